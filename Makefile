@@ -1,0 +1,38 @@
+# symkin developer commands.  `make demo` and `make test` work on a fresh machine with
+# python3 (>= 3.10) and a C compiler: they create .venv and install what they need.
+
+PYTHON ?= python3
+VENV ?= .venv
+BIN := $(VENV)/bin
+STAMP := $(VENV)/.symkin-installed
+MODELS := $(wildcard models/*.yaml)
+PYTEST_WORKERS ?= 2
+
+.PHONY: setup demo test generate check-generated bench clean
+
+$(STAMP): pyproject.toml requirements/constraints.txt
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(BIN)/python -m pip install --quiet -c requirements/constraints.txt -e '.[test]'
+	touch $(STAMP)
+
+## setup: create .venv and install symkin (editable) with its test tools
+setup: $(STAMP)
+
+## demo: derive every example model into generated/ and print what was derived
+demo: setup
+	$(BIN)/symkin derive $(MODELS) -o generated
+
+## test: run the whole test suite
+test: setup
+	$(BIN)/python -m pytest -n $(PYTEST_WORKERS) -q
+
+## generate: rewrite generated/ from the example models (the "update" switch of the golden tests)
+generate: demo
+
+## bench: derive-time and evaluation benchmarks (results printed, nothing timed in tests)
+bench: setup
+	$(BIN)/python benchmarks/derive_time.py
+
+clean:
+	rm -rf $(VENV) build dist *.egg-info .pytest_cache
