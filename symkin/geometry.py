@@ -1,0 +1,45 @@
+"""Exact rotation matrices and homogeneous transforms (seed sec. 3: ^iR_j and ^iT_j).
+
+Shared by the model builder (rotated inertia tensors) and the kinematics.
+"""
+
+from __future__ import annotations
+
+import sympy
+
+from symkin.model.schema import Vec3
+
+
+def principal_axis(axis: Vec3) -> tuple[int, int] | None:
+    """(index, sign) if ``axis`` is +-x, +-y or +-z, else None."""
+    nonzero = [(i, c) for i, c in enumerate(axis) if c != 0]
+    if len(nonzero) == 1 and nonzero[0][1] in (1, -1):
+        return nonzero[0][0], int(nonzero[0][1])
+    return None
+
+
+def rotation_matrix(axis: Vec3, angle: sympy.Expr) -> sympy.Matrix:
+    """Rotation by ``angle`` about the unit ``axis`` (right hand).
+
+    Principal axes give the elementary matrices (e.g. the seed's rotation about z);
+    any other axis uses Rodrigues' formula R = I + sin(a) K + (1 - cos(a)) K^2.
+    """
+    c, s = sympy.cos(angle), sympy.sin(angle)
+    principal = principal_axis(axis)
+    if principal is not None:
+        index, sign = principal
+        s = sign * s
+        if index == 0:
+            return sympy.Matrix([[1, 0, 0], [0, c, -s], [0, s, c]])
+        if index == 1:
+            return sympy.Matrix([[c, 0, s], [0, 1, 0], [-s, 0, c]])
+        return sympy.Matrix([[c, -s, 0], [s, c, 0], [0, 0, 1]])
+    kx, ky, kz = axis
+    k = sympy.Matrix([[0, -kz, ky], [kz, 0, -kx], [-ky, kx, 0]])
+    return sympy.eye(3) + s * k + (1 - c) * (k * k)
+
+
+def homogeneous(rotation: sympy.Matrix, position: sympy.Matrix) -> sympy.ImmutableMatrix:
+    """The 4x4 transform [[R, p], [0, 1]] (seed: homogeneous transformation matrix)."""
+    top = rotation.row_join(position)
+    return sympy.ImmutableMatrix(top.col_join(sympy.Matrix([[0, 0, 0, 1]])))

@@ -1,0 +1,57 @@
+"""Generalized-coordinate symbols of a model and the input groups of generated functions.
+
+Every joint ``j`` owns four symbols: its coordinate ``j`` (in ``q``), velocity ``j_d``
+(in ``qd``), acceleration ``j_dd`` (in ``qdd``) and actuator effort ``tau_j`` (in
+``tau``).  Symbols are created on demand: sympy symbols with equal name and assumptions
+are equal, so every module sees the same symbols without sharing state.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import sympy
+
+from symkin.model.schema import JointType, Model
+
+
+@dataclass(frozen=True)
+class GroupDef:
+    """How one coordinate group names its symbols and what units they have."""
+
+    name: str
+    doc: str
+    prefix: str
+    suffix: str
+    revolute_unit: str
+    prismatic_unit: str
+
+
+GROUPS: dict[str, GroupDef] = {
+    "q": GroupDef("q", "joint coordinates", "", "", "rad", "m"),
+    "qd": GroupDef("qd", "joint velocities", "", "_d", "rad/s", "m/s"),
+    "qdd": GroupDef("qdd", "joint accelerations", "", "_dd", "rad/s^2", "m/s^2"),
+    "tau": GroupDef("tau", "joint torques (revolute) or forces (prismatic)", "tau_", "", "N*m", "N"),
+}
+
+
+def symbol_name(group: str, joint_name: str) -> str:
+    """Name of the symbol of ``joint_name`` in ``group`` (e.g. ``theta1_d``)."""
+    g = GROUPS[group]
+    return f"{g.prefix}{joint_name}{g.suffix}"
+
+
+def symbols(model: Model, group: str) -> tuple[sympy.Symbol, ...]:
+    """The symbols of one coordinate group, in joint order."""
+    return tuple(sympy.Symbol(symbol_name(group, j.name), real=True) for j in model.joints)
+
+
+def units(model: Model, group: str) -> tuple[str, ...]:
+    """Per-joint units of one coordinate group."""
+    g = GROUPS[group]
+    return tuple(g.revolute_unit if j.type is JointType.REVOLUTE else g.prismatic_unit for j in model.joints)
+
+
+def all_symbol_names(joint_name: str) -> tuple[str, ...]:
+    """Every symbol name a joint claims (used to detect clashes with parameter names)."""
+    return tuple(symbol_name(g, joint_name) for g in GROUPS)

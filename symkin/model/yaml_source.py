@@ -1,0 +1,208 @@
+"""Read a YAML model file into plain data that remembers where every value came from.
+
+A model file is data, never code: the file is *composed* (parsed into a node graph) with
+PyYAML's safe loader, and the node graph is converted by hand, so no constructor of any
+tag ever runs.  On the way the reader
+
+* rejects explicit tags (``!!python/object``...), merge keys and non-string keys,
+* rejects duplicate keys (PyYAML would silently keep the last one),
+* bounds the file size, the nesting depth and the number of nodes after alias expansion
+  (so a "billion laughs" document fails fast instead of eating memory),
+* records for every key path its line/column and, for scalars, the raw text, so that
+  numbers such as ``0.1807`` reach the expression parser as written (exact decimals).
+
+Key paths are tuples of str (mapping keys) and int (sequence indices).
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from symkin.errors import ModelError, Problem
+
+MAX_FILE_BYTES = 1_000_000
+MAX_NODES = 100_000
+MAX_DEPTH = 64
+
+KeyPath = tuple[str | int, ...]
+
+_CORE = "tag:yaml.org,2002:"
+_SCALAR_TAGS = {_CORE + t for t in ("str", "int", "float", "bool", "null")}
+
+
+def format_path(path: KeyPath) -> str:
+    """Render a key path as ``serial.dh.rows[2].alpha``."""
+    out = ""
+    for part in path:
+        if isinstance(part, int):
+            out += f"[{part}]"
+        else:
+            out += ("." if out else "") + part
+    return out
+
+
+@dataclass
+class Document:
+    """Plain data of a YAML file plus the location and raw text of every value.
+
+    Attributes:
+        file: the path as given by the user (used in messages).
+        data: the document as dict/list/str/int/float/bool/None.
+        marks: key path -> (line, column), 1-based.
+        raw: key path -> raw scalar text, for scalars.
+    """
+
+    file: str
+    data: Any
+    marks: dict[KeyPath, tuple[int, int]] = field(default_factory=dict)
+    raw: dict[KeyPath, str] = field(default_factory=dict)
+
+    def problem(self, path: KeyPath, message: str, fix: str) -> Problem:
+        """A :class:`Problem` located at ``path`` (or at its closest located ancestor)."""
+        probe = tuple(path)
+        while probe and probe not in self.marks:
+            probe = probe[:-1]
+        line, column = self.marks.get(probe, (None, None))
+        return Problem(self.file, line, column, format_path(path), message, fix)
+
+    def canonical_json(self) -> str:
+        """The data as canonical JSON (sorted keys): the input of the model hash."""
+        return json.dumps(self.data, sort_keys=True, separators=(",", ":"), ensure_ascii=True)
+
+
+def read_document(path: str | Path) -> Document:
+    """Read and compose a YAML model file.
+
+    Raises:
+        ModelError: unreadable file, YAML syntax error, or forbidden YAML construct.
+    """
+    name = str(path)
+    try:
+        raw_bytes = Path(path).read_bytes()
+    except OSError as exc:
+        raise ModelError([Problem(name, None, None, "", f"cannot read the file: {exc.strerror}",
+                                  "check the path and the file permissions")]) from None
+    if len(raw_bytes) > MAX_FILE_BYTES:
+        raise ModelError([Problem(name, None, None, "",
+                                  f"the file has {len(raw_bytes)} bytes, more than the limit of {MAX_FILE_BYTES}",
+                                  "a model file describes one mechanism; split it or remove generated content")])
+    try:
+        text = raw_bytes.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ModelError([Problem(name, None, None, "", f"the file is not UTF-8 text ({exc.reason} at byte {exc.start})",
+                                  "save the model as UTF-8 text")]) from None
+    return parse_document(text, name)
+
+
+def parse_document(text: str, file: str = "<string>") -> Document:
+    """Compose YAML ``text`` into a :class:`Document` (see module docstring for the rules)."""
+    try:
+        root = yaml.compose(text, Loader=yaml.SafeLoader)
+    except yaml.MarkedYAMLError as exc:
+        mark = exc.problem_mark or exc.context_mark
+        line, col = (mark.line + 1, mark.column + 1) if mark else (None, None)
+        context = exc.context or ""
+        if exc.context and exc.context_mark and exc.problem_mark and exc.context_mark.line != exc.problem_mark.line:
+            context += f" (opened at line {exc.context_mark.line + 1})"
+        detail = ": ".join(s for s in (context, exc.problem) if s)
+        raise ModelError([Problem(file, line, col, "", f"YAML syntax error: {detail}",
+                                  "fix the YAML syntax at this line (indentation, quotes, colons)")]) from None
+    except yaml.YAMLError as exc:  # e.g. several documents in one stream
+        raise ModelError([Problem(file, None, None, "", f"YAML error: {exc}",
+                                  "a model file must hold exactly one YAML document")]) from None
+    if root is None:
+        raise ModelError([Problem(file, None, None, "", "the file is empty",
+                                  "write a model: see docs/model-format.md")])
+    doc = Document(file, None)
+    converter = _Converter(doc)
+    doc.data = converter.convert(root, (), 0)
+    if converter.problems:
+        raise ModelError(converter.problems)
+    return doc
+
+
+class _Converter:
+    """Walks a composed node graph into plain data, enforcing the safety rules."""
+
+    def __init__(self, doc: Document):
+        self.doc = doc
+        self.nodes = 0
+        self.problems: list[Problem] = []
+        self.scalar_constructor = yaml.constructor.SafeConstructor()
+
+    def _fail(self, node: yaml.Node, path: KeyPath, message: str, fix: str) -> None:
+        mark = node.start_mark
+        self.problems.append(Problem(self.doc.file, mark.line + 1, mark.column + 1,
+                                     format_path(path), message, fix))
+
+    def convert(self, node: yaml.Node, path: KeyPath, depth: int) -> Any:
+        self.nodes += 1
+        if self.nodes > MAX_NODES:
+            self._fail(node, path, f"the document expands to more than {MAX_NODES} values "
+                                   "(aliases expanding exponentially?)",
+                       "remove the anchors/aliases that multiply the document")
+            raise ModelError(self.problems)
+        if depth > MAX_DEPTH:
+            self._fail(node, path, f"the document is nested deeper than {MAX_DEPTH} levels",
+                       "flatten the structure; no model key nests this deep")
+            raise ModelError(self.problems)
+        self.doc.marks.setdefault(path, (node.start_mark.line + 1, node.start_mark.column + 1))
+        if isinstance(node, yaml.ScalarNode):
+            return self._scalar(node, path)
+        if isinstance(node, yaml.SequenceNode):
+            if node.tag != _CORE + "seq":
+                return self._bad_tag(node, path)
+            return [self.convert(item, path + (i,), depth + 1) for i, item in enumerate(node.value)]
+        if isinstance(node, yaml.MappingNode):
+            if node.tag != _CORE + "map":
+                return self._bad_tag(node, path)
+            return self._mapping(node, path, depth)
+        self._fail(node, path, "unsupported YAML node", "use plain mappings, lists and scalars")
+        return None
+
+    def _bad_tag(self, node: yaml.Node, path: KeyPath) -> None:
+        self._fail(node, path, f"YAML tag '{node.tag}' is not allowed (a model file is data, never code)",
+                   "remove the tag; write plain values")
+        return None
+
+    def _scalar(self, node: yaml.ScalarNode, path: KeyPath) -> Any:
+        if node.tag not in _SCALAR_TAGS:
+            return self._bad_tag(node, path)
+        self.doc.raw[path] = node.value
+        kind = node.tag[len(_CORE):]
+        if kind == "str":
+            return node.value
+        if kind == "null":
+            return None
+        constructor = yaml.constructor.SafeConstructor.yaml_constructors[node.tag]
+        try:
+            return constructor(self.scalar_constructor, node)
+        except (ValueError, OverflowError, yaml.YAMLError):
+            self._fail(node, path, f"cannot read the {kind} value '{node.value}'", f"write a plain {kind}")
+            return None
+
+    def _mapping(self, node: yaml.MappingNode, path: KeyPath, depth: int) -> dict[str, Any]:
+        out: dict[str, Any] = {}
+        for key_node, value_node in node.value:
+            if key_node.tag == _CORE + "merge":
+                self._fail(key_node, path, "YAML merge keys ('<<') are not supported",
+                           "write the keys out explicitly")
+                continue
+            if not isinstance(key_node, yaml.ScalarNode) or key_node.tag != _CORE + "str":
+                self._fail(key_node, path, f"mapping keys must be plain strings, got '{getattr(key_node, 'value', '?')}'",
+                           "quote the key or rename it to a plain word")
+                continue
+            key = key_node.value
+            if key in out:
+                first = self.doc.marks.get(path + (key,), (0, 0))[0]
+                self._fail(key_node, path + (key,), f"duplicate key '{key}' (first defined on line {first})",
+                           "remove one of the two definitions")
+                continue
+            self.doc.marks[path + (key,)] = (key_node.start_mark.line + 1, key_node.start_mark.column + 1)
+            out[key] = self.convert(value_node, path + (key,), depth + 1)
+        return out
