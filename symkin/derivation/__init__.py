@@ -1,0 +1,9 @@
+"""Lazy derivation of symbolic quantities (see :mod:`symkin.derivation.graph`).
+
+Importing this package registers every quantity symkin knows.
+"""
+
+from symkin.derivation.graph import Derivation, QuantityDef, emitted_quantities, quantity, registry
+from symkin.kinematics import quantities as _kinematics  # noqa: F401  (registers fk, frames, jacobian...)
+
+__all__ = ["Derivation", "QuantityDef", "emitted_quantities", "quantity", "registry"]

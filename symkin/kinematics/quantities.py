@@ -1,0 +1,115 @@
+"""Kinematic quantities of serial chains, registered in the derivation graph.
+
+=====================  =========================================================
+``chain``              (internal) link frames, joint axes and TCP by one chain walk
+``fk``                 base_T_tcp, 4x4 (seed sec. 3.1, DH step 4)
+``frames``             base_T_<link> for every link, 4x4 each
+``task_coordinates``   task-space coordinates p = f(q), m (seed eq. 8.5)
+``jacobian_geometric`` 6 x n, linear rows over angular rows, base frame
+``jacobian``           task Jacobian J = dp/dq, m x n (seed sec. 4 "Jacobian Matrix")
+=====================  =========================================================
+"""
+
+from __future__ import annotations
+
+import sympy
+
+from symkin.derivation.graph import Derivation, quantity
+from symkin.ir.spec import FunctionSpec, InputSpec, OutputSpec, make_function
+from symkin.kinematics import task_space
+from symkin.kinematics.chain import ChainFrames, compose_chain
+from symkin.model import coordinates
+from symkin.model.schema import JointType, Model
+
+
+def coordinate_input(model: Model, group: str) -> InputSpec:
+    """The vector input of a coordinate group (``q``, ``qd``, ``qdd``, ``tau``)."""
+    return InputSpec(
+        name=group,
+        kind="vector",
+        symbols=coordinates.symbols(model, group),
+        element_names=tuple(j.name for j in model.joints),
+        units=coordinates.units(model, group),
+        doc=coordinates.GROUPS[group].doc,
+    )
+
+
+@quantity("chain", "link frames, joint axes and TCP frame of the serial chain", emitted=False)
+def _chain(d: Derivation) -> ChainFrames:
+    return compose_chain(d.model)
+
+
+@quantity("fk", "forward kinematics: base_T_tcp (4x4)")
+def _fk(d: Derivation) -> FunctionSpec:
+    chain: ChainFrames = d["chain"]
+    return make_function(
+        d.model, "fk", "Forward kinematics: pose of the TCP in the base frame.",
+        "base_T_tcp = base_T_1 * 1_T_2 * ... * n_T_tcp (seed sec. 3.1, DH step 4).",
+        [coordinate_input(d.model, "q")],
+        [OutputSpec("base_T_tcp", chain.tcp.T, "homogeneous transform of the TCP frame in the base frame", "m")],
+    )
+
+
+@quantity("frames", "base_T_<link> (4x4) of every link frame")
+def _frames(d: Derivation) -> FunctionSpec:
+    chain: ChainFrames = d["chain"]
+    return make_function(
+        d.model, "frames", "Pose of every link frame in the base frame.",
+        "base_T_<link> = base_T_1 * ... * (i-1)_T_i for each link i (seed sec. 3.1).",
+        [coordinate_input(d.model, "q")],
+        [OutputSpec(f"base_T_{name}", frame.T, f"homogeneous transform of frame '{name}' in the base frame", "m")
+         for name, frame in chain.links],
+    )
+
+
+@quantity("task_coordinates", "task-space coordinates p = f(q) of the TCP (m)")
+def _task_coordinates(d: Derivation) -> FunctionSpec:
+    chain: ChainFrames = d["chain"]
+    p = task_space.coordinates(d.model.task_space, chain.tcp)
+    units = ", ".join(f"{c} [{task_space.UNITS[c]}]" for c in d.model.task_space)
+    return make_function(
+        d.model, "task_coordinates", "Task-space coordinates of the TCP.",
+        f"p = f(q) (seed eq. 8.5) with p = [{units}].",
+        [coordinate_input(d.model, "q")],
+        [OutputSpec("p", p, f"task coordinates [{units}]", shape=(len(p),))],
+    )
+
+
+@quantity("jacobian_geometric_matrix", "geometric Jacobian matrix of the TCP (6 x n)", emitted=False)
+def _geometric_matrix(d: Derivation) -> sympy.ImmutableMatrix:
+    """Columns [z_i x (p_tcp - p_i); z_i] for revolute and [z_i; 0] for prismatic joints."""
+    chain: ChainFrames = d["chain"]
+    p_tcp = sympy.Matrix(chain.tcp.p)
+    columns = []
+    for axis in chain.axes:
+        z = sympy.Matrix(axis.direction)
+        if axis.type is JointType.REVOLUTE:
+            columns.append(z.cross(p_tcp - sympy.Matrix(axis.point)).col_join(z))
+        else:
+            columns.append(z.col_join(sympy.zeros(3, 1)))
+    return sympy.ImmutableMatrix(sympy.Matrix.hstack(*columns))
+
+
+@quantity("jacobian_geometric", "geometric Jacobian of the TCP, [v; w] = J qd (6 x n, base frame)")
+def _jacobian_geometric(d: Derivation) -> FunctionSpec:
+    return make_function(
+        d.model, "jacobian_geometric", "Geometric Jacobian of the TCP in the base frame.",
+        "[v; w] = J qd with v the TCP velocity and w the angular velocity, both in the base frame; "
+        "column i is [z_i x (p_tcp - p_i); z_i] for a revolute and [z_i; 0] for a prismatic joint.",
+        [coordinate_input(d.model, "q")],
+        [OutputSpec("J", d["jacobian_geometric_matrix"], "rows vx, vy, vz, wx, wy, wz; one column per joint")],
+    )
+
+
+@quantity("jacobian", "task Jacobian J = dp/dq (m x n, task space of the model)")
+def _jacobian(d: Derivation) -> FunctionSpec:
+    chain: ChainFrames = d["chain"]
+    components = d.model.task_space
+    J = task_space.jacobian_rows(components, sympy.Matrix(d["jacobian_geometric_matrix"]), chain.tcp,
+                                 coordinates.symbols(d.model, "q"))
+    return make_function(
+        d.model, "jacobian", "Task Jacobian of the TCP.",
+        f"J = d[{', '.join(components)}]/dq, dp = J dq (seed sec. 4 'Jacobian Matrix', eq. 8.29).",
+        [coordinate_input(d.model, "q")],
+        [OutputSpec("J", J, f"rows {', '.join(components)}; one column per joint")],
+    )
