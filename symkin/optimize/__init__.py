@@ -1,0 +1,45 @@
+"""Expression optimization: pure passes from a FunctionSpec to an OptimizedFunction.
+
+:func:`optimize` runs, in order:
+
+1. :func:`~symkin.optimize.passes.fold_parameters` - substitute fixed parameters by their
+   exact values (and drop them from the inputs);
+2. :func:`~symkin.optimize.passes.fold_constants` - evaluate constant subexpressions
+   (``cos(1/10)``, ``sqrt(3)/2``) once, at 30 digits, instead of at every call;
+3. :func:`~symkin.optimize.cse.eliminate_common_subexpressions` - one CSE across all
+   outputs of the function.
+
+The operation count after each stage is recorded in ``OptimizedFunction.op_counts``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+from symkin.ir.spec import FunctionSpec, OptimizedFunction
+from symkin.optimize.cse import eliminate_common_subexpressions
+from symkin.optimize.opcount import spec_op_count
+from symkin.optimize.passes import fold_constants, fold_parameters
+
+__all__ = ["optimize", "fold_parameters", "fold_constants", "eliminate_common_subexpressions", "spec_op_count"]
+
+
+def optimize(spec: FunctionSpec, fixed: Iterable[str] = ()) -> OptimizedFunction:
+    """Optimize one function spec.
+
+    Args:
+        spec: the derived function.
+        fixed: names of parameters to fold to their default values.
+
+    Returns:
+        The optimized function; ``op_counts`` has ``derived`` (as derived), ``folded``
+        (after parameter folding, when any parameter was folded) and ``cse`` (final:
+        temporaries plus outputs).
+    """
+    counts = {"derived": spec_op_count(spec)}
+    fixed = tuple(fixed)
+    if any(i.kind == "parameter" and i.name in fixed for i in spec.inputs):
+        spec = fold_parameters(spec, fixed)
+        counts["folded"] = spec_op_count(spec)
+    spec = fold_constants(spec)
+    return eliminate_common_subexpressions(spec, counts)
