@@ -1,0 +1,74 @@
+"""Write a directory of generated files all at once, or not at all.
+
+Files are written into a temporary sibling directory, which then replaces the target
+with two renames while SIGINT/SIGTERM are held back, so an interrupted run leaves the
+previous output intact (and at worst a stray ``.<name>.tmp-*`` directory).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import shutil
+import signal
+import tempfile
+import threading
+from collections.abc import Iterator, Mapping
+from pathlib import Path, PurePosixPath
+
+_HELD_SIGNALS = {signal.SIGINT, signal.SIGTERM}
+
+
+@contextlib.contextmanager
+def signals_held() -> Iterator[None]:
+    """Defer SIGINT and SIGTERM until the block ends (main thread of a POSIX process)."""
+    can_block = hasattr(signal, "pthread_sigmask") and threading.current_thread() is threading.main_thread()
+    if can_block:
+        signal.pthread_sigmask(signal.SIG_BLOCK, _HELD_SIGNALS)
+    try:
+        yield
+    finally:
+        if can_block:
+            signal.pthread_sigmask(signal.SIG_UNBLOCK, _HELD_SIGNALS)
+
+
+def _checked_relative(path: str) -> PurePosixPath:
+    rel = PurePosixPath(path)
+    if rel.is_absolute() or ".." in rel.parts or not rel.parts:
+        raise ValueError(f"refusing to write outside the output directory: {path!r}")
+    return rel
+
+
+def replace_directory(target: Path, files: Mapping[str, str | bytes]) -> None:
+    """Make ``target`` a directory holding exactly ``files`` ({relative path: content}).
+
+    Text is written as UTF-8 with '\\n' line ends.  The previous content of ``target``
+    stays untouched until every new file has been written and flushed.
+    """
+    target = Path(target)
+    parent = target.parent
+    parent.mkdir(parents=True, exist_ok=True)
+    staging = Path(tempfile.mkdtemp(prefix=f".{target.name}.tmp-", dir=parent))
+    try:
+        for name, content in sorted(files.items()):
+            path = staging / _checked_relative(name)
+            path.parent.mkdir(parents=True, exist_ok=True)
+            data = content.encode("utf-8") if isinstance(content, str) else content
+            with open(path, "wb") as handle:
+                handle.write(data)
+                handle.flush()
+                os.fsync(handle.fileno())
+            os.chmod(path, 0o644)
+        os.chmod(staging, 0o755)
+        retired = None
+        with signals_held():
+            if target.exists():
+                retired = Path(tempfile.mkdtemp(prefix=f".{target.name}.old-", dir=parent))
+                os.rmdir(retired)
+                os.rename(target, retired)
+            os.rename(staging, target)
+        if retired is not None:
+            shutil.rmtree(retired, ignore_errors=True)
+    except BaseException:
+        shutil.rmtree(staging, ignore_errors=True)
+        raise

@@ -1,0 +1,23 @@
+"""Code generators, registered by name.  Adding a backend touches only this dict."""
+
+from __future__ import annotations
+
+from symkin.backends.base import Backend
+from symkin.backends.numpy import NumpyBackend
+from symkin.errors import SymkinError
+
+BACKENDS: dict[str, Backend] = {
+    "numpy": NumpyBackend(),
+}
+
+
+def get_backend(name: str) -> Backend:
+    """The backend called ``name``.
+
+    Raises:
+        SymkinError: unknown backend.
+    """
+    try:
+        return BACKENDS[name]
+    except KeyError:
+        raise SymkinError(f"unknown backend '{name}'; available: {', '.join(BACKENDS)}") from None

@@ -1,0 +1,81 @@
+"""Printing of the numpy module from the optimized functions (see templates/numpy/module.py.j2)."""
+
+from __future__ import annotations
+
+import textwrap
+from typing import Any
+
+from symkin.backends.layout import nonzero_elements, shape_text, type_name
+from symkin.backends.numpy.printer import BatchNumPyPrinter
+from symkin.backends.templating import provenance, render
+from symkin.ir.bundle import ModelCode
+from symkin.ir.spec import InputSpec, OptimizedFunction
+
+TEMPLATE = "numpy/module.py.j2"
+DOC_WIDTH = 84
+
+
+def _wrap(text: str, indent: str = "    ") -> list[str]:
+    lines = textwrap.wrap(text, DOC_WIDTH)
+    return lines[:1] + [indent + line for line in lines[1:]]
+
+
+def _input_doc(i: InputSpec) -> list[str]:
+    if i.kind == "parameter":
+        unit = f" [{i.units[0]}]" if i.units[0] else ""
+        return _wrap(f"{i.name}: {i.doc or 'parameter'}{unit}; default {float(i.default)!r}; "
+                     "a scalar or an array broadcastable to the batch shape.")
+    elements = ", ".join(f"{n} [{u}]" for n, u in zip(i.element_names, i.units))
+    return _wrap(f"{i.name}: {i.doc}, shape (..., {len(i.symbols)}): {elements}.")
+
+
+def _function_context(f: OptimizedFunction, printer: BatchNumPyPrinter) -> dict[str, Any]:
+    spec = f.spec
+    vectors = spec.vector_inputs
+    params = spec.parameter_inputs
+    signature = ", ".join([v.name for v in vectors] + (["*"] if params else [])
+                          + [f"{p.name}={float(p.default)!r}" for p in params])
+    outputs = []
+    for out, entries in zip(spec.outputs, f.outputs):
+        outputs.append({
+            "name": out.name,
+            "local": f"_out_{out.name}",
+            "shape": repr(tuple(out.shape)),
+            "assignments": [{"index": ", ".join(["..."] + [str(k) for k in index]), "code": printer.doprint(e)}
+                            for index, e in nonzero_elements(out, entries)],
+        })
+    returns = [line for out in spec.outputs
+               for line in _wrap(f"{out.name}: shape {shape_text(out.shape)}; {out.doc}"
+                                 + (f" [{out.unit}]" if out.unit else "") + ".")]
+    multi = len(spec.outputs) > 1
+    return {
+        "name": spec.name,
+        "summary": spec.summary,
+        "doc_lines": textwrap.wrap(spec.doc, DOC_WIDTH),
+        "signature": signature,
+        "signature_short": ", ".join(v.name for v in vectors) + (", **params" if params else ""),
+        "returns_short": (type_name(spec.name) + "(" + ", ".join(o.name for o in spec.outputs) + ")") if multi
+        else f"{spec.outputs[0].name} {shape_text(spec.outputs[0].shape)}",
+        "args_doc": [line for i in spec.inputs for line in _input_doc(i)],
+        "returns_doc": returns if not multi else [f"{type_name(spec.name)} with the fields:"] + returns,
+        "vectors": [{"name": v.name, "size": len(v.symbols),
+                     "elements": [{"local": str(s), "index": k} for k, s in enumerate(v.symbols)]} for v in vectors],
+        "batch_shapes": [f"{v.name}.shape[:-1]" for v in vectors] + [f"numpy.shape({p.name})" for p in params],
+        "temporaries": [{"name": str(s), "code": printer.doprint(e)} for s, e in f.temporaries],
+        "outputs": outputs,
+        "result_type": type_name(spec.name) if multi else "",
+    }
+
+
+def emit_module(code: ModelCode) -> dict[str, str | bytes]:
+    """{<model>.py: module text} for ``code``."""
+    printer = BatchNumPyPrinter()
+    text = render(
+        TEMPLATE,
+        provenance=provenance(TEMPLATE, code.name, code.hash),
+        model={"name": code.name, "hash": code.hash, "description": code.description or code.name,
+               "symkin_version": code.symkin_version, "coordinates": code.coordinates},
+        free_parameters=[{"name": p.name, "default_text": repr(p.default)} for p in code.parameters if not p.fixed],
+        functions=[_function_context(f, printer) for f in code.functions],
+    )
+    return {f"{code.name}.py": text}

@@ -1,0 +1,44 @@
+"""``symkin check`` and ``symkin quantities``: validate models, list what can be derived."""
+
+from __future__ import annotations
+
+import argparse
+
+from symkin.cli.table import format_table
+
+
+def register_check(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("check", help="validate model files without deriving",
+                       description="Validate model files (syntax, names, expressions, physical plausibility of "
+                                   "masses and inertias, scene) and print a summary. Writes nothing.")
+    p.add_argument("models", nargs="+", metavar="MODEL", help="model file(s) (YAML)")
+    p.set_defaults(run=run_check)
+
+
+def run_check(args: argparse.Namespace) -> int:
+    from symkin import pipeline
+    from symkin.model import load_model
+
+    for path in args.models:
+        model = load_model(path)
+        request = pipeline.resolve_request(model)
+        print(f"{path}: ok - model '{model.name}', {model.dof} joints "
+              f"({', '.join(f'{j.name}:{j.type.value}' for j in model.joints)}), "
+              f"{len(model.parameters)} parameters, {len(model.bodies)} bodies, "
+              f"task space [{', '.join(model.task_space)}]; "
+              f"scene: {', '.join(request.outputs)} via {', '.join(request.backends)}")
+    return 0
+
+
+def register_quantities(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("quantities", help="list the quantities symkin can derive",
+                       description="List the outputs that a scene or --only may request.")
+    p.set_defaults(run=run_quantities)
+
+
+def run_quantities(_args: argparse.Namespace) -> int:
+    from symkin.derivation import registry
+
+    rows = [[q.name, q.summary] for q in registry().values() if q.emitted]
+    print(format_table(["output", "meaning"], rows, indent=""))
+    return 0

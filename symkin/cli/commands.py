@@ -1,0 +1,11 @@
+"""The subcommands of ``symkin``, in the order ``--help`` lists them."""
+
+from __future__ import annotations
+
+from symkin.cli import check_cmd, derive_cmd
+
+REGISTRY = [
+    derive_cmd.register,
+    check_cmd.register_check,
+    check_cmd.register_quantities,
+]

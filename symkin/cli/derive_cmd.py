@@ -1,0 +1,66 @@
+"""``symkin derive``: derive models and write their generated code."""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+from symkin.cli.progress import Progress
+from symkin.cli.table import format_table
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "derive",
+        help="derive models and emit code",
+        description="Derive the quantities a model's scene asks for (or --only), optimize them and "
+                    "write the generated code and manifest.json to OUT/<model name>/, atomically.",
+    )
+    p.add_argument("models", nargs="+", metavar="MODEL", help="model file(s) (YAML)")
+    p.add_argument("-o", "--out", default="generated", metavar="OUT",
+                   help="output directory (default: %(default)s)")
+    p.add_argument("--only", metavar="NAMES",
+                   help="comma-separated outputs to emit instead of the scene's, e.g. fk,jacobian "
+                        "(see 'symkin quantities')")
+    p.add_argument("--backend", metavar="NAMES", help="comma-separated backends (default: the scene's, else numpy)")
+    p.add_argument("--fixed", metavar="NAMES",
+                   help="comma-separated parameters to fold to their default values, or 'all' "
+                        "(default: the scene's)")
+    p.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
+    p.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from symkin import pipeline
+    from symkin.model import load_model
+
+    # Validate every model and request first: a bad file writes nothing at all.
+    jobs = []
+    for path in args.models:
+        model = load_model(path)
+        jobs.append((model, pipeline.resolve_request(model, args.only, args.backend, args.fixed)))
+    for model, request in jobs:
+        start = time.perf_counter()
+        with Progress(model.name, enabled=not args.quiet) as progress:
+            result = pipeline.generate(model, request, progress)
+            target = pipeline.write(result, args.out)
+        if not args.quiet:
+            _summary(result, target, time.perf_counter() - start)
+    return 0
+
+
+def _summary(result, target: Path, seconds: float) -> None:
+    model = result.model
+    free = sum(1 for p in model.parameters if p.name not in result.request.fixed)
+    print(f"{model.name}: {model.dof} DoF, {free} free / {len(result.request.fixed)} fixed parameters "
+          f"-> {target}  ({seconds:.2f} s)")
+    rows = []
+    for r in result.reports:
+        counts = r.op_counts
+        folded = f" -> {counts['folded']}" if "folded" in counts else ""
+        rows.append([r.name, r.outputs, f"{counts['derived']}{folded} -> {counts['cse']}",
+                     f"{r.derive_seconds:.3f}", f"{r.optimize_seconds:.3f}"])
+    print(format_table(["function", "outputs", "ops derived -> cse", "derive s", "optimize s"], rows))
+    files = ", ".join(f"{b}: {' '.join(f['files'])}" for b, f in result.manifest["backends"].items())
+    print(f"  emitted {files} in {result.emit_seconds:.3f} s; derived: {', '.join(result.derived)}")

@@ -1,0 +1,75 @@
+"""A small progress display for the command line.
+
+On a terminal, a status line shows the current stage and the elapsed time, refreshed by a
+background thread, once the work has taken longer than ``delay`` seconds (quick commands
+print nothing).  When stderr is not a terminal (CI logs, pipes), stages that take longer
+than ``delay`` are reported as plain lines when they finish.
+"""
+
+from __future__ import annotations
+
+import sys
+import threading
+import time
+from types import TracebackType
+from typing import TextIO
+
+
+class Progress:
+    """Use as a context manager; call it with a stage description."""
+
+    def __init__(self, title: str, stream: TextIO | None = None, delay: float = 1.5, enabled: bool = True):
+        self.title = title
+        self.stream = stream or sys.stderr
+        self.delay = delay
+        self.enabled = enabled
+        self.live = enabled and self.stream.isatty()
+        self.start = time.perf_counter()
+        self.stage = ""
+        self.stage_start = self.start
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._shown = False
+
+    def __enter__(self) -> Progress:
+        if self.live:
+            self._thread = threading.Thread(target=self._refresh, daemon=True)
+            self._thread.start()
+        return self
+
+    def __call__(self, stage: str) -> None:
+        with self._lock:
+            self._finish_stage()
+            self.stage = stage
+            self.stage_start = time.perf_counter()
+
+    def _finish_stage(self) -> None:
+        elapsed = time.perf_counter() - self.stage_start
+        if self.enabled and not self.live and self.stage and elapsed > self.delay:
+            print(f"  [{self.title}] {self.stage}: {elapsed:.1f} s", file=self.stream, flush=True)
+
+    def _refresh(self) -> None:
+        spinner = "|/-\\"
+        tick = 0
+        while not self._stop.wait(0.1):
+            elapsed = time.perf_counter() - self.start
+            if elapsed < self.delay:
+                continue
+            with self._lock:
+                line = f"\r{spinner[tick % 4]} [{self.title}] {self.stage} ({elapsed:5.1f} s)"
+            self.stream.write(line[:120].ljust(80))
+            self.stream.flush()
+            self._shown = True
+            tick += 1
+
+    def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
+                 tb: TracebackType | None) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join()
+        with self._lock:
+            self._finish_stage()
+        if self._shown:
+            self.stream.write("\r" + " " * 80 + "\r")
+            self.stream.flush()

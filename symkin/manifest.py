@@ -1,0 +1,99 @@
+"""The manifest of a generated model directory (``OUT/<model>/manifest.json``).
+
+The manifest is the contract between ``symkin derive`` and everything that uses its
+output (``symkin.load``, analyses, users' build systems).  It records the model identity,
+the generator versions, every function with its inputs, outputs, op counts and the
+backends that emitted it, and the files of each backend.  It holds no timestamps or
+timings, so the same model always gives the same bytes.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from symkin._version import __version__
+from symkin.errors import GeneratedCodeError
+
+if TYPE_CHECKING:  # reading a manifest must not import sympy
+    from symkin.ir.bundle import ModelCode
+    from symkin.model.schema import Model
+
+MANIFEST_NAME = "manifest.json"
+MANIFEST_VERSION = 1
+
+
+def _input_record(i) -> dict[str, Any]:
+    record: dict[str, Any] = {"name": i.name, "kind": i.kind, "shape": list(i.shape),
+                              "elements": list(i.element_names), "units": list(i.units), "doc": i.doc}
+    if i.default is not None:
+        record["default"] = float(i.default)
+    return record
+
+
+def build_manifest(model: Model, code: ModelCode, derived: list[str], backend_files: dict[str, list[str]]) -> dict:
+    """The manifest of ``code`` derived from ``model``.
+
+    Args:
+        model: the source model.
+        code: the optimized functions.
+        derived: names of the graph quantities that were derived, in order.
+        backend_files: files written by each backend.
+    """
+    import sympy
+
+    return {
+        "manifest_version": MANIFEST_VERSION,
+        "generator": {"symkin": __version__, "sympy": sympy.__version__},
+        "model": {
+            "name": model.name,
+            "hash": model.hash,
+            "source": Path(model.source).name,
+            "description": model.description,
+            "dof": model.dof,
+            "coordinates": [{"name": j.name, "type": j.type.value} for j in model.joints],
+            "task_space": list(model.task_space),
+        },
+        "parameters": [{"name": p.name, "default": p.default, "unit": p.unit, "doc": p.doc, "fixed": p.fixed}
+                       for p in code.parameters],
+        "derived_quantities": list(derived),
+        "functions": [
+            {
+                "name": f.name,
+                "summary": f.spec.summary,
+                "inputs": [_input_record(i) for i in f.spec.inputs],
+                "outputs": [{"name": o.name, "shape": list(o.shape), "unit": o.unit, "doc": o.doc}
+                            for o in f.spec.outputs],
+                "op_counts": f.op_counts,
+                "backends": sorted(backend_files),
+            }
+            for f in code.functions
+        ],
+        "backends": {name: {"files": sorted(files)} for name, files in sorted(backend_files.items())},
+    }
+
+
+def dumps(manifest: dict) -> str:
+    """Deterministic JSON text of a manifest."""
+    return json.dumps(manifest, indent=2, ensure_ascii=False) + "\n"
+
+
+def read_manifest(directory: str | Path) -> dict:
+    """Read and sanity-check ``directory/manifest.json``.
+
+    Raises:
+        GeneratedCodeError: missing, unreadable or of an unknown version.
+    """
+    path = Path(directory) / MANIFEST_NAME
+    try:
+        manifest = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise GeneratedCodeError(f"{directory} holds no {MANIFEST_NAME}: is it the output of 'symkin derive'? "
+                                 "Pass the model's directory, e.g. generated/ur10e") from None
+    except (OSError, json.JSONDecodeError) as exc:
+        raise GeneratedCodeError(f"cannot read {path}: {exc}") from None
+    if manifest.get("manifest_version") != MANIFEST_VERSION:
+        raise GeneratedCodeError(f"{path}: manifest version {manifest.get('manifest_version')} is not "
+                                 f"{MANIFEST_VERSION}; derive the model again with this symkin")
+    return manifest

@@ -1,0 +1,173 @@
+"""The one-way pipeline: model -> derivation -> optimization -> backends -> files.
+
+:func:`generate` runs it for one model and returns a :class:`Generation` (files in
+memory plus a report); :func:`write` puts the files in place atomically.  The CLI and the
+tests both go through these two functions.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from symkin import manifest as manifest_io
+from symkin._version import __version__
+from symkin.atomic import replace_directory
+from symkin.backends import BACKENDS, get_backend
+from symkin.derivation import Derivation, emitted_quantities
+from symkin.errors import ModelError, Problem
+from symkin.ir.bundle import ModelCode, ParameterInfo
+from symkin.ir.spec import FunctionSpec, OptimizedFunction
+from symkin.model.schema import Model
+from symkin.optimize import optimize
+
+Progress = Callable[[str], None]
+
+
+@dataclass(frozen=True)
+class Request:
+    """What to generate for a model.
+
+    Attributes:
+        outputs: quantity names, in order.
+        fixed: parameters folded to their defaults.
+        backends: backend names.
+    """
+
+    outputs: tuple[str, ...]
+    fixed: tuple[str, ...]
+    backends: tuple[str, ...]
+
+
+@dataclass
+class FunctionReport:
+    """Per-function figures for the summary table."""
+
+    name: str
+    outputs: str
+    op_counts: dict[str, int]
+    derive_seconds: float
+    optimize_seconds: float
+
+
+@dataclass
+class Generation:
+    """The result of :func:`generate`: files to write and what happened."""
+
+    model: Model
+    request: Request
+    files: dict[str, str | bytes]
+    manifest: dict
+    functions: list[OptimizedFunction]
+    derived: list[str]
+    reports: list[FunctionReport] = field(default_factory=list)
+    emit_seconds: float = 0.0
+
+
+def _split(value: str | Sequence[str] | None) -> tuple[str, ...] | None:
+    if value is None:
+        return None
+    if isinstance(value, str):
+        return tuple(v.strip() for v in value.split(",") if v.strip())
+    return tuple(value)
+
+
+def resolve_request(model: Model, only: str | Sequence[str] | None = None,
+                    backends: str | Sequence[str] | None = None,
+                    fixed: str | Sequence[str] | None = None) -> Request:
+    """The request from the model's scene, overridden by explicit arguments (the CLI's flags).
+
+    Raises:
+        ModelError: a scene entry names no known output, backend or parameter (located in
+            the model file), or an explicit argument does (located at the command line).
+    """
+    problems: list[Problem] = []
+    known_outputs = emitted_quantities()
+    pnames = tuple(p.name for p in model.parameters)
+
+    def check(names: tuple[str, ...], known: Sequence[str], what: str, scene_key: str, from_cli: bool) -> None:
+        for i, name in enumerate(names):
+            if name in known:
+                continue
+            fix = f"use one of: {', '.join(known)}" if known else f"the model has no {what}s"
+            message = f"unknown {what} '{name}'"
+            if from_cli:
+                problems.append(Problem("<command line>", None, None, scene_key, message, fix))
+            else:
+                problems.append(model.problem(("scene", scene_key, i), message, fix))
+
+    outputs = _split(only)
+    check(outputs or model.scene.outputs, known_outputs, "output", "outputs", outputs is not None)
+    chosen_backends = _split(backends)
+    check(chosen_backends or model.scene.backends, tuple(BACKENDS), "backend", "backends", chosen_backends is not None)
+    fixed_names = _split(fixed)
+    if fixed_names == ("all",):
+        fixed_names = pnames
+    check(fixed_names or (), pnames, "parameter", "fixed", fixed_names is not None)
+    if problems:
+        raise ModelError(problems)
+    return Request(outputs=outputs or model.scene.outputs,
+                   fixed=fixed_names if fixed_names is not None else model.scene.fixed,
+                   backends=chosen_backends or model.scene.backends)
+
+
+def _describe_outputs(spec: FunctionSpec) -> str:
+    shown = [f"{o.name} {'x'.join(map(str, o.shape)) or 'scalar'}" for o in spec.outputs[:2]]
+    more = len(spec.outputs) - len(shown)
+    return ", ".join(shown) + (f" (+{more} more)" if more else "")
+
+
+def _quiet(_stage: str) -> None:
+    pass
+
+
+def generate(model: Model, request: Request, progress: Progress = _quiet) -> Generation:
+    """Derive, optimize and emit everything ``request`` asks for (files stay in memory)."""
+    derivation = Derivation(model)
+    functions: list[OptimizedFunction] = []
+    reports = []
+    for name in request.outputs:
+        progress(f"deriving {name}")
+        start = time.perf_counter()
+        (spec,) = derivation.functions([name])
+        derived_at = time.perf_counter()
+        progress(f"optimizing {name}")
+        optimized = optimize(spec, request.fixed)
+        done = time.perf_counter()
+        functions.append(optimized)
+        reports.append(FunctionReport(name, _describe_outputs(spec), optimized.op_counts,
+                                      derived_at - start, done - derived_at))
+    code = ModelCode(
+        name=model.name,
+        hash=model.hash,
+        description=model.description,
+        symkin_version=__version__,
+        coordinates=tuple(j.name for j in model.joints),
+        parameters=tuple(ParameterInfo(p.name, float(p.value), p.unit, p.doc, p.name in request.fixed)
+                         for p in model.parameters),
+        functions=tuple(functions),
+    )
+    files: dict[str, str | bytes] = {}
+    backend_files: dict[str, list[str]] = {}
+    start = time.perf_counter()
+    for backend_name in request.backends:
+        progress(f"emitting {backend_name} code")
+        emitted = get_backend(backend_name).emit(code)
+        overlap = set(emitted) & set(files)
+        if overlap:
+            raise RuntimeError(f"backend {backend_name} would overwrite {sorted(overlap)}")
+        files.update(emitted)
+        backend_files[backend_name] = sorted(emitted)
+    manifest = manifest_io.build_manifest(model, code, list(derivation.computed), backend_files)
+    files[manifest_io.MANIFEST_NAME] = manifest_io.dumps(manifest)
+    return Generation(model, request, files, manifest, functions, list(derivation.computed), reports,
+                          time.perf_counter() - start)
+
+
+def write(result: Generation, out_dir: str | Path) -> Path:
+    """Write the files of ``result`` atomically to ``out_dir/<model name>``; returns that path."""
+    target = Path(out_dir) / result.model.name
+    replace_directory(target, result.files)
+    return target

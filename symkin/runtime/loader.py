@@ -1,0 +1,89 @@
+"""Load the generated functions of a model directory written by ``symkin derive``.
+
+This module imports neither sympy nor jinja2: a control loop that only evaluates
+generated code pays for numpy (and the backend it picks) alone.
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from symkin.errors import GeneratedCodeError
+from symkin.manifest import MANIFEST_NAME, read_manifest
+
+
+class LoadedModel:
+    """The generated functions of one model, as attributes (``ur.fk(q)``, ``ur.jacobian(q)``).
+
+    Attributes:
+        name: model name.
+        backend: the backend the functions come from.
+        directory: the model directory.
+        manifest: the parsed ``manifest.json``.
+        functions: names of the generated functions.
+        parameters: default values of the free parameters (inputs of the functions).
+    """
+
+    def __init__(self, directory: Path, manifest: dict[str, Any], backend: str,
+                 functions: dict[str, Callable[..., Any]], bound: dict[str, float] | None = None):
+        self.directory = directory
+        self.manifest = manifest
+        self.backend = backend
+        self.name: str = manifest["model"]["name"]
+        self._raw = functions
+        self._bound = dict(bound or {})
+        self.functions = tuple(functions)
+        self.parameters = {p["name"]: p["default"] for p in manifest["parameters"] if not p["fixed"]}
+        self.parameters.update(self._bound)
+        accepted = {f["name"]: {i["name"] for i in f["inputs"] if i["kind"] == "parameter"}
+                    for f in manifest["functions"]}
+        for name, fn in functions.items():
+            bound_here = {k: v for k, v in self._bound.items() if k in accepted[name]}
+            setattr(self, name, functools.partial(fn, **bound_here) if bound_here else fn)
+
+    def bind(self, **parameters: float) -> LoadedModel:
+        """A view whose functions use these parameter values instead of the defaults.
+
+        Each function receives only the parameters it depends on, so one call binds a
+        design (e.g. ``arm.bind(l1=0.2, l2=0.2)``) for every function.
+
+        Raises:
+            KeyError: a name is not a free parameter of the model.
+        """
+        unknown = set(parameters) - set(self.parameters)
+        if unknown:
+            raise KeyError(f"{self.name}: not free parameters: {sorted(unknown)}; free: {sorted(self.parameters)}")
+        return LoadedModel(self.directory, self.manifest, self.backend, self._raw, {**self._bound, **parameters})
+
+    def __repr__(self) -> str:
+        return f"<symkin model {self.name!r} ({self.backend}): {', '.join(self.functions)}>"
+
+
+def load(path: str | Path, backend: str = "numpy") -> LoadedModel:
+    """Load the generated code of a model.
+
+    Args:
+        path: the model directory written by ``symkin derive`` (``OUT/<model>``) or its
+            ``manifest.json``.
+        backend: which emitted backend to use (``numpy`` by default).
+
+    Raises:
+        GeneratedCodeError: no manifest, or the backend was not emitted for this model.
+    """
+    from symkin.backends import BACKENDS
+
+    directory = Path(path)
+    if directory.name == MANIFEST_NAME:
+        directory = directory.parent
+    manifest = read_manifest(directory)
+    emitted = manifest.get("backends", {})
+    if backend not in emitted:
+        raise GeneratedCodeError(f"{directory}: no '{backend}' code was emitted (emitted: {', '.join(emitted)}); "
+                                 f"derive again with --backend {backend}")
+    if backend not in BACKENDS:
+        raise GeneratedCodeError(f"this symkin cannot load '{backend}' code (known: {', '.join(BACKENDS)})")
+    functions = BACKENDS[backend].load(directory, manifest)
+    return LoadedModel(directory, manifest, backend, functions)
