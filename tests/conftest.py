@@ -1,0 +1,64 @@
+"""Shared fixtures: example models, derivations, generated code and reference evaluators."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import sympy
+
+from symkin import pipeline
+from symkin.derivation import Derivation
+from symkin.ir.spec import FunctionSpec
+from symkin.model import Model, load_model
+
+ROOT = Path(__file__).resolve().parent.parent
+MODELS_DIR = ROOT / "models"
+GENERATED_DIR = ROOT / "generated"
+EXAMPLE_MODELS = sorted(p.stem for p in MODELS_DIR.glob("*.yaml"))
+SYMKIN_CLI = [sys.executable, "-m", "symkin"]
+
+
+@pytest.fixture(scope="session")
+def models() -> dict[str, Model]:
+    """Every example model, loaded once."""
+    return {name: load_model(MODELS_DIR / f"{name}.yaml") for name in EXAMPLE_MODELS}
+
+
+@pytest.fixture(scope="session")
+def derivations(models: dict[str, Model]) -> dict[str, Derivation]:
+    """One shared derivation graph per example model (quantities are memoized across tests)."""
+    return {name: Derivation(model) for name, model in models.items()}
+
+
+def reference_function(model: Model, spec: FunctionSpec, modules: str = "numpy"):
+    """Plain lambdify of the un-optimized outputs, parameters at their defaults.
+
+    Returns f(*vectors) -> list of arrays (one per output, shaped as declared).
+    """
+    vectors = [list(i.symbols) for i in spec.vector_inputs]
+    values = model.parameter_values
+    fns = [sympy.lambdify(vectors, sympy.Matrix(o.expr).xreplace(values), modules=modules) for o in spec.outputs]
+    shapes = [o.shape for o in spec.outputs]
+
+    def evaluate(*args):
+        return [np.asarray(fn(*args), dtype=float).reshape(shape) for fn, shape in zip(fns, shapes)]
+
+    return evaluate
+
+
+def random_q(model: Model, rng: np.random.Generator, size=None) -> np.ndarray:
+    """Random joint coordinates within +-pi (revolute) and +-0.5 m (prismatic)."""
+    shape = (model.dof,) if size is None else tuple(np.atleast_1d(size)) + (model.dof,)
+    return rng.uniform(-np.pi, np.pi, shape)
+
+
+@pytest.fixture(scope="session")
+def generated_dir(tmp_path_factory, models) -> Path:
+    """All example models derived with their scenes into a session temp directory."""
+    out = tmp_path_factory.mktemp("generated")
+    for model in models.values():
+        pipeline.write(pipeline.generate(model, pipeline.resolve_request(model)), out)
+    return out

@@ -1,0 +1,52 @@
+"""The command line: help everywhere, summary output, exit codes."""
+
+from __future__ import annotations
+
+import subprocess
+
+import pytest
+
+from conftest import MODELS_DIR, SYMKIN_CLI
+from symkin.cli import build_parser
+
+
+def _commands() -> list[str]:
+    parser = build_parser()
+    sub = next(a for a in parser._actions if a.dest == "command")
+    return sorted(sub.choices)
+
+
+@pytest.mark.parametrize("command", [[]] + [[c] for c in _commands()])
+def test_every_command_has_help(command):
+    result = subprocess.run(SYMKIN_CLI + command + ["--help"], capture_output=True, text=True)
+    assert result.returncode == 0
+    assert "usage: symkin" in result.stdout
+
+
+def test_derive_prints_a_summary_table(tmp_path):
+    result = subprocess.run(SYMKIN_CLI + ["derive", str(MODELS_DIR / "planar_2r.yaml"), "-o", str(tmp_path)],
+                            capture_output=True, text=True, check=True)
+    assert "planar_2r: 2 DoF" in result.stdout
+    assert "ops derived -> cse" in result.stdout
+    assert "jacobian" in result.stdout
+    assert (tmp_path / "planar_2r" / "manifest.json").exists()
+
+
+def test_check_validates_and_writes_nothing(tmp_path):
+    result = subprocess.run(SYMKIN_CLI + ["check", str(MODELS_DIR / "ur10e.yaml")], capture_output=True, text=True,
+                            check=True, cwd=tmp_path)
+    assert "ok - model 'ur10e', 6 joints" in result.stdout
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_quantities_lists_the_outputs():
+    result = subprocess.run(SYMKIN_CLI + ["quantities"], capture_output=True, text=True, check=True)
+    for name in ("fk", "frames", "jacobian", "jacobian_geometric", "task_coordinates"):
+        assert name in result.stdout
+
+
+def test_library_derive_matches_the_cli(tmp_path):
+    import symkin
+
+    path = symkin.derive(MODELS_DIR / "planar_2r.yaml", tmp_path, outputs=["fk"])
+    assert symkin.load(path).fk([0.0, 0.0])[0, 3] == pytest.approx(0.2)

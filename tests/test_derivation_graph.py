@@ -1,0 +1,86 @@
+"""The derivation graph derives what is asked for and what it needs, nothing more."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+
+import pytest
+
+from conftest import MODELS_DIR, SYMKIN_CLI
+from symkin import pipeline
+from symkin.derivation import Derivation, emitted_quantities, quantity
+from symkin.errors import DerivationError, ModelError
+
+
+def test_fk_alone_derives_no_jacobian_and_no_dynamics(models):
+    d = Derivation(models["ur10e"])
+    d.functions(["fk"])
+    assert d.computed == ["chain", "fk"]
+
+
+def test_quantities_are_memoized(models):
+    d = Derivation(models["ur10e"])
+    first = d["jacobian"]
+    assert d["jacobian"] is first
+    d["jacobian_geometric"]
+    assert d.computed.count("chain") == 1 and d.computed.count("jacobian_geometric_matrix") == 1
+
+
+def test_only_fk_on_the_command_line_is_recorded_in_the_manifest(tmp_path):
+    subprocess.run(SYMKIN_CLI + ["derive", str(MODELS_DIR / "ur10e.yaml"), "--only", "fk", "-o", str(tmp_path), "-q"],
+                   check=True)
+    manifest = json.loads((tmp_path / "ur10e" / "manifest.json").read_text())
+    assert manifest["derived_quantities"] == ["chain", "fk"]
+    assert [f["name"] for f in manifest["functions"]] == ["fk"]
+    text = (tmp_path / "ur10e" / "ur10e.py").read_text()
+    assert "def jacobian" not in text
+
+
+def test_manifest_describes_every_function(generated_dir):
+    manifest = json.loads((generated_dir / "ur10e" / "manifest.json").read_text())
+    assert manifest["model"]["name"] == "ur10e"
+    assert manifest["model"]["hash"].startswith("sha256:")
+    assert manifest["generator"]["symkin"]
+    fk = next(f for f in manifest["functions"] if f["name"] == "fk")
+    assert fk["inputs"][0] == {"name": "q", "kind": "vector", "shape": [6],
+                               "elements": ["q1", "q2", "q3", "q4", "q5", "q6"], "units": ["rad"] * 6,
+                               "doc": "joint coordinates"}
+    assert fk["outputs"][0]["name"] == "base_T_tcp" and fk["outputs"][0]["shape"] == [4, 4]
+    assert fk["op_counts"]["cse"] < fk["op_counts"]["derived"]
+    assert fk["backends"] == ["numpy"]
+    assert manifest["backends"]["numpy"]["files"] == ["ur10e.py"]
+
+
+def test_unknown_output_on_the_command_line_is_a_usage_error(tmp_path):
+    result = subprocess.run(SYMKIN_CLI + ["derive", str(MODELS_DIR / "ur10e.yaml"), "--only", "fk,jacobain",
+                                          "-o", str(tmp_path / "out")], capture_output=True, text=True)
+    assert result.returncode == 2
+    assert "unknown output 'jacobain'" in result.stderr and "jacobian" in result.stderr
+    assert not (tmp_path / "out").exists()
+
+
+def test_folding_parameters_removes_them_from_the_inputs(models):
+    model = models["planar_2r"]
+    result = pipeline.generate(model, pipeline.resolve_request(model, "fk", "numpy", "l1"))
+    (fk,) = result.manifest["functions"]
+    assert [i["name"] for i in fk["inputs"]] == ["q", "l2"]
+    assert "folded" in fk["op_counts"]
+    with pytest.raises(ModelError, match="unknown parameter 'l9'"):
+        pipeline.resolve_request(model, "fk", "numpy", "l9")
+
+
+def test_registering_a_quantity_twice_is_refused():
+    with pytest.raises(ValueError, match="registered twice"):
+        quantity("fk", "again")(lambda d: None)
+
+
+def test_internal_quantities_cannot_be_emitted(models):
+    assert "chain" not in emitted_quantities()
+    with pytest.raises(DerivationError, match="not an output"):
+        Derivation(models["planar_2r"]).functions(["chain"])
+
+
+def test_task_coordinates_need_coordinate_components(models):
+    with pytest.raises(DerivationError, match="angular velocity"):
+        Derivation(models["ur10e"])["task_coordinates"]
