@@ -30,9 +30,9 @@ test: setup
 ## generate: rewrite generated/ from the example models (the "update" switch of the golden tests)
 generate: demo
 
-## bench: derive-time and evaluation benchmarks (results printed, nothing timed in tests)
+## bench: run every benchmarks/bench_*.py (figures printed; speed is never asserted in tests)
 bench: setup
-	$(BIN)/python benchmarks/derive_time.py
+	@for script in benchmarks/bench_*.py; do echo "== $$script"; $(BIN)/python $$script || exit 1; done
 
 clean:
 	rm -rf $(VENV) build dist *.egg-info .pytest_cache

@@ -15,23 +15,12 @@ from __future__ import annotations
 import sympy
 
 from symkin.derivation.graph import Derivation, quantity
-from symkin.ir.spec import FunctionSpec, InputSpec, OutputSpec, make_function
+from symkin.derivation.inputs import coordinate_input
+from symkin.ir.spec import FunctionSpec, OutputSpec, make_function
 from symkin.kinematics import task_space
 from symkin.kinematics.chain import ChainFrames, compose_chain
 from symkin.model import coordinates
-from symkin.model.schema import JointType, Model
-
-
-def coordinate_input(model: Model, group: str) -> InputSpec:
-    """The vector input of a coordinate group (``q``, ``qd``, ``qdd``, ``tau``)."""
-    return InputSpec(
-        name=group,
-        kind="vector",
-        symbols=coordinates.symbols(model, group),
-        element_names=tuple(j.name for j in model.joints),
-        units=coordinates.units(model, group),
-        doc=coordinates.GROUPS[group].doc,
-    )
+from symkin.model.schema import JointType
 
 
 @quantity("chain", "link frames, joint axes and TCP frame of the serial chain", emitted=False)

@@ -1,6 +1,6 @@
 """Derive time of every example model: load, derive, optimize, emit (median of several runs).
 
-Run with `make bench` or `python benchmarks/derive_time.py [--repeat N] [MODEL ...]`.
+Run with `make bench` or `python benchmarks/bench_derive.py [--repeat N] [MODEL ...]`.
 Each run starts from a fresh derivation graph (nothing memoized between runs).
 """
 
