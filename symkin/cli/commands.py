@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
-from symkin.cli import check_cmd, derive_cmd
+from symkin.cli import bench_cmd, check_cmd, derive_cmd
 
 REGISTRY = [
     derive_cmd.register,
     check_cmd.register_check,
     check_cmd.register_quantities,
+    bench_cmd.register,
 ]
