@@ -12,6 +12,7 @@ import hashlib
 from collections.abc import Callable, Iterable
 from typing import Any
 
+import numpy as np
 import sympy
 
 from symkin.errors import ModelError, Problem
@@ -493,8 +494,7 @@ def _unit_axis(r: _Reader, path: KeyPath, value: Any) -> Vec3 | None:
     if norm == 0:
         r.fail(path, "the joint axis is the zero vector", "give the axis direction, e.g. [0, 0, 1]")
         return None
-    unit = tuple(sympy.nsimplify(c / norm) if not (c / norm).is_Rational else c / norm for c in vec)
-    return (unit[0], unit[1], unit[2])
+    return (vec[0] / norm, vec[1] / norm, vec[2] / norm)
 
 
 def _frame_ops(r: _Reader, path: KeyPath, value: Any) -> tuple[Op, ...] | None:
@@ -669,8 +669,6 @@ def _rotate_inertia(r: _Reader, path: KeyPath, value: Any, inertia: sympy.Matrix
 
 def _check_inertia_physical(r: _Reader, path: KeyPath, tensor: sympy.Matrix) -> None:
     """At default parameter values the principal moments are >= 0 and obey the triangle inequality."""
-    import numpy as np
-
     values = [r.default_value(v) for v in tensor]
     if any(v is None for v in values):
         return
