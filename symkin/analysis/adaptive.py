@@ -9,6 +9,18 @@ without the 2^d corner points) gives the region's error estimate |I_7 - I_5|.  R
 are split in two halves across the axis with the largest fourth divided difference
 (where the integrand is least polynomial).
 
+A region that straddles the boundary of the integration domain (an integrand with an
+``indicator`` component whose value differs between the region's nodes) gets the error
+estimate V (max f - min f) over its nodes instead: |I_7 - I_5| means nothing across a
+jump, and this bound steers the refinement along the boundary (a quadtree-like
+resolution of the domain, error falling as the area of the boundary regions).  The
+region's 2^d corners are probed too (not integrated), to catch more boundary crossings.
+
+Such a boundary can also pass between all nodes of a region (a thin cusp of the
+workspace): integrands with an indicator therefore start from a uniform partition of the
+box that takes a quarter of the budget, so that what stays hidden shrinks as the budget
+grows.
+
 Unlike the textbook algorithm, which splits one region per step, every step here splits
 the regions that carry the larger half of the estimated error at once and evaluates all
 their children's nodes in one call of the integrand: the generated numpy (or C) code then
@@ -48,12 +60,15 @@ class GenzMalikRule:
         degree7: (P,) weights of the degree-7 rule (normalized to sum 1).
         degree5: (P,) weights of the embedded degree-5 rule (0 on the corner nodes).
         axis_nodes: (d, 4) indices of +lambda2 e_i, -lambda2 e_i, +lambda3 e_i, -lambda3 e_i.
+        corners: (2^d, d) corners of the cube, probed (not integrated) for jumps of an
+            indicator.
     """
 
     nodes: np.ndarray
     degree7: np.ndarray
     degree5: np.ndarray
     axis_nodes: np.ndarray
+    corners: np.ndarray
 
 
 @lru_cache(maxsize=None)
@@ -89,19 +104,28 @@ def genz_malik_rule(d: int) -> GenzMalikRule:
     w5[1:1 + 2 * d] = 245 / 486
     w5[1 + 2 * d:first_pair] = (265 - 100 * d) / 1458
     w5[first_pair:first_corner] = 25 / 729
-    return GenzMalikRule(nodes, w7, w5, axis_nodes)
+    corners = np.array(list(product((1.0, -1.0), repeat=d)))
+    return GenzMalikRule(nodes, w7, w5, axis_nodes, corners)
 
 
 def _apply(integrand: Integrand, rule: GenzMalikRule, centers: np.ndarray, halves: np.ndarray,
            scale: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Estimates (R, k), error estimates (R, k) and split axes (R,) of R regions, one integrand call."""
     R, d = centers.shape
-    P = len(rule.nodes)
-    points = (centers[:, None, :] + halves[:, None, :] * rule.nodes[None, :, :]).reshape(R * P, d)
-    f = integrand(points).reshape(R, P, -1)
+    nodes = rule.nodes if integrand.indicator is None else np.concatenate([rule.nodes, rule.corners])
+    P = len(nodes)
+    points = (centers[:, None, :] + halves[:, None, :] * nodes[None, :, :]).reshape(R * P, d)
+    values = integrand(points).reshape(R, P, -1)
+    f = values[:, :len(rule.nodes)]
     volume = np.prod(2.0 * halves, axis=1)[:, None]
     high = volume * np.einsum("p,rpk->rk", rule.degree7, f)
     low = volume * np.einsum("p,rpk->rk", rule.degree5, f)
+    error = np.abs(high - low)
+    if integrand.indicator is not None:
+        jump = values[:, :, integrand.indicator]
+        straddling = jump.max(axis=1) != jump.min(axis=1)
+        spread = volume * (values.max(axis=1) - values.min(axis=1))
+        error = np.where(straddling[:, None], np.maximum(error, spread), error)
     center = f[:, :1, :]
     a = rule.axis_nodes
     second2 = f[:, a[:, 0], :] + f[:, a[:, 1], :] - 2.0 * center
@@ -113,7 +137,7 @@ def _apply(integrand: Integrand, rule: GenzMalikRule, centers: np.ndarray, halve
     # (so that a locally polynomial integrand is bisected evenly).
     candidates = fourth >= (1.0 - 1e-3) * fourth.max(axis=1, keepdims=True)
     axes = np.argmax(np.where(candidates, halves, -1.0), axis=1)
-    return high, np.abs(high - low), axes
+    return high, error, axes
 
 
 def adaptive(integrand: Integrand, samples: int, *, rtol: float = 0.0) -> IntegralEstimate:
@@ -133,14 +157,18 @@ def adaptive(integrand: Integrand, samples: int, *, rtol: float = 0.0) -> Integr
     """
     d = integrand.dimension
     rule = genz_malik_rule(d)
-    P = len(rule.nodes)
+    P = len(rule.nodes) + (len(rule.corners) if integrand.indicator is not None else 0)
     if samples < P:
         raise ValueError(f"the adaptive rule needs at least {P} evaluations in {d} dimensions, got {samples}")
     lower, upper = np.asarray(integrand.lower, float), np.asarray(integrand.upper, float)
-    centers = ((lower + upper) / 2)[None, :]
-    halves = ((upper - lower) / 2)[None, :]
+    # A continuous integrand starts from the whole box; one with a domain indicator from a
+    # uniform partition that takes a quarter of the budget, so that no part of the
+    # domain's boundary can hide between the nodes of a large region for long.
+    per_axis = 1 if integrand.indicator is None else max(1, int((samples / (4 * P)) ** (1.0 / d)))
+    halves = np.tile((upper - lower) / (2 * per_axis), (per_axis**d, 1))
+    centers = lower + halves * (2 * np.array(list(product(range(per_axis), repeat=d))) + 1)
     est, err, axes = _apply(integrand, rule, centers, halves, None)
-    evaluations = P
+    evaluations = P * per_axis**d
     while True:
         total, total_error = est.sum(axis=0), err.sum(axis=0)
         scale = np.maximum(np.abs(total), 1e-300)

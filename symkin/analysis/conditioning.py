@@ -35,31 +35,20 @@ def _rank_threshold(J: np.ndarray) -> float:
     return max(J.shape[-2:]) * _EPS
 
 
-def _gram(J: np.ndarray) -> np.ndarray:
-    """The smaller Gram matrix: J^T J if m >= n, else J J^T (k x k with k = min(m, n))."""
-    if J.shape[-2] >= J.shape[-1]:
-        return np.swapaxes(J, -1, -2) @ J
-    return J @ np.swapaxes(J, -1, -2)
-
-
 def _extreme_singular_values(J: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(sigma_max, sigma_min) with the numerical-rank rule applied to sigma_min.
 
-    For k = min(m, n) = 2 the closed form of the 2 x 2 Gram matrix G is used (no LAPACK
-    call, several times faster over large batches): sigma_max^2 = (t + sqrt(t^2 - 4 d)) / 2
-    with t = tr G = sigma_1^2 + sigma_2^2 and d = det G = (sigma_1 sigma_2)^2, then
-    sigma_min = sqrt(d) / sigma_max, which keeps full relative accuracy near singular
-    configurations (no cancellation) and is exactly 0 where det J = 0.  For square J,
-    sqrt(d) is computed as |det J| directly.
+    For a 2 x 2 J a closed form is used (no LAPACK call, several times faster over large
+    batches): with t = ||J||_F^2 = sigma_1^2 + sigma_2^2 and |det J| = sigma_1 sigma_2,
+    sigma_max^2 = (t + sqrt(t^2 - 4 det^2)) / 2 and sigma_min = |det J| / sigma_max.  This
+    avoids the subtraction t - sqrt(...) that would lose half the digits of sigma_min, so
+    1/kappa is as accurate as an SVD's (absolute error of a few eps) and exactly 0 where
+    det J = 0.
     """
     m, n = J.shape[-2:]
-    if min(m, n) == 2:
-        G = _gram(J)
-        trace = G[..., 0, 0] + G[..., 1, 1]
-        if m == n:
-            root_det = np.abs(J[..., 0, 0] * J[..., 1, 1] - J[..., 0, 1] * J[..., 1, 0])
-        else:
-            root_det = np.sqrt(np.maximum(G[..., 0, 0] * G[..., 1, 1] - G[..., 0, 1] * G[..., 1, 0], 0.0))
+    if m == n == 2:
+        trace = np.einsum("...ij,...ij->...", J, J)
+        root_det = np.abs(J[..., 0, 0] * J[..., 1, 1] - J[..., 0, 1] * J[..., 1, 0])
         discriminant = np.sqrt(np.maximum(trace * trace - 4.0 * root_det * root_det, 0.0))
         sigma_max = np.sqrt(0.5 * (trace + discriminant))
         with np.errstate(invalid="ignore", divide="ignore"):

@@ -62,6 +62,13 @@ def reference_gci(model: Any, *, samples: int = REFERENCE_SAMPLES, rtol: float =
                **kwargs).value
 
 
+def _warm_up(model: Any, methods: Sequence[str], domains: Sequence[str], seed: int, kwargs: dict) -> None:
+    """One small run of each integrator, so that one-time imports (scipy.stats) are not timed."""
+    for domain in domains:
+        for method in methods:
+            gci(model, method=method, samples=512, seed=seed, domain=domain, **kwargs)
+
+
 def time_against_error(model: Any, reference: Estimate, *, methods: Sequence[str], budgets: Sequence[int] = DEFAULT_BUDGETS,
                        domains: Sequence[str] = ("joint",), repeats: int = 3, seed: int = 0,
                        progress: Callable[[str], None] | None = None, **kwargs) -> list[Trial]:
@@ -72,13 +79,20 @@ def time_against_error(model: Any, reference: Estimate, *, methods: Sequence[str
         reference: the reference value (see :func:`reference_gci`).
         methods: integrators to run.
         budgets: integrand evaluations per run.
-        domains: ``joint`` and/or ``cartesian`` (the latter needs ``inverse=``).
+        domains: ``joint`` and/or ``cartesian`` (the latter needs ``inverse=``; its box
+            is computed once, before the timed runs, unless ``box=`` is given).
         repeats: runs per point; the fastest wall time is kept (the estimate is the same
             for a given seed).
         seed: seed of the random integrators.
         progress: called with a description of each run.
         kwargs: more arguments of :func:`symkin.analysis.global_indices.gci` (limits, inverse, box...).
     """
+    if "cartesian" in domains and kwargs.get("box") is None:
+        # The Cartesian box is found once (joint grid through fk), not timed in every run.
+        from symkin.analysis.workspace import bounding_box
+
+        kwargs["box"] = bounding_box(model, limits=kwargs.get("limits"))
+    _warm_up(model, methods, domains, seed, kwargs)
     trials = []
     for domain in domains:
         for method in methods:

@@ -158,7 +158,7 @@ def cartesian_integrand(model: Any, inverse: InverseKinematics, box: tuple[np.nd
 
     axes = tuple("xyz"[a] for a in mechanism.position_axes(model))
     components = ("index dW", "dW") if scored is not None else ("dW",)
-    return Integrand(lower, upper, function, components, axes)
+    return Integrand(lower, upper, function, components, axes, indicator=len(components) - 1)
 
 
 @dataclass(frozen=True)
@@ -228,8 +228,9 @@ def global_index(model: Any, *, method: str = "qmc", samples: int = 2**16, seed:
     result = integrate(integrand, method, samples, seed=seed, **options)
     caveat = ""
     if domain == "cartesian" and not result.statistical:
-        caveat = (f"the reachability indicator is discontinuous: the {method} error estimate is indicative, "
-                  "not a bound; use mc or qmc for a confidence interval")
+        caveat = (f"the reachability indicator is discontinuous: the {method} error estimate assumes that its "
+                  "sample points see every crossing of the workspace boundary; mc and qmc give a confidence "
+                  "interval without that assumption")
     return GlobalIndex(result.ratio(0, 1), result.component(1), result, description, caveat)
 
 

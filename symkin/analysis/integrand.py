@@ -22,6 +22,10 @@ class Integrand:
             evaluates the whole batch through the generated code).
         components: names of the k components, e.g. ("1/kappa dW", "dW").
         variables: names of the d coordinates, e.g. joint names or ("x", "y").
+        indicator: index of a component that is the 0/1 indicator of the integration
+            domain inside the box (a reachability test), or None for an integrand that is
+            continuous on the box; where it jumps, every component may jump, which the
+            adaptive integrator must know (see :mod:`symkin.analysis.adaptive`).
     """
 
     lower: np.ndarray
@@ -29,6 +33,7 @@ class Integrand:
     function: Callable[[np.ndarray], np.ndarray]
     components: tuple[str, ...]
     variables: tuple[str, ...]
+    indicator: int | None = None
 
     @property
     def dimension(self) -> int:
