@@ -38,6 +38,7 @@ def test_fig_8_19_is_reproduced_by_the_documented_command(tmp_path, capsys):
     areas = [float(a) for a in re.findall(r"area: ([0-9.e-]+) \+- [0-9.e-]+ m\^2 \(qmc, \|det J\|", out)]
     assert areas == pytest.approx([np.pi / 2 * 0.01, np.pi / 2 * 0.04], rel=1e-6)
     assert out.count("singular configurations: 200, of which 200 on the workspace boundary") == 2
+    assert "planar_2r (l1 = 20 cm, l2 = 20 cm): 40000 configurations" in out
 
 
 def test_workspace_of_a_model_file_derives_it_on_the_fly(tmp_path, capsys):
@@ -76,8 +77,9 @@ def test_bench_gci_prints_a_table_and_plots_time_against_error(tmp_path, capsys)
     assert main(["bench", "gci", ARM_DIR, "--budgets", "256,4096", "--repeats", "1", "-o", str(figure)]) == 0
     out = capsys.readouterr().out
     assert "GCI reference 0.22334089896201" in out
-    rows = [line for line in out.splitlines() if re.match(r"\s+(joint|cartesian)\s", line)]
+    rows = [line for line in out.splitlines() if re.match(r"\s+(joint|cartesian)\s.*(yes|NO)$", line)]
     assert len(rows) == 2 * 4 * 2  # domains x integrators x budgets
+    assert "fastest run reaching a relative error of the GCI of:" in out
     assert figure.read_bytes()[:8] == PNG
 
 

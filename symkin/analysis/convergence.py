@@ -108,3 +108,19 @@ def time_against_error(model: Any, reference: Estimate, *, methods: Sequence[str
                 trials.append(Trial(domain, method, samples, estimate.evaluations, best, estimate,
                                     abs(estimate.value - reference.value)))
     return trials
+
+
+def fastest_within(trials: Sequence[Trial], relative_error: float) -> dict[tuple[str, str], Trial | None]:
+    """For each (domain, method), the fastest trial whose achieved error is within ``relative_error``.
+
+    The achieved error is relative to the reference value (|estimate - reference| /
+    |reference|, computed from the trial's ``achieved`` and its estimate).
+    """
+    best: dict[tuple[str, str], Trial | None] = {}
+    for t in trials:
+        key = (t.domain, t.method)
+        best.setdefault(key, None)
+        reference = abs(t.estimate.value) or 1.0
+        if t.achieved <= relative_error * reference and (best[key] is None or t.seconds < best[key].seconds):
+            best[key] = t
+    return best

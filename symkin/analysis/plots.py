@@ -138,27 +138,30 @@ def plot_index_map(cloud: WorkspaceCloud, values: np.ndarray, path: str | Path, 
     return _save(figure, path)
 
 
-def plot_time_against_error(series: dict[str, tuple[Sequence[float], Sequence[float]]], path: str | Path, *,
-                            title: str = "Run time against error", estimated: dict | None = None) -> Path:
-    """Log-log plot of wall time against achieved error, one line per integrator.
+def plot_time_against_error(panels: dict[str, dict[str, tuple[Sequence[float], Sequence[float], Sequence[float]]]],
+                            path: str | Path, *, title: str = "Run time against error") -> Path:
+    """Log-log plots of wall time against error, one panel per domain, one colour per integrator.
 
     Args:
-        series: name -> (times in s, achieved absolute errors).
-        estimated: optional name -> (times, estimated errors), drawn dashed.
+        panels: panel title -> integrator name -> (times in s, achieved absolute errors,
+            estimated errors); achieved errors are drawn solid, estimates dashed.
     """
-    figure = _figure((6.4, 4.8))
-    ax = figure.add_subplot()
+    figure = _figure((5.0 * len(panels) + 1.5, 4.6))
+    axes = figure.subplots(1, len(panels), sharey=True, squeeze=False)[0]
     floor = 1e-17
-    for k, (name, (times, errors)) in enumerate(series.items()):
-        color = f"C{k}"
-        ax.loglog(np.asarray(times) * 1e3, np.maximum(errors, floor), "o-", color=color, label=f"{name}: achieved")
-        if estimated and name in estimated:
-            t, e = estimated[name]
-            ax.loglog(np.asarray(t) * 1e3, np.maximum(e, floor), "x--", color=color, alpha=0.7,
+    names = list(dict.fromkeys(name for series in panels.values() for name in series))
+    for ax, (panel, series) in zip(axes, panels.items()):
+        for name, (times, achieved, estimated) in series.items():
+            color = f"C{names.index(name)}"
+            milliseconds = np.asarray(times) * 1e3
+            ax.loglog(milliseconds, np.maximum(achieved, floor), "o-", color=color, label=f"{name}: achieved")
+            ax.loglog(milliseconds, np.maximum(estimated, floor), "x--", color=color, alpha=0.6,
                       label=f"{name}: estimated")
-    ax.set_xlabel("wall time [ms]")
-    ax.set_ylabel("absolute error against the reference")
-    ax.grid(True, which="both", lw=0.3)
-    ax.set_title(title)
-    ax.legend(fontsize="small")
+        ax.set_xlabel("wall time [ms]")
+        ax.set_title(panel, fontsize="medium")
+        ax.grid(True, which="both", lw=0.3)
+    axes[0].set_ylabel("absolute error of the GCI")
+    handles, labels = axes[0].get_legend_handles_labels()
+    figure.legend(handles, labels, loc="outside right center", fontsize="small")
+    figure.suptitle(title)
     return _save(figure, path)

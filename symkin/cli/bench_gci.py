@@ -65,17 +65,20 @@ def run(args: argparse.Namespace) -> int:
              f"{t.estimate.error:.2e}", f"{t.achieved:.2e}", "yes" if t.bracketed else "NO"] for t in trials]
     print(format_table(["domain", "method", "evaluations", "time ms", "GCI", "est. error", "achieved", "bracketed"],
                        rows))
-    series, estimated = {}, {}
+    print("fastest run reaching a relative error of the GCI of:")
+    targets = (1e-3, 1e-6, 1e-9)
+    best = [convergence.fastest_within(trials, target) for target in targets]
+    summary = [[domain, method] + [f"{b[(domain, method)].seconds * 1e3:.2f} ms ({b[(domain, method)].evaluations})"
+                                   if b[(domain, method)] else "-" for b in best]
+               for domain, method in best[0]]
+    print(format_table(["domain", "method"] + [f"{t:g}" for t in targets], summary))
+    panels: dict = {}
     for t in trials:
-        key = f"{t.method} ({t.domain})"
-        series.setdefault(key, ([], []))
-        estimated.setdefault(key, ([], []))
-        series[key][0].append(t.seconds)
-        series[key][1].append(t.achieved)
-        estimated[key][0].append(t.seconds)
-        estimated[key][1].append(t.estimate.error)
-    path = plots.plot_time_against_error(series, args.out or f"bench-results/{model.name}-gci-time-vs-error.png",
-                                         title=f"GCI of {model.name}: wall time against error ({model.backend})",
-                                         estimated=estimated)
+        times, achieved, estimated = panels.setdefault(f"{t.domain} domain", {}).setdefault(t.method, ([], [], []))
+        times.append(t.seconds)
+        achieved.append(t.achieved)
+        estimated.append(t.estimate.error)
+    path = plots.plot_time_against_error(panels, args.out or f"bench-results/{model.name}-gci-time-vs-error.png",
+                                         title=f"GCI of {model.name}: wall time against error ({model.backend})")
     print(f"figure: {path}")
     return 0

@@ -58,7 +58,7 @@ def run(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     with Progress(base.name) as progress:
         for values, model in zip(designs, models):
-            label = ", ".join(f"{k} = {v:g}" for k, v in values.items()) or "model parameters"
+            label = _label(base, values, args.unit)
             progress(f"sampling {label}")
             try:
                 cloud = workspace.sample_workspace(model, args.samples, method=method, limits=limits, seed=args.seed)
@@ -88,6 +88,14 @@ def run(args: argparse.Namespace) -> int:
             print(f"1/kappa map: {path}")
     print(f"done in {time.perf_counter() - start:.2f} s")
     return 0
+
+
+def _label(model, values: dict[str, float], unit: str) -> str:
+    """'l1 = 10 cm, l2 = 10 cm': the design's values, lengths (unit m in the manifest) in the figure's unit."""
+    units = {p["name"]: p["unit"] for p in model.manifest["parameters"]}
+    parts = [f"{name} = {value * UNITS[unit]:g} {unit}" if units.get(name) == "m" else f"{name} = {value:g}"
+             for name, value in values.items()]
+    return ", ".join(parts) or "model parameters"
 
 
 def _length(text: str) -> float | str:
