@@ -54,7 +54,7 @@ LENGTH_SAMPLES_LOG2 = 10
 def scaled_index(model: Any, index: Index, length: float | str | None, limits: np.ndarray) -> Index:
     """The index, applied to the homogenized Jacobian when the task space mixes lengths and angles."""
     rows = mechanism.position_rows(model)
-    if 0 < len(rows) < len(mechanism.task_space(model)):
+    if mechanism.mixes_translations_and_rotations(model):
         if length is None:
             raise ValueError(f"{model.name}: the task space {list(mechanism.task_space(model))} mixes translations "
                              "and rotations: give a characteristic length (length=L in m, or 'auto')")

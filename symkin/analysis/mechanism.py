@@ -113,3 +113,12 @@ def is_positional(model: Any) -> bool:
     in metres^d) wherever the map q -> TCP is one-to-one.
     """
     return len(position_rows(model)) == len(task_space(model)) == len(coordinate_names(model))
+
+
+def mixes_translations_and_rotations(model: Any) -> bool:
+    """Whether the task Jacobian has both translational rows (m/rad) and rotational rows (rad/rad).
+
+    Its singular values then mix units, and conditioning indices need a characteristic
+    length (:func:`symkin.analysis.conditioning.homogenize`).
+    """
+    return 0 < len(position_rows(model)) < len(task_space(model))

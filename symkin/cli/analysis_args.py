@@ -30,6 +30,47 @@ def add_model_arguments(p: argparse.ArgumentParser) -> None:
                         "e.g. --limit theta2=-90deg:90deg (repeatable)")
 
 
+def add_length_argument(p: argparse.ArgumentParser) -> None:
+    """--length: the characteristic length of task spaces that mix translations and rotations."""
+    p.add_argument("--length", metavar="L", default="auto",
+                   help="characteristic length [m] for task spaces mixing translations and rotations, or "
+                        "'auto' (default: the length minimizing the mean kappa_F^2)")
+
+
+def parse_length(text: str) -> float | str:
+    """A positive number of metres, or "auto".
+
+    Raises:
+        ValueError: anything else.
+    """
+    if text == "auto":
+        return text
+    try:
+        value = float(text)
+    except ValueError:
+        raise ValueError(f"--length: '{text}' is neither a length in m nor 'auto'") from None
+    if not value > 0:
+        raise ValueError(f"--length must be positive, got {text}")
+    return value
+
+
+def resolve_length(model: Any, text: str, limits: dict) -> float | None:
+    """The characteristic length to use for ``model`` (None if its task space needs none).
+
+    With "auto" the length is computed here, once, and printed.
+    """
+    from symkin.analysis import global_indices, mechanism
+
+    length = parse_length(text)
+    if not mechanism.mixes_translations_and_rotations(model):
+        return None
+    if length == "auto":
+        length = global_indices.characteristic_length_of(model, mechanism.joint_limits(model, limits))
+        print(f"{model.name}: characteristic length L = {length:.6g} m (minimizes the mean kappa_F^2; "
+              "set with --length)")
+    return length
+
+
 def parse_assignments(texts: list[str]) -> dict[str, float]:
     """``["l1=0.2,l2=0.2", "m1=1"]`` -> {"l1": 0.2, "l2": 0.2, "m1": 1.0}.
 

@@ -25,8 +25,7 @@ def register(kinds: argparse._SubParsersAction) -> None:
                    help="joint and/or cartesian (default: both where an inverse kinematics exists)")
     p.add_argument("--repeats", type=int, default=3, help="timed runs per point, the fastest kept (default: 3)")
     p.add_argument("--seed", type=int, default=0, help="seed of mc/qmc (default: %(default)s)")
-    p.add_argument("--length", metavar="L", default="auto",
-                   help="characteristic length [m] for mixed task spaces, or 'auto' (default)")
+    analysis_args.add_length_argument(p)
     p.add_argument("-o", "--out", metavar="FIGURE",
                    help="plot of time against error (default: bench-results/MODEL_NAME-gci-time-vs-error.png)")
     p.set_defaults(run=run, parser=p)
@@ -44,7 +43,7 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError(f"unknown integrators {unknown}; choose from {', '.join(INTEGRATORS)}")
         budgets = ([int(b) for b in args.budgets.split(",") if b.strip()] if args.budgets
                    else list(convergence.DEFAULT_BUDGETS))
-        length = args.length if args.length == "auto" else float(args.length)
+        length = analysis_args.resolve_length(model, args.length, limits)
         ik = inverse.inverse_kinematics_for(model)
         domains = ["joint", "cartesian"] if args.domains == "auto" else [d.strip() for d in args.domains.split(",")]
         if args.domains == "auto" and ik is None:

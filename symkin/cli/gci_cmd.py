@@ -43,41 +43,33 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="joint domain: dW = |det J| dq (cartesian, default) or dq (joint)")
     p.add_argument("--index", choices=tuple(INDICES), default="inverse-condition",
                    help="local index to average (default: %(default)s = 1/kappa, the GCI)")
-    p.add_argument("--length", metavar="L", default="auto",
-                   help="characteristic length [m] for task spaces mixing translations and rotations, or "
-                        "'auto' (default)")
+    analysis_args.add_length_argument(p)
     p.add_argument("--seed", type=int, default=None, help="seed of mc/qmc (default: fresh randomness)")
     p.add_argument("--map", metavar="FIGURE", help="also draw the local index over the workspace into FIGURE")
     p.set_defaults(run=run, parser=p)
 
 
 def run(args: argparse.Namespace) -> int:
-    from symkin.analysis import conditioning, global_indices, inverse, mechanism, plots, workspace
+    from symkin.analysis import conditioning, global_indices, inverse, plots, workspace
     from symkin.analysis.integrators import STATISTICAL
 
     index = getattr(conditioning, INDICES[args.index])
-    length = args.length if args.length == "auto" else None
     try:
         model, limits = analysis_args.model_from_args(args)
-        if length is None:
-            length = float(args.length)
+        length = analysis_args.resolve_length(model, args.length, limits)
         ik = inverse.inverse_kinematics_for(model) if args.domain == "cartesian" else None
         if args.domain == "cartesian" and ik is None:
             raise ValueError(f"{model.name}: no inverse kinematics is available for the Cartesian domain "
                              "(closed forms: planar 2R); use --domain joint")
         options = {"rtol": args.rtol} if args.method == "adaptive" else {}
-        if length == "auto" and mechanism.position_rows(model) and not mechanism.is_positional(model):
-            length = global_indices.characteristic_length_of(model, mechanism.joint_limits(model, limits))
-            print(f"{model.name}: characteristic length L = {length:.6g} m (minimizes the mean kappa_F^2; "
-                  "set with --length)")
         if args.method in STATISTICAL:
             import scipy.stats  # noqa: F401  (a one-time import of about a second, kept out of the timing)
         start = time.perf_counter()
         with Progress(model.name) as progress:
             progress(f"{args.method} over the {args.domain} domain, {args.samples} samples")
-            result = global_indices.global_index(model, method=args.method, samples=args.samples, seed=args.seed,
-                                      domain=args.domain, measure=args.measure, index=index, limits=limits,
-                                      length=length, inverse=ik, **options)
+            result = global_indices.global_index(
+                model, method=args.method, samples=args.samples, seed=args.seed, domain=args.domain,
+                measure=args.measure, index=index, limits=limits, length=length, inverse=ik, **options)
             seconds = time.perf_counter() - start
             if args.map:
                 progress("drawing")

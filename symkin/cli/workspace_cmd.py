@@ -34,9 +34,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--map", metavar="FIGURE", help="also draw 1/kappa over the workspace into FIGURE "
                                                    "(first design)")
     p.add_argument("--no-figure", action="store_true", help="print the report only")
-    p.add_argument("--length", metavar="L", default="auto",
-                   help="characteristic length [m] for task spaces mixing translations and rotations, or "
-                        "'auto' (default)")
+    analysis_args.add_length_argument(p)
     p.add_argument("--unit", choices=tuple(UNITS), default="m", help="length unit of the figures (default: m)")
     p.add_argument("--title", help="figure title")
     p.set_defaults(run=run, parser=p)
@@ -50,10 +48,10 @@ def run(args: argparse.Namespace) -> int:
         designs = [analysis_args.parse_assignments([text]) for text in args.design] or [{}]
         models = [base.bind(**values) if values else base for values in designs]
         joints = mechanism.joint_limits(base, limits).shape[0]
+        length = analysis_args.resolve_length(base, args.length, limits)  # of the base design, for all designs
     except (ValueError, KeyError) as err:
         analysis_args.fail_on_bad_input(args, err)
     method = args.method or workspace.default_method(base)
-    length = _length(args.length)
     layers = []
     start = time.perf_counter()
     with Progress(base.name) as progress:
@@ -96,10 +94,6 @@ def _label(model, values: dict[str, float], unit: str) -> str:
     parts = [f"{name} = {value * UNITS[unit]:g} {unit}" if units.get(name) == "m" else f"{name} = {value:g}"
              for name, value in values.items()]
     return ", ".join(parts) or "model parameters"
-
-
-def _length(text: str) -> float | str:
-    return text if text == "auto" else float(text)
 
 
 def _report(model, cloud, inv_kappa, limits, progress) -> list[str]:
