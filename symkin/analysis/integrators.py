@@ -13,7 +13,7 @@ number of integrand evaluations to spend, approximately for the grid) and return
   but not a bound;
 * ``mc``: plain Monte Carlo with uniform points; standard error from the sample
   covariance, 95 % normal confidence half-width;
-* ``qmc``: randomized quasi-Monte Carlo: ``replicates`` independently randomized Sobol
+* ``qmc``: randomized quasi-Monte Carlo: ``replicates`` independently scrambled Sobol
   point sets of 2^m points each (:func:`symkin.analysis.sampling.sobol`), evaluated in
   one batch; the estimate is their mean and the error the 95 % Student-t half-width
   from their spread (Owen, "Monte Carlo theory, methods and examples", ch. 17);
