@@ -174,3 +174,18 @@ def test_limit_curves_trace_the_fig_8_19_outline():
     radius = [np.linalg.norm(c, axis=1) for c in curves]
     assert np.allclose(radius[2], 0.2)  # theta2 = 0: the outer arc
     assert np.allclose(radius[3], np.hypot(0.1, 0.1))  # theta2 = 90 deg: the inner arc
+
+
+def test_analyses_do_not_import_sympy():
+    """Analyses run on generated code only: data flows one way, and a design loop pays for numpy and scipy."""
+    import subprocess
+    import sys
+
+    code = ("import sys; import symkin; from symkin import analysis; "
+            f"arm = symkin.load({str(GENERATED_DIR / 'planar_2r')!r}); "
+            "analysis.gci(arm, method='qmc', samples=1024, seed=0); "
+            "analysis.sample_workspace(arm, 100); "
+            "import symkin.analysis.plots, symkin.analysis.convergence; "
+            "print('sympy' in sys.modules, 'jinja2' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.split() == ["False", "False"]
