@@ -32,6 +32,19 @@ def _input_record(i) -> dict[str, Any]:
     return record
 
 
+def _coordinate_record(model: Model, joint) -> dict[str, Any]:
+    """Name and type of a joint coordinate, and its position limits where the model declares them.
+
+    Limits are numbers: their expressions evaluated at the parameters' default values (the
+    analyses in :mod:`symkin.analysis` read them without sympy).
+    """
+    record: dict[str, Any] = {"name": joint.name, "type": joint.type.value}
+    if joint.limits is not None:
+        values = model.parameter_values
+        record["limits"] = [float(bound.xreplace(values)) for bound in joint.limits]
+    return record
+
+
 def build_manifest(model: Model, code: ModelCode, derived: list[str], backend_files: dict[str, list[str]]) -> dict:
     """The manifest of ``code`` derived from ``model``.
 
@@ -52,7 +65,7 @@ def build_manifest(model: Model, code: ModelCode, derived: list[str], backend_fi
             "source": Path(model.source).name,
             "description": model.description,
             "dof": model.dof,
-            "coordinates": [{"name": j.name, "type": j.type.value} for j in model.joints],
+            "coordinates": [_coordinate_record(model, j) for j in model.joints],
             "task_space": list(model.task_space),
         },
         "parameters": [{"name": p.name, "default": p.default, "unit": p.unit, "doc": p.doc, "fixed": p.fixed}

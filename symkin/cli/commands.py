@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
-from symkin.cli import bench_cmd, check_cmd, derive_cmd
+from symkin.cli import bench_cmd, check_cmd, derive_cmd, gci_cmd, workspace_cmd
 
 REGISTRY = [
     derive_cmd.register,
     check_cmd.register_check,
     check_cmd.register_quantities,
+    workspace_cmd.register,
+    gci_cmd.register,
     bench_cmd.register,
 ]

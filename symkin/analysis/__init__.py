@@ -1,0 +1,74 @@
+"""Analyses of generated models: workspace, conditioning, global indices (seed sec. 4.1-4.3, 5.2).
+
+Free functions of a loaded model (``symkin.load(directory, backend)``) and arrays; the
+hot paths call the generated functions on whole batches and never touch sympy::
+
+    import symkin
+    from symkin import analysis
+
+    arm = symkin.load("generated/planar_2r")
+    result = analysis.gci(arm, method="qmc", samples=2**14, seed=0)
+    print(result.value, result.measure)          # GCI +- error, area +- error
+
+Modules: :mod:`~symkin.analysis.conditioning` (singular values, 1/kappa, Table 8.5
+criteria, characteristic length), :mod:`~symkin.analysis.workspace` (point clouds,
+occupancy, boundary), :mod:`~symkin.analysis.global_indices` (GCI eq. 8.28 and workspace measure
+over joint or Cartesian domains), :mod:`~symkin.analysis.integrators` (grid, Monte
+Carlo, quasi-Monte Carlo, adaptive), :mod:`~symkin.analysis.inverse` (reachability
+interface, planar 2R closed form), :mod:`~symkin.analysis.plots` (figures),
+:mod:`~symkin.analysis.convergence` (run time against error).
+"""
+
+from symkin.analysis.conditioning import (
+    characteristic_length,
+    condition_number,
+    frobenius_condition_number,
+    homogenize,
+    inverse_condition_number,
+    inverse_frobenius_condition_number,
+    manipulability,
+    singular_values,
+    transmission_indices,
+)
+from symkin.analysis.estimates import Estimate, IntegralEstimate
+from symkin.analysis.global_indices import GlobalIndex, gci, global_index, workspace_measure
+from symkin.analysis.integrators import INTEGRATORS, integrate
+from symkin.analysis.inverse import InverseKinematics, feasible_configurations, planar_2r_inverse, reachable
+from symkin.analysis.workspace import (
+    Occupancy,
+    WorkspaceCloud,
+    bounding_box,
+    occupancy_from_cloud,
+    reachability_grid,
+    sample_workspace,
+)
+
+__all__ = [
+    "INTEGRATORS",
+    "Estimate",
+    "GlobalIndex",
+    "IntegralEstimate",
+    "InverseKinematics",
+    "Occupancy",
+    "WorkspaceCloud",
+    "bounding_box",
+    "characteristic_length",
+    "condition_number",
+    "feasible_configurations",
+    "frobenius_condition_number",
+    "gci",
+    "global_index",
+    "homogenize",
+    "integrate",
+    "inverse_condition_number",
+    "inverse_frobenius_condition_number",
+    "manipulability",
+    "occupancy_from_cloud",
+    "planar_2r_inverse",
+    "reachability_grid",
+    "reachable",
+    "sample_workspace",
+    "singular_values",
+    "transmission_indices",
+    "workspace_measure",
+]

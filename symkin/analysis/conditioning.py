@@ -1,0 +1,257 @@
+"""Transmission quality of a mechanism from its Jacobian (seed sec. 4.2, Table 8.5).
+
+Every function takes a stack of Jacobians ``J`` of shape ``(..., m, n)`` (one per
+configuration, e.g. the output of a generated ``jacobian(q)`` over a batch of ``q``) and
+returns one value per configuration, shape ``(...)``.  Nothing here knows the mechanism:
+the same functions rate a serial arm's ``J`` and, through :func:`from_inverse`, a parallel
+mechanism's inverse Jacobian ``J^-1``.
+
+Singular values are sigma_i(A) = sqrt(lambda_i(A^T A)) (seed sec. 4.2); with k = min(m, n)
+there are k of them, sigma_1 >= ... >= sigma_k >= 0.
+
+Numerical rank: a singular value below ``max(m, n) * eps * sigma_max`` (the threshold of
+``numpy.linalg.matrix_rank``) is the rounding noise of an exactly singular matrix and is
+reported as exactly 0, so that singular configurations give 1/kappa = 0, never NaN and
+never a spurious 1e-17.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+_EPS = np.finfo(np.float64).eps
+
+
+def _as_stack(J: np.ndarray) -> np.ndarray:
+    J = np.asarray(J, dtype=np.float64)
+    if J.ndim < 2:
+        raise ValueError(f"expected Jacobians of shape (..., m, n), got {J.shape}")
+    return J
+
+
+def _rank_threshold(J: np.ndarray) -> float:
+    return max(J.shape[-2:]) * _EPS
+
+
+def _extreme_singular_values(J: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(sigma_max, sigma_min) with the numerical-rank rule applied to sigma_min.
+
+    For a 2 x 2 J a closed form is used (no LAPACK call, several times faster over large
+    batches): with t = ||J||_F^2 = sigma_1^2 + sigma_2^2 and |det J| = sigma_1 sigma_2,
+    sigma_max^2 = (t + sqrt(t^2 - 4 det^2)) / 2 and sigma_min = |det J| / sigma_max.  This
+    avoids the subtraction t - sqrt(...) that would lose half the digits of sigma_min, so
+    1/kappa is as accurate as an SVD's (absolute error of a few eps) and exactly 0 where
+    det J = 0.
+    """
+    m, n = J.shape[-2:]
+    if m == n == 2:
+        trace = np.einsum("...ij,...ij->...", J, J)
+        root_det = np.abs(J[..., 0, 0] * J[..., 1, 1] - J[..., 0, 1] * J[..., 1, 0])
+        discriminant = np.sqrt(np.maximum(trace * trace - 4.0 * root_det * root_det, 0.0))
+        sigma_max = np.sqrt(0.5 * (trace + discriminant))
+        with np.errstate(invalid="ignore", divide="ignore"):
+            sigma_min = np.where(sigma_max > 0, root_det / np.where(sigma_max > 0, sigma_max, 1.0), 0.0)
+        sigma_min = np.minimum(sigma_min, sigma_max)
+    else:
+        s = np.linalg.svd(J, compute_uv=False)
+        sigma_max, sigma_min = s[..., 0], s[..., -1]
+    sigma_min = np.where(sigma_min <= _rank_threshold(J) * sigma_max, 0.0, sigma_min)
+    return sigma_max, sigma_min
+
+
+def singular_values(J: np.ndarray) -> np.ndarray:
+    """All singular values sigma_1 >= ... >= sigma_k of each J, shape (..., k), k = min(m, n).
+
+    Values below the numerical-rank threshold (see module docstring) are set to 0.
+    """
+    J = _as_stack(J)
+    s = np.linalg.svd(J, compute_uv=False)
+    return np.where(s <= _rank_threshold(J) * s[..., :1], 0.0, s)
+
+
+def inverse_condition_number(J: np.ndarray) -> np.ndarray:
+    """1/kappa = sigma_min / sigma_max in [0, 1] (seed eq. 8.25).
+
+    1 at isotropic configurations (J^T J proportional to I), exactly 0 at singular ones
+    (and for J = 0); never NaN.
+    """
+    sigma_max, sigma_min = _extreme_singular_values(_as_stack(J))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(sigma_max > 0, sigma_min / np.where(sigma_max > 0, sigma_max, 1.0), 0.0)
+
+
+def condition_number(J: np.ndarray) -> np.ndarray:
+    """kappa = sigma_max / sigma_min >= 1 (seed eq. 8.25); +inf at singular configurations."""
+    sigma_max, sigma_min = _extreme_singular_values(_as_stack(J))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(sigma_min > 0, sigma_max / np.where(sigma_min > 0, sigma_min, 1.0), np.inf)
+
+
+def inverse_frobenius_condition_number(J: np.ndarray) -> np.ndarray:
+    """1/kappa_F in [0, 1], the Frobenius-norm conditioning, smooth away from singularities.
+
+    kappa_F = (1/k) ||J||_F ||J^+||_F = (1/k) sqrt(sum sigma_i^2 * sum sigma_i^-2)
+    (Angeles, Fundamentals of Robotic Mechanical Systems, sec. 4.9; Gosselin and Angeles
+    1991).  kappa / k <= kappa_F <= kappa, with kappa_F = 1 exactly at isotropy; unlike
+    sigma_min / sigma_max it has no kink where singular values cross, so gradient-based
+    dimensioning prefers it.  1/kappa_F = 0 at singular configurations, never NaN.  For
+    k = 2, kappa_F = (kappa + 1/kappa) / 2.
+    """
+    J = _as_stack(J)
+    if min(J.shape[-2:]) == 2:
+        r = inverse_condition_number(J)
+        return 2.0 * r / (1.0 + r * r)
+    s = singular_values(J)
+    squares = s * s
+    regular = s[..., -1] > 0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        inverse_sum = (1.0 / np.where(regular[..., None], squares, 1.0)).sum(axis=-1)
+        value = s.shape[-1] / np.sqrt(squares.sum(axis=-1) * inverse_sum)
+    return np.where(regular, value, 0.0)
+
+
+def frobenius_condition_number(J: np.ndarray) -> np.ndarray:
+    """kappa_F >= 1 (see :func:`inverse_frobenius_condition_number`); +inf at singular configurations."""
+    inverse = inverse_frobenius_condition_number(J)
+    with np.errstate(divide="ignore"):
+        return np.where(inverse > 0, 1.0 / np.where(inverse > 0, inverse, 1.0), np.inf)
+
+
+def absolute_determinant(J: np.ndarray) -> np.ndarray:
+    """|det J| of square Jacobians (..., n, n); closed forms for n = 2 and 3 (no LAPACK call).
+
+    |det J| dq is the Cartesian volume element of the workspace in joint coordinates.
+    """
+    J = _as_stack(J)
+    n = J.shape[-1]
+    if J.shape[-2] != n:
+        raise ValueError(f"a determinant needs square matrices, got {J.shape[-2:]}")
+    if n == 2:
+        return np.abs(J[..., 0, 0] * J[..., 1, 1] - J[..., 0, 1] * J[..., 1, 0])
+    if n == 3:
+        return np.abs(np.einsum("...i,...i->...", J[..., 0, :], np.cross(J[..., 1, :], J[..., 2, :])))
+    return np.abs(np.linalg.det(J))
+
+
+def manipulability(J: np.ndarray) -> np.ndarray:
+    """Yoshikawa's manipulability w = sqrt(det(J J^T)) = prod(sigma_i) (Table 8.5); |det J| if square."""
+    J = _as_stack(J)
+    m, n = J.shape[-2:]
+    if m == n:
+        return absolute_determinant(J)
+    return np.prod(singular_values(J), axis=-1)
+
+
+class TransmissionIndices(NamedTuple):
+    """The optimization criteria of seed Table 8.5 at each configuration (arrays of shape (...)).
+
+    With tau = J^T F (seed eq. 8.35) and dq = J^-1 dp (eq. 8.30), the singular values of
+    J^-1 are 1/sigma_i(J):
+
+    Attributes:
+        force: sigma_min(J^-1) = 1 / sigma_max(J); force transmission, to be maximized.
+        speed: sigma_max(J^-1) = 1 / sigma_min(J); speed transmission, to be minimized
+            (+inf at singular configurations).
+        manipulability: prod sigma_i(J) (Yoshikawa), to be maximized; 0 at singularities.
+        inverse_condition: 1/kappa in [0, 1] (eq. 8.25), to be maximized.
+        inverse_frobenius_condition: 1/kappa_F in [0, 1], its smooth counterpart.
+    """
+
+    force: np.ndarray
+    speed: np.ndarray
+    manipulability: np.ndarray
+    inverse_condition: np.ndarray
+    inverse_frobenius_condition: np.ndarray
+
+
+def transmission_indices(J: np.ndarray) -> TransmissionIndices:
+    """The Table 8.5 criteria from the forward Jacobian J (dp = J dq)."""
+    J = _as_stack(J)
+    sigma_max, sigma_min = _extreme_singular_values(J)
+    with np.errstate(divide="ignore"):
+        force = np.where(sigma_max > 0, 1.0 / np.where(sigma_max > 0, sigma_max, 1.0), np.inf)
+        speed = np.where(sigma_min > 0, 1.0 / np.where(sigma_min > 0, sigma_min, 1.0), np.inf)
+    return TransmissionIndices(force, speed, manipulability(J), inverse_condition_number(J),
+                               inverse_frobenius_condition_number(J))
+
+
+def from_inverse(J_inverse: np.ndarray) -> np.ndarray:
+    """The forward Jacobian J = (J^-1)^-1 of each non-singular inverse Jacobian, NaN-free.
+
+    Parallel mechanisms give the inverse Jacobian (dq = J^-1 dp) in closed form; the
+    indices above need J.  Singular J^-1 (seed: workspace-interior singularity,
+    det(J^-1) = 0) map to J = 0, which every index above rates as singular (1/kappa = 0).
+    Since kappa(J) = kappa(J^-1), ``inverse_condition_number(J_inverse)`` gives 1/kappa
+    directly and needs no inversion.
+    """
+    J_inverse = _as_stack(J_inverse)
+    if J_inverse.shape[-1] != J_inverse.shape[-2]:
+        raise ValueError(f"an inverse Jacobian must be square, got {J_inverse.shape[-2:]}")
+    regular = inverse_condition_number(J_inverse) > 0
+    safe = np.where(regular[..., None, None], J_inverse, np.eye(J_inverse.shape[-1]))
+    return np.where(regular[..., None, None], np.linalg.inv(safe), 0.0)
+
+
+def homogenize(J: np.ndarray, length: float, position_rows: tuple[int, ...]) -> np.ndarray:
+    """Dimensionless Jacobian for mixed translation/rotation task spaces.
+
+    The rows of translational velocities (m per rad) are divided by a characteristic
+    length L, so that all entries share one unit and singular values can be compared
+    (Angeles and Lopez-Cajun 1992; Khan and Angeles 2006).  Rotational rows are unchanged.
+
+    Args:
+        J: Jacobians (..., m, n).
+        length: characteristic length L > 0 (same unit as the translational rows' lengths).
+        position_rows: indices of the translational rows (x, y, z in the task space).
+    """
+    if not length > 0:
+        raise ValueError(f"the characteristic length must be positive, got {length}")
+    scale = np.ones(np.shape(J)[-2])
+    scale[list(position_rows)] = 1.0 / length
+    return np.asarray(J, dtype=np.float64) * scale[:, None]
+
+
+def characteristic_length(J: np.ndarray, position_rows: tuple[int, ...],
+                          bounds: tuple[float, float] | None = None) -> float:
+    """The characteristic length L that makes the homogenized Jacobians best conditioned.
+
+    L minimizes the mean of kappa_F^2 of ``homogenize(J, L)`` over the given
+    configurations (Angeles' definition of the characteristic length as the length
+    minimizing the condition number, here averaged over a sample of the workspace and
+    with the smooth Frobenius conditioning).  Configurations that are singular for every
+    L are ignored.  Scaling the mechanism by s scales L by s.
+
+    Args:
+        J: Jacobians (..., m, n), e.g. ``model.jacobian(q)`` over workspace samples.
+        position_rows: indices of the translational rows.
+        bounds: search interval for L; default: 1e-3 to 1e3 times the median ratio of the
+            translational to the rotational row norms.
+
+    Returns:
+        L, in the length unit of J's translational rows.
+    """
+    from scipy.optimize import minimize_scalar
+
+    J = _as_stack(J).reshape((-1,) + np.shape(J)[-2:])
+    rows = list(position_rows)
+    others = [i for i in range(J.shape[-2]) if i not in rows]
+    if not rows or not others:
+        raise ValueError("a characteristic length needs both translational and rotational rows")
+    ok = inverse_condition_number(J) > 0
+    if not ok.any():
+        raise ValueError("every configuration is singular: no characteristic length can be found")
+    J = J[ok]
+    if bounds is None:
+        ratio = np.median(np.linalg.norm(J[:, rows], axis=(-2, -1)) / np.linalg.norm(J[:, others], axis=(-2, -1)))
+        bounds = (ratio * 1e-3, ratio * 1e3)
+
+    def cost(log_length: float) -> float:
+        inverse = inverse_frobenius_condition_number(homogenize(J, float(np.exp(log_length)), position_rows))
+        with np.errstate(divide="ignore"):
+            return float(np.mean(1.0 / inverse**2))
+
+    result = minimize_scalar(cost, bounds=(np.log(bounds[0]), np.log(bounds[1])), method="bounded",
+                             options={"xatol": 1e-10})
+    return float(np.exp(result.x))

@@ -1,0 +1,258 @@
+"""Global conditioning index and workspace measure (seed eq. 8.28).
+
+    GCI = v = int_W (1/kappa) dW / int_W dW
+
+The integral runs over the workspace W with a measure dW that must be stated; two
+domains of integration and two measures are offered:
+
+* ``domain="joint"`` integrates over the box of joint limits Q, with
+  - ``measure="cartesian"`` (default): dW = |det J(q)| dq, the Cartesian volume element
+    of the TCP workspace pulled back to joint space (change of variables).  It equals
+    the Cartesian measure where q -> TCP is one-to-one on Q; where several joint
+    configurations reach the same point (e.g. elbow up and down both within limits),
+    that point is counted once per configuration (measure with multiplicity).  It needs
+    a square task Jacobian: for a position task space the measure is the workspace's
+    area/volume in m^d; for a pose task space [x, y, z, wx, wy, wz] it is the invariant
+    volume of SE(3) (m^3 rad^3);
+  - ``measure="joint"``: dW = dq, the plain average over joint space (common in the
+    literature, but it rates configurations, not places of the workspace);
+* ``domain="cartesian"`` integrates over a Cartesian box containing the workspace with
+  the indicator of reachability from an inverse kinematics
+  (:class:`~symkin.analysis.inverse.InverseKinematics`): dW = 1_W(x) dx, each reachable
+  point counted once, 1/kappa at the first feasible solution branch.  This is the
+  formulation of parallel mechanisms, whose inverse kinematics is closed-form.
+
+The index is 1/kappa by default (:func:`~symkin.analysis.conditioning.inverse_condition_number`);
+any function of the Jacobians (..., m, n) -> (...) can replace it (e.g. the smooth
+1/kappa_F, or a Table 8.5 criterion for a global force or speed index).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from symkin.analysis import conditioning, mechanism, sampling
+from symkin.analysis.estimates import Estimate, IntegralEstimate
+from symkin.analysis.integrand import Integrand
+from symkin.analysis.integrators import integrate
+from symkin.analysis.inverse import InverseKinematics, feasible_configurations
+from symkin.analysis.mechanism import Limits
+
+DOMAINS = ("joint", "cartesian")
+MEASURES = ("cartesian", "joint")
+
+Index = Callable[[np.ndarray], np.ndarray]
+
+#: Configurations sampled to choose the characteristic length (``length="auto"``).
+LENGTH_SAMPLES_LOG2 = 10
+
+
+def scaled_index(model: Any, index: Index, length: float | str | None, limits: np.ndarray) -> Index:
+    """The index, applied to the homogenized Jacobian when the task space mixes lengths and angles."""
+    rows = mechanism.position_rows(model)
+    if mechanism.mixes_translations_and_rotations(model):
+        if length is None:
+            raise ValueError(f"{model.name}: the task space {list(mechanism.task_space(model))} mixes translations "
+                             "and rotations: give a characteristic length (length=L in m, or 'auto')")
+        if length == "auto":
+            length = characteristic_length_of(model, limits)
+        L = float(length)
+        return lambda J: index(conditioning.homogenize(J, L, rows))
+    return index
+
+
+def local_index(model: Any, q: np.ndarray, *, index: Index = conditioning.inverse_condition_number,
+                length: float | str | None = None, limits: Limits | None = None) -> np.ndarray:
+    """The local index (1/kappa by default) at configurations q (..., n), through ``model.jacobian``.
+
+    ``length`` homogenizes a task space that mixes translations and rotations (m, or
+    ``"auto"`` for the characteristic length over the joint limits).
+    """
+    scored = scaled_index(model, index, length, mechanism.joint_limits(model, limits))
+    return scored(model.jacobian(q))
+
+
+def singular(model: Any, q: np.ndarray, *, threshold: float = 0.0, length: float | str | None = None,
+             limits: Limits | None = None) -> np.ndarray:
+    """Boolean (...): configurations whose 1/kappa is at most ``threshold`` (0: numerically singular)."""
+    return local_index(model, q, length=length, limits=limits) <= threshold
+
+
+def characteristic_length_of(model: Any, limits: np.ndarray | None = None, seed: int = 0) -> float:
+    """Characteristic length of a model with a mixed task space, from a Sobol sample of its joint space.
+
+    See :func:`symkin.analysis.conditioning.characteristic_length`.
+    """
+    limits = mechanism.joint_limits(model) if limits is None else limits
+    q = sampling.sobol(limits[:, 0], limits[:, 1], LENGTH_SAMPLES_LOG2, np.random.default_rng(seed))
+    return conditioning.characteristic_length(model.jacobian(q), mechanism.position_rows(model))
+
+
+def joint_space_integrand(model: Any, *, index: Index | None = conditioning.inverse_condition_number,
+                          measure: str = "cartesian", limits: Limits | None = None,
+                          length: float | str | None = None,
+                          jacobian: Callable[[np.ndarray], np.ndarray] | None = None) -> Integrand:
+    """Integrand over the joint-limit box: components [w g, w] (or [w] without an index).
+
+    w = |det J(q)| (``measure="cartesian"``) or 1 (``measure="joint"``); g = index(J(q)).
+
+    Args:
+        model: a loaded model (numpy or C backend).
+        index: function of Jacobians (..., m, n) -> (...); None for the measure alone.
+        measure: ``cartesian`` or ``joint`` (see module docstring).
+        limits: joint-limit overrides (see :func:`symkin.analysis.mechanism.joint_limits`).
+        length: characteristic length for mixed task spaces (m, or ``"auto"``).
+        jacobian: the Jacobian function q -> J; default ``model.jacobian`` (a parallel
+            mechanism passes its own, e.g. the inverse of its closed-form J^-1).
+    """
+    if measure not in MEASURES:
+        raise ValueError(f"unknown measure '{measure}'; choose one of {', '.join(MEASURES)}")
+    box = mechanism.joint_limits(model, limits)
+    jacobian = model.jacobian if jacobian is None else jacobian
+    n = box.shape[0]
+    if measure == "cartesian":
+        m = len(mechanism.task_space(model))
+        if m != n:
+            raise ValueError(f"{model.name}: the Cartesian measure |det J| dq needs a square task Jacobian, "
+                             f"this one is {m} x {n}; use measure='joint' or the Cartesian domain")
+    scored = scaled_index(model, index, length, box) if index is not None else None
+
+    def function(q: np.ndarray) -> np.ndarray:
+        J = jacobian(q)
+        weight = conditioning.absolute_determinant(J) if measure == "cartesian" else np.ones(len(q))
+        if scored is None:
+            return weight[:, None]
+        return np.stack([weight * scored(J), weight], axis=-1)
+
+    components = ("index dW", "dW") if scored is not None else ("dW",)
+    return Integrand(box[:, 0], box[:, 1], function, components, mechanism.coordinate_names(model))
+
+
+def cartesian_integrand(model: Any, inverse: InverseKinematics, box: tuple[np.ndarray, np.ndarray], *,
+                        index: Index | None = conditioning.inverse_condition_number, limits: Limits | None = None,
+                        length: float | str | None = None) -> Integrand:
+    """Integrand over a Cartesian box: components [1_W g, 1_W] (or [1_W] without an index).
+
+    1_W(x) is 1 where ``inverse`` has a solution within the joint limits; g = index(J(q(x))).
+    """
+    joint_box = mechanism.joint_limits(model, limits)
+    revolute = mechanism.revolute_mask(model)
+    lower, upper = (np.asarray(b, dtype=np.float64) for b in box)
+    if lower.shape != (inverse.dimension,):
+        raise ValueError(f"the Cartesian box must have {inverse.dimension} coordinates, got {lower.shape}")
+    scored = scaled_index(model, index, length, joint_box) if index is not None else None
+
+    def function(points: np.ndarray) -> np.ndarray:
+        q, inside = feasible_configurations(inverse, points, joint_box, revolute)
+        indicator = inside.astype(np.float64)
+        if scored is None:
+            return indicator[:, None]
+        values = np.zeros(len(points))
+        if inside.any():
+            values[inside] = scored(model.jacobian(q[inside]))
+        return np.stack([values, indicator], axis=-1)
+
+    axes = tuple("xyz"[a] for a in mechanism.position_axes(model))
+    components = ("index dW", "dW") if scored is not None else ("dW",)
+    return Integrand(lower, upper, function, components, axes, indicator=len(components) - 1)
+
+
+@dataclass(frozen=True)
+class GlobalIndex:
+    """A global index (GCI by default) with the workspace measure it was averaged over.
+
+    Attributes:
+        value: the global index (ratio of the two integrals) and its error.
+        measure: int_W dW and its error (area/volume in m^d for a positional Cartesian measure).
+        integral: the raw integrator result (both components).
+        description: which domain and measure were used, in words.
+        caveat: a warning about the error estimate, or "".
+    """
+
+    value: Estimate
+    measure: Estimate
+    integral: IntegralEstimate
+    description: str
+    caveat: str = ""
+
+
+def _integrand(model: Any, *, domain: str, measure: str, index: Index | None, limits: Limits | None,
+               length: float | str | None, inverse: InverseKinematics | None,
+               box: tuple[np.ndarray, np.ndarray] | None) -> tuple[Integrand, str]:
+    if domain == "joint":
+        description = ("joint space, dW = |det J| dq (Cartesian measure, with multiplicity where the map is "
+                       "not one-to-one)" if measure == "cartesian" else "joint space, dW = dq (joint measure)")
+        return joint_space_integrand(model, index=index, measure=measure, limits=limits, length=length), description
+    if domain == "cartesian":
+        if inverse is None:
+            raise ValueError("the Cartesian domain needs an inverse kinematics (inverse=...)")
+        if box is None:
+            from symkin.analysis.workspace import bounding_box
+
+            box = bounding_box(model, limits=limits)
+        description = "Cartesian box with reachability from inverse kinematics, dW = 1_W(x) dx"
+        return cartesian_integrand(model, inverse, box, index=index, limits=limits, length=length), description
+    raise ValueError(f"unknown domain '{domain}'; choose one of {', '.join(DOMAINS)}")
+
+
+def global_index(model: Any, *, method: str = "qmc", samples: int = 2**16, seed: int | None = None,
+                 domain: str = "joint", measure: str = "cartesian",
+                 index: Index = conditioning.inverse_condition_number, limits: Limits | None = None,
+                 length: float | str | None = None, inverse: InverseKinematics | None = None,
+                 box: tuple[np.ndarray, np.ndarray] | None = None, **options) -> GlobalIndex:
+    """Workspace average of an index of the Jacobian, int_W g dW / int_W dW, with error estimates.
+
+    Args:
+        model: a loaded model; its generated ``jacobian`` (and ``fk`` for the default
+            Cartesian box) are evaluated on batches.
+        method: integrator: ``grid``, ``mc``, ``qmc`` or ``adaptive``.
+        samples: budget of integrand evaluations.
+        seed: seed of the random methods.
+        domain: ``joint`` or ``cartesian`` (see module docstring).
+        measure: ``cartesian`` or ``joint`` (joint domain only).
+        index: the local index, 1/kappa by default.
+        limits: joint-limit overrides.
+        length: characteristic length (m, or ``"auto"``) for a task space that mixes
+            translations and rotations.
+        inverse: inverse kinematics (Cartesian domain).
+        box: Cartesian box (lower, upper) of the Cartesian domain; default: the
+            workspace's :func:`~symkin.analysis.workspace.bounding_box`.
+        options: integrator options (``replicates``, ``rtol``).
+    """
+    integrand, description = _integrand(model, domain=domain, measure=measure, index=index, limits=limits,
+                                        length=length, inverse=inverse, box=box)
+    result = integrate(integrand, method, samples, seed=seed, **options)
+    caveat = ""
+    if domain == "cartesian" and not result.statistical:
+        caveat = (f"the reachability indicator is discontinuous: the {method} error estimate assumes that its "
+                  "sample points see every crossing of the workspace boundary; mc and qmc give a confidence "
+                  "interval without that assumption")
+    return GlobalIndex(result.ratio(0, 1), result.component(1), result, description, caveat)
+
+
+def gci(model: Any, **kwargs) -> GlobalIndex:
+    """The global conditioning index v = int_W 1/kappa dW / int_W dW (seed eq. 8.28).
+
+    Keyword arguments as :func:`global_index` (whose default index is 1/kappa).
+    """
+    kwargs.setdefault("index", conditioning.inverse_condition_number)
+    return global_index(model, **kwargs)
+
+
+def workspace_measure(model: Any, *, method: str = "qmc", samples: int = 2**16, seed: int | None = None,
+                      domain: str = "joint", limits: Limits | None = None,
+                      inverse: InverseKinematics | None = None,
+                      box: tuple[np.ndarray, np.ndarray] | None = None, **options) -> Estimate:
+    """Area or volume of the workspace, int_W dW, with its error estimate.
+
+    ``domain="joint"`` integrates |det J| dq over the joint limits (exact where the map is
+    one-to-one; overlapping branches counted with multiplicity); ``domain="cartesian"``
+    integrates the reachability indicator over a Cartesian box (each point once).
+    """
+    integrand, _ = _integrand(model, domain=domain, measure="cartesian", index=None, limits=limits,
+                              length=None, inverse=inverse, box=box)
+    return integrate(integrand, method, samples, seed=seed, **options).component(0)

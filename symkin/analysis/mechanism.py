@@ -1,0 +1,124 @@
+"""What the analyses need to know about a loaded model, read from its manifest (no sympy).
+
+The analyses take a :class:`symkin.LoadedModel` (``symkin.load(directory, backend)``):
+its generated functions do the arithmetic, its manifest tells the joint types, limits and
+task space.  The C backend plugs in by being loaded instead of the numpy one: only
+``model.fk`` and ``model.jacobian`` are called, with batches of ``q``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+#: Task-space components that are TCP coordinates in metres (symkin.kinematics.task_space).
+POSITION_COMPONENTS = ("x", "y", "z")
+
+#: Limits assumed for a revolute joint that declares none: one full turn.
+DEFAULT_REVOLUTE_LIMITS = (-np.pi, np.pi)
+
+Limits = Sequence[Sequence[float]] | Mapping[str, Sequence[float]] | np.ndarray
+
+
+def coordinate_names(model: Any) -> tuple[str, ...]:
+    """Names of the joint coordinates, in the order of ``q``."""
+    return tuple(c["name"] for c in model.manifest["model"]["coordinates"])
+
+
+def revolute_mask(model: Any) -> np.ndarray:
+    """Boolean array (n,): which coordinates are revolute (angles, periodic)."""
+    return np.array([c["type"] == "R" for c in model.manifest["model"]["coordinates"]])
+
+
+def joint_limits(model: Any, limits: Limits | None = None) -> np.ndarray:
+    """Joint limits as an array (n, 2) of [lower, upper].
+
+    Args:
+        model: a loaded model.
+        limits: overrides: an (n, 2) array, or a mapping from coordinate names to
+            (lower, upper) for some of them.  Otherwise the limits recorded in the
+            manifest (the model file's, evaluated at the parameters' default values) are
+            used; a revolute joint without limits gets one full turn [-pi, pi].
+
+    Raises:
+        ValueError: a prismatic joint has no limits, or the limits are malformed.
+    """
+    names = coordinate_names(model)
+    records = model.manifest["model"]["coordinates"]
+    if limits is not None and not isinstance(limits, Mapping):
+        result = np.array(limits, dtype=np.float64)
+        if result.shape != (len(names), 2):
+            raise ValueError(f"{model.name}: limits must have shape ({len(names)}, 2), got {result.shape}")
+    else:
+        overrides = dict(limits or {})
+        unknown = set(overrides) - set(names)
+        if unknown:
+            raise ValueError(f"{model.name}: no coordinates named {sorted(unknown)}; coordinates: {', '.join(names)}")
+        rows = []
+        for record in records:
+            bounds = overrides.get(record["name"], record.get("limits"))
+            if bounds is None:
+                if record["type"] != "R":
+                    raise ValueError(f"{model.name}: prismatic joint '{record['name']}' declares no limits; "
+                                     "declare them in the model file or pass limits")
+                bounds = DEFAULT_REVOLUTE_LIMITS
+            rows.append([float(bounds[0]), float(bounds[1])])
+        result = np.array(rows)
+    bad = [n for n, (lo, hi) in zip(names, result) if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi)]
+    if bad:
+        raise ValueError(f"{model.name}: limits of {', '.join(bad)} are not finite intervals [lower < upper]")
+    return result
+
+
+def task_space(model: Any) -> tuple[str, ...]:
+    """Names of the task-space components (rows of ``model.jacobian``)."""
+    return tuple(model.manifest["model"]["task_space"])
+
+
+def position_rows(model: Any) -> tuple[int, ...]:
+    """Indices of the translational components (x, y, z) among the task-space rows."""
+    return tuple(i for i, c in enumerate(task_space(model)) if c in POSITION_COMPONENTS)
+
+
+def position_axes(model: Any) -> tuple[int, ...]:
+    """Base-frame axes (0, 1, 2 for x, y, z) of the TCP coordinates that span the workspace.
+
+    A planar arm whose task space is [x, y] has a 2-D workspace; a pose or position task
+    space gives a 3-D one.
+
+    Raises:
+        ValueError: the task space has no position components.
+    """
+    axes = tuple(POSITION_COMPONENTS.index(c) for c in task_space(model) if c in POSITION_COMPONENTS)
+    if not axes:
+        raise ValueError(f"{model.name}: the task space {list(task_space(model))} has no position "
+                         "components (x, y, z): there is no positional workspace to analyse")
+    return tuple(sorted(axes))
+
+
+def tcp_positions(model: Any, q: np.ndarray) -> np.ndarray:
+    """TCP positions of a batch of configurations, shape (..., d), from the generated ``fk``.
+
+    d is the number of position components of the task space (2 for a planar arm).
+    """
+    return model.fk(q)[..., list(position_axes(model)), 3]
+
+
+def is_positional(model: Any) -> bool:
+    """Whether the task space is only positions and the task Jacobian is square.
+
+    Then |det J| dq is the volume element of the positional workspace (Lebesgue measure
+    in metres^d) wherever the map q -> TCP is one-to-one.
+    """
+    return len(position_rows(model)) == len(task_space(model)) == len(coordinate_names(model))
+
+
+def mixes_translations_and_rotations(model: Any) -> bool:
+    """Whether the task Jacobian has both translational rows (m/rad) and rotational rows (rad/rad).
+
+    Its singular values then mix units, and conditioning indices need a characteristic
+    length (:func:`symkin.analysis.conditioning.homogenize`).
+    """
+    return 0 < len(position_rows(model)) < len(task_space(model))

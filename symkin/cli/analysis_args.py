@@ -1,0 +1,157 @@
+"""Arguments shared by the analysis commands (``symkin workspace``, ``symkin gci``, ``symkin bench gci``).
+
+MODEL is a generated model directory (the output of ``symkin derive``) or a model file,
+which is then derived on the fly (fk and jacobian only) into a temporary directory.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import tempfile
+from pathlib import Path
+from typing import Any
+
+#: Quantities an analysis needs from a model file derived on the fly.
+ANALYSIS_OUTPUTS = ("fk", "jacobian")
+
+
+def add_model_arguments(p: argparse.ArgumentParser) -> None:
+    """MODEL, --backend, --set and --limit."""
+    p.add_argument("model", metavar="MODEL",
+                   help="generated model directory (from 'symkin derive', e.g. generated/planar_2r) "
+                        "or a model file (YAML; fk and jacobian are derived on the fly)")
+    p.add_argument("--backend", default="numpy", metavar="NAME",
+                   help="generated code to evaluate (default: %(default)s)")
+    p.add_argument("--set", dest="assignments", action="append", default=[], metavar="NAME=VALUE[,...]",
+                   help="parameter values instead of the defaults, e.g. --set l1=0.2,l2=0.2 (repeatable)")
+    p.add_argument("--limit", dest="limits", action="append", default=[], metavar="JOINT=LOWER:UPPER",
+                   help="joint limits instead of the model's, in rad or m; append 'deg' for degrees, "
+                        "e.g. --limit theta2=-90deg:90deg (repeatable)")
+
+
+def add_length_argument(p: argparse.ArgumentParser) -> None:
+    """--length: the characteristic length of task spaces that mix translations and rotations."""
+    p.add_argument("--length", metavar="L", default="auto",
+                   help="characteristic length [m] for task spaces mixing translations and rotations, or "
+                        "'auto' (default: the length minimizing the mean kappa_F^2)")
+
+
+def parse_length(text: str) -> float | str:
+    """A positive number of metres, or "auto".
+
+    Raises:
+        ValueError: anything else.
+    """
+    if text == "auto":
+        return text
+    try:
+        value = float(text)
+    except ValueError:
+        raise ValueError(f"--length: '{text}' is neither a length in m nor 'auto'") from None
+    if not value > 0:
+        raise ValueError(f"--length must be positive, got {text}")
+    return value
+
+
+def resolve_length(model: Any, text: str, limits: dict) -> float | None:
+    """The characteristic length to use for ``model`` (None if its task space needs none).
+
+    With "auto" the length is computed here, once, and printed.
+    """
+    from symkin.analysis import global_indices, mechanism
+
+    length = parse_length(text)
+    if not mechanism.mixes_translations_and_rotations(model):
+        return None
+    if length == "auto":
+        length = global_indices.characteristic_length_of(model, mechanism.joint_limits(model, limits))
+        print(f"{model.name}: characteristic length L = {length:.6g} m (minimizes the mean kappa_F^2; "
+              "set with --length)")
+    return length
+
+
+def parse_assignments(texts: list[str]) -> dict[str, float]:
+    """``["l1=0.2,l2=0.2", "m1=1"]`` -> {"l1": 0.2, "l2": 0.2, "m1": 1.0}.
+
+    Raises:
+        ValueError: an entry is not NAME=NUMBER.
+    """
+    values: dict[str, float] = {}
+    for text in texts:
+        for item in filter(None, (part.strip() for part in text.split(","))):
+            name, sep, value = item.partition("=")
+            if not sep or not name.strip():
+                raise ValueError(f"'{item}' is not NAME=VALUE")
+            try:
+                values[name.strip()] = float(value)
+            except ValueError:
+                raise ValueError(f"'{item}': '{value}' is not a number") from None
+    return values
+
+
+def _bound(text: str) -> float:
+    text = text.strip()
+    if text.endswith("deg"):
+        return math.radians(float(text[:-3]))
+    return float(text)
+
+
+def parse_limits(texts: list[str]) -> dict[str, tuple[float, float]]:
+    """``["theta2=-90deg:90deg"]`` -> {"theta2": (-pi/2, pi/2)}.
+
+    Raises:
+        ValueError: an entry is not JOINT=LOWER:UPPER with numbers.
+    """
+    limits: dict[str, tuple[float, float]] = {}
+    for text in texts:
+        name, sep, bounds = text.partition("=")
+        lower, colon, upper = bounds.partition(":")
+        if not sep or not colon or not name.strip():
+            raise ValueError(f"'{text}' is not JOINT=LOWER:UPPER")
+        try:
+            limits[name.strip()] = (_bound(lower), _bound(upper))
+        except ValueError:
+            raise ValueError(f"'{text}': the bounds must be numbers (optionally with 'deg')") from None
+    return limits
+
+
+def load_model(path: str, backend: str = "numpy") -> Any:
+    """The loaded model of MODEL: a generated directory, or a model file derived on the fly.
+
+    Raises:
+        ModelError: a model file is invalid.
+        GeneratedCodeError: a directory holds no usable generated code.
+    """
+    from symkin import load
+
+    source = Path(path)
+    if source.suffix.lower() not in (".yaml", ".yml"):
+        return load(source, backend)
+    from symkin import pipeline
+    from symkin.model import load_model as load_model_file
+
+    model = load_model_file(source)
+    request = pipeline.resolve_request(model, ",".join(ANALYSIS_OUTPUTS), backend, None)
+    with tempfile.TemporaryDirectory(prefix="symkin-analysis-") as scratch:
+        # The generated module is imported (numpy) or opened (C) by load(): the files may go afterwards.
+        return load(pipeline.write(pipeline.generate(model, request), scratch), backend)
+
+
+def model_from_args(args: argparse.Namespace) -> tuple[Any, dict[str, tuple[float, float]]]:
+    """The model of MODEL with --set applied, and the --limit overrides.
+
+    Raises:
+        ValueError: malformed --set or --limit (KeyError for an unknown parameter).
+    """
+    model = load_model(args.model, args.backend)
+    values = parse_assignments(args.assignments)
+    if values:
+        model = model.bind(**values)
+    return model, parse_limits(args.limits)
+
+
+def fail_on_bad_input(args: argparse.Namespace, err: Exception) -> None:
+    """Report a bad argument or an analysis that does not apply to the model; exit code 2."""
+    message = err.args[0] if isinstance(err, KeyError) and err.args else str(err)
+    args.parser.error(message)

@@ -1,0 +1,83 @@
+"""``symkin bench gci MODEL``: wall time against achieved error of every GCI integrator."""
+
+from __future__ import annotations
+
+import argparse
+
+from symkin.cli import analysis_args
+from symkin.cli.progress import Progress
+from symkin.cli.table import format_table
+
+
+def register(kinds: argparse._SubParsersAction) -> None:
+    p = kinds.add_parser(
+        "gci", help="GCI: run time against error of each integrator",
+        description="Run every GCI integrator (grid, mc, qmc, adaptive) at a ladder of budgets on the joint domain "
+                    "(dW = |det J| dq) and, where a closed-form inverse kinematics exists, on the Cartesian domain; "
+                    "print wall time, estimate, estimated and achieved error against a high-accuracy reference "
+                    "(adaptive cubature at rtol 1e-13), and plot time against error.")
+    analysis_args.add_model_arguments(p)
+    p.add_argument("--methods", metavar="NAMES",
+                   help="comma-separated integrators (default: all: grid, mc, qmc, adaptive)")
+    p.add_argument("--budgets", metavar="N,N,...",
+                   help="integrand evaluations per run (default: 4^4 ... 4^10, i.e. 256 to 1048576)")
+    p.add_argument("--domains", default="auto", metavar="NAMES",
+                   help="joint and/or cartesian (default: both where an inverse kinematics exists)")
+    p.add_argument("--repeats", type=int, default=3, help="timed runs per point, the fastest kept (default: 3)")
+    p.add_argument("--seed", type=int, default=0, help="seed of mc/qmc (default: %(default)s)")
+    analysis_args.add_length_argument(p)
+    p.add_argument("-o", "--out", metavar="FIGURE",
+                   help="plot of time against error (default: bench-results/MODEL_NAME-gci-time-vs-error.png)")
+    p.set_defaults(run=run, parser=p)
+
+
+def run(args: argparse.Namespace) -> int:
+    from symkin.analysis import convergence, inverse, plots
+    from symkin.analysis.integrators import INTEGRATORS
+
+    try:
+        model, limits = analysis_args.model_from_args(args)
+        methods = [m.strip() for m in args.methods.split(",") if m.strip()] if args.methods else list(INTEGRATORS)
+        unknown = sorted(set(methods) - set(INTEGRATORS))
+        if unknown:
+            raise ValueError(f"unknown integrators {unknown}; choose from {', '.join(INTEGRATORS)}")
+        budgets = ([int(b) for b in args.budgets.split(",") if b.strip()] if args.budgets
+                   else list(convergence.DEFAULT_BUDGETS))
+        length = analysis_args.resolve_length(model, args.length, limits)
+        ik = inverse.inverse_kinematics_for(model)
+        domains = ["joint", "cartesian"] if args.domains == "auto" else [d.strip() for d in args.domains.split(",")]
+        if args.domains == "auto" and ik is None:
+            domains = ["joint"]
+        if "cartesian" in domains and ik is None:
+            raise ValueError(f"{model.name}: no inverse kinematics for the Cartesian domain")
+        with Progress(f"bench gci {model.name}") as progress:
+            progress("reference")
+            reference = convergence.reference_gci(model, limits=limits, length=length)
+            trials = convergence.time_against_error(model, reference, methods=methods, budgets=budgets,
+                                                    domains=domains, repeats=args.repeats, seed=args.seed,
+                                                    progress=progress, limits=limits, length=length, inverse=ik)
+    except (ValueError, KeyError) as err:
+        analysis_args.fail_on_bad_input(args, err)
+    print(f"{model.name} ({model.backend} backend): GCI reference {reference} "
+          f"(adaptive, {reference.evaluations} evaluations)")
+    rows = [[t.domain, t.method, t.evaluations, f"{t.seconds * 1e3:.2f}", f"{t.estimate.value:.10f}",
+             f"{t.estimate.error:.2e}", f"{t.achieved:.2e}", "yes" if t.bracketed else "NO"] for t in trials]
+    print(format_table(["domain", "method", "evaluations", "time ms", "GCI", "est. error", "achieved", "bracketed"],
+                       rows))
+    print("fastest run reaching a relative error of the GCI of:")
+    targets = (1e-3, 1e-6, 1e-9)
+    best = [convergence.fastest_within(trials, target) for target in targets]
+    summary = [[domain, method] + [f"{b[(domain, method)].seconds * 1e3:.2f} ms ({b[(domain, method)].evaluations})"
+                                   if b[(domain, method)] else "-" for b in best]
+               for domain, method in best[0]]
+    print(format_table(["domain", "method"] + [f"{t:g}" for t in targets], summary))
+    panels: dict = {}
+    for t in trials:
+        times, achieved, estimated = panels.setdefault(f"{t.domain} domain", {}).setdefault(t.method, ([], [], []))
+        times.append(t.seconds)
+        achieved.append(t.achieved)
+        estimated.append(t.estimate.error)
+    path = plots.plot_time_against_error(panels, args.out or f"bench-results/{model.name}-gci-time-vs-error.png",
+                                         title=f"GCI of {model.name}: wall time against error ({model.backend})")
+    print(f"figure: {path}")
+    return 0

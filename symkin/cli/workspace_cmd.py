@@ -1,0 +1,129 @@
+"""``symkin workspace MODEL``: TCP point cloud, area/volume, boundary, singularities, figures."""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+from symkin.cli import analysis_args
+from symkin.cli.progress import Progress
+
+UNITS = {"m": 1.0, "cm": 100.0, "mm": 1000.0}
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "workspace",
+        help="sample the workspace; area/volume, boundary, singularities and figures",
+        description="Sample the joint space within the limits, map it through the generated fk and report the "
+                    "workspace: bounding box, area/volume with an error estimate, boundary cells, 1/kappa range "
+                    "and singular configurations (and whether they lie on the boundary). Draws the point "
+                    "cloud (-o) and a 1/kappa map (--map). Several --design options overlay designs, e.g. "
+                    "seed Fig. 8.19: symkin workspace generated/planar_2r --design l1=0.1,l2=0.1 "
+                    "--design l1=0.2,l2=0.2 --unit cm -o fig-8-19.png",
+    )
+    analysis_args.add_model_arguments(p)
+    p.add_argument("--design", action="append", default=[], metavar="NAME=VALUE[,...]",
+                   help="a design to analyse and overlay (parameter values on top of --set); repeatable")
+    p.add_argument("-n", "--samples", type=int, default=40_000, metavar="N",
+                   help="joint configurations per design (default: %(default)s)")
+    p.add_argument("--method", choices=("grid", "random", "sobol"), default=None,
+                   help="joint-space sampling (default: grid up to 3 joints, else sobol)")
+    p.add_argument("--seed", type=int, default=0, help="seed of random/sobol sampling (default: %(default)s)")
+    p.add_argument("-o", "--out", metavar="FIGURE", help="workspace figure (default: MODEL_NAME-workspace.png)")
+    p.add_argument("--map", metavar="FIGURE", help="also draw 1/kappa over the workspace into FIGURE "
+                                                   "(first design)")
+    p.add_argument("--no-figure", action="store_true", help="print the report only")
+    analysis_args.add_length_argument(p)
+    p.add_argument("--unit", choices=tuple(UNITS), default="m", help="length unit of the figures (default: m)")
+    p.add_argument("--title", help="figure title")
+    p.set_defaults(run=run, parser=p)
+
+
+def run(args: argparse.Namespace) -> int:
+    from symkin.analysis import global_indices, mechanism, plots, workspace
+
+    try:
+        base, limits = analysis_args.model_from_args(args)
+        designs = [analysis_args.parse_assignments([text]) for text in args.design] or [{}]
+        models = [base.bind(**values) if values else base for values in designs]
+        joints = mechanism.joint_limits(base, limits).shape[0]
+        length = analysis_args.resolve_length(base, args.length, limits)  # of the base design, for all designs
+    except (ValueError, KeyError) as err:
+        analysis_args.fail_on_bad_input(args, err)
+    method = args.method or workspace.default_method(base)
+    layers = []
+    start = time.perf_counter()
+    with Progress(base.name) as progress:
+        for values, model in zip(designs, models):
+            label = _label(base, values, args.unit)
+            progress(f"sampling {label}")
+            try:
+                cloud = workspace.sample_workspace(model, args.samples, method=method, limits=limits, seed=args.seed)
+                progress(f"conditioning {label}")
+                inv_kappa = global_indices.local_index(model, cloud.q, length=length, limits=limits)
+                report = _report(model, cloud, inv_kappa, limits, progress)
+            except ValueError as err:
+                analysis_args.fail_on_bad_input(args, err)
+            print(f"{model.name} ({label}): {len(cloud.q)} configurations ({method}), workspace in "
+                  f"{', '.join(cloud.axes)}")
+            for line in report:
+                print(f"  {line}")
+            outline = workspace.limit_curves(model, limits=limits) if joints == 2 else ()
+            layers.append((plots.WorkspaceLayer(label, cloud, outline), inv_kappa))
+        scale = UNITS[args.unit]
+        if not args.no_figure:
+            progress("drawing")
+            title = args.title or f"Workspace of {base.name}"
+            path = plots.plot_workspaces([layer for layer, _ in layers], args.out or f"{base.name}-workspace.png",
+                                         title=title, scale=scale, unit=args.unit)
+            print(f"figure: {path}")
+        if args.map:
+            layer, values = layers[0]
+            path = plots.plot_index_map(layer.cloud, values, args.map, outline=layer.outline, scale=scale,
+                                        unit=args.unit, title=f"1/kappa over the workspace of {base.name} "
+                                                              f"({layer.label})")
+            print(f"1/kappa map: {path}")
+    print(f"done in {time.perf_counter() - start:.2f} s")
+    return 0
+
+
+def _label(model, values: dict[str, float], unit: str) -> str:
+    """'l1 = 10 cm, l2 = 10 cm': the design's values, lengths (unit m in the manifest) in the figure's unit."""
+    units = {p["name"]: p["unit"] for p in model.manifest["parameters"]}
+    parts = [f"{name} = {value * UNITS[unit]:g} {unit}" if units.get(name) == "m" else f"{name} = {value:g}"
+             for name, value in values.items()]
+    return ", ".join(parts) or "model parameters"
+
+
+def _report(model, cloud, inv_kappa, limits, progress) -> list[str]:
+    from symkin.analysis import global_indices, inverse, mechanism, workspace
+
+    lines = []
+    lower, upper = cloud.points.min(axis=0), cloud.points.max(axis=0)
+    lines.append("extent of the samples: " + ", ".join(f"{a} [{lo:.6g}, {hi:.6g}] m"
+                                                       for a, lo, hi in zip(cloud.axes, lower, upper)))
+    d = len(cloud.axes)
+    unit = f"m^{d}"
+    kind = "area" if d == 2 else "volume"
+    if mechanism.is_positional(model):
+        progress(f"{kind} (joint domain)")
+        measure = global_indices.workspace_measure(model, method="qmc", samples=2**16, seed=0, limits=limits)
+        lines.append(f"{kind}: {measure} {unit} (qmc, |det J| dq over the joint limits: exact where q -> TCP "
+                     "is one-to-one, else with multiplicity)")
+    ik = inverse.inverse_kinematics_for(model)
+    if ik is not None:
+        progress(f"{kind} (Cartesian domain)")
+        measure = global_indices.workspace_measure(model, method="qmc", samples=2**16, seed=0, limits=limits,
+                                        domain="cartesian", inverse=ik)
+        lines.append(f"{kind}: {measure} {unit} (qmc over a Cartesian box, reachability by inverse kinematics)")
+    occupancy = workspace.occupancy_from_cloud(cloud)
+    boundary = occupancy.boundary()
+    lines.append(f"{kind}: {occupancy.measure()} {unit} (occupancy of {occupancy.cell[0]:.3g} m cells: "
+                 f"between interior and all occupied cells); {int(boundary.sum())} boundary cells")
+    singular = inv_kappa <= 0.0
+    on_boundary = int(occupancy.lookup(cloud.points[singular], boundary).sum())
+    lines.append(f"1/kappa: min {inv_kappa.min():.4g}, mean {inv_kappa.mean():.4g}, max {inv_kappa.max():.4g}; "
+                 f"singular configurations: {int(singular.sum())}, of which {on_boundary} on the workspace "
+                 "boundary (seed sec. 4.2: boundary singularities)")
+    return lines

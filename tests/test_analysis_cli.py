@@ -1,0 +1,104 @@
+"""``symkin workspace``, ``symkin gci`` and ``symkin bench gci``: reports, figures, exit codes."""
+
+from __future__ import annotations
+
+import re
+import subprocess
+
+import numpy as np
+import pytest
+
+from conftest import GENERATED_DIR, MODELS_DIR, SYMKIN_CLI
+from symkin.cli import main
+
+ARM_DIR = str(GENERATED_DIR / "planar_2r")
+PNG = b"\x89PNG\r\n\x1a\n"
+
+
+def _number(pattern: str, text: str) -> float:
+    match = re.search(pattern, text)
+    assert match, (pattern, text)
+    return float(match.group(1))
+
+
+def test_bench_gci_has_help():
+    result = subprocess.run(SYMKIN_CLI + ["bench", "gci", "--help"], capture_output=True, text=True)
+    assert result.returncode == 0
+    assert "usage: symkin bench gci" in result.stdout
+
+
+def test_fig_8_19_is_reproduced_by_the_documented_command(tmp_path, capsys):
+    """The README's command: both length combinations of seed Fig. 8.19 in one figure."""
+    figure, kappa_map = tmp_path / "fig-8-19.png", tmp_path / "map.png"
+    assert main(["workspace", ARM_DIR, "--design", "l1=0.1,l2=0.1", "--design", "l1=0.2,l2=0.2", "--unit", "cm",
+                 "-o", str(figure), "--map", str(kappa_map)]) == 0
+    out = capsys.readouterr().out
+    for path in (figure, kappa_map):
+        assert path.read_bytes()[:8] == PNG and path.stat().st_size > 20_000
+    areas = [float(a) for a in re.findall(r"area: ([0-9.e-]+) \+- [0-9.e-]+ m\^2 \(qmc, \|det J\|", out)]
+    assert areas == pytest.approx([np.pi / 2 * 0.01, np.pi / 2 * 0.04], rel=1e-6)
+    assert out.count("singular configurations: 200, of which 200 on the workspace boundary") == 2
+    assert "planar_2r (l1 = 20 cm, l2 = 20 cm): 40000 configurations" in out
+
+
+def test_workspace_of_a_model_file_derives_it_on_the_fly(tmp_path, capsys):
+    assert main(["workspace", str(MODELS_DIR / "planar_2r.yaml"), "-n", "400", "--no-figure"]) == 0
+    assert "planar_2r (model parameters): 400 configurations (grid)" in capsys.readouterr().out
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_gci_reports_value_error_and_measure(capsys):
+    assert main(["gci", ARM_DIR, "--method", "adaptive", "-n", "4096"]) == 0
+    out = capsys.readouterr().out
+    assert _number(r"GCI = ([0-9.]+)", out) == pytest.approx(0.2233408989620, abs=1e-12)
+    assert _number(r"int dW = ([0-9.e-]+)", out) == pytest.approx(np.pi / 2 * 0.01, rel=1e-12)
+    assert "dW = |det J| dq" in out
+
+
+def test_gci_on_the_cartesian_domain_warns_about_deterministic_errors(capsys):
+    assert main(["gci", ARM_DIR, "--domain", "cartesian", "--method", "grid", "-n", "4096"]) == 0
+    assert "note: the reachability indicator is discontinuous" in capsys.readouterr().out
+    assert main(["gci", ARM_DIR, "--domain", "cartesian", "--method", "mc", "-n", "4096", "--seed", "1"]) == 0
+    assert "confidence half-width (95 %)" in capsys.readouterr().out
+
+
+def test_gci_of_a_mixed_task_space_uses_a_characteristic_length(tmp_path, capsys):
+    kappa_map = tmp_path / "ur10e.png"
+    assert main(["gci", str(GENERATED_DIR / "ur10e"), "--method", "qmc", "-n", "1024", "--seed", "0",
+                 "--map", str(kappa_map)]) == 0
+    out = capsys.readouterr().out
+    assert "characteristic length L = " in out
+    assert 0 < _number(r"GCI = ([0-9.]+)", out) < 1
+    assert kappa_map.read_bytes()[:8] == PNG
+
+
+def test_bench_gci_prints_a_table_and_plots_time_against_error(tmp_path, capsys):
+    figure = tmp_path / "bench.png"
+    assert main(["bench", "gci", ARM_DIR, "--budgets", "256,4096", "--repeats", "1", "-o", str(figure)]) == 0
+    out = capsys.readouterr().out
+    assert "GCI reference 0.22334089896201" in out
+    rows = [line for line in out.splitlines() if re.match(r"\s+(joint|cartesian)\s.*(yes|NO)$", line)]
+    assert len(rows) == 2 * 4 * 2  # domains x integrators x budgets
+    assert "fastest run reaching a relative error of the GCI of:" in out
+    assert figure.read_bytes()[:8] == PNG
+
+
+@pytest.mark.parametrize("arguments, message", [
+    (["gci", ARM_DIR, "--set", "l3=1"], "not free parameters"),
+    (["gci", ARM_DIR, "--set", "l1"], "is not NAME=VALUE"),
+    (["gci", ARM_DIR, "--limit", "theta2=0"], "is not JOINT=LOWER:UPPER"),
+    (["gci", ARM_DIR, "--limit", "theta9=0:1"], "no coordinates named"),
+    (["gci", str(GENERATED_DIR / "ur10e"), "--domain", "cartesian"], "no inverse kinematics"),
+    (["workspace", ARM_DIR, "--limit", "theta1=1:0", "--no-figure"], "not finite intervals"),
+    (["bench", "gci", ARM_DIR, "--methods", "simpson"], "unknown integrators"),
+])
+def test_bad_arguments_exit_with_code_2(arguments, message, capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        main(arguments)
+    assert exit_info.value.code == 2
+    assert message in capsys.readouterr().err
+
+
+def test_missing_generated_code_exits_with_code_2(tmp_path, capsys):
+    assert main(["gci", str(tmp_path)]) == 2
+    assert "holds no manifest.json" in capsys.readouterr().err
