@@ -32,6 +32,14 @@ def _input_record(i) -> dict[str, Any]:
     return record
 
 
+def _limits(model: Model, joint) -> list[float] | None:
+    """[lower, upper] position limits of ``joint`` at the parameters' default values, or None."""
+    if joint.limits is None:
+        return None
+    values = model.parameter_values
+    return [float(bound.xreplace(values)) for bound in joint.limits]
+
+
 def build_manifest(model: Model, code: ModelCode, derived: list[str], backend_files: dict[str, list[str]]) -> dict:
     """The manifest of ``code`` derived from ``model``.
 
@@ -52,7 +60,8 @@ def build_manifest(model: Model, code: ModelCode, derived: list[str], backend_fi
             "source": Path(model.source).name,
             "description": model.description,
             "dof": model.dof,
-            "coordinates": [{"name": j.name, "type": j.type.value} for j in model.joints],
+            "coordinates": [{"name": j.name, "type": j.type.value, "limits": _limits(model, j)}
+                            for j in model.joints],
             "task_space": list(model.task_space),
         },
         "parameters": [{"name": p.name, "default": p.default, "unit": p.unit, "doc": p.doc, "fixed": p.fixed}

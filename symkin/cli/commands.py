@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
-from symkin.cli import bench_cmd, check_cmd, derive_cmd
+from symkin.cli import bench_cmd, check_cmd, derive_cmd, ik_cmd
 
 REGISTRY = [
     derive_cmd.register,
     check_cmd.register_check,
     check_cmd.register_quantities,
     bench_cmd.register,
+    ik_cmd.register,
 ]
