@@ -8,8 +8,12 @@ from __future__ import annotations
 import argparse
 from collections.abc import Callable
 
+from symkin.cli import bench_stability
+
 #: Registration functions of the benchmark kinds (``symkin bench gci``, ``symkin bench stability``...).
-KINDS: list[Callable[[argparse._SubParsersAction], None]] = []
+KINDS: list[Callable[[argparse._SubParsersAction], None]] = [
+    bench_stability.register,
+]
 
 
 def register(sub: argparse._SubParsersAction) -> None:
