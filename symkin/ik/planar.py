@@ -28,7 +28,7 @@ import numpy as np
 
 from symkin.ik.closed_form import SINGULARITY_EPSILON, STRUCTURE_TOLERANCE, BranchFlag, register
 from symkin.ik.problem import POSITION_INDEX, ModelKinematics
-from symkin.ik.rotations import rotate
+from symkin.ik.rotations import cross, rotate
 from symkin.ik.screws import HomeScrews
 from symkin.ik.subproblems import exterior_angle, perpendicular, signed_angle
 
@@ -112,7 +112,7 @@ def recognise_planar_2r(kin: ModelKinematics, screws: HomeScrews) -> Planar2R | 
     if not all(c in POSITION_INDEX for c in kin.task_space):
         return None
     h = screws.directions[0]
-    if np.linalg.norm(np.cross(h, screws.directions[1])) > STRUCTURE_TOLERANCE:
+    if np.linalg.norm(cross(h, screws.directions[1])) > STRUCTURE_TOLERANCE:
         return None
     missing = [k for k in range(3) if k not in (POSITION_INDEX[c] for c in kin.task_space)]
     if len(missing) > 1 or (missing and abs(h[missing[0]]) < 1.0 - STRUCTURE_TOLERANCE):

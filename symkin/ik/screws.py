@@ -26,7 +26,7 @@ import numpy as np
 
 from symkin.errors import GeneratedCodeError
 from symkin.ik.problem import ModelKinematics
-from symkin.ik.rotations import rotate, rotation_matrix
+from symkin.ik.rotations import cross, rotate, rotation_matrix
 
 #: Agreement required between the product of exponentials and the generated fk (relative).
 CHECK_TOLERANCE = 1e-9
@@ -102,9 +102,9 @@ def home_screws(kinematics: ModelKinematics, rng: np.random.Generator | None = N
         v, w = J[:3, i], J[3:, i]
         if kinematics.revolute[i]:
             h = w / np.linalg.norm(w)
-            moment = v + np.cross(p_tcp, h)
+            moment = v + cross(p_tcp, h)
             directions.append(h)
-            points.append(np.cross(h, moment))
+            points.append(cross(h, moment))
         else:
             directions.append(v / np.linalg.norm(v))
             points.append(np.zeros(3))

@@ -30,6 +30,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from symkin.ik.rotations import cross
+
 #: Rounding allowance, relative to the lengths involved, below which a negative factor is
 #: clamped to zero (the target is on the boundary) instead of declared unreachable.
 REACH_SLACK = 64.0 * np.finfo(float).eps
@@ -68,7 +70,7 @@ def signed_angle(h: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
     theta = atan2(h . (u x v), u . v)  (only the components of u, v normal to h matter).
     Returns 0 where u or v has no such component (the subproblem is degenerate there).
     """
-    return np.arctan2(dot(h, np.cross(u, v)), dot(perpendicular(h, u), perpendicular(h, v)))
+    return np.arctan2(dot(h, cross(u, v)), dot(perpendicular(h, u), perpendicular(h, v)))
 
 
 def _nonnegative(factor: np.ndarray, scale: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

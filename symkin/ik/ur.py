@@ -55,18 +55,18 @@ import numpy as np
 from symkin.ik.closed_form import SINGULARITY_EPSILON, STRUCTURE_TOLERANCE, BranchFlag, register
 from symkin.ik.planar import ParallelPair
 from symkin.ik.problem import ModelKinematics
-from symkin.ik.rotations import rotate
+from symkin.ik.rotations import cross, rotate
 from symkin.ik.screws import HomeScrews
 from symkin.ik.subproblems import dot, perpendicular, signed_angle, sinusoid
 
 
 def _closest_point_of_lines(c1: np.ndarray, h1: np.ndarray, c2: np.ndarray, h2: np.ndarray) -> tuple[np.ndarray, float]:
     """The midpoint of the common normal of two non-parallel lines, and their distance."""
-    n = np.cross(h1, h2)
+    n = cross(h1, h2)
     nn = float(np.dot(n, n))
     delta = c2 - c1
-    t1 = np.dot(np.cross(delta, h2), n) / nn
-    t2 = np.dot(np.cross(delta, h1), n) / nn
+    t1 = np.dot(cross(delta, h2), n) / nn
+    t2 = np.dot(cross(delta, h1), n) / nn
     p1, p2 = c1 + t1 * h1, c2 + t2 * h2
     return 0.5 * (p1 + p2), float(np.linalg.norm(p1 - p2))
 
@@ -104,48 +104,54 @@ class URFamily:
         self.normal = normal / np.linalg.norm(normal)
 
     def candidates(self, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """All eight branches at once: axes (..., shoulder, wrist, elbow) flattened to (..., 8)."""
         h, c, h2, s = self.h, self.c, self.h2, self.screws
+        h1, h5, h6 = h[0], h[4], h[5]
         TM = target @ self.M_inv                       # E1 ... E6
         R_d = TM[..., :3, :3]
-        w = np.einsum("...ij,j->...i", TM[..., :3, :3], self.w0) + TM[..., :3, 3]
-        a6 = R_d @ h[5]
-        scale = s.scale
+        w = np.einsum("...ij,j->...i", R_d, self.w0) + TM[..., :3, 3]
+        a6 = R_d @ h6
 
-        # 1. shoulder: (R1 h2) . (w - c1) = delta
+        # 1. shoulder: (R1 h2) . (w - c1) = delta                              -> q1 (..., 2)
         r = w - c[0]
-        h1 = h[0]
-        shoulder = sinusoid(dot(perpendicular(h1, h2), r), dot(np.cross(h1, h2), r),
+        shoulder = sinusoid(dot(perpendicular(h1, h2), r), dot(cross(h1, h2), r),
                             self.delta - np.dot(h1, h2) * dot(h1, r))
-        shoulder_flags = np.where(shoulder.unreachable, int(BranchFlag.UNREACHABLE_SHOULDER), 0)
-        shoulder_flags |= np.where(shoulder.clamped, int(BranchFlag.CLAMPED), 0)
-        shoulder_flags |= np.where(shoulder.root <= SINGULARITY_EPSILON * scale, int(BranchFlag.SHOULDER), 0)
+        q1 = np.stack([shoulder.plus, shoulder.minus], -1)
+        shoulder_flags = (np.where(shoulder.unreachable, int(BranchFlag.UNREACHABLE_SHOULDER), 0)
+                          | np.where(shoulder.clamped, int(BranchFlag.CLAMPED), 0)
+                          | np.where(shoulder.root <= SINGULARITY_EPSILON * s.scale, int(BranchFlag.SHOULDER), 0))
 
-        qs, flags = [], []
-        for q1 in (shoulder.plus, shoulder.minus):
-            k = rotate(h1, q1, np.broadcast_to(h2, q1.shape + (3,)))
-            # 2. wrist: h2 . (R5 h6) = k . a6, root |k x a6|
-            h5, h6 = h[4], h[5]
-            wrist = sinusoid(np.dot(perpendicular(h5, h6), h2), np.dot(np.cross(h5, h6), h2),
-                             dot(k, a6) - np.dot(h5, h6) * np.dot(h5, h2),
-                             root=np.linalg.norm(np.cross(k, a6), axis=-1))
-            wrist_flags = np.where(wrist.root <= SINGULARITY_EPSILON, int(BranchFlag.WRIST), 0)
-            for q5 in (wrist.plus, wrist.minus):
-                # 3. q6 turns u = R5^T h2 onto v = R_d^T k about h6 by -q6
-                u = rotate(h5, -q5, np.broadcast_to(h2, q5.shape + (3,)))
-                v = np.einsum("...ji,...j->...i", R_d, k)
-                q6 = -signed_angle(h6, u, v)
-                # 4. E2 E3 E4 = E1^-1 T M^-1 E6^-1 E5^-1; it moves c4 (on axis 4) to x
-                E234 = s.transform(0, -q1) @ TM @ s.transform(5, -q6) @ s.transform(4, -q5)
-                x = np.einsum("...ij,j->...i", E234[..., :3, :3], c[3]) + E234[..., :3, 3]
-                q2_pair, q3_pair, elbow_flags = self.elbow.solve(x)
-                # 5. q4 from the total turn about h2
-                total = signed_angle(h2, self.normal, np.einsum("...ij,j->...i", E234[..., :3, :3], self.normal))
-                for branch in range(2):
-                    q2, q3 = q2_pair[..., branch], q3_pair[..., branch]
-                    q4 = self.s4 * (total - q2 - self.s3 * q3)
-                    qs.append(np.stack([q1, q2, q3, q4, q5, q6], -1))
-                    flags.append(shoulder_flags | wrist_flags | elbow_flags[..., branch])
-        return np.stack(qs, -2), np.stack(flags, -1)
+        # 2. wrist: h2 . (R5 h6) = k . a6 with the root |k x a6|              -> q5 (..., 2, 2)
+        k = rotate(h1, q1, np.broadcast_to(h2, q1.shape + (3,)))
+        a6_b = a6[..., None, :]
+        wrist = sinusoid(np.dot(perpendicular(h5, h6), h2), np.dot(cross(h5, h6), h2),
+                         dot(k, a6_b) - np.dot(h5, h6) * np.dot(h5, h2),
+                         root=np.linalg.norm(cross(k, a6_b), axis=-1))
+        q5 = np.stack([wrist.plus, wrist.minus], -1)
+        wrist_flags = np.where(wrist.root <= SINGULARITY_EPSILON, int(BranchFlag.WRIST), 0)
+
+        # 3. q6 turns u = R5^T h2 onto v = R_d^T k about h6 by -q6             -> q6 (..., 2, 2)
+        u = rotate(h5, -q5, np.broadcast_to(h2, q5.shape + (3,)))
+        v = np.einsum("...ji,...kj->...ki", R_d, k)[..., :, None, :]
+        q6 = -signed_angle(h6, u, v)
+
+        # 4. E2 E3 E4 = E1^-1 T M^-1 E6^-1 E5^-1 moves c4 (on axis 4) to x     -> q2, q3 (..., 2, 2, 2)
+        E234 = (s.transform(0, -q1)[..., :, None, :, :] @ TM[..., None, None, :, :]
+                @ s.transform(5, -q6) @ s.transform(4, -q5))
+        x = np.einsum("...ij,j->...i", E234[..., :3, :3], c[3]) + E234[..., :3, 3]
+        q2, q3, elbow_flags = self.elbow.solve(x)
+
+        # 5. q4 from the total turn about h2
+        turned = np.einsum("...ij,j->...i", E234[..., :3, :3], self.normal)
+        total = signed_angle(h2, self.normal, turned)[..., None]
+        q4 = self.s4 * (total - q2 - self.s3 * q3)
+
+        shape = q2.shape
+        q = np.stack([np.broadcast_to(q1[..., :, None, None], shape), q2, q3, q4,
+                      np.broadcast_to(q5[..., None], shape), np.broadcast_to(q6[..., None], shape)], -1)
+        flags = shoulder_flags[..., None, None, None] | wrist_flags[..., :, None, None] | elbow_flags
+        batch = shape[:-3]
+        return q.reshape(batch + (8, 6)), np.broadcast_to(flags, shape).reshape(batch + (8,))
 
 
 @register
@@ -156,10 +162,10 @@ def recognise_ur_family(kin: ModelKinematics, screws: HomeScrews) -> URFamily | 
         return None
     h = screws.directions
     tol = STRUCTURE_TOLERANCE
-    parallel = all(np.linalg.norm(np.cross(h[1], h[i])) <= tol for i in (2, 3))
+    parallel = all(np.linalg.norm(cross(h[1], h[i])) <= tol for i in (2, 3))
     if not parallel or abs(np.dot(h[4], h[1])) > tol or abs(np.dot(h[4], h[5])) > tol:
         return None
-    if np.linalg.norm(np.cross(h[0], h[1])) <= tol:
+    if np.linalg.norm(cross(h[0], h[1])) <= tol:
         return None
     wrist_point, distance = _closest_point_of_lines(screws.points[4], h[4], screws.points[5], h[5])
     if distance > tol * screws.scale:
