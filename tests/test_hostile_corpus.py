@@ -92,3 +92,12 @@ def test_fuzzed_models_through_the_cli_exit_0_or_2_and_write_nothing_on_error(tm
     else:
         assert (base / "out").is_dir()
     assert not (base / "pwned").exists()
+
+
+def test_deep_block_nesting_is_refused_with_a_location(tmp_path, monkeypatch, capsys):
+    text = "name: arm\ndescription:\n" + "".join(" " * (i + 1) + "a:\n" for i in range(700)) + " " * 701 + "1\n"
+    path = tmp_path / "deep.yaml"
+    path.write_text(text)
+    (tmp_path / "work").mkdir()
+    code, err = _run(["check", str(path)], tmp_path / "work", monkeypatch, capsys)
+    assert code == 2 and "nested deeper than 64 levels" in err and f"{path}:" in err

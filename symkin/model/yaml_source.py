@@ -28,6 +28,9 @@ from symkin.errors import ModelError, Problem
 MAX_FILE_BYTES = 1_000_000
 MAX_NODES = 100_000
 MAX_DEPTH = 64
+#: Bracket depth at which a file is refused before YAML parsing (a generous multiple of
+#: MAX_DEPTH, so that brackets inside quoted text never trip it in a sensible file).
+PRESCAN_DEPTH = 4 * MAX_DEPTH
 
 KeyPath = tuple[str | int, ...]
 
@@ -114,6 +117,10 @@ def read_document(path: str | Path) -> Document:
 
 def parse_document(text: str, file: str = "<string>") -> Document:
     """Compose YAML ``text`` into a :class:`Document` (see module docstring for the rules)."""
+    line, column = _deepest_point(text, PRESCAN_DEPTH)
+    if line is not None:  # refuse before PyYAML, whose time grows with the square of the flow depth
+        raise ModelError([Problem(file, line, column, "", f"the document is nested deeper than {MAX_DEPTH} levels",
+                                  "flatten the structure; no model key nests this deep")])
     try:
         root = yaml.compose(text, Loader=yaml.SafeLoader)
     except yaml.reader.ReaderError as exc:  # a character YAML does not allow, e.g. a NUL byte
@@ -123,6 +130,9 @@ def parse_document(text: str, file: str = "<string>") -> Document:
                                   "remove it: a model file is plain text (no NUL or other control characters)")]) from None
     except RecursionError:
         line, column = _deepest_point(text)
+        if line is None:  # nested by indentation: the first line indented more than MAX_DEPTH
+            deep = [i for i, row in enumerate(text.splitlines(), 1) if len(row) - len(row.lstrip(" ")) > MAX_DEPTH]
+            line, column = (deep[0], MAX_DEPTH + 1) if deep else (None, None)
         raise ModelError([Problem(file, line, column, "", f"the document is nested deeper than {MAX_DEPTH} levels",
                                   "flatten the structure; no model key nests this deep")]) from None
     except yaml.MarkedYAMLError as exc:
@@ -155,13 +165,13 @@ def _line_column(text: str, position: int) -> tuple[int, int]:
     return line, position - (before.rfind("\n") + 1) + 1
 
 
-def _deepest_point(text: str) -> tuple[int | None, int | None]:
-    """Where flow brackets first nest deeper than MAX_DEPTH (for documents too deep to parse)."""
+def _deepest_point(text: str, limit: int = MAX_DEPTH) -> tuple[int | None, int | None]:
+    """Where flow brackets ([ and {, quotes not considered) first nest deeper than ``limit``, or (None, None)."""
     depth = 0
     for position, char in enumerate(text):
         if char in "[{":
             depth += 1
-            if depth > MAX_DEPTH:
+            if depth > limit:
                 return _line_column(text, position)
         elif char in "]}":
             depth -= 1
