@@ -1,8 +1,9 @@
 """Write a directory of generated files all at once, or not at all.
 
 Files are written into a temporary sibling directory, which then replaces the target
-with two renames while SIGINT/SIGTERM are held back, so an interrupted run leaves the
-previous output intact (and at worst a stray ``.<name>.tmp-*`` directory).
+with two renames while SIGINT/SIGTERM are held back (as is the removal of the previous
+output's retired copy), so an interrupted run leaves either the previous or the complete new
+output, and no stray directory.
 """
 
 from __future__ import annotations
@@ -21,15 +22,26 @@ _HELD_SIGNALS = {signal.SIGINT, signal.SIGTERM}
 
 @contextlib.contextmanager
 def signals_held() -> Iterator[None]:
-    """Defer SIGINT and SIGTERM until the block ends (main thread of a POSIX process)."""
-    can_block = hasattr(signal, "pthread_sigmask") and threading.current_thread() is threading.main_thread()
-    if can_block:
-        signal.pthread_sigmask(signal.SIG_BLOCK, _HELD_SIGNALS)
+    """Defer SIGINT and SIGTERM until the block ends (in the main thread; a no-op elsewhere).
+
+    The Python-level handlers are replaced by one that only records the signal, and the
+    first recorded signal is raised again, to the restored handler, when the block ends.
+    (Blocking with pthread_sigmask would not do: it holds signals back from the calling
+    thread only, and the kernel hands a process-directed signal to any other thread - such
+    as the progress display's - whose handler then interrupts the main thread anyway.)
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    received: list[int] = []
+    previous = {sig: signal.signal(sig, lambda signum, _frame: received.append(signum)) for sig in _HELD_SIGNALS}
     try:
         yield
     finally:
-        if can_block:
-            signal.pthread_sigmask(signal.SIG_UNBLOCK, _HELD_SIGNALS)
+        for sig, handler in previous.items():
+            signal.signal(sig, handler if handler is not None else signal.SIG_DFL)
+        if received:
+            signal.raise_signal(received[0])
 
 
 def _checked_relative(path: str) -> PurePosixPath:
@@ -60,15 +72,17 @@ def replace_directory(target: Path, files: Mapping[str, str | bytes]) -> None:
                 os.fsync(handle.fileno())
             os.chmod(path, 0o644)
         os.chmod(staging, 0o755)
-        retired = None
         with signals_held():
+            # the retired copy is removed while signals are still held: a signal delivered right
+            # after the swap must not leave it behind
+            retired = None
             if target.exists():
                 retired = Path(tempfile.mkdtemp(prefix=f".{target.name}.old-", dir=parent))
                 os.rmdir(retired)
                 os.rename(target, retired)
             os.rename(staging, target)
-        if retired is not None:
-            shutil.rmtree(retired, ignore_errors=True)
+            if retired is not None:
+                shutil.rmtree(retired, ignore_errors=True)
     except BaseException:
         shutil.rmtree(staging, ignore_errors=True)
         raise

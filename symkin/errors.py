@@ -54,9 +54,14 @@ class ModelError(SymkinError):
         self.problems = tuple(problems)
         super().__init__(self._text())
 
+    #: The message lists at most this many problems (a hostile file can have thousands).
+    MAX_SHOWN = 20
+
     def _text(self) -> str:
         head = f"{len(self.problems)} problem(s) in the model:" if len(self.problems) > 1 else ""
-        body = "\n".join(str(p) for p in self.problems)
+        body = "\n".join(str(p) for p in self.problems[:self.MAX_SHOWN])
+        if len(self.problems) > self.MAX_SHOWN:
+            body += f"\n... and {len(self.problems) - self.MAX_SHOWN} more"
         return f"{head}\n{body}" if head else body
 
 

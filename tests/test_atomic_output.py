@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import json
+import os
 import signal
 import subprocess
 import time
+from pathlib import Path
 
 import pytest
 
@@ -74,3 +76,46 @@ def test_interrupting_derive_leaves_previous_output_intact(tmp_path, sig, delay)
     if proc.returncode == 0:
         assert (tmp_path / "ur10e" / "manifest.json").read_text() == after
     assert [p.name for p in tmp_path.iterdir()] == ["ur10e"]
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_signal_during_the_swap_leaves_the_new_output_and_no_stray_directory(tmp_path, monkeypatch, sig):
+    """A signal that arrives while the two renames are held back is delivered right after them:
+    the new output is complete and the retired previous output must not be left behind."""
+    from symkin.cli import _terminate
+
+    atomic.replace_directory(tmp_path / "m", {"a.txt": "old"})
+    real_rename = atomic.os.rename
+
+    def rename_then_signal(src, dst):
+        real_rename(src, dst)
+        if Path(dst) == tmp_path / "m":
+            os.kill(os.getpid(), sig)  # pending until the renames are done
+
+    monkeypatch.setattr(atomic.os, "rename", rename_then_signal)
+    previous = signal.signal(signal.SIGTERM, _terminate)
+    try:
+        with pytest.raises((KeyboardInterrupt, SystemExit)):
+            atomic.replace_directory(tmp_path / "m", {"a.txt": "new"})
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+    assert (tmp_path / "m" / "a.txt").read_text() == "new"
+    assert [p.name for p in tmp_path.iterdir()] == ["m"]
+
+
+def test_interrupting_the_first_derive_leaves_nothing_half_written(tmp_path):
+    model = str(MODELS_DIR / "ur10e.yaml")
+    for delay in (0.4, 1.0):
+        out = tmp_path / f"out{delay}"
+        proc = subprocess.Popen(SYMKIN_CLI + ["derive", model, "-o", str(out), "-q"], stdout=subprocess.PIPE,
+                                stderr=subprocess.PIPE)
+        time.sleep(delay)
+        proc.send_signal(signal.SIGINT)
+        proc.communicate(timeout=60)
+        if out.exists():
+            entries = [p.name for p in out.iterdir()]
+            assert entries in ([], ["ur10e"]), entries
+            if entries:
+                manifest = json.loads((out / "ur10e" / "manifest.json").read_text())
+                assert sorted(p.name for p in (out / "ur10e").iterdir()) == sorted(
+                    ["manifest.json"] + manifest["backends"]["numpy"]["files"])

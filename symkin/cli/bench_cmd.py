@@ -8,11 +8,12 @@ from __future__ import annotations
 import argparse
 from collections.abc import Callable
 
-from symkin.cli import bench_gci
+from symkin.cli import bench_gci, bench_stability
 
 #: Registration functions of the benchmark kinds (``symkin bench gci``, ``symkin bench stability``...).
 KINDS: list[Callable[[argparse._SubParsersAction], None]] = [
     bench_gci.register,
+    bench_stability.register,
 ]
 
 

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from symkin.cli import bench_cmd, check_cmd, derive_cmd, gci_cmd, workspace_cmd
+from symkin.cli import bench_cmd, check_cmd, derive_cmd, gci_cmd, ik_cmd, workspace_cmd
 
 REGISTRY = [
     derive_cmd.register,
@@ -11,4 +11,5 @@ REGISTRY = [
     workspace_cmd.register,
     gci_cmd.register,
     bench_cmd.register,
+    ik_cmd.register,
 ]

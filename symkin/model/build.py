@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import difflib
 import hashlib
+import math
 from collections.abc import Callable, Iterable
 from typing import Any
 
@@ -34,10 +35,13 @@ from symkin.model.schema import (
     Translation,
     Vec3,
 )
-from symkin.model.yaml_source import Document, KeyPath
+from symkin.model.yaml_source import Document, KeyPath, shorten
 
 #: Version of the model format; part of the model hash.
 FORMAT_VERSION = 1
+#: Most joints of one chain (exact expressions grow with the chain; beyond this, derivation
+#: would run for hours).
+MAX_JOINTS = 64
 
 TOP_LEVEL_KEYS = ("name", "description", "references", "parameters", "serial", "task_space",
                   "bodies", "gravity", "friction", "scene")
@@ -69,7 +73,7 @@ def _describe(value: Any) -> str:
         return "a mapping"
     if isinstance(value, list):
         return f"a list of {len(value)}"
-    return f"'{value}'"
+    return f"'{shorten(value)}'"
 
 
 class _Reader:
@@ -82,6 +86,10 @@ class _Reader:
         self.names: dict[str, sympy.Expr] = {}
         #: Default value of every free parameter symbol (for physical plausibility checks).
         self.defaults: dict[sympy.Symbol, sympy.Expr] = {}
+        #: Parameters whose own definition failed: uses of them are not reported again.
+        self.invalid: set[str] = set()
+        #: Links of joints whose definition failed: bodies on them are not reported as unknown.
+        self.invalid_links: set[str] = set()
 
     def fail(self, path: KeyPath, message: str, fix: str) -> None:
         self.problems.append(self.doc.problem(path, message, fix))
@@ -99,7 +107,7 @@ class _Reader:
             if key not in allowed:
                 close = difflib.get_close_matches(key, allowed, n=1)
                 hint = f"did you mean '{close[0]}'? " if close else ""
-                self.fail(path + (key,), f"unknown key '{key}'", f"{hint}allowed keys here: {', '.join(allowed)}")
+                self.fail(path + (key,), f"unknown key '{shorten(key)}'", f"{hint}allowed keys here: {', '.join(allowed)}")
         for key in required:
             if key not in value:
                 self.fail(path, f"missing required key '{key}'", f"add '{key}:'")
@@ -130,12 +138,15 @@ class _Reader:
     def expr(self, path: KeyPath, value: Any, names: dict[str, sympy.Expr] | None = None) -> sympy.Expr | None:
         """Parse the expression at ``path``; numbers are read from their raw text (exact decimals)."""
         text = value
-        if isinstance(value, (int, float)) and not isinstance(value, bool):
-            text = self.doc.raw.get(path, value)
+        if isinstance(value, (int, float)) and not isinstance(value, bool) and not (
+                isinstance(value, float) and not math.isfinite(value)):
+            text = self.doc.raw.get(path, value)  # .inf and .nan go to the parser as floats
         try:
             return parse_expression(text, self.names if names is None else names)
         except ExpressionError as err:
-            problem = self.doc.problem(path, f"invalid expression '{text}': {err}", err.fix)
+            if err.undefined_name is not None and err.undefined_name in self.invalid:
+                return None  # the parameter's own definition is already reported
+            problem = self.doc.problem(path, f"invalid expression '{shorten(text)}': {err}", err.fix)
             if problem.column is not None and isinstance(text, str):
                 problem = Problem(problem.file, problem.line, problem.column + err.column, problem.key,
                                   problem.message, problem.fix)
@@ -274,6 +285,7 @@ def _parameters(r: _Reader, section: Any) -> tuple[tuple[Parameter, ...], tuple[
             continue
         value = r.expr(vpath, raw, names={})
         if value is None:
+            r.invalid.add(pname)
             continue
         symbol = sympy.Symbol(pname, real=True)
         free.append(Parameter(pname, symbol, value, unit, doc))
@@ -298,6 +310,7 @@ def _resolve_derived(r: _Reader, pending: dict[str, tuple[KeyPath, Any, str, str
                     blocked[pname] = err.undefined_name
                     continue
                 r.expr(vpath, raw)  # records the located problem
+                r.invalid.add(pname)
                 del waiting[pname]
                 progress = True
                 continue
@@ -348,6 +361,9 @@ def _serial(r: _Reader, section: Any) -> tuple[tuple[Joint, ...], tuple[Op, ...]
     tcp = _frame_ops(r, path + ("tcp",), section["tcp"]) if "tcp" in section else ()
     if not joints and not r.problems:
         r.fail(path, "the chain has no joints", "declare at least one joint")
+    if len(joints) > MAX_JOINTS:
+        r.fail(path, f"the chain has {len(joints)} joints, more than the limit of {MAX_JOINTS}",
+               "split the mechanism; symbolic expressions grow with every joint of a chain")
     _check_unique(r, [(path, j.name) for j in joints], "joint")
     _check_unique(r, [(path, j.link) for j in joints], "link")
     return tuple(joints), base or (), tcp or ()
@@ -410,13 +426,15 @@ def _dh_table(r: _Reader, path: KeyPath, section: Any) -> list[Joint]:
     for i, row in enumerate(rows):
         rpath = path + ("rows", i)
         fields = _dh_row_fields(r, rpath, row)
-        if fields is None:
-            continue
+        if fields is None or any(k not in fields for k in ("name", "theta", "d", "a", "alpha")):
+            r.invalid_links.add(_declared_link(fields, i))
+            continue  # the missing keys are reported
         jname = r.name(rpath + ("name",), fields["name"])
         jtype = _joint_type(r, rpath + ("type",), fields.get("type", "R"))
         values = {k: r.expr(rpath + (k,), fields[k]) for k in ("theta", "d", "a", "alpha")}
         extras = _joint_extras(r, rpath, fields, default_link=f"link{i + 1}")
         if jname is None or jtype is None or any(v is None for v in values.values()) or extras is None:
+            r.invalid_links.add(_declared_link(fields, i))
             continue
         theta, d, a, alpha = values["theta"], values["d"], values["a"], values["alpha"]
         revolute = jtype is JointType.REVOLUTE
@@ -452,6 +470,12 @@ def _dh_row_fields(r: _Reader, path: KeyPath, row: Any) -> dict[str, Any] | None
     return r.mapping(path, row, required=("name", "theta", "d", "a", "alpha"), optional=("type",) + _JOINT_EXTRAS)
 
 
+def _declared_link(fields: Any, index: int) -> str:
+    """The link a joint entry declares (or its default name), even if the entry is invalid."""
+    link = fields.get("link") if isinstance(fields, dict) else None
+    return link if isinstance(link, str) else f"link{index + 1}"
+
+
 def _alias_path(doc: Document, source: KeyPath, alias: KeyPath) -> None:
     """Make every location under ``source`` also known under ``alias``."""
     for key in [k for k in doc.marks if k[:len(source)] == source]:
@@ -478,6 +502,7 @@ def _chain(r: _Reader, path: KeyPath, section: Any) -> list[Joint]:
         offset = r.expr(jpath + ("offset",), item["offset"]) if "offset" in item else ZERO
         extras = _joint_extras(r, jpath, item, default_link=f"link{i + 1}")
         if None in (jname, jtype, axis, before, offset, extras):
+            r.invalid_links.add(_declared_link(item, i))
             continue
         joints.append(Joint(name=jname, type=jtype, axis=axis, offset=offset, before=before, after=(), **extras))
     return joints
@@ -603,6 +628,8 @@ def _bodies(r: _Reader, value: Any, links: tuple[str, ...]) -> tuple[Body, ...]:
         if item is None or "link" not in item or "mass" not in item:
             continue
         link = item["link"]
+        if link in r.invalid_links:
+            continue  # its joint is already reported
         if link not in links:
             close = difflib.get_close_matches(str(link), links, n=1)
             hint = f"did you mean '{close[0]}'? " if close else ""
@@ -722,7 +749,9 @@ def _scene(r: _Reader, value: Any, parameters: tuple[Parameter, ...]) -> Scene:
             return None
         out = []
         for i, item in enumerate(items):
-            if isinstance(item, str) and check(path + (key, i), item):
+            if isinstance(item, str) and item in out:
+                r.fail(path + (key, i), f"'{shorten(item)}' appears twice", f"list each of the {key} once")
+            elif isinstance(item, str) and check(path + (key, i), item):
                 out.append(item)
             elif not isinstance(item, str):
                 r.fail(path + (key, i), f"expected a name, got {_describe(item)}", "write a name")
@@ -735,7 +764,7 @@ def _scene(r: _Reader, value: Any, parameters: tuple[Parameter, ...]) -> Scene:
             return True
         close = difflib.get_close_matches(item, pnames, n=1)
         hint = f"did you mean '{close[0]}'? " if close else ""
-        r.fail(ipath, f"'{item}' is not a free parameter of the model", f"{hint}list names declared under 'parameters:'")
+        r.fail(ipath, f"'{shorten(item)}' is not a free parameter of the model", f"{hint}list names declared under 'parameters:'")
         return False
 
     fixed_value = section.get("fixed")

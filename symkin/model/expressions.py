@@ -284,6 +284,9 @@ def _check_finite(value: sympy.Expr, pos: int) -> None:
         raise ExpressionError("the value is not a real number", pos, "fix the arguments (e.g. acos of a value outside [-1, 1])")
     if value.is_number and value.is_Rational and abs(value) > MAX_MAGNITUDE:
         raise ExpressionError("the value is too large", pos, "use a number of a physical size")
+    if value.is_number and not value.is_Rational and abs(value.evalf(15)) > MAX_MAGNITUDE:
+        # exp(1000), exp(exp(10)): finite symbolically, but no double can hold them
+        raise ExpressionError("the value is too large", pos, "use a number of a physical size")
 
 
 def parse_expression(text: str | int | float, names: Mapping[str, sympy.Expr] | None = None) -> sympy.Expr:

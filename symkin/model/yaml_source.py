@@ -28,11 +28,27 @@ from symkin.errors import ModelError, Problem
 MAX_FILE_BYTES = 1_000_000
 MAX_NODES = 100_000
 MAX_DEPTH = 64
+#: Bracket depth at which a file is refused before YAML parsing (a generous multiple of
+#: MAX_DEPTH, so that brackets inside quoted text never trip it in a sensible file).
+PRESCAN_DEPTH = 4 * MAX_DEPTH
 
 KeyPath = tuple[str | int, ...]
 
 _CORE = "tag:yaml.org,2002:"
 _SCALAR_TAGS = {_CORE + t for t in ("str", "int", "float", "bool", "null")}
+
+
+#: Longest echo of a user's value in a message (a 5000-digit number or a 100 kB key is cut).
+MAX_ECHO = 60
+
+
+def shorten(text: object, limit: int = MAX_ECHO) -> str:
+    """``text`` as a string of at most ``limit`` characters (the middle elided)."""
+    text = str(text)
+    if len(text) <= limit:
+        return text
+    half = (limit - 5) // 2
+    return f"{text[:half]} ... {text[-half:]} ({len(text)} characters)"
 
 
 def format_path(path: KeyPath) -> str:
@@ -42,7 +58,7 @@ def format_path(path: KeyPath) -> str:
         if isinstance(part, int):
             out += f"[{part}]"
         else:
-            out += ("." if out else "") + part
+            out += ("." if out else "") + shorten(part)
     return out
 
 
@@ -101,8 +117,24 @@ def read_document(path: str | Path) -> Document:
 
 def parse_document(text: str, file: str = "<string>") -> Document:
     """Compose YAML ``text`` into a :class:`Document` (see module docstring for the rules)."""
+    line, column = _deepest_point(text, PRESCAN_DEPTH)
+    if line is not None:  # refuse before PyYAML, whose time grows with the square of the flow depth
+        raise ModelError([Problem(file, line, column, "", f"the document is nested deeper than {MAX_DEPTH} levels",
+                                  "flatten the structure; no model key nests this deep")])
     try:
         root = yaml.compose(text, Loader=yaml.SafeLoader)
+    except yaml.reader.ReaderError as exc:  # a character YAML does not allow, e.g. a NUL byte
+        line, column = _line_column(text, exc.position)
+        code = ord(exc.character) if isinstance(exc.character, str) else int(exc.character)
+        raise ModelError([Problem(file, line, column, "", f"the character U+{code:04X} is not allowed in a YAML file",
+                                  "remove it: a model file is plain text (no NUL or other control characters)")]) from None
+    except RecursionError:
+        line, column = _deepest_point(text)
+        if line is None:  # nested by indentation: the first line indented more than MAX_DEPTH
+            deep = [i for i, row in enumerate(text.splitlines(), 1) if len(row) - len(row.lstrip(" ")) > MAX_DEPTH]
+            line, column = (deep[0], MAX_DEPTH + 1) if deep else (None, None)
+        raise ModelError([Problem(file, line, column, "", f"the document is nested deeper than {MAX_DEPTH} levels",
+                                  "flatten the structure; no model key nests this deep")]) from None
     except yaml.MarkedYAMLError as exc:
         mark = exc.problem_mark or exc.context_mark
         line, col = (mark.line + 1, mark.column + 1) if mark else (None, None)
@@ -126,12 +158,33 @@ def parse_document(text: str, file: str = "<string>") -> Document:
     return doc
 
 
+def _line_column(text: str, position: int) -> tuple[int, int]:
+    """1-based line and column of the character at ``position``."""
+    before = text[:position]
+    line = before.count("\n") + 1
+    return line, position - (before.rfind("\n") + 1) + 1
+
+
+def _deepest_point(text: str, limit: int = MAX_DEPTH) -> tuple[int | None, int | None]:
+    """Where flow brackets ([ and {, quotes not considered) first nest deeper than ``limit``, or (None, None)."""
+    depth = 0
+    for position, char in enumerate(text):
+        if char in "[{":
+            depth += 1
+            if depth > limit:
+                return _line_column(text, position)
+        elif char in "]}":
+            depth -= 1
+    return None, None
+
+
 class _Converter:
     """Walks a composed node graph into plain data, enforcing the safety rules."""
 
     def __init__(self, doc: Document):
         self.doc = doc
         self.nodes = 0
+        self.open: set[int] = set()  # ids of the collection nodes being converted (alias cycles)
         self.problems: list[Problem] = []
         self.scalar_constructor = yaml.constructor.SafeConstructor()
 
@@ -154,14 +207,22 @@ class _Converter:
         self.doc.marks.setdefault(path, (node.start_mark.line + 1, node.start_mark.column + 1))
         if isinstance(node, yaml.ScalarNode):
             return self._scalar(node, path)
-        if isinstance(node, yaml.SequenceNode):
-            if node.tag != _CORE + "seq":
-                return self._bad_tag(node, path)
-            return [self.convert(item, path + (i,), depth + 1) for i, item in enumerate(node.value)]
-        if isinstance(node, yaml.MappingNode):
-            if node.tag != _CORE + "map":
-                return self._bad_tag(node, path)
-            return self._mapping(node, path, depth)
+        if id(node) in self.open:
+            self._fail(node, path, "an alias refers to a node that contains it (a recursive structure)",
+                       "remove the alias ('*name') inside the anchored ('&name') value")
+            raise ModelError(self.problems)
+        self.open.add(id(node))
+        try:
+            if isinstance(node, yaml.SequenceNode):
+                if node.tag != _CORE + "seq":
+                    return self._bad_tag(node, path)
+                return [self.convert(item, path + (i,), depth + 1) for i, item in enumerate(node.value)]
+            if isinstance(node, yaml.MappingNode):
+                if node.tag != _CORE + "map":
+                    return self._bad_tag(node, path)
+                return self._mapping(node, path, depth)
+        finally:
+            self.open.discard(id(node))
         self._fail(node, path, "unsupported YAML node", "use plain mappings, lists and scalars")
         return None
 
@@ -183,7 +244,7 @@ class _Converter:
         try:
             return constructor(self.scalar_constructor, node)
         except (ValueError, OverflowError, yaml.YAMLError):
-            self._fail(node, path, f"cannot read the {kind} value '{node.value}'", f"write a plain {kind}")
+            self._fail(node, path, f"cannot read the {kind} value '{shorten(node.value)}'", f"write a plain {kind}")
             return None
 
     def _mapping(self, node: yaml.MappingNode, path: KeyPath, depth: int) -> dict[str, Any]:
@@ -194,13 +255,13 @@ class _Converter:
                            "write the keys out explicitly")
                 continue
             if not isinstance(key_node, yaml.ScalarNode) or key_node.tag != _CORE + "str":
-                self._fail(key_node, path, f"mapping keys must be plain strings, got '{getattr(key_node, 'value', '?')}'",
+                self._fail(key_node, path, f"mapping keys must be plain strings, got '{shorten(getattr(key_node, 'value', '?'))}'",
                            "quote the key or rename it to a plain word")
                 continue
             key = key_node.value
             if key in out:
                 first = self.doc.marks.get(path + (key,), (0, 0))[0]
-                self._fail(key_node, path + (key,), f"duplicate key '{key}' (first defined on line {first})",
+                self._fail(key_node, path + (key,), f"duplicate key '{shorten(key)}' (first defined on line {first})",
                            "remove one of the two definitions")
                 continue
             self.doc.marks[path + (key,)] = (key_node.start_mark.line + 1, key_node.start_mark.column + 1)

@@ -44,6 +44,14 @@ class LoadedModel:
             bound_here = {k: v for k, v in self._bound.items() if k in accepted[name]}
             setattr(self, name, functools.partial(fn, **bound_here) if bound_here else fn)
 
+    @property
+    def joint_limits(self) -> tuple[tuple[float, float], ...]:
+        """(lower, upper) position limit of every joint, at the parameters' default values;
+        (-inf, inf) for a joint without limits."""
+        inf = float("inf")
+        return tuple(tuple(c["limits"]) if c.get("limits") else (-inf, inf)
+                     for c in self.manifest["model"]["coordinates"])
+
     def bind(self, **parameters: float) -> LoadedModel:
         """A view whose functions use these parameter values instead of the defaults.
 

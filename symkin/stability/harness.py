@@ -1,0 +1,194 @@
+"""The stability harness: every generated quantity of a model against mpmath at 50 digits.
+
+For each quantity the model can derive (every registered output, so dynamics quantities
+join automatically once they are registered), the generated numpy code - derived with all
+parameters as inputs, optimized and emitted exactly as ``symkin derive`` does - is
+evaluated
+
+* at random states (``random``),
+* along paths into the singular configurations found by :mod:`symkin.stability.states`
+  (``singular``),
+* with every length parameter multiplied by 1e-3 ... 1e3 (``scale``),
+* in float32, through :func:`~symkin.stability.ir_eval.compile_ir` (``float32``),
+
+and compared with the un-optimized expressions evaluated by mpmath at the same inputs
+(:class:`~symkin.stability.reference.MpmathReference`).  Each comparison is a
+:class:`Record` with the normwise relative error and kappa, the condition number
+sigma_max/sigma_min of the task Jacobian at that state (seed sec. 4.2), computed from the
+50-digit Jacobian.
+"""
+
+from __future__ import annotations
+
+import tempfile
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import mpmath
+import numpy as np
+
+from symkin import pipeline
+from symkin.derivation import Derivation, emitted_quantities
+from symkin.errors import DerivationError
+from symkin.model.schema import Model
+from symkin.runtime import load
+from symkin.stability.ik_forms import formula_errors
+from symkin.stability.ir_eval import compile_ir, flatten_outputs
+from symkin.stability.reference import DIGITS, MpmathReference, normwise_error
+from symkin.stability.states import parameter_values, random_states, singular_paths
+
+SCALES = (1e-3, 1e-2, 1e-1, 1.0, 1e1, 1e2, 1e3)
+PATH_STEPS = tuple(10.0 ** -k for k in range(1, 13))
+#: The acceptance criterion of the issue: error <= BOUND wherever kappa < KAPPA_LIMIT (float64).
+BOUND = 1e-13
+KAPPA_LIMIT = 1e3
+
+
+@dataclass(frozen=True)
+class Record:
+    """One quantity evaluated at one state.
+
+    Attributes:
+        quantity: the generated function.
+        family: ``random``, ``singular``, ``scale`` or ``float32``.
+        label: the path (``theta2 -> 0``) for singular states, else empty.
+        parameter: t (distance to the singular value) for singular states, the length scale
+            for ``scale``, 1 otherwise.
+        kappa: condition number of the task Jacobian at the state (inf if singular, nan if the
+            model has no task Jacobian).
+        error: normwise relative error against mpmath (inf: a non-finite value came out).
+    """
+
+    quantity: str
+    family: str
+    label: str
+    parameter: float
+    kappa: float
+    error: float
+
+
+@dataclass
+class StabilityRun:
+    """All records of one model, plus what was checked."""
+
+    model: str
+    quantities: tuple[str, ...]
+    skipped: dict[str, str]
+    paths: list
+    records: list[Record] = field(default_factory=list)
+    #: closed-form IK angles along paths into singularities (:mod:`symkin.stability.ik_forms`)
+    formulas: list = field(default_factory=list)
+
+    def select(self, family: str | None = None, quantity: str | None = None) -> list[Record]:
+        return [r for r in self.records if (family is None or r.family == family)
+                and (quantity is None or r.quantity == quantity)]
+
+    def acceptance(self, bound: float = BOUND, kappa_limit: float = KAPPA_LIMIT) -> tuple[bool, float]:
+        """(every float64 record with kappa < kappa_limit has error <= bound, the largest such error)."""
+        errors = [r.error for r in self.records if r.family != "float32" and r.kappa < kappa_limit]
+        worst = max(errors, default=0.0)
+        return worst <= bound, worst
+
+
+def _kappa(reference: MpmathReference | None, shape: tuple[int, ...], vectors: dict, parameters: dict) -> float:
+    """sigma_max / sigma_min of the 50-digit task Jacobian (inf at a singular state, nan without one)."""
+    if reference is None:
+        return float("nan")
+    exact = reference.exact(vectors, parameters)
+    rows, columns = shape
+    with mpmath.workdps(DIGITS):
+        J = mpmath.matrix([exact[i * columns:(i + 1) * columns] for i in range(rows)])
+        singular = mpmath.svd_r(J, compute_uv=False)
+        largest, smallest = max(singular), min(singular)
+        return float("inf") if smallest == 0 else float(largest / smallest)
+
+
+def derivable_quantities(derivation: Derivation, names: Sequence[str] | None = None) -> tuple[list[str], dict[str, str]]:
+    """(the emitted quantities this model can derive, {skipped name: reason})."""
+    kept, skipped = [], {}
+    for name in names or emitted_quantities():
+        try:
+            derivation[name]
+        except DerivationError as err:
+            skipped[name] = str(err)
+            continue
+        kept.append(name)
+    return kept, skipped
+
+
+def run_stability(model: Model, *, samples: int = 32, float32_samples: int = 16, scale_samples: int = 6,
+                  scales: Sequence[float] = SCALES, steps: Sequence[float] = PATH_STEPS,
+                  quantities: Sequence[str] | None = None, max_paths: int = 8, seed: int = 0,
+                  progress: Callable[[str], None] = lambda _stage: None) -> StabilityRun:
+    """Check every generated quantity of ``model`` against mpmath (see the module docstring).
+
+    Args:
+        model: the model.
+        samples: random states at the default parameters.
+        float32_samples: random states evaluated in float32.
+        scale_samples: random states per length scale.
+        scales: length scales.
+        steps: distances t to the singular value along each singular path.
+        quantities: the quantities to check (default: every one the model can derive).
+        max_paths: at most this many singular paths.
+        seed: random seed (the run is deterministic).
+        progress: called with a description of each stage.
+    """
+    rng = np.random.default_rng(seed)
+    derivation = Derivation(model)
+    names, skipped = derivable_quantities(derivation, quantities)
+    has_jacobian = bool(derivable_quantities(derivation, ["jacobian"])[0])
+    generated = tuple(names) + (("jacobian",) if has_jacobian and "jacobian" not in names else ())
+    progress("generating code")
+    generation = pipeline.generate(model, pipeline.Request(generated, (), ("numpy",)))
+    optimized = {f.name: f for f in generation.functions}
+    references = {name: MpmathReference(derivation[name]) for name in names}
+    kappa_reference = MpmathReference(derivation["jacobian"]) if has_jacobian else None
+    kappa_shape = derivation["jacobian"].outputs[0].shape if has_jacobian else ()
+    with tempfile.TemporaryDirectory(prefix="symkin-stability-") as tmp:
+        loaded = load(pipeline.write(generation, tmp))
+        functions = {name: getattr(loaded, name) for name in names}
+        shapes = {name: [o.shape for o in derivation[name].outputs] for name in names}
+        run = StabilityRun(model.name, tuple(names), skipped, [])
+
+        def check(family: str, states: dict[str, np.ndarray], parameters: dict[str, float], label: str = "",
+                  parameter_of: Callable[[int], float] = lambda _k: 1.0, dtype: type = np.float64) -> None:
+            count = len(states["q"])
+            kappas = [_kappa(kappa_reference, kappa_shape, {g: v[k] for g, v in states.items()}, parameters)
+                      for k in range(count)]
+            for name in names:
+                spec_vectors = [i.name for i in derivation[name].vector_inputs]
+                params = {i.name: parameters[i.name] for i in derivation[name].parameter_inputs}
+                if dtype is np.float64:
+                    computed = flatten_outputs(functions[name](*(states[g] for g in spec_vectors), **params),
+                                               shapes[name])
+                else:
+                    computed = compile_ir(optimized[name], dtype)({g: states[g] for g in spec_vectors}, params)
+                for k in range(count):
+                    hi, lo = references[name]({g: states[g][k] for g in spec_vectors}, parameters)
+                    run.records.append(Record(name, family, label, parameter_of(k), kappas[k],
+                                              normwise_error(computed[k].astype(np.float64), hi, lo)))
+
+        defaults = parameter_values(model)
+        progress("random states")
+        check("random", random_states(model, samples, rng), defaults)
+        if has_jacobian:
+            progress("finding singular configurations")
+            run.paths = singular_paths(model, loaded.jacobian, rng, max_paths)
+            for path in run.paths:
+                progress(f"path {path.label}")
+                states = random_states(model, len(steps), rng)
+                states["q"] = path.states(np.asarray(steps))
+                check("singular", states, defaults, path.label, lambda k: steps[k])
+        for scale in scales:
+            progress(f"length scale {scale:g}")
+            check("scale", random_states(model, scale_samples, rng), parameter_values(model, scale),
+                  parameter_of=lambda _k, s=scale: s)
+        progress("closed-form IK near singularities")
+        run.formulas = formula_errors(loaded, steps)
+        progress("float32")
+        states32 = {g: v.astype(np.float32).astype(np.float64) for g, v in random_states(model, float32_samples,
+                                                                                       rng).items()}
+        params32 = {k: float(np.float32(v)) for k, v in defaults.items()}
+        check("float32", states32, params32, dtype=np.float32)
+    return run

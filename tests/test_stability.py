@@ -1,0 +1,148 @@
+"""Numerical stability: every generated quantity against mpmath at 50 digits (issue 7 acceptance)."""
+
+from __future__ import annotations
+
+import math
+import subprocess
+
+import numpy as np
+import pytest
+import sympy
+
+from conftest import EXAMPLE_MODELS, MODELS_DIR, SYMKIN_CLI
+from symkin import load, pipeline
+from symkin.derivation import Derivation, graph
+from symkin.derivation.inputs import coordinate_input
+from symkin.ir.spec import FunctionSpec, InputSpec, OutputSpec, make_function
+from symkin.model import coordinates
+from symkin.stability import BOUND, KAPPA_LIMIT, run_stability
+from symkin.stability.ir_eval import compile_ir, flatten_outputs
+from symkin.stability.reference import MpmathReference, normwise_error
+from symkin.stability.states import parameter_values
+
+QUICK = dict(samples=12, scale_samples=3, float32_samples=6, steps=(1e-2, 1e-6, 1e-10))
+
+
+@pytest.fixture(scope="module")
+def runs(models):
+    return {name: run_stability(models[name], **QUICK) for name in EXAMPLE_MODELS}
+
+
+@pytest.mark.parametrize("name", EXAMPLE_MODELS)
+def test_error_below_1e_13_where_kappa_below_1e3(runs, name):
+    run = runs[name]
+    passed, worst = run.acceptance()
+    assert passed, f"{name}: largest error {worst:.3g} where kappa < {KAPPA_LIMIT}"
+    well = [r for r in run.records if r.family != "float32" and r.kappa < KAPPA_LIMIT]
+    assert len(well) >= 20
+    families = {r.family for r in run.records}
+    assert families == {"random", "singular", "scale", "float32"}
+    assert {r.parameter for r in run.select("scale")} == {1e-3, 1e-2, 1e-1, 1.0, 1e1, 1e2, 1e3}
+    # every quantity the model can derive is checked, nothing produced a non-finite value
+    assert set(run.quantities) >= {"fk", "frames", "jacobian", "jacobian_geometric"}
+    assert all(math.isfinite(r.error) for r in run.records)
+
+
+def test_singular_paths_are_found_generically(runs):
+    assert {p.label for p in runs["planar_2r"].paths} == {"theta2 -> 0", "theta2 -> -3.14159"}
+    ur = {p.label for p in runs["ur10e"].paths}
+    assert {"q5 -> 0", "q3 -> 0"} <= ur
+    for path in runs["ur10e"].paths:
+        kappas = [r.kappa for r in runs["ur10e"].select("singular") if r.label == path.label]
+        assert max(kappas) > 1e9 and min(kappas) < 1e4
+
+
+def test_forward_quantities_stay_accurate_into_the_ur_singularities(runs):
+    """No division in the UR's kinematics: even at kappa = 1e10 the code is accurate to rounding."""
+    singular = runs["ur10e"].select("singular")
+    assert max(r.kappa for r in singular) > 1e9
+    assert max(r.error for r in singular) < 1e-15
+
+
+def test_folded_planar_arm_error_grows_with_kappa_as_its_conditioning_allows(runs):
+    """theta2 -> pi with l1 = l2 puts the TCP at the base: x = l1 c1 + l2 c12 cancels, and the
+    task coordinates' relative error grows like kappa * eps - never beyond it."""
+    rs = [r for r in runs["planar_2r"].select("singular", "task_coordinates") if r.label == "theta2 -> -3.14159"]
+    assert max(r.error for r in rs) > 1e-10
+    assert all(r.error <= 16 * np.finfo(float).eps * r.kappa for r in rs)
+
+
+def test_length_scales_and_float32(runs):
+    for run in runs.values():
+        assert max(r.error for r in run.select("scale")) < BOUND
+        errors = [r.error for r in run.select("float32")]
+        eps32 = float(np.finfo(np.float32).eps)
+        assert max(errors) < 50 * eps32
+        assert max(errors) > 1e-3 * eps32  # really computed in single precision
+
+
+def test_ir_evaluator_in_float64_is_bit_identical_to_the_generated_module(models, tmp_path):
+    model = models["ur10e"]
+    generation = pipeline.generate(model, pipeline.Request(("fk", "frames", "jacobian"), (), ("numpy",)))
+    loaded = load(pipeline.write(generation, tmp_path))
+    rng = np.random.default_rng(0)
+    q = rng.uniform(-np.pi, np.pi, (50, 6))
+    params = parameter_values(model)
+    for f in generation.functions:
+        used = {i.name: params[i.name] for i in f.spec.parameter_inputs}
+        ours = compile_ir(f, np.float64)({"q": q}, used)
+        theirs = flatten_outputs(getattr(loaded, f.name)(q, **used), [o.shape for o in f.spec.outputs])
+        np.testing.assert_array_equal(ours, theirs)
+        assert compile_ir(f, np.float32)({"q": q}, used).dtype == np.float32
+
+
+def test_reference_and_error_measure():
+    x = sympy.Symbol("x", real=True)
+    spec = FunctionSpec("f", "f", "f", (InputSpec("q", "vector", (x,), ("x",), ("m",), "x"),),
+                        (OutputSpec("y", sympy.ImmutableMatrix([[1 - sympy.cos(x), x]]), "y"),))
+    reference = MpmathReference(spec)
+    hi, lo = reference({"q": np.array([1e-8])}, {})
+    assert hi[0] == pytest.approx(5e-17, rel=1e-15) and hi[1] == 1e-8
+    naive = np.array([1 - np.cos(1e-8), 1e-8])  # 1 - cos cancels to 0: 100 % wrong in that entry
+    assert normwise_error(naive, hi, lo) == pytest.approx(5e-9, rel=1e-6)
+    assert normwise_error(np.array([5e-17, 1e-8]), hi, lo) < 1e-16
+    assert normwise_error(np.array([np.nan, 1e-8]), hi, lo) == math.inf
+
+
+def test_new_quantities_are_covered_automatically(models, monkeypatch):
+    """A quantity registered later (as dynamics will be, with q and qd inputs) joins the harness."""
+
+    def velocity_of_tcp(d: Derivation):
+        J = sympy.Matrix(d["jacobian_geometric_matrix"])[:3, :]
+        qd = sympy.Matrix(coordinates.symbols(d.model, "qd"))
+        return make_function(d.model, "tcp_velocity", "TCP velocity", "v = J_v qd",
+                             [coordinate_input(d.model, "q"), coordinate_input(d.model, "qd")],
+                             [OutputSpec("v", sympy.ImmutableMatrix(J * qd), "velocity", shape=(3,))])
+
+    monkeypatch.setitem(graph._REGISTRY, "tcp_velocity",
+                        graph.QuantityDef("tcp_velocity", "TCP velocity", velocity_of_tcp, True))
+    run = run_stability(models["planar_2r"], samples=4, scale_samples=1, float32_samples=2, steps=(1e-3,),
+                        scales=(1.0,))
+    assert "tcp_velocity" in run.quantities
+    assert len(run.select(quantity="tcp_velocity")) > 4
+    assert run.acceptance()[0]
+
+
+def test_ik_wrist_formula_error_drop(runs):
+    (wrist,) = runs["ur10e"].formulas
+    at = {t: (a, b) for t, a, b in zip(wrist.steps, wrist.textbook, wrist.symkin)}
+    textbook, ours = at[1e-6]
+    assert textbook > 1e-12 and ours < 1e-15
+    assert np.all(wrist.symkin < 1e-15)
+    (elbow,) = runs["planar_2r"].formulas
+    finite = np.isfinite(elbow.bound)
+    assert np.all(elbow.symkin[finite] <= 4 * elbow.bound[finite])
+
+
+def test_bench_stability_cli(tmp_path):
+    result = subprocess.run(SYMKIN_CLI + ["bench", "stability", str(MODELS_DIR / "planar_2r.yaml"), "--samples",
+                                          "8", "--scale-samples", "2", "--float32-samples", "4", "--csv",
+                                          str(tmp_path / "records.csv")],
+                            capture_output=True, text=True, cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    for heading in ("error vs kappa", "error vs length scale", "paths into singularities", "float32",
+                    "closed-form IK near singularities", "acceptance: "):
+        assert heading in result.stdout
+    assert "PASS" in result.stdout
+    assert (tmp_path / "planar_2r-stability.png").stat().st_size > 10_000
+    assert (tmp_path / "records.csv").read_text().startswith("model,quantity,family")
