@@ -40,7 +40,8 @@ def joint_limits(model: Any, limits: Limits | None = None) -> np.ndarray:
         limits: overrides: an (n, 2) array, or a mapping from coordinate names to
             (lower, upper) for some of them.  Otherwise the limits recorded in the
             manifest (the model file's, evaluated at the parameters' default values) are
-            used; a revolute joint without limits gets one full turn [-pi, pi].
+            used (``model.joint_limits``); a revolute joint without limits gets one full
+            turn [-pi, pi].
 
     Raises:
         ValueError: a prismatic joint has no limits, or the limits are malformed.
@@ -57,8 +58,8 @@ def joint_limits(model: Any, limits: Limits | None = None) -> np.ndarray:
         if unknown:
             raise ValueError(f"{model.name}: no coordinates named {sorted(unknown)}; coordinates: {', '.join(names)}")
         rows = []
-        for record in records:
-            bounds = overrides.get(record["name"], record.get("limits"))
+        for record, declared in zip(records, model.joint_limits):
+            bounds = overrides.get(record["name"], declared if np.all(np.isfinite(declared)) else None)
             if bounds is None:
                 if record["type"] != "R":
                     raise ValueError(f"{model.name}: prismatic joint '{record['name']}' declares no limits; "
