@@ -284,6 +284,7 @@ class _RectangularStub:
     name = "stub"
     manifest = {"model": {"coordinates": [{"name": "a", "type": "R"}, {"name": "b", "type": "R"}],
                           "task_space": ["x", "y", "z"]}}
+    joint_limits = ((-np.pi, np.pi), (-np.pi, np.pi))
 
     @staticmethod
     def jacobian(q):

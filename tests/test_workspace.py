@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 import symkin
 from symkin.analysis import global_indices, inverse, mechanism, workspace
 from symkin.analysis.inverse import planar_2r_inverse, within_limits
+from symkin.runtime import LoadedModel
 
 from conftest import EXAMPLE_MODELS, GENERATED_DIR
 
@@ -39,14 +42,12 @@ def test_limit_overrides_and_defaults():
     with pytest.raises(ValueError, match="not finite intervals"):
         mechanism.joint_limits(ARM, {"theta1": (1, 0)})
 
-    class Stub:
-        name = "stub"
-        manifest = {"model": {"coordinates": [{"name": "a", "type": "R"}, {"name": "s", "type": "P"}],
-                              "task_space": ["x", "y"]}}
-
+    stub = LoadedModel(Path("."), {"model": {"name": "stub", "task_space": ["x", "y"],
+                                             "coordinates": [{"name": "a", "type": "R"}, {"name": "s", "type": "P"}]},
+                                   "parameters": [], "functions": []}, "numpy", {})
     with pytest.raises(ValueError, match="prismatic joint 's' declares no limits"):
-        mechanism.joint_limits(Stub())
-    assert np.allclose(mechanism.joint_limits(Stub(), {"s": (0, 0.5)}), [[-np.pi, np.pi], [0, 0.5]])
+        mechanism.joint_limits(stub)
+    assert np.allclose(mechanism.joint_limits(stub, {"s": (0, 0.5)}), [[-np.pi, np.pi], [0, 0.5]])
 
 
 # --- point clouds ---------------------------------------------------------------------------------
