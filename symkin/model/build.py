@@ -692,19 +692,26 @@ def _friction(r: _Reader, value: Any, joint_names: tuple[str, ...]) -> tuple[Fri
         if jname not in joint_names:
             continue  # already reported as unknown key
         fpath = path + (jname,)
-        spec = r.mapping(fpath, spec, optional=("viscous", "coulomb"))
+        spec = r.mapping(fpath, spec, optional=("viscous", "coulomb", "smoothing_velocity"))
         if spec is None:
             continue
         viscous = r.expr(fpath + ("viscous",), spec["viscous"]) if "viscous" in spec else ZERO
         coulomb = r.expr(fpath + ("coulomb",), spec["coulomb"]) if "coulomb" in spec else ZERO
-        if viscous is None or coulomb is None:
+        smoothing = r.expr(fpath + ("smoothing_velocity",), spec["smoothing_velocity"]) \
+            if "smoothing_velocity" in spec else None
+        if viscous is None or coulomb is None or ("smoothing_velocity" in spec and smoothing is None):
             continue
         for key, coeff in (("viscous", viscous), ("coulomb", coulomb)):
             v = r.default_value(coeff)
             if v is not None and v < 0:
                 r.fail(fpath + (key,), f"negative {key} friction coefficient {coeff}",
                        "friction coefficients are zero or positive")
-        out.append(Friction(jname, viscous, coulomb))
+        if smoothing is not None:
+            v = r.default_value(smoothing)
+            if smoothing == 0 or (v is not None and v <= 0):
+                r.fail(fpath + ("smoothing_velocity",), f"the smoothing velocity must be positive, got {smoothing}",
+                       "give the speed below which Coulomb friction fades out, e.g. a parameter v_s: 0.01")
+        out.append(Friction(jname, viscous, coulomb, smoothing))
     return tuple(out)
 
 
