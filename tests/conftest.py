@@ -40,11 +40,20 @@ def reference_function(model: Model, spec: FunctionSpec, modules: str = "numpy")
     """
     vectors = [list(i.symbols) for i in spec.vector_inputs]
     values = model.parameter_values
-    fns = [sympy.lambdify(vectors, sympy.Matrix(o.expr).xreplace(values), modules=modules) for o in spec.outputs]
+    definitions = [(s, e.xreplace(values)) for s, e in spec.definitions]
+    entries = [e.xreplace(values) for o in spec.outputs for e in o.entries]
+    # The spec's definitions are the assignments of the lambdified function (cse hook).
+    fn = sympy.lambdify(vectors, entries, modules=modules, cse=lambda exprs: (definitions, exprs))
     shapes = [o.shape for o in spec.outputs]
 
     def evaluate(*args):
-        return [np.asarray(fn(*args), dtype=float).reshape(shape) for fn, shape in zip(fns, shapes)]
+        flat = fn(*args)
+        out, start = [], 0
+        for shape in shapes:
+            size = int(np.prod(shape)) if shape else 1
+            out.append(np.array(flat[start:start + size], dtype=float if modules == "numpy" else object).reshape(shape))
+            start += size
+        return out
 
     return evaluate
 
