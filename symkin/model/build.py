@@ -498,7 +498,14 @@ def _unit_axis(r: _Reader, path: KeyPath, value: Any) -> Vec3 | None:
 
 
 def _frame_ops(r: _Reader, path: KeyPath, value: Any) -> tuple[Op, ...] | None:
-    """A fixed frame {xyz: [...], rpy: [...]}: Trans(xyz) Rz(yaw) Ry(pitch) Rx(roll) (URDF convention)."""
+    """A fixed frame {xyz: [...], rpy: [...]}: Trans(xyz) Rz(yaw) Ry(pitch) Rx(roll) (URDF convention).
+
+    A list of such frames is their composition, applied in order (the fixed joints between
+    two moving joints of a URDF chain).
+    """
+    if isinstance(value, list):
+        parts = [_frame_ops(r, path + (i,), item) for i, item in enumerate(value)]
+        return None if any(p is None for p in parts) else tuple(op for part in parts for op in part)  # type: ignore
     section = r.mapping(path, value, optional=("xyz", "rpy"))
     if section is None:
         return None
@@ -599,7 +606,7 @@ def _bodies(r: _Reader, value: Any, links: tuple[str, ...]) -> tuple[Body, ...]:
     bodies = []
     for i, item in enumerate(items):
         bpath = path + (i,)
-        item = r.mapping(bpath, item, required=("link", "mass"), optional=("com", "inertia", "inertia_rpy"))
+        item = r.mapping(bpath, item, required=("link", "mass"), optional=("com", "inertia", "inertia_rpy", "origin"))
         if item is None or "link" not in item or "mass" not in item:
             continue
         link = item["link"]
@@ -613,6 +620,8 @@ def _bodies(r: _Reader, value: Any, links: tuple[str, ...]) -> tuple[Body, ...]:
         inertia = _inertia(r, bpath + ("inertia",), item["inertia"]) if "inertia" in item else sympy.zeros(3, 3)
         if "inertia_rpy" in item and inertia is not None:
             inertia = _rotate_inertia(r, bpath + ("inertia_rpy",), item["inertia_rpy"], inertia)
+        if "origin" in item and com is not None and inertia is not None:
+            com, inertia = _body_in_link_frame(r, bpath + ("origin",), item["origin"], com, inertia)
         if mass is None or com is None or inertia is None:
             continue
         m = r.default_value(mass)
@@ -622,6 +631,23 @@ def _bodies(r: _Reader, value: Any, links: tuple[str, ...]) -> tuple[Body, ...]:
             continue
         bodies.append(Body(link, mass, com, sympy.ImmutableMatrix(inertia)))
     return tuple(bodies)
+
+
+def _body_in_link_frame(r: _Reader, path: KeyPath, value: Any, com: Vec3, inertia: sympy.Matrix
+                        ) -> tuple[Vec3 | None, sympy.Matrix | None]:
+    """com and inertia given in a frame fixed to the link (``origin:``, one frame or a list),
+    expressed in the link frame: c_link = p + R c, I_link = R I R^T with link_T_frame = (R, p)."""
+    ops = _frame_ops(r, path, value)
+    if ops is None:
+        return None, None
+    R, p = sympy.eye(3), sympy.zeros(3, 1)
+    for op in ops:
+        if isinstance(op, Rotation):
+            R = R * rotation_matrix(op.axis, op.angle)
+        else:
+            p = p + R * sympy.Matrix(op.vector)
+    c = p + R * sympy.Matrix(com)
+    return (c[0], c[1], c[2]), R * inertia * R.T
 
 
 def _inertia(r: _Reader, path: KeyPath, value: Any) -> sympy.Matrix | None:
