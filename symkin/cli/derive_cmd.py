@@ -17,7 +17,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Derive the quantities a model's scene asks for (or --only), optimize them and "
                     "write the generated code and manifest.json to OUT/<model name>/, atomically.",
     )
-    p.add_argument("models", nargs="+", metavar="MODEL", help="model file(s) (YAML)")
+    p.add_argument("models", nargs="+", metavar="MODEL", help="model file(s): YAML, or URDF (.urdf)")
+    p.add_argument("--tip", metavar="LINK",
+                   help="URDF only: the link that ends the chain (default: the leaf behind the most moving joints)")
     p.add_argument("-o", "--out", default="generated", metavar="OUT",
                    help="output directory (default: %(default)s)")
     p.add_argument("--only", metavar="NAMES",
@@ -38,7 +40,7 @@ def run(args: argparse.Namespace) -> int:
     # Validate every model and request first: a bad file writes nothing at all.
     jobs = []
     for path in args.models:
-        model = load_model(path)
+        model = load_model(path, tip=args.tip if path.lower().endswith(".urdf") else None)
         jobs.append((model, pipeline.resolve_request(model, args.only, args.backend, args.fixed)))
     for model, request in jobs:
         start = time.perf_counter()

@@ -19,7 +19,8 @@ validator of :mod:`symkin.model.build` checks it and every message points at the
   the task space is ``pose``.
 
 The tip is the link named by the caller (``symkin derive --tip LINK``,
-``load_model(path, tip=...)``), or else the single leaf of the tree.  Closed loops (a link
+``load_model(path, tip=...)``), or else the leaf link behind the most moving joints (so
+sensor frames fixed to the base or to a link do not count), if that leaf is unique.  Closed loops (a link
 with two parent joints), mimic joints, floating and planar joints, and moving joints that
 branch off the root-tip chain are refused with a located error.
 
@@ -208,7 +209,7 @@ def urdf_document(text: str, file: str = "<string>", tip: str | None = None) -> 
     for j in joints.values():
         children[j.parent].append(j)
     root = _root(r, robot, links, parent_of)
-    tip = _tip(r, robot, links, children, tip)
+    tip = _tip(r, robot, links, children, parent_of, tip)
     path = _path(parent_of, root, tip)  # joints root -> tip
     on_path = {root} | {j.child for j in path}
     _check_branches(r, children, on_path, path)
@@ -368,7 +369,8 @@ def _root(r: _UrdfReader, robot: Element, links: dict[str, Element], parent_of: 
 
 
 def _tip(r: _UrdfReader, robot: Element, links: dict[str, Element], children: dict[str, list[_Joint]],
-         tip: str | None) -> str:
+         parent_of: dict[str, _Joint], tip: str | None) -> str:
+    """The named tip, or the leaf at the end of the chain with the most moving joints (if unique)."""
     if tip is not None:
         if tip not in links:
             r.fail(robot, "tip", f"the tip link '{tip}' is not a link of the robot",
@@ -376,11 +378,22 @@ def _tip(r: _UrdfReader, robot: Element, links: dict[str, Element], children: di
             r.stop()
         return tip
     leaves = [name for name, joints in children.items() if not joints]
-    if len(leaves) != 1:
-        r.fail(robot, "tip", f"the robot has {len(leaves)} leaf links ({', '.join(leaves)}) and no tip was named",
+    moving = {leaf: _moving_count(leaf, parent_of) for leaf in leaves}
+    deepest = [leaf for leaf in leaves if moving[leaf] == max(moving.values())]
+    if len(deepest) != 1:
+        r.fail(robot, "tip", f"no tip was named and {len(deepest)} leaf links end chains with the most moving joints "
+                             f"({', '.join(deepest)})",
                "name the tip link: symkin derive robot.urdf --tip LINK, or load_model(path, tip='LINK')")
         r.stop()
-    return leaves[0]
+    return deepest[0]
+
+
+def _moving_count(link: str, parent_of: dict[str, _Joint]) -> int:
+    count = 0
+    while link in parent_of:
+        count += parent_of[link].type != "fixed"
+        link = parent_of[link].parent
+    return count
 
 
 def _path(parent_of: dict[str, _Joint], root: str, tip: str) -> list[_Joint]:
@@ -402,8 +415,10 @@ def _check_branches(r: _UrdfReader, children: dict[str, list[_Joint]], on_path: 
         j = stack.pop()
         if j.type != "fixed":
             r.fail(j.element, f"joint[{j.name}]", f"the {j.type} joint '{j.name}' branches off the chain "
-                                                  f"(its parent '{j.parent}' is on the chain to the tip)",
-                   "symkin derives serial chains: choose the tip on this branch (--tip), or remove the branch")
+                                                  f"(its parent '{j.parent}' is on the chain to the tip), so the "
+                                                  "masses it carries cannot be placed",
+                   "symkin derives serial chains: choose a tip at the end of this branch (--tip), or remove "
+                   "the branch")
         else:
             stack.extend(children[j.child])
 
