@@ -8,6 +8,11 @@ large straight-line programs, and converts results back with :func:`to_sympy`:
   such as ``real=True``, and sympy symbols with other assumptions are different symbols);
 * every distinct SymEngine node is converted once (memoized), so shared subexpressions cost
   one conversion;
+* sums and products are rebuilt from their arguments as SymEngine ordered them
+  (``_from_args``): SymEngine has already flattened them and combined numbers, so sympy's
+  canonicalization, the dominant cost of a conversion, is skipped.  The result is a valid
+  sympy expression, equal in value; its argument order is SymEngine's (deterministic for a
+  given SymEngine version, which requirements/constraints.txt pins).
 * numbers stay exact (Integer, Rational) and constants map to sympy's (pi, E).
 """
 
@@ -75,9 +80,9 @@ class SympyConverter:
         if kind in _CONSTANTS:
             return _CONSTANTS[kind]
         if kind == "Add":
-            return sympy.Add(*args)
+            return sympy.Add._from_args(args)
         if kind == "Mul":
-            return sympy.Mul(*args)
+            return sympy.Mul._from_args(args)
         if kind == "Pow":
             return sympy.Pow(*args)
         if kind in _FUNCTIONS:

@@ -74,14 +74,15 @@ class Program:
             rename[symbol] = self._append(renamed(expr))
         return [renamed(e) for e in reduced]
 
-    def to_sympy(self, outputs: Sequence[se.Basic], symbols: Iterable[sympy.Symbol]) -> tuple[
+    def to_sympy(self, outputs: Sequence[se.Basic], convert: SympyConverter) -> tuple[
             tuple[tuple[sympy.Symbol, sympy.Expr], ...], list[sympy.Expr]]:
         """The definitions the ``outputs`` need and the outputs, as sympy expressions.
 
         Args:
             outputs: SymEngine expressions of inputs and assignments.
-            symbols: the sympy symbols of the inputs (model symbols carry assumptions such
-                as ``real=True`` that SymEngine does not keep; they are restored by name).
+            convert: the converter, with the sympy symbols of the inputs (model symbols
+                carry assumptions such as ``real=True`` that SymEngine does not keep; they
+                are restored by name).  Its memo may be shared by several programs.
 
         Returns:
             (definitions, outputs): assignments no output depends on are dropped.
@@ -94,7 +95,6 @@ class Program:
             if not needed[k]:
                 needed[k] = True
                 stack.extend(s for s in self.assignments[k][1].free_symbols if s in index)
-        convert = SympyConverter({s.name: s for s in symbols})
         definitions = tuple((convert(symbol), convert(expr))
                             for k, (symbol, expr) in enumerate(self.assignments) if needed[k])
         return definitions, [convert(se.sympify(e)) for e in outputs]

@@ -35,6 +35,7 @@ from symkin.dynamics.bodies import BodyJacobians, body_jacobians
 from symkin.dynamics.linsolve import ldl_solve, transpose_solve
 from symkin.dynamics.program import Program, mat_vec, se_matrix, se_vector
 from symkin.errors import DerivationError
+from symkin.symengine_bridge import SympyConverter
 from symkin.ir.spec import FunctionSpec, OutputSpec, make_function
 from symkin.model import coordinates
 
@@ -55,9 +56,7 @@ def _function(d: Derivation, name: str, summary: str, doc: str, groups: Sequence
         outputs: (name, row-major entries, shape, doc, unit) per output.
     """
     model = d.model
-    symbols = [s for g in coordinates.GROUPS for s in coordinates.symbols(model, g)]
-    symbols += [p.symbol for p in model.parameters]
-    definitions, flat = program.to_sympy([e for out in outputs for e in out[1]], symbols)
+    definitions, flat = program.to_sympy([e for out in outputs for e in out[1]], d["sympy_converter"])
     specs, start = [], 0
     for out_name, entries, shape, out_doc, unit in outputs:
         size = len(entries)
@@ -73,6 +72,15 @@ def _flat(matrix: Matrix) -> list[se.Basic]:
 
 
 # --------------------------------------------------------------------------- internal quantities
+
+@quantity("sympy_converter", "SymEngine -> sympy conversion shared by the functions of one model", emitted=False)
+def _sympy_converter(d: Derivation) -> SympyConverter:
+    """One memo for every function: programs that start alike (M, then dM/dq) convert their
+    common assignments once."""
+    symbols = [s for g in coordinates.GROUPS for s in coordinates.symbols(d.model, g)]
+    symbols += [p.symbol for p in d.model.parameters]
+    return SympyConverter({s.name: s for s in symbols})
+
 
 @quantity("body_jacobians", "velocity Jacobians of the bodies at their centres of mass", emitted=False)
 def _body_jacobians(d: Derivation) -> tuple[BodyJacobians, ...]:
@@ -133,14 +141,41 @@ def _require_gravity(d: Derivation, name: str) -> None:
                               f"not emitted; declare 'gravity:' in the model or remove '{name}' from the outputs")
 
 
-def _dynamics_terms(d: Derivation, with_friction: bool) -> list[se.Basic]:
-    """V + G (+ F_f): everything of eq. 8.34 except M qdd."""
-    partials = d["mass_matrix_partials"]
-    terms = lagrange.coriolis_vector(partials, _symbols(d, "qd"))
-    for extra in (d["gravity_vector_graph"], d["friction_graph"] if with_friction else None):
-        if extra is not None:
-            terms = [a + b for a, b in zip(terms, extra)]
-    return terms
+class _BoundTerms:
+    """The terms of eq. 8.34 bound into one program, always in the same order (M, dM/dq, G, F_f),
+    so that the programs of different functions start alike and share their conversion."""
+
+    def __init__(self, d: Derivation, program: Program):
+        self.d, self.program = d, program
+        self.n = d.model.dof
+
+    def mass_matrix(self) -> Matrix:
+        values = self.program.bind(_flat(self.d["mass_matrix_graph"]))
+        return [values[i * self.n:(i + 1) * self.n] for i in range(self.n)]
+
+    def partials(self) -> list[Matrix]:
+        """dM/dq_k as partials[k][i][j]."""
+        n = self.n
+        values = self.program.bind([v for dM in self.d["mass_matrix_partials"] for v in _flat(dM)])
+        return [[values[k * n * n + i * n:k * n * n + (i + 1) * n] for i in range(n)] for k in range(n)]
+
+    def coriolis_vector(self) -> list[se.Basic]:
+        return lagrange.coriolis_vector(self.partials(), _symbols(self.d, "qd"))
+
+    def gravity_vector(self) -> list[se.Basic] | None:
+        G = self.d["gravity_vector_graph"]
+        return None if G is None else self.program.bind(G)
+
+    def friction(self) -> list[se.Basic] | None:
+        return self.d["friction_graph"]
+
+    def rest(self, with_friction: bool) -> list[se.Basic]:
+        """V + G (+ F_f): everything of eq. 8.34 except M qdd."""
+        terms = self.coriolis_vector()
+        for extra in (self.gravity_vector(), self.friction() if with_friction else None):
+            if extra is not None:
+                terms = [a + b for a, b in zip(terms, extra)]
+        return terms
 
 
 # --------------------------------------------------------------------------- emitted functions
@@ -148,7 +183,7 @@ def _dynamics_terms(d: Derivation, with_friction: bool) -> list[se.Basic]:
 @quantity("mass_matrix", "mass matrix M(q) (n x n, symmetric positive definite)")
 def _mass_matrix(d: Derivation) -> FunctionSpec:
     program = Program()
-    M = program.bind(_flat(d["mass_matrix_graph"]))
+    M = _flat(_BoundTerms(d, program).mass_matrix())
     return _function(
         d, "mass_matrix", "Joint-space mass matrix.",
         "M(q) = sum over bodies of m Jv^T Jv + Jw^T I Jw with the velocity Jacobians at the centres of mass "
@@ -160,8 +195,7 @@ def _mass_matrix(d: Derivation) -> FunctionSpec:
 def _coriolis_matrix(d: Derivation) -> FunctionSpec:
     n = d.model.dof
     program = Program()
-    partials = _unflatten_partials(program.bind([v for dM in d["mass_matrix_partials"] for v in _flat(dM)]), n)
-    C = lagrange.coriolis_matrix(partials, _symbols(d, "qd"))
+    C = lagrange.coriolis_matrix(_BoundTerms(d, program).partials(), _symbols(d, "qd"))
     return _function(
         d, "coriolis_matrix", "Coriolis matrix from the Christoffel symbols of M.",
         "C_ij = sum_k c_ijk qd_k, c_ijk = 1/2 (dM_ij/dq_k + dM_ik/dq_j - dM_jk/dq_i); V = C qd and "
@@ -169,14 +203,10 @@ def _coriolis_matrix(d: Derivation) -> FunctionSpec:
         ["q", "qd"], program, [("C", _flat(C), (n, n), "Coriolis matrix", "")])
 
 
-def _unflatten_partials(values: list[se.Basic], n: int) -> list[Matrix]:
-    return [[values[k * n * n + i * n:k * n * n + (i + 1) * n] for i in range(n)] for k in range(n)]
-
-
 @quantity("coriolis_vector", "Coriolis and centrifugal vector V(q, qd) = C qd (n)")
 def _coriolis_vector(d: Derivation) -> FunctionSpec:
     program = Program()
-    V = program.bind(lagrange.coriolis_vector(d["mass_matrix_partials"], _symbols(d, "qd")))
+    V = _BoundTerms(d, program).coriolis_vector()
     return _function(
         d, "coriolis_vector", "Coriolis and centrifugal torques.",
         "V(q, qd) = C(q, qd) qd = dM/dt qd - 1/2 d(qd^T M qd)/dq (seed eq. 8.31; 2-DoF example eq. 8.54).",
@@ -187,7 +217,7 @@ def _coriolis_vector(d: Derivation) -> FunctionSpec:
 def _gravity_vector(d: Derivation) -> FunctionSpec:
     _require_gravity(d, "gravity_vector")
     program = Program()
-    G = program.bind(d["gravity_vector_graph"])
+    G = _BoundTerms(d, program).gravity_vector()
     return _function(
         d, "gravity_vector", "Gravity torques.",
         "G(q) = du/dq with u = -sum m g . c over the bodies (seed eq. 8.31; 2-DoF example eq. 8.54).",
@@ -212,9 +242,9 @@ def _friction(d: Derivation) -> FunctionSpec:
 def _inverse_dynamics(d: Derivation) -> FunctionSpec:
     n = d.model.dof
     program = Program()
-    values = program.bind(_flat(d["mass_matrix_graph"]) + _dynamics_terms(d, with_friction=True))
-    M = [values[i * n:(i + 1) * n] for i in range(n)]
-    tau = [a + b for a, b in zip(mat_vec(M, _symbols(d, "qdd")), values[n * n:])]
+    terms = _BoundTerms(d, program)
+    M = terms.mass_matrix()
+    tau = [a + b for a, b in zip(mat_vec(M, _symbols(d, "qdd")), terms.rest(with_friction=True))]
     return _function(
         d, "inverse_dynamics", "Inverse dynamics: joint torques for a motion.",
         "tau = M(q) qdd + V(q, qd) + G(q) + F_f(qd) (seed eq. 8.34).",
@@ -226,9 +256,9 @@ def _inverse_dynamics(d: Derivation) -> FunctionSpec:
 def _forward_dynamics(d: Derivation) -> FunctionSpec:
     n = d.model.dof
     program = Program()
-    values = program.bind(_flat(d["mass_matrix_graph"]) + _dynamics_terms(d, with_friction=True))
-    M = [values[i * n:(i + 1) * n] for i in range(n)]
-    rhs = [[t - b] for t, b in zip(_symbols(d, "tau"), values[n * n:])]
+    terms = _BoundTerms(d, program)
+    M = terms.mass_matrix()
+    rhs = [[t - b] for t, b in zip(_symbols(d, "tau"), terms.rest(with_friction=True))]
     qdd = [row[0] for row in ldl_solve(program, M, rhs)]
     return _function(
         d, "forward_dynamics", "Forward dynamics: joint accelerations under given torques.",
@@ -243,10 +273,11 @@ def _tcp_force(d: Derivation) -> FunctionSpec:
     n = d.model.dof
     J = d["task_jacobian_graph"]
     program = Program()
-    values = program.bind(_flat(d["mass_matrix_graph"]) + _dynamics_terms(d, with_friction=False) + _flat(J))
-    M = [values[i * n:(i + 1) * n] for i in range(n)]
-    rhs = [[a + b] for a, b in zip(mat_vec(M, _symbols(d, "qdd")), values[n * n:n * n + n])]
-    J = [values[n * n + n + i * n:n * n + n + (i + 1) * n] for i in range(n)]
+    terms = _BoundTerms(d, program)
+    M = terms.mass_matrix()
+    rhs = [[a + b] for a, b in zip(mat_vec(M, _symbols(d, "qdd")), terms.rest(with_friction=False))]
+    values = program.bind(_flat(J))
+    J = [values[i * n:(i + 1) * n] for i in range(n)]
     F = [row[0] for row in transpose_solve(program, J, rhs)]
     components = ", ".join(d.model.task_space)
     return _function(
@@ -265,16 +296,14 @@ def _operational_space(d: Derivation) -> FunctionSpec:
     # dJ/dt qd = sum_k dJ/dq_k qd_k qd.
     Jdot_qd = [sum((se.diff(J_graph[i][j], q[k]) * qd[k] * qd[j] for j in range(n) for k in range(n)),
                    se.Integer(0)) for i in range(n)]
-    G_graph = d["gravity_vector_graph"]
     program = Program()
-    values = program.bind(_flat(d["mass_matrix_graph"]) + lagrange.coriolis_vector(d["mass_matrix_partials"], qd)
-                          + (G_graph or []) + _flat(J_graph) + Jdot_qd)
-    M = [values[i * n:(i + 1) * n] for i in range(n)]
-    V = values[n * n:n * n + n]
-    rest = values[n * n + n:]
-    G, rest = (rest[:n], rest[n:]) if G_graph is not None else (None, rest)
-    J = [rest[i * n:(i + 1) * n] for i in range(n)]
-    jdot_qd = rest[n * n:]
+    terms = _BoundTerms(d, program)
+    M = terms.mass_matrix()
+    V = terms.coriolis_vector()
+    G = terms.gravity_vector()
+    values = program.bind(_flat(J_graph) + Jdot_qd)
+    J = [values[i * n:(i + 1) * n] for i in range(n)]
+    jdot_qd = values[n * n:]
     # J^-T [M | V | G] in one solve; Mx = J^-T (J^-T M)^T = J^-T M J^-1 (M symmetric).
     first = transpose_solve(program, J, [M[i] + [V[i]] + ([G[i]] if G is not None else []) for i in range(n)])
     Mx = transpose_solve(program, J, [[first[j][i] for j in range(n)] for i in range(n)])
@@ -296,7 +325,7 @@ def _operational_space(d: Derivation) -> FunctionSpec:
 @quantity("kinetic_energy", "kinetic energy k(q, qd) = 1/2 qd^T M qd (scalar)")
 def _kinetic_energy(d: Derivation) -> FunctionSpec:
     program = Program()
-    (k,) = program.bind([lagrange.kinetic_energy(d["mass_matrix_graph"], _symbols(d, "qd"))])
+    (k,) = program.bind([lagrange.kinetic_energy(_BoundTerms(d, program).mass_matrix(), _symbols(d, "qd"))])
     return _function(
         d, "kinetic_energy", "Kinetic energy.", "k = 1/2 qd^T M(q) qd (seed eq. 8.32).",
         ["q", "qd"], program, [("k", [k], (), "kinetic energy of all bodies", "J")])
