@@ -19,8 +19,12 @@ def register_check(sub: argparse._SubParsersAction) -> None:
 
 def run_check(args: argparse.Namespace) -> int:
     from symkin import pipeline
+    from symkin.errors import ModelError, Problem
     from symkin.model import load_model
 
+    if args.tip and not any(path.lower().endswith(".urdf") for path in args.models):
+        raise ModelError([Problem("<command line>", None, None, "--tip", "--tip applies to URDF files only",
+                                  "drop --tip, or pass a .urdf file")])
     for path in args.models:
         model = load_model(path, tip=args.tip if path.lower().endswith(".urdf") else None)
         request = pipeline.resolve_request(model)

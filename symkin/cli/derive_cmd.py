@@ -35,10 +35,14 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from symkin import pipeline
+    from symkin.errors import ModelError, Problem
     from symkin.model import load_model
 
     # Validate every model and request first: a bad file writes nothing at all.
     jobs = []
+    if args.tip and not any(path.lower().endswith(".urdf") for path in args.models):
+        raise ModelError([Problem("<command line>", None, None, "--tip", "--tip applies to URDF files only",
+                                  "drop --tip, or pass a .urdf file")])
     for path in args.models:
         model = load_model(path, tip=args.tip if path.lower().endswith(".urdf") else None)
         jobs.append((model, pipeline.resolve_request(model, args.only, args.backend, args.fixed)))
