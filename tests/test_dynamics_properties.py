@@ -41,7 +41,7 @@ bodies:
 gravity: [0.5, -1, -g]
 friction:
   j1: {viscous: 0.1, coulomb: 0.3, smoothing_velocity: v_s}
-  j2: {viscous: 0.05}
+  j2: {viscous: 0.05, coulomb: 0.1}
   j3: {coulomb: 0.2, smoothing_velocity: v_s}
 """
 

@@ -91,3 +91,44 @@ def test_programs_are_deterministic():
     model = model_from_text(ARM, "arm")
     a, b = Derivation(model)["forward_dynamics"], Derivation(model)["forward_dynamics"]
     assert a == b and a.definitions
+
+
+def test_generated_friction_and_dynamics_match_the_expressions(tmp_path):
+    """sign and tanh friction through the numpy backend (the example models have no friction)."""
+    from symkin import load, pipeline
+    from test_dynamics_properties import FRICTION_ARM
+
+    model = model_from_text(FRICTION_ARM)
+    request = pipeline.resolve_request(model, only="friction,inverse_dynamics,forward_dynamics")
+    arm = load(pipeline.write(pipeline.generate(model, request), tmp_path))
+    d = Derivation(model)
+    rng = np.random.default_rng(31)
+    q, qd, x = rng.uniform(-2, 2, (3, 50, 3))
+    qd[0] = [0.0, -0.01, 0.2]
+    for name, args in (("friction", (qd,)), ("inverse_dynamics", (q, qd, x)), ("forward_dynamics", (q, qd, x))):
+        reference = reference_function(model, d[name])
+        got = getattr(arm, name)(*args)
+        for k in range(0, 50, 7):
+            np.testing.assert_allclose(got[k], reference(*(a[k] for a in args))[0], rtol=1e-12, atol=1e-12)
+    # j1 at rest: no friction; j2: viscous + sign Coulomb; j3: smooth Coulomb only.
+    np.testing.assert_allclose(arm.friction(qd[0]), [0, 0.05 * -0.01 - 0.1, 0.2 * np.tanh(0.2 / 0.05)], rtol=1e-15,
+                               atol=0)
+
+
+def test_tcp_force_where_elimination_without_pivoting_fails(models, derivations):
+    """UR10e with J_11 = 0 (the TCP in the base's x-z plane) but J regular: J^T F = b still holds."""
+    model = models["ur10e"]
+    J = reference_function(model, derivations["ur10e"]["jacobian"])
+    F = reference_function(model, derivations["ur10e"]["tcp_force"])
+    M = reference_function(model, derivations["ur10e"]["mass_matrix"])
+    V = reference_function(model, derivations["ur10e"]["coriolis_vector"])
+    G = reference_function(model, derivations["ur10e"]["gravity_vector"])
+    fk = reference_function(model, derivations["ur10e"]["fk"])
+    q = np.array([0.0, -1.1, 1.3, -0.7, 1.2, 0.4])
+    x, y = fk(q)[0][:2, 3]
+    q[0] = -np.arctan2(y, x)  # turn the base until the TCP lies in the x-z plane: J_11 = -y = 0
+    Jq = J(q)[0]
+    assert abs(Jq[0, 0]) < 1e-12 and abs(np.linalg.det(Jq)) > 1e-3
+    qd, qdd = np.linspace(-1, 1, 6), np.linspace(2, -2, 6)
+    rhs = M(q)[0] @ qdd + V(q, qd)[0] + G(q)[0]
+    np.testing.assert_allclose(Jq.T @ F(q, qd, qdd)[0], rhs, rtol=1e-10, atol=1e-10 * np.abs(rhs).max())
