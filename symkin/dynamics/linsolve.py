@@ -26,8 +26,6 @@ All functions take and return SymEngine expressions.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-
 import symengine as se
 
 from symkin.dynamics.program import Program, dot

@@ -113,8 +113,3 @@ def dot(u: Sequence[se.Basic], v: Sequence[se.Basic]) -> se.Basic:
 def mat_vec(A: Sequence[Sequence[se.Basic]], v: Sequence[se.Basic]) -> list[se.Basic]:
     """A v."""
     return [dot(row, v) for row in A]
-
-
-def transpose_mat_vec(A: Sequence[Sequence[se.Basic]], v: Sequence[se.Basic]) -> list[se.Basic]:
-    """A^T v."""
-    return [sum((A[i][j] * v[i] for i in range(len(A))), se.Integer(0)) for j in range(len(A[0]))]
