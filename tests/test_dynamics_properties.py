@@ -200,3 +200,27 @@ def test_tcp_force_and_operational_space_satisfy_their_definitions(name, cases):
         Vx_ref = Jinv.T @ (V(q, qd) - M(q) @ Jinv @ Jdot @ qd)
         np.testing.assert_allclose(Vx, Vx_ref, rtol=1e-8, atol=1e-8 * np.abs(Vx_ref).max())
         np.testing.assert_allclose(Gx, Jinv.T @ G(q), rtol=1e-8, atol=1e-8 * np.abs(Gx).max())
+
+
+@pytest.mark.parametrize("name", CASE_NAMES)
+def test_coriolis_matrix_is_made_of_christoffel_symbols(name, cases):
+    """C_ij = sum_k 1/2 (dM_ij/dq_k + dM_ik/dq_j - dM_jk/dq_i) qd_k with dM/dq by differences of M."""
+    if name not in cases:
+        pytest.skip("model without bodies")
+    model, _ = cases[name]
+    M = _f(cases[name], "mass_matrix", "mpmath")
+    C = _f(cases[name], "coriolis_matrix")
+    n = model.dof
+    h = mpmath.mpf("1e-15")
+    with mpmath.workdps(40):
+        for q, qd, _ in _states(model, 16):
+            q0 = _mp(q)
+            dM = []
+            for k in range(n):
+                plus, minus = list(q0), list(q0)
+                plus[k] += h
+                minus[k] -= h
+                dM.append(_mp_array((M(plus) - M(minus)) / (2 * h)).reshape(n, n))
+            want = np.array([[sum((dM[k][i, j] + dM[j][i, k] - dM[i][j, k]) / 2 * qd[k] for k in range(n))
+                              for j in range(n)] for i in range(n)])
+            np.testing.assert_allclose(C(q, qd), want, rtol=0, atol=1e-12 * max(1.0, np.abs(want).max()))
