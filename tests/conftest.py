@@ -7,10 +7,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import sympy
 
 from symkin import pipeline
 from symkin.derivation import Derivation
+from symkin.ir.evaluate import lambdify_spec
 from symkin.ir.spec import FunctionSpec
 from symkin.model import Model, load_model
 
@@ -38,13 +38,17 @@ def reference_function(model: Model, spec: FunctionSpec, modules: str = "numpy")
 
     Returns f(*vectors) -> list of arrays (one per output, shaped as declared).
     """
-    vectors = [list(i.symbols) for i in spec.vector_inputs]
-    values = model.parameter_values
-    fns = [sympy.lambdify(vectors, sympy.Matrix(o.expr).xreplace(values), modules=modules) for o in spec.outputs]
+    fn = lambdify_spec(spec, [list(i.symbols) for i in spec.vector_inputs], modules, model.parameter_values)
     shapes = [o.shape for o in spec.outputs]
 
     def evaluate(*args):
-        return [np.asarray(fn(*args), dtype=float).reshape(shape) for fn, shape in zip(fns, shapes)]
+        flat = fn(*args)
+        out, start = [], 0
+        for shape in shapes:
+            size = int(np.prod(shape)) if shape else 1
+            out.append(np.array(flat[start:start + size], dtype=float if modules == "numpy" else object).reshape(shape))
+            start += size
+        return out
 
     return evaluate
 

@@ -53,13 +53,19 @@ def test_paths_outside_the_directory_are_refused(tmp_path, path):
     assert not (tmp_path / "m").exists()
 
 
+@pytest.fixture(scope="module")
+def complete_manifest(tmp_path_factory) -> str:
+    """The manifest of a complete, uninterrupted derive of the UR10e (derived once)."""
+    reference = tmp_path_factory.mktemp("reference")
+    subprocess.run(SYMKIN_CLI + ["derive", str(MODELS_DIR / "ur10e.yaml"), "-o", str(reference), "-q"], check=True)
+    return (reference / "ur10e" / "manifest.json").read_text()
+
+
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
 @pytest.mark.parametrize("delay", [0.3, 0.8, 1.3])
-def test_interrupting_derive_leaves_previous_output_intact(tmp_path, sig, delay):
+def test_interrupting_derive_leaves_previous_output_intact(tmp_path, sig, delay, complete_manifest):
     model = str(MODELS_DIR / "ur10e.yaml")
-    reference = tmp_path / "reference"
-    subprocess.run(SYMKIN_CLI + ["derive", model, "-o", str(reference), "-q"], check=True)
-    after = (reference / "ur10e" / "manifest.json").read_text()
+    after = complete_manifest
     tmp_path = tmp_path / "out"
     subprocess.run(SYMKIN_CLI + ["derive", model, "--only", "fk", "-o", str(tmp_path), "-q"], check=True)
     before = (tmp_path / "ur10e" / "manifest.json").read_text()

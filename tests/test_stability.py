@@ -11,7 +11,7 @@ import sympy
 
 from conftest import EXAMPLE_MODELS, MODELS_DIR, SYMKIN_CLI
 from symkin import load, pipeline
-from symkin.derivation import Derivation, graph
+from symkin.derivation import Derivation, graph, registry
 from symkin.derivation.inputs import coordinate_input
 from symkin.ir.spec import FunctionSpec, InputSpec, OutputSpec, make_function
 from symkin.model import coordinates
@@ -53,8 +53,9 @@ def test_singular_paths_are_found_generically(runs):
 
 
 def test_forward_quantities_stay_accurate_into_the_ur_singularities(runs):
-    """No division in the UR's kinematics: even at kappa = 1e10 the code is accurate to rounding."""
-    singular = runs["ur10e"].select("singular")
+    """No division in the UR's kinematics and dynamics: even at kappa = 1e10 the code is accurate to
+    rounding (quantities that invert J, the TCP force and operational space, are excluded)."""
+    singular = [r for r in runs["ur10e"].select("singular") if registry()[r.quantity].solves_with is None]
     assert max(r.kappa for r in singular) > 1e9
     assert max(r.error for r in singular) < 1e-15
 
@@ -68,8 +69,14 @@ def test_folded_planar_arm_error_grows_with_kappa_as_its_conditioning_allows(run
 
 
 def test_length_scales_and_float32(runs):
+    eps = float(np.finfo(float).eps)
     for run in runs.values():
-        assert max(r.error for r in run.select("scale")) < BOUND
+        for r in run.select("scale"):
+            # Scaling lengths but not the published inertias makes M ill-conditioned: forward
+            # dynamics then meets the bound only where its own kappa = cond(M) is moderate,
+            # and stays within a small multiple of kappa * eps everywhere (backward stable).
+            assert r.error < BOUND or r.kappa >= KAPPA_LIMIT, r
+            assert r.error <= 64 * eps * max(r.kappa, 1.0), r
         errors = [r.error for r in run.select("float32")]
         eps32 = float(np.finfo(np.float32).eps)
         assert max(errors) < 50 * eps32

@@ -11,16 +11,22 @@ def register_check(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("check", help="validate model files without deriving",
                        description="Validate model files (syntax, names, expressions, physical plausibility of "
                                    "masses and inertias, scene) and print a summary. Writes nothing.")
-    p.add_argument("models", nargs="+", metavar="MODEL", help="model file(s) (YAML)")
+    p.add_argument("models", nargs="+", metavar="MODEL", help="model file(s): YAML, or URDF (.urdf)")
+    p.add_argument("--tip", metavar="LINK",
+                   help="URDF only: the link that ends the chain (default: the leaf behind the most moving joints)")
     p.set_defaults(run=run_check)
 
 
 def run_check(args: argparse.Namespace) -> int:
     from symkin import pipeline
+    from symkin.errors import ModelError, Problem
     from symkin.model import load_model
 
+    if args.tip and not any(path.lower().endswith(".urdf") for path in args.models):
+        raise ModelError([Problem("<command line>", None, None, "--tip", "--tip applies to URDF files only",
+                                  "drop --tip, or pass a .urdf file")])
     for path in args.models:
-        model = load_model(path)
+        model = load_model(path, tip=args.tip if path.lower().endswith(".urdf") else None)
         request = pipeline.resolve_request(model)
         print(f"{path}: ok - model '{model.name}', {model.dof} joints "
               f"({', '.join(f'{j.name}:{j.type.value}' for j in model.joints)}), "

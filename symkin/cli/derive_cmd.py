@@ -17,7 +17,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Derive the quantities a model's scene asks for (or --only), optimize them and "
                     "write the generated code and manifest.json to OUT/<model name>/, atomically.",
     )
-    p.add_argument("models", nargs="+", metavar="MODEL", help="model file(s) (YAML)")
+    p.add_argument("models", nargs="+", metavar="MODEL", help="model file(s): YAML, or URDF (.urdf)")
+    p.add_argument("--tip", metavar="LINK",
+                   help="URDF only: the link that ends the chain (default: the leaf behind the most moving joints)")
     p.add_argument("-o", "--out", default="generated", metavar="OUT",
                    help="output directory (default: %(default)s)")
     p.add_argument("--only", metavar="NAMES",
@@ -33,12 +35,16 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from symkin import pipeline
+    from symkin.errors import ModelError, Problem
     from symkin.model import load_model
 
     # Validate every model and request first: a bad file writes nothing at all.
     jobs = []
+    if args.tip and not any(path.lower().endswith(".urdf") for path in args.models):
+        raise ModelError([Problem("<command line>", None, None, "--tip", "--tip applies to URDF files only",
+                                  "drop --tip, or pass a .urdf file")])
     for path in args.models:
-        model = load_model(path)
+        model = load_model(path, tip=args.tip if path.lower().endswith(".urdf") else None)
         jobs.append((model, pipeline.resolve_request(model, args.only, args.backend, args.fixed)))
     for model, request in jobs:
         start = time.perf_counter()

@@ -5,5 +5,6 @@ Importing this package registers every quantity symkin knows.
 
 from symkin.derivation.graph import Derivation, QuantityDef, emitted_quantities, quantity, registry
 from symkin.kinematics import quantities as _kinematics  # noqa: F401  (registers fk, frames, jacobian...)
+from symkin.dynamics import quantities as _dynamics  # noqa: F401  (registers mass_matrix, inverse_dynamics...)
 
 __all__ = ["Derivation", "QuantityDef", "emitted_quantities", "quantity", "registry"]

@@ -28,25 +28,29 @@ class QuantityDef:
         summary: one line shown by ``symkin quantities`` and in docs.
         compute: ``compute(derivation) -> value``; asks the derivation for what it needs.
         emitted: True if the value is a :class:`FunctionSpec` that backends turn into code.
+        solves_with: the emitted quantity whose (square) matrix this one inverts, e.g.
+            ``mass_matrix`` for forward dynamics; its condition number bounds the accuracy any
+            algorithm can reach (used by the stability analysis).  None if nothing is inverted.
     """
 
     name: str
     summary: str
     compute: Callable[["Derivation"], Any]
     emitted: bool
+    solves_with: str | None = None
 
 
 _REGISTRY: dict[str, QuantityDef] = {}
 
 
-def quantity(name: str, summary: str, emitted: bool = True) -> Callable[[Callable[["Derivation"], Any]],
-                                                                      Callable[["Derivation"], Any]]:
-    """Register ``compute`` as the derivation of quantity ``name``."""
+def quantity(name: str, summary: str, emitted: bool = True,
+             solves_with: str | None = None) -> Callable[[Callable[["Derivation"], Any]], Callable[["Derivation"], Any]]:
+    """Register ``compute`` as the derivation of quantity ``name`` (see :class:`QuantityDef`)."""
 
     def register(compute: Callable[["Derivation"], Any]) -> Callable[["Derivation"], Any]:
         if name in _REGISTRY:
             raise ValueError(f"quantity {name!r} registered twice")
-        _REGISTRY[name] = QuantityDef(name, summary, compute, emitted)
+        _REGISTRY[name] = QuantityDef(name, summary, compute, emitted, solves_with)
         return compute
 
     return register

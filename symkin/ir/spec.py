@@ -5,6 +5,14 @@ A :class:`FunctionSpec` names a function, its ordered inputs (coordinate vectors
 shape).  The optimizer turns it into an :class:`OptimizedFunction` (common subexpressions
 pulled out into temporaries); every backend prints from that one representation, so the
 numpy, C and CasADi code cannot drift apart.
+
+A spec may also carry *definitions*: named intermediate values ``(symbol, expression)`` in
+evaluation order, which later definitions and the outputs use like inputs.  Derivations
+whose results are large shared graphs (the dynamics: M, C, solves on M) hand them over as
+such a straight-line program, because writing them out as one sympy tree per entry would
+repeat every shared subexpression at each use.  The optimizer treats definitions and
+outputs together (folding, one CSE) and emits every definition as a temporary, so backends
+see only :class:`OptimizedFunction` temporaries and never need to know.
 """
 
 from __future__ import annotations
@@ -84,6 +92,10 @@ class FunctionSpec:
         doc: longer description with the equation or reference implemented.
         inputs: ordered inputs: vectors first, then parameters in model order.
         outputs: ordered outputs.
+        definitions: named intermediate values ``(symbol, expression)``, in evaluation
+            order; an expression may use the inputs and earlier definitions, the outputs
+            may use all of them (see the module docstring).  Definition symbols are named
+            ``_w<k>``, which no model name can be.
     """
 
     name: str
@@ -91,6 +103,7 @@ class FunctionSpec:
     doc: str
     inputs: tuple[InputSpec, ...]
     outputs: tuple[OutputSpec, ...]
+    definitions: tuple[tuple[sympy.Symbol, sympy.Expr], ...] = ()
 
     @property
     def vector_inputs(self) -> tuple[InputSpec, ...]:
@@ -99,6 +112,19 @@ class FunctionSpec:
     @property
     def parameter_inputs(self) -> tuple[InputSpec, ...]:
         return tuple(i for i in self.inputs if i.kind == "parameter")
+
+    def expanded_outputs(self) -> tuple[sympy.ImmutableMatrix, ...]:
+        """The output matrices with every definition substituted (plain expressions of the inputs).
+
+        Meant for small specs and tests (symbolic comparisons): for a large program the
+        expanded trees can be far bigger than the program itself.
+        """
+        if not self.definitions:
+            return tuple(o.expr for o in self.outputs)
+        values: dict[sympy.Symbol, sympy.Expr] = {}
+        for symbol, expr in self.definitions:
+            values[symbol] = expr.xreplace(values)
+        return tuple(sympy.ImmutableMatrix(o.expr.xreplace(values)) for o in self.outputs)
 
 
 @dataclass(frozen=True)
@@ -123,7 +149,8 @@ class OptimizedFunction:
 
 
 def make_function(model: Model, name: str, summary: str, doc: str,
-                  vectors: Sequence[InputSpec], outputs: Sequence[OutputSpec]) -> FunctionSpec:
+                  vectors: Sequence[InputSpec], outputs: Sequence[OutputSpec],
+                  definitions: Sequence[tuple[sympy.Symbol, sympy.Expr]] = ()) -> FunctionSpec:
     """Build a spec whose parameter inputs are the model parameters its outputs use.
 
     Raises:
@@ -132,6 +159,9 @@ def make_function(model: Model, name: str, summary: str, doc: str,
     used: set[sympy.Symbol] = set()
     for out in outputs:
         used |= out.expr.free_symbols
+    for _, expr in definitions:
+        used |= expr.free_symbols
+    used -= {symbol for symbol, _ in definitions}
     params = tuple(
         InputSpec(p.name, "parameter", (p.symbol,), (p.name,), (p.unit,), p.doc, p.value)
         for p in model.parameters if p.symbol in used
@@ -140,4 +170,4 @@ def make_function(model: Model, name: str, summary: str, doc: str,
     missing = used - provided
     if missing:
         raise DerivationError(f"{name}: outputs use {sorted(map(str, missing))} which no input provides")
-    return FunctionSpec(name, summary, doc, tuple(vectors) + params, tuple(outputs))
+    return FunctionSpec(name, summary, doc, tuple(vectors) + params, tuple(outputs), tuple(definitions))

@@ -523,7 +523,14 @@ def _unit_axis(r: _Reader, path: KeyPath, value: Any) -> Vec3 | None:
 
 
 def _frame_ops(r: _Reader, path: KeyPath, value: Any) -> tuple[Op, ...] | None:
-    """A fixed frame {xyz: [...], rpy: [...]}: Trans(xyz) Rz(yaw) Ry(pitch) Rx(roll) (URDF convention)."""
+    """A fixed frame {xyz: [...], rpy: [...]}: Trans(xyz) Rz(yaw) Ry(pitch) Rx(roll) (URDF convention).
+
+    A list of such frames is their composition, applied in order (the fixed joints between
+    two moving joints of a URDF chain).
+    """
+    if isinstance(value, list):
+        parts = [_frame_ops(r, path + (i,), item) for i, item in enumerate(value)]
+        return None if any(p is None for p in parts) else tuple(op for part in parts for op in part)  # type: ignore
     section = r.mapping(path, value, optional=("xyz", "rpy"))
     if section is None:
         return None
@@ -624,7 +631,7 @@ def _bodies(r: _Reader, value: Any, links: tuple[str, ...]) -> tuple[Body, ...]:
     bodies = []
     for i, item in enumerate(items):
         bpath = path + (i,)
-        item = r.mapping(bpath, item, required=("link", "mass"), optional=("com", "inertia", "inertia_rpy"))
+        item = r.mapping(bpath, item, required=("link", "mass"), optional=("com", "inertia", "inertia_rpy", "origin"))
         if item is None or "link" not in item or "mass" not in item:
             continue
         link = item["link"]
@@ -640,6 +647,8 @@ def _bodies(r: _Reader, value: Any, links: tuple[str, ...]) -> tuple[Body, ...]:
         inertia = _inertia(r, bpath + ("inertia",), item["inertia"]) if "inertia" in item else sympy.zeros(3, 3)
         if "inertia_rpy" in item and inertia is not None:
             inertia = _rotate_inertia(r, bpath + ("inertia_rpy",), item["inertia_rpy"], inertia)
+        if "origin" in item and com is not None and inertia is not None:
+            com, inertia = _body_in_link_frame(r, bpath + ("origin",), item["origin"], com, inertia)
         if mass is None or com is None or inertia is None:
             continue
         m = r.default_value(mass)
@@ -649,6 +658,23 @@ def _bodies(r: _Reader, value: Any, links: tuple[str, ...]) -> tuple[Body, ...]:
             continue
         bodies.append(Body(link, mass, com, sympy.ImmutableMatrix(inertia)))
     return tuple(bodies)
+
+
+def _body_in_link_frame(r: _Reader, path: KeyPath, value: Any, com: Vec3, inertia: sympy.Matrix
+                        ) -> tuple[Vec3 | None, sympy.Matrix | None]:
+    """com and inertia given in a frame fixed to the link (``origin:``, one frame or a list),
+    expressed in the link frame: c_link = p + R c, I_link = R I R^T with link_T_frame = (R, p)."""
+    ops = _frame_ops(r, path, value)
+    if ops is None:
+        return None, None
+    R, p = sympy.eye(3), sympy.zeros(3, 1)
+    for op in ops:
+        if isinstance(op, Rotation):
+            R = R * rotation_matrix(op.axis, op.angle)
+        else:
+            p = p + R * sympy.Matrix(op.vector)
+    c = p + R * sympy.Matrix(com)
+    return (c[0], c[1], c[2]), R * inertia * R.T
 
 
 def _inertia(r: _Reader, path: KeyPath, value: Any) -> sympy.Matrix | None:
@@ -717,19 +743,26 @@ def _friction(r: _Reader, value: Any, joint_names: tuple[str, ...]) -> tuple[Fri
         if jname not in joint_names:
             continue  # already reported as unknown key
         fpath = path + (jname,)
-        spec = r.mapping(fpath, spec, optional=("viscous", "coulomb"))
+        spec = r.mapping(fpath, spec, optional=("viscous", "coulomb", "smoothing_velocity"))
         if spec is None:
             continue
         viscous = r.expr(fpath + ("viscous",), spec["viscous"]) if "viscous" in spec else ZERO
         coulomb = r.expr(fpath + ("coulomb",), spec["coulomb"]) if "coulomb" in spec else ZERO
-        if viscous is None or coulomb is None:
+        smoothing = r.expr(fpath + ("smoothing_velocity",), spec["smoothing_velocity"]) \
+            if "smoothing_velocity" in spec else None
+        if viscous is None or coulomb is None or ("smoothing_velocity" in spec and smoothing is None):
             continue
         for key, coeff in (("viscous", viscous), ("coulomb", coulomb)):
             v = r.default_value(coeff)
             if v is not None and v < 0:
                 r.fail(fpath + (key,), f"negative {key} friction coefficient {coeff}",
                        "friction coefficients are zero or positive")
-        out.append(Friction(jname, viscous, coulomb))
+        if smoothing is not None:
+            v = r.default_value(smoothing)
+            if smoothing == 0 or (v is not None and v <= 0):
+                r.fail(fpath + ("smoothing_velocity",), f"the smoothing velocity must be positive, got {smoothing}",
+                       "give the speed below which Coulomb friction fades out, e.g. a parameter v_s: 0.01")
+        out.append(Friction(jname, viscous, coulomb, smoothing))
     return tuple(out)
 
 

@@ -138,11 +138,16 @@ class Body:
 
 @dataclass(frozen=True)
 class Friction:
-    """Joint friction coefficients, tau_f = viscous * qd + coulomb * sign(qd) (seed eq. 8.34)."""
+    """Joint friction, tau_f = viscous * qd + coulomb * sign(qd) (seed eq. 8.34).
+
+    With ``smoothing_velocity`` v_s the Coulomb term is the smooth
+    coulomb * tanh(qd / v_s) instead (differentiable, for optimization and simulation).
+    """
 
     joint: str
     viscous: sympy.Expr
     coulomb: sympy.Expr
+    smoothing_velocity: sympy.Expr | None = None
 
 
 @dataclass(frozen=True)

@@ -2,29 +2,37 @@
 
 from __future__ import annotations
 
+import symengine as se
 import sympy
 from sympy.core.parameters import distribute
 
 from symkin.ir.spec import FunctionSpec, OptimizedFunction
 from symkin.optimize.opcount import op_count
+from symkin.symengine_bridge import SympyConverter, to_symengine
 
 #: Prefix of CSE temporaries; model names must start with a letter, so these never clash.
 TEMPORARY_PREFIX = "_x"
 
+Assignment = tuple[sympy.Symbol, sympy.Expr]
+
 
 def eliminate_common_subexpressions(spec: FunctionSpec, counts: dict[str, int] | None = None) -> OptimizedFunction:
-    """Run one CSE over every entry of every output of ``spec``.
+    """Run one CSE over every entry of every output of ``spec`` (and over its definitions).
 
     The result is deterministic: sympy's canonical ordering is used and temporaries are
-    numbered in evaluation order (``_x0``, ``_x1``...).
+    numbered in evaluation order (``_x0``, ``_x1``...).  The definitions of a spec become
+    temporaries too (see :func:`_cse_program`).
 
     Args:
         spec: the function to optimize.
         counts: op counts of earlier stages, extended with ``cse`` (temporaries + outputs).
     """
     entries = [e for out in spec.outputs for e in out.entries]
-    with distribute(False):  # keep 2*(x + y) as one product (see passes.fold_parameters)
-        temporaries, reduced = sympy.cse(entries, symbols=sympy.numbered_symbols(TEMPORARY_PREFIX, real=True))
+    if spec.definitions:
+        temporaries, reduced = _cse_program(spec.definitions, entries)
+    else:
+        with distribute(False):  # keep 2*(x + y) as one product (see passes.fold_parameters)
+            temporaries, reduced = sympy.cse(entries, symbols=sympy.numbered_symbols(TEMPORARY_PREFIX, real=True))
     outputs = []
     start = 0
     for out in spec.outputs:
@@ -34,3 +42,55 @@ def eliminate_common_subexpressions(spec: FunctionSpec, counts: dict[str, int] |
     counts = dict(counts or {})
     counts["cse"] = op_count([e for _, e in temporaries] + list(reduced))
     return OptimizedFunction(spec, tuple(temporaries), tuple(outputs), counts)
+
+
+def _cse_program(definitions: tuple[Assignment, ...], entries: list[sympy.Expr]) -> tuple[list[Assignment],
+                                                                                         list[sympy.Expr]]:
+    """One CSE over the definitions and the output entries of a straight-line program.
+
+    Programs (the dynamics) hold thousands of definitions, on which ``sympy.cse`` takes
+    seconds; SymEngine's CSE (deterministic, independent of the hash seed) takes tens of
+    milliseconds, so it runs here (see :mod:`symkin.symengine_bridge`).  Definition symbols
+    are atoms to the CSE; the new temporaries and the (reduced) definitions are then put in
+    a dependency order (depth first, in list order, so the result does not depend on set
+    iteration order), definitions that reduced to a single symbol or number are substituted
+    away, and everything is renamed ``_x0, _x1...`` in evaluation order.
+    """
+    exprs = [e for _, e in definitions] + entries
+    symbols = {s.name: s for e in exprs for s in e.free_symbols}
+    symbols.update((s.name, s) for s, _ in definitions)
+    found, reduced = se.cse([to_symengine(e) for e in exprs])
+    assignments = list(found) + [(to_symengine(symbol), expr) for (symbol, _), expr in zip(definitions, reduced)]
+    # Final names in evaluation order; a definition that reduced to an atom is an alias.
+    names = sympy.numbered_symbols(TEMPORARY_PREFIX, real=True)
+    kept = []
+    for symbol, expr in _dependency_order(assignments):
+        if expr.is_Atom:
+            symbols[symbol.name] = SympyConverter(symbols)(expr)
+        else:
+            symbols[symbol.name] = next(names)
+            kept.append((symbol, expr))
+    convert = SympyConverter(symbols)
+    temporaries = [(symbols[symbol.name], convert(expr)) for symbol, expr in kept]
+    return temporaries, [convert(e) for e in reduced[len(definitions):]]
+
+
+def _dependency_order(assignments: list[Assignment]) -> list[Assignment]:
+    """``assignments`` reordered so that each comes after those it uses (stable, iterative DFS)."""
+    index = {symbol: k for k, (symbol, _) in enumerate(assignments)}
+    deps = [sorted((index[s] for s in expr.free_symbols if s in index), reverse=True) for _, expr in assignments]
+    done = [False] * len(assignments)
+    order: list[int] = []
+    for root in range(len(assignments)):
+        stack = [(root, False)]
+        while stack:
+            k, expanded = stack.pop()
+            if done[k]:
+                continue
+            if expanded:
+                done[k] = True
+                order.append(k)
+                continue
+            stack.append((k, True))
+            stack.extend((d, False) for d in deps[k] if not done[d])
+    return [assignments[k] for k in order]

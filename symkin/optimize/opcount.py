@@ -49,5 +49,5 @@ def op_count(exprs: Iterable[sympy.Expr]) -> int:
 
 
 def spec_op_count(spec: FunctionSpec) -> int:
-    """Operation count of all output entries of ``spec``."""
-    return op_count(e for out in spec.outputs for e in out.entries)
+    """Operation count of all output entries of ``spec`` (and of its definitions, each counted once)."""
+    return op_count([e for _, e in spec.definitions] + [e for out in spec.outputs for e in out.entries])

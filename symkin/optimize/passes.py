@@ -18,6 +18,10 @@ def _map_outputs(spec: FunctionSpec, fn) -> tuple[OutputSpec, ...]:
                  for o in spec.outputs)
 
 
+def _map_definitions(spec: FunctionSpec, fn) -> tuple[tuple[sympy.Symbol, sympy.Expr], ...]:
+    return tuple((symbol, fn(expr)) for symbol, expr in spec.definitions)
+
+
 def fold_parameters(spec: FunctionSpec, fixed: Iterable[str]) -> FunctionSpec:
     """Substitute the ``fixed`` parameters by their exact default values; drop them from the inputs.
 
@@ -32,8 +36,9 @@ def fold_parameters(spec: FunctionSpec, fixed: Iterable[str]) -> FunctionSpec:
         return spec
     with distribute(False):
         outputs = _map_outputs(spec, lambda e: e.xreplace(values))
+        definitions = _map_definitions(spec, lambda e: e.xreplace(values))
     inputs = tuple(i for i in spec.inputs if not (i.kind == "parameter" and i.name in fixed))
-    return FunctionSpec(spec.name, spec.summary, spec.doc, inputs, outputs)
+    return FunctionSpec(spec.name, spec.summary, spec.doc, inputs, outputs, definitions)
 
 
 def _fold(expr: sympy.Expr) -> sympy.Expr:
@@ -45,8 +50,12 @@ def _fold(expr: sympy.Expr) -> sympy.Expr:
             return value
         return expr
     if expr.is_Pow:
-        return expr.func(_fold(expr.base), expr.exp)  # keep exact exponents (x**2, sqrt)
-    return expr.func(*(_fold(a) for a in expr.args))
+        base = _fold(expr.base)
+        return expr if base is expr.base else expr.func(base, expr.exp)  # keep exact exponents (x**2, sqrt)
+    args = tuple(_fold(a) for a in expr.args)
+    if all(new is old for new, old in zip(args, expr.args)):
+        return expr  # nothing folded below: no need to rebuild
+    return expr.func(*args)
 
 
 def fold_constants(spec: FunctionSpec) -> FunctionSpec:
@@ -55,4 +64,5 @@ def fold_constants(spec: FunctionSpec) -> FunctionSpec:
     Exponents stay exact so that ``x**2`` and ``sqrt(x)`` keep their cheap forms.
     """
     with distribute(False):
-        return FunctionSpec(spec.name, spec.summary, spec.doc, spec.inputs, _map_outputs(spec, _fold))
+        return FunctionSpec(spec.name, spec.summary, spec.doc, spec.inputs, _map_outputs(spec, _fold),
+                            _map_definitions(spec, _fold))

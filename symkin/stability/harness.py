@@ -14,8 +14,11 @@ evaluated
 and compared with the un-optimized expressions evaluated by mpmath at the same inputs
 (:class:`~symkin.stability.reference.MpmathReference`).  Each comparison is a
 :class:`Record` with the normwise relative error and kappa, the condition number
-sigma_max/sigma_min of the task Jacobian at that state (seed sec. 4.2), computed from the
-50-digit Jacobian.
+sigma_max/sigma_min (seed sec. 4.2), computed from 50-digit values, of the matrix that
+bounds the accuracy of the quantity: the matrix it inverts when its registration declares
+one (``solves_with``: the mass matrix for forward dynamics, the task Jacobian for TCP forces
+and operational-space dynamics), else the task Jacobian.  A backward-stable evaluation has
+an error of the order of kappa * eps, so this is the kappa to judge the error against.
 """
 
 from __future__ import annotations
@@ -28,7 +31,7 @@ import mpmath
 import numpy as np
 
 from symkin import pipeline
-from symkin.derivation import Derivation, emitted_quantities
+from symkin.derivation import Derivation, emitted_quantities, registry
 from symkin.errors import DerivationError
 from symkin.model.schema import Model
 from symkin.runtime import load
@@ -54,8 +57,8 @@ class Record:
         label: the path (``theta2 -> 0``) for singular states, else empty.
         parameter: t (distance to the singular value) for singular states, the length scale
             for ``scale``, 1 otherwise.
-        kappa: condition number of the task Jacobian at the state (inf if singular, nan if the
-            model has no task Jacobian).
+        kappa: condition number, at the state, of the matrix the quantity inverts, else of the
+            task Jacobian (inf if singular, nan if the model has no such matrix).
         error: normwise relative error against mpmath (inf: a non-finite value came out).
     """
 
@@ -91,10 +94,10 @@ class StabilityRun:
 
 
 def _kappa(reference: MpmathReference | None, shape: tuple[int, ...], vectors: dict, parameters: dict) -> float:
-    """sigma_max / sigma_min of the 50-digit task Jacobian (inf at a singular state, nan without one)."""
+    """sigma_max / sigma_min of a 50-digit matrix output (inf at a singular state, nan without one)."""
     if reference is None:
         return float("nan")
-    exact = reference.exact(vectors, parameters)
+    exact = reference.exact({g: vectors[g] for g in reference.vector_names}, parameters)
     rows, columns = shape
     with mpmath.workdps(DIGITS):
         J = mpmath.matrix([exact[i * columns:(i + 1) * columns] for i in range(rows)])
@@ -143,8 +146,14 @@ def run_stability(model: Model, *, samples: int = 32, float32_samples: int = 16,
     generation = pipeline.generate(model, pipeline.Request(generated, (), ("numpy",)))
     optimized = {f.name: f for f in generation.functions}
     references = {name: MpmathReference(derivation[name]) for name in names}
-    kappa_reference = MpmathReference(derivation["jacobian"]) if has_jacobian else None
-    kappa_shape = derivation["jacobian"].outputs[0].shape if has_jacobian else ()
+    conditioning = {name: registry()[name].solves_with or "jacobian" for name in names}
+    kappa_sources = {}
+    for source in sorted(set(conditioning.values())):
+        if source == "jacobian" and not has_jacobian:
+            kappa_sources[source] = (None, ())
+        else:
+            kappa_sources[source] = (references.get(source) or MpmathReference(derivation[source]),
+                                     derivation[source].outputs[0].shape)
     with tempfile.TemporaryDirectory(prefix="symkin-stability-") as tmp:
         loaded = load(pipeline.write(generation, tmp))
         functions = {name: getattr(loaded, name) for name in names}
@@ -154,8 +163,9 @@ def run_stability(model: Model, *, samples: int = 32, float32_samples: int = 16,
         def check(family: str, states: dict[str, np.ndarray], parameters: dict[str, float], label: str = "",
                   parameter_of: Callable[[int], float] = lambda _k: 1.0, dtype: type = np.float64) -> None:
             count = len(states["q"])
-            kappas = [_kappa(kappa_reference, kappa_shape, {g: v[k] for g, v in states.items()}, parameters)
-                      for k in range(count)]
+            kappas = {source: [_kappa(reference, shape, {g: v[k] for g, v in states.items()}, parameters)
+                               for k in range(count)]
+                      for source, (reference, shape) in kappa_sources.items()}
             for name in names:
                 spec_vectors = [i.name for i in derivation[name].vector_inputs]
                 params = {i.name: parameters[i.name] for i in derivation[name].parameter_inputs}
@@ -166,7 +176,7 @@ def run_stability(model: Model, *, samples: int = 32, float32_samples: int = 16,
                     computed = compile_ir(optimized[name], dtype)({g: states[g] for g in spec_vectors}, params)
                 for k in range(count):
                     hi, lo = references[name]({g: states[g][k] for g in spec_vectors}, parameters)
-                    run.records.append(Record(name, family, label, parameter_of(k), kappas[k],
+                    run.records.append(Record(name, family, label, parameter_of(k), kappas[conditioning[name]][k],
                                               normwise_error(computed[k].astype(np.float64), hi, lo)))
 
         defaults = parameter_values(model)

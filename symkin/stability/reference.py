@@ -14,8 +14,7 @@ from collections.abc import Mapping
 
 import mpmath
 import numpy as np
-import sympy
-
+from symkin.ir.evaluate import lambdify_spec
 from symkin.ir.spec import FunctionSpec
 
 #: Working precision of the reference (significant decimal digits).
@@ -34,9 +33,8 @@ class MpmathReference:
         self.vector_names = tuple(i.name for i in spec.vector_inputs)
         self.parameter_names = tuple(i.name for i in spec.parameter_inputs)
         symbols = [s for i in spec.vector_inputs for s in i.symbols] + [i.symbols[0] for i in spec.parameter_inputs]
-        entries = sympy.Matrix([e for out in spec.outputs for e in out.entries])
-        self._function = sympy.lambdify(symbols, entries, modules="mpmath")
-        self.size = len(entries)
+        self._function = lambdify_spec(spec, symbols, modules="mpmath")
+        self.size = sum(len(out.entries) for out in spec.outputs)
 
     def exact(self, vectors: Mapping[str, np.ndarray], parameters: Mapping[str, float]) -> list:
         """The outputs (flattened, row-major, outputs in order) as mpmath numbers."""

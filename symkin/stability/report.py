@@ -59,8 +59,9 @@ def path_table(run: StabilityRun) -> str:
             at = [r for r in records if r.label == path.label and math.isclose(r.parameter, t)]
             if at:
                 worst = max(at, key=lambda r: r.error)
-                rows.append([path.label, f"{t:.0e}", _e(at[0].kappa), _e(worst.error), worst.quantity])
-    return format_table(["path", "t", "kappa", "max error", "worst quantity"], rows)
+                jacobian = next((r for r in at if r.quantity == "jacobian"), at[0])
+                rows.append([path.label, f"{t:.0e}", _e(jacobian.kappa), _e(worst.error), worst.quantity])
+    return format_table(["path", "t", "kappa(J)", "max error", "worst quantity"], rows)
 
 
 def float32_table(run: StabilityRun) -> str:
@@ -90,7 +91,9 @@ def render(run: StabilityRun) -> str:
     random = run.select("random")
     parts = [
         f"numerical stability of {run.model}: generated numpy code against mpmath at 50 digits "
-        f"(normwise relative error |f - f_ref| / |f_ref| per function; kappa = cond(task Jacobian))",
+        f"(normwise relative error |f - f_ref| / |f_ref| per function; kappa = condition number of the matrix "
+        f"the function inverts: M for forward_dynamics, J for tcp_force and operational_space; "
+        f"of the task Jacobian J for the others)",
         f"quantities: {', '.join(run.quantities)}"
         + (f"; not derivable: {', '.join(run.skipped)}" if run.skipped else ""),
         f"records: {len(run.records)} ({len(random)} random, {len(run.select('singular'))} singular, "

@@ -1,0 +1,125 @@
+"""Straight-line linear solves for generated code (forward dynamics, J^-T, operational space).
+
+Generated code must run without branches or library calls, so every solve here is a fixed
+sequence of arithmetic on *named* entries (:meth:`Program.let`): the matrix entries stand
+for their (large) expressions once, every factor is computed once, and CSE shares the rest.
+
+* :func:`ldl_solve` - ``A X = B`` for symmetric positive definite A (the mass matrix) by
+  A = L D L^T without pivoting.  For an SPD matrix every pivot D_k is positive (Golub &
+  Van Loan, *Matrix Computations*, sec. 4.1-4.2), so the factorization exists and is
+  backward stable without pivoting; it costs n^3/6 multiplications and no square roots.
+* :func:`transpose_solve` - ``J^T X = B`` for a square, nonsingular but otherwise general
+  matrix (a task Jacobian).  Elimination without pivoting is not sound here: a leading
+  minor of J may vanish where J is regular (the UR10e at q = 0 has J_11 = 0), and dividing
+  by it gives NaN.  Two sound straight-line methods are used instead:
+
+  - m <= 3: the adjugate, J^-T = cof(J) / det(J) - exact closed forms (the seed writes J^-T
+    of the planar arm this way, sec. 4.4.1) that fail only where det J = 0, i.e. at the
+    singularities where no J^-T exists;
+  - m > 3: QR of J^T by modified Gram-Schmidt with the right-hand sides carried along as
+    extra columns (Bjorck, *Numerical Methods for Least Squares Problems*, sec. 2.4.3):
+    the diagonal r_kk are the norms of the successive orthogonal residuals, nonzero for
+    every nonsingular J, and the augmented form is backward stable for the solution.
+
+All functions take and return SymEngine expressions.
+"""
+
+from __future__ import annotations
+
+import symengine as se
+
+from symkin.dynamics.program import Program, dot
+
+Matrix = list[list[se.Basic]]
+
+#: Largest size solved by the adjugate (closed form); larger systems use Gram-Schmidt QR.
+ADJUGATE_MAX_SIZE = 3
+
+
+def ldl_solve(program: Program, A: Matrix, B: Matrix) -> Matrix:
+    """X with A X = B, for symmetric positive definite A (n x n) and B (n x r), by LDL^T.
+
+    Only the lower triangle of A is used.
+    """
+    n = len(A)
+    A = [[program.let(A[i][j]) for j in range(i + 1)] for i in range(n)]
+    D: list[se.Basic] = []
+    L: Matrix = [[se.Integer(0)] * n for _ in range(n)]
+    # E[i][k] = L[i][k] * D[k], kept to save a multiplication per use.
+    E: Matrix = [[se.Integer(0)] * n for _ in range(n)]
+    for j in range(n):
+        D.append(program.let(A[j][j] - sum((L[j][k] * E[j][k] for k in range(j)), se.Integer(0))))
+        inverse = program.let(1 / D[j])
+        for i in range(j + 1, n):
+            E[i][j] = program.let(A[i][j] - sum((L[i][k] * E[j][k] for k in range(j)), se.Integer(0)))
+            L[i][j] = program.let(E[i][j] * inverse)
+    columns = []
+    for c in range(len(B[0])):
+        y: list[se.Basic] = []
+        for i in range(n):  # L y = b
+            y.append(program.let(B[i][c] - sum((L[i][k] * y[k] for k in range(i)), se.Integer(0))))
+        x: list[se.Basic] = [se.Integer(0)] * n
+        for i in reversed(range(n)):  # D L^T x = y
+            x[i] = program.let(y[i] / D[i] - sum((L[k][i] * x[k] for k in range(i + 1, n)), se.Integer(0)))
+        columns.append(x)
+    return [[columns[c][i] for c in range(len(B[0]))] for i in range(n)]
+
+
+def transpose_solve(program: Program, J: Matrix, B: Matrix) -> Matrix:
+    """X with J^T X = B for square nonsingular J (m x m) and B (m x r); see the module docstring."""
+    m = len(J)
+    if any(len(row) != m for row in J):
+        raise ValueError("transpose_solve needs a square matrix")
+    J = [[program.let(v) for v in row] for row in J]
+    B = [[program.let(v) for v in row] for row in B]
+    if m <= ADJUGATE_MAX_SIZE:
+        return _adjugate_transpose_solve(program, J, B)
+    return _gram_schmidt_transpose_solve(program, J, B)
+
+
+def _det(A: Matrix) -> se.Basic:
+    """Determinant by cofactor expansion along the first row (m <= 3)."""
+    m = len(A)
+    if m == 1:
+        return A[0][0]
+    return sum(((-1) ** c * A[0][c] * _det(_minor(A, 0, c)) for c in range(m)), se.Integer(0))
+
+
+def _minor(A: Matrix, row: int, col: int) -> Matrix:
+    return [[v for c, v in enumerate(r) if c != col] for k, r in enumerate(A) if k != row]
+
+
+def _adjugate_transpose_solve(program: Program, J: Matrix, B: Matrix) -> Matrix:
+    """J^-T B = cof(J) B / det(J), cof(J)_ij = (-1)^(i+j) det(minor_ij(J))."""
+    m = len(J)
+    cofactor = [[program.let((-1) ** (i + j) * _det(_minor(J, i, j))) if m > 1 else se.Integer(1)
+                 for j in range(m)] for i in range(m)]
+    det = program.let(sum((J[0][c] * cofactor[0][c] for c in range(m)), se.Integer(0)))
+    inverse = program.let(1 / det)
+    return [[program.let(sum((cofactor[i][k] * B[k][c] for k in range(m)), se.Integer(0)) * inverse)
+             for c in range(len(B[0]))] for i in range(m)]
+
+
+def _gram_schmidt_transpose_solve(program: Program, J: Matrix, B: Matrix) -> Matrix:
+    """Augmented modified Gram-Schmidt: J^T = Q R, then R X = Q^T B by back substitution."""
+    m = len(J)
+    a = [[J[j][i] for i in range(m)] for j in range(m)]  # a[k] = column k of J^T = row k of J
+    b = [[B[i][c] for i in range(m)] for c in range(len(B[0]))]
+    R: Matrix = [[se.Integer(0)] * m for _ in range(m)]
+    qtb: Matrix = [[se.Integer(0)] * len(b) for _ in range(m)]
+    for k in range(m):
+        R[k][k] = program.let(se.sqrt(dot(a[k], a[k])))
+        inverse = program.let(1 / R[k][k])
+        unit = [program.let(v * inverse) for v in a[k]]
+        for j in range(k + 1, m):
+            R[k][j] = program.let(dot(unit, a[j]))
+            a[j] = [program.let(a[j][i] - R[k][j] * unit[i]) for i in range(m)]
+        for c in range(len(b)):
+            qtb[k][c] = program.let(dot(unit, b[c]))
+            b[c] = [program.let(b[c][i] - qtb[k][c] * unit[i]) for i in range(m)]
+    X: Matrix = [[se.Integer(0)] * len(b) for _ in range(m)]
+    for c in range(len(b)):
+        for i in reversed(range(m)):
+            rest = sum((R[i][k] * X[k][c] for k in range(i + 1, m)), se.Integer(0))
+            X[i][c] = program.let((qtb[i][c] - rest) / R[i][i])
+    return X

@@ -1,0 +1,115 @@
+"""Straight-line programs built with SymEngine and handed to the IR as sympy definitions.
+
+The dynamics are large shared graphs: every entry of the mass matrix reuses the same link
+rotations and lever arms, the Christoffel symbols reuse the derivatives of M, a solve on M
+reuses its factors.  SymEngine (C++) builds and differentiates such graphs two orders of
+magnitude faster than sympy and keeps the sharing (subexpressions are reference-counted
+nodes).  A :class:`Program` collects the values a function needs as named assignments:
+
+* :meth:`Program.bind` runs ``symengine.cse`` over a batch of large expressions and keeps
+  the common subexpressions as assignments, returning small expressions of them;
+* :meth:`Program.let` names one value (a pivot, a factor of a solve);
+* :meth:`Program.to_sympy` converts the assignments that the outputs need, one small
+  expression at a time, into the sympy ``definitions`` of a
+  :class:`~symkin.ir.spec.FunctionSpec` (sympy stays the public expression type).
+
+Converting the graphs directly into sympy trees instead would repeat every shared
+subexpression at every use (the UR10e Coriolis matrix grows to about a million operations
+that way); the program form keeps it at a few thousand.  ``symengine.cse`` is deterministic
+(it does not depend on Python's hash seed), so generated code stays byte-identical.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+
+import symengine as se
+import sympy
+
+from symkin.symengine_bridge import SympyConverter, to_symengine
+
+#: Prefix of program assignments (see FunctionSpec.definitions); no model name starts with "_".
+DEFINITION_PREFIX = "_w"
+
+
+def se_vector(values: Iterable[sympy.Expr]) -> list[se.Basic]:
+    """Entries of a sympy vector (or any iterable of expressions) as SymEngine expressions."""
+    return [to_symengine(v) for v in values]
+
+
+def se_matrix(matrix: sympy.MatrixBase) -> list[list[se.Basic]]:
+    """A sympy matrix as a list of rows of SymEngine expressions."""
+    return [[to_symengine(matrix[i, j]) for j in range(matrix.shape[1])] for i in range(matrix.shape[0])]
+
+
+class Program:
+    """Named assignments ``(symbol, expression)`` in evaluation order (see the module docstring)."""
+
+    def __init__(self) -> None:
+        self.assignments: list[tuple[se.Symbol, se.Basic]] = []
+
+    def _append(self, expr: se.Basic) -> se.Symbol:
+        symbol = se.Symbol(f"{DEFINITION_PREFIX}{len(self.assignments)}")
+        self.assignments.append((symbol, expr))
+        return symbol
+
+    def let(self, expr: se.Basic) -> se.Basic:
+        """Name ``expr``; symbols and numbers are returned unchanged."""
+        expr = se.sympify(expr)
+        if expr.is_Atom:
+            return expr
+        return self._append(expr)
+
+    def bind(self, exprs: Sequence[se.Basic]) -> list[se.Basic]:
+        """Pull the common subexpressions of ``exprs`` into assignments; returns the reduced expressions."""
+        temporaries, reduced = se.cse([se.sympify(e) for e in exprs])
+        rename: dict[se.Basic, se.Basic] = {}
+
+        def renamed(expr: se.Basic) -> se.Basic:
+            # Substitute only the symbols that occur (a large mapping costs at every call).
+            used = {s: rename[s] for s in expr.free_symbols if s in rename}
+            return expr.xreplace(used) if used else expr
+
+        for symbol, expr in temporaries:
+            rename[symbol] = self._append(renamed(expr))
+        return [renamed(e) for e in reduced]
+
+    def to_sympy(self, outputs: Sequence[se.Basic], convert: SympyConverter) -> tuple[
+            tuple[tuple[sympy.Symbol, sympy.Expr], ...], list[sympy.Expr]]:
+        """The definitions the ``outputs`` need and the outputs, as sympy expressions.
+
+        Args:
+            outputs: SymEngine expressions of inputs and assignments.
+            convert: the converter, with the sympy symbols of the inputs (model symbols
+                carry assumptions such as ``real=True`` that SymEngine does not keep; they
+                are restored by name).  Its memo may be shared by several programs.
+
+        Returns:
+            (definitions, outputs): assignments no output depends on are dropped.
+        """
+        index = {symbol: k for k, (symbol, _) in enumerate(self.assignments)}
+        needed = [False] * len(self.assignments)
+        stack = [s for e in outputs for s in se.sympify(e).free_symbols if s in index]
+        while stack:
+            k = index[stack.pop()]
+            if not needed[k]:
+                needed[k] = True
+                stack.extend(s for s in self.assignments[k][1].free_symbols if s in index)
+        definitions = tuple((convert(symbol), convert(expr))
+                            for k, (symbol, expr) in enumerate(self.assignments) if needed[k])
+        return definitions, [convert(se.sympify(e)) for e in outputs]
+
+
+def cross(u: Sequence[se.Basic], v: Sequence[se.Basic]) -> list[se.Basic]:
+    """u x v of 3-vectors."""
+    return [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]]
+
+
+def dot(u: Sequence[se.Basic], v: Sequence[se.Basic]) -> se.Basic:
+    """u . v."""
+    return sum((a * b for a, b in zip(u, v)), se.Integer(0))
+
+
+def mat_vec(A: Sequence[Sequence[se.Basic]], v: Sequence[se.Basic]) -> list[se.Basic]:
+    """A v."""
+    return [dot(row, v) for row in A]

@@ -1,0 +1,343 @@
+"""Dynamic quantities of serial chains, registered in the derivation graph (seed sec. 4.4).
+
+=====================  ================================================================
+``mass_matrix``        M(q), n x n (eqs. 8.31, 8.53)
+``coriolis_matrix``    C(q, qd), n x n, Christoffel symbols: V = C qd, dM/dt - 2C skew
+``coriolis_vector``    V(q, qd) = C qd, Coriolis and centrifugal terms (eq. 8.31)
+``gravity_vector``     G(q) = du/dq (eq. 8.31); not available for models without gravity
+``friction``           F_f(qd): viscous + Coulomb (sign or tanh) per joint (eq. 8.34)
+``inverse_dynamics``   tau = M qdd + V + G + F_f (eq. 8.34)
+``forward_dynamics``   qdd = M^-1 (tau - V - G - F_f), by an LDL^T solve
+``tcp_force``          F = J^-T (M qdd + V + G) (eq. 8.37), square task Jacobians
+``operational_space``  Mx, Vx, Gx (eqs. 8.61-8.64), square task Jacobians
+``kinetic_energy``     k = 1/2 qd^T M qd (eq. 8.32)
+``potential_energy``   u = -sum m g . c (eq. 8.32)
+=====================  ================================================================
+
+The closed forms are in :mod:`symkin.dynamics.lagrange`, the solves in
+:mod:`symkin.dynamics.linsolve`; each emitted function is a straight-line
+:class:`~symkin.dynamics.program.Program` converted to sympy definitions.  A model whose
+gravity is zero has no gravity terms anywhere (and no ``gravity_vector`` or
+``potential_energy`` to emit); bodies without mass and inertia are dropped.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import symengine as se
+import sympy
+
+from symkin.derivation.graph import Derivation, quantity
+from symkin.derivation.inputs import coordinate_input
+from symkin.dynamics import lagrange
+from symkin.dynamics.bodies import BodyJacobians, body_jacobians
+from symkin.dynamics.linsolve import ldl_solve, transpose_solve
+from symkin.dynamics.program import Program, mat_vec, se_matrix, se_vector
+from symkin.errors import DerivationError
+from symkin.symengine_bridge import SympyConverter
+from symkin.ir.spec import FunctionSpec, OutputSpec, make_function
+from symkin.model import coordinates
+
+Matrix = list[list[se.Basic]]
+
+EFFORT_UNIT = "N*m (revolute), N (prismatic)"
+
+
+def _symbols(d: Derivation, group: str) -> list[se.Symbol]:
+    return se_vector(coordinates.symbols(d.model, group))
+
+
+def _function(d: Derivation, name: str, summary: str, doc: str, groups: Sequence[str], program: Program,
+              outputs: Sequence[tuple[str, Sequence[se.Basic], tuple[int, ...], str, str]]) -> FunctionSpec:
+    """The spec of a function whose outputs are SymEngine values of ``program``.
+
+    Args:
+        outputs: (name, row-major entries, shape, doc, unit) per output.
+    """
+    model = d.model
+    definitions, flat = program.to_sympy([e for out in outputs for e in out[1]], d["sympy_converter"])
+    specs, start = [], 0
+    for out_name, entries, shape, out_doc, unit in outputs:
+        size = len(entries)
+        rows, cols = (shape + (1, 1))[:2] if len(shape) < 2 else shape
+        matrix = sympy.ImmutableMatrix(rows, cols, flat[start:start + size])
+        specs.append(OutputSpec(out_name, matrix, out_doc, unit, shape))
+        start += size
+    return make_function(model, name, summary, doc, [coordinate_input(model, g) for g in groups], specs, definitions)
+
+
+def _flat(matrix: Matrix) -> list[se.Basic]:
+    return [v for row in matrix for v in row]
+
+
+# --------------------------------------------------------------------------- internal quantities
+
+@quantity("sympy_converter", "SymEngine -> sympy conversion shared by the functions of one model", emitted=False)
+def _sympy_converter(d: Derivation) -> SympyConverter:
+    """One memo for every function: programs that start alike (M, then dM/dq) convert their
+    common assignments once."""
+    symbols = [s for g in coordinates.GROUPS for s in coordinates.symbols(d.model, g)]
+    symbols += [p.symbol for p in d.model.parameters]
+    return SympyConverter({s.name: s for s in symbols})
+
+
+@quantity("body_jacobians", "velocity Jacobians of the bodies at their centres of mass", emitted=False)
+def _body_jacobians(d: Derivation) -> tuple[BodyJacobians, ...]:
+    return body_jacobians(d.model, d["chain"])
+
+
+@quantity("mass_matrix_graph", "M(q) as a SymEngine graph", emitted=False)
+def _mass_matrix_graph(d: Derivation) -> Matrix:
+    return lagrange.mass_matrix(d["body_jacobians"], d.model.dof)
+
+
+@quantity("mass_matrix_partials", "dM/dq_k as SymEngine graphs", emitted=False)
+def _mass_matrix_partials(d: Derivation) -> list[Matrix]:
+    return lagrange.mass_matrix_partials(d["mass_matrix_graph"], _symbols(d, "q"))
+
+
+@quantity("gravity_graph", "gravity vector in the base frame, or None if zero", emitted=False)
+def _gravity_graph(d: Derivation) -> list[se.Basic] | None:
+    if all(c == 0 for c in d.model.gravity):
+        return None
+    return se_vector(d.model.gravity)
+
+
+@quantity("gravity_vector_graph", "G(q) as a SymEngine graph, or None without gravity", emitted=False)
+def _gravity_vector_graph(d: Derivation) -> list[se.Basic] | None:
+    g = d["gravity_graph"]
+    return None if g is None else lagrange.gravity_vector(d["body_jacobians"], d["chain"].axes, g)
+
+
+@quantity("friction_graph", "F_f(qd) as SymEngine expressions, or None without friction", emitted=False)
+def _friction_graph(d: Derivation) -> list[se.Basic] | None:
+    """F_f,j = viscous_j qd_j + coulomb_j sign(qd_j), or coulomb_j tanh(qd_j / v_s,j) when smoothed."""
+    if not d.model.friction:
+        return None
+    qd = dict(zip((j.name for j in d.model.joints), _symbols(d, "qd")))
+    F = {name: se.Integer(0) for name in qd}
+    for f in d.model.friction:
+        v = qd[f.joint]
+        coulomb = se.sign(v) if f.smoothing_velocity is None else se.tanh(v / se.sympify(f.smoothing_velocity))
+        F[f.joint] = se.sympify(f.viscous) * v + se.sympify(f.coulomb) * coulomb
+    return list(F.values())
+
+
+@quantity("task_jacobian_graph", "task Jacobian J (square) as SymEngine expressions", emitted=False)
+def _task_jacobian_graph(d: Derivation) -> Matrix:
+    J = d["jacobian"].outputs[0].expr
+    if J.shape[0] != J.shape[1]:
+        raise DerivationError(
+            f"{d.model.name}: the task Jacobian is {J.shape[0]} x {J.shape[1]}; TCP forces and operational-space "
+            f"dynamics need a square one (as many task coordinates as joints, {d.model.dof}); "
+            "change 'task_space' of the model")
+    return se_matrix(J)
+
+
+def _require_gravity(d: Derivation, name: str) -> None:
+    if d["gravity_graph"] is None:
+        raise DerivationError(f"{d.model.name}: the model has no gravity, so {name} is identically zero and is "
+                              f"not emitted; declare 'gravity:' in the model or remove '{name}' from the outputs")
+
+
+class _BoundTerms:
+    """The terms of eq. 8.34 bound into one program, always in the same order (M, dM/dq, G, F_f),
+    so that the programs of different functions start alike and share their conversion."""
+
+    def __init__(self, d: Derivation, program: Program):
+        self.d, self.program = d, program
+        self.n = d.model.dof
+
+    def mass_matrix(self) -> Matrix:
+        values = self.program.bind(_flat(self.d["mass_matrix_graph"]))
+        return [values[i * self.n:(i + 1) * self.n] for i in range(self.n)]
+
+    def partials(self) -> list[Matrix]:
+        """dM/dq_k as partials[k][i][j]."""
+        n = self.n
+        values = self.program.bind([v for dM in self.d["mass_matrix_partials"] for v in _flat(dM)])
+        return [[values[k * n * n + i * n:k * n * n + (i + 1) * n] for i in range(n)] for k in range(n)]
+
+    def coriolis_vector(self) -> list[se.Basic]:
+        return lagrange.coriolis_vector(self.partials(), _symbols(self.d, "qd"))
+
+    def gravity_vector(self) -> list[se.Basic] | None:
+        G = self.d["gravity_vector_graph"]
+        return None if G is None else self.program.bind(G)
+
+    def friction(self) -> list[se.Basic] | None:
+        return self.d["friction_graph"]
+
+    def rest(self, with_friction: bool) -> list[se.Basic]:
+        """V + G (+ F_f): everything of eq. 8.34 except M qdd."""
+        terms = self.coriolis_vector()
+        for extra in (self.gravity_vector(), self.friction() if with_friction else None):
+            if extra is not None:
+                terms = [a + b for a, b in zip(terms, extra)]
+        return terms
+
+
+# --------------------------------------------------------------------------- emitted functions
+
+@quantity("mass_matrix", "mass matrix M(q) (n x n, symmetric positive definite)")
+def _mass_matrix(d: Derivation) -> FunctionSpec:
+    program = Program()
+    M = _flat(_BoundTerms(d, program).mass_matrix())
+    return _function(
+        d, "mass_matrix", "Joint-space mass matrix.",
+        "M(q) = sum over bodies of m Jv^T Jv + Jw^T I Jw with the velocity Jacobians at the centres of mass "
+        "(seed eqs. 8.31-8.33; 2-DoF example eq. 8.53).",
+        ["q"], program, [("M", M, (d.model.dof, d.model.dof), "symmetric positive definite mass matrix", "")])
+
+
+@quantity("coriolis_matrix", "Coriolis matrix C(q, qd) from Christoffel symbols (n x n)")
+def _coriolis_matrix(d: Derivation) -> FunctionSpec:
+    n = d.model.dof
+    program = Program()
+    C = lagrange.coriolis_matrix(_BoundTerms(d, program).partials(), _symbols(d, "qd"))
+    return _function(
+        d, "coriolis_matrix", "Coriolis matrix from the Christoffel symbols of M.",
+        "C_ij = sum_k c_ijk qd_k, c_ijk = 1/2 (dM_ij/dq_k + dM_ik/dq_j - dM_jk/dq_i); V = C qd and "
+        "dM/dt - 2C is skew-symmetric.",
+        ["q", "qd"], program, [("C", _flat(C), (n, n), "Coriolis matrix", "")])
+
+
+@quantity("coriolis_vector", "Coriolis and centrifugal vector V(q, qd) = C qd (n)")
+def _coriolis_vector(d: Derivation) -> FunctionSpec:
+    program = Program()
+    V = _BoundTerms(d, program).coriolis_vector()
+    return _function(
+        d, "coriolis_vector", "Coriolis and centrifugal torques.",
+        "V(q, qd) = C(q, qd) qd = dM/dt qd - 1/2 d(qd^T M qd)/dq (seed eq. 8.31; 2-DoF example eq. 8.54).",
+        ["q", "qd"], program, [("V", V, (d.model.dof,), "Coriolis and centrifugal joint torques", EFFORT_UNIT)])
+
+
+@quantity("gravity_vector", "gravity vector G(q) = du/dq (n)")
+def _gravity_vector(d: Derivation) -> FunctionSpec:
+    _require_gravity(d, "gravity_vector")
+    program = Program()
+    G = _BoundTerms(d, program).gravity_vector()
+    return _function(
+        d, "gravity_vector", "Gravity torques.",
+        "G(q) = du/dq with u = -sum m g . c over the bodies (seed eq. 8.31; 2-DoF example eq. 8.54).",
+        ["q"], program, [("G", G, (d.model.dof,), "joint torques that hold the arm against gravity", EFFORT_UNIT)])
+
+
+@quantity("friction", "joint friction F_f(qd): viscous + Coulomb (n)")
+def _friction(d: Derivation) -> FunctionSpec:
+    F = d["friction_graph"]
+    if F is None:
+        raise DerivationError(f"{d.model.name}: the model declares no friction; add a 'friction:' section "
+                              "or remove 'friction' from the outputs")
+    program = Program()
+    return _function(
+        d, "friction", "Joint friction torques.",
+        "F_f = viscous qd + coulomb sign(qd) per joint (seed eq. 8.34), or coulomb tanh(qd / v_s) where the "
+        "model gives a smoothing velocity v_s.",
+        ["qd"], program, [("F_f", F, (d.model.dof,), "friction torques opposing the motion", EFFORT_UNIT)])
+
+
+@quantity("inverse_dynamics", "inverse dynamics tau = M qdd + V + G + F_f (n)")
+def _inverse_dynamics(d: Derivation) -> FunctionSpec:
+    n = d.model.dof
+    program = Program()
+    terms = _BoundTerms(d, program)
+    M = terms.mass_matrix()
+    tau = [a + b for a, b in zip(mat_vec(M, _symbols(d, "qdd")), terms.rest(with_friction=True))]
+    return _function(
+        d, "inverse_dynamics", "Inverse dynamics: joint torques for a motion.",
+        "tau = M(q) qdd + V(q, qd) + G(q) + F_f(qd) (seed eq. 8.34).",
+        ["q", "qd", "qdd"], program, [("tau", tau, (n,), "joint torques (revolute) or forces (prismatic)",
+                                       EFFORT_UNIT)])
+
+
+@quantity("forward_dynamics", "forward dynamics qdd = M^-1 (tau - V - G - F_f) (n)", solves_with="mass_matrix")
+def _forward_dynamics(d: Derivation) -> FunctionSpec:
+    n = d.model.dof
+    program = Program()
+    terms = _BoundTerms(d, program)
+    M = terms.mass_matrix()
+    rhs = [[t - b] for t, b in zip(_symbols(d, "tau"), terms.rest(with_friction=True))]
+    qdd = [row[0] for row in ldl_solve(program, M, rhs)]
+    return _function(
+        d, "forward_dynamics", "Forward dynamics: joint accelerations under given torques.",
+        "qdd = M(q)^-1 (tau - V(q, qd) - G(q) - F_f(qd)) (seed eq. 8.34 solved for qdd), by a straight-line "
+        "LDL^T factorization of the symmetric positive definite M.",
+        ["q", "qd", "tau"], program, [("qdd", qdd, (n,), "joint accelerations", "rad/s^2 (revolute), m/s^2 "
+                                                                                 "(prismatic)")])
+
+
+@quantity("tcp_force", "TCP force F = J^-T (M qdd + V + G) (m, square task Jacobian)", solves_with="jacobian")
+def _tcp_force(d: Derivation) -> FunctionSpec:
+    n = d.model.dof
+    J = d["task_jacobian_graph"]
+    program = Program()
+    terms = _BoundTerms(d, program)
+    M = terms.mass_matrix()
+    rhs = [[a + b] for a, b in zip(mat_vec(M, _symbols(d, "qdd")), terms.rest(with_friction=False))]
+    values = program.bind(_flat(J))
+    J = [values[i * n:(i + 1) * n] for i in range(n)]
+    F = [row[0] for row in transpose_solve(program, J, rhs)]
+    components = ", ".join(d.model.task_space)
+    return _function(
+        d, "tcp_force", "Force (wrench) at the TCP that produces a joint motion.",
+        f"F = J^-T (M qdd + V + G) (seed eqs. 8.36-8.37, 2-DoF example eqs. 8.59-8.60), task components "
+        f"[{components}]; J^-T by the adjugate for up to 3 task coordinates, else by a Gram-Schmidt QR "
+        "(no pivoting needed).",
+        ["q", "qd", "qdd"], program, [("F", F, (n,), f"TCP force components [{components}]", "N, N*m")])
+
+
+@quantity("operational_space", "operational-space dynamics Mx, Vx, Gx (square task Jacobian)",
+          solves_with="jacobian")
+def _operational_space(d: Derivation) -> FunctionSpec:
+    n = d.model.dof
+    J_graph = d["task_jacobian_graph"]
+    q, qd = _symbols(d, "q"), _symbols(d, "qd")
+    # dJ/dt qd = sum_k dJ/dq_k qd_k qd.
+    Jdot_qd = [sum((se.diff(J_graph[i][j], q[k]) * qd[k] * qd[j] for j in range(n) for k in range(n)),
+                   se.Integer(0)) for i in range(n)]
+    program = Program()
+    terms = _BoundTerms(d, program)
+    M = terms.mass_matrix()
+    V = terms.coriolis_vector()
+    G = terms.gravity_vector()
+    values = program.bind(_flat(J_graph) + Jdot_qd)
+    J = [values[i * n:(i + 1) * n] for i in range(n)]
+    jdot_qd = values[n * n:]
+    # J^-T [M | V | G] in one solve; Mx = J^-T (J^-T M)^T = J^-T M J^-1 (M symmetric).
+    first = transpose_solve(program, J, [M[i] + [V[i]] + ([G[i]] if G is not None else []) for i in range(n)])
+    Mx = transpose_solve(program, J, [[first[j][i] for j in range(n)] for i in range(n)])
+    Mx = [[Mx[i][j] if i >= j else Mx[j][i] for j in range(n)] for i in range(n)]  # exactly symmetric
+    Vx = [first[i][n] - sum((Mx[i][k] * jdot_qd[k] for k in range(n)), se.Integer(0)) for i in range(n)]
+    outputs = [("Mx", _flat(Mx), (n, n), "operational-space mass matrix J^-T M J^-1", ""),
+               ("Vx", Vx, (n,), "operational-space Coriolis and centrifugal force J^-T (V - M J^-1 dJ/dt qd)", "")]
+    if G is not None:
+        outputs.append(("Gx", [first[i][n + 1] for i in range(n)], (n,), "operational-space gravity force J^-T G",
+                        ""))
+    components = ", ".join(d.model.task_space)
+    return _function(
+        d, "operational_space", "Operational-space dynamics F = Mx xdd + Vx + Gx.",
+        f"Mx = J^-T M J^-1, Vx = J^-T (V - M J^-1 dJ/dt qd), Gx = J^-T G (seed eqs. 8.61-8.64; Craig sec. "
+        f"6.11) for the task components [{components}].  Gx is omitted for a model without gravity.",
+        ["q", "qd"], program, outputs)
+
+
+@quantity("kinetic_energy", "kinetic energy k(q, qd) = 1/2 qd^T M qd (scalar)")
+def _kinetic_energy(d: Derivation) -> FunctionSpec:
+    program = Program()
+    (k,) = program.bind([lagrange.kinetic_energy(_BoundTerms(d, program).mass_matrix(), _symbols(d, "qd"))])
+    return _function(
+        d, "kinetic_energy", "Kinetic energy.", "k = 1/2 qd^T M(q) qd (seed eq. 8.32).",
+        ["q", "qd"], program, [("k", [k], (), "kinetic energy of all bodies", "J")])
+
+
+@quantity("potential_energy", "potential energy u(q) = -sum m g . c (scalar)")
+def _potential_energy(d: Derivation) -> FunctionSpec:
+    _require_gravity(d, "potential_energy")
+    program = Program()
+    (u,) = program.bind([lagrange.potential_energy(d["body_jacobians"], d["gravity_graph"])])
+    return _function(
+        d, "potential_energy", "Gravitational potential energy.",
+        "u = -sum m g . c over the bodies, zero with every centre of mass at the base origin (seed eq. 8.32).",
+        ["q"], program, [("u", [u], (), "potential energy", "J")])

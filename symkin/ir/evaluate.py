@@ -1,0 +1,30 @@
+"""Direct evaluation of a FunctionSpec as derived: the reference every backend is compared with.
+
+The un-optimized outputs (and the spec's definitions program, evaluated in order as
+assignments) are lambdified for numpy or mpmath; nothing of the optimizer or the printers
+is involved, so the result is an independent check of generated code.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+
+import sympy
+
+from symkin.ir.spec import FunctionSpec
+
+
+def lambdify_spec(spec: FunctionSpec, args: Sequence[object], modules: str = "numpy",
+                  values: Mapping[sympy.Symbol, sympy.Expr] | None = None) -> Callable[..., list]:
+    """A function of ``args`` returning every output entry of ``spec`` (row-major, outputs in order).
+
+    Args:
+        spec: the derived function (its definitions become assignments before the outputs).
+        args: lambdify arguments: symbols, or sequences of symbols for vector arguments.
+        modules: ``"numpy"`` or ``"mpmath"``.
+        values: substitutions applied first (e.g. parameters at their defaults).
+    """
+    values = dict(values or {})
+    definitions = [(s, e.xreplace(values)) for s, e in spec.definitions]
+    entries = [e.xreplace(values) for out in spec.outputs for e in out.entries]
+    return sympy.lambdify(list(args), entries, modules=modules, cse=lambda exprs: (definitions, exprs))

@@ -1,0 +1,474 @@
+"""Read a URDF robot description into the same plain document a YAML model file gives.
+
+ROS users' robots work without rewriting them: the chain from the URDF's root link to a tip
+link becomes a ``serial.chain`` (see docs/model-format.md, "URDF files"), so the one
+validator of :mod:`symkin.model.build` checks it and every message points at the URDF line.
+
+* joints: ``revolute``, ``continuous`` (revolute without limits), ``prismatic`` and
+  ``fixed``; fixed joints are merged into the frames around them (the ``origin`` of the
+  next moving joint, ``serial.base`` before the first, ``serial.tcp`` after the last);
+* ``<origin xyz rpy>`` is parent_T_joint = Trans(xyz) Rz(yaw) Ry(pitch) Rx(roll), ``<axis>``
+  (default 1 0 0) the motion axis, ``<limit>`` the position, velocity and effort limits;
+* ``<inertial>``: mass, centre of mass and inertia tensor (``<origin>`` rotates its axes);
+  links fixed to a moving link add their inertials to it; links fixed to the root do not
+  move and are ignored;
+* numbers are read as exact decimals; an angle within 1e-12 rad of a multiple of pi/2 is
+  that exact multiple (URDF files print pi/2 as 1.5707963267948966), so a URDF and the
+  YAML model of the same robot derive the same expressions;
+* gravity is ``[0, 0, -g]`` with a free parameter ``g = 9.81`` (ROS convention: z up);
+  the task space is ``pose``.
+
+The tip is the link named by the caller (``symkin derive --tip LINK``,
+``load_model(path, tip=...)``), or else the leaf link behind the most moving joints (so
+sensor frames fixed to the base or to a link do not count), if that leaf is unique.  Closed loops (a link
+with two parent joints), mimic joints, floating and planar joints, and moving joints that
+branch off the root-tip chain are refused with a located error.
+
+The file is data: it is parsed with the standard library's expat parser, document type
+declarations (and so entities) are refused, and the file size and element count are
+bounded.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass, field
+from fractions import Fraction
+from pathlib import Path
+from typing import Any
+from xml.parsers import expat
+
+from symkin.errors import ModelError, Problem
+from symkin.model.yaml_source import MAX_FILE_BYTES, Document, KeyPath
+
+MAX_ELEMENTS = 100_000
+_NUMBER = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?")
+#: Angles this close to a multiple of pi/2 are read as that multiple.
+ANGLE_SNAP = 1e-12
+
+SUPPORTED_JOINTS = ("revolute", "continuous", "prismatic", "fixed")
+
+
+@dataclass
+class Element:
+    """An XML element with its location."""
+
+    tag: str
+    attrib: dict[str, str]
+    line: int
+    column: int
+    children: list[Element] = field(default_factory=list)
+
+    def find(self, tag: str) -> Element | None:
+        return next((c for c in self.children if c.tag == tag), None)
+
+    def findall(self, tag: str) -> list[Element]:
+        return [c for c in self.children if c.tag == tag]
+
+
+class _Fail(Exception):
+    """Stops reading after located problems were recorded."""
+
+
+class _UrdfReader:
+    def __init__(self, file: str):
+        self.file = file
+        self.problems: list[Problem] = []
+        self.marks: dict[KeyPath, tuple[int, int]] = {}
+
+    def fail(self, element: Element | None, key: str, message: str, fix: str) -> None:
+        line, column = (element.line, element.column) if element is not None else (None, None)
+        self.problems.append(Problem(self.file, line, column, key, message, fix))
+
+    def stop(self) -> None:
+        if self.problems:
+            raise ModelError(self.problems)
+
+    # ------------------------------------------------------------------ XML
+
+    def parse(self, text: str) -> Element:
+        parser = expat.ParserCreate()
+        stack: list[Element] = []
+        root: list[Element] = []
+        count = [0]
+
+        def refuse_dtd(*_args: Any) -> None:
+            raise _Fail("document type declarations are not allowed")
+
+        def start(tag: str, attrib: dict[str, str]) -> None:
+            count[0] += 1
+            if count[0] > MAX_ELEMENTS:
+                raise _Fail(f"more than {MAX_ELEMENTS} elements")
+            element = Element(tag, dict(attrib), parser.CurrentLineNumber, parser.CurrentColumnNumber + 1)
+            (stack[-1].children if stack else root).append(element)
+            stack.append(element)
+
+        parser.StartDoctypeDeclHandler = refuse_dtd
+        parser.EntityDeclHandler = refuse_dtd
+        parser.StartElementHandler = start
+        parser.EndElementHandler = lambda _tag: stack.pop()
+        try:
+            parser.Parse(text, True)
+        except expat.ExpatError as exc:
+            self.problems.append(Problem(self.file, exc.lineno, exc.offset + 1, "",
+                                         f"malformed XML: {expat.ErrorString(exc.code)}",
+                                         "fix the XML syntax (a URDF is an XML file with a <robot> root)"))
+            raise ModelError(self.problems) from None
+        except _Fail as exc:
+            self.problems.append(Problem(self.file, parser.CurrentLineNumber, parser.CurrentColumnNumber + 1, "",
+                                         f"refused: {exc}", "a URDF needs no DOCTYPE or entities; remove them"))
+            raise ModelError(self.problems) from None
+        if root[0].tag != "robot":
+            self.fail(root[0], "", f"the root element is <{root[0].tag}>, not <robot>", "a URDF file has a <robot> root")
+            self.stop()
+        return root[0]
+
+    # ------------------------------------------------------------------ values
+
+    def numbers(self, element: Element, attribute: str, count: int, default: str, key: str,
+                angles: bool = False) -> list[str]:
+        """The attribute as ``count`` exact number texts (pi multiples for angles, see the module docstring)."""
+        text = element.attrib.get(attribute, default)
+        parts = text.split()
+        if len(parts) != count or not all(_NUMBER.fullmatch(p) for p in parts):
+            self.fail(element, key, f"{attribute}=\"{text}\" is not {count} number(s)",
+                      f"write {count} decimal number(s) separated by spaces")
+            return ["0"] * count
+        return [_snap_angle(p) if angles else p for p in parts]
+
+    def number(self, element: Element, attribute: str, key: str, default: str | None = None,
+               angle: bool = False) -> str | None:
+        if attribute not in element.attrib and default is None:
+            self.fail(element, key, f"missing attribute '{attribute}'", f"add {attribute}=\"...\"")
+            return None
+        return self.numbers(element, attribute, 1, default or "0", key, angles=angle)[0]
+
+    def frame(self, element: Element | None, key: str) -> dict[str, list[str]]:
+        """{xyz, rpy} of an <origin> element (identity if absent)."""
+        if element is None:
+            return {"xyz": ["0", "0", "0"], "rpy": ["0", "0", "0"]}
+        return {"xyz": self.numbers(element, "xyz", 3, "0 0 0", key + ".xyz"),
+                "rpy": self.numbers(element, "rpy", 3, "0 0 0", key + ".rpy", angles=True)}
+
+
+def _snap_angle(text: str) -> str:
+    value = float(Fraction(text))
+    k = round(value / (math.pi / 2))
+    if k != 0 and abs(value - k * math.pi / 2) <= ANGLE_SNAP:
+        return f"{k}*pi/2"
+    return text
+
+
+def _is_identity(frame: dict[str, list[str]]) -> bool:
+    return all(Fraction(v) == 0 for v in frame["xyz"]) and all(v == "0" or (not v.endswith("pi/2") and
+                                                                          Fraction(v) == 0) for v in frame["rpy"])
+
+
+@dataclass
+class _Joint:
+    element: Element
+    name: str
+    type: str
+    parent: str
+    child: str
+
+
+def read_urdf_document(path: str | Path, tip: str | None = None) -> Document:
+    """Read the URDF at ``path`` as a model document (see the module docstring).
+
+    Raises:
+        ModelError: unreadable or malformed file, unsupported content, unknown tip.
+    """
+    name = str(path)
+    try:
+        raw = Path(path).read_bytes()
+    except OSError as exc:
+        raise ModelError([Problem(name, None, None, "", f"cannot read the file: {exc.strerror}",
+                                  "check the path and the file permissions")]) from None
+    if len(raw) > MAX_FILE_BYTES:
+        raise ModelError([Problem(name, None, None, "", f"the file has {len(raw)} bytes, more than the limit of "
+                                                        f"{MAX_FILE_BYTES}", "remove meshes or generated content")])
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ModelError([Problem(name, None, None, "", f"the file is not UTF-8 text ({exc.reason})",
+                                  "save the URDF as UTF-8 text")]) from None
+    return urdf_document(text, name, tip)
+
+
+def urdf_document(text: str, file: str = "<string>", tip: str | None = None) -> Document:
+    """The model document of URDF ``text`` (see :func:`read_urdf_document`)."""
+    r = _UrdfReader(file)
+    robot = r.parse(text)
+    links = _links(r, robot)
+    joints = _joints(r, robot, links)
+    r.stop()
+    parent_of = {j.child: j for j in joints.values()}
+    children: dict[str, list[_Joint]] = {link: [] for link in links}
+    for j in joints.values():
+        children[j.parent].append(j)
+    root = _root(r, robot, links, parent_of)
+    tip = _tip(r, robot, links, children, parent_of, tip)
+    path = _path(parent_of, root, tip)  # joints root -> tip
+    on_path = {root} | {j.child for j in path}
+    _check_branches(r, children, on_path, path)
+    r.stop()
+
+    data: dict[str, Any] = {}
+    robot_name = robot.attrib.get("name", "")
+    if re.fullmatch(r"[A-Za-z][A-Za-z0-9_]*", robot_name):
+        data["name"] = robot_name
+    data["description"] = f"{robot_name or 'robot'} from the URDF {Path(file).name}, chain {root} -> {tip}."
+    data["parameters"] = {"g": {"value": "9.81", "unit": "m/s^2", "doc": "gravitational acceleration"}}
+    serial: dict[str, Any] = {}
+    chain: list[dict[str, Any]] = []
+    pending: list[dict[str, list[str]]] = []  # fixed frames since the last moving joint (or the root)
+    # Links that move: (model link carrying them, frames from that link's frame to theirs).
+    carried: dict[str, tuple[str, list[dict[str, list[str]]]]] = {}
+    for j in path:
+        origin = r.frame(j.element.find("origin"), f"joint[{j.name}].origin")
+        if j.type == "fixed":
+            pending.append(origin)
+        else:
+            if chain:
+                joint = _moving_joint(r, j, _nontrivial(pending + [origin]))
+            else:
+                joint = _moving_joint(r, j, _nontrivial([origin]))
+                if _nontrivial(pending):
+                    serial["base"] = _nontrivial(pending)
+            r.marks[("serial", "chain", len(chain))] = (j.element.line, j.element.column)
+            chain.append(joint)
+            pending = []
+        if chain:
+            carried[j.child] = (chain[-1]["link"], list(pending))
+    if not chain:
+        r.fail(robot, "", f"the chain {root} -> {tip} has no moving joint", "choose another tip link (--tip)")
+        r.stop()
+    if _nontrivial(pending):
+        serial["tcp"] = _nontrivial(pending)
+    serial["chain"] = chain
+    data["serial"] = serial
+    # Links fixed to a moving link off the chain (sensors, flanges) move with it.
+    stack = [j for link in list(carried) for j in children[link] if j.child not in on_path]
+    while stack:
+        j = stack.pop()
+        moving, frames = carried[j.parent]
+        carried[j.child] = (moving, frames + [r.frame(j.element.find("origin"), f"joint[{j.name}].origin")])
+        stack.extend(children[j.child])
+    bodies: list[dict[str, Any]] = []
+    for link_name, element in links.items():
+        if link_name in carried:  # links fixed to the root never move and are ignored
+            body = _body(r, link_name, element, *carried[link_name])
+            if body is not None:
+                r.marks[("bodies", len(bodies))] = (element.line, element.column)
+                bodies.append(body)
+    if bodies:
+        data["bodies"] = bodies
+    data["gravity"] = ["0", "0", "-g"]
+    data["task_space"] = "pose"
+    r.stop()
+    return Document(file=file, data=data, marks=r.marks)
+
+
+def _nontrivial(frames: list[dict[str, list[str]]]) -> list[dict[str, list[str]]]:
+    return [f for f in frames if not _is_identity(f)]
+
+
+def _links(r: _UrdfReader, robot: Element) -> dict[str, Element]:
+    links: dict[str, Element] = {}
+    for element in robot.findall("link"):
+        name = element.attrib.get("name")
+        if not name:
+            r.fail(element, "link", "a <link> without a name", "add name=\"...\"")
+        elif name in links:
+            r.fail(element, f"link[{name}]", f"duplicate link name '{name}' (first on line {links[name].line})",
+                   "give every link its own name")
+        else:
+            links[name] = element
+    if not links and not r.problems:
+        r.fail(robot, "", "the robot has no links", "declare <link> and <joint> elements")
+    return links
+
+
+def _joints(r: _UrdfReader, robot: Element, links: dict[str, Element]) -> dict[str, _Joint]:
+    joints: dict[str, _Joint] = {}
+    parents: dict[str, _Joint] = {}
+    for element in robot.findall("joint"):
+        name = element.attrib.get("name", "")
+        key = f"joint[{name}]"
+        jtype = element.attrib.get("type", "")
+        if not name:
+            r.fail(element, "joint", "a <joint> without a name", "add name=\"...\"")
+            continue
+        if name in joints:
+            r.fail(element, key, f"duplicate joint name '{name}'", "give every joint its own name")
+            continue
+        if jtype not in SUPPORTED_JOINTS:
+            what = {"floating": "a floating joint (6 DoF, a free-flying base)",
+                    "planar": "a planar joint (3 DoF)"}.get(jtype, f"joint type '{jtype}'")
+            r.fail(element, key + ".type", f"{what} is not supported; symkin reads serial chains of "
+                                           f"{', '.join(SUPPORTED_JOINTS)} joints",
+                   "model a mobile base separately, or decompose the joint into revolute/prismatic joints")
+            continue
+        if element.find("mimic") is not None:
+            r.fail(element.find("mimic"), key + ".mimic", f"joint '{name}' mimics another joint (a coupling "
+                                                          "constraint), which symkin does not support",
+                   "remove the <mimic> element and treat the joint as independent, or remove the joint")
+            continue
+        ends = {}
+        for end in ("parent", "child"):
+            item = element.find(end)
+            link = item.attrib.get("link") if item is not None else None
+            if link is None:
+                r.fail(element, f"{key}.{end}", f"joint '{name}' has no <{end} link=\"...\"/>", f"add the {end} link")
+            elif link not in links:
+                r.fail(item, f"{key}.{end}", f"joint '{name}' names the unknown {end} link '{link}'",
+                       f"declare <link name=\"{link}\"/> or fix the name")
+            else:
+                ends[end] = link
+        if len(ends) != 2:
+            continue
+        joint = _Joint(element, name, jtype, ends["parent"], ends["child"])
+        if joint.child in parents:
+            first = parents[joint.child]
+            r.fail(element, key, f"closed loop: link '{joint.child}' is the child of joint '{first.name}' (line "
+                                 f"{first.element.line}) and of joint '{name}'",
+                   "symkin reads tree-shaped URDFs (serial chains); model closed loops as parallel mechanisms")
+            continue
+        parents[joint.child] = joint
+        joints[name] = joint
+    return joints
+
+
+def _root(r: _UrdfReader, robot: Element, links: dict[str, Element], parent_of: dict[str, _Joint]) -> str:
+    roots = [name for name in links if name not in parent_of]
+    if len(roots) != 1:
+        if not roots:
+            r.fail(robot, "", "every link has a parent joint: the joints form a closed loop",
+                   "symkin reads tree-shaped URDFs; remove the joint that closes the loop")
+        else:
+            r.fail(robot, "", f"the robot has {len(roots)} root links ({', '.join(roots)}): they are not connected",
+                   "connect every link to one root link by joints")
+        r.stop()
+    root = roots[0]
+    seen, link = set(), None
+    for start in links:  # a cycle detached from the root would loop forever below
+        link = start
+        path = set()
+        while link in parent_of and link not in seen:
+            if link in path:
+                joint = parent_of[link]
+                r.fail(joint.element, f"joint[{joint.name}]", f"closed loop through link '{link}'",
+                       "symkin reads tree-shaped URDFs; remove the joint that closes the loop")
+                r.stop()
+            path.add(link)
+            link = parent_of[link].parent
+        seen |= path
+    return root
+
+
+def _tip(r: _UrdfReader, robot: Element, links: dict[str, Element], children: dict[str, list[_Joint]],
+         parent_of: dict[str, _Joint], tip: str | None) -> str:
+    """The named tip, or the leaf at the end of the chain with the most moving joints (if unique)."""
+    if tip is not None:
+        if tip not in links:
+            r.fail(robot, "tip", f"the tip link '{tip}' is not a link of the robot",
+                   f"choose one of: {', '.join(links)}")
+            r.stop()
+        return tip
+    leaves = [name for name, joints in children.items() if not joints]
+    moving = {leaf: _moving_count(leaf, parent_of) for leaf in leaves}
+    deepest = [leaf for leaf in leaves if moving[leaf] == max(moving.values())]
+    if len(deepest) != 1:
+        r.fail(robot, "tip", f"no tip was named and {len(deepest)} leaf links end chains with the most moving joints "
+                             f"({', '.join(deepest)})",
+               "name the tip link: symkin derive robot.urdf --tip LINK, or load_model(path, tip='LINK')")
+        r.stop()
+    return deepest[0]
+
+
+def _moving_count(link: str, parent_of: dict[str, _Joint]) -> int:
+    count = 0
+    while link in parent_of:
+        count += parent_of[link].type != "fixed"
+        link = parent_of[link].parent
+    return count
+
+
+def _path(parent_of: dict[str, _Joint], root: str, tip: str) -> list[_Joint]:
+    path = []
+    link = tip
+    while link != root:
+        joint = parent_of[link]
+        path.append(joint)
+        link = joint.parent
+    return path[::-1]
+
+
+def _check_branches(r: _UrdfReader, children: dict[str, list[_Joint]], on_path: set[str],
+                    path: list[_Joint]) -> None:
+    """Moving joints off the root-tip chain would carry masses symkin cannot place: refuse them."""
+    chain_joints = {j.name for j in path}
+    stack = [j for link in on_path for j in children[link] if j.name not in chain_joints]
+    while stack:
+        j = stack.pop()
+        if j.type != "fixed":
+            r.fail(j.element, f"joint[{j.name}]", f"the {j.type} joint '{j.name}' branches off the chain "
+                                                  f"(its parent '{j.parent}' is on the chain to the tip), so the "
+                                                  "masses it carries cannot be placed",
+                   "symkin derives serial chains: choose a tip at the end of this branch (--tip), or remove "
+                   "the branch")
+        else:
+            stack.extend(children[j.child])
+
+
+def _moving_joint(r: _UrdfReader, j: _Joint, origin: list[dict[str, list[str]]]) -> dict[str, Any]:
+    key = f"joint[{j.name}]"
+    joint: dict[str, Any] = {"name": j.name, "type": "P" if j.type == "prismatic" else "R", "link": j.child,
+                             "origin": origin}
+    axis = j.element.find("axis")
+    joint["axis"] = r.numbers(axis, "xyz", 3, "1 0 0", key + ".axis") if axis is not None else ["1", "0", "0"]
+    limit = j.element.find("limit")
+    if limit is not None:
+        angular = j.type != "prismatic"
+        if j.type != "continuous" and ("lower" in limit.attrib or "upper" in limit.attrib):
+            lower = r.number(limit, "lower", key + ".limit", "0", angle=angular)
+            upper = r.number(limit, "upper", key + ".limit", "0", angle=angular)
+            if lower is not None and upper is not None and not (Fraction(_plain(lower)) == Fraction(_plain(upper))
+                                                                  == 0):
+                joint["limits"] = [lower, upper]
+        for attribute, field_name in (("velocity", "velocity_limit"), ("effort", "effort_limit")):
+            value = r.number(limit, attribute, key + ".limit", "0") if attribute in limit.attrib else None
+            if value is not None and Fraction(value) > 0:
+                joint[field_name] = value
+    return joint
+
+
+def _plain(text: str) -> str:
+    """A snapped angle k*pi/2 as a number text (for comparisons only)."""
+    if text.endswith("*pi/2"):
+        return repr(int(text[:-5]) * math.pi / 2)
+    return text
+
+
+def _body(r: _UrdfReader, link: str, element: Element, moving: str, frames: list[dict[str, list[str]]]
+          ) -> dict[str, Any] | None:
+    """The inertial of URDF ``link`` as a body of the model link ``moving`` (frames: moving -> link)."""
+    inertial = element.find("inertial")
+    if inertial is None:
+        return None
+    key = f"link[{link}].inertial"
+    mass_element = inertial.find("mass")
+    if mass_element is None:
+        r.fail(inertial, key, "an <inertial> without <mass value=\"...\"/>", "add the mass")
+        return None
+    body: dict[str, Any] = {"link": moving, "mass": r.number(mass_element, "value", key + ".mass")}
+    origin = _nontrivial(frames + [r.frame(inertial.find("origin"), key + ".origin")])
+    if origin:
+        body["origin"] = origin
+    inertia = inertial.find("inertia")
+    if inertia is not None:
+        body["inertia"] = {k: r.number(inertia, "i" + k, key + ".inertia", "0")
+                           for k in ("xx", "yy", "zz", "xy", "xz", "yz")}
+    return body

@@ -1,0 +1,226 @@
+"""Physics of the derived dynamics, for every example model at random states.
+
+M symmetric positive definite; dM/dt - 2C skew-symmetric; V = C qd; G = du/dq; the power
+balance d(k + u)/dt = qd . (tau - F_f); forward dynamics inverts inverse dynamics; TCP
+forces and operational-space dynamics satisfy their defining equations (seed sec. 4.4).
+Derivatives are central finite differences at 40 digits (mpmath), where the check needs
+more than double precision.
+"""
+
+from __future__ import annotations
+
+import mpmath
+import numpy as np
+import pytest
+
+from conftest import EXAMPLE_MODELS, random_q, reference_function
+from symkin.derivation import Derivation
+from symkin.model import model_from_text
+
+STATES = 4
+
+#: A planar arm with distributed rigid links, viscous and smooth Coulomb friction, and
+#: gravity with a component along every axis: exercises what the example models do not.
+FRICTION_ARM = """
+name: friction_arm
+parameters:
+  l1: 0.3
+  l2: 0.25
+  v_s: {value: 0.05, unit: rad/s, doc: Coulomb smoothing velocity}
+  g: 9.81
+serial:
+  chain:
+    - {name: j1, axis: [0, 0, 1]}
+    - {name: j2, axis: [0, 1, 0], origin: {xyz: [l1, 0, 0]}}
+    - {name: j3, type: P, axis: [1, 0, 0], origin: {xyz: [l2, 0, 0], rpy: [0.1, 0.2, 0.3]}}
+task_space: position
+bodies:
+  - {link: link1, mass: 1.2, com: [0.15, 0.01, 0], inertia: {xx: 0.002, yy: 0.01, zz: 0.011, xy: 0.0003}}
+  - {link: link2, mass: 0.8, com: [0.12, 0, 0.02], inertia: {xx: 0.001, yy: 0.006, zz: 0.0065, xz: -0.0002}}
+  - {link: link3, mass: 0.3, com: [0.05, 0, 0]}
+gravity: [0.5, -1, -g]
+friction:
+  j1: {viscous: 0.1, coulomb: 0.3, smoothing_velocity: v_s}
+  j2: {viscous: 0.05, coulomb: 0.1}
+  j3: {coulomb: 0.2, smoothing_velocity: v_s}
+"""
+
+
+def _dynamic_models(models):
+    out = {name: models[name] for name in EXAMPLE_MODELS if models[name].bodies}
+    out["friction_arm"] = model_from_text(FRICTION_ARM)
+    return out
+
+
+@pytest.fixture(scope="module")
+def cases(models, derivations):
+    """(model, derivation) of every example model with bodies, plus the friction arm."""
+    out = {}
+    for name, model in _dynamic_models(models).items():
+        out[name] = (model, derivations[name] if name in derivations else Derivation(model))
+    return out
+
+
+CASE_NAMES = EXAMPLE_MODELS + ["friction_arm"]
+
+
+def _f(case, name, modules="numpy"):
+    model, d = case
+    fn = reference_function(model, d[name], modules)
+    return lambda *args: fn(*args)[0] if len(d[name].outputs) == 1 else fn(*args)
+
+
+def _states(model, seed):
+    rng = np.random.default_rng(seed)
+    for _ in range(STATES):
+        yield random_q(model, rng), rng.uniform(-2, 2, model.dof), rng.uniform(-3, 3, model.dof)
+
+
+def _mp(x):
+    return [mpmath.mpf(float(v)) for v in x]
+
+
+def _mp_array(values) -> np.ndarray:
+    return np.array([[float(v) for v in row] for row in np.atleast_2d(values)], dtype=float).squeeze()
+
+
+@pytest.mark.parametrize("name", CASE_NAMES)
+def test_mass_matrix_is_symmetric_positive_definite(name, cases):
+    if name not in cases:
+        pytest.skip("model without bodies")
+    model, _ = cases[name]
+    M = _f(cases[name], "mass_matrix")
+    for q, _, _ in _states(model, 10):
+        Mq = M(q)
+        np.testing.assert_allclose(Mq, Mq.T, rtol=0, atol=1e-15 * np.abs(Mq).max())
+        assert np.linalg.eigvalsh(Mq).min() > 0
+
+
+@pytest.mark.parametrize("name", CASE_NAMES)
+def test_coriolis_matrix_gives_V_and_makes_Mdot_minus_2C_skew(name, cases):
+    if name not in cases:
+        pytest.skip("model without bodies")
+    model, _ = cases[name]
+    M = _f(cases[name], "mass_matrix", "mpmath")
+    C, V = _f(cases[name], "coriolis_matrix"), _f(cases[name], "coriolis_vector")
+    h = mpmath.mpf("1e-15")
+    with mpmath.workdps(40):
+        for q, qd, _ in _states(model, 11):
+            Cq = C(q, qd)
+            np.testing.assert_allclose(Cq @ qd, V(q, qd), rtol=1e-12, atol=1e-12 * np.abs(Cq).max())
+            q0, v = _mp(q), _mp(qd)
+            Mdot = (M([a + h * b for a, b in zip(q0, v)]) - M([a - h * b for a, b in zip(q0, v)])) / (2 * h)
+            N = _mp_array(Mdot) - 2 * Cq
+            np.testing.assert_allclose(N, -N.T, rtol=0, atol=1e-12 * max(1.0, np.abs(Cq).max()))
+
+
+@pytest.mark.parametrize("name", CASE_NAMES)
+def test_gravity_vector_is_the_gradient_of_the_potential(name, cases):
+    if name not in cases:
+        pytest.skip("model without bodies")
+    model, _ = cases[name]
+    G, u = _f(cases[name], "gravity_vector"), _f(cases[name], "potential_energy", "mpmath")
+    h = mpmath.mpf("1e-15")
+    with mpmath.workdps(40):
+        for q, _, _ in _states(model, 12):
+            q0 = _mp(q)
+            grad = []
+            for i in range(model.dof):
+                plus, minus = list(q0), list(q0)
+                plus[i] += h
+                minus[i] -= h
+                grad.append(float((u(plus)[()] - u(minus)[()]) / (2 * h)))
+            np.testing.assert_allclose(G(q), grad, rtol=1e-12, atol=1e-12 * np.abs(grad).max())
+
+
+@pytest.mark.parametrize("name", CASE_NAMES)
+def test_power_balance(name, cases):
+    """d(k + u)/dt = qd . (tau - F_f) along q(t) = q + t qd + t^2/2 qdd (central difference in t)."""
+    if name not in cases:
+        pytest.skip("model without bodies")
+    model, d = cases[name]
+    k, u = _f(cases[name], "kinetic_energy", "mpmath"), _f(cases[name], "potential_energy", "mpmath")
+    tau = _f(cases[name], "inverse_dynamics")
+    friction = _f(cases[name], "friction") if model.friction else (lambda qd: np.zeros(model.dof))
+    h = mpmath.mpf("1e-15")
+    with mpmath.workdps(40):
+        for q, qd, qdd in _states(model, 13):
+            q0, v, a = _mp(q), _mp(qd), _mp(qdd)
+
+            def energy(t):
+                qt = [x + t * y + t * t / 2 * z for x, y, z in zip(q0, v, a)]
+                vt = [y + t * z for y, z in zip(v, a)]
+                return k(qt, vt)[()] + u(qt)[()]
+
+            power = float((energy(h) - energy(-h)) / (2 * h))
+            expected = qd @ (tau(q, qd, qdd) - friction(qd))
+            assert power == pytest.approx(expected, rel=1e-10, abs=1e-10)
+
+
+@pytest.mark.parametrize("name", CASE_NAMES)
+def test_forward_dynamics_inverts_inverse_dynamics(name, cases):
+    if name not in cases:
+        pytest.skip("model without bodies")
+    model, _ = cases[name]
+    tau, qdd_of = _f(cases[name], "inverse_dynamics"), _f(cases[name], "forward_dynamics")
+    M, V, G = _f(cases[name], "mass_matrix"), _f(cases[name], "coriolis_vector"), _f(cases[name], "gravity_vector")
+    friction = _f(cases[name], "friction") if model.friction else (lambda qd: np.zeros(model.dof))
+    for q, qd, qdd in _states(model, 14):
+        t = tau(q, qd, qdd)
+        np.testing.assert_allclose(t, M(q) @ qdd + V(q, qd) + G(q) + friction(qd), rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(qdd_of(q, qd, t), qdd, rtol=1e-9, atol=1e-9)
+
+
+@pytest.mark.parametrize("name", CASE_NAMES)
+def test_tcp_force_and_operational_space_satisfy_their_definitions(name, cases):
+    """J^T F = M qdd + V + G (eq. 8.35/8.37); Mx = J^-T M J^-1, Vx = J^-T (V - M J^-1 Jdot qd), Gx = J^-T G."""
+    if name not in cases:
+        pytest.skip("model without bodies")
+    model, d = cases[name]
+    if len(model.task_space) != model.dof:
+        pytest.skip("task Jacobian not square")
+    J, F = _f(cases[name], "jacobian"), _f(cases[name], "tcp_force")
+    M, V, G = _f(cases[name], "mass_matrix"), _f(cases[name], "coriolis_vector"), _f(cases[name], "gravity_vector")
+    Jmp = _f(cases[name], "jacobian", "mpmath")
+    ops = _f(cases[name], "operational_space")
+    h = mpmath.mpf("1e-15")
+    for q, qd, qdd in _states(model, 15):
+        Jq = J(q)
+        if abs(np.linalg.det(Jq)) < 1e-3 * np.abs(Jq).max() ** model.dof:
+            continue  # too close to a singularity for a meaningful comparison
+        rhs = M(q) @ qdd + V(q, qd) + G(q)
+        np.testing.assert_allclose(Jq.T @ F(q, qd, qdd), rhs, rtol=1e-9, atol=1e-9 * np.abs(rhs).max())
+        with mpmath.workdps(40):
+            q0, v = _mp(q), _mp(qd)
+            Jdot = _mp_array((Jmp([a + h * b for a, b in zip(q0, v)]) - Jmp([a - h * b for a, b in zip(q0, v)]))
+                             / (2 * h))
+        Jinv = np.linalg.inv(Jq)
+        Mx, Vx, Gx = ops(q, qd)
+        np.testing.assert_allclose(Mx, Jinv.T @ M(q) @ Jinv, rtol=1e-8, atol=1e-8 * np.abs(Mx).max())
+        Vx_ref = Jinv.T @ (V(q, qd) - M(q) @ Jinv @ Jdot @ qd)
+        np.testing.assert_allclose(Vx, Vx_ref, rtol=1e-8, atol=1e-8 * np.abs(Vx_ref).max())
+        np.testing.assert_allclose(Gx, Jinv.T @ G(q), rtol=1e-8, atol=1e-8 * np.abs(Gx).max())
+
+
+@pytest.mark.parametrize("name", CASE_NAMES)
+def test_coriolis_matrix_is_made_of_christoffel_symbols(name, cases):
+    """C_ij = sum_k 1/2 (dM_ij/dq_k + dM_ik/dq_j - dM_jk/dq_i) qd_k with dM/dq by differences of M."""
+    if name not in cases:
+        pytest.skip("model without bodies")
+    model, _ = cases[name]
+    M = _f(cases[name], "mass_matrix", "mpmath")
+    C = _f(cases[name], "coriolis_matrix")
+    n = model.dof
+    h = mpmath.mpf("1e-15")
+    with mpmath.workdps(40):
+        for q, qd, _ in _states(model, 16):
+            q0 = _mp(q)
+            dM = []
+            for k in range(n):
+                plus, minus = list(q0), list(q0)
+                plus[k] += h
+                minus[k] -= h
+                dM.append(_mp_array((M(plus) - M(minus)) / (2 * h)).reshape(n, n))
+            want = np.array([[sum((dM[k][i, j] + dM[j][i, k] - dM[i][j, k]) / 2 * qd[k] for k in range(n))
+                              for j in range(n)] for i in range(n)])
+            np.testing.assert_allclose(C(q, qd), want, rtol=0, atol=1e-12 * max(1.0, np.abs(want).max()))

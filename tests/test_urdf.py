@@ -1,0 +1,134 @@
+"""URDF files as model sources: what is read, and every unsupported construct gets a located error."""
+
+from __future__ import annotations
+
+import subprocess
+
+import numpy as np
+import pytest
+import sympy
+
+from conftest import MODELS_DIR, SYMKIN_CLI, reference_function
+from symkin.derivation import Derivation
+from symkin.errors import ModelError
+from symkin.model import load_model
+
+ARM = """<?xml version="1.0"?>
+<robot name="arm">
+  <link name="world"/>
+  <link name="base"/>
+  <link name="l1">
+    <inertial><origin xyz="0.1 0 0"/><mass value="1.5"/>
+      <inertia ixx="0.001" iyy="0.002" izz="0.003" ixy="0" ixz="0" iyz="0"/></inertial>
+  </link>
+  <link name="l1_sensor"><inertial><origin xyz="0 0.05 0"/><mass value="0.2"/></inertial></link>
+  <link name="l2"><inertial><origin xyz="0.05 0 0"/><mass value="0.5"/></inertial></link>
+  <link name="slider"><inertial><mass value="0.25"/></inertial></link>
+  <link name="tool"/>
+  <joint name="mount" type="fixed"><parent link="world"/><child link="base"/>
+    <origin xyz="0 0 0.5" rpy="0 0 3.141592653589793"/></joint>
+  <joint name="j1" type="continuous"><parent link="base"/><child link="l1"/><axis xyz="0 0 1"/></joint>
+  <joint name="sensor_mount" type="fixed"><parent link="l1"/><child link="l1_sensor"/>
+    <origin xyz="0.1 0 0.02"/></joint>
+  <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/>
+    <origin xyz="0.2 0 0" rpy="1.5707963267948966 0 0"/><axis xyz="0 1 0"/>
+    <limit lower="-1.5" upper="1.5" effort="10" velocity="3"/></joint>
+  <joint name="j3" type="prismatic"><parent link="l2"/><child link="slider"/>
+    <origin xyz="0.1 0 0"/><axis xyz="1 0 0"/><limit lower="0" upper="0.2" effort="50" velocity="0.5"/></joint>
+  <joint name="flange" type="fixed"><parent link="slider"/><child link="tool"/><origin xyz="0 0 0.05"/></joint>
+</robot>
+"""
+
+
+def _write(tmp_path, text, name="arm.urdf"):
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def test_a_chain_with_fixed_joints_branches_and_all_joint_types(tmp_path):
+    model = load_model(_write(tmp_path, ARM))
+    assert model.name == "arm"
+    assert [(j.name, j.type.value, j.link) for j in model.joints] == [("j1", "R", "l1"), ("j2", "R", "l2"),
+                                                                      ("j3", "P", "slider")]
+    j1, j2, j3 = model.joints
+    assert j1.limits is None  # continuous
+    assert [float(v) for v in j2.limits] == [-1.5, 1.5] and float(j3.effort_limit) == 50
+    assert model.base and model.tcp  # the fixed mount and flange
+    # The sensor, fixed to l1 off the chain, moves with l1: its mass is a body of l1.
+    assert sorted((b.link, float(b.mass)) for b in model.bodies) == [("l1", 0.2), ("l1", 1.5), ("l2", 0.5),
+                                                                    ("slider", 0.25)]
+    sensor = next(b for b in model.bodies if b.mass == 0.2 or float(b.mass) == 0.2)
+    assert [float(c) for c in sensor.com] == [0.1, 0.05, 0.02]
+    # The rpy of j2 is read as exactly pi/2, and the TCP sits where the frames say at q = 0:
+    # (0, 0, 0.5) + Rz(pi) [(0.2, 0, 0) + Rx(pi/2) ((0.1, 0, 0) + (0, 0, 0.05))] = (-0.3, 0.05, 0.5).
+    assert j2.before[-1].angle == sympy.pi / 2
+    T = reference_function(model, Derivation(model)["fk"])(np.zeros(3))[0]
+    np.testing.assert_allclose(T[:3, 3], [-0.3, 0.05, 0.5], atol=1e-15)
+
+
+def test_the_tip_selects_the_chain(tmp_path):
+    text = ARM.replace('<link name="tool"/>', '<link name="tool"/><link name="cam"/>').replace(
+        "</robot>", '<joint name="cam_mount" type="fixed"><parent link="slider"/><child link="cam"/></joint></robot>')
+    path = _write(tmp_path, text)
+    with pytest.raises(ModelError, match="no tip was named and 2 leaf links"):
+        load_model(path)
+    assert load_model(path, tip="tool").dof == 3
+    assert load_model(path, tip="cam").tcp == ()
+    with pytest.raises(ModelError, match="'j3' branches off the chain"):
+        load_model(path, tip="l2")  # j3 would carry masses beyond the tip
+    with pytest.raises(ModelError, match="tip link 'nope' is not a link"):
+        load_model(path, tip="nope")
+
+
+@pytest.mark.parametrize("edit, message", [
+    (lambda t: t.replace('type="prismatic"', 'type="floating"'), "floating joint .* not supported"),
+    (lambda t: t.replace('type="prismatic"', 'type="planar"'), "planar joint .* not supported"),
+    (lambda t: t.replace('<axis xyz="1 0 0"/><limit', '<mimic joint="j2"/><axis xyz="1 0 0"/><limit'),
+     "mimics another joint"),
+    (lambda t: t.replace("</robot>", '<joint name="loop" type="fixed"><parent link="base"/><child link="l2"/>'
+                                     "</joint></robot>"), "closed loop: link 'l2'"),
+    (lambda t: t.replace("</robot>", '<link name="b2"/><joint name="j4" type="revolute"><parent link="l1"/>'
+                                     '<child link="b2"/><limit lower="-1" upper="1"/></joint></robot>'),
+     "j4' branches off the chain"),
+    (lambda t: t.replace('<child link="l2"/>', '<child link="l9"/>'), "unknown child link 'l9'"),
+    (lambda t: t.replace('xyz="0.2 0 0"', 'xyz="0.2 0"'), "is not 3 number"),
+    (lambda t: t.replace("</robot>", "<link name=\"l1\"/></robot>"), "duplicate link name 'l1'"),
+    (lambda t: t.replace('<link name="l2">', '<link name="l2"').replace("<robot", "<robot "), "malformed XML"),
+    (lambda t: t.replace('<?xml version="1.0"?>', '<?xml version="1.0"?><!DOCTYPE r [<!ENTITY a "b">]>'),
+     "refused: document type declarations"),
+    (lambda t: t.replace('<mass value="0.5"/>', '<mass value="-0.5"/>'), "negative mass"),
+])
+def test_unsupported_or_malformed_urdfs_get_located_errors(tmp_path, edit, message):
+    with pytest.raises(ModelError, match=message) as info:
+        load_model(_write(tmp_path, edit(ARM)))
+    assert all(p.line is not None for p in info.value.problems), info.value
+
+
+def test_cli_derives_a_urdf_with_a_tip(tmp_path):
+    path = _write(tmp_path, ARM)
+    out = tmp_path / "out"
+    run = subprocess.run(SYMKIN_CLI + ["derive", str(path), "--tip", "slider", "-o", str(out), "--only",
+                                       "fk,mass_matrix", "-q"], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    from symkin import load
+
+    arm = load(out / "arm")
+    assert arm.mass_matrix(np.zeros(3)).shape == (3, 3)
+    bad = subprocess.run(SYMKIN_CLI + ["derive", str(_write(tmp_path, ARM.replace('type="prismatic"', 'type="floating"'),
+                                                            "bad.urdf")), "-o", str(out)],
+                         capture_output=True, text=True)
+    assert bad.returncode == 2 and "bad.urdf:" in bad.stderr and "floating" in bad.stderr
+
+
+def test_the_example_urdf_is_the_yaml_robot(models):
+    urdf = load_model(MODELS_DIR / "ur10e.urdf")
+    yaml = models["ur10e"]
+    assert [float(b.mass) for b in urdf.bodies] == [float(b.mass.xreplace(yaml.parameter_values)) for b in yaml.bodies]
+    d_urdf, d_yaml = Derivation(urdf), Derivation(yaml)
+    rng = np.random.default_rng(50)
+    q = rng.uniform(-3, 3, (3, 6))
+    for name, args in (("fk", q[:1]), ("inverse_dynamics", q)):
+        a = reference_function(urdf, d_urdf[name])(*args)[0]
+        b = reference_function(yaml, d_yaml[name])(*args)[0]
+        np.testing.assert_allclose(a, b, rtol=1e-13, atol=1e-13)
