@@ -19,11 +19,14 @@ from symkin.backends import BACKENDS, get_backend
 from symkin.derivation import Derivation, emitted_quantities
 from symkin.errors import ModelError, Problem
 from symkin.ir.bundle import ModelCode, ParameterInfo
-from symkin.ir.spec import FunctionSpec, OptimizedFunction
+from symkin.ir.spec import FunctionSpec, OptimizedFunction, combine_functions
 from symkin.model.schema import Model
 from symkin.optimize import optimize
 
 Progress = Callable[[str], None]
+
+#: Name of the function that computes every output of a scene together (one shared CSE).
+COMBINED_FUNCTION = "scene"
 
 
 @dataclass(frozen=True)
@@ -34,11 +37,13 @@ class Request:
         outputs: quantity names, in order.
         fixed: parameters folded to their defaults.
         backends: backend names.
+        float32: also emit single-precision variants (C backend).
     """
 
     outputs: tuple[str, ...]
     fixed: tuple[str, ...]
     backends: tuple[str, ...]
+    float32: bool = False
 
 
 @dataclass
@@ -76,7 +81,8 @@ def _split(value: str | Sequence[str] | None) -> tuple[str, ...] | None:
 
 def resolve_request(model: Model, only: str | Sequence[str] | None = None,
                     backends: str | Sequence[str] | None = None,
-                    fixed: str | Sequence[str] | None = None) -> Request:
+                    fixed: str | Sequence[str] | None = None,
+                    float32: bool | None = None) -> Request:
     """The request from the model's scene, overridden by explicit arguments (the CLI's flags).
 
     Raises:
@@ -110,7 +116,8 @@ def resolve_request(model: Model, only: str | Sequence[str] | None = None,
         raise ModelError(problems)
     return Request(outputs=outputs or model.scene.outputs,
                    fixed=fixed_names if fixed_names is not None else model.scene.fixed,
-                   backends=chosen_backends or model.scene.backends)
+                   backends=chosen_backends or model.scene.backends,
+                   float32=model.scene.float32 if float32 is None else float32)
 
 
 def _describe_outputs(spec: FunctionSpec) -> str:
@@ -127,6 +134,7 @@ def generate(model: Model, request: Request, progress: Progress = _quiet) -> Gen
     """Derive, optimize and emit everything ``request`` asks for (files stay in memory)."""
     derivation = Derivation(model)
     functions: list[OptimizedFunction] = []
+    specs: list[FunctionSpec] = []
     reports = []
     for name in request.outputs:
         progress(f"deriving {name}")
@@ -136,9 +144,18 @@ def generate(model: Model, request: Request, progress: Progress = _quiet) -> Gen
         progress(f"optimizing {name}")
         optimized = optimize(spec, request.fixed)
         done = time.perf_counter()
+        specs.append(spec)
         functions.append(optimized)
         reports.append(FunctionReport(name, _describe_outputs(spec), optimized.op_counts,
                                       derived_at - start, done - derived_at))
+    if len(specs) > 1:
+        progress(f"optimizing {COMBINED_FUNCTION}")
+        start = time.perf_counter()
+        combined = combine_functions(model, COMBINED_FUNCTION, specs)
+        optimized = optimize(combined, request.fixed)
+        functions.append(optimized)
+        reports.append(FunctionReport(COMBINED_FUNCTION, _describe_outputs(combined), optimized.op_counts,
+                                      0.0, time.perf_counter() - start))
     code = ModelCode(
         name=model.name,
         hash=model.hash,
@@ -148,6 +165,7 @@ def generate(model: Model, request: Request, progress: Progress = _quiet) -> Gen
         parameters=tuple(ParameterInfo(p.name, float(p.value), p.unit, p.doc, p.name in request.fixed)
                          for p in model.parameters),
         functions=tuple(functions),
+        float32=request.float32,
     )
     files: dict[str, str | bytes] = {}
     backend_files: dict[str, list[str]] = {}

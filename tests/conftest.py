@@ -11,7 +11,7 @@ import sympy
 
 from symkin import pipeline
 from symkin.derivation import Derivation
-from symkin.ir.spec import FunctionSpec
+from symkin.ir.spec import FunctionSpec, combine_functions
 from symkin.model import Model, load_model
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -47,6 +47,14 @@ def reference_function(model: Model, spec: FunctionSpec, modules: str = "numpy")
         return [np.asarray(fn(*args), dtype=float).reshape(shape) for fn, shape in zip(fns, shapes)]
 
     return evaluate
+
+
+def function_spec(model: Model, derivation: Derivation, record: dict) -> FunctionSpec:
+    """The un-optimized spec of the generated function described by a manifest ``record``
+    (for the combined scene function: the combination of its parts)."""
+    if record.get("combines"):
+        return combine_functions(model, record["name"], derivation.functions(record["combines"]))
+    return derivation[record["name"]]
 
 
 def random_q(model: Model, rng: np.random.Generator, size=None) -> np.ndarray:

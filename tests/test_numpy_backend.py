@@ -8,7 +8,7 @@ import sys
 import numpy as np
 import pytest
 
-from conftest import EXAMPLE_MODELS, random_q, reference_function
+from conftest import EXAMPLE_MODELS, function_spec, random_q, reference_function
 from symkin import load
 
 
@@ -23,8 +23,9 @@ def test_generated_functions_match_the_sympy_expressions(name, models, derivatio
     generated = load(generated_dir / name)
     rng = np.random.default_rng(3)
     q = random_q(model, rng, 1000)
-    for function in generated.functions:
-        spec = derivations[name][function]
+    for record in generated.manifest["functions"]:
+        function = record["name"]
+        spec = function_spec(model, derivations[name], record)
         reference = reference_function(model, spec)
         batch = getattr(generated, function)(q)
         outputs = batch if isinstance(batch, tuple) else (batch,)

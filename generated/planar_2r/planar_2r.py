@@ -15,6 +15,7 @@ Functions:
     frames(q, **params) -> FramesResult(base_T_link1, base_T_link2)
     jacobian(q, **params) -> J (..., 2, 2)
     jacobian_geometric(q, **params) -> J (..., 6, 2)
+    scene(q, **params) -> SceneResult(base_T_tcp, base_T_link1, base_T_link2, jacobian_J, jacobian_geometric_J)
 """
 
 import collections
@@ -35,6 +36,8 @@ PARAMETERS = {
 }
 
 FramesResult = collections.namedtuple("FramesResult", ["base_T_link1", "base_T_link2"])
+
+SceneResult = collections.namedtuple("SceneResult", ["base_T_tcp", "base_T_link1", "base_T_link2", "jacobian_J", "jacobian_geometric_J"])
 
 
 def _vector(value, size, name, function):
@@ -201,3 +204,88 @@ def jacobian_geometric(q, *, l1=0.1, l2=0.1):
     _out_J[..., 5, 0] = 1
     _out_J[..., 5, 1] = 1
     return _out_J
+
+
+def scene(q, *, l1=0.1, l2=0.1):
+    """fk, frames, jacobian, jacobian_geometric together, with one set of shared subexpressions.
+
+    Computes the outputs of fk, frames, jacobian, jacobian_geometric in one call;
+    subexpressions common to several of them are evaluated once.
+
+    Args:
+        q: joint coordinates, shape (..., 2): theta1 [rad], theta2 [rad].
+        l1: length of link 1 [m]; default 0.1; a scalar or an array broadcastable to the
+            batch shape.
+        l2: length of link 2 [m]; default 0.1; a scalar or an array broadcastable to the
+            batch shape.
+
+    Returns:
+        SceneResult with the fields:
+        base_T_tcp: shape (..., 4, 4); homogeneous transform of the TCP frame in the base
+            frame (fk) [m].
+        base_T_link1: shape (..., 4, 4); homogeneous transform of frame 'link1' in the base
+            frame (frames) [m].
+        base_T_link2: shape (..., 4, 4); homogeneous transform of frame 'link2' in the base
+            frame (frames) [m].
+        jacobian_J: shape (..., 2, 2); rows x, y; one column per joint (jacobian).
+        jacobian_geometric_J: shape (..., 6, 2); rows vx, vy, vz, wx, wy, wz; one column per
+            joint (jacobian_geometric).
+    """
+    q = _vector(q, 2, "q", "scene")
+    batch = _batch_shape("scene", q.shape[:-1], numpy.shape(l1), numpy.shape(l2))
+    theta1 = q[..., 0]
+    theta2 = q[..., 1]
+    _x0 = theta1 + theta2
+    _x1 = numpy.cos(_x0)
+    _x2 = numpy.sin(_x0)
+    _x3 = -_x2
+    _x4 = numpy.cos(theta1)
+    _x5 = _x4*l1
+    _x6 = _x1*l2
+    _x7 = _x5 + _x6
+    _x8 = numpy.sin(theta1)
+    _x9 = _x8*l1
+    _x10 = _x2*l2
+    _x11 = _x10 + _x9
+    _x12 = -_x11
+    _x13 = -_x10
+    _out_base_T_tcp = numpy.zeros(batch + (4, 4))
+    _out_base_T_tcp[..., 0, 0] = _x1
+    _out_base_T_tcp[..., 0, 1] = _x3
+    _out_base_T_tcp[..., 0, 3] = _x7
+    _out_base_T_tcp[..., 1, 0] = _x2
+    _out_base_T_tcp[..., 1, 1] = _x1
+    _out_base_T_tcp[..., 1, 3] = _x11
+    _out_base_T_tcp[..., 2, 2] = 1
+    _out_base_T_tcp[..., 3, 3] = 1
+    _out_base_T_link1 = numpy.zeros(batch + (4, 4))
+    _out_base_T_link1[..., 0, 0] = _x4
+    _out_base_T_link1[..., 0, 1] = -_x8
+    _out_base_T_link1[..., 0, 3] = _x5
+    _out_base_T_link1[..., 1, 0] = _x8
+    _out_base_T_link1[..., 1, 1] = _x4
+    _out_base_T_link1[..., 1, 3] = _x9
+    _out_base_T_link1[..., 2, 2] = 1
+    _out_base_T_link1[..., 3, 3] = 1
+    _out_base_T_link2 = numpy.zeros(batch + (4, 4))
+    _out_base_T_link2[..., 0, 0] = _x1
+    _out_base_T_link2[..., 0, 1] = _x3
+    _out_base_T_link2[..., 0, 3] = _x7
+    _out_base_T_link2[..., 1, 0] = _x2
+    _out_base_T_link2[..., 1, 1] = _x1
+    _out_base_T_link2[..., 1, 3] = _x11
+    _out_base_T_link2[..., 2, 2] = 1
+    _out_base_T_link2[..., 3, 3] = 1
+    _out_jacobian_J = numpy.zeros(batch + (2, 2))
+    _out_jacobian_J[..., 0, 0] = _x12
+    _out_jacobian_J[..., 0, 1] = _x13
+    _out_jacobian_J[..., 1, 0] = _x7
+    _out_jacobian_J[..., 1, 1] = _x6
+    _out_jacobian_geometric_J = numpy.zeros(batch + (6, 2))
+    _out_jacobian_geometric_J[..., 0, 0] = _x12
+    _out_jacobian_geometric_J[..., 0, 1] = _x13
+    _out_jacobian_geometric_J[..., 1, 0] = _x7
+    _out_jacobian_geometric_J[..., 1, 1] = _x6
+    _out_jacobian_geometric_J[..., 5, 0] = 1
+    _out_jacobian_geometric_J[..., 5, 1] = 1
+    return SceneResult(_out_base_T_tcp, _out_base_T_link1, _out_base_T_link2, _out_jacobian_J, _out_jacobian_geometric_J)

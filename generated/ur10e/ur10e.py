@@ -15,6 +15,7 @@ Functions:
     frames(q, **params) -> FramesResult(base_T_shoulder, base_T_upper_arm, base_T_forearm, base_T_wrist1, base_T_wrist2, base_T_wrist3)
     jacobian(q, **params) -> J (..., 6, 6)
     jacobian_geometric(q, **params) -> J (..., 6, 6)
+    scene(q, **params) -> SceneResult(base_T_tcp, base_T_shoulder, base_T_upper_arm, base_T_forearm, base_T_wrist1, base_T_wrist2, base_T_wrist3, jacobian_J, jacobian_geometric_J)
 """
 
 import collections
@@ -43,6 +44,8 @@ PARAMETERS = {
 }
 
 FramesResult = collections.namedtuple("FramesResult", ["base_T_shoulder", "base_T_upper_arm", "base_T_forearm", "base_T_wrist1", "base_T_wrist2", "base_T_wrist3"])
+
+SceneResult = collections.namedtuple("SceneResult", ["base_T_tcp", "base_T_shoulder", "base_T_upper_arm", "base_T_forearm", "base_T_wrist1", "base_T_wrist2", "base_T_wrist3", "jacobian_J", "jacobian_geometric_J"])
 
 
 def _vector(value, size, name, function):
@@ -484,3 +487,280 @@ def jacobian_geometric(q, *, a2=-0.6127, a3=-0.57155, d4=0.17415, d5=0.11985, d6
     _out_J[..., 5, 4] = -_x9
     _out_J[..., 5, 5] = -_x19
     return _out_J
+
+
+def scene(q, *, d1=0.1807, a2=-0.6127, a3=-0.57155, d4=0.17415, d5=0.11985, d6=0.11655):
+    """fk, frames, jacobian, jacobian_geometric together, with one set of shared subexpressions.
+
+    Computes the outputs of fk, frames, jacobian, jacobian_geometric in one call;
+    subexpressions common to several of them are evaluated once.
+
+    Args:
+        q: joint coordinates, shape (..., 6): q1 [rad], q2 [rad], q3 [rad], q4 [rad], q5
+            [rad], q6 [rad].
+        d1: shoulder height [m]; default 0.1807; a scalar or an array broadcastable to the
+            batch shape.
+        a2: upper arm length (UR sign convention) [m]; default -0.6127; a scalar or an array
+            broadcastable to the batch shape.
+        a3: forearm length (UR sign convention) [m]; default -0.57155; a scalar or an array
+            broadcastable to the batch shape.
+        d4: wrist 1 offset [m]; default 0.17415; a scalar or an array broadcastable to the
+            batch shape.
+        d5: wrist 2 offset [m]; default 0.11985; a scalar or an array broadcastable to the
+            batch shape.
+        d6: wrist 3 offset (flange) [m]; default 0.11655; a scalar or an array broadcastable
+            to the batch shape.
+
+    Returns:
+        SceneResult with the fields:
+        base_T_tcp: shape (..., 4, 4); homogeneous transform of the TCP frame in the base
+            frame (fk) [m].
+        base_T_shoulder: shape (..., 4, 4); homogeneous transform of frame 'shoulder' in the
+            base frame (frames) [m].
+        base_T_upper_arm: shape (..., 4, 4); homogeneous transform of frame 'upper_arm' in
+            the base frame (frames) [m].
+        base_T_forearm: shape (..., 4, 4); homogeneous transform of frame 'forearm' in the
+            base frame (frames) [m].
+        base_T_wrist1: shape (..., 4, 4); homogeneous transform of frame 'wrist1' in the
+            base frame (frames) [m].
+        base_T_wrist2: shape (..., 4, 4); homogeneous transform of frame 'wrist2' in the
+            base frame (frames) [m].
+        base_T_wrist3: shape (..., 4, 4); homogeneous transform of frame 'wrist3' in the
+            base frame (frames) [m].
+        jacobian_J: shape (..., 6, 6); rows x, y, z, wx, wy, wz; one column per joint
+            (jacobian).
+        jacobian_geometric_J: shape (..., 6, 6); rows vx, vy, vz, wx, wy, wz; one column per
+            joint (jacobian_geometric).
+    """
+    q = _vector(q, 6, "q", "scene")
+    batch = _batch_shape("scene", q.shape[:-1], numpy.shape(d1), numpy.shape(a2), numpy.shape(a3), numpy.shape(d4), numpy.shape(d5), numpy.shape(d6))
+    q1 = q[..., 0]
+    q2 = q[..., 1]
+    q3 = q[..., 2]
+    q4 = q[..., 3]
+    q5 = q[..., 4]
+    q6 = q[..., 5]
+    _x0 = numpy.sin(q6)
+    _x1 = numpy.cos(q1)
+    _x2 = q2 + q3
+    _x3 = _x2 + q4
+    _x4 = numpy.sin(_x3)
+    _x5 = _x1*_x4
+    _x6 = numpy.cos(q6)
+    _x7 = numpy.sin(q1)
+    _x8 = numpy.sin(q5)
+    _x9 = _x7*_x8
+    _x10 = numpy.cos(_x3)
+    _x11 = numpy.cos(q5)
+    _x12 = _x1*_x11
+    _x13 = _x10*_x12 + _x9
+    _x14 = -_x0*_x5 + _x13*_x6
+    _x15 = -(_x0*_x13 + _x5*_x6)
+    _x16 = _x11*_x7
+    _x17 = _x1*_x8
+    _x18 = -_x10*_x17 + _x16
+    _x19 = _x5*d5
+    _x20 = _x18*d6 + _x19
+    _x21 = numpy.cos(q2)
+    _x22 = _x1*_x21
+    _x23 = _x22*a2
+    _x24 = _x7*d4
+    _x25 = numpy.cos(_x2)
+    _x26 = _x1*_x25
+    _x27 = _x24 + _x26*a3
+    _x28 = _x23 + _x27
+    _x29 = _x20 + _x28
+    _x30 = _x4*_x7
+    _x31 = _x10*_x16 - _x17
+    _x32 = -_x0*_x30 + _x31*_x6
+    _x33 = -(_x0*_x31 + _x30*_x6)
+    _x34 = -(_x10*_x9 + _x12)
+    _x35 = _x30*d5
+    _x36 = _x34*d6 + _x35
+    _x37 = _x21*_x7
+    _x38 = _x37*a2
+    _x39 = -_x1*d4
+    _x40 = _x25*_x7
+    _x41 = _x39 + _x40*a3
+    _x42 = _x38 + _x41
+    _x43 = _x36 + _x42
+    _x44 = _x11*_x4
+    _x45 = _x0*_x10 + _x44*_x6
+    _x46 = -_x0*_x44 + _x10*_x6
+    _x47 = _x4*_x8
+    _x48 = -_x47
+    _x49 = _x47*d6
+    _x50 = -_x49
+    _x51 = _x10*d5
+    _x52 = -_x51
+    _x53 = numpy.sin(_x2)
+    _x54 = _x53*a3
+    _x55 = numpy.sin(q2)
+    _x56 = _x55*a2
+    _x57 = _x56 + d1
+    _x58 = _x54 + _x57
+    _x59 = _x52 + _x58
+    _x60 = _x50 + _x59
+    _x61 = -_x1
+    _x62 = -_x10
+    _x63 = -_x43
+    _x64 = _x50 + _x52 + _x54 + _x56
+    _x65 = -_x1*_x64
+    _x66 = _x49 + _x51
+    _x67 = -(-_x53*a3 + _x66)
+    _x68 = -_x1*_x67
+    _x69 = -_x66
+    _x70 = -_x1*_x69
+    _x71 = _x10*_x36 + _x30*_x69
+    _x72 = -_x64*_x7
+    _x73 = -_x67*_x7
+    _x74 = -_x69*_x7
+    _x75 = -(_x10*_x20 + _x5*_x69)
+    _x76 = _x1*_x29 + _x43*_x7
+    _x77 = _x1*(_x20 + _x27) + _x7*(_x36 + _x41)
+    _x78 = _x1*(_x20 + _x24) + _x7*(_x36 + _x39)
+    _x79 = -_x20*_x30 + _x36*_x5
+    _out_base_T_tcp = numpy.zeros(batch + (4, 4))
+    _out_base_T_tcp[..., 0, 0] = _x14
+    _out_base_T_tcp[..., 0, 1] = _x15
+    _out_base_T_tcp[..., 0, 2] = _x18
+    _out_base_T_tcp[..., 0, 3] = _x29
+    _out_base_T_tcp[..., 1, 0] = _x32
+    _out_base_T_tcp[..., 1, 1] = _x33
+    _out_base_T_tcp[..., 1, 2] = _x34
+    _out_base_T_tcp[..., 1, 3] = _x43
+    _out_base_T_tcp[..., 2, 0] = _x45
+    _out_base_T_tcp[..., 2, 1] = _x46
+    _out_base_T_tcp[..., 2, 2] = _x48
+    _out_base_T_tcp[..., 2, 3] = _x60
+    _out_base_T_tcp[..., 3, 3] = 1
+    _out_base_T_shoulder = numpy.zeros(batch + (4, 4))
+    _out_base_T_shoulder[..., 0, 0] = _x1
+    _out_base_T_shoulder[..., 0, 1] = -_x7
+    _out_base_T_shoulder[..., 1, 0] = _x7
+    _out_base_T_shoulder[..., 1, 1] = _x1
+    _out_base_T_shoulder[..., 2, 2] = 1
+    _out_base_T_shoulder[..., 2, 3] = d1
+    _out_base_T_shoulder[..., 3, 3] = 1
+    _out_base_T_upper_arm = numpy.zeros(batch + (4, 4))
+    _out_base_T_upper_arm[..., 0, 0] = _x22
+    _out_base_T_upper_arm[..., 0, 1] = -_x1*_x55
+    _out_base_T_upper_arm[..., 0, 2] = _x7
+    _out_base_T_upper_arm[..., 1, 0] = _x37
+    _out_base_T_upper_arm[..., 1, 1] = -_x55*_x7
+    _out_base_T_upper_arm[..., 1, 2] = _x61
+    _out_base_T_upper_arm[..., 2, 0] = _x55
+    _out_base_T_upper_arm[..., 2, 1] = _x21
+    _out_base_T_upper_arm[..., 2, 3] = d1
+    _out_base_T_upper_arm[..., 3, 3] = 1
+    _out_base_T_forearm = numpy.zeros(batch + (4, 4))
+    _out_base_T_forearm[..., 0, 0] = _x26
+    _out_base_T_forearm[..., 0, 1] = -_x1*_x53
+    _out_base_T_forearm[..., 0, 2] = _x7
+    _out_base_T_forearm[..., 0, 3] = _x23
+    _out_base_T_forearm[..., 1, 0] = _x40
+    _out_base_T_forearm[..., 1, 1] = -_x53*_x7
+    _out_base_T_forearm[..., 1, 2] = _x61
+    _out_base_T_forearm[..., 1, 3] = _x38
+    _out_base_T_forearm[..., 2, 0] = _x53
+    _out_base_T_forearm[..., 2, 1] = _x25
+    _out_base_T_forearm[..., 2, 3] = _x57
+    _out_base_T_forearm[..., 3, 3] = 1
+    _out_base_T_wrist1 = numpy.zeros(batch + (4, 4))
+    _out_base_T_wrist1[..., 0, 0] = _x1*_x10
+    _out_base_T_wrist1[..., 0, 1] = -_x5
+    _out_base_T_wrist1[..., 0, 2] = _x7
+    _out_base_T_wrist1[..., 0, 3] = _x28
+    _out_base_T_wrist1[..., 1, 0] = _x10*_x7
+    _out_base_T_wrist1[..., 1, 1] = -_x30
+    _out_base_T_wrist1[..., 1, 2] = _x61
+    _out_base_T_wrist1[..., 1, 3] = _x42
+    _out_base_T_wrist1[..., 2, 0] = _x4
+    _out_base_T_wrist1[..., 2, 1] = _x10
+    _out_base_T_wrist1[..., 2, 3] = _x58
+    _out_base_T_wrist1[..., 3, 3] = 1
+    _out_base_T_wrist2 = numpy.zeros(batch + (4, 4))
+    _out_base_T_wrist2[..., 0, 0] = _x13
+    _out_base_T_wrist2[..., 0, 1] = _x18
+    _out_base_T_wrist2[..., 0, 2] = _x5
+    _out_base_T_wrist2[..., 0, 3] = _x19 + _x28
+    _out_base_T_wrist2[..., 1, 0] = _x31
+    _out_base_T_wrist2[..., 1, 1] = _x34
+    _out_base_T_wrist2[..., 1, 2] = _x30
+    _out_base_T_wrist2[..., 1, 3] = _x35 + _x42
+    _out_base_T_wrist2[..., 2, 0] = _x44
+    _out_base_T_wrist2[..., 2, 1] = _x48
+    _out_base_T_wrist2[..., 2, 2] = _x62
+    _out_base_T_wrist2[..., 2, 3] = _x59
+    _out_base_T_wrist2[..., 3, 3] = 1
+    _out_base_T_wrist3 = numpy.zeros(batch + (4, 4))
+    _out_base_T_wrist3[..., 0, 0] = _x14
+    _out_base_T_wrist3[..., 0, 1] = _x15
+    _out_base_T_wrist3[..., 0, 2] = _x18
+    _out_base_T_wrist3[..., 0, 3] = _x29
+    _out_base_T_wrist3[..., 1, 0] = _x32
+    _out_base_T_wrist3[..., 1, 1] = _x33
+    _out_base_T_wrist3[..., 1, 2] = _x34
+    _out_base_T_wrist3[..., 1, 3] = _x43
+    _out_base_T_wrist3[..., 2, 0] = _x45
+    _out_base_T_wrist3[..., 2, 1] = _x46
+    _out_base_T_wrist3[..., 2, 2] = _x48
+    _out_base_T_wrist3[..., 2, 3] = _x60
+    _out_base_T_wrist3[..., 3, 3] = 1
+    _out_jacobian_J = numpy.zeros(batch + (6, 6))
+    _out_jacobian_J[..., 0, 0] = _x63
+    _out_jacobian_J[..., 0, 1] = _x65
+    _out_jacobian_J[..., 0, 2] = _x68
+    _out_jacobian_J[..., 0, 3] = _x70
+    _out_jacobian_J[..., 0, 4] = _x71
+    _out_jacobian_J[..., 1, 0] = _x29
+    _out_jacobian_J[..., 1, 1] = _x72
+    _out_jacobian_J[..., 1, 2] = _x73
+    _out_jacobian_J[..., 1, 3] = _x74
+    _out_jacobian_J[..., 1, 4] = _x75
+    _out_jacobian_J[..., 2, 1] = _x76
+    _out_jacobian_J[..., 2, 2] = _x77
+    _out_jacobian_J[..., 2, 3] = _x78
+    _out_jacobian_J[..., 2, 4] = _x79
+    _out_jacobian_J[..., 3, 1] = _x7
+    _out_jacobian_J[..., 3, 2] = _x7
+    _out_jacobian_J[..., 3, 3] = _x7
+    _out_jacobian_J[..., 3, 4] = _x5
+    _out_jacobian_J[..., 3, 5] = _x18
+    _out_jacobian_J[..., 4, 1] = _x61
+    _out_jacobian_J[..., 4, 2] = _x61
+    _out_jacobian_J[..., 4, 3] = _x61
+    _out_jacobian_J[..., 4, 4] = _x30
+    _out_jacobian_J[..., 4, 5] = _x34
+    _out_jacobian_J[..., 5, 0] = 1
+    _out_jacobian_J[..., 5, 4] = _x62
+    _out_jacobian_J[..., 5, 5] = _x48
+    _out_jacobian_geometric_J = numpy.zeros(batch + (6, 6))
+    _out_jacobian_geometric_J[..., 0, 0] = _x63
+    _out_jacobian_geometric_J[..., 0, 1] = _x65
+    _out_jacobian_geometric_J[..., 0, 2] = _x68
+    _out_jacobian_geometric_J[..., 0, 3] = _x70
+    _out_jacobian_geometric_J[..., 0, 4] = _x71
+    _out_jacobian_geometric_J[..., 1, 0] = _x29
+    _out_jacobian_geometric_J[..., 1, 1] = _x72
+    _out_jacobian_geometric_J[..., 1, 2] = _x73
+    _out_jacobian_geometric_J[..., 1, 3] = _x74
+    _out_jacobian_geometric_J[..., 1, 4] = _x75
+    _out_jacobian_geometric_J[..., 2, 1] = _x76
+    _out_jacobian_geometric_J[..., 2, 2] = _x77
+    _out_jacobian_geometric_J[..., 2, 3] = _x78
+    _out_jacobian_geometric_J[..., 2, 4] = _x79
+    _out_jacobian_geometric_J[..., 3, 1] = _x7
+    _out_jacobian_geometric_J[..., 3, 2] = _x7
+    _out_jacobian_geometric_J[..., 3, 3] = _x7
+    _out_jacobian_geometric_J[..., 3, 4] = _x5
+    _out_jacobian_geometric_J[..., 3, 5] = _x18
+    _out_jacobian_geometric_J[..., 4, 1] = _x61
+    _out_jacobian_geometric_J[..., 4, 2] = _x61
+    _out_jacobian_geometric_J[..., 4, 3] = _x61
+    _out_jacobian_geometric_J[..., 4, 4] = _x30
+    _out_jacobian_geometric_J[..., 4, 5] = _x34
+    _out_jacobian_geometric_J[..., 5, 0] = 1
+    _out_jacobian_geometric_J[..., 5, 4] = _x62
+    _out_jacobian_geometric_J[..., 5, 5] = _x48
+    return SceneResult(_out_base_T_tcp, _out_base_T_shoulder, _out_base_T_upper_arm, _out_base_T_forearm, _out_base_T_wrist1, _out_base_T_wrist2, _out_base_T_wrist3, _out_jacobian_J, _out_jacobian_geometric_J)

@@ -12,6 +12,7 @@ the model's defaults and may be scalars or arrays broadcastable to the batch sha
 Functions:
     fk(q, **params) -> base_T_tcp (..., 4, 4)
     jacobian(q, **params) -> J (..., 6, 6)
+    scene(q, **params) -> SceneResult(base_T_tcp, J)
 """
 
 import collections
@@ -38,6 +39,8 @@ PARAMETERS = {
     "m6": 0.615,
     "g": 9.81,
 }
+
+SceneResult = collections.namedtuple("SceneResult", ["base_T_tcp", "J"])
 
 
 def _vector(value, size, name, function):
@@ -223,3 +226,127 @@ def jacobian(q, *, a2=-0.6127, a3=-0.57155, d4=0.17415, d5=0.11985, d6=0.11655):
     _out_J[..., 5, 4] = -_x9
     _out_J[..., 5, 5] = -_x19
     return _out_J
+
+
+def scene(q, *, d1=0.1807, a2=-0.6127, a3=-0.57155, d4=0.17415, d5=0.11985, d6=0.11655):
+    """fk, jacobian together, with one set of shared subexpressions.
+
+    Computes the outputs of fk, jacobian in one call; subexpressions common to several
+    of them are evaluated once.
+
+    Args:
+        q: joint coordinates, shape (..., 6): q1 [rad], q2 [rad], q3 [rad], q4 [rad], q5
+            [rad], q6 [rad].
+        d1: shoulder height [m]; default 0.1807; a scalar or an array broadcastable to the
+            batch shape.
+        a2: upper arm length (UR sign convention) [m]; default -0.6127; a scalar or an array
+            broadcastable to the batch shape.
+        a3: forearm length (UR sign convention) [m]; default -0.57155; a scalar or an array
+            broadcastable to the batch shape.
+        d4: wrist 1 offset [m]; default 0.17415; a scalar or an array broadcastable to the
+            batch shape.
+        d5: wrist 2 offset [m]; default 0.11985; a scalar or an array broadcastable to the
+            batch shape.
+        d6: wrist 3 offset (flange) [m]; default 0.11655; a scalar or an array broadcastable
+            to the batch shape.
+
+    Returns:
+        SceneResult with the fields:
+        base_T_tcp: shape (..., 4, 4); homogeneous transform of the TCP frame in the base
+            frame (fk) [m].
+        J: shape (..., 6, 6); rows x, y, z, wx, wy, wz; one column per joint (jacobian).
+    """
+    q = _vector(q, 6, "q", "scene")
+    batch = _batch_shape("scene", q.shape[:-1], numpy.shape(d1), numpy.shape(a2), numpy.shape(a3), numpy.shape(d4), numpy.shape(d5), numpy.shape(d6))
+    q1 = q[..., 0]
+    q2 = q[..., 1]
+    q3 = q[..., 2]
+    q4 = q[..., 3]
+    q5 = q[..., 4]
+    q6 = q[..., 5]
+    _x0 = numpy.sin(q6)
+    _x1 = numpy.cos(q1)
+    _x2 = q2 + q3
+    _x3 = _x2 + q4
+    _x4 = numpy.sin(_x3)
+    _x5 = _x1*_x4
+    _x6 = numpy.cos(q6)
+    _x7 = numpy.sin(q1)
+    _x8 = numpy.sin(q5)
+    _x9 = _x7*_x8
+    _x10 = numpy.cos(_x3)
+    _x11 = numpy.cos(q5)
+    _x12 = _x1*_x11
+    _x13 = _x10*_x12 + _x9
+    _x14 = _x11*_x7
+    _x15 = _x1*_x8
+    _x16 = -_x10*_x15 + _x14
+    _x17 = a2*numpy.cos(q2)
+    _x18 = a3*numpy.cos(_x2)
+    _x19 = _x16*d6 + _x5*d5
+    _x20 = _x19 + _x7*d4
+    _x21 = _x1*_x18 + _x20
+    _x22 = _x1*_x17 + _x21
+    _x23 = _x4*_x7
+    _x24 = _x10*_x14 - _x15
+    _x25 = -(_x10*_x9 + _x12)
+    _x26 = _x23*d5 + _x25*d6
+    _x27 = -_x1*d4 + _x26
+    _x28 = _x18*_x7 + _x27
+    _x29 = _x17*_x7 + _x28
+    _x30 = _x11*_x4
+    _x31 = _x4*_x8
+    _x32 = -_x31
+    _x33 = numpy.sin(_x2)
+    _x34 = _x10*d5
+    _x35 = _x31*d6
+    _x36 = _x33*a3 - _x34 - _x35 + a2*numpy.sin(q2)
+    _x37 = _x34 + _x35
+    _x38 = -(-_x33*a3 + _x37)
+    _x39 = -_x37
+    _x40 = _x1*_x39
+    _x41 = _x39*_x7
+    _x42 = -_x1
+    _out_base_T_tcp = numpy.zeros(batch + (4, 4))
+    _out_base_T_tcp[..., 0, 0] = -_x0*_x5 + _x13*_x6
+    _out_base_T_tcp[..., 0, 1] = -(_x0*_x13 + _x5*_x6)
+    _out_base_T_tcp[..., 0, 2] = _x16
+    _out_base_T_tcp[..., 0, 3] = _x22
+    _out_base_T_tcp[..., 1, 0] = -_x0*_x23 + _x24*_x6
+    _out_base_T_tcp[..., 1, 1] = -(_x0*_x24 + _x23*_x6)
+    _out_base_T_tcp[..., 1, 2] = _x25
+    _out_base_T_tcp[..., 1, 3] = _x29
+    _out_base_T_tcp[..., 2, 0] = _x0*_x10 + _x30*_x6
+    _out_base_T_tcp[..., 2, 1] = -_x0*_x30 + _x10*_x6
+    _out_base_T_tcp[..., 2, 2] = _x32
+    _out_base_T_tcp[..., 2, 3] = _x36 + d1
+    _out_base_T_tcp[..., 3, 3] = 1
+    _out_J = numpy.zeros(batch + (6, 6))
+    _out_J[..., 0, 0] = -_x29
+    _out_J[..., 0, 1] = -_x1*_x36
+    _out_J[..., 0, 2] = -_x1*_x38
+    _out_J[..., 0, 3] = -_x40
+    _out_J[..., 0, 4] = _x10*_x26 + _x4*_x41
+    _out_J[..., 1, 0] = _x22
+    _out_J[..., 1, 1] = -_x36*_x7
+    _out_J[..., 1, 2] = -_x38*_x7
+    _out_J[..., 1, 3] = -_x41
+    _out_J[..., 1, 4] = -(_x10*_x19 + _x4*_x40)
+    _out_J[..., 2, 1] = _x1*_x22 + _x29*_x7
+    _out_J[..., 2, 2] = _x1*_x21 + _x28*_x7
+    _out_J[..., 2, 3] = _x1*_x20 + _x27*_x7
+    _out_J[..., 2, 4] = -_x19*_x23 + _x26*_x5
+    _out_J[..., 3, 1] = _x7
+    _out_J[..., 3, 2] = _x7
+    _out_J[..., 3, 3] = _x7
+    _out_J[..., 3, 4] = _x5
+    _out_J[..., 3, 5] = _x16
+    _out_J[..., 4, 1] = _x42
+    _out_J[..., 4, 2] = _x42
+    _out_J[..., 4, 3] = _x42
+    _out_J[..., 4, 4] = _x23
+    _out_J[..., 4, 5] = _x25
+    _out_J[..., 5, 0] = 1
+    _out_J[..., 5, 4] = -_x10
+    _out_J[..., 5, 5] = _x32
+    return SceneResult(_out_base_T_tcp, _out_J)

@@ -27,6 +27,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--fixed", metavar="NAMES",
                    help="comma-separated parameters to fold to their default values, or 'all' "
                         "(default: the scene's)")
+    p.add_argument("--float32", action=argparse.BooleanOptionalAction, default=None,
+                   help="also emit single-precision (float) C functions, suffix _f32 (default: the scene's)")
     p.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
     p.set_defaults(run=run)
 
@@ -39,7 +41,7 @@ def run(args: argparse.Namespace) -> int:
     jobs = []
     for path in args.models:
         model = load_model(path)
-        jobs.append((model, pipeline.resolve_request(model, args.only, args.backend, args.fixed)))
+        jobs.append((model, pipeline.resolve_request(model, args.only, args.backend, args.fixed, args.float32)))
     for model, request in jobs:
         start = time.perf_counter()
         with Progress(model.name, enabled=not args.quiet) as progress:

@@ -84,6 +84,8 @@ class FunctionSpec:
         doc: longer description with the equation or reference implemented.
         inputs: ordered inputs: vectors first, then parameters in model order.
         outputs: ordered outputs.
+        parts: for a combined function (see :func:`combine_functions`), the names of the
+            functions whose outputs it computes together; empty otherwise.
     """
 
     name: str
@@ -91,6 +93,7 @@ class FunctionSpec:
     doc: str
     inputs: tuple[InputSpec, ...]
     outputs: tuple[OutputSpec, ...]
+    parts: tuple[str, ...] = ()
 
     @property
     def vector_inputs(self) -> tuple[InputSpec, ...]:
@@ -141,3 +144,38 @@ def make_function(model: Model, name: str, summary: str, doc: str,
     if missing:
         raise DerivationError(f"{name}: outputs use {sorted(map(str, missing))} which no input provides")
     return FunctionSpec(name, summary, doc, tuple(vectors) + params, tuple(outputs))
+
+
+def combine_functions(model: Model, name: str, specs: Sequence[FunctionSpec]) -> FunctionSpec:
+    """One function computing the outputs of all ``specs`` together (e.g. M, V and G).
+
+    Optimizing the combined spec runs one CSE across every output, so work shared between
+    the quantities (sines and cosines of q, link transforms) is done once per call.
+
+    The vector inputs are those of the parts in order of first use; the parameters are the
+    model parameters any output uses, in model order (as :func:`make_function`).  An output
+    keeps its name when no other part has an output of the same name, and is called
+    ``<part>_<output>`` otherwise (``jacobian_J`` and ``jacobian_geometric_J``).
+
+    Raises:
+        DerivationError: two parts give different symbols to a vector input of one name.
+    """
+    vectors: dict[str, InputSpec] = {}
+    for spec in specs:
+        for v in spec.vector_inputs:
+            known = vectors.setdefault(v.name, v)
+            if known.symbols != v.symbols:
+                raise DerivationError(f"{name}: the parts disagree on the input '{v.name}'")
+    counts: dict[str, int] = {}
+    for spec in specs:
+        for out in spec.outputs:
+            counts[out.name] = counts.get(out.name, 0) + 1
+    outputs = [OutputSpec(out.name if counts[out.name] == 1 else f"{spec.name}_{out.name}",
+                          out.expr, f"{out.doc} ({spec.name})", out.unit, out.shape)
+               for spec in specs for out in spec.outputs]
+    parts = tuple(spec.name for spec in specs)
+    summary = f"{', '.join(parts)} together, with one set of shared subexpressions."
+    doc = ("Computes the outputs of " + ", ".join(parts) + " in one call; subexpressions common to "
+           "several of them are evaluated once.")
+    combined = make_function(model, name, summary, doc, list(vectors.values()), outputs)
+    return FunctionSpec(combined.name, combined.summary, combined.doc, combined.inputs, combined.outputs, parts)

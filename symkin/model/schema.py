@@ -153,11 +153,13 @@ class Scene:
         outputs: names of derivable quantities to emit (see ``symkin quantities``).
         fixed: parameters folded to their default values before code generation.
         backends: code generators to run.
+        float32: also emit single-precision variants (C backend).
     """
 
     outputs: tuple[str, ...]
     fixed: tuple[str, ...] = ()
     backends: tuple[str, ...] = ("numpy",)
+    float32: bool = False
 
 
 @dataclass(frozen=True)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Iterable
 
 import sympy
@@ -33,7 +34,7 @@ def fold_parameters(spec: FunctionSpec, fixed: Iterable[str]) -> FunctionSpec:
     with distribute(False):
         outputs = _map_outputs(spec, lambda e: e.xreplace(values))
     inputs = tuple(i for i in spec.inputs if not (i.kind == "parameter" and i.name in fixed))
-    return FunctionSpec(spec.name, spec.summary, spec.doc, inputs, outputs)
+    return dataclasses.replace(spec, inputs=inputs, outputs=outputs)
 
 
 def _fold(expr: sympy.Expr) -> sympy.Expr:
@@ -55,4 +56,4 @@ def fold_constants(spec: FunctionSpec) -> FunctionSpec:
     Exponents stay exact so that ``x**2`` and ``sqrt(x)`` keep their cheap forms.
     """
     with distribute(False):
-        return FunctionSpec(spec.name, spec.summary, spec.doc, spec.inputs, _map_outputs(spec, _fold))
+        return dataclasses.replace(spec, outputs=_map_outputs(spec, _fold))
