@@ -1,7 +1,12 @@
-"""Shared fixtures: example models, derivations, generated code and reference evaluators."""
+"""Shared fixtures: example models, derivations, generated code and reference evaluators.
+
+Compiled C goes to a per-session cache directory (``SYMKIN_CACHE_DIR``), so each model is
+compiled once per test session (per xdist worker) and the user's cache is never touched.
+"""
 
 from __future__ import annotations
 
+import os
 import sys
 from pathlib import Path
 
@@ -9,7 +14,7 @@ import numpy as np
 import pytest
 import sympy
 
-from symkin import pipeline
+from symkin import load, pipeline
 from symkin.derivation import Derivation
 from symkin.ir.spec import FunctionSpec, combine_functions
 from symkin.model import Model, load_model
@@ -18,6 +23,7 @@ ROOT = Path(__file__).resolve().parent.parent
 MODELS_DIR = ROOT / "models"
 GENERATED_DIR = ROOT / "generated"
 EXAMPLE_MODELS = sorted(p.stem for p in MODELS_DIR.glob("*.yaml"))
+BACKENDS = ("numpy", "c", "casadi")
 SYMKIN_CLI = [sys.executable, "-m", "symkin"]
 
 
@@ -61,6 +67,53 @@ def random_q(model: Model, rng: np.random.Generator, size=None) -> np.ndarray:
     """Random joint coordinates within +-pi (revolute) and +-0.5 m (prismatic)."""
     shape = (model.dof,) if size is None else tuple(np.atleast_1d(size)) + (model.dof,)
     return rng.uniform(-np.pi, np.pi, shape)
+
+
+def batch_reference(model: Model, spec: FunctionSpec):
+    """Plain lambdify of the un-optimized outputs (parameters at their defaults), vectorized.
+
+    Returns f(*vectors) with vectors of shape (N, n) -> list of arrays (N,) + output shape.
+    """
+    vectors = [list(i.symbols) for i in spec.vector_inputs]
+    values = model.parameter_values
+    fns = [sympy.lambdify(vectors, [e.xreplace(values) for e in o.entries], modules="numpy") for o in spec.outputs]
+
+    def evaluate(*args):
+        n = len(args[0])
+        columns = [[a[:, k] for k in range(a.shape[1])] for a in args]
+        results = []
+        for fn, out in zip(fns, spec.outputs):
+            entries = [np.broadcast_to(np.asarray(e, dtype=float), (n,)) for e in fn(*columns)]
+            results.append(np.stack(entries, axis=-1).reshape((n,) + out.shape))
+        return results
+
+    return evaluate
+
+
+@pytest.fixture(scope="session", autouse=True)
+def compile_cache(tmp_path_factory) -> Path:
+    """Compiled C libraries go to a session temp directory, never to the user's cache."""
+    path = tmp_path_factory.mktemp("symkin-cache")
+    previous = os.environ.get("SYMKIN_CACHE_DIR")
+    os.environ["SYMKIN_CACHE_DIR"] = str(path)
+    yield path
+    if previous is None:
+        os.environ.pop("SYMKIN_CACHE_DIR", None)
+    else:
+        os.environ["SYMKIN_CACHE_DIR"] = previous
+
+
+@pytest.fixture(scope="session")
+def loaded(generated_dir):
+    """loaded(model, backend): the generated functions, loaded (and compiled) once per session."""
+    cache = {}
+
+    def get(name: str, backend: str):
+        if (name, backend) not in cache:
+            cache[name, backend] = load(generated_dir / name, backend=backend)
+        return cache[name, backend]
+
+    return get
 
 
 @pytest.fixture(scope="session")

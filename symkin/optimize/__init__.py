@@ -19,9 +19,10 @@ from collections.abc import Iterable
 from symkin.ir.spec import FunctionSpec, OptimizedFunction
 from symkin.optimize.cse import eliminate_common_subexpressions
 from symkin.optimize.opcount import spec_op_count
-from symkin.optimize.passes import fold_constants, fold_parameters
+from symkin.optimize.passes import fold_constants, fold_parameters, fold_parameters_after_cse
 
-__all__ = ["optimize", "fold_parameters", "fold_constants", "eliminate_common_subexpressions", "spec_op_count"]
+__all__ = ["optimize", "fold_parameters", "fold_parameters_after_cse", "fold_constants",
+           "eliminate_common_subexpressions", "spec_op_count"]
 
 
 def optimize(spec: FunctionSpec, fixed: Iterable[str] = ()) -> OptimizedFunction:
@@ -31,15 +32,22 @@ def optimize(spec: FunctionSpec, fixed: Iterable[str] = ()) -> OptimizedFunction
         spec: the derived function.
         fixed: names of parameters to fold to their default values.
 
+    Folding parameters runs two ways, and the cheaper result is kept: fold, then CSE (sympy
+    can simplify with the numbers in place) and CSE, then fold into the temporaries
+    (:func:`fold_parameters_after_cse`, never more operations than without folding).  So
+    folding never costs operations, at the price of a second CSE when something is fixed.
+
     Returns:
         The optimized function; ``op_counts`` has ``derived`` (as derived), ``folded``
-        (after parameter folding, when any parameter was folded) and ``cse`` (final:
-        temporaries plus outputs).
+        (after parameter folding, when any parameter was folded; never above ``derived``)
+        and ``cse`` (final: temporaries plus outputs).
     """
     counts = {"derived": spec_op_count(spec)}
     fixed = tuple(fixed)
-    if any(i.kind == "parameter" and i.name in fixed for i in spec.inputs):
-        spec = fold_parameters(spec, fixed)
-        counts["folded"] = spec_op_count(spec)
-    spec = fold_constants(spec)
-    return eliminate_common_subexpressions(spec, counts)
+    if not any(i.kind == "parameter" and i.name in fixed for i in spec.inputs):
+        return eliminate_common_subexpressions(fold_constants(spec), counts)
+    folded = fold_parameters(spec, fixed)
+    counts["folded"] = spec_op_count(folded)
+    fold_first = eliminate_common_subexpressions(fold_constants(folded), counts)
+    cse_first = fold_parameters_after_cse(eliminate_common_subexpressions(fold_constants(spec), counts), fixed)
+    return fold_first if fold_first.op_counts["cse"] <= cse_first.op_counts["cse"] else cse_first

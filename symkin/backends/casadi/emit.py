@@ -3,7 +3,9 @@
 Every optimized function becomes ``casadi.Function(name, inputs, outputs, input_names,
 output_names)`` with inputs ``q`` (n x 1), ``qd``... and one scalar input per free
 parameter (so optimizers can vary them), and dense outputs shaped as declared (r x c,
-r x 1 or 1 x 1; identically zero entries are stored zeros, as in the other backends).  The SX graph is built once from the IR: inputs, then the CSE temporaries in
+r x 1 or 1 x 1; identically zero entries are stored zeros, as in the other backends).
+Called by name (``f(q=q)``), an omitted parameter takes its model default and an omitted
+vector input is NaN, so a forgotten ``q`` shows up instead of silently reading zeros.  The SX graph is built once from the IR: inputs, then the CSE temporaries in
 order, then the outputs (:mod:`symkin.backends.casadi.sx`).
 
 Determinism: CasADi's binary serialization of an SX function writes its algorithm (the
@@ -51,7 +53,9 @@ def build_function(f: OptimizedFunction) -> casadi.Function:
             if e != 0:
                 matrix[k // cols, k % cols] = builder.doprint(e)
         outputs.append(matrix)
-    return casadi.Function(spec.name, inputs, outputs, [i.name for i in spec.inputs], [o.name for o in spec.outputs])
+    defaults = [float(i.default) if i.kind == "parameter" else float("nan") for i in spec.inputs]
+    return casadi.Function(spec.name, inputs, outputs, [i.name for i in spec.inputs], [o.name for o in spec.outputs],
+                           {"default_in": defaults})
 
 
 def serialize(function: casadi.Function) -> bytes:
