@@ -173,3 +173,21 @@ def test_folded_functions_agree_across_backends(models, tmp_path):
         with pytest.raises(TypeError):
             folded.fk(q, l1=0.2)
         np.testing.assert_allclose(folded.fk(q), reference, rtol=1e-15, atol=1e-16)
+
+
+def test_angle_sums_are_expanded_to_one_sin_cos_pair_per_angle(derivations):
+    from symkin.optimize import expand_trig_sums
+
+    q1, q2, q3 = X
+    spec = _spec([sympy.sin(q1 + q2 + q3), sympy.cos(q1 + q2), sympy.sin(2 * q3 - q1), sympy.cos(q2 + sympy.pi / 3),
+                  sympy.sin(q1)])
+    expanded = expand_trig_sums(spec)
+    calls = {e for e in expanded.outputs[0].expr.atoms(sympy.sin, sympy.cos)}
+    assert calls == {f(q) for f in (sympy.sin, sympy.cos) for q in (q1, q2, q3)}
+    point = {q1: 0.3, q2: -1.2, q3: 2.5}
+    for got, want in zip(expanded.outputs[0].entries, spec.outputs[0].entries):
+        assert abs(float(got.subs(point)) - float(want.subs(point))) < 1e-14
+    # In the optimized UR10e functions every trigonometric call takes a single joint angle.
+    optimized = optimize(derivations["ur10e"]["jacobian"])
+    arguments = {call.args[0] for _, e in optimized.temporaries for call in e.atoms(sympy.sin, sympy.cos)}
+    assert arguments and all(a.is_Symbol for a in arguments)

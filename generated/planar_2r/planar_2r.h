@@ -49,7 +49,7 @@ extern "C" {
  * Outputs:
  *   base_T_tcp[16]: 4 x 4, row-major; homogeneous transform of the TCP frame in the base
  *   frame [m].
- * Cost: 11 operations.
+ * Cost: 16 operations.
  */
 void planar_2r_fk(const double *q, double l1, double l2, double *base_T_tcp);
 
@@ -69,7 +69,7 @@ void planar_2r_fk_batch(size_t n, const double *q, const double *params, size_t 
  *   frame [m].
  *   base_T_link2[16]: 4 x 4, row-major; homogeneous transform of frame 'link2' in the base
  *   frame [m].
- * Cost: 11 operations.
+ * Cost: 16 operations.
  */
 void planar_2r_frames(const double *q, double l1, double l2, double *base_T_link1, double *base_T_link2);
 
@@ -86,7 +86,7 @@ void planar_2r_frames_batch(size_t n, const double *q, const double *params, siz
  *   l2: length of link 2 [m]; default PLANAR_2R_DEFAULT_l2 = 0.1.
  * Outputs:
  *   J[4]: 2 x 2, row-major; rows x, y; one column per joint.
- * Cost: 11 operations.
+ * Cost: 16 operations.
  */
 void planar_2r_jacobian(const double *q, double l1, double l2, double *J);
 
@@ -105,7 +105,7 @@ void planar_2r_jacobian_batch(size_t n, const double *q, const double *params, s
  *   l2: length of link 2 [m]; default PLANAR_2R_DEFAULT_l2 = 0.1.
  * Outputs:
  *   J[12]: 6 x 2, row-major; rows vx, vy, vz, wx, wy, wz; one column per joint.
- * Cost: 11 operations.
+ * Cost: 16 operations.
  */
 void planar_2r_jacobian_geometric(const double *q, double l1, double l2, double *J);
 
@@ -131,7 +131,7 @@ void planar_2r_jacobian_geometric_batch(size_t n, const double *q, const double 
  *   jacobian_J[4]: 2 x 2, row-major; rows x, y; one column per joint (jacobian).
  *   jacobian_geometric_J[12]: 6 x 2, row-major; rows vx, vy, vz, wx, wy, wz; one column
  *   per joint (jacobian_geometric).
- * Cost: 11 operations.
+ * Cost: 16 operations.
  */
 void planar_2r_scene(const double *q, double l1, double l2, double *base_T_tcp, double *base_T_link1, double *base_T_link2, double *jacobian_J, double *jacobian_geometric_J);
 

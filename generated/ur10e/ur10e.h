@@ -62,7 +62,7 @@ extern "C" {
  * Outputs:
  *   base_T_tcp[16]: 4 x 4, row-major; homogeneous transform of the TCP frame in the base
  *   frame [m].
- * Cost: 76 operations.
+ * Cost: 86 operations.
  */
 void ur10e_fk(const double *q, double d1, double a2, double a3, double d4, double d5, double d6, double *base_T_tcp);
 
@@ -94,7 +94,7 @@ void ur10e_fk_batch(size_t n, const double *q, const double *params, size_t para
  *   base frame [m].
  *   base_T_wrist3[16]: 4 x 4, row-major; homogeneous transform of frame 'wrist3' in the
  *   base frame [m].
- * Cost: 84 operations.
+ * Cost: 95 operations.
  */
 void ur10e_frames(const double *q, double d1, double a2, double a3, double d4, double d5, double d6, double *base_T_shoulder, double *base_T_upper_arm, double *base_T_forearm, double *base_T_wrist1, double *base_T_wrist2, double *base_T_wrist3);
 
@@ -114,7 +114,7 @@ void ur10e_frames_batch(size_t n, const double *q, const double *params, size_t 
  *   d6: wrist 3 offset (flange) [m]; default UR10E_DEFAULT_d6 = 0.11655.
  * Outputs:
  *   J[36]: 6 x 6, row-major; rows x, y, z, wx, wy, wz; one column per joint.
- * Cost: 76 operations.
+ * Cost: 87 operations.
  */
 void ur10e_jacobian(const double *q, double a2, double a3, double d4, double d5, double d6, double *J);
 
@@ -136,7 +136,7 @@ void ur10e_jacobian_batch(size_t n, const double *q, const double *params, size_
  *   d6: wrist 3 offset (flange) [m]; default UR10E_DEFAULT_d6 = 0.11655.
  * Outputs:
  *   J[36]: 6 x 6, row-major; rows vx, vy, vz, wx, wy, wz; one column per joint.
- * Cost: 76 operations.
+ * Cost: 87 operations.
  */
 void ur10e_jacobian_geometric(const double *q, double a2, double a3, double d4, double d5, double d6, double *J);
 
@@ -175,7 +175,7 @@ void ur10e_jacobian_geometric_batch(size_t n, const double *q, const double *par
  *   (jacobian).
  *   jacobian_geometric_J[36]: 6 x 6, row-major; rows vx, vy, vz, wx, wy, wz; one column
  *   per joint (jacobian_geometric).
- * Cost: 120 operations.
+ * Cost: 131 operations.
  */
 void ur10e_scene(const double *q, double d1, double a2, double a3, double d4, double d5, double d6, double *base_T_tcp, double *base_T_shoulder, double *base_T_upper_arm, double *base_T_forearm, double *base_T_wrist1, double *base_T_wrist2, double *base_T_wrist3, double *jacobian_J, double *jacobian_geometric_J);
 
@@ -197,7 +197,7 @@ void ur10e_scene_batch(size_t n, const double *q, const double *params, size_t p
  * Outputs:
  *   base_T_tcp[16]: 4 x 4, row-major; homogeneous transform of the TCP frame in the base
  *   frame [m].
- * Cost: 76 operations.
+ * Cost: 86 operations.
  */
 void ur10e_fk_f32(const float *q, float d1, float a2, float a3, float d4, float d5, float d6, float *base_T_tcp);
 
@@ -229,7 +229,7 @@ void ur10e_fk_batch_f32(size_t n, const float *q, const float *params, size_t pa
  *   base frame [m].
  *   base_T_wrist3[16]: 4 x 4, row-major; homogeneous transform of frame 'wrist3' in the
  *   base frame [m].
- * Cost: 84 operations.
+ * Cost: 95 operations.
  */
 void ur10e_frames_f32(const float *q, float d1, float a2, float a3, float d4, float d5, float d6, float *base_T_shoulder, float *base_T_upper_arm, float *base_T_forearm, float *base_T_wrist1, float *base_T_wrist2, float *base_T_wrist3);
 
@@ -249,7 +249,7 @@ void ur10e_frames_batch_f32(size_t n, const float *q, const float *params, size_
  *   d6: wrist 3 offset (flange) [m]; default UR10E_DEFAULT_d6 = 0.11655.
  * Outputs:
  *   J[36]: 6 x 6, row-major; rows x, y, z, wx, wy, wz; one column per joint.
- * Cost: 76 operations.
+ * Cost: 87 operations.
  */
 void ur10e_jacobian_f32(const float *q, float a2, float a3, float d4, float d5, float d6, float *J);
 
@@ -271,7 +271,7 @@ void ur10e_jacobian_batch_f32(size_t n, const float *q, const float *params, siz
  *   d6: wrist 3 offset (flange) [m]; default UR10E_DEFAULT_d6 = 0.11655.
  * Outputs:
  *   J[36]: 6 x 6, row-major; rows vx, vy, vz, wx, wy, wz; one column per joint.
- * Cost: 76 operations.
+ * Cost: 87 operations.
  */
 void ur10e_jacobian_geometric_f32(const float *q, float a2, float a3, float d4, float d5, float d6, float *J);
 
@@ -310,7 +310,7 @@ void ur10e_jacobian_geometric_batch_f32(size_t n, const float *q, const float *p
  *   (jacobian).
  *   jacobian_geometric_J[36]: 6 x 6, row-major; rows vx, vy, vz, wx, wy, wz; one column
  *   per joint (jacobian_geometric).
- * Cost: 120 operations.
+ * Cost: 131 operations.
  */
 void ur10e_scene_f32(const float *q, float d1, float a2, float a3, float d4, float d5, float d6, float *base_T_tcp, float *base_T_shoulder, float *base_T_upper_arm, float *base_T_forearm, float *base_T_wrist1, float *base_T_wrist2, float *base_T_wrist3, float *jacobian_J, float *jacobian_geometric_J);
 

@@ -62,7 +62,7 @@ extern "C" {
  * Outputs:
  *   base_T_tcp[16]: 4 x 4, row-major; homogeneous transform of the TCP frame in the base
  *   frame [m].
- * Cost: 76 operations.
+ * Cost: 86 operations.
  */
 void ur10e_classic_fk(const double *q, double d1, double a2, double a3, double d4, double d5, double d6, double *base_T_tcp);
 
@@ -84,7 +84,7 @@ void ur10e_classic_fk_batch(size_t n, const double *q, const double *params, siz
  *   d6: wrist 3 offset (flange) [m]; default UR10E_CLASSIC_DEFAULT_d6 = 0.11655.
  * Outputs:
  *   J[36]: 6 x 6, row-major; rows x, y, z, wx, wy, wz; one column per joint.
- * Cost: 76 operations.
+ * Cost: 87 operations.
  */
 void ur10e_classic_jacobian(const double *q, double a2, double a3, double d4, double d5, double d6, double *J);
 
@@ -110,7 +110,7 @@ void ur10e_classic_jacobian_batch(size_t n, const double *q, const double *param
  *   base_T_tcp[16]: 4 x 4, row-major; homogeneous transform of the TCP frame in the base
  *   frame (fk) [m].
  *   J[36]: 6 x 6, row-major; rows x, y, z, wx, wy, wz; one column per joint (jacobian).
- * Cost: 103 operations.
+ * Cost: 114 operations.
  */
 void ur10e_classic_scene(const double *q, double d1, double a2, double a3, double d4, double d5, double d6, double *base_T_tcp, double *J);
 

@@ -4,9 +4,11 @@
 
 1. :func:`~symkin.optimize.passes.fold_parameters` - substitute fixed parameters by their
    exact values (and drop them from the inputs);
-2. :func:`~symkin.optimize.passes.fold_constants` - evaluate constant subexpressions
+2. :func:`~symkin.optimize.passes.expand_trig_sums` - sin and cos of angle sums through
+   the addition formulas, so each angle costs one sin/cos pair;
+3. :func:`~symkin.optimize.passes.fold_constants` - evaluate constant subexpressions
    (``cos(1/10)``, ``sqrt(3)/2``) once, at 30 digits, instead of at every call;
-3. :func:`~symkin.optimize.cse.eliminate_common_subexpressions` - one CSE across all
+4. :func:`~symkin.optimize.cse.eliminate_common_subexpressions` - one CSE across all
    outputs of the function.
 
 The operation count after each stage is recorded in ``OptimizedFunction.op_counts``.
@@ -19,9 +21,9 @@ from collections.abc import Iterable
 from symkin.ir.spec import FunctionSpec, OptimizedFunction
 from symkin.optimize.cse import eliminate_common_subexpressions
 from symkin.optimize.opcount import spec_op_count
-from symkin.optimize.passes import fold_constants, fold_parameters, fold_parameters_after_cse
+from symkin.optimize.passes import expand_trig_sums, fold_constants, fold_parameters, fold_parameters_after_cse
 
-__all__ = ["optimize", "fold_parameters", "fold_parameters_after_cse", "fold_constants",
+__all__ = ["optimize", "fold_parameters", "fold_parameters_after_cse", "fold_constants", "expand_trig_sums",
            "eliminate_common_subexpressions", "spec_op_count"]
 
 
@@ -45,9 +47,14 @@ def optimize(spec: FunctionSpec, fixed: Iterable[str] = ()) -> OptimizedFunction
     counts = {"derived": spec_op_count(spec)}
     fixed = tuple(fixed)
     if not any(i.kind == "parameter" and i.name in fixed for i in spec.inputs):
-        return eliminate_common_subexpressions(fold_constants(spec), counts)
+        return eliminate_common_subexpressions(_prepare(spec), counts)
     folded = fold_parameters(spec, fixed)
     counts["folded"] = spec_op_count(folded)
-    fold_first = eliminate_common_subexpressions(fold_constants(folded), counts)
-    cse_first = fold_parameters_after_cse(eliminate_common_subexpressions(fold_constants(spec), counts), fixed)
+    fold_first = eliminate_common_subexpressions(_prepare(folded), counts)
+    cse_first = fold_parameters_after_cse(eliminate_common_subexpressions(_prepare(spec), counts), fixed)
     return fold_first if fold_first.op_counts["cse"] <= cse_first.op_counts["cse"] else cse_first
+
+
+def _prepare(spec: FunctionSpec) -> FunctionSpec:
+    """The passes between folding and CSE: angle sums expanded, then constants evaluated."""
+    return fold_constants(expand_trig_sums(spec))

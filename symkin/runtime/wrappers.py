@@ -28,6 +28,8 @@ from symkin.backends.naming import shape_text, type_name
 from symkin.errors import GeneratedCodeError
 
 Kernel = Callable[[tuple[int, ...], list[numpy.ndarray], list[numpy.ndarray]], list[numpy.ndarray]]
+SingleKernel = Callable[[Sequence[numpy.ndarray], Sequence[float]], list[numpy.ndarray]]
+FLOAT64 = numpy.dtype(numpy.float64)
 
 
 def vector_input(value: Any, size: int, name: str, function: str) -> numpy.ndarray:
@@ -83,8 +85,17 @@ def _docstring(record: dict[str, Any], backend: str) -> str:
     return "\n".join(lines)
 
 
-def make_function(record: dict[str, Any], kernel: Kernel, backend: str) -> Callable[..., Any]:
+def make_function(record: dict[str, Any], kernel: Kernel, backend: str,
+                  single: SingleKernel | None = None) -> Callable[..., Any]:
     """The Python function of the manifest function ``record`` evaluated by ``kernel``.
+
+    Args:
+        record: the function's manifest record.
+        kernel: evaluates any batch (see the module docstring).
+        backend: backend name, for docstrings and code object names.
+        single: optional faster path for the common call of a control loop, used when every
+            vector argument is a float64 ndarray of exactly its shape (n,) and every
+            parameter a Python float or int: ``single(vectors, params) -> outputs``.
 
     Raises:
         GeneratedCodeError: the manifest record has an input name that is no identifier.
@@ -92,11 +103,17 @@ def make_function(record: dict[str, Any], kernel: Kernel, backend: str) -> Calla
     name = _identifier(record["name"])
     vectors = [(_identifier(i["name"]), int(i["shape"][0])) for i in record["inputs"] if i["kind"] != "parameter"]
     params = [(_identifier(i["name"]), float(i["default"])) for i in record["inputs"] if i["kind"] == "parameter"]
+    vector_shapes = [(size,) for _, size in vectors]
     outputs = [o["name"] for o in record["outputs"]]
     result_type: Callable[..., Any] | None = (
         collections.namedtuple(type_name(name), outputs) if len(outputs) > 1 else None)
 
     def evaluate(vector_values: Sequence[Any], param_values: Sequence[Any]) -> Any:
+        if single is not None and all(type(v) is numpy.ndarray and v.shape == shape and v.dtype is FLOAT64
+                                      for v, shape in zip(vector_values, vector_shapes)) \
+                and all(type(p) is float or type(p) is int for p in param_values):
+            results = single(vector_values, param_values)
+            return result_type(*results) if result_type is not None else results[0]
         arrays = [vector_input(value, size, vname, name) for value, (vname, size) in zip(vector_values, vectors)]
         param_arrays = [numpy.asarray(value, dtype=numpy.float64) for value in param_values]
         batch = batch_shape(name, *[a.shape[:-1] for a in arrays], *[p.shape for p in param_arrays])

@@ -15,6 +15,7 @@ from __future__ import annotations
 import ctypes
 import math
 import threading
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -23,7 +24,7 @@ import numpy
 from symkin.backends.c.build import shared_library
 from symkin.backends.naming import c_symbol
 from symkin.errors import GeneratedCodeError
-from symkin.runtime.wrappers import Kernel, make_function
+from symkin.runtime.wrappers import Kernel, SingleKernel, make_function
 
 DOUBLE_SIZE = 8
 
@@ -53,14 +54,15 @@ def _entry(library: ctypes.CDLL, symbol: str, argtypes: list[Any]) -> Any:
 class _Scratch(threading.local):
     """Per-thread input and output arrays of one function, with their addresses."""
 
-    def __init__(self, vector_sizes: list[int], total: int):
+    def __init__(self, vector_sizes: list[int], offsets: list[int], total: int):
         self.inputs = [numpy.empty(size) for size in vector_sizes]
         self.output = numpy.empty(total)
         self.input_addresses = [a.ctypes.data for a in self.inputs]
-        self.output_address = self.output.ctypes.data
+        base = self.output.ctypes.data
+        self.output_addresses = [base + DOUBLE_SIZE * offset for offset in offsets]
 
 
-def _kernel(library: ctypes.CDLL, model: str, record: dict[str, Any]) -> Kernel:
+def _kernels(library: ctypes.CDLL, model: str, record: dict[str, Any]) -> tuple[Kernel, SingleKernel]:
     vector_sizes = [int(i["shape"][0]) for i in record["inputs"] if i["kind"] != "parameter"]
     n_params = sum(1 for i in record["inputs"] if i["kind"] == "parameter")
     output_shapes = [tuple(o["shape"]) for o in record["outputs"]]
@@ -72,21 +74,22 @@ def _kernel(library: ctypes.CDLL, model: str, record: dict[str, Any]) -> Kernel:
     single = _entry(library, c_symbol(model, record["name"]), pointers + [ctypes.c_double] * n_params + outputs)
     batched = _entry(library, c_symbol(model, record["name"], "_batch"),
                      [ctypes.c_size_t] + pointers + ([ctypes.c_void_p, ctypes.c_size_t] if n_params else []) + outputs)
-    scratch = _Scratch(vector_sizes, total)
+    scratch = _Scratch(vector_sizes, offsets, total)
 
     def split(buffer: numpy.ndarray, n: int, batch: tuple[int, ...]) -> list[numpy.ndarray]:
         return [buffer[n * offset:n * (offset + size)].reshape(batch + shape)
                 for offset, size, shape in zip(offsets, sizes, output_shapes)]
 
+    def one(vectors: Sequence[numpy.ndarray], params: Sequence[float]) -> list[numpy.ndarray]:
+        local = scratch
+        for target, v in zip(local.inputs, vectors):
+            target[:] = v
+        single(*local.input_addresses, *params, *local.output_addresses)
+        return split(local.output.copy(), 1, ())
+
     def kernel(batch: tuple[int, ...], vectors: list[numpy.ndarray], params: list[numpy.ndarray]) -> list[numpy.ndarray]:
         if not batch and all(p.ndim == 0 for p in params):
-            local = scratch
-            for target, v in zip(local.inputs, vectors):
-                target[:] = v
-            out = local.output_address
-            single(*local.input_addresses, *[float(p) for p in params],
-                   *[out + DOUBLE_SIZE * offset for offset in offsets])
-            return split(local.output.copy(), 1, batch)
+            return one(vectors, [float(p) for p in params])
         n = math.prod(batch)
         arguments: list[Any] = [n]
         keep = []  # arrays whose memory C reads, alive until the call returns
@@ -111,7 +114,7 @@ def _kernel(library: ctypes.CDLL, model: str, record: dict[str, Any]) -> Kernel:
         batched(*arguments)
         return split(buffer, n, batch)
 
-    return kernel
+    return kernel, one
 
 
 def bind_library(directory: Path, manifest: dict[str, Any]) -> dict[str, Any]:
@@ -119,5 +122,8 @@ def bind_library(directory: Path, manifest: dict[str, Any]) -> dict[str, Any]:
     source, header = _files(directory, manifest)
     library = ctypes.CDLL(str(shared_library(source, header)))
     model = manifest["model"]["name"]
-    return {record["name"]: make_function(record, _kernel(library, model, record), "c")
-            for record in manifest["functions"]}
+    functions = {}
+    for record in manifest["functions"]:
+        kernel, one = _kernels(library, model, record)
+        functions[record["name"]] = make_function(record, kernel, "c", single=one)
+    return functions

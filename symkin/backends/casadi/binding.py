@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 import threading
 from collections import OrderedDict
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -22,7 +23,7 @@ import numpy
 
 from symkin.backends.naming import casadi_file
 from symkin.errors import GeneratedCodeError
-from symkin.runtime.wrappers import Kernel, make_function
+from symkin.runtime.wrappers import Kernel, SingleKernel, make_function
 
 #: How many batch sizes (mapped functions and their buffers) each function keeps per thread.
 CACHE_SIZE = 4
@@ -39,7 +40,7 @@ class _Buffers(threading.local):
         self.by_size: OrderedDict[int, tuple[Any, Any]] = OrderedDict()
 
 
-def _kernel(function: casadi.Function, record: dict[str, Any]) -> Kernel:
+def _kernels(function: casadi.Function, record: dict[str, Any]) -> tuple[Kernel, SingleKernel]:
     vector_sizes = [int(i["shape"][0]) for i in record["inputs"] if i["kind"] != "parameter"]
     output_shapes = [tuple(o["shape"]) for o in record["outputs"]]
     output_2d = [_shape_2d(shape) for shape in output_shapes]
@@ -57,6 +58,18 @@ def _kernel(function: casadi.Function, record: dict[str, Any]) -> Kernel:
         if len(cache) > CACHE_SIZE:
             cache.popitem(last=False)
         return cache[n]
+
+    def one(vectors: Sequence[numpy.ndarray], params: Sequence[float]) -> list[numpy.ndarray]:
+        buffer, evaluate = buffer_of(1)
+        keep = [numpy.ascontiguousarray(v) for v in vectors] + [numpy.array(float(p)) for p in params]
+        for k, array in enumerate(keep):
+            buffer.set_arg(k, memoryview(array))
+        raw = [numpy.empty((cols, rows)) for rows, cols in output_2d]
+        for k, array in enumerate(raw):
+            buffer.set_res(k, memoryview(array))
+        evaluate()
+        return [numpy.ascontiguousarray(r.T).reshape(shape) if cols > 1 else r.reshape(shape)
+                for r, shape, (_, cols) in zip(raw, output_shapes, output_2d)]
 
     def kernel(batch: tuple[int, ...], vectors: list[numpy.ndarray], params: list[numpy.ndarray]) -> list[numpy.ndarray]:
         n = math.prod(batch)
@@ -76,7 +89,7 @@ def _kernel(function: casadi.Function, record: dict[str, Any]) -> Kernel:
         return [numpy.ascontiguousarray(r.transpose(0, 2, 1)).reshape(batch + shape)
                 for r, shape in zip(raw, output_shapes)]
 
-    return kernel
+    return kernel, one
 
 
 def bind_functions(directory: Path, manifest: dict[str, Any]) -> dict[str, Any]:
@@ -96,7 +109,8 @@ def bind_functions(directory: Path, manifest: dict[str, Any]) -> dict[str, Any]:
         if function.name() != record["name"] or function.name_in() != expected:
             raise GeneratedCodeError(f"{path} holds {function.name()}({', '.join(function.name_in())}), "
                                      f"not {record['name']}({', '.join(expected)}); derive the model again")
-        wrapper = make_function(record, _kernel(function, record), "casadi")
+        kernel, one = _kernels(function, record)
+        wrapper = make_function(record, kernel, "casadi", single=one)
         wrapper.casadi = function
         functions[record["name"]] = wrapper
     return functions
