@@ -131,9 +131,10 @@ MAX_ANGLE_MULTIPLE = 4
 
 def _angle_terms(arg: sympy.Expr) -> tuple[sympy.Expr, list[tuple[sympy.Symbol, int]]] | None:
     """``arg`` = constant + sum of n_i * s_i (symbols s_i, small integers n_i), or None."""
-    constant, terms = arg.as_coeff_add()
+    terms = sympy.Add.make_args(arg)
+    constant = sympy.Add(*[t for t in terms if not t.free_symbols])
     parts = []
-    for term in terms:
+    for term in (t for t in terms if t.free_symbols):
         coefficient, symbol = term.as_coeff_Mul()
         if not (symbol.is_Symbol and coefficient.is_Integer and 1 <= abs(int(coefficient)) <= MAX_ANGLE_MULTIPLE):
             return None
