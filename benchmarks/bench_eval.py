@@ -271,7 +271,11 @@ def main(argv: list[str] | None = None) -> int:
     os.environ.setdefault("SYMKIN_CFLAGS", args.cflags)
     try:
         cases = find_cases(model)
-        pm, tcp = pinocchio_model(model)
+        try:
+            pm, tcp = pinocchio_model(model)
+        except ImportError:
+            pm, tcp = None, None
+            print("Pinocchio: not installed (pip install pin==4.1.0); its rows are left out")
         rows = {}
         c_timings: dict[tuple[str, str], float] = {}
         op_counts = {}
@@ -290,17 +294,18 @@ def main(argv: list[str] | None = None) -> int:
             c_timings.update(run_harness(source, [target / f"{model.name}.c"], [target], compiler,
                                          ["-std=c99", *cflags], work, args.calls, args.batch,
                                          f"harness_{label.replace('+', '_')}"))
-            rows[label, "pinocchio"] = pinocchio_timings(label, pm, tcp, inputs, ring, args.batch)
+            if pm is not None:
+                rows[label, "pinocchio"] = pinocchio_timings(label, pm, tcp, inputs, ring, args.batch)
         symforce_note = ""
         if not args.no_symforce:
-            symforce_note = symforce_timings(model, work, cflags, args.calls, c_timings, pm, tcp)
+            symforce_note = symforce_timings(model, work, cflags, args.calls, c_timings)
         table = []
         for (label, impl), (call_us, per_config) in rows.items():
             c_call = c_timings.get((label, "single")) if impl == "symkin c" else None
             c_batch = c_timings.get((label, "batch")) if impl == "symkin c" else None
             table.append([label, impl, f"{call_us:.2f}", f"{per_config:.0f}",
                           f"{c_call:.1f}" if c_call else "", f"{c_batch:.1f}" if c_batch else ""])
-            if impl == "pinocchio" and (f"sf:{label}", "single") in c_timings:
+            if impl == "symkin casadi" and (f"sf:{label}", "single") in c_timings:
                 table.append([label, "symforce (C++)", "", "", f"{c_timings[f'sf:{label}', 'single']:.1f}", ""])
         print(f"UR10e evaluation speed, {args.batch} configurations per batch, C flags '{args.cflags}', "
               f"all parameters folded")
@@ -344,7 +349,7 @@ def pinocchio_timings(label, pm, tcp, inputs, ring, n):
     return per_call, batch_ns(loop, inputs, n)
 
 
-def symforce_timings(model, work, cflags, calls, c_timings, pm, tcp) -> str:
+def symforce_timings(model, work, cflags, calls, c_timings) -> str:
     try:
         import symforce  # noqa: F401
     except ImportError:
