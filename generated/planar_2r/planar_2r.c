@@ -3,21 +3,78 @@
  * with the template c/source.c.j2.
  * Do not edit: changes are lost when the model is derived again (symkin derive).
  *
- * The calling conventions are documented in planar_2r.h.
+ * The calling conventions are documented in planar_2r.h.  Each function's
+ * statements appear twice: once on scalars in the single-configuration function, once in
+ * the lane loop of its batch function, which evaluates blocks of 8 configurations
+ * stored lane by lane so that the compiler can vectorize it.
  */
 #include "planar_2r.h"
 
 #include <math.h>
 
-/* fk: Forward kinematics: pose of the TCP in the base frame. (double) */
-static inline void planar_2r_fk_kernel(const double *restrict q, const double l1, const double l2, double *restrict base_T_tcp)
+/* Configurations per block of the batch functions. */
+#define PLANAR_2R_BLOCK 8
+
+/* sin and cos of x[0..n-1] into s and c, branch-free (vectorizable): Cody-Waite
+ * reduction by pi/2 = 1.570796325802803 + 9.920935791635221e-10 + 5.170182981794105e-19, Taylor polynomials on
+ * [-pi/4, pi/4], quadrant by comparisons; |x| > 100000.0, NaN and inf go to libm. */
+static void planar_2r_sincos(size_t n, const double *restrict x, double *restrict s, double *restrict c)
+{
+    for (size_t i = 0; i < n; ++i) {
+        const double k = (x[i] * 0.6366197723675814 + 6755399441055744.0) - 6755399441055744.0;
+        const double r = ((x[i] - k * 1.570796325802803) - k * 9.920935791635221e-10) - k * 5.170182981794105e-19;
+        const double r2 = r * r;
+        double ps = 2.8114572543455206e-15;
+        ps = ps * r2 + -7.647163731819816e-13;
+        ps = ps * r2 + 1.6059043836821613e-10;
+        ps = ps * r2 + -2.505210838544172e-08;
+        ps = ps * r2 + 2.7557319223985893e-06;
+        ps = ps * r2 + -0.0001984126984126984;
+        ps = ps * r2 + 0.008333333333333333;
+        ps = ps * r2 + -0.16666666666666666;
+        double pc = -1.5619206968586225e-16;
+        pc = pc * r2 + 4.779477332387385e-14;
+        pc = pc * r2 + -1.1470745597729725e-11;
+        pc = pc * r2 + 2.08767569878681e-09;
+        pc = pc * r2 + -2.755731922398589e-07;
+        pc = pc * r2 + 2.48015873015873e-05;
+        pc = pc * r2 + -0.001388888888888889;
+        pc = pc * r2 + 0.041666666666666664;
+        pc = pc * r2 + -0.5;
+        const double sr = r + r * r2 * ps;
+        const double cr = 1.0 + r2 * pc;
+        /* quadrant k mod 4, as m = k - 4*round(k/4) in {-2, -1, 0, 1, 2} */
+        const double m = k - 4.0 * ((k * 0.25 + 6755399441055744.0) - 6755399441055744.0);
+        const int odd = m == 1.0 || m == -1.0;
+        const double sv = odd ? cr : sr;
+        const double cv = odd ? sr : cr;
+        s[i] = (m > 1.5 || m < -0.5) ? -sv : sv;
+        c[i] = (m > 0.5 || m < -1.5) ? -cv : cv;
+    }
+    for (size_t i = 0; i < n; ++i) {
+        if (!(fabs(x[i]) <= 100000.0)) {
+            s[i] = sin(x[i]);
+            c[i] = cos(x[i]);
+        }
+    }
+}
+
+/* planar_2r_fk: Forward kinematics: pose of the TCP in the base frame. */
+void planar_2r_fk(const double *restrict q, double l1, double l2, double *restrict base_T_tcp)
 {
     const double theta1 = q[0];
     const double theta2 = q[1];
-    const double _x0 = cos(theta1);
-    const double _x1 = cos(theta2);
-    const double _x2 = sin(theta1);
-    const double _x3 = sin(theta2);
+    const double _angle[2] = {theta1, theta2};
+    double _sin[2], _cos[2];
+    planar_2r_sincos(2, _angle, _sin, _cos);
+    const double _sin_theta1 = _sin[0];
+    const double _cos_theta1 = _cos[0];
+    const double _sin_theta2 = _sin[1];
+    const double _cos_theta2 = _cos[1];
+    const double _x0 = _cos_theta1;
+    const double _x1 = _cos_theta2;
+    const double _x2 = _sin_theta1;
+    const double _x3 = _sin_theta2;
     const double _x4 = _x0*_x1 - _x2*_x3;
     const double _x5 = _x0*_x3 + _x1*_x2;
     base_T_tcp[0] = _x4;
@@ -38,30 +95,86 @@ static inline void planar_2r_fk_kernel(const double *restrict q, const double l1
     base_T_tcp[15] = 1.0;
 }
 
-void planar_2r_fk(const double *restrict q, double l1, double l2, double *restrict base_T_tcp)
-{
-    planar_2r_fk_kernel(q, l1, l2, base_T_tcp);
-}
-
+/* planar_2r_fk_batch: planar_2r_fk for n configurations, in blocks of 8. */
 void planar_2r_fk_batch(size_t n, const double *restrict q, const double *restrict params, size_t params_stride, double *restrict base_T_tcp)
 {
-    for (size_t _i = 0; _i < n; ++_i) {
-        const double *restrict _p = params + _i * params_stride;
-        planar_2r_fk_kernel(q + _i * 2, _p[0], _p[1], base_T_tcp + _i * 16);
+    for (size_t _i = 0; _i < n; _i += PLANAR_2R_BLOCK) {
+        /* lanes past the end of the batch repeat configuration _i and are not stored */
+        const size_t _m = n - _i < PLANAR_2R_BLOCK ? n - _i : PLANAR_2R_BLOCK;
+        double _in[4][PLANAR_2R_BLOCK];
+        for (size_t _l = 0; _l < PLANAR_2R_BLOCK; ++_l) {
+            const size_t _j = _i + (_l < _m ? _l : 0);
+            _in[0][_l] = q[_j * 2 + 0];
+            _in[1][_l] = q[_j * 2 + 1];
+            _in[2][_l] = params[_j * params_stride + 0];
+            _in[3][_l] = params[_j * params_stride + 1];
+        }
+        double _angle[2][PLANAR_2R_BLOCK], _sin[2][PLANAR_2R_BLOCK], _cos[2][PLANAR_2R_BLOCK];
+        for (size_t _l = 0; _l < PLANAR_2R_BLOCK; ++_l) {
+            _angle[0][_l] = _in[0][_l];
+            _angle[1][_l] = _in[1][_l];
+        }
+        planar_2r_sincos(2 * PLANAR_2R_BLOCK, &_angle[0][0], &_sin[0][0], &_cos[0][0]);
+        double _out[6][PLANAR_2R_BLOCK];
+        for (size_t _l = 0; _l < PLANAR_2R_BLOCK; ++_l) {
+            const double l1 = _in[2][_l];
+            const double l2 = _in[3][_l];
+            const double _sin_theta1 = _sin[0][_l];
+            const double _cos_theta1 = _cos[0][_l];
+            const double _sin_theta2 = _sin[1][_l];
+            const double _cos_theta2 = _cos[1][_l];
+            const double _x0 = _cos_theta1;
+            const double _x1 = _cos_theta2;
+            const double _x2 = _sin_theta1;
+            const double _x3 = _sin_theta2;
+            const double _x4 = _x0*_x1 - _x2*_x3;
+            const double _x5 = _x0*_x3 + _x1*_x2;
+            _out[0][_l] = _x4;
+            _out[1][_l] = -_x5;
+            _out[2][_l] = _x0*l1 + _x4*l2;
+            _out[3][_l] = _x5;
+            _out[4][_l] = _x4;
+            _out[5][_l] = _x2*l1 + _x5*l2;
+        }
+        for (size_t _l = 0; _l < _m; ++_l) {
+            base_T_tcp[(_i + _l) * 16 + 0] = _out[0][_l];
+            base_T_tcp[(_i + _l) * 16 + 1] = _out[1][_l];
+            base_T_tcp[(_i + _l) * 16 + 2] = 0.0;
+            base_T_tcp[(_i + _l) * 16 + 3] = _out[2][_l];
+            base_T_tcp[(_i + _l) * 16 + 4] = _out[3][_l];
+            base_T_tcp[(_i + _l) * 16 + 5] = _out[4][_l];
+            base_T_tcp[(_i + _l) * 16 + 6] = 0.0;
+            base_T_tcp[(_i + _l) * 16 + 7] = _out[5][_l];
+            base_T_tcp[(_i + _l) * 16 + 8] = 0.0;
+            base_T_tcp[(_i + _l) * 16 + 9] = 0.0;
+            base_T_tcp[(_i + _l) * 16 + 10] = 1.0;
+            base_T_tcp[(_i + _l) * 16 + 11] = 0.0;
+            base_T_tcp[(_i + _l) * 16 + 12] = 0.0;
+            base_T_tcp[(_i + _l) * 16 + 13] = 0.0;
+            base_T_tcp[(_i + _l) * 16 + 14] = 0.0;
+            base_T_tcp[(_i + _l) * 16 + 15] = 1.0;
+        }
     }
 }
 
-/* frames: Pose of every link frame in the base frame. (double) */
-static inline void planar_2r_frames_kernel(const double *restrict q, const double l1, const double l2, double *restrict base_T_link1, double *restrict base_T_link2)
+/* planar_2r_frames: Pose of every link frame in the base frame. */
+void planar_2r_frames(const double *restrict q, double l1, double l2, double *restrict base_T_link1, double *restrict base_T_link2)
 {
     const double theta1 = q[0];
     const double theta2 = q[1];
-    const double _x0 = cos(theta1);
-    const double _x1 = sin(theta1);
+    const double _angle[2] = {theta1, theta2};
+    double _sin[2], _cos[2];
+    planar_2r_sincos(2, _angle, _sin, _cos);
+    const double _sin_theta1 = _sin[0];
+    const double _cos_theta1 = _cos[0];
+    const double _sin_theta2 = _sin[1];
+    const double _cos_theta2 = _cos[1];
+    const double _x0 = _cos_theta1;
+    const double _x1 = _sin_theta1;
     const double _x2 = _x0*l1;
     const double _x3 = _x1*l1;
-    const double _x4 = cos(theta2);
-    const double _x5 = sin(theta2);
+    const double _x4 = _cos_theta2;
+    const double _x5 = _sin_theta2;
     const double _x6 = _x0*_x4 - _x1*_x5;
     const double _x7 = _x0*_x5 + _x1*_x4;
     base_T_link1[0] = _x0;
@@ -98,28 +211,108 @@ static inline void planar_2r_frames_kernel(const double *restrict q, const doubl
     base_T_link2[15] = 1.0;
 }
 
-void planar_2r_frames(const double *restrict q, double l1, double l2, double *restrict base_T_link1, double *restrict base_T_link2)
-{
-    planar_2r_frames_kernel(q, l1, l2, base_T_link1, base_T_link2);
-}
-
+/* planar_2r_frames_batch: planar_2r_frames for n configurations, in blocks of 8. */
 void planar_2r_frames_batch(size_t n, const double *restrict q, const double *restrict params, size_t params_stride, double *restrict base_T_link1, double *restrict base_T_link2)
 {
-    for (size_t _i = 0; _i < n; ++_i) {
-        const double *restrict _p = params + _i * params_stride;
-        planar_2r_frames_kernel(q + _i * 2, _p[0], _p[1], base_T_link1 + _i * 16, base_T_link2 + _i * 16);
+    for (size_t _i = 0; _i < n; _i += PLANAR_2R_BLOCK) {
+        /* lanes past the end of the batch repeat configuration _i and are not stored */
+        const size_t _m = n - _i < PLANAR_2R_BLOCK ? n - _i : PLANAR_2R_BLOCK;
+        double _in[4][PLANAR_2R_BLOCK];
+        for (size_t _l = 0; _l < PLANAR_2R_BLOCK; ++_l) {
+            const size_t _j = _i + (_l < _m ? _l : 0);
+            _in[0][_l] = q[_j * 2 + 0];
+            _in[1][_l] = q[_j * 2 + 1];
+            _in[2][_l] = params[_j * params_stride + 0];
+            _in[3][_l] = params[_j * params_stride + 1];
+        }
+        double _angle[2][PLANAR_2R_BLOCK], _sin[2][PLANAR_2R_BLOCK], _cos[2][PLANAR_2R_BLOCK];
+        for (size_t _l = 0; _l < PLANAR_2R_BLOCK; ++_l) {
+            _angle[0][_l] = _in[0][_l];
+            _angle[1][_l] = _in[1][_l];
+        }
+        planar_2r_sincos(2 * PLANAR_2R_BLOCK, &_angle[0][0], &_sin[0][0], &_cos[0][0]);
+        double _out[12][PLANAR_2R_BLOCK];
+        for (size_t _l = 0; _l < PLANAR_2R_BLOCK; ++_l) {
+            const double l1 = _in[2][_l];
+            const double l2 = _in[3][_l];
+            const double _sin_theta1 = _sin[0][_l];
+            const double _cos_theta1 = _cos[0][_l];
+            const double _sin_theta2 = _sin[1][_l];
+            const double _cos_theta2 = _cos[1][_l];
+            const double _x0 = _cos_theta1;
+            const double _x1 = _sin_theta1;
+            const double _x2 = _x0*l1;
+            const double _x3 = _x1*l1;
+            const double _x4 = _cos_theta2;
+            const double _x5 = _sin_theta2;
+            const double _x6 = _x0*_x4 - _x1*_x5;
+            const double _x7 = _x0*_x5 + _x1*_x4;
+            _out[0][_l] = _x0;
+            _out[1][_l] = -_x1;
+            _out[2][_l] = _x2;
+            _out[3][_l] = _x1;
+            _out[4][_l] = _x0;
+            _out[5][_l] = _x3;
+            _out[6][_l] = _x6;
+            _out[7][_l] = -_x7;
+            _out[8][_l] = _x2 + _x6*l2;
+            _out[9][_l] = _x7;
+            _out[10][_l] = _x6;
+            _out[11][_l] = _x3 + _x7*l2;
+        }
+        for (size_t _l = 0; _l < _m; ++_l) {
+            base_T_link1[(_i + _l) * 16 + 0] = _out[0][_l];
+            base_T_link1[(_i + _l) * 16 + 1] = _out[1][_l];
+            base_T_link1[(_i + _l) * 16 + 2] = 0.0;
+            base_T_link1[(_i + _l) * 16 + 3] = _out[2][_l];
+            base_T_link1[(_i + _l) * 16 + 4] = _out[3][_l];
+            base_T_link1[(_i + _l) * 16 + 5] = _out[4][_l];
+            base_T_link1[(_i + _l) * 16 + 6] = 0.0;
+            base_T_link1[(_i + _l) * 16 + 7] = _out[5][_l];
+            base_T_link1[(_i + _l) * 16 + 8] = 0.0;
+            base_T_link1[(_i + _l) * 16 + 9] = 0.0;
+            base_T_link1[(_i + _l) * 16 + 10] = 1.0;
+            base_T_link1[(_i + _l) * 16 + 11] = 0.0;
+            base_T_link1[(_i + _l) * 16 + 12] = 0.0;
+            base_T_link1[(_i + _l) * 16 + 13] = 0.0;
+            base_T_link1[(_i + _l) * 16 + 14] = 0.0;
+            base_T_link1[(_i + _l) * 16 + 15] = 1.0;
+            base_T_link2[(_i + _l) * 16 + 0] = _out[6][_l];
+            base_T_link2[(_i + _l) * 16 + 1] = _out[7][_l];
+            base_T_link2[(_i + _l) * 16 + 2] = 0.0;
+            base_T_link2[(_i + _l) * 16 + 3] = _out[8][_l];
+            base_T_link2[(_i + _l) * 16 + 4] = _out[9][_l];
+            base_T_link2[(_i + _l) * 16 + 5] = _out[10][_l];
+            base_T_link2[(_i + _l) * 16 + 6] = 0.0;
+            base_T_link2[(_i + _l) * 16 + 7] = _out[11][_l];
+            base_T_link2[(_i + _l) * 16 + 8] = 0.0;
+            base_T_link2[(_i + _l) * 16 + 9] = 0.0;
+            base_T_link2[(_i + _l) * 16 + 10] = 1.0;
+            base_T_link2[(_i + _l) * 16 + 11] = 0.0;
+            base_T_link2[(_i + _l) * 16 + 12] = 0.0;
+            base_T_link2[(_i + _l) * 16 + 13] = 0.0;
+            base_T_link2[(_i + _l) * 16 + 14] = 0.0;
+            base_T_link2[(_i + _l) * 16 + 15] = 1.0;
+        }
     }
 }
 
-/* jacobian: Task Jacobian of the TCP. (double) */
-static inline void planar_2r_jacobian_kernel(const double *restrict q, const double l1, const double l2, double *restrict J)
+/* planar_2r_jacobian: Task Jacobian of the TCP. */
+void planar_2r_jacobian(const double *restrict q, double l1, double l2, double *restrict J)
 {
     const double theta1 = q[0];
     const double theta2 = q[1];
-    const double _x0 = sin(theta1);
-    const double _x1 = cos(theta2);
-    const double _x2 = sin(theta2);
-    const double _x3 = cos(theta1);
+    const double _angle[2] = {theta1, theta2};
+    double _sin[2], _cos[2];
+    planar_2r_sincos(2, _angle, _sin, _cos);
+    const double _sin_theta1 = _sin[0];
+    const double _cos_theta1 = _cos[0];
+    const double _sin_theta2 = _sin[1];
+    const double _cos_theta2 = _cos[1];
+    const double _x0 = _sin_theta1;
+    const double _x1 = _cos_theta2;
+    const double _x2 = _sin_theta2;
+    const double _x3 = _cos_theta1;
     const double _x4 = l2*(_x0*_x1 + _x2*_x3);
     const double _x5 = l2*(-_x0*_x2 + _x1*_x3);
     J[0] = -(_x0*l1 + _x4);
@@ -128,28 +321,70 @@ static inline void planar_2r_jacobian_kernel(const double *restrict q, const dou
     J[3] = _x5;
 }
 
-void planar_2r_jacobian(const double *restrict q, double l1, double l2, double *restrict J)
-{
-    planar_2r_jacobian_kernel(q, l1, l2, J);
-}
-
+/* planar_2r_jacobian_batch: planar_2r_jacobian for n configurations, in blocks of 8. */
 void planar_2r_jacobian_batch(size_t n, const double *restrict q, const double *restrict params, size_t params_stride, double *restrict J)
 {
-    for (size_t _i = 0; _i < n; ++_i) {
-        const double *restrict _p = params + _i * params_stride;
-        planar_2r_jacobian_kernel(q + _i * 2, _p[0], _p[1], J + _i * 4);
+    for (size_t _i = 0; _i < n; _i += PLANAR_2R_BLOCK) {
+        /* lanes past the end of the batch repeat configuration _i and are not stored */
+        const size_t _m = n - _i < PLANAR_2R_BLOCK ? n - _i : PLANAR_2R_BLOCK;
+        double _in[4][PLANAR_2R_BLOCK];
+        for (size_t _l = 0; _l < PLANAR_2R_BLOCK; ++_l) {
+            const size_t _j = _i + (_l < _m ? _l : 0);
+            _in[0][_l] = q[_j * 2 + 0];
+            _in[1][_l] = q[_j * 2 + 1];
+            _in[2][_l] = params[_j * params_stride + 0];
+            _in[3][_l] = params[_j * params_stride + 1];
+        }
+        double _angle[2][PLANAR_2R_BLOCK], _sin[2][PLANAR_2R_BLOCK], _cos[2][PLANAR_2R_BLOCK];
+        for (size_t _l = 0; _l < PLANAR_2R_BLOCK; ++_l) {
+            _angle[0][_l] = _in[0][_l];
+            _angle[1][_l] = _in[1][_l];
+        }
+        planar_2r_sincos(2 * PLANAR_2R_BLOCK, &_angle[0][0], &_sin[0][0], &_cos[0][0]);
+        double _out[4][PLANAR_2R_BLOCK];
+        for (size_t _l = 0; _l < PLANAR_2R_BLOCK; ++_l) {
+            const double l1 = _in[2][_l];
+            const double l2 = _in[3][_l];
+            const double _sin_theta1 = _sin[0][_l];
+            const double _cos_theta1 = _cos[0][_l];
+            const double _sin_theta2 = _sin[1][_l];
+            const double _cos_theta2 = _cos[1][_l];
+            const double _x0 = _sin_theta1;
+            const double _x1 = _cos_theta2;
+            const double _x2 = _sin_theta2;
+            const double _x3 = _cos_theta1;
+            const double _x4 = l2*(_x0*_x1 + _x2*_x3);
+            const double _x5 = l2*(-_x0*_x2 + _x1*_x3);
+            _out[0][_l] = -(_x0*l1 + _x4);
+            _out[1][_l] = -_x4;
+            _out[2][_l] = _x3*l1 + _x5;
+            _out[3][_l] = _x5;
+        }
+        for (size_t _l = 0; _l < _m; ++_l) {
+            J[(_i + _l) * 4 + 0] = _out[0][_l];
+            J[(_i + _l) * 4 + 1] = _out[1][_l];
+            J[(_i + _l) * 4 + 2] = _out[2][_l];
+            J[(_i + _l) * 4 + 3] = _out[3][_l];
+        }
     }
 }
 
-/* jacobian_geometric: Geometric Jacobian of the TCP in the base frame. (double) */
-static inline void planar_2r_jacobian_geometric_kernel(const double *restrict q, const double l1, const double l2, double *restrict J)
+/* planar_2r_jacobian_geometric: Geometric Jacobian of the TCP in the base frame. */
+void planar_2r_jacobian_geometric(const double *restrict q, double l1, double l2, double *restrict J)
 {
     const double theta1 = q[0];
     const double theta2 = q[1];
-    const double _x0 = sin(theta1);
-    const double _x1 = cos(theta2);
-    const double _x2 = sin(theta2);
-    const double _x3 = cos(theta1);
+    const double _angle[2] = {theta1, theta2};
+    double _sin[2], _cos[2];
+    planar_2r_sincos(2, _angle, _sin, _cos);
+    const double _sin_theta1 = _sin[0];
+    const double _cos_theta1 = _cos[0];
+    const double _sin_theta2 = _sin[1];
+    const double _cos_theta2 = _cos[1];
+    const double _x0 = _sin_theta1;
+    const double _x1 = _cos_theta2;
+    const double _x2 = _sin_theta2;
+    const double _x3 = _cos_theta1;
     const double _x4 = l2*(_x0*_x1 + _x2*_x3);
     const double _x5 = l2*(-_x0*_x2 + _x1*_x3);
     J[0] = -(_x0*l1 + _x4);
@@ -166,28 +401,78 @@ static inline void planar_2r_jacobian_geometric_kernel(const double *restrict q,
     J[11] = 1.0;
 }
 
-void planar_2r_jacobian_geometric(const double *restrict q, double l1, double l2, double *restrict J)
-{
-    planar_2r_jacobian_geometric_kernel(q, l1, l2, J);
-}
-
+/* planar_2r_jacobian_geometric_batch: planar_2r_jacobian_geometric for n configurations, in blocks of 8. */
 void planar_2r_jacobian_geometric_batch(size_t n, const double *restrict q, const double *restrict params, size_t params_stride, double *restrict J)
 {
-    for (size_t _i = 0; _i < n; ++_i) {
-        const double *restrict _p = params + _i * params_stride;
-        planar_2r_jacobian_geometric_kernel(q + _i * 2, _p[0], _p[1], J + _i * 12);
+    for (size_t _i = 0; _i < n; _i += PLANAR_2R_BLOCK) {
+        /* lanes past the end of the batch repeat configuration _i and are not stored */
+        const size_t _m = n - _i < PLANAR_2R_BLOCK ? n - _i : PLANAR_2R_BLOCK;
+        double _in[4][PLANAR_2R_BLOCK];
+        for (size_t _l = 0; _l < PLANAR_2R_BLOCK; ++_l) {
+            const size_t _j = _i + (_l < _m ? _l : 0);
+            _in[0][_l] = q[_j * 2 + 0];
+            _in[1][_l] = q[_j * 2 + 1];
+            _in[2][_l] = params[_j * params_stride + 0];
+            _in[3][_l] = params[_j * params_stride + 1];
+        }
+        double _angle[2][PLANAR_2R_BLOCK], _sin[2][PLANAR_2R_BLOCK], _cos[2][PLANAR_2R_BLOCK];
+        for (size_t _l = 0; _l < PLANAR_2R_BLOCK; ++_l) {
+            _angle[0][_l] = _in[0][_l];
+            _angle[1][_l] = _in[1][_l];
+        }
+        planar_2r_sincos(2 * PLANAR_2R_BLOCK, &_angle[0][0], &_sin[0][0], &_cos[0][0]);
+        double _out[4][PLANAR_2R_BLOCK];
+        for (size_t _l = 0; _l < PLANAR_2R_BLOCK; ++_l) {
+            const double l1 = _in[2][_l];
+            const double l2 = _in[3][_l];
+            const double _sin_theta1 = _sin[0][_l];
+            const double _cos_theta1 = _cos[0][_l];
+            const double _sin_theta2 = _sin[1][_l];
+            const double _cos_theta2 = _cos[1][_l];
+            const double _x0 = _sin_theta1;
+            const double _x1 = _cos_theta2;
+            const double _x2 = _sin_theta2;
+            const double _x3 = _cos_theta1;
+            const double _x4 = l2*(_x0*_x1 + _x2*_x3);
+            const double _x5 = l2*(-_x0*_x2 + _x1*_x3);
+            _out[0][_l] = -(_x0*l1 + _x4);
+            _out[1][_l] = -_x4;
+            _out[2][_l] = _x3*l1 + _x5;
+            _out[3][_l] = _x5;
+        }
+        for (size_t _l = 0; _l < _m; ++_l) {
+            J[(_i + _l) * 12 + 0] = _out[0][_l];
+            J[(_i + _l) * 12 + 1] = _out[1][_l];
+            J[(_i + _l) * 12 + 2] = _out[2][_l];
+            J[(_i + _l) * 12 + 3] = _out[3][_l];
+            J[(_i + _l) * 12 + 4] = 0.0;
+            J[(_i + _l) * 12 + 5] = 0.0;
+            J[(_i + _l) * 12 + 6] = 0.0;
+            J[(_i + _l) * 12 + 7] = 0.0;
+            J[(_i + _l) * 12 + 8] = 0.0;
+            J[(_i + _l) * 12 + 9] = 0.0;
+            J[(_i + _l) * 12 + 10] = 1.0;
+            J[(_i + _l) * 12 + 11] = 1.0;
+        }
     }
 }
 
-/* scene: fk, frames, jacobian, jacobian_geometric together, with one set of shared subexpressions. (double) */
-static inline void planar_2r_scene_kernel(const double *restrict q, const double l1, const double l2, double *restrict base_T_tcp, double *restrict base_T_link1, double *restrict base_T_link2, double *restrict jacobian_J, double *restrict jacobian_geometric_J)
+/* planar_2r_scene: fk, frames, jacobian, jacobian_geometric together, with one set of shared subexpressions. */
+void planar_2r_scene(const double *restrict q, double l1, double l2, double *restrict base_T_tcp, double *restrict base_T_link1, double *restrict base_T_link2, double *restrict jacobian_J, double *restrict jacobian_geometric_J)
 {
     const double theta1 = q[0];
     const double theta2 = q[1];
-    const double _x0 = cos(theta1);
-    const double _x1 = cos(theta2);
-    const double _x2 = sin(theta1);
-    const double _x3 = sin(theta2);
+    const double _angle[2] = {theta1, theta2};
+    double _sin[2], _cos[2];
+    planar_2r_sincos(2, _angle, _sin, _cos);
+    const double _sin_theta1 = _sin[0];
+    const double _cos_theta1 = _cos[0];
+    const double _sin_theta2 = _sin[1];
+    const double _cos_theta2 = _cos[1];
+    const double _x0 = _cos_theta1;
+    const double _x1 = _cos_theta2;
+    const double _x2 = _sin_theta1;
+    const double _x3 = _sin_theta2;
     const double _x4 = _x0*_x1 - _x2*_x3;
     const double _x5 = _x0*_x3 + _x1*_x2;
     const double _x6 = -_x5;
@@ -265,15 +550,141 @@ static inline void planar_2r_scene_kernel(const double *restrict q, const double
     jacobian_geometric_J[11] = 1.0;
 }
 
-void planar_2r_scene(const double *restrict q, double l1, double l2, double *restrict base_T_tcp, double *restrict base_T_link1, double *restrict base_T_link2, double *restrict jacobian_J, double *restrict jacobian_geometric_J)
-{
-    planar_2r_scene_kernel(q, l1, l2, base_T_tcp, base_T_link1, base_T_link2, jacobian_J, jacobian_geometric_J);
-}
-
+/* planar_2r_scene_batch: planar_2r_scene for n configurations, in blocks of 8. */
 void planar_2r_scene_batch(size_t n, const double *restrict q, const double *restrict params, size_t params_stride, double *restrict base_T_tcp, double *restrict base_T_link1, double *restrict base_T_link2, double *restrict jacobian_J, double *restrict jacobian_geometric_J)
 {
-    for (size_t _i = 0; _i < n; ++_i) {
-        const double *restrict _p = params + _i * params_stride;
-        planar_2r_scene_kernel(q + _i * 2, _p[0], _p[1], base_T_tcp + _i * 16, base_T_link1 + _i * 16, base_T_link2 + _i * 16, jacobian_J + _i * 4, jacobian_geometric_J + _i * 12);
+    for (size_t _i = 0; _i < n; _i += PLANAR_2R_BLOCK) {
+        /* lanes past the end of the batch repeat configuration _i and are not stored */
+        const size_t _m = n - _i < PLANAR_2R_BLOCK ? n - _i : PLANAR_2R_BLOCK;
+        double _in[4][PLANAR_2R_BLOCK];
+        for (size_t _l = 0; _l < PLANAR_2R_BLOCK; ++_l) {
+            const size_t _j = _i + (_l < _m ? _l : 0);
+            _in[0][_l] = q[_j * 2 + 0];
+            _in[1][_l] = q[_j * 2 + 1];
+            _in[2][_l] = params[_j * params_stride + 0];
+            _in[3][_l] = params[_j * params_stride + 1];
+        }
+        double _angle[2][PLANAR_2R_BLOCK], _sin[2][PLANAR_2R_BLOCK], _cos[2][PLANAR_2R_BLOCK];
+        for (size_t _l = 0; _l < PLANAR_2R_BLOCK; ++_l) {
+            _angle[0][_l] = _in[0][_l];
+            _angle[1][_l] = _in[1][_l];
+        }
+        planar_2r_sincos(2 * PLANAR_2R_BLOCK, &_angle[0][0], &_sin[0][0], &_cos[0][0]);
+        double _out[26][PLANAR_2R_BLOCK];
+        for (size_t _l = 0; _l < PLANAR_2R_BLOCK; ++_l) {
+            const double l1 = _in[2][_l];
+            const double l2 = _in[3][_l];
+            const double _sin_theta1 = _sin[0][_l];
+            const double _cos_theta1 = _cos[0][_l];
+            const double _sin_theta2 = _sin[1][_l];
+            const double _cos_theta2 = _cos[1][_l];
+            const double _x0 = _cos_theta1;
+            const double _x1 = _cos_theta2;
+            const double _x2 = _sin_theta1;
+            const double _x3 = _sin_theta2;
+            const double _x4 = _x0*_x1 - _x2*_x3;
+            const double _x5 = _x0*_x3 + _x1*_x2;
+            const double _x6 = -_x5;
+            const double _x7 = _x0*l1;
+            const double _x8 = _x4*l2;
+            const double _x9 = _x7 + _x8;
+            const double _x10 = _x2*l1;
+            const double _x11 = _x5*l2;
+            const double _x12 = _x10 + _x11;
+            const double _x13 = -_x12;
+            const double _x14 = -_x11;
+            _out[0][_l] = _x4;
+            _out[1][_l] = _x6;
+            _out[2][_l] = _x9;
+            _out[3][_l] = _x5;
+            _out[4][_l] = _x4;
+            _out[5][_l] = _x12;
+            _out[6][_l] = _x0;
+            _out[7][_l] = -_x2;
+            _out[8][_l] = _x7;
+            _out[9][_l] = _x2;
+            _out[10][_l] = _x0;
+            _out[11][_l] = _x10;
+            _out[12][_l] = _x4;
+            _out[13][_l] = _x6;
+            _out[14][_l] = _x9;
+            _out[15][_l] = _x5;
+            _out[16][_l] = _x4;
+            _out[17][_l] = _x12;
+            _out[18][_l] = _x13;
+            _out[19][_l] = _x14;
+            _out[20][_l] = _x9;
+            _out[21][_l] = _x8;
+            _out[22][_l] = _x13;
+            _out[23][_l] = _x14;
+            _out[24][_l] = _x9;
+            _out[25][_l] = _x8;
+        }
+        for (size_t _l = 0; _l < _m; ++_l) {
+            base_T_tcp[(_i + _l) * 16 + 0] = _out[0][_l];
+            base_T_tcp[(_i + _l) * 16 + 1] = _out[1][_l];
+            base_T_tcp[(_i + _l) * 16 + 2] = 0.0;
+            base_T_tcp[(_i + _l) * 16 + 3] = _out[2][_l];
+            base_T_tcp[(_i + _l) * 16 + 4] = _out[3][_l];
+            base_T_tcp[(_i + _l) * 16 + 5] = _out[4][_l];
+            base_T_tcp[(_i + _l) * 16 + 6] = 0.0;
+            base_T_tcp[(_i + _l) * 16 + 7] = _out[5][_l];
+            base_T_tcp[(_i + _l) * 16 + 8] = 0.0;
+            base_T_tcp[(_i + _l) * 16 + 9] = 0.0;
+            base_T_tcp[(_i + _l) * 16 + 10] = 1.0;
+            base_T_tcp[(_i + _l) * 16 + 11] = 0.0;
+            base_T_tcp[(_i + _l) * 16 + 12] = 0.0;
+            base_T_tcp[(_i + _l) * 16 + 13] = 0.0;
+            base_T_tcp[(_i + _l) * 16 + 14] = 0.0;
+            base_T_tcp[(_i + _l) * 16 + 15] = 1.0;
+            base_T_link1[(_i + _l) * 16 + 0] = _out[6][_l];
+            base_T_link1[(_i + _l) * 16 + 1] = _out[7][_l];
+            base_T_link1[(_i + _l) * 16 + 2] = 0.0;
+            base_T_link1[(_i + _l) * 16 + 3] = _out[8][_l];
+            base_T_link1[(_i + _l) * 16 + 4] = _out[9][_l];
+            base_T_link1[(_i + _l) * 16 + 5] = _out[10][_l];
+            base_T_link1[(_i + _l) * 16 + 6] = 0.0;
+            base_T_link1[(_i + _l) * 16 + 7] = _out[11][_l];
+            base_T_link1[(_i + _l) * 16 + 8] = 0.0;
+            base_T_link1[(_i + _l) * 16 + 9] = 0.0;
+            base_T_link1[(_i + _l) * 16 + 10] = 1.0;
+            base_T_link1[(_i + _l) * 16 + 11] = 0.0;
+            base_T_link1[(_i + _l) * 16 + 12] = 0.0;
+            base_T_link1[(_i + _l) * 16 + 13] = 0.0;
+            base_T_link1[(_i + _l) * 16 + 14] = 0.0;
+            base_T_link1[(_i + _l) * 16 + 15] = 1.0;
+            base_T_link2[(_i + _l) * 16 + 0] = _out[12][_l];
+            base_T_link2[(_i + _l) * 16 + 1] = _out[13][_l];
+            base_T_link2[(_i + _l) * 16 + 2] = 0.0;
+            base_T_link2[(_i + _l) * 16 + 3] = _out[14][_l];
+            base_T_link2[(_i + _l) * 16 + 4] = _out[15][_l];
+            base_T_link2[(_i + _l) * 16 + 5] = _out[16][_l];
+            base_T_link2[(_i + _l) * 16 + 6] = 0.0;
+            base_T_link2[(_i + _l) * 16 + 7] = _out[17][_l];
+            base_T_link2[(_i + _l) * 16 + 8] = 0.0;
+            base_T_link2[(_i + _l) * 16 + 9] = 0.0;
+            base_T_link2[(_i + _l) * 16 + 10] = 1.0;
+            base_T_link2[(_i + _l) * 16 + 11] = 0.0;
+            base_T_link2[(_i + _l) * 16 + 12] = 0.0;
+            base_T_link2[(_i + _l) * 16 + 13] = 0.0;
+            base_T_link2[(_i + _l) * 16 + 14] = 0.0;
+            base_T_link2[(_i + _l) * 16 + 15] = 1.0;
+            jacobian_J[(_i + _l) * 4 + 0] = _out[18][_l];
+            jacobian_J[(_i + _l) * 4 + 1] = _out[19][_l];
+            jacobian_J[(_i + _l) * 4 + 2] = _out[20][_l];
+            jacobian_J[(_i + _l) * 4 + 3] = _out[21][_l];
+            jacobian_geometric_J[(_i + _l) * 12 + 0] = _out[22][_l];
+            jacobian_geometric_J[(_i + _l) * 12 + 1] = _out[23][_l];
+            jacobian_geometric_J[(_i + _l) * 12 + 2] = _out[24][_l];
+            jacobian_geometric_J[(_i + _l) * 12 + 3] = _out[25][_l];
+            jacobian_geometric_J[(_i + _l) * 12 + 4] = 0.0;
+            jacobian_geometric_J[(_i + _l) * 12 + 5] = 0.0;
+            jacobian_geometric_J[(_i + _l) * 12 + 6] = 0.0;
+            jacobian_geometric_J[(_i + _l) * 12 + 7] = 0.0;
+            jacobian_geometric_J[(_i + _l) * 12 + 8] = 0.0;
+            jacobian_geometric_J[(_i + _l) * 12 + 9] = 0.0;
+            jacobian_geometric_J[(_i + _l) * 12 + 10] = 1.0;
+            jacobian_geometric_J[(_i + _l) * 12 + 11] = 1.0;
+        }
     }
 }

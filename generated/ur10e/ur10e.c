@@ -3,14 +3,102 @@
  * with the template c/source.c.j2.
  * Do not edit: changes are lost when the model is derived again (symkin derive).
  *
- * The calling conventions are documented in ur10e.h.
+ * The calling conventions are documented in ur10e.h.  Each function's
+ * statements appear twice: once on scalars in the single-configuration function, once in
+ * the lane loop of its batch function, which evaluates blocks of 8 configurations
+ * stored lane by lane so that the compiler can vectorize it.
  */
 #include "ur10e.h"
 
 #include <math.h>
 
-/* fk: Forward kinematics: pose of the TCP in the base frame. (double) */
-static inline void ur10e_fk_kernel(const double *restrict q, const double d1, const double a2, const double a3, const double d4, const double d5, const double d6, double *restrict base_T_tcp)
+/* Configurations per block of the batch functions. */
+#define UR10E_BLOCK 8
+
+/* sin and cos of x[0..n-1] into s and c, branch-free (vectorizable): Cody-Waite
+ * reduction by pi/2 = 1.570796325802803 + 9.920935791635221e-10 + 5.170182981794105e-19, Taylor polynomials on
+ * [-pi/4, pi/4], quadrant by comparisons; |x| > 100000.0, NaN and inf go to libm. */
+static void ur10e_sincos(size_t n, const double *restrict x, double *restrict s, double *restrict c)
+{
+    for (size_t i = 0; i < n; ++i) {
+        const double k = (x[i] * 0.6366197723675814 + 6755399441055744.0) - 6755399441055744.0;
+        const double r = ((x[i] - k * 1.570796325802803) - k * 9.920935791635221e-10) - k * 5.170182981794105e-19;
+        const double r2 = r * r;
+        double ps = 2.8114572543455206e-15;
+        ps = ps * r2 + -7.647163731819816e-13;
+        ps = ps * r2 + 1.6059043836821613e-10;
+        ps = ps * r2 + -2.505210838544172e-08;
+        ps = ps * r2 + 2.7557319223985893e-06;
+        ps = ps * r2 + -0.0001984126984126984;
+        ps = ps * r2 + 0.008333333333333333;
+        ps = ps * r2 + -0.16666666666666666;
+        double pc = -1.5619206968586225e-16;
+        pc = pc * r2 + 4.779477332387385e-14;
+        pc = pc * r2 + -1.1470745597729725e-11;
+        pc = pc * r2 + 2.08767569878681e-09;
+        pc = pc * r2 + -2.755731922398589e-07;
+        pc = pc * r2 + 2.48015873015873e-05;
+        pc = pc * r2 + -0.001388888888888889;
+        pc = pc * r2 + 0.041666666666666664;
+        pc = pc * r2 + -0.5;
+        const double sr = r + r * r2 * ps;
+        const double cr = 1.0 + r2 * pc;
+        /* quadrant k mod 4, as m = k - 4*round(k/4) in {-2, -1, 0, 1, 2} */
+        const double m = k - 4.0 * ((k * 0.25 + 6755399441055744.0) - 6755399441055744.0);
+        const int odd = m == 1.0 || m == -1.0;
+        const double sv = odd ? cr : sr;
+        const double cv = odd ? sr : cr;
+        s[i] = (m > 1.5 || m < -0.5) ? -sv : sv;
+        c[i] = (m > 0.5 || m < -1.5) ? -cv : cv;
+    }
+    for (size_t i = 0; i < n; ++i) {
+        if (!(fabs(x[i]) <= 100000.0)) {
+            s[i] = sin(x[i]);
+            c[i] = cos(x[i]);
+        }
+    }
+}
+
+/* sin and cos of x[0..n-1] into s and c, branch-free (vectorizable): Cody-Waite
+ * reduction by pi/2 = 1.5703125f + 0.0004837513f + 7.54979e-08f, Taylor polynomials on
+ * [-pi/4, pi/4], quadrant by comparisons; |x| > 2000.0f, NaN and inf go to libm. */
+static void ur10e_sincos_f32(size_t n, const float *restrict x, float *restrict s, float *restrict c)
+{
+    for (size_t i = 0; i < n; ++i) {
+        const float k = (x[i] * 0.63661975f + 1.2582912e+07f) - 1.2582912e+07f;
+        const float r = ((x[i] - k * 1.5703125f) - k * 0.0004837513f) - k * 7.54979e-08f;
+        const float r2 = r * r;
+        float ps = -2.5052108e-08f;
+        ps = ps * r2 + 2.7557319e-06f;
+        ps = ps * r2 + -0.0001984127f;
+        ps = ps * r2 + 0.008333334f;
+        ps = ps * r2 + -0.16666667f;
+        float pc = 2.0876756e-09f;
+        pc = pc * r2 + -2.755732e-07f;
+        pc = pc * r2 + 2.4801588e-05f;
+        pc = pc * r2 + -0.0013888889f;
+        pc = pc * r2 + 0.041666668f;
+        pc = pc * r2 + -0.5f;
+        const float sr = r + r * r2 * ps;
+        const float cr = 1.0f + r2 * pc;
+        /* quadrant k mod 4, as m = k - 4*round(k/4) in {-2, -1, 0, 1, 2} */
+        const float m = k - 4.0f * ((k * 0.25f + 1.2582912e+07f) - 1.2582912e+07f);
+        const int odd = m == 1.0f || m == -1.0f;
+        const float sv = odd ? cr : sr;
+        const float cv = odd ? sr : cr;
+        s[i] = (m > 1.5f || m < -0.5f) ? -sv : sv;
+        c[i] = (m > 0.5f || m < -1.5f) ? -cv : cv;
+    }
+    for (size_t i = 0; i < n; ++i) {
+        if (!(fabsf(x[i]) <= 2000.0f)) {
+            s[i] = sinf(x[i]);
+            c[i] = cosf(x[i]);
+        }
+    }
+}
+
+/* ur10e_fk: Forward kinematics: pose of the TCP in the base frame. */
+void ur10e_fk(const double *restrict q, double d1, double a2, double a3, double d4, double d5, double d6, double *restrict base_T_tcp)
 {
     const double q1 = q[0];
     const double q2 = q[1];
@@ -18,24 +106,39 @@ static inline void ur10e_fk_kernel(const double *restrict q, const double d1, co
     const double q4 = q[3];
     const double q5 = q[4];
     const double q6 = q[5];
-    const double _x0 = sin(q6);
-    const double _x1 = cos(q1);
-    const double _x2 = cos(q4);
-    const double _x3 = sin(q2);
-    const double _x4 = cos(q3);
-    const double _x5 = sin(q3);
-    const double _x6 = cos(q2);
+    const double _angle[6] = {q1, q2, q3, q4, q5, q6};
+    double _sin[6], _cos[6];
+    ur10e_sincos(6, _angle, _sin, _cos);
+    const double _sin_q1 = _sin[0];
+    const double _cos_q1 = _cos[0];
+    const double _sin_q2 = _sin[1];
+    const double _cos_q2 = _cos[1];
+    const double _sin_q3 = _sin[2];
+    const double _cos_q3 = _cos[2];
+    const double _sin_q4 = _sin[3];
+    const double _cos_q4 = _cos[3];
+    const double _sin_q5 = _sin[4];
+    const double _cos_q5 = _cos[4];
+    const double _sin_q6 = _sin[5];
+    const double _cos_q6 = _cos[5];
+    const double _x0 = _sin_q6;
+    const double _x1 = _cos_q1;
+    const double _x2 = _cos_q4;
+    const double _x3 = _sin_q2;
+    const double _x4 = _cos_q3;
+    const double _x5 = _sin_q3;
+    const double _x6 = _cos_q2;
     const double _x7 = _x3*_x4 + _x5*_x6;
-    const double _x8 = sin(q4);
+    const double _x8 = _sin_q4;
     const double _x9 = -_x3*_x5 + _x4*_x6;
     const double _x10 = _x2*_x7 + _x8*_x9;
     const double _x11 = _x1*_x10;
-    const double _x12 = cos(q6);
-    const double _x13 = sin(q1);
-    const double _x14 = sin(q5);
+    const double _x12 = _cos_q6;
+    const double _x13 = _sin_q1;
+    const double _x14 = _sin_q5;
     const double _x15 = _x13*_x14;
     const double _x16 = _x2*_x9 - _x7*_x8;
-    const double _x17 = cos(q5);
+    const double _x17 = _cos_q5;
     const double _x18 = _x1*_x17;
     const double _x19 = _x15 + _x16*_x18;
     const double _x20 = _x13*_x17;
@@ -66,21 +169,124 @@ static inline void ur10e_fk_kernel(const double *restrict q, const double d1, co
     base_T_tcp[15] = 1.0;
 }
 
-void ur10e_fk(const double *restrict q, double d1, double a2, double a3, double d4, double d5, double d6, double *restrict base_T_tcp)
-{
-    ur10e_fk_kernel(q, d1, a2, a3, d4, d5, d6, base_T_tcp);
-}
-
+/* ur10e_fk_batch: ur10e_fk for n configurations, in blocks of 8. */
 void ur10e_fk_batch(size_t n, const double *restrict q, const double *restrict params, size_t params_stride, double *restrict base_T_tcp)
 {
-    for (size_t _i = 0; _i < n; ++_i) {
-        const double *restrict _p = params + _i * params_stride;
-        ur10e_fk_kernel(q + _i * 6, _p[0], _p[1], _p[2], _p[3], _p[4], _p[5], base_T_tcp + _i * 16);
+    for (size_t _i = 0; _i < n; _i += UR10E_BLOCK) {
+        /* lanes past the end of the batch repeat configuration _i and are not stored */
+        const size_t _m = n - _i < UR10E_BLOCK ? n - _i : UR10E_BLOCK;
+        double _in[12][UR10E_BLOCK];
+        for (size_t _l = 0; _l < UR10E_BLOCK; ++_l) {
+            const size_t _j = _i + (_l < _m ? _l : 0);
+            _in[0][_l] = q[_j * 6 + 0];
+            _in[1][_l] = q[_j * 6 + 1];
+            _in[2][_l] = q[_j * 6 + 2];
+            _in[3][_l] = q[_j * 6 + 3];
+            _in[4][_l] = q[_j * 6 + 4];
+            _in[5][_l] = q[_j * 6 + 5];
+            _in[6][_l] = params[_j * params_stride + 0];
+            _in[7][_l] = params[_j * params_stride + 1];
+            _in[8][_l] = params[_j * params_stride + 2];
+            _in[9][_l] = params[_j * params_stride + 3];
+            _in[10][_l] = params[_j * params_stride + 4];
+            _in[11][_l] = params[_j * params_stride + 5];
+        }
+        double _angle[6][UR10E_BLOCK], _sin[6][UR10E_BLOCK], _cos[6][UR10E_BLOCK];
+        for (size_t _l = 0; _l < UR10E_BLOCK; ++_l) {
+            _angle[0][_l] = _in[0][_l];
+            _angle[1][_l] = _in[1][_l];
+            _angle[2][_l] = _in[2][_l];
+            _angle[3][_l] = _in[3][_l];
+            _angle[4][_l] = _in[4][_l];
+            _angle[5][_l] = _in[5][_l];
+        }
+        ur10e_sincos(6 * UR10E_BLOCK, &_angle[0][0], &_sin[0][0], &_cos[0][0]);
+        double _out[12][UR10E_BLOCK];
+        for (size_t _l = 0; _l < UR10E_BLOCK; ++_l) {
+            const double d1 = _in[6][_l];
+            const double a2 = _in[7][_l];
+            const double a3 = _in[8][_l];
+            const double d4 = _in[9][_l];
+            const double d5 = _in[10][_l];
+            const double d6 = _in[11][_l];
+            const double _sin_q1 = _sin[0][_l];
+            const double _cos_q1 = _cos[0][_l];
+            const double _sin_q2 = _sin[1][_l];
+            const double _cos_q2 = _cos[1][_l];
+            const double _sin_q3 = _sin[2][_l];
+            const double _cos_q3 = _cos[2][_l];
+            const double _sin_q4 = _sin[3][_l];
+            const double _cos_q4 = _cos[3][_l];
+            const double _sin_q5 = _sin[4][_l];
+            const double _cos_q5 = _cos[4][_l];
+            const double _sin_q6 = _sin[5][_l];
+            const double _cos_q6 = _cos[5][_l];
+            const double _x0 = _sin_q6;
+            const double _x1 = _cos_q1;
+            const double _x2 = _cos_q4;
+            const double _x3 = _sin_q2;
+            const double _x4 = _cos_q3;
+            const double _x5 = _sin_q3;
+            const double _x6 = _cos_q2;
+            const double _x7 = _x3*_x4 + _x5*_x6;
+            const double _x8 = _sin_q4;
+            const double _x9 = -_x3*_x5 + _x4*_x6;
+            const double _x10 = _x2*_x7 + _x8*_x9;
+            const double _x11 = _x1*_x10;
+            const double _x12 = _cos_q6;
+            const double _x13 = _sin_q1;
+            const double _x14 = _sin_q5;
+            const double _x15 = _x13*_x14;
+            const double _x16 = _x2*_x9 - _x7*_x8;
+            const double _x17 = _cos_q5;
+            const double _x18 = _x1*_x17;
+            const double _x19 = _x15 + _x16*_x18;
+            const double _x20 = _x13*_x17;
+            const double _x21 = _x1*_x14;
+            const double _x22 = -_x16*_x21 + _x20;
+            const double _x23 = _x6*a2;
+            const double _x24 = _x9*a3;
+            const double _x25 = _x10*_x13;
+            const double _x26 = _x16*_x20 - _x21;
+            const double _x27 = -(_x15*_x16 + _x18);
+            const double _x28 = _x10*_x17;
+            const double _x29 = _x10*_x14;
+            _out[0][_l] = -_x0*_x11 + _x12*_x19;
+            _out[1][_l] = -(_x0*_x19 + _x11*_x12);
+            _out[2][_l] = _x22;
+            _out[3][_l] = _x1*_x23 + _x1*_x24 + _x11*d5 + _x13*d4 + _x22*d6;
+            _out[4][_l] = -_x0*_x25 + _x12*_x26;
+            _out[5][_l] = -(_x0*_x26 + _x12*_x25);
+            _out[6][_l] = _x27;
+            _out[7][_l] = -_x1*d4 + _x13*_x23 + _x13*_x24 + _x25*d5 + _x27*d6;
+            _out[8][_l] = _x0*_x16 + _x12*_x28;
+            _out[9][_l] = -_x0*_x28 + _x12*_x16;
+            _out[10][_l] = -_x29;
+            _out[11][_l] = -_x16*d5 - _x29*d6 + _x3*a2 + _x7*a3 + d1;
+        }
+        for (size_t _l = 0; _l < _m; ++_l) {
+            base_T_tcp[(_i + _l) * 16 + 0] = _out[0][_l];
+            base_T_tcp[(_i + _l) * 16 + 1] = _out[1][_l];
+            base_T_tcp[(_i + _l) * 16 + 2] = _out[2][_l];
+            base_T_tcp[(_i + _l) * 16 + 3] = _out[3][_l];
+            base_T_tcp[(_i + _l) * 16 + 4] = _out[4][_l];
+            base_T_tcp[(_i + _l) * 16 + 5] = _out[5][_l];
+            base_T_tcp[(_i + _l) * 16 + 6] = _out[6][_l];
+            base_T_tcp[(_i + _l) * 16 + 7] = _out[7][_l];
+            base_T_tcp[(_i + _l) * 16 + 8] = _out[8][_l];
+            base_T_tcp[(_i + _l) * 16 + 9] = _out[9][_l];
+            base_T_tcp[(_i + _l) * 16 + 10] = _out[10][_l];
+            base_T_tcp[(_i + _l) * 16 + 11] = _out[11][_l];
+            base_T_tcp[(_i + _l) * 16 + 12] = 0.0;
+            base_T_tcp[(_i + _l) * 16 + 13] = 0.0;
+            base_T_tcp[(_i + _l) * 16 + 14] = 0.0;
+            base_T_tcp[(_i + _l) * 16 + 15] = 1.0;
+        }
     }
 }
 
-/* frames: Pose of every link frame in the base frame. (double) */
-static inline void ur10e_frames_kernel(const double *restrict q, const double d1, const double a2, const double a3, const double d4, const double d5, const double d6, double *restrict base_T_shoulder, double *restrict base_T_upper_arm, double *restrict base_T_forearm, double *restrict base_T_wrist1, double *restrict base_T_wrist2, double *restrict base_T_wrist3)
+/* ur10e_frames: Pose of every link frame in the base frame. */
+void ur10e_frames(const double *restrict q, double d1, double a2, double a3, double d4, double d5, double d6, double *restrict base_T_shoulder, double *restrict base_T_upper_arm, double *restrict base_T_forearm, double *restrict base_T_wrist1, double *restrict base_T_wrist2, double *restrict base_T_wrist3)
 {
     const double q1 = q[0];
     const double q2 = q[1];
@@ -88,15 +294,30 @@ static inline void ur10e_frames_kernel(const double *restrict q, const double d1
     const double q4 = q[3];
     const double q5 = q[4];
     const double q6 = q[5];
-    const double _x0 = cos(q1);
-    const double _x1 = sin(q1);
-    const double _x2 = cos(q2);
+    const double _angle[6] = {q1, q2, q3, q4, q5, q6};
+    double _sin[6], _cos[6];
+    ur10e_sincos(6, _angle, _sin, _cos);
+    const double _sin_q1 = _sin[0];
+    const double _cos_q1 = _cos[0];
+    const double _sin_q2 = _sin[1];
+    const double _cos_q2 = _cos[1];
+    const double _sin_q3 = _sin[2];
+    const double _cos_q3 = _cos[2];
+    const double _sin_q4 = _sin[3];
+    const double _cos_q4 = _cos[3];
+    const double _sin_q5 = _sin[4];
+    const double _cos_q5 = _cos[4];
+    const double _sin_q6 = _sin[5];
+    const double _cos_q6 = _cos[5];
+    const double _x0 = _cos_q1;
+    const double _x1 = _sin_q1;
+    const double _x2 = _cos_q2;
     const double _x3 = _x0*_x2;
-    const double _x4 = sin(q2);
+    const double _x4 = _sin_q2;
     const double _x5 = _x1*_x2;
     const double _x6 = -_x0;
-    const double _x7 = cos(q3);
-    const double _x8 = sin(q3);
+    const double _x7 = _cos_q3;
+    const double _x8 = _sin_q3;
     const double _x9 = _x2*_x7 - _x4*_x8;
     const double _x10 = _x0*_x9;
     const double _x11 = _x2*_x8 + _x4*_x7;
@@ -104,9 +325,9 @@ static inline void ur10e_frames_kernel(const double *restrict q, const double d1
     const double _x13 = _x1*_x9;
     const double _x14 = _x5*a2;
     const double _x15 = _x4*a2 + d1;
-    const double _x16 = cos(q4);
+    const double _x16 = _cos_q4;
     const double _x17 = _x16*_x9;
-    const double _x18 = sin(q4);
+    const double _x18 = _sin_q4;
     const double _x19 = _x11*_x18;
     const double _x20 = _x17 - _x19;
     const double _x21 = _x0*_x20;
@@ -117,8 +338,8 @@ static inline void ur10e_frames_kernel(const double *restrict q, const double d1
     const double _x26 = _x1*_x22;
     const double _x27 = -_x0*d4 + _x13*a3 + _x14;
     const double _x28 = _x11*a3 + _x15;
-    const double _x29 = sin(q5);
-    const double _x30 = cos(q5);
+    const double _x29 = _sin_q5;
+    const double _x30 = _cos_q5;
     const double _x31 = _x1*_x29 + _x21*_x30;
     const double _x32 = _x1*_x30 - _x21*_x29;
     const double _x33 = _x23*d5 + _x24;
@@ -129,8 +350,8 @@ static inline void ur10e_frames_kernel(const double *restrict q, const double d1
     const double _x38 = _x22*_x29;
     const double _x39 = -_x38;
     const double _x40 = -_x20*d5 + _x28;
-    const double _x41 = sin(q6);
-    const double _x42 = cos(q6);
+    const double _x41 = _sin_q6;
+    const double _x42 = _cos_q6;
     base_T_shoulder[0] = _x0;
     base_T_shoulder[1] = -_x1;
     base_T_shoulder[2] = 0.0;
@@ -229,146 +450,303 @@ static inline void ur10e_frames_kernel(const double *restrict q, const double d1
     base_T_wrist3[15] = 1.0;
 }
 
-void ur10e_frames(const double *restrict q, double d1, double a2, double a3, double d4, double d5, double d6, double *restrict base_T_shoulder, double *restrict base_T_upper_arm, double *restrict base_T_forearm, double *restrict base_T_wrist1, double *restrict base_T_wrist2, double *restrict base_T_wrist3)
-{
-    ur10e_frames_kernel(q, d1, a2, a3, d4, d5, d6, base_T_shoulder, base_T_upper_arm, base_T_forearm, base_T_wrist1, base_T_wrist2, base_T_wrist3);
-}
-
+/* ur10e_frames_batch: ur10e_frames for n configurations, in blocks of 8. */
 void ur10e_frames_batch(size_t n, const double *restrict q, const double *restrict params, size_t params_stride, double *restrict base_T_shoulder, double *restrict base_T_upper_arm, double *restrict base_T_forearm, double *restrict base_T_wrist1, double *restrict base_T_wrist2, double *restrict base_T_wrist3)
 {
-    for (size_t _i = 0; _i < n; ++_i) {
-        const double *restrict _p = params + _i * params_stride;
-        ur10e_frames_kernel(q + _i * 6, _p[0], _p[1], _p[2], _p[3], _p[4], _p[5], base_T_shoulder + _i * 16, base_T_upper_arm + _i * 16, base_T_forearm + _i * 16, base_T_wrist1 + _i * 16, base_T_wrist2 + _i * 16, base_T_wrist3 + _i * 16);
+    for (size_t _i = 0; _i < n; _i += UR10E_BLOCK) {
+        /* lanes past the end of the batch repeat configuration _i and are not stored */
+        const size_t _m = n - _i < UR10E_BLOCK ? n - _i : UR10E_BLOCK;
+        double _in[12][UR10E_BLOCK];
+        for (size_t _l = 0; _l < UR10E_BLOCK; ++_l) {
+            const size_t _j = _i + (_l < _m ? _l : 0);
+            _in[0][_l] = q[_j * 6 + 0];
+            _in[1][_l] = q[_j * 6 + 1];
+            _in[2][_l] = q[_j * 6 + 2];
+            _in[3][_l] = q[_j * 6 + 3];
+            _in[4][_l] = q[_j * 6 + 4];
+            _in[5][_l] = q[_j * 6 + 5];
+            _in[6][_l] = params[_j * params_stride + 0];
+            _in[7][_l] = params[_j * params_stride + 1];
+            _in[8][_l] = params[_j * params_stride + 2];
+            _in[9][_l] = params[_j * params_stride + 3];
+            _in[10][_l] = params[_j * params_stride + 4];
+            _in[11][_l] = params[_j * params_stride + 5];
+        }
+        double _angle[6][UR10E_BLOCK], _sin[6][UR10E_BLOCK], _cos[6][UR10E_BLOCK];
+        for (size_t _l = 0; _l < UR10E_BLOCK; ++_l) {
+            _angle[0][_l] = _in[0][_l];
+            _angle[1][_l] = _in[1][_l];
+            _angle[2][_l] = _in[2][_l];
+            _angle[3][_l] = _in[3][_l];
+            _angle[4][_l] = _in[4][_l];
+            _angle[5][_l] = _in[5][_l];
+        }
+        ur10e_sincos(6 * UR10E_BLOCK, &_angle[0][0], &_sin[0][0], &_cos[0][0]);
+        double _out[60][UR10E_BLOCK];
+        for (size_t _l = 0; _l < UR10E_BLOCK; ++_l) {
+            const double d1 = _in[6][_l];
+            const double a2 = _in[7][_l];
+            const double a3 = _in[8][_l];
+            const double d4 = _in[9][_l];
+            const double d5 = _in[10][_l];
+            const double d6 = _in[11][_l];
+            const double _sin_q1 = _sin[0][_l];
+            const double _cos_q1 = _cos[0][_l];
+            const double _sin_q2 = _sin[1][_l];
+            const double _cos_q2 = _cos[1][_l];
+            const double _sin_q3 = _sin[2][_l];
+            const double _cos_q3 = _cos[2][_l];
+            const double _sin_q4 = _sin[3][_l];
+            const double _cos_q4 = _cos[3][_l];
+            const double _sin_q5 = _sin[4][_l];
+            const double _cos_q5 = _cos[4][_l];
+            const double _sin_q6 = _sin[5][_l];
+            const double _cos_q6 = _cos[5][_l];
+            const double _x0 = _cos_q1;
+            const double _x1 = _sin_q1;
+            const double _x2 = _cos_q2;
+            const double _x3 = _x0*_x2;
+            const double _x4 = _sin_q2;
+            const double _x5 = _x1*_x2;
+            const double _x6 = -_x0;
+            const double _x7 = _cos_q3;
+            const double _x8 = _sin_q3;
+            const double _x9 = _x2*_x7 - _x4*_x8;
+            const double _x10 = _x0*_x9;
+            const double _x11 = _x2*_x8 + _x4*_x7;
+            const double _x12 = _x3*a2;
+            const double _x13 = _x1*_x9;
+            const double _x14 = _x5*a2;
+            const double _x15 = _x4*a2 + d1;
+            const double _x16 = _cos_q4;
+            const double _x17 = _x16*_x9;
+            const double _x18 = _sin_q4;
+            const double _x19 = _x11*_x18;
+            const double _x20 = _x17 - _x19;
+            const double _x21 = _x0*_x20;
+            const double _x22 = _x11*_x16 + _x18*_x9;
+            const double _x23 = _x0*_x22;
+            const double _x24 = _x1*d4 + _x10*a3 + _x12;
+            const double _x25 = _x1*_x20;
+            const double _x26 = _x1*_x22;
+            const double _x27 = -_x0*d4 + _x13*a3 + _x14;
+            const double _x28 = _x11*a3 + _x15;
+            const double _x29 = _sin_q5;
+            const double _x30 = _cos_q5;
+            const double _x31 = _x1*_x29 + _x21*_x30;
+            const double _x32 = _x1*_x30 - _x21*_x29;
+            const double _x33 = _x23*d5 + _x24;
+            const double _x34 = -_x0*_x29 + _x25*_x30;
+            const double _x35 = -(_x0*_x30 + _x25*_x29);
+            const double _x36 = _x26*d5 + _x27;
+            const double _x37 = _x22*_x30;
+            const double _x38 = _x22*_x29;
+            const double _x39 = -_x38;
+            const double _x40 = -_x20*d5 + _x28;
+            const double _x41 = _sin_q6;
+            const double _x42 = _cos_q6;
+            _out[0][_l] = _x0;
+            _out[1][_l] = -_x1;
+            _out[2][_l] = _x1;
+            _out[3][_l] = _x0;
+            _out[4][_l] = d1;
+            _out[5][_l] = _x3;
+            _out[6][_l] = -_x0*_x4;
+            _out[7][_l] = _x1;
+            _out[8][_l] = _x5;
+            _out[9][_l] = -_x1*_x4;
+            _out[10][_l] = _x6;
+            _out[11][_l] = _x4;
+            _out[12][_l] = _x2;
+            _out[13][_l] = d1;
+            _out[14][_l] = _x10;
+            _out[15][_l] = -_x0*_x11;
+            _out[16][_l] = _x1;
+            _out[17][_l] = _x12;
+            _out[18][_l] = _x13;
+            _out[19][_l] = -_x1*_x11;
+            _out[20][_l] = _x6;
+            _out[21][_l] = _x14;
+            _out[22][_l] = _x11;
+            _out[23][_l] = _x9;
+            _out[24][_l] = _x15;
+            _out[25][_l] = _x21;
+            _out[26][_l] = -_x23;
+            _out[27][_l] = _x1;
+            _out[28][_l] = _x24;
+            _out[29][_l] = _x25;
+            _out[30][_l] = -_x26;
+            _out[31][_l] = _x6;
+            _out[32][_l] = _x27;
+            _out[33][_l] = _x22;
+            _out[34][_l] = _x20;
+            _out[35][_l] = _x28;
+            _out[36][_l] = _x31;
+            _out[37][_l] = _x32;
+            _out[38][_l] = _x23;
+            _out[39][_l] = _x33;
+            _out[40][_l] = _x34;
+            _out[41][_l] = _x35;
+            _out[42][_l] = _x26;
+            _out[43][_l] = _x36;
+            _out[44][_l] = _x37;
+            _out[45][_l] = _x39;
+            _out[46][_l] = -_x17 + _x19;
+            _out[47][_l] = _x40;
+            _out[48][_l] = -_x23*_x41 + _x31*_x42;
+            _out[49][_l] = -(_x23*_x42 + _x31*_x41);
+            _out[50][_l] = _x32;
+            _out[51][_l] = _x32*d6 + _x33;
+            _out[52][_l] = -_x26*_x41 + _x34*_x42;
+            _out[53][_l] = -(_x26*_x42 + _x34*_x41);
+            _out[54][_l] = _x35;
+            _out[55][_l] = _x35*d6 + _x36;
+            _out[56][_l] = _x20*_x41 + _x37*_x42;
+            _out[57][_l] = _x20*_x42 - _x37*_x41;
+            _out[58][_l] = _x39;
+            _out[59][_l] = -_x38*d6 + _x40;
+        }
+        for (size_t _l = 0; _l < _m; ++_l) {
+            base_T_shoulder[(_i + _l) * 16 + 0] = _out[0][_l];
+            base_T_shoulder[(_i + _l) * 16 + 1] = _out[1][_l];
+            base_T_shoulder[(_i + _l) * 16 + 2] = 0.0;
+            base_T_shoulder[(_i + _l) * 16 + 3] = 0.0;
+            base_T_shoulder[(_i + _l) * 16 + 4] = _out[2][_l];
+            base_T_shoulder[(_i + _l) * 16 + 5] = _out[3][_l];
+            base_T_shoulder[(_i + _l) * 16 + 6] = 0.0;
+            base_T_shoulder[(_i + _l) * 16 + 7] = 0.0;
+            base_T_shoulder[(_i + _l) * 16 + 8] = 0.0;
+            base_T_shoulder[(_i + _l) * 16 + 9] = 0.0;
+            base_T_shoulder[(_i + _l) * 16 + 10] = 1.0;
+            base_T_shoulder[(_i + _l) * 16 + 11] = _out[4][_l];
+            base_T_shoulder[(_i + _l) * 16 + 12] = 0.0;
+            base_T_shoulder[(_i + _l) * 16 + 13] = 0.0;
+            base_T_shoulder[(_i + _l) * 16 + 14] = 0.0;
+            base_T_shoulder[(_i + _l) * 16 + 15] = 1.0;
+            base_T_upper_arm[(_i + _l) * 16 + 0] = _out[5][_l];
+            base_T_upper_arm[(_i + _l) * 16 + 1] = _out[6][_l];
+            base_T_upper_arm[(_i + _l) * 16 + 2] = _out[7][_l];
+            base_T_upper_arm[(_i + _l) * 16 + 3] = 0.0;
+            base_T_upper_arm[(_i + _l) * 16 + 4] = _out[8][_l];
+            base_T_upper_arm[(_i + _l) * 16 + 5] = _out[9][_l];
+            base_T_upper_arm[(_i + _l) * 16 + 6] = _out[10][_l];
+            base_T_upper_arm[(_i + _l) * 16 + 7] = 0.0;
+            base_T_upper_arm[(_i + _l) * 16 + 8] = _out[11][_l];
+            base_T_upper_arm[(_i + _l) * 16 + 9] = _out[12][_l];
+            base_T_upper_arm[(_i + _l) * 16 + 10] = 0.0;
+            base_T_upper_arm[(_i + _l) * 16 + 11] = _out[13][_l];
+            base_T_upper_arm[(_i + _l) * 16 + 12] = 0.0;
+            base_T_upper_arm[(_i + _l) * 16 + 13] = 0.0;
+            base_T_upper_arm[(_i + _l) * 16 + 14] = 0.0;
+            base_T_upper_arm[(_i + _l) * 16 + 15] = 1.0;
+            base_T_forearm[(_i + _l) * 16 + 0] = _out[14][_l];
+            base_T_forearm[(_i + _l) * 16 + 1] = _out[15][_l];
+            base_T_forearm[(_i + _l) * 16 + 2] = _out[16][_l];
+            base_T_forearm[(_i + _l) * 16 + 3] = _out[17][_l];
+            base_T_forearm[(_i + _l) * 16 + 4] = _out[18][_l];
+            base_T_forearm[(_i + _l) * 16 + 5] = _out[19][_l];
+            base_T_forearm[(_i + _l) * 16 + 6] = _out[20][_l];
+            base_T_forearm[(_i + _l) * 16 + 7] = _out[21][_l];
+            base_T_forearm[(_i + _l) * 16 + 8] = _out[22][_l];
+            base_T_forearm[(_i + _l) * 16 + 9] = _out[23][_l];
+            base_T_forearm[(_i + _l) * 16 + 10] = 0.0;
+            base_T_forearm[(_i + _l) * 16 + 11] = _out[24][_l];
+            base_T_forearm[(_i + _l) * 16 + 12] = 0.0;
+            base_T_forearm[(_i + _l) * 16 + 13] = 0.0;
+            base_T_forearm[(_i + _l) * 16 + 14] = 0.0;
+            base_T_forearm[(_i + _l) * 16 + 15] = 1.0;
+            base_T_wrist1[(_i + _l) * 16 + 0] = _out[25][_l];
+            base_T_wrist1[(_i + _l) * 16 + 1] = _out[26][_l];
+            base_T_wrist1[(_i + _l) * 16 + 2] = _out[27][_l];
+            base_T_wrist1[(_i + _l) * 16 + 3] = _out[28][_l];
+            base_T_wrist1[(_i + _l) * 16 + 4] = _out[29][_l];
+            base_T_wrist1[(_i + _l) * 16 + 5] = _out[30][_l];
+            base_T_wrist1[(_i + _l) * 16 + 6] = _out[31][_l];
+            base_T_wrist1[(_i + _l) * 16 + 7] = _out[32][_l];
+            base_T_wrist1[(_i + _l) * 16 + 8] = _out[33][_l];
+            base_T_wrist1[(_i + _l) * 16 + 9] = _out[34][_l];
+            base_T_wrist1[(_i + _l) * 16 + 10] = 0.0;
+            base_T_wrist1[(_i + _l) * 16 + 11] = _out[35][_l];
+            base_T_wrist1[(_i + _l) * 16 + 12] = 0.0;
+            base_T_wrist1[(_i + _l) * 16 + 13] = 0.0;
+            base_T_wrist1[(_i + _l) * 16 + 14] = 0.0;
+            base_T_wrist1[(_i + _l) * 16 + 15] = 1.0;
+            base_T_wrist2[(_i + _l) * 16 + 0] = _out[36][_l];
+            base_T_wrist2[(_i + _l) * 16 + 1] = _out[37][_l];
+            base_T_wrist2[(_i + _l) * 16 + 2] = _out[38][_l];
+            base_T_wrist2[(_i + _l) * 16 + 3] = _out[39][_l];
+            base_T_wrist2[(_i + _l) * 16 + 4] = _out[40][_l];
+            base_T_wrist2[(_i + _l) * 16 + 5] = _out[41][_l];
+            base_T_wrist2[(_i + _l) * 16 + 6] = _out[42][_l];
+            base_T_wrist2[(_i + _l) * 16 + 7] = _out[43][_l];
+            base_T_wrist2[(_i + _l) * 16 + 8] = _out[44][_l];
+            base_T_wrist2[(_i + _l) * 16 + 9] = _out[45][_l];
+            base_T_wrist2[(_i + _l) * 16 + 10] = _out[46][_l];
+            base_T_wrist2[(_i + _l) * 16 + 11] = _out[47][_l];
+            base_T_wrist2[(_i + _l) * 16 + 12] = 0.0;
+            base_T_wrist2[(_i + _l) * 16 + 13] = 0.0;
+            base_T_wrist2[(_i + _l) * 16 + 14] = 0.0;
+            base_T_wrist2[(_i + _l) * 16 + 15] = 1.0;
+            base_T_wrist3[(_i + _l) * 16 + 0] = _out[48][_l];
+            base_T_wrist3[(_i + _l) * 16 + 1] = _out[49][_l];
+            base_T_wrist3[(_i + _l) * 16 + 2] = _out[50][_l];
+            base_T_wrist3[(_i + _l) * 16 + 3] = _out[51][_l];
+            base_T_wrist3[(_i + _l) * 16 + 4] = _out[52][_l];
+            base_T_wrist3[(_i + _l) * 16 + 5] = _out[53][_l];
+            base_T_wrist3[(_i + _l) * 16 + 6] = _out[54][_l];
+            base_T_wrist3[(_i + _l) * 16 + 7] = _out[55][_l];
+            base_T_wrist3[(_i + _l) * 16 + 8] = _out[56][_l];
+            base_T_wrist3[(_i + _l) * 16 + 9] = _out[57][_l];
+            base_T_wrist3[(_i + _l) * 16 + 10] = _out[58][_l];
+            base_T_wrist3[(_i + _l) * 16 + 11] = _out[59][_l];
+            base_T_wrist3[(_i + _l) * 16 + 12] = 0.0;
+            base_T_wrist3[(_i + _l) * 16 + 13] = 0.0;
+            base_T_wrist3[(_i + _l) * 16 + 14] = 0.0;
+            base_T_wrist3[(_i + _l) * 16 + 15] = 1.0;
+        }
     }
 }
 
-/* jacobian: Task Jacobian of the TCP. (double) */
-static inline void ur10e_jacobian_kernel(const double *restrict q, const double a2, const double a3, const double d4, const double d5, const double d6, double *restrict J)
-{
-    const double q1 = q[0];
-    const double q2 = q[1];
-    const double q3 = q[2];
-    const double q4 = q[3];
-    const double q5 = q[4];
-    const double _x0 = sin(q1);
-    const double _x1 = cos(q2);
-    const double _x2 = _x1*a2;
-    const double _x3 = cos(q3);
-    const double _x4 = sin(q2);
-    const double _x5 = sin(q3);
-    const double _x6 = _x1*_x3 - _x4*_x5;
-    const double _x7 = _x6*a3;
-    const double _x8 = cos(q1);
-    const double _x9 = cos(q4);
-    const double _x10 = _x1*_x5 + _x3*_x4;
-    const double _x11 = sin(q4);
-    const double _x12 = _x10*_x9 + _x11*_x6;
-    const double _x13 = _x0*_x12;
-    const double _x14 = cos(q5);
-    const double _x15 = _x6*_x9;
-    const double _x16 = _x10*_x11;
-    const double _x17 = _x15 - _x16;
-    const double _x18 = sin(q5);
-    const double _x19 = _x17*_x18;
-    const double _x20 = -(_x0*_x19 + _x14*_x8);
-    const double _x21 = _x13*d5 + _x20*d6;
-    const double _x22 = _x21 - _x8*d4;
-    const double _x23 = _x0*_x7 + _x22;
-    const double _x24 = _x0*_x2 + _x23;
-    const double _x25 = _x17*d5;
-    const double _x26 = _x12*_x18;
-    const double _x27 = _x26*d6;
-    const double _x28 = _x10*a3 - _x25 - _x27 + _x4*a2;
-    const double _x29 = _x25 + _x27;
-    const double _x30 = -(-_x10*a3 + _x29);
-    const double _x31 = -_x29;
-    const double _x32 = _x31*_x8;
-    const double _x33 = _x0*_x31;
-    const double _x34 = _x12*_x8;
-    const double _x35 = _x0*_x14 - _x19*_x8;
-    const double _x36 = _x34*d5 + _x35*d6;
-    const double _x37 = _x0*d4 + _x36;
-    const double _x38 = _x37 + _x7*_x8;
-    const double _x39 = _x2*_x8 + _x38;
-    const double _x40 = -_x8;
-    J[0] = -_x24;
-    J[1] = -_x28*_x8;
-    J[2] = -_x30*_x8;
-    J[3] = -_x32;
-    J[4] = _x12*_x33 + _x17*_x21;
-    J[5] = 0.0;
-    J[6] = _x39;
-    J[7] = -_x0*_x28;
-    J[8] = -_x0*_x30;
-    J[9] = -_x33;
-    J[10] = -(_x12*_x32 + _x17*_x36);
-    J[11] = 0.0;
-    J[12] = 0.0;
-    J[13] = _x0*_x24 + _x39*_x8;
-    J[14] = _x0*_x23 + _x38*_x8;
-    J[15] = _x0*_x22 + _x37*_x8;
-    J[16] = -_x13*_x36 + _x21*_x34;
-    J[17] = 0.0;
-    J[18] = 0.0;
-    J[19] = _x0;
-    J[20] = _x0;
-    J[21] = _x0;
-    J[22] = _x34;
-    J[23] = _x35;
-    J[24] = 0.0;
-    J[25] = _x40;
-    J[26] = _x40;
-    J[27] = _x40;
-    J[28] = _x13;
-    J[29] = _x20;
-    J[30] = 1.0;
-    J[31] = 0.0;
-    J[32] = 0.0;
-    J[33] = 0.0;
-    J[34] = -_x15 + _x16;
-    J[35] = -_x26;
-}
-
+/* ur10e_jacobian: Task Jacobian of the TCP. */
 void ur10e_jacobian(const double *restrict q, double a2, double a3, double d4, double d5, double d6, double *restrict J)
 {
-    ur10e_jacobian_kernel(q, a2, a3, d4, d5, d6, J);
-}
-
-void ur10e_jacobian_batch(size_t n, const double *restrict q, const double *restrict params, size_t params_stride, double *restrict J)
-{
-    for (size_t _i = 0; _i < n; ++_i) {
-        const double *restrict _p = params + _i * params_stride;
-        ur10e_jacobian_kernel(q + _i * 6, _p[0], _p[1], _p[2], _p[3], _p[4], J + _i * 36);
-    }
-}
-
-/* jacobian_geometric: Geometric Jacobian of the TCP in the base frame. (double) */
-static inline void ur10e_jacobian_geometric_kernel(const double *restrict q, const double a2, const double a3, const double d4, const double d5, const double d6, double *restrict J)
-{
     const double q1 = q[0];
     const double q2 = q[1];
     const double q3 = q[2];
     const double q4 = q[3];
     const double q5 = q[4];
-    const double _x0 = sin(q1);
-    const double _x1 = cos(q2);
+    const double _angle[5] = {q1, q2, q3, q4, q5};
+    double _sin[5], _cos[5];
+    ur10e_sincos(5, _angle, _sin, _cos);
+    const double _sin_q1 = _sin[0];
+    const double _cos_q1 = _cos[0];
+    const double _sin_q2 = _sin[1];
+    const double _cos_q2 = _cos[1];
+    const double _sin_q3 = _sin[2];
+    const double _cos_q3 = _cos[2];
+    const double _sin_q4 = _sin[3];
+    const double _cos_q4 = _cos[3];
+    const double _sin_q5 = _sin[4];
+    const double _cos_q5 = _cos[4];
+    const double _x0 = _sin_q1;
+    const double _x1 = _cos_q2;
     const double _x2 = _x1*a2;
-    const double _x3 = cos(q3);
-    const double _x4 = sin(q2);
-    const double _x5 = sin(q3);
+    const double _x3 = _cos_q3;
+    const double _x4 = _sin_q2;
+    const double _x5 = _sin_q3;
     const double _x6 = _x1*_x3 - _x4*_x5;
     const double _x7 = _x6*a3;
-    const double _x8 = cos(q1);
-    const double _x9 = cos(q4);
+    const double _x8 = _cos_q1;
+    const double _x9 = _cos_q4;
     const double _x10 = _x1*_x5 + _x3*_x4;
-    const double _x11 = sin(q4);
+    const double _x11 = _sin_q4;
     const double _x12 = _x10*_x9 + _x11*_x6;
     const double _x13 = _x0*_x12;
-    const double _x14 = cos(q5);
+    const double _x14 = _cos_q5;
     const double _x15 = _x6*_x9;
     const double _x16 = _x10*_x11;
     const double _x17 = _x15 - _x16;
-    const double _x18 = sin(q5);
+    const double _x18 = _sin_q5;
     const double _x19 = _x17*_x18;
     const double _x20 = -(_x0*_x19 + _x14*_x8);
     const double _x21 = _x13*d5 + _x20*d6;
@@ -429,21 +807,418 @@ static inline void ur10e_jacobian_geometric_kernel(const double *restrict q, con
     J[35] = -_x26;
 }
 
-void ur10e_jacobian_geometric(const double *restrict q, double a2, double a3, double d4, double d5, double d6, double *restrict J)
+/* ur10e_jacobian_batch: ur10e_jacobian for n configurations, in blocks of 8. */
+void ur10e_jacobian_batch(size_t n, const double *restrict q, const double *restrict params, size_t params_stride, double *restrict J)
 {
-    ur10e_jacobian_geometric_kernel(q, a2, a3, d4, d5, d6, J);
-}
-
-void ur10e_jacobian_geometric_batch(size_t n, const double *restrict q, const double *restrict params, size_t params_stride, double *restrict J)
-{
-    for (size_t _i = 0; _i < n; ++_i) {
-        const double *restrict _p = params + _i * params_stride;
-        ur10e_jacobian_geometric_kernel(q + _i * 6, _p[0], _p[1], _p[2], _p[3], _p[4], J + _i * 36);
+    for (size_t _i = 0; _i < n; _i += UR10E_BLOCK) {
+        /* lanes past the end of the batch repeat configuration _i and are not stored */
+        const size_t _m = n - _i < UR10E_BLOCK ? n - _i : UR10E_BLOCK;
+        double _in[10][UR10E_BLOCK];
+        for (size_t _l = 0; _l < UR10E_BLOCK; ++_l) {
+            const size_t _j = _i + (_l < _m ? _l : 0);
+            _in[0][_l] = q[_j * 6 + 0];
+            _in[1][_l] = q[_j * 6 + 1];
+            _in[2][_l] = q[_j * 6 + 2];
+            _in[3][_l] = q[_j * 6 + 3];
+            _in[4][_l] = q[_j * 6 + 4];
+            _in[5][_l] = params[_j * params_stride + 0];
+            _in[6][_l] = params[_j * params_stride + 1];
+            _in[7][_l] = params[_j * params_stride + 2];
+            _in[8][_l] = params[_j * params_stride + 3];
+            _in[9][_l] = params[_j * params_stride + 4];
+        }
+        double _angle[5][UR10E_BLOCK], _sin[5][UR10E_BLOCK], _cos[5][UR10E_BLOCK];
+        for (size_t _l = 0; _l < UR10E_BLOCK; ++_l) {
+            _angle[0][_l] = _in[0][_l];
+            _angle[1][_l] = _in[1][_l];
+            _angle[2][_l] = _in[2][_l];
+            _angle[3][_l] = _in[3][_l];
+            _angle[4][_l] = _in[4][_l];
+        }
+        ur10e_sincos(5 * UR10E_BLOCK, &_angle[0][0], &_sin[0][0], &_cos[0][0]);
+        double _out[26][UR10E_BLOCK];
+        for (size_t _l = 0; _l < UR10E_BLOCK; ++_l) {
+            const double a2 = _in[5][_l];
+            const double a3 = _in[6][_l];
+            const double d4 = _in[7][_l];
+            const double d5 = _in[8][_l];
+            const double d6 = _in[9][_l];
+            const double _sin_q1 = _sin[0][_l];
+            const double _cos_q1 = _cos[0][_l];
+            const double _sin_q2 = _sin[1][_l];
+            const double _cos_q2 = _cos[1][_l];
+            const double _sin_q3 = _sin[2][_l];
+            const double _cos_q3 = _cos[2][_l];
+            const double _sin_q4 = _sin[3][_l];
+            const double _cos_q4 = _cos[3][_l];
+            const double _sin_q5 = _sin[4][_l];
+            const double _cos_q5 = _cos[4][_l];
+            const double _x0 = _sin_q1;
+            const double _x1 = _cos_q2;
+            const double _x2 = _x1*a2;
+            const double _x3 = _cos_q3;
+            const double _x4 = _sin_q2;
+            const double _x5 = _sin_q3;
+            const double _x6 = _x1*_x3 - _x4*_x5;
+            const double _x7 = _x6*a3;
+            const double _x8 = _cos_q1;
+            const double _x9 = _cos_q4;
+            const double _x10 = _x1*_x5 + _x3*_x4;
+            const double _x11 = _sin_q4;
+            const double _x12 = _x10*_x9 + _x11*_x6;
+            const double _x13 = _x0*_x12;
+            const double _x14 = _cos_q5;
+            const double _x15 = _x6*_x9;
+            const double _x16 = _x10*_x11;
+            const double _x17 = _x15 - _x16;
+            const double _x18 = _sin_q5;
+            const double _x19 = _x17*_x18;
+            const double _x20 = -(_x0*_x19 + _x14*_x8);
+            const double _x21 = _x13*d5 + _x20*d6;
+            const double _x22 = _x21 - _x8*d4;
+            const double _x23 = _x0*_x7 + _x22;
+            const double _x24 = _x0*_x2 + _x23;
+            const double _x25 = _x17*d5;
+            const double _x26 = _x12*_x18;
+            const double _x27 = _x26*d6;
+            const double _x28 = _x10*a3 - _x25 - _x27 + _x4*a2;
+            const double _x29 = _x25 + _x27;
+            const double _x30 = -(-_x10*a3 + _x29);
+            const double _x31 = -_x29;
+            const double _x32 = _x31*_x8;
+            const double _x33 = _x0*_x31;
+            const double _x34 = _x12*_x8;
+            const double _x35 = _x0*_x14 - _x19*_x8;
+            const double _x36 = _x34*d5 + _x35*d6;
+            const double _x37 = _x0*d4 + _x36;
+            const double _x38 = _x37 + _x7*_x8;
+            const double _x39 = _x2*_x8 + _x38;
+            const double _x40 = -_x8;
+            _out[0][_l] = -_x24;
+            _out[1][_l] = -_x28*_x8;
+            _out[2][_l] = -_x30*_x8;
+            _out[3][_l] = -_x32;
+            _out[4][_l] = _x12*_x33 + _x17*_x21;
+            _out[5][_l] = _x39;
+            _out[6][_l] = -_x0*_x28;
+            _out[7][_l] = -_x0*_x30;
+            _out[8][_l] = -_x33;
+            _out[9][_l] = -(_x12*_x32 + _x17*_x36);
+            _out[10][_l] = _x0*_x24 + _x39*_x8;
+            _out[11][_l] = _x0*_x23 + _x38*_x8;
+            _out[12][_l] = _x0*_x22 + _x37*_x8;
+            _out[13][_l] = -_x13*_x36 + _x21*_x34;
+            _out[14][_l] = _x0;
+            _out[15][_l] = _x0;
+            _out[16][_l] = _x0;
+            _out[17][_l] = _x34;
+            _out[18][_l] = _x35;
+            _out[19][_l] = _x40;
+            _out[20][_l] = _x40;
+            _out[21][_l] = _x40;
+            _out[22][_l] = _x13;
+            _out[23][_l] = _x20;
+            _out[24][_l] = -_x15 + _x16;
+            _out[25][_l] = -_x26;
+        }
+        for (size_t _l = 0; _l < _m; ++_l) {
+            J[(_i + _l) * 36 + 0] = _out[0][_l];
+            J[(_i + _l) * 36 + 1] = _out[1][_l];
+            J[(_i + _l) * 36 + 2] = _out[2][_l];
+            J[(_i + _l) * 36 + 3] = _out[3][_l];
+            J[(_i + _l) * 36 + 4] = _out[4][_l];
+            J[(_i + _l) * 36 + 5] = 0.0;
+            J[(_i + _l) * 36 + 6] = _out[5][_l];
+            J[(_i + _l) * 36 + 7] = _out[6][_l];
+            J[(_i + _l) * 36 + 8] = _out[7][_l];
+            J[(_i + _l) * 36 + 9] = _out[8][_l];
+            J[(_i + _l) * 36 + 10] = _out[9][_l];
+            J[(_i + _l) * 36 + 11] = 0.0;
+            J[(_i + _l) * 36 + 12] = 0.0;
+            J[(_i + _l) * 36 + 13] = _out[10][_l];
+            J[(_i + _l) * 36 + 14] = _out[11][_l];
+            J[(_i + _l) * 36 + 15] = _out[12][_l];
+            J[(_i + _l) * 36 + 16] = _out[13][_l];
+            J[(_i + _l) * 36 + 17] = 0.0;
+            J[(_i + _l) * 36 + 18] = 0.0;
+            J[(_i + _l) * 36 + 19] = _out[14][_l];
+            J[(_i + _l) * 36 + 20] = _out[15][_l];
+            J[(_i + _l) * 36 + 21] = _out[16][_l];
+            J[(_i + _l) * 36 + 22] = _out[17][_l];
+            J[(_i + _l) * 36 + 23] = _out[18][_l];
+            J[(_i + _l) * 36 + 24] = 0.0;
+            J[(_i + _l) * 36 + 25] = _out[19][_l];
+            J[(_i + _l) * 36 + 26] = _out[20][_l];
+            J[(_i + _l) * 36 + 27] = _out[21][_l];
+            J[(_i + _l) * 36 + 28] = _out[22][_l];
+            J[(_i + _l) * 36 + 29] = _out[23][_l];
+            J[(_i + _l) * 36 + 30] = 1.0;
+            J[(_i + _l) * 36 + 31] = 0.0;
+            J[(_i + _l) * 36 + 32] = 0.0;
+            J[(_i + _l) * 36 + 33] = 0.0;
+            J[(_i + _l) * 36 + 34] = _out[24][_l];
+            J[(_i + _l) * 36 + 35] = _out[25][_l];
+        }
     }
 }
 
-/* scene: fk, frames, jacobian, jacobian_geometric together, with one set of shared subexpressions. (double) */
-static inline void ur10e_scene_kernel(const double *restrict q, const double d1, const double a2, const double a3, const double d4, const double d5, const double d6, double *restrict base_T_tcp, double *restrict base_T_shoulder, double *restrict base_T_upper_arm, double *restrict base_T_forearm, double *restrict base_T_wrist1, double *restrict base_T_wrist2, double *restrict base_T_wrist3, double *restrict jacobian_J, double *restrict jacobian_geometric_J)
+/* ur10e_jacobian_geometric: Geometric Jacobian of the TCP in the base frame. */
+void ur10e_jacobian_geometric(const double *restrict q, double a2, double a3, double d4, double d5, double d6, double *restrict J)
+{
+    const double q1 = q[0];
+    const double q2 = q[1];
+    const double q3 = q[2];
+    const double q4 = q[3];
+    const double q5 = q[4];
+    const double _angle[5] = {q1, q2, q3, q4, q5};
+    double _sin[5], _cos[5];
+    ur10e_sincos(5, _angle, _sin, _cos);
+    const double _sin_q1 = _sin[0];
+    const double _cos_q1 = _cos[0];
+    const double _sin_q2 = _sin[1];
+    const double _cos_q2 = _cos[1];
+    const double _sin_q3 = _sin[2];
+    const double _cos_q3 = _cos[2];
+    const double _sin_q4 = _sin[3];
+    const double _cos_q4 = _cos[3];
+    const double _sin_q5 = _sin[4];
+    const double _cos_q5 = _cos[4];
+    const double _x0 = _sin_q1;
+    const double _x1 = _cos_q2;
+    const double _x2 = _x1*a2;
+    const double _x3 = _cos_q3;
+    const double _x4 = _sin_q2;
+    const double _x5 = _sin_q3;
+    const double _x6 = _x1*_x3 - _x4*_x5;
+    const double _x7 = _x6*a3;
+    const double _x8 = _cos_q1;
+    const double _x9 = _cos_q4;
+    const double _x10 = _x1*_x5 + _x3*_x4;
+    const double _x11 = _sin_q4;
+    const double _x12 = _x10*_x9 + _x11*_x6;
+    const double _x13 = _x0*_x12;
+    const double _x14 = _cos_q5;
+    const double _x15 = _x6*_x9;
+    const double _x16 = _x10*_x11;
+    const double _x17 = _x15 - _x16;
+    const double _x18 = _sin_q5;
+    const double _x19 = _x17*_x18;
+    const double _x20 = -(_x0*_x19 + _x14*_x8);
+    const double _x21 = _x13*d5 + _x20*d6;
+    const double _x22 = _x21 - _x8*d4;
+    const double _x23 = _x0*_x7 + _x22;
+    const double _x24 = _x0*_x2 + _x23;
+    const double _x25 = _x17*d5;
+    const double _x26 = _x12*_x18;
+    const double _x27 = _x26*d6;
+    const double _x28 = _x10*a3 - _x25 - _x27 + _x4*a2;
+    const double _x29 = _x25 + _x27;
+    const double _x30 = -(-_x10*a3 + _x29);
+    const double _x31 = -_x29;
+    const double _x32 = _x31*_x8;
+    const double _x33 = _x0*_x31;
+    const double _x34 = _x12*_x8;
+    const double _x35 = _x0*_x14 - _x19*_x8;
+    const double _x36 = _x34*d5 + _x35*d6;
+    const double _x37 = _x0*d4 + _x36;
+    const double _x38 = _x37 + _x7*_x8;
+    const double _x39 = _x2*_x8 + _x38;
+    const double _x40 = -_x8;
+    J[0] = -_x24;
+    J[1] = -_x28*_x8;
+    J[2] = -_x30*_x8;
+    J[3] = -_x32;
+    J[4] = _x12*_x33 + _x17*_x21;
+    J[5] = 0.0;
+    J[6] = _x39;
+    J[7] = -_x0*_x28;
+    J[8] = -_x0*_x30;
+    J[9] = -_x33;
+    J[10] = -(_x12*_x32 + _x17*_x36);
+    J[11] = 0.0;
+    J[12] = 0.0;
+    J[13] = _x0*_x24 + _x39*_x8;
+    J[14] = _x0*_x23 + _x38*_x8;
+    J[15] = _x0*_x22 + _x37*_x8;
+    J[16] = -_x13*_x36 + _x21*_x34;
+    J[17] = 0.0;
+    J[18] = 0.0;
+    J[19] = _x0;
+    J[20] = _x0;
+    J[21] = _x0;
+    J[22] = _x34;
+    J[23] = _x35;
+    J[24] = 0.0;
+    J[25] = _x40;
+    J[26] = _x40;
+    J[27] = _x40;
+    J[28] = _x13;
+    J[29] = _x20;
+    J[30] = 1.0;
+    J[31] = 0.0;
+    J[32] = 0.0;
+    J[33] = 0.0;
+    J[34] = -_x15 + _x16;
+    J[35] = -_x26;
+}
+
+/* ur10e_jacobian_geometric_batch: ur10e_jacobian_geometric for n configurations, in blocks of 8. */
+void ur10e_jacobian_geometric_batch(size_t n, const double *restrict q, const double *restrict params, size_t params_stride, double *restrict J)
+{
+    for (size_t _i = 0; _i < n; _i += UR10E_BLOCK) {
+        /* lanes past the end of the batch repeat configuration _i and are not stored */
+        const size_t _m = n - _i < UR10E_BLOCK ? n - _i : UR10E_BLOCK;
+        double _in[10][UR10E_BLOCK];
+        for (size_t _l = 0; _l < UR10E_BLOCK; ++_l) {
+            const size_t _j = _i + (_l < _m ? _l : 0);
+            _in[0][_l] = q[_j * 6 + 0];
+            _in[1][_l] = q[_j * 6 + 1];
+            _in[2][_l] = q[_j * 6 + 2];
+            _in[3][_l] = q[_j * 6 + 3];
+            _in[4][_l] = q[_j * 6 + 4];
+            _in[5][_l] = params[_j * params_stride + 0];
+            _in[6][_l] = params[_j * params_stride + 1];
+            _in[7][_l] = params[_j * params_stride + 2];
+            _in[8][_l] = params[_j * params_stride + 3];
+            _in[9][_l] = params[_j * params_stride + 4];
+        }
+        double _angle[5][UR10E_BLOCK], _sin[5][UR10E_BLOCK], _cos[5][UR10E_BLOCK];
+        for (size_t _l = 0; _l < UR10E_BLOCK; ++_l) {
+            _angle[0][_l] = _in[0][_l];
+            _angle[1][_l] = _in[1][_l];
+            _angle[2][_l] = _in[2][_l];
+            _angle[3][_l] = _in[3][_l];
+            _angle[4][_l] = _in[4][_l];
+        }
+        ur10e_sincos(5 * UR10E_BLOCK, &_angle[0][0], &_sin[0][0], &_cos[0][0]);
+        double _out[26][UR10E_BLOCK];
+        for (size_t _l = 0; _l < UR10E_BLOCK; ++_l) {
+            const double a2 = _in[5][_l];
+            const double a3 = _in[6][_l];
+            const double d4 = _in[7][_l];
+            const double d5 = _in[8][_l];
+            const double d6 = _in[9][_l];
+            const double _sin_q1 = _sin[0][_l];
+            const double _cos_q1 = _cos[0][_l];
+            const double _sin_q2 = _sin[1][_l];
+            const double _cos_q2 = _cos[1][_l];
+            const double _sin_q3 = _sin[2][_l];
+            const double _cos_q3 = _cos[2][_l];
+            const double _sin_q4 = _sin[3][_l];
+            const double _cos_q4 = _cos[3][_l];
+            const double _sin_q5 = _sin[4][_l];
+            const double _cos_q5 = _cos[4][_l];
+            const double _x0 = _sin_q1;
+            const double _x1 = _cos_q2;
+            const double _x2 = _x1*a2;
+            const double _x3 = _cos_q3;
+            const double _x4 = _sin_q2;
+            const double _x5 = _sin_q3;
+            const double _x6 = _x1*_x3 - _x4*_x5;
+            const double _x7 = _x6*a3;
+            const double _x8 = _cos_q1;
+            const double _x9 = _cos_q4;
+            const double _x10 = _x1*_x5 + _x3*_x4;
+            const double _x11 = _sin_q4;
+            const double _x12 = _x10*_x9 + _x11*_x6;
+            const double _x13 = _x0*_x12;
+            const double _x14 = _cos_q5;
+            const double _x15 = _x6*_x9;
+            const double _x16 = _x10*_x11;
+            const double _x17 = _x15 - _x16;
+            const double _x18 = _sin_q5;
+            const double _x19 = _x17*_x18;
+            const double _x20 = -(_x0*_x19 + _x14*_x8);
+            const double _x21 = _x13*d5 + _x20*d6;
+            const double _x22 = _x21 - _x8*d4;
+            const double _x23 = _x0*_x7 + _x22;
+            const double _x24 = _x0*_x2 + _x23;
+            const double _x25 = _x17*d5;
+            const double _x26 = _x12*_x18;
+            const double _x27 = _x26*d6;
+            const double _x28 = _x10*a3 - _x25 - _x27 + _x4*a2;
+            const double _x29 = _x25 + _x27;
+            const double _x30 = -(-_x10*a3 + _x29);
+            const double _x31 = -_x29;
+            const double _x32 = _x31*_x8;
+            const double _x33 = _x0*_x31;
+            const double _x34 = _x12*_x8;
+            const double _x35 = _x0*_x14 - _x19*_x8;
+            const double _x36 = _x34*d5 + _x35*d6;
+            const double _x37 = _x0*d4 + _x36;
+            const double _x38 = _x37 + _x7*_x8;
+            const double _x39 = _x2*_x8 + _x38;
+            const double _x40 = -_x8;
+            _out[0][_l] = -_x24;
+            _out[1][_l] = -_x28*_x8;
+            _out[2][_l] = -_x30*_x8;
+            _out[3][_l] = -_x32;
+            _out[4][_l] = _x12*_x33 + _x17*_x21;
+            _out[5][_l] = _x39;
+            _out[6][_l] = -_x0*_x28;
+            _out[7][_l] = -_x0*_x30;
+            _out[8][_l] = -_x33;
+            _out[9][_l] = -(_x12*_x32 + _x17*_x36);
+            _out[10][_l] = _x0*_x24 + _x39*_x8;
+            _out[11][_l] = _x0*_x23 + _x38*_x8;
+            _out[12][_l] = _x0*_x22 + _x37*_x8;
+            _out[13][_l] = -_x13*_x36 + _x21*_x34;
+            _out[14][_l] = _x0;
+            _out[15][_l] = _x0;
+            _out[16][_l] = _x0;
+            _out[17][_l] = _x34;
+            _out[18][_l] = _x35;
+            _out[19][_l] = _x40;
+            _out[20][_l] = _x40;
+            _out[21][_l] = _x40;
+            _out[22][_l] = _x13;
+            _out[23][_l] = _x20;
+            _out[24][_l] = -_x15 + _x16;
+            _out[25][_l] = -_x26;
+        }
+        for (size_t _l = 0; _l < _m; ++_l) {
+            J[(_i + _l) * 36 + 0] = _out[0][_l];
+            J[(_i + _l) * 36 + 1] = _out[1][_l];
+            J[(_i + _l) * 36 + 2] = _out[2][_l];
+            J[(_i + _l) * 36 + 3] = _out[3][_l];
+            J[(_i + _l) * 36 + 4] = _out[4][_l];
+            J[(_i + _l) * 36 + 5] = 0.0;
+            J[(_i + _l) * 36 + 6] = _out[5][_l];
+            J[(_i + _l) * 36 + 7] = _out[6][_l];
+            J[(_i + _l) * 36 + 8] = _out[7][_l];
+            J[(_i + _l) * 36 + 9] = _out[8][_l];
+            J[(_i + _l) * 36 + 10] = _out[9][_l];
+            J[(_i + _l) * 36 + 11] = 0.0;
+            J[(_i + _l) * 36 + 12] = 0.0;
+            J[(_i + _l) * 36 + 13] = _out[10][_l];
+            J[(_i + _l) * 36 + 14] = _out[11][_l];
+            J[(_i + _l) * 36 + 15] = _out[12][_l];
+            J[(_i + _l) * 36 + 16] = _out[13][_l];
+            J[(_i + _l) * 36 + 17] = 0.0;
+            J[(_i + _l) * 36 + 18] = 0.0;
+            J[(_i + _l) * 36 + 19] = _out[14][_l];
+            J[(_i + _l) * 36 + 20] = _out[15][_l];
+            J[(_i + _l) * 36 + 21] = _out[16][_l];
+            J[(_i + _l) * 36 + 22] = _out[17][_l];
+            J[(_i + _l) * 36 + 23] = _out[18][_l];
+            J[(_i + _l) * 36 + 24] = 0.0;
+            J[(_i + _l) * 36 + 25] = _out[19][_l];
+            J[(_i + _l) * 36 + 26] = _out[20][_l];
+            J[(_i + _l) * 36 + 27] = _out[21][_l];
+            J[(_i + _l) * 36 + 28] = _out[22][_l];
+            J[(_i + _l) * 36 + 29] = _out[23][_l];
+            J[(_i + _l) * 36 + 30] = 1.0;
+            J[(_i + _l) * 36 + 31] = 0.0;
+            J[(_i + _l) * 36 + 32] = 0.0;
+            J[(_i + _l) * 36 + 33] = 0.0;
+            J[(_i + _l) * 36 + 34] = _out[24][_l];
+            J[(_i + _l) * 36 + 35] = _out[25][_l];
+        }
+    }
+}
+
+/* ur10e_scene: fk, frames, jacobian, jacobian_geometric together, with one set of shared subexpressions. */
+void ur10e_scene(const double *restrict q, double d1, double a2, double a3, double d4, double d5, double d6, double *restrict base_T_tcp, double *restrict base_T_shoulder, double *restrict base_T_upper_arm, double *restrict base_T_forearm, double *restrict base_T_wrist1, double *restrict base_T_wrist2, double *restrict base_T_wrist3, double *restrict jacobian_J, double *restrict jacobian_geometric_J)
 {
     const double q1 = q[0];
     const double q2 = q[1];
@@ -451,26 +1226,41 @@ static inline void ur10e_scene_kernel(const double *restrict q, const double d1,
     const double q4 = q[3];
     const double q5 = q[4];
     const double q6 = q[5];
-    const double _x0 = sin(q6);
-    const double _x1 = cos(q1);
-    const double _x2 = cos(q4);
-    const double _x3 = sin(q2);
-    const double _x4 = cos(q3);
-    const double _x5 = sin(q3);
-    const double _x6 = cos(q2);
+    const double _angle[6] = {q1, q2, q3, q4, q5, q6};
+    double _sin[6], _cos[6];
+    ur10e_sincos(6, _angle, _sin, _cos);
+    const double _sin_q1 = _sin[0];
+    const double _cos_q1 = _cos[0];
+    const double _sin_q2 = _sin[1];
+    const double _cos_q2 = _cos[1];
+    const double _sin_q3 = _sin[2];
+    const double _cos_q3 = _cos[2];
+    const double _sin_q4 = _sin[3];
+    const double _cos_q4 = _cos[3];
+    const double _sin_q5 = _sin[4];
+    const double _cos_q5 = _cos[4];
+    const double _sin_q6 = _sin[5];
+    const double _cos_q6 = _cos[5];
+    const double _x0 = _sin_q6;
+    const double _x1 = _cos_q1;
+    const double _x2 = _cos_q4;
+    const double _x3 = _sin_q2;
+    const double _x4 = _cos_q3;
+    const double _x5 = _sin_q3;
+    const double _x6 = _cos_q2;
     const double _x7 = _x3*_x4 + _x5*_x6;
-    const double _x8 = sin(q4);
+    const double _x8 = _sin_q4;
     const double _x9 = -_x3*_x5 + _x4*_x6;
     const double _x10 = _x2*_x7 + _x8*_x9;
     const double _x11 = _x1*_x10;
-    const double _x12 = cos(q6);
-    const double _x13 = sin(q1);
-    const double _x14 = sin(q5);
+    const double _x12 = _cos_q6;
+    const double _x13 = _sin_q1;
+    const double _x14 = _sin_q5;
     const double _x15 = _x13*_x14;
     const double _x16 = _x2*_x9;
     const double _x17 = _x7*_x8;
     const double _x18 = _x16 - _x17;
-    const double _x19 = cos(q5);
+    const double _x19 = _cos_q5;
     const double _x20 = _x1*_x19;
     const double _x21 = _x15 + _x18*_x20;
     const double _x22 = -_x0*_x11 + _x12*_x21;
@@ -721,21 +1511,458 @@ static inline void ur10e_scene_kernel(const double *restrict q, const double d1,
     jacobian_geometric_J[35] = _x54;
 }
 
-void ur10e_scene(const double *restrict q, double d1, double a2, double a3, double d4, double d5, double d6, double *restrict base_T_tcp, double *restrict base_T_shoulder, double *restrict base_T_upper_arm, double *restrict base_T_forearm, double *restrict base_T_wrist1, double *restrict base_T_wrist2, double *restrict base_T_wrist3, double *restrict jacobian_J, double *restrict jacobian_geometric_J)
-{
-    ur10e_scene_kernel(q, d1, a2, a3, d4, d5, d6, base_T_tcp, base_T_shoulder, base_T_upper_arm, base_T_forearm, base_T_wrist1, base_T_wrist2, base_T_wrist3, jacobian_J, jacobian_geometric_J);
-}
-
+/* ur10e_scene_batch: ur10e_scene for n configurations, in blocks of 8. */
 void ur10e_scene_batch(size_t n, const double *restrict q, const double *restrict params, size_t params_stride, double *restrict base_T_tcp, double *restrict base_T_shoulder, double *restrict base_T_upper_arm, double *restrict base_T_forearm, double *restrict base_T_wrist1, double *restrict base_T_wrist2, double *restrict base_T_wrist3, double *restrict jacobian_J, double *restrict jacobian_geometric_J)
 {
-    for (size_t _i = 0; _i < n; ++_i) {
-        const double *restrict _p = params + _i * params_stride;
-        ur10e_scene_kernel(q + _i * 6, _p[0], _p[1], _p[2], _p[3], _p[4], _p[5], base_T_tcp + _i * 16, base_T_shoulder + _i * 16, base_T_upper_arm + _i * 16, base_T_forearm + _i * 16, base_T_wrist1 + _i * 16, base_T_wrist2 + _i * 16, base_T_wrist3 + _i * 16, jacobian_J + _i * 36, jacobian_geometric_J + _i * 36);
+    for (size_t _i = 0; _i < n; _i += UR10E_BLOCK) {
+        /* lanes past the end of the batch repeat configuration _i and are not stored */
+        const size_t _m = n - _i < UR10E_BLOCK ? n - _i : UR10E_BLOCK;
+        double _in[12][UR10E_BLOCK];
+        for (size_t _l = 0; _l < UR10E_BLOCK; ++_l) {
+            const size_t _j = _i + (_l < _m ? _l : 0);
+            _in[0][_l] = q[_j * 6 + 0];
+            _in[1][_l] = q[_j * 6 + 1];
+            _in[2][_l] = q[_j * 6 + 2];
+            _in[3][_l] = q[_j * 6 + 3];
+            _in[4][_l] = q[_j * 6 + 4];
+            _in[5][_l] = q[_j * 6 + 5];
+            _in[6][_l] = params[_j * params_stride + 0];
+            _in[7][_l] = params[_j * params_stride + 1];
+            _in[8][_l] = params[_j * params_stride + 2];
+            _in[9][_l] = params[_j * params_stride + 3];
+            _in[10][_l] = params[_j * params_stride + 4];
+            _in[11][_l] = params[_j * params_stride + 5];
+        }
+        double _angle[6][UR10E_BLOCK], _sin[6][UR10E_BLOCK], _cos[6][UR10E_BLOCK];
+        for (size_t _l = 0; _l < UR10E_BLOCK; ++_l) {
+            _angle[0][_l] = _in[0][_l];
+            _angle[1][_l] = _in[1][_l];
+            _angle[2][_l] = _in[2][_l];
+            _angle[3][_l] = _in[3][_l];
+            _angle[4][_l] = _in[4][_l];
+            _angle[5][_l] = _in[5][_l];
+        }
+        ur10e_sincos(6 * UR10E_BLOCK, &_angle[0][0], &_sin[0][0], &_cos[0][0]);
+        double _out[124][UR10E_BLOCK];
+        for (size_t _l = 0; _l < UR10E_BLOCK; ++_l) {
+            const double d1 = _in[6][_l];
+            const double a2 = _in[7][_l];
+            const double a3 = _in[8][_l];
+            const double d4 = _in[9][_l];
+            const double d5 = _in[10][_l];
+            const double d6 = _in[11][_l];
+            const double _sin_q1 = _sin[0][_l];
+            const double _cos_q1 = _cos[0][_l];
+            const double _sin_q2 = _sin[1][_l];
+            const double _cos_q2 = _cos[1][_l];
+            const double _sin_q3 = _sin[2][_l];
+            const double _cos_q3 = _cos[2][_l];
+            const double _sin_q4 = _sin[3][_l];
+            const double _cos_q4 = _cos[3][_l];
+            const double _sin_q5 = _sin[4][_l];
+            const double _cos_q5 = _cos[4][_l];
+            const double _sin_q6 = _sin[5][_l];
+            const double _cos_q6 = _cos[5][_l];
+            const double _x0 = _sin_q6;
+            const double _x1 = _cos_q1;
+            const double _x2 = _cos_q4;
+            const double _x3 = _sin_q2;
+            const double _x4 = _cos_q3;
+            const double _x5 = _sin_q3;
+            const double _x6 = _cos_q2;
+            const double _x7 = _x3*_x4 + _x5*_x6;
+            const double _x8 = _sin_q4;
+            const double _x9 = -_x3*_x5 + _x4*_x6;
+            const double _x10 = _x2*_x7 + _x8*_x9;
+            const double _x11 = _x1*_x10;
+            const double _x12 = _cos_q6;
+            const double _x13 = _sin_q1;
+            const double _x14 = _sin_q5;
+            const double _x15 = _x13*_x14;
+            const double _x16 = _x2*_x9;
+            const double _x17 = _x7*_x8;
+            const double _x18 = _x16 - _x17;
+            const double _x19 = _cos_q5;
+            const double _x20 = _x1*_x19;
+            const double _x21 = _x15 + _x18*_x20;
+            const double _x22 = -_x0*_x11 + _x12*_x21;
+            const double _x23 = -(_x0*_x21 + _x11*_x12);
+            const double _x24 = _x13*_x19;
+            const double _x25 = _x1*_x14;
+            const double _x26 = -_x18*_x25 + _x24;
+            const double _x27 = _x11*d5;
+            const double _x28 = _x26*d6 + _x27;
+            const double _x29 = _x1*_x6;
+            const double _x30 = _x29*a2;
+            const double _x31 = _x13*d4;
+            const double _x32 = _x1*_x9;
+            const double _x33 = _x31 + _x32*a3;
+            const double _x34 = _x30 + _x33;
+            const double _x35 = _x28 + _x34;
+            const double _x36 = _x10*_x13;
+            const double _x37 = _x18*_x24 - _x25;
+            const double _x38 = -_x0*_x36 + _x12*_x37;
+            const double _x39 = -(_x0*_x37 + _x12*_x36);
+            const double _x40 = -(_x15*_x18 + _x20);
+            const double _x41 = _x36*d5;
+            const double _x42 = _x40*d6 + _x41;
+            const double _x43 = _x13*_x6;
+            const double _x44 = _x43*a2;
+            const double _x45 = -_x1*d4;
+            const double _x46 = _x13*_x9;
+            const double _x47 = _x45 + _x46*a3;
+            const double _x48 = _x44 + _x47;
+            const double _x49 = _x42 + _x48;
+            const double _x50 = _x10*_x19;
+            const double _x51 = _x0*_x18 + _x12*_x50;
+            const double _x52 = -_x0*_x50 + _x12*_x18;
+            const double _x53 = _x10*_x14;
+            const double _x54 = -_x53;
+            const double _x55 = _x53*d6;
+            const double _x56 = -_x55;
+            const double _x57 = _x18*d5;
+            const double _x58 = -_x57;
+            const double _x59 = _x7*a3;
+            const double _x60 = _x3*a2;
+            const double _x61 = _x60 + d1;
+            const double _x62 = _x59 + _x61;
+            const double _x63 = _x58 + _x62;
+            const double _x64 = _x56 + _x63;
+            const double _x65 = -_x1;
+            const double _x66 = -_x16 + _x17;
+            const double _x67 = -_x49;
+            const double _x68 = _x56 + _x58 + _x59 + _x60;
+            const double _x69 = -_x1*_x68;
+            const double _x70 = _x55 + _x57;
+            const double _x71 = -(-_x7*a3 + _x70);
+            const double _x72 = -_x1*_x71;
+            const double _x73 = -_x70;
+            const double _x74 = -_x1*_x73;
+            const double _x75 = _x18*_x42 + _x36*_x73;
+            const double _x76 = -_x13*_x68;
+            const double _x77 = -_x13*_x71;
+            const double _x78 = -_x13*_x73;
+            const double _x79 = -(_x11*_x73 + _x18*_x28);
+            const double _x80 = _x1*_x35 + _x13*_x49;
+            const double _x81 = _x1*(_x28 + _x33) + _x13*(_x42 + _x47);
+            const double _x82 = _x1*(_x28 + _x31) + _x13*(_x42 + _x45);
+            const double _x83 = _x11*_x42 - _x28*_x36;
+            _out[0][_l] = _x22;
+            _out[1][_l] = _x23;
+            _out[2][_l] = _x26;
+            _out[3][_l] = _x35;
+            _out[4][_l] = _x38;
+            _out[5][_l] = _x39;
+            _out[6][_l] = _x40;
+            _out[7][_l] = _x49;
+            _out[8][_l] = _x51;
+            _out[9][_l] = _x52;
+            _out[10][_l] = _x54;
+            _out[11][_l] = _x64;
+            _out[12][_l] = _x1;
+            _out[13][_l] = -_x13;
+            _out[14][_l] = _x13;
+            _out[15][_l] = _x1;
+            _out[16][_l] = d1;
+            _out[17][_l] = _x29;
+            _out[18][_l] = -_x1*_x3;
+            _out[19][_l] = _x13;
+            _out[20][_l] = _x43;
+            _out[21][_l] = -_x13*_x3;
+            _out[22][_l] = _x65;
+            _out[23][_l] = _x3;
+            _out[24][_l] = _x6;
+            _out[25][_l] = d1;
+            _out[26][_l] = _x32;
+            _out[27][_l] = -_x1*_x7;
+            _out[28][_l] = _x13;
+            _out[29][_l] = _x30;
+            _out[30][_l] = _x46;
+            _out[31][_l] = -_x13*_x7;
+            _out[32][_l] = _x65;
+            _out[33][_l] = _x44;
+            _out[34][_l] = _x7;
+            _out[35][_l] = _x9;
+            _out[36][_l] = _x61;
+            _out[37][_l] = _x1*_x18;
+            _out[38][_l] = -_x11;
+            _out[39][_l] = _x13;
+            _out[40][_l] = _x34;
+            _out[41][_l] = _x13*_x18;
+            _out[42][_l] = -_x36;
+            _out[43][_l] = _x65;
+            _out[44][_l] = _x48;
+            _out[45][_l] = _x10;
+            _out[46][_l] = _x18;
+            _out[47][_l] = _x62;
+            _out[48][_l] = _x21;
+            _out[49][_l] = _x26;
+            _out[50][_l] = _x11;
+            _out[51][_l] = _x27 + _x34;
+            _out[52][_l] = _x37;
+            _out[53][_l] = _x40;
+            _out[54][_l] = _x36;
+            _out[55][_l] = _x41 + _x48;
+            _out[56][_l] = _x50;
+            _out[57][_l] = _x54;
+            _out[58][_l] = _x66;
+            _out[59][_l] = _x63;
+            _out[60][_l] = _x22;
+            _out[61][_l] = _x23;
+            _out[62][_l] = _x26;
+            _out[63][_l] = _x35;
+            _out[64][_l] = _x38;
+            _out[65][_l] = _x39;
+            _out[66][_l] = _x40;
+            _out[67][_l] = _x49;
+            _out[68][_l] = _x51;
+            _out[69][_l] = _x52;
+            _out[70][_l] = _x54;
+            _out[71][_l] = _x64;
+            _out[72][_l] = _x67;
+            _out[73][_l] = _x69;
+            _out[74][_l] = _x72;
+            _out[75][_l] = _x74;
+            _out[76][_l] = _x75;
+            _out[77][_l] = _x35;
+            _out[78][_l] = _x76;
+            _out[79][_l] = _x77;
+            _out[80][_l] = _x78;
+            _out[81][_l] = _x79;
+            _out[82][_l] = _x80;
+            _out[83][_l] = _x81;
+            _out[84][_l] = _x82;
+            _out[85][_l] = _x83;
+            _out[86][_l] = _x13;
+            _out[87][_l] = _x13;
+            _out[88][_l] = _x13;
+            _out[89][_l] = _x11;
+            _out[90][_l] = _x26;
+            _out[91][_l] = _x65;
+            _out[92][_l] = _x65;
+            _out[93][_l] = _x65;
+            _out[94][_l] = _x36;
+            _out[95][_l] = _x40;
+            _out[96][_l] = _x66;
+            _out[97][_l] = _x54;
+            _out[98][_l] = _x67;
+            _out[99][_l] = _x69;
+            _out[100][_l] = _x72;
+            _out[101][_l] = _x74;
+            _out[102][_l] = _x75;
+            _out[103][_l] = _x35;
+            _out[104][_l] = _x76;
+            _out[105][_l] = _x77;
+            _out[106][_l] = _x78;
+            _out[107][_l] = _x79;
+            _out[108][_l] = _x80;
+            _out[109][_l] = _x81;
+            _out[110][_l] = _x82;
+            _out[111][_l] = _x83;
+            _out[112][_l] = _x13;
+            _out[113][_l] = _x13;
+            _out[114][_l] = _x13;
+            _out[115][_l] = _x11;
+            _out[116][_l] = _x26;
+            _out[117][_l] = _x65;
+            _out[118][_l] = _x65;
+            _out[119][_l] = _x65;
+            _out[120][_l] = _x36;
+            _out[121][_l] = _x40;
+            _out[122][_l] = _x66;
+            _out[123][_l] = _x54;
+        }
+        for (size_t _l = 0; _l < _m; ++_l) {
+            base_T_tcp[(_i + _l) * 16 + 0] = _out[0][_l];
+            base_T_tcp[(_i + _l) * 16 + 1] = _out[1][_l];
+            base_T_tcp[(_i + _l) * 16 + 2] = _out[2][_l];
+            base_T_tcp[(_i + _l) * 16 + 3] = _out[3][_l];
+            base_T_tcp[(_i + _l) * 16 + 4] = _out[4][_l];
+            base_T_tcp[(_i + _l) * 16 + 5] = _out[5][_l];
+            base_T_tcp[(_i + _l) * 16 + 6] = _out[6][_l];
+            base_T_tcp[(_i + _l) * 16 + 7] = _out[7][_l];
+            base_T_tcp[(_i + _l) * 16 + 8] = _out[8][_l];
+            base_T_tcp[(_i + _l) * 16 + 9] = _out[9][_l];
+            base_T_tcp[(_i + _l) * 16 + 10] = _out[10][_l];
+            base_T_tcp[(_i + _l) * 16 + 11] = _out[11][_l];
+            base_T_tcp[(_i + _l) * 16 + 12] = 0.0;
+            base_T_tcp[(_i + _l) * 16 + 13] = 0.0;
+            base_T_tcp[(_i + _l) * 16 + 14] = 0.0;
+            base_T_tcp[(_i + _l) * 16 + 15] = 1.0;
+            base_T_shoulder[(_i + _l) * 16 + 0] = _out[12][_l];
+            base_T_shoulder[(_i + _l) * 16 + 1] = _out[13][_l];
+            base_T_shoulder[(_i + _l) * 16 + 2] = 0.0;
+            base_T_shoulder[(_i + _l) * 16 + 3] = 0.0;
+            base_T_shoulder[(_i + _l) * 16 + 4] = _out[14][_l];
+            base_T_shoulder[(_i + _l) * 16 + 5] = _out[15][_l];
+            base_T_shoulder[(_i + _l) * 16 + 6] = 0.0;
+            base_T_shoulder[(_i + _l) * 16 + 7] = 0.0;
+            base_T_shoulder[(_i + _l) * 16 + 8] = 0.0;
+            base_T_shoulder[(_i + _l) * 16 + 9] = 0.0;
+            base_T_shoulder[(_i + _l) * 16 + 10] = 1.0;
+            base_T_shoulder[(_i + _l) * 16 + 11] = _out[16][_l];
+            base_T_shoulder[(_i + _l) * 16 + 12] = 0.0;
+            base_T_shoulder[(_i + _l) * 16 + 13] = 0.0;
+            base_T_shoulder[(_i + _l) * 16 + 14] = 0.0;
+            base_T_shoulder[(_i + _l) * 16 + 15] = 1.0;
+            base_T_upper_arm[(_i + _l) * 16 + 0] = _out[17][_l];
+            base_T_upper_arm[(_i + _l) * 16 + 1] = _out[18][_l];
+            base_T_upper_arm[(_i + _l) * 16 + 2] = _out[19][_l];
+            base_T_upper_arm[(_i + _l) * 16 + 3] = 0.0;
+            base_T_upper_arm[(_i + _l) * 16 + 4] = _out[20][_l];
+            base_T_upper_arm[(_i + _l) * 16 + 5] = _out[21][_l];
+            base_T_upper_arm[(_i + _l) * 16 + 6] = _out[22][_l];
+            base_T_upper_arm[(_i + _l) * 16 + 7] = 0.0;
+            base_T_upper_arm[(_i + _l) * 16 + 8] = _out[23][_l];
+            base_T_upper_arm[(_i + _l) * 16 + 9] = _out[24][_l];
+            base_T_upper_arm[(_i + _l) * 16 + 10] = 0.0;
+            base_T_upper_arm[(_i + _l) * 16 + 11] = _out[25][_l];
+            base_T_upper_arm[(_i + _l) * 16 + 12] = 0.0;
+            base_T_upper_arm[(_i + _l) * 16 + 13] = 0.0;
+            base_T_upper_arm[(_i + _l) * 16 + 14] = 0.0;
+            base_T_upper_arm[(_i + _l) * 16 + 15] = 1.0;
+            base_T_forearm[(_i + _l) * 16 + 0] = _out[26][_l];
+            base_T_forearm[(_i + _l) * 16 + 1] = _out[27][_l];
+            base_T_forearm[(_i + _l) * 16 + 2] = _out[28][_l];
+            base_T_forearm[(_i + _l) * 16 + 3] = _out[29][_l];
+            base_T_forearm[(_i + _l) * 16 + 4] = _out[30][_l];
+            base_T_forearm[(_i + _l) * 16 + 5] = _out[31][_l];
+            base_T_forearm[(_i + _l) * 16 + 6] = _out[32][_l];
+            base_T_forearm[(_i + _l) * 16 + 7] = _out[33][_l];
+            base_T_forearm[(_i + _l) * 16 + 8] = _out[34][_l];
+            base_T_forearm[(_i + _l) * 16 + 9] = _out[35][_l];
+            base_T_forearm[(_i + _l) * 16 + 10] = 0.0;
+            base_T_forearm[(_i + _l) * 16 + 11] = _out[36][_l];
+            base_T_forearm[(_i + _l) * 16 + 12] = 0.0;
+            base_T_forearm[(_i + _l) * 16 + 13] = 0.0;
+            base_T_forearm[(_i + _l) * 16 + 14] = 0.0;
+            base_T_forearm[(_i + _l) * 16 + 15] = 1.0;
+            base_T_wrist1[(_i + _l) * 16 + 0] = _out[37][_l];
+            base_T_wrist1[(_i + _l) * 16 + 1] = _out[38][_l];
+            base_T_wrist1[(_i + _l) * 16 + 2] = _out[39][_l];
+            base_T_wrist1[(_i + _l) * 16 + 3] = _out[40][_l];
+            base_T_wrist1[(_i + _l) * 16 + 4] = _out[41][_l];
+            base_T_wrist1[(_i + _l) * 16 + 5] = _out[42][_l];
+            base_T_wrist1[(_i + _l) * 16 + 6] = _out[43][_l];
+            base_T_wrist1[(_i + _l) * 16 + 7] = _out[44][_l];
+            base_T_wrist1[(_i + _l) * 16 + 8] = _out[45][_l];
+            base_T_wrist1[(_i + _l) * 16 + 9] = _out[46][_l];
+            base_T_wrist1[(_i + _l) * 16 + 10] = 0.0;
+            base_T_wrist1[(_i + _l) * 16 + 11] = _out[47][_l];
+            base_T_wrist1[(_i + _l) * 16 + 12] = 0.0;
+            base_T_wrist1[(_i + _l) * 16 + 13] = 0.0;
+            base_T_wrist1[(_i + _l) * 16 + 14] = 0.0;
+            base_T_wrist1[(_i + _l) * 16 + 15] = 1.0;
+            base_T_wrist2[(_i + _l) * 16 + 0] = _out[48][_l];
+            base_T_wrist2[(_i + _l) * 16 + 1] = _out[49][_l];
+            base_T_wrist2[(_i + _l) * 16 + 2] = _out[50][_l];
+            base_T_wrist2[(_i + _l) * 16 + 3] = _out[51][_l];
+            base_T_wrist2[(_i + _l) * 16 + 4] = _out[52][_l];
+            base_T_wrist2[(_i + _l) * 16 + 5] = _out[53][_l];
+            base_T_wrist2[(_i + _l) * 16 + 6] = _out[54][_l];
+            base_T_wrist2[(_i + _l) * 16 + 7] = _out[55][_l];
+            base_T_wrist2[(_i + _l) * 16 + 8] = _out[56][_l];
+            base_T_wrist2[(_i + _l) * 16 + 9] = _out[57][_l];
+            base_T_wrist2[(_i + _l) * 16 + 10] = _out[58][_l];
+            base_T_wrist2[(_i + _l) * 16 + 11] = _out[59][_l];
+            base_T_wrist2[(_i + _l) * 16 + 12] = 0.0;
+            base_T_wrist2[(_i + _l) * 16 + 13] = 0.0;
+            base_T_wrist2[(_i + _l) * 16 + 14] = 0.0;
+            base_T_wrist2[(_i + _l) * 16 + 15] = 1.0;
+            base_T_wrist3[(_i + _l) * 16 + 0] = _out[60][_l];
+            base_T_wrist3[(_i + _l) * 16 + 1] = _out[61][_l];
+            base_T_wrist3[(_i + _l) * 16 + 2] = _out[62][_l];
+            base_T_wrist3[(_i + _l) * 16 + 3] = _out[63][_l];
+            base_T_wrist3[(_i + _l) * 16 + 4] = _out[64][_l];
+            base_T_wrist3[(_i + _l) * 16 + 5] = _out[65][_l];
+            base_T_wrist3[(_i + _l) * 16 + 6] = _out[66][_l];
+            base_T_wrist3[(_i + _l) * 16 + 7] = _out[67][_l];
+            base_T_wrist3[(_i + _l) * 16 + 8] = _out[68][_l];
+            base_T_wrist3[(_i + _l) * 16 + 9] = _out[69][_l];
+            base_T_wrist3[(_i + _l) * 16 + 10] = _out[70][_l];
+            base_T_wrist3[(_i + _l) * 16 + 11] = _out[71][_l];
+            base_T_wrist3[(_i + _l) * 16 + 12] = 0.0;
+            base_T_wrist3[(_i + _l) * 16 + 13] = 0.0;
+            base_T_wrist3[(_i + _l) * 16 + 14] = 0.0;
+            base_T_wrist3[(_i + _l) * 16 + 15] = 1.0;
+            jacobian_J[(_i + _l) * 36 + 0] = _out[72][_l];
+            jacobian_J[(_i + _l) * 36 + 1] = _out[73][_l];
+            jacobian_J[(_i + _l) * 36 + 2] = _out[74][_l];
+            jacobian_J[(_i + _l) * 36 + 3] = _out[75][_l];
+            jacobian_J[(_i + _l) * 36 + 4] = _out[76][_l];
+            jacobian_J[(_i + _l) * 36 + 5] = 0.0;
+            jacobian_J[(_i + _l) * 36 + 6] = _out[77][_l];
+            jacobian_J[(_i + _l) * 36 + 7] = _out[78][_l];
+            jacobian_J[(_i + _l) * 36 + 8] = _out[79][_l];
+            jacobian_J[(_i + _l) * 36 + 9] = _out[80][_l];
+            jacobian_J[(_i + _l) * 36 + 10] = _out[81][_l];
+            jacobian_J[(_i + _l) * 36 + 11] = 0.0;
+            jacobian_J[(_i + _l) * 36 + 12] = 0.0;
+            jacobian_J[(_i + _l) * 36 + 13] = _out[82][_l];
+            jacobian_J[(_i + _l) * 36 + 14] = _out[83][_l];
+            jacobian_J[(_i + _l) * 36 + 15] = _out[84][_l];
+            jacobian_J[(_i + _l) * 36 + 16] = _out[85][_l];
+            jacobian_J[(_i + _l) * 36 + 17] = 0.0;
+            jacobian_J[(_i + _l) * 36 + 18] = 0.0;
+            jacobian_J[(_i + _l) * 36 + 19] = _out[86][_l];
+            jacobian_J[(_i + _l) * 36 + 20] = _out[87][_l];
+            jacobian_J[(_i + _l) * 36 + 21] = _out[88][_l];
+            jacobian_J[(_i + _l) * 36 + 22] = _out[89][_l];
+            jacobian_J[(_i + _l) * 36 + 23] = _out[90][_l];
+            jacobian_J[(_i + _l) * 36 + 24] = 0.0;
+            jacobian_J[(_i + _l) * 36 + 25] = _out[91][_l];
+            jacobian_J[(_i + _l) * 36 + 26] = _out[92][_l];
+            jacobian_J[(_i + _l) * 36 + 27] = _out[93][_l];
+            jacobian_J[(_i + _l) * 36 + 28] = _out[94][_l];
+            jacobian_J[(_i + _l) * 36 + 29] = _out[95][_l];
+            jacobian_J[(_i + _l) * 36 + 30] = 1.0;
+            jacobian_J[(_i + _l) * 36 + 31] = 0.0;
+            jacobian_J[(_i + _l) * 36 + 32] = 0.0;
+            jacobian_J[(_i + _l) * 36 + 33] = 0.0;
+            jacobian_J[(_i + _l) * 36 + 34] = _out[96][_l];
+            jacobian_J[(_i + _l) * 36 + 35] = _out[97][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 0] = _out[98][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 1] = _out[99][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 2] = _out[100][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 3] = _out[101][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 4] = _out[102][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 5] = 0.0;
+            jacobian_geometric_J[(_i + _l) * 36 + 6] = _out[103][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 7] = _out[104][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 8] = _out[105][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 9] = _out[106][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 10] = _out[107][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 11] = 0.0;
+            jacobian_geometric_J[(_i + _l) * 36 + 12] = 0.0;
+            jacobian_geometric_J[(_i + _l) * 36 + 13] = _out[108][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 14] = _out[109][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 15] = _out[110][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 16] = _out[111][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 17] = 0.0;
+            jacobian_geometric_J[(_i + _l) * 36 + 18] = 0.0;
+            jacobian_geometric_J[(_i + _l) * 36 + 19] = _out[112][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 20] = _out[113][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 21] = _out[114][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 22] = _out[115][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 23] = _out[116][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 24] = 0.0;
+            jacobian_geometric_J[(_i + _l) * 36 + 25] = _out[117][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 26] = _out[118][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 27] = _out[119][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 28] = _out[120][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 29] = _out[121][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 30] = 1.0;
+            jacobian_geometric_J[(_i + _l) * 36 + 31] = 0.0;
+            jacobian_geometric_J[(_i + _l) * 36 + 32] = 0.0;
+            jacobian_geometric_J[(_i + _l) * 36 + 33] = 0.0;
+            jacobian_geometric_J[(_i + _l) * 36 + 34] = _out[122][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 35] = _out[123][_l];
+        }
     }
 }
 
-/* fk: Forward kinematics: pose of the TCP in the base frame. (float) */
-static inline void ur10e_fk_kernel_f32(const float *restrict q, const float d1, const float a2, const float a3, const float d4, const float d5, const float d6, float *restrict base_T_tcp)
+/* ur10e_fk_f32: Forward kinematics: pose of the TCP in the base frame. */
+void ur10e_fk_f32(const float *restrict q, float d1, float a2, float a3, float d4, float d5, float d6, float *restrict base_T_tcp)
 {
     const float q1 = q[0];
     const float q2 = q[1];
@@ -743,24 +1970,39 @@ static inline void ur10e_fk_kernel_f32(const float *restrict q, const float d1, 
     const float q4 = q[3];
     const float q5 = q[4];
     const float q6 = q[5];
-    const float _x0 = sinf(q6);
-    const float _x1 = cosf(q1);
-    const float _x2 = cosf(q4);
-    const float _x3 = sinf(q2);
-    const float _x4 = cosf(q3);
-    const float _x5 = sinf(q3);
-    const float _x6 = cosf(q2);
+    const float _angle[6] = {q1, q2, q3, q4, q5, q6};
+    float _sin[6], _cos[6];
+    ur10e_sincos_f32(6, _angle, _sin, _cos);
+    const float _sin_q1 = _sin[0];
+    const float _cos_q1 = _cos[0];
+    const float _sin_q2 = _sin[1];
+    const float _cos_q2 = _cos[1];
+    const float _sin_q3 = _sin[2];
+    const float _cos_q3 = _cos[2];
+    const float _sin_q4 = _sin[3];
+    const float _cos_q4 = _cos[3];
+    const float _sin_q5 = _sin[4];
+    const float _cos_q5 = _cos[4];
+    const float _sin_q6 = _sin[5];
+    const float _cos_q6 = _cos[5];
+    const float _x0 = _sin_q6;
+    const float _x1 = _cos_q1;
+    const float _x2 = _cos_q4;
+    const float _x3 = _sin_q2;
+    const float _x4 = _cos_q3;
+    const float _x5 = _sin_q3;
+    const float _x6 = _cos_q2;
     const float _x7 = _x3*_x4 + _x5*_x6;
-    const float _x8 = sinf(q4);
+    const float _x8 = _sin_q4;
     const float _x9 = -_x3*_x5 + _x4*_x6;
     const float _x10 = _x2*_x7 + _x8*_x9;
     const float _x11 = _x1*_x10;
-    const float _x12 = cosf(q6);
-    const float _x13 = sinf(q1);
-    const float _x14 = sinf(q5);
+    const float _x12 = _cos_q6;
+    const float _x13 = _sin_q1;
+    const float _x14 = _sin_q5;
     const float _x15 = _x13*_x14;
     const float _x16 = _x2*_x9 - _x7*_x8;
-    const float _x17 = cosf(q5);
+    const float _x17 = _cos_q5;
     const float _x18 = _x1*_x17;
     const float _x19 = _x15 + _x16*_x18;
     const float _x20 = _x13*_x17;
@@ -791,21 +2033,124 @@ static inline void ur10e_fk_kernel_f32(const float *restrict q, const float d1, 
     base_T_tcp[15] = 1.0f;
 }
 
-void ur10e_fk_f32(const float *restrict q, float d1, float a2, float a3, float d4, float d5, float d6, float *restrict base_T_tcp)
-{
-    ur10e_fk_kernel_f32(q, d1, a2, a3, d4, d5, d6, base_T_tcp);
-}
-
+/* ur10e_fk_batch_f32: ur10e_fk_f32 for n configurations, in blocks of 8. */
 void ur10e_fk_batch_f32(size_t n, const float *restrict q, const float *restrict params, size_t params_stride, float *restrict base_T_tcp)
 {
-    for (size_t _i = 0; _i < n; ++_i) {
-        const float *restrict _p = params + _i * params_stride;
-        ur10e_fk_kernel_f32(q + _i * 6, _p[0], _p[1], _p[2], _p[3], _p[4], _p[5], base_T_tcp + _i * 16);
+    for (size_t _i = 0; _i < n; _i += UR10E_BLOCK) {
+        /* lanes past the end of the batch repeat configuration _i and are not stored */
+        const size_t _m = n - _i < UR10E_BLOCK ? n - _i : UR10E_BLOCK;
+        float _in[12][UR10E_BLOCK];
+        for (size_t _l = 0; _l < UR10E_BLOCK; ++_l) {
+            const size_t _j = _i + (_l < _m ? _l : 0);
+            _in[0][_l] = q[_j * 6 + 0];
+            _in[1][_l] = q[_j * 6 + 1];
+            _in[2][_l] = q[_j * 6 + 2];
+            _in[3][_l] = q[_j * 6 + 3];
+            _in[4][_l] = q[_j * 6 + 4];
+            _in[5][_l] = q[_j * 6 + 5];
+            _in[6][_l] = params[_j * params_stride + 0];
+            _in[7][_l] = params[_j * params_stride + 1];
+            _in[8][_l] = params[_j * params_stride + 2];
+            _in[9][_l] = params[_j * params_stride + 3];
+            _in[10][_l] = params[_j * params_stride + 4];
+            _in[11][_l] = params[_j * params_stride + 5];
+        }
+        float _angle[6][UR10E_BLOCK], _sin[6][UR10E_BLOCK], _cos[6][UR10E_BLOCK];
+        for (size_t _l = 0; _l < UR10E_BLOCK; ++_l) {
+            _angle[0][_l] = _in[0][_l];
+            _angle[1][_l] = _in[1][_l];
+            _angle[2][_l] = _in[2][_l];
+            _angle[3][_l] = _in[3][_l];
+            _angle[4][_l] = _in[4][_l];
+            _angle[5][_l] = _in[5][_l];
+        }
+        ur10e_sincos_f32(6 * UR10E_BLOCK, &_angle[0][0], &_sin[0][0], &_cos[0][0]);
+        float _out[12][UR10E_BLOCK];
+        for (size_t _l = 0; _l < UR10E_BLOCK; ++_l) {
+            const float d1 = _in[6][_l];
+            const float a2 = _in[7][_l];
+            const float a3 = _in[8][_l];
+            const float d4 = _in[9][_l];
+            const float d5 = _in[10][_l];
+            const float d6 = _in[11][_l];
+            const float _sin_q1 = _sin[0][_l];
+            const float _cos_q1 = _cos[0][_l];
+            const float _sin_q2 = _sin[1][_l];
+            const float _cos_q2 = _cos[1][_l];
+            const float _sin_q3 = _sin[2][_l];
+            const float _cos_q3 = _cos[2][_l];
+            const float _sin_q4 = _sin[3][_l];
+            const float _cos_q4 = _cos[3][_l];
+            const float _sin_q5 = _sin[4][_l];
+            const float _cos_q5 = _cos[4][_l];
+            const float _sin_q6 = _sin[5][_l];
+            const float _cos_q6 = _cos[5][_l];
+            const float _x0 = _sin_q6;
+            const float _x1 = _cos_q1;
+            const float _x2 = _cos_q4;
+            const float _x3 = _sin_q2;
+            const float _x4 = _cos_q3;
+            const float _x5 = _sin_q3;
+            const float _x6 = _cos_q2;
+            const float _x7 = _x3*_x4 + _x5*_x6;
+            const float _x8 = _sin_q4;
+            const float _x9 = -_x3*_x5 + _x4*_x6;
+            const float _x10 = _x2*_x7 + _x8*_x9;
+            const float _x11 = _x1*_x10;
+            const float _x12 = _cos_q6;
+            const float _x13 = _sin_q1;
+            const float _x14 = _sin_q5;
+            const float _x15 = _x13*_x14;
+            const float _x16 = _x2*_x9 - _x7*_x8;
+            const float _x17 = _cos_q5;
+            const float _x18 = _x1*_x17;
+            const float _x19 = _x15 + _x16*_x18;
+            const float _x20 = _x13*_x17;
+            const float _x21 = _x1*_x14;
+            const float _x22 = -_x16*_x21 + _x20;
+            const float _x23 = _x6*a2;
+            const float _x24 = _x9*a3;
+            const float _x25 = _x10*_x13;
+            const float _x26 = _x16*_x20 - _x21;
+            const float _x27 = -(_x15*_x16 + _x18);
+            const float _x28 = _x10*_x17;
+            const float _x29 = _x10*_x14;
+            _out[0][_l] = -_x0*_x11 + _x12*_x19;
+            _out[1][_l] = -(_x0*_x19 + _x11*_x12);
+            _out[2][_l] = _x22;
+            _out[3][_l] = _x1*_x23 + _x1*_x24 + _x11*d5 + _x13*d4 + _x22*d6;
+            _out[4][_l] = -_x0*_x25 + _x12*_x26;
+            _out[5][_l] = -(_x0*_x26 + _x12*_x25);
+            _out[6][_l] = _x27;
+            _out[7][_l] = -_x1*d4 + _x13*_x23 + _x13*_x24 + _x25*d5 + _x27*d6;
+            _out[8][_l] = _x0*_x16 + _x12*_x28;
+            _out[9][_l] = -_x0*_x28 + _x12*_x16;
+            _out[10][_l] = -_x29;
+            _out[11][_l] = -_x16*d5 - _x29*d6 + _x3*a2 + _x7*a3 + d1;
+        }
+        for (size_t _l = 0; _l < _m; ++_l) {
+            base_T_tcp[(_i + _l) * 16 + 0] = _out[0][_l];
+            base_T_tcp[(_i + _l) * 16 + 1] = _out[1][_l];
+            base_T_tcp[(_i + _l) * 16 + 2] = _out[2][_l];
+            base_T_tcp[(_i + _l) * 16 + 3] = _out[3][_l];
+            base_T_tcp[(_i + _l) * 16 + 4] = _out[4][_l];
+            base_T_tcp[(_i + _l) * 16 + 5] = _out[5][_l];
+            base_T_tcp[(_i + _l) * 16 + 6] = _out[6][_l];
+            base_T_tcp[(_i + _l) * 16 + 7] = _out[7][_l];
+            base_T_tcp[(_i + _l) * 16 + 8] = _out[8][_l];
+            base_T_tcp[(_i + _l) * 16 + 9] = _out[9][_l];
+            base_T_tcp[(_i + _l) * 16 + 10] = _out[10][_l];
+            base_T_tcp[(_i + _l) * 16 + 11] = _out[11][_l];
+            base_T_tcp[(_i + _l) * 16 + 12] = 0.0f;
+            base_T_tcp[(_i + _l) * 16 + 13] = 0.0f;
+            base_T_tcp[(_i + _l) * 16 + 14] = 0.0f;
+            base_T_tcp[(_i + _l) * 16 + 15] = 1.0f;
+        }
     }
 }
 
-/* frames: Pose of every link frame in the base frame. (float) */
-static inline void ur10e_frames_kernel_f32(const float *restrict q, const float d1, const float a2, const float a3, const float d4, const float d5, const float d6, float *restrict base_T_shoulder, float *restrict base_T_upper_arm, float *restrict base_T_forearm, float *restrict base_T_wrist1, float *restrict base_T_wrist2, float *restrict base_T_wrist3)
+/* ur10e_frames_f32: Pose of every link frame in the base frame. */
+void ur10e_frames_f32(const float *restrict q, float d1, float a2, float a3, float d4, float d5, float d6, float *restrict base_T_shoulder, float *restrict base_T_upper_arm, float *restrict base_T_forearm, float *restrict base_T_wrist1, float *restrict base_T_wrist2, float *restrict base_T_wrist3)
 {
     const float q1 = q[0];
     const float q2 = q[1];
@@ -813,15 +2158,30 @@ static inline void ur10e_frames_kernel_f32(const float *restrict q, const float 
     const float q4 = q[3];
     const float q5 = q[4];
     const float q6 = q[5];
-    const float _x0 = cosf(q1);
-    const float _x1 = sinf(q1);
-    const float _x2 = cosf(q2);
+    const float _angle[6] = {q1, q2, q3, q4, q5, q6};
+    float _sin[6], _cos[6];
+    ur10e_sincos_f32(6, _angle, _sin, _cos);
+    const float _sin_q1 = _sin[0];
+    const float _cos_q1 = _cos[0];
+    const float _sin_q2 = _sin[1];
+    const float _cos_q2 = _cos[1];
+    const float _sin_q3 = _sin[2];
+    const float _cos_q3 = _cos[2];
+    const float _sin_q4 = _sin[3];
+    const float _cos_q4 = _cos[3];
+    const float _sin_q5 = _sin[4];
+    const float _cos_q5 = _cos[4];
+    const float _sin_q6 = _sin[5];
+    const float _cos_q6 = _cos[5];
+    const float _x0 = _cos_q1;
+    const float _x1 = _sin_q1;
+    const float _x2 = _cos_q2;
     const float _x3 = _x0*_x2;
-    const float _x4 = sinf(q2);
+    const float _x4 = _sin_q2;
     const float _x5 = _x1*_x2;
     const float _x6 = -_x0;
-    const float _x7 = cosf(q3);
-    const float _x8 = sinf(q3);
+    const float _x7 = _cos_q3;
+    const float _x8 = _sin_q3;
     const float _x9 = _x2*_x7 - _x4*_x8;
     const float _x10 = _x0*_x9;
     const float _x11 = _x2*_x8 + _x4*_x7;
@@ -829,9 +2189,9 @@ static inline void ur10e_frames_kernel_f32(const float *restrict q, const float 
     const float _x13 = _x1*_x9;
     const float _x14 = _x5*a2;
     const float _x15 = _x4*a2 + d1;
-    const float _x16 = cosf(q4);
+    const float _x16 = _cos_q4;
     const float _x17 = _x16*_x9;
-    const float _x18 = sinf(q4);
+    const float _x18 = _sin_q4;
     const float _x19 = _x11*_x18;
     const float _x20 = _x17 - _x19;
     const float _x21 = _x0*_x20;
@@ -842,8 +2202,8 @@ static inline void ur10e_frames_kernel_f32(const float *restrict q, const float 
     const float _x26 = _x1*_x22;
     const float _x27 = -_x0*d4 + _x13*a3 + _x14;
     const float _x28 = _x11*a3 + _x15;
-    const float _x29 = sinf(q5);
-    const float _x30 = cosf(q5);
+    const float _x29 = _sin_q5;
+    const float _x30 = _cos_q5;
     const float _x31 = _x1*_x29 + _x21*_x30;
     const float _x32 = _x1*_x30 - _x21*_x29;
     const float _x33 = _x23*d5 + _x24;
@@ -854,8 +2214,8 @@ static inline void ur10e_frames_kernel_f32(const float *restrict q, const float 
     const float _x38 = _x22*_x29;
     const float _x39 = -_x38;
     const float _x40 = -_x20*d5 + _x28;
-    const float _x41 = sinf(q6);
-    const float _x42 = cosf(q6);
+    const float _x41 = _sin_q6;
+    const float _x42 = _cos_q6;
     base_T_shoulder[0] = _x0;
     base_T_shoulder[1] = -_x1;
     base_T_shoulder[2] = 0.0f;
@@ -954,146 +2314,303 @@ static inline void ur10e_frames_kernel_f32(const float *restrict q, const float 
     base_T_wrist3[15] = 1.0f;
 }
 
-void ur10e_frames_f32(const float *restrict q, float d1, float a2, float a3, float d4, float d5, float d6, float *restrict base_T_shoulder, float *restrict base_T_upper_arm, float *restrict base_T_forearm, float *restrict base_T_wrist1, float *restrict base_T_wrist2, float *restrict base_T_wrist3)
-{
-    ur10e_frames_kernel_f32(q, d1, a2, a3, d4, d5, d6, base_T_shoulder, base_T_upper_arm, base_T_forearm, base_T_wrist1, base_T_wrist2, base_T_wrist3);
-}
-
+/* ur10e_frames_batch_f32: ur10e_frames_f32 for n configurations, in blocks of 8. */
 void ur10e_frames_batch_f32(size_t n, const float *restrict q, const float *restrict params, size_t params_stride, float *restrict base_T_shoulder, float *restrict base_T_upper_arm, float *restrict base_T_forearm, float *restrict base_T_wrist1, float *restrict base_T_wrist2, float *restrict base_T_wrist3)
 {
-    for (size_t _i = 0; _i < n; ++_i) {
-        const float *restrict _p = params + _i * params_stride;
-        ur10e_frames_kernel_f32(q + _i * 6, _p[0], _p[1], _p[2], _p[3], _p[4], _p[5], base_T_shoulder + _i * 16, base_T_upper_arm + _i * 16, base_T_forearm + _i * 16, base_T_wrist1 + _i * 16, base_T_wrist2 + _i * 16, base_T_wrist3 + _i * 16);
+    for (size_t _i = 0; _i < n; _i += UR10E_BLOCK) {
+        /* lanes past the end of the batch repeat configuration _i and are not stored */
+        const size_t _m = n - _i < UR10E_BLOCK ? n - _i : UR10E_BLOCK;
+        float _in[12][UR10E_BLOCK];
+        for (size_t _l = 0; _l < UR10E_BLOCK; ++_l) {
+            const size_t _j = _i + (_l < _m ? _l : 0);
+            _in[0][_l] = q[_j * 6 + 0];
+            _in[1][_l] = q[_j * 6 + 1];
+            _in[2][_l] = q[_j * 6 + 2];
+            _in[3][_l] = q[_j * 6 + 3];
+            _in[4][_l] = q[_j * 6 + 4];
+            _in[5][_l] = q[_j * 6 + 5];
+            _in[6][_l] = params[_j * params_stride + 0];
+            _in[7][_l] = params[_j * params_stride + 1];
+            _in[8][_l] = params[_j * params_stride + 2];
+            _in[9][_l] = params[_j * params_stride + 3];
+            _in[10][_l] = params[_j * params_stride + 4];
+            _in[11][_l] = params[_j * params_stride + 5];
+        }
+        float _angle[6][UR10E_BLOCK], _sin[6][UR10E_BLOCK], _cos[6][UR10E_BLOCK];
+        for (size_t _l = 0; _l < UR10E_BLOCK; ++_l) {
+            _angle[0][_l] = _in[0][_l];
+            _angle[1][_l] = _in[1][_l];
+            _angle[2][_l] = _in[2][_l];
+            _angle[3][_l] = _in[3][_l];
+            _angle[4][_l] = _in[4][_l];
+            _angle[5][_l] = _in[5][_l];
+        }
+        ur10e_sincos_f32(6 * UR10E_BLOCK, &_angle[0][0], &_sin[0][0], &_cos[0][0]);
+        float _out[60][UR10E_BLOCK];
+        for (size_t _l = 0; _l < UR10E_BLOCK; ++_l) {
+            const float d1 = _in[6][_l];
+            const float a2 = _in[7][_l];
+            const float a3 = _in[8][_l];
+            const float d4 = _in[9][_l];
+            const float d5 = _in[10][_l];
+            const float d6 = _in[11][_l];
+            const float _sin_q1 = _sin[0][_l];
+            const float _cos_q1 = _cos[0][_l];
+            const float _sin_q2 = _sin[1][_l];
+            const float _cos_q2 = _cos[1][_l];
+            const float _sin_q3 = _sin[2][_l];
+            const float _cos_q3 = _cos[2][_l];
+            const float _sin_q4 = _sin[3][_l];
+            const float _cos_q4 = _cos[3][_l];
+            const float _sin_q5 = _sin[4][_l];
+            const float _cos_q5 = _cos[4][_l];
+            const float _sin_q6 = _sin[5][_l];
+            const float _cos_q6 = _cos[5][_l];
+            const float _x0 = _cos_q1;
+            const float _x1 = _sin_q1;
+            const float _x2 = _cos_q2;
+            const float _x3 = _x0*_x2;
+            const float _x4 = _sin_q2;
+            const float _x5 = _x1*_x2;
+            const float _x6 = -_x0;
+            const float _x7 = _cos_q3;
+            const float _x8 = _sin_q3;
+            const float _x9 = _x2*_x7 - _x4*_x8;
+            const float _x10 = _x0*_x9;
+            const float _x11 = _x2*_x8 + _x4*_x7;
+            const float _x12 = _x3*a2;
+            const float _x13 = _x1*_x9;
+            const float _x14 = _x5*a2;
+            const float _x15 = _x4*a2 + d1;
+            const float _x16 = _cos_q4;
+            const float _x17 = _x16*_x9;
+            const float _x18 = _sin_q4;
+            const float _x19 = _x11*_x18;
+            const float _x20 = _x17 - _x19;
+            const float _x21 = _x0*_x20;
+            const float _x22 = _x11*_x16 + _x18*_x9;
+            const float _x23 = _x0*_x22;
+            const float _x24 = _x1*d4 + _x10*a3 + _x12;
+            const float _x25 = _x1*_x20;
+            const float _x26 = _x1*_x22;
+            const float _x27 = -_x0*d4 + _x13*a3 + _x14;
+            const float _x28 = _x11*a3 + _x15;
+            const float _x29 = _sin_q5;
+            const float _x30 = _cos_q5;
+            const float _x31 = _x1*_x29 + _x21*_x30;
+            const float _x32 = _x1*_x30 - _x21*_x29;
+            const float _x33 = _x23*d5 + _x24;
+            const float _x34 = -_x0*_x29 + _x25*_x30;
+            const float _x35 = -(_x0*_x30 + _x25*_x29);
+            const float _x36 = _x26*d5 + _x27;
+            const float _x37 = _x22*_x30;
+            const float _x38 = _x22*_x29;
+            const float _x39 = -_x38;
+            const float _x40 = -_x20*d5 + _x28;
+            const float _x41 = _sin_q6;
+            const float _x42 = _cos_q6;
+            _out[0][_l] = _x0;
+            _out[1][_l] = -_x1;
+            _out[2][_l] = _x1;
+            _out[3][_l] = _x0;
+            _out[4][_l] = d1;
+            _out[5][_l] = _x3;
+            _out[6][_l] = -_x0*_x4;
+            _out[7][_l] = _x1;
+            _out[8][_l] = _x5;
+            _out[9][_l] = -_x1*_x4;
+            _out[10][_l] = _x6;
+            _out[11][_l] = _x4;
+            _out[12][_l] = _x2;
+            _out[13][_l] = d1;
+            _out[14][_l] = _x10;
+            _out[15][_l] = -_x0*_x11;
+            _out[16][_l] = _x1;
+            _out[17][_l] = _x12;
+            _out[18][_l] = _x13;
+            _out[19][_l] = -_x1*_x11;
+            _out[20][_l] = _x6;
+            _out[21][_l] = _x14;
+            _out[22][_l] = _x11;
+            _out[23][_l] = _x9;
+            _out[24][_l] = _x15;
+            _out[25][_l] = _x21;
+            _out[26][_l] = -_x23;
+            _out[27][_l] = _x1;
+            _out[28][_l] = _x24;
+            _out[29][_l] = _x25;
+            _out[30][_l] = -_x26;
+            _out[31][_l] = _x6;
+            _out[32][_l] = _x27;
+            _out[33][_l] = _x22;
+            _out[34][_l] = _x20;
+            _out[35][_l] = _x28;
+            _out[36][_l] = _x31;
+            _out[37][_l] = _x32;
+            _out[38][_l] = _x23;
+            _out[39][_l] = _x33;
+            _out[40][_l] = _x34;
+            _out[41][_l] = _x35;
+            _out[42][_l] = _x26;
+            _out[43][_l] = _x36;
+            _out[44][_l] = _x37;
+            _out[45][_l] = _x39;
+            _out[46][_l] = -_x17 + _x19;
+            _out[47][_l] = _x40;
+            _out[48][_l] = -_x23*_x41 + _x31*_x42;
+            _out[49][_l] = -(_x23*_x42 + _x31*_x41);
+            _out[50][_l] = _x32;
+            _out[51][_l] = _x32*d6 + _x33;
+            _out[52][_l] = -_x26*_x41 + _x34*_x42;
+            _out[53][_l] = -(_x26*_x42 + _x34*_x41);
+            _out[54][_l] = _x35;
+            _out[55][_l] = _x35*d6 + _x36;
+            _out[56][_l] = _x20*_x41 + _x37*_x42;
+            _out[57][_l] = _x20*_x42 - _x37*_x41;
+            _out[58][_l] = _x39;
+            _out[59][_l] = -_x38*d6 + _x40;
+        }
+        for (size_t _l = 0; _l < _m; ++_l) {
+            base_T_shoulder[(_i + _l) * 16 + 0] = _out[0][_l];
+            base_T_shoulder[(_i + _l) * 16 + 1] = _out[1][_l];
+            base_T_shoulder[(_i + _l) * 16 + 2] = 0.0f;
+            base_T_shoulder[(_i + _l) * 16 + 3] = 0.0f;
+            base_T_shoulder[(_i + _l) * 16 + 4] = _out[2][_l];
+            base_T_shoulder[(_i + _l) * 16 + 5] = _out[3][_l];
+            base_T_shoulder[(_i + _l) * 16 + 6] = 0.0f;
+            base_T_shoulder[(_i + _l) * 16 + 7] = 0.0f;
+            base_T_shoulder[(_i + _l) * 16 + 8] = 0.0f;
+            base_T_shoulder[(_i + _l) * 16 + 9] = 0.0f;
+            base_T_shoulder[(_i + _l) * 16 + 10] = 1.0f;
+            base_T_shoulder[(_i + _l) * 16 + 11] = _out[4][_l];
+            base_T_shoulder[(_i + _l) * 16 + 12] = 0.0f;
+            base_T_shoulder[(_i + _l) * 16 + 13] = 0.0f;
+            base_T_shoulder[(_i + _l) * 16 + 14] = 0.0f;
+            base_T_shoulder[(_i + _l) * 16 + 15] = 1.0f;
+            base_T_upper_arm[(_i + _l) * 16 + 0] = _out[5][_l];
+            base_T_upper_arm[(_i + _l) * 16 + 1] = _out[6][_l];
+            base_T_upper_arm[(_i + _l) * 16 + 2] = _out[7][_l];
+            base_T_upper_arm[(_i + _l) * 16 + 3] = 0.0f;
+            base_T_upper_arm[(_i + _l) * 16 + 4] = _out[8][_l];
+            base_T_upper_arm[(_i + _l) * 16 + 5] = _out[9][_l];
+            base_T_upper_arm[(_i + _l) * 16 + 6] = _out[10][_l];
+            base_T_upper_arm[(_i + _l) * 16 + 7] = 0.0f;
+            base_T_upper_arm[(_i + _l) * 16 + 8] = _out[11][_l];
+            base_T_upper_arm[(_i + _l) * 16 + 9] = _out[12][_l];
+            base_T_upper_arm[(_i + _l) * 16 + 10] = 0.0f;
+            base_T_upper_arm[(_i + _l) * 16 + 11] = _out[13][_l];
+            base_T_upper_arm[(_i + _l) * 16 + 12] = 0.0f;
+            base_T_upper_arm[(_i + _l) * 16 + 13] = 0.0f;
+            base_T_upper_arm[(_i + _l) * 16 + 14] = 0.0f;
+            base_T_upper_arm[(_i + _l) * 16 + 15] = 1.0f;
+            base_T_forearm[(_i + _l) * 16 + 0] = _out[14][_l];
+            base_T_forearm[(_i + _l) * 16 + 1] = _out[15][_l];
+            base_T_forearm[(_i + _l) * 16 + 2] = _out[16][_l];
+            base_T_forearm[(_i + _l) * 16 + 3] = _out[17][_l];
+            base_T_forearm[(_i + _l) * 16 + 4] = _out[18][_l];
+            base_T_forearm[(_i + _l) * 16 + 5] = _out[19][_l];
+            base_T_forearm[(_i + _l) * 16 + 6] = _out[20][_l];
+            base_T_forearm[(_i + _l) * 16 + 7] = _out[21][_l];
+            base_T_forearm[(_i + _l) * 16 + 8] = _out[22][_l];
+            base_T_forearm[(_i + _l) * 16 + 9] = _out[23][_l];
+            base_T_forearm[(_i + _l) * 16 + 10] = 0.0f;
+            base_T_forearm[(_i + _l) * 16 + 11] = _out[24][_l];
+            base_T_forearm[(_i + _l) * 16 + 12] = 0.0f;
+            base_T_forearm[(_i + _l) * 16 + 13] = 0.0f;
+            base_T_forearm[(_i + _l) * 16 + 14] = 0.0f;
+            base_T_forearm[(_i + _l) * 16 + 15] = 1.0f;
+            base_T_wrist1[(_i + _l) * 16 + 0] = _out[25][_l];
+            base_T_wrist1[(_i + _l) * 16 + 1] = _out[26][_l];
+            base_T_wrist1[(_i + _l) * 16 + 2] = _out[27][_l];
+            base_T_wrist1[(_i + _l) * 16 + 3] = _out[28][_l];
+            base_T_wrist1[(_i + _l) * 16 + 4] = _out[29][_l];
+            base_T_wrist1[(_i + _l) * 16 + 5] = _out[30][_l];
+            base_T_wrist1[(_i + _l) * 16 + 6] = _out[31][_l];
+            base_T_wrist1[(_i + _l) * 16 + 7] = _out[32][_l];
+            base_T_wrist1[(_i + _l) * 16 + 8] = _out[33][_l];
+            base_T_wrist1[(_i + _l) * 16 + 9] = _out[34][_l];
+            base_T_wrist1[(_i + _l) * 16 + 10] = 0.0f;
+            base_T_wrist1[(_i + _l) * 16 + 11] = _out[35][_l];
+            base_T_wrist1[(_i + _l) * 16 + 12] = 0.0f;
+            base_T_wrist1[(_i + _l) * 16 + 13] = 0.0f;
+            base_T_wrist1[(_i + _l) * 16 + 14] = 0.0f;
+            base_T_wrist1[(_i + _l) * 16 + 15] = 1.0f;
+            base_T_wrist2[(_i + _l) * 16 + 0] = _out[36][_l];
+            base_T_wrist2[(_i + _l) * 16 + 1] = _out[37][_l];
+            base_T_wrist2[(_i + _l) * 16 + 2] = _out[38][_l];
+            base_T_wrist2[(_i + _l) * 16 + 3] = _out[39][_l];
+            base_T_wrist2[(_i + _l) * 16 + 4] = _out[40][_l];
+            base_T_wrist2[(_i + _l) * 16 + 5] = _out[41][_l];
+            base_T_wrist2[(_i + _l) * 16 + 6] = _out[42][_l];
+            base_T_wrist2[(_i + _l) * 16 + 7] = _out[43][_l];
+            base_T_wrist2[(_i + _l) * 16 + 8] = _out[44][_l];
+            base_T_wrist2[(_i + _l) * 16 + 9] = _out[45][_l];
+            base_T_wrist2[(_i + _l) * 16 + 10] = _out[46][_l];
+            base_T_wrist2[(_i + _l) * 16 + 11] = _out[47][_l];
+            base_T_wrist2[(_i + _l) * 16 + 12] = 0.0f;
+            base_T_wrist2[(_i + _l) * 16 + 13] = 0.0f;
+            base_T_wrist2[(_i + _l) * 16 + 14] = 0.0f;
+            base_T_wrist2[(_i + _l) * 16 + 15] = 1.0f;
+            base_T_wrist3[(_i + _l) * 16 + 0] = _out[48][_l];
+            base_T_wrist3[(_i + _l) * 16 + 1] = _out[49][_l];
+            base_T_wrist3[(_i + _l) * 16 + 2] = _out[50][_l];
+            base_T_wrist3[(_i + _l) * 16 + 3] = _out[51][_l];
+            base_T_wrist3[(_i + _l) * 16 + 4] = _out[52][_l];
+            base_T_wrist3[(_i + _l) * 16 + 5] = _out[53][_l];
+            base_T_wrist3[(_i + _l) * 16 + 6] = _out[54][_l];
+            base_T_wrist3[(_i + _l) * 16 + 7] = _out[55][_l];
+            base_T_wrist3[(_i + _l) * 16 + 8] = _out[56][_l];
+            base_T_wrist3[(_i + _l) * 16 + 9] = _out[57][_l];
+            base_T_wrist3[(_i + _l) * 16 + 10] = _out[58][_l];
+            base_T_wrist3[(_i + _l) * 16 + 11] = _out[59][_l];
+            base_T_wrist3[(_i + _l) * 16 + 12] = 0.0f;
+            base_T_wrist3[(_i + _l) * 16 + 13] = 0.0f;
+            base_T_wrist3[(_i + _l) * 16 + 14] = 0.0f;
+            base_T_wrist3[(_i + _l) * 16 + 15] = 1.0f;
+        }
     }
 }
 
-/* jacobian: Task Jacobian of the TCP. (float) */
-static inline void ur10e_jacobian_kernel_f32(const float *restrict q, const float a2, const float a3, const float d4, const float d5, const float d6, float *restrict J)
-{
-    const float q1 = q[0];
-    const float q2 = q[1];
-    const float q3 = q[2];
-    const float q4 = q[3];
-    const float q5 = q[4];
-    const float _x0 = sinf(q1);
-    const float _x1 = cosf(q2);
-    const float _x2 = _x1*a2;
-    const float _x3 = cosf(q3);
-    const float _x4 = sinf(q2);
-    const float _x5 = sinf(q3);
-    const float _x6 = _x1*_x3 - _x4*_x5;
-    const float _x7 = _x6*a3;
-    const float _x8 = cosf(q1);
-    const float _x9 = cosf(q4);
-    const float _x10 = _x1*_x5 + _x3*_x4;
-    const float _x11 = sinf(q4);
-    const float _x12 = _x10*_x9 + _x11*_x6;
-    const float _x13 = _x0*_x12;
-    const float _x14 = cosf(q5);
-    const float _x15 = _x6*_x9;
-    const float _x16 = _x10*_x11;
-    const float _x17 = _x15 - _x16;
-    const float _x18 = sinf(q5);
-    const float _x19 = _x17*_x18;
-    const float _x20 = -(_x0*_x19 + _x14*_x8);
-    const float _x21 = _x13*d5 + _x20*d6;
-    const float _x22 = _x21 - _x8*d4;
-    const float _x23 = _x0*_x7 + _x22;
-    const float _x24 = _x0*_x2 + _x23;
-    const float _x25 = _x17*d5;
-    const float _x26 = _x12*_x18;
-    const float _x27 = _x26*d6;
-    const float _x28 = _x10*a3 - _x25 - _x27 + _x4*a2;
-    const float _x29 = _x25 + _x27;
-    const float _x30 = -(-_x10*a3 + _x29);
-    const float _x31 = -_x29;
-    const float _x32 = _x31*_x8;
-    const float _x33 = _x0*_x31;
-    const float _x34 = _x12*_x8;
-    const float _x35 = _x0*_x14 - _x19*_x8;
-    const float _x36 = _x34*d5 + _x35*d6;
-    const float _x37 = _x0*d4 + _x36;
-    const float _x38 = _x37 + _x7*_x8;
-    const float _x39 = _x2*_x8 + _x38;
-    const float _x40 = -_x8;
-    J[0] = -_x24;
-    J[1] = -_x28*_x8;
-    J[2] = -_x30*_x8;
-    J[3] = -_x32;
-    J[4] = _x12*_x33 + _x17*_x21;
-    J[5] = 0.0f;
-    J[6] = _x39;
-    J[7] = -_x0*_x28;
-    J[8] = -_x0*_x30;
-    J[9] = -_x33;
-    J[10] = -(_x12*_x32 + _x17*_x36);
-    J[11] = 0.0f;
-    J[12] = 0.0f;
-    J[13] = _x0*_x24 + _x39*_x8;
-    J[14] = _x0*_x23 + _x38*_x8;
-    J[15] = _x0*_x22 + _x37*_x8;
-    J[16] = -_x13*_x36 + _x21*_x34;
-    J[17] = 0.0f;
-    J[18] = 0.0f;
-    J[19] = _x0;
-    J[20] = _x0;
-    J[21] = _x0;
-    J[22] = _x34;
-    J[23] = _x35;
-    J[24] = 0.0f;
-    J[25] = _x40;
-    J[26] = _x40;
-    J[27] = _x40;
-    J[28] = _x13;
-    J[29] = _x20;
-    J[30] = 1.0f;
-    J[31] = 0.0f;
-    J[32] = 0.0f;
-    J[33] = 0.0f;
-    J[34] = -_x15 + _x16;
-    J[35] = -_x26;
-}
-
+/* ur10e_jacobian_f32: Task Jacobian of the TCP. */
 void ur10e_jacobian_f32(const float *restrict q, float a2, float a3, float d4, float d5, float d6, float *restrict J)
 {
-    ur10e_jacobian_kernel_f32(q, a2, a3, d4, d5, d6, J);
-}
-
-void ur10e_jacobian_batch_f32(size_t n, const float *restrict q, const float *restrict params, size_t params_stride, float *restrict J)
-{
-    for (size_t _i = 0; _i < n; ++_i) {
-        const float *restrict _p = params + _i * params_stride;
-        ur10e_jacobian_kernel_f32(q + _i * 6, _p[0], _p[1], _p[2], _p[3], _p[4], J + _i * 36);
-    }
-}
-
-/* jacobian_geometric: Geometric Jacobian of the TCP in the base frame. (float) */
-static inline void ur10e_jacobian_geometric_kernel_f32(const float *restrict q, const float a2, const float a3, const float d4, const float d5, const float d6, float *restrict J)
-{
     const float q1 = q[0];
     const float q2 = q[1];
     const float q3 = q[2];
     const float q4 = q[3];
     const float q5 = q[4];
-    const float _x0 = sinf(q1);
-    const float _x1 = cosf(q2);
+    const float _angle[5] = {q1, q2, q3, q4, q5};
+    float _sin[5], _cos[5];
+    ur10e_sincos_f32(5, _angle, _sin, _cos);
+    const float _sin_q1 = _sin[0];
+    const float _cos_q1 = _cos[0];
+    const float _sin_q2 = _sin[1];
+    const float _cos_q2 = _cos[1];
+    const float _sin_q3 = _sin[2];
+    const float _cos_q3 = _cos[2];
+    const float _sin_q4 = _sin[3];
+    const float _cos_q4 = _cos[3];
+    const float _sin_q5 = _sin[4];
+    const float _cos_q5 = _cos[4];
+    const float _x0 = _sin_q1;
+    const float _x1 = _cos_q2;
     const float _x2 = _x1*a2;
-    const float _x3 = cosf(q3);
-    const float _x4 = sinf(q2);
-    const float _x5 = sinf(q3);
+    const float _x3 = _cos_q3;
+    const float _x4 = _sin_q2;
+    const float _x5 = _sin_q3;
     const float _x6 = _x1*_x3 - _x4*_x5;
     const float _x7 = _x6*a3;
-    const float _x8 = cosf(q1);
-    const float _x9 = cosf(q4);
+    const float _x8 = _cos_q1;
+    const float _x9 = _cos_q4;
     const float _x10 = _x1*_x5 + _x3*_x4;
-    const float _x11 = sinf(q4);
+    const float _x11 = _sin_q4;
     const float _x12 = _x10*_x9 + _x11*_x6;
     const float _x13 = _x0*_x12;
-    const float _x14 = cosf(q5);
+    const float _x14 = _cos_q5;
     const float _x15 = _x6*_x9;
     const float _x16 = _x10*_x11;
     const float _x17 = _x15 - _x16;
-    const float _x18 = sinf(q5);
+    const float _x18 = _sin_q5;
     const float _x19 = _x17*_x18;
     const float _x20 = -(_x0*_x19 + _x14*_x8);
     const float _x21 = _x13*d5 + _x20*d6;
@@ -1154,21 +2671,418 @@ static inline void ur10e_jacobian_geometric_kernel_f32(const float *restrict q, 
     J[35] = -_x26;
 }
 
-void ur10e_jacobian_geometric_f32(const float *restrict q, float a2, float a3, float d4, float d5, float d6, float *restrict J)
+/* ur10e_jacobian_batch_f32: ur10e_jacobian_f32 for n configurations, in blocks of 8. */
+void ur10e_jacobian_batch_f32(size_t n, const float *restrict q, const float *restrict params, size_t params_stride, float *restrict J)
 {
-    ur10e_jacobian_geometric_kernel_f32(q, a2, a3, d4, d5, d6, J);
-}
-
-void ur10e_jacobian_geometric_batch_f32(size_t n, const float *restrict q, const float *restrict params, size_t params_stride, float *restrict J)
-{
-    for (size_t _i = 0; _i < n; ++_i) {
-        const float *restrict _p = params + _i * params_stride;
-        ur10e_jacobian_geometric_kernel_f32(q + _i * 6, _p[0], _p[1], _p[2], _p[3], _p[4], J + _i * 36);
+    for (size_t _i = 0; _i < n; _i += UR10E_BLOCK) {
+        /* lanes past the end of the batch repeat configuration _i and are not stored */
+        const size_t _m = n - _i < UR10E_BLOCK ? n - _i : UR10E_BLOCK;
+        float _in[10][UR10E_BLOCK];
+        for (size_t _l = 0; _l < UR10E_BLOCK; ++_l) {
+            const size_t _j = _i + (_l < _m ? _l : 0);
+            _in[0][_l] = q[_j * 6 + 0];
+            _in[1][_l] = q[_j * 6 + 1];
+            _in[2][_l] = q[_j * 6 + 2];
+            _in[3][_l] = q[_j * 6 + 3];
+            _in[4][_l] = q[_j * 6 + 4];
+            _in[5][_l] = params[_j * params_stride + 0];
+            _in[6][_l] = params[_j * params_stride + 1];
+            _in[7][_l] = params[_j * params_stride + 2];
+            _in[8][_l] = params[_j * params_stride + 3];
+            _in[9][_l] = params[_j * params_stride + 4];
+        }
+        float _angle[5][UR10E_BLOCK], _sin[5][UR10E_BLOCK], _cos[5][UR10E_BLOCK];
+        for (size_t _l = 0; _l < UR10E_BLOCK; ++_l) {
+            _angle[0][_l] = _in[0][_l];
+            _angle[1][_l] = _in[1][_l];
+            _angle[2][_l] = _in[2][_l];
+            _angle[3][_l] = _in[3][_l];
+            _angle[4][_l] = _in[4][_l];
+        }
+        ur10e_sincos_f32(5 * UR10E_BLOCK, &_angle[0][0], &_sin[0][0], &_cos[0][0]);
+        float _out[26][UR10E_BLOCK];
+        for (size_t _l = 0; _l < UR10E_BLOCK; ++_l) {
+            const float a2 = _in[5][_l];
+            const float a3 = _in[6][_l];
+            const float d4 = _in[7][_l];
+            const float d5 = _in[8][_l];
+            const float d6 = _in[9][_l];
+            const float _sin_q1 = _sin[0][_l];
+            const float _cos_q1 = _cos[0][_l];
+            const float _sin_q2 = _sin[1][_l];
+            const float _cos_q2 = _cos[1][_l];
+            const float _sin_q3 = _sin[2][_l];
+            const float _cos_q3 = _cos[2][_l];
+            const float _sin_q4 = _sin[3][_l];
+            const float _cos_q4 = _cos[3][_l];
+            const float _sin_q5 = _sin[4][_l];
+            const float _cos_q5 = _cos[4][_l];
+            const float _x0 = _sin_q1;
+            const float _x1 = _cos_q2;
+            const float _x2 = _x1*a2;
+            const float _x3 = _cos_q3;
+            const float _x4 = _sin_q2;
+            const float _x5 = _sin_q3;
+            const float _x6 = _x1*_x3 - _x4*_x5;
+            const float _x7 = _x6*a3;
+            const float _x8 = _cos_q1;
+            const float _x9 = _cos_q4;
+            const float _x10 = _x1*_x5 + _x3*_x4;
+            const float _x11 = _sin_q4;
+            const float _x12 = _x10*_x9 + _x11*_x6;
+            const float _x13 = _x0*_x12;
+            const float _x14 = _cos_q5;
+            const float _x15 = _x6*_x9;
+            const float _x16 = _x10*_x11;
+            const float _x17 = _x15 - _x16;
+            const float _x18 = _sin_q5;
+            const float _x19 = _x17*_x18;
+            const float _x20 = -(_x0*_x19 + _x14*_x8);
+            const float _x21 = _x13*d5 + _x20*d6;
+            const float _x22 = _x21 - _x8*d4;
+            const float _x23 = _x0*_x7 + _x22;
+            const float _x24 = _x0*_x2 + _x23;
+            const float _x25 = _x17*d5;
+            const float _x26 = _x12*_x18;
+            const float _x27 = _x26*d6;
+            const float _x28 = _x10*a3 - _x25 - _x27 + _x4*a2;
+            const float _x29 = _x25 + _x27;
+            const float _x30 = -(-_x10*a3 + _x29);
+            const float _x31 = -_x29;
+            const float _x32 = _x31*_x8;
+            const float _x33 = _x0*_x31;
+            const float _x34 = _x12*_x8;
+            const float _x35 = _x0*_x14 - _x19*_x8;
+            const float _x36 = _x34*d5 + _x35*d6;
+            const float _x37 = _x0*d4 + _x36;
+            const float _x38 = _x37 + _x7*_x8;
+            const float _x39 = _x2*_x8 + _x38;
+            const float _x40 = -_x8;
+            _out[0][_l] = -_x24;
+            _out[1][_l] = -_x28*_x8;
+            _out[2][_l] = -_x30*_x8;
+            _out[3][_l] = -_x32;
+            _out[4][_l] = _x12*_x33 + _x17*_x21;
+            _out[5][_l] = _x39;
+            _out[6][_l] = -_x0*_x28;
+            _out[7][_l] = -_x0*_x30;
+            _out[8][_l] = -_x33;
+            _out[9][_l] = -(_x12*_x32 + _x17*_x36);
+            _out[10][_l] = _x0*_x24 + _x39*_x8;
+            _out[11][_l] = _x0*_x23 + _x38*_x8;
+            _out[12][_l] = _x0*_x22 + _x37*_x8;
+            _out[13][_l] = -_x13*_x36 + _x21*_x34;
+            _out[14][_l] = _x0;
+            _out[15][_l] = _x0;
+            _out[16][_l] = _x0;
+            _out[17][_l] = _x34;
+            _out[18][_l] = _x35;
+            _out[19][_l] = _x40;
+            _out[20][_l] = _x40;
+            _out[21][_l] = _x40;
+            _out[22][_l] = _x13;
+            _out[23][_l] = _x20;
+            _out[24][_l] = -_x15 + _x16;
+            _out[25][_l] = -_x26;
+        }
+        for (size_t _l = 0; _l < _m; ++_l) {
+            J[(_i + _l) * 36 + 0] = _out[0][_l];
+            J[(_i + _l) * 36 + 1] = _out[1][_l];
+            J[(_i + _l) * 36 + 2] = _out[2][_l];
+            J[(_i + _l) * 36 + 3] = _out[3][_l];
+            J[(_i + _l) * 36 + 4] = _out[4][_l];
+            J[(_i + _l) * 36 + 5] = 0.0f;
+            J[(_i + _l) * 36 + 6] = _out[5][_l];
+            J[(_i + _l) * 36 + 7] = _out[6][_l];
+            J[(_i + _l) * 36 + 8] = _out[7][_l];
+            J[(_i + _l) * 36 + 9] = _out[8][_l];
+            J[(_i + _l) * 36 + 10] = _out[9][_l];
+            J[(_i + _l) * 36 + 11] = 0.0f;
+            J[(_i + _l) * 36 + 12] = 0.0f;
+            J[(_i + _l) * 36 + 13] = _out[10][_l];
+            J[(_i + _l) * 36 + 14] = _out[11][_l];
+            J[(_i + _l) * 36 + 15] = _out[12][_l];
+            J[(_i + _l) * 36 + 16] = _out[13][_l];
+            J[(_i + _l) * 36 + 17] = 0.0f;
+            J[(_i + _l) * 36 + 18] = 0.0f;
+            J[(_i + _l) * 36 + 19] = _out[14][_l];
+            J[(_i + _l) * 36 + 20] = _out[15][_l];
+            J[(_i + _l) * 36 + 21] = _out[16][_l];
+            J[(_i + _l) * 36 + 22] = _out[17][_l];
+            J[(_i + _l) * 36 + 23] = _out[18][_l];
+            J[(_i + _l) * 36 + 24] = 0.0f;
+            J[(_i + _l) * 36 + 25] = _out[19][_l];
+            J[(_i + _l) * 36 + 26] = _out[20][_l];
+            J[(_i + _l) * 36 + 27] = _out[21][_l];
+            J[(_i + _l) * 36 + 28] = _out[22][_l];
+            J[(_i + _l) * 36 + 29] = _out[23][_l];
+            J[(_i + _l) * 36 + 30] = 1.0f;
+            J[(_i + _l) * 36 + 31] = 0.0f;
+            J[(_i + _l) * 36 + 32] = 0.0f;
+            J[(_i + _l) * 36 + 33] = 0.0f;
+            J[(_i + _l) * 36 + 34] = _out[24][_l];
+            J[(_i + _l) * 36 + 35] = _out[25][_l];
+        }
     }
 }
 
-/* scene: fk, frames, jacobian, jacobian_geometric together, with one set of shared subexpressions. (float) */
-static inline void ur10e_scene_kernel_f32(const float *restrict q, const float d1, const float a2, const float a3, const float d4, const float d5, const float d6, float *restrict base_T_tcp, float *restrict base_T_shoulder, float *restrict base_T_upper_arm, float *restrict base_T_forearm, float *restrict base_T_wrist1, float *restrict base_T_wrist2, float *restrict base_T_wrist3, float *restrict jacobian_J, float *restrict jacobian_geometric_J)
+/* ur10e_jacobian_geometric_f32: Geometric Jacobian of the TCP in the base frame. */
+void ur10e_jacobian_geometric_f32(const float *restrict q, float a2, float a3, float d4, float d5, float d6, float *restrict J)
+{
+    const float q1 = q[0];
+    const float q2 = q[1];
+    const float q3 = q[2];
+    const float q4 = q[3];
+    const float q5 = q[4];
+    const float _angle[5] = {q1, q2, q3, q4, q5};
+    float _sin[5], _cos[5];
+    ur10e_sincos_f32(5, _angle, _sin, _cos);
+    const float _sin_q1 = _sin[0];
+    const float _cos_q1 = _cos[0];
+    const float _sin_q2 = _sin[1];
+    const float _cos_q2 = _cos[1];
+    const float _sin_q3 = _sin[2];
+    const float _cos_q3 = _cos[2];
+    const float _sin_q4 = _sin[3];
+    const float _cos_q4 = _cos[3];
+    const float _sin_q5 = _sin[4];
+    const float _cos_q5 = _cos[4];
+    const float _x0 = _sin_q1;
+    const float _x1 = _cos_q2;
+    const float _x2 = _x1*a2;
+    const float _x3 = _cos_q3;
+    const float _x4 = _sin_q2;
+    const float _x5 = _sin_q3;
+    const float _x6 = _x1*_x3 - _x4*_x5;
+    const float _x7 = _x6*a3;
+    const float _x8 = _cos_q1;
+    const float _x9 = _cos_q4;
+    const float _x10 = _x1*_x5 + _x3*_x4;
+    const float _x11 = _sin_q4;
+    const float _x12 = _x10*_x9 + _x11*_x6;
+    const float _x13 = _x0*_x12;
+    const float _x14 = _cos_q5;
+    const float _x15 = _x6*_x9;
+    const float _x16 = _x10*_x11;
+    const float _x17 = _x15 - _x16;
+    const float _x18 = _sin_q5;
+    const float _x19 = _x17*_x18;
+    const float _x20 = -(_x0*_x19 + _x14*_x8);
+    const float _x21 = _x13*d5 + _x20*d6;
+    const float _x22 = _x21 - _x8*d4;
+    const float _x23 = _x0*_x7 + _x22;
+    const float _x24 = _x0*_x2 + _x23;
+    const float _x25 = _x17*d5;
+    const float _x26 = _x12*_x18;
+    const float _x27 = _x26*d6;
+    const float _x28 = _x10*a3 - _x25 - _x27 + _x4*a2;
+    const float _x29 = _x25 + _x27;
+    const float _x30 = -(-_x10*a3 + _x29);
+    const float _x31 = -_x29;
+    const float _x32 = _x31*_x8;
+    const float _x33 = _x0*_x31;
+    const float _x34 = _x12*_x8;
+    const float _x35 = _x0*_x14 - _x19*_x8;
+    const float _x36 = _x34*d5 + _x35*d6;
+    const float _x37 = _x0*d4 + _x36;
+    const float _x38 = _x37 + _x7*_x8;
+    const float _x39 = _x2*_x8 + _x38;
+    const float _x40 = -_x8;
+    J[0] = -_x24;
+    J[1] = -_x28*_x8;
+    J[2] = -_x30*_x8;
+    J[3] = -_x32;
+    J[4] = _x12*_x33 + _x17*_x21;
+    J[5] = 0.0f;
+    J[6] = _x39;
+    J[7] = -_x0*_x28;
+    J[8] = -_x0*_x30;
+    J[9] = -_x33;
+    J[10] = -(_x12*_x32 + _x17*_x36);
+    J[11] = 0.0f;
+    J[12] = 0.0f;
+    J[13] = _x0*_x24 + _x39*_x8;
+    J[14] = _x0*_x23 + _x38*_x8;
+    J[15] = _x0*_x22 + _x37*_x8;
+    J[16] = -_x13*_x36 + _x21*_x34;
+    J[17] = 0.0f;
+    J[18] = 0.0f;
+    J[19] = _x0;
+    J[20] = _x0;
+    J[21] = _x0;
+    J[22] = _x34;
+    J[23] = _x35;
+    J[24] = 0.0f;
+    J[25] = _x40;
+    J[26] = _x40;
+    J[27] = _x40;
+    J[28] = _x13;
+    J[29] = _x20;
+    J[30] = 1.0f;
+    J[31] = 0.0f;
+    J[32] = 0.0f;
+    J[33] = 0.0f;
+    J[34] = -_x15 + _x16;
+    J[35] = -_x26;
+}
+
+/* ur10e_jacobian_geometric_batch_f32: ur10e_jacobian_geometric_f32 for n configurations, in blocks of 8. */
+void ur10e_jacobian_geometric_batch_f32(size_t n, const float *restrict q, const float *restrict params, size_t params_stride, float *restrict J)
+{
+    for (size_t _i = 0; _i < n; _i += UR10E_BLOCK) {
+        /* lanes past the end of the batch repeat configuration _i and are not stored */
+        const size_t _m = n - _i < UR10E_BLOCK ? n - _i : UR10E_BLOCK;
+        float _in[10][UR10E_BLOCK];
+        for (size_t _l = 0; _l < UR10E_BLOCK; ++_l) {
+            const size_t _j = _i + (_l < _m ? _l : 0);
+            _in[0][_l] = q[_j * 6 + 0];
+            _in[1][_l] = q[_j * 6 + 1];
+            _in[2][_l] = q[_j * 6 + 2];
+            _in[3][_l] = q[_j * 6 + 3];
+            _in[4][_l] = q[_j * 6 + 4];
+            _in[5][_l] = params[_j * params_stride + 0];
+            _in[6][_l] = params[_j * params_stride + 1];
+            _in[7][_l] = params[_j * params_stride + 2];
+            _in[8][_l] = params[_j * params_stride + 3];
+            _in[9][_l] = params[_j * params_stride + 4];
+        }
+        float _angle[5][UR10E_BLOCK], _sin[5][UR10E_BLOCK], _cos[5][UR10E_BLOCK];
+        for (size_t _l = 0; _l < UR10E_BLOCK; ++_l) {
+            _angle[0][_l] = _in[0][_l];
+            _angle[1][_l] = _in[1][_l];
+            _angle[2][_l] = _in[2][_l];
+            _angle[3][_l] = _in[3][_l];
+            _angle[4][_l] = _in[4][_l];
+        }
+        ur10e_sincos_f32(5 * UR10E_BLOCK, &_angle[0][0], &_sin[0][0], &_cos[0][0]);
+        float _out[26][UR10E_BLOCK];
+        for (size_t _l = 0; _l < UR10E_BLOCK; ++_l) {
+            const float a2 = _in[5][_l];
+            const float a3 = _in[6][_l];
+            const float d4 = _in[7][_l];
+            const float d5 = _in[8][_l];
+            const float d6 = _in[9][_l];
+            const float _sin_q1 = _sin[0][_l];
+            const float _cos_q1 = _cos[0][_l];
+            const float _sin_q2 = _sin[1][_l];
+            const float _cos_q2 = _cos[1][_l];
+            const float _sin_q3 = _sin[2][_l];
+            const float _cos_q3 = _cos[2][_l];
+            const float _sin_q4 = _sin[3][_l];
+            const float _cos_q4 = _cos[3][_l];
+            const float _sin_q5 = _sin[4][_l];
+            const float _cos_q5 = _cos[4][_l];
+            const float _x0 = _sin_q1;
+            const float _x1 = _cos_q2;
+            const float _x2 = _x1*a2;
+            const float _x3 = _cos_q3;
+            const float _x4 = _sin_q2;
+            const float _x5 = _sin_q3;
+            const float _x6 = _x1*_x3 - _x4*_x5;
+            const float _x7 = _x6*a3;
+            const float _x8 = _cos_q1;
+            const float _x9 = _cos_q4;
+            const float _x10 = _x1*_x5 + _x3*_x4;
+            const float _x11 = _sin_q4;
+            const float _x12 = _x10*_x9 + _x11*_x6;
+            const float _x13 = _x0*_x12;
+            const float _x14 = _cos_q5;
+            const float _x15 = _x6*_x9;
+            const float _x16 = _x10*_x11;
+            const float _x17 = _x15 - _x16;
+            const float _x18 = _sin_q5;
+            const float _x19 = _x17*_x18;
+            const float _x20 = -(_x0*_x19 + _x14*_x8);
+            const float _x21 = _x13*d5 + _x20*d6;
+            const float _x22 = _x21 - _x8*d4;
+            const float _x23 = _x0*_x7 + _x22;
+            const float _x24 = _x0*_x2 + _x23;
+            const float _x25 = _x17*d5;
+            const float _x26 = _x12*_x18;
+            const float _x27 = _x26*d6;
+            const float _x28 = _x10*a3 - _x25 - _x27 + _x4*a2;
+            const float _x29 = _x25 + _x27;
+            const float _x30 = -(-_x10*a3 + _x29);
+            const float _x31 = -_x29;
+            const float _x32 = _x31*_x8;
+            const float _x33 = _x0*_x31;
+            const float _x34 = _x12*_x8;
+            const float _x35 = _x0*_x14 - _x19*_x8;
+            const float _x36 = _x34*d5 + _x35*d6;
+            const float _x37 = _x0*d4 + _x36;
+            const float _x38 = _x37 + _x7*_x8;
+            const float _x39 = _x2*_x8 + _x38;
+            const float _x40 = -_x8;
+            _out[0][_l] = -_x24;
+            _out[1][_l] = -_x28*_x8;
+            _out[2][_l] = -_x30*_x8;
+            _out[3][_l] = -_x32;
+            _out[4][_l] = _x12*_x33 + _x17*_x21;
+            _out[5][_l] = _x39;
+            _out[6][_l] = -_x0*_x28;
+            _out[7][_l] = -_x0*_x30;
+            _out[8][_l] = -_x33;
+            _out[9][_l] = -(_x12*_x32 + _x17*_x36);
+            _out[10][_l] = _x0*_x24 + _x39*_x8;
+            _out[11][_l] = _x0*_x23 + _x38*_x8;
+            _out[12][_l] = _x0*_x22 + _x37*_x8;
+            _out[13][_l] = -_x13*_x36 + _x21*_x34;
+            _out[14][_l] = _x0;
+            _out[15][_l] = _x0;
+            _out[16][_l] = _x0;
+            _out[17][_l] = _x34;
+            _out[18][_l] = _x35;
+            _out[19][_l] = _x40;
+            _out[20][_l] = _x40;
+            _out[21][_l] = _x40;
+            _out[22][_l] = _x13;
+            _out[23][_l] = _x20;
+            _out[24][_l] = -_x15 + _x16;
+            _out[25][_l] = -_x26;
+        }
+        for (size_t _l = 0; _l < _m; ++_l) {
+            J[(_i + _l) * 36 + 0] = _out[0][_l];
+            J[(_i + _l) * 36 + 1] = _out[1][_l];
+            J[(_i + _l) * 36 + 2] = _out[2][_l];
+            J[(_i + _l) * 36 + 3] = _out[3][_l];
+            J[(_i + _l) * 36 + 4] = _out[4][_l];
+            J[(_i + _l) * 36 + 5] = 0.0f;
+            J[(_i + _l) * 36 + 6] = _out[5][_l];
+            J[(_i + _l) * 36 + 7] = _out[6][_l];
+            J[(_i + _l) * 36 + 8] = _out[7][_l];
+            J[(_i + _l) * 36 + 9] = _out[8][_l];
+            J[(_i + _l) * 36 + 10] = _out[9][_l];
+            J[(_i + _l) * 36 + 11] = 0.0f;
+            J[(_i + _l) * 36 + 12] = 0.0f;
+            J[(_i + _l) * 36 + 13] = _out[10][_l];
+            J[(_i + _l) * 36 + 14] = _out[11][_l];
+            J[(_i + _l) * 36 + 15] = _out[12][_l];
+            J[(_i + _l) * 36 + 16] = _out[13][_l];
+            J[(_i + _l) * 36 + 17] = 0.0f;
+            J[(_i + _l) * 36 + 18] = 0.0f;
+            J[(_i + _l) * 36 + 19] = _out[14][_l];
+            J[(_i + _l) * 36 + 20] = _out[15][_l];
+            J[(_i + _l) * 36 + 21] = _out[16][_l];
+            J[(_i + _l) * 36 + 22] = _out[17][_l];
+            J[(_i + _l) * 36 + 23] = _out[18][_l];
+            J[(_i + _l) * 36 + 24] = 0.0f;
+            J[(_i + _l) * 36 + 25] = _out[19][_l];
+            J[(_i + _l) * 36 + 26] = _out[20][_l];
+            J[(_i + _l) * 36 + 27] = _out[21][_l];
+            J[(_i + _l) * 36 + 28] = _out[22][_l];
+            J[(_i + _l) * 36 + 29] = _out[23][_l];
+            J[(_i + _l) * 36 + 30] = 1.0f;
+            J[(_i + _l) * 36 + 31] = 0.0f;
+            J[(_i + _l) * 36 + 32] = 0.0f;
+            J[(_i + _l) * 36 + 33] = 0.0f;
+            J[(_i + _l) * 36 + 34] = _out[24][_l];
+            J[(_i + _l) * 36 + 35] = _out[25][_l];
+        }
+    }
+}
+
+/* ur10e_scene_f32: fk, frames, jacobian, jacobian_geometric together, with one set of shared subexpressions. */
+void ur10e_scene_f32(const float *restrict q, float d1, float a2, float a3, float d4, float d5, float d6, float *restrict base_T_tcp, float *restrict base_T_shoulder, float *restrict base_T_upper_arm, float *restrict base_T_forearm, float *restrict base_T_wrist1, float *restrict base_T_wrist2, float *restrict base_T_wrist3, float *restrict jacobian_J, float *restrict jacobian_geometric_J)
 {
     const float q1 = q[0];
     const float q2 = q[1];
@@ -1176,26 +3090,41 @@ static inline void ur10e_scene_kernel_f32(const float *restrict q, const float d
     const float q4 = q[3];
     const float q5 = q[4];
     const float q6 = q[5];
-    const float _x0 = sinf(q6);
-    const float _x1 = cosf(q1);
-    const float _x2 = cosf(q4);
-    const float _x3 = sinf(q2);
-    const float _x4 = cosf(q3);
-    const float _x5 = sinf(q3);
-    const float _x6 = cosf(q2);
+    const float _angle[6] = {q1, q2, q3, q4, q5, q6};
+    float _sin[6], _cos[6];
+    ur10e_sincos_f32(6, _angle, _sin, _cos);
+    const float _sin_q1 = _sin[0];
+    const float _cos_q1 = _cos[0];
+    const float _sin_q2 = _sin[1];
+    const float _cos_q2 = _cos[1];
+    const float _sin_q3 = _sin[2];
+    const float _cos_q3 = _cos[2];
+    const float _sin_q4 = _sin[3];
+    const float _cos_q4 = _cos[3];
+    const float _sin_q5 = _sin[4];
+    const float _cos_q5 = _cos[4];
+    const float _sin_q6 = _sin[5];
+    const float _cos_q6 = _cos[5];
+    const float _x0 = _sin_q6;
+    const float _x1 = _cos_q1;
+    const float _x2 = _cos_q4;
+    const float _x3 = _sin_q2;
+    const float _x4 = _cos_q3;
+    const float _x5 = _sin_q3;
+    const float _x6 = _cos_q2;
     const float _x7 = _x3*_x4 + _x5*_x6;
-    const float _x8 = sinf(q4);
+    const float _x8 = _sin_q4;
     const float _x9 = -_x3*_x5 + _x4*_x6;
     const float _x10 = _x2*_x7 + _x8*_x9;
     const float _x11 = _x1*_x10;
-    const float _x12 = cosf(q6);
-    const float _x13 = sinf(q1);
-    const float _x14 = sinf(q5);
+    const float _x12 = _cos_q6;
+    const float _x13 = _sin_q1;
+    const float _x14 = _sin_q5;
     const float _x15 = _x13*_x14;
     const float _x16 = _x2*_x9;
     const float _x17 = _x7*_x8;
     const float _x18 = _x16 - _x17;
-    const float _x19 = cosf(q5);
+    const float _x19 = _cos_q5;
     const float _x20 = _x1*_x19;
     const float _x21 = _x15 + _x18*_x20;
     const float _x22 = -_x0*_x11 + _x12*_x21;
@@ -1446,15 +3375,452 @@ static inline void ur10e_scene_kernel_f32(const float *restrict q, const float d
     jacobian_geometric_J[35] = _x54;
 }
 
-void ur10e_scene_f32(const float *restrict q, float d1, float a2, float a3, float d4, float d5, float d6, float *restrict base_T_tcp, float *restrict base_T_shoulder, float *restrict base_T_upper_arm, float *restrict base_T_forearm, float *restrict base_T_wrist1, float *restrict base_T_wrist2, float *restrict base_T_wrist3, float *restrict jacobian_J, float *restrict jacobian_geometric_J)
-{
-    ur10e_scene_kernel_f32(q, d1, a2, a3, d4, d5, d6, base_T_tcp, base_T_shoulder, base_T_upper_arm, base_T_forearm, base_T_wrist1, base_T_wrist2, base_T_wrist3, jacobian_J, jacobian_geometric_J);
-}
-
+/* ur10e_scene_batch_f32: ur10e_scene_f32 for n configurations, in blocks of 8. */
 void ur10e_scene_batch_f32(size_t n, const float *restrict q, const float *restrict params, size_t params_stride, float *restrict base_T_tcp, float *restrict base_T_shoulder, float *restrict base_T_upper_arm, float *restrict base_T_forearm, float *restrict base_T_wrist1, float *restrict base_T_wrist2, float *restrict base_T_wrist3, float *restrict jacobian_J, float *restrict jacobian_geometric_J)
 {
-    for (size_t _i = 0; _i < n; ++_i) {
-        const float *restrict _p = params + _i * params_stride;
-        ur10e_scene_kernel_f32(q + _i * 6, _p[0], _p[1], _p[2], _p[3], _p[4], _p[5], base_T_tcp + _i * 16, base_T_shoulder + _i * 16, base_T_upper_arm + _i * 16, base_T_forearm + _i * 16, base_T_wrist1 + _i * 16, base_T_wrist2 + _i * 16, base_T_wrist3 + _i * 16, jacobian_J + _i * 36, jacobian_geometric_J + _i * 36);
+    for (size_t _i = 0; _i < n; _i += UR10E_BLOCK) {
+        /* lanes past the end of the batch repeat configuration _i and are not stored */
+        const size_t _m = n - _i < UR10E_BLOCK ? n - _i : UR10E_BLOCK;
+        float _in[12][UR10E_BLOCK];
+        for (size_t _l = 0; _l < UR10E_BLOCK; ++_l) {
+            const size_t _j = _i + (_l < _m ? _l : 0);
+            _in[0][_l] = q[_j * 6 + 0];
+            _in[1][_l] = q[_j * 6 + 1];
+            _in[2][_l] = q[_j * 6 + 2];
+            _in[3][_l] = q[_j * 6 + 3];
+            _in[4][_l] = q[_j * 6 + 4];
+            _in[5][_l] = q[_j * 6 + 5];
+            _in[6][_l] = params[_j * params_stride + 0];
+            _in[7][_l] = params[_j * params_stride + 1];
+            _in[8][_l] = params[_j * params_stride + 2];
+            _in[9][_l] = params[_j * params_stride + 3];
+            _in[10][_l] = params[_j * params_stride + 4];
+            _in[11][_l] = params[_j * params_stride + 5];
+        }
+        float _angle[6][UR10E_BLOCK], _sin[6][UR10E_BLOCK], _cos[6][UR10E_BLOCK];
+        for (size_t _l = 0; _l < UR10E_BLOCK; ++_l) {
+            _angle[0][_l] = _in[0][_l];
+            _angle[1][_l] = _in[1][_l];
+            _angle[2][_l] = _in[2][_l];
+            _angle[3][_l] = _in[3][_l];
+            _angle[4][_l] = _in[4][_l];
+            _angle[5][_l] = _in[5][_l];
+        }
+        ur10e_sincos_f32(6 * UR10E_BLOCK, &_angle[0][0], &_sin[0][0], &_cos[0][0]);
+        float _out[124][UR10E_BLOCK];
+        for (size_t _l = 0; _l < UR10E_BLOCK; ++_l) {
+            const float d1 = _in[6][_l];
+            const float a2 = _in[7][_l];
+            const float a3 = _in[8][_l];
+            const float d4 = _in[9][_l];
+            const float d5 = _in[10][_l];
+            const float d6 = _in[11][_l];
+            const float _sin_q1 = _sin[0][_l];
+            const float _cos_q1 = _cos[0][_l];
+            const float _sin_q2 = _sin[1][_l];
+            const float _cos_q2 = _cos[1][_l];
+            const float _sin_q3 = _sin[2][_l];
+            const float _cos_q3 = _cos[2][_l];
+            const float _sin_q4 = _sin[3][_l];
+            const float _cos_q4 = _cos[3][_l];
+            const float _sin_q5 = _sin[4][_l];
+            const float _cos_q5 = _cos[4][_l];
+            const float _sin_q6 = _sin[5][_l];
+            const float _cos_q6 = _cos[5][_l];
+            const float _x0 = _sin_q6;
+            const float _x1 = _cos_q1;
+            const float _x2 = _cos_q4;
+            const float _x3 = _sin_q2;
+            const float _x4 = _cos_q3;
+            const float _x5 = _sin_q3;
+            const float _x6 = _cos_q2;
+            const float _x7 = _x3*_x4 + _x5*_x6;
+            const float _x8 = _sin_q4;
+            const float _x9 = -_x3*_x5 + _x4*_x6;
+            const float _x10 = _x2*_x7 + _x8*_x9;
+            const float _x11 = _x1*_x10;
+            const float _x12 = _cos_q6;
+            const float _x13 = _sin_q1;
+            const float _x14 = _sin_q5;
+            const float _x15 = _x13*_x14;
+            const float _x16 = _x2*_x9;
+            const float _x17 = _x7*_x8;
+            const float _x18 = _x16 - _x17;
+            const float _x19 = _cos_q5;
+            const float _x20 = _x1*_x19;
+            const float _x21 = _x15 + _x18*_x20;
+            const float _x22 = -_x0*_x11 + _x12*_x21;
+            const float _x23 = -(_x0*_x21 + _x11*_x12);
+            const float _x24 = _x13*_x19;
+            const float _x25 = _x1*_x14;
+            const float _x26 = -_x18*_x25 + _x24;
+            const float _x27 = _x11*d5;
+            const float _x28 = _x26*d6 + _x27;
+            const float _x29 = _x1*_x6;
+            const float _x30 = _x29*a2;
+            const float _x31 = _x13*d4;
+            const float _x32 = _x1*_x9;
+            const float _x33 = _x31 + _x32*a3;
+            const float _x34 = _x30 + _x33;
+            const float _x35 = _x28 + _x34;
+            const float _x36 = _x10*_x13;
+            const float _x37 = _x18*_x24 - _x25;
+            const float _x38 = -_x0*_x36 + _x12*_x37;
+            const float _x39 = -(_x0*_x37 + _x12*_x36);
+            const float _x40 = -(_x15*_x18 + _x20);
+            const float _x41 = _x36*d5;
+            const float _x42 = _x40*d6 + _x41;
+            const float _x43 = _x13*_x6;
+            const float _x44 = _x43*a2;
+            const float _x45 = -_x1*d4;
+            const float _x46 = _x13*_x9;
+            const float _x47 = _x45 + _x46*a3;
+            const float _x48 = _x44 + _x47;
+            const float _x49 = _x42 + _x48;
+            const float _x50 = _x10*_x19;
+            const float _x51 = _x0*_x18 + _x12*_x50;
+            const float _x52 = -_x0*_x50 + _x12*_x18;
+            const float _x53 = _x10*_x14;
+            const float _x54 = -_x53;
+            const float _x55 = _x53*d6;
+            const float _x56 = -_x55;
+            const float _x57 = _x18*d5;
+            const float _x58 = -_x57;
+            const float _x59 = _x7*a3;
+            const float _x60 = _x3*a2;
+            const float _x61 = _x60 + d1;
+            const float _x62 = _x59 + _x61;
+            const float _x63 = _x58 + _x62;
+            const float _x64 = _x56 + _x63;
+            const float _x65 = -_x1;
+            const float _x66 = -_x16 + _x17;
+            const float _x67 = -_x49;
+            const float _x68 = _x56 + _x58 + _x59 + _x60;
+            const float _x69 = -_x1*_x68;
+            const float _x70 = _x55 + _x57;
+            const float _x71 = -(-_x7*a3 + _x70);
+            const float _x72 = -_x1*_x71;
+            const float _x73 = -_x70;
+            const float _x74 = -_x1*_x73;
+            const float _x75 = _x18*_x42 + _x36*_x73;
+            const float _x76 = -_x13*_x68;
+            const float _x77 = -_x13*_x71;
+            const float _x78 = -_x13*_x73;
+            const float _x79 = -(_x11*_x73 + _x18*_x28);
+            const float _x80 = _x1*_x35 + _x13*_x49;
+            const float _x81 = _x1*(_x28 + _x33) + _x13*(_x42 + _x47);
+            const float _x82 = _x1*(_x28 + _x31) + _x13*(_x42 + _x45);
+            const float _x83 = _x11*_x42 - _x28*_x36;
+            _out[0][_l] = _x22;
+            _out[1][_l] = _x23;
+            _out[2][_l] = _x26;
+            _out[3][_l] = _x35;
+            _out[4][_l] = _x38;
+            _out[5][_l] = _x39;
+            _out[6][_l] = _x40;
+            _out[7][_l] = _x49;
+            _out[8][_l] = _x51;
+            _out[9][_l] = _x52;
+            _out[10][_l] = _x54;
+            _out[11][_l] = _x64;
+            _out[12][_l] = _x1;
+            _out[13][_l] = -_x13;
+            _out[14][_l] = _x13;
+            _out[15][_l] = _x1;
+            _out[16][_l] = d1;
+            _out[17][_l] = _x29;
+            _out[18][_l] = -_x1*_x3;
+            _out[19][_l] = _x13;
+            _out[20][_l] = _x43;
+            _out[21][_l] = -_x13*_x3;
+            _out[22][_l] = _x65;
+            _out[23][_l] = _x3;
+            _out[24][_l] = _x6;
+            _out[25][_l] = d1;
+            _out[26][_l] = _x32;
+            _out[27][_l] = -_x1*_x7;
+            _out[28][_l] = _x13;
+            _out[29][_l] = _x30;
+            _out[30][_l] = _x46;
+            _out[31][_l] = -_x13*_x7;
+            _out[32][_l] = _x65;
+            _out[33][_l] = _x44;
+            _out[34][_l] = _x7;
+            _out[35][_l] = _x9;
+            _out[36][_l] = _x61;
+            _out[37][_l] = _x1*_x18;
+            _out[38][_l] = -_x11;
+            _out[39][_l] = _x13;
+            _out[40][_l] = _x34;
+            _out[41][_l] = _x13*_x18;
+            _out[42][_l] = -_x36;
+            _out[43][_l] = _x65;
+            _out[44][_l] = _x48;
+            _out[45][_l] = _x10;
+            _out[46][_l] = _x18;
+            _out[47][_l] = _x62;
+            _out[48][_l] = _x21;
+            _out[49][_l] = _x26;
+            _out[50][_l] = _x11;
+            _out[51][_l] = _x27 + _x34;
+            _out[52][_l] = _x37;
+            _out[53][_l] = _x40;
+            _out[54][_l] = _x36;
+            _out[55][_l] = _x41 + _x48;
+            _out[56][_l] = _x50;
+            _out[57][_l] = _x54;
+            _out[58][_l] = _x66;
+            _out[59][_l] = _x63;
+            _out[60][_l] = _x22;
+            _out[61][_l] = _x23;
+            _out[62][_l] = _x26;
+            _out[63][_l] = _x35;
+            _out[64][_l] = _x38;
+            _out[65][_l] = _x39;
+            _out[66][_l] = _x40;
+            _out[67][_l] = _x49;
+            _out[68][_l] = _x51;
+            _out[69][_l] = _x52;
+            _out[70][_l] = _x54;
+            _out[71][_l] = _x64;
+            _out[72][_l] = _x67;
+            _out[73][_l] = _x69;
+            _out[74][_l] = _x72;
+            _out[75][_l] = _x74;
+            _out[76][_l] = _x75;
+            _out[77][_l] = _x35;
+            _out[78][_l] = _x76;
+            _out[79][_l] = _x77;
+            _out[80][_l] = _x78;
+            _out[81][_l] = _x79;
+            _out[82][_l] = _x80;
+            _out[83][_l] = _x81;
+            _out[84][_l] = _x82;
+            _out[85][_l] = _x83;
+            _out[86][_l] = _x13;
+            _out[87][_l] = _x13;
+            _out[88][_l] = _x13;
+            _out[89][_l] = _x11;
+            _out[90][_l] = _x26;
+            _out[91][_l] = _x65;
+            _out[92][_l] = _x65;
+            _out[93][_l] = _x65;
+            _out[94][_l] = _x36;
+            _out[95][_l] = _x40;
+            _out[96][_l] = _x66;
+            _out[97][_l] = _x54;
+            _out[98][_l] = _x67;
+            _out[99][_l] = _x69;
+            _out[100][_l] = _x72;
+            _out[101][_l] = _x74;
+            _out[102][_l] = _x75;
+            _out[103][_l] = _x35;
+            _out[104][_l] = _x76;
+            _out[105][_l] = _x77;
+            _out[106][_l] = _x78;
+            _out[107][_l] = _x79;
+            _out[108][_l] = _x80;
+            _out[109][_l] = _x81;
+            _out[110][_l] = _x82;
+            _out[111][_l] = _x83;
+            _out[112][_l] = _x13;
+            _out[113][_l] = _x13;
+            _out[114][_l] = _x13;
+            _out[115][_l] = _x11;
+            _out[116][_l] = _x26;
+            _out[117][_l] = _x65;
+            _out[118][_l] = _x65;
+            _out[119][_l] = _x65;
+            _out[120][_l] = _x36;
+            _out[121][_l] = _x40;
+            _out[122][_l] = _x66;
+            _out[123][_l] = _x54;
+        }
+        for (size_t _l = 0; _l < _m; ++_l) {
+            base_T_tcp[(_i + _l) * 16 + 0] = _out[0][_l];
+            base_T_tcp[(_i + _l) * 16 + 1] = _out[1][_l];
+            base_T_tcp[(_i + _l) * 16 + 2] = _out[2][_l];
+            base_T_tcp[(_i + _l) * 16 + 3] = _out[3][_l];
+            base_T_tcp[(_i + _l) * 16 + 4] = _out[4][_l];
+            base_T_tcp[(_i + _l) * 16 + 5] = _out[5][_l];
+            base_T_tcp[(_i + _l) * 16 + 6] = _out[6][_l];
+            base_T_tcp[(_i + _l) * 16 + 7] = _out[7][_l];
+            base_T_tcp[(_i + _l) * 16 + 8] = _out[8][_l];
+            base_T_tcp[(_i + _l) * 16 + 9] = _out[9][_l];
+            base_T_tcp[(_i + _l) * 16 + 10] = _out[10][_l];
+            base_T_tcp[(_i + _l) * 16 + 11] = _out[11][_l];
+            base_T_tcp[(_i + _l) * 16 + 12] = 0.0f;
+            base_T_tcp[(_i + _l) * 16 + 13] = 0.0f;
+            base_T_tcp[(_i + _l) * 16 + 14] = 0.0f;
+            base_T_tcp[(_i + _l) * 16 + 15] = 1.0f;
+            base_T_shoulder[(_i + _l) * 16 + 0] = _out[12][_l];
+            base_T_shoulder[(_i + _l) * 16 + 1] = _out[13][_l];
+            base_T_shoulder[(_i + _l) * 16 + 2] = 0.0f;
+            base_T_shoulder[(_i + _l) * 16 + 3] = 0.0f;
+            base_T_shoulder[(_i + _l) * 16 + 4] = _out[14][_l];
+            base_T_shoulder[(_i + _l) * 16 + 5] = _out[15][_l];
+            base_T_shoulder[(_i + _l) * 16 + 6] = 0.0f;
+            base_T_shoulder[(_i + _l) * 16 + 7] = 0.0f;
+            base_T_shoulder[(_i + _l) * 16 + 8] = 0.0f;
+            base_T_shoulder[(_i + _l) * 16 + 9] = 0.0f;
+            base_T_shoulder[(_i + _l) * 16 + 10] = 1.0f;
+            base_T_shoulder[(_i + _l) * 16 + 11] = _out[16][_l];
+            base_T_shoulder[(_i + _l) * 16 + 12] = 0.0f;
+            base_T_shoulder[(_i + _l) * 16 + 13] = 0.0f;
+            base_T_shoulder[(_i + _l) * 16 + 14] = 0.0f;
+            base_T_shoulder[(_i + _l) * 16 + 15] = 1.0f;
+            base_T_upper_arm[(_i + _l) * 16 + 0] = _out[17][_l];
+            base_T_upper_arm[(_i + _l) * 16 + 1] = _out[18][_l];
+            base_T_upper_arm[(_i + _l) * 16 + 2] = _out[19][_l];
+            base_T_upper_arm[(_i + _l) * 16 + 3] = 0.0f;
+            base_T_upper_arm[(_i + _l) * 16 + 4] = _out[20][_l];
+            base_T_upper_arm[(_i + _l) * 16 + 5] = _out[21][_l];
+            base_T_upper_arm[(_i + _l) * 16 + 6] = _out[22][_l];
+            base_T_upper_arm[(_i + _l) * 16 + 7] = 0.0f;
+            base_T_upper_arm[(_i + _l) * 16 + 8] = _out[23][_l];
+            base_T_upper_arm[(_i + _l) * 16 + 9] = _out[24][_l];
+            base_T_upper_arm[(_i + _l) * 16 + 10] = 0.0f;
+            base_T_upper_arm[(_i + _l) * 16 + 11] = _out[25][_l];
+            base_T_upper_arm[(_i + _l) * 16 + 12] = 0.0f;
+            base_T_upper_arm[(_i + _l) * 16 + 13] = 0.0f;
+            base_T_upper_arm[(_i + _l) * 16 + 14] = 0.0f;
+            base_T_upper_arm[(_i + _l) * 16 + 15] = 1.0f;
+            base_T_forearm[(_i + _l) * 16 + 0] = _out[26][_l];
+            base_T_forearm[(_i + _l) * 16 + 1] = _out[27][_l];
+            base_T_forearm[(_i + _l) * 16 + 2] = _out[28][_l];
+            base_T_forearm[(_i + _l) * 16 + 3] = _out[29][_l];
+            base_T_forearm[(_i + _l) * 16 + 4] = _out[30][_l];
+            base_T_forearm[(_i + _l) * 16 + 5] = _out[31][_l];
+            base_T_forearm[(_i + _l) * 16 + 6] = _out[32][_l];
+            base_T_forearm[(_i + _l) * 16 + 7] = _out[33][_l];
+            base_T_forearm[(_i + _l) * 16 + 8] = _out[34][_l];
+            base_T_forearm[(_i + _l) * 16 + 9] = _out[35][_l];
+            base_T_forearm[(_i + _l) * 16 + 10] = 0.0f;
+            base_T_forearm[(_i + _l) * 16 + 11] = _out[36][_l];
+            base_T_forearm[(_i + _l) * 16 + 12] = 0.0f;
+            base_T_forearm[(_i + _l) * 16 + 13] = 0.0f;
+            base_T_forearm[(_i + _l) * 16 + 14] = 0.0f;
+            base_T_forearm[(_i + _l) * 16 + 15] = 1.0f;
+            base_T_wrist1[(_i + _l) * 16 + 0] = _out[37][_l];
+            base_T_wrist1[(_i + _l) * 16 + 1] = _out[38][_l];
+            base_T_wrist1[(_i + _l) * 16 + 2] = _out[39][_l];
+            base_T_wrist1[(_i + _l) * 16 + 3] = _out[40][_l];
+            base_T_wrist1[(_i + _l) * 16 + 4] = _out[41][_l];
+            base_T_wrist1[(_i + _l) * 16 + 5] = _out[42][_l];
+            base_T_wrist1[(_i + _l) * 16 + 6] = _out[43][_l];
+            base_T_wrist1[(_i + _l) * 16 + 7] = _out[44][_l];
+            base_T_wrist1[(_i + _l) * 16 + 8] = _out[45][_l];
+            base_T_wrist1[(_i + _l) * 16 + 9] = _out[46][_l];
+            base_T_wrist1[(_i + _l) * 16 + 10] = 0.0f;
+            base_T_wrist1[(_i + _l) * 16 + 11] = _out[47][_l];
+            base_T_wrist1[(_i + _l) * 16 + 12] = 0.0f;
+            base_T_wrist1[(_i + _l) * 16 + 13] = 0.0f;
+            base_T_wrist1[(_i + _l) * 16 + 14] = 0.0f;
+            base_T_wrist1[(_i + _l) * 16 + 15] = 1.0f;
+            base_T_wrist2[(_i + _l) * 16 + 0] = _out[48][_l];
+            base_T_wrist2[(_i + _l) * 16 + 1] = _out[49][_l];
+            base_T_wrist2[(_i + _l) * 16 + 2] = _out[50][_l];
+            base_T_wrist2[(_i + _l) * 16 + 3] = _out[51][_l];
+            base_T_wrist2[(_i + _l) * 16 + 4] = _out[52][_l];
+            base_T_wrist2[(_i + _l) * 16 + 5] = _out[53][_l];
+            base_T_wrist2[(_i + _l) * 16 + 6] = _out[54][_l];
+            base_T_wrist2[(_i + _l) * 16 + 7] = _out[55][_l];
+            base_T_wrist2[(_i + _l) * 16 + 8] = _out[56][_l];
+            base_T_wrist2[(_i + _l) * 16 + 9] = _out[57][_l];
+            base_T_wrist2[(_i + _l) * 16 + 10] = _out[58][_l];
+            base_T_wrist2[(_i + _l) * 16 + 11] = _out[59][_l];
+            base_T_wrist2[(_i + _l) * 16 + 12] = 0.0f;
+            base_T_wrist2[(_i + _l) * 16 + 13] = 0.0f;
+            base_T_wrist2[(_i + _l) * 16 + 14] = 0.0f;
+            base_T_wrist2[(_i + _l) * 16 + 15] = 1.0f;
+            base_T_wrist3[(_i + _l) * 16 + 0] = _out[60][_l];
+            base_T_wrist3[(_i + _l) * 16 + 1] = _out[61][_l];
+            base_T_wrist3[(_i + _l) * 16 + 2] = _out[62][_l];
+            base_T_wrist3[(_i + _l) * 16 + 3] = _out[63][_l];
+            base_T_wrist3[(_i + _l) * 16 + 4] = _out[64][_l];
+            base_T_wrist3[(_i + _l) * 16 + 5] = _out[65][_l];
+            base_T_wrist3[(_i + _l) * 16 + 6] = _out[66][_l];
+            base_T_wrist3[(_i + _l) * 16 + 7] = _out[67][_l];
+            base_T_wrist3[(_i + _l) * 16 + 8] = _out[68][_l];
+            base_T_wrist3[(_i + _l) * 16 + 9] = _out[69][_l];
+            base_T_wrist3[(_i + _l) * 16 + 10] = _out[70][_l];
+            base_T_wrist3[(_i + _l) * 16 + 11] = _out[71][_l];
+            base_T_wrist3[(_i + _l) * 16 + 12] = 0.0f;
+            base_T_wrist3[(_i + _l) * 16 + 13] = 0.0f;
+            base_T_wrist3[(_i + _l) * 16 + 14] = 0.0f;
+            base_T_wrist3[(_i + _l) * 16 + 15] = 1.0f;
+            jacobian_J[(_i + _l) * 36 + 0] = _out[72][_l];
+            jacobian_J[(_i + _l) * 36 + 1] = _out[73][_l];
+            jacobian_J[(_i + _l) * 36 + 2] = _out[74][_l];
+            jacobian_J[(_i + _l) * 36 + 3] = _out[75][_l];
+            jacobian_J[(_i + _l) * 36 + 4] = _out[76][_l];
+            jacobian_J[(_i + _l) * 36 + 5] = 0.0f;
+            jacobian_J[(_i + _l) * 36 + 6] = _out[77][_l];
+            jacobian_J[(_i + _l) * 36 + 7] = _out[78][_l];
+            jacobian_J[(_i + _l) * 36 + 8] = _out[79][_l];
+            jacobian_J[(_i + _l) * 36 + 9] = _out[80][_l];
+            jacobian_J[(_i + _l) * 36 + 10] = _out[81][_l];
+            jacobian_J[(_i + _l) * 36 + 11] = 0.0f;
+            jacobian_J[(_i + _l) * 36 + 12] = 0.0f;
+            jacobian_J[(_i + _l) * 36 + 13] = _out[82][_l];
+            jacobian_J[(_i + _l) * 36 + 14] = _out[83][_l];
+            jacobian_J[(_i + _l) * 36 + 15] = _out[84][_l];
+            jacobian_J[(_i + _l) * 36 + 16] = _out[85][_l];
+            jacobian_J[(_i + _l) * 36 + 17] = 0.0f;
+            jacobian_J[(_i + _l) * 36 + 18] = 0.0f;
+            jacobian_J[(_i + _l) * 36 + 19] = _out[86][_l];
+            jacobian_J[(_i + _l) * 36 + 20] = _out[87][_l];
+            jacobian_J[(_i + _l) * 36 + 21] = _out[88][_l];
+            jacobian_J[(_i + _l) * 36 + 22] = _out[89][_l];
+            jacobian_J[(_i + _l) * 36 + 23] = _out[90][_l];
+            jacobian_J[(_i + _l) * 36 + 24] = 0.0f;
+            jacobian_J[(_i + _l) * 36 + 25] = _out[91][_l];
+            jacobian_J[(_i + _l) * 36 + 26] = _out[92][_l];
+            jacobian_J[(_i + _l) * 36 + 27] = _out[93][_l];
+            jacobian_J[(_i + _l) * 36 + 28] = _out[94][_l];
+            jacobian_J[(_i + _l) * 36 + 29] = _out[95][_l];
+            jacobian_J[(_i + _l) * 36 + 30] = 1.0f;
+            jacobian_J[(_i + _l) * 36 + 31] = 0.0f;
+            jacobian_J[(_i + _l) * 36 + 32] = 0.0f;
+            jacobian_J[(_i + _l) * 36 + 33] = 0.0f;
+            jacobian_J[(_i + _l) * 36 + 34] = _out[96][_l];
+            jacobian_J[(_i + _l) * 36 + 35] = _out[97][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 0] = _out[98][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 1] = _out[99][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 2] = _out[100][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 3] = _out[101][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 4] = _out[102][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 5] = 0.0f;
+            jacobian_geometric_J[(_i + _l) * 36 + 6] = _out[103][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 7] = _out[104][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 8] = _out[105][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 9] = _out[106][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 10] = _out[107][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 11] = 0.0f;
+            jacobian_geometric_J[(_i + _l) * 36 + 12] = 0.0f;
+            jacobian_geometric_J[(_i + _l) * 36 + 13] = _out[108][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 14] = _out[109][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 15] = _out[110][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 16] = _out[111][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 17] = 0.0f;
+            jacobian_geometric_J[(_i + _l) * 36 + 18] = 0.0f;
+            jacobian_geometric_J[(_i + _l) * 36 + 19] = _out[112][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 20] = _out[113][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 21] = _out[114][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 22] = _out[115][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 23] = _out[116][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 24] = 0.0f;
+            jacobian_geometric_J[(_i + _l) * 36 + 25] = _out[117][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 26] = _out[118][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 27] = _out[119][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 28] = _out[120][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 29] = _out[121][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 30] = 1.0f;
+            jacobian_geometric_J[(_i + _l) * 36 + 31] = 0.0f;
+            jacobian_geometric_J[(_i + _l) * 36 + 32] = 0.0f;
+            jacobian_geometric_J[(_i + _l) * 36 + 33] = 0.0f;
+            jacobian_geometric_J[(_i + _l) * 36 + 34] = _out[122][_l];
+            jacobian_geometric_J[(_i + _l) * 36 + 35] = _out[123][_l];
+        }
     }
 }

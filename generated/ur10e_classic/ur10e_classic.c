@@ -3,14 +3,64 @@
  * with the template c/source.c.j2.
  * Do not edit: changes are lost when the model is derived again (symkin derive).
  *
- * The calling conventions are documented in ur10e_classic.h.
+ * The calling conventions are documented in ur10e_classic.h.  Each function's
+ * statements appear twice: once on scalars in the single-configuration function, once in
+ * the lane loop of its batch function, which evaluates blocks of 8 configurations
+ * stored lane by lane so that the compiler can vectorize it.
  */
 #include "ur10e_classic.h"
 
 #include <math.h>
 
-/* fk: Forward kinematics: pose of the TCP in the base frame. (double) */
-static inline void ur10e_classic_fk_kernel(const double *restrict q, const double d1, const double a2, const double a3, const double d4, const double d5, const double d6, double *restrict base_T_tcp)
+/* Configurations per block of the batch functions. */
+#define UR10E_CLASSIC_BLOCK 8
+
+/* sin and cos of x[0..n-1] into s and c, branch-free (vectorizable): Cody-Waite
+ * reduction by pi/2 = 1.570796325802803 + 9.920935791635221e-10 + 5.170182981794105e-19, Taylor polynomials on
+ * [-pi/4, pi/4], quadrant by comparisons; |x| > 100000.0, NaN and inf go to libm. */
+static void ur10e_classic_sincos(size_t n, const double *restrict x, double *restrict s, double *restrict c)
+{
+    for (size_t i = 0; i < n; ++i) {
+        const double k = (x[i] * 0.6366197723675814 + 6755399441055744.0) - 6755399441055744.0;
+        const double r = ((x[i] - k * 1.570796325802803) - k * 9.920935791635221e-10) - k * 5.170182981794105e-19;
+        const double r2 = r * r;
+        double ps = 2.8114572543455206e-15;
+        ps = ps * r2 + -7.647163731819816e-13;
+        ps = ps * r2 + 1.6059043836821613e-10;
+        ps = ps * r2 + -2.505210838544172e-08;
+        ps = ps * r2 + 2.7557319223985893e-06;
+        ps = ps * r2 + -0.0001984126984126984;
+        ps = ps * r2 + 0.008333333333333333;
+        ps = ps * r2 + -0.16666666666666666;
+        double pc = -1.5619206968586225e-16;
+        pc = pc * r2 + 4.779477332387385e-14;
+        pc = pc * r2 + -1.1470745597729725e-11;
+        pc = pc * r2 + 2.08767569878681e-09;
+        pc = pc * r2 + -2.755731922398589e-07;
+        pc = pc * r2 + 2.48015873015873e-05;
+        pc = pc * r2 + -0.001388888888888889;
+        pc = pc * r2 + 0.041666666666666664;
+        pc = pc * r2 + -0.5;
+        const double sr = r + r * r2 * ps;
+        const double cr = 1.0 + r2 * pc;
+        /* quadrant k mod 4, as m = k - 4*round(k/4) in {-2, -1, 0, 1, 2} */
+        const double m = k - 4.0 * ((k * 0.25 + 6755399441055744.0) - 6755399441055744.0);
+        const int odd = m == 1.0 || m == -1.0;
+        const double sv = odd ? cr : sr;
+        const double cv = odd ? sr : cr;
+        s[i] = (m > 1.5 || m < -0.5) ? -sv : sv;
+        c[i] = (m > 0.5 || m < -1.5) ? -cv : cv;
+    }
+    for (size_t i = 0; i < n; ++i) {
+        if (!(fabs(x[i]) <= 100000.0)) {
+            s[i] = sin(x[i]);
+            c[i] = cos(x[i]);
+        }
+    }
+}
+
+/* ur10e_classic_fk: Forward kinematics: pose of the TCP in the base frame. */
+void ur10e_classic_fk(const double *restrict q, double d1, double a2, double a3, double d4, double d5, double d6, double *restrict base_T_tcp)
 {
     const double q1 = q[0];
     const double q2 = q[1];
@@ -18,24 +68,39 @@ static inline void ur10e_classic_fk_kernel(const double *restrict q, const doubl
     const double q4 = q[3];
     const double q5 = q[4];
     const double q6 = q[5];
-    const double _x0 = sin(q6);
-    const double _x1 = cos(q1);
-    const double _x2 = cos(q4);
-    const double _x3 = sin(q2);
-    const double _x4 = cos(q3);
-    const double _x5 = sin(q3);
-    const double _x6 = cos(q2);
+    const double _angle[6] = {q1, q2, q3, q4, q5, q6};
+    double _sin[6], _cos[6];
+    ur10e_classic_sincos(6, _angle, _sin, _cos);
+    const double _sin_q1 = _sin[0];
+    const double _cos_q1 = _cos[0];
+    const double _sin_q2 = _sin[1];
+    const double _cos_q2 = _cos[1];
+    const double _sin_q3 = _sin[2];
+    const double _cos_q3 = _cos[2];
+    const double _sin_q4 = _sin[3];
+    const double _cos_q4 = _cos[3];
+    const double _sin_q5 = _sin[4];
+    const double _cos_q5 = _cos[4];
+    const double _sin_q6 = _sin[5];
+    const double _cos_q6 = _cos[5];
+    const double _x0 = _sin_q6;
+    const double _x1 = _cos_q1;
+    const double _x2 = _cos_q4;
+    const double _x3 = _sin_q2;
+    const double _x4 = _cos_q3;
+    const double _x5 = _sin_q3;
+    const double _x6 = _cos_q2;
     const double _x7 = _x3*_x4 + _x5*_x6;
-    const double _x8 = sin(q4);
+    const double _x8 = _sin_q4;
     const double _x9 = -_x3*_x5 + _x4*_x6;
     const double _x10 = _x2*_x7 + _x8*_x9;
     const double _x11 = _x1*_x10;
-    const double _x12 = cos(q6);
-    const double _x13 = sin(q1);
-    const double _x14 = sin(q5);
+    const double _x12 = _cos_q6;
+    const double _x13 = _sin_q1;
+    const double _x14 = _sin_q5;
     const double _x15 = _x13*_x14;
     const double _x16 = _x2*_x9 - _x7*_x8;
-    const double _x17 = cos(q5);
+    const double _x17 = _cos_q5;
     const double _x18 = _x1*_x17;
     const double _x19 = _x15 + _x16*_x18;
     const double _x20 = _x13*_x17;
@@ -66,46 +131,162 @@ static inline void ur10e_classic_fk_kernel(const double *restrict q, const doubl
     base_T_tcp[15] = 1.0;
 }
 
-void ur10e_classic_fk(const double *restrict q, double d1, double a2, double a3, double d4, double d5, double d6, double *restrict base_T_tcp)
-{
-    ur10e_classic_fk_kernel(q, d1, a2, a3, d4, d5, d6, base_T_tcp);
-}
-
+/* ur10e_classic_fk_batch: ur10e_classic_fk for n configurations, in blocks of 8. */
 void ur10e_classic_fk_batch(size_t n, const double *restrict q, const double *restrict params, size_t params_stride, double *restrict base_T_tcp)
 {
-    for (size_t _i = 0; _i < n; ++_i) {
-        const double *restrict _p = params + _i * params_stride;
-        ur10e_classic_fk_kernel(q + _i * 6, _p[0], _p[1], _p[2], _p[3], _p[4], _p[5], base_T_tcp + _i * 16);
+    for (size_t _i = 0; _i < n; _i += UR10E_CLASSIC_BLOCK) {
+        /* lanes past the end of the batch repeat configuration _i and are not stored */
+        const size_t _m = n - _i < UR10E_CLASSIC_BLOCK ? n - _i : UR10E_CLASSIC_BLOCK;
+        double _in[12][UR10E_CLASSIC_BLOCK];
+        for (size_t _l = 0; _l < UR10E_CLASSIC_BLOCK; ++_l) {
+            const size_t _j = _i + (_l < _m ? _l : 0);
+            _in[0][_l] = q[_j * 6 + 0];
+            _in[1][_l] = q[_j * 6 + 1];
+            _in[2][_l] = q[_j * 6 + 2];
+            _in[3][_l] = q[_j * 6 + 3];
+            _in[4][_l] = q[_j * 6 + 4];
+            _in[5][_l] = q[_j * 6 + 5];
+            _in[6][_l] = params[_j * params_stride + 0];
+            _in[7][_l] = params[_j * params_stride + 1];
+            _in[8][_l] = params[_j * params_stride + 2];
+            _in[9][_l] = params[_j * params_stride + 3];
+            _in[10][_l] = params[_j * params_stride + 4];
+            _in[11][_l] = params[_j * params_stride + 5];
+        }
+        double _angle[6][UR10E_CLASSIC_BLOCK], _sin[6][UR10E_CLASSIC_BLOCK], _cos[6][UR10E_CLASSIC_BLOCK];
+        for (size_t _l = 0; _l < UR10E_CLASSIC_BLOCK; ++_l) {
+            _angle[0][_l] = _in[0][_l];
+            _angle[1][_l] = _in[1][_l];
+            _angle[2][_l] = _in[2][_l];
+            _angle[3][_l] = _in[3][_l];
+            _angle[4][_l] = _in[4][_l];
+            _angle[5][_l] = _in[5][_l];
+        }
+        ur10e_classic_sincos(6 * UR10E_CLASSIC_BLOCK, &_angle[0][0], &_sin[0][0], &_cos[0][0]);
+        double _out[12][UR10E_CLASSIC_BLOCK];
+        for (size_t _l = 0; _l < UR10E_CLASSIC_BLOCK; ++_l) {
+            const double d1 = _in[6][_l];
+            const double a2 = _in[7][_l];
+            const double a3 = _in[8][_l];
+            const double d4 = _in[9][_l];
+            const double d5 = _in[10][_l];
+            const double d6 = _in[11][_l];
+            const double _sin_q1 = _sin[0][_l];
+            const double _cos_q1 = _cos[0][_l];
+            const double _sin_q2 = _sin[1][_l];
+            const double _cos_q2 = _cos[1][_l];
+            const double _sin_q3 = _sin[2][_l];
+            const double _cos_q3 = _cos[2][_l];
+            const double _sin_q4 = _sin[3][_l];
+            const double _cos_q4 = _cos[3][_l];
+            const double _sin_q5 = _sin[4][_l];
+            const double _cos_q5 = _cos[4][_l];
+            const double _sin_q6 = _sin[5][_l];
+            const double _cos_q6 = _cos[5][_l];
+            const double _x0 = _sin_q6;
+            const double _x1 = _cos_q1;
+            const double _x2 = _cos_q4;
+            const double _x3 = _sin_q2;
+            const double _x4 = _cos_q3;
+            const double _x5 = _sin_q3;
+            const double _x6 = _cos_q2;
+            const double _x7 = _x3*_x4 + _x5*_x6;
+            const double _x8 = _sin_q4;
+            const double _x9 = -_x3*_x5 + _x4*_x6;
+            const double _x10 = _x2*_x7 + _x8*_x9;
+            const double _x11 = _x1*_x10;
+            const double _x12 = _cos_q6;
+            const double _x13 = _sin_q1;
+            const double _x14 = _sin_q5;
+            const double _x15 = _x13*_x14;
+            const double _x16 = _x2*_x9 - _x7*_x8;
+            const double _x17 = _cos_q5;
+            const double _x18 = _x1*_x17;
+            const double _x19 = _x15 + _x16*_x18;
+            const double _x20 = _x13*_x17;
+            const double _x21 = _x1*_x14;
+            const double _x22 = -_x16*_x21 + _x20;
+            const double _x23 = _x6*a2;
+            const double _x24 = _x9*a3;
+            const double _x25 = _x10*_x13;
+            const double _x26 = _x16*_x20 - _x21;
+            const double _x27 = -(_x15*_x16 + _x18);
+            const double _x28 = _x10*_x17;
+            const double _x29 = _x10*_x14;
+            _out[0][_l] = -_x0*_x11 + _x12*_x19;
+            _out[1][_l] = -(_x0*_x19 + _x11*_x12);
+            _out[2][_l] = _x22;
+            _out[3][_l] = _x1*_x23 + _x1*_x24 + _x11*d5 + _x13*d4 + _x22*d6;
+            _out[4][_l] = -_x0*_x25 + _x12*_x26;
+            _out[5][_l] = -(_x0*_x26 + _x12*_x25);
+            _out[6][_l] = _x27;
+            _out[7][_l] = -_x1*d4 + _x13*_x23 + _x13*_x24 + _x25*d5 + _x27*d6;
+            _out[8][_l] = _x0*_x16 + _x12*_x28;
+            _out[9][_l] = -_x0*_x28 + _x12*_x16;
+            _out[10][_l] = -_x29;
+            _out[11][_l] = -_x16*d5 - _x29*d6 + _x3*a2 + _x7*a3 + d1;
+        }
+        for (size_t _l = 0; _l < _m; ++_l) {
+            base_T_tcp[(_i + _l) * 16 + 0] = _out[0][_l];
+            base_T_tcp[(_i + _l) * 16 + 1] = _out[1][_l];
+            base_T_tcp[(_i + _l) * 16 + 2] = _out[2][_l];
+            base_T_tcp[(_i + _l) * 16 + 3] = _out[3][_l];
+            base_T_tcp[(_i + _l) * 16 + 4] = _out[4][_l];
+            base_T_tcp[(_i + _l) * 16 + 5] = _out[5][_l];
+            base_T_tcp[(_i + _l) * 16 + 6] = _out[6][_l];
+            base_T_tcp[(_i + _l) * 16 + 7] = _out[7][_l];
+            base_T_tcp[(_i + _l) * 16 + 8] = _out[8][_l];
+            base_T_tcp[(_i + _l) * 16 + 9] = _out[9][_l];
+            base_T_tcp[(_i + _l) * 16 + 10] = _out[10][_l];
+            base_T_tcp[(_i + _l) * 16 + 11] = _out[11][_l];
+            base_T_tcp[(_i + _l) * 16 + 12] = 0.0;
+            base_T_tcp[(_i + _l) * 16 + 13] = 0.0;
+            base_T_tcp[(_i + _l) * 16 + 14] = 0.0;
+            base_T_tcp[(_i + _l) * 16 + 15] = 1.0;
+        }
     }
 }
 
-/* jacobian: Task Jacobian of the TCP. (double) */
-static inline void ur10e_classic_jacobian_kernel(const double *restrict q, const double a2, const double a3, const double d4, const double d5, const double d6, double *restrict J)
+/* ur10e_classic_jacobian: Task Jacobian of the TCP. */
+void ur10e_classic_jacobian(const double *restrict q, double a2, double a3, double d4, double d5, double d6, double *restrict J)
 {
     const double q1 = q[0];
     const double q2 = q[1];
     const double q3 = q[2];
     const double q4 = q[3];
     const double q5 = q[4];
-    const double _x0 = sin(q1);
-    const double _x1 = cos(q2);
+    const double _angle[5] = {q1, q2, q3, q4, q5};
+    double _sin[5], _cos[5];
+    ur10e_classic_sincos(5, _angle, _sin, _cos);
+    const double _sin_q1 = _sin[0];
+    const double _cos_q1 = _cos[0];
+    const double _sin_q2 = _sin[1];
+    const double _cos_q2 = _cos[1];
+    const double _sin_q3 = _sin[2];
+    const double _cos_q3 = _cos[2];
+    const double _sin_q4 = _sin[3];
+    const double _cos_q4 = _cos[3];
+    const double _sin_q5 = _sin[4];
+    const double _cos_q5 = _cos[4];
+    const double _x0 = _sin_q1;
+    const double _x1 = _cos_q2;
     const double _x2 = _x1*a2;
-    const double _x3 = cos(q3);
-    const double _x4 = sin(q2);
-    const double _x5 = sin(q3);
+    const double _x3 = _cos_q3;
+    const double _x4 = _sin_q2;
+    const double _x5 = _sin_q3;
     const double _x6 = _x1*_x3 - _x4*_x5;
     const double _x7 = _x6*a3;
-    const double _x8 = cos(q1);
-    const double _x9 = cos(q4);
+    const double _x8 = _cos_q1;
+    const double _x9 = _cos_q4;
     const double _x10 = _x1*_x5 + _x3*_x4;
-    const double _x11 = sin(q4);
+    const double _x11 = _sin_q4;
     const double _x12 = _x10*_x9 + _x11*_x6;
     const double _x13 = _x0*_x12;
-    const double _x14 = cos(q5);
+    const double _x14 = _cos_q5;
     const double _x15 = _x6*_x9;
     const double _x16 = _x10*_x11;
     const double _x17 = _x15 - _x16;
-    const double _x18 = sin(q5);
+    const double _x18 = _sin_q5;
     const double _x19 = _x17*_x18;
     const double _x20 = -(_x0*_x19 + _x14*_x8);
     const double _x21 = _x13*d5 + _x20*d6;
@@ -166,21 +347,163 @@ static inline void ur10e_classic_jacobian_kernel(const double *restrict q, const
     J[35] = -_x26;
 }
 
-void ur10e_classic_jacobian(const double *restrict q, double a2, double a3, double d4, double d5, double d6, double *restrict J)
-{
-    ur10e_classic_jacobian_kernel(q, a2, a3, d4, d5, d6, J);
-}
-
+/* ur10e_classic_jacobian_batch: ur10e_classic_jacobian for n configurations, in blocks of 8. */
 void ur10e_classic_jacobian_batch(size_t n, const double *restrict q, const double *restrict params, size_t params_stride, double *restrict J)
 {
-    for (size_t _i = 0; _i < n; ++_i) {
-        const double *restrict _p = params + _i * params_stride;
-        ur10e_classic_jacobian_kernel(q + _i * 6, _p[0], _p[1], _p[2], _p[3], _p[4], J + _i * 36);
+    for (size_t _i = 0; _i < n; _i += UR10E_CLASSIC_BLOCK) {
+        /* lanes past the end of the batch repeat configuration _i and are not stored */
+        const size_t _m = n - _i < UR10E_CLASSIC_BLOCK ? n - _i : UR10E_CLASSIC_BLOCK;
+        double _in[10][UR10E_CLASSIC_BLOCK];
+        for (size_t _l = 0; _l < UR10E_CLASSIC_BLOCK; ++_l) {
+            const size_t _j = _i + (_l < _m ? _l : 0);
+            _in[0][_l] = q[_j * 6 + 0];
+            _in[1][_l] = q[_j * 6 + 1];
+            _in[2][_l] = q[_j * 6 + 2];
+            _in[3][_l] = q[_j * 6 + 3];
+            _in[4][_l] = q[_j * 6 + 4];
+            _in[5][_l] = params[_j * params_stride + 0];
+            _in[6][_l] = params[_j * params_stride + 1];
+            _in[7][_l] = params[_j * params_stride + 2];
+            _in[8][_l] = params[_j * params_stride + 3];
+            _in[9][_l] = params[_j * params_stride + 4];
+        }
+        double _angle[5][UR10E_CLASSIC_BLOCK], _sin[5][UR10E_CLASSIC_BLOCK], _cos[5][UR10E_CLASSIC_BLOCK];
+        for (size_t _l = 0; _l < UR10E_CLASSIC_BLOCK; ++_l) {
+            _angle[0][_l] = _in[0][_l];
+            _angle[1][_l] = _in[1][_l];
+            _angle[2][_l] = _in[2][_l];
+            _angle[3][_l] = _in[3][_l];
+            _angle[4][_l] = _in[4][_l];
+        }
+        ur10e_classic_sincos(5 * UR10E_CLASSIC_BLOCK, &_angle[0][0], &_sin[0][0], &_cos[0][0]);
+        double _out[26][UR10E_CLASSIC_BLOCK];
+        for (size_t _l = 0; _l < UR10E_CLASSIC_BLOCK; ++_l) {
+            const double a2 = _in[5][_l];
+            const double a3 = _in[6][_l];
+            const double d4 = _in[7][_l];
+            const double d5 = _in[8][_l];
+            const double d6 = _in[9][_l];
+            const double _sin_q1 = _sin[0][_l];
+            const double _cos_q1 = _cos[0][_l];
+            const double _sin_q2 = _sin[1][_l];
+            const double _cos_q2 = _cos[1][_l];
+            const double _sin_q3 = _sin[2][_l];
+            const double _cos_q3 = _cos[2][_l];
+            const double _sin_q4 = _sin[3][_l];
+            const double _cos_q4 = _cos[3][_l];
+            const double _sin_q5 = _sin[4][_l];
+            const double _cos_q5 = _cos[4][_l];
+            const double _x0 = _sin_q1;
+            const double _x1 = _cos_q2;
+            const double _x2 = _x1*a2;
+            const double _x3 = _cos_q3;
+            const double _x4 = _sin_q2;
+            const double _x5 = _sin_q3;
+            const double _x6 = _x1*_x3 - _x4*_x5;
+            const double _x7 = _x6*a3;
+            const double _x8 = _cos_q1;
+            const double _x9 = _cos_q4;
+            const double _x10 = _x1*_x5 + _x3*_x4;
+            const double _x11 = _sin_q4;
+            const double _x12 = _x10*_x9 + _x11*_x6;
+            const double _x13 = _x0*_x12;
+            const double _x14 = _cos_q5;
+            const double _x15 = _x6*_x9;
+            const double _x16 = _x10*_x11;
+            const double _x17 = _x15 - _x16;
+            const double _x18 = _sin_q5;
+            const double _x19 = _x17*_x18;
+            const double _x20 = -(_x0*_x19 + _x14*_x8);
+            const double _x21 = _x13*d5 + _x20*d6;
+            const double _x22 = _x21 - _x8*d4;
+            const double _x23 = _x0*_x7 + _x22;
+            const double _x24 = _x0*_x2 + _x23;
+            const double _x25 = _x17*d5;
+            const double _x26 = _x12*_x18;
+            const double _x27 = _x26*d6;
+            const double _x28 = _x10*a3 - _x25 - _x27 + _x4*a2;
+            const double _x29 = _x25 + _x27;
+            const double _x30 = -(-_x10*a3 + _x29);
+            const double _x31 = -_x29;
+            const double _x32 = _x31*_x8;
+            const double _x33 = _x0*_x31;
+            const double _x34 = _x12*_x8;
+            const double _x35 = _x0*_x14 - _x19*_x8;
+            const double _x36 = _x34*d5 + _x35*d6;
+            const double _x37 = _x0*d4 + _x36;
+            const double _x38 = _x37 + _x7*_x8;
+            const double _x39 = _x2*_x8 + _x38;
+            const double _x40 = -_x8;
+            _out[0][_l] = -_x24;
+            _out[1][_l] = -_x28*_x8;
+            _out[2][_l] = -_x30*_x8;
+            _out[3][_l] = -_x32;
+            _out[4][_l] = _x12*_x33 + _x17*_x21;
+            _out[5][_l] = _x39;
+            _out[6][_l] = -_x0*_x28;
+            _out[7][_l] = -_x0*_x30;
+            _out[8][_l] = -_x33;
+            _out[9][_l] = -(_x12*_x32 + _x17*_x36);
+            _out[10][_l] = _x0*_x24 + _x39*_x8;
+            _out[11][_l] = _x0*_x23 + _x38*_x8;
+            _out[12][_l] = _x0*_x22 + _x37*_x8;
+            _out[13][_l] = -_x13*_x36 + _x21*_x34;
+            _out[14][_l] = _x0;
+            _out[15][_l] = _x0;
+            _out[16][_l] = _x0;
+            _out[17][_l] = _x34;
+            _out[18][_l] = _x35;
+            _out[19][_l] = _x40;
+            _out[20][_l] = _x40;
+            _out[21][_l] = _x40;
+            _out[22][_l] = _x13;
+            _out[23][_l] = _x20;
+            _out[24][_l] = -_x15 + _x16;
+            _out[25][_l] = -_x26;
+        }
+        for (size_t _l = 0; _l < _m; ++_l) {
+            J[(_i + _l) * 36 + 0] = _out[0][_l];
+            J[(_i + _l) * 36 + 1] = _out[1][_l];
+            J[(_i + _l) * 36 + 2] = _out[2][_l];
+            J[(_i + _l) * 36 + 3] = _out[3][_l];
+            J[(_i + _l) * 36 + 4] = _out[4][_l];
+            J[(_i + _l) * 36 + 5] = 0.0;
+            J[(_i + _l) * 36 + 6] = _out[5][_l];
+            J[(_i + _l) * 36 + 7] = _out[6][_l];
+            J[(_i + _l) * 36 + 8] = _out[7][_l];
+            J[(_i + _l) * 36 + 9] = _out[8][_l];
+            J[(_i + _l) * 36 + 10] = _out[9][_l];
+            J[(_i + _l) * 36 + 11] = 0.0;
+            J[(_i + _l) * 36 + 12] = 0.0;
+            J[(_i + _l) * 36 + 13] = _out[10][_l];
+            J[(_i + _l) * 36 + 14] = _out[11][_l];
+            J[(_i + _l) * 36 + 15] = _out[12][_l];
+            J[(_i + _l) * 36 + 16] = _out[13][_l];
+            J[(_i + _l) * 36 + 17] = 0.0;
+            J[(_i + _l) * 36 + 18] = 0.0;
+            J[(_i + _l) * 36 + 19] = _out[14][_l];
+            J[(_i + _l) * 36 + 20] = _out[15][_l];
+            J[(_i + _l) * 36 + 21] = _out[16][_l];
+            J[(_i + _l) * 36 + 22] = _out[17][_l];
+            J[(_i + _l) * 36 + 23] = _out[18][_l];
+            J[(_i + _l) * 36 + 24] = 0.0;
+            J[(_i + _l) * 36 + 25] = _out[19][_l];
+            J[(_i + _l) * 36 + 26] = _out[20][_l];
+            J[(_i + _l) * 36 + 27] = _out[21][_l];
+            J[(_i + _l) * 36 + 28] = _out[22][_l];
+            J[(_i + _l) * 36 + 29] = _out[23][_l];
+            J[(_i + _l) * 36 + 30] = 1.0;
+            J[(_i + _l) * 36 + 31] = 0.0;
+            J[(_i + _l) * 36 + 32] = 0.0;
+            J[(_i + _l) * 36 + 33] = 0.0;
+            J[(_i + _l) * 36 + 34] = _out[24][_l];
+            J[(_i + _l) * 36 + 35] = _out[25][_l];
+        }
     }
 }
 
-/* scene: fk, jacobian together, with one set of shared subexpressions. (double) */
-static inline void ur10e_classic_scene_kernel(const double *restrict q, const double d1, const double a2, const double a3, const double d4, const double d5, const double d6, double *restrict base_T_tcp, double *restrict J)
+/* ur10e_classic_scene: fk, jacobian together, with one set of shared subexpressions. */
+void ur10e_classic_scene(const double *restrict q, double d1, double a2, double a3, double d4, double d5, double d6, double *restrict base_T_tcp, double *restrict J)
 {
     const double q1 = q[0];
     const double q2 = q[1];
@@ -188,26 +511,41 @@ static inline void ur10e_classic_scene_kernel(const double *restrict q, const do
     const double q4 = q[3];
     const double q5 = q[4];
     const double q6 = q[5];
-    const double _x0 = sin(q6);
-    const double _x1 = cos(q1);
-    const double _x2 = cos(q4);
-    const double _x3 = sin(q2);
-    const double _x4 = cos(q3);
-    const double _x5 = sin(q3);
-    const double _x6 = cos(q2);
+    const double _angle[6] = {q1, q2, q3, q4, q5, q6};
+    double _sin[6], _cos[6];
+    ur10e_classic_sincos(6, _angle, _sin, _cos);
+    const double _sin_q1 = _sin[0];
+    const double _cos_q1 = _cos[0];
+    const double _sin_q2 = _sin[1];
+    const double _cos_q2 = _cos[1];
+    const double _sin_q3 = _sin[2];
+    const double _cos_q3 = _cos[2];
+    const double _sin_q4 = _sin[3];
+    const double _cos_q4 = _cos[3];
+    const double _sin_q5 = _sin[4];
+    const double _cos_q5 = _cos[4];
+    const double _sin_q6 = _sin[5];
+    const double _cos_q6 = _cos[5];
+    const double _x0 = _sin_q6;
+    const double _x1 = _cos_q1;
+    const double _x2 = _cos_q4;
+    const double _x3 = _sin_q2;
+    const double _x4 = _cos_q3;
+    const double _x5 = _sin_q3;
+    const double _x6 = _cos_q2;
     const double _x7 = _x3*_x4 + _x5*_x6;
-    const double _x8 = sin(q4);
+    const double _x8 = _sin_q4;
     const double _x9 = -_x3*_x5 + _x4*_x6;
     const double _x10 = _x2*_x7 + _x8*_x9;
     const double _x11 = _x1*_x10;
-    const double _x12 = cos(q6);
-    const double _x13 = sin(q1);
-    const double _x14 = sin(q5);
+    const double _x12 = _cos_q6;
+    const double _x13 = _sin_q1;
+    const double _x14 = _sin_q5;
     const double _x15 = _x13*_x14;
     const double _x16 = _x2*_x9;
     const double _x17 = _x7*_x8;
     const double _x18 = _x16 - _x17;
-    const double _x19 = cos(q5);
+    const double _x19 = _cos_q5;
     const double _x20 = _x1*_x19;
     const double _x21 = _x15 + _x18*_x20;
     const double _x22 = _x13*_x19;
@@ -292,15 +630,200 @@ static inline void ur10e_classic_scene_kernel(const double *restrict q, const do
     J[35] = _x40;
 }
 
-void ur10e_classic_scene(const double *restrict q, double d1, double a2, double a3, double d4, double d5, double d6, double *restrict base_T_tcp, double *restrict J)
-{
-    ur10e_classic_scene_kernel(q, d1, a2, a3, d4, d5, d6, base_T_tcp, J);
-}
-
+/* ur10e_classic_scene_batch: ur10e_classic_scene for n configurations, in blocks of 8. */
 void ur10e_classic_scene_batch(size_t n, const double *restrict q, const double *restrict params, size_t params_stride, double *restrict base_T_tcp, double *restrict J)
 {
-    for (size_t _i = 0; _i < n; ++_i) {
-        const double *restrict _p = params + _i * params_stride;
-        ur10e_classic_scene_kernel(q + _i * 6, _p[0], _p[1], _p[2], _p[3], _p[4], _p[5], base_T_tcp + _i * 16, J + _i * 36);
+    for (size_t _i = 0; _i < n; _i += UR10E_CLASSIC_BLOCK) {
+        /* lanes past the end of the batch repeat configuration _i and are not stored */
+        const size_t _m = n - _i < UR10E_CLASSIC_BLOCK ? n - _i : UR10E_CLASSIC_BLOCK;
+        double _in[12][UR10E_CLASSIC_BLOCK];
+        for (size_t _l = 0; _l < UR10E_CLASSIC_BLOCK; ++_l) {
+            const size_t _j = _i + (_l < _m ? _l : 0);
+            _in[0][_l] = q[_j * 6 + 0];
+            _in[1][_l] = q[_j * 6 + 1];
+            _in[2][_l] = q[_j * 6 + 2];
+            _in[3][_l] = q[_j * 6 + 3];
+            _in[4][_l] = q[_j * 6 + 4];
+            _in[5][_l] = q[_j * 6 + 5];
+            _in[6][_l] = params[_j * params_stride + 0];
+            _in[7][_l] = params[_j * params_stride + 1];
+            _in[8][_l] = params[_j * params_stride + 2];
+            _in[9][_l] = params[_j * params_stride + 3];
+            _in[10][_l] = params[_j * params_stride + 4];
+            _in[11][_l] = params[_j * params_stride + 5];
+        }
+        double _angle[6][UR10E_CLASSIC_BLOCK], _sin[6][UR10E_CLASSIC_BLOCK], _cos[6][UR10E_CLASSIC_BLOCK];
+        for (size_t _l = 0; _l < UR10E_CLASSIC_BLOCK; ++_l) {
+            _angle[0][_l] = _in[0][_l];
+            _angle[1][_l] = _in[1][_l];
+            _angle[2][_l] = _in[2][_l];
+            _angle[3][_l] = _in[3][_l];
+            _angle[4][_l] = _in[4][_l];
+            _angle[5][_l] = _in[5][_l];
+        }
+        ur10e_classic_sincos(6 * UR10E_CLASSIC_BLOCK, &_angle[0][0], &_sin[0][0], &_cos[0][0]);
+        double _out[38][UR10E_CLASSIC_BLOCK];
+        for (size_t _l = 0; _l < UR10E_CLASSIC_BLOCK; ++_l) {
+            const double d1 = _in[6][_l];
+            const double a2 = _in[7][_l];
+            const double a3 = _in[8][_l];
+            const double d4 = _in[9][_l];
+            const double d5 = _in[10][_l];
+            const double d6 = _in[11][_l];
+            const double _sin_q1 = _sin[0][_l];
+            const double _cos_q1 = _cos[0][_l];
+            const double _sin_q2 = _sin[1][_l];
+            const double _cos_q2 = _cos[1][_l];
+            const double _sin_q3 = _sin[2][_l];
+            const double _cos_q3 = _cos[2][_l];
+            const double _sin_q4 = _sin[3][_l];
+            const double _cos_q4 = _cos[3][_l];
+            const double _sin_q5 = _sin[4][_l];
+            const double _cos_q5 = _cos[4][_l];
+            const double _sin_q6 = _sin[5][_l];
+            const double _cos_q6 = _cos[5][_l];
+            const double _x0 = _sin_q6;
+            const double _x1 = _cos_q1;
+            const double _x2 = _cos_q4;
+            const double _x3 = _sin_q2;
+            const double _x4 = _cos_q3;
+            const double _x5 = _sin_q3;
+            const double _x6 = _cos_q2;
+            const double _x7 = _x3*_x4 + _x5*_x6;
+            const double _x8 = _sin_q4;
+            const double _x9 = -_x3*_x5 + _x4*_x6;
+            const double _x10 = _x2*_x7 + _x8*_x9;
+            const double _x11 = _x1*_x10;
+            const double _x12 = _cos_q6;
+            const double _x13 = _sin_q1;
+            const double _x14 = _sin_q5;
+            const double _x15 = _x13*_x14;
+            const double _x16 = _x2*_x9;
+            const double _x17 = _x7*_x8;
+            const double _x18 = _x16 - _x17;
+            const double _x19 = _cos_q5;
+            const double _x20 = _x1*_x19;
+            const double _x21 = _x15 + _x18*_x20;
+            const double _x22 = _x13*_x19;
+            const double _x23 = _x1*_x14;
+            const double _x24 = -_x18*_x23 + _x22;
+            const double _x25 = _x6*a2;
+            const double _x26 = _x9*a3;
+            const double _x27 = _x11*d5 + _x24*d6;
+            const double _x28 = _x13*d4 + _x27;
+            const double _x29 = _x1*_x26 + _x28;
+            const double _x30 = _x1*_x25 + _x29;
+            const double _x31 = _x10*_x13;
+            const double _x32 = _x18*_x22 - _x23;
+            const double _x33 = -(_x15*_x18 + _x20);
+            const double _x34 = _x31*d5 + _x33*d6;
+            const double _x35 = -_x1*d4 + _x34;
+            const double _x36 = _x13*_x26 + _x35;
+            const double _x37 = _x13*_x25 + _x36;
+            const double _x38 = _x10*_x19;
+            const double _x39 = _x10*_x14;
+            const double _x40 = -_x39;
+            const double _x41 = _x18*d5;
+            const double _x42 = _x39*d6;
+            const double _x43 = _x3*a2 - _x41 - _x42 + _x7*a3;
+            const double _x44 = _x41 + _x42;
+            const double _x45 = -(_x44 - _x7*a3);
+            const double _x46 = -_x44;
+            const double _x47 = _x1*_x46;
+            const double _x48 = _x13*_x46;
+            const double _x49 = -_x1;
+            _out[0][_l] = -_x0*_x11 + _x12*_x21;
+            _out[1][_l] = -(_x0*_x21 + _x11*_x12);
+            _out[2][_l] = _x24;
+            _out[3][_l] = _x30;
+            _out[4][_l] = -_x0*_x31 + _x12*_x32;
+            _out[5][_l] = -(_x0*_x32 + _x12*_x31);
+            _out[6][_l] = _x33;
+            _out[7][_l] = _x37;
+            _out[8][_l] = _x0*_x18 + _x12*_x38;
+            _out[9][_l] = -_x0*_x38 + _x12*_x18;
+            _out[10][_l] = _x40;
+            _out[11][_l] = _x43 + d1;
+            _out[12][_l] = -_x37;
+            _out[13][_l] = -_x1*_x43;
+            _out[14][_l] = -_x1*_x45;
+            _out[15][_l] = -_x47;
+            _out[16][_l] = _x10*_x48 + _x18*_x34;
+            _out[17][_l] = _x30;
+            _out[18][_l] = -_x13*_x43;
+            _out[19][_l] = -_x13*_x45;
+            _out[20][_l] = -_x48;
+            _out[21][_l] = -(_x10*_x47 + _x18*_x27);
+            _out[22][_l] = _x1*_x30 + _x13*_x37;
+            _out[23][_l] = _x1*_x29 + _x13*_x36;
+            _out[24][_l] = _x1*_x28 + _x13*_x35;
+            _out[25][_l] = _x11*_x34 - _x27*_x31;
+            _out[26][_l] = _x13;
+            _out[27][_l] = _x13;
+            _out[28][_l] = _x13;
+            _out[29][_l] = _x11;
+            _out[30][_l] = _x24;
+            _out[31][_l] = _x49;
+            _out[32][_l] = _x49;
+            _out[33][_l] = _x49;
+            _out[34][_l] = _x31;
+            _out[35][_l] = _x33;
+            _out[36][_l] = -_x16 + _x17;
+            _out[37][_l] = _x40;
+        }
+        for (size_t _l = 0; _l < _m; ++_l) {
+            base_T_tcp[(_i + _l) * 16 + 0] = _out[0][_l];
+            base_T_tcp[(_i + _l) * 16 + 1] = _out[1][_l];
+            base_T_tcp[(_i + _l) * 16 + 2] = _out[2][_l];
+            base_T_tcp[(_i + _l) * 16 + 3] = _out[3][_l];
+            base_T_tcp[(_i + _l) * 16 + 4] = _out[4][_l];
+            base_T_tcp[(_i + _l) * 16 + 5] = _out[5][_l];
+            base_T_tcp[(_i + _l) * 16 + 6] = _out[6][_l];
+            base_T_tcp[(_i + _l) * 16 + 7] = _out[7][_l];
+            base_T_tcp[(_i + _l) * 16 + 8] = _out[8][_l];
+            base_T_tcp[(_i + _l) * 16 + 9] = _out[9][_l];
+            base_T_tcp[(_i + _l) * 16 + 10] = _out[10][_l];
+            base_T_tcp[(_i + _l) * 16 + 11] = _out[11][_l];
+            base_T_tcp[(_i + _l) * 16 + 12] = 0.0;
+            base_T_tcp[(_i + _l) * 16 + 13] = 0.0;
+            base_T_tcp[(_i + _l) * 16 + 14] = 0.0;
+            base_T_tcp[(_i + _l) * 16 + 15] = 1.0;
+            J[(_i + _l) * 36 + 0] = _out[12][_l];
+            J[(_i + _l) * 36 + 1] = _out[13][_l];
+            J[(_i + _l) * 36 + 2] = _out[14][_l];
+            J[(_i + _l) * 36 + 3] = _out[15][_l];
+            J[(_i + _l) * 36 + 4] = _out[16][_l];
+            J[(_i + _l) * 36 + 5] = 0.0;
+            J[(_i + _l) * 36 + 6] = _out[17][_l];
+            J[(_i + _l) * 36 + 7] = _out[18][_l];
+            J[(_i + _l) * 36 + 8] = _out[19][_l];
+            J[(_i + _l) * 36 + 9] = _out[20][_l];
+            J[(_i + _l) * 36 + 10] = _out[21][_l];
+            J[(_i + _l) * 36 + 11] = 0.0;
+            J[(_i + _l) * 36 + 12] = 0.0;
+            J[(_i + _l) * 36 + 13] = _out[22][_l];
+            J[(_i + _l) * 36 + 14] = _out[23][_l];
+            J[(_i + _l) * 36 + 15] = _out[24][_l];
+            J[(_i + _l) * 36 + 16] = _out[25][_l];
+            J[(_i + _l) * 36 + 17] = 0.0;
+            J[(_i + _l) * 36 + 18] = 0.0;
+            J[(_i + _l) * 36 + 19] = _out[26][_l];
+            J[(_i + _l) * 36 + 20] = _out[27][_l];
+            J[(_i + _l) * 36 + 21] = _out[28][_l];
+            J[(_i + _l) * 36 + 22] = _out[29][_l];
+            J[(_i + _l) * 36 + 23] = _out[30][_l];
+            J[(_i + _l) * 36 + 24] = 0.0;
+            J[(_i + _l) * 36 + 25] = _out[31][_l];
+            J[(_i + _l) * 36 + 26] = _out[32][_l];
+            J[(_i + _l) * 36 + 27] = _out[33][_l];
+            J[(_i + _l) * 36 + 28] = _out[34][_l];
+            J[(_i + _l) * 36 + 29] = _out[35][_l];
+            J[(_i + _l) * 36 + 30] = 1.0;
+            J[(_i + _l) * 36 + 31] = 0.0;
+            J[(_i + _l) * 36 + 32] = 0.0;
+            J[(_i + _l) * 36 + 33] = 0.0;
+            J[(_i + _l) * 36 + 34] = _out[36][_l];
+            J[(_i + _l) * 36 + 35] = _out[37][_l];
+        }
     }
 }

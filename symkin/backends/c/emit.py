@@ -11,6 +11,13 @@ Calling convention (documented in the generated header):
   (q is n x dof, out1 is n x size), the parameters packed in one array read at
   ``params + i*params_stride`` (stride 0: the same values for every configuration);
 * with the float32 option, ``..._f32`` variants of both take and return ``float``.
+
+Both print the same statements (so they return the same bits).  The single function runs
+them once on scalars; the batch function runs them in a loop over the lanes of a block of
+BLOCK configurations whose inputs were transposed into lane-contiguous arrays: a loop of
+straight-line arithmetic the compiler vectorizes.  sin and cos of input symbols (all of
+them, after :func:`~symkin.optimize.passes.expand_trig_sums`) are computed before that loop
+by the generated vectorizable ``sincos`` (:mod:`symkin.backends.c.trig`).
 """
 
 from __future__ import annotations
@@ -18,7 +25,10 @@ from __future__ import annotations
 import textwrap
 from typing import Any
 
+import sympy
+
 from symkin.backends.c.printer import C_TYPES, CPrinter
+from symkin.backends.c.trig import constants
 from symkin.backends.naming import c_symbol
 from symkin.backends.templating import provenance, render
 from symkin.ir.bundle import ModelCode
@@ -27,6 +37,8 @@ from symkin.ir.spec import OptimizedFunction
 HEADER_TEMPLATE = "c/header.h.j2"
 SOURCE_TEMPLATE = "c/source.c.j2"
 DOC_WIDTH = 86
+#: Configurations per block of the batch entry points (a multiple of every SIMD width).
+BLOCK = 8
 
 #: (precision, function-name suffix) of each emitted variant.
 VARIANTS = {"double": "", "float": "_f32"}
@@ -43,38 +55,91 @@ def _size(shape: tuple[int, ...]) -> int:
     return size
 
 
-def _function_context(code: ModelCode, f: OptimizedFunction, precision: str, printer: CPrinter) -> dict[str, Any]:
-    spec = f.spec
-    ctype = C_TYPES[precision]
-    suffix = VARIANTS[precision]
-    used = set()
+def _used_symbols(f: OptimizedFunction) -> set[sympy.Symbol]:
+    used: set[sympy.Symbol] = set()
     for _, e in f.temporaries:
         used |= e.free_symbols
     for entries in f.outputs:
         for e in entries:
             used |= e.free_symbols
+    return used
+
+
+def _trig_of_inputs(f: OptimizedFunction, inputs: set[sympy.Symbol]) -> list[sympy.Symbol]:
+    """Input symbols whose sine or cosine the function uses, in input order."""
+    found = set()
+    for e in [e for _, e in f.temporaries] + [e for entries in f.outputs for e in entries]:
+        for call in e.atoms(sympy.sin, sympy.cos):
+            if call.args[0] in inputs:
+                found.add(call.args[0])
+    return [s for s in sorted(found, key=sympy.default_sort_key)]
+
+
+def _function_context(code: ModelCode, f: OptimizedFunction, precision: str, printer: CPrinter) -> dict[str, Any]:
+    spec = f.spec
+    ctype = C_TYPES[precision]
+    suffix = VARIANTS[precision]
+    used = _used_symbols(f)
+    macro = code.name.upper()
+
+    scalars = []  # every used scalar input: where the single and the batch function read it
     vectors = []
     for v in spec.vector_inputs:
+        elements = []
+        for k, s in enumerate(v.symbols):
+            if s in used:
+                elements.append({"local": str(s), "index": k})
+                scalars.append({"symbol": s, "local": str(s), "single": f"{v.name}[{k}]",
+                                "batch": f"{v.name}[_j * {len(v.symbols)} + {k}]"})
         vectors.append({
-            "name": v.name, "size": len(v.symbols),
-            "elements": [{"local": str(s), "index": k} for k, s in enumerate(v.symbols) if s in used],
+            "name": v.name, "size": len(v.symbols), "elements": elements,
             "doc": _comment_lines(f"{v.name}[{len(v.symbols)}]: {v.doc}: "
                                   + ", ".join(f"{n} [{u}]" for n, u in zip(v.element_names, v.units)) + "."),
         })
     params = []
-    for p in spec.parameter_inputs:
+    for k, p in enumerate(spec.parameter_inputs):
         unit = f" [{p.units[0]}]" if p.units[0] else ""
         params.append({"name": p.name, "doc": _comment_lines(
-            f"{p.name}: {p.doc or 'parameter'}{unit}; default {code.name.upper()}_DEFAULT_{p.name} "
-            f"= {float(p.default)!r}.")})
+            f"{p.name}: {p.doc or 'parameter'}{unit}; default {macro}_DEFAULT_{p.name} = {float(p.default)!r}.")})
+        if p.symbols[0] in used:
+            scalars.append({"symbol": p.symbols[0], "local": p.name, "single": None,
+                            "batch": f"params[_j * params_stride + {k}]"})
+    for k, s in enumerate(scalars):
+        s["row"] = k
+
+    angles = _trig_of_inputs(f, {s for i in spec.inputs for s in i.symbols if s in used})
+    row_of = {s["symbol"]: s["row"] for s in scalars}
+    trig_names = {}
+    trig = []
+    for k, a in enumerate(angles):
+        trig_names[sympy.sin(a)] = sympy.Symbol(f"_sin_{a}", real=True)
+        trig_names[sympy.cos(a)] = sympy.Symbol(f"_cos_{a}", real=True)
+        trig.append({"angle": str(a), "row": row_of[a], "index": k,
+                     "sin": f"_sin_{a}", "cos": f"_cos_{a}"})
+
+    def text(e: sympy.Expr) -> str:
+        return printer.doprint(e.xreplace(trig_names) if trig_names else e)
+
+    direct = set()  # inputs used other than through their sin/cos
+    for e in [e for _, e in f.temporaries] + [e for entries in f.outputs for e in entries]:
+        direct |= (e.xreplace(trig_names) if trig_names else e).free_symbols
+    for s in scalars:
+        s["direct"] = s["symbol"] in direct
+
     outputs = []
+    slots = 0
     for out, entries in zip(spec.outputs, f.outputs):
         size = _size(out.shape)
         shape = " x ".join(map(str, out.shape)) or "scalar"
         order = ", row-major" if len(out.shape) == 2 else ""
+        assignments = []
+        for k, e in enumerate(entries):
+            constant = not e.free_symbols
+            assignments.append({"index": k, "code": text(e), "constant": constant,
+                                "slot": None if constant else slots})
+            slots += 0 if constant else 1
         outputs.append({
-            "name": out.name, "size": size,
-            "assignments": [{"index": k, "code": printer.doprint(e)} for k, e in enumerate(entries)],
+            "name": out.name, "size": size, "assignments": assignments,
             "doc": _comment_lines(f"{out.name}[{size}]: {shape}{order}; {out.doc}"
                                   + (f" [{out.unit}]" if out.unit else "") + "."),
         })
@@ -82,22 +147,43 @@ def _function_context(code: ModelCode, f: OptimizedFunction, precision: str, pri
         "name": spec.name,
         "symbol": c_symbol(code.name, spec.name, suffix),
         "batch_symbol": c_symbol(code.name, spec.name, "_batch" + suffix),
-        "kernel": c_symbol(code.name, spec.name, "_kernel" + suffix),
         "real": ctype,
+        "sincos": f"{code.name}_sincos{suffix}",
         "summary": _comment_lines(spec.summary),
         "doc": _comment_lines(spec.doc),
         "vectors": vectors,
         "params": params,
+        "scalars": scalars,
+        "trig": trig,
         "outputs": outputs,
-        "temporaries": [{"name": str(s), "code": printer.doprint(e)} for s, e in f.temporaries],
+        "slots": slots,
+        "temporaries": [{"name": str(s), "code": text(e)} for s, e in f.temporaries],
         "op_count": f.op_counts["cse"],
+    }
+
+
+def _sincos_context(code: ModelCode, precision: str, printer: CPrinter) -> dict[str, Any]:
+    c = constants(precision)
+    float_suffix = "f" if precision == "float" else ""
+    return {
+        "name": f"{code.name}_sincos{VARIANTS[precision]}",
+        "real": C_TYPES[precision],
+        "fabs": "fabs" + float_suffix, "sin": "sin" + float_suffix, "cos": "cos" + float_suffix,
+        "two_over_pi": printer.literal(c.two_over_pi),
+        "parts": [printer.literal(p) for p in c.pi_half_parts],
+        "magic": printer.literal(c.round_magic),
+        "limit": printer.literal(c.limit),
+        "sin_coefficients": [printer.literal(v) for v in c.sin_coefficients],
+        "cos_coefficients": [printer.literal(v) for v in c.cos_coefficients],
+        "literal": {v: printer.literal(float(v)) for v in (0.5, 1.5, -0.5, -1.5, 1.0, 4.0, 0.25)},
     }
 
 
 def emit_sources(code: ModelCode) -> dict[str, str | bytes]:
     """{<model>.h: header, <model>.c: source} for ``code``."""
     precisions = ["double", "float"] if code.float32 else ["double"]
-    functions = [_function_context(code, f, precision, CPrinter(precision))
+    printers = {p: CPrinter(p) for p in precisions}
+    functions = [_function_context(code, f, precision, printers[precision])
                  for precision in precisions for f in code.functions]
     model = {
         "name": code.name, "macro": code.name.upper(), "hash": code.hash,
@@ -110,10 +196,11 @@ def emit_sources(code: ModelCode) -> dict[str, str | bytes]:
     header_name = f"{code.name}.h"
     context = {"model": model, "functions": functions, "free_parameters": free,
                "fixed_parameters": _comment_lines(", ".join(fixed)) if fixed else [],
-               "header_name": header_name, "float32": code.float32}
+               "header_name": header_name, "float32": code.float32, "block": BLOCK,
+               "sincos": [_sincos_context(code, p, printers[p]) for p in precisions
+                          if any(f["trig"] for f in functions if f["real"] == C_TYPES[p])]}
     return {
         header_name: render(HEADER_TEMPLATE, provenance=provenance(HEADER_TEMPLATE, code.name, code.hash), **context),
         f"{code.name}.c": render(SOURCE_TEMPLATE, provenance=provenance(SOURCE_TEMPLATE, code.name, code.hash),
                                  **context),
     }
-
