@@ -91,9 +91,15 @@ def batch_reference(model: Model, spec: FunctionSpec):
 
 
 @pytest.fixture(scope="session", autouse=True)
-def compile_cache(tmp_path_factory) -> Path:
-    """Compiled C libraries go to a session temp directory, never to the user's cache."""
-    path = tmp_path_factory.mktemp("symkin-cache")
+def compile_cache(tmp_path_factory, worker_id) -> Path:
+    """Compiled C libraries go to a session temp directory, never to the user's cache.
+
+    The xdist workers share it (the cache locks while compiling), so each library is
+    compiled once per test run.
+    """
+    base = tmp_path_factory.getbasetemp()
+    path = (base.parent if worker_id != "master" else base) / "symkin-cache"
+    path.mkdir(exist_ok=True)
     previous = os.environ.get("SYMKIN_CACHE_DIR")
     os.environ["SYMKIN_CACHE_DIR"] = str(path)
     yield path

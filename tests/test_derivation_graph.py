@@ -52,7 +52,7 @@ def test_manifest_describes_every_function(generated_dir):
     assert manifest["backends"]["numpy"]["files"] == ["ur10e.py"]
     assert manifest["backends"]["c"]["files"] == ["ur10e.c", "ur10e.h"]
     assert "ur10e_fk.casadi" in manifest["backends"]["casadi"]["files"]
-    assert manifest["options"] == {"float32": True}
+    assert manifest["options"] == {"float32": False}
 
 
 def test_unknown_output_on_the_command_line_is_a_usage_error(tmp_path):

@@ -131,6 +131,12 @@ void ur10e_classic_fk(const double *restrict q, double d1, double a2, double a3,
     base_T_tcp[15] = 1.0;
 }
 
+/* ur10e_classic_fk_packed: ur10e_classic_fk with packed inputs and outputs. */
+void ur10e_classic_fk_packed(const double *restrict in, double *restrict out)
+{
+    ur10e_classic_fk(in + 0, in[6], in[7], in[8], in[9], in[10], in[11], out + 0);
+}
+
 /* ur10e_classic_fk_batch: ur10e_classic_fk for n configurations, in blocks of 8. */
 void ur10e_classic_fk_batch(size_t n, const double *restrict q, const double *restrict params, size_t params_stride, double *restrict base_T_tcp)
 {
@@ -345,6 +351,12 @@ void ur10e_classic_jacobian(const double *restrict q, double a2, double a3, doub
     J[33] = 0.0;
     J[34] = -_x15 + _x16;
     J[35] = -_x26;
+}
+
+/* ur10e_classic_jacobian_packed: ur10e_classic_jacobian with packed inputs and outputs. */
+void ur10e_classic_jacobian_packed(const double *restrict in, double *restrict out)
+{
+    ur10e_classic_jacobian(in + 0, in[6], in[7], in[8], in[9], in[10], out + 0);
 }
 
 /* ur10e_classic_jacobian_batch: ur10e_classic_jacobian for n configurations, in blocks of 8. */
@@ -628,6 +640,12 @@ void ur10e_classic_scene(const double *restrict q, double d1, double a2, double 
     J[33] = 0.0;
     J[34] = -_x16 + _x17;
     J[35] = _x40;
+}
+
+/* ur10e_classic_scene_packed: ur10e_classic_scene with packed inputs and outputs. */
+void ur10e_classic_scene_packed(const double *restrict in, double *restrict out)
+{
+    ur10e_classic_scene(in + 0, in[6], in[7], in[8], in[9], in[10], in[11], out + 0, out + 16);
 }
 
 /* ur10e_classic_scene_batch: ur10e_classic_scene for n configurations, in blocks of 8. */

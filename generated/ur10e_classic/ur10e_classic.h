@@ -13,6 +13,8 @@
  *   - Outputs go to caller-owned arrays; matrices are row-major: element (i, j) of an
  *     r x c output is out[i*c + j]. Every element is written. Outputs must not overlap
  *     each other or the inputs.
+ *   - <function>_packed(in, out) takes the inputs (vectors, then parameters) packed one
+ *     after the other in one array and writes the outputs one after the other into another.
  *   - <function>_batch(n, ...) evaluates n configurations: each vector input holds n rows
  *     one after the other (q: n x 6), each output n blocks of its size; the free
  *     parameters of configuration i are read from params + i*params_stride, in the order
@@ -66,6 +68,9 @@ extern "C" {
  */
 void ur10e_classic_fk(const double *q, double d1, double a2, double a3, double d4, double d5, double d6, double *base_T_tcp);
 
+/* ur10e_classic_fk with packed arguments: in = q, d1, a2, a3, d4, d5, d6 one after the other; out = base_T_tcp one after the other. */
+void ur10e_classic_fk_packed(const double *in, double *out);
+
 /* ur10e_classic_fk for n configurations; params: d1, a2, a3, d4, d5, d6, stride 0 or 6. */
 void ur10e_classic_fk_batch(size_t n, const double *q, const double *params, size_t params_stride, double *base_T_tcp);
 
@@ -87,6 +92,9 @@ void ur10e_classic_fk_batch(size_t n, const double *q, const double *params, siz
  * Cost: 87 operations.
  */
 void ur10e_classic_jacobian(const double *q, double a2, double a3, double d4, double d5, double d6, double *J);
+
+/* ur10e_classic_jacobian with packed arguments: in = q, a2, a3, d4, d5, d6 one after the other; out = J one after the other. */
+void ur10e_classic_jacobian_packed(const double *in, double *out);
 
 /* ur10e_classic_jacobian for n configurations; params: a2, a3, d4, d5, d6, stride 0 or 5. */
 void ur10e_classic_jacobian_batch(size_t n, const double *q, const double *params, size_t params_stride, double *J);
@@ -113,6 +121,9 @@ void ur10e_classic_jacobian_batch(size_t n, const double *q, const double *param
  * Cost: 114 operations.
  */
 void ur10e_classic_scene(const double *q, double d1, double a2, double a3, double d4, double d5, double d6, double *base_T_tcp, double *J);
+
+/* ur10e_classic_scene with packed arguments: in = q, d1, a2, a3, d4, d5, d6 one after the other; out = base_T_tcp, J one after the other. */
+void ur10e_classic_scene_packed(const double *in, double *out);
 
 /* ur10e_classic_scene for n configurations; params: d1, a2, a3, d4, d5, d6, stride 0 or 6. */
 void ur10e_classic_scene_batch(size_t n, const double *q, const double *params, size_t params_stride, double *base_T_tcp, double *J);

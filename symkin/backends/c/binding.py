@@ -1,9 +1,9 @@
 """ctypes binding of a compiled model library to Python functions (no sympy needed).
 
-A call with one configuration and scalar parameters goes to ``<model>_<function>``: the
-inputs are copied into per-thread scratch arrays whose addresses are known (asking numpy
-for an array's address costs about a microsecond, more than the C code), the parameters
-are passed as C doubles and the outputs copied out of a scratch buffer.  Any other call
+A call with one configuration and scalar parameters goes to ``<model>_<function>_packed``:
+the inputs are copied into a per-thread scratch array whose address is known (asking numpy
+for an array's address costs about a microsecond, more than the C code) and the outputs
+copied out of another; two pointer arguments keep the ctypes call cheap.  Any other call
 goes to ``<model>_<function>_batch``: vector inputs broadcast to the batch shape and made
 C-contiguous (n x size), parameters packed into one array (stride 0 when all are scalars,
 else one row per configuration), all outputs in one fresh buffer, output k being the
@@ -52,14 +52,15 @@ def _entry(library: ctypes.CDLL, symbol: str, argtypes: list[Any]) -> Any:
 
 
 class _Scratch(threading.local):
-    """Per-thread input and output arrays of one function, with their addresses."""
+    """Per-thread packed input and output arrays of one function (``<function>_packed``)."""
 
-    def __init__(self, vector_sizes: list[int], offsets: list[int], total: int):
-        self.inputs = [numpy.empty(size) for size in vector_sizes]
+    def __init__(self, vector_sizes: list[int], n_params: int, total: int):
+        self.input = numpy.empty(sum(vector_sizes) + n_params)
+        starts = [sum(vector_sizes[:k]) for k in range(len(vector_sizes))]
+        self.vectors = [self.input[start:start + size] for start, size in zip(starts, vector_sizes)]
         self.output = numpy.empty(total)
-        self.input_addresses = [a.ctypes.data for a in self.inputs]
-        base = self.output.ctypes.data
-        self.output_addresses = [base + DOUBLE_SIZE * offset for offset in offsets]
+        self.input_address = self.input.ctypes.data
+        self.output_address = self.output.ctypes.data
 
 
 def _kernels(library: ctypes.CDLL, model: str, record: dict[str, Any]) -> tuple[Kernel, SingleKernel]:
@@ -71,10 +72,11 @@ def _kernels(library: ctypes.CDLL, model: str, record: dict[str, Any]) -> tuple[
     total = sum(sizes)
     pointers = [ctypes.c_void_p] * len(vector_sizes)
     outputs = [ctypes.c_void_p] * len(output_shapes)
-    single = _entry(library, c_symbol(model, record["name"]), pointers + [ctypes.c_double] * n_params + outputs)
+    packed = _entry(library, c_symbol(model, record["name"], "_packed"), [ctypes.c_void_p, ctypes.c_void_p])
     batched = _entry(library, c_symbol(model, record["name"], "_batch"),
                      [ctypes.c_size_t] + pointers + ([ctypes.c_void_p, ctypes.c_size_t] if n_params else []) + outputs)
-    scratch = _Scratch(vector_sizes, offsets, total)
+    scratch = _Scratch(vector_sizes, n_params, total)
+    first_param = sum(vector_sizes)
 
     def split(buffer: numpy.ndarray, n: int, batch: tuple[int, ...]) -> list[numpy.ndarray]:
         return [buffer[n * offset:n * (offset + size)].reshape(batch + shape)
@@ -82,9 +84,11 @@ def _kernels(library: ctypes.CDLL, model: str, record: dict[str, Any]) -> tuple[
 
     def one(vectors: Sequence[numpy.ndarray], params: Sequence[float]) -> list[numpy.ndarray]:
         local = scratch
-        for target, v in zip(local.inputs, vectors):
-            target[:] = v
-        single(*local.input_addresses, *params, *local.output_addresses)
+        for target, v in zip(local.vectors, vectors):
+            target[...] = v
+        for k, p in enumerate(params):
+            local.input[first_param + k] = p
+        packed(local.input_address, local.output_address)
         return split(local.output.copy(), 1, ())
 
     def kernel(batch: tuple[int, ...], vectors: list[numpy.ndarray], params: list[numpy.ndarray]) -> list[numpy.ndarray]:

@@ -3,8 +3,9 @@
 The cache key covers the source and header bytes, the compiler command and flags, and the
 compiler's version text, so editing any of them (or regenerating the model) builds anew,
 while loading the same model again costs a hash and a ``dlopen``.  Libraries are written
-under a temporary name and renamed into place, so concurrent loaders (pytest-xdist
-workers, several processes of a control application) never see a half-written file.
+under a temporary name and renamed into place, under a lock file, so concurrent loaders
+(pytest-xdist workers, several processes of a control application) compile a library once
+and never see a half-written file.
 
 Environment:
     SYMKIN_CACHE_DIR: cache directory (default ``$XDG_CACHE_HOME/symkin`` or ``~/.cache/symkin``).
@@ -20,6 +21,8 @@ import shlex
 import subprocess
 import sys
 import tempfile
+from collections.abc import Iterator
+from contextlib import contextmanager
 from functools import lru_cache
 from pathlib import Path
 
@@ -74,6 +77,31 @@ def shared_library(source: Path, header: Path) -> Path:
     if target.exists():
         return target
     directory.mkdir(parents=True, exist_ok=True)
+    with _locked(directory / f"{target.name}.lock"):
+        if not target.exists():  # another process may have built it while we waited
+            _compile(command, source, header, target)
+    return target
+
+
+@contextmanager
+def _locked(path: Path) -> Iterator[None]:
+    """An exclusive lock on ``path`` (so concurrent loaders compile a library once)."""
+    try:
+        import fcntl
+    except ImportError:  # no advisory locks (Windows): concurrent builds stay safe, just redundant
+        yield
+        return
+    with open(path, "a") as handle:
+        fcntl.flock(handle, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(handle, fcntl.LOCK_UN)
+
+
+def _compile(command: list[str], source: Path, header: Path, target: Path) -> None:
+    """Compile into a temporary file next to ``target``, then rename it into place."""
+    directory = target.parent
     fd, partial = tempfile.mkstemp(prefix=target.name + ".", suffix=".partial", dir=directory)
     os.close(fd)
     try:
@@ -86,4 +114,3 @@ def shared_library(source: Path, header: Path) -> Path:
     finally:
         if os.path.exists(partial):
             os.unlink(partial)
-    return target

@@ -10,7 +10,9 @@ Calling convention (documented in the generated header):
   size_t params_stride, double *out1, ...)``: n configurations stored one after the other
   (q is n x dof, out1 is n x size), the parameters packed in one array read at
   ``params + i*params_stride`` (stride 0: the same values for every configuration);
-* with the float32 option, ``..._f32`` variants of both take and return ``float``.
+* ``<model>_<function>_packed(const double *in, double *out)``: the inputs packed one after
+  the other (vector elements, then parameters), the outputs one after the other;
+* with the float32 option, ``..._f32`` variants of all three take and return ``float``.
 
 Both print the same statements (so they return the same bits).  The single function runs
 them once on scalars; the batch function runs them in a loop over the lanes of a block of
@@ -106,6 +108,13 @@ def _function_context(code: ModelCode, f: OptimizedFunction, precision: str, pri
                             "batch": f"params[_j * params_stride + {k}]"})
     for k, s in enumerate(scalars):
         s["row"] = k
+    offset = 0
+    for item in vectors:
+        item["offset"] = offset
+        offset += item["size"]
+    for item in params:
+        item["offset"] = offset
+        offset += 1
 
     angles = _trig_of_inputs(f, {s for i in spec.inputs for s in i.symbols if s in used})
     row_of = {s["symbol"]: s["row"] for s in scalars}
@@ -128,6 +137,7 @@ def _function_context(code: ModelCode, f: OptimizedFunction, precision: str, pri
 
     outputs = []
     slots = 0
+    output_offset = 0
     for out, entries in zip(spec.outputs, f.outputs):
         size = _size(out.shape)
         shape = " x ".join(map(str, out.shape)) or "scalar"
@@ -139,14 +149,16 @@ def _function_context(code: ModelCode, f: OptimizedFunction, precision: str, pri
                                 "slot": None if constant else slots})
             slots += 0 if constant else 1
         outputs.append({
-            "name": out.name, "size": size, "assignments": assignments,
+            "name": out.name, "size": size, "assignments": assignments, "offset": output_offset,
             "doc": _comment_lines(f"{out.name}[{size}]: {shape}{order}; {out.doc}"
                                   + (f" [{out.unit}]" if out.unit else "") + "."),
         })
+        output_offset += size
     return {
         "name": spec.name,
         "symbol": c_symbol(code.name, spec.name, suffix),
         "batch_symbol": c_symbol(code.name, spec.name, "_batch" + suffix),
+        "packed_symbol": c_symbol(code.name, spec.name, "_packed" + suffix),
         "real": ctype,
         "sincos": f"{code.name}_sincos{suffix}",
         "summary": _comment_lines(spec.summary),
