@@ -131,3 +131,17 @@ def test_results_are_fresh_arrays(loaded):
         result = ur.scene(np.zeros(6))
         result.base_T_tcp[:] = 7.0
         assert not np.any(result.base_T_wrist3 == 7.0)
+
+
+def test_large_batches_are_evaluated_in_chunks_with_the_same_results(loaded, models):
+    """numpy evaluates batches above its chunk size piecewise; results equal the C backend's."""
+    numpy_ur, c_ur = loaded("ur10e", "numpy"), loaded("ur10e", "c")
+    q = random_q(models["ur10e"], np.random.default_rng(9), (3, 5000))
+    d6 = np.linspace(0.1, 0.2, 5000)
+    for kwargs in ({}, {"d6": d6}, {"d6": d6[:, None].T}):
+        got, want = numpy_ur.scene(q, **kwargs), c_ur.scene(q, **kwargs)
+        assert type(got).__name__ == "SceneResult"
+        for g, w in zip(got, want):
+            assert g.shape == w.shape
+            np.testing.assert_allclose(g, w, rtol=1e-13, atol=1e-14)
+    assert numpy_ur.fk(q[0, :3000]).shape == (3000, 4, 4)

@@ -19,6 +19,7 @@ Functions:
 """
 
 import collections
+import math
 
 import numpy
 
@@ -56,6 +57,31 @@ def _batch_shape(function, *shapes):
         raise ValueError(f"{function}(): the batch shapes of the inputs do not broadcast: {shapes}") from None
 
 
+#: Large batches are evaluated this many configurations at a time, so that the temporary
+#: arrays of one chunk stay in the processor's cache.
+CHUNK = 4096
+
+
+def _in_chunks(function, batch, vectors, params):
+    """``function`` over a large batch, CHUNK configurations at a time (same results)."""
+    n = math.prod(batch)
+    flat = [numpy.broadcast_to(v, batch + v.shape[-1:]).reshape(n, v.shape[-1]) for v in vectors]
+    flat_params = {k: p if numpy.ndim(p) == 0 else numpy.broadcast_to(p, batch).reshape(n)
+                   for k, p in params.items()}
+    outputs = None
+    for start in range(0, n, CHUNK):
+        part = slice(start, start + CHUNK)
+        result = function(*[v[part] for v in flat],
+                          **{k: p if numpy.ndim(p) == 0 else p[part] for k, p in flat_params.items()})
+        parts = result if isinstance(result, tuple) else (result,)
+        if outputs is None:
+            outputs = [numpy.empty((n,) + r.shape[1:]) for r in parts]
+        for out, r in zip(outputs, parts):
+            out[part] = r
+    shaped = [out.reshape(batch + out.shape[1:]) for out in outputs]
+    return type(result)(*shaped) if isinstance(result, tuple) else shaped[0]
+
+
 def fk(q, *, l1=0.1, l2=0.1):
     """Forward kinematics: pose of the TCP in the base frame.
 
@@ -74,6 +100,8 @@ def fk(q, *, l1=0.1, l2=0.1):
     """
     q = _vector(q, 2, "q", "fk")
     batch = _batch_shape("fk", q.shape[:-1], numpy.shape(l1), numpy.shape(l2))
+    if math.prod(batch) > CHUNK:
+        return _in_chunks(fk, batch, (q, ), {"l1": l1, "l2": l2})
     theta1 = q[..., 0]
     theta2 = q[..., 1]
     _x0 = numpy.cos(theta1)
@@ -115,6 +143,8 @@ def frames(q, *, l1=0.1, l2=0.1):
     """
     q = _vector(q, 2, "q", "frames")
     batch = _batch_shape("frames", q.shape[:-1], numpy.shape(l1), numpy.shape(l2))
+    if math.prod(batch) > CHUNK:
+        return _in_chunks(frames, batch, (q, ), {"l1": l1, "l2": l2})
     theta1 = q[..., 0]
     theta2 = q[..., 1]
     _x0 = numpy.cos(theta1)
@@ -163,6 +193,8 @@ def jacobian(q, *, l1=0.1, l2=0.1):
     """
     q = _vector(q, 2, "q", "jacobian")
     batch = _batch_shape("jacobian", q.shape[:-1], numpy.shape(l1), numpy.shape(l2))
+    if math.prod(batch) > CHUNK:
+        return _in_chunks(jacobian, batch, (q, ), {"l1": l1, "l2": l2})
     theta1 = q[..., 0]
     theta2 = q[..., 1]
     _x0 = numpy.sin(theta1)
@@ -198,6 +230,8 @@ def jacobian_geometric(q, *, l1=0.1, l2=0.1):
     """
     q = _vector(q, 2, "q", "jacobian_geometric")
     batch = _batch_shape("jacobian_geometric", q.shape[:-1], numpy.shape(l1), numpy.shape(l2))
+    if math.prod(batch) > CHUNK:
+        return _in_chunks(jacobian_geometric, batch, (q, ), {"l1": l1, "l2": l2})
     theta1 = q[..., 0]
     theta2 = q[..., 1]
     _x0 = numpy.sin(theta1)
@@ -243,6 +277,8 @@ def scene(q, *, l1=0.1, l2=0.1):
     """
     q = _vector(q, 2, "q", "scene")
     batch = _batch_shape("scene", q.shape[:-1], numpy.shape(l1), numpy.shape(l2))
+    if math.prod(batch) > CHUNK:
+        return _in_chunks(scene, batch, (q, ), {"l1": l1, "l2": l2})
     theta1 = q[..., 0]
     theta2 = q[..., 1]
     _x0 = numpy.cos(theta1)

@@ -16,6 +16,7 @@ Functions:
 """
 
 import collections
+import math
 
 import numpy
 
@@ -59,6 +60,31 @@ def _batch_shape(function, *shapes):
         raise ValueError(f"{function}(): the batch shapes of the inputs do not broadcast: {shapes}") from None
 
 
+#: Large batches are evaluated this many configurations at a time, so that the temporary
+#: arrays of one chunk stay in the processor's cache.
+CHUNK = 4096
+
+
+def _in_chunks(function, batch, vectors, params):
+    """``function`` over a large batch, CHUNK configurations at a time (same results)."""
+    n = math.prod(batch)
+    flat = [numpy.broadcast_to(v, batch + v.shape[-1:]).reshape(n, v.shape[-1]) for v in vectors]
+    flat_params = {k: p if numpy.ndim(p) == 0 else numpy.broadcast_to(p, batch).reshape(n)
+                   for k, p in params.items()}
+    outputs = None
+    for start in range(0, n, CHUNK):
+        part = slice(start, start + CHUNK)
+        result = function(*[v[part] for v in flat],
+                          **{k: p if numpy.ndim(p) == 0 else p[part] for k, p in flat_params.items()})
+        parts = result if isinstance(result, tuple) else (result,)
+        if outputs is None:
+            outputs = [numpy.empty((n,) + r.shape[1:]) for r in parts]
+        for out, r in zip(outputs, parts):
+            out[part] = r
+    shaped = [out.reshape(batch + out.shape[1:]) for out in outputs]
+    return type(result)(*shaped) if isinstance(result, tuple) else shaped[0]
+
+
 def fk(q, *, d1=0.1807, a2=-0.6127, a3=-0.57155, d4=0.17415, d5=0.11985, d6=0.11655):
     """Forward kinematics: pose of the TCP in the base frame.
 
@@ -86,6 +112,8 @@ def fk(q, *, d1=0.1807, a2=-0.6127, a3=-0.57155, d4=0.17415, d5=0.11985, d6=0.11
     """
     q = _vector(q, 6, "q", "fk")
     batch = _batch_shape("fk", q.shape[:-1], numpy.shape(d1), numpy.shape(a2), numpy.shape(a3), numpy.shape(d4), numpy.shape(d5), numpy.shape(d6))
+    if math.prod(batch) > CHUNK:
+        return _in_chunks(fk, batch, (q, ), {"d1": d1, "a2": a2, "a3": a3, "d4": d4, "d5": d5, "d6": d6})
     q1 = q[..., 0]
     q2 = q[..., 1]
     q3 = q[..., 2]
@@ -163,6 +191,8 @@ def jacobian(q, *, a2=-0.6127, a3=-0.57155, d4=0.17415, d5=0.11985, d6=0.11655):
     """
     q = _vector(q, 6, "q", "jacobian")
     batch = _batch_shape("jacobian", q.shape[:-1], numpy.shape(a2), numpy.shape(a3), numpy.shape(d4), numpy.shape(d5), numpy.shape(d6))
+    if math.prod(batch) > CHUNK:
+        return _in_chunks(jacobian, batch, (q, ), {"a2": a2, "a3": a3, "d4": d4, "d5": d5, "d6": d6})
     q1 = q[..., 0]
     q2 = q[..., 1]
     q3 = q[..., 2]
@@ -271,6 +301,8 @@ def scene(q, *, d1=0.1807, a2=-0.6127, a3=-0.57155, d4=0.17415, d5=0.11985, d6=0
     """
     q = _vector(q, 6, "q", "scene")
     batch = _batch_shape("scene", q.shape[:-1], numpy.shape(d1), numpy.shape(a2), numpy.shape(a3), numpy.shape(d4), numpy.shape(d5), numpy.shape(d6))
+    if math.prod(batch) > CHUNK:
+        return _in_chunks(scene, batch, (q, ), {"d1": d1, "a2": a2, "a3": a3, "d4": d4, "d5": d5, "d6": d6})
     q1 = q[..., 0]
     q2 = q[..., 1]
     q3 = q[..., 2]
