@@ -30,6 +30,7 @@ from symkin.errors import GeneratedCodeError
 Kernel = Callable[[tuple[int, ...], list[numpy.ndarray], list[numpy.ndarray]], list[numpy.ndarray]]
 SingleKernel = Callable[[Sequence[numpy.ndarray], Sequence[float]], list[numpy.ndarray]]
 FLOAT64 = numpy.dtype(numpy.float64)
+SCALAR_TYPES = frozenset((float, int))
 
 
 def vector_input(value: Any, size: int, name: str, function: str) -> numpy.ndarray:
@@ -111,7 +112,7 @@ def make_function(record: dict[str, Any], kernel: Kernel, backend: str,
     def evaluate(vector_values: Sequence[Any], param_values: Sequence[Any]) -> Any:
         if single is not None and all(type(v) is numpy.ndarray and v.shape == shape and v.dtype is FLOAT64
                                       for v, shape in zip(vector_values, vector_shapes)) \
-                and all(type(p) is float or type(p) is int for p in param_values):
+                and SCALAR_TYPES.issuperset(map(type, param_values)):
             results = single(vector_values, param_values)
             return result_type(*results) if result_type is not None else results[0]
         arrays = [vector_input(value, size, vname, name) for value, (vname, size) in zip(vector_values, vectors)]

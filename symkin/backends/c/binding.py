@@ -82,14 +82,17 @@ def _kernels(library: ctypes.CDLL, model: str, record: dict[str, Any]) -> tuple[
         return [buffer[n * offset:n * (offset + size)].reshape(batch + shape)
                 for offset, size, shape in zip(offsets, sizes, output_shapes)]
 
+    single_views = [(slice(offset, offset + size), shape) for offset, size, shape in zip(offsets, sizes, output_shapes)]
+
     def one(vectors: Sequence[numpy.ndarray], params: Sequence[float]) -> list[numpy.ndarray]:
         local = scratch
         for target, v in zip(local.vectors, vectors):
             target[...] = v
-        for k, p in enumerate(params):
-            local.input[first_param + k] = p
+        if params:
+            local.input[first_param:] = params
         packed(local.input_address, local.output_address)
-        return split(local.output.copy(), 1, ())
+        out = local.output.copy()
+        return [out[part].reshape(shape) for part, shape in single_views]
 
     def kernel(batch: tuple[int, ...], vectors: list[numpy.ndarray], params: list[numpy.ndarray]) -> list[numpy.ndarray]:
         if not batch and all(p.ndim == 0 for p in params):
