@@ -23,3 +23,9 @@ def c_symbol(model_name: str, function_name: str, suffix: str = "") -> str:
 def casadi_file(model_name: str, function_name: str) -> str:
     """Name of a serialized CasADi function, e.g. ``ur10e_fk.casadi``."""
     return f"{model_name}_{function_name}.casadi"
+
+
+def matrix_shape(shape: tuple[int, ...] | list[int]) -> tuple[int, int]:
+    """The (rows, columns) of an output as a matrix: (r, c), (r,) -> (r, 1), () -> (1, 1)."""
+    shape = tuple(shape)
+    return (shape[0], shape[1]) if len(shape) == 2 else (shape[0], 1) if len(shape) == 1 else (1, 1)

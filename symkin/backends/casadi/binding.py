@@ -21,16 +21,12 @@ from typing import Any
 import casadi
 import numpy
 
-from symkin.backends.naming import casadi_file
+from symkin.backends.naming import casadi_file, matrix_shape
 from symkin.errors import GeneratedCodeError
 from symkin.runtime.wrappers import Kernel, SingleKernel, make_function
 
 #: How many batch sizes (mapped functions and their buffers) each function keeps per thread.
 CACHE_SIZE = 4
-
-
-def _shape_2d(shape: tuple[int, ...]) -> tuple[int, int]:
-    return (shape + (1, 1))[:2] if len(shape) < 2 else (shape[0], shape[1])
 
 
 class _Buffers(threading.local):
@@ -43,7 +39,7 @@ class _Buffers(threading.local):
 def _kernels(function: casadi.Function, record: dict[str, Any]) -> tuple[Kernel, SingleKernel]:
     vector_sizes = [int(i["shape"][0]) for i in record["inputs"] if i["kind"] != "parameter"]
     output_shapes = [tuple(o["shape"]) for o in record["outputs"]]
-    output_2d = [_shape_2d(shape) for shape in output_shapes]
+    output_2d = [matrix_shape(shape) for shape in output_shapes]
     buffers = _Buffers()
     lock = threading.Lock()  # function.map is not known to be thread-safe
 

@@ -23,7 +23,7 @@ import tempfile
 import casadi
 
 from symkin.backends.casadi.sx import SXBuilder
-from symkin.backends.naming import casadi_file
+from symkin.backends.naming import casadi_file, matrix_shape
 from symkin.ir.bundle import ModelCode
 from symkin.ir.spec import OptimizedFunction
 
@@ -47,7 +47,7 @@ def build_function(f: OptimizedFunction) -> casadi.Function:
         builder.bind(symbol, builder.doprint(expr))
     outputs = []
     for out, entries in zip(spec.outputs, f.outputs):
-        rows, cols = (out.shape + (1, 1))[:2] if len(out.shape) < 2 else out.shape
+        rows, cols = matrix_shape(out.shape)
         matrix = casadi.SX.zeros(rows, cols)  # dense: zeros are values, as in the other backends
         for k, e in enumerate(entries):
             if e != 0:
