@@ -67,14 +67,12 @@ def _used_symbols(f: OptimizedFunction) -> set[sympy.Symbol]:
     return used
 
 
-def _trig_of_inputs(f: OptimizedFunction, inputs: set[sympy.Symbol]) -> list[sympy.Symbol]:
-    """Input symbols whose sine or cosine the function uses, in input order."""
-    found = set()
+def _trig_of_inputs(f: OptimizedFunction, inputs: set[sympy.Symbol]) -> tuple[list[sympy.Symbol], set[sympy.Expr]]:
+    """(input symbols whose sine or cosine the function uses, in a fixed order; those calls)."""
+    calls = set()
     for e in [e for _, e in f.temporaries] + [e for entries in f.outputs for e in entries]:
-        for call in e.atoms(sympy.sin, sympy.cos):
-            if call.args[0] in inputs:
-                found.add(call.args[0])
-    return [s for s in sorted(found, key=sympy.default_sort_key)]
+        calls |= {call for call in e.atoms(sympy.sin, sympy.cos) if call.args[0] in inputs}
+    return sorted({call.args[0] for call in calls}, key=sympy.default_sort_key), calls
 
 
 def _function_context(code: ModelCode, f: OptimizedFunction, precision: str, printer: CPrinter) -> dict[str, Any]:
@@ -116,7 +114,7 @@ def _function_context(code: ModelCode, f: OptimizedFunction, precision: str, pri
         item["offset"] = offset
         offset += 1
 
-    angles = _trig_of_inputs(f, {s for i in spec.inputs for s in i.symbols if s in used})
+    angles, calls = _trig_of_inputs(f, {s for i in spec.inputs for s in i.symbols if s in used})
     row_of = {s["symbol"]: s["row"] for s in scalars}
     trig_names = {}
     trig = []
@@ -124,7 +122,8 @@ def _function_context(code: ModelCode, f: OptimizedFunction, precision: str, pri
         trig_names[sympy.sin(a)] = sympy.Symbol(f"_sin_{a}", real=True)
         trig_names[sympy.cos(a)] = sympy.Symbol(f"_cos_{a}", real=True)
         trig.append({"angle": str(a), "row": row_of[a], "index": k,
-                     "sin": f"_sin_{a}", "cos": f"_cos_{a}"})
+                     "sin": f"_sin_{a}" if sympy.sin(a) in calls else None,
+                     "cos": f"_cos_{a}" if sympy.cos(a) in calls else None})
 
     def text(e: sympy.Expr) -> str:
         return printer.doprint(e.xreplace(trig_names) if trig_names else e)
