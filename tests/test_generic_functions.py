@@ -97,3 +97,30 @@ def test_generic_c_compiles_without_warnings(dynamics_like, tmp_path):
     result = subprocess.run([CC, *STRICT_FLAGS, "-c", str(target / "planar_2r.c"), "-o", str(tmp_path / "g.o")],
                             capture_output=True, text=True)
     assert result.returncode == 0 and not result.stderr, result.stderr
+
+
+def test_constant_outputs_and_prismatic_joints(tmp_path):
+    """A Cartesian robot: the Jacobian is constant (no statements at all), fk has no trigonometry."""
+    import subprocess
+
+    from symkin import pipeline
+    from symkin.model import load_model
+    from test_c_backend import CC, STRICT_FLAGS
+
+    path = tmp_path / "cart.yaml"
+    path.write_text("name: cart\nparameters:\n  h: 0.5\nserial:\n  dh:\n    convention: classic\n    rows:\n"
+                    "      - [x1, P, 0, 0, 0, 0]\n      - [x2, P, pi/2, h, 0, pi/2]\ntask_space: [x, y, z]\n"
+                    "scene:\n  outputs: [fk, jacobian]\n  backends: [numpy, c, casadi]\n  float32: true\n")
+    model = load_model(path)
+    target = pipeline.write(pipeline.generate(model, pipeline.resolve_request(model)), tmp_path / "out")
+    if CC is not None:
+        result = subprocess.run([CC, *STRICT_FLAGS, "-c", str(target / "cart.c"), "-o", str(tmp_path / "cart.o")],
+                                capture_output=True, text=True)
+        assert result.returncode == 0 and not result.stderr, result.stderr
+    q = np.random.default_rng(1).uniform(-1, 1, (5, 2))
+    reference = load(target)
+    for backend in ("c", "casadi"):
+        generated = load(target, backend=backend)
+        for name in ("fk", "jacobian"):
+            np.testing.assert_allclose(getattr(generated, name)(q, h=0.7), getattr(reference, name)(q, h=0.7),
+                                       atol=1e-15)
