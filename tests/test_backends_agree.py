@@ -145,3 +145,21 @@ def test_large_batches_are_evaluated_in_chunks_with_the_same_results(loaded, mod
             assert g.shape == w.shape
             np.testing.assert_allclose(g, w, rtol=1e-13, atol=1e-14)
     assert numpy_ur.fk(q[0, :3000]).shape == (3000, 4, 4)
+
+
+@pytest.mark.parametrize("backend", ("c", "casadi"))
+def test_concurrent_calls_from_threads_are_independent(backend, loaded, models):
+    """The single-configuration paths reuse per-thread scratch memory; threads must not mix results."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    ur, reference = loaded("ur10e", backend), loaded("ur10e", "numpy")
+    q = random_q(models["ur10e"], np.random.default_rng(12), 400)
+
+    def work(offset):
+        return [ur.jacobian(q[k], a2=-0.6 - 0.001 * k) for k in range(offset, 400, 4)]
+
+    with ThreadPoolExecutor(4) as pool:
+        results = list(pool.map(work, range(4)))
+    for offset, got in enumerate(results):
+        for k, J in zip(range(offset, 400, 4), got):
+            np.testing.assert_allclose(J, reference.jacobian(q[k], a2=-0.6 - 0.001 * k), rtol=1e-13, atol=1e-14)

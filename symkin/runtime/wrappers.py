@@ -30,7 +30,6 @@ from symkin.errors import GeneratedCodeError
 Kernel = Callable[[tuple[int, ...], list[numpy.ndarray], list[numpy.ndarray]], list[numpy.ndarray]]
 SingleKernel = Callable[[Sequence[numpy.ndarray], Sequence[float]], list[numpy.ndarray]]
 FLOAT64 = numpy.dtype(numpy.float64)
-SCALAR_TYPES = frozenset((float, int))
 
 
 def vector_input(value: Any, size: int, name: str, function: str) -> numpy.ndarray:
@@ -104,17 +103,15 @@ def make_function(record: dict[str, Any], kernel: Kernel, backend: str,
     name = _identifier(record["name"])
     vectors = [(_identifier(i["name"]), int(i["shape"][0])) for i in record["inputs"] if i["kind"] != "parameter"]
     params = [(_identifier(i["name"]), float(i["default"])) for i in record["inputs"] if i["kind"] == "parameter"]
-    vector_shapes = [(size,) for _, size in vectors]
     outputs = [o["name"] for o in record["outputs"]]
     result_type: Callable[..., Any] | None = (
         collections.namedtuple(type_name(name), outputs) if len(outputs) > 1 else None)
 
+    def evaluate_single(vector_values: Sequence[Any], param_values: Sequence[Any]) -> Any:
+        results = single(vector_values, param_values)  # type: ignore[misc]
+        return result_type(*results) if result_type is not None else results[0]
+
     def evaluate(vector_values: Sequence[Any], param_values: Sequence[Any]) -> Any:
-        if single is not None and all(type(v) is numpy.ndarray and v.shape == shape and v.dtype is FLOAT64
-                                      for v, shape in zip(vector_values, vector_shapes)) \
-                and SCALAR_TYPES.issuperset(map(type, param_values)):
-            results = single(vector_values, param_values)
-            return result_type(*results) if result_type is not None else results[0]
         arrays = [vector_input(value, size, vname, name) for value, (vname, size) in zip(vector_values, vectors)]
         param_arrays = [numpy.asarray(value, dtype=numpy.float64) for value in param_values]
         batch = batch_shape(name, *[a.shape[:-1] for a in arrays], *[p.shape for p in param_arrays])
@@ -123,9 +120,17 @@ def make_function(record: dict[str, Any], kernel: Kernel, backend: str,
 
     signature = ", ".join([v for v, _ in vectors] + (["*"] if params else [])
                           + [f"{p}={default!r}" for p, default in params])
-    call = f"_evaluate(({''.join(v + ', ' for v, _ in vectors)}), ({''.join(p + ', ' for p, _ in params)}))"
-    source = f"def {name}({signature}):\n    return {call}\n"
-    namespace: dict[str, Any] = {"_evaluate": evaluate, "inf": float("inf"), "nan": float("nan")}
+    arguments = f"({''.join(v + ', ' for v, _ in vectors)}), ({''.join(p + ', ' for p, _ in params)})"
+    source = f"def {name}({signature}):\n"
+    if single is not None:
+        # the checks of the single-configuration path, written out (no loops, no generators)
+        checks = [f"type({v}) is _ndarray and {v}.shape == ({size},) and {v}.dtype is _float64" for v, size in vectors]
+        checks += [f"(type({p}) is float or type({p}) is int)" for p, _ in params]
+        source += f"    if {' and '.join(checks)}:\n        return _evaluate_single({arguments})\n"
+    source += f"    return _evaluate({arguments})\n"
+    namespace: dict[str, Any] = {"_evaluate": evaluate, "_evaluate_single": evaluate_single,
+                                 "_ndarray": numpy.ndarray, "_float64": FLOAT64,
+                                 "inf": float("inf"), "nan": float("nan")}
     exec(compile(source, f"<symkin {backend} {name}>", "exec"), namespace)  # noqa: S102 (identifiers checked)
     function = namespace[name]
     function.__doc__ = _docstring(record, backend)

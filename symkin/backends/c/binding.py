@@ -83,6 +83,7 @@ def _kernels(library: ctypes.CDLL, model: str, record: dict[str, Any]) -> tuple[
                 for offset, size, shape in zip(offsets, sizes, output_shapes)]
 
     single_views = [(slice(offset, offset + size), shape) for offset, size, shape in zip(offsets, sizes, output_shapes)]
+    one_output = len(output_shapes) == 1
 
     def one(vectors: Sequence[numpy.ndarray], params: Sequence[float]) -> list[numpy.ndarray]:
         local = scratch
@@ -92,6 +93,8 @@ def _kernels(library: ctypes.CDLL, model: str, record: dict[str, Any]) -> tuple[
             local.input[first_param:] = params
         packed(local.input_address, local.output_address)
         out = local.output.copy()
+        if one_output:
+            return [out.reshape(output_shapes[0])]
         return [out[part].reshape(shape) for part, shape in single_views]
 
     def kernel(batch: tuple[int, ...], vectors: list[numpy.ndarray], params: list[numpy.ndarray]) -> list[numpy.ndarray]:

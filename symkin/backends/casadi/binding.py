@@ -36,6 +36,27 @@ class _Buffers(threading.local):
         self.by_size: OrderedDict[int, tuple[Any, Any]] = OrderedDict()
 
 
+class _Single(threading.local):
+    """Per-thread buffer of the unmapped function, bound once to packed input and output arrays."""
+
+    def __init__(self, function: casadi.Function, input_sizes: list[int], output_sizes: list[int]):
+        self.buffer, self.evaluate = function.buffer()
+        self.input = numpy.empty(sum(input_sizes))
+        self.output = numpy.empty(sum(output_sizes))
+        self.inputs = _bind(self.input, input_sizes, self.buffer.set_arg)
+        _bind(self.output, output_sizes, self.buffer.set_res)
+
+
+def _bind(packed: numpy.ndarray, sizes: list[int], setter: Any) -> list[numpy.ndarray]:
+    """Consecutive slices of ``packed``, each handed to ``setter(k, memoryview)``."""
+    views, start = [], 0
+    for k, size in enumerate(sizes):
+        views.append(packed[start:start + size])
+        setter(k, memoryview(views[-1]))
+        start += size
+    return views
+
+
 def _kernels(function: casadi.Function, record: dict[str, Any]) -> tuple[Kernel, SingleKernel]:
     vector_sizes = [int(i["shape"][0]) for i in record["inputs"] if i["kind"] != "parameter"]
     output_shapes = [tuple(o["shape"]) for o in record["outputs"]]
@@ -55,17 +76,23 @@ def _kernels(function: casadi.Function, record: dict[str, Any]) -> tuple[Kernel,
             cache.popitem(last=False)
         return cache[n]
 
+    n_params = len(record["inputs"]) - len(vector_sizes)
+    output_sizes = [rows * cols for rows, cols in output_2d]
+    single = _Single(function, vector_sizes + [1] * n_params, output_sizes)
+    first_param = sum(vector_sizes)
+    output_starts = [sum(output_sizes[:k]) for k in range(len(output_sizes))]
+
     def one(vectors: Sequence[numpy.ndarray], params: Sequence[float]) -> list[numpy.ndarray]:
-        buffer, evaluate = buffer_of(1)
-        keep = [numpy.ascontiguousarray(v) for v in vectors] + [numpy.array(float(p)) for p in params]
-        for k, array in enumerate(keep):
-            buffer.set_arg(k, memoryview(array))
-        raw = [numpy.empty((cols, rows)) for rows, cols in output_2d]
-        for k, array in enumerate(raw):
-            buffer.set_res(k, memoryview(array))
-        evaluate()
-        return [numpy.ascontiguousarray(r.T).reshape(shape) if cols > 1 else r.reshape(shape)
-                for r, shape, (_, cols) in zip(raw, output_shapes, output_2d)]
+        local = single
+        for target, v in zip(local.inputs, vectors):
+            target[...] = v
+        if params:
+            local.input[first_param:] = params
+        local.evaluate()
+        out = local.output.copy()
+        return [out[start:start + rows * cols].reshape(cols, rows).T.copy().reshape(shape) if cols > 1
+                else out[start:start + rows].reshape(shape)
+                for start, shape, (rows, cols) in zip(output_starts, output_shapes, output_2d)]
 
     def kernel(batch: tuple[int, ...], vectors: list[numpy.ndarray], params: list[numpy.ndarray]) -> list[numpy.ndarray]:
         n = math.prod(batch)
