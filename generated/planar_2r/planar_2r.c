@@ -15,9 +15,11 @@
 /* Configurations per block of the batch functions. */
 #define PLANAR_2R_BLOCK 8
 
-/* sin and cos of x[0..n-1] into s and c, branch-free (vectorizable): Cody-Waite
- * reduction by pi/2 = 1.570796325802803 + 9.920935791635221e-10 + 5.170182981794105e-19, Taylor polynomials on
- * [-pi/4, pi/4], quadrant by comparisons; |x| > 100000.0, NaN and inf go to libm. */
+/* sin and cos of x[0..n-1] into s and c (double), branch-free so that the loop vectorizes:
+ * Cody-Waite reduction r = x - k*pi/2 with
+ *   pi/2 = 1.570796325802803 + 9.920935791635221e-10 + 5.170182981794105e-19,
+ * Taylor polynomials of sin r and cos r on [-pi/4, pi/4], the quadrant k mod 4 by comparisons.
+ * |x| > 100000.0, NaN and inf are recomputed with libm. */
 static void planar_2r_sincos(size_t n, const double *restrict x, double *restrict s, double *restrict c)
 {
     for (size_t i = 0; i < n; ++i) {
@@ -25,22 +27,22 @@ static void planar_2r_sincos(size_t n, const double *restrict x, double *restric
         const double r = ((x[i] - k * 1.570796325802803) - k * 9.920935791635221e-10) - k * 5.170182981794105e-19;
         const double r2 = r * r;
         double ps = 2.8114572543455206e-15;
-        ps = ps * r2 + -7.647163731819816e-13;
+        ps = ps * r2 - 7.647163731819816e-13;
         ps = ps * r2 + 1.6059043836821613e-10;
-        ps = ps * r2 + -2.505210838544172e-08;
+        ps = ps * r2 - 2.505210838544172e-08;
         ps = ps * r2 + 2.7557319223985893e-06;
-        ps = ps * r2 + -0.0001984126984126984;
+        ps = ps * r2 - 0.0001984126984126984;
         ps = ps * r2 + 0.008333333333333333;
-        ps = ps * r2 + -0.16666666666666666;
+        ps = ps * r2 - 0.16666666666666666;
         double pc = -1.5619206968586225e-16;
         pc = pc * r2 + 4.779477332387385e-14;
-        pc = pc * r2 + -1.1470745597729725e-11;
+        pc = pc * r2 - 1.1470745597729725e-11;
         pc = pc * r2 + 2.08767569878681e-09;
-        pc = pc * r2 + -2.755731922398589e-07;
+        pc = pc * r2 - 2.755731922398589e-07;
         pc = pc * r2 + 2.48015873015873e-05;
-        pc = pc * r2 + -0.001388888888888889;
+        pc = pc * r2 - 0.001388888888888889;
         pc = pc * r2 + 0.041666666666666664;
-        pc = pc * r2 + -0.5;
+        pc = pc * r2 - 0.5;
         const double sr = r + r * r2 * ps;
         const double cr = 1.0 + r2 * pc;
         /* quadrant k mod 4, as m = k - 4*round(k/4) in {-2, -1, 0, 1, 2} */
@@ -59,9 +61,11 @@ static void planar_2r_sincos(size_t n, const double *restrict x, double *restric
     }
 }
 
-/* sin and cos of x[0..n-1] into s and c, branch-free (vectorizable): Cody-Waite
- * reduction by pi/2 = 1.5703125f + 0.0004837513f + 7.54979e-08f, Taylor polynomials on
- * [-pi/4, pi/4], quadrant by comparisons; |x| > 2000.0f, NaN and inf go to libm. */
+/* sin and cos of x[0..n-1] into s and c (float), branch-free so that the loop vectorizes:
+ * Cody-Waite reduction r = x - k*pi/2 with
+ *   pi/2 = 1.5703125f + 0.0004837513f + 7.54979e-08f,
+ * Taylor polynomials of sin r and cos r on [-pi/4, pi/4], the quadrant k mod 4 by comparisons.
+ * |x| > 2000.0f, NaN and inf are recomputed with libm. */
 static void planar_2r_sincos_f32(size_t n, const float *restrict x, float *restrict s, float *restrict c)
 {
     for (size_t i = 0; i < n; ++i) {
@@ -70,15 +74,15 @@ static void planar_2r_sincos_f32(size_t n, const float *restrict x, float *restr
         const float r2 = r * r;
         float ps = -2.5052108e-08f;
         ps = ps * r2 + 2.7557319e-06f;
-        ps = ps * r2 + -0.0001984127f;
+        ps = ps * r2 - 0.0001984127f;
         ps = ps * r2 + 0.008333334f;
-        ps = ps * r2 + -0.16666667f;
+        ps = ps * r2 - 0.16666667f;
         float pc = 2.0876756e-09f;
-        pc = pc * r2 + -2.755732e-07f;
+        pc = pc * r2 - 2.755732e-07f;
         pc = pc * r2 + 2.4801588e-05f;
-        pc = pc * r2 + -0.0013888889f;
+        pc = pc * r2 - 0.0013888889f;
         pc = pc * r2 + 0.041666668f;
-        pc = pc * r2 + -0.5f;
+        pc = pc * r2 - 0.5f;
         const float sr = r + r * r2 * ps;
         const float cr = 1.0f + r2 * pc;
         /* quadrant k mod 4, as m = k - 4*round(k/4) in {-2, -1, 0, 1, 2} */

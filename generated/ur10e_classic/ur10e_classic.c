@@ -15,9 +15,11 @@
 /* Configurations per block of the batch functions. */
 #define UR10E_CLASSIC_BLOCK 8
 
-/* sin and cos of x[0..n-1] into s and c, branch-free (vectorizable): Cody-Waite
- * reduction by pi/2 = 1.570796325802803 + 9.920935791635221e-10 + 5.170182981794105e-19, Taylor polynomials on
- * [-pi/4, pi/4], quadrant by comparisons; |x| > 100000.0, NaN and inf go to libm. */
+/* sin and cos of x[0..n-1] into s and c (double), branch-free so that the loop vectorizes:
+ * Cody-Waite reduction r = x - k*pi/2 with
+ *   pi/2 = 1.570796325802803 + 9.920935791635221e-10 + 5.170182981794105e-19,
+ * Taylor polynomials of sin r and cos r on [-pi/4, pi/4], the quadrant k mod 4 by comparisons.
+ * |x| > 100000.0, NaN and inf are recomputed with libm. */
 static void ur10e_classic_sincos(size_t n, const double *restrict x, double *restrict s, double *restrict c)
 {
     for (size_t i = 0; i < n; ++i) {
@@ -25,22 +27,22 @@ static void ur10e_classic_sincos(size_t n, const double *restrict x, double *res
         const double r = ((x[i] - k * 1.570796325802803) - k * 9.920935791635221e-10) - k * 5.170182981794105e-19;
         const double r2 = r * r;
         double ps = 2.8114572543455206e-15;
-        ps = ps * r2 + -7.647163731819816e-13;
+        ps = ps * r2 - 7.647163731819816e-13;
         ps = ps * r2 + 1.6059043836821613e-10;
-        ps = ps * r2 + -2.505210838544172e-08;
+        ps = ps * r2 - 2.505210838544172e-08;
         ps = ps * r2 + 2.7557319223985893e-06;
-        ps = ps * r2 + -0.0001984126984126984;
+        ps = ps * r2 - 0.0001984126984126984;
         ps = ps * r2 + 0.008333333333333333;
-        ps = ps * r2 + -0.16666666666666666;
+        ps = ps * r2 - 0.16666666666666666;
         double pc = -1.5619206968586225e-16;
         pc = pc * r2 + 4.779477332387385e-14;
-        pc = pc * r2 + -1.1470745597729725e-11;
+        pc = pc * r2 - 1.1470745597729725e-11;
         pc = pc * r2 + 2.08767569878681e-09;
-        pc = pc * r2 + -2.755731922398589e-07;
+        pc = pc * r2 - 2.755731922398589e-07;
         pc = pc * r2 + 2.48015873015873e-05;
-        pc = pc * r2 + -0.001388888888888889;
+        pc = pc * r2 - 0.001388888888888889;
         pc = pc * r2 + 0.041666666666666664;
-        pc = pc * r2 + -0.5;
+        pc = pc * r2 - 0.5;
         const double sr = r + r * r2 * ps;
         const double cr = 1.0 + r2 * pc;
         /* quadrant k mod 4, as m = k - 4*round(k/4) in {-2, -1, 0, 1, 2} */
