@@ -141,3 +141,16 @@ def test_printer_literals_read_back_exactly(precision):
     assert printer.doprint(sympy.sin(x)) == ("sin(x)" if precision == "double" else "sinf(x)")
     with pytest.raises(Exception):
         printer.doprint(sympy.besselj(0, x))  # strict: no silent "not supported" comment
+
+
+def test_scene_float32_must_be_true_or_false(tmp_path):
+    from symkin.errors import ModelError
+    from symkin.model import load_model
+
+    path = tmp_path / "arm.yaml"
+    path.write_text("name: arm\nparameters:\n  l1: 0.1\nserial:\n  dh:\n    convention: classic\n    rows:\n"
+                    "      - [t1, R, 0, 0, l1, 0]\ntask_space: [x, y]\nscene:\n  outputs: [fk]\n  float32: maybe\n")
+    with pytest.raises(ModelError, match=r"arm.yaml:12:.*scene.float32.*true or false"):
+        load_model(path)
+    path.write_text(path.read_text().replace("maybe", "true"))
+    assert load_model(path).scene.float32 is True
