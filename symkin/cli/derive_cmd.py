@@ -6,6 +6,7 @@ import argparse
 import time
 from pathlib import Path
 
+from symkin.backends import BACKENDS
 from symkin.cli.progress import Progress
 from symkin.cli.table import format_table
 
@@ -23,7 +24,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--only", metavar="NAMES",
                    help="comma-separated outputs to emit instead of the scene's, e.g. fk,jacobian "
                         "(see 'symkin quantities')")
-    p.add_argument("--backend", metavar="NAMES", help="comma-separated backends (default: the scene's, else numpy)")
+    p.add_argument("--backend", metavar="NAMES",
+                   help=f"comma-separated backends: {', '.join(BACKENDS)} (default: the scene's, else numpy)")
     p.add_argument("--fixed", metavar="NAMES",
                    help="comma-separated parameters to fold to their default values, or 'all' "
                         "(default: the scene's)")
