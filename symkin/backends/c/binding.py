@@ -110,14 +110,14 @@ def _kernels(library: ctypes.CDLL, model: str, record: dict[str, Any]) -> tuple[
             arguments.append(v.ctypes.data)
         if n_params:
             if all(p.ndim == 0 for p in params):
-                packed, stride = numpy.array([float(p) for p in params]), 0
+                rows, stride = numpy.array([float(p) for p in params]), 0
             else:
-                packed = numpy.empty(batch + (n_params,))
+                rows = numpy.empty(batch + (n_params,))
                 for k, p in enumerate(params):
-                    packed[..., k] = p
+                    rows[..., k] = p
                 stride = n_params
-            keep.append(packed)
-            arguments += [packed.ctypes.data, stride]
+            keep.append(rows)
+            arguments += [rows.ctypes.data, stride]
         buffer = numpy.empty(n * total)
         address = buffer.ctypes.data
         arguments += [address + DOUBLE_SIZE * n * offset for offset in offsets]

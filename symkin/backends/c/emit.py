@@ -24,7 +24,9 @@ by the generated vectorizable ``sincos`` (:mod:`symkin.backends.c.trig`).
 
 from __future__ import annotations
 
+import math
 import textwrap
+from collections.abc import Callable
 from typing import Any
 
 import sympy
@@ -34,7 +36,7 @@ from symkin.backends.c.trig import constants
 from symkin.backends.naming import c_symbol
 from symkin.backends.templating import provenance, render
 from symkin.ir.bundle import ModelCode
-from symkin.ir.spec import OptimizedFunction
+from symkin.ir.spec import FunctionSpec, OptimizedFunction
 
 HEADER_TEMPLATE = "c/header.h.j2"
 SOURCE_TEMPLATE = "c/source.c.j2"
@@ -50,40 +52,16 @@ def _comment_lines(text: str, width: int = DOC_WIDTH) -> list[str]:
     return textwrap.wrap(text.replace("*/", "* /"), width) or [""]
 
 
-def _size(shape: tuple[int, ...]) -> int:
-    size = 1
-    for s in shape:
-        size *= s
-    return size
+def _expressions(f: OptimizedFunction) -> list[sympy.Expr]:
+    """Every expression the function evaluates: temporaries, then output entries."""
+    return [e for _, e in f.temporaries] + [e for entries in f.outputs for e in entries]
 
 
-def _used_symbols(f: OptimizedFunction) -> set[sympy.Symbol]:
-    used: set[sympy.Symbol] = set()
-    for _, e in f.temporaries:
-        used |= e.free_symbols
-    for entries in f.outputs:
-        for e in entries:
-            used |= e.free_symbols
-    return used
-
-
-def _trig_of_inputs(f: OptimizedFunction, inputs: set[sympy.Symbol]) -> tuple[list[sympy.Symbol], set[sympy.Expr]]:
-    """(input symbols whose sine or cosine the function uses, in a fixed order; those calls)."""
-    calls = set()
-    for e in [e for _, e in f.temporaries] + [e for entries in f.outputs for e in entries]:
-        calls |= {call for call in e.atoms(sympy.sin, sympy.cos) if call.args[0] in inputs}
-    return sorted({call.args[0] for call in calls}, key=sympy.default_sort_key), calls
-
-
-def _function_context(code: ModelCode, f: OptimizedFunction, precision: str, printer: CPrinter) -> dict[str, Any]:
-    spec = f.spec
-    ctype = C_TYPES[precision]
-    suffix = VARIANTS[precision]
-    used = _used_symbols(f)
-    macro = code.name.upper()
-
-    scalars = []  # every used scalar input: where the single and the batch function read it
+def _inputs(spec: FunctionSpec, used: set[sympy.Symbol], macro: str) -> tuple[list, list, list]:
+    """(vectors, params, scalars) contexts; scalars: every used scalar input and where it is read."""
+    scalars: list[dict[str, Any]] = []
     vectors = []
+    offset = 0
     for v in spec.vector_inputs:
         elements = []
         for k, s in enumerate(v.symbols):
@@ -92,53 +70,46 @@ def _function_context(code: ModelCode, f: OptimizedFunction, precision: str, pri
                 scalars.append({"symbol": s, "local": str(s), "single": f"{v.name}[{k}]",
                                 "batch": f"{v.name}[_j * {len(v.symbols)} + {k}]"})
         vectors.append({
-            "name": v.name, "size": len(v.symbols), "elements": elements,
+            "name": v.name, "size": len(v.symbols), "elements": elements, "offset": offset,
             "doc": _comment_lines(f"{v.name}[{len(v.symbols)}]: {v.doc}: "
                                   + ", ".join(f"{n} [{u}]" for n, u in zip(v.element_names, v.units)) + "."),
         })
+        offset += len(v.symbols)
     params = []
     for k, p in enumerate(spec.parameter_inputs):
         unit = f" [{p.units[0]}]" if p.units[0] else ""
-        params.append({"name": p.name, "doc": _comment_lines(
+        params.append({"name": p.name, "offset": offset + k, "doc": _comment_lines(
             f"{p.name}: {p.doc or 'parameter'}{unit}; default {macro}_DEFAULT_{p.name} = {float(p.default)!r}.")})
         if p.symbols[0] in used:
             scalars.append({"symbol": p.symbols[0], "local": p.name, "single": None,
                             "batch": f"params[_j * params_stride + {k}]"})
-    for k, s in enumerate(scalars):
-        s["row"] = k
-    offset = 0
-    for item in vectors:
-        item["offset"] = offset
-        offset += item["size"]
-    for item in params:
-        item["offset"] = offset
-        offset += 1
+    for row, scalar in enumerate(scalars):
+        scalar["row"] = row
+    return vectors, params, scalars
 
-    angles, calls = _trig_of_inputs(f, {s for i in spec.inputs for s in i.symbols if s in used})
+
+def _trigonometry(f: OptimizedFunction, scalars: list[dict[str, Any]]) -> tuple[list, dict]:
+    """(trig contexts, {sin(a)/cos(a): local symbol}) for the input symbols under sin and cos."""
     row_of = {s["symbol"]: s["row"] for s in scalars}
-    trig_names = {}
+    calls = {call for e in _expressions(f) for call in e.atoms(sympy.sin, sympy.cos) if call.args[0] in row_of}
+    names = {}
     trig = []
-    for k, a in enumerate(angles):
-        trig_names[sympy.sin(a)] = sympy.Symbol(f"_sin_{a}", real=True)
-        trig_names[sympy.cos(a)] = sympy.Symbol(f"_cos_{a}", real=True)
+    for k, a in enumerate(sorted({call.args[0] for call in calls}, key=sympy.default_sort_key)):
+        names[sympy.sin(a)] = sympy.Symbol(f"_sin_{a}", real=True)
+        names[sympy.cos(a)] = sympy.Symbol(f"_cos_{a}", real=True)
         trig.append({"angle": str(a), "row": row_of[a], "index": k,
                      "sin": f"_sin_{a}" if sympy.sin(a) in calls else None,
                      "cos": f"_cos_{a}" if sympy.cos(a) in calls else None})
+    return trig, names
 
-    def text(e: sympy.Expr) -> str:
-        return printer.doprint(e.xreplace(trig_names) if trig_names else e)
 
-    direct = set()  # inputs used other than through their sin/cos
-    for e in [e for _, e in f.temporaries] + [e for entries in f.outputs for e in entries]:
-        direct |= (e.xreplace(trig_names) if trig_names else e).free_symbols
-    for s in scalars:
-        s["direct"] = s["symbol"] in direct
-
+def _outputs(spec: FunctionSpec, f: OptimizedFunction, text: Callable[[sympy.Expr], str]) -> tuple[list, int]:
+    """(output contexts, number of non-constant entries); each of those gets a lane-array slot."""
     outputs = []
     slots = 0
-    output_offset = 0
+    offset = 0
     for out, entries in zip(spec.outputs, f.outputs):
-        size = _size(out.shape)
+        size = math.prod(out.shape)
         shape = " x ".join(map(str, out.shape)) or "scalar"
         order = ", row-major" if len(out.shape) == 2 else ""
         assignments = []
@@ -148,17 +119,34 @@ def _function_context(code: ModelCode, f: OptimizedFunction, precision: str, pri
                                 "slot": None if constant else slots})
             slots += 0 if constant else 1
         outputs.append({
-            "name": out.name, "size": size, "assignments": assignments, "offset": output_offset,
+            "name": out.name, "size": size, "assignments": assignments, "offset": offset,
             "doc": _comment_lines(f"{out.name}[{size}]: {shape}{order}; {out.doc}"
                                   + (f" [{out.unit}]" if out.unit else "") + "."),
         })
-        output_offset += size
+        offset += size
+    return outputs, slots
+
+
+def _function_context(code: ModelCode, f: OptimizedFunction, precision: str, printer: CPrinter) -> dict[str, Any]:
+    spec = f.spec
+    suffix = VARIANTS[precision]
+    used = {s for e in _expressions(f) for s in e.free_symbols}
+    vectors, params, scalars = _inputs(spec, used, code.name.upper())
+    trig, trig_names = _trigonometry(f, scalars)
+
+    def text(e: sympy.Expr) -> str:
+        return printer.doprint(e.xreplace(trig_names) if trig_names else e)
+
+    direct = {s for e in _expressions(f) for s in (e.xreplace(trig_names) if trig_names else e).free_symbols}
+    for scalar in scalars:
+        scalar["direct"] = scalar["symbol"] in direct  # used other than through its sin/cos
+    outputs, slots = _outputs(spec, f, text)
     return {
         "name": spec.name,
         "symbol": c_symbol(code.name, spec.name, suffix),
         "batch_symbol": c_symbol(code.name, spec.name, "_batch" + suffix),
         "packed_symbol": c_symbol(code.name, spec.name, "_packed" + suffix),
-        "real": ctype,
+        "real": C_TYPES[precision],
         "sincos": f"{code.name}_sincos{suffix}",
         "summary": _comment_lines(spec.summary),
         "doc": _comment_lines(spec.doc),
