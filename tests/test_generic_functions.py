@@ -31,10 +31,13 @@ def dynamics_like(models, tmp_path_factory):
     kinetic = (w.T * M * w)[0] / 2
     gravity = sympy.ImmutableMatrix([g * ((m1 + m2) * l1 * sympy.cos(t1) + m2 * l2 * sympy.cos(t1 + t2)),
                                      g * m2 * l2 * sympy.cos(t1 + t2)])
+    friction = sympy.ImmutableMatrix([sympy.Rational(1, 10) * w1 + sympy.Rational(1, 2) * sympy.sign(w1),
+                                      sympy.Max(w2, 0) - sympy.Min(w1, w2, 0) + sympy.Abs(w1) ** 3])
     energy = make_function(model, "energy", "Energy terms.", "test function",
                            [q, qd], [OutputSpec("k", sympy.ImmutableMatrix([kinetic]), "kinetic energy", "J"),
                                      OutputSpec("G", gravity, "gravity torques", "N*m", shape=(2,)),
-                                     OutputSpec("M", M, "mass matrix", "kg*m^2")])
+                                     OutputSpec("M", M, "mass matrix", "kg*m^2"),
+                                     OutputSpec("F", friction, "friction-like terms", shape=(2,))])
     mass = make_function(model, "mass", "Mass matrix.", "test function", [q],
                          [OutputSpec("M", M, "mass matrix", "kg*m^2")])
     specs = [energy, mass, combine_functions(model, "scene", [energy, mass])]
@@ -52,7 +55,7 @@ def dynamics_like(models, tmp_path_factory):
     replace_directory(target, files)
     values = model.parameter_values
     reference = sympy.lambdify([q.symbols, qd.symbols], [kinetic.xreplace(values), gravity.xreplace(values),
-                                                         M.xreplace(values)], modules="numpy")
+                                                         M.xreplace(values), friction], modules="numpy")
     return target, reference
 
 
@@ -62,11 +65,13 @@ def test_two_vector_inputs_and_scalar_vector_matrix_outputs(dynamics_like, backe
     generated = load(target, backend=backend)
     rng = np.random.default_rng(0)
     q, qd = rng.uniform(-3, 3, (7, 2)), rng.uniform(-2, 2, (7, 2))
+    qd[3] = 0.0  # sign(0) = 0 in every backend
     result = generated.energy(q, qd)
     assert type(result).__name__ == "EnergyResult"
     assert result.k.shape == (7,) and result.G.shape == (7, 2) and result.M.shape == (7, 2, 2)
     for i in range(7):
-        k, G, M = reference(q[i], qd[i])
+        k, G, M, F = reference(q[i], qd[i])
+        np.testing.assert_allclose(result.F[i], np.ravel(F), rtol=1e-13, atol=1e-15)
         np.testing.assert_allclose(result.k[i], k, rtol=1e-13)
         np.testing.assert_allclose(result.G[i], np.ravel(G), rtol=1e-13, atol=1e-15)
         np.testing.assert_allclose(result.M[i], M, rtol=1e-13)
@@ -81,7 +86,7 @@ def test_two_vector_inputs_and_scalar_vector_matrix_outputs(dynamics_like, backe
     with pytest.raises(ValueError, match=r"energy\(\): 'qd' must have shape \(\.\.\., 2\), got \(7, 3\)"):
         generated.energy(q, np.zeros((7, 3)))
     scene = generated.scene(q, qd)
-    assert scene._fields == ("k", "G", "energy_M", "mass_M")
+    assert scene._fields == ("k", "G", "energy_M", "F", "mass_M")
     np.testing.assert_allclose(scene.mass_M, result.M, rtol=1e-14)
     assert generated.mass(q).shape == (7, 2, 2)
 

@@ -45,6 +45,12 @@ class CPrinter(ArithmeticPrinterMixin, C99CodePrinter):
             text += ".0"
         return text + suffix
 
+    def _print_sign(self, expr: sympy.sign) -> str:
+        # sympy's C printer subtracts two int comparisons; a floating result needs no conversion
+        x = self._print(expr.args[0])
+        one, zero = self.literal(1.0), self.literal(0.0)
+        return f"({x} > {zero} ? {one} : ({x} < {zero} ? -{one} : {zero}))"
+
     def general_power(self, base: str, exponent: sympy.Expr) -> str:
         function = "powf" if self.precision == "float" else "pow"
         exponent_text = self.literal(float(exponent)) if exponent.is_Number else self._print(exponent)

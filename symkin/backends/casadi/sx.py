@@ -24,7 +24,7 @@ FUNCTIONS = {
     "asin": casadi.asin, "acos": casadi.acos, "atan": casadi.atan, "atan2": casadi.atan2,
     "sinh": casadi.sinh, "cosh": casadi.cosh, "tanh": casadi.tanh,
     "exp": casadi.exp, "log": casadi.log, "Abs": casadi.fabs, "sign": casadi.sign,
-    "floor": casadi.floor, "ceiling": casadi.ceil, "Max": casadi.fmax, "Min": casadi.fmin,
+    "floor": casadi.floor, "ceiling": casadi.ceil,
 }
 
 
@@ -94,7 +94,10 @@ class SXBuilder(Printer):
         name = type(expr).__name__
         if name not in FUNCTIONS:
             return self.emptyPrinter(expr)
-        args = [self._print(a) for a in expr.args]
-        if name in ("Max", "Min"):
-            return functools.reduce(FUNCTIONS[name], args)
-        return FUNCTIONS[name](*args)
+        return FUNCTIONS[name](*[self._print(a) for a in expr.args])
+
+    def _print_Max(self, expr: sympy.Max) -> casadi.SX:
+        return functools.reduce(casadi.fmax, [self._print(a) for a in expr.args])
+
+    def _print_Min(self, expr: sympy.Min) -> casadi.SX:
+        return functools.reduce(casadi.fmin, [self._print(a) for a in expr.args])

@@ -27,3 +27,15 @@ class BatchNumPyPrinter(ArithmeticPrinterMixin, NumPyPrinter):
 
     def unroll_power(self, base: sympy.Expr, exponent: int) -> bool:
         return base.is_Symbol and abs(exponent) <= MAX_UNROLLED_ARRAY_POWER
+
+    def _nested(self, function: str, args: tuple[sympy.Expr, ...]) -> str:
+        text = self._print(args[0])
+        for arg in args[1:]:
+            text = f"{function}({text}, {self._print(arg)})"
+        return text
+
+    def _print_Max(self, expr: sympy.Max) -> str:
+        return self._nested("numpy.maximum", expr.args)
+
+    def _print_Min(self, expr: sympy.Min) -> str:
+        return self._nested("numpy.minimum", expr.args)
