@@ -4,7 +4,7 @@
 
 1. :func:`~symkin.optimize.passes.fold_parameters` - substitute fixed parameters by their
    exact values (and drop them from the inputs);
-2. :func:`~symkin.optimize.passes.expand_trig_sums` - sin and cos of angle sums through
+2. :func:`~symkin.optimize.trig.expand_trig_sums` - sin and cos of angle sums through
    the addition formulas, so each angle costs one sin/cos pair;
 3. :func:`~symkin.optimize.passes.fold_constants` - evaluate constant subexpressions
    (``cos(1/10)``, ``sqrt(3)/2``) once, at 30 digits, instead of at every call;
@@ -21,7 +21,8 @@ from collections.abc import Iterable
 from symkin.ir.spec import FunctionSpec, OptimizedFunction
 from symkin.optimize.cse import eliminate_common_subexpressions
 from symkin.optimize.opcount import spec_op_count
-from symkin.optimize.passes import expand_trig_sums, fold_constants, fold_parameters, fold_parameters_after_cse
+from symkin.optimize.passes import fold_constants, fold_parameters, fold_parameters_after_cse
+from symkin.optimize.trig import expand_trig_sums
 
 __all__ = ["optimize", "fold_parameters", "fold_parameters_after_cse", "fold_constants", "expand_trig_sums",
            "eliminate_common_subexpressions", "spec_op_count"]
