@@ -71,7 +71,8 @@ void ur10e_classic_fk(const double *q, double d1, double a2, double a3, double d
 /* ur10e_classic_fk with packed arguments: in = q, d1, a2, a3, d4, d5, d6 one after the other; out = base_T_tcp one after the other. */
 void ur10e_classic_fk_packed(const double *in, double *out);
 
-/* ur10e_classic_fk for n configurations; params: d1, a2, a3, d4, d5, d6, stride 0 or 6. */
+/* ur10e_classic_fk for n configurations; params: d1, a2, a3, d4, d5, d6, stride 0 or 6.
+ * Uses 2688 bytes of stack for its blocks of 8 configurations. */
 void ur10e_classic_fk_batch(size_t n, const double *q, const double *params, size_t params_stride, double *base_T_tcp);
 
 /* ur10e_classic_jacobian: Task Jacobian of the TCP.
@@ -96,7 +97,8 @@ void ur10e_classic_jacobian(const double *q, double a2, double a3, double d4, do
 /* ur10e_classic_jacobian with packed arguments: in = q, a2, a3, d4, d5, d6 one after the other; out = J one after the other. */
 void ur10e_classic_jacobian_packed(const double *in, double *out);
 
-/* ur10e_classic_jacobian for n configurations; params: a2, a3, d4, d5, d6, stride 0 or 5. */
+/* ur10e_classic_jacobian for n configurations; params: a2, a3, d4, d5, d6, stride 0 or 5.
+ * Uses 3264 bytes of stack for its blocks of 8 configurations. */
 void ur10e_classic_jacobian_batch(size_t n, const double *q, const double *params, size_t params_stride, double *J);
 
 /* ur10e_classic_scene: fk, jacobian together, with one set of shared subexpressions.
@@ -125,7 +127,8 @@ void ur10e_classic_scene(const double *q, double d1, double a2, double a3, doubl
 /* ur10e_classic_scene with packed arguments: in = q, d1, a2, a3, d4, d5, d6 one after the other; out = base_T_tcp, J one after the other. */
 void ur10e_classic_scene_packed(const double *in, double *out);
 
-/* ur10e_classic_scene for n configurations; params: d1, a2, a3, d4, d5, d6, stride 0 or 6. */
+/* ur10e_classic_scene for n configurations; params: d1, a2, a3, d4, d5, d6, stride 0 or 6.
+ * Uses 4352 bytes of stack for its blocks of 8 configurations. */
 void ur10e_classic_scene_batch(size_t n, const double *q, const double *params, size_t params_stride, double *base_T_tcp, double *J);
 
 #ifdef __cplusplus

@@ -156,6 +156,8 @@ def _function_context(code: ModelCode, f: OptimizedFunction, precision: str, pri
         "trig": trig,
         "outputs": outputs,
         "slots": slots,
+        # lane arrays of the batch function: inputs, outputs, and angle/sin/cos per angle
+        "batch_stack_bytes": (len(scalars) + slots + 3 * len(trig)) * BLOCK * (4 if precision == "float" else 8),
         "temporaries": [{"name": str(s), "code": text(e)} for s, e in f.temporaries],
         "op_count": f.op_counts["cse"],
     }
