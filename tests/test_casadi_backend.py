@@ -31,6 +31,9 @@ def test_functions_have_named_inputs_outputs_and_defaults(loaded):
     assert np.all(np.isnan(fk(d1=0.2)["base_T_tcp"].full()[:3, :]))
     scene = ur.scene.casadi
     assert scene.name_out()[-2:] == ["jacobian_J", "jacobian_geometric_J"]
+    # The raw function names the wrong input itself (the wrappers raise the numpy backend's errors).
+    with pytest.raises(RuntimeError, match=r"Input 0 \(q\) has mismatching shape"):
+        fk(q=np.zeros(5))
 
 
 def test_graph_keeps_the_common_subexpressions(models, derivations):
