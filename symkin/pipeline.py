@@ -17,7 +17,7 @@ from symkin._version import __version__
 from symkin.atomic import replace_directory
 from symkin.backends import BACKENDS, get_backend
 from symkin.derivation import Derivation, emitted_quantities
-from symkin.errors import ModelError, Problem
+from symkin.errors import DerivationError, ModelError, Problem
 from symkin.ir.bundle import ModelCode, ParameterInfo
 from symkin.ir.spec import FunctionSpec, OptimizedFunction, combine_functions
 from symkin.model.schema import Model
@@ -149,6 +149,9 @@ def generate(model: Model, request: Request, progress: Progress = _quiet) -> Gen
         reports.append(FunctionReport(name, _describe_outputs(spec), optimized.op_counts,
                                       derived_at - start, done - derived_at))
     if len(specs) > 1:
+        if COMBINED_FUNCTION in request.outputs:
+            raise DerivationError(f"a quantity may not be called '{COMBINED_FUNCTION}': that is the name of "
+                                  "the combined function of a scene")
         progress(f"optimizing {COMBINED_FUNCTION}")
         start = time.perf_counter()
         combined = combine_functions(model, COMBINED_FUNCTION, specs)
