@@ -5,6 +5,7 @@ PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.symkin-installed
+BENCH_STAMP := $(VENV)/.symkin-bench-installed
 MODELS := $(wildcard models/*.yaml)
 PYTEST_WORKERS ?= 2
 
@@ -34,8 +35,13 @@ test: setup
 ## generate: rewrite generated/ from the example models (the "update" switch of the golden tests)
 generate: demo
 
-## bench: run every benchmarks/bench_*.py (figures printed; speed is never asserted in tests)
-bench: setup
+$(BENCH_STAMP): $(STAMP)
+	$(BIN)/python -m pip install --quiet -c requirements/constraints.txt -e '.[test,bench]'
+	touch $(BENCH_STAMP)
+
+## bench: run every benchmarks/bench_*.py (figures printed; speed is never asserted in tests);
+## the SymForce column also needs a C++ compiler and the Eigen headers (apt-get install g++ libeigen3-dev)
+bench: $(BENCH_STAMP)
 	@for script in benchmarks/bench_*.py; do echo "== $$script"; $(BIN)/python $$script || exit 1; done
 
 clean:

@@ -11,7 +11,8 @@ from symkin.model import Model, load_model
 
 def derive(model: str | Path | Model, out_dir: str | Path = "generated", *,
            outputs: Sequence[str] | None = None, backends: Sequence[str] | None = None,
-           fixed: Sequence[str] | None = None) -> Path:
+           fixed: Sequence[str] | None = None, float32: bool | None = None,
+           combine: Sequence[str] | str | None = None) -> Path:
     """Derive a model and write its generated code, like ``symkin derive``.
 
     Args:
@@ -20,11 +21,13 @@ def derive(model: str | Path | Model, out_dir: str | Path = "generated", *,
         outputs: quantities to emit (default: the model's scene).
         backends: backends to run (default: the scene's, else numpy).
         fixed: parameters to fold (default: the scene's).
+        float32: also emit single-precision C functions (default: the scene's).
+        combine: outputs also fused into one function ``scene`` (default: the scene's, else all).
 
     Returns:
         The model's output directory, ready for :func:`symkin.load`.
     """
     if not isinstance(model, Model):
         model = load_model(model)
-    request = pipeline.resolve_request(model, outputs, backends, fixed)
+    request = pipeline.resolve_request(model, outputs, backends, fixed, float32, combine)
     return pipeline.write(pipeline.generate(model, request), out_dir)

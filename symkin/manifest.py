@@ -71,6 +71,7 @@ def build_manifest(model: Model, code: ModelCode, derived: list[str], backend_fi
         "parameters": [{"name": p.name, "default": p.default, "unit": p.unit, "doc": p.doc, "fixed": p.fixed}
                        for p in code.parameters],
         "derived_quantities": list(derived),
+        "options": {"float32": code.float32},
         "functions": [
             {
                 "name": f.name,
@@ -78,6 +79,7 @@ def build_manifest(model: Model, code: ModelCode, derived: list[str], backend_fi
                 "inputs": [_input_record(i) for i in f.spec.inputs],
                 "outputs": [{"name": o.name, "shape": list(o.shape), "unit": o.unit, "doc": o.doc}
                             for o in f.spec.outputs],
+                **({"combines": list(f.spec.parts)} if f.spec.parts else {}),
                 "op_counts": f.op_counts,
                 "backends": sorted(backend_files),
             }

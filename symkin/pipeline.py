@@ -17,13 +17,16 @@ from symkin._version import __version__
 from symkin.atomic import replace_directory
 from symkin.backends import BACKENDS, get_backend
 from symkin.derivation import Derivation, emitted_quantities
-from symkin.errors import ModelError, Problem
+from symkin.errors import DerivationError, ModelError, Problem
 from symkin.ir.bundle import ModelCode, ParameterInfo
-from symkin.ir.spec import FunctionSpec, OptimizedFunction
+from symkin.ir.spec import FunctionSpec, OptimizedFunction, combine_functions
 from symkin.model.schema import Model
 from symkin.optimize import optimize
 
 Progress = Callable[[str], None]
+
+#: Name of the function that computes every output of a scene together (one shared CSE).
+COMBINED_FUNCTION = "scene"
 
 
 @dataclass(frozen=True)
@@ -34,11 +37,15 @@ class Request:
         outputs: quantity names, in order.
         fixed: parameters folded to their defaults.
         backends: backend names.
+        float32: also emit single-precision variants (C backend).
+        combine: outputs also computed together by the function ``scene`` (at least two, or none).
     """
 
     outputs: tuple[str, ...]
     fixed: tuple[str, ...]
     backends: tuple[str, ...]
+    float32: bool = False
+    combine: tuple[str, ...] = ()
 
 
 @dataclass
@@ -76,8 +83,14 @@ def _split(value: str | Sequence[str] | None) -> tuple[str, ...] | None:
 
 def resolve_request(model: Model, only: str | Sequence[str] | None = None,
                     backends: str | Sequence[str] | None = None,
-                    fixed: str | Sequence[str] | None = None) -> Request:
+                    fixed: str | Sequence[str] | None = None,
+                    float32: bool | None = None,
+                    combine: str | Sequence[str] | None = None) -> Request:
     """The request from the model's scene, overridden by explicit arguments (the CLI's flags).
+
+    ``combine`` (or the scene's) names the outputs also fused into the function ``scene``;
+    ``all`` (the default) fuses every output, ``none`` none.  Scene entries that ``only``
+    leaves out are dropped; explicit names must be among the outputs.
 
     Raises:
         ModelError: a scene entry names no known output, backend or parameter (located in
@@ -106,11 +119,24 @@ def resolve_request(model: Model, only: str | Sequence[str] | None = None,
     if fixed_names == ("all",):
         fixed_names = pnames
     check(fixed_names or (), pnames, "parameter", "fixed", fixed_names is not None)
+    chosen_outputs = outputs or model.scene.outputs
+    fused = _split(combine)
+    if fused == ("all",) or (fused is None and model.scene.combine is None):
+        fused = chosen_outputs
+    elif fused == ("none",):
+        fused = ()
+    elif fused is not None:
+        check(fused, chosen_outputs, "output to combine", "combine", True)
+    else:
+        check(model.scene.combine, model.scene.outputs, "output to combine", "combine", False)
+        fused = tuple(name for name in model.scene.combine if name in chosen_outputs)
     if problems:
         raise ModelError(problems)
-    return Request(outputs=outputs or model.scene.outputs,
+    return Request(outputs=chosen_outputs,
                    fixed=fixed_names if fixed_names is not None else model.scene.fixed,
-                   backends=chosen_backends or model.scene.backends)
+                   backends=chosen_backends or model.scene.backends,
+                   float32=model.scene.float32 if float32 is None else float32,
+                   combine=tuple(name for name in chosen_outputs if name in fused) if len(fused) > 1 else ())
 
 
 def _describe_outputs(spec: FunctionSpec) -> str:
@@ -127,6 +153,7 @@ def generate(model: Model, request: Request, progress: Progress = _quiet) -> Gen
     """Derive, optimize and emit everything ``request`` asks for (files stay in memory)."""
     derivation = Derivation(model)
     functions: list[OptimizedFunction] = []
+    specs: list[FunctionSpec] = []
     reports = []
     for name in request.outputs:
         progress(f"deriving {name}")
@@ -136,9 +163,22 @@ def generate(model: Model, request: Request, progress: Progress = _quiet) -> Gen
         progress(f"optimizing {name}")
         optimized = optimize(spec, request.fixed)
         done = time.perf_counter()
+        specs.append(spec)
         functions.append(optimized)
         reports.append(FunctionReport(name, _describe_outputs(spec), optimized.op_counts,
                                       derived_at - start, done - derived_at))
+    if request.combine:
+        if COMBINED_FUNCTION in request.outputs:
+            raise DerivationError(f"a quantity may not be called '{COMBINED_FUNCTION}': that is the name of "
+                                  "the combined function of a scene")
+        progress(f"optimizing {COMBINED_FUNCTION}")
+        start = time.perf_counter()
+        combined = combine_functions(model, COMBINED_FUNCTION,
+                                     [spec for name, spec in zip(request.outputs, specs) if name in request.combine])
+        optimized = optimize(combined, request.fixed)
+        functions.append(optimized)
+        reports.append(FunctionReport(COMBINED_FUNCTION, _describe_outputs(combined), optimized.op_counts,
+                                      0.0, time.perf_counter() - start))
     code = ModelCode(
         name=model.name,
         hash=model.hash,
@@ -148,6 +188,7 @@ def generate(model: Model, request: Request, progress: Progress = _quiet) -> Gen
         parameters=tuple(ParameterInfo(p.name, float(p.value), p.unit, p.doc, p.name in request.fixed)
                          for p in model.parameters),
         functions=tuple(functions),
+        float32=request.float32,
     )
     files: dict[str, str | bytes] = {}
     backend_files: dict[str, list[str]] = {}

@@ -1,23 +1,29 @@
-"""Shared fixtures: example models, derivations, generated code and reference evaluators."""
+"""Shared fixtures: example models, derivations, generated code and reference evaluators.
+
+Compiled C goes to a per-session cache directory (``SYMKIN_CACHE_DIR``), so each model is
+compiled once per test session (per xdist worker) and the user's cache is never touched.
+"""
 
 from __future__ import annotations
 
+import os
 import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from symkin import pipeline
+from symkin import load, pipeline
 from symkin.derivation import Derivation
 from symkin.ir.evaluate import lambdify_spec
-from symkin.ir.spec import FunctionSpec
+from symkin.ir.spec import FunctionSpec, combine_functions
 from symkin.model import Model, load_model
 
 ROOT = Path(__file__).resolve().parent.parent
 MODELS_DIR = ROOT / "models"
 GENERATED_DIR = ROOT / "generated"
 EXAMPLE_MODELS = sorted(p.stem for p in MODELS_DIR.glob("*.yaml"))
+BACKENDS = ("numpy", "c", "casadi")
 SYMKIN_CLI = [sys.executable, "-m", "symkin"]
 
 
@@ -53,10 +59,89 @@ def reference_function(model: Model, spec: FunctionSpec, modules: str = "numpy")
     return evaluate
 
 
+def function_spec(model: Model, derivation: Derivation, record: dict) -> FunctionSpec:
+    """The un-optimized spec of the generated function described by a manifest ``record``
+    (for the combined scene function: the combination of its parts)."""
+    if record.get("combines"):
+        return combine_functions(model, record["name"], derivation.functions(record["combines"]))
+    return derivation[record["name"]]
+
+
 def random_q(model: Model, rng: np.random.Generator, size=None) -> np.ndarray:
     """Random joint coordinates within +-pi (revolute) and +-0.5 m (prismatic)."""
     shape = (model.dof,) if size is None else tuple(np.atleast_1d(size)) + (model.dof,)
     return rng.uniform(-np.pi, np.pi, shape)
+
+
+def random_inputs(model: Model, spec: FunctionSpec, rng: np.random.Generator, size: int) -> list[np.ndarray]:
+    """Random values of every vector input of ``spec``: q as :func:`random_q`, the passive joints s
+    within +-0.5 rad (the closure's orientation rows are 2 tan(angle/2) axis of the orientation
+    error, which grows without bound - with its rounding error - towards half turns), the platform
+    pose p within 2 cm / 0.1 rad of the model's home pose."""
+    values = []
+    for vector in spec.vector_inputs:
+        if vector.name == "q":
+            values.append(random_q(model, rng, size))
+        elif vector.name == "p":
+            home = np.array([float(e.xreplace(model.parameter_values)) for e in model.parallel.home])
+            spread = np.where([u == "m" for u in vector.units], 0.02, 0.1)
+            values.append(home + rng.uniform(-1, 1, (size, len(home))) * spread)
+        else:
+            values.append(rng.uniform(-0.5, 0.5, (size, len(vector.symbols))))
+    return values
+
+
+def batch_reference(model: Model, spec: FunctionSpec):
+    """Plain lambdify of the un-optimized outputs (parameters at their defaults), vectorized.
+
+    Returns f(*vectors) with vectors of shape (N, n) -> list of arrays (N,) + output shape.
+    """
+    fn = lambdify_spec(spec, [list(i.symbols) for i in spec.vector_inputs], "numpy", model.parameter_values)
+
+    def evaluate(*args):
+        n = len(args[0])
+        flat = [np.broadcast_to(np.asarray(e, dtype=float), (n,)) for e in fn(*([a[:, k] for k in range(a.shape[1])]
+                                                                               for a in args))]
+        results, start = [], 0
+        for out in spec.outputs:
+            size = int(np.prod(out.shape)) if out.shape else 1
+            results.append(np.stack(flat[start:start + size], axis=-1).reshape((n,) + out.shape))
+            start += size
+        return results
+
+    return evaluate
+
+
+@pytest.fixture(scope="session", autouse=True)
+def compile_cache(tmp_path_factory, worker_id) -> Path:
+    """Compiled C libraries go to a session temp directory, never to the user's cache.
+
+    The xdist workers share it (the cache locks while compiling), so each library is
+    compiled once per test run.
+    """
+    base = tmp_path_factory.getbasetemp()
+    path = (base.parent if worker_id != "master" else base) / "symkin-cache"
+    path.mkdir(exist_ok=True)
+    previous = os.environ.get("SYMKIN_CACHE_DIR")
+    os.environ["SYMKIN_CACHE_DIR"] = str(path)
+    yield path
+    if previous is None:
+        os.environ.pop("SYMKIN_CACHE_DIR", None)
+    else:
+        os.environ["SYMKIN_CACHE_DIR"] = previous
+
+
+@pytest.fixture(scope="session")
+def loaded(generated_dir):
+    """loaded(model, backend): the generated functions, loaded (and compiled) once per session."""
+    cache = {}
+
+    def get(name: str, backend: str):
+        if (name, backend) not in cache:
+            cache[name, backend] = load(generated_dir / name, backend=backend)
+        return cache[name, backend]
+
+    return get
 
 
 @pytest.fixture(scope="session")

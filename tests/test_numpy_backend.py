@@ -8,7 +8,7 @@ import sys
 import numpy as np
 import pytest
 
-from conftest import EXAMPLE_MODELS, random_q, reference_function
+from conftest import EXAMPLE_MODELS, function_spec, random_q, reference_function
 from symkin import load
 
 
@@ -24,8 +24,9 @@ def test_generated_functions_match_the_sympy_expressions(name, models, derivatio
     rng = np.random.default_rng(3)
     q = random_q(model, rng, 1000)
     others = {group: rng.uniform(-2, 2, (1000, model.dof)) for group in ("qd", "qdd", "tau")}
-    for function in generated.functions:
-        spec = derivations[name][function]
+    for record in generated.manifest["functions"]:
+        function = record["name"]
+        spec = function_spec(model, derivations[name], record)
         reference = reference_function(model, spec)
         vectors = [q if v.name == "q" else others[v.name] for v in spec.vector_inputs]
         batch = getattr(generated, function)(*vectors)

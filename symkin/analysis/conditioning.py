@@ -38,19 +38,18 @@ def _rank_threshold(J: np.ndarray) -> float:
 def _extreme_singular_values(J: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(sigma_max, sigma_min) with the numerical-rank rule applied to sigma_min.
 
-    For a 2 x 2 J a closed form is used (no LAPACK call, several times faster over large
-    batches): with t = ||J||_F^2 = sigma_1^2 + sigma_2^2 and |det J| = sigma_1 sigma_2,
-    sigma_max^2 = (t + sqrt(t^2 - 4 det^2)) / 2 and sigma_min = |det J| / sigma_max.  This
-    avoids the subtraction t - sqrt(...) that would lose half the digits of sigma_min, so
-    1/kappa is as accurate as an SVD's (absolute error of a few eps) and exactly 0 where
-    det J = 0.
+    For a 2 x 2 J = [[a, b], [c, d]] a closed form is used (no LAPACK call, several times
+    faster over large batches): sigma_max = (hypot(a + d, b - c) + hypot(a - d, b + c)) / 2
+    and sigma_min = |ad - bc| / sigma_max.  Neither step subtracts nearly equal numbers
+    (the textbook sqrt(t^2 - 4 det^2) with t = ||J||_F^2 loses half the digits near isotropy,
+    and t - sqrt(...) half the digits of sigma_min), so 1/kappa is as accurate as an SVD's
+    (a few eps) at both ends: exactly 0 where det J = 0, 1 to a few eps at isotropy.
     """
     m, n = J.shape[-2:]
     if m == n == 2:
-        trace = np.einsum("...ij,...ij->...", J, J)
-        root_det = np.abs(J[..., 0, 0] * J[..., 1, 1] - J[..., 0, 1] * J[..., 1, 0])
-        discriminant = np.sqrt(np.maximum(trace * trace - 4.0 * root_det * root_det, 0.0))
-        sigma_max = np.sqrt(0.5 * (trace + discriminant))
+        a, b, c, d = J[..., 0, 0], J[..., 0, 1], J[..., 1, 0], J[..., 1, 1]
+        sigma_max = 0.5 * (np.hypot(a + d, b - c) + np.hypot(a - d, b + c))
+        root_det = np.abs(a * d - b * c)
         with np.errstate(invalid="ignore", divide="ignore"):
             sigma_min = np.where(sigma_max > 0, root_det / np.where(sigma_max > 0, sigma_max, 1.0), 0.0)
         sigma_min = np.minimum(sigma_min, sigma_max)

@@ -3,11 +3,15 @@
 from __future__ import annotations
 
 from symkin.backends.base import Backend
+from symkin.backends.c import CBackend
+from symkin.backends.casadi import CasadiBackend
 from symkin.backends.numpy import NumpyBackend
 from symkin.errors import SymkinError
 
 BACKENDS: dict[str, Backend] = {
     "numpy": NumpyBackend(),
+    "c": CBackend(),
+    "casadi": CasadiBackend(),
 }
 
 

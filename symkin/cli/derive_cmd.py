@@ -6,6 +6,7 @@ import argparse
 import time
 from pathlib import Path
 
+from symkin.backends import BACKENDS
 from symkin.cli.progress import Progress
 from symkin.cli.table import format_table
 
@@ -25,10 +26,16 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--only", metavar="NAMES",
                    help="comma-separated outputs to emit instead of the scene's, e.g. fk,jacobian "
                         "(see 'symkin quantities')")
-    p.add_argument("--backend", metavar="NAMES", help="comma-separated backends (default: the scene's, else numpy)")
+    p.add_argument("--backend", metavar="NAMES",
+                   help=f"comma-separated backends: {', '.join(BACKENDS)} (default: the scene's, else numpy)")
     p.add_argument("--fixed", metavar="NAMES",
                    help="comma-separated parameters to fold to their default values, or 'all' "
                         "(default: the scene's)")
+    p.add_argument("--float32", action=argparse.BooleanOptionalAction, default=None,
+                   help="also emit single-precision (float) C functions, suffix _f32 (default: the scene's)")
+    p.add_argument("--combine", metavar="NAMES",
+                   help="outputs also computed together by one function 'scene' sharing one CSE "
+                        "(comma-separated, 'all' or 'none'; default: the scene's, else all)")
     p.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
     p.set_defaults(run=run)
 
@@ -45,7 +52,8 @@ def run(args: argparse.Namespace) -> int:
                                   "drop --tip, or pass a .urdf file")])
     for path in args.models:
         model = load_model(path, tip=args.tip if path.lower().endswith(".urdf") else None)
-        jobs.append((model, pipeline.resolve_request(model, args.only, args.backend, args.fixed)))
+        jobs.append((model, pipeline.resolve_request(model, args.only, args.backend, args.fixed, args.float32,
+                                                            args.combine)))
     for model, request in jobs:
         start = time.perf_counter()
         with Progress(model.name, enabled=not args.quiet) as progress:
@@ -68,5 +76,13 @@ def _summary(result, target: Path, seconds: float) -> None:
         rows.append([r.name, r.outputs, f"{counts['derived']}{folded} -> {counts['cse']}",
                      f"{r.derive_seconds:.3f}", f"{r.optimize_seconds:.3f}"])
     print(format_table(["function", "outputs", "ops derived -> cse", "derive s", "optimize s"], rows))
-    files = ", ".join(f"{b}: {' '.join(f['files'])}" for b, f in result.manifest["backends"].items())
-    print(f"  emitted {files} in {result.emit_seconds:.3f} s; derived: {', '.join(result.derived)}")
+    files = ", ".join(f"{b}: {_listing(f['files'], 'files')}" for b, f in result.manifest["backends"].items())
+    print(f"  emitted {files} in {result.emit_seconds:.3f} s")
+    print(f"  derived {len(result.derived)} graph nodes: {_listing(result.derived, 'nodes', 12)}")
+
+
+def _listing(names: list[str], noun: str, limit: int = 3) -> str:
+    """The names, or the first few and a count when there are more than ``limit``."""
+    if len(names) <= limit:
+        return " ".join(names)
+    return f"{' '.join(names[:limit])} ... ({len(names)} {noun})"

@@ -26,10 +26,8 @@ from collections.abc import Iterable, Sequence
 import symengine as se
 import sympy
 
+from symkin.ir.spec import DEFINITION_PREFIX
 from symkin.symengine_bridge import SympyConverter, to_symengine
-
-#: Prefix of program assignments (see FunctionSpec.definitions); no model name starts with "_".
-DEFINITION_PREFIX = "_w"
 
 
 def se_vector(values: Iterable[sympy.Expr]) -> list[se.Basic]:

@@ -37,7 +37,8 @@ class ModelCode:
         symkin_version: version of the generator.
         coordinates: joint coordinate names, in order.
         parameters: every model parameter.
-        functions: the optimized functions, in request order.
+        functions: the optimized functions, in request order (then the combined one).
+        float32: also emit single-precision variants where the backend has them (C).
     """
 
     name: str
@@ -47,3 +48,4 @@ class ModelCode:
     coordinates: tuple[str, ...]
     parameters: tuple[ParameterInfo, ...]
     functions: tuple[OptimizedFunction, ...]
+    float32: bool = False

@@ -17,6 +17,7 @@ see only :class:`OptimizedFunction` temporaries and never need to know.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -24,6 +25,9 @@ import sympy
 
 from symkin.errors import DerivationError
 from symkin.model.schema import Model
+
+#: Prefix of definition symbols (``_w0``, ``_w1``...); no model name starts with "_".
+DEFINITION_PREFIX = "_w"
 
 
 @dataclass(frozen=True)
@@ -95,7 +99,9 @@ class FunctionSpec:
         definitions: named intermediate values ``(symbol, expression)``, in evaluation
             order; an expression may use the inputs and earlier definitions, the outputs
             may use all of them (see the module docstring).  Definition symbols are named
-            ``_w<k>``, which no model name can be.
+            ``_w<k>`` (:data:`DEFINITION_PREFIX`), which no model name can be.
+        parts: for a combined function (see :func:`combine_functions`), the names of the
+            functions whose outputs it computes together; empty otherwise.
     """
 
     name: str
@@ -104,6 +110,7 @@ class FunctionSpec:
     inputs: tuple[InputSpec, ...]
     outputs: tuple[OutputSpec, ...]
     definitions: tuple[tuple[sympy.Symbol, sympy.Expr], ...] = ()
+    parts: tuple[str, ...] = ()
 
     @property
     def vector_inputs(self) -> tuple[InputSpec, ...]:
@@ -171,3 +178,49 @@ def make_function(model: Model, name: str, summary: str, doc: str,
     if missing:
         raise DerivationError(f"{name}: outputs use {sorted(map(str, missing))} which no input provides")
     return FunctionSpec(name, summary, doc, tuple(vectors) + params, tuple(outputs), tuple(definitions))
+
+
+def combine_functions(model: Model, name: str, specs: Sequence[FunctionSpec]) -> FunctionSpec:
+    """One function computing the outputs of all ``specs`` together (e.g. M, V and G).
+
+    Optimizing the combined spec runs one CSE across every output, so work shared between
+    the quantities (sines and cosines of q, link transforms) is done once per call.
+
+    The vector inputs are those of the parts in order of first use; the parameters are the
+    model parameters any output uses, in model order (as :func:`make_function`).  An output
+    keeps its name when no other part has an output of the same name and no input has it,
+    and is called ``<part>_<output>`` otherwise (``jacobian_J`` and ``jacobian_geometric_J``;
+    ``forward_dynamics_qdd`` next to the input ``qdd`` of inverse dynamics).
+
+    Raises:
+        DerivationError: two parts give different symbols to a vector input of one name.
+    """
+    vectors: dict[str, InputSpec] = {}
+    for spec in specs:
+        for v in spec.vector_inputs:
+            known = vectors.setdefault(v.name, v)
+            if known.symbols != v.symbols:
+                raise DerivationError(f"{name}: the parts disagree on the input '{v.name}'")
+    counts: dict[str, int] = {name: 1 for name in vectors}  # an output may not take an input's name
+    for spec in specs:
+        for out in spec.outputs:
+            counts[out.name] = counts.get(out.name, 0) + 1
+    # Each part numbers its definitions from _w0: renumber them so the parts cannot clash
+    # (identical work in several parts is then shared by the one CSE over the combination).
+    definitions: list[tuple[sympy.Symbol, sympy.Expr]] = []
+    outputs = []
+    for spec in specs:
+        renamed: dict[sympy.Symbol, sympy.Symbol] = {}
+        for symbol, expr in spec.definitions:
+            renamed[symbol] = sympy.Symbol(f"{DEFINITION_PREFIX}{len(definitions)}", **symbol.assumptions0)
+            definitions.append((renamed[symbol], expr.xreplace(renamed)))
+        outputs += [OutputSpec(out.name if counts[out.name] == 1 else f"{spec.name}_{out.name}",
+                               sympy.ImmutableMatrix(out.expr.xreplace(renamed)), f"{out.doc} ({spec.name})",
+                               out.unit, out.shape)
+                    for out in spec.outputs]
+    parts = tuple(spec.name for spec in specs)
+    summary = f"{', '.join(parts)} together, with one set of shared subexpressions."
+    doc = ("Computes the outputs of " + ", ".join(parts) + " in one call; subexpressions common to "
+           "several of them are evaluated once.")
+    combined = make_function(model, name, summary, doc, list(vectors.values()), outputs, definitions)
+    return dataclasses.replace(combined, parts=parts)

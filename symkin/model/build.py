@@ -378,6 +378,9 @@ def _check_unique(r: _Reader, items: list[tuple[KeyPath, str]], what: str) -> No
 
 
 def _joint_type(r: _Reader, path: KeyPath, value: Any) -> JointType | None:
+    if not isinstance(value, str):
+        r.fail(path, f"a joint type must be a name, got {_describe(value)}", "use 'R' (revolute) or 'P' (prismatic)")
+        return None
     if value in JOINT_TYPES:
         return JOINT_TYPES[value]
     if value in MULTI_DOF_JOINT_TYPES:
@@ -769,7 +772,7 @@ def _friction(r: _Reader, value: Any, joint_names: tuple[str, ...]) -> tuple[Fri
 def _scene(r: _Reader, value: Any, parameters: tuple[Parameter, ...]) -> Scene:
     """The default request; output and backend names are checked by the pipeline, which knows them."""
     path: KeyPath = ("scene",)
-    section = r.mapping(path, value, optional=("outputs", "fixed", "backends"))
+    section = r.mapping(path, value, optional=("outputs", "fixed", "backends", "float32", "combine"))
     default = Scene(outputs=("fk", "jacobian"))
     if section is None:
         return default
@@ -807,6 +810,14 @@ def _scene(r: _Reader, value: Any, parameters: tuple[Parameter, ...]) -> Scene:
         fixed = names("fixed", is_parameter)
     outputs = names("outputs", lambda _p, _i: True)
     backends = names("backends", lambda _p, _i: True)
+    float32 = section.get("float32", False)
+    if not isinstance(float32, bool):
+        r.fail(path + ("float32",), f"'float32' must be true or false, got {_describe(float32)}",
+               "write true or false")
+        float32 = False
+    combine = None if section.get("combine", "all") == "all" else names("combine", lambda _p, _i: True)
     return Scene(outputs=outputs if outputs is not None else default.outputs,
                  fixed=fixed or (),
-                 backends=backends if backends is not None else default.backends)
+                 backends=backends if backends is not None else default.backends,
+                 float32=float32,
+                 combine=combine)

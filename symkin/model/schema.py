@@ -158,11 +158,16 @@ class Scene:
         outputs: names of derivable quantities to emit (see ``symkin quantities``).
         fixed: parameters folded to their default values before code generation.
         backends: code generators to run.
+        float32: also emit single-precision variants (C backend).
+        combine: outputs also computed together by one function ``scene`` that shares one
+            CSE across them (e.g. M, V and G for a servo loop); None means every output.
     """
 
     outputs: tuple[str, ...]
     fixed: tuple[str, ...] = ()
     backends: tuple[str, ...] = ("numpy",)
+    float32: bool = False
+    combine: tuple[str, ...] | None = None
 
 
 @dataclass(frozen=True)

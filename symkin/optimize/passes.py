@@ -1,68 +1,130 @@
-"""Spec-to-spec rewriting passes (each pure: a new spec, the input untouched)."""
+"""Spec-to-spec rewriting passes (each pure: a new spec, the input untouched).
+
+Both passes substitute leaves (a fixed parameter by its value, a constant subexpression by a
+30-digit float) and rebuild the expression bottom-up with :func:`_rebuild`, which lets sympy
+re-evaluate every node whose arguments changed, except where sympy's evaluation would cost
+more operations than the node as it stands (``atan2(y, 2)`` evaluates to ``atan(y/2)``: one
+call becomes a call and a product; ``2*(x + y)`` distributes to ``2*x + 2*y``).  Since replacing a symbol by a number never raises the
+cost of an unevaluated node under the op-count model (:mod:`symkin.optimize.opcount`), no
+pass can increase a function's operation count.
+"""
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+import dataclasses
+from collections.abc import Callable, Iterable
 
 import sympy
-from sympy.core.parameters import distribute
 
-from symkin.ir.spec import FunctionSpec, OutputSpec
+from symkin.ir.spec import FunctionSpec, OptimizedFunction, OutputSpec
+from symkin.optimize.opcount import node_cost, op_count
 
 #: Digits used to evaluate constant subexpressions before they are rounded to double.
 CONSTANT_DIGITS = 30
 
-
-def _map_outputs(spec: FunctionSpec, fn) -> tuple[OutputSpec, ...]:
-    return tuple(OutputSpec(o.name, sympy.ImmutableMatrix(o.expr.applyfunc(fn)), o.doc, o.unit, o.shape)
-                 for o in spec.outputs)
+Replacement = Callable[[sympy.Expr], "sympy.Expr | None"]
 
 
-def _map_definitions(spec: FunctionSpec, fn) -> tuple[tuple[sympy.Symbol, sympy.Expr], ...]:
-    return tuple((symbol, fn(expr)) for symbol, expr in spec.definitions)
+def _rebuild(expr: sympy.Expr, replace: Replacement, memo: dict, costs: dict) -> sympy.Expr:
+    """``expr`` with ``replace(node)`` substituted wherever it is not None, re-evaluated where that is cheaper."""
+    done = memo.get(expr)
+    if done is not None:
+        return done
+    new = replace(expr)
+    if new is None:
+        if expr.is_Atom:
+            new = expr
+        else:
+            args = tuple(_rebuild(a, replace, memo, costs) for a in expr.args)
+            if args == expr.args:
+                new = expr
+            else:
+                evaluated = expr.func(*args)
+                try:
+                    plain = expr.func(*args, evaluate=False)
+                except TypeError:  # a node type without unevaluated construction
+                    plain = evaluated
+                new = evaluated if node_cost(evaluated, costs) <= node_cost(plain, costs) else plain
+    memo[expr] = new
+    return new
+
+
+def map_spec(spec: FunctionSpec, rewrite: Callable[[sympy.Expr], sympy.Expr]) -> FunctionSpec:
+    """``spec`` with ``rewrite`` applied to every output entry and every definition."""
+    outputs = tuple(OutputSpec(o.name, sympy.ImmutableMatrix(o.expr.applyfunc(rewrite)), o.doc, o.unit, o.shape)
+                    for o in spec.outputs)
+    definitions = tuple((symbol, rewrite(expr)) for symbol, expr in spec.definitions)
+    return dataclasses.replace(spec, outputs=outputs, definitions=definitions)
+
+
+def _replace_in_spec(spec: FunctionSpec, replace: Replacement) -> FunctionSpec:
+    memo: dict = {}
+    costs: dict = {}
+    return map_spec(spec, lambda e: _rebuild(e, replace, memo, costs))
 
 
 def fold_parameters(spec: FunctionSpec, fixed: Iterable[str]) -> FunctionSpec:
     """Substitute the ``fixed`` parameters by their exact default values; drop them from the inputs.
 
     Folding lets sympy simplify (``0*x``, ``cos(pi/2)``, products of numbers) before CSE,
-    so a fixed-geometry servo loop pays only for what varies.  Sympy's automatic
-    distribution of a number over a sum (``2*(x + y)`` -> ``2*x + 2*y``) is switched off
-    while substituting: it would turn one multiplication into several.
+    so a fixed-geometry servo loop pays only for what varies; it never adds operations
+    (see the module docstring).
     """
     fixed = set(fixed)
     values = {i.symbols[0]: i.default for i in spec.inputs if i.kind == "parameter" and i.name in fixed}
     if not values:
         return spec
-    with distribute(False):
-        outputs = _map_outputs(spec, lambda e: e.xreplace(values))
-        definitions = _map_definitions(spec, lambda e: e.xreplace(values))
     inputs = tuple(i for i in spec.inputs if not (i.kind == "parameter" and i.name in fixed))
-    return FunctionSpec(spec.name, spec.summary, spec.doc, inputs, outputs, definitions)
+    return dataclasses.replace(_replace_in_spec(spec, lambda e: values.get(e) if e.is_Symbol else None), inputs=inputs)
 
 
-def _fold(expr: sympy.Expr) -> sympy.Expr:
-    if expr.is_Atom:
-        return expr
-    if expr.is_number and not expr.is_Rational:
-        value = expr.evalf(CONSTANT_DIGITS)
-        if value.is_Float:
-            return value
-        return expr
-    if expr.is_Pow:
-        base = _fold(expr.base)
-        return expr if base is expr.base else expr.func(base, expr.exp)  # keep exact exponents (x**2, sqrt)
-    args = tuple(_fold(a) for a in expr.args)
-    if all(new is old for new, old in zip(args, expr.args)):
-        return expr  # nothing folded below: no need to rebuild
-    return expr.func(*args)
+def _constant_value(expr: sympy.Expr) -> sympy.Expr | None:
+    if expr.is_Atom or expr.is_Rational or not expr.is_number:
+        return None
+    value = expr.evalf(CONSTANT_DIGITS)
+    return value if value.is_Float else None
 
 
 def fold_constants(spec: FunctionSpec) -> FunctionSpec:
     """Replace constant non-rational subexpressions (``sqrt(3)/2``, ``cos(1/10)``) by 30-digit floats.
 
-    Exponents stay exact so that ``x**2`` and ``sqrt(x)`` keep their cheap forms.
+    Rational numbers stay exact, so exponents keep their cheap forms (``x**2``, ``sqrt(x)``).
     """
-    with distribute(False):
-        return FunctionSpec(spec.name, spec.summary, spec.doc, spec.inputs, _map_outputs(spec, _fold),
-                            _map_definitions(spec, _fold))
+    return _replace_in_spec(spec, _constant_value)
+
+
+def fold_parameters_after_cse(function: OptimizedFunction, fixed: Iterable[str]) -> OptimizedFunction:
+    """Fold the ``fixed`` parameters into an already optimized function (temporaries and outputs).
+
+    The other order than :func:`fold_parameters` followed by CSE: it keeps the CSE found
+    with the parameters as symbols (numbers in products can hide common factors from
+    sympy's CSE), and it cannot add operations to it: every temporary and output is rebuilt
+    with :func:`_rebuild`, and a temporary that folds to a number or a single symbol is
+    substituted into its uses instead of being kept.  ``op_counts["cse"]`` is recomputed.
+    """
+    spec = function.spec
+    fixed = set(fixed)
+    values: dict[sympy.Symbol, sympy.Expr] = {i.symbols[0]: i.default for i in spec.parameter_inputs
+                                              if i.name in fixed}
+    if not values:
+        return function
+    memo: dict = {}
+    constants_memo: dict = {}
+    costs: dict = {}
+
+    def fold(expr: sympy.Expr) -> sympy.Expr:
+        substituted = _rebuild(expr, lambda e: values.get(e) if e.is_Symbol else None, memo, costs)
+        return _rebuild(substituted, _constant_value, constants_memo, costs)
+
+    temporaries = []
+    for symbol, expr in function.temporaries:
+        folded = fold(expr)
+        if folded.is_Atom:
+            values[symbol] = folded  # a number or an alias: substitute it into later uses
+        else:
+            temporaries.append((symbol, folded))
+    outputs = tuple(tuple(fold(e) for e in entries) for entries in function.outputs)
+    inputs = tuple(i for i in spec.inputs if not (i.kind == "parameter" and i.name in fixed))
+    counts = dict(function.op_counts)
+    counts["cse"] = op_count([e for _, e in temporaries] + [e for entries in outputs for e in entries])
+    return OptimizedFunction(dataclasses.replace(spec, inputs=inputs), tuple(temporaries), outputs, counts)

@@ -82,6 +82,7 @@ CASES: list[tuple[str, str | bytes, str, int | None]] = [
     ("type-mass-list", replace("mass: m2", "mass: [1, 2]"), "expected a number or an expression, got list", 14),
     ("type-convention-list", replace("convention: classic", "convention: [classic]"), "unknown DH convention", 8),
     ("type-key-not-string", BASE + "1: one\n", "mapping keys must be plain strings", 15),
+    ("type-joint-type-list", replace("type: R, theta: 0", "type: [], theta: 0"), "a joint type must be a name", 11),
     # missing and duplicate keys
     ("missing-serial", BASE.split("serial:")[0] + "task_space: [x, y]\n", "the model declares no mechanism", None),
     ("missing-dh-convention", replace("    convention: classic\n", ""), "missing required key 'convention'", 7),

@@ -12,6 +12,8 @@ from symkin.ir.bundle import ModelCode
 from symkin.ir.spec import InputSpec, OptimizedFunction
 
 TEMPLATE = "numpy/module.py.j2"
+#: Configurations per chunk of large batches (temporaries of a 6-DoF chunk fit in L2).
+CHUNK = 4096
 DOC_WIDTH = 84
 
 
@@ -64,6 +66,7 @@ def _function_context(f: OptimizedFunction, printer: BatchNumPyPrinter) -> dict[
         "temporaries": [{"name": str(s), "code": printer.doprint(e)} for s, e in f.temporaries],
         "outputs": outputs,
         "result_type": type_name(spec.name) if multi else "",
+        "params": [p.name for p in params],
     }
 
 
@@ -76,6 +79,7 @@ def emit_module(code: ModelCode) -> dict[str, str | bytes]:
         model={"name": code.name, "hash": code.hash, "description": code.description or code.name,
                "symkin_version": code.symkin_version, "coordinates": code.coordinates},
         free_parameters=[{"name": p.name, "default_text": repr(p.default)} for p in code.parameters if not p.fixed],
+        chunk=CHUNK,
         functions=[_function_context(f, printer) for f in code.functions],
     )
     return {f"{code.name}.py": text}

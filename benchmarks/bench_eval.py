@@ -1,0 +1,372 @@
+"""Evaluation speed of UR10e code: symkin's numpy, C and CasADi backends beside Pinocchio and SymForce.
+
+Run with ``make bench`` or ``python benchmarks/bench_eval.py [--batch N] [--calls N] [--cflags FLAGS]``.
+
+Cases (functions generated with every parameter folded, as in a fixed-geometry servo loop):
+
+* ``FK``     base_T_tcp;
+* ``FK+J``   base_T_tcp and the geometric Jacobian, the combined function of one shared CSE;
+* ``M``, ``M+V+G`` when the dynamics quantities are registered (found by their output
+  names M, V, G), likewise.
+
+Columns:
+
+* ``py call``   microseconds per call from Python, one configuration (median of 5 runs);
+* ``py batch``  nanoseconds per configuration of one batched call over ``--batch`` configurations
+  (numpy and C: the generated vectorized functions; CasADi: ``Function.map``; Pinocchio: a
+  Python loop, as a Python user would write it);
+* ``C call``    nanoseconds per call of the single-configuration C function, timed in C by a
+  harness this script compiles (best of 5 runs of ``--calls`` calls over 1024 configurations);
+* ``C batch``   nanoseconds per configuration of the C batch entry point, timed in C.
+
+Pinocchio: ``computeFrameJacobian`` (which also updates the TCP placement) for FK+J,
+``forwardKinematics`` + ``updateFramePlacement`` for FK, ``crba`` for M, ``crba`` + ``rnea``
+(zero acceleration: V + G) + ``computeGeneralizedGravity`` for M+V+G.  SymForce (when it
+and the Eigen headers are installed): C++ generated from sf.Pose3 compositions of the same
+joints and ``pose.jacobian(q)`` (FK+J only), timed in C++ by the same harness loop.
+Targets of issue 4: C call M <= 250 ns, FK+J <= 150 ns; C batch M+V+G <= 150 ns/config;
+numpy batch <= 1 us/config.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent
+sys.path.insert(0, str(ROOT.parent))
+sys.path.insert(0, str(ROOT))
+
+from competitors import pinocchio_model, symforce_fk_jacobian_codegen  # noqa: E402
+from symkin import load, pipeline  # noqa: E402
+from symkin.cli.table import format_table  # noqa: E402
+from symkin.derivation import Derivation, emitted_quantities  # noqa: E402
+from symkin.errors import DerivationError  # noqa: E402
+from symkin.model import load_model  # noqa: E402
+
+MODEL = ROOT.parent / "models" / "ur10e.yaml"
+RING = 1024  # configurations cycled through by the single-call timings
+
+
+def find_cases(model) -> dict[str, list[str]]:
+    """{case name: quantities} for the cases this symkin can derive."""
+    derivation = Derivation(model)
+    by_output: dict[str, str] = {}
+    for name in emitted_quantities():
+        try:
+            spec = derivation[name]
+        except DerivationError:
+            continue
+        outputs = [o.name for o in spec.outputs]
+        if len(outputs) == 1:
+            by_output.setdefault(outputs[0], name)
+    cases = {"FK": ["fk"], "FK+J": ["fk", "jacobian_geometric"]}
+    if "M" in by_output:
+        cases["M"] = [by_output["M"]]
+        if "V" in by_output and "G" in by_output:
+            cases["M+V+G"] = [by_output["M"], by_output["V"], by_output["G"]]
+    return cases
+
+
+def generate(model, quantities: list[str], out: Path) -> Path:
+    request = pipeline.resolve_request(model, quantities, ["numpy", "c", "casadi"], "all")
+    return pipeline.write(pipeline.generate(model, request), out)
+
+
+def function_name(quantities: list[str]) -> str:
+    return quantities[0] if len(quantities) == 1 else pipeline.COMBINED_FUNCTION
+
+
+def random_inputs(record: dict, n: int, rng: np.random.Generator) -> list[np.ndarray]:
+    return [rng.uniform(-np.pi, np.pi, (n, i["shape"][0])) for i in record["inputs"] if i["kind"] == "vector"]
+
+
+def median_call_us(fn, args_ring: list[tuple], repeat: int = 5, calls: int = 2000) -> float:
+    runs = []
+    for _ in range(repeat):
+        start = time.perf_counter()
+        for k in range(calls):
+            fn(*args_ring[k % len(args_ring)])
+        runs.append((time.perf_counter() - start) / calls)
+    return 1e6 * statistics.median(runs)
+
+
+def batch_ns(fn, args, n: int, repeat: int = 3) -> float:
+    fn(*[a[:10] for a in args])
+    best = min(_timed(fn, args) for _ in range(repeat))
+    return 1e9 * best / n
+
+
+def _timed(fn, args) -> float:
+    start = time.perf_counter()
+    fn(*args)
+    return time.perf_counter() - start
+
+
+# -- C timing harness -------------------------------------------------------------------
+
+HARNESS_HEAD = r"""
+#define _POSIX_C_SOURCE 199309L
+#include <stdio.h>
+#include <stdlib.h>
+#include <time.h>
+%(includes)s
+
+static double now(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+static double uniform(unsigned long *state)
+{
+    *state = (*state * 6364136223846793005UL + 1442695040888963407UL) & 0xffffffffffffUL;
+    return ((double)*state / 281474976710656.0 - 0.5) * 6.283185307179586;
+}
+
+static double *random_array(size_t n, unsigned long *state)
+{
+    double *a = (double *)malloc(n * sizeof *a);
+    for (size_t i = 0; i < n; ++i) {
+        a[i] = uniform(state);
+    }
+    return a;
+}
+
+int main(int argc, char **argv)
+{
+    const long calls = argc > 1 ? atol(argv[1]) : 1000000;
+    const size_t batch = argc > 2 ? (size_t)atol(argv[2]) : 100000;
+    unsigned long state = 12345;
+    double sink = 0.0;
+    (void)batch;
+"""
+
+HARNESS_CASE = r"""
+    {   /* %(label)s */
+%(allocs)s
+        double best = 1e30;
+        for (int run = 0; run < 5; ++run) {
+            const double start = now();
+            for (long i = 0; i < calls; ++i) {
+                const size_t k = (size_t)(i & %(mask)d);
+                %(single_call)s;
+                sink += %(first_output)s[0];
+            }
+            const double per = (now() - start) / (double)calls;
+            best = per < best ? per : best;
+        }
+        printf("%(label)s single %%.2f\n", 1e9 * best);
+%(batch_block)s
+    }
+"""
+
+BATCH_BLOCK = r"""
+%(batch_allocs)s
+        best = 1e30;
+        for (int run = 0; run < 5; ++run) {
+            const double start = now();
+            %(batch_call)s;
+            const double per = (now() - start) / (double)batch;
+            best = per < best ? per : best;
+            sink += %(first_batch_output)s[batch - 1];
+        }
+        printf("%(label)s batch %%.2f\n", 1e9 * best);
+"""
+
+HARNESS_TAIL = r"""
+    printf("sink %g\n", sink);
+    return 0;
+}
+"""
+
+
+def symkin_case_c(label: str, model_name: str, record: dict) -> str:
+    vectors = [(i["name"], i["shape"][0]) for i in record["inputs"] if i["kind"] == "vector"]
+    outputs = [(o["name"], int(np.prod(o["shape"], dtype=int))) for o in record["outputs"]]
+    allocs = "\n".join(f"        double *in_{v} = random_array({RING} * {n}, &state);" for v, n in vectors)
+    allocs += "\n" + "\n".join(f"        double out_{o}[{n}];" for o, n in outputs)
+    single = f"{model_name}_{record['name']}(" + ", ".join(
+        [f"in_{v} + {n} * k" for v, n in vectors] + [f"out_{o}" for o, _ in outputs]) + ")"
+    batch_allocs = "\n".join(f"        double *batch_{v} = random_array(batch * {n}, &state);" for v, n in vectors)
+    batch_allocs += "\n" + "\n".join(f"        double *batch_out_{o} = (double *)malloc(batch * {n} * sizeof(double));"
+                                     for o, n in outputs)
+    batch_call = f"{model_name}_{record['name']}_batch(batch, " + ", ".join(
+        [f"batch_{v}" for v, _ in vectors] + [f"batch_out_{o}" for o, _ in outputs]) + ")"
+    block = BATCH_BLOCK % {"batch_allocs": batch_allocs, "batch_call": batch_call, "label": label,
+                           "first_batch_output": f"batch_out_{outputs[0][0]}"}
+    return HARNESS_CASE % {"label": label, "allocs": allocs, "mask": RING - 1, "single_call": single,
+                           "first_output": f"out_{outputs[0][0]}", "batch_block": block}
+
+
+def run_harness(source: str, sources: list[Path], includes: list[Path], compiler: list[str], flags: list[str],
+                work: Path, calls: int, batch: int, name: str) -> dict[tuple[str, str], float]:
+    main = work / f"{name}.c"
+    main.write_text(source)
+    binary = work / name
+    command = compiler + flags + [f"-I{d}" for d in includes] + [str(main), *map(str, sources), "-o", str(binary),
+                                                                 "-lm"]
+    subprocess.run(command, check=True)
+    out = subprocess.run([str(binary), str(calls), str(batch)], check=True, capture_output=True, text=True).stdout
+    results = {}
+    for line in out.splitlines():
+        parts = line.rsplit(" ", 2)
+        if len(parts) == 3 and parts[1] in ("single", "batch"):
+            results[parts[0], parts[1]] = float(parts[2])
+    return results
+
+
+def symforce_harness(header_dir: Path, dof: int) -> str:
+    return (HARNESS_HEAD.replace("%(includes)s", '#include <Eigen/Core>\n#include "ur10e_fk_jacobian.h"')
+            .replace("#define _POSIX_C_SOURCE 199309L", "")
+            + r"""
+    {
+        double *q = random_array(%(ring)d * %(dof)d, &state);
+        Eigen::Matrix<double, 4, 4> T;
+        Eigen::Matrix<double, 6, %(dof)d> J;
+        double best = 1e30;
+        for (int run = 0; run < 5; ++run) {
+            const double start = now();
+            for (long i = 0; i < calls; ++i) {
+                const size_t k = (size_t)(i & %(mask)d);
+                Eigen::Map<const Eigen::Matrix<double, %(dof)d, 1>> qk(q + %(dof)d * k);
+                sym::Ur10EFkJacobian<double>(qk, &T, &J);
+                sink += T(0, 3);
+            }
+            const double per = (now() - start) / (double)calls;
+            best = per < best ? per : best;
+        }
+        printf("FK+J single %%.2f\n", 1e9 * best);
+    }
+""" % {"ring": RING, "dof": dof, "mask": RING - 1} + HARNESS_TAIL)
+
+
+# -- main -----------------------------------------------------------------------------------
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--batch", type=int, default=100_000, help="configurations per batched call (default 1e5)")
+    parser.add_argument("--calls", type=int, default=1_000_000, help="single calls per C timing run (default 1e6)")
+    parser.add_argument("--cflags", default="-O3 -march=native",
+                        help="flags for the C harness and SymForce (default: %(default)s)")
+    parser.add_argument("--no-symforce", action="store_true", help="skip SymForce")
+    args = parser.parse_args(argv)
+    compiler = [os.environ.get("CC", "cc")]
+    cflags = args.cflags.split()
+    model = load_model(MODEL)
+    rng = np.random.default_rng(0)
+    work = Path(tempfile.mkdtemp(prefix="symkin-bench-"))
+    os.environ.setdefault("SYMKIN_CACHE_DIR", str(work / "cache"))
+    os.environ.setdefault("SYMKIN_CFLAGS", args.cflags)
+    try:
+        cases = find_cases(model)
+        try:
+            pm, tcp = pinocchio_model(model)
+        except ImportError:
+            pm, tcp = None, None
+            print("Pinocchio: not installed (pip install pin==4.1.0); its rows are left out")
+        rows = {}
+        c_timings: dict[tuple[str, str], float] = {}
+        op_counts = {}
+        for label, quantities in cases.items():
+            target = generate(model, quantities, work / label.replace("+", "_"))
+            name = function_name(quantities)
+            record = next(f for f in load(target).manifest["functions"] if f["name"] == name)
+            op_counts[label] = record["op_counts"]["cse"]
+            inputs = random_inputs(record, args.batch, rng)
+            ring = [tuple(a[k] for a in inputs) for k in range(RING)]
+            for backend in ("numpy", "c", "casadi"):
+                fn = getattr(load(target, backend=backend), name)
+                rows[label, f"symkin {backend}"] = (median_call_us(fn, ring), batch_ns(fn, inputs, args.batch))
+            source = HARNESS_HEAD % {"includes": f'#include "{model.name}.h"'} + symkin_case_c(label, model.name, record) \
+                + HARNESS_TAIL
+            c_timings.update(run_harness(source, [target / f"{model.name}.c"], [target], compiler,
+                                         ["-std=c99", *cflags], work, args.calls, args.batch,
+                                         f"harness_{label.replace('+', '_')}"))
+            if pm is not None:
+                rows[label, "pinocchio"] = pinocchio_timings(label, pm, tcp, inputs, ring, args.batch)
+        symforce_note = ""
+        if not args.no_symforce:
+            symforce_note = symforce_timings(model, work, cflags, args.calls, c_timings)
+        table = []
+        for (label, impl), (call_us, per_config) in rows.items():
+            c_call = c_timings.get((label, "single")) if impl == "symkin c" else None
+            c_batch = c_timings.get((label, "batch")) if impl == "symkin c" else None
+            table.append([label, impl, f"{call_us:.2f}", f"{per_config:.0f}",
+                          f"{c_call:.1f}" if c_call else "", f"{c_batch:.1f}" if c_batch else ""])
+            if impl == "symkin casadi" and (f"sf:{label}", "single") in c_timings:
+                table.append([label, "symforce (C++)", "", "", f"{c_timings[f'sf:{label}', 'single']:.1f}", ""])
+        print(f"UR10e evaluation speed, {args.batch} configurations per batch, C flags '{args.cflags}', "
+              f"all parameters folded")
+        print("op counts after CSE: " + ", ".join(f"{k} {v}" for k, v in op_counts.items()))
+        print(format_table(["case", "implementation", "py call [us]", "py batch [ns/config]", "C call [ns]",
+                            "C batch [ns/config]"], table))
+        if symforce_note:
+            print(symforce_note)
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+    return 0
+
+
+def pinocchio_timings(label, pm, tcp, inputs, ring, n):
+    import pinocchio as pin
+
+    data = pm.createData()
+    zero = np.zeros(pm.nv)
+    if label == "FK":
+        def call(q):
+            pin.forwardKinematics(pm, data, q)
+            pin.updateFramePlacement(pm, data, tcp)
+            return data.oMf[tcp].homogeneous
+    elif label == "FK+J":
+        def call(q):
+            J = pin.computeFrameJacobian(pm, data, q, tcp, pin.LOCAL_WORLD_ALIGNED)
+            return data.oMf[tcp].homogeneous, J
+    elif label == "M":
+        def call(q):
+            return pin.crba(pm, data, q)
+    else:
+        def call(q, qd):
+            M = pin.crba(pm, data, q).copy()
+            return M, pin.rnea(pm, data, q, qd, zero).copy(), pin.computeGeneralizedGravity(pm, data, q).copy()
+
+    def loop(*arrays):
+        for k in range(len(arrays[0])):
+            call(*[a[k] for a in arrays])
+
+    per_call = median_call_us(call, ring)
+    return per_call, batch_ns(loop, inputs, n)
+
+
+def symforce_timings(model, work, cflags, calls, c_timings) -> str:
+    try:
+        import symforce  # noqa: F401
+    except ImportError:
+        return "SymForce: not installed (pip install symforce==0.12.0)"
+    eigen = next((p for p in (Path("/usr/include/eigen3"), Path("/usr/local/include/eigen3")) if p.exists()), None)
+    cxx = shutil.which(os.environ.get("CXX", "c++"))
+    if eigen is None or cxx is None:
+        return "SymForce: skipped, needs a C++ compiler and the Eigen headers (apt-get install g++ libeigen3-dev)"
+    header_dir = symforce_fk_jacobian_codegen(model, work / "symforce")
+    source = symforce_harness(header_dir, model.dof)
+    results = run_harness(source, [], [header_dir, eigen], [cxx], ["-std=c++17", *cflags, "-x", "c++"], work,
+                          calls, 1, "harness_symforce")
+    c_timings.update({(f"sf:{label}", kind): v for (label, kind), v in results.items()})
+    ops = next((line for line in (header_dir / f"{model.name}_fk_jacobian.h").read_text().splitlines()
+                if "Total ops" in line), "").strip().lstrip("/ ")
+    return f"SymForce FK+J: sf.Pose3 chain + pose.jacobian(q) (tangent-space Jacobian), {ops}"
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,120 @@
+"""The same symkin model in Pinocchio and in SymForce, for side-by-side benchmarks.
+
+Both are built from the loaded :class:`~symkin.model.Model` (joints as fixed operations
+``before``/``after`` around the joint motion, bodies in link frames), with every parameter
+at its default, so they compute the very mechanism symkin derived; bench_eval.py checks
+that their poses agree with symkin's before timing anything.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import sympy
+
+from symkin.model.schema import JointType, Model, Rotation
+
+
+def _number(expr, values) -> float:
+    return float(sympy.sympify(expr).xreplace(values))
+
+
+def _rotation(axis, angle: float) -> np.ndarray:
+    axis = np.asarray(axis, dtype=float)
+    axis = axis / np.linalg.norm(axis)
+    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    return np.eye(3) + np.sin(angle) * k + (1 - np.cos(angle)) * k @ k
+
+
+def _ops_transform(ops, values) -> np.ndarray:
+    """4x4 transform of a sequence of moving-frame operations."""
+    T = np.eye(4)
+    for op in ops:
+        step = np.eye(4)
+        if isinstance(op, Rotation):
+            step[:3, :3] = _rotation([_number(a, values) for a in op.axis], _number(op.angle, values))
+        else:
+            step[:3, 3] = [_number(v, values) for v in op.vector]
+        T = T @ step
+    return T
+
+
+def pinocchio_model(model: Model):
+    """(pinocchio.Model, frame id of the TCP) of a serial symkin model."""
+    import pinocchio as pin
+
+    values = model.parameter_values
+    pm = pin.Model()
+    pm.gravity = pin.Motion(np.array([_number(g, values) for g in model.gravity]), np.zeros(3))
+    bodies = {b.link: b for b in model.bodies}
+    parent, pending = 0, _ops_transform(model.base, values)
+    for joint in model.joints:
+        placement = pending @ _ops_transform(joint.before, values)
+        axis = np.array([_number(a, values) for a in joint.axis])
+        offset = _number(joint.offset, values)
+        motion = np.eye(4)
+        if joint.type is JointType.REVOLUTE:
+            motion[:3, :3] = _rotation(axis, offset)
+            joint_model = pin.JointModelRevoluteUnaligned(axis)
+        else:
+            motion[:3, 3] = axis * offset
+            joint_model = pin.JointModelPrismaticUnaligned(axis)
+        placement = placement @ motion
+        parent = pm.addJoint(parent, joint_model, pin.SE3(placement[:3, :3], placement[:3, 3]), joint.name)
+        after = _ops_transform(joint.after, values)
+        body = bodies.get(joint.link)
+        if body is not None:
+            inertia = pin.Inertia(_number(body.mass, values), np.array([_number(c, values) for c in body.com]),
+                                  np.array(body.inertia.xreplace(values), dtype=float))
+            pm.appendBodyToJoint(parent, inertia.se3Action(pin.SE3(after[:3, :3], after[:3, 3])), pin.SE3.Identity())
+        pending = after
+    tcp = pending @ _ops_transform(model.tcp, values)
+    frame = pm.addFrame(pin.Frame("tcp", parent, pin.SE3(tcp[:3, :3], tcp[:3, 3]), pin.FrameType.OP_FRAME))
+    return pm, frame
+
+
+def symforce_fk_jacobian_codegen(model: Model, out_dir: Path) -> Path:
+    """Generate SymForce C++ for (base_T_tcp 4x4, tangent-space Jacobian 6xn) of the TCP pose.
+
+    Written as a SymForce user would: sf.Pose3 compositions of the joint operations and
+    ``pose.jacobian(q)``; SymForce's own CSE and C++ printer do the rest.  Returns the
+    directory holding the generated header.
+    """
+    import symforce
+
+    symforce.set_epsilon_to_symbol()
+    import symforce.symbolic as sf
+    from symforce.codegen import Codegen, CppConfig
+
+    values = model.parameter_values
+    n = model.dof
+
+    def ops_pose(ops):
+        pose = sf.Pose3.identity()
+        for op in ops:
+            if isinstance(op, Rotation):
+                axis = sf.V3(*[_number(a, values) for a in op.axis])
+                pose = pose * sf.Pose3(R=sf.Rot3.from_angle_axis(_number(op.angle, values), axis), t=sf.V3())
+            else:
+                pose = pose * sf.Pose3(R=sf.Rot3.identity(), t=sf.V3(*[_number(v, values) for v in op.vector]))
+        return pose
+
+    def fk_jacobian(q: sf.Matrix):
+        pose = ops_pose(model.base)
+        for k, joint in enumerate(model.joints):
+            axis = sf.V3(*[_number(a, values) for a in joint.axis])
+            amount = q[k] + _number(joint.offset, values)
+            if joint.type is JointType.REVOLUTE:
+                motion = sf.Pose3(R=sf.Rot3.from_angle_axis(amount, axis), t=sf.V3())
+            else:
+                motion = sf.Pose3(R=sf.Rot3.identity(), t=axis * amount)
+            pose = pose * ops_pose(joint.before) * motion * ops_pose(joint.after)
+        pose = pose * ops_pose(model.tcp)
+        return pose.to_homogenous_matrix(), pose.jacobian(q)
+
+    codegen = Codegen.function(fk_jacobian, input_types=[sf.Matrix(n, 1)], config=CppConfig(),
+                               name=f"{model.name}_fk_jacobian", output_names=["T", "J"])
+    result = codegen.generate_function(output_dir=out_dir, skip_directory_nesting=True)
+    headers = list(Path(result.generated_files[0]).parent.rglob("*.h")) if result.generated_files else []
+    return headers[0].parent if headers else Path(out_dir)

@@ -1,0 +1,139 @@
+"""ctypes binding of a compiled model library to Python functions (no sympy needed).
+
+A call with one configuration and scalar parameters goes to ``<model>_<function>_packed``:
+the inputs are copied into a per-thread scratch array whose address is known (asking numpy
+for an array's address costs about a microsecond, more than the C code) and the outputs
+copied out of another; two pointer arguments keep the ctypes call cheap.  Any other call
+goes to ``<model>_<function>_batch``: vector inputs broadcast to the batch shape and made
+C-contiguous (n x size), parameters packed into one array (stride 0 when all are scalars,
+else one row per configuration), all outputs in one fresh buffer, output k being the
+contiguous block of n * size_k doubles at offset n * offset_k.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import math
+import threading
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy
+
+from symkin.backends.c.build import shared_library
+from symkin.backends.naming import c_symbol
+from symkin.errors import GeneratedCodeError
+from symkin.runtime.wrappers import Kernel, SingleKernel, make_function
+
+DOUBLE_SIZE = 8
+
+
+def _files(directory: Path, manifest: dict[str, Any]) -> tuple[Path, Path]:
+    files = manifest.get("backends", {}).get("c", {}).get("files", [])
+    sources = [directory / f for f in files if f.endswith(".c")]
+    headers = [directory / f for f in files if f.endswith(".h")]
+    if len(sources) != 1 or len(headers) != 1:
+        raise GeneratedCodeError(f"{directory}: the manifest lists no C source and header pair (found {files})")
+    for path in sources + headers:
+        if not path.exists():
+            raise GeneratedCodeError(f"{path} is missing; derive the model again with --backend c")
+    return sources[0], headers[0]
+
+
+def _entry(library: ctypes.CDLL, symbol: str, argtypes: list[Any]) -> Any:
+    try:
+        entry = getattr(library, symbol)
+    except AttributeError:
+        raise GeneratedCodeError(f"the compiled library has no function {symbol}; derive the model again") from None
+    entry.argtypes = argtypes
+    entry.restype = None
+    return entry
+
+
+class _Scratch(threading.local):
+    """Per-thread packed input and output arrays of one function (``<function>_packed``)."""
+
+    def __init__(self, vector_sizes: list[int], n_params: int, total: int):
+        self.input = numpy.empty(sum(vector_sizes) + n_params)
+        starts = [sum(vector_sizes[:k]) for k in range(len(vector_sizes))]
+        self.vectors = [self.input[start:start + size] for start, size in zip(starts, vector_sizes)]
+        self.output = numpy.empty(total)
+        self.input_address = self.input.ctypes.data
+        self.output_address = self.output.ctypes.data
+
+
+def _kernels(library: ctypes.CDLL, model: str, record: dict[str, Any]) -> tuple[Kernel, SingleKernel]:
+    vector_sizes = [int(i["shape"][0]) for i in record["inputs"] if i["kind"] != "parameter"]
+    n_params = sum(1 for i in record["inputs"] if i["kind"] == "parameter")
+    output_shapes = [tuple(o["shape"]) for o in record["outputs"]]
+    sizes = [math.prod(shape) for shape in output_shapes]
+    offsets = [sum(sizes[:k]) for k in range(len(sizes))]
+    total = sum(sizes)
+    pointers = [ctypes.c_void_p] * len(vector_sizes)
+    outputs = [ctypes.c_void_p] * len(output_shapes)
+    packed = _entry(library, c_symbol(model, record["name"], "_packed"), [ctypes.c_void_p, ctypes.c_void_p])
+    batched = _entry(library, c_symbol(model, record["name"], "_batch"),
+                     [ctypes.c_size_t] + pointers + ([ctypes.c_void_p, ctypes.c_size_t] if n_params else []) + outputs)
+    scratch = _Scratch(vector_sizes, n_params, total)
+    first_param = sum(vector_sizes)
+
+    def split(buffer: numpy.ndarray, n: int, batch: tuple[int, ...]) -> list[numpy.ndarray]:
+        return [buffer[n * offset:n * (offset + size)].reshape(batch + shape)
+                for offset, size, shape in zip(offsets, sizes, output_shapes)]
+
+    single_views = [(slice(offset, offset + size), shape) for offset, size, shape in zip(offsets, sizes, output_shapes)]
+    one_output = len(output_shapes) == 1
+
+    def one(vectors: Sequence[numpy.ndarray], params: Sequence[float]) -> list[numpy.ndarray]:
+        local = scratch
+        for target, v in zip(local.vectors, vectors):
+            target[...] = v
+        if params:
+            local.input[first_param:] = params
+        packed(local.input_address, local.output_address)
+        out = local.output.copy()
+        if one_output:
+            return [out.reshape(output_shapes[0])]
+        return [out[part].reshape(shape) for part, shape in single_views]
+
+    def kernel(batch: tuple[int, ...], vectors: list[numpy.ndarray], params: list[numpy.ndarray]) -> list[numpy.ndarray]:
+        if not batch and all(p.ndim == 0 for p in params):
+            return one(vectors, [float(p) for p in params])
+        n = math.prod(batch)
+        arguments: list[Any] = [n]
+        keep = []  # arrays whose memory C reads, alive until the call returns
+        for v, size in zip(vectors, vector_sizes):
+            if v.shape[:-1] != batch or not v.flags.c_contiguous:
+                v = numpy.ascontiguousarray(numpy.broadcast_to(v, batch + (size,)))
+            keep.append(v)
+            arguments.append(v.ctypes.data)
+        if n_params:
+            if all(p.ndim == 0 for p in params):
+                rows, stride = numpy.array([float(p) for p in params]), 0
+            else:
+                rows = numpy.empty(batch + (n_params,))
+                for k, p in enumerate(params):
+                    rows[..., k] = p
+                stride = n_params
+            keep.append(rows)
+            arguments += [rows.ctypes.data, stride]
+        buffer = numpy.empty(n * total)
+        address = buffer.ctypes.data
+        arguments += [address + DOUBLE_SIZE * n * offset for offset in offsets]
+        batched(*arguments)
+        return split(buffer, n, batch)
+
+    return kernel, one
+
+
+def bind_library(directory: Path, manifest: dict[str, Any]) -> dict[str, Any]:
+    """Compile (or find in the cache) the model's C code and bind every function of the manifest."""
+    source, header = _files(directory, manifest)
+    library = ctypes.CDLL(str(shared_library(source, header)))
+    model = manifest["model"]["name"]
+    functions = {}
+    for record in manifest["functions"]:
+        kernel, one = _kernels(library, model, record)
+        functions[record["name"]] = make_function(record, kernel, "c", single=one)
+    return functions

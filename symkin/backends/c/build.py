@@ -1,0 +1,116 @@
+"""Compile generated C into a shared library, once: cached by the hash of what goes in.
+
+The cache key covers the source and header bytes, the compiler command and flags, and the
+compiler's version text, so editing any of them (or regenerating the model) builds anew,
+while loading the same model again costs a hash and a ``dlopen``.  Libraries are written
+under a temporary name and renamed into place, under a lock file, so concurrent loaders
+(pytest-xdist workers, several processes of a control application) compile a library once
+and never see a half-written file.
+
+Environment:
+    SYMKIN_CACHE_DIR: cache directory (default ``$XDG_CACHE_HOME/symkin`` or ``~/.cache/symkin``).
+    CC: the C compiler (default ``cc``).
+    SYMKIN_CFLAGS: optimization flags (default ``-O3``; e.g. ``-O3 -march=native``).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import shlex
+import subprocess
+import sys
+import tempfile
+from collections.abc import Iterator
+from contextlib import contextmanager
+from functools import lru_cache
+from pathlib import Path
+
+from symkin.errors import GeneratedCodeError
+
+DEFAULT_CFLAGS = "-O3"
+#: Flags every build uses (the generated code must compile warning-free with them).
+BASE_FLAGS = ("-std=c99", "-fPIC", "-shared", "-Wall", "-Wextra")
+
+
+def cache_directory() -> Path:
+    """Where compiled libraries are kept (see the module docstring)."""
+    explicit = os.environ.get("SYMKIN_CACHE_DIR")
+    if explicit:
+        return Path(explicit)
+    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(base) / "symkin"
+
+
+def compiler_command() -> list[str]:
+    """The compiler and the user's optimization flags."""
+    return shlex.split(os.environ.get("CC", "cc")) + shlex.split(os.environ.get("SYMKIN_CFLAGS", DEFAULT_CFLAGS))
+
+
+@lru_cache(maxsize=8)
+def _compiler_version(compiler: str) -> str:
+    try:
+        result = subprocess.run([compiler, "--version"], capture_output=True, text=True, check=True)
+    except (OSError, subprocess.CalledProcessError) as exc:
+        raise GeneratedCodeError(f"cannot run the C compiler '{compiler}' ({exc}); install one (e.g. gcc) "
+                                 "or set CC to a C compiler") from None
+    return result.stdout
+
+
+def _library_suffix() -> str:
+    return ".dylib" if sys.platform == "darwin" else ".dll" if sys.platform == "win32" else ".so"
+
+
+def shared_library(source: Path, header: Path) -> Path:
+    """The compiled shared library of ``source`` (building it if the cache has none).
+
+    Raises:
+        GeneratedCodeError: the compiler is missing or fails (its messages are included).
+    """
+    command = compiler_command()
+    key = hashlib.sha256()
+    for part in (source.read_bytes(), header.read_bytes(), "\0".join(command + list(BASE_FLAGS)).encode(),
+                 _compiler_version(command[0]).encode()):
+        key.update(hashlib.sha256(part).digest())
+    directory = cache_directory()
+    target = directory / f"lib{source.stem}-{key.hexdigest()[:24]}{_library_suffix()}"
+    if target.exists():
+        return target
+    directory.mkdir(parents=True, exist_ok=True)
+    with _locked(directory / f"{target.name}.lock"):
+        if not target.exists():  # another process may have built it while we waited
+            _compile(command, source, header, target)
+    return target
+
+
+@contextmanager
+def _locked(path: Path) -> Iterator[None]:
+    """An exclusive lock on ``path`` (so concurrent loaders compile a library once)."""
+    try:
+        import fcntl
+    except ImportError:  # no advisory locks (Windows): concurrent builds stay safe, just redundant
+        yield
+        return
+    with open(path, "a") as handle:
+        fcntl.flock(handle, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(handle, fcntl.LOCK_UN)
+
+
+def _compile(command: list[str], source: Path, header: Path, target: Path) -> None:
+    """Compile into a temporary file next to ``target``, then rename it into place."""
+    directory = target.parent
+    fd, partial = tempfile.mkstemp(prefix=target.name + ".", suffix=".partial", dir=directory)
+    os.close(fd)
+    try:
+        result = subprocess.run(command + list(BASE_FLAGS) + ["-I", str(header.parent), "-o", partial,
+                                                              str(source), "-lm"],
+                                capture_output=True, text=True)
+        if result.returncode != 0:
+            raise GeneratedCodeError(f"compiling {source} failed:\n{result.stderr.strip()}")
+        os.replace(partial, target)
+    finally:
+        if os.path.exists(partial):
+            os.unlink(partial)

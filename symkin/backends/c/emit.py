@@ -1,0 +1,207 @@
+"""Printing of the C header and source from the optimized functions (templates/c/).
+
+Calling convention (documented in the generated header):
+
+* ``<model>_<function>(const double *q, ..., double p1, ..., double *out1, ...)``: vector
+  inputs as pointers to their n elements, free parameters as scalars (model order), each
+  output into a caller-owned array of its size, row-major (element (i, j) of an r x c
+  matrix at ``out[i*c + j]``); every element is written;
+* ``<model>_<function>_batch(size_t n, const double *q, ..., const double *params,
+  size_t params_stride, double *out1, ...)``: n configurations stored one after the other
+  (q is n x dof, out1 is n x size), the parameters packed in one array read at
+  ``params + i*params_stride`` (stride 0: the same values for every configuration);
+* ``<model>_<function>_packed(const double *in, double *out)``: the inputs packed one after
+  the other (vector elements, then parameters), the outputs one after the other;
+* with the float32 option, ``..._f32`` variants of all three take and return ``float``.
+
+Both print the same statements (so they return the same bits).  The single function runs
+them once on scalars; the batch function runs them in a loop over the lanes of a block of
+BLOCK configurations whose inputs were transposed into lane-contiguous arrays: a loop of
+straight-line arithmetic the compiler vectorizes.  sin and cos of input symbols (all of
+them, after :func:`~symkin.optimize.passes.expand_trig_sums`) are computed before that loop
+by the generated vectorizable ``sincos`` (:mod:`symkin.backends.c.trig`).
+"""
+
+from __future__ import annotations
+
+import math
+import textwrap
+from collections.abc import Callable
+from typing import Any
+
+import sympy
+
+from symkin.backends.c.printer import C_TYPES, CPrinter
+from symkin.backends.c.trig import constants
+from symkin.backends.naming import c_symbol
+from symkin.backends.templating import provenance, render
+from symkin.ir.bundle import ModelCode
+from symkin.ir.spec import FunctionSpec, OptimizedFunction
+
+HEADER_TEMPLATE = "c/header.h.j2"
+SOURCE_TEMPLATE = "c/source.c.j2"
+DOC_WIDTH = 86
+#: Configurations per block of the batch entry points (a multiple of every SIMD width).
+BLOCK = 8
+
+#: (precision, function-name suffix) of each emitted variant.
+VARIANTS = {"double": "", "float": "_f32"}
+
+
+def _comment_lines(text: str, width: int = DOC_WIDTH) -> list[str]:
+    return textwrap.wrap(text.replace("*/", "* /"), width) or [""]
+
+
+def _expressions(f: OptimizedFunction) -> list[sympy.Expr]:
+    """Every expression the function evaluates: temporaries, then output entries."""
+    return [e for _, e in f.temporaries] + [e for entries in f.outputs for e in entries]
+
+
+def _inputs(spec: FunctionSpec, used: set[sympy.Symbol], macro: str) -> tuple[list, list, list]:
+    """(vectors, params, scalars) contexts; scalars: every used scalar input and where it is read."""
+    scalars: list[dict[str, Any]] = []
+    vectors = []
+    offset = 0
+    for v in spec.vector_inputs:
+        elements = []
+        for k, s in enumerate(v.symbols):
+            if s in used:
+                elements.append({"local": str(s), "index": k})
+                scalars.append({"symbol": s, "local": str(s), "single": f"{v.name}[{k}]",
+                                "batch": f"{v.name}[_j * {len(v.symbols)} + {k}]"})
+        vectors.append({
+            "name": v.name, "size": len(v.symbols), "elements": elements, "offset": offset,
+            "doc": _comment_lines(f"{v.name}[{len(v.symbols)}]: {v.doc}: "
+                                  + ", ".join(f"{n} [{u}]" for n, u in zip(v.element_names, v.units)) + "."),
+        })
+        offset += len(v.symbols)
+    params = []
+    for k, p in enumerate(spec.parameter_inputs):
+        unit = f" [{p.units[0]}]" if p.units[0] else ""
+        params.append({"name": p.name, "offset": offset + k, "doc": _comment_lines(
+            f"{p.name}: {p.doc or 'parameter'}{unit}; default {macro}_DEFAULT_{p.name} = {float(p.default)!r}.")})
+        if p.symbols[0] in used:
+            scalars.append({"symbol": p.symbols[0], "local": p.name, "single": None,
+                            "batch": f"params[_j * params_stride + {k}]"})
+    for row, scalar in enumerate(scalars):
+        scalar["row"] = row
+    return vectors, params, scalars
+
+
+def _trigonometry(f: OptimizedFunction, scalars: list[dict[str, Any]]) -> tuple[list, dict]:
+    """(trig contexts, {sin(a)/cos(a): local symbol}) for the input symbols under sin and cos."""
+    row_of = {s["symbol"]: s["row"] for s in scalars}
+    calls = {call for e in _expressions(f) for call in e.atoms(sympy.sin, sympy.cos) if call.args[0] in row_of}
+    names = {}
+    trig = []
+    for k, a in enumerate(sorted({call.args[0] for call in calls}, key=sympy.default_sort_key)):
+        names[sympy.sin(a)] = sympy.Symbol(f"_sin_{a}", real=True)
+        names[sympy.cos(a)] = sympy.Symbol(f"_cos_{a}", real=True)
+        trig.append({"angle": str(a), "row": row_of[a], "index": k,
+                     "sin": f"_sin_{a}" if sympy.sin(a) in calls else None,
+                     "cos": f"_cos_{a}" if sympy.cos(a) in calls else None})
+    return trig, names
+
+
+def _outputs(spec: FunctionSpec, f: OptimizedFunction, text: Callable[[sympy.Expr], str]) -> tuple[list, int]:
+    """(output contexts, number of non-constant entries); each of those gets a lane-array slot."""
+    outputs = []
+    slots = 0
+    offset = 0
+    for out, entries in zip(spec.outputs, f.outputs):
+        size = math.prod(out.shape)
+        shape = " x ".join(map(str, out.shape)) or "scalar"
+        order = ", row-major" if len(out.shape) == 2 else ""
+        assignments = []
+        for k, e in enumerate(entries):
+            constant = not e.free_symbols
+            assignments.append({"index": k, "code": text(e), "constant": constant,
+                                "slot": None if constant else slots})
+            slots += 0 if constant else 1
+        outputs.append({
+            "name": out.name, "size": size, "assignments": assignments, "offset": offset,
+            "doc": _comment_lines(f"{out.name}[{size}]: {shape}{order}; {out.doc}"
+                                  + (f" [{out.unit}]" if out.unit else "") + "."),
+        })
+        offset += size
+    return outputs, slots
+
+
+def _function_context(code: ModelCode, f: OptimizedFunction, precision: str, printer: CPrinter) -> dict[str, Any]:
+    spec = f.spec
+    suffix = VARIANTS[precision]
+    used = {s for e in _expressions(f) for s in e.free_symbols}
+    vectors, params, scalars = _inputs(spec, used, code.name.upper())
+    trig, trig_names = _trigonometry(f, scalars)
+
+    def text(e: sympy.Expr) -> str:
+        return printer.doprint(e.xreplace(trig_names) if trig_names else e)
+
+    direct = {s for e in _expressions(f) for s in (e.xreplace(trig_names) if trig_names else e).free_symbols}
+    for scalar in scalars:
+        scalar["direct"] = scalar["symbol"] in direct  # used other than through its sin/cos
+    outputs, slots = _outputs(spec, f, text)
+    return {
+        "name": spec.name,
+        "symbol": c_symbol(code.name, spec.name, suffix),
+        "batch_symbol": c_symbol(code.name, spec.name, "_batch" + suffix),
+        "packed_symbol": c_symbol(code.name, spec.name, "_packed" + suffix),
+        "real": C_TYPES[precision],
+        "sincos": f"{code.name}_sincos{suffix}",
+        "summary": _comment_lines(spec.summary),
+        "doc": _comment_lines(spec.doc),
+        "vectors": vectors,
+        "params": params,
+        "scalars": scalars,
+        "trig": trig,
+        "outputs": outputs,
+        "slots": slots,
+        # lane arrays of the batch function: inputs, outputs, and angle/sin/cos per angle
+        "batch_stack_bytes": (len(scalars) + slots + 3 * len(trig)) * BLOCK * (4 if precision == "float" else 8),
+        "temporaries": [{"name": str(s), "code": text(e)} for s, e in f.temporaries],
+        "op_count": f.op_counts["cse"],
+    }
+
+
+def _sincos_context(code: ModelCode, precision: str, printer: CPrinter) -> dict[str, Any]:
+    c = constants(precision)
+    float_suffix = "f" if precision == "float" else ""
+    return {
+        "name": f"{code.name}_sincos{VARIANTS[precision]}",
+        "real": C_TYPES[precision],
+        "fabs": "fabs" + float_suffix, "sin": "sin" + float_suffix, "cos": "cos" + float_suffix,
+        "two_over_pi": printer.literal(c.two_over_pi),
+        "parts": [printer.literal(p) for p in c.pi_half_parts],
+        "magic": printer.literal(c.round_magic),
+        "limit": printer.literal(c.limit),
+        "sin_coefficients": [printer.literal(v) for v in c.sin_coefficients],
+        "cos_coefficients": [printer.literal(v) for v in c.cos_coefficients],
+        "literal": {v: printer.literal(float(v)) for v in (0.5, 1.5, -0.5, -1.5, 1.0, 4.0, 0.25)},
+    }
+
+
+def emit_sources(code: ModelCode) -> dict[str, str | bytes]:
+    """{<model>.h: header, <model>.c: source} for ``code``."""
+    precisions = ["double", "float"] if code.float32 else ["double"]
+    printers = {p: CPrinter(p) for p in precisions}
+    functions = [_function_context(code, f, precision, printers[precision])
+                 for precision in precisions for f in code.functions]
+    model = {
+        "name": code.name, "macro": code.name.upper(), "hash": code.hash,
+        "description": _comment_lines(code.description or code.name),
+        "dof": len(code.coordinates), "coordinates": ", ".join(code.coordinates),
+    }
+    free = [{"name": p.name, "default": repr(p.default), "unit": p.unit, "doc": p.doc}
+            for p in code.parameters if not p.fixed]
+    fixed = [f"{p.name} = {p.default!r}" for p in code.parameters if p.fixed]
+    header_name = f"{code.name}.h"
+    context = {"model": model, "functions": functions, "free_parameters": free,
+               "fixed_parameters": _comment_lines(", ".join(fixed)) if fixed else [],
+               "header_name": header_name, "float32": code.float32, "block": BLOCK,
+               "sincos": [_sincos_context(code, p, printers[p]) for p in precisions
+                          if any(f["trig"] for f in functions if f["real"] == C_TYPES[p])]}
+    return {
+        header_name: render(HEADER_TEMPLATE, provenance=provenance(HEADER_TEMPLATE, code.name, code.hash), **context),
+        f"{code.name}.c": render(SOURCE_TEMPLATE, provenance=provenance(SOURCE_TEMPLATE, code.name, code.hash),
+                                 **context),
+    }

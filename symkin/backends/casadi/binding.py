@@ -1,0 +1,139 @@
+"""Serialized CasADi functions wrapped with the numpy backend's calling semantics (no sympy).
+
+Evaluation goes through CasADi's zero-copy ``Function.buffer()`` interface (passing numpy
+memory directly; the ordinary call converts every argument to a DM and costs tens of
+microseconds): one configuration calls the function itself, a batch of n calls
+``function.map(n)``.  CasADi is column-major, which fits numpy's batch layout: an
+(n, size) C-ordered array is the size x n matrix ``map`` wants, and an r x c output of n
+configurations (an r x c*n matrix) is the C-ordered array (n, c, r), transposed to
+(n, r, c).  Buffers are kept per thread and per batch size (the last few sizes).
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+from collections import OrderedDict
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import casadi
+import numpy
+
+from symkin.backends.naming import casadi_file, matrix_shape
+from symkin.errors import GeneratedCodeError
+from symkin.runtime.wrappers import Kernel, SingleKernel, make_function
+
+#: How many batch sizes (mapped functions and their buffers) each function keeps per thread.
+CACHE_SIZE = 4
+
+
+class _Buffers(threading.local):
+    """Per-thread ``(buffer, evaluate)`` pairs of one function, by batch size."""
+
+    def __init__(self) -> None:
+        self.by_size: OrderedDict[int, tuple[Any, Any]] = OrderedDict()
+
+
+class _Single(threading.local):
+    """Per-thread buffer of the unmapped function, bound once to packed input and output arrays."""
+
+    def __init__(self, function: casadi.Function, input_sizes: list[int], output_sizes: list[int]):
+        self.buffer, self.evaluate = function.buffer()
+        self.input = numpy.empty(sum(input_sizes))
+        self.output = numpy.empty(sum(output_sizes))
+        self.inputs = _bind(self.input, input_sizes, self.buffer.set_arg)
+        _bind(self.output, output_sizes, self.buffer.set_res)
+
+
+def _bind(packed: numpy.ndarray, sizes: list[int], setter: Any) -> list[numpy.ndarray]:
+    """Consecutive slices of ``packed``, each handed to ``setter(k, memoryview)``."""
+    views, start = [], 0
+    for k, size in enumerate(sizes):
+        views.append(packed[start:start + size])
+        setter(k, memoryview(views[-1]))
+        start += size
+    return views
+
+
+def _kernels(function: casadi.Function, record: dict[str, Any]) -> tuple[Kernel, SingleKernel]:
+    vector_sizes = [int(i["shape"][0]) for i in record["inputs"] if i["kind"] != "parameter"]
+    output_shapes = [tuple(o["shape"]) for o in record["outputs"]]
+    output_2d = [matrix_shape(shape) for shape in output_shapes]
+    buffers = _Buffers()
+    lock = threading.Lock()  # function.map is not known to be thread-safe
+
+    def buffer_of(n: int) -> tuple[Any, Any]:
+        cache = buffers.by_size
+        if n in cache:
+            cache.move_to_end(n)
+            return cache[n]
+        with lock:
+            evaluated = function if n == 1 else function.map(n, "serial")
+            cache[n] = evaluated.buffer()
+        if len(cache) > CACHE_SIZE:
+            cache.popitem(last=False)
+        return cache[n]
+
+    n_params = len(record["inputs"]) - len(vector_sizes)
+    output_sizes = [rows * cols for rows, cols in output_2d]
+    single = _Single(function, vector_sizes + [1] * n_params, output_sizes)
+    first_param = sum(vector_sizes)
+    output_starts = [sum(output_sizes[:k]) for k in range(len(output_sizes))]
+
+    def one(vectors: Sequence[numpy.ndarray], params: Sequence[float]) -> list[numpy.ndarray]:
+        local = single
+        for target, v in zip(local.inputs, vectors):
+            target[...] = v
+        if params:
+            local.input[first_param:] = params
+        local.evaluate()
+        out = local.output.copy()
+        return [out[start:start + rows * cols].reshape(cols, rows).T.copy().reshape(shape) if cols > 1
+                else out[start:start + rows].reshape(shape)
+                for start, shape, (rows, cols) in zip(output_starts, output_shapes, output_2d)]
+
+    def kernel(batch: tuple[int, ...], vectors: list[numpy.ndarray], params: list[numpy.ndarray]) -> list[numpy.ndarray]:
+        n = math.prod(batch)
+        if n == 0:
+            return [numpy.empty(batch + shape) for shape in output_shapes]
+        buffer, evaluate = buffer_of(n)
+        keep = [numpy.ascontiguousarray(numpy.broadcast_to(v, batch + (size,)))
+                for v, size in zip(vectors, vector_sizes)]
+        keep += [p if p.ndim == 0 and n == 1 else numpy.ascontiguousarray(numpy.broadcast_to(p, batch))
+                 for p in params]
+        for k, array in enumerate(keep):
+            buffer.set_arg(k, memoryview(array))
+        raw = [numpy.empty((n, cols, rows)) for rows, cols in output_2d]
+        for k, array in enumerate(raw):
+            buffer.set_res(k, memoryview(array))
+        evaluate()
+        return [numpy.ascontiguousarray(r.transpose(0, 2, 1)).reshape(batch + shape)
+                for r, shape in zip(raw, output_shapes)]
+
+    return kernel, one
+
+
+def bind_functions(directory: Path, manifest: dict[str, Any]) -> dict[str, Any]:
+    """Load every function of the manifest from its ``.casadi`` file and wrap it.
+
+    Raises:
+        GeneratedCodeError: a file is missing or does not hold the function the manifest names.
+    """
+    model = manifest["model"]["name"]
+    functions = {}
+    for record in manifest["functions"]:
+        path = directory / casadi_file(model, record["name"])
+        if not path.exists():
+            raise GeneratedCodeError(f"{path} is missing; derive the model again with --backend casadi")
+        function = casadi.Function.load(str(path))
+        expected = [i["name"] for i in record["inputs"]]
+        if function.name() != record["name"] or function.name_in() != expected:
+            raise GeneratedCodeError(f"{path} holds {function.name()}({', '.join(function.name_in())}), "
+                                     f"not {record['name']}({', '.join(expected)}); derive the model again")
+        kernel, one = _kernels(function, record)
+        wrapper = make_function(record, kernel, "casadi", single=one)
+        wrapper.casadi = function
+        functions[record["name"]] = wrapper
+    return functions

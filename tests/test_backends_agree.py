@@ -1,0 +1,176 @@
+"""numpy, C and CasADi give the numbers of the sympy expressions, with one calling convention.
+
+Acceptance (issue 4): for every example model and every generated function, each backend
+agrees with plain lambdify of the un-optimized sympy outputs at 1000 random points to a
+relative 1e-12; wrong input shapes raise the same clear errors in every backend.
+"""
+
+from __future__ import annotations
+
+import inspect
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from conftest import BACKENDS, EXAMPLE_MODELS, batch_reference, function_spec, random_inputs, random_q
+
+POINTS = 1000
+
+
+def _relative_error(a: np.ndarray, b: np.ndarray) -> float:
+    """max |a - b| / max(1, max |b|) over the last axes, worst over the batch."""
+    axes = tuple(range(1, b.ndim))
+    scale = np.maximum(1.0, np.max(np.abs(b), axis=axes)) if axes else np.maximum(1.0, np.abs(b))
+    diff = np.max(np.abs(a - b), axis=axes) if axes else np.abs(a - b)
+    return float(np.max(diff / scale))
+
+
+def _tuple(result):
+    return result if isinstance(result, tuple) else (result,)
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+@pytest.mark.parametrize("name", EXAMPLE_MODELS)
+def test_every_function_matches_the_sympy_expressions(name, backend, models, derivations, loaded):
+    model = models[name]
+    generated = loaded(name, backend)
+    assert generated.backend == backend
+    rng = np.random.default_rng(11)
+    checked = []
+    for record in generated.manifest["functions"]:
+        spec = function_spec(model, derivations[name], record)
+        inputs = random_inputs(model, spec, rng, POINTS)
+        want = batch_reference(model, spec)(*inputs)
+        got = _tuple(getattr(generated, record["name"])(*inputs))
+        assert len(got) == len(want)
+        for g, w, out in zip(got, want, record["outputs"]):
+            assert g.shape == w.shape == (POINTS,) + tuple(out["shape"])
+            assert _relative_error(g, w) < 1e-12, (record["name"], out["name"])
+        checked.append(record["name"])
+    assert checked == list(generated.functions) and "scene" in checked
+
+
+def assert_close_at_scale(got, want):
+    """Equal to 1e-13 relative, or 1e-14 of the output's largest entry: evaluation orders differ in
+    rounding, and the dynamics outputs (hundreds of N m, thousands of rad/s^2) cancel to small entries."""
+    scale = float(np.max(np.abs(want), initial=1.0))
+    np.testing.assert_allclose(got, want, rtol=1e-13, atol=1e-14 * scale)
+
+
+@pytest.mark.parametrize("backend", ("c", "casadi"))
+@pytest.mark.parametrize("name", EXAMPLE_MODELS)
+def test_same_signatures_and_batch_semantics_as_numpy(name, backend, models, loaded):
+    reference, other = loaded(name, "numpy"), loaded(name, backend)
+    assert other.functions == reference.functions
+    rng = np.random.default_rng(5)
+    for record in reference.manifest["functions"]:
+        function = record["name"]
+        f_ref, f_other = getattr(reference, function), getattr(other, function)
+        assert inspect.signature(f_other) == inspect.signature(f_ref)
+        full = [rng.uniform(-1, 1, (3, 4) + tuple(i["shape"])) for i in record["inputs"] if i["kind"] == "vector"]
+        for pick in (lambda a: a, lambda a: a[1, 2], lambda a: a[:, :1], lambda a: np.zeros((0, a.shape[-1]))):
+            args = [pick(a) for a in full]
+            want, got = _tuple(f_ref(*args)), _tuple(f_other(*args))
+            assert type(got).__name__ == type(want).__name__
+            for g, w in zip(got, want):
+                assert g.shape == w.shape and g.dtype == np.float64
+                assert_close_at_scale(g, w)
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_parameters_broadcast_against_the_batch(backend, loaded):
+    arm, reference = loaded("planar_2r", backend), loaded("planar_2r", "numpy")
+    q = np.array([[0.3, 0.4], [0.1, 0.2]])
+    for kwargs in ({"l1": np.array([0.1, 0.2]), "l2": 0.3}, {"l1": np.array([[0.1], [0.2], [0.4]])},
+                   {"l2": 0.25}):
+        np.testing.assert_allclose(arm.fk(q, **kwargs), reference.fk(q, **kwargs), rtol=1e-14, atol=1e-15)
+        np.testing.assert_allclose(arm.fk(q[0], **kwargs), reference.fk(q[0], **kwargs), rtol=1e-14, atol=1e-15)
+    t1, t2 = q[1]
+    assert arm.fk(q, l1=np.array([0.1, 0.2]), l2=0.3)[1, 0, 3] == pytest.approx(
+        0.2 * np.cos(t1) + 0.3 * np.cos(t1 + t2), rel=1e-15)
+    bound = arm.bind(l1=0.2, l2=0.2)
+    np.testing.assert_allclose(bound.jacobian([0, 0]), [[0, 0], [0.4, 0.2]], atol=1e-16)
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+@pytest.mark.parametrize("bad", [np.zeros(5), np.zeros((3, 7)), 1.0, [[1, 2, 3]]])
+def test_wrong_input_shape_raises_the_same_clear_error(backend, bad, loaded):
+    ur = loaded("ur10e", backend)
+    with pytest.raises(ValueError, match=r"^fk\(\): 'q' must have shape \(\.\.\., 6\), got \(") as error:
+        ur.fk(bad)
+    with pytest.raises(ValueError) as numpy_error:
+        loaded("ur10e", "numpy").fk(bad)
+    assert str(error.value) == str(numpy_error.value)
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_missing_or_unknown_arguments_raise_the_same_type_errors(backend, loaded):
+    ur, reference = loaded("ur10e", backend), loaded("ur10e", "numpy")
+    for call in (lambda m: m.fk(), lambda m: m.fk(np.zeros(6), d7=1.0), lambda m: m.fk(np.zeros(6), 0.2),
+                 lambda m: m.jacobian(np.zeros(6), np.zeros(6))):
+        with pytest.raises(TypeError) as error:
+            call(ur)
+        with pytest.raises(TypeError) as numpy_error:
+            call(reference)
+        assert str(error.value) == str(numpy_error.value)
+    with pytest.raises(ValueError, match="do not broadcast") as error:
+        ur.fk(np.zeros((4, 6)), d1=np.ones(3))
+    with pytest.raises(ValueError) as numpy_error:
+        reference.fk(np.zeros((4, 6)), d1=np.ones(3))
+    assert str(error.value) == str(numpy_error.value)
+
+
+@pytest.mark.parametrize("backend", ("c", "casadi"))
+def test_loading_does_not_import_sympy(backend, generated_dir, compile_cache):
+    code = ("import sys, numpy as np; from symkin import load; "
+            f"m = load({str(generated_dir / 'ur10e')!r}, backend={backend!r}); m.fk(np.zeros(6)); "
+            "m.scene(np.zeros((3, 6)), np.zeros((3, 6))); print('sympy' in sys.modules, 'jinja2' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.split() == ["False", "False"]
+
+
+def test_results_are_fresh_arrays(loaded):
+    """Outputs never share memory with each other or between calls (the C binding reuses scratch memory)."""
+    for backend in BACKENDS:
+        ur = loaded("ur10e", backend)
+        first = ur.fk(np.zeros(6))
+        ur.fk(np.ones(6))
+        np.testing.assert_array_equal(first, loaded("ur10e", "numpy").fk(np.zeros(6)))
+        result = ur.scene(np.zeros(6), np.zeros(6))
+        result.base_T_tcp[:] = 7.0
+        assert not np.any(result.J == 7.0) and not np.any(result.M == 7.0)
+
+
+def test_large_batches_are_evaluated_in_chunks_with_the_same_results(loaded, models):
+    """numpy evaluates batches above its chunk size piecewise; results equal the C backend's."""
+    numpy_ur, c_ur = loaded("ur10e", "numpy"), loaded("ur10e", "c")
+    q = random_q(models["ur10e"], np.random.default_rng(9), (3, 5000))
+    qd = np.random.default_rng(10).uniform(-1, 1, q.shape)
+    d6 = np.linspace(0.1, 0.2, 5000)
+    for kwargs in ({}, {"d6": d6}, {"d6": d6[:, None].T}):
+        got, want = numpy_ur.scene(q, qd, **kwargs), c_ur.scene(q, qd, **kwargs)
+        assert type(got).__name__ == "SceneResult"
+        for g, w in zip(got, want):
+            assert g.shape == w.shape
+            assert_close_at_scale(g, w)
+    assert numpy_ur.fk(q[0, :3000]).shape == (3000, 4, 4)
+
+
+@pytest.mark.parametrize("backend", ("c", "casadi"))
+def test_concurrent_calls_from_threads_are_independent(backend, loaded, models):
+    """The single-configuration paths reuse per-thread scratch memory; threads must not mix results."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    ur, reference = loaded("ur10e", backend), loaded("ur10e", "numpy")
+    q = random_q(models["ur10e"], np.random.default_rng(12), 400)
+
+    def work(offset):
+        return [ur.jacobian(q[k], a2=-0.6 - 0.001 * k) for k in range(offset, 400, 4)]
+
+    with ThreadPoolExecutor(4) as pool:
+        results = list(pool.map(work, range(4)))
+    for offset, got in enumerate(results):
+        for k, J in zip(range(offset, 400, 4), got):
+            np.testing.assert_allclose(J, reference.jacobian(q[k], a2=-0.6 - 0.001 * k), rtol=1e-13, atol=1e-14)
