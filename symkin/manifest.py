@@ -43,7 +43,7 @@ def build_manifest(model: Model, code: ModelCode, derived: list[str], backend_fi
     """
     import sympy
 
-    return {
+    manifest = {
         "manifest_version": MANIFEST_VERSION,
         "generator": {"symkin": __version__, "sympy": sympy.__version__},
         "model": {
@@ -52,7 +52,7 @@ def build_manifest(model: Model, code: ModelCode, derived: list[str], backend_fi
             "source": Path(model.source).name,
             "description": model.description,
             "dof": model.dof,
-            "coordinates": [{"name": j.name, "type": j.type.value} for j in model.joints],
+            "coordinates": [{"name": j.name, "type": j.type.value} for j in model.coordinates],
             "task_space": list(model.task_space),
         },
         "parameters": [{"name": p.name, "default": p.default, "unit": p.unit, "doc": p.doc, "fixed": p.fixed}
@@ -71,6 +71,24 @@ def build_manifest(model: Model, code: ModelCode, derived: list[str], backend_fi
             for f in code.functions
         ],
         "backends": {name: {"files": sorted(files)} for name, files in sorted(backend_files.items())},
+    }
+    if model.parallel is not None:
+        manifest["model"]["parallel"] = _parallel_record(model)
+    return manifest
+
+
+def _parallel_record(model: Model) -> dict[str, Any]:
+    """Legs, platform motion and home pose of a parallel model (home at the default parameters)."""
+    parallel = model.parallel
+    assert parallel is not None
+    home = None
+    if parallel.home is not None:
+        home = [float(e.xreplace(model.parameter_values)) for e in parallel.home]
+    return {
+        "motion": parallel.motion.value,
+        "legs": [{"name": leg.name, "topology": "".join(j.type.value for j in leg.joints),
+                  "joints": [j.name for j in leg.joints]} for leg in parallel.legs],
+        "home": home,
     }
 
 

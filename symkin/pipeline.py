@@ -84,7 +84,7 @@ def resolve_request(model: Model, only: str | Sequence[str] | None = None,
             the model file), or an explicit argument does (located at the command line).
     """
     problems: list[Problem] = []
-    known_outputs = emitted_quantities()
+    known_outputs = emitted_quantities(model.mechanism)
     pnames = tuple(p.name for p in model.parameters)
 
     def check(names: tuple[str, ...], known: Sequence[str], what: str, scene_key: str, from_cli: bool) -> None:
@@ -144,7 +144,7 @@ def generate(model: Model, request: Request, progress: Progress = _quiet) -> Gen
         hash=model.hash,
         description=model.description,
         symkin_version=__version__,
-        coordinates=tuple(j.name for j in model.joints),
+        coordinates=tuple(j.name for j in model.coordinates),
         parameters=tuple(ParameterInfo(p.name, float(p.value), p.unit, p.doc, p.name in request.fixed)
                          for p in model.parameters),
         functions=tuple(functions),

@@ -55,6 +55,22 @@ def random_q(model: Model, rng: np.random.Generator, size=None) -> np.ndarray:
     return rng.uniform(-np.pi, np.pi, shape)
 
 
+def random_inputs(model: Model, spec: FunctionSpec, rng: np.random.Generator, size: int) -> list[np.ndarray]:
+    """Random values of every vector input of ``spec``: q as :func:`random_q`, the passive joints s
+    within +-pi, the platform pose p within 2 cm / 0.1 rad of the model's home pose."""
+    values = []
+    for vector in spec.vector_inputs:
+        if vector.name == "q":
+            values.append(random_q(model, rng, size))
+        elif vector.name == "p":
+            home = np.array([float(e.xreplace(model.parameter_values)) for e in model.parallel.home])
+            spread = np.where([u == "m" for u in vector.units], 0.02, 0.1)
+            values.append(home + rng.uniform(-1, 1, (size, len(home))) * spread)
+        else:
+            values.append(rng.uniform(-np.pi, np.pi, (size, len(vector.symbols))))
+    return values
+
+
 @pytest.fixture(scope="session")
 def generated_dir(tmp_path_factory, models) -> Path:
     """All example models derived with their scenes into a session temp directory."""
