@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
-from symkin.cli import bench_cmd, check_cmd, derive_cmd
+from symkin.cli import bench_cmd, check_cmd, derive_cmd, structure_cmd
 
 REGISTRY = [
     derive_cmd.register,
     check_cmd.register_check,
     check_cmd.register_quantities,
+    structure_cmd.register_mobility,
+    structure_cmd.register_topologies,
     bench_cmd.register,
 ]
