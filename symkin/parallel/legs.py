@@ -23,6 +23,16 @@ Z_AXIS = (sympy.Integer(0), sympy.Integer(0), sympy.Integer(1))
 
 
 @dataclass(frozen=True)
+class Motion:
+    """One elementary joint motion as seen from the base: its variable, axis direction and a point on it."""
+
+    variable: sympy.Symbol
+    rotation: bool
+    direction: sympy.ImmutableMatrix
+    point: sympy.ImmutableMatrix
+
+
+@dataclass(frozen=True)
 class LegChain:
     """The walked leg.
 
@@ -30,12 +40,14 @@ class LegChain:
         leg: the leg.
         centres: per joint, its centre (the frame origin after its ``origin`` operations) in
             the base frame.
+        motions: every elementary motion, base to platform.
         end: the last joint's frame in the base frame (after all motions).
         attachment: the attachment frame B_i in the platform frame.
     """
 
     leg: Leg
     centres: tuple[sympy.ImmutableMatrix, ...]
+    motions: tuple[Motion, ...]
     end: Frame
     attachment: Frame
 
@@ -58,16 +70,19 @@ def walk(leg: Leg, start: MovingFrame | None = None, joints: slice = slice(None)
     if start is None:
         moving.apply(leg.base)
     centres = []
+    motions = []
     for joint in leg.joints[joints]:
         moving.apply(joint.origin)
         centres.append(sympy.ImmutableMatrix(moving.p))
         for k, (variable, axis, rotation) in enumerate(joint.motions):
+            motions.append(Motion(symbol(variable), rotation, sympy.ImmutableMatrix(moving.direction(axis)),
+                                  sympy.ImmutableMatrix(moving.p)))
             amount = symbol(variable) + (joint.offset if k == joint.active else 0)
             if rotation:
                 moving.rotate(axis, amount)
             else:
                 moving.translate(tuple(c * amount for c in axis))  # type: ignore[arg-type]
-    return LegChain(leg, tuple(centres), moving.frame(), fixed_frame(leg.platform))
+    return LegChain(leg, tuple(centres), tuple(motions), moving.frame(), fixed_frame(leg.platform))
 
 
 def platform_frame(model: Model) -> Frame:

@@ -75,11 +75,15 @@ def _structure(d: Derivation) -> ParallelStructure:
 
 # --------------------------------------------------------------------------- generic loop closure
 
+@quantity("leg_closures", "closure equations of every leg", emitted=False, mechanism=PARALLEL)
+def _leg_closures(d: Derivation) -> tuple[closure.LegClosure, ...]:
+    structure: ParallelStructure = d["parallel_structure"]
+    return tuple(closure.LegClosure(structure.platform, chain) for chain in structure.chains)
+
+
 @quantity("closure_residual", "loop-closure equations Phi(q, s, p) (sympy)", emitted=False, mechanism=PARALLEL)
 def _closure_residual(d: Derivation) -> sympy.ImmutableMatrix:
-    structure: ParallelStructure = d["parallel_structure"]
-    rows = [e for chain in structure.chains for e in closure.leg_residual(structure.platform, chain)]
-    return sympy.ImmutableMatrix(rows)
+    return sympy.ImmutableMatrix([e for leg in d["leg_closures"] for e in leg.residual()])
 
 
 def _closure_rows(d: Derivation) -> str:
@@ -94,7 +98,8 @@ def _closure(d: Derivation) -> FunctionSpec:
         d.model, "closure", "Loop-closure residual of every leg.",
         "Seed sec. 3.2, inverse kinematics steps 1-2: the closed vector chain of each leg, split into "
         "Cartesian components: the end of the leg's joint chain minus the platform attachment "
-        "(position rows) and vee(E - E^T)/2 with E = R_attachment^T R_end (orientation rows). "
+        "(position rows) and 2 vee(E - E^T) / (1 + trace E) = 2 tan(angle/2) axis of the residual rotation "
+        "E = R_attachment^T R_end (orientation rows). "
         "Zero exactly when the mechanism is assembled at (q, s, p).",
         [_q(d), passive_input(d.model), task_input(d.model)],
         [OutputSpec("phi", phi, f"residual rows ({_closure_rows(d)})", shape=(len(phi),))],
@@ -103,17 +108,23 @@ def _closure(d: Derivation) -> FunctionSpec:
 
 @quantity("closure_jacobians", "implicit Jacobians Phi_p, Phi_q, Phi_s of the loop closure", mechanism=PARALLEL)
 def _closure_jacobians(d: Derivation) -> FunctionSpec:
-    phi = sympy.Matrix(d["closure_residual"])
-    groups = [("Phi_p", task_symbols(d.model), "p"), ("Phi_q", coordinates.symbols(d.model, "q"), "q"),
+    task = task_symbols(d.model)
+    columns: list[dict[sympy.Symbol, list[sympy.Expr]]] = []
+    for leg in d["leg_closures"]:
+        columns.append({**leg.joint_derivatives(), **leg.task_derivatives(task)})
+    groups = [("Phi_p", task, "p"), ("Phi_q", coordinates.symbols(d.model, "q"), "q"),
               ("Phi_s", passive_symbols(d.model), "s")]
-    outputs = [OutputSpec(name, jacobian(phi, symbols),
-                          f"d phi / d {wrt}, rows as in closure(), one column per element of {wrt}")
-               for name, symbols, wrt in groups]
+    outputs = []
+    for name, symbols, wrt in groups:
+        rows = [[leg.get(s, [0] * 6)[k] for s in symbols] for leg in columns for k in range(6)]
+        outputs.append(OutputSpec(name, sympy.ImmutableMatrix(rows),
+                                  f"d phi / d {wrt}, rows as in closure(), one column per element of {wrt}"))
     return make_function(
         d.model, "closure_jacobians", "Implicit Jacobians of the loop closure.",
         "Differentiating Phi(q, s, p) = 0 gives Phi_p pdot + Phi_q qdot + Phi_s sdot = 0, the velocity "
         "relation of any leg topology; Newton steps on these matrices solve the closure numerically "
-        "(symkin.runtime.parallel.solve_closure).",
+        "(symkin.runtime.parallel.solve_closure). Formed from the joint screws: a rotation about the axis w "
+        "through o moves the leg end by w x (p_end - o) and turns it by w.",
         [_q(d), passive_input(d.model), task_input(d.model)], outputs,
     )
 
