@@ -193,7 +193,7 @@ class LegJoint:
     Attributes:
         name: joint name (with the leg's number appended, e.g. ``theta1``).
         type: R, P, U, S or C.
-        axes: unit axis of each elementary motion, in the moved joint frame.
+        axes: unit axis of each elementary motion, in the moved joint frame (one shared axis for C).
         origin: fixed operations from the previous joint's frame (or the leg's base frame).
         variables: coordinate name of each elementary motion: ``name`` for R and P,
             ``name_1``, ``name_2`` (, ``name_3``) for U and S, ``name_t``, ``name_r`` for C.
@@ -215,7 +215,8 @@ class LegJoint:
         """(variable, axis, is_rotation) of every elementary motion, in order."""
         rotation = {LegJointType.R: (True,), LegJointType.P: (False,), LegJointType.U: (True, True),
                     LegJointType.S: (True, True, True), LegJointType.C: (False, True)}[self.type]
-        return tuple(zip(self.variables, self.axes, rotation))
+        axes = self.axes * 2 if self.type is LegJointType.C else self.axes  # C: slide along and turn about one axis
+        return tuple(zip(self.variables, axes, rotation))
 
 
 @dataclass(frozen=True)
