@@ -85,6 +85,13 @@ def test_fk_reports_failure_instead_of_a_wrong_pose(stewart):
     assert np.all(np.isnan(report.solution[~done]))
 
 
+def test_fk_starts_at_the_home_pose_by_default(stewart):
+    pose = np.array([0.01, -0.01, 0.24, 0.05, -0.03, 0.08])
+    report = solve_fk(stewart, stewart.ik(pose).joints)
+    assert report.all_converged
+    np.testing.assert_allclose(report.solution, pose, atol=1e-12)
+
+
 def test_fk_needs_the_generated_equations(generated_dir):
     arm = load(generated_dir / "planar_2r")
     with pytest.raises(GeneratedCodeError, match="constraints"):

@@ -111,7 +111,19 @@ def _iterate(start: np.ndarray, equations: Callable[[np.ndarray], tuple[np.ndarr
                         residual.reshape(batch), step_norm.reshape(batch))
 
 
-def solve_fk(model: LoadedModel, q, p0, *, tol: float = 1e-12, max_iterations: int = 30) -> NewtonReport:
+def home_pose(model: LoadedModel) -> np.ndarray:
+    """The model's declared home pose (task coordinates at the default parameters).
+
+    Raises:
+        GeneratedCodeError: the model declares none (``parallel.home``).
+    """
+    home = model.manifest["model"].get("parallel", {}).get("home")
+    if home is None:
+        raise GeneratedCodeError(f"model '{model.name}' declares no home pose (parallel.home); pass a start p0")
+    return np.array(home, dtype=float)
+
+
+def solve_fk(model: LoadedModel, q, p0=None, *, tol: float = 1e-12, max_iterations: int = 30) -> NewtonReport:
     """Forward kinematics p(q) by Newton's method on the generated leg equations.
 
     Solves f(q, p) = 0 for p with the generated ``constraints`` and ``constraint_jacobians``:
@@ -123,7 +135,7 @@ def solve_fk(model: LoadedModel, q, p0, *, tol: float = 1e-12, max_iterations: i
     Args:
         model: the loaded model (with ``constraints`` and ``constraint_jacobians``).
         q: actuated joint variables, shape (..., n).
-        p0: start, shape (..., m) (broadcast against q).
+        p0: start, shape (..., m) (broadcast against q); default: the model's home pose.
         tol: converged when a Newton step is at most this large (max-norm, task units).
         max_iterations: give up (report failure) after this many steps.
 
@@ -134,7 +146,7 @@ def solve_fk(model: LoadedModel, q, p0, *, tol: float = 1e-12, max_iterations: i
     constraints = _function(model, "constraints", "solve_fk")
     jacobians = _function(model, "constraint_jacobians", "solve_fk")
     q = np.asarray(q, dtype=float)
-    p0 = np.asarray(p0, dtype=float)
+    p0 = home_pose(model) if p0 is None else np.asarray(p0, dtype=float)
     batch = np.broadcast_shapes(q.shape[:-1], p0.shape[:-1])
     q = np.broadcast_to(q, batch + q.shape[-1:])
     start = np.broadcast_to(p0, batch + p0.shape[-1:])
