@@ -36,11 +36,18 @@ def derivations(models: dict[str, Model]) -> dict[str, Derivation]:
 def reference_function(model: Model, spec: FunctionSpec, modules: str = "numpy"):
     """Plain lambdify of the un-optimized outputs, parameters at their defaults.
 
-    Returns f(*vectors) -> list of arrays (one per output, shaped as declared).
+    Returns f(*vectors) -> list of arrays (one per output, shaped as declared).  Very large outputs
+    (a Laplace-expanded 6x6 determinant, the Stewart-Gough closure Jacobians: over 20000 operations)
+    are lambdified with sympy's own common-subexpression option, which only changes how the same
+    expression is evaluated; printing and evaluating them as one flat expression takes minutes.
     """
+    from symkin.optimize import spec_op_count
+
     vectors = [list(i.symbols) for i in spec.vector_inputs]
     values = model.parameter_values
-    fns = [sympy.lambdify(vectors, sympy.Matrix(o.expr).xreplace(values), modules=modules) for o in spec.outputs]
+    large = spec_op_count(spec) > 20000
+    fns = [sympy.lambdify(vectors, sympy.Matrix(o.expr).xreplace(values), modules=modules, cse=large)
+           for o in spec.outputs]
     shapes = [o.shape for o in spec.outputs]
 
     def evaluate(*args):
@@ -57,7 +64,9 @@ def random_q(model: Model, rng: np.random.Generator, size=None) -> np.ndarray:
 
 def random_inputs(model: Model, spec: FunctionSpec, rng: np.random.Generator, size: int) -> list[np.ndarray]:
     """Random values of every vector input of ``spec``: q as :func:`random_q`, the passive joints s
-    within +-pi, the platform pose p within 2 cm / 0.1 rad of the model's home pose."""
+    within +-0.5 rad (the closure's orientation rows are 2 tan(angle/2) axis of the orientation
+    error, which grows without bound - with its rounding error - towards half turns), the platform
+    pose p within 2 cm / 0.1 rad of the model's home pose."""
     values = []
     for vector in spec.vector_inputs:
         if vector.name == "q":
@@ -67,7 +76,7 @@ def random_inputs(model: Model, spec: FunctionSpec, rng: np.random.Generator, si
             spread = np.where([u == "m" for u in vector.units], 0.02, 0.1)
             values.append(home + rng.uniform(-1, 1, (size, len(home))) * spread)
         else:
-            values.append(rng.uniform(-np.pi, np.pi, (size, len(vector.symbols))))
+            values.append(rng.uniform(-0.5, 0.5, (size, len(vector.symbols))))
     return values
 
 
