@@ -72,8 +72,11 @@ def ik(p, *, r_base=0.07, r_tcp=0.025, a=0.1, b=0.15):
     in closed form: q = atan2(gamma, beta) + sigma atan2(sqrt(beta^2 + gamma^2 -
     alpha^2), -alpha) for a revolute actuator (a robust form of seed eqs. 8.18-8.20),
     the root of a quadratic for a prismatic one. Branches: leg1: theta1 on the negative
-    branch; leg2: theta2 on the negative branch; leg3: theta3 on the negative branch.
-    Where a leg's margin is negative p is out of its reach and its q is NaN.
+    branch; leg2: theta2 on the negative branch; leg3: theta3 on the negative branch
+    (positive: the platform joint B_i lies at a positive rotation about the actuator
+    axis from the elbow C_i, or the larger root of a prismatic actuator; negative: the
+    other solution). Where a leg's margin is negative p is out of its reach and its q is
+    NaN.
 
     Args:
         p: task coordinates of the platform (TCP), shape (..., 3): x [m], y [m], z [m].

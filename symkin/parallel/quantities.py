@@ -191,7 +191,9 @@ def _ik(d: Derivation) -> FunctionSpec:
         "Per leg (seed sec. 3.2, step 3), the equation |B_i(p) - C_i(q_i)| = L_i(q_i) solved in closed form: "
         "q = atan2(gamma, beta) + sigma atan2(sqrt(beta^2 + gamma^2 - alpha^2), -alpha) for a revolute "
         "actuator (a robust form of seed eqs. 8.18-8.20), the root of a quadratic for a prismatic one. "
-        f"Branches: {branches}. Where a leg's margin is negative p is out of its reach and its q is NaN.",
+        f"Branches: {branches} (positive: the platform joint B_i lies at a positive rotation about the actuator "
+        "axis from the elbow C_i, or the larger root of a prismatic actuator; negative: the other solution). "
+        "Where a leg's margin is negative p is out of its reach and its q is NaN.",
         [task_input(d.model)],
         [OutputSpec("joints", sympy.ImmutableMatrix([s.value for s in solutions]), "actuated joint variables q",
                     shape=(len(solutions),)),
