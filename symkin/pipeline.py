@@ -93,6 +93,8 @@ def resolve_request(model: Model, only: str | Sequence[str] | None = None,
                 continue
             fix = f"use one of: {', '.join(known)}" if known else f"the model has no {what}s"
             message = f"unknown {what} '{name}'"
+            if what == "output" and name in emitted_quantities():
+                message += f" for a {model.mechanism} mechanism (it is derived for the other kind)"
             if from_cli:
                 problems.append(Problem("<command line>", None, None, scene_key, message, fix))
             else:
