@@ -32,16 +32,16 @@ def _input_record(i) -> dict[str, Any]:
     return record
 
 
-def _coordinate_record(model: Model, joint) -> dict[str, Any]:
+def _coordinate_record(model: Model, coordinate) -> dict[str, Any]:
     """Name and type of a joint coordinate, and its position limits where the model declares them.
 
     Limits are numbers: their expressions evaluated at the parameters' default values (the
     analyses in :mod:`symkin.analysis` read them without sympy).
     """
-    record: dict[str, Any] = {"name": joint.name, "type": joint.type.value}
-    if joint.limits is not None:
+    record: dict[str, Any] = {"name": coordinate.name, "type": coordinate.type.value}
+    if coordinate.limits is not None:
         values = model.parameter_values
-        record["limits"] = [float(bound.xreplace(values)) for bound in joint.limits]
+        record["limits"] = [float(bound.xreplace(values)) for bound in coordinate.limits]
     return record
 
 
@@ -56,7 +56,7 @@ def build_manifest(model: Model, code: ModelCode, derived: list[str], backend_fi
     """
     import sympy
 
-    return {
+    manifest = {
         "manifest_version": MANIFEST_VERSION,
         "generator": {"symkin": __version__, "sympy": sympy.__version__},
         "model": {
@@ -65,7 +65,7 @@ def build_manifest(model: Model, code: ModelCode, derived: list[str], backend_fi
             "source": Path(model.source).name,
             "description": model.description,
             "dof": model.dof,
-            "coordinates": [_coordinate_record(model, j) for j in model.joints],
+            "coordinates": [_coordinate_record(model, c) for c in model.coordinates],
             "task_space": list(model.task_space),
         },
         "parameters": [{"name": p.name, "default": p.default, "unit": p.unit, "doc": p.doc, "fixed": p.fixed}
@@ -86,6 +86,24 @@ def build_manifest(model: Model, code: ModelCode, derived: list[str], backend_fi
             for f in code.functions
         ],
         "backends": {name: {"files": sorted(files)} for name, files in sorted(backend_files.items())},
+    }
+    if model.parallel is not None:
+        manifest["model"]["parallel"] = _parallel_record(model)
+    return manifest
+
+
+def _parallel_record(model: Model) -> dict[str, Any]:
+    """Legs, platform motion and home pose of a parallel model (home at the default parameters)."""
+    parallel = model.parallel
+    assert parallel is not None
+    home = None
+    if parallel.home is not None:
+        home = [float(e.xreplace(model.parameter_values)) for e in parallel.home]
+    return {
+        "motion": parallel.motion.value,
+        "legs": [{"name": leg.name, "topology": "".join(j.type.value for j in leg.joints),
+                  "joints": [j.name for j in leg.joints]} for leg in parallel.legs],
+        "home": home,
     }
 
 

@@ -97,7 +97,7 @@ def resolve_request(model: Model, only: str | Sequence[str] | None = None,
             the model file), or an explicit argument does (located at the command line).
     """
     problems: list[Problem] = []
-    known_outputs = emitted_quantities()
+    known_outputs = emitted_quantities(model.mechanism)
     pnames = tuple(p.name for p in model.parameters)
 
     def check(names: tuple[str, ...], known: Sequence[str], what: str, scene_key: str, from_cli: bool) -> None:
@@ -106,6 +106,8 @@ def resolve_request(model: Model, only: str | Sequence[str] | None = None,
                 continue
             fix = f"use one of: {', '.join(known)}" if known else f"the model has no {what}s"
             message = f"unknown {what} '{name}'"
+            if what == "output" and name in emitted_quantities():
+                message += f" for a {model.mechanism} mechanism (it is derived for the other kind)"
             if from_cli:
                 problems.append(Problem("<command line>", None, None, scene_key, message, fix))
             else:
@@ -184,7 +186,7 @@ def generate(model: Model, request: Request, progress: Progress = _quiet) -> Gen
         hash=model.hash,
         description=model.description,
         symkin_version=__version__,
-        coordinates=tuple(j.name for j in model.joints),
+        coordinates=tuple(j.name for j in model.coordinates),
         parameters=tuple(ParameterInfo(p.name, float(p.value), p.unit, p.doc, p.name in request.fixed)
                          for p in model.parameters),
         functions=tuple(functions),

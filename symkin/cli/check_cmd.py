@@ -28,8 +28,13 @@ def run_check(args: argparse.Namespace) -> int:
     for path in args.models:
         model = load_model(path, tip=args.tip if path.lower().endswith(".urdf") else None)
         request = pipeline.resolve_request(model)
-        print(f"{path}: ok - model '{model.name}', {model.dof} joints "
-              f"({', '.join(f'{j.name}:{j.type.value}' for j in model.joints)}), "
+        if model.parallel is None:
+            structure = f"{model.dof} joints ({', '.join(f'{j.name}:{j.type.value}' for j in model.joints)})"
+        else:
+            legs = ", ".join(f"{leg.name}:{''.join(j.type.value for j in leg.joints)}" for leg in model.parallel.legs)
+            structure = (f"parallel, {len(model.parallel.legs)} legs ({legs}), {model.dof} actuated "
+                         f"({', '.join(f'{j.name}:{j.type.value}' for j in model.coordinates)})")
+        print(f"{path}: ok - model '{model.name}', {structure}, "
               f"{len(model.parameters)} parameters, {len(model.bodies)} bodies, "
               f"task space [{', '.join(model.task_space)}]; "
               f"scene: {', '.join(request.outputs)} via {', '.join(request.backends)}")
@@ -45,6 +50,8 @@ def register_quantities(sub: argparse._SubParsersAction) -> None:
 def run_quantities(_args: argparse.Namespace) -> int:
     from symkin.derivation import registry
 
-    rows = [[q.name, q.summary] for q in registry().values() if q.emitted]
-    print(format_table(["output", "meaning"], rows, indent=""))
+    defs = {(q.name, q.mechanism): q for mechanism in ("serial", "parallel")
+            for q in registry(mechanism).values() if q.emitted}
+    rows = [[q.name, q.mechanism, q.summary] for q in defs.values()]
+    print(format_table(["output", "models", "meaning"], rows, indent=""))
     return 0

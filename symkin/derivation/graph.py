@@ -5,6 +5,10 @@ Quantities (``fk``, ``jacobian``, later ``mass_matrix``...) are registered with 
 :class:`Derivation` computes a quantity the first time it is asked for, together with
 exactly what it depends on, and remembers it: no call-order rules, nothing derived twice,
 nothing derived that was not needed (asking for ``fk`` never derives a Jacobian).
+
+A quantity belongs to serial chains (the default), to parallel mechanisms, or to ``any``
+model; one name may have a serial and a parallel derivation (``fk``, ``jacobian``), and
+asking a model for a quantity of the other kind is a clear :class:`DerivationError`.
 """
 
 from __future__ import annotations
@@ -31,6 +35,7 @@ class QuantityDef:
         solves_with: the emitted quantity whose (square) matrix this one inverts, e.g.
             ``mass_matrix`` for forward dynamics; its condition number bounds the accuracy any
             algorithm can reach (used by the stability analysis).  None if nothing is inverted.
+        mechanism: ``serial``, ``parallel`` or ``any``: the models it is derived for.
     """
 
     name: str
@@ -38,32 +43,46 @@ class QuantityDef:
     compute: Callable[["Derivation"], Any]
     emitted: bool
     solves_with: str | None = None
+    mechanism: str = "serial"
 
 
-_REGISTRY: dict[str, QuantityDef] = {}
+MECHANISMS = ("serial", "parallel", "any")
+
+#: name -> mechanism -> definition
+_REGISTRY: dict[str, dict[str, QuantityDef]] = {}
 
 
-def quantity(name: str, summary: str, emitted: bool = True,
-             solves_with: str | None = None) -> Callable[[Callable[["Derivation"], Any]], Callable[["Derivation"], Any]]:
-    """Register ``compute`` as the derivation of quantity ``name`` (see :class:`QuantityDef`)."""
+def quantity(name: str, summary: str, emitted: bool = True, solves_with: str | None = None,
+             mechanism: str = "serial") -> Callable[[Callable[["Derivation"], Any]], Callable[["Derivation"], Any]]:
+    """Register ``compute`` as the derivation of quantity ``name`` for ``mechanism`` models (see :class:`QuantityDef`)."""
+    if mechanism not in MECHANISMS:
+        raise ValueError(f"mechanism must be one of {MECHANISMS}, got {mechanism!r}")
 
     def register(compute: Callable[["Derivation"], Any]) -> Callable[["Derivation"], Any]:
-        if name in _REGISTRY:
+        defs = _REGISTRY.setdefault(name, {})
+        if mechanism in defs or "any" in defs or (mechanism == "any" and defs):
             raise ValueError(f"quantity {name!r} registered twice")
-        _REGISTRY[name] = QuantityDef(name, summary, compute, emitted, solves_with)
+        defs[mechanism] = QuantityDef(name, summary, compute, emitted, solves_with, mechanism)
         return compute
 
     return register
 
 
-def registry() -> dict[str, QuantityDef]:
-    """All registered quantities by name (a copy)."""
-    return dict(_REGISTRY)
+def _definition(name: str, mechanism: str) -> QuantityDef | None:
+    defs = _REGISTRY.get(name, {})
+    return defs.get(mechanism) or defs.get("any")
 
 
-def emitted_quantities() -> tuple[str, ...]:
-    """Names of the quantities that can be requested as generated functions."""
-    return tuple(name for name, q in _REGISTRY.items() if q.emitted)
+def registry(mechanism: str = "serial") -> dict[str, QuantityDef]:
+    """The quantities derivable for ``mechanism`` models, by name (a copy)."""
+    return {name: d for name in _REGISTRY if (d := _definition(name, mechanism)) is not None}
+
+
+def emitted_quantities(mechanism: str | None = None) -> tuple[str, ...]:
+    """Names of the quantities that can be requested as generated functions (for one kind of model, or any)."""
+    kinds = MECHANISMS if mechanism is None else (mechanism,)
+    return tuple(name for name, defs in _REGISTRY.items()
+                 if any((d := _definition(name, kind)) is not None and d.emitted for kind in kinds))
 
 
 class Derivation:
@@ -82,18 +101,28 @@ class Derivation:
         self.computed: list[str] = []
         self.seconds: dict[str, float] = {}
 
+    def _definition(self, name: str) -> QuantityDef:
+        if name not in _REGISTRY:
+            raise DerivationError(f"unknown quantity {name!r}; known: {', '.join(sorted(_REGISTRY))}")
+        definition = _definition(name, self.model.mechanism)
+        if definition is None:
+            other = " or ".join(sorted(_REGISTRY[name]))
+            raise DerivationError(
+                f"{name!r} is derived for {other} mechanisms, but model '{self.model.name}' is a "
+                f"{self.model.mechanism} mechanism; its outputs are: {', '.join(emitted_quantities(self.model.mechanism))}")
+        return definition
+
     def __getitem__(self, name: str) -> Any:
         if name in self._values:
             return self._values[name]
-        if name not in _REGISTRY:
-            raise DerivationError(f"unknown quantity {name!r}; known: {', '.join(sorted(_REGISTRY))}")
+        definition = self._definition(name)
         if name in self._active:
             raise DerivationError(f"quantity dependency cycle: {' -> '.join(self._active + [name])}")
         self._active.append(name)
         start = time.perf_counter()
         children_before = sum(self.seconds.values())
         try:
-            value = _REGISTRY[name].compute(self)
+            value = definition.compute(self)
         finally:
             self._active.pop()
         elapsed = time.perf_counter() - start
@@ -106,8 +135,9 @@ class Derivation:
         """The function specs of the requested emitted quantities, in request order."""
         specs = []
         for name in names:
-            if name not in _REGISTRY or not _REGISTRY[name].emitted:
-                raise DerivationError(f"{name!r} is not an output; outputs: {', '.join(emitted_quantities())}")
+            if name not in _REGISTRY or not self._definition(name).emitted:
+                outputs = ", ".join(emitted_quantities(self.model.mechanism))
+                raise DerivationError(f"{name!r} is not an output; outputs: {outputs}")
             spec = self[name]
             if not isinstance(spec, FunctionSpec):
                 raise DerivationError(f"quantity {name!r} did not produce a function spec")

@@ -13,7 +13,7 @@ def coordinate_input(model: Model, group: str) -> InputSpec:
         name=group,
         kind="vector",
         symbols=coordinates.symbols(model, group),
-        element_names=tuple(j.name for j in model.joints),
+        element_names=tuple(j.name for j in model.coordinates),
         units=coordinates.units(model, group),
         doc=coordinates.GROUPS[group].doc,
     )

@@ -14,6 +14,13 @@ import sympy
 from symkin.ir.spec import FunctionSpec
 
 
+#: Above this many operations (a Laplace-expanded 6x6 determinant, the Stewart-Gough closure
+#: Jacobians) outputs are evaluated through sympy's own CSE: printing and evaluating them as one
+#: flat expression takes minutes, and sharing subexpressions only changes how the same
+#: expression is evaluated.
+SHARED_EVALUATION_OPS = 20000
+
+
 def lambdify_spec(spec: FunctionSpec, args: Sequence[object], modules: str = "numpy",
                   values: Mapping[sympy.Symbol, sympy.Expr] | None = None) -> Callable[..., list]:
     """A function of ``args`` returning every output entry of ``spec`` (row-major, outputs in order).
@@ -24,7 +31,17 @@ def lambdify_spec(spec: FunctionSpec, args: Sequence[object], modules: str = "nu
         modules: ``"numpy"`` or ``"mpmath"``.
         values: substitutions applied first (e.g. parameters at their defaults).
     """
+    from symkin.optimize.opcount import spec_op_count
+
     values = dict(values or {})
     definitions = [(s, e.xreplace(values)) for s, e in spec.definitions]
     entries = [e.xreplace(values) for out in spec.outputs for e in out.entries]
-    return sympy.lambdify(list(args), entries, modules=modules, cse=lambda exprs: (definitions, exprs))
+    share = spec_op_count(spec) > SHARED_EVALUATION_OPS
+
+    def program(exprs: list[sympy.Expr]) -> tuple[list, list]:
+        if not share:
+            return definitions, exprs
+        shared, reduced = sympy.cse(exprs, symbols=sympy.numbered_symbols("_ref"), order="none")
+        return definitions + shared, reduced
+
+    return sympy.lambdify(list(args), entries, modules=modules, cse=program)

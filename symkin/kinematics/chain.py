@@ -61,7 +61,7 @@ def _canonical(axis: Vec3, angle: sympy.Expr) -> tuple[Vec3, sympy.Expr]:
     return axis, angle
 
 
-class _MovingFrame:
+class MovingFrame:
     """The frame being moved along the chain, with the factored rotation described above."""
 
     def __init__(self) -> None:
@@ -110,7 +110,7 @@ class _MovingFrame:
 
 def compose_chain(model: Model) -> ChainFrames:
     """Walk the chain of ``model`` and return every link frame, joint axis and the TCP."""
-    moving = _MovingFrame()
+    moving = MovingFrame()
     moving.apply(model.base)
     links = []
     axes = []

@@ -43,7 +43,7 @@ FORMAT_VERSION = 1
 #: would run for hours).
 MAX_JOINTS = 64
 
-TOP_LEVEL_KEYS = ("name", "description", "references", "parameters", "serial", "task_space",
+TOP_LEVEL_KEYS = ("name", "description", "references", "parameters", "serial", "parallel", "task_space",
                   "bodies", "gravity", "friction", "scene")
 
 JOINT_TYPES = {"R": JointType.REVOLUTE, "revolute": JointType.REVOLUTE,
@@ -192,17 +192,34 @@ def build_model(doc: Document, stem: str) -> Model:
     description = r.string(("description",), data.get("description", "")) or ""
     references = _references(r, data)
     parameters, derived = _parameters(r, data.get("parameters", {}))
-    if "serial" not in data:
-        r.fail((), "the model declares no mechanism", "add a 'serial:' section (see docs/model-format.md)")
+    if ("serial" in data) == ("parallel" in data):
+        r.fail((), "the model declares no mechanism" if "serial" not in data else
+               "the model declares both a serial chain and a parallel mechanism",
+               "write exactly one of 'serial:' or 'parallel:' (see docs/model-format.md)")
         raise ModelError(r.problems)
-    joints, base, tcp = _serial(r, data["serial"])
-    _check_name_clashes(r, parameters, derived, joints)
-    task_space = _task_space(r, data.get("task_space", "position"))
+    parallel = None
+    if "serial" in data:
+        joints, base, tcp = _serial(r, data["serial"])
+        _check_name_clashes(r, parameters, derived, joints)
+        task_space = _task_space(r, data.get("task_space", "position"))
+        coordinate_names = tuple(j.name for j in joints)
+    else:
+        from symkin.model.parallel_build import build_parallel, check_parallel_names, parallel_task_space
+
+        joints, base, tcp = (), (), ()
+        parallel = build_parallel(r, data["parallel"])
+        if parallel is None:
+            raise ModelError(r.problems)
+        task_space = parallel_task_space(r, data, parallel)
+        check_parallel_names(r, parameters, derived, parallel)
+        coordinate_names = tuple(j.variables[j.active] for leg in parallel.legs for j in leg.joints
+                                 if j.active is not None)
     links = tuple(j.link for j in joints)
     bodies = _bodies(r, data.get("bodies", []), links)
     gravity = r.vector3(("gravity",), data["gravity"]) if "gravity" in data else (ZERO, ZERO, ZERO)
-    friction = _friction(r, data.get("friction", {}), tuple(j.name for j in joints))
-    scene = _scene(r, data.get("scene", {}), parameters)
+    friction = _friction(r, data.get("friction", {}), coordinate_names)
+    scene = _scene(r, data.get("scene", {}), parameters,
+                   ("fk", "jacobian") if parallel is None else ("closure", "closure_jacobians"))
 
     if r.problems:
         raise ModelError(r.problems)
@@ -223,6 +240,7 @@ def build_model(doc: Document, stem: str) -> Model:
         gravity=gravity or (ZERO, ZERO, ZERO),
         friction=friction,
         scene=scene,
+        parallel=parallel,
         locations=dict(doc.marks),
     )
 
@@ -769,11 +787,12 @@ def _friction(r: _Reader, value: Any, joint_names: tuple[str, ...]) -> tuple[Fri
     return tuple(out)
 
 
-def _scene(r: _Reader, value: Any, parameters: tuple[Parameter, ...]) -> Scene:
+def _scene(r: _Reader, value: Any, parameters: tuple[Parameter, ...],
+           default_outputs: tuple[str, ...] = ("fk", "jacobian")) -> Scene:
     """The default request; output and backend names are checked by the pipeline, which knows them."""
     path: KeyPath = ("scene",)
     section = r.mapping(path, value, optional=("outputs", "fixed", "backends", "float32", "combine"))
-    default = Scene(outputs=("fk", "jacobian"))
+    default = Scene(outputs=default_outputs)
     if section is None:
         return default
 

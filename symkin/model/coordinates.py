@@ -1,6 +1,7 @@
 """Generalized-coordinate symbols of a model and the input groups of generated functions.
 
-Every joint ``j`` owns four symbols: its coordinate ``j`` (in ``q``), velocity ``j_d``
+The coordinates are a serial chain's joints or a parallel mechanism's actuated joint
+variables (:attr:`symkin.model.schema.Model.coordinates`).  Every coordinate ``j`` owns four symbols: its coordinate ``j`` (in ``q``), velocity ``j_d``
 (in ``qd``), acceleration ``j_dd`` (in ``qdd``) and actuator effort ``tau_j`` (in
 ``tau``).  Symbols are created on demand: sympy symbols with equal name and assumptions
 are equal, so every module sees the same symbols without sharing state.
@@ -43,13 +44,13 @@ def symbol_name(group: str, joint_name: str) -> str:
 
 def symbols(model: Model, group: str) -> tuple[sympy.Symbol, ...]:
     """The symbols of one coordinate group, in joint order."""
-    return tuple(sympy.Symbol(symbol_name(group, j.name), real=True) for j in model.joints)
+    return tuple(sympy.Symbol(symbol_name(group, j.name), real=True) for j in model.coordinates)
 
 
 def units(model: Model, group: str) -> tuple[str, ...]:
     """Per-joint units of one coordinate group."""
     g = GROUPS[group]
-    return tuple(g.revolute_unit if j.type is JointType.REVOLUTE else g.prismatic_unit for j in model.joints)
+    return tuple(g.revolute_unit if j.type is JointType.REVOLUTE else g.prismatic_unit for j in model.coordinates)
 
 
 def all_symbol_names(joint_name: str) -> tuple[str, ...]:

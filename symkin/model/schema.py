@@ -171,6 +171,129 @@ class Scene:
 
 
 @dataclass(frozen=True)
+class Coordinate:
+    """One generalized coordinate q_i: an actuated joint variable (revolute: rad, prismatic: m).
+
+    ``limits`` are (lower, upper) position bounds, or None where the model declares none.
+    """
+
+    name: str
+    type: JointType
+    limits: tuple[sympy.Expr, sympy.Expr] | None = None
+
+
+class LegJointType(str, Enum):
+    """Joint types of the legs of parallel mechanisms (seed Fig. 8.2) and their degrees of freedom."""
+
+    R = "R"  # revolute: rotation about ``axes[0]``
+    P = "P"  # prismatic: translation along ``axes[0]``
+    U = "U"  # universal: rotation about ``axes[0]``, then about ``axes[1]`` (moved frame)
+    S = "S"  # spherical: rotations about ``axes[0]``, ``axes[1]``, ``axes[2]`` (moved frames)
+    C = "C"  # cylindrical: translation along ``axes[0]``, then rotation about it
+
+    @property
+    def dof(self) -> int:
+        return {"R": 1, "P": 1, "U": 2, "S": 3, "C": 2}[self.value]
+
+
+@dataclass(frozen=True)
+class LegJoint:
+    """One joint of a leg of a parallel mechanism.
+
+    The leg frame moves through ``origin`` (fixed operations, as a serial chain's
+    ``origin``) and then through the joint's motion: one elementary motion per degree of
+    freedom, in the order of :attr:`variables`.
+
+    Attributes:
+        name: joint name (with the leg's number appended, e.g. ``theta1``).
+        type: R, P, U, S or C.
+        axes: unit axis of each elementary motion, in the moved joint frame (one shared axis for C).
+        origin: fixed operations from the previous joint's frame (or the leg's base frame).
+        variables: coordinate name of each elementary motion: ``name`` for R and P,
+            ``name_1``, ``name_2`` (, ``name_3``) for U and S, ``name_t``, ``name_r`` for C.
+        active: index into ``variables`` of the actuated motion, or None (passive joint).
+            R and P joints and the slide of a C joint can be actuated.
+        offset: constant added to the actuated variable (e.g. the strut length at zero stroke).
+    """
+
+    name: str
+    type: LegJointType
+    axes: tuple[Vec3, ...]
+    origin: tuple[Op, ...]
+    variables: tuple[str, ...]
+    active: int | None = None
+    offset: sympy.Expr = sympy.Integer(0)
+
+    @property
+    def motions(self) -> tuple[tuple[str, Vec3, bool], ...]:
+        """(variable, axis, is_rotation) of every elementary motion, in order."""
+        rotation = {LegJointType.R: (True,), LegJointType.P: (False,), LegJointType.U: (True, True),
+                    LegJointType.S: (True, True, True), LegJointType.C: (False, True)}[self.type]
+        axes = self.axes * 2 if self.type is LegJointType.C else self.axes  # C: slide along and turn about one axis
+        return tuple(zip(self.variables, axes, rotation))
+
+
+@dataclass(frozen=True)
+class Leg:
+    """One kinematic chain from the base to the moving platform.
+
+    Closure (seed sec. 3.2, "Inverse Kinematics" step 1): walking the joints from the leg's
+    base frame must end in the platform's attachment frame,
+    ``base_T_leg * prod_j(origin_j * motion_j) = base_T_platform(p) * platform_T_attachment``.
+
+    Attributes:
+        name: leg name (``leg1``...).
+        base: fixed operations from the base frame to the leg's first joint frame (A_i).
+        joints: the joints, base to platform.
+        platform: fixed operations from the platform frame to the attachment frame (B_i).
+        ik_branch: +1 or -1, the root chosen by the closed-form inverse kinematics (see
+            ``docs/model-format.md``, "Branches").
+    """
+
+    name: str
+    base: tuple[Op, ...]
+    joints: tuple[LegJoint, ...]
+    platform: tuple[Op, ...]
+    ik_branch: int = 1
+
+
+class PlatformMotion(str, Enum):
+    """What the moving platform can do, and hence its task coordinates p."""
+
+    TRANSLATION = "translation"  # p = (x, y, z), orientation constant (TPM, seed sec. 2.2.1)
+    POSE = "pose"  # p = (x, y, z, roll, pitch, yaw), R = Rz(yaw) Ry(pitch) Rx(roll)
+
+
+@dataclass(frozen=True)
+class Parallel:
+    """The structure of a parallel mechanism.
+
+    Attributes:
+        motion: translation (3 DoF) or full pose (6 DoF) of the platform.
+        legs: the kinematic chains, in order.
+        fk_branch: +1 or -1, the root of the closed-form forward kinematics (trilateration).
+        identical: identical (idle) conditions declared in addition to the detected ones
+            (f_id of eq. 8.2).
+        constraints: constraints that must hold for the mechanism to move (s of eq. 8.2).
+        kind: ``delta`` when built from the DELTA shorthand, else ``legs``.
+        home: a reachable platform pose (task coordinates): the default start of numerical
+            solvers and the centre of sampled workspaces; None if not declared.
+    """
+
+    motion: PlatformMotion
+    legs: tuple[Leg, ...]
+    fk_branch: int = -1
+    identical: int = 0
+    constraints: int = 0
+    kind: str = "legs"
+    home: tuple[sympy.Expr, ...] | None = None
+
+    @property
+    def task_dof(self) -> int:
+        return 3 if self.motion is PlatformMotion.TRANSLATION else 6
+
+
+@dataclass(frozen=True)
 class Model:
     """A validated mechanism model.
 
@@ -185,11 +308,13 @@ class Model:
         joints: serial chain, base to tip.
         base: fixed operations from the world/base frame to the first joint's parent frame.
         tcp: fixed operations from the last link frame to the TCP frame.
-        task_space: names of task-space coordinates (see symkin.kinematics.task_space).
+        task_space: names of task-space coordinates (see symkin.kinematics.task_space); for a
+            parallel mechanism x, y, z (translation) or x, y, z, roll, pitch, yaw (pose).
         bodies: mass properties.
         gravity: gravity acceleration vector in the base frame.
         friction: per-joint friction.
         scene: default request.
+        parallel: legs and platform of a parallel mechanism, None for a serial chain.
     """
 
     name: str
@@ -207,6 +332,8 @@ class Model:
     gravity: Vec3 = (sympy.Integer(0), sympy.Integer(0), sympy.Integer(0))
     friction: tuple[Friction, ...] = ()
     scene: Scene = field(default_factory=lambda: Scene(outputs=("fk", "jacobian")))
+    #: the legs and platform of a parallel mechanism (``joints`` is empty then), None for serial chains.
+    parallel: Parallel | None = None
     #: key path -> (line, column) in the model file, for located messages of later stages.
     locations: dict = field(default_factory=dict, compare=False, repr=False)
 
@@ -221,9 +348,32 @@ class Model:
         return Problem(self.source, line, column, format_path(path), message, fix)
 
     @property
+    def mechanism(self) -> str:
+        """``serial`` or ``parallel``."""
+        return "serial" if self.parallel is None else "parallel"
+
+    @property
+    def coordinates(self) -> tuple[Joint | Coordinate, ...]:
+        """The generalized coordinates q, each with a ``name`` and a ``type`` (R or P).
+
+        A serial chain's coordinates are its joints; a parallel mechanism's are its actuated
+        joint variables, leg by leg (the passive ones follow from the loop closure).
+        """
+        if self.parallel is None:
+            return self.joints
+        out = []
+        for leg in self.parallel.legs:
+            for joint in leg.joints:
+                if joint.active is not None:
+                    _, _, rotation = joint.motions[joint.active]
+                    out.append(Coordinate(joint.variables[joint.active],
+                                          JointType.REVOLUTE if rotation else JointType.PRISMATIC))
+        return tuple(out)
+
+    @property
     def dof(self) -> int:
-        """Number of joint coordinates n."""
-        return len(self.joints)
+        """Number of generalized coordinates n (joints of a chain, actuators of a parallel mechanism)."""
+        return len(self.coordinates)
 
     @property
     def parameter_values(self) -> dict[sympy.Symbol, sympy.Expr]:

@@ -1,0 +1,326 @@
+"""Validate the ``parallel:`` section of a model file and build its :class:`Parallel` structure.
+
+A parallel mechanism is a base, a moving platform and legs: joint chains from the base
+to the platform (seed sec. 1.3, "Parallel Mechanisms").  The section is either the DELTA
+shorthand (see :mod:`symkin.model.delta`) or a list of legs::
+
+    parallel:
+      motion: pose                    # translation (x, y, z) or pose (x, y, z, roll, pitch, yaw)
+      chains:                         # leg types, shared by several legs (optional)
+        ups:
+          - {name: ub, type: U, axes: [[0, 0, 1], [0, 1, 0]]}
+          - {name: l, type: P, axis: [1, 0, 0], active: true}
+          - {name: sp, type: S}
+      legs:
+        - {chain: ups, base: {radius: rb, angle: deg(-10)}, platform: {radius: rp, angle: deg(-50)}}
+
+Joint names get the leg's number appended (``l`` -> ``l1`` in the first leg).  The format
+is documented in ``docs/model-format.md`` ("Parallel mechanisms").
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import sympy
+
+from symkin.model.build import X_AXIS, Y_AXIS, Z_AXIS, ZERO, _describe, _frame_ops, _ops, _Reader, _unit_axis
+from symkin.model.schema import Leg, LegJoint, LegJointType, Op, Parallel, PlatformMotion, Rotation, Translation, Vec3
+from symkin.model.yaml_source import KeyPath
+
+PARALLEL_KEYS = ("delta", "motion", "chains", "legs", "fk_branch", "mobility", "home")
+LEG_KEYS = ("name", "chain", "joints", "base", "platform", "ik_branch")
+JOINT_KEYS = ("name", "type", "axis", "axes", "origin", "active", "offset")
+BRANCHES = {"positive": 1, "negative": -1}
+#: Task coordinates p of a parallel mechanism by platform motion (names of task_space components).
+TASK_COORDINATES = {PlatformMotion.TRANSLATION: ("x", "y", "z"),
+                    PlatformMotion.POSE: ("x", "y", "z", "roll", "pitch", "yaw")}
+#: Names of the vector inputs of parallel functions (besides q): platform pose and passive joints.
+PARALLEL_INPUT_NAMES = ("p", "s")
+
+#: Default motion axes of each joint type (in the joint frame).
+DEFAULT_AXES: dict[LegJointType, tuple[Vec3, ...]] = {
+    LegJointType.R: (Z_AXIS,),
+    LegJointType.P: (Z_AXIS,),
+    LegJointType.C: (Z_AXIS,),
+    LegJointType.U: (Z_AXIS, Y_AXIS),
+    LegJointType.S: (Z_AXIS, Y_AXIS, X_AXIS),
+}
+_ACTUABLE = {LegJointType.R: 0, LegJointType.P: 0, LegJointType.C: 0}  # index of the actuable motion
+
+
+def variable_names(name: str, jtype: LegJointType) -> tuple[str, ...]:
+    """Coordinate names of a leg joint's motions: ``name`` (R, P), ``name_1``... (U, S), ``name_t``, ``name_r`` (C)."""
+    if jtype in (LegJointType.R, LegJointType.P):
+        return (name,)
+    if jtype is LegJointType.C:
+        return (f"{name}_t", f"{name}_r")
+    return tuple(f"{name}_{k + 1}" for k in range(jtype.dof))
+
+
+def build_parallel(r: _Reader, section: Any) -> Parallel | None:
+    """The parallel structure of ``section`` (problems are recorded in ``r``)."""
+    path: KeyPath = ("parallel",)
+    section = r.mapping(path, section, optional=PARALLEL_KEYS)
+    if section is None:
+        return None
+    identical, constraints = _mobility(r, path + ("mobility",), section.get("mobility", {}))
+    if "delta" in section:
+        for key in ("motion", "chains", "legs", "fk_branch"):
+            if key in section:
+                r.fail(path + (key,), f"'{key}' cannot be combined with the DELTA shorthand 'delta:'",
+                       "remove it: the shorthand defines the legs, the motion and the branches")
+        from symkin.model.delta import delta_legs
+
+        built = delta_legs(r, path + ("delta",), section["delta"])
+        if built is None:
+            return None
+        legs, fk_branch = built
+        home = _home(r, path + ("home",), section.get("home"), PlatformMotion.TRANSLATION)
+        return _checked(r, path, Parallel(PlatformMotion.TRANSLATION, legs, fk_branch, identical, constraints, "delta",
+                                          home))
+    for key in ("motion", "legs"):
+        if key not in section:
+            r.fail(path, f"missing required key '{key}'", f"add '{key}:' (or use the DELTA shorthand 'delta:')")
+    if "motion" not in section or "legs" not in section:
+        return None
+    motion = _motion(r, path + ("motion",), section["motion"])
+    chains = _chains(r, path + ("chains",), section.get("chains", {}))
+    fk_branch = _branch(r, path + ("fk_branch",), section.get("fk_branch", "negative"))
+    legs = _legs(r, path + ("legs",), section["legs"], chains)
+    if motion is None or fk_branch is None or legs is None:
+        return None
+    home = _home(r, path + ("home",), section.get("home"), motion)
+    return _checked(r, path, Parallel(motion, legs, fk_branch, identical, constraints, home=home))
+
+
+def _checked(r: _Reader, path: KeyPath, parallel: Parallel) -> Parallel:
+    """Structure-wide checks: unique names, as many actuators as the platform has DoF."""
+    seen: dict[str, str] = {}
+    for leg in parallel.legs:
+        for joint in leg.joints:
+            for name in (joint.name,) + joint.variables:
+                if name in seen and seen[name] != joint.name:
+                    r.fail(path, f"the name '{name}' is used twice (joints '{seen[name]}' and '{joint.name}')",
+                           "rename a joint (leg numbers are appended to joint names)")
+                seen.setdefault(name, joint.name)
+    if len({leg.name for leg in parallel.legs}) != len(parallel.legs):
+        r.fail(path + ("legs",), "two legs have the same name", "give every leg its own name")
+    active = sum(1 for leg in parallel.legs for joint in leg.joints if joint.active is not None)
+    if active != parallel.task_dof:
+        r.fail(path, f"the platform has {parallel.task_dof} degrees of freedom ({parallel.motion.value}) but the legs "
+                     f"have {active} active joints",
+               f"mark exactly {parallel.task_dof} joints 'active: true' (fully actuated, seed sec. 2.2)")
+    if len(parallel.legs) < 2:
+        r.fail(path + ("legs",), "a parallel mechanism has at least two legs (seed sec. 1.3)",
+               "add legs, or describe a single chain under 'serial:'")
+    return parallel
+
+
+def _home(r: _Reader, path: KeyPath, value: Any, motion: PlatformMotion) -> tuple[sympy.Expr, ...] | None:
+    """The optional home pose: one expression per task coordinate."""
+    if value is None:
+        return None
+    names = TASK_COORDINATES[motion]
+    items = r.sequence(path, value, len(names), f"task coordinates [{', '.join(names)}]")
+    if items is None:
+        return None
+    parts = [r.expr(path + (i,), v) for i, v in enumerate(items)]
+    return None if any(p is None for p in parts) else tuple(parts)  # type: ignore[arg-type]
+
+
+def _mobility(r: _Reader, path: KeyPath, value: Any) -> tuple[int, int]:
+    """Declared identical conditions f_id and constraints s of eq. (8.2), non-negative integers."""
+    section = r.mapping(path, value, optional=("identical", "constraints"))
+    counts = []
+    for key in ("identical", "constraints"):
+        item = (section or {}).get(key, 0)
+        if isinstance(item, bool) or not isinstance(item, int) or item < 0:
+            r.fail(path + (key,), f"'{key}' must be a non-negative integer, got {_describe(item)}", "write e.g. 0 or 1")
+            item = 0
+        counts.append(item)
+    return counts[0], counts[1]
+
+
+def _motion(r: _Reader, path: KeyPath, value: Any) -> PlatformMotion | None:
+    for motion in PlatformMotion:
+        if value == motion.value:
+            return motion
+    r.fail(path, f"unknown platform motion {_describe(value)}",
+           "use 'translation' (x, y, z; a TPM) or 'pose' (x, y, z, roll, pitch, yaw)")
+    return None
+
+
+def _branch(r: _Reader, path: KeyPath, value: Any) -> int | None:
+    if isinstance(value, str) and value in BRANCHES:
+        return BRANCHES[value]
+    r.fail(path, f"unknown branch {_describe(value)}", "write 'positive' or 'negative' (see 'Branches' in the docs)")
+    return None
+
+
+def _chains(r: _Reader, path: KeyPath, value: Any) -> dict[str, tuple[KeyPath, list[Any]]]:
+    section = r.mapping(path, value, optional=tuple(value) if isinstance(value, dict) else ())
+    if section is None:
+        return {}
+    out = {}
+    for cname, joints in section.items():
+        if r.name(path + (cname,), cname) is None:
+            continue
+        items = r.sequence(path + (cname,), joints, what="joints")
+        if items is not None:
+            out[cname] = (path + (cname,), items)
+    return out
+
+
+def _legs(r: _Reader, path: KeyPath, value: Any, chains: dict[str, tuple[KeyPath, list[Any]]]) -> tuple[Leg, ...] | None:
+    items = r.sequence(path, value, what="legs")
+    if items is None:
+        return None
+    legs = []
+    for i, item in enumerate(items):
+        lpath = path + (i,)
+        item = r.mapping(lpath, item, required=("base", "platform"), optional=LEG_KEYS)
+        if item is None or "base" not in item or "platform" not in item:
+            continue
+        number = i + 1
+        name = r.name(lpath + ("name",), item["name"]) if "name" in item else f"leg{number}"
+        if ("chain" in item) == ("joints" in item):
+            r.fail(lpath, "a leg needs exactly one of 'chain:' (a name under 'parallel.chains') or 'joints:'",
+                   "keep one of the two keys")
+            continue
+        if "chain" in item:
+            if item["chain"] not in chains:
+                known = ", ".join(chains) or "none declared"
+                r.fail(lpath + ("chain",), f"unknown chain {_describe(item['chain'])}", f"chains: {known}")
+                continue
+            jpath, entries = chains[item["chain"]]
+        else:
+            jpath = lpath + ("joints",)
+            entries = r.sequence(jpath, item["joints"], what="joints")
+            if entries is None:
+                continue
+        joints = [_joint(r, jpath + (k,), entry, number) for k, entry in enumerate(entries)]
+        base = attachment(r, lpath + ("base",), item["base"])
+        platform = attachment(r, lpath + ("platform",), item["platform"])
+        branch = _branch(r, lpath + ("ik_branch",), item.get("ik_branch", "positive"))
+        if not entries:
+            r.fail(jpath, "the leg has no joints", "declare the joints from the base to the platform")
+        if name is None or None in joints or base is None or platform is None or branch is None:
+            continue
+        legs.append(Leg(name, base, tuple(joints), platform, branch))  # type: ignore[arg-type]
+    return tuple(legs)
+
+
+def attachment(r: _Reader, path: KeyPath, value: Any) -> tuple[Op, ...] | None:
+    """An attachment frame: ``{xyz, rpy}`` or polar ``{radius, angle, z}`` = Rz(angle) Trans(radius, 0, z).
+
+    The polar form is the seed's base_T_A_i (sec. 3.2.1): the leg frame's x axis points
+    from the centre towards the joint, z is the base's z.
+    """
+    if isinstance(value, dict) and ({"radius", "angle"} & set(value)):
+        section = r.mapping(path, value, required=("radius", "angle"), optional=("z",))
+        if section is None or "radius" not in section or "angle" not in section:
+            return None
+        radius = r.expr(path + ("radius",), section["radius"])
+        angle = r.expr(path + ("angle",), section["angle"])
+        height = r.expr(path + ("z",), section["z"]) if "z" in section else ZERO
+        if radius is None or angle is None or height is None:
+            return None
+        return _ops(Rotation(Z_AXIS, angle), Translation((radius, ZERO, height)))
+    return _frame_ops(r, path, value)
+
+
+def _joint(r: _Reader, path: KeyPath, item: Any, number: int) -> LegJoint | None:
+    item = r.mapping(path, item, required=("name", "type"), optional=JOINT_KEYS)
+    if item is None or "name" not in item or "type" not in item:
+        return None
+    base_name = r.name(path + ("name",), item["name"])
+    jtype = next((t for t in LegJointType if t.value == item["type"]), None)
+    if jtype is None:
+        r.fail(path + ("type",), f"unknown joint type {_describe(item['type'])}",
+               "use R (revolute), P (prismatic), U (universal), S (spherical) or C (cylindrical)")
+        return None
+    axes = _axes(r, path, item, jtype)
+    origin = _frame_ops(r, path + ("origin",), item["origin"]) if "origin" in item else ()
+    active = item.get("active", False)
+    if not isinstance(active, bool):
+        r.fail(path + ("active",), f"'active' must be true or false, got {_describe(active)}", "write true or false")
+        return None
+    if active and jtype not in _ACTUABLE:
+        r.fail(path + ("active",), f"a {jtype.value} joint cannot be actuated",
+               "actuate an R joint (rotary motor), a P joint (linear actuator) or the slide of a C joint (piston)")
+        return None
+    offset = ZERO
+    if "offset" in item:
+        if not active:
+            r.fail(path + ("offset",), "an offset applies to the actuated variable of an active joint",
+                   "remove 'offset' or mark the joint 'active: true'")
+            return None
+        offset = r.expr(path + ("offset",), item["offset"])
+    if base_name is None or axes is None or origin is None or offset is None:
+        return None
+    name = f"{base_name}{number}"
+    return LegJoint(name, jtype, axes, origin, variable_names(name, jtype), _ACTUABLE[jtype] if active else None,
+                    offset)
+
+
+def _axes(r: _Reader, path: KeyPath, item: dict[str, Any], jtype: LegJointType) -> tuple[Vec3, ...] | None:
+    single = jtype in (LegJointType.R, LegJointType.P, LegJointType.C)
+    key, other = ("axis", "axes") if single else ("axes", "axis")
+    if other in item:
+        r.fail(path + (other,), f"a {jtype.value} joint takes '{key}', not '{other}'", f"write '{key}:'")
+        return None
+    if key not in item:
+        axes = DEFAULT_AXES[jtype]
+    elif single:
+        axis = _unit_axis(r, path + ("axis",), item["axis"])
+        if axis is None:
+            return None
+        axes = (axis,)
+    else:
+        rows = r.sequence(path + ("axes",), item["axes"], jtype.dof, "axes")
+        if rows is None:
+            return None
+        parsed = [_unit_axis(r, path + ("axes", k), row) for k, row in enumerate(rows)]
+        if any(a is None for a in parsed):
+            return None
+        axes = tuple(parsed)  # type: ignore[arg-type]
+    for k in range(1, len(axes)):
+        cross = sympy.Matrix(axes[k - 1]).cross(sympy.Matrix(axes[k]))
+        if cross.is_zero_matrix:
+            r.fail(path + ("axes",), f"axes {k} and {k + 1} of the {jtype.value} joint are parallel",
+                   "the axes of a U or S joint are not parallel (usually perpendicular)")
+            return None
+    return axes
+
+
+def parallel_task_space(r: _Reader, data: dict[str, Any], parallel: Parallel) -> tuple[str, ...]:
+    """The task coordinates follow from the platform motion; a model may not set them otherwise."""
+    if "task_space" in data:
+        r.fail(("task_space",), "a parallel mechanism's task space follows from 'parallel.motion'",
+               "remove 'task_space:' (translation gives [x, y, z], pose [x, y, z, roll, pitch, yaw])")
+    if data.get("bodies"):
+        r.fail(("bodies",), "bodies of parallel mechanisms are not supported yet (kinematics only)",
+               "remove 'bodies:' from the parallel model")
+    return TASK_COORDINATES[parallel.motion]
+
+
+def check_parallel_names(r: _Reader, parameters: tuple, derived: tuple, parallel: Parallel) -> None:
+    """Parameters may not take the names of joint variables, task coordinates or input vectors."""
+    from symkin.model import coordinates
+
+    taken: dict[str, str] = {}
+    for name in PARALLEL_INPUT_NAMES:
+        taken[name] = f"the input vector '{name}' of generated functions"
+    for name in TASK_COORDINATES[parallel.motion]:
+        taken[name] = f"the task coordinate '{name}'"
+    for leg in parallel.legs:
+        for joint in leg.joints:
+            for k, variable in enumerate(joint.variables):
+                symbols = coordinates.all_symbol_names(variable) if k == joint.active else (variable,)
+                for symbol in symbols:
+                    taken[symbol] = f"the symbol '{symbol}' of joint '{joint.name}' ({leg.name})"
+    for p in tuple(parameters) + tuple(derived):
+        if p.name in taken:
+            r.fail(("parameters", p.name), f"parameter '{p.name}' clashes with {taken[p.name]}",
+                   "rename the parameter")

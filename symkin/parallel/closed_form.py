@@ -1,0 +1,118 @@
+"""Closed-form inverse and forward kinematics of legs in distance form (seed sec. 3.2.1).
+
+Inverse kinematics, per leg (seed "Inverse Kinematics" step 3), for the equation
+f_i(q_i, p) = (|B_i - C_i|^2 - L_i^2) / 2 = 0 of :mod:`symkin.parallel.distance`, with
+v = q_i + offset:
+
+* revolute actuator before the rod (DELTA): C_i runs on a circle, so
+  f = alpha + beta cos v + gamma sin v exactly, and
+
+      v = atan2(gamma, beta) + sigma * atan2(sqrt(beta^2 + gamma^2 - alpha^2), -alpha).
+
+  This replaces the seed's eqs. (8.18)-(8.20), which are inconsistent (eq. 8.20 has
+  theta_1 on both sides, and 8.19 leaves the sign of theta_2 open).  The atan2 form is
+  well conditioned everywhere, including near the workspace boundary where arccos is not,
+  and the branch is explicit: sigma = +1 puts B_i at a positive rotation (right hand about
+  the actuator axis, less than half a turn) from the elbow C_i, sigma = -1 at a negative one.
+* prismatic actuator (before the rod, as a linear DELTA, or inside it, as a Stewart-Gough
+  strut): f is a quadratic c2 v^2 + c1 v + c0 and sigma = +1 takes the larger root.
+
+In both cases the radicand is returned as the leg's *margin*: >= 0 exactly when the leg
+reaches p; where it is negative, the square root makes q_i NaN (IEEE), never a wrong number.
+
+Forward kinematics of a translational platform on three distance legs: trilateration of
+the spheres |P - S_i| = L_i, S_i = C_i(q) - b_i (the seed's virtual frames C'_i).  With
+u = S2 - S1, v = S3 - S1, n = u x v, subtracting the sphere equations gives
+u.(P - S1) = h2 = (L1^2 - L2^2 + |u|^2)/2 and v.(P - S1) = h3 = (L1^2 - L3^2 + |v|^2)/2,
+whose solutions are P = S1 + w + t n with
+
+    w = (h2 (v x n) + h3 (n x u)) / |n|^2,    t = sigma sqrt((L1^2 - |w|^2) / |n|^2).
+
+The two roots are mirror images through the plane of the centres; sigma picks the
+geometrically meaningful one (for the DELTA: the TCP below its elbows), and the margin
+L1^2 - |w|^2 < 0 (no intersection) makes P NaN.
+"""
+
+from __future__ import annotations
+
+import random
+from dataclasses import dataclass
+
+import sympy
+
+from symkin.errors import DerivationError
+from symkin.parallel.distance import DistanceLeg
+
+
+@dataclass(frozen=True)
+class Solution:
+    """A closed-form solution and its margin (>= 0 iff it is real)."""
+
+    value: sympy.Expr
+    margin: sympy.Expr
+
+
+def trig_coefficients(f: sympy.Expr, v: sympy.Symbol) -> tuple[sympy.Expr, sympy.Expr, sympy.Expr]:
+    """(alpha, beta, gamma) with f(v) = alpha + beta cos v + gamma sin v.
+
+    Read off exactly from f at v = 0, pi/2, pi, -pi/2, then checked at a random point, so
+    that a leg whose equation is not of this form is refused instead of solved wrongly.
+
+    Raises:
+        DerivationError: f is not a first-order trigonometric polynomial in v.
+    """
+    at = {k: f.xreplace({v: angle}) for k, angle in (("0", 0), ("pi", sympy.pi), ("+", sympy.pi / 2),
+                                                      ("-", -sympy.pi / 2))}
+    alpha = sympy.expand((at["0"] + at["pi"]) / 2)
+    beta = sympy.expand((at["0"] - at["pi"]) / 2)
+    gamma = sympy.expand((at["+"] - at["-"]) / 2)
+    rng = random.Random(7)
+    point = {s: sympy.Float(rng.uniform(0.3, 1.3)) for s in f.free_symbols - {v}}
+    probe = sympy.Float(rng.uniform(-3, 3))
+    expected = f.xreplace(point).xreplace({v: probe})
+    model = (alpha + beta * sympy.cos(v) + gamma * sympy.sin(v)).xreplace(point).xreplace({v: probe})
+    if abs(sympy.N(expected - model)) > 1e-9 * (1 + abs(sympy.N(expected))):
+        raise DerivationError("the leg equation is not of the form alpha + beta cos q + gamma sin q")
+    return alpha, beta, gamma
+
+
+def solve_leg(leg: DistanceLeg) -> Solution:
+    """q_i(p) of one leg in distance form, with the branch ``leg.leg.ik_branch``.
+
+    Raises:
+        DerivationError: the actuator does not change the leg's equation, or the equation
+            has no closed form here.
+    """
+    f = leg.constraint
+    if leg.q not in f.free_symbols:
+        raise DerivationError(f"leg '{leg.leg.name}': its actuator {leg.q} does not change the rod's distance")
+    v = sympy.Dummy("v", real=True)
+    f_v = f.xreplace({leg.q: v - leg.offset})
+    sigma = leg.leg.ik_branch
+    if leg.rotation:
+        alpha, beta, gamma = trig_coefficients(f_v, v)
+        margin = beta**2 + gamma**2 - alpha**2
+        value = sympy.atan2(gamma, beta) + sigma * sympy.atan2(sympy.sqrt(margin), -alpha)
+    else:
+        poly = sympy.Poly(sympy.expand(f_v), v)
+        if poly.degree() != 2 or not poly.LC().is_number:
+            raise DerivationError(f"leg '{leg.leg.name}': the rod equation is not a quadratic in {leg.q}")
+        c2, c1, c0 = (poly.coeff_monomial(v**k) for k in (2, 1, 0))
+        margin = c1**2 - 4 * c2 * c0
+        value = (-c1 + sigma * sympy.sign(c2) * sympy.sqrt(margin)) / (2 * c2)
+    return Solution(value - leg.offset, margin)
+
+
+def trilaterate(legs: tuple[DistanceLeg, ...], sigma: int) -> tuple[sympy.Matrix, sympy.Expr]:
+    """P(q) of a translational platform on three distance legs and its margin (see module docstring)."""
+    S = [sympy.Matrix(leg.C) - sympy.Matrix(leg.b) for leg in legs]
+    r2 = [leg.L2 for leg in legs]
+    u, v = S[1] - S[0], S[2] - S[0]
+    n = u.cross(v)
+    nn = n.dot(n)
+    h2 = (r2[0] - r2[1] + u.dot(u)) / 2
+    h3 = (r2[0] - r2[2] + v.dot(v)) / 2
+    w = (h2 * v.cross(n) + h3 * n.cross(u)) / nn
+    margin = r2[0] - w.dot(w)
+    t = sigma * sympy.sqrt(margin / nn)
+    return S[0] + w + t * n, margin

@@ -1,0 +1,108 @@
+"""Legs reduced to one distance equation: point joint - rod - point joint (seed sec. 3.2.1).
+
+Many legs end in a rod between two *point joints* (U or S: their rotations leave the joint
+centre in place): the DELTA's RUU (rod b between two U joints), the Stewart-Gough UPS and
+SPS, UPU, PUU, RUS...  The rod only fixes the distance between its two centres, so the
+passive variables drop out and the leg gives one equation between the actuated variable
+q_i and the platform coordinates p:
+
+    f_i(q, p) = ( |B_i(p) - C_i(q)|^2 - L_i(q)^2 ) / 2 = 0,
+
+where C_i is the proximal joint centre (moved by an actuator before it, as the DELTA's
+elbow), B_i = P + R(p) b_i the platform joint, and L_i the rod length (changed by a
+prismatic actuator inside the rod, as a Stewart-Gough strut).  For the DELTA this is the
+seed's sphere equation with C_i (eq. 8.16, the virtual frame C'_i = C_i - b_i): all points
+B_i lie on a sphere of radius b about C_i.
+
+A leg qualifies when its last joint is U or S, the joints between the proximal point joint
+and the last one are prismatic (the rod), C_i depends on no passive variable and the leg
+has exactly one actuated variable, before the proximal joint or inside the rod.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import sympy
+
+from symkin.kinematics.chain import Frame, MovingFrame
+from symkin.model.schema import Leg, LegJointType
+from symkin.parallel.legs import LegChain, attachment_point, symbol, walk
+
+POINT_JOINTS = (LegJointType.U, LegJointType.S)
+
+
+@dataclass(frozen=True)
+class DistanceLeg:
+    """A leg reduced to f_i(q_i, p) = (|B_i - C_i|^2 - L_i^2) / 2.
+
+    Attributes:
+        leg: the leg.
+        q: the actuated variable's symbol.
+        rotation: True if the actuated motion is a rotation.
+        actuator: ``before`` (moves C_i) or ``rod`` (changes L_i).
+        offset: constant added to q in the motion.
+        C: proximal joint centre in the base frame (3x1).
+        B: platform joint centre in the base frame, B(p) = P + R(p) b_i (3x1).
+        b: platform joint centre in the platform frame (3x1).
+        L2: squared rod length.
+    """
+
+    leg: Leg
+    q: sympy.Symbol
+    rotation: bool
+    actuator: str
+    offset: sympy.Expr
+    C: sympy.ImmutableMatrix
+    B: sympy.ImmutableMatrix
+    b: sympy.ImmutableMatrix
+    L2: sympy.Expr
+
+    @property
+    def constraint(self) -> sympy.Expr:
+        """f_i = (|B_i - C_i|^2 - L_i^2) / 2."""
+        d = sympy.Matrix(self.B) - sympy.Matrix(self.C)
+        return (d.dot(d) - self.L2) / 2
+
+
+def reduce_leg(leg: Leg, chain: LegChain, platform: Frame) -> DistanceLeg | str:
+    """The distance form of ``leg``, or the reason it has none."""
+    joints = leg.joints
+    if joints[-1].type not in POINT_JOINTS:
+        return f"its last joint {joints[-1].name} is a {joints[-1].type.value} joint, not a point joint (U or S)"
+    proximal = len(joints) - 2
+    while proximal >= 0 and joints[proximal].type is LegJointType.P:
+        proximal -= 1
+    if proximal < 0 or joints[proximal].type not in POINT_JOINTS:
+        return "no rod of prismatic joints between two point joints (U or S) ends the leg"
+    actuated = [(i, j) for i, j in enumerate(joints) if j.active is not None]
+    if len(actuated) != 1:
+        return f"it has {len(actuated)} actuated joints, the distance form needs exactly one"
+    index, active = actuated[0]
+    if index == proximal or index == len(joints) - 1:
+        return "its actuator is a point joint"
+    C = chain.centres[proximal]
+    passive = {symbol(v) for j in joints for k, v in enumerate(j.variables) if k != j.active}
+    if C.free_symbols & passive:
+        return f"the centre of {joints[proximal].name} moves with passive joints before it"
+    rod = MovingFrame()  # the rod, in the frame of the proximal joint after its rotations
+    walk(leg, start=rod, joints=slice(proximal + 1, len(joints) - 1))
+    rod.apply(joints[-1].origin)
+    L2 = sympy.expand(sympy.Matrix(rod.p).dot(sympy.Matrix(rod.p)))
+    if L2.free_symbols & passive:
+        return "a passive prismatic joint changes the rod length"
+    variable, _, rotation = active.motions[active.active]
+    return DistanceLeg(leg, symbol(variable), rotation, "before" if index < proximal else "rod", active.offset,
+                       sympy.ImmutableMatrix(C), sympy.ImmutableMatrix(attachment_point(platform, chain)),
+                       sympy.ImmutableMatrix(chain.attachment.p), L2)
+
+
+def distance_legs(chains: tuple[LegChain, ...], platform: Frame) -> tuple[DistanceLeg, ...] | str:
+    """Every leg in distance form, or why one of them has none."""
+    out = []
+    for chain in chains:
+        reduced = reduce_leg(chain.leg, chain, platform)
+        if isinstance(reduced, str):
+            return f"leg '{chain.leg.name}' has no distance form: {reduced}"
+        out.append(reduced)
+    return tuple(out)

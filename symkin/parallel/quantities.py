@@ -1,0 +1,279 @@
+"""Quantities of parallel mechanisms, registered in the derivation graph (``mechanism="parallel"``).
+
+=========================  ===================================================================
+``parallel_structure``     (internal) every leg walked once, and the platform frame
+``closure``                loop-closure residual Phi(q, s, p), 6 rows per leg (seed sec. 3.2 steps 1-2)
+``closure_jacobians``      implicit Jacobians Phi_p, Phi_q, Phi_s of the closure
+``distance_legs``          (internal) legs reduced to f_i(q_i, p) = (|B_i - C_i|^2 - L_i^2)/2
+``constraints``            f(q, p), one equation per leg
+``constraint_jacobians``   J_x = df/dp, J_q = -df/dq: J_x pdot = J_q qdot
+``ik``                     closed-form inverse kinematics q(p) with per-leg margins
+``fk``                     closed-form forward kinematics p(q) by trilateration (3 legs, translation)
+``jacobian``               task Jacobian J = J_x^-1 J_q: pdot = J qdot (seed eq. 8.29)
+``inverse_jacobian``       J^-1 = J_q^-1 J_x: qdot = J^-1 pdot (seed eq. 8.30)
+``singularities``          det J_q (workspace boundary) and det J_x (interior) (seed sec. 4.2)
+=========================  ===================================================================
+
+Coordinates (``docs/model-format.md``, "Coordinates of parallel mechanisms"): q are the
+actuated joint variables, p the task coordinates of the platform, s the passive joint
+variables.  Velocity functions take both q and p: evaluate them at a consistent pair,
+p = fk(q) or q = ik(p).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import sympy
+
+from symkin.derivation.graph import Derivation, quantity
+from symkin.derivation.inputs import coordinate_input
+from symkin.errors import DerivationError
+from symkin.ir.spec import FunctionSpec, OutputSpec, make_function
+from symkin.kinematics.chain import Frame
+from symkin.model import coordinates
+from symkin.model.schema import PlatformMotion
+from symkin.parallel import closed_form, closure, determinant, distance
+from symkin.parallel.inputs import passive_input, passive_symbols, task_input, task_symbols
+from symkin.parallel.legs import LegChain, platform_frame, walk
+
+PARALLEL = "parallel"
+
+
+@dataclass(frozen=True)
+class ParallelStructure:
+    """The platform frame base_T_platform(p) and every walked leg."""
+
+    platform: Frame
+    chains: tuple[LegChain, ...]
+
+
+def _q(d: Derivation):
+    return coordinate_input(d.model, "q")
+
+
+def jacobian(rows: sympy.Matrix, symbols: tuple[sympy.Symbol, ...]) -> sympy.ImmutableMatrix:
+    """d rows / d symbols, differentiating each row only by the symbols it contains (legs are sparse)."""
+    out = sympy.zeros(len(rows), len(symbols))
+    for i, row in enumerate(rows):
+        present = row.free_symbols
+        for j, s in enumerate(symbols):
+            if s in present:
+                out[i, j] = sympy.diff(row, s)
+    return sympy.ImmutableMatrix(out)
+
+
+def _branch_text(sigma: int) -> str:
+    return "positive" if sigma > 0 else "negative"
+
+
+@quantity("parallel_structure", "legs walked from the base and the platform frame", emitted=False, mechanism=PARALLEL)
+def _structure(d: Derivation) -> ParallelStructure:
+    assert d.model.parallel is not None
+    return ParallelStructure(platform_frame(d.model), tuple(walk(leg) for leg in d.model.parallel.legs))
+
+
+# --------------------------------------------------------------------------- generic loop closure
+
+@quantity("leg_closures", "closure equations of every leg", emitted=False, mechanism=PARALLEL)
+def _leg_closures(d: Derivation) -> tuple[closure.LegClosure, ...]:
+    structure: ParallelStructure = d["parallel_structure"]
+    return tuple(closure.LegClosure(structure.platform, chain) for chain in structure.chains)
+
+
+@quantity("closure_residual", "loop-closure equations Phi(q, s, p) (sympy)", emitted=False, mechanism=PARALLEL)
+def _closure_residual(d: Derivation) -> sympy.ImmutableMatrix:
+    return sympy.ImmutableMatrix([e for leg in d["leg_closures"] for e in leg.residual()])
+
+
+def _closure_rows(d: Derivation) -> str:
+    return ", ".join(f"{leg.name}: x, y, z, rx, ry, rz" for leg in d.model.parallel.legs)  # type: ignore[union-attr]
+
+
+@quantity("closure", "loop-closure residual Phi(q, s, p), 6 rows per leg (zero when the legs close)",
+          mechanism=PARALLEL)
+def _closure(d: Derivation) -> FunctionSpec:
+    phi = d["closure_residual"]
+    return make_function(
+        d.model, "closure", "Loop-closure residual of every leg.",
+        "Seed sec. 3.2, inverse kinematics steps 1-2: the closed vector chain of each leg, split into "
+        "Cartesian components: the end of the leg's joint chain minus the platform attachment "
+        "(position rows) and 2 vee(E - E^T) / (1 + trace E) = 2 tan(angle/2) axis of the residual rotation "
+        "E = R_attachment^T R_end (orientation rows). "
+        "Zero exactly when the mechanism is assembled at (q, s, p).",
+        [_q(d), passive_input(d.model), task_input(d.model)],
+        [OutputSpec("phi", phi, f"residual rows ({_closure_rows(d)})", shape=(len(phi),))],
+    )
+
+
+@quantity("closure_jacobians", "implicit Jacobians Phi_p, Phi_q, Phi_s of the loop closure", mechanism=PARALLEL)
+def _closure_jacobians(d: Derivation) -> FunctionSpec:
+    task = task_symbols(d.model)
+    columns: list[dict[sympy.Symbol, list[sympy.Expr]]] = []
+    for leg in d["leg_closures"]:
+        columns.append({**leg.joint_derivatives(), **leg.task_derivatives(task)})
+    groups = [("Phi_p", task, "p"), ("Phi_q", coordinates.symbols(d.model, "q"), "q"),
+              ("Phi_s", passive_symbols(d.model), "s")]
+    outputs = []
+    for name, symbols, wrt in groups:
+        rows = [[leg.get(s, [0] * 6)[k] for s in symbols] for leg in columns for k in range(6)]
+        outputs.append(OutputSpec(name, sympy.ImmutableMatrix(rows),
+                                  f"d phi / d {wrt}, rows as in closure(), one column per element of {wrt}"))
+    return make_function(
+        d.model, "closure_jacobians", "Implicit Jacobians of the loop closure.",
+        "Differentiating Phi(q, s, p) = 0 gives Phi_p pdot + Phi_q qdot + Phi_s sdot = 0, the velocity "
+        "relation of any leg topology; Newton steps on these matrices solve the closure numerically "
+        "(symkin.runtime.parallel.solve_closure). Formed from the joint screws: a rotation about the axis w "
+        "through o moves the leg end by w x (p_end - o) and turns it by w.",
+        [_q(d), passive_input(d.model), task_input(d.model)], outputs,
+    )
+
+
+# --------------------------------------------------------------------------- distance form
+
+@quantity("distance_legs", "legs reduced to one distance equation each", emitted=False, mechanism=PARALLEL)
+def _distance_legs(d: Derivation) -> tuple[distance.DistanceLeg, ...]:
+    structure: ParallelStructure = d["parallel_structure"]
+    legs = distance.distance_legs(structure.chains, structure.platform)
+    if isinstance(legs, str):
+        raise DerivationError(f"model '{d.model.name}': {legs}; use the generic outputs closure and "
+                              "closure_jacobians for this topology")
+    return legs
+
+
+@quantity("constraint_vector", "f(q, p) (sympy)", emitted=False, mechanism=PARALLEL)
+def _constraint_vector(d: Derivation) -> sympy.ImmutableMatrix:
+    return sympy.ImmutableMatrix([leg.constraint for leg in d["distance_legs"]])
+
+
+@quantity("constraints", "leg equations f(q, p) = (|B_i - C_i|^2 - L_i^2)/2, zero when assembled",
+          mechanism=PARALLEL)
+def _constraints(d: Derivation) -> FunctionSpec:
+    f = d["constraint_vector"]
+    return make_function(
+        d.model, "constraints", "Leg equations in distance form.",
+        "f_i = (|B_i(p) - C_i(q)|^2 - L_i(q)^2) / 2 for every leg: the rod between the point joints C_i and "
+        "B_i has length L_i (seed sec. 3.2.1, the sphere equation about C'_i). Zero when assembled.",
+        [_q(d), task_input(d.model)],
+        [OutputSpec("f", f, "one equation per leg", "m^2", shape=(len(f),))],
+    )
+
+
+@quantity("constraint_jacobian_matrices", "J_x and J_q (sympy)", emitted=False, mechanism=PARALLEL)
+def _constraint_jacobian_matrices(d: Derivation) -> tuple[sympy.ImmutableMatrix, sympy.ImmutableMatrix]:
+    f = sympy.Matrix(d["constraint_vector"])
+    J_x = jacobian(f, task_symbols(d.model))
+    J_q = -jacobian(f, coordinates.symbols(d.model, "q"))
+    return J_x, sympy.ImmutableMatrix(J_q)
+
+
+@quantity("constraint_jacobians", "J_x = df/dp and J_q = -df/dq, so that J_x pdot = J_q qdot", mechanism=PARALLEL)
+def _constraint_jacobians(d: Derivation) -> FunctionSpec:
+    J_x, J_q = d["constraint_jacobian_matrices"]
+    return make_function(
+        d.model, "constraint_jacobians", "Jacobians of the leg equations.",
+        "Differentiating f(q, p) = 0 gives the velocity relation J_x pdot = J_q qdot with J_x = df/dp "
+        "(rows (B_i - C_i)^T dB_i/dp) and J_q = -df/dq (diagonal: one actuator per leg).",
+        [_q(d), task_input(d.model)],
+        [OutputSpec("J_x", J_x, "df/dp: one row per leg, one column per task coordinate"),
+         OutputSpec("J_q", J_q, "-df/dq: one row per leg, one column per actuated joint (diagonal)")],
+    )
+
+
+@quantity("ik", "closed-form inverse kinematics q(p) per leg, with reachability margins", mechanism=PARALLEL)
+def _ik(d: Derivation) -> FunctionSpec:
+    legs = d["distance_legs"]
+    solutions = [closed_form.solve_leg(leg) for leg in legs]
+    branches = "; ".join(f"{leg.leg.name}: {leg.q} on the {_branch_text(leg.leg.ik_branch)} branch"
+                         for leg in legs)
+    return make_function(
+        d.model, "ik", "Inverse kinematics: actuated joint variables from the task coordinates.",
+        "Per leg (seed sec. 3.2, step 3), the equation |B_i(p) - C_i(q_i)| = L_i(q_i) solved in closed form: "
+        "q = atan2(gamma, beta) + sigma atan2(sqrt(beta^2 + gamma^2 - alpha^2), -alpha) for a revolute "
+        "actuator (a robust form of seed eqs. 8.18-8.20), the root of a quadratic for a prismatic one. "
+        f"Branches: {branches} (positive: the platform joint B_i lies at a positive rotation about the actuator "
+        "axis from the elbow C_i, or the larger root of a prismatic actuator; negative: the other solution). "
+        "Where a leg's margin is negative p is out of its reach and its q is NaN.",
+        [task_input(d.model)],
+        [OutputSpec("joints", sympy.ImmutableMatrix([s.value for s in solutions]), "actuated joint variables q",
+                    shape=(len(solutions),)),
+         OutputSpec("margin", sympy.ImmutableMatrix([s.margin for s in solutions]),
+                    "per leg: >= 0 iff the leg reaches p (the radicand of its solution)", shape=(len(solutions),))],
+    )
+
+
+@quantity("fk", "closed-form forward kinematics p(q) by trilateration (3 legs, translational platform)",
+          mechanism=PARALLEL)
+def _fk(d: Derivation) -> FunctionSpec:
+    parallel = d.model.parallel
+    assert parallel is not None
+    if parallel.motion is not PlatformMotion.TRANSLATION or len(parallel.legs) != 3:
+        raise DerivationError(
+            f"model '{d.model.name}': closed-form forward kinematics needs a translational platform on three "
+            "legs (trilateration); solve it numerically with symkin.runtime.parallel.solve_fk (Newton on the "
+            "generated ik and inverse_jacobian)")
+    position, margin = closed_form.trilaterate(d["distance_legs"], parallel.fk_branch)
+    return make_function(
+        d.model, "fk", "Forward kinematics: TCP position from the actuated joint variables.",
+        "Trilateration (seed sec. 3.2.1): P lies on the spheres of radius L_i about S_i = C_i(q) - b_i; "
+        "P = S1 + w + t n with n = (S2 - S1) x (S3 - S1), w in the plane of the centres and "
+        f"t = sigma sqrt(margin / |n|^2). The root on the {_branch_text(parallel.fk_branch)} side of n is "
+        "returned. Where the margin is negative the spheres do not meet and the position is NaN.",
+        [_q(d)],
+        [OutputSpec("position", sympy.ImmutableMatrix(position), "TCP position x, y, z", "m", shape=(3,)),
+         OutputSpec("margin", sympy.ImmutableMatrix([margin]), ">= 0 iff the spheres meet (a real solution)",
+                    "m^2", shape=())],
+    )
+
+
+def _square(d: Derivation, name: str) -> tuple[sympy.Matrix, sympy.Matrix]:
+    J_x, J_q = d["constraint_jacobian_matrices"]
+    if J_x.shape[0] != J_x.shape[1]:
+        raise DerivationError(f"model '{d.model.name}': {name} needs as many legs as task coordinates")
+    return sympy.Matrix(J_x), sympy.Matrix(J_q)
+
+
+@quantity("jacobian", "task Jacobian J = J_x^-1 J_q of the platform: pdot = J qdot", mechanism=PARALLEL)
+def _jacobian(d: Derivation) -> FunctionSpec:
+    J_x, J_q = _square(d, "the task Jacobian")
+    J = determinant.adjugate(J_x) * J_q / determinant.determinant(J_x)
+    return make_function(
+        d.model, "jacobian", "Task Jacobian of the platform.",
+        "J = J_x^-1 J_q from J_x pdot = J_q qdot, so that dp = J dq (seed eq. 8.29); J_x^-1 = adj(J_x) / "
+        "det(J_x). Infinite at interior singularities (det J_x = 0).",
+        [_q(d), task_input(d.model)],
+        [OutputSpec("J", sympy.ImmutableMatrix(J), "rows: task coordinates; columns: actuated joints")],
+    )
+
+
+@quantity("inverse_jacobian", "inverse Jacobian J^-1 = J_q^-1 J_x: qdot = J^-1 pdot", mechanism=PARALLEL)
+def _inverse_jacobian(d: Derivation) -> FunctionSpec:
+    J_x, J_q = _square(d, "the inverse Jacobian")
+    J_inv = sympy.Matrix([[J_x[i, j] / J_q[i, i] for j in range(J_x.shape[1])] for i in range(J_x.shape[0])])
+    return make_function(
+        d.model, "inverse_jacobian", "Inverse Jacobian of the platform.",
+        "J^-1 = J_q^-1 J_x (J_q is diagonal), so that dq = J^-1 dp (seed eq. 8.30): row i is the derivative of "
+        "leg i's actuated variable with respect to the task coordinates. Its determinant vanishes at "
+        "interior singularities.",
+        [_q(d), task_input(d.model)],
+        [OutputSpec("J_inv", sympy.ImmutableMatrix(J_inv), "rows: actuated joints; columns: task coordinates")],
+    )
+
+
+@quantity("singularities", "det J_q (zero at workspace-boundary singularities) and det J_x (interior)",
+          mechanism=PARALLEL)
+def _singularities(d: Derivation) -> FunctionSpec:
+    J_x, J_q = _square(d, "the singularity measures")
+    det_q = sympy.Mul(*[J_q[i, i] for i in range(J_q.shape[0])])
+    return make_function(
+        d.model, "singularities", "Singularity measures of both types.",
+        "Seed sec. 4.2: det J_q = 0 where a leg is stretched or folded (workspace-boundary singularity: J "
+        "loses rank, the TCP cannot move in some direction); det J_x = 0 where the legs' constraint "
+        "directions become dependent (workspace-interior singularity: J^-1 loses rank, the platform gains "
+        "a degree of freedom). det J_x is expanded by minors, a polynomial in its entries.",
+        [_q(d), task_input(d.model)],
+        [OutputSpec("det_Jq", sympy.ImmutableMatrix([det_q]), "det J_q (boundary singularities where zero)",
+                    shape=()),
+         OutputSpec("det_Jx", sympy.ImmutableMatrix([determinant.determinant(J_x)]),
+                    "det J_x (interior singularities where zero)", shape=())],
+    )

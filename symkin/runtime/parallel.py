@@ -1,0 +1,206 @@
+"""Numerical kinematics of parallel mechanisms on top of their generated code (numpy only).
+
+Where no closed form exists (the forward kinematics of a Stewart-Gough platform, the
+loop closure of an arbitrary leg topology), Newton's method on the *generated* equations
+and Jacobians solves it.  Every solver is vectorized over a batch and reports, per sample,
+whether it converged, how many iterations it took and the final residual; where it did
+not converge the solution is NaN, never a plausible but wrong pose.
+
+Like :mod:`symkin.runtime.loader`, this module imports neither sympy nor jinja2.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from symkin.errors import GeneratedCodeError
+from symkin.runtime.loader import LoadedModel
+
+
+@dataclass(frozen=True)
+class NewtonReport:
+    """The outcome of a vectorized Newton solve.
+
+    Attributes:
+        solution: the solution, NaN where ``converged`` is False; for :func:`solve_closure`
+            a dict of the solved vectors by name.
+        converged: per sample, True when the last Newton step was below the tolerance and
+            the residual is finite.
+        iterations: per sample, Newton steps taken.
+        residual: per sample, max-norm of the equations at the returned point (the leg
+            equations f for :func:`solve_fk`, the closure residual phi for :func:`solve_closure`).
+        step: per sample, max-norm of the last Newton step (an estimate of the error of the
+            solution before that step).
+    """
+
+    solution: np.ndarray | dict[str, np.ndarray]
+    converged: np.ndarray
+    iterations: np.ndarray
+    residual: np.ndarray
+    step: np.ndarray
+
+    @property
+    def all_converged(self) -> bool:
+        return bool(np.all(self.converged))
+
+
+def _function(model: LoadedModel, name: str, purpose: str) -> Callable[..., object]:
+    if name not in model.functions:
+        raise GeneratedCodeError(f"{purpose} needs the generated function '{name}' of model '{model.name}'; "
+                                 f"derive it (scene outputs or --only {name})")
+    return getattr(model, name)
+
+
+def _newton_steps(A: np.ndarray, r: np.ndarray) -> np.ndarray:
+    """Newton steps -A^-1 r for a flat batch (k, rows, cols); least squares -A^+ r when A is not
+    square; NaN where A or r is not finite or A is singular."""
+    steps = np.full(A.shape[:1] + A.shape[2:], np.nan)
+    finite = np.all(np.isfinite(A), axis=(1, 2)) & np.all(np.isfinite(r), axis=1)
+    if A.shape[1] != A.shape[2]:
+        steps[finite] = -np.einsum("kij,kj->ki", np.linalg.pinv(A[finite]), r[finite])
+        return steps
+    try:
+        steps[finite] = -np.linalg.solve(A[finite], r[finite][..., None])[..., 0]
+    except np.linalg.LinAlgError:  # some matrix is singular: solve one by one, leave those NaN
+        for k in np.nonzero(finite)[0]:
+            try:
+                steps[k] = -np.linalg.solve(A[k], r[k])
+            except np.linalg.LinAlgError:
+                pass  # the sample stops and is reported as not converged
+    return steps
+
+
+def _iterate(start: np.ndarray, equations: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]], tol: float,
+             max_iterations: int) -> NewtonReport:
+    """Newton iteration x <- x - A(x)^-1 r(x) on a batch (..., k) of unknowns."""
+    batch = start.shape[:-1]
+    x = np.array(start, dtype=float, copy=True).reshape(-1, start.shape[-1])
+
+    def flat_equations(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        r, A = equations(values.reshape(batch + values.shape[-1:]))
+        r = np.asarray(r, dtype=float)
+        A = np.asarray(A, dtype=float)
+        return r.reshape(-1, r.shape[-1]), A.reshape((-1,) + A.shape[-2:])
+
+    count = x.shape[0]
+    converged = np.zeros(count, dtype=bool)
+    iterations = np.zeros(count, dtype=int)
+    step_norm = np.full(count, np.inf)
+    active = np.ones(count, dtype=bool)
+    for _ in range(max_iterations):
+        if not active.any():
+            break
+        r, A = flat_equations(x)
+        step = _newton_steps(A, r)
+        with np.errstate(invalid="ignore"):
+            norm = np.max(np.abs(step), axis=-1)
+        moved = active & np.isfinite(norm)
+        x[moved] += step[moved]
+        iterations[active] += 1
+        step_norm[active] = norm[active]
+        converged |= moved & (norm <= tol)
+        active &= moved & ~converged
+    r, _ = flat_equations(x)
+    residual = np.max(np.abs(r), axis=-1)
+    converged &= np.isfinite(residual)
+    x[~converged] = np.nan
+    return NewtonReport(x.reshape(start.shape), converged.reshape(batch), iterations.reshape(batch),
+                        residual.reshape(batch), step_norm.reshape(batch))
+
+
+def home_pose(model: LoadedModel) -> np.ndarray:
+    """The model's declared home pose (task coordinates at the default parameters).
+
+    Raises:
+        GeneratedCodeError: the model declares none (``parallel.home``).
+    """
+    home = model.manifest["model"].get("parallel", {}).get("home")
+    if home is None:
+        raise GeneratedCodeError(f"model '{model.name}' declares no home pose (parallel.home); pass a start p0")
+    return np.array(home, dtype=float)
+
+
+def solve_fk(model: LoadedModel, q, p0=None, *, tol: float = 1e-12, max_iterations: int = 30) -> NewtonReport:
+    """Forward kinematics p(q) by Newton's method on the generated leg equations.
+
+    Solves f(q, p) = 0 for p with the generated ``constraints`` and ``constraint_jacobians``:
+    p <- p - J_x(q, p)^-1 f(q, p) (J_x = df/dp).  Quadratic convergence near a regular
+    solution; from a start near the wanted assembly mode (e.g. the last pose of a control
+    loop, seed sec. 3.2 [24]) it finds that pose.  Works for any model whose legs have the
+    distance form (Stewart-Gough, DELTA...).
+
+    Args:
+        model: the loaded model (with ``constraints`` and ``constraint_jacobians``).
+        q: actuated joint variables, shape (..., n).
+        p0: start, shape (..., m) (broadcast against q); default: the model's home pose.
+        tol: converged when a Newton step is at most this large (max-norm, task units).
+        max_iterations: give up (report failure) after this many steps.
+
+    Returns:
+        The report; ``solution`` is p, NaN where the iteration did not converge (no real
+        solution, a singular J_x, or too far a start).
+    """
+    constraints = _function(model, "constraints", "solve_fk")
+    jacobians = _function(model, "constraint_jacobians", "solve_fk")
+    q = np.asarray(q, dtype=float)
+    p0 = home_pose(model) if p0 is None else np.asarray(p0, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], p0.shape[:-1])
+    q = np.broadcast_to(q, batch + q.shape[-1:])
+    start = np.broadcast_to(p0, batch + p0.shape[-1:])
+
+    def equations(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return np.asarray(constraints(q, p)), np.asarray(jacobians(q, p).J_x)
+
+    return _iterate(start, equations, tol, max_iterations)
+
+
+def solve_closure(model: LoadedModel, q, s, p, *, unknowns: tuple[str, ...] = ("p", "s"), tol: float = 1e-12,
+                  max_iterations: int = 50) -> NewtonReport:
+    """Solve the generated loop closure phi(q, s, p) = 0 for some of its vectors (any leg topology).
+
+    Gauss-Newton on the generated ``closure`` and ``closure_jacobians``: the unknown
+    vectors are stacked and updated by the least-squares Newton step -A^+ phi, with A the
+    matching columns of [Phi_q, Phi_s, Phi_p].  Forward kinematics solves for ("p", "s")
+    at given q, inverse kinematics for ("q", "s") at given p, the passive joints alone for
+    ("s",).  The closure of a translational platform is overdetermined but consistent (each
+    leg has 6 equations and 5 joints), hence least squares.
+
+    Args:
+        model: the loaded model (with ``closure`` and ``closure_jacobians``).
+        q, s, p: actuated, passive and task coordinates (known values and starts).
+        unknowns: which of "q", "s", "p" to solve for.
+        tol: converged when a step is at most this large (max-norm).
+        max_iterations: give up after this many steps.
+
+    Returns:
+        The report; ``solution`` maps every vector name to its value (unknowns NaN where not
+        converged).
+    """
+    closure = _function(model, "closure", "solve_closure")
+    jacobians = _function(model, "closure_jacobians", "solve_closure")
+    names = ("q", "s", "p")
+    if not unknowns or set(unknowns) - set(names):
+        raise ValueError(f"unknowns must be a non-empty selection of {names}, got {unknowns}")
+    values = {name: np.asarray(v, dtype=float) for name, v in zip(names, (q, s, p))}
+    batch = np.broadcast_shapes(*(v.shape[:-1] for v in values.values()))
+    values = {name: np.broadcast_to(v, batch + v.shape[-1:]) for name, v in values.items()}
+    order = [name for name in names if name in unknowns]
+    sizes = [values[name].shape[-1] for name in order]
+    splits = np.cumsum(sizes)[:-1]
+
+    def unpack(x: np.ndarray) -> dict[str, np.ndarray]:
+        return {**values, **dict(zip(order, np.split(x, splits, axis=-1)))}
+
+    def equations(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        v = unpack(x)
+        phi = np.asarray(closure(v["q"], v["s"], v["p"]))
+        J = jacobians(v["q"], v["s"], v["p"])
+        blocks = {"q": J.Phi_q, "s": J.Phi_s, "p": J.Phi_p}
+        return phi, np.concatenate([np.asarray(blocks[name]) for name in order], axis=-1)
+
+    start = np.concatenate([values[name] for name in order], axis=-1)
+    report = _iterate(start, equations, tol, max_iterations)
+    return NewtonReport(unpack(report.solution), report.converged, report.iterations, report.residual, report.step)
