@@ -59,6 +59,18 @@ def reference_function(model: Model, spec: FunctionSpec, modules: str = "numpy")
     return evaluate
 
 
+def relative_error(got: np.ndarray, want: np.ndarray) -> float:
+    """Worst over the batch (leading axis) of max |got - want| / max(1, max |want|) over each entry's
+    values.  NaN (no real solution, e.g. an unreachable DELTA point) must be in both at the same places."""
+    got, want = np.asarray(got, dtype=float), np.asarray(want, dtype=float)
+    assert np.array_equal(np.isnan(got), np.isnan(want)), "NaN at different places"
+    got, want = np.where(np.isnan(want), 0.0, got), np.where(np.isnan(want), 0.0, want)
+    axes = tuple(range(1, want.ndim))
+    scale = np.maximum(1.0, np.max(np.abs(want), axis=axes)) if axes else np.maximum(1.0, np.abs(want))
+    diff = np.max(np.abs(got - want), axis=axes) if axes else np.abs(got - want)
+    return float(np.max(diff / scale, initial=0.0))
+
+
 def function_spec(model: Model, derivation: Derivation, record: dict) -> FunctionSpec:
     """The un-optimized spec of the generated function described by a manifest ``record``
     (for the combined scene function: the combination of its parts)."""

@@ -27,9 +27,17 @@ def _seed_fk(q, l1=0.1, l2=0.1):
 
 @pytest.mark.parametrize("name", EXAMPLE_MODELS)
 def test_manifest_limits_are_the_model_files_limits(models, name):
+    """Declared limits at the default parameters; an undeclared revolute range is one turn,
+    an undeclared prismatic range is an error that names the coordinate."""
     model = models[name]
     loaded = symkin.load(GENERATED_DIR / name)
-    expected = [[float(b.xreplace(model.parameter_values)) for b in j.limits] for j in model.joints]
+    unbounded = [c.name for c in model.coordinates if c.limits is None and c.type.value == "P"]
+    if unbounded:
+        with pytest.raises(ValueError, match=f"prismatic joint '{unbounded[0]}' declares no limits"):
+            mechanism.joint_limits(loaded)
+        return
+    expected = [[float(b.xreplace(model.parameter_values)) for b in c.limits] if c.limits is not None
+                else [-np.pi, np.pi] for c in model.coordinates]
     assert np.array_equal(mechanism.joint_limits(loaded), np.array(expected))
 
 
