@@ -98,9 +98,10 @@ def _extreme_3x3(J: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     sigma_min = np.minimum(sigma_min, np.sqrt(lambda2))
     hard = (np.abs(r) > 1.0 - CLOSED_FORM_3X3_CLUSTER) | (lambda2 < CLOSED_FORM_3X3_RATIO**2 * lambda1)
     if hard.any():
-        sigma_max, sigma_min = np.array(sigma_max, ndmin=1), np.array(sigma_min, ndmin=1)
-        s = np.linalg.svd(J.reshape(-1, 3, 3)[hard.ravel()], compute_uv=False)
-        sigma_max[hard.ravel()], sigma_min[hard.ravel()] = s[..., 0], s[..., -1]
+        flat = hard.reshape(-1)
+        sigma_max, sigma_min = np.array(sigma_max).reshape(-1), np.array(sigma_min).reshape(-1)
+        s = np.linalg.svd(J.reshape(-1, 3, 3)[flat], compute_uv=False)
+        sigma_max[flat], sigma_min[flat] = s[:, 0], s[:, -1]
         sigma_max, sigma_min = sigma_max.reshape(hard.shape), sigma_min.reshape(hard.shape)
     return sigma_max, sigma_min
 
