@@ -23,7 +23,7 @@ import numpy as np
 
 from symkin.analysis import mechanism, parallel, sampling
 from symkin.analysis.estimates import Estimate
-from symkin.analysis.inverse import InverseKinematics, reachable
+from symkin.analysis.inverse import InverseKinematics, feasible_configurations, reachable
 from symkin.analysis.mechanism import Limits
 
 SAMPLING_METHODS = ("grid", "random", "sobol")
@@ -260,6 +260,28 @@ def reachability_grid(model: Any, inverse: InverseKinematics, box: tuple[np.ndar
     centers = occupancy.centers().reshape(-1, len(counts))
     mask = reachable(inverse, centers, mechanism.joint_limits(model, limits), mechanism.revolute_mask(model))
     return Occupancy(start, size, mask.reshape(counts))
+
+
+def index_grid(model: Any, inverse: InverseKinematics, box: tuple[np.ndarray, np.ndarray], cell: float, *,
+               index=None, limits: Limits | None = None, length: float | None = None) -> tuple[Occupancy, np.ndarray]:
+    """A local index (1/kappa by default) at the reachable cell centres of a Cartesian grid.
+
+    Returns:
+        (occupancy, values): the reachability grid (:func:`reachability_grid`) and the index
+        at every cell centre, an array of the grid's shape, NaN at unreachable cells.
+    """
+    from symkin.analysis import conditioning, global_indices
+
+    index = conditioning.inverse_condition_number if index is None else index
+    start, size, counts = _grid_geometry(np.asarray(box[0], float), np.asarray(box[1], float), cell)
+    centers = Occupancy(start, size, np.zeros(counts, dtype=bool)).centers().reshape(-1, len(counts))
+    joint_box = mechanism.joint_limits(model, limits)
+    q, inside = feasible_configurations(inverse, centers, joint_box, mechanism.revolute_mask(model))
+    values = np.full(len(centers), np.nan)
+    if inside.any():
+        scored = global_indices.scaled_index(model, index, length, joint_box)
+        values[inside] = scored(mechanism.jacobian(model, q[inside], centers[inside]))
+    return Occupancy(start, size, inside.reshape(counts)), values.reshape(counts)
 
 
 def limit_curves(model: Any, *, limits: Limits | None = None, count: int = 200) -> list[np.ndarray]:
