@@ -197,6 +197,8 @@ def _integrand(model: Any, *, domain: str, measure: str, index: Index | None, li
     if domain == "joint":
         description = ("joint space, dW = |det J| dq (Cartesian measure, with multiplicity where the map is "
                        "not one-to-one)" if measure == "cartesian" else "joint space, dW = dq (joint measure)")
+        if mechanism.is_parallel(model):
+            description += "; configurations in the working mode (ik(fk(q)) = q), one-to-one"
         return joint_space_integrand(model, index=index, measure=measure, limits=limits, length=length), description
     if domain == "cartesian":
         if inverse is None:
@@ -206,6 +208,8 @@ def _integrand(model: Any, *, domain: str, measure: str, index: Index | None, li
 
             box = bounding_box(model, limits=limits)
         description = "Cartesian box with reachability from inverse kinematics, dW = 1_W(x) dx"
+        if mechanism.is_parallel(model):
+            description += " (in the working mode: fk(ik(x)) = x)"
         return cartesian_integrand(model, inverse, box, index=index, limits=limits, length=length), description
     raise ValueError(f"unknown domain '{domain}'; choose one of {', '.join(DOMAINS)}")
 
