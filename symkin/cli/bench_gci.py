@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 from symkin.cli import analysis_args
 from symkin.cli.progress import Progress
@@ -24,13 +25,14 @@ def register(kinds: argparse._SubParsersAction) -> None:
     p.add_argument("--domains", default="auto", metavar="NAMES",
                    help="joint and/or cartesian (default: both where an inverse kinematics exists)")
     p.add_argument("--backends", metavar="NAMES",
-                   help="comma-separated generated code to time, e.g. numpy,c (default: --backend)")
+                   help="comma-separated generated code to time, e.g. numpy,c (default: --backend if given, "
+                        "else numpy and c where emitted)")
     p.add_argument("--repeats", type=int, default=3, help="timed runs per point, the fastest kept (default: 3)")
     p.add_argument("--seed", type=int, default=0, help="seed of mc/qmc (default: %(default)s)")
     analysis_args.add_length_argument(p)
     p.add_argument("-o", "--out", metavar="FIGURE",
                    help="plot of time against error (default: bench-results/MODEL_NAME-gci-time-vs-error.png)")
-    p.set_defaults(run=run, parser=p)
+    p.set_defaults(run=run, parser=p, backend=None)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -38,7 +40,7 @@ def run(args: argparse.Namespace) -> int:
     from symkin.analysis.integrators import INTEGRATORS
 
     try:
-        backends = [b.strip() for b in (args.backends or args.backend).split(",") if b.strip()]
+        backends = _backends(args)
         models = []
         for backend in backends:
             args.backend = backend
@@ -94,3 +96,19 @@ def run(args: argparse.Namespace) -> int:
                                                f"({', '.join(m.backend for m in models)})")
     print(f"figure: {path}")
     return 0
+
+
+#: Backends timed by default, where the model was emitted with them.
+DEFAULT_BACKENDS = ("numpy", "c")
+
+
+def _backends(args: argparse.Namespace) -> list[str]:
+    """--backends, else --backend, else numpy and c where the model directory has them."""
+    if args.backends:
+        return [b.strip() for b in args.backends.split(",") if b.strip()]
+    if args.backend:
+        return [args.backend]
+    if Path(args.model).suffix.lower() in (".yaml", ".yml"):
+        return ["numpy"]  # a model file is derived on the fly, for numpy
+    emitted = analysis_args.load_model(args.model).manifest.get("backends", {})
+    return [b for b in DEFAULT_BACKENDS if b in emitted]
