@@ -198,7 +198,9 @@ def _integrand(model: Any, *, domain: str, measure: str, index: Index | None, li
         description = ("joint space, dW = |det J| dq (Cartesian measure, with multiplicity where the map is "
                        "not one-to-one)" if measure == "cartesian" else "joint space, dW = dq (joint measure)")
         if mechanism.is_parallel(model):
-            description += "; configurations in the working mode (ik(fk(q)) = q), one-to-one"
+            description = ("joint space, dW = |det J| dq over the configurations in the working mode "
+                           "(ik(fk(q)) = q, one-to-one): the Cartesian measure" if measure == "cartesian" else
+                           "joint space, dW = dq over the configurations in the working mode (joint measure)")
         return joint_space_integrand(model, index=index, measure=measure, limits=limits, length=length), description
     if domain == "cartesian":
         if inverse is None:

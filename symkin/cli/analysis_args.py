@@ -1,7 +1,8 @@
 """Arguments shared by the analysis commands (``symkin workspace``, ``symkin gci``, ``symkin bench gci``).
 
 MODEL is a generated model directory (the output of ``symkin derive``) or a model file,
-which is then derived on the fly (fk and jacobian only) into a temporary directory.
+which is then derived on the fly (fk and jacobian only, and ik for a parallel mechanism)
+into a temporary directory.
 """
 
 from __future__ import annotations
@@ -12,8 +13,10 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
-#: Quantities an analysis needs from a model file derived on the fly.
+#: Quantities an analysis needs from a model file derived on the fly (a parallel mechanism
+#: also needs its closed-form ik: reachability and working mode).
 ANALYSIS_OUTPUTS = ("fk", "jacobian")
+PARALLEL_ANALYSIS_OUTPUTS = ("ik", "fk", "jacobian")
 
 
 def add_model_arguments(p: argparse.ArgumentParser) -> None:
@@ -132,7 +135,8 @@ def load_model(path: str, backend: str = "numpy") -> Any:
     from symkin.model import load_model as load_model_file
 
     model = load_model_file(source)
-    request = pipeline.resolve_request(model, ",".join(ANALYSIS_OUTPUTS), backend, None)
+    outputs = ANALYSIS_OUTPUTS if model.parallel is None else PARALLEL_ANALYSIS_OUTPUTS
+    request = pipeline.resolve_request(model, ",".join(outputs), backend, None)
     with tempfile.TemporaryDirectory(prefix="symkin-analysis-") as scratch:
         # The generated module is imported (numpy) or opened (C) by load(): the files may go afterwards.
         return load(pipeline.write(pipeline.generate(model, request), scratch), backend)
