@@ -330,3 +330,16 @@ def test_passive_limits_are_refused_by_the_analyses_not_ignored():
         global_indices.gci(limited, method="grid", samples=1000)
     with pytest.raises(ValueError, match="passive-joint limits are declared"):
         inverse.parallel_inverse(limited)
+
+
+def test_a_delta_model_file_is_analysed_on_the_fly(capsys):
+    assert main(["gci", str(MODELS_DIR / "delta.yaml"), "--method", "grid", "-n", "2000"]) == 0
+    assert 0.5 < float(re.search(r"GCI = ([0-9.]+)", capsys.readouterr().out).group(1)) < 0.54
+
+
+def test_a_platform_without_closed_form_fk_is_refused_with_a_message(capsys):
+    limits = [f"--limit=l{i}=0.2:0.3" for i in range(1, 7)]
+    with pytest.raises(SystemExit) as exit_info:
+        main(["gci", str(GENERATED_DIR / "stewart"), *limits])
+    assert exit_info.value.code == 2
+    assert "Stewart-Gough" in capsys.readouterr().err

@@ -112,8 +112,22 @@ def tcp_positions(model: Any, q: np.ndarray) -> np.ndarray:
     assembled).
     """
     if is_parallel(model):
-        return model.fk(q).position
+        return parallel_function(model, "fk")(q).position
     return model.fk(q)[..., list(position_axes(model)), 3]
+
+
+def parallel_function(model: Any, name: str):
+    """The generated function ``name`` of a parallel mechanism.
+
+    Raises:
+        ValueError: it was not generated (e.g. a Stewart-Gough platform has no closed-form fk
+            and no ``jacobian``, only ``inverse_jacobian``: its analyses are not supported yet).
+    """
+    if name not in model.functions:
+        raise ValueError(f"{model.name}: the workspace and GCI analyses of a parallel mechanism need its generated "
+                         f"'{name}' (derive it, e.g. --only ik,fk,jacobian); platforms without a closed-form fk "
+                         "(Stewart-Gough) are not analysed yet")
+    return getattr(model, name)
 
 
 def jacobian(model: Any, q: np.ndarray, points: np.ndarray | None = None) -> np.ndarray:
@@ -125,7 +139,7 @@ def jacobian(model: Any, q: np.ndarray, points: np.ndarray | None = None) -> np.
     """
     if not is_parallel(model):
         return model.jacobian(q)
-    return model.jacobian(q, tcp_positions(model, q) if points is None else points)
+    return parallel_function(model, "jacobian")(q, tcp_positions(model, q) if points is None else points)
 
 
 def is_positional(model: Any) -> bool:

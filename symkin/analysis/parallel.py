@@ -40,11 +40,9 @@ JOINT_ROUND_TRIP_TOLERANCE = 1e-6
 POSITION_ROUND_TRIP_TOLERANCE = 1e-6
 
 
-def _require(model: Any, names: tuple[str, ...], purpose: str) -> None:
-    missing = [n for n in names if n not in model.functions]
-    if missing:
-        raise ValueError(f"{model.name}: {purpose} needs the generated functions {', '.join(missing)}; "
-                         f"derive them (e.g. symkin derive MODEL --only {','.join(names)})")
+def _require(model: Any, names: tuple[str, ...]) -> None:
+    for name in names:
+        mechanism.parallel_function(model, name)
     legs = model.manifest["model"]["parallel"]["legs"]
     declared = [name for leg in legs for name in leg.get("passive_limits", {})]
     if declared:
@@ -65,7 +63,7 @@ def working_mode(model: Any, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         (p, inside): p = fk(q) (..., 3), NaN where the legs cannot be assembled; inside:
         boolean (...), fk assembles and ik(fk(q)) = q (joint limits are not checked here).
     """
-    _require(model, ("fk", "ik"), "the joint-space workspace of a parallel mechanism")
+    _require(model, ("fk", "ik", "jacobian"))
     q = np.asarray(q, dtype=np.float64)
     with np.errstate(invalid="ignore"):  # the closed forms take sqrt of negative margins: NaN, as documented
         p = model.fk(q).position
@@ -120,7 +118,7 @@ def parallel_inverse(model: Any) -> ParallelInverse:
     if tuple(mechanism.task_space(model)) != mechanism.POSITION_COMPONENTS:
         raise ValueError(f"{model.name}: the Cartesian workspace of a platform that also rotates "
                          f"(task space {list(mechanism.task_space(model))}) is not analysed yet")
-    _require(model, ("ik", "fk"), "reachability by inverse kinematics")
+    _require(model, ("ik", "fk", "jacobian"))
     home = model.manifest["model"]["parallel"].get("home")
     if home is None:
         raise ValueError(f"{model.name}: declare a home pose (parallel.home) to scale the workspace analyses")
