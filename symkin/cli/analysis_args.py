@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import math
 import tempfile
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -116,8 +117,16 @@ def parse_limits(texts: list[str]) -> dict[str, tuple[float, float]]:
     return limits
 
 
-def load_model(path: str, backend: str = "numpy") -> Any:
+def load_model(path: str, backend: str = "numpy", outputs: Sequence[str] = ANALYSIS_OUTPUTS,
+               optional: Sequence[str] = ()) -> Any:
     """The loaded model of MODEL: a generated directory, or a model file derived on the fly.
+
+    Args:
+        path: generated directory (or its manifest.json), or a YAML model file.
+        backend: the backend to load (and, for a model file, to emit).
+        outputs: the quantities to derive from a model file.
+        optional: quantities also derived where the model has them (e.g. ``friction``,
+            ``gravity_vector``); skipped silently where it does not.
 
     Raises:
         ModelError: a model file is invalid.
@@ -129,13 +138,24 @@ def load_model(path: str, backend: str = "numpy") -> Any:
     if source.suffix.lower() not in (".yaml", ".yml"):
         return load(source, backend)
     from symkin import pipeline
+    from symkin.cli.progress import Progress
+    from symkin.derivation import Derivation
+    from symkin.errors import DerivationError
     from symkin.model import load_model as load_model_file
 
     model = load_model_file(source)
-    request = pipeline.resolve_request(model, ",".join(ANALYSIS_OUTPUTS), backend, None)
-    with tempfile.TemporaryDirectory(prefix="symkin-analysis-") as scratch:
+    derivation = Derivation(model)
+    available = []
+    for name in optional:
+        try:
+            derivation[name]
+        except DerivationError:
+            continue
+        available.append(name)
+    request = pipeline.resolve_request(model, ",".join([*outputs, *available]), backend, None)
+    with tempfile.TemporaryDirectory(prefix="symkin-analysis-") as scratch, Progress(model.name) as progress:
         # The generated module is imported (numpy) or opened (C) by load(): the files may go afterwards.
-        return load(pipeline.write(pipeline.generate(model, request), scratch), backend)
+        return load(pipeline.write(pipeline.generate(model, request, progress), scratch), backend)
 
 
 def model_from_args(args: argparse.Namespace) -> tuple[Any, dict[str, tuple[float, float]]]:
