@@ -91,7 +91,12 @@ def parse_assignments(texts: list[str]) -> dict[str, float]:
     return values
 
 
-def _bound(text: str) -> float:
+def parse_value(text: str) -> float:
+    """A number of rad or m, or of degrees with a 'deg' suffix (converted to rad).
+
+    Raises:
+        ValueError: not a number.
+    """
     text = text.strip()
     if text.endswith("deg"):
         return math.radians(float(text[:-3]))
@@ -111,10 +116,26 @@ def parse_limits(texts: list[str]) -> dict[str, tuple[float, float]]:
         if not sep or not colon or not name.strip():
             raise ValueError(f"'{text}' is not JOINT=LOWER:UPPER")
         try:
-            limits[name.strip()] = (_bound(lower), _bound(upper))
+            limits[name.strip()] = (parse_value(lower), parse_value(upper))
         except ValueError:
             raise ValueError(f"'{text}': the bounds must be numbers (optionally with 'deg')") from None
     return limits
+
+
+def derivable(model: Any, names: Sequence[str]) -> list[str]:
+    """The quantities of ``names`` that ``model`` has (e.g. no ``gravity_vector`` without gravity)."""
+    from symkin.derivation import Derivation
+    from symkin.errors import DerivationError
+
+    derivation = Derivation(model)
+    found = []
+    for name in names:
+        try:
+            derivation[name]
+        except DerivationError:
+            continue
+        found.append(name)
+    return found
 
 
 def load_model(path: str, backend: str = "numpy", outputs: Sequence[str] = ANALYSIS_OUTPUTS,
@@ -139,20 +160,10 @@ def load_model(path: str, backend: str = "numpy", outputs: Sequence[str] = ANALY
         return load(source, backend)
     from symkin import pipeline
     from symkin.cli.progress import Progress
-    from symkin.derivation import Derivation
-    from symkin.errors import DerivationError
     from symkin.model import load_model as load_model_file
 
     model = load_model_file(source)
-    derivation = Derivation(model)
-    available = []
-    for name in optional:
-        try:
-            derivation[name]
-        except DerivationError:
-            continue
-        available.append(name)
-    request = pipeline.resolve_request(model, ",".join([*outputs, *available]), backend, None)
+    request = pipeline.resolve_request(model, ",".join([*outputs, *derivable(model, optional)]), backend, None)
     with tempfile.TemporaryDirectory(prefix="symkin-analysis-") as scratch, Progress(model.name) as progress:
         # The generated module is imported (numpy) or opened (C) by load(): the files may go afterwards.
         return load(pipeline.write(pipeline.generate(model, request, progress), scratch), backend)

@@ -77,24 +77,18 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(run=run, parser=p)
 
 
-def parse_value(text: str) -> float:
-    """A number, or a number with 'deg' converted to rad.
-
-    Raises:
-        ValueError: not a number.
-    """
-    text = text.strip()
+def _number(option: str, text: str) -> float:
     try:
-        return math.radians(float(text[:-3])) if text.endswith("deg") else float(text)
+        return analysis_args.parse_value(text)
     except ValueError:
-        raise ValueError(f"'{text}' is not a number (rad or m, or degrees with 'deg')") from None
+        raise ValueError(f"{option}: '{text}' is not a number (rad or m, or degrees with 'deg')") from None
 
 
 def _start(args: argparse.Namespace, plant) -> list[float]:
     if args.q0 is None:
         limits = plant.model.joint_limits
         return [0.5 * (lo + hi) if math.isfinite(lo) and math.isfinite(hi) else 0.0 for lo, hi in limits]
-    values = [parse_value(v) for v in args.q0]
+    values = [_number("--q0", v) for v in args.q0]
     if len(values) != plant.dof:
         raise ValueError(f"--q0: {plant.name} has {plant.dof} joints ({' '.join(plant.coordinates)}), "
                          f"got {len(values)} values")
@@ -136,7 +130,7 @@ def run(args: argparse.Namespace) -> int:
         if joint is None:
             raise ValueError(f"--joint: {plant.name} has no joint '{args.joint}'; use one of "
                              f"{', '.join(plant.coordinates)}")
-        amplitude = parse_value(args.amplitude)
+        amplitude = _number("--amplitude", args.amplitude)
     except (ValueError, KeyError) as err:
         analysis_args.fail_on_bad_input(args, err)
     timing = scenarios.Timing(args.duration, args.rate, args.integrator or DEFAULT_INTEGRATOR[args.scenario],
