@@ -89,6 +89,16 @@ def test_tcp_force_is_the_generated_tcp_force(arm, seed_result):
                                rtol=1e-10, atol=1e-12)
 
 
+def test_tcp_forces_are_flagged_at_singular_configurations(arm):
+    q = np.array([[0.3, 0.0], [0.3, 0.5]])
+    tau = np.array([[0.1, 0.2], [0.1, 0.2]])
+    force = scenarios.tcp_forces(arm.jacobian(q), tau)
+    assert np.all(np.isnan(force[0]))
+    np.testing.assert_allclose(seed_jacobian(q[1], 0.1, 0.1).T @ force[1], tau[1], rtol=1e-12)
+    with pytest.raises(ValueError, match="square"):
+        scenarios.tcp_forces(np.zeros((2, 3, 6)), np.zeros((2, 6)))
+
+
 def test_free_swing_conserves_energy_to_the_tolerance(arm):
     result = scenarios.free_swing("", Plant(arm), SEED_CENTER, scenarios.Timing(1.0, 100, "dop853"))
     energy = result.series[0].columns["energy k + u [J]"]

@@ -153,6 +153,8 @@ def run(args: argparse.Namespace) -> int:
         except SimulationError as err:
             print(f"symkin simulate: {err}")
             return 1
+        except ValueError as err:  # the scenario does not apply to the model
+            analysis_args.fail_on_bad_input(args, err)
         progress("writing")
         out = args.out or f"out/simulation/{base.name}-{args.scenario}"
         files = scenario_files(base.name, result, figures=not args.no_figure)

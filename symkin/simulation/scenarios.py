@@ -115,6 +115,20 @@ def _peak(values: np.ndarray) -> float:
     return float(np.max(np.abs(values)))
 
 
+def tcp_forces(J: np.ndarray, tau: np.ndarray) -> np.ndarray:
+    """F = J^-T tau (seed eq. 8.35) per sample (N, m); NaN where J is singular (kappa > 1e12).
+
+    Raises:
+        ValueError: the task Jacobian is not square (tau does not determine F).
+    """
+    if J.shape[-1] != J.shape[-2]:
+        raise ValueError(f"TCP forces F = J^-T tau need a square task Jacobian, got {J.shape[-2]} x {J.shape[-1]}")
+    force = np.full(tau.shape[:-1] + (J.shape[-2],), np.nan)
+    regular = np.linalg.cond(J) < 1e12
+    force[regular] = np.linalg.solve(np.swapaxes(J[regular], -1, -2), tau[regular][..., None])[..., 0]
+    return force
+
+
 def sine(designs: Sequence[tuple[str, Plant]], center: np.ndarray, joint: int, amplitude: float, frequency: float,
          timing: Timing) -> ScenarioResult:
     """The seed's simplified haptic scenario for each design (Figs. 8.21, 8.22)."""
@@ -127,8 +141,7 @@ def sine(designs: Sequence[tuple[str, Plant]], center: np.ndarray, joint: int, a
         t = np.arange(timing.steps + 1) / timing.rate
         q, qd, qdd = reference(t)
         tau = plant.torque(q, qd, qdd)
-        J = plant.model.jacobian(q)
-        force = np.linalg.solve(np.swapaxes(J, -1, -2), tau[..., None])[..., 0]          # F = J^-T tau (8.35)
+        force = tcp_forces(plant.model.jacobian(q), tau)
         system = ArmSystem(plant)
         run = integrate(system, ComputedTorque(system, reference), system.initial(q[0], qd[0]), timing)
         simulated = system.split(run.x)
@@ -142,8 +155,11 @@ def sine(designs: Sequence[tuple[str, Plant]], center: np.ndarray, joint: int, a
         series.append(Series(label, columns))
         peaks = ", ".join(f"|tau_{n}| <= {_peak(tau[:, i]):.4g}" for i, n in enumerate(names))
         summary.append(f"{label}: peak torques {peaks} {effort_unit}; peak TCP forces "
-                       + ", ".join(f"|F_{c}| <= {_peak(force[:, i]):.4g}" for i, c in enumerate(plant.task_space))
-                       + " N")
+                       + ", ".join(f"|F_{c}| <= {np.nanmax(np.abs(force[:, i])):.4g}"
+                                   for i, c in enumerate(plant.task_space)) + " N")
+        singular = int(np.sum(np.isnan(force[:, 0])))
+        if singular:
+            summary.append(f"  {singular} samples at a singular configuration: TCP forces undefined (NaN)")
         if len(names) >= 2:
             above = bool(np.all(tau[:, 0] > tau[:, 1]))
             larger = _peak(tau[:, 0]) > _peak(tau[:, 1])
