@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import math
 import tempfile
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -90,7 +91,12 @@ def parse_assignments(texts: list[str]) -> dict[str, float]:
     return values
 
 
-def _bound(text: str) -> float:
+def parse_value(text: str) -> float:
+    """A number of rad or m, or of degrees with a 'deg' suffix (converted to rad).
+
+    Raises:
+        ValueError: not a number.
+    """
     text = text.strip()
     if text.endswith("deg"):
         return math.radians(float(text[:-3]))
@@ -110,14 +116,38 @@ def parse_limits(texts: list[str]) -> dict[str, tuple[float, float]]:
         if not sep or not colon or not name.strip():
             raise ValueError(f"'{text}' is not JOINT=LOWER:UPPER")
         try:
-            limits[name.strip()] = (_bound(lower), _bound(upper))
+            limits[name.strip()] = (parse_value(lower), parse_value(upper))
         except ValueError:
             raise ValueError(f"'{text}': the bounds must be numbers (optionally with 'deg')") from None
     return limits
 
 
-def load_model(path: str, backend: str = "numpy") -> Any:
+def derivable(model: Any, names: Sequence[str]) -> list[str]:
+    """The quantities of ``names`` that ``model`` has (e.g. no ``gravity_vector`` without gravity)."""
+    from symkin.derivation import Derivation
+    from symkin.errors import DerivationError
+
+    derivation = Derivation(model)
+    found = []
+    for name in names:
+        try:
+            derivation[name]
+        except DerivationError:
+            continue
+        found.append(name)
+    return found
+
+
+def load_model(path: str, backend: str = "numpy", outputs: Sequence[str] = ANALYSIS_OUTPUTS,
+               optional: Sequence[str] = ()) -> Any:
     """The loaded model of MODEL: a generated directory, or a model file derived on the fly.
+
+    Args:
+        path: generated directory (or its manifest.json), or a YAML model file.
+        backend: the backend to load (and, for a model file, to emit).
+        outputs: the quantities to derive from a model file.
+        optional: quantities also derived where the model has them (e.g. ``friction``,
+            ``gravity_vector``); skipped silently where it does not.
 
     Raises:
         ModelError: a model file is invalid.
@@ -129,13 +159,14 @@ def load_model(path: str, backend: str = "numpy") -> Any:
     if source.suffix.lower() not in (".yaml", ".yml"):
         return load(source, backend)
     from symkin import pipeline
+    from symkin.cli.progress import Progress
     from symkin.model import load_model as load_model_file
 
     model = load_model_file(source)
-    request = pipeline.resolve_request(model, ",".join(ANALYSIS_OUTPUTS), backend, None)
-    with tempfile.TemporaryDirectory(prefix="symkin-analysis-") as scratch:
+    request = pipeline.resolve_request(model, ",".join([*outputs, *derivable(model, optional)]), backend, None)
+    with tempfile.TemporaryDirectory(prefix="symkin-analysis-") as scratch, Progress(model.name) as progress:
         # The generated module is imported (numpy) or opened (C) by load(): the files may go afterwards.
-        return load(pipeline.write(pipeline.generate(model, request), scratch), backend)
+        return load(pipeline.write(pipeline.generate(model, request, progress), scratch), backend)
 
 
 def model_from_args(args: argparse.Namespace) -> tuple[Any, dict[str, tuple[float, float]]]:

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from symkin.cli import bench_cmd, check_cmd, derive_cmd, gci_cmd, ik_cmd, structure_cmd, workspace_cmd
+from symkin.cli import bench_cmd, check_cmd, derive_cmd, gci_cmd, ik_cmd, simulate_cmd, structure_cmd, workspace_cmd
 
 REGISTRY = [
     derive_cmd.register,
@@ -14,4 +14,5 @@ REGISTRY = [
     structure_cmd.register_topologies,
     bench_cmd.register,
     ik_cmd.register,
+    simulate_cmd.register,
 ]
