@@ -16,13 +16,14 @@ from typing import Any
 ANALYSIS_OUTPUTS = ("fk", "jacobian")
 
 
-def add_model_arguments(p: argparse.ArgumentParser) -> None:
-    """MODEL, --backend, --set and --limit."""
+def add_model_arguments(p: argparse.ArgumentParser, *, backend: bool = True) -> None:
+    """MODEL, --backend (unless ``backend`` is False), --set and --limit."""
     p.add_argument("model", metavar="MODEL",
                    help="generated model directory (from 'symkin derive', e.g. generated/planar_2r) "
                         "or a model file (YAML; fk and jacobian are derived on the fly)")
-    p.add_argument("--backend", default="numpy", metavar="NAME",
-                   help="generated code to evaluate (default: %(default)s)")
+    if backend:
+        p.add_argument("--backend", default="numpy", metavar="NAME",
+                       help="generated code to evaluate (default: %(default)s)")
     p.add_argument("--set", dest="assignments", action="append", default=[], metavar="NAME=VALUE[,...]",
                    help="parameter values instead of the defaults, e.g. --set l1=0.2,l2=0.2 (repeatable)")
     p.add_argument("--limit", dest="limits", action="append", default=[], metavar="JOINT=LOWER:UPPER",
@@ -123,19 +124,32 @@ def load_model(path: str, backend: str = "numpy") -> Any:
         ModelError: a model file is invalid.
         GeneratedCodeError: a directory holds no usable generated code.
     """
+    return load_models(path, (backend,))[0]
+
+
+def load_models(path: str, backends: tuple[str, ...], outputs: tuple[str, ...] = ANALYSIS_OUTPUTS) -> list[Any]:
+    """MODEL loaded once per backend; a model file is derived on the fly (those of ``outputs``
+    that its kind of mechanism has, e.g. ``ik`` only for a parallel one).
+
+    Raises:
+        ModelError: a model file is invalid.
+        GeneratedCodeError: a directory holds no usable generated code.
+    """
     from symkin import load
 
     source = Path(path)
     if source.suffix.lower() not in (".yaml", ".yml"):
-        return load(source, backend)
+        return [load(source, backend) for backend in backends]
     from symkin import pipeline
     from symkin.model import load_model as load_model_file
 
     model = load_model_file(source)
-    request = pipeline.resolve_request(model, ",".join(ANALYSIS_OUTPUTS), backend, None)
+    known = pipeline.emitted_quantities(model.mechanism)
+    request = pipeline.resolve_request(model, ",".join(o for o in outputs if o in known), ",".join(backends), None)
     with tempfile.TemporaryDirectory(prefix="symkin-analysis-") as scratch:
-        # The generated module is imported (numpy) or opened (C) by load(): the files may go afterwards.
-        return load(pipeline.write(pipeline.generate(model, request), scratch), backend)
+        # The generated module is imported (numpy) or read (C, CasADi) by load(): the files may go afterwards.
+        directory = pipeline.write(pipeline.generate(model, request), scratch)
+        return [load(directory, backend) for backend in backends]
 
 
 def model_from_args(args: argparse.Namespace) -> tuple[Any, dict[str, tuple[float, float]]]:

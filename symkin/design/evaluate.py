@@ -94,7 +94,8 @@ def _serial_box(problem: DesignProblem, model: Any, configurations: np.ndarray |
 
 def parallel_reachable(model: Any, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Joints (N, n) of the closed-form ``ik`` and whether each point is reachable within declared joint limits."""
-    q, margin = model.ik(points)
+    with np.errstate(invalid="ignore"):  # the square root of a negative margin: NaN joints, unreachable
+        q, margin = model.ik(points)
     inside = np.all(margin >= 0, axis=-1) & np.all(np.isfinite(q), axis=-1)
     limits = np.array(model.joint_limits, dtype=np.float64)
     inside &= np.all((q >= limits[:, 0]) & (q <= limits[:, 1]), axis=-1) if inside.any() else inside
