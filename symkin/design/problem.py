@@ -19,7 +19,7 @@ from symkin.analysis import mechanism
 #: What can be maximized.
 OBJECTIVES = ("gci", "workspace")
 
-#: Default span of a free parameter without --bounds: [start / SPAN, start * SPAN].
+#: Default span of a free parameter without --bounds: from start / SPAN to start * SPAN.
 SPAN = 2.0
 
 
@@ -116,8 +116,8 @@ def _free_parameters(model: Any, free: Sequence[str], bounds: Mapping[str, tuple
         start = float(values.get(name, model.parameters[name]))
         if name in bounds:
             lower, upper = bounds[name]
-        elif start > 0:
-            lower, upper = start / SPAN, start * SPAN
+        elif start != 0:
+            lower, upper = sorted((start / SPAN, start * SPAN))
         else:
             raise ValueError(f"{model.name}: '{name}' starts at {start:g}, so no default span applies; "
                              f"give --bounds {name}=LOWER:UPPER")
@@ -161,7 +161,7 @@ def design_problem(model: Any, objective: str, free: Sequence[str], *,
         model: the loaded model (any backend; only its manifest is read).
         objective: ``gci`` or ``workspace``.
         free: names of the parameters to optimize.
-        bounds: {name: (lower, upper)}; default [start / 2, 2 start] for a positive start.
+        bounds: {name: (lower, upper)}; default from start / 2 to 2 start (a start of 0 needs bounds).
         values: parameter values instead of the defaults (also the start of free ones).
         box: the required workspace box {axis: (lower, upper)} over the task's position
             axes (x, y, z); required for parallel models, whose GCI is taken over it.
