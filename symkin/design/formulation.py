@@ -55,16 +55,21 @@ def casadi_function(model: Any, name: str) -> casadi.Function:
     return function.casadi
 
 
-def _mapped(function: casadi.Function, count: int, arguments: dict[str, Any]) -> dict[str, Any]:
-    """``function`` over ``count`` columns; scalars (the parameters) are shared by all."""
+def _node_function(name: str, node: casadi.SX, free: casadi.SX, outputs: casadi.SX) -> casadi.Function:
+    """A function of one sample point and the free parameter values, to be mapped over all points."""
+    return casadi.Function(name, [node, free], [outputs], ["node", "free"], [name])
+
+
+def _call(function: casadi.Function, arguments: dict[str, Any]) -> list[casadi.SX]:
+    """The outputs of a generated function called by name with the arguments it takes."""
     wanted = set(function.name_in())
-    return function.map(count)(**{k: v for k, v in arguments.items() if k in wanted})
+    result = function.call({k: v for k, v in arguments.items() if k in wanted})
+    return [result[name] for name in function.name_out()]
 
 
-def _blocks(matrix: Any, count: int) -> list[Any]:
-    """The ``count`` square blocks of a mapped matrix output (rows x rows*count)."""
-    width = matrix.shape[1] // count
-    return [matrix[:, j * width:(j + 1) * width] for j in range(count)]
+def _mapped(function: casadi.Function, nodes: Any, free: casadi.MX) -> casadi.MX:
+    """``function`` at every column of ``nodes`` (d x N), the free values shared: (outputs x N)."""
+    return function.map(nodes.shape[1], "serial")(nodes, free)
 
 
 @dataclass
@@ -72,7 +77,7 @@ class Program:
     """A nonlinear program min f(x) s.t. lbg <= g(x) <= ubg, lbx <= x <= ubx, and how to read it.
 
     Attributes:
-        x, f, g: CasADi SX expressions (f is -objective / |objective(start)|).
+        x, f, g: CasADi MX expressions (f is -objective / |objective(start)|).
         x0, lbx, ubx, lbg, ubg: numeric start and bounds.
         objective: Function of the free parameter values (unscaled) -> the surrogate.
         free_count: the first ``free_count`` entries of x are the scaled free parameters.
@@ -82,9 +87,9 @@ class Program:
         description: the surrogate and its domain, in words.
     """
 
-    x: casadi.SX
-    f: casadi.SX
-    g: casadi.SX
+    x: casadi.MX
+    f: casadi.MX
+    g: casadi.MX
     x0: np.ndarray
     lbx: np.ndarray
     ubx: np.ndarray
@@ -106,6 +111,10 @@ def formulate(problem: DesignProblem, casadi_model: Any, numpy_model: Any, *, no
               box_points: int = BOX_POINTS_PER_AXIS, seed: int = 0) -> Program:
     """The CasADi program of a dimensioning problem.
 
+    Each term is a CasADi function of one sample point and the free parameter values, built
+    from the generated functions (SX) and mapped over the points (MX): the program and
+    its exact Hessian stay small however many points there are.
+
     Args:
         problem: from :func:`symkin.design.problem.design_problem`.
         casadi_model: the model loaded with ``backend="casadi"`` (unbound).
@@ -115,15 +124,17 @@ def formulate(problem: DesignProblem, casadi_model: Any, numpy_model: Any, *, no
         seed: seed of the fixed Sobol nodes.
     """
     scales = np.array([p.scale for p in problem.free])
-    z = casadi.SX.sym("z", len(problem.free))
+    free = casadi.SX.sym("free", len(problem.free))
     values: dict[str, Any] = dict(problem.values)
-    values.update({p.name: z[k] * scales[k] for k, p in enumerate(problem.free)})
+    values.update({p.name: free[k] for k, p in enumerate(problem.free)})
+    z = casadi.MX.sym("z", len(problem.free))
     build = _parallel if problem.parallel else _serial
-    objective, g, lbg, ubg, extra, nodes_used, points, description = build(
-        problem, casadi_model, numpy_model, values, nodes, box_points, seed)
-    free_values = casadi.SX.sym("p", len(problem.free))
-    objective_of = casadi.Function("objective", [z], [objective]).call([free_values / scales])[0]
-    objective_function = casadi.Function("objective", [free_values], [objective_of], ["free"], ["surrogate"])
+    terms = build(problem, casadi_model, numpy_model, free, values, z * scales, nodes, box_points, seed)
+    objective, g, lbg, ubg, extra, nodes_used, points, description = terms
+    free_values = casadi.MX.sym("free", len(problem.free))
+    objective_function = casadi.Function("objective", [z], [objective])
+    objective_function = casadi.Function("surrogate", [free_values], [objective_function(free_values / scales)],
+                                         ["free"], ["surrogate"])
     start = np.array([p.start for p in problem.free])
     reference = abs(float(objective_function(start)))
     if not reference > 0:
@@ -137,42 +148,41 @@ def formulate(problem: DesignProblem, casadi_model: Any, numpy_model: Any, *, no
                    objective_function, len(problem.free), scales, nodes_used, points, description)
 
 
-def _serial(problem: DesignProblem, casadi_model: Any, numpy_model: Any, values: dict[str, Any],
-            nodes: int | None, box_points: int, seed: int):
+def _serial(problem: DesignProblem, casadi_model: Any, numpy_model: Any, free: casadi.SX, values: dict[str, Any],
+            design: casadi.MX, nodes: int | None, box_points: int, seed: int):
     limits = problem.limits
+    n = limits.shape[0]
     q = sampling.sobol(limits[:, 0], limits[:, 1], SERIAL_NODES_LOG2 if nodes is None else nodes,
                        np.random.default_rng(seed))
     count = len(q)
-    jacobian = _mapped(casadi_function(casadi_model, "jacobian"), count, {"q": casadi.DM(q.T), **values})
+    node = casadi.SX.sym("q", n)
+    J = _call(casadi_function(casadi_model, "jacobian"), {"q": node, **values})[0]
     rows = mechanism.position_rows(numpy_model)
-    blocks = _blocks(next(iter(jacobian.values())), count)
-    weights = casadi.sum1(casadi.vertcat(*[casadi.fabs(smooth.determinant(J)) for J in blocks]))
+    term = smooth.measure_weighted_inverse_frobenius(J, smooth.homogenized(J, problem.length, rows))
+    per_node = _node_function("gci_terms", node, free, casadi.vertcat(term, casadi.fabs(smooth.determinant(J))))
+    sums = casadi.sum2(_mapped(per_node, casadi.DM(q.T), design))
     if problem.objective == "gci":
-        terms = [smooth.measure_weighted_inverse_frobenius(J, smooth.homogenized(J, problem.length, rows))
-                 for J in blocks]
-        objective = casadi.sum1(casadi.vertcat(*terms)) / weights
+        objective = sums[0] / sums[1]
         description = (f"Frobenius GCI surrogate: sum |det J| / kappa_F / sum |det J| at {count} fixed Sobol "
                        "nodes over the joint limits (Cartesian measure dW = |det J| dq)")
     else:
-        objective = weights * float(np.prod(limits[:, 1] - limits[:, 0])) / count
+        objective = sums[1] * float(np.prod(limits[:, 1] - limits[:, 0])) / count
         description = f"workspace measure int |det J| dq over the joint limits, at {count} fixed Sobol nodes"
     if problem.box is None:
-        return objective, casadi.SX(0, 1), [], [], (casadi.SX(0, 1), [], [], []), q, np.empty((0, 0)), description
+        return objective, casadi.MX(0, 1), [], [], (casadi.MX(0, 1), [], [], []), q, np.empty((0, 0)), description
     points = sampling.grid(*problem.inflated_box, box_points, midpoints=False)
-    qb = casadi.SX.sym("q_box", q.shape[1], len(points))
-    fk = _mapped(casadi_function(casadi_model, "fk"), len(points), {"q": qb, **values})
-    transforms = _blocks(next(iter(fk.values())), len(points))
     axes = list(mechanism.position_axes(numpy_model))
+    T = _call(casadi_function(casadi_model, "fk"), {"q": node, **values})[0]
+    position = _node_function("tcp", node, free, T[axes, 3])
+    qb = casadi.MX.sym("q_box", n, len(points))
     size = float(np.max(problem.box[1] - problem.box[0]))
-    residuals = [(T[axes, 3] - casadi.DM(p)) / size for T, p in zip(transforms, points)]
+    residuals = (_mapped(position, qb, design) - casadi.DM(points.T)) / size
     start = _nearest_configurations(numpy_model.bind(**problem.start), limits, points, axes, seed)
-    count_b = len(points)
-    lower = np.tile(limits[:, 0], count_b)
-    upper = np.tile(limits[:, 1], count_b)
-    g = casadi.vertcat(*residuals)
-    zeros = np.zeros(g.shape[0])
-    description += f"; the box is required at {count_b} points (fk(q_b) = p_b within the joint limits)"
-    return (objective, g, zeros, zeros, (casadi.vec(qb), start.ravel(), lower, upper), q, points, description)
+    zeros = np.zeros(residuals.numel())
+    description += f"; the box is required at {len(points)} points (fk(q_b) = p_b within the joint limits)"
+    bounds = (np.tile(limits[:, 0], len(points)), np.tile(limits[:, 1], len(points)))
+    return (objective, casadi.vec(residuals), zeros, zeros, (casadi.vec(qb), start.ravel(), *bounds), q, points,
+            description)
 
 
 def _nearest_configurations(model: Any, limits: np.ndarray, points: np.ndarray, axes: list[int],
@@ -184,34 +194,33 @@ def _nearest_configurations(model: Any, limits: np.ndarray, points: np.ndarray, 
     return q[nearest]
 
 
-def _parallel(problem: DesignProblem, casadi_model: Any, numpy_model: Any, values: dict[str, Any],
-              nodes: int | None, box_points: int, seed: int):
+def _parallel(problem: DesignProblem, casadi_model: Any, numpy_model: Any, free: casadi.SX, values: dict[str, Any],
+              design: casadi.MX, nodes: int | None, box_points: int, seed: int):
     per_axis = PARALLEL_NODES_PER_AXIS if nodes is None else nodes
     p = sampling.grid(*problem.box, per_axis)
-    ik = casadi_function(casadi_model, "ik")
-    solved = _mapped(ik, len(p), {"p": casadi.DM(p.T), **values})
-    joints, _ = (solved[name] for name in ik.name_out())
-    jacobian = _mapped(casadi_function(casadi_model, "jacobian"), len(p), {"q": joints, "p": casadi.DM(p.T), **values})
-    blocks = _blocks(next(iter(jacobian.values())), len(p))
-    objective = casadi.sum1(casadi.vertcat(*[smooth.inverse_frobenius(J) for J in blocks])) / len(p)
+    node = casadi.SX.sym("p", p.shape[1])
+    joints, margin = _call(casadi_function(casadi_model, "ik"), {"p": node, **values})
+    J = _call(casadi_function(casadi_model, "jacobian"), {"q": joints, "p": node, **values})[0]
+    index = _node_function("inverse_frobenius", node, free, smooth.inverse_frobenius(J))
+    objective = casadi.sum2(_mapped(index, casadi.DM(p.T), design)) / len(p)
     description = (f"Frobenius GCI surrogate: mean 1/kappa_F over a {per_axis}^{p.shape[1]} midpoint grid of the "
                    "required box (Cartesian measure), joints from the closed-form ik")
     corners = sampling.grid(*problem.inflated_box, box_points, midpoints=False)
     points = np.concatenate([corners, p])
-    reach = _mapped(ik, len(points), {"p": casadi.DM(points.T), **values})
-    reach_joints, margin = (reach[name] for name in ik.name_out())
     start_margin = np.asarray(numpy_model.ik(points, **problem.start)[1])
     if not np.all(np.isfinite(start_margin)):
         raise ValueError(f"{numpy_model.name}: the inverse kinematics fails at the start design")
     reference = float(np.median(np.abs(start_margin))) or 1.0
-    g = [casadi.vec(margin) / reference]
-    lbg, ubg = [np.zeros(margin.numel())], [np.full(margin.numel(), np.inf)]
-    declared = np.array(numpy_model.joint_limits, dtype=np.float64)
-    for k, (lo, hi) in enumerate(declared):
+    reach = _node_function("reach", node, free, casadi.vertcat(margin / reference, joints))
+    legs = margin.numel()
+    reached = _mapped(reach, casadi.DM(points.T), design)
+    g = [casadi.vec(reached[:legs, :])]
+    lbg, ubg = [np.zeros(legs * len(points))], [np.full(legs * len(points), np.inf)]
+    for k, (lo, hi) in enumerate(np.array(numpy_model.joint_limits, dtype=np.float64)):
         if np.isfinite(lo) or np.isfinite(hi):
-            g.append(reach_joints[k, :].T)
+            g.append(reached[legs + k, :].T)
             lbg.append(np.full(len(points), lo))
             ubg.append(np.full(len(points), hi))
     description += f"; the box is required at {len(points)} points (ik margin >= 0)"
-    return (objective, casadi.vertcat(*g), np.concatenate(lbg), np.concatenate(ubg), (casadi.SX(0, 1), [], [], []),
+    return (objective, casadi.vertcat(*g), np.concatenate(lbg), np.concatenate(ubg), (casadi.MX(0, 1), [], [], []),
             p, points, description)

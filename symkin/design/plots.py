@@ -33,7 +33,7 @@ def png(figure: Any) -> bytes:
 
 
 def history_figure(solution: Solution, problem: DesignProblem, model_name: str) -> Any:
-    """The surrogate objective at every IPOPT iterate."""
+    """The surrogate objective at every IPOPT iterate, and the constraint violation where there are constraints."""
     from matplotlib.figure import Figure
 
     figure = Figure(figsize=(6.0, 4.0), layout="constrained")
@@ -44,6 +44,11 @@ def history_figure(solution: Solution, problem: DesignProblem, model_name: str) 
     ax.set_title(f"{model_name}: maximize {problem.objective} over {', '.join(problem.names)} "
                  f"({solution.iterations} iterations, {solution.status})", fontsize=9)
     ax.grid(alpha=0.3)
+    if np.any(solution.infeasibility > 0):
+        twin = ax.twinx()
+        twin.semilogy(np.arange(len(solution.infeasibility)), np.maximum(solution.infeasibility, 1e-17),
+                      color="tab:red", lw=0.8, ls="--")
+        twin.set_ylabel("constraint violation (IPOPT inf_pr)", color="tab:red")
     return figure
 
 

@@ -31,6 +31,7 @@ class Solution:
         start, optimum: all parameter values of the start and the optimized design.
         surrogate_start, surrogate_optimum: the objective's surrogate at both.
         history: the surrogate at every IPOPT iterate (iteration 0 is the start).
+        infeasibility: IPOPT's primal infeasibility (largest scaled constraint violation) at every iterate.
         status: IPOPT's return status; ``success`` whether it converged.
         iterations: IPOPT iterations.
         ipopt_seconds: wall time of the IPOPT solve (including CasADi's evaluations of f, g and derivatives).
@@ -44,6 +45,7 @@ class Solution:
     surrogate_start: float
     surrogate_optimum: float
     history: np.ndarray
+    infeasibility: np.ndarray
     status: str
     success: bool
     iterations: int
@@ -78,6 +80,7 @@ def solve(problem: DesignProblem, program: Program, *, build_seconds: float = 0.
         start=problem.start, optimum=problem.design(free),
         surrogate_start=float(program.objective(program.x0[:program.free_count] * program.scales)),
         surrogate_optimum=float(program.objective(free)), history=history,
+        infeasibility=np.asarray(stats["iterations"]["inf_pr"], dtype=np.float64),
         status=str(stats["return_status"]), success=bool(stats["success"]), iterations=int(stats["iter_count"]),
         ipopt_seconds=ipopt_seconds, build_seconds=build_seconds,
         box_configurations=box_q if box_q.size else np.empty((0, 0)), constraint_violation=violation)
