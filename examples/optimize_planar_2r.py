@@ -51,7 +51,8 @@ def run(numpy_model, casadi_model, out: Path, label: str, **requirements) -> des
     if after.box_reachable is not None:
         print(f"  box reachable at {100 * after.box_reachable:.1f} % of the points ({after.box_check})")
     print(f"  IPOPT {solution.ipopt_seconds * 1e3:.1f} ms ({solution.iterations} iterations), wall {wall:.2f} s")
-    (out / f"planar_2r-{label}-history.png").write_bytes(plots.png(plots.history_figure(solution, problem, "planar_2r")))
+    history = plots.history_figure(solution, problem, "planar_2r")
+    (out / f"planar_2r-{label}-history.png").write_bytes(plots.png(history))
     (out / f"planar_2r-{label}-design.png").write_bytes(
         plots.png(plots.design_figure(problem, numpy_model, solution, (before, after))))
     return solution

@@ -144,8 +144,8 @@ def test_delta_optimization_improves_the_gci_and_keeps_the_box_reachable(delta):
 
 def test_cli_on_a_model_file_writes_figures_and_result(tmp_path, capsys):
     out = tmp_path / "run"
-    assert main(["optimize", str(MODELS_DIR / "planar_2r.yaml"), "--free", "l1", "--bounds", "l1=0.05:0.3", "--nodes", "6",
-                 "-n", "1024", "-o", str(out)]) == 0
+    assert main(["optimize", str(MODELS_DIR / "planar_2r.yaml"), "--free", "l1", "--bounds", "l1=0.05:0.3",
+                 "--nodes", "6", "-n", "1024", "-o", str(out)]) == 0
     text = capsys.readouterr().out
     assert "l1: 0.1 -> 0.1414213562" in text and "IPOPT" in text and "wall" in text
     assert sorted(p.name for p in out.iterdir()) == ["design.png", "history.png", "result.json"]
@@ -176,4 +176,13 @@ def test_bad_input_is_refused_with_exit_code_2(tmp_path, capsys, arguments, mess
         main(["optimize", *arguments, "-o", str(out)])
     assert exit_info.value.code == 2
     assert message in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_an_unreachable_box_fails_with_exit_code_1_and_writes_nothing(tmp_path, capsys):
+    """The corner (0.05, 0.05) is nearer the base than any 2R design within the bounds reaches at 0..90 deg."""
+    out = tmp_path / "out"
+    assert main(["optimize", ARM_DIR, "--free", "l1", "--bounds", "l1=0.05:0.3", "--require-box",
+                 "x=0.05:0.1,y=0.05:0.1", "-o", str(out)]) == 1
+    assert "IPOPT did not converge (Infeasible_Problem_Detected" in capsys.readouterr().err
     assert not out.exists()

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 import time
 from pathlib import Path
 
@@ -101,7 +102,7 @@ def run(args: argparse.Namespace) -> int:
             if not solution.success:
                 print(f"error: IPOPT did not converge ({solution.status}, {solution.iterations} iterations); "
                       "if the required box cannot be reached within the bounds, widen --bounds or shrink "
-                      "--require-box; nothing was written", flush=True)
+                      "--require-box; nothing was written", file=sys.stderr, flush=True)
                 return 1
             progress("independent evaluation")
             start = time.perf_counter()
@@ -118,8 +119,9 @@ def run(args: argparse.Namespace) -> int:
     except (ValueError, KeyError) as err:
         analysis_args.fail_on_bad_input(args, err)
     wall = time.perf_counter() - wall
-    report = _report(args, problem, program, solution, rating, {"build": solution.build_seconds, "ipopt": solution.ipopt_seconds,
-                                                                  "evaluation": evaluation, "wall": wall})
+    seconds = {"build": solution.build_seconds, "ipopt": solution.ipopt_seconds, "evaluation": evaluation,
+               "wall": wall}
+    report = _report(args, problem, program, solution, rating, seconds)
     files["result.json"] = json.dumps(report, indent=2) + "\n"
     out = Path(args.out or Path("out") / "optimize" / numpy_model.name)
     replace_directory(out, files)
