@@ -186,3 +186,18 @@ def test_an_unreachable_box_fails_with_exit_code_1_and_writes_nothing(tmp_path, 
                  "x=0.05:0.1,y=0.05:0.1", "-o", str(out)]) == 1
     assert "IPOPT did not converge (Infeasible_Problem_Detected" in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_delta_actuated_joint_limits_are_kept_over_the_box(delta):
+    """Upper arms at most 20 deg above horizontal: the unconstrained optimum needs about 30 deg."""
+    numpy_model, _ = delta
+    limits = {f"theta{i}": (-np.pi / 2, np.radians(20)) for i in (1, 2, 3)}
+    bounds = {"r_base": (0.04, 0.10), "r_tcp": (0.015, 0.04), "a": (0.06, 0.15), "b": (0.10, 0.25)}
+    problem, _, solution = _optimize(delta, "gci", list(bounds), bounds=bounds, box=DELTA_BOX, margin=0.005,
+                                     limits=limits, nodes=4)
+    assert solution.success
+    lower, upper = problem.inflated_box
+    points = np.stack(np.meshgrid(*[np.linspace(lo, hi, 9) for lo, hi in zip(lower, upper)]), -1).reshape(-1, 3)
+    q = numpy_model.bind(**solution.optimum).ik(points).joints
+    assert np.degrees(q.max()) == pytest.approx(20.0, abs=1e-6)  # active at the box's top corners
+    assert design.evaluate(problem, numpy_model, solution.optimum, samples=2**10).box_reachable == 1.0

@@ -10,6 +10,7 @@ import argparse
 import math
 import tempfile
 from pathlib import Path
+from collections.abc import Mapping
 from typing import Any
 
 #: Quantities an analysis needs from a model file derived on the fly.
@@ -127,9 +128,12 @@ def load_model(path: str, backend: str = "numpy") -> Any:
     return load_models(path, (backend,))[0]
 
 
-def load_models(path: str, backends: tuple[str, ...], outputs: tuple[str, ...] = ANALYSIS_OUTPUTS) -> list[Any]:
-    """MODEL loaded once per backend; a model file is derived on the fly (those of ``outputs``
-    that its kind of mechanism has, e.g. ``ik`` only for a parallel one).
+def load_models(path: str, backends: tuple[str, ...],
+                outputs: Mapping[str, tuple[str, ...]] | None = None) -> list[Any]:
+    """MODEL loaded once per backend; a model file is derived on the fly.
+
+    ``outputs`` maps the kind of mechanism ("serial", "parallel") to the quantities to
+    derive; default fk and jacobian for both.
 
     Raises:
         ModelError: a model file is invalid.
@@ -144,8 +148,8 @@ def load_models(path: str, backends: tuple[str, ...], outputs: tuple[str, ...] =
     from symkin.model import load_model as load_model_file
 
     model = load_model_file(source)
-    known = pipeline.emitted_quantities(model.mechanism)
-    request = pipeline.resolve_request(model, ",".join(o for o in outputs if o in known), ",".join(backends), None)
+    wanted = (outputs or {}).get(model.mechanism, ANALYSIS_OUTPUTS)
+    request = pipeline.resolve_request(model, ",".join(wanted), ",".join(backends), None)
     with tempfile.TemporaryDirectory(prefix="symkin-analysis-") as scratch:
         # The generated module is imported (numpy) or read (C, CasADi) by load(): the files may go afterwards.
         directory = pipeline.write(pipeline.generate(model, request), scratch)

@@ -89,8 +89,8 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError(f"--samples must be at least 16, got {args.samples}")
         with Progress(Path(args.model).stem) as progress:
             progress("loading the generated code")
-            numpy_model, casadi_model = analysis_args.load_models(args.model, ("numpy", "casadi"),
-                                                                  ("fk", "ik", "jacobian"))
+            outputs = {kind: design.needed_functions(kind == "parallel") for kind in ("serial", "parallel")}
+            numpy_model, casadi_model = analysis_args.load_models(args.model, ("numpy", "casadi"), outputs)
             problem = design.design_problem(numpy_model, args.maximize, free, bounds=bounds, values=values, box=box,
                                             margin=args.margin, limits=limits, length=args.length)
             progress("building the CasADi program")

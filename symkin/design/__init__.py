@@ -16,8 +16,8 @@ expression optimizer of the code generator.
 
 from symkin.design.evaluate import Evaluation, evaluate
 from symkin.design.formulation import Program, formulate
-from symkin.design.problem import OBJECTIVES, DesignProblem, FreeParameter, design_problem
+from symkin.design.problem import OBJECTIVES, DesignProblem, FreeParameter, design_problem, needed_functions
 from symkin.design.solve import Solution, solve
 
 __all__ = ["OBJECTIVES", "DesignProblem", "Evaluation", "FreeParameter", "Program", "Solution", "design_problem",
-           "evaluate", "formulate", "solve"]
+           "evaluate", "formulate", "needed_functions", "solve"]

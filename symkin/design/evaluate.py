@@ -4,7 +4,8 @@ with an error estimate, and the reachability of the required box, on the generat
 Nothing here shares code with the optimizer's CasADi surrogate: a serial model is rated by
 :func:`symkin.analysis.gci` (randomized QMC over the joint limits, dW = |det J| dq); a
 parallel model by the same integrator over the required box, with the reachability
-indicator of its closed-form ``ik`` (dW = 1_W(x) dx, the Cartesian measure).  The box is
+indicator of its closed-form ``ik`` and actuated-joint limits, if any (dW = 1_W(x) dx,
+the Cartesian measure).  The box is
 checked on a vertex grid denser than the optimizer's constraint points: by the closed-form
 inverse of :mod:`symkin.analysis.inverse` where one exists, else by the ``ik`` margin.
 """
@@ -92,37 +93,37 @@ def _serial_box(problem: DesignProblem, model: Any, configurations: np.ndarray |
     return float(np.mean(inside)), f"closed-form inverse kinematics within the joint limits at {len(points)} points"
 
 
-def parallel_reachable(model: Any, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Joints (N, n) of the closed-form ``ik`` and whether each point is reachable within declared joint limits."""
+def parallel_reachable(model: Any, points: np.ndarray, limits: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+    """Joints (N, n) of the closed-form ``ik`` and whether each point is reachable (within ``limits``, if any)."""
     with np.errstate(invalid="ignore"):  # the square root of a negative margin: NaN joints, unreachable
         q, margin = model.ik(points)
     inside = np.all(margin >= 0, axis=-1) & np.all(np.isfinite(q), axis=-1)
-    limits = np.array(model.joint_limits, dtype=np.float64)
-    inside &= np.all((q >= limits[:, 0]) & (q <= limits[:, 1]), axis=-1) if inside.any() else inside
+    if limits is not None:
+        inside &= np.all((q >= limits[:, 0]) & (q <= limits[:, 1]), axis=-1)
     return q, inside
 
 
-def parallel_index(model: Any, points: np.ndarray) -> np.ndarray:
-    """1/kappa of J at each point (0 where unreachable)."""
-    q, inside = parallel_reachable(model, points)
+def parallel_index(model: Any, points: np.ndarray, limits: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+    """1/kappa of J at each point (0 where unreachable), and whether it is reachable."""
+    q, inside = parallel_reachable(model, points, limits)
     values = np.zeros(len(points))
     if inside.any():
         values[inside] = conditioning.inverse_condition_number(model.jacobian(q[inside], points[inside]))
-    return values
+    return values, inside
 
 
 def _parallel(problem: DesignProblem, model: Any, samples: int, seed: int) -> Evaluation:
     lower, upper = problem.box
 
     def function(points: np.ndarray) -> np.ndarray:
-        _, inside = parallel_reachable(model, points)
-        return np.stack([parallel_index(model, points), inside.astype(np.float64)], axis=-1)
+        values, inside = parallel_index(model, points, problem.limits)
+        return np.stack([values, inside.astype(np.float64)], axis=-1)
 
     axes = tuple("xyz"[a] for a in mechanism.position_axes(model))
     integrand = Integrand(lower, upper, function, ("1/kappa dW", "dW"), axes, indicator=1)
     result = integrate(integrand, "qmc", samples, seed=seed)
     points = box_check_points(problem)
-    fraction = float(np.mean(parallel_reachable(model, points)[1]))
+    fraction = float(np.mean(parallel_reachable(model, points, problem.limits)[1]))
     return Evaluation(result.ratio(0, 1), result.component(1),
                       "qmc over the required box, dW = 1_W(x) dx (reachable by the closed-form ik)", fraction,
                       f"closed-form ik margin at {len(points)} points")

@@ -22,7 +22,7 @@ Constraints (the required box, inflated by the margin, sampled on a vertex grid 
 corners): a serial model's box configurations q_b satisfy fk(q_b) = p_b within the joint
 limits (bounds of the variables); a parallel model's ``ik`` margin (the radicand of each
 leg's solution) is >= 0 at every box point and objective node, and its actuated joints stay
-within declared limits.
+within their limits (declared or overridden), if any.
 """
 
 from __future__ import annotations
@@ -216,8 +216,8 @@ def _parallel(problem: DesignProblem, casadi_model: Any, numpy_model: Any, free:
     reached = _mapped(reach, casadi.DM(points.T), design)
     g = [casadi.vec(reached[:legs, :])]
     lbg, ubg = [np.zeros(legs * len(points))], [np.full(legs * len(points), np.inf)]
-    for k, (lo, hi) in enumerate(np.array(numpy_model.joint_limits, dtype=np.float64)):
-        if np.isfinite(lo) or np.isfinite(hi):
+    if problem.limits is not None:
+        for k, (lo, hi) in enumerate(problem.limits):
             g.append(reached[legs + k, :].T)
             lbg.append(np.full(len(points), lo))
             ubg.append(np.full(len(points), hi))

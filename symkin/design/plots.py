@@ -87,7 +87,7 @@ def _parallel_panel(ax: Any, problem: DesignProblem, model: Any) -> Any:
     U, V = np.meshgrid(u, v)
     points = np.tile((lower + upper) / 2, (U.size, 1))
     points[:, first], points[:, last] = U.ravel(), V.ravel()
-    values = parallel_index(model, points).reshape(U.shape)
+    values = parallel_index(model, points, problem.limits)[0].reshape(U.shape)
     mesh = ax.pcolormesh(U, V, np.ma.masked_equal(values, 0.0), shading="auto", cmap="viridis", vmin=0.0, vmax=1.0,
                          rasterized=True)
     axes = mechanism.position_axes(model)
@@ -105,9 +105,11 @@ def design_figure(problem: DesignProblem, model: Any, solution: Solution,
     figure = Figure(figsize=(11.0, 4.8), layout="constrained")
     panel = _parallel_panel if problem.parallel else _serial_panel
     mesh = None
+    first = None
     for k, (design, evaluation, which) in enumerate(zip((solution.start, solution.optimum), evaluations,
                                                         ("before", "after"))):
-        ax = figure.add_subplot(1, 2, k + 1)
+        ax = figure.add_subplot(1, 2, k + 1, sharex=first, sharey=first)
+        first = first or ax
         mesh = panel(ax, problem, model.bind(**design))
         ax.set_aspect("equal")
         ax.set_title(_label(problem, design, evaluation, which), fontsize=8)

@@ -47,7 +47,8 @@ class DesignProblem:
         free: the free parameters.
         values: values of every other parameter of the model (defaults, or --set).
         parallel: whether the model is a parallel mechanism (integration over the box).
-        limits: joint limits (n, 2) of a serial model (the GCI's integration domain).
+        limits: joint limits (n, 2): of a serial model the GCI's integration domain; of a
+            parallel model the range of its actuated joints (None: unlimited).
         box: the required workspace box (lower, upper) over the task's position axes, or None.
         margin: the box is required with this clearance on every side [m].
         length: characteristic length of a mixed translation/rotation task [m], or None.
@@ -166,7 +167,7 @@ def design_problem(model: Any, objective: str, free: Sequence[str], *,
         box: the required workspace box {axis: (lower, upper)} over the task's position
             axes (x, y, z); required for parallel models, whose GCI is taken over it.
         margin: clearance of the box [m].
-        limits: joint-limit overrides of a serial model.
+        limits: joint-limit overrides.
         length: characteristic length [m] of a task space mixing translations and rotations.
 
     Raises:
@@ -208,7 +209,12 @@ def design_problem(model: Any, objective: str, free: Sequence[str], *,
             axes = ["xyz"[a] for a in mechanism.position_axes(model)]
             raise ValueError(f"{model.name}: the GCI of a parallel mechanism is taken over the required workspace "
                              f"box: give --require-box {','.join(f'{a}=LOWER:UPPER' for a in axes)} (in m)")
-        joint_box = None
+        if len(mechanism.position_rows(model)) != len(task):
+            raise ValueError(f"{model.name}: the task space {list(task)} includes orientations; the GCI of a "
+                             "parallel mechanism is taken over a box of TCP positions, which leaves the orientation "
+                             "open: only position task spaces (such as the DELTA's) are supported")
+        declared = np.array(model.joint_limits, dtype=np.float64)
+        joint_box = mechanism.joint_limits(model, limits) if limits or np.isfinite(declared).any() else None
     else:
         joint_box = mechanism.joint_limits(model, limits)
     fixed = {k: float(v) for k, v in {**model.parameters, **values}.items()
