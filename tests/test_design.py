@@ -21,6 +21,7 @@ from conftest import GENERATED_DIR, MODELS_DIR
 from symkin import design
 from symkin.analysis import conditioning
 from symkin.cli import main
+from symkin.design import formulation
 
 ARM_DIR = str(GENERATED_DIR / "planar_2r")
 DELTA_DIR = str(GENERATED_DIR / "delta")
@@ -45,10 +46,13 @@ def _optimize(models, objective, free, **kwargs):
     return problem, program, design.solve(problem, program)
 
 
-def _serial_surrogate(model, q):
+def _serial_surrogate(model, q, smoothing=formulation.DETERMINANT_SMOOTHING):
+    """sum |det J| / kappa_F / sum sqrt(det J^2 + eps^2), eps^2 = smoothing^2 mean(det J^2)."""
     J = model.jacobian(q)
-    weight = conditioning.absolute_determinant(J)
-    return np.sum(weight * conditioning.inverse_frobenius_condition_number(J)) / np.sum(weight)
+    det = np.linalg.det(J)
+    weight = np.sqrt(det**2 + smoothing**2 * np.mean(det**2))
+    index = conditioning.inverse_frobenius_condition_number(J)
+    return np.sum(conditioning.absolute_determinant(J) * index) / np.sum(weight)
 
 
 def test_serial_surrogate_and_gradient_match_the_numpy_code(arm):
@@ -57,7 +61,10 @@ def test_serial_surrogate_and_gradient_match_the_numpy_code(arm):
     program = design.formulate(problem, casadi_model, numpy_model, nodes=7)
     free = np.array([0.13, 0.08])
     value = float(program.objective(free))
-    assert value == pytest.approx(_serial_surrogate(numpy_model.bind(l1=0.13, l2=0.08), program.nodes), rel=1e-13)
+    bound = numpy_model.bind(l1=0.13, l2=0.08)
+    assert value == pytest.approx(_serial_surrogate(bound, program.nodes), rel=1e-13)
+    # the smoothing of |det J| changes the Frobenius GCI estimate by about smoothing^2
+    assert value == pytest.approx(_serial_surrogate(bound, program.nodes, smoothing=0.0), rel=1e-5)
     import casadi
 
     p = casadi.SX.sym("p", 2)
@@ -201,3 +208,12 @@ def test_delta_actuated_joint_limits_are_kept_over_the_box(delta):
     q = numpy_model.bind(**solution.optimum).ik(points).joints
     assert np.degrees(q.max()) == pytest.approx(20.0, abs=1e-6)  # active at the box's top corners
     assert design.evaluate(problem, numpy_model, solution.optimum, samples=2**10).box_reachable == 1.0
+
+
+def test_a_6x6_pose_task_with_a_characteristic_length_converges():
+    """UR10e, L = 0.3 m: nodes whose det J changes sign with the design would stall IPOPT without smoothing."""
+    directory = GENERATED_DIR / "ur10e"
+    models = symkin.load(directory), symkin.load(directory, "casadi")
+    _, program, solution = _optimize(models, "gci", ["a2", "a3"], length=0.3, nodes=6)
+    assert solution.success, solution.status
+    assert solution.surrogate_optimum > solution.surrogate_start

@@ -11,12 +11,17 @@ over fixed sample points, so the objective is a smooth function of the design:
       v_F = sum_j |det J_j| / kappa_F(J_j)  /  sum_j |det J_j|
 
   (:func:`symkin.design.smooth.measure_weighted_inverse_frobenius`); with the same nodes
-  it is :func:`symkin.analysis.global_index` with ``index=inverse_frobenius_condition_number``;
+  it is :func:`symkin.analysis.global_index` with ``index=inverse_frobenius_condition_number``,
+  except that |det J_j| in the denominator is sqrt(det_j^2 + eps^2): where a node's det J
+  changes sign as the design varies, |det J| has a kink that stalls IPOPT.  eps^2 =
+  1e-6 mean_j det_j^2 scales with the design like det^2, so a design that only rescales
+  det J (the 2R arm's l1 l2 |sin theta2|) keeps its optimum exactly; a node's weight
+  grows by at most eps, relatively ~1e-6 at typical nodes;
 * ``gci`` of a parallel model: the mean of 1/kappa_F over a midpoint grid of the required
   box (the Cartesian measure over the region the design must serve), the joints from the
   closed-form ``ik``;
 * ``workspace`` of a serial model: int |det J| dq over the joint limits (area/volume in
-  m^d), estimated at the same nodes.
+  m^d), estimated at the same nodes (with the same smoothed |det J|).
 
 Constraints (the required box, inflated by the margin, sampled on a vertex grid with its
 corners): a serial model's box configurations q_b satisfy fk(q_b) = p_b within the joint
@@ -40,6 +45,8 @@ from symkin.design.problem import DesignProblem
 #: Nodes of the serial objective (2**LOG2, Sobol, fixed seed) and per axis of the parallel one.
 SERIAL_NODES_LOG2 = 8
 PARALLEL_NODES_PER_AXIS = 5
+#: |det J| of the measure is smoothed as sqrt(det^2 + eps^2), eps = this times the rms of det J over the nodes.
+DETERMINANT_SMOOTHING = 1e-3
 #: Constraint points per axis of the required box (a vertex grid: corners, edges, faces).
 BOX_POINTS_PER_AXIS = 4
 #: Configurations sampled to start the box configurations of a serial model near a solution.
@@ -159,14 +166,18 @@ def _serial(problem: DesignProblem, casadi_model: Any, numpy_model: Any, free: c
     J = _call(casadi_function(casadi_model, "jacobian"), {"q": node, **values})[0]
     rows = mechanism.position_rows(numpy_model)
     term = smooth.measure_weighted_inverse_frobenius(J, smooth.homogenized(J, problem.length, rows))
-    per_node = _node_function("gci_terms", node, free, casadi.vertcat(term, casadi.fabs(smooth.determinant(J))))
-    sums = casadi.sum2(_mapped(per_node, casadi.DM(q.T), design))
+    per_node = _node_function("gci_terms", node, free, casadi.vertcat(term, smooth.determinant(J)))
+    terms = _mapped(per_node, casadi.DM(q.T), design)
+    det = terms[1, :]
+    floor = DETERMINANT_SMOOTHING**2 * casadi.sumsqr(det) / count
+    weights = casadi.sum2(casadi.sqrt(det * det + floor))
     if problem.objective == "gci":
-        objective = sums[0] / sums[1]
+        objective = casadi.sum2(terms[0, :]) / weights
         description = (f"Frobenius GCI surrogate: sum |det J| / kappa_F / sum |det J| at {count} fixed Sobol "
-                       "nodes over the joint limits (Cartesian measure dW = |det J| dq)")
+                       "nodes over the joint limits (Cartesian measure dW = |det J| dq, |det J| smoothed by "
+                       f"{DETERMINANT_SMOOTHING:g} rms det J)")
     else:
-        objective = sums[1] * float(np.prod(limits[:, 1] - limits[:, 0])) / count
+        objective = weights * float(np.prod(limits[:, 1] - limits[:, 0])) / count
         description = f"workspace measure int |det J| dq over the joint limits, at {count} fixed Sobol nodes"
     if problem.box is None:
         return objective, casadi.MX(0, 1), [], [], (casadi.MX(0, 1), [], [], []), q, np.empty((0, 0)), description

@@ -81,3 +81,4 @@ def measure_weighted_inverse_frobenius(J: casadi.SX, J_h: casadi.SX) -> casadi.S
     absolute value: smooth wherever adj J_h != 0.
     """
     return J.shape[0] * determinant(J) * determinant(J_h) / _frobenius_product(J_h)
+
