@@ -175,6 +175,7 @@ def test_cli_on_a_model_file_writes_figures_and_result(tmp_path, capsys):
     ([DELTA_DIR, "--free", "a", "--maximize", "workspace", "--require-box", "x=0:1,y=0:1,z=0:1"],
      "maximizing the workspace of a parallel mechanism is not supported"),
     ([str(GENERATED_DIR / "ur10e"), "--free", "a2"], "mixes translations and rotations"),
+    ([ARM_DIR, "--free", "l1", "--nodes", "0"], "--nodes must be between 1 and 16"),
     ([ARM_DIR, "--free", "l1", "--set", "l1=0"], "'l1' starts at 0, so no default span applies; give --bounds"),
 ])
 def test_bad_input_is_refused_with_exit_code_2(tmp_path, capsys, arguments, message):

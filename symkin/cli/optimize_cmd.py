@@ -11,6 +11,9 @@ from pathlib import Path
 from symkin.cli import analysis_args
 from symkin.cli.progress import Progress
 
+#: Largest --nodes: 2^16 Sobol nodes, or 16^3 grid points of a parallel model's box.
+MAX_NODES = 16
+
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
@@ -21,7 +24,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "points) or the workspace measure over the free design parameters, with IPOPT on the "
                     "generated CasADi functions, subject to parameter bounds and a required workspace box. The "
                     "start and optimized designs are then rated independently on the generated numpy code (the "
-                    "true GCI with 1/kappa from singular values, randomized QMC with a 95%% confidence "
+                    "true GCI with 1/kappa from singular values, randomized QMC with a 95 % confidence "
                     "half-width; box reachability on a dense grid). Serial models integrate over the joint limits "
                     "with dW = |det J| dq; parallel models over the required box. Writes history.png, design.png "
                     "and result.json into the output directory (replaced atomically).",
@@ -85,6 +88,8 @@ def run(args: argparse.Namespace) -> int:
         box = parse_ranges([args.require_box], "--require-box") if args.require_box else None
         values = analysis_args.parse_assignments(args.assignments)
         limits = analysis_args.parse_limits(args.limits)
+        if args.nodes is not None and not 1 <= args.nodes <= MAX_NODES:
+            raise ValueError(f"--nodes must be between 1 and {MAX_NODES}, got {args.nodes}")
         if args.samples < 16:
             raise ValueError(f"--samples must be at least 16, got {args.samples}")
         with Progress(Path(args.model).stem) as progress:
