@@ -33,7 +33,7 @@ within their limits (declared or overridden), if any.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 import casadi
 import numpy as np
@@ -77,6 +77,25 @@ def _call(function: casadi.Function, arguments: dict[str, Any]) -> list[casadi.S
 def _mapped(function: casadi.Function, nodes: Any, free: casadi.MX) -> casadi.MX:
     """``function`` at every column of ``nodes`` (d x N), the free values shared: (outputs x N)."""
     return function.map(nodes.shape[1], "serial")(nodes, free)
+
+
+class _Terms(NamedTuple):
+    """What a kind of mechanism contributes to the program."""
+
+    objective: casadi.MX
+    g: casadi.MX
+    lbg: np.ndarray
+    ubg: np.ndarray
+    variables: casadi.MX  # extra decision variables (serial box configurations), with
+    start: np.ndarray  # their start values
+    lower: np.ndarray  # and bounds
+    upper: np.ndarray
+    nodes: np.ndarray
+    box_points: np.ndarray
+    description: str
+
+
+NO_VARIABLES = (casadi.MX(0, 1), np.empty(0), np.empty(0), np.empty(0))
 
 
 @dataclass
@@ -137,9 +156,8 @@ def formulate(problem: DesignProblem, casadi_model: Any, numpy_model: Any, *, no
     z = casadi.MX.sym("z", len(problem.free))
     build = _parallel if problem.parallel else _serial
     terms = build(problem, casadi_model, numpy_model, free, values, z * scales, nodes, box_points, seed)
-    objective, g, lbg, ubg, extra, nodes_used, points, description = terms
     free_values = casadi.MX.sym("free", len(problem.free))
-    objective_function = casadi.Function("objective", [z], [objective])
+    objective_function = casadi.Function("objective", [z], [terms.objective])
     objective_function = casadi.Function("surrogate", [free_values], [objective_function(free_values / scales)],
                                          ["free"], ["surrogate"])
     start = np.array([p.start for p in problem.free])
@@ -147,16 +165,16 @@ def formulate(problem: DesignProblem, casadi_model: Any, numpy_model: Any, *, no
     if not reference > 0:
         raise ValueError(f"the {problem.objective} surrogate is 0 at the start design {problem.start}: "
                          "start from a design with a nonsingular, reachable workspace")
-    x = casadi.vertcat(z, extra[0])
-    x0 = np.concatenate([start / scales, extra[1]])
-    lbx = np.concatenate([[p.lower for p in problem.free] / scales, extra[2]])
-    ubx = np.concatenate([[p.upper for p in problem.free] / scales, extra[3]])
-    return Program(x, -objective / reference, g, x0, lbx, ubx, np.asarray(lbg, float), np.asarray(ubg, float),
-                   objective_function, len(problem.free), scales, nodes_used, points, description)
+    return Program(casadi.vertcat(z, terms.variables), -terms.objective / reference, terms.g,
+                   np.concatenate([start / scales, terms.start]),
+                   np.concatenate([[p.lower for p in problem.free] / scales, terms.lower]),
+                   np.concatenate([[p.upper for p in problem.free] / scales, terms.upper]),
+                   np.asarray(terms.lbg, float), np.asarray(terms.ubg, float), objective_function,
+                   len(problem.free), scales, terms.nodes, terms.box_points, terms.description)
 
 
 def _serial(problem: DesignProblem, casadi_model: Any, numpy_model: Any, free: casadi.SX, values: dict[str, Any],
-            design: casadi.MX, nodes: int | None, box_points: int, seed: int):
+            design: casadi.MX, nodes: int | None, box_points: int, seed: int) -> _Terms:
     limits = problem.limits
     n = limits.shape[0]
     q = sampling.sobol(limits[:, 0], limits[:, 1], SERIAL_NODES_LOG2 if nodes is None else nodes,
@@ -180,7 +198,8 @@ def _serial(problem: DesignProblem, casadi_model: Any, numpy_model: Any, free: c
         objective = weights * float(np.prod(limits[:, 1] - limits[:, 0])) / count
         description = f"workspace measure int |det J| dq over the joint limits, at {count} fixed Sobol nodes"
     if problem.box is None:
-        return objective, casadi.MX(0, 1), [], [], (casadi.MX(0, 1), [], [], []), q, np.empty((0, 0)), description
+        return _Terms(objective, casadi.MX(0, 1), np.empty(0), np.empty(0), *NO_VARIABLES, q, np.empty((0, 0)),
+                      description)
     points = sampling.grid(*problem.inflated_box, box_points, midpoints=False)
     axes = list(mechanism.position_axes(numpy_model))
     T = _call(casadi_function(casadi_model, "fk"), {"q": node, **values})[0]
@@ -192,8 +211,8 @@ def _serial(problem: DesignProblem, casadi_model: Any, numpy_model: Any, free: c
     zeros = np.zeros(residuals.numel())
     description += f"; the box is required at {len(points)} points (fk(q_b) = p_b within the joint limits)"
     bounds = (np.tile(limits[:, 0], len(points)), np.tile(limits[:, 1], len(points)))
-    return (objective, casadi.vec(residuals), zeros, zeros, (casadi.vec(qb), start.ravel(), *bounds), q, points,
-            description)
+    return _Terms(objective, casadi.vec(residuals), zeros, zeros, casadi.vec(qb), start.ravel(), *bounds, q, points,
+                  description)
 
 
 def _nearest_configurations(model: Any, limits: np.ndarray, points: np.ndarray, axes: list[int],
@@ -206,7 +225,7 @@ def _nearest_configurations(model: Any, limits: np.ndarray, points: np.ndarray, 
 
 
 def _parallel(problem: DesignProblem, casadi_model: Any, numpy_model: Any, free: casadi.SX, values: dict[str, Any],
-              design: casadi.MX, nodes: int | None, box_points: int, seed: int):
+              design: casadi.MX, nodes: int | None, box_points: int, seed: int) -> _Terms:
     per_axis = PARALLEL_NODES_PER_AXIS if nodes is None else nodes
     p = sampling.grid(*problem.box, per_axis)
     node = casadi.SX.sym("p", p.shape[1])
@@ -233,5 +252,5 @@ def _parallel(problem: DesignProblem, casadi_model: Any, numpy_model: Any, free:
             lbg.append(np.full(len(points), lo))
             ubg.append(np.full(len(points), hi))
     description += f"; the box is required at {len(points)} points (ik margin >= 0)"
-    return (objective, casadi.vertcat(*g), np.concatenate(lbg), np.concatenate(ubg), (casadi.MX(0, 1), [], [], []),
-            p, points, description)
+    return _Terms(objective, casadi.vertcat(*g), np.concatenate(lbg), np.concatenate(ubg), *NO_VARIABLES, p, points,
+                  description)
