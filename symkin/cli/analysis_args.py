@@ -9,8 +9,8 @@ from __future__ import annotations
 import argparse
 import math
 import tempfile
+from collections.abc import Mapping, Sequence
 from pathlib import Path
-from collections.abc import Mapping
 from typing import Any
 
 #: Quantities an analysis needs from a model file derived on the fly.
@@ -92,7 +92,12 @@ def parse_assignments(texts: list[str]) -> dict[str, float]:
     return values
 
 
-def _bound(text: str) -> float:
+def parse_value(text: str) -> float:
+    """A number of rad or m, or of degrees with a 'deg' suffix (converted to rad).
+
+    Raises:
+        ValueError: not a number.
+    """
     text = text.strip()
     if text.endswith("deg"):
         return math.radians(float(text[:-3]))
@@ -112,32 +117,53 @@ def parse_limits(texts: list[str]) -> dict[str, tuple[float, float]]:
         if not sep or not colon or not name.strip():
             raise ValueError(f"'{text}' is not JOINT=LOWER:UPPER")
         try:
-            limits[name.strip()] = (_bound(lower), _bound(upper))
+            limits[name.strip()] = (parse_value(lower), parse_value(upper))
         except ValueError:
             raise ValueError(f"'{text}': the bounds must be numbers (optionally with 'deg')") from None
     return limits
 
 
-def load_model(path: str, backend: str = "numpy") -> Any:
+def derivable(model: Any, names: Sequence[str]) -> list[str]:
+    """The quantities of ``names`` that ``model`` has (e.g. no ``gravity_vector`` without gravity)."""
+    from symkin.derivation import Derivation
+    from symkin.errors import DerivationError
+
+    derivation = Derivation(model)
+    found = []
+    for name in names:
+        try:
+            derivation[name]
+        except DerivationError:
+            continue
+        found.append(name)
+    return found
+
+
+def load_model(path: str, backend: str = "numpy", outputs: Sequence[str] = ANALYSIS_OUTPUTS,
+               optional: Sequence[str] = ()) -> Any:
     """The loaded model of MODEL: a generated directory, or a model file derived on the fly.
+
+    Args:
+        path: generated directory (or its manifest.json), or a YAML model file.
+        backend: the backend to load (and, for a model file, to emit).
+        outputs: the quantities to derive from a model file.
+        optional: quantities also derived where the model has them (e.g. ``friction``,
+            ``gravity_vector``); skipped silently where it does not.
 
     Raises:
         ModelError: a model file is invalid.
         GeneratedCodeError: a directory holds no usable generated code.
     """
-    return load_models(path, (backend,))[0]
+    return load_models(path, (backend,), outputs, optional)[0]
 
 
-def load_models(path: str, backends: tuple[str, ...],
-                outputs: Mapping[str, tuple[str, ...]] | None = None) -> list[Any]:
-    """MODEL loaded once per backend; a model file is derived on the fly.
+def load_models(path: str, backends: Sequence[str],
+                outputs: Sequence[str] | Mapping[str, Sequence[str]] = ANALYSIS_OUTPUTS,
+                optional: Sequence[str] = ()) -> list[Any]:
+    """MODEL loaded once per backend (as :func:`load_model`); a model file is derived once, for all of them.
 
-    ``outputs`` maps the kind of mechanism ("serial", "parallel") to the quantities to
-    derive; default fk and jacobian for both.
-
-    Raises:
-        ModelError: a model file is invalid.
-        GeneratedCodeError: a directory holds no usable generated code.
+    ``outputs`` may map the kind of mechanism ("serial", "parallel") to the quantities
+    to derive (e.g. fk for a serial arm, the closed-form ik for a parallel one).
     """
     from symkin import load
 
@@ -145,14 +171,16 @@ def load_models(path: str, backends: tuple[str, ...],
     if source.suffix.lower() not in (".yaml", ".yml"):
         return [load(source, backend) for backend in backends]
     from symkin import pipeline
+    from symkin.cli.progress import Progress
     from symkin.model import load_model as load_model_file
 
     model = load_model_file(source)
-    wanted = (outputs or {}).get(model.mechanism, ANALYSIS_OUTPUTS)
-    request = pipeline.resolve_request(model, ",".join(wanted), ",".join(backends), None)
-    with tempfile.TemporaryDirectory(prefix="symkin-analysis-") as scratch:
+    wanted = outputs.get(model.mechanism, ANALYSIS_OUTPUTS) if isinstance(outputs, Mapping) else outputs
+    request = pipeline.resolve_request(model, ",".join([*wanted, *derivable(model, optional)]), ",".join(backends),
+                                       None)
+    with tempfile.TemporaryDirectory(prefix="symkin-analysis-") as scratch, Progress(model.name) as progress:
         # The generated module is imported (numpy) or read (C, CasADi) by load(): the files may go afterwards.
-        directory = pipeline.write(pipeline.generate(model, request), scratch)
+        directory = pipeline.write(pipeline.generate(model, request, progress), scratch)
         return [load(directory, backend) for backend in backends]
 
 

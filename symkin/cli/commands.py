@@ -2,7 +2,17 @@
 
 from __future__ import annotations
 
-from symkin.cli import bench_cmd, check_cmd, derive_cmd, gci_cmd, ik_cmd, optimize_cmd, structure_cmd, workspace_cmd
+from symkin.cli import (
+    bench_cmd,
+    check_cmd,
+    derive_cmd,
+    gci_cmd,
+    ik_cmd,
+    optimize_cmd,
+    simulate_cmd,
+    structure_cmd,
+    workspace_cmd,
+)
 
 REGISTRY = [
     derive_cmd.register,
@@ -15,4 +25,5 @@ REGISTRY = [
     structure_cmd.register_topologies,
     bench_cmd.register,
     ik_cmd.register,
+    simulate_cmd.register,
 ]
