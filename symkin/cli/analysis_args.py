@@ -9,7 +9,7 @@ from __future__ import annotations
 import argparse
 import math
 import tempfile
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -17,13 +17,14 @@ from typing import Any
 ANALYSIS_OUTPUTS = ("fk", "jacobian")
 
 
-def add_model_arguments(p: argparse.ArgumentParser) -> None:
-    """MODEL, --backend, --set and --limit."""
+def add_model_arguments(p: argparse.ArgumentParser, *, backend: bool = True) -> None:
+    """MODEL, --backend (unless ``backend`` is False), --set and --limit."""
     p.add_argument("model", metavar="MODEL",
                    help="generated model directory (from 'symkin derive', e.g. generated/planar_2r) "
                         "or a model file (YAML; fk and jacobian are derived on the fly)")
-    p.add_argument("--backend", default="numpy", metavar="NAME",
-                   help="generated code to evaluate (default: %(default)s)")
+    if backend:
+        p.add_argument("--backend", default="numpy", metavar="NAME",
+                       help="generated code to evaluate (default: %(default)s)")
     p.add_argument("--set", dest="assignments", action="append", default=[], metavar="NAME=VALUE[,...]",
                    help="parameter values instead of the defaults, e.g. --set l1=0.2,l2=0.2 (repeatable)")
     p.add_argument("--limit", dest="limits", action="append", default=[], metavar="JOINT=LOWER:UPPER",
@@ -153,20 +154,34 @@ def load_model(path: str, backend: str = "numpy", outputs: Sequence[str] = ANALY
         ModelError: a model file is invalid.
         GeneratedCodeError: a directory holds no usable generated code.
     """
+    return load_models(path, (backend,), outputs, optional)[0]
+
+
+def load_models(path: str, backends: Sequence[str],
+                outputs: Sequence[str] | Mapping[str, Sequence[str]] = ANALYSIS_OUTPUTS,
+                optional: Sequence[str] = ()) -> list[Any]:
+    """MODEL loaded once per backend (as :func:`load_model`); a model file is derived once, for all of them.
+
+    ``outputs`` may map the kind of mechanism ("serial", "parallel") to the quantities
+    to derive (e.g. fk for a serial arm, the closed-form ik for a parallel one).
+    """
     from symkin import load
 
     source = Path(path)
     if source.suffix.lower() not in (".yaml", ".yml"):
-        return load(source, backend)
+        return [load(source, backend) for backend in backends]
     from symkin import pipeline
     from symkin.cli.progress import Progress
     from symkin.model import load_model as load_model_file
 
     model = load_model_file(source)
-    request = pipeline.resolve_request(model, ",".join([*outputs, *derivable(model, optional)]), backend, None)
+    wanted = outputs.get(model.mechanism, ANALYSIS_OUTPUTS) if isinstance(outputs, Mapping) else outputs
+    request = pipeline.resolve_request(model, ",".join([*wanted, *derivable(model, optional)]), ",".join(backends),
+                                       None)
     with tempfile.TemporaryDirectory(prefix="symkin-analysis-") as scratch, Progress(model.name) as progress:
-        # The generated module is imported (numpy) or opened (C) by load(): the files may go afterwards.
-        return load(pipeline.write(pipeline.generate(model, request, progress), scratch), backend)
+        # The generated module is imported (numpy) or read (C, CasADi) by load(): the files may go afterwards.
+        directory = pipeline.write(pipeline.generate(model, request, progress), scratch)
+        return [load(directory, backend) for backend in backends]
 
 
 def model_from_args(args: argparse.Namespace) -> tuple[Any, dict[str, tuple[float, float]]]:
