@@ -213,8 +213,9 @@ def run_stability(model: Model, *, samples: int = 32, float32_samples: int = 16,
                 spec_vectors = [i.name for i in derivation[name].vector_inputs]
                 params = {i.name: parameters[i.name] for i in derivation[name].parameter_inputs}
                 if dtype is np.float64:
-                    computed = flatten_outputs(functions[name](*(states[g] for g in spec_vectors), **params),
-                                               shapes[name])
+                    with np.errstate(invalid="ignore", divide="ignore"):  # NaN/inf flags are what is checked
+                        values = functions[name](*(states[g] for g in spec_vectors), **params)
+                    computed = flatten_outputs(values, shapes[name])
                 else:
                     computed = compile_ir(optimized[name], dtype)({g: states[g] for g in spec_vectors}, params)
                 for k in range(count):
