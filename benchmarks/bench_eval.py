@@ -78,7 +78,8 @@ def find_cases(model) -> dict[str, list[str]]:
 
 
 def generate(model, quantities: list[str], out: Path) -> Path:
-    request = pipeline.resolve_request(model, quantities, ["numpy", "c", "casadi"], "all")
+    combine = quantities if len(quantities) > 1 else "none"
+    request = pipeline.resolve_request(model, quantities, ["numpy", "c", "casadi"], "all", combine=combine)
     return pipeline.write(pipeline.generate(model, request), out)
 
 

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 import sympy
 
-from conftest import EXAMPLE_MODELS, MODELS_DIR, SYMKIN_CLI
+from conftest import EXAMPLE_MODELS, GENERATED_DIR, MODELS_DIR, SYMKIN_CLI
 from symkin import load, pipeline
-from symkin.derivation import Derivation, graph, registry
+from symkin.derivation import Derivation, emitted_quantities, graph, registry
 from symkin.derivation.inputs import coordinate_input
 from symkin.ir.spec import FunctionSpec, InputSpec, OutputSpec, make_function
 from symkin.model import coordinates
@@ -21,15 +21,25 @@ from symkin.stability.reference import MpmathReference, normwise_error
 from symkin.stability.states import parameter_values
 
 QUICK = dict(samples=12, scale_samples=3, float32_samples=6, steps=(1e-2, 1e-6, 1e-10))
+#: The Stewart platform's J = J_x^-1 J_q (a symbolic 6x6 inverse) takes a minute to derive and
+#: lambdify for mpmath: the suite checks every other quantity (`symkin bench stability` checks all).
+LEFT_OUT = {"stewart": ("jacobian",)}
+CHECKED = {"serial": {"fk", "frames", "jacobian", "jacobian_geometric", "mass_matrix", "forward_dynamics"},
+           "parallel": {"ik", "inverse_jacobian", "constraints", "constraint_jacobians", "closure", "singularities"}}
 
 
 @pytest.fixture(scope="module")
 def runs(models):
-    return {name: run_stability(models[name], **QUICK) for name in EXAMPLE_MODELS}
+    out = {}
+    for name in EXAMPLE_MODELS:
+        mechanism = models[name].mechanism
+        quantities = [q for q in emitted_quantities(mechanism) if q not in LEFT_OUT.get(name, ())]
+        out[name] = run_stability(models[name], quantities=quantities, **QUICK)
+    return out
 
 
 @pytest.mark.parametrize("name", EXAMPLE_MODELS)
-def test_error_below_1e_13_where_kappa_below_1e3(runs, name):
+def test_error_below_1e_13_where_kappa_below_1e3(runs, models, name):
     run = runs[name]
     passed, worst = run.acceptance()
     assert passed, f"{name}: largest error {worst:.3g} where kappa < {KAPPA_LIMIT}"
@@ -39,8 +49,12 @@ def test_error_below_1e_13_where_kappa_below_1e3(runs, name):
     assert families == {"random", "singular", "scale", "float32"}
     assert {r.parameter for r in run.select("scale")} == {1e-3, 1e-2, 1e-1, 1.0, 1e1, 1e2, 1e3}
     # every quantity the model can derive is checked, nothing produced a non-finite value
-    assert set(run.quantities) >= {"fk", "frames", "jacobian", "jacobian_geometric"}
+    assert set(run.quantities) >= CHECKED[models[name].mechanism]
     assert all(math.isfinite(r.error) for r in run.records)
+
+
+def _kappas_along(run, path):
+    return [r.kappa for r in run.select("singular") if r.label == path.label]
 
 
 def test_singular_paths_are_found_generically(runs):
@@ -48,14 +62,44 @@ def test_singular_paths_are_found_generically(runs):
     ur = {p.label for p in runs["ur10e"].paths}
     assert {"q5 -> 0", "q3 -> 0"} <= ur
     for path in runs["ur10e"].paths:
-        kappas = [r.kappa for r in runs["ur10e"].select("singular") if r.label == path.label]
+        kappas = _kappas_along(runs["ur10e"], path)
         assert max(kappas) > 1e9 and min(kappas) < 1e4
+    # Stewart-Gough: interior singular poses (kappa ~ 1/t) in position and in every orientation angle
+    stewart = runs["stewart"]
+    assert {p.name for p in stewart.paths} >= {"roll", "pitch", "yaw"}
+    for path in stewart.paths:
+        kappas = [k for k in _kappas_along(stewart, path) if math.isfinite(k)]
+        assert max(kappas) > 1e8 and min(kappas) < 1e5
+
+
+def test_delta_paths_end_in_its_singularities_and_on_its_workspace_boundary(runs, models):
+    """DELTA: every path the sweep finds ends where det J_q = 0 (a leg stretched or folded: the
+    IK's two knee branches merge, the workspace boundary - the IK margin vanishes there and
+    just beyond it the mechanism does not assemble) or where det J_x = 0 (a parallel singularity
+    inside the workspace); kappa grows without bound along each path."""
+    delta = runs["delta"]
+    loaded = load(GENERATED_DIR / "delta")
+    home = np.array([0.0, 0.0, -0.15])
+    typical = loaded.singularities(loaded.ik(home).joints, home)
+    boundaries = 0
+    for path in delta.paths:
+        kappas = _kappas_along(delta, path)
+        assert max(kappas) > 1e4 and min(kappas) < 1e3
+        end, beyond = (path.states(np.array([t])) for t in (0.0, -1e-6))
+        dets = loaded.singularities(end["q"][0], end["p"][0])
+        on_boundary = abs(dets.det_Jq) < 1e-6 * abs(typical.det_Jq)
+        assert on_boundary or abs(dets.det_Jx) < 1e-6 * abs(typical.det_Jx), path.label
+        if on_boundary:
+            boundaries += 1
+            assert np.min(loaded.ik(end["p"][0]).margin) < 1e-12
+            assert np.isnan(beyond["q"]).any()
+    assert boundaries >= 2
 
 
 def test_forward_quantities_stay_accurate_into_the_ur_singularities(runs):
     """No division in the UR's kinematics and dynamics: even at kappa = 1e10 the code is accurate to
     rounding (quantities that invert J, the TCP force and operational space, are excluded)."""
-    singular = [r for r in runs["ur10e"].select("singular") if registry()[r.quantity].solves_with is None]
+    singular = [r for r in runs["ur10e"].select("singular") if registry("serial")[r.quantity].solves_with is None]
     assert max(r.kappa for r in singular) > 1e9
     assert max(r.error for r in singular) < 1e-15
 
@@ -122,7 +166,7 @@ def test_new_quantities_are_covered_automatically(models, monkeypatch):
                              [OutputSpec("v", sympy.ImmutableMatrix(J * qd), "velocity", shape=(3,))])
 
     monkeypatch.setitem(graph._REGISTRY, "tcp_velocity",
-                        graph.QuantityDef("tcp_velocity", "TCP velocity", velocity_of_tcp, True))
+                        {"serial": graph.QuantityDef("tcp_velocity", "TCP velocity", velocity_of_tcp, True)})
     run = run_stability(models["planar_2r"], samples=4, scale_samples=1, float32_samples=2, steps=(1e-3,),
                         scales=(1.0,))
     assert "tcp_velocity" in run.quantities

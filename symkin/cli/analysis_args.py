@@ -10,22 +10,24 @@ from __future__ import annotations
 import argparse
 import math
 import tempfile
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-#: Quantities an analysis needs from a model file derived on the fly (a parallel mechanism
-#: also needs its closed-form ik: reachability and working mode).
+#: Quantities an analysis needs from a model file derived on the fly ...
 ANALYSIS_OUTPUTS = ("fk", "jacobian")
-PARALLEL_ANALYSIS_OUTPUTS = ("ik", "fk", "jacobian")
+#: ... by kind of mechanism: a parallel one also needs its closed-form ik (reachability, working mode).
+ANALYSIS_OUTPUTS_BY_KIND = {"serial": ANALYSIS_OUTPUTS, "parallel": ("ik", "fk", "jacobian")}
 
 
-def add_model_arguments(p: argparse.ArgumentParser) -> None:
-    """MODEL, --backend, --set and --limit."""
+def add_model_arguments(p: argparse.ArgumentParser, *, backend: bool = True) -> None:
+    """MODEL, --backend (unless ``backend`` is False), --set and --limit."""
     p.add_argument("model", metavar="MODEL",
                    help="generated model directory (from 'symkin derive', e.g. generated/planar_2r) "
                         "or a model file (YAML; fk and jacobian are derived on the fly)")
-    p.add_argument("--backend", default="numpy", metavar="NAME",
-                   help="generated code to evaluate (default: %(default)s)")
+    if backend:
+        p.add_argument("--backend", default="numpy", metavar="NAME",
+                       help="generated code to evaluate (default: %(default)s)")
     p.add_argument("--set", dest="assignments", action="append", default=[], metavar="NAME=VALUE[,...]",
                    help="parameter values instead of the defaults, e.g. --set l1=0.2,l2=0.2 (repeatable)")
     p.add_argument("--limit", dest="limits", action="append", default=[], metavar="JOINT=LOWER:UPPER",
@@ -93,7 +95,12 @@ def parse_assignments(texts: list[str]) -> dict[str, float]:
     return values
 
 
-def _bound(text: str) -> float:
+def parse_value(text: str) -> float:
+    """A number of rad or m, or of degrees with a 'deg' suffix (converted to rad).
+
+    Raises:
+        ValueError: not a number.
+    """
     text = text.strip()
     if text.endswith("deg"):
         return math.radians(float(text[:-3]))
@@ -113,33 +120,71 @@ def parse_limits(texts: list[str]) -> dict[str, tuple[float, float]]:
         if not sep or not colon or not name.strip():
             raise ValueError(f"'{text}' is not JOINT=LOWER:UPPER")
         try:
-            limits[name.strip()] = (_bound(lower), _bound(upper))
+            limits[name.strip()] = (parse_value(lower), parse_value(upper))
         except ValueError:
             raise ValueError(f"'{text}': the bounds must be numbers (optionally with 'deg')") from None
     return limits
 
 
-def load_model(path: str, backend: str = "numpy") -> Any:
+def derivable(model: Any, names: Sequence[str]) -> list[str]:
+    """The quantities of ``names`` that ``model`` has (e.g. no ``gravity_vector`` without gravity)."""
+    from symkin.derivation import Derivation
+    from symkin.errors import DerivationError
+
+    derivation = Derivation(model)
+    found = []
+    for name in names:
+        try:
+            derivation[name]
+        except DerivationError:
+            continue
+        found.append(name)
+    return found
+
+
+def load_model(path: str, backend: str = "numpy", outputs: Sequence[str] = ANALYSIS_OUTPUTS,
+               optional: Sequence[str] = ()) -> Any:
     """The loaded model of MODEL: a generated directory, or a model file derived on the fly.
+
+    Args:
+        path: generated directory (or its manifest.json), or a YAML model file.
+        backend: the backend to load (and, for a model file, to emit).
+        outputs: the quantities to derive from a model file.
+        optional: quantities also derived where the model has them (e.g. ``friction``,
+            ``gravity_vector``); skipped silently where it does not.
 
     Raises:
         ModelError: a model file is invalid.
         GeneratedCodeError: a directory holds no usable generated code.
     """
+    return load_models(path, (backend,), outputs, optional)[0]
+
+
+def load_models(path: str, backends: Sequence[str],
+                outputs: Sequence[str] | Mapping[str, Sequence[str]] = ANALYSIS_OUTPUTS,
+                optional: Sequence[str] = ()) -> list[Any]:
+    """MODEL loaded once per backend (as :func:`load_model`); a model file is derived once, for all of them.
+
+    ``outputs`` may map the kind of mechanism ("serial", "parallel") to the quantities
+    to derive (e.g. fk for a serial arm, the closed-form ik for a parallel one).
+    """
     from symkin import load
 
     source = Path(path)
     if source.suffix.lower() not in (".yaml", ".yml"):
-        return load(source, backend)
+        return [load(source, backend) for backend in backends]
     from symkin import pipeline
+    from symkin.cli.progress import Progress
     from symkin.model import load_model as load_model_file
 
     model = load_model_file(source)
-    outputs = ANALYSIS_OUTPUTS if model.parallel is None else PARALLEL_ANALYSIS_OUTPUTS
-    request = pipeline.resolve_request(model, ",".join(outputs), backend, None)
-    with tempfile.TemporaryDirectory(prefix="symkin-analysis-") as scratch:
-        # The generated module is imported (numpy) or opened (C) by load(): the files may go afterwards.
-        return load(pipeline.write(pipeline.generate(model, request), scratch), backend)
+    wanted = outputs.get(model.mechanism, ANALYSIS_OUTPUTS) if isinstance(outputs, Mapping) else outputs
+    request = pipeline.resolve_request(model, ",".join([*wanted, *derivable(model, optional)]), ",".join(backends),
+                                       None)
+    with tempfile.TemporaryDirectory(prefix="symkin-analysis-") as scratch, Progress(model.name) as progress:
+        # The generated module is imported (numpy) or read (C, CasADi) by load(): the files may go afterwards.
+        directory = pipeline.write(pipeline.generate(model, request, progress), scratch)
+        return [load(directory, backend) for backend in backends]
 
 
 def model_from_args(args: argparse.Namespace) -> tuple[Any, dict[str, tuple[float, float]]]:
@@ -148,7 +193,7 @@ def model_from_args(args: argparse.Namespace) -> tuple[Any, dict[str, tuple[floa
     Raises:
         ValueError: malformed --set or --limit (KeyError for an unknown parameter).
     """
-    model = load_model(args.model, args.backend)
+    model = load_models(args.model, (args.backend,), ANALYSIS_OUTPUTS_BY_KIND)[0]
     values = parse_assignments(args.assignments)
     if values:
         model = model.bind(**values)

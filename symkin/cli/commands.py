@@ -2,7 +2,17 @@
 
 from __future__ import annotations
 
-from symkin.cli import bench_cmd, check_cmd, derive_cmd, gci_cmd, ik_cmd, structure_cmd, workspace_cmd
+from symkin.cli import (
+    bench_cmd,
+    check_cmd,
+    derive_cmd,
+    gci_cmd,
+    ik_cmd,
+    optimize_cmd,
+    simulate_cmd,
+    structure_cmd,
+    workspace_cmd,
+)
 
 REGISTRY = [
     derive_cmd.register,
@@ -10,8 +20,10 @@ REGISTRY = [
     check_cmd.register_quantities,
     workspace_cmd.register,
     gci_cmd.register,
+    optimize_cmd.register,
     structure_cmd.register_mobility,
     structure_cmd.register_topologies,
     bench_cmd.register,
     ik_cmd.register,
+    simulate_cmd.register,
 ]

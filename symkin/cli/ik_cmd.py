@@ -10,6 +10,7 @@ import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
+from symkin.cli import analysis_args
 from symkin.cli.progress import Progress
 from symkin.errors import ModelError, Problem
 
@@ -59,19 +60,10 @@ def _loaded(path: str) -> Iterator[object]:
         yield load(source)
         return
     from symkin import pipeline
-    from symkin.derivation import Derivation
-    from symkin.errors import DerivationError
     from symkin.model import load_model
 
     model = load_model(source)
-    derivation = Derivation(model)
-    outputs = []
-    for name in IK_OUTPUTS:
-        try:
-            derivation[name]
-        except DerivationError:
-            continue
-        outputs.append(name)
+    outputs = analysis_args.derivable(model, IK_OUTPUTS)
     request = pipeline.resolve_request(model, outputs, "numpy", ())
     with tempfile.TemporaryDirectory(prefix="symkin-ik-") as tmp, Progress(model.name) as progress:
         result = pipeline.generate(model, request, progress)

@@ -36,6 +36,9 @@ class QuantityDef:
             ``mass_matrix`` for forward dynamics; its condition number bounds the accuracy any
             algorithm can reach (used by the stability analysis).  None if nothing is inverted.
         mechanism: ``serial``, ``parallel`` or ``any``: the models it is derived for.
+        residual: True if the value vanishes wherever the mechanism is assembled (loop-closure
+            and leg equations): its accuracy is judged away from that manifold, where a
+            relative error means something (used by the stability analysis).
     """
 
     name: str
@@ -44,6 +47,7 @@ class QuantityDef:
     emitted: bool
     solves_with: str | None = None
     mechanism: str = "serial"
+    residual: bool = False
 
 
 MECHANISMS = ("serial", "parallel", "any")
@@ -53,7 +57,7 @@ _REGISTRY: dict[str, dict[str, QuantityDef]] = {}
 
 
 def quantity(name: str, summary: str, emitted: bool = True, solves_with: str | None = None,
-             mechanism: str = "serial") -> Callable[[Callable[["Derivation"], Any]], Callable[["Derivation"], Any]]:
+             mechanism: str = "serial", residual: bool = False) -> Callable[[Callable[["Derivation"], Any]], Callable[["Derivation"], Any]]:
     """Register ``compute`` as the derivation of quantity ``name`` for ``mechanism`` models (see :class:`QuantityDef`)."""
     if mechanism not in MECHANISMS:
         raise ValueError(f"mechanism must be one of {MECHANISMS}, got {mechanism!r}")
@@ -62,7 +66,7 @@ def quantity(name: str, summary: str, emitted: bool = True, solves_with: str | N
         defs = _REGISTRY.setdefault(name, {})
         if mechanism in defs or "any" in defs or (mechanism == "any" and defs):
             raise ValueError(f"quantity {name!r} registered twice")
-        defs[mechanism] = QuantityDef(name, summary, compute, emitted, solves_with, mechanism)
+        defs[mechanism] = QuantityDef(name, summary, compute, emitted, solves_with, mechanism, residual)
         return compute
 
     return register

@@ -91,7 +91,7 @@ def _closure_rows(d: Derivation) -> str:
 
 
 @quantity("closure", "loop-closure residual Phi(q, s, p), 6 rows per leg (zero when the legs close)",
-          mechanism=PARALLEL)
+          mechanism=PARALLEL, residual=True)
 def _closure(d: Derivation) -> FunctionSpec:
     phi = d["closure_residual"]
     return make_function(
@@ -147,7 +147,7 @@ def _constraint_vector(d: Derivation) -> sympy.ImmutableMatrix:
 
 
 @quantity("constraints", "leg equations f(q, p) = (|B_i - C_i|^2 - L_i^2)/2, zero when assembled",
-          mechanism=PARALLEL)
+          mechanism=PARALLEL, residual=True)
 def _constraints(d: Derivation) -> FunctionSpec:
     f = d["constraint_vector"]
     return make_function(

@@ -17,8 +17,15 @@ and compared with the un-optimized expressions evaluated by mpmath at the same i
 sigma_max/sigma_min (seed sec. 4.2), computed from 50-digit values, of the matrix that
 bounds the accuracy of the quantity: the matrix it inverts when its registration declares
 one (``solves_with``: the mass matrix for forward dynamics, the task Jacobian for TCP forces
-and operational-space dynamics), else the task Jacobian.  A backward-stable evaluation has
+and operational-space dynamics), else the task Jacobian (:func:`conditioning_matrix`).  A backward-stable evaluation has
 an error of the order of kappa * eps, so this is the kappa to judge the error against.
+
+Parallel mechanisms are checked at assembled states (p around the home pose, q = ik(p),
+see :mod:`symkin.stability.states`), along paths into their singularities (the DELTA's
+workspace boundary, the Stewart platform's interior singular poses), at length scales and in
+float32 alike.  Their residual quantities (loop closure and leg equations, which vanish at
+assembled states, so that any rounding would be a 100 % relative error) are evaluated with
+q moved off the assembled state by up to :data:`OFF_MANIFOLD`.
 """
 
 from __future__ import annotations
@@ -45,6 +52,10 @@ PATH_STEPS = tuple(10.0 ** -k for k in range(1, 13))
 #: The acceptance criterion of the issue: error <= BOUND wherever kappa < KAPPA_LIMIT (float64).
 BOUND = 1e-13
 KAPPA_LIMIT = 1e3
+#: Residual quantities (zero wherever the mechanism is assembled) are evaluated with q moved off
+#: the assembled state by up to this fraction of max(|q|, 1), so that their relative error is
+#: meaningful (and scales with the mechanism).
+OFF_MANIFOLD = 0.2
 
 
 @dataclass(frozen=True)
@@ -94,10 +105,13 @@ class StabilityRun:
 
 
 def _kappa(reference: MpmathReference | None, shape: tuple[int, ...], vectors: dict, parameters: dict) -> float:
-    """sigma_max / sigma_min of a 50-digit matrix output (inf at a singular state, nan without one)."""
+    """sigma_max / sigma_min of a 50-digit matrix output (inf at a singular state; nan without one,
+    or where it is undefined)."""
     if reference is None:
         return float("nan")
     exact = reference.exact({g: vectors[g] for g in reference.vector_names}, parameters)
+    if any(mpmath.isnan(v) for v in exact):
+        return float("nan")
     rows, columns = shape
     with mpmath.workdps(DIGITS):
         J = mpmath.matrix([exact[i * columns:(i + 1) * columns] for i in range(rows)])
@@ -106,10 +120,17 @@ def _kappa(reference: MpmathReference | None, shape: tuple[int, ...], vectors: d
         return float("inf") if smallest == 0 else float(largest / smallest)
 
 
+def conditioning_matrix(model: Model) -> str:
+    """The task matrix whose kappa judges a quantity that inverts nothing: the task Jacobian J of a
+    serial chain; the inverse Jacobian J^-1 = J_q^-1 J_x of a parallel mechanism (its closed
+    form; kappa(J^-1) = kappa(J), and a Stewart platform's J = J_x^-1 J_q is a huge expression)."""
+    return "jacobian" if model.parallel is None else "inverse_jacobian"
+
+
 def derivable_quantities(derivation: Derivation, names: Sequence[str] | None = None) -> tuple[list[str], dict[str, str]]:
     """(the emitted quantities this model can derive, {skipped name: reason})."""
     kept, skipped = [], {}
-    for name in names or emitted_quantities():
+    for name in names or emitted_quantities(derivation.model.mechanism):
         try:
             derivation[name]
         except DerivationError as err:
@@ -140,16 +161,20 @@ def run_stability(model: Model, *, samples: int = 32, float32_samples: int = 16,
     rng = np.random.default_rng(seed)
     derivation = Derivation(model)
     names, skipped = derivable_quantities(derivation, quantities)
-    has_jacobian = bool(derivable_quantities(derivation, ["jacobian"])[0])
-    generated = tuple(names) + (("jacobian",) if has_jacobian and "jacobian" not in names else ())
+    task_matrix = conditioning_matrix(model)
+    has_jacobian = bool(derivable_quantities(derivation, [task_matrix])[0])
+    generated = tuple(names) + ((task_matrix,) if has_jacobian and task_matrix not in names else ())
     progress("generating code")
     generation = pipeline.generate(model, pipeline.Request(generated, (), ("numpy",)))
     optimized = {f.name: f for f in generation.functions}
     references = {name: MpmathReference(derivation[name]) for name in names}
-    conditioning = {name: registry()[name].solves_with or "jacobian" for name in names}
+    definitions = registry(model.mechanism)
+    conditioning = {name: definitions[name].solves_with or task_matrix for name in names}
+    residual = [name for name in names if definitions[name].residual]
+    regular = [name for name in names if not definitions[name].residual]
     kappa_sources = {}
     for source in sorted(set(conditioning.values())):
-        if source == "jacobian" and not has_jacobian:
+        if source == task_matrix and not has_jacobian:
             kappa_sources[source] = (None, ())
         else:
             kappa_sources[source] = (references.get(source) or MpmathReference(derivation[source]),
@@ -158,20 +183,39 @@ def run_stability(model: Model, *, samples: int = 32, float32_samples: int = 16,
         loaded = load(pipeline.write(generation, tmp))
         functions = {name: getattr(loaded, name) for name in names}
         shapes = {name: [o.shape for o in derivation[name].outputs] for name in names}
+        sizes = {i.name: len(i.symbols) for name in names for i in derivation[name].vector_inputs}
         run = StabilityRun(model.name, tuple(names), skipped, [])
+        ik = getattr(loaded, "ik", None) if model.parallel is not None else None
+
+        def states_at(count: int, scale: float = 1.0) -> dict[str, np.ndarray]:
+            """Random states, plus any input group they lack (passive joint variables) in [-0.5, 0.5]."""
+            states = random_states(model, count, rng, scale=scale, ik=ik)
+            for group, size in sizes.items():
+                if group not in states:
+                    states[group] = rng.uniform(-0.5, 0.5, size=(count, size))
+            return states
 
         def check(family: str, states: dict[str, np.ndarray], parameters: dict[str, float], label: str = "",
                   parameter_of: Callable[[int], float] = lambda _k: 1.0, dtype: type = np.float64) -> None:
+            evaluate(family, states, parameters, label, parameter_of, dtype, regular)
+            if residual:
+                q = states["q"]
+                off = dict(states, q=q + OFF_MANIFOLD * np.maximum(np.abs(q), 1.0) * rng.uniform(-1, 1, q.shape))
+                evaluate(family, off, parameters, label, parameter_of, dtype, residual)
+
+        def evaluate(family: str, states: dict[str, np.ndarray], parameters: dict[str, float], label: str,
+                     parameter_of: Callable[[int], float], dtype: type, quantities: list[str]) -> None:
             count = len(states["q"])
             kappas = {source: [_kappa(reference, shape, {g: v[k] for g, v in states.items()}, parameters)
                                for k in range(count)]
                       for source, (reference, shape) in kappa_sources.items()}
-            for name in names:
+            for name in quantities:
                 spec_vectors = [i.name for i in derivation[name].vector_inputs]
                 params = {i.name: parameters[i.name] for i in derivation[name].parameter_inputs}
                 if dtype is np.float64:
-                    computed = flatten_outputs(functions[name](*(states[g] for g in spec_vectors), **params),
-                                               shapes[name])
+                    with np.errstate(invalid="ignore", divide="ignore"):  # NaN/inf flags are what is checked
+                        values = functions[name](*(states[g] for g in spec_vectors), **params)
+                    computed = flatten_outputs(values, shapes[name])
                 else:
                     computed = compile_ir(optimized[name], dtype)({g: states[g] for g in spec_vectors}, params)
                 for k in range(count):
@@ -181,24 +225,23 @@ def run_stability(model: Model, *, samples: int = 32, float32_samples: int = 16,
 
         defaults = parameter_values(model)
         progress("random states")
-        check("random", random_states(model, samples, rng), defaults)
+        check("random", states_at(samples), defaults)
         if has_jacobian:
             progress("finding singular configurations")
-            run.paths = singular_paths(model, loaded.jacobian, rng, max_paths)
+            run.paths = singular_paths(model, getattr(loaded, task_matrix), rng, max_paths, ik=ik, reach=max(steps))
             for path in run.paths:
                 progress(f"path {path.label}")
-                states = random_states(model, len(steps), rng)
-                states["q"] = path.states(np.asarray(steps))
+                states = states_at(len(steps))
+                states.update(path.states(np.asarray(steps)))
                 check("singular", states, defaults, path.label, lambda k: steps[k])
         for scale in scales:
             progress(f"length scale {scale:g}")
-            check("scale", random_states(model, scale_samples, rng), parameter_values(model, scale),
+            check("scale", states_at(scale_samples, scale), parameter_values(model, scale),
                   parameter_of=lambda _k, s=scale: s)
         progress("closed-form IK near singularities")
         run.formulas = formula_errors(loaded, steps)
         progress("float32")
-        states32 = {g: v.astype(np.float32).astype(np.float64) for g, v in random_states(model, float32_samples,
-                                                                                       rng).items()}
+        states32 = {g: v.astype(np.float32).astype(np.float64) for g, v in states_at(float32_samples).items()}
         params32 = {k: float(np.float32(v)) for k, v in defaults.items()}
         check("float32", states32, params32, dtype=np.float32)
     return run

@@ -37,12 +37,17 @@ class MpmathReference:
         self.size = sum(len(out.entries) for out in spec.outputs)
 
     def exact(self, vectors: Mapping[str, np.ndarray], parameters: Mapping[str, float]) -> list:
-        """The outputs (flattened, row-major, outputs in order) as mpmath numbers."""
+        """The outputs (flattened, row-major, outputs in order) as mpmath reals.
+
+        An output that comes out complex (the square root of a negative discriminant: a
+        parallel mechanism that does not assemble at these exact inputs) is undefined there:
+        NaN, as the generated code flags it.
+        """
         args = [mpmath.mpf(float(v)) for name in self.vector_names for v in np.asarray(vectors[name], dtype=float)]
         args += [mpmath.mpf(float(parameters[name])) for name in self.parameter_names]
         with mpmath.workdps(DIGITS):
             values = self._function(*args)
-            return [mpmath.mpf(values[k]) for k in range(self.size)]
+            return [_real_or_nan(values[k]) for k in range(self.size)]
 
     def __call__(self, vectors: Mapping[str, np.ndarray], parameters: Mapping[str, float]) -> tuple[np.ndarray, np.ndarray]:
         """(hi, lo) double-double arrays of the flattened outputs at one state."""
@@ -53,13 +58,27 @@ class MpmathReference:
         return hi, lo
 
 
+def _real_or_nan(value: object) -> mpmath.mpf:
+    """A real mpmath value; a complex one with a non-negligible imaginary part is NaN."""
+    if isinstance(value, mpmath.mpc):
+        if abs(value.imag) > mpmath.mpf(10) ** (10 - DIGITS) * max(abs(value.real), 1):
+            return mpmath.mpf("nan")
+        return mpmath.mpf(value.real)
+    return mpmath.mpf(value)
+
+
 def normwise_error(computed: np.ndarray, hi: np.ndarray, lo: np.ndarray) -> float:
     """|computed - reference|_2 / |reference|_2 for one state (reference = hi + lo).
 
     An exactly zero reference gives 0 if the computed value is zero too, else inf; a
-    non-finite computed value gives inf.
+    non-finite computed value gives inf, except where the reference is undefined (NaN)
+    too: an entry that both flag as undefined agrees and is left out.
     """
     computed = np.asarray(computed, dtype=float)
+    undefined = np.isnan(hi)
+    if np.any(np.isfinite(computed[undefined])):
+        return float("inf")  # a value where none exists: silent garbage
+    computed, hi, lo = computed[~undefined], hi[~undefined], lo[~undefined]
     if not np.all(np.isfinite(computed)):
         return float("inf")
     difference = (computed - hi) - lo

@@ -105,7 +105,8 @@ def render(run: StabilityRun) -> str:
         "error vs length scale (all length parameters multiplied; float64)",
         scale_table(run),
         "",
-        "paths into singularities (q_j = q* + t)",
+        "paths into singularities (x_j = x* + t: a joint of a serial chain, a task coordinate of a parallel "
+        "mechanism, times its characteristic length)",
         path_table(run) if run.paths else "  (no singular configuration found)",
         "",
         "float32 (optimized IR printed by the numpy printer, evaluated on float32 arrays)",

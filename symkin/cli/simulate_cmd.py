@@ -1,0 +1,166 @@
+"""``symkin simulate``: forward dynamics of a serial model in a scenario (seed sec. 5)."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+from pathlib import Path
+
+from symkin.cli import analysis_args
+from symkin.cli.progress import Progress
+
+#: What a model file is derived with on the fly; the optional ones where the model has them.
+SIMULATION_OUTPUTS = ("fk", "jacobian", "jacobian_geometric", "forward_dynamics", "inverse_dynamics",
+                      "kinetic_energy", "coriolis_vector")
+OPTIONAL_OUTPUTS = ("gravity_vector", "potential_energy", "friction")
+SCENARIOS = ("sine", "tracking", "haptic-wall", "free-swing")
+#: the integrator each scenario uses unless --integrator says otherwise
+DEFAULT_INTEGRATOR = {"sine": "dop853", "tracking": "rk4", "haptic-wall": "rk4", "free-swing": "dop853"}
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "simulate", help="simulate the dynamics: seed haptic scenario, trajectory following, virtual wall",
+        description="Integrate the forward dynamics of a serial model with its generated functions. Scenarios: "
+                    "'sine' (seed sec. 5.3, Figs. 8.21, 8.22: one joint follows a sine, the others are fixed; joint "
+                    "torques and TCP forces F = J^-T tau, checked by a forward simulation), 'tracking' (Fig. 8.17: a "
+                    "TCP circle through inverse kinematics and computed-torque control), 'haptic-wall' (Fig. 8.18: a "
+                    "mass-spring-damper hand pushes into a virtual wall rendered in a 1 kHz loop), 'free-swing' (no "
+                    "torques; energy conserved without friction). Writes CSV per run, summary.txt and figures into "
+                    "the output directory (replaced as a whole).",
+        epilog="Seed Figs. 8.21/8.22: symkin simulate generated/planar_2r --scenario sine --design l1=0.1,l2=0.1 "
+               "--design l1=0.2,l2=0.2 -o out/figures/seed-haptic-scenario")
+    p.add_argument("model", metavar="MODEL",
+                   help="generated model directory (from 'symkin derive', e.g. generated/planar_2r) or a model file "
+                        "(YAML; the dynamics are derived on the fly)")
+    p.add_argument("--scenario", choices=SCENARIOS, default="sine", help="what to simulate (default: %(default)s)")
+    p.add_argument("--backend", default="numpy", metavar="NAME", help="generated code to evaluate: numpy, c, casadi "
+                                                                      "(default: %(default)s)")
+    p.add_argument("--set", dest="assignments", action="append", default=[], metavar="NAME=VALUE[,...]",
+                   help="parameter values instead of the defaults, e.g. --set m2=0.2 (repeatable)")
+    p.add_argument("--design", action="append", default=[], metavar="NAME=VALUE[,...]",
+                   help="a design (parameter values on top of --set); 'sine' compares several, the other scenarios "
+                        "use the first; repeatable")
+    p.add_argument("--q0", nargs="+", metavar="Q", default=None,
+                   help="start (sine: centre) configuration, rad or m; append 'deg' for degrees, e.g. 45deg "
+                        "(default: the middle of the joint limits, 0 for unlimited joints)")
+    p.add_argument("--duration", type=float, default=2.0, metavar="S", help="simulated time [s] (default: 2)")
+    p.add_argument("--rate", type=float, default=1000.0, metavar="HZ",
+                   help="control and sample rate [Hz] (default: 1000, the haptic loop)")
+    p.add_argument("--integrator", choices=("rk4", "dop853"),
+                   help="rk4: fixed step under a sampled (zero-order hold) controller; dop853: adaptive, "
+                        "continuous control (default: dop853 for sine and free-swing, rk4 otherwise)")
+    p.add_argument("--substeps", type=int, default=1, metavar="K", help="rk4 steps per sample (default: 1)")
+    p.add_argument("--joint", metavar="NAME", help="sine: the moving joint (default: the last)")
+    p.add_argument("--amplitude", default="30deg", metavar="A",
+                   help="sine: amplitude, rad or m, or with 'deg' (default: %(default)s)")
+    p.add_argument("--frequency", type=float, default=1.0, metavar="HZ",
+                   help="sine: frequency; haptic-wall: frequency of the hand's push (default: 1)")
+    p.add_argument("--radius", type=float, default=0.02, metavar="M", help="tracking: circle radius (default: 0.02)")
+    p.add_argument("--bandwidth", type=float, default=50.0, metavar="RAD_S",
+                   help="computed torque: omega of the error dynamics (default: 50)")
+    p.add_argument("--wall", type=float, default=0.01, metavar="M",
+                   help="haptic-wall: distance of the wall from the start TCP along the first task axis "
+                        "(default: 0.01)")
+    p.add_argument("--push", type=float, default=0.02, metavar="M",
+                   help="haptic-wall: how far the hand intends to move towards the wall (default: 0.02)")
+    p.add_argument("--wall-stiffness", type=float, default=1000.0, metavar="N_M", help="k_w (default: 1000 N/m)")
+    p.add_argument("--wall-damping", type=float, default=2.0, metavar="NS_M", help="b_w (default: 2 N s/m)")
+    p.add_argument("--force-gain", type=float, default=0.0, metavar="K",
+                   help="haptic-wall: force feedback gain K_f (default: 0, open-loop impedance rendering)")
+    p.add_argument("--hand", action="append", default=[], metavar="NAME=VALUE[,...]",
+                   help="haptic-wall: user model, of mass, arm_stiffness, arm_damping, grip_stiffness, grip_damping "
+                        "(default: 0.2 kg, 200 N/m, 5 N s/m, 2000 N/m, 10 N s/m)")
+    p.add_argument("-o", "--out", metavar="DIR", help="output directory (default: out/simulation/MODEL-SCENARIO)")
+    p.add_argument("--no-figure", action="store_true", help="write CSV and summary only")
+    p.set_defaults(run=run, parser=p)
+
+
+def _number(option: str, text: str) -> float:
+    try:
+        return analysis_args.parse_value(text)
+    except ValueError:
+        raise ValueError(f"{option}: '{text}' is not a number (rad or m, or degrees with 'deg')") from None
+
+
+def _start(args: argparse.Namespace, plant) -> list[float]:
+    if args.q0 is None:
+        limits = plant.model.joint_limits
+        return [0.5 * (lo + hi) if math.isfinite(lo) and math.isfinite(hi) else 0.0 for lo, hi in limits]
+    values = [_number("--q0", v) for v in args.q0]
+    if len(values) != plant.dof:
+        raise ValueError(f"--q0: {plant.name} has {plant.dof} joints ({' '.join(plant.coordinates)}), "
+                         f"got {len(values)} values")
+    return values
+
+
+def _label(model, values: dict[str, float]) -> str:
+    units = {p["name"]: p["unit"] for p in model.manifest["parameters"]}
+    parts = [f"{name} = {value * 100:g} cm" if units.get(name) == "m" else f"{name} = {value:g}"
+             for name, value in values.items()]
+    return ", ".join(parts) or "model parameters"
+
+
+def run(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from symkin.atomic import replace_directory
+    from symkin.simulation import Plant, SimulationError, scenarios
+    from symkin.simulation.output import scenario_files
+
+    try:
+        base = analysis_args.load_model(args.model, args.backend, SIMULATION_OUTPUTS, OPTIONAL_OUTPUTS)
+        values = analysis_args.parse_assignments(args.assignments)
+        if values:
+            base = base.bind(**values)
+        designs = [analysis_args.parse_assignments([text]) for text in args.design] or [{}]
+        plants = [(_label(base, d), Plant(base.bind(**d) if d else base)) for d in designs]
+        plant = plants[0][1]
+        q0 = np.array(_start(args, plant))
+        hand = analysis_args.parse_assignments(args.hand)
+        unknown = set(hand) - {"mass", "arm_stiffness", "arm_damping", "grip_stiffness", "grip_damping"}
+        if unknown:
+            raise ValueError(f"--hand: unknown user parameters {sorted(unknown)}; use mass, arm_stiffness, "
+                             "arm_damping, grip_stiffness, grip_damping")
+        if not (args.rate > 0 and args.duration > 0 and args.substeps >= 1):
+            raise ValueError("--rate and --duration must be positive and --substeps at least 1")
+        joint = plant.dof - 1 if args.joint is None else plant.coordinates.index(args.joint) \
+            if args.joint in plant.coordinates else None
+        if joint is None:
+            raise ValueError(f"--joint: {plant.name} has no joint '{args.joint}'; use one of "
+                             f"{', '.join(plant.coordinates)}")
+        amplitude = _number("--amplitude", args.amplitude)
+    except (ValueError, KeyError) as err:
+        analysis_args.fail_on_bad_input(args, err)
+    timing = scenarios.Timing(args.duration, args.rate, args.integrator or DEFAULT_INTEGRATOR[args.scenario],
+                              args.substeps)
+    label, _ = plants[0]
+    start = time.perf_counter()
+    with Progress(base.name) as progress:
+        progress(f"simulating {args.scenario}")
+        try:
+            if args.scenario == "sine":
+                result = scenarios.sine(plants, q0, joint, amplitude, args.frequency, timing)
+            elif args.scenario == "tracking":
+                result = scenarios.tracking(label, plant, q0, args.radius, timing, args.bandwidth)
+            elif args.scenario == "haptic-wall":
+                result = scenarios.haptic_wall(label, plant, q0, args.wall, args.push, timing,
+                                               frequency=args.frequency, stiffness=args.wall_stiffness,
+                                               damping=args.wall_damping, force_gain=args.force_gain, hand=hand)
+            else:
+                result = scenarios.free_swing(label, plant, q0, timing)
+        except SimulationError as err:
+            print(f"symkin simulate: {err}")
+            return 1
+        except ValueError as err:  # the scenario does not apply to the model
+            analysis_args.fail_on_bad_input(args, err)
+        progress("writing")
+        out = args.out or f"out/simulation/{base.name}-{args.scenario}"
+        files = scenario_files(base.name, result, figures=not args.no_figure)
+        replace_directory(Path(out), files)
+    print(f"{base.name} ({args.backend}): {args.scenario}, {timing.duration:g} s at {timing.rate:g} Hz")
+    for line in result.summary:
+        print(f"  {line}")
+    print(f"wrote {len(files)} files to {out}/ ({', '.join(sorted(files))}) in {time.perf_counter() - start:.2f} s")
+    return 0

@@ -1,0 +1,23 @@
+"""Dimensioning optimization with CasADi and IPOPT (seed sec. 4, steps 1-3; GCI eq. 8.28; Table 8.5).
+
+    problem  = design_problem(model, "gci", ["l1"], bounds={"l1": (0.05, 0.3)})   # step 1
+    program  = formulate(problem, casadi_model, numpy_model)                        # step 2
+    solution = solve(problem, program)                                              # step 3
+    rating   = evaluate(problem, numpy_model, solution.optimum)                     # independent check
+
+:mod:`~symkin.design.problem` (free parameters, bounds, required box; refusals),
+:mod:`~symkin.design.smooth` (1/kappa_F of CasADi Jacobians),
+:mod:`~symkin.design.formulation` (the nonlinear program over the generated CasADi functions),
+:mod:`~symkin.design.solve` (IPOPT, history, run times),
+:mod:`~symkin.design.evaluate` (true GCI with error estimates and box reachability on the numpy code),
+:mod:`~symkin.design.plots` (figures).  Not to be confused with :mod:`symkin.optimize`, the
+expression optimizer of the code generator.
+"""
+
+from symkin.design.evaluate import Evaluation, evaluate
+from symkin.design.formulation import Program, formulate
+from symkin.design.problem import OBJECTIVES, DesignProblem, FreeParameter, design_problem, needed_functions
+from symkin.design.solve import Solution, solve
+
+__all__ = ["OBJECTIVES", "DesignProblem", "Evaluation", "FreeParameter", "Program", "Solution", "design_problem",
+           "evaluate", "formulate", "needed_functions", "solve"]

@@ -1,0 +1,256 @@
+"""The dimensioning problem as a CasADi nonlinear program (seed sec. 4.1 step 2).
+
+Decision variables: the free parameters, scaled to order one (value / start), and, for a
+serial model with a required box, one joint configuration per box point.  The generated
+CasADi functions (``fk``, ``ik``, ``jacobian``: their parameters are inputs) are mapped
+over fixed sample points, so the objective is a smooth function of the design:
+
+* ``gci`` of a serial model: the Frobenius surrogate of the GCI (seed eq. 8.28) with the
+  Cartesian measure dW = |det J| dq over the joint limits, at fixed Sobol nodes q_j,
+
+      v_F = sum_j |det J_j| / kappa_F(J_j)  /  sum_j |det J_j|
+
+  (:func:`symkin.design.smooth.measure_weighted_inverse_frobenius`); with the same nodes
+  it is :func:`symkin.analysis.global_index` with ``index=inverse_frobenius_condition_number``,
+  except that |det J_j| in the denominator is sqrt(det_j^2 + eps^2): where a node's det J
+  changes sign as the design varies, |det J| has a kink that stalls IPOPT.  eps^2 =
+  1e-6 mean_j det_j^2 scales with the design like det^2, so a design that only rescales
+  det J (the 2R arm's l1 l2 |sin theta2|) keeps its optimum exactly; a node's weight
+  grows by at most eps, relatively ~1e-6 at typical nodes;
+* ``gci`` of a parallel model: the mean of 1/kappa_F over a midpoint grid of the required
+  box (the Cartesian measure over the region the design must serve), the joints from the
+  closed-form ``ik``;
+* ``workspace`` of a serial model: int |det J| dq over the joint limits (area/volume in
+  m^d), estimated at the same nodes (with the same smoothed |det J|).
+
+Constraints (the required box, inflated by the margin, sampled on a vertex grid with its
+corners): a serial model's box configurations q_b satisfy fk(q_b) = p_b within the joint
+limits (bounds of the variables); a parallel model's ``ik`` margin (the radicand of each
+leg's solution) is >= 0 at every box point and objective node, and its actuated joints stay
+within their limits (declared or overridden), if any.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, NamedTuple
+
+import casadi
+import numpy as np
+
+from symkin.analysis import mechanism, sampling
+from symkin.design import smooth
+from symkin.design.problem import DesignProblem
+
+#: Nodes of the serial objective (2**LOG2, Sobol, fixed seed) and per axis of the parallel one.
+SERIAL_NODES_LOG2 = 8
+PARALLEL_NODES_PER_AXIS = 5
+#: |det J| of the measure is smoothed as sqrt(det^2 + eps^2), eps = this times the rms of det J over the nodes.
+DETERMINANT_SMOOTHING = 1e-3
+#: Constraint points per axis of the required box (a vertex grid: corners, edges, faces).
+BOX_POINTS_PER_AXIS = 4
+#: Configurations sampled to start the box configurations of a serial model near a solution.
+START_SAMPLES_LOG2 = 12
+
+
+def casadi_function(model: Any, name: str) -> casadi.Function:
+    """The ``casadi.Function`` behind a function of a model loaded with ``backend="casadi"``."""
+    function = getattr(model, name, None)
+    function = getattr(function, "func", function)  # a bound model wraps it in functools.partial
+    if function is None or not hasattr(function, "casadi"):
+        raise ValueError(f"{model.name}: no CasADi function '{name}'; derive the model with --backend numpy,casadi")
+    return function.casadi
+
+
+def _node_function(name: str, node: casadi.SX, free: casadi.SX, outputs: casadi.SX) -> casadi.Function:
+    """A function of one sample point and the free parameter values, to be mapped over all points."""
+    return casadi.Function(name, [node, free], [outputs], ["node", "free"], [name])
+
+
+def _call(function: casadi.Function, arguments: dict[str, Any]) -> list[casadi.SX]:
+    """The outputs of a generated function called by name with the arguments it takes."""
+    wanted = set(function.name_in())
+    result = function.call({k: v for k, v in arguments.items() if k in wanted})
+    return [result[name] for name in function.name_out()]
+
+
+def _mapped(function: casadi.Function, nodes: Any, free: casadi.MX) -> casadi.MX:
+    """``function`` at every column of ``nodes`` (d x N), the free values shared: (outputs x N)."""
+    return function.map(nodes.shape[1], "serial")(nodes, free)
+
+
+class _Terms(NamedTuple):
+    """What a kind of mechanism contributes to the program."""
+
+    objective: casadi.MX
+    g: casadi.MX
+    lbg: np.ndarray
+    ubg: np.ndarray
+    variables: casadi.MX  # extra decision variables (serial box configurations), with
+    start: np.ndarray  # their start values
+    lower: np.ndarray  # and bounds
+    upper: np.ndarray
+    nodes: np.ndarray
+    box_points: np.ndarray
+    description: str
+
+
+NO_VARIABLES = (casadi.MX(0, 1), np.empty(0), np.empty(0), np.empty(0))
+
+
+@dataclass
+class Program:
+    """A nonlinear program min f(x) s.t. lbg <= g(x) <= ubg, lbx <= x <= ubx, and how to read it.
+
+    Attributes:
+        x, f, g: CasADi MX expressions (f is -objective / |objective(start)|).
+        x0, lbx, ubx, lbg, ubg: numeric start and bounds.
+        objective: Function of the free parameter values (unscaled) -> the surrogate.
+        free_count: the first ``free_count`` entries of x are the scaled free parameters.
+        scales: value = x * scale for those.
+        nodes: the objective's sample points (joint configurations or box points).
+        box_points: the constraint points of the required box (or an empty array).
+        description: the surrogate and its domain, in words.
+    """
+
+    x: casadi.MX
+    f: casadi.MX
+    g: casadi.MX
+    x0: np.ndarray
+    lbx: np.ndarray
+    ubx: np.ndarray
+    lbg: np.ndarray
+    ubg: np.ndarray
+    objective: casadi.Function
+    free_count: int
+    scales: np.ndarray
+    nodes: np.ndarray
+    box_points: np.ndarray
+    description: str
+
+    def free_values(self, x: np.ndarray) -> np.ndarray:
+        """The free parameter values of a solution vector."""
+        return np.asarray(x, dtype=np.float64).ravel()[:self.free_count] * self.scales
+
+
+def formulate(problem: DesignProblem, casadi_model: Any, numpy_model: Any, *, nodes: int | None = None,
+              box_points: int = BOX_POINTS_PER_AXIS, seed: int = 0) -> Program:
+    """The CasADi program of a dimensioning problem.
+
+    Each term is a CasADi function of one sample point and the free parameter values, built
+    from the generated functions (SX) and mapped over the points (MX): the program and
+    its exact Hessian stay small however many points there are.
+
+    Args:
+        problem: from :func:`symkin.design.problem.design_problem`.
+        casadi_model: the model loaded with ``backend="casadi"`` (unbound).
+        numpy_model: the same model with the numpy backend (start guesses only).
+        nodes: serial: log2 of the Sobol node count; parallel: grid points per axis.
+        box_points: constraint points per axis of the required box.
+        seed: seed of the fixed Sobol nodes.
+    """
+    scales = np.array([p.scale for p in problem.free])
+    free = casadi.SX.sym("free", len(problem.free))
+    values: dict[str, Any] = dict(problem.values)
+    values.update({p.name: free[k] for k, p in enumerate(problem.free)})
+    z = casadi.MX.sym("z", len(problem.free))
+    build = _parallel if problem.parallel else _serial
+    terms = build(problem, casadi_model, numpy_model, free, values, z * scales, nodes, box_points, seed)
+    free_values = casadi.MX.sym("free", len(problem.free))
+    objective_function = casadi.Function("objective", [z], [terms.objective])
+    objective_function = casadi.Function("surrogate", [free_values], [objective_function(free_values / scales)],
+                                         ["free"], ["surrogate"])
+    start = np.array([p.start for p in problem.free])
+    reference = abs(float(objective_function(start)))
+    if not reference > 0:
+        raise ValueError(f"the {problem.objective} surrogate is 0 at the start design {problem.start}: "
+                         "start from a design with a nonsingular, reachable workspace")
+    return Program(casadi.vertcat(z, terms.variables), -terms.objective / reference, terms.g,
+                   np.concatenate([start / scales, terms.start]),
+                   np.concatenate([[p.lower for p in problem.free] / scales, terms.lower]),
+                   np.concatenate([[p.upper for p in problem.free] / scales, terms.upper]),
+                   np.asarray(terms.lbg, float), np.asarray(terms.ubg, float), objective_function,
+                   len(problem.free), scales, terms.nodes, terms.box_points, terms.description)
+
+
+def _serial(problem: DesignProblem, casadi_model: Any, numpy_model: Any, free: casadi.SX, values: dict[str, Any],
+            design: casadi.MX, nodes: int | None, box_points: int, seed: int) -> _Terms:
+    limits = problem.limits
+    n = limits.shape[0]
+    q = sampling.sobol(limits[:, 0], limits[:, 1], SERIAL_NODES_LOG2 if nodes is None else nodes,
+                       np.random.default_rng(seed))
+    count = len(q)
+    node = casadi.SX.sym("q", n)
+    J = _call(casadi_function(casadi_model, "jacobian"), {"q": node, **values})[0]
+    rows = mechanism.position_rows(numpy_model)
+    term = smooth.measure_weighted_inverse_frobenius(J, smooth.homogenized(J, problem.length, rows))
+    per_node = _node_function("gci_terms", node, free, casadi.vertcat(term, smooth.determinant(J)))
+    terms = _mapped(per_node, casadi.DM(q.T), design)
+    det = terms[1, :]
+    floor = DETERMINANT_SMOOTHING**2 * casadi.sumsqr(det) / count
+    weights = casadi.sum2(casadi.sqrt(det * det + floor))
+    if problem.objective == "gci":
+        objective = casadi.sum2(terms[0, :]) / weights
+        description = (f"Frobenius GCI surrogate: sum |det J| / kappa_F / sum |det J| at {count} fixed Sobol "
+                       "nodes over the joint limits (Cartesian measure dW = |det J| dq, |det J| smoothed by "
+                       f"{DETERMINANT_SMOOTHING:g} rms det J)")
+    else:
+        objective = weights * float(np.prod(limits[:, 1] - limits[:, 0])) / count
+        description = f"workspace measure int |det J| dq over the joint limits, at {count} fixed Sobol nodes"
+    if problem.box is None:
+        return _Terms(objective, casadi.MX(0, 1), np.empty(0), np.empty(0), *NO_VARIABLES, q, np.empty((0, 0)),
+                      description)
+    points = sampling.grid(*problem.inflated_box, box_points, midpoints=False)
+    axes = list(mechanism.position_axes(numpy_model))
+    T = _call(casadi_function(casadi_model, "fk"), {"q": node, **values})[0]
+    position = _node_function("tcp", node, free, T[axes, 3])
+    qb = casadi.MX.sym("q_box", n, len(points))
+    size = float(np.max(problem.box[1] - problem.box[0]))
+    residuals = (_mapped(position, qb, design) - casadi.DM(points.T)) / size
+    start = _nearest_configurations(numpy_model.bind(**problem.start), limits, points, axes, seed)
+    zeros = np.zeros(residuals.numel())
+    description += f"; the box is required at {len(points)} points (fk(q_b) = p_b within the joint limits)"
+    bounds = (np.tile(limits[:, 0], len(points)), np.tile(limits[:, 1], len(points)))
+    return _Terms(objective, casadi.vec(residuals), zeros, zeros, casadi.vec(qb), start.ravel(), *bounds, q, points,
+                  description)
+
+
+def _nearest_configurations(model: Any, limits: np.ndarray, points: np.ndarray, axes: list[int],
+                            seed: int) -> np.ndarray:
+    """For each point, the sampled configuration (within the limits) whose TCP is nearest: a start for IPOPT."""
+    q = sampling.sobol(limits[:, 0], limits[:, 1], START_SAMPLES_LOG2, np.random.default_rng(seed + 1))
+    tcp = model.fk(q)[:, axes, 3]
+    nearest = np.argmin(((points[:, None, :] - tcp[None, :, :]) ** 2).sum(axis=-1), axis=1)
+    return q[nearest]
+
+
+def _parallel(problem: DesignProblem, casadi_model: Any, numpy_model: Any, free: casadi.SX, values: dict[str, Any],
+              design: casadi.MX, nodes: int | None, box_points: int, seed: int) -> _Terms:
+    per_axis = PARALLEL_NODES_PER_AXIS if nodes is None else nodes
+    p = sampling.grid(*problem.box, per_axis)
+    node = casadi.SX.sym("p", p.shape[1])
+    joints, margin = _call(casadi_function(casadi_model, "ik"), {"p": node, **values})
+    J = _call(casadi_function(casadi_model, "jacobian"), {"q": joints, "p": node, **values})[0]
+    index = _node_function("inverse_frobenius", node, free, smooth.inverse_frobenius(J))
+    objective = casadi.sum2(_mapped(index, casadi.DM(p.T), design)) / len(p)
+    description = (f"Frobenius GCI surrogate: mean 1/kappa_F over a {per_axis}^{p.shape[1]} midpoint grid of the "
+                   "required box (Cartesian measure), joints from the closed-form ik")
+    corners = sampling.grid(*problem.inflated_box, box_points, midpoints=False)
+    points = np.concatenate([corners, p])
+    start_margin = np.asarray(numpy_model.ik(points, **problem.start)[1])
+    if not np.all(np.isfinite(start_margin)):
+        raise ValueError(f"{numpy_model.name}: the inverse kinematics fails at the start design")
+    reference = float(np.median(np.abs(start_margin))) or 1.0
+    reach = _node_function("reach", node, free, casadi.vertcat(margin / reference, joints))
+    legs = margin.numel()
+    reached = _mapped(reach, casadi.DM(points.T), design)
+    g = [casadi.vec(reached[:legs, :])]
+    lbg, ubg = [np.zeros(legs * len(points))], [np.full(legs * len(points), np.inf)]
+    if problem.limits is not None:
+        for k, (lo, hi) in enumerate(problem.limits):
+            g.append(reached[legs + k, :].T)
+            lbg.append(np.full(len(points), lo))
+            ubg.append(np.full(len(points), hi))
+    description += f"; the box is required at {len(points)} points (ik margin >= 0)"
+    return _Terms(objective, casadi.vertcat(*g), np.concatenate(lbg), np.concatenate(ubg), *NO_VARIABLES, p, points,
+                  description)

@@ -1,0 +1,117 @@
+"""Figures of a dimensioning run: the objective history and the design before and after.
+
+Drawn with ``matplotlib.figure.Figure`` (no pyplot, no GUI backend) and returned as PNG
+bytes, so the command writes them together with its other outputs in one atomic step.
+"""
+
+from __future__ import annotations
+
+import io
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from symkin.analysis import global_indices, mechanism, workspace
+from symkin.design.evaluate import Evaluation, parallel_index
+from symkin.design.problem import DesignProblem
+from symkin.design.solve import Solution
+
+DPI = 150
+#: Configurations drawn per serial workspace; points per axis of a parallel slice.
+CLOUD_SAMPLES = 20_000
+SLICE_POINTS = 121
+#: A parallel slice shows the required box grown by this fraction of its size on each side.
+SLICE_BORDER = 0.5
+
+
+def png(figure: Any) -> bytes:
+    """The figure as PNG bytes."""
+    buffer = io.BytesIO()
+    figure.savefig(buffer, format="png", dpi=DPI, bbox_inches="tight")
+    return buffer.getvalue()
+
+
+def history_figure(solution: Solution, problem: DesignProblem, model_name: str) -> Any:
+    """The surrogate objective at every IPOPT iterate, and the constraint violation where there are constraints."""
+    from matplotlib.figure import Figure
+
+    figure = Figure(figsize=(6.0, 4.0), layout="constrained")
+    ax = figure.add_subplot()
+    ax.plot(np.arange(len(solution.history)), solution.history, marker="o", ms=3)
+    ax.set_xlabel("IPOPT iteration")
+    ax.set_ylabel("GCI surrogate (1/kappa_F)" if problem.objective == "gci" else "workspace measure")
+    ax.set_title(f"{model_name}: maximize {problem.objective} over {', '.join(problem.names)} "
+                 f"({solution.iterations} iterations, {solution.status})", fontsize=9)
+    ax.grid(alpha=0.3)
+    if np.any(solution.infeasibility > 0):
+        twin = ax.twinx()
+        twin.semilogy(np.arange(len(solution.infeasibility)), np.maximum(solution.infeasibility, 1e-17),
+                      color="tab:red", lw=0.8, ls="--")
+        twin.set_ylabel("constraint violation (IPOPT inf_pr)", color="tab:red")
+    return figure
+
+
+def _label(problem: DesignProblem, design: dict[str, float], evaluation: Evaluation, which: str) -> str:
+    values = ", ".join(f"{n} = {design[n] * 1e3:.4g} mm" for n in problem.names)
+    return f"{which}: {values}\nGCI = {evaluation.gci}"
+
+
+def _box_outline(ax: Any, problem: DesignProblem, axes: Sequence[int]) -> None:
+    if problem.box is None:
+        return
+    (x0, y0), (x1, y1) = problem.box[0][list(axes)], problem.box[1][list(axes)]
+    ax.plot([x0, x1, x1, x0, x0], [y0, y0, y1, y1, y0], color="red", lw=1.0, label="required box")
+    ax.legend(loc="lower left", fontsize=7)
+
+
+def _serial_panel(ax: Any, problem: DesignProblem, model: Any) -> Any:
+    cloud = workspace.sample_workspace(model, CLOUD_SAMPLES, method="sobol", limits=problem.limits, seed=0)
+    values = global_indices.local_index(model, cloud.q, length=problem.length, limits=problem.limits)
+    mesh = ax.scatter(cloud.points[:, 0], cloud.points[:, 1], c=values, s=2, linewidths=0, rasterized=True,
+                      cmap="viridis", vmin=0.0, vmax=1.0)
+    ax.set_xlabel(f"{cloud.axes[0]} [m]")
+    ax.set_ylabel(f"{cloud.axes[1]} [m]")
+    _box_outline(ax, problem, (0, 1))
+    return mesh
+
+
+def _parallel_panel(ax: Any, problem: DesignProblem, model: Any) -> Any:
+    """1/kappa on the vertical slice through the box centre (first and last axis)."""
+    lower, upper = problem.box
+    border = SLICE_BORDER * (upper - lower)
+    lo, hi = lower - border, upper + border
+    first, last = 0, len(lower) - 1
+    u = np.linspace(lo[first], hi[first], SLICE_POINTS)
+    v = np.linspace(lo[last], hi[last], SLICE_POINTS)
+    U, V = np.meshgrid(u, v)
+    points = np.tile((lower + upper) / 2, (U.size, 1))
+    points[:, first], points[:, last] = U.ravel(), V.ravel()
+    values = parallel_index(model, points, problem.limits)[0].reshape(U.shape)
+    mesh = ax.pcolormesh(U, V, np.ma.masked_equal(values, 0.0), shading="auto", cmap="viridis", vmin=0.0, vmax=1.0,
+                         rasterized=True)
+    axes = mechanism.position_axes(model)
+    ax.set_xlabel(f"{'xyz'[axes[first]]} [m]")
+    ax.set_ylabel(f"{'xyz'[axes[last]]} [m] (slice through the box centre)")
+    _box_outline(ax, problem, (first, last))
+    return mesh
+
+
+def design_figure(problem: DesignProblem, model: Any, solution: Solution,
+                  evaluations: tuple[Evaluation, Evaluation]) -> Any:
+    """1/kappa over the workspace (serial) or a slice of the box region (parallel), before and after."""
+    from matplotlib.figure import Figure
+
+    figure = Figure(figsize=(11.0, 4.8), layout="constrained")
+    panel = _parallel_panel if problem.parallel else _serial_panel
+    mesh = None
+    first = None
+    for k, (design, evaluation, which) in enumerate(zip((solution.start, solution.optimum), evaluations,
+                                                        ("before", "after"))):
+        ax = figure.add_subplot(1, 2, k + 1, sharex=first, sharey=first)
+        first = first or ax
+        mesh = panel(ax, problem, model.bind(**design))
+        ax.set_aspect("equal")
+        ax.set_title(_label(problem, design, evaluation, which), fontsize=8)
+    figure.colorbar(mesh, ax=figure.axes, label="1/kappa")
+    return figure

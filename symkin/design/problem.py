@@ -1,0 +1,222 @@
+"""What to optimize: free design parameters with bounds, the objective, the required workspace box.
+
+Seed sec. 4.1, steps 1 and 2 of dimensioning: "definition of parameters and their span of
+values (e.g. rod lengths)" and "analytical or numerical description of the optimization
+problem".  :func:`design_problem` checks every choice against the loaded model and says
+what to change when one does not fit (``ValueError``); nothing is evaluated here.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from symkin.analysis import mechanism
+
+#: What can be maximized.
+OBJECTIVES = ("gci", "workspace")
+
+#: Default span of a free parameter without --bounds: from start / SPAN to start * SPAN.
+SPAN = 2.0
+
+
+@dataclass(frozen=True)
+class FreeParameter:
+    """A design parameter the optimizer varies, within [lower, upper], starting at ``start``."""
+
+    name: str
+    start: float
+    lower: float
+    upper: float
+
+    @property
+    def scale(self) -> float:
+        """The optimizer works on value / scale (order 1)."""
+        return abs(self.start) if self.start != 0 else self.upper - self.lower
+
+
+@dataclass(frozen=True)
+class DesignProblem:
+    """A dimensioning problem on one model.
+
+    Attributes:
+        objective: ``gci`` (the smooth surrogate of seed eq. 8.28) or ``workspace``.
+        free: the free parameters.
+        values: values of every other parameter of the model (defaults, or --set).
+        parallel: whether the model is a parallel mechanism (integration over the box).
+        limits: joint limits (n, 2): of a serial model the GCI's integration domain; of a
+            parallel model the range of its actuated joints (None: unlimited).
+        box: the required workspace box (lower, upper) over the task's position axes, or None.
+        margin: the box is required with this clearance on every side [m].
+        length: characteristic length of a mixed translation/rotation task [m], or None.
+    """
+
+    objective: str
+    free: tuple[FreeParameter, ...]
+    values: Mapping[str, float]
+    parallel: bool
+    limits: np.ndarray | None
+    box: tuple[np.ndarray, np.ndarray] | None
+    margin: float
+    length: float | None
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return tuple(p.name for p in self.free)
+
+    def design(self, free_values: Sequence[float]) -> dict[str, float]:
+        """All parameter values of a design given the free ones (in the order of ``free``)."""
+        return {**self.values, **{p.name: float(v) for p, v in zip(self.free, free_values)}}
+
+    @property
+    def start(self) -> dict[str, float]:
+        return self.design([p.start for p in self.free])
+
+    @property
+    def inflated_box(self) -> tuple[np.ndarray, np.ndarray]:
+        """The required box grown by the margin on every side."""
+        assert self.box is not None
+        return self.box[0] - self.margin, self.box[1] + self.margin
+
+
+def is_parallel(model: Any) -> bool:
+    """Whether the manifest describes a parallel mechanism."""
+    return "parallel" in model.manifest["model"]
+
+
+def needed_functions(parallel: bool) -> tuple[str, ...]:
+    """The generated functions a dimensioning problem evaluates."""
+    return ("ik", "jacobian") if parallel else ("fk", "jacobian")
+
+
+def _parameter_inputs(model: Any, functions: Sequence[str]) -> set[str]:
+    records = {f["name"]: f for f in model.manifest["functions"]}
+    missing = [name for name in functions if name not in records]
+    if missing:
+        raise ValueError(f"{model.name}: the generated code has no {', '.join(missing)}; derive the model with "
+                         f"--only {','.join(functions)} --backend numpy,casadi")
+    return {i["name"] for name in functions for i in records[name]["inputs"] if i["kind"] == "parameter"}
+
+
+def _free_parameters(model: Any, free: Sequence[str], bounds: Mapping[str, tuple[float, float]],
+                     values: Mapping[str, float], used: set[str]) -> tuple[FreeParameter, ...]:
+    known = sorted(model.parameters)
+    if not free:
+        raise ValueError(f"{model.name}: name the parameters to optimize with --free (parameters: {', '.join(known)})")
+    result = []
+    for name in free:
+        if name not in model.parameters:
+            raise ValueError(f"{model.name}: '{name}' is not a free parameter of the model; parameters: "
+                             f"{', '.join(known)} (parameters fixed at derivation cannot be optimized)")
+        if name not in used:
+            raise ValueError(f"{model.name}: the objective does not depend on '{name}' (it is no input of the "
+                             f"kinematics); free parameters that matter: {', '.join(sorted(used & set(known)))}")
+        start = float(values.get(name, model.parameters[name]))
+        if name in bounds:
+            lower, upper = bounds[name]
+        elif start != 0:
+            lower, upper = sorted((start / SPAN, start * SPAN))
+        else:
+            raise ValueError(f"{model.name}: '{name}' starts at {start:g}, so no default span applies; "
+                             f"give --bounds {name}=LOWER:UPPER")
+        if not (np.isfinite(lower) and np.isfinite(upper) and lower < upper):
+            raise ValueError(f"--bounds {name}={lower:g}:{upper:g}: need finite LOWER < UPPER")
+        result.append(FreeParameter(name, float(np.clip(start, lower, upper)), float(lower), float(upper)))
+    if len(set(free)) != len(free):
+        raise ValueError(f"--free names a parameter twice: {', '.join(free)}")
+    stray = sorted(set(bounds) - set(free))
+    if stray:
+        raise ValueError(f"--bounds for {', '.join(stray)}, which is not among the free parameters "
+                         f"({', '.join(free)})")
+    return tuple(result)
+
+
+def _box(model: Any, box: Mapping[str, tuple[float, float]] | None) -> tuple[np.ndarray, np.ndarray] | None:
+    if box is None:
+        return None
+    axes = ["xyz"[a] for a in mechanism.position_axes(model)]
+    unknown = sorted(set(box) - set(axes))
+    missing = [a for a in axes if a not in box]
+    if unknown or missing:
+        raise ValueError(f"{model.name}: the required box needs exactly the axes {', '.join(axes)} of the task "
+                         f"space (as {','.join(f'{a}=LOWER:UPPER' for a in axes)}); "
+                         + (f"unknown: {', '.join(unknown)}" if unknown else f"missing: {', '.join(missing)}"))
+    lower = np.array([box[a][0] for a in axes], dtype=np.float64)
+    upper = np.array([box[a][1] for a in axes], dtype=np.float64)
+    if not np.all(np.isfinite(lower) & np.isfinite(upper) & (lower < upper)):
+        raise ValueError(f"{model.name}: every side of the required box needs finite LOWER < UPPER")
+    return lower, upper
+
+
+def design_problem(model: Any, objective: str, free: Sequence[str], *,
+                   bounds: Mapping[str, tuple[float, float]] | None = None,
+                   values: Mapping[str, float] | None = None,
+                   box: Mapping[str, tuple[float, float]] | None = None, margin: float = 0.0,
+                   limits: mechanism.Limits | None = None, length: float | None = None) -> DesignProblem:
+    """Check a dimensioning problem against a loaded model and describe it.
+
+    Args:
+        model: the loaded model (any backend; only its manifest is read).
+        objective: ``gci`` or ``workspace``.
+        free: names of the parameters to optimize.
+        bounds: {name: (lower, upper)}; default from start / 2 to 2 start (a start of 0 needs bounds).
+        values: parameter values instead of the defaults (also the start of free ones).
+        box: the required workspace box {axis: (lower, upper)} over the task's position
+            axes (x, y, z); required for parallel models, whose GCI is taken over it.
+        margin: clearance of the box [m].
+        limits: joint-limit overrides.
+        length: characteristic length [m] of a task space mixing translations and rotations.
+
+    Raises:
+        ValueError: an unknown or irrelevant parameter, bad bounds, a malformed box, or a
+            case that is not supported (the message says which and what to do).
+    """
+    if objective not in OBJECTIVES:
+        raise ValueError(f"unknown objective '{objective}'; choose one of {', '.join(OBJECTIVES)}")
+    parallel = is_parallel(model)
+    values = dict(values or {})
+    unknown = sorted(set(values) - set(model.parameters))
+    if unknown:
+        raise ValueError(f"{model.name}: not parameters of the model: {', '.join(unknown)}; "
+                         f"parameters: {', '.join(sorted(model.parameters))}")
+    used = _parameter_inputs(model, needed_functions(parallel))
+    free_parameters = _free_parameters(model, list(free), dict(bounds or {}), values, used)
+    required = _box(model, box)
+    if not margin >= 0:
+        raise ValueError(f"the box margin must be >= 0 m, got {margin}")
+    task = mechanism.task_space(model)
+    n = len(mechanism.coordinate_names(model))
+    if mechanism.mixes_translations_and_rotations(model):
+        if length is None:
+            raise ValueError(f"{model.name}: the task space {list(task)} mixes translations and rotations, so "
+                             "1/kappa compares metres with radians: give a characteristic length (--length L in m)")
+        if not length > 0:
+            raise ValueError(f"the characteristic length must be positive, got {length}")
+    else:
+        length = None
+    if len(task) != n:
+        raise ValueError(f"{model.name}: the task Jacobian is {len(task)} x {n}; dimensioning needs a square one "
+                         "(the Cartesian measure |det J| dq and kappa_F of J^-1)")
+    if parallel:
+        if objective == "workspace":
+            raise ValueError(f"{model.name}: maximizing the workspace of a parallel mechanism is not supported "
+                             "(its workspace has no joint-space parametrization here); maximize the GCI over a "
+                             "required box instead (--maximize gci --require-box ...)")
+        if required is None:
+            axes = ["xyz"[a] for a in mechanism.position_axes(model)]
+            raise ValueError(f"{model.name}: the GCI of a parallel mechanism is taken over the required workspace "
+                             f"box: give --require-box {','.join(f'{a}=LOWER:UPPER' for a in axes)} (in m)")
+        if len(mechanism.position_rows(model)) != len(task):
+            raise ValueError(f"{model.name}: the task space {list(task)} includes orientations; the GCI of a "
+                             "parallel mechanism is taken over a box of TCP positions, which leaves the orientation "
+                             "open: only position task spaces (such as the DELTA's) are supported")
+        declared = np.array(model.joint_limits, dtype=np.float64)
+        joint_box = mechanism.joint_limits(model, limits) if limits or np.isfinite(declared).any() else None
+    else:
+        joint_box = mechanism.joint_limits(model, limits)
+    fixed = {k: float(v) for k, v in {**model.parameters, **values}.items()
+             if k in used and k not in {p.name for p in free_parameters}}
+    return DesignProblem(objective, free_parameters, fixed, parallel, joint_box, required, float(margin), length)

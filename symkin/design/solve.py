@@ -1,0 +1,86 @@
+"""Solve a dimensioning program with IPOPT (seed sec. 4.1 step 3: "mathematical optimization, e.g. via a
+gradient approach"), recording the objective history and the run times."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import casadi
+import numpy as np
+
+from symkin.design.formulation import Program
+from symkin.design.problem import DesignProblem
+
+#: IPOPT options: quiet, tight tolerances (the problems are small and smooth).
+IPOPT_OPTIONS = {
+    "ipopt.print_level": 0,
+    "ipopt.sb": "yes",
+    "ipopt.tol": 1e-10,
+    "ipopt.constr_viol_tol": 1e-10,
+    "ipopt.max_iter": 300,
+    "print_time": False,
+}
+
+
+@dataclass(frozen=True)
+class Solution:
+    """The optimizer's result.
+
+    Attributes:
+        start, optimum: all parameter values of the start and the optimized design.
+        surrogate_start, surrogate_optimum: the objective's surrogate at both.
+        history: the surrogate at every IPOPT iterate (iteration 0 is the start).
+        infeasibility: IPOPT's primal infeasibility (largest scaled constraint violation) at every iterate.
+        status: IPOPT's return status; ``success`` whether it converged.
+        iterations: IPOPT iterations.
+        ipopt_seconds: wall time of the IPOPT solve (including CasADi's evaluations of f, g and derivatives).
+        build_seconds: wall time to build the program and the solver.
+        box_configurations: serial models: the optimizer's joint configurations at the box points.
+        constraint_violation: largest violation of g at the optimum (0 where met).
+    """
+
+    start: dict[str, float]
+    optimum: dict[str, float]
+    surrogate_start: float
+    surrogate_optimum: float
+    history: np.ndarray
+    infeasibility: np.ndarray
+    status: str
+    success: bool
+    iterations: int
+    ipopt_seconds: float
+    build_seconds: float
+    box_configurations: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))
+    constraint_violation: float = 0.0
+
+
+def solve(problem: DesignProblem, program: Program, *, build_seconds: float = 0.0,
+          options: dict | None = None) -> Solution:
+    """Run IPOPT on the program and read the design off its solution."""
+    start = time.perf_counter()
+    solver = casadi.nlpsol("design", "ipopt", {"x": program.x, "f": program.f, "g": program.g},
+                           {**IPOPT_OPTIONS, **(options or {})})
+    build_seconds += time.perf_counter() - start
+    start = time.perf_counter()
+    result = solver(x0=program.x0, lbx=program.lbx, ubx=program.ubx, lbg=program.lbg, ubg=program.ubg)
+    ipopt_seconds = time.perf_counter() - start
+    stats = solver.stats()
+    x = np.asarray(result["x"]).ravel()
+    g = np.asarray(result["g"]).ravel()
+    violation = float(np.max(np.concatenate([[0.0], program.lbg - g, g - program.ubg]))) if g.size else 0.0
+    free = program.free_values(x)
+    # CasADi records the scaled objective f = -surrogate / reference at every iterate.
+    reference = abs(float(program.objective(program.x0[:program.free_count] * program.scales)))
+    history = -np.asarray(stats["iterations"]["obj"], dtype=np.float64) * reference
+    box_q = x[program.free_count:]
+    if program.box_points.size and box_q.size:
+        box_q = box_q.reshape(len(program.box_points), -1)
+    return Solution(
+        start=problem.start, optimum=problem.design(free),
+        surrogate_start=float(program.objective(program.x0[:program.free_count] * program.scales)),
+        surrogate_optimum=float(program.objective(free)), history=history,
+        infeasibility=np.asarray(stats["iterations"]["inf_pr"], dtype=np.float64),
+        status=str(stats["return_status"]), success=bool(stats["success"]), iterations=int(stats["iter_count"]),
+        ipopt_seconds=ipopt_seconds, build_seconds=build_seconds,
+        box_configurations=box_q if box_q.size else np.empty((0, 0)), constraint_violation=violation)

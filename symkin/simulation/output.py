@@ -1,0 +1,69 @@
+"""The files of a scenario: figures (matplotlib, Agg, no pyplot), CSV per series, summary.
+
+Everything is rendered in memory and written with :func:`symkin.atomic.replace_directory`,
+so the output directory holds either the previous run or the complete new one.
+"""
+
+from __future__ import annotations
+
+import io
+import re
+
+import numpy as np
+
+from symkin.simulation.scenarios import FigureSpec, ScenarioResult, Series
+
+DPI = 150
+
+
+def csv_text(model: str, scenario: str, series: Series) -> str:
+    """One row per sample, a header of column names with units, a comment line naming the run."""
+    names = list(series.columns)
+    data = np.column_stack([series.columns[n] for n in names])
+    lines = [f"# symkin simulate {model} --scenario {scenario}: {series.label}", ",".join(names)]
+    lines += [",".join(f"{v:.10g}" for v in row) for row in data]
+    return "\n".join(lines) + "\n"
+
+
+def figure_png(spec: FigureSpec, series: list[Series]) -> bytes:
+    """The figure of ``spec``: stacked panels against time, one line per column and series."""
+    from matplotlib.figure import Figure
+
+    figure = Figure(figsize=(7.0, 2.2 * len(spec.panels) + 0.6), layout="constrained")
+    axes = figure.subplots(len(spec.panels), 1, sharex=True, squeeze=False)[:, 0]
+    styles = ("-", "--", ":", "-.")
+    for ax, (ylabel, columns) in zip(axes, spec.panels):
+        for k, s in enumerate(series):
+            t = s.columns["t [s]"]
+            for j, column in enumerate(columns):
+                if column not in s.columns:
+                    continue
+                name = column.rsplit(" [", 1)[0]
+                label = f"{name} ({s.label})" if len(series) > 1 else name
+                ax.plot(t, s.columns[column], styles[j % len(styles)], color=f"C{k}" if len(series) > 1 else f"C{j}",
+                        label=label, linewidth=1.2)
+        ax.set_ylabel(ylabel)
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7, loc="best")
+    axes[-1].set_xlabel("t [s]")
+    figure.suptitle(spec.title)
+    buffer = io.BytesIO()
+    figure.savefig(buffer, format="png", dpi=DPI)
+    return buffer.getvalue()
+
+
+def _slug(text: str) -> str:
+    """'l1 = 10 cm, l2 = 10 cm' -> 'l1=10cm_l2=10cm'."""
+    return re.sub(r"[^A-Za-z0-9.=-]+", "_", text.replace(" ", "")).strip("_") or "run"
+
+
+def scenario_files(model: str, result: ScenarioResult, figures: bool = True) -> dict[str, str | bytes]:
+    """{file name: content} of a scenario: CSV per series, summary.txt and the figures."""
+    files: dict[str, str | bytes] = {}
+    for k, series in enumerate(result.series, start=1):
+        files[f"{result.name}-{k}-{_slug(series.label)}.csv"] = csv_text(model, result.name, series)
+    files["summary.txt"] = "\n".join(result.summary) + "\n"
+    if figures:
+        for spec in result.figures:
+            files[spec.filename] = figure_png(spec, result.series)
+    return files

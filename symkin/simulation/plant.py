@@ -1,0 +1,118 @@
+"""The mechanism as a plant: joint-space rigid-body dynamics from the generated functions.
+
+Seed eq. 8.34, tau = M(q) qdd + V(q, qd) + G(q) + F_f(qd), evaluated both ways through
+the functions ``symkin derive`` emitted (``forward_dynamics`` gives qdd, ``inverse_dynamics``
+gives tau), on whichever backend the model was loaded with (numpy, C, CasADi).  Nothing
+here derives or imports sympy.
+
+The TCP point of the haptic loop is the translational part of the model's task space
+(``x``, ``y``, ``z`` components): its position comes from ``fk`` and its velocity Jacobian
+from the rows of the task Jacobian ``jacobian``, so forces map to joint torques by
+tau = J^T F (seed eq. 8.35) with zeros in the rotational rows.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from symkin.errors import GeneratedCodeError
+from symkin.runtime import LoadedModel
+
+#: Functions a plant cannot do without, and how to get them.
+REQUIRED = ("forward_dynamics", "inverse_dynamics", "kinetic_energy")
+POSITION_INDEX = {"x": 0, "y": 1, "z": 2}
+
+
+class Plant:
+    """Joint-space dynamics of a serial model (seed eq. 8.34) and the TCP point it drives.
+
+    Args:
+        model: a loaded model (``symkin.load(...)``), any backend, possibly ``bind()``-ed,
+            with at least ``forward_dynamics``, ``inverse_dynamics`` and ``kinetic_energy``
+            generated (``gravity_vector`` and ``potential_energy`` where the model has gravity,
+            ``friction`` where it has friction; ``fk`` and ``jacobian`` for task-space work).
+
+    Raises:
+        GeneratedCodeError: a needed function was not generated.
+    """
+
+    def __init__(self, model: LoadedModel):
+        missing = [name for name in REQUIRED if name not in model.functions]
+        if missing:
+            raise GeneratedCodeError(f"{model.name}: simulation needs the generated {', '.join(missing)}; derive "
+                                     f"the model with them, e.g. 'symkin derive MODEL --only "
+                                     f"{','.join(REQUIRED)},gravity_vector,potential_energy,fk,jacobian'")
+        self.model = model
+        self.name = model.name
+        coordinates = model.manifest["model"]["coordinates"]
+        self.coordinates = tuple(c["name"] for c in coordinates)
+        self.dof = len(self.coordinates)
+        self.revolute = np.array([c["type"] == "R" for c in coordinates])
+        self.task_space = tuple(model.manifest["model"]["task_space"])
+        #: rows of the task Jacobian that are TCP translations, and their fk axes
+        self.point_rows = [i for i, c in enumerate(self.task_space) if c in POSITION_INDEX]
+        self.point_axes = tuple(self.task_space[i] for i in self.point_rows)
+        self._point_index = [POSITION_INDEX[c] for c in self.point_axes]
+        functions = set(model.functions)
+        self._gravity = model.gravity_vector if "gravity_vector" in functions else None
+        self._potential = model.potential_energy if "potential_energy" in functions else None
+        self._friction = model.friction if "friction" in functions else None
+        self._check_complete(functions)
+
+    def _check_complete(self, functions: set[str]) -> None:
+        """Refuse a plant whose missing functions would silently read as zero.
+
+        At a test state, ``inverse_dynamics(q, 0, 0)`` is G(q), and with ``coriolis_vector``
+        ``inverse_dynamics(q, qd, 0) - inverse_dynamics(q, 0, 0) - V(q, qd)`` is F_f(qd).
+        """
+        rng = np.random.default_rng(7)
+        q, qd = rng.uniform(-1.0, 1.0, self.dof), rng.uniform(-1.0, 1.0, self.dof)
+        zero = np.zeros(self.dof)
+        static = np.asarray(self.model.inverse_dynamics(q, zero, zero))
+        if self._gravity is None and np.any(static != 0.0):
+            raise GeneratedCodeError(f"{self.name}: the model has gravity but 'gravity_vector' was not generated; "
+                                     "derive it with gravity_vector,potential_energy")
+        if self._gravity is not None and self._potential is None:
+            raise GeneratedCodeError(f"{self.name}: the energy balance needs 'potential_energy'; derive it too")
+        if self._friction is None and "coriolis_vector" in functions:
+            friction = self.model.inverse_dynamics(q, qd, zero) - static - self.model.coriolis_vector(q, qd)
+            scale = np.max(np.abs(static)) + np.max(np.abs(self.model.coriolis_vector(q, qd))) + 1.0
+            if np.max(np.abs(friction)) > 1e-9 * scale:
+                raise GeneratedCodeError(f"{self.name}: the model has friction but 'friction' was not generated; "
+                                         "derive it with friction")
+
+    def acceleration(self, q: np.ndarray, qd: np.ndarray, tau: np.ndarray) -> np.ndarray:
+        """qdd = M^-1 (tau - V - G - F_f) (generated ``forward_dynamics``)."""
+        return self.model.forward_dynamics(q, qd, tau)
+
+    def torque(self, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
+        """tau = M qdd + V + G + F_f (generated ``inverse_dynamics``, seed eq. 8.34)."""
+        return self.model.inverse_dynamics(q, qd, qdd)
+
+    def gravity(self, q: np.ndarray) -> np.ndarray:
+        """G(q) = du/dq, zero without gravity."""
+        return self._gravity(q) if self._gravity is not None else np.zeros(np.shape(q))
+
+    def friction(self, qd: np.ndarray) -> np.ndarray:
+        """F_f(qd) (viscous + Coulomb), zero without friction."""
+        return self._friction(qd) if self._friction is not None else np.zeros(np.shape(qd))
+
+    def energy(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+        """k(q, qd) + u(q) (seed eq. 8.32)."""
+        k = self.model.kinetic_energy(q, qd)
+        return k + self._potential(q) if self._potential is not None else k
+
+    def point(self, q: np.ndarray) -> np.ndarray:
+        """Position (..., d) of the TCP in the translational task axes (:attr:`point_axes`)."""
+        self._require_point()
+        return self.model.fk(q)[..., self._point_index, 3]
+
+    def point_jacobian(self, q: np.ndarray) -> np.ndarray:
+        """(..., d, n): TCP velocity = J_p qd, the translational rows of the task Jacobian."""
+        self._require_point()
+        return self.model.jacobian(q)[..., self.point_rows, :]
+
+    def _require_point(self) -> None:
+        if not self.point_rows or "fk" not in self.model.functions or "jacobian" not in self.model.functions:
+            raise GeneratedCodeError(f"{self.name}: task-space simulation needs 'fk' and 'jacobian' and a task "
+                                     f"space with x, y or z (it is [{', '.join(self.task_space)}])")

@@ -1,0 +1,283 @@
+"""The scenarios of ``symkin simulate``: each returns the time series and a summary.
+
+* :func:`sine` - the seed's simplified haptic scenario (sec. 5.3, Figs. 8.21, 8.22): one
+  joint follows a sine, the others are fixed; the joint torques are the inverse dynamics of
+  the prescribed motion (eq. 8.34) and the TCP forces F = J^-T tau (eq. 8.35).  The motion
+  is then simulated forward under computed-torque control from the same start, which checks
+  that the plant reproduces it with these torques.
+* :func:`tracking` - trajectory following (Fig. 8.17): a TCP circle, inverse kinematics,
+  computed-torque control at the sample rate, zero-order hold.
+* :func:`haptic_wall` - the haptic force loop (Fig. 8.18): a mass-spring-damper hand pushes
+  the TCP into a virtual wall rendered at the sample rate.
+* :func:`free_swing` - no torques: the mechanism swings under gravity; without friction its
+  energy k + u stays constant.
+
+Every run records the power balance k + u - w (:meth:`ArmSystem.balance`), whose drift is
+the integration error.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from symkin.simulation.control import ComputedTorque, Wall, WallRenderer
+from symkin.simulation.integrate import Run, run_adaptive, run_sampled
+from symkin.simulation.plant import Plant
+from symkin.simulation.system import ArmSystem
+from symkin.simulation.trajectory import JointSine, task_circle
+from symkin.simulation.user import MassSpringDamperUser, sine_intent
+
+INTEGRATORS = ("rk4", "dop853")
+
+
+@dataclass(frozen=True)
+class Series:
+    """The time series of one run (one design).
+
+    Attributes:
+        label: the design, e.g. "l1 = 10 cm, l2 = 10 cm".
+        columns: name (with unit) -> (N,) values; the first is the time.
+    """
+
+    label: str
+    columns: dict[str, np.ndarray]
+
+
+@dataclass(frozen=True)
+class FigureSpec:
+    """A figure of a scenario: one panel per group of columns, every series in each panel.
+
+    Attributes:
+        filename: file name in the output directory.
+        title: figure title.
+        panels: (y label, column names) per panel, drawn against the time.
+    """
+
+    filename: str
+    title: str
+    panels: tuple[tuple[str, tuple[str, ...]], ...]
+
+
+@dataclass
+class ScenarioResult:
+    name: str
+    series: list[Series]
+    figures: list[FigureSpec]
+    summary: list[str] = field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class Timing:
+    """Duration [s], sample rate [Hz] and integrator of a run."""
+
+    duration: float
+    rate: float = 1000.0
+    integrator: str = "rk4"
+    substeps: int = 1
+
+    @property
+    def steps(self) -> int:
+        return max(1, int(round(self.duration * self.rate)))
+
+
+def integrate(system: ArmSystem, control, x0: np.ndarray, timing: Timing) -> Run:
+    """Run the loop with the chosen integrator (see :mod:`symkin.simulation.integrate`)."""
+    if timing.integrator == "rk4":
+        return run_sampled(system.derivative, control, x0, 1.0 / timing.rate, timing.steps, timing.substeps)
+    if timing.integrator == "dop853":
+        return run_adaptive(system.derivative, control, x0, np.arange(timing.steps + 1) / timing.rate)
+    raise ValueError(f"unknown integrator {timing.integrator!r}; use one of {', '.join(INTEGRATORS)}")
+
+
+def _named(prefix: str, names: Sequence[str], unit: str, values: np.ndarray) -> dict[str, np.ndarray]:
+    return {f"{prefix}{name} [{unit}]": values[:, i] for i, name in enumerate(names)}
+
+
+def _joint_units(plant: Plant) -> tuple[str, str]:
+    """(position unit, effort unit) of the joints: rad and N m if all revolute, else mixed."""
+    if np.all(plant.revolute):
+        return "rad", "N m"
+    return ("m", "N") if not np.any(plant.revolute) else ("rad|m", "N m|N")
+
+
+def balance_drift(system: ArmSystem, run: Run) -> float:
+    """max |(k + u - w)(t) - (k + u - w)(0)|, relative to the largest |k + u| met (or 1 J)."""
+    b = system.balance(run.x)
+    s = system.split(run.x)
+    scale = max(1.0, float(np.max(np.abs(system.plant.energy(s.q, s.qd)))))
+    return float(np.max(np.abs(b - b[0]))) / scale
+
+
+def _peak(values: np.ndarray) -> float:
+    return float(np.max(np.abs(values)))
+
+
+def tcp_forces(J: np.ndarray, tau: np.ndarray) -> np.ndarray:
+    """F = J^-T tau (seed eq. 8.35) per sample (N, m); NaN where J is singular (kappa > 1e12).
+
+    Raises:
+        ValueError: the task Jacobian is not square (tau does not determine F).
+    """
+    if J.shape[-1] != J.shape[-2]:
+        raise ValueError(f"TCP forces F = J^-T tau need a square task Jacobian, got {J.shape[-2]} x {J.shape[-1]}")
+    force = np.full(tau.shape[:-1] + (J.shape[-2],), np.nan)
+    regular = np.linalg.cond(J) < 1e12
+    force[regular] = np.linalg.solve(np.swapaxes(J[regular], -1, -2), tau[regular][..., None])[..., 0]
+    return force
+
+
+def sine(designs: Sequence[tuple[str, Plant]], center: np.ndarray, joint: int, amplitude: float, frequency: float,
+         timing: Timing) -> ScenarioResult:
+    """The seed's simplified haptic scenario for each design (Figs. 8.21, 8.22)."""
+    series, summary = [], []
+    plant0 = designs[0][1]
+    names = plant0.coordinates
+    position_unit, effort_unit = _joint_units(plant0)
+    reference = JointSine(np.asarray(center, float), joint, amplitude, frequency)
+    for label, plant in designs:
+        t = np.arange(timing.steps + 1) / timing.rate
+        q, qd, qdd = reference(t)
+        tau = plant.torque(q, qd, qdd)
+        force = tcp_forces(plant.model.jacobian(q), tau)
+        system = ArmSystem(plant)
+        run = integrate(system, ComputedTorque(system, reference), system.initial(q[0], qd[0]), timing)
+        simulated = system.split(run.x)
+        error = _peak(simulated.q - q)
+        columns = {"t [s]": t}
+        columns |= _named("", names, position_unit, q)
+        columns |= _named("tau_", names, effort_unit, tau)
+        columns |= _named("F_", plant.task_space, "N", force)
+        columns |= _named("simulated ", names, position_unit, simulated.q)
+        columns |= _named("simulated tau_", names, effort_unit, run.u)
+        series.append(Series(label, columns))
+        peaks = ", ".join(f"|tau_{n}| <= {_peak(tau[:, i]):.4g}" for i, n in enumerate(names))
+        summary.append(f"{label}: peak torques {peaks} {effort_unit}; peak TCP forces "
+                       + ", ".join(f"|F_{c}| <= {np.nanmax(np.abs(force[:, i])):.4g}"
+                                   for i, c in enumerate(plant.task_space)) + " N")
+        singular = int(np.sum(np.isnan(force[:, 0])))
+        if singular:
+            summary.append(f"  {singular} samples at a singular configuration: TCP forces undefined (NaN)")
+        if len(names) >= 2:
+            above = bool(np.all(tau[:, 0] > tau[:, 1]))
+            larger = _peak(tau[:, 0]) > _peak(tau[:, 1])
+            summary.append(f"  tau_{names[0]} > tau_{names[1]} at every sample: {'yes' if above else 'no'}; peak "
+                           f"|tau_{names[0]}| > peak |tau_{names[1]}|: {'yes' if larger else 'no'} (seed: the first "
+                           "actuator carries the following links)")
+        summary.append(f"  forward simulation under computed torque ({timing.integrator}): max joint error "
+                       f"{error:.3g} {position_unit}, energy balance drift {balance_drift(system, run):.3g}")
+    figures = [
+        FigureSpec("fig-8-21-torques.png", "Seed Fig. 8.21: torques on the joints",
+                   tuple((f"tau_{n} [{effort_unit}]", (f"tau_{n} [{effort_unit}]",)) for n in names)),
+        FigureSpec("fig-8-22-tcp-forces.png", "Seed Fig. 8.22: forces on the TCP (F = J^-T tau)",
+                   tuple((f"F_{c} [N]", (f"F_{c} [N]",)) for c in plant0.task_space)),
+        FigureSpec("sine-motion.png", "Prescribed and simulated joint motion",
+                   tuple((f"{n} [{position_unit}]", (f"{n} [{position_unit}]", f"simulated {n} [{position_unit}]"))
+                         for n in names)),
+    ]
+    return ScenarioResult("sine", series, figures, summary)
+
+
+def tracking(label: str, plant: Plant, q_start: np.ndarray, radius: float, timing: Timing,
+             bandwidth: float = 50.0) -> ScenarioResult:
+    """A TCP circle followed by computed-torque control (seed Fig. 8.17)."""
+    reference = task_circle(plant, q_start, radius, timing.duration)
+    system = ArmSystem(plant)
+    run = integrate(system, ComputedTorque(system, reference, bandwidth), system.initial(q_start), timing)
+    q_r = reference(run.t)[0]
+    s = system.split(run.x)
+    p_r, p = plant.point(q_r), plant.point(s.q)
+    names = plant.coordinates
+    position_unit, effort_unit = _joint_units(plant)
+    columns = {"t [s]": run.t}
+    columns |= _named("reference ", names, position_unit, q_r)
+    columns |= _named("", names, position_unit, s.q)
+    columns |= _named("tau_", names, effort_unit, run.u)
+    columns |= _named("reference TCP ", plant.point_axes, "m", p_r)
+    columns |= _named("TCP ", plant.point_axes, "m", p)
+    columns["TCP error [m]"] = np.linalg.norm(p - p_r, axis=-1)
+    summary = [f"{label}: TCP circle of radius {radius:g} m in {timing.duration:g} s, computed torque "
+               f"(omega = {bandwidth:g} rad/s) at {timing.rate:g} Hz ({timing.integrator})",
+               f"  max joint error {_peak(s.q - q_r):.3g} {position_unit}, max TCP error "
+               f"{_peak(columns['TCP error [m]']):.3g} m",
+               "  peak torques " + ", ".join(f"|tau_{n}| <= {_peak(run.u[:, i]):.4g}" for i, n in enumerate(names))
+               + f" {effort_unit}; energy balance drift {balance_drift(system, run):.3g}"]
+    figures = [FigureSpec("tracking.png", f"Trajectory following (seed Fig. 8.17): {plant.name}", (
+        ("TCP [m]", tuple(f"{prefix}TCP {c} [m]" for c in plant.point_axes for prefix in ("reference ", "")))
+        , ("TCP error [m]", ("TCP error [m]",)),
+        (f"torque [{effort_unit}]", tuple(f"tau_{n} [{effort_unit}]" for n in names))))]
+    return ScenarioResult("tracking", [Series(label, columns)], figures, summary)
+
+
+def haptic_wall(label: str, plant: Plant, q_start: np.ndarray, wall_offset: float, push: float, timing: Timing, *,
+                frequency: float = 1.0, stiffness: float = 1000.0, damping: float = 2.0, force_gain: float = 0.0,
+                hand: dict[str, float] | None = None) -> ScenarioResult:
+    """A hand pushes the TCP into a virtual wall rendered in the loop (seed Fig. 8.18).
+
+    The wall's normal is the first translational task axis; its surface lies ``wall_offset``
+    beyond the start TCP position, and the hand intends to move ``push`` along the normal
+    and back, sinusoidally at ``frequency``.  ``hand`` overrides parameters of
+    :class:`~symkin.simulation.user.MassSpringDamperUser` (mass, arm_stiffness, ...).
+    """
+    q_start = np.asarray(q_start, dtype=float)
+    p0 = plant.point(q_start)
+    normal = np.zeros(len(p0))
+    normal[0] = 1.0
+    user = MassSpringDamperUser(sine_intent(p0, normal, push, frequency), **(hand or {}))
+    wall = Wall(normal, float(p0 @ normal) + wall_offset, stiffness, damping)
+    system = ArmSystem(plant, user)
+    renderer = WallRenderer(system, wall, force_gain)
+    run = integrate(system, renderer, system.initial(q_start), timing)
+    s = system.split(run.x)
+    p = plant.point(s.q)
+    desired, sensed = zip(*(renderer.desired_and_sensed(t, x) for t, x in zip(run.t, run.x)))
+    desired, sensed = np.array(desired), np.array(sensed)
+    names, axes = plant.coordinates, plant.point_axes
+    _, effort_unit = _joint_units(plant)
+    columns = {"t [s]": run.t}
+    columns |= _named("TCP ", axes, "m", p)
+    columns |= _named("hand ", axes, "m", s.hand)
+    columns["penetration [m]"] = np.maximum(0.0, wall.penetration(p))
+    columns |= _named("F_desired_", axes, "N", desired)
+    columns |= _named("F_felt_", axes, "N", sensed)
+    columns |= _named("tau_", names, effort_unit, run.u)
+    summary = [f"{label}: wall at {axes[0]} = {wall.offset:.4g} m (k_w = {wall.stiffness:g} N/m, b_w = "
+               f"{wall.damping:g} N s/m), hand pushing {push:g} m at {frequency:g} Hz, loop at {timing.rate:g} Hz "
+               f"({timing.integrator}), force feedback K_f = {force_gain:g}",
+               f"  peak penetration {_peak(columns['penetration [m]']):.3g} m, peak felt force "
+               f"{_peak(sensed[:, 0]):.3g} N (desired {_peak(desired[:, 0]):.3g} N), max |F_desired - F_felt| "
+               f"{_peak(desired - sensed):.3g} N",
+               "  peak torques " + ", ".join(f"|tau_{n}| <= {_peak(run.u[:, i]):.4g}" for i, n in enumerate(names))
+               + f" {effort_unit}; energy balance drift {balance_drift(system, run):.3g}"]
+    figures = [FigureSpec("haptic-wall.png", f"Haptic loop with a virtual wall (seed Fig. 8.18): {plant.name}", (
+        ("position [m]", (f"TCP {axes[0]} [m]", f"hand {axes[0]} [m]")),
+        ("penetration [m]", ("penetration [m]",)),
+        ("force on the hand [N]", (f"F_desired_{axes[0]} [N]", f"F_felt_{axes[0]} [N]")),
+        (f"torque [{effort_unit}]", tuple(f"tau_{n} [{effort_unit}]" for n in names))))]
+    return ScenarioResult("haptic-wall", [Series(label, columns)], figures, summary)
+
+
+def free_swing(label: str, plant: Plant, q_start: np.ndarray, timing: Timing) -> ScenarioResult:
+    """No torques, released at rest: the energy k + u is conserved without friction."""
+    system = ArmSystem(plant)
+    zero = np.zeros(plant.dof)
+    run = integrate(system, lambda t, x: zero, system.initial(q_start), timing)
+    s = system.split(run.x)
+    energy = plant.energy(s.q, s.qd)
+    names = plant.coordinates
+    position_unit, _ = _joint_units(plant)
+    columns = {"t [s]": run.t}
+    columns |= _named("", names, position_unit, s.q)
+    columns["energy k + u [J]"] = energy
+    columns["work of friction [J]"] = s.work
+    columns["balance drift [J]"] = system.balance(run.x) - system.balance(run.x[0])
+    summary = [f"{label}: free swing for {timing.duration:g} s ({timing.integrator}, {run.evaluations} evaluations)",
+               f"  energy change {float(energy[-1] - energy[0]):.3g} J (friction work {float(s.work[-1]):.3g} J), "
+               f"energy balance drift {balance_drift(system, run):.3g}"]
+    figures = [FigureSpec("free-swing.png", f"Free swing: {plant.name}", (
+        (f"joint [{position_unit}]", tuple(f"{n} [{position_unit}]" for n in names)),
+        ("energy [J]", ("energy k + u [J]",)),
+        ("balance drift [J]", ("balance drift [J]",))))]
+    return ScenarioResult("free-swing", [Series(label, columns)], figures, summary)

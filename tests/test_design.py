@@ -1,0 +1,220 @@
+"""Dimensioning optimization (``symkin.design``, ``symkin optimize``): seed sec. 4 steps 1-3, GCI eq. 8.28.
+
+Oracles independent of the CasADi surrogate: the numpy backend with
+``symkin.analysis.conditioning`` at the same nodes (value and gradient by central
+differences), the true GCI by ``symkin.analysis.gci`` (1/kappa from singular values,
+randomized QMC), the closed forms of the 2R arm (isotropy at l1 = sqrt(2) l2,
+theta2 = 135 deg; the pointwise optimum of 1/kappa_F(theta2; l1/l2) is l1/l2 = sqrt(2) for
+every theta2; the smallest reach sqrt(l1^2 + l2^2) at theta2 = 90 deg) and the DELTA's
+closed-form ik on a grid denser than the optimizer's constraint points.
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import symkin
+from conftest import GENERATED_DIR, MODELS_DIR
+from symkin import design
+from symkin.analysis import conditioning
+from symkin.cli import main
+from symkin.design import formulation
+
+ARM_DIR = str(GENERATED_DIR / "planar_2r")
+DELTA_DIR = str(GENERATED_DIR / "delta")
+DELTA_BOX = {"x": (-0.04, 0.04), "y": (-0.04, 0.04), "z": (-0.19, -0.11)}
+
+
+@pytest.fixture(scope="module")
+def arm():
+    return symkin.load(ARM_DIR), symkin.load(ARM_DIR, "casadi")
+
+
+@pytest.fixture(scope="module")
+def delta():
+    return symkin.load(DELTA_DIR), symkin.load(DELTA_DIR, "casadi")
+
+
+def _optimize(models, objective, free, **kwargs):
+    numpy_model, casadi_model = models
+    nodes = kwargs.pop("nodes", None)
+    problem = design.design_problem(numpy_model, objective, free, **kwargs)
+    program = design.formulate(problem, casadi_model, numpy_model, nodes=nodes)
+    return problem, program, design.solve(problem, program)
+
+
+def _serial_surrogate(model, q, smoothing=formulation.DETERMINANT_SMOOTHING):
+    """sum |det J| / kappa_F / sum sqrt(det J^2 + eps^2), eps^2 = smoothing^2 mean(det J^2)."""
+    J = model.jacobian(q)
+    det = np.linalg.det(J)
+    weight = np.sqrt(det**2 + smoothing**2 * np.mean(det**2))
+    index = conditioning.inverse_frobenius_condition_number(J)
+    return np.sum(conditioning.absolute_determinant(J) * index) / np.sum(weight)
+
+
+def test_serial_surrogate_and_gradient_match_the_numpy_code(arm):
+    numpy_model, casadi_model = arm
+    problem = design.design_problem(numpy_model, "gci", ["l1", "l2"], limits={"theta2": (0.0, np.pi)})
+    program = design.formulate(problem, casadi_model, numpy_model, nodes=7)
+    free = np.array([0.13, 0.08])
+    value = float(program.objective(free))
+    bound = numpy_model.bind(l1=0.13, l2=0.08)
+    assert value == pytest.approx(_serial_surrogate(bound, program.nodes), rel=1e-13)
+    # the smoothing of |det J| changes the Frobenius GCI estimate by about smoothing^2
+    assert value == pytest.approx(_serial_surrogate(bound, program.nodes, smoothing=0.0), rel=1e-5)
+    import casadi
+
+    p = casadi.SX.sym("p", 2)
+    gradient = np.asarray(casadi.Function("g", [p], [casadi.gradient(program.objective(p), p)])(free)).ravel()
+    h = 1e-6
+    numeric = [(_serial_surrogate(numpy_model.bind(**dict(zip(("l1", "l2"), free + h * e))), program.nodes)
+                - _serial_surrogate(numpy_model.bind(**dict(zip(("l1", "l2"), free - h * e))), program.nodes)) / (2 * h)
+               for e in np.eye(2)]
+    assert gradient == pytest.approx(numeric, rel=1e-6, abs=1e-9)
+    # the GCI depends on the length ratio only: the gradient is orthogonal to the design
+    assert gradient @ free == pytest.approx(0.0, abs=1e-12)
+
+
+def test_parallel_surrogate_matches_the_numpy_code(delta):
+    numpy_model, casadi_model = delta
+    problem = design.design_problem(numpy_model, "gci", ["a", "b"], box=DELTA_BOX)
+    program = design.formulate(problem, casadi_model, numpy_model, nodes=3)
+    q = numpy_model.bind(a=0.11, b=0.16).ik(program.nodes).joints
+    J = numpy_model.bind(a=0.11, b=0.16).jacobian(q, program.nodes)
+    expected = np.mean(conditioning.inverse_frobenius_condition_number(J))
+    assert float(program.objective([0.11, 0.16])) == pytest.approx(expected, rel=1e-13)
+
+
+@pytest.mark.parametrize("theta2_limits", [(0.0, np.pi / 2), (0.0, np.pi)])
+def test_2r_with_free_length_ratio_finds_the_isotropic_design(arm, theta2_limits):
+    numpy_model, _ = arm
+    _, _, solution = _optimize(arm, "gci", ["l1"], bounds={"l1": (0.05, 0.3)}, limits={"theta2": theta2_limits})
+    assert solution.success
+    l1, l2 = solution.optimum["l1"], solution.optimum["l2"]
+    assert l2 == 0.1
+    assert l1 / l2 == pytest.approx(np.sqrt(2), rel=1e-9)
+    # kappa = 1 at the isotropic configuration theta2 = 135 deg, by the generated numpy code and an SVD
+    J = numpy_model.bind(l1=l1, l2=l2).jacobian(np.array([0.3, 3 * np.pi / 4]))
+    assert conditioning.condition_number(J) == pytest.approx(1.0, abs=1e-8)
+    assert conditioning.condition_number(numpy_model.bind(l1=np.sqrt(2) * 0.1).jacobian([0.3, 3 * np.pi / 4])) \
+        == pytest.approx(1.0, abs=1e-14)
+
+
+def test_maximizing_the_gci_of_the_2r_improves_its_independent_gci_and_keeps_the_box(arm):
+    numpy_model, _ = arm
+    box = {"x": (0.11, 0.14), "y": (0.11, 0.14)}
+    problem, _, solution = _optimize(arm, "gci", ["l1"], bounds={"l1": (0.05, 0.3)}, box=box)
+    assert solution.success and solution.constraint_violation < 1e-9
+    # the box corner nearest the base needs the smallest reach sqrt(l1^2 + l2^2) (theta2 = 90 deg) <= |corner|
+    assert solution.optimum["l1"] == pytest.approx(np.sqrt(2 * 0.11**2 - 0.1**2), rel=1e-7)
+    before, after = (design.evaluate(problem, numpy_model, d, samples=2**12)
+                     for d in (solution.start, solution.optimum))
+    assert after.gci.value - after.gci.error > before.gci.value + before.gci.error
+    assert before.box_reachable == after.box_reachable == 1.0
+    # the optimizer's box configurations reach the box points within the joint limits
+    q = solution.box_configurations
+    assert np.all((q >= -1e-9) & (q <= np.pi / 2 + 1e-9))
+    tcp = numpy_model.bind(**solution.optimum).fk(q)[:, :2, 3]
+    assert np.abs(tcp[[0, -1]] - [[0.11, 0.11], [0.14, 0.14]]).max() < 1e-9
+
+
+def test_workspace_maximization_of_the_2r_reaches_the_length_bound(arm):
+    numpy_model, _ = arm
+    problem, _, solution = _optimize(arm, "workspace", ["l1"], bounds={"l1": (0.05, 0.2)})
+    assert solution.optimum["l1"] == pytest.approx(0.2, rel=1e-7)
+    rating = design.evaluate(problem, numpy_model, solution.optimum, samples=2**12)
+    area = np.pi / 2 * 0.2 * 0.1  # int_0^pi/2 int_0^pi/2 l1 l2 sin(theta2) dq
+    assert abs(rating.measure.value - area) <= rating.measure.error
+    assert solution.surrogate_optimum == pytest.approx(area, rel=1e-3)
+
+
+def test_delta_optimization_improves_the_gci_and_keeps_the_box_reachable(delta):
+    numpy_model, _ = delta
+    problem, program, solution = _optimize(delta, "gci", ["r_base", "r_tcp", "a", "b"], box=DELTA_BOX,
+                                           margin=0.005, nodes=4)
+    assert solution.success and solution.constraint_violation < 1e-9
+    assert solution.surrogate_optimum > solution.surrogate_start
+    before, after = (design.evaluate(problem, numpy_model, d, samples=2**12)
+                     for d in (solution.start, solution.optimum))
+    assert after.gci.value - after.gci.error > before.gci.value + before.gci.error
+    assert after.box_reachable == 1.0
+    # the box with its margin: the closed-form ik margin at a grid denser than the constraint points
+    lower, upper = problem.inflated_box
+    points = np.stack(np.meshgrid(*[np.linspace(lo, hi, 9) for lo, hi in zip(lower, upper)]), -1).reshape(-1, 3)
+    assert np.all(numpy_model.bind(**solution.optimum).ik(points).margin >= -1e-12)
+    for p in problem.free:
+        assert p.lower - 1e-12 <= solution.optimum[p.name] <= p.upper + 1e-12
+
+
+def test_cli_on_a_model_file_writes_figures_and_result(tmp_path, capsys):
+    out = tmp_path / "run"
+    assert main(["optimize", str(MODELS_DIR / "planar_2r.yaml"), "--free", "l1", "--bounds", "l1=0.05:0.3",
+                 "--nodes", "6", "-n", "1024", "-o", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "l1: 0.1 -> 0.1414213562" in text and "IPOPT" in text and "wall" in text
+    assert sorted(p.name for p in out.iterdir()) == ["design.png", "history.png", "result.json"]
+    for name in ("design.png", "history.png"):
+        assert (out / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    result = json.loads((out / "result.json").read_text())
+    assert result["evaluation"]["optimum"]["gci"] > result["evaluation"]["start"]["gci"]
+    assert result["ipopt"]["history"][-1] == pytest.approx(result["surrogate_value"]["optimum"])
+
+
+@pytest.mark.parametrize("arguments, message", [
+    ([ARM_DIR, "--free", "l3"], "'l3' is not a free parameter of the model; parameters: g, l1, l2, m1, m2"),
+    ([ARM_DIR, "--free", "m1"], "the objective does not depend on 'm1'"),
+    ([ARM_DIR, "--free", "l1", "--bounds", "l1=0.3:0.1"], "LOWER must be smaller than UPPER"),
+    ([ARM_DIR, "--free", "l1", "--bounds", "l1=short:long"], "LOWER and UPPER must be numbers"),
+    ([ARM_DIR, "--free", "l1", "--bounds", "l1"], "'l1' is not NAME=LOWER:UPPER"),
+    ([ARM_DIR, "--free", "l1", "--bounds", "l2=0.1:0.2"], "--bounds for l2, which is not among the free"),
+    ([ARM_DIR, "--free", "l1", "--require-box", "x=0:1"], "missing: y"),
+    ([DELTA_DIR, "--free", "a"], "give --require-box x=LOWER:UPPER,y=LOWER:UPPER,z=LOWER:UPPER"),
+    ([DELTA_DIR, "--free", "a", "--maximize", "workspace", "--require-box", "x=0:1,y=0:1,z=0:1"],
+     "maximizing the workspace of a parallel mechanism is not supported"),
+    ([str(GENERATED_DIR / "ur10e"), "--free", "a2"], "mixes translations and rotations"),
+    ([ARM_DIR, "--free", "l1", "--nodes", "0"], "--nodes must be between 1 and 16"),
+    ([ARM_DIR, "--free", "l1", "--set", "l1=0"], "'l1' starts at 0, so no default span applies; give --bounds"),
+])
+def test_bad_input_is_refused_with_exit_code_2(tmp_path, capsys, arguments, message):
+    out = tmp_path / "out"
+    with pytest.raises(SystemExit) as exit_info:
+        main(["optimize", *arguments, "-o", str(out)])
+    assert exit_info.value.code == 2
+    assert message in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_an_unreachable_box_fails_with_exit_code_1_and_writes_nothing(tmp_path, capsys):
+    """The corner (0.05, 0.05) is nearer the base than any 2R design within the bounds reaches at 0..90 deg."""
+    out = tmp_path / "out"
+    assert main(["optimize", ARM_DIR, "--free", "l1", "--bounds", "l1=0.05:0.3", "--require-box",
+                 "x=0.05:0.1,y=0.05:0.1", "-o", str(out)]) == 1
+    assert "IPOPT did not converge (Infeasible_Problem_Detected" in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_delta_actuated_joint_limits_are_kept_over_the_box(delta):
+    """Upper arms at most 20 deg above horizontal: the unconstrained optimum needs about 30 deg."""
+    numpy_model, _ = delta
+    limits = {f"theta{i}": (-np.pi / 2, np.radians(20)) for i in (1, 2, 3)}
+    bounds = {"r_base": (0.04, 0.10), "r_tcp": (0.015, 0.04), "a": (0.06, 0.15), "b": (0.10, 0.25)}
+    problem, _, solution = _optimize(delta, "gci", list(bounds), bounds=bounds, box=DELTA_BOX, margin=0.005,
+                                     limits=limits, nodes=4)
+    assert solution.success
+    lower, upper = problem.inflated_box
+    points = np.stack(np.meshgrid(*[np.linspace(lo, hi, 9) for lo, hi in zip(lower, upper)]), -1).reshape(-1, 3)
+    q = numpy_model.bind(**solution.optimum).ik(points).joints
+    assert np.degrees(q.max()) == pytest.approx(20.0, abs=1e-6)  # active at the box's top corners
+    assert design.evaluate(problem, numpy_model, solution.optimum, samples=2**10).box_reachable == 1.0
+
+
+def test_a_6x6_pose_task_with_a_characteristic_length_converges():
+    """UR10e, L = 0.3 m: nodes whose det J changes sign with the design would stall IPOPT without smoothing."""
+    directory = GENERATED_DIR / "ur10e"
+    models = symkin.load(directory), symkin.load(directory, "casadi")
+    _, program, solution = _optimize(models, "gci", ["a2", "a3"], length=0.3, nodes=6)
+    assert solution.success, solution.status
+    assert solution.surrogate_optimum > solution.surrogate_start
