@@ -6,6 +6,7 @@ compiled once per test session (per xdist worker) and the user's cache is never 
 
 from __future__ import annotations
 
+import functools
 import os
 import sys
 from pathlib import Path
@@ -85,14 +86,30 @@ def random_q(model: Model, rng: np.random.Generator, size=None) -> np.ndarray:
     return rng.uniform(-np.pi, np.pi, shape)
 
 
+@functools.lru_cache(maxsize=None)
+def _home_joints(model: Model) -> tuple[float, ...]:
+    spec = Derivation(model)["ik"]
+    fn = lambdify_spec(spec, [list(spec.vector_inputs[0].symbols)], "numpy", model.parameter_values)
+    home = [float(e.xreplace(model.parameter_values)) for e in model.parallel.home]
+    return tuple(float(v) for v in fn(home)[:model.dof])
+
+
+def home_joints(model: Model) -> np.ndarray:
+    """The actuated joints of a parallel mechanism at its home pose (the un-optimized closed-form IK)."""
+    return np.array(_home_joints(model))
+
+
 def random_inputs(model: Model, spec: FunctionSpec, rng: np.random.Generator, size: int) -> list[np.ndarray]:
-    """Random values of every vector input of ``spec``: q as :func:`random_q`, the passive joints s
+    """Random values of every vector input of ``spec``: q as :func:`random_q` (for a parallel
+    mechanism within 0.3 of its joints at the home pose, near assembled states), the passive joints s
     within +-0.5 rad (the closure's orientation rows are 2 tan(angle/2) axis of the orientation
     error, which grows without bound - with its rounding error - towards half turns), the platform
     pose p within 2 cm / 0.1 rad of the model's home pose."""
     values = []
     for vector in spec.vector_inputs:
-        if vector.name == "q":
+        if vector.name == "q" and model.parallel is not None:
+            values.append(home_joints(model) + rng.uniform(-0.3, 0.3, (size, model.dof)))
+        elif vector.name == "q":
             values.append(random_q(model, rng, size))
         elif vector.name == "p":
             home = np.array([float(e.xreplace(model.parameter_values)) for e in model.parallel.home])
