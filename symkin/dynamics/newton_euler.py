@@ -1,42 +1,48 @@
-"""Symbolic recursive Newton-Euler inverse dynamics of a serial chain (seed sec. 4.4, "Iterative Approach").
+"""Symbolic Newton-Euler dynamics of a serial chain: recursive inverse dynamics, composite-rigid-body M.
 
 The Lagrangian route (:mod:`symkin.dynamics.lagrange`) differentiates M(q): the Coriolis
 vector from Christoffel symbols costs O(n^3) terms.  The recursive Newton-Euler algorithm
-(Luh, Walker and Paul 1980; in the spatial-vector form of Featherstone, *Rigid Body
-Dynamics Algorithms*, 2008, sec. 5.3, table 5.1) gives tau = M qdd + V + G in O(n):
+(seed sec. 4.4, "Iterative Approach"; Luh, Walker and Paul 1980; Craig, *Introduction to
+Robotics*, sec. 6.5) gives tau = M qdd + V + G in O(n) operations.
 
-1. outward, for each link i with parent p (the base for the first)::
+Frames.  Every link i has its *joint frame* F_i: the model's joint frame of joint i moved
+by the joint (``before * Motion(q_i)``), fixed to link i.  The joint axis passes through
+the origin of F_i along the constant unit vector z_i of the model.  The transform from the
+parent frame F_p to F_i is the constant ``after_p * before_i`` (the base's fixed
+operations for the first joint) followed by the joint motion: rotation E_i = (C_R
+Rot(z_i, q_i))^T from F_p to F_i coordinates and origin r_i = C_p (+ C_R z_i q_i if
+prismatic) in F_p coordinates, so each step involves only sin(q_i) and cos(q_i).  The
+bodies of a link (point masses and rigid bodies with full inertia tensors, given in the
+link frame) are summed into one :class:`SpatialInertia` in F_i with the constant
+``after_i`` transform: mass m, first moment h = m c and rotational inertia J about the
+origin (J = sum R I_c R^T - m [c]^2, parallel axes).
 
-       v_i = X_i v_p + S_i qd_i
-       a_i = X_i a_p + S_i qdd_i + v_i x S_i qd_i,      a_0 = (0, -g)
+Inverse dynamics (:func:`inverse_dynamics`), everything in F_i coordinates:
 
-   (gravity enters as an upward acceleration of the base);
-2. per link, the net spatial force f_i = I_i a_i + v_i x* I_i v_i;
-3. inward: tau_i = S_i . f_i, f_p += X_i^T f_i.
+1. outward, with w_0 = dw_0 = 0 and a_0 = -g (gravity as an upward acceleration of the base)::
 
-Every link i has its own *joint frame* F_i: the model's joint frame of joint i moved by the
-joint (``before * Motion(q_i)``), so the joint axis passes through the origin of F_i along
-the constant unit vector z_i of the model, and S_i = (z_i, 0) for a revolute and (0, z_i)
-for a prismatic joint, constant.  The transform from F_p to F_i is the constant
-``after_p * before_i`` (the base's fixed operations for the first joint) followed by the
-joint motion: rotation E_i = (C_R Rot(z_i, q_i))^T and origin r_i = C_p (+ C_R z_i q_i if
-prismatic) in F_p coordinates, so only sin(q_i) and cos(q_i) enter each step.  Spatial
-vectors are (angular, linear) pairs of 3-vectors at the origin of their frame, in its
-coordinates:
+       a_i  = E_i (a_p + dw_p x r_i + w_p x (w_p x r_i))      acceleration of the origin of F_i
+       w_i  = E_i w_p + z_i qd_i                               (revolute)
+       dw_i = E_i dw_p + (E_i w_p) x z_i qd_i + z_i qdd_i
+       a_i += 2 w_i x z_i qd_i + z_i qdd_i                     (prismatic; w_i = E_i w_p, dw_i = E_i dw_p)
 
-* motion transform  X (w, v) = (E w, E (v - r x w));
-* force transform   X^T (n, f) = (E^T n + r x E^T f, E^T f);
-* cross products    (w, v) x (w', v') = (w x w', w x v' + v x w'),
-                    (w, v) x* (n, f)  = (w x n + v x f, w x f);
-* rigid-body inertia of mass m, first moment h = m c and rotational inertia J about the
-  origin (J = I_c - m [c]^2, parallel axes):  I (w, v) = (J w + h x v, m v - h x w).
+2. per link, the force and the moment about the origin that move its bodies::
 
-The bodies of a link (point masses and rigid bodies with full inertia tensors, given in the
-link frame) are summed into one spatial inertia in F_i with the constant ``after_i``
-transform.  Everything is a SymEngine expression; the caller binds the results into a
+       f_i = m a_i + dw_i x h + w_i x (w_i x h),   n_i = J dw_i + w_i x J w_i + h x a_i
+
+3. inward: f_p += E_i^T f_i, n_p += E_i^T n_i + r_i x E_i^T f_i; tau_i = z_i . n_i
+   (revolute) or z_i . f_i (prismatic).
+
+The mass matrix (:func:`mass_matrix`) comes from the composite-rigid-body algorithm
+(Featherstone, *Rigid Body Dynamics Algorithms*, 2008, sec. 6.2): composite inertias
+I^c_p += X_i^T I^c_i X_i inward, then M_ij = S_j . X^T ... X^T I^c_i S_i.  Gravity
+(:func:`gravity_torques`) is the Newton-Euler pass at rest, which reduces to the composite
+masses and first moments: G_i = z_i . (h^c_i x a_i).
+
+Everything is a SymEngine expression; the caller binds the results into a
 :class:`~symkin.dynamics.program.Program`, whose CSE keeps the O(n) sharing.  Terms that
-are zero are never built: no velocity pass without qd, no acceleration term without qdd,
-no gravity term without gravity.
+are zero are never built: no velocity terms without qd, no acceleration terms without
+qdd, no gravity without gravity.
 """
 
 from __future__ import annotations
@@ -105,7 +111,7 @@ def _compose(ops: Sequence[Op], R: sympy.Matrix, p: sympy.Matrix) -> tuple[sympy
 def _link_inertia(model: Model, link: str, R: sympy.Matrix, p: sympy.Matrix) -> SpatialInertia | None:
     """The bodies on ``link`` summed into F_i, where the link frame has rotation R and origin p.
 
-    J = sum_b R I_b R^T + m_b ([c_b]^T [c_b]) with c_b = p + R com_b (parallel-axis theorem).
+    J = sum_b R I_b R^T + m_b (c_b . c_b 1 - c_b c_b^T) with c_b = p + R com_b (parallel-axis theorem).
     """
     mass, moment, rotational = sympy.Integer(0), sympy.zeros(3, 1), sympy.zeros(3, 3)
     found = False
@@ -147,12 +153,6 @@ def _add(u: Vec, v: Vec) -> Vec:
     return [a + b for a, b in zip(u, v)]
 
 
-def _motion_transform(link: Link, v: Spatial) -> Spatial:
-    """X (w, v) = (E w, E (v - r x w))."""
-    w, lin = v
-    return mat_vec(link.rotation, w), mat_vec(link.rotation, [a - b for a, b in zip(lin, cross(link.origin, w))])
-
-
 def _force_transform(link: Link, f: Spatial) -> Spatial:
     """X^T (n, f) = (E^T n + r x E^T f, E^T f)."""
     n, lin = f
@@ -174,48 +174,55 @@ def _is_zero(v: Spatial) -> bool:
 
 def inverse_dynamics(links: Sequence[Link], qd: Sequence[se.Basic] | None, qdd: Sequence[se.Basic] | None,
                      gravity: Sequence[se.Basic] | None) -> list[se.Basic]:
-    """tau = M qdd + V + G by the recursion of the module docstring.
+    """tau = M qdd + V + G by the Luh-Walker-Paul recursion of the module docstring.
 
     Args:
         links: :func:`chain_links`.
-        qd, qdd: joint velocities and accelerations, or None where zero.
+        qd, qdd: joint velocities and accelerations, or None where zero (no velocity terms
+            without qd, no acceleration terms without qdd).
         gravity: the gravity vector in the base frame, or None.
 
     Returns:
         The joint torques (forces for prismatic joints), without friction.
     """
     zero = [se.Integer(0)] * 3
-    v: Spatial = (zero, zero)
-    a: Spatial = (zero, [-g for g in gravity] if gravity is not None else zero)
+    w, dw = zero, zero
+    acc = [-g for g in gravity] if gravity is not None else zero
     forces: list[Spatial] = []
     for i, link in enumerate(links):
-        v = _motion_transform(link, v)
-        a = _motion_transform(link, a)
+        E, r = link.rotation, link.origin
+        # The origin of F_i is a point of the parent link at r (moved along the axis if prismatic).
+        acc = mat_vec(E, _add(acc, _add(cross(dw, r), cross(w, cross(w, r)))))
+        w, dw = mat_vec(E, w), mat_vec(E, dw)
+        revolute = link.type is JointType.REVOLUTE
         if qd is not None:
-            Sqd = _scaled_axis(link, qd[i])
-            # v_i x S qd = (X v_p) x S qd, since S qd x S qd = 0.
-            w, lin = v
-            a = (_add(a[0], cross(w, Sqd[0])), _add(a[1], _add(cross(w, Sqd[1]), cross(lin, Sqd[0]))))
-            v = (_add(v[0], Sqd[0]), _add(v[1], Sqd[1]))
+            zqd = [c * qd[i] for c in link.axis]
+            if revolute:
+                dw = _add(dw, cross(w, zqd))
+                w = _add(w, zqd)
+            else:
+                acc = _add(acc, [2 * c for c in cross(w, zqd)])
         if qdd is not None:
-            Sqdd = _scaled_axis(link, qdd[i])
-            a = (_add(a[0], Sqdd[0]), _add(a[1], Sqdd[1]))
-        if link.inertia is None:
+            zqdd = [c * qdd[i] for c in link.axis]
+            if revolute:
+                dw = _add(dw, zqdd)
+            else:
+                acc = _add(acc, zqdd)
+        body = link.inertia
+        if body is None:
             forces.append((zero, zero))
             continue
-        f = link.inertia.times(a)
-        if qd is not None:
-            w, lin = v
-            n_v, f_v = link.inertia.times(v)
-            f = (_add(f[0], _add(cross(w, n_v), cross(lin, f_v))), _add(f[1], cross(w, f_v)))
-        forces.append(f)
+        h, J = body.moment, body.rotational
+        f = _add([body.mass * a for a in acc], _add(cross(dw, h), cross(w, cross(w, h))))
+        n = _add(_add(mat_vec(J, dw), cross(w, mat_vec(J, w))), cross(h, acc))
+        forces.append((n, f))
     tau: list[se.Basic] = [se.Integer(0)] * len(links)
     carried: Spatial = (zero, zero)
     for i in reversed(range(len(links))):
         link = links[i]
-        f = (_add(forces[i][0], carried[0]), _add(forces[i][1], carried[1]))
-        tau[i] = dot(link.axis, f[0] if link.type is JointType.REVOLUTE else f[1])
-        carried = _force_transform(link, f) if i > 0 and not _is_zero(f) else (zero, zero)
+        total = (_add(forces[i][0], carried[0]), _add(forces[i][1], carried[1]))
+        tau[i] = dot(link.axis, total[0] if link.type is JointType.REVOLUTE else total[1])
+        carried = _force_transform(link, total) if i > 0 and not _is_zero(total) else (zero, zero)
     return tau
 
 
@@ -228,19 +235,28 @@ def _mat_mul(A: list[Vec], B: list[Vec]) -> list[Vec]:
     return [[dot(row, [B[k][c] for k in range(3)]) for c in range(3)] for row in A]
 
 
+def _transpose(A: list[Vec]) -> list[Vec]:
+    return [[A[r][c] for r in range(3)] for c in range(3)]
+
+
+def _moment_to_parent(link: Link, mass: se.Basic, moment: Vec) -> Vec:
+    """The first moment h of a body in F_i about the origin of F_p, in F_p coordinates: E^T h + m r."""
+    return [a + mass * b for a, b in zip(mat_vec(_transpose(link.rotation), moment), link.origin)]
+
+
 def _to_parent(link: Link, inertia: SpatialInertia) -> SpatialInertia:
     """X^T I X: ``inertia`` in F_i expressed about the origin of F_p, in F_p coordinates.
 
     m' = m, h' = E^T h + m r, J' = E^T J E - [E^T h][r] - [r][E^T h] - m [r]^2.
     """
     E = link.rotation
-    Et = [[E[r][c] for r in range(3)] for c in range(3)]
+    Et = _transpose(E)
     h = mat_vec(Et, inertia.moment)
     r = link.origin
     J = _mat_mul(Et, _mat_mul(inertia.rotational, E))
     hr, rh, rr = _mat_mul(_skew(h), _skew(r)), _mat_mul(_skew(r), _skew(h)), _mat_mul(_skew(r), _skew(r))
     J = [[J[a][b] - hr[a][b] - rh[a][b] - inertia.mass * rr[a][b] for b in range(3)] for a in range(3)]
-    return SpatialInertia(inertia.mass, [a + inertia.mass * b for a, b in zip(h, r)], J)
+    return SpatialInertia(inertia.mass, _moment_to_parent(link, inertia.mass, inertia.moment), J)
 
 
 def _sum(a: SpatialInertia | None, b: SpatialInertia | None) -> SpatialInertia | None:
@@ -250,13 +266,53 @@ def _sum(a: SpatialInertia | None, b: SpatialInertia | None) -> SpatialInertia |
                           [_add(x, y) for x, y in zip(a.rotational, b.rotational)])
 
 
+def _composites(links: Sequence[Link], rotational: bool) -> list[SpatialInertia | None]:
+    """The composite inertia of each link and everything it carries, in its frame F_i.
+
+    With ``rotational=False`` only the mass and the first moment are summed (the
+    rotational inertia is left as it is): all that gravity needs.
+    """
+    composite: list[SpatialInertia | None] = [link.inertia for link in links]
+    for i in reversed(range(1, len(links))):
+        child = composite[i]
+        if child is None:
+            continue
+        if rotational:
+            moved = _to_parent(links[i], child)
+        else:
+            moved = SpatialInertia(child.mass, _moment_to_parent(links[i], child.mass, child.moment),
+                                   [[se.Integer(0)] * 3 for _ in range(3)])
+        composite[i - 1] = _sum(composite[i - 1], moved)
+    return composite
+
+
+def gravity_torques(links: Sequence[Link], gravity: Sequence[se.Basic]) -> list[se.Basic]:
+    """G(q): the Newton-Euler torques at rest (qd = qdd = 0).
+
+    At rest every link has the same acceleration -g (in F_i: a_i = E_i a_p), and the
+    inward pass sums the forces m_b a and moments h_b x a of the bodies beyond joint i into
+    those of their composite body (mass m^c_i, first moment h^c_i, as in the
+    composite-rigid-body algorithm): G_i = z_i . (h^c_i x a_i) for a revolute joint,
+    z_i . m^c_i a_i for a prismatic one.
+    """
+    composite = _composites(links, rotational=False)
+    acc = [-g for g in gravity]
+    G = []
+    for link, body in zip(links, composite):
+        acc = mat_vec(link.rotation, acc)
+        if body is None:
+            G.append(se.Integer(0))
+        elif link.type is JointType.REVOLUTE:
+            G.append(dot(link.axis, cross(body.moment, acc)))
+        else:
+            G.append(dot(link.axis, [body.mass * a for a in acc]))
+    return G
+
+
 def mass_matrix(links: Sequence[Link]) -> list[list[se.Basic]]:
     """M(q) by the composite-rigid-body algorithm (Featherstone sec. 6.2, table 6.2)."""
     n = len(links)
-    composite: list[SpatialInertia | None] = [link.inertia for link in links]
-    for i in reversed(range(1, n)):
-        if composite[i] is not None:
-            composite[i - 1] = _sum(composite[i - 1], _to_parent(links[i], composite[i]))
+    composite = _composites(links, rotational=True)
     M = [[se.Integer(0)] * n for _ in range(n)]
     for i in range(n):
         if composite[i] is None:

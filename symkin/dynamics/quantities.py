@@ -205,7 +205,7 @@ class _BoundTerms:
             return None
         if self.lagrangian:
             return self.program.bind(self.d["lagrangian_gravity_vector_graph"])
-        return self.newton_euler(velocity=False, acceleration=False, gravity=True)
+        return self.program.bind(newton_euler.gravity_torques(self.d["newton_euler_links"], self.d["gravity_graph"]))
 
     def friction(self) -> list[se.Basic] | None:
         return self.d["friction_graph"]
