@@ -59,7 +59,25 @@ from symkin.model import coordinates
 from symkin.model.schema import JointType, Model, Op, Rotation, Translation
 
 Vec = list[se.Basic]
+#: A pair of 3-vectors: (angular, linear) motion or (moment, force).
 Spatial = tuple[Vec, Vec]
+
+
+def _add(u: Vec, v: Vec) -> Vec:
+    return [a + b for a, b in zip(u, v)]
+
+
+def _transpose(A: list[Vec]) -> list[Vec]:
+    return [[A[r][c] for r in range(3)] for c in range(3)]
+
+
+def _skew(v: Vec) -> list[Vec]:
+    zero = se.Integer(0)
+    return [[zero, -v[2], v[1]], [v[2], zero, -v[0]], [-v[1], v[0], zero]]
+
+
+def _mat_mul(A: list[Vec], B: list[Vec]) -> list[Vec]:
+    return [[dot(row, [B[k][c] for k in range(3)]) for c in range(3)] for row in A]
 
 
 @dataclass(frozen=True)
@@ -149,23 +167,18 @@ def chain_links(model: Model) -> tuple[Link, ...]:
     return tuple(links)
 
 
-def _add(u: Vec, v: Vec) -> Vec:
-    return [a + b for a, b in zip(u, v)]
-
-
 def _force_transform(link: Link, f: Spatial) -> Spatial:
     """X^T (n, f) = (E^T n + r x E^T f, E^T f)."""
     n, lin = f
-    Et = [[link.rotation[r][c] for r in range(3)] for c in range(3)]
+    Et = _transpose(link.rotation)
     f_parent = mat_vec(Et, lin)
     return _add(mat_vec(Et, n), cross(link.origin, f_parent)), f_parent
 
 
-def _scaled_axis(link: Link, amount: se.Basic) -> Spatial:
-    """S_i amount."""
+def _motion_axis(link: Link) -> Spatial:
+    """S_i: (z_i, 0) for a revolute joint, (0, z_i) for a prismatic one."""
     zero = [se.Integer(0)] * 3
-    scaled = [c * amount for c in link.axis]
-    return (scaled, zero) if link.type is JointType.REVOLUTE else (zero, scaled)
+    return (link.axis, zero) if link.type is JointType.REVOLUTE else (zero, link.axis)
 
 
 def _is_zero(v: Spatial) -> bool:
@@ -224,19 +237,6 @@ def inverse_dynamics(links: Sequence[Link], qd: Sequence[se.Basic] | None, qdd: 
         tau[i] = dot(link.axis, total[0] if link.type is JointType.REVOLUTE else total[1])
         carried = _force_transform(link, total) if i > 0 and not _is_zero(total) else (zero, zero)
     return tau
-
-
-def _skew(v: Vec) -> list[Vec]:
-    zero = se.Integer(0)
-    return [[zero, -v[2], v[1]], [v[2], zero, -v[0]], [-v[1], v[0], zero]]
-
-
-def _mat_mul(A: list[Vec], B: list[Vec]) -> list[Vec]:
-    return [[dot(row, [B[k][c] for k in range(3)]) for c in range(3)] for row in A]
-
-
-def _transpose(A: list[Vec]) -> list[Vec]:
-    return [[A[r][c] for r in range(3)] for c in range(3)]
 
 
 def _moment_to_parent(link: Link, mass: se.Basic, moment: Vec) -> Vec:
@@ -317,7 +317,7 @@ def mass_matrix(links: Sequence[Link]) -> list[list[se.Basic]]:
     for i in range(n):
         if composite[i] is None:
             continue
-        f = composite[i].times(_scaled_axis(links[i], se.Integer(1)))
+        f = composite[i].times(_motion_axis(links[i]))
         for j in reversed(range(i + 1)):
             link = links[j]
             M[i][j] = M[j][i] = dot(link.axis, f[0] if link.type is JointType.REVOLUTE else f[1])
