@@ -21,13 +21,14 @@ $(STAMP): pyproject.toml requirements/constraints.txt
 setup: $(STAMP)
 
 ## demo: derive every example model into generated/ and print what was derived;
-## draw seed Fig. 8.19 (2-DoF workspaces) and a 1/kappa map into out/figures/, and the seed's haptic
-## scenario (Figs. 8.21, 8.22: torques, TCP forces, CSV) into out/figures/seed-haptic-scenario/
+## draw seed Fig. 8.19 (2-DoF workspaces) and 1/kappa maps (planar arm, DELTA) into out/figures/, and the
+## seed's haptic scenario (Figs. 8.21, 8.22: torques, TCP forces, CSV) into out/figures/seed-haptic-scenario/
 demo: setup
 	$(BIN)/symkin derive $(MODELS) -o generated
 	$(BIN)/symkin workspace generated/planar_2r --design l1=0.1,l2=0.1 --design l1=0.2,l2=0.2 --unit cm \
 	    --title "Seed Fig. 8.19: 2-DoF arm, 0 <= theta1, theta2 <= 90 deg" \
 	    -o out/figures/fig-8-19-workspace.png --map out/figures/planar_2r-inverse-condition.png
+	$(BIN)/symkin workspace generated/delta --unit mm -o out/figures/delta-workspace.png --map out/figures/delta-inverse-condition.png
 	$(BIN)/symkin simulate generated/planar_2r --scenario sine --design l1=0.1,l2=0.1 --design l1=0.2,l2=0.2 -o out/figures/seed-haptic-scenario
 
 ## test: run the whole test suite

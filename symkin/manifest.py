@@ -93,18 +93,28 @@ def build_manifest(model: Model, code: ModelCode, derived: list[str], backend_fi
 
 
 def _parallel_record(model: Model) -> dict[str, Any]:
-    """Legs, platform motion and home pose of a parallel model (home at the default parameters)."""
+    """Legs, platform motion and home pose of a parallel model (home at the default parameters).
+
+    Limits of passive joint variables, where declared, are listed per leg under
+    ``passive_limits`` (numbers at the default parameters; the actuated ones are the
+    coordinates' ``limits``).
+    """
     parallel = model.parallel
     assert parallel is not None
     home = None
     if parallel.home is not None:
         home = [float(e.xreplace(model.parameter_values)) for e in parallel.home]
-    return {
-        "motion": parallel.motion.value,
-        "legs": [{"name": leg.name, "topology": "".join(j.type.value for j in leg.joints),
-                  "joints": [j.name for j in leg.joints]} for leg in parallel.legs],
-        "home": home,
-    }
+    legs = []
+    for leg in parallel.legs:
+        record: dict[str, Any] = {"name": leg.name, "topology": "".join(j.type.value for j in leg.joints),
+                                  "joints": [j.name for j in leg.joints]}
+        passive = {variable: [float(b.xreplace(model.parameter_values)) for b in joint.limits_of(k)]
+                   for joint in leg.joints for k, variable in enumerate(joint.variables)
+                   if k != joint.active and joint.limits_of(k) is not None}
+        if passive:
+            record["passive_limits"] = passive
+        legs.append(record)
+    return {"motion": parallel.motion.value, "legs": legs, "home": home}
 
 
 def dumps(manifest: dict) -> str:

@@ -78,7 +78,7 @@ def test_bench_gci_prints_a_table_and_plots_time_against_error(tmp_path, capsys)
     out = capsys.readouterr().out
     assert "GCI reference 0.22334089896201" in out
     rows = [line for line in out.splitlines() if re.match(r"\s+(joint|cartesian)\s.*(yes|NO)$", line)]
-    assert len(rows) == 2 * 4 * 2  # domains x integrators x budgets
+    assert len(rows) == 2 * 4 * 2 * 2  # domains x integrators x budgets x backends (numpy and c by default)
     assert "fastest run reaching a relative error of the GCI of:" in out
     assert figure.read_bytes()[:8] == PNG
 

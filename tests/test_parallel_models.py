@@ -313,7 +313,9 @@ def test_manifest_records_the_parallel_structure(generated_dir):
     record = delta.manifest["model"]["parallel"]
     assert record["motion"] == "translation" and record["home"] == [0.0, 0.0, -0.15]
     assert [leg["topology"] for leg in record["legs"]] == ["RUU"] * 3
-    assert delta.manifest["model"]["coordinates"][0] == {"name": "theta1", "type": "R"}
+    theta1 = delta.manifest["model"]["coordinates"][0]
+    assert theta1["name"] == "theta1" and theta1["type"] == "R"
+    assert theta1["limits"] == pytest.approx([-np.pi / 2, np.pi / 3], rel=1e-15)  # actuator_limits
     ik = next(f for f in delta.manifest["functions"] if f["name"] == "ik")
     assert ik["inputs"][0]["name"] == "p" and ik["inputs"][0]["elements"] == ["x", "y", "z"]
     assert [o["name"] for o in ik["outputs"]] == ["joints", "margin"]

@@ -30,6 +30,7 @@ class Trial:
     """One integrator run.
 
     Attributes:
+        backend: the generated code that was timed (``numpy``, ``c``...).
         domain: ``joint`` or ``cartesian``.
         method: integrator name.
         samples: requested budget.
@@ -39,6 +40,7 @@ class Trial:
         achieved: |estimate - reference|.
     """
 
+    backend: str
     domain: str
     method: str
     samples: int
@@ -105,20 +107,20 @@ def time_against_error(model: Any, reference: Estimate, *, methods: Sequence[str
                     result = gci(model, method=method, samples=samples, seed=seed, domain=domain, **kwargs)
                     best = min(best, time.perf_counter() - start)
                 estimate = result.value
-                trials.append(Trial(domain, method, samples, estimate.evaluations, best, estimate,
+                trials.append(Trial(model.backend, domain, method, samples, estimate.evaluations, best, estimate,
                                     abs(estimate.value - reference.value)))
     return trials
 
 
-def fastest_within(trials: Sequence[Trial], relative_error: float) -> dict[tuple[str, str], Trial | None]:
-    """For each (domain, method), the fastest trial whose achieved error is within ``relative_error``.
+def fastest_within(trials: Sequence[Trial], relative_error: float) -> dict[tuple[str, str, str], Trial | None]:
+    """For each (backend, domain, method), the fastest trial whose achieved error is within ``relative_error``.
 
     The achieved error is relative to the reference value (|estimate - reference| /
     |reference|, computed from the trial's ``achieved`` and its estimate).
     """
-    best: dict[tuple[str, str], Trial | None] = {}
+    best: dict[tuple[str, str, str], Trial | None] = {}
     for t in trials:
-        key = (t.domain, t.method)
+        key = (t.backend, t.domain, t.method)
         best.setdefault(key, None)
         reference = abs(t.estimate.value) or 1.0
         if t.achieved <= relative_error * reference and (best[key] is None or t.seconds < best[key].seconds):

@@ -35,7 +35,7 @@ from typing import Any
 
 import numpy as np
 
-from symkin.analysis import conditioning, mechanism, sampling
+from symkin.analysis import conditioning, mechanism, parallel, sampling
 from symkin.analysis.estimates import Estimate, IntegralEstimate
 from symkin.analysis.integrand import Integrand
 from symkin.analysis.integrators import integrate
@@ -73,7 +73,7 @@ def local_index(model: Any, q: np.ndarray, *, index: Index = conditioning.invers
     ``"auto"`` for the characteristic length over the joint limits).
     """
     scored = scaled_index(model, index, length, mechanism.joint_limits(model, limits))
-    return scored(model.jacobian(q))
+    return scored(mechanism.jacobian(model, q))
 
 
 def singular(model: Any, q: np.ndarray, *, threshold: float = 0.0, length: float | str | None = None,
@@ -89,7 +89,7 @@ def characteristic_length_of(model: Any, limits: np.ndarray | None = None, seed:
     """
     limits = mechanism.joint_limits(model) if limits is None else limits
     q = sampling.sobol(limits[:, 0], limits[:, 1], LENGTH_SAMPLES_LOG2, np.random.default_rng(seed))
-    return conditioning.characteristic_length(model.jacobian(q), mechanism.position_rows(model))
+    return conditioning.characteristic_length(mechanism.jacobian(model, q), mechanism.position_rows(model))
 
 
 def joint_space_integrand(model: Any, *, index: Index | None = conditioning.inverse_condition_number,
@@ -106,13 +106,22 @@ def joint_space_integrand(model: Any, *, index: Index | None = conditioning.inve
         measure: ``cartesian`` or ``joint`` (see module docstring).
         limits: joint-limit overrides (see :func:`symkin.analysis.mechanism.joint_limits`).
         length: characteristic length for mixed task spaces (m, or ``"auto"``).
-        jacobian: the Jacobian function q -> J; default ``model.jacobian`` (a parallel
-            mechanism passes its own, e.g. the inverse of its closed-form J^-1).
+        jacobian: the Jacobian function q -> J; default ``model.jacobian``.  For a parallel
+            mechanism the default is J(q, fk(q)) restricted to the working mode
+            (:func:`symkin.analysis.parallel.jacobian_in_working_mode`): w = 0 outside it.
     """
     if measure not in MEASURES:
         raise ValueError(f"unknown measure '{measure}'; choose one of {', '.join(MEASURES)}")
     box = mechanism.joint_limits(model, limits)
-    jacobian = model.jacobian if jacobian is None else jacobian
+    if jacobian is not None:
+        def evaluate(q: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+            return jacobian(q), None
+    elif mechanism.is_parallel(model):
+        def evaluate(q: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+            return parallel.jacobian_in_working_mode(model, q)
+    else:
+        def evaluate(q: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+            return model.jacobian(q), None
     n = box.shape[0]
     if measure == "cartesian":
         m = len(mechanism.task_space(model))
@@ -122,8 +131,10 @@ def joint_space_integrand(model: Any, *, index: Index | None = conditioning.inve
     scored = scaled_index(model, index, length, box) if index is not None else None
 
     def function(q: np.ndarray) -> np.ndarray:
-        J = jacobian(q)
+        J, inside = evaluate(q)
         weight = conditioning.absolute_determinant(J) if measure == "cartesian" else np.ones(len(q))
+        if inside is not None:
+            weight = np.where(inside, weight, 0.0)
         if scored is None:
             return weight[:, None]
         return np.stack([weight * scored(J), weight], axis=-1)
@@ -153,7 +164,7 @@ def cartesian_integrand(model: Any, inverse: InverseKinematics, box: tuple[np.nd
             return indicator[:, None]
         values = np.zeros(len(points))
         if inside.any():
-            values[inside] = scored(model.jacobian(q[inside]))
+            values[inside] = scored(mechanism.jacobian(model, q[inside], points[inside]))
         return np.stack([values, indicator], axis=-1)
 
     axes = tuple("xyz"[a] for a in mechanism.position_axes(model))
@@ -186,6 +197,10 @@ def _integrand(model: Any, *, domain: str, measure: str, index: Index | None, li
     if domain == "joint":
         description = ("joint space, dW = |det J| dq (Cartesian measure, with multiplicity where the map is "
                        "not one-to-one)" if measure == "cartesian" else "joint space, dW = dq (joint measure)")
+        if mechanism.is_parallel(model):
+            description = ("joint space, dW = |det J| dq over the configurations in the working mode "
+                           "(ik(fk(q)) = q, one-to-one): the Cartesian measure" if measure == "cartesian" else
+                           "joint space, dW = dq over the configurations in the working mode (joint measure)")
         return joint_space_integrand(model, index=index, measure=measure, limits=limits, length=length), description
     if domain == "cartesian":
         if inverse is None:
@@ -195,6 +210,8 @@ def _integrand(model: Any, *, domain: str, measure: str, index: Index | None, li
 
             box = bounding_box(model, limits=limits)
         description = "Cartesian box with reachability from inverse kinematics, dW = 1_W(x) dx"
+        if mechanism.is_parallel(model):
+            description += " (in the working mode: fk(ik(x)) = x)"
         return cartesian_integrand(model, inverse, box, index=index, limits=limits, length=length), description
     raise ValueError(f"unknown domain '{domain}'; choose one of {', '.join(DOMAINS)}")
 

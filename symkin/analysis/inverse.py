@@ -18,6 +18,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from symkin.analysis import mechanism
+from symkin.analysis.parallel import parallel_inverse
 
 #: Tolerance on joint limits and on the reach of a closed form (rounding of points that lie
 #: exactly on the workspace boundary, e.g. the fully stretched arm).
@@ -173,8 +174,8 @@ def planar_2r_inverse(model: Any, *, checks: int = 32, tolerance: float = 1e-9) 
 
 #: Factories tried in order by :func:`inverse_kinematics_for`; each returns an
 #: InverseKinematics for the model or raises ValueError.  Closed forms of more mechanisms
-#: (the DELTA's, the serial inverse kinematics of issue 7) are registered here.
-INVERSE_FACTORIES: list = [planar_2r_inverse]
+#: (parallel mechanisms' generated ``ik``; the serial inverse kinematics of issue 7) are registered here.
+INVERSE_FACTORIES: list = [planar_2r_inverse, parallel_inverse]
 
 
 def inverse_kinematics_for(model: Any) -> InverseKinematics | None:

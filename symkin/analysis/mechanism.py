@@ -99,12 +99,47 @@ def position_axes(model: Any) -> tuple[int, ...]:
     return tuple(sorted(axes))
 
 
+def is_parallel(model: Any) -> bool:
+    """Whether the loaded model is a parallel mechanism (its manifest has a ``parallel`` record)."""
+    return "parallel" in model.manifest["model"]
+
+
 def tcp_positions(model: Any, q: np.ndarray) -> np.ndarray:
     """TCP positions of a batch of configurations, shape (..., d), from the generated ``fk``.
 
-    d is the number of position components of the task space (2 for a planar arm).
+    d is the number of position components of the task space (2 for a planar arm).  A
+    parallel mechanism's ``fk`` gives the position directly (NaN where it cannot be
+    assembled).
     """
+    if is_parallel(model):
+        return parallel_function(model, "fk")(q).position
     return model.fk(q)[..., list(position_axes(model)), 3]
+
+
+def parallel_function(model: Any, name: str):
+    """The generated function ``name`` of a parallel mechanism.
+
+    Raises:
+        ValueError: it was not generated (e.g. a Stewart-Gough platform has no closed-form fk
+            and no ``jacobian``, only ``inverse_jacobian``: its analyses are not supported yet).
+    """
+    if name not in model.functions:
+        raise ValueError(f"{model.name}: the workspace and GCI analyses of a parallel mechanism need its generated "
+                         f"'{name}' (derive it, e.g. --only ik,fk,jacobian); platforms without a closed-form fk "
+                         "(Stewart-Gough) are not analysed yet")
+    return getattr(model, name)
+
+
+def jacobian(model: Any, q: np.ndarray, points: np.ndarray | None = None) -> np.ndarray:
+    """The task Jacobian J (..., m, n) at configurations q (..., n).
+
+    A serial arm's is ``model.jacobian(q)``; a parallel mechanism's ``model.jacobian(q, p)``
+    at the TCP positions ``points`` (default: fk(q)); it is NaN where p is not, which the
+    conditioning indices rate as singular.
+    """
+    if not is_parallel(model):
+        return model.jacobian(q)
+    return parallel_function(model, "jacobian")(q, tcp_positions(model, q) if points is None else points)
 
 
 def is_positional(model: Any) -> bool:

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from symkin.analysis.workspace import WorkspaceCloud
+from symkin.analysis.workspace import Occupancy, WorkspaceCloud
 
 DPI = 150
 
@@ -163,5 +163,52 @@ def plot_time_against_error(panels: dict[str, dict[str, tuple[Sequence[float], S
     axes[0].set_ylabel("absolute error of the GCI")
     handles, labels = axes[0].get_legend_handles_labels()
     figure.legend(handles, labels, loc="outside right center", fontsize="small")
+    figure.suptitle(title)
+    return _save(figure, path)
+
+
+def plot_index_slices(occupancy: Occupancy, values: np.ndarray, path: str | Path, *, count: int = 6,
+                      title: str = "1/kappa over the workspace", label: str = "1/kappa",
+                      axes: Sequence[str] = ("x", "y", "z"), scale: float = 1.0, unit: str = "m") -> Path:
+    """A local index over a 3-D workspace as horizontal slices (the last axis, z, held fixed).
+
+    Args:
+        occupancy: the Cartesian grid (:func:`symkin.analysis.workspace.index_grid`).
+        values: the index at the cell centres, the grid's shape, NaN outside the workspace
+            (drawn blank).
+        count: number of slices, evenly spread over the layers that hold workspace cells
+            (between 10 % and 90 % of their height).
+    """
+    values = np.asarray(values, dtype=np.float64)
+    if values.ndim != 3:
+        raise ValueError(f"slices need a 3-D grid, got shape {values.shape}")
+    layers = np.nonzero(np.isfinite(values).any(axis=(0, 1)))[0]
+    if layers.size == 0:
+        raise ValueError("the workspace is empty: nothing to draw")
+    # evenly between 10 % and 90 % of the height: the extreme layers hold a few cells only
+    spread = np.linspace(0.1, 0.9, count) if layers.size > count else np.linspace(0.0, 1.0, layers.size)
+    chosen = layers[np.unique(np.round(spread * (layers.size - 1)).astype(int))]
+    columns = min(3, len(chosen))
+    rows = int(np.ceil(len(chosen) / columns))
+    figure = _figure((3.4 * columns + 1.2, 3.2 * rows + 0.6))
+    grid = figure.subplots(rows, columns, squeeze=False, sharex=True, sharey=True)
+    lower, cell = occupancy.lower * scale, occupancy.cell * scale
+    shape = values.shape
+    edges = [lower[i] + np.arange(shape[i] + 1) * cell[i] for i in range(2)]
+    vmax = max(1e-12, float(np.nanmax(values)))
+    mesh = None
+    for ax, layer in zip(grid.ravel(), chosen):
+        mesh = ax.pcolormesh(edges[0], edges[1], values[:, :, layer].T, cmap="viridis", vmin=0.0, vmax=vmax,
+                             rasterized=True)
+        ax.set_title(f"{axes[2]} = {lower[2] + (layer + 0.5) * cell[2]:.4g} {unit}", fontsize="medium")
+        ax.set_aspect("equal")
+        ax.grid(True, lw=0.3)
+    for ax in grid.ravel()[len(chosen):]:
+        ax.set_visible(False)
+    for ax in grid[-1]:
+        ax.set_xlabel(f"{axes[0]} [{unit}]")
+    for ax in grid[:, 0]:
+        ax.set_ylabel(f"{axes[1]} [{unit}]")
+    figure.colorbar(mesh, ax=grid.ravel().tolist(), label=label)
     figure.suptitle(title)
     return _save(figure, path)

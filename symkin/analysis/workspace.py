@@ -21,9 +21,9 @@ from typing import Any
 
 import numpy as np
 
-from symkin.analysis import mechanism, sampling
+from symkin.analysis import mechanism, parallel, sampling
 from symkin.analysis.estimates import Estimate
-from symkin.analysis.inverse import InverseKinematics, reachable
+from symkin.analysis.inverse import InverseKinematics, feasible_configurations, reachable
 from symkin.analysis.mechanism import Limits
 
 SAMPLING_METHODS = ("grid", "random", "sobol")
@@ -84,6 +84,12 @@ def sample_workspace(model: Any, samples: int = 2**14, *, method: str | None = N
     else:
         raise ValueError(f"unknown sampling method '{method}'; choose one of {', '.join(SAMPLING_METHODS)}")
     axes = tuple("xyz"[a] for a in mechanism.position_axes(model))
+    if mechanism.is_parallel(model):
+        # Only configurations that assemble in the working mode belong to the workspace.
+        points, inside = parallel.working_mode(model, q)
+        if not inside.all():
+            return WorkspaceCloud(q[inside], points[inside], axes, None)
+        return WorkspaceCloud(q, points, axes, grid_shape)
     return WorkspaceCloud(q, mechanism.tcp_positions(model, q), axes, grid_shape)
 
 
@@ -101,11 +107,31 @@ def bounding_box(model: Any, *, limits: Limits | None = None, samples: int = BOX
     n = box.shape[0]
     per_axis = max(3, int(samples ** (1.0 / n)))
     q = sampling.grid(box[:, 0], box[:, 1], per_axis, midpoints=False)
+    if mechanism.is_parallel(model):
+        return _parallel_bounding_box(model, q, per_axis)
     points = mechanism.tcp_positions(model, q)
     J = model.jacobian(q)[:, list(mechanism.position_rows(model)), :]
     half_diagonal = 0.5 * np.linalg.norm((box[:, 1] - box[:, 0]) / (per_axis - 1))
     margin = 2.0 * np.max(np.linalg.norm(J, axis=(-2, -1))) * half_diagonal
     return points.min(axis=0) - margin, points.max(axis=0) + margin
+
+
+def _parallel_bounding_box(model: Any, q: np.ndarray, per_axis: int) -> tuple[np.ndarray, np.ndarray]:
+    """Box of a parallel mechanism: the working-mode TCP positions of a joint grid, padded.
+
+    The Jacobian grows without bound next to the assembly limit (det J_x -> 0), so the
+    padding is not a Jacobian bound but twice the largest distance between the TCP
+    positions of neighbouring grid nodes that both lie in the working mode.
+    """
+    points, inside = parallel.working_mode(model, q)
+    if not inside.any():
+        raise ValueError(f"{model.name}: no configuration within the joint limits assembles in the working mode")
+    shape = (per_axis,) * q.shape[1]
+    grid_points = np.where(inside[:, None], points, np.nan).reshape(*shape, -1)
+    gaps = [np.nanmax(np.linalg.norm(np.diff(grid_points, axis=axis), axis=-1), initial=0.0)
+            for axis in range(len(shape))]
+    margin = 2.0 * max(gaps)
+    return points[inside].min(axis=0) - margin, points[inside].max(axis=0) + margin
 
 
 @dataclass(frozen=True)
@@ -234,6 +260,28 @@ def reachability_grid(model: Any, inverse: InverseKinematics, box: tuple[np.ndar
     centers = occupancy.centers().reshape(-1, len(counts))
     mask = reachable(inverse, centers, mechanism.joint_limits(model, limits), mechanism.revolute_mask(model))
     return Occupancy(start, size, mask.reshape(counts))
+
+
+def index_grid(model: Any, inverse: InverseKinematics, box: tuple[np.ndarray, np.ndarray], cell: float, *,
+               index=None, limits: Limits | None = None, length: float | None = None) -> tuple[Occupancy, np.ndarray]:
+    """A local index (1/kappa by default) at the reachable cell centres of a Cartesian grid.
+
+    Returns:
+        (occupancy, values): the reachability grid (:func:`reachability_grid`) and the index
+        at every cell centre, an array of the grid's shape, NaN at unreachable cells.
+    """
+    from symkin.analysis import conditioning, global_indices
+
+    index = conditioning.inverse_condition_number if index is None else index
+    start, size, counts = _grid_geometry(np.asarray(box[0], float), np.asarray(box[1], float), cell)
+    centers = Occupancy(start, size, np.zeros(counts, dtype=bool)).centers().reshape(-1, len(counts))
+    joint_box = mechanism.joint_limits(model, limits)
+    q, inside = feasible_configurations(inverse, centers, joint_box, mechanism.revolute_mask(model))
+    values = np.full(len(centers), np.nan)
+    if inside.any():
+        scored = global_indices.scaled_index(model, index, length, joint_box)
+        values[inside] = scored(mechanism.jacobian(model, q[inside], centers[inside]))
+    return Occupancy(start, size, inside.reshape(counts)), values.reshape(counts)
 
 
 def limit_curves(model: Any, *, limits: Limits | None = None, count: int = 200) -> list[np.ndarray]:

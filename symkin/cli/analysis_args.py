@@ -1,7 +1,8 @@
 """Arguments shared by the analysis commands (``symkin workspace``, ``symkin gci``, ``symkin bench gci``).
 
 MODEL is a generated model directory (the output of ``symkin derive``) or a model file,
-which is then derived on the fly (fk and jacobian only) into a temporary directory.
+which is then derived on the fly (fk and jacobian only, and ik for a parallel mechanism)
+into a temporary directory.
 """
 
 from __future__ import annotations
@@ -13,8 +14,10 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-#: Quantities an analysis needs from a model file derived on the fly.
+#: Quantities an analysis needs from a model file derived on the fly ...
 ANALYSIS_OUTPUTS = ("fk", "jacobian")
+#: ... by kind of mechanism: a parallel one also needs its closed-form ik (reachability, working mode).
+ANALYSIS_OUTPUTS_BY_KIND = {"serial": ANALYSIS_OUTPUTS, "parallel": ("ik", "fk", "jacobian")}
 
 
 def add_model_arguments(p: argparse.ArgumentParser, *, backend: bool = True) -> None:
@@ -190,7 +193,7 @@ def model_from_args(args: argparse.Namespace) -> tuple[Any, dict[str, tuple[floa
     Raises:
         ValueError: malformed --set or --limit (KeyError for an unknown parameter).
     """
-    model = load_model(args.model, args.backend)
+    model = load_models(args.model, (args.backend,), ANALYSIS_OUTPUTS_BY_KIND)[0]
     values = parse_assignments(args.assignments)
     if values:
         model = model.bind(**values)

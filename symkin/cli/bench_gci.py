@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 from symkin.cli import analysis_args
 from symkin.cli.progress import Progress
@@ -23,12 +24,15 @@ def register(kinds: argparse._SubParsersAction) -> None:
                    help="integrand evaluations per run (default: 4^4 ... 4^10, i.e. 256 to 1048576)")
     p.add_argument("--domains", default="auto", metavar="NAMES",
                    help="joint and/or cartesian (default: both where an inverse kinematics exists)")
+    p.add_argument("--backends", metavar="NAMES",
+                   help="comma-separated generated code to time, e.g. numpy,c (default: --backend if given, "
+                        "else numpy and c where emitted)")
     p.add_argument("--repeats", type=int, default=3, help="timed runs per point, the fastest kept (default: 3)")
     p.add_argument("--seed", type=int, default=0, help="seed of mc/qmc (default: %(default)s)")
     analysis_args.add_length_argument(p)
     p.add_argument("-o", "--out", metavar="FIGURE",
                    help="plot of time against error (default: bench-results/MODEL_NAME-gci-time-vs-error.png)")
-    p.set_defaults(run=run, parser=p)
+    p.set_defaults(run=run, parser=p, backend=None)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -36,7 +40,12 @@ def run(args: argparse.Namespace) -> int:
     from symkin.analysis.integrators import INTEGRATORS
 
     try:
-        model, limits = analysis_args.model_from_args(args)
+        backends = _backends(args)
+        models = []
+        for backend in backends:
+            args.backend = backend
+            model, limits = analysis_args.model_from_args(args)
+            models.append(model)
         methods = [m.strip() for m in args.methods.split(",") if m.strip()] if args.methods else list(INTEGRATORS)
         unknown = sorted(set(methods) - set(INTEGRATORS))
         if unknown:
@@ -52,32 +61,54 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError(f"{model.name}: no inverse kinematics for the Cartesian domain")
         with Progress(f"bench gci {model.name}") as progress:
             progress("reference")
-            reference = convergence.reference_gci(model, limits=limits, length=length)
-            trials = convergence.time_against_error(model, reference, methods=methods, budgets=budgets,
-                                                    domains=domains, repeats=args.repeats, seed=args.seed,
-                                                    progress=progress, limits=limits, length=length, inverse=ik)
+            # The reference does not depend on the backend; it is computed with the last one.
+            reference = convergence.reference_gci(models[-1], limits=limits, length=length)
+            trials = []
+            for model in models:
+                trials += convergence.time_against_error(
+                    model, reference, methods=methods, budgets=budgets, domains=domains, repeats=args.repeats,
+                    seed=args.seed, progress=lambda text, b=model.backend: progress(f"{b}: {text}"), limits=limits,
+                    length=length, inverse=inverse.inverse_kinematics_for(model) if ik is not None else None)
     except (ValueError, KeyError) as err:
         analysis_args.fail_on_bad_input(args, err)
-    print(f"{model.name} ({model.backend} backend): GCI reference {reference} "
-          f"(adaptive, {reference.evaluations} evaluations)")
-    rows = [[t.domain, t.method, t.evaluations, f"{t.seconds * 1e3:.2f}", f"{t.estimate.value:.10f}",
+    print(f"{model.name}: GCI reference {reference} (adaptive, {reference.evaluations} evaluations, "
+          f"{models[-1].backend} backend)")
+    rows = [[t.domain, t.method, t.backend, t.evaluations, f"{t.seconds * 1e3:.2f}", f"{t.estimate.value:.10f}",
              f"{t.estimate.error:.2e}", f"{t.achieved:.2e}", "yes" if t.bracketed else "NO"] for t in trials]
-    print(format_table(["domain", "method", "evaluations", "time ms", "GCI", "est. error", "achieved", "bracketed"],
-                       rows))
+    print(format_table(["domain", "method", "backend", "evaluations", "time ms", "GCI", "est. error", "achieved",
+                        "bracketed"], rows))
     print("fastest run reaching a relative error of the GCI of:")
     targets = (1e-3, 1e-6, 1e-9)
     best = [convergence.fastest_within(trials, target) for target in targets]
-    summary = [[domain, method] + [f"{b[(domain, method)].seconds * 1e3:.2f} ms ({b[(domain, method)].evaluations})"
-                                   if b[(domain, method)] else "-" for b in best]
-               for domain, method in best[0]]
-    print(format_table(["domain", "method"] + [f"{t:g}" for t in targets], summary))
+    summary = [[domain, method, backend] + [f"{b[key].seconds * 1e3:.2f} ms ({b[key].evaluations})" if b[key] else "-"
+                                            for b in best]
+               for key in best[0] for backend, domain, method in [key]]
+    print(format_table(["domain", "method", "backend"] + [f"{t:g}" for t in targets], summary))
     panels: dict = {}
     for t in trials:
-        times, achieved, estimated = panels.setdefault(f"{t.domain} domain", {}).setdefault(t.method, ([], [], []))
+        name = t.method if len(models) == 1 else f"{t.method} ({t.backend})"
+        times, achieved, estimated = panels.setdefault(f"{t.domain} domain", {}).setdefault(name, ([], [], []))
         times.append(t.seconds)
         achieved.append(t.achieved)
         estimated.append(t.estimate.error)
     path = plots.plot_time_against_error(panels, args.out or f"bench-results/{model.name}-gci-time-vs-error.png",
-                                         title=f"GCI of {model.name}: wall time against error ({model.backend})")
+                                         title=f"GCI of {model.name}: wall time against error "
+                                               f"({', '.join(m.backend for m in models)})")
     print(f"figure: {path}")
     return 0
+
+
+#: Backends timed by default, where the model was emitted with them.
+DEFAULT_BACKENDS = ("numpy", "c")
+
+
+def _backends(args: argparse.Namespace) -> list[str]:
+    """--backends, else --backend, else numpy and c where the model directory has them."""
+    if args.backends:
+        return [b.strip() for b in args.backends.split(",") if b.strip()]
+    if args.backend:
+        return [args.backend]
+    if Path(args.model).suffix.lower() in (".yaml", ".yml"):
+        return ["numpy"]  # a model file is derived on the fly, for numpy
+    emitted = analysis_args.load_model(args.model).manifest.get("backends", {})
+    return [b for b in DEFAULT_BACKENDS if b in emitted]

@@ -9,8 +9,10 @@ import time
 from symkin.cli import analysis_args
 from symkin.cli.progress import Progress
 
-#: Configurations drawn for --map.
+#: Configurations drawn for --map (serial mechanisms).
 MAP_SAMPLES = 40_000
+#: Cells along the longest side of the Cartesian grid drawn for --map (parallel mechanisms).
+MAP_CELLS = 64
 
 #: Local indices that ``--index`` can average (names of symkin.analysis.conditioning functions).
 INDICES = {
@@ -29,7 +31,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "a deterministic estimate for grid/adaptive). The default integrates over the joint limits "
                     "with dW = |det J| dq, the Cartesian measure (exact where q -> TCP is one-to-one); "
                     "--domain cartesian integrates the reachability indicator over a Cartesian box (needs a "
-                    "closed-form inverse kinematics: the planar 2R now).",
+                    "closed-form inverse kinematics: the planar 2R, parallel mechanisms with a generated ik such "
+                    "as the DELTA). A parallel mechanism's workspace is the set reached in its declared working "
+                    "mode (ik and fk branches) within the actuator limits, on both domains.",
     )
     analysis_args.add_model_arguments(p)
     p.add_argument("--method", choices=("grid", "mc", "qmc", "adaptive"), default="qmc",
@@ -51,7 +55,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from symkin.analysis import conditioning, global_indices, inverse, plots, workspace
+    from symkin.analysis import conditioning, global_indices, inverse, mechanism, plots, workspace
     from symkin.analysis.integrators import STATISTICAL
 
     index = getattr(conditioning, INDICES[args.index])
@@ -61,7 +65,7 @@ def run(args: argparse.Namespace) -> int:
         ik = inverse.inverse_kinematics_for(model) if args.domain == "cartesian" else None
         if args.domain == "cartesian" and ik is None:
             raise ValueError(f"{model.name}: no inverse kinematics is available for the Cartesian domain "
-                             "(closed forms: planar 2R); use --domain joint")
+                             "(closed forms: planar 2R, parallel mechanisms with ik); use --domain joint")
         options = {"rtol": args.rtol} if args.method == "adaptive" else {}
         if args.method in STATISTICAL:  # a one-time import of about a second, kept out of the timing
             importlib.import_module("scipy.stats")
@@ -72,7 +76,15 @@ def run(args: argparse.Namespace) -> int:
                 model, method=args.method, samples=args.samples, seed=args.seed, domain=args.domain,
                 measure=args.measure, index=index, limits=limits, length=length, inverse=ik, **options)
             seconds = time.perf_counter() - start
-            if args.map:
+            if args.map and mechanism.is_parallel(model):
+                progress("drawing")
+                box = workspace.bounding_box(model, limits=limits)
+                occupancy, values = workspace.index_grid(model, inverse.parallel_inverse(model), box,
+                                                         float(max(box[1] - box[0])) / MAP_CELLS, index=index,
+                                                         limits=limits, length=length)
+                path = plots.plot_index_slices(occupancy, values, args.map, label=args.index,
+                                               title=f"{args.index} over the workspace of {model.name}")
+            elif args.map:
                 progress("drawing")
                 cloud = workspace.sample_workspace(model, MAP_SAMPLES, limits=limits, seed=0)
                 values = global_indices.local_index(model, cloud.q, index=index, length=length, limits=limits)

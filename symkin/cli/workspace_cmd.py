@@ -10,6 +10,11 @@ from symkin.cli.progress import Progress
 
 UNITS = {"m": 1.0, "cm": 100.0, "mm": 1000.0}
 
+#: Cells along the longest side of the Cartesian grid of a parallel mechanism's workspace.
+CARTESIAN_CELLS = 64
+#: Fraction of the reachable cells, those of lowest 1/kappa, whose place (boundary or not) is reported.
+LOWEST_FRACTION = 0.01
+
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
@@ -52,7 +57,7 @@ def run(args: argparse.Namespace) -> int:
     except (ValueError, KeyError) as err:
         analysis_args.fail_on_bad_input(args, err)
     method = args.method or workspace.default_method(base)
-    layers = []
+    layers, grids = [], []
     start = time.perf_counter()
     with Progress(base.name) as progress:
         for values, model in zip(designs, models):
@@ -63,6 +68,11 @@ def run(args: argparse.Namespace) -> int:
                 progress(f"conditioning {label}")
                 inv_kappa = global_indices.local_index(model, cloud.q, length=length, limits=limits)
                 report = _report(model, cloud, inv_kappa, limits, progress)
+                if mechanism.is_parallel(model):
+                    progress(f"Cartesian grid {label}")
+                    grid = _cartesian_grid(model, limits, length)
+                    report += _cartesian_report(*grid)
+                    grids.append(grid)
             except ValueError as err:
                 analysis_args.fail_on_bad_input(args, err)
             print(f"{model.name} ({label}): {len(cloud.q)} configurations ({method}), workspace in "
@@ -80,9 +90,13 @@ def run(args: argparse.Namespace) -> int:
             print(f"figure: {path}")
         if args.map:
             layer, values = layers[0]
-            path = plots.plot_index_map(layer.cloud, values, args.map, outline=layer.outline, scale=scale,
-                                        unit=args.unit, title=f"1/kappa over the workspace of {base.name} "
-                                                              f"({layer.label})")
+            title = f"1/kappa over the workspace of {base.name} ({layer.label})"
+            if grids:
+                path = plots.plot_index_slices(*grids[0], args.map, scale=scale, unit=args.unit,
+                                               title=f"{title}: Cartesian grid, reachability by ik")
+            else:
+                path = plots.plot_index_map(layer.cloud, values, args.map, outline=layer.outline, scale=scale,
+                                            unit=args.unit, title=title)
             print(f"1/kappa map: {path}")
     print(f"done in {time.perf_counter() - start:.2f} s")
     return 0
@@ -94,6 +108,34 @@ def _label(model, values: dict[str, float], unit: str) -> str:
     parts = [f"{name} = {value * UNITS[unit]:g} {unit}" if units.get(name) == "m" else f"{name} = {value:g}"
              for name, value in values.items()]
     return ", ".join(parts) or "model parameters"
+
+
+def _cartesian_grid(model, limits, length):
+    """Reachability grid of a parallel mechanism with 1/kappa at its cell centres (see workspace.index_grid)."""
+    from symkin.analysis import inverse, workspace
+
+    box = workspace.bounding_box(model, limits=limits)
+    cell = float(max(box[1] - box[0])) / CARTESIAN_CELLS
+    return workspace.index_grid(model, inverse.parallel_inverse(model), box, cell, limits=limits, length=length)
+
+
+def _cartesian_report(occupancy, values) -> list[str]:
+    """Volume, boundary and where the (near-)singular cells lie, from the Cartesian grid."""
+    import numpy as np
+
+    boundary = occupancy.boundary()
+    interior = occupancy.interior()
+    lines = [f"volume: {occupancy.measure()} m^3 (Cartesian grid of {occupancy.cell[0]:.3g} m cells, reachability "
+             f"by ik in the working mode: between interior and all reachable cells); {int(boundary.sum())} "
+             "boundary cells"]
+    if interior.any():
+        lines.append(f"1/kappa at the cell centres: min {np.nanmin(values[boundary]):.4g} on boundary cells, "
+                     f"min {np.nanmin(values[interior]):.4g} on interior cells")
+    reachable = values[occupancy.occupied]
+    worst = occupancy.occupied & (values <= np.quantile(reachable, LOWEST_FRACTION))
+    lines.append(f"the {int(worst.sum())} cells of lowest 1/kappa ({LOWEST_FRACTION:.0%}): {int((worst & boundary).sum())} "
+                 "on the workspace boundary (seed sec. 4.2: boundary singularities)")
+    return lines
 
 
 def _report(model, cloud, inv_kappa, limits, progress) -> list[str]:
@@ -117,6 +159,8 @@ def _report(model, cloud, inv_kappa, limits, progress) -> list[str]:
         measure = global_indices.workspace_measure(model, method="qmc", samples=2**16, seed=0, limits=limits,
                                         domain="cartesian", inverse=ik)
         lines.append(f"{kind}: {measure} {unit} (qmc over a Cartesian box, reachability by inverse kinematics)")
+    if mechanism.is_parallel(model):
+        return lines  # the Cartesian grid (_cartesian_report) gives the volume, boundary and singularities
     occupancy = workspace.occupancy_from_cloud(cloud)
     boundary = occupancy.boundary()
     lines.append(f"{kind}: {occupancy.measure()} {unit} (occupancy of {occupancy.cell[0]:.3g} m cells: "

@@ -563,27 +563,31 @@ def _frame_ops(r: _Reader, path: KeyPath, value: Any) -> tuple[Op, ...] | None:
     return _ops(Translation(xyz), Rotation(Z_AXIS, yaw), Rotation(Y_AXIS, pitch), Rotation(X_AXIS, roll))
 
 
+def position_limits(r: _Reader, path: KeyPath, value: Any) -> tuple[sympy.Expr, sympy.Expr] | None:
+    """Position limits ``[lower, upper]`` (expressions, lower < upper at the default values), or None."""
+    bounds = r.sequence(path, value, 2, "bounds [lower, upper]")
+    if bounds is None:
+        return None
+    lower = r.expr(path + (0,), bounds[0])
+    upper = r.expr(path + (1,), bounds[1])
+    if lower is None or upper is None:
+        return None
+    lo, hi = r.default_value(lower), r.default_value(upper)
+    if lo is not None and hi is not None and not lo < hi:
+        r.fail(path, f"the lower limit {lower} is not below the upper limit {upper}",
+               "write the limits as [lower, upper]")
+        return None
+    return lower, upper
+
+
 def _joint_extras(r: _Reader, path: KeyPath, item: dict[str, Any], default_link: str) -> dict[str, Any] | None:
     """Link name, limits and activity of a joint (keys shared by DH rows and chain joints)."""
     link = r.name(path + ("link",), item["link"]) if "link" in item else default_link
     limits = None
     ok = link is not None
     if "limits" in item:
-        bounds = r.sequence(path + ("limits",), item["limits"], 2, "bounds [lower, upper]")
-        if bounds is None:
-            ok = False
-        else:
-            lower = r.expr(path + ("limits", 0), bounds[0])
-            upper = r.expr(path + ("limits", 1), bounds[1])
-            if lower is None or upper is None:
-                ok = False
-            else:
-                lo, hi = r.default_value(lower), r.default_value(upper)
-                if lo is not None and hi is not None and not lo < hi:
-                    r.fail(path + ("limits",), f"the lower limit {lower} is not below the upper limit {upper}",
-                           "write the limits as [lower, upper]")
-                    ok = False
-                limits = (lower, upper)
+        limits = position_limits(r, path + ("limits",), item["limits"])
+        ok = ok and limits is not None
     extras: dict[str, Any] = {"link": link, "limits": limits}
     for key in ("velocity_limit", "effort_limit"):
         extras[key] = None

@@ -35,12 +35,12 @@ from typing import Any
 
 import sympy
 
-from symkin.model.build import ZERO, _describe, _ops, _Reader
+from symkin.model.build import ZERO, _describe, _ops, _Reader, position_limits
 from symkin.model.parallel_build import variable_names
 from symkin.model.schema import Leg, LegJoint, LegJointType, Rotation, Translation, Vec3
 from symkin.model.yaml_source import KeyPath
 
-DELTA_KEYS = ("base", "platform", "upper_arm", "lower_arm", "leg_angles", "actuator")
+DELTA_KEYS = ("base", "platform", "upper_arm", "lower_arm", "leg_angles", "actuator", "actuator_limits")
 JOINT_AT = ("vertex", "side_midpoint")
 
 MINUS_Y: Vec3 = (ZERO, sympy.Integer(-1), ZERO)
@@ -89,6 +89,12 @@ def delta_legs(r: _Reader, path: KeyPath, value: Any) -> tuple[tuple[Leg, ...], 
     lengths = [_length(r, path + (key,), section[key]) for key in ("upper_arm", "lower_arm")]
     angles = _angles(r, path + ("leg_angles",), section["leg_angles"])
     prefix = r.name(path + ("actuator",), section["actuator"]) if "actuator" in section else "theta"
+    limits = ()
+    if "actuator_limits" in section:
+        bounds = position_limits(r, path + ("actuator_limits",), section["actuator_limits"])
+        if bounds is None:
+            return None
+        limits = (bounds,)
     if r_base is None or r_platform is None or None in lengths or angles is None or prefix is None:
         return None
     upper, lower = lengths
@@ -96,7 +102,7 @@ def delta_legs(r: _Reader, path: KeyPath, value: Any) -> tuple[tuple[Leg, ...], 
     for i, phi in enumerate(angles):
         n = i + 1
         joints = (
-            _joint(f"{prefix}{n}", LegJointType.R, (MINUS_Y,), (), active=0),
+            _joint(f"{prefix}{n}", LegJointType.R, (MINUS_Y,), (), active=0, limits=limits),
             _joint(f"elbow{n}", LegJointType.U, (MINUS_Y, PLUS_Z), _ops(Translation((upper, ZERO, ZERO)))),
             _joint(f"wrist{n}", LegJointType.U, (PLUS_Z, MINUS_Y), _ops(Translation((lower, ZERO, ZERO)))),
         )
@@ -111,8 +117,9 @@ def delta_legs(r: _Reader, path: KeyPath, value: Any) -> tuple[tuple[Leg, ...], 
     return tuple(legs), -orientation
 
 
-def _joint(name: str, jtype: LegJointType, axes: tuple[Vec3, ...], origin: tuple, active: int | None = None) -> LegJoint:
-    return LegJoint(name, jtype, axes, origin, variable_names(name, jtype), active)
+def _joint(name: str, jtype: LegJointType, axes: tuple[Vec3, ...], origin: tuple, active: int | None = None,
+           limits: tuple = ()) -> LegJoint:
+    return LegJoint(name, jtype, axes, origin, variable_names(name, jtype), active, limits=limits)
 
 
 def _length(r: _Reader, path: KeyPath, value: Any) -> sympy.Expr | None:

@@ -24,13 +24,14 @@ from typing import Any
 
 import sympy
 
-from symkin.model.build import X_AXIS, Y_AXIS, Z_AXIS, ZERO, _describe, _frame_ops, _ops, _Reader, _unit_axis
+from symkin.model.build import (X_AXIS, Y_AXIS, Z_AXIS, ZERO, _describe, _frame_ops, _ops, _Reader, _unit_axis,
+                                position_limits)
 from symkin.model.schema import Leg, LegJoint, LegJointType, Op, Parallel, PlatformMotion, Rotation, Translation, Vec3
 from symkin.model.yaml_source import KeyPath
 
 PARALLEL_KEYS = ("delta", "motion", "chains", "legs", "fk_branch", "mobility", "home")
 LEG_KEYS = ("name", "chain", "joints", "base", "platform", "ik_branch")
-JOINT_KEYS = ("name", "type", "axis", "axes", "origin", "active", "offset")
+JOINT_KEYS = ("name", "type", "axis", "axes", "origin", "active", "offset", "limits")
 BRANCHES = {"positive": 1, "negative": -1}
 #: Task coordinates p of a parallel mechanism by platform motion (names of task_space components).
 TASK_COORDINATES = {PlatformMotion.TRANSLATION: ("x", "y", "z"),
@@ -257,11 +258,29 @@ def _joint(r: _Reader, path: KeyPath, item: Any, number: int) -> LegJoint | None
                    "remove 'offset' or mark the joint 'active: true'")
             return None
         offset = r.expr(path + ("offset",), item["offset"])
-    if base_name is None or axes is None or origin is None or offset is None:
+    limits = leg_joint_limits(r, path + ("limits",), item["limits"], jtype) if "limits" in item else ()
+    if base_name is None or axes is None or origin is None or offset is None or limits is None:
         return None
     name = f"{base_name}{number}"
     return LegJoint(name, jtype, axes, origin, variable_names(name, jtype), _ACTUABLE[jtype] if active else None,
-                    offset)
+                    offset, limits)
+
+
+def leg_joint_limits(r: _Reader, path: KeyPath, value: Any,
+                     jtype: LegJointType) -> tuple[tuple[sympy.Expr, sympy.Expr] | None, ...] | None:
+    """Position limits of a leg joint: ``[lower, upper]`` (R, P) or one pair per motion (U, S, C).
+
+    A motion of a multi-DoF joint may be left free with ``null``; None when invalid.
+    """
+    if jtype.dof == 1:
+        bounds = position_limits(r, path, value)
+        return None if bounds is None else (bounds,)
+    items = r.sequence(path, value, jtype.dof, f"limits, one [lower, upper] (or null) per motion of the "
+                                               f"{jtype.value} joint")
+    if items is None:
+        return None
+    limits = tuple(None if item is None else position_limits(r, path + (k,), item) for k, item in enumerate(items))
+    return None if any(b is None and item is not None for b, item in zip(limits, items)) else limits
 
 
 def _axes(r: _Reader, path: KeyPath, item: dict[str, Any], jtype: LegJointType) -> tuple[Vec3, ...] | None:

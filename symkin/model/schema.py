@@ -214,6 +214,10 @@ class LegJoint:
         active: index into ``variables`` of the actuated motion, or None (passive joint).
             R and P joints and the slide of a C joint can be actuated.
         offset: constant added to the actuated variable (e.g. the strut length at zero stroke).
+        limits: position limits (lower, upper) of each motion (one per variable), None for
+            a motion without limits; () when the joint declares none.  The actuated
+            motion's limits are its coordinate's; the passive ones restrict the workspace
+            (:mod:`symkin.analysis.parallel`).
     """
 
     name: str
@@ -223,6 +227,11 @@ class LegJoint:
     variables: tuple[str, ...]
     active: int | None = None
     offset: sympy.Expr = sympy.Integer(0)
+    limits: tuple[tuple[sympy.Expr, sympy.Expr] | None, ...] = ()
+
+    def limits_of(self, k: int) -> tuple[sympy.Expr, sympy.Expr] | None:
+        """The limits of motion k (index into :attr:`variables`), or None."""
+        return self.limits[k] if self.limits else None
 
     @property
     def motions(self) -> tuple[tuple[str, Vec3, bool], ...]:
@@ -367,7 +376,8 @@ class Model:
                 if joint.active is not None:
                     _, _, rotation = joint.motions[joint.active]
                     out.append(Coordinate(joint.variables[joint.active],
-                                          JointType.REVOLUTE if rotation else JointType.PRISMATIC))
+                                          JointType.REVOLUTE if rotation else JointType.PRISMATIC,
+                                          joint.limits_of(joint.active)))
         return tuple(out)
 
     @property
