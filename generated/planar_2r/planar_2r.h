@@ -134,7 +134,8 @@ void planar_2r_jacobian_geometric_batch(size_t n, const double *q, const double 
 /* planar_2r_mass_matrix: Joint-space mass matrix.
  *
  * M(q) = sum over bodies of m Jv^T Jv + Jw^T I Jw with the velocity Jacobians at the
- * centres of mass (seed eqs. 8.31-8.33; 2-DoF example eq. 8.53).
+ * centres of mass (seed eqs. 8.31-8.33; 2-DoF example eq. 8.53), evaluated by the
+ * composite-rigid-body algorithm (Featherstone 2008, table 6.2).
  *
  * Inputs:
  *   q[2]: joint coordinates: theta1 [rad], theta2 [rad].
@@ -144,7 +145,7 @@ void planar_2r_jacobian_geometric_batch(size_t n, const double *q, const double 
  *   m2: point mass at the end of link 2 [kg]; default PLANAR_2R_DEFAULT_m2 = 0.1.
  * Outputs:
  *   M[4]: 2 x 2, row-major; symmetric positive definite mass matrix.
- * Cost: 34 operations.
+ * Cost: 14 operations.
  */
 void planar_2r_mass_matrix(const double *q, double l1, double l2, double m1, double m2, double *M);
 
@@ -152,7 +153,7 @@ void planar_2r_mass_matrix(const double *q, double l1, double l2, double m1, dou
 void planar_2r_mass_matrix_packed(const double *in, double *out);
 
 /* planar_2r_mass_matrix for n configurations; params: l1, l2, m1, m2, stride 0 or 4.
- * Uses 832 bytes of stack for its blocks of 8 configurations. */
+ * Uses 768 bytes of stack for its blocks of 8 configurations. */
 void planar_2r_mass_matrix_batch(size_t n, const double *q, const double *params, size_t params_stride, double *M);
 
 /* planar_2r_coriolis_matrix: Coriolis matrix from the Christoffel symbols of M.
@@ -168,7 +169,7 @@ void planar_2r_mass_matrix_batch(size_t n, const double *q, const double *params
  *   m2: point mass at the end of link 2 [kg]; default PLANAR_2R_DEFAULT_m2 = 0.1.
  * Outputs:
  *   C[4]: 2 x 2, row-major; Coriolis matrix.
- * Cost: 39 operations.
+ * Cost: 8 operations.
  */
 void planar_2r_coriolis_matrix(const double *q, const double *qd, double l1, double l2, double m2, double *C);
 
@@ -176,13 +177,14 @@ void planar_2r_coriolis_matrix(const double *q, const double *qd, double l1, dou
 void planar_2r_coriolis_matrix_packed(const double *in, double *out);
 
 /* planar_2r_coriolis_matrix for n configurations; params: l1, l2, m2, stride 0 or 3.
- * Uses 832 bytes of stack for its blocks of 8 configurations. */
+ * Uses 768 bytes of stack for its blocks of 8 configurations. */
 void planar_2r_coriolis_matrix_batch(size_t n, const double *q, const double *qd, const double *params, size_t params_stride, double *C);
 
 /* planar_2r_coriolis_vector: Coriolis and centrifugal torques.
  *
  * V(q, qd) = C(q, qd) qd = dM/dt qd - 1/2 d(qd^T M qd)/dq (seed eq. 8.31; 2-DoF example
- * eq. 8.54).
+ * eq. 8.54), evaluated by a recursive Newton-Euler pass without gravity and acceleration
+ * (seed sec. 4.4).
  *
  * Inputs:
  *   q[2]: joint coordinates: theta1 [rad], theta2 [rad].
@@ -192,7 +194,7 @@ void planar_2r_coriolis_matrix_batch(size_t n, const double *q, const double *qd
  *   m2: point mass at the end of link 2 [kg]; default PLANAR_2R_DEFAULT_m2 = 0.1.
  * Outputs:
  *   V[2]: 2; Coriolis and centrifugal joint torques [N*m (revolute), N (prismatic)].
- * Cost: 52 operations.
+ * Cost: 18 operations.
  */
 void planar_2r_coriolis_vector(const double *q, const double *qd, double l1, double l2, double m2, double *V);
 
@@ -200,13 +202,13 @@ void planar_2r_coriolis_vector(const double *q, const double *qd, double l1, dou
 void planar_2r_coriolis_vector_packed(const double *in, double *out);
 
 /* planar_2r_coriolis_vector for n configurations; params: l1, l2, m2, stride 0 or 3.
- * Uses 768 bytes of stack for its blocks of 8 configurations. */
+ * Uses 704 bytes of stack for its blocks of 8 configurations. */
 void planar_2r_coriolis_vector_batch(size_t n, const double *q, const double *qd, const double *params, size_t params_stride, double *V);
 
 /* planar_2r_gravity_vector: Gravity torques.
  *
  * G(q) = du/dq with u = -sum m g . c over the bodies (seed eq. 8.31; 2-DoF example eq.
- * 8.54).
+ * 8.54), evaluated by a recursive Newton-Euler pass at rest (seed sec. 4.4).
  *
  * Inputs:
  *   q[2]: joint coordinates: theta1 [rad], theta2 [rad].
@@ -218,7 +220,7 @@ void planar_2r_coriolis_vector_batch(size_t n, const double *q, const double *qd
  * Outputs:
  *   G[2]: 2; joint torques that hold the arm against gravity [N*m (revolute), N
  *   (prismatic)].
- * Cost: 17 operations.
+ * Cost: 19 operations.
  */
 void planar_2r_gravity_vector(const double *q, double l1, double l2, double m1, double m2, double g, double *G);
 
@@ -231,7 +233,8 @@ void planar_2r_gravity_vector_batch(size_t n, const double *q, const double *par
 
 /* planar_2r_inverse_dynamics: Inverse dynamics: joint torques for a motion.
  *
- * tau = M(q) qdd + V(q, qd) + G(q) + F_f(qd) (seed eq. 8.34).
+ * tau = M(q) qdd + V(q, qd) + G(q) + F_f(qd) (seed eq. 8.34), by the recursive Newton-
+ * Euler algorithm (seed sec. 4.4, Luh-Walker-Paul; O(n) operations).
  *
  * Inputs:
  *   q[2]: joint coordinates: theta1 [rad], theta2 [rad].
@@ -245,7 +248,7 @@ void planar_2r_gravity_vector_batch(size_t n, const double *q, const double *par
  * Outputs:
  *   tau[2]: 2; joint torques (revolute) or forces (prismatic) [N*m (revolute), N
  *   (prismatic)].
- * Cost: 107 operations.
+ * Cost: 44 operations.
  */
 void planar_2r_inverse_dynamics(const double *q, const double *qd, const double *qdd, double l1, double l2, double m1, double m2, double g, double *tau);
 
@@ -272,7 +275,7 @@ void planar_2r_inverse_dynamics_batch(size_t n, const double *q, const double *q
  *   g: gravitational acceleration [m/s^2]; default PLANAR_2R_DEFAULT_g = 9.81.
  * Outputs:
  *   qdd[2]: 2; joint accelerations [rad/s^2 (revolute), m/s^2 (prismatic)].
- * Cost: 111 operations.
+ * Cost: 55 operations.
  */
 void planar_2r_forward_dynamics(const double *q, const double *qd, const double *tau, double l1, double l2, double m1, double m2, double g, double *qdd);
 
@@ -300,7 +303,7 @@ void planar_2r_forward_dynamics_batch(size_t n, const double *q, const double *q
  *   g: gravitational acceleration [m/s^2]; default PLANAR_2R_DEFAULT_g = 9.81.
  * Outputs:
  *   F[2]: 2; TCP force components [x, y] [N, N*m].
- * Cost: 125 operations.
+ * Cost: 65 operations.
  */
 void planar_2r_tcp_force(const double *q, const double *qd, const double *qdd, double l1, double l2, double m1, double m2, double g, double *F);
 
@@ -329,7 +332,7 @@ void planar_2r_tcp_force_batch(size_t n, const double *q, const double *qd, cons
  *   Mx[4]: 2 x 2, row-major; operational-space mass matrix J^-T M J^-1.
  *   Vx[2]: 2; operational-space Coriolis and centrifugal force J^-T (V - M J^-1 dJ/dt qd).
  *   Gx[2]: 2; operational-space gravity force J^-T G.
- * Cost: 177 operations.
+ * Cost: 128 operations.
  */
 void planar_2r_operational_space(const double *q, const double *qd, double l1, double l2, double m1, double m2, double g, double *Mx, double *Vx, double *Gx);
 
@@ -353,7 +356,7 @@ void planar_2r_operational_space_batch(size_t n, const double *q, const double *
  *   m2: point mass at the end of link 2 [kg]; default PLANAR_2R_DEFAULT_m2 = 0.1.
  * Outputs:
  *   k[1]: scalar; kinetic energy of all bodies [J].
- * Cost: 44 operations.
+ * Cost: 24 operations.
  */
 void planar_2r_kinetic_energy(const double *q, const double *qd, double l1, double l2, double m1, double m2, double *k);
 
@@ -361,7 +364,7 @@ void planar_2r_kinetic_energy(const double *q, const double *qd, double l1, doub
 void planar_2r_kinetic_energy_packed(const double *in, double *out);
 
 /* planar_2r_kinetic_energy for n configurations; params: l1, l2, m1, m2, stride 0 or 4.
- * Uses 768 bytes of stack for its blocks of 8 configurations. */
+ * Uses 704 bytes of stack for its blocks of 8 configurations. */
 void planar_2r_kinetic_energy_batch(size_t n, const double *q, const double *qd, const double *params, size_t params_stride, double *k);
 
 /* planar_2r_potential_energy: Gravitational potential energy.
@@ -434,7 +437,7 @@ void planar_2r_potential_energy_batch(size_t n, const double *q, const double *p
  *   Gx[2]: 2; operational-space gravity force J^-T G (operational_space).
  *   k[1]: scalar; kinetic energy of all bodies (kinetic_energy) [J].
  *   u[1]: scalar; potential energy (potential_energy) [J].
- * Cost: 632 operations.
+ * Cost: 302 operations.
  */
 void planar_2r_scene(const double *q, const double *qd, const double *qdd, const double *tau, double l1, double l2, double m1, double m2, double g, double *base_T_tcp, double *base_T_link1, double *base_T_link2, double *jacobian_J, double *jacobian_geometric_J, double *M, double *C, double *V, double *G, double *inverse_dynamics_tau, double *forward_dynamics_qdd, double *F, double *Mx, double *Vx, double *Gx, double *k, double *u);
 
@@ -538,7 +541,8 @@ void planar_2r_jacobian_geometric_batch_f32(size_t n, const float *q, const floa
 /* planar_2r_mass_matrix_f32: Joint-space mass matrix.
  *
  * M(q) = sum over bodies of m Jv^T Jv + Jw^T I Jw with the velocity Jacobians at the
- * centres of mass (seed eqs. 8.31-8.33; 2-DoF example eq. 8.53).
+ * centres of mass (seed eqs. 8.31-8.33; 2-DoF example eq. 8.53), evaluated by the
+ * composite-rigid-body algorithm (Featherstone 2008, table 6.2).
  *
  * Inputs:
  *   q[2]: joint coordinates: theta1 [rad], theta2 [rad].
@@ -548,7 +552,7 @@ void planar_2r_jacobian_geometric_batch_f32(size_t n, const float *q, const floa
  *   m2: point mass at the end of link 2 [kg]; default PLANAR_2R_DEFAULT_m2 = 0.1.
  * Outputs:
  *   M[4]: 2 x 2, row-major; symmetric positive definite mass matrix.
- * Cost: 34 operations.
+ * Cost: 14 operations.
  */
 void planar_2r_mass_matrix_f32(const float *q, float l1, float l2, float m1, float m2, float *M);
 
@@ -556,7 +560,7 @@ void planar_2r_mass_matrix_f32(const float *q, float l1, float l2, float m1, flo
 void planar_2r_mass_matrix_packed_f32(const float *in, float *out);
 
 /* planar_2r_mass_matrix_f32 for n configurations; params: l1, l2, m1, m2, stride 0 or 4.
- * Uses 416 bytes of stack for its blocks of 8 configurations. */
+ * Uses 384 bytes of stack for its blocks of 8 configurations. */
 void planar_2r_mass_matrix_batch_f32(size_t n, const float *q, const float *params, size_t params_stride, float *M);
 
 /* planar_2r_coriolis_matrix_f32: Coriolis matrix from the Christoffel symbols of M.
@@ -572,7 +576,7 @@ void planar_2r_mass_matrix_batch_f32(size_t n, const float *q, const float *para
  *   m2: point mass at the end of link 2 [kg]; default PLANAR_2R_DEFAULT_m2 = 0.1.
  * Outputs:
  *   C[4]: 2 x 2, row-major; Coriolis matrix.
- * Cost: 39 operations.
+ * Cost: 8 operations.
  */
 void planar_2r_coriolis_matrix_f32(const float *q, const float *qd, float l1, float l2, float m2, float *C);
 
@@ -580,13 +584,14 @@ void planar_2r_coriolis_matrix_f32(const float *q, const float *qd, float l1, fl
 void planar_2r_coriolis_matrix_packed_f32(const float *in, float *out);
 
 /* planar_2r_coriolis_matrix_f32 for n configurations; params: l1, l2, m2, stride 0 or 3.
- * Uses 416 bytes of stack for its blocks of 8 configurations. */
+ * Uses 384 bytes of stack for its blocks of 8 configurations. */
 void planar_2r_coriolis_matrix_batch_f32(size_t n, const float *q, const float *qd, const float *params, size_t params_stride, float *C);
 
 /* planar_2r_coriolis_vector_f32: Coriolis and centrifugal torques.
  *
  * V(q, qd) = C(q, qd) qd = dM/dt qd - 1/2 d(qd^T M qd)/dq (seed eq. 8.31; 2-DoF example
- * eq. 8.54).
+ * eq. 8.54), evaluated by a recursive Newton-Euler pass without gravity and acceleration
+ * (seed sec. 4.4).
  *
  * Inputs:
  *   q[2]: joint coordinates: theta1 [rad], theta2 [rad].
@@ -596,7 +601,7 @@ void planar_2r_coriolis_matrix_batch_f32(size_t n, const float *q, const float *
  *   m2: point mass at the end of link 2 [kg]; default PLANAR_2R_DEFAULT_m2 = 0.1.
  * Outputs:
  *   V[2]: 2; Coriolis and centrifugal joint torques [N*m (revolute), N (prismatic)].
- * Cost: 52 operations.
+ * Cost: 18 operations.
  */
 void planar_2r_coriolis_vector_f32(const float *q, const float *qd, float l1, float l2, float m2, float *V);
 
@@ -604,13 +609,13 @@ void planar_2r_coriolis_vector_f32(const float *q, const float *qd, float l1, fl
 void planar_2r_coriolis_vector_packed_f32(const float *in, float *out);
 
 /* planar_2r_coriolis_vector_f32 for n configurations; params: l1, l2, m2, stride 0 or 3.
- * Uses 384 bytes of stack for its blocks of 8 configurations. */
+ * Uses 352 bytes of stack for its blocks of 8 configurations. */
 void planar_2r_coriolis_vector_batch_f32(size_t n, const float *q, const float *qd, const float *params, size_t params_stride, float *V);
 
 /* planar_2r_gravity_vector_f32: Gravity torques.
  *
  * G(q) = du/dq with u = -sum m g . c over the bodies (seed eq. 8.31; 2-DoF example eq.
- * 8.54).
+ * 8.54), evaluated by a recursive Newton-Euler pass at rest (seed sec. 4.4).
  *
  * Inputs:
  *   q[2]: joint coordinates: theta1 [rad], theta2 [rad].
@@ -622,7 +627,7 @@ void planar_2r_coriolis_vector_batch_f32(size_t n, const float *q, const float *
  * Outputs:
  *   G[2]: 2; joint torques that hold the arm against gravity [N*m (revolute), N
  *   (prismatic)].
- * Cost: 17 operations.
+ * Cost: 19 operations.
  */
 void planar_2r_gravity_vector_f32(const float *q, float l1, float l2, float m1, float m2, float g, float *G);
 
@@ -635,7 +640,8 @@ void planar_2r_gravity_vector_batch_f32(size_t n, const float *q, const float *p
 
 /* planar_2r_inverse_dynamics_f32: Inverse dynamics: joint torques for a motion.
  *
- * tau = M(q) qdd + V(q, qd) + G(q) + F_f(qd) (seed eq. 8.34).
+ * tau = M(q) qdd + V(q, qd) + G(q) + F_f(qd) (seed eq. 8.34), by the recursive Newton-
+ * Euler algorithm (seed sec. 4.4, Luh-Walker-Paul; O(n) operations).
  *
  * Inputs:
  *   q[2]: joint coordinates: theta1 [rad], theta2 [rad].
@@ -649,7 +655,7 @@ void planar_2r_gravity_vector_batch_f32(size_t n, const float *q, const float *p
  * Outputs:
  *   tau[2]: 2; joint torques (revolute) or forces (prismatic) [N*m (revolute), N
  *   (prismatic)].
- * Cost: 107 operations.
+ * Cost: 44 operations.
  */
 void planar_2r_inverse_dynamics_f32(const float *q, const float *qd, const float *qdd, float l1, float l2, float m1, float m2, float g, float *tau);
 
@@ -676,7 +682,7 @@ void planar_2r_inverse_dynamics_batch_f32(size_t n, const float *q, const float 
  *   g: gravitational acceleration [m/s^2]; default PLANAR_2R_DEFAULT_g = 9.81.
  * Outputs:
  *   qdd[2]: 2; joint accelerations [rad/s^2 (revolute), m/s^2 (prismatic)].
- * Cost: 111 operations.
+ * Cost: 55 operations.
  */
 void planar_2r_forward_dynamics_f32(const float *q, const float *qd, const float *tau, float l1, float l2, float m1, float m2, float g, float *qdd);
 
@@ -704,7 +710,7 @@ void planar_2r_forward_dynamics_batch_f32(size_t n, const float *q, const float 
  *   g: gravitational acceleration [m/s^2]; default PLANAR_2R_DEFAULT_g = 9.81.
  * Outputs:
  *   F[2]: 2; TCP force components [x, y] [N, N*m].
- * Cost: 125 operations.
+ * Cost: 65 operations.
  */
 void planar_2r_tcp_force_f32(const float *q, const float *qd, const float *qdd, float l1, float l2, float m1, float m2, float g, float *F);
 
@@ -733,7 +739,7 @@ void planar_2r_tcp_force_batch_f32(size_t n, const float *q, const float *qd, co
  *   Mx[4]: 2 x 2, row-major; operational-space mass matrix J^-T M J^-1.
  *   Vx[2]: 2; operational-space Coriolis and centrifugal force J^-T (V - M J^-1 dJ/dt qd).
  *   Gx[2]: 2; operational-space gravity force J^-T G.
- * Cost: 177 operations.
+ * Cost: 128 operations.
  */
 void planar_2r_operational_space_f32(const float *q, const float *qd, float l1, float l2, float m1, float m2, float g, float *Mx, float *Vx, float *Gx);
 
@@ -757,7 +763,7 @@ void planar_2r_operational_space_batch_f32(size_t n, const float *q, const float
  *   m2: point mass at the end of link 2 [kg]; default PLANAR_2R_DEFAULT_m2 = 0.1.
  * Outputs:
  *   k[1]: scalar; kinetic energy of all bodies [J].
- * Cost: 44 operations.
+ * Cost: 24 operations.
  */
 void planar_2r_kinetic_energy_f32(const float *q, const float *qd, float l1, float l2, float m1, float m2, float *k);
 
@@ -765,7 +771,7 @@ void planar_2r_kinetic_energy_f32(const float *q, const float *qd, float l1, flo
 void planar_2r_kinetic_energy_packed_f32(const float *in, float *out);
 
 /* planar_2r_kinetic_energy_f32 for n configurations; params: l1, l2, m1, m2, stride 0 or 4.
- * Uses 384 bytes of stack for its blocks of 8 configurations. */
+ * Uses 352 bytes of stack for its blocks of 8 configurations. */
 void planar_2r_kinetic_energy_batch_f32(size_t n, const float *q, const float *qd, const float *params, size_t params_stride, float *k);
 
 /* planar_2r_potential_energy_f32: Gravitational potential energy.
@@ -838,7 +844,7 @@ void planar_2r_potential_energy_batch_f32(size_t n, const float *q, const float 
  *   Gx[2]: 2; operational-space gravity force J^-T G (operational_space).
  *   k[1]: scalar; kinetic energy of all bodies (kinetic_energy) [J].
  *   u[1]: scalar; potential energy (potential_energy) [J].
- * Cost: 632 operations.
+ * Cost: 302 operations.
  */
 void planar_2r_scene_f32(const float *q, const float *qd, const float *qdd, const float *tau, float l1, float l2, float m1, float m2, float g, float *base_T_tcp, float *base_T_link1, float *base_T_link2, float *jacobian_J, float *jacobian_geometric_J, float *M, float *C, float *V, float *G, float *inverse_dynamics_tau, float *forward_dynamics_qdd, float *F, float *Mx, float *Vx, float *Gx, float *k, float *u);
 

@@ -163,11 +163,11 @@ void ur10e_jacobian_geometric_batch(size_t n, const double *q, const double *par
 /* ur10e_mass_matrix: Joint-space mass matrix.
  *
  * M(q) = sum over bodies of m Jv^T Jv + Jw^T I Jw with the velocity Jacobians at the
- * centres of mass (seed eqs. 8.31-8.33; 2-DoF example eq. 8.53).
+ * centres of mass (seed eqs. 8.31-8.33; 2-DoF example eq. 8.53), evaluated by the
+ * composite-rigid-body algorithm (Featherstone 2008, table 6.2).
  *
  * Inputs:
  *   q[6]: joint coordinates: q1 [rad], q2 [rad], q3 [rad], q4 [rad], q5 [rad], q6 [rad].
- *   d1: shoulder height [m]; default UR10E_DEFAULT_d1 = 0.1807.
  *   a2: upper arm length (UR sign convention) [m]; default UR10E_DEFAULT_a2 = -0.6127.
  *   a3: forearm length (UR sign convention) [m]; default UR10E_DEFAULT_a3 = -0.57155.
  *   d4: wrist 1 offset [m]; default UR10E_DEFAULT_d4 = 0.17415.
@@ -181,15 +181,15 @@ void ur10e_jacobian_geometric_batch(size_t n, const double *q, const double *par
  *   m6: mass of link 6 (wrist 3), without tool [kg]; default UR10E_DEFAULT_m6 = 0.615.
  * Outputs:
  *   M[36]: 6 x 6, row-major; symmetric positive definite mass matrix.
- * Cost: 851 operations.
+ * Cost: 326 operations.
  */
-void ur10e_mass_matrix(const double *q, double d1, double a2, double a3, double d4, double d5, double d6, double m1, double m2, double m3, double m4, double m5, double m6, double *M);
+void ur10e_mass_matrix(const double *q, double a2, double a3, double d4, double d5, double d6, double m1, double m2, double m3, double m4, double m5, double m6, double *M);
 
-/* ur10e_mass_matrix with packed arguments: in = q, d1, a2, a3, d4, d5, d6, m1, m2, m3, m4, m5, m6 one after the other; out = M one after the other. */
+/* ur10e_mass_matrix with packed arguments: in = q, a2, a3, d4, d5, d6, m1, m2, m3, m4, m5, m6 one after the other; out = M one after the other. */
 void ur10e_mass_matrix_packed(const double *in, double *out);
 
-/* ur10e_mass_matrix for n configurations; params: d1, a2, a3, d4, d5, d6, m1, m2, m3, m4, m5, m6, stride 0 or 12.
- * Uses 4224 bytes of stack for its blocks of 8 configurations. */
+/* ur10e_mass_matrix for n configurations; params: a2, a3, d4, d5, d6, m1, m2, m3, m4, m5, m6, stride 0 or 11.
+ * Uses 4096 bytes of stack for its blocks of 8 configurations. */
 void ur10e_mass_matrix_batch(size_t n, const double *q, const double *params, size_t params_stride, double *M);
 
 /* ur10e_coriolis_matrix: Coriolis matrix from the Christoffel symbols of M.
@@ -201,13 +201,11 @@ void ur10e_mass_matrix_batch(size_t n, const double *q, const double *params, si
  *   q[6]: joint coordinates: q1 [rad], q2 [rad], q3 [rad], q4 [rad], q5 [rad], q6 [rad].
  *   qd[6]: joint velocities: q1 [rad/s], q2 [rad/s], q3 [rad/s], q4 [rad/s], q5 [rad/s],
  *   q6 [rad/s].
- *   d1: shoulder height [m]; default UR10E_DEFAULT_d1 = 0.1807.
  *   a2: upper arm length (UR sign convention) [m]; default UR10E_DEFAULT_a2 = -0.6127.
  *   a3: forearm length (UR sign convention) [m]; default UR10E_DEFAULT_a3 = -0.57155.
  *   d4: wrist 1 offset [m]; default UR10E_DEFAULT_d4 = 0.17415.
  *   d5: wrist 2 offset [m]; default UR10E_DEFAULT_d5 = 0.11985.
  *   d6: wrist 3 offset (flange) [m]; default UR10E_DEFAULT_d6 = 0.11655.
- *   m1: mass of link 1 (shoulder) [kg]; default UR10E_DEFAULT_m1 = 7.369.
  *   m2: mass of link 2 (upper arm) [kg]; default UR10E_DEFAULT_m2 = 13.051.
  *   m3: mass of link 3 (forearm) [kg]; default UR10E_DEFAULT_m3 = 3.989.
  *   m4: mass of link 4 (wrist 1) [kg]; default UR10E_DEFAULT_m4 = 2.1.
@@ -215,33 +213,32 @@ void ur10e_mass_matrix_batch(size_t n, const double *q, const double *params, si
  *   m6: mass of link 6 (wrist 3), without tool [kg]; default UR10E_DEFAULT_m6 = 0.615.
  * Outputs:
  *   C[36]: 6 x 6, row-major; Coriolis matrix.
- * Cost: 3767 operations.
+ * Cost: 976 operations.
  */
-void ur10e_coriolis_matrix(const double *q, const double *qd, double d1, double a2, double a3, double d4, double d5, double d6, double m1, double m2, double m3, double m4, double m5, double m6, double *C);
+void ur10e_coriolis_matrix(const double *q, const double *qd, double a2, double a3, double d4, double d5, double d6, double m2, double m3, double m4, double m5, double m6, double *C);
 
-/* ur10e_coriolis_matrix with packed arguments: in = q, qd, d1, a2, a3, d4, d5, d6, m1, m2, m3, m4, m5, m6 one after the other; out = C one after the other. */
+/* ur10e_coriolis_matrix with packed arguments: in = q, qd, a2, a3, d4, d5, d6, m2, m3, m4, m5, m6 one after the other; out = C one after the other. */
 void ur10e_coriolis_matrix_packed(const double *in, double *out);
 
-/* ur10e_coriolis_matrix for n configurations; params: d1, a2, a3, d4, d5, d6, m1, m2, m3, m4, m5, m6, stride 0 or 12.
- * Uses 4608 bytes of stack for its blocks of 8 configurations. */
+/* ur10e_coriolis_matrix for n configurations; params: a2, a3, d4, d5, d6, m2, m3, m4, m5, m6, stride 0 or 10.
+ * Uses 4544 bytes of stack for its blocks of 8 configurations. */
 void ur10e_coriolis_matrix_batch(size_t n, const double *q, const double *qd, const double *params, size_t params_stride, double *C);
 
 /* ur10e_coriolis_vector: Coriolis and centrifugal torques.
  *
  * V(q, qd) = C(q, qd) qd = dM/dt qd - 1/2 d(qd^T M qd)/dq (seed eq. 8.31; 2-DoF example
- * eq. 8.54).
+ * eq. 8.54), evaluated by a recursive Newton-Euler pass without gravity and acceleration
+ * (seed sec. 4.4).
  *
  * Inputs:
  *   q[6]: joint coordinates: q1 [rad], q2 [rad], q3 [rad], q4 [rad], q5 [rad], q6 [rad].
  *   qd[6]: joint velocities: q1 [rad/s], q2 [rad/s], q3 [rad/s], q4 [rad/s], q5 [rad/s],
  *   q6 [rad/s].
- *   d1: shoulder height [m]; default UR10E_DEFAULT_d1 = 0.1807.
  *   a2: upper arm length (UR sign convention) [m]; default UR10E_DEFAULT_a2 = -0.6127.
  *   a3: forearm length (UR sign convention) [m]; default UR10E_DEFAULT_a3 = -0.57155.
  *   d4: wrist 1 offset [m]; default UR10E_DEFAULT_d4 = 0.17415.
  *   d5: wrist 2 offset [m]; default UR10E_DEFAULT_d5 = 0.11985.
  *   d6: wrist 3 offset (flange) [m]; default UR10E_DEFAULT_d6 = 0.11655.
- *   m1: mass of link 1 (shoulder) [kg]; default UR10E_DEFAULT_m1 = 7.369.
  *   m2: mass of link 2 (upper arm) [kg]; default UR10E_DEFAULT_m2 = 13.051.
  *   m3: mass of link 3 (forearm) [kg]; default UR10E_DEFAULT_m3 = 3.989.
  *   m4: mass of link 4 (wrist 1) [kg]; default UR10E_DEFAULT_m4 = 2.1.
@@ -249,27 +246,26 @@ void ur10e_coriolis_matrix_batch(size_t n, const double *q, const double *qd, co
  *   m6: mass of link 6 (wrist 3), without tool [kg]; default UR10E_DEFAULT_m6 = 0.615.
  * Outputs:
  *   V[6]: 6; Coriolis and centrifugal joint torques [N*m (revolute), N (prismatic)].
- * Cost: 3822 operations.
+ * Cost: 578 operations.
  */
-void ur10e_coriolis_vector(const double *q, const double *qd, double d1, double a2, double a3, double d4, double d5, double d6, double m1, double m2, double m3, double m4, double m5, double m6, double *V);
+void ur10e_coriolis_vector(const double *q, const double *qd, double a2, double a3, double d4, double d5, double d6, double m2, double m3, double m4, double m5, double m6, double *V);
 
-/* ur10e_coriolis_vector with packed arguments: in = q, qd, d1, a2, a3, d4, d5, d6, m1, m2, m3, m4, m5, m6 one after the other; out = V one after the other. */
+/* ur10e_coriolis_vector with packed arguments: in = q, qd, a2, a3, d4, d5, d6, m2, m3, m4, m5, m6 one after the other; out = V one after the other. */
 void ur10e_coriolis_vector_packed(const double *in, double *out);
 
-/* ur10e_coriolis_vector for n configurations; params: d1, a2, a3, d4, d5, d6, m1, m2, m3, m4, m5, m6, stride 0 or 12.
+/* ur10e_coriolis_vector for n configurations; params: a2, a3, d4, d5, d6, m2, m3, m4, m5, m6, stride 0 or 10.
  * Uses 2688 bytes of stack for its blocks of 8 configurations. */
 void ur10e_coriolis_vector_batch(size_t n, const double *q, const double *qd, const double *params, size_t params_stride, double *V);
 
 /* ur10e_gravity_vector: Gravity torques.
  *
  * G(q) = du/dq with u = -sum m g . c over the bodies (seed eq. 8.31; 2-DoF example eq.
- * 8.54).
+ * 8.54), evaluated by a recursive Newton-Euler pass at rest (seed sec. 4.4).
  *
  * Inputs:
  *   q[6]: joint coordinates: q1 [rad], q2 [rad], q3 [rad], q4 [rad], q5 [rad], q6 [rad].
  *   a2: upper arm length (UR sign convention) [m]; default UR10E_DEFAULT_a2 = -0.6127.
  *   a3: forearm length (UR sign convention) [m]; default UR10E_DEFAULT_a3 = -0.57155.
- *   d4: wrist 1 offset [m]; default UR10E_DEFAULT_d4 = 0.17415.
  *   d5: wrist 2 offset [m]; default UR10E_DEFAULT_d5 = 0.11985.
  *   d6: wrist 3 offset (flange) [m]; default UR10E_DEFAULT_d6 = 0.11655.
  *   m2: mass of link 2 (upper arm) [kg]; default UR10E_DEFAULT_m2 = 13.051.
@@ -281,20 +277,21 @@ void ur10e_coriolis_vector_batch(size_t n, const double *q, const double *qd, co
  * Outputs:
  *   G[6]: 6; joint torques that hold the arm against gravity [N*m (revolute), N
  *   (prismatic)].
- * Cost: 134 operations.
+ * Cost: 69 operations.
  */
-void ur10e_gravity_vector(const double *q, double a2, double a3, double d4, double d5, double d6, double m2, double m3, double m4, double m5, double m6, double g, double *G);
+void ur10e_gravity_vector(const double *q, double a2, double a3, double d5, double d6, double m2, double m3, double m4, double m5, double m6, double g, double *G);
 
-/* ur10e_gravity_vector with packed arguments: in = q, a2, a3, d4, d5, d6, m2, m3, m4, m5, m6, g one after the other; out = G one after the other. */
+/* ur10e_gravity_vector with packed arguments: in = q, a2, a3, d5, d6, m2, m3, m4, m5, m6, g one after the other; out = G one after the other. */
 void ur10e_gravity_vector_packed(const double *in, double *out);
 
-/* ur10e_gravity_vector for n configurations; params: a2, a3, d4, d5, d6, m2, m3, m4, m5, m6, g, stride 0 or 11.
+/* ur10e_gravity_vector for n configurations; params: a2, a3, d5, d6, m2, m3, m4, m5, m6, g, stride 0 or 10.
  * Uses 1920 bytes of stack for its blocks of 8 configurations. */
 void ur10e_gravity_vector_batch(size_t n, const double *q, const double *params, size_t params_stride, double *G);
 
 /* ur10e_inverse_dynamics: Inverse dynamics: joint torques for a motion.
  *
- * tau = M(q) qdd + V(q, qd) + G(q) + F_f(qd) (seed eq. 8.34).
+ * tau = M(q) qdd + V(q, qd) + G(q) + F_f(qd) (seed eq. 8.34), by the recursive Newton-
+ * Euler algorithm (seed sec. 4.4, Luh-Walker-Paul; O(n) operations).
  *
  * Inputs:
  *   q[6]: joint coordinates: q1 [rad], q2 [rad], q3 [rad], q4 [rad], q5 [rad], q6 [rad].
@@ -302,7 +299,6 @@ void ur10e_gravity_vector_batch(size_t n, const double *q, const double *params,
  *   q6 [rad/s].
  *   qdd[6]: joint accelerations: q1 [rad/s^2], q2 [rad/s^2], q3 [rad/s^2], q4 [rad/s^2],
  *   q5 [rad/s^2], q6 [rad/s^2].
- *   d1: shoulder height [m]; default UR10E_DEFAULT_d1 = 0.1807.
  *   a2: upper arm length (UR sign convention) [m]; default UR10E_DEFAULT_a2 = -0.6127.
  *   a3: forearm length (UR sign convention) [m]; default UR10E_DEFAULT_a3 = -0.57155.
  *   d4: wrist 1 offset [m]; default UR10E_DEFAULT_d4 = 0.17415.
@@ -318,15 +314,15 @@ void ur10e_gravity_vector_batch(size_t n, const double *q, const double *params,
  * Outputs:
  *   tau[6]: 6; joint torques (revolute) or forces (prismatic) [N*m (revolute), N
  *   (prismatic)].
- * Cost: 4865 operations.
+ * Cost: 630 operations.
  */
-void ur10e_inverse_dynamics(const double *q, const double *qd, const double *qdd, double d1, double a2, double a3, double d4, double d5, double d6, double m1, double m2, double m3, double m4, double m5, double m6, double g, double *tau);
+void ur10e_inverse_dynamics(const double *q, const double *qd, const double *qdd, double a2, double a3, double d4, double d5, double d6, double m1, double m2, double m3, double m4, double m5, double m6, double g, double *tau);
 
-/* ur10e_inverse_dynamics with packed arguments: in = q, qd, qdd, d1, a2, a3, d4, d5, d6, m1, m2, m3, m4, m5, m6, g one after the other; out = tau one after the other. */
+/* ur10e_inverse_dynamics with packed arguments: in = q, qd, qdd, a2, a3, d4, d5, d6, m1, m2, m3, m4, m5, m6, g one after the other; out = tau one after the other. */
 void ur10e_inverse_dynamics_packed(const double *in, double *out);
 
-/* ur10e_inverse_dynamics for n configurations; params: d1, a2, a3, d4, d5, d6, m1, m2, m3, m4, m5, m6, g, stride 0 or 13.
- * Uses 3136 bytes of stack for its blocks of 8 configurations. */
+/* ur10e_inverse_dynamics for n configurations; params: a2, a3, d4, d5, d6, m1, m2, m3, m4, m5, m6, g, stride 0 or 12.
+ * Uses 3200 bytes of stack for its blocks of 8 configurations. */
 void ur10e_inverse_dynamics_batch(size_t n, const double *q, const double *qd, const double *qdd, const double *params, size_t params_stride, double *tau);
 
 /* ur10e_forward_dynamics: Forward dynamics: joint accelerations under given torques.
@@ -340,7 +336,6 @@ void ur10e_inverse_dynamics_batch(size_t n, const double *q, const double *qd, c
  *   q6 [rad/s].
  *   tau[6]: joint torques (revolute) or forces (prismatic): q1 [N*m], q2 [N*m], q3 [N*m],
  *   q4 [N*m], q5 [N*m], q6 [N*m].
- *   d1: shoulder height [m]; default UR10E_DEFAULT_d1 = 0.1807.
  *   a2: upper arm length (UR sign convention) [m]; default UR10E_DEFAULT_a2 = -0.6127.
  *   a3: forearm length (UR sign convention) [m]; default UR10E_DEFAULT_a3 = -0.57155.
  *   d4: wrist 1 offset [m]; default UR10E_DEFAULT_d4 = 0.17415.
@@ -355,15 +350,15 @@ void ur10e_inverse_dynamics_batch(size_t n, const double *q, const double *qd, c
  *   g: gravitational acceleration [m/s^2]; default UR10E_DEFAULT_g = 9.81.
  * Outputs:
  *   qdd[6]: 6; joint accelerations [rad/s^2 (revolute), m/s^2 (prismatic)].
- * Cost: 4955 operations.
+ * Cost: 1037 operations.
  */
-void ur10e_forward_dynamics(const double *q, const double *qd, const double *tau, double d1, double a2, double a3, double d4, double d5, double d6, double m1, double m2, double m3, double m4, double m5, double m6, double g, double *qdd);
+void ur10e_forward_dynamics(const double *q, const double *qd, const double *tau, double a2, double a3, double d4, double d5, double d6, double m1, double m2, double m3, double m4, double m5, double m6, double g, double *qdd);
 
-/* ur10e_forward_dynamics with packed arguments: in = q, qd, tau, d1, a2, a3, d4, d5, d6, m1, m2, m3, m4, m5, m6, g one after the other; out = qdd one after the other. */
+/* ur10e_forward_dynamics with packed arguments: in = q, qd, tau, a2, a3, d4, d5, d6, m1, m2, m3, m4, m5, m6, g one after the other; out = qdd one after the other. */
 void ur10e_forward_dynamics_packed(const double *in, double *out);
 
-/* ur10e_forward_dynamics for n configurations; params: d1, a2, a3, d4, d5, d6, m1, m2, m3, m4, m5, m6, g, stride 0 or 13.
- * Uses 3136 bytes of stack for its blocks of 8 configurations. */
+/* ur10e_forward_dynamics for n configurations; params: a2, a3, d4, d5, d6, m1, m2, m3, m4, m5, m6, g, stride 0 or 12.
+ * Uses 3200 bytes of stack for its blocks of 8 configurations. */
 void ur10e_forward_dynamics_batch(size_t n, const double *q, const double *qd, const double *tau, const double *params, size_t params_stride, double *qdd);
 
 /* ur10e_tcp_force: Force (wrench) at the TCP that produces a joint motion.
@@ -378,7 +373,6 @@ void ur10e_forward_dynamics_batch(size_t n, const double *q, const double *qd, c
  *   q6 [rad/s].
  *   qdd[6]: joint accelerations: q1 [rad/s^2], q2 [rad/s^2], q3 [rad/s^2], q4 [rad/s^2],
  *   q5 [rad/s^2], q6 [rad/s^2].
- *   d1: shoulder height [m]; default UR10E_DEFAULT_d1 = 0.1807.
  *   a2: upper arm length (UR sign convention) [m]; default UR10E_DEFAULT_a2 = -0.6127.
  *   a3: forearm length (UR sign convention) [m]; default UR10E_DEFAULT_a3 = -0.57155.
  *   d4: wrist 1 offset [m]; default UR10E_DEFAULT_d4 = 0.17415.
@@ -393,15 +387,15 @@ void ur10e_forward_dynamics_batch(size_t n, const double *q, const double *qd, c
  *   g: gravitational acceleration [m/s^2]; default UR10E_DEFAULT_g = 9.81.
  * Outputs:
  *   F[6]: 6; TCP force components [x, y, z, wx, wy, wz] [N, N*m].
- * Cost: 5468 operations.
+ * Cost: 1236 operations.
  */
-void ur10e_tcp_force(const double *q, const double *qd, const double *qdd, double d1, double a2, double a3, double d4, double d5, double d6, double m1, double m2, double m3, double m4, double m5, double m6, double g, double *F);
+void ur10e_tcp_force(const double *q, const double *qd, const double *qdd, double a2, double a3, double d4, double d5, double d6, double m1, double m2, double m3, double m4, double m5, double m6, double g, double *F);
 
-/* ur10e_tcp_force with packed arguments: in = q, qd, qdd, d1, a2, a3, d4, d5, d6, m1, m2, m3, m4, m5, m6, g one after the other; out = F one after the other. */
+/* ur10e_tcp_force with packed arguments: in = q, qd, qdd, a2, a3, d4, d5, d6, m1, m2, m3, m4, m5, m6, g one after the other; out = F one after the other. */
 void ur10e_tcp_force_packed(const double *in, double *out);
 
-/* ur10e_tcp_force for n configurations; params: d1, a2, a3, d4, d5, d6, m1, m2, m3, m4, m5, m6, g, stride 0 or 13.
- * Uses 3136 bytes of stack for its blocks of 8 configurations. */
+/* ur10e_tcp_force for n configurations; params: a2, a3, d4, d5, d6, m1, m2, m3, m4, m5, m6, g, stride 0 or 12.
+ * Uses 3456 bytes of stack for its blocks of 8 configurations. */
 void ur10e_tcp_force_batch(size_t n, const double *q, const double *qd, const double *qdd, const double *params, size_t params_stride, double *F);
 
 /* ur10e_operational_space: Operational-space dynamics F = Mx xdd + Vx + Gx.
@@ -414,7 +408,6 @@ void ur10e_tcp_force_batch(size_t n, const double *q, const double *qd, const do
  *   q[6]: joint coordinates: q1 [rad], q2 [rad], q3 [rad], q4 [rad], q5 [rad], q6 [rad].
  *   qd[6]: joint velocities: q1 [rad/s], q2 [rad/s], q3 [rad/s], q4 [rad/s], q5 [rad/s],
  *   q6 [rad/s].
- *   d1: shoulder height [m]; default UR10E_DEFAULT_d1 = 0.1807.
  *   a2: upper arm length (UR sign convention) [m]; default UR10E_DEFAULT_a2 = -0.6127.
  *   a3: forearm length (UR sign convention) [m]; default UR10E_DEFAULT_a3 = -0.57155.
  *   d4: wrist 1 offset [m]; default UR10E_DEFAULT_d4 = 0.17415.
@@ -431,15 +424,15 @@ void ur10e_tcp_force_batch(size_t n, const double *q, const double *qd, const do
  *   Mx[36]: 6 x 6, row-major; operational-space mass matrix J^-T M J^-1.
  *   Vx[6]: 6; operational-space Coriolis and centrifugal force J^-T (V - M J^-1 dJ/dt qd).
  *   Gx[6]: 6; operational-space gravity force J^-T G.
- * Cost: 7984 operations.
+ * Cost: 4102 operations.
  */
-void ur10e_operational_space(const double *q, const double *qd, double d1, double a2, double a3, double d4, double d5, double d6, double m1, double m2, double m3, double m4, double m5, double m6, double g, double *Mx, double *Vx, double *Gx);
+void ur10e_operational_space(const double *q, const double *qd, double a2, double a3, double d4, double d5, double d6, double m1, double m2, double m3, double m4, double m5, double m6, double g, double *Mx, double *Vx, double *Gx);
 
-/* ur10e_operational_space with packed arguments: in = q, qd, d1, a2, a3, d4, d5, d6, m1, m2, m3, m4, m5, m6, g one after the other; out = Mx, Vx, Gx one after the other. */
+/* ur10e_operational_space with packed arguments: in = q, qd, a2, a3, d4, d5, d6, m1, m2, m3, m4, m5, m6, g one after the other; out = Mx, Vx, Gx one after the other. */
 void ur10e_operational_space_packed(const double *in, double *out);
 
-/* ur10e_operational_space for n configurations; params: d1, a2, a3, d4, d5, d6, m1, m2, m3, m4, m5, m6, g, stride 0 or 13.
- * Uses 5440 bytes of stack for its blocks of 8 configurations. */
+/* ur10e_operational_space for n configurations; params: a2, a3, d4, d5, d6, m1, m2, m3, m4, m5, m6, g, stride 0 or 12.
+ * Uses 5760 bytes of stack for its blocks of 8 configurations. */
 void ur10e_operational_space_batch(size_t n, const double *q, const double *qd, const double *params, size_t params_stride, double *Mx, double *Vx, double *Gx);
 
 /* ur10e_kinetic_energy: Kinetic energy.
@@ -450,7 +443,6 @@ void ur10e_operational_space_batch(size_t n, const double *q, const double *qd, 
  *   q[6]: joint coordinates: q1 [rad], q2 [rad], q3 [rad], q4 [rad], q5 [rad], q6 [rad].
  *   qd[6]: joint velocities: q1 [rad/s], q2 [rad/s], q3 [rad/s], q4 [rad/s], q5 [rad/s],
  *   q6 [rad/s].
- *   d1: shoulder height [m]; default UR10E_DEFAULT_d1 = 0.1807.
  *   a2: upper arm length (UR sign convention) [m]; default UR10E_DEFAULT_a2 = -0.6127.
  *   a3: forearm length (UR sign convention) [m]; default UR10E_DEFAULT_a3 = -0.57155.
  *   d4: wrist 1 offset [m]; default UR10E_DEFAULT_d4 = 0.17415.
@@ -464,15 +456,15 @@ void ur10e_operational_space_batch(size_t n, const double *q, const double *qd, 
  *   m6: mass of link 6 (wrist 3), without tool [kg]; default UR10E_DEFAULT_m6 = 0.615.
  * Outputs:
  *   k[1]: scalar; kinetic energy of all bodies [J].
- * Cost: 929 operations.
+ * Cost: 398 operations.
  */
-void ur10e_kinetic_energy(const double *q, const double *qd, double d1, double a2, double a3, double d4, double d5, double d6, double m1, double m2, double m3, double m4, double m5, double m6, double *k);
+void ur10e_kinetic_energy(const double *q, const double *qd, double a2, double a3, double d4, double d5, double d6, double m1, double m2, double m3, double m4, double m5, double m6, double *k);
 
-/* ur10e_kinetic_energy with packed arguments: in = q, qd, d1, a2, a3, d4, d5, d6, m1, m2, m3, m4, m5, m6 one after the other; out = k one after the other. */
+/* ur10e_kinetic_energy with packed arguments: in = q, qd, a2, a3, d4, d5, d6, m1, m2, m3, m4, m5, m6 one after the other; out = k one after the other. */
 void ur10e_kinetic_energy_packed(const double *in, double *out);
 
-/* ur10e_kinetic_energy for n configurations; params: d1, a2, a3, d4, d5, d6, m1, m2, m3, m4, m5, m6, stride 0 or 12.
- * Uses 2368 bytes of stack for its blocks of 8 configurations. */
+/* ur10e_kinetic_energy for n configurations; params: a2, a3, d4, d5, d6, m1, m2, m3, m4, m5, m6, stride 0 or 11.
+ * Uses 2432 bytes of stack for its blocks of 8 configurations. */
 void ur10e_kinetic_energy_batch(size_t n, const double *q, const double *qd, const double *params, size_t params_stride, double *k);
 
 /* ur10e_potential_energy: Gravitational potential energy.
@@ -538,7 +530,7 @@ void ur10e_potential_energy_batch(size_t n, const double *q, const double *param
  *   (prismatic)].
  *   G[6]: 6; joint torques that hold the arm against gravity (gravity_vector) [N*m
  *   (revolute), N (prismatic)].
- * Cost: 4894 operations.
+ * Cost: 1021 operations.
  */
 void ur10e_scene(const double *q, const double *qd, double d1, double a2, double a3, double d4, double d5, double d6, double m1, double m2, double m3, double m4, double m5, double m6, double g, double *base_T_tcp, double *J, double *M, double *V, double *G);
 
@@ -546,7 +538,7 @@ void ur10e_scene(const double *q, const double *qd, double d1, double a2, double
 void ur10e_scene_packed(const double *in, double *out);
 
 /* ur10e_scene for n configurations; params: d1, a2, a3, d4, d5, d6, m1, m2, m3, m4, m5, m6, g, stride 0 or 13.
- * Uses 8192 bytes of stack for its blocks of 8 configurations. */
+ * Uses 7936 bytes of stack for its blocks of 8 configurations. */
 void ur10e_scene_batch(size_t n, const double *q, const double *qd, const double *params, size_t params_stride, double *base_T_tcp, double *J, double *M, double *V, double *G);
 
 #ifdef __cplusplus

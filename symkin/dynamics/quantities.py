@@ -14,7 +14,12 @@
 ``potential_energy``   u = -sum m g . c (eq. 8.32)
 =====================  ================================================================
 
-The closed forms are in :mod:`symkin.dynamics.lagrange`, the solves in
+M is built by the composite-rigid-body algorithm and V, G and tau by the recursive
+Newton-Euler algorithm (:mod:`symkin.dynamics.newton_euler`, O(n) terms for V, G and tau);
+C = Christoffel symbols of that M.  The Lagrangian closed forms
+(:mod:`symkin.dynamics.lagrange`: M = sum J^T I J, G = du/dq, V = C qd) stay as the
+reference: the internal quantity ``lagrangian_dynamics`` computes M, C, V, G and tau from
+them, and the tests check that both routes agree.  The solves are in
 :mod:`symkin.dynamics.linsolve`; each emitted function is a straight-line
 :class:`~symkin.dynamics.program.Program` converted to sympy definitions.  A model whose
 gravity is zero has no gravity terms anywhere (and no ``gravity_vector`` or
@@ -30,7 +35,7 @@ import sympy
 
 from symkin.derivation.graph import Derivation, quantity
 from symkin.derivation.inputs import coordinate_input
-from symkin.dynamics import lagrange
+from symkin.dynamics import lagrange, newton_euler
 from symkin.dynamics.bodies import BodyJacobians, body_jacobians
 from symkin.dynamics.linsolve import ldl_solve, transpose_solve
 from symkin.dynamics.program import Program, mat_vec, se_matrix, se_vector
@@ -87,14 +92,30 @@ def _body_jacobians(d: Derivation) -> tuple[BodyJacobians, ...]:
     return body_jacobians(d.model, d["chain"])
 
 
-@quantity("mass_matrix_graph", "M(q) as a SymEngine graph", emitted=False)
+@quantity("newton_euler_links", "links in their joint frames with spatial inertias (Newton-Euler)", emitted=False)
+def _newton_euler_links(d: Derivation) -> tuple[newton_euler.Link, ...]:
+    return newton_euler.chain_links(d.model)
+
+
+@quantity("mass_matrix_graph", "M(q) by the composite-rigid-body algorithm, as a SymEngine graph", emitted=False)
 def _mass_matrix_graph(d: Derivation) -> Matrix:
+    return newton_euler.mass_matrix(d["newton_euler_links"])
+
+
+@quantity("lagrangian_mass_matrix_graph", "M(q) = sum J^T I J (Lagrangian reference), SymEngine graph",
+          emitted=False)
+def _lagrangian_mass_matrix_graph(d: Derivation) -> Matrix:
     return lagrange.mass_matrix(d["body_jacobians"], d.model.dof)
 
 
 @quantity("mass_matrix_partials", "dM/dq_k as SymEngine graphs", emitted=False)
 def _mass_matrix_partials(d: Derivation) -> list[Matrix]:
     return lagrange.mass_matrix_partials(d["mass_matrix_graph"], _symbols(d, "q"))
+
+
+@quantity("lagrangian_mass_matrix_partials", "dM/dq_k of the Lagrangian reference M", emitted=False)
+def _lagrangian_mass_matrix_partials(d: Derivation) -> list[Matrix]:
+    return lagrange.mass_matrix_partials(d["lagrangian_mass_matrix_graph"], _symbols(d, "q"))
 
 
 @quantity("gravity_graph", "gravity vector in the base frame, or None if zero", emitted=False)
@@ -104,8 +125,9 @@ def _gravity_graph(d: Derivation) -> list[se.Basic] | None:
     return se_vector(d.model.gravity)
 
 
-@quantity("gravity_vector_graph", "G(q) as a SymEngine graph, or None without gravity", emitted=False)
-def _gravity_vector_graph(d: Derivation) -> list[se.Basic] | None:
+@quantity("lagrangian_gravity_vector_graph", "G(q) = du/dq (Lagrangian reference), or None without gravity",
+          emitted=False)
+def _lagrangian_gravity_vector_graph(d: Derivation) -> list[se.Basic] | None:
     g = d["gravity_graph"]
     return None if g is None else lagrange.gravity_vector(d["body_jacobians"], d["chain"].axes, g)
 
@@ -142,40 +164,91 @@ def _require_gravity(d: Derivation, name: str) -> None:
 
 
 class _BoundTerms:
-    """The terms of eq. 8.34 bound into one program, always in the same order (M, dM/dq, G, F_f),
-    so that the programs of different functions start alike and share their conversion."""
+    """The terms of eq. 8.34 bound into one program, always in the same order (M, dM/dq, V, G, F_f),
+    so that the programs of different functions start alike and share their conversion.
 
-    def __init__(self, d: Derivation, program: Program):
-        self.d, self.program = d, program
+    M comes from the composite-rigid-body algorithm, everything without M from one
+    Newton-Euler pass (:func:`~symkin.dynamics.newton_euler.inverse_dynamics`); with
+    ``lagrangian=True`` the terms are the Lagrangian reference instead (M = sum J^T I J,
+    V = C qd from its Christoffel symbols, G = du/dq).
+    """
+
+    def __init__(self, d: Derivation, program: Program, lagrangian: bool = False):
+        self.d, self.program, self.lagrangian = d, program, lagrangian
         self.n = d.model.dof
+        self.prefix = "lagrangian_" if lagrangian else ""
 
     def mass_matrix(self) -> Matrix:
-        values = self.program.bind(_flat(self.d["mass_matrix_graph"]))
+        values = self.program.bind(_flat(self.d[self.prefix + "mass_matrix_graph"]))
         return [values[i * self.n:(i + 1) * self.n] for i in range(self.n)]
 
     def partials(self) -> list[Matrix]:
         """dM/dq_k as partials[k][i][j]."""
         n = self.n
-        values = self.program.bind([v for dM in self.d["mass_matrix_partials"] for v in _flat(dM)])
+        values = self.program.bind([v for dM in self.d[self.prefix + "mass_matrix_partials"] for v in _flat(dM)])
         return [[values[k * n * n + i * n:k * n * n + (i + 1) * n] for i in range(n)] for k in range(n)]
 
+    def newton_euler(self, velocity: bool, acceleration: bool, gravity: bool) -> list[se.Basic]:
+        """The Newton-Euler torques of the chosen terms (M qdd, V, G), bound."""
+        d = self.d
+        qd, qdd = (_symbols(d, g) if use else None for g, use in (("qd", velocity), ("qdd", acceleration)))
+        return self.program.bind(newton_euler.inverse_dynamics(
+            d["newton_euler_links"], qd, qdd, d["gravity_graph"] if gravity else None))
+
     def coriolis_vector(self) -> list[se.Basic]:
-        return lagrange.coriolis_vector(self.partials(), _symbols(self.d, "qd"))
+        if self.lagrangian:
+            return lagrange.coriolis_vector(self.partials(), _symbols(self.d, "qd"))
+        return self.newton_euler(velocity=True, acceleration=False, gravity=False)
 
     def gravity_vector(self) -> list[se.Basic] | None:
-        G = self.d["gravity_vector_graph"]
-        return None if G is None else self.program.bind(G)
+        if self.d["gravity_graph"] is None:
+            return None
+        if self.lagrangian:
+            return self.program.bind(self.d["lagrangian_gravity_vector_graph"])
+        return self.program.bind(newton_euler.gravity_torques(self.d["newton_euler_links"], self.d["gravity_graph"]))
 
     def friction(self) -> list[se.Basic] | None:
         return self.d["friction_graph"]
 
-    def rest(self, with_friction: bool) -> list[se.Basic]:
-        """V + G (+ F_f): everything of eq. 8.34 except M qdd."""
-        terms = self.coriolis_vector()
-        for extra in (self.gravity_vector(), self.friction() if with_friction else None):
+    def torques(self, acceleration: bool, with_friction: bool) -> list[se.Basic]:
+        """M qdd (if ``acceleration``) + V + G (+ F_f): eq. 8.34, in one Newton-Euler pass."""
+        if self.lagrangian:
+            terms = self.coriolis_vector()
+            if acceleration:
+                terms = [a + b for a, b in zip(terms, mat_vec(self.mass_matrix(), _symbols(self.d, "qdd")))]
+            extras = [self.gravity_vector()]
+        else:
+            terms = self.newton_euler(velocity=True, acceleration=acceleration, gravity=True)
+            extras = []
+        if with_friction:
+            extras.append(self.friction())
+        for extra in extras:
             if extra is not None:
                 terms = [a + b for a, b in zip(terms, extra)]
         return terms
+
+
+@quantity("lagrangian_dynamics", "M, C, V, G and tau from the Lagrangian closed forms (reference)", emitted=False)
+def _lagrangian_dynamics(d: Derivation) -> FunctionSpec:
+    """The reference the emitted dynamics are checked against (tests): the closed forms of
+    :mod:`symkin.dynamics.lagrange`, independent of the Newton-Euler and composite-rigid-body code."""
+    n = d.model.dof
+    program = Program()
+    terms = _BoundTerms(d, program, lagrangian=True)
+    M = terms.mass_matrix()
+    C = lagrange.coriolis_matrix(terms.partials(), _symbols(d, "qd"))
+    outputs = [("M", _flat(M), (n, n), "mass matrix", ""), ("C", _flat(C), (n, n), "Coriolis matrix", ""),
+               ("V", terms.coriolis_vector(), (n,), "Coriolis and centrifugal torques", EFFORT_UNIT)]
+    G = terms.gravity_vector()
+    if G is not None:
+        outputs.append(("G", G, (n,), "gravity torques", EFFORT_UNIT))
+    outputs.append(("tau", terms.torques(acceleration=True, with_friction=True), (n,), "inverse dynamics",
+                    EFFORT_UNIT))
+    return _function(
+        d, "lagrangian_dynamics", "Lagrangian reference dynamics.",
+        "M = sum J^T I J, C from the Christoffel symbols of M, V = C qd, G = du/dq, "
+        "tau = M qdd + V + G + F_f (seed eqs. 8.31-8.34).",
+        ["q", "qd", "qdd"], program, outputs)
 
 
 # --------------------------------------------------------------------------- emitted functions
@@ -187,7 +260,8 @@ def _mass_matrix(d: Derivation) -> FunctionSpec:
     return _function(
         d, "mass_matrix", "Joint-space mass matrix.",
         "M(q) = sum over bodies of m Jv^T Jv + Jw^T I Jw with the velocity Jacobians at the centres of mass "
-        "(seed eqs. 8.31-8.33; 2-DoF example eq. 8.53).",
+        "(seed eqs. 8.31-8.33; 2-DoF example eq. 8.53), evaluated by the composite-rigid-body algorithm "
+        "(Featherstone 2008, table 6.2).",
         ["q"], program, [("M", M, (d.model.dof, d.model.dof), "symmetric positive definite mass matrix", "")])
 
 
@@ -209,7 +283,8 @@ def _coriolis_vector(d: Derivation) -> FunctionSpec:
     V = _BoundTerms(d, program).coriolis_vector()
     return _function(
         d, "coriolis_vector", "Coriolis and centrifugal torques.",
-        "V(q, qd) = C(q, qd) qd = dM/dt qd - 1/2 d(qd^T M qd)/dq (seed eq. 8.31; 2-DoF example eq. 8.54).",
+        "V(q, qd) = C(q, qd) qd = dM/dt qd - 1/2 d(qd^T M qd)/dq (seed eq. 8.31; 2-DoF example eq. 8.54), "
+        "evaluated by a recursive Newton-Euler pass without gravity and acceleration (seed sec. 4.4).",
         ["q", "qd"], program, [("V", V, (d.model.dof,), "Coriolis and centrifugal joint torques", EFFORT_UNIT)])
 
 
@@ -220,7 +295,8 @@ def _gravity_vector(d: Derivation) -> FunctionSpec:
     G = _BoundTerms(d, program).gravity_vector()
     return _function(
         d, "gravity_vector", "Gravity torques.",
-        "G(q) = du/dq with u = -sum m g . c over the bodies (seed eq. 8.31; 2-DoF example eq. 8.54).",
+        "G(q) = du/dq with u = -sum m g . c over the bodies (seed eq. 8.31; 2-DoF example eq. 8.54), "
+        "evaluated by a recursive Newton-Euler pass at rest (seed sec. 4.4).",
         ["q"], program, [("G", G, (d.model.dof,), "joint torques that hold the arm against gravity", EFFORT_UNIT)])
 
 
@@ -242,12 +318,11 @@ def _friction(d: Derivation) -> FunctionSpec:
 def _inverse_dynamics(d: Derivation) -> FunctionSpec:
     n = d.model.dof
     program = Program()
-    terms = _BoundTerms(d, program)
-    M = terms.mass_matrix()
-    tau = [a + b for a, b in zip(mat_vec(M, _symbols(d, "qdd")), terms.rest(with_friction=True))]
+    tau = _BoundTerms(d, program).torques(acceleration=True, with_friction=True)
     return _function(
         d, "inverse_dynamics", "Inverse dynamics: joint torques for a motion.",
-        "tau = M(q) qdd + V(q, qd) + G(q) + F_f(qd) (seed eq. 8.34).",
+        "tau = M(q) qdd + V(q, qd) + G(q) + F_f(qd) (seed eq. 8.34), by the recursive Newton-Euler algorithm "
+        "(seed sec. 4.4, Luh-Walker-Paul; O(n) operations).",
         ["q", "qd", "qdd"], program, [("tau", tau, (n,), "joint torques (revolute) or forces (prismatic)",
                                        EFFORT_UNIT)])
 
@@ -258,7 +333,7 @@ def _forward_dynamics(d: Derivation) -> FunctionSpec:
     program = Program()
     terms = _BoundTerms(d, program)
     M = terms.mass_matrix()
-    rhs = [[t - b] for t, b in zip(_symbols(d, "tau"), terms.rest(with_friction=True))]
+    rhs = [[t - b] for t, b in zip(_symbols(d, "tau"), terms.torques(acceleration=False, with_friction=True))]
     qdd = [row[0] for row in ldl_solve(program, M, rhs)]
     return _function(
         d, "forward_dynamics", "Forward dynamics: joint accelerations under given torques.",
@@ -273,9 +348,7 @@ def _tcp_force(d: Derivation) -> FunctionSpec:
     n = d.model.dof
     J = d["task_jacobian_graph"]
     program = Program()
-    terms = _BoundTerms(d, program)
-    M = terms.mass_matrix()
-    rhs = [[a + b] for a, b in zip(mat_vec(M, _symbols(d, "qdd")), terms.rest(with_friction=False))]
+    rhs = [[b] for b in _BoundTerms(d, program).torques(acceleration=True, with_friction=False)]
     values = program.bind(_flat(J))
     J = [values[i * n:(i + 1) * n] for i in range(n)]
     F = [row[0] for row in transpose_solve(program, J, rhs)]

@@ -193,10 +193,13 @@ static void check_ur10e(void)
 static void check_scene_batch_and_float32(void)
 {
     enum { N = 16 };
-    /* scene parameters: d1 a2 a3 d4 d5 d6 m1..m6 g; each part takes the ones it uses. */
+    /* scene parameters: d1 a2 a3 d4 d5 d6 m1..m6 g; each part takes the ones it uses (see ur10e.h):
+     * M: a2 a3 d4 d5 d6 m1..m6; V: a2 a3 d4 d5 d6 m2..m6; G: a2 a3 d5 d6 m2..m6 g. */
     double params[13] = {UR_PARAMS, UR10E_DEFAULT_m1, UR10E_DEFAULT_m2, UR10E_DEFAULT_m3, UR10E_DEFAULT_m4,
                          UR10E_DEFAULT_m5, UR10E_DEFAULT_m6, UR10E_DEFAULT_g};
-    const double gravity_params[11] = {params[1], params[2], params[3], params[4], params[5], params[7],
+    const double coriolis_params[10] = {params[1], params[2], params[3], params[4], params[5], params[7],
+                                        params[8], params[9], params[10], params[11]};
+    const double gravity_params[10] = {params[1], params[2], params[4], params[5], params[7],
                                        params[8], params[9], params[10], params[11], params[12]};
     double q[N * 6], qd[N * 6];
     double T[N * 16], J[N * 36], M[N * 36], V[N * 6], G[N * 6];
@@ -214,8 +217,8 @@ static void check_scene_batch_and_float32(void)
     }
     ur10e_fk_batch(N, q, params, 0, T);
     ur10e_jacobian_batch(N, q, params + 1, 0, J);
-    ur10e_mass_matrix_batch(N, q, params, 0, M);
-    ur10e_coriolis_vector_batch(N, q, qd, params, 0, V);
+    ur10e_mass_matrix_batch(N, q, params + 1, 0, M);
+    ur10e_coriolis_vector_batch(N, q, qd, coriolis_params, 0, V);
     ur10e_gravity_vector_batch(N, q, gravity_params, 0, G);
     ur10e_scene_batch(N, q, qd, params, 0, s_fk, s_J, s_M, s_V, s_G);
     planar_2r_fk_batch(N, q2, params2, 0, T2);
