@@ -74,8 +74,12 @@ def _newton_steps(A: np.ndarray, r: np.ndarray) -> np.ndarray:
 
 
 def _iterate(start: np.ndarray, equations: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]], tol: float,
-             max_iterations: int) -> NewtonReport:
-    """Newton iteration x <- x - A(x)^-1 r(x) on a batch (..., k) of unknowns."""
+             max_iterations: int, max_step: float | None = None) -> NewtonReport:
+    """Newton iteration x <- x - A(x)^-1 r(x) on a batch (..., k) of unknowns.
+
+    With ``max_step`` the iteration is damped: a step longer than that (max-norm) is scaled
+    down to it, so a start near one solution does not jump to another far away.
+    """
     batch = start.shape[:-1]
     x = np.array(start, dtype=float, copy=True).reshape(-1, start.shape[-1])
 
@@ -98,6 +102,9 @@ def _iterate(start: np.ndarray, equations: Callable[[np.ndarray], tuple[np.ndarr
         with np.errstate(invalid="ignore"):
             norm = np.max(np.abs(step), axis=-1)
         moved = active & np.isfinite(norm)
+        if max_step is not None:
+            with np.errstate(invalid="ignore"):
+                step *= np.minimum(1.0, max_step / np.maximum(norm, max_step))[:, None]
         x[moved] += step[moved]
         iterations[active] += 1
         step_norm[active] = norm[active]
@@ -158,7 +165,7 @@ def solve_fk(model: LoadedModel, q, p0=None, *, tol: float = 1e-12, max_iteratio
 
 
 def solve_closure(model: LoadedModel, q, s, p, *, unknowns: tuple[str, ...] = ("p", "s"), tol: float = 1e-12,
-                  max_iterations: int = 50) -> NewtonReport:
+                  max_iterations: int = 50, max_step: float | None = None) -> NewtonReport:
     """Solve the generated loop closure phi(q, s, p) = 0 for some of its vectors (any leg topology).
 
     Gauss-Newton on the generated ``closure`` and ``closure_jacobians``: the unknown
@@ -174,6 +181,7 @@ def solve_closure(model: LoadedModel, q, s, p, *, unknowns: tuple[str, ...] = ("
         unknowns: which of "q", "s", "p" to solve for.
         tol: converged when a step is at most this large (max-norm).
         max_iterations: give up after this many steps.
+        max_step: damping: steps longer than this (max-norm) are shortened to it.
 
     Returns:
         The report; ``solution`` maps every vector name to its value (unknowns NaN where not
@@ -202,5 +210,5 @@ def solve_closure(model: LoadedModel, q, s, p, *, unknowns: tuple[str, ...] = ("
         return phi, np.concatenate([np.asarray(blocks[name]) for name in order], axis=-1)
 
     start = np.concatenate([values[name] for name in order], axis=-1)
-    report = _iterate(start, equations, tol, max_iterations)
+    report = _iterate(start, equations, tol, max_iterations, max_step)
     return NewtonReport(unpack(report.solution), report.converged, report.iterations, report.residual, report.step)
