@@ -11,6 +11,7 @@ angles of a DELTA leg (below), and the shorthand DELTA without limits (exact equ
 from __future__ import annotations
 
 import copy
+import re
 import warnings
 
 import numpy as np
@@ -193,3 +194,15 @@ def test_malformed_passive_limits_are_refused_with_their_place(limited, limits, 
         inverse.parallel_inverse(model)
     with pytest.raises(ValueError, match=message):
         global_indices.gci(model, method="grid", samples=200)
+
+
+def test_a_model_file_with_passive_limits_is_analysed_on_the_fly(tmp_path, capsys):
+    """The CLI derives the loop closure of a model file that limits passive joints (+-20 deg here)."""
+    from symkin.cli import main
+
+    path = tmp_path / "delta_legs.yaml"
+    path.write_text(MODEL.replace("  outputs: [ik, fk, jacobian, closure, closure_jacobians]\n", "  outputs: [ik]\n"))
+    assert main(["gci", str(path), "--method", "grid", "-n", "1000"]) == 0
+    measure = float(re.search(r"int dW = ([0-9.e-]+)", capsys.readouterr().out).group(1))
+    unlimited = global_indices.workspace_measure(DELTA, method="grid", samples=1000).value
+    assert 0.1 * unlimited < measure < 0.6 * unlimited
