@@ -206,3 +206,16 @@ def test_a_model_file_with_passive_limits_is_analysed_on_the_fly(tmp_path, capsy
     measure = float(re.search(r"int dW = ([0-9.e-]+)", capsys.readouterr().out).group(1))
     unlimited = global_indices.workspace_measure(DELTA, method="grid", samples=1000).value
     assert 0.1 * unlimited < measure < 0.6 * unlimited
+
+
+def test_least_squares_steps_agree_with_pinv_also_where_rank_deficient():
+    from symkin.runtime.parallel import _least_squares_steps
+
+    rng = np.random.default_rng(3)
+    A = rng.normal(size=(6, 18, 12))
+    A[2, :, 5] = A[2, :, 4]  # rank 11: the minimum-norm step
+    A[4, :, 7] = 0.0
+    r = rng.normal(size=(6, 18))
+    expected = -np.einsum("kij,kj->ki", np.linalg.pinv(A), r)
+    np.testing.assert_allclose(_least_squares_steps(A, r), expected, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(_least_squares_steps(A[[0, 1, 3]], r[[0, 1, 3]]), expected[[0, 1, 3]], rtol=1e-9)

@@ -59,6 +59,11 @@ def _function(model: LoadedModel, name: str, purpose: str) -> Callable[..., obje
 _FULL_RANK = 1e-10
 
 
+def _pinv_steps(A: np.ndarray, r: np.ndarray) -> np.ndarray:
+    """Minimum-norm least-squares steps -A^+ r of a flat batch (k, rows, cols)."""
+    return -np.einsum("kij,kj->ki", np.linalg.pinv(A), r)
+
+
 def _least_squares_steps(A: np.ndarray, r: np.ndarray) -> np.ndarray:
     """Least-squares steps -A^+ r of a flat batch of tall A (k, rows, cols).
 
@@ -68,19 +73,18 @@ def _least_squares_steps(A: np.ndarray, r: np.ndarray) -> np.ndarray:
     equations square the condition number of the step, not of the solution: a Gauss-Newton
     fixed point A^T r = 0 is the same.
     """
-    pinv_steps = lambda B, b: -np.einsum("kij,kj->ki", np.linalg.pinv(B), b)  # noqa: E731
     if A.shape[1] < A.shape[2]:
-        return pinv_steps(A, r)
+        return _pinv_steps(A, r)
     At = np.swapaxes(A, 1, 2)
     normal = At @ A
     try:
         pivots = np.abs(np.diagonal(np.linalg.cholesky(normal), axis1=1, axis2=2))
     except np.linalg.LinAlgError:  # some A is rank-deficient
-        return pinv_steps(A, r)
+        return _pinv_steps(A, r)
     regular = pivots.min(axis=1) > _FULL_RANK * pivots.max(axis=1)
     steps = np.empty(A.shape[:1] + A.shape[2:])
     steps[regular] = -np.linalg.solve(normal[regular], At[regular] @ r[regular][..., None])[..., 0]
-    steps[~regular] = pinv_steps(A[~regular], r[~regular])
+    steps[~regular] = _pinv_steps(A[~regular], r[~regular])
     return steps
 
 
