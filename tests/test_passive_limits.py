@@ -219,3 +219,14 @@ def test_least_squares_steps_agree_with_pinv_also_where_rank_deficient():
     expected = -np.einsum("kij,kj->ki", np.linalg.pinv(A), r)
     np.testing.assert_allclose(_least_squares_steps(A, r), expected, rtol=1e-9, atol=1e-12)
     np.testing.assert_allclose(_least_squares_steps(A[[0, 1, 3]], r[[0, 1, 3]]), expected[[0, 1, 3]], rtol=1e-9)
+
+
+def test_joint_and_cartesian_domains_agree_under_passive_limits(limited):
+    """Two formulations of the limited workspace: |det J| dq over the configurations within the
+    passive limits (fk, then s) and the reachability indicator over a box (ik, then s)."""
+    joint = global_indices.workspace_measure(limited, method="grid", samples=8000)
+    cartesian = global_indices.workspace_measure(limited, method="grid", samples=8000, domain="cartesian",
+                                                 box=workspace.bounding_box(DELTA),
+                                                 inverse=inverse.parallel_inverse(limited))
+    assert abs(joint.value - cartesian.value) <= min(joint.error + cartesian.error, 0.05 * cartesian.value)
+    assert cartesian.value < 0.5 * global_indices.workspace_measure(DELTA, method="grid", samples=8000).value
