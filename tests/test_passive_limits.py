@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 import symkin
-from symkin.analysis import global_indices, inverse, mechanism, parallel, passive, workspace
+from symkin.analysis import global_indices, inverse, mechanism, parallel, passive, sampling, workspace
 from symkin.runtime.loader import LoadedModel
 
 from conftest import GENERATED_DIR
@@ -102,17 +102,17 @@ def _wrapped_difference(a, b):
 
 @pytest.fixture(scope="module")
 def poses():
-    """Reachable poses around home, their actuator angles, and the closed-form passive angles."""
-    p = np.array([0.0, 0.0, -0.15]) + np.random.default_rng(1).uniform(-0.07, 0.07, (400, 3))
-    with np.errstate(invalid="ignore"):
-        q = DELTA.ik(p).joints
-    keep = np.isfinite(q).all(axis=1)
-    return q[keep], p[keep], _closed_form(q[keep], p[keep])
+    """The working-mode configurations of a joint grid over the actuator limits (the whole
+    workspace, edges included), their TCP positions and closed-form passive angles."""
+    box = mechanism.joint_limits(DELTA)
+    q = sampling.grid(box[:, 0], box[:, 1], 12, midpoints=False)
+    p, inside = parallel.working_mode(DELTA, q)
+    return q[inside], p[inside], _closed_form(q[inside], p[inside])
 
 
 def test_passive_variables_close_the_loop_on_the_home_branch(limited, poses):
     q, p, expected = poses
-    assert len(q) > 200
+    assert len(q) > 1000
     model = _variant(limited, _elbow(180))
     solution = passive.solve_passive(model, passive.declared_limits(model), q, p)
     assert solution.resolved.all()
