@@ -26,6 +26,7 @@ says how many poses that was, never silently accepted.
 from __future__ import annotations
 
 import warnings
+import weakref
 from dataclasses import dataclass
 from typing import Any
 
@@ -109,12 +110,25 @@ def _solve(model: Any, q: np.ndarray, p: np.ndarray, start: np.ndarray):
                          max_step=MAX_STEP)
 
 
+#: s_home of every loaded model analysed so far (a model's parameters do not change; ``bind``
+#: makes a new one).
+_HOME_ASSEMBLIES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
 def home_assembly(model: Any) -> np.ndarray:
     """s_home: the passive variables at the home pose, from s = 0 (the branch every pose is solved on).
+
+    Computed once per loaded model (read-only array).
 
     Raises:
         ValueError: the home pose is out of reach or its passive variables do not converge.
     """
+    if model not in _HOME_ASSEMBLIES:
+        _HOME_ASSEMBLIES[model] = _home_assembly(model)
+    return _HOME_ASSEMBLIES[model]
+
+
+def _home_assembly(model: Any) -> np.ndarray:
     home = np.array(model.manifest["model"]["parallel"]["home"], dtype=np.float64)
     size = len(_passive_input(model)["elements"])
     with np.errstate(invalid="ignore"):
@@ -123,7 +137,9 @@ def home_assembly(model: Any) -> np.ndarray:
     if not (report.converged and report.residual <= CLOSURE_TOLERANCE):
         raise ValueError(f"{model.name}: the passive joint variables at the home pose {home.tolist()} do not "
                          f"converge (closure residual {float(report.residual):.3g}); check parallel.home")
-    return report.solution["s"]
+    s = report.solution["s"]
+    s.setflags(write=False)
+    return s
 
 
 @dataclass(frozen=True)
