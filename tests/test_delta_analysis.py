@@ -320,18 +320,6 @@ def test_delta_actuator_limits_are_validated(tmp_path):
         load_model(path)
 
 
-def test_passive_limits_are_refused_by_the_analyses_not_ignored():
-    manifest = {**DELTA.manifest, "model": {**DELTA.manifest["model"]}}
-    record = dict(manifest["model"]["parallel"])
-    record["legs"] = [{**record["legs"][0], "passive_limits": {"elbow1_1": [-1.0, 1.0]}}] + record["legs"][1:]
-    manifest["model"]["parallel"] = record
-    limited = LoadedModel(DELTA.directory, manifest, "numpy", DELTA._raw)
-    with pytest.raises(ValueError, match="passive-joint limits are declared"):
-        global_indices.gci(limited, method="grid", samples=1000)
-    with pytest.raises(ValueError, match="passive-joint limits are declared"):
-        inverse.parallel_inverse(limited)
-
-
 def test_a_delta_model_file_is_analysed_on_the_fly(capsys):
     assert main(["gci", str(MODELS_DIR / "delta.yaml"), "--method", "grid", "-n", "2000"]) == 0
     assert 0.5 < float(re.search(r"GCI = ([0-9.]+)", capsys.readouterr().out).group(1)) < 0.54

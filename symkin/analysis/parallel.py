@@ -18,9 +18,10 @@ another working mode (e.g. a DELTA leg with its knee inwards, reached from the b
 actuator angles through a leg singularity det J_q = 0) are outside; at that boundary
 |det J| = |det J_q| / |det J_x| vanishes, so the joint-domain integrand stays continuous.
 
-**Passive-joint limits** (``limits`` on leg joints) are recorded in the manifest; the
-analyses here cannot evaluate passive joint angles yet and refuse such models with a
-clear message rather than ignore the limits.
+**Passive-joint limits** (``limits`` on leg joints, recorded in the manifest) are part of
+the working mode: a configuration or point counts only if its passive joint variables,
+found from the generated loop closure on the home assembly's branch, are within them
+(:mod:`symkin.analysis.passive`; unresolved poses count as unreachable, with a warning).
 """
 
 from __future__ import annotations
@@ -30,7 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from symkin.analysis import mechanism
+from symkin.analysis import mechanism, passive
 
 #: Largest |ik(fk(q)) - q| (rad or m) of a configuration in the working mode.  The two
 #: roots of a leg differ by far more except next to the leg singularity where they
@@ -43,12 +44,6 @@ POSITION_ROUND_TRIP_TOLERANCE = 1e-6
 def _require(model: Any, names: tuple[str, ...]) -> None:
     for name in names:
         mechanism.parallel_function(model, name)
-    legs = model.manifest["model"]["parallel"]["legs"]
-    declared = [name for leg in legs for name in leg.get("passive_limits", {})]
-    if declared:
-        raise ValueError(f"{model.name}: passive-joint limits are declared ({', '.join(declared)}) but the "
-                         "workspace analyses cannot evaluate passive joint angles yet; remove the limits or "
-                         "analyse without them")
 
 
 def _angle_difference(a: np.ndarray, b: np.ndarray, revolute: np.ndarray) -> np.ndarray:
@@ -61,7 +56,8 @@ def working_mode(model: Any, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
     Returns:
         (p, inside): p = fk(q) (..., 3), NaN where the legs cannot be assembled; inside:
-        boolean (...), fk assembles and ik(fk(q)) = q (joint limits are not checked here).
+        boolean (...), fk assembles, ik(fk(q)) = q and the declared passive-joint limits hold
+        (the actuators' joint limits are not checked here).
     """
     _require(model, ("fk", "ik", "jacobian"))
     q = np.asarray(q, dtype=np.float64)
@@ -70,6 +66,11 @@ def working_mode(model: Any, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         back = model.ik(np.where(np.isfinite(p), p, 0.0)).joints
         error = np.abs(_angle_difference(back, q, mechanism.revolute_mask(model)))
         inside = np.isfinite(p).all(axis=-1) & np.all(error <= JOINT_ROUND_TRIP_TOLERANCE, axis=-1)
+    limits = passive.declared_limits(model)
+    if limits is not None:
+        batch = inside.shape
+        inside = passive.admissible(model, limits, q.reshape(-1, q.shape[-1]), p.reshape(-1, p.shape[-1]),
+                                    inside.reshape(-1)).reshape(batch)
     return p, inside
 
 
@@ -84,15 +85,18 @@ class ParallelInverse:
     """The generated closed-form ``ik`` as an :class:`~symkin.analysis.inverse.InverseKinematics`.
 
     One branch (the model's working mode): a point is valid where every leg reaches it
-    (margin >= 0) and the forward kinematics of the solution returns to it.
+    (margin >= 0), the forward kinematics of the solution returns to it and the passive
+    joint variables are within their declared limits.
 
     Attributes:
         model: the loaded parallel model (with ``ik`` and ``fk``).
         size: a length of the mechanism (m) that scales the round-trip tolerance.
+        passive_limits: the declared passive-joint limits, None if there are none.
     """
 
     model: Any
     size: float
+    passive_limits: passive.PassiveLimits | None = None
     dimension: int = 3
     branches: int = 1
 
@@ -103,7 +107,10 @@ class ParallelInverse:
             finite = np.isfinite(q).all(axis=-1)
             p = self.model.fk(np.where(finite[:, None], q, 0.0)).position
             returns = np.all(np.abs(p - points) <= POSITION_ROUND_TRIP_TOLERANCE * self.size, axis=-1)
-        return q[:, None, :], (finite & returns)[:, None]
+        valid = finite & returns
+        if self.passive_limits is not None:
+            valid = passive.admissible(self.model, self.passive_limits, q, points, valid)
+        return q[:, None, :], valid[:, None]
 
 
 def parallel_inverse(model: Any) -> ParallelInverse:
@@ -111,7 +118,8 @@ def parallel_inverse(model: Any) -> ParallelInverse:
 
     Raises:
         ValueError: the model is not parallel, its platform also rotates (pose task space),
-            it lacks the generated ``ik`` or ``fk``, or it declares passive-joint limits.
+            it lacks the generated ``ik`` or ``fk``, or its passive-joint limits are malformed
+            or cannot be evaluated (no generated ``closure``).
     """
     if not mechanism.is_parallel(model):
         raise ValueError(f"{model.name}: not a parallel mechanism")
@@ -123,7 +131,7 @@ def parallel_inverse(model: Any) -> ParallelInverse:
     if home is None:
         raise ValueError(f"{model.name}: declare a home pose (parallel.home) to scale the workspace analyses")
     size = max(float(np.linalg.norm(home)), 1e-3)
-    return ParallelInverse(model, size)
+    return ParallelInverse(model, size, passive.declared_limits(model))
 
 
 def home_position(model: Any) -> np.ndarray:

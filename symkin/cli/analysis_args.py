@@ -18,6 +18,9 @@ from typing import Any
 ANALYSIS_OUTPUTS = ("fk", "jacobian")
 #: ... by kind of mechanism: a parallel one also needs its closed-form ik (reachability, working mode).
 ANALYSIS_OUTPUTS_BY_KIND = {"serial": ANALYSIS_OUTPUTS, "parallel": ("ik", "fk", "jacobian")}
+#: Also derived for a parallel model file that limits passive joints: the analyses find the
+#: passive joint variables from the loop closure (symkin.analysis.passive).
+PASSIVE_LIMIT_OUTPUTS = ("closure", "closure_jacobians")
 
 
 def add_model_arguments(p: argparse.ArgumentParser, *, backend: bool = True) -> None:
@@ -179,12 +182,21 @@ def load_models(path: str, backends: Sequence[str],
 
     model = load_model_file(source)
     wanted = outputs.get(model.mechanism, ANALYSIS_OUTPUTS) if isinstance(outputs, Mapping) else outputs
+    if isinstance(outputs, Mapping) and _limits_passive_joints(model):
+        wanted = (*wanted, *PASSIVE_LIMIT_OUTPUTS)
     request = pipeline.resolve_request(model, ",".join([*wanted, *derivable(model, optional)]), ",".join(backends),
                                        None)
     with tempfile.TemporaryDirectory(prefix="symkin-analysis-") as scratch, Progress(model.name) as progress:
         # The generated module is imported (numpy) or read (C, CasADi) by load(): the files may go afterwards.
         directory = pipeline.write(pipeline.generate(model, request, progress), scratch)
         return [load(directory, backend) for backend in backends]
+
+
+def _limits_passive_joints(model: Any) -> bool:
+    """Whether a parallel model file declares limits on a passive joint variable."""
+    return model.parallel is not None and any(
+        joint.limits_of(k) is not None for leg in model.parallel.legs for joint in leg.joints
+        for k in range(len(joint.variables)) if k != joint.active)
 
 
 def model_from_args(args: argparse.Namespace) -> tuple[Any, dict[str, tuple[float, float]]]:

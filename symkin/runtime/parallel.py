@@ -54,13 +54,47 @@ def _function(model: LoadedModel, name: str, purpose: str) -> Callable[..., obje
     return getattr(model, name)
 
 
+#: A tall Jacobian counts as of full column rank when its smallest pivot |R_ii| (A = QR) is
+#: above this fraction of its largest.
+_FULL_RANK = 1e-10
+
+
+def _pinv_steps(A: np.ndarray, r: np.ndarray) -> np.ndarray:
+    """Minimum-norm least-squares steps -A^+ r of a flat batch (k, rows, cols)."""
+    return -np.einsum("kij,kj->ki", np.linalg.pinv(A), r)
+
+
+def _least_squares_steps(A: np.ndarray, r: np.ndarray) -> np.ndarray:
+    """Least-squares steps -A^+ r of a flat batch of tall A (k, rows, cols).
+
+    Where A has full column rank, from the normal equations A^T A x = -A^T r (several times
+    faster than the SVD behind pinv; the Cholesky factor of A^T A is R^T of A = QR, whose
+    diagonal tells the rank); elsewhere the minimum-norm step of pinv.  The normal
+    equations square the condition number of the step, not of the solution: a Gauss-Newton
+    fixed point A^T r = 0 is the same.
+    """
+    if A.shape[1] < A.shape[2]:
+        return _pinv_steps(A, r)
+    At = np.swapaxes(A, 1, 2)
+    normal = At @ A
+    try:
+        pivots = np.abs(np.diagonal(np.linalg.cholesky(normal), axis1=1, axis2=2))
+    except np.linalg.LinAlgError:  # some A is rank-deficient
+        return _pinv_steps(A, r)
+    regular = pivots.min(axis=1) > _FULL_RANK * pivots.max(axis=1)
+    steps = np.empty(A.shape[:1] + A.shape[2:])
+    steps[regular] = -np.linalg.solve(normal[regular], At[regular] @ r[regular][..., None])[..., 0]
+    steps[~regular] = _pinv_steps(A[~regular], r[~regular])
+    return steps
+
+
 def _newton_steps(A: np.ndarray, r: np.ndarray) -> np.ndarray:
     """Newton steps -A^-1 r for a flat batch (k, rows, cols); least squares -A^+ r when A is not
     square; NaN where A or r is not finite or A is singular."""
     steps = np.full(A.shape[:1] + A.shape[2:], np.nan)
     finite = np.all(np.isfinite(A), axis=(1, 2)) & np.all(np.isfinite(r), axis=1)
     if A.shape[1] != A.shape[2]:
-        steps[finite] = -np.einsum("kij,kj->ki", np.linalg.pinv(A[finite]), r[finite])
+        steps[finite] = _least_squares_steps(A[finite], r[finite])
         return steps
     try:
         steps[finite] = -np.linalg.solve(A[finite], r[finite][..., None])[..., 0]
@@ -73,17 +107,23 @@ def _newton_steps(A: np.ndarray, r: np.ndarray) -> np.ndarray:
     return steps
 
 
-def _iterate(start: np.ndarray, equations: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]], tol: float,
-             max_iterations: int) -> NewtonReport:
-    """Newton iteration x <- x - A(x)^-1 r(x) on a batch (..., k) of unknowns."""
+def _iterate(start: np.ndarray, equations: Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]],
+             tol: float, max_iterations: int, max_step: float | None = None) -> NewtonReport:
+    """Newton iteration x <- x - A(x)^-1 r(x) on a batch (..., k) of unknowns.
+
+    ``equations(x, rows)`` gives r and A of the samples ``rows`` (indices into the flattened
+    batch) at their unknowns x (len(rows), k); only the samples still iterating are evaluated.
+    With ``max_step`` the iteration is damped: a step longer than that (max-norm) is scaled
+    down to it, so a start near one solution does not jump to another far away.
+    """
     batch = start.shape[:-1]
     x = np.array(start, dtype=float, copy=True).reshape(-1, start.shape[-1])
 
-    def flat_equations(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        r, A = equations(values.reshape(batch + values.shape[-1:]))
+    def flat_equations(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        r, A = equations(x[rows], rows)
         r = np.asarray(r, dtype=float)
         A = np.asarray(A, dtype=float)
-        return r.reshape(-1, r.shape[-1]), A.reshape((-1,) + A.shape[-2:])
+        return r.reshape(len(rows), -1), A.reshape((len(rows),) + A.shape[-2:])
 
     count = x.shape[0]
     converged = np.zeros(count, dtype=bool)
@@ -91,20 +131,25 @@ def _iterate(start: np.ndarray, equations: Callable[[np.ndarray], tuple[np.ndarr
     step_norm = np.full(count, np.inf)
     active = np.ones(count, dtype=bool)
     for _ in range(max_iterations):
-        if not active.any():
+        rows = np.flatnonzero(active)
+        if not len(rows):
             break
-        r, A = flat_equations(x)
+        r, A = flat_equations(rows)
         step = _newton_steps(A, r)
         with np.errstate(invalid="ignore"):
             norm = np.max(np.abs(step), axis=-1)
-        moved = active & np.isfinite(norm)
-        x[moved] += step[moved]
-        iterations[active] += 1
-        step_norm[active] = norm[active]
-        converged |= moved & (norm <= tol)
-        active &= moved & ~converged
-    r, _ = flat_equations(x)
-    residual = np.max(np.abs(r), axis=-1)
+        moved = np.isfinite(norm)
+        if max_step is not None:
+            with np.errstate(invalid="ignore"):
+                step *= np.minimum(1.0, max_step / np.maximum(norm, max_step))[:, None]
+        x[rows[moved]] += step[moved]
+        iterations[rows] += 1
+        step_norm[rows] = norm
+        done = moved & (norm <= tol)
+        converged[rows[done]] = True
+        active[rows[~moved | done]] = False
+    r, _ = flat_equations(np.arange(count))
+    residual = np.max(np.abs(r), axis=-1) if count else np.zeros(0)
     converged &= np.isfinite(residual)
     x[~converged] = np.nan
     return NewtonReport(x.reshape(start.shape), converged.reshape(batch), iterations.reshape(batch),
@@ -151,14 +196,16 @@ def solve_fk(model: LoadedModel, q, p0=None, *, tol: float = 1e-12, max_iteratio
     q = np.broadcast_to(q, batch + q.shape[-1:])
     start = np.broadcast_to(p0, batch + p0.shape[-1:])
 
-    def equations(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return np.asarray(constraints(q, p)), np.asarray(jacobians(q, p).J_x)
+    q_flat = q.reshape(-1, q.shape[-1])
+
+    def equations(p: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return np.asarray(constraints(q_flat[rows], p)), np.asarray(jacobians(q_flat[rows], p).J_x)
 
     return _iterate(start, equations, tol, max_iterations)
 
 
 def solve_closure(model: LoadedModel, q, s, p, *, unknowns: tuple[str, ...] = ("p", "s"), tol: float = 1e-12,
-                  max_iterations: int = 50) -> NewtonReport:
+                  max_iterations: int = 50, max_step: float | None = None) -> NewtonReport:
     """Solve the generated loop closure phi(q, s, p) = 0 for some of its vectors (any leg topology).
 
     Gauss-Newton on the generated ``closure`` and ``closure_jacobians``: the unknown
@@ -174,6 +221,7 @@ def solve_closure(model: LoadedModel, q, s, p, *, unknowns: tuple[str, ...] = ("
         unknowns: which of "q", "s", "p" to solve for.
         tol: converged when a step is at most this large (max-norm).
         max_iterations: give up after this many steps.
+        max_step: damping: steps longer than this (max-norm) are shortened to it.
 
     Returns:
         The report; ``solution`` maps every vector name to its value (unknowns NaN where not
@@ -194,13 +242,15 @@ def solve_closure(model: LoadedModel, q, s, p, *, unknowns: tuple[str, ...] = ("
     def unpack(x: np.ndarray) -> dict[str, np.ndarray]:
         return {**values, **dict(zip(order, np.split(x, splits, axis=-1)))}
 
-    def equations(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        v = unpack(x)
+    flat = {name: v.reshape(-1, v.shape[-1]) for name, v in values.items()}
+
+    def equations(x: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        v = {**{name: value[rows] for name, value in flat.items()}, **dict(zip(order, np.split(x, splits, axis=-1)))}
         phi = np.asarray(closure(v["q"], v["s"], v["p"]))
         J = jacobians(v["q"], v["s"], v["p"])
         blocks = {"q": J.Phi_q, "s": J.Phi_s, "p": J.Phi_p}
         return phi, np.concatenate([np.asarray(blocks[name]) for name in order], axis=-1)
 
     start = np.concatenate([values[name] for name in order], axis=-1)
-    report = _iterate(start, equations, tol, max_iterations)
+    report = _iterate(start, equations, tol, max_iterations, max_step)
     return NewtonReport(unpack(report.solution), report.converged, report.iterations, report.residual, report.step)

@@ -1,0 +1,31 @@
+"""Joint coordinates against their limits (actuated joints, and passive joints of parallel legs)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: Tolerance on joint limits and on the reach of a closed form (rounding of points that lie
+#: exactly on the workspace boundary, e.g. the fully stretched arm).
+LIMIT_TOLERANCE = 1e-9
+
+
+def within_limits(q: np.ndarray, limits: np.ndarray, revolute: np.ndarray,
+                  tolerance: float = LIMIT_TOLERANCE) -> tuple[np.ndarray, np.ndarray]:
+    """Joint coordinates moved into their limits where possible, and whether they are inside.
+
+    A revolute coordinate is an angle: it is shifted by a multiple of 2 pi to the first
+    representative at or above ``lower - tolerance``.
+
+    Args:
+        q: (..., n) joint coordinates.
+        limits: (n, 2) [lower, upper].
+        revolute: (n,) which coordinates are angles.
+
+    Returns:
+        (q, inside): the shifted coordinates (..., n) and a boolean (...) array.
+    """
+    lower, upper = limits[:, 0], limits[:, 1]
+    wrapped = lower - tolerance + np.mod(q - lower + tolerance, 2.0 * np.pi)
+    q = np.where(revolute, wrapped, q)
+    inside = np.all((q >= lower - tolerance) & (q <= upper + tolerance), axis=-1)
+    return q, inside
