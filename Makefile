@@ -33,7 +33,7 @@ demo: setup
 
 ## test: run the whole test suite
 test: setup
-	$(BIN)/python -m pytest -n $(PYTEST_WORKERS) -q
+	$(BIN)/python -m pytest -n $(PYTEST_WORKERS) --dist loadgroup -q
 
 ## generate: rewrite generated/ from the example models (the "update" switch of the golden tests)
 generate: demo

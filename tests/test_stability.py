@@ -20,6 +20,10 @@ from symkin.stability.ir_eval import compile_ir, flatten_outputs
 from symkin.stability.reference import MpmathReference, normwise_error
 from symkin.stability.states import parameter_values
 
+#: One xdist worker runs this module (`make test` uses --dist loadgroup), so the module-scoped
+#: runs are computed once, not once per worker.
+pytestmark = pytest.mark.xdist_group("stability")
+
 QUICK = dict(samples=12, scale_samples=3, float32_samples=6, steps=(1e-2, 1e-6, 1e-10))
 #: The Stewart platform's J = J_x^-1 J_q (a symbolic 6x6 inverse) takes a minute to derive and
 #: lambdify for mpmath: the suite checks every other quantity (`symkin bench stability` checks all).
