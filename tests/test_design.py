@@ -94,7 +94,6 @@ def test_2r_with_free_length_ratio_finds_the_isotropic_design(arm, theta2_limits
     _, _, solution = _optimize(arm, "gci", ["l1"], bounds={"l1": (0.05, 0.3)}, limits={"theta2": theta2_limits})
     assert solution.success
     l1, l2 = solution.optimum["l1"], solution.optimum["l2"]
-    assert l2 == 0.1
     assert l1 / l2 == pytest.approx(np.sqrt(2), rel=1e-9)
     # kappa = 1 at the isotropic configuration theta2 = 135 deg, by the generated numpy code and an SVD
     J = numpy_model.bind(l1=l1, l2=l2).jacobian(np.array([0.3, 3 * np.pi / 4]))

@@ -13,12 +13,15 @@ from __future__ import annotations
 import copy
 import re
 import warnings
+from unittest import mock
 
 import numpy as np
 import pytest
 
 import symkin
 from symkin.analysis import global_indices, inverse, mechanism, parallel, passive, sampling, workspace
+from symkin.ik.rotations import wrap_angle
+from symkin.runtime import parallel as runtime_parallel
 from symkin.runtime.loader import LoadedModel
 
 from conftest import GENERATED_DIR
@@ -96,10 +99,6 @@ def _closed_form(q: np.ndarray, p: np.ndarray) -> np.ndarray:
     return np.stack(columns, axis=-1)
 
 
-def _wrapped_difference(a, b):
-    return np.remainder(a - b + np.pi, 2 * np.pi) - np.pi
-
-
 @pytest.fixture(scope="module")
 def poses():
     """The working-mode configurations of a joint grid over the actuator limits (the whole
@@ -117,7 +116,7 @@ def test_passive_variables_close_the_loop_on_the_home_branch(limited, poses):
     solution = passive.solve_passive(model, passive.declared_limits(model), q, p)
     assert solution.resolved.all()
     assert np.max(np.abs(model.closure(q, solution.s, p))) <= 1e-10
-    assert np.max(np.abs(_wrapped_difference(solution.s, expected))) < 1e-9
+    assert np.max(np.abs(wrap_angle(solution.s - expected))) < 1e-9
     # elbow_2 is reported in its declared interval [-pi, pi]
     assert np.all(np.abs(solution.s[:, [1, 5, 9]]) <= np.pi)
 
@@ -217,7 +216,11 @@ def test_least_squares_steps_agree_with_pinv_also_where_rank_deficient():
     A[4, :, 7] = 0.0
     r = rng.normal(size=(6, 18))
     expected = -np.einsum("kij,kj->ki", np.linalg.pinv(A), r)
-    np.testing.assert_allclose(_least_squares_steps(A, r), expected, rtol=1e-9, atol=1e-12)
+    # one batch mixes both paths: normal equations for the full-rank matrices, pinv for the others
+    with mock.patch("symkin.runtime.parallel._pinv_steps", wraps=runtime_parallel._pinv_steps) as pinv:
+        np.testing.assert_allclose(_least_squares_steps(A, r), expected, rtol=1e-9, atol=1e-12)
+    (call,) = pinv.call_args_list
+    assert len(call.args[0]) == 2
     np.testing.assert_allclose(_least_squares_steps(A[[0, 1, 3]], r[[0, 1, 3]]), expected[[0, 1, 3]], rtol=1e-9)
 
 

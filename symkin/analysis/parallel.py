@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 
 from symkin.analysis import mechanism, passive
+from symkin.ik.rotations import wrap_angle
 
 #: Largest |ik(fk(q)) - q| (rad or m) of a configuration in the working mode.  The two
 #: roots of a leg differ by far more except next to the leg singularity where they
@@ -46,11 +47,6 @@ def _require(model: Any, names: tuple[str, ...]) -> None:
         mechanism.parallel_function(model, name)
 
 
-def _angle_difference(a: np.ndarray, b: np.ndarray, revolute: np.ndarray) -> np.ndarray:
-    difference = a - b
-    return np.where(revolute, np.remainder(difference + np.pi, 2.0 * np.pi) - np.pi, difference)
-
-
 def working_mode(model: Any, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """TCP positions of configurations q (..., n) and whether each is in the working mode.
 
@@ -59,12 +55,12 @@ def working_mode(model: Any, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         boolean (...), fk assembles, ik(fk(q)) = q and the declared passive-joint limits hold
         (the actuators' joint limits are not checked here).
     """
-    _require(model, ("fk", "ik", "jacobian"))
+    _require(model, ("fk", "ik"))
     q = np.asarray(q, dtype=np.float64)
     with np.errstate(invalid="ignore"):  # the closed forms take sqrt of negative margins: NaN, as documented
         p = model.fk(q).position
         back = model.ik(np.where(np.isfinite(p), p, 0.0)).joints
-        error = np.abs(_angle_difference(back, q, mechanism.revolute_mask(model)))
+        error = np.abs(np.where(mechanism.revolute_mask(model), wrap_angle(back - q), back - q))
         inside = np.isfinite(p).all(axis=-1) & np.all(error <= JOINT_ROUND_TRIP_TOLERANCE, axis=-1)
     limits = passive.declared_limits(model)
     if limits is not None:
@@ -133,7 +129,3 @@ def parallel_inverse(model: Any) -> ParallelInverse:
     size = max(float(np.linalg.norm(home)), 1e-3)
     return ParallelInverse(model, size, passive.declared_limits(model))
 
-
-def home_position(model: Any) -> np.ndarray:
-    """The declared home position of the platform (TCP), shape (3,)."""
-    return np.array(model.manifest["model"]["parallel"]["home"][:3], dtype=np.float64)

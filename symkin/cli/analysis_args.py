@@ -205,11 +205,19 @@ def model_from_args(args: argparse.Namespace) -> tuple[Any, dict[str, tuple[floa
     Raises:
         ValueError: malformed --set or --limit (KeyError for an unknown parameter).
     """
-    model = load_models(args.model, (args.backend,), ANALYSIS_OUTPUTS_BY_KIND)[0]
+    (model,), limits = models_from_args(args, (args.backend,))
+    return model, limits
+
+
+def models_from_args(args: argparse.Namespace,
+                     backends: Sequence[str]) -> tuple[list[Any], dict[str, tuple[float, float]]]:
+    """MODEL loaded once per backend (a model file derived once), with --set applied, and the
+    --limit overrides (see :func:`model_from_args`)."""
+    models = load_models(args.model, backends, ANALYSIS_OUTPUTS_BY_KIND)
     values = parse_assignments(args.assignments)
     if values:
-        model = model.bind(**values)
-    return model, parse_limits(args.limits)
+        models = [model.bind(**values) for model in models]
+    return models, parse_limits(args.limits)
 
 
 def fail_on_bad_input(args: argparse.Namespace, err: Exception) -> None:

@@ -41,11 +41,8 @@ def run(args: argparse.Namespace) -> int:
 
     try:
         backends = _backends(args)
-        models = []
-        for backend in backends:
-            args.backend = backend
-            model, limits = analysis_args.model_from_args(args)
-            models.append(model)
+        models, limits = analysis_args.models_from_args(args, backends)
+        model = models[-1]
         methods = [m.strip() for m in args.methods.split(",") if m.strip()] if args.methods else list(INTEGRATORS)
         unknown = sorted(set(methods) - set(INTEGRATORS))
         if unknown:

@@ -65,12 +65,17 @@ def run(args: argparse.Namespace) -> int:
             progress(f"sampling {label}")
             try:
                 cloud = workspace.sample_workspace(model, args.samples, method=method, limits=limits, seed=args.seed)
-                progress(f"conditioning {label}")
-                inv_kappa = global_indices.local_index(model, cloud.q, length=length, limits=limits)
-                report = _report(model, cloud, inv_kappa, limits, progress)
-                if mechanism.is_parallel(model):
+                parallel = mechanism.is_parallel(model)
+                inv_kappa, box = None, None
+                if parallel:  # 1/kappa and the volume come from a Cartesian grid over this box
+                    box = workspace.bounding_box(model, limits=limits)
+                else:
+                    progress(f"conditioning {label}")
+                    inv_kappa = global_indices.local_index(model, cloud.q, length=length, limits=limits)
+                report = _report(model, cloud, inv_kappa, limits, progress, box)
+                if parallel:
                     progress(f"Cartesian grid {label}")
-                    grid = _cartesian_grid(model, limits, length)
+                    grid = _cartesian_grid(model, box, limits, length)
                     report += _cartesian_report(*grid)
                     grids.append(grid)
             except ValueError as err:
@@ -110,11 +115,11 @@ def _label(model, values: dict[str, float], unit: str) -> str:
     return ", ".join(parts) or "model parameters"
 
 
-def _cartesian_grid(model, limits, length):
-    """Reachability grid of a parallel mechanism with 1/kappa at its cell centres (see workspace.index_grid)."""
+def _cartesian_grid(model, box, limits, length):
+    """Reachability grid of a parallel mechanism over ``box`` with 1/kappa at its cell centres
+    (see workspace.index_grid)."""
     from symkin.analysis import inverse, workspace
 
-    box = workspace.bounding_box(model, limits=limits)
     cell = float(max(box[1] - box[0])) / CARTESIAN_CELLS
     return workspace.index_grid(model, inverse.parallel_inverse(model), box, cell, limits=limits, length=length)
 
@@ -138,7 +143,7 @@ def _cartesian_report(occupancy, values) -> list[str]:
     return lines
 
 
-def _report(model, cloud, inv_kappa, limits, progress) -> list[str]:
+def _report(model, cloud, inv_kappa, limits, progress, box=None) -> list[str]:
     from symkin.analysis import global_indices, inverse, mechanism, workspace
 
     lines = []
@@ -157,7 +162,7 @@ def _report(model, cloud, inv_kappa, limits, progress) -> list[str]:
     if ik is not None:
         progress(f"{kind} (Cartesian domain)")
         measure = global_indices.workspace_measure(model, method="qmc", samples=2**16, seed=0, limits=limits,
-                                        domain="cartesian", inverse=ik)
+                                                   domain="cartesian", inverse=ik, box=box)
         lines.append(f"{kind}: {measure} {unit} (qmc over a Cartesian box, reachability by inverse kinematics)")
     if mechanism.is_parallel(model):
         return lines  # the Cartesian grid (_cartesian_report) gives the volume, boundary and singularities

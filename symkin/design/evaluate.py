@@ -3,9 +3,8 @@ with an error estimate, and the reachability of the required box, on the generat
 
 Nothing here shares code with the optimizer's CasADi surrogate: a serial model is rated by
 :func:`symkin.analysis.gci` (randomized QMC over the joint limits, dW = |det J| dq); a
-parallel model by the same integrator over the required box, with the reachability
-indicator of its closed-form ``ik`` and actuated-joint limits, if any (dW = 1_W(x) dx,
-the Cartesian measure).  The box is
+parallel model by the same function on the Cartesian domain of the required box, with the
+analyses' reachability test of its closed-form ``ik`` (dW = 1_W(x) dx).  The box is
 checked on a vertex grid denser than the optimizer's constraint points: by the closed-form
 inverse of :mod:`symkin.analysis.inverse` where one exists, else by the ``ik`` margin.
 """
@@ -19,8 +18,6 @@ import numpy as np
 
 from symkin.analysis import conditioning, global_indices, inverse, mechanism, sampling
 from symkin.analysis.estimates import Estimate
-from symkin.analysis.integrand import Integrand
-from symkin.analysis.integrators import integrate
 from symkin.design.problem import DesignProblem
 
 #: Integrand evaluations of the independent GCI (qmc: 16 scrambles of 2^10 points).
@@ -93,19 +90,13 @@ def _serial_box(problem: DesignProblem, model: Any, configurations: np.ndarray |
     return float(np.mean(inside)), f"closed-form inverse kinematics within the joint limits at {len(points)} points"
 
 
-def parallel_reachable(model: Any, points: np.ndarray, limits: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
-    """Joints (N, n) of the closed-form ``ik`` and whether each point is reachable (within ``limits``, if any)."""
-    with np.errstate(invalid="ignore"):  # the square root of a negative margin: NaN joints, unreachable
-        q, margin = model.ik(points)
-    inside = np.all(margin >= 0, axis=-1) & np.all(np.isfinite(q), axis=-1)
-    if limits is not None:
-        inside &= np.all((q >= limits[:, 0]) & (q <= limits[:, 1]), axis=-1)
-    return q, inside
-
-
 def parallel_index(model: Any, points: np.ndarray, limits: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
-    """1/kappa of J at each point (0 where unreachable), and whether it is reachable."""
-    q, inside = parallel_reachable(model, points, limits)
+    """1/kappa of J at each point (0 where unreachable), and whether it is reachable: by the
+    analyses' own test (:func:`symkin.analysis.inverse.parallel_inverse`: IK margin, fk round
+    trip, declared passive-joint limits) within the actuated-joint ``limits``."""
+    ik = inverse.parallel_inverse(model)
+    q, inside = inverse.feasible_configurations(ik, points, mechanism.joint_limits(model, limits),
+                                                mechanism.revolute_mask(model))
     values = np.zeros(len(points))
     if inside.any():
         values[inside] = conditioning.inverse_condition_number(model.jacobian(q[inside], points[inside]))
@@ -113,17 +104,11 @@ def parallel_index(model: Any, points: np.ndarray, limits: np.ndarray | None) ->
 
 
 def _parallel(problem: DesignProblem, model: Any, samples: int, seed: int) -> Evaluation:
-    lower, upper = problem.box
-
-    def function(points: np.ndarray) -> np.ndarray:
-        values, inside = parallel_index(model, points, problem.limits)
-        return np.stack([values, inside.astype(np.float64)], axis=-1)
-
-    axes = tuple("xyz"[a] for a in mechanism.position_axes(model))
-    integrand = Integrand(lower, upper, function, ("1/kappa dW", "dW"), axes, indicator=1)
-    result = integrate(integrand, "qmc", samples, seed=seed)
+    ik = inverse.parallel_inverse(model)
+    result = global_indices.gci(model, method="qmc", samples=samples, seed=seed, domain="cartesian", inverse=ik,
+                                box=problem.box, limits=problem.limits)
     points = box_check_points(problem)
-    fraction = float(np.mean(parallel_reachable(model, points, problem.limits)[1]))
-    return Evaluation(result.ratio(0, 1), result.component(1),
-                      "qmc over the required box, dW = 1_W(x) dx (reachable by the closed-form ik)", fraction,
-                      f"closed-form ik margin at {len(points)} points")
+    fraction = float(np.mean(inverse.reachable(ik, points, mechanism.joint_limits(model, problem.limits),
+                                               mechanism.revolute_mask(model))))
+    return Evaluation(result.value, result.measure, f"qmc over the required box, {result.description}", fraction,
+                      f"closed-form ik (margin, fk round trip, joint limits) at {len(points)} points")

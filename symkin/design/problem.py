@@ -82,11 +82,6 @@ class DesignProblem:
         return self.box[0] - self.margin, self.box[1] + self.margin
 
 
-def is_parallel(model: Any) -> bool:
-    """Whether the manifest describes a parallel mechanism."""
-    return "parallel" in model.manifest["model"]
-
-
 def needed_functions(parallel: bool) -> tuple[str, ...]:
     """The generated functions a dimensioning problem evaluates."""
     return ("ik", "jacobian") if parallel else ("fk", "jacobian")
@@ -176,7 +171,7 @@ def design_problem(model: Any, objective: str, free: Sequence[str], *,
     """
     if objective not in OBJECTIVES:
         raise ValueError(f"unknown objective '{objective}'; choose one of {', '.join(OBJECTIVES)}")
-    parallel = is_parallel(model)
+    parallel = mechanism.is_parallel(model)
     values = dict(values or {})
     unknown = sorted(set(values) - set(model.parameters))
     if unknown:

@@ -67,23 +67,18 @@ def _pinv_steps(A: np.ndarray, r: np.ndarray) -> np.ndarray:
 def _least_squares_steps(A: np.ndarray, r: np.ndarray) -> np.ndarray:
     """Least-squares steps -A^+ r of a flat batch of tall A (k, rows, cols).
 
-    Where A has full column rank, from the normal equations A^T A x = -A^T r (several times
-    faster than the SVD behind pinv; the Cholesky factor of A^T A is R^T of A = QR, whose
-    diagonal tells the rank); elsewhere the minimum-norm step of pinv.  The normal
-    equations square the condition number of the step, not of the solution: a Gauss-Newton
-    fixed point A^T r = 0 is the same.
+    Where A has full column rank - judged per matrix by the diagonal of R in A = QR - from
+    the normal equations A^T A x = -A^T r (several times faster than the SVD behind pinv);
+    elsewhere the minimum-norm step of pinv.  The normal equations square the condition
+    number of the step, not of the solution: a Gauss-Newton fixed point A^T r = 0 is the same.
     """
     if A.shape[1] < A.shape[2]:
         return _pinv_steps(A, r)
-    At = np.swapaxes(A, 1, 2)
-    normal = At @ A
-    try:
-        pivots = np.abs(np.diagonal(np.linalg.cholesky(normal), axis1=1, axis2=2))
-    except np.linalg.LinAlgError:  # some A is rank-deficient
-        return _pinv_steps(A, r)
+    pivots = np.abs(np.diagonal(np.linalg.qr(A, mode="r"), axis1=1, axis2=2))
     regular = pivots.min(axis=1) > _FULL_RANK * pivots.max(axis=1)
     steps = np.empty(A.shape[:1] + A.shape[2:])
-    steps[regular] = -np.linalg.solve(normal[regular], At[regular] @ r[regular][..., None])[..., 0]
+    At = np.swapaxes(A[regular], 1, 2)
+    steps[regular] = -np.linalg.solve(At @ A[regular], At @ r[regular][..., None])[..., 0]
     steps[~regular] = _pinv_steps(A[~regular], r[~regular])
     return steps
 
@@ -141,7 +136,7 @@ def _iterate(start: np.ndarray, equations: Callable[[np.ndarray, np.ndarray], tu
         moved = np.isfinite(norm)
         if max_step is not None:
             with np.errstate(invalid="ignore"):
-                step *= np.minimum(1.0, max_step / np.maximum(norm, max_step))[:, None]
+                step *= (max_step / np.maximum(norm, max_step))[:, None]
         x[rows[moved]] += step[moved]
         iterations[rows] += 1
         step_norm[rows] = norm

@@ -90,13 +90,17 @@ class WallRenderer:
     def desired_and_sensed(self, t: float, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(F_d, F_s) at state x: wall force and the force felt by the hand."""
         s = self.system.split(x)
-        plant = self.system.plant
-        p, v = plant.point(s.q), plant.point_jacobian(s.q) @ s.qd
-        return self.wall.force(p, v), -self.system.hand_force(t, s)
+        desired, sensed, _ = self._forces(s)
+        return desired, sensed
+
+    def _forces(self, s) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(F_d, F_s, J_p) at the split state ``s``: the TCP motion evaluated once."""
+        p, Jp, v = self.system.tcp_motion(s.q, s.qd)
+        sensed = -self.system.user.force_on_tcp(p, v, s.hand, s.hand_velocity)
+        return self.wall.force(p, v), sensed, Jp
 
     def __call__(self, t: float, x: np.ndarray) -> np.ndarray:
         s = self.system.split(x)
-        plant = self.system.plant
-        desired, sensed = self.desired_and_sensed(t, x)
+        desired, sensed, Jp = self._forces(s)
         command = desired + self.force_gain * (desired - sensed)
-        return plant.gravity(s.q) + plant.point_jacobian(s.q).T @ command
+        return self.system.plant.gravity(s.q) + Jp.T @ command

@@ -15,12 +15,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from symkin.analysis import mechanism
 from symkin.errors import GeneratedCodeError
 from symkin.runtime import LoadedModel
 
 #: Functions a plant cannot do without, and how to get them.
 REQUIRED = ("forward_dynamics", "inverse_dynamics", "kinetic_energy")
-POSITION_INDEX = {"x": 0, "y": 1, "z": 2}
 
 
 class Plant:
@@ -44,15 +44,17 @@ class Plant:
                                      f"{','.join(REQUIRED)},gravity_vector,potential_energy,fk,jacobian'")
         self.model = model
         self.name = model.name
-        coordinates = model.manifest["model"]["coordinates"]
-        self.coordinates = tuple(c["name"] for c in coordinates)
+        self.coordinates = mechanism.coordinate_names(model)
         self.dof = len(self.coordinates)
-        self.revolute = np.array([c["type"] == "R" for c in coordinates])
-        self.task_space = tuple(model.manifest["model"]["task_space"])
+        self.revolute = mechanism.revolute_mask(model)
+        self.task_space = mechanism.task_space(model)
         #: rows of the task Jacobian that are TCP translations, and their fk axes
-        self.point_rows = [i for i, c in enumerate(self.task_space) if c in POSITION_INDEX]
+        self.point_rows = list(mechanism.position_rows(model))
         self.point_axes = tuple(self.task_space[i] for i in self.point_rows)
-        self._point_index = [POSITION_INDEX[c] for c in self.point_axes]
+        self._point_index = [mechanism.POSITION_COMPONENTS.index(c) for c in self.point_axes]
+        self._point_error = None if self.point_rows and {"fk", "jacobian"} <= set(model.functions) else (
+            f"{self.name}: task-space simulation needs 'fk' and 'jacobian' and a task space with x, y or z "
+            f"(it is [{', '.join(self.task_space)}])")
         functions = set(model.functions)
         self._gravity = model.gravity_vector if "gravity_vector" in functions else None
         self._potential = model.potential_energy if "potential_energy" in functions else None
@@ -113,6 +115,5 @@ class Plant:
         return self.model.jacobian(q)[..., self.point_rows, :]
 
     def _require_point(self) -> None:
-        if not self.point_rows or "fk" not in self.model.functions or "jacobian" not in self.model.functions:
-            raise GeneratedCodeError(f"{self.name}: task-space simulation needs 'fk' and 'jacobian' and a task "
-                                     f"space with x, y or z (it is [{', '.join(self.task_space)}])")
+        if self._point_error is not None:
+            raise GeneratedCodeError(self._point_error)

@@ -62,13 +62,10 @@ class ArmSystem:
             parts += [self.plant.point(q), self.plant.point_jacobian(q) @ qd]
         return np.concatenate(parts + [np.zeros(1)])
 
-    def hand_force(self, t: float, state: State) -> np.ndarray:
-        """F_h: the force of the hand on the TCP (zero without a user)."""
-        if self.user is None:
-            return np.zeros(0)
-        p = self.plant.point(state.q)
-        v = self.plant.point_jacobian(state.q) @ state.qd
-        return self.user.force_on_tcp(p, v, state.hand, state.hand_velocity)
+    def tcp_motion(self, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(p, J_p, v = J_p qd): the TCP point, its Jacobian and velocity (one fk, one Jacobian)."""
+        Jp = self.plant.point_jacobian(q)
+        return self.plant.point(q), Jp, Jp @ qd
 
     def derivative(self, t: float, x: np.ndarray, tau: np.ndarray) -> np.ndarray:
         """dx/dt at (t, x) under joint torques ``tau`` (held by the caller).
@@ -81,9 +78,9 @@ class ArmSystem:
         out[:n] = qd
         total = tau
         if self.user is not None:
-            Jp = plant.point_jacobian(q)
+            p, Jp, v = self.tcp_motion(q, qd)
             hand, hand_velocity = x[2 * n:2 * n + d], x[2 * n + d:2 * n + 2 * d]
-            force = self.user.force_on_tcp(plant.point(q), Jp @ qd, hand, hand_velocity)
+            force = self.user.force_on_tcp(p, v, hand, hand_velocity)
             total = tau + Jp.T @ force
             out[2 * n:2 * n + d] = hand_velocity
             out[2 * n + d:2 * n + 2 * d] = self.user.hand_acceleration(t, hand, hand_velocity, force)

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from symkin.simulation.integrate import SimulationError
-from symkin.simulation.plant import POSITION_INDEX
+from symkin.analysis.mechanism import POSITION_COMPONENTS
 
 
 @dataclass(frozen=True)
@@ -97,16 +97,15 @@ def task_circle(plant, q_start: np.ndarray, radius: float, duration: float, samp
     times = np.linspace(0.0, duration, samples)
     phi = 2.0 * np.pi * rest_to_rest(times, duration)
     offsets = radius * np.stack([np.cos(phi) - 1.0, np.sin(phi)], axis=-1)
-    start = kin.fk(q_start)
+    start = kin.fk(q_start) if kind == "pose" else kin.task_coordinates(q_start)
     q = np.empty((samples, kin.dof))
     previous = q_start
     for k, (a, b) in enumerate(offsets):
+        target = start.copy()
         if kind == "pose":
-            target = start.copy()
-            target[POSITION_INDEX[plant.point_axes[0]], 3] += a
-            target[POSITION_INDEX[plant.point_axes[1]], 3] += b
+            target[POSITION_COMPONENTS.index(plant.point_axes[0]), 3] += a
+            target[POSITION_COMPONENTS.index(plant.point_axes[1]), 3] += b
         else:
-            target = kin.task_coordinates(q_start).copy()
             target[plant.point_rows[0]] += a
             target[plant.point_rows[1]] += b
         result = solve_numeric(kin, target, previous, kind=kind)
