@@ -5,11 +5,16 @@ PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.symkin-installed
-BENCH_STAMP := $(VENV)/.symkin-bench-installed
+# Benchmarks get a venv of their own: SymForce (a bench-only competitor) ships its own fork of
+# symengine's wrapper into the symengine package, which changes the order of CSE output, so a
+# venv holding it would no longer regenerate generated/ byte for byte.
+BENCH_VENV ?= .venv-bench
+BENCH_BIN := $(BENCH_VENV)/bin
+BENCH_STAMP := $(BENCH_VENV)/.symkin-bench-installed
 MODELS := $(wildcard models/*.yaml)
 PYTEST_WORKERS ?= 2
 
-.PHONY: setup demo test generate check-generated bench clean
+.PHONY: setup demo test generate bench clean
 
 $(STAMP): pyproject.toml requirements/constraints.txt
 	$(PYTHON) -m venv $(VENV)
@@ -38,14 +43,16 @@ test: setup
 ## generate: rewrite generated/ from the example models (the "update" switch of the golden tests)
 generate: demo
 
-$(BENCH_STAMP): $(STAMP)
-	$(BIN)/python -m pip install --quiet -c requirements/constraints.txt -e '.[test,bench]'
+$(BENCH_STAMP): pyproject.toml requirements/constraints.txt
+	$(PYTHON) -m venv $(BENCH_VENV)
+	$(BENCH_BIN)/python -m pip install --quiet --upgrade pip
+	$(BENCH_BIN)/python -m pip install --quiet -c requirements/constraints.txt -e '.[test,bench]'
 	touch $(BENCH_STAMP)
 
-## bench: run every benchmarks/bench_*.py (figures printed; speed is never asserted in tests);
-## the SymForce column also needs a C++ compiler and the Eigen headers (apt-get install g++ libeigen3-dev)
+## bench: run every benchmarks/bench_*.py in .venv-bench (figures printed; speed is never asserted
+## in tests); the SymForce column also needs a C++ compiler and the Eigen headers (apt-get install g++ libeigen3-dev)
 bench: $(BENCH_STAMP)
-	@for script in benchmarks/bench_*.py; do echo "== $$script"; $(BIN)/python $$script || exit 1; done
+	@for script in benchmarks/bench_*.py; do echo "== $$script"; $(BENCH_BIN)/python $$script || exit 1; done
 
 clean:
-	rm -rf $(VENV) build dist *.egg-info .pytest_cache
+	rm -rf $(VENV) $(BENCH_VENV) build dist *.egg-info .pytest_cache

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import filecmp
+import importlib.util
 import os
 import subprocess
 from pathlib import Path
@@ -14,6 +15,19 @@ from conftest import EXAMPLE_MODELS, GENERATED_DIR, MODELS_DIR, SYMKIN_CLI
 
 def _tree(root: Path) -> dict[str, bytes]:
     return {str(p.relative_to(root)): p.read_bytes() for p in sorted(root.rglob("*")) if p.is_file()}
+
+
+def test_symengine_is_not_shadowed_by_symforce():
+    """SymForce installs its own fork of symengine's wrapper inside the ``symengine`` package.
+
+    That fork orders CSE output differently, so a venv holding it regenerates generated/ with
+    other (equally correct) bytes.  Benchmarks that need SymForce run in .venv-bench instead.
+    """
+    assert importlib.util.find_spec("symforce") is None, (
+        "symforce is installed in this venv and shadows symengine's wrapper; generated code would "
+        "differ from generated/. Fix: `pip uninstall symforce symforce-sym && pip install --force-reinstall "
+        "--no-deps -c requirements/constraints.txt symengine`, and run `make bench` (it uses .venv-bench)."
+    )
 
 
 def test_generated_directory_holds_exactly_the_example_models():

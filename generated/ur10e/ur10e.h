@@ -213,7 +213,7 @@ void ur10e_mass_matrix_batch(size_t n, const double *q, const double *params, si
  *   m6: mass of link 6 (wrist 3), without tool [kg]; default UR10E_DEFAULT_m6 = 0.615.
  * Outputs:
  *   C[36]: 6 x 6, row-major; Coriolis matrix.
- * Cost: 976 operations.
+ * Cost: 978 operations.
  */
 void ur10e_coriolis_matrix(const double *q, const double *qd, double a2, double a3, double d4, double d5, double d6, double m2, double m3, double m4, double m5, double m6, double *C);
 
