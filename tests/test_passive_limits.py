@@ -1,7 +1,7 @@
 """Passive-joint limits of a parallel mechanism in the workspace and GCI analyses (issue 6).
 
-The model is the example DELTA written leg by leg (the shorthand has no passive limits),
-with limits on the elbow U joints' second angle (the parallelogram's sideways swing).  It
+The model is the example DELTA written leg by leg (and, once, by the shorthand's
+``elbow_limits``), with limits on the elbow U joints' second angle (the parallelogram's sideways swing).  It
 is derived once; the limit variants are made by editing the manifest record the analyses
 read (``model.parallel.legs[i].passive_limits``), as a model file with those limits would
 write it.  Oracles: the generated closure itself (residual), the closed-form passive
@@ -24,7 +24,7 @@ from symkin.ik.rotations import wrap_angle
 from symkin.runtime import parallel as runtime_parallel
 from symkin.runtime.loader import LoadedModel
 
-from conftest import GENERATED_DIR
+from conftest import GENERATED_DIR, MODELS_DIR
 
 DELTA = symkin.load(str(GENERATED_DIR / "delta"))
 LEG_ANGLES = np.radians([0.0, 120.0, 240.0])
@@ -233,3 +233,40 @@ def test_joint_and_cartesian_domains_agree_under_passive_limits(limited):
                                                  inverse=inverse.parallel_inverse(limited))
     assert abs(joint.value - cartesian.value) <= min(joint.error + cartesian.error, 0.05 * cartesian.value)
     assert cartesian.value < 0.5 * global_indices.workspace_measure(DELTA, method="grid", samples=8000).value
+
+
+def test_the_delta_shorthand_declares_the_same_passive_limits(limited, tmp_path):
+    """``elbow_limits`` of the shorthand = ``limits`` on the leg-by-leg elbow U joints."""
+    text = (MODELS_DIR / "delta.yaml").read_text()
+    text = text.replace("actuator_limits: [deg(-90), deg(60)]",
+                        "actuator_limits: [deg(-90), deg(60)]\n    elbow_limits: [null, [deg(-20), deg(20)]]")
+    text = re.sub(r"scene:.*", "scene:\n  outputs: [ik, fk, jacobian, closure, closure_jacobians]\n"
+                  "  backends: [numpy]\n", text, flags=re.S)
+    path = tmp_path / "delta.yaml"
+    path.write_text(text)
+    shorthand = symkin.load(symkin.derive(path, tmp_path / "generated"))
+    records = [leg.get("passive_limits") for leg in shorthand.manifest["model"]["parallel"]["legs"]]
+    assert records == [leg.get("passive_limits") for leg in limited.manifest["model"]["parallel"]["legs"]]
+    assert records[0] == {"elbow1_2": pytest.approx([-np.radians(20), np.radians(20)], rel=1e-15)}
+    box = mechanism.joint_limits(DELTA)
+    q = sampling.grid(box[:, 0], box[:, 1], 8, midpoints=False)
+    assert np.array_equal(parallel.working_mode(shorthand, q)[1], parallel.working_mode(limited, q)[1])
+    assert not parallel.working_mode(shorthand, q)[1].all()
+
+
+@pytest.mark.parametrize("value, message", [
+    ("[[deg(-20), deg(20)]]", "write exactly 2 limits"),
+    ("[null, [deg(20), deg(-20)]]", "lower"),
+    ("deg(20)", "write a YAML list of limits"),
+])
+def test_malformed_delta_passive_limits_name_their_place(tmp_path, value, message):
+    text = (MODELS_DIR / "delta.yaml").read_text().replace(
+        "actuator_limits: [deg(-90), deg(60)]", f"actuator_limits: [deg(-90), deg(60)]\n    wrist_limits: {value}")
+    path = tmp_path / "delta.yaml"
+    path.write_text(text)
+    from symkin.errors import ModelError
+
+    with pytest.raises(ModelError, match=r"parallel\.delta\.wrist_limits") as error:
+        symkin.derive(path, tmp_path / "out")
+    assert message in str(error.value)
+    assert not (tmp_path / "out").exists()

@@ -23,6 +23,16 @@ joint sits at a vertex (joint radius = circumradius) or at a side midpoint (join
 inradius = circumradius / 2).  The seed's r_base and r_TCP are joint radii (centre to
 joint), i.e. ``joint_at: vertex`` with ``radius: r_base``.
 
+Passive-joint limits: ``elbow_limits`` and ``wrist_limits`` bound the two motions of every
+elbow and wrist universal joint (``[[lower, upper] | null, [lower, upper] | null]``, on the
+variables ``elbow<i>_1``, ``elbow<i>_2``, ``wrist<i>_1``, ``wrist<i>_2``): ``elbow<i>_1`` is the
+knee bend about the actuator axis (0 with the rod continuing the upper arm), ``elbow<i>_2`` the
+swing of the rod out of the leg plane; the wrist undoes both so that the platform keeps its
+orientation, ``wrist<i>_1 = -elbow<i>_2`` and ``wrist<i>_2 = -(theta_i + elbow<i>_1)`` (minus
+the rod's elevation in the leg plane).  The U joints and ball joints of haptic DELTAs reach
+some +/-30 to 60 deg; the workspace analyses drop the poses beyond the declared ranges
+(:mod:`symkin.analysis.passive`).
+
 Branches: the inverse kinematics takes the knee pointing outwards (``ik_branch: negative``:
 the platform joint B_i is reached from the elbow C_i by a negative rotation about the
 actuator axis -y_Ai); the forward kinematics the TCP hanging below its elbows.
@@ -36,11 +46,12 @@ from typing import Any
 import sympy
 
 from symkin.model.build import ZERO, _describe, _ops, _Reader, position_limits
-from symkin.model.parallel_build import variable_names
+from symkin.model.parallel_build import leg_joint_limits, variable_names
 from symkin.model.schema import Leg, LegJoint, LegJointType, Rotation, Translation, Vec3
 from symkin.model.yaml_source import KeyPath
 
-DELTA_KEYS = ("base", "platform", "upper_arm", "lower_arm", "leg_angles", "actuator", "actuator_limits")
+DELTA_KEYS = ("base", "platform", "upper_arm", "lower_arm", "leg_angles", "actuator", "actuator_limits",
+              "elbow_limits", "wrist_limits")
 JOINT_AT = ("vertex", "side_midpoint")
 
 MINUS_Y: Vec3 = (ZERO, sympy.Integer(-1), ZERO)
@@ -95,7 +106,10 @@ def delta_legs(r: _Reader, path: KeyPath, value: Any) -> tuple[tuple[Leg, ...], 
         if bounds is None:
             return None
         limits = (bounds,)
-    if r_base is None or r_platform is None or None in lengths or angles is None or prefix is None:
+    elbow, wrist = (leg_joint_limits(r, path + (key,), section[key], LegJointType.U) if key in section else ()
+                    for key in ("elbow_limits", "wrist_limits"))
+    if r_base is None or r_platform is None or None in lengths or angles is None or prefix is None \
+            or elbow is None or wrist is None:
         return None
     upper, lower = lengths
     legs = []
@@ -103,8 +117,10 @@ def delta_legs(r: _Reader, path: KeyPath, value: Any) -> tuple[tuple[Leg, ...], 
         n = i + 1
         joints = (
             _joint(f"{prefix}{n}", LegJointType.R, (MINUS_Y,), (), active=0, limits=limits),
-            _joint(f"elbow{n}", LegJointType.U, (MINUS_Y, PLUS_Z), _ops(Translation((upper, ZERO, ZERO)))),
-            _joint(f"wrist{n}", LegJointType.U, (PLUS_Z, MINUS_Y), _ops(Translation((lower, ZERO, ZERO)))),
+            _joint(f"elbow{n}", LegJointType.U, (MINUS_Y, PLUS_Z), _ops(Translation((upper, ZERO, ZERO))),
+                   limits=elbow),
+            _joint(f"wrist{n}", LegJointType.U, (PLUS_Z, MINUS_Y), _ops(Translation((lower, ZERO, ZERO))),
+                   limits=wrist),
         )
         base = _ops(Rotation(PLUS_Z, phi), Translation((r_base, ZERO, ZERO)))
         platform = _ops(Rotation(PLUS_Z, phi), Translation((r_platform, ZERO, ZERO)))
