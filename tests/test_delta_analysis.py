@@ -20,7 +20,6 @@ from symkin.analysis import conditioning as C
 from symkin.analysis import convergence, global_indices, inverse, mechanism, parallel, workspace
 from symkin.cli import main
 from symkin.model import load_model
-from symkin.runtime.loader import LoadedModel
 
 from conftest import GENERATED_DIR, MODELS_DIR
 

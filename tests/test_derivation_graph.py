@@ -87,3 +87,12 @@ def test_internal_quantities_cannot_be_emitted(models):
 def test_task_coordinates_need_coordinate_components(models):
     with pytest.raises(DerivationError, match="angular velocity"):
         Derivation(models["ur10e"])["task_coordinates"]
+
+
+def test_available_keeps_what_the_model_can_derive_and_says_why_not(models):
+    d = Derivation(models["delta"])
+    kept, skipped = d.available(["ik", "mass_matrix", "no_such_quantity", "jacobian"])
+    assert kept == ["ik", "jacobian"]
+    assert set(skipped) == {"mass_matrix", "no_such_quantity"}
+    assert "serial" in skipped["mass_matrix"] and "unknown quantity" in skipped["no_such_quantity"]
+    assert "mass_matrix" not in d.computed

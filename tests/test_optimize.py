@@ -11,7 +11,6 @@ from hypothesis import strategies as st
 from conftest import random_inputs, random_q
 from symkin import pipeline
 from symkin.derivation import emitted_quantities
-from symkin.errors import DerivationError
 from symkin.ir.spec import FunctionSpec, InputSpec, OutputSpec
 from symkin.optimize import fold_parameters, optimize
 from symkin.optimize.opcount import op_count
@@ -71,18 +70,6 @@ def test_op_count_model():
     assert op_count([sympy.sin(x) ** 2]) == 2
 
 
-def _derivable(derivation, names):
-    """The quantities of ``names`` this model can derive (dynamics joins when it is registered)."""
-    out = []
-    for name in names:
-        try:
-            derivation[name]
-        except DerivationError:
-            continue
-        out.append(name)
-    return out
-
-
 def fold_all(model, derivation, name):
     """(optimized with every parameter free, optimized with every parameter folded) for one quantity.
 
@@ -95,7 +82,7 @@ def fold_all(model, derivation, name):
 @pytest.mark.parametrize("name", ["ur10e", "planar_2r"])
 def test_folding_all_parameters_never_costs_and_keeps_the_values(name, models, derivations):
     model = models[name]
-    quantities = _derivable(derivations[name], emitted_quantities())
+    quantities = derivations[name].available(emitted_quantities())[0]
     assert {"fk", "jacobian", "mass_matrix"} <= set(quantities)
     for quantity in quantities:
         spec = derivations[name][quantity]

@@ -129,22 +129,6 @@ def parse_limits(texts: list[str]) -> dict[str, tuple[float, float]]:
     return limits
 
 
-def derivable(model: Any, names: Sequence[str]) -> list[str]:
-    """The quantities of ``names`` that ``model`` has (e.g. no ``gravity_vector`` without gravity)."""
-    from symkin.derivation import Derivation
-    from symkin.errors import DerivationError
-
-    derivation = Derivation(model)
-    found = []
-    for name in names:
-        try:
-            derivation[name]
-        except DerivationError:
-            continue
-        found.append(name)
-    return found
-
-
 def load_model(path: str, backend: str = "numpy", outputs: Sequence[str] = ANALYSIS_OUTPUTS,
                optional: Sequence[str] = ()) -> Any:
     """The loaded model of MODEL: a generated directory, or a model file derived on the fly.
@@ -178,13 +162,14 @@ def load_models(path: str, backends: Sequence[str],
         return [load(source, backend) for backend in backends]
     from symkin import pipeline
     from symkin.cli.progress import Progress
+    from symkin.derivation import Derivation
     from symkin.model import load_model as load_model_file
 
     model = load_model_file(source)
     wanted = outputs.get(model.mechanism, ANALYSIS_OUTPUTS) if isinstance(outputs, Mapping) else outputs
     if isinstance(outputs, Mapping) and _limits_passive_joints(model):
         wanted = (*wanted, *PASSIVE_LIMIT_OUTPUTS)
-    request = pipeline.resolve_request(model, ",".join([*wanted, *derivable(model, optional)]), ",".join(backends),
+    request = pipeline.resolve_request(model, ",".join([*wanted, *Derivation(model).available(optional)[0]]), ",".join(backends),
                                        None)
     with tempfile.TemporaryDirectory(prefix="symkin-analysis-") as scratch, Progress(model.name) as progress:
         # The generated module is imported (numpy) or read (C, CasADi) by load(): the files may go afterwards.

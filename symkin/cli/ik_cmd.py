@@ -10,7 +10,6 @@ import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
-from symkin.cli import analysis_args
 from symkin.cli.progress import Progress
 from symkin.errors import ModelError, Problem
 
@@ -60,10 +59,11 @@ def _loaded(path: str) -> Iterator[object]:
         yield load(source)
         return
     from symkin import pipeline
+    from symkin.derivation import Derivation
     from symkin.model import load_model
 
     model = load_model(source)
-    outputs = analysis_args.derivable(model, IK_OUTPUTS)
+    outputs = Derivation(model).available(IK_OUTPUTS)[0]
     request = pipeline.resolve_request(model, outputs, "numpy", ())
     with tempfile.TemporaryDirectory(prefix="symkin-ik-") as tmp, Progress(model.name) as progress:
         result = pipeline.generate(model, request, progress)

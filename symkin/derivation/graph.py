@@ -135,6 +135,23 @@ class Derivation:
         self.computed.append(name)
         return value
 
+    def available(self, names: Iterable[str]) -> tuple[list[str], dict[str, str]]:
+        """(the quantities of ``names`` this model can derive, {skipped name: reason}).
+
+        Deriving is how a quantity finds out whether the model has what it needs (no
+        ``gravity_vector`` without gravity, no dynamics without bodies), so the kept ones
+        are derived (and memoized) on the way.
+        """
+        kept, skipped = [], {}
+        for name in names:
+            try:
+                self[name]
+            except DerivationError as err:
+                skipped[name] = str(err)
+                continue
+            kept.append(name)
+        return kept, skipped
+
     def functions(self, names: Iterable[str]) -> list[FunctionSpec]:
         """The function specs of the requested emitted quantities, in request order."""
         specs = []

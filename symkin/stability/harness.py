@@ -39,7 +39,6 @@ import numpy as np
 
 from symkin import pipeline
 from symkin.derivation import Derivation, emitted_quantities, registry
-from symkin.errors import DerivationError
 from symkin.model.schema import Model
 from symkin.runtime import load
 from symkin.stability.ik_forms import formula_errors
@@ -127,19 +126,6 @@ def conditioning_matrix(model: Model) -> str:
     return "jacobian" if model.parallel is None else "inverse_jacobian"
 
 
-def derivable_quantities(derivation: Derivation, names: Sequence[str] | None = None) -> tuple[list[str], dict[str, str]]:
-    """(the emitted quantities this model can derive, {skipped name: reason})."""
-    kept, skipped = [], {}
-    for name in names or emitted_quantities(derivation.model.mechanism):
-        try:
-            derivation[name]
-        except DerivationError as err:
-            skipped[name] = str(err)
-            continue
-        kept.append(name)
-    return kept, skipped
-
-
 def run_stability(model: Model, *, samples: int = 32, float32_samples: int = 16, scale_samples: int = 6,
                   scales: Sequence[float] = SCALES, steps: Sequence[float] = PATH_STEPS,
                   quantities: Sequence[str] | None = None, max_paths: int = 8, seed: int = 0,
@@ -160,9 +146,9 @@ def run_stability(model: Model, *, samples: int = 32, float32_samples: int = 16,
     """
     rng = np.random.default_rng(seed)
     derivation = Derivation(model)
-    names, skipped = derivable_quantities(derivation, quantities)
+    names, skipped = derivation.available(quantities or emitted_quantities(model.mechanism))
     task_matrix = conditioning_matrix(model)
-    has_jacobian = bool(derivable_quantities(derivation, [task_matrix])[0])
+    has_jacobian = bool(derivation.available([task_matrix])[0])
     generated = tuple(names) + ((task_matrix,) if has_jacobian and task_matrix not in names else ())
     progress("generating code")
     generation = pipeline.generate(model, pipeline.Request(generated, (), ("numpy",)))
