@@ -110,23 +110,36 @@ def parse_value(text: str) -> float:
     return float(text)
 
 
-def parse_limits(texts: list[str]) -> dict[str, tuple[float, float]]:
-    """``["theta2=-90deg:90deg"]`` -> {"theta2": (-pi/2, pi/2)}.
+def parse_ranges(texts: list[str], option: str, name: str = "NAME") -> dict[str, tuple[float, float]]:
+    """``["a=0.05:0.2,theta2=-90deg:90deg"]`` -> {"a": (0.05, 0.2), "theta2": (-pi/2, pi/2)}.
+
+    Each text holds comma-separated NAME=LOWER:UPPER entries (numbers as :func:`parse_value`
+    reads them, so 'deg' works); a later entry of a name replaces an earlier one.
 
     Raises:
-        ValueError: an entry is not JOINT=LOWER:UPPER with numbers.
+        ValueError: an entry is not NAME=LOWER:UPPER with numbers and LOWER < UPPER (the
+            message names ``option`` and the entry).
     """
-    limits: dict[str, tuple[float, float]] = {}
+    ranges: dict[str, tuple[float, float]] = {}
     for text in texts:
-        name, sep, bounds = text.partition("=")
-        lower, colon, upper = bounds.partition(":")
-        if not sep or not colon or not name.strip():
-            raise ValueError(f"'{text}' is not JOINT=LOWER:UPPER")
-        try:
-            limits[name.strip()] = (parse_value(lower), parse_value(upper))
-        except ValueError:
-            raise ValueError(f"'{text}': the bounds must be numbers (optionally with 'deg')") from None
-    return limits
+        for item in filter(None, (part.strip() for part in text.split(","))):
+            key, sep, span = item.partition("=")
+            lower, colon, upper = span.partition(":")
+            if not sep or not colon or not key.strip():
+                raise ValueError(f"{option} '{item}' is not {name}=LOWER:UPPER")
+            try:
+                bounds = (parse_value(lower), parse_value(upper))
+            except ValueError:
+                raise ValueError(f"{option} '{item}': LOWER and UPPER must be numbers (optionally with 'deg')") from None
+            if not bounds[0] < bounds[1]:
+                raise ValueError(f"{option} '{item}': LOWER must be smaller than UPPER")
+            ranges[key.strip()] = bounds
+    return ranges
+
+
+def parse_limits(texts: list[str]) -> dict[str, tuple[float, float]]:
+    """The joint limits of ``--limit JOINT=LOWER:UPPER`` options (see :func:`parse_ranges`)."""
+    return parse_ranges(texts, "--limit", "JOINT")
 
 
 def load_model(path: str, backend: str = "numpy", outputs: Sequence[str] = ANALYSIS_OUTPUTS,

@@ -53,29 +53,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(run=run, parser=p)
 
 
-def parse_ranges(texts: list[str], option: str) -> dict[str, tuple[float, float]]:
-    """``["a=0.05:0.2,b=0.1:0.3"]`` -> {"a": (0.05, 0.2), "b": (0.1, 0.3)}.
-
-    Raises:
-        ValueError: an entry is not NAME=LOWER:UPPER with numbers and LOWER < UPPER.
-    """
-    ranges: dict[str, tuple[float, float]] = {}
-    for text in texts:
-        for item in filter(None, (part.strip() for part in text.split(","))):
-            name, sep, span = item.partition("=")
-            lower, colon, upper = span.partition(":")
-            if not sep or not colon or not name.strip():
-                raise ValueError(f"{option} '{item}' is not NAME=LOWER:UPPER")
-            try:
-                bounds = (float(lower), float(upper))
-            except ValueError:
-                raise ValueError(f"{option} '{item}': LOWER and UPPER must be numbers") from None
-            if not bounds[0] < bounds[1]:
-                raise ValueError(f"{option} '{item}': LOWER must be smaller than UPPER")
-            ranges[name.strip()] = bounds
-    return ranges
-
-
 def run(args: argparse.Namespace) -> int:
     from symkin import design
     from symkin.atomic import replace_directory
@@ -84,8 +61,8 @@ def run(args: argparse.Namespace) -> int:
     wall = time.perf_counter()
     try:
         free = [name.strip() for name in args.free.split(",") if name.strip()]
-        bounds = parse_ranges(args.bounds, "--bounds")
-        box = parse_ranges([args.require_box], "--require-box") if args.require_box else None
+        bounds = analysis_args.parse_ranges(args.bounds, "--bounds")
+        box = analysis_args.parse_ranges([args.require_box], "--require-box") if args.require_box else None
         values = analysis_args.parse_assignments(args.assignments)
         limits = analysis_args.parse_limits(args.limits)
         if args.nodes is not None and not 1 <= args.nodes <= MAX_NODES:
