@@ -56,7 +56,8 @@ import sympy
 from symkin.dynamics.program import cross, dot, mat_vec, se_matrix, se_vector
 from symkin.geometry import rotation_matrix
 from symkin.model import coordinates
-from symkin.model.schema import JointType, Model, Op, Rotation, Translation
+from symkin.kinematics.chain import MovingFrame
+from symkin.model.schema import JointType, Model, Op
 
 Vec = list[se.Basic]
 #: A pair of 3-vectors: (angular, linear) motion or (moment, force).
@@ -117,13 +118,9 @@ class Link:
 
 def _compose(ops: Sequence[Op], R: sympy.Matrix, p: sympy.Matrix) -> tuple[sympy.Matrix, sympy.Matrix]:
     """(R, p) of the frame reached from (R, p) by the fixed operations ``ops`` (moving frame, left to right)."""
-    for op in ops:
-        if isinstance(op, Rotation):
-            R = R * rotation_matrix(op.axis, op.angle)
-        else:
-            assert isinstance(op, Translation)
-            p = p + R * sympy.Matrix(op.vector)
-    return R, p
+    frame = MovingFrame(R, p)
+    frame.apply(ops)
+    return frame.rotation(), frame.p
 
 
 def _link_inertia(model: Model, link: str, R: sympy.Matrix, p: sympy.Matrix) -> SpatialInertia | None:

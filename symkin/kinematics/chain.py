@@ -12,6 +12,7 @@ of the textbook, exact, and cheaper to evaluate.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import sympy
@@ -64,12 +65,13 @@ def _canonical(axis: Vec3, angle: sympy.Expr) -> tuple[Vec3, sympy.Expr]:
 class MovingFrame:
     """The frame being moved along the chain, with the factored rotation described above."""
 
-    def __init__(self) -> None:
-        self.prefix = sympy.eye(3)
+    def __init__(self, rotation: sympy.Matrix | None = None, origin: sympy.Matrix | None = None) -> None:
+        """Start at the pose (rotation, origin), the identity by default."""
+        self.prefix = sympy.eye(3) if rotation is None else rotation
         self.trail_axis: Vec3 | None = None
         self.trail_angle: sympy.Expr = sympy.Integer(0)
-        self.p = sympy.zeros(3, 1)
-        self._rotation: sympy.Matrix | None = sympy.eye(3)
+        self.p = sympy.zeros(3, 1) if origin is None else origin
+        self._rotation: sympy.Matrix | None = self.prefix
 
     def rotation(self) -> sympy.Matrix:
         if self._rotation is None:
@@ -89,7 +91,7 @@ class MovingFrame:
     def translate(self, vector: Vec3) -> None:
         self.p = self.p + self.rotation() * sympy.Matrix(vector)
 
-    def apply(self, ops: tuple[Op, ...]) -> None:
+    def apply(self, ops: Sequence[Op]) -> None:
         for op in ops:
             if isinstance(op, Rotation):
                 self.rotate(op.axis, op.angle)
