@@ -25,8 +25,13 @@ CONSTANT_DIGITS = 30
 Replacement = Callable[[sympy.Expr], "sympy.Expr | None"]
 
 
-def _rebuild(expr: sympy.Expr, replace: Replacement, memo: dict, costs: dict) -> sympy.Expr:
-    """``expr`` with ``replace(node)`` substituted wherever it is not None, re-evaluated where that is cheaper."""
+def rebuild(expr: sympy.Expr, replace: Replacement, memo: dict,
+            build: Callable[[sympy.Expr, tuple], sympy.Expr] = lambda expr, args: expr.func(*args)) -> sympy.Expr:
+    """``expr`` with ``replace(node)`` substituted wherever it is not None, bottom-up.
+
+    A node whose arguments changed is rebuilt with ``build(node, new_args)`` (sympy
+    evaluation by default); ``memo`` maps nodes already seen to their result.
+    """
     done = memo.get(expr)
     if done is not None:
         return done
@@ -35,18 +40,27 @@ def _rebuild(expr: sympy.Expr, replace: Replacement, memo: dict, costs: dict) ->
         if expr.is_Atom:
             new = expr
         else:
-            args = tuple(_rebuild(a, replace, memo, costs) for a in expr.args)
-            if args == expr.args:
-                new = expr
-            else:
-                evaluated = expr.func(*args)
-                try:
-                    plain = expr.func(*args, evaluate=False)
-                except TypeError:  # a node type without unevaluated construction
-                    plain = evaluated
-                new = evaluated if node_cost(evaluated, costs) <= node_cost(plain, costs) else plain
+            args = tuple(rebuild(a, replace, memo, build) for a in expr.args)
+            new = expr if args == expr.args else build(expr, args)
     memo[expr] = new
     return new
+
+
+def _cheaper_node(costs: dict) -> Callable[[sympy.Expr, tuple], sympy.Expr]:
+    """A ``build`` for :func:`rebuild`: the node re-evaluated by sympy, or left unevaluated where that is cheaper."""
+    def build(expr: sympy.Expr, args: tuple) -> sympy.Expr:
+        evaluated = expr.func(*args)
+        try:
+            plain = expr.func(*args, evaluate=False)
+        except TypeError:  # a node type without unevaluated construction
+            return evaluated
+        return evaluated if node_cost(evaluated, costs) <= node_cost(plain, costs) else plain
+    return build
+
+
+def _rebuild(expr: sympy.Expr, replace: Replacement, memo: dict, costs: dict) -> sympy.Expr:
+    """``expr`` with ``replace(node)`` substituted wherever it is not None, re-evaluated where that is cheaper."""
+    return rebuild(expr, replace, memo, _cheaper_node(costs))
 
 
 def map_spec(spec: FunctionSpec, rewrite: Callable[[sympy.Expr], sympy.Expr]) -> FunctionSpec:

@@ -8,7 +8,7 @@ from __future__ import annotations
 import sympy
 
 from symkin.ir.spec import FunctionSpec
-from symkin.optimize.passes import Replacement, map_spec
+from symkin.optimize.passes import map_spec, rebuild
 
 
 #: Largest integer multiple of an angle expanded by :func:`expand_trig_sums` (sin(4q) -> ...).
@@ -90,22 +90,6 @@ def expand_trig_sums(spec: FunctionSpec) -> FunctionSpec:
     memo: dict = {}
 
     def rewrite_all(expr: sympy.Expr) -> sympy.Expr:
-        return _rebuild_plain(expr, rewrite, memo)
+        return rebuild(expr, rewrite, memo)
 
     return map_spec(spec, rewrite_all)
-
-
-def _rebuild_plain(expr: sympy.Expr, replace: Replacement, memo: dict) -> sympy.Expr:
-    """``expr`` with ``replace(node)`` substituted wherever it is not None (sympy evaluation)."""
-    done = memo.get(expr)
-    if done is not None:
-        return done
-    new = replace(expr)
-    if new is None:
-        if expr.is_Atom:
-            new = expr
-        else:
-            args = tuple(_rebuild_plain(a, replace, memo) for a in expr.args)
-            new = expr if args == expr.args else expr.func(*args)
-    memo[expr] = new
-    return new
