@@ -6,6 +6,7 @@ import argparse
 import math
 import sys
 import time
+import warnings
 from pathlib import Path
 
 from symkin.cli import analysis_args
@@ -182,7 +183,12 @@ def run(args: argparse.Namespace) -> int:
                               args.substeps)
     label, _ = plants[0]
     start = time.perf_counter()
-    with Progress(base.name) as progress:
+    with Progress(base.name) as progress, warnings.catch_warnings():
+        warnings.simplefilter("always", scenarios.StopStabilityWarning)
+        shown = warnings.showwarning
+        warnings.showwarning = lambda message, category, *rest: (
+            print(f"symkin simulate: warning: {message}", file=sys.stderr)
+            if issubclass(category, scenarios.StopStabilityWarning) else shown(message, category, *rest))
         progress(f"simulating {args.scenario}")
         try:
             if args.scenario == "sine":
@@ -208,7 +214,5 @@ def run(args: argparse.Namespace) -> int:
     print(f"{base.name} ({args.backend}): {args.scenario}, {timing.duration:g} s at {timing.rate:g} Hz")
     for line in result.summary:
         print(f"  {line}")
-    for warning in result.warnings:
-        print(f"symkin simulate: warning: {warning}", file=sys.stderr)
     print(f"wrote {len(files)} files to {out}/ ({', '.join(sorted(files))}) in {time.perf_counter() - start:.2f} s")
     return 0

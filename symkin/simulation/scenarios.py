@@ -21,6 +21,7 @@ run checks RK4's stability in contact.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -75,8 +76,10 @@ class ScenarioResult:
     series: list[Series]
     figures: list[FigureSpec]
     summary: list[str] = field(default_factory=list)
-    #: problems the caller should show (e.g. an unstable RK4 step in contact)
-    warnings: list[str] = field(default_factory=list)
+
+
+class StopStabilityWarning(RuntimeWarning):
+    """The fixed RK4 step is unstable in contact with the joint stops (warned before the run)."""
 
 
 @dataclass(frozen=True)
@@ -142,20 +145,34 @@ def balance_drift(system: ArmSystem, run: Run, energy: np.ndarray | None = None)
     return float(np.max(np.abs(b - b[0]))) / scale
 
 
-def _system(plant: Plant, q: np.ndarray, stops: StopSettings | None, user: MassSpringDamperUser | None = None
-            ) -> ArmSystem:
-    return ArmSystem(plant, user, stops.build(plant, q) if stops is not None else None)
+def _system(plant: Plant, q: np.ndarray, stops: StopSettings | None, timing: Timing,
+            user: MassSpringDamperUser | None = None) -> ArmSystem:
+    """The system with the stops built at q; warns (:class:`StopStabilityWarning`) before a
+    fixed-step run that is unstable in contact."""
+    system = ArmSystem(plant, user, stops.build(plant, q) if stops is not None else None)
+    stability = _stability(system, timing, q)
+    if stability is not None and not stability.stable:
+        warnings.warn(StopStabilityWarning(
+            f"{plant.name}: RK4 at h = {stability.step * 1e3:.4g} ms is unstable in contact with the joint stops "
+            f"(omega_max h = {stability.omega_max * stability.step:.3g}, the limit is about 2.83); use --substeps "
+            f"{stability.substeps_needed} or more, or a longer --stop-time-constant"), stacklevel=3)
+    return system
+
+
+def _stability(system: ArmSystem, timing: Timing, q: np.ndarray):
+    """RK4's stability in contact at M(q) (None: no stops, or not a fixed-step run)."""
+    if system.stops is None or timing.integrator != "rk4":
+        return None
+    return rk4_stability(system.stops, mass_matrix(system.plant, q), 1.0 / timing.rate, timing.substeps)
 
 
 @dataclass(frozen=True)
 class StopReport:
-    """The joint stops' part of a run: CSV columns, summary lines, contacts, warnings (all empty
-    without stops)."""
+    """The joint stops' part of a run: CSV columns, summary lines, contacts (all empty without stops)."""
 
     columns: dict[str, np.ndarray] = field(default_factory=dict)
     lines: list[str] = field(default_factory=list)
     contacts: tuple[Contact, ...] = ()
-    warnings: list[str] = field(default_factory=list)
 
 
 def stop_report(system: ArmSystem, run: Run, timing: Timing, q: np.ndarray) -> StopReport:
@@ -168,18 +185,12 @@ def stop_report(system: ArmSystem, run: Run, timing: Timing, q: np.ndarray) -> S
     found = contact_report.intervals(stops, run)
     lines = ["  " + line for line in stops.describe(units)]
     lines += contact_report.summary(system, run, found, units)
-    warnings = []
-    if timing.integrator == "rk4":
-        stability = rk4_stability(stops, mass_matrix(system.plant, q), 1.0 / timing.rate, timing.substeps)
+    stability = _stability(system, timing, q)
+    if stability is not None:
         lines.append("  " + stability.describe())
-        if not stability.stable:
-            warnings.append(f"{system.plant.name}: RK4 at h = {stability.step * 1e3:.4g} ms is unstable in contact "
-                            f"with the joint stops (omega_max h = {stability.omega_max * stability.step:.3g}, "
-                            f"the limit is about 2.83); use --substeps {stability.substeps_needed} or more, or a "
-                            "longer --stop-time-constant")
     else:
         lines.append(f"  {len(run.switches)} stop contacts and releases located by events (DOP853 restarted at each)")
-    return StopReport(contact_report.columns(system, run, units), lines, tuple(found), warnings)
+    return StopReport(contact_report.columns(system, run, units), lines, tuple(found))
 
 
 def _peak(values: np.ndarray) -> float:
@@ -203,7 +214,7 @@ def tcp_forces(J: np.ndarray, tau: np.ndarray) -> np.ndarray:
 def sine(designs: Sequence[tuple[str, Plant]], center: np.ndarray, joint: int, amplitude: float, frequency: float,
          timing: Timing, stops: StopSettings | None = None) -> ScenarioResult:
     """The seed's simplified haptic scenario for each design (Figs. 8.21, 8.22)."""
-    series, summary, warnings = [], [], []
+    series, summary = [], []
     plant0 = designs[0][1]
     names = plant0.coordinates
     position_unit, effort_unit = _joint_units(plant0)
@@ -213,7 +224,7 @@ def sine(designs: Sequence[tuple[str, Plant]], center: np.ndarray, joint: int, a
     for label, plant in designs:
         tau = plant.torque(q, qd, qdd)
         force = tcp_forces(plant.model.jacobian(q), tau)
-        system = _system(plant, center, stops)
+        system = _system(plant, center, stops, timing)
         run = integrate(system, ComputedTorque(system, reference), system.initial(q[0], qd[0]), timing)
         report = stop_report(system, run, timing, center)
         simulated = system.split(run.x)
@@ -241,7 +252,6 @@ def sine(designs: Sequence[tuple[str, Plant]], center: np.ndarray, joint: int, a
         summary.append(f"  forward simulation under computed torque ({timing.integrator}): max joint error "
                        f"{error:.3g} {position_unit}, energy balance drift {balance_drift(system, run):.3g}")
         summary += report.lines
-        warnings += report.warnings
     figures = [
         FigureSpec("fig-8-21-torques.png", "Seed Fig. 8.21: torques on the joints",
                    tuple((f"tau_{n} [{effort_unit}]", (f"tau_{n} [{effort_unit}]",)) for n in names)),
@@ -251,14 +261,14 @@ def sine(designs: Sequence[tuple[str, Plant]], center: np.ndarray, joint: int, a
                    tuple((f"{n} [{position_unit}]", (f"{n} [{position_unit}]", f"simulated {n} [{position_unit}]"))
                          for n in names)),
     ]
-    return ScenarioResult("sine", series, figures, summary, warnings)
+    return ScenarioResult("sine", series, figures, summary)
 
 
 def tracking(label: str, plant: Plant, q_start: np.ndarray, radius: float, timing: Timing,
              bandwidth: float = 50.0, stops: StopSettings | None = None) -> ScenarioResult:
     """A TCP circle followed by computed-torque control (seed Fig. 8.17)."""
     reference = task_circle(plant, q_start, radius, timing.duration)
-    system = _system(plant, q_start, stops)
+    system = _system(plant, q_start, stops, timing)
     run = integrate(system, ComputedTorque(system, reference, bandwidth), system.initial(q_start), timing)
     report = stop_report(system, run, timing, q_start)
     q_r = reference(run.t)[0]
@@ -283,8 +293,7 @@ def tracking(label: str, plant: Plant, q_start: np.ndarray, radius: float, timin
         ("TCP [m]", tuple(f"{prefix}TCP {c} [m]" for c in plant.point_axes for prefix in ("reference ", "")))
         , ("TCP error [m]", ("TCP error [m]",)),
         (f"torque [{effort_unit}]", tuple(f"tau_{n} [{effort_unit}]" for n in names))))]
-    return ScenarioResult("tracking", [Series(label, columns | report.columns, report.contacts)], figures, summary,
-                          report.warnings)
+    return ScenarioResult("tracking", [Series(label, columns | report.columns, report.contacts)], figures, summary)
 
 
 def haptic_wall(label: str, plant: Plant, q_start: np.ndarray, wall_offset: float, push: float, timing: Timing, *,
@@ -303,7 +312,7 @@ def haptic_wall(label: str, plant: Plant, q_start: np.ndarray, wall_offset: floa
     normal[0] = 1.0
     user = MassSpringDamperUser(sine_intent(p0, normal, push, frequency), **(hand or {}))
     wall = Wall(normal, float(p0 @ normal) + wall_offset, stiffness, damping)
-    system = _system(plant, q_start, stops, user)
+    system = _system(plant, q_start, stops, timing, user)
     renderer = WallRenderer(system, wall, force_gain)
     run = integrate(system, renderer, system.initial(q_start), timing)
     report = stop_report(system, run, timing, q_start)
@@ -333,15 +342,15 @@ def haptic_wall(label: str, plant: Plant, q_start: np.ndarray, wall_offset: floa
         ("penetration [m]", ("penetration [m]",)),
         ("force on the hand [N]", (f"F_desired_{axes[0]} [N]", f"F_felt_{axes[0]} [N]")),
         (f"torque [{effort_unit}]", tuple(f"tau_{n} [{effort_unit}]" for n in names))))]
-    return ScenarioResult("haptic-wall", [Series(label, columns | report.columns, report.contacts)], figures, summary,
-                          report.warnings)
+    return ScenarioResult("haptic-wall", [Series(label, columns | report.columns, report.contacts)], figures,
+                          summary)
 
 
 def free_swing(label: str, plant: Plant, q_start: np.ndarray, timing: Timing,
                stops: StopSettings | None = None) -> ScenarioResult:
     """No torques, released at rest: the energy k + u is conserved without friction and stops
     (with stops: k + u + U + D, U stored in and D dissipated by them)."""
-    system = _system(plant, q_start, stops)
+    system = _system(plant, q_start, stops, timing)
     zero = np.zeros(plant.dof)
     run = integrate(system, lambda t, x: zero, system.initial(q_start), timing)
     report = stop_report(system, run, timing, q_start)
@@ -365,4 +374,4 @@ def free_swing(label: str, plant: Plant, q_start: np.ndarray, timing: Timing,
     panels += ((f"penetration [{position_unit}]", stopped),) if stopped else ()
     figures = [FigureSpec("free-swing.png", f"Free swing: {plant.name}",
                           panels + (("balance drift [J]", ("balance drift [J]",)),))]
-    return ScenarioResult("free-swing", [Series(label, columns, report.contacts)], figures, summary, report.warnings)
+    return ScenarioResult("free-swing", [Series(label, columns, report.contacts)], figures, summary)
