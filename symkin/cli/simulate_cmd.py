@@ -79,10 +79,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="mechanical stops at the declared joint limits: a linear spring-damper beyond each limit "
                         "(default: on when the model declares limits)")
     p.add_argument("--stop-time-constant", type=float, metavar="S",
-                   help="stops: contact time constant T_c = 1/omega_n; k_i = M_ii / T_c^2 at the start configuration "
-                        "(default: 0.003)")
+                   help="stops: contact time constant T_c = 1/omega_n; k_i = m_i / T_c^2 with m_i = 1/(M^-1)_ii at the "
+                        "start configuration (default: 0.003)")
     p.add_argument("--stop-damping-ratio", type=float, metavar="ZETA",
-                   help="stops: damping ratio, c_i = 2 zeta M_ii / T_c; restitution exp(-zeta pi / sqrt(1 - "
+                   help="stops: damping ratio, c_i = 2 zeta m_i / T_c; restitution exp(-zeta pi / sqrt(1 - "
                         "zeta^2)) (default: 0.5)")
     p.add_argument("--stop-stiffness", action="append", default=[], metavar="JOINT=K[,...]",
                    help="stops: stiffness of a joint's stops [N m/rad or N/m] instead of the default (repeatable)")

@@ -53,9 +53,10 @@ class Modes(Protocol):
 
 @dataclass(frozen=True)
 class Switch:
-    """A mode switch of a run: at time ``t`` the ``guard`` reached zero."""
+    """A mode switch of a run: at time ``t`` (state ``x``) the ``guard`` reached zero."""
 
     t: float
+    x: np.ndarray
     guard: Any
 
 
@@ -163,7 +164,7 @@ def run_adaptive(rhs: Rhs, control: Control, x0: np.ndarray, t_eval: np.ndarray,
             break
         fired = next(i for i, hits in enumerate(solution.t_events) if hits.size)
         t0, x = float(solution.t_events[fired][0]), solution.y_events[fired][0]
-        switches.append(Switch(t0, guards[fired]))
+        switches.append(Switch(t0, x, guards[fired]))
         if len(switches) > MAX_SWITCHES:
             raise SimulationError(f"more than {MAX_SWITCHES} mode switches by t = {t0:.6g} s (chattering)")
         mode = modes.switch(mode, guards[fired])

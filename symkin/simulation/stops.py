@@ -28,10 +28,13 @@ Energy: the spring stores U = sum 1/2 k d^2 over the engaged stops and the dampe
 D' = sum c d'^2, so the stop power is qd . tau_stop = -dU/dt - D' and
 k + u + U + D - w is constant (:meth:`ArmSystem.balance`).
 
-Defaults from the model: k_i = M_ii omega_n^2 and c_i = 2 zeta M_ii omega_n, with M_ii the
-mass-matrix diagonal at a configuration (the inertia of joint i with the others locked),
-omega_n = 1 / T_c for a contact time constant T_c (default 3 ms) and zeta = 0.5
-(e = 0.16 for a joint hitting with the others locked).
+Defaults from the model: k_i = m_i omega_n^2 and c_i = 2 zeta m_i omega_n, with
+m_i = 1 / (M^-1)_ii at a configuration q: the inertia joint i's stop meets when the other joints
+are free (unactuated or backdrivable, as in a haptic device; with the others locked it would be
+M_ii >= m_i).  omega_n = 1 / T_c for a contact time constant T_c (default 3 ms), zeta = 0.5
+(e = 0.16).  M changes with the configuration, so an impact elsewhere has
+omega = sqrt(k / m_i(q_contact)) and zeta = c / (2 sqrt(k m_i(q_contact))); the tests check the
+closed forms with these.
 """
 
 from __future__ import annotations
@@ -63,6 +66,11 @@ def peak_penetration(velocity: float, omega: float, damping_ratio: float) -> flo
     """Peak of d'' + 2 zeta omega d' + omega^2 d = 0 from d(0) = 0, d'(0) = v (0 <= zeta < 1)."""
     root = math.sqrt(1.0 - damping_ratio ** 2)
     return velocity / omega * math.exp(-damping_ratio / root * math.atan2(root, damping_ratio))
+
+
+def effective_inertia(mass: np.ndarray) -> np.ndarray:
+    """m_i = 1 / (M^-1)_ii (n,): the inertia at joint i with the other joints free."""
+    return 1.0 / np.diag(np.linalg.inv(mass))
 
 
 def mass_matrix(plant, q: np.ndarray) -> np.ndarray:
@@ -101,7 +109,7 @@ class JointStops:
 
         Args:
             plant: the :class:`~symkin.simulation.plant.Plant`.
-            q: the configuration whose mass-matrix diagonal sets the defaults.
+            q: the configuration whose effective inertias 1 / (M^-1)_ii set the defaults.
             time_constant: T_c = 1 / omega_n [s].
             damping_ratio: zeta.
             stiffness, damping: per-joint values (by name) instead of the defaults.
@@ -119,7 +127,7 @@ class JointStops:
         if not limited.any():
             return None
         names = tuple(plant.coordinates)
-        inertia = np.diag(mass_matrix(plant, q))
+        inertia = effective_inertia(mass_matrix(plant, q))
         omega = 1.0 / time_constant
         k = np.where(limited, inertia * omega ** 2, 0.0)
         c = np.where(limited, 2.0 * damping_ratio * inertia * omega, 0.0)
@@ -176,8 +184,8 @@ class JointStops:
         """Summary lines: the parameters per stopped joint."""
         position, effort = units
         lines = [f"joint stops: linear spring-damper beyond the limits, T_c = {self.time_constant * 1e3:g} ms, "
-                 f"zeta = {self.damping_ratio:g} (e = {restitution(self.damping_ratio):.3g} with the other joints "
-                 "locked)"]
+                 f"zeta = {self.damping_ratio:g} (e = {restitution(self.damping_ratio):.3g} at the start configuration, "
+                 "other joints free)"]
         for i, name in enumerate(self.names):
             if self.stiffness[i] > 0.0:
                 lines.append(f"  {name}: [{self.lower[i]:.4g}, {self.upper[i]:.4g}] {position}, k = "
