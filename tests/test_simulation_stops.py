@@ -21,7 +21,7 @@ from symkin.simulation import ArmSystem, ComputedTorque, JointSine, Plant, run_a
 from symkin.simulation.contacts import intervals
 from symkin.simulation.stops import (ContactModes, JointStops, effective_inertia, mass_matrix, peak_penetration,
                                      restitution, rk4_stability)
-from tests.conftest import GENERATED_DIR
+from tests.conftest import GENERATED_DIR, MODELS_DIR
 
 START = np.radians([45.0, 45.0])
 ZERO = np.zeros(2)
@@ -206,30 +206,12 @@ def test_cli_reports_stops_and_warns_before_an_unstable_loop(tmp_path, capsys):
     assert "UNSTABLE" in captured.out
 
 
-@pytest.mark.parametrize("arguments, message", [
-    (["--joint-stops", "off", "--stop-time-constant", "0.01"], "the joint stops are off"),
-    (["--stop-time-constant", "0"], "time constant must be positive"),
-    (["--stop-damping-ratio", "-0.1"], "must not be negative"),
-    (["--stop-stiffness", "theta9=100"], "no joint 'theta9'"),
-    (["--stop-stiffness", "theta1=-1"], "must be positive"),
-    (["--stop-damping", "theta1"], "is not NAME=VALUE"),
-    (["--joint-stops", "maybe"], "invalid choice"),
-])
-def test_bad_stop_options_exit_with_code_2_and_write_nothing(arguments, message, tmp_path, capsys):
+def test_stops_on_a_model_without_limits_exit_with_code_2(tmp_path, capsys):
+    source = tmp_path / "planar_2r.yaml"
+    source.write_text((MODELS_DIR / "planar_2r.yaml").read_text().replace(", [0, deg(90)]]", "]"))
     out = tmp_path / "out"
     with pytest.raises(SystemExit) as exit_info:
-        main(["simulate", str(GENERATED_DIR / "planar_2r"), "--scenario", "free-swing", "-o", str(out)] + arguments)
+        main(["simulate", str(source), "--scenario", "free-swing", "--joint-stops", "on", "-o", str(out)])
     assert exit_info.value.code == 2
-    assert message in capsys.readouterr().err
+    assert "--joint-stops on: planar_2r declares no joint limits" in capsys.readouterr().err
     assert not out.exists()
-
-
-def test_stops_on_needs_declared_limits(plant):
-    class Unlimited:
-        """planar_2r's plant as if its model declared no limits."""
-
-        def __init__(self, plant):
-            self.__dict__.update(plant.__dict__)
-            self.model = type("M", (), {"joint_limits": ((-math.inf, math.inf),) * 2})()
-
-    assert JointStops.from_plant(Unlimited(plant), START) is None
