@@ -20,7 +20,7 @@ from symkin.cli import main
 from symkin.simulation import ArmSystem, ComputedTorque, JointSine, Plant, run_adaptive, run_sampled, scenarios
 from symkin.simulation.contacts import intervals
 from symkin.simulation.stops import (ContactModes, JointStops, effective_inertia, mass_matrix, peak_penetration,
-                                     restitution, rk4_stability)
+                                     restitution, rk4_stability, stop_configurations)
 from tests.conftest import GENERATED_DIR, MODELS_DIR
 
 START = np.radians([45.0, 45.0])
@@ -183,6 +183,10 @@ def test_rk4_is_stable_in_contact_exactly_where_the_condition_says(plant):
     assert unstable[-1] > 100 * unstable[0]
     assert stable[-1] < stable[0]
     assert rk4_stability(stops, mass_matrix(plant, rest), 1e-3, stability.substeps_needed).stable
+    # the check before a run, from the start configuration, covers the rest on the stops through the corners
+    corners = np.array([mass_matrix(plant, c) for c in stop_configurations(stops, START)])
+    assert rk4_stability(stops, corners, 1e-3).substeps_needed >= stability.substeps_needed
+    assert rk4_stability(stops, mass_matrix(plant, START), 1e-3).substeps_needed < stability.substeps_needed
 
 
 def test_cli_reports_stops_and_warns_before_an_unstable_loop(tmp_path, capsys):

@@ -32,7 +32,8 @@ from symkin.simulation.contacts import Contact
 from symkin.simulation.control import ComputedTorque, Wall, WallRenderer
 from symkin.simulation.integrate import Run, run_adaptive, run_sampled
 from symkin.simulation.plant import Plant
-from symkin.simulation.stops import DAMPING_RATIO, TIME_CONSTANT, ContactModes, JointStops, mass_matrix, rk4_stability
+from symkin.simulation.stops import (DAMPING_RATIO, TIME_CONSTANT, ContactModes, JointStops, mass_matrix, rk4_stability,
+                                     stop_configurations)
 from symkin.simulation.system import ArmSystem
 from symkin.simulation.trajectory import JointSine, task_circle
 from symkin.simulation.user import MassSpringDamperUser, sine_intent
@@ -160,10 +161,12 @@ def _system(plant: Plant, q: np.ndarray, stops: StopSettings | None, timing: Tim
 
 
 def _stability(system: ArmSystem, timing: Timing, q: np.ndarray):
-    """RK4's stability in contact at M(q) (None: no stops, or not a fixed-step run)."""
+    """RK4's stability in contact at q and the corners of the limits (None: no stops, or not a
+    fixed-step run)."""
     if system.stops is None or timing.integrator != "rk4":
         return None
-    return rk4_stability(system.stops, mass_matrix(system.plant, q), 1.0 / timing.rate, timing.substeps)
+    masses = [mass_matrix(system.plant, c) for c in stop_configurations(system.stops, q)]
+    return rk4_stability(system.stops, np.array(masses), 1.0 / timing.rate, timing.substeps)
 
 
 @dataclass(frozen=True)
@@ -176,8 +179,8 @@ class StopReport:
 
 
 def stop_report(system: ArmSystem, run: Run, timing: Timing, q: np.ndarray) -> StopReport:
-    """Contacts, penetrations and energies of the stops; for RK4, its stability in contact at
-    M(q) (:func:`~symkin.simulation.stops.rk4_stability`)."""
+    """Contacts, penetrations and energies of the stops; for RK4, its stability in contact
+    (:func:`~symkin.simulation.stops.rk4_stability` at q and the corners of the limits)."""
     stops = system.stops
     if stops is None:
         return StopReport()
