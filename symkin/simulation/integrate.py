@@ -168,8 +168,9 @@ def run_adaptive(rhs: Rhs, control: Control, x0: np.ndarray, t_eval: np.ndarray,
         if len(switches) > MAX_SWITCHES:
             raise SimulationError(f"more than {MAX_SWITCHES} mode switches by t = {t0:.6g} s (chattering)")
         mode = modes.switch(mode, guards[fired])
-        if t0 >= end:  # the switch is the last instant: its state is the last sample
-            parts.append(x[None, :len(t_eval) - sum(len(p) for p in parts)])
+        if t0 >= end:  # the switch is the last instant: its state is the last sample, if not yet recorded
+            if sum(len(p) for p in parts) < len(t_eval):
+                parts.append(x[None])
             break
     xs = np.concatenate(parts)
     _check(xs, end)
