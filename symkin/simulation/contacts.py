@@ -84,18 +84,20 @@ def summary(system: ArmSystem, run: Run, contacts: list[Contact], unit: tuple[st
     """Lines: per stopped joint the number of contacts, time in contact and peak penetration."""
     stops = system.stops
     depth = stops.depth(system.split(run.x).q)
-    lines = []
+    lines, free = [], []
     for j, name in enumerate(stops.names):
         if stops.stiffness[j] <= 0.0:
             continue
         mine = [c for c in contacts if c.joint == name]
         if not mine:
-            lines.append(f"  {name}: no contact with its stops")
+            free.append(name)
             continue
         parts = [f"{sum(c.side == side for c in mine)} x {side} {sum(c.end - c.start for c in mine if c.side == side):.4g} s"
                  for side in SIDES.values() if any(c.side == side for c in mine)]
         lines.append(f"  {name}: in contact {', '.join(parts)}; max penetration {np.max(depth[:, j]):.3g} {unit[0]} "
                      f"(at the samples)")
+    if free:
+        lines.append(f"  {', '.join(free)}: no contact with {'its' if len(free) == 1 else 'their'} stops")
     s = system.split(run.x[-1])
     lines.append(f"  stops: {float(stops.stored_energy(s.q)):.3g} J stored at the end, {float(s.dissipated):.3g} J "
                  "dissipated")
