@@ -5,7 +5,9 @@ one control period: the wall renderer (fk, task Jacobian, gravity vector) and on
 of the arm coupled to the mass-spring-damper hand (four forward-dynamics evaluations, each
 with fk and the Jacobian for the hand's force).  A loop is real-time capable at 1 kHz when
 it runs faster than 1000 steps/s.  Also: the torque-only computed-torque loop (one
-inverse-dynamics call per step) and DOP853 evaluations/s for reference.
+inverse-dynamics call per step) and DOP853 evaluations/s for reference, and the same free
+swing with the joint stops (DOP853 restarted at every located contact) and the cost of the stops
+in the haptic loop (planar_2r only: the UR10e's +-2 pi limits are not met in 1 s).
 """
 
 from __future__ import annotations
@@ -25,21 +27,27 @@ from symkin.cli.table import format_table  # noqa: E402
 from symkin.simulation import (ArmSystem, ComputedTorque, JointSine, MassSpringDamperUser, Plant, Wall,  # noqa: E402
                                WallRenderer, run_adaptive, run_sampled, sine_intent)
 from symkin.simulation.scenarios import balance_drift  # noqa: E402
+from symkin.simulation.stops import ContactModes, JointStops  # noqa: E402
 
 STARTS = {"planar_2r": np.radians([45.0, 45.0]), "ur10e": np.array([0.3, -1.2, 1.4, -1.6, -1.5, 0.2])}
 
 
-def _loops(plant, q0: np.ndarray) -> dict[str, tuple]:
-    """(system, controller, initial state) of the timed loops."""
+def _loops(plant, q0: np.ndarray, stops: JointStops | None) -> dict[str, tuple]:
+    """(system, controller, initial state) of the timed loops (with stops: the haptic loop again)."""
     p0 = plant.point(q0)
     normal = np.zeros(len(p0))
     normal[0] = 1.0
-    held = ArmSystem(plant, MassSpringDamperUser(sine_intent(p0, normal, 0.02, 1.0)))
+    user = MassSpringDamperUser(sine_intent(p0, normal, 0.02, 1.0))
+    held = ArmSystem(plant, user)
     wall = WallRenderer(held, Wall(normal, float(p0[0]) + 0.005))
     free = ArmSystem(plant)
     tracking = ComputedTorque(free, JointSine(q0, plant.dof - 1, 0.3, 1.0))
-    return {"haptic wall + hand, RK4 + ZOH": (held, wall, held.initial(q0)),
-            "computed torque, RK4 + ZOH": (free, tracking, free.initial(q0, tracking.reference(0.0)[1]))}
+    loops = {"haptic wall + hand, RK4 + ZOH": (held, wall, held.initial(q0)),
+             "computed torque, RK4 + ZOH": (free, tracking, free.initial(q0, tracking.reference(0.0)[1]))}
+    if stops is not None:
+        stopped = ArmSystem(plant, user, stops)
+        loops["haptic wall + hand + joint stops"] = (stopped, WallRenderer(stopped, wall.wall), stopped.initial(q0))
+    return loops
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -51,7 +59,8 @@ def main(argv: list[str] | None = None) -> int:
     for name, q0 in STARTS.items():
         for backend in ("numpy", "c"):
             plant = Plant(symkin.load(ROOT / "generated" / name, backend))
-            for label, (system, control, x0) in _loops(plant, q0).items():
+            stops = JointStops.from_plant(plant, q0) if name == "planar_2r" else None
+            for label, (system, control, x0) in _loops(plant, q0, stops).items():
                 start = time.perf_counter()
                 run = run_sampled(system.derivative, control, x0, 1e-3, steps)
                 rate = steps / (time.perf_counter() - start)
@@ -64,6 +73,15 @@ def main(argv: list[str] | None = None) -> int:
             elapsed = time.perf_counter() - start
             rows.append([name, backend, "free swing, DOP853 rtol 1e-10", f"{run.evaluations / elapsed:,.0f} f/s",
                          f"{args.seconds / elapsed:.1f}x", f"{balance_drift(system, run):.1e}"])
+            if stops is not None:
+                system = ArmSystem(plant, stops=stops)
+                start = time.perf_counter()
+                run = run_adaptive(system.derivative, lambda t, x: zero, system.initial(q0),
+                                   np.linspace(0, args.seconds, 11), modes=ContactModes(stops))
+                elapsed = time.perf_counter() - start
+                rows.append([name, backend, f"free swing onto the stops, DOP853 ({len(run.switches)} events)",
+                             f"{run.evaluations / elapsed:,.0f} f/s", f"{args.seconds / elapsed:.1f}x",
+                             f"{balance_drift(system, run):.1e}"])
     print(f"Loops at 1 kHz over {args.seconds:g} s of simulated time: control periods per second of wall time "
           "(real time = steps/s / 1000; DOP853: right-hand-side evaluations per second)")
     print(format_table(["model", "backend", "loop", "steps/s", "real time", "energy balance drift"], rows))

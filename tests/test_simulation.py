@@ -247,6 +247,13 @@ def test_cli_derives_a_model_file_on_the_fly(tmp_path, capsys):
     (["--hand", "mass=1,stiffnes=3"], "unknown user parameters"),
     (["--set", "l9=1"], "l9"),
     (["--rate", "0"], "must be positive"),
+    (["--joint-stops", "off", "--stop-time-constant", "0.01"], "the joint stops are off"),
+    (["--stop-time-constant", "0"], "time constant must be positive"),
+    (["--stop-damping-ratio", "-0.1"], "must not be negative"),
+    (["--stop-stiffness", "theta9=100"], "no joint 'theta9'"),
+    (["--stop-stiffness", "theta1=-1"], "must be positive"),
+    (["--stop-damping", "theta1"], "is not NAME=VALUE"),
+    (["--joint-stops", "maybe"], "invalid choice"),
 ])
 def test_bad_arguments_exit_with_code_2_and_write_nothing(arguments, message, tmp_path, capsys):
     out = tmp_path / "out"

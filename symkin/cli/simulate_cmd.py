@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 import time
+import warnings
 from pathlib import Path
 
 from symkin.cli import analysis_args
@@ -27,7 +29,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "torques and TCP forces F = J^-T tau, checked by a forward simulation), 'tracking' (Fig. 8.17: a "
                     "TCP circle through inverse kinematics and computed-torque control), 'haptic-wall' (Fig. 8.18: a "
                     "mass-spring-damper hand pushes into a virtual wall rendered in a 1 kHz loop), 'free-swing' (no "
-                    "torques; energy conserved without friction). Writes CSV per run, summary.txt and figures into "
+                    "torques; energy conserved without friction). Joints stop at their declared limits (a stiff "
+                    "spring-damper, --joint-stops); contacts are reported and shaded in the figures. Writes CSV per run, summary.txt and figures into "
                     "the output directory (replaced as a whole).",
         epilog="Seed Figs. 8.21/8.22: symkin simulate generated/planar_2r --scenario sine --design l1=0.1,l2=0.1 "
                "--design l1=0.2,l2=0.2 -o out/figures/seed-haptic-scenario")
@@ -72,6 +75,19 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--hand", action="append", default=[], metavar="NAME=VALUE[,...]",
                    help="haptic-wall: user model, of mass, arm_stiffness, arm_damping, grip_stiffness, grip_damping "
                         "(default: 0.2 kg, 200 N/m, 5 N s/m, 2000 N/m, 10 N s/m)")
+    p.add_argument("--joint-stops", choices=("on", "off"),
+                   help="mechanical stops at the declared joint limits: a linear spring-damper beyond each limit "
+                        "(default: on when the model declares limits)")
+    p.add_argument("--stop-time-constant", type=float, metavar="S",
+                   help="stops: contact time constant T_c = 1/omega_n; k_i = m_i / T_c^2 with m_i = 1/(M^-1)_ii at the "
+                        "start configuration (default: 0.003)")
+    p.add_argument("--stop-damping-ratio", type=float, metavar="ZETA",
+                   help="stops: damping ratio, c_i = 2 zeta m_i / T_c; restitution exp(-zeta pi / sqrt(1 - "
+                        "zeta^2)) (default: 0.5)")
+    p.add_argument("--stop-stiffness", action="append", default=[], metavar="JOINT=K[,...]",
+                   help="stops: stiffness of a joint's stops [N m/rad or N/m] instead of the default (repeatable)")
+    p.add_argument("--stop-damping", action="append", default=[], metavar="JOINT=C[,...]",
+                   help="stops: damping of a joint's stops [N m s/rad or N s/m] instead of the default (repeatable)")
     p.add_argument("-o", "--out", metavar="DIR", help="output directory (default: out/simulation/MODEL-SCENARIO)")
     p.add_argument("--no-figure", action="store_true", help="write CSV and summary only")
     p.set_defaults(run=run, parser=p)
@@ -93,6 +109,35 @@ def _start(args: argparse.Namespace, plant) -> list[float]:
         raise ValueError(f"--q0: {plant.name} has {plant.dof} joints ({' '.join(plant.coordinates)}), "
                          f"got {len(values)} values")
     return values
+
+
+def _stops(args: argparse.Namespace, plant, q0):
+    """The StopSettings of the arguments (None: stops off), checked by building them at q0.
+
+    Raises:
+        ValueError: stops asked for on a model without limits, stop parameters with the stops
+            off, or a bad parameter.
+    """
+    from symkin.simulation.scenarios import StopSettings
+
+    limited = any(math.isfinite(v) for bounds in plant.model.joint_limits for v in bounds)
+    tuning = [name for name, given in (("--stop-time-constant", args.stop_time_constant is not None),
+                                       ("--stop-damping-ratio", args.stop_damping_ratio is not None),
+                                       ("--stop-stiffness", bool(args.stop_stiffness)),
+                                       ("--stop-damping", bool(args.stop_damping))) if given]
+    if args.joint_stops == "on" and not limited:
+        raise ValueError(f"--joint-stops on: {plant.name} declares no joint limits (declare them in the model file)")
+    if args.joint_stops == "off" or not limited:
+        if tuning:
+            raise ValueError(f"{', '.join(tuning)}: the joint stops are off"
+                             + ("" if limited else f" ({plant.name} declares no joint limits)"))
+        return None
+    settings = StopSettings(**{k: v for k, v in (("time_constant", args.stop_time_constant),
+                                                  ("damping_ratio", args.stop_damping_ratio)) if v is not None},
+                            stiffness=analysis_args.parse_assignments(args.stop_stiffness),
+                            damping=analysis_args.parse_assignments(args.stop_damping))
+    settings.build(plant, q0)
+    return settings
 
 
 def _label(model, values: dict[str, float]) -> str:
@@ -131,25 +176,32 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError(f"--joint: {plant.name} has no joint '{args.joint}'; use one of "
                              f"{', '.join(plant.coordinates)}")
         amplitude = _number("--amplitude", args.amplitude)
+        stops = _stops(args, plant, q0)
     except (ValueError, KeyError) as err:
         analysis_args.fail_on_bad_input(args, err)
     timing = scenarios.Timing(args.duration, args.rate, args.integrator or DEFAULT_INTEGRATOR[args.scenario],
                               args.substeps)
     label, _ = plants[0]
     start = time.perf_counter()
-    with Progress(base.name) as progress:
+    with Progress(base.name) as progress, warnings.catch_warnings():
+        warnings.simplefilter("always", scenarios.StopStabilityWarning)
+        shown = warnings.showwarning
+        warnings.showwarning = lambda message, category, *rest: (
+            print(f"symkin simulate: warning: {message}", file=sys.stderr)
+            if issubclass(category, scenarios.StopStabilityWarning) else shown(message, category, *rest))
         progress(f"simulating {args.scenario}")
         try:
             if args.scenario == "sine":
-                result = scenarios.sine(plants, q0, joint, amplitude, args.frequency, timing)
+                result = scenarios.sine(plants, q0, joint, amplitude, args.frequency, timing, stops)
             elif args.scenario == "tracking":
-                result = scenarios.tracking(label, plant, q0, args.radius, timing, args.bandwidth)
+                result = scenarios.tracking(label, plant, q0, args.radius, timing, args.bandwidth, stops)
             elif args.scenario == "haptic-wall":
                 result = scenarios.haptic_wall(label, plant, q0, args.wall, args.push, timing,
                                                frequency=args.frequency, stiffness=args.wall_stiffness,
-                                               damping=args.wall_damping, force_gain=args.force_gain, hand=hand)
+                                               damping=args.wall_damping, force_gain=args.force_gain, hand=hand,
+                                               stops=stops)
             else:
-                result = scenarios.free_swing(label, plant, q0, timing)
+                result = scenarios.free_swing(label, plant, q0, timing, stops)
         except SimulationError as err:
             print(f"symkin simulate: {err}")
             return 1

@@ -7,7 +7,9 @@ emitted (any backend); nothing here derives symbolically.
 * :class:`ArmSystem` - the state, optionally with a mass-spring-damper user, and the
   power balance k + u - w;
 * :func:`run_sampled` (RK4 under a zero-order-hold controller, the 1 kHz loop) and
-  :func:`run_adaptive` (DOP853 to a tolerance);
+  :func:`run_adaptive` (DOP853 to a tolerance, with located mode switches);
+* :class:`JointStops` - mechanical stops at the joint limits (linear spring-dampers), their
+  :class:`ContactModes` for event location, :mod:`symkin.simulation.contacts` the report;
 * controllers :class:`ComputedTorque` and :class:`WallRenderer`, references
   :class:`JointSine` and :func:`task_circle`;
 * :mod:`symkin.simulation.scenarios` - the scenarios of ``symkin simulate``.
@@ -28,10 +30,11 @@ Example::
 from symkin.simulation.control import ComputedTorque, Wall, WallRenderer
 from symkin.simulation.integrate import Run, SimulationError, rk4_step, run_adaptive, run_sampled
 from symkin.simulation.plant import Plant
+from symkin.simulation.stops import ContactModes, JointStops
 from symkin.simulation.system import ArmSystem
 from symkin.simulation.trajectory import JointSine, SplineReference, task_circle
 from symkin.simulation.user import MassSpringDamperUser, sine_intent
 
-__all__ = ["ArmSystem", "ComputedTorque", "JointSine", "MassSpringDamperUser", "Plant", "Run", "SimulationError",
-           "SplineReference", "Wall", "WallRenderer", "rk4_step", "run_adaptive", "run_sampled", "sine_intent",
-           "task_circle"]
+__all__ = ["ArmSystem", "ComputedTorque", "ContactModes", "JointSine", "JointStops", "MassSpringDamperUser", "Plant",
+           "Run", "SimulationError", "SplineReference", "Wall", "WallRenderer", "rk4_step", "run_adaptive",
+           "run_sampled", "sine_intent", "task_circle"]

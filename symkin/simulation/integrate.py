@@ -10,13 +10,18 @@ Two integrators, for two jobs:
 * :func:`run_adaptive` - scipy's ``solve_ivp`` with DOP853 (Dormand-Prince 8(5,3)) and a
   continuous control law, for offline reference runs to a tolerance (the energy-balance
   checks run at rtol 1e-10).  A discontinuous (sampled) control would force it to tiny steps
-  at every sample, so it is not used for the zero-order-hold loops.
+  at every sample, so it is not used for the zero-order-hold loops.  A right-hand side that
+  switches (joint stops engaging and releasing) is integrated mode by mode: the solver stops
+  at the switching instant located by an event function (``solve_ivp`` events, root found to
+  machine precision on the dense output) and restarts in the new mode, so no step straddles
+  the discontinuity and the error control is not smeared over it.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -24,6 +29,35 @@ import numpy as np
 Rhs = Callable[[float, np.ndarray, np.ndarray], np.ndarray]
 #: u = control(t, x)
 Control = Callable[[float, np.ndarray], np.ndarray]
+
+
+#: a switching run gives up after this many mode switches (chattering)
+MAX_SWITCHES = 10_000
+
+
+class Modes(Protocol):
+    """The discrete modes of a switching right-hand side (e.g. :class:`~symkin.simulation.stops.ContactModes`).
+
+    ``rhs(t, x, u, argument(mode))`` is smooth within a mode; each guard g(t, x) (with the
+    ``solve_ivp`` event attributes ``direction`` and ``terminal``) ends the mode at its zero.
+    """
+
+    def initial(self, x: np.ndarray) -> Any: ...
+
+    def argument(self, mode: Any) -> Any: ...
+
+    def guards(self, mode: Any) -> Sequence[Callable[[float, np.ndarray], float]]: ...
+
+    def switch(self, mode: Any, guard: Any) -> Any: ...
+
+
+@dataclass(frozen=True)
+class Switch:
+    """A mode switch of a run: at time ``t`` (state ``x``) the ``guard`` reached zero."""
+
+    t: float
+    x: np.ndarray
+    guard: Any
 
 
 class SimulationError(RuntimeError):
@@ -40,12 +74,14 @@ class Run:
         u: (N, nu) controls: ``u[k]`` is applied from ``t[k]`` (sampled runs: held until
             ``t[k + 1]``); the last row is the control at the final state.
         evaluations: right-hand-side evaluations spent.
+        switches: the mode switches located by events (adaptive runs with modes), in order.
     """
 
     t: np.ndarray
     x: np.ndarray
     u: np.ndarray
     evaluations: int
+    switches: tuple[Switch, ...] = ()
 
 
 def rk4_step(rhs: Rhs, t: float, x: np.ndarray, u: np.ndarray, h: float) -> np.ndarray:
@@ -97,20 +133,46 @@ def run_sampled(rhs: Rhs, control: Control, x0: np.ndarray, period: float, steps
 
 
 def run_adaptive(rhs: Rhs, control: Control, x0: np.ndarray, t_eval: np.ndarray, *,
-                 rtol: float = 1e-10, atol: float = 1e-12) -> Run:
+                 rtol: float = 1e-10, atol: float = 1e-12, modes: Modes | None = None) -> Run:
     """Continuous loop x' = rhs(t, x, control(t, x)) with DOP853 to the tolerances.
 
+    With ``modes``, the right-hand side in a mode m is ``rhs(t, x, u, modes.argument(m))``;
+    the run is integrated segment by segment between the zeros of the mode's guards.
+
     Raises:
-        SimulationError: the solver failed.
+        SimulationError: the solver failed, or the modes switched more than
+            :data:`MAX_SWITCHES` times.
     """
     from scipy.integrate import solve_ivp
 
     t_eval = np.asarray(t_eval, dtype=float)
-    solution = solve_ivp(lambda t, x: rhs(t, x, control(t, x)), (t_eval[0], t_eval[-1]), np.asarray(x0, float),
-                         method="DOP853", t_eval=t_eval, rtol=rtol, atol=atol)
-    if not solution.success:
-        raise SimulationError(f"DOP853 failed at t = {solution.t[-1]:.6g} s: {solution.message}")
-    xs = solution.y.T
-    _check(xs, t_eval[-1])
+    t0, x, end = t_eval[0], np.asarray(x0, float), t_eval[-1]
+    mode = modes.initial(x) if modes is not None else None
+    parts, switches, evaluations = [], [], 0
+    while True:
+        argument = () if modes is None else (modes.argument(mode),)
+        guards = list(modes.guards(mode)) if modes is not None else None
+        times = t_eval[(t_eval >= t0) if not parts else (t_eval > t0)]
+        solution = solve_ivp(lambda t, y: rhs(t, y, control(t, y), *argument), (t0, end), x, method="DOP853",
+                             t_eval=times, rtol=rtol, atol=atol, events=guards or None)
+        evaluations += int(solution.nfev)
+        if not solution.success:
+            raise SimulationError(f"DOP853 failed at t = {solution.t[-1] if solution.t.size else t0:.6g} s: "
+                                  f"{solution.message}")
+        parts.append(np.reshape(solution.y, (x.size, -1)).T)
+        if solution.status != 1:  # reached the end
+            break
+        fired = next(i for i, hits in enumerate(solution.t_events) if hits.size)
+        t0, x = float(solution.t_events[fired][0]), solution.y_events[fired][0]
+        switches.append(Switch(t0, x, guards[fired]))
+        if len(switches) > MAX_SWITCHES:
+            raise SimulationError(f"more than {MAX_SWITCHES} mode switches by t = {t0:.6g} s (chattering)")
+        mode = modes.switch(mode, guards[fired])
+        if t0 >= end:  # the switch is the last instant: its state is the last sample, if not yet recorded
+            if sum(len(p) for p in parts) < len(t_eval):
+                parts.append(x[None])
+            break
+    xs = np.concatenate(parts)
+    _check(xs, end)
     us = np.array([control(t, x) for t, x in zip(t_eval, xs)], dtype=float)
-    return Run(t_eval, xs, us, int(solution.nfev))
+    return Run(t_eval, xs, us, evaluations, tuple(switches))

@@ -25,8 +25,28 @@ def csv_text(model: str, scenario: str, series: Series) -> str:
     return "\n".join(lines) + "\n"
 
 
+#: hatches of the joint-stop contact spans, per joint
+CONTACT_HATCHES = ("////", "\\\\\\\\", "xxxx", "....", "||||", "----")
+
+
+def _mark_contacts(ax, series: list[Series], legend: bool) -> None:
+    """Shade the joint-stop contacts of every series (grey, one hatch per joint; in the legend
+    once per joint and side if ``legend``)."""
+    for s in series:
+        joints = list(dict.fromkeys(c.joint for c in s.contacts))
+        labelled = set()
+        for c in s.contacts:
+            key = (c.joint, c.side)
+            j = joints.index(c.joint)
+            label = f"stop contact {c.joint} {c.side}" + (f" ({s.label})" if len(series) > 1 else "")
+            ax.axvspan(c.start, c.end, facecolor="0.6", alpha=0.25, hatch=CONTACT_HATCHES[j % len(CONTACT_HATCHES)],
+                       edgecolor="0.35", linewidth=0.0, label=None if key in labelled or not legend else label)
+            labelled.add(key)
+
+
 def figure_png(spec: FigureSpec, series: list[Series]) -> bytes:
-    """The figure of ``spec``: stacked panels against time, one line per column and series."""
+    """The figure of ``spec``: stacked panels against time, one line per column and series; the
+    joint-stop contacts shaded."""
     from matplotlib.figure import Figure
 
     figure = Figure(figsize=(7.0, 2.2 * len(spec.panels) + 0.6), layout="constrained")
@@ -42,6 +62,7 @@ def figure_png(spec: FigureSpec, series: list[Series]) -> bytes:
                 label = f"{name} ({s.label})" if len(series) > 1 else name
                 ax.plot(t, s.columns[column], styles[j % len(styles)], color=f"C{k}" if len(series) > 1 else f"C{j}",
                         label=label, linewidth=1.2)
+        _mark_contacts(ax, series, legend=ax is axes[0])
         ax.set_ylabel(ylabel)
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=7, loc="best")

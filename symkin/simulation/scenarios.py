@@ -13,19 +13,27 @@
   energy k + u stays constant.
 
 Every run records the power balance k + u - w (:meth:`ArmSystem.balance`), whose drift is
-the integration error.
+the integration error.  With joint stops (``stops=StopSettings(...)``, see
+:mod:`symkin.simulation.stops`) the balance is k + u + U + D - w, every run reports its
+contacts (:mod:`symkin.simulation.contacts`) and marks them in the figures, and a fixed-step
+run checks RK4's stability in contact.
 """
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from symkin.simulation import contacts as contact_report
+from symkin.simulation.contacts import Contact
 from symkin.simulation.control import ComputedTorque, Wall, WallRenderer
 from symkin.simulation.integrate import Run, run_adaptive, run_sampled
 from symkin.simulation.plant import Plant
+from symkin.simulation.stops import (DAMPING_RATIO, TIME_CONSTANT, ContactModes, JointStops, mass_matrix, rk4_stability,
+                                     stop_configurations)
 from symkin.simulation.system import ArmSystem
 from symkin.simulation.trajectory import JointSine, task_circle
 from symkin.simulation.user import MassSpringDamperUser, sine_intent
@@ -40,10 +48,12 @@ class Series:
     Attributes:
         label: the design, e.g. "l1 = 10 cm, l2 = 10 cm".
         columns: name (with unit) -> (N,) values; the first is the time.
+        contacts: the joint-stop contacts of the run (shaded in the figures).
     """
 
     label: str
     columns: dict[str, np.ndarray]
+    contacts: tuple[Contact, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -69,6 +79,26 @@ class ScenarioResult:
     summary: list[str] = field(default_factory=list)
 
 
+class StopStabilityWarning(RuntimeWarning):
+    """The fixed RK4 step is unstable in contact with the joint stops (warned before the run)."""
+
+
+@dataclass(frozen=True)
+class StopSettings:
+    """Joint stops of a scenario (:class:`~symkin.simulation.stops.JointStops`): contact time
+    constant T_c [s], damping ratio zeta, and per-joint stiffness / damping overrides by name."""
+
+    time_constant: float = TIME_CONSTANT
+    damping_ratio: float = DAMPING_RATIO
+    stiffness: dict[str, float] = field(default_factory=dict)
+    damping: dict[str, float] = field(default_factory=dict)
+
+    def build(self, plant: Plant, q: np.ndarray) -> JointStops | None:
+        """The stops at the model's declared limits, defaults from M(q) (None: no limits declared)."""
+        return JointStops.from_plant(plant, q, time_constant=self.time_constant, damping_ratio=self.damping_ratio,
+                                     stiffness=self.stiffness, damping=self.damping)
+
+
 @dataclass(frozen=True)
 class Timing:
     """Duration [s], sample rate [Hz] and integrator of a run."""
@@ -88,7 +118,8 @@ def integrate(system: ArmSystem, control, x0: np.ndarray, timing: Timing) -> Run
     if timing.integrator == "rk4":
         return run_sampled(system.derivative, control, x0, 1.0 / timing.rate, timing.steps, timing.substeps)
     if timing.integrator == "dop853":
-        return run_adaptive(system.derivative, control, x0, np.arange(timing.steps + 1) / timing.rate)
+        modes = ContactModes(system.stops) if system.stops is not None else None
+        return run_adaptive(system.derivative, control, x0, np.arange(timing.steps + 1) / timing.rate, modes=modes)
     raise ValueError(f"unknown integrator {timing.integrator!r}; use one of {', '.join(INTEGRATORS)}")
 
 
@@ -110,9 +141,59 @@ def balance_drift(system: ArmSystem, run: Run, energy: np.ndarray | None = None)
     """
     s = system.split(run.x)
     energy = system.plant.energy(s.q, s.qd) if energy is None else energy
-    b = energy - s.work  # system.balance, without evaluating the energy again
+    b = energy + system.stop_energy(s) - s.work  # system.balance, without evaluating the energy again
     scale = max(1.0, float(np.max(np.abs(energy))))
     return float(np.max(np.abs(b - b[0]))) / scale
+
+
+def _system(plant: Plant, q: np.ndarray, stops: StopSettings | None, timing: Timing,
+            user: MassSpringDamperUser | None = None) -> ArmSystem:
+    """The system with the stops built at q; warns (:class:`StopStabilityWarning`) before a
+    fixed-step run that is unstable in contact."""
+    system = ArmSystem(plant, user, stops.build(plant, q) if stops is not None else None)
+    stability = _stability(system, timing, q)
+    if stability is not None and not stability.stable:
+        warnings.warn(StopStabilityWarning(
+            f"{plant.name}: RK4 at h = {stability.step * 1e3:.4g} ms is unstable in contact with the joint stops "
+            f"(omega_max h = {stability.omega_max * stability.step:.3g}, the limit is about 2.83); use --substeps "
+            f"{stability.substeps_needed} or more, or a longer --stop-time-constant"), stacklevel=3)
+    return system
+
+
+def _stability(system: ArmSystem, timing: Timing, q: np.ndarray):
+    """RK4's stability in contact at q and the corners of the limits (None: no stops, or not a
+    fixed-step run)."""
+    if system.stops is None or timing.integrator != "rk4":
+        return None
+    masses = [mass_matrix(system.plant, c) for c in stop_configurations(system.stops, q)]
+    return rk4_stability(system.stops, np.array(masses), 1.0 / timing.rate, timing.substeps)
+
+
+@dataclass(frozen=True)
+class StopReport:
+    """The joint stops' part of a run: CSV columns, summary lines, contacts (all empty without stops)."""
+
+    columns: dict[str, np.ndarray] = field(default_factory=dict)
+    lines: list[str] = field(default_factory=list)
+    contacts: tuple[Contact, ...] = ()
+
+
+def stop_report(system: ArmSystem, run: Run, timing: Timing, q: np.ndarray) -> StopReport:
+    """Contacts, penetrations and energies of the stops; for RK4, its stability in contact
+    (:func:`~symkin.simulation.stops.rk4_stability` at q and the corners of the limits)."""
+    stops = system.stops
+    if stops is None:
+        return StopReport()
+    units = _joint_units(system.plant)
+    found = contact_report.intervals(stops, run)
+    lines = ["  " + line for line in stops.describe(units)]
+    lines += contact_report.summary(system, run, found, units)
+    stability = _stability(system, timing, q)
+    if stability is not None:
+        lines.append("  " + stability.describe())
+    else:
+        lines.append(f"  {len(run.switches)} stop contacts and releases located by events (DOP853 restarted at each)")
+    return StopReport(contact_report.columns(system, run, units), lines, tuple(found))
 
 
 def _peak(values: np.ndarray) -> float:
@@ -134,7 +215,7 @@ def tcp_forces(J: np.ndarray, tau: np.ndarray) -> np.ndarray:
 
 
 def sine(designs: Sequence[tuple[str, Plant]], center: np.ndarray, joint: int, amplitude: float, frequency: float,
-         timing: Timing) -> ScenarioResult:
+         timing: Timing, stops: StopSettings | None = None) -> ScenarioResult:
     """The seed's simplified haptic scenario for each design (Figs. 8.21, 8.22)."""
     series, summary = [], []
     plant0 = designs[0][1]
@@ -146,8 +227,9 @@ def sine(designs: Sequence[tuple[str, Plant]], center: np.ndarray, joint: int, a
     for label, plant in designs:
         tau = plant.torque(q, qd, qdd)
         force = tcp_forces(plant.model.jacobian(q), tau)
-        system = ArmSystem(plant)
+        system = _system(plant, center, stops, timing)
         run = integrate(system, ComputedTorque(system, reference), system.initial(q[0], qd[0]), timing)
+        report = stop_report(system, run, timing, center)
         simulated = system.split(run.x)
         error = _peak(simulated.q - q)
         columns = {"t [s]": t}
@@ -156,7 +238,7 @@ def sine(designs: Sequence[tuple[str, Plant]], center: np.ndarray, joint: int, a
         columns |= _named("F_", plant.task_space, "N", force)
         columns |= _named("simulated ", names, position_unit, simulated.q)
         columns |= _named("simulated tau_", names, effort_unit, run.u)
-        series.append(Series(label, columns))
+        series.append(Series(label, columns | report.columns, report.contacts))
         peaks = ", ".join(f"|tau_{n}| <= {_peak(tau[:, i]):.4g}" for i, n in enumerate(names))
         summary.append(f"{label}: peak torques {peaks} {effort_unit}; peak TCP forces "
                        + ", ".join(f"|F_{c}| <= {np.nanmax(np.abs(force[:, i])):.4g}"
@@ -172,6 +254,7 @@ def sine(designs: Sequence[tuple[str, Plant]], center: np.ndarray, joint: int, a
                            "actuator carries the following links)")
         summary.append(f"  forward simulation under computed torque ({timing.integrator}): max joint error "
                        f"{error:.3g} {position_unit}, energy balance drift {balance_drift(system, run):.3g}")
+        summary += report.lines
     figures = [
         FigureSpec("fig-8-21-torques.png", "Seed Fig. 8.21: torques on the joints",
                    tuple((f"tau_{n} [{effort_unit}]", (f"tau_{n} [{effort_unit}]",)) for n in names)),
@@ -185,11 +268,12 @@ def sine(designs: Sequence[tuple[str, Plant]], center: np.ndarray, joint: int, a
 
 
 def tracking(label: str, plant: Plant, q_start: np.ndarray, radius: float, timing: Timing,
-             bandwidth: float = 50.0) -> ScenarioResult:
+             bandwidth: float = 50.0, stops: StopSettings | None = None) -> ScenarioResult:
     """A TCP circle followed by computed-torque control (seed Fig. 8.17)."""
     reference = task_circle(plant, q_start, radius, timing.duration)
-    system = ArmSystem(plant)
+    system = _system(plant, q_start, stops, timing)
     run = integrate(system, ComputedTorque(system, reference, bandwidth), system.initial(q_start), timing)
+    report = stop_report(system, run, timing, q_start)
     q_r = reference(run.t)[0]
     s = system.split(run.x)
     p_r, p = plant.point(q_r), plant.point(s.q)
@@ -207,17 +291,17 @@ def tracking(label: str, plant: Plant, q_start: np.ndarray, radius: float, timin
                f"  max joint error {_peak(s.q - q_r):.3g} {position_unit}, max TCP error "
                f"{_peak(columns['TCP error [m]']):.3g} m",
                "  peak torques " + ", ".join(f"|tau_{n}| <= {_peak(run.u[:, i]):.4g}" for i, n in enumerate(names))
-               + f" {effort_unit}; energy balance drift {balance_drift(system, run):.3g}"]
+               + f" {effort_unit}; energy balance drift {balance_drift(system, run):.3g}"] + report.lines
     figures = [FigureSpec("tracking.png", f"Trajectory following (seed Fig. 8.17): {plant.name}", (
         ("TCP [m]", tuple(f"{prefix}TCP {c} [m]" for c in plant.point_axes for prefix in ("reference ", "")))
         , ("TCP error [m]", ("TCP error [m]",)),
         (f"torque [{effort_unit}]", tuple(f"tau_{n} [{effort_unit}]" for n in names))))]
-    return ScenarioResult("tracking", [Series(label, columns)], figures, summary)
+    return ScenarioResult("tracking", [Series(label, columns | report.columns, report.contacts)], figures, summary)
 
 
 def haptic_wall(label: str, plant: Plant, q_start: np.ndarray, wall_offset: float, push: float, timing: Timing, *,
                 frequency: float = 1.0, stiffness: float = 1000.0, damping: float = 2.0, force_gain: float = 0.0,
-                hand: dict[str, float] | None = None) -> ScenarioResult:
+                hand: dict[str, float] | None = None, stops: StopSettings | None = None) -> ScenarioResult:
     """A hand pushes the TCP into a virtual wall rendered in the loop (seed Fig. 8.18).
 
     The wall's normal is the first translational task axis; its surface lies ``wall_offset``
@@ -231,9 +315,10 @@ def haptic_wall(label: str, plant: Plant, q_start: np.ndarray, wall_offset: floa
     normal[0] = 1.0
     user = MassSpringDamperUser(sine_intent(p0, normal, push, frequency), **(hand or {}))
     wall = Wall(normal, float(p0 @ normal) + wall_offset, stiffness, damping)
-    system = ArmSystem(plant, user)
+    system = _system(plant, q_start, stops, timing, user)
     renderer = WallRenderer(system, wall, force_gain)
     run = integrate(system, renderer, system.initial(q_start), timing)
+    report = stop_report(system, run, timing, q_start)
     s = system.split(run.x)
     p = plant.point(s.q)
     desired, sensed = zip(*(renderer.desired_and_sensed(t, x) for t, x in zip(run.t, run.x)))
@@ -254,20 +339,24 @@ def haptic_wall(label: str, plant: Plant, q_start: np.ndarray, wall_offset: floa
                f"{_peak(sensed[:, 0]):.3g} N (desired {_peak(desired[:, 0]):.3g} N), max |F_desired - F_felt| "
                f"{_peak(desired - sensed):.3g} N",
                "  peak torques " + ", ".join(f"|tau_{n}| <= {_peak(run.u[:, i]):.4g}" for i, n in enumerate(names))
-               + f" {effort_unit}; energy balance drift {balance_drift(system, run):.3g}"]
+               + f" {effort_unit}; energy balance drift {balance_drift(system, run):.3g}"] + report.lines
     figures = [FigureSpec("haptic-wall.png", f"Haptic loop with a virtual wall (seed Fig. 8.18): {plant.name}", (
         ("position [m]", (f"TCP {axes[0]} [m]", f"hand {axes[0]} [m]")),
         ("penetration [m]", ("penetration [m]",)),
         ("force on the hand [N]", (f"F_desired_{axes[0]} [N]", f"F_felt_{axes[0]} [N]")),
         (f"torque [{effort_unit}]", tuple(f"tau_{n} [{effort_unit}]" for n in names))))]
-    return ScenarioResult("haptic-wall", [Series(label, columns)], figures, summary)
+    return ScenarioResult("haptic-wall", [Series(label, columns | report.columns, report.contacts)], figures,
+                          summary)
 
 
-def free_swing(label: str, plant: Plant, q_start: np.ndarray, timing: Timing) -> ScenarioResult:
-    """No torques, released at rest: the energy k + u is conserved without friction."""
-    system = ArmSystem(plant)
+def free_swing(label: str, plant: Plant, q_start: np.ndarray, timing: Timing,
+               stops: StopSettings | None = None) -> ScenarioResult:
+    """No torques, released at rest: the energy k + u is conserved without friction and stops
+    (with stops: k + u + U + D, U stored in and D dissipated by them)."""
+    system = _system(plant, q_start, stops, timing)
     zero = np.zeros(plant.dof)
     run = integrate(system, lambda t, x: zero, system.initial(q_start), timing)
+    report = stop_report(system, run, timing, q_start)
     s = system.split(run.x)
     energy = plant.energy(s.q, s.qd)
     names = plant.coordinates
@@ -276,13 +365,16 @@ def free_swing(label: str, plant: Plant, q_start: np.ndarray, timing: Timing) ->
     columns |= _named("", names, position_unit, s.q)
     columns["energy k + u [J]"] = energy
     columns["work of friction [J]"] = s.work
-    balance = energy - s.work
+    balance = energy + system.stop_energy(s) - s.work
+    columns |= report.columns
     columns["balance drift [J]"] = balance - balance[0]
     summary = [f"{label}: free swing for {timing.duration:g} s ({timing.integrator}, {run.evaluations} evaluations)",
                f"  energy change {float(energy[-1] - energy[0]):.3g} J (friction work {float(s.work[-1]):.3g} J), "
-               f"energy balance drift {balance_drift(system, run, energy):.3g}"]
-    figures = [FigureSpec("free-swing.png", f"Free swing: {plant.name}", (
-        (f"joint [{position_unit}]", tuple(f"{n} [{position_unit}]" for n in names)),
-        ("energy [J]", ("energy k + u [J]",)),
-        ("balance drift [J]", ("balance drift [J]",))))]
-    return ScenarioResult("free-swing", [Series(label, columns)], figures, summary)
+               f"energy balance drift {balance_drift(system, run, energy):.3g}"] + report.lines
+    stopped = tuple(c for c in report.columns if c.startswith("penetration "))
+    panels = ((f"joint [{position_unit}]", tuple(f"{n} [{position_unit}]" for n in names)),
+              ("energy [J]", ("energy k + u [J]", "stop energy stored [J]", "stop energy dissipated [J]")))
+    panels += ((f"penetration [{position_unit}]", stopped),) if stopped else ()
+    figures = [FigureSpec("free-swing.png", f"Free swing: {plant.name}",
+                          panels + (("balance drift [J]", ("balance drift [J]",)),))]
+    return ScenarioResult("free-swing", [Series(label, columns, report.contacts)], figures, summary)

@@ -1,0 +1,104 @@
+"""What the joint stops did in a run: contact intervals, time in contact, penetration, energy.
+
+Contact intervals come from the located mode switches of an adaptive run (exact instants,
+:class:`~symkin.simulation.stops.ContactModes`), or, for a fixed-step run, from the sampled
+penetrations, the crossing instant interpolated linearly between the two samples around it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from symkin.simulation.integrate import Run
+from symkin.simulation.stops import JointStops
+from symkin.simulation.system import ArmSystem
+
+SIDES = {-1: "lower", 1: "upper"}
+
+
+@dataclass(frozen=True)
+class Contact:
+    """Joint ``joint`` (name) was beyond its ``side`` ("lower" or "upper") limit from ``start`` to ``end`` [s]."""
+
+    joint: str
+    side: str
+    start: float
+    end: float
+
+
+def intervals(stops: JointStops, run: Run) -> list[Contact]:
+    """The contacts of ``run`` in time order (a contact still open at the end ends there)."""
+    if run.switches:
+        return _from_switches(stops, run)
+    q, t = run.x[:, :len(stops.names)], run.t
+    found = []
+    for j, name in enumerate(stops.names):
+        for side, label in SIDES.items():
+            d = (stops.lower[j] - q[:, j]) if side < 0 else (q[:, j] - stops.upper[j])
+            if not np.isfinite(d).all():
+                continue
+            inside = d > 0.0
+            edges = np.flatnonzero(np.diff(inside.astype(int)))
+            # crossing of d = 0 between samples k and k + 1, linearly interpolated
+            crossings = [t[k] + (t[k + 1] - t[k]) * d[k] / (d[k] - d[k + 1]) for k in edges]
+            marks = ([t[0]] if inside[0] else []) + crossings + ([t[-1]] if inside[-1] else [])
+            found += [Contact(name, label, float(a), float(b)) for a, b in zip(marks[::2], marks[1::2])]
+    return sorted(found, key=lambda c: c.start)
+
+
+def _from_switches(stops: JointStops, run: Run) -> list[Contact]:
+    q0 = run.x[0, :len(stops.names)]
+    open_ = {(j, int(s)): float(run.t[0]) for j, s in enumerate(stops.contact(q0)) if s}
+    found = []
+    for switch in run.switches:
+        g = switch.guard
+        key = (g.joint, g.side)
+        if g.entering:
+            open_[key] = switch.t
+        elif key in open_:
+            found.append(Contact(stops.names[g.joint], SIDES[g.side], open_.pop(key), switch.t))
+    found += [Contact(stops.names[j], SIDES[s], start, float(run.t[-1])) for (j, s), start in open_.items()]
+    return sorted(found, key=lambda c: c.start)
+
+
+def columns(system: ArmSystem, run: Run, unit: tuple[str, str]) -> dict[str, np.ndarray]:
+    """Per-sample columns: penetration and stop torque per stopped joint, stored and dissipated energy."""
+    stops = system.stops
+    s = system.split(run.x)
+    depth = stops.depth(s.q)
+    tau, _ = stops.torque_and_dissipation(s.q, s.qd)
+    position, effort = unit
+    out = {}
+    for j, name in enumerate(stops.names):
+        if stops.stiffness[j] > 0.0:
+            out[f"penetration {name} [{position}]"] = depth[:, j]
+            out[f"tau_stop_{name} [{effort}]"] = tau[:, j]
+    out["stop energy stored [J]"] = stops.stored_energy(s.q)
+    out["stop energy dissipated [J]"] = s.dissipated
+    return out
+
+
+def summary(system: ArmSystem, run: Run, contacts: list[Contact], unit: tuple[str, str]) -> list[str]:
+    """Lines: per stopped joint the number of contacts, time in contact and peak penetration."""
+    stops = system.stops
+    depth = stops.depth(system.split(run.x).q)
+    lines, free = [], []
+    for j, name in enumerate(stops.names):
+        if stops.stiffness[j] <= 0.0:
+            continue
+        mine = [c for c in contacts if c.joint == name]
+        if not mine:
+            free.append(name)
+            continue
+        parts = [f"{sum(c.side == side for c in mine)} x {side} {sum(c.end - c.start for c in mine if c.side == side):.4g} s"
+                 for side in SIDES.values() if any(c.side == side for c in mine)]
+        lines.append(f"  {name}: in contact {', '.join(parts)}; max penetration {np.max(depth[:, j]):.3g} {unit[0]} "
+                     f"(at the samples)")
+    if free:
+        lines.append(f"  {', '.join(free)}: no contact with {'its' if len(free) == 1 else 'their'} stops")
+    s = system.split(run.x[-1])
+    lines.append(f"  stops: {float(stops.stored_energy(s.q)):.3g} J stored at the end, {float(s.dissipated):.3g} J "
+                 "dissipated")
+    return lines

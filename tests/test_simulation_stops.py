@@ -1,0 +1,221 @@
+"""Joint stops in the simulation: the linear spring-damper beyond the joint limits.
+
+Oracles: the closed forms of the linear oscillator d'' + 2 zeta omega d' + omega^2 d = 0
+(contact time pi / omega_d, restitution exp(-zeta pi / sqrt(1 - zeta^2)), peak penetration)
+with the effective inertia 1 / (M^-1)_ii at the contact, the static rest k d = G(q) on the
+stops, the energy balance k + u + U + D - w, stops off as the reference inside the limits,
+and the growth or decay of a perturbation as RK4's stability region predicts.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+
+import numpy as np
+import pytest
+
+from symkin import load
+from symkin.cli import main
+from symkin.simulation import ArmSystem, ComputedTorque, JointSine, Plant, run_adaptive, run_sampled, scenarios
+from symkin.simulation.contacts import intervals
+from symkin.simulation.stops import (ContactModes, JointStops, effective_inertia, mass_matrix, peak_penetration,
+                                     restitution, rk4_stability, stop_configurations)
+from tests.conftest import GENERATED_DIR, MODELS_DIR
+
+START = np.radians([45.0, 45.0])
+ZERO = np.zeros(2)
+
+
+@pytest.fixture(scope="module")
+def plant():
+    return Plant(load(GENERATED_DIR / "planar_2r"))
+
+
+@pytest.fixture(scope="module")
+def impact():
+    """planar_2r without gravity, theta2 thrown at -3 rad/s onto its lower stop, theta1 free (DOP853)."""
+    plant = Plant(load(GENERATED_DIR / "planar_2r").bind(g=0.0))
+    q0, qd0 = np.radians([45.0, 10.0]), np.array([0.0, -3.0])
+    stops = JointStops.from_plant(plant, q0)
+    system = ArmSystem(plant, stops=stops)
+    run = run_adaptive(system.derivative, lambda t, x: ZERO, system.initial(q0, qd0), np.linspace(0.0, 0.1, 2001),
+                       modes=ContactModes(stops))
+    return plant, stops, system, run
+
+
+def test_defaults_follow_from_the_effective_inertia(plant):
+    stops = JointStops.from_plant(plant, START, time_constant=0.004, damping_ratio=0.3)
+    M = plant.model.mass_matrix(START)                      # the generated mass matrix, independently
+    np.testing.assert_allclose(mass_matrix(plant, START), M, rtol=1e-12)
+    m = 1.0 / np.diag(np.linalg.inv(M))
+    np.testing.assert_allclose(stops.stiffness, m / 0.004 ** 2, rtol=1e-12)
+    np.testing.assert_allclose(stops.damping, 2 * 0.3 * m / 0.004, rtol=1e-12)
+    np.testing.assert_allclose(stops.lower, [0.0, 0.0])
+    np.testing.assert_allclose(stops.upper, [np.pi / 2, np.pi / 2])
+    custom = JointStops.from_plant(plant, START, stiffness={"theta2": 50.0}, damping={"theta1": 0.0})
+    assert custom.stiffness[1] == 50.0 and custom.damping[0] == 0.0
+
+
+def test_inside_the_limits_the_stops_change_nothing(plant):
+    stops = JointStops.from_plant(plant, START)
+    rng = np.random.default_rng(3)
+    q = rng.uniform(0.0, np.pi / 2, (50, 2))
+    tau, _ = stops.torque_and_dissipation(q, rng.normal(size=(50, 2)))
+    assert np.all(tau == 0.0) and np.all(stops.stored_energy(q) == 0.0)
+    reference = JointSine(START, 1, np.radians(30), 1.0)
+    q0, qd0, _ = reference(0.0)
+    runs = []
+    for s in (None, stops):
+        system = ArmSystem(plant, stops=s)
+        runs.append(run_sampled(system.derivative, ComputedTorque(system, reference), system.initial(q0, qd0),
+                                1e-3, 300))
+    np.testing.assert_array_equal(runs[1].x[:, :4], runs[0].x[:, :4])      # bit for bit
+    np.testing.assert_array_equal(runs[1].u, runs[0].u)
+    assert np.all(runs[1].x[:, -1] == 0.0)                                   # nothing dissipated
+    # DOP853 with contact modes: no switch, the same motion to the tolerance
+    timing = scenarios.Timing(0.5, 200, "dop853")
+    results = [scenarios.sine([("", plant)], START, 1, np.radians(30), 1.0, timing, stops=s)
+               for s in (None, scenarios.StopSettings())]
+    on, off = results[1].series[0], results[0].series[0]
+    assert on.contacts == ()
+    np.testing.assert_allclose(on.columns["simulated theta2 [rad]"], off.columns["simulated theta2 [rad]"], atol=1e-9)
+    assert np.all(on.columns["tau_stop_theta2 [N m]"] == 0.0)
+    assert "  theta1, theta2: no contact with their stops" in results[1].summary
+
+
+def test_an_impact_follows_the_linear_spring_damper_closed_forms(impact):
+    plant, stops, system, run = impact
+    assert [(s.guard.joint, s.guard.side, s.guard.entering) for s in run.switches] == [(1, -1, True), (1, -1, False)]
+    enter, leave = run.switches
+    assert abs(enter.x[1]) < 1e-12 and abs(leave.x[1]) < 1e-12              # located on the limit
+    # the contact oscillator: effective inertia of theta2 with theta1 free, at the contact
+    m = effective_inertia(mass_matrix(plant, enter.x[:2]))[1]
+    k, c = stops.stiffness[1], stops.damping[1]
+    omega, zeta = math.sqrt(k / m), c / (2 * math.sqrt(k * m))
+    assert 0.3 < zeta < 0.8                                                   # underdamped: it bounces
+    v = -enter.x[3]
+    np.testing.assert_allclose(leave.t - enter.t, math.pi / (omega * math.sqrt(1 - zeta ** 2)), rtol=1e-3)
+    np.testing.assert_allclose(leave.x[3] / v, restitution(zeta), rtol=1e-3)
+    peak = np.max(stops.depth(run.x[:, :2])[:, 1])                           # samples every 50 us
+    np.testing.assert_allclose(peak, peak_penetration(v, omega, zeta), rtol=2e-3)
+    assert peak < v * math.sqrt(m / k)                                        # below the undamped bound v / omega
+
+
+def test_energy_balance_holds_with_contacts(impact, plant):
+    _, stops, system, run = impact
+    s = system.split(run.x)
+    energy = system.plant.energy(s.q, s.qd)
+    balance = system.balance(run.x)
+    assert np.ptp(balance) < 1e-9 * energy[0]
+    lost = energy[0] - energy[-1]
+    np.testing.assert_allclose(s.dissipated[-1], lost, rtol=1e-9)             # the damper has what was lost
+    # theta1's momentum p_1 is untouched by the stop: the loss is 1/2 m v^2 (1 - e^2) of the contact oscillator
+    enter = run.switches[0]
+    m = effective_inertia(mass_matrix(system.plant, enter.x[:2]))[1]
+    e = run.switches[1].x[3] / -enter.x[3]
+    np.testing.assert_allclose(lost, 0.5 * m * enter.x[3] ** 2 * (1 - e ** 2), rtol=1e-3)
+    # during the contact the spring holds 1/2 k d_peak^2 at the peak of the oscillator
+    k, c = stops.stiffness[1], stops.damping[1]
+    peak = peak_penetration(-enter.x[3], math.sqrt(k / m), c / (2 * math.sqrt(k * m)))
+    np.testing.assert_allclose(np.max(stops.stored_energy(s.q)), 0.5 * k * peak ** 2, rtol=4e-3)
+
+
+@pytest.fixture(scope="module")
+def fall(plant):
+    """planar_2r released at rest under gravity from 45, 45 deg (DOP853 with contact events)."""
+    return scenarios.free_swing("", plant, START, scenarios.Timing(1.2, 200, "dop853"), stops=scenarios.StopSettings())
+
+
+def test_an_arm_released_under_gravity_comes_to_rest_on_its_stops(plant, fall):
+    series = fall.series[0]
+    c = series.columns
+    stops = JointStops.from_plant(plant, START)
+    q = np.stack([c["theta1 [rad]"], c["theta2 [rad]"]], -1)
+    # at rest on both lower stops: k d = G(q) (m_eff g / k), q = -d
+    depth = np.stack([c["penetration theta1 [rad]"], c["penetration theta2 [rad]"]], -1)
+    np.testing.assert_allclose(depth[-1], plant.gravity(q[-1]) / stops.stiffness, rtol=1e-6)
+    np.testing.assert_allclose(q[-1], -depth[-1], rtol=1e-12)
+    assert np.all(depth[-1] > 1e-4)
+    # no stop takes more than the energy released above the lowest point, (0, 0) (u = 0):
+    # 1/2 k d^2 <= E0 + G_max d  ->  d <= (G_max + sqrt(G_max^2 + 2 k E0)) / k
+    e0 = c["energy k + u [J]"][0]
+    g_max = plant.gravity(np.zeros(2))
+    bound = (g_max + np.sqrt(g_max ** 2 + 2 * stops.stiffness * e0)) / stops.stiffness
+    assert np.all(np.max(depth, axis=0) < bound)
+    assert np.all(np.max(depth, axis=0) > 10 * depth[-1])                     # real impacts, not just sagging
+    # both joints met their lower stops, and still rest on them
+    joints = {(contact.joint, contact.side) for contact in series.contacts}
+    assert {("theta1", "lower"), ("theta2", "lower")} <= joints
+    assert {contact.end for contact in series.contacts if contact.side == "lower"} >= {1.2}
+    np.testing.assert_allclose(c["balance drift [J]"], 0.0, atol=1e-9 * e0)
+    np.testing.assert_allclose(c["stop energy dissipated [J]"][-1] + c["stop energy stored [J]"][-1],
+                               e0 - c["energy k + u [J]"][-1], rtol=1e-8)
+    assert any(line.strip().startswith("theta1: in contact") for line in fall.summary)
+
+
+def test_sampled_contacts_agree_with_the_located_events(plant, fall):
+    """RK4 contact intervals (interpolated between samples) against DOP853's events: the first contact."""
+    stops = JointStops.from_plant(plant, START)
+    system = ArmSystem(plant, stops=stops)
+    run = run_sampled(system.derivative, lambda t, x: ZERO, system.initial(START), 1e-3, 200, substeps=4)
+    first = intervals(stops, run)[0]
+    exact = fall.series[0].contacts[0]
+    assert (first.joint, first.side) == (exact.joint, exact.side)
+    assert abs(first.start - exact.start) < 1e-4 and abs(first.end - exact.end) < 1e-3
+
+
+def test_rk4_is_stable_in_contact_exactly_where_the_condition_says(plant):
+    stops = JointStops.from_plant(plant, START, time_constant=3e-4)
+    system = ArmSystem(plant, stops=stops)
+    depth = np.zeros(2)
+    for _ in range(50):                                                       # rest on the stops: k d = G(-d)
+        depth = plant.gravity(-depth) / stops.stiffness
+    rest = -depth
+    stability = rk4_stability(stops, mass_matrix(plant, rest), 1e-3)
+    assert not stability.stable and stability.substeps_needed > 1
+    deviation = {}
+    for substeps in (stability.substeps_needed - 1, stability.substeps_needed):
+        run = run_sampled(system.derivative, lambda t, x: ZERO, system.initial(rest + 1e-3 * depth), 1e-3, 100,
+                          substeps)
+        deviation[substeps] = np.max(np.abs(run.x[:, :2] - rest), axis=1)
+    unstable, stable = deviation.values()
+    assert unstable[-1] > 100 * unstable[0]
+    assert stable[-1] < stable[0]
+    assert rk4_stability(stops, mass_matrix(plant, rest), 1e-3, stability.substeps_needed).stable
+    # the check before a run, from the start configuration, covers the rest on the stops through the corners
+    corners = np.array([mass_matrix(plant, c) for c in stop_configurations(stops, START)])
+    assert rk4_stability(stops, corners, 1e-3).substeps_needed >= stability.substeps_needed
+    assert rk4_stability(stops, mass_matrix(plant, START), 1e-3).substeps_needed < stability.substeps_needed
+
+
+def test_cli_reports_stops_and_warns_before_an_unstable_loop(tmp_path, capsys):
+    out = tmp_path / "swing"
+    assert main(["simulate", str(GENERATED_DIR / "planar_2r"), "--scenario", "free-swing", "--duration", "0.4",
+                 "--rate", "200", "-o", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "joint stops: linear spring-damper" in printed
+    assert re.search(r"theta1: in contact \d+ x lower [0-9.]+ s; max penetration", printed)
+    header = (out / "free-swing-1-modelparameters.csv").read_text().splitlines()[1]
+    assert "penetration theta1 [rad]" in header and "stop energy dissipated [J]" in header
+    assert (out / "free-swing.png").read_bytes()[:4] == b"\x89PNG"
+    off = tmp_path / "off"
+    assert main(["simulate", str(GENERATED_DIR / "planar_2r"), "--scenario", "free-swing", "--duration", "0.1",
+                 "--rate", "200", "--joint-stops", "off", "--no-figure", "-o", str(off)]) == 0
+    assert "penetration" not in (off / "free-swing-1-modelparameters.csv").read_text()
+    assert main(["simulate", str(GENERATED_DIR / "planar_2r"), "--scenario", "free-swing", "--duration", "0.01",
+                 "--integrator", "rk4", "--stop-time-constant", "0.0003", "--no-figure", "-o", str(off)]) == 0
+    captured = capsys.readouterr()
+    assert "warning: planar_2r: RK4 at h = 1 ms is unstable in contact" in captured.err
+    assert "UNSTABLE" in captured.out
+
+
+def test_stops_on_a_model_without_limits_exit_with_code_2(tmp_path, capsys):
+    source = tmp_path / "planar_2r.yaml"
+    source.write_text((MODELS_DIR / "planar_2r.yaml").read_text().replace(", [0, deg(90)]]", "]"))
+    out = tmp_path / "out"
+    with pytest.raises(SystemExit) as exit_info:
+        main(["simulate", str(source), "--scenario", "free-swing", "--joint-stops", "on", "-o", str(out)])
+    assert exit_info.value.code == 2
+    assert "--joint-stops on: planar_2r declares no joint limits" in capsys.readouterr().err
+    assert not out.exists()
