@@ -85,6 +85,7 @@ def test_tcp_force_is_the_generated_tcp_force(arm, seed_result):
     q = np.stack([c["theta1 [rad]"], c["theta2 [rad]"]], -1)
     t = c["t [s]"]
     q_r, qd_r, qdd_r = JointSine(SEED_CENTER, 1, np.radians(30), 1.0)(t)
+    np.testing.assert_allclose(q, q_r, rtol=0, atol=1e-12)  # the CSV's joints are the prescribed motion
     np.testing.assert_allclose(arm.tcp_force(q_r, qd_r, qdd_r), np.stack([c["F_x [N]"], c["F_y [N]"]], -1),
                                rtol=1e-10, atol=1e-12)
 
