@@ -251,6 +251,11 @@ class ConstantOrientation:
         return self.rates @ conditioning.from_inverse(J_inverse)
 
 
+def home_position(model: Any) -> np.ndarray:
+    """The platform centre (x, y, z) of the home pose ``parallel.home``."""
+    return _home(model)[:3]
+
+
 def orientation_text(model: ConstantOrientation) -> str:
     """'0, 10, 0 deg': the constant orientation (roll, pitch, yaw) in degrees."""
     return ", ".join(f"{a:g}" for a in np.degrees(model.orientation)) + " deg"

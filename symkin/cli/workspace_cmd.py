@@ -39,7 +39,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seed", type=int, default=0, help="seed of random/sobol sampling (default: %(default)s)")
     p.add_argument("-o", "--out", metavar="FIGURE", help="workspace figure (default: MODEL_NAME-workspace.png)")
     p.add_argument("--map", metavar="FIGURE", help="also draw 1/kappa over the workspace into FIGURE "
-                                                   "(first design)")
+                                                   "(first design); a platform at a constant orientation also "
+                                                   "gets FIGURE-sections (x-y, x-z, y-z through the home position)")
     p.add_argument("--no-figure", action="store_true", help="print the report only")
     analysis_args.add_length_argument(p)
     add_orientation_argument(p)
@@ -106,11 +107,11 @@ def run(args: argparse.Namespace) -> int:
                     box = workspace.bounding_box(model, limits=limits)
                     progress(f"Cartesian grid {label}")
                     grid = _cartesian_grid(model, box, limits, length)
-                    cloud = _grid_cloud(model, grid[0], limits)
+                    cloud = _boundary_cloud(model, grid[0], limits)  # drawn: the workspace's surface
                     report = _report(model, cloud, inv_kappa, limits, progress, box) + _cartesian_report(*grid)
                     grids.append(grid)
-                    sampled = (f"{len(cloud.q)} reachable cells of a Cartesian grid at roll, pitch, yaw = "
-                               f"{parallel.orientation_text(model)}")
+                    sampled = (f"{int(grid[0].occupied.sum())} reachable cells of a Cartesian grid at roll, pitch, "
+                               f"yaw = {parallel.orientation_text(model)}")
                 else:
                     cloud = workspace.sample_workspace(model, args.samples, method=method, limits=limits,
                                                        seed=args.seed)
@@ -146,12 +147,26 @@ def run(args: argparse.Namespace) -> int:
             if grids:
                 path = plots.plot_index_slices(*grids[0], args.map, scale=scale, unit=args.unit,
                                                title=f"{title}: Cartesian grid, reachability by ik")
+                if isinstance(models[0], parallel.ConstantOrientation):
+                    sections = plots.plot_index_sections(
+                        *grids[0], sections_path(args.map), parallel.home_position(models[0]), scale=scale,
+                        unit=args.unit, title=f"{title}: sections through the home position at roll, pitch, yaw "
+                                              f"= {parallel.orientation_text(models[0])}")
+                    print(f"1/kappa sections: {sections}")
             else:
                 path = plots.plot_index_map(layer.cloud, values, args.map, outline=layer.outline, scale=scale,
                                             unit=args.unit, title=title)
             print(f"1/kappa map: {path}")
     print(f"done in {time.perf_counter() - start:.2f} s")
     return 0
+
+
+def sections_path(path: str) -> str:
+    """The file of the sections through the home position, next to the --map FIGURE: map.png -> map-sections.png."""
+    from pathlib import Path
+
+    figure = Path(path)
+    return str(figure.with_name(f"{figure.stem}-sections{figure.suffix}"))
 
 
 def _label(model, values: dict[str, float], unit: str) -> str:
@@ -171,11 +186,11 @@ def _cartesian_grid(model, box, limits, length):
     return workspace.index_grid(model, inverse.parallel_inverse(model), box, cell, limits=limits, length=length)
 
 
-def _grid_cloud(model, occupancy, limits):
-    """The reachable cell centres of a Cartesian grid and their joint coordinates, as a point cloud."""
+def _boundary_cloud(model, occupancy, limits):
+    """The centres of the boundary cells of a Cartesian grid and their joint coordinates, as a point cloud."""
     from symkin.analysis import inverse, mechanism, workspace
 
-    points = occupancy.centers()[occupancy.occupied]
+    points = occupancy.centers()[occupancy.boundary()]
     q, _ = inverse.feasible_configurations(inverse.parallel_inverse(model), points,
                                            mechanism.joint_limits(model, limits), mechanism.revolute_mask(model))
     return workspace.WorkspaceCloud(q, points, ("x", "y", "z"))
@@ -188,8 +203,8 @@ def _cartesian_report(occupancy, values) -> list[str]:
     boundary = occupancy.boundary()
     interior = occupancy.interior()
     lines = [f"volume: {occupancy.measure()} m^3 (Cartesian grid of {occupancy.cell[0]:.3g} m cells, reachability "
-             f"by ik in the working mode: between interior and all reachable cells); {int(boundary.sum())} "
-             "boundary cells"]
+             f"by ik in the working mode: between interior and all reachable cells, a bracket unless thin parts of the "
+             f"workspace fall between cell centres); {int(boundary.sum())} boundary cells"]
     if interior.any():
         lines.append(f"1/kappa at the cell centres: min {np.nanmin(values[boundary]):.4g} on boundary cells, "
                      f"min {np.nanmin(values[interior]):.4g} on interior cells")
