@@ -231,7 +231,9 @@ def test_workspace_command_reports_the_volume_and_draws_the_figures(tmp_path, ca
     assert "reachable cells of a Cartesian grid at roll, pitch, yaw = 0, 0, 0 deg" in out
     volume = float(re.search(r"volume: ([0-9.e-]+) \+- ([0-9.e-]+) m\^3 \(qmc", out).group(1))
     assert abs(volume - oracle[0]) < 0.03 * oracle[0]
-    assert cloud.read_bytes()[:8] == PNG and kappa_map.read_bytes()[:8] == PNG
+    sections = tmp_path / "map-sections.png"
+    assert f"1/kappa sections: {sections}" in out
+    assert all(path.read_bytes()[:8] == PNG for path in (cloud, kappa_map, sections))
 
 
 def test_gci_command_integrates_over_the_cartesian_domain_at_the_given_orientation(capsys):

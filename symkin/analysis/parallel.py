@@ -22,6 +22,14 @@ actuator angles through a leg singularity det J_q = 0) are outside; at that boun
 the working mode: a configuration or point counts only if its passive joint variables,
 found from the generated loop closure on the home assembly's branch, are within them
 (:mod:`symkin.analysis.passive`; unresolved poses count as unreachable, with a warning).
+
+**Pose platforms** (task space x, y, z, roll, pitch, yaw: the Stewart-Gough platform) have
+no closed-form fk and no ``jacobian``, only ``inverse_jacobian``.  They are analysed at a
+constant orientation (:class:`ConstantOrientation`, Gosselin's constant-orientation
+workspace): platform centres p (3 coordinates) in, leg lengths out, the pose in the
+assembly mode of the home pose (sign of det J^-1), the 6 x 6 twist Jacobian for the
+conditioning (homogenized by a characteristic length, :func:`characteristic_length`), and
+the Cartesian domain only.
 """
 
 from __future__ import annotations
@@ -77,8 +85,41 @@ def jacobian_in_working_mode(model: Any, q: np.ndarray) -> tuple[np.ndarray, np.
     return model.jacobian(q, np.where(np.isfinite(p), p, 0.0)), inside
 
 
+class _GeneratedInverse:
+    """The generated closed-form ``ik`` as an :class:`~symkin.analysis.inverse.InverseKinematics`, one branch.
+
+    A point is valid where every leg reaches it (finite ``ik``), the solution is in the
+    working mode (:meth:`in_mode`, on the finite solutions) and the declared passive-joint
+    limits hold.  Subclasses have the fields ``model`` and ``passive_limits``.
+    """
+
+    dimension: int = 3
+    branches: int = 1
+
+    def in_mode(self, q: np.ndarray, points: np.ndarray) -> np.ndarray:
+        """Boolean (N,): the solutions q (N, n) of points (N, 3) are in the working mode."""
+        raise NotImplementedError
+
+    def poses(self, points: np.ndarray) -> tuple[Any, np.ndarray]:
+        """The loaded model whose ``closure`` gives the passive variables, and the task coordinates of points."""
+        return self.model, points
+
+    def solve(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        points = np.asarray(points, dtype=np.float64)
+        with np.errstate(invalid="ignore"):  # NaN where out of reach, as documented
+            q = self.model.ik(points).joints
+        finite = np.isfinite(q).all(axis=-1)
+        valid = np.zeros(len(points), dtype=bool)
+        if finite.any():
+            valid[finite] = self.in_mode(q[finite], points[finite])
+        if self.passive_limits is not None:
+            model, task = self.poses(points)
+            valid = passive.admissible(model, self.passive_limits, q, task, valid)
+        return q[:, None, :], valid[:, None]
+
+
 @dataclass(frozen=True)
-class ParallelInverse:
+class ParallelInverse(_GeneratedInverse):
     """The generated closed-form ``ik`` as an :class:`~symkin.analysis.inverse.InverseKinematics`.
 
     One branch (the model's working mode): a point is valid where every leg reaches it
@@ -94,20 +135,12 @@ class ParallelInverse:
     model: Any
     size: float
     passive_limits: passive.PassiveLimits | None = None
-    dimension: int = 3
-    branches: int = 1
 
-    def solve(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        points = np.asarray(points, dtype=np.float64)
-        with np.errstate(invalid="ignore"):  # NaN where out of reach, as documented
-            q = self.model.ik(points).joints
-            finite = np.isfinite(q).all(axis=-1)
-            p = self.model.fk(np.where(finite[:, None], q, 0.0)).position
-            returns = np.all(np.abs(p - points) <= POSITION_ROUND_TRIP_TOLERANCE * self.size, axis=-1)
-        valid = finite & returns
-        if self.passive_limits is not None:
-            valid = passive.admissible(self.model, self.passive_limits, q, points, valid)
-        return q[:, None, :], valid[:, None]
+    def in_mode(self, q: np.ndarray, points: np.ndarray) -> np.ndarray:
+        """fk(q) returns to the point (the fk branch of the working mode)."""
+        with np.errstate(invalid="ignore"):
+            p = self.model.fk(q).position
+        return np.all(np.abs(p - points) <= POSITION_ROUND_TRIP_TOLERANCE * self.size, axis=-1)
 
 
 def parallel_inverse(model: Any) -> ParallelInverse | ConstantOrientationInverse:
@@ -285,7 +318,7 @@ def home_sign(model: Any) -> float:
 
 
 @dataclass(frozen=True)
-class ConstantOrientationInverse:
+class ConstantOrientationInverse(_GeneratedInverse):
     """The generated ``ik`` of a pose platform at a constant orientation, as an InverseKinematics.
 
     Points are platform centres (x, y, z); joints are the actuator coordinates.  A point is
@@ -305,20 +338,13 @@ class ConstantOrientationInverse:
     model: ConstantOrientation
     sign: float
     passive_limits: passive.PassiveLimits | None = None
-    dimension: int = 3
-    branches: int = 1
 
-    def solve(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        points = np.asarray(points, dtype=np.float64)
-        with np.errstate(invalid="ignore"):  # NaN where out of reach, as documented
-            q = self.model.ik(points).joints
-            finite = np.isfinite(q).all(axis=-1)
-            safe = np.where(finite[:, None], q, 1.0)
-            determinant = np.linalg.det(self.model.inverse_jacobian(safe, points))
-        valid = finite & (self.sign * determinant > 0)
-        if self.passive_limits is not None:
-            valid = passive.admissible(self.model.model, self.passive_limits, q, self.model.poses(points), valid)
-        return q[:, None, :], valid[:, None]
+    def in_mode(self, q: np.ndarray, points: np.ndarray) -> np.ndarray:
+        """det J^-1 has the sign of the home pose's (the assembly mode)."""
+        return self.sign * np.linalg.det(self.model.inverse_jacobian(q, points)) > 0
+
+    def poses(self, points: np.ndarray) -> tuple[Any, np.ndarray]:
+        return self.model.model, self.model.poses(points)
 
 
 def constant_orientation_inverse(model: ConstantOrientation) -> ConstantOrientationInverse:
