@@ -262,3 +262,32 @@ def test_bad_options_exit_with_code_2_and_a_message(arguments, message, capsys):
         main(arguments)
     assert exit_info.value.code == 2
     assert message in capsys.readouterr().err
+
+
+# --- passive-joint limits --------------------------------------------------------------------
+
+
+def test_passive_limits_of_the_base_joints_bound_the_legs_elevation(tmp_path):
+    """U joints limited to ub_2 in [-75, -50] deg: each leg's elevation above the base plane in [50, 75] deg.
+
+    The base U joint turns the leg frame Rz(angle_i) about z (ub_1), then about the new y
+    (ub_2), so the leg's unit vector has the z component -sin(ub_2): elevation = -ub_2.
+    """
+    text = (MODELS_DIR / "stewart.yaml").read_text()
+    plain = "{name: ub, type: U, axes: [[0, 0, 1], [0, 1, 0]]}"
+    assert plain in text
+    path = tmp_path / "stewart.yaml"
+    path.write_text(text.replace(plain, plain[:-1] + ", limits: [null, [deg(-75), deg(-50)]]}"))
+    assert main(["derive", str(path), "-o", str(tmp_path), "--only", "ik,inverse_jacobian,closure,closure_jacobians",
+                 "--backend", "numpy"]) == 0
+    held = parallel.constant_orientation(symkin.load(tmp_path / "stewart"))
+    points = np.random.default_rng(5).uniform([-0.16, -0.16, 0.15], [0.16, 0.16, 0.3], (3000, 3))
+    legs = _legs(points)
+    lengths = np.linalg.norm(legs, axis=-1)
+    elevation = np.degrees(np.arcsin(legs[..., 2] / lengths))
+    stroke = np.all((lengths >= STROKE[0]) & (lengths <= STROKE[1]), axis=-1)
+    expected = stroke & np.all((elevation >= 50) & (elevation <= 75), axis=-1)
+    got = inverse.reachable(inverse.parallel_inverse(held), points, mechanism.joint_limits(held),
+                            mechanism.revolute_mask(held))
+    assert 100 < expected.sum() < 0.8 * stroke.sum()  # the limits cut the workspace
+    np.testing.assert_array_equal(got, expected)
