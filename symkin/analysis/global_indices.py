@@ -85,9 +85,12 @@ def singular(model: Any, q: np.ndarray, *, threshold: float = 0.0, length: float
 def characteristic_length_of(model: Any, limits: np.ndarray | None = None, seed: int = 0) -> float:
     """Characteristic length of a model with a mixed task space, from a Sobol sample of its joint space.
 
-    See :func:`symkin.analysis.conditioning.characteristic_length`.
+    See :func:`symkin.analysis.conditioning.characteristic_length`; a platform at a constant
+    orientation is sampled over its Cartesian workspace (:func:`symkin.analysis.parallel.characteristic_length`).
     """
     limits = mechanism.joint_limits(model) if limits is None else limits
+    if isinstance(model, parallel.ConstantOrientation):  # no fk: sampled over its Cartesian workspace
+        return parallel.characteristic_length(model, limits, seed)
     q = sampling.sobol(limits[:, 0], limits[:, 1], LENGTH_SAMPLES_LOG2, np.random.default_rng(seed))
     return conditioning.characteristic_length(mechanism.jacobian(model, q), mechanism.position_rows(model))
 
@@ -210,7 +213,10 @@ def _integrand(model: Any, *, domain: str, measure: str, index: Index | None, li
 
             box = bounding_box(model, limits=limits)
         description = "Cartesian box with reachability from inverse kinematics, dW = 1_W(x) dx"
-        if mechanism.is_parallel(model):
+        if isinstance(model, parallel.ConstantOrientation):
+            description += (f" (platform centres at roll, pitch, yaw = {parallel.orientation_text(model)}; "
+                            "in the assembly mode of the home pose: sign of det J^-1)")
+        elif mechanism.is_parallel(model):
             description += " (in the working mode: fk(ik(x)) = x)"
         return cartesian_integrand(model, inverse, box, index=index, limits=limits, length=length), description
     raise ValueError(f"unknown domain '{domain}'; choose one of {', '.join(DOMAINS)}")

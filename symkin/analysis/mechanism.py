@@ -121,12 +121,14 @@ def parallel_function(model: Any, name: str):
 
     Raises:
         ValueError: it was not generated (e.g. a Stewart-Gough platform has no closed-form fk
-            and no ``jacobian``, only ``inverse_jacobian``: its analyses are not supported yet).
+            and no ``jacobian``, only ``inverse_jacobian``: it is analysed at a constant
+            orientation, over the Cartesian domain, see :mod:`symkin.analysis.parallel`).
     """
     if name not in model.functions:
         raise ValueError(f"{model.name}: the workspace and GCI analyses of a parallel mechanism need its generated "
                          f"'{name}' (derive it, e.g. --only ik,fk,jacobian); platforms without a closed-form fk "
-                         "(Stewart-Gough) are not analysed yet")
+                         "(Stewart-Gough) are analysed at a constant orientation over the Cartesian domain only "
+                         "(symkin gci --domain cartesian)")
     return getattr(model, name)
 
 

@@ -22,6 +22,14 @@ actuator angles through a leg singularity det J_q = 0) are outside; at that boun
 the working mode: a configuration or point counts only if its passive joint variables,
 found from the generated loop closure on the home assembly's branch, are within them
 (:mod:`symkin.analysis.passive`; unresolved poses count as unreachable, with a warning).
+
+**Pose platforms** (task space x, y, z, roll, pitch, yaw: the Stewart-Gough platform) have
+no closed-form fk and no ``jacobian``, only ``inverse_jacobian``.  They are analysed at a
+constant orientation (:class:`ConstantOrientation`, Gosselin's constant-orientation
+workspace): platform centres p (3 coordinates) in, leg lengths out, the pose in the
+assembly mode of the home pose (sign of det J^-1), the 6 x 6 twist Jacobian for the
+conditioning (homogenized by a characteristic length, :func:`characteristic_length`), and
+the Cartesian domain only.
 """
 
 from __future__ import annotations
@@ -31,7 +39,8 @@ from typing import Any
 
 import numpy as np
 
-from symkin.analysis import mechanism, passive
+from symkin.analysis import conditioning, mechanism, passive, sampling
+from symkin.analysis.limits import within_limits
 from symkin.ik.rotations import wrap_angle
 
 #: Largest |ik(fk(q)) - q| (rad or m) of a configuration in the working mode.  The two
@@ -76,8 +85,41 @@ def jacobian_in_working_mode(model: Any, q: np.ndarray) -> tuple[np.ndarray, np.
     return model.jacobian(q, np.where(np.isfinite(p), p, 0.0)), inside
 
 
+class _GeneratedInverse:
+    """The generated closed-form ``ik`` as an :class:`~symkin.analysis.inverse.InverseKinematics`, one branch.
+
+    A point is valid where every leg reaches it (finite ``ik``), the solution is in the
+    working mode (:meth:`in_mode`, on the finite solutions) and the declared passive-joint
+    limits hold.  Subclasses have the fields ``model`` and ``passive_limits``.
+    """
+
+    dimension: int = 3
+    branches: int = 1
+
+    def in_mode(self, q: np.ndarray, points: np.ndarray) -> np.ndarray:
+        """Boolean (N,): the solutions q (N, n) of points (N, 3) are in the working mode."""
+        raise NotImplementedError
+
+    def poses(self, points: np.ndarray) -> tuple[Any, np.ndarray]:
+        """The loaded model whose ``closure`` gives the passive variables, and the task coordinates of points."""
+        return self.model, points
+
+    def solve(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        points = np.asarray(points, dtype=np.float64)
+        with np.errstate(invalid="ignore"):  # NaN where out of reach, as documented
+            q = self.model.ik(points).joints
+        finite = np.isfinite(q).all(axis=-1)
+        valid = np.zeros(len(points), dtype=bool)
+        if finite.any():
+            valid[finite] = self.in_mode(q[finite], points[finite])
+        if self.passive_limits is not None:
+            model, task = self.poses(points)
+            valid = passive.admissible(model, self.passive_limits, q, task, valid)
+        return q[:, None, :], valid[:, None]
+
+
 @dataclass(frozen=True)
-class ParallelInverse:
+class ParallelInverse(_GeneratedInverse):
     """The generated closed-form ``ik`` as an :class:`~symkin.analysis.inverse.InverseKinematics`.
 
     One branch (the model's working mode): a point is valid where every leg reaches it
@@ -93,39 +135,316 @@ class ParallelInverse:
     model: Any
     size: float
     passive_limits: passive.PassiveLimits | None = None
-    dimension: int = 3
-    branches: int = 1
 
-    def solve(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        points = np.asarray(points, dtype=np.float64)
-        with np.errstate(invalid="ignore"):  # NaN where out of reach, as documented
-            q = self.model.ik(points).joints
-            finite = np.isfinite(q).all(axis=-1)
-            p = self.model.fk(np.where(finite[:, None], q, 0.0)).position
-            returns = np.all(np.abs(p - points) <= POSITION_ROUND_TRIP_TOLERANCE * self.size, axis=-1)
-        valid = finite & returns
-        if self.passive_limits is not None:
-            valid = passive.admissible(self.model, self.passive_limits, q, points, valid)
-        return q[:, None, :], valid[:, None]
+    def in_mode(self, q: np.ndarray, points: np.ndarray) -> np.ndarray:
+        """fk(q) returns to the point (the fk branch of the working mode)."""
+        with np.errstate(invalid="ignore"):
+            p = self.model.fk(q).position
+        return np.all(np.abs(p - points) <= POSITION_ROUND_TRIP_TOLERANCE * self.size, axis=-1)
 
 
-def parallel_inverse(model: Any) -> ParallelInverse:
-    """The closed-form inverse kinematics of a parallel mechanism with a translational platform.
+def parallel_inverse(model: Any) -> ParallelInverse | ConstantOrientationInverse:
+    """The closed-form inverse kinematics of a parallel mechanism, as the Cartesian analyses see it.
+
+    A translational platform (DELTA) gives a :class:`ParallelInverse`; a pose platform held at
+    one orientation (:class:`ConstantOrientation`) a :class:`ConstantOrientationInverse`.
 
     Raises:
-        ValueError: the model is not parallel, its platform also rotates (pose task space),
-            it lacks the generated ``ik`` or ``fk``, or its passive-joint limits are malformed
-            or cannot be evaluated (no generated ``closure``).
+        ValueError: the model is not parallel, its platform also rotates and it was not held at
+            a constant orientation, it lacks the generated ``ik`` or ``fk``, or its passive-joint
+            limits are malformed or cannot be evaluated (no generated ``closure``).
     """
+    if isinstance(model, ConstantOrientation):
+        return constant_orientation_inverse(model)
     if not mechanism.is_parallel(model):
         raise ValueError(f"{model.name}: not a parallel mechanism")
     if tuple(mechanism.task_space(model)) != mechanism.POSITION_COMPONENTS:
-        raise ValueError(f"{model.name}: the Cartesian workspace of a platform that also rotates "
-                         f"(task space {list(mechanism.task_space(model))}) is not analysed yet")
+        raise ValueError(f"{model.name}: the platform also rotates (task space {list(mechanism.task_space(model))}): "
+                         "its Cartesian workspace is analysed at a constant orientation "
+                         "(symkin.analysis.parallel.constant_orientation(model, (roll, pitch, yaw)))")
     _require(model, ("ik", "fk", "jacobian"))
+    size = max(float(np.linalg.norm(_home(model))), 1e-3)
+    return ParallelInverse(model, size, passive.declared_limits(model))
+
+
+def _home(model: Any) -> np.ndarray:
     home = model.manifest["model"]["parallel"].get("home")
     if home is None:
         raise ValueError(f"{model.name}: declare a home pose (parallel.home) to scale the workspace analyses")
-    size = max(float(np.linalg.norm(home)), 1e-3)
-    return ParallelInverse(model, size, passive.declared_limits(model))
+    return np.array(home, dtype=np.float64)
 
+
+# --- pose platforms (Stewart-Gough) at a constant orientation --------------------------------
+
+#: Orientation coordinates of a pose task space: R = Rz(yaw) Ry(pitch) Rx(roll).
+ORIENTATION_COMPONENTS = ("roll", "pitch", "yaw")
+#: Rows of the Jacobian of a platform held at a constant orientation: linear and angular
+#: velocity of the platform frame, in the base frame.
+TWIST_COMPONENTS = ("x", "y", "z", "wx", "wy", "wz")
+#: Smallest |cos(pitch)| of a constant orientation: at pitch = +-90 deg the roll-pitch-yaw
+#: rates do not determine the angular velocity (a representation singularity, not the platform's).
+GIMBAL_TOLERANCE = 1e-6
+#: Largest |l_i^2 - |p - c_i|^2| / size^2 of the sphere-centre identification (see
+#: :func:`leg_sphere_centres`).
+SPHERE_TOLERANCE = 1e-9
+
+
+def angular_velocity_matrix(orientation: np.ndarray) -> np.ndarray:
+    """E (3, 3) with omega = E d(roll, pitch, yaw)/dt, omega in the base frame, R = Rz(yaw) Ry(pitch) Rx(roll).
+
+    omega = e_z dyaw + Rz(yaw) e_y dpitch + Rz(yaw) Ry(pitch) e_x droll, so the columns of E
+    are Rz Ry e_x = (cy cp, sy cp, -sp), Rz e_y = (-sy, cy, 0) and e_z; E = I at roll = pitch =
+    yaw = 0 and det E = cos(pitch).
+    """
+    _, pitch, yaw = orientation
+    cp, sp, cy, sy = np.cos(pitch), np.sin(pitch), np.cos(yaw), np.sin(yaw)
+    return np.array([[cy * cp, -sy, 0.0], [sy * cp, cy, 0.0], [-sp, 0.0, 1.0]])
+
+
+class ConstantOrientation:
+    """A pose platform (task space x, y, z, roll, pitch, yaw) held at one orientation.
+
+    The analyses see a positional parallel mechanism: TCP points are the 3 coordinates of
+    the platform centre (Gosselin's constant-orientation workspace; Merlet, Parallel Robots,
+    ch. 6), the joints are the model's, and
+
+    * ``ik(points)`` is the generated ``ik`` at the poses (points, orientation);
+    * ``jacobian(q, points)`` (6 x 6) is the twist Jacobian, dt = J dq with
+      t = (v, omega): linear velocity of the platform centre and angular velocity, in the
+      base frame.  From the generated J^-1 (dq = J^-1 dp, p with roll-pitch-yaw rates):
+      J = diag(I, E) (J^-1)^-1 (:func:`angular_velocity_matrix`), so kappa does not depend
+      on the angle parametrization; singular J^-1 give J = 0 (1/kappa = 0,
+      :func:`~symkin.analysis.conditioning.from_inverse`).  Its rows mix m/s and rad/s: the
+      conditioning indices homogenize them with a characteristic length (task space
+      ``TWIST_COMPONENTS``).
+
+    Every other attribute (``name``, ``joint_limits``, ``parameters``, generated functions)
+    is the model's; ``bind`` binds the model and keeps the orientation.
+
+    Raises:
+        ValueError: the model is not a pose platform with a generated ``ik`` and
+            ``inverse_jacobian``, or the orientation is not 3 finite angles away from pitch = +-90 deg.
+    """
+
+    def __init__(self, model: Any, orientation) -> None:
+        if isinstance(model, ConstantOrientation):
+            model = model.model
+        if not mechanism.is_parallel(model) or tuple(mechanism.task_space(model)) != (
+                *mechanism.POSITION_COMPONENTS, *ORIENTATION_COMPONENTS):
+            raise ValueError(f"{model.name}: a constant orientation applies to a parallel platform with the task "
+                             f"space x, y, z, roll, pitch, yaw, not {list(mechanism.task_space(model))}")
+        for name in ("ik", "inverse_jacobian"):
+            if name not in model.functions:
+                raise ValueError(f"{model.name}: the constant-orientation analyses need the generated '{name}' "
+                                 "(add it to the scene outputs and derive again)")
+        angles = np.array(orientation, dtype=np.float64).reshape(-1)
+        if angles.shape != (3,) or not np.all(np.isfinite(angles)):
+            raise ValueError(f"{model.name}: the orientation must be 3 finite angles (roll, pitch, yaw in rad), "
+                             f"got {orientation!r}")
+        if abs(np.cos(angles[1])) < GIMBAL_TOLERANCE:
+            raise ValueError(f"{model.name}: pitch = {np.degrees(angles[1]):g} deg is the singularity of the "
+                             "roll-pitch-yaw angles (the angular velocity is not defined by their rates); "
+                             "choose another orientation")
+        self.model = model
+        self.orientation = angles
+        self.rates = np.eye(6)
+        self.rates[3:, 3:] = angular_velocity_matrix(angles)
+        record = dict(model.manifest["model"], task_space=list(TWIST_COMPONENTS))
+        self.manifest = dict(model.manifest, model=record)
+        self.functions = (*model.functions, "jacobian")
+
+    def __getattr__(self, name: str) -> Any:  # the model's name, parameters, joint_limits, generated functions
+        if name == "model":  # not yet set (copy, pickle): no recursion
+            raise AttributeError(name)
+        return getattr(self.model, name)
+
+    def __repr__(self) -> str:
+        return f"<{self.model!r} at the constant orientation roll, pitch, yaw = {orientation_text(self)}>"
+
+    def bind(self, **parameters: float) -> ConstantOrientation:
+        return ConstantOrientation(self.model.bind(**parameters), self.orientation)
+
+    def poses(self, points: np.ndarray) -> np.ndarray:
+        """The poses (..., 6) of platform centres ``points`` (..., 3) at this orientation."""
+        points = np.asarray(points, dtype=np.float64)
+        return np.concatenate([points, np.broadcast_to(self.orientation, (*points.shape[:-1], 3))], axis=-1)
+
+    def ik(self, points: np.ndarray):
+        return self.model.ik(self.poses(points))
+
+    def inverse_jacobian(self, q: np.ndarray, points: np.ndarray) -> np.ndarray:
+        """The generated J^-1 (..., 6, 6) at (q, pose of ``points``): dq = J^-1 d(x, y, z, roll, pitch, yaw)."""
+        return self.model.inverse_jacobian(q, self.poses(points))
+
+    def jacobian(self, q: np.ndarray, points: np.ndarray) -> np.ndarray:
+        """The twist Jacobian J (..., 6, 6) at (q, pose of ``points``); J = 0 where J^-1 is singular or NaN."""
+        J_inverse = self.inverse_jacobian(q, points)
+        finite = np.isfinite(J_inverse).all(axis=(-2, -1))
+        J_inverse = np.where(finite[..., None, None], J_inverse, 0.0)  # unassembled: singular
+        return self.rates @ conditioning.from_inverse(J_inverse)
+
+
+def home_position(model: Any) -> np.ndarray:
+    """The platform centre (x, y, z) of the home pose ``parallel.home``."""
+    return _home(model)[:3]
+
+
+def orientation_text(model: ConstantOrientation) -> str:
+    """'0, 10, 0 deg': the constant orientation (roll, pitch, yaw) in degrees."""
+    return ", ".join(f"{a:g}" for a in np.degrees(model.orientation)) + " deg"
+
+
+def constant_orientation(model: Any, orientation=None) -> ConstantOrientation:
+    """``model`` held at ``orientation`` (roll, pitch, yaw in rad; default: that of ``parallel.home``)."""
+    if orientation is None:
+        orientation = _home(model)[3:]
+    return ConstantOrientation(model, orientation)
+
+
+def home_sign(model: Any) -> float:
+    """The sign of det J^-1 at the home pose ``parallel.home``: the assembly mode analysed.
+
+    Raises:
+        ValueError: the home pose is out of reach or singular.
+    """
+    home = _home(model)
+    with np.errstate(invalid="ignore"):
+        q = model.ik(home).joints
+        determinant = float(np.linalg.det(model.inverse_jacobian(q, home))) if np.all(np.isfinite(q)) else np.nan
+    if not np.isfinite(determinant) or determinant == 0.0:
+        raise ValueError(f"{model.name}: the home pose {home.tolist()} is out of reach or singular "
+                         f"(det J^-1 = {determinant:.3g}); check parallel.home")
+    return float(np.sign(determinant))
+
+
+@dataclass(frozen=True)
+class ConstantOrientationInverse(_GeneratedInverse):
+    """The generated ``ik`` of a pose platform at a constant orientation, as an InverseKinematics.
+
+    Points are platform centres (x, y, z); joints are the actuator coordinates.  A point is
+    valid where every leg reaches it (finite ``ik``), the pose is in the assembly mode of
+    the home pose, det J^-1 having its sign there (the platform cannot change sign
+    without crossing a singularity det J^-1 = 0, e.g. the plane of the base joints, below
+    which lies the mirror image of the workspace), and the declared passive-joint limits
+    hold.  The actuators' limits are applied by the analyses
+    (:func:`symkin.analysis.inverse.feasible_configurations`).
+
+    Attributes:
+        model: the :class:`ConstantOrientation`.
+        sign: det J^-1 at the home pose (:func:`home_sign`).
+        passive_limits: the declared passive-joint limits, None if there are none.
+    """
+
+    model: ConstantOrientation
+    sign: float
+    passive_limits: passive.PassiveLimits | None = None
+
+    def in_mode(self, q: np.ndarray, points: np.ndarray) -> np.ndarray:
+        """det J^-1 has the sign of the home pose's (the assembly mode)."""
+        return self.sign * np.linalg.det(self.model.inverse_jacobian(q, points)) > 0
+
+    def poses(self, points: np.ndarray) -> tuple[Any, np.ndarray]:
+        return self.model.model, self.model.poses(points)
+
+
+def constant_orientation_inverse(model: ConstantOrientation) -> ConstantOrientationInverse:
+    """The inverse kinematics of a platform held at a constant orientation (see :class:`ConstantOrientationInverse`)."""
+    return ConstantOrientationInverse(model, home_sign(model.model), passive.declared_limits(model.model))
+
+
+def leg_sphere_centres(model: ConstantOrientation) -> np.ndarray:
+    """Centres c_i (n, 3) with l_i(p) = |p - c_i| at the constant orientation (distance-form legs).
+
+    A UPS leg's length is |p + R b_i - a_i| (base joint a_i, platform joint b_i), so at a
+    fixed R, l_i^2 is a quadratic in p with c_i = a_i - R b_i.  The centres are read off the
+    generated ``ik`` (c_ik = (l_i^2(-e_k) - l_i^2(e_k)) / 4) and checked at pseudo-random
+    points, so any model whose legs have the distance form is accepted, and nothing else.
+
+    Raises:
+        ValueError: a leg length is not the distance to a fixed point.
+    """
+    size = max(float(np.linalg.norm(_home(model.model)[:3])), 1e-3)
+    steps = size * np.vstack([np.eye(3), -np.eye(3)])
+    with np.errstate(invalid="ignore"):
+        squares = model.ik(steps).joints ** 2
+    centres = ((squares[3:] - squares[:3]) / (4.0 * size)).T
+    checks = np.random.default_rng(0).uniform(-2.0 * size, 2.0 * size, (32, 3))
+    with np.errstate(invalid="ignore"):
+        lengths = model.ik(checks).joints
+    mismatch = np.abs(lengths**2 - np.sum((checks[:, None, :] - centres) ** 2, axis=-1))
+    if not np.all(np.isfinite(mismatch)) or mismatch.max() > SPHERE_TOLERANCE * size**2:
+        raise ValueError(f"{model.name}: the legs' lengths are not distances |p - c_i| at a constant orientation "
+                         "(not UPS-like legs): no Cartesian box of the constant-orientation workspace")
+    return centres
+
+
+#: Cells along the longest side of the legs' reach box in the coarse grid of :func:`constant_orientation_box` ...
+BOX_CELLS = 32
+#: ... and the padding, in cells, around its reachable cells.
+BOX_PADDING = 2
+
+
+def reachable_points(model: ConstantOrientation, points: np.ndarray, limits: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Joint coordinates (N, n) and reachability (N,) of platform centres at the constant orientation.
+
+    Reachable: in the assembly mode of the home pose (:class:`ConstantOrientationInverse`) with
+    the actuators within ``limits`` (n, 2).
+    """
+    q, valid = constant_orientation_inverse(model).solve(points)
+    q, inside = within_limits(q[:, 0], limits, mechanism.revolute_mask(model))
+    return q, valid[:, 0] & inside
+
+
+def constant_orientation_box(model: ConstantOrientation, limits: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A box (lower, upper) around the constant-orientation workspace.
+
+    Leg i reaches only the ball |p - c_i| <= upper limit of l_i (:func:`leg_sphere_centres`),
+    so the workspace lies in the intersection of the balls' bounding boxes.  That box also
+    holds the mirror image of the workspace in the other assembly mode (below the base), so
+    it is shrunk to the reachable cell centres of a coarse grid (:data:`BOX_CELLS` along its
+    longest side) padded by :data:`BOX_PADDING` cells: a part of the workspace thinner than
+    that padding, outside every reachable cell, would be cut off (the volume is checked
+    against an independent Monte Carlo estimate over the full box in the tests).
+
+    Raises:
+        ValueError: the balls' boxes do not intersect or no cell centre is reachable.
+    """
+    limits = np.asarray(limits, dtype=np.float64)
+    centres = leg_sphere_centres(model)
+    reach = limits[:, 1][:, None]
+    lower, upper = (centres - reach).max(axis=0), (centres + reach).min(axis=0)
+    where = f"{model.name}: no platform position is reachable at the orientation " \
+            f"{np.degrees(model.orientation).round(6).tolist()} deg within the leg limits"
+    if not np.all(lower < upper):
+        raise ValueError(where)
+    cell = float(np.max(upper - lower)) / BOX_CELLS
+    counts = np.maximum(np.ceil((upper - lower) / cell).astype(int), 1)
+    points = sampling.grid(lower, lower + counts * cell, tuple(counts), midpoints=True)
+    _, reachable = reachable_points(model, points, limits)
+    if not reachable.any():
+        raise ValueError(where)
+    pad = (BOX_PADDING + 0.5) * cell
+    return (np.maximum(points[reachable].min(axis=0) - pad, lower),
+            np.minimum(points[reachable].max(axis=0) + pad, upper))
+
+
+#: Sobol points of the Cartesian box sampled for the characteristic length (log2).
+LENGTH_SAMPLES_LOG2 = 12
+
+
+def characteristic_length(model: ConstantOrientation, limits: np.ndarray, seed: int = 0) -> float:
+    """The characteristic length of a platform at a constant orientation: the L minimizing the
+    mean kappa_F^2 of the homogenized twist Jacobian over the reachable points of a Sobol
+    sample of its workspace box (:func:`symkin.analysis.conditioning.characteristic_length`).
+
+    Raises:
+        ValueError: no sampled point is reachable.
+    """
+    lower, upper = constant_orientation_box(model, limits)
+    points = sampling.sobol(lower, upper, LENGTH_SAMPLES_LOG2, np.random.default_rng(seed))
+    q, reachable = reachable_points(model, points, limits)
+    if not reachable.any():
+        raise ValueError(f"{model.name}: no sampled position is reachable at this orientation: "
+                         "no characteristic length; give one (--length)")
+    return conditioning.characteristic_length(model.jacobian(q[reachable], points[reachable]),
+                                              mechanism.position_rows(model))

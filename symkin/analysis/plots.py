@@ -212,3 +212,41 @@ def plot_index_slices(occupancy: Occupancy, values: np.ndarray, path: str | Path
     figure.colorbar(mesh, ax=grid.ravel().tolist(), label=label)
     figure.suptitle(title)
     return _save(figure, path)
+
+
+def plot_index_sections(occupancy: Occupancy, values: np.ndarray, path: str | Path, through: Sequence[float], *,
+                        title: str = "1/kappa over the workspace", label: str = "1/kappa",
+                        axes: Sequence[str] = ("x", "y", "z"), scale: float = 1.0, unit: str = "m") -> Path:
+    """A local index over a 3-D workspace on the three grid sections through a point (e.g. the home pose).
+
+    Panels: the plane of the first two axes (z held at the point's), of the first and
+    third (y held) and of the second and third (x held), each through the grid layer that
+    holds the point; NaN cells (outside the workspace) are blank.
+
+    Raises:
+        ValueError: the grid is not 3-D or the point lies outside it.
+    """
+    values = np.asarray(values, dtype=np.float64)
+    if values.ndim != 3:
+        raise ValueError(f"sections need a 3-D grid, got shape {values.shape}")
+    layer = np.floor((np.asarray(through, dtype=np.float64) - occupancy.lower) / occupancy.cell).astype(int)
+    if np.any(layer < 0) or np.any(layer >= np.array(values.shape)):
+        raise ValueError(f"the point {list(through)} lies outside the grid")
+    vmax = max(1e-12, float(np.nanmax(values)))
+    figure = _figure((13.0, 4.2))
+    panels = figure.subplots(1, 3, squeeze=True)
+    lower, cell = occupancy.lower * scale, occupancy.cell * scale
+    mesh = None
+    for ax, held in zip(panels, (2, 1, 0)):
+        shown = [i for i in range(3) if i != held]
+        section = np.take(values, layer[held], axis=held)
+        edges = [lower[i] + np.arange(values.shape[i] + 1) * cell[i] for i in shown]
+        mesh = ax.pcolormesh(edges[0], edges[1], section.T, cmap="viridis", vmin=0.0, vmax=vmax, rasterized=True)
+        ax.set_title(f"{axes[held]} = {lower[held] + (layer[held] + 0.5) * cell[held]:.4g} {unit}", fontsize="medium")
+        ax.set_xlabel(f"{axes[shown[0]]} [{unit}]")
+        ax.set_ylabel(f"{axes[shown[1]]} [{unit}]")
+        ax.set_aspect("equal")
+        ax.grid(True, lw=0.3)
+    figure.colorbar(mesh, ax=list(panels), label=label)
+    figure.suptitle(title)
+    return _save(figure, path)

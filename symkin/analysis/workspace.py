@@ -98,12 +98,16 @@ def bounding_box(model: Any, *, limits: Limits | None = None, samples: int = BOX
 
     The TCP positions of a joint grid (limits included) are padded by a first-order bound
     of how far the TCP can move inside one grid cell: twice the largest Frobenius norm of
-    the positional Jacobian rows at the grid nodes times the half diagonal of a cell.
+    the positional Jacobian rows at the grid nodes times the half diagonal of a cell.  A
+    platform at a constant orientation has no fk: its box is bounded by the legs' reach
+    (:func:`symkin.analysis.parallel.constant_orientation_box`).
 
     Returns:
         (lower, upper), arrays of shape (d,).
     """
     box = mechanism.joint_limits(model, limits)
+    if isinstance(model, parallel.ConstantOrientation):  # no fk: the legs' reach bounds the workspace
+        return parallel.constant_orientation_box(model, box)
     n = box.shape[0]
     per_axis = max(3, int(samples ** (1.0 / n)))
     q = sampling.grid(box[:, 0], box[:, 1], per_axis, midpoints=False)

@@ -8,6 +8,7 @@ import time
 
 from symkin.cli import analysis_args
 from symkin.cli.progress import Progress
+from symkin.cli.workspace_cmd import add_orientation_argument, at_orientation
 
 #: Configurations drawn for --map (serial mechanisms).
 MAP_SAMPLES = 40_000
@@ -33,7 +34,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "--domain cartesian integrates the reachability indicator over a Cartesian box (needs a "
                     "closed-form inverse kinematics: the planar 2R, parallel mechanisms with a generated ik such "
                     "as the DELTA). A parallel mechanism's workspace is the set reached in its declared working "
-                    "mode (ik and fk branches) within the actuator limits, on both domains.",
+                    "mode (ik and fk branches) within the actuator limits, on both domains. A platform that also "
+                    "rotates (Stewart-Gough) is analysed at a constant orientation (--orientation) over the "
+                    "Cartesian domain, 1/kappa of its twist Jacobian homogenized by --length.",
     )
     analysis_args.add_model_arguments(p)
     p.add_argument("--method", choices=("grid", "mc", "qmc", "adaptive"), default="qmc",
@@ -42,25 +45,33 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="budget of integrand evaluations (default: %(default)s)")
     p.add_argument("--rtol", type=float, default=0.0,
                    help="adaptive: stop at this relative error estimate (default: spend the budget)")
-    p.add_argument("--domain", choices=("joint", "cartesian"), default="joint",
-                   help="integrate over the joint limits or a Cartesian box (default: %(default)s)")
+    p.add_argument("--domain", choices=("joint", "cartesian"), default=None,
+                   help="integrate over the joint limits or a Cartesian box (default: joint; cartesian for a "
+                        "platform that also rotates, the only domain it has)")
     p.add_argument("--measure", choices=("cartesian", "joint"), default="cartesian",
                    help="joint domain: dW = |det J| dq (cartesian, default) or dq (joint)")
     p.add_argument("--index", choices=tuple(INDICES), default="inverse-condition",
                    help="local index to average (default: %(default)s = 1/kappa, the GCI)")
     analysis_args.add_length_argument(p)
+    add_orientation_argument(p)
     p.add_argument("--seed", type=int, default=None, help="seed of mc/qmc (default: fresh randomness)")
     p.add_argument("--map", metavar="FIGURE", help="also draw the local index over the workspace into FIGURE")
     p.set_defaults(run=run, parser=p)
 
 
 def run(args: argparse.Namespace) -> int:
-    from symkin.analysis import conditioning, global_indices, inverse, mechanism, plots, workspace
+    from symkin.analysis import conditioning, global_indices, inverse, mechanism, parallel, plots, workspace
     from symkin.analysis.integrators import STATISTICAL
 
     index = getattr(conditioning, INDICES[args.index])
     try:
         model, limits = analysis_args.model_from_args(args)
+        model = at_orientation(model, args.orientation)
+        held = isinstance(model, parallel.ConstantOrientation)
+        if held and args.domain == "joint":
+            raise ValueError(f"{model.name}: a platform that also rotates has no closed-form fk: its GCI is "
+                             "integrated over the constant-orientation workspace only (--domain cartesian)")
+        args.domain = args.domain or ("cartesian" if held else "joint")
         length = analysis_args.resolve_length(model, args.length, limits)
         ik = inverse.inverse_kinematics_for(model) if args.domain == "cartesian" else None
         if args.domain == "cartesian" and ik is None:

@@ -25,7 +25,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "and singular configurations (and whether they lie on the boundary). Draws the point "
                     "cloud (-o) and a 1/kappa map (--map). Several --design options overlay designs, e.g. "
                     "seed Fig. 8.19: symkin workspace generated/planar_2r --design l1=0.1,l2=0.1 "
-                    "--design l1=0.2,l2=0.2 --unit cm -o fig-8-19.png",
+                    "--design l1=0.2,l2=0.2 --unit cm -o fig-8-19.png. A platform that also rotates "
+                    "(Stewart-Gough) is analysed at a constant orientation (--orientation) on a Cartesian grid "
+                    "(its joint space is not sampled: -n, --method and --seed do not apply).",
     )
     analysis_args.add_model_arguments(p)
     p.add_argument("--design", action="append", default=[], metavar="NAME=VALUE[,...]",
@@ -37,19 +39,55 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seed", type=int, default=0, help="seed of random/sobol sampling (default: %(default)s)")
     p.add_argument("-o", "--out", metavar="FIGURE", help="workspace figure (default: MODEL_NAME-workspace.png)")
     p.add_argument("--map", metavar="FIGURE", help="also draw 1/kappa over the workspace into FIGURE "
-                                                   "(first design)")
+                                                   "(first design); a platform at a constant orientation also "
+                                                   "gets FIGURE-sections (x-y, x-z, y-z through the home position)")
     p.add_argument("--no-figure", action="store_true", help="print the report only")
     analysis_args.add_length_argument(p)
+    add_orientation_argument(p)
     p.add_argument("--unit", choices=tuple(UNITS), default="m", help="length unit of the figures (default: m)")
     p.add_argument("--title", help="figure title")
     p.set_defaults(run=run, parser=p)
 
 
+def add_orientation_argument(p: argparse.ArgumentParser) -> None:
+    """--orientation: the constant orientation at which a rotating platform is analysed (shared with ``symkin gci``)."""
+    p.add_argument("--orientation", metavar="ROLL,PITCH,YAW",
+                   help="platforms that also rotate (Stewart-Gough): the constant orientation of the analysed "
+                        "workspace, R = Rz(yaw) Ry(pitch) Rx(roll), in rad, or in degrees with 'deg' "
+                        "(e.g. 0,10deg,0); default: the orientation of the model's home pose (parallel.home)")
+
+
+def at_orientation(model, text: str | None):
+    """``model`` held at the --orientation ``text`` if its platform rotates, else ``model`` itself.
+
+    Raises:
+        ValueError: --orientation is malformed, or given for a mechanism whose platform does not rotate.
+    """
+    from symkin.analysis import mechanism, parallel
+
+    rotates = mechanism.is_parallel(model) and mechanism.mixes_translations_and_rotations(model)
+    if text is None:
+        return parallel.constant_orientation(model) if rotates else model
+    if not rotates:
+        raise ValueError(f"--orientation: {model.name} is not a parallel platform that rotates "
+                         f"(task space {list(mechanism.task_space(model))}); leave the option out")
+    parts = text.split(",")
+    try:
+        if len(parts) != 3:
+            raise ValueError
+        angles = [analysis_args.parse_value(part) for part in parts]
+    except ValueError:
+        raise ValueError(f"--orientation: '{text}' is not ROLL,PITCH,YAW (three numbers in rad, or with 'deg', "
+                         "e.g. 0,10deg,0)") from None
+    return parallel.constant_orientation(model, angles)
+
+
 def run(args: argparse.Namespace) -> int:
-    from symkin.analysis import global_indices, mechanism, plots, workspace
+    from symkin.analysis import global_indices, mechanism, parallel, plots, workspace
 
     try:
         base, limits = analysis_args.model_from_args(args)
+        base = at_orientation(base, args.orientation)
         designs = [analysis_args.parse_assignments([text]) for text in args.design] or [{}]
         models = [base.bind(**values) if values else base for values in designs]
         joints = mechanism.joint_limits(base, limits).shape[0]
@@ -64,24 +102,34 @@ def run(args: argparse.Namespace) -> int:
             label = _label(base, values, args.unit)
             progress(f"sampling {label}")
             try:
-                cloud = workspace.sample_workspace(model, args.samples, method=method, limits=limits, seed=args.seed)
-                parallel = mechanism.is_parallel(model)
                 inv_kappa, box = None, None
-                if parallel:  # 1/kappa and the volume come from a Cartesian grid over this box
+                if isinstance(model, parallel.ConstantOrientation):  # no fk: the Cartesian grid is the cloud
                     box = workspace.bounding_box(model, limits=limits)
-                else:
-                    progress(f"conditioning {label}")
-                    inv_kappa = global_indices.local_index(model, cloud.q, length=length, limits=limits)
-                report = _report(model, cloud, inv_kappa, limits, progress, box)
-                if parallel:
                     progress(f"Cartesian grid {label}")
                     grid = _cartesian_grid(model, box, limits, length)
-                    report += _cartesian_report(*grid)
+                    cloud = _boundary_cloud(model, grid[0], limits)  # drawn: the workspace's surface
+                    report = _report(model, cloud, inv_kappa, limits, progress, box) + _cartesian_report(*grid)
                     grids.append(grid)
+                    sampled = (f"{int(grid[0].occupied.sum())} reachable cells of a Cartesian grid at roll, pitch, "
+                               f"yaw = {parallel.orientation_text(model)}")
+                else:
+                    cloud = workspace.sample_workspace(model, args.samples, method=method, limits=limits,
+                                                       seed=args.seed)
+                    if mechanism.is_parallel(model):  # 1/kappa and the volume come from a Cartesian grid over this box
+                        box = workspace.bounding_box(model, limits=limits)
+                    else:
+                        progress(f"conditioning {label}")
+                        inv_kappa = global_indices.local_index(model, cloud.q, length=length, limits=limits)
+                    report = _report(model, cloud, inv_kappa, limits, progress, box)
+                    if mechanism.is_parallel(model):
+                        progress(f"Cartesian grid {label}")
+                        grid = _cartesian_grid(model, box, limits, length)
+                        report += _cartesian_report(*grid)
+                        grids.append(grid)
+                    sampled = f"{len(cloud.q)} configurations ({method})"
             except ValueError as err:
                 analysis_args.fail_on_bad_input(args, err)
-            print(f"{model.name} ({label}): {len(cloud.q)} configurations ({method}), workspace in "
-                  f"{', '.join(cloud.axes)}")
+            print(f"{model.name} ({label}): {sampled}, workspace in {', '.join(cloud.axes)}")
             for line in report:
                 print(f"  {line}")
             outline = workspace.limit_curves(model, limits=limits) if joints == 2 else ()
@@ -99,12 +147,26 @@ def run(args: argparse.Namespace) -> int:
             if grids:
                 path = plots.plot_index_slices(*grids[0], args.map, scale=scale, unit=args.unit,
                                                title=f"{title}: Cartesian grid, reachability by ik")
+                if isinstance(models[0], parallel.ConstantOrientation):
+                    sections = plots.plot_index_sections(
+                        *grids[0], sections_path(args.map), parallel.home_position(models[0]), scale=scale,
+                        unit=args.unit, title=f"{title}: sections through the home position at roll, pitch, yaw "
+                                              f"= {parallel.orientation_text(models[0])}")
+                    print(f"1/kappa sections: {sections}")
             else:
                 path = plots.plot_index_map(layer.cloud, values, args.map, outline=layer.outline, scale=scale,
                                             unit=args.unit, title=title)
             print(f"1/kappa map: {path}")
     print(f"done in {time.perf_counter() - start:.2f} s")
     return 0
+
+
+def sections_path(path: str) -> str:
+    """The file of the sections through the home position, next to the --map FIGURE: map.png -> map-sections.png."""
+    from pathlib import Path
+
+    figure = Path(path)
+    return str(figure.with_name(f"{figure.stem}-sections{figure.suffix}"))
 
 
 def _label(model, values: dict[str, float], unit: str) -> str:
@@ -124,6 +186,16 @@ def _cartesian_grid(model, box, limits, length):
     return workspace.index_grid(model, inverse.parallel_inverse(model), box, cell, limits=limits, length=length)
 
 
+def _boundary_cloud(model, occupancy, limits):
+    """The centres of the boundary cells of a Cartesian grid and their joint coordinates, as a point cloud."""
+    from symkin.analysis import inverse, mechanism, workspace
+
+    points = occupancy.centers()[occupancy.boundary()]
+    q, _ = inverse.feasible_configurations(inverse.parallel_inverse(model), points,
+                                           mechanism.joint_limits(model, limits), mechanism.revolute_mask(model))
+    return workspace.WorkspaceCloud(q, points, ("x", "y", "z"))
+
+
 def _cartesian_report(occupancy, values) -> list[str]:
     """Volume, boundary and where the (near-)singular cells lie, from the Cartesian grid."""
     import numpy as np
@@ -131,8 +203,8 @@ def _cartesian_report(occupancy, values) -> list[str]:
     boundary = occupancy.boundary()
     interior = occupancy.interior()
     lines = [f"volume: {occupancy.measure()} m^3 (Cartesian grid of {occupancy.cell[0]:.3g} m cells, reachability "
-             f"by ik in the working mode: between interior and all reachable cells); {int(boundary.sum())} "
-             "boundary cells"]
+             f"by ik in the working mode: between interior and all reachable cells, a bracket unless thin parts of the "
+             f"workspace fall between cell centres); {int(boundary.sum())} boundary cells"]
     if interior.any():
         lines.append(f"1/kappa at the cell centres: min {np.nanmin(values[boundary]):.4g} on boundary cells, "
                      f"min {np.nanmin(values[interior]):.4g} on interior cells")
