@@ -236,6 +236,15 @@ def test_workspace_command_reports_the_volume_and_draws_the_figures(tmp_path, ca
     assert all(path.read_bytes()[:8] == PNG for path in (cloud, kappa_map, sections))
 
 
+def test_gci_command_derives_a_model_file_on_the_fly(capsys):
+    """A platform that rotates has no closed-form fk: the analyses derive ik and J^-1 only."""
+    args = ["--length", str(LENGTH), "-n", "4096", "--seed", "0"]
+    assert main(["gci", STEWART_DIR, *args]) == 0
+    from_directory = re.search(r"GCI = ([0-9.]+)", capsys.readouterr().out).group(1)
+    assert main(["gci", str(MODELS_DIR / "stewart.yaml"), *args]) == 0
+    assert re.search(r"GCI = ([0-9.]+)", capsys.readouterr().out).group(1) == from_directory
+
+
 def test_gci_command_integrates_over_the_cartesian_domain_at_the_given_orientation(capsys):
     assert main(["gci", STEWART_DIR, "--length", str(LENGTH), "-n", "8192", "--seed", "0"]) == 0
     home = capsys.readouterr().out

@@ -1,8 +1,9 @@
 """Arguments shared by the analysis commands (``symkin workspace``, ``symkin gci``, ``symkin bench gci``).
 
 MODEL is a generated model directory (the output of ``symkin derive``) or a model file,
-which is then derived on the fly (fk and jacobian only, and ik for a parallel mechanism)
-into a temporary directory.
+which is then derived on the fly into a temporary directory: fk and jacobian; ik as well for
+a translational parallel mechanism; ik and the inverse Jacobian for a platform that also
+rotates (:data:`ANALYSIS_OUTPUTS_BY_KIND`).
 """
 
 from __future__ import annotations
@@ -16,8 +17,11 @@ from typing import Any
 
 #: Quantities an analysis needs from a model file derived on the fly ...
 ANALYSIS_OUTPUTS = ("fk", "jacobian")
-#: ... by kind of mechanism: a parallel one also needs its closed-form ik (reachability, working mode).
-ANALYSIS_OUTPUTS_BY_KIND = {"serial": ANALYSIS_OUTPUTS, "parallel": ("ik", "fk", "jacobian")}
+#: ... by kind of mechanism (:func:`analysis_kind`): a translational parallel one also needs
+#: its closed-form ik (reachability, working mode); a platform that also rotates (Stewart-Gough)
+#: has no closed-form fk, and its analyses at a constant orientation use ik and J^-1.
+ANALYSIS_OUTPUTS_BY_KIND = {"serial": ANALYSIS_OUTPUTS, "parallel": ("ik", "fk", "jacobian"),
+                            "parallel pose": ("ik", "inverse_jacobian")}
 #: Also derived for a parallel model file that limits passive joints: the analyses find the
 #: passive joint variables from the loop closure (symkin.analysis.passive).
 PASSIVE_LIMIT_OUTPUTS = ("closure", "closure_jacobians")
@@ -179,7 +183,7 @@ def load_models(path: str, backends: Sequence[str],
     from symkin.model import load_model as load_model_file
 
     model = load_model_file(source)
-    wanted = outputs.get(model.mechanism, ANALYSIS_OUTPUTS) if isinstance(outputs, Mapping) else outputs
+    wanted = outputs.get(analysis_kind(model), ANALYSIS_OUTPUTS) if isinstance(outputs, Mapping) else outputs
     if isinstance(outputs, Mapping) and _limits_passive_joints(model):
         wanted = (*wanted, *PASSIVE_LIMIT_OUTPUTS)
     request = pipeline.resolve_request(model, ",".join([*wanted, *Derivation(model).available(optional)[0]]), ",".join(backends),
@@ -188,6 +192,15 @@ def load_models(path: str, backends: Sequence[str],
         # The generated module is imported (numpy) or read (C, CasADi) by load(): the files may go afterwards.
         directory = pipeline.write(pipeline.generate(model, request, progress), scratch)
         return [load(directory, backend) for backend in backends]
+
+
+def analysis_kind(model: Any) -> str:
+    """The key of a model file in :data:`ANALYSIS_OUTPUTS_BY_KIND`: serial, parallel, parallel pose."""
+    from symkin.model.schema import PlatformMotion
+
+    if model.parallel is not None and model.parallel.motion is PlatformMotion.POSE:
+        return "parallel pose"
+    return model.mechanism
 
 
 def _limits_passive_joints(model: Any) -> bool:
