@@ -209,12 +209,12 @@ def closed_form_solver(model: LoadedModel | ModelKinematics,
     kin = model if isinstance(model, ModelKinematics) else ModelKinematics(model, limits)
     try:
         screws = home_screws(kin)
-    except GeneratedCodeError:  # no pose Jacobian was generated, or not a plain serial chain
+        for recognise in RECOGNISERS:
+            solver = recognise(kin, screws)
+            if solver is not None:
+                return ClosedFormIK(kin, solver)
+    except GeneratedCodeError:  # not a plain serial chain, or its residual lacks a generated function
         return None
-    for recognise in RECOGNISERS:
-        solver = recognise(kin, screws)
-        if solver is not None:
-            return ClosedFormIK(kin, solver)
     return None
 
 
