@@ -56,7 +56,7 @@ class Roots:
 
 
 def dot(u: np.ndarray, v: np.ndarray) -> np.ndarray:
-    return np.sum(u * v, axis=-1)
+    return (u * v).sum(-1)
 
 
 def perpendicular(h: np.ndarray, v: np.ndarray) -> np.ndarray:
