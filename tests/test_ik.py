@@ -433,3 +433,17 @@ def test_joint_screws_from_fk_alone_match_the_jacobian_ones(ur, arm, tmp_path):
     found = closed_form_solver(lean).solve(lean.fk(q)[:, :2, 3])
     assert found.valid.all() and found.solver == "planar 2R"
     assert np.max(_angle_distance(found.q[:, 0], q)) < 1e-7
+
+
+def test_solve_without_shifting_keeps_the_solver_angles(ur):
+    """shift=False (the workspace analyses apply limits of their own): the same branches and
+    checks, the angles as the solver gives them (equal modulo 2 pi), within_limits as they lie."""
+    model = ur["ur10e"]
+    solver = closed_form_solver(model, limits=[(0.0, 2.0 * np.pi)] * 6)
+    T = model.fk(np.random.default_rng(11).uniform(-np.pi, np.pi, (50, 6)))
+    shifted, raw = solver.solve(T), solver.solve(T, shift=False)
+    assert np.array_equal(shifted.valid, raw.valid) and np.array_equal(shifted.flags, raw.flags)
+    assert np.all(_angle_distance(shifted.q, raw.q)[shifted.valid] < 1e-12)
+    assert np.array_equal(raw.q, solver.solver.candidates(T)[0], equal_nan=True)
+    assert np.array_equal(raw.within_limits, solver.kinematics.within_limits(raw.q) & raw.valid)
+    assert shifted.within_limits[shifted.valid].all() and not raw.within_limits[raw.valid].all()

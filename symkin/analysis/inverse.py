@@ -80,8 +80,8 @@ class ClosedFormInverse:
     only where it is a real solution that reproduces the point (residual <= 1e-9 relative,
     :data:`symkin.ik.closed_form.VALID_TOLERANCE`).  A point on the workspace boundary
     (|cos theta2| = 1 up to rounding) is clamped onto it and stays reachable.  The solver's
-    own joint limits are not used: :func:`feasible_configurations` applies the analysis'
-    limits.
+    own joint limits are not used (its angles are not shifted into them):
+    :func:`feasible_configurations` applies the analysis' limits.
 
     Attributes:
         solver: the :class:`~symkin.ik.closed_form.ClosedFormIK` (task-space targets).
@@ -95,7 +95,7 @@ class ClosedFormInverse:
     branches: int
 
     def solve(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        solutions = self.solver.solve(np.asarray(points, dtype=np.float64)[..., list(self.order)])
+        solutions = self.solver.solve(np.asarray(points, dtype=np.float64)[..., list(self.order)], shift=False)
         return solutions.q, solutions.valid
 
 
