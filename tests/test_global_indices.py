@@ -24,7 +24,7 @@ from symkin.analysis import global_indices as G
 from symkin.analysis.adaptive import adaptive, genz_malik_rule
 from symkin.analysis.integrand import Integrand
 from symkin.analysis.integrators import INTEGRATORS, integrate
-from symkin.analysis.inverse import planar_2r_inverse
+from symkin.analysis.inverse import closed_form_inverse
 from symkin.analysis.workspace import bounding_box
 from symkin.model import coordinates
 
@@ -127,7 +127,7 @@ TOLERANCES = {  # achieved |GCI - exact| at 2^18 evaluations, far above what eac
 @pytest.mark.parametrize("method", list(INTEGRATORS))
 def test_every_integrator_converges_to_the_exact_gci(exact, method, domain):
     truth, _ = exact(0.1, 0.1, QUARTER, "cartesian")
-    ik = planar_2r_inverse(ARM) if domain == "cartesian" else None
+    ik = closed_form_inverse(ARM) if domain == "cartesian" else None
     errors, estimates = [], []
     for samples in (2**10, 2**14, 2**18):
         result = G.gci(ARM, method=method, samples=samples, seed=11, domain=domain, inverse=ik)
@@ -170,7 +170,7 @@ def test_statistical_error_estimates_have_their_nominal_coverage(exact, method, 
 def test_statistical_coverage_on_the_cartesian_domain(exact, method):
     truth, area = exact(0.1, 0.1, QUARTER, "cartesian")
     gci_coverage, area_coverage, _ = _coverage(method, "cartesian", 200, 2**12, truth, area * np.pi / 2,
-                                               planar_2r_inverse(ARM))
+                                               closed_form_inverse(ARM))
     assert 0.89 <= gci_coverage <= 0.995
     assert 0.89 <= area_coverage <= 0.995
 
@@ -199,7 +199,7 @@ def test_deterministic_error_estimates_bracket_the_true_error(exact, method, des
 def test_deterministic_error_estimates_bracket_the_true_error_on_the_cartesian_domain(exact, method):
     """The reachability indicator jumps at the workspace boundary; the estimates still cover the error."""
     truth, area = exact(0.1, 0.1, QUARTER, "cartesian")
-    ik, box = planar_2r_inverse(ARM), bounding_box(ARM)
+    ik, box = closed_form_inverse(ARM), bounding_box(ARM)
     for samples in (2**10, 2**12, 2**14, 2**16, 2**18):
         result = G.gci(ARM, method=method, samples=samples, domain="cartesian", inverse=ik, box=box)
         assert abs(result.value.value - truth) <= result.value.error, samples
@@ -221,7 +221,7 @@ def test_area_is_exact_for_the_seed_arm(exact):
 
 def test_cartesian_and_joint_space_formulations_agree_where_the_map_is_one_to_one(exact):
     """0 <= theta2 <= 90 deg: one elbow branch, q -> TCP one-to-one: the same GCI and area."""
-    ik = planar_2r_inverse(ARM)
+    ik = closed_form_inverse(ARM)
     joint = G.gci(ARM, method="adaptive", samples=2**14)
     cartesian = G.gci(ARM, method="qmc", samples=2**18, seed=3, domain="cartesian", inverse=ik)
     # Twice the combined 95 % error bars: one seed is not a coverage test (those are above).
@@ -246,7 +246,7 @@ def test_overlapping_branches_are_counted_with_multiplicity_in_joint_space(exact
     limits = _limits((-np.pi / 2, np.pi / 2))
     joint = G.workspace_measure(ARM, method="adaptive", samples=2**14, limits=limits)
     cartesian = G.workspace_measure(ARM, method="qmc", samples=2**16, seed=0, limits=limits, domain="cartesian",
-                                    inverse=planar_2r_inverse(ARM))
+                                    inverse=closed_form_inverse(ARM))
     assert abs(joint.value - np.pi * 0.01) <= joint.error
     assert np.pi / 2 * 0.01 + cartesian.error < cartesian.value < np.pi * 0.01 - cartesian.error
 

@@ -414,3 +414,36 @@ def test_joint_limits_come_from_the_manifest(arm, ur):
     assert arm.joint_limits == ((0.0, np.pi / 2), (0.0, np.pi / 2))
     assert ur["ur10e"].joint_limits == ((-2 * np.pi, 2 * np.pi),) * 6
     assert arm.manifest["model"]["coordinates"][0] == {"name": "theta1", "type": "R", "limits": [0.0, np.pi / 2]}
+
+
+def test_joint_screws_from_fk_alone_match_the_jacobian_ones(ur, arm, tmp_path):
+    """Without a generated pose Jacobian (a model file derived on the fly for the analyses:
+    fk and the task Jacobian), the screws come from fk(pi/2 e_i) M^-1 and agree with J(0)'s."""
+    import symkin
+    from symkin.ik.screws import home_screws
+
+    for model in (arm, ur["ur10e"], ur["ur10e_classic"]):
+        kin = ModelKinematics(model)
+        kin._pose_jacobian = None  # as if jacobian_geometric had not been generated
+        from_fk, from_jacobian = home_screws(kin), home_screws(ModelKinematics(model))
+        np.testing.assert_allclose(from_fk.directions, from_jacobian.directions, atol=1e-15)
+        np.testing.assert_allclose(from_fk.points, from_jacobian.points, atol=1e-15)
+    lean = load(symkin.derive(MODELS_DIR / "planar_2r.yaml", tmp_path, outputs=["fk", "jacobian"]))
+    q = np.array([[0.3, 0.9], [1.2, 0.0]])
+    found = closed_form_solver(lean).solve(lean.fk(q)[:, :2, 3])
+    assert found.valid.all() and found.solver == "planar 2R"
+    assert np.max(_angle_distance(found.q[:, 0], q)) < 1e-7
+
+
+def test_solve_without_shifting_keeps_the_solver_angles(ur):
+    """shift=False (the workspace analyses apply limits of their own): the same branches and
+    checks, the angles as the solver gives them (equal modulo 2 pi), within_limits as they lie."""
+    model = ur["ur10e"]
+    solver = closed_form_solver(model, limits=[(0.0, 2.0 * np.pi)] * 6)
+    T = model.fk(np.random.default_rng(11).uniform(-np.pi, np.pi, (50, 6)))
+    shifted, raw = solver.solve(T), solver.solve(T, shift=False)
+    assert np.array_equal(shifted.valid, raw.valid) and np.array_equal(shifted.flags, raw.flags)
+    assert np.all(_angle_distance(shifted.q, raw.q)[shifted.valid] < 1e-12)
+    assert np.array_equal(raw.q, solver.solver.candidates(T)[0], equal_nan=True)
+    assert np.array_equal(raw.within_limits, solver.kinematics.within_limits(raw.q) & raw.valid)
+    assert shifted.within_limits[shifted.valid].all() and not raw.within_limits[raw.valid].all()

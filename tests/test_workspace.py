@@ -9,7 +9,7 @@ import pytest
 
 import symkin
 from symkin.analysis import global_indices, inverse, mechanism, workspace
-from symkin.analysis.inverse import planar_2r_inverse, within_limits
+from symkin.analysis.inverse import closed_form_inverse, within_limits
 from symkin.runtime import LoadedModel
 
 from conftest import EXAMPLE_MODELS, GENERATED_DIR
@@ -93,17 +93,30 @@ def test_bounding_box_contains_the_workspace():
 # --- reachability (inverse kinematics) ----------------------------------------------------------
 
 
-def test_planar_2r_is_identified_from_the_generated_fk():
-    ik = planar_2r_inverse(ARM.bind(l1=0.3, l2=0.12))
-    assert (ik.l1, ik.l2) == pytest.approx((0.3, 0.12), rel=1e-14)
-    assert np.allclose(ik.base, 0, atol=1e-15)
-    with pytest.raises(ValueError, match="two revolute joints"):
-        planar_2r_inverse(symkin.load(GENERATED_DIR / "ur10e"))
+def test_closed_form_inverse_adapts_symkin_ik_to_positions_and_refuses_pose_solvers():
+    """The planar arm's symkin.ik solver, bound parameters included; boundary points (the
+    stretched and the folded arm, |cos theta2| = 1) stay reachable; the UR10e's solver
+    takes poses and is refused."""
+    arm = ARM.bind(l1=0.3, l2=0.12)
+    ik = closed_form_inverse(arm)
+    assert (ik.dimension, ik.branches) == (2, 2) and ik.solver.name == "planar 2R"
+    rim = 0.42 * np.array([np.cos(np.linspace(0, 2 * np.pi, 37)), np.sin(np.linspace(0, 2 * np.pi, 37))]).T
+    hole = rim * (0.18 / 0.42)
+    for points, theta2 in ((rim, 0.0), (hole, np.pi)):
+        q, valid = ik.solve(points)
+        assert valid.all()
+        assert np.allclose(np.abs(np.angle(np.exp(1j * q[..., 1]))), theta2, atol=1e-7)
+        assert np.allclose(mechanism.tcp_positions(arm, q), points[:, None], atol=1e-15)
+    _, valid = ik.solve(rim * (1 + 1e-12))
+    assert not valid.any()
+    with pytest.raises(ValueError, match="takes pose targets"):
+        closed_form_inverse(symkin.load(GENERATED_DIR / "ur10e"))
+    assert isinstance(inverse.inverse_kinematics_for(ARM), inverse.ClosedFormInverse)
 
 
 def test_inverse_kinematics_round_trips_on_both_branches():
     arm = ARM.bind(l1=0.25, l2=0.1)
-    ik = planar_2r_inverse(arm)
+    ik = closed_form_inverse(arm)
     q = np.random.default_rng(3).uniform(-np.pi, np.pi, (500, 2))
     points = mechanism.tcp_positions(arm, q)
     solutions, valid = ik.solve(points)
@@ -119,7 +132,7 @@ def test_inverse_kinematics_round_trips_on_both_branches():
 
 
 def test_reachability_respects_joint_limits():
-    ik = planar_2r_inverse(ARM)
+    ik = closed_form_inverse(ARM)
     limits, revolute = mechanism.joint_limits(ARM), mechanism.revolute_mask(ARM)
     inside = workspace.sample_workspace(ARM, 2000, method="random", seed=4)
     assert inverse.reachable(ik, inside.points, limits, revolute).all()
@@ -164,7 +177,7 @@ def test_boundary_singularities_lie_on_the_workspace_boundary():
 
 
 def test_reachability_grid_finds_the_same_workspace_and_boundary():
-    ik = planar_2r_inverse(ARM)
+    ik = closed_form_inverse(ARM)
     grid = workspace.reachability_grid(ARM, ik, workspace.bounding_box(ARM), 0.002)
     area = grid.occupied.sum() * grid.cell_volume
     assert area == pytest.approx(np.pi / 2 * 0.01, rel=0.02)

@@ -33,7 +33,7 @@ from symkin.analysis.conditioning import (
 from symkin.analysis.estimates import Estimate, IntegralEstimate
 from symkin.analysis.global_indices import GlobalIndex, gci, global_index, workspace_measure
 from symkin.analysis.integrators import INTEGRATORS, integrate
-from symkin.analysis.inverse import InverseKinematics, feasible_configurations, planar_2r_inverse, reachable
+from symkin.analysis.inverse import InverseKinematics, closed_form_inverse, feasible_configurations, reachable
 from symkin.analysis.workspace import (
     Occupancy,
     WorkspaceCloud,
@@ -53,6 +53,7 @@ __all__ = [
     "WorkspaceCloud",
     "bounding_box",
     "characteristic_length",
+    "closed_form_inverse",
     "condition_number",
     "feasible_configurations",
     "frobenius_condition_number",
@@ -64,7 +65,6 @@ __all__ = [
     "inverse_frobenius_condition_number",
     "manipulability",
     "occupancy_from_cloud",
-    "planar_2r_inverse",
     "reachability_grid",
     "reachable",
     "sample_workspace",

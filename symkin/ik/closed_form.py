@@ -151,7 +151,8 @@ class ClosedFormIK:
     def kind(self) -> str:
         return self.solver.kind
 
-    def solve(self, target: np.ndarray | Sequence, reference: np.ndarray | Sequence | None = None) -> ClosedFormSolutions:
+    def solve(self, target: np.ndarray | Sequence, reference: np.ndarray | Sequence | None = None, *,
+              shift: bool = True) -> ClosedFormSolutions:
         """Every branch for targets (..., *target shape).
 
         Args:
@@ -159,14 +160,20 @@ class ClosedFormIK:
             reference: configuration (n,) or (..., n): each revolute angle is shifted by a
                 multiple of 2 pi into the joint limits, as close to the reference as possible
                 (default: zero).
+            shift: False keeps the solver's own angles (no 2 pi shifts, ``reference`` unused;
+                ``within_limits`` then says whether they happen to lie inside), for callers
+                that apply joint limits of their own (the workspace analyses).
         """
         target = as_target(self.residual, target)
         tshape = self.residual.target_shape()
         batch = target.shape[:target.ndim - len(tshape)]
         q, flags = self.solver.candidates(target)
         kin = self.kinematics
-        ref = np.zeros(kin.dof) if reference is None else np.asarray(reference, dtype=float)
-        q, within = _into_limits(kin, q, ref[..., None, :])
+        if shift:
+            ref = np.zeros(kin.dof) if reference is None else np.asarray(reference, dtype=float)
+            q, within = _into_limits(kin, q, ref[..., None, :])
+        else:
+            within = kin.within_limits(q)  # False where q is NaN (no such branch)
         branches = len(self.solver.branches)
         q_eval = np.where(np.isfinite(q), q, 0.0)
         expanded = np.broadcast_to(target[..., None, :, :] if self.kind == "pose" else target[..., None, :],
@@ -209,12 +216,12 @@ def closed_form_solver(model: LoadedModel | ModelKinematics,
     kin = model if isinstance(model, ModelKinematics) else ModelKinematics(model, limits)
     try:
         screws = home_screws(kin)
-    except GeneratedCodeError:  # no pose Jacobian was generated, or not a plain serial chain
+        for recognise in RECOGNISERS:
+            solver = recognise(kin, screws)
+            if solver is not None:
+                return ClosedFormIK(kin, solver)
+    except GeneratedCodeError:  # not a plain serial chain, or its residual lacks a generated function
         return None
-    for recognise in RECOGNISERS:
-        solver = recognise(kin, screws)
-        if solver is not None:
-            return ClosedFormIK(kin, solver)
     return None
 
 

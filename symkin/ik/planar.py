@@ -23,6 +23,7 @@ branches coincide); the target on axis 1 (d = 0, theta1 undetermined,
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -50,34 +51,47 @@ class ParallelPair:
         return cls(h, screws.points[first], screws.points[first + 1], 1.0,
                    float(np.sign(np.dot(h, screws.directions[first + 1]))), point)
 
+    # the triangle's fixed sides and its turn at q = 0: computed once per solver, not per call
+    @cached_property
+    def a_vec(self) -> np.ndarray:
+        return perpendicular(self.h, self.c2 - self.c1)
+
+    @cached_property
+    def b0(self) -> np.ndarray:
+        return perpendicular(self.h, self.point - self.c2)
+
+    @cached_property
+    def a(self) -> float:
+        return float(np.linalg.norm(self.a_vec))
+
+    @cached_property
+    def b(self) -> float:
+        return float(np.linalg.norm(self.b0))
+
+    @cached_property
+    def phi0(self) -> float:
+        return float(signed_angle(self.h, self.a_vec, self.b0))
+
     def is_regular(self, scale: float) -> bool:
         """The axes are distinct and the point is off the second axis (otherwise no triangle)."""
-        a = np.linalg.norm(perpendicular(self.h, self.c2 - self.c1))
-        b = np.linalg.norm(perpendicular(self.h, self.point - self.c2))
-        return bool(a > STRUCTURE_TOLERANCE * scale and b > STRUCTURE_TOLERANCE * scale)
+        return bool(self.a > STRUCTURE_TOLERANCE * scale and self.b > STRUCTURE_TOLERANCE * scale)
 
     def solve(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(theta1, theta2, flags), each (..., 2) for the branches +beta, -beta; x is (..., 3)."""
-        h = self.h
-        a_vec = perpendicular(h, self.c2 - self.c1)
-        b0 = perpendicular(h, self.point - self.c2)
+        h, a, b = self.h, self.a, self.b
         x_vec = perpendicular(h, x - self.c1)
-        a, b = np.linalg.norm(a_vec), np.linalg.norm(b0)
         d = np.linalg.norm(x_vec, axis=-1)
-        phi0 = signed_angle(h, a_vec, b0)
         beta = exterior_angle(a, b, d)
         flags = np.where(beta.unreachable, int(BranchFlag.UNREACHABLE_ELBOW), 0)
         flags |= np.where(beta.clamped, int(BranchFlag.CLAMPED), 0)
         near = (beta.plus <= SINGULARITY_EPSILON) | (np.pi - beta.plus <= SINGULARITY_EPSILON)
         flags |= np.where(near, int(BranchFlag.ELBOW), 0)
         flags |= np.where(d <= SINGULARITY_EPSILON * (a + b), int(BranchFlag.SHOULDER), 0)
-        theta1, theta2 = [], []
-        for turn_sign in (1.0, -1.0):
-            turn = turn_sign * beta.plus - phi0
-            y = a_vec + rotate(h, turn, np.broadcast_to(b0, turn.shape + (3,)))
-            theta2.append(self.s2 * turn)
-            theta1.append(self.s1 * signed_angle(h, y, x_vec))
-        return np.stack(theta1, -1), np.stack(theta2, -1), np.stack([flags, flags], -1)
+        # both branches at once: the last axis is (+beta, -beta)
+        turn = np.stack([beta.plus, beta.minus], -1) - self.phi0
+        y = self.a_vec + rotate(h, turn, self.b0)
+        theta1 = self.s1 * signed_angle(h, y, x_vec[..., None, :])
+        return theta1, self.s2 * turn, np.stack([flags, flags], -1)
 
 
 class Planar2R:

@@ -76,6 +76,11 @@ class ModelKinematics:
         """``pose`` for models whose task space is the pose, else ``task``."""
         return "pose" if self.task_space == POSE_TASK_SPACE or not self._has_task else "task"
 
+    @property
+    def has_pose_jacobian(self) -> bool:
+        """Whether the geometric Jacobian (pose targets, :meth:`pose_jacobian`) was generated."""
+        return self._pose_jacobian is not None
+
     def fk(self, q: np.ndarray) -> np.ndarray:
         return self.model.fk(q)
 

@@ -30,7 +30,7 @@ def rotate(axis: np.ndarray, angle: np.ndarray, v: np.ndarray) -> np.ndarray:
     R v = v cos(t) + (h x v) sin(t) + h (h . v)(1 - cos(t))."""
     angle = np.asarray(angle)[..., None]
     c, s = np.cos(angle), np.sin(angle)
-    dot = np.sum(axis * v, axis=-1, keepdims=True)
+    dot = (axis * v).sum(-1, keepdims=True)
     return v * c + cross(axis, v) * s + axis * dot * (1.0 - c)
 
 
@@ -38,10 +38,14 @@ def rotation_matrix(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
     """R = I + sin(t) K + (1 - cos(t)) K^2 with K = [axis]x, shape (..., 3, 3)."""
     axis = np.asarray(axis, dtype=float)
     angle = np.asarray(angle, dtype=float)
-    shape = np.broadcast_shapes(axis.shape[:-1], angle.shape)
-    kx, ky, kz = (np.broadcast_to(axis[..., i], shape) for i in range(3))
-    zero = np.zeros(shape)
-    K = np.stack([np.stack([zero, -kz, ky], -1), np.stack([kz, zero, -kx], -1), np.stack([-ky, kx, zero], -1)], -2)
+    if axis.ndim == 1:  # one axis for every angle (a joint's): one K, built without stacking batches
+        kx, ky, kz = axis
+        K = np.array([[0.0, -kz, ky], [kz, 0.0, -kx], [-ky, kx, 0.0]])
+    else:
+        shape = np.broadcast_shapes(axis.shape[:-1], angle.shape)
+        kx, ky, kz = (np.broadcast_to(axis[..., i], shape) for i in range(3))
+        zero = np.zeros(shape)
+        K = np.stack([np.stack([zero, -kz, ky], -1), np.stack([kz, zero, -kx], -1), np.stack([-ky, kx, zero], -1)], -2)
     s = np.sin(angle)[..., None, None]
     c = np.cos(angle)[..., None, None]
     return np.eye(3) + s * K + (1.0 - c) * (K @ K)

@@ -10,7 +10,9 @@ point c_i of its axis, for a prismatic joint its direction.  Both come from one 
 of the generated functions at q = 0: column i of the geometric Jacobian is
 [h_i x (p_tcp - c_i); h_i] (revolute) or [h_i; 0] (prismatic), so with the moment
 m_i = c_i x h_i = v_i + p_tcp x h_i the point of the axis nearest the origin is
-c_i = h_i x m_i.
+c_i = h_i x m_i.  A model derived without a pose Jacobian (e.g. a model file derived on
+the fly for the analyses, fk and the task Jacobian only) gives them through n more
+evaluations of ``fk`` (:func:`_axes_from_fk`).
 
 The closed-form solvers (:mod:`symkin.ik.closed_form`) recognise structures (parallel or
 perpendicular axes, intersecting axes) on these screws, so a model's DH convention, base
@@ -26,7 +28,7 @@ import numpy as np
 
 from symkin.errors import GeneratedCodeError
 from symkin.ik.problem import ModelKinematics
-from symkin.ik.rotations import cross, rotate, rotation_matrix
+from symkin.ik.rotations import cross, rotate, rotation_matrix, vee
 
 #: Agreement required between the product of exponentials and the generated fk (relative).
 CHECK_TOLERANCE = 1e-9
@@ -84,7 +86,8 @@ class HomeScrews:
 
 
 def home_screws(kinematics: ModelKinematics, rng: np.random.Generator | None = None) -> HomeScrews:
-    """Read the joint screws at q = 0 from the generated ``fk`` and geometric Jacobian.
+    """Read the joint screws at q = 0 from the generated ``fk`` and geometric Jacobian (or,
+    where no pose Jacobian was generated, from ``fk`` alone: :func:`_axes_from_fk`).
 
     The product of exponentials is checked against the generated ``fk`` at a few random
     configurations.
@@ -93,9 +96,23 @@ def home_screws(kinematics: ModelKinematics, rng: np.random.Generator | None = N
         GeneratedCodeError: the generated functions do not describe a serial chain of
             revolute/prismatic joints (they disagree with the product of exponentials).
     """
-    zero = np.zeros(kinematics.dof)
-    M = np.asarray(kinematics.fk(zero), dtype=float)
-    J = np.asarray(kinematics.pose_jacobian(zero), dtype=float)
+    M = np.asarray(kinematics.fk(np.zeros(kinematics.dof)), dtype=float)
+    axes = _axes_from_jacobian if kinematics.has_pose_jacobian else _axes_from_fk
+    directions, points = axes(kinematics, M)
+    scale = float(max(1e-300, np.max(np.linalg.norm(points - M[:3, 3], axis=-1))))
+    screws = HomeScrews(directions, points, kinematics.revolute.copy(), M, scale)
+    rng = rng or np.random.default_rng(0)
+    q = rng.uniform(-np.pi, np.pi, size=(8, kinematics.dof))
+    deviation = np.max(np.abs(screws.fk(q) - kinematics.fk(q)))
+    if deviation > CHECK_TOLERANCE * max(1.0, scale):
+        raise GeneratedCodeError(f"{kinematics.name}: the generated fk is not a product of exponentials of its "
+                                 f"joint axes (deviation {deviation:.3g}); derive the model again")
+    return screws
+
+
+def _axes_from_jacobian(kinematics: ModelKinematics, M: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(h_i, c_i) from the columns [h_i x (p_tcp - c_i); h_i] (revolute) or [h_i; 0] of J(0)."""
+    J = np.asarray(kinematics.pose_jacobian(np.zeros(kinematics.dof)), dtype=float)
     p_tcp = M[:3, 3]
     directions, points = [], []
     for i in range(kinematics.dof):
@@ -108,13 +125,21 @@ def home_screws(kinematics: ModelKinematics, rng: np.random.Generator | None = N
         else:
             directions.append(v / np.linalg.norm(v))
             points.append(np.zeros(3))
-    points_array = np.array(points)
-    scale = float(max(1e-300, np.max(np.linalg.norm(points_array - p_tcp, axis=-1))))
-    screws = HomeScrews(np.array(directions), points_array, kinematics.revolute.copy(), M, scale)
-    rng = rng or np.random.default_rng(0)
-    q = rng.uniform(-np.pi, np.pi, size=(8, kinematics.dof))
-    deviation = np.max(np.abs(screws.fk(q) - kinematics.fk(q)))
-    if deviation > CHECK_TOLERANCE * max(1.0, scale):
-        raise GeneratedCodeError(f"{kinematics.name}: the generated fk is not a product of exponentials of its "
-                                 f"joint axes (deviation {deviation:.3g}); derive the model again")
-    return screws
+    return np.array(directions), np.array(points)
+
+
+def _axes_from_fk(kinematics: ModelKinematics, M: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(h_i, c_i) from fk alone: E_i = fk(t e_i) M^-1 = exp([S_i] t) is joint i's motion on its own.
+
+    Revolute, t = pi/2: E_i = (R, (I - R) c_i) with R = exp([h_i] pi/2), so the vector of the
+    antisymmetric part of R is sin(pi/2) h_i = h_i, and for c_i normal to h_i the translation
+    d = (I - R) c_i = c_i - h_i x c_i gives c_i = (d + h_i x d) / 2.  Prismatic, t = 1:
+    E_i = (I, h_i).
+    """
+    steps = np.where(kinematics.revolute, np.pi / 2, 1.0)
+    E = np.asarray(kinematics.fk(np.diag(steps)), dtype=float) @ np.linalg.inv(M)
+    d = E[:, :3, 3]
+    h = np.where(kinematics.revolute[:, None], vee(E[:, :3, :3]), d)
+    h = h / np.linalg.norm(h, axis=-1, keepdims=True)
+    points = np.where(kinematics.revolute[:, None], 0.5 * (d + cross(h, d)), 0.0)
+    return h, points

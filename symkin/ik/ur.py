@@ -102,6 +102,11 @@ class URFamily:
         # any unit vector normal to h2, to read the rotation angle of E2 E3 E4 about h2
         normal = perpendicular(self.h2, np.eye(3)[int(np.argmin(np.abs(self.h2)))])
         self.normal = normal / np.linalg.norm(normal)
+        # the target-independent coefficients of the two sinusoids (steps 1 and 2)
+        h1, h2, h5, h6 = self.h[0], self.h2, self.h[4], self.h[5]
+        self.shoulder_coefficients = (perpendicular(h1, h2), cross(h1, h2), np.dot(h1, h2))
+        self.wrist_coefficients = (np.dot(perpendicular(h5, h6), h2), np.dot(cross(h5, h6), h2),
+                                   np.dot(h5, h6) * np.dot(h5, h2))
 
     def candidates(self, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """All eight branches at once: axes (..., shoulder, wrist, elbow) flattened to (..., 8)."""
@@ -114,24 +119,23 @@ class URFamily:
 
         # 1. shoulder: (R1 h2) . (w - c1) = delta                              -> q1 (..., 2)
         r = w - c[0]
-        shoulder = sinusoid(dot(perpendicular(h1, h2), r), dot(cross(h1, h2), r),
-                            self.delta - np.dot(h1, h2) * dot(h1, r))
+        along_a, along_b, h1_h2 = self.shoulder_coefficients
+        shoulder = sinusoid(dot(along_a, r), dot(along_b, r), self.delta - h1_h2 * dot(h1, r))
         q1 = np.stack([shoulder.plus, shoulder.minus], -1)
         shoulder_flags = (np.where(shoulder.unreachable, int(BranchFlag.UNREACHABLE_SHOULDER), 0)
                           | np.where(shoulder.clamped, int(BranchFlag.CLAMPED), 0)
                           | np.where(shoulder.root <= SINGULARITY_EPSILON * s.scale, int(BranchFlag.SHOULDER), 0))
 
         # 2. wrist: h2 . (R5 h6) = k . a6 with the root |k x a6|              -> q5 (..., 2, 2)
-        k = rotate(h1, q1, np.broadcast_to(h2, q1.shape + (3,)))
+        k = rotate(h1, q1, h2)
         a6_b = a6[..., None, :]
-        wrist = sinusoid(np.dot(perpendicular(h5, h6), h2), np.dot(cross(h5, h6), h2),
-                         dot(k, a6_b) - np.dot(h5, h6) * np.dot(h5, h2),
-                         root=np.linalg.norm(cross(k, a6_b), axis=-1))
+        wrist_a, wrist_b, wrist_c = self.wrist_coefficients
+        wrist = sinusoid(wrist_a, wrist_b, dot(k, a6_b) - wrist_c, root=np.linalg.norm(cross(k, a6_b), axis=-1))
         q5 = np.stack([wrist.plus, wrist.minus], -1)
         wrist_flags = np.where(wrist.root <= SINGULARITY_EPSILON, int(BranchFlag.WRIST), 0)
 
         # 3. q6 turns u = R5^T h2 onto v = R_d^T k about h6 by -q6             -> q6 (..., 2, 2)
-        u = rotate(h5, -q5, np.broadcast_to(h2, q5.shape + (3,)))
+        u = rotate(h5, -q5, h2)
         v = np.einsum("...ji,...kj->...ki", R_d, k)[..., :, None, :]
         q6 = -signed_angle(h6, u, v)
 
@@ -147,8 +151,9 @@ class URFamily:
         q4 = self.s4 * (total - q2 - self.s3 * q3)
 
         shape = q2.shape
-        q = np.stack([np.broadcast_to(q1[..., :, None, None], shape), q2, q3, q4,
-                      np.broadcast_to(q5[..., None], shape), np.broadcast_to(q6[..., None], shape)], -1)
+        q = np.empty(shape + (6,))
+        q[..., 0], q[..., 1], q[..., 2], q[..., 3] = q1[..., :, None, None], q2, q3, q4
+        q[..., 4], q[..., 5] = q5[..., None], q6[..., None]
         flags = shoulder_flags[..., None, None, None] | wrist_flags[..., :, None, None] | elbow_flags
         batch = shape[:-3]
         return q.reshape(batch + (8, 6)), np.broadcast_to(flags, shape).reshape(batch + (8,))
