@@ -157,7 +157,7 @@ def test_ur_shoulder_singularity_branches_merge(ur):
     model = ur["ur10e"]
     solver = closed_form_solver(model)
     ur_solver = solver.solver
-    h1, c1, u = ur_solver.h[0], ur_solver.c[0], np.cross(ur_solver.h[0], ur_solver.h2)
+    c1, u = ur_solver.c[0], np.cross(ur_solver.h[0], ur_solver.h2)
 
     def radial(q2: float) -> float:
         q = np.array([0.0, q2, 1.0, 0.3, 0.8, 0.2])
