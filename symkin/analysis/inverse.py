@@ -108,6 +108,8 @@ def closed_form_inverse(model: Any) -> ClosedFormInverse:
             Cartesian analyses work on positions, the solver's target must be the model's
             positional task space.
     """
+    if mechanism.is_parallel(model):  # also views of one, e.g. a platform held at a constant orientation
+        raise ValueError(f"{model.name}: a parallel mechanism; its inverse kinematics is its generated 'ik'")
     solver = closed_form_solver(model)
     if solver is None:
         raise ValueError(f"{model.name}: no closed-form inverse kinematics recognised (symkin.ik)")
