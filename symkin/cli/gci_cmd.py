@@ -8,13 +8,10 @@ import time
 
 from symkin.cli import analysis_args
 from symkin.cli.progress import Progress
-from symkin.cli.workspace_cmd import add_orientation_argument, at_orientation
+from symkin.cli.workspace_cmd import add_orientation_argument, at_orientation, cartesian_index_grid
 
 #: Configurations drawn for --map (serial mechanisms).
 MAP_SAMPLES = 40_000
-#: Cells along the longest side of the Cartesian grid drawn for --map (parallel mechanisms).
-MAP_CELLS = 64
-
 #: Local indices that ``--index`` can average (names of symkin.analysis.conditioning functions).
 INDICES = {
     "inverse-condition": "inverse_condition_number",
@@ -90,9 +87,7 @@ def run(args: argparse.Namespace) -> int:
             if args.map and mechanism.is_parallel(model):
                 progress("drawing")
                 box = workspace.bounding_box(model, limits=limits)
-                occupancy, values = workspace.index_grid(model, inverse.parallel_inverse(model), box,
-                                                         float(max(box[1] - box[0])) / MAP_CELLS, index=index,
-                                                         limits=limits, length=length)
+                occupancy, values = cartesian_index_grid(model, box, limits, length, index)
                 path = plots.plot_index_slices(occupancy, values, args.map, label=args.index,
                                                title=f"{args.index} over the workspace of {model.name}")
             elif args.map:

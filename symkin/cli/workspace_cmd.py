@@ -106,7 +106,7 @@ def run(args: argparse.Namespace) -> int:
                 if isinstance(model, parallel.ConstantOrientation):  # no fk: the Cartesian grid is the cloud
                     box = workspace.bounding_box(model, limits=limits)
                     progress(f"Cartesian grid {label}")
-                    grid = _cartesian_grid(model, box, limits, length)
+                    grid = cartesian_index_grid(model, box, limits, length)
                     cloud = _boundary_cloud(model, grid[0], limits)  # drawn: the workspace's surface
                     report = _report(model, cloud, inv_kappa, limits, progress, box) + _cartesian_report(*grid)
                     grids.append(grid)
@@ -123,7 +123,7 @@ def run(args: argparse.Namespace) -> int:
                     report = _report(model, cloud, inv_kappa, limits, progress, box)
                     if mechanism.is_parallel(model):
                         progress(f"Cartesian grid {label}")
-                        grid = _cartesian_grid(model, box, limits, length)
+                        grid = cartesian_index_grid(model, box, limits, length)
                         report += _cartesian_report(*grid)
                         grids.append(grid)
                     sampled = f"{len(cloud.q)} configurations ({method})"
@@ -177,13 +177,14 @@ def _label(model, values: dict[str, float], unit: str) -> str:
     return ", ".join(parts) or "model parameters"
 
 
-def _cartesian_grid(model, box, limits, length):
-    """Reachability grid of a parallel mechanism over ``box`` with 1/kappa at its cell centres
-    (see workspace.index_grid)."""
+def cartesian_index_grid(model, box, limits, length, index=None):
+    """Reachability grid of a parallel mechanism over ``box`` (CARTESIAN_CELLS along its longest
+    side) with a local index (1/kappa by default) at its cell centres (see workspace.index_grid)."""
     from symkin.analysis import inverse, workspace
 
     cell = float(max(box[1] - box[0])) / CARTESIAN_CELLS
-    return workspace.index_grid(model, inverse.parallel_inverse(model), box, cell, limits=limits, length=length)
+    return workspace.index_grid(model, inverse.parallel_inverse(model), box, cell, index=index, limits=limits,
+                                length=length)
 
 
 def _boundary_cloud(model, occupancy, limits):
