@@ -321,8 +321,7 @@ def haptic_wall(label: str, plant: Plant, q_start: np.ndarray, wall_offset: floa
     report = stop_report(system, run, timing, q_start)
     s = system.split(run.x)
     p = plant.point(s.q)
-    desired, sensed = zip(*(renderer.desired_and_sensed(t, x) for t, x in zip(run.t, run.x)))
-    desired, sensed = np.array(desired), np.array(sensed)
+    desired, sensed = renderer.desired_and_sensed(run.t, run.x)
     names, axes = plant.coordinates, plant.point_axes
     _, effort_unit = _joint_units(plant)
     columns = {"t [s]": run.t}

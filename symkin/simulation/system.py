@@ -73,9 +73,9 @@ class ArmSystem:
         return np.concatenate(parts + [np.zeros(1 + (self.stops is not None))])
 
     def tcp_motion(self, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(p, J_p, v = J_p qd): the TCP point, its Jacobian and velocity (one fk, one Jacobian)."""
+        """(p, J_p, v = J_p qd): the TCP point, its Jacobian and velocity (one fk, one Jacobian), batched over ``...``."""
         Jp = self.plant.point_jacobian(q)
-        return self.plant.point(q), Jp, Jp @ qd
+        return self.plant.point(q), Jp, (Jp @ qd[..., None])[..., 0]
 
     def derivative(self, t: float, x: np.ndarray, tau: np.ndarray, contact: np.ndarray | None = None) -> np.ndarray:
         """dx/dt at (t, x) under joint torques ``tau`` (held by the caller).
