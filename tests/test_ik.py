@@ -444,6 +444,4 @@ def test_solve_without_shifting_keeps_the_solver_angles(ur):
     shifted, raw = solver.solve(T), solver.solve(T, shift=False)
     assert np.array_equal(shifted.valid, raw.valid) and np.array_equal(shifted.flags, raw.flags)
     assert np.all(_angle_distance(shifted.q, raw.q)[shifted.valid] < 1e-12)
-    assert np.array_equal(raw.q, solver.solver.candidates(T)[0], equal_nan=True)
-    assert np.array_equal(raw.within_limits, solver.kinematics.within_limits(raw.q) & raw.valid)
     assert shifted.within_limits[shifted.valid].all() and not raw.within_limits[raw.valid].all()

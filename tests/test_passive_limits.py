@@ -216,7 +216,7 @@ def test_least_squares_steps_agree_with_pinv_also_where_rank_deficient():
     A[4, :, 7] = 0.0
     r = rng.normal(size=(6, 18))
     expected = -np.einsum("kij,kj->ki", np.linalg.pinv(A), r)
-    # one batch mixes both paths: normal equations for the full-rank matrices, pinv for the others
+    # one batch mixes both paths: QR for the full-rank matrices, pinv for the others
     with mock.patch("symkin.runtime.parallel._pinv_steps", wraps=runtime_parallel._pinv_steps) as pinv:
         np.testing.assert_allclose(_least_squares_steps(A, r), expected, rtol=1e-9, atol=1e-12)
     (call,) = pinv.call_args_list

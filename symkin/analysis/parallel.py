@@ -40,7 +40,6 @@ from typing import Any
 import numpy as np
 
 from symkin.analysis import conditioning, mechanism, passive, sampling
-from symkin.analysis.limits import within_limits
 from symkin.ik.rotations import wrap_angle
 
 #: Largest |ik(fk(q)) - q| (rad or m) of a configuration in the working mode.  The two
@@ -278,10 +277,7 @@ class ConstantOrientation:
 
     def jacobian(self, q: np.ndarray, points: np.ndarray) -> np.ndarray:
         """The twist Jacobian J (..., 6, 6) at (q, pose of ``points``); J = 0 where J^-1 is singular or NaN."""
-        J_inverse = self.inverse_jacobian(q, points)
-        finite = np.isfinite(J_inverse).all(axis=(-2, -1))
-        J_inverse = np.where(finite[..., None, None], J_inverse, 0.0)  # unassembled: singular
-        return self.rates @ conditioning.from_inverse(J_inverse)
+        return self.rates @ conditioning.from_inverse(self.inverse_jacobian(q, points))
 
 
 def home_position(model: Any) -> np.ndarray:
@@ -390,9 +386,9 @@ def reachable_points(model: ConstantOrientation, points: np.ndarray, limits: np.
     Reachable: in the assembly mode of the home pose (:class:`ConstantOrientationInverse`) with
     the actuators within ``limits`` (n, 2).
     """
-    q, valid = constant_orientation_inverse(model).solve(points)
-    q, inside = within_limits(q[:, 0], limits, mechanism.revolute_mask(model))
-    return q, valid[:, 0] & inside
+    from symkin.analysis.inverse import feasible_configurations  # inverse imports this module
+
+    return feasible_configurations(constant_orientation_inverse(model), points, limits, mechanism.revolute_mask(model))
 
 
 def constant_orientation_box(model: ConstantOrientation, limits: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -23,7 +23,7 @@ import numpy as np
 
 from symkin.analysis import mechanism, parallel, sampling
 from symkin.analysis.estimates import Estimate
-from symkin.analysis.inverse import InverseKinematics, feasible_configurations, reachable
+from symkin.analysis.inverse import InverseKinematics
 from symkin.analysis.mechanism import Limits
 
 SAMPLING_METHODS = ("grid", "random", "sobol")
@@ -252,18 +252,25 @@ def occupancy_from_cloud(cloud: WorkspaceCloud, cell: float | None = None) -> Oc
     return Occupancy(start, size, occupied)
 
 
+def _grid_cells(box: tuple[np.ndarray, np.ndarray], cell: float) -> tuple[np.ndarray, np.ndarray, tuple, np.ndarray]:
+    """(start, cell sizes, counts, cell centres (N, d)) of the Cartesian grid of ``box``."""
+    start, size, counts = _grid_geometry(np.asarray(box[0], float), np.asarray(box[1], float), cell)
+    return start, size, counts, Occupancy(start, size, np.zeros(counts, dtype=bool)).centers().reshape(-1, len(counts))
+
+
 def reachability_grid(model: Any, inverse: InverseKinematics, box: tuple[np.ndarray, np.ndarray],
                       cell: float, *, limits: Limits | None = None) -> Occupancy:
     """Cells whose centre the inverse kinematics reaches within the joint limits.
 
     This is the Cartesian grid with IK feasibility of parallel mechanisms; any
-    :class:`~symkin.analysis.inverse.InverseKinematics` plugs in.
+    :class:`~symkin.analysis.inverse.InverseKinematics` plugs in.  The cells are evaluated
+    with the Cartesian integrand of the GCI (:func:`~symkin.analysis.global_indices.cartesian_integrand`).
     """
-    start, size, counts = _grid_geometry(np.asarray(box[0], float), np.asarray(box[1], float), cell)
-    occupancy = Occupancy(start, size, np.zeros(counts, dtype=bool))
-    centers = occupancy.centers().reshape(-1, len(counts))
-    mask = reachable(inverse, centers, mechanism.joint_limits(model, limits), mechanism.revolute_mask(model))
-    return Occupancy(start, size, mask.reshape(counts))
+    from symkin.analysis import global_indices
+
+    start, size, counts, centers = _grid_cells(box, cell)
+    indicator = global_indices.cartesian_integrand(model, inverse, box, index=None, limits=limits).function(centers)
+    return Occupancy(start, size, (indicator[:, 0] > 0).reshape(counts))
 
 
 def index_grid(model: Any, inverse: InverseKinematics, box: tuple[np.ndarray, np.ndarray], cell: float, *,
@@ -277,14 +284,11 @@ def index_grid(model: Any, inverse: InverseKinematics, box: tuple[np.ndarray, np
     from symkin.analysis import conditioning, global_indices
 
     index = conditioning.inverse_condition_number if index is None else index
-    start, size, counts = _grid_geometry(np.asarray(box[0], float), np.asarray(box[1], float), cell)
-    centers = Occupancy(start, size, np.zeros(counts, dtype=bool)).centers().reshape(-1, len(counts))
-    joint_box = mechanism.joint_limits(model, limits)
-    q, inside = feasible_configurations(inverse, centers, joint_box, mechanism.revolute_mask(model))
-    values = np.full(len(centers), np.nan)
-    if inside.any():
-        scored = global_indices.scaled_index(model, index, length, joint_box)
-        values[inside] = scored(mechanism.jacobian(model, q[inside], centers[inside]))
+    start, size, counts, centers = _grid_cells(box, cell)
+    scored = global_indices.cartesian_integrand(model, inverse, box, index=index, limits=limits,
+                                                length=length).function(centers)
+    inside = scored[:, 1] > 0
+    values = np.where(inside, scored[:, 0], np.nan)
     return Occupancy(start, size, inside.reshape(counts)), values.reshape(counts)
 
 

@@ -22,6 +22,8 @@ ANALYSIS_OUTPUTS = ("fk", "jacobian")
 #: has no closed-form fk, and its analyses at a constant orientation use ik and J^-1.
 ANALYSIS_OUTPUTS_BY_KIND = {"serial": ANALYSIS_OUTPUTS, "parallel": ("ik", "fk", "jacobian"),
                             "parallel pose": ("ik", "inverse_jacobian")}
+#: Length units of figures and design labels: metres per unit.
+LENGTH_UNITS = {"m": 1.0, "cm": 100.0, "mm": 1000.0}
 #: Also derived for a parallel model file that limits passive joints: the analyses find the
 #: passive joint variables from the loop closure (symkin.analysis.passive).
 PASSIVE_LIMIT_OUTPUTS = ("closure", "closure_jacobians")
@@ -40,6 +42,14 @@ def add_model_arguments(p: argparse.ArgumentParser, *, backend: bool = True) -> 
     p.add_argument("--limit", dest="limits", action="append", default=[], metavar="JOINT=LOWER:UPPER",
                    help="joint limits instead of the model's, in rad or m; append 'deg' for degrees, "
                         "e.g. --limit theta2=-90deg:90deg (repeatable)")
+
+
+def design_label(model: Any, values: dict[str, float], unit: str) -> str:
+    """'l1 = 10 cm, l2 = 10 cm': a design's parameter values, lengths (unit m in the manifest) in ``unit``."""
+    units = {p["name"]: p["unit"] for p in model.manifest["parameters"]}
+    parts = [f"{name} = {value * LENGTH_UNITS[unit]:g} {unit}" if units.get(name) == "m" else f"{name} = {value:g}"
+             for name, value in values.items()]
+    return ", ".join(parts) or "model parameters"
 
 
 def add_length_argument(p: argparse.ArgumentParser) -> None:

@@ -14,7 +14,7 @@ from symkin.cli.progress import Progress
 
 #: What a model file is derived with on the fly; the optional ones where the model has them.
 SIMULATION_OUTPUTS = ("fk", "jacobian", "jacobian_geometric", "forward_dynamics", "inverse_dynamics",
-                      "kinetic_energy", "coriolis_vector")
+                      "mass_matrix", "kinetic_energy", "coriolis_vector")
 OPTIONAL_OUTPUTS = ("gravity_vector", "potential_energy", "friction")
 SCENARIOS = ("sine", "tracking", "haptic-wall", "free-swing")
 #: the integrator each scenario uses unless --integrator says otherwise
@@ -140,13 +140,6 @@ def _stops(args: argparse.Namespace, plant, q0):
     return settings
 
 
-def _label(model, values: dict[str, float]) -> str:
-    units = {p["name"]: p["unit"] for p in model.manifest["parameters"]}
-    parts = [f"{name} = {value * 100:g} cm" if units.get(name) == "m" else f"{name} = {value:g}"
-             for name, value in values.items()]
-    return ", ".join(parts) or "model parameters"
-
-
 def run(args: argparse.Namespace) -> int:
     import numpy as np
 
@@ -160,7 +153,7 @@ def run(args: argparse.Namespace) -> int:
         if values:
             base = base.bind(**values)
         designs = [analysis_args.parse_assignments([text]) for text in args.design] or [{}]
-        plants = [(_label(base, d), Plant(base.bind(**d) if d else base)) for d in designs]
+        plants = [(analysis_args.design_label(base, d, "cm"), Plant(base.bind(**d) if d else base)) for d in designs]
         plant = plants[0][1]
         q0 = np.array(_start(args, plant))
         hand = analysis_args.parse_assignments(args.hand)

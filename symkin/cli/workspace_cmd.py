@@ -8,7 +8,6 @@ import time
 from symkin.cli import analysis_args
 from symkin.cli.progress import Progress
 
-UNITS = {"m": 1.0, "cm": 100.0, "mm": 1000.0}
 
 #: Cells along the longest side of the Cartesian grid of a parallel mechanism's workspace.
 CARTESIAN_CELLS = 64
@@ -44,7 +43,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--no-figure", action="store_true", help="print the report only")
     analysis_args.add_length_argument(p)
     add_orientation_argument(p)
-    p.add_argument("--unit", choices=tuple(UNITS), default="m", help="length unit of the figures (default: m)")
+    p.add_argument("--unit", choices=tuple(analysis_args.LENGTH_UNITS), default="m",
+                   help="length unit of the figures (default: m)")
     p.add_argument("--title", help="figure title")
     p.set_defaults(run=run, parser=p)
 
@@ -99,7 +99,7 @@ def run(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     with Progress(base.name) as progress:
         for values, model in zip(designs, models):
-            label = _label(base, values, args.unit)
+            label = analysis_args.design_label(base, values, args.unit)
             progress(f"sampling {label}")
             try:
                 inv_kappa, box = None, None
@@ -134,7 +134,7 @@ def run(args: argparse.Namespace) -> int:
                 print(f"  {line}")
             outline = workspace.limit_curves(model, limits=limits) if joints == 2 else ()
             layers.append((plots.WorkspaceLayer(label, cloud, outline), inv_kappa))
-        scale = UNITS[args.unit]
+        scale = analysis_args.LENGTH_UNITS[args.unit]
         if not args.no_figure:
             progress("drawing")
             title = args.title or f"Workspace of {base.name}"
@@ -167,14 +167,6 @@ def sections_path(path: str) -> str:
 
     figure = Path(path)
     return str(figure.with_name(f"{figure.stem}-sections{figure.suffix}"))
-
-
-def _label(model, values: dict[str, float], unit: str) -> str:
-    """'l1 = 10 cm, l2 = 10 cm': the design's values, lengths (unit m in the manifest) in the figure's unit."""
-    units = {p["name"]: p["unit"] for p in model.manifest["parameters"]}
-    parts = [f"{name} = {value * UNITS[unit]:g} {unit}" if units.get(name) == "m" else f"{name} = {value:g}"
-             for name, value in values.items()]
-    return ", ".join(parts) or "model parameters"
 
 
 def cartesian_index_grid(model, box, limits, length, index=None):

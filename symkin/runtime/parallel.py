@@ -68,17 +68,17 @@ def _least_squares_steps(A: np.ndarray, r: np.ndarray) -> np.ndarray:
     """Least-squares steps -A^+ r of a flat batch of tall A (k, rows, cols).
 
     Where A has full column rank - judged per matrix by the diagonal of R in A = QR - from
-    the normal equations A^T A x = -A^T r (several times faster than the SVD behind pinv);
-    elsewhere the minimum-norm step of pinv.  The normal equations square the condition
-    number of the step, not of the solution: a Gauss-Newton fixed point A^T r = 0 is the same.
+    that factorization, R x = -Q^T r (several times faster than the SVD behind pinv, and
+    without squaring the condition number as the normal equations would); elsewhere the
+    minimum-norm step of pinv.
     """
     if A.shape[1] < A.shape[2]:
         return _pinv_steps(A, r)
-    pivots = np.abs(np.diagonal(np.linalg.qr(A, mode="r"), axis1=1, axis2=2))
+    Q, R = np.linalg.qr(A)
+    pivots = np.abs(np.diagonal(R, axis1=1, axis2=2))
     regular = pivots.min(axis=1) > _FULL_RANK * pivots.max(axis=1)
     steps = np.empty(A.shape[:1] + A.shape[2:])
-    At = np.swapaxes(A[regular], 1, 2)
-    steps[regular] = -np.linalg.solve(At @ A[regular], At @ r[regular][..., None])[..., 0]
+    steps[regular] = -np.linalg.solve(R[regular], np.einsum("kji,kj->ki", Q[regular], r[regular])[..., None])[..., 0]
     steps[~regular] = _pinv_steps(A[~regular], r[~regular])
     return steps
 

@@ -20,7 +20,7 @@ from symkin.errors import GeneratedCodeError
 from symkin.runtime import LoadedModel
 
 #: Functions a plant cannot do without, and how to get them.
-REQUIRED = ("forward_dynamics", "inverse_dynamics", "kinetic_energy")
+REQUIRED = ("forward_dynamics", "inverse_dynamics", "mass_matrix", "kinetic_energy")
 
 
 class Plant:
@@ -77,8 +77,9 @@ class Plant:
         if self._gravity is not None and self._potential is None:
             raise GeneratedCodeError(f"{self.name}: the energy balance needs 'potential_energy'; derive it too")
         if self._friction is None and "coriolis_vector" in functions:
-            friction = self.model.inverse_dynamics(q, qd, zero) - static - self.model.coriolis_vector(q, qd)
-            scale = np.max(np.abs(static)) + np.max(np.abs(self.model.coriolis_vector(q, qd))) + 1.0
+            coriolis = self.model.coriolis_vector(q, qd)
+            friction = self.model.inverse_dynamics(q, qd, zero) - static - coriolis
+            scale = np.max(np.abs(static)) + np.max(np.abs(coriolis)) + 1.0
             if np.max(np.abs(friction)) > 1e-9 * scale:
                 raise GeneratedCodeError(f"{self.name}: the model has friction but 'friction' was not generated; "
                                          "derive it with friction")
@@ -90,6 +91,10 @@ class Plant:
     def torque(self, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
         """tau = M qdd + V + G + F_f (generated ``inverse_dynamics``, seed eq. 8.34)."""
         return self.model.inverse_dynamics(q, qd, qdd)
+
+    def mass_matrix(self, q: np.ndarray) -> np.ndarray:
+        """M(q) (..., n, n) (generated ``mass_matrix``; the joint stops take their inertia from it)."""
+        return self.model.mass_matrix(q)
 
     def gravity(self, q: np.ndarray) -> np.ndarray:
         """G(q) = du/dq, zero without gravity."""

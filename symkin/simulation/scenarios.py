@@ -32,8 +32,8 @@ from symkin.simulation.contacts import Contact
 from symkin.simulation.control import ComputedTorque, Wall, WallRenderer
 from symkin.simulation.integrate import Run, run_adaptive, run_sampled
 from symkin.simulation.plant import Plant
-from symkin.simulation.stops import (DAMPING_RATIO, TIME_CONSTANT, ContactModes, JointStops, mass_matrix, rk4_stability,
-                                     stop_configurations)
+from symkin.simulation.stops import (DAMPING_RATIO, TIME_CONSTANT, ContactModes, JointStops, Stability,
+                                     rk4_stability, stop_configurations)
 from symkin.simulation.system import ArmSystem
 from symkin.simulation.trajectory import JointSine, task_circle
 from symkin.simulation.user import MassSpringDamperUser, sine_intent
@@ -141,15 +141,15 @@ def balance_drift(system: ArmSystem, run: Run, energy: np.ndarray | None = None)
     """
     s = system.split(run.x)
     energy = system.plant.energy(s.q, s.qd) if energy is None else energy
-    b = energy + system.stop_energy(s) - s.work  # system.balance, without evaluating the energy again
+    b = system.balance(run.x, energy)
     scale = max(1.0, float(np.max(np.abs(energy))))
     return float(np.max(np.abs(b - b[0]))) / scale
 
 
 def _system(plant: Plant, q: np.ndarray, stops: StopSettings | None, timing: Timing,
-            user: MassSpringDamperUser | None = None) -> ArmSystem:
-    """The system with the stops built at q; warns (:class:`StopStabilityWarning`) before a
-    fixed-step run that is unstable in contact."""
+            user: MassSpringDamperUser | None = None) -> tuple[ArmSystem, Stability | None]:
+    """The system with the stops built at q, and RK4's stability in contact (:func:`_stability`);
+    warns (:class:`StopStabilityWarning`) before a fixed-step run that is unstable in contact."""
     system = ArmSystem(plant, user, stops.build(plant, q) if stops is not None else None)
     stability = _stability(system, timing, q)
     if stability is not None and not stability.stable:
@@ -157,7 +157,7 @@ def _system(plant: Plant, q: np.ndarray, stops: StopSettings | None, timing: Tim
             f"{plant.name}: RK4 at h = {stability.step * 1e3:.4g} ms is unstable in contact with the joint stops "
             f"(omega_max h = {stability.omega_max * stability.step:.3g}, the limit is about 2.83); use --substeps "
             f"{stability.substeps_needed} or more, or a longer --stop-time-constant"), stacklevel=3)
-    return system
+    return system, stability
 
 
 def _stability(system: ArmSystem, timing: Timing, q: np.ndarray):
@@ -165,8 +165,8 @@ def _stability(system: ArmSystem, timing: Timing, q: np.ndarray):
     fixed-step run)."""
     if system.stops is None or timing.integrator != "rk4":
         return None
-    masses = [mass_matrix(system.plant, c) for c in stop_configurations(system.stops, q)]
-    return rk4_stability(system.stops, np.array(masses), 1.0 / timing.rate, timing.substeps)
+    masses = system.plant.mass_matrix(stop_configurations(system.stops, q))
+    return rk4_stability(system.stops, masses, 1.0 / timing.rate, timing.substeps)
 
 
 @dataclass(frozen=True)
@@ -178,9 +178,9 @@ class StopReport:
     contacts: tuple[Contact, ...] = ()
 
 
-def stop_report(system: ArmSystem, run: Run, timing: Timing, q: np.ndarray) -> StopReport:
+def stop_report(system: ArmSystem, run: Run, stability: Stability | None) -> StopReport:
     """Contacts, penetrations and energies of the stops; for RK4, its stability in contact
-    (:func:`~symkin.simulation.stops.rk4_stability` at q and the corners of the limits)."""
+    (``stability`` from :func:`_system`; None for the event-located DOP853)."""
     stops = system.stops
     if stops is None:
         return StopReport()
@@ -188,7 +188,6 @@ def stop_report(system: ArmSystem, run: Run, timing: Timing, q: np.ndarray) -> S
     found = contact_report.intervals(stops, run)
     lines = ["  " + line for line in stops.describe(units)]
     lines += contact_report.summary(system, run, found, units)
-    stability = _stability(system, timing, q)
     if stability is not None:
         lines.append("  " + stability.describe())
     else:
@@ -227,9 +226,9 @@ def sine(designs: Sequence[tuple[str, Plant]], center: np.ndarray, joint: int, a
     for label, plant in designs:
         tau = plant.torque(q, qd, qdd)
         force = tcp_forces(plant.model.jacobian(q), tau)
-        system = _system(plant, center, stops, timing)
+        system, stability = _system(plant, center, stops, timing)
         run = integrate(system, ComputedTorque(system, reference), system.initial(q[0], qd[0]), timing)
-        report = stop_report(system, run, timing, center)
+        report = stop_report(system, run, stability)
         simulated = system.split(run.x)
         error = _peak(simulated.q - q)
         columns = {"t [s]": t}
@@ -271,9 +270,9 @@ def tracking(label: str, plant: Plant, q_start: np.ndarray, radius: float, timin
              bandwidth: float = 50.0, stops: StopSettings | None = None) -> ScenarioResult:
     """A TCP circle followed by computed-torque control (seed Fig. 8.17)."""
     reference = task_circle(plant, q_start, radius, timing.duration)
-    system = _system(plant, q_start, stops, timing)
+    system, stability = _system(plant, q_start, stops, timing)
     run = integrate(system, ComputedTorque(system, reference, bandwidth), system.initial(q_start), timing)
-    report = stop_report(system, run, timing, q_start)
+    report = stop_report(system, run, stability)
     q_r = reference(run.t)[0]
     s = system.split(run.x)
     p_r, p = plant.point(q_r), plant.point(s.q)
@@ -315,10 +314,10 @@ def haptic_wall(label: str, plant: Plant, q_start: np.ndarray, wall_offset: floa
     normal[0] = 1.0
     user = MassSpringDamperUser(sine_intent(p0, normal, push, frequency), **(hand or {}))
     wall = Wall(normal, float(p0 @ normal) + wall_offset, stiffness, damping)
-    system = _system(plant, q_start, stops, timing, user)
+    system, stability = _system(plant, q_start, stops, timing, user)
     renderer = WallRenderer(system, wall, force_gain)
     run = integrate(system, renderer, system.initial(q_start), timing)
-    report = stop_report(system, run, timing, q_start)
+    report = stop_report(system, run, stability)
     s = system.split(run.x)
     p = plant.point(s.q)
     desired, sensed = renderer.desired_and_sensed(run.t, run.x)
@@ -352,10 +351,10 @@ def free_swing(label: str, plant: Plant, q_start: np.ndarray, timing: Timing,
                stops: StopSettings | None = None) -> ScenarioResult:
     """No torques, released at rest: the energy k + u is conserved without friction and stops
     (with stops: k + u + U + D, U stored in and D dissipated by them)."""
-    system = _system(plant, q_start, stops, timing)
+    system, stability = _system(plant, q_start, stops, timing)
     zero = np.zeros(plant.dof)
     run = integrate(system, lambda t, x: zero, system.initial(q_start), timing)
-    report = stop_report(system, run, timing, q_start)
+    report = stop_report(system, run, stability)
     s = system.split(run.x)
     energy = plant.energy(s.q, s.qd)
     names = plant.coordinates
@@ -364,7 +363,7 @@ def free_swing(label: str, plant: Plant, q_start: np.ndarray, timing: Timing,
     columns |= _named("", names, position_unit, s.q)
     columns["energy k + u [J]"] = energy
     columns["work of friction [J]"] = s.work
-    balance = energy + system.stop_energy(s) - s.work
+    balance = system.balance(run.x, energy)
     columns |= report.columns
     columns["balance drift [J]"] = balance - balance[0]
     summary = [f"{label}: free swing for {timing.duration:g} s ({timing.integrator}, {run.evaluations} evaluations)",

@@ -73,15 +73,6 @@ def effective_inertia(mass: np.ndarray) -> np.ndarray:
     return 1.0 / np.diag(np.linalg.inv(mass))
 
 
-def mass_matrix(plant, q: np.ndarray) -> np.ndarray:
-    """M(q) (n, n) from the generated inverse dynamics: column i = ID(q, 0, e_i) - ID(q, 0, 0)."""
-    q = np.asarray(q, dtype=float)
-    n = plant.dof
-    zero = np.zeros((n, n))
-    columns = plant.torque(np.tile(q, (n, 1)), zero, np.eye(n)) - plant.torque(q, zero[0], zero[0])
-    return np.asarray(columns).T
-
-
 @dataclass(frozen=True)
 class JointStops:
     """Unilateral spring-dampers at the joint limits (see the module docstring).
@@ -127,7 +118,7 @@ class JointStops:
         if not limited.any():
             return None
         names = tuple(plant.coordinates)
-        inertia = effective_inertia(mass_matrix(plant, q))
+        inertia = effective_inertia(plant.mass_matrix(np.asarray(q, dtype=float)))
         omega = 1.0 / time_constant
         k = np.where(limited, inertia * omega ** 2, 0.0)
         c = np.where(limited, 2.0 * damping_ratio * inertia * omega, 0.0)
@@ -159,8 +150,8 @@ class JointStops:
         return np.maximum(0.0, np.maximum(d_lo, d_hi))
 
     def torque_and_dissipation(self, q: np.ndarray, qd: np.ndarray,
-                               contact: np.ndarray | None = None) -> tuple[np.ndarray, float]:
-        """(tau_stop (n,), D' = sum c d'^2) at one state.
+                               contact: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """(tau_stop (..., n), D' = sum c d'^2 (...,)) at states (..., n).
 
         ``contact``: the engaged stops (-1, 0, +1 per joint) of a hybrid mode; the spring-damper
         then acts on the engaged joints whatever the sign of d (the smooth continuation the
@@ -168,13 +159,13 @@ class JointStops:
         """
         side = self.contact(q) if contact is None else contact
         if not np.any(side):
-            return np.zeros_like(q), 0.0
+            return np.zeros_like(q), np.zeros(np.shape(q)[:-1])
         # d = side (q - limit), d' = side qd; tau = -side (k d + c d')
         limit = np.where(side < 0, self.lower, np.where(side > 0, self.upper, 0.0))
         d = side * (q - limit)
         rate = side * qd
         tau = -side * (self.stiffness * d + self.damping * rate)
-        return tau, float(np.sum(self.damping * rate * rate))
+        return tau, np.sum(self.damping * rate * rate, axis=-1)
 
     def stored_energy(self, q: np.ndarray) -> np.ndarray:
         """U = sum 1/2 k max(0, d)^2 (...,)."""

@@ -109,8 +109,9 @@ class ArmSystem:
             return np.zeros(np.shape(s.work))
         return self.stops.stored_energy(s.q) + s.dissipated
 
-    def balance(self, x: np.ndarray) -> np.ndarray:
+    def balance(self, x: np.ndarray, energy: np.ndarray | None = None) -> np.ndarray:
         """k + u + U + D - w along states (..., size): constant for the exact solution (see the
-        module docstring)."""
+        module docstring).  ``energy``: k + u at those states, if the caller has it already."""
         s = self.split(x)
-        return self.plant.energy(s.q, s.qd) + self.stop_energy(s) - s.work
+        energy = self.plant.energy(s.q, s.qd) if energy is None else energy
+        return energy + self.stop_energy(s) - s.work
