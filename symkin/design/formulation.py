@@ -103,9 +103,10 @@ class Program:
     """A nonlinear program min f(x) s.t. lbg <= g(x) <= ubg, lbx <= x <= ubx, and how to read it.
 
     Attributes:
-        x, f, g: CasADi MX expressions (f is -objective / |objective(start)|).
+        x, f, g: CasADi MX expressions (f is -objective / reference).
         x0, lbx, ubx, lbg, ubg: numeric start and bounds.
         objective: Function of the free parameter values (unscaled) -> the surrogate.
+        reference: |objective(start)|, the scale of f (surrogate = -f * reference).
         free_count: the first ``free_count`` entries of x are the scaled free parameters.
         scales: value = x * scale for those.
         nodes: the objective's sample points (joint configurations or box points).
@@ -122,6 +123,7 @@ class Program:
     lbg: np.ndarray
     ubg: np.ndarray
     objective: casadi.Function
+    reference: float
     free_count: int
     scales: np.ndarray
     nodes: np.ndarray
@@ -157,8 +159,8 @@ def formulate(problem: DesignProblem, casadi_model: Any, numpy_model: Any, *, no
     build = _parallel if problem.parallel else _serial
     terms = build(problem, casadi_model, numpy_model, free, values, z * scales, nodes, box_points, seed)
     free_values = casadi.MX.sym("free", len(problem.free))
-    objective_function = casadi.Function("objective", [z], [terms.objective])
-    objective_function = casadi.Function("surrogate", [free_values], [objective_function(free_values / scales)],
+    objective_function = casadi.Function("surrogate", [free_values],
+                                         [casadi.substitute(terms.objective, z, free_values / scales)],
                                          ["free"], ["surrogate"])
     start = np.array([p.start for p in problem.free])
     reference = abs(float(objective_function(start)))
@@ -170,7 +172,7 @@ def formulate(problem: DesignProblem, casadi_model: Any, numpy_model: Any, *, no
                    np.concatenate([[p.lower for p in problem.free] / scales, terms.lower]),
                    np.concatenate([[p.upper for p in problem.free] / scales, terms.upper]),
                    np.asarray(terms.lbg, float), np.asarray(terms.ubg, float), objective_function,
-                   len(problem.free), scales, terms.nodes, terms.box_points, terms.description)
+                   reference, len(problem.free), scales, terms.nodes, terms.box_points, terms.description)
 
 
 def _serial(problem: DesignProblem, casadi_model: Any, numpy_model: Any, free: casadi.SX, values: dict[str, Any],

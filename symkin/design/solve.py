@@ -70,15 +70,14 @@ def solve(problem: DesignProblem, program: Program, *, build_seconds: float = 0.
     g = np.asarray(result["g"]).ravel()
     violation = float(np.max(np.concatenate([[0.0], program.lbg - g, g - program.ubg]))) if g.size else 0.0
     free = program.free_values(x)
-    # CasADi records the scaled objective f = -surrogate / |surrogate at the start| at every iterate.
-    surrogate_start = float(program.objective(program.free_values(program.x0)))
-    history = -np.asarray(stats["iterations"]["obj"], dtype=np.float64) * abs(surrogate_start)
+    # CasADi records the scaled objective f = -surrogate / reference at every iterate.
+    history = -np.asarray(stats["iterations"]["obj"], dtype=np.float64) * program.reference
     box_q = x[program.free_count:]
     if program.box_points.size and box_q.size:
         box_q = box_q.reshape(len(program.box_points), -1)
     return Solution(
         start=problem.start, optimum=problem.design(free),
-        surrogate_start=surrogate_start,
+        surrogate_start=float(program.objective(program.free_values(program.x0))),
         surrogate_optimum=float(program.objective(free)), history=history,
         infeasibility=np.asarray(stats["iterations"]["inf_pr"], dtype=np.float64),
         status=str(stats["return_status"]), success=bool(stats["success"]), iterations=int(stats["iter_count"]),

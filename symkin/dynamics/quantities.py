@@ -167,25 +167,23 @@ class _BoundTerms:
     """The terms of eq. 8.34 bound into one program, always in the same order (M, dM/dq, V, G, F_f),
     so that the programs of different functions start alike and share their conversion.
 
-    M comes from the composite-rigid-body algorithm, everything without M from one
-    Newton-Euler pass (:func:`~symkin.dynamics.newton_euler.inverse_dynamics`); with
-    ``lagrangian=True`` the terms are the Lagrangian reference instead (M = sum J^T I J,
-    V = C qd from its Christoffel symbols, G = du/dq).
+    M comes from the composite-rigid-body algorithm (or, with ``source="lagrangian_"``, from the
+    Lagrangian reference's graphs), everything without M from one Newton-Euler pass
+    (:func:`~symkin.dynamics.newton_euler.inverse_dynamics`).
     """
 
-    def __init__(self, d: Derivation, program: Program, lagrangian: bool = False):
-        self.d, self.program, self.lagrangian = d, program, lagrangian
+    def __init__(self, d: Derivation, program: Program, source: str = ""):
+        self.d, self.program, self.source = d, program, source
         self.n = d.model.dof
-        self.prefix = "lagrangian_" if lagrangian else ""
 
     def mass_matrix(self) -> Matrix:
-        values = self.program.bind(_flat(self.d[self.prefix + "mass_matrix_graph"]))
+        values = self.program.bind(_flat(self.d[self.source + "mass_matrix_graph"]))
         return [values[i * self.n:(i + 1) * self.n] for i in range(self.n)]
 
     def partials(self) -> list[Matrix]:
         """dM/dq_k as partials[k][i][j]."""
         n = self.n
-        values = self.program.bind([v for dM in self.d[self.prefix + "mass_matrix_partials"] for v in _flat(dM)])
+        values = self.program.bind([v for dM in self.d[self.source + "mass_matrix_partials"] for v in _flat(dM)])
         return [[values[k * n * n + i * n:k * n * n + (i + 1) * n] for i in range(n)] for k in range(n)]
 
     def newton_euler(self, velocity: bool, acceleration: bool, gravity: bool) -> list[se.Basic]:
@@ -196,15 +194,11 @@ class _BoundTerms:
             d["newton_euler_links"], qd, qdd, d["gravity_graph"] if gravity else None))
 
     def coriolis_vector(self) -> list[se.Basic]:
-        if self.lagrangian:
-            return lagrange.coriolis_vector(self.partials(), _symbols(self.d, "qd"))
         return self.newton_euler(velocity=True, acceleration=False, gravity=False)
 
     def gravity_vector(self) -> list[se.Basic] | None:
         if self.d["gravity_graph"] is None:
             return None
-        if self.lagrangian:
-            return self.program.bind(self.d["lagrangian_gravity_vector_graph"])
         return self.program.bind(newton_euler.gravity_torques(self.d["newton_euler_links"], self.d["gravity_graph"]))
 
     def friction(self) -> list[se.Basic] | None:
@@ -212,20 +206,9 @@ class _BoundTerms:
 
     def torques(self, acceleration: bool, with_friction: bool) -> list[se.Basic]:
         """M qdd (if ``acceleration``) + V + G (+ F_f): eq. 8.34, in one Newton-Euler pass."""
-        if self.lagrangian:
-            terms = self.coriolis_vector()
-            if acceleration:
-                terms = [a + b for a, b in zip(terms, mat_vec(self.mass_matrix(), _symbols(self.d, "qdd")))]
-            extras = [self.gravity_vector()]
-        else:
-            terms = self.newton_euler(velocity=True, acceleration=acceleration, gravity=True)
-            extras = []
-        if with_friction:
-            extras.append(self.friction())
-        for extra in extras:
-            if extra is not None:
-                terms = [a + b for a, b in zip(terms, extra)]
-        return terms
+        terms = self.newton_euler(velocity=True, acceleration=acceleration, gravity=True)
+        friction = self.friction() if with_friction else None
+        return terms if friction is None else [a + b for a, b in zip(terms, friction)]
 
 
 @quantity("lagrangian_dynamics", "M, C, V, G and tau from the Lagrangian closed forms (reference)", emitted=False)
@@ -234,16 +217,21 @@ def _lagrangian_dynamics(d: Derivation) -> FunctionSpec:
     :mod:`symkin.dynamics.lagrange`, independent of the Newton-Euler and composite-rigid-body code."""
     n = d.model.dof
     program = Program()
-    terms = _BoundTerms(d, program, lagrangian=True)
-    M = terms.mass_matrix()
-    C = lagrange.coriolis_matrix(terms.partials(), _symbols(d, "qd"))
+    terms = _BoundTerms(d, program, source="lagrangian_")
+    qd = _symbols(d, "qd")
+    M, partials = terms.mass_matrix(), terms.partials()
+    C = lagrange.coriolis_matrix(partials, qd)
+    V = lagrange.coriolis_vector(partials, qd)
+    G = program.bind(d["lagrangian_gravity_vector_graph"]) if d["gravity_graph"] is not None else None
+    tau = [a + b for a, b in zip(V, mat_vec(M, _symbols(d, "qdd")))]
+    for extra in (G, terms.friction()):
+        if extra is not None:
+            tau = [a + b for a, b in zip(tau, extra)]
     outputs = [("M", _flat(M), (n, n), "mass matrix", ""), ("C", _flat(C), (n, n), "Coriolis matrix", ""),
-               ("V", terms.coriolis_vector(), (n,), "Coriolis and centrifugal torques", EFFORT_UNIT)]
-    G = terms.gravity_vector()
+               ("V", V, (n,), "Coriolis and centrifugal torques", EFFORT_UNIT)]
     if G is not None:
         outputs.append(("G", G, (n,), "gravity torques", EFFORT_UNIT))
-    outputs.append(("tau", terms.torques(acceleration=True, with_friction=True), (n,), "inverse dynamics",
-                    EFFORT_UNIT))
+    outputs.append(("tau", tau, (n,), "inverse dynamics", EFFORT_UNIT))
     return _function(
         d, "lagrangian_dynamics", "Lagrangian reference dynamics.",
         "M = sum J^T I J, C from the Christoffel symbols of M, V = C qd, G = du/dq, "
