@@ -116,15 +116,14 @@ def joint_space_integrand(model: Any, *, index: Index | None = conditioning.inve
     if measure not in MEASURES:
         raise ValueError(f"unknown measure '{measure}'; choose one of {', '.join(MEASURES)}")
     box = mechanism.joint_limits(model, limits)
-    if jacobian is not None:
-        def evaluate(q: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
-            return jacobian(q), None
-    elif mechanism.is_parallel(model):
-        def evaluate(q: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+    if jacobian is None and mechanism.is_parallel(model):
+        def evaluate(q: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:  # (J, working-mode mask)
             return parallel.jacobian_in_working_mode(model, q)
     else:
+        serial_jacobian = jacobian or model.jacobian
+
         def evaluate(q: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
-            return model.jacobian(q), None
+            return serial_jacobian(q), None
     n = box.shape[0]
     if measure == "cartesian":
         m = len(mechanism.task_space(model))

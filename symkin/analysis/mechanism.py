@@ -104,6 +104,18 @@ def is_parallel(model: Any) -> bool:
     return "parallel" in model.manifest["model"]
 
 
+def home_pose(model: Any) -> np.ndarray:
+    """The home pose ``parallel.home`` of a parallel mechanism (task coordinates p).
+
+    Raises:
+        ValueError: the model declares none (the workspace analyses scale with it).
+    """
+    home = model.manifest["model"]["parallel"].get("home")
+    if home is None:
+        raise ValueError(f"{model.name}: declare a home pose (parallel.home) to scale the workspace analyses")
+    return np.array(home, dtype=np.float64)
+
+
 def tcp_positions(model: Any, q: np.ndarray) -> np.ndarray:
     """TCP positions of a batch of configurations, shape (..., d), from the generated ``fk``.
 

@@ -162,15 +162,8 @@ def parallel_inverse(model: Any) -> ParallelInverse | ConstantOrientationInverse
                          "its Cartesian workspace is analysed at a constant orientation "
                          "(symkin.analysis.parallel.constant_orientation(model, (roll, pitch, yaw)))")
     _require(model, ("ik", "fk", "jacobian"))
-    size = max(float(np.linalg.norm(_home(model))), 1e-3)
+    size = max(float(np.linalg.norm(mechanism.home_pose(model))), 1e-3)
     return ParallelInverse(model, size, passive.declared_limits(model))
-
-
-def _home(model: Any) -> np.ndarray:
-    home = model.manifest["model"]["parallel"].get("home")
-    if home is None:
-        raise ValueError(f"{model.name}: declare a home pose (parallel.home) to scale the workspace analyses")
-    return np.array(home, dtype=np.float64)
 
 
 # --- pose platforms (Stewart-Gough) at a constant orientation --------------------------------
@@ -282,7 +275,7 @@ class ConstantOrientation:
 
 def home_position(model: Any) -> np.ndarray:
     """The platform centre (x, y, z) of the home pose ``parallel.home``."""
-    return _home(model)[:3]
+    return mechanism.home_pose(model)[:3]
 
 
 def orientation_text(model: ConstantOrientation) -> str:
@@ -293,7 +286,7 @@ def orientation_text(model: ConstantOrientation) -> str:
 def constant_orientation(model: Any, orientation=None) -> ConstantOrientation:
     """``model`` held at ``orientation`` (roll, pitch, yaw in rad; default: that of ``parallel.home``)."""
     if orientation is None:
-        orientation = _home(model)[3:]
+        orientation = mechanism.home_pose(model)[3:]
     return ConstantOrientation(model, orientation)
 
 
@@ -303,7 +296,7 @@ def home_sign(model: Any) -> float:
     Raises:
         ValueError: the home pose is out of reach or singular.
     """
-    home = _home(model)
+    home = mechanism.home_pose(model)
     with np.errstate(invalid="ignore"):
         q = model.ik(home).joints
         determinant = float(np.linalg.det(model.inverse_jacobian(q, home))) if np.all(np.isfinite(q)) else np.nan
@@ -359,7 +352,7 @@ def leg_sphere_centres(model: ConstantOrientation) -> np.ndarray:
     Raises:
         ValueError: a leg length is not the distance to a fixed point.
     """
-    size = max(float(np.linalg.norm(_home(model.model)[:3])), 1e-3)
+    size = max(float(np.linalg.norm(mechanism.home_pose(model.model)[:3])), 1e-3)
     steps = size * np.vstack([np.eye(3), -np.eye(3)])
     with np.errstate(invalid="ignore"):
         squares = model.ik(steps).joints ** 2

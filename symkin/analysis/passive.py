@@ -32,6 +32,7 @@ from typing import Any
 
 import numpy as np
 
+from symkin.analysis import mechanism
 from symkin.analysis.limits import within_limits
 from symkin.runtime.parallel import solve_closure
 
@@ -129,7 +130,7 @@ def home_assembly(model: Any) -> np.ndarray:
 
 
 def _home_assembly(model: Any) -> np.ndarray:
-    home = np.array(model.manifest["model"]["parallel"]["home"], dtype=np.float64)
+    home = mechanism.home_pose(model)
     size = len(_passive_input(model)["elements"])
     with np.errstate(invalid="ignore"):
         q = model.ik(home).joints

@@ -77,9 +77,9 @@ def run(args: argparse.Namespace) -> int:
     print("fastest run reaching a relative error of the GCI of:")
     targets = (1e-3, 1e-6, 1e-9)
     best = [convergence.fastest_within(trials, target) for target in targets]
-    summary = [[domain, method, backend] + [f"{b[key].seconds * 1e3:.2f} ms ({b[key].evaluations})" if b[key] else "-"
-                                            for b in best]
-               for key in best[0] for backend, domain, method in [key]]
+    summary = [[key[1], key[2], key[0]] + [f"{b[key].seconds * 1e3:.2f} ms ({b[key].evaluations})" if b[key] else "-"
+                                           for b in best]
+               for key in best[0]]  # key = (backend, domain, method)
     print(format_table(["domain", "method", "backend"] + [f"{t:g}" for t in targets], summary))
     panels: dict = {}
     for t in trials:
@@ -107,5 +107,8 @@ def _backends(args: argparse.Namespace) -> list[str]:
         return [args.backend]
     if Path(args.model).suffix.lower() in (".yaml", ".yml"):
         return ["numpy"]  # a model file is derived on the fly, for numpy
-    emitted = analysis_args.load_model(args.model).manifest.get("backends", {})
+    from symkin.manifest import read_manifest
+
+    directory = Path(args.model)
+    emitted = read_manifest(directory.parent if directory.name == "manifest.json" else directory).get("backends", {})
     return [b for b in DEFAULT_BACKENDS if b in emitted]

@@ -102,31 +102,25 @@ def run(args: argparse.Namespace) -> int:
             label = analysis_args.design_label(base, values, args.unit)
             progress(f"sampling {label}")
             try:
-                inv_kappa, box = None, None
-                if isinstance(model, parallel.ConstantOrientation):  # no fk: the Cartesian grid is the cloud
+                inv_kappa, box, grid = None, None, None
+                if mechanism.is_parallel(model):  # 1/kappa and the volume come from a Cartesian grid
                     box = workspace.bounding_box(model, limits=limits)
                     progress(f"Cartesian grid {label}")
                     grid = cartesian_index_grid(model, box, limits, length)
-                    cloud = _boundary_cloud(model, grid[0], limits)  # drawn: the workspace's surface
-                    report = _report(model, cloud, inv_kappa, limits, progress, box) + _cartesian_report(*grid)
                     grids.append(grid)
+                if isinstance(model, parallel.ConstantOrientation):  # no fk: the grid's surface is the cloud
+                    cloud = _boundary_cloud(model, grid[0], limits)
                     sampled = (f"{int(grid[0].occupied.sum())} reachable cells of a Cartesian grid at roll, pitch, "
                                f"yaw = {parallel.orientation_text(model)}")
                 else:
                     cloud = workspace.sample_workspace(model, args.samples, method=method, limits=limits,
                                                        seed=args.seed)
-                    if mechanism.is_parallel(model):  # 1/kappa and the volume come from a Cartesian grid over this box
-                        box = workspace.bounding_box(model, limits=limits)
-                    else:
+                    if grid is None:
                         progress(f"conditioning {label}")
                         inv_kappa = global_indices.local_index(model, cloud.q, length=length, limits=limits)
-                    report = _report(model, cloud, inv_kappa, limits, progress, box)
-                    if mechanism.is_parallel(model):
-                        progress(f"Cartesian grid {label}")
-                        grid = cartesian_index_grid(model, box, limits, length)
-                        report += _cartesian_report(*grid)
-                        grids.append(grid)
                     sampled = f"{len(cloud.q)} configurations ({method})"
+                report = _report(model, cloud, inv_kappa, limits, progress, box)
+                report += _cartesian_report(*grid) if grid is not None else []
             except ValueError as err:
                 analysis_args.fail_on_bad_input(args, err)
             print(f"{model.name} ({label}): {sampled}, workspace in {', '.join(cloud.axes)}")

@@ -254,6 +254,11 @@ def _assembled_side(sweep: _Sweep, j: int, value: float, reach: float) -> float:
     return 0.0
 
 
+def _distance(a: float, b: float, angular: bool) -> float:
+    """|a - b|, for angles modulo 2 pi."""
+    return abs(np.remainder(a - b + np.pi, 2 * np.pi) - np.pi) if angular else abs(a - b)
+
+
 def singular_paths(model: Model, jacobian: Callable[..., np.ndarray], rng: np.random.Generator,
                    limit: int = 8, per_coordinate: int = 2, ik: IK | None = None,
                    reach: float = 0.1) -> list[SingularPath]:
@@ -272,9 +277,8 @@ def singular_paths(model: Model, jacobian: Callable[..., np.ndarray], rng: np.ra
     sweep = _serial_sweep(model, rng) if model.parallel is None else _parallel_sweep(model, rng, ik)
     found: list[SingularPath] = []
     for j, name in enumerate(sweep.names):
-        grid = sweep.base[j] + np.linspace(-sweep.spans[j], sweep.spans[j], SWEEP_POINTS)
-        if sweep.angular[j]:
-            grid -= sweep.base[j]
+        centre = 0.0 if sweep.angular[j] else sweep.base[j]  # angles: a full turn around 0
+        grid = centre + np.linspace(-sweep.spans[j], sweep.spans[j], SWEEP_POINTS)
         x = np.tile(sweep.base, (SWEEP_POINTS, 1))
         x[:, j] = grid
         r = _inverse_kappa(jacobian, sweep.configure(x))
@@ -293,7 +297,7 @@ def singular_paths(model: Model, jacobian: Callable[..., np.ndarray], rng: np.ra
             value = _snap(value) if sweep.angular[j] else value
             inverse_kappa = at(value)
             side = _assembled_side(sweep, j, value, reach)
-            duplicate = any(p.coordinate == j and abs(np.remainder(p.value - value + np.pi, 2 * np.pi) - np.pi) < 1e-9
+            duplicate = any(p.coordinate == j and _distance(p.value, value, sweep.angular[j]) < 1e-9 * sweep.units[j]
                             for p in found)
             if side and inverse_kappa < (SINGULAR_BOUNDARY if edge else SINGULAR) and not duplicate:
                 found.append(SingularPath(j, name, value, sweep.base, inverse_kappa, sweep.configure, side,
