@@ -102,7 +102,7 @@ def test_2r_with_free_length_ratio_finds_the_isotropic_design(arm, theta2_limits
         == pytest.approx(1.0, abs=1e-14)
 
 
-def test_maximizing_the_gci_of_the_2r_improves_its_independent_gci_and_keeps_the_box(arm):
+def test_maximizing_the_gci_of_the_2r_improves_its_independent_gci_and_keeps_the_box(arm, monkeypatch):
     numpy_model, _ = arm
     box = {"x": (0.11, 0.14), "y": (0.11, 0.14)}
     problem, _, solution = _optimize(arm, "gci", ["l1"], bounds={"l1": (0.05, 0.3)}, box=box)
@@ -118,6 +118,14 @@ def test_maximizing_the_gci_of_the_2r_improves_its_independent_gci_and_keeps_the
     assert np.all((q >= -1e-9) & (q <= np.pi / 2 + 1e-9))
     tcp = numpy_model.bind(**solution.optimum).fk(q)[:, :2, 3]
     assert np.abs(tcp[[0, -1]] - [[0.11, 0.11], [0.14, 0.14]]).max() < 1e-9
+    # without a closed-form inverse, the box is checked at those configurations by the generated fk
+    monkeypatch.setattr("symkin.analysis.inverse.inverse_kinematics_for", lambda model: None)
+    checked = design.evaluate(problem, numpy_model, solution.optimum, samples=2**10,
+                              box_points=solution.box_points, box_configurations=q)
+    assert checked.box_reachable == 1.0 and "generated fk" in checked.box_check
+    moved = design.evaluate(problem, numpy_model, solution.optimum, samples=2**10,
+                            box_points=solution.box_points + 1e-6, box_configurations=q)
+    assert moved.box_reachable == 0.0
 
 
 def test_workspace_maximization_of_the_2r_reaches_the_length_bound(arm):

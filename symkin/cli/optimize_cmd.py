@@ -89,8 +89,9 @@ def run(args: argparse.Namespace) -> int:
             progress("independent evaluation")
             start = time.perf_counter()
             rating = tuple(design.evaluate(problem, numpy_model, d, samples=args.samples, seed=args.seed,
-                                           box_configurations=solution.box_configurations if d is solution.optimum
-                                           else None)
+                                           **({"box_points": solution.box_points,
+                                               "box_configurations": solution.box_configurations}
+                                              if d is solution.optimum else {}))
                            for d in (solution.start, solution.optimum))
             evaluation = time.perf_counter() - start
             progress("drawing")

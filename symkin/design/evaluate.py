@@ -18,6 +18,7 @@ import numpy as np
 
 from symkin.analysis import conditioning, global_indices, inverse, mechanism, sampling
 from symkin.analysis.estimates import Estimate
+from symkin.analysis.limits import within_limits
 from symkin.design.problem import DesignProblem
 
 #: Integrand evaluations of the independent GCI (qmc: 16 scrambles of 2^10 points).
@@ -46,18 +47,20 @@ class Evaluation:
 
 
 def evaluate(problem: DesignProblem, model: Any, design: dict[str, float], *, samples: int = EVALUATION_SAMPLES,
-             seed: int = 0, box_configurations: np.ndarray | None = None) -> Evaluation:
+             seed: int = 0, box_points: np.ndarray | None = None,
+             box_configurations: np.ndarray | None = None) -> Evaluation:
     """Rate ``design`` (all parameter values) of ``model`` (numpy backend, unbound).
 
-    ``box_configurations``: a serial model's joint configurations at the optimizer's box
-    points, checked by forward kinematics when no closed-form inverse applies.
+    ``box_points``, ``box_configurations``: the optimizer's box points and a serial model's
+    joint configurations at them (:class:`~symkin.design.solve.Solution`), checked by forward
+    kinematics when no closed-form inverse applies.
     """
     bound = model.bind(**design)
     if problem.parallel:
         return _parallel(problem, bound, samples, seed)
     result = global_indices.gci(bound, method="qmc", samples=samples, seed=seed, limits=problem.limits,
                                 length=problem.length)
-    fraction, check = _serial_box(problem, bound, box_configurations)
+    fraction, check = _serial_box(problem, bound, box_points, box_configurations)
     return Evaluation(result.value, result.measure, f"qmc, {result.description}", fraction, check)
 
 
@@ -71,18 +74,18 @@ def box_check_points(problem: DesignProblem) -> np.ndarray:
 POSITION_TOLERANCE = 1e-9
 
 
-def _serial_box(problem: DesignProblem, model: Any, configurations: np.ndarray | None) -> tuple[float | None, str]:
+def _serial_box(problem: DesignProblem, model: Any, points: np.ndarray | None,
+                configurations: np.ndarray | None) -> tuple[float | None, str]:
     if problem.box is None:
         return None, "no required box"
     ik = inverse.inverse_kinematics_for(model)
     if ik is None:
-        if configurations is None or not configurations.size:
+        if configurations is None or not configurations.size or points is None:
             return None, "not checked: no closed-form inverse kinematics for this model"
-        points = sampling.grid(*problem.inflated_box, round(len(configurations) ** (1 / problem.box[0].size)),
-                               midpoints=False)
         error = np.linalg.norm(mechanism.tcp_positions(model, configurations) - points, axis=-1)
-        inside = (error < POSITION_TOLERANCE) & np.all((configurations >= problem.limits[:, 0])
-                                                       & (configurations <= problem.limits[:, 1]), axis=-1)
+        # within the limits up to the analyses' tolerance (IPOPT meets bounds to about 1e-8 relative)
+        _, in_limits = within_limits(configurations, problem.limits, mechanism.revolute_mask(model))
+        inside = (error < POSITION_TOLERANCE) & in_limits
         return float(np.mean(inside)), (f"the optimizer's configurations at {len(points)} box points, by the "
                                         "generated fk (no closed-form inverse kinematics for this model)")
     points = box_check_points(problem)

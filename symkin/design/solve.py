@@ -36,7 +36,8 @@ class Solution:
         iterations: IPOPT iterations.
         ipopt_seconds: wall time of the IPOPT solve (including CasADi's evaluations of f, g and derivatives).
         build_seconds: wall time to build the program and the solver.
-        box_configurations: serial models: the optimizer's joint configurations at the box points.
+        box_points, box_configurations: serial models: the required box's constraint points and
+            the optimizer's joint configurations at them (empty without a box).
         constraint_violation: largest violation of g at the optimum (0 where met).
     """
 
@@ -51,6 +52,7 @@ class Solution:
     iterations: int
     ipopt_seconds: float
     build_seconds: float
+    box_points: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))
     box_configurations: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))
     constraint_violation: float = 0.0
 
@@ -82,4 +84,5 @@ def solve(problem: DesignProblem, program: Program, *, build_seconds: float = 0.
         infeasibility=np.asarray(stats["iterations"]["inf_pr"], dtype=np.float64),
         status=str(stats["return_status"]), success=bool(stats["success"]), iterations=int(stats["iter_count"]),
         ipopt_seconds=ipopt_seconds, build_seconds=build_seconds,
+        box_points=program.box_points if box_q.size else np.empty((0, 0)),
         box_configurations=box_q if box_q.size else np.empty((0, 0)), constraint_violation=violation)

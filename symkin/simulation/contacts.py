@@ -32,11 +32,12 @@ def intervals(stops: JointStops, run: Run) -> list[Contact]:
     """The contacts of ``run`` in time order (a contact still open at the end ends there)."""
     if run.switches:
         return _from_switches(stops, run)
-    q, t = run.x[:, :len(stops.names)], run.t
+    t = run.t
+    penetration = dict(zip((-1, 1), stops.penetration(run.x[:, :len(stops.names)])))
     found = []
     for j, name in enumerate(stops.names):
         for side, label in SIDES.items():
-            d = (stops.lower[j] - q[:, j]) if side < 0 else (q[:, j] - stops.upper[j])
+            d = penetration[side][:, j]
             if not np.isfinite(d).all():
                 continue
             inside = d > 0.0

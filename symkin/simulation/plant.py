@@ -49,10 +49,10 @@ class Plant:
         self.revolute = mechanism.revolute_mask(model)
         self.task_space = mechanism.task_space(model)
         #: rows of the task Jacobian that are TCP translations, and their fk axes
-        self.point_rows = list(mechanism.position_rows(model))
+        self.point_rows = np.array(mechanism.position_rows(model), dtype=int)
         self.point_axes = tuple(self.task_space[i] for i in self.point_rows)
-        self._point_index = [mechanism.POSITION_COMPONENTS.index(c) for c in self.point_axes]
-        self._point_error = None if self.point_rows and {"fk", "jacobian"} <= set(model.functions) else (
+        self._point_index = np.array([mechanism.POSITION_COMPONENTS.index(c) for c in self.point_axes], dtype=int)
+        self._point_error = None if self.point_rows.size and {"fk", "jacobian"} <= set(model.functions) else (
             f"{self.name}: task-space simulation needs 'fk' and 'jacobian' and a task space with x, y or z "
             f"(it is [{', '.join(self.task_space)}])")
         functions = set(model.functions)
