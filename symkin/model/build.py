@@ -659,8 +659,8 @@ def _bodies(r: _Reader, value: Any, links: tuple[str, ...]) -> tuple[Body, ...]:
         item = r.mapping(bpath, item, required=("link", "mass"), optional=("com", "inertia", "inertia_rpy", "origin"))
         if item is None or "link" not in item or "mass" not in item:
             continue
-        link = item["link"]
-        if link in r.invalid_links:
+        link = r.name(bpath + ("link",), item["link"])  # a name, not any YAML value (lists are unhashable)
+        if link is None or link in r.invalid_links:
             continue  # its joint is already reported
         if link not in links:
             close = difflib.get_close_matches(str(link), links, n=1)

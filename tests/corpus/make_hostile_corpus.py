@@ -185,6 +185,8 @@ CASES: list[tuple[str, str | bytes, str, int | None]] = [
                                        + "}\n"), "unknown key 'k0'", 14),
     ("long-line-description-and-error", replace("name: arm", "name: arm\ndescription: " + "x" * 50_000)
      .replace("l2: 0.2", "l2: nope"), "undefined name 'nope'", 5),
+    # found by the fuzz test in CI: a YAML list where a link name belongs
+    ("body-link-not-a-name", replace("{link: link2, mass: m2}", "{link: [], mass: m2}"), "bodies[0].link", 14),
 ]
 
 
