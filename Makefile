@@ -36,9 +36,15 @@ demo: setup
 	$(BIN)/symkin workspace generated/delta --unit mm -o out/figures/delta-workspace.png --map out/figures/delta-inverse-condition.png
 	$(BIN)/symkin simulate generated/planar_2r --scenario sine --design l1=0.1,l2=0.1 --design l1=0.2,l2=0.2 -o out/figures/seed-haptic-scenario
 
-## test: run the whole test suite
+# The numerics-sensitive tests run a second time on foreign arithmetic (tests/conftest.py): numpy's
+# wide SIMD loops off, generated C with FMA contraction.  x86-64 feature names; elsewhere only the C flags.
+FOREIGN_SIMD := $(if $(filter x86_64,$(shell uname -m)),NPY_DISABLE_CPU_FEATURES="X86_V3 X86_V4 AVX512_ICL AVX512_SPR")
+FOREIGN_ARITHMETIC := SYMKIN_TEST_ARITHMETIC=foreign $(FOREIGN_SIMD) SYMKIN_CFLAGS="-O2 -march=native -ffp-contract=fast"
+
+## test: run the whole test suite, then its numerics-sensitive part again on foreign arithmetic
 test: setup
 	$(BIN)/python -m pytest -n $(PYTEST_WORKERS) --dist loadgroup -q
+	$(FOREIGN_ARITHMETIC) $(BIN)/python -m pytest -n $(PYTEST_WORKERS) --dist loadgroup -q -m numerics
 
 ## generate: rewrite generated/ from the example models (the "update" switch of the golden tests)
 generate: demo

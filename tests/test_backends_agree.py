@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 from conftest import BACKENDS, EXAMPLE_MODELS, batch_reference, function_spec, random_inputs, random_q, relative_error
+from tolerances import CLOSED_FORM, DYNAMICS, EPS, KINEMATICS, UR10E_SCALE
 
 POINTS = 1000
 
@@ -45,10 +46,11 @@ def test_every_function_matches_the_sympy_expressions(name, backend, models, der
 
 
 def assert_close_at_scale(got, want):
-    """Equal to 1e-13 relative, or 1e-14 of the output's largest entry: evaluation orders differ in
-    rounding, and the dynamics outputs (hundreds of N m, thousands of rad/s^2) cancel to small entries."""
+    """Equal to DYNAMICS (the bound of the deepest outputs, tests/tolerances.py) times the output's
+    largest entry: evaluation orders differ in rounding, and the dynamics outputs (hundreds of N m,
+    thousands of rad/s^2) cancel to small entries, whose error is that of the large ones."""
     scale = float(np.nanmax(np.abs(want), initial=1.0))
-    np.testing.assert_allclose(got, want, rtol=1e-13, atol=1e-14 * scale)
+    np.testing.assert_allclose(got, want, rtol=0, atol=DYNAMICS * scale)
 
 
 @pytest.mark.parametrize("backend", ("c", "casadi"))
@@ -78,13 +80,15 @@ def test_parameters_broadcast_against_the_batch(backend, loaded):
     q = np.array([[0.3, 0.4], [0.1, 0.2]])
     for kwargs in ({"l1": np.array([0.1, 0.2]), "l2": 0.3}, {"l1": np.array([[0.1], [0.2], [0.4]])},
                    {"l2": 0.25}):
-        np.testing.assert_allclose(arm.fk(q, **kwargs), reference.fk(q, **kwargs), rtol=1e-14, atol=1e-15)
-        np.testing.assert_allclose(arm.fk(q[0], **kwargs), reference.fk(q[0], **kwargs), rtol=1e-14, atol=1e-15)
+        # the planar FK is a closed form of two terms; positions scale with the reach (< 1 m)
+        np.testing.assert_allclose(arm.fk(q, **kwargs), reference.fk(q, **kwargs), rtol=0, atol=CLOSED_FORM)
+        np.testing.assert_allclose(arm.fk(q[0], **kwargs), reference.fk(q[0], **kwargs), rtol=0, atol=CLOSED_FORM)
     t1, t2 = q[1]
     assert arm.fk(q, l1=np.array([0.1, 0.2]), l2=0.3)[1, 0, 3] == pytest.approx(
-        0.2 * np.cos(t1) + 0.3 * np.cos(t1 + t2), rel=1e-15)
+        0.2 * np.cos(t1) + 0.3 * np.cos(t1 + t2), abs=CLOSED_FORM * 0.5)  # terms <= l1 + l2 = 0.5 m
     bound = arm.bind(l1=0.2, l2=0.2)
-    np.testing.assert_allclose(bound.jacobian([0, 0]), [[0, 0], [0.4, 0.2]], atol=1e-16)
+    # at q = 0 the entries are sums of sin(0) = 0 and cos(0) = 1 times lengths: one rounding of 0.4 m
+    np.testing.assert_allclose(bound.jacobian([0, 0]), [[0, 0], [0.4, 0.2]], rtol=0, atol=EPS * 0.4)
 
 
 @pytest.mark.parametrize("backend", BACKENDS)
@@ -166,4 +170,5 @@ def test_concurrent_calls_from_threads_are_independent(backend, loaded, models):
         results = list(pool.map(work, range(4)))
     for offset, got in enumerate(results):
         for k, J in zip(range(offset, 400, 4), got):
-            np.testing.assert_allclose(J, reference.jacobian(q[k], a2=-0.6 - 0.001 * k), rtol=1e-13, atol=1e-14)
+            # UR10e Jacobian entries (threads must not change a bit; mixing would be O(1))
+            np.testing.assert_allclose(J, reference.jacobian(q[k], a2=-0.6 - 0.001 * k), rtol=0, atol=KINEMATICS * UR10E_SCALE)

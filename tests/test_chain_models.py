@@ -8,6 +8,7 @@ import sympy
 from conftest import random_q, reference_function
 from symkin.derivation import Derivation
 from symkin.model import coordinates, model_from_text
+from tolerances import CLOSED_FORM, KINEMATICS, UR10E_SCALE
 
 # The UR10e as a URDF-style chain with the joint origins of UR's ROS description
 # (config/ur10e/default_kinematics.yaml, calibration residue of 1e-11 removed): its link
@@ -36,8 +37,9 @@ def test_urdf_style_chain_equals_the_dh_models(models, derivations):
     rng = np.random.default_rng(5)
     for _ in range(100):
         q = random_q(chain, rng)
-        np.testing.assert_allclose(fk_chain(q)[0], fk_dh(q)[0], atol=1e-14)
-        np.testing.assert_allclose(J_chain(q)[0], J_dh(q)[0], atol=1e-14)
+        # positions and Jacobian columns are within UR10E_SCALE metres
+        np.testing.assert_allclose(fk_chain(q)[0], fk_dh(q)[0], rtol=0, atol=KINEMATICS * UR10E_SCALE)
+        np.testing.assert_allclose(J_chain(q)[0], J_dh(q)[0], rtol=0, atol=KINEMATICS * UR10E_SCALE)
 
 
 POLAR_ARM = """
@@ -74,7 +76,7 @@ def _same_fk(a_text: str, b_text: str) -> None:
     rng = np.random.default_rng(6)
     for _ in range(20):
         q = rng.uniform(-1, 1, a.dof)
-        np.testing.assert_allclose(fa(q)[0], fb(q)[0], atol=1e-15)
+        np.testing.assert_allclose(fa(q)[0], fb(q)[0], rtol=0, atol=KINEMATICS)  # links well under 1 m
 
 
 def test_modified_dh_prismatic_row_matches_the_chain_form():
@@ -132,10 +134,13 @@ def test_rotation_about_a_general_axis():
     axis = sympy.Matrix([1, 2, 2]) / 3
     for value in (0.3, 1.7, -2.9):
         Rv = np.array(R.subs(th, value), dtype=float)
-        np.testing.assert_allclose(Rv @ Rv.T, np.eye(3), atol=1e-15)
-        assert abs(np.linalg.det(Rv) - 1) < 1e-14
+        # Rv's entries are rounded once each; unit rows and columns: products of 3 terms are closed forms,
+        # the LU determinant takes ~n^3 = 27 roundings (KINEMATICS), and the axis read from
+        # R - R^T is divided by 2 sin(value) >= 0.47, which doubles its error.
+        np.testing.assert_allclose(Rv @ Rv.T, np.eye(3), rtol=0, atol=CLOSED_FORM)
+        assert abs(np.linalg.det(Rv) - 1) <= KINEMATICS
         np.testing.assert_allclose(Rv @ np.array(axis, dtype=float).ravel(), np.array(axis, dtype=float).ravel(),
-                                   atol=1e-15)
-        assert abs((np.trace(Rv) - 1) / 2 - np.cos(value)) < 1e-15
+                                   rtol=0, atol=CLOSED_FORM)
+        assert abs((np.trace(Rv) - 1) / 2 - np.cos(value)) <= CLOSED_FORM
         vee = np.array([Rv[2, 1] - Rv[1, 2], Rv[0, 2] - Rv[2, 0], Rv[1, 0] - Rv[0, 1]]) / (2 * np.sin(value))
-        np.testing.assert_allclose(vee, np.array(axis, dtype=float).ravel(), atol=1e-14)
+        np.testing.assert_allclose(vee, np.array(axis, dtype=float).ravel(), rtol=0, atol=2 * CLOSED_FORM / 0.47)

@@ -12,6 +12,7 @@ import sympy
 
 from symkin import load
 from symkin.model import coordinates
+from tolerances import CLOSED_FORM, DELTA_SCALE, KINEMATICS
 
 PHI = np.deg2rad([0.0, 120.0, 240.0])
 E = np.stack([np.cos(PHI), np.sin(PHI), np.zeros(3)], axis=-1)  # radial unit vectors e_i
@@ -78,7 +79,9 @@ def test_fk_of_ik_is_the_identity_on_thousands_of_points(delta, dims):
     np.testing.assert_allclose(fk.position, p, rtol=0, atol=1e-12)
     # The solutions are geometric: every rod has length b, every knee points outwards.
     rods = np.linalg.norm(platform_joints(p, dims) - elbows(theta, dims), axis=-1)
-    np.testing.assert_allclose(rods, dims["b"], rtol=0, atol=1e-13)
+    # the rod length is the residual of the IK's equation |B - C(theta)| = b: backward stable (an error
+    # in theta of EPS x its condition number moves the rod by EPS x the scale), KINEMATICS of the reach
+    np.testing.assert_allclose(rods, dims["b"], rtol=0, atol=KINEMATICS * DELTA_SCALE)
     assert np.all(knee_out(theta, p, dims))
 
 
@@ -160,7 +163,8 @@ def test_jacobian_matches_finite_differences_of_fk(delta, dims):
         np.testing.assert_allclose(J[:, :, j], fd, rtol=0, atol=1e-7 * np.max(np.abs(J)))
     # Velocity relation J_x pdot = J_q thetadot and J^-1 = J_q^-1 J_x.
     jac = delta.constraint_jacobians(theta, p)
-    np.testing.assert_allclose(jac.J_x @ J, jac.J_q, atol=1e-14)
+    # J = J_x^-1 J_q solved by LU: backward stable, the product's residual within KINEMATICS of |J_q| <= 1 m
+    np.testing.assert_allclose(jac.J_x @ J, jac.J_q, rtol=0, atol=KINEMATICS * DELTA_SCALE)
     np.testing.assert_allclose(delta.inverse_jacobian(theta, p) @ J, np.broadcast_to(np.eye(3), J.shape), atol=1e-9)
 
 
@@ -187,7 +191,9 @@ def test_boundary_singularities_zero_det_Jq_only(delta, dims):
             theta[0] = t1
             assert np.linalg.norm(platform_joints(p, dims)[0] - elbows(theta, dims)[0]) == pytest.approx(dims["b"])
             det_q, det_x = _normalized_dets(delta, dims, theta, p)
-            assert abs(det_q) < 1e-14
+            # det J_q = prod of three leg terms, one of them a vanishing cross product of lengths <= a + b:
+            # its rounding is KINEMATICS of the normalized terms (<= 1)
+            assert abs(det_q) < KINEMATICS
             assert abs(det_x) > 1e-3
             found[kind] += 1
     assert min(found.values()) > 30, found
@@ -202,10 +208,12 @@ def test_interior_singularities_zero_det_Jx_only(delta, dims):
     w = rng.normal(size=(100, 3))
     w /= np.linalg.norm(w, axis=-1, keepdims=True)
     p = np.array([0, 0, h]) - dims["b"] * w
+    # points and rods built by closed forms of the scale b (CLOSED_FORM); det J_x of three rods that are
+    # parallel up to that rounding, normalized by b^3: KINEMATICS
     np.testing.assert_allclose(np.linalg.norm(platform_joints(p, dims) - elbows(theta, dims), axis=-1),
-                               dims["b"], atol=1e-15)
+                               dims["b"], rtol=0, atol=CLOSED_FORM * DELTA_SCALE)
     det_q, det_x = _normalized_dets(delta, dims, np.broadcast_to(theta, p.shape), p)
-    assert np.max(np.abs(det_x)) < 1e-14
+    assert np.max(np.abs(det_x)) < KINEMATICS
     assert np.min(np.abs(det_q)[np.abs(w[:, 2]) > 0.3]) > 1e-4
 
 
@@ -215,9 +223,11 @@ def test_coplanar_rods_are_interior_singular(delta, dims):
     wide = delta.bind(a=a)
     theta = np.full(3, np.arccos((dims["b"] + dims["r_tcp"] - dims["r_base"]) / a))
     p = np.array([0.0, 0.0, a * np.sin(theta[0])])
-    assert wide.constraints(theta, p) == pytest.approx(np.zeros(3), abs=1e-16)
+    # the constraints are squared lengths (m^2, terms <= 0.1 m^2) that vanish here; det J_x is a triple
+    # product of rods (terms <= b^3 = 3.4e-3 m^3) that vanishes: both at the rounding of their terms
+    assert wide.constraints(theta, p) == pytest.approx(np.zeros(3), abs=KINEMATICS * 0.1)
     s = wide.singularities(theta, p)
-    assert abs(s.det_Jx) < 1e-16 and abs(s.det_Jq) > 1e-9
+    assert abs(s.det_Jx) < KINEMATICS * dims["b"] ** 3 and abs(s.det_Jq) > 1e-9
 
 
 def test_regular_points_are_not_singular(delta, dims):

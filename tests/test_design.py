@@ -22,6 +22,7 @@ from symkin import design
 from symkin.analysis import conditioning
 from symkin.cli import main
 from symkin.design import formulation
+from tolerances import CLOSED_FORM, KINEMATICS, svd
 
 ARM_DIR = str(GENERATED_DIR / "planar_2r")
 DELTA_DIR = str(GENERATED_DIR / "delta")
@@ -62,7 +63,8 @@ def test_serial_surrogate_and_gradient_match_the_numpy_code(arm):
     free = np.array([0.13, 0.08])
     value = float(program.objective(free))
     bound = numpy_model.bind(l1=0.13, l2=0.08)
-    assert value == pytest.approx(_serial_surrogate(bound, program.nodes), rel=1e-13)
+    # a mean of kinematic quantities (CasADi's graph against numpy's): KINEMATICS
+    assert value == pytest.approx(_serial_surrogate(bound, program.nodes), rel=KINEMATICS)
     # the smoothing of |det J| changes the Frobenius GCI estimate by about smoothing^2
     assert value == pytest.approx(_serial_surrogate(bound, program.nodes, smoothing=0.0), rel=1e-5)
     import casadi
@@ -85,7 +87,8 @@ def test_parallel_surrogate_matches_the_numpy_code(delta):
     q = numpy_model.bind(a=0.11, b=0.16).ik(program.nodes).joints
     J = numpy_model.bind(a=0.11, b=0.16).jacobian(q, program.nodes)
     expected = np.mean(conditioning.inverse_frobenius_condition_number(J))
-    assert float(program.objective([0.11, 0.16])) == pytest.approx(expected, rel=1e-13)
+    # the same mean through the DELTA's IK and a 3x3 SVD: KINEMATICS + svd(3)
+    assert float(program.objective([0.11, 0.16])) == pytest.approx(expected, rel=KINEMATICS + svd(3))
 
 
 @pytest.mark.parametrize("theta2_limits", [(0.0, np.pi / 2), (0.0, np.pi)])
@@ -99,7 +102,7 @@ def test_2r_with_free_length_ratio_finds_the_isotropic_design(arm, theta2_limits
     J = numpy_model.bind(l1=l1, l2=l2).jacobian(np.array([0.3, 3 * np.pi / 4]))
     assert conditioning.condition_number(J) == pytest.approx(1.0, abs=1e-8)
     assert conditioning.condition_number(numpy_model.bind(l1=np.sqrt(2) * 0.1).jacobian([0.3, 3 * np.pi / 4])) \
-        == pytest.approx(1.0, abs=1e-14)
+        == pytest.approx(1.0, abs=svd(2) + CLOSED_FORM)  # l1 = sqrt(2) l2 is rounded once
 
 
 def test_maximizing_the_gci_of_the_2r_improves_its_independent_gci_and_keeps_the_box(arm, monkeypatch):

@@ -19,6 +19,7 @@ from conftest import EXAMPLE_MODELS, MODELS_DIR, random_q, reference_function
 from symkin.derivation import Derivation
 from symkin.model import load_model, model_from_text
 from test_dynamics_properties import FRICTION_ARM
+from tolerances import DYNAMICS
 
 #: Every branch of symkin.dynamics.newton_euler at once.
 ODD_ARM = """
@@ -89,7 +90,8 @@ def test_emitted_dynamics_equal_the_lagrangian_reference(name, cases):
         want = dict(zip(names, reference(*state)))
         for out, (f, arity) in functions.items():
             got = f(*state[:arity])[0]
-            assert _relative(got, want[out]) <= 1e-12, (out, got, want[out])
+            # two exact derivations (Newton-Euler, Lagrange) differ in rounding only: DYNAMICS
+            assert _relative(got, want[out]) <= DYNAMICS, (out, DYNAMICS, got, want[out], state)
 
 
 def test_forward_dynamics_inverts_the_lagrangian_torques(cases):
@@ -101,7 +103,9 @@ def test_forward_dynamics_inverts_the_lagrangian_torques(cases):
     for _ in range(STATES):
         q, qd, qdd = random_q(model, rng), rng.uniform(-2, 2, model.dof), rng.uniform(-3, 3, model.dof)
         tau = reference(q, qd, qdd)[-1]
-        assert _relative(qdd_of(q, qd, tau)[0], qdd) <= 1e-10
+        # a solve with M: backward stable, the error of qdd grows with kappa(M)
+        bound = DYNAMICS * np.linalg.cond(reference_function(model, d["mass_matrix"])(q)[0])
+        assert _relative(qdd_of(q, qd, tau)[0], qdd) <= bound, (bound, q, qd, tau)
 
 
 def _symbolic(spec) -> list[sympy.Matrix]:

@@ -14,6 +14,7 @@ import pytest
 
 from conftest import random_q, reference_function
 from newton_euler import Link, inverse_dynamics
+from tolerances import DYNAMICS
 
 
 def _inertia(xx, yy, zz, xy, xz, yz):
@@ -40,7 +41,8 @@ def test_inverse_dynamics_equals_numeric_newton_euler(name, models, derivations)
         q, qd, qdd = random_q(model, rng), rng.uniform(-2, 2, 6), rng.uniform(-5, 5, 6)
         want = inverse_dynamics(UR10E, GRAVITY, q, qd, qdd)
         got = tau(q, qd, qdd)[0]
-        assert np.max(np.abs(got - want)) <= 1e-10 * np.max(np.abs(want))
+        # symbolic against numeric Newton-Euler: rounding only (DYNAMICS of the largest torque)
+        assert np.max(np.abs(got - want)) <= DYNAMICS * np.max(np.abs(want)), (q, qd, qdd)
 
 
 def test_newton_euler_is_not_vacuous():

@@ -15,6 +15,7 @@ from symkin.derivation.inputs import coordinate_input
 from symkin.ir.bundle import ModelCode, ParameterInfo
 from symkin.ir.spec import OutputSpec, combine_functions, make_function
 from symkin.optimize import optimize
+from tolerances import CLOSED_FORM, DYNAMICS, KINEMATICS
 
 
 @pytest.fixture(scope="module")
@@ -71,23 +72,24 @@ def test_two_vector_inputs_and_scalar_vector_matrix_outputs(dynamics_like, backe
     assert result.k.shape == (7,) and result.G.shape == (7, 2) and result.M.shape == (7, 2, 2)
     for i in range(7):
         k, G, M, F = reference(q[i], qd[i])
-        np.testing.assert_allclose(result.F[i], np.ravel(F), rtol=1e-13, atol=1e-15)
-        np.testing.assert_allclose(result.k[i], k, rtol=1e-13)
-        np.testing.assert_allclose(result.G[i], np.ravel(G), rtol=1e-13, atol=1e-15)
-        np.testing.assert_allclose(result.M[i], M, rtol=1e-13)
+        # dynamics of a two-body cart-pendulum, relative to each output's largest entry
+        for got, want in ((result.F[i], np.ravel(F)), (result.k[i], k), (result.G[i], np.ravel(G)), (result.M[i], M)):
+            np.testing.assert_allclose(got, want, rtol=0, atol=DYNAMICS * max(np.abs(want).max(), 1.0))
     single = generated.energy(q[0], qd[0])
     assert single.k.shape == () and single.G.shape == (2,)
-    np.testing.assert_allclose(single.k, result.k[0], rtol=1e-15)
+    # one configuration through the batch code or the single-call path: the same operations (the C
+    # batch loop may vectorize sin/cos, which differ in the last bit): CLOSED_FORM
+    np.testing.assert_allclose(single.k, result.k[0], rtol=CLOSED_FORM)
     # parameters broadcast; the folded g is no argument; qd broadcasts against q
     np.testing.assert_allclose(generated.energy(q, qd[0], m2=np.full(7, 0.1)).k, generated.energy(q, qd[0]).k,
-                               rtol=1e-15)
+                               rtol=CLOSED_FORM)
     with pytest.raises(TypeError):
         generated.energy(q, qd, g=9.81)
     with pytest.raises(ValueError, match=r"energy\(\): 'qd' must have shape \(\.\.\., 2\), got \(7, 3\)"):
         generated.energy(q, np.zeros((7, 3)))
     scene = generated.scene(q, qd)
     assert scene._fields == ("k", "G", "energy_M", "F", "mass_M")
-    np.testing.assert_allclose(scene.mass_M, result.M, rtol=1e-14)
+    np.testing.assert_allclose(scene.mass_M, result.M, rtol=0, atol=DYNAMICS * np.abs(result.M).max())
     assert generated.mass(q).shape == (7, 2, 2)
 
 
@@ -126,6 +128,6 @@ def test_constant_outputs_and_prismatic_joints(tmp_path):
     reference = load(target)
     for backend in ("c", "casadi"):
         generated = load(target, backend=backend)
-        np.testing.assert_allclose(generated.fk(q, h=0.7), reference.fk(q, h=0.7), atol=1e-15)
-        np.testing.assert_allclose(generated.jacobian(q), reference.jacobian(q), atol=1e-15)
+        np.testing.assert_allclose(generated.fk(q, h=0.7), reference.fk(q, h=0.7), rtol=0, atol=KINEMATICS)
+        np.testing.assert_allclose(generated.jacobian(q), reference.jacobian(q), rtol=0, atol=KINEMATICS)
         assert not np.any(np.isnan(generated.jacobian(q)))

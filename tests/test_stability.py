@@ -19,6 +19,7 @@ from symkin.stability import BOUND, KAPPA_LIMIT, run_stability
 from symkin.stability.ir_eval import compile_ir, flatten_outputs
 from symkin.stability.reference import MpmathReference, normwise_error
 from symkin.stability.states import parameter_values
+from tolerances import CLOSED_FORM, EPS, FORWARD_AT_SINGULARITIES
 
 #: One xdist worker runs this module (`make test` uses --dist loadgroup), so the module-scoped
 #: runs are computed once, not once per worker.
@@ -46,7 +47,7 @@ def runs(models):
 def test_error_below_1e_13_where_kappa_below_1e3(runs, models, name):
     run = runs[name]
     passed, worst = run.acceptance()
-    assert passed, f"{name}: largest error {worst:.3g} where kappa < {KAPPA_LIMIT}"
+    assert passed, f"{name}: largest error {worst:.3g} > bound {BOUND:g} where kappa < {KAPPA_LIMIT}: {run.worst()}"
     well = [r for r in run.records if r.family != "float32" and r.kappa < KAPPA_LIMIT]
     assert len(well) >= 20
     families = {r.family for r in run.records}
@@ -105,7 +106,8 @@ def test_forward_quantities_stay_accurate_into_the_ur_singularities(runs):
     rounding (quantities that invert J, the TCP force and operational space, are excluded)."""
     singular = [r for r in runs["ur10e"].select("singular") if registry("serial")[r.quantity].solves_with is None]
     assert max(r.kappa for r in singular) > 1e9
-    assert max(r.error for r in singular) < 1e-15
+    worst = max(singular, key=lambda r: r.error)
+    assert worst.error <= FORWARD_AT_SINGULARITIES, f"bound {FORWARD_AT_SINGULARITIES:.3g} exceeded by {worst}"
 
 
 def test_folded_planar_arm_error_grows_with_kappa_as_its_conditioning_allows(runs):
@@ -152,10 +154,12 @@ def test_reference_and_error_measure():
                         (OutputSpec("y", sympy.ImmutableMatrix([[1 - sympy.cos(x), x]]), "y"),))
     reference = MpmathReference(spec)
     hi, lo = reference({"q": np.array([1e-8])}, {})
-    assert hi[0] == pytest.approx(5e-17, rel=1e-15) and hi[1] == 1e-8
+    # 1 - cos(x) = x^2/2 - x^4/24 + ...: 5e-17 to 4e-33 relative, the reference's 50 digits keep it
+    # to its last bit; one rounding of the hi part: EPS/2.
+    assert hi[0] == pytest.approx(5e-17, rel=EPS) and hi[1] == 1e-8
     naive = np.array([1 - np.cos(1e-8), 1e-8])  # 1 - cos cancels to 0: 100 % wrong in that entry
     assert normwise_error(naive, hi, lo) == pytest.approx(5e-9, rel=1e-6)
-    assert normwise_error(np.array([5e-17, 1e-8]), hi, lo) < 1e-16
+    assert normwise_error(np.array([5e-17, 1e-8]), hi, lo) < EPS  # exact up to the rounding of 5e-17
     assert normwise_error(np.array([np.nan, 1e-8]), hi, lo) == math.inf
 
 
@@ -182,8 +186,10 @@ def test_ik_wrist_formula_error_drop(runs):
     (wrist,) = runs["ur10e"].formulas
     at = {t: (a, b) for t, a, b in zip(wrist.steps, wrist.textbook, wrist.symkin)}
     textbook, ours = at[1e-6]
-    assert textbook > 1e-12 and ours < 1e-15
-    assert np.all(wrist.symkin < 1e-15)
+    # symkin's wrist angle is an atan2 of two computed components: a closed form (CLOSED_FORM);
+    # the textbook acos loses half the digits near its singular value (sqrt(EPS) ~ 1.5e-8).
+    assert textbook > 1e-12 and ours <= CLOSED_FORM
+    assert np.all(wrist.symkin <= CLOSED_FORM), (wrist.steps, wrist.symkin, CLOSED_FORM)
     (elbow,) = runs["planar_2r"].formulas
     finite = np.isfinite(elbow.bound)
     assert np.all(elbow.symkin[finite] <= 4 * elbow.bound[finite])
