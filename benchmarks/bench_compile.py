@@ -24,7 +24,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from symkin.backends.c.build import shared_library  # noqa: E402
-from symkin.cli.table import format_table  # noqa: E402
+from symkin.text_table import format_table  # noqa: E402
 
 GENERATED = ROOT / "generated"
 DEFAULT_FLAGS = ("-O3", "-O3 -fno-tree-slp-vectorize")

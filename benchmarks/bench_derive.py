@@ -16,7 +16,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from symkin import pipeline  # noqa: E402
-from symkin.cli.table import format_table  # noqa: E402
+from symkin.text_table import format_table  # noqa: E402
 from symkin.model import load_model  # noqa: E402
 
 

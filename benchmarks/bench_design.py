@@ -21,7 +21,7 @@ sys.path.insert(0, str(ROOT))
 
 import symkin  # noqa: E402
 from symkin import design  # noqa: E402
-from symkin.cli.table import format_table  # noqa: E402
+from symkin.text_table import format_table  # noqa: E402
 
 PROBLEMS = {
     "planar_2r, free l1/l2": ("planar_2r", dict(free=["l1"], bounds={"l1": (0.05, 0.3)})),

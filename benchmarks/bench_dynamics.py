@@ -28,7 +28,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from symkin.cli.table import format_table  # noqa: E402
+from symkin.text_table import format_table  # noqa: E402
 
 MODEL = ROOT / "models" / "ur10e.yaml"
 OUTPUTS = ("fk", "jacobian", "mass_matrix", "coriolis_vector", "coriolis_matrix", "gravity_vector", "friction")

@@ -48,7 +48,7 @@ sys.path.insert(0, str(ROOT))
 
 from competitors import pinocchio_model, symforce_fk_jacobian_codegen  # noqa: E402
 from symkin import load, pipeline  # noqa: E402
-from symkin.cli.table import format_table  # noqa: E402
+from symkin.text_table import format_table  # noqa: E402
 from symkin.derivation import Derivation, emitted_quantities  # noqa: E402
 from symkin.errors import DerivationError  # noqa: E402
 from symkin.model import load_model  # noqa: E402

@@ -27,7 +27,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from symkin import load, pipeline  # noqa: E402
-from symkin.cli.table import format_table  # noqa: E402
+from symkin.text_table import format_table  # noqa: E402
 from symkin.derivation import Derivation  # noqa: E402
 from symkin.model import load_model  # noqa: E402
 from symkin.runtime.parallel import solve_fk  # noqa: E402

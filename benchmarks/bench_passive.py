@@ -25,8 +25,8 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 import symkin  # noqa: E402
-from symkin.analysis import global_indices, inverse, mechanism, parallel, sampling, workspace  # noqa: E402
-from symkin.cli.table import format_table  # noqa: E402
+from symkin.analysis import global_indices, mechanism, parallel, sampling, workspace  # noqa: E402
+from symkin.text_table import format_table  # noqa: E402
 
 WIDTHS_DEG = (None, 40, 30, 20, 10)
 SCENE = "scene:\n  outputs: [ik, fk, jacobian, closure, closure_jacobians]\n  backends: [numpy]\n"
@@ -62,7 +62,7 @@ def main(argv: list[str] | None = None) -> int:
             mode_time, (_, inside) = seconds(lambda: parallel.working_mode(model, q))
             gci_time, joint = seconds(lambda: global_indices.gci(model, method="grid", samples=args.samples))
             cartesian = global_indices.gci(model, method="grid", samples=args.samples, domain="cartesian",
-                                           box=workspace.bounding_box(model), inverse=inverse.parallel_inverse(model))
+                                           box=workspace.bounding_box(model), inverse=parallel.parallel_inverse(model))
             rows.append(["none" if width is None else f"+-{width} deg", f"{1e6 * mode_time / len(q):.1f}",
                          f"{int(inside.sum())}/{len(q)}", f"{gci_time:.2f}", f"{joint.measure.value:.6f}",
                          f"{cartesian.measure.value:.6f}", f"{joint.value.value:.4f}"])

@@ -23,7 +23,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 import symkin  # noqa: E402
-from symkin.cli.table import format_table  # noqa: E402
+from symkin.text_table import format_table  # noqa: E402
 from symkin.simulation import (ArmSystem, ComputedTorque, JointSine, MassSpringDamperUser, Plant, Wall,  # noqa: E402
                                WallRenderer, run_adaptive, run_sampled, sine_intent)
 from symkin.simulation.scenarios import balance_drift  # noqa: E402

@@ -20,7 +20,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 import symkin  # noqa: E402
-from symkin.analysis import global_indices, inverse, parallel, workspace  # noqa: E402
+from symkin.analysis import global_indices, parallel, workspace  # noqa: E402
 
 ORIENTATIONS = {"home (0, 0, 0 deg)": (0.0, 0.0, 0.0), "tilted (5, -8, 20 deg)": tuple(np.radians([5, -8, 20]))}
 BUDGETS = (2**12, 2**14, 2**16, 2**18)
@@ -40,7 +40,7 @@ def main() -> None:
         model = symkin.load(ROOT / "generated" / "stewart", backend)
         for label, orientation in ORIENTATIONS.items():
             held = parallel.constant_orientation(model, orientation)
-            ik = inverse.parallel_inverse(held)
+            ik = parallel.parallel_inverse(held)
             seconds, box = best_of(3, lambda: workspace.bounding_box(held))
             print(f"stewart ({backend}) at {label}: box {np.round(box[0], 4)} .. {np.round(box[1], 4)} m "
                   f"in {seconds * 1e3:.1f} ms")

@@ -17,7 +17,7 @@ import pytest
 
 import symkin
 from symkin.analysis import conditioning as C
-from symkin.analysis import convergence, global_indices, inverse, mechanism, parallel, workspace
+from symkin.analysis import convergence, feasibility, global_indices, grids, inverse, mechanism, parallel, workspace
 from symkin.cli import main
 from symkin.model import load_model
 
@@ -128,7 +128,7 @@ def test_ik_reachability_respects_the_actuator_limits(ik):
     assert np.allclose(limits, np.radians([[-90, 60]] * 3))
     points = workspace.bounding_box(DELTA)
     grid = np.random.default_rng(3).uniform(points[0], points[1], (20000, 3))
-    q, inside = inverse.feasible_configurations(ik, grid, limits, mechanism.revolute_mask(DELTA))
+    q, inside = feasibility.feasible_configurations(ik, grid, limits, mechanism.revolute_mask(DELTA))
     assert inside.mean() > 0.1
     assert np.all((q[inside] >= limits[:, 0] - 1e-9) & (q[inside] <= limits[:, 1] + 1e-9))
     assert np.allclose(DELTA.fk(q[inside]).position, grid[inside], atol=1e-12)
@@ -152,10 +152,10 @@ def test_boundary_singularities_lie_on_the_workspace_boundary(ik):
     limits, revolute = mechanism.joint_limits(DELTA, FULL_TURN), mechanism.revolute_mask(DELTA)
     assert np.all(C.inverse_condition_number(DELTA.jacobian(q, p)) == 0.0)
     step = 1e-5
-    assert not inverse.reachable(ik, p + step * direction, limits, revolute).any()
-    assert inverse.reachable(ik, p - step * direction, limits, revolute).all()
+    assert not feasibility.reachable(ik, p + step * direction, limits, revolute).any()
+    assert feasibility.reachable(ik, p - step * direction, limits, revolute).all()
     box = workspace.bounding_box(DELTA, limits=FULL_TURN, samples=2**15)
-    occupancy = workspace.reachability_grid(DELTA, ik, box, 0.006, limits=FULL_TURN)
+    occupancy = grids.reachability_grid(DELTA, ik, box, 0.006, limits=FULL_TURN)
     boundary_centres = occupancy.centers()[occupancy.boundary()]
     distance = np.linalg.norm(p[:, None, :] - boundary_centres[None], axis=-1).min(axis=1)
     assert np.all(distance <= np.sqrt(3) * 0.006)
@@ -165,7 +165,7 @@ def test_boundary_singularities_lie_on_the_workspace_boundary(ik):
 def test_lowest_conditioning_lies_on_the_boundary_within_the_actuator_limits(ik):
     """In the model's limits the working mode ends at leg singularities: the worst cells are boundary cells."""
     box = workspace.bounding_box(DELTA)
-    occupancy, values = workspace.index_grid(DELTA, ik, box, 0.006)
+    occupancy, values = grids.index_grid(DELTA, ik, box, 0.006)
     assert np.array_equal(np.isfinite(values), occupancy.occupied)
     reachable = values[occupancy.occupied]
     worst = occupancy.occupied & (values <= np.quantile(reachable, 0.01))

@@ -13,7 +13,7 @@ from symkin import pipeline
 from symkin.derivation import emitted_quantities
 from symkin.ir.spec import FunctionSpec, InputSpec, OutputSpec
 from symkin.optimize import fold_parameters, optimize
-from symkin.optimize.opcount import op_count
+from symkin.ir.opcount import op_count
 from tolerances import CLOSED_FORM, DYNAMICS, KINEMATICS
 
 X = sympy.symbols("x0:3", real=True)

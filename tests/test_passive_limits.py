@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 import symkin
-from symkin.analysis import global_indices, inverse, mechanism, parallel, passive, sampling, workspace
+from symkin.analysis import feasibility, global_indices, mechanism, parallel, passive, sampling, workspace
 from symkin.ik.rotations import wrap_angle
 from symkin.runtime import parallel as runtime_parallel
 from symkin.runtime.loader import LoadedModel
@@ -127,28 +127,28 @@ def test_a_pose_beyond_a_passive_limit_is_excluded_one_inside_kept(limited, pose
     swing = np.degrees(np.max(np.abs(expected[:, [1, 5, 9]]), axis=1))
     inside, beyond = np.argmin(np.abs(swing - 15)), np.argmin(np.abs(swing - 25))
     assert abs(swing[inside] - 15) < 2 and abs(swing[beyond] - 25) < 2
-    ik = inverse.parallel_inverse(limited)  # +-20 deg
+    ik = parallel.parallel_inverse(limited)  # +-20 deg
     points = p[[inside, beyond]]
     _, valid = ik.solve(points)
     assert valid[:, 0].tolist() == [True, False]
     _, in_mode = parallel.working_mode(limited, q[[inside, beyond]])
     assert in_mode.tolist() == [True, False]
     # without the limits both are in the workspace
-    assert inverse.parallel_inverse(_variant(limited, None)).solve(points)[1][:, 0].all()
+    assert parallel.parallel_inverse(_variant(limited, None)).solve(points)[1][:, 0].all()
 
 
 def test_tighter_passive_limits_shrink_the_workspace(limited):
-    ik = inverse.parallel_inverse(DELTA)
+    ik = parallel.parallel_inverse(DELTA)
     lower, upper = np.array([-0.13, -0.13, -0.27]), np.array([0.13, 0.13, -0.05])
     axes = [np.linspace(lo, hi, 14) for lo, hi in zip(lower, upper)]
     points = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
     box = mechanism.joint_limits(DELTA)
     revolute = mechanism.revolute_mask(DELTA)
-    previous = inverse.reachable(ik, points, box, revolute)
+    previous = feasibility.reachable(ik, points, box, revolute)
     counts = [int(previous.sum())]
     for width in (90, 30, 20, 10):
         model = _variant(limited, _elbow(width))
-        current = inverse.reachable(inverse.parallel_inverse(model), points, box, revolute)
+        current = feasibility.reachable(parallel.parallel_inverse(model), points, box, revolute)
         assert not np.any(current & ~previous)  # a subset of the looser limits' workspace
         counts.append(int(current.sum()))
         previous = current
@@ -166,9 +166,9 @@ def test_wide_passive_limits_reproduce_the_unlimited_analyses_exactly(limited):
         box = workspace.bounding_box(DELTA)
         for domain in ("joint", "cartesian"):
             expected = global_indices.gci(DELTA, method="grid", samples=1500, domain=domain, box=box,
-                                          inverse=inverse.parallel_inverse(DELTA))
+                                          inverse=parallel.parallel_inverse(DELTA))
             result = global_indices.gci(wide, method="grid", samples=1500, domain=domain, box=box,
-                                        inverse=inverse.parallel_inverse(wide))
+                                        inverse=parallel.parallel_inverse(wide))
             assert (result.value.value, result.measure.value) == (expected.value.value, expected.measure.value)
             assert (result.value.error, result.measure.error) == (expected.value.error, expected.measure.error)
 
@@ -191,7 +191,7 @@ def test_unresolved_passive_variables_are_unreachable_and_reported(limited, pose
 def test_malformed_passive_limits_are_refused_with_their_place(limited, limits, message):
     model = _variant(limited, limits)
     with pytest.raises(ValueError, match=message):
-        inverse.parallel_inverse(model)
+        parallel.parallel_inverse(model)
     with pytest.raises(ValueError, match=message):
         global_indices.gci(model, method="grid", samples=200)
 
@@ -231,7 +231,7 @@ def test_joint_and_cartesian_domains_agree_under_passive_limits(limited):
     joint = global_indices.workspace_measure(limited, method="grid", samples=8000)
     cartesian = global_indices.workspace_measure(limited, method="grid", samples=8000, domain="cartesian",
                                                  box=workspace.bounding_box(DELTA),
-                                                 inverse=inverse.parallel_inverse(limited))
+                                                 inverse=parallel.parallel_inverse(limited))
     assert abs(joint.value - cartesian.value) <= min(joint.error + cartesian.error, 0.05 * cartesian.value)
     assert cartesian.value < 0.5 * global_indices.workspace_measure(DELTA, method="grid", samples=8000).value
 

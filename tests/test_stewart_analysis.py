@@ -17,7 +17,7 @@ import pytest
 
 import symkin
 from symkin.analysis import conditioning as C
-from symkin.analysis import global_indices, inverse, mechanism, parallel, workspace
+from symkin.analysis import feasibility, global_indices, grids, inverse, mechanism, parallel, workspace
 from symkin.cli import main
 
 from conftest import GENERATED_DIR, MODELS_DIR
@@ -129,7 +129,7 @@ def test_reachability_is_the_stroke_in_the_assembly_mode_of_home(ik):
     points = np.random.default_rng(2).uniform([-0.22, -0.22, -0.33], [0.22, 0.22, 0.33], (20_000, 3))
     lengths = np.linalg.norm(_legs(points), axis=-1)
     expected = np.all((lengths >= STROKE[0]) & (lengths <= STROKE[1]), axis=-1) & (points[:, 2] > 0)
-    got = inverse.reachable(ik, points, mechanism.joint_limits(HELD), mechanism.revolute_mask(HELD))
+    got = feasibility.reachable(ik, points, mechanism.joint_limits(HELD), mechanism.revolute_mask(HELD))
     assert expected.sum() > 300
     np.testing.assert_array_equal(got, expected)
 
@@ -138,7 +138,7 @@ def test_reachability_is_the_stroke_in_the_assembly_mode_of_home(ik):
 def test_volume_agrees_with_an_independent_monte_carlo(oracle, orientation):
     volume, error, _ = oracle if orientation == (0.0, 0.0, 0.0) else _monte_carlo(orientation, 600_000, seed=3)
     held = parallel.constant_orientation(STEWART, orientation)
-    measured = global_indices.workspace_measure(held, domain="cartesian", inverse=inverse.parallel_inverse(held),
+    measured = global_indices.workspace_measure(held, domain="cartesian", inverse=parallel.parallel_inverse(held),
                                                 method="qmc", samples=2**15, seed=0)
     assert abs(measured.value - volume) <= 4.0 * np.hypot(error, measured.error / 2.0)
     assert measured.error < 0.02 * measured.value
@@ -146,7 +146,7 @@ def test_volume_agrees_with_an_independent_monte_carlo(oracle, orientation):
 
 def test_reachable_cells_approach_the_volume_and_the_boundary_holds_the_lowest_conditioning(oracle, ik):
     box = workspace.bounding_box(HELD)
-    occupancy, values = workspace.index_grid(HELD, ik, box, 0.008, length=LENGTH)
+    occupancy, values = grids.index_grid(HELD, ik, box, 0.008, length=LENGTH)
     # cells whose centre is reachable: a midpoint rule for the volume (thin spikes of the
     # workspace fall between centres, so the interior/occupied bracket is not guaranteed)
     assert abs(occupancy.occupied.sum() * occupancy.cell_volume - oracle[0]) < 0.02 * oracle[0]
@@ -208,7 +208,7 @@ def test_gci_estimators_converge_to_the_independent_value(oracle_gci, ik, method
 
 def test_automatic_length_minimizes_the_mean_kappa_f_squared(ik):
     length = global_indices.characteristic_length_of(HELD)
-    points = workspace.reachability_grid(HELD, ik, workspace.bounding_box(HELD), 0.01)
+    points = grids.reachability_grid(HELD, ik, workspace.bounding_box(HELD), 0.01)
     points = points.centers()[points.occupied]
     J = HELD.jacobian(HELD.ik(points).joints, points)
 
@@ -294,7 +294,7 @@ def test_passive_limits_of_the_base_joints_bound_the_legs_elevation(tmp_path):
     elevation = np.degrees(np.arcsin(legs[..., 2] / lengths))
     stroke = np.all((lengths >= STROKE[0]) & (lengths <= STROKE[1]), axis=-1)
     expected = stroke & np.all((elevation >= 50) & (elevation <= 75), axis=-1)
-    got = inverse.reachable(inverse.parallel_inverse(held), points, mechanism.joint_limits(held),
+    got = feasibility.reachable(parallel.parallel_inverse(held), points, mechanism.joint_limits(held),
                             mechanism.revolute_mask(held))
     assert 100 < expected.sum() < 0.8 * stroke.sum()  # the limits cut the workspace
     np.testing.assert_array_equal(got, expected)

@@ -8,8 +8,9 @@ import numpy as np
 import pytest
 
 import symkin
-from symkin.analysis import global_indices, inverse, mechanism, workspace
-from symkin.analysis.inverse import closed_form_inverse, within_limits
+from symkin.analysis import feasibility, global_indices, grids, inverse, mechanism, workspace
+from symkin.analysis.inverse import closed_form_inverse
+from symkin.analysis.limits import within_limits
 from symkin.runtime import LoadedModel
 
 from conftest import EXAMPLE_MODELS, GENERATED_DIR
@@ -137,10 +138,10 @@ def test_reachability_respects_joint_limits():
     ik = closed_form_inverse(ARM)
     limits, revolute = mechanism.joint_limits(ARM), mechanism.revolute_mask(ARM)
     inside = workspace.sample_workspace(ARM, 2000, method="random", seed=4)
-    assert inverse.reachable(ik, inside.points, limits, revolute).all()
+    assert feasibility.reachable(ik, inside.points, limits, revolute).all()
     q_out = np.random.default_rng(5).uniform([-np.pi, -np.pi], [-0.1, -0.1], (500, 2))  # both joints below 0
-    assert not inverse.reachable(ik, _seed_fk(q_out), limits, revolute).any()
-    q, ok = inverse.feasible_configurations(ik, inside.points, limits, revolute)
+    assert not feasibility.reachable(ik, _seed_fk(q_out), limits, revolute).any()
+    q, ok = feasibility.feasible_configurations(ik, inside.points, limits, revolute)
     assert ok.all() and np.allclose(q, inside.q, atol=1e-7)
 
 
@@ -180,7 +181,7 @@ def test_boundary_singularities_lie_on_the_workspace_boundary():
 
 def test_reachability_grid_finds_the_same_workspace_and_boundary():
     ik = closed_form_inverse(ARM)
-    grid = workspace.reachability_grid(ARM, ik, workspace.bounding_box(ARM), 0.002)
+    grid = grids.reachability_grid(ARM, ik, workspace.bounding_box(ARM), 0.002)
     area = grid.occupied.sum() * grid.cell_volume
     assert area == pytest.approx(np.pi / 2 * 0.01, rel=0.02)
     # The stretched arm away from the two cusps (where the workspace is thinner than a cell).

@@ -13,9 +13,11 @@ hot paths call the generated functions on whole batches and never touch sympy::
 Modules: :mod:`~symkin.analysis.conditioning` (singular values, 1/kappa, Table 8.5
 criteria, characteristic length), :mod:`~symkin.analysis.workspace` (point clouds,
 occupancy, boundary), :mod:`~symkin.analysis.global_indices` (GCI eq. 8.28 and workspace measure
-over joint or Cartesian domains), :mod:`~symkin.analysis.integrators` (grid, Monte
-Carlo, quasi-Monte Carlo, adaptive), :mod:`~symkin.analysis.inverse` (reachability
-interface, planar 2R closed form), :mod:`~symkin.analysis.plots` (figures),
+over joint or Cartesian domains), :mod:`~symkin.analysis.grids` (reachability and 1/kappa maps on
+Cartesian grids), :mod:`~symkin.analysis.integrators` (grid, Monte Carlo, quasi-Monte Carlo,
+adaptive), :mod:`~symkin.analysis.feasibility` (the reachability interface and joint limits),
+:mod:`~symkin.analysis.inverse` (which inverse kinematics a model gets: planar 2R closed form,
+parallel closed forms), :mod:`~symkin.analysis.plots` (figures),
 :mod:`~symkin.analysis.convergence` (run time against error).
 """
 
@@ -33,15 +35,10 @@ from symkin.analysis.conditioning import (
 from symkin.analysis.estimates import Estimate, IntegralEstimate
 from symkin.analysis.global_indices import GlobalIndex, gci, global_index, workspace_measure
 from symkin.analysis.integrators import INTEGRATORS, integrate
-from symkin.analysis.inverse import InverseKinematics, closed_form_inverse, feasible_configurations, reachable
-from symkin.analysis.workspace import (
-    Occupancy,
-    WorkspaceCloud,
-    bounding_box,
-    occupancy_from_cloud,
-    reachability_grid,
-    sample_workspace,
-)
+from symkin.analysis.feasibility import InverseKinematics, feasible_configurations, reachable
+from symkin.analysis.inverse import closed_form_inverse
+from symkin.analysis.grids import index_grid, reachability_grid
+from symkin.analysis.workspace import Occupancy, WorkspaceCloud, bounding_box, occupancy_from_cloud, sample_workspace
 
 __all__ = [
     "INTEGRATORS",
@@ -60,6 +57,7 @@ __all__ = [
     "gci",
     "global_index",
     "homogenize",
+    "index_grid",
     "integrate",
     "inverse_condition_number",
     "inverse_frobenius_condition_number",

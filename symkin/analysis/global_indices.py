@@ -18,7 +18,7 @@ domains of integration and two measures are offered:
     literature, but it rates configurations, not places of the workspace);
 * ``domain="cartesian"`` integrates over a Cartesian box containing the workspace with
   the indicator of reachability from an inverse kinematics
-  (:class:`~symkin.analysis.inverse.InverseKinematics`): dW = 1_W(x) dx, each reachable
+  (:class:`~symkin.analysis.feasibility.InverseKinematics`): dW = 1_W(x) dx, each reachable
   point counted once, 1/kappa at the first feasible solution branch.  This is the
   formulation of parallel mechanisms, whose inverse kinematics is closed-form.
 
@@ -39,8 +39,9 @@ from symkin.analysis import conditioning, mechanism, parallel, sampling
 from symkin.analysis.estimates import Estimate, IntegralEstimate
 from symkin.analysis.integrand import Integrand
 from symkin.analysis.integrators import integrate
-from symkin.analysis.inverse import InverseKinematics, feasible_configurations
+from symkin.analysis.feasibility import InverseKinematics, feasible_configurations
 from symkin.analysis.mechanism import Limits
+from symkin.analysis.workspace import bounding_box
 
 DOMAINS = ("joint", "cartesian")
 MEASURES = ("cartesian", "joint")
@@ -208,8 +209,6 @@ def _integrand(model: Any, *, domain: str, measure: str, index: Index | None, li
         if inverse is None:
             raise ValueError("the Cartesian domain needs an inverse kinematics (inverse=...)")
         if box is None:
-            from symkin.analysis.workspace import bounding_box
-
             box = bounding_box(model, limits=limits)
         description = "Cartesian box with reachability from inverse kinematics, dW = 1_W(x) dx"
         if isinstance(model, parallel.ConstantOrientation):

@@ -1,70 +1,24 @@
-"""Is a Cartesian point reachable? Inverse kinematics as the analyses see it.
+"""The inverse kinematics an analysis uses for a model (:func:`inverse_kinematics_for`).
 
-A Cartesian workspace analysis (reachability grid, GCI over a Cartesian box) needs, for a
-batch of TCP points, the joint coordinates of every solution branch and whether each
-branch is real.  Any object with this interface plugs in (:class:`InverseKinematics`):
-the closed forms of serial arms recognised by :mod:`symkin.ik` whose target is a TCP
-position (the planar 2R; :class:`ClosedFormInverse`) and a parallel mechanism's
-closed-form inverse kinematics (DELTA: one quadratic per leg, 2^3 branches or the chosen
-working mode, with its passive-joint limits folded into ``valid``).  Joint limits are
-applied here, once, for all of them (:func:`feasible_configurations`).
+Serial arms: the closed forms of :mod:`symkin.ik` whose target is a TCP position (the planar
+2R; :class:`ClosedFormInverse`); parallel mechanisms: their closed-form inverse kinematics
+(DELTA: one quadratic per leg, 2^3 branches or the chosen working mode;
+:func:`symkin.analysis.parallel.parallel_inverse`).  Each is an
+:class:`~symkin.analysis.feasibility.InverseKinematics`; joint limits are applied by
+:func:`~symkin.analysis.feasibility.feasible_configurations`.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import Any
 
 import numpy as np
 
 from symkin.analysis import mechanism
-from symkin.analysis.limits import within_limits
+from symkin.analysis.feasibility import InverseKinematics
 from symkin.analysis.parallel import parallel_inverse
 from symkin.ik import ClosedFormIK, closed_form_solver
-
-
-class InverseKinematics(Protocol):
-    """Every inverse-kinematics solution of a batch of TCP points.
-
-    Attributes:
-        dimension: d, the number of TCP coordinates of a point (the workspace dimension,
-            in the order of :func:`symkin.analysis.mechanism.position_axes`).
-        branches: B, the number of solution branches returned per point.
-    """
-
-    dimension: int
-    branches: int
-
-    def solve(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Solutions of points (N, d): joint coordinates (N, B, n) and validity (N, B).
-
-        ``valid`` is False where a branch has no real solution (the point is out of reach
-        for it); joint limits are not checked here.
-        """
-        ...
-
-
-def feasible_configurations(inverse: InverseKinematics, points: np.ndarray, limits: np.ndarray,
-                            revolute: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """For each point, the first solution branch within the joint limits.
-
-    Returns:
-        (q, reachable): joint coordinates (N, n) (meaningless where unreachable) and a
-        boolean (N,) array: the point has a real solution within the limits.  Which
-        branch is taken where several are feasible follows the inverse kinematics' branch
-        order (for a serial arm the conditioning may differ between branches; for the
-        planar 2R it does not).
-    """
-    q, valid = inverse.solve(np.asarray(points, dtype=np.float64))
-    q, inside = within_limits(q, limits, revolute)
-    feasible = valid & inside
-    first = np.argmax(feasible, axis=1)
-    return q[np.arange(len(q)), first], feasible.any(axis=1)
-
-
-def reachable(inverse: InverseKinematics, points: np.ndarray, limits: np.ndarray, revolute: np.ndarray) -> np.ndarray:
-    """Boolean (N,): whether each point has an inverse-kinematics solution within the limits."""
-    return feasible_configurations(inverse, points, limits, revolute)[1]
 
 
 # --- serial closed forms (symkin.ik) -------------------------------------------------------
@@ -72,7 +26,7 @@ def reachable(inverse: InverseKinematics, points: np.ndarray, limits: np.ndarray
 
 @dataclass(frozen=True)
 class ClosedFormInverse:
-    """A closed-form solver of :mod:`symkin.ik` seen as an :class:`InverseKinematics`.
+    """A closed-form solver of :mod:`symkin.ik` seen as an :class:`~symkin.analysis.feasibility.InverseKinematics`.
 
     The solver recognises the structure from the joint screws (e.g. the planar 2R: two
     parallel revolute axes, both elbow branches from the half-angle law of cosines, seed
@@ -81,7 +35,7 @@ class ClosedFormInverse:
     :data:`symkin.ik.closed_form.VALID_TOLERANCE`).  A point on the workspace boundary
     (|cos theta2| = 1 up to rounding) is clamped onto it and stays reachable.  The solver's
     own joint limits are not used (its angles are not shifted into them):
-    :func:`feasible_configurations` applies the analysis' limits.
+    :func:`~symkin.analysis.feasibility.feasible_configurations` applies the analysis' limits.
 
     Attributes:
         solver: the :class:`~symkin.ik.closed_form.ClosedFormIK` (task-space targets).

@@ -40,6 +40,7 @@ from typing import Any
 import numpy as np
 
 from symkin.analysis import conditioning, mechanism, passive, sampling
+from symkin.analysis.feasibility import feasible_configurations
 from symkin.ik.rotations import wrap_angle
 
 #: Largest |ik(fk(q)) - q| (rad or m) of a configuration in the working mode.  The two
@@ -85,7 +86,7 @@ def jacobian_in_working_mode(model: Any, q: np.ndarray) -> tuple[np.ndarray, np.
 
 
 class _GeneratedInverse:
-    """The generated closed-form ``ik`` as an :class:`~symkin.analysis.inverse.InverseKinematics`, one branch.
+    """The generated closed-form ``ik`` as an :class:`~symkin.analysis.feasibility.InverseKinematics`, one branch.
 
     A point is valid where every leg reaches it (finite ``ik``), the solution is in the
     working mode (:meth:`in_mode`, on the finite solutions) and the declared passive-joint
@@ -119,7 +120,7 @@ class _GeneratedInverse:
 
 @dataclass(frozen=True)
 class ParallelInverse(_GeneratedInverse):
-    """The generated closed-form ``ik`` as an :class:`~symkin.analysis.inverse.InverseKinematics`.
+    """The generated closed-form ``ik`` as an :class:`~symkin.analysis.feasibility.InverseKinematics`.
 
     One branch (the model's working mode): a point is valid where every leg reaches it
     (margin >= 0), the forward kinematics of the solution returns to it and the passive
@@ -316,7 +317,7 @@ class ConstantOrientationInverse(_GeneratedInverse):
     without crossing a singularity det J^-1 = 0, e.g. the plane of the base joints, below
     which lies the mirror image of the workspace), and the declared passive-joint limits
     hold.  The actuators' limits are applied by the analyses
-    (:func:`symkin.analysis.inverse.feasible_configurations`).
+    (:func:`symkin.analysis.feasibility.feasible_configurations`).
 
     Attributes:
         model: the :class:`ConstantOrientation`.
@@ -379,8 +380,6 @@ def reachable_points(model: ConstantOrientation, points: np.ndarray, limits: np.
     Reachable: in the assembly mode of the home pose (:class:`ConstantOrientationInverse`) with
     the actuators within ``limits`` (n, 2).
     """
-    from symkin.analysis.inverse import feasible_configurations  # inverse imports this module
-
     return feasible_configurations(constant_orientation_inverse(model), points, limits, mechanism.revolute_mask(model))
 
 

@@ -173,7 +173,7 @@ def plot_index_slices(occupancy: Occupancy, values: np.ndarray, path: str | Path
     """A local index over a 3-D workspace as horizontal slices (the last axis, z, held fixed).
 
     Args:
-        occupancy: the Cartesian grid (:func:`symkin.analysis.workspace.index_grid`).
+        occupancy: the Cartesian grid (:func:`symkin.analysis.grids.index_grid`).
         values: the index at the cell centres, the grid's shape, NaN outside the workspace
             (drawn blank).
         count: number of slices, evenly spread over the layers that hold workspace cells

@@ -5,7 +5,7 @@ Two ways to see the workspace W (seed sec. 4.1 and 5.2):
 * forward: sample the joint space within the limits and map through the generated
   ``fk`` (:func:`sample_workspace`): a TCP point cloud, for any serial mechanism;
 * inverse: test points of a Cartesian grid for reachability with an inverse kinematics
-  (:func:`reachability_grid`): the way of parallel mechanisms.
+  (:func:`symkin.analysis.grids.reachability_grid`): the way of parallel mechanisms.
 
 Both give an :class:`Occupancy` grid, from which the boundary (occupied cells with an
 empty neighbour) and a bracketed area/volume follow.  The integrators of
@@ -23,7 +23,6 @@ import numpy as np
 
 from symkin.analysis import mechanism, parallel, sampling
 from symkin.analysis.estimates import Estimate
-from symkin.analysis.inverse import InverseKinematics
 from symkin.analysis.mechanism import Limits
 
 SAMPLING_METHODS = ("grid", "random", "sobol")
@@ -252,44 +251,10 @@ def occupancy_from_cloud(cloud: WorkspaceCloud, cell: float | None = None) -> Oc
     return Occupancy(start, size, occupied)
 
 
-def _grid_cells(box: tuple[np.ndarray, np.ndarray], cell: float) -> tuple[np.ndarray, np.ndarray, tuple, np.ndarray]:
+def grid_cells(box: tuple[np.ndarray, np.ndarray], cell: float) -> tuple[np.ndarray, np.ndarray, tuple, np.ndarray]:
     """(start, cell sizes, counts, cell centres (N, d)) of the Cartesian grid of ``box``."""
     start, size, counts = _grid_geometry(np.asarray(box[0], float), np.asarray(box[1], float), cell)
     return start, size, counts, Occupancy(start, size, np.zeros(counts, dtype=bool)).centers().reshape(-1, len(counts))
-
-
-def reachability_grid(model: Any, inverse: InverseKinematics, box: tuple[np.ndarray, np.ndarray],
-                      cell: float, *, limits: Limits | None = None) -> Occupancy:
-    """Cells whose centre the inverse kinematics reaches within the joint limits.
-
-    This is the Cartesian grid with IK feasibility of parallel mechanisms; any
-    :class:`~symkin.analysis.inverse.InverseKinematics` plugs in.  The cells are evaluated
-    with the Cartesian integrand of the GCI (:func:`~symkin.analysis.global_indices.cartesian_integrand`).
-    """
-    from symkin.analysis import global_indices
-
-    start, size, counts, centers = _grid_cells(box, cell)
-    indicator = global_indices.cartesian_integrand(model, inverse, box, index=None, limits=limits).function(centers)
-    return Occupancy(start, size, (indicator[:, 0] > 0).reshape(counts))
-
-
-def index_grid(model: Any, inverse: InverseKinematics, box: tuple[np.ndarray, np.ndarray], cell: float, *,
-               index=None, limits: Limits | None = None, length: float | None = None) -> tuple[Occupancy, np.ndarray]:
-    """A local index (1/kappa by default) at the reachable cell centres of a Cartesian grid.
-
-    Returns:
-        (occupancy, values): the reachability grid (:func:`reachability_grid`) and the index
-        at every cell centre, an array of the grid's shape, NaN at unreachable cells.
-    """
-    from symkin.analysis import conditioning, global_indices
-
-    index = conditioning.inverse_condition_number if index is None else index
-    start, size, counts, centers = _grid_cells(box, cell)
-    scored = global_indices.cartesian_integrand(model, inverse, box, index=index, limits=limits,
-                                                length=length).function(centers)
-    inside = scored[:, 1] > 0
-    values = np.where(inside, scored[:, 0], np.nan)
-    return Occupancy(start, size, inside.reshape(counts)), values.reshape(counts)
 
 
 def limit_curves(model: Any, *, limits: Limits | None = None, count: int = 200) -> list[np.ndarray]:

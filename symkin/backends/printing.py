@@ -18,7 +18,7 @@ import sympy
 from sympy.printing.precedence import PRECEDENCE
 
 #: Largest exponent printed as repeated multiplication (the op count model uses the same bound).
-from symkin.optimize.opcount import MAX_UNROLLED_POWER
+from symkin.ir.opcount import MAX_UNROLLED_POWER
 
 __all__ = ["ArithmeticPrinterMixin", "MAX_UNROLLED_POWER"]
 

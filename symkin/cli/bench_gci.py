@@ -7,7 +7,7 @@ from pathlib import Path
 
 from symkin.cli import analysis_args
 from symkin.cli.progress import Progress
-from symkin.cli.table import format_table
+from symkin.text_table import format_table
 
 
 def register(kinds: argparse._SubParsersAction) -> None:

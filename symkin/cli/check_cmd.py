@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from symkin.cli.table import format_table
+from symkin.text_table import format_table
 
 
 def register_check(sub: argparse._SubParsersAction) -> None:

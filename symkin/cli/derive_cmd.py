@@ -8,7 +8,7 @@ from pathlib import Path
 
 from symkin.backends import BACKENDS
 from symkin.cli.progress import Progress
-from symkin.cli.table import format_table
+from symkin.text_table import format_table
 
 
 def register(sub: argparse._SubParsersAction) -> None:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 
-from symkin.cli.table import format_table
+from symkin.text_table import format_table
 
 
 def register_mobility(sub: argparse._SubParsersAction) -> None:

@@ -165,21 +165,22 @@ def sections_path(path: str) -> str:
 
 def cartesian_index_grid(model, box, limits, length, index=None):
     """Reachability grid of a parallel mechanism over ``box`` (CARTESIAN_CELLS along its longest
-    side) with a local index (1/kappa by default) at its cell centres (see workspace.index_grid)."""
-    from symkin.analysis import inverse, workspace
+    side) with a local index (1/kappa by default) at its cell centres (see symkin.analysis.grids.index_grid)."""
+    from symkin.analysis import parallel
+    from symkin.analysis.grids import index_grid
 
     cell = float(max(box[1] - box[0])) / CARTESIAN_CELLS
-    return workspace.index_grid(model, inverse.parallel_inverse(model), box, cell, index=index, limits=limits,
+    return index_grid(model, parallel.parallel_inverse(model), box, cell, index=index, limits=limits,
                                 length=length)
 
 
 def _boundary_cloud(model, occupancy, limits):
     """The centres of the boundary cells of a Cartesian grid and their joint coordinates, as a point cloud."""
-    from symkin.analysis import inverse, mechanism, workspace
+    from symkin.analysis import feasibility, mechanism, parallel, workspace
 
     points = occupancy.centers()[occupancy.boundary()]
-    q, _ = inverse.feasible_configurations(inverse.parallel_inverse(model), points,
-                                           mechanism.joint_limits(model, limits), mechanism.revolute_mask(model))
+    q, _ = feasibility.feasible_configurations(parallel.parallel_inverse(model), points,
+                                               mechanism.joint_limits(model, limits), mechanism.revolute_mask(model))
     return workspace.WorkspaceCloud(q, points, ("x", "y", "z"))
 
 

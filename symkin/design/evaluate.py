@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from symkin.analysis import conditioning, global_indices, inverse, mechanism, sampling
+from symkin.analysis import conditioning, feasibility, global_indices, inverse, mechanism, parallel, sampling
 from symkin.analysis.estimates import Estimate
 from symkin.analysis.limits import within_limits
 from symkin.design.problem import DesignProblem
@@ -89,16 +89,16 @@ def _serial_box(problem: DesignProblem, model: Any, points: np.ndarray | None,
         return float(np.mean(inside)), (f"the optimizer's configurations at {len(points)} box points, by the "
                                         "generated fk (no closed-form inverse kinematics for this model)")
     points = box_check_points(problem)
-    inside = inverse.reachable(ik, points, problem.limits, mechanism.revolute_mask(model))
+    inside = feasibility.reachable(ik, points, problem.limits, mechanism.revolute_mask(model))
     return float(np.mean(inside)), f"closed-form inverse kinematics within the joint limits at {len(points)} points"
 
 
 def parallel_index(model: Any, points: np.ndarray, limits: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
     """1/kappa of J at each point (0 where unreachable), and whether it is reachable: by the
-    analyses' own test (:func:`symkin.analysis.inverse.parallel_inverse`: IK margin, fk round
+    analyses' own test (:func:`symkin.analysis.parallel.parallel_inverse`: IK margin, fk round
     trip, declared passive-joint limits) within the actuated-joint ``limits``."""
-    ik = inverse.parallel_inverse(model)
-    q, inside = inverse.feasible_configurations(ik, points, mechanism.joint_limits(model, limits),
+    ik = parallel.parallel_inverse(model)
+    q, inside = feasibility.feasible_configurations(ik, points, mechanism.joint_limits(model, limits),
                                                 mechanism.revolute_mask(model))
     values = np.zeros(len(points))
     if inside.any():
@@ -107,11 +107,11 @@ def parallel_index(model: Any, points: np.ndarray, limits: np.ndarray | None) ->
 
 
 def _parallel(problem: DesignProblem, model: Any, samples: int, seed: int) -> Evaluation:
-    ik = inverse.parallel_inverse(model)
+    ik = parallel.parallel_inverse(model)
     result = global_indices.gci(model, method="qmc", samples=samples, seed=seed, domain="cartesian", inverse=ik,
                                 box=problem.box, limits=problem.limits)
     points = box_check_points(problem)
-    fraction = float(np.mean(inverse.reachable(ik, points, mechanism.joint_limits(model, problem.limits),
+    fraction = float(np.mean(feasibility.reachable(ik, points, mechanism.joint_limits(model, problem.limits),
                                                mechanism.revolute_mask(model))))
     return Evaluation(result.value, result.measure, f"qmc over the required box, {result.description}", fraction,
                       f"closed-form ik (margin, fk round trip, joint limits) at {len(points)} points")

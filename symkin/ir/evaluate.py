@@ -11,6 +11,7 @@ from collections.abc import Callable, Mapping, Sequence
 
 import sympy
 
+from symkin.ir.opcount import spec_op_count
 from symkin.ir.spec import FunctionSpec
 
 
@@ -31,8 +32,6 @@ def lambdify_spec(spec: FunctionSpec, args: Sequence[object], modules: str = "nu
         modules: ``"numpy"`` or ``"mpmath"``.
         values: substitutions applied first (e.g. parameters at their defaults).
     """
-    from symkin.optimize.opcount import spec_op_count
-
     values = dict(values or {})
     definitions = [(s, e.xreplace(values)) for s, e in spec.definitions]
     entries = [e.xreplace(values) for out in spec.outputs for e in out.entries]

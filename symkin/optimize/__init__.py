@@ -20,7 +20,7 @@ from collections.abc import Iterable
 
 from symkin.ir.spec import FunctionSpec, OptimizedFunction
 from symkin.optimize.cse import eliminate_common_subexpressions
-from symkin.optimize.opcount import spec_op_count
+from symkin.ir.opcount import spec_op_count
 from symkin.optimize.passes import fold_constants, fold_parameters, fold_parameters_after_cse
 from symkin.optimize.trig import expand_trig_sums
 

@@ -7,7 +7,7 @@ import sympy
 from sympy.core.parameters import distribute
 
 from symkin.ir.spec import FunctionSpec, OptimizedFunction
-from symkin.optimize.opcount import op_count
+from symkin.ir.opcount import op_count
 from symkin.symengine_bridge import SympyConverter, to_symengine
 
 #: Prefix of CSE temporaries; model names must start with a letter, so these never clash.

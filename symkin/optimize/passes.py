@@ -5,7 +5,7 @@ Both passes substitute leaves (a fixed parameter by its value, a constant subexp
 re-evaluate every node whose arguments changed, except where sympy's evaluation would cost
 more operations than the node as it stands (``atan2(y, 2)`` evaluates to ``atan(y/2)``: one
 call becomes a call and a product; ``2*(x + y)`` distributes to ``2*x + 2*y``).  Since replacing a symbol by a number never raises the
-cost of an unevaluated node under the op-count model (:mod:`symkin.optimize.opcount`), no
+cost of an unevaluated node under the op-count model (:mod:`symkin.ir.opcount`), no
 pass can increase a function's operation count.
 """
 
@@ -17,7 +17,7 @@ from collections.abc import Callable, Iterable
 import sympy
 
 from symkin.ir.spec import FunctionSpec, OptimizedFunction, OutputSpec
-from symkin.optimize.opcount import node_cost, op_count
+from symkin.ir.opcount import node_cost, op_count
 
 #: Digits used to evaluate constant subexpressions before they are rounded to double.
 CONSTANT_DIGITS = 30

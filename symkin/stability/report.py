@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from symkin.cli.table import format_table
+from symkin.text_table import format_table
 from symkin.stability.harness import BOUND, KAPPA_LIMIT, StabilityRun
 
 KAPPA_BINS = (1.0, 1e1, 1e2, 1e3, 1e6, 1e9, 1e12, math.inf)

@@ -1,4 +1,4 @@
-"""Plain-text tables for command output."""
+"""Plain-text tables for command output and reports (the CLI, `symkin bench stability`, benchmarks)."""
 
 from __future__ import annotations
 

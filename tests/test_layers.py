@@ -1,0 +1,186 @@
+"""The package's layers, read from its imports (issue 11): data flows one way, and nothing imports in a circle.
+
+Every ``import`` in ``symkin/`` is read, at module level and inside functions, and resolved to the
+symkin module it loads, including the parent packages whose ``__init__`` runs first (the root
+``symkin`` facade excepted: it is the public entry point, and lazy).  A module may import from its
+own layer or from a lower one, never from a higher one; and no set of modules may import each
+other in a circle, however indirectly.  The layers, lowest first, are those of README.md.
+
+``KNOWN_UPWARD`` and ``KNOWN_CYCLES`` list the exceptions that exist today (a ratchet): the test
+fails on any new one, and on a listed one that has gone, so that each fix shortens the list.
+"""
+
+from __future__ import annotations
+
+import ast
+from collections import defaultdict
+from pathlib import Path
+
+PACKAGE = Path(__file__).resolve().parent.parent / "symkin"
+
+#: Lowest first.  Each entry: the layer's name and its top-level modules or packages of symkin.
+LAYERS = (
+    ("foundation", {"_version", "errors", "atomic", "symengine_bridge", "text_table"}),
+    ("model", {"model", "geometry"}),
+    ("structure", {"structure"}),
+    ("ir", {"ir"}),
+    ("derivation", {"derivation", "kinematics", "dynamics", "parallel"}),
+    ("optimize", {"optimize"}),
+    ("backends", {"backends", "manifest", "pipeline"}),
+    ("runtime", {"runtime"}),
+    ("analyses", {"ik", "analysis", "design", "simulation", "stability"}),
+    ("api", {"api"}),
+    ("cli", {"cli", "__main__"}),
+)
+RANK = {part: rank for rank, (_name, parts) in enumerate(LAYERS) for part in parts}
+
+#: Imports against the layer order that exist today: (importer, imported).  Shrinks to empty.
+KNOWN_UPWARD = {
+    ("symkin.backends.c.binding", "symkin.runtime"),
+    ("symkin.backends.c.binding", "symkin.runtime.wrappers"),
+    ("symkin.backends.casadi.binding", "symkin.runtime"),
+    ("symkin.backends.casadi.binding", "symkin.runtime.wrappers"),
+}
+
+#: Import cycles that exist today, each as the set of its modules.  Shrinks to empty.
+KNOWN_CYCLES = {
+    frozenset({"symkin.geometry", "symkin.model", "symkin.model.build", "symkin.model.delta",
+               "symkin.model.parallel_build"}),
+    frozenset({"symkin.backends", "symkin.backends.c", "symkin.backends.c.binding", "symkin.backends.casadi",
+               "symkin.backends.casadi.binding", "symkin.runtime", "symkin.runtime.loader",
+               "symkin.runtime.wrappers"}),
+    frozenset({"symkin.derivation", "symkin.dynamics.quantities", "symkin.kinematics.quantities",
+               "symkin.parallel.quantities"}),
+}
+
+
+def modules(package: Path = PACKAGE) -> dict[str, Path]:
+    """Every module of the package by dotted name (a package by its own name)."""
+    found = {}
+    for path in package.rglob("*.py"):
+        parts = list(path.relative_to(package.parent).with_suffix("").parts)
+        if parts[-1] == "__init__":
+            parts.pop()
+        found[".".join(parts)] = path
+    return found
+
+
+def _imported_names(module: str, path: Path, node: ast.Import | ast.ImportFrom, known: dict) -> list[str]:
+    if isinstance(node, ast.Import):
+        return [alias.name for alias in node.names]
+    package = module if path.name == "__init__.py" else module.rsplit(".", 1)[0]
+    base = node.module or ""
+    if node.level:
+        parts = package.split(".")
+        base = ".".join(parts[:len(parts) - node.level + 1] + ([base] if base else []))
+    # `from package import name` loads the submodule `name` when there is one
+    return [f"{base}.{alias.name}" if f"{base}.{alias.name}" in known else base for alias in node.names]
+
+
+def import_graph(package: Path = PACKAGE) -> dict[str, set[str]]:
+    """module -> the symkin modules it imports (anywhere in it), with the packages they run first."""
+    known = modules(package)
+    graph: dict[str, set[str]] = defaultdict(set)
+    for module, path in known.items():
+        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+            if not isinstance(node, (ast.Import, ast.ImportFrom)):
+                continue
+            for name in _imported_names(module, path, node, known):
+                if not name.startswith("symkin"):
+                    continue
+                while name not in known and "." in name:
+                    name = name.rsplit(".", 1)[0]
+                target = name
+                while target.count("."):  # the module and its parent packages, the root facade excepted
+                    if target in known and target != module and not module.startswith(target + "."):
+                        graph[module].add(target)
+                    target = target.rsplit(".", 1)[0]
+    return graph
+
+
+def layer_of(module: str) -> int:
+    """The layer of a module; the root package (the public facade: load, derive) is the api's."""
+    parts = module.split(".")
+    return RANK[parts[1] if len(parts) > 1 else "api"]
+
+
+def upward_imports(graph: dict[str, set[str]]) -> set[tuple[str, str]]:
+    return {(a, b) for a, targets in graph.items() for b in targets if layer_of(a) < layer_of(b)}
+
+
+def cycles(graph: dict[str, set[str]]) -> set[frozenset[str]]:
+    """The strongly connected components of more than one module (Tarjan's algorithm, iterative)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    found = set()
+    for root in sorted(graph):
+        if root in index:
+            continue
+        work = [(root, iter(sorted(graph.get(root, ()))))]
+        index[root] = low[root] = len(index)
+        stack.append(root)
+        on_stack.add(root)
+        while work:
+            node, children = work[-1]
+            child = next(children, None)
+            if child is not None:
+                if child not in index:
+                    index[child] = low[child] = len(index)
+                    stack.append(child)
+                    on_stack.add(child)
+                    work.append((child, iter(sorted(graph.get(child, ())))))
+                elif child in on_stack:
+                    low[node] = min(low[node], index[child])
+                continue
+            work.pop()
+            if work:
+                low[work[-1][0]] = min(low[work[-1][0]], low[node])
+            if low[node] == index[node]:
+                component = set()
+                while True:
+                    member = stack.pop()
+                    on_stack.discard(member)
+                    component.add(member)
+                    if member == node:
+                        break
+                if len(component) > 1:
+                    found.add(frozenset(component))
+    return found
+
+
+def test_every_module_belongs_to_a_layer():
+    assert {m.split(".")[1] for m in modules() if "." in m} <= set(RANK), "add the new package to LAYERS"
+
+
+def test_no_import_goes_against_the_layer_order():
+    upward = upward_imports(import_graph())
+    new = sorted(upward - KNOWN_UPWARD)
+    assert not new, "imports from a higher layer (move the code down, or the import up):\n" + "\n".join(
+        f"{a} ({LAYERS[layer_of(a)][0]}) -> {b} ({LAYERS[layer_of(b)][0]})" for a, b in new)
+    gone = sorted(KNOWN_UPWARD - upward)
+    assert not gone, f"fixed: remove from KNOWN_UPWARD: {gone}"
+
+
+def test_no_import_cycles():
+    found = cycles(import_graph())
+    new = [sorted(c) for c in found - KNOWN_CYCLES]
+    assert not new, f"import cycles: {new}"
+    gone = [sorted(c) for c in KNOWN_CYCLES - found]
+    assert not gone, f"fixed or changed: update KNOWN_CYCLES: {gone}"
+
+
+def test_the_reader_sees_function_level_and_relative_imports_and_the_packages_they_run(tmp_path):
+    package = tmp_path / "symkin"
+    (package / "low").mkdir(parents=True)
+    (package / "__init__.py").write_text("")
+    (package / "low" / "__init__.py").write_text("from symkin.low.base import thing\n")
+    (package / "low" / "base.py").write_text("def thing():\n    from ..high import use\n    return use\n")
+    (package / "low" / "other.py").write_text("from . import base\nimport numpy\n")
+    (package / "high.py").write_text("from symkin.low import other\nuse = 1\n")
+    graph = import_graph(package)
+    assert graph["symkin.low.base"] == {"symkin.high"}  # inside a function, relative
+    assert graph["symkin.high"] == {"symkin.low.other", "symkin.low"}  # the package's __init__ runs first
+    assert graph["symkin.low.other"] == {"symkin.low.base"}
+    assert cycles(graph) == {frozenset({"symkin.low", "symkin.low.base", "symkin.low.other", "symkin.high"})}
