@@ -35,20 +35,12 @@ LAYERS = (
 RANK = {part: rank for rank, (_name, parts) in enumerate(LAYERS) for part in parts}
 
 #: Imports against the layer order that exist today: (importer, imported).  Shrinks to empty.
-KNOWN_UPWARD = {
-    ("symkin.backends.c.binding", "symkin.runtime"),
-    ("symkin.backends.c.binding", "symkin.runtime.wrappers"),
-    ("symkin.backends.casadi.binding", "symkin.runtime"),
-    ("symkin.backends.casadi.binding", "symkin.runtime.wrappers"),
-}
+KNOWN_UPWARD: set[tuple[str, str]] = set()
 
 #: Import cycles that exist today, each as the set of its modules.  Shrinks to empty.
 KNOWN_CYCLES = {
     frozenset({"symkin.geometry", "symkin.model", "symkin.model.build", "symkin.model.delta",
                "symkin.model.parallel_build"}),
-    frozenset({"symkin.backends", "symkin.backends.c", "symkin.backends.c.binding", "symkin.backends.casadi",
-               "symkin.backends.casadi.binding", "symkin.runtime", "symkin.runtime.loader",
-               "symkin.runtime.wrappers"}),
     frozenset({"symkin.derivation", "symkin.dynamics.quantities", "symkin.kinematics.quantities",
                "symkin.parallel.quantities"}),
 }

@@ -1,4 +1,5 @@
-"""Code generators, registered by name.  Adding a backend touches only this dict."""
+"""Code generators, registered by name.  Adding a backend touches this dict (and, to load what it
+wrote, :data:`symkin.runtime.loader.LOADERS`)."""
 
 from __future__ import annotations
 

@@ -15,6 +15,33 @@ from symkin.errors import GeneratedCodeError
 from symkin.manifest import MANIFEST_NAME, read_manifest
 
 
+def _numpy(directory: Path, manifest: dict[str, Any]) -> dict[str, Callable[..., Any]]:
+    from symkin.runtime.numpy_module import import_module
+
+    return import_module(directory, manifest)
+
+
+def _c(directory: Path, manifest: dict[str, Any]) -> dict[str, Callable[..., Any]]:
+    from symkin.runtime.c_library import bind_library
+
+    return bind_library(directory, manifest)
+
+
+def _casadi(directory: Path, manifest: dict[str, Any]) -> dict[str, Callable[..., Any]]:
+    from symkin.runtime.casadi_functions import bind_functions  # imports casadi: only when asked for
+
+    return bind_functions(directory, manifest)
+
+
+#: How the code of each backend (:data:`symkin.backends.BACKENDS`) is loaded:
+#: loader(model directory, manifest) -> {function name: Python function}.
+LOADERS: dict[str, Callable[[Path, dict[str, Any]], dict[str, Callable[..., Any]]]] = {
+    "numpy": _numpy,
+    "c": _c,
+    "casadi": _casadi,
+}
+
+
 class LoadedModel:
     """The generated functions of one model, as attributes (``ur.fk(q)``, ``ur.jacobian(q)``).
 
@@ -81,8 +108,6 @@ def load(path: str | Path, backend: str = "numpy") -> LoadedModel:
     Raises:
         GeneratedCodeError: no manifest, or the backend was not emitted for this model.
     """
-    from symkin.backends import BACKENDS
-
     directory = Path(path)
     if directory.name == MANIFEST_NAME:
         directory = directory.parent
@@ -91,7 +116,7 @@ def load(path: str | Path, backend: str = "numpy") -> LoadedModel:
     if backend not in emitted:
         raise GeneratedCodeError(f"{directory}: no '{backend}' code was emitted (emitted: {', '.join(emitted)}); "
                                  f"derive again with --backend {backend}")
-    if backend not in BACKENDS:
-        raise GeneratedCodeError(f"this symkin cannot load '{backend}' code (known: {', '.join(BACKENDS)})")
-    functions = BACKENDS[backend].load(directory, manifest)
+    if backend not in LOADERS:
+        raise GeneratedCodeError(f"this symkin cannot load '{backend}' code (known: {', '.join(LOADERS)})")
+    functions = LOADERS[backend](directory, manifest)
     return LoadedModel(directory, manifest, backend, functions)

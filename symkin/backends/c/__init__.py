@@ -1,23 +1,20 @@
-"""The C backend: a C99 header and source per model, compiled and loaded on demand.
+"""The C backend: a C99 header and source per model.
 
-Generation (``emit``) imports sympy and jinja2 lazily; loading (``load``) needs only the
-standard library, numpy and a C compiler: the source is compiled once into a shared
-library cached by content hash (see :mod:`symkin.backends.c.build`) and bound with ctypes
-(:mod:`symkin.backends.c.binding`).
+Generation (``emit``) imports sympy and jinja2 lazily.  Loading is the runtime's
+(:mod:`symkin.runtime.c_library`): the source is compiled once into a shared library cached by
+content hash (:mod:`symkin.backends.c.build`) and bound with ctypes.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from symkin.ir.bundle import ModelCode
 
 
 class CBackend:
-    """Emits ``<model>.h`` and ``<model>.c``; loads them through a cached shared library."""
+    """Emits ``<model>.h`` and ``<model>.c``."""
 
     name = "c"
 
@@ -25,8 +22,3 @@ class CBackend:
         from symkin.backends.c.emit import emit_sources
 
         return emit_sources(code)
-
-    def load(self, directory: Path, manifest: dict[str, Any]) -> dict[str, Callable[..., Any]]:
-        from symkin.backends.c.binding import bind_library
-
-        return bind_library(Path(directory), manifest)

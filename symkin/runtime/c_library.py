@@ -1,9 +1,8 @@
 """ctypes binding of a compiled model library to Python functions (no sympy needed).
 
-A call with one configuration and scalar parameters goes to ``<model>_<function>_packed``:
-the inputs are copied into a per-thread scratch array whose address is known (asking numpy
-for an array's address costs about a microsecond, more than the C code) and the outputs
-copied out of another; two pointer arguments keep the ctypes call cheap.  Any other call
+A call with one configuration and scalar parameters goes to ``<model>_<function>_packed``
+through the per-thread packed arrays of :mod:`symkin.runtime.packed`: two pointer arguments
+keep the ctypes call cheap.  Any other call
 goes to ``<model>_<function>_batch``: vector inputs broadcast to the batch shape and made
 C-contiguous (n x size), parameters packed into one array (stride 0 when all are scalars,
 else one row per configuration), all outputs in one fresh buffer, output k being the
@@ -13,9 +12,8 @@ contiguous block of n * size_k doubles at offset n * offset_k.
 from __future__ import annotations
 
 import ctypes
+import functools
 import math
-import threading
-from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -24,6 +22,7 @@ import numpy
 from symkin.backends.c.build import shared_library
 from symkin.backends.naming import c_symbol
 from symkin.errors import GeneratedCodeError
+from symkin.runtime.packed import single_kernel
 from symkin.runtime.wrappers import Kernel, SingleKernel, make_function
 
 DOUBLE_SIZE = 8
@@ -51,18 +50,6 @@ def _entry(library: ctypes.CDLL, symbol: str, argtypes: list[Any]) -> Any:
     return entry
 
 
-class _Scratch(threading.local):
-    """Per-thread packed input and output arrays of one function (``<function>_packed``)."""
-
-    def __init__(self, vector_sizes: list[int], n_params: int, total: int):
-        self.input = numpy.empty(sum(vector_sizes) + n_params)
-        starts = [sum(vector_sizes[:k]) for k in range(len(vector_sizes))]
-        self.vectors = [self.input[start:start + size] for start, size in zip(starts, vector_sizes)]
-        self.output = numpy.empty(total)
-        self.input_address = self.input.ctypes.data
-        self.output_address = self.output.ctypes.data
-
-
 def _kernels(library: ctypes.CDLL, model: str, record: dict[str, Any]) -> tuple[Kernel, SingleKernel]:
     vector_sizes = [int(i["shape"][0]) for i in record["inputs"] if i["kind"] != "parameter"]
     n_params = sum(1 for i in record["inputs"] if i["kind"] == "parameter")
@@ -75,27 +62,21 @@ def _kernels(library: ctypes.CDLL, model: str, record: dict[str, Any]) -> tuple[
     packed = _entry(library, c_symbol(model, record["name"], "_packed"), [ctypes.c_void_p, ctypes.c_void_p])
     batched = _entry(library, c_symbol(model, record["name"], "_batch"),
                      [ctypes.c_size_t] + pointers + ([ctypes.c_void_p, ctypes.c_size_t] if n_params else []) + outputs)
-    scratch = _Scratch(vector_sizes, n_params, total)
-    first_param = sum(vector_sizes)
 
     def split(buffer: numpy.ndarray, n: int, batch: tuple[int, ...]) -> list[numpy.ndarray]:
         return [buffer[n * offset:n * (offset + size)].reshape(batch + shape)
                 for offset, size, shape in zip(offsets, sizes, output_shapes)]
 
-    single_views = [(slice(offset, offset + size), shape) for offset, size, shape in zip(offsets, sizes, output_shapes)]
-    one_output = len(output_shapes) == 1
+    def attach(packed_input: numpy.ndarray, packed_output: numpy.ndarray):
+        return functools.partial(packed, packed_input.ctypes.data, packed_output.ctypes.data)
 
-    def one(vectors: Sequence[numpy.ndarray], params: Sequence[float]) -> list[numpy.ndarray]:
-        local = scratch
-        for target, v in zip(local.vectors, vectors):
-            target[...] = v
-        if params:
-            local.input[first_param:] = params
-        packed(local.input_address, local.output_address)
-        out = local.output.copy()
-        if one_output:
-            return [out.reshape(output_shapes[0])]
-        return [out[part].reshape(shape) for part, shape in single_views]
+    views = [(slice(offset, offset + size), shape) for offset, size, shape in zip(offsets, sizes, output_shapes)]
+    if len(views) == 1:
+        shape = output_shapes[0]
+        one = single_kernel(vector_sizes, n_params, total, attach, lambda out: [out.reshape(shape)])
+    else:
+        one = single_kernel(vector_sizes, n_params, total, attach,
+                            lambda out: [out[part].reshape(shape) for part, shape in views])
 
     def kernel(batch: tuple[int, ...], vectors: list[numpy.ndarray], params: list[numpy.ndarray]) -> list[numpy.ndarray]:
         if not batch and all(p.ndim == 0 for p in params):

@@ -2,8 +2,8 @@
 
 Evaluation goes through CasADi's zero-copy ``Function.buffer()`` interface (passing numpy
 memory directly; the ordinary call converts every argument to a DM and costs tens of
-microseconds): one configuration calls the function itself, a batch of n calls
-``function.map(n)``.  CasADi is column-major, which fits numpy's batch layout: an
+microseconds): one configuration calls the function itself through the packed arrays of
+:mod:`symkin.runtime.packed`, a batch of n calls ``function.map(n)``.  CasADi is column-major, which fits numpy's batch layout: an
 (n, size) C-ordered array is the size x n matrix ``map`` wants, and an r x c output of n
 configurations (an r x c*n matrix) is the C-ordered array (n, c, r), transposed to
 (n, r, c).  Buffers are kept per thread and per batch size (the last few sizes).
@@ -11,10 +11,11 @@ configurations (an r x c*n matrix) is the C-ordered array (n, c, r), transposed 
 
 from __future__ import annotations
 
+import functools
 import math
 import threading
 from collections import OrderedDict
-from collections.abc import Sequence
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -23,6 +24,7 @@ import numpy
 
 from symkin.backends.naming import casadi_file, matrix_shape
 from symkin.errors import GeneratedCodeError
+from symkin.runtime.packed import single_kernel
 from symkin.runtime.wrappers import Kernel, SingleKernel, make_function
 
 #: How many batch sizes (mapped functions and their buffers) each function keeps per thread.
@@ -36,15 +38,9 @@ class _Buffers(threading.local):
         self.by_size: OrderedDict[int, tuple[Any, Any]] = OrderedDict()
 
 
-class _Single(threading.local):
-    """Per-thread buffer of the unmapped function, bound once to packed input and output arrays."""
-
-    def __init__(self, function: casadi.Function, input_sizes: list[int], output_sizes: list[int]):
-        self.buffer, self.evaluate = function.buffer()
-        self.input = numpy.empty(sum(input_sizes))
-        self.output = numpy.empty(sum(output_sizes))
-        self.inputs = _bind(self.input, input_sizes, self.buffer.set_arg)
-        _bind(self.output, output_sizes, self.buffer.set_res)
+def _evaluate(buffer: Any, evaluate: Callable[[], None]) -> None:
+    """Evaluate into the arrays ``buffer`` is bound to (holding ``buffer`` keeps it alive as long as they are)."""
+    evaluate()
 
 
 def _bind(packed: numpy.ndarray, sizes: list[int], setter: Any) -> list[numpy.ndarray]:
@@ -78,21 +74,22 @@ def _kernels(function: casadi.Function, record: dict[str, Any]) -> tuple[Kernel,
 
     n_params = len(record["inputs"]) - len(vector_sizes)
     output_sizes = [rows * cols for rows, cols in output_2d]
-    single = _Single(function, vector_sizes + [1] * n_params, output_sizes)
-    first_param = sum(vector_sizes)
     output_starts = [sum(output_sizes[:k]) for k in range(len(output_sizes))]
 
-    def one(vectors: Sequence[numpy.ndarray], params: Sequence[float]) -> list[numpy.ndarray]:
-        local = single
-        for target, v in zip(local.inputs, vectors):
-            target[...] = v
-        if params:
-            local.input[first_param:] = params
-        local.evaluate()
-        out = local.output.copy()
+    def attach(packed_input: numpy.ndarray, packed_output: numpy.ndarray):
+        """The unmapped function's buffer, bound once to this thread's packed arrays."""
+        buffer, evaluate = function.buffer()
+        _bind(packed_input, vector_sizes + [1] * n_params, buffer.set_arg)
+        _bind(packed_output, output_sizes, buffer.set_res)
+        return functools.partial(_evaluate, buffer, evaluate)
+
+    def unpack(out: numpy.ndarray) -> list[numpy.ndarray]:
+        """Column-major r x c blocks -> row-major outputs."""
         return [out[start:start + rows * cols].reshape(cols, rows).T.copy().reshape(shape) if cols > 1
                 else out[start:start + rows].reshape(shape)
                 for start, shape, (rows, cols) in zip(output_starts, output_shapes, output_2d)]
+
+    one = single_kernel(vector_sizes, n_params, sum(output_sizes), attach, unpack)
 
     def kernel(batch: tuple[int, ...], vectors: list[numpy.ndarray], params: list[numpy.ndarray]) -> list[numpy.ndarray]:
         n = math.prod(batch)

@@ -1,0 +1,25 @@
+"""Import a model's generated numpy module (no sympy, no jinja2: a control loop imports it)."""
+
+from __future__ import annotations
+
+import importlib.util
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from symkin.errors import GeneratedCodeError
+
+
+def import_module(directory: Path, manifest: dict[str, Any]) -> dict[str, Callable[..., Any]]:
+    """The functions of the manifest from ``<model>.py``, imported under a name unique to the model's hash."""
+    files = manifest.get("backends", {}).get("numpy", {}).get("files", [])
+    if not files:
+        raise GeneratedCodeError(f"{directory}: the manifest lists no numpy module")
+    path = Path(directory) / files[0]
+    module_name = f"symkin_generated_{manifest['model']['name']}_{manifest['model']['hash'][7:19]}"
+    spec = importlib.util.spec_from_file_location(module_name, path)
+    if spec is None or spec.loader is None:
+        raise GeneratedCodeError(f"cannot import the generated module {path}")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return {f["name"]: getattr(module, f["name"]) for f in manifest["functions"]}
