@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import json
 import subprocess
+import types
 
 import pytest
-
 from conftest import MODELS_DIR, SYMKIN_CLI
+
 from symkin import pipeline
-from symkin.derivation import Derivation, emitted_quantities, quantity
+from symkin.derivation import Derivation, catalog, emitted_quantities, quantity
 from symkin.errors import DerivationError, ModelError
 
 
@@ -73,9 +74,23 @@ def test_folding_parameters_removes_them_from_the_inputs(models):
         pipeline.resolve_request(model, "fk", "numpy", "l9")
 
 
-def test_registering_a_quantity_twice_is_refused():
-    with pytest.raises(ValueError, match="registered twice"):
-        quantity("fk", "again")(lambda d: None)
+def test_the_catalog_refuses_a_quantity_defined_twice_and_keeps_definition_order():
+    """The catalog is built from an explicit list of modules (nothing registers on import)."""
+    first, second = types.ModuleType("first"), types.ModuleType("second")
+
+    def define(module, name, mechanism="serial"):
+        def compute(d):
+            return name
+        compute.__module__ = module.__name__
+        setattr(module, f"{name}_{mechanism}", quantity(name, name, mechanism=mechanism)(compute))
+
+    define(first, "b"), define(first, "a"), define(second, "b", "parallel")
+    table = catalog.collect((first, second))
+    assert list(table) == ["b", "a"] and set(table["b"]) == {"serial", "parallel"}
+    define(second, "a")
+    with pytest.raises(ValueError, match="'a' defined twice"):
+        catalog.collect((first, second))
+    assert list(catalog.QUANTITIES)[:3] == ["chain", "fk", "frames"]  # the order of QUANTITY_MODULES
 
 
 def test_internal_quantities_cannot_be_emitted(models):

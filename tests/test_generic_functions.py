@@ -11,7 +11,7 @@ from conftest import BACKENDS
 from symkin import load, manifest
 from symkin.atomic import replace_directory
 from symkin.backends import get_backend
-from symkin.derivation.inputs import coordinate_input
+from symkin.ir.inputs import coordinate_input
 from symkin.ir.bundle import ModelCode, ParameterInfo
 from symkin.ir.spec import OutputSpec, combine_functions, make_function
 from symkin.optimize import optimize

@@ -2,7 +2,8 @@
 
 Every ``import`` in ``symkin/`` is read, at module level and inside functions, and resolved to the
 symkin module it loads, including the parent packages whose ``__init__`` runs first (the root
-``symkin`` facade excepted: it is the public entry point, and lazy).  A module may import from its
+``symkin`` facade excepted: it is the public entry point, and lazy); imports under
+``if TYPE_CHECKING:`` name types for annotations and are never executed, so they do not count.  A module may import from its
 own layer or from a lower one, never from a higher one; and no set of modules may import each
 other in a circle, however indirectly.  The layers, lowest first, are those of README.md.
 
@@ -41,8 +42,6 @@ KNOWN_UPWARD: set[tuple[str, str]] = set()
 KNOWN_CYCLES = {
     frozenset({"symkin.geometry", "symkin.model", "symkin.model.build", "symkin.model.delta",
                "symkin.model.parallel_build"}),
-    frozenset({"symkin.derivation", "symkin.dynamics.quantities", "symkin.kinematics.quantities",
-               "symkin.parallel.quantities"}),
 }
 
 
@@ -69,13 +68,23 @@ def _imported_names(module: str, path: Path, node: ast.Import | ast.ImportFrom, 
     return [f"{base}.{alias.name}" if f"{base}.{alias.name}" in known else base for alias in node.names]
 
 
+def _annotation_only(tree: ast.Module) -> set[int]:
+    """ids of the imports under ``if TYPE_CHECKING:``: names for annotations, never executed."""
+    guarded = [n for n in ast.walk(tree) if isinstance(n, ast.If) and (
+        (isinstance(n.test, ast.Name) and n.test.id == "TYPE_CHECKING")
+        or (isinstance(n.test, ast.Attribute) and n.test.attr == "TYPE_CHECKING"))]
+    return {id(i) for g in guarded for statement in g.body for i in ast.walk(statement)}
+
+
 def import_graph(package: Path = PACKAGE) -> dict[str, set[str]]:
     """module -> the symkin modules it imports (anywhere in it), with the packages they run first."""
     known = modules(package)
     graph: dict[str, set[str]] = defaultdict(set)
     for module, path in known.items():
-        for node in ast.walk(ast.parse(path.read_text(), str(path))):
-            if not isinstance(node, (ast.Import, ast.ImportFrom)):
+        tree = ast.parse(path.read_text(), str(path))
+        annotation_only = _annotation_only(tree)
+        for node in ast.walk(tree):
+            if not isinstance(node, (ast.Import, ast.ImportFrom)) or id(node) in annotation_only:
                 continue
             for name in _imported_names(module, path, node, known):
                 if not name.startswith("symkin"):
@@ -169,7 +178,8 @@ def test_the_reader_sees_function_level_and_relative_imports_and_the_packages_th
     (package / "__init__.py").write_text("")
     (package / "low" / "__init__.py").write_text("from symkin.low.base import thing\n")
     (package / "low" / "base.py").write_text("def thing():\n    from ..high import use\n    return use\n")
-    (package / "low" / "other.py").write_text("from . import base\nimport numpy\n")
+    (package / "low" / "other.py").write_text("from typing import TYPE_CHECKING\nfrom . import base\nimport numpy\n"
+                                              "if TYPE_CHECKING:\n    from symkin.high import use\n")
     (package / "high.py").write_text("from symkin.low import other\nuse = 1\n")
     graph = import_graph(package)
     assert graph["symkin.low.base"] == {"symkin.high"}  # inside a function, relative

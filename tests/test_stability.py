@@ -8,18 +8,19 @@ import subprocess
 import numpy as np
 import pytest
 import sympy
-
 from conftest import EXAMPLE_MODELS, GENERATED_DIR, MODELS_DIR, SYMKIN_CLI
+from tolerances import CLOSED_FORM, EPS, FORWARD_AT_SINGULARITIES
+
 from symkin import load, pipeline
-from symkin.derivation import Derivation, emitted_quantities, graph, registry
-from symkin.derivation.inputs import coordinate_input
+from symkin.derivation import Derivation, catalog, emitted_quantities, registry
+from symkin.ir.inputs import coordinate_input
+from symkin.ir.quantity import QuantityDef
 from symkin.ir.spec import FunctionSpec, InputSpec, OutputSpec, make_function
 from symkin.model import coordinates
 from symkin.stability import BOUND, KAPPA_LIMIT, run_stability
 from symkin.stability.ir_eval import compile_ir, flatten_outputs
 from symkin.stability.reference import MpmathReference, normwise_error
 from symkin.stability.states import parameter_values
-from tolerances import CLOSED_FORM, EPS, FORWARD_AT_SINGULARITIES
 
 #: One xdist worker runs this module (`make test` uses --dist loadgroup), so the module-scoped
 #: runs are computed once, not once per worker.
@@ -173,8 +174,8 @@ def test_new_quantities_are_covered_automatically(models, monkeypatch):
                              [coordinate_input(d.model, "q"), coordinate_input(d.model, "qd")],
                              [OutputSpec("v", sympy.ImmutableMatrix(J * qd), "velocity", shape=(3,))])
 
-    monkeypatch.setitem(graph._REGISTRY, "tcp_velocity",
-                        {"serial": graph.QuantityDef("tcp_velocity", "TCP velocity", velocity_of_tcp, True)})
+    monkeypatch.setitem(catalog.QUANTITIES, "tcp_velocity",
+                        {"serial": QuantityDef("tcp_velocity", "TCP velocity", velocity_of_tcp, True)})
     run = run_stability(models["planar_2r"], samples=4, scale_samples=1, float32_samples=2, steps=(1e-3,),
                         scales=(1.0,))
     assert "tcp_velocity" in run.quantities

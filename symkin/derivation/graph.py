@@ -1,7 +1,7 @@
 """A lazy, memoized graph of named symbolic quantities.
 
-Quantities (``fk``, ``jacobian``, later ``mass_matrix``...) are registered with the
-:func:`quantity` decorator by the modules that know how to derive them.  A
+Quantities (``fk``, ``jacobian``, ``mass_matrix``...) are defined by the modules listed in
+:data:`symkin.derivation.catalog.QUANTITY_MODULES`.  A
 :class:`Derivation` computes a quantity the first time it is asked for, together with
 exactly what it depends on, and remembers it: no call-order rules, nothing derived twice,
 nothing derived that was not needed (asking for ``fk`` never derives a Jacobian).
@@ -14,79 +14,14 @@ asking a model for a quantity of the other kind is a clear :class:`DerivationErr
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Iterable
-from dataclasses import dataclass
+from collections.abc import Iterable
 from typing import Any
 
+from symkin.derivation import catalog
 from symkin.errors import DerivationError
+from symkin.ir.quantity import QuantityDef
 from symkin.ir.spec import FunctionSpec
 from symkin.model.schema import Model
-
-
-@dataclass(frozen=True)
-class QuantityDef:
-    """A registered quantity.
-
-    Attributes:
-        name: key in the graph (and name of the generated function when emitted).
-        summary: one line shown by ``symkin quantities`` and in docs.
-        compute: ``compute(derivation) -> value``; asks the derivation for what it needs.
-        emitted: True if the value is a :class:`FunctionSpec` that backends turn into code.
-        solves_with: the emitted quantity whose (square) matrix this one inverts, e.g.
-            ``mass_matrix`` for forward dynamics; its condition number bounds the accuracy any
-            algorithm can reach (used by the stability analysis).  None if nothing is inverted.
-        mechanism: ``serial``, ``parallel`` or ``any``: the models it is derived for.
-        residual: True if the value vanishes wherever the mechanism is assembled (loop-closure
-            and leg equations): its accuracy is judged away from that manifold, where a
-            relative error means something (used by the stability analysis).
-    """
-
-    name: str
-    summary: str
-    compute: Callable[["Derivation"], Any]
-    emitted: bool
-    solves_with: str | None = None
-    mechanism: str = "serial"
-    residual: bool = False
-
-
-MECHANISMS = ("serial", "parallel", "any")
-
-#: name -> mechanism -> definition
-_REGISTRY: dict[str, dict[str, QuantityDef]] = {}
-
-
-def quantity(name: str, summary: str, emitted: bool = True, solves_with: str | None = None,
-             mechanism: str = "serial", residual: bool = False) -> Callable[[Callable[["Derivation"], Any]], Callable[["Derivation"], Any]]:
-    """Register ``compute`` as the derivation of quantity ``name`` for ``mechanism`` models (see :class:`QuantityDef`)."""
-    if mechanism not in MECHANISMS:
-        raise ValueError(f"mechanism must be one of {MECHANISMS}, got {mechanism!r}")
-
-    def register(compute: Callable[["Derivation"], Any]) -> Callable[["Derivation"], Any]:
-        defs = _REGISTRY.setdefault(name, {})
-        if mechanism in defs or "any" in defs or (mechanism == "any" and defs):
-            raise ValueError(f"quantity {name!r} registered twice")
-        defs[mechanism] = QuantityDef(name, summary, compute, emitted, solves_with, mechanism, residual)
-        return compute
-
-    return register
-
-
-def _definition(name: str, mechanism: str) -> QuantityDef | None:
-    defs = _REGISTRY.get(name, {})
-    return defs.get(mechanism) or defs.get("any")
-
-
-def registry(mechanism: str = "serial") -> dict[str, QuantityDef]:
-    """The quantities derivable for ``mechanism`` models, by name (a copy)."""
-    return {name: d for name in _REGISTRY if (d := _definition(name, mechanism)) is not None}
-
-
-def emitted_quantities(mechanism: str | None = None) -> tuple[str, ...]:
-    """Names of the quantities that can be requested as generated functions (for one kind of model, or any)."""
-    kinds = MECHANISMS if mechanism is None else (mechanism,)
-    return tuple(name for name, defs in _REGISTRY.items()
-                 if any((d := _definition(name, kind)) is not None and d.emitted for kind in kinds))
 
 
 class Derivation:
@@ -106,14 +41,15 @@ class Derivation:
         self.seconds: dict[str, float] = {}
 
     def _definition(self, name: str) -> QuantityDef:
-        if name not in _REGISTRY:
-            raise DerivationError(f"unknown quantity {name!r}; known: {', '.join(sorted(_REGISTRY))}")
-        definition = _definition(name, self.model.mechanism)
+        if name not in catalog.QUANTITIES:
+            raise DerivationError(f"unknown quantity {name!r}; known: {', '.join(sorted(catalog.QUANTITIES))}")
+        definition = catalog.definition(name, self.model.mechanism)
         if definition is None:
-            other = " or ".join(sorted(_REGISTRY[name]))
+            other = " or ".join(sorted(catalog.QUANTITIES[name]))
+            outputs = ", ".join(catalog.emitted_quantities(self.model.mechanism))
             raise DerivationError(
                 f"{name!r} is derived for {other} mechanisms, but model '{self.model.name}' is a "
-                f"{self.model.mechanism} mechanism; its outputs are: {', '.join(emitted_quantities(self.model.mechanism))}")
+                f"{self.model.mechanism} mechanism; its outputs are: {outputs}")
         return definition
 
     def __getitem__(self, name: str) -> Any:
@@ -156,8 +92,8 @@ class Derivation:
         """The function specs of the requested emitted quantities, in request order."""
         specs = []
         for name in names:
-            if name not in _REGISTRY or not self._definition(name).emitted:
-                outputs = ", ".join(emitted_quantities(self.model.mechanism))
+            if name not in catalog.QUANTITIES or not self._definition(name).emitted:
+                outputs = ", ".join(catalog.emitted_quantities(self.model.mechanism))
                 raise DerivationError(f"{name!r} is not an output; outputs: {outputs}")
             spec = self[name]
             if not isinstance(spec, FunctionSpec):

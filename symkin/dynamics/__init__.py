@@ -1,5 +1,6 @@
 """Lagrangian dynamics of serial chains (seed sec. 4.4): M, C, V, G, friction, inverse and
 forward dynamics, TCP forces, operational space and energies.
 
-Importing :mod:`symkin.dynamics.quantities` registers the quantities (see its table).
+:mod:`symkin.dynamics.quantities` defines the quantities (see its table); the catalog
+(:mod:`symkin.derivation.catalog`) lists it.
 """

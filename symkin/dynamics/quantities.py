@@ -29,20 +29,24 @@ gravity is zero has no gravity terms anywhere (and no ``gravity_vector`` or
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import symengine as se
 import sympy
 
-from symkin.derivation.graph import Derivation, quantity
-from symkin.derivation.inputs import coordinate_input
 from symkin.dynamics import lagrange, newton_euler
 from symkin.dynamics.bodies import BodyJacobians, body_jacobians
 from symkin.dynamics.linsolve import ldl_solve, transpose_solve
 from symkin.dynamics.program import Program, mat_vec, se_matrix, se_vector
 from symkin.errors import DerivationError
-from symkin.symengine_bridge import SympyConverter
+from symkin.ir.inputs import coordinate_input
+from symkin.ir.quantity import quantity
 from symkin.ir.spec import FunctionSpec, OutputSpec, make_function
 from symkin.model import coordinates
+from symkin.symengine_bridge import SympyConverter
+
+if TYPE_CHECKING:
+    from symkin.derivation.graph import Derivation
 
 Matrix = list[list[se.Basic]]
 

@@ -14,7 +14,6 @@ import sympy
 from symkin.ir.opcount import spec_op_count
 from symkin.ir.spec import FunctionSpec
 
-
 #: Above this many operations (a Laplace-expanded 6x6 determinant, the Stewart-Gough closure
 #: Jacobians) outputs are evaluated through sympy's own CSE: printing and evaluating them as one
 #: flat expression takes minutes, and sharing subexpressions only changes how the same

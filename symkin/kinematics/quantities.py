@@ -12,15 +12,20 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import sympy
 
-from symkin.derivation.graph import Derivation, quantity
-from symkin.derivation.inputs import coordinate_input
+from symkin.ir.inputs import coordinate_input
+from symkin.ir.quantity import quantity
 from symkin.ir.spec import FunctionSpec, OutputSpec, make_function
 from symkin.kinematics import task_space
 from symkin.kinematics.chain import ChainFrames, compose_chain
 from symkin.model import coordinates
 from symkin.model.schema import JointType
+
+if TYPE_CHECKING:
+    from symkin.derivation.graph import Derivation
 
 
 @quantity("chain", "link frames, joint axes and TCP frame of the serial chain", emitted=False)

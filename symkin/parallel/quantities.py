@@ -23,19 +23,28 @@ p = fk(q) or q = ik(p).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import sympy
 
-from symkin.derivation.graph import Derivation, quantity
-from symkin.derivation.inputs import coordinate_input
 from symkin.errors import DerivationError
+from symkin.ir.inputs import coordinate_input
+from symkin.ir.quantity import quantity
 from symkin.ir.spec import FunctionSpec, OutputSpec, make_function
 from symkin.kinematics.chain import Frame
 from symkin.model import coordinates
 from symkin.model.schema import PlatformMotion
 from symkin.parallel import closed_form, closure, determinant, distance
-from symkin.parallel.inputs import passive_input, passive_symbols, task_input, task_symbols
+from symkin.parallel.inputs import (
+    passive_input,
+    passive_symbols,
+    task_input,
+    task_symbols,
+)
 from symkin.parallel.legs import LegChain, platform_frame, walk
+
+if TYPE_CHECKING:
+    from symkin.derivation.graph import Derivation
 
 PARALLEL = "parallel"
 

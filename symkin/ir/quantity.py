@@ -1,0 +1,62 @@
+"""What a derivable quantity is: a name, how it is computed, and what it means.
+
+The modules that know how to derive quantities (``symkin.kinematics.quantities``,
+``symkin.dynamics.quantities``, ``symkin.parallel.quantities``) mark their functions with
+:func:`quantity`; nothing is registered by importing them.  The list of those modules is
+explicit, in :data:`symkin.derivation.catalog.QUANTITY_MODULES`, like the list of
+optimization passes, and :class:`symkin.derivation.graph.Derivation` computes what they define.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from symkin.derivation.graph import Derivation
+
+MECHANISMS = ("serial", "parallel", "any")
+
+
+@dataclass(frozen=True)
+class QuantityDef:
+    """A quantity's definition.
+
+    Attributes:
+        name: key in the graph (and name of the generated function when emitted).
+        summary: one line shown by ``symkin quantities`` and in docs.
+        compute: ``compute(derivation) -> value``; asks the derivation for what it needs.
+        emitted: True if the value is a :class:`FunctionSpec` that backends turn into code.
+        solves_with: the emitted quantity whose (square) matrix this one inverts, e.g.
+            ``mass_matrix`` for forward dynamics; its condition number bounds the accuracy any
+            algorithm can reach (used by the stability analysis).  None if nothing is inverted.
+        mechanism: ``serial``, ``parallel`` or ``any``: the models it is derived for.
+        residual: True if the value vanishes wherever the mechanism is assembled (loop-closure
+            and leg equations): its accuracy is judged away from that manifold, where a
+            relative error means something (used by the stability analysis).
+    """
+
+    name: str
+    summary: str
+    compute: Callable[[Derivation], Any]
+    emitted: bool
+    solves_with: str | None = None
+    mechanism: str = "serial"
+    residual: bool = False
+
+
+def quantity(name: str, summary: str, emitted: bool = True, solves_with: str | None = None,
+             mechanism: str = "serial", residual: bool = False
+             ) -> Callable[[Callable[[Derivation], Any]], Callable[[Derivation], Any]]:
+    """Mark ``compute`` as the derivation of quantity ``name`` for ``mechanism`` models (see
+    :class:`QuantityDef`); the function keeps working as itself and carries its definition as
+    ``compute.quantity``."""
+    if mechanism not in MECHANISMS:
+        raise ValueError(f"mechanism must be one of {MECHANISMS}, got {mechanism!r}")
+
+    def mark(compute: Callable[[Derivation], Any]) -> Callable[[Derivation], Any]:
+        compute.quantity = QuantityDef(name, summary, compute, emitted, solves_with, mechanism, residual)  # type: ignore[attr-defined]
+        return compute
+
+    return mark
