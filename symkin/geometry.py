@@ -5,9 +5,12 @@ Shared by the model builder (rotated inertia tensors) and the kinematics.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import sympy
 
-from symkin.model.schema import Vec3
+if TYPE_CHECKING:
+    from symkin.model.schema import Vec3
 
 
 def principal_axis(axis: Vec3) -> tuple[int, int] | None:

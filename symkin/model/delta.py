@@ -45,8 +45,8 @@ from typing import Any
 
 import sympy
 
-from symkin.model.build import ZERO, _describe, _ops, _Reader, position_limits
-from symkin.model.parallel_build import leg_joint_limits, variable_names
+from symkin.model.leg_joints import leg_joint_limits, variable_names
+from symkin.model.reader import ZERO, Reader, describe, ops, position_limits
 from symkin.model.schema import Leg, LegJoint, LegJointType, Rotation, Translation, Vec3
 from symkin.model.yaml_source import KeyPath
 
@@ -60,7 +60,7 @@ PLUS_Z: Vec3 = (ZERO, ZERO, sympy.Integer(1))
 KNEE_OUT_BRANCH = -1
 
 
-def joint_radius(r: _Reader, path: KeyPath, value: Any) -> sympy.Expr | None:
+def joint_radius(r: Reader, path: KeyPath, value: Any) -> sympy.Expr | None:
     """Distance from the centre to the joints of an equilateral triangle with an explicit convention.
 
     ``{joint_at: vertex | side_midpoint, radius: R}`` (R: circumradius) or
@@ -71,7 +71,7 @@ def joint_radius(r: _Reader, path: KeyPath, value: Any) -> sympy.Expr | None:
     if section is None or "joint_at" not in section:
         return None
     if section["joint_at"] not in JOINT_AT:
-        r.fail(path + ("joint_at",), f"unknown joint position {_describe(section['joint_at'])}",
+        r.fail(path + ("joint_at",), f"unknown joint position {describe(section['joint_at'])}",
                "write 'vertex' (joint at a corner of the triangle) or 'side_midpoint' (at the middle of a side)")
         return None
     if ("radius" in section) == ("side" in section):
@@ -90,7 +90,7 @@ def joint_radius(r: _Reader, path: KeyPath, value: Any) -> sympy.Expr | None:
     return circumradius if section["joint_at"] == "vertex" else circumradius / 2
 
 
-def delta_legs(r: _Reader, path: KeyPath, value: Any) -> tuple[tuple[Leg, ...], int] | None:
+def delta_legs(r: Reader, path: KeyPath, value: Any) -> tuple[tuple[Leg, ...], int] | None:
     """The three RUU legs and the forward-kinematics branch of a DELTA."""
     section = r.mapping(path, value, required=DELTA_KEYS[:5], optional=DELTA_KEYS[5:])
     if section is None or any(k not in section for k in DELTA_KEYS[:5]):
@@ -117,13 +117,13 @@ def delta_legs(r: _Reader, path: KeyPath, value: Any) -> tuple[tuple[Leg, ...], 
         n = i + 1
         joints = (
             _joint(f"{prefix}{n}", LegJointType.R, (MINUS_Y,), (), active=0, limits=limits),
-            _joint(f"elbow{n}", LegJointType.U, (MINUS_Y, PLUS_Z), _ops(Translation((upper, ZERO, ZERO))),
+            _joint(f"elbow{n}", LegJointType.U, (MINUS_Y, PLUS_Z), ops(Translation((upper, ZERO, ZERO))),
                    limits=elbow),
-            _joint(f"wrist{n}", LegJointType.U, (PLUS_Z, MINUS_Y), _ops(Translation((lower, ZERO, ZERO))),
+            _joint(f"wrist{n}", LegJointType.U, (PLUS_Z, MINUS_Y), ops(Translation((lower, ZERO, ZERO))),
                    limits=wrist),
         )
-        base = _ops(Rotation(PLUS_Z, phi), Translation((r_base, ZERO, ZERO)))
-        platform = _ops(Rotation(PLUS_Z, phi), Translation((r_platform, ZERO, ZERO)))
+        base = ops(Rotation(PLUS_Z, phi), Translation((r_base, ZERO, ZERO)))
+        platform = ops(Rotation(PLUS_Z, phi), Translation((r_platform, ZERO, ZERO)))
         legs.append(Leg(f"leg{n}", base, joints, platform, KNEE_OUT_BRANCH))
     orientation = _orientation(r, path + ("leg_angles",), angles)
     if orientation is None:
@@ -138,7 +138,7 @@ def _joint(name: str, jtype: LegJointType, axes: tuple[Vec3, ...], origin: tuple
     return LegJoint(name, jtype, axes, origin, variable_names(name, jtype), active, limits=limits)
 
 
-def _length(r: _Reader, path: KeyPath, value: Any) -> sympy.Expr | None:
+def _length(r: Reader, path: KeyPath, value: Any) -> sympy.Expr | None:
     length = r.expr(path, value)
     if length is None:
         return None
@@ -149,7 +149,7 @@ def _length(r: _Reader, path: KeyPath, value: Any) -> sympy.Expr | None:
     return length
 
 
-def _angles(r: _Reader, path: KeyPath, value: Any) -> list[sympy.Expr] | None:
+def _angles(r: Reader, path: KeyPath, value: Any) -> list[sympy.Expr] | None:
     items = r.sequence(path, value, 3, "leg angles phi_1, phi_2, phi_3")
     if items is None:
         return None
@@ -157,7 +157,7 @@ def _angles(r: _Reader, path: KeyPath, value: Any) -> list[sympy.Expr] | None:
     return None if any(a is None for a in angles) else angles  # type: ignore[return-value]
 
 
-def _orientation(r: _Reader, path: KeyPath, angles: list[sympy.Expr]) -> int | None:
+def _orientation(r: Reader, path: KeyPath, angles: list[sympy.Expr]) -> int | None:
     """+1 if the legs go round counter-clockwise (seen from +z), -1 if clockwise."""
     values = [r.default_value(a) for a in angles]
     if any(v is None for v in values):

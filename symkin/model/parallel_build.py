@@ -24,9 +24,31 @@ from typing import Any
 
 import sympy
 
-from symkin.model.build import (X_AXIS, Y_AXIS, Z_AXIS, ZERO, _describe, _frame_ops, _ops, _Reader, _unit_axis,
-                                position_limits)
-from symkin.model.schema import Leg, LegJoint, LegJointType, Op, Parallel, PlatformMotion, Rotation, Translation, Vec3
+from symkin.model import coordinates
+from symkin.model.delta import delta_legs
+from symkin.model.leg_joints import leg_joint_limits, variable_names
+from symkin.model.reader import (
+    X_AXIS,
+    Y_AXIS,
+    Z_AXIS,
+    ZERO,
+    Reader,
+    describe,
+    frame_ops,
+    ops,
+    unit_axis,
+)
+from symkin.model.schema import (
+    Leg,
+    LegJoint,
+    LegJointType,
+    Op,
+    Parallel,
+    PlatformMotion,
+    Rotation,
+    Translation,
+    Vec3,
+)
 from symkin.model.yaml_source import KeyPath
 
 PARALLEL_KEYS = ("delta", "motion", "chains", "legs", "fk_branch", "mobility", "home")
@@ -50,16 +72,7 @@ DEFAULT_AXES: dict[LegJointType, tuple[Vec3, ...]] = {
 _ACTUABLE = {LegJointType.R: 0, LegJointType.P: 0, LegJointType.C: 0}  # index of the actuable motion
 
 
-def variable_names(name: str, jtype: LegJointType) -> tuple[str, ...]:
-    """Coordinate names of a leg joint's motions: ``name`` (R, P), ``name_1``... (U, S), ``name_t``, ``name_r`` (C)."""
-    if jtype in (LegJointType.R, LegJointType.P):
-        return (name,)
-    if jtype is LegJointType.C:
-        return (f"{name}_t", f"{name}_r")
-    return tuple(f"{name}_{k + 1}" for k in range(jtype.dof))
-
-
-def build_parallel(r: _Reader, section: Any) -> Parallel | None:
+def build_parallel(r: Reader, section: Any) -> Parallel | None:
     """The parallel structure of ``section`` (problems are recorded in ``r``)."""
     path: KeyPath = ("parallel",)
     section = r.mapping(path, section, optional=PARALLEL_KEYS)
@@ -71,8 +84,6 @@ def build_parallel(r: _Reader, section: Any) -> Parallel | None:
             if key in section:
                 r.fail(path + (key,), f"'{key}' cannot be combined with the DELTA shorthand 'delta:'",
                        "remove it: the shorthand defines the legs, the motion and the branches")
-        from symkin.model.delta import delta_legs
-
         built = delta_legs(r, path + ("delta",), section["delta"])
         if built is None:
             return None
@@ -95,7 +106,7 @@ def build_parallel(r: _Reader, section: Any) -> Parallel | None:
     return _checked(r, path, Parallel(motion, legs, fk_branch, identical, constraints, home=home))
 
 
-def _checked(r: _Reader, path: KeyPath, parallel: Parallel) -> Parallel:
+def _checked(r: Reader, path: KeyPath, parallel: Parallel) -> Parallel:
     """Structure-wide checks: unique names, as many actuators as the platform has DoF."""
     seen: dict[str, str] = {}
     for leg in parallel.legs:
@@ -118,7 +129,7 @@ def _checked(r: _Reader, path: KeyPath, parallel: Parallel) -> Parallel:
     return parallel
 
 
-def _home(r: _Reader, path: KeyPath, value: Any, motion: PlatformMotion) -> tuple[sympy.Expr, ...] | None:
+def _home(r: Reader, path: KeyPath, value: Any, motion: PlatformMotion) -> tuple[sympy.Expr, ...] | None:
     """The optional home pose: one expression per task coordinate."""
     if value is None:
         return None
@@ -130,36 +141,36 @@ def _home(r: _Reader, path: KeyPath, value: Any, motion: PlatformMotion) -> tupl
     return None if any(p is None for p in parts) else tuple(parts)  # type: ignore[arg-type]
 
 
-def _mobility(r: _Reader, path: KeyPath, value: Any) -> tuple[int, int]:
+def _mobility(r: Reader, path: KeyPath, value: Any) -> tuple[int, int]:
     """Declared identical conditions f_id and constraints s of eq. (8.2), non-negative integers."""
     section = r.mapping(path, value, optional=("identical", "constraints"))
     counts = []
     for key in ("identical", "constraints"):
         item = (section or {}).get(key, 0)
         if isinstance(item, bool) or not isinstance(item, int) or item < 0:
-            r.fail(path + (key,), f"'{key}' must be a non-negative integer, got {_describe(item)}", "write e.g. 0 or 1")
+            r.fail(path + (key,), f"'{key}' must be a non-negative integer, got {describe(item)}", "write e.g. 0 or 1")
             item = 0
         counts.append(item)
     return counts[0], counts[1]
 
 
-def _motion(r: _Reader, path: KeyPath, value: Any) -> PlatformMotion | None:
+def _motion(r: Reader, path: KeyPath, value: Any) -> PlatformMotion | None:
     for motion in PlatformMotion:
         if value == motion.value:
             return motion
-    r.fail(path, f"unknown platform motion {_describe(value)}",
+    r.fail(path, f"unknown platform motion {describe(value)}",
            "use 'translation' (x, y, z; a TPM) or 'pose' (x, y, z, roll, pitch, yaw)")
     return None
 
 
-def _branch(r: _Reader, path: KeyPath, value: Any) -> int | None:
+def _branch(r: Reader, path: KeyPath, value: Any) -> int | None:
     if isinstance(value, str) and value in BRANCHES:
         return BRANCHES[value]
-    r.fail(path, f"unknown branch {_describe(value)}", "write 'positive' or 'negative' (see 'Branches' in the docs)")
+    r.fail(path, f"unknown branch {describe(value)}", "write 'positive' or 'negative' (see 'Branches' in the docs)")
     return None
 
 
-def _chains(r: _Reader, path: KeyPath, value: Any) -> dict[str, tuple[KeyPath, list[Any]]]:
+def _chains(r: Reader, path: KeyPath, value: Any) -> dict[str, tuple[KeyPath, list[Any]]]:
     section = r.mapping(path, value, optional=tuple(value) if isinstance(value, dict) else ())
     if section is None:
         return {}
@@ -173,7 +184,7 @@ def _chains(r: _Reader, path: KeyPath, value: Any) -> dict[str, tuple[KeyPath, l
     return out
 
 
-def _legs(r: _Reader, path: KeyPath, value: Any, chains: dict[str, tuple[KeyPath, list[Any]]]) -> tuple[Leg, ...] | None:
+def _legs(r: Reader, path: KeyPath, value: Any, chains: dict[str, tuple[KeyPath, list[Any]]]) -> tuple[Leg, ...] | None:
     items = r.sequence(path, value, what="legs")
     if items is None:
         return None
@@ -192,7 +203,7 @@ def _legs(r: _Reader, path: KeyPath, value: Any, chains: dict[str, tuple[KeyPath
         if "chain" in item:
             if item["chain"] not in chains:
                 known = ", ".join(chains) or "none declared"
-                r.fail(lpath + ("chain",), f"unknown chain {_describe(item['chain'])}", f"chains: {known}")
+                r.fail(lpath + ("chain",), f"unknown chain {describe(item['chain'])}", f"chains: {known}")
                 continue
             jpath, entries = chains[item["chain"]]
         else:
@@ -212,7 +223,7 @@ def _legs(r: _Reader, path: KeyPath, value: Any, chains: dict[str, tuple[KeyPath
     return tuple(legs)
 
 
-def attachment(r: _Reader, path: KeyPath, value: Any) -> tuple[Op, ...] | None:
+def attachment(r: Reader, path: KeyPath, value: Any) -> tuple[Op, ...] | None:
     """An attachment frame: ``{xyz, rpy}`` or polar ``{radius, angle, z}`` = Rz(angle) Trans(radius, 0, z).
 
     The polar form is the seed's base_T_A_i (sec. 3.2.1): the leg frame's x axis points
@@ -227,25 +238,25 @@ def attachment(r: _Reader, path: KeyPath, value: Any) -> tuple[Op, ...] | None:
         height = r.expr(path + ("z",), section["z"]) if "z" in section else ZERO
         if radius is None or angle is None or height is None:
             return None
-        return _ops(Rotation(Z_AXIS, angle), Translation((radius, ZERO, height)))
-    return _frame_ops(r, path, value)
+        return ops(Rotation(Z_AXIS, angle), Translation((radius, ZERO, height)))
+    return frame_ops(r, path, value)
 
 
-def _joint(r: _Reader, path: KeyPath, item: Any, number: int) -> LegJoint | None:
+def _joint(r: Reader, path: KeyPath, item: Any, number: int) -> LegJoint | None:
     item = r.mapping(path, item, required=("name", "type"), optional=JOINT_KEYS)
     if item is None or "name" not in item or "type" not in item:
         return None
     base_name = r.name(path + ("name",), item["name"])
     jtype = next((t for t in LegJointType if t.value == item["type"]), None)
     if jtype is None:
-        r.fail(path + ("type",), f"unknown joint type {_describe(item['type'])}",
+        r.fail(path + ("type",), f"unknown joint type {describe(item['type'])}",
                "use R (revolute), P (prismatic), U (universal), S (spherical) or C (cylindrical)")
         return None
     axes = _axes(r, path, item, jtype)
-    origin = _frame_ops(r, path + ("origin",), item["origin"]) if "origin" in item else ()
+    origin = frame_ops(r, path + ("origin",), item["origin"]) if "origin" in item else ()
     active = item.get("active", False)
     if not isinstance(active, bool):
-        r.fail(path + ("active",), f"'active' must be true or false, got {_describe(active)}", "write true or false")
+        r.fail(path + ("active",), f"'active' must be true or false, got {describe(active)}", "write true or false")
         return None
     if active and jtype not in _ACTUABLE:
         r.fail(path + ("active",), f"a {jtype.value} joint cannot be actuated",
@@ -266,24 +277,7 @@ def _joint(r: _Reader, path: KeyPath, item: Any, number: int) -> LegJoint | None
                     offset, limits)
 
 
-def leg_joint_limits(r: _Reader, path: KeyPath, value: Any,
-                     jtype: LegJointType) -> tuple[tuple[sympy.Expr, sympy.Expr] | None, ...] | None:
-    """Position limits of a leg joint: ``[lower, upper]`` (R, P) or one pair per motion (U, S, C).
-
-    A motion of a multi-DoF joint may be left free with ``null``; None when invalid.
-    """
-    if jtype.dof == 1:
-        bounds = position_limits(r, path, value)
-        return None if bounds is None else (bounds,)
-    items = r.sequence(path, value, jtype.dof, f"limits, one [lower, upper] (or null) per motion of the "
-                                               f"{jtype.value} joint")
-    if items is None:
-        return None
-    limits = tuple(None if item is None else position_limits(r, path + (k,), item) for k, item in enumerate(items))
-    return None if any(b is None and item is not None for b, item in zip(limits, items)) else limits
-
-
-def _axes(r: _Reader, path: KeyPath, item: dict[str, Any], jtype: LegJointType) -> tuple[Vec3, ...] | None:
+def _axes(r: Reader, path: KeyPath, item: dict[str, Any], jtype: LegJointType) -> tuple[Vec3, ...] | None:
     single = jtype in (LegJointType.R, LegJointType.P, LegJointType.C)
     key, other = ("axis", "axes") if single else ("axes", "axis")
     if other in item:
@@ -292,7 +286,7 @@ def _axes(r: _Reader, path: KeyPath, item: dict[str, Any], jtype: LegJointType) 
     if key not in item:
         axes = DEFAULT_AXES[jtype]
     elif single:
-        axis = _unit_axis(r, path + ("axis",), item["axis"])
+        axis = unit_axis(r, path + ("axis",), item["axis"])
         if axis is None:
             return None
         axes = (axis,)
@@ -300,7 +294,7 @@ def _axes(r: _Reader, path: KeyPath, item: dict[str, Any], jtype: LegJointType) 
         rows = r.sequence(path + ("axes",), item["axes"], jtype.dof, "axes")
         if rows is None:
             return None
-        parsed = [_unit_axis(r, path + ("axes", k), row) for k, row in enumerate(rows)]
+        parsed = [unit_axis(r, path + ("axes", k), row) for k, row in enumerate(rows)]
         if any(a is None for a in parsed):
             return None
         axes = tuple(parsed)  # type: ignore[arg-type]
@@ -313,7 +307,7 @@ def _axes(r: _Reader, path: KeyPath, item: dict[str, Any], jtype: LegJointType) 
     return axes
 
 
-def parallel_task_space(r: _Reader, data: dict[str, Any], parallel: Parallel) -> tuple[str, ...]:
+def parallel_task_space(r: Reader, data: dict[str, Any], parallel: Parallel) -> tuple[str, ...]:
     """The task coordinates follow from the platform motion; a model may not set them otherwise."""
     if "task_space" in data:
         r.fail(("task_space",), "a parallel mechanism's task space follows from 'parallel.motion'",
@@ -324,10 +318,8 @@ def parallel_task_space(r: _Reader, data: dict[str, Any], parallel: Parallel) ->
     return TASK_COORDINATES[parallel.motion]
 
 
-def check_parallel_names(r: _Reader, parameters: tuple, derived: tuple, parallel: Parallel) -> None:
+def check_parallel_names(r: Reader, parameters: tuple, derived: tuple, parallel: Parallel) -> None:
     """Parameters may not take the names of joint variables, task coordinates or input vectors."""
-    from symkin.model import coordinates
-
     taken: dict[str, str] = {}
     for name in PARALLEL_INPUT_NAMES:
         taken[name] = f"the input vector '{name}' of generated functions"

@@ -1,0 +1,172 @@
+"""The ``bodies:`` (mass, centre of mass, inertia tensor in any frame) and ``friction:`` sections."""
+
+from __future__ import annotations
+
+import difflib
+from typing import Any
+
+import numpy as np
+import sympy
+
+from symkin.geometry import rotation_matrix
+from symkin.model.reader import (
+    X_AXIS,
+    Y_AXIS,
+    Z_AXIS,
+    ZERO,
+    Reader,
+    describe,
+    frame_ops,
+)
+from symkin.model.schema import (
+    Body,
+    Friction,
+    Rotation,
+    Vec3,
+)
+from symkin.model.yaml_source import KeyPath
+
+_INERTIA_KEYS = ("xx", "yy", "zz", "xy", "xz", "yz")
+
+
+def read_bodies(r: Reader, value: Any, links: tuple[str, ...]) -> tuple[Body, ...]:
+    path: KeyPath = ("bodies",)
+    items = r.sequence(path, value, what="bodies")
+    if items is None:
+        return ()
+    bodies = []
+    for i, item in enumerate(items):
+        bpath = path + (i,)
+        item = r.mapping(bpath, item, required=("link", "mass"), optional=("com", "inertia", "inertia_rpy", "origin"))
+        if item is None or "link" not in item or "mass" not in item:
+            continue
+        link = r.name(bpath + ("link",), item["link"])  # a name, not any YAML value (lists are unhashable)
+        if link is None or link in r.invalid_links:
+            continue  # its joint is already reported
+        if link not in links:
+            close = difflib.get_close_matches(str(link), links, n=1)
+            hint = f"did you mean '{close[0]}'? " if close else ""
+            r.fail(bpath + ("link",), f"unknown link {describe(link)}", f"{hint}links: {', '.join(links)}")
+            continue
+        mass = r.expr(bpath + ("mass",), item["mass"])
+        com = r.vector3(bpath + ("com",), item["com"]) if "com" in item else (ZERO, ZERO, ZERO)
+        inertia = _inertia(r, bpath + ("inertia",), item["inertia"]) if "inertia" in item else sympy.zeros(3, 3)
+        if "inertia_rpy" in item and inertia is not None:
+            inertia = _rotate_inertia(r, bpath + ("inertia_rpy",), item["inertia_rpy"], inertia)
+        if "origin" in item and com is not None and inertia is not None:
+            com, inertia = _body_in_link_frame(r, bpath + ("origin",), item["origin"], com, inertia)
+        if mass is None or com is None or inertia is None:
+            continue
+        m = r.default_value(mass)
+        if m is not None and m < 0:
+            r.fail(bpath + ("mass",), f"negative mass {mass} ({m:g} at the default values)",
+                   "a mass is zero or positive")
+            continue
+        bodies.append(Body(link, mass, com, sympy.ImmutableMatrix(inertia)))
+    return tuple(bodies)
+
+
+def _body_in_link_frame(r: Reader, path: KeyPath, value: Any, com: Vec3, inertia: sympy.Matrix
+                        ) -> tuple[Vec3 | None, sympy.Matrix | None]:
+    """com and inertia given in a frame fixed to the link (``origin:``, one frame or a list),
+    expressed in the link frame: c_link = p + R c, I_link = R I R^T with link_T_frame = (R, p)."""
+    ops = frame_ops(r, path, value)
+    if ops is None:
+        return None, None
+    R, p = sympy.eye(3), sympy.zeros(3, 1)
+    for op in ops:
+        if isinstance(op, Rotation):
+            R = R * rotation_matrix(op.axis, op.angle)
+        else:
+            p = p + R * sympy.Matrix(op.vector)
+    c = p + R * sympy.Matrix(com)
+    return (c[0], c[1], c[2]), R * inertia * R.T
+
+
+def _inertia(r: Reader, path: KeyPath, value: Any) -> sympy.Matrix | None:
+    """Inertia about the centre of mass: {xx, yy, zz, xy, xz, yz} or a symmetric 3x3 list."""
+    if isinstance(value, dict):
+        section = r.mapping(path, value, optional=_INERTIA_KEYS)
+        if section is None:
+            return None
+        parts = {k: r.expr(path + (k,), section[k]) if k in section else ZERO for k in _INERTIA_KEYS}
+        if any(v is None for v in parts.values()):
+            return None
+        tensor = sympy.Matrix([[parts["xx"], parts["xy"], parts["xz"]],
+                               [parts["xy"], parts["yy"], parts["yz"]],
+                               [parts["xz"], parts["yz"], parts["zz"]]])
+    else:
+        rows = r.sequence(path, value, 3, "rows (or a mapping xx, yy, zz, xy, xz, yz)")
+        if rows is None:
+            return None
+        entries: list[list[sympy.Expr | None]] = []
+        for i, row in enumerate(rows):
+            cols = r.sequence(path + (i,), row, 3, "entries")
+            if cols is None:
+                return None
+            entries.append([r.expr(path + (i, j), v) for j, v in enumerate(cols)])
+        if any(v is None for row in entries for v in row):
+            return None
+        tensor = sympy.Matrix(entries)
+        if (tensor - tensor.T).is_zero_matrix is not True:
+            r.fail(path, "the inertia tensor is not symmetric", "make entry [i][j] equal to entry [j][i]")
+            return None
+    _check_inertia_physical(r, path, tensor)
+    return tensor
+
+
+def _rotate_inertia(r: Reader, path: KeyPath, value: Any, inertia: sympy.Matrix) -> sympy.Matrix | None:
+    """Inertia given in axes rotated by rpy from the link frame (URDF <inertial><origin rpy>):
+    I_link = R I R^T with R = Rz(yaw) Ry(pitch) Rx(roll)."""
+    rpy = r.vector3(path, value)
+    if rpy is None:
+        return None
+    roll, pitch, yaw = rpy
+    R = rotation_matrix(Z_AXIS, yaw) * rotation_matrix(Y_AXIS, pitch) * rotation_matrix(X_AXIS, roll)
+    return R * inertia * R.T
+
+
+def _check_inertia_physical(r: Reader, path: KeyPath, tensor: sympy.Matrix) -> None:
+    """At default parameter values the principal moments are >= 0 and obey the triangle inequality."""
+    values = [r.default_value(v) for v in tensor]
+    if any(v is None for v in values):
+        return
+    moments = np.linalg.eigvalsh(np.array(values, dtype=float).reshape(3, 3))
+    scale = max(1e-300, float(np.max(np.abs(moments))))
+    a, b, c = moments
+    if a < -1e-12 * scale or a + b < c - 1e-9 * scale:
+        r.fail(path, f"the inertia tensor is not physical (principal moments {a:.6g}, {b:.6g}, {c:.6g})",
+               "principal moments must be >= 0 and each at most the sum of the other two")
+
+
+def read_friction(r: Reader, value: Any, joint_names: tuple[str, ...]) -> tuple[Friction, ...]:
+    path: KeyPath = ("friction",)
+    section = r.mapping(path, value, optional=joint_names)
+    if section is None:
+        return ()
+    out = []
+    for jname, spec in section.items():
+        if jname not in joint_names:
+            continue  # already reported as unknown key
+        fpath = path + (jname,)
+        spec = r.mapping(fpath, spec, optional=("viscous", "coulomb", "smoothing_velocity"))
+        if spec is None:
+            continue
+        viscous = r.expr(fpath + ("viscous",), spec["viscous"]) if "viscous" in spec else ZERO
+        coulomb = r.expr(fpath + ("coulomb",), spec["coulomb"]) if "coulomb" in spec else ZERO
+        smoothing = r.expr(fpath + ("smoothing_velocity",), spec["smoothing_velocity"]) \
+            if "smoothing_velocity" in spec else None
+        if viscous is None or coulomb is None or ("smoothing_velocity" in spec and smoothing is None):
+            continue
+        for key, coeff in (("viscous", viscous), ("coulomb", coulomb)):
+            v = r.default_value(coeff)
+            if v is not None and v < 0:
+                r.fail(fpath + (key,), f"negative {key} friction coefficient {coeff}",
+                       "friction coefficients are zero or positive")
+        if smoothing is not None:
+            v = r.default_value(smoothing)
+            if smoothing == 0 or (v is not None and v <= 0):
+                r.fail(fpath + ("smoothing_velocity",), f"the smoothing velocity must be positive, got {smoothing}",
+                       "give the speed below which Coulomb friction fades out, e.g. a parameter v_s: 0.01")
+        out.append(Friction(jname, viscous, coulomb, smoothing))
+    return tuple(out)

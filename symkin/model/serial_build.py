@@ -1,0 +1,217 @@
+"""The ``serial:`` section: a DH table (classic or modified) or a URDF-like joint chain, base and TCP frames."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from symkin.model.reader import (
+    X_AXIS,
+    Z_AXIS,
+    ZERO,
+    Reader,
+    describe,
+    frame_ops,
+    ops,
+    position_limits,
+    unit_axis,
+)
+from symkin.model.schema import (
+    Joint,
+    JointType,
+    Op,
+    Rotation,
+    Translation,
+)
+from symkin.model.yaml_source import Document, KeyPath
+
+#: Most joints of one chain (exact expressions grow with the chain; beyond this, derivation
+#: would run for hours).
+MAX_JOINTS = 64
+JOINT_TYPES = {"R": JointType.REVOLUTE, "revolute": JointType.REVOLUTE,
+               "P": JointType.PRISMATIC, "prismatic": JointType.PRISMATIC}
+#: Joint types that exist in legs of parallel mechanisms but not in a serial chain.
+MULTI_DOF_JOINT_TYPES = ("U", "S", "C", "E", "H")
+DH_CONVENTIONS = {"classic": "classic", "distal": "classic", "modified": "modified", "proximal": "modified"}
+DH_COLUMNS = ("name", "type", "theta", "d", "a", "alpha")
+
+
+def read_serial(r: Reader, section: Any) -> tuple[tuple[Joint, ...], tuple[Op, ...], tuple[Op, ...]]:
+    path: KeyPath = ("serial",)
+    section = r.mapping(path, section, optional=("dh", "chain", "base", "tcp"))
+    if section is None:
+        return (), (), ()
+    joints: list[Joint] = []
+    if ("dh" in section) == ("chain" in section):
+        r.fail(path, "a serial mechanism needs exactly one of 'dh:' (a DH table) or 'chain:' (a joint chain)",
+               "keep one of the two sections")
+    elif "dh" in section:
+        joints = _dh_table(r, path + ("dh",), section["dh"])
+    else:
+        joints = _chain(r, path + ("chain",), section["chain"])
+    base = frame_ops(r, path + ("base",), section["base"]) if "base" in section else ()
+    tcp = frame_ops(r, path + ("tcp",), section["tcp"]) if "tcp" in section else ()
+    if not joints and not r.problems:
+        r.fail(path, "the chain has no joints", "declare at least one joint")
+    if len(joints) > MAX_JOINTS:
+        r.fail(path, f"the chain has {len(joints)} joints, more than the limit of {MAX_JOINTS}",
+               "split the mechanism; symbolic expressions grow with every joint of a chain")
+    check_unique(r, [(path, j.name) for j in joints], "joint")
+    check_unique(r, [(path, j.link) for j in joints], "link")
+    return tuple(joints), base or (), tcp or ()
+
+
+def check_unique(r: Reader, items: list[tuple[KeyPath, str]], what: str) -> None:
+    seen: set[str] = set()
+    for path, item in items:
+        if item in seen:
+            r.fail(path, f"duplicate {what} name '{item}'", f"give every {what} its own name")
+        seen.add(item)
+
+
+def _joint_type(r: Reader, path: KeyPath, value: Any) -> JointType | None:
+    if not isinstance(value, str):
+        r.fail(path, f"a joint type must be a name, got {describe(value)}", "use 'R' (revolute) or 'P' (prismatic)")
+        return None
+    if value in JOINT_TYPES:
+        return JOINT_TYPES[value]
+    if value in MULTI_DOF_JOINT_TYPES:
+        r.fail(path, f"joint type '{value}' has several degrees of freedom; a serial chain uses R or P joints",
+               "decompose it into R joints (U = 2 R, S = 3 R with intersecting axes, C = R + P)")
+    else:
+        r.fail(path, f"unknown joint type {describe(value)}", "use 'R' (revolute) or 'P' (prismatic)")
+    return None
+
+
+_JOINT_EXTRAS = ("link", "limits", "velocity_limit", "effort_limit", "active")
+
+
+def _dh_table(r: Reader, path: KeyPath, section: Any) -> list[Joint]:
+    """Joints from a DH table (seed sec. 3.1, eq. 8.12 and Table 8.3).
+
+    classic (distal):   ^{i-1}T_i = Rz(theta_i) Tz(d_i) Tx(a_i) Rx(alpha_i)
+    modified (proximal, Craig): ^{i-1}T_i = Rx(alpha_{i-1}) Tx(a_{i-1}) Rz(theta_i) Tz(d_i),
+    where row i holds alpha_{i-1} and a_{i-1} as in Craig's tables.
+    The joint coordinate adds to theta (revolute) or d (prismatic).
+    """
+    section = r.mapping(path, section, required=("convention", "rows"))
+    if section is None or "convention" not in section or "rows" not in section:
+        return []
+    convention = DH_CONVENTIONS.get(section["convention"]) if isinstance(section["convention"], str) else None
+    if convention is None:
+        r.fail(path + ("convention",), f"unknown DH convention {describe(section['convention'])}",
+               "use 'classic' (distal, Denavit-Hartenberg) or 'modified' (proximal, Craig)")
+        return []
+    rows = r.sequence(path + ("rows",), section["rows"], what="DH rows")
+    if rows is None:
+        return []
+    joints = []
+    for i, row in enumerate(rows):
+        rpath = path + ("rows", i)
+        fields = _dh_row_fields(r, rpath, row)
+        if fields is None or any(k not in fields for k in ("name", "theta", "d", "a", "alpha")):
+            r.invalid_links.add(_declared_link(fields, i))
+            continue  # the missing keys are reported
+        jname = r.name(rpath + ("name",), fields["name"])
+        jtype = _joint_type(r, rpath + ("type",), fields.get("type", "R"))
+        values = {k: r.expr(rpath + (k,), fields[k]) for k in ("theta", "d", "a", "alpha")}
+        extras = _joint_extras(r, rpath, fields, default_link=f"link{i + 1}")
+        if jname is None or jtype is None or any(v is None for v in values.values()) or extras is None:
+            r.invalid_links.add(_declared_link(fields, i))
+            continue
+        theta, d, a, alpha = values["theta"], values["d"], values["a"], values["alpha"]
+        revolute = jtype is JointType.REVOLUTE
+        if convention == "classic":
+            before = () if revolute else ops(Rotation(Z_AXIS, theta))
+            after = ops(*((Translation((ZERO, ZERO, d)),) if revolute else ()),
+                         Translation((a, ZERO, ZERO)), Rotation(X_AXIS, alpha))
+        else:
+            before = ops(Rotation(X_AXIS, alpha), Translation((a, ZERO, ZERO)),
+                          *(() if revolute else (Rotation(Z_AXIS, theta),)))
+            after = ops(Translation((ZERO, ZERO, d))) if revolute else ()
+        joints.append(Joint(name=jname, type=jtype, axis=Z_AXIS, offset=theta if revolute else d,
+                            before=before, after=after, **extras))
+    return joints
+
+
+def _dh_row_fields(r: Reader, path: KeyPath, row: Any) -> dict[str, Any] | None:
+    """A DH row as a mapping; list rows are [name, type, theta, d, a, alpha(, [lower, upper])]."""
+    if isinstance(row, list):
+        if len(row) not in (6, 7):
+            r.fail(path, f"a DH row has 6 entries [{', '.join(DH_COLUMNS)}] (and optionally [lower, upper] limits), "
+                         f"this one has {len(row)}",
+                   "write the row as [name, type, theta, d, a, alpha] or as a mapping with those keys")
+            return None
+        fields = dict(zip(DH_COLUMNS, row))
+        if len(row) == 7:
+            fields["limits"] = row[6]
+        # List entries are located by index; map the field names onto those paths.
+        for k, key in enumerate(list(DH_COLUMNS) + ["limits"]):
+            if k < len(row):
+                _alias_path(r.doc, path + (k,), path + (key,))
+        return fields
+    return r.mapping(path, row, required=("name", "theta", "d", "a", "alpha"), optional=("type",) + _JOINT_EXTRAS)
+
+
+def _declared_link(fields: Any, index: int) -> str:
+    """The link a joint entry declares (or its default name), even if the entry is invalid."""
+    link = fields.get("link") if isinstance(fields, dict) else None
+    return link if isinstance(link, str) else f"link{index + 1}"
+
+
+def _alias_path(doc: Document, source: KeyPath, alias: KeyPath) -> None:
+    """Make every location under ``source`` also known under ``alias``."""
+    for key in [k for k in doc.marks if k[:len(source)] == source]:
+        doc.marks.setdefault(alias + key[len(source):], doc.marks[key])
+        if key in doc.raw:
+            doc.raw.setdefault(alias + key[len(source):], doc.raw[key])
+
+
+def _chain(r: Reader, path: KeyPath, section: Any) -> list[Joint]:
+    """Joints of a URDF-like chain: parent_T_link = Trans(xyz) Rz(yaw) Ry(pitch) Rx(roll) Motion(axis, q)."""
+    items = r.sequence(path, section, what="joints")
+    if items is None:
+        return []
+    joints = []
+    for i, item in enumerate(items):
+        jpath = path + (i,)
+        item = r.mapping(jpath, item, required=("name",), optional=("type", "axis", "origin", "offset") + _JOINT_EXTRAS)
+        if item is None or "name" not in item:
+            continue
+        jname = r.name(jpath + ("name",), item["name"])
+        jtype = _joint_type(r, jpath + ("type",), item.get("type", "R"))
+        axis = unit_axis(r, jpath + ("axis",), item["axis"]) if "axis" in item else Z_AXIS
+        before = frame_ops(r, jpath + ("origin",), item["origin"]) if "origin" in item else ()
+        offset = r.expr(jpath + ("offset",), item["offset"]) if "offset" in item else ZERO
+        extras = _joint_extras(r, jpath, item, default_link=f"link{i + 1}")
+        if None in (jname, jtype, axis, before, offset, extras):
+            r.invalid_links.add(_declared_link(item, i))
+            continue
+        joints.append(Joint(name=jname, type=jtype, axis=axis, offset=offset, before=before, after=(), **extras))
+    return joints
+
+
+def _joint_extras(r: Reader, path: KeyPath, item: dict[str, Any], default_link: str) -> dict[str, Any] | None:
+    """Link name, limits and activity of a joint (keys shared by DH rows and chain joints)."""
+    link = r.name(path + ("link",), item["link"]) if "link" in item else default_link
+    limits = None
+    ok = link is not None
+    if "limits" in item:
+        limits = position_limits(r, path + ("limits",), item["limits"])
+        ok = ok and limits is not None
+    extras: dict[str, Any] = {"link": link, "limits": limits}
+    for key in ("velocity_limit", "effort_limit"):
+        extras[key] = None
+        if key in item:
+            value = r.expr(path + (key,), item[key])
+            numeric = r.default_value(value) if value is not None else None
+            if value is None or (numeric is not None and numeric <= 0):
+                if value is not None:
+                    r.fail(path + (key,), f"{key} must be positive, got {value}", "write a positive number")
+                ok = False
+            extras[key] = value
+    active = item.get("active", True)
+    if not isinstance(active, bool):
+        r.fail(path + ("active",), f"'active' must be true or false, got {describe(active)}", "write true or false")
+        ok = False
+    extras["active"] = active
+    return extras if ok else None
