@@ -7,26 +7,13 @@ tests/corpus/make_hostile_corpus.py (mutants kept in the corpus).
 from __future__ import annotations
 
 import copy
+from pathlib import Path
 
 import hypothesis.strategies as st
 import yaml
 
-BASE = """\
-name: arm
-parameters:
-  l1: {value: 0.1, unit: m}
-  l2: 0.2
-  m2: 0.5
-serial:
-  dh:
-    convention: classic
-    rows:
-      - [theta1, R, 0, 0, l1, 0]
-      - {name: theta2, type: R, theta: 0, d: 0, a: l2, alpha: 0, limits: [-pi, pi]}
-task_space: [x, y]
-bodies:
-  - {link: link2, mass: m2}
-"""
+#: The valid model the strategies damage (tests/corpus/base_model.yaml, as the hostile corpus).
+BASE = (Path(__file__).resolve().parent / "corpus" / "base_model.yaml").read_text()
 
 #: Values a hostile file puts where a model expects something else; code payloads would touch ./pwned.
 HOSTILE_VALUES = [

@@ -68,8 +68,7 @@ def _stretched_leg_1(thetas_deg):
 CLOSED_FORM_3X3 = 16 * EPS / np.sqrt(C.CLOSED_FORM_3X3_CLUSTER)
 
 
-def test_3x3_closed_form_matches_a_50_digit_svd():
-    mpmath.mp.dps = 40
+def test_3x3_closed_form_matches_a_40_digit_svd():
     rng = np.random.default_rng(7)
     matrices = []
     for _ in range(400):
@@ -80,9 +79,10 @@ def test_3x3_closed_form_matches_a_50_digit_svd():
         matrices.append(U @ np.diag(np.array([1.0, s2, s3]) * 10 ** rng.uniform(-3, 3)) @ V.T)
     matrices = np.array(matrices)
     exact = []
-    for J in matrices:
-        s = sorted(float(x) for x in mpmath.svd_r(mpmath.matrix(J.tolist()), compute_uv=False))
-        exact.append(s[0] / s[-1])
+    with mpmath.workdps(40):  # local precision: the global mpmath context is left as it was
+        for J in matrices:
+            s = sorted(float(x) for x in mpmath.svd_r(mpmath.matrix(J.tolist()), compute_uv=False))
+            exact.append(s[0] / s[-1])
     assert np.max(np.abs(C.inverse_condition_number(matrices) - np.array(exact))) <= CLOSED_FORM_3X3
 
 

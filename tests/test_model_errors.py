@@ -3,31 +3,16 @@
 from __future__ import annotations
 
 import subprocess
-import textwrap
 from pathlib import Path
 
 import pytest
-
 from conftest import SYMKIN_CLI
+
 from symkin.errors import ModelError
 from symkin.model import load_model
 
-VALID = textwrap.dedent("""\
-    name: arm
-    parameters:
-      l1: {value: 0.1, unit: m}
-      l2: 0.2
-      m2: 0.5
-    serial:
-      dh:
-        convention: classic
-        rows:
-          - [theta1, R, 0, 0, l1, 0]
-          - {name: theta2, type: R, theta: 0, d: 0, a: l2, alpha: 0, limits: [-pi, pi]}
-    task_space: [x, y]
-    bodies:
-      - {link: link2, mass: m2}
-    """)
+#: The valid model the bad ones are made from (shared with the hostile corpus and the fuzz strategies).
+VALID = (Path(__file__).resolve().parent / "corpus" / "base_model.yaml").read_text()
 
 # (case id, text to replace, replacement, expected line, expected key fragment, expected message fragment)
 CASES = [

@@ -25,22 +25,8 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent / "hostile"
 TESTS = Path(__file__).resolve().parent.parent
 
-BASE = """\
-name: arm
-parameters:
-  l1: {value: 0.1, unit: m}
-  l2: 0.2
-  m2: 0.5
-serial:
-  dh:
-    convention: classic
-    rows:
-      - [theta1, R, 0, 0, l1, 0]
-      - {name: theta2, type: R, theta: 0, d: 0, a: l2, alpha: 0, limits: [-pi, pi]}
-task_space: [x, y]
-bodies:
-  - {link: link2, mass: m2}
-"""
+#: The valid model every hostile variant starts from (shared with the fuzz strategies and test_model_errors).
+BASE = (Path(__file__).resolve().parent / "base_model.yaml").read_text()
 
 
 def replace(old: str, new: str) -> str:
