@@ -245,3 +245,29 @@ def fail_on_bad_input(args: argparse.Namespace, err: Exception) -> None:
     """Report a bad argument or an analysis that does not apply to the model; exit code 2."""
     message = err.args[0] if isinstance(err, KeyError) and err.args else str(err)
     args.parser.error(message)
+
+
+def add_orientation_argument(p: argparse.ArgumentParser) -> None:
+    """--orientation: the constant orientation at which a rotating platform is analysed (workspace, gci)."""
+    p.add_argument("--orientation", metavar="ROLL,PITCH,YAW",
+                   help="platforms that also rotate (Stewart-Gough): the constant orientation of the analysed "
+                        "workspace, R = Rz(yaw) Ry(pitch) Rx(roll), in rad, or in degrees with 'deg' "
+                        "(e.g. 0,10deg,0); default: the orientation of the model's home pose (parallel.home)")
+
+
+def parse_orientation(text: str | None) -> list[float] | None:
+    """--orientation ROLL,PITCH,YAW as angles in rad (None if not given).
+
+    Raises:
+        ValueError: not three numbers.
+    """
+    if text is None:
+        return None
+    parts = text.split(",")
+    try:
+        if len(parts) != 3:
+            raise ValueError
+        return [parse_value(part) for part in parts]
+    except ValueError:
+        raise ValueError(f"--orientation: '{text}' is not ROLL,PITCH,YAW (three numbers in rad, or with 'deg', "
+                         "e.g. 0,10deg,0)") from None

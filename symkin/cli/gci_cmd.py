@@ -8,7 +8,6 @@ import time
 
 from symkin.cli import analysis_args
 from symkin.cli.progress import Progress
-from symkin.cli.workspace_cmd import add_orientation_argument, at_orientation, cartesian_index_grid
 
 #: Configurations drawn for --map (serial mechanisms).
 MAP_SAMPLES = 40_000
@@ -50,20 +49,20 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--index", choices=tuple(INDICES), default="inverse-condition",
                    help="local index to average (default: %(default)s = 1/kappa, the GCI)")
     analysis_args.add_length_argument(p)
-    add_orientation_argument(p)
+    analysis_args.add_orientation_argument(p)
     p.add_argument("--seed", type=int, default=None, help="seed of mc/qmc (default: fresh randomness)")
     p.add_argument("--map", metavar="FIGURE", help="also draw the local index over the workspace into FIGURE")
     p.set_defaults(run=run, parser=p)
 
 
 def run(args: argparse.Namespace) -> int:
-    from symkin.analysis import conditioning, global_indices, inverse, mechanism, parallel, plots, workspace
+    from symkin.analysis import conditioning, global_indices, inverse, mechanism, parallel, plots, study, workspace
     from symkin.analysis.integrators import STATISTICAL
 
     index = getattr(conditioning, INDICES[args.index])
     try:
         model, limits = analysis_args.model_from_args(args)
-        model = at_orientation(model, args.orientation)
+        model = study.at_orientation(model, analysis_args.parse_orientation(args.orientation))
         held = isinstance(model, parallel.ConstantOrientation)
         if held and args.domain == "joint":
             raise ValueError(f"{model.name}: a platform that also rotates has no closed-form fk: its GCI is "
@@ -87,7 +86,7 @@ def run(args: argparse.Namespace) -> int:
             if args.map and mechanism.is_parallel(model):
                 progress("drawing")
                 box = workspace.bounding_box(model, limits=limits)
-                occupancy, values = cartesian_index_grid(model, box, limits, length, index)
+                occupancy, values = study.cartesian_index_grid(model, box, limits, length, index)
                 path = plots.plot_index_slices(occupancy, values, args.map, label=args.index,
                                                title=f"{args.index} over the workspace of {model.name}")
             elif args.map:

@@ -1,0 +1,164 @@
+"""The workspace study of one design, as ``symkin workspace`` reports it: what is sampled, measured and found.
+
+A serial mechanism (or a parallel one with a closed-form fk) is sampled in its joint space and
+mapped through the generated ``fk`` (:func:`symkin.analysis.workspace.sample_workspace`); its
+area/volume comes from the joint domain (|det J| dq) and, where an inverse kinematics exists,
+from a Cartesian box; its boundary and singular configurations from the occupancy of the
+point cloud (seed sec. 4.1, 4.2).  A parallel mechanism also gets a Cartesian grid with
+reachability by its closed-form IK and 1/kappa at the cell centres
+(:func:`cartesian_index_grid`), which gives its volume, boundary and near-singular cells; a
+platform held at a constant orientation (:func:`at_orientation`) has no fk, and the grid's
+boundary cells are its point cloud.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from symkin.analysis import feasibility, global_indices, inverse, mechanism, parallel, workspace
+from symkin.analysis.grids import index_grid
+from symkin.analysis.mechanism import Limits
+from symkin.analysis.workspace import Occupancy, WorkspaceCloud
+
+#: Cells along the longest side of the Cartesian grid of a parallel mechanism's workspace.
+CARTESIAN_CELLS = 64
+#: Fraction of the reachable cells, those of lowest 1/kappa, whose place (boundary or not) is reported.
+LOWEST_FRACTION = 0.01
+
+
+def at_orientation(model: Any, angles: Sequence[float] | None) -> Any:
+    """``model`` held at the constant orientation ``angles`` (roll, pitch, yaw in rad) if its platform
+    rotates (:func:`symkin.analysis.parallel.constant_orientation`; None: the home orientation), else ``model``.
+
+    Raises:
+        ValueError: angles are given for a mechanism whose platform does not rotate.
+    """
+    rotates = mechanism.is_parallel(model) and mechanism.mixes_translations_and_rotations(model)
+    if angles is None:
+        return parallel.constant_orientation(model) if rotates else model
+    if not rotates:
+        raise ValueError(f"--orientation: {model.name} is not a parallel platform that rotates "
+                         f"(task space {list(mechanism.task_space(model))}); leave the option out")
+    return parallel.constant_orientation(model, list(angles))
+
+
+def cartesian_index_grid(model: Any, box: tuple[np.ndarray, np.ndarray], limits: Limits | None,
+                         length: float | None, index=None) -> tuple[Occupancy, np.ndarray]:
+    """Reachability grid of a parallel mechanism over ``box`` (:data:`CARTESIAN_CELLS` along its longest
+    side) with a local index (1/kappa by default) at its cell centres (:func:`symkin.analysis.grids.index_grid`)."""
+    cell = float(max(box[1] - box[0])) / CARTESIAN_CELLS
+    return index_grid(model, parallel.parallel_inverse(model), box, cell, index=index, limits=limits, length=length)
+
+
+def boundary_cloud(model: Any, occupancy: Occupancy, limits: Limits | None) -> WorkspaceCloud:
+    """The centres of the boundary cells of a Cartesian grid and their joint coordinates, as a point cloud."""
+    points = occupancy.centers()[occupancy.boundary()]
+    q, _ = feasibility.feasible_configurations(parallel.parallel_inverse(model), points,
+                                               mechanism.joint_limits(model, limits), mechanism.revolute_mask(model))
+    return WorkspaceCloud(q, points, ("x", "y", "z"))
+
+
+@dataclass
+class WorkspaceStudy:
+    """What :func:`study_workspace` found for one design.
+
+    Attributes:
+        cloud: the TCP point cloud (the grid's boundary cells for a platform at a constant orientation).
+        sampled: how the cloud was obtained, in words.
+        inv_kappa: 1/kappa at the cloud's configurations (None where the Cartesian grid carries it).
+        grid: (occupancy, 1/kappa at the cell centres) of a parallel mechanism, else None.
+        report: the findings, one line each (extent, area/volume, boundary, singularities).
+        outline: the images of the joint-limit edges of a 2-DoF mechanism (for figures).
+    """
+
+    cloud: WorkspaceCloud
+    sampled: str
+    inv_kappa: np.ndarray | None
+    grid: tuple[Occupancy, np.ndarray] | None
+    report: list[str]
+    outline: list = field(default_factory=list)
+
+
+def study_workspace(model: Any, *, samples: int, method: str, seed: int, limits: Limits | None,
+                    length: float | None, progress: Callable[[str], None] = lambda _stage: None) -> WorkspaceStudy:
+    """Sample, measure and report the workspace of one design (see the module docstring).
+
+    Raises:
+        ValueError: the model cannot be analysed so (e.g. no reachable cell).
+    """
+    inv_kappa, box, grid = None, None, None
+    if mechanism.is_parallel(model):  # 1/kappa and the volume come from a Cartesian grid
+        box = workspace.bounding_box(model, limits=limits)
+        progress("Cartesian grid")
+        grid = cartesian_index_grid(model, box, limits, length)
+    if isinstance(model, parallel.ConstantOrientation):  # no fk: the grid's surface is the cloud
+        cloud = boundary_cloud(model, grid[0], limits)
+        sampled = (f"{int(grid[0].occupied.sum())} reachable cells of a Cartesian grid at roll, pitch, "
+                   f"yaw = {parallel.orientation_text(model)}")
+    else:
+        cloud = workspace.sample_workspace(model, samples, method=method, limits=limits, seed=seed)
+        if grid is None:
+            progress("conditioning")
+            inv_kappa = global_indices.local_index(model, cloud.q, length=length, limits=limits)
+        sampled = f"{len(cloud.q)} configurations ({method})"
+    report = _report(model, cloud, inv_kappa, limits, progress, box)
+    report += _cartesian_report(*grid) if grid is not None else []
+    joints = mechanism.joint_limits(model, limits).shape[0]
+    outline = workspace.limit_curves(model, limits=limits) if joints == 2 else []
+    return WorkspaceStudy(cloud, sampled, inv_kappa, grid, report, outline)
+
+
+def _cartesian_report(occupancy: Occupancy, values: np.ndarray) -> list[str]:
+    """Volume, boundary and where the (near-)singular cells lie, from the Cartesian grid."""
+    boundary = occupancy.boundary()
+    interior = occupancy.interior()
+    lines = [f"volume: {occupancy.measure()} m^3 (Cartesian grid of {occupancy.cell[0]:.3g} m cells, reachability "
+             f"by ik in the working mode: between interior and all reachable cells, a bracket unless thin parts of the "
+             f"workspace fall between cell centres); {int(boundary.sum())} boundary cells"]
+    if interior.any():
+        lines.append(f"1/kappa at the cell centres: min {np.nanmin(values[boundary]):.4g} on boundary cells, "
+                     f"min {np.nanmin(values[interior]):.4g} on interior cells")
+    reachable = values[occupancy.occupied]
+    worst = occupancy.occupied & (values <= np.quantile(reachable, LOWEST_FRACTION))
+    lines.append(f"the {int(worst.sum())} cells of lowest 1/kappa ({LOWEST_FRACTION:.0%}): {int((worst & boundary).sum())} "
+                 "on the workspace boundary (seed sec. 4.2: boundary singularities)")
+    return lines
+
+
+def _report(model: Any, cloud: WorkspaceCloud, inv_kappa: np.ndarray | None, limits: Limits | None,
+            progress: Callable[[str], None], box=None) -> list[str]:
+    """Extent, area/volume (joint and Cartesian domains) and, for a serial mechanism, boundary and singularities."""
+    lines = []
+    lower, upper = cloud.points.min(axis=0), cloud.points.max(axis=0)
+    lines.append("extent of the samples: " + ", ".join(f"{a} [{lo:.6g}, {hi:.6g}] m"
+                                                       for a, lo, hi in zip(cloud.axes, lower, upper)))
+    d = len(cloud.axes)
+    unit = f"m^{d}"
+    kind = "area" if d == 2 else "volume"
+    if mechanism.is_positional(model):
+        progress(f"{kind} (joint domain)")
+        measure = global_indices.workspace_measure(model, method="qmc", samples=2**16, seed=0, limits=limits)
+        lines.append(f"{kind}: {measure} {unit} (qmc, |det J| dq over the joint limits: exact where q -> TCP "
+                     "is one-to-one, else with multiplicity)")
+    ik = inverse.inverse_kinematics_for(model)
+    if ik is not None:
+        progress(f"{kind} (Cartesian domain)")
+        measure = global_indices.workspace_measure(model, method="qmc", samples=2**16, seed=0, limits=limits,
+                                                   domain="cartesian", inverse=ik, box=box)
+        lines.append(f"{kind}: {measure} {unit} (qmc over a Cartesian box, reachability by inverse kinematics)")
+    if mechanism.is_parallel(model):
+        return lines  # the Cartesian grid (_cartesian_report) gives the volume, boundary and singularities
+    occupancy = workspace.occupancy_from_cloud(cloud)
+    boundary = occupancy.boundary()
+    lines.append(f"{kind}: {occupancy.measure()} {unit} (occupancy of {occupancy.cell[0]:.3g} m cells: "
+                 f"between interior and all occupied cells); {int(boundary.sum())} boundary cells")
+    singular = inv_kappa <= 0.0
+    on_boundary = int(occupancy.lookup(cloud.points[singular], boundary).sum())
+    lines.append(f"1/kappa: min {inv_kappa.min():.4g}, mean {inv_kappa.mean():.4g}, max {inv_kappa.max():.4g}; "
+                 f"singular configurations: {int(singular.sum())}, of which {on_boundary} on the workspace "
+                 "boundary (seed sec. 4.2: boundary singularities)")
+    return lines
