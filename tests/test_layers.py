@@ -183,3 +183,18 @@ def test_the_reader_sees_function_level_and_relative_imports_and_the_packages_th
     assert graph["symkin.high"] == {"symkin.low.other", "symkin.low"}  # the package's __init__ runs first
     assert graph["symkin.low.other"] == {"symkin.low.base"}
     assert cycles(graph) == {frozenset({"symkin.low", "symkin.low.base", "symkin.low.other", "symkin.high"})}
+
+
+#: A module longer than this says why in its docstring (a paragraph starting ``Length:``).
+MODULE_LINES = 400
+
+
+def test_long_modules_say_why_they_are_long():
+    unexplained = []
+    for module, path in sorted(modules().items()):
+        text = path.read_text()
+        lines = text.count("\n")
+        docstring = ast.get_docstring(ast.parse(text)) or ""
+        if lines > MODULE_LINES and "\nLength:" not in "\n" + docstring:
+            unexplained.append(f"{module} ({lines} lines)")
+    assert not unexplained, f"split these modules by job, or say why not ('Length: ...' in the docstring): {unexplained}"

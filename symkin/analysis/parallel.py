@@ -30,6 +30,10 @@ workspace): platform centres p (3 coordinates) in, leg lengths out, the pose in 
 assembly mode of the home pose (sign of det J^-1), the 6 x 6 twist Jacobian for the
 conditioning (homogenized by a characteristic length, :func:`characteristic_length`), and
 the Cartesian domain only.
+
+Length: the two adapters of parallel mechanisms to the analyses (working mode, constant
+orientation) share their Jacobian and reachability helpers; the passive-joint closure is already
+its own module (:mod:`symkin.analysis.passive`).
 """
 
 from __future__ import annotations

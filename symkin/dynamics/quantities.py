@@ -24,6 +24,9 @@ them, and the tests check that both routes agree.  The solves are in
 :class:`~symkin.dynamics.program.Program` converted to sympy definitions.  A model whose
 gravity is zero has no gravity terms anywhere (and no ``gravity_vector`` or
 ``potential_energy`` to emit); bodies without mass and inertia are dropped.
+
+Length: the table above, one short function per row plus the internal graphs they share; each
+function is the glue between the algorithms (newton_euler, lagrange, linsolve), not an algorithm.
 """
 
 from __future__ import annotations

@@ -8,6 +8,9 @@ Rigid motions are sequences of elementary operations (:class:`Rotation`,
 :class:`Translation`) applied in the moving frame, left to right, so that a DH row or a
 URDF origin becomes a short list that the kinematics composer can merge cleverly
 (consecutive rotations about the same axis add their angles).
+
+Length: one vocabulary (every dataclass of a model, serial and parallel), read together by
+everything below the derivation; split it and every reader imports from several places.
 """
 
 from __future__ import annotations

@@ -27,6 +27,9 @@ branch off the root-tip chain are refused with a located error.
 The file is data: it is parsed with the standard library's expat parser, document type
 declarations (and so entities) are refused, and the file size and element count are
 bounded.
+
+Length: one reader of one format (links, joints, inertials, mimic and fixed joints, located
+errors); its parts only make sense together.
 """
 
 from __future__ import annotations
