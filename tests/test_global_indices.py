@@ -17,7 +17,9 @@ import mpmath
 import numpy as np
 import pytest
 import sympy
+from conftest import GENERATED_DIR
 from scipy.integrate import cubature
+from tolerances import EPS
 
 import symkin
 from symkin.analysis import global_indices as G
@@ -27,9 +29,7 @@ from symkin.analysis.integrators import INTEGRATORS, integrate
 from symkin.analysis.inverse import closed_form_inverse
 from symkin.analysis.workspace import bounding_box
 from symkin.model import coordinates
-
-from conftest import GENERATED_DIR
-from tolerances import EPS
+from symkin.runtime.info import Coordinate, ModelInfo
 
 ARM = symkin.load(GENERATED_DIR / "planar_2r")
 QUARTER = (0.0, np.pi / 2)
@@ -285,8 +285,8 @@ class _RectangularStub:
     """A loaded-model stand-in with a 3 x 2 task Jacobian (x, y, z from two joints)."""
 
     name = "stub"
-    manifest = {"model": {"coordinates": [{"name": "a", "type": "R"}, {"name": "b", "type": "R"}],
-                          "task_space": ["x", "y", "z"]}}
+    info = ModelInfo("stub", "serial", (Coordinate("a", True, None), Coordinate("b", True, None)), ("x", "y", "z"),
+                     (), {})
     joint_limits = ((-np.pi, np.pi), (-np.pi, np.pi))
 
     @staticmethod

@@ -24,12 +24,12 @@ Limits = Sequence[Sequence[float]] | Mapping[str, Sequence[float]] | np.ndarray
 
 def coordinate_names(model: Any) -> tuple[str, ...]:
     """Names of the joint coordinates, in the order of ``q``."""
-    return tuple(c["name"] for c in model.manifest["model"]["coordinates"])
+    return model.info.coordinate_names
 
 
 def revolute_mask(model: Any) -> np.ndarray:
     """Boolean array (n,): which coordinates are revolute (angles, periodic)."""
-    return np.array([c["type"] == "R" for c in model.manifest["model"]["coordinates"]])
+    return np.array([c.revolute for c in model.info.coordinates])
 
 
 def joint_limits(model: Any, limits: Limits | None = None) -> np.ndarray:
@@ -47,7 +47,7 @@ def joint_limits(model: Any, limits: Limits | None = None) -> np.ndarray:
         ValueError: a prismatic joint has no limits, or the limits are malformed.
     """
     names = coordinate_names(model)
-    records = model.manifest["model"]["coordinates"]
+    coordinates = model.info.coordinates
     if limits is not None and not isinstance(limits, Mapping):
         result = np.array(limits, dtype=np.float64)
         if result.shape != (len(names), 2):
@@ -58,11 +58,11 @@ def joint_limits(model: Any, limits: Limits | None = None) -> np.ndarray:
         if unknown:
             raise ValueError(f"{model.name}: no coordinates named {sorted(unknown)}; coordinates: {', '.join(names)}")
         rows = []
-        for record, declared in zip(records, model.joint_limits):
-            bounds = overrides.get(record["name"], declared if np.all(np.isfinite(declared)) else None)
+        for coordinate, declared in zip(coordinates, model.joint_limits):
+            bounds = overrides.get(coordinate.name, declared if np.all(np.isfinite(declared)) else None)
             if bounds is None:
-                if record["type"] != "R":
-                    raise ValueError(f"{model.name}: prismatic joint '{record['name']}' declares no limits; "
+                if not coordinate.revolute:
+                    raise ValueError(f"{model.name}: prismatic joint '{coordinate.name}' declares no limits; "
                                      "declare them in the model file or pass limits")
                 bounds = DEFAULT_REVOLUTE_LIMITS
             rows.append([float(bounds[0]), float(bounds[1])])
@@ -75,7 +75,7 @@ def joint_limits(model: Any, limits: Limits | None = None) -> np.ndarray:
 
 def task_space(model: Any) -> tuple[str, ...]:
     """Names of the task-space components (rows of ``model.jacobian``)."""
-    return tuple(model.manifest["model"]["task_space"])
+    return model.info.task_space
 
 
 def position_rows(model: Any) -> tuple[int, ...]:
@@ -100,8 +100,8 @@ def position_axes(model: Any) -> tuple[int, ...]:
 
 
 def is_parallel(model: Any) -> bool:
-    """Whether the loaded model is a parallel mechanism (its manifest has a ``parallel`` record)."""
-    return "parallel" in model.manifest["model"]
+    """Whether the loaded model is a parallel mechanism."""
+    return model.info.is_parallel
 
 
 def home_pose(model: Any) -> np.ndarray:
@@ -110,7 +110,7 @@ def home_pose(model: Any) -> np.ndarray:
     Raises:
         ValueError: the model declares none (the workspace analyses scale with it).
     """
-    home = model.manifest["model"]["parallel"].get("home")
+    home = model.info.home
     if home is None:
         raise ValueError(f"{model.name}: declare a home pose (parallel.home) to scale the workspace analyses")
     return np.array(home, dtype=np.float64)

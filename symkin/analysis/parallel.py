@@ -246,8 +246,7 @@ class ConstantOrientation:
         self.orientation = angles
         self.rates = np.eye(6)
         self.rates[3:, 3:] = angular_velocity_matrix(angles)
-        record = dict(model.manifest["model"], task_space=list(TWIST_COMPONENTS))
-        self.manifest = dict(model.manifest, model=record)
+        self.info = model.info.with_task_space(TWIST_COMPONENTS)
         self.functions = (*model.functions, "jacobian")
 
     def __getattr__(self, name: str) -> Any:  # the model's name, parameters, joint_limits, generated functions

@@ -34,6 +34,7 @@ import numpy as np
 
 from symkin.analysis import mechanism
 from symkin.analysis.limits import within_limits
+from symkin.runtime.info import VectorInput
 from symkin.runtime.parallel import solve_closure
 
 #: Damping of the Gauss-Newton iteration: the largest step (max-norm, rad or m).
@@ -66,10 +67,9 @@ class PassiveLimits:
     bounds: np.ndarray
 
 
-def _passive_input(model: Any) -> dict:
-    for function in model.manifest["functions"]:
-        if function["name"] == "closure":
-            return next(i for i in function["inputs"] if i["name"] == "s")
+def _passive_input(model: Any) -> VectorInput:
+    if "closure" in model.info.functions:
+        return model.info.functions["closure"].vectors["s"]
     raise ValueError(f"{model.name}: passive-joint limits are declared; enforcing them needs the generated "
                      "'closure' and 'closure_jacobians' (add them to the scene outputs and derive again)")
 
@@ -81,17 +81,17 @@ def declared_limits(model: Any) -> PassiveLimits | None:
         ValueError: a limit is not a pair of finite numbers [lower < upper], names an unknown
             passive variable, or the closure functions needed to evaluate s were not generated.
     """
-    legs = model.manifest["model"]["parallel"]["legs"]
-    if not any(leg.get("passive_limits") for leg in legs):
+    legs = model.info.passive_limits
+    if not any(legs):
         return None
     s = _passive_input(model)
     if "closure_jacobians" not in model.functions:
         raise ValueError(f"{model.name}: passive-joint limits are declared; enforcing them needs the generated "
                          "'closure_jacobians' (add it to the scene outputs and derive again)")
-    names = tuple(s["elements"])
+    names = s.elements
     columns, bounds = [], []
     for i, leg in enumerate(legs):
-        for name, value in leg.get("passive_limits", {}).items():
+        for name, value in leg.items():
             where = f"{model.name}: manifest.json model.parallel.legs[{i}].passive_limits.{name}"
             if name not in names:
                 raise ValueError(f"{where}: no passive joint variable of that name (passive variables: "
@@ -102,7 +102,7 @@ def declared_limits(model: Any) -> PassiveLimits | None:
                                  "fix the model file's limits and derive again")
             columns.append(names.index(name))
             bounds.append(pair)
-    revolute = np.array([unit == "rad" for unit in s["units"]])
+    revolute = np.array([unit == "rad" for unit in s.units])
     return PassiveLimits(names, revolute, np.array(columns, dtype=int), np.array(bounds))
 
 
@@ -131,7 +131,7 @@ def home_assembly(model: Any) -> np.ndarray:
 
 def _home_assembly(model: Any) -> np.ndarray:
     home = mechanism.home_pose(model)
-    size = len(_passive_input(model)["elements"])
+    size = len(_passive_input(model).elements)
     with np.errstate(invalid="ignore"):
         q = model.ik(home).joints
     report = _solve(model, q, home, np.zeros(size))

@@ -46,7 +46,7 @@ def add_model_arguments(p: argparse.ArgumentParser, *, backend: bool = True) -> 
 
 def design_label(model: Any, values: dict[str, float], unit: str) -> str:
     """'l1 = 10 cm, l2 = 10 cm': a design's parameter values, lengths (unit m in the manifest) in ``unit``."""
-    units = {p["name"]: p["unit"] for p in model.manifest["parameters"]}
+    units = model.info.units
     parts = [f"{name} = {value * LENGTH_UNITS[unit]:g} {unit}" if units.get(name) == "m" else f"{name} = {value:g}"
              for name, value in values.items()]
     return ", ".join(parts) or "model parameters"

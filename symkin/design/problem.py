@@ -88,12 +88,12 @@ def needed_functions(parallel: bool) -> tuple[str, ...]:
 
 
 def _parameter_inputs(model: Any, functions: Sequence[str]) -> set[str]:
-    records = {f["name"]: f for f in model.manifest["functions"]}
-    missing = [name for name in functions if name not in records]
+    generated = model.info.functions
+    missing = [name for name in functions if name not in generated]
     if missing:
         raise ValueError(f"{model.name}: the generated code has no {', '.join(missing)}; derive the model with "
                          f"--only {','.join(functions)} --backend numpy,casadi")
-    return {i["name"] for name in functions for i in records[name]["inputs"] if i["kind"] == "parameter"}
+    return {parameter for name in functions for parameter in generated[name].parameters}
 
 
 def _free_parameters(model: Any, free: Sequence[str], bounds: Mapping[str, tuple[float, float]],

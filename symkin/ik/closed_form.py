@@ -211,7 +211,7 @@ def closed_form_solver(model: LoadedModel | ModelKinematics,
                        limits: Sequence[tuple[float, float]] | None = None) -> ClosedFormIK | None:
     """The closed-form solver of ``model``'s structure, or None if no known structure matches
     (or it is a parallel mechanism, whose IK is generated code of its own)."""
-    if isinstance(model, LoadedModel) and model.manifest["model"].get("parallel"):
+    if isinstance(model, LoadedModel) and model.info.is_parallel:
         return None
     kin = model if isinstance(model, ModelKinematics) else ModelKinematics(model, limits)
     try:

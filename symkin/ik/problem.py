@@ -53,12 +53,11 @@ class ModelKinematics:
         if "fk" not in functions:
             raise GeneratedCodeError(f"{model.name}: inverse kinematics needs the generated 'fk'; "
                                      + _derive_hint("fk,jacobian_geometric"))
-        coordinates = model.manifest["model"]["coordinates"]
         self.name = model.name
-        self.coordinates = tuple(c["name"] for c in coordinates)
-        self.revolute = np.array([c["type"] == "R" for c in coordinates])
+        self.coordinates = model.info.coordinate_names
+        self.revolute = np.array([c.revolute for c in model.info.coordinates])
         self.dof = len(self.coordinates)
-        self.task_space = tuple(model.manifest["model"]["task_space"])
+        self.task_space = model.info.task_space
         bounds = np.array(model.joint_limits if limits is None else limits, dtype=float).reshape(self.dof, 2)
         if np.any(bounds[:, 0] > bounds[:, 1]):
             raise ValueError(f"{model.name}: a lower joint limit is above its upper limit: {bounds.tolist()}")

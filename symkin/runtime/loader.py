@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from symkin.errors import GeneratedCodeError
+from symkin.runtime.info import ModelInfo
 from symkin.manifest import MANIFEST_NAME, read_manifest
 
 
@@ -50,6 +51,7 @@ class LoadedModel:
         backend: the backend the functions come from.
         directory: the model directory.
         manifest: the parsed ``manifest.json``.
+        info: the typed view of the model (:class:`~symkin.runtime.info.ModelInfo`): what consumers read.
         functions: names of the generated functions.
         parameters: default values of the free parameters (inputs of the functions).
     """
@@ -60,6 +62,7 @@ class LoadedModel:
         self.manifest = manifest
         self.backend = backend
         self.name: str = manifest["model"]["name"]
+        self.info = ModelInfo.from_manifest(manifest)
         self._raw = functions
         self._bound = dict(bound or {})
         self.functions = tuple(functions)
@@ -76,8 +79,7 @@ class LoadedModel:
         """(lower, upper) position limit of every joint, at the parameters' default values;
         (-inf, inf) for a joint without limits."""
         inf = float("inf")
-        return tuple(tuple(c["limits"]) if c.get("limits") else (-inf, inf)
-                     for c in self.manifest["model"]["coordinates"])
+        return tuple(c.limits if c.limits is not None else (-inf, inf) for c in self.info.coordinates)
 
     def bind(self, **parameters: float) -> LoadedModel:
         """A view whose functions use these parameter values instead of the defaults.

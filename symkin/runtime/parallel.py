@@ -157,7 +157,7 @@ def home_pose(model: LoadedModel) -> np.ndarray:
     Raises:
         GeneratedCodeError: the model declares none (``parallel.home``).
     """
-    home = model.manifest["model"].get("parallel", {}).get("home")
+    home = model.info.home
     if home is None:
         raise GeneratedCodeError(f"model '{model.name}' declares no home pose (parallel.home); pass a start p0")
     return np.array(home, dtype=float)

@@ -1,0 +1,119 @@
+"""One typed view of a loaded model, built once from its manifest (:class:`ModelInfo`).
+
+Every consumer of a loaded model (analyses, IK, design, simulation, the CLI) reads what it
+needs about the mechanism from ``model.info`` rather than indexing ``manifest.json``: the
+joint coordinates with their types and limits, the task space, the parameters, the generated
+functions with their parameter inputs and vector elements, and, for a parallel mechanism, its
+home pose and the passive-joint limits of its legs.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import Any
+
+
+@dataclass(frozen=True)
+class Coordinate:
+    """A joint coordinate (an element of ``q``).
+
+    Attributes:
+        name: its name in the model file.
+        revolute: an angle (periodic) rather than a length.
+        limits: (lower, upper) at the parameters' default values, or None where the model declares none.
+    """
+
+    name: str
+    revolute: bool
+    limits: tuple[float, float] | None
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """A model parameter: ``fixed`` ones are folded into the code, the others are function arguments."""
+
+    name: str
+    default: float
+    unit: str
+    fixed: bool
+
+
+@dataclass(frozen=True)
+class VectorInput:
+    """A vector input of a generated function (``q``, ``qd``, ``p``, ``s``...): its elements and their units."""
+
+    elements: tuple[str, ...]
+    units: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class Function:
+    """A generated function: its name, its vector inputs by name, and its parameter inputs."""
+
+    name: str
+    vectors: dict[str, VectorInput]
+    parameters: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class ModelInfo:
+    """What a loaded model is (see the module docstring).
+
+    Attributes:
+        name: model name.
+        mechanism: ``serial`` or ``parallel``.
+        coordinates: the joint coordinates, in the order of ``q``.
+        task_space: the task-space components (rows of ``jacobian``), e.g. ``("x", "y")``.
+        parameters: every parameter, fixed or free.
+        functions: the generated functions, by name.
+        home: a parallel mechanism's declared home pose (task coordinates), else None.
+        passive_limits: per leg of a parallel mechanism, {passive variable: [lower, upper]} as recorded
+            (validated where they are used, :func:`symkin.analysis.passive.declared_limits`, with the
+            manifest's place in the message).
+    """
+
+    name: str
+    mechanism: str
+    coordinates: tuple[Coordinate, ...]
+    task_space: tuple[str, ...]
+    parameters: tuple[Parameter, ...]
+    functions: dict[str, Function]
+    home: tuple[float, ...] | None = None
+    passive_limits: tuple[dict[str, Any], ...] = ()
+
+    @property
+    def is_parallel(self) -> bool:
+        return self.mechanism == "parallel"
+
+    @property
+    def coordinate_names(self) -> tuple[str, ...]:
+        return tuple(c.name for c in self.coordinates)
+
+    @property
+    def units(self) -> dict[str, str]:
+        """{parameter name: unit}."""
+        return {p.name: p.unit for p in self.parameters}
+
+    def with_task_space(self, task_space: tuple[str, ...]) -> ModelInfo:
+        """The same model seen through other task coordinates (e.g. a platform held at a constant orientation)."""
+        return dataclasses.replace(self, task_space=tuple(task_space))
+
+    @classmethod
+    def from_manifest(cls, manifest: dict[str, Any]) -> ModelInfo:
+        model = manifest["model"]
+        parallel = model.get("parallel")
+        coordinates = tuple(Coordinate(c["name"], c["type"] == "R",
+                                       tuple(float(v) for v in c["limits"]) if c.get("limits") else None)
+                            for c in model["coordinates"])
+        parameters = tuple(Parameter(p["name"], float(p["default"]), p.get("unit", ""), bool(p["fixed"]))
+                           for p in manifest["parameters"])
+        functions = {f["name"]: Function(f["name"],
+                                         {i["name"]: VectorInput(tuple(i["elements"]), tuple(i["units"]))
+                                          for i in f["inputs"] if i["kind"] != "parameter"},
+                                         tuple(i["name"] for i in f["inputs"] if i["kind"] == "parameter"))
+                     for f in manifest["functions"]}
+        home = tuple(float(v) for v in parallel["home"]) if parallel and parallel.get("home") is not None else None
+        passive = tuple(dict(leg.get("passive_limits") or {}) for leg in parallel["legs"]) if parallel else ()
+        return cls(model["name"], "parallel" if parallel else "serial", coordinates, tuple(model["task_space"]),
+                   parameters, functions, home, passive)
