@@ -16,6 +16,7 @@ import pytest
 import sympy
 
 from conftest import EXAMPLE_MODELS, MODELS_DIR, random_q, reference_function
+from lagrangian_reference import lagrangian_dynamics
 from symkin.derivation import Derivation
 from symkin.model import load_model, model_from_text
 from test_dynamics_properties import FRICTION_ARM
@@ -77,8 +78,8 @@ def _relative(got, want) -> float:
 @pytest.mark.parametrize("name", CASES)
 def test_emitted_dynamics_equal_the_lagrangian_reference(name, cases):
     model, d = cases[name]
-    reference = reference_function(model, d["lagrangian_dynamics"])
-    names = [o.name for o in d["lagrangian_dynamics"].outputs]
+    reference = reference_function(model, lagrangian_dynamics(d))
+    names = [o.name for o in lagrangian_dynamics(d).outputs]
     emitted = {"M": ("mass_matrix", 1), "C": ("coriolis_matrix", 2), "V": ("coriolis_vector", 2),
                "G": ("gravity_vector", 1), "tau": ("inverse_dynamics", 3)}
     assert set(names) == set(emitted)
@@ -97,7 +98,7 @@ def test_emitted_dynamics_equal_the_lagrangian_reference(name, cases):
 def test_forward_dynamics_inverts_the_lagrangian_torques(cases):
     """forward_dynamics (M by the composite-rigid-body algorithm, V + G by Newton-Euler) against the reference."""
     model, d = cases["odd_arm"]
-    reference = reference_function(model, d["lagrangian_dynamics"])
+    reference = reference_function(model, lagrangian_dynamics(d))
     qdd_of = reference_function(model, d["forward_dynamics"])
     rng = np.random.default_rng(41)
     for _ in range(STATES):
@@ -115,7 +116,7 @@ def _symbolic(spec) -> list[sympy.Matrix]:
 def test_planar_arm_equals_the_lagrangian_reference_symbolically(cases):
     """Exact equality (the difference simplifies to zero) for the seed's 2-DoF arm, parameters symbolic."""
     _, d = cases["planar_2r"]
-    reference = dict(zip([o.name for o in d["lagrangian_dynamics"].outputs], _symbolic(d["lagrangian_dynamics"])))
+    reference = dict(zip([o.name for o in lagrangian_dynamics(d).outputs], _symbolic(lagrangian_dynamics(d))))
     for out, quantity in (("M", "mass_matrix"), ("C", "coriolis_matrix"), ("V", "coriolis_vector"),
                           ("G", "gravity_vector"), ("tau", "inverse_dynamics")):
         (got,) = _symbolic(d[quantity])

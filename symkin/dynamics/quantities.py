@@ -1,4 +1,4 @@
-"""Dynamic quantities of serial chains, registered in the derivation graph (seed sec. 4.4).
+"""Dynamic quantities of serial chains, listed in the derivation catalog (seed sec. 4.4).
 
 =====================  ================================================================
 ``mass_matrix``        M(q), n x n (eqs. 8.31, 8.53)
@@ -17,16 +17,12 @@
 M is built by the composite-rigid-body algorithm and V, G and tau by the recursive
 Newton-Euler algorithm (:mod:`symkin.dynamics.newton_euler`, O(n) terms for V, G and tau);
 C = Christoffel symbols of that M.  The Lagrangian closed forms
-(:mod:`symkin.dynamics.lagrange`: M = sum J^T I J, G = du/dq, V = C qd) stay as the
-reference: the internal quantity ``lagrangian_dynamics`` computes M, C, V, G and tau from
-them, and the tests check that both routes agree.  The solves are in
+(:mod:`symkin.dynamics.lagrange`: M = sum J^T I J, G = du/dq, V = C qd) are the tests'
+reference (tests/lagrangian_reference.py), and the tests check that both routes agree.  The solves are in
 :mod:`symkin.dynamics.linsolve`; each emitted function is a straight-line
 :class:`~symkin.dynamics.program.Program` converted to sympy definitions.  A model whose
 gravity is zero has no gravity terms anywhere (and no ``gravity_vector`` or
 ``potential_energy`` to emit); bodies without mass and inertia are dropped.
-
-Length: the table above, one short function per row plus the internal graphs they share; each
-function is the glue between the algorithms (newton_euler, lagrange, linsolve), not an algorithm.
 """
 
 from __future__ import annotations
@@ -40,7 +36,7 @@ import sympy
 from symkin.dynamics import lagrange, newton_euler
 from symkin.dynamics.bodies import BodyJacobians, body_jacobians
 from symkin.dynamics.linsolve import ldl_solve, transpose_solve
-from symkin.dynamics.program import Program, mat_vec, se_matrix, se_vector
+from symkin.dynamics.program import Program, se_matrix, se_vector
 from symkin.errors import DerivationError
 from symkin.ir.inputs import coordinate_input
 from symkin.ir.quantity import quantity
@@ -109,20 +105,9 @@ def _mass_matrix_graph(d: Derivation) -> Matrix:
     return newton_euler.mass_matrix(d["newton_euler_links"])
 
 
-@quantity("lagrangian_mass_matrix_graph", "M(q) = sum J^T I J (Lagrangian reference), SymEngine graph",
-          emitted=False)
-def _lagrangian_mass_matrix_graph(d: Derivation) -> Matrix:
-    return lagrange.mass_matrix(d["body_jacobians"], d.model.dof)
-
-
 @quantity("mass_matrix_partials", "dM/dq_k as SymEngine graphs", emitted=False)
 def _mass_matrix_partials(d: Derivation) -> list[Matrix]:
     return lagrange.mass_matrix_partials(d["mass_matrix_graph"], _symbols(d, "q"))
-
-
-@quantity("lagrangian_mass_matrix_partials", "dM/dq_k of the Lagrangian reference M", emitted=False)
-def _lagrangian_mass_matrix_partials(d: Derivation) -> list[Matrix]:
-    return lagrange.mass_matrix_partials(d["lagrangian_mass_matrix_graph"], _symbols(d, "q"))
 
 
 @quantity("gravity_graph", "gravity vector in the base frame, or None if zero", emitted=False)
@@ -130,13 +115,6 @@ def _gravity_graph(d: Derivation) -> list[se.Basic] | None:
     if all(c == 0 for c in d.model.gravity):
         return None
     return se_vector(d.model.gravity)
-
-
-@quantity("lagrangian_gravity_vector_graph", "G(q) = du/dq (Lagrangian reference), or None without gravity",
-          emitted=False)
-def _lagrangian_gravity_vector_graph(d: Derivation) -> list[se.Basic] | None:
-    g = d["gravity_graph"]
-    return None if g is None else lagrange.gravity_vector(d["body_jacobians"], d["chain"].axes, g)
 
 
 @quantity("friction_graph", "F_f(qd) as SymEngine expressions, or None without friction", emitted=False)
@@ -174,23 +152,22 @@ class _BoundTerms:
     """The terms of eq. 8.34 bound into one program, always in the same order (M, dM/dq, V, G, F_f),
     so that the programs of different functions start alike and share their conversion.
 
-    M comes from the composite-rigid-body algorithm (or, with ``source="lagrangian_"``, from the
-    Lagrangian reference's graphs), everything without M from one Newton-Euler pass
-    (:func:`~symkin.dynamics.newton_euler.inverse_dynamics`).
+    M comes from the composite-rigid-body algorithm, everything without M from one Newton-Euler
+    pass (:func:`~symkin.dynamics.newton_euler.inverse_dynamics`).
     """
 
-    def __init__(self, d: Derivation, program: Program, source: str = ""):
-        self.d, self.program, self.source = d, program, source
+    def __init__(self, d: Derivation, program: Program):
+        self.d, self.program = d, program
         self.n = d.model.dof
 
     def mass_matrix(self) -> Matrix:
-        values = self.program.bind(_flat(self.d[self.source + "mass_matrix_graph"]))
+        values = self.program.bind(_flat(self.d["mass_matrix_graph"]))
         return [values[i * self.n:(i + 1) * self.n] for i in range(self.n)]
 
     def partials(self) -> list[Matrix]:
         """dM/dq_k as partials[k][i][j]."""
         n = self.n
-        values = self.program.bind([v for dM in self.d[self.source + "mass_matrix_partials"] for v in _flat(dM)])
+        values = self.program.bind([v for dM in self.d["mass_matrix_partials"] for v in _flat(dM)])
         return [[values[k * n * n + i * n:k * n * n + (i + 1) * n] for i in range(n)] for k in range(n)]
 
     def newton_euler(self, velocity: bool, acceleration: bool, gravity: bool) -> list[se.Basic]:
@@ -216,34 +193,6 @@ class _BoundTerms:
         terms = self.newton_euler(velocity=True, acceleration=acceleration, gravity=True)
         friction = self.friction() if with_friction else None
         return terms if friction is None else [a + b for a, b in zip(terms, friction)]
-
-
-@quantity("lagrangian_dynamics", "M, C, V, G and tau from the Lagrangian closed forms (reference)", emitted=False)
-def _lagrangian_dynamics(d: Derivation) -> FunctionSpec:
-    """The reference the emitted dynamics are checked against (tests): the closed forms of
-    :mod:`symkin.dynamics.lagrange`, independent of the Newton-Euler and composite-rigid-body code."""
-    n = d.model.dof
-    program = Program()
-    terms = _BoundTerms(d, program, source="lagrangian_")
-    qd = _symbols(d, "qd")
-    M, partials = terms.mass_matrix(), terms.partials()
-    C = lagrange.coriolis_matrix(partials, qd)
-    V = lagrange.coriolis_vector(partials, qd)
-    G = program.bind(d["lagrangian_gravity_vector_graph"]) if d["gravity_graph"] is not None else None
-    tau = [a + b for a, b in zip(V, mat_vec(M, _symbols(d, "qdd")))]
-    for extra in (G, terms.friction()):
-        if extra is not None:
-            tau = [a + b for a, b in zip(tau, extra)]
-    outputs = [("M", _flat(M), (n, n), "mass matrix", ""), ("C", _flat(C), (n, n), "Coriolis matrix", ""),
-               ("V", V, (n,), "Coriolis and centrifugal torques", EFFORT_UNIT)]
-    if G is not None:
-        outputs.append(("G", G, (n,), "gravity torques", EFFORT_UNIT))
-    outputs.append(("tau", tau, (n,), "inverse dynamics", EFFORT_UNIT))
-    return _function(
-        d, "lagrangian_dynamics", "Lagrangian reference dynamics.",
-        "M = sum J^T I J, C from the Christoffel symbols of M, V = C qd, G = du/dq, "
-        "tau = M qdd + V + G + F_f (seed eqs. 8.31-8.34).",
-        ["q", "qd", "qdd"], program, outputs)
 
 
 # --------------------------------------------------------------------------- emitted functions
