@@ -83,6 +83,16 @@ def relative_error(got: np.ndarray, want: np.ndarray) -> float:
     return float(np.max(diff / scale, initial=0.0))
 
 
+def worst_state(got: np.ndarray, want: np.ndarray, inputs: list[np.ndarray]) -> dict:
+    """For a failure message: the batch index whose entry of ``got`` is farthest from ``want``, and its inputs."""
+    got, want = np.asarray(got, dtype=float), np.asarray(want, dtype=float)
+    axes = tuple(range(1, want.ndim))
+    diff = np.nan_to_num(np.abs(got - want), nan=np.inf)
+    k = int(np.argmax(np.max(diff, axis=axes) if axes else diff))
+    return {"index": k, "inputs": [np.asarray(a)[k].tolist() for a in inputs], "got": got[k].tolist(),
+            "want": want[k].tolist()}
+
+
 def function_spec(model: Model, derivation: Derivation, record: dict) -> FunctionSpec:
     """The un-optimized spec of the generated function described by a manifest ``record``
     (for the combined scene function: the combination of its parts)."""

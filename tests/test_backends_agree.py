@@ -14,7 +14,8 @@ import sys
 import numpy as np
 import pytest
 
-from conftest import BACKENDS, EXAMPLE_MODELS, batch_reference, function_spec, random_inputs, random_q, relative_error
+from conftest import (BACKENDS, EXAMPLE_MODELS, batch_reference, function_spec, random_inputs, random_q,
+                      relative_error, worst_state)
 from tolerances import CLOSED_FORM, DYNAMICS, EPS, KINEMATICS, UR10E_SCALE
 
 POINTS = 1000
@@ -40,7 +41,9 @@ def test_every_function_matches_the_sympy_expressions(name, backend, models, der
         assert len(got) == len(want)
         for g, w, out in zip(got, want, record["outputs"]):
             assert g.shape == w.shape == (POINTS,) + tuple(out["shape"])
-            assert relative_error(g, w) < 1e-12, (record["name"], out["name"])
+            error = relative_error(g, w)
+            assert error < 1e-12, (record["name"], out["name"], f"error {error:.3g} > bound 1e-12",
+                                   worst_state(g, w, inputs))
         checked.append(record["name"])
     assert checked == list(generated.functions) and "scene" in checked
 

@@ -36,9 +36,10 @@ def symkin_side(request, models, derivations):
     return model, Derivation(model)
 
 
-def _close(got, want):
+def _close(got, want, *state):
     scale = max(1.0, float(np.max(np.abs(want))))
-    assert float(np.max(np.abs(np.asarray(got) - want))) <= TOLERANCE * scale
+    error = float(np.max(np.abs(np.asarray(got) - want)))
+    assert error <= TOLERANCE * scale, f"error {error:.3g} > bound {TOLERANCE * scale:.3g} at state {state}"
 
 
 def test_dynamics_agree_with_pinocchio(pinocchio_model, symkin_side):
@@ -54,10 +55,10 @@ def test_dynamics_agree_with_pinocchio(pinocchio_model, symkin_side):
         q, qd, qdd = random_q(model, rng), rng.uniform(-2, 2, 6), rng.uniform(-5, 5, 6)
         M_pin = pin.crba(pmodel, pdata, q).copy()
         M_pin = np.triu(M_pin) + np.triu(M_pin, 1).T
-        _close(M(q)[0], M_pin)
-        _close(V(q, qd)[0] + G(q)[0], pin.nonLinearEffects(pmodel, pdata, q, qd))
-        _close(G(q)[0], pin.computeGeneralizedGravity(pmodel, pdata, q))
-        _close(tau(q, qd, qdd)[0], pin.rnea(pmodel, pdata, q, qd, qdd))
+        _close(M(q)[0], M_pin, q, qd, qdd)
+        _close(V(q, qd)[0] + G(q)[0], pin.nonLinearEffects(pmodel, pdata, q, qd), q, qd, qdd)
+        _close(G(q)[0], pin.computeGeneralizedGravity(pmodel, pdata, q), q, qd, qdd)
+        _close(tau(q, qd, qdd)[0], pin.rnea(pmodel, pdata, q, qd, qdd), q, qd, qdd)
 
 
 def test_kinematics_agree_with_pinocchio(pinocchio_model, symkin_side):
@@ -70,6 +71,6 @@ def test_kinematics_agree_with_pinocchio(pinocchio_model, symkin_side):
         q = random_q(model, rng)
         pin.forwardKinematics(pmodel, pdata, q)
         pin.updateFramePlacements(pmodel, pdata)
-        _close(fk(q)[0], pdata.oMf[tool].homogeneous)
+        _close(fk(q)[0], pdata.oMf[tool].homogeneous, q)
         J_pin = pin.computeFrameJacobian(pmodel, pdata, q, tool, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
-        _close(J(q)[0], J_pin)
+        _close(J(q)[0], J_pin, q)

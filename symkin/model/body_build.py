@@ -9,21 +9,8 @@ import numpy as np
 import sympy
 
 from symkin.geometry import rotation_matrix
-from symkin.model.reader import (
-    X_AXIS,
-    Y_AXIS,
-    Z_AXIS,
-    ZERO,
-    Reader,
-    describe,
-    frame_ops,
-)
-from symkin.model.schema import (
-    Body,
-    Friction,
-    Rotation,
-    Vec3,
-)
+from symkin.model.reader import X_AXIS, Y_AXIS, Z_AXIS, ZERO, Reader, describe, frame_ops
+from symkin.model.schema import Body, Friction, Rotation, Vec3
 from symkin.model.yaml_source import KeyPath
 
 _INERTIA_KEYS = ("xx", "yy", "zz", "xy", "xz", "yz")

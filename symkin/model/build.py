@@ -13,17 +13,11 @@ from typing import Any
 from symkin.errors import ModelError
 from symkin.model.body_build import read_bodies, read_friction
 from symkin.model.names import name_problem
-from symkin.model.parallel_build import (
-    build_parallel,
-    check_parallel_names,
-    parallel_task_space,
-)
+from symkin.model.parallel_build import build_parallel, check_parallel_names, parallel_task_space
 from symkin.model.parameter_build import check_name_clashes, read_parameters
 from symkin.model.reader import ZERO, Reader
 from symkin.model.scene_build import read_scene
-from symkin.model.schema import (
-    Model,
-)
+from symkin.model.schema import Model
 from symkin.model.serial_build import read_serial
 from symkin.model.task_space_build import read_task_space
 from symkin.model.yaml_source import Document

@@ -27,28 +27,8 @@ import sympy
 from symkin.model import coordinates
 from symkin.model.delta import delta_legs
 from symkin.model.leg_joints import leg_joint_limits, variable_names
-from symkin.model.reader import (
-    X_AXIS,
-    Y_AXIS,
-    Z_AXIS,
-    ZERO,
-    Reader,
-    describe,
-    frame_ops,
-    ops,
-    unit_axis,
-)
-from symkin.model.schema import (
-    Leg,
-    LegJoint,
-    LegJointType,
-    Op,
-    Parallel,
-    PlatformMotion,
-    Rotation,
-    Translation,
-    Vec3,
-)
+from symkin.model.reader import X_AXIS, Y_AXIS, Z_AXIS, ZERO, Reader, describe, frame_ops, ops, unit_axis
+from symkin.model.schema import Leg, LegJoint, LegJointType, Op, Parallel, PlatformMotion, Rotation, Translation, Vec3
 from symkin.model.yaml_source import KeyPath
 
 PARALLEL_KEYS = ("delta", "motion", "chains", "legs", "fk_branch", "mobility", "home")

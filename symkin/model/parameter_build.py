@@ -9,11 +9,7 @@ import sympy
 from symkin.model import coordinates
 from symkin.model.expressions import ExpressionError, parse_expression
 from symkin.model.reader import Reader, raw_text
-from symkin.model.schema import (
-    DerivedParameter,
-    Joint,
-    Parameter,
-)
+from symkin.model.schema import DerivedParameter, Joint, Parameter
 from symkin.model.yaml_source import KeyPath
 
 

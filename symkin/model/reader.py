@@ -17,12 +17,7 @@ import sympy
 from symkin.errors import Problem
 from symkin.model.expressions import ExpressionError, parse_expression
 from symkin.model.names import name_problem
-from symkin.model.schema import (
-    Op,
-    Rotation,
-    Translation,
-    Vec3,
-)
+from symkin.model.schema import Op, Rotation, Translation, Vec3
 from symkin.model.yaml_source import Document, KeyPath, shorten
 
 ZERO = sympy.Integer(0)

@@ -7,10 +7,7 @@ from collections.abc import Callable
 from typing import Any
 
 from symkin.model.reader import Reader, describe
-from symkin.model.schema import (
-    Parameter,
-    Scene,
-)
+from symkin.model.schema import Parameter, Scene
 from symkin.model.yaml_source import KeyPath, shorten
 
 

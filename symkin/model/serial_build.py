@@ -4,24 +4,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from symkin.model.reader import (
-    X_AXIS,
-    Z_AXIS,
-    ZERO,
-    Reader,
-    describe,
-    frame_ops,
-    ops,
-    position_limits,
-    unit_axis,
-)
-from symkin.model.schema import (
-    Joint,
-    JointType,
-    Op,
-    Rotation,
-    Translation,
-)
+from symkin.model.reader import X_AXIS, Z_AXIS, ZERO, Reader, describe, frame_ops, ops, position_limits, unit_axis
+from symkin.model.schema import Joint, JointType, Op, Rotation, Translation
 from symkin.model.yaml_source import Document, KeyPath
 
 #: Most joints of one chain (exact expressions grow with the chain; beyond this, derivation
