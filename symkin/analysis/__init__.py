@@ -33,11 +33,11 @@ from symkin.analysis.conditioning import (
     transmission_indices,
 )
 from symkin.analysis.estimates import Estimate, IntegralEstimate
-from symkin.analysis.global_indices import GlobalIndex, gci, global_index, workspace_measure
-from symkin.analysis.integrators import INTEGRATORS, integrate
 from symkin.analysis.feasibility import InverseKinematics, feasible_configurations, reachable
-from symkin.analysis.inverse import closed_form_inverse
+from symkin.analysis.global_indices import GlobalIndex, gci, global_index, workspace_measure
 from symkin.analysis.grids import index_grid, reachability_grid
+from symkin.analysis.integrators import INTEGRATORS, integrate
+from symkin.analysis.inverse import closed_form_inverse
 from symkin.analysis.workspace import Occupancy, WorkspaceCloud, bounding_box, occupancy_from_cloud, sample_workspace
 
 __all__ = [

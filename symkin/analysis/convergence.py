@@ -12,10 +12,10 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Any
 
 from symkin.analysis.estimates import Estimate
 from symkin.analysis.global_indices import gci
+from symkin.runtime.info import GeneratedModel
 
 #: Default budgets: 2^8 ... 2^20 integrand evaluations, a factor 4 apart.
 DEFAULT_BUDGETS = tuple(4**k for k in range(4, 11))
@@ -55,7 +55,7 @@ class Trial:
         return self.achieved <= self.estimate.error
 
 
-def reference_gci(model: Any, *, samples: int = REFERENCE_SAMPLES, rtol: float = REFERENCE_RTOL, **kwargs) -> Estimate:
+def reference_gci(model: GeneratedModel, *, samples: int = REFERENCE_SAMPLES, rtol: float = REFERENCE_RTOL, **kwargs) -> Estimate:
     """High-accuracy GCI: adaptive cubature over joint space with the Cartesian measure.
 
     Keyword arguments go to :func:`symkin.analysis.global_indices.gci` (limits, length, index).
@@ -64,14 +64,14 @@ def reference_gci(model: Any, *, samples: int = REFERENCE_SAMPLES, rtol: float =
                **kwargs).value
 
 
-def _warm_up(model: Any, methods: Sequence[str], domains: Sequence[str], seed: int, kwargs: dict) -> None:
+def _warm_up(model: GeneratedModel, methods: Sequence[str], domains: Sequence[str], seed: int, kwargs: dict) -> None:
     """One small run of each integrator, so that one-time imports (scipy.stats) are not timed."""
     for domain in domains:
         for method in methods:
             gci(model, method=method, samples=512, seed=seed, domain=domain, **kwargs)
 
 
-def time_against_error(model: Any, reference: Estimate, *, methods: Sequence[str], budgets: Sequence[int] = DEFAULT_BUDGETS,
+def time_against_error(model: GeneratedModel, reference: Estimate, *, methods: Sequence[str], budgets: Sequence[int] = DEFAULT_BUDGETS,
                        domains: Sequence[str] = ("joint",), repeats: int = 3, seed: int = 0,
                        progress: Callable[[str], None] | None = None, **kwargs) -> list[Trial]:
     """Run every integrator at every budget, timed against ``reference``.

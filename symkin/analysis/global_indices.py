@@ -31,17 +31,17 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
 from symkin.analysis import conditioning, mechanism, parallel, sampling
 from symkin.analysis.estimates import Estimate, IntegralEstimate
+from symkin.analysis.feasibility import InverseKinematics, feasible_configurations
 from symkin.analysis.integrand import Integrand
 from symkin.analysis.integrators import integrate
-from symkin.analysis.feasibility import InverseKinematics, feasible_configurations
 from symkin.analysis.mechanism import Limits
 from symkin.analysis.workspace import bounding_box
+from symkin.runtime.info import GeneratedModel
 
 DOMAINS = ("joint", "cartesian")
 MEASURES = ("cartesian", "joint")
@@ -52,7 +52,7 @@ Index = Callable[[np.ndarray], np.ndarray]
 LENGTH_SAMPLES_LOG2 = 10
 
 
-def scaled_index(model: Any, index: Index, length: float | str | None, limits: np.ndarray) -> Index:
+def scaled_index(model: GeneratedModel, index: Index, length: float | str | None, limits: np.ndarray) -> Index:
     """The index, applied to the homogenized Jacobian when the task space mixes lengths and angles."""
     rows = mechanism.position_rows(model)
     if mechanism.mixes_translations_and_rotations(model):
@@ -66,7 +66,7 @@ def scaled_index(model: Any, index: Index, length: float | str | None, limits: n
     return index
 
 
-def local_index(model: Any, q: np.ndarray, *, index: Index = conditioning.inverse_condition_number,
+def local_index(model: GeneratedModel, q: np.ndarray, *, index: Index = conditioning.inverse_condition_number,
                 length: float | str | None = None, limits: Limits | None = None) -> np.ndarray:
     """The local index (1/kappa by default) at configurations q (..., n), through ``model.jacobian``.
 
@@ -77,13 +77,13 @@ def local_index(model: Any, q: np.ndarray, *, index: Index = conditioning.invers
     return scored(mechanism.jacobian(model, q))
 
 
-def singular(model: Any, q: np.ndarray, *, threshold: float = 0.0, length: float | str | None = None,
+def singular(model: GeneratedModel, q: np.ndarray, *, threshold: float = 0.0, length: float | str | None = None,
              limits: Limits | None = None) -> np.ndarray:
     """Boolean (...): configurations whose 1/kappa is at most ``threshold`` (0: numerically singular)."""
     return local_index(model, q, length=length, limits=limits) <= threshold
 
 
-def characteristic_length_of(model: Any, limits: np.ndarray | None = None, seed: int = 0) -> float:
+def characteristic_length_of(model: GeneratedModel, limits: np.ndarray | None = None, seed: int = 0) -> float:
     """Characteristic length of a model with a mixed task space, from a Sobol sample of its joint space.
 
     See :func:`symkin.analysis.conditioning.characteristic_length`; a platform at a constant
@@ -96,7 +96,7 @@ def characteristic_length_of(model: Any, limits: np.ndarray | None = None, seed:
     return conditioning.characteristic_length(mechanism.jacobian(model, q), mechanism.position_rows(model))
 
 
-def joint_space_integrand(model: Any, *, index: Index | None = conditioning.inverse_condition_number,
+def joint_space_integrand(model: GeneratedModel, *, index: Index | None = conditioning.inverse_condition_number,
                           measure: str = "cartesian", limits: Limits | None = None,
                           length: float | str | None = None,
                           jacobian: Callable[[np.ndarray], np.ndarray] | None = None) -> Integrand:
@@ -146,7 +146,7 @@ def joint_space_integrand(model: Any, *, index: Index | None = conditioning.inve
     return Integrand(box[:, 0], box[:, 1], function, components, mechanism.coordinate_names(model))
 
 
-def cartesian_integrand(model: Any, inverse: InverseKinematics, box: tuple[np.ndarray, np.ndarray], *,
+def cartesian_integrand(model: GeneratedModel, inverse: InverseKinematics, box: tuple[np.ndarray, np.ndarray], *,
                         index: Index | None = conditioning.inverse_condition_number, limits: Limits | None = None,
                         length: float | str | None = None) -> Integrand:
     """Integrand over a Cartesian box: components [1_W g, 1_W] (or [1_W] without an index).
@@ -194,7 +194,7 @@ class GlobalIndex:
     caveat: str = ""
 
 
-def _integrand(model: Any, *, domain: str, measure: str, index: Index | None, limits: Limits | None,
+def _integrand(model: GeneratedModel, *, domain: str, measure: str, index: Index | None, limits: Limits | None,
                length: float | str | None, inverse: InverseKinematics | None,
                box: tuple[np.ndarray, np.ndarray] | None) -> tuple[Integrand, str]:
     if domain == "joint":
@@ -220,7 +220,7 @@ def _integrand(model: Any, *, domain: str, measure: str, index: Index | None, li
     raise ValueError(f"unknown domain '{domain}'; choose one of {', '.join(DOMAINS)}")
 
 
-def global_index(model: Any, *, method: str = "qmc", samples: int = 2**16, seed: int | None = None,
+def global_index(model: GeneratedModel, *, method: str = "qmc", samples: int = 2**16, seed: int | None = None,
                  domain: str = "joint", measure: str = "cartesian",
                  index: Index = conditioning.inverse_condition_number, limits: Limits | None = None,
                  length: float | str | None = None, inverse: InverseKinematics | None = None,
@@ -255,7 +255,7 @@ def global_index(model: Any, *, method: str = "qmc", samples: int = 2**16, seed:
     return GlobalIndex(result.ratio(0, 1), result.component(1), result, description, caveat)
 
 
-def gci(model: Any, **kwargs) -> GlobalIndex:
+def gci(model: GeneratedModel, **kwargs) -> GlobalIndex:
     """The global conditioning index v = int_W 1/kappa dW / int_W dW (seed eq. 8.28).
 
     Keyword arguments as :func:`global_index` (whose default index is 1/kappa).
@@ -264,7 +264,7 @@ def gci(model: Any, **kwargs) -> GlobalIndex:
     return global_index(model, **kwargs)
 
 
-def workspace_measure(model: Any, *, method: str = "qmc", samples: int = 2**16, seed: int | None = None,
+def workspace_measure(model: GeneratedModel, *, method: str = "qmc", samples: int = 2**16, seed: int | None = None,
                       domain: str = "joint", limits: Limits | None = None,
                       inverse: InverseKinematics | None = None,
                       box: tuple[np.ndarray, np.ndarray] | None = None, **options) -> Estimate:

@@ -9,17 +9,16 @@ GCI integrate the same function.
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 
 from symkin.analysis import conditioning, global_indices
 from symkin.analysis.feasibility import InverseKinematics
 from symkin.analysis.mechanism import Limits
 from symkin.analysis.workspace import Occupancy, grid_cells
+from symkin.runtime.info import GeneratedModel
 
 
-def reachability_grid(model: Any, inverse: InverseKinematics, box: tuple[np.ndarray, np.ndarray],
+def reachability_grid(model: GeneratedModel, inverse: InverseKinematics, box: tuple[np.ndarray, np.ndarray],
                       cell: float, *, limits: Limits | None = None) -> Occupancy:
     """Cells whose centre the inverse kinematics reaches within the joint limits.
 
@@ -32,7 +31,7 @@ def reachability_grid(model: Any, inverse: InverseKinematics, box: tuple[np.ndar
     return Occupancy(start, size, (indicator[:, 0] > 0).reshape(counts))
 
 
-def index_grid(model: Any, inverse: InverseKinematics, box: tuple[np.ndarray, np.ndarray], cell: float, *,
+def index_grid(model: GeneratedModel, inverse: InverseKinematics, box: tuple[np.ndarray, np.ndarray], cell: float, *,
                index=None, limits: Limits | None = None, length: float | None = None) -> tuple[Occupancy, np.ndarray]:
     """A local index (1/kappa by default) at the reachable cell centres of a Cartesian grid.
 

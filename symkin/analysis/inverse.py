@@ -11,7 +11,6 @@ Serial arms: the closed forms of :mod:`symkin.ik` whose target is a TCP position
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
@@ -19,7 +18,7 @@ from symkin.analysis import mechanism
 from symkin.analysis.feasibility import InverseKinematics
 from symkin.analysis.parallel import parallel_inverse
 from symkin.ik import ClosedFormIK, closed_form_solver
-
+from symkin.runtime.info import GeneratedModel
 
 # --- serial closed forms (symkin.ik) -------------------------------------------------------
 
@@ -53,7 +52,7 @@ class ClosedFormInverse:
         return solutions.q, solutions.valid
 
 
-def closed_form_inverse(model: Any) -> ClosedFormInverse:
+def closed_form_inverse(model: GeneratedModel) -> ClosedFormInverse:
     """The closed-form inverse kinematics of a serial model whose task space is positional.
 
     Raises:
@@ -83,7 +82,7 @@ def closed_form_inverse(model: Any) -> ClosedFormInverse:
 INVERSE_FACTORIES: list = [closed_form_inverse, parallel_inverse]
 
 
-def inverse_kinematics_for(model: Any) -> InverseKinematics | None:
+def inverse_kinematics_for(model: GeneratedModel) -> InverseKinematics | None:
     """The first inverse kinematics that applies to ``model``, or None."""
     for factory in INVERSE_FACTORIES:
         try:

@@ -9,9 +9,10 @@ task space.  The C backend plugs in by being loaded instead of the numpy one: on
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import Any
 
 import numpy as np
+
+from symkin.runtime.info import GeneratedModel
 
 #: Task-space components that are TCP coordinates in metres (symkin.kinematics.task_space).
 POSITION_COMPONENTS = ("x", "y", "z")
@@ -22,17 +23,17 @@ DEFAULT_REVOLUTE_LIMITS = (-np.pi, np.pi)
 Limits = Sequence[Sequence[float]] | Mapping[str, Sequence[float]] | np.ndarray
 
 
-def coordinate_names(model: Any) -> tuple[str, ...]:
+def coordinate_names(model: GeneratedModel) -> tuple[str, ...]:
     """Names of the joint coordinates, in the order of ``q``."""
     return model.info.coordinate_names
 
 
-def revolute_mask(model: Any) -> np.ndarray:
+def revolute_mask(model: GeneratedModel) -> np.ndarray:
     """Boolean array (n,): which coordinates are revolute (angles, periodic)."""
     return np.array([c.revolute for c in model.info.coordinates])
 
 
-def joint_limits(model: Any, limits: Limits | None = None) -> np.ndarray:
+def joint_limits(model: GeneratedModel, limits: Limits | None = None) -> np.ndarray:
     """Joint limits as an array (n, 2) of [lower, upper].
 
     Args:
@@ -73,17 +74,17 @@ def joint_limits(model: Any, limits: Limits | None = None) -> np.ndarray:
     return result
 
 
-def task_space(model: Any) -> tuple[str, ...]:
+def task_space(model: GeneratedModel) -> tuple[str, ...]:
     """Names of the task-space components (rows of ``model.jacobian``)."""
     return model.info.task_space
 
 
-def position_rows(model: Any) -> tuple[int, ...]:
+def position_rows(model: GeneratedModel) -> tuple[int, ...]:
     """Indices of the translational components (x, y, z) among the task-space rows."""
     return tuple(i for i, c in enumerate(task_space(model)) if c in POSITION_COMPONENTS)
 
 
-def position_axes(model: Any) -> tuple[int, ...]:
+def position_axes(model: GeneratedModel) -> tuple[int, ...]:
     """Base-frame axes (0, 1, 2 for x, y, z) of the TCP coordinates that span the workspace.
 
     A planar arm whose task space is [x, y] has a 2-D workspace; a pose or position task
@@ -99,12 +100,12 @@ def position_axes(model: Any) -> tuple[int, ...]:
     return tuple(sorted(axes))
 
 
-def is_parallel(model: Any) -> bool:
+def is_parallel(model: GeneratedModel) -> bool:
     """Whether the loaded model is a parallel mechanism."""
     return model.info.is_parallel
 
 
-def home_pose(model: Any) -> np.ndarray:
+def home_pose(model: GeneratedModel) -> np.ndarray:
     """The home pose ``parallel.home`` of a parallel mechanism (task coordinates p).
 
     Raises:
@@ -116,7 +117,7 @@ def home_pose(model: Any) -> np.ndarray:
     return np.array(home, dtype=np.float64)
 
 
-def tcp_positions(model: Any, q: np.ndarray) -> np.ndarray:
+def tcp_positions(model: GeneratedModel, q: np.ndarray) -> np.ndarray:
     """TCP positions of a batch of configurations, shape (..., d), from the generated ``fk``.
 
     d is the number of position components of the task space (2 for a planar arm).  A
@@ -128,7 +129,7 @@ def tcp_positions(model: Any, q: np.ndarray) -> np.ndarray:
     return model.fk(q)[..., list(position_axes(model)), 3]
 
 
-def parallel_function(model: Any, name: str):
+def parallel_function(model: GeneratedModel, name: str):
     """The generated function ``name`` of a parallel mechanism.
 
     Raises:
@@ -144,7 +145,7 @@ def parallel_function(model: Any, name: str):
     return getattr(model, name)
 
 
-def jacobian(model: Any, q: np.ndarray, points: np.ndarray | None = None) -> np.ndarray:
+def jacobian(model: GeneratedModel, q: np.ndarray, points: np.ndarray | None = None) -> np.ndarray:
     """The task Jacobian J (..., m, n) at configurations q (..., n).
 
     A serial arm's is ``model.jacobian(q)``; a parallel mechanism's ``model.jacobian(q, p)``
@@ -156,7 +157,7 @@ def jacobian(model: Any, q: np.ndarray, points: np.ndarray | None = None) -> np.
     return parallel_function(model, "jacobian")(q, tcp_positions(model, q) if points is None else points)
 
 
-def is_positional(model: Any) -> bool:
+def is_positional(model: GeneratedModel) -> bool:
     """Whether the task space is only positions and the task Jacobian is square.
 
     Then |det J| dq is the volume element of the positional workspace (Lebesgue measure
@@ -165,7 +166,7 @@ def is_positional(model: Any) -> bool:
     return len(position_rows(model)) == len(task_space(model)) == len(coordinate_names(model))
 
 
-def mixes_translations_and_rotations(model: Any) -> bool:
+def mixes_translations_and_rotations(model: GeneratedModel) -> bool:
     """Whether the task Jacobian has both translational rows (m/rad) and rotational rows (rad/rad).
 
     Its singular values then mix units, and conditioning indices need a characteristic

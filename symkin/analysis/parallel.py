@@ -46,6 +46,7 @@ import numpy as np
 from symkin.analysis import conditioning, mechanism, passive, sampling
 from symkin.analysis.feasibility import feasible_configurations
 from symkin.ik.rotations import wrap_angle
+from symkin.runtime.info import GeneratedModel
 
 #: Largest |ik(fk(q)) - q| (rad or m) of a configuration in the working mode.  The two
 #: roots of a leg differ by far more except next to the leg singularity where they
@@ -55,12 +56,12 @@ JOINT_ROUND_TRIP_TOLERANCE = 1e-6
 POSITION_ROUND_TRIP_TOLERANCE = 1e-6
 
 
-def _require(model: Any, names: tuple[str, ...]) -> None:
+def _require(model: GeneratedModel, names: tuple[str, ...]) -> None:
     for name in names:
         mechanism.parallel_function(model, name)
 
 
-def working_mode(model: Any, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def working_mode(model: GeneratedModel, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """TCP positions of configurations q (..., n) and whether each is in the working mode.
 
     Returns:
@@ -83,7 +84,7 @@ def working_mode(model: Any, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return p, inside
 
 
-def jacobian_in_working_mode(model: Any, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def jacobian_in_working_mode(model: GeneratedModel, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """J(q, fk(q)) (..., 3, n) and the working-mode mask (...) of configurations q (see :func:`working_mode`)."""
     p, inside = working_mode(model, q)
     return model.jacobian(q, np.where(np.isfinite(p), p, 0.0)), inside
@@ -136,7 +137,7 @@ class ParallelInverse(_GeneratedInverse):
         passive_limits: the declared passive-joint limits, None if there are none.
     """
 
-    model: Any
+    model: GeneratedModel
     size: float
     passive_limits: passive.PassiveLimits | None = None
 
@@ -147,7 +148,7 @@ class ParallelInverse(_GeneratedInverse):
         return np.all(np.abs(p - points) <= POSITION_ROUND_TRIP_TOLERANCE * self.size, axis=-1)
 
 
-def parallel_inverse(model: Any) -> ParallelInverse | ConstantOrientationInverse:
+def parallel_inverse(model: GeneratedModel) -> ParallelInverse | ConstantOrientationInverse:
     """The closed-form inverse kinematics of a parallel mechanism, as the Cartesian analyses see it.
 
     A translational platform (DELTA) gives a :class:`ParallelInverse`; a pose platform held at
@@ -223,7 +224,7 @@ class ConstantOrientation:
             ``inverse_jacobian``, or the orientation is not 3 finite angles away from pitch = +-90 deg.
     """
 
-    def __init__(self, model: Any, orientation) -> None:
+    def __init__(self, model: GeneratedModel, orientation) -> None:
         if isinstance(model, ConstantOrientation):
             model = model.model
         if not mechanism.is_parallel(model) or tuple(mechanism.task_space(model)) != (
@@ -277,7 +278,7 @@ class ConstantOrientation:
         return self.rates @ conditioning.from_inverse(self.inverse_jacobian(q, points))
 
 
-def home_position(model: Any) -> np.ndarray:
+def home_position(model: GeneratedModel) -> np.ndarray:
     """The platform centre (x, y, z) of the home pose ``parallel.home``."""
     return mechanism.home_pose(model)[:3]
 
@@ -287,14 +288,14 @@ def orientation_text(model: ConstantOrientation) -> str:
     return ", ".join(f"{a:g}" for a in np.degrees(model.orientation)) + " deg"
 
 
-def constant_orientation(model: Any, orientation=None) -> ConstantOrientation:
+def constant_orientation(model: GeneratedModel, orientation=None) -> ConstantOrientation:
     """``model`` held at ``orientation`` (roll, pitch, yaw in rad; default: that of ``parallel.home``)."""
     if orientation is None:
         orientation = mechanism.home_pose(model)[3:]
     return ConstantOrientation(model, orientation)
 
 
-def home_sign(model: Any) -> float:
+def home_sign(model: GeneratedModel) -> float:
     """The sign of det J^-1 at the home pose ``parallel.home``: the assembly mode analysed.
 
     Raises:

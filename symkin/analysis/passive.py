@@ -28,13 +28,12 @@ from __future__ import annotations
 import warnings
 import weakref
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
 from symkin.analysis import mechanism
 from symkin.analysis.limits import within_limits
-from symkin.runtime.info import VectorInput
+from symkin.runtime.info import GeneratedModel, VectorInput
 from symkin.runtime.parallel import solve_closure
 
 #: Damping of the Gauss-Newton iteration: the largest step (max-norm, rad or m).
@@ -67,14 +66,14 @@ class PassiveLimits:
     bounds: np.ndarray
 
 
-def _passive_input(model: Any) -> VectorInput:
+def _passive_input(model: GeneratedModel) -> VectorInput:
     if "closure" in model.info.functions:
         return model.info.functions["closure"].vectors["s"]
     raise ValueError(f"{model.name}: passive-joint limits are declared; enforcing them needs the generated "
                      "'closure' and 'closure_jacobians' (add them to the scene outputs and derive again)")
 
 
-def declared_limits(model: Any) -> PassiveLimits | None:
+def declared_limits(model: GeneratedModel) -> PassiveLimits | None:
     """The passive-joint limits recorded in the manifest (``model.parallel.legs[i].passive_limits``), or None.
 
     Raises:
@@ -106,7 +105,7 @@ def declared_limits(model: Any) -> PassiveLimits | None:
     return PassiveLimits(names, revolute, np.array(columns, dtype=int), np.array(bounds))
 
 
-def _solve(model: Any, q: np.ndarray, p: np.ndarray, start: np.ndarray):
+def _solve(model: GeneratedModel, q: np.ndarray, p: np.ndarray, start: np.ndarray):
     return solve_closure(model, q, start, p, unknowns=("s",), tol=STEP_TOLERANCE, max_iterations=MAX_ITERATIONS,
                          max_step=MAX_STEP)
 
@@ -116,7 +115,7 @@ def _solve(model: Any, q: np.ndarray, p: np.ndarray, start: np.ndarray):
 _HOME_ASSEMBLIES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
-def home_assembly(model: Any) -> np.ndarray:
+def home_assembly(model: GeneratedModel) -> np.ndarray:
     """s_home: the passive variables at the home pose, from s = 0 (the branch every pose is solved on).
 
     Computed once per loaded model (read-only array).
@@ -129,7 +128,7 @@ def home_assembly(model: Any) -> np.ndarray:
     return _HOME_ASSEMBLIES[model]
 
 
-def _home_assembly(model: Any) -> np.ndarray:
+def _home_assembly(model: GeneratedModel) -> np.ndarray:
     home = mechanism.home_pose(model)
     size = len(_passive_input(model).elements)
     with np.errstate(invalid="ignore"):
@@ -160,7 +159,7 @@ class PassiveSolution:
     residual: np.ndarray
 
 
-def solve_passive(model: Any, limits: PassiveLimits, q: np.ndarray, p: np.ndarray) -> PassiveSolution:
+def solve_passive(model: GeneratedModel, limits: PassiveLimits, q: np.ndarray, p: np.ndarray) -> PassiveSolution:
     """The passive joint variables at assembled poses (q (N, n), p (N, 3)) and whether they are within limits."""
     report = _solve(model, np.asarray(q, dtype=np.float64), np.asarray(p, dtype=np.float64), home_assembly(model))
     resolved = report.converged & (report.residual <= CLOSURE_TOLERANCE)
@@ -170,7 +169,7 @@ def solve_passive(model: Any, limits: PassiveLimits, q: np.ndarray, p: np.ndarra
     return PassiveSolution(s, resolved, resolved & inside, report.residual)
 
 
-def admissible(model: Any, limits: PassiveLimits, q: np.ndarray, p: np.ndarray, candidates: np.ndarray) -> np.ndarray:
+def admissible(model: GeneratedModel, limits: PassiveLimits, q: np.ndarray, p: np.ndarray, candidates: np.ndarray) -> np.ndarray:
     """Boolean (N,): candidate poses whose passive variables are found and within their limits.
 
     Only the candidates (assembled poses) are solved; a candidate whose passive variables

@@ -23,6 +23,7 @@ from symkin.analysis import feasibility, global_indices, inverse, mechanism, par
 from symkin.analysis.grids import index_grid
 from symkin.analysis.mechanism import Limits
 from symkin.analysis.workspace import Occupancy, WorkspaceCloud
+from symkin.runtime.info import GeneratedModel
 
 #: Cells along the longest side of the Cartesian grid of a parallel mechanism's workspace.
 CARTESIAN_CELLS = 64
@@ -30,7 +31,7 @@ CARTESIAN_CELLS = 64
 LOWEST_FRACTION = 0.01
 
 
-def at_orientation(model: Any, angles: Sequence[float] | None) -> Any:
+def at_orientation(model: GeneratedModel, angles: Sequence[float] | None) -> Any:
     """``model`` held at the constant orientation ``angles`` (roll, pitch, yaw in rad) if its platform
     rotates (:func:`symkin.analysis.parallel.constant_orientation`; None: the home orientation), else ``model``.
 
@@ -46,7 +47,7 @@ def at_orientation(model: Any, angles: Sequence[float] | None) -> Any:
     return parallel.constant_orientation(model, list(angles))
 
 
-def cartesian_index_grid(model: Any, box: tuple[np.ndarray, np.ndarray], limits: Limits | None,
+def cartesian_index_grid(model: GeneratedModel, box: tuple[np.ndarray, np.ndarray], limits: Limits | None,
                          length: float | None, index=None) -> tuple[Occupancy, np.ndarray]:
     """Reachability grid of a parallel mechanism over ``box`` (:data:`CARTESIAN_CELLS` along its longest
     side) with a local index (1/kappa by default) at its cell centres (:func:`symkin.analysis.grids.index_grid`)."""
@@ -54,7 +55,7 @@ def cartesian_index_grid(model: Any, box: tuple[np.ndarray, np.ndarray], limits:
     return index_grid(model, parallel.parallel_inverse(model), box, cell, index=index, limits=limits, length=length)
 
 
-def boundary_cloud(model: Any, occupancy: Occupancy, limits: Limits | None) -> WorkspaceCloud:
+def boundary_cloud(model: GeneratedModel, occupancy: Occupancy, limits: Limits | None) -> WorkspaceCloud:
     """The centres of the boundary cells of a Cartesian grid and their joint coordinates, as a point cloud."""
     points = occupancy.centers()[occupancy.boundary()]
     q, _ = feasibility.feasible_configurations(parallel.parallel_inverse(model), points,
@@ -83,7 +84,7 @@ class WorkspaceStudy:
     outline: list = field(default_factory=list)
 
 
-def study_workspace(model: Any, *, samples: int, method: str, seed: int, limits: Limits | None,
+def study_workspace(model: GeneratedModel, *, samples: int, method: str, seed: int, limits: Limits | None,
                     length: float | None, progress: Callable[[str], None] = lambda _stage: None) -> WorkspaceStudy:
     """Sample, measure and report the workspace of one design (see the module docstring).
 
@@ -129,7 +130,7 @@ def _cartesian_report(occupancy: Occupancy, values: np.ndarray) -> list[str]:
     return lines
 
 
-def _report(model: Any, cloud: WorkspaceCloud, inv_kappa: np.ndarray | None, limits: Limits | None,
+def _report(model: GeneratedModel, cloud: WorkspaceCloud, inv_kappa: np.ndarray | None, limits: Limits | None,
             progress: Callable[[str], None], box=None) -> list[str]:
     """Extent, area/volume (joint and Cartesian domains) and, for a serial mechanism, boundary and singularities."""
     lines = []

@@ -17,13 +17,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from itertools import product
-from typing import Any
 
 import numpy as np
 
 from symkin.analysis import mechanism, parallel, sampling
 from symkin.analysis.estimates import Estimate
 from symkin.analysis.mechanism import Limits
+from symkin.runtime.info import GeneratedModel
 
 SAMPLING_METHODS = ("grid", "random", "sobol")
 
@@ -50,12 +50,12 @@ class WorkspaceCloud:
     grid_shape: tuple[int, ...] | None = None
 
 
-def default_method(model: Any) -> str:
+def default_method(model: GeneratedModel) -> str:
     """Joint-space sampling that suits the model: a grid up to 3 joints (curvilinear maps), else Sobol."""
     return "grid" if len(mechanism.coordinate_names(model)) <= 3 else "sobol"
 
 
-def sample_workspace(model: Any, samples: int = 2**14, *, method: str | None = None, limits: Limits | None = None,
+def sample_workspace(model: GeneratedModel, samples: int = 2**14, *, method: str | None = None, limits: Limits | None = None,
                      seed: int | None = None) -> WorkspaceCloud:
     """Sample the joint space within the limits and map it through ``fk``.
 
@@ -92,7 +92,7 @@ def sample_workspace(model: Any, samples: int = 2**14, *, method: str | None = N
     return WorkspaceCloud(q, mechanism.tcp_positions(model, q), axes, grid_shape)
 
 
-def bounding_box(model: Any, *, limits: Limits | None = None, samples: int = BOX_SAMPLES) -> tuple[np.ndarray, np.ndarray]:
+def bounding_box(model: GeneratedModel, *, limits: Limits | None = None, samples: int = BOX_SAMPLES) -> tuple[np.ndarray, np.ndarray]:
     """A Cartesian box that contains the workspace.
 
     The TCP positions of a joint grid (limits included) are padded by a first-order bound
@@ -119,7 +119,7 @@ def bounding_box(model: Any, *, limits: Limits | None = None, samples: int = BOX
     return points.min(axis=0) - margin, points.max(axis=0) + margin
 
 
-def _parallel_bounding_box(model: Any, q: np.ndarray, per_axis: int) -> tuple[np.ndarray, np.ndarray]:
+def _parallel_bounding_box(model: GeneratedModel, q: np.ndarray, per_axis: int) -> tuple[np.ndarray, np.ndarray]:
     """Box of a parallel mechanism: the working-mode TCP positions of a joint grid, padded.
 
     The Jacobian grows without bound next to the assembly limit (det J_x -> 0), so the
@@ -257,7 +257,7 @@ def grid_cells(box: tuple[np.ndarray, np.ndarray], cell: float) -> tuple[np.ndar
     return start, size, counts, Occupancy(start, size, np.zeros(counts, dtype=bool)).centers().reshape(-1, len(counts))
 
 
-def limit_curves(model: Any, *, limits: Limits | None = None, count: int = 200) -> list[np.ndarray]:
+def limit_curves(model: GeneratedModel, *, limits: Limits | None = None, count: int = 200) -> list[np.ndarray]:
     """TCP paths along the four edges of the joint-limit box of a 2-DoF mechanism.
 
     The workspace boundary of a serial arm lies on the images of the joint-limit faces

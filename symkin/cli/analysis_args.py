@@ -15,6 +15,8 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from symkin.runtime.info import GeneratedModel
+
 #: Quantities an analysis needs from a model file derived on the fly ...
 ANALYSIS_OUTPUTS = ("fk", "jacobian")
 #: ... by kind of mechanism (:func:`analysis_kind`): a translational parallel one also needs
@@ -44,7 +46,7 @@ def add_model_arguments(p: argparse.ArgumentParser, *, backend: bool = True) -> 
                         "e.g. --limit theta2=-90deg:90deg (repeatable)")
 
 
-def design_label(model: Any, values: dict[str, float], unit: str) -> str:
+def design_label(model: GeneratedModel, values: dict[str, float], unit: str) -> str:
     """'l1 = 10 cm, l2 = 10 cm': a design's parameter values, lengths (unit m in the manifest) in ``unit``."""
     units = model.info.units
     parts = [f"{name} = {value * LENGTH_UNITS[unit]:g} {unit}" if units.get(name) == "m" else f"{name} = {value:g}"
@@ -76,7 +78,7 @@ def parse_length(text: str) -> float | str:
     return value
 
 
-def resolve_length(model: Any, text: str, limits: dict) -> float | None:
+def resolve_length(model: GeneratedModel, text: str, limits: dict) -> float | None:
     """The characteristic length to use for ``model`` (None if its task space needs none).
 
     With "auto" the length is computed here, once, and printed.
@@ -204,7 +206,7 @@ def load_models(path: str, backends: Sequence[str],
         return [load(directory, backend) for backend in backends]
 
 
-def analysis_kind(model: Any) -> str:
+def analysis_kind(model: GeneratedModel) -> str:
     """The key of a model file in :data:`ANALYSIS_OUTPUTS_BY_KIND`: serial, parallel, parallel pose."""
     from symkin.model.schema import PlatformMotion
 
@@ -213,7 +215,7 @@ def analysis_kind(model: Any) -> str:
     return model.mechanism
 
 
-def _limits_passive_joints(model: Any) -> bool:
+def _limits_passive_joints(model: GeneratedModel) -> bool:
     """Whether a parallel model file declares limits on a passive joint variable."""
     return model.parallel is not None and any(
         joint.limits_of(k) is not None for leg in model.parallel.legs for joint in leg.joints

@@ -12,7 +12,6 @@ inverse of :mod:`symkin.analysis.inverse` where one exists, else by the ``ik`` m
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
@@ -20,6 +19,7 @@ from symkin.analysis import conditioning, feasibility, global_indices, inverse, 
 from symkin.analysis.estimates import Estimate
 from symkin.analysis.limits import within_limits
 from symkin.design.problem import DesignProblem
+from symkin.runtime.info import GeneratedModel
 
 #: Integrand evaluations of the independent GCI (qmc: 16 scrambles of 2^10 points).
 EVALUATION_SAMPLES = 2**14
@@ -46,7 +46,7 @@ class Evaluation:
     box_check: str
 
 
-def evaluate(problem: DesignProblem, model: Any, design: dict[str, float], *, samples: int = EVALUATION_SAMPLES,
+def evaluate(problem: DesignProblem, model: GeneratedModel, design: dict[str, float], *, samples: int = EVALUATION_SAMPLES,
              seed: int = 0, box_points: np.ndarray | None = None,
              box_configurations: np.ndarray | None = None) -> Evaluation:
     """Rate ``design`` (all parameter values) of ``model`` (numpy backend, unbound).
@@ -74,7 +74,7 @@ def box_check_points(problem: DesignProblem) -> np.ndarray:
 POSITION_TOLERANCE = 1e-9
 
 
-def _serial_box(problem: DesignProblem, model: Any, points: np.ndarray | None,
+def _serial_box(problem: DesignProblem, model: GeneratedModel, points: np.ndarray | None,
                 configurations: np.ndarray | None) -> tuple[float | None, str]:
     if problem.box is None:
         return None, "no required box"
@@ -93,7 +93,7 @@ def _serial_box(problem: DesignProblem, model: Any, points: np.ndarray | None,
     return float(np.mean(inside)), f"closed-form inverse kinematics within the joint limits at {len(points)} points"
 
 
-def parallel_index(model: Any, points: np.ndarray, limits: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+def parallel_index(model: GeneratedModel, points: np.ndarray, limits: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
     """1/kappa of J at each point (0 where unreachable), and whether it is reachable: by the
     analyses' own test (:func:`symkin.analysis.parallel.parallel_inverse`: IK margin, fk round
     trip, declared passive-joint limits) within the actuated-joint ``limits``."""
@@ -106,7 +106,7 @@ def parallel_index(model: Any, points: np.ndarray, limits: np.ndarray | None) ->
     return values, inside
 
 
-def _parallel(problem: DesignProblem, model: Any, samples: int, seed: int) -> Evaluation:
+def _parallel(problem: DesignProblem, model: GeneratedModel, samples: int, seed: int) -> Evaluation:
     ik = parallel.parallel_inverse(model)
     result = global_indices.gci(model, method="qmc", samples=samples, seed=seed, domain="cartesian", inverse=ik,
                                 box=problem.box, limits=problem.limits)

@@ -41,6 +41,7 @@ import numpy as np
 from symkin.analysis import mechanism, sampling
 from symkin.design import smooth
 from symkin.design.problem import DesignProblem
+from symkin.runtime.info import GeneratedModel
 
 #: Nodes of the serial objective (2**LOG2, Sobol, fixed seed) and per axis of the parallel one.
 SERIAL_NODES_LOG2 = 8
@@ -53,7 +54,7 @@ BOX_POINTS_PER_AXIS = 4
 START_SAMPLES_LOG2 = 12
 
 
-def casadi_function(model: Any, name: str) -> casadi.Function:
+def casadi_function(model: GeneratedModel, name: str) -> casadi.Function:
     """The ``casadi.Function`` behind a function of a model loaded with ``backend="casadi"``."""
     function = getattr(model, name, None)
     function = getattr(function, "func", function)  # a bound model wraps it in functools.partial
@@ -135,7 +136,7 @@ class Program:
         return np.asarray(x, dtype=np.float64).ravel()[:self.free_count] * self.scales
 
 
-def formulate(problem: DesignProblem, casadi_model: Any, numpy_model: Any, *, nodes: int | None = None,
+def formulate(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model: GeneratedModel, *, nodes: int | None = None,
               box_points: int = BOX_POINTS_PER_AXIS, seed: int = 0) -> Program:
     """The CasADi program of a dimensioning problem.
 
@@ -175,7 +176,7 @@ def formulate(problem: DesignProblem, casadi_model: Any, numpy_model: Any, *, no
                    reference, len(problem.free), scales, terms.nodes, terms.box_points, terms.description)
 
 
-def _serial(problem: DesignProblem, casadi_model: Any, numpy_model: Any, free: casadi.SX, values: dict[str, Any],
+def _serial(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model: GeneratedModel, free: casadi.SX, values: dict[str, Any],
             design: casadi.MX, nodes: int | None, box_points: int, seed: int) -> _Terms:
     limits = problem.limits
     n = limits.shape[0]
@@ -217,7 +218,7 @@ def _serial(problem: DesignProblem, casadi_model: Any, numpy_model: Any, free: c
                   description)
 
 
-def _nearest_configurations(model: Any, limits: np.ndarray, points: np.ndarray, axes: list[int],
+def _nearest_configurations(model: GeneratedModel, limits: np.ndarray, points: np.ndarray, axes: list[int],
                             seed: int) -> np.ndarray:
     """For each point, the sampled configuration (within the limits) whose TCP is nearest: a start for IPOPT."""
     q = sampling.sobol(limits[:, 0], limits[:, 1], START_SAMPLES_LOG2, np.random.default_rng(seed + 1))
@@ -226,7 +227,7 @@ def _nearest_configurations(model: Any, limits: np.ndarray, points: np.ndarray, 
     return q[nearest]
 
 
-def _parallel(problem: DesignProblem, casadi_model: Any, numpy_model: Any, free: casadi.SX, values: dict[str, Any],
+def _parallel(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model: GeneratedModel, free: casadi.SX, values: dict[str, Any],
               design: casadi.MX, nodes: int | None, box_points: int, seed: int) -> _Terms:
     per_axis = PARALLEL_NODES_PER_AXIS if nodes is None else nodes
     p = sampling.grid(*problem.box, per_axis)

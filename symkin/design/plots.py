@@ -16,6 +16,7 @@ from symkin.analysis import global_indices, mechanism, workspace
 from symkin.design.evaluate import Evaluation, parallel_index
 from symkin.design.problem import DesignProblem
 from symkin.design.solve import Solution
+from symkin.runtime.info import GeneratedModel
 
 DPI = 150
 #: Configurations drawn per serial workspace; points per axis of a parallel slice.
@@ -65,7 +66,7 @@ def _box_outline(ax: Any, problem: DesignProblem, axes: Sequence[int]) -> None:
     ax.legend(loc="lower left", fontsize=7)
 
 
-def _serial_panel(ax: Any, problem: DesignProblem, model: Any) -> Any:
+def _serial_panel(ax: Any, problem: DesignProblem, model: GeneratedModel) -> Any:
     cloud = workspace.sample_workspace(model, CLOUD_SAMPLES, method="sobol", limits=problem.limits, seed=0)
     values = global_indices.local_index(model, cloud.q, length=problem.length, limits=problem.limits)
     mesh = ax.scatter(cloud.points[:, 0], cloud.points[:, 1], c=values, s=2, linewidths=0, rasterized=True,
@@ -76,7 +77,7 @@ def _serial_panel(ax: Any, problem: DesignProblem, model: Any) -> Any:
     return mesh
 
 
-def _parallel_panel(ax: Any, problem: DesignProblem, model: Any) -> Any:
+def _parallel_panel(ax: Any, problem: DesignProblem, model: GeneratedModel) -> Any:
     """1/kappa on the vertical slice through the box centre (first and last axis)."""
     lower, upper = problem.box
     border = SLICE_BORDER * (upper - lower)
@@ -97,7 +98,7 @@ def _parallel_panel(ax: Any, problem: DesignProblem, model: Any) -> Any:
     return mesh
 
 
-def design_figure(problem: DesignProblem, model: Any, solution: Solution,
+def design_figure(problem: DesignProblem, model: GeneratedModel, solution: Solution,
                   evaluations: tuple[Evaluation, Evaluation]) -> Any:
     """1/kappa over the workspace (serial) or a slice of the box region (parallel), before and after."""
     from matplotlib.figure import Figure

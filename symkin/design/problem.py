@@ -10,11 +10,11 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
 from symkin.analysis import mechanism
+from symkin.runtime.info import GeneratedModel
 
 #: What can be maximized.
 OBJECTIVES = ("gci", "workspace")
@@ -87,7 +87,7 @@ def needed_functions(parallel: bool) -> tuple[str, ...]:
     return ("ik", "jacobian") if parallel else ("fk", "jacobian")
 
 
-def _parameter_inputs(model: Any, functions: Sequence[str]) -> set[str]:
+def _parameter_inputs(model: GeneratedModel, functions: Sequence[str]) -> set[str]:
     generated = model.info.functions
     missing = [name for name in functions if name not in generated]
     if missing:
@@ -96,7 +96,7 @@ def _parameter_inputs(model: Any, functions: Sequence[str]) -> set[str]:
     return {parameter for name in functions for parameter in generated[name].parameters}
 
 
-def _free_parameters(model: Any, free: Sequence[str], bounds: Mapping[str, tuple[float, float]],
+def _free_parameters(model: GeneratedModel, free: Sequence[str], bounds: Mapping[str, tuple[float, float]],
                      values: Mapping[str, float], used: set[str]) -> tuple[FreeParameter, ...]:
     known = sorted(model.parameters)
     if not free:
@@ -129,7 +129,7 @@ def _free_parameters(model: Any, free: Sequence[str], bounds: Mapping[str, tuple
     return tuple(result)
 
 
-def _box(model: Any, box: Mapping[str, tuple[float, float]] | None) -> tuple[np.ndarray, np.ndarray] | None:
+def _box(model: GeneratedModel, box: Mapping[str, tuple[float, float]] | None) -> tuple[np.ndarray, np.ndarray] | None:
     if box is None:
         return None
     axes = ["xyz"[a] for a in mechanism.position_axes(model)]
@@ -146,7 +146,7 @@ def _box(model: Any, box: Mapping[str, tuple[float, float]] | None) -> tuple[np.
     return lower, upper
 
 
-def design_problem(model: Any, objective: str, free: Sequence[str], *,
+def design_problem(model: GeneratedModel, objective: str, free: Sequence[str], *,
                    bounds: Mapping[str, tuple[float, float]] | None = None,
                    values: Mapping[str, float] | None = None,
                    box: Mapping[str, tuple[float, float]] | None = None, margin: float = 0.0,

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Protocol
 
 
 @dataclass(frozen=True)
@@ -117,3 +117,23 @@ class ModelInfo:
         passive = tuple(dict(leg.get("passive_limits") or {}) for leg in parallel["legs"]) if parallel else ()
         return cls(model["name"], "parallel" if parallel else "serial", coordinates, tuple(model["task_space"]),
                    parameters, functions, home, passive)
+
+
+class GeneratedModel(Protocol):
+    """What the analyses, IK, design and simulation take: a :class:`symkin.runtime.loader.LoadedModel`
+    or a view of one (a platform held at a constant orientation, a bound design).
+
+    The generated functions (``fk``, ``jacobian``, ``ik``...) are attributes named as in ``functions``.
+    """
+
+    name: str
+    info: ModelInfo
+    functions: tuple[str, ...]
+    parameters: dict[str, float]
+
+    @property
+    def joint_limits(self) -> tuple[tuple[float, float], ...]: ...
+
+    def bind(self, **parameters: float) -> GeneratedModel: ...
+
+    def __getattr__(self, name: str) -> Any: ...
