@@ -24,7 +24,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "gci",
         help="global conditioning index with an error estimate",
         description="Global conditioning index v = int_W 1/kappa dW / int_W dW (seed eq. 8.28) and the workspace "
-                    "measure int_W dW, each with an error estimate (95%% confidence half-width for mc/qmc, "
+                    "measure int_W dW, each with an error estimate (95 % confidence half-width for mc/qmc, "
                     "a deterministic estimate for grid/adaptive). The default integrates over the joint limits "
                     "with dW = |det J| dq, the Cartesian measure (exact where q -> TCP is one-to-one); "
                     "--domain cartesian integrates the reachability indicator over a Cartesian box (needs a "
