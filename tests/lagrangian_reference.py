@@ -9,13 +9,11 @@ from __future__ import annotations
 
 import functools
 
-import sympy
-
 from symkin.derivation import Derivation
 from symkin.dynamics import lagrange
 from symkin.dynamics.program import Program, mat_vec, se_vector
-from symkin.ir.inputs import coordinate_input
-from symkin.ir.spec import FunctionSpec, OutputSpec, make_function
+from symkin.dynamics.quantities import function_spec
+from symkin.ir.spec import FunctionSpec
 from symkin.model import coordinates
 
 
@@ -32,20 +30,14 @@ def lagrangian_dynamics(d: Derivation) -> FunctionSpec:
     partials = [[partial_values[k * n * n + i * n:k * n * n + (i + 1) * n] for i in range(n)] for k in range(n)]
     C, V = lagrange.coriolis_matrix(partials, qd), lagrange.coriolis_vector(partials, qd)
     gravity = d["gravity_graph"]
-    G = None if gravity is None else program.bind(lagrange.gravity_vector(d["body_jacobians"], d["chain"].axes, gravity))
+    G = None if gravity is None else program.bind(
+        lagrange.gravity_vector(d["body_jacobians"], d["chain"].axes, gravity))
     tau = [a + b for a, b in zip(V, mat_vec(M, qdd))]
     for extra in (G, d["friction_graph"]):
         if extra is not None:
             tau = [a + b for a, b in zip(tau, extra)]
     outputs = [("M", [v for row in M for v in row], (n, n)), ("C", [v for row in C for v in row], (n, n)),
                ("V", V, (n,))] + ([("G", G, (n,))] if G is not None else []) + [("tau", tau, (n,))]
-    definitions, flat = program.to_sympy([e for _, entries, _ in outputs for e in entries], d["sympy_converter"])
-    specs, start = [], 0
-    for name, entries, shape in outputs:
-        rows, cols = shape if len(shape) == 2 else (shape[0], 1)
-        specs.append(OutputSpec(name, sympy.ImmutableMatrix(rows, cols, flat[start:start + len(entries)]), name, "",
-                                shape))
-        start += len(entries)
-    return make_function(d.model, "lagrangian_dynamics", "Lagrangian reference dynamics.",
-                         "seed eqs. 8.31-8.34", [coordinate_input(d.model, g) for g in ("q", "qd", "qdd")], specs,
-                         definitions)
+    return function_spec(d, "lagrangian_dynamics", "Lagrangian reference dynamics.", "seed eqs. 8.31-8.34",
+                         ["q", "qd", "qdd"], program,
+                         [(name, entries, shape, name, "") for name, entries, shape in outputs])

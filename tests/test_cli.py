@@ -6,7 +6,7 @@ import subprocess
 
 import pytest
 
-from conftest import MODELS_DIR, SYMKIN_CLI
+from conftest import MODELS_DIR, ROOT, SYMKIN_CLI
 from symkin.cli import build_parser
 
 
@@ -52,3 +52,10 @@ def test_library_derive_matches_the_cli(tmp_path):
 
     path = symkin.derive(MODELS_DIR / "planar_2r.yaml", tmp_path, outputs=["fk"])
     assert symkin.load(path).fk([0.0, 0.0])[0, 3] == pytest.approx(0.2)
+
+
+def test_ci_runs_exactly_the_readme_test_command():
+    """.ci/run is what CI executes; it must run the README's `make test` line, word for word."""
+    readme = [line for line in (ROOT / "README.md").read_text().splitlines() if line.startswith("make test")]
+    ci = [line for line in (ROOT / ".ci" / "run").read_text().splitlines() if line.startswith("make ")]
+    assert len(readme) == 1 and ci == readme, (readme, ci)

@@ -56,9 +56,10 @@ def _symbols(d: Derivation, group: str) -> list[se.Symbol]:
     return se_vector(coordinates.symbols(d.model, group))
 
 
-def _function(d: Derivation, name: str, summary: str, doc: str, groups: Sequence[str], program: Program,
-              outputs: Sequence[tuple[str, Sequence[se.Basic], tuple[int, ...], str, str]]) -> FunctionSpec:
-    """The spec of a function whose outputs are SymEngine values of ``program``.
+def function_spec(d: Derivation, name: str, summary: str, doc: str, groups: Sequence[str], program: Program,
+                  outputs: Sequence[tuple[str, Sequence[se.Basic], tuple[int, ...], str, str]]) -> FunctionSpec:
+    """The spec of a function whose outputs are SymEngine values of ``program`` (its inputs: the coordinate
+    ``groups``), converted to sympy with the model's shared converter.
 
     Args:
         outputs: (name, row-major entries, shape, doc, unit) per output.
@@ -201,7 +202,7 @@ class _BoundTerms:
 def _mass_matrix(d: Derivation) -> FunctionSpec:
     program = Program()
     M = _flat(_BoundTerms(d, program).mass_matrix())
-    return _function(
+    return function_spec(
         d, "mass_matrix", "Joint-space mass matrix.",
         "M(q) = sum over bodies of m Jv^T Jv + Jw^T I Jw with the velocity Jacobians at the centres of mass "
         "(seed eqs. 8.31-8.33; 2-DoF example eq. 8.53), evaluated by the composite-rigid-body algorithm "
@@ -214,7 +215,7 @@ def _coriolis_matrix(d: Derivation) -> FunctionSpec:
     n = d.model.dof
     program = Program()
     C = lagrange.coriolis_matrix(_BoundTerms(d, program).partials(), _symbols(d, "qd"))
-    return _function(
+    return function_spec(
         d, "coriolis_matrix", "Coriolis matrix from the Christoffel symbols of M.",
         "C_ij = sum_k c_ijk qd_k, c_ijk = 1/2 (dM_ij/dq_k + dM_ik/dq_j - dM_jk/dq_i); V = C qd and "
         "dM/dt - 2C is skew-symmetric.",
@@ -225,7 +226,7 @@ def _coriolis_matrix(d: Derivation) -> FunctionSpec:
 def _coriolis_vector(d: Derivation) -> FunctionSpec:
     program = Program()
     V = _BoundTerms(d, program).coriolis_vector()
-    return _function(
+    return function_spec(
         d, "coriolis_vector", "Coriolis and centrifugal torques.",
         "V(q, qd) = C(q, qd) qd = dM/dt qd - 1/2 d(qd^T M qd)/dq (seed eq. 8.31; 2-DoF example eq. 8.54), "
         "evaluated by a recursive Newton-Euler pass without gravity and acceleration (seed sec. 4.4).",
@@ -237,7 +238,7 @@ def _gravity_vector(d: Derivation) -> FunctionSpec:
     _require_gravity(d, "gravity_vector")
     program = Program()
     G = _BoundTerms(d, program).gravity_vector()
-    return _function(
+    return function_spec(
         d, "gravity_vector", "Gravity torques.",
         "G(q) = du/dq with u = -sum m g . c over the bodies (seed eq. 8.31; 2-DoF example eq. 8.54), "
         "evaluated by a recursive Newton-Euler pass at rest (seed sec. 4.4).",
@@ -251,7 +252,7 @@ def _friction(d: Derivation) -> FunctionSpec:
         raise DerivationError(f"{d.model.name}: the model declares no friction; add a 'friction:' section "
                               "or remove 'friction' from the outputs")
     program = Program()
-    return _function(
+    return function_spec(
         d, "friction", "Joint friction torques.",
         "F_f = viscous qd + coulomb sign(qd) per joint (seed eq. 8.34), or coulomb tanh(qd / v_s) where the "
         "model gives a smoothing velocity v_s.",
@@ -263,7 +264,7 @@ def _inverse_dynamics(d: Derivation) -> FunctionSpec:
     n = d.model.dof
     program = Program()
     tau = _BoundTerms(d, program).torques(acceleration=True, with_friction=True)
-    return _function(
+    return function_spec(
         d, "inverse_dynamics", "Inverse dynamics: joint torques for a motion.",
         "tau = M(q) qdd + V(q, qd) + G(q) + F_f(qd) (seed eq. 8.34), by the recursive Newton-Euler algorithm "
         "(seed sec. 4.4, Luh-Walker-Paul; O(n) operations).",
@@ -279,7 +280,7 @@ def _forward_dynamics(d: Derivation) -> FunctionSpec:
     M = terms.mass_matrix()
     rhs = [[t - b] for t, b in zip(_symbols(d, "tau"), terms.torques(acceleration=False, with_friction=True))]
     qdd = [row[0] for row in ldl_solve(program, M, rhs)]
-    return _function(
+    return function_spec(
         d, "forward_dynamics", "Forward dynamics: joint accelerations under given torques.",
         "qdd = M(q)^-1 (tau - V(q, qd) - G(q) - F_f(qd)) (seed eq. 8.34 solved for qdd), by a straight-line "
         "LDL^T factorization of the symmetric positive definite M.",
@@ -297,7 +298,7 @@ def _tcp_force(d: Derivation) -> FunctionSpec:
     J = [values[i * n:(i + 1) * n] for i in range(n)]
     F = [row[0] for row in transpose_solve(program, J, rhs)]
     components = ", ".join(d.model.task_space)
-    return _function(
+    return function_spec(
         d, "tcp_force", "Force (wrench) at the TCP that produces a joint motion.",
         f"F = J^-T (M qdd + V + G) (seed eqs. 8.36-8.37, 2-DoF example eqs. 8.59-8.60), task components "
         f"[{components}]; J^-T by the adjugate for up to 3 task coordinates, else by a Gram-Schmidt QR "
@@ -333,7 +334,7 @@ def _operational_space(d: Derivation) -> FunctionSpec:
         outputs.append(("Gx", [first[i][n + 1] for i in range(n)], (n,), "operational-space gravity force J^-T G",
                         ""))
     components = ", ".join(d.model.task_space)
-    return _function(
+    return function_spec(
         d, "operational_space", "Operational-space dynamics F = Mx xdd + Vx + Gx.",
         f"Mx = J^-T M J^-1, Vx = J^-T (V - M J^-1 dJ/dt qd), Gx = J^-T G (seed eqs. 8.61-8.64; Craig sec. "
         f"6.11) for the task components [{components}].  Gx is omitted for a model without gravity.",
@@ -344,7 +345,7 @@ def _operational_space(d: Derivation) -> FunctionSpec:
 def _kinetic_energy(d: Derivation) -> FunctionSpec:
     program = Program()
     (k,) = program.bind([lagrange.kinetic_energy(_BoundTerms(d, program).mass_matrix(), _symbols(d, "qd"))])
-    return _function(
+    return function_spec(
         d, "kinetic_energy", "Kinetic energy.", "k = 1/2 qd^T M(q) qd (seed eq. 8.32).",
         ["q", "qd"], program, [("k", [k], (), "kinetic energy of all bodies", "J")])
 
@@ -354,7 +355,7 @@ def _potential_energy(d: Derivation) -> FunctionSpec:
     _require_gravity(d, "potential_energy")
     program = Program()
     (u,) = program.bind([lagrange.potential_energy(d["body_jacobians"], d["gravity_graph"])])
-    return _function(
+    return function_spec(
         d, "potential_energy", "Gravitational potential energy.",
         "u = -sum m g . c over the bodies, zero with every centre of mass at the base origin (seed eq. 8.32).",
         ["q"], program, [("u", [u], (), "potential energy", "J")])

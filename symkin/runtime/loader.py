@@ -12,8 +12,8 @@ from pathlib import Path
 from typing import Any
 
 from symkin.errors import GeneratedCodeError
-from symkin.runtime.info import ModelInfo
 from symkin.manifest import MANIFEST_NAME, read_manifest
+from symkin.runtime.info import ModelInfo
 
 
 def _numpy(directory: Path, manifest: dict[str, Any]) -> dict[str, Callable[..., Any]]:
@@ -57,21 +57,20 @@ class LoadedModel:
     """
 
     def __init__(self, directory: Path, manifest: dict[str, Any], backend: str,
-                 functions: dict[str, Callable[..., Any]], bound: dict[str, float] | None = None):
+                 functions: dict[str, Callable[..., Any]], bound: dict[str, float] | None = None,
+                 info: ModelInfo | None = None):
         self.directory = directory
         self.manifest = manifest
         self.backend = backend
-        self.name: str = manifest["model"]["name"]
-        self.info = ModelInfo.from_manifest(manifest)
+        self.info = ModelInfo.from_manifest(manifest) if info is None else info
+        self.name: str = self.info.name
         self._raw = functions
         self._bound = dict(bound or {})
         self.functions = tuple(functions)
-        self.parameters = {p["name"]: p["default"] for p in manifest["parameters"] if not p["fixed"]}
+        self.parameters = {p.name: p.default for p in self.info.parameters if not p.fixed}
         self.parameters.update(self._bound)
-        accepted = {f["name"]: {i["name"] for i in f["inputs"] if i["kind"] == "parameter"}
-                    for f in manifest["functions"]}
         for name, fn in functions.items():
-            bound_here = {k: v for k, v in self._bound.items() if k in accepted[name]}
+            bound_here = {k: v for k, v in self._bound.items() if k in self.info.functions[name].parameters}
             setattr(self, name, functools.partial(fn, **bound_here) if bound_here else fn)
 
     @property
@@ -93,7 +92,8 @@ class LoadedModel:
         unknown = set(parameters) - set(self.parameters)
         if unknown:
             raise KeyError(f"{self.name}: not free parameters: {sorted(unknown)}; free: {sorted(self.parameters)}")
-        return LoadedModel(self.directory, self.manifest, self.backend, self._raw, {**self._bound, **parameters})
+        return LoadedModel(self.directory, self.manifest, self.backend, self._raw, {**self._bound, **parameters},
+                           self.info)
 
     def __repr__(self) -> str:
         return f"<symkin model {self.name!r} ({self.backend}): {', '.join(self.functions)}>"
