@@ -6,9 +6,11 @@ import json
 
 import numpy as np
 
-from conftest import GENERATED_DIR
-from symkin import load
+from conftest import GENERATED_DIR, MODELS_DIR
+from symkin import derive, load
 from symkin.analysis import parallel
+from symkin.model import load_model
+from tolerances import KINEMATICS
 
 
 def test_the_view_says_what_the_manifest_records():
@@ -37,3 +39,28 @@ def test_a_parallel_view_and_a_platform_held_at_a_constant_orientation():
     assert stewart.info.task_space == ("x", "y", "z", "roll", "pitch", "yaw")
     assert held.info.task_space == parallel.TWIST_COMPONENTS  # a view, the loaded model is untouched
     assert held.info.coordinates == stewart.info.coordinates and held.manifest is stewart.manifest
+
+
+def test_the_model_hash_names_the_mechanism_not_what_is_emitted_from_it(tmp_path):
+    """Issue 11: changing the ``scene:`` section (outputs, backends, folded parameters) keeps the hash;
+    changing the mechanism changes it; two scenes of one model load side by side as distinct modules."""
+    source = (MODELS_DIR / "planar_2r.yaml").read_text()
+    scene_start = source.index("\nscene:")
+    fk_only = source[:scene_start] + "\nscene:\n  outputs: [fk]\n  backends: [numpy]\n  fixed: [l1]\n"
+    longer_link = source.replace("l2: {value: 0.1,", "l2: {value: 0.12,", 1)
+    assert longer_link != source
+    files = {}
+    for name, text in {"full": source, "fk_only": fk_only, "longer": longer_link}.items():
+        (tmp_path / name).mkdir()
+        files[name] = tmp_path / name / "planar_2r.yaml"
+        files[name].write_text(text)
+    hashes = {name: load_model(path).hash for name, path in files.items()}
+    assert hashes["full"] == hashes["fk_only"] == load_model(MODELS_DIR / "planar_2r.yaml").hash
+    assert hashes["longer"] != hashes["full"]
+
+    full = load(derive(files["full"], tmp_path / "out_full", backends=["numpy"]))
+    folded = load(derive(files["fk_only"], tmp_path / "out_fk"))
+    assert full.info.parameters != folded.info.parameters  # l1 is an input of one, folded in the other
+    q = np.array([0.3, -0.7])
+    np.testing.assert_allclose(folded.fk(q), full.fk(q), rtol=0, atol=KINEMATICS)
+    assert set(folded.functions) == {"fk"} and "mass_matrix" in full.functions

@@ -24,6 +24,9 @@ from symkin.model.yaml_source import Document
 
 #: Version of the model format; part of the model hash.
 FORMAT_VERSION = 1
+#: Sections that say how a model is emitted, not what the mechanism is: left out of the model hash,
+#: so that choosing other outputs, backends or folded parameters keeps the mechanism's identity.
+EMISSION_KEYS = ("scene",)
 TOP_LEVEL_KEYS = ("name", "description", "references", "parameters", "serial", "parallel", "task_space",
                   "bodies", "gravity", "friction", "scene")
 
@@ -76,7 +79,8 @@ def build_model(doc: Document, stem: str) -> Model:
 
     if r.problems:
         raise ModelError(r.problems)
-    digest = hashlib.sha256(f"symkin-model-format-{FORMAT_VERSION}\n{doc.canonical_json()}".encode()).hexdigest()
+    digest = hashlib.sha256(
+        f"symkin-model-format-{FORMAT_VERSION}\n{doc.canonical_json(omit=EMISSION_KEYS)}".encode()).hexdigest()
     return Model(
         name=name,
         description=description.strip(),

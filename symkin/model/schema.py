@@ -314,7 +314,8 @@ class Model:
         description: free text.
         references: citations for the numbers in the model.
         source: path of the model file as given.
-        hash: ``sha256:<hex>`` of the canonical model data.
+        hash: ``sha256:<hex>`` of the canonical model data without its ``scene:`` section: the
+            mechanism's identity, the same whatever is emitted from it.
         parameters: free parameters (symbols with defaults), in file order.
         derived_parameters: parameters defined by expressions (already inlined).
         joints: serial chain, base to tip.

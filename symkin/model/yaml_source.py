@@ -86,9 +86,11 @@ class Document:
         line, column = self.marks.get(probe, (None, None))
         return Problem(self.file, line, column, format_path(path), message, fix)
 
-    def canonical_json(self) -> str:
-        """The data as canonical JSON (sorted keys): the input of the model hash."""
-        return json.dumps(self.data, sort_keys=True, separators=(",", ":"), ensure_ascii=True)
+    def canonical_json(self, omit: tuple[str, ...] = ()) -> str:
+        """The data as canonical JSON (sorted keys) without the top-level keys ``omit``: the input of the model hash."""
+        data = {key: value for key, value in self.data.items() if key not in omit} if isinstance(self.data, dict) \
+            else self.data
+        return json.dumps(data, sort_keys=True, separators=(",", ":"), ensure_ascii=True)
 
 
 def read_document(path: str | Path) -> Document:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import importlib.util
 from collections.abc import Callable
 from pathlib import Path
@@ -11,12 +12,20 @@ from symkin.errors import GeneratedCodeError
 
 
 def import_module(directory: Path, manifest: dict[str, Any]) -> dict[str, Callable[..., Any]]:
-    """The functions of the manifest from ``<model>.py``, imported under a name unique to the model's hash."""
+    """The functions of the manifest from ``<model>.py``, imported under a name unique to the module's bytes.
+
+    The model hash names the mechanism, not what was emitted from it (two scenes of one model give
+    two modules), so the import name is keyed by the file's content.
+    """
     files = manifest.get("backends", {}).get("numpy", {}).get("files", [])
     if not files:
         raise GeneratedCodeError(f"{directory}: the manifest lists no numpy module")
     path = Path(directory) / files[0]
-    module_name = f"symkin_generated_{manifest['model']['name']}_{manifest['model']['hash'][7:19]}"
+    try:
+        digest = hashlib.sha256(path.read_bytes()).hexdigest()
+    except OSError as error:
+        raise GeneratedCodeError(f"cannot read the generated module {path}: {error.strerror}") from error
+    module_name = f"symkin_generated_{manifest['model']['name']}_{digest[:12]}"
     spec = importlib.util.spec_from_file_location(module_name, path)
     if spec is None or spec.loader is None:
         raise GeneratedCodeError(f"cannot import the generated module {path}")
