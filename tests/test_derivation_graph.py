@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import ast
+import inspect
 import json
 import subprocess
 import types
@@ -12,6 +14,8 @@ from conftest import MODELS_DIR, SYMKIN_CLI
 from symkin import pipeline
 from symkin.derivation import Derivation, catalog, emitted_quantities, quantity
 from symkin.errors import DerivationError, ModelError
+from symkin.kinematics import quantities as kinematics_quantities
+from symkin.parallel import quantities as parallel_quantities
 
 
 def test_fk_alone_derives_no_jacobian_and_no_dynamics(models):
@@ -111,3 +115,21 @@ def test_available_keeps_what_the_model_can_derive_and_says_why_not(models):
     assert set(skipped) == {"mass_matrix", "no_such_quantity"}
     assert "serial" in skipped["mass_matrix"] and "unknown quantity" in skipped["no_such_quantity"]
     assert "mass_matrix" not in d.computed
+
+
+def test_quantities_ask_for_each_other_by_their_marked_functions_not_by_name(models):
+    """Issue 11: typed keys. Inside the quantity modules no derivation is indexed with a string, and a
+    marked function and its name reach the same memoized value; a quantity of the other mechanism is refused."""
+    for module in catalog.QUANTITY_MODULES:
+        tree = ast.parse(inspect.getsource(module))
+        string_keys = [f"{module.__name__}:{node.lineno}" for node in ast.walk(tree)
+                       if isinstance(node, ast.Subscript) and isinstance(node.slice, ast.Constant)
+                       and isinstance(node.slice.value, str)]
+        assert not string_keys, f"quantity looked up by name (use the marked function): {string_keys}"
+    arm = Derivation(models["ur10e"])
+    assert arm[kinematics_quantities.chain_frames] is arm["chain"]
+    assert arm[kinematics_quantities.task_jacobian] is arm["jacobian"]
+    with pytest.raises(DerivationError, match="derived for parallel mechanisms"):
+        arm[parallel_quantities._ik]
+    with pytest.raises(DerivationError, match="neither a quantity name nor a function marked"):
+        arm[len]

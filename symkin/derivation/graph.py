@@ -19,7 +19,7 @@ from typing import Any
 
 from symkin.derivation import catalog
 from symkin.errors import DerivationError
-from symkin.ir.quantity import QuantityDef
+from symkin.ir.quantity import QuantityDef, QuantityKey, definition_of
 from symkin.ir.spec import FunctionSpec
 from symkin.model.schema import Model
 
@@ -52,10 +52,24 @@ class Derivation:
                 f"{self.model.mechanism} mechanism; its outputs are: {outputs}")
         return definition
 
-    def __getitem__(self, name: str) -> Any:
+    def _resolve(self, key: QuantityKey) -> QuantityDef:
+        """The definition of ``key``: a marked function's own, or the catalog's for a name."""
+        if isinstance(key, str):
+            return self._definition(key)
+        definition = definition_of(key)
+        if definition is None:
+            raise DerivationError(f"{key!r} is neither a quantity name nor a function marked with @quantity")
+        if definition.mechanism not in (self.model.mechanism, "any"):
+            raise DerivationError(f"{definition.name!r} ({key.__module__}) is derived for {definition.mechanism} "
+                                  f"mechanisms, but model '{self.model.name}' is a {self.model.mechanism} mechanism")
+        return definition
+
+    def __getitem__(self, key: QuantityKey) -> Any:
+        """The value of a quantity, asked for by name or by its marked function (see :data:`QuantityKey`)."""
+        definition = self._resolve(key)
+        name = definition.name
         if name in self._values:
             return self._values[name]
-        definition = self._definition(name)
         if name in self._active:
             raise DerivationError(f"quantity dependency cycle: {' -> '.join(self._active + [name])}")
         self._active.append(name)

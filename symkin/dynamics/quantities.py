@@ -41,6 +41,7 @@ from symkin.errors import DerivationError
 from symkin.ir.inputs import coordinate_input
 from symkin.ir.quantity import quantity
 from symkin.ir.spec import FunctionSpec, OutputSpec, make_function
+from symkin.kinematics.quantities import chain_frames, task_jacobian
 from symkin.model import coordinates
 from symkin.symengine_bridge import SympyConverter
 
@@ -65,7 +66,7 @@ def function_spec(d: Derivation, name: str, summary: str, doc: str, groups: Sequ
         outputs: (name, row-major entries, shape, doc, unit) per output.
     """
     model = d.model
-    definitions, flat = program.to_sympy([e for out in outputs for e in out[1]], d["sympy_converter"])
+    definitions, flat = program.to_sympy([e for out in outputs for e in out[1]], d[_sympy_converter])
     specs, start = [], 0
     for out_name, entries, shape, out_doc, unit in outputs:
         size = len(entries)
@@ -93,7 +94,7 @@ def _sympy_converter(d: Derivation) -> SympyConverter:
 
 @quantity("body_jacobians", "velocity Jacobians of the bodies at their centres of mass", emitted=False)
 def _body_jacobians(d: Derivation) -> tuple[BodyJacobians, ...]:
-    return body_jacobians(d.model, d["chain"])
+    return body_jacobians(d.model, d[chain_frames])
 
 
 @quantity("newton_euler_links", "links in their joint frames with spatial inertias (Newton-Euler)", emitted=False)
@@ -103,12 +104,12 @@ def _newton_euler_links(d: Derivation) -> tuple[newton_euler.Link, ...]:
 
 @quantity("mass_matrix_graph", "M(q) by the composite-rigid-body algorithm, as a SymEngine graph", emitted=False)
 def _mass_matrix_graph(d: Derivation) -> Matrix:
-    return newton_euler.mass_matrix(d["newton_euler_links"])
+    return newton_euler.mass_matrix(d[_newton_euler_links])
 
 
 @quantity("mass_matrix_partials", "dM/dq_k as SymEngine graphs", emitted=False)
 def _mass_matrix_partials(d: Derivation) -> list[Matrix]:
-    return lagrange.mass_matrix_partials(d["mass_matrix_graph"], _symbols(d, "q"))
+    return lagrange.mass_matrix_partials(d[_mass_matrix_graph], _symbols(d, "q"))
 
 
 @quantity("gravity_graph", "gravity vector in the base frame, or None if zero", emitted=False)
@@ -134,7 +135,7 @@ def _friction_graph(d: Derivation) -> list[se.Basic] | None:
 
 @quantity("task_jacobian_graph", "task Jacobian J (square) as SymEngine expressions", emitted=False)
 def _task_jacobian_graph(d: Derivation) -> Matrix:
-    J = d["jacobian"].outputs[0].expr
+    J = d[task_jacobian].outputs[0].expr
     if J.shape[0] != J.shape[1]:
         raise DerivationError(
             f"{d.model.name}: the task Jacobian is {J.shape[0]} x {J.shape[1]}; TCP forces and operational-space "
@@ -144,7 +145,7 @@ def _task_jacobian_graph(d: Derivation) -> Matrix:
 
 
 def _require_gravity(d: Derivation, name: str) -> None:
-    if d["gravity_graph"] is None:
+    if d[_gravity_graph] is None:
         raise DerivationError(f"{d.model.name}: the model has no gravity, so {name} is identically zero and is "
                               f"not emitted; declare 'gravity:' in the model or remove '{name}' from the outputs")
 
@@ -162,13 +163,13 @@ class _BoundTerms:
         self.n = d.model.dof
 
     def mass_matrix(self) -> Matrix:
-        values = self.program.bind(_flat(self.d["mass_matrix_graph"]))
+        values = self.program.bind(_flat(self.d[_mass_matrix_graph]))
         return [values[i * self.n:(i + 1) * self.n] for i in range(self.n)]
 
     def partials(self) -> list[Matrix]:
         """dM/dq_k as partials[k][i][j]."""
         n = self.n
-        values = self.program.bind([v for dM in self.d["mass_matrix_partials"] for v in _flat(dM)])
+        values = self.program.bind([v for dM in self.d[_mass_matrix_partials] for v in _flat(dM)])
         return [[values[k * n * n + i * n:k * n * n + (i + 1) * n] for i in range(n)] for k in range(n)]
 
     def newton_euler(self, velocity: bool, acceleration: bool, gravity: bool) -> list[se.Basic]:
@@ -176,18 +177,18 @@ class _BoundTerms:
         d = self.d
         qd, qdd = (_symbols(d, g) if use else None for g, use in (("qd", velocity), ("qdd", acceleration)))
         return self.program.bind(newton_euler.inverse_dynamics(
-            d["newton_euler_links"], qd, qdd, d["gravity_graph"] if gravity else None))
+            d[_newton_euler_links], qd, qdd, d[_gravity_graph] if gravity else None))
 
     def coriolis_vector(self) -> list[se.Basic]:
         return self.newton_euler(velocity=True, acceleration=False, gravity=False)
 
     def gravity_vector(self) -> list[se.Basic] | None:
-        if self.d["gravity_graph"] is None:
+        if self.d[_gravity_graph] is None:
             return None
-        return self.program.bind(newton_euler.gravity_torques(self.d["newton_euler_links"], self.d["gravity_graph"]))
+        return self.program.bind(newton_euler.gravity_torques(self.d[_newton_euler_links], self.d[_gravity_graph]))
 
     def friction(self) -> list[se.Basic] | None:
-        return self.d["friction_graph"]
+        return self.d[_friction_graph]
 
     def torques(self, acceleration: bool, with_friction: bool) -> list[se.Basic]:
         """M qdd (if ``acceleration``) + V + G (+ F_f): eq. 8.34, in one Newton-Euler pass."""
@@ -247,7 +248,7 @@ def _gravity_vector(d: Derivation) -> FunctionSpec:
 
 @quantity("friction", "joint friction F_f(qd): viscous + Coulomb (n)")
 def _friction(d: Derivation) -> FunctionSpec:
-    F = d["friction_graph"]
+    F = d[_friction_graph]
     if F is None:
         raise DerivationError(f"{d.model.name}: the model declares no friction; add a 'friction:' section "
                               "or remove 'friction' from the outputs")
@@ -291,7 +292,7 @@ def _forward_dynamics(d: Derivation) -> FunctionSpec:
 @quantity("tcp_force", "TCP force F = J^-T (M qdd + V + G) (m, square task Jacobian)", solves_with="jacobian")
 def _tcp_force(d: Derivation) -> FunctionSpec:
     n = d.model.dof
-    J = d["task_jacobian_graph"]
+    J = d[_task_jacobian_graph]
     program = Program()
     rhs = [[b] for b in _BoundTerms(d, program).torques(acceleration=True, with_friction=False)]
     values = program.bind(_flat(J))
@@ -310,7 +311,7 @@ def _tcp_force(d: Derivation) -> FunctionSpec:
           solves_with="jacobian")
 def _operational_space(d: Derivation) -> FunctionSpec:
     n = d.model.dof
-    J_graph = d["task_jacobian_graph"]
+    J_graph = d[_task_jacobian_graph]
     q, qd = _symbols(d, "q"), _symbols(d, "qd")
     # dJ/dt qd = sum_k dJ/dq_k qd_k qd.
     Jdot_qd = [sum((se.diff(J_graph[i][j], q[k]) * qd[k] * qd[j] for j in range(n) for k in range(n)),
@@ -354,7 +355,7 @@ def _kinetic_energy(d: Derivation) -> FunctionSpec:
 def _potential_energy(d: Derivation) -> FunctionSpec:
     _require_gravity(d, "potential_energy")
     program = Program()
-    (u,) = program.bind([lagrange.potential_energy(d["body_jacobians"], d["gravity_graph"])])
+    (u,) = program.bind([lagrange.potential_energy(d[_body_jacobians], d[_gravity_graph])])
     return function_spec(
         d, "potential_energy", "Gravitational potential energy.",
         "u = -sum m g . c over the bodies, zero with every centre of mass at the base origin (seed eq. 8.32).",

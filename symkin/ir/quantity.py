@@ -46,6 +46,19 @@ class QuantityDef:
     residual: bool = False
 
 
+#: What a derivation is asked for.  Inside symkin, a quantity asks for another by the marked
+#: function itself (``d[chain_frames]``): a misspelt key is a NameError at import, and the
+#: definition used is the one named, never looked up.  Names (``d["fk"]``) are for the
+#: boundary, where they come from a model file, a command line or a test, and are validated.
+QuantityKey = str | Callable[..., Any]
+
+
+def definition_of(key: QuantityKey) -> QuantityDef | None:
+    """The definition a marked function carries; None for a name, or for an unmarked function."""
+    definition = getattr(key, "quantity", None) if callable(key) else None
+    return definition if isinstance(definition, QuantityDef) else None
+
+
 def quantity(name: str, summary: str, emitted: bool = True, solves_with: str | None = None,
              mechanism: str = "serial", residual: bool = False
              ) -> Callable[[Callable[[Derivation], Any]], Callable[[Derivation], Any]]:

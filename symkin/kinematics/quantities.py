@@ -29,13 +29,13 @@ if TYPE_CHECKING:
 
 
 @quantity("chain", "link frames, joint axes and TCP frame of the serial chain", emitted=False)
-def _chain(d: Derivation) -> ChainFrames:
+def chain_frames(d: Derivation) -> ChainFrames:
     return compose_chain(d.model)
 
 
 @quantity("fk", "forward kinematics: base_T_tcp (4x4)")
 def _fk(d: Derivation) -> FunctionSpec:
-    chain: ChainFrames = d["chain"]
+    chain: ChainFrames = d[chain_frames]
     return make_function(
         d.model, "fk", "Forward kinematics: pose of the TCP in the base frame.",
         "base_T_tcp = base_T_1 * 1_T_2 * ... * n_T_tcp (seed sec. 3.1, DH step 4).",
@@ -46,7 +46,7 @@ def _fk(d: Derivation) -> FunctionSpec:
 
 @quantity("frames", "base_T_<link> (4x4) of every link frame")
 def _frames(d: Derivation) -> FunctionSpec:
-    chain: ChainFrames = d["chain"]
+    chain: ChainFrames = d[chain_frames]
     return make_function(
         d.model, "frames", "Pose of every link frame in the base frame.",
         "base_T_<link> = base_T_1 * ... * (i-1)_T_i for each link i (seed sec. 3.1).",
@@ -58,7 +58,7 @@ def _frames(d: Derivation) -> FunctionSpec:
 
 @quantity("task_coordinates", "task-space coordinates p = f(q) of the TCP (m)")
 def _task_coordinates(d: Derivation) -> FunctionSpec:
-    chain: ChainFrames = d["chain"]
+    chain: ChainFrames = d[chain_frames]
     p = task_space.coordinates(d.model.task_space, chain.tcp)
     units = ", ".join(f"{c} [{task_space.UNITS[c]}]" for c in d.model.task_space)
     return make_function(
@@ -70,9 +70,9 @@ def _task_coordinates(d: Derivation) -> FunctionSpec:
 
 
 @quantity("jacobian_geometric_matrix", "geometric Jacobian matrix of the TCP (6 x n)", emitted=False)
-def _geometric_matrix(d: Derivation) -> sympy.ImmutableMatrix:
+def geometric_jacobian_matrix(d: Derivation) -> sympy.ImmutableMatrix:
     """Columns [z_i x (p_tcp - p_i); z_i] for revolute and [z_i; 0] for prismatic joints."""
-    chain: ChainFrames = d["chain"]
+    chain: ChainFrames = d[chain_frames]
     p_tcp = sympy.Matrix(chain.tcp.p)
     columns = []
     for axis in chain.axes:
@@ -91,15 +91,15 @@ def _jacobian_geometric(d: Derivation) -> FunctionSpec:
         "[v; w] = J qd with v the TCP velocity and w the angular velocity, both in the base frame; "
         "column i is [z_i x (p_tcp - p_i); z_i] for a revolute and [z_i; 0] for a prismatic joint.",
         [coordinate_input(d.model, "q")],
-        [OutputSpec("J", d["jacobian_geometric_matrix"], "rows vx, vy, vz, wx, wy, wz; one column per joint")],
+        [OutputSpec("J", d[geometric_jacobian_matrix], "rows vx, vy, vz, wx, wy, wz; one column per joint")],
     )
 
 
 @quantity("jacobian", "task Jacobian J = dp/dq (m x n, task space of the model)")
-def _jacobian(d: Derivation) -> FunctionSpec:
-    chain: ChainFrames = d["chain"]
+def task_jacobian(d: Derivation) -> FunctionSpec:
+    chain: ChainFrames = d[chain_frames]
     components = d.model.task_space
-    J = task_space.jacobian_rows(components, sympy.Matrix(d["jacobian_geometric_matrix"]), chain.tcp,
+    J = task_space.jacobian_rows(components, sympy.Matrix(d[geometric_jacobian_matrix]), chain.tcp,
                                  coordinates.symbols(d.model, "q"))
     return make_function(
         d.model, "jacobian", "Task Jacobian of the TCP.",

@@ -86,13 +86,13 @@ def _structure(d: Derivation) -> ParallelStructure:
 
 @quantity("leg_closures", "closure equations of every leg", emitted=False, mechanism=PARALLEL)
 def _leg_closures(d: Derivation) -> tuple[closure.LegClosure, ...]:
-    structure: ParallelStructure = d["parallel_structure"]
+    structure: ParallelStructure = d[_structure]
     return tuple(closure.LegClosure(structure.platform, chain) for chain in structure.chains)
 
 
 @quantity("closure_residual", "loop-closure equations Phi(q, s, p) (sympy)", emitted=False, mechanism=PARALLEL)
 def _closure_residual(d: Derivation) -> sympy.ImmutableMatrix:
-    return sympy.ImmutableMatrix([e for leg in d["leg_closures"] for e in leg.residual()])
+    return sympy.ImmutableMatrix([e for leg in d[_leg_closures] for e in leg.residual()])
 
 
 def _closure_rows(d: Derivation) -> str:
@@ -102,7 +102,7 @@ def _closure_rows(d: Derivation) -> str:
 @quantity("closure", "loop-closure residual Phi(q, s, p), 6 rows per leg (zero when the legs close)",
           mechanism=PARALLEL, residual=True)
 def _closure(d: Derivation) -> FunctionSpec:
-    phi = d["closure_residual"]
+    phi = d[_closure_residual]
     return make_function(
         d.model, "closure", "Loop-closure residual of every leg.",
         "Seed sec. 3.2, inverse kinematics steps 1-2: the closed vector chain of each leg, split into "
@@ -119,7 +119,7 @@ def _closure(d: Derivation) -> FunctionSpec:
 def _closure_jacobians(d: Derivation) -> FunctionSpec:
     task = task_symbols(d.model)
     columns: list[dict[sympy.Symbol, list[sympy.Expr]]] = []
-    for leg in d["leg_closures"]:
+    for leg in d[_leg_closures]:
         columns.append({**leg.joint_derivatives(), **leg.task_derivatives(task)})
     groups = [("Phi_p", task, "p"), ("Phi_q", coordinates.symbols(d.model, "q"), "q"),
               ("Phi_s", passive_symbols(d.model), "s")]
@@ -142,7 +142,7 @@ def _closure_jacobians(d: Derivation) -> FunctionSpec:
 
 @quantity("distance_legs", "legs reduced to one distance equation each", emitted=False, mechanism=PARALLEL)
 def _distance_legs(d: Derivation) -> tuple[distance.DistanceLeg, ...]:
-    structure: ParallelStructure = d["parallel_structure"]
+    structure: ParallelStructure = d[_structure]
     legs = distance.distance_legs(structure.chains, structure.platform)
     if isinstance(legs, str):
         raise DerivationError(f"model '{d.model.name}': {legs}; use the generic outputs closure and "
@@ -152,13 +152,13 @@ def _distance_legs(d: Derivation) -> tuple[distance.DistanceLeg, ...]:
 
 @quantity("constraint_vector", "f(q, p) (sympy)", emitted=False, mechanism=PARALLEL)
 def _constraint_vector(d: Derivation) -> sympy.ImmutableMatrix:
-    return sympy.ImmutableMatrix([leg.constraint for leg in d["distance_legs"]])
+    return sympy.ImmutableMatrix([leg.constraint for leg in d[_distance_legs]])
 
 
 @quantity("constraints", "leg equations f(q, p) = (|B_i - C_i|^2 - L_i^2)/2, zero when assembled",
           mechanism=PARALLEL, residual=True)
 def _constraints(d: Derivation) -> FunctionSpec:
-    f = d["constraint_vector"]
+    f = d[_constraint_vector]
     return make_function(
         d.model, "constraints", "Leg equations in distance form.",
         "f_i = (|B_i(p) - C_i(q)|^2 - L_i(q)^2) / 2 for every leg: the rod between the point joints C_i and "
@@ -170,7 +170,7 @@ def _constraints(d: Derivation) -> FunctionSpec:
 
 @quantity("constraint_jacobian_matrices", "J_x and J_q (sympy)", emitted=False, mechanism=PARALLEL)
 def _constraint_jacobian_matrices(d: Derivation) -> tuple[sympy.ImmutableMatrix, sympy.ImmutableMatrix]:
-    f = sympy.Matrix(d["constraint_vector"])
+    f = sympy.Matrix(d[_constraint_vector])
     J_x = jacobian(f, task_symbols(d.model))
     J_q = -jacobian(f, coordinates.symbols(d.model, "q"))
     return J_x, sympy.ImmutableMatrix(J_q)
@@ -178,7 +178,7 @@ def _constraint_jacobian_matrices(d: Derivation) -> tuple[sympy.ImmutableMatrix,
 
 @quantity("constraint_jacobians", "J_x = df/dp and J_q = -df/dq, so that J_x pdot = J_q qdot", mechanism=PARALLEL)
 def _constraint_jacobians(d: Derivation) -> FunctionSpec:
-    J_x, J_q = d["constraint_jacobian_matrices"]
+    J_x, J_q = d[_constraint_jacobian_matrices]
     return make_function(
         d.model, "constraint_jacobians", "Jacobians of the leg equations.",
         "Differentiating f(q, p) = 0 gives the velocity relation J_x pdot = J_q qdot with J_x = df/dp "
@@ -191,7 +191,7 @@ def _constraint_jacobians(d: Derivation) -> FunctionSpec:
 
 @quantity("ik", "closed-form inverse kinematics q(p) per leg, with reachability margins", mechanism=PARALLEL)
 def _ik(d: Derivation) -> FunctionSpec:
-    legs = d["distance_legs"]
+    legs = d[_distance_legs]
     solutions = [closed_form.solve_leg(leg) for leg in legs]
     branches = "; ".join(f"{leg.leg.name}: {leg.q} on the {_branch_text(leg.leg.ik_branch)} branch"
                          for leg in legs)
@@ -221,7 +221,7 @@ def _fk(d: Derivation) -> FunctionSpec:
             f"model '{d.model.name}': closed-form forward kinematics needs a translational platform on three "
             "legs (trilateration); solve it numerically with symkin.runtime.parallel.solve_fk (Newton on the "
             "generated ik and inverse_jacobian)")
-    position, margin = closed_form.trilaterate(d["distance_legs"], parallel.fk_branch)
+    position, margin = closed_form.trilaterate(d[_distance_legs], parallel.fk_branch)
     return make_function(
         d.model, "fk", "Forward kinematics: TCP position from the actuated joint variables.",
         "Trilateration (seed sec. 3.2.1): P lies on the spheres of radius L_i about S_i = C_i(q) - b_i; "
@@ -236,7 +236,7 @@ def _fk(d: Derivation) -> FunctionSpec:
 
 
 def _square(d: Derivation, name: str) -> tuple[sympy.Matrix, sympy.Matrix]:
-    J_x, J_q = d["constraint_jacobian_matrices"]
+    J_x, J_q = d[_constraint_jacobian_matrices]
     if J_x.shape[0] != J_x.shape[1]:
         raise DerivationError(f"model '{d.model.name}': {name} needs as many legs as task coordinates")
     return sympy.Matrix(J_x), sympy.Matrix(J_q)
