@@ -28,9 +28,51 @@ _FUNCTIONS = {name: getattr(sympy, name) for name in (
 _CONSTANTS = {"Pi": sympy.pi, "E": sympy.E}
 
 
-def to_symengine(expr: sympy.Expr) -> se.Basic:
-    """A sympy expression as a SymEngine one (symbols keep their names, assumptions are dropped)."""
-    return se.sympify(expr)
+_SE_FUNCTIONS = {getattr(sympy, name): getattr(se, name) for name in _FUNCTIONS}
+
+
+def to_symengine(expr: sympy.Expr, memo: dict[sympy.Basic, se.Basic] | None = None) -> se.Basic:
+    """A sympy expression as a SymEngine one (symbols keep their names, assumptions are dropped).
+
+    Every distinct sympy node is converted once (``memo``, which callers may share across
+    expressions): the products of transforms along a long chain are DAGs whose trees are
+    exponentially larger, and ``symengine.sympify`` walks the tree.  Sums, products, powers
+    and the functions of :data:`_FUNCTIONS` are rebuilt from their converted arguments, so
+    SymEngine canonicalizes them as ``sympify`` would; any other node (numbers, constants)
+    goes through ``sympify`` whole.
+    """
+    memo = {} if memo is None else memo
+    stack = [expr]
+    while stack:  # iterative post-order, as SympyConverter
+        node = stack[-1]
+        if node in memo:
+            stack.pop()
+            continue
+        rebuild = _rebuilder(node)
+        if rebuild is None:
+            memo[node] = se.sympify(node)
+            stack.pop()
+            continue
+        pending = [a for a in node.args if a not in memo]
+        if pending:
+            stack.extend(pending)
+            continue
+        stack.pop()
+        memo[node] = rebuild(*[memo[a] for a in node.args])
+    return memo[expr]
+
+
+def _rebuilder(node: sympy.Basic):
+    """The SymEngine constructor of a sympy node rebuilt from its arguments, None for a leaf."""
+    if node.is_Atom:
+        return None
+    if node.is_Add:
+        return se.Add
+    if node.is_Mul:
+        return se.Mul
+    if node.is_Pow:
+        return se.Pow
+    return _SE_FUNCTIONS.get(node.func)
 
 
 class SympyConverter:

@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 import sympy
 
 from symkin.errors import DerivationError
+from symkin.ir.dag import free_symbols
 from symkin.model.schema import Model
 
 #: Prefix of definition symbols (``_w0``, ``_w1``...); no model name starts with "_".
@@ -163,11 +164,7 @@ def make_function(model: Model, name: str, summary: str, doc: str,
     Raises:
         DerivationError: if an output uses a symbol that no input provides.
     """
-    used: set[sympy.Symbol] = set()
-    for out in outputs:
-        used |= out.expr.free_symbols
-    for _, expr in definitions:
-        used |= expr.free_symbols
+    used = free_symbols([e for out in outputs for e in out.expr] + [expr for _, expr in definitions])
     used -= {symbol for symbol, _ in definitions}
     params = tuple(
         InputSpec(p.name, "parameter", (p.symbol,), (p.name,), (p.unit,), p.doc, p.value)

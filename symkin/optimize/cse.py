@@ -6,8 +6,9 @@ import symengine as se
 import sympy
 from sympy.core.parameters import distribute
 
+from symkin.ir.dag import free_symbols
 from symkin.ir.spec import FunctionSpec, OptimizedFunction
-from symkin.ir.opcount import op_count
+from symkin.ir.opcount import op_count, spec_op_count
 from symkin.symengine_bridge import SympyConverter, to_symengine
 
 #: Prefix of CSE temporaries; model names must start with a letter, so these never clash.
@@ -15,11 +16,20 @@ TEMPORARY_PREFIX = "_x"
 
 Assignment = tuple[sympy.Symbol, sympy.Expr]
 
+#: Largest function (operations counted as a tree, :func:`~symkin.ir.opcount.spec_op_count`) given
+#: to ``sympy.cse``.  sympy's CSE orders arguments by their tree size
+#: (``sympy.core.sorting._node_count``, not memoized), so its cost follows the tree: about
+#: 4 us per tree operation here, 24 s for the 6-million-operation Jacobian of a 24-joint chain,
+#: whose DAG has 979 nodes.  Larger functions go through SymEngine's CSE, whose cost follows the
+#: DAG (:func:`_cse_program`); every example model stays below the limit.
+SYMPY_CSE_LIMIT = 500_000
+
 
 def eliminate_common_subexpressions(spec: FunctionSpec, counts: dict[str, int] | None = None) -> OptimizedFunction:
     """Run one CSE over every entry of every output of ``spec`` (and over its definitions).
 
-    The result is deterministic: sympy's canonical ordering is used and temporaries are
+    The result is deterministic: sympy's canonical ordering is used (SymEngine's for programs and for
+    functions over :data:`SYMPY_CSE_LIMIT`) and temporaries are
     numbered in evaluation order (``_x0``, ``_x1``...).  The definitions of a spec become
     temporaries too (see :func:`_cse_program`).
 
@@ -28,7 +38,8 @@ def eliminate_common_subexpressions(spec: FunctionSpec, counts: dict[str, int] |
         counts: op counts of earlier stages, extended with ``cse`` (temporaries + outputs).
     """
     entries = [e for out in spec.outputs for e in out.entries]
-    if spec.definitions:
+    counts = dict(counts or {})
+    if spec.definitions or spec_op_count(spec) > SYMPY_CSE_LIMIT:
         temporaries, reduced = _cse_program(spec.definitions, entries)
     else:
         with distribute(False):  # keep 2*(x + y) as one product (see passes.fold_parameters)
@@ -39,7 +50,6 @@ def eliminate_common_subexpressions(spec: FunctionSpec, counts: dict[str, int] |
         size = len(out.entries)
         outputs.append(tuple(reduced[start:start + size]))
         start += size
-    counts = dict(counts or {})
     counts["cse"] = op_count([e for _, e in temporaries] + list(reduced))
     return OptimizedFunction(spec, tuple(temporaries), tuple(outputs), counts)
 
@@ -57,10 +67,12 @@ def _cse_program(definitions: tuple[Assignment, ...], entries: list[sympy.Expr])
     away, and everything is renamed ``_x0, _x1...`` in evaluation order.
     """
     exprs = [e for _, e in definitions] + entries
-    symbols = {s.name: s for e in exprs for s in e.free_symbols}
+    symbols = {s.name: s for s in free_symbols(exprs)}
     symbols.update((s.name, s) for s, _ in definitions)
-    found, reduced = se.cse([to_symengine(e) for e in exprs])
-    assignments = list(found) + [(to_symengine(symbol), expr) for (symbol, _), expr in zip(definitions, reduced)]
+    memo: dict = {}
+    found, reduced = se.cse([to_symengine(e, memo) for e in exprs])
+    assignments = list(found) + [(to_symengine(symbol, memo), expr)
+                                 for (symbol, _), expr in zip(definitions, reduced)]
     # Final names in evaluation order; a definition that reduced to an atom is an alias.
     names = sympy.numbered_symbols(TEMPORARY_PREFIX, real=True)
     kept = []

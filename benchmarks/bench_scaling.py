@@ -1,0 +1,75 @@
+"""Derive time and operation counts against the number of joints (issue 12).
+
+For the generated n-joint chains of ``chain_models.py`` (n = 3, 6, 12, 24 by default):
+``symkin derive --only fk,jacobian,mass_matrix,coriolis_vector,gravity_vector --backend
+numpy,c`` in process (load, derive, optimize, emit; no compilation), with the operations
+of every function as derived (a tree count) and after CSE, and the exponent of a power-law
+fit of the derive time against n over the sizes from 6 on.
+
+Run with `make bench` or `python benchmarks/bench_scaling.py [--sizes 3,6,12,24]`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+from chain_models import chain_yaml  # noqa: E402
+from symkin import pipeline  # noqa: E402
+from symkin.model import load_model  # noqa: E402
+from symkin.text_table import format_table  # noqa: E402
+
+OUTPUTS = "fk,jacobian,mass_matrix,coriolis_vector,gravity_vector"
+
+
+def measure(n: int, directory: Path) -> dict[str, float]:
+    path = directory / f"chain{n}.yaml"
+    path.write_text(chain_yaml(n))
+    start = time.perf_counter()
+    model = load_model(path)
+    result = pipeline.generate(model, pipeline.resolve_request(model, OUTPUTS, "numpy,c", None, None, None))
+    pipeline.write(result, directory / "out")
+    seconds = time.perf_counter() - start
+    parts = [r for r in result.reports if r.name != "scene"]
+    return {"n": n, "seconds": seconds,
+            "derived": sum(r.op_counts["derived"] for r in parts), "cse": sum(r.op_counts["cse"] for r in parts),
+            "scene": next((r.op_counts["cse"] for r in result.reports if r.name == "scene"), 0)}
+
+
+def fitted_exponent(rows: list[dict[str, float]]) -> float:
+    """Least-squares slope of log(time) against log(n), over n >= 6 (small n is fixed overhead)."""
+    points = [(math.log(r["n"]), math.log(r["seconds"])) for r in rows if r["n"] >= 6]
+    if len(points) < 2:
+        return float("nan")
+    mx = sum(x for x, _ in points) / len(points)
+    my = sum(y for _, y in points) / len(points)
+    return sum((x - mx) * (y - my) for x, y in points) / sum((x - mx) ** 2 for x, _ in points)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--sizes", default="3,6,12,24", help="numbers of joints, comma-separated (default: %(default)s)")
+    args = parser.parse_args(argv)
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for n in (int(s) for s in args.sizes.split(",")):
+            rows.append(measure(n, Path(tmp)))
+            r = rows[-1]
+            print(f"  n = {n}: {r['seconds']:.2f} s", file=sys.stderr, flush=True)
+    print(f"derive {OUTPUTS} (numpy, c) for generated n-joint chains")
+    print(format_table(["n", "wall (s)", "ops derived (tree)", "ops after CSE", "scene ops"],
+                       [[r["n"], f"{r['seconds']:.2f}", f"{r['derived']:,}", f"{r['cse']:,}", f"{r['scene']:,}"]
+                        for r in rows]))
+    print(f"fitted exponent of the derive time in n (n >= 6): {fitted_exponent(rows):.2f}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
