@@ -26,6 +26,7 @@ from collections.abc import Iterable, Sequence
 import symengine as se
 import sympy
 
+from symkin.ir.dag import VALUE_NUMBERING_TREE_SIZE, name_shared_nodes, tree_size
 from symkin.ir.spec import DEFINITION_PREFIX
 from symkin.symengine_bridge import SympyConverter, to_symengine
 
@@ -59,8 +60,16 @@ class Program:
         return self._append(expr)
 
     def bind(self, exprs: Sequence[se.Basic]) -> list[se.Basic]:
-        """Pull the common subexpressions of ``exprs`` into assignments; returns the reduced expressions."""
-        temporaries, reduced = se.cse([se.sympify(e) for e in exprs])
+        """Pull the common subexpressions of ``exprs`` into assignments; returns the reduced expressions.
+
+        Deep graphs (over :data:`~symkin.ir.dag.VALUE_NUMBERING_TREE_SIZE`) are value-numbered
+        first (:func:`~symkin.ir.dag.name_shared_nodes`), so that ``symengine.cse`` sees small
+        expressions.
+        """
+        exprs = [se.sympify(e) for e in exprs]
+        if tree_size(exprs) > VALUE_NUMBERING_TREE_SIZE:
+            exprs = name_shared_nodes(exprs, self._append)
+        temporaries, reduced = se.cse(exprs)
         rename: dict[se.Basic, se.Basic] = {}
 
         def renamed(expr: se.Basic) -> se.Basic:

@@ -6,13 +6,15 @@ import symengine as se
 import sympy
 from sympy.core.parameters import distribute
 
-from symkin.ir.dag import free_symbols
+from symkin.ir.dag import VALUE_NUMBERING_TREE_SIZE, free_symbols, name_shared_nodes, tree_size
 from symkin.ir.spec import FunctionSpec, OptimizedFunction
 from symkin.ir.opcount import op_count, spec_op_count
 from symkin.symengine_bridge import SympyConverter, to_symengine
 
 #: Prefix of CSE temporaries; model names must start with a letter, so these never clash.
 TEMPORARY_PREFIX = "_x"
+#: Prefix of the shared nodes named by value numbering before SymEngine's CSE (renamed ``_x..`` after).
+VALUE_PREFIX = "_v"
 
 Assignment = tuple[sympy.Symbol, sympy.Expr]
 
@@ -64,15 +66,25 @@ def _cse_program(definitions: tuple[Assignment, ...], entries: list[sympy.Expr])
     are atoms to the CSE; the new temporaries and the (reduced) definitions are then put in
     a dependency order (depth first, in list order, so the result does not depend on set
     iteration order), definitions that reduced to a single symbol or number are substituted
-    away, and everything is renamed ``_x0, _x1...`` in evaluation order.
+    away, and everything is renamed ``_x0, _x1...`` in evaluation order.  Deep graphs are
+    value-numbered before SymEngine's CSE (:func:`~symkin.ir.dag.name_shared_nodes`).
     """
     exprs = [e for _, e in definitions] + entries
     symbols = {s.name: s for s in free_symbols(exprs)}
     symbols.update((s.name, s) for s, _ in definitions)
     memo: dict = {}
-    found, reduced = se.cse([to_symengine(e, memo) for e in exprs])
-    assignments = list(found) + [(to_symengine(symbol, memo), expr)
-                                 for (symbol, _), expr in zip(definitions, reduced)]
+    converted = [to_symengine(e, memo) for e in exprs]
+    named: list[tuple[se.Symbol, se.Basic]] = []
+    if tree_size(converted) > VALUE_NUMBERING_TREE_SIZE:
+        def name(value: se.Basic) -> se.Symbol:
+            named.append((se.Symbol(f"{VALUE_PREFIX}{len(named)}"), value))
+            return named[-1][0]
+        converted = name_shared_nodes(converted, name)
+    # The named values go through the CSE too (sums shared between them are found there).
+    found, reduced = se.cse([value for _, value in named] + converted)
+    named, reduced = [(symbol, value) for (symbol, _), value in zip(named, reduced)], reduced[len(named):]
+    assignments = named + list(found) + [(to_symengine(symbol, memo), expr)
+                                         for (symbol, _), expr in zip(definitions, reduced)]
     # Final names in evaluation order; a definition that reduced to an atom is an alias.
     names = sympy.numbered_symbols(TEMPORARY_PREFIX, real=True)
     kept = []
