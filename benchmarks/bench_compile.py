@@ -5,10 +5,9 @@ Run with `make bench` or `python benchmarks/bench_compile.py [--models NAMES] [-
 Each model of ``generated/`` is built exactly as ``load(..., backend="c")`` builds it
 (:func:`symkin.backends.c.build.shared_library`, into an empty temporary cache so nothing is
 reused), once per set of ``SYMKIN_CFLAGS``.  The default sets are the default ``-O3`` and
-``-O3 -fno-tree-slp-vectorize``: GCC's SLP vectorizer dominates the build of the large
-straight-line functions (the Stewart platform's closure Jacobians: several minutes at
-``-O3``), see docs/generated-code.md.  The Stewart library is left out by default: it takes
-some 14 minutes over both sets (``--models stewart``).
+``-O3 -fno-tree-slp-vectorize``: GCC's SLP vectorizer dominates the build of large lane
+loops, which is why functions with many outputs batch by single calls (``LANE_SLOTS``, see
+docs/generated-code.md).
 """
 
 from __future__ import annotations
@@ -49,7 +48,7 @@ def build_seconds(source: Path, flags: str) -> float:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--models", default="planar_2r,ur10e,delta",
+    parser.add_argument("--models", default="planar_2r,ur10e,delta,stewart",
                         help="comma-separated directories of generated/ (default: %(default)s)")
     parser.add_argument("--flags", action="append", default=None, metavar="CFLAGS",
                         help="a set of SYMKIN_CFLAGS to time (repeatable; default: " + " and ".join(

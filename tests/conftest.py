@@ -27,9 +27,6 @@ from symkin.model import Model, load_model
 FOREIGN_ARITHMETIC = os.environ.get("SYMKIN_TEST_ARITHMETIC") == "foreign"
 NUMERICS_MODULES = {"test_stability", "test_backends_agree", "test_pinocchio", "test_dynamics_newton_euler",
                     "test_dynamics_ur10e", "test_numpy_backend", "test_golden", "test_tolerances"}
-#: Models whose C compiles in seconds with the foreign flags; the Stewart platform's takes ~400 s
-#: at -O2 (issue 12 makes it fast; then it joins).
-FOREIGN_C_MODELS = {"planar_2r", "ur10e", "ur10e_classic", "delta"}
 
 ROOT = Path(__file__).resolve().parent.parent
 MODELS_DIR = ROOT / "models"
@@ -193,8 +190,6 @@ def loaded(generated_dir):
     cache = {}
 
     def get(name: str, backend: str):
-        if FOREIGN_ARITHMETIC and backend == "c" and name not in FOREIGN_C_MODELS:
-            pytest.skip(f"{name}'s C takes minutes to compile with the foreign-arithmetic flags")
         if (name, backend) not in cache:
             cache[name, backend] = load(generated_dir / name, backend=backend)
         return cache[name, backend]

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 import sympy
 
-from conftest import EXAMPLE_MODELS, ROOT
+from conftest import EXAMPLE_MODELS, ROOT, function_spec, random_inputs
 from symkin.backends.c import build
 from symkin.backends.c.printer import CPrinter
 from symkin.errors import GeneratedCodeError
@@ -25,8 +25,8 @@ STRICT_FLAGS = ["-std=c99", "-O3", "-Wall", "-Wextra", "-Werror", "-pedantic", "
 
 
 #: Sources larger than this are compiled at -O1 instead of -O3: the same warnings (GCC's
-#: flow-sensitive analyses run from -O1 on), minutes less (the UR10e's dynamics take a minute at
-#: -O3, the Stewart platform's closure Jacobians seven: GCC's SLP vectorizer on huge blocks).
+#: flow-sensitive analyses run from -O1 on), a minute less (the UR10e's dynamics take a minute at
+#: -O3 with the strict flags: GCC's SLP vectorizer on large lane loops).
 LARGE_SOURCE = 300_000
 
 
@@ -166,3 +166,20 @@ def test_scene_float32_must_be_true_or_false(tmp_path):
         load_model(path)
     path.write_text(path.read_text().replace("maybe", "true"))
     assert load_model(path).scene.float32 is True
+
+
+def test_a_function_with_many_outputs_batches_by_single_calls_with_the_same_bits(loaded, models, derivations,
+                                                                                generated_dir):
+    """Issue 12: over LANE_SLOTS stored outputs the batch function calls the single one per configuration
+    (GCC's SLP vectorizer took minutes on the lane loop); its results are the single calls' bits."""
+    header = (generated_dir / "stewart" / "stewart.h").read_text()
+    assert "Calls stewart_closure_jacobians once per configuration." in header
+    assert "bytes of stack for its blocks" in header  # the smaller functions keep their lane loops
+    stewart = loaded("stewart", "c")
+    record = next(f for f in stewart.manifest["functions"] if f["name"] == "closure_jacobians")
+    spec = function_spec(models["stewart"], derivations["stewart"], record)
+    inputs = random_inputs(models["stewart"], spec, np.random.default_rng(3), 9)
+    batch = stewart.closure_jacobians(*inputs)
+    singles = [stewart.closure_jacobians(*(a[i] for a in inputs)) for i in range(9)]
+    for k, out in enumerate(batch):
+        np.testing.assert_array_equal(out, np.stack([single[k] for single in singles]))

@@ -276,7 +276,7 @@ void stewart_closure_jacobians(const double *q, const double *s, const double *p
 void stewart_closure_jacobians_packed(const double *in, double *out);
 
 /* stewart_closure_jacobians for n configurations; params: r_p, gamma_b, gamma_p, stride 0 or 3.
- * Uses 24768 bytes of stack for its blocks of 8 configurations. */
+ * Calls stewart_closure_jacobians once per configuration. */
 void stewart_closure_jacobians_batch(size_t n, const double *q, const double *s, const double *p, const double *params, size_t params_stride, double *Phi_p, double *Phi_q, double *Phi_s);
 
 /* stewart_scene: ik, inverse_jacobian together, with one set of shared subexpressions.

@@ -19,7 +19,10 @@ them once on scalars; the batch function runs them in a loop over the lanes of a
 BLOCK configurations whose inputs were transposed into lane-contiguous arrays: a loop of
 straight-line arithmetic the compiler vectorizes.  sin and cos of input symbols (all of
 them, after :func:`~symkin.optimize.passes.expand_trig_sums`) are computed before that loop
-by the generated vectorizable ``sincos`` (:mod:`symkin.backends.c.trig`).
+by the generated vectorizable ``sincos`` (:mod:`symkin.backends.c.trig`).  A function with
+more than :data:`LANE_SLOTS` non-constant outputs gets no lane loop: its batch function calls
+the single one per configuration (same statements, same bits), because compiling the lane
+loop grows much faster than its size (see :data:`LANE_SLOTS`).
 """
 
 from __future__ import annotations
@@ -43,6 +46,12 @@ SOURCE_TEMPLATE = "c/source.c.j2"
 DOC_WIDTH = 86
 #: Configurations per block of the batch entry points (a multiple of every SIMD width).
 BLOCK = 8
+#: Most non-constant outputs a batch function evaluates in a lane loop.  GCC's SLP vectorizer
+#: (on at -O2 and -O3) grows superlinearly with the lane loop's stores times its statements:
+#: Stewart's closure_jacobians (240 stored outputs, 1 008 temporaries) took over 700 s at -O3
+#: in a lane loop (33 s with -fno-tree-slp-vectorize), 4 s as a single function.  Every other
+#: example function stores at most 81 (UR10e scene, 1.3 s); see benchmarks/bench_compile.py.
+LANE_SLOTS = 128
 
 #: (precision, function-name suffix) of each emitted variant.
 VARIANTS = {"double": "", "float": "_f32"}
@@ -158,6 +167,7 @@ def _function_context(code: ModelCode, f: OptimizedFunction, precision: str, pri
         "slots": slots,
         # lane arrays of the batch function: inputs, outputs, and angle/sin/cos per angle
         "batch_stack_bytes": (len(scalars) + slots + 3 * len(trig)) * BLOCK * (4 if precision == "float" else 8),
+        "lanes": slots <= LANE_SLOTS,
         "temporaries": [{"name": str(s), "code": text(e)} for s, e in f.temporaries],
         "op_count": f.op_counts["cse"],
     }
