@@ -65,8 +65,8 @@ def _cse_program(definitions: tuple[Assignment, ...], entries: list[sympy.Expr])
     milliseconds, so it runs here (see :mod:`symkin.symengine_bridge`).  Definition symbols
     are atoms to the CSE; the new temporaries and the (reduced) definitions are then put in
     a dependency order (depth first, in list order, so the result does not depend on set
-    iteration order), definitions that reduced to a single symbol or number are substituted
-    away, and everything is renamed ``_x0, _x1...`` in evaluation order.  Deep graphs are
+    iteration order), definitions that reduced to a single symbol or number, or to the value of
+    an earlier assignment, are substituted away, and everything is renamed ``_x0, _x1...`` in evaluation order.  Deep graphs are
     value-numbered before SymEngine's CSE (:func:`~symkin.ir.dag.name_shared_nodes`).
     """
     exprs = [e for _, e in definitions] + entries
@@ -85,13 +85,26 @@ def _cse_program(definitions: tuple[Assignment, ...], entries: list[sympy.Expr])
     named, reduced = [(symbol, value) for (symbol, _), value in zip(named, reduced)], reduced[len(named):]
     assignments = named + list(found) + [(to_symengine(symbol, memo), expr)
                                          for (symbol, _), expr in zip(definitions, reduced)]
-    # Final names in evaluation order; a definition that reduced to an atom is an alias.
+    # Final names in evaluation order.  Value numbering: an assignment that reduced to an atom,
+    # or to the right-hand side of an earlier one (once the aliases before it are substituted),
+    # is an alias, so no function evaluates the same right-hand side twice (the parts of a
+    # combined function number their definitions apart: M, V and G each rebuild the link terms).
     names = sympy.numbered_symbols(TEMPORARY_PREFIX, real=True)
     kept = []
+    alias: dict[se.Basic, se.Basic] = {}
+    first_with_value: dict[se.Basic, se.Basic] = {}
     for symbol, expr in _dependency_order(assignments):
+        used = {s: alias[s] for s in expr.free_symbols if s in alias}
+        if used:
+            expr = expr.xreplace(used)
         if expr.is_Atom:
+            alias[symbol] = expr
             symbols[symbol.name] = SympyConverter(symbols)(expr)
+        elif expr in first_with_value:
+            alias[symbol] = first_with_value[expr]
+            symbols[symbol.name] = symbols[first_with_value[expr].name]
         else:
+            first_with_value[expr] = symbol
             symbols[symbol.name] = next(names)
             kept.append((symbol, expr))
     convert = SympyConverter(symbols)

@@ -113,8 +113,8 @@ def fold_parameters_after_cse(function: OptimizedFunction, fixed: Iterable[str])
     The other order than :func:`fold_parameters` followed by CSE: it keeps the CSE found
     with the parameters as symbols (numbers in products can hide common factors from
     sympy's CSE), and it cannot add operations to it: every temporary and output is rebuilt
-    with :func:`_rebuild`, and a temporary that folds to a number or a single symbol is
-    substituted into its uses instead of being kept.  ``op_counts["cse"]`` is recomputed.
+    with :func:`_rebuild`, and a temporary that folds to a number, a single symbol or the value
+    of an earlier temporary is substituted into its uses instead of being kept.  ``op_counts["cse"]`` is recomputed.
     """
     spec = function.spec
     fixed = set(fixed)
@@ -131,11 +131,15 @@ def fold_parameters_after_cse(function: OptimizedFunction, fixed: Iterable[str])
         return _rebuild(substituted, _constant_value, constants_memo, costs)
 
     temporaries = []
+    first_with_value: dict[sympy.Expr, sympy.Symbol] = {}
     for symbol, expr in function.temporaries:
         folded = fold(expr)
         if folded.is_Atom:
             values[symbol] = folded  # a number or an alias: substitute it into later uses
+        elif folded in first_with_value:
+            values[symbol] = first_with_value[folded]  # two temporaries that folding made equal
         else:
+            first_with_value[folded] = symbol
             temporaries.append((symbol, folded))
     outputs = tuple(tuple(fold(e) for e in entries) for entries in function.outputs)
     inputs = tuple(i for i in spec.inputs if not (i.kind == "parameter" and i.name in fixed))
