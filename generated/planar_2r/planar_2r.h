@@ -303,7 +303,7 @@ void planar_2r_forward_dynamics_batch(size_t n, const double *q, const double *q
  *   g: gravitational acceleration [m/s^2]; default PLANAR_2R_DEFAULT_g = 9.81.
  * Outputs:
  *   F[2]: 2; TCP force components [x, y] [N, N*m].
- * Cost: 65 operations.
+ * Cost: 68 operations.
  */
 void planar_2r_tcp_force(const double *q, const double *qd, const double *qdd, double l1, double l2, double m1, double m2, double g, double *F);
 
@@ -332,7 +332,7 @@ void planar_2r_tcp_force_batch(size_t n, const double *q, const double *qd, cons
  *   Mx[4]: 2 x 2, row-major; operational-space mass matrix J^-T M J^-1.
  *   Vx[2]: 2; operational-space Coriolis and centrifugal force J^-T (V - M J^-1 dJ/dt qd).
  *   Gx[2]: 2; operational-space gravity force J^-T G.
- * Cost: 125 operations.
+ * Cost: 127 operations.
  */
 void planar_2r_operational_space(const double *q, const double *qd, double l1, double l2, double m1, double m2, double g, double *Mx, double *Vx, double *Gx);
 
@@ -437,7 +437,7 @@ void planar_2r_potential_energy_batch(size_t n, const double *q, const double *p
  *   Gx[2]: 2; operational-space gravity force J^-T G (operational_space).
  *   k[1]: scalar; kinetic energy of all bodies (kinetic_energy) [J].
  *   u[1]: scalar; potential energy (potential_energy) [J].
- * Cost: 276 operations.
+ * Cost: 266 operations.
  */
 void planar_2r_scene(const double *q, const double *qd, const double *qdd, const double *tau, double l1, double l2, double m1, double m2, double g, double *base_T_tcp, double *base_T_link1, double *base_T_link2, double *jacobian_J, double *jacobian_geometric_J, double *M, double *C, double *V, double *G, double *inverse_dynamics_tau, double *forward_dynamics_qdd, double *F, double *Mx, double *Vx, double *Gx, double *k, double *u);
 
@@ -710,7 +710,7 @@ void planar_2r_forward_dynamics_batch_f32(size_t n, const float *q, const float 
  *   g: gravitational acceleration [m/s^2]; default PLANAR_2R_DEFAULT_g = 9.81.
  * Outputs:
  *   F[2]: 2; TCP force components [x, y] [N, N*m].
- * Cost: 65 operations.
+ * Cost: 68 operations.
  */
 void planar_2r_tcp_force_f32(const float *q, const float *qd, const float *qdd, float l1, float l2, float m1, float m2, float g, float *F);
 
@@ -739,7 +739,7 @@ void planar_2r_tcp_force_batch_f32(size_t n, const float *q, const float *qd, co
  *   Mx[4]: 2 x 2, row-major; operational-space mass matrix J^-T M J^-1.
  *   Vx[2]: 2; operational-space Coriolis and centrifugal force J^-T (V - M J^-1 dJ/dt qd).
  *   Gx[2]: 2; operational-space gravity force J^-T G.
- * Cost: 125 operations.
+ * Cost: 127 operations.
  */
 void planar_2r_operational_space_f32(const float *q, const float *qd, float l1, float l2, float m1, float m2, float g, float *Mx, float *Vx, float *Gx);
 
@@ -844,7 +844,7 @@ void planar_2r_potential_energy_batch_f32(size_t n, const float *q, const float 
  *   Gx[2]: 2; operational-space gravity force J^-T G (operational_space).
  *   k[1]: scalar; kinetic energy of all bodies (kinetic_energy) [J].
  *   u[1]: scalar; potential energy (potential_energy) [J].
- * Cost: 276 operations.
+ * Cost: 266 operations.
  */
 void planar_2r_scene_f32(const float *q, const float *qd, const float *qdd, const float *tau, float l1, float l2, float m1, float m2, float g, float *base_T_tcp, float *base_T_link1, float *base_T_link2, float *jacobian_J, float *jacobian_geometric_J, float *M, float *C, float *V, float *G, float *inverse_dynamics_tau, float *forward_dynamics_qdd, float *F, float *Mx, float *Vx, float *Gx, float *k, float *u);
 

@@ -99,17 +99,30 @@ def _cse_program(definitions: tuple[Assignment, ...], entries: list[sympy.Expr])
             expr = expr.xreplace(used)
         if expr.is_Atom:
             alias[symbol] = expr
-            symbols[symbol.name] = SympyConverter(symbols)(expr)
         elif expr in first_with_value:
             alias[symbol] = first_with_value[expr]
-            symbols[symbol.name] = symbols[first_with_value[expr].name]
         else:
             first_with_value[expr] = symbol
-            symbols[symbol.name] = next(names)
             kept.append((symbol, expr))
+    outputs = [e.xreplace({s: alias[s] for s in e.free_symbols if s in alias}) for e in reduced[len(definitions):]]
+    kept = _used_by(kept, outputs)
+    for symbol, _ in kept:
+        symbols[symbol.name] = next(names)
     convert = SympyConverter(symbols)
     temporaries = [(symbols[symbol.name], convert(expr)) for symbol, expr in kept]
-    return temporaries, [convert(e) for e in reduced[len(definitions):]]
+    return temporaries, [convert(e) for e in outputs]
+
+
+def _used_by(assignments: list[Assignment], outputs: list) -> list[Assignment]:
+    """The ``assignments`` (in dependency order) that ``outputs`` need, directly or through others:
+    a definition whose every use was rewritten away (trig of a sum expanded) is not emitted."""
+    needed = {s for e in outputs for s in e.free_symbols}
+    kept = []
+    for symbol, expr in reversed(assignments):
+        if symbol in needed:
+            kept.append((symbol, expr))
+            needed.update(expr.free_symbols)
+    return kept[::-1]
 
 
 def _dependency_order(assignments: list[Assignment]) -> list[Assignment]:

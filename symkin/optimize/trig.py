@@ -62,23 +62,39 @@ class _AngleSums:
         return self.pairs[key]
 
 
+def _definitions_of_angle_sums(spec: FunctionSpec) -> dict[sympy.Symbol, sympy.Expr]:
+    """The definitions whose values are angle sums (``_w3 = q2 + q3``, ``_w4 = _w3 + q4``), written
+    out in the symbols they add: trig of a definition is then expanded like trig of the sum."""
+    sums: dict[sympy.Symbol, sympy.Expr] = {}
+    for symbol, expr in spec.definitions:
+        through = {s: sums[s] for s in expr.free_symbols if s in sums}
+        value = expr.xreplace(through) if through else expr
+        if not value.is_Symbol and _angle_terms(value) is not None:
+            sums[symbol] = value
+    return sums
+
+
 def expand_trig_sums(spec: FunctionSpec) -> FunctionSpec:
     """Rewrite sin and cos of sums of angles through the angle-addition formulas.
 
     ``sin(q2 + q3 + q4)`` becomes ``sin(q2 + q3)*cos(q4) + cos(q2 + q3)*sin(q4)`` with
     ``sin(q2 + q3)`` itself expanded (prefixes of the sum, in a fixed symbol order, are
     shared, so CSE finds them once), likewise integer multiples (``sin(2*q)``) and constant
-    offsets (``cos(q + pi/3)``, exact coefficients).  A function then calls sin and cos once
+    offsets (``cos(q + pi/3)``, exact coefficients), also where the sum is a definition
+    (``sin(_w4)`` with ``_w4 = q2 + q3 + q4``).  A function then calls sin and cos once
     per angle symbol and pays a few multiplications per sum instead: one sin/cos pair costs
     about as much time as 20-40 multiplications, so this trades a higher op count for speed.
     Applied before constant folding, so constant offsets stay exact.
     """
     sums = _AngleSums()
+    angle_sums = _definitions_of_angle_sums(spec)
 
     def rewrite(expr: sympy.Expr) -> sympy.Expr | None:
         if not isinstance(expr, (sympy.sin, sympy.cos)):
             return None
-        split = _angle_terms(rewrite_all(expr.args[0]))
+        argument = rewrite_all(expr.args[0])
+        through = {s: angle_sums[s] for s in argument.free_symbols if s in angle_sums}
+        split = _angle_terms(argument.xreplace(through) if through else argument)
         if split is None:
             return None
         constant, parts = split
