@@ -94,15 +94,19 @@ def test_float32_entry_points_agree_with_double(loaded, generated_dir):
     np.testing.assert_allclose(out, arm.jacobian(q, l1=0.3, l2=0.2), atol=1e-6)
 
 
-def test_libraries_are_cached_by_content(generated_dir, tmp_path, monkeypatch):
+def test_libraries_are_cached_by_content(generated_dir, tmp_path, monkeypatch, capsys):
     monkeypatch.setenv("SYMKIN_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.delenv("SYMKIN_QUIET", raising=False)
     work = tmp_path / "src"
     shutil.copytree(generated_dir / "planar_2r", work)
     source, header = work / "planar_2r.c", work / "planar_2r.h"
     first = build.shared_library(source, header)
     assert first.parent == tmp_path / "cache" and first.exists()
+    progress = capsys.readouterr().err  # a build says what it compiles and how long it took
+    assert "symkin: compiling planar_2r.c" in progress and "symkin: compiled planar_2r.c in" in progress
     stamp = first.stat().st_mtime_ns
     assert build.shared_library(source, header) == first and first.stat().st_mtime_ns == stamp
+    assert capsys.readouterr().err == ""  # loading from the cache is silent
     source.write_text(source.read_text() + "\n/* changed */\n")
     second = build.shared_library(source, header)
     assert second != first and second.exists()

@@ -11,6 +11,7 @@ Environment:
     SYMKIN_CACHE_DIR: cache directory (default ``$XDG_CACHE_HOME/symkin`` or ``~/.cache/symkin``).
     CC: the C compiler (default ``cc``).
     SYMKIN_CFLAGS: optimization flags (default ``-O3``; e.g. ``-O3 -march=native``).
+    SYMKIN_QUIET: ``1`` silences the progress lines a build prints on stderr.
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ import shlex
 import subprocess
 import sys
 import tempfile
+import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from functools import lru_cache
@@ -79,8 +81,20 @@ def shared_library(source: Path, header: Path) -> Path:
     directory.mkdir(parents=True, exist_ok=True)
     with _locked(directory / f"{target.name}.lock"):
         if not target.exists():  # another process may have built it while we waited
+            _progress(f"symkin: compiling {source.name} ({source.stat().st_size // 1024} kB) with "
+                      f"{' '.join(command)}; cached in {directory} afterwards ...")
+            start = time.perf_counter()
             _compile(command, source, header, target)
+            _progress(f"symkin: compiled {source.name} in {time.perf_counter() - start:.1f} s")
     return target
+
+
+def _progress(line: str) -> None:
+    """A progress line on stderr: a build takes seconds, loading from the cache is silent
+    (``SYMKIN_QUIET=1`` silences builds too)."""
+    if os.environ.get("SYMKIN_QUIET", "") not in ("", "0"):
+        return
+    print(line, file=sys.stderr, flush=True)
 
 
 @contextmanager
