@@ -59,3 +59,14 @@ def test_ci_runs_exactly_the_readme_test_command():
     readme = [line for line in (ROOT / "README.md").read_text().splitlines() if line.startswith("make test")]
     ci = [line for line in (ROOT / ".ci" / "run").read_text().splitlines() if line.startswith("make ")]
     assert len(readme) == 1 and ci == readme, (readme, ci)
+
+
+def test_negative_values_with_units_are_values_not_options():
+    """Issue 16: ``--q0 0 30deg 0 -60deg`` was refused (argparse read -60deg as an option)."""
+    from symkin.cli import build_parser
+
+    args = build_parser().parse_args(["simulate", "generated/ur10e", "--q0", "0", "30deg", "0", "-60deg", "-1e-3",
+                                      "-.5", "--scenario", "sine"])
+    assert args.q0 == ["0", "30deg", "0", "-60deg", "-1e-3", "-.5"] and args.scenario == "sine"
+    with pytest.raises(SystemExit):  # an unknown option is still an error
+        build_parser().parse_args(["simulate", "generated/ur10e", "--q0", "0", "-x"])

@@ -6,6 +6,7 @@ Exit codes: 0 success, 2 bad input (model file, arguments), 1 anything else.
 from __future__ import annotations
 
 import argparse
+import re
 import signal
 import sys
 from collections.abc import Sequence
@@ -13,6 +14,11 @@ from collections.abc import Sequence
 from symkin._version import __version__
 from symkin.cli import commands
 from symkin.errors import GeneratedCodeError, ModelError, SymkinError
+
+
+#: What a command line reads as a negative value, not an option: -60, -0.5, -1e-3 and -60deg
+#: (argparse's own pattern stops at plain numbers, so ``--q0 0 -60deg`` was an unknown option).
+NEGATIVE_VALUE = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?(deg)?$")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -26,6 +32,10 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for register in commands.REGISTRY:
         register(sub)
+    for command in sub.choices.values():
+        # argparse's documented behaviour (a token that looks like a negative number is a value
+        # when no option looks like one) keyed by its pattern attribute, widened to units.
+        command._negative_number_matcher = NEGATIVE_VALUE
     return parser
 
 
