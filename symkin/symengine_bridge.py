@@ -23,6 +23,8 @@ from collections.abc import Mapping
 import symengine as se
 import sympy
 
+from symkin.expression_dag import post_order
+
 _FUNCTIONS = {name: getattr(sympy, name) for name in (
     "sin", "cos", "tan", "asin", "acos", "atan", "atan2", "sinh", "cosh", "tanh", "exp", "log", "sign", "Abs")}
 _CONSTANTS = {"Pi": sympy.pi, "E": sympy.E}
@@ -42,23 +44,12 @@ def to_symengine(expr: sympy.Expr, memo: dict[sympy.Basic, se.Basic] | None = No
     goes through ``sympify`` whole.
     """
     memo = {} if memo is None else memo
-    stack = [expr]
-    while stack:  # iterative post-order, as SympyConverter
-        node = stack[-1]
-        if node in memo:
-            stack.pop()
-            continue
+
+    def convert(node: sympy.Basic) -> se.Basic:
         rebuild = _rebuilder(node)
-        if rebuild is None:
-            memo[node] = se.sympify(node)
-            stack.pop()
-            continue
-        pending = [a for a in node.args if a not in memo]
-        if pending:
-            stack.extend(pending)
-            continue
-        stack.pop()
-        memo[node] = rebuild(*[memo[a] for a in node.args])
+        return se.sympify(node) if rebuild is None else rebuild(*[memo[a] for a in node.args])
+
+    post_order([expr], memo, convert, children=lambda node: () if _rebuilder(node) is None else node.args)
     return memo[expr]
 
 

@@ -1,4 +1,4 @@
-"""DAG walks (symkin.ir.dag): sizes and value numbering that visit each distinct node once (issue 12)."""
+"""DAG walks (symkin.expression_dag): sizes and value numbering that visit each distinct node once (issue 12)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import math
 import symengine as se
 import sympy
 
-from symkin.ir.dag import free_symbols, name_shared_nodes, tree_size
+from symkin.expression_dag import free_symbols, name_shared_nodes, tree_size
 from tolerances import CLOSED_FORM
 
 

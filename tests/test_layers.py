@@ -21,7 +21,7 @@ PACKAGE = Path(__file__).resolve().parent.parent / "symkin"
 
 #: Lowest first.  Each entry: the layer's name and its top-level modules or packages of symkin.
 LAYERS = (
-    ("foundation", {"_version", "errors", "atomic", "symengine_bridge", "text_table"}),
+    ("foundation", {"_version", "errors", "atomic", "expression_dag", "symengine_bridge", "text_table"}),
     ("model", {"model", "geometry"}),
     ("structure", {"structure"}),
     ("ir", {"ir"}),

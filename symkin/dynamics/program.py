@@ -26,7 +26,7 @@ from collections.abc import Iterable, Sequence
 import symengine as se
 import sympy
 
-from symkin.ir.dag import VALUE_NUMBERING_TREE_SIZE, name_shared_nodes, tree_size
+from symkin.expression_dag import VALUE_NUMBERING_TREE_SIZE, name_shared_nodes, tree_size
 from symkin.ir.spec import DEFINITION_PREFIX
 from symkin.symengine_bridge import SympyConverter, to_symengine
 
@@ -62,8 +62,8 @@ class Program:
     def bind(self, exprs: Sequence[se.Basic]) -> list[se.Basic]:
         """Pull the common subexpressions of ``exprs`` into assignments; returns the reduced expressions.
 
-        Deep graphs (over :data:`~symkin.ir.dag.VALUE_NUMBERING_TREE_SIZE`) are value-numbered
-        first (:func:`~symkin.ir.dag.name_shared_nodes`), so that ``symengine.cse`` sees small
+        Deep graphs (over :data:`~symkin.expression_dag.VALUE_NUMBERING_TREE_SIZE`) are value-numbered
+        first (:func:`~symkin.expression_dag.name_shared_nodes`), so that ``symengine.cse`` sees small
         expressions.
         """
         exprs = [se.sympify(e) for e in exprs]

@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 import sympy
 
 from symkin.errors import DerivationError
-from symkin.ir.dag import free_symbols
+from symkin.expression_dag import free_symbols
 from symkin.model.schema import Model
 
 #: Prefix of definition symbols (``_w0``, ``_w1``...); no model name starts with "_".

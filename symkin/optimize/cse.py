@@ -6,7 +6,7 @@ import symengine as se
 import sympy
 from sympy.core.parameters import distribute
 
-from symkin.ir.dag import VALUE_NUMBERING_TREE_SIZE, free_symbols, name_shared_nodes, tree_size
+from symkin.expression_dag import VALUE_NUMBERING_TREE_SIZE, free_symbols, name_shared_nodes, tree_size
 from symkin.ir.spec import FunctionSpec, OptimizedFunction
 from symkin.ir.opcount import op_count, spec_op_count
 from symkin.symengine_bridge import SympyConverter, to_symengine
@@ -67,7 +67,7 @@ def _cse_program(definitions: tuple[Assignment, ...], entries: list[sympy.Expr])
     a dependency order (depth first, in list order, so the result does not depend on set
     iteration order), definitions that reduced to a single symbol or number, or to the value of
     an earlier assignment, are substituted away, and everything is renamed ``_x0, _x1...`` in evaluation order.  Deep graphs are
-    value-numbered before SymEngine's CSE (:func:`~symkin.ir.dag.name_shared_nodes`).
+    value-numbered before SymEngine's CSE (:func:`~symkin.expression_dag.name_shared_nodes`).
     """
     exprs = [e for _, e in definitions] + entries
     symbols = {s.name: s for s in free_symbols(exprs)}

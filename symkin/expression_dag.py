@@ -8,7 +8,7 @@ These walks visit each distinct node once; they work on sympy and SymEngine expr
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from typing import Any
 
 import sympy
@@ -22,26 +22,28 @@ import sympy
 VALUE_NUMBERING_TREE_SIZE = 1_000_000
 
 
-def free_symbols(exprs: Iterable[sympy.Basic]) -> set[sympy.Symbol]:
-    """The symbols ``exprs`` use, each distinct node visited once (``Basic.free_symbols`` walks the tree)."""
-    seen: set[sympy.Basic] = set()
-    found: set[sympy.Symbol] = set()
+def distinct_nodes(exprs: Iterable[Any]) -> Iterator[Any]:
+    """Every distinct node under ``exprs``, once each (depth first; the order is not specified)."""
+    seen: set[Any] = set()
     stack = list(exprs)
     while stack:
         node = stack.pop()
         if node in seen:
             continue
         seen.add(node)
-        if node.is_Symbol:
-            found.add(node)
-        elif not node.is_Atom:
-            stack.extend(a for a in node.args if a not in seen)
-    return found
+        yield node
+        stack.extend(a for a in node.args if a not in seen)
 
 
+def free_symbols(exprs: Iterable[sympy.Basic]) -> set[sympy.Symbol]:
+    """The symbols ``exprs`` use, each distinct node visited once (``Basic.free_symbols`` walks the tree)."""
+    return {node for node in distinct_nodes(exprs) if node.is_Symbol}
 
-def _post_order(roots: Iterable[Any], memo: dict, visit: Callable[[Any], Any]) -> None:
-    """``memo[node] = visit(node)`` for every node under ``roots``, children first (iterative)."""
+
+def post_order(roots: Iterable[Any], memo: dict, visit: Callable[[Any], Any],
+               children: Callable[[Any], Sequence[Any]] = lambda node: node.args) -> None:
+    """``memo[node] = visit(node)`` for every node under ``roots`` not yet in ``memo``, children first
+    (iterative: deep graphs must not hit the recursion limit)."""
     for root in roots:
         stack = [root]
         while stack:
@@ -49,7 +51,7 @@ def _post_order(roots: Iterable[Any], memo: dict, visit: Callable[[Any], Any]) -
             if node in memo:
                 stack.pop()
                 continue
-            pending = [a for a in node.args if a not in memo]
+            pending = [a for a in children(node) if a not in memo]
             if pending:
                 stack.extend(pending)
                 continue
@@ -60,7 +62,7 @@ def _post_order(roots: Iterable[Any], memo: dict, visit: Callable[[Any], Any]) -
 def tree_size(exprs: Sequence[Any]) -> int:
     """Number of nodes of ``exprs`` counted at every occurrence (computed on the DAG, each node once)."""
     sizes: dict[Any, int] = {}
-    _post_order(exprs, sizes, lambda node: 1 + sum(sizes[a] for a in node.args))
+    post_order(exprs, sizes, lambda node: 1 + sum(sizes[a] for a in node.args))
     return sum(sizes[root] for root in exprs)
 
 
@@ -76,17 +78,9 @@ def name_shared_nodes(exprs: Sequence[Any], name: Callable[[Any], Any]) -> list[
     uses: dict[Any, int] = {}
     for root in exprs:
         uses[root] = uses.get(root, 0) + 1
-    seen: set[Any] = set()
-    stack = list(exprs)
-    while stack:
-        node = stack.pop()
-        if node in seen:
-            continue
-        seen.add(node)
+    for node in distinct_nodes(exprs):
         for arg in node.args:
             uses[arg] = uses.get(arg, 0) + 1
-            if arg not in seen:
-                stack.append(arg)
     rebuilt: dict[Any, Any] = {}
 
     def visit(node: Any) -> Any:
@@ -95,5 +89,5 @@ def name_shared_nodes(exprs: Sequence[Any], name: Callable[[Any], Any]) -> list[
         value = node.func(*[rebuilt[a] for a in node.args])
         return name(value) if uses[node] > 1 else value
 
-    _post_order(exprs, rebuilt, visit)
+    post_order(exprs, rebuilt, visit)
     return [rebuilt[root] for root in exprs]
