@@ -124,3 +124,15 @@ def test_bad_arguments_exit_with_code_2(arguments, message, capsys):
 def test_missing_generated_code_exits_with_code_2(tmp_path, capsys):
     assert main(["gci", str(tmp_path)]) == 2
     assert "holds no manifest.json" in capsys.readouterr().err
+
+
+def test_the_workspace_measure_is_printed_with_its_unit(capsys):
+    """Issue 16: 'workspace measure int dW = 0.0157' said nothing of its unit."""
+    assert main(["gci", str(GENERATED_DIR / "planar_2r"), "--samples", "256"]) == 0
+    assert re.search(r"workspace measure int dW = .* m\^2$", capsys.readouterr().out, re.MULTILINE)
+    assert main(["gci", str(GENERATED_DIR / "planar_2r"), "--samples", "256", "--measure", "joint"]) == 0
+    out = capsys.readouterr().out
+    measure = float(re.search(r"int dW = (\S+)", out).group(1))
+    assert re.search(r" rad\^2$", out, re.MULTILINE) and abs(measure - (np.pi / 2) ** 2) < 1e-9  # the joint box
+    assert main(["gci", str(GENERATED_DIR / "delta"), "--samples", "256"]) == 0
+    assert re.search(r"workspace measure int dW = .* m\^3$", capsys.readouterr().out, re.MULTILINE)

@@ -8,6 +8,7 @@ import time
 
 from symkin.cli import analysis_args
 from symkin.cli.progress import Progress
+from symkin.kinematics.task_space import POSITION
 
 #: Configurations drawn for --map (serial mechanisms).
 MAP_SAMPLES = 40_000
@@ -101,10 +102,22 @@ def run(args: argparse.Namespace) -> int:
     kind = "confidence half-width (95 %)" if result.value.statistical else "error estimate"
     name = "GCI" if args.index == "inverse-condition" else f"mean {args.index}"
     print(f"{model.name}: {name} = {result.value} ({kind})")
-    print(f"  workspace measure int dW = {result.measure}")
+    print(f"  workspace measure int dW = {result.measure} {measure_unit(model, args.measure)}")
     print(f"  {result.integral.evaluations} evaluations by {args.method} in {seconds * 1e3:.1f} ms; {result.description}")
     if result.caveat:
         print(f"  note: {result.caveat}")
     if args.map:
         print(f"  map: {path}")
     return 0
+
+
+def measure_unit(model, measure: str) -> str:
+    """The unit of the workspace measure int dW: the product of the task coordinates' units for the
+    Cartesian measure (dW = |det J| dq), of the joints' for the joint measure (dW = dq); lengths in
+    m, angles (joint angles, orientation coordinates and angular-velocity components) in rad."""
+    if measure == "joint":
+        units = ["rad" if c.revolute else "m" for c in model.info.coordinates]
+    else:
+        units = ["m" if c in POSITION else "rad" for c in model.info.task_space]
+    powers = {u: units.count(u) for u in ("m", "rad") if u in units}
+    return " ".join(u if n == 1 else f"{u}^{n}" for u, n in powers.items())
