@@ -91,3 +91,9 @@ def name_shared_nodes(exprs: Sequence[Any], name: Callable[[Any], Any]) -> list[
 
     post_order(exprs, rebuilt, visit)
     return [rebuilt[root] for root in exprs]
+
+
+def name_shared_nodes_of_deep_graphs(exprs: Sequence[Any], name: Callable[[Any], Any]) -> list[Any]:
+    """:func:`name_shared_nodes` where ``exprs`` are deeper than :data:`VALUE_NUMBERING_TREE_SIZE`
+    as a tree, ``exprs`` unchanged otherwise (the example models' code stays as it was)."""
+    return name_shared_nodes(exprs, name) if tree_size(exprs) > VALUE_NUMBERING_TREE_SIZE else list(exprs)

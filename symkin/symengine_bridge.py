@@ -80,19 +80,7 @@ class SympyConverter:
 
     def __call__(self, expr: se.Basic) -> sympy.Expr:
         memo = self._memo
-        stack = [expr]
-        while stack:  # iterative post-order: deep graphs must not hit the recursion limit
-            node = stack[-1]
-            if node in memo:
-                stack.pop()
-                continue
-            args = node.args
-            pending = [a for a in args if a not in memo]
-            if pending:
-                stack.extend(pending)
-                continue
-            stack.pop()
-            memo[node] = self._convert(node, [memo[a] for a in args])
+        post_order([expr], memo, lambda node: self._convert(node, [memo[a] for a in node.args]))
         return memo[expr]
 
     def _convert(self, node: se.Basic, args: list[sympy.Expr]) -> sympy.Expr:

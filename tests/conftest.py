@@ -68,16 +68,21 @@ def reference_function(model: Model, spec: FunctionSpec, modules: str = "numpy")
     return evaluate
 
 
-def relative_error(got: np.ndarray, want: np.ndarray) -> float:
-    """Worst over the batch (leading axis) of max |got - want| / max(1, max |want|) over each entry's
-    values.  NaN (no real solution, e.g. an unreachable DELTA point) must be in both at the same places."""
+def relative_errors(got: np.ndarray, want: np.ndarray) -> np.ndarray:
+    """Per batch entry (leading axis): max |got - want| / max(1, max |want|) over the entry's values.
+    NaN (no real solution, e.g. an unreachable DELTA point) must be in both at the same places."""
     got, want = np.asarray(got, dtype=float), np.asarray(want, dtype=float)
     assert np.array_equal(np.isnan(got), np.isnan(want)), "NaN at different places"
     got, want = np.where(np.isnan(want), 0.0, got), np.where(np.isnan(want), 0.0, want)
     axes = tuple(range(1, want.ndim))
     scale = np.maximum(1.0, np.max(np.abs(want), axis=axes)) if axes else np.maximum(1.0, np.abs(want))
     diff = np.max(np.abs(got - want), axis=axes) if axes else np.abs(got - want)
-    return float(np.max(diff / scale, initial=0.0))
+    return diff / scale
+
+
+def relative_error(got: np.ndarray, want: np.ndarray) -> float:
+    """The worst of :func:`relative_errors` over the batch."""
+    return float(np.max(relative_errors(got, want), initial=0.0))
 
 
 def worst_state(got: np.ndarray, want: np.ndarray, inputs: list[np.ndarray]) -> dict:

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from conftest import (BACKENDS, EXAMPLE_MODELS, batch_reference, function_spec, random_inputs, random_q,
-                      relative_error, worst_state)
+                      relative_errors, worst_state)
 from symkin.derivation import catalog
 from tolerances import CLOSED_FORM, DYNAMICS, EPS, KINEMATICS, UR10E_SCALE, svd
 
@@ -25,12 +25,6 @@ POINTS = 1000
 
 #: Agreement bound of a well-conditioned function, relative to the largest entry of each output.
 AGREEMENT = 1e-12
-
-
-def _relative_errors(got: np.ndarray, want: np.ndarray) -> np.ndarray:
-    """Per batch entry: max |got - want| / max(1, max |want|), NaN only where both are NaN."""
-    errors = np.array([relative_error(g[None], w[None]) for g, w in zip(got, want)])
-    return errors
 
 
 def _bound(model, spec, inputs, numpy_model) -> np.ndarray:
@@ -72,7 +66,7 @@ def test_every_function_matches_the_sympy_expressions(name, backend, models, der
         bound = _bound(model, spec, inputs, loaded(name, "numpy"))
         for g, w, out in zip(got, want, record["outputs"]):
             assert g.shape == w.shape == (POINTS,) + tuple(out["shape"])
-            error = _relative_errors(g, w)
+            error = relative_errors(g, w)
             worst = int(np.argmax(error / bound))
             assert error[worst] < bound[worst], (record["name"], out["name"], f"error {error[worst]:.3g} > bound "
                                                  f"{bound[worst]:.3g}", worst_state(g, w, inputs))

@@ -9,6 +9,7 @@ import time
 from symkin.cli import analysis_args
 from symkin.cli.progress import Progress
 from symkin.kinematics.task_space import POSITION
+from symkin.runtime.info import GeneratedModel
 
 #: Configurations drawn for --map (serial mechanisms).
 MAP_SAMPLES = 40_000
@@ -111,7 +112,7 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def measure_unit(model, measure: str) -> str:
+def measure_unit(model: GeneratedModel, measure: str) -> str:
     """The unit of the workspace measure int dW: the product of the task coordinates' units for the
     Cartesian measure (dW = |det J| dq), of the joints' for the joint measure (dW = dq); lengths in
     m, angles (joint angles, orientation coordinates and angular-velocity components) in rad."""

@@ -26,7 +26,7 @@ from collections.abc import Iterable, Sequence
 import symengine as se
 import sympy
 
-from symkin.expression_dag import VALUE_NUMBERING_TREE_SIZE, name_shared_nodes, tree_size
+from symkin.expression_dag import name_shared_nodes_of_deep_graphs
 from symkin.ir.spec import DEFINITION_PREFIX
 from symkin.symengine_bridge import SympyConverter, to_symengine
 
@@ -66,9 +66,7 @@ class Program:
         first (:func:`~symkin.expression_dag.name_shared_nodes`), so that ``symengine.cse`` sees small
         expressions.
         """
-        exprs = [se.sympify(e) for e in exprs]
-        if tree_size(exprs) > VALUE_NUMBERING_TREE_SIZE:
-            exprs = name_shared_nodes(exprs, self._append)
+        exprs = name_shared_nodes_of_deep_graphs([se.sympify(e) for e in exprs], self._append)
         temporaries, reduced = se.cse(exprs)
         rename: dict[se.Basic, se.Basic] = {}
 

@@ -6,7 +6,7 @@ import symengine as se
 import sympy
 from sympy.core.parameters import distribute
 
-from symkin.expression_dag import VALUE_NUMBERING_TREE_SIZE, free_symbols, name_shared_nodes, tree_size
+from symkin.expression_dag import free_symbols, name_shared_nodes_of_deep_graphs
 from symkin.ir.spec import FunctionSpec, OptimizedFunction
 from symkin.ir.opcount import op_count, spec_op_count
 from symkin.symengine_bridge import SympyConverter, to_symengine
@@ -66,20 +66,21 @@ def _cse_program(definitions: tuple[Assignment, ...], entries: list[sympy.Expr])
     are atoms to the CSE; the new temporaries and the (reduced) definitions are then put in
     a dependency order (depth first, in list order, so the result does not depend on set
     iteration order), definitions that reduced to a single symbol or number, or to the value of
-    an earlier assignment, are substituted away, and everything is renamed ``_x0, _x1...`` in evaluation order.  Deep graphs are
-    value-numbered before SymEngine's CSE (:func:`~symkin.expression_dag.name_shared_nodes`).
+    an earlier assignment, are substituted away, and everything is renamed ``_x0, _x1...`` in
+    evaluation order.  Deep graphs are value-numbered before SymEngine's CSE
+    (:func:`~symkin.expression_dag.name_shared_nodes_of_deep_graphs`).
     """
     exprs = [e for _, e in definitions] + entries
     symbols = {s.name: s for s in free_symbols(exprs)}
     symbols.update((s.name, s) for s, _ in definitions)
     memo: dict = {}
-    converted = [to_symengine(e, memo) for e in exprs]
     named: list[tuple[se.Symbol, se.Basic]] = []
-    if tree_size(converted) > VALUE_NUMBERING_TREE_SIZE:
-        def name(value: se.Basic) -> se.Symbol:
-            named.append((se.Symbol(f"{VALUE_PREFIX}{len(named)}"), value))
-            return named[-1][0]
-        converted = name_shared_nodes(converted, name)
+
+    def name(value: se.Basic) -> se.Symbol:
+        named.append((se.Symbol(f"{VALUE_PREFIX}{len(named)}"), value))
+        return named[-1][0]
+
+    converted = name_shared_nodes_of_deep_graphs([to_symengine(e, memo) for e in exprs], name)
     # The named values go through the CSE too (sums shared between them are found there).
     found, reduced = se.cse([value for _, value in named] + converted)
     named, reduced = [(symbol, value) for (symbol, _), value in zip(named, reduced)], reduced[len(named):]

@@ -50,7 +50,8 @@ BLOCK = 8
 #: (on at -O2 and -O3) grows superlinearly with the lane loop's stores times its statements:
 #: Stewart's closure_jacobians (240 stored outputs, 1 008 temporaries) took over 700 s at -O3
 #: in a lane loop (33 s with -fno-tree-slp-vectorize), 4 s as a single function.  Every other
-#: example function stores at most 81 (UR10e scene, 1.3 s); see benchmarks/bench_compile.py.
+#: example function stores at most 81 (UR10e scene) and keeps its lanes; whole-library build
+#: times: benchmarks/bench_compile.py.
 LANE_SLOTS = 128
 
 #: (precision, function-name suffix) of each emitted variant.
