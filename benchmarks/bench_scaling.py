@@ -6,6 +6,10 @@ numpy,c`` in process (load, derive, optimize, emit; no compilation), with the op
 of every function as derived (a tree count) and after CSE, and the exponent of a power-law
 fit of the derive time against n over the sizes from 6 on.
 
+The generated dynamics are set against the algorithmic operation counts of the recursive
+algorithms Pinocchio runs on the same chain (``recursive_reference.py``: CRBA for M, RNEA
+with qdd = 0 for V + G, counted on CasADi symbols); issue 12's target is a ratio <= 1.5.
+
 Run with `make bench` or `python benchmarks/bench_scaling.py [--sizes 3,6,12,24]`.
 """
 
@@ -21,12 +25,14 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from chain_models import chain_yaml  # noqa: E402
+from chain_models import chain_yaml, dh_chain  # noqa: E402
+from recursive_reference import arithmetic_operations, crba_function, rnea_function  # noqa: E402
 from symkin import pipeline  # noqa: E402
 from symkin.model import load_model  # noqa: E402
 from symkin.text_table import format_table  # noqa: E402
 
 OUTPUTS = "fk,jacobian,mass_matrix,coriolis_vector,gravity_vector"
+GRAVITY = (0.0, 0.0, -9.81)
 
 
 def measure(n: int, directory: Path) -> dict[str, float]:
@@ -37,10 +43,14 @@ def measure(n: int, directory: Path) -> dict[str, float]:
     result = pipeline.generate(model, pipeline.resolve_request(model, OUTPUTS, "numpy,c", None, None, None))
     pipeline.write(result, directory / "out")
     seconds = time.perf_counter() - start
-    parts = [r for r in result.reports if r.name != "scene"]
+    parts = {r.name: r.op_counts for r in result.reports if r.name != "scene"}
     return {"n": n, "seconds": seconds,
-            "derived": sum(r.op_counts["derived"] for r in parts), "cse": sum(r.op_counts["cse"] for r in parts),
-            "scene": next((r.op_counts["cse"] for r in result.reports if r.name == "scene"), 0)}
+            "derived": sum(c["derived"] for c in parts.values()), "cse": sum(c["cse"] for c in parts.values()),
+            "scene": next((r.op_counts["cse"] for r in result.reports if r.name == "scene"), 0),
+            "mass_matrix": parts["mass_matrix"]["cse"],
+            "bias": parts["coriolis_vector"]["cse"] + parts["gravity_vector"]["cse"],
+            "crba": arithmetic_operations(crba_function(dh_chain(n))),
+            "rnea": arithmetic_operations(rnea_function(dh_chain(n), GRAVITY, with_acceleration=False))}
 
 
 def fitted_exponent(rows: list[dict[str, float]]) -> float:
@@ -68,6 +78,11 @@ def main(argv: list[str] | None = None) -> int:
                        [[r["n"], f"{r['seconds']:.2f}", f"{r['derived']:,}", f"{r['cse']:,}", f"{r['scene']:,}"]
                         for r in rows]))
     print(f"fitted exponent of the derive time in n (n >= 6): {fitted_exponent(rows):.2f}")
+    print()
+    print("generated dynamics against the recursive algorithms (operations; target ratio <= 1.5)")
+    print(format_table(["n", "M (symkin)", "CRBA", "ratio", "V + G (symkin)", "RNEA qdd=0", "ratio"],
+                       [[r["n"], f"{r['mass_matrix']:,}", f"{r['crba']:,}", f"{r['mass_matrix'] / r['crba']:.2f}",
+                         f"{r['bias']:,}", f"{r['rnea']:,}", f"{r['bias'] / r['rnea']:.2f}"] for r in rows]))
     return 0
 
 
