@@ -187,3 +187,43 @@ def test_a_function_with_many_outputs_batches_by_single_calls_with_the_same_bits
     singles = [stewart.closure_jacobians(*(a[i] for a in inputs)) for i in range(9)]
     for k, out in enumerate(batch):
         np.testing.assert_array_equal(out, np.stack([single[k] for single in singles]))
+
+
+def test_the_source_compiles_as_parallel_translation_units_with_the_bits_of_the_whole_file(generated_dir, tmp_path,
+                                                                                            monkeypatch):
+    """The build splits a source into the units it states (-D<MODEL>_PART=k), each warning-free with
+    the strict flags (no helper missing or unused in a unit), and the linked library returns the
+    same bits as the whole file compiled as one unit, for every function of the manifest."""
+    import json
+
+    from symkin.backends.naming import c_symbol
+
+    name = "ur10e"
+    source, header = generated_dir / name / f"{name}.c", generated_dir / name / f"{name}.h"
+    units = build.translation_units(source.read_text())
+    assert len(units) > 1 and build.translation_units("int f(void);\n") == [[]]
+    for k, unit in enumerate(units):
+        result = subprocess.run([CC, *[f for f in STRICT_FLAGS if f != "-O3"], "-O0", *unit, "-c", str(source),
+                                 "-o", str(tmp_path / f"part{k}.o")], capture_output=True, text=True)
+        assert result.returncode == 0 and not result.stderr, (unit, result.stderr)
+    monkeypatch.setenv("SYMKIN_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.setenv("SYMKIN_BUILD_JOBS", "2")
+    split = ctypes.CDLL(str(build.shared_library(source, header)))
+    whole_path = tmp_path / "libwhole.so"
+    subprocess.run([*build.compiler_command(), *build.BASE_FLAGS, "-shared", "-I", str(header.parent), "-o",
+                    str(whole_path), str(source), "-lm"], check=True, capture_output=True)
+    whole = ctypes.CDLL(str(whole_path))
+    rng = np.random.default_rng(7)
+    manifest = json.loads((generated_dir / name / "manifest.json").read_text())
+    for record in manifest["functions"]:
+        inputs = sum(int(np.prod(i["shape"])) if i["kind"] != "parameter" else 1 for i in record["inputs"])
+        outputs = sum(int(np.prod(o["shape"])) for o in record["outputs"])
+        packed = rng.uniform(-2.0, 2.0, inputs)
+        results = []
+        for library in (split, whole):
+            out = np.empty(outputs)
+            entry = getattr(library, c_symbol(name, record["name"], "_packed"))
+            entry.argtypes, entry.restype = [ctypes.c_void_p, ctypes.c_void_p], None
+            entry(packed.ctypes.data, out.ctypes.data)
+            results.append(out)
+        assert results[0].tobytes() == results[1].tobytes(), record["name"]

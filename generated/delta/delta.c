@@ -7,7 +7,12 @@
  * statements appear twice: once on scalars in the single-configuration function, once in
  * the lane loop of its batch function, which evaluates blocks of 8 configurations
  * stored lane by lane so that the compiler can vectorize it.
+ *
+ * Compiled as it is, this file is the whole library.  Compiled with -DDELTA_PART=k
+ * (k = 0..1) it keeps only the functions of group k and the helpers they use, so
+ * that the groups compile as separate translation units in parallel and are linked together.
  */
+/* symkin: translation units DELTA_PART=0..1 */
 #include "delta.h"
 
 #include <math.h>
@@ -15,6 +20,7 @@
 /* Configurations per block of the batch functions. */
 #define DELTA_BLOCK 8
 
+#if !defined(DELTA_PART) || DELTA_PART == 0 || DELTA_PART == 1
 /* sin and cos of x[0..n-1] into s and c (double), branch-free so that the loop vectorizes:
  * Cody-Waite reduction r = x - k*pi/2 with
  *   pi/2 = 1.570796325802803 + 9.920935791635221e-10 + 5.170182981794105e-19,
@@ -60,6 +66,9 @@ static void delta_sincos(size_t n, const double *restrict x, double *restrict s,
         }
     }
 }
+#endif
+
+#if !defined(DELTA_PART) || DELTA_PART == 0
 
 /* delta_ik: Inverse kinematics: actuated joint variables from the task coordinates. */
 void delta_ik(const double *restrict p, double r_base, double r_tcp, double a, double b, double *restrict joints, double *restrict margin)
@@ -172,6 +181,9 @@ void delta_ik_batch(size_t n, const double *restrict p, const double *restrict p
         }
     }
 }
+#endif
+
+#if !defined(DELTA_PART) || DELTA_PART == 0
 
 /* delta_fk: Forward kinematics: TCP position from the actuated joint variables. */
 void delta_fk(const double *restrict q, double r_base, double r_tcp, double a, double b, double *restrict position, double *restrict margin)
@@ -305,6 +317,9 @@ void delta_fk_batch(size_t n, const double *restrict q, const double *restrict p
         }
     }
 }
+#endif
+
+#if !defined(DELTA_PART) || DELTA_PART == 0
 
 /* delta_constraints: Leg equations in distance form. */
 void delta_constraints(const double *restrict q, const double *restrict p, double r_base, double r_tcp, double a, double b, double *restrict f)
@@ -400,6 +415,9 @@ void delta_constraints_batch(size_t n, const double *restrict q, const double *r
         }
     }
 }
+#endif
+
+#if !defined(DELTA_PART) || DELTA_PART == 0
 
 /* delta_constraint_jacobians: Jacobians of the leg equations. */
 void delta_constraint_jacobians(const double *restrict q, const double *restrict p, double r_base, double r_tcp, double a, double *restrict J_x, double *restrict J_q)
@@ -554,6 +572,9 @@ void delta_constraint_jacobians_batch(size_t n, const double *restrict q, const 
         }
     }
 }
+#endif
+
+#if !defined(DELTA_PART) || DELTA_PART == 0
 
 /* delta_jacobian: Task Jacobian of the platform. */
 void delta_jacobian(const double *restrict q, const double *restrict p, double r_base, double r_tcp, double a, double *restrict J)
@@ -715,6 +736,9 @@ void delta_jacobian_batch(size_t n, const double *restrict q, const double *rest
         }
     }
 }
+#endif
+
+#if !defined(DELTA_PART) || DELTA_PART == 0
 
 /* delta_inverse_jacobian: Inverse Jacobian of the platform. */
 void delta_inverse_jacobian(const double *restrict q, const double *restrict p, double r_base, double r_tcp, double a, double *restrict J_inv)
@@ -854,6 +878,9 @@ void delta_inverse_jacobian_batch(size_t n, const double *restrict q, const doub
         }
     }
 }
+#endif
+
+#if !defined(DELTA_PART) || DELTA_PART == 0
 
 /* delta_singularities: Singularity measures of both types. */
 void delta_singularities(const double *restrict q, const double *restrict p, double r_base, double r_tcp, double a, double *restrict det_Jq, double *restrict det_Jx)
@@ -970,6 +997,9 @@ void delta_singularities_batch(size_t n, const double *restrict q, const double 
         }
     }
 }
+#endif
+
+#if !defined(DELTA_PART) || DELTA_PART == 0
 
 /* delta_closure: Loop-closure residual of every leg. */
 void delta_closure(const double *restrict q, const double *restrict s, const double *restrict p, double r_base, double r_tcp, double a, double b, double *restrict phi)
@@ -1344,6 +1374,9 @@ void delta_closure_batch(size_t n, const double *restrict q, const double *restr
         }
     }
 }
+#endif
+
+#if !defined(DELTA_PART) || DELTA_PART == 1
 
 /* delta_closure_jacobians: Implicit Jacobians of the loop closure. */
 void delta_closure_jacobians(const double *restrict q, const double *restrict s, const double *restrict p, double a, double b, double *restrict Phi_p, double *restrict Phi_q, double *restrict Phi_s)
@@ -2707,6 +2740,9 @@ void delta_closure_jacobians_batch(size_t n, const double *restrict q, const dou
         }
     }
 }
+#endif
+
+#if !defined(DELTA_PART) || DELTA_PART == 1
 
 /* delta_scene: jacobian, inverse_jacobian, singularities together, with one set of shared subexpressions. */
 void delta_scene(const double *restrict q, const double *restrict p, double r_base, double r_tcp, double a, double *restrict J, double *restrict J_inv, double *restrict det_Jq, double *restrict det_Jx)
@@ -2915,3 +2951,4 @@ void delta_scene_batch(size_t n, const double *restrict q, const double *restric
         }
     }
 }
+#endif

@@ -7,7 +7,12 @@
  * statements appear twice: once on scalars in the single-configuration function, once in
  * the lane loop of its batch function, which evaluates blocks of 8 configurations
  * stored lane by lane so that the compiler can vectorize it.
+ *
+ * Compiled as it is, this file is the whole library.  Compiled with -DPLANAR_2R_PART=k
+ * (k = 0..1) it keeps only the functions of group k and the helpers they use, so
+ * that the groups compile as separate translation units in parallel and are linked together.
  */
+/* symkin: translation units PLANAR_2R_PART=0..1 */
 #include "planar_2r.h"
 
 #include <math.h>
@@ -15,6 +20,7 @@
 /* Configurations per block of the batch functions. */
 #define PLANAR_2R_BLOCK 8
 
+#if !defined(PLANAR_2R_PART) || PLANAR_2R_PART == 0
 /* sin and cos of x[0..n-1] into s and c (double), branch-free so that the loop vectorizes:
  * Cody-Waite reduction r = x - k*pi/2 with
  *   pi/2 = 1.570796325802803 + 9.920935791635221e-10 + 5.170182981794105e-19,
@@ -60,7 +66,9 @@ static void planar_2r_sincos(size_t n, const double *restrict x, double *restric
         }
     }
 }
+#endif
 
+#if !defined(PLANAR_2R_PART) || PLANAR_2R_PART == 0 || PLANAR_2R_PART == 1
 /* sin and cos of x[0..n-1] into s and c (float), branch-free so that the loop vectorizes:
  * Cody-Waite reduction r = x - k*pi/2 with
  *   pi/2 = 1.5703125f + 0.0004837513f + 7.54979e-08f,
@@ -100,6 +108,9 @@ static void planar_2r_sincos_f32(size_t n, const float *restrict x, float *restr
         }
     }
 }
+#endif
+
+#if !defined(PLANAR_2R_PART) || PLANAR_2R_PART == 0
 
 /* planar_2r_fk: Forward kinematics: pose of the TCP in the base frame. */
 void planar_2r_fk(const double *restrict q, double l1, double l2, double *restrict base_T_tcp)
@@ -204,6 +215,9 @@ void planar_2r_fk_batch(size_t n, const double *restrict q, const double *restri
         }
     }
 }
+#endif
+
+#if !defined(PLANAR_2R_PART) || PLANAR_2R_PART == 0
 
 /* planar_2r_frames: Pose of every link frame in the base frame. */
 void planar_2r_frames(const double *restrict q, double l1, double l2, double *restrict base_T_link1, double *restrict base_T_link2)
@@ -350,6 +364,9 @@ void planar_2r_frames_batch(size_t n, const double *restrict q, const double *re
         }
     }
 }
+#endif
+
+#if !defined(PLANAR_2R_PART) || PLANAR_2R_PART == 0
 
 /* planar_2r_jacobian: Task Jacobian of the TCP. */
 void planar_2r_jacobian(const double *restrict q, double l1, double l2, double *restrict J)
@@ -428,6 +445,9 @@ void planar_2r_jacobian_batch(size_t n, const double *restrict q, const double *
         }
     }
 }
+#endif
+
+#if !defined(PLANAR_2R_PART) || PLANAR_2R_PART == 0
 
 /* planar_2r_jacobian_geometric: Geometric Jacobian of the TCP in the base frame. */
 void planar_2r_jacobian_geometric(const double *restrict q, double l1, double l2, double *restrict J)
@@ -522,6 +542,9 @@ void planar_2r_jacobian_geometric_batch(size_t n, const double *restrict q, cons
         }
     }
 }
+#endif
+
+#if !defined(PLANAR_2R_PART) || PLANAR_2R_PART == 0
 
 /* planar_2r_mass_matrix: Joint-space mass matrix. */
 void planar_2r_mass_matrix(const double *restrict q, double l1, double l2, double m1, double m2, double *restrict M)
@@ -591,6 +614,9 @@ void planar_2r_mass_matrix_batch(size_t n, const double *restrict q, const doubl
         }
     }
 }
+#endif
+
+#if !defined(PLANAR_2R_PART) || PLANAR_2R_PART == 0
 
 /* planar_2r_coriolis_matrix: Coriolis matrix from the Christoffel symbols of M. */
 void planar_2r_coriolis_matrix(const double *restrict q, const double *restrict qd, double l1, double l2, double m2, double *restrict C)
@@ -661,6 +687,9 @@ void planar_2r_coriolis_matrix_batch(size_t n, const double *restrict q, const d
         }
     }
 }
+#endif
+
+#if !defined(PLANAR_2R_PART) || PLANAR_2R_PART == 0
 
 /* planar_2r_coriolis_vector: Coriolis and centrifugal torques. */
 void planar_2r_coriolis_vector(const double *restrict q, const double *restrict qd, double l1, double l2, double m2, double *restrict V)
@@ -732,6 +761,9 @@ void planar_2r_coriolis_vector_batch(size_t n, const double *restrict q, const d
         }
     }
 }
+#endif
+
+#if !defined(PLANAR_2R_PART) || PLANAR_2R_PART == 0
 
 /* planar_2r_gravity_vector: Gravity torques. */
 void planar_2r_gravity_vector(const double *restrict q, double l1, double l2, double m1, double m2, double g, double *restrict G)
@@ -806,6 +838,9 @@ void planar_2r_gravity_vector_batch(size_t n, const double *restrict q, const do
         }
     }
 }
+#endif
+
+#if !defined(PLANAR_2R_PART) || PLANAR_2R_PART == 0
 
 /* planar_2r_inverse_dynamics: Inverse dynamics: joint torques for a motion. */
 void planar_2r_inverse_dynamics(const double *restrict q, const double *restrict qd, const double *restrict qdd, double l1, double l2, double m1, double m2, double g, double *restrict tau)
@@ -902,6 +937,9 @@ void planar_2r_inverse_dynamics_batch(size_t n, const double *restrict q, const 
         }
     }
 }
+#endif
+
+#if !defined(PLANAR_2R_PART) || PLANAR_2R_PART == 0
 
 /* planar_2r_forward_dynamics: Forward dynamics: joint accelerations under given torques. */
 void planar_2r_forward_dynamics(const double *restrict q, const double *restrict qd, const double *restrict tau, double l1, double l2, double m1, double m2, double g, double *restrict qdd)
@@ -1018,6 +1056,9 @@ void planar_2r_forward_dynamics_batch(size_t n, const double *restrict q, const 
         }
     }
 }
+#endif
+
+#if !defined(PLANAR_2R_PART) || PLANAR_2R_PART == 0
 
 /* planar_2r_tcp_force: Force (wrench) at the TCP that produces a joint motion. */
 void planar_2r_tcp_force(const double *restrict q, const double *restrict qd, const double *restrict qdd, double l1, double l2, double m1, double m2, double g, double *restrict F)
@@ -1140,6 +1181,9 @@ void planar_2r_tcp_force_batch(size_t n, const double *restrict q, const double 
         }
     }
 }
+#endif
+
+#if !defined(PLANAR_2R_PART) || PLANAR_2R_PART == 0
 
 /* planar_2r_operational_space: Operational-space dynamics F = Mx xdd + Vx + Gx. */
 void planar_2r_operational_space(const double *restrict q, const double *restrict qd, double l1, double l2, double m1, double m2, double g, double *restrict Mx, double *restrict Vx, double *restrict Gx)
@@ -1322,6 +1366,9 @@ void planar_2r_operational_space_batch(size_t n, const double *restrict q, const
         }
     }
 }
+#endif
+
+#if !defined(PLANAR_2R_PART) || PLANAR_2R_PART == 0
 
 /* planar_2r_kinetic_energy: Kinetic energy. */
 void planar_2r_kinetic_energy(const double *restrict q, const double *restrict qd, double l1, double l2, double m1, double m2, double *restrict k)
@@ -1388,6 +1435,9 @@ void planar_2r_kinetic_energy_batch(size_t n, const double *restrict q, const do
         }
     }
 }
+#endif
+
+#if !defined(PLANAR_2R_PART) || PLANAR_2R_PART == 0
 
 /* planar_2r_potential_energy: Gravitational potential energy. */
 void planar_2r_potential_energy(const double *restrict q, double l1, double l2, double m1, double m2, double g, double *restrict u)
@@ -1455,6 +1505,9 @@ void planar_2r_potential_energy_batch(size_t n, const double *restrict q, const 
         }
     }
 }
+#endif
+
+#if !defined(PLANAR_2R_PART) || PLANAR_2R_PART == 0
 
 /* planar_2r_scene: fk, frames, jacobian, jacobian_geometric, mass_matrix, coriolis_matrix, coriolis_vector, gravity_vector, inverse_dynamics, forward_dynamics, tcp_force, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions. */
 void planar_2r_scene(const double *restrict q, const double *restrict qd, const double *restrict qdd, const double *restrict tau, double l1, double l2, double m1, double m2, double g, double *restrict base_T_tcp, double *restrict base_T_link1, double *restrict base_T_link2, double *restrict jacobian_J, double *restrict jacobian_geometric_J, double *restrict M, double *restrict C, double *restrict V, double *restrict G, double *restrict inverse_dynamics_tau, double *restrict forward_dynamics_qdd, double *restrict F, double *restrict Mx, double *restrict Vx, double *restrict Gx, double *restrict k, double *restrict u)
@@ -1938,6 +1991,9 @@ void planar_2r_scene_batch(size_t n, const double *restrict q, const double *res
         }
     }
 }
+#endif
+
+#if !defined(PLANAR_2R_PART) || PLANAR_2R_PART == 0
 
 /* planar_2r_fk_f32: Forward kinematics: pose of the TCP in the base frame. */
 void planar_2r_fk_f32(const float *restrict q, float l1, float l2, float *restrict base_T_tcp)
@@ -2042,6 +2098,9 @@ void planar_2r_fk_batch_f32(size_t n, const float *restrict q, const float *rest
         }
     }
 }
+#endif
+
+#if !defined(PLANAR_2R_PART) || PLANAR_2R_PART == 0
 
 /* planar_2r_frames_f32: Pose of every link frame in the base frame. */
 void planar_2r_frames_f32(const float *restrict q, float l1, float l2, float *restrict base_T_link1, float *restrict base_T_link2)
@@ -2188,6 +2247,9 @@ void planar_2r_frames_batch_f32(size_t n, const float *restrict q, const float *
         }
     }
 }
+#endif
+
+#if !defined(PLANAR_2R_PART) || PLANAR_2R_PART == 1
 
 /* planar_2r_jacobian_f32: Task Jacobian of the TCP. */
 void planar_2r_jacobian_f32(const float *restrict q, float l1, float l2, float *restrict J)
@@ -2266,6 +2328,9 @@ void planar_2r_jacobian_batch_f32(size_t n, const float *restrict q, const float
         }
     }
 }
+#endif
+
+#if !defined(PLANAR_2R_PART) || PLANAR_2R_PART == 1
 
 /* planar_2r_jacobian_geometric_f32: Geometric Jacobian of the TCP in the base frame. */
 void planar_2r_jacobian_geometric_f32(const float *restrict q, float l1, float l2, float *restrict J)
@@ -2360,6 +2425,9 @@ void planar_2r_jacobian_geometric_batch_f32(size_t n, const float *restrict q, c
         }
     }
 }
+#endif
+
+#if !defined(PLANAR_2R_PART) || PLANAR_2R_PART == 1
 
 /* planar_2r_mass_matrix_f32: Joint-space mass matrix. */
 void planar_2r_mass_matrix_f32(const float *restrict q, float l1, float l2, float m1, float m2, float *restrict M)
@@ -2429,6 +2497,9 @@ void planar_2r_mass_matrix_batch_f32(size_t n, const float *restrict q, const fl
         }
     }
 }
+#endif
+
+#if !defined(PLANAR_2R_PART) || PLANAR_2R_PART == 1
 
 /* planar_2r_coriolis_matrix_f32: Coriolis matrix from the Christoffel symbols of M. */
 void planar_2r_coriolis_matrix_f32(const float *restrict q, const float *restrict qd, float l1, float l2, float m2, float *restrict C)
@@ -2499,6 +2570,9 @@ void planar_2r_coriolis_matrix_batch_f32(size_t n, const float *restrict q, cons
         }
     }
 }
+#endif
+
+#if !defined(PLANAR_2R_PART) || PLANAR_2R_PART == 1
 
 /* planar_2r_coriolis_vector_f32: Coriolis and centrifugal torques. */
 void planar_2r_coriolis_vector_f32(const float *restrict q, const float *restrict qd, float l1, float l2, float m2, float *restrict V)
@@ -2570,6 +2644,9 @@ void planar_2r_coriolis_vector_batch_f32(size_t n, const float *restrict q, cons
         }
     }
 }
+#endif
+
+#if !defined(PLANAR_2R_PART) || PLANAR_2R_PART == 1
 
 /* planar_2r_gravity_vector_f32: Gravity torques. */
 void planar_2r_gravity_vector_f32(const float *restrict q, float l1, float l2, float m1, float m2, float g, float *restrict G)
@@ -2644,6 +2721,9 @@ void planar_2r_gravity_vector_batch_f32(size_t n, const float *restrict q, const
         }
     }
 }
+#endif
+
+#if !defined(PLANAR_2R_PART) || PLANAR_2R_PART == 1
 
 /* planar_2r_inverse_dynamics_f32: Inverse dynamics: joint torques for a motion. */
 void planar_2r_inverse_dynamics_f32(const float *restrict q, const float *restrict qd, const float *restrict qdd, float l1, float l2, float m1, float m2, float g, float *restrict tau)
@@ -2740,6 +2820,9 @@ void planar_2r_inverse_dynamics_batch_f32(size_t n, const float *restrict q, con
         }
     }
 }
+#endif
+
+#if !defined(PLANAR_2R_PART) || PLANAR_2R_PART == 1
 
 /* planar_2r_forward_dynamics_f32: Forward dynamics: joint accelerations under given torques. */
 void planar_2r_forward_dynamics_f32(const float *restrict q, const float *restrict qd, const float *restrict tau, float l1, float l2, float m1, float m2, float g, float *restrict qdd)
@@ -2856,6 +2939,9 @@ void planar_2r_forward_dynamics_batch_f32(size_t n, const float *restrict q, con
         }
     }
 }
+#endif
+
+#if !defined(PLANAR_2R_PART) || PLANAR_2R_PART == 1
 
 /* planar_2r_tcp_force_f32: Force (wrench) at the TCP that produces a joint motion. */
 void planar_2r_tcp_force_f32(const float *restrict q, const float *restrict qd, const float *restrict qdd, float l1, float l2, float m1, float m2, float g, float *restrict F)
@@ -2978,6 +3064,9 @@ void planar_2r_tcp_force_batch_f32(size_t n, const float *restrict q, const floa
         }
     }
 }
+#endif
+
+#if !defined(PLANAR_2R_PART) || PLANAR_2R_PART == 1
 
 /* planar_2r_operational_space_f32: Operational-space dynamics F = Mx xdd + Vx + Gx. */
 void planar_2r_operational_space_f32(const float *restrict q, const float *restrict qd, float l1, float l2, float m1, float m2, float g, float *restrict Mx, float *restrict Vx, float *restrict Gx)
@@ -3160,6 +3249,9 @@ void planar_2r_operational_space_batch_f32(size_t n, const float *restrict q, co
         }
     }
 }
+#endif
+
+#if !defined(PLANAR_2R_PART) || PLANAR_2R_PART == 1
 
 /* planar_2r_kinetic_energy_f32: Kinetic energy. */
 void planar_2r_kinetic_energy_f32(const float *restrict q, const float *restrict qd, float l1, float l2, float m1, float m2, float *restrict k)
@@ -3226,6 +3318,9 @@ void planar_2r_kinetic_energy_batch_f32(size_t n, const float *restrict q, const
         }
     }
 }
+#endif
+
+#if !defined(PLANAR_2R_PART) || PLANAR_2R_PART == 1
 
 /* planar_2r_potential_energy_f32: Gravitational potential energy. */
 void planar_2r_potential_energy_f32(const float *restrict q, float l1, float l2, float m1, float m2, float g, float *restrict u)
@@ -3293,6 +3388,9 @@ void planar_2r_potential_energy_batch_f32(size_t n, const float *restrict q, con
         }
     }
 }
+#endif
+
+#if !defined(PLANAR_2R_PART) || PLANAR_2R_PART == 1
 
 /* planar_2r_scene_f32: fk, frames, jacobian, jacobian_geometric, mass_matrix, coriolis_matrix, coriolis_vector, gravity_vector, inverse_dynamics, forward_dynamics, tcp_force, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions. */
 void planar_2r_scene_f32(const float *restrict q, const float *restrict qd, const float *restrict qdd, const float *restrict tau, float l1, float l2, float m1, float m2, float g, float *restrict base_T_tcp, float *restrict base_T_link1, float *restrict base_T_link2, float *restrict jacobian_J, float *restrict jacobian_geometric_J, float *restrict M, float *restrict C, float *restrict V, float *restrict G, float *restrict inverse_dynamics_tau, float *restrict forward_dynamics_qdd, float *restrict F, float *restrict Mx, float *restrict Vx, float *restrict Gx, float *restrict k, float *restrict u)
@@ -3776,3 +3874,4 @@ void planar_2r_scene_batch_f32(size_t n, const float *restrict q, const float *r
         }
     }
 }
+#endif

@@ -7,7 +7,12 @@
  * statements appear twice: once on scalars in the single-configuration function, once in
  * the lane loop of its batch function, which evaluates blocks of 8 configurations
  * stored lane by lane so that the compiler can vectorize it.
+ *
+ * Compiled as it is, this file is the whole library.  Compiled with -DSTEWART_PART=k
+ * (k = 0..4) it keeps only the functions of group k and the helpers they use, so
+ * that the groups compile as separate translation units in parallel and are linked together.
  */
+/* symkin: translation units STEWART_PART=0..4 */
 #include "stewart.h"
 
 #include <math.h>
@@ -15,6 +20,7 @@
 /* Configurations per block of the batch functions. */
 #define STEWART_BLOCK 8
 
+#if !defined(STEWART_PART) || STEWART_PART == 0 || STEWART_PART == 1 || STEWART_PART == 2 || STEWART_PART == 3 || STEWART_PART == 4
 /* sin and cos of x[0..n-1] into s and c (double), branch-free so that the loop vectorizes:
  * Cody-Waite reduction r = x - k*pi/2 with
  *   pi/2 = 1.570796325802803 + 9.920935791635221e-10 + 5.170182981794105e-19,
@@ -60,6 +66,9 @@ static void stewart_sincos(size_t n, const double *restrict x, double *restrict 
         }
     }
 }
+#endif
+
+#if !defined(STEWART_PART) || STEWART_PART == 0
 
 /* stewart_ik: Inverse kinematics: actuated joint variables from the task coordinates. */
 void stewart_ik(const double *restrict p, double r_b, double r_p, double gamma_b, double gamma_p, double *restrict joints, double *restrict margin)
@@ -446,6 +455,9 @@ void stewart_ik_batch(size_t n, const double *restrict p, const double *restrict
         }
     }
 }
+#endif
+
+#if !defined(STEWART_PART) || STEWART_PART == 0
 
 /* stewart_constraints: Leg equations in distance form. */
 void stewart_constraints(const double *restrict q, const double *restrict p, double r_b, double r_p, double gamma_b, double gamma_p, double *restrict f)
@@ -672,6 +684,9 @@ void stewart_constraints_batch(size_t n, const double *restrict q, const double 
         }
     }
 }
+#endif
+
+#if !defined(STEWART_PART) || STEWART_PART == 0
 
 /* stewart_constraint_jacobians: Jacobians of the leg equations. */
 void stewart_constraint_jacobians(const double *restrict q, const double *restrict p, double r_b, double r_p, double gamma_b, double gamma_p, double *restrict J_x, double *restrict J_q)
@@ -1252,6 +1267,9 @@ void stewart_constraint_jacobians_batch(size_t n, const double *restrict q, cons
         }
     }
 }
+#endif
+
+#if !defined(STEWART_PART) || STEWART_PART == 1
 
 /* stewart_inverse_jacobian: Inverse Jacobian of the platform. */
 void stewart_inverse_jacobian(const double *restrict q, const double *restrict p, double r_b, double r_p, double gamma_b, double gamma_p, double *restrict J_inv)
@@ -1766,6 +1784,9 @@ void stewart_inverse_jacobian_batch(size_t n, const double *restrict q, const do
         }
     }
 }
+#endif
+
+#if !defined(STEWART_PART) || STEWART_PART == 1
 
 /* stewart_singularities: Singularity measures of both types. */
 void stewart_singularities(const double *restrict q, const double *restrict p, double r_b, double r_p, double gamma_b, double gamma_p, double *restrict det_Jq, double *restrict det_Jx)
@@ -2328,6 +2349,9 @@ void stewart_singularities_batch(size_t n, const double *restrict q, const doubl
         }
     }
 }
+#endif
+
+#if !defined(STEWART_PART) || STEWART_PART == 2
 
 /* stewart_closure: Loop-closure residual of every leg. */
 void stewart_closure(const double *restrict q, const double *restrict s, const double *restrict p, double r_b, double r_p, double gamma_b, double gamma_p, double *restrict phi)
@@ -3506,6 +3530,9 @@ void stewart_closure_batch(size_t n, const double *restrict q, const double *res
         }
     }
 }
+#endif
+
+#if !defined(STEWART_PART) || STEWART_PART == 3
 
 /* stewart_closure_jacobians: Implicit Jacobians of the loop closure. */
 void stewart_closure_jacobians(const double *restrict q, const double *restrict s, const double *restrict p, double r_p, double gamma_b, double gamma_p, double *restrict Phi_p, double *restrict Phi_q, double *restrict Phi_s)
@@ -6158,6 +6185,9 @@ void stewart_closure_jacobians_batch(size_t n, const double *restrict q, const d
         stewart_closure_jacobians(q + _j * 6, s + _j * 30, p + _j * 6, params[_j * params_stride + 0], params[_j * params_stride + 1], params[_j * params_stride + 2], Phi_p + _j * 216, Phi_q + _j * 216, Phi_s + _j * 1080);
     }
 }
+#endif
+
+#if !defined(STEWART_PART) || STEWART_PART == 4
 
 /* stewart_scene: ik, inverse_jacobian together, with one set of shared subexpressions. */
 void stewart_scene(const double *restrict p, const double *restrict q, double r_b, double r_p, double gamma_b, double gamma_p, double *restrict joints, double *restrict margin, double *restrict J_inv)
@@ -6902,3 +6932,4 @@ void stewart_scene_batch(size_t n, const double *restrict p, const double *restr
         }
     }
 }
+#endif

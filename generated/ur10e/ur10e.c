@@ -7,7 +7,12 @@
  * statements appear twice: once on scalars in the single-configuration function, once in
  * the lane loop of its batch function, which evaluates blocks of 8 configurations
  * stored lane by lane so that the compiler can vectorize it.
+ *
+ * Compiled as it is, this file is the whole library.  Compiled with -DUR10E_PART=k
+ * (k = 0..5) it keeps only the functions of group k and the helpers they use, so
+ * that the groups compile as separate translation units in parallel and are linked together.
  */
+/* symkin: translation units UR10E_PART=0..5 */
 #include "ur10e.h"
 
 #include <math.h>
@@ -15,6 +20,7 @@
 /* Configurations per block of the batch functions. */
 #define UR10E_BLOCK 8
 
+#if !defined(UR10E_PART) || UR10E_PART == 0 || UR10E_PART == 1 || UR10E_PART == 2 || UR10E_PART == 3 || UR10E_PART == 4 || UR10E_PART == 5
 /* sin and cos of x[0..n-1] into s and c (double), branch-free so that the loop vectorizes:
  * Cody-Waite reduction r = x - k*pi/2 with
  *   pi/2 = 1.570796325802803 + 9.920935791635221e-10 + 5.170182981794105e-19,
@@ -60,6 +66,9 @@ static void ur10e_sincos(size_t n, const double *restrict x, double *restrict s,
         }
     }
 }
+#endif
+
+#if !defined(UR10E_PART) || UR10E_PART == 0
 
 /* ur10e_fk: Forward kinematics: pose of the TCP in the base frame. */
 void ur10e_fk(const double *restrict q, double d1, double a2, double a3, double d4, double d5, double d6, double *restrict base_T_tcp)
@@ -254,6 +263,9 @@ void ur10e_fk_batch(size_t n, const double *restrict q, const double *restrict p
         }
     }
 }
+#endif
+
+#if !defined(UR10E_PART) || UR10E_PART == 0
 
 /* ur10e_frames: Pose of every link frame in the base frame. */
 void ur10e_frames(const double *restrict q, double d1, double a2, double a3, double d4, double d5, double d6, double *restrict base_T_shoulder, double *restrict base_T_upper_arm, double *restrict base_T_forearm, double *restrict base_T_wrist1, double *restrict base_T_wrist2, double *restrict base_T_wrist3)
@@ -682,6 +694,9 @@ void ur10e_frames_batch(size_t n, const double *restrict q, const double *restri
         }
     }
 }
+#endif
+
+#if !defined(UR10E_PART) || UR10E_PART == 0
 
 /* ur10e_jacobian: Task Jacobian of the TCP. */
 void ur10e_jacobian(const double *restrict q, double a2, double a3, double d4, double d5, double d6, double *restrict J)
@@ -943,6 +958,9 @@ void ur10e_jacobian_batch(size_t n, const double *restrict q, const double *rest
         }
     }
 }
+#endif
+
+#if !defined(UR10E_PART) || UR10E_PART == 0
 
 /* ur10e_jacobian_geometric: Geometric Jacobian of the TCP in the base frame. */
 void ur10e_jacobian_geometric(const double *restrict q, double a2, double a3, double d4, double d5, double d6, double *restrict J)
@@ -1204,6 +1222,9 @@ void ur10e_jacobian_geometric_batch(size_t n, const double *restrict q, const do
         }
     }
 }
+#endif
+
+#if !defined(UR10E_PART) || UR10E_PART == 0
 
 /* ur10e_mass_matrix: Joint-space mass matrix. */
 void ur10e_mass_matrix(const double *restrict q, double a2, double a3, double d4, double d5, double d6, double m1, double m2, double m3, double m4, double m5, double m6, double *restrict M)
@@ -1618,6 +1639,9 @@ void ur10e_mass_matrix_batch(size_t n, const double *restrict q, const double *r
         }
     }
 }
+#endif
+
+#if !defined(UR10E_PART) || UR10E_PART == 0
 
 /* ur10e_coriolis_matrix: Coriolis matrix from the Christoffel symbols of M. */
 void ur10e_coriolis_matrix(const double *restrict q, const double *restrict qd, double a2, double a3, double d4, double d5, double d6, double m2, double m3, double m4, double m5, double m6, double *restrict C)
@@ -2544,6 +2568,9 @@ void ur10e_coriolis_matrix_batch(size_t n, const double *restrict q, const doubl
         }
     }
 }
+#endif
+
+#if !defined(UR10E_PART) || UR10E_PART == 1
 
 /* ur10e_coriolis_vector: Coriolis and centrifugal torques. */
 void ur10e_coriolis_vector(const double *restrict q, const double *restrict qd, double a2, double a3, double d4, double d5, double d6, double m2, double m3, double m4, double m5, double m6, double *restrict V)
@@ -2969,6 +2996,9 @@ void ur10e_coriolis_vector_batch(size_t n, const double *restrict q, const doubl
         }
     }
 }
+#endif
+
+#if !defined(UR10E_PART) || UR10E_PART == 1
 
 /* ur10e_gravity_vector: Gravity torques. */
 void ur10e_gravity_vector(const double *restrict q, double a2, double a3, double d5, double d6, double m2, double m3, double m4, double m5, double m6, double g, double *restrict G)
@@ -3099,6 +3129,9 @@ void ur10e_gravity_vector_batch(size_t n, const double *restrict q, const double
         }
     }
 }
+#endif
+
+#if !defined(UR10E_PART) || UR10E_PART == 1
 
 /* ur10e_inverse_dynamics: Inverse dynamics: joint torques for a motion. */
 void ur10e_inverse_dynamics(const double *restrict q, const double *restrict qd, const double *restrict qdd, double a2, double a3, double d4, double d5, double d6, double m1, double m2, double m3, double m4, double m5, double m6, double g, double *restrict tau)
@@ -3556,6 +3589,9 @@ void ur10e_inverse_dynamics_batch(size_t n, const double *restrict q, const doub
         }
     }
 }
+#endif
+
+#if !defined(UR10E_PART) || UR10E_PART == 2
 
 /* ur10e_forward_dynamics: Forward dynamics: joint accelerations under given torques. */
 void ur10e_forward_dynamics(const double *restrict q, const double *restrict qd, const double *restrict tau, double a2, double a3, double d4, double d5, double d6, double m1, double m2, double m3, double m4, double m5, double m6, double g, double *restrict qdd)
@@ -4287,6 +4323,9 @@ void ur10e_forward_dynamics_batch(size_t n, const double *restrict q, const doub
         }
     }
 }
+#endif
+
+#if !defined(UR10E_PART) || UR10E_PART == 3
 
 /* ur10e_tcp_force: Force (wrench) at the TCP that produces a joint motion. */
 void ur10e_tcp_force(const double *restrict q, const double *restrict qd, const double *restrict qdd, double a2, double a3, double d4, double d5, double d6, double m1, double m2, double m3, double m4, double m5, double m6, double g, double *restrict F)
@@ -5199,6 +5238,9 @@ void ur10e_tcp_force_batch(size_t n, const double *restrict q, const double *res
         }
     }
 }
+#endif
+
+#if !defined(UR10E_PART) || UR10E_PART == 4
 
 /* ur10e_operational_space: Operational-space dynamics F = Mx xdd + Vx + Gx. */
 void ur10e_operational_space(const double *restrict q, const double *restrict qd, double a2, double a3, double d4, double d5, double d6, double m1, double m2, double m3, double m4, double m5, double m6, double g, double *restrict Mx, double *restrict Vx, double *restrict Gx)
@@ -7621,6 +7663,9 @@ void ur10e_operational_space_batch(size_t n, const double *restrict q, const dou
         }
     }
 }
+#endif
+
+#if !defined(UR10E_PART) || UR10E_PART == 5
 
 /* ur10e_kinetic_energy: Kinetic energy. */
 void ur10e_kinetic_energy(const double *restrict q, const double *restrict qd, double a2, double a3, double d4, double d5, double d6, double m1, double m2, double m3, double m4, double m5, double m6, double *restrict k)
@@ -7953,6 +7998,9 @@ void ur10e_kinetic_energy_batch(size_t n, const double *restrict q, const double
         }
     }
 }
+#endif
+
+#if !defined(UR10E_PART) || UR10E_PART == 5
 
 /* ur10e_potential_energy: Gravitational potential energy. */
 void ur10e_potential_energy(const double *restrict q, double d1, double a2, double a3, double d5, double d6, double m1, double m2, double m3, double m4, double m5, double m6, double g, double *restrict u)
@@ -8068,6 +8116,9 @@ void ur10e_potential_energy_batch(size_t n, const double *restrict q, const doub
         }
     }
 }
+#endif
+
+#if !defined(UR10E_PART) || UR10E_PART == 5
 
 /* ur10e_scene: fk, jacobian, mass_matrix, coriolis_vector, gravity_vector together, with one set of shared subexpressions. */
 void ur10e_scene(const double *restrict q, const double *restrict qd, double d1, double a2, double a3, double d4, double d5, double d6, double m1, double m2, double m3, double m4, double m5, double m6, double g, double *restrict base_T_tcp, double *restrict J, double *restrict M, double *restrict V, double *restrict G)
@@ -9055,3 +9106,4 @@ void ur10e_scene_batch(size_t n, const double *restrict q, const double *restric
         }
     }
 }
+#endif

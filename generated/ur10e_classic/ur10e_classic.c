@@ -7,7 +7,12 @@
  * statements appear twice: once on scalars in the single-configuration function, once in
  * the lane loop of its batch function, which evaluates blocks of 8 configurations
  * stored lane by lane so that the compiler can vectorize it.
+ *
+ * Compiled as it is, this file is the whole library.  Compiled with -DUR10E_CLASSIC_PART=k
+ * (k = 0..0) it keeps only the functions of group k and the helpers they use, so
+ * that the groups compile as separate translation units in parallel and are linked together.
  */
+/* symkin: translation units UR10E_CLASSIC_PART=0..0 */
 #include "ur10e_classic.h"
 
 #include <math.h>
@@ -15,6 +20,7 @@
 /* Configurations per block of the batch functions. */
 #define UR10E_CLASSIC_BLOCK 8
 
+#if !defined(UR10E_CLASSIC_PART) || UR10E_CLASSIC_PART == 0
 /* sin and cos of x[0..n-1] into s and c (double), branch-free so that the loop vectorizes:
  * Cody-Waite reduction r = x - k*pi/2 with
  *   pi/2 = 1.570796325802803 + 9.920935791635221e-10 + 5.170182981794105e-19,
@@ -60,6 +66,9 @@ static void ur10e_classic_sincos(size_t n, const double *restrict x, double *res
         }
     }
 }
+#endif
+
+#if !defined(UR10E_CLASSIC_PART) || UR10E_CLASSIC_PART == 0
 
 /* ur10e_classic_fk: Forward kinematics: pose of the TCP in the base frame. */
 void ur10e_classic_fk(const double *restrict q, double d1, double a2, double a3, double d4, double d5, double d6, double *restrict base_T_tcp)
@@ -254,6 +263,9 @@ void ur10e_classic_fk_batch(size_t n, const double *restrict q, const double *re
         }
     }
 }
+#endif
+
+#if !defined(UR10E_CLASSIC_PART) || UR10E_CLASSIC_PART == 0
 
 /* ur10e_classic_jacobian: Task Jacobian of the TCP. */
 void ur10e_classic_jacobian(const double *restrict q, double a2, double a3, double d4, double d5, double d6, double *restrict J)
@@ -515,6 +527,9 @@ void ur10e_classic_jacobian_batch(size_t n, const double *restrict q, const doub
         }
     }
 }
+#endif
+
+#if !defined(UR10E_CLASSIC_PART) || UR10E_CLASSIC_PART == 0
 
 /* ur10e_classic_scene: fk, jacobian together, with one set of shared subexpressions. */
 void ur10e_classic_scene(const double *restrict q, double d1, double a2, double a3, double d4, double d5, double d6, double *restrict base_T_tcp, double *restrict J)
@@ -847,3 +862,4 @@ void ur10e_classic_scene_batch(size_t n, const double *restrict q, const double 
         }
     }
 }
+#endif

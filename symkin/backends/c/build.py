@@ -1,5 +1,13 @@
 """Compile generated C into a shared library, once: cached by the hash of what goes in.
 
+A generated source states the translation units it splits into (:func:`parts_line`): with
+``-D<MODEL>_PART=k`` it keeps function k and the helpers that function uses.  The build
+compiles those parts as separate objects in parallel (one compiler process per core, or
+``SYMKIN_BUILD_JOBS``) and links them, so the wall time of a build is that of its largest
+function rather than the sum; a source without the line (hand-written, or older) is
+compiled whole.  The parts hold disjoint functions and each keeps its own static copy of a
+helper, so the library has the same code and returns the same bits as the whole file.
+
 The cache key covers the source and header bytes, the compiler command and flags, and the
 compiler's version text, so editing any of them (or regenerating the model) builds anew,
 while loading the same model again costs a hash and a ``dlopen``.  Libraries are written
@@ -12,18 +20,21 @@ Environment:
     CC: the C compiler (default ``cc``).
     SYMKIN_CFLAGS: optimization flags (default ``-O3``; e.g. ``-O3 -march=native``).
     SYMKIN_QUIET: ``1`` silences the progress lines a build prints on stderr.
+    SYMKIN_BUILD_JOBS: compiler processes at once (default: the cores this process may use).
 """
 
 from __future__ import annotations
 
 import hashlib
 import os
+import re
 import shlex
 import subprocess
 import sys
 import tempfile
 import time
 from collections.abc import Iterator
+from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
 from functools import lru_cache
 from pathlib import Path
@@ -31,8 +42,38 @@ from pathlib import Path
 from symkin.errors import GeneratedCodeError
 
 DEFAULT_CFLAGS = "-O3"
-#: Flags every build uses (the generated code must compile warning-free with them).
-BASE_FLAGS = ("-std=c99", "-fPIC", "-shared", "-Wall", "-Wextra")
+#: Flags every compilation uses (the generated code must compile warning-free with them).
+BASE_FLAGS = ("-std=c99", "-fPIC", "-Wall", "-Wextra")
+#: The generated source's statement of its translation units (see :func:`parts_line`).
+_PARTS_PATTERN = re.compile(r"^/\* symkin: translation units (\w+)=0\.\.(\d+) \*/$", re.MULTILINE)
+
+
+def part_macro(model_name: str) -> str:
+    """The macro that selects one translation unit of ``<model>.c``."""
+    return f"{model_name.upper()}_PART"
+
+
+def parts_line(model_name: str, parts: int) -> str:
+    """The source line that tells the build it splits into ``parts`` translation units."""
+    return f"/* symkin: translation units {part_macro(model_name)}=0..{parts - 1} */"
+
+
+def translation_units(source_text: str) -> list[list[str]]:
+    """The extra compiler arguments of each translation unit of a source: one unit, the whole
+    file, unless the source states its parts."""
+    match = _PARTS_PATTERN.search(source_text)
+    if match is None:
+        return [[]]
+    macro, last = match.group(1), int(match.group(2))
+    return [[f"-D{macro}={k}"] for k in range(last + 1)]
+
+
+def build_jobs() -> int:
+    """Compiler processes run at once."""
+    explicit = os.environ.get("SYMKIN_BUILD_JOBS")
+    if explicit:
+        return max(1, int(explicit))
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
 
 
 def cache_directory() -> Path:
@@ -81,10 +122,13 @@ def shared_library(source: Path, header: Path) -> Path:
     directory.mkdir(parents=True, exist_ok=True)
     with _locked(directory / f"{target.name}.lock"):
         if not target.exists():  # another process may have built it while we waited
-            _progress(f"symkin: compiling {source.name} ({source.stat().st_size // 1024} kB) with "
+            units = translation_units(source.read_text())
+            jobs = min(build_jobs(), len(units))
+            _progress(f"symkin: compiling {source.name} ({source.stat().st_size // 1024} kB, "
+                      f"{len(units)} translation unit{'s' if len(units) > 1 else ''}, {jobs} at once) with "
                       f"{' '.join(command)}; cached in {directory} afterwards ...")
             start = time.perf_counter()
-            _compile(command, source, header, target)
+            _compile(command, source, header, target, units, jobs)
             _progress(f"symkin: compiled {source.name} in {time.perf_counter() - start:.1f} s")
     return target
 
@@ -113,18 +157,23 @@ def _locked(path: Path) -> Iterator[None]:
             fcntl.flock(handle, fcntl.LOCK_UN)
 
 
-def _compile(command: list[str], source: Path, header: Path, target: Path) -> None:
-    """Compile into a temporary file next to ``target``, then rename it into place."""
-    directory = target.parent
-    fd, partial = tempfile.mkstemp(prefix=target.name + ".", suffix=".partial", dir=directory)
-    os.close(fd)
-    try:
-        result = subprocess.run(command + list(BASE_FLAGS) + ["-I", str(header.parent), "-o", partial,
-                                                              str(source), "-lm"],
-                                capture_output=True, text=True)
-        if result.returncode != 0:
-            raise GeneratedCodeError(f"compiling {source} failed:\n{result.stderr.strip()}")
+def _run(arguments: list[str], source: Path) -> None:
+    result = subprocess.run(arguments, capture_output=True, text=True)
+    if result.returncode != 0:
+        raise GeneratedCodeError(f"compiling {source} failed:\n{result.stderr.strip()}")
+
+
+def _compile(command: list[str], source: Path, header: Path, target: Path, units: list[list[str]],
+             jobs: int) -> None:
+    """Compile each unit into an object, link them into a temporary file next to ``target``, then
+    rename it into place (so no reader ever sees a half-written library)."""
+    with tempfile.TemporaryDirectory(prefix=target.name + ".", dir=target.parent) as scratch:
+        objects = [str(Path(scratch) / f"part{k}.o") for k in range(len(units))]
+        compile_base = command + list(BASE_FLAGS) + ["-I", str(header.parent), "-c"]
+        with ThreadPoolExecutor(max_workers=jobs) as pool:
+            # list() re-raises the first failure once every started compilation has finished
+            list(pool.map(lambda unit, obj: _run(compile_base + unit + ["-o", obj, str(source)], source),
+                          units, objects))
+        partial = Path(scratch) / target.name
+        _run(command + list(BASE_FLAGS) + ["-shared", "-o", str(partial)] + objects + ["-lm"], source)
         os.replace(partial, target)
-    finally:
-        if os.path.exists(partial):
-            os.unlink(partial)

@@ -23,6 +23,11 @@ by the generated vectorizable ``sincos`` (:mod:`symkin.backends.c.trig`).  A fun
 more than :data:`LANE_SLOTS` non-constant outputs gets no lane loop: its batch function calls
 the single one per configuration (same statements, same bits), because compiling the lane
 loop grows much faster than its size (see :data:`LANE_SLOTS`).
+
+The functions are grouped, in order, into translation units of about :data:`PART_OPS`
+operations, each guarded by ``#if !defined(<MODEL>_PART) || <MODEL>_PART == k`` (its sincos
+helper too, for the units that use it), which the build compiles in parallel
+(:mod:`symkin.backends.c.build`).
 """
 
 from __future__ import annotations
@@ -34,6 +39,7 @@ from typing import Any
 
 import sympy
 
+from symkin.backends.c.build import part_macro, parts_line
 from symkin.backends.c.printer import C_TYPES, CPrinter
 from symkin.backends.c.trig import constants
 from symkin.backends.naming import c_symbol
@@ -53,6 +59,12 @@ BLOCK = 8
 #: example function stores at most 81 (UR10e scene) and keeps its lanes; whole-library build
 #: times: benchmarks/bench_compile.py.
 LANE_SLOTS = 128
+
+#: Operations (counted once per printing of a function's statements) after which a translation
+#: unit of the source is closed: smaller functions share a unit, so a build does not start a
+#: compiler process for every few lines, while the large ones compile in parallel
+#: (:mod:`symkin.backends.c.build`).
+PART_OPS = 1500
 
 #: (precision, function-name suffix) of each emitted variant.
 VARIANTS = {"double": "", "float": "_f32"}
@@ -191,6 +203,18 @@ def _sincos_context(code: ModelCode, precision: str, printer: CPrinter) -> dict[
     }
 
 
+def _assign_parts(functions: list[dict[str, Any]]) -> int:
+    """Group the functions, in order, into translation units of about :data:`PART_OPS` operations
+    (a larger function is a unit of its own); set each function's ``part`` and return the count."""
+    part, size = 0, 0
+    for function in functions:
+        if size >= PART_OPS:
+            part, size = part + 1, 0
+        function["part"] = part
+        size += function["op_count"] * (2 if function["lanes"] else 1)  # statements printed twice with lanes
+    return part + 1
+
+
 def emit_sources(code: ModelCode) -> dict[str, str | bytes]:
     """{<model>.h: header, <model>.c: source} for ``code``."""
     precisions = ["double", "float"] if code.float32 else ["double"]
@@ -205,12 +229,18 @@ def emit_sources(code: ModelCode) -> dict[str, str | bytes]:
     free = [{"name": p.name, "default": repr(p.default), "unit": p.unit, "doc": p.doc}
             for p in code.parameters if not p.fixed]
     fixed = [f"{p.name} = {p.default!r}" for p in code.parameters if p.fixed]
+    parts = _assign_parts(functions)
+    sincos = []
+    for precision in precisions:
+        users = [f["part"] for f in functions if f["trig"] and f["real"] == C_TYPES[precision]]
+        if users:
+            sincos.append(_sincos_context(code, precision, printers[precision]) | {"units": users})
     header_name = f"{code.name}.h"
     context = {"model": model, "functions": functions, "free_parameters": free,
                "fixed_parameters": _comment_lines(", ".join(fixed)) if fixed else [],
                "header_name": header_name, "float32": code.float32, "block": BLOCK,
-               "sincos": [_sincos_context(code, p, printers[p]) for p in precisions
-                          if any(f["trig"] for f in functions if f["real"] == C_TYPES[p])]}
+               "part_macro": part_macro(code.name), "parts": parts,
+               "parts_line": parts_line(code.name, parts), "sincos": sincos}
     return {
         header_name: render(HEADER_TEMPLATE, provenance=provenance(HEADER_TEMPLATE, code.name, code.hash), **context),
         f"{code.name}.c": render(SOURCE_TEMPLATE, provenance=provenance(SOURCE_TEMPLATE, code.name, code.hash),
