@@ -61,11 +61,24 @@ def test_a_chain_with_fixed_joints_branches_and_all_joint_types(tmp_path):
                                                                     ("slider", 0.25)]
     sensor = next(b for b in model.bodies if b.mass == 0.2 or float(b.mass) == 0.2)
     assert [float(c) for c in sensor.com] == [0.1, 0.05, 0.02]
-    # The rpy of j2 is read as exactly pi/2, and the TCP sits where the frames say at q = 0:
+    # The rpy of j2 is read as written (the decimal the file prints), and the TCP sits where the
+    # frames say at q = 0:
     # (0, 0, 0.5) + Rz(pi) [(0.2, 0, 0) + Rx(pi/2) ((0.1, 0, 0) + (0, 0, 0.05))] = (-0.3, 0.05, 0.5).
-    assert j2.before[-1].angle == sympy.pi / 2
+    assert j2.before[-1].angle == sympy.Rational("1.5707963267948966")
+    assert "angles as written" in model.description
     T = reference_function(model, Derivation(model)["fk"])(np.zeros(3))[0]
     np.testing.assert_allclose(T[:3, 3], [-0.3, 0.05, 0.5], rtol=0, atol=KINEMATICS)  # lengths < 1 m
+
+
+def test_angles_are_snapped_to_multiples_of_pi_half_only_when_asked(tmp_path):
+    path = _write(tmp_path, ARM)
+    snapped = load_model(path, snap_angles=True)
+    assert snapped.joints[1].before[-1].angle == sympy.pi / 2
+    assert "snapped" in snapped.description
+    # 3.14159265359 (a Kinova file's pi) is 2e-13 from pi: as written it stays that decimal.
+    near = _write(tmp_path, ARM.replace("3.141592653589793", "3.14159265359"), "near.urdf")
+    assert load_model(near).base[-1].angle == sympy.Rational("3.14159265359")
+    assert load_model(near, snap_angles=True).base[-1].angle == sympy.pi
 
 
 def test_the_tip_selects_the_chain(tmp_path):
@@ -76,22 +89,72 @@ def test_the_tip_selects_the_chain(tmp_path):
         load_model(path)
     assert load_model(path, tip="tool").dof == 3
     assert load_model(path, tip="cam").tcp == ()
-    with pytest.raises(ModelError, match="'j3' branches off the chain"):
-        load_model(path, tip="l2")  # j3 would carry masses beyond the tip
     with pytest.raises(ModelError, match="tip link 'nope' is not a link"):
         load_model(path, tip="nope")
+
+
+def test_joints_off_the_chain_are_locked_and_their_links_lumped_into_the_chain(tmp_path):
+    """Beyond the tip l2, the prismatic j3 is locked (at 0, or at --lock's value): the slider and the
+    tool it carries become rigid parts of l2, as in Pinocchio's buildReducedModel."""
+    path = _write(tmp_path, ARM)
+    at_zero = load_model(path, tip="l2")
+    assert [j.name for j in at_zero.joints] == ["j1", "j2"] and "locked: j3 = 0" in at_zero.description
+    slider = next(b for b in at_zero.bodies if float(b.mass) == 0.25)
+    assert slider.link == "l2" and [float(c) for c in slider.com] == [0.1, 0.0, 0.0]
+    moved = load_model(path, tip="l2", locks={"j3": 0.15})
+    slider = next(b for b in moved.bodies if float(b.mass) == 0.25)
+    assert [float(c) for c in slider.com] == [0.25, 0.0, 0.0]  # 0.1 + 0.15 along the axis x
+    with pytest.raises(ModelError, match="locked at 0.3, outside its limits"):
+        load_model(path, tip="l2", locks={"j3": 0.3})
+    with pytest.raises(ModelError, match="--lock names 'j2', a joint of the chain"):
+        load_model(path, tip="l2", locks={"j2": 0.1})
+    with pytest.raises(ModelError, match="unknown joint 'j9'"):
+        load_model(path, tip="l2", locks={"j9": 0.1})
+    # A revolute joint off the chain, locked about a general axis: its body sits where the rotation puts it.
+    text = ARM.replace("</robot>", '<link name="arm2"><inertial><origin xyz="0.1 0 0"/><mass value="0.3"/>'
+                                   '</inertial></link><joint name="j4" type="revolute"><parent link="l1"/>'
+                                   '<child link="arm2"/><axis xyz="0 0.6 0.8"/><limit lower="-2" upper="2"/>'
+                                   '</joint></robot>')
+    locked = load_model(_write(tmp_path, text, "branch.urdf"), tip="tool", locks={"j4": 1.0})
+    body = next(b for b in locked.bodies if float(b.mass) == 0.3)
+    x, y, z, c, s = 0.0, 0.6, 0.8, np.cos(1.0), np.sin(1.0)  # Rodrigues: R e_x for the unit axis (0, 0.6, 0.8)
+    expected = 0.1 * np.array([c + x * x * (1 - c), y * x * (1 - c) + z * s, z * x * (1 - c) - y * s])
+    np.testing.assert_allclose([float(v) for v in body.com], expected, rtol=0, atol=KINEMATICS)
+
+
+def test_mimic_joints_off_the_chain_follow_their_leader_and_on_the_chain_are_refused(tmp_path):
+    fingers = ARM.replace("</robot>", '<link name="f1"><inertial><origin xyz="0 0.01 0"/><mass value="0.1"/>'
+                                      '</inertial></link><link name="f2"><inertial><mass value="0.1"/></inertial>'
+                                      '</link><joint name="finger1" type="prismatic"><parent link="tool"/>'
+                                      '<child link="f1"/><axis xyz="0 1 0"/><limit lower="0" upper="0.04"/></joint>'
+                                      '<joint name="finger2" type="prismatic"><parent link="tool"/><child link="f2"/>'
+                                      '<axis xyz="0 -1 0"/><limit lower="0" upper="0.08"/>'
+                                      '<mimic joint="finger1" multiplier="2" offset="0.001"/></joint></robot>')
+    path = _write(tmp_path, fingers, "hand.urdf")
+    model = load_model(path, tip="tool", locks={"finger1": 0.02})
+    assert "finger1 = 0.02, finger2 = 0.041" in model.description
+    f1, f2 = [b for b in model.bodies if float(b.mass) == 0.1]  # bodies in link order: f1, f2
+    assert f1.link == f2.link == "slider"
+    assert abs(float(f1.com[1]) - 0.03) < KINEMATICS  # 0.01 + 0.02 along +y
+    assert abs(float(f2.com[1]) + 0.041) < KINEMATICS  # 2 * 0.02 + 0.001 along -y
+    with pytest.raises(ModelError, match="on the chain mimics 'j2'"):
+        load_model(_write(tmp_path, ARM.replace('<axis xyz="1 0 0"/><limit', '<mimic joint="j2"/><axis xyz="1 0 0"/>'
+                                                                          '<limit'), "coupled.urdf"))
 
 
 @pytest.mark.parametrize("edit, message", [
     (lambda t: t.replace('type="prismatic"', 'type="floating"'), "floating joint .* not supported"),
     (lambda t: t.replace('type="prismatic"', 'type="planar"'), "planar joint .* not supported"),
     (lambda t: t.replace('<axis xyz="1 0 0"/><limit', '<mimic joint="j2"/><axis xyz="1 0 0"/><limit'),
-     "mimics another joint"),
+     "on the chain mimics 'j2'"),
     (lambda t: t.replace("</robot>", '<joint name="loop" type="fixed"><parent link="base"/><child link="l2"/>'
                                      "</joint></robot>"), "closed loop: link 'l2'"),
     (lambda t: t.replace("</robot>", '<link name="b2"/><joint name="j4" type="revolute"><parent link="l1"/>'
-                                     '<child link="b2"/><limit lower="-1" upper="1"/></joint></robot>'),
-     "j4' branches off the chain"),
+                                     '<child link="b2"/><limit lower="0.5" upper="1"/></joint></robot>'),
+     "'j4' is locked at 0, outside its limits"),
+    (lambda t: t.replace("</robot>", '<link name="b2"/><joint name="j4" type="revolute"><parent link="l1"/>'
+                                     '<child link="b2"/><mimic joint="j2"/></joint></robot>'),
+     "'j4' off the chain mimics 'j2', a joint of the chain"),
     (lambda t: t.replace('<child link="l2"/>', '<child link="l9"/>'), "unknown child link 'l9'"),
     (lambda t: t.replace('xyz="0.2 0 0"', 'xyz="0.2 0"'), "is not 3 number"),
     (lambda t: t.replace("</robot>", "<link name=\"l1\"/></robot>"), "duplicate link name 'l1'"),

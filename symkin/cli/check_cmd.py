@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from symkin.cli.urdf_args import add_urdf_arguments, urdf_options
 from symkin.text_table import format_table
 
 
@@ -12,21 +13,16 @@ def register_check(sub: argparse._SubParsersAction) -> None:
                        description="Validate model files (syntax, names, expressions, physical plausibility of "
                                    "masses and inertias, scene) and print a summary. Writes nothing.")
     p.add_argument("models", nargs="+", metavar="MODEL", help="model file(s): YAML, or URDF (.urdf)")
-    p.add_argument("--tip", metavar="LINK",
-                   help="URDF only: the link that ends the chain (default: the leaf behind the most moving joints)")
+    add_urdf_arguments(p)
     p.set_defaults(run=run_check)
 
 
 def run_check(args: argparse.Namespace) -> int:
     from symkin import pipeline
-    from symkin.errors import ModelError, Problem
     from symkin.model import load_model
 
-    if args.tip and not any(path.lower().endswith(".urdf") for path in args.models):
-        raise ModelError([Problem("<command line>", None, None, "--tip", "--tip applies to URDF files only",
-                                  "drop --tip, or pass a .urdf file")])
     for path in args.models:
-        model = load_model(path, tip=args.tip if path.lower().endswith(".urdf") else None)
+        model = load_model(path, **urdf_options(args, path))
         request = pipeline.resolve_request(model)
         if model.parallel is None:
             structure = f"{model.dof} joints ({', '.join(f'{j.name}:{j.type.value}' for j in model.joints)})"

@@ -8,6 +8,7 @@ from pathlib import Path
 
 from symkin.backends import BACKENDS
 from symkin.cli.progress import Progress
+from symkin.cli.urdf_args import add_urdf_arguments, urdf_options
 from symkin.text_table import format_table
 
 
@@ -19,8 +20,6 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "write the generated code and manifest.json to OUT/<model name>/, atomically.",
     )
     p.add_argument("models", nargs="+", metavar="MODEL", help="model file(s): YAML, or URDF (.urdf)")
-    p.add_argument("--tip", metavar="LINK",
-                   help="URDF only: the link that ends the chain (default: the leaf behind the most moving joints)")
     p.add_argument("-o", "--out", default="generated", metavar="OUT",
                    help="output directory (default: %(default)s)")
     p.add_argument("--only", metavar="NAMES",
@@ -37,21 +36,18 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="outputs also computed together by one function 'scene' sharing one CSE "
                         "(comma-separated, 'all' or 'none'; default: the scene's, else all)")
     p.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
+    add_urdf_arguments(p)
     p.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
     from symkin import pipeline
-    from symkin.errors import ModelError, Problem
     from symkin.model import load_model
 
     # Validate every model and request first: a bad file writes nothing at all.
     jobs = []
-    if args.tip and not any(path.lower().endswith(".urdf") for path in args.models):
-        raise ModelError([Problem("<command line>", None, None, "--tip", "--tip applies to URDF files only",
-                                  "drop --tip, or pass a .urdf file")])
     for path in args.models:
-        model = load_model(path, tip=args.tip if path.lower().endswith(".urdf") else None)
+        model = load_model(path, **urdf_options(args, path))
         jobs.append((model, pipeline.resolve_request(model, args.only, args.backend, args.fixed, args.float32,
                                                             args.combine)))
     for model, request in jobs:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
 
 from symkin.errors import ModelError, Problem
@@ -14,21 +15,29 @@ __all__ = ["Body", "Friction", "Joint", "JointType", "Model", "Parameter", "Rota
            "load_model", "model_from_text"]
 
 
-def load_model(path: str | Path, tip: str | None = None) -> Model:
+def load_model(path: str | Path, tip: str | None = None, *, base: str | None = None,
+               locks: Mapping[str, float] | None = None, snap_angles: bool = False) -> Model:
     """Read, validate and build the model in the file ``path``: YAML, or URDF (``.urdf``).
 
     Args:
         path: the model file.
-        tip: URDF only: the link that ends the chain (default: the single leaf link).
+        tip: URDF only: the link that ends the chain (default: the leaf behind the most moving joints).
+        base: URDF only: the link the chain starts from (default: the root link).
+        locks: URDF only: {joint: value} of joints off the chain (default 0; see
+            :mod:`symkin.model.urdf_source`).
+        snap_angles: URDF only: read angles within 1e-12 of a multiple of pi/2 as that multiple.
 
     Raises:
         symkin.errors.ModelError: with every problem found, each located in the file.
     """
     if Path(path).suffix.lower() == ".urdf":
-        return build_model(read_urdf_document(path, tip), Path(path).stem)
-    if tip is not None:
-        raise ModelError([Problem(str(path), None, None, "", "a tip link applies to URDF files only",
-                                  "drop the tip, or pass a .urdf file")])
+        return build_model(read_urdf_document(path, tip, base=base, locks=locks, snap_angles=snap_angles),
+                           Path(path).stem)
+    given = [name for name, value in (("tip", tip), ("base", base), ("locks", locks), ("snap_angles", snap_angles))
+             if value]
+    if given:
+        raise ModelError([Problem(str(path), None, None, "", f"{given[0]} applies to URDF files only",
+                                  f"drop {given[0]}, or pass a .urdf file")])
     return build_model(read_document(path), Path(path).stem)
 
 

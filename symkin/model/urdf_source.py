@@ -1,8 +1,13 @@
 """Read a URDF robot description into the same plain document a YAML model file gives.
 
-ROS users' robots work without rewriting them: the chain from the URDF's root link to a tip
-link becomes a ``serial.chain`` (see docs/model-format.md, "URDF files"), so the one
-validator of :mod:`symkin.model.build` checks it and every message points at the URDF line.
+ROS users' robots work without rewriting them: the chain from the URDF's root link (or a
+chosen base link) to a tip link becomes a ``serial.chain`` (see docs/model-format.md, "URDF
+files"), so the one validator of :mod:`symkin.model.build` checks it and every message points
+at the URDF line.  Everything off that chain is handled as Pinocchio's reduced model
+(``pinocchio.buildReducedModel``) handles it: every moving joint off the chain or beyond the
+tip (grippers, heads, sensors) is locked, at 0 or at a value the caller gives, and the links
+it carries become rigid parts of the chain link they hang on (their inertials are lumped into
+it), so M and G are those of the arm holding them.
 
 * joints: ``revolute``, ``continuous`` (revolute without limits), ``prismatic`` and
   ``fixed``; fixed joints are merged into the frames around them (the ``origin`` of the
@@ -12,17 +17,21 @@ validator of :mod:`symkin.model.build` checks it and every message points at the
 * ``<inertial>``: mass, centre of mass and inertia tensor (``<origin>`` rotates its axes);
   links fixed to a moving link add their inertials to it; links fixed to the root do not
   move and are ignored;
-* numbers are read as exact decimals; an angle within 1e-12 rad of a multiple of pi/2 is
-  that exact multiple (URDF files print pi/2 as 1.5707963267948966), so a URDF and the
-  YAML model of the same robot derive the same expressions;
+* numbers are read as exact decimals, taken as written; with ``snap_angles`` an angle within
+  1e-12 rad of a multiple of pi/2 is read as that exact multiple (URDF files print pi/2 as
+  1.5707963267948966), so a URDF and the YAML model of the same robot derive the same
+  expressions; the model's description says which reading was used;
+* ``<mimic joint multiplier offset>``: a follower off the chain is locked at
+  multiplier * (its leader's locked value) + offset;
 * gravity is ``[0, 0, -g]`` with a free parameter ``g = 9.81`` (ROS convention: z up);
   the task space is ``pose``.
 
 The tip is the link named by the caller (``symkin derive --tip LINK``,
 ``load_model(path, tip=...)``), or else the leaf link behind the most moving joints (so
-sensor frames fixed to the base or to a link do not count), if that leaf is unique.  Closed loops (a link
-with two parent joints), mimic joints, floating and planar joints, and moving joints that
-branch off the root-tip chain are refused with a located error.
+sensor frames fixed to the base or to a link do not count, nor do mimic followers), if that
+leaf is unique; else the error lists the candidates.  Closed loops (a link with two parent
+joints), floating and planar joints, mimic joints on the chain (a coupling q_j = a q_i + b)
+and off-chain followers of a chain joint are refused with a located error.
 
 The file is data: it is parsed with the standard library's expat parser, document type
 declarations (and so entities) are refused, and the file size and element count are
@@ -36,6 +45,7 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
@@ -47,7 +57,7 @@ from symkin.model.yaml_source import MAX_FILE_BYTES, Document, KeyPath
 
 MAX_ELEMENTS = 100_000
 _NUMBER = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?")
-#: Angles this close to a multiple of pi/2 are read as that multiple.
+#: With ``snap_angles``, angles this close to a multiple of pi/2 are read as that multiple.
 ANGLE_SNAP = 1e-12
 
 SUPPORTED_JOINTS = ("revolute", "continuous", "prismatic", "fixed")
@@ -75,8 +85,9 @@ class _Fail(Exception):
 
 
 class _UrdfReader:
-    def __init__(self, file: str):
+    def __init__(self, file: str, snap_angles: bool = False):
         self.file = file
+        self.snap_angles = snap_angles
         self.problems: list[Problem] = []
         self.marks: dict[KeyPath, tuple[int, int]] = {}
 
@@ -138,7 +149,7 @@ class _UrdfReader:
             self.fail(element, key, f"{attribute}=\"{text}\" is not {count} number(s)",
                       f"write {count} decimal number(s) separated by spaces")
             return ["0"] * count
-        return [_snap_angle(p) if angles else p for p in parts]
+        return [_snap_angle(p) if angles and self.snap_angles else p for p in parts]
 
     def number(self, element: Element, attribute: str, key: str, default: str | None = None,
                angle: bool = False) -> str | None:
@@ -175,9 +186,12 @@ class _Joint:
     type: str
     parent: str
     child: str
+    #: (leader joint, multiplier, offset) of a <mimic> joint: q = multiplier * q_leader + offset.
+    mimic: tuple[str, Fraction, Fraction] | None = None
 
 
-def read_urdf_document(path: str | Path, tip: str | None = None) -> Document:
+def read_urdf_document(path: str | Path, tip: str | None = None, *, base: str | None = None,
+                       locks: Mapping[str, float] | None = None, snap_angles: bool = False) -> Document:
     """Read the URDF at ``path`` as a model document (see the module docstring).
 
     Raises:
@@ -197,12 +211,22 @@ def read_urdf_document(path: str | Path, tip: str | None = None) -> Document:
     except UnicodeDecodeError as exc:
         raise ModelError([Problem(name, None, None, "", f"the file is not UTF-8 text ({exc.reason})",
                                   "save the URDF as UTF-8 text")]) from None
-    return urdf_document(text, name, tip)
+    return urdf_document(text, name, tip, base=base, locks=locks, snap_angles=snap_angles)
 
 
-def urdf_document(text: str, file: str = "<string>", tip: str | None = None) -> Document:
-    """The model document of URDF ``text`` (see :func:`read_urdf_document`)."""
-    r = _UrdfReader(file)
+def urdf_document(text: str, file: str = "<string>", tip: str | None = None, *, base: str | None = None,
+                  locks: Mapping[str, float] | None = None, snap_angles: bool = False) -> Document:
+    """The model document of URDF ``text`` (see :func:`read_urdf_document`).
+
+    Args:
+        tip: the link that ends the chain (default: see the module docstring).
+        base: the link the chain starts from (default: the root link); links outside its subtree
+            are ignored (they do not move relative to it once their joints are locked).
+        locks: {joint: value} for joints off the chain (rad or m; default 0, mimic followers from
+            their leader).
+        snap_angles: read angles within 1e-12 of a multiple of pi/2 as that multiple.
+    """
+    r = _UrdfReader(file, snap_angles)
     robot = r.parse(text)
     links = _links(r, robot)
     joints = _joints(r, robot, links)
@@ -212,17 +236,27 @@ def urdf_document(text: str, file: str = "<string>", tip: str | None = None) -> 
     for j in joints.values():
         children[j.parent].append(j)
     root = _root(r, robot, links, parent_of)
-    tip = _tip(r, robot, links, children, parent_of, tip)
-    path = _path(parent_of, root, tip)  # joints root -> tip
+    if base is not None:
+        if base not in links:
+            r.fail(robot, "base", f"the base link '{base}' is not a link of the robot",
+                   f"choose one of: {', '.join(links)}")
+            r.stop()
+        root = base
+    tip = _tip(r, robot, root, children, parent_of, tip)
+    path = _path(r, robot, parent_of, root, tip)  # joints root -> tip
     on_path = {root} | {j.child for j in path}
-    _check_branches(r, children, on_path, path)
+    locked = _locked_values(r, robot, joints, children, on_path, path, dict(locks or {}))
     r.stop()
 
     data: dict[str, Any] = {}
     robot_name = robot.attrib.get("name", "")
     if re.fullmatch(r"[A-Za-z][A-Za-z0-9_]*", robot_name):
         data["name"] = robot_name
-    data["description"] = f"{robot_name or 'robot'} from the URDF {Path(file).name}, chain {root} -> {tip}."
+    locked_text = ", ".join(f"{name} = {_decimal(value)}" for name, value in locked.items())
+    data["description"] = (f"{robot_name or 'robot'} from the URDF {Path(file).name}, chain {root} -> {tip}"
+                           + (f"; locked: {locked_text}" if locked else "")
+                           + ("; angles within 1e-12 of multiples of pi/2 snapped to them" if snap_angles
+                              else "; angles as written") + ".")
     data["parameters"] = {"g": {"value": "9.81", "unit": "m/s^2", "doc": "gravitational acceleration"}}
     serial: dict[str, Any] = {}
     chain: list[dict[str, Any]] = []
@@ -257,7 +291,10 @@ def urdf_document(text: str, file: str = "<string>", tip: str | None = None) -> 
     while stack:
         j = stack.pop()
         moving, frames = carried[j.parent]
-        carried[j.child] = (moving, frames + [r.frame(j.element.find("origin"), f"joint[{j.name}].origin")])
+        step = [r.frame(j.element.find("origin"), f"joint[{j.name}].origin")]
+        if j.name in locked:
+            step.append(_locked_motion(r, j, locked[j.name]))
+        carried[j.child] = (moving, frames + step)
         stack.extend(children[j.child])
     bodies: list[dict[str, Any]] = []
     for link_name, element in links.items():
@@ -314,11 +351,16 @@ def _joints(r: _UrdfReader, robot: Element, links: dict[str, Element]) -> dict[s
                                            f"{', '.join(SUPPORTED_JOINTS)} joints",
                    "model a mobile base separately, or decompose the joint into revolute/prismatic joints")
             continue
+        mimic = None
         if element.find("mimic") is not None:
-            r.fail(element.find("mimic"), key + ".mimic", f"joint '{name}' mimics another joint (a coupling "
-                                                          "constraint), which symkin does not support",
-                   "remove the <mimic> element and treat the joint as independent, or remove the joint")
-            continue
+            m = element.find("mimic")
+            leader = m.attrib.get("joint")
+            if not leader:
+                r.fail(m, key + ".mimic", f"the <mimic> of joint '{name}' names no joint", "add joint=\"LEADER\"")
+                continue
+            multiplier = r.number(m, "multiplier", key + ".mimic", "1")
+            offset = r.number(m, "offset", key + ".mimic", "0")
+            mimic = (leader, Fraction(multiplier or "1"), Fraction(offset or "0"))
         ends = {}
         for end in ("parent", "child"):
             item = element.find(end)
@@ -332,7 +374,7 @@ def _joints(r: _UrdfReader, robot: Element, links: dict[str, Element]) -> dict[s
                 ends[end] = link
         if len(ends) != 2:
             continue
-        joint = _Joint(element, name, jtype, ends["parent"], ends["child"])
+        joint = _Joint(element, name, jtype, ends["parent"], ends["child"], mimic)
         if joint.child in parents:
             first = parents[joint.child]
             r.fail(element, key, f"closed loop: link '{joint.child}' is the child of joint '{first.name}' (line "
@@ -371,59 +413,166 @@ def _root(r: _UrdfReader, robot: Element, links: dict[str, Element], parent_of: 
     return root
 
 
-def _tip(r: _UrdfReader, robot: Element, links: dict[str, Element], children: dict[str, list[_Joint]],
+def _subtree(root: str, children: dict[str, list[_Joint]]) -> list[str]:
+    """The links of ``root``'s subtree, ``root`` first."""
+    links, stack = [], [root]
+    while stack:
+        link = stack.pop()
+        links.append(link)
+        stack.extend(j.child for j in reversed(children[link]))
+    return links
+
+
+def _tip(r: _UrdfReader, robot: Element, root: str, children: dict[str, list[_Joint]],
          parent_of: dict[str, _Joint], tip: str | None) -> str:
-    """The named tip, or the leaf at the end of the chain with the most moving joints (if unique)."""
+    """The named tip, or the leaf of the root's subtree behind the most moving joints (if unique)."""
+    subtree = _subtree(root, children)
     if tip is not None:
-        if tip not in links:
+        if tip not in children:
             r.fail(robot, "tip", f"the tip link '{tip}' is not a link of the robot",
-                   f"choose one of: {', '.join(links)}")
+                   f"choose one of: {', '.join(subtree)}")
             r.stop()
         return tip
-    leaves = [name for name, joints in children.items() if not joints]
-    moving = {leaf: _moving_count(leaf, parent_of) for leaf in leaves}
+    leaves = [name for name in subtree if not children[name]]
+    moving = {leaf: _moving_count(leaf, root, parent_of) for leaf in leaves}
     deepest = [leaf for leaf in leaves if moving[leaf] == max(moving.values())]
     if len(deepest) != 1:
         r.fail(robot, "tip", f"no tip was named and {len(deepest)} leaf links end chains with the most moving joints "
                              f"({', '.join(deepest)})",
-               "name the tip link: symkin derive robot.urdf --tip LINK, or load_model(path, tip='LINK')")
+               f"name the tip link (one of: {', '.join(deepest)}): symkin derive robot.urdf --tip LINK, or "
+               "load_model(path, tip='LINK')")
         r.stop()
     return deepest[0]
 
 
-def _moving_count(link: str, parent_of: dict[str, _Joint]) -> int:
+def _moving_count(link: str, root: str, parent_of: dict[str, _Joint]) -> int:
+    """Moving joints between ``root`` and ``link`` (mimic followers do not add a coordinate)."""
     count = 0
-    while link in parent_of:
-        count += parent_of[link].type != "fixed"
+    while link != root and link in parent_of:
+        count += parent_of[link].type != "fixed" and parent_of[link].mimic is None
         link = parent_of[link].parent
     return count
 
 
-def _path(parent_of: dict[str, _Joint], root: str, tip: str) -> list[_Joint]:
+def _path(r: _UrdfReader, robot: Element, parent_of: dict[str, _Joint], root: str, tip: str) -> list[_Joint]:
     path = []
     link = tip
     while link != root:
+        if link not in parent_of:
+            r.fail(robot, "tip", f"the tip link '{tip}' is not below the base link '{root}'",
+                   "choose a tip in the base link's subtree, or another base (--base)")
+            r.stop()
         joint = parent_of[link]
         path.append(joint)
         link = joint.parent
     return path[::-1]
 
 
-def _check_branches(r: _UrdfReader, children: dict[str, list[_Joint]], on_path: set[str],
-                    path: list[_Joint]) -> None:
-    """Moving joints off the root-tip chain would carry masses symkin cannot place: refuse them."""
+def _locked_values(r: _UrdfReader, robot: Element, joints: dict[str, _Joint], children: dict[str, list[_Joint]],
+                   on_path: set[str], path: list[_Joint], locks: dict[str, float]) -> dict[str, Fraction]:
+    """{joint: locked value} of every moving joint hanging off the chain (or beyond the tip) in the
+    base's subtree: the caller's value, a mimic follower's from its leader, else 0."""
     chain_joints = {j.name for j in path}
+    for name in locks:
+        if name not in joints:
+            r.fail(robot, "lock", f"--lock names the unknown joint '{name}'",
+                   f"lock one of the joints off the chain: {', '.join(j for j in joints if j not in chain_joints)}")
+        elif name in chain_joints:
+            r.fail(joints[name].element, f"joint[{name}]", f"--lock names '{name}', a joint of the chain to the tip",
+                   "lock only joints off the chain; to remove a chain joint, choose a nearer tip (--tip)")
+    for j in path:
+        if j.mimic is not None and j.type != "fixed":
+            r.fail(j.element.find("mimic"), f"joint[{j.name}].mimic",
+                   f"joint '{j.name}' on the chain mimics '{j.mimic[0]}' (a coupling q = a q_leader + b), which "
+                   "symkin does not support yet",
+                   "choose a tip before this joint (--tip), or remove its <mimic> element to make it independent")
+    off_chain = []
     stack = [j for link in on_path for j in children[link] if j.name not in chain_joints]
     while stack:
         j = stack.pop()
-        if j.type != "fixed":
-            r.fail(j.element, f"joint[{j.name}]", f"the {j.type} joint '{j.name}' branches off the chain "
-                                                  f"(its parent '{j.parent}' is on the chain to the tip), so the "
-                                                  "masses it carries cannot be placed",
-                   "symkin derives serial chains: choose a tip at the end of this branch (--tip), or remove "
-                   "the branch")
+        off_chain.append(j)
+        stack.extend(children[j.child])
+    values: dict[str, Fraction] = {}
+    followers = []
+    for j in sorted(off_chain, key=lambda joint: joint.element.line):
+        if j.type == "fixed":
+            continue
+        if j.mimic is not None and j.name not in locks:
+            followers.append(j)
         else:
-            stack.extend(children[j.child])
+            values[j.name] = Fraction(repr(float(locks.get(j.name, 0.0))))
+    for j in followers:
+        leader, multiplier, offset = j.mimic
+        if leader in chain_joints:
+            r.fail(j.element.find("mimic"), f"joint[{j.name}].mimic",
+                   f"joint '{j.name}' off the chain mimics '{leader}', a joint of the chain: the links it moves "
+                   "cannot be lumped into a chain link",
+                   f"lock it at a value (--lock {j.name}=VALUE), or choose a tip beyond it (--tip)")
+            continue
+        if leader not in values:
+            r.fail(j.element.find("mimic"), f"joint[{j.name}].mimic",
+                   f"joint '{j.name}' mimics '{leader}', which is not a moving joint off the chain",
+                   f"lock it at a value (--lock {j.name}=VALUE), or fix the <mimic joint=...> name")
+            continue
+        values[j.name] = multiplier * values[leader] + offset
+    for j in off_chain:
+        if j.name in values:
+            _check_lock_within_limits(r, j, values[j.name])
+    return dict(sorted(values.items(), key=lambda item: joints[item[0]].element.line))
+
+
+def _check_lock_within_limits(r: _UrdfReader, j: _Joint, value: Fraction) -> None:
+    limit = j.element.find("limit")
+    if j.type == "continuous" or limit is None or not ("lower" in limit.attrib or "upper" in limit.attrib):
+        return
+    lower = Fraction(limit.attrib.get("lower", "0")) if _NUMBER.fullmatch(limit.attrib.get("lower", "0")) else None
+    upper = Fraction(limit.attrib.get("upper", "0")) if _NUMBER.fullmatch(limit.attrib.get("upper", "0")) else None
+    if lower is not None and upper is not None and lower < upper and not lower <= value <= upper:
+        r.fail(limit, f"joint[{j.name}].limit", f"joint '{j.name}' is locked at {_decimal(value)}, outside its "
+                                                f"limits [{limit.attrib.get('lower')}, {limit.attrib.get('upper')}]",
+               f"lock it within its limits (--lock {j.name}=VALUE)")
+
+
+def _decimal(value: Fraction) -> str:
+    return repr(float(value)) if value.denominator != 1 else str(value.numerator)
+
+
+def _locked_motion(r: _UrdfReader, j: _Joint, value: Fraction) -> dict[str, list[str]]:
+    """The frame of joint ``j``'s motion at ``value``: a rotation about its axis (as rpy) or a translation along it."""
+    axis_element = j.element.find("axis")
+    axis_text = r.numbers(axis_element, "xyz", 3, "1 0 0", f"joint[{j.name}].axis") if axis_element is not None \
+        else ["1", "0", "0"]
+    axis = [Fraction(a) for a in axis_text]
+    norm = math.sqrt(sum(float(a) ** 2 for a in axis))
+    if value == 0 or norm == 0:
+        return {"xyz": ["0", "0", "0"], "rpy": ["0", "0", "0"]}
+    if j.type == "prismatic":
+        return {"xyz": [_fraction_text(a * value / Fraction(repr(norm))) if norm != 1 else _fraction_text(a * value)
+                        for a in axis], "rpy": ["0", "0", "0"]}
+    nonzero = [k for k, a in enumerate(axis) if a != 0]
+    if len(nonzero) == 1:  # about x, y or z: exact
+        rpy = ["0", "0", "0"]
+        rpy[nonzero[0]] = _fraction_text(value if axis[nonzero[0]] > 0 else -value)
+        return {"xyz": ["0", "0", "0"], "rpy": rpy}
+    return {"xyz": ["0", "0", "0"], "rpy": [repr(angle) for angle in _rpy_of_axis_angle(
+        [float(a) / norm for a in axis], float(value))]}
+
+
+def _fraction_text(value: Fraction) -> str:
+    return str(value.numerator) if value.denominator == 1 else f"{value.numerator}/{value.denominator}"
+
+
+def _rpy_of_axis_angle(axis: list[float], angle: float) -> tuple[float, float, float]:
+    """(roll, pitch, yaw) with Rz(yaw) Ry(pitch) Rx(roll) = the rotation by ``angle`` about the unit ``axis``
+    (Rodrigues' formula, then the URDF's fixed-axis XYZ angles)."""
+    x, y, z = axis
+    c, s = math.cos(angle), math.sin(angle)
+    t = 1 - c
+    R = [[c + x * x * t, x * y * t - z * s, x * z * t + y * s],
+         [y * x * t + z * s, c + y * y * t, y * z * t - x * s],
+         [z * x * t - y * s, z * y * t + x * s, c + z * z * t]]
+    return (math.atan2(R[2][1], R[2][2]), math.atan2(-R[2][0], math.hypot(R[2][1], R[2][2])),
+            math.atan2(R[1][0], R[0][0]))
 
 
 def _moving_joint(r: _UrdfReader, j: _Joint, origin: list[dict[str, list[str]]]) -> dict[str, Any]:

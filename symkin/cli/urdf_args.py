@@ -1,0 +1,53 @@
+"""Options that choose what of a URDF becomes the model (``symkin check`` and ``symkin derive``).
+
+The chain runs from the root link (or ``--base``) to ``--tip``; every joint off it is locked
+(``--lock JOINT=VALUE``, default 0) and what it carries is lumped into the chain link it hangs
+on (:mod:`symkin.model.urdf_source`); ``--snap-angles`` reads angles within 1e-12 of a
+multiple of pi/2 as that multiple.  The options apply to URDF files only.
+"""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from symkin.cli.analysis_args import parse_value
+from symkin.errors import ModelError, Problem
+
+
+def add_urdf_arguments(p: argparse.ArgumentParser) -> None:
+    group = p.add_argument_group("URDF files")
+    group.add_argument("--tip", metavar="LINK",
+                       help="the link that ends the chain (default: the leaf behind the most moving joints, if "
+                            "unique)")
+    group.add_argument("--base", metavar="LINK", help="the link the chain starts from (default: the root link)")
+    group.add_argument("--lock", action="append", default=[], metavar="JOINT=VALUE",
+                       help="the value of a joint off the chain, in rad or m, or degrees with 'deg' (repeatable; "
+                            "default 0, a mimic joint follows its leader)")
+    group.add_argument("--snap-angles", action="store_true",
+                       help="read angles within 1e-12 rad of a multiple of pi/2 as that multiple (default: as "
+                            "written)")
+
+
+def urdf_options(args: argparse.Namespace, path: str) -> dict[str, Any]:
+    """Keyword arguments of :func:`symkin.model.load_model` for the model file ``path``.
+
+    Raises:
+        ModelError: URDF options given with no URDF among the models, or a malformed --lock.
+    """
+    given = [option for option, value in (("--tip", args.tip), ("--base", args.base), ("--lock", args.lock),
+                                          ("--snap-angles", args.snap_angles)) if value]
+    if given and not any(model.lower().endswith(".urdf") for model in args.models):
+        raise ModelError([Problem("<command line>", None, None, given[0], f"{given[0]} applies to URDF files only",
+                                  f"drop {given[0]}, or pass a .urdf file")])
+    if not path.lower().endswith(".urdf"):
+        return {}
+    locks = {}
+    for item in args.lock:
+        name, _, value = item.partition("=")
+        try:
+            locks[name.strip()] = parse_value(value)
+        except ValueError:
+            raise ModelError([Problem("<command line>", None, None, "--lock", f"--lock '{item}' is not JOINT=VALUE",
+                                      "write e.g. --lock finger_joint1=0.02 or --lock head_pan=30deg")]) from None
+    return {"tip": args.tip, "base": args.base, "locks": locks, "snap_angles": args.snap_angles}
