@@ -179,6 +179,9 @@ def test_cli_derives_a_urdf_with_a_tip(tmp_path):
 
     arm = load(out / "arm")
     assert arm.mass_matrix(np.zeros(3)).shape == (3, 3)
+    # What the <limit> elements declare reaches the manifest and the loaded model's info.
+    limits = [(c.limits, c.velocity_limit, c.effort_limit) for c in arm.info.coordinates]
+    assert limits == [(None, None, None), ((-1.5, 1.5), 3.0, 10.0), ((0.0, 0.2), 0.5, 50.0)]
     bad = subprocess.run(SYMKIN_CLI + ["derive", str(_write(tmp_path, ARM.replace('type="prismatic"', 'type="floating"'),
                                                             "bad.urdf")), "-o", str(out)],
                          capture_output=True, text=True)
@@ -196,3 +199,15 @@ def test_the_example_urdf_is_the_yaml_robot(models):
         a = reference_function(urdf, d_urdf[name])(*args)[0]
         b = reference_function(yaml, d_yaml[name])(*args)[0]
         np.testing.assert_allclose(a, b, rtol=0, atol=DYNAMICS * max(1.0, np.abs(b).max()), err_msg=name)
+
+
+def test_the_base_link_starts_the_chain(tmp_path):
+    """--base l1: l1 is the fixed base, the chain is j2, j3; links outside l1's subtree are ignored."""
+    path = _write(tmp_path, ARM)
+    model = load_model(path, base="l1")
+    assert [j.name for j in model.joints] == ["j2", "j3"]
+    assert sorted(float(b.mass) for b in model.bodies) == [0.25, 0.5]  # l1 and its sensor no longer move
+    with pytest.raises(ModelError, match="tip link 'l1' is not below the base link 'l2'"):
+        load_model(path, base="l2", tip="l1")
+    with pytest.raises(ModelError, match="base link 'nope' is not a link"):
+        load_model(path, base="nope")
