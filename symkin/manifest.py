@@ -33,15 +33,20 @@ def _input_record(i) -> dict[str, Any]:
 
 
 def _coordinate_record(model: Model, coordinate) -> dict[str, Any]:
-    """Name and type of a joint coordinate, and its position limits where the model declares them.
+    """Name and type of a joint coordinate, and its position, velocity and effort limits where the
+    model declares them.
 
     Limits are numbers: their expressions evaluated at the parameters' default values (the
-    analyses in :mod:`symkin.analysis` read them without sympy).
+    analyses in :mod:`symkin.analysis` and the simulation read them without sympy).
     """
     record: dict[str, Any] = {"name": coordinate.name, "type": coordinate.type.value}
+    values = model.parameter_values
     if coordinate.limits is not None:
-        values = model.parameter_values
         record["limits"] = [float(bound.xreplace(values)) for bound in coordinate.limits]
+    for key in ("velocity_limit", "effort_limit"):
+        bound = getattr(coordinate, key, None)
+        if bound is not None:
+            record[key] = float(bound.xreplace(values))
     return record
 
 

@@ -214,7 +214,9 @@ def test_ur10e_follows_a_tcp_circle():
     assert c["TCP error [m]"][-1] < 2e-5
     q = np.stack([c[f"q{i} [rad]"] for i in range(1, 7)], -1)
     tau = np.stack([c[f"tau_q{i} [N m]"] for i in range(1, 7)], -1)
-    assert np.all(np.abs(tau) < [330, 330, 150, 56, 56, 56])     # within the UR10e's joint torque limits
+    assert np.all(np.abs(tau) < plant.effort_limits)             # within the UR10e's declared torque limits
+    assert plant.effort_limits.tolist() == [330, 330, 150, 56, 56, 56]  # models/ur10e.yaml, via the manifest
+    assert any("effort limits of the model" in line and "within the limits" in line for line in result.summary)
     assert np.max(np.abs(q - q0)) < 0.5
 
 

@@ -22,11 +22,15 @@ class Coordinate:
         name: its name in the model file.
         revolute: an angle (periodic) rather than a length.
         limits: (lower, upper) at the parameters' default values, or None where the model declares none.
+        velocity_limit: the largest |qd| the joint allows (rad/s or m/s), or None.
+        effort_limit: the largest |tau| its actuator gives (N m or N), or None.
     """
 
     name: str
     revolute: bool
     limits: tuple[float, float] | None
+    velocity_limit: float | None = None
+    effort_limit: float | None = None
 
 
 @dataclass(frozen=True)
@@ -104,7 +108,8 @@ class ModelInfo:
         model = manifest["model"]
         parallel = model.get("parallel")
         coordinates = tuple(Coordinate(c["name"], c["type"] == "R",
-                                       tuple(float(v) for v in c["limits"]) if c.get("limits") else None)
+                                       tuple(float(v) for v in c["limits"]) if c.get("limits") else None,
+                                       c.get("velocity_limit"), c.get("effort_limit"))
                             for c in model["coordinates"])
         parameters = tuple(Parameter(p["name"], float(p["default"]), p.get("unit", ""), bool(p["fixed"]))
                            for p in manifest["parameters"])

@@ -46,6 +46,11 @@ class Plant:
         self.name = model.name
         self.coordinates = mechanism.coordinate_names(model)
         self.dof = len(self.coordinates)
+        #: the model's declared velocity and effort limits per joint (NaN where it declares none)
+        self.velocity_limits = np.array([np.nan if c.velocity_limit is None else c.velocity_limit
+                                         for c in model.info.coordinates])
+        self.effort_limits = np.array([np.nan if c.effort_limit is None else c.effort_limit
+                                       for c in model.info.coordinates])
         self.revolute = mechanism.revolute_mask(model)
         self.task_space = mechanism.task_space(model)
         #: rows of the task Jacobian that are TCP translations, and their fk axes

@@ -199,6 +199,24 @@ def _peak(values: np.ndarray) -> float:
     return float(np.max(np.abs(values)))
 
 
+def limit_lines(plant: Plant, tau: np.ndarray, qd: np.ndarray) -> list[str]:
+    """Summary lines that set the peak joint torques and speeds of a run against the limits the
+    model declares (URDF ``<limit effort velocity>``, YAML ``effort_limit``/``velocity_limit``):
+    the largest ratio peak/limit and its joint, and every joint whose limit is exceeded."""
+    lines = []
+    for what, values, limits in (("effort", tau, plant.effort_limits), ("velocity", qd, plant.velocity_limits)):
+        declared = ~np.isnan(limits)
+        if not declared.any():
+            continue
+        ratios = np.where(declared, np.max(np.abs(values), axis=0) / np.where(declared, limits, 1.0), 0.0)
+        worst = int(np.argmax(ratios))
+        exceeded = [plant.coordinates[j] for j in np.flatnonzero(ratios > 1.0)]
+        verdict = f"exceeded at {', '.join(exceeded)}" if exceeded else "within the limits"
+        lines.append(f"  {what} limits of the model: peak/limit up to {ratios[worst]:.3g} "
+                     f"({plant.coordinates[worst]}): {verdict}")
+    return lines
+
+
 def tcp_forces(J: np.ndarray, tau: np.ndarray) -> np.ndarray:
     """F = J^-T tau (seed eq. 8.35) per sample (N, m); NaN where J is singular (kappa > 1e12).
 
@@ -253,6 +271,7 @@ def sine(designs: Sequence[tuple[str, Plant]], center: np.ndarray, joint: int, a
                            "actuator carries the following links)")
         summary.append(f"  forward simulation under computed torque ({timing.integrator}): max joint error "
                        f"{error:.3g} {position_unit}, energy balance drift {balance_drift(system, run):.3g}")
+        summary += limit_lines(plant, tau, qd)
         summary += report.lines
     figures = [
         FigureSpec("fig-8-21-torques.png", "Seed Fig. 8.21: torques on the joints",
@@ -290,7 +309,8 @@ def tracking(label: str, plant: Plant, q_start: np.ndarray, radius: float, timin
                f"  max joint error {_peak(s.q - q_r):.3g} {position_unit}, max TCP error "
                f"{_peak(columns['TCP error [m]']):.3g} m",
                "  peak torques " + ", ".join(f"|tau_{n}| <= {_peak(run.u[:, i]):.4g}" for i, n in enumerate(names))
-               + f" {effort_unit}; energy balance drift {balance_drift(system, run):.3g}"] + report.lines
+               + f" {effort_unit}; energy balance drift {balance_drift(system, run):.3g}"]
+    summary += limit_lines(plant, run.u, s.qd) + report.lines
     figures = [FigureSpec("tracking.png", f"Trajectory following (seed Fig. 8.17): {plant.name}", (
         ("TCP [m]", tuple(f"{prefix}TCP {c} [m]" for c in plant.point_axes for prefix in ("reference ", "")))
         , ("TCP error [m]", ("TCP error [m]",)),
@@ -337,7 +357,8 @@ def haptic_wall(label: str, plant: Plant, q_start: np.ndarray, wall_offset: floa
                f"{_peak(sensed[:, 0]):.3g} N (desired {_peak(desired[:, 0]):.3g} N), max |F_desired - F_felt| "
                f"{_peak(desired - sensed):.3g} N",
                "  peak torques " + ", ".join(f"|tau_{n}| <= {_peak(run.u[:, i]):.4g}" for i, n in enumerate(names))
-               + f" {effort_unit}; energy balance drift {balance_drift(system, run):.3g}"] + report.lines
+               + f" {effort_unit}; energy balance drift {balance_drift(system, run):.3g}"]
+    summary += limit_lines(plant, run.u, s.qd) + report.lines
     figures = [FigureSpec("haptic-wall.png", f"Haptic loop with a virtual wall (seed Fig. 8.18): {plant.name}", (
         ("position [m]", (f"TCP {axes[0]} [m]", f"hand {axes[0]} [m]")),
         ("penetration [m]", ("penetration [m]",)),
