@@ -17,6 +17,7 @@ from symkin._version import __version__
 from symkin.atomic import replace_directory
 from symkin.backends import BACKENDS, get_backend
 from symkin.derivation import Derivation, emitted_quantities
+from symkin.dynamics.feasibility import mass_matrix_problems
 from symkin.errors import DerivationError, ModelError, Problem
 from symkin.ir.bundle import ModelCode, ParameterInfo
 from symkin.ir.spec import FunctionSpec, OptimizedFunction, combine_functions
@@ -132,6 +133,8 @@ def resolve_request(model: Model, only: str | Sequence[str] | None = None,
     else:
         check(model.scene.combine, model.scene.outputs, "output to combine", "combine", False)
         fused = tuple(name for name in model.scene.combine if name in chosen_outputs)
+    if not problems:
+        problems += mass_matrix_problems(model, chosen_outputs)
     if problems:
         raise ModelError(problems)
     return Request(outputs=chosen_outputs,
