@@ -5,6 +5,7 @@ from __future__ import annotations
 from symkin.cli import (
     bench_cmd,
     check_cmd,
+    crosscheck_cmd,
     derive_cmd,
     gci_cmd,
     ik_cmd,
@@ -18,6 +19,8 @@ REGISTRY = [
     derive_cmd.register,
     check_cmd.register_check,
     check_cmd.register_quantities,
+    crosscheck_cmd.register_crosscheck,
+    crosscheck_cmd.register_export,
     workspace_cmd.register,
     gci_cmd.register,
     optimize_cmd.register,

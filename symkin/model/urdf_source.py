@@ -179,6 +179,16 @@ def _is_identity(frame: dict[str, list[str]]) -> bool:
                                                                           Fraction(v) == 0) for v in frame["rpy"])
 
 
+@dataclass(frozen=True)
+class UrdfReduction:
+    """How a URDF tree became the model's chain: the chain's first and last links and the values
+    of the joints locked off it (what a reference such as Pinocchio needs to reduce the same tree)."""
+
+    base: str
+    tip: str
+    locked: dict[str, float]
+
+
 @dataclass
 class _Joint:
     element: Element
@@ -308,7 +318,8 @@ def urdf_document(text: str, file: str = "<string>", tip: str | None = None, *, 
     data["gravity"] = ["0", "0", "-g"]
     data["task_space"] = "pose"
     r.stop()
-    return Document(file=file, data=data, marks=r.marks)
+    return Document(file=file, data=data, marks=r.marks,
+                    reduction=UrdfReduction(root, tip, {name: float(value) for name, value in locked.items()}))
 
 
 def _nontrivial(frames: list[dict[str, list[str]]]) -> list[dict[str, list[str]]]:

@@ -71,12 +71,15 @@ class Document:
         data: the document as dict/list/str/int/float/bool/None.
         marks: key path -> (line, column), 1-based.
         raw: key path -> raw scalar text, for scalars.
+        reduction: for a URDF source, how its tree became the chain
+            (:class:`symkin.model.urdf_source.UrdfReduction`); None for a YAML file.
     """
 
     file: str
     data: Any
     marks: dict[KeyPath, tuple[int, int]] = field(default_factory=dict)
     raw: dict[KeyPath, str] = field(default_factory=dict)
+    reduction: Any = None
 
     def problem(self, path: KeyPath, message: str, fix: str) -> Problem:
         """A :class:`Problem` located at ``path`` (or at its closest located ancestor)."""

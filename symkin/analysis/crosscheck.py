@@ -1,0 +1,216 @@
+"""symkin against an independent reference on the same robot: ``symkin crosscheck`` (Pinocchio).
+
+The reference reads the robot from a URDF and shares no code with symkin's derivation: a
+URDF model file is given to Pinocchio as it is (with symkin's choice of chain: the joints
+off it locked at the same values, :class:`~symkin.model.urdf_source.UrdfReduction`); a YAML
+model goes through the URDF that ``symkin export`` writes (:mod:`symkin.model.urdf_export`);
+``reference_urdf`` replaces either by another file (e.g. the vendor's).  symkin's side is the
+generated numpy code, derived into a temporary directory, so what is checked is what users run.
+
+At ``samples`` random states within the joint limits (q; qd and qdd in [-1, 1]) it compares
+every quantity both have: fk and the frame of every link (base_T_<link>), the geometric
+Jacobian of the TCP in base axes, M (CRBA), G, V (nonLinearEffects without gravity) and the
+inverse dynamics tau (RNEA) of the chain, the locked joints at rest.  Each row is the largest
+normwise relative error ||symkin - reference||_F / ||reference||_F over the states (the
+absolute error where the reference is zero).  Two exact methods differ by rounding only, so
+the default tolerance is 1e-12; an edited file or a wrong convention shows as errors of
+order 1e-3 to 1.
+"""
+
+from __future__ import annotations
+
+import math
+import tempfile
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from symkin.errors import ModelError, Problem
+
+#: Largest normwise relative error accepted by default (two exact methods differ by rounding).
+DEFAULT_TOLERANCE = 1e-12
+KINEMATICS_OUTPUTS = ("fk", "frames", "jacobian_geometric")
+DYNAMICS_OUTPUTS = ("mass_matrix", "coriolis_vector", "gravity_vector", "inverse_dynamics")
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """One quantity: its largest error over the states, and a note (e.g. why it was skipped)."""
+
+    quantity: str
+    error: float
+    note: str = ""
+
+
+@dataclass(frozen=True)
+class CrosscheckReport:
+    """The comparisons of one model against the reference."""
+
+    model: str
+    reference: str
+    samples: int
+    tolerance: float
+    comparisons: tuple[Comparison, ...]
+
+    @property
+    def failures(self) -> tuple[Comparison, ...]:
+        return tuple(c for c in self.comparisons if not c.error <= self.tolerance)
+
+
+def _pinocchio() -> Any:
+    try:
+        import pinocchio
+    except ImportError:
+        raise ModelError([Problem("<command line>", None, None, "--reference", "the reference 'pinocchio' is not "
+                                  "installed", "pip install 'symkin[crosscheck]' (or pip install pin)")]) from None
+    return pinocchio
+
+
+def _normwise(got: np.ndarray, want: np.ndarray) -> float:
+    scale = float(np.linalg.norm(want))
+    difference = float(np.linalg.norm(np.asarray(got, dtype=float) - want))
+    return difference / scale if scale > 0 else difference
+
+
+def _sources(path: Path, reference_urdf: Path | None, urdf: Mapping[str, Any]) -> tuple[Any, str, Any]:
+    """(model, reference URDF text, reduction) for the model file ``path``."""
+    from symkin.model import load_model
+    from symkin.model.build import build_model
+    from symkin.model.urdf_export import ROOT_LINK, TCP_LINK, export_urdf
+    from symkin.model.urdf_source import UrdfReduction, read_urdf_document
+
+    if path.suffix.lower() == ".urdf":
+        document = read_urdf_document(path, **urdf)
+        model = build_model(document, path.stem)
+        reduction = document.reduction
+        text = (reference_urdf or path).read_text()
+    else:
+        model = load_model(path)
+        reduction = UrdfReduction(ROOT_LINK, TCP_LINK, {})
+        text = reference_urdf.read_text() if reference_urdf else export_urdf(model)
+    if model.parallel is not None:
+        raise ModelError([model.problem(("parallel",), "crosscheck compares serial chains with a URDF reference; "
+                                                       "a parallel mechanism has closed loops",
+                                        "cross-check a serial model (the parallel models' tests use their own "
+                                        "closed-loop references)")])
+    return model, text, reduction
+
+
+def _states(model: Any, samples: int, seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(seed)
+    lower, upper = [], []
+    for joint in model.joints:
+        if joint.limits is not None:
+            low, high = (float(b.xreplace(model.parameter_values)) for b in joint.limits)
+        else:
+            low, high = (-math.pi, math.pi) if joint.type.value == "R" else (-0.5, 0.5)
+        lower.append(max(low, -4 * math.pi))
+        upper.append(min(high, 4 * math.pi))
+    n = model.dof
+    return rng.uniform(lower, upper, (samples, n)), rng.uniform(-1, 1, (samples, n)), rng.uniform(-1, 1, (samples, n))
+
+
+def crosscheck(path: str | Path, *, reference_urdf: str | Path | None = None, samples: int = 20, seed: int = 0,
+               tolerance: float = DEFAULT_TOLERANCE, urdf: Mapping[str, Any] | None = None,
+               progress: Callable[[str], None] | None = None) -> CrosscheckReport:
+    """Compare the model in ``path`` (YAML or URDF) with Pinocchio (see the module docstring).
+
+    Args:
+        urdf: for a URDF model, the keyword arguments of :func:`symkin.model.load_model` (tip,
+            base, locks, snap_angles).
+
+    Raises:
+        ModelError: bad model, a parallel model, a reference without the chain's joints or
+            links, or Pinocchio missing.
+    """
+    from symkin import pipeline
+    from symkin.runtime.loader import load
+
+    pin = _pinocchio()
+    path = Path(path)
+    reference_path = Path(reference_urdf) if reference_urdf is not None else None
+    model, text, reduction = _sources(path, reference_path, urdf or {})
+    outputs = KINEMATICS_OUTPUTS + (DYNAMICS_OUTPUTS if model.bodies else ())
+    say = progress or (lambda _line: None)
+    say(f"deriving {', '.join(outputs)} of {model.name} (numpy)")
+    request = pipeline.resolve_request(model, outputs, "numpy", None, False, "none")
+    with tempfile.TemporaryDirectory(prefix="symkin-crosscheck-") as directory:
+        written = pipeline.write(pipeline.generate(model, request), directory)
+        ours = load(written)
+        reference = pin.buildModelFromXML(text)
+        data = reference.createData()
+        missing = [j.name for j in model.joints if not reference.existJointName(j.name)]
+        missing += [link for link in [reduction.base, reduction.tip] + [j.link for j in model.joints]
+                    if not reference.existFrame(link)]
+        if missing:
+            source = str(reference_path or path)
+            raise ModelError([Problem(source, None, None, "", f"the reference has no joint or link "
+                                                              f"{', '.join(sorted(set(missing)))}",
+                                      "give a reference URDF of the same robot (--reference-urdf)")])
+        chain = [reference.joints[reference.getJointId(j.name)] for j in model.joints]
+        columns = [joint.idx_v for joint in chain]
+        q_rest = pin.neutral(reference)
+        for name, value in reduction.locked.items():
+            if reference.existJointName(name):
+                _set(q_rest, reference.joints[reference.getJointId(name)], value)
+        base, tip = reference.getFrameId(reduction.base), reference.getFrameId(reduction.tip)
+        pin.framesForwardKinematics(reference, data, q_rest)
+        base_rotation = data.oMf[base].rotation.copy()  # the chain's base does not move: joints above it are locked
+        gravity = np.array([float(g.xreplace(model.parameter_values)) for g in model.gravity])
+        reference.gravity = pin.Motion(np.concatenate([base_rotation @ gravity, np.zeros(3)]))
+        # V from a model without gravity: nonLinearEffects - G would lose V's digits under a large G
+        weightless = pin.Model(reference)
+        weightless.gravity = pin.Motion.Zero()
+        weightless_data = weightless.createData()
+        Q, QD, QDD = _states(model, samples, seed)
+        say(f"comparing at {samples} states with Pinocchio {pin.__version__}")
+        values = {name: getattr(ours, name)(*args) for name, args in (
+            ("fk", (Q,)), ("frames", (Q,)), ("jacobian_geometric", (Q,)))}
+        if model.bodies:
+            values |= {"mass_matrix": ours.mass_matrix(Q), "coriolis_vector": ours.coriolis_vector(Q, QD),
+                       "gravity_vector": ours.gravity_vector(Q), "inverse_dynamics": ours.inverse_dynamics(Q, QD, QDD)}
+        errors: dict[str, float] = {}
+        rotate = np.kron(np.eye(2), base_rotation.T)
+        for k in range(samples):
+            q, v, a = q_rest.copy(), np.zeros(reference.nv), np.zeros(reference.nv)
+            for joint, angle, rate, acceleration in zip(chain, Q[k], QD[k], QDD[k]):
+                _set(q, joint, angle)
+                v[joint.idx_v], a[joint.idx_v] = rate, acceleration
+            pin.framesForwardKinematics(reference, data, q)
+            to_base = data.oMf[base].inverse()
+            pairs = {"fk": (values["fk"][k], (to_base * data.oMf[tip]).homogeneous)}
+            for joint in model.joints:
+                pairs[f"frame {joint.link}"] = (getattr(values["frames"], f"base_T_{joint.link}")[k],
+                                                (to_base * data.oMf[reference.getFrameId(joint.link)]).homogeneous)
+            jacobian = pin.computeFrameJacobian(reference, data, q, tip, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+            pairs["jacobian_geometric"] = (values["jacobian_geometric"][k], rotate @ jacobian[:, columns])
+            if model.bodies:
+                mass = pin.crba(reference, data, q)
+                mass = np.triu(mass) + np.triu(mass, 1).T
+                g = pin.computeGeneralizedGravity(reference, data, q)
+                pairs["mass_matrix"] = (values["mass_matrix"][k], mass[np.ix_(columns, columns)])
+                pairs["gravity_vector"] = (values["gravity_vector"][k], g[columns])
+                pairs["coriolis_vector"] = (values["coriolis_vector"][k],
+                                            pin.nonLinearEffects(weightless, weightless_data, q, v)[columns])
+                if not model.friction:
+                    pairs["inverse_dynamics"] = (values["inverse_dynamics"][k], pin.rnea(reference, data, q, v, a)[columns])
+            for name, (got, want) in pairs.items():
+                errors[name] = max(errors.get(name, 0.0), _normwise(got, want))
+    comparisons = [Comparison(name, error) for name, error in errors.items()]
+    if model.bodies and model.friction:
+        comparisons.append(Comparison("inverse_dynamics", 0.0, "skipped: the model has friction, Pinocchio's RNEA none"))
+    if not model.bodies:
+        comparisons.append(Comparison("dynamics", 0.0, "skipped: the model declares no bodies"))
+    return CrosscheckReport(model.name, f"Pinocchio {pin.__version__}", samples, tolerance, tuple(comparisons))
+
+
+def _set(q: np.ndarray, joint: Any, value: float) -> None:
+    """Set a Pinocchio configuration's entries of a one-coordinate joint (a continuous joint
+    stores cos and sin)."""
+    if joint.nq == 2:
+        q[joint.idx_q:joint.idx_q + 2] = [math.cos(value), math.sin(value)]
+    else:
+        q[joint.idx_q] = value

@@ -1,0 +1,81 @@
+"""`symkin crosscheck` and `symkin export` (issue 13): symkin against Pinocchio on the same robot.
+
+The example models pass (YAML through the exported URDF, the UR10e's URDF as it is), a stock
+Panda passes with its fingers locked open, and a reference that disagrees fails with exit 1
+naming the quantity: an exported URDF whose forearm mass was edited, read with
+--reference-urdf, proves the check can fail.  The export itself is checked by reading it back
+with symkin's own URDF reader.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from conftest import MODELS_DIR, SYMKIN_CLI, reference_function
+from symkin.analysis.crosscheck import crosscheck
+from symkin.derivation import Derivation
+from symkin.errors import ModelError
+from symkin.model import load_model
+from symkin.model.urdf_export import export_urdf
+from test_robot_zoo import ROBOTS_DIR
+from tolerances import DYNAMICS
+
+
+@pytest.mark.parametrize("name", ["planar_2r.yaml", "ur10e.yaml", "ur10e_classic.yaml", "ur10e.urdf"])
+def test_the_example_models_agree_with_pinocchio(name):
+    report = crosscheck(MODELS_DIR / name, samples=5)
+    names = {c.quantity for c in report.comparisons}
+    assert {"fk", "jacobian_geometric", "mass_matrix", "coriolis_vector", "gravity_vector",
+            "inverse_dynamics"} <= names and any(n.startswith("frame ") for n in names)
+    assert not report.failures, report.comparisons
+
+
+def test_a_stock_robot_with_locked_fingers_passes_on_the_command_line():
+    run = subprocess.run(SYMKIN_CLI + ["crosscheck", str(ROBOTS_DIR / "panda_description/urdf/panda.urdf"), "--tip",
+                                       "panda_link8", "--lock", "panda_finger_joint1=0.03", "--samples", "4"],
+                         capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    assert "mass_matrix" in run.stdout and "FAIL" not in run.stdout and "frame panda_link7" in run.stdout
+
+
+def test_a_reference_that_disagrees_fails_naming_the_quantity(tmp_path):
+    exported = tmp_path / "ur10e.urdf"
+    assert subprocess.run(SYMKIN_CLI + ["export", str(MODELS_DIR / "ur10e.yaml"), "-o", str(exported)]).returncode == 0
+    text = exported.read_text()
+    edited = tmp_path / "edited.urdf"
+    forearm_mass = '<link name="forearm__body2">\n    <inertial><mass value="'
+    assert forearm_mass in text
+    edited.write_text(text.replace(forearm_mass + "3.989", forearm_mass + "4.2"))
+    run = subprocess.run(SYMKIN_CLI + ["crosscheck", str(MODELS_DIR / "ur10e.yaml"), "--reference-urdf", str(edited),
+                                       "--samples", "3"], capture_output=True, text=True)
+    assert run.returncode == 1, run.stdout + run.stderr
+    assert "crosscheck failed" in run.stderr and "mass_matrix" in run.stderr and "fk (" not in run.stderr
+
+
+def test_the_exported_urdf_reads_back_as_the_same_robot(tmp_path):
+    """symkin's own reader on the exported file: the same M and tau as the YAML model."""
+    yaml = load_model(MODELS_DIR / "ur10e.yaml")
+    path = tmp_path / "ur10e.urdf"
+    path.write_text(export_urdf(yaml))
+    urdf = load_model(path, tip="tcp")
+    assert [j.name for j in urdf.joints] == [j.name for j in yaml.joints]
+    rng = np.random.default_rng(3)
+    for _ in range(4):
+        q, qd, qdd = (rng.uniform(-2, 2, 6) for _ in range(3))
+        for name, args in (("mass_matrix", (q,)), ("inverse_dynamics", (q, qd, qdd))):
+            a = reference_function(urdf, Derivation(urdf)[name])(*args)[0]
+            b = reference_function(yaml, Derivation(yaml)[name])(*args)[0]
+            assert np.max(np.abs(a - b)) <= DYNAMICS * np.max(np.abs(b)), name
+
+
+def test_export_refuses_a_parallel_model_and_crosscheck_says_when_pinocchio_is_missing(tmp_path, monkeypatch):
+    run = subprocess.run(SYMKIN_CLI + ["export", str(MODELS_DIR / "delta.yaml"), "-o", str(tmp_path / "d.urdf")],
+                         capture_output=True, text=True)
+    assert run.returncode == 2 and "closed loops" in run.stderr and not (tmp_path / "d.urdf").exists()
+    monkeypatch.setitem(sys.modules, "pinocchio", None)  # import pinocchio raises ImportError
+    with pytest.raises(ModelError, match="'pinocchio' is not installed"):
+        crosscheck(MODELS_DIR / "planar_2r.yaml", samples=1)
