@@ -51,6 +51,15 @@ def _checked_relative(path: str) -> PurePosixPath:
     return rel
 
 
+def file_mode(directory: bool = False) -> int:
+    """The mode ``open()`` or ``mkdir()`` would give a new file (0o666) or directory (0o777) under
+    the process's umask: outputs staged in private temporary files get it before they are
+    renamed into place, so every file symkin writes has the same permissions as any other."""
+    mask = os.umask(0)
+    os.umask(mask)
+    return (0o777 if directory else 0o666) & ~mask
+
+
 def replace_directory(target: Path, files: Mapping[str, str | bytes]) -> None:
     """Make ``target`` a directory holding exactly ``files`` ({relative path: content}).
 
@@ -70,8 +79,8 @@ def replace_directory(target: Path, files: Mapping[str, str | bytes]) -> None:
                 handle.write(data)
                 handle.flush()
                 os.fsync(handle.fileno())
-            os.chmod(path, 0o644)
-        os.chmod(staging, 0o755)
+            os.chmod(path, file_mode())
+        os.chmod(staging, file_mode(directory=True))
         with signals_held():
             # the retired copy is removed while signals are still held: a signal delivered right
             # after the swap must not leave it behind
@@ -99,7 +108,7 @@ def replace_file(target: Path, text: str) -> None:
             handle.write(text.encode("utf-8"))
             handle.flush()
             os.fsync(handle.fileno())
-        os.chmod(staging, 0o644)
+        os.chmod(staging, file_mode())
         os.replace(staging, target)
     except BaseException:
         if os.path.exists(staging):

@@ -206,5 +206,5 @@ def test_bench_stability_cli(tmp_path):
                     "closed-form IK near singularities", "acceptance: "):
         assert heading in result.stdout
     assert "PASS" in result.stdout
-    assert (tmp_path / "planar_2r-stability.png").stat().st_size > 10_000
+    assert (tmp_path / "out" / "figures" / "planar_2r-stability.png").stat().st_size > 10_000
     assert (tmp_path / "records.csv").read_text().startswith("model,quantity,family")

@@ -211,3 +211,12 @@ def test_the_base_link_starts_the_chain(tmp_path):
         load_model(path, base="l2", tip="l1")
     with pytest.raises(ModelError, match="base link 'nope' is not a link"):
         load_model(path, base="nope")
+
+
+def test_analysis_commands_take_a_urdf_as_a_model_file(tmp_path):
+    """Issue 16: `symkin workspace robot.urdf` derived it on the fly like a YAML file instead of
+    failing with "cannot read robot.urdf/manifest.json: Not a directory"."""
+    run = subprocess.run(SYMKIN_CLI + ["workspace", str(MODELS_DIR / "ur10e.urdf"), "-n", "500",
+                                       "-o", str(tmp_path / "ws.png")], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    assert (tmp_path / "ws.png").exists() and "manifest.json" not in run.stderr

@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from symkin.analysis.workspace import Occupancy, WorkspaceCloud
+from symkin.atomic import file_mode
 
 DPI = 150
 
@@ -28,6 +29,7 @@ def _save(figure, path: str | Path) -> Path:
     os.close(handle)
     try:
         figure.savefig(temporary, dpi=DPI, bbox_inches="tight")
+        os.chmod(temporary, file_mode())  # mkstemp makes it private; the figure is not
         os.replace(temporary, path)
     finally:
         if os.path.exists(temporary):

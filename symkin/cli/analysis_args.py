@@ -24,6 +24,8 @@ ANALYSIS_OUTPUTS = ("fk", "jacobian")
 #: has no closed-form fk, and its analyses at a constant orientation use ik and J^-1.
 ANALYSIS_OUTPUTS_BY_KIND = {"serial": ANALYSIS_OUTPUTS, "parallel": ("ik", "fk", "jacobian"),
                             "parallel pose": ("ik", "inverse_jacobian")}
+#: Suffixes of model files (derived on the fly); anything else is a generated directory.
+MODEL_FILE_SUFFIXES = (".yaml", ".yml", ".urdf")
 #: Length units of figures and design labels: metres per unit.
 LENGTH_UNITS = {"m": 1.0, "cm": 100.0, "mm": 1000.0}
 #: Also derived for a parallel model file that limits passive joints: the analyses find the
@@ -35,7 +37,7 @@ def add_model_arguments(p: argparse.ArgumentParser, *, backend: bool = True) -> 
     """MODEL, --backend (unless ``backend`` is False), --set and --limit."""
     p.add_argument("model", metavar="MODEL",
                    help="generated model directory (from 'symkin derive', e.g. generated/planar_2r) "
-                        "or a model file (YAML; fk and jacobian are derived on the fly)")
+                        "or a model file (YAML, or URDF; fk and jacobian are derived on the fly)")
     if backend:
         p.add_argument("--backend", default="numpy", metavar="NAME",
                        help="generated code to evaluate (default: %(default)s)")
@@ -163,7 +165,7 @@ def load_model(path: str, backend: str = "numpy", outputs: Sequence[str] = ANALY
     """The loaded model of MODEL: a generated directory, or a model file derived on the fly.
 
     Args:
-        path: generated directory (or its manifest.json), or a YAML model file.
+        path: generated directory (or its manifest.json), or a model file (YAML, or URDF with its default tip).
         backend: the backend to load (and, for a model file, to emit).
         outputs: the quantities to derive from a model file.
         optional: quantities also derived where the model has them (e.g. ``friction``,
@@ -187,7 +189,7 @@ def load_models(path: str, backends: Sequence[str],
     from symkin import load
 
     source = Path(path)
-    if source.suffix.lower() not in (".yaml", ".yml"):
+    if source.suffix.lower() not in MODEL_FILE_SUFFIXES:
         return [load(source, backend) for backend in backends]
     from symkin import pipeline
     from symkin.cli.progress import Progress

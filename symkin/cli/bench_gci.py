@@ -105,7 +105,7 @@ def _backends(args: argparse.Namespace) -> list[str]:
         return [b.strip() for b in args.backends.split(",") if b.strip()]
     if args.backend:
         return [args.backend]
-    if Path(args.model).suffix.lower() in (".yaml", ".yml"):
+    if Path(args.model).suffix.lower() in analysis_args.MODEL_FILE_SUFFIXES:
         return ["numpy"]  # a model file is derived on the fly, for numpy
     from symkin.manifest import read_manifest
 

@@ -27,7 +27,7 @@ def register(kinds: argparse._SubParsersAction) -> None:
     p.add_argument("--only", metavar="NAMES", help="comma-separated quantities (default: all the model can derive)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
     p.add_argument("--figure", type=Path, metavar="PATH",
-                   help="figure file (default: MODEL_NAME-stability.png in the current directory)")
+                   help="figure file (default: out/figures/MODEL_NAME-stability.png)")
     p.add_argument("--no-figure", action="store_true", help="write no figure")
     p.add_argument("--csv", type=Path, metavar="PATH", help="also write every record as CSV")
     p.set_defaults(run=run)
@@ -49,7 +49,7 @@ def run(args: argparse.Namespace) -> int:
         report.write_csv(result, args.csv)
         print(f"records written to {args.csv}")
     if not args.no_figure:
-        figure = args.figure or Path(f"{model.name}-stability.png")
+        figure = args.figure or Path("out") / "figures" / f"{model.name}-stability.png"
         report.write_figure(result, figure)
         print(f"figure written to {figure}")
     return 0

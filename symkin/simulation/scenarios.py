@@ -31,6 +31,7 @@ from symkin.simulation import contacts as contact_report
 from symkin.simulation.contacts import Contact
 from symkin.simulation.control import ComputedTorque, Wall, WallRenderer
 from symkin.simulation.integrate import Run, run_adaptive, run_sampled
+from symkin.simulation.limits import declared_limit_lines
 from symkin.simulation.plant import Plant
 from symkin.simulation.stops import (DAMPING_RATIO, TIME_CONSTANT, ContactModes, JointStops, Stability,
                                      rk4_stability, stop_configurations)
@@ -127,6 +128,17 @@ def _named(prefix: str, names: Sequence[str], unit: str, values: np.ndarray) -> 
     return {f"{prefix}{name} [{unit}]": values[:, i] for i, name in enumerate(names)}
 
 
+def _seed(plant: Plant, figure: str) -> str:
+    """" (seed Fig. <figure>)" for the seed chapter's arm (a planar 2R arm, task space x, y), else ""."""
+    planar_2r = plant.dof == 2 and bool(np.all(plant.revolute)) and tuple(plant.task_space) == ("x", "y")
+    return f" (seed Fig. {figure})" if planar_2r else ""
+
+
+def _force_units(plant: Plant) -> list[tuple[str, str]]:
+    """(task coordinate, unit of its generalized force): N along a translation, N m about a rotation."""
+    return [(c, "N" if c in plant.point_axes else "N m") for c in plant.task_space]
+
+
 def _joint_units(plant: Plant) -> tuple[str, str]:
     """(position unit, effort unit) of the joints: rad and N m if all revolute, else mixed."""
     if np.all(plant.revolute):
@@ -199,24 +211,6 @@ def _peak(values: np.ndarray) -> float:
     return float(np.max(np.abs(values)))
 
 
-def limit_lines(plant: Plant, tau: np.ndarray, qd: np.ndarray) -> list[str]:
-    """Summary lines that set the peak joint torques and speeds of a run against the limits the
-    model declares (URDF ``<limit effort velocity>``, YAML ``effort_limit``/``velocity_limit``):
-    the largest ratio peak/limit and its joint, and every joint whose limit is exceeded."""
-    lines = []
-    for what, values, limits in (("effort", tau, plant.effort_limits), ("velocity", qd, plant.velocity_limits)):
-        declared = ~np.isnan(limits)
-        if not declared.any():
-            continue
-        ratios = np.where(declared, np.max(np.abs(values), axis=0) / np.where(declared, limits, 1.0), 0.0)
-        worst = int(np.argmax(ratios))
-        exceeded = [plant.coordinates[j] for j in np.flatnonzero(ratios > 1.0)]
-        verdict = f"exceeded at {', '.join(exceeded)}" if exceeded else "within the limits"
-        lines.append(f"  {what} limits of the model: peak/limit up to {ratios[worst]:.3g} "
-                     f"({plant.coordinates[worst]}): {verdict}")
-    return lines
-
-
 def tcp_forces(J: np.ndarray, tau: np.ndarray) -> np.ndarray:
     """F = J^-T tau (seed eq. 8.35) per sample (N, m); NaN where J is singular (kappa > 1e12).
 
@@ -252,14 +246,14 @@ def sine(designs: Sequence[tuple[str, Plant]], center: np.ndarray, joint: int, a
         columns = {"t [s]": t}
         columns |= _named("", names, position_unit, q)
         columns |= _named("tau_", names, effort_unit, tau)
-        columns |= _named("F_", plant.task_space, "N", force)
+        columns |= {f"F_{c} [{unit}]": force[:, i] for i, (c, unit) in enumerate(_force_units(plant))}
         columns |= _named("simulated ", names, position_unit, simulated.q)
         columns |= _named("simulated tau_", names, effort_unit, run.u)
         series.append(Series(label, columns | report.columns, report.contacts))
         peaks = ", ".join(f"|tau_{n}| <= {_peak(tau[:, i]):.4g}" for i, n in enumerate(names))
         summary.append(f"{label}: peak torques {peaks} {effort_unit}; peak TCP forces "
-                       + ", ".join(f"|F_{c}| <= {np.nanmax(np.abs(force[:, i])):.4g}"
-                                   for i, c in enumerate(plant.task_space)) + " N")
+                       + ", ".join(f"|F_{c}| <= {np.nanmax(np.abs(force[:, i])):.4g} {unit}"
+                                   for i, (c, unit) in enumerate(_force_units(plant))))
         singular = int(np.sum(np.isnan(force[:, 0])))
         if singular:
             summary.append(f"  {singular} samples at a singular configuration: TCP forces undefined (NaN)")
@@ -271,13 +265,13 @@ def sine(designs: Sequence[tuple[str, Plant]], center: np.ndarray, joint: int, a
                            "actuator carries the following links)")
         summary.append(f"  forward simulation under computed torque ({timing.integrator}): max joint error "
                        f"{error:.3g} {position_unit}, energy balance drift {balance_drift(system, run):.3g}")
-        summary += limit_lines(plant, tau, qd)
+        summary += declared_limit_lines(plant, tau, qd)
         summary += report.lines
     figures = [
-        FigureSpec("fig-8-21-torques.png", "Seed Fig. 8.21: torques on the joints",
+        FigureSpec("fig-8-21-torques.png", f"Torques on the joints: {plant0.name}{_seed(plant0, '8.21')}",
                    tuple((f"tau_{n} [{effort_unit}]", (f"tau_{n} [{effort_unit}]",)) for n in names)),
-        FigureSpec("fig-8-22-tcp-forces.png", "Seed Fig. 8.22: forces on the TCP (F = J^-T tau)",
-                   tuple((f"F_{c} [N]", (f"F_{c} [N]",)) for c in plant0.task_space)),
+        FigureSpec("fig-8-22-tcp-forces.png", f"Forces on the TCP (F = J^-T tau): {plant0.name}{_seed(plant0, '8.22')}",
+                   tuple((f"F_{c} [{unit}]", (f"F_{c} [{unit}]",)) for c, unit in _force_units(plant0))),
         FigureSpec("sine-motion.png", "Prescribed and simulated joint motion",
                    tuple((f"{n} [{position_unit}]", (f"{n} [{position_unit}]", f"simulated {n} [{position_unit}]"))
                          for n in names)),
@@ -310,7 +304,7 @@ def tracking(label: str, plant: Plant, q_start: np.ndarray, radius: float, timin
                f"{_peak(columns['TCP error [m]']):.3g} m",
                "  peak torques " + ", ".join(f"|tau_{n}| <= {_peak(run.u[:, i]):.4g}" for i, n in enumerate(names))
                + f" {effort_unit}; energy balance drift {balance_drift(system, run):.3g}"]
-    summary += limit_lines(plant, run.u, s.qd) + report.lines
+    summary += declared_limit_lines(plant, run.u, s.qd) + report.lines
     figures = [FigureSpec("tracking.png", f"Trajectory following (seed Fig. 8.17): {plant.name}", (
         ("TCP [m]", tuple(f"{prefix}TCP {c} [m]" for c in plant.point_axes for prefix in ("reference ", "")))
         , ("TCP error [m]", ("TCP error [m]",)),
@@ -358,7 +352,7 @@ def haptic_wall(label: str, plant: Plant, q_start: np.ndarray, wall_offset: floa
                f"{_peak(desired - sensed):.3g} N",
                "  peak torques " + ", ".join(f"|tau_{n}| <= {_peak(run.u[:, i]):.4g}" for i, n in enumerate(names))
                + f" {effort_unit}; energy balance drift {balance_drift(system, run):.3g}"]
-    summary += limit_lines(plant, run.u, s.qd) + report.lines
+    summary += declared_limit_lines(plant, run.u, s.qd) + report.lines
     figures = [FigureSpec("haptic-wall.png", f"Haptic loop with a virtual wall (seed Fig. 8.18): {plant.name}", (
         ("position [m]", (f"TCP {axes[0]} [m]", f"hand {axes[0]} [m]")),
         ("penetration [m]", ("penetration [m]",)),

@@ -160,7 +160,12 @@ def run_stability(model: Model, *, samples: int = 32, float32_samples: int = 16,
     names, skipped = derivation.available(quantities or emitted_quantities(model.mechanism))
     task_matrix = conditioning_matrix(model)
     has_jacobian = bool(derivation.available([task_matrix])[0])
-    generated = tuple(names) + ((task_matrix,) if has_jacobian and task_matrix not in names else ())
+    # also what the run itself evaluates: the conditioning matrix, and fk and the geometric Jacobian
+    # of a serial chain for the closed-form IK section (even when --only leaves them out)
+    support = [task_matrix] if has_jacobian else []
+    if model.parallel is None:
+        support += derivation.available(["fk", "jacobian_geometric"])[0]
+    generated = tuple(names) + tuple(dict.fromkeys(name for name in support if name not in names))
     progress("generating code")
     generation = pipeline.generate(model, pipeline.Request(generated, (), ("numpy",)))
     optimized = {f.name: f for f in generation.functions}

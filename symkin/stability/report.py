@@ -174,5 +174,6 @@ def write_figure(run: StabilityRun, path: Path) -> None:
                title="closed-form IK near a singularity")
         ax.legend(fontsize=7)
     fig.tight_layout()
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=110)
     plt.close(fig)
