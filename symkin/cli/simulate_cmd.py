@@ -47,7 +47,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "use the first; repeatable")
     p.add_argument("--q0", nargs="+", metavar="Q", default=None,
                    help="start (sine: centre) configuration, rad or m; append 'deg' for degrees, e.g. 45deg "
-                        "(default: the middle of the joint limits, 0 for unlimited joints)")
+                        "(default: the middle of the joint limits, 0 for unlimited joints, if the task "
+                        "Jacobian is well conditioned there, else the best-conditioned of 256 poses within the "
+                        "limits; the output says which)")
     p.add_argument("--duration", type=float, default=2.0, metavar="S", help="simulated time [s] (default: 2)")
     p.add_argument("--rate", type=float, default=1000.0, metavar="HZ",
                    help="control and sample rate [Hz] (default: 1000, the haptic loop)")
@@ -100,15 +102,50 @@ def _number(option: str, text: str) -> float:
         raise ValueError(f"{option}: '{text}' is not a number (rad or m, or degrees with 'deg')") from None
 
 
-def _start(args: argparse.Namespace, plant) -> list[float]:
-    if args.q0 is None:
-        limits = plant.model.joint_limits
-        return [0.5 * (lo + hi) if math.isfinite(lo) and math.isfinite(hi) else 0.0 for lo, hi in limits]
-    values = [_number("--q0", v) for v in args.q0]
-    if len(values) != plant.dof:
-        raise ValueError(f"--q0: {plant.name} has {plant.dof} joints ({' '.join(plant.coordinates)}), "
-                         f"got {len(values)} values")
-    return values
+#: The middle of the limits is the default start unless its task Jacobian is worse conditioned
+#: than this (1/kappa): symmetric limits put many arms at a singularity (a SCARA or a UR arm
+#: stretched out), where TCP forces are undefined and a task-space reference leaves the workspace.
+WELL_CONDITIONED = 0.05
+#: Candidate start poses searched then (a Sobol set within the limits, deterministic).
+START_CANDIDATES = 256
+
+
+def _inverse_condition(plant, q):
+    """1/kappa of the task Jacobian at q (..., n): smallest over largest singular value."""
+    import numpy as np
+
+    sigma = np.linalg.svd(plant.model.jacobian(q), compute_uv=False)
+    return sigma[..., -1] / sigma[..., 0]
+
+
+def _start(args: argparse.Namespace, plant) -> tuple[list[float], str]:
+    """(q0, how it was chosen): --q0, else the middle of the joint limits (0 for an unlimited
+    joint) if its task Jacobian is well conditioned, else the best-conditioned of a Sobol set."""
+    if args.q0 is not None:
+        values = [_number("--q0", v) for v in args.q0]
+        if len(values) != plant.dof:
+            raise ValueError(f"--q0: {plant.name} has {plant.dof} joints ({' '.join(plant.coordinates)}), "
+                             f"got {len(values)} values")
+        return values, "--q0"
+    import numpy as np
+
+    limits = np.array(plant.model.joint_limits, dtype=float).reshape(plant.dof, 2)
+    finite = np.isfinite(limits).all(axis=1)
+    middle = np.zeros(plant.dof)
+    middle[finite] = limits[finite].mean(axis=1)
+    conditioning = float(_inverse_condition(plant, middle))
+    if conditioning >= WELL_CONDITIONED:
+        return middle.tolist(), f"the middle of the joint limits (1/kappa = {conditioning:.3g})"
+    from scipy.stats import qmc
+
+    span = np.where(finite[:, None], limits, np.where(plant.revolute, np.pi, 0.5)[:, None] * [-1.0, 1.0])
+    # stay 10 % inside the limits, so that a motion about the start has room
+    low, high = span[:, 0] + 0.1 * np.ptp(span, axis=1), span[:, 1] - 0.1 * np.ptp(span, axis=1)
+    candidates = qmc.scale(qmc.Sobol(plant.dof, scramble=False).random(START_CANDIDATES), low, high)
+    best = int(np.argmax(_inverse_condition(plant, candidates)))
+    return candidates[best].tolist(), (f"the best-conditioned of {START_CANDIDATES} poses within the limits "
+                                       f"(1/kappa = {float(_inverse_condition(plant, candidates[best])):.3g}); the "
+                                       f"middle of the limits has 1/kappa = {conditioning:.3g}")
 
 
 def _stops(args: argparse.Namespace, plant, q0):
@@ -155,7 +192,8 @@ def run(args: argparse.Namespace) -> int:
         designs = [analysis_args.parse_assignments([text]) for text in args.design] or [{}]
         plants = [(analysis_args.design_label(base, d, "cm"), Plant(base.bind(**d) if d else base)) for d in designs]
         plant = plants[0][1]
-        q0 = np.array(_start(args, plant))
+        start_pose, start_reason = _start(args, plant)
+        q0 = np.array(start_pose)
         hand = analysis_args.parse_assignments(args.hand)
         unknown = set(hand) - {"mass", "arm_stiffness", "arm_damping", "grip_stiffness", "grip_damping"}
         if unknown:
@@ -205,6 +243,7 @@ def run(args: argparse.Namespace) -> int:
         files = scenario_files(base.name, result, figures=not args.no_figure)
         replace_directory(Path(out), files)
     print(f"{base.name} ({args.backend}): {args.scenario}, {timing.duration:g} s at {timing.rate:g} Hz")
+    print(f"  start: q0 = [{', '.join(f'{v:.4g}' for v in q0)}], {start_reason}")
     for line in result.summary:
         print(f"  {line}")
     print(f"wrote {len(files)} files to {out}/ ({', '.join(sorted(files))}) in {time.perf_counter() - start:.2f} s")

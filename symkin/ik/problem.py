@@ -9,10 +9,16 @@ Two kinds of targets:
 * ``pose``: a 4x4 base_T_tcp.  The residual is e = [p_t - p; log(R_t R^T)] (base frame) and
   its Jacobian is the geometric Jacobian [v; w] = J qd (``jacobian_geometric``, or
   ``jacobian`` when the model's task space is ``pose``).
-* ``task``: a vector in the model's task space (``[x, y]`` for the planar arm).  The
-  residual is p_t - f(q), Euler-angle components wrapped to (-pi, pi], and its Jacobian the
-  task Jacobian ``jacobian``.  f(q) comes from ``task_coordinates``, or from the translation
-  of ``fk`` when the task space has only position components.
+* ``task``: a vector in the model's task space (``[x, y]`` for the planar arm, ``[x, y, z,
+  yaw]`` for a SCARA, ``[x, y, wz]`` for a planar arm that orients its tool).  The residual
+  is p_t - f(q), angle components wrapped to (-pi, pi], and its Jacobian the task Jacobian
+  ``jacobian``.  f(q) comes from ``task_coordinates``, or from ``fk`` when the task space has
+  only position components and angular-velocity components: x, y, z are the translation,
+  wx, wy, wz the rotation vector log(R) (for a planar arm, wz is the angle about z, whose
+  rate is the Jacobian's wz row).
+
+The target kind follows the model's task space: ``pose`` for the pose task space, ``task``
+otherwise; what a kind needs and the generated code lacks is named in the error.
 """
 
 from __future__ import annotations
@@ -23,11 +29,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from symkin.errors import GeneratedCodeError
-from symkin.ik.rotations import pose_error, right_jacobian_inverse, wrap_angle
+from symkin.ik.rotations import log_so3, pose_error, right_jacobian_inverse, wrap_angle
 from symkin.runtime import LoadedModel
 
 POSE_TASK_SPACE = ("x", "y", "z", "wx", "wy", "wz")
 POSITION_INDEX = {"x": 0, "y": 1, "z": 2}
+#: angular-velocity task components: their coordinate is the rotation vector's component
+ROTATION_INDEX = {"wx": 0, "wy": 1, "wz": 2}
 ANGLES = ("roll", "pitch", "yaw")
 TARGET_KINDS = ("pose", "task")
 
@@ -68,12 +76,13 @@ class ModelKinematics:
                                else "jacobian" if self.task_space == POSE_TASK_SPACE and "jacobian" in functions
                                else None)
         self._has_task = ("task_coordinates" in functions
-                          or all(c in POSITION_INDEX for c in self.task_space)) and "jacobian" in functions
+                          or all(c in POSITION_INDEX or c in ROTATION_INDEX for c in self.task_space)
+                          ) and "jacobian" in functions
 
     @property
     def default_kind(self) -> str:
-        """``pose`` for models whose task space is the pose, else ``task``."""
-        return "pose" if self.task_space == POSE_TASK_SPACE or not self._has_task else "task"
+        """``pose`` for models whose task space is the pose, else ``task`` (the kind follows the task space)."""
+        return "pose" if self.task_space == POSE_TASK_SPACE else "task"
 
     @property
     def has_pose_jacobian(self) -> bool:
@@ -99,7 +108,9 @@ class ModelKinematics:
         if "task_coordinates" in self.model.functions:
             return self.model.task_coordinates(q)
         T = self.model.fk(q)
-        return np.stack([T[..., POSITION_INDEX[c], 3] for c in self.task_space], axis=-1)
+        rotation = log_so3(T[..., :3, :3]) if any(c in ROTATION_INDEX for c in self.task_space) else None
+        return np.stack([T[..., POSITION_INDEX[c], 3] if c in POSITION_INDEX else rotation[..., ROTATION_INDEX[c]]
+                         for c in self.task_space], axis=-1)
 
     def task_jacobian(self, q: np.ndarray) -> np.ndarray:
         self._require_task()
@@ -192,7 +203,7 @@ def residual_for(kinematics: ModelKinematics, kind: str | None = None) -> Residu
         return Residual("pose", kinematics, POSE_TASK_SPACE[:3] + ("rx", "ry", "rz"),
                         np.array([False, False, False, True, True, True]))
     kinematics._require_task()
-    angular = np.array([c in ANGLES for c in kinematics.task_space])
+    angular = np.array([c in ANGLES or c in ROTATION_INDEX for c in kinematics.task_space])
     return Residual("task", kinematics, kinematics.task_space, angular)
 
 
