@@ -68,6 +68,10 @@ def test_simulate_starts_from_a_well_conditioned_pose_and_says_which(tmp_path):
     assert run.returncode == 0, run.stderr
     assert "start: q0 = [" in run.stdout and "best-conditioned of 256 poses" in run.stdout
     assert "singular configuration" not in run.stdout  # no NaN TCP forces
+    # each joint with its own unit: the prismatic q3 in m and N, no "N m|N" mixed into one line
+    assert "|tau_q3| <= " in run.stdout and "N m|N" not in run.stdout and "rad|m, k =" not in run.stdout
+    assert "q3: [0, 0.2] m, k = " in run.stdout
+    assert "tau_q1 > tau_q2 at every sample" not in run.stdout  # the seed's remark is for its 2R arm only
     seed = subprocess.run(SYMKIN_CLI + ["simulate", str(GENERATED_DIR / "planar_2r"), "--scenario", "sine",
                                         "--duration", "0.05", "-o", str(tmp_path / "arm"), "--no-figure"],
                           capture_output=True, text=True)

@@ -7,6 +7,7 @@ penetrations, the crossing instant interpolated linearly between the two samples
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -64,24 +65,24 @@ def _from_switches(stops: JointStops, run: Run) -> list[Contact]:
     return sorted(found, key=lambda c: c.start)
 
 
-def columns(system: ArmSystem, run: Run, unit: tuple[str, str]) -> dict[str, np.ndarray]:
+def columns(system: ArmSystem, run: Run, units: tuple[Sequence[str], Sequence[str]]) -> dict[str, np.ndarray]:
     """Per-sample columns: penetration and stop torque per stopped joint, stored and dissipated energy."""
     stops = system.stops
     s = system.split(run.x)
     depth = stops.depth(s.q)
     tau, _ = stops.torque_and_dissipation(s.q, s.qd)
-    position, effort = unit
     out = {}
     for j, name in enumerate(stops.names):
         if stops.stiffness[j] > 0.0:
-            out[f"penetration {name} [{position}]"] = depth[:, j]
-            out[f"tau_stop_{name} [{effort}]"] = tau[:, j]
+            out[f"penetration {name} [{units[0][j]}]"] = depth[:, j]
+            out[f"tau_stop_{name} [{units[1][j]}]"] = tau[:, j]
     out["stop energy stored [J]"] = stops.stored_energy(s.q)
     out["stop energy dissipated [J]"] = s.dissipated
     return out
 
 
-def summary(system: ArmSystem, run: Run, contacts: list[Contact], unit: tuple[str, str]) -> list[str]:
+def summary(system: ArmSystem, run: Run, contacts: list[Contact], units: tuple[Sequence[str], Sequence[str]]
+            ) -> list[str]:
     """Lines: per stopped joint the number of contacts, time in contact and peak penetration."""
     stops = system.stops
     depth = stops.depth(system.split(run.x).q)
@@ -95,8 +96,8 @@ def summary(system: ArmSystem, run: Run, contacts: list[Contact], unit: tuple[st
             continue
         parts = [f"{sum(c.side == side for c in mine)} x {side} {sum(c.end - c.start for c in mine if c.side == side):.4g} s"
                  for side in SIDES.values() if any(c.side == side for c in mine)]
-        lines.append(f"  {name}: in contact {', '.join(parts)}; max penetration {np.max(depth[:, j]):.3g} {unit[0]} "
-                     f"(at the samples)")
+        lines.append(f"  {name}: in contact {', '.join(parts)}; max penetration {np.max(depth[:, j]):.3g} "
+                     f"{units[0][j]} (at the samples)")
     if free:
         lines.append(f"  {', '.join(free)}: no contact with {'its' if len(free) == 1 else 'their'} stops")
     s = system.split(run.x[-1])

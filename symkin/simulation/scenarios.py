@@ -28,13 +28,21 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from symkin.simulation import contacts as contact_report
+from symkin.simulation import labels
 from symkin.simulation.contacts import Contact
 from symkin.simulation.control import ComputedTorque, Wall, WallRenderer
 from symkin.simulation.integrate import Run, run_adaptive, run_sampled
 from symkin.simulation.limits import declared_limit_lines
 from symkin.simulation.plant import Plant
-from symkin.simulation.stops import (DAMPING_RATIO, TIME_CONSTANT, ContactModes, JointStops, Stability,
-                                     rk4_stability, stop_configurations)
+from symkin.simulation.stops import (
+    DAMPING_RATIO,
+    TIME_CONSTANT,
+    ContactModes,
+    JointStops,
+    Stability,
+    rk4_stability,
+    stop_configurations,
+)
 from symkin.simulation.system import ArmSystem
 from symkin.simulation.trajectory import JointSine, task_circle
 from symkin.simulation.user import MassSpringDamperUser, sine_intent
@@ -124,28 +132,6 @@ def integrate(system: ArmSystem, control, x0: np.ndarray, timing: Timing) -> Run
     raise ValueError(f"unknown integrator {timing.integrator!r}; use one of {', '.join(INTEGRATORS)}")
 
 
-def _named(prefix: str, names: Sequence[str], unit: str, values: np.ndarray) -> dict[str, np.ndarray]:
-    return {f"{prefix}{name} [{unit}]": values[:, i] for i, name in enumerate(names)}
-
-
-def _seed(plant: Plant, figure: str) -> str:
-    """" (seed Fig. <figure>)" for the seed chapter's arm (a planar 2R arm, task space x, y), else ""."""
-    planar_2r = plant.dof == 2 and bool(np.all(plant.revolute)) and tuple(plant.task_space) == ("x", "y")
-    return f" (seed Fig. {figure})" if planar_2r else ""
-
-
-def _force_units(plant: Plant) -> list[tuple[str, str]]:
-    """(task coordinate, unit of its generalized force): N along a translation, N m about a rotation."""
-    return [(c, "N" if c in plant.point_axes else "N m") for c in plant.task_space]
-
-
-def _joint_units(plant: Plant) -> tuple[str, str]:
-    """(position unit, effort unit) of the joints: rad and N m if all revolute, else mixed."""
-    if np.all(plant.revolute):
-        return "rad", "N m"
-    return ("m", "N") if not np.any(plant.revolute) else ("rad|m", "N m|N")
-
-
 def balance_drift(system: ArmSystem, run: Run, energy: np.ndarray | None = None) -> float:
     """max |(k + u - w)(t) - (k + u - w)(0)|, relative to the largest |k + u| met (or 1 J).
 
@@ -196,7 +182,7 @@ def stop_report(system: ArmSystem, run: Run, stability: Stability | None) -> Sto
     stops = system.stops
     if stops is None:
         return StopReport()
-    units = _joint_units(system.plant)
+    units = labels.joint_units(system.plant)
     found = contact_report.intervals(stops, run)
     lines = ["  " + line for line in stops.describe(units)]
     lines += contact_report.summary(system, run, found, units)
@@ -231,7 +217,7 @@ def sine(designs: Sequence[tuple[str, Plant]], center: np.ndarray, joint: int, a
     series, summary = [], []
     plant0 = designs[0][1]
     names = plant0.coordinates
-    position_unit, effort_unit = _joint_units(plant0)
+    positions, efforts = labels.joint_units(plant0)
     reference = JointSine(np.asarray(center, float), joint, amplitude, frequency)
     t = np.arange(timing.steps + 1) / timing.rate
     q, qd, qdd = reference(t)
@@ -244,37 +230,36 @@ def sine(designs: Sequence[tuple[str, Plant]], center: np.ndarray, joint: int, a
         simulated = system.split(run.x)
         error = _peak(simulated.q - q)
         columns = {"t [s]": t}
-        columns |= _named("", names, position_unit, q)
-        columns |= _named("tau_", names, effort_unit, tau)
-        columns |= {f"F_{c} [{unit}]": force[:, i] for i, (c, unit) in enumerate(_force_units(plant))}
-        columns |= _named("simulated ", names, position_unit, simulated.q)
-        columns |= _named("simulated tau_", names, effort_unit, run.u)
+        columns |= labels.named("", names, positions, q)
+        columns |= labels.named("tau_", names, efforts, tau)
+        columns |= {f"F_{c} [{unit}]": force[:, i] for i, (c, unit) in enumerate(labels.force_units(plant))}
+        columns |= labels.named("simulated ", names, positions, simulated.q)
+        columns |= labels.named("simulated tau_", names, efforts, run.u)
         series.append(Series(label, columns | report.columns, report.contacts))
-        peaks = ", ".join(f"|tau_{n}| <= {_peak(tau[:, i]):.4g}" for i, n in enumerate(names))
-        summary.append(f"{label}: peak torques {peaks} {effort_unit}; peak TCP forces "
+        summary.append(f"{label}: peak torques {labels.peaks('tau_', names, efforts, tau)}; peak TCP forces "
                        + ", ".join(f"|F_{c}| <= {np.nanmax(np.abs(force[:, i])):.4g} {unit}"
-                                   for i, (c, unit) in enumerate(_force_units(plant))))
+                                   for i, (c, unit) in enumerate(labels.force_units(plant))))
         singular = int(np.sum(np.isnan(force[:, 0])))
         if singular:
             summary.append(f"  {singular} samples at a singular configuration: TCP forces undefined (NaN)")
-        if len(names) >= 2:
+        if labels.seed(plant, "8.21"):  # the seed's observation on its 2R arm
             above = bool(np.all(tau[:, 0] > tau[:, 1]))
             larger = _peak(tau[:, 0]) > _peak(tau[:, 1])
             summary.append(f"  tau_{names[0]} > tau_{names[1]} at every sample: {'yes' if above else 'no'}; peak "
                            f"|tau_{names[0]}| > peak |tau_{names[1]}|: {'yes' if larger else 'no'} (seed: the first "
                            "actuator carries the following links)")
         summary.append(f"  forward simulation under computed torque ({timing.integrator}): max joint error "
-                       f"{error:.3g} {position_unit}, energy balance drift {balance_drift(system, run):.3g}")
+                       f"{error:.3g} {labels.label(positions)}, energy balance drift {balance_drift(system, run):.3g}")
         summary += declared_limit_lines(plant, tau, qd)
         summary += report.lines
     figures = [
-        FigureSpec("fig-8-21-torques.png", f"Torques on the joints: {plant0.name}{_seed(plant0, '8.21')}",
-                   tuple((f"tau_{n} [{effort_unit}]", (f"tau_{n} [{effort_unit}]",)) for n in names)),
-        FigureSpec("fig-8-22-tcp-forces.png", f"Forces on the TCP (F = J^-T tau): {plant0.name}{_seed(plant0, '8.22')}",
-                   tuple((f"F_{c} [{unit}]", (f"F_{c} [{unit}]",)) for c, unit in _force_units(plant0))),
+        FigureSpec("fig-8-21-torques.png", f"Torques on the joints: {plant0.name}{labels.seed(plant0, '8.21')}",
+                   tuple((f"tau_{n} [{u}]", (f"tau_{n} [{u}]",)) for n, u in zip(names, efforts))),
+        FigureSpec("fig-8-22-tcp-forces.png",
+                   f"Forces on the TCP (F = J^-T tau): {plant0.name}{labels.seed(plant0, '8.22')}",
+                   tuple((f"F_{c} [{unit}]", (f"F_{c} [{unit}]",)) for c, unit in labels.force_units(plant0))),
         FigureSpec("sine-motion.png", "Prescribed and simulated joint motion",
-                   tuple((f"{n} [{position_unit}]", (f"{n} [{position_unit}]", f"simulated {n} [{position_unit}]"))
-                         for n in names)),
+                   tuple((f"{n} [{u}]", (f"{n} [{u}]", f"simulated {n} [{u}]")) for n, u in zip(names, positions))),
     ]
     return ScenarioResult("sine", series, figures, summary)
 
@@ -290,25 +275,25 @@ def tracking(label: str, plant: Plant, q_start: np.ndarray, radius: float, timin
     s = system.split(run.x)
     p_r, p = plant.point(q_r), plant.point(s.q)
     names = plant.coordinates
-    position_unit, effort_unit = _joint_units(plant)
+    positions, efforts = labels.joint_units(plant)
     columns = {"t [s]": run.t}
-    columns |= _named("reference ", names, position_unit, q_r)
-    columns |= _named("", names, position_unit, s.q)
-    columns |= _named("tau_", names, effort_unit, run.u)
-    columns |= _named("reference TCP ", plant.point_axes, "m", p_r)
-    columns |= _named("TCP ", plant.point_axes, "m", p)
+    columns |= labels.named("reference ", names, positions, q_r)
+    columns |= labels.named("", names, positions, s.q)
+    columns |= labels.named("tau_", names, efforts, run.u)
+    columns |= labels.named("reference TCP ", plant.point_axes, "m", p_r)
+    columns |= labels.named("TCP ", plant.point_axes, "m", p)
     columns["TCP error [m]"] = np.linalg.norm(p - p_r, axis=-1)
     summary = [f"{label}: TCP circle of radius {radius:g} m in {timing.duration:g} s, computed torque "
                f"(omega = {bandwidth:g} rad/s) at {timing.rate:g} Hz ({timing.integrator})",
-               f"  max joint error {_peak(s.q - q_r):.3g} {position_unit}, max TCP error "
+               f"  max joint error {_peak(s.q - q_r):.3g} {labels.label(positions)}, max TCP error "
                f"{_peak(columns['TCP error [m]']):.3g} m",
-               "  peak torques " + ", ".join(f"|tau_{n}| <= {_peak(run.u[:, i]):.4g}" for i, n in enumerate(names))
-               + f" {effort_unit}; energy balance drift {balance_drift(system, run):.3g}"]
+               f"  peak torques {labels.peaks('tau_', names, efforts, run.u)}; energy balance drift "
+               f"{balance_drift(system, run):.3g}"]
     summary += declared_limit_lines(plant, run.u, s.qd) + report.lines
     figures = [FigureSpec("tracking.png", f"Trajectory following (seed Fig. 8.17): {plant.name}", (
         ("TCP [m]", tuple(f"{prefix}TCP {c} [m]" for c in plant.point_axes for prefix in ("reference ", "")))
         , ("TCP error [m]", ("TCP error [m]",)),
-        (f"torque [{effort_unit}]", tuple(f"tau_{n} [{effort_unit}]" for n in names))))]
+        (f"torque [{labels.label(efforts)}]", tuple(f"tau_{n} [{u}]" for n, u in zip(names, efforts)))))]
     return ScenarioResult("tracking", [Series(label, columns | report.columns, report.contacts)], figures, summary)
 
 
@@ -336,28 +321,28 @@ def haptic_wall(label: str, plant: Plant, q_start: np.ndarray, wall_offset: floa
     p = plant.point(s.q)
     desired, sensed = renderer.desired_and_sensed(run.t, run.x)
     names, axes = plant.coordinates, plant.point_axes
-    _, effort_unit = _joint_units(plant)
+    _, efforts = labels.joint_units(plant)
     columns = {"t [s]": run.t}
-    columns |= _named("TCP ", axes, "m", p)
-    columns |= _named("hand ", axes, "m", s.hand)
+    columns |= labels.named("TCP ", axes, "m", p)
+    columns |= labels.named("hand ", axes, "m", s.hand)
     columns["penetration [m]"] = np.maximum(0.0, wall.penetration(p))
-    columns |= _named("F_desired_", axes, "N", desired)
-    columns |= _named("F_felt_", axes, "N", sensed)
-    columns |= _named("tau_", names, effort_unit, run.u)
+    columns |= labels.named("F_desired_", axes, "N", desired)
+    columns |= labels.named("F_felt_", axes, "N", sensed)
+    columns |= labels.named("tau_", names, efforts, run.u)
     summary = [f"{label}: wall at {axes[0]} = {wall.offset:.4g} m (k_w = {wall.stiffness:g} N/m, b_w = "
                f"{wall.damping:g} N s/m), hand pushing {push:g} m at {frequency:g} Hz, loop at {timing.rate:g} Hz "
                f"({timing.integrator}), force feedback K_f = {force_gain:g}",
                f"  peak penetration {_peak(columns['penetration [m]']):.3g} m, peak felt force "
                f"{_peak(sensed[:, 0]):.3g} N (desired {_peak(desired[:, 0]):.3g} N), max |F_desired - F_felt| "
                f"{_peak(desired - sensed):.3g} N",
-               "  peak torques " + ", ".join(f"|tau_{n}| <= {_peak(run.u[:, i]):.4g}" for i, n in enumerate(names))
-               + f" {effort_unit}; energy balance drift {balance_drift(system, run):.3g}"]
+               f"  peak torques {labels.peaks('tau_', names, efforts, run.u)}; energy balance drift "
+               f"{balance_drift(system, run):.3g}"]
     summary += declared_limit_lines(plant, run.u, s.qd) + report.lines
     figures = [FigureSpec("haptic-wall.png", f"Haptic loop with a virtual wall (seed Fig. 8.18): {plant.name}", (
         ("position [m]", (f"TCP {axes[0]} [m]", f"hand {axes[0]} [m]")),
         ("penetration [m]", ("penetration [m]",)),
         ("force on the hand [N]", (f"F_desired_{axes[0]} [N]", f"F_felt_{axes[0]} [N]")),
-        (f"torque [{effort_unit}]", tuple(f"tau_{n} [{effort_unit}]" for n in names))))]
+        (f"torque [{labels.label(efforts)}]", tuple(f"tau_{n} [{u}]" for n, u in zip(names, efforts)))))]
     return ScenarioResult("haptic-wall", [Series(label, columns | report.columns, report.contacts)], figures,
                           summary)
 
@@ -373,9 +358,9 @@ def free_swing(label: str, plant: Plant, q_start: np.ndarray, timing: Timing,
     s = system.split(run.x)
     energy = plant.energy(s.q, s.qd)
     names = plant.coordinates
-    position_unit, _ = _joint_units(plant)
+    positions, _ = labels.joint_units(plant)
     columns = {"t [s]": run.t}
-    columns |= _named("", names, position_unit, s.q)
+    columns |= labels.named("", names, positions, s.q)
     columns["energy k + u [J]"] = energy
     columns["work of friction [J]"] = s.work
     balance = system.balance(run.x, energy)
@@ -385,9 +370,9 @@ def free_swing(label: str, plant: Plant, q_start: np.ndarray, timing: Timing,
                f"  energy change {float(energy[-1] - energy[0]):.3g} J (friction work {float(s.work[-1]):.3g} J), "
                f"energy balance drift {balance_drift(system, run, energy):.3g}"] + report.lines
     stopped = tuple(c for c in report.columns if c.startswith("penetration "))
-    panels = ((f"joint [{position_unit}]", tuple(f"{n} [{position_unit}]" for n in names)),
+    panels = ((f"joint [{labels.label(positions)}]", tuple(f"{n} [{u}]" for n, u in zip(names, positions))),
               ("energy [J]", ("energy k + u [J]", "stop energy stored [J]", "stop energy dissipated [J]")))
-    panels += ((f"penetration [{position_unit}]", stopped),) if stopped else ()
+    panels += ((f"penetration [{labels.label(positions)}]", stopped),) if stopped else ()
     figures = [FigureSpec("free-swing.png", f"Free swing: {plant.name}",
                           panels + (("balance drift [J]", ("balance drift [J]",)),))]
     return ScenarioResult("free-swing", [Series(label, columns, report.contacts)], figures, summary)

@@ -40,6 +40,7 @@ closed forms with these.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -171,14 +172,14 @@ class JointStops:
         """U = sum 1/2 k max(0, d)^2 (...,)."""
         return 0.5 * np.sum(self.stiffness * self.depth(q) ** 2, axis=-1)
 
-    def describe(self, units: tuple[str, str]) -> list[str]:
-        """Summary lines: the parameters per stopped joint."""
-        position, effort = units
+    def describe(self, units: tuple[Sequence[str], Sequence[str]]) -> list[str]:
+        """Summary lines: the parameters per stopped joint (``units``: position and effort unit per joint)."""
         lines = [f"joint stops: linear spring-damper beyond the limits, T_c = {self.time_constant * 1e3:g} ms, "
                  f"zeta = {self.damping_ratio:g} (e = {restitution(self.damping_ratio):.3g} at the start configuration, "
                  "other joints free)"]
         for i, name in enumerate(self.names):
             if self.stiffness[i] > 0.0:
+                position, effort = units[0][i], units[1][i]
                 lines.append(f"  {name}: [{self.lower[i]:.4g}, {self.upper[i]:.4g}] {position}, k = "
                              f"{self.stiffness[i]:.4g} {effort}/{position}, c = {self.damping[i]:.4g} "
                              f"{effort} s/{position}")
