@@ -98,8 +98,8 @@ def plot_workspaces(layers: Sequence[WorkspaceLayer], path: str | Path, *, title
         raise ValueError(f"cannot draw a {d}-D workspace")
     ax.set_xlabel(f"{layers[0].cloud.axes[0]} [{unit}]")
     ax.set_ylabel(f"{layers[0].cloud.axes[1]} [{unit}]")
-    ax.set_title(title)
-    ax.legend(loc="best")
+    figure.suptitle(title)
+    ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)  # beside the clouds, never on them
     return _save(figure, path)
 
 
@@ -136,7 +136,7 @@ def plot_index_map(cloud: WorkspaceCloud, values: np.ndarray, path: str | Path, 
     figure.colorbar(mesh, ax=ax, label=label)
     ax.set_xlabel(f"{cloud.axes[0]} [{unit}]")
     ax.set_ylabel(f"{cloud.axes[1]} [{unit}]")
-    ax.set_title(title)
+    figure.suptitle(title)  # over the axes and the colour bar: an axes title ran under the bar
     return _save(figure, path)
 
 

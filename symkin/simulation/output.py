@@ -45,11 +45,18 @@ def _mark_contacts(ax, series: list[Series], legend: bool) -> None:
 
 
 def figure_png(spec: FigureSpec, series: list[Series]) -> bytes:
+    """The PNG of :func:`figure_of`."""
+    buffer = io.BytesIO()
+    figure_of(spec, series).savefig(buffer, format="png", dpi=DPI)
+    return buffer.getvalue()
+
+
+def figure_of(spec: FigureSpec, series: list[Series]):
     """The figure of ``spec``: stacked panels against time, one line per column and series; the
-    joint-stop contacts shaded."""
+    joint-stop contacts shaded; each panel's legend to its right, where it covers no curve."""
     from matplotlib.figure import Figure
 
-    figure = Figure(figsize=(7.0, 2.2 * len(spec.panels) + 0.6), layout="constrained")
+    figure = Figure(figsize=(8.5, 2.2 * len(spec.panels) + 0.6), layout="constrained")
     axes = figure.subplots(len(spec.panels), 1, sharex=True, squeeze=False)[:, 0]
     styles = ("-", "--", ":", "-.")
     for ax, (ylabel, columns) in zip(axes, spec.panels):
@@ -65,12 +72,10 @@ def figure_png(spec: FigureSpec, series: list[Series]) -> bytes:
         _mark_contacts(ax, series, legend=ax is axes[0])
         ax.set_ylabel(ylabel)
         ax.grid(True, alpha=0.3)
-        ax.legend(fontsize=7, loc="best")
+        ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
     axes[-1].set_xlabel("t [s]")
     figure.suptitle(spec.title)
-    buffer = io.BytesIO()
-    figure.savefig(buffer, format="png", dpi=DPI)
-    return buffer.getvalue()
+    return figure
 
 
 def _slug(text: str) -> str:

@@ -1,0 +1,61 @@
+"""Figures are drawn and checked for layout (issue 16): legends cover no data, titles are not cut.
+
+Before, the legends of the simulation figures sat inside the panels at loc="best" (covering
+curves in fig-8-21's top panel, sine-motion's lower panel and free-swing), the workspace legend
+on the clouds, and the 1/kappa map's axes title ran under the colour bar.  The figures are
+rendered (Agg) and every legend's box must lie outside every axes box, and every title inside the
+figure and clear of every axes box.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+from conftest import GENERATED_DIR
+from symkin import analysis, load
+from symkin.analysis import plots
+from symkin.simulation import Plant, scenarios
+from symkin.simulation.output import figure_of
+
+
+def _check_layout(figure) -> None:
+    FigureCanvasAgg(figure).draw()
+    renderer = figure.canvas.get_renderer()
+    boxes = [ax.get_window_extent(renderer) for ax in figure.axes]
+    frame = figure.bbox
+    legends = [ax.get_legend() for ax in figure.axes if ax.get_legend() is not None] + list(figure.legends)
+    for legend in legends:
+        box = legend.get_window_extent(renderer)
+        assert not any(box.overlaps(axes_box) for axes_box in boxes), "a legend covers a panel"
+    titles = [(figure._suptitle, None)] if figure._suptitle is not None else []
+    titles += [(ax.title, ax) for ax in figure.axes if ax.get_title()]
+    for title, owner in titles:
+        box = title.get_window_extent(renderer)
+        assert frame.x0 - 1 <= box.x0 and box.x1 <= frame.x1 + 1 and box.y1 <= frame.y1 + 1, "a title is cut"
+        others = [b for ax, b in zip(figure.axes, boxes) if ax is not owner]
+        assert not any(box.overlaps(other) for other in others), "a title runs into a panel or the colour bar"
+
+
+def test_simulation_figures_keep_legends_off_the_curves():
+    arm = Plant(load(GENERATED_DIR / "planar_2r"))
+    for result in (scenarios.sine([("a", arm), ("b", Plant(load(GENERATED_DIR / "planar_2r").bind(l1=0.2)))],
+                                  np.radians([45, 45]), 1, np.radians(30), 1.0, scenarios.Timing(0.1, 200, "rk4")),
+                   scenarios.free_swing("a", arm, np.radians([45, 45]), scenarios.Timing(0.1, 200, "rk4"))):
+        for spec in result.figures:
+            _check_layout(figure_of(spec, result.series))
+
+
+def test_workspace_and_index_map_figures_keep_titles_and_legends_clear(tmp_path, monkeypatch):
+    drawn = []
+    monkeypatch.setattr(plots, "_save", lambda figure, path: drawn.append(figure) or path)
+    arm = load(GENERATED_DIR / "planar_2r")
+    cloud = analysis.sample_workspace(arm, 2000)
+    plots.plot_workspaces([plots.WorkspaceLayer(label="l1 = l2 = 10 cm", cloud=cloud)], tmp_path / "w.png",
+                          title="Workspace of the planar 2R arm (seed Fig. 8.19), two designs compared")
+    values = np.linspace(0.0, 1.0, len(cloud.points))
+    plots.plot_index_map(cloud, values, tmp_path / "m.png", label="1/kappa",
+                         title="Inverse condition number 1/kappa of the planar 2R arm over its workspace")
+    assert len(drawn) == 2
+    for figure in drawn:
+        _check_layout(figure)
