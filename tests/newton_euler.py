@@ -76,3 +76,14 @@ def inverse_dynamics(links: list[Link], gravity: np.ndarray, q, qd, qdd) -> np.n
         tau[i] = m @ axes[i]
         f_next, n_next = f, m
     return tau
+
+
+def links_of(rows) -> list[Link]:
+    """The links of rows with d, a, alpha, mass, com and inertia (xx, yy, zz, xy, xz, yz), such as the
+    generated chains of benchmarks/chain_models.py (plain data: no symkin code)."""
+    links = []
+    for row in rows:
+        xx, yy, zz, xy, xz, yz = row.inertia
+        inertia = np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
+        links.append(Link(row.d, row.a, row.alpha, row.mass, row.com, inertia))
+    return links

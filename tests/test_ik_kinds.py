@@ -15,6 +15,7 @@ import subprocess
 import numpy as np
 
 from conftest import SYMKIN_CLI
+from test_dynamics_feasibility import SCARA as FEASIBILITY_SCARA
 
 PLANAR_3R = """name: planar_3r
 serial:
@@ -27,17 +28,8 @@ serial:
 task_space: [x, y, wz]
 """
 
-SCARA = """name: scara
-serial:
-  dh:
-    convention: classic
-    rows:
-      - [q1, R, 0, 0.4, 0.3, 0, [-2.5, 2.5]]
-      - [q2, R, 0, 0, 0.25, pi, [-2.5, 2.5]]
-      - [q3, P, 0, 0, 0, 0, [0, 0.2]]
-      - [q4, R, 0, 0, 0, 0, [-3, 3]]
-task_space: [x, y, z, yaw]
-"""
+#: The SCARA of the feasibility tests, with the task space of a pick-and-place robot.
+SCARA = FEASIBILITY_SCARA.replace("task_space: [x, y, z, wz]", "task_space: [x, y, z, yaw]")
 
 
 def _ik(model, *target, extra=()):

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from conftest import ROOT
-from newton_euler import Link, dh_transform, inverse_dynamics
+from newton_euler import dh_transform, inverse_dynamics, links_of
 from symkin import derive, load
 from symkin.optimize.cse import SYMPY_CSE_LIMIT
 from tolerances import DYNAMICS, KINEMATICS
@@ -36,15 +36,6 @@ def chain(tmp_path_factory):
     path = directory / f"chain{N}.yaml"
     path.write_text(chain_yaml(N))
     return derive(path, directory / "generated", outputs=OUTPUTS, backends=["numpy"], combine="none")
-
-
-def _links() -> list[Link]:
-    links = []
-    for link in dh_chain(N):
-        xx, yy, zz, xy, xz, yz = link.inertia
-        inertia = np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
-        links.append(Link(link.d, link.a, link.alpha, link.mass, link.com, inertia))
-    return links
 
 
 def _frames(q: np.ndarray) -> list[np.ndarray]:
@@ -71,7 +62,7 @@ def test_the_large_functions_took_the_dag_path(chain):
 
 def test_a_20_joint_chain_matches_independent_numeric_kinematics_and_dynamics(chain):
     arm = load(chain)
-    links = _links()
+    links = links_of(dh_chain(N))
     reach = sum(abs(link.a) + abs(link.d) for link in links)
     rng = np.random.default_rng(12)
     for _ in range(5):

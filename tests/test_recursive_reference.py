@@ -14,7 +14,7 @@ import sys
 import numpy as np
 
 from conftest import ROOT
-from newton_euler import Link, inverse_dynamics
+from newton_euler import inverse_dynamics, links_of
 from tolerances import DYNAMICS
 
 sys.path.insert(0, str(ROOT / "benchmarks"))
@@ -23,15 +23,6 @@ from recursive_reference import arithmetic_operations, crba_function, rnea_funct
 
 N = 7
 GRAVITY = np.array([0.0, 0.0, -9.81])
-
-
-def _links() -> list[Link]:
-    links = []
-    for link in dh_chain(N):
-        xx, yy, zz, xy, xz, yz = link.inertia
-        inertia = np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
-        links.append(Link(link.d, link.a, link.alpha, link.mass, link.com, inertia))
-    return links
 
 
 def _relative(a: np.ndarray, b: np.ndarray) -> float:
@@ -43,9 +34,9 @@ def test_the_reference_rnea_is_the_newton_euler_of_the_tests():
     full, bias = rnea_function(dh_chain(N), GRAVITY, True), rnea_function(dh_chain(N), GRAVITY, False)
     for _ in range(5):
         q, qd, qdd = rng.uniform(-np.pi, np.pi, N), rng.uniform(-2, 2, N), rng.uniform(-3, 3, N)
-        expected = inverse_dynamics(_links(), GRAVITY, q, qd, qdd)
+        expected = inverse_dynamics(links_of(dh_chain(N)), GRAVITY, q, qd, qdd)
         assert _relative(np.asarray(full(q, qd, qdd)).ravel(), expected) < DYNAMICS
-        expected_bias = inverse_dynamics(_links(), GRAVITY, q, qd, np.zeros(N))
+        expected_bias = inverse_dynamics(links_of(dh_chain(N)), GRAVITY, q, qd, np.zeros(N))
         assert _relative(np.asarray(bias(q, qd)).ravel(), expected_bias) < DYNAMICS
 
 
@@ -54,7 +45,7 @@ def test_the_reference_crba_is_the_mass_matrix_of_the_tests_newton_euler():
     crba = crba_function(dh_chain(N))
     for _ in range(5):
         q = rng.uniform(-np.pi, np.pi, N)
-        expected = np.array([inverse_dynamics(_links(), np.zeros(3), q, np.zeros(N), column)
+        expected = np.array([inverse_dynamics(links_of(dh_chain(N)), np.zeros(3), q, np.zeros(N), column)
                              for column in np.eye(N)]).T
         assert _relative(np.asarray(crba(q)), expected) < DYNAMICS
 
