@@ -59,3 +59,20 @@ def test_workspace_and_index_map_figures_keep_titles_and_legends_clear(tmp_path,
     assert len(drawn) == 2
     for figure in drawn:
         _check_layout(figure)
+
+
+def test_the_slice_and_section_maps_of_a_3d_workspace_keep_titles_clear(tmp_path, monkeypatch):
+    """The DELTA's maps: six z slices, and three sections through a point, each with one colour bar."""
+    from symkin.analysis.workspace import Occupancy
+
+    drawn = []
+    monkeypatch.setattr(plots, "_save", lambda figure, path: drawn.append(figure) or path)
+    occupied = np.ones((12, 12, 8), dtype=bool)
+    occupancy = Occupancy(np.array([-0.06, -0.06, -0.2]), np.array([0.01, 0.01, 0.01]), occupied)
+    values = np.random.default_rng(1).uniform(0.2, 0.9, occupied.shape)
+    title = "Inverse condition number 1/kappa of the DELTA over its reachable workspace"
+    plots.plot_index_slices(occupancy, values, tmp_path / "s.png", title=title)
+    plots.plot_index_sections(occupancy, values, tmp_path / "c.png", [0.0, 0.0, -0.16], title=title)
+    assert len(drawn) == 2
+    for figure in drawn:
+        _check_layout(figure)
