@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from symkin.errors import ModelError, Problem
+from symkin.model.coordinates import coordinate_range
 
 #: Largest normwise relative error accepted by default (two exact methods differ by rounding).
 DEFAULT_TOLERANCE = 1e-12
@@ -100,15 +101,9 @@ def _sources(path: Path, reference_urdf: Path | None, urdf: Mapping[str, Any]) -
 
 
 def _states(model: Any, samples: int, seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """q within the joint ranges (:func:`~symkin.model.coordinates.coordinate_range`), qd and qdd in [-1, 1]."""
     rng = np.random.default_rng(seed)
-    lower, upper = [], []
-    for joint in model.joints:
-        if joint.limits is not None:
-            low, high = (float(b.xreplace(model.parameter_values)) for b in joint.limits)
-        else:
-            low, high = (-math.pi, math.pi) if joint.type.value == "R" else (-0.5, 0.5)
-        lower.append(max(low, -4 * math.pi))
-        upper.append(min(high, 4 * math.pi))
+    lower, upper = coordinate_range(model)
     n = model.dof
     return rng.uniform(lower, upper, (samples, n)), rng.uniform(-1, 1, (samples, n)), rng.uniform(-1, 1, (samples, n))
 

@@ -102,50 +102,18 @@ def _number(option: str, text: str) -> float:
         raise ValueError(f"{option}: '{text}' is not a number (rad or m, or degrees with 'deg')") from None
 
 
-#: The middle of the limits is the default start unless its task Jacobian is worse conditioned
-#: than this (1/kappa): symmetric limits put many arms at a singularity (a SCARA or a UR arm
-#: stretched out), where TCP forces are undefined and a task-space reference leaves the workspace.
-WELL_CONDITIONED = 0.05
-#: Candidate start poses searched then (a Sobol set within the limits, deterministic).
-START_CANDIDATES = 256
-
-
-def _inverse_condition(plant, q):
-    """1/kappa of the task Jacobian at q (..., n): smallest over largest singular value."""
-    import numpy as np
-
-    sigma = np.linalg.svd(plant.model.jacobian(q), compute_uv=False)
-    return sigma[..., -1] / sigma[..., 0]
-
-
 def _start(args: argparse.Namespace, plant) -> tuple[list[float], str]:
-    """(q0, how it was chosen): --q0, else the middle of the joint limits (0 for an unlimited
-    joint) if its task Jacobian is well conditioned, else the best-conditioned of a Sobol set."""
+    """(q0, how it was chosen): --q0, else :func:`symkin.simulation.start.start_pose`."""
     if args.q0 is not None:
         values = [_number("--q0", v) for v in args.q0]
         if len(values) != plant.dof:
             raise ValueError(f"--q0: {plant.name} has {plant.dof} joints ({' '.join(plant.coordinates)}), "
                              f"got {len(values)} values")
         return values, "--q0"
-    import numpy as np
+    from symkin.simulation.start import start_pose
 
-    limits = np.array(plant.model.joint_limits, dtype=float).reshape(plant.dof, 2)
-    finite = np.isfinite(limits).all(axis=1)
-    middle = np.zeros(plant.dof)
-    middle[finite] = limits[finite].mean(axis=1)
-    conditioning = float(_inverse_condition(plant, middle))
-    if conditioning >= WELL_CONDITIONED:
-        return middle.tolist(), f"the middle of the joint limits (1/kappa = {conditioning:.3g})"
-    from scipy.stats import qmc
-
-    span = np.where(finite[:, None], limits, np.where(plant.revolute, np.pi, 0.5)[:, None] * [-1.0, 1.0])
-    # stay 10 % inside the limits, so that a motion about the start has room
-    low, high = span[:, 0] + 0.1 * np.ptp(span, axis=1), span[:, 1] - 0.1 * np.ptp(span, axis=1)
-    candidates = qmc.scale(qmc.Sobol(plant.dof, scramble=False).random(START_CANDIDATES), low, high)
-    best = int(np.argmax(_inverse_condition(plant, candidates)))
-    return candidates[best].tolist(), (f"the best-conditioned of {START_CANDIDATES} poses within the limits "
-                                       f"(1/kappa = {float(_inverse_condition(plant, candidates[best])):.3g}); the "
-                                       f"middle of the limits has 1/kappa = {conditioning:.3g}")
+    q0, reason = start_pose(plant)
+    return q0.tolist(), reason
 
 
 def _stops(args: argparse.Namespace, plant, q0):

@@ -20,7 +20,6 @@ an eigenvalue is negative beyond that bound (indefinite: inertias that are not p
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -28,7 +27,8 @@ import numpy as np
 from symkin.derivation import Derivation, registry
 from symkin.errors import Problem
 from symkin.ir.evaluate import lambdify_spec
-from symkin.model.schema import JointType, Model
+from symkin.model.coordinates import coordinate_range
+from symkin.model.schema import Model
 
 #: Eigenvalue bound, in units of n eps max|lambda|, below which M is numerically singular.
 SINGULAR_RELATIVE = 64.0
@@ -53,7 +53,8 @@ def mass_matrix_problems(model: Model, outputs: Sequence[str]) -> list[Problem]:
     n = model.dof
     rng = np.random.default_rng(0)
     singular_everywhere, null_direction = True, None
-    for q in _sample_configurations(model, rng):
+    lower, upper = coordinate_range(model)
+    for q in rng.uniform(lower, upper, (SAMPLES, n)):
         M = np.array(evaluate(q), dtype=float).reshape(n, n)
         eigenvalues, vectors = np.linalg.eigh(M)
         scale = float(np.max(np.abs(eigenvalues)))
@@ -82,19 +83,3 @@ def mass_matrix_problems(model: Model, outputs: Sequence[str]) -> list[Problem]:
                           f"give the bodies that {joints} moves a mass off its axis or an inertia about it (e.g. the "
                           f"actuator's rotor inertia), or leave {', '.join(inverting)} out of the outputs "
                           "(symkin derive --only ...)")]
-
-
-def _sample_configurations(model: Model, rng: np.random.Generator) -> list[np.ndarray]:
-    """``SAMPLES`` configurations within the joint limits (angles in [-pi, pi], lengths in [-1, 1] m
-    where the model declares none)."""
-    lower, upper = [], []
-    for joint in model.joints:
-        default = (-math.pi, math.pi) if joint.type == JointType.REVOLUTE else (-1.0, 1.0)
-        if joint.limits is None:
-            low, high = default
-        else:
-            low, high = (float(b.xreplace(model.parameter_values)) for b in joint.limits)
-            low, high = max(low, default[0] * 4), min(high, default[1] * 4)
-        lower.append(low)
-        upper.append(high)
-    return [rng.uniform(lower, upper) for _ in range(SAMPLES)]

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
 import sympy
 
 from symkin.model.schema import JointType, Model
@@ -56,3 +57,21 @@ def units(model: Model, group: str) -> tuple[str, ...]:
 def all_symbol_names(joint_name: str) -> tuple[str, ...]:
     """Every symbol name a joint claims (used to detect clashes with parameter names)."""
     return tuple(symbol_name(g, joint_name) for g in GROUPS)
+
+
+def coordinate_range(model: Model) -> tuple[np.ndarray, np.ndarray]:
+    """(lower, upper) per joint for random states (the stability harness, the feasibility check of
+    the mass matrix, the crosscheck): the limits at the default parameters, clamped to +-4 pi, else
+    +-pi rad / +-0.5 m."""
+    lower, upper = [], []
+    defaults = model.parameter_values
+    for joint in model.joints:
+        span = np.pi if joint.type is JointType.REVOLUTE else 0.5
+        if joint.limits is not None:
+            lo, hi = (float(b.xreplace(defaults)) for b in joint.limits)
+            lower.append(max(lo, -4 * np.pi))
+            upper.append(min(hi, 4 * np.pi))
+        else:
+            lower.append(-span)
+            upper.append(span)
+    return np.array(lower), np.array(upper)

@@ -41,7 +41,7 @@ def _number(expr: sympy.Expr, values: dict) -> float:
     return float(sympy.sympify(expr).xreplace(values))
 
 
-def _rotation(axis: np.ndarray, angle: float) -> np.ndarray:
+def rotation_about(axis: np.ndarray, angle: float) -> np.ndarray:
     """Rodrigues' formula: the rotation by ``angle`` about the unit ``axis``."""
     x, y, z = axis / np.linalg.norm(axis)
     c, s, t = math.cos(angle), math.sin(angle), 1 - math.cos(angle)
@@ -56,14 +56,14 @@ def _transform(ops: tuple[Op, ...], values: dict) -> np.ndarray:
     for op in ops:
         step = np.eye(4)
         if isinstance(op, Rotation):
-            step[:3, :3] = _rotation(np.array([_number(a, values) for a in op.axis]), _number(op.angle, values))
+            step[:3, :3] = rotation_about(np.array([_number(a, values) for a in op.axis]), _number(op.angle, values))
         else:
             step[:3, 3] = [_number(v, values) for v in op.vector]
         T = T @ step
     return T
 
 
-def _rpy(R: np.ndarray) -> tuple[float, float, float]:
+def urdf_rpy(R: np.ndarray) -> tuple[float, float, float]:
     """(roll, pitch, yaw) with R = Rz(yaw) Ry(pitch) Rx(roll); at pitch = +-pi/2 roll is 0."""
     pitch = math.atan2(-R[2, 0], math.hypot(R[0, 0], R[1, 0]))
     if math.hypot(R[0, 0], R[1, 0]) < 1e-12:
@@ -73,7 +73,7 @@ def _rpy(R: np.ndarray) -> tuple[float, float, float]:
 
 def _origin(T: np.ndarray) -> str:
     xyz = " ".join(repr(float(v)) for v in T[:3, 3])
-    rpy = " ".join(repr(float(v)) for v in _rpy(T[:3, :3]))
+    rpy = " ".join(repr(float(v)) for v in urdf_rpy(T[:3, :3]))
     return f'<origin xyz="{xyz}" rpy="{rpy}"/>'
 
 
@@ -109,7 +109,7 @@ def export_urdf(model: Model) -> str:
         offset = _number(joint.offset, values)
         motion = np.eye(4)
         if joint.type == JointType.REVOLUTE:
-            motion[:3, :3] = _rotation(axis, offset)
+            motion[:3, :3] = rotation_about(axis, offset)
         else:
             motion[:3, 3] = offset * axis / np.linalg.norm(axis)
         origin = pending @ _transform(joint.before, values) @ motion

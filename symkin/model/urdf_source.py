@@ -52,7 +52,10 @@ from pathlib import Path
 from typing import Any
 from xml.parsers import expat
 
+import numpy as np
+
 from symkin.errors import ModelError, Problem
+from symkin.model.urdf_export import rotation_about, urdf_rpy
 from symkin.model.yaml_source import MAX_FILE_BYTES, Document, KeyPath
 
 MAX_ELEMENTS = 100_000
@@ -558,32 +561,19 @@ def _locked_motion(r: _UrdfReader, j: _Joint, value: Fraction) -> dict[str, list
     if value == 0 or norm == 0:
         return {"xyz": ["0", "0", "0"], "rpy": ["0", "0", "0"]}
     if j.type == "prismatic":
-        return {"xyz": [_fraction_text(a * value / Fraction(repr(norm))) if norm != 1 else _fraction_text(a * value)
-                        for a in axis], "rpy": ["0", "0", "0"]}
+        along = value if norm == 1 else value / Fraction(repr(norm))  # the axis need not be a unit vector
+        return {"xyz": [_fraction_text(a * along) for a in axis], "rpy": ["0", "0", "0"]}
     nonzero = [k for k, a in enumerate(axis) if a != 0]
     if len(nonzero) == 1:  # about x, y or z: exact
         rpy = ["0", "0", "0"]
         rpy[nonzero[0]] = _fraction_text(value if axis[nonzero[0]] > 0 else -value)
         return {"xyz": ["0", "0", "0"], "rpy": rpy}
-    return {"xyz": ["0", "0", "0"], "rpy": [repr(angle) for angle in _rpy_of_axis_angle(
-        [float(a) / norm for a in axis], float(value))]}
+    rotation = rotation_about(np.array([float(a) for a in axis]), float(value))
+    return {"xyz": ["0", "0", "0"], "rpy": [repr(angle) for angle in urdf_rpy(rotation)]}
 
 
 def _fraction_text(value: Fraction) -> str:
     return str(value.numerator) if value.denominator == 1 else f"{value.numerator}/{value.denominator}"
-
-
-def _rpy_of_axis_angle(axis: list[float], angle: float) -> tuple[float, float, float]:
-    """(roll, pitch, yaw) with Rz(yaw) Ry(pitch) Rx(roll) = the rotation by ``angle`` about the unit ``axis``
-    (Rodrigues' formula, then the URDF's fixed-axis XYZ angles)."""
-    x, y, z = axis
-    c, s = math.cos(angle), math.sin(angle)
-    t = 1 - c
-    R = [[c + x * x * t, x * y * t - z * s, x * z * t + y * s],
-         [y * x * t + z * s, c + y * y * t, y * z * t - x * s],
-         [z * x * t - y * s, z * y * t + x * s, c + z * z * t]]
-    return (math.atan2(R[2][1], R[2][2]), math.atan2(-R[2][0], math.hypot(R[2][1], R[2][2])),
-            math.atan2(R[1][0], R[0][0]))
 
 
 def _moving_joint(r: _UrdfReader, j: _Joint, origin: list[dict[str, list[str]]]) -> dict[str, Any]:

@@ -31,6 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from symkin.model import coordinates
+from symkin.model.coordinates import coordinate_range
 from symkin.model.schema import JointType, Model
 from symkin.parallel.inputs import TASK_UNITS
 
@@ -50,22 +51,6 @@ ORIENTATION_SPREAD = 0.2
 States = dict[str, np.ndarray]
 #: The generated closed-form IK of a parallel mechanism: ik(p, **parameters) -> (.joints, .margin).
 IK = Callable[..., object]
-
-
-def coordinate_range(model: Model) -> tuple[np.ndarray, np.ndarray]:
-    """(lower, upper) per joint for random states: the limits if finite, else +-pi / +-0.5 m."""
-    lower, upper = [], []
-    defaults = model.parameter_values
-    for joint in model.joints:
-        span = np.pi if joint.type is JointType.REVOLUTE else 0.5
-        if joint.limits is not None:
-            lo, hi = (float(b.xreplace(defaults)) for b in joint.limits)
-            lower.append(max(lo, -4 * np.pi))
-            upper.append(min(hi, 4 * np.pi))
-        else:
-            lower.append(-span)
-            upper.append(span)
-    return np.array(lower), np.array(upper)
 
 
 def length_parameters(model: Model) -> tuple[str, ...]:
