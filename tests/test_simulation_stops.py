@@ -234,3 +234,52 @@ def test_stops_on_a_model_without_limits_exit_with_code_2(tmp_path, capsys):
     assert exit_info.value.code == 2
     assert "--joint-stops on: planar_2r declares no joint limits" in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_a_guard_zero_at_the_restart_fires_at_its_next_crossing_only():
+    """scipy's event location (sign change over a step, then Brent's method) returns the root at the start
+    of a step whose guard is exactly zero there: a mode restarted at its switch would end where it began.
+    y' = 1 from 1 and g = (y - 1) (y - 1.01) rising, at the run's tolerances: the next crossing is at
+    t = 0.01, inside DOP853's first step."""
+    from scipy.integrate import solve_ivp
+
+    from symkin.simulation.integrate import ArmedGuard
+
+    def guard(t, y):
+        return (y[0] - 1.0) * (y[0] - 1.01)
+
+    guard.direction, guard.terminal = 1.0, True
+    tolerances = {"rtol": 1e-10, "atol": 1e-12}
+    plain = solve_ivp(lambda t, y: np.ones(1), (0.0, 1.0), np.ones(1), method="DOP853", events=guard, **tolerances)
+    assert plain.t_events[0][0] == 0.0                                        # the defect: the restart itself
+    armed = solve_ivp(lambda t, y: np.ones(1), (0.0, 1.0), np.ones(1), method="DOP853",
+                      events=ArmedGuard(guard, 0.0), **tolerances)
+    np.testing.assert_allclose(armed.t_events[0], [0.01], rtol=1e-12)
+
+
+def test_a_joint_pushed_back_onto_its_stop_right_after_leaving_it_does_not_chatter():
+    """UR10e free swing from the default start: wrist 1 (q4) bounces on its lower stop and, 0.78 s in, is
+    thrown back onto it within 8 ms of leaving it.  Before the guards were re-armed at each restart this
+    ran 10 000 switches at that instant and failed ("chattering")."""
+    from symkin.simulation.start import start_pose
+
+    plant = Plant(load(GENERATED_DIR / "ur10e"))
+    q0, _ = start_pose(plant)
+    stops = JointStops.from_plant(plant, q0)
+    system = ArmSystem(plant, stops=stops)
+    run = run_adaptive(system.derivative, lambda t, x: np.zeros(6), system.initial(q0), np.linspace(0.0, 1.0, 201),
+                       modes=ContactModes(stops))
+    located = [(s.guard.joint, s.guard.side, s.guard.entering) for s in run.switches]
+    assert located == [(3, -1, True), (3, -1, False)] * 2 + [(3, -1, True)]
+    assert np.all(np.diff([s.t for s in run.switches]) > 1e-3)                # no zero-length mode
+    # the flight after the second release is a ballistic one, 2 v / a: v = qd4 leaving the stop, a = -qdd4
+    # with no stop acting (the arm's own motion throws q4 back); a varies along the 8 ms, hence 10 %
+    release, contact = run.switches[3], run.switches[4]
+    v = release.x[6 + 3]
+    a = -system.derivative(release.t, release.x, np.zeros(6), np.zeros(6))[6 + 3]
+    assert v > 0.0 and a > 0.0
+    np.testing.assert_allclose(contact.t - release.t, 2.0 * v / a, rtol=0.1)
+    # resting on the stop at the end, and the power balance holds through all five switches
+    assert stops.contact(run.x[-1, :6])[3] == -1
+    s = system.split(run.x)
+    assert np.ptp(system.balance(run.x)) < 1e-9 * np.max(np.abs(plant.energy(s.q, s.qd)))

@@ -14,7 +14,12 @@ Two integrators, for two jobs:
   switches (joint stops engaging and releasing) is integrated mode by mode: the solver stops
   at the switching instant located by an event function (``solve_ivp`` events, root found to
   machine precision on the dense output) and restarts in the new mode, so no step straddles
-  the discontinuity and the error control is not smeared over it.
+  the discontinuity and the error control is not smeared over it.  After a switch the guard
+  that fired, and its counterpart in the new mode, are zero at the restart: each guard is
+  re-armed there (:class:`ArmedGuard`), so that only a crossing after the restart ends the new
+  mode.  Without that, a joint that leaves its stop and is pushed back within one solver step
+  (a bounce shorter than the step, or a joint settling onto its stop) had its new contact
+  located at the restart instant itself, and the run switched back and forth there forever.
 """
 
 from __future__ import annotations
@@ -58,6 +63,31 @@ class Switch:
     t: float
     x: np.ndarray
     guard: Any
+
+
+class ArmedGuard:
+    """A guard g of a mode that starts at a switch (t0, x0), where g may be exactly zero.
+
+    ``solve_ivp`` looks for a sign change of an event between the ends of each step and then
+    for a root in that step with Brent's method.  At a switch the guard just crossed (and its
+    counterpart, the same function watching the other direction) is zero at t0: the first step
+    whose end lies past its next crossing brackets two roots, and Brent's method returns the
+    one at t0, so the new mode ends where it began.  The armed guard takes, at t0 itself, the
+    sign it has before it triggers (-direction), and g elsewhere: every root after t0 is kept,
+    the one at t0 is not.  A guard already past its trigger at t0 (two joints reaching their
+    stops within the root tolerance, only one located) then fires at once, as it should.
+    """
+
+    def __init__(self, guard: Callable[[float, np.ndarray], float], t0: float):
+        self.guard = guard
+        self.t0 = t0
+        self.direction = getattr(guard, "direction", 0.0)
+        self.terminal = getattr(guard, "terminal", False)
+
+    def __call__(self, t: float, x: np.ndarray) -> float:
+        if t == self.t0 and self.direction:
+            return -self.direction
+        return self.guard(t, x)
 
 
 class SimulationError(RuntimeError):
@@ -152,9 +182,13 @@ def run_adaptive(rhs: Rhs, control: Control, x0: np.ndarray, t_eval: np.ndarray,
     while True:
         argument = () if modes is None else (modes.argument(mode),)
         guards = list(modes.guards(mode)) if modes is not None else None
+        if guards and switches:
+            events = [ArmedGuard(g, t0) for g in guards]
+        else:
+            events = guards
         times = t_eval[(t_eval >= t0) if not parts else (t_eval > t0)]
         solution = solve_ivp(lambda t, y: rhs(t, y, control(t, y), *argument), (t0, end), x, method="DOP853",
-                             t_eval=times, rtol=rtol, atol=atol, events=guards or None)
+                             t_eval=times, rtol=rtol, atol=atol, events=events or None)
         evaluations += int(solution.nfev)
         if not solution.success:
             raise SimulationError(f"DOP853 failed at t = {solution.t[-1] if solution.t.size else t0:.6g} s: "
