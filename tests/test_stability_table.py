@@ -1,0 +1,61 @@
+"""The results table of docs/numerical-stability.md against a fresh run (issue 16: quoted figures are tested).
+
+Each row quotes ``symkin bench stability models/NAME.yaml`` with the default options.  The
+run is deterministic in its states, so the record and non-finite counts must match exactly.
+The error columns are maxima of rounding errors: another CPU (another libm, other SIMD
+loops) rounds differently by a few ulps of each output, which moves a maximum by a small
+factor at any condition number (the amplification kappa is the same, only the rounding it
+amplifies differs); a changed formula or a lost digit moves it by orders of magnitude.  So a
+quoted maximum must lie within :data:`DECADE` of the measured one, either way.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+
+import pytest
+from conftest import EXAMPLE_MODELS, ROOT
+
+from symkin.stability import run_stability
+
+#: a quoted maximum and the measured one may differ by this factor, either way (see above)
+DECADE = 10.0
+DOCUMENT = ROOT / "docs" / "numerical-stability.md"
+NUMBER = re.compile(r"[-+]?\d+(?:\.\d+)?(?:e[-+]?\d+)?")
+
+
+
+def quoted_rows() -> dict[str, dict[str, float]]:
+    """model -> records, kappa_below_1e3, any_kappa, float32, nonfinite: the first number of each cell."""
+    text = DOCUMENT.read_text()
+    section = text[text.index("## Results"):]
+    rows = {}
+    for line in section.splitlines():
+        cells = [cell.strip() for cell in line.strip().strip("|").split("|")]
+        if len(cells) != 6 or cells[0] not in EXAMPLE_MODELS:
+            continue
+        values = [float(NUMBER.search(cell).group()) for cell in cells[1:]]
+        rows[cells[0]] = dict(zip(("records", "kappa_below_1e3", "any_kappa", "float32", "nonfinite"), values))
+    return rows
+
+
+def test_the_table_has_a_row_per_example_model():
+    assert sorted(quoted_rows()) == EXAMPLE_MODELS
+
+
+@pytest.mark.parametrize("name", [pytest.param(name, marks=pytest.mark.xdist_group(f"stability-table-{name}"))
+                                  for name in EXAMPLE_MODELS])         # the rows spread over the workers
+def test_quoted_figures_are_what_the_bench_measures(models, name):
+    quoted = quoted_rows()[name]
+    run = run_stability(models[name])                   # the defaults of `symkin bench stability`
+    float64 = [r.error for r in run.records if r.family != "float32"]
+    measured = {"records": len(run.records), "kappa_below_1e3": run.acceptance()[1], "any_kappa": max(float64),
+                "float32": max(r.error for r in run.select("float32")),
+                "nonfinite": sum(math.isinf(r.error) for r in run.records)}
+    assert (quoted["records"], quoted["nonfinite"]) == (measured["records"], measured["nonfinite"]), \
+        f"{name}: the table quotes {quoted}, the bench measures {measured}"
+    for column in ("kappa_below_1e3", "any_kappa", "float32"):
+        ratio = quoted[column] / measured[column]
+        assert 1.0 / DECADE <= ratio <= DECADE, \
+            f"{name}: {column} quoted {quoted[column]:.2g}, measured {measured[column]:.2g}: refresh the table"
