@@ -97,15 +97,15 @@ def replace_directory(target: Path, files: Mapping[str, str | bytes]) -> None:
         raise
 
 
-def replace_file(target: Path, text: str) -> None:
-    """Make ``target`` a file holding ``text`` (UTF-8): written and flushed under a temporary name
-    next to it, then renamed into place, so a reader sees the old file or the new one, never half."""
+def replace_file(target: Path, content: str | bytes) -> None:
+    """Make ``target`` a file holding ``content`` (text as UTF-8): written and flushed under a temporary
+    name next to it, then renamed into place, so a reader sees the old file or the new one, never half."""
     target = Path(target)
     target.parent.mkdir(parents=True, exist_ok=True)
     fd, staging = tempfile.mkstemp(prefix=f".{target.name}.tmp-", dir=target.parent)
     try:
         with os.fdopen(fd, "wb") as handle:
-            handle.write(text.encode("utf-8"))
+            handle.write(content.encode("utf-8") if isinstance(content, str) else content)
             handle.flush()
             os.fsync(handle.fileno())
         os.chmod(staging, file_mode())

@@ -56,7 +56,7 @@ def _environment() -> dict[str, str]:
 
 
 #: A quoted result: an expression line whose comment starts with a number, optionally "+- error".
-QUOTE = re.compile(r"#\s*(-?\d+\.\d*(?:e[-+]?\d+)?)(?:\s*\+-\s*(\d+(?:\.\d*)?(?:e[-+]?\d+)?))?(?:\s|$)")
+QUOTE = re.compile(r"#\s*(-?\d+(?:\.\d*)?(?:e[-+]?\d+)?)(?:\s*\+-\s*(\d+(?:\.\d*)?(?:e[-+]?\d+)?))?(?:\s|$)")
 
 
 def quoted_values(code: str) -> dict[int, tuple[float, int, float]]:

@@ -9,9 +9,10 @@ rotates (:data:`ANALYSIS_OUTPUTS_BY_KIND`).
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import tempfile
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -188,9 +189,21 @@ def load_models(path: str, backends: Sequence[str],
     """
     from symkin import load
 
+    # The generated module is imported (numpy) or read (C, CasADi) by load(): the files may go afterwards.
+    with generated_directory(path, backends, outputs, optional) as directory:
+        return [load(directory, backend) for backend in backends]
+
+
+@contextlib.contextmanager
+def generated_directory(path: str, backends: Sequence[str],
+                        outputs: Sequence[str] | Mapping[str, Sequence[str]] = ANALYSIS_OUTPUTS,
+                        optional: Sequence[str] = ()) -> Iterator[Path]:
+    """The generated directory of MODEL while the block runs: MODEL itself, or for a model file
+    a scratch directory it is derived into (``outputs`` and ``optional`` as :func:`load_models`)."""
     source = Path(path)
     if source.suffix.lower() not in MODEL_FILE_SUFFIXES:
-        return [load(source, backend) for backend in backends]
+        yield source.parent if source.name == "manifest.json" else source
+        return
     from symkin import pipeline
     from symkin.cli.progress import Progress
     from symkin.derivation import Derivation
@@ -202,10 +215,10 @@ def load_models(path: str, backends: Sequence[str],
         wanted = (*wanted, *PASSIVE_LIMIT_OUTPUTS)
     request = pipeline.resolve_request(model, ",".join([*wanted, *Derivation(model).available(optional)[0]]), ",".join(backends),
                                        None)
-    with tempfile.TemporaryDirectory(prefix="symkin-analysis-") as scratch, Progress(model.name) as progress:
-        # The generated module is imported (numpy) or read (C, CasADi) by load(): the files may go afterwards.
-        directory = pipeline.write(pipeline.generate(model, request, progress), scratch)
-        return [load(directory, backend) for backend in backends]
+    with tempfile.TemporaryDirectory(prefix="symkin-analysis-") as scratch:
+        with Progress(model.name) as progress:
+            directory = pipeline.write(pipeline.generate(model, request, progress), scratch)
+        yield directory
 
 
 def analysis_kind(model: GeneratedModel) -> str:

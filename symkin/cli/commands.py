@@ -12,6 +12,7 @@ from symkin.cli import (
     optimize_cmd,
     simulate_cmd,
     structure_cmd,
+    sweep_cmd,
     workspace_cmd,
 )
 
@@ -24,6 +25,7 @@ REGISTRY = [
     workspace_cmd.register,
     gci_cmd.register,
     optimize_cmd.register,
+    sweep_cmd.register,
     structure_cmd.register_mobility,
     structure_cmd.register_topologies,
     bench_cmd.register,

@@ -1,0 +1,364 @@
+"""Design sweeps: the metrics of thousands of designs, evaluated in chunks on Dask (issue 15).
+
+The seed's dimensioning step (sec. 5) searches the link lengths for the best workspace and
+GCI; before a local optimum (:mod:`symkin.design.solve`) a designer wants the map: every
+design of a grid or a Sobol set with its GCI (eq. 8.28), workspace measure and extreme
+condition numbers.  One derivation serves every design: the parameters are inputs of the
+generated functions, so a design is ``model.bind(**values)``.
+
+* :class:`SweepDefinition` - the varied parameters, the design set (a grid, row-major in the
+  order the parameters are given, or the first N points of an unscrambled Sobol sequence),
+  the metrics, the integration budget and seed, the chunk size.  Design i always has the
+  same values, and chunk k holds designs k c ... (k + 1) c - 1.
+* :func:`evaluate_design` - the metrics of one design: GCI and workspace measure from one
+  quasi-Monte Carlo integration over the joint limits (dW = |det J| dq,
+  :func:`~symkin.analysis.global_indices.gci`) with their 95 % error estimates; kappa_min and
+  kappa_max are the extremes of kappa over the same points inside the workspace (sample
+  extremes: the true minimum is at most kappa_min).  A design that fails is a row with a
+  status, never an exception.
+* :func:`evaluate_chunk` - one chunk, on a worker: the generated code travels as a
+  :class:`ModelPayload` (the manifest and the numpy module, a few tens of kB), so a worker on
+  another machine needs no shared file system.
+* :func:`sweep` - every chunk not yet in the store (:mod:`symkin.design.sweep_store`), in
+  this process (``scheduler="serial"``), on a ``LocalCluster`` (``"local"``, the default
+  elsewhere), on a running scheduler (``"tcp://host:8786"``) or on a given
+  ``dask.distributed.Client``.  Dask reruns the tasks of a worker that dies; each completed
+  chunk is written at once, so an interrupted sweep resumes where it stopped.  Each design's
+  metrics depend only on its values and the definition, so a sweep gives the same rows, to
+  the bit, however it was scheduled, split or resumed.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import tempfile
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import asdict, dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+#: metrics a sweep can compute
+METRICS = ("gci", "volume", "kappa_min", "kappa_max")
+#: metrics that come with an error estimate (a column NAME_error)
+ESTIMATED = ("gci", "volume")
+#: statuses of a row
+OK, EMPTY = "ok", "empty workspace"
+
+
+@dataclass(frozen=True)
+class SweepAxis:
+    """A varied parameter: its range and, for a grid, the number of values (ends included)."""
+
+    name: str
+    low: float
+    high: float
+    count: int | None = None
+
+    def values(self) -> np.ndarray:
+        return np.linspace(self.low, self.high, self.count)
+
+
+@dataclass(frozen=True)
+class SweepDefinition:
+    """What a sweep evaluates (see the module docstring).
+
+    Attributes:
+        axes: the varied parameters.
+        metrics: names from :data:`METRICS`.
+        sobol: the number of Sobol designs (None: the grid of the axes' counts).
+        samples: integrand evaluations per design (quasi-Monte Carlo budget).
+        seed: seed of the integrator's scrambling (the same for every design).
+        chunk: designs per task.
+        fixed: parameter values every design shares (``--set``).
+    """
+
+    axes: tuple[SweepAxis, ...]
+    metrics: tuple[str, ...] = METRICS
+    sobol: int | None = None
+    samples: int = 4096
+    seed: int = 0
+    chunk: int = 64
+    fixed: tuple[tuple[str, float], ...] = field(default=())
+
+    def __post_init__(self) -> None:
+        names = [a.name for a in self.axes]
+        if not names:
+            raise ValueError("a sweep varies at least one parameter (--vary NAME=LOW:HIGH:COUNT)")
+        if len(set(names)) != len(names):
+            raise ValueError(f"a parameter is varied twice: {', '.join(names)}")
+        unknown = [m for m in self.metrics if m not in METRICS]
+        if unknown or not self.metrics:
+            raise ValueError(f"unknown metrics {unknown}; choose from {', '.join(METRICS)}")
+        for axis in self.axes:
+            if not (math.isfinite(axis.low) and math.isfinite(axis.high) and axis.low <= axis.high):
+                raise ValueError(f"{axis.name}: the range {axis.low:g}:{axis.high:g} must be finite, low <= high")
+            if self.sobol is None and (axis.count is None or axis.count < 1):
+                raise ValueError(f"{axis.name}: a grid needs a count, e.g. {axis.name}={axis.low:g}:{axis.high:g}:20")
+            if self.sobol is not None and axis.count is not None:
+                raise ValueError(f"{axis.name}: with --sobol give the range only, {axis.name}={axis.low:g}:"
+                                 f"{axis.high:g}")
+        if self.sobol is not None and self.sobol < 1:
+            raise ValueError(f"--sobol: the number of designs must be positive, got {self.sobol}")
+        if self.samples < 16 or self.chunk < 1:
+            raise ValueError("the integration budget must be at least 16 samples and a chunk at least one design")
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return tuple(a.name for a in self.axes)
+
+    @property
+    def size(self) -> int:
+        return self.sobol if self.sobol is not None else math.prod(a.count for a in self.axes)
+
+    @property
+    def chunks(self) -> int:
+        return -(-self.size // self.chunk)
+
+    def designs(self, chunk: int | None = None) -> np.ndarray:
+        """(N, p) parameter values of every design, or of one chunk's designs."""
+        start, stop = (0, self.size) if chunk is None else (chunk * self.chunk, min(self.size, (chunk + 1) * self.chunk))
+        if self.sobol is not None:
+            import warnings
+
+            from scipy.stats import qmc
+
+            low, high = np.array([a.low for a in self.axes]), np.array([a.high for a in self.axes])
+            sequence = qmc.Sobol(len(self.axes), scramble=False)
+            if start:  # (scipy refuses a fast-forward by 0)
+                sequence.fast_forward(start)
+            with warnings.catch_warnings():  # a chunk need not be a power of 2: the set as a whole is
+                warnings.simplefilter("ignore", UserWarning)
+                return low + (high - low) * sequence.random(stop - start)
+        index = np.unravel_index(np.arange(start, stop), tuple(a.count for a in self.axes))
+        return np.stack([a.values()[i] for a, i in zip(self.axes, index)], axis=-1)
+
+    def columns(self) -> list[str]:
+        """The columns of a result row, in order."""
+        metrics = [c for m in self.metrics for c in ((m, f"{m}_error") if m in ESTIMATED else (m,))]
+        return ["design", *self.names, *metrics, "status"]
+
+    def to_json(self) -> str:
+        """Canonical JSON (sorted keys): stored with the results, compared on --resume."""
+        return json.dumps(asdict(self), sort_keys=True)
+
+    @classmethod
+    def from_json(cls, text: str) -> SweepDefinition:
+        data = json.loads(text)
+        data["axes"] = tuple(SweepAxis(**a) for a in data["axes"])
+        data["metrics"] = tuple(data["metrics"])
+        data["fixed"] = tuple((name, value) for name, value in data["fixed"])
+        return cls(**data)
+
+
+def parse_axis(text: str, with_count: bool) -> SweepAxis:
+    """``NAME=LOW:HIGH:COUNT`` (a grid axis) or ``NAME=LOW:HIGH`` (a Sobol range)."""
+    name, _, spec = text.partition("=")
+    parts = spec.split(":")
+    expected = "NAME=LOW:HIGH:COUNT" if with_count else "NAME=LOW:HIGH (with --sobol)"
+    if not name.strip() or len(parts) != (3 if with_count else 2):
+        raise ValueError(f"--vary '{text}': expected {expected}")
+    try:
+        low, high = float(parts[0]), float(parts[1])
+        count = int(parts[2]) if with_count else None
+    except ValueError:
+        raise ValueError(f"--vary '{text}': expected {expected} with numbers") from None
+    return SweepAxis(name.strip(), low, high, count)
+
+
+@dataclass(frozen=True)
+class ModelPayload:
+    """The generated numpy code of a model as bytes: what a worker needs to evaluate designs.
+
+    Attributes:
+        name: the model name.
+        model_hash: the hash of the model source (manifest ``model.hash``).
+        files: (file name, content) of the manifest and the numpy module.
+    """
+
+    name: str
+    model_hash: str
+    files: tuple[tuple[str, bytes], ...]
+
+    @classmethod
+    def from_directory(cls, directory: str | Path) -> ModelPayload:
+        directory = Path(directory)
+        manifest = json.loads((directory / "manifest.json").read_text())
+        if "numpy" not in manifest.get("backends", {}):
+            raise ValueError(f"{directory}: no numpy code generated (derive with --backend numpy)")
+        names = ["manifest.json", *manifest["backends"]["numpy"]["files"]]
+        return cls(manifest["model"]["name"], manifest["model"]["hash"],
+                   tuple((n, (directory / n).read_bytes()) for n in names))
+
+    @property
+    def digest(self) -> str:
+        """sha256 of the files: the key of the worker-side cache."""
+        h = hashlib.sha256()
+        for name, content in self.files:
+            h.update(name.encode() + b"\0" + content)
+        return h.hexdigest()
+
+    def load(self) -> Any:
+        """The loaded numpy model, written once per process into a scratch directory."""
+        digest = self.digest
+        if digest not in _LOADED:
+            from symkin import load
+
+            directory = Path(tempfile.mkdtemp(prefix=f"symkin-sweep-{self.name}-"))
+            for name, content in self.files:
+                (directory / name).write_bytes(content)
+            _LOADED[digest] = load(directory, "numpy")
+        return _LOADED[digest]
+
+
+#: worker-side cache: payload digest -> loaded model
+_LOADED: dict[str, Any] = {}
+
+
+def evaluate_design(model: Any, values: dict[str, float], definition: SweepDefinition) -> dict[str, Any]:
+    """The metrics of one design (see the module docstring): {column: value} with a status."""
+    from symkin.analysis.global_indices import joint_space_integrand
+    from symkin.analysis.integrators import integrate
+
+    row: dict[str, Any] = {c: math.nan for c in definition.columns()[1 + len(definition.axes):-1]}
+    try:
+        design = model.bind(**dict(definition.fixed), **values)
+        integrand = joint_space_integrand(design)
+        extremes = [math.inf, -math.inf]
+
+        def recorded(q: np.ndarray) -> np.ndarray:
+            out = integrand.function(q)
+            inside = out[:, 1] > 0.0
+            if inside.any():
+                index = out[inside, 0] / out[inside, 1]
+                extremes[0], extremes[1] = min(extremes[0], float(index.min())), max(extremes[1], float(index.max()))
+            return out
+
+        with np.errstate(all="ignore"):
+            result = integrate(replace(integrand, function=recorded), "qmc", definition.samples, seed=definition.seed)
+        measure = result.component(1)
+        if not measure.value > 0.0:
+            return {**row, "status": EMPTY}
+        gci = result.ratio(0, 1)
+        found = {"gci": (gci.value, gci.error), "volume": (measure.value, measure.error),
+                 "kappa_min": (1.0 / extremes[1] if extremes[1] > 0 else math.inf,),
+                 "kappa_max": (1.0 / extremes[0] if extremes[0] > 0 else math.inf,)}
+        for metric in definition.metrics:
+            row[metric] = float(found[metric][0])
+            if metric in ESTIMATED:
+                row[f"{metric}_error"] = float(found[metric][1])
+        return {**row, "status": OK}
+    except (ValueError, KeyError, ArithmeticError, np.linalg.LinAlgError) as err:
+        return {**row, "status": f"failed: {type(err).__name__}: {err}"}
+
+
+def evaluate_chunk(payload: ModelPayload, definition: SweepDefinition, chunk: int) -> dict[str, list]:
+    """Columns (see :meth:`SweepDefinition.columns`) of the designs of one chunk."""
+    model = payload.load()
+    columns: dict[str, list] = {c: [] for c in definition.columns()}
+    first = chunk * definition.chunk
+    for offset, point in enumerate(definition.designs(chunk)):
+        values = {name: float(v) for name, v in zip(definition.names, point)}
+        row = {"design": first + offset, **values, **evaluate_design(model, values, definition)}
+        for name in columns:
+            columns[name].append(row[name])
+    return columns
+
+
+def _client(scheduler: str, workers: int | None) -> tuple[Any, Any]:
+    """(client, cluster to close or None) for ``scheduler`` ``local`` or an address."""
+    from dask.distributed import Client, LocalCluster
+
+    if scheduler == "local":
+        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
+        return Client(cluster), cluster
+    return Client(scheduler), None
+
+
+def sweep(payload: ModelPayload, definition: SweepDefinition, store: Any, *, scheduler: str = "local",
+          workers: int | None = None, client: Any = None,
+          progress: Callable[[int, int], None] = lambda done, total: None,
+          chunk_done: Callable[[int], None] = lambda chunk: None) -> Any:
+    """Evaluate every chunk missing from ``store`` and return the whole table (pyarrow).
+
+    Args:
+        payload: the generated code (:meth:`ModelPayload.from_directory`).
+        definition: the sweep.
+        store: a :class:`~symkin.design.sweep_store.SweepStore` (parts written per chunk).
+        scheduler: ``serial`` (this process), ``local`` (a ``LocalCluster`` of ``workers``
+            processes, default one per core) or a scheduler address ``tcp://host:port``.
+        client: a ``dask.distributed.Client`` to use instead (``scheduler`` is then ignored).
+        progress: called with (designs done, designs in all) after each chunk.
+        chunk_done: called with the index of each chunk written (tests interrupt a sweep here).
+    """
+    todo = [k for k in range(definition.chunks) if k not in store.completed()]
+    done = definition.size - chunk_designs(definition, todo)
+
+    def finished(chunk: int, columns: dict[str, list]) -> None:
+        nonlocal done
+        store.write_chunk(chunk, columns)
+        done += len(columns["design"])
+        progress(done, definition.size)
+        chunk_done(chunk)
+
+    if client is None and scheduler == "serial":
+        progress(done, definition.size)
+        for chunk in todo:
+            finished(chunk, evaluate_chunk(payload, definition, chunk))
+        return store.table()
+    owned = None
+    if client is None:
+        client, owned = _client(scheduler, workers)
+    try:
+        progress(done, definition.size)
+        _run_on(client, payload, definition, todo, finished)
+    finally:
+        if owned is not None:
+            client.close()
+            owned.close()
+    return store.table()
+
+
+def _run_on(client: Any, payload: ModelPayload, definition: SweepDefinition, todo: Iterable[int],
+            finished: Callable[[int, dict[str, list]], None]) -> None:
+    from dask.distributed import as_completed
+
+    # the model is a task's result, not scattered data: the scheduler recomputes it if every worker
+    # holding it dies (scattered data would be lost with them)
+    shared = client.submit(_same, payload, key=f"symkin-model-{payload.digest[:16]}")
+    futures = {client.submit(evaluate_chunk, shared, definition, chunk, key=f"symkin-sweep-{chunk}-{payload.digest[:12]}",
+                             retries=2): chunk for chunk in todo}
+    try:
+        for future in as_completed(futures):
+            finished(futures[future], future.result())
+    finally:
+        client.cancel(list(futures))
+
+
+def _same(payload: ModelPayload) -> ModelPayload:
+    return payload
+
+
+def summary_rows(table: Any, definition: SweepDefinition) -> list[list[str]]:
+    """Rows (status, count) and the best designs by each metric, for the closing summary."""
+    data = table.to_pydict()
+    statuses: dict[str, int] = {}
+    for status in data["status"]:
+        key = status if status in (OK, EMPTY) else "failed"
+        statuses[key] = statuses.get(key, 0) + 1
+    rows = [[f"designs {status}", str(count), ""] for status, count in sorted(statuses.items())]
+    ok = [i for i, s in enumerate(data["status"]) if s == OK]
+    for metric, best in (("gci", max), ("volume", max), ("kappa_max", min)):
+        if metric in definition.metrics and ok:
+            i = best(ok, key=lambda k: data[metric][k])
+            values = ", ".join(f"{n} = {data[n][i]:.4g}" for n in definition.names)
+            rows.append([f"best {metric}", f"{data[metric][i]:.6g}", values])
+    return rows
+
+
+def chunk_designs(definition: SweepDefinition, chunks: Sequence[int]) -> int:
+    """How many designs the given chunks hold."""
+    return sum(min(definition.size, (k + 1) * definition.chunk) - k * definition.chunk for k in chunks)

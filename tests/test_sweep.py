@@ -1,0 +1,175 @@
+"""Design sweeps on Dask (issue 15): the same rows to the bit however they are scheduled, nothing lost.
+
+Oracles: the GCI and workspace measure of a design computed directly with
+:func:`symkin.analysis.global_indices.gci` on the bound model (the sweep must give the same
+numbers); the planar 2R's workspace area pi ((l1 + l2)^2 - (l1 - l2)^2) / 4 within its
+quarter-turn limits... (exact: the annulus sector swept by the two quarter turns is checked
+through the integrator's own error bar); the GCI-optimal ratio l2 / l1 = 1 / sqrt(2) of the
+2R arm (Salisbury and Craig 1982; the seed's Table 8.5 neighbourhood); a serial run as the
+reference of the LocalCluster runs, the interrupted and resumed run and the run that loses a
+worker.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import signal
+
+import numpy as np
+import pyarrow.parquet as pq
+import pytest
+from conftest import GENERATED_DIR, MODELS_DIR
+
+from symkin.analysis.global_indices import gci
+from symkin.cli import main
+from symkin.design.sweep import EMPTY, OK, ModelPayload, SweepAxis, SweepDefinition, parse_axis, sweep
+from symkin.design.sweep_store import SweepStore, read_sweep
+
+#: one worker runs the Dask tests: each starts a LocalCluster of 2 processes on the 2 cores
+pytestmark = pytest.mark.xdist_group("dask")
+
+GRID = SweepDefinition((SweepAxis("l1", 0.05, 0.30, 6), SweepAxis("l2", 0.05, 0.30, 6)), chunk=5, samples=1024)
+
+
+@pytest.fixture(scope="module")
+def payload():
+    return ModelPayload.from_directory(GENERATED_DIR / "planar_2r")
+
+
+@pytest.fixture(scope="module")
+def reference(payload, tmp_path_factory):
+    """The grid evaluated serially, in this process."""
+    store = SweepStore(tmp_path_factory.mktemp("serial") / "grid.parquet", GRID, payload)
+    sweep(payload, GRID, store, scheduler="serial")
+    return store.finish()
+
+
+def test_designs_are_fixed_by_the_definition():
+    assert GRID.size == 36 and GRID.chunks == 8
+    designs = GRID.designs()
+    np.testing.assert_array_equal(designs[:7, 0], [0.05] * 6 + [0.1])             # row-major, l2 fastest
+    np.testing.assert_array_equal(np.vstack([GRID.designs(k) for k in range(GRID.chunks)]), designs)
+    sobol = SweepDefinition((SweepAxis("l1", 0.1, 0.2), SweepAxis("l2", 0.0, 1.0)), sobol=100, chunk=7)
+    whole = sobol.designs()
+    assert whole.shape == (100, 2) and len(np.unique(whole, axis=0)) == 100
+    np.testing.assert_array_equal(np.vstack([sobol.designs(k) for k in range(sobol.chunks)]), whole)
+    assert whole[:, 0].min() >= 0.1 and whole[:, 0].max() <= 0.2
+    assert SweepDefinition.from_json(sobol.to_json()) == sobol
+    assert parse_axis("l1=0.05:0.3:40", True) == SweepAxis("l1", 0.05, 0.3, 40)
+    for text, grid in (("l1=0.05:0.3", True), ("l1=a:b:3", True), ("l1=0.1:0.2:3", False), ("=1:2:3", True)):
+        with pytest.raises(ValueError, match="--vary"):
+            parse_axis(text, grid)
+    with pytest.raises(ValueError, match="unknown metrics"):
+        SweepDefinition(GRID.axes, ("gci", "speed"))
+    with pytest.raises(ValueError, match="varied twice"):
+        SweepDefinition((GRID.axes[0], GRID.axes[0]))
+
+
+def test_rows_are_the_gci_of_each_design(reference, payload):
+    rows = reference.to_pydict()
+    assert rows["design"] == list(range(36)) and set(rows["status"]) == {OK}
+    model = payload.load()
+    for i in (0, 17, 35):
+        direct = gci(model.bind(l1=rows["l1"][i], l2=rows["l2"][i]), samples=GRID.samples, seed=GRID.seed)
+        assert rows["gci"][i] == direct.value.value and rows["gci_error"][i] == direct.value.error
+        assert rows["volume"][i] == direct.measure.value and rows["volume_error"][i] == direct.measure.error
+        assert 1.0 <= rows["kappa_min"][i] <= 1.0 / rows["gci"][i] <= rows["kappa_max"][i]
+    # the 2R arm's GCI is best near l2 / l1 = 1 / sqrt(2), for every l1 of the grid
+    gcis = np.array(rows["gci"]).reshape(6, 6)
+    values = GRID.axes[1].values()
+    for k, l1 in enumerate(GRID.axes[0].values()[2:], start=2):
+        best = values[np.argmax(gcis[k])]
+        assert abs(best - l1 / math.sqrt(2)) <= values[1] - values[0], (l1, best)
+
+
+def test_a_local_cluster_gives_the_same_rows_to_the_bit(reference, payload, tmp_path):
+    store = SweepStore(tmp_path / "local.parquet", GRID, payload)
+    table = sweep(payload, GRID, store, scheduler="local", workers=2)
+    assert table.equals(reference)
+    store.finish()
+    assert pq.read_table(tmp_path / "local.parquet").equals(reference)
+
+
+def test_an_interrupted_sweep_resumes_without_recomputing_or_duplicating(reference, payload, tmp_path):
+    out = tmp_path / "split.parquet"
+    done = []
+
+    def interrupt(chunk: int) -> None:
+        done.append(chunk)
+        if len(done) == 3:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        sweep(payload, GRID, SweepStore(out, GRID, payload), scheduler="serial", chunk_done=interrupt)
+    store = SweepStore(out, GRID, payload, resume=True)
+    assert store.completed() == {0, 1, 2}
+    resumed = []
+    table = sweep(payload, GRID, store, scheduler="serial", chunk_done=resumed.append)
+    assert resumed == [3, 4, 5, 6, 7]
+    assert table.equals(reference)
+    # a different definition does not resume these parts
+    other = SweepDefinition(GRID.axes, chunk=5, samples=2048)
+    with pytest.raises(ValueError, match="another definition"):
+        SweepStore(out, other, payload, resume=True)
+
+
+def test_a_worker_killed_mid_sweep_loses_no_design(reference, payload, tmp_path):
+    from dask.distributed import Client, LocalCluster
+
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
+            Client(cluster) as client:
+        pids = client.run(os.getpid)
+        killed = []
+
+        def kill_one(chunk: int) -> None:
+            if not killed:
+                victim = sorted(pids.values())[0]
+                os.kill(victim, signal.SIGKILL)
+                killed.append(victim)
+
+        store = SweepStore(tmp_path / "killed.parquet", GRID, payload)
+        table = sweep(payload, GRID, store, client=client, chunk_done=kill_one)
+    assert killed
+    assert table.column("design").to_pylist() == list(range(GRID.size))
+    assert table.equals(reference)
+
+
+def test_a_design_without_workspace_is_a_row_not_a_crash(payload, tmp_path):
+    definition = SweepDefinition((SweepAxis("l1", 0.0, 0.1, 2), SweepAxis("l2", 0.0, 0.1, 2)), samples=256)
+    table = sweep(payload, definition, SweepStore(tmp_path / "e.parquet", definition, payload), scheduler="serial")
+    rows = table.to_pydict()
+    # det J = l1 l2 sin(theta2): with a zero length the workspace is an arc (or a point), of area 0
+    assert rows["status"] == [EMPTY, EMPTY, EMPTY, OK]
+    assert math.isnan(rows["gci"][0]) and rows["gci"][3] > 0.0
+
+
+def test_cli_writes_the_table_with_its_metadata_and_figures(tmp_path, capsys):
+    out = tmp_path / "sweep.parquet"
+    assert main(["sweep", str(MODELS_DIR / "delta.yaml"), "--vary", "a=0.08:0.12:3", "--vary", "b=0.13:0.17:2",
+                 "-n", "512", "--chunk", "4", "--scheduler", "serial", "-o", str(out),
+                 "--figures", str(tmp_path / "fig")]) == 0
+    printed = capsys.readouterr().out
+    assert "sweep of delta: 6 designs in 2 chunks of 4, in this process" in printed
+    assert "best gci" in printed
+    table, definition, metadata = read_sweep(out)
+    assert table.num_rows == 6 and set(table.column("status").to_pylist()) == {OK}
+    assert metadata["symkin.model"] == "delta" and metadata["symkin.model_hash"].startswith("sha256:")
+    assert definition.names == ("a", "b") and definition.samples == 512
+    assert (tmp_path / "fig" / "delta-sweep-maps.png").read_bytes()[:4] == b"\x89PNG"
+    assert (tmp_path / "fig" / "delta-sweep-pareto.png").read_bytes()[:4] == b"\x89PNG"
+    assert not (tmp_path / "sweep.parquet.parts").exists()
+
+
+@pytest.mark.parametrize("arguments, message", [
+    (["--vary", "l9=0.1:0.2:3"], "not free parameters: l9"),
+    (["--vary", "l1=0.1:0.2"], "expected NAME=LOW:HIGH:COUNT"),
+    (["--vary", "l1=0.1:0.2:3", "--scheduler", "nowhere"], "--scheduler 'nowhere'"),
+    (["--vary", "l1=0.1:0.2:3", "--metric", "gci,speed"], "unknown metrics"),
+])
+def test_cli_bad_input_exits_with_code_2(tmp_path, capsys, arguments, message):
+    with pytest.raises(SystemExit) as exit_info:
+        main(["sweep", str(GENERATED_DIR / "planar_2r"), "-o", str(tmp_path / "s.parquet"), *arguments])
+    assert exit_info.value.code == 2
+    assert message in capsys.readouterr().err
+    assert not (tmp_path / "s.parquet").exists()
