@@ -22,6 +22,7 @@ shrink with P: one scheduler hands out every task).  Speed is reported, never as
 from __future__ import annotations
 
 import argparse
+import logging
 import sys
 import tempfile
 import time
@@ -67,7 +68,8 @@ def main() -> None:
     clusters = {}
     for workers in (1, 2):
         start = time.perf_counter()
-        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
+        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,
+                               silence_logs=logging.ERROR)
         clusters[workers] = (cluster, Client(cluster), time.perf_counter() - start)
     client = clusters[2][1]
     start = time.perf_counter()

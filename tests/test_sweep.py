@@ -161,7 +161,25 @@ def test_cli_writes_the_table_with_its_metadata_and_figures(tmp_path, capsys):
     assert not (tmp_path / "sweep.parquet.parts").exists()
 
 
+def test_cli_marks_the_optimum_of_symkin_optimize(tmp_path, capsys):
+    """The optimum of the planar arm (GCI maximal at l2 = l1 / sqrt(2)) evaluated like the designs."""
+    assert main(["optimize", str(GENERATED_DIR / "planar_2r"), "--free", "l1,l2", "--bounds",
+                 "l1=0.05:0.3,l2=0.05:0.3", "-o", str(tmp_path / "opt")]) == 0
+    capsys.readouterr()
+    assert main(["sweep", str(GENERATED_DIR / "planar_2r"), "--vary", "l1=0.05:0.3:4", "--vary", "l2=0.05:0.3:4",
+                 "-n", "1024", "--scheduler", "serial", "--optimum", str(tmp_path / "opt" / "result.json"),
+                 "-o", str(tmp_path / "s.parquet"), "--figures", str(tmp_path / "fig")]) == 0
+    printed = capsys.readouterr().out
+    line = next(row for row in printed.splitlines() if row.strip().startswith("optimum gci"))
+    table, _, _ = read_sweep(tmp_path / "s.parquet")
+    # the optimum is at least as good as every grid design, within the integrator's error bars
+    margin = 3 * max(table.column("gci_error").to_pylist())
+    assert float(line.split()[2]) >= max(table.column("gci").to_pylist()) - margin
+    assert (tmp_path / "fig" / "planar_2r-sweep-pareto.png").exists()
+
+
 @pytest.mark.parametrize("arguments, message", [
+    (["--vary", "l1=0.1:0.2:3", "--optimum", "missing.json"], "--optimum missing.json: not a result.json"),
     (["--vary", "l9=0.1:0.2:3"], "not free parameters: l9"),
     (["--vary", "l1=0.1:0.2"], "expected NAME=LOW:HIGH:COUNT"),
     (["--vary", "l1=0.1:0.2:3", "--scheduler", "nowhere"], "--scheduler 'nowhere'"),
@@ -173,3 +191,31 @@ def test_cli_bad_input_exits_with_code_2(tmp_path, capsys, arguments, message):
     assert exit_info.value.code == 2
     assert message in capsys.readouterr().err
     assert not (tmp_path / "s.parquet").exists()
+
+
+def test_cli_sigterm_then_resume_gives_the_uninterrupted_table(tmp_path):
+    """SIGTERM mid-sweep: exit 130, the completed chunks kept; --resume finishes with the same rows."""
+    import subprocess
+    import time
+
+    from conftest import SYMKIN_CLI
+
+    command = [*SYMKIN_CLI, "sweep", str(GENERATED_DIR / "planar_2r"), "--vary", "l1=0.05:0.3:8", "--vary",
+               "l2=0.05:0.3:8", "-n", "4096", "--chunk", "2", "--scheduler", "serial", "--no-figure"]
+    out = tmp_path / "cut.parquet"
+    process = subprocess.Popen([*command, "-o", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    parts = tmp_path / "cut.parquet.parts"
+    deadline = time.monotonic() + 60
+    while not (parts.exists() and any(parts.glob("chunk-*.parquet"))) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    process.send_signal(signal.SIGTERM)
+    _, err = process.communicate(timeout=60)
+    assert process.returncode == 130, err
+    assert "rerun the same command with --resume" in err
+    kept = len(list(parts.glob("chunk-*.parquet")))
+    assert 0 < kept < 32 and not out.exists()
+    resumed = subprocess.run([*command, "-o", str(out), "--resume"], capture_output=True, text=True, check=True)
+    assert f"resuming with {kept} chunks done" in resumed.stdout
+    whole = tmp_path / "whole.parquet"
+    subprocess.run([*command, "-o", str(whole)], capture_output=True, text=True, check=True)
+    assert pq.read_table(out).equals(pq.read_table(whole))

@@ -55,6 +55,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="LocalCluster: worker processes (default: one per core)")
     p.add_argument("--resume", action="store_true",
                    help="continue an interrupted sweep with the same options: only the missing chunks run")
+    p.add_argument("--optimum", metavar="RESULT.json",
+                   help="the result.json of 'symkin optimize': its optimum is evaluated like the designs, printed and "
+                        "marked on the Pareto figure")
     p.add_argument("-o", "--out", metavar="FILE.parquet", help="result table (default: out/sweeps/MODEL.parquet)")
     p.add_argument("--figures", metavar="DIR", help="figure directory (default: out/figures)")
     p.add_argument("--no-figure", action="store_true", help="write no figures")
@@ -79,6 +82,27 @@ def _check_names(definition, payload) -> None:
                          f"{', '.join(sorted(model.parameters))}")
 
 
+def _optimum(path: str | None, definition, payload) -> dict | None:
+    """The optimum of a 'symkin optimize' result.json, evaluated like a design (None without --optimum).
+
+    Raises:
+        ValueError: the file is not such a result.
+    """
+    if path is None:
+        return None
+    import json
+
+    from symkin.design.sweep import evaluate_design
+
+    try:
+        values = {name: float(p["optimum"]) for name, p in json.loads(Path(path).read_text())["parameters"].items()}
+    except (OSError, ValueError, KeyError, TypeError, AttributeError) as err:
+        raise ValueError(f"--optimum {path}: not a result.json of 'symkin optimize' ({err})") from None
+    design = ", ".join(f"{n} = {v:.4g}" for n, v in values.items())
+    return {**evaluate_design(payload.load(), values, definition), "label": f"symkin optimize: {design}",
+            "design": design}
+
+
 def _terminate(signum, _frame) -> None:
     raise KeyboardInterrupt(f"signal {signum}")
 
@@ -100,6 +124,7 @@ def run(args: argparse.Namespace) -> int:
             payload = ModelPayload.from_directory(d)
         _check_names(definition, payload)
         out = Path(args.out or Path("out") / "sweeps" / f"{payload.name}.parquet")
+        optimum = _optimum(args.optimum, definition, payload)
         store = SweepStore(out, definition, payload, resume=args.resume)
     except (ValueError, KeyError) as err:
         analysis_args.fail_on_bad_input(args, err)
@@ -111,9 +136,12 @@ def run(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     previous = signal.signal(signal.SIGTERM, _terminate)
     try:
-        with Progress(f"{payload.name} sweep", delay=0.5) as progress:
+        with Progress(f"{payload.name} sweep") as progress:
+            first = definition.size - sum(min(definition.size, (k + 1) * definition.chunk) - k * definition.chunk
+                                          for k in range(definition.chunks) if k not in store.completed())
+
             def report(done: int, total: int) -> None:
-                rate = done / max(time.perf_counter() - start, 1e-9)
+                rate = (done - first) / max(time.perf_counter() - start, 1e-9)
                 progress(f"{done}/{total} designs ({rate:.0f}/s)")
 
             progress("starting" if args.scheduler == "serial" else "starting the Dask cluster")
@@ -129,17 +157,20 @@ def run(args: argparse.Namespace) -> int:
         signal.signal(signal.SIGTERM, previous)
     table = store.finish()
     seconds = time.perf_counter() - start
-    print(format_table(["", "value", "design"], summary_rows(table, definition)))
+    rows = summary_rows(table, definition)
+    if optimum is not None:
+        rows += [[f"optimum {m}", f"{optimum[m]:.6g}", optimum["design"]] for m in definition.metrics
+                 if m in ("gci", "volume")]
+    print(format_table(["", "value", "design"], rows))
     print(f"wrote {out} ({table.num_rows} rows) in {seconds:.1f} s")
     if not args.no_figure:
         from symkin.atomic import replace_file
 
         folder = Path(args.figures or Path("out") / "figures")
-        for name, content in ((f"{payload.name}-sweep-maps.png", sweep_plots.metric_maps(table, definition,
-                                                                                         payload.name)),
-                              (f"{payload.name}-sweep-pareto.png", sweep_plots.pareto_figure(table, definition,
-                                                                                             payload.name))):
+        figures = {"maps": sweep_plots.metric_maps(table, definition, payload.name),
+                   "pareto": sweep_plots.pareto_figure(table, definition, payload.name, optimum)}
+        for kind, content in figures.items():
             if content is not None:
-                replace_file(folder / name, content)
-                print(f"figure written to {folder / name}")
+                replace_file(folder / f"{payload.name}-sweep-{kind}.png", content)
+                print(f"figure written to {folder / f'{payload.name}-sweep-{kind}.png'}")
     return 0

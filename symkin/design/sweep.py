@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import logging
 import math
 import tempfile
 from collections.abc import Callable, Iterable, Sequence
@@ -225,7 +226,7 @@ def evaluate_design(model: Any, values: dict[str, float], definition: SweepDefin
 
     row: dict[str, Any] = {c: math.nan for c in definition.columns()[1 + len(definition.axes):-1]}
     try:
-        design = model.bind(**dict(definition.fixed), **values)
+        design = model.bind(**{**dict(definition.fixed), **values})
         integrand = joint_space_integrand(design)
         extremes = [math.inf, -math.inf]
 
@@ -273,7 +274,8 @@ def _client(scheduler: str, workers: int | None) -> tuple[Any, Any]:
     from dask.distributed import Client, LocalCluster
 
     if scheduler == "local":
-        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
+        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,
+                               silence_logs=logging.ERROR)
         return Client(cluster), cluster
     return Client(scheduler), None
 
