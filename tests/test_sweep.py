@@ -135,6 +135,25 @@ def test_a_worker_killed_mid_sweep_loses_no_design(reference, payload, tmp_path)
     assert table.equals(reference)
 
 
+def test_torque_peak_is_the_longest_lever_arm(payload, tmp_path):
+    """Planar 2R: tau = J^T F, column 1 of J has the length of the TCP radius |p| (largest, l1 + l2, at
+    theta2 = 0), column 2 has l2.  The Sobol net puts a point within (pi/2) / 2^6 of theta2 = 0 among
+    2^12, where |p| falls short of l1 + l2 by at most l1 l2 delta^2 / (2 (l1 + l2))."""
+    definition = SweepDefinition((SweepAxis("l1", 0.1, 0.2, 2), SweepAxis("l2", 0.05, 0.05, 1)),
+                                 ("gci", "torque_peak"), samples=4096)
+    table = sweep(payload, definition, SweepStore(tmp_path / "t.parquet", definition, payload), scheduler="serial")
+    rows = table.to_pydict()
+    delta = (math.pi / 2) / 2**6
+    for l1, l2, peak in zip(rows["l1"], rows["l2"], rows["torque_peak"]):
+        assert l1 + l2 - l1 * l2 * delta**2 / (2 * (l1 + l2)) <= peak <= l1 + l2
+    assert "kappa_min" not in rows
+    delta_payload = ModelPayload.from_directory(GENERATED_DIR / "delta")
+    one = SweepDefinition((SweepAxis("a", 0.1, 0.1, 1),), ("torque_peak",), samples=1024)
+    peak = sweep(delta_payload, one, SweepStore(tmp_path / "d.parquet", one, delta_payload),
+                 scheduler="serial").column("torque_peak")[0].as_py()
+    assert 0.0 < peak < 1.0                                      # N m per N, finite (0.14 at 2^10 points)
+
+
 def test_a_design_without_workspace_is_a_row_not_a_crash(payload, tmp_path):
     definition = SweepDefinition((SweepAxis("l1", 0.0, 0.1, 2), SweepAxis("l2", 0.0, 0.1, 2)), samples=256)
     table = sweep(payload, definition, SweepStore(tmp_path / "e.parquet", definition, payload), scheduler="serial")

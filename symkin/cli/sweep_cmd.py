@@ -14,7 +14,7 @@ from symkin.cli.progress import Progress
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    from symkin.design.sweep import METRICS
+    from symkin.design.sweep_metrics import DEFAULT_METRICS, METRICS
 
     p = sub.add_parser(
         "sweep",
@@ -39,8 +39,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="a varied parameter: its range and, for a grid, the number of values (repeatable)")
     p.add_argument("--sobol", type=int, default=None, metavar="N",
                    help="N designs of an unscrambled Sobol sequence over the --vary ranges instead of a grid")
-    p.add_argument("--metric", default=",".join(METRICS), metavar="A,B",
-                   help=f"metrics, comma-separated, from {', '.join(METRICS)} (default: all)")
+    p.add_argument("--metric", default=",".join(DEFAULT_METRICS), metavar="A,B",
+                   help=f"metrics, comma-separated, from {', '.join(METRICS)} (torque_peak: the largest actuator "
+                        "effort per newton of TCP force over the workspace, N m/N; default: %(default)s)")
     p.add_argument("--set", dest="assignments", action="append", default=[], metavar="NAME=VALUE[,...]",
                    help="values every design shares instead of the defaults (repeatable)")
     p.add_argument("-n", "--samples", type=int, default=4096, metavar="N",

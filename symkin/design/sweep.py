@@ -10,12 +10,9 @@ generated functions, so a design is ``model.bind(**values)``.
   order the parameters are given, or the first N points of an unscrambled Sobol sequence),
   the metrics, the integration budget and seed, the chunk size.  Design i always has the
   same values, and chunk k holds designs k c ... (k + 1) c - 1.
-* :func:`evaluate_design` - the metrics of one design: GCI and workspace measure from one
-  quasi-Monte Carlo integration over the joint limits (dW = |det J| dq,
-  :func:`~symkin.analysis.global_indices.gci`) with their 95 % error estimates; kappa_min and
-  kappa_max are the extremes of kappa over the same points inside the workspace (sample
-  extremes: the true minimum is at most kappa_min).  A design that fails is a row with a
-  status, never an exception.
+* :func:`~symkin.design.sweep_metrics.evaluate_design` - the metrics of one design (GCI,
+  workspace measure, extreme kappas, peak actuator effort per unit force); a design that
+  fails is a row with a status, never an exception.
 * :func:`evaluate_chunk` - one chunk, on a worker: the generated code travels as a
   :class:`ModelPayload` (the manifest and the numpy module, a few tens of kB), so a worker on
   another machine needs no shared file system.
@@ -36,18 +33,13 @@ import logging
 import math
 import tempfile
 from collections.abc import Callable, Iterable, Sequence
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-#: metrics a sweep can compute
-METRICS = ("gci", "volume", "kappa_min", "kappa_max")
-#: metrics that come with an error estimate (a column NAME_error)
-ESTIMATED = ("gci", "volume")
-#: statuses of a row
-OK, EMPTY = "ok", "empty workspace"
+from symkin.design.sweep_metrics import DEFAULT_METRICS, EMPTY, ESTIMATED, METRICS, OK, evaluate_design
 
 
 @dataclass(frozen=True)
@@ -78,7 +70,7 @@ class SweepDefinition:
     """
 
     axes: tuple[SweepAxis, ...]
-    metrics: tuple[str, ...] = METRICS
+    metrics: tuple[str, ...] = DEFAULT_METRICS
     sobol: int | None = None
     samples: int = 4096
     seed: int = 0
@@ -217,43 +209,6 @@ class ModelPayload:
 
 #: worker-side cache: payload digest -> loaded model
 _LOADED: dict[str, Any] = {}
-
-
-def evaluate_design(model: Any, values: dict[str, float], definition: SweepDefinition) -> dict[str, Any]:
-    """The metrics of one design (see the module docstring): {column: value} with a status."""
-    from symkin.analysis.global_indices import joint_space_integrand
-    from symkin.analysis.integrators import integrate
-
-    row: dict[str, Any] = {c: math.nan for c in definition.columns()[1 + len(definition.axes):-1]}
-    try:
-        design = model.bind(**{**dict(definition.fixed), **values})
-        integrand = joint_space_integrand(design)
-        extremes = [math.inf, -math.inf]
-
-        def recorded(q: np.ndarray) -> np.ndarray:
-            out = integrand.function(q)
-            inside = out[:, 1] > 0.0
-            if inside.any():
-                index = out[inside, 0] / out[inside, 1]
-                extremes[0], extremes[1] = min(extremes[0], float(index.min())), max(extremes[1], float(index.max()))
-            return out
-
-        with np.errstate(all="ignore"):
-            result = integrate(replace(integrand, function=recorded), "qmc", definition.samples, seed=definition.seed)
-        measure = result.component(1)
-        if not measure.value > 0.0:
-            return {**row, "status": EMPTY}
-        gci = result.ratio(0, 1)
-        found = {"gci": (gci.value, gci.error), "volume": (measure.value, measure.error),
-                 "kappa_min": (1.0 / extremes[1] if extremes[1] > 0 else math.inf,),
-                 "kappa_max": (1.0 / extremes[0] if extremes[0] > 0 else math.inf,)}
-        for metric in definition.metrics:
-            row[metric] = float(found[metric][0])
-            if metric in ESTIMATED:
-                row[f"{metric}_error"] = float(found[metric][1])
-        return {**row, "status": OK}
-    except (ValueError, KeyError, ArithmeticError, np.linalg.LinAlgError) as err:
-        return {**row, "status": f"failed: {type(err).__name__}: {err}"}
 
 
 def evaluate_chunk(payload: ModelPayload, definition: SweepDefinition, chunk: int) -> dict[str, list]:

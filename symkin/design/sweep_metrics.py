@@ -1,0 +1,93 @@
+"""The metrics of one design of a sweep (:mod:`symkin.design.sweep`), each a number per design.
+
+* ``gci`` and ``volume``: the global conditioning index v = int_W 1/kappa dW / int_W dW
+  (seed eq. 8.28) and the workspace measure int_W dW, from one quasi-Monte Carlo integration
+  over the joint limits with dW = |det J| dq (a parallel mechanism: its configurations in the
+  working mode), each with its 95 % confidence half-width
+  (:func:`~symkin.analysis.global_indices.joint_space_integrand`);
+* ``kappa_min`` and ``kappa_max``: the extremes of kappa over the same integration points
+  inside the workspace (sample extremes: the true minimum is at most ``kappa_min``, the true
+  maximum at least ``kappa_max``);
+* ``torque_peak``: the largest actuator effort that rendering a unit force at the TCP needs
+  anywhere in the workspace, max_q max_i ||J_p[:, i](q)||_2 with tau = J_p^T F (seed eq. 8.35,
+  J_p the position rows of the task Jacobian), in N m per N for a revolute actuator (a length:
+  for a serial arm, joint i's largest lever arm to the TCP) and N per N for a prismatic one.
+  Times the force to render, it sizes the actuators (seed Table 8.5, force transmission).  A
+  sample extreme over its own 2^m Sobol points (m from the budget) in the joint limits.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+
+#: metrics a sweep can compute, and those it computes unless told otherwise
+METRICS = ("gci", "volume", "kappa_min", "kappa_max", "torque_peak")
+DEFAULT_METRICS = ("gci", "volume", "kappa_min", "kappa_max")
+#: metrics that come with an error estimate (a column NAME_error)
+ESTIMATED = ("gci", "volume")
+#: statuses of a row
+OK, EMPTY = "ok", "empty workspace"
+
+
+def evaluate_design(model: Any, values: dict[str, float], definition: Any) -> dict[str, Any]:
+    """The metrics of one design ({column: value} and ``status``): ``model`` bound to the sweep's
+    fixed values and then ``values``; ``definition`` a :class:`~symkin.design.sweep.SweepDefinition`."""
+    from symkin.analysis.global_indices import joint_space_integrand
+    from symkin.analysis.integrators import integrate
+
+    row: dict[str, Any] = {c: math.nan for c in definition.columns()[1 + len(definition.axes):-1]}
+    try:
+        design = model.bind(**{**dict(definition.fixed), **values})
+        integrand = joint_space_integrand(design)
+        extremes = [math.inf, -math.inf]
+
+        def recorded(q: np.ndarray) -> np.ndarray:
+            out = integrand.function(q)
+            inside = out[:, 1] > 0.0
+            if inside.any():
+                index = out[inside, 0] / out[inside, 1]
+                extremes[0], extremes[1] = min(extremes[0], float(index.min())), max(extremes[1], float(index.max()))
+            return out
+
+        with np.errstate(all="ignore"):
+            result = integrate(replace(integrand, function=recorded), "qmc", definition.samples, seed=definition.seed)
+        measure = result.component(1)
+        if not measure.value > 0.0:
+            return {**row, "status": EMPTY}
+        gci = result.ratio(0, 1)
+        found: dict[str, tuple[float, ...]] = {
+            "gci": (gci.value, gci.error), "volume": (measure.value, measure.error),
+            "kappa_min": (1.0 / extremes[1] if extremes[1] > 0 else math.inf,),
+            "kappa_max": (1.0 / extremes[0] if extremes[0] > 0 else math.inf,)}
+        if "torque_peak" in definition.metrics:
+            found["torque_peak"] = (torque_peak(design, integrand.lower, integrand.upper, definition.samples,
+                                                definition.seed),)
+        for metric in definition.metrics:
+            row[metric] = float(found[metric][0])
+            if metric in ESTIMATED:
+                row[f"{metric}_error"] = float(found[metric][1])
+        return {**row, "status": OK}
+    except (ValueError, KeyError, ArithmeticError, np.linalg.LinAlgError) as err:
+        return {**row, "status": f"failed: {type(err).__name__}: {err}"}
+
+
+def torque_peak(model: Any, lower: np.ndarray, upper: np.ndarray, samples: int, seed: int) -> float:
+    """max over Sobol configurations in [lower, upper] (in the working mode, for a parallel
+    mechanism) of the largest column norm of J_p: the peak effort per unit TCP force (see above)."""
+    from symkin.analysis import mechanism, parallel, sampling
+
+    q = sampling.sobol(lower, upper, max(4, int(math.log2(samples))), np.random.default_rng(seed))
+    with np.errstate(all="ignore"):
+        if mechanism.is_parallel(model):
+            J, inside = parallel.jacobian_in_working_mode(model, q)
+        else:
+            J, inside = mechanism.jacobian(model, q), np.ones(len(q), dtype=bool)
+    levers = np.linalg.norm(J[:, list(mechanism.position_rows(model)), :], axis=1)    # (N, n): ||J_p[:, i]||
+    levers = levers[inside & np.isfinite(levers).all(axis=1)]
+    if not len(levers):
+        raise ValueError("no configuration of the working mode among the sampled ones")
+    return float(levers.max())
