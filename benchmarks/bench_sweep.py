@@ -31,8 +31,9 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from symkin.design.sweep import ModelPayload, SweepAxis, SweepDefinition, sweep  # noqa: E402
+from symkin.design.sweep import SweepAxis, SweepDefinition, sweep  # noqa: E402
 from symkin.design.sweep_store import SweepStore  # noqa: E402
+from symkin.runtime.payload import ModelPayload  # noqa: E402
 
 MODELS = ("planar_2r", "delta")
 CHUNK = 32

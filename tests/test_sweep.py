@@ -23,7 +23,8 @@ from conftest import GENERATED_DIR, MODELS_DIR
 
 from symkin.analysis.global_indices import gci
 from symkin.cli import main
-from symkin.design.sweep import EMPTY, OK, ModelPayload, SweepAxis, SweepDefinition, parse_axis, sweep
+from symkin.design.sweep import EMPTY, OK, SweepAxis, SweepDefinition, parse_axis, sweep
+from symkin.runtime.payload import ModelPayload
 from symkin.design.sweep_store import SweepStore, read_sweep
 
 #: one worker runs the Dask tests: each starts a LocalCluster of 2 processes on the 2 cores

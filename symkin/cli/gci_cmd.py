@@ -39,7 +39,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     analysis_args.add_model_arguments(p)
     p.add_argument("--method", choices=("grid", "mc", "qmc", "adaptive"), default="qmc",
                    help="integrator (default: %(default)s)")
-    p.add_argument("-n", "--samples", type=int, default=2**16, metavar="N",
+    p.add_argument("-n", "--samples", type=_count, default=2**16, metavar="N",
                    help="budget of integrand evaluations (default: %(default)s)")
     p.add_argument("--rtol", type=float, default=0.0,
                    help="adaptive: stop at this relative error estimate (default: spend the budget)")
@@ -53,15 +53,84 @@ def register(sub: argparse._SubParsersAction) -> None:
     analysis_args.add_length_argument(p)
     analysis_args.add_orientation_argument(p)
     p.add_argument("--seed", type=int, default=None, help="seed of mc/qmc (default: fresh randomness)")
+    p.add_argument("--scheduler", metavar="local|serial|tcp://HOST:PORT", default=None,
+                   help="mc/qmc on the joint domain in chunks of --chunk points, as Dask tasks: on a LocalCluster "
+                        "(local), in this process (serial) or on the scheduler at an address; memory is bounded by "
+                        "the chunk, so -n may be 1e9 or more (default: all points at once, in this process)")
+    p.add_argument("--workers", type=int, default=None, metavar="K",
+                   help="LocalCluster: worker processes (default: one per core)")
+    p.add_argument("--chunk", type=int, default=2**20, metavar="N", help="points per task (default: %(default)s)")
     p.add_argument("--map", metavar="FIGURE", help="also draw the local index over the workspace into FIGURE")
     p.set_defaults(run=run, parser=p)
+
+
+def _count(text: str) -> int:
+    """A sample count, also written like 1e9."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"'{text}' is not a number of samples") from None
+    if not (value >= 1 and value == int(value)):
+        raise argparse.ArgumentTypeError(f"'{text}' is not a whole positive number of samples")
+    return int(value)
+
+
+def _chunked(args: argparse.Namespace) -> int:
+    """--scheduler: the integral in chunks on Dask (:mod:`symkin.analysis.chunked`)."""
+    from symkin.analysis.chunked import IntegrandSpec, integrate_chunked
+    from symkin.analysis.global_indices import GlobalIndex
+    from symkin.runtime.cluster import check_scheduler
+    from symkin.runtime.payload import ModelPayload
+
+    try:
+        check_scheduler(args.scheduler, args.workers)
+        if args.method not in ("mc", "qmc") or args.domain == "cartesian" or args.map or args.orientation:
+            raise ValueError("--scheduler integrates mc or qmc over the joint domain (no --domain cartesian, "
+                             "--orientation or --map)")
+        with analysis_args.generated_directory(args.model, ("numpy",), analysis_args.ANALYSIS_OUTPUTS_BY_KIND) as d:
+            payload = ModelPayload.from_directory(d)
+        values = analysis_args.parse_assignments(args.assignments)
+        model = payload.load().bind(**values) if values else payload.load()
+        limits = analysis_args.parse_limits(args.limits)
+        spec = IntegrandSpec(tuple(sorted(values.items())), INDICES[args.index], args.measure,
+                             tuple(sorted(limits.items())), analysis_args.resolve_length(model, args.length, limits))
+        start = time.perf_counter()
+        with Progress(model.name) as progress:
+            result = integrate_chunked(payload, spec, args.method, args.samples, seed=args.seed or 0,
+                                       chunk=args.chunk, scheduler=args.scheduler, workers=args.workers,
+                                       progress=lambda done, total: progress(f"{done}/{total} points"))
+    except (ValueError, KeyError) as err:
+        analysis_args.fail_on_bad_input(args, err)
+    seconds = time.perf_counter() - start
+    chunks = -(-result.evaluations // args.chunk) if args.method == "mc" else None
+    where = {"serial": "in this process", "local": "on a LocalCluster"}.get(args.scheduler, f"on {args.scheduler}")
+    found = GlobalIndex(result.ratio(0, 1), result.component(1), result,
+                        f"joint space, dW = {'|det J| dq' if args.measure == 'cartesian' else 'dq'}, in chunks of "
+                        f"at most {args.chunk} points {where}" + (f" ({chunks} chunks)" if chunks else ""))
+    _print(args, model, found, seconds, None)
+    return 0
+
+
+def _print(args: argparse.Namespace, model: GeneratedModel, result, seconds: float, path) -> None:
+    kind = "confidence half-width (95 %)" if result.value.statistical else "error estimate"
+    name = "GCI" if args.index == "inverse-condition" else f"mean {args.index}"
+    print(f"{model.name}: {name} = {result.value} ({kind})")
+    print(f"  workspace measure int dW = {result.measure} {measure_unit(model, args.measure)}")
+    print(f"  {result.integral.evaluations} evaluations by {args.method} in {seconds * 1e3:.1f} ms; {result.description}")
+    if result.caveat:
+        print(f"  note: {result.caveat}")
+    if path is not None:
+        print(f"  map: {path}")
 
 
 def run(args: argparse.Namespace) -> int:
     from symkin.analysis import conditioning, global_indices, inverse, mechanism, parallel, plots, study, workspace
     from symkin.analysis.integrators import STATISTICAL
 
+    if args.scheduler is not None:
+        return _chunked(args)
     index = getattr(conditioning, INDICES[args.index])
+    path = None
     try:
         model, limits = analysis_args.model_from_args(args)
         model = study.at_orientation(model, analysis_args.parse_orientation(args.orientation))
@@ -100,15 +169,7 @@ def run(args: argparse.Namespace) -> int:
                                             title=f"{args.index} over the workspace of {model.name}")
     except (ValueError, KeyError) as err:
         analysis_args.fail_on_bad_input(args, err)
-    kind = "confidence half-width (95 %)" if result.value.statistical else "error estimate"
-    name = "GCI" if args.index == "inverse-condition" else f"mean {args.index}"
-    print(f"{model.name}: {name} = {result.value} ({kind})")
-    print(f"  workspace measure int dW = {result.measure} {measure_unit(model, args.measure)}")
-    print(f"  {result.integral.evaluations} evaluations by {args.method} in {seconds * 1e3:.1f} ms; {result.description}")
-    if result.caveat:
-        print(f"  note: {result.caveat}")
-    if args.map:
-        print(f"  map: {path}")
+    _print(args, model, result, seconds, path)
     return 0
 
 

@@ -110,17 +110,15 @@ def _terminate(signum, _frame) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from symkin.design import sweep_plots
-    from symkin.design.sweep import ModelPayload, summary_rows, sweep
+    from symkin.design.sweep import summary_rows, sweep
     from symkin.design.sweep_store import SweepStore
+    from symkin.runtime.cluster import check_scheduler
+    from symkin.runtime.payload import ModelPayload
     from symkin.text_table import format_table
 
     try:
         definition = _definition(args)
-        if args.scheduler not in ("local", "serial") and "://" not in args.scheduler:
-            raise ValueError(f"--scheduler '{args.scheduler}': use local, serial or a scheduler address such as "
-                             "tcp://HOST:8786")
-        if args.workers is not None and args.workers < 1:
-            raise ValueError("--workers must be at least 1")
+        check_scheduler(args.scheduler, args.workers)
         with analysis_args.generated_directory(args.model, ("numpy",), analysis_args.ANALYSIS_OUTPUTS_BY_KIND) as d:
             payload = ModelPayload.from_directory(d)
         _check_names(definition, payload)

@@ -14,32 +14,31 @@ generated functions, so a design is ``model.bind(**values)``.
   workspace measure, extreme kappas, peak actuator effort per unit force); a design that
   fails is a row with a status, never an exception.
 * :func:`evaluate_chunk` - one chunk, on a worker: the generated code travels as a
-  :class:`ModelPayload` (the manifest and the numpy module, a few tens of kB), so a worker on
+  :class:`~symkin.runtime.payload.ModelPayload` (the manifest and the numpy module, a few tens of kB), so a worker on
   another machine needs no shared file system.
 * :func:`sweep` - every chunk not yet in the store (:mod:`symkin.design.sweep_store`), in
   this process (``scheduler="serial"``), on a ``LocalCluster`` (``"local"``, the default
   elsewhere), on a running scheduler (``"tcp://host:8786"``) or on a given
-  ``dask.distributed.Client``.  Dask reruns the tasks of a worker that dies; each completed
-  chunk is written at once, so an interrupted sweep resumes where it stopped.  Each design's
+  ``dask.distributed.Client`` (:func:`symkin.runtime.cluster.run_tasks`).  Dask reruns the
+  tasks of a worker that dies; each completed chunk is written at once, so an interrupted
+  sweep resumes where it stopped.  Each design's
   metrics depend only on its values and the definition, so a sweep gives the same rows, to
   the bit, however it was scheduled, split or resumed.
 """
 
 from __future__ import annotations
 
-import hashlib
 import json
-import logging
 import math
-import tempfile
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from symkin.design.sweep_metrics import DEFAULT_METRICS, EMPTY, ESTIMATED, METRICS, OK, evaluate_design
+from symkin.runtime.cluster import run_tasks
+from symkin.runtime.payload import ModelPayload
 
 
 @dataclass(frozen=True)
@@ -162,55 +161,6 @@ def parse_axis(text: str, with_count: bool) -> SweepAxis:
     return SweepAxis(name.strip(), low, high, count)
 
 
-@dataclass(frozen=True)
-class ModelPayload:
-    """The generated numpy code of a model as bytes: what a worker needs to evaluate designs.
-
-    Attributes:
-        name: the model name.
-        model_hash: the hash of the model source (manifest ``model.hash``).
-        files: (file name, content) of the manifest and the numpy module.
-    """
-
-    name: str
-    model_hash: str
-    files: tuple[tuple[str, bytes], ...]
-
-    @classmethod
-    def from_directory(cls, directory: str | Path) -> ModelPayload:
-        directory = Path(directory)
-        manifest = json.loads((directory / "manifest.json").read_text())
-        if "numpy" not in manifest.get("backends", {}):
-            raise ValueError(f"{directory}: no numpy code generated (derive with --backend numpy)")
-        names = ["manifest.json", *manifest["backends"]["numpy"]["files"]]
-        return cls(manifest["model"]["name"], manifest["model"]["hash"],
-                   tuple((n, (directory / n).read_bytes()) for n in names))
-
-    @property
-    def digest(self) -> str:
-        """sha256 of the files: the key of the worker-side cache."""
-        h = hashlib.sha256()
-        for name, content in self.files:
-            h.update(name.encode() + b"\0" + content)
-        return h.hexdigest()
-
-    def load(self) -> Any:
-        """The loaded numpy model, written once per process into a scratch directory."""
-        digest = self.digest
-        if digest not in _LOADED:
-            from symkin import load
-
-            directory = Path(tempfile.mkdtemp(prefix=f"symkin-sweep-{self.name}-"))
-            for name, content in self.files:
-                (directory / name).write_bytes(content)
-            _LOADED[digest] = load(directory, "numpy")
-        return _LOADED[digest]
-
-
-#: worker-side cache: payload digest -> loaded model
-_LOADED: dict[str, Any] = {}
-
-
 def evaluate_chunk(payload: ModelPayload, definition: SweepDefinition, chunk: int) -> dict[str, list]:
     """Columns (see :meth:`SweepDefinition.columns`) of the designs of one chunk."""
     model = payload.load()
@@ -222,17 +172,6 @@ def evaluate_chunk(payload: ModelPayload, definition: SweepDefinition, chunk: in
         for name in columns:
             columns[name].append(row[name])
     return columns
-
-
-def _client(scheduler: str, workers: int | None) -> tuple[Any, Any]:
-    """(client, cluster to close or None) for ``scheduler`` ``local`` or an address."""
-    from dask.distributed import Client, LocalCluster
-
-    if scheduler == "local":
-        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,
-                               silence_logs=logging.ERROR)
-        return Client(cluster), cluster
-    return Client(scheduler), None
 
 
 def sweep(payload: ModelPayload, definition: SweepDefinition, store: Any, *, scheduler: str = "local",
@@ -261,42 +200,10 @@ def sweep(payload: ModelPayload, definition: SweepDefinition, store: Any, *, sch
         progress(done, definition.size)
         chunk_done(chunk)
 
-    if client is None and scheduler == "serial":
-        progress(done, definition.size)
-        for chunk in todo:
-            finished(chunk, evaluate_chunk(payload, definition, chunk))
-        return store.table()
-    owned = None
-    if client is None:
-        client, owned = _client(scheduler, workers)
-    try:
-        progress(done, definition.size)
-        _run_on(client, payload, definition, todo, finished)
-    finally:
-        if owned is not None:
-            client.close()
-            owned.close()
+    run_tasks(evaluate_chunk, [(definition, chunk) for chunk in todo], shared=payload, scheduler=scheduler,
+              workers=workers, client=client, name=f"symkin-sweep-{payload.digest[:12]}",
+              started=lambda: progress(done, definition.size), finished=lambda i, columns: finished(todo[i], columns))
     return store.table()
-
-
-def _run_on(client: Any, payload: ModelPayload, definition: SweepDefinition, todo: Iterable[int],
-            finished: Callable[[int, dict[str, list]], None]) -> None:
-    from dask.distributed import as_completed
-
-    # the model is a task's result, not scattered data: the scheduler recomputes it if every worker
-    # holding it dies (scattered data would be lost with them)
-    shared = client.submit(_same, payload, key=f"symkin-model-{payload.digest[:16]}")
-    futures = {client.submit(evaluate_chunk, shared, definition, chunk, key=f"symkin-sweep-{chunk}-{payload.digest[:12]}",
-                             retries=2): chunk for chunk in todo}
-    try:
-        for future in as_completed(futures):
-            finished(futures[future], future.result())
-    finally:
-        client.cancel(list(futures))
-
-
-def _same(payload: ModelPayload) -> ModelPayload:
-    return payload
 
 
 def summary_rows(table: Any, definition: SweepDefinition) -> list[list[str]]:
