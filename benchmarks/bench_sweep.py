@@ -31,7 +31,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from symkin.design.sweep import SweepAxis, SweepDefinition, sweep  # noqa: E402
+from symkin.design.sweeps import SweepAxis, SweepDefinition, evaluate_missing  # noqa: E402
 from symkin.design.sweep_store import SweepStore  # noqa: E402
 from symkin.runtime.payload import ModelPayload  # noqa: E402
 
@@ -52,7 +52,7 @@ def definition_for(payload: ModelPayload, designs: int) -> SweepDefinition:
 def timed_sweep(payload: ModelPayload, definition: SweepDefinition, **where) -> tuple[float, object]:
     with tempfile.TemporaryDirectory() as scratch:
         start = time.perf_counter()
-        table = sweep(payload, definition, SweepStore(Path(scratch) / "s.parquet", definition, payload), **where)
+        table = evaluate_missing(payload, definition, SweepStore(Path(scratch) / "s.parquet", definition, payload), **where)
         return time.perf_counter() - start, table
 
 

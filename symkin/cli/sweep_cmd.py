@@ -66,7 +66,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _definition(args: argparse.Namespace):
-    from symkin.design.sweep import SweepDefinition, parse_axis
+    from symkin.design.sweeps import SweepDefinition, parse_axis
 
     axes = tuple(parse_axis(text, args.sobol is None) for text in args.vary)
     fixed = tuple(sorted(analysis_args.parse_assignments(args.assignments).items()))
@@ -93,7 +93,7 @@ def _optimum(path: str | None, definition, payload) -> dict | None:
         return None
     import json
 
-    from symkin.design.sweep import evaluate_design
+    from symkin.design.sweeps import evaluate_design
 
     try:
         values = {name: float(p["optimum"]) for name, p in json.loads(Path(path).read_text())["parameters"].items()}
@@ -110,7 +110,7 @@ def _terminate(signum, _frame) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from symkin.design import sweep_plots
-    from symkin.design.sweep import summary_rows, sweep
+    from symkin.design.sweeps import evaluate_missing, summary_rows
     from symkin.design.sweep_store import SweepStore
     from symkin.runtime.cluster import check_scheduler
     from symkin.runtime.payload import ModelPayload
@@ -145,7 +145,7 @@ def run(args: argparse.Namespace) -> int:
 
             progress("starting" if args.scheduler == "serial" else "starting the Dask cluster")
 
-            table = sweep(payload, definition, store, scheduler=args.scheduler, workers=args.workers,
+            table = evaluate_missing(payload, definition, store, scheduler=args.scheduler, workers=args.workers,
                           progress=report)
     except KeyboardInterrupt:
         kept = len(store.completed())

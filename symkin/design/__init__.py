@@ -10,7 +10,9 @@
 :mod:`~symkin.design.formulation` (the nonlinear program over the generated CasADi functions),
 :mod:`~symkin.design.solve` (IPOPT, history, run times),
 :mod:`~symkin.design.evaluate` (true GCI with error estimates and box reachability on the numpy code),
-:mod:`~symkin.design.plots` (figures).  Not to be confused with :mod:`symkin.optimize`, the
+:mod:`~symkin.design.plots` (figures); design sweeps: :func:`sweep` (:mod:`~symkin.design.sweep_run`) over
+:mod:`~symkin.design.sweeps`, :mod:`~symkin.design.sweep_metrics`, :mod:`~symkin.design.sweep_store` and
+:mod:`~symkin.design.sweep_plots`.  Not to be confused with :mod:`symkin.optimize`, the
 expression optimizer of the code generator.
 """
 
@@ -18,6 +20,7 @@ from symkin.design.evaluate import Evaluation, evaluate
 from symkin.design.formulation import Program, formulate
 from symkin.design.problem import OBJECTIVES, DesignProblem, FreeParameter, design_problem, needed_functions
 from symkin.design.solve import Solution, solve
+from symkin.design.sweep_run import sweep
 
 __all__ = ["OBJECTIVES", "DesignProblem", "Evaluation", "FreeParameter", "Program", "Solution", "design_problem",
-           "evaluate", "formulate", "needed_functions", "solve"]
+           "evaluate", "formulate", "needed_functions", "solve", "sweep"]

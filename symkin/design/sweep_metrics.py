@@ -1,4 +1,4 @@
-"""The metrics of one design of a sweep (:mod:`symkin.design.sweep`), each a number per design.
+"""The metrics of one design of a sweep (:mod:`symkin.design.sweeps`), each a number per design.
 
 * ``gci`` and ``volume``: the global conditioning index v = int_W 1/kappa dW / int_W dW
   (seed eq. 8.28) and the workspace measure int_W dW, from one quasi-Monte Carlo integration
@@ -35,7 +35,7 @@ OK, EMPTY = "ok", "empty workspace"
 
 def evaluate_design(model: Any, values: dict[str, float], definition: Any) -> dict[str, Any]:
     """The metrics of one design ({column: value} and ``status``): ``model`` bound to the sweep's
-    fixed values and then ``values``; ``definition`` a :class:`~symkin.design.sweep.SweepDefinition`."""
+    fixed values and then ``values``; ``definition`` a :class:`~symkin.design.sweeps.SweepDefinition`."""
     from symkin.analysis.global_indices import joint_space_integrand
     from symkin.analysis.integrators import integrate
 

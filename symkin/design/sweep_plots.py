@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from symkin.design.plots import png
-from symkin.design.sweep import OK, SweepDefinition
+from symkin.design.sweeps import OK, SweepDefinition
 
 LABELS = {"gci": "GCI (mean 1/kappa)", "volume": "workspace measure", "kappa_min": "min kappa",
           "kappa_max": "max kappa"}

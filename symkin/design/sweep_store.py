@@ -21,7 +21,7 @@ from typing import Any
 
 from symkin._version import __version__
 from symkin.atomic import replace_file
-from symkin.design.sweep import ESTIMATED, SweepDefinition
+from symkin.design.sweeps import ESTIMATED, SweepDefinition
 from symkin.runtime.payload import ModelPayload
 
 PART = re.compile(r"chunk-(\d{6})\.parquet")

@@ -1,5 +1,7 @@
 """Design sweeps: the metrics of thousands of designs, evaluated in chunks on Dask (issue 15).
 
+The one-call entry point is :func:`symkin.design.sweep` (:mod:`symkin.design.sweep_run`).
+
 The seed's dimensioning step (sec. 5) searches the link lengths for the best workspace and
 GCI; before a local optimum (:mod:`symkin.design.solve`) a designer wants the map: every
 design of a grid or a Sobol set with its GCI (eq. 8.28), workspace measure and extreme
@@ -16,7 +18,7 @@ generated functions, so a design is ``model.bind(**values)``.
 * :func:`evaluate_chunk` - one chunk, on a worker: the generated code travels as a
   :class:`~symkin.runtime.payload.ModelPayload` (the manifest and the numpy module, a few tens of kB), so a worker on
   another machine needs no shared file system.
-* :func:`sweep` - every chunk not yet in the store (:mod:`symkin.design.sweep_store`), in
+* :func:`evaluate_missing` - every chunk not yet in the store (:mod:`symkin.design.sweep_store`), in
   this process (``scheduler="serial"``), on a ``LocalCluster`` (``"local"``, the default
   elsewhere), on a running scheduler (``"tcp://host:8786"``) or on a given
   ``dask.distributed.Client`` (:func:`symkin.runtime.cluster.run_tasks`).  Dask reruns the
@@ -174,7 +176,7 @@ def evaluate_chunk(payload: ModelPayload, definition: SweepDefinition, chunk: in
     return columns
 
 
-def sweep(payload: ModelPayload, definition: SweepDefinition, store: Any, *, scheduler: str = "local",
+def evaluate_missing(payload: ModelPayload, definition: SweepDefinition, store: Any, *, scheduler: str = "local",
           workers: int | None = None, client: Any = None,
           progress: Callable[[int, int], None] = lambda done, total: None,
           chunk_done: Callable[[int], None] = lambda chunk: None) -> Any:
