@@ -41,10 +41,14 @@ def measure(n: int, directory: Path) -> dict[str, float]:
     start = time.perf_counter()
     model = load_model(path)
     result = pipeline.generate(model, pipeline.resolve_request(model, OUTPUTS, "numpy,c", None, None, None))
+    generated = time.perf_counter()
     pipeline.write(result, directory / "out")
     seconds = time.perf_counter() - start
     parts = {r.name: r.op_counts for r in result.reports if r.name != "scene"}
-    return {"n": n, "seconds": seconds,
+    derive = sum(r.derive_seconds for r in result.reports)
+    optimize = sum(r.optimize_seconds for r in result.reports)
+    return {"n": n, "seconds": seconds, "derive": derive, "optimize": optimize, "emit": result.emit_seconds,
+            "other": generated - start - derive - optimize - result.emit_seconds, "write": seconds - (generated - start),
             "derived": sum(c["derived"] for c in parts.values()), "cse": sum(c["cse"] for c in parts.values()),
             "scene": next((r.op_counts["cse"] for r in result.reports if r.name == "scene"), 0),
             "mass_matrix": parts["mass_matrix"]["cse"],
@@ -78,6 +82,12 @@ def main(argv: list[str] | None = None) -> int:
                        [[r["n"], f"{r['seconds']:.2f}", f"{r['derived']:,}", f"{r['cse']:,}", f"{r['scene']:,}"]
                         for r in rows]))
     print(f"fitted exponent of the derive time in n (n >= 6): {fitted_exponent(rows):.2f}")
+    print()
+    print("where the wall time goes (s): sympy derivation, expression optimization (value numbering, CSE), "
+          "emission (printers, templates), the rest of generate (model load, request), writing the files")
+    print(format_table(["n", "derive", "optimize", "emit", "other", "write"],
+                       [[r["n"]] + [f"{r[k]:.2f}" for k in ("derive", "optimize", "emit", "other", "write")]
+                        for r in rows]))
     print()
     print("generated dynamics against the recursive algorithms (operations; target ratio <= 1.5)")
     print(format_table(["n", "M (symkin)", "CRBA", "ratio", "V + G (symkin)", "RNEA qdd=0", "ratio"],

@@ -227,3 +227,22 @@ def test_the_source_compiles_as_parallel_translation_units_with_the_bits_of_the_
             entry(packed.ctypes.data, out.ctypes.data)
             results.append(out)
         assert results[0].tobytes() == results[1].tobytes(), record["name"]
+
+
+def test_an_interrupted_compile_leaves_nothing_in_the_cache(generated_dir, tmp_path):
+    """Ctrl-C while the library compiles (issue 16): the process stops with KeyboardInterrupt, the cache
+    holds no library, object or half-written file (only the lock file), and the next load builds it."""
+    import signal
+    import sys
+
+    cache = tmp_path / "cache"
+    env = {**os.environ, "SYMKIN_CACHE_DIR": str(cache), "SYMKIN_QUIET": "0"}
+    load_c = f"import symkin; symkin.load({str(generated_dir / 'planar_2r')!r}, 'c')"
+    process = subprocess.Popen([sys.executable, "-c", load_c], stderr=subprocess.PIPE, text=True, env=env)
+    assert process.stderr.readline().startswith("symkin: compiling planar_2r.c")
+    process.send_signal(signal.SIGINT)
+    _, err = process.communicate(timeout=120)
+    assert process.returncode != 0 and "KeyboardInterrupt" in err
+    assert [p.name for p in cache.iterdir() if not p.name.endswith(".lock")] == []
+    subprocess.run([sys.executable, "-c", load_c], env=env, check=True, capture_output=True)
+    assert [p.suffix for p in cache.iterdir() if not p.name.endswith(".lock")] == [".so"]
