@@ -303,7 +303,7 @@ void delta_closure_batch(size_t n, const double *q, const double *s, const doubl
  *   element of q.
  *   Phi_s[216]: 18 x 12, row-major; d phi / d s, rows as in closure(), one column per
  *   element of s.
- * Cost: 742 operations.
+ * Cost: 740 operations.
  */
 void delta_closure_jacobians(const double *q, const double *s, const double *p, double a, double b, double *Phi_p, double *Phi_q, double *Phi_s);
 

@@ -45,7 +45,8 @@ def eliminate_common_subexpressions(spec: FunctionSpec, counts: dict[str, int] |
         temporaries, reduced = _cse_program(spec.definitions, entries)
     else:
         with distribute(False):  # keep 2*(x + y) as one product (see passes.fold_parameters)
-            temporaries, reduced = sympy.cse(entries, symbols=sympy.numbered_symbols(TEMPORARY_PREFIX, real=True))
+            temporaries, reduced = _merge_repeats(*sympy.cse(entries, symbols=sympy.numbered_symbols(
+                TEMPORARY_PREFIX, real=True)))
     outputs = []
     start = 0
     for out in spec.outputs:
@@ -54,6 +55,33 @@ def eliminate_common_subexpressions(spec: FunctionSpec, counts: dict[str, int] |
         start += size
     counts["cse"] = op_count([e for _, e in temporaries] + list(reduced))
     return OptimizedFunction(spec, tuple(temporaries), tuple(outputs), counts)
+
+
+def _merge_repeats(temporaries: list[Assignment], reduced: list[sympy.Expr]) -> tuple[list[Assignment],
+                                                                                     list[sympy.Expr]]:
+    """sympy's CSE result with every repeated right-hand side an alias of its first occurrence.
+
+    sympy's CSE can leave one product twice (``0.8660254037844386*_x127`` in the DELTA's
+    closure Jacobians: its rewriting of negated products finds the two after it has named
+    them).  Unchanged when nothing repeats; otherwise the temporaries are renumbered in order.
+    """
+    first: dict[sympy.Expr, sympy.Symbol] = {}
+    alias: dict[sympy.Symbol, sympy.Symbol] = {}
+    kept = []
+    for symbol, expr in temporaries:
+        expr = expr.xreplace(alias) if alias else expr
+        if expr in first:
+            alias[symbol] = first[expr]
+        else:
+            first[expr] = symbol
+            kept.append((symbol, expr))
+    if not alias:
+        return temporaries, reduced
+    names = sympy.numbered_symbols(TEMPORARY_PREFIX, real=True)
+    rename = {**alias, **{symbol: next(names) for symbol, _ in kept}}
+    rename.update({s: rename[t] for s, t in alias.items()})
+    return ([(rename[symbol], expr.xreplace(rename)) for symbol, expr in kept],
+            [e.xreplace(rename) for e in reduced])
 
 
 def _cse_program(definitions: tuple[Assignment, ...], entries: list[sympy.Expr]) -> tuple[list[Assignment],
