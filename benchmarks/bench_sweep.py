@@ -52,8 +52,9 @@ def definition_for(payload: ModelPayload, designs: int) -> SweepDefinition:
 def timed_sweep(payload: ModelPayload, definition: SweepDefinition, **where) -> tuple[float, object]:
     with tempfile.TemporaryDirectory() as scratch:
         start = time.perf_counter()
-        table = evaluate_missing(payload, definition, SweepStore(Path(scratch) / "s.parquet", definition, payload), **where)
-        return time.perf_counter() - start, table
+        store = SweepStore(Path(scratch) / "s.parquet", definition, payload)
+        evaluate_missing(payload, definition, store, **where)
+        return time.perf_counter() - start, store.table()
 
 
 def _noop(k: int) -> int:

@@ -21,6 +21,7 @@ import pyarrow.parquet as pq
 import pytest
 from conftest import GENERATED_DIR, MODELS_DIR
 
+from symkin import design
 from symkin.analysis.global_indices import gci
 from symkin.cli import main
 from symkin.design.sweeps import EMPTY, OK, SweepAxis, SweepDefinition, evaluate_missing, parse_axis
@@ -86,9 +87,8 @@ def test_rows_are_the_gci_of_each_design(reference, payload):
 
 def test_a_local_cluster_gives_the_same_rows_to_the_bit(reference, payload, tmp_path):
     store = SweepStore(tmp_path / "local.parquet", GRID, payload)
-    table = evaluate_missing(payload, GRID, store, scheduler="local", workers=2)
-    assert table.equals(reference)
-    store.finish()
+    evaluate_missing(payload, GRID, store, scheduler="local", workers=2)
+    assert store.finish().equals(reference)
     assert pq.read_table(tmp_path / "local.parquet").equals(reference)
 
 
@@ -106,9 +106,9 @@ def test_an_interrupted_sweep_resumes_without_recomputing_or_duplicating(referen
     store = SweepStore(out, GRID, payload, resume=True)
     assert store.completed() == {0, 1, 2}
     resumed = []
-    table = evaluate_missing(payload, GRID, store, scheduler="serial", chunk_done=resumed.append)
+    evaluate_missing(payload, GRID, store, scheduler="serial", chunk_done=resumed.append)
     assert resumed == [3, 4, 5, 6, 7]
-    assert table.equals(reference)
+    assert store.table().equals(reference)
     # a different definition does not resume these parts
     other = SweepDefinition(GRID.axes, chunk=5, samples=2048)
     with pytest.raises(ValueError, match="another definition"):
@@ -130,7 +130,8 @@ def test_a_worker_killed_mid_sweep_loses_no_design(reference, payload, tmp_path)
                 killed.append(victim)
 
         store = SweepStore(tmp_path / "killed.parquet", GRID, payload)
-        table = evaluate_missing(payload, GRID, store, client=client, chunk_done=kill_one)
+        evaluate_missing(payload, GRID, store, client=client, chunk_done=kill_one)
+    table = store.table()
     assert killed
     assert table.column("design").to_pylist() == list(range(GRID.size))
     assert table.equals(reference)
@@ -142,7 +143,7 @@ def test_torque_peak_is_the_longest_lever_arm(payload, tmp_path):
     2^12, where |p| falls short of l1 + l2 by at most l1 l2 delta^2 / (2 (l1 + l2))."""
     definition = SweepDefinition((SweepAxis("l1", 0.1, 0.2, 2), SweepAxis("l2", 0.05, 0.05, 1)),
                                  ("gci", "torque_peak"), samples=4096)
-    table = evaluate_missing(payload, definition, SweepStore(tmp_path / "t.parquet", definition, payload), scheduler="serial")
+    table = design.sweep(payload, definition, scheduler="serial")
     rows = table.to_pydict()
     delta = (math.pi / 2) / 2**6
     for l1, l2, peak in zip(rows["l1"], rows["l2"], rows["torque_peak"]):
@@ -150,14 +151,13 @@ def test_torque_peak_is_the_longest_lever_arm(payload, tmp_path):
     assert "kappa_min" not in rows
     delta_payload = ModelPayload.from_directory(GENERATED_DIR / "delta")
     one = SweepDefinition((SweepAxis("a", 0.1, 0.1, 1),), ("torque_peak",), samples=1024)
-    peak = evaluate_missing(delta_payload, one, SweepStore(tmp_path / "d.parquet", one, delta_payload),
-                 scheduler="serial").column("torque_peak")[0].as_py()
+    peak = design.sweep(delta_payload, one, scheduler="serial").column("torque_peak")[0].as_py()
     assert 0.0 < peak < 1.0                                      # N m per N, finite (0.14 at 2^10 points)
 
 
 def test_a_design_without_workspace_is_a_row_not_a_crash(payload, tmp_path):
     definition = SweepDefinition((SweepAxis("l1", 0.0, 0.1, 2), SweepAxis("l2", 0.0, 0.1, 2)), samples=256)
-    table = evaluate_missing(payload, definition, SweepStore(tmp_path / "e.parquet", definition, payload), scheduler="serial")
+    table = design.sweep(payload, definition, scheduler="serial")
     rows = table.to_pydict()
     # det J = l1 l2 sin(theta2): with a zero length the workspace is an arc (or a point), of area 0
     assert rows["status"] == [EMPTY, EMPTY, EMPTY, OK]
@@ -167,8 +167,8 @@ def test_a_design_without_workspace_is_a_row_not_a_crash(payload, tmp_path):
 def test_cli_writes_the_table_with_its_metadata_and_figures(tmp_path, capsys):
     out = tmp_path / "sweep.parquet"
     assert main(["sweep", str(MODELS_DIR / "delta.yaml"), "--vary", "a=0.08:0.12:3", "--vary", "b=0.13:0.17:2",
-                 "-n", "512", "--chunk", "4", "--scheduler", "serial", "-o", str(out),
-                 "--figures", str(tmp_path / "fig")]) == 0
+                 "-n", "512", "--chunk", "4", "--scheduler", "serial", "-o", str(out), "--metric",
+                 "gci,volume,kappa_min,kappa_max,torque_peak", "--figures", str(tmp_path / "fig")]) == 0
     printed = capsys.readouterr().out
     assert "sweep of delta: 6 designs in 2 chunks of 4, in this process" in printed
     assert "best gci" in printed
@@ -243,7 +243,7 @@ def test_cli_sigterm_then_resume_gives_the_uninterrupted_table(tmp_path):
 
 def test_one_call_from_python_gives_the_same_table(reference, tmp_path):
     """symkin.design.sweep: from a loaded model, keyword options, a file or nothing on disk."""
-    from symkin import design, load
+    from symkin import load
 
     arm = load(GENERATED_DIR / "planar_2r")
     table = design.sweep(arm, vary={"l1": (0.05, 0.30, 6), "l2": (0.05, 0.30, 6)}, samples=1024, chunk=5,

@@ -35,8 +35,8 @@ from typing import Any
 
 import numpy as np
 
-from symkin.analysis.estimates import CONFIDENCE, IntegralEstimate
-from symkin.analysis.integrators import QMC_REPLICATES
+from symkin.analysis.estimates import IntegralEstimate
+from symkin.analysis.integrators import QMC_REPLICATES, monte_carlo_estimate, quasi_monte_carlo_estimate
 from symkin.analysis.sampling import SOBOL_BITS
 from symkin.runtime.cluster import run_tasks
 from symkin.runtime.payload import ModelPayload
@@ -117,8 +117,6 @@ def integrate_chunked(payload: ModelPayload, spec: IntegrandSpec, method: str, s
         scheduler, workers, client: where the tasks run (:func:`symkin.runtime.cluster.run_tasks`).
         progress: called with (points done, points in all) as chunks complete.
     """
-    from scipy.stats import norm, t
-
     if method not in METHODS:
         raise ValueError(f"chunked integration: method '{method}' is not one of {', '.join(METHODS)}")
     if chunk < 1:
@@ -156,13 +154,9 @@ def integrate_chunked(payload: ModelPayload, spec: IntegrandSpec, method: str, s
         sums = np.zeros((replicates, len(ordered[0])))
         for (_, _, r, _, _), s in zip(tasks, ordered):
             sums[r] += s
-        means = volume * sums / size
-        covariance = np.atleast_2d(np.cov(means, rowvar=False)) / replicates
-        return IntegralEstimate(values=means.mean(axis=0), evaluations=total, method="qmc", covariance=covariance,
-                                quantile=float(t.ppf(0.5 + CONFIDENCE / 2, replicates - 1)))
+        return quasi_monte_carlo_estimate(volume * sums / size, total)
     first = sum((s for s, _ in ordered), np.zeros_like(ordered[0][0]))
     second = sum((p for _, p in ordered), np.zeros_like(ordered[0][1]))
     mean = first / samples
-    covariance = (second / samples - np.outer(mean, mean)) * samples / (samples - 1) * volume**2 / samples
-    return IntegralEstimate(values=volume * mean, evaluations=samples, method="mc",
-                            covariance=np.atleast_2d(covariance), quantile=float(norm.ppf(0.5 + CONFIDENCE / 2)))
+    return monte_carlo_estimate(volume, mean, (second / samples - np.outer(mean, mean)) * samples / (samples - 1),
+                                samples)

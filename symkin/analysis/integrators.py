@@ -52,23 +52,28 @@ def grid(integrand: Integrand, samples: int, *, rng: np.random.Generator | None 
 
 def monte_carlo(integrand: Integrand, samples: int, *, rng: np.random.Generator | None = None) -> IntegralEstimate:
     """Plain Monte Carlo with uniform random points."""
-    from scipy.stats import norm
-
     if samples < 2:
         raise ValueError("Monte Carlo needs at least 2 samples")
     rng = np.random.default_rng() if rng is None else rng
     f = integrand(sampling.uniform(integrand.lower, integrand.upper, samples, rng))
-    volume = integrand.volume
-    covariance = np.atleast_2d(np.cov(f, rowvar=False)) * volume**2 / samples
-    return IntegralEstimate(values=volume * f.mean(axis=0), evaluations=samples, method="mc",
-                            covariance=covariance, quantile=float(norm.ppf(0.5 + CONFIDENCE / 2)))
+    return monte_carlo_estimate(integrand.volume, f.mean(axis=0), np.atleast_2d(np.cov(f, rowvar=False)), samples)
+
+
+def monte_carlo_estimate(volume: float, mean: np.ndarray, covariance: np.ndarray, samples: int) -> IntegralEstimate:
+    """V mean f with the covariance of the mean V^2 cov(f) / N and the 95 % normal quantile.
+
+    ``covariance``: the sample covariance of f (divisor N - 1).
+    """
+    from scipy.stats import norm
+
+    return IntegralEstimate(values=volume * mean, evaluations=samples, method="mc",
+                            covariance=np.atleast_2d(covariance) * volume**2 / samples,
+                            quantile=float(norm.ppf(0.5 + CONFIDENCE / 2)))
 
 
 def quasi_monte_carlo(integrand: Integrand, samples: int, *, rng: np.random.Generator | None = None,
                       replicates: int = QMC_REPLICATES) -> IntegralEstimate:
     """Randomized quasi-Monte Carlo: ``replicates`` scrambled Sobol sets of 2^m points, m as large as fits."""
-    from scipy.stats import t
-
     m = int(np.floor(np.log2(max(samples, 1) / replicates)))
     if replicates < 2 or m < 1:
         raise ValueError(f"quasi-Monte Carlo needs at least {2 * max(replicates, 2)} samples "
@@ -77,9 +82,17 @@ def quasi_monte_carlo(integrand: Integrand, samples: int, *, rng: np.random.Gene
     volume = integrand.volume
     points = sampling.sobol(integrand.lower, integrand.upper, m, rng, replicates=replicates)
     means = volume * integrand(points.reshape(-1, integrand.dimension)).reshape(replicates, 2**m, -1).mean(axis=1)
-    covariance = np.atleast_2d(np.cov(means, rowvar=False)) / replicates
-    return IntegralEstimate(values=means.mean(axis=0), evaluations=replicates * 2**m, method="qmc",
-                            covariance=covariance, quantile=float(t.ppf(0.5 + CONFIDENCE / 2, replicates - 1)))
+    return quasi_monte_carlo_estimate(means, replicates * 2**m)
+
+
+def quasi_monte_carlo_estimate(means: np.ndarray, evaluations: int) -> IntegralEstimate:
+    """The mean of the replicate estimates (replicates, k) and the Student-t half-width of their spread."""
+    from scipy.stats import t
+
+    replicates = len(means)
+    return IntegralEstimate(values=means.mean(axis=0), evaluations=evaluations, method="qmc",
+                            covariance=np.atleast_2d(np.cov(means, rowvar=False)) / replicates,
+                            quantile=float(t.ppf(0.5 + CONFIDENCE / 2, replicates - 1)))
 
 
 def adaptive_integrator(integrand: Integrand, samples: int, *, rng: np.random.Generator | None = None,

@@ -110,7 +110,7 @@ def _terminate(signum, _frame) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from symkin.design import sweep_plots
-    from symkin.design.sweeps import evaluate_missing, summary_rows
+    from symkin.design.sweeps import chunk_designs, evaluate_missing, summary_rows
     from symkin.design.sweep_store import SweepStore
     from symkin.runtime.cluster import check_scheduler
     from symkin.runtime.payload import ModelPayload
@@ -136,8 +136,7 @@ def run(args: argparse.Namespace) -> int:
     previous = signal.signal(signal.SIGTERM, _terminate)
     try:
         with Progress(f"{payload.name} sweep") as progress:
-            first = definition.size - sum(min(definition.size, (k + 1) * definition.chunk) - k * definition.chunk
-                                          for k in range(definition.chunks) if k not in store.completed())
+            first = definition.size - chunk_designs(definition, set(range(definition.chunks)) - store.completed())
 
             def report(done: int, total: int) -> None:
                 rate = (done - first) / max(time.perf_counter() - start, 1e-9)
@@ -145,7 +144,7 @@ def run(args: argparse.Namespace) -> int:
 
             progress("starting" if args.scheduler == "serial" else "starting the Dask cluster")
 
-            table = evaluate_missing(payload, definition, store, scheduler=args.scheduler, workers=args.workers,
+            evaluate_missing(payload, definition, store, scheduler=args.scheduler, workers=args.workers,
                           progress=report)
     except KeyboardInterrupt:
         kept = len(store.completed())

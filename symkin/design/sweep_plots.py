@@ -15,7 +15,7 @@ from symkin.design.plots import png
 from symkin.design.sweeps import OK, SweepDefinition
 
 LABELS = {"gci": "GCI (mean 1/kappa)", "volume": "workspace measure", "kappa_min": "min kappa",
-          "kappa_max": "max kappa"}
+          "kappa_max": "max kappa", "torque_peak": "peak effort per unit force (N m/N)"}
 
 
 def pareto_front(gci: np.ndarray, volume: np.ndarray) -> np.ndarray:

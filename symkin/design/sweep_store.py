@@ -21,12 +21,10 @@ from typing import Any
 
 from symkin._version import __version__
 from symkin.atomic import replace_file
-from symkin.design.sweeps import ESTIMATED, SweepDefinition
+from symkin.design.sweeps import SweepDefinition
 from symkin.runtime.payload import ModelPayload
 
 PART = re.compile(r"chunk-(\d{6})\.parquet")
-#: schema metadata keys of the result file
-METADATA = ("symkin.version", "symkin.model", "symkin.model_hash", "symkin.sweep")
 
 
 def schema(definition: SweepDefinition) -> Any:
@@ -123,5 +121,3 @@ def read_sweep(path: str | Path) -> tuple[Any, SweepDefinition, dict[str, str]]:
         raise ValueError(f"{path}: not a symkin sweep (no 'symkin.sweep' in its Parquet metadata)")
     return table, SweepDefinition.from_json(metadata["symkin.sweep"]), metadata
 
-
-__all__ = ["ESTIMATED", "METADATA", "SweepStore", "read_sweep", "schema"]

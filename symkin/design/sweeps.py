@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
@@ -179,8 +179,9 @@ def evaluate_chunk(payload: ModelPayload, definition: SweepDefinition, chunk: in
 def evaluate_missing(payload: ModelPayload, definition: SweepDefinition, store: Any, *, scheduler: str = "local",
           workers: int | None = None, client: Any = None,
           progress: Callable[[int, int], None] = lambda done, total: None,
-          chunk_done: Callable[[int], None] = lambda chunk: None) -> Any:
-    """Evaluate every chunk missing from ``store`` and return the whole table (pyarrow).
+          chunk_done: Callable[[int], None] = lambda chunk: None) -> None:
+    """Evaluate every chunk missing from ``store``, writing each to it as it completes (the table:
+    ``store.table()``, or ``store.finish()`` for the result file).
 
     Args:
         payload: the generated code (:meth:`ModelPayload.from_directory`).
@@ -205,7 +206,6 @@ def evaluate_missing(payload: ModelPayload, definition: SweepDefinition, store: 
     run_tasks(evaluate_chunk, [(definition, chunk) for chunk in todo], shared=payload, scheduler=scheduler,
               workers=workers, client=client, name=f"symkin-sweep-{payload.digest[:12]}",
               started=lambda: progress(done, definition.size), finished=lambda i, columns: finished(todo[i], columns))
-    return store.table()
 
 
 def summary_rows(table: Any, definition: SweepDefinition) -> list[list[str]]:
@@ -225,6 +225,6 @@ def summary_rows(table: Any, definition: SweepDefinition) -> list[list[str]]:
     return rows
 
 
-def chunk_designs(definition: SweepDefinition, chunks: Sequence[int]) -> int:
+def chunk_designs(definition: SweepDefinition, chunks: Iterable[int]) -> int:
     """How many designs the given chunks hold."""
     return sum(min(definition.size, (k + 1) * definition.chunk) - k * definition.chunk for k in chunks)

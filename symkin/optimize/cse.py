@@ -78,8 +78,8 @@ def _merge_repeats(temporaries: list[Assignment], reduced: list[sympy.Expr]) -> 
     if not alias:
         return temporaries, reduced
     names = sympy.numbered_symbols(TEMPORARY_PREFIX, real=True)
-    rename = {**alias, **{symbol: next(names) for symbol, _ in kept}}
-    rename.update({s: rename[t] for s, t in alias.items()})
+    rename = {symbol: next(names) for symbol, _ in kept}
+    rename.update({symbol: rename[first_use] for symbol, first_use in alias.items()})
     return ([(rename[symbol], expr.xreplace(rename)) for symbol, expr in kept],
             [e.xreplace(rename) for e in reduced])
 

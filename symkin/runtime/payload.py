@@ -2,14 +2,19 @@
 
 Dask tasks (design sweeps, chunked integrations) carry a :class:`ModelPayload` (the manifest and
 the numpy module, a few tens of kB) instead of a path, so the workers of a cluster need symkin
-installed but no shared file system; each worker process writes it once into a scratch
-directory and loads it (:meth:`ModelPayload.load`, cached by the files' digest).
+installed but no shared file system.  :meth:`ModelPayload.load` writes it once per machine into
+``<symkin cache>/payloads/<digest>`` (the directory of the compiled C libraries,
+:func:`symkin.backends.c.build.cache_directory`; the first complete copy renamed into place
+wins, so concurrent workers never see half of one) and loads it once per process.
 """
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
+import os
+import shutil
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -40,7 +45,7 @@ class ModelPayload:
         return cls(manifest["model"]["name"], manifest["model"]["hash"],
                    tuple((n, (directory / n).read_bytes()) for n in names))
 
-    @property
+    @functools.cached_property
     def digest(self) -> str:
         """sha256 of the files: the key of the worker-side cache."""
         h = hashlib.sha256()
@@ -49,15 +54,23 @@ class ModelPayload:
         return h.hexdigest()
 
     def load(self) -> Any:
-        """The loaded numpy model, written once per process into a scratch directory."""
+        """The loaded numpy model (see the module docstring)."""
         digest = self.digest
         if digest not in _LOADED:
             from symkin import load
+            from symkin.backends.c.build import cache_directory
 
-            directory = Path(tempfile.mkdtemp(prefix=f"symkin-sweep-{self.name}-"))
-            for name, content in self.files:
-                (directory / name).write_bytes(content)
-            _LOADED[digest] = load(directory, "numpy")
+            target = cache_directory() / "payloads" / digest[:24]
+            if not (target / "manifest.json").exists():
+                target.parent.mkdir(parents=True, exist_ok=True)
+                staging = Path(tempfile.mkdtemp(prefix=f".{target.name}.", dir=target.parent))
+                for name, content in self.files:
+                    (staging / name).write_bytes(content)
+                try:
+                    os.rename(staging, target)
+                except OSError:  # another process put its complete copy there first
+                    shutil.rmtree(staging, ignore_errors=True)
+            _LOADED[digest] = load(target, "numpy")
         return _LOADED[digest]
 
 
