@@ -19,6 +19,10 @@ import pytest
 from conftest import ROOT
 from newton_euler import dh_transform, inverse_dynamics, links_of
 from symkin import derive, load
+from symkin.derivation.graph import Derivation
+from symkin.expression_dag import distinct_nodes, tree_size
+from symkin.kinematics.quantities import chain_frames, geometric_jacobian_matrix
+from symkin.model import load_model
 from symkin.optimize.cse import SYMPY_CSE_LIMIT
 from tolerances import DYNAMICS, KINEMATICS
 
@@ -73,3 +77,25 @@ def test_a_20_joint_chain_matches_independent_numeric_kinematics_and_dynamics(ch
         want = inverse_dynamics(links, GRAVITY, q, qd, qdd)
         # each torque sums n link contributions of size |tau|max, each with DYNAMICS relative rounding
         np.testing.assert_allclose(tau, want, rtol=0, atol=DYNAMICS * N * np.abs(want).max())
+
+
+def _kinematic_graph_sizes(n: int, directory) -> tuple[int, int]:
+    """(distinct nodes, tree size) of the TCP pose and geometric Jacobian of the n-joint chain."""
+    path = directory / f"chain{n}.yaml"
+    path.write_text(chain_yaml(n))
+    derivation = Derivation(load_model(path))
+    exprs = [*derivation[chain_frames].tcp.T, *derivation[geometric_jacobian_matrix]]
+    return sum(1 for _ in distinct_nodes(exprs)), tree_size(exprs)
+
+
+def test_the_kinematics_are_a_graph_that_grows_linearly_with_the_chain(tmp_path):
+    """The chain walk shares every link's rotation and origin with the next link (issue 12).
+
+    Each joint adds a bounded number of new nodes, so the distinct nodes of FK and the
+    Jacobian grow as n (memory stays bounded) while the tree they stand for grows
+    exponentially; every later walk (conversion, free symbols, CSE) visits distinct nodes.
+    """
+    nodes_12, tree_12 = _kinematic_graph_sizes(12, tmp_path)
+    nodes_24, tree_24 = _kinematic_graph_sizes(24, tmp_path)
+    assert nodes_24 <= 2.5 * nodes_12, (nodes_12, nodes_24)
+    assert tree_24 > 1000 * tree_12 and nodes_24 < 1e-6 * tree_24, (tree_12, tree_24)
