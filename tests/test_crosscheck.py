@@ -42,6 +42,20 @@ def test_a_stock_robot_with_locked_fingers_passes_on_the_command_line():
     assert "mass_matrix" in run.stdout and "FAIL" not in run.stdout and "frame panda_link7" in run.stdout
 
 
+def test_a_stock_arm_with_a_mimic_joint_on_the_chain_passes():
+    """The PR2's left arm to its finger tip: the tip joint mimics the finger joint (a parallel-jaw finger),
+    so the chain has 9 joints and 8 coordinates; the other finger joints follow the finger joint off the
+    chain and are locked.  Pinocchio's reference has the follower free, set at q = a q_leader + b."""
+    others = ["l_gripper_r_finger_joint", "l_gripper_l_parallel_root_joint", "l_gripper_r_parallel_root_joint",
+              "l_gripper_r_finger_tip_joint"]
+    report = crosscheck(ROBOTS_DIR / "pr2_description/urdf/pr2.urdf", samples=4,
+                        urdf={"base": "torso_lift_link", "tip": "l_gripper_l_finger_tip_link",
+                              "locks": {name: 0.2 for name in others}})
+    assert not report.failures, report.comparisons
+    assert {"mass_matrix", "coriolis_vector", "gravity_vector", "frame l_gripper_l_finger_tip_link"} <= \
+        {c.quantity for c in report.comparisons}
+
+
 def test_a_reference_that_disagrees_fails_naming_the_quantity(tmp_path):
     exported = tmp_path / "ur10e.urdf"
     assert subprocess.run(SYMKIN_CLI + ["export", str(MODELS_DIR / "ur10e.yaml"), "-o", str(exported)]).returncode == 0

@@ -12,6 +12,7 @@ from conftest import MODELS_DIR, SYMKIN_CLI, reference_function
 from symkin.derivation import Derivation
 from symkin.errors import ModelError
 from symkin.model import load_model
+from symkin.model.coordinates import coordinate_range
 from tolerances import DYNAMICS, KINEMATICS
 
 ARM = """<?xml version="1.0"?>
@@ -122,7 +123,7 @@ def test_joints_off_the_chain_are_locked_and_their_links_lumped_into_the_chain(t
     np.testing.assert_allclose([float(v) for v in body.com], expected, rtol=0, atol=KINEMATICS)
 
 
-def test_mimic_joints_off_the_chain_follow_their_leader_and_on_the_chain_are_refused(tmp_path):
+def test_mimic_joints_off_the_chain_follow_their_leader_and_on_the_chain_are_coupled(tmp_path):
     fingers = ARM.replace("</robot>", '<link name="f1"><inertial><origin xyz="0 0.01 0"/><mass value="0.1"/>'
                                       '</inertial></link><link name="f2"><inertial><mass value="0.1"/></inertial>'
                                       '</link><joint name="finger1" type="prismatic"><parent link="tool"/>'
@@ -137,16 +138,22 @@ def test_mimic_joints_off_the_chain_follow_their_leader_and_on_the_chain_are_ref
     assert f1.link == f2.link == "slider"
     assert abs(float(f1.com[1]) - 0.03) < KINEMATICS  # 0.01 + 0.02 along +y
     assert abs(float(f2.com[1]) + 0.041) < KINEMATICS  # 2 * 0.02 + 0.001 along -y
-    with pytest.raises(ModelError, match="on the chain mimics 'j2'"):
-        load_model(_write(tmp_path, ARM.replace('<axis xyz="1 0 0"/><limit', '<mimic joint="j2"/><axis xyz="1 0 0"/>'
-                                                                          '<limit'), "coupled.urdf"))
+    coupled = load_model(_write(tmp_path, ARM.replace('<axis xyz="1 0 0"/><limit', '<mimic joint="j2" '
+                                                      'multiplier="0.5" offset="0.05"/><axis xyz="1 0 0"/><limit'),
+                                "coupled.urdf"))
+    assert [c.name for c in coupled.coordinates] == ["j1", "j2"]
+    mimic = coupled.joints[2].mimic
+    assert (mimic.leader, mimic.multiplier, mimic.offset) == ("j2", sympy.Rational(1, 2), sympy.Rational(1, 20))
+    # the slider's stroke [0, 0.2] bounds j2 through s = j2 / 2 + 0.05: j2 in [-0.1, 0.3]
+    np.testing.assert_allclose(np.array(coordinate_range(coupled)), [[-np.pi, -0.1], [np.pi, 0.3]], rtol=0,
+                               atol=KINEMATICS)
 
 
 @pytest.mark.parametrize("edit, message", [
     (lambda t: t.replace('type="prismatic"', 'type="floating"'), "floating joint .* not supported"),
     (lambda t: t.replace('type="prismatic"', 'type="planar"'), "planar joint .* not supported"),
-    (lambda t: t.replace('<axis xyz="1 0 0"/><limit', '<mimic joint="j2"/><axis xyz="1 0 0"/><limit'),
-     "on the chain mimics 'j2'"),
+    (lambda t: t.replace('<axis xyz="1 0 0"/><limit', '<mimic joint="mount"/><axis xyz="1 0 0"/><limit'),
+     "on the chain mimics 'mount', which is not a moving joint of the chain"),
     (lambda t: t.replace("</robot>", '<joint name="loop" type="fixed"><parent link="base"/><child link="l2"/>'
                                      "</joint></robot>"), "closed loop: link 'l2'"),
     (lambda t: t.replace("</robot>", '<link name="b2"/><joint name="j4" type="revolute"><parent link="l1"/>'

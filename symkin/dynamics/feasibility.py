@@ -76,7 +76,7 @@ def mass_matrix_problems(model: Model, outputs: Sequence[str]) -> list[Problem]:
                               "declare the bodies with their masses and inertias, or leave "
                               f"{', '.join(inverting)} out of the outputs (symkin derive --only ...)")]
     weights = np.abs(null_direction)
-    joints = ", ".join(model.joints[j].name for j in np.flatnonzero(weights >= 0.5 * weights.max()))
+    joints = ", ".join(model.coordinates[j].name for j in np.flatnonzero(weights >= 0.5 * weights.max()))
     return [model.problem(("bodies",), f"the mass matrix is singular at every configuration: moving {joints} moves "
                                        "no mass and no rotational inertia (e.g. a point mass on a revolute axis), so "
                                        f"{', '.join(inverting)} (which inverts M) cannot be derived",

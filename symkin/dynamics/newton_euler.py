@@ -149,7 +149,7 @@ def chain_links(model: Model) -> tuple[Link, ...]:
     eye, zero = sympy.eye(3), sympy.zeros(3, 1)
     R_prev, p_prev = _compose(model.base, eye, zero)  # F_0 = base frame, then the base's fixed operations
     links = []
-    for joint, q in zip(model.joints, coordinates.symbols(model, "q")):
+    for joint, q in zip(model.joints, coordinates.joint_values(model, "q")):
         C_R, C_p = _compose(joint.before, R_prev, p_prev)
         amount = q + joint.offset
         axis = sympy.Matrix(joint.axis)

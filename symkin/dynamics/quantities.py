@@ -34,6 +34,7 @@ import symengine as se
 import sympy
 
 from symkin.dynamics import lagrange, newton_euler
+from symkin.dynamics.coupling import forces_on_coordinates, joint_rates, matrix_on_coordinates
 from symkin.dynamics.bodies import BodyJacobians, body_jacobians
 from symkin.dynamics.linsolve import ldl_solve, transpose_solve
 from symkin.dynamics.program import Program, se_matrix, se_vector
@@ -104,7 +105,7 @@ def _newton_euler_links(d: Derivation) -> tuple[newton_euler.Link, ...]:
 
 @quantity("mass_matrix_graph", "M(q) by the composite-rigid-body algorithm, as a SymEngine graph", emitted=False)
 def _mass_matrix_graph(d: Derivation) -> Matrix:
-    return newton_euler.mass_matrix(d[_newton_euler_links])
+    return matrix_on_coordinates(d.model, newton_euler.mass_matrix(d[_newton_euler_links]))
 
 
 @quantity("mass_matrix_partials", "dM/dq_k as SymEngine graphs", emitted=False)
@@ -124,13 +125,13 @@ def _friction_graph(d: Derivation) -> list[se.Basic] | None:
     """F_f,j = viscous_j qd_j + coulomb_j sign(qd_j), or coulomb_j tanh(qd_j / v_s,j) when smoothed."""
     if not d.model.friction:
         return None
-    qd = dict(zip((j.name for j in d.model.joints), _symbols(d, "qd")))
+    qd = dict(zip((j.name for j in d.model.joints), joint_rates(d.model, "qd")))
     F = {name: se.Integer(0) for name in qd}
     for f in d.model.friction:
         v = qd[f.joint]
         coulomb = se.sign(v) if f.smoothing_velocity is None else se.tanh(v / se.sympify(f.smoothing_velocity))
         F[f.joint] = se.sympify(f.viscous) * v + se.sympify(f.coulomb) * coulomb
-    return list(F.values())
+    return forces_on_coordinates(d.model, list(F.values()))
 
 
 @quantity("task_jacobian_graph", "task Jacobian J (square) as SymEngine expressions", emitted=False)
@@ -175,9 +176,9 @@ class _BoundTerms:
     def newton_euler(self, velocity: bool, acceleration: bool, gravity: bool) -> list[se.Basic]:
         """The Newton-Euler torques of the chosen terms (M qdd, V, G), bound."""
         d = self.d
-        qd, qdd = (_symbols(d, g) if use else None for g, use in (("qd", velocity), ("qdd", acceleration)))
-        return self.program.bind(newton_euler.inverse_dynamics(
-            d[_newton_euler_links], qd, qdd, d[_gravity_graph] if gravity else None))
+        qd, qdd = (joint_rates(d.model, g) if use else None for g, use in (("qd", velocity), ("qdd", acceleration)))
+        return self.program.bind(forces_on_coordinates(d.model, newton_euler.inverse_dynamics(
+            d[_newton_euler_links], qd, qdd, d[_gravity_graph] if gravity else None)))
 
     def coriolis_vector(self) -> list[se.Basic]:
         return self.newton_euler(velocity=True, acceleration=False, gravity=False)
@@ -185,7 +186,8 @@ class _BoundTerms:
     def gravity_vector(self) -> list[se.Basic] | None:
         if self.d[_gravity_graph] is None:
             return None
-        return self.program.bind(newton_euler.gravity_torques(self.d[_newton_euler_links], self.d[_gravity_graph]))
+        return self.program.bind(forces_on_coordinates(
+            self.d.model, newton_euler.gravity_torques(self.d[_newton_euler_links], self.d[_gravity_graph])))
 
     def friction(self) -> list[se.Basic] | None:
         return self.d[_friction_graph]

@@ -111,12 +111,16 @@ class MovingFrame:
 
 
 def compose_chain(model: Model) -> ChainFrames:
-    """Walk the chain of ``model`` and return every link frame, joint axis and the TCP."""
+    """Walk the chain of ``model`` and return every link frame, joint axis and the TCP.
+
+    There is one axis per joint; a follower's moves with its leader's coordinate
+    (:func:`~symkin.model.coordinates.joint_values`).
+    """
     moving = MovingFrame()
     moving.apply(model.base)
     links = []
     axes = []
-    for joint, q in zip(model.joints, coordinates.symbols(model, "q")):
+    for joint, q in zip(model.joints, coordinates.joint_values(model, "q")):
         moving.apply(joint.before)
         axes.append(JointAxis(joint.name, joint.type, sympy.ImmutableMatrix(moving.direction(joint.axis)),
                               sympy.ImmutableMatrix(moving.p)))

@@ -71,7 +71,8 @@ def _task_coordinates(d: Derivation) -> FunctionSpec:
 
 @quantity("jacobian_geometric_matrix", "geometric Jacobian matrix of the TCP (6 x n)", emitted=False)
 def geometric_jacobian_matrix(d: Derivation) -> sympy.ImmutableMatrix:
-    """Columns [z_i x (p_tcp - p_i); z_i] for revolute and [z_i; 0] for prismatic joints."""
+    """Columns [z_i x (p_tcp - p_i); z_i] for revolute and [z_i; 0] for prismatic joints, times the
+    coupling matrix A when joints mimic others (one column per coordinate)."""
     chain: ChainFrames = d[chain_frames]
     p_tcp = sympy.Matrix(chain.tcp.p)
     columns = []
@@ -81,7 +82,9 @@ def geometric_jacobian_matrix(d: Derivation) -> sympy.ImmutableMatrix:
             columns.append(z.cross(p_tcp - sympy.Matrix(axis.point)).col_join(z))
         else:
             columns.append(z.col_join(sympy.zeros(3, 1)))
-    return sympy.ImmutableMatrix(sympy.Matrix.hstack(*columns))
+    J = sympy.Matrix.hstack(*columns)
+    coupling = coordinates.coupling_matrix(d.model)
+    return sympy.ImmutableMatrix(J if coupling is None else J * coupling)
 
 
 @quantity("jacobian_geometric", "geometric Jacobian of the TCP, [v; w] = J qd (6 x n, base frame)")

@@ -54,6 +54,42 @@ def units(model: Model, group: str) -> tuple[str, ...]:
     return tuple(g.revolute_unit if j.type is JointType.REVOLUTE else g.prismatic_unit for j in model.coordinates)
 
 
+def joint_values(model: Model, group: str) -> tuple[sympy.Expr, ...]:
+    """The value of every joint of a serial chain in ``group`` ("q", "qd" or "qdd"), in joint order.
+
+    A joint with its own coordinate is its symbol; a follower (:class:`~symkin.model.schema.Mimic`)
+    is ``multiplier * leader (+ offset for q)``, so that everything built on these values is a
+    function of the coordinates alone.
+    """
+    own = dict(zip((c.name for c in model.coordinates), symbols(model, group)))
+    values = []
+    for joint in model.joints:
+        if joint.mimic is None:
+            values.append(own[joint.name])
+        else:
+            value = joint.mimic.multiplier * own[joint.mimic.leader]
+            values.append(value + joint.mimic.offset if group == "q" else value)
+    return tuple(values)
+
+
+def coupling_matrix(model: Model) -> sympy.ImmutableMatrix | None:
+    """A = d(joint values)/d(coordinates), joints x coordinates, or None when every joint is a coordinate.
+
+    Joint rates are A qd; the coordinates' Jacobian columns are J A, their mass matrix A^T M A and
+    their generalized forces A^T tau (virtual work, the coupling being linear).
+    """
+    if all(j.mimic is None for j in model.joints):
+        return None
+    index = {c.name: k for k, c in enumerate(model.coordinates)}
+    A = sympy.zeros(len(model.joints), len(index))
+    for row, joint in enumerate(model.joints):
+        if joint.mimic is None:
+            A[row, index[joint.name]] = 1
+        else:
+            A[row, index[joint.mimic.leader]] = joint.mimic.multiplier
+    return sympy.ImmutableMatrix(A)
+
+
 def all_symbol_names(joint_name: str) -> tuple[str, ...]:
     """Every symbol name a joint claims (used to detect clashes with parameter names)."""
     return tuple(symbol_name(g, joint_name) for g in GROUPS)
@@ -65,7 +101,7 @@ def coordinate_range(model: Model) -> tuple[np.ndarray, np.ndarray]:
     +-pi rad / +-0.5 m."""
     lower, upper = [], []
     defaults = model.parameter_values
-    for joint in model.joints:
+    for joint in model.coordinates:
         span = np.pi if joint.type is JointType.REVOLUTE else 0.5
         if joint.limits is not None:
             lo, hi = (float(b.xreplace(defaults)) for b in joint.limits)
@@ -74,4 +110,10 @@ def coordinate_range(model: Model) -> tuple[np.ndarray, np.ndarray]:
         else:
             lower.append(-span)
             upper.append(span)
+    for follower in (j for j in model.joints if j.mimic is not None and j.limits is not None):
+        # the follower's limits bound its leader: lo <= a q + b <= hi
+        k = [c.name for c in model.coordinates].index(follower.mimic.leader)
+        a, b = (float(sympy.sympify(v).xreplace(defaults)) for v in (follower.mimic.multiplier, follower.mimic.offset))
+        ends = sorted((float(limit.xreplace(defaults)) - b) / a for limit in follower.limits)
+        lower[k], upper[k] = max(lower[k], ends[0]), min(upper[k], ends[1])
     return np.array(lower), np.array(upper)

@@ -80,6 +80,18 @@ class DerivedParameter:
 
 
 @dataclass(frozen=True)
+class Mimic:
+    """A joint that follows another: q_follower = multiplier * q_leader + offset (URDF ``<mimic>``).
+
+    The follower adds no coordinate; its rates are multiplier times the leader's.
+    """
+
+    leader: str
+    multiplier: sympy.Expr
+    offset: sympy.Expr
+
+
+@dataclass(frozen=True)
 class Joint:
     """One joint of a serial chain and the link it moves.
 
@@ -102,6 +114,7 @@ class Joint:
         velocity_limit: maximal speed or None.
         effort_limit: maximal torque/force or None.
         active: actuated (True) or passive.
+        mimic: the coupling to a leader joint, None for a joint with its own coordinate.
     """
 
     name: str
@@ -115,6 +128,7 @@ class Joint:
     velocity_limit: sympy.Expr | None = None
     effort_limit: sympy.Expr | None = None
     active: bool = True
+    mimic: Mimic | None = None
 
 
 @dataclass(frozen=True)
@@ -369,11 +383,12 @@ class Model:
     def coordinates(self) -> tuple[Joint | Coordinate, ...]:
         """The generalized coordinates q, each with a ``name`` and a ``type`` (R or P).
 
-        A serial chain's coordinates are its joints; a parallel mechanism's are its actuated
-        joint variables, leg by leg (the passive ones follow from the loop closure).
+        A serial chain's coordinates are its joints but those that mimic another; a parallel
+        mechanism's are its actuated joint variables, leg by leg (the passive ones follow from
+        the loop closure).
         """
         if self.parallel is None:
-            return self.joints
+            return tuple(j for j in self.joints if j.mimic is None)
         out = []
         for leg in self.parallel.legs:
             for joint in leg.joints:

@@ -4,8 +4,10 @@ from __future__ import annotations
 
 from typing import Any
 
+import sympy
+
 from symkin.model.reader import X_AXIS, Z_AXIS, ZERO, Reader, describe, frame_ops, ops, position_limits, unit_axis
-from symkin.model.schema import Joint, JointType, Op, Rotation, Translation
+from symkin.model.schema import Joint, JointType, Mimic, Op, Rotation, Translation
 from symkin.model.yaml_source import Document, KeyPath
 
 #: Most joints of one chain (exact expressions grow with the chain; beyond this, derivation
@@ -41,7 +43,20 @@ def read_serial(r: Reader, section: Any) -> tuple[tuple[Joint, ...], tuple[Op, .
                "split the mechanism; symbolic expressions grow with every joint of a chain")
     check_unique(r, [(path, j.name) for j in joints], "joint")
     check_unique(r, [(path, j.link) for j in joints], "link")
+    _check_leaders(r, path + (("dh", "rows") if "dh" in section else ("chain",)), joints)
     return tuple(joints), base or (), tcp or ()
+
+
+def _check_leaders(r: Reader, path: KeyPath, joints: list[Joint]) -> None:
+    """Every ``mimic:`` names another joint of the chain that has a coordinate of its own."""
+    own = {j.name for j in joints if j.mimic is None}
+    for i, joint in enumerate(joints):
+        if joint.mimic is not None and joint.mimic.leader not in own:
+            what = ("the joint itself" if joint.mimic.leader == joint.name else
+                    "a joint that mimics another" if joint.mimic.leader in {j.name for j in joints} else
+                    "no joint of the chain")
+            r.fail(path + (i, "mimic", "joint"), f"joint '{joint.name}' mimics '{joint.mimic.leader}', {what}",
+                   f"name a joint with its own coordinate: {', '.join(sorted(own)) or '(none)'}")
 
 
 def check_unique(r: Reader, items: list[tuple[KeyPath, str]], what: str) -> None:
@@ -66,7 +81,7 @@ def _joint_type(r: Reader, path: KeyPath, value: Any) -> JointType | None:
     return None
 
 
-_JOINT_EXTRAS = ("link", "limits", "velocity_limit", "effort_limit", "active")
+_JOINT_EXTRAS = ("link", "limits", "velocity_limit", "effort_limit", "active", "mimic")
 
 
 def _dh_table(r: Reader, path: KeyPath, section: Any) -> list[Joint]:
@@ -198,4 +213,25 @@ def _joint_extras(r: Reader, path: KeyPath, item: dict[str, Any], default_link: 
         r.fail(path + ("active",), f"'active' must be true or false, got {describe(active)}", "write true or false")
         ok = False
     extras["active"] = active
+    extras["mimic"] = None
+    if "mimic" in item:
+        extras["mimic"] = _mimic(r, path + ("mimic",), item["mimic"])
+        ok = ok and extras["mimic"] is not None
     return extras if ok else None
+
+
+def _mimic(r: Reader, path: KeyPath, value: Any) -> Mimic | None:
+    """``mimic: {joint: LEADER, multiplier: a, offset: b}``: q = a q_leader + b (a defaults to 1, b to 0)."""
+    value = r.mapping(path, value, required=("joint",), optional=("multiplier", "offset"))
+    if value is None or "joint" not in value:
+        return None
+    leader = r.name(path + ("joint",), value["joint"])
+    multiplier = r.expr(path + ("multiplier",), value["multiplier"]) if "multiplier" in value else sympy.Integer(1)
+    offset = r.expr(path + ("offset",), value["offset"]) if "offset" in value else ZERO
+    if multiplier is not None and multiplier.is_zero:
+        r.fail(path + ("multiplier",), "a multiplier of 0 makes the joint fixed, not a follower",
+               "write a nonzero multiplier, or replace the joint by a fixed transform")
+        return None
+    if None in (leader, multiplier, offset):
+        return None
+    return Mimic(leader, multiplier, offset)

@@ -22,7 +22,9 @@ it), so M and G are those of the arm holding them.
   1.5707963267948966), so a URDF and the YAML model of the same robot derive the same
   expressions; the model's description says which reading was used;
 * ``<mimic joint multiplier offset>``: a follower off the chain is locked at
-  multiplier * (its leader's locked value) + offset;
+  multiplier * (its leader's locked value) + offset; a follower on the chain whose leader is
+  a moving joint of the chain becomes the coupling q = multiplier * q_leader + offset
+  (``mimic:`` of the model: no coordinate of its own);
 * gravity is ``[0, 0, -g]`` with a free parameter ``g = 9.81`` (ROS convention: z up);
   the task space is ``pose``.
 
@@ -30,8 +32,9 @@ The tip is the link named by the caller (``symkin derive --tip LINK``,
 ``load_model(path, tip=...)``), or else the leaf link behind the most moving joints (so
 sensor frames fixed to the base or to a link do not count, nor do mimic followers), if that
 leaf is unique; else the error lists the candidates.  Closed loops (a link with two parent
-joints), floating and planar joints, mimic joints on the chain (a coupling q_j = a q_i + b)
-and off-chain followers of a chain joint are refused with a located error.
+joints), floating and planar joints, followers on the chain of a joint off it, and
+off-chain followers of a chain joint (the links they move cannot be lumped into a chain
+link) are refused with a located error.
 
 The file is data: it is parsed with the standard library's expat parser, document type
 declarations (and so entities) are refused, and the file size and element count are
@@ -494,11 +497,12 @@ def _locked_values(r: _UrdfReader, robot: Element, joints: dict[str, _Joint], ch
         elif name in chain_joints:
             r.fail(joints[name].element, f"joint[{name}]", f"--lock names '{name}', a joint of the chain to the tip",
                    "lock only joints off the chain; to remove a chain joint, choose a nearer tip (--tip)")
+    leaders = {j.name for j in path if j.type != "fixed" and j.mimic is None}
     for j in path:
-        if j.mimic is not None and j.type != "fixed":
+        if j.mimic is not None and j.type != "fixed" and j.mimic[0] not in leaders:
             r.fail(j.element.find("mimic"), f"joint[{j.name}].mimic",
-                   f"joint '{j.name}' on the chain mimics '{j.mimic[0]}' (a coupling q = a q_leader + b), which "
-                   "symkin does not support yet",
+                   f"joint '{j.name}' on the chain mimics '{j.mimic[0]}', which is not a moving joint of the chain "
+                   "with a coordinate of its own (a coupling q = a q_leader + b needs its leader on the chain)",
                    "choose a tip before this joint (--tip), or remove its <mimic> element to make it independent")
     off_chain = []
     stack = [j for link in on_path for j in children[link] if j.name not in chain_joints]
@@ -595,6 +599,9 @@ def _moving_joint(r: _UrdfReader, j: _Joint, origin: list[dict[str, list[str]]])
             value = r.number(limit, attribute, key + ".limit", "0") if attribute in limit.attrib else None
             if value is not None and Fraction(value) > 0:
                 joint[field_name] = value
+    if j.mimic is not None:  # a follower on the chain: q = multiplier q_leader + offset, exact
+        leader, multiplier, offset = j.mimic
+        joint["mimic"] = {"joint": leader, "multiplier": str(multiplier), "offset": str(offset)}
     return joint
 
 

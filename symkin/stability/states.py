@@ -172,8 +172,8 @@ class _Sweep:
 
 def _serial_sweep(model: Model, rng: np.random.Generator) -> _Sweep:
     lower, upper = coordinate_range(model)
-    revolute = np.array([j.type is JointType.REVOLUTE for j in model.joints])
-    return _Sweep(tuple(j.name for j in model.joints), np.where(revolute, np.pi, 1.0), np.ones(model.dof), revolute,
+    revolute = np.array([j.type is JointType.REVOLUTE for j in model.coordinates])
+    return _Sweep(tuple(j.name for j in model.coordinates), np.where(revolute, np.pi, 1.0), np.ones(model.dof), revolute,
                   lambda q: {"q": q}, rng.uniform(np.maximum(lower, -np.pi), np.minimum(upper, np.pi)))
 
 

@@ -116,7 +116,9 @@ def model_mobility(model: Model) -> MobilityReport:
     """The mobility terms of ``model``: spatial (lambda = 6), bodies and joints from its chain or legs."""
     if model.parallel is None:
         dofs = tuple(1 for _ in model.joints)
-        return MobilityReport(model.name, "serial", SPATIAL, len(dofs) + 1, dofs, 0, 0, 1, len(dofs))
+        # a follower's motion is fixed by its leader's (a gear coupling): it takes a DoF like an idle one
+        followers = len(model.joints) - model.dof
+        return MobilityReport(model.name, "serial", SPATIAL, len(dofs) + 1, dofs, followers, 0, 1, model.dof)
     legs = model.parallel.legs
     dofs = tuple(j.type.dof for leg in legs for j in leg.joints)
     identical = idle_rods(model) + model.parallel.identical
