@@ -66,6 +66,10 @@ def test_a_stock_robot_file_derives_and_agrees_with_pinocchio(file, tip, dof):
     chain = [full.joints[full.getJointId(j.name)] for j in model.joints]
     columns = [joint.idx_v for joint in chain]
     frame = full.getFrameId(tip or model.joints[-1].link)
+    # <dynamics damping friction> as Pinocchio reads it (model.damping, model.friction), exactly
+    friction = {f.joint: (float(f.viscous), float(f.coulomb)) for f in model.friction}
+    assert [friction.get(j.name, (0.0, 0.0)) for j in model.joints] == \
+        [(full.damping[c], full.friction[c]) for c in columns], file
     rng = np.random.default_rng(13)
     for _ in range(5):
         q, qd = rng.uniform(-1.5, 1.5, dof), rng.uniform(-1.0, 1.0, dof)
@@ -91,3 +95,15 @@ def test_the_zoo_reads_every_serial_arm_the_package_ships():
     assert {file for file, _, _ in ZOO} <= shipped
     for family in ("panda", "z1", "ur3", "ur5", "ur10", "kinova", "talos", "baxter", "so100", "xarm"):
         assert any(family in file for file, _, _ in ZOO), family
+
+
+@pytest.mark.parametrize("file, tip, dof", ZOO, ids=[Path(f).stem for f, _, _ in ZOO])
+def test_symkin_crosscheck_passes_on_every_zoo_robot(file, tip, dof):
+    """Issue 13's acceptance, through the command's own code: its table for every zoo robot passes
+    (frames of every link, J, M, V, G, and tau where the file declares no joint friction)."""
+    from symkin.analysis.crosscheck import crosscheck
+
+    report = crosscheck(ROBOTS_DIR / file, samples=3, urdf={"tip": tip})
+    assert not report.failures, report.comparisons
+    assert {"fk", "jacobian_geometric", "mass_matrix", "coriolis_vector", "gravity_vector"} <= \
+        {c.quantity for c in report.comparisons}

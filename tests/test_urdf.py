@@ -123,6 +123,18 @@ def test_joints_off_the_chain_are_locked_and_their_links_lumped_into_the_chain(t
     np.testing.assert_allclose([float(v) for v in body.com], expected, rtol=0, atol=KINEMATICS)
 
 
+def test_joint_dynamics_become_friction(tmp_path):
+    text = ARM.replace('<limit lower="-1.5" upper="1.5" effort="10" velocity="3"/>',
+                       '<limit lower="-1.5" upper="1.5" effort="10" velocity="3"/><dynamics damping="0.25" friction="0.1"/>')
+    text = text.replace('<child link="l1"/>', '<child link="l1"/><dynamics damping="0" friction="0"/>')
+    model = load_model(_write(tmp_path, text))
+    assert [(f.joint, f.viscous, f.coulomb) for f in model.friction] == [("j2", sympy.Rational(1, 4),
+                                                                        sympy.Rational(1, 10))]
+    with pytest.raises(ModelError, match="negative viscous friction") as info:
+        load_model(_write(tmp_path, text.replace('damping="0.25"', 'damping="-0.25"'), "bad.urdf"))
+    assert info.value.problems[0].line is not None
+
+
 def test_mimic_joints_off_the_chain_follow_their_leader_and_on_the_chain_are_coupled(tmp_path):
     fingers = ARM.replace("</robot>", '<link name="f1"><inertial><origin xyz="0 0.01 0"/><mass value="0.1"/>'
                                       '</inertial></link><link name="f2"><inertial><mass value="0.1"/></inertial>'

@@ -112,6 +112,11 @@ def _sources(path: Path, reference_urdf: Path | None, urdf: Mapping[str, Any]) -
     return model, text, reduction
 
 
+def _link_frame(pin: Any, reference: Any, link: str) -> int:
+    """The id of the reference's frame of URDF link ``link`` (a body frame: a joint may share its name)."""
+    return reference.getFrameId(link, pin.FrameType.BODY)
+
+
 def _coupling(model: Any) -> np.ndarray:
     """The coupling matrix A (joints x coordinates) at the default parameters; the identity without followers."""
     A = coupling_matrix(model)
@@ -175,7 +180,7 @@ def crosscheck(path: str | Path, *, reference_urdf: str | Path | None = None, sa
         for name, value in reduction.locked.items():
             if reference.existJointName(name):
                 _set(q_rest, reference.joints[reference.getJointId(name)], value)
-        base, tip = reference.getFrameId(reduction.base), reference.getFrameId(reduction.tip)
+        base, tip = _link_frame(pin, reference, reduction.base), _link_frame(pin, reference, reduction.tip)
         pin.framesForwardKinematics(reference, data, q_rest)
         base_rotation = data.oMf[base].rotation.copy()  # the chain's base does not move: joints above it are locked
         gravity = np.array([float(g.xreplace(model.parameter_values)) for g in model.gravity])
@@ -204,7 +209,7 @@ def crosscheck(path: str | Path, *, reference_urdf: str | Path | None = None, sa
             pairs = {"fk": (values["fk"][k], (to_base * data.oMf[tip]).homogeneous)}
             for joint in model.joints:
                 pairs[f"frame {joint.link}"] = (getattr(values["frames"], f"base_T_{joint.link}")[k],
-                                                (to_base * data.oMf[reference.getFrameId(joint.link)]).homogeneous)
+                                                (to_base * data.oMf[_link_frame(pin, reference, joint.link)]).homogeneous)
             jacobian = pin.computeFrameJacobian(reference, data, q, tip, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
             pairs["jacobian_geometric"] = (values["jacobian_geometric"][k], rotate @ jacobian[:, columns] @ coupling)
             if model.bodies:

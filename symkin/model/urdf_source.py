@@ -25,6 +25,8 @@ it), so M and G are those of the arm holding them.
   multiplier * (its leader's locked value) + offset; a follower on the chain whose leader is
   a moving joint of the chain becomes the coupling q = multiplier * q_leader + offset
   (``mimic:`` of the model: no coordinate of its own);
+* ``<dynamics damping friction>`` of a chain joint: its friction (viscous = damping,
+  Coulomb = friction, as Pinocchio reads them into ``model.damping`` and ``model.friction``);
 * gravity is ``[0, 0, -g]`` with a free parameter ``g = 9.81`` (ROS convention: z up);
   the task space is ``pose``.
 
@@ -279,6 +281,7 @@ def urdf_document(text: str, file: str = "<string>", tip: str | None = None, *, 
     pending: list[dict[str, list[str]]] = []  # fixed frames since the last moving joint (or the root)
     # Links that move: (model link carrying them, frames from that link's frame to theirs).
     carried: dict[str, tuple[str, list[dict[str, list[str]]]]] = {}
+    friction: dict[str, dict[str, str]] = {}
     for j in path:
         origin = r.frame(j.element.find("origin"), f"joint[{j.name}].origin")
         if j.type == "fixed":
@@ -293,6 +296,12 @@ def urdf_document(text: str, file: str = "<string>", tip: str | None = None, *, 
             r.marks[("serial", "chain", len(chain))] = (j.element.line, j.element.column)
             chain.append(joint)
             pending = []
+            dynamics = j.element.find("dynamics")
+            if dynamics is not None:
+                coefficients = _friction(r, j, dynamics)
+                if coefficients:
+                    r.marks[("friction", j.name)] = (dynamics.line, dynamics.column)
+                    friction[j.name] = coefficients
         if chain:
             carried[j.child] = (chain[-1]["link"], list(pending))
     if not chain:
@@ -321,6 +330,8 @@ def urdf_document(text: str, file: str = "<string>", tip: str | None = None, *, 
                 bodies.append(body)
     if bodies:
         data["bodies"] = bodies
+    if friction:
+        data["friction"] = friction
     data["gravity"] = ["0", "0", "-g"]
     data["task_space"] = "pose"
     r.stop()
@@ -603,6 +614,15 @@ def _moving_joint(r: _UrdfReader, j: _Joint, origin: list[dict[str, list[str]]])
         leader, multiplier, offset = j.mimic
         joint["mimic"] = {"joint": leader, "multiplier": str(multiplier), "offset": str(offset)}
     return joint
+
+
+def _friction(r: _UrdfReader, j: _Joint, dynamics: Element) -> dict[str, str]:
+    """``<dynamics damping friction>`` as the model's friction: viscous = damping (N*m*s/rad or N*s/m),
+    Coulomb = friction (N*m or N); empty when both are zero."""
+    key = f"joint[{j.name}].dynamics"
+    coefficients = {name: r.number(dynamics, attribute, key, "0")
+                    for name, attribute in (("viscous", "damping"), ("coulomb", "friction"))}
+    return {name: value for name, value in coefficients.items() if value is not None and Fraction(value) != 0}
 
 
 def _plain(text: str) -> str:
