@@ -199,7 +199,7 @@ class Occupancy:
         return Estimate((inner + outer) / 2, (outer - inner) / 2, int(self.occupied.size), "occupancy", False)
 
 
-def _grid_geometry(lower: np.ndarray, upper: np.ndarray, cell: float) -> tuple[np.ndarray, np.ndarray, tuple[int, ...]]:
+def grid_geometry(lower: np.ndarray, upper: np.ndarray, cell: float) -> tuple[np.ndarray, np.ndarray, tuple[int, ...]]:
     counts = np.maximum(np.ceil((upper - lower) / cell).astype(int), 1)
     centre = (lower + upper) / 2
     start = centre - counts * cell / 2
@@ -244,7 +244,7 @@ def occupancy_from_cloud(cloud: WorkspaceCloud, cell: float | None = None) -> Oc
     """
     cell = default_cell(cloud) if cell is None else float(cell)
     lower, upper = cloud.points.min(axis=0), cloud.points.max(axis=0)
-    start, size, counts = _grid_geometry(lower, upper + 1e-12 * cell, cell)
+    start, size, counts = grid_geometry(lower, upper + 1e-12 * cell, cell)
     index = np.minimum(np.floor((cloud.points - start) / size).astype(int), np.array(counts) - 1)
     occupied = np.zeros(counts, dtype=bool)
     occupied[tuple(index.T)] = True
@@ -253,7 +253,7 @@ def occupancy_from_cloud(cloud: WorkspaceCloud, cell: float | None = None) -> Oc
 
 def grid_cells(box: tuple[np.ndarray, np.ndarray], cell: float) -> tuple[np.ndarray, np.ndarray, tuple, np.ndarray]:
     """(start, cell sizes, counts, cell centres (N, d)) of the Cartesian grid of ``box``."""
-    start, size, counts = _grid_geometry(np.asarray(box[0], float), np.asarray(box[1], float), cell)
+    start, size, counts = grid_geometry(np.asarray(box[0], float), np.asarray(box[1], float), cell)
     return start, size, counts, Occupancy(start, size, np.zeros(counts, dtype=bool)).centers().reshape(-1, len(counts))
 
 

@@ -264,6 +264,28 @@ def fail_on_bad_input(args: argparse.Namespace, err: Exception) -> None:
     args.parser.error(message)
 
 
+def sample_count(text: str) -> int:
+    """A sample count, also written like 1e9 (an argparse type)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"'{text}' is not a number of samples") from None
+    if not (value >= 1 and value == int(value)):
+        raise argparse.ArgumentTypeError(f"'{text}' is not a whole positive number of samples")
+    return int(value)
+
+
+def add_chunk_arguments(p: argparse.ArgumentParser, what: str) -> None:
+    """--scheduler, --workers, --chunk: ``what`` in chunks of points as Dask tasks (symkin.runtime.cluster)."""
+    p.add_argument("--scheduler", metavar="local|serial|tcp://HOST:PORT", default=None,
+                   help=f"{what} in chunks of --chunk points, as Dask tasks: on a LocalCluster (local), in this "
+                        "process (serial) or on the scheduler at an address; memory is bounded by the chunk, so -n "
+                        "may be 1e9 or more (default: all points at once, in this process)")
+    p.add_argument("--workers", type=int, default=None, metavar="K",
+                   help="LocalCluster: worker processes (default: one per core)")
+    p.add_argument("--chunk", type=int, default=2**20, metavar="N", help="points per task (default: %(default)s)")
+
+
 def add_orientation_argument(p: argparse.ArgumentParser) -> None:
     """--orientation: the constant orientation at which a rotating platform is analysed (workspace, gci)."""
     p.add_argument("--orientation", metavar="ROLL,PITCH,YAW",

@@ -39,7 +39,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     analysis_args.add_model_arguments(p)
     p.add_argument("--method", choices=("grid", "mc", "qmc", "adaptive"), default="qmc",
                    help="integrator (default: %(default)s)")
-    p.add_argument("-n", "--samples", type=_count, default=2**16, metavar="N",
+    p.add_argument("-n", "--samples", type=analysis_args.sample_count, default=2**16, metavar="N",
                    help="budget of integrand evaluations (default: %(default)s)")
     p.add_argument("--rtol", type=float, default=0.0,
                    help="adaptive: stop at this relative error estimate (default: spend the budget)")
@@ -53,26 +53,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     analysis_args.add_length_argument(p)
     analysis_args.add_orientation_argument(p)
     p.add_argument("--seed", type=int, default=None, help="seed of mc/qmc (default: fresh randomness)")
-    p.add_argument("--scheduler", metavar="local|serial|tcp://HOST:PORT", default=None,
-                   help="mc/qmc on the joint domain in chunks of --chunk points, as Dask tasks: on a LocalCluster "
-                        "(local), in this process (serial) or on the scheduler at an address; memory is bounded by "
-                        "the chunk, so -n may be 1e9 or more (default: all points at once, in this process)")
-    p.add_argument("--workers", type=int, default=None, metavar="K",
-                   help="LocalCluster: worker processes (default: one per core)")
-    p.add_argument("--chunk", type=int, default=2**20, metavar="N", help="points per task (default: %(default)s)")
+    analysis_args.add_chunk_arguments(p, "mc/qmc on the joint domain")
     p.add_argument("--map", metavar="FIGURE", help="also draw the local index over the workspace into FIGURE")
     p.set_defaults(run=run, parser=p)
-
-
-def _count(text: str) -> int:
-    """A sample count, also written like 1e9."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"'{text}' is not a number of samples") from None
-    if not (value >= 1 and value == int(value)):
-        raise argparse.ArgumentTypeError(f"'{text}' is not a whole positive number of samples")
-    return int(value)
 
 
 def _chunked(args: argparse.Namespace) -> int:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import time
 
 from symkin.cli import analysis_args
@@ -25,7 +26,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     analysis_args.add_model_arguments(p)
     p.add_argument("--design", action="append", default=[], metavar="NAME=VALUE[,...]",
                    help="a design to analyse and overlay (parameter values on top of --set); repeatable")
-    p.add_argument("-n", "--samples", type=int, default=40_000, metavar="N",
+    p.add_argument("-n", "--samples", type=analysis_args.sample_count, default=40_000, metavar="N",
                    help="joint configurations per design (default: %(default)s)")
     p.add_argument("--method", choices=("grid", "random", "sobol"), default=None,
                    help="joint-space sampling (default: grid up to 3 joints, else sobol)")
@@ -40,7 +41,43 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--unit", choices=tuple(analysis_args.LENGTH_UNITS), default="m",
                    help="length unit of the figures (default: m)")
     p.add_argument("--title", help="figure title")
+    analysis_args.add_chunk_arguments(p, "serial mechanisms: the joint-space samples (extent, occupancy, 1/kappa, "
+                                         "area/volume; figures from an evenly spaced subsample)")
     p.set_defaults(run=run, parser=p)
+
+
+def _chunked_study(args: argparse.Namespace, models: list, designs: list[dict[str, float]], method: str, limits,
+                   length: float | None, progress: Progress) -> list:
+    """--scheduler: every design sampled in chunks on one Dask client (symkin.analysis.chunked_workspace)."""
+    from symkin.analysis import chunked_workspace, mechanism, study, workspace
+    from symkin.runtime.cluster import check_scheduler, dask_client
+    from symkin.runtime.payload import ModelPayload
+
+    check_scheduler(args.scheduler, args.workers)
+    if args.orientation:
+        raise ValueError("--scheduler samples a serial mechanism's joint space (no --orientation)")
+    with analysis_args.generated_directory(args.model, ("numpy",), analysis_args.ANALYSIS_OUTPUTS_BY_KIND) as d:
+        payload = ModelPayload.from_directory(d)
+    where = {"serial": "in this process", "local": "on a LocalCluster"}.get(args.scheduler, f"on {args.scheduler}")
+    found = []
+    with (dask_client(args.scheduler, args.workers) if args.scheduler != "serial" else _no_client()) as client:
+        for values, model in zip(designs, models):
+            parameters = {**analysis_args.parse_assignments(args.assignments), **values}
+            spec = chunked_workspace.CloudSpec(tuple(sorted(parameters.items())), tuple(sorted(limits.items())),
+                                               length, method, args.samples, args.seed)
+            result = chunked_workspace.chunked_workspace(payload, spec, chunk=args.chunk, scheduler=args.scheduler,
+                                                         client=client, progress=progress)
+            found.append(study.WorkspaceStudy(result.cloud, f"{result.configurations} configurations ({method}, "
+                                                            f"in chunks of {args.chunk})", result.inv_kappa, None,
+                                              chunked_workspace.report(result, args.chunk, where),
+                                              workspace.limit_curves(model, limits=limits)
+                                              if mechanism.joint_limits(model, limits).shape[0] == 2 else []))
+    return found
+
+
+@contextlib.contextmanager
+def _no_client():
+    yield None
 
 
 def run(args: argparse.Namespace) -> int:
@@ -58,12 +95,19 @@ def run(args: argparse.Namespace) -> int:
     layers, grids = [], []
     start = time.perf_counter()
     with Progress(base.name) as progress:
-        for values, model in zip(designs, models):
+        studies: list = []
+        if args.scheduler is not None:
+            try:
+                studies = _chunked_study(args, models, designs, method, limits, length, progress)
+            except ValueError as err:
+                analysis_args.fail_on_bad_input(args, err)
+        for k, (values, model) in enumerate(zip(designs, models)):
             label = analysis_args.design_label(base, values, args.unit)
             progress(f"sampling {label}")
             try:
-                found = study.study_workspace(model, samples=args.samples, method=method, seed=args.seed,
-                                              limits=limits, length=length, progress=progress)
+                found = studies[k] if studies else study.study_workspace(
+                    model, samples=args.samples, method=method, seed=args.seed, limits=limits, length=length,
+                    progress=progress)
             except ValueError as err:
                 analysis_args.fail_on_bad_input(args, err)
             if found.grid is not None:
