@@ -87,9 +87,30 @@ def test_cli_chunked_gci(capsys):
     assert abs(measure - AREA) <= 3 * error
 
 
+def test_the_cartesian_domain_in_chunks(payload):
+    """Reachability by inverse kinematics over a Cartesian box: the planar arm's area within its error bar, and
+    the rotating Stewart platform (at its home orientation) against the in-memory integrator within both bars."""
+    from symkin.analysis import inverse, study, workspace
+
+    model = payload.load()
+    box = tuple(tuple(float(v) for v in b) for b in workspace.bounding_box(model))
+    area = integrate_chunked(payload, IntegrandSpec(domain="cartesian", box=box), "qmc", 2**15, seed=5, chunk=5000,
+                             scheduler="serial").component(1)
+    assert abs(area.value - AREA) <= 3 * area.error
+    stewart_payload = ModelPayload.from_directory(GENERATED_DIR / "stewart")
+    held = study.at_orientation(stewart_payload.load(), None)
+    box = tuple(tuple(float(v) for v in b) for b in workspace.bounding_box(held))
+    chunked_gci = integrate_chunked(stewart_payload, IntegrandSpec(length=0.1, domain="cartesian", box=box), "qmc", 2**15,
+                                    seed=6,
+                                    chunk=5000, scheduler="serial").ratio(0, 1)
+    in_memory = gci(held, domain="cartesian", inverse=inverse.inverse_kinematics_for(held), samples=2**15, seed=6,
+                    length=0.1, box=tuple(np.array(b) for b in box))
+    assert abs(chunked_gci.value - in_memory.value.value) <= 3 * (chunked_gci.error + in_memory.value.error)
+
+
 @pytest.mark.parametrize("arguments, message", [
-    (["--scheduler", "serial", "--domain", "cartesian"], "--scheduler integrates mc or qmc over the joint domain"),
-    (["--scheduler", "serial", "--method", "grid"], "--scheduler integrates mc or qmc"),
+    (["--scheduler", "serial", "--map", "x.png"], "--scheduler integrates by mc or qmc (no --map)"),
+    (["--scheduler", "serial", "--method", "grid"], "--scheduler integrates by mc or qmc"),
     (["--scheduler", "somewhere"], "--scheduler 'somewhere'"),
     (["-n", "1.5"], "not a whole positive number"),
 ])

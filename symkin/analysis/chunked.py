@@ -48,15 +48,20 @@ METHODS = ("qmc", "mc")
 
 @dataclass(frozen=True)
 class IntegrandSpec:
-    """What a worker needs besides the model to rebuild the integrand of
-    :func:`~symkin.analysis.global_indices.joint_space_integrand` (the joint domain).
+    """What a worker needs besides the model to rebuild the integrand: that of
+    :func:`~symkin.analysis.global_indices.joint_space_integrand` (the joint domain) or of
+    :func:`~symkin.analysis.global_indices.cartesian_integrand` (a Cartesian box, reachability by
+    the model's inverse kinematics).
 
     Attributes:
         parameters: parameter values the model is bound to ((name, value) pairs).
         index: name of a :mod:`symkin.analysis.conditioning` function (None: the measure alone).
-        measure: ``cartesian`` (dW = |det J| dq) or ``joint``.
+        measure: ``cartesian`` (dW = |det J| dq) or ``joint`` (joint domain only).
         limits: joint-limit overrides ((joint, (lower, upper)) pairs).
         length: characteristic length for a task space that mixes translations and rotations.
+        domain: ``joint`` or ``cartesian``.
+        box: the Cartesian box ((lower...), (upper...)), computed once by the caller (Cartesian domain).
+        orientation: roll, pitch, yaw of a rotating platform held at a constant orientation, or None.
     """
 
     parameters: tuple[tuple[str, float], ...] = ()
@@ -64,15 +69,25 @@ class IntegrandSpec:
     measure: str = "cartesian"
     limits: tuple[tuple[str, tuple[float, float]], ...] = ()
     length: float | None = None
+    domain: str = "joint"
+    box: tuple[tuple[float, ...], tuple[float, ...]] | None = None
+    orientation: tuple[float, float, float] | None = None
 
     def build(self, model: Any) -> Any:
-        from symkin.analysis import conditioning
-        from symkin.analysis.global_indices import joint_space_integrand
+        from symkin.analysis import conditioning, inverse, study
+        from symkin.analysis.global_indices import cartesian_integrand, joint_space_integrand
 
         bound = model.bind(**dict(self.parameters)) if self.parameters else model
         index = getattr(conditioning, self.index) if self.index is not None else None
-        return joint_space_integrand(bound, index=index, measure=self.measure, limits=dict(self.limits) or None,
-                                     length=self.length)
+        limits = dict(self.limits) or None
+        if self.domain == "joint":
+            return joint_space_integrand(bound, index=index, measure=self.measure, limits=limits, length=self.length)
+        held = study.at_orientation(bound, self.orientation)
+        ik = inverse.inverse_kinematics_for(held)
+        if ik is None or self.box is None:
+            raise ValueError(f"{model.name}: the Cartesian domain needs an inverse kinematics and a box")
+        box = (np.array(self.box[0], dtype=float), np.array(self.box[1], dtype=float))
+        return cartesian_integrand(held, ik, box, index=index, limits=limits, length=self.length)
 
 
 def _qmc_chunk(payload: ModelPayload, spec: IntegrandSpec, seed: int, replicate: int, start: int,
@@ -109,7 +124,7 @@ def integrate_chunked(payload: ModelPayload, spec: IntegrandSpec, method: str, s
                       chunk: int = CHUNK, replicates: int = QMC_REPLICATES, scheduler: str = "local",
                       workers: int | None = None, client: Any = None,
                       progress: Callable[[int, int], None] = lambda done, total: None) -> IntegralEstimate:
-    """Integrate the integrand of ``spec`` over the model's joint limits with ``samples`` points in chunks.
+    """Integrate the integrand of ``spec`` (its joint limits or Cartesian box) with ``samples`` points in chunks.
 
     Args:
         method: ``qmc`` (replicates x 2^m points, m as large as fits the budget) or ``mc``.

@@ -198,26 +198,34 @@ def _integrand(model: GeneratedModel, *, domain: str, measure: str, index: Index
                length: float | str | None, inverse: InverseKinematics | None,
                box: tuple[np.ndarray, np.ndarray] | None) -> tuple[Integrand, str]:
     if domain == "joint":
-        description = ("joint space, dW = |det J| dq (Cartesian measure, with multiplicity where the map is "
-                       "not one-to-one)" if measure == "cartesian" else "joint space, dW = dq (joint measure)")
-        if mechanism.is_parallel(model):
-            description = ("joint space, dW = |det J| dq over the configurations in the working mode "
-                           "(ik(fk(q)) = q, one-to-one): the Cartesian measure" if measure == "cartesian" else
-                           "joint space, dW = dq over the configurations in the working mode (joint measure)")
-        return joint_space_integrand(model, index=index, measure=measure, limits=limits, length=length), description
+        integrand = joint_space_integrand(model, index=index, measure=measure, limits=limits, length=length)
+        return integrand, domain_description(model, domain, measure)
     if domain == "cartesian":
         if inverse is None:
             raise ValueError("the Cartesian domain needs an inverse kinematics (inverse=...)")
         if box is None:
             box = bounding_box(model, limits=limits)
-        description = "Cartesian box with reachability from inverse kinematics, dW = 1_W(x) dx"
-        if isinstance(model, parallel.ConstantOrientation):
-            description += (f" (platform centres at roll, pitch, yaw = {parallel.orientation_text(model)}; "
-                            "in the assembly mode of the home pose: sign of det J^-1)")
-        elif mechanism.is_parallel(model):
-            description += " (in the working mode: fk(ik(x)) = x)"
-        return cartesian_integrand(model, inverse, box, index=index, limits=limits, length=length), description
+        integrand = cartesian_integrand(model, inverse, box, index=index, limits=limits, length=length)
+        return integrand, domain_description(model, domain, measure)
     raise ValueError(f"unknown domain '{domain}'; choose one of {', '.join(DOMAINS)}")
+
+
+def domain_description(model: GeneratedModel, domain: str, measure: str) -> str:
+    """The integration domain and measure of a global index, in words (for reports)."""
+    if domain == "joint":
+        if mechanism.is_parallel(model):
+            return ("joint space, dW = |det J| dq over the configurations in the working mode "
+                    "(ik(fk(q)) = q, one-to-one): the Cartesian measure" if measure == "cartesian" else
+                    "joint space, dW = dq over the configurations in the working mode (joint measure)")
+        return ("joint space, dW = |det J| dq (Cartesian measure, with multiplicity where the map is "
+                "not one-to-one)" if measure == "cartesian" else "joint space, dW = dq (joint measure)")
+    description = "Cartesian box with reachability from inverse kinematics, dW = 1_W(x) dx"
+    if isinstance(model, parallel.ConstantOrientation):
+        description += (f" (platform centres at roll, pitch, yaw = {parallel.orientation_text(model)}; "
+                        "in the assembly mode of the home pose: sign of det J^-1)")
+    elif mechanism.is_parallel(model):
+        description += " (in the working mode: fk(ik(x)) = x)"
+    return description
 
 
 def global_index(model: GeneratedModel, *, method: str = "qmc", samples: int = 2**16, seed: int | None = None,

@@ -60,23 +60,32 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def _chunked(args: argparse.Namespace) -> int:
     """--scheduler: the integral in chunks on Dask (:mod:`symkin.analysis.chunked`)."""
+    from symkin.analysis import inverse, study, workspace
     from symkin.analysis.chunked import IntegrandSpec, integrate_chunked
-    from symkin.analysis.global_indices import GlobalIndex
+    from symkin.analysis.global_indices import GlobalIndex, domain_description
     from symkin.runtime.cluster import check_scheduler
     from symkin.runtime.payload import ModelPayload
 
     try:
         check_scheduler(args.scheduler, args.workers)
-        if args.method not in ("mc", "qmc") or args.domain == "cartesian" or args.map or args.orientation:
-            raise ValueError("--scheduler integrates mc or qmc over the joint domain (no --domain cartesian, "
-                             "--orientation or --map)")
+        if args.method not in ("mc", "qmc") or args.map:
+            raise ValueError("--scheduler integrates by mc or qmc (no --map)")
         with analysis_args.generated_directory(args.model, ("numpy",), analysis_args.ANALYSIS_OUTPUTS_BY_KIND) as d:
             payload = ModelPayload.from_directory(d)
         values = analysis_args.parse_assignments(args.assignments)
         model = payload.load().bind(**values) if values else payload.load()
         limits = analysis_args.parse_limits(args.limits)
+        orientation = analysis_args.parse_orientation(args.orientation)
+        held = study.at_orientation(model, orientation)
+        domain = _domain(args, held)
+        box = None
+        if domain == "cartesian":
+            if inverse.inverse_kinematics_for(held) is None:
+                raise ValueError(f"{model.name}: no inverse kinematics is available for the Cartesian domain")
+            box = tuple(tuple(float(v) for v in b) for b in workspace.bounding_box(held, limits=limits))
         spec = IntegrandSpec(tuple(sorted(values.items())), INDICES[args.index], args.measure,
-                             tuple(sorted(limits.items())), analysis_args.resolve_length(model, args.length, limits))
+                             tuple(sorted(limits.items())), analysis_args.resolve_length(held, args.length, limits),
+                             domain, box, None if orientation is None else tuple(orientation))
         start = time.perf_counter()
         with Progress(model.name) as progress:
             result = integrate_chunked(payload, spec, args.method, args.samples, seed=args.seed or 0,
@@ -87,10 +96,11 @@ def _chunked(args: argparse.Namespace) -> int:
     seconds = time.perf_counter() - start
     chunks = -(-result.evaluations // args.chunk) if args.method == "mc" else None
     where = {"serial": "in this process", "local": "on a LocalCluster"}.get(args.scheduler, f"on {args.scheduler}")
+    space = domain_description(held, domain, args.measure)
     found = GlobalIndex(result.ratio(0, 1), result.component(1), result,
-                        f"joint space, dW = {'|det J| dq' if args.measure == 'cartesian' else 'dq'}, in chunks of "
-                        f"at most {args.chunk} points {where}" + (f" ({chunks} chunks)" if chunks else ""))
-    _print(args, model, found, seconds, None)
+                        f"{space}, in chunks of at most {args.chunk} points {where}"
+                        + (f" ({chunks} chunks)" if chunks else ""))
+    _print(args, held, found, seconds, None)
     return 0
 
 
@@ -106,8 +116,19 @@ def _print(args: argparse.Namespace, model: GeneratedModel, result, seconds: flo
         print(f"  map: {path}")
 
 
+def _domain(args: argparse.Namespace, model: GeneratedModel) -> str:
+    """--domain, by default joint, or cartesian for a platform that also rotates (its only domain)."""
+    from symkin.analysis import parallel
+
+    held = isinstance(model, parallel.ConstantOrientation)
+    if held and args.domain == "joint":
+        raise ValueError(f"{model.name}: a platform that also rotates has no closed-form fk: its GCI is "
+                         "integrated over the constant-orientation workspace only (--domain cartesian)")
+    return args.domain or ("cartesian" if held else "joint")
+
+
 def run(args: argparse.Namespace) -> int:
-    from symkin.analysis import conditioning, global_indices, inverse, mechanism, parallel, plots, study, workspace
+    from symkin.analysis import conditioning, global_indices, inverse, mechanism, plots, study, workspace
     from symkin.analysis.integrators import STATISTICAL
 
     if args.scheduler is not None:
@@ -117,11 +138,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         model, limits = analysis_args.model_from_args(args)
         model = study.at_orientation(model, analysis_args.parse_orientation(args.orientation))
-        held = isinstance(model, parallel.ConstantOrientation)
-        if held and args.domain == "joint":
-            raise ValueError(f"{model.name}: a platform that also rotates has no closed-form fk: its GCI is "
-                             "integrated over the constant-orientation workspace only (--domain cartesian)")
-        args.domain = args.domain or ("cartesian" if held else "joint")
+        args.domain = _domain(args, model)
         length = analysis_args.resolve_length(model, args.length, limits)
         ik = inverse.inverse_kinematics_for(model) if args.domain == "cartesian" else None
         if args.domain == "cartesian" and ik is None:
