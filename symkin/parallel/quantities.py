@@ -235,7 +235,8 @@ def _fk(d: Derivation) -> FunctionSpec:
     )
 
 
-def _square(d: Derivation, name: str) -> tuple[sympy.Matrix, sympy.Matrix]:
+def square_constraint_jacobians(d: Derivation, name: str) -> tuple[sympy.Matrix, sympy.Matrix]:
+    """(J_x, J_q) of a model with as many legs as task coordinates (``name``: what needs them, for the error)."""
     J_x, J_q = d[_constraint_jacobian_matrices]
     if J_x.shape[0] != J_x.shape[1]:
         raise DerivationError(f"model '{d.model.name}': {name} needs as many legs as task coordinates")
@@ -244,7 +245,7 @@ def _square(d: Derivation, name: str) -> tuple[sympy.Matrix, sympy.Matrix]:
 
 @quantity("jacobian", "task Jacobian J = J_x^-1 J_q of the platform: pdot = J qdot", mechanism=PARALLEL)
 def _jacobian(d: Derivation) -> FunctionSpec:
-    J_x, J_q = _square(d, "the task Jacobian")
+    J_x, J_q = square_constraint_jacobians(d, "the task Jacobian")
     J = determinant.adjugate(J_x) * J_q / determinant.determinant(J_x)
     return make_function(
         d.model, "jacobian", "Task Jacobian of the platform.",
@@ -257,7 +258,7 @@ def _jacobian(d: Derivation) -> FunctionSpec:
 
 @quantity("inverse_jacobian", "inverse Jacobian J^-1 = J_q^-1 J_x: qdot = J^-1 pdot", mechanism=PARALLEL)
 def _inverse_jacobian(d: Derivation) -> FunctionSpec:
-    J_x, J_q = _square(d, "the inverse Jacobian")
+    J_x, J_q = square_constraint_jacobians(d, "the inverse Jacobian")
     J_inv = sympy.Matrix([[J_x[i, j] / J_q[i, i] for j in range(J_x.shape[1])] for i in range(J_x.shape[0])])
     return make_function(
         d.model, "inverse_jacobian", "Inverse Jacobian of the platform.",
@@ -272,7 +273,7 @@ def _inverse_jacobian(d: Derivation) -> FunctionSpec:
 @quantity("singularities", "det J_q (zero at workspace-boundary singularities) and det J_x (interior)",
           mechanism=PARALLEL)
 def _singularities(d: Derivation) -> FunctionSpec:
-    J_x, J_q = _square(d, "the singularity measures")
+    J_x, J_q = square_constraint_jacobians(d, "the singularity measures")
     det_q = sympy.Mul(*[J_q[i, i] for i in range(J_q.shape[0])])
     return make_function(
         d.model, "singularities", "Singularity measures of both types.",

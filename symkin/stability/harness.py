@@ -30,7 +30,9 @@ q moved off the assembled state by up to :data:`OFF_MANIFOLD`.
 
 from __future__ import annotations
 
+import itertools
 import tempfile
+import zlib
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
@@ -189,12 +191,18 @@ def run_stability(model: Model, *, samples: int = 32, float32_samples: int = 16,
         run = StabilityRun(model.name, tuple(names), skipped, [])
         ik = getattr(loaded, "ik", None) if model.parallel is not None else None
 
+        calls = itertools.count()
+
         def states_at(count: int, scale: float = 1.0) -> dict[str, np.ndarray]:
-            """Random states, plus any input group they lack (passive joint variables) in [-0.5, 0.5]."""
+            """Random states, plus any input group they lack in [-0.5, 0.5]: the passive joint variables s from
+            the run's stream, every other group (forces, efforts) from a generator of its own (seed, group,
+            call), so that a quantity with a new input group leaves the states of the others as they were."""
             states = random_states(model, count, rng, scale=scale, ik=ik)
+            call = next(calls)
             for group, size in sizes.items():
                 if group not in states:
-                    states[group] = rng.uniform(-0.5, 0.5, size=(count, size))
+                    source = rng if group == "s" else np.random.default_rng([seed, zlib.crc32(group.encode()), call])
+                    states[group] = source.uniform(-0.5, 0.5, size=(count, size))
             return states
 
         def check(family: str, states: dict[str, np.ndarray], parameters: dict[str, float], label: str = "",
