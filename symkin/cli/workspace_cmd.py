@@ -35,6 +35,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--map", metavar="FIGURE", help="also draw 1/kappa over the workspace into FIGURE "
                                                    "(first design); a platform at a constant orientation also "
                                                    "gets FIGURE-sections (x-y, x-z, y-z through the home position)")
+    p.add_argument("--force-map", metavar="FIGURE",
+                   help="also draw the isotropic force (the largest force rendered in every direction, from the "
+                        "actuators' effort limits) over the workspace of the first design into FIGURE; "
+                        "translational task spaces only")
+    p.add_argument("--effort-limit", metavar="T[,T...]",
+                   help="actuator effort limits for --force-map (N m or N; one value for all, or one per actuator; "
+                        "default: the model's effort limits)")
     p.add_argument("--no-figure", action="store_true", help="print the report only")
     analysis_args.add_length_argument(p)
     analysis_args.add_orientation_argument(p)
@@ -139,8 +146,61 @@ def run(args: argparse.Namespace) -> int:
                 path = plots.plot_index_map(layer.cloud, values, args.map, outline=layer.outline, scale=scale,
                                             unit=args.unit, title=title)
             print(f"1/kappa map: {path}")
+        if args.force_map:
+            progress("isotropic force")
+            try:
+                path, summary = _force_map(args, models[0], layers[0][0], limits, scale)
+            except ValueError as err:
+                analysis_args.fail_on_bad_input(args, err)
+            print(f"isotropic force: {summary}")
+            print(f"force map: {path}")
     print(f"done in {time.perf_counter() - start:.2f} s")
     return 0
+
+
+def _effort_limits(args: argparse.Namespace, model) -> list[float]:
+    """--effort-limit, else the model's effort limits (all of them declared)."""
+    count = len(model.info.coordinates)
+    if args.effort_limit:
+        try:
+            values = [float(v) for v in args.effort_limit.split(",")]
+        except ValueError:
+            raise ValueError(f"--effort-limit '{args.effort_limit}': write numbers separated by commas") from None
+        if len(values) not in (1, count):
+            raise ValueError(f"--effort-limit: give one value or {count} (one per actuator), got {len(values)}")
+        return values * count if len(values) == 1 else values
+    declared = [c.effort_limit for c in model.info.coordinates]
+    if None in declared:
+        raise ValueError(f"{model.name} declares no effort limit for every actuator: give --effort-limit T[,T...]")
+    return [float(v) for v in declared]
+
+
+def _force_map(args: argparse.Namespace, model, layer, limits, scale: float):
+    """(figure path, summary) of the isotropic force over the workspace (symkin.analysis.forces)."""
+    import numpy as np
+
+    from symkin.analysis import forces, mechanism, plots, study, workspace
+
+    if not mechanism.is_positional(model):
+        raise ValueError(f"--force-map: the task space of {model.name} ({', '.join(mechanism.task_space(model))}) "
+                         "is not translations only")
+    efforts = _effort_limits(args, model)
+    title = f"isotropic force over the workspace of {model.name} (effort limits {', '.join(f'{e:g}' for e in efforts)})"
+    if mechanism.is_parallel(model):
+        grid, values = study.cartesian_index_grid(model, workspace.bounding_box(model, limits=limits), limits, None,
+                                                  lambda J: forces.isotropic_force(J, efforts))
+        path = plots.plot_index_slices(grid, values, args.force_map, label="isotropic force [N]", title=title,
+                                       scale=scale, unit=args.unit)
+        reachable = values[grid.occupied]
+    else:
+        values = forces.isotropic_force(mechanism.jacobian(model, layer.cloud.q), efforts)
+        path = plots.plot_index_map(layer.cloud, values, args.force_map, outline=layer.outline, label="isotropic "
+                                    "force [N]", title=title, scale=scale, unit=args.unit)
+        reachable = values
+    finite = reachable[np.isfinite(reachable)]
+    summary = (f"min {finite.min():.4g} N, median {np.median(finite):.4g} N, max {finite.max():.4g} N over the "
+               "workspace")
+    return path, summary
 
 
 def sections_path(path: str) -> str:
