@@ -11,10 +11,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from conftest import GENERATED_DIR
+from conftest import GENERATED_DIR, ROOT
 from symkin import load
 from symkin.analysis import forces, mechanism
 from symkin.cli import main
+from symkin.errors import ModelError
+from symkin.model import model_from_text
 from tolerances import KINEMATICS
 
 EPS = np.finfo(float).eps
@@ -74,3 +76,25 @@ def test_cli_force_map_bad_input_exits_with_code_2(tmp_path, capsys, model, argu
               str(tmp_path / "f.png"), *arguments])
     assert exit_info.value.code == 2
     assert message in capsys.readouterr().err
+
+
+def test_a_delta_that_declares_its_actuators_effort_limits_needs_no_option(tmp_path, capsys):
+    text = (ROOT / "models" / "delta.yaml").read_text().replace(
+        "actuator_limits: [deg(-90), deg(60)]",
+        "actuator_limits: [deg(-90), deg(60)]\n    actuator_effort_limit: 0.5\n    actuator_velocity_limit: 20")
+    model = tmp_path / "delta.yaml"
+    model.write_text(text)
+    assert main(["workspace", str(model), "--no-figure", "--force-map", str(tmp_path / "f.png")]) == 0
+    declared = capsys.readouterr().out.split("isotropic force: ")[1].split("\n")[0]
+    assert main(["workspace", str(GENERATED_DIR / "delta"), "--no-figure", "--force-map", str(tmp_path / "g.png"),
+                 "--effort-limit", "0.5"]) == 0
+    assert capsys.readouterr().out.split("isotropic force: ")[1].split("\n")[0] == declared
+    passive = text.replace("    actuator_effort_limit: 0.5\n", "")
+    assert [c.effort_limit for c in model_from_text(passive).coordinates] == [None] * 3
+
+
+def test_an_effort_limit_on_a_passive_leg_joint_is_a_located_error():
+    with pytest.raises(ModelError, match="'effort_limit' is the actuator's") as error:
+        model_from_text((ROOT / "models" / "stewart.yaml").read_text().replace(
+            "type: S}", "type: S, effort_limit: 100}", 1))
+    assert error.value.problems[0].line is not None

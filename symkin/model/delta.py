@@ -33,6 +33,10 @@ the rod's elevation in the leg plane).  The U joints and ball joints of haptic D
 some +/-30 to 60 deg; the workspace analyses drop the poses beyond the declared ranges
 (:mod:`symkin.analysis.passive`).
 
+Actuators: ``actuator_limits`` bound every actuated angle, ``actuator_effort_limit`` and
+``actuator_velocity_limit`` are every actuator's largest torque and speed (the coordinates'
+``effort_limit`` and ``velocity_limit``).
+
 Branches: the inverse kinematics takes the knee pointing outwards (``ik_branch: negative``:
 the platform joint B_i is reached from the elbow C_i by a negative rotation about the
 actuator axis -y_Ai); the forward kinematics the TCP hanging below its elbows.
@@ -46,12 +50,12 @@ from typing import Any
 import sympy
 
 from symkin.model.leg_joints import leg_joint_limits, variable_names
-from symkin.model.reader import ZERO, Reader, describe, ops, position_limits
+from symkin.model.reader import ZERO, Reader, describe, ops, position_limits, positive_limit
 from symkin.model.schema import Leg, LegJoint, LegJointType, Rotation, Translation, Vec3
 from symkin.model.yaml_source import KeyPath
 
 DELTA_KEYS = ("base", "platform", "upper_arm", "lower_arm", "leg_angles", "actuator", "actuator_limits",
-              "elbow_limits", "wrist_limits")
+              "actuator_velocity_limit", "actuator_effort_limit", "elbow_limits", "wrist_limits")
 JOINT_AT = ("vertex", "side_midpoint")
 
 MINUS_Y: Vec3 = (ZERO, sympy.Integer(-1), ZERO)
@@ -108,6 +112,12 @@ def delta_legs(r: Reader, path: KeyPath, value: Any) -> tuple[tuple[Leg, ...], i
         limits = (bounds,)
     elbow, wrist = (leg_joint_limits(r, path + (key,), section[key], LegJointType.U) if key in section else ()
                     for key in ("elbow_limits", "wrist_limits"))
+    actuator = {}
+    for key in ("velocity_limit", "effort_limit"):
+        if f"actuator_{key}" in section:
+            actuator[key] = positive_limit(r, path + (f"actuator_{key}",), section[f"actuator_{key}"])
+            if actuator[key] is None:
+                return None
     if r_base is None or r_platform is None or None in lengths or angles is None or prefix is None \
             or elbow is None or wrist is None:
         return None
@@ -116,7 +126,7 @@ def delta_legs(r: Reader, path: KeyPath, value: Any) -> tuple[tuple[Leg, ...], i
     for i, phi in enumerate(angles):
         n = i + 1
         joints = (
-            _joint(f"{prefix}{n}", LegJointType.R, (MINUS_Y,), (), active=0, limits=limits),
+            _joint(f"{prefix}{n}", LegJointType.R, (MINUS_Y,), (), active=0, limits=limits, **actuator),
             _joint(f"elbow{n}", LegJointType.U, (MINUS_Y, PLUS_Z), ops(Translation((upper, ZERO, ZERO))),
                    limits=elbow),
             _joint(f"wrist{n}", LegJointType.U, (PLUS_Z, MINUS_Y), ops(Translation((lower, ZERO, ZERO))),
@@ -134,8 +144,8 @@ def delta_legs(r: Reader, path: KeyPath, value: Any) -> tuple[tuple[Leg, ...], i
 
 
 def _joint(name: str, jtype: LegJointType, axes: tuple[Vec3, ...], origin: tuple, active: int | None = None,
-           limits: tuple = ()) -> LegJoint:
-    return LegJoint(name, jtype, axes, origin, variable_names(name, jtype), active, limits=limits)
+           limits: tuple = (), **actuator: Any) -> LegJoint:
+    return LegJoint(name, jtype, axes, origin, variable_names(name, jtype), active, limits=limits, **actuator)
 
 
 def _length(r: Reader, path: KeyPath, value: Any) -> sympy.Expr | None:

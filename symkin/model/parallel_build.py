@@ -27,13 +27,24 @@ import sympy
 from symkin.model import coordinates
 from symkin.model.delta import delta_legs
 from symkin.model.leg_joints import leg_joint_limits, variable_names
-from symkin.model.reader import X_AXIS, Y_AXIS, Z_AXIS, ZERO, Reader, describe, frame_ops, ops, unit_axis
+from symkin.model.reader import (
+    X_AXIS,
+    Y_AXIS,
+    Z_AXIS,
+    ZERO,
+    Reader,
+    describe,
+    frame_ops,
+    ops,
+    positive_limit,
+    unit_axis,
+)
 from symkin.model.schema import Leg, LegJoint, LegJointType, Op, Parallel, PlatformMotion, Rotation, Translation, Vec3
 from symkin.model.yaml_source import KeyPath
 
 PARALLEL_KEYS = ("delta", "motion", "chains", "legs", "fk_branch", "mobility", "home")
 LEG_KEYS = ("name", "chain", "joints", "base", "platform", "ik_branch")
-JOINT_KEYS = ("name", "type", "axis", "axes", "origin", "active", "offset", "limits")
+JOINT_KEYS = ("name", "type", "axis", "axes", "origin", "active", "offset", "limits", "velocity_limit", "effort_limit")
 BRANCHES = {"positive": 1, "negative": -1}
 #: Task coordinates p of a parallel mechanism by platform motion (names of task_space components).
 TASK_COORDINATES = {PlatformMotion.TRANSLATION: ("x", "y", "z"),
@@ -250,11 +261,21 @@ def _joint(r: Reader, path: KeyPath, item: Any, number: int) -> LegJoint | None:
             return None
         offset = r.expr(path + ("offset",), item["offset"])
     limits = leg_joint_limits(r, path + ("limits",), item["limits"], jtype) if "limits" in item else ()
+    actuator = {}
+    for key in ("velocity_limit", "effort_limit"):
+        if key in item:
+            if not active:
+                r.fail(path + (key,), f"'{key}' is the actuator's: it applies to an active joint",
+                       f"remove '{key}' or mark the joint 'active: true'")
+                return None
+            actuator[key] = positive_limit(r, path + (key,), item[key])
+            if actuator[key] is None:
+                return None
     if base_name is None or axes is None or origin is None or offset is None or limits is None:
         return None
     name = f"{base_name}{number}"
     return LegJoint(name, jtype, axes, origin, variable_names(name, jtype), _ACTUABLE[jtype] if active else None,
-                    offset, limits)
+                    offset, limits, **actuator)
 
 
 def _axes(r: Reader, path: KeyPath, item: dict[str, Any], jtype: LegJointType) -> tuple[Vec3, ...] | None:

@@ -203,3 +203,13 @@ def position_limits(r: Reader, path: KeyPath, value: Any) -> tuple[sympy.Expr, s
                "write the limits as [lower, upper]")
         return None
     return lower, upper
+
+
+def positive_limit(r: Reader, path: KeyPath, value: Any) -> sympy.Expr | None:
+    """A velocity or effort limit: an expression whose default value is positive (None, reported, if not)."""
+    expr = r.expr(path, value)
+    numeric = r.default_value(expr) if expr is not None else None
+    if expr is not None and numeric is not None and numeric <= 0:
+        r.fail(path, f"{path[-1]} must be positive, got {expr}", "write a positive number")
+        return None
+    return expr

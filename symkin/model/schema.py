@@ -191,12 +191,15 @@ class Scene:
 class Coordinate:
     """One generalized coordinate q_i: an actuated joint variable (revolute: rad, prismatic: m).
 
-    ``limits`` are (lower, upper) position bounds, or None where the model declares none.
+    ``limits`` are (lower, upper) position bounds, ``velocity_limit`` and ``effort_limit`` the
+    actuator's largest speed and effort, each None where the model declares none.
     """
 
     name: str
     type: JointType
     limits: tuple[sympy.Expr, sympy.Expr] | None = None
+    velocity_limit: sympy.Expr | None = None
+    effort_limit: sympy.Expr | None = None
 
 
 class LegJointType(str, Enum):
@@ -231,6 +234,7 @@ class LegJoint:
         active: index into ``variables`` of the actuated motion, or None (passive joint).
             R and P joints and the slide of a C joint can be actuated.
         offset: constant added to the actuated variable (e.g. the strut length at zero stroke).
+        velocity_limit, effort_limit: the actuator's largest speed and effort (active joints), or None.
         limits: position limits (lower, upper) of each motion (one per variable), None for
             a motion without limits; () when the joint declares none.  The actuated
             motion's limits are its coordinate's; the passive ones restrict the workspace
@@ -245,6 +249,8 @@ class LegJoint:
     active: int | None = None
     offset: sympy.Expr = sympy.Integer(0)
     limits: tuple[tuple[sympy.Expr, sympy.Expr] | None, ...] = ()
+    velocity_limit: sympy.Expr | None = None
+    effort_limit: sympy.Expr | None = None
 
     def limits_of(self, k: int) -> tuple[sympy.Expr, sympy.Expr] | None:
         """The limits of motion k (index into :attr:`variables`), or None."""
@@ -396,7 +402,7 @@ class Model:
                     _, _, rotation = joint.motions[joint.active]
                     out.append(Coordinate(joint.variables[joint.active],
                                           JointType.REVOLUTE if rotation else JointType.PRISMATIC,
-                                          joint.limits_of(joint.active)))
+                                          joint.limits_of(joint.active), joint.velocity_limit, joint.effort_limit))
         return tuple(out)
 
     @property

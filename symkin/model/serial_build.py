@@ -6,7 +6,18 @@ from typing import Any
 
 import sympy
 
-from symkin.model.reader import X_AXIS, Z_AXIS, ZERO, Reader, describe, frame_ops, ops, position_limits, unit_axis
+from symkin.model.reader import (
+    X_AXIS,
+    Z_AXIS,
+    ZERO,
+    Reader,
+    describe,
+    frame_ops,
+    ops,
+    position_limits,
+    positive_limit,
+    unit_axis,
+)
 from symkin.model.schema import Joint, JointType, Mimic, Op, Rotation, Translation
 from symkin.model.yaml_source import Document, KeyPath
 
@@ -199,15 +210,8 @@ def _joint_extras(r: Reader, path: KeyPath, item: dict[str, Any], default_link: 
         ok = ok and limits is not None
     extras: dict[str, Any] = {"link": link, "limits": limits}
     for key in ("velocity_limit", "effort_limit"):
-        extras[key] = None
-        if key in item:
-            value = r.expr(path + (key,), item[key])
-            numeric = r.default_value(value) if value is not None else None
-            if value is None or (numeric is not None and numeric <= 0):
-                if value is not None:
-                    r.fail(path + (key,), f"{key} must be positive, got {value}", "write a positive number")
-                ok = False
-            extras[key] = value
+        extras[key] = positive_limit(r, path + (key,), item[key]) if key in item else None
+        ok = ok and (key not in item or extras[key] is not None)
     active = item.get("active", True)
     if not isinstance(active, bool):
         r.fail(path + ("active",), f"'active' must be true or false, got {describe(active)}", "write true or false")
