@@ -11,6 +11,7 @@ from hypothesis import strategies as st
 from conftest import random_inputs, random_q
 from symkin import pipeline
 from symkin.derivation import emitted_quantities
+from symkin.errors import DerivationError
 from symkin.ir.spec import FunctionSpec, InputSpec, OutputSpec
 from symkin.optimize import fold_parameters, optimize
 from symkin.ir.opcount import op_count
@@ -52,10 +53,26 @@ def test_folding_never_increases_the_op_count(exprs, values):
     spec = FunctionSpec(spec.name, spec.summary, spec.doc,
                         spec.inputs[:1] + tuple(InputSpec(i.name, i.kind, i.symbols, i.element_names, i.units, i.doc, v)
                                                 for i, v in zip(spec.inputs[1:], values)), spec.outputs)
-    folded = fold_parameters(spec, [str(p) for p in P])
+    try:
+        folded = fold_parameters(spec, [str(p) for p in P])
+    except DerivationError as error:  # a value that divides by zero: refused, named
+        assert "make an output undefined" in str(error)
+        return
     before = op_count(e for o in spec.outputs for e in o.entries)
     after = op_count(e for o in folded.outputs for e in o.entries)
     assert after <= before, (exprs, values)
+
+
+def test_folding_a_value_that_divides_by_zero_is_a_named_error():
+    x, p0 = X[0], P[0]
+    for expr in (sympy.atan2(0, 1 / p0), x / p0):
+        spec = _spec([expr])
+        spec = FunctionSpec(spec.name, spec.summary, spec.doc,
+                            spec.inputs[:1] + tuple(InputSpec(i.name, i.kind, i.symbols, i.element_names, i.units,
+                                                              i.doc, sympy.Integer(0)) for i in spec.inputs[1:]),
+                            spec.outputs)
+        with pytest.raises(DerivationError, match="make an output undefined"):
+            fold_parameters(spec, [str(p0)])
 
 
 def test_op_count_model():

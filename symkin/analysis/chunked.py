@@ -37,7 +37,7 @@ import numpy as np
 
 from symkin.analysis.estimates import IntegralEstimate
 from symkin.analysis.integrators import QMC_REPLICATES, monte_carlo_estimate, quasi_monte_carlo_estimate
-from symkin.analysis.sampling import SOBOL_BITS
+from symkin.analysis.sampling import sobol_range
 from symkin.runtime.cluster import run_tasks
 from symkin.runtime.payload import ModelPayload
 
@@ -93,19 +93,8 @@ class IntegrandSpec:
 def _qmc_chunk(payload: ModelPayload, spec: IntegrandSpec, seed: int, replicate: int, start: int,
                stop: int) -> np.ndarray:
     """sum f over points start ... stop - 1 of replicate ``replicate`` (see the module docstring)."""
-    import warnings
-
-    from scipy.stats import qmc
-
     integrand = spec.build(payload.load())
-    sequence = qmc.Sobol(integrand.dimension, scramble=True, bits=SOBOL_BITS,
-                         rng=np.random.default_rng(np.random.SeedSequence([seed, replicate])))
-    if start:
-        sequence.fast_forward(start)
-    with warnings.catch_warnings():  # a chunk need not be a power of 2: the replicate as a whole is
-        warnings.simplefilter("ignore", UserWarning)
-        unit = sequence.random(stop - start)
-    unit += np.random.default_rng([seed, replicate, start]).random(unit.shape) * 2.0**-SOBOL_BITS
+    unit = sobol_range(integrand.dimension, (seed, replicate), start, stop)
     with np.errstate(all="ignore"):
         return integrand(integrand.lower + unit * (integrand.upper - integrand.lower)).sum(axis=0)
 

@@ -26,7 +26,6 @@ bounds the grid held by the client.
 from __future__ import annotations
 
 import math
-import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -81,16 +80,7 @@ class CloudSpec:
         if self.method == "random":
             rng = np.random.default_rng([self.seed, start])
             return box[:, 0] + rng.random((stop - start, n)) * (box[:, 1] - box[:, 0])
-        from scipy.stats import qmc
-
-        sequence = qmc.Sobol(n, scramble=True, bits=sampling.SOBOL_BITS,
-                             rng=np.random.default_rng(np.random.SeedSequence([self.seed])))
-        if start:
-            sequence.fast_forward(start)
-        with warnings.catch_warnings():  # a chunk need not be a power of 2: the sequence as a whole is
-            warnings.simplefilter("ignore", UserWarning)
-            unit = sequence.random(stop - start)
-        unit += np.random.default_rng([self.seed, start]).random(unit.shape) * 2.0**-sampling.SOBOL_BITS
+        unit = sampling.sobol_range(n, (self.seed,), start, stop)
         return box[:, 0] + unit * (box[:, 1] - box[:, 0])
 
 

@@ -6,6 +6,8 @@ shape (d,).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
 
@@ -81,3 +83,24 @@ def sobol(lower: np.ndarray, upper: np.ndarray, log2_count: int, rng: np.random.
     unit = sets + rng.random(sets.shape) * 2.0**-SOBOL_BITS
     points = lower + unit * (upper - lower)
     return points[0] if replicates is None else points
+
+
+def sobol_range(dimension: int, key: Sequence[int], start: int, stop: int) -> np.ndarray:
+    """Points start ... stop - 1 (in the unit cube) of one scrambled Sobol sequence, drawn without the others.
+
+    The scramble comes from the seed sequence ``key``, the digits beyond :data:`SOBOL_BITS`
+    from the generator (``*key``, start), as in :func:`sobol`: a chunk of a sequence can be
+    drawn by any process from its definition alone (the chunked integrators and workspace).
+    """
+    import warnings
+
+    from scipy.stats import qmc
+
+    sequence = qmc.Sobol(dimension, scramble=True, bits=SOBOL_BITS,
+                         rng=np.random.default_rng(np.random.SeedSequence(list(key))))
+    if start:
+        sequence.fast_forward(start)
+    with warnings.catch_warnings():  # a chunk need not be a power of 2: the sequence as a whole is
+        warnings.simplefilter("ignore", UserWarning)
+        unit = sequence.random(stop - start)
+    return unit + np.random.default_rng([*key, start]).random(unit.shape) * 2.0**-SOBOL_BITS

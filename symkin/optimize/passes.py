@@ -16,6 +16,7 @@ from collections.abc import Callable, Iterable
 
 import sympy
 
+from symkin.errors import DerivationError
 from symkin.ir.spec import FunctionSpec, OptimizedFunction, OutputSpec
 from symkin.ir.opcount import node_cost, op_count
 
@@ -89,7 +90,15 @@ def fold_parameters(spec: FunctionSpec, fixed: Iterable[str]) -> FunctionSpec:
     if not values:
         return spec
     inputs = tuple(i for i in spec.inputs if not (i.kind == "parameter" and i.name in fixed))
-    return dataclasses.replace(_replace_in_spec(spec, lambda e: values.get(e) if e.is_Symbol else None), inputs=inputs)
+    problem = (f"{spec.name}: the fixed parameters {', '.join(f'{k} = {v}' for k, v in values.items())} make an "
+               "output undefined (a division by zero or the like)")
+    try:
+        folded = _replace_in_spec(spec, lambda e: values.get(e) if e.is_Symbol else None)
+    except TypeError:  # sympy compares an undefined value (atan2 of zoo, ...)
+        raise DerivationError(f"{problem}; keep them free or change their values") from None
+    if any(e.has(sympy.zoo, sympy.nan) for o in folded.outputs for e in o.entries):
+        raise DerivationError(f"{problem}; keep them free or change their values")
+    return dataclasses.replace(folded, inputs=inputs)
 
 
 def _constant_value(expr: sympy.Expr) -> sympy.Expr | None:

@@ -29,6 +29,7 @@ import hashlib
 import os
 import re
 import shlex
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -167,13 +168,22 @@ def _compile(command: list[str], source: Path, header: Path, target: Path, units
              jobs: int) -> None:
     """Compile each unit into an object, link them into a temporary file next to ``target``, then
     rename it into place (so no reader ever sees a half-written library)."""
-    with tempfile.TemporaryDirectory(prefix=target.name + ".", dir=target.parent) as scratch:
-        objects = [str(Path(scratch) / f"part{k}.o") for k in range(len(units))]
+    scratch = Path(tempfile.mkdtemp(prefix=target.name + ".", dir=target.parent))
+    try:
+        objects = [str(scratch / f"part{k}.o") for k in range(len(units))]
         compile_base = command + list(BASE_FLAGS) + ["-I", str(header.parent), "-c"]
         with ThreadPoolExecutor(max_workers=jobs) as pool:
             # list() re-raises the first failure once every started compilation has finished
             list(pool.map(lambda unit, obj: _run(compile_base + unit + ["-o", obj, str(source)], source),
                           units, objects))
-        partial = Path(scratch) / target.name
+        partial = scratch / target.name
         _run(command + list(BASE_FLAGS) + ["-shared", "-o", str(partial)] + objects + ["-lm"], source)
         os.replace(partial, target)
+    finally:
+        # An interrupted compiler may still be removing its own output while the tree goes: never let
+        # that leave the scratch directory in the cache (or hide the KeyboardInterrupt behind an OSError).
+        for _ in range(20):
+            shutil.rmtree(scratch, ignore_errors=True)
+            if not scratch.exists():
+                break
+            time.sleep(0.05)
