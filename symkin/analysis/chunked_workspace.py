@@ -34,7 +34,7 @@ import numpy as np
 
 from symkin.analysis import global_indices, mechanism, sampling, workspace
 from symkin.analysis.chunked import IntegrandSpec, integrate_chunked
-from symkin.runtime.cluster import dask_client
+from symkin.runtime.cluster import dask_client, run_tasks
 from symkin.runtime.payload import ModelPayload
 
 #: configurations per task unless told otherwise
@@ -222,8 +222,6 @@ def chunked_workspace(payload: ModelPayload, spec: CloudSpec, *, chunk: int = CH
 
 def _run(function: Callable[..., Any], tasks: list[tuple], payload: ModelPayload, name: str, results: dict,
          scheduler: str, client: Any, progress: Callable[[int], None]) -> None:
-    from symkin.runtime.cluster import run_tasks
-
     def finished(i: int, result: Any) -> None:
         results[i] = result
         progress(len(results))

@@ -67,7 +67,8 @@ def _chunked_study(args: argparse.Namespace, models: list, designs: list[dict[st
         payload = ModelPayload.from_directory(d)
     where = {"serial": "in this process", "local": "on a LocalCluster"}.get(args.scheduler, f"on {args.scheduler}")
     found = []
-    with (dask_client(args.scheduler, args.workers) if args.scheduler != "serial" else _no_client()) as client:
+    with (dask_client(args.scheduler, args.workers) if args.scheduler != "serial" else contextlib.nullcontext()) \
+            as client:
         for values, model in zip(designs, models):
             parameters = {**analysis_args.parse_assignments(args.assignments), **values}
             spec = chunked_workspace.CloudSpec(tuple(sorted(parameters.items())), tuple(sorted(limits.items())),
@@ -80,11 +81,6 @@ def _chunked_study(args: argparse.Namespace, models: list, designs: list[dict[st
                                               workspace.limit_curves(model, limits=limits)
                                               if mechanism.joint_limits(model, limits).shape[0] == 2 else []))
     return found
-
-
-@contextlib.contextmanager
-def _no_client():
-    yield None
 
 
 def run(args: argparse.Namespace) -> int:
