@@ -110,11 +110,11 @@ def test_task_coordinates_need_coordinate_components(models):
 
 def test_available_keeps_what_the_model_can_derive_and_says_why_not(models):
     d = Derivation(models["delta"])
-    kept, skipped = d.available(["ik", "mass_matrix", "no_such_quantity", "jacobian"])
+    kept, skipped = d.available(["ik", "frames", "no_such_quantity", "jacobian"])
     assert kept == ["ik", "jacobian"]
-    assert set(skipped) == {"mass_matrix", "no_such_quantity"}
-    assert "serial" in skipped["mass_matrix"] and "unknown quantity" in skipped["no_such_quantity"]
-    assert "mass_matrix" not in d.computed
+    assert set(skipped) == {"frames", "no_such_quantity"}
+    assert "serial" in skipped["frames"] and "unknown quantity" in skipped["no_such_quantity"]
+    assert "frames" not in d.computed
 
 
 def test_quantities_ask_for_each_other_by_their_marked_functions_not_by_name(models):

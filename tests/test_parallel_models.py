@@ -171,7 +171,11 @@ BAD_LEGS = [
     ("unknown motion", "motion: translation", "motion: rotation", "parallel.motion", "unknown platform motion"),
     ("home of the wrong size", "home: [0, 0, -0.2]", "home: [0, 0]", "parallel.home", "expected 3 task coordinates"),
     ("unknown branch", "home: [0, 0, -0.2]", "fk_branch: up", "parallel.fk_branch", "unknown branch 'up'"),
-    ("bodies", "scene:", "bodies: [{link: l1, mass: 1}]\nscene:", "bodies", "not supported yet"),
+    ("bodies as a serial list", "scene:", "bodies: [{link: l1, mass: 1}]\nscene:", "bodies", "expected a mapping"),
+    ("unknown body", "scene:", "bodies: {arm: {mass: 1}}\nscene:", "bodies.arm", "unknown key 'arm'"),
+    ("negative rod mass", "scene:", "bodies: {rod: {mass: -1}}\nscene:", "bodies.rod.mass", "negative mass"),
+    ("rod fraction above one", "scene:", "bodies: {rod: {mass: 1, platform_fraction: 2}}\nscene:",
+     "bodies.rod.platform_fraction", "fraction of the rod mass"),
 ]
 
 

@@ -54,9 +54,11 @@ def test_error_below_1e_13_where_kappa_below_1e3(runs, models, name):
     families = {r.family for r in run.records}
     assert families == {"random", "singular", "scale", "float32"}
     assert {r.parameter for r in run.select("scale")} == {1e-3, 1e-2, 1e-1, 1.0, 1e1, 1e2, 1e3}
-    # every quantity the model can derive is checked, nothing produced a non-finite value
+    # every quantity the model can derive is checked, nothing produced a non-finite value where a double
+    # can hold an answer (kappa eps < 1: at a Stewart platform's interior singularity, 1e-10 away, its
+    # actuator-side mass matrix has kappa ~ 1e19 and its LDL^T pivots round to zero)
     assert set(run.quantities) >= CHECKED[models[name].mechanism]
-    assert all(math.isfinite(r.error) for r in run.records)
+    assert all(math.isfinite(r.error) for r in run.records if r.kappa * EPS < 1)
 
 
 def _kappas_along(run, path):

@@ -41,9 +41,10 @@ from symkin.dynamics.program import Program, se_matrix, se_vector
 from symkin.errors import DerivationError
 from symkin.ir.inputs import coordinate_input
 from symkin.ir.quantity import quantity
-from symkin.ir.spec import FunctionSpec, OutputSpec, make_function
+from symkin.ir.spec import FunctionSpec, InputSpec, OutputSpec, make_function
 from symkin.kinematics.quantities import chain_frames, task_jacobian
 from symkin.model import coordinates
+from symkin.model.schema import Friction
 from symkin.symengine_bridge import SympyConverter
 
 if TYPE_CHECKING:
@@ -58,10 +59,11 @@ def _symbols(d: Derivation, group: str) -> list[se.Symbol]:
     return se_vector(coordinates.symbols(d.model, group))
 
 
-def function_spec(d: Derivation, name: str, summary: str, doc: str, groups: Sequence[str], program: Program,
-                  outputs: Sequence[tuple[str, Sequence[se.Basic], tuple[int, ...], str, str]]) -> FunctionSpec:
+def function_spec(d: Derivation, name: str, summary: str, doc: str, groups: Sequence[str | InputSpec],
+                  program: Program, outputs: Sequence[tuple[str, Sequence[se.Basic], tuple[int, ...], str, str]]
+                  ) -> FunctionSpec:
     """The spec of a function whose outputs are SymEngine values of ``program`` (its inputs: the coordinate
-    ``groups``), converted to sympy with the model's shared converter.
+    ``groups`` by name, or any input specs), converted to sympy with the model's shared converter.
 
     Args:
         outputs: (name, row-major entries, shape, doc, unit) per output.
@@ -75,7 +77,8 @@ def function_spec(d: Derivation, name: str, summary: str, doc: str, groups: Sequ
         matrix = sympy.ImmutableMatrix(rows, cols, flat[start:start + size])
         specs.append(OutputSpec(out_name, matrix, out_doc, unit, shape))
         start += size
-    return make_function(model, name, summary, doc, [coordinate_input(model, g) for g in groups], specs, definitions)
+    inputs = [g if isinstance(g, InputSpec) else coordinate_input(model, g) for g in groups]
+    return make_function(model, name, summary, doc, inputs, specs, definitions)
 
 
 def _flat(matrix: Matrix) -> list[se.Basic]:
@@ -84,7 +87,8 @@ def _flat(matrix: Matrix) -> list[se.Basic]:
 
 # --------------------------------------------------------------------------- internal quantities
 
-@quantity("sympy_converter", "SymEngine -> sympy conversion shared by the functions of one model", emitted=False)
+@quantity("sympy_converter", "SymEngine -> sympy conversion shared by the functions of one model", emitted=False,
+          mechanism="any")
 def _sympy_converter(d: Derivation) -> SympyConverter:
     """One memo for every function: programs that start alike (M, then dM/dq) convert their
     common assignments once."""
@@ -128,10 +132,14 @@ def _friction_graph(d: Derivation) -> list[se.Basic] | None:
     qd = dict(zip((j.name for j in d.model.joints), joint_rates(d.model, "qd")))
     F = {name: se.Integer(0) for name in qd}
     for f in d.model.friction:
-        v = qd[f.joint]
-        coulomb = se.sign(v) if f.smoothing_velocity is None else se.tanh(v / se.sympify(f.smoothing_velocity))
-        F[f.joint] = se.sympify(f.viscous) * v + se.sympify(f.coulomb) * coulomb
+        F[f.joint] = joint_friction(f, qd[f.joint])
     return forces_on_coordinates(d.model, list(F.values()))
+
+
+def joint_friction(f: Friction, v: se.Basic) -> se.Basic:
+    """viscous v + coulomb sign(v), or coulomb tanh(v / v_s) with a smoothing velocity v_s (seed eq. 8.34)."""
+    coulomb = se.sign(v) if f.smoothing_velocity is None else se.tanh(v / se.sympify(f.smoothing_velocity))
+    return se.sympify(f.viscous) * v + se.sympify(f.coulomb) * coulomb
 
 
 @quantity("task_jacobian_graph", "task Jacobian J (square) as SymEngine expressions", emitted=False)

@@ -35,6 +35,9 @@ class QuantityDef:
         residual: True if the value vanishes wherever the mechanism is assembled (loop-closure
             and leg equations): its accuracy is judged away from that manifold, where a
             relative error means something (used by the stability analysis).
+        kappa_degree: the degree of the value in the matrix that conditions it: a quadratic
+            form such as J^-T M J^-1 doubles that matrix's relative error (its relative condition
+            number is 2), so the stability analysis judges it by kappa_degree * kappa.
     """
 
     name: str
@@ -44,6 +47,7 @@ class QuantityDef:
     solves_with: str | None = None
     mechanism: str = "serial"
     residual: bool = False
+    kappa_degree: int = 1
 
 
 #: What a derivation is asked for.  Inside symkin, a quantity asks for another by the marked
@@ -60,7 +64,7 @@ def definition_of(key: QuantityKey) -> QuantityDef | None:
 
 
 def quantity(name: str, summary: str, emitted: bool = True, solves_with: str | None = None,
-             mechanism: str = "serial", residual: bool = False
+             mechanism: str = "serial", residual: bool = False, kappa_degree: int = 1
              ) -> Callable[[Callable[[Derivation], Any]], Callable[[Derivation], Any]]:
     """Mark ``compute`` as the derivation of quantity ``name`` for ``mechanism`` models (see
     :class:`QuantityDef`); the function keeps working as itself and carries its definition as
@@ -69,7 +73,8 @@ def quantity(name: str, summary: str, emitted: bool = True, solves_with: str | N
         raise ValueError(f"mechanism must be one of {MECHANISMS}, got {mechanism!r}")
 
     def mark(compute: Callable[[Derivation], Any]) -> Callable[[Derivation], Any]:
-        compute.quantity = QuantityDef(name, summary, compute, emitted, solves_with, mechanism, residual)  # type: ignore[attr-defined]
+        compute.quantity = QuantityDef(name, summary, compute, emitted, solves_with, mechanism, residual,
+                                               kappa_degree)  # type: ignore[attr-defined]
         return compute
 
     return mark

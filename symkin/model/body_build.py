@@ -10,7 +10,7 @@ import sympy
 
 from symkin.geometry import rotation_matrix
 from symkin.model.reader import X_AXIS, Y_AXIS, Z_AXIS, ZERO, Reader, describe, frame_ops
-from symkin.model.schema import Body, Friction, Rotation, Vec3
+from symkin.model.schema import Body, Friction, ParallelBodies, Rotation, Vec3
 from symkin.model.yaml_source import KeyPath
 
 _INERTIA_KEYS = ("xx", "yy", "zz", "xy", "xz", "yz")
@@ -35,22 +35,70 @@ def read_bodies(r: Reader, value: Any, links: tuple[str, ...]) -> tuple[Body, ..
             hint = f"did you mean '{close[0]}'? " if close else ""
             r.fail(bpath + ("link",), f"unknown link {describe(link)}", f"{hint}links: {', '.join(links)}")
             continue
-        mass = r.expr(bpath + ("mass",), item["mass"])
-        com = r.vector3(bpath + ("com",), item["com"]) if "com" in item else (ZERO, ZERO, ZERO)
-        inertia = _inertia(r, bpath + ("inertia",), item["inertia"]) if "inertia" in item else sympy.zeros(3, 3)
-        if "inertia_rpy" in item and inertia is not None:
-            inertia = _rotate_inertia(r, bpath + ("inertia_rpy",), item["inertia_rpy"], inertia)
-        if "origin" in item and com is not None and inertia is not None:
-            com, inertia = _body_in_link_frame(r, bpath + ("origin",), item["origin"], com, inertia)
-        if mass is None or com is None or inertia is None:
-            continue
-        m = r.default_value(mass)
-        if m is not None and m < 0:
-            r.fail(bpath + ("mass",), f"negative mass {mass} ({m:g} at the default values)",
-                   "a mass is zero or positive")
-            continue
-        bodies.append(Body(link, mass, com, sympy.ImmutableMatrix(inertia)))
+        body = _mass_properties(r, bpath, item, link)
+        if body is not None:
+            bodies.append(body)
     return tuple(bodies)
+
+
+def _mass_properties(r: Reader, path: KeyPath, item: dict[str, Any], link: str) -> Body | None:
+    """The Body of a mapping with ``mass`` and optional ``com``, ``inertia``, ``inertia_rpy``, ``origin``."""
+    mass = r.expr(path + ("mass",), item["mass"])
+    com = r.vector3(path + ("com",), item["com"]) if "com" in item else (ZERO, ZERO, ZERO)
+    inertia = _inertia(r, path + ("inertia",), item["inertia"]) if "inertia" in item else sympy.zeros(3, 3)
+    if "inertia_rpy" in item and inertia is not None:
+        inertia = _rotate_inertia(r, path + ("inertia_rpy",), item["inertia_rpy"], inertia)
+    if "origin" in item and com is not None and inertia is not None:
+        com, inertia = _body_in_link_frame(r, path + ("origin",), item["origin"], com, inertia)
+    if mass is None or com is None or inertia is None or _negative(r, path + ("mass",), mass, "mass"):
+        return None
+    return Body(link, mass, com, sympy.ImmutableMatrix(inertia))
+
+
+def _negative(r: Reader, path: KeyPath, value: sympy.Expr, what: str) -> bool:
+    """True (and a recorded problem) if ``value`` is negative at the default parameter values."""
+    v = r.default_value(value)
+    if v is not None and v < 0:
+        r.fail(path, f"negative {what} {value} ({v:g} at the default values)", f"a {what} is zero or positive")
+        return True
+    return False
+
+
+#: keys of a parallel model's ``bodies:`` (:class:`~symkin.model.schema.ParallelBodies`)
+PARALLEL_BODY_KEYS = ("platform", "actuated_link", "rod", "rotor")
+_MASS_KEYS = ("mass", "com", "inertia", "inertia_rpy", "origin")
+
+
+def read_parallel_bodies(r: Reader, value: Any) -> ParallelBodies | None:
+    """``bodies:`` of a parallel model: the platform, and on every leg the actuated link, the rod
+    (point masses at its ends) and the actuator's rotor."""
+    path: KeyPath = ("bodies",)
+    section = r.mapping(path, value, optional=PARALLEL_BODY_KEYS)
+    if section is None:
+        return None
+    fields: dict[str, Any] = {}
+    for key in ("platform", "actuated_link"):
+        if key in section:
+            item = r.mapping(path + (key,), section[key], required=("mass",), optional=_MASS_KEYS[1:])
+            if item is not None and "mass" in item:
+                fields[key] = _mass_properties(r, path + (key,), item, key)
+    scalars = {"rod": {"mass": "rod_mass", "platform_fraction": "rod_platform_fraction"},
+               "rotor": {"inertia": "rotor_inertia", "gear_ratio": "gear_ratio"}}
+    for key, names in scalars.items():
+        if key not in section:
+            continue
+        item = r.mapping(path + (key,), section[key], optional=tuple(names))
+        for name, field_name in names.items():
+            if item is None or name not in item:
+                continue
+            amount = r.expr(path + (key, name), item[name])
+            if amount is not None and not _negative(r, path + (key, name), amount, name.replace("_", " ")):
+                fields[field_name] = amount
+    fraction = r.default_value(fields.get("rod_platform_fraction", ZERO))
+    if fraction is not None and fraction > 1:
+        r.fail(path + ("rod", "platform_fraction"), f"the fraction of the rod mass at the platform is {fraction:g}",
+               "give a number between 0 (all at C_i) and 1 (all at the platform joint B_i)")
+    return ParallelBodies(**fields)
 
 
 def _body_in_link_frame(r: Reader, path: KeyPath, value: Any, com: Vec3, inertia: sympy.Matrix

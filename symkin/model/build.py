@@ -7,11 +7,12 @@ location (file, line, column, key path) and a suggested fix; if any is found a s
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 from typing import Any
 
 from symkin.errors import ModelError
-from symkin.model.body_build import read_bodies, read_friction
+from symkin.model.body_build import read_bodies, read_friction, read_parallel_bodies
 from symkin.model.names import name_problem
 from symkin.model.parallel_build import build_parallel, check_parallel_names, parallel_task_space
 from symkin.model.parameter_build import check_name_clashes, read_parameters
@@ -71,7 +72,9 @@ def build_model(doc: Document, stem: str) -> Model:
         coordinate_names = tuple(j.variables[j.active] for leg in parallel.legs for j in leg.joints
                                  if j.active is not None)
     links = tuple(j.link for j in joints)
-    bodies = read_bodies(r, data.get("bodies", []), links)
+    bodies = read_bodies(r, data.get("bodies", []), links) if parallel is None else ()
+    if parallel is not None and "bodies" in data:
+        parallel = dataclasses.replace(parallel, bodies=read_parallel_bodies(r, data["bodies"]))
     gravity = r.vector3(("gravity",), data["gravity"]) if "gravity" in data else (ZERO, ZERO, ZERO)
     friction = read_friction(r, data.get("friction", {}), coordinate_names)
     scene = read_scene(r, data.get("scene", {}), parameters,

@@ -313,9 +313,6 @@ def parallel_task_space(r: Reader, data: dict[str, Any], parallel: Parallel) -> 
     if "task_space" in data:
         r.fail(("task_space",), "a parallel mechanism's task space follows from 'parallel.motion'",
                "remove 'task_space:' (translation gives [x, y, z], pose [x, y, z, roll, pitch, yaw])")
-    if data.get("bodies"):
-        r.fail(("bodies",), "bodies of parallel mechanisms are not supported yet (kinematics only)",
-               "remove 'bodies:' from the parallel model")
     return TASK_COORDINATES[parallel.motion]
 
 

@@ -289,6 +289,31 @@ class Leg:
     ik_branch: int = 1
 
 
+@dataclass(frozen=True)
+class ParallelBodies:
+    """Mass properties of a parallel mechanism, the same on every leg (``bodies:`` of a parallel model).
+
+    Attributes:
+        platform: the moving platform, com and inertia in the platform (TCP) frame; None if massless.
+        actuated_link: the link the actuator moves (the DELTA's upper arm), com and inertia in the
+            frame right after the actuated motion; None if massless.
+        rod_mass: mass of each leg's rod between its point joints C_i and B_i (the DELTA's
+            parallelogram, a Stewart strut), lumped at its two ends.
+        rod_platform_fraction: the part of ``rod_mass`` lumped at the platform joint B_i; the rest
+            is at C_i (the elbow of a DELTA, the fixed base joint of a Stewart strut).
+        rotor_inertia: each actuator's rotor inertia about its axis (motor side).
+        gear_ratio: motor turns per actuated-joint turn (1: direct drive); the joint sees
+            gear_ratio^2 rotor_inertia.
+    """
+
+    platform: Body | None = None
+    actuated_link: Body | None = None
+    rod_mass: sympy.Expr = sympy.Integer(0)
+    rod_platform_fraction: sympy.Expr = sympy.Rational(1, 2)
+    rotor_inertia: sympy.Expr = sympy.Integer(0)
+    gear_ratio: sympy.Expr = sympy.Integer(1)
+
+
 class PlatformMotion(str, Enum):
     """What the moving platform can do, and hence its task coordinates p."""
 
@@ -310,6 +335,7 @@ class Parallel:
         kind: ``delta`` when built from the DELTA shorthand, else ``legs``.
         home: a reachable platform pose (task coordinates): the default start of numerical
             solvers and the centre of sampled workspaces; None if not declared.
+        bodies: mass properties of the legs and the platform; None for a kinematic model.
     """
 
     motion: PlatformMotion
@@ -319,6 +345,7 @@ class Parallel:
     constraints: int = 0
     kind: str = "legs"
     home: tuple[sympy.Expr, ...] | None = None
+    bodies: ParallelBodies | None = None
 
     @property
     def task_dof(self) -> int:

@@ -17,7 +17,9 @@ and compared with the un-optimized expressions evaluated by mpmath at the same i
 sigma_max/sigma_min (seed sec. 4.2), computed from 50-digit values, of the matrix that
 bounds the accuracy of the quantity: the matrix it inverts when its registration declares
 one (``solves_with``: the mass matrix for forward dynamics, the task Jacobian for TCP forces
-and operational-space dynamics), else the task Jacobian (:func:`conditioning_matrix`).  A backward-stable evaluation has
+and operational-space dynamics), else the task Jacobian (:func:`conditioning_matrix`); a
+parallel mechanism's quantity that inverts a matrix of its own is judged by the larger of that
+kappa and the task matrix's, since its dynamics reach the actuators through J = J_x^-1 J_q.  A backward-stable evaluation has
 an error of the order of kappa * eps, so this is the kappa to judge the error against.
 
 Parallel mechanisms are checked at assembled states (p around the home pose, q = ik(p),
@@ -31,9 +33,10 @@ q moved off the assembled state by up to :data:`OFF_MANIFOLD`.
 from __future__ import annotations
 
 import itertools
+import math
 import tempfile
 import zlib
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 
 import mpmath
@@ -132,6 +135,20 @@ def _kappa(reference: MpmathReference | None, shape: tuple[int, ...], vectors: d
         return float("inf") if smallest == 0 else float(largest / smallest)
 
 
+def _largest(kappas: Iterable[float]) -> float:
+    """The largest of the defined condition numbers (nan if none is)."""
+    defined = [k for k in kappas if not math.isnan(k)]
+    return max(defined, default=float("nan"))
+
+
+def _ik_of(loaded: object, derivation: Derivation) -> Callable[..., object]:
+    """The generated ik taking every parameter of the run by keyword and passing on the ones it has
+    (a model's mass parameters, say, are inputs of its dynamics but not of its ik)."""
+    own = [i.name for i in derivation["ik"].parameter_inputs]
+    ik = getattr(loaded, "ik")
+    return lambda p, **parameters: ik(p, **{name: parameters[name] for name in own})
+
+
 def conditioning_matrix(model: Model) -> str:
     """The task matrix whose kappa judges a quantity that inverts nothing: the task Jacobian J of a
     serial chain; the inverse Jacobian J^-1 = J_q^-1 J_x of a parallel mechanism (its closed
@@ -162,22 +179,29 @@ def run_stability(model: Model, *, samples: int = 32, float32_samples: int = 16,
     names, skipped = derivation.available(quantities or emitted_quantities(model.mechanism))
     task_matrix = conditioning_matrix(model)
     has_jacobian = bool(derivation.available([task_matrix])[0])
-    # also what the run itself evaluates: the conditioning matrix, and fk and the geometric Jacobian
-    # of a serial chain for the closed-form IK section (even when --only leaves them out)
+    # also what the run itself evaluates: the conditioning matrix, fk and the geometric Jacobian of a
+    # serial chain for the closed-form IK section, a parallel mechanism's ik (even when --only leaves them out)
     support = [task_matrix] if has_jacobian else []
     if model.parallel is None:
         support += derivation.available(["fk", "jacobian_geometric"])[0]
+    else:
+        support += derivation.available(["ik"])[0]  # the sampler's q = ik(p)
     generated = tuple(names) + tuple(dict.fromkeys(name for name in support if name not in names))
     progress("generating code")
     generation = pipeline.generate(model, pipeline.Request(generated, (), ("numpy",)))
     optimized = {f.name: f for f in generation.functions}
     references = {name: MpmathReference(derivation[name]) for name in names}
     definitions = registry(model.mechanism)
-    conditioning = {name: definitions[name].solves_with or task_matrix for name in names}
+    # A parallel mechanism's dynamics reach the actuators through J = J_x^-1 J_q: a quantity that
+    # inverts a matrix of its own (forward dynamics: M) is also judged by the task matrix.
+    conditioning = {name: tuple(dict.fromkeys(
+        ([definitions[name].solves_with] if definitions[name].solves_with else [])
+        + ([task_matrix] if model.parallel is not None or not definitions[name].solves_with else [])))
+        for name in names}
     residual = [name for name in names if definitions[name].residual]
     regular = [name for name in names if not definitions[name].residual]
     kappa_sources = {}
-    for source in sorted(set(conditioning.values())):
+    for source in sorted({source for sources in conditioning.values() for source in sources}):
         if source == task_matrix and not has_jacobian:
             kappa_sources[source] = (None, ())
         else:
@@ -189,7 +213,7 @@ def run_stability(model: Model, *, samples: int = 32, float32_samples: int = 16,
         shapes = {name: [o.shape for o in derivation[name].outputs] for name in names}
         sizes = {i.name: len(i.symbols) for name in names for i in derivation[name].vector_inputs}
         run = StabilityRun(model.name, tuple(names), skipped, [])
-        ik = getattr(loaded, "ik", None) if model.parallel is not None else None
+        ik = _ik_of(loaded, derivation) if model.parallel is not None else None
 
         calls = itertools.count()
 
@@ -231,7 +255,8 @@ def run_stability(model: Model, *, samples: int = 32, float32_samples: int = 16,
                 for k in range(count):
                     hi, lo = references[name]({g: states[g][k] for g in spec_vectors}, parameters)
                     state = tuple((g, tuple(float(v) for v in np.ravel(states[g][k]))) for g in spec_vectors)
-                    run.records.append(Record(name, family, label, parameter_of(k), kappas[conditioning[name]][k],
+                    run.records.append(Record(name, family, label, parameter_of(k), definitions[name].kappa_degree
+                                              * _largest(kappas[s][k] for s in conditioning[name]),
                                               normwise_error(computed[k].astype(np.float64), hi, lo), state))
 
         defaults = parameter_values(model)

@@ -1,0 +1,391 @@
+"""Dynamics of parallel mechanisms in the actuated coordinates (Lagrange, loop closure eliminated through J).
+
+=====================  ====================================================================
+``mass_matrix``        M(q) = M_a + J^T M_p J
+``coriolis_vector``    V = V_a + J^T (M_p b + V_p), b = dJ/dt qd
+``gravity_vector``     G = du_a/dq + J^T du_p/dp: the actuator efforts that hold the device still
+``friction``           F_f(qd) at the actuators: viscous + Coulomb (sign or tanh)
+``inverse_dynamics``   tau = M qdd + V + G + F_f
+``forward_dynamics``   qdd = M^-1 (tau - V - G - F_f), by an LDL^T solve
+``operational_space``  Mx, Vx, Gx in the task coordinates: F = Mx pdd + Vx + Gx
+``kinetic_energy``     k = 1/2 qd^T M_a qd + 1/2 pd^T M_p pd
+``potential_energy``   u = u_a(q) + u_p(p)
+=====================  ====================================================================
+
+Method.  The masses are split into an actuator side (moved by one q_i) and a platform side
+(moved by p) (:mod:`symkin.parallel.inertia`), so the Lagrangian of the closed chain is
+L = 1/2 qd^T M_a qd + 1/2 pd^T M_p pd - u_a(q) - u_p(p) on the constraint manifold f(q, p) = 0,
+whose velocities are pd = J qd (J = J_x^-1 J_q, :mod:`symkin.parallel.quantities`).  The
+platform side gives the task-space force F_p = M_p pdd + V_p + G_p (its own Lagrange equations
+in p, V_p from the Christoffel symbols of M_p), and by d'Alembert's principle (the constraint
+forces do no work on motions pd = J qd) the actuator efforts are
+
+    tau = M_a qdd + V_a + G_a + J^T F_p,   pdd = J qdd + b,   b = -J_x^-1 (zd^T H_i zd)_i,
+
+with H_i the Hessian of f_i in z = (q, p) (differentiate f(q, p) = 0 twice along the motion).
+This is the elimination of the loop-closure multipliers through the closed-form Jacobians the
+project already has; it keeps the n actuated coordinates, needs no passive variables and no
+numerical solve of the closure, and is exact for the lumped rods (the common simplification of
+DELTA dynamics: Codourey, Int. J. Robotics Research 17(12), 1998; Pierrot et al. 1991).  A
+multiplier formulation over all joint variables would need the passive variables as inputs and
+a solve of the closure at every call.
+
+Accuracy.  J_x^-1 enters M (through J^T M_p J) twice and the Coriolis and inverse-dynamics efforts
+up to four times (J^T M_p J_x^-1 h(J qd, J qd)), so a relative error d of J^-1 (kappa(J^-1) eps
+at best) becomes up to 2 d and 4 d: their ``kappa_degree`` (:class:`~symkin.ir.quantity.QuantityDef`).
+
+Every function takes the actuated variables q and the platform pose p = fk(q) (or q = ik(p))
+as a consistent pair, like the velocity functions.  J_x^-1 is formed once per function by the
+adjugate (3 legs) or a Gram-Schmidt QR (6 legs) (:mod:`symkin.dynamics.linsolve`).
+"""
+
+from __future__ import annotations
+
+from functools import cached_property
+from typing import TYPE_CHECKING
+
+import symengine as se
+import sympy
+
+from symkin.dynamics import lagrange
+from symkin.dynamics.linsolve import ldl_solve, transpose_solve
+from symkin.dynamics.program import Program, dot, mat_vec, se_matrix, se_vector
+from symkin.dynamics.quantities import EFFORT_UNIT, function_spec, joint_friction
+from symkin.errors import DerivationError
+from symkin.ir.quantity import quantity
+from symkin.ir.spec import FunctionSpec
+from symkin.model import coordinates
+from symkin.parallel.inertia import Inertia, split_inertia
+from symkin.parallel.inputs import task_input, task_symbols
+from symkin.parallel.quantities import (
+    PARALLEL,
+    _constraint_vector,
+    _distance_legs,
+    _structure,
+    square_constraint_jacobians,
+)
+
+if TYPE_CHECKING:
+    from symkin.derivation.graph import Derivation
+
+Matrix = list[list[se.Basic]]
+
+TASK_FORCE_UNIT = "N (position rows), N*m (angle rows)"
+
+
+@quantity("parallel_inertia", "mass distribution split into actuator side and platform side", emitted=False,
+          mechanism=PARALLEL)
+def _inertia(d: Derivation) -> Inertia:
+    structure = d[_structure]
+    return split_inertia(d.model, d[_distance_legs], structure.chains, sympy.Matrix(structure.platform.R))
+
+
+@quantity("constraint_hessians", "second derivatives of the leg equations in (q, p)", emitted=False,
+          mechanism=PARALLEL)
+def _constraint_hessians(d: Derivation) -> tuple[tuple[tuple[int, int, sympy.Expr], ...], ...]:
+    """Per leg equation f_i, the nonzero (a, b, c) with a <= b such that zd^T H_i zd = sum c zd_a zd_b."""
+    z = coordinates.symbols(d.model, "q") + task_symbols(d.model)
+    out = []
+    for f in d[_constraint_vector]:
+        present = [k for k, s in enumerate(z) if s in f.free_symbols]
+        terms = []
+        for i, a in enumerate(present):
+            first = sympy.diff(f, z[a])
+            for b in present[i:]:
+                second = sympy.expand(sympy.diff(first, z[b]))
+                if second != 0:
+                    terms.append((a, b, second if a == b else 2 * second))
+        out.append(tuple(terms))
+    return tuple(out)
+
+
+class _Terms:
+    """The pieces of the equations of motion bound into one program, each formed once when first used."""
+
+    def __init__(self, d: Derivation, program: Program):
+        self.d, self.program = d, program
+        self.n = d.model.dof
+        self.parts: Inertia = d[_inertia]
+        self.q = se_vector(coordinates.symbols(d.model, "q"))
+        self.p = se_vector(task_symbols(d.model))
+
+    @cached_property
+    def jacobians(self) -> tuple[Matrix, list[se.Basic]]:
+        """(J_x, diagonal of J_q), bound."""
+        J_x, J_q = square_constraint_jacobians(self.d, "the dynamics")
+        n = self.n
+        values = self.program.bind([v for row in se_matrix(J_x) for v in row] + se_vector(J_q.diagonal()))
+        return [values[i * n:(i + 1) * n] for i in range(n)], values[n * n:]
+
+    @cached_property
+    def J_x_inverse(self) -> Matrix:
+        """J_x^-1 from one solve, J_x X = E (written as (J_x^T)^T X = E)."""
+        J_x, _ = self.jacobians
+        identity = [[se.Integer(int(i == j)) for j in range(self.n)] for i in range(self.n)]
+        return transpose_solve(self.program, [list(col) for col in zip(*J_x)], identity)
+
+    @cached_property
+    def J(self) -> Matrix:
+        """J = J_x^-1 J_q (J_q diagonal)."""
+        _, J_q = self.jacobians
+        return [[self.program.let(self.J_x_inverse[i][j] * J_q[j]) for j in range(self.n)] for i in range(self.n)]
+
+    def J_transpose(self, v: list[se.Basic]) -> list[se.Basic]:
+        """J^T v."""
+        J = self.J
+        return [sum((J[k][i] * v[k] for k in range(self.n)), se.Integer(0)) for i in range(self.n)]
+
+    def task_rates(self, qd: list[se.Basic]) -> list[se.Basic]:
+        """pd = J qd, bound."""
+        return [self.program.let(v) for v in mat_vec(self.J, qd)]
+
+    def curvature(self, qd: list[se.Basic], pd: list[se.Basic]) -> list[se.Basic]:
+        """h = (zd^T H_i zd)_i, bound: the second derivative of the leg equations along the motion at
+        zero accelerations, so that J_x pdd - J_q qdd + h = 0."""
+        zd = list(qd) + list(pd)
+        return [self.program.let(sum((se.sympify(c) * zd[a] * zd[b] for a, b, c in terms), se.Integer(0)))
+                for terms in self.d[_constraint_hessians]]
+
+    def bias(self, qd: list[se.Basic], pd: list[se.Basic]) -> list[se.Basic]:
+        """b = dJ/dt qd = -J_x^-1 h, so that pdd = J qdd + b."""
+        h = self.curvature(qd, pd)
+        return [self.program.let(-dot(row, h)) for row in self.J_x_inverse]
+
+    @cached_property
+    def M_a(self) -> list[se.Basic]:
+        return self.program.bind(se_vector(self.parts.actuator_diagonal))
+
+    @cached_property
+    def M_p(self) -> Matrix:
+        n = self.n
+        values = self.program.bind([v for row in se_matrix(self.parts.platform_matrix) for v in row])
+        return [values[i * n:(i + 1) * n] for i in range(n)]
+
+    def V_a(self, qd: list[se.Basic]) -> list[se.Basic]:
+        """1/2 dM_a,ii/dq_i qd_i^2 (M_a diagonal, M_a,ii a function of q_i only)."""
+        return [se.diff(m, q) * v * v / 2 for m, q, v in zip(se_vector(self.parts.actuator_diagonal), self.q, qd)]
+
+    def V_p(self, pd: list[se.Basic]) -> list[se.Basic]:
+        """The platform's Coriolis and centrifugal force in p: Christoffel symbols of M_p(p)."""
+        M_p = se_matrix(self.parts.platform_matrix)
+        if all(se.diff(v, s) == 0 for row in M_p for v in row for s in self.p):
+            return [se.Integer(0)] * self.n
+        return self.program.bind(lagrange.coriolis_vector(lagrange.mass_matrix_partials(M_p, self.p), pd))
+
+    @cached_property
+    def gravity_parts(self) -> tuple[list[se.Basic], list[se.Basic]] | None:
+        """(G_a = du_a/dq, G_p = du_p/dp), bound; None without gravity."""
+        if all(c == 0 for c in self.d.model.gravity):
+            return None
+        u_a, u_p = se.sympify(self.parts.actuator_potential), se.sympify(self.parts.platform_potential)
+        values = self.program.bind([se.diff(u_a, q) for q in self.q] + [se.diff(u_p, p) for p in self.p])
+        return values[:self.n], values[self.n:]
+
+    def friction(self, qd: list[se.Basic]) -> list[se.Basic] | None:
+        if not self.d.model.friction:
+            return None
+        rates = dict(zip((c.name for c in self.d.model.coordinates), qd))
+        forces = {name: se.Integer(0) for name in rates}
+        for f in self.d.model.friction:
+            forces[f.joint] = joint_friction(f, rates[f.joint])
+        return list(forces.values())
+
+    def torques(self, qd: list[se.Basic], qdd: list[se.Basic] | None, with_gravity: bool = True,
+                with_friction: bool = True) -> list[se.Basic]:
+        """M_a qdd + V_a + G_a + F_f + J^T (M_p pdd + V_p + G_p), pdd = J qdd + b (qdd None: zero)."""
+        pd = self.task_rates(qd)
+        pdd = self.bias(qd, pd)
+        if qdd is not None:
+            pdd = [a + b for a, b in zip(mat_vec(self.J, qdd), pdd)]
+        F_p = [a + b for a, b in zip(mat_vec(self.M_p, pdd), self.V_p(pd))]
+        tau = [a for a in self.V_a(qd)]
+        if qdd is not None:
+            tau = [t + m * a for t, m, a in zip(tau, self.M_a, qdd)]
+        gravity = self.gravity_parts if with_gravity else None
+        if gravity is not None:
+            F_p = [f + g for f, g in zip(F_p, gravity[1])]
+            tau = [t + g for t, g in zip(tau, gravity[0])]
+        friction = self.friction(qd) if with_friction else None
+        if friction is not None:
+            tau = [t + f for t, f in zip(tau, friction)]
+        return [t + f for t, f in zip(tau, self.J_transpose(F_p))]
+
+    def mass_matrix(self) -> Matrix:
+        """M_a + J^T M_p J (symmetric by construction)."""
+        n, J = self.n, self.J
+        MJ = [[self.program.let(v) for v in mat_vec(self.M_p, [J[k][j] for k in range(n)])] for j in range(n)]
+        M: Matrix = [[se.Integer(0)] * n for _ in range(n)]
+        for i in range(n):
+            for j in range(i, n):
+                M[i][j] = M[j][i] = self.program.let(
+                    (self.M_a[i] if i == j else 0) + sum((J[k][i] * MJ[j][k] for k in range(n)), se.Integer(0)))
+        return M
+
+
+def _inputs(d: Derivation, *groups: str) -> list:
+    """q, then p, then the other coordinate groups."""
+    return ["q", task_input(d.model), *groups]
+
+
+def _symbols(d: Derivation, group: str) -> list[se.Basic]:
+    return se_vector(coordinates.symbols(d.model, group))
+
+
+def _require_gravity(d: Derivation, name: str) -> None:
+    if all(c == 0 for c in d.model.gravity):
+        raise DerivationError(f"{d.model.name}: the model has no gravity, so {name} is identically zero and is "
+                              f"not emitted; declare 'gravity:' in the model or remove '{name}' from the outputs")
+
+
+_PAIR = "Evaluate at a consistent pair q, p (p = fk(q) or q = ik(p))."
+
+
+@quantity("mass_matrix", "mass matrix M(q) = M_a + J^T M_p J in the actuated coordinates (n x n)", mechanism=PARALLEL,
+          kappa_degree=2)
+def _mass_matrix(d: Derivation) -> FunctionSpec:
+    program = Program()
+    M = _Terms(d, program).mass_matrix()
+    n = d.model.dof
+    return function_spec(
+        d, "mass_matrix", "Mass matrix in the actuated coordinates.",
+        "M = M_a + J^T M_p J: the actuator side (arms, rod shares at the elbows, rotors times the gear ratio "
+        "squared; diagonal) plus the platform side (platform and rod shares at the platform joints) carried "
+        f"to the actuators by the task Jacobian J (k = 1/2 qd^T M qd). {_PAIR}",
+        _inputs(d), program, [("M", [v for row in M for v in row], (n, n), "symmetric positive definite mass matrix",
+                               "")])
+
+
+@quantity("coriolis_vector", "Coriolis and centrifugal efforts V = V_a + J^T (M_p b + V_p) (n)", mechanism=PARALLEL,
+          kappa_degree=4)
+def _coriolis_vector(d: Derivation) -> FunctionSpec:
+    program = Program()
+    V = _Terms(d, program).torques(_symbols(d, "qd"), None, with_gravity=False, with_friction=False)
+    return function_spec(
+        d, "coriolis_vector", "Coriolis and centrifugal efforts at the actuators.",
+        "V = V_a + J^T (M_p b + V_p(p, pd)) with pd = J qd and b = dJ/dt qd = -J_x^-1 (zd^T H_i zd)_i (the "
+        "second derivative of the leg equations along the motion); V_a and V_p from the Christoffel symbols of "
+        f"M_a(q) and M_p(p). {_PAIR}",
+        _inputs(d, "qd"), program, [("V", V, (d.model.dof,), "Coriolis and centrifugal efforts", EFFORT_UNIT)])
+
+
+@quantity("gravity_vector", "actuator efforts G = du_a/dq + J^T du_p/dp that hold the device against gravity",
+          mechanism=PARALLEL)
+def _gravity_vector(d: Derivation) -> FunctionSpec:
+    _require_gravity(d, "gravity_vector")
+    program = Program()
+    terms = _Terms(d, program)
+    G_a, G_p = terms.gravity_parts  # type: ignore[misc]
+    G = [a + b for a, b in zip(G_a, terms.J_transpose(G_p))]
+    return function_spec(
+        d, "gravity_vector", "Gravity compensation efforts.",
+        "G = du_a/dq + J^T du_p/dp with u = -g . (sum of mass times centre of mass): the actuator efforts that "
+        f"hold the device still at the pose (gravity compensation of a haptic device). {_PAIR}",
+        _inputs(d), program, [("G", G, (d.model.dof,), "actuator efforts that hold the device against gravity",
+                               EFFORT_UNIT)])
+
+
+@quantity("friction", "actuator friction F_f(qd): viscous + Coulomb (n)", mechanism=PARALLEL)
+def _friction(d: Derivation) -> FunctionSpec:
+    program = Program()
+    F = _Terms(d, program).friction(_symbols(d, "qd"))
+    if F is None:
+        raise DerivationError(f"{d.model.name}: the model declares no friction; add a 'friction:' section "
+                              "or remove 'friction' from the outputs")
+    return function_spec(
+        d, "friction", "Actuator friction efforts.",
+        "F_f = viscous qd + coulomb sign(qd) per actuator (seed eq. 8.34), or coulomb tanh(qd / v_s) where the "
+        "model gives a smoothing velocity v_s.",
+        ["qd"], program, [("F_f", F, (d.model.dof,), "friction efforts opposing the motion", EFFORT_UNIT)])
+
+
+@quantity("inverse_dynamics", "inverse dynamics tau = M qdd + V + G + F_f at the actuators (n)", mechanism=PARALLEL,
+          kappa_degree=4)
+def _inverse_dynamics(d: Derivation) -> FunctionSpec:
+    program = Program()
+    tau = _Terms(d, program).torques(_symbols(d, "qd"), _symbols(d, "qdd"))
+    return function_spec(
+        d, "inverse_dynamics", "Inverse dynamics: actuator efforts for a motion.",
+        "tau = M_a qdd + V_a + G_a + F_f + J^T (M_p pdd + V_p + G_p) with pdd = J qdd + b (d'Alembert: the loop "
+        "constraint forces do no work on motions pd = J qd), equal to M qdd + V + G + F_f without forming M. "
+        f"{_PAIR}",
+        _inputs(d, "qd", "qdd"), program, [("tau", tau, (d.model.dof,), "actuator efforts", EFFORT_UNIT)])
+
+
+@quantity("forward_dynamics", "forward dynamics qdd = M^-1 (tau - V - G - F_f) (n)", solves_with="mass_matrix",
+          mechanism=PARALLEL, kappa_degree=4)
+def _forward_dynamics(d: Derivation) -> FunctionSpec:
+    program = Program()
+    terms = _Terms(d, program)
+    rest = terms.torques(_symbols(d, "qd"), None)
+    M = terms.mass_matrix()
+    qdd = [row[0] for row in ldl_solve(program, M, [[t - r] for t, r in zip(_symbols(d, "tau"), rest)])]
+    return function_spec(
+        d, "forward_dynamics", "Forward dynamics: actuator accelerations under given efforts.",
+        "qdd = M^-1 (tau - V - G - F_f) by a straight-line LDL^T factorization of the symmetric positive "
+        f"definite M = M_a + J^T M_p J; the platform then accelerates with pdd = J qdd + b. {_PAIR}",
+        _inputs(d, "qd", "tau"), program,
+        [("qdd", qdd, (d.model.dof,), "actuator accelerations", "rad/s^2 (revolute), m/s^2 (prismatic)")])
+
+
+@quantity("operational_space", "task-space dynamics F = Mx pdd + Vx + Gx of the platform", mechanism=PARALLEL,
+          kappa_degree=3)
+def _operational_space(d: Derivation) -> FunctionSpec:
+    program = Program()
+    terms = _Terms(d, program)
+    n = d.model.dof
+    J_x, J_q = terms.jacobians
+    J_inverse = [[program.let(J_x[i][k] / J_q[i]) for k in range(n)] for i in range(n)]  # J^-1 = J_q^-1 J_x
+
+    def inverse_transpose(v: list[se.Basic]) -> list[se.Basic]:  # J^-T v
+        return [sum((J_inverse[i][k] * v[i] for i in range(n)), se.Integer(0)) for k in range(n)]
+
+    qd = _symbols(d, "qd")
+    pd = terms.task_rates(qd)
+    J_inverse_b = [program.let(-h / J_q[i]) for i, h in enumerate(terms.curvature(qd, pd))]  # J^-1 b = -J_q^-1 h
+    Mx: Matrix = [[se.Integer(0)] * n for _ in range(n)]
+    for k in range(n):
+        for m in range(k, n):
+            Mx[k][m] = Mx[m][k] = program.let(terms.M_p[k][m] + sum(
+                (J_inverse[i][k] * terms.M_a[i] * J_inverse[i][m] for i in range(n)), se.Integer(0)))
+    # Vx = J^-T (V_a - M_a J^-1 b) + V_p: the actuator side seen in p, minus its share of the bias.
+    Vx = [a + c for a, c in zip(inverse_transpose([v - m * x for v, m, x in zip(terms.V_a(qd), terms.M_a, J_inverse_b)]),
+                                terms.V_p(pd))]
+    outputs = [("Mx", [v for row in Mx for v in row], (n, n), "task-space mass matrix J^-T M J^-1", ""),
+               ("Vx", Vx, (n,), "task-space Coriolis and centrifugal force", TASK_FORCE_UNIT)]
+    if terms.gravity_parts is not None:
+        G_a, G_p = terms.gravity_parts
+        outputs.append(("Gx", [a + c for a, c in zip(inverse_transpose(G_a), G_p)], (n,),
+                        "task-space gravity force J^-T G", TASK_FORCE_UNIT))
+    return function_spec(
+        d, "operational_space", "Task-space dynamics of the platform.",
+        "F = Mx pdd + Vx + Gx is the force on the platform (conjugate to p) that produces the motion, tau = J^T F: "
+        "Mx = J^-T M_a J^-1 + M_p, Vx = J^-T (V_a - M_a J^-1 b) + V_p, Gx = J^-T G_a + G_p with J^-1 = J_q^-1 J_x "
+        "and J^-1 b = -J_q^-1 h (h: the leg equations' second derivative along the motion; no solve but pd = J qd: "
+        f"J_q is diagonal; seed eqs. 8.61-8.64). Gx is omitted for a model without gravity. {_PAIR}",
+        _inputs(d, "qd"), program, outputs)
+
+
+@quantity("kinetic_energy", "kinetic energy k = 1/2 qd^T M_a qd + 1/2 pd^T M_p pd (scalar)", mechanism=PARALLEL,
+          kappa_degree=2)
+def _kinetic_energy(d: Derivation) -> FunctionSpec:
+    program = Program()
+    terms = _Terms(d, program)
+    qd = _symbols(d, "qd")
+    pd = terms.task_rates(qd)
+    k = (sum((m * v * v for m, v in zip(terms.M_a, qd)), se.Integer(0)) + dot(pd, mat_vec(terms.M_p, pd))) / 2
+    return function_spec(
+        d, "kinetic_energy", "Kinetic energy.",
+        f"k = 1/2 qd^T M_a qd + 1/2 pd^T M_p pd with pd = J qd (= 1/2 qd^T M qd). {_PAIR}",
+        _inputs(d, "qd"), program, [("k", [k], (), "kinetic energy of all bodies", "J")])
+
+
+@quantity("potential_energy", "potential energy u = u_a(q) + u_p(p) (scalar)", mechanism=PARALLEL)
+def _potential_energy(d: Derivation) -> FunctionSpec:
+    _require_gravity(d, "potential_energy")
+    program = Program()
+    parts = d[_inertia]
+    (u,) = program.bind([se.sympify(parts.actuator_potential + parts.platform_potential)])
+    return function_spec(
+        d, "potential_energy", "Gravitational potential energy.",
+        f"u = -g . (sum of mass times centre of mass), zero with every mass at the base origin. {_PAIR}",
+        _inputs(d), program, [("u", [u], (), "potential energy", "J")])

@@ -1,0 +1,150 @@
+"""The mass distribution of a parallel mechanism, split by what moves it (sympy, exact).
+
+With the rods lumped at their ends (:class:`~symkin.model.schema.ParallelBodies`), every
+mass of a distance-form mechanism (:mod:`symkin.parallel.distance`) moves either with one
+actuated variable q_i (the actuated link, the rod's share at C_i, the rotor) or with the
+platform (the platform body, the rods' shares at B_i).  The kinetic and potential energy
+separate accordingly:
+
+    k = 1/2 qd^T M_a(q) qd + 1/2 pd^T M_p(p) pd,        u = u_a(q) + u_p(p),
+
+* M_a is diagonal: leg i's actuator side turns (or slides) about the fixed axis of its first
+  moving joint, M_a,ii = m |dc/dq_i|^2 + w^T (R I R^T) w + m_C |dC/dq_i|^2 + n^2 J_rotor;
+* M_p is the platform's spatial inertia in the task coordinates p = (position, roll, pitch,
+  yaw): with the mass m, the first moment h and the inertia I_o about the platform origin
+  (all platform-side masses summed, parallel-axis theorem; platform axes), v_o = d(position)/dt
+  and the angular velocity in platform axes w_b = E_b d(angles)/dt,
+
+      k_p = 1/2 m |v_o|^2 + v_o . R (w_b x h) + 1/2 w_b^T I_o w_b,
+
+  so M_p = [[m 1, -R [h]x E_b], [.., E_b^T I_o E_b]] (constant, m 1, for a translational
+  platform);
+* u = -g . (sum of mass times centre of mass), the same split.
+
+This is what makes the Lagrangian of the closed chain reducible through the task Jacobian
+(:mod:`symkin.parallel.dynamics`).  A distal link with rotational inertia of its own (not
+lumped) moves with passive joint variables too, and is not covered here.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import sympy
+
+from symkin.errors import DerivationError
+from symkin.model.schema import Body, Model, ParallelBodies, PlatformMotion
+from symkin.parallel.distance import DistanceLeg
+from symkin.parallel.inputs import task_symbols
+from symkin.parallel.legs import LegChain, walk
+
+
+@dataclass(frozen=True)
+class Inertia:
+    """The split mass distribution (see the module docstring).
+
+    Attributes:
+        actuator_diagonal: M_a,ii per leg, a function of q_i only.
+        actuator_potential: u_a(q).
+        platform_matrix: M_p(p), symmetric, one row per task coordinate.
+        platform_potential: u_p(p).
+    """
+
+    actuator_diagonal: tuple[sympy.Expr, ...]
+    actuator_potential: sympy.Expr
+    platform_matrix: sympy.ImmutableMatrix
+    platform_potential: sympy.Expr
+
+
+def _skew(v: sympy.Matrix) -> sympy.Matrix:
+    return sympy.Matrix([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
+
+
+def body_angular_velocity_matrix(model: Model) -> sympy.Matrix:
+    """E_b with w_body = R^T w = E_b d(roll, pitch, yaw)/dt for R = Rz(yaw) Ry(pitch) Rx(roll).
+
+    w = yawd z + pitchd Rz y + rolld Rz Ry x, so R^T w = rolld x + pitchd Rx^T y + yawd Rx^T Ry^T z:
+    E_b = [[1, 0, -sin(pitch)], [0, cos(roll), sin(roll) cos(pitch)], [0, -sin(roll), cos(roll) cos(pitch)]].
+    """
+    values = dict(zip(model.task_space, task_symbols(model)))
+    roll, pitch = values["roll"], values["pitch"]
+    return sympy.Matrix([[1, 0, -sympy.sin(pitch)],
+                         [0, sympy.cos(roll), sympy.sin(roll) * sympy.cos(pitch)],
+                         [0, -sympy.sin(roll), sympy.cos(roll) * sympy.cos(pitch)]])
+
+
+def _about_origin(body: Body) -> tuple[sympy.Expr, sympy.Matrix, sympy.Matrix]:
+    """(m, h = m c, I_o = I_c + m (|c|^2 E - c c^T)): a body's mass, first moment and inertia about its
+    frame origin (parallel-axis theorem)."""
+    c = sympy.Matrix(body.com)
+    return body.mass, body.mass * c, sympy.Matrix(body.inertia) + body.mass * (c.dot(c) * sympy.eye(3) - c * c.T)
+
+
+def _platform(model: Model, bodies: ParallelBodies, legs: tuple[DistanceLeg, ...], platform_R: sympy.Matrix
+              ) -> tuple[sympy.ImmutableMatrix, sympy.Expr]:
+    """M_p(p) and u_p(p) of the platform body and the rods' shares at the platform joints."""
+    parts = [_about_origin(bodies.platform)] if bodies.platform is not None else []
+    share = bodies.rod_mass * bodies.rod_platform_fraction
+    parts += [_about_origin(Body("rod", share, tuple(leg.b), sympy.zeros(3, 3))) for leg in legs]
+    m = sum((part[0] for part in parts), sympy.Integer(0))
+    h = sum((part[1] for part in parts), sympy.zeros(3, 1))
+    I_o = sum((part[2] for part in parts), sympy.zeros(3, 3))
+    p = task_symbols(model)
+    g = sympy.Matrix(model.gravity)
+    position = sympy.Matrix(p[:3])
+    potential = -g.dot(m * position + platform_R * h)
+    if model.parallel.motion is PlatformMotion.TRANSLATION:  # type: ignore[union-attr]
+        return sympy.ImmutableMatrix(m * sympy.eye(3)), sympy.expand(potential)
+    E_b = body_angular_velocity_matrix(model)
+    coupling = -platform_R * _skew(h) * E_b  # -[R h]x E = -R [h]x R^T E
+    rotation = E_b.T * I_o * E_b
+    M = sympy.Matrix.vstack(sympy.Matrix.hstack(m * sympy.eye(3), coupling),
+                            sympy.Matrix.hstack(coupling.T, rotation))
+    return sympy.ImmutableMatrix(M), potential
+
+
+def _actuator_side(model: Model, bodies: ParallelBodies, leg: DistanceLeg, chain: LegChain
+                   ) -> tuple[sympy.Expr, sympy.Expr]:
+    """(M_a,ii, u_a,i) of one leg: actuated link, rod share at C_i and rotor."""
+    g = sympy.Matrix(model.gravity)
+    q = leg.q
+    inertia = bodies.gear_ratio ** 2 * bodies.rotor_inertia
+    potential = sympy.Integer(0)
+    C_share = bodies.rod_mass * (1 - bodies.rod_platform_fraction)
+    C = sympy.Matrix(leg.C)
+    inertia += C_share * sympy.trigsimp(sympy.diff(C, q).dot(sympy.diff(C, q)))
+    potential += -C_share * g.dot(C)
+    if bodies.actuated_link is not None:
+        link = bodies.actuated_link
+        index = next(k for k, j in enumerate(leg.leg.joints) if j.active is not None)
+        frame = walk(leg.leg, joints=slice(0, index + 1)).end
+        if leg.actuator != "before" or (frame.p.free_symbols | frame.R.free_symbols) & _variables(leg, {q}):
+            raise DerivationError(
+                f"model '{model.name}': leg '{leg.leg.name}' has no link moved by its actuator alone (the actuated "
+                "joint is not the first moving joint of the leg); remove 'bodies: actuated_link:' and lump its mass")
+        R, origin = sympy.Matrix(frame.R), sympy.Matrix(frame.p)
+        c = origin + R * sympy.Matrix(link.com)
+        motion = next(m for m in chain.motions if m.variable == q)
+        w = sympy.Matrix(motion.direction) if motion.rotation else sympy.zeros(3, 1)
+        v = sympy.diff(c, q)
+        inertia += sympy.trigsimp(link.mass * v.dot(v) + (w.T * R * sympy.Matrix(link.inertia) * R.T * w)[0, 0])
+        potential += -link.mass * g.dot(c)
+    return inertia, potential
+
+
+def _variables(leg: DistanceLeg, exclude: set[sympy.Symbol]) -> set[sympy.Symbol]:
+    """The symbols of every joint variable of the leg but ``exclude``."""
+    names = {v for j in leg.leg.joints for v in j.variables}
+    return {sympy.Symbol(n, real=True) for n in names} - exclude
+
+
+def split_inertia(model: Model, legs: tuple[DistanceLeg, ...], chains: tuple[LegChain, ...],
+                  platform_R: sympy.Matrix) -> Inertia:
+    """The mass distribution of ``model`` (which must declare ``bodies:``) split as in the module docstring."""
+    bodies = model.parallel.bodies if model.parallel is not None else None
+    if bodies is None:
+        raise DerivationError(f"model '{model.name}' declares no bodies, so it has no dynamics; add a 'bodies:' "
+                              "section (platform, actuated_link, rod, rotor; see docs/model-format.md)")
+    sides = [_actuator_side(model, bodies, leg, chain) for leg, chain in zip(legs, chains)]
+    M_p, u_p = _platform(model, bodies, legs, platform_R)
+    return Inertia(tuple(s[0] for s in sides), sum((s[1] for s in sides), sympy.Integer(0)), M_p, u_p)
