@@ -418,3 +418,11 @@ def test_stewart_inverse_dynamics_matches_pinocchio_rigid_body_and_strut_statics
         assert np.allclose(tau, tau_ref, rtol=0, atol=1e-9 * np.abs(tau_ref).max()), (tau, tau_ref)
         qdd = f["forward_dynamics"](length, p, ld, tau_ref)[0]
         assert np.allclose(qdd, ldd, rtol=0, atol=1e-9 * np.abs(ldd).max()), (qdd, ldd)
+
+
+def test_symkin_quantities_lists_the_dynamics_of_parallel_models(capsys):
+    from symkin.cli import main
+    assert main(["quantities"]) == 0
+    parallel = {line.split()[0] for line in capsys.readouterr().out.splitlines() if " parallel " in line}
+    assert {"mass_matrix", "coriolis_vector", "gravity_vector", "friction", "inverse_dynamics", "forward_dynamics",
+            "operational_space", "kinetic_energy", "potential_energy", "tcp_force_map"} <= parallel

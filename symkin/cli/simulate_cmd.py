@@ -1,4 +1,4 @@
-"""``symkin simulate``: forward dynamics of a serial model in a scenario (seed sec. 5)."""
+"""``symkin simulate``: forward dynamics of a serial model or a DELTA-type parallel mechanism in a scenario (seed sec. 5)."""
 
 from __future__ import annotations
 
@@ -13,22 +13,28 @@ from symkin.cli import analysis_args
 from symkin.cli.progress import Progress
 
 #: What a model file is derived with on the fly; the optional ones where the model has them.
-SIMULATION_OUTPUTS = ("fk", "jacobian", "jacobian_geometric", "forward_dynamics", "inverse_dynamics",
-                      "mass_matrix", "kinetic_energy", "coriolis_vector")
+DYNAMICS_OUTPUTS = ("forward_dynamics", "inverse_dynamics", "mass_matrix", "kinetic_energy", "coriolis_vector")
+SIMULATION_OUTPUTS = {"serial": ("fk", "jacobian", "jacobian_geometric") + DYNAMICS_OUTPUTS,
+                      "parallel": ("ik", "fk", "jacobian") + DYNAMICS_OUTPUTS,
+                      "parallel pose": ("ik", "inverse_jacobian") + DYNAMICS_OUTPUTS}
 OPTIONAL_OUTPUTS = ("gravity_vector", "potential_energy", "friction")
-SCENARIOS = ("sine", "tracking", "haptic-wall", "free-swing")
+SCENARIOS = ("sine", "tracking", "haptic-wall", "gravity-compensation", "free-swing")
 #: the integrator each scenario uses unless --integrator says otherwise
-DEFAULT_INTEGRATOR = {"sine": "dop853", "tracking": "rk4", "haptic-wall": "rk4", "free-swing": "dop853"}
+DEFAULT_INTEGRATOR = {"sine": "dop853", "tracking": "rk4", "haptic-wall": "rk4", "gravity-compensation": "rk4",
+                      "free-swing": "dop853"}
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "simulate", help="simulate the dynamics: seed haptic scenario, trajectory following, virtual wall",
-        description="Integrate the forward dynamics of a serial model with its generated functions. Scenarios: "
+        description="Integrate the forward dynamics of a serial model, or of a parallel mechanism with a closed-form "
+                    "fk (a DELTA: in its actuated joints, the platform at fk(q)), with its generated functions. Scenarios: "
                     "'sine' (seed sec. 5.3, Figs. 8.21, 8.22: one joint follows a sine, the others are fixed; joint "
                     "torques and TCP forces F = J^-T tau, checked by a forward simulation), 'tracking' (Fig. 8.17: a "
                     "TCP circle through inverse kinematics and computed-torque control), 'haptic-wall' (Fig. 8.18: a "
-                    "mass-spring-damper hand pushes into a virtual wall rendered in a 1 kHz loop), 'free-swing' (no "
+                    "mass-spring-damper hand pushes into a virtual wall rendered in a 1 kHz loop), 'gravity-compensation' (the "
+                    "hand moves the handle up and down, --push along the last task axis, with the actuators holding "
+                    "tau = G(q) and with them off: the force the user feels), 'free-swing' (no "
                     "torques; energy conserved without friction). Joints stop at their declared limits (a stiff "
                     "spring-damper, --joint-stops); contacts are reported and shaded in the figures. Writes CSV per run, summary.txt and figures into "
                     "the output directory (replaced as a whole).",
@@ -61,7 +67,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--amplitude", default="30deg", metavar="A",
                    help="sine: amplitude, rad or m, or with 'deg' (default: %(default)s)")
     p.add_argument("--frequency", type=float, default=1.0, metavar="HZ",
-                   help="sine: frequency; haptic-wall: frequency of the hand's push (default: 1)")
+                   help="sine: frequency; haptic-wall, gravity-compensation: frequency of the hand's motion "
+                        "(default: 1)")
     p.add_argument("--radius", type=float, default=0.02, metavar="M", help="tracking: circle radius (default: 0.02)")
     p.add_argument("--bandwidth", type=float, default=50.0, metavar="RAD_S",
                    help="computed torque: omega of the error dynamics (default: 50)")
@@ -69,14 +76,15 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="haptic-wall: distance of the wall from the start TCP along the first task axis "
                         "(default: 0.01)")
     p.add_argument("--push", type=float, default=0.02, metavar="M",
-                   help="haptic-wall: how far the hand intends to move towards the wall (default: 0.02)")
+                   help="haptic-wall: how far the hand intends to move towards the wall; gravity-compensation: its "
+                        "travel up and down (default: 0.02)")
     p.add_argument("--wall-stiffness", type=float, default=1000.0, metavar="N_M", help="k_w (default: 1000 N/m)")
     p.add_argument("--wall-damping", type=float, default=2.0, metavar="NS_M", help="b_w (default: 2 N s/m)")
     p.add_argument("--force-gain", type=float, default=0.0, metavar="K",
                    help="haptic-wall: force feedback gain K_f (default: 0, open-loop impedance rendering)")
     p.add_argument("--hand", action="append", default=[], metavar="NAME=VALUE[,...]",
-                   help="haptic-wall: user model, of mass, arm_stiffness, arm_damping, grip_stiffness, grip_damping "
-                        "(default: 0.2 kg, 200 N/m, 5 N s/m, 2000 N/m, 10 N s/m)")
+                   help="haptic-wall, gravity-compensation: user model, of mass, arm_stiffness, arm_damping, "
+                        "grip_stiffness, grip_damping (default: 0.2 kg, 200 N/m, 5 N s/m, 2000 N/m, 10 N s/m)")
     p.add_argument("--joint-stops", choices=("on", "off"),
                    help="mechanical stops at the declared joint limits: a linear spring-damper beyond each limit "
                         "(default: on when the model declares limits)")
@@ -199,6 +207,9 @@ def run(args: argparse.Namespace) -> int:
                                                frequency=args.frequency, stiffness=args.wall_stiffness,
                                                damping=args.wall_damping, force_gain=args.force_gain, hand=hand,
                                                stops=stops)
+            elif args.scenario == "gravity-compensation":
+                result = scenarios.gravity_compensation(label, plant, q0, args.push, timing, frequency=args.frequency,
+                                                        hand=hand, stops=stops)
             else:
                 result = scenarios.free_swing(label, plant, q0, timing, stops)
         except SimulationError as err:

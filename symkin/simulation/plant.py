@@ -9,6 +9,10 @@ The TCP point of the haptic loop is the translational part of the model's task s
 (``x``, ``y``, ``z`` components): its position comes from ``fk`` and its velocity Jacobian
 from the rows of the task Jacobian ``jacobian``, so forces map to joint torques by
 tau = J^T F (seed eq. 8.35) with zeros in the rotational rows.
+
+A parallel mechanism (a DELTA) is a plant in its actuated coordinates q too: its generated
+dynamics take the platform pose p with q (symkin.parallel.dynamics), which the plant supplies
+from the closed-form forward kinematics, p = fk(q), so the state stays (q, qd).
 """
 
 from __future__ import annotations
@@ -21,27 +25,35 @@ from symkin.runtime import LoadedModel
 
 #: Functions a plant cannot do without, and how to get them.
 REQUIRED = ("forward_dynamics", "inverse_dynamics", "mass_matrix", "kinetic_energy")
+#: ... and a parallel mechanism's: its platform pose p = fk(q) (closed form).
+REQUIRED_PARALLEL = REQUIRED + ("fk",)
 
 
 class Plant:
-    """Joint-space dynamics of a serial model (seed eq. 8.34) and the TCP point it drives.
+    """Joint-space dynamics of a serial model or a parallel mechanism with a closed-form fk
+    (seed eq. 8.34) and the TCP point it drives.
 
     Args:
         model: a loaded model (``symkin.load(...)``), any backend, possibly ``bind()``-ed,
             with at least ``forward_dynamics``, ``inverse_dynamics`` and ``kinetic_energy``
             generated (``gravity_vector`` and ``potential_energy`` where the model has gravity,
-            ``friction`` where it has friction; ``fk`` and ``jacobian`` for task-space work).
+            ``friction`` where it has friction; ``fk`` and ``jacobian`` for task-space work, and
+            ``fk`` always for a parallel mechanism).
 
     Raises:
         GeneratedCodeError: a needed function was not generated.
     """
 
     def __init__(self, model: LoadedModel):
-        missing = [name for name in REQUIRED if name not in model.functions]
+        self.parallel = model.info.mechanism == "parallel"
+        required = REQUIRED_PARALLEL if self.parallel else REQUIRED
+        missing = [name for name in required if name not in model.functions]
         if missing:
-            raise GeneratedCodeError(f"{model.name}: simulation needs the generated {', '.join(missing)}; derive "
-                                     f"the model with them, e.g. 'symkin derive MODEL --only "
-                                     f"{','.join(REQUIRED)},gravity_vector,potential_energy,fk,jacobian'")
+            hint = (" (a closed-form fk: three legs and a translating platform, e.g. a DELTA)"
+                    if self.parallel and "fk" in missing else "")
+            suggested = ",".join(dict.fromkeys(required + ("gravity_vector", "potential_energy", "fk", "jacobian")))
+            raise GeneratedCodeError(f"{model.name}: simulation needs the generated {', '.join(missing)}{hint}; "
+                                     f"derive the model with them, e.g. 'symkin derive MODEL --only {suggested}'")
         self.model = model
         self.name = model.name
         self.coordinates = mechanism.coordinate_names(model)
@@ -61,10 +73,35 @@ class Plant:
             f"{self.name}: task-space simulation needs 'fk' and 'jacobian' and a task space with x, y or z "
             f"(it is [{', '.join(self.task_space)}])")
         functions = set(model.functions)
-        self._gravity = model.gravity_vector if "gravity_vector" in functions else None
-        self._potential = model.potential_energy if "potential_energy" in functions else None
-        self._friction = model.friction if "friction" in functions else None
+        self._forward, self._inverse = self._of_joints("forward_dynamics"), self._of_joints("inverse_dynamics")
+        self._mass, self._kinetic = self._of_joints("mass_matrix"), self._of_joints("kinetic_energy")
+        self._jacobian = self._of_joints("jacobian") if "jacobian" in functions else None
+        self._gravity = self._of_joints("gravity_vector") if "gravity_vector" in functions else None
+        self._potential = self._of_joints("potential_energy") if "potential_energy" in functions else None
+        self._friction = model.friction if "friction" in functions else None  # F_f(qd): no pose
         self._check_complete(functions)
+
+    def _of_joints(self, name: str):
+        """The generated function ``name`` as a function of the joint variables q (and the rest): a parallel
+        mechanism's takes the platform pose p = fk(q) after q."""
+        function = getattr(self.model, name)
+        if not self.parallel:
+            return function
+        return lambda q, *rest: function(q, self.pose(q), *rest)
+
+    def pose(self, q: np.ndarray) -> np.ndarray:
+        """A parallel mechanism's platform pose p = fk(q) (..., task dof); NaN where it does not assemble."""
+        return np.asarray(self.model.fk(q).position)
+
+    def _test_configuration(self) -> np.ndarray:
+        """A configuration to probe the generated functions at: random for a serial chain, the
+        declared home pose's (q = ik(home)) or q = 0 for a parallel mechanism, which must assemble."""
+        if not self.parallel:
+            return np.random.default_rng(7).uniform(-1.0, 1.0, self.dof)
+        home = self.model.info.home
+        if home is not None and "ik" in self.model.functions:
+            return np.asarray(self.model.ik(np.asarray(home, dtype=float)).joints, dtype=float)
+        return np.zeros(self.dof)
 
     def _check_complete(self, functions: set[str]) -> None:
         """Refuse a plant whose missing functions would silently read as zero.
@@ -72,18 +109,20 @@ class Plant:
         At a test state, ``inverse_dynamics(q, 0, 0)`` is G(q), and with ``coriolis_vector``
         ``inverse_dynamics(q, qd, 0) - inverse_dynamics(q, 0, 0) - V(q, qd)`` is F_f(qd).
         """
-        rng = np.random.default_rng(7)
-        q, qd = rng.uniform(-1.0, 1.0, self.dof), rng.uniform(-1.0, 1.0, self.dof)
+        q, qd = self._test_configuration(), np.random.default_rng(8).uniform(-1.0, 1.0, self.dof)
         zero = np.zeros(self.dof)
-        static = np.asarray(self.model.inverse_dynamics(q, zero, zero))
+        if self.parallel and not np.all(np.isfinite(self.pose(q))):
+            raise GeneratedCodeError(f"{self.name}: the mechanism does not assemble at q = {q.tolist()}; declare a "
+                                     "reachable parallel.home in the model file")
+        static = np.asarray(self._inverse(q, zero, zero))
         if self._gravity is None and np.any(static != 0.0):
             raise GeneratedCodeError(f"{self.name}: the model has gravity but 'gravity_vector' was not generated; "
                                      "derive it with gravity_vector,potential_energy")
         if self._gravity is not None and self._potential is None:
             raise GeneratedCodeError(f"{self.name}: the energy balance needs 'potential_energy'; derive it too")
         if self._friction is None and "coriolis_vector" in functions:
-            coriolis = self.model.coriolis_vector(q, qd)
-            friction = self.model.inverse_dynamics(q, qd, zero) - static - coriolis
+            coriolis = self._of_joints("coriolis_vector")(q, qd)
+            friction = self._inverse(q, qd, zero) - static - coriolis
             scale = np.max(np.abs(static)) + np.max(np.abs(coriolis)) + 1.0
             if np.max(np.abs(friction)) > 1e-9 * scale:
                 raise GeneratedCodeError(f"{self.name}: the model has friction but 'friction' was not generated; "
@@ -91,15 +130,15 @@ class Plant:
 
     def acceleration(self, q: np.ndarray, qd: np.ndarray, tau: np.ndarray) -> np.ndarray:
         """qdd = M^-1 (tau - V - G - F_f) (generated ``forward_dynamics``)."""
-        return self.model.forward_dynamics(q, qd, tau)
+        return self._forward(q, qd, tau)
 
     def torque(self, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
         """tau = M qdd + V + G + F_f (generated ``inverse_dynamics``, seed eq. 8.34)."""
-        return self.model.inverse_dynamics(q, qd, qdd)
+        return self._inverse(q, qd, qdd)
 
     def mass_matrix(self, q: np.ndarray) -> np.ndarray:
         """M(q) (..., n, n) (generated ``mass_matrix``; the joint stops take their inertia from it)."""
-        return self.model.mass_matrix(q)
+        return self._mass(q)
 
     def gravity(self, q: np.ndarray) -> np.ndarray:
         """G(q) = du/dq, zero without gravity."""
@@ -111,18 +150,26 @@ class Plant:
 
     def energy(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
         """k(q, qd) + u(q) (seed eq. 8.32)."""
-        k = self.model.kinetic_energy(q, qd)
+        k = self._kinetic(q, qd)
         return k + self._potential(q) if self._potential is not None else k
 
     def point(self, q: np.ndarray) -> np.ndarray:
         """Position (..., d) of the TCP in the translational task axes (:attr:`point_axes`)."""
         self._require_point()
+        if self.parallel:
+            return self.pose(q)[..., self._point_index]
         return self.model.fk(q)[..., self._point_index, 3]
 
     def point_jacobian(self, q: np.ndarray) -> np.ndarray:
         """(..., d, n): TCP velocity = J_p qd, the translational rows of the task Jacobian."""
         self._require_point()
-        return self.model.jacobian(q)[..., self.point_rows, :]
+        return self.task_jacobian(q)[..., self.point_rows, :]
+
+    def task_jacobian(self, q: np.ndarray) -> np.ndarray:
+        """(..., m, n): the task Jacobian J, pd = J qd (generated ``jacobian``)."""
+        if self._jacobian is None:
+            raise GeneratedCodeError(f"{self.name}: task-space simulation needs the generated 'jacobian'")
+        return self._jacobian(q)
 
     def _require_point(self) -> None:
         if self._point_error is not None:

@@ -9,6 +9,8 @@
   computed-torque control at the sample rate, zero-order hold.
 * :func:`haptic_wall` - the haptic force loop (Fig. 8.18): a mass-spring-damper hand pushes
   the TCP into a virtual wall rendered at the sample rate.
+* :func:`gravity_compensation` - a hand moves the handle up and down while the actuators
+  cancel the device's weight, tau = G(q), and again with them off: the force felt.
 * :func:`free_swing` - no torques: the mechanism swings under gravity; without friction its
   energy k + u stays constant.
 
@@ -17,6 +19,10 @@ the integration error.  With joint stops (``stops=StopSettings(...)``, see
 :mod:`symkin.simulation.stops`) the balance is k + u + U + D - w, every run reports its
 contacts (:mod:`symkin.simulation.contacts`) and marks them in the figures, and a fixed-step
 run checks RK4's stability in contact.
+
+Length: the five scenarios share the run helpers (the system with its stops, the integrator,
+the stop report, the energy balance) and differ in their controller and columns only; side by
+side they read as one table of experiments.
 """
 
 from __future__ import annotations
@@ -223,7 +229,7 @@ def sine(designs: Sequence[tuple[str, Plant]], center: np.ndarray, joint: int, a
     q, qd, qdd = reference(t)
     for label, plant in designs:
         tau = plant.torque(q, qd, qdd)
-        force = tcp_forces(plant.model.jacobian(q), tau)
+        force = tcp_forces(plant.task_jacobian(q), tau)
         system, stability = _system(plant, center, stops, timing)
         run = integrate(system, ComputedTorque(system, reference), system.initial(q[0], qd[0]), timing)
         report = stop_report(system, run, stability)
@@ -345,6 +351,64 @@ def haptic_wall(label: str, plant: Plant, q_start: np.ndarray, wall_offset: floa
         (f"torque [{labels.label(efforts)}]", tuple(f"tau_{n} [{u}]" for n, u in zip(names, efforts)))))]
     return ScenarioResult("haptic-wall", [Series(label, columns | report.columns, report.contacts)], figures,
                           summary)
+
+
+def gravity_compensation(label: str, plant: Plant, q_start: np.ndarray, travel: float, timing: Timing, *,
+                         frequency: float = 1.0, hand: dict[str, float] | None = None,
+                         stops: StopSettings | None = None) -> ScenarioResult:
+    """What a user feels of the device's weight: the hand moves the handle ``travel`` up and down
+    along the last translational task axis (z, or y of a planar arm) at ``frequency``, once with the
+    actuators holding tau = G(q) (gravity compensation, the generated ``gravity_vector``) and once
+    with them off (tau = 0).  The force the hand exerts on the handle, F_h, is what the user feels:
+    with compensation only the device's inertia, Coriolis and friction forces remain (its
+    transparency); without, also its weight, J^-T G(q) at the TCP (seed eq. 8.35).
+    """
+    q_start = np.asarray(q_start, dtype=float)
+    if not np.any(plant.gravity(q_start)):
+        raise ValueError(f"{plant.name}: the model has no gravity (or no 'gravity_vector'): nothing to compensate")
+    p0 = plant.point(q_start)
+    axes = plant.point_axes
+    vertical = np.zeros(len(p0))
+    vertical[-1] = 1.0
+    user = MassSpringDamperUser(sine_intent(p0, vertical, travel, frequency), **(hand or {}))
+    runs = (("gravity compensated (tau = G)", lambda t, x, system: system.plant.gravity(system.split(x).q)),
+            ("actuators off (tau = 0)", lambda t, x, system: np.zeros(plant.dof)))
+    series, lines, felt_peaks = [], [], []
+    names = plant.coordinates
+    _, efforts = labels.joint_units(plant)
+    for run_label, control in runs:
+        system, stability = _system(plant, q_start, stops, timing, user)
+        run = integrate(system, lambda t, x, c=control, sy=system: c(t, x, sy), system.initial(q_start), timing)
+        report = stop_report(system, run, stability)
+        s = system.split(run.x)
+        p, _, v = system.tcp_motion(s.q, s.qd)
+        felt = user.force_on_tcp(p, v, s.hand, s.hand_velocity)
+        columns = {"t [s]": run.t}
+        columns |= labels.named("TCP ", axes, "m", p)
+        columns |= labels.named("hand ", axes, "m", s.hand)
+        columns |= labels.named("F_hand_", axes, "N", felt)
+        columns |= labels.named("tau_", names, efforts, run.u)
+        series.append(Series(run_label, columns | report.columns, report.contacts))
+        felt_peaks.append(_peak(felt))
+        lines += [f"  {run_label}: the hand pushes with up to {_peak(felt):.3g} N (mean "
+                    f"{float(np.mean(felt[:, -1])):.3g} N along {axes[-1]}, rms "
+                    f"{float(np.sqrt(np.mean(np.sum(felt ** 2, axis=-1)))):.3g} N); peak torques "
+                    f"{labels.peaks('tau_', names, efforts, run.u)}; energy balance drift "
+                    f"{balance_drift(system, run):.3g}"] + declared_limit_lines(plant, run.u, s.qd) + report.lines
+    summary = [f"{label}: the hand moves the handle {travel:g} m along {axes[-1]} at {frequency:g} Hz, loop at "
+               f"{timing.rate:g} Hz ({timing.integrator}); compensation cuts the peak force felt from "
+               f"{felt_peaks[1]:.3g} N to {felt_peaks[0]:.3g} N"]
+    J0 = plant.task_jacobian(q_start)
+    if J0.shape[0] == J0.shape[1]:
+        weight = tcp_forces(J0[None], plant.gravity(q_start)[None])[0][plant.point_rows]
+        summary.append(f"  the device's weight at the handle at the start: J^-T G = ("
+                       + ", ".join(f"{v:.4g}" for v in weight) + f") N along ({', '.join(axes)})")
+    summary += lines
+    figures = [FigureSpec("gravity-compensation.png", f"Gravity compensation, felt by a user's hand: {plant.name}", (
+        (f"TCP {axes[-1]} [m]", (f"TCP {axes[-1]} [m]", f"hand {axes[-1]} [m]")),
+        ("force of the hand [N]", tuple(f"F_hand_{c} [N]" for c in axes)),
+        (f"torque [{labels.label(efforts)}]", tuple(f"tau_{n} [{u}]" for n, u in zip(names, efforts)))))]
+    return ScenarioResult("gravity-compensation", series, figures, summary)
 
 
 def free_swing(label: str, plant: Plant, q_start: np.ndarray, timing: Timing,

@@ -26,7 +26,7 @@ def start_pose(plant: Plant) -> tuple[np.ndarray, str]:
     finite = np.isfinite(limits).all(axis=1)
     middle = np.zeros(plant.dof)
     middle[finite] = limits[finite].mean(axis=1)
-    conditioning = float(inverse_condition_number(plant.model.jacobian(middle)))
+    conditioning = float(inverse_condition_number(plant.task_jacobian(middle)))
     if conditioning >= WELL_CONDITIONED:
         return middle, f"the middle of the joint limits (1/kappa = {conditioning:.3g})"
     from scipy.stats import qmc
@@ -34,7 +34,7 @@ def start_pose(plant: Plant) -> tuple[np.ndarray, str]:
     span = np.where(finite[:, None], limits, np.where(plant.revolute, np.pi, 0.5)[:, None] * [-1.0, 1.0])
     low, high = span[:, 0] + 0.1 * np.ptp(span, axis=1), span[:, 1] - 0.1 * np.ptp(span, axis=1)
     candidates = qmc.scale(qmc.Sobol(plant.dof, scramble=False).random(START_CANDIDATES), low, high)
-    measures = inverse_condition_number(plant.model.jacobian(candidates))
+    measures = inverse_condition_number(plant.task_jacobian(candidates))
     best = int(np.argmax(measures))
     return candidates[best], (f"the best-conditioned of {START_CANDIDATES} poses within the limits (1/kappa = "
                               f"{float(measures[best]):.3g}); the middle of the limits has 1/kappa = {conditioning:.3g}")

@@ -89,6 +89,8 @@ def task_circle(plant, q_start: np.ndarray, radius: float, duration: float, samp
         SimulationError: a point of the circle has no inverse-kinematics solution within the
             joint limits near the previous sample.
     """
+    if plant.parallel:
+        return _parallel_circle(plant, q_start, radius, duration, samples)
     from symkin.ik import ModelKinematics, solve_numeric
 
     kin = ModelKinematics(plant.model)
@@ -115,3 +117,20 @@ def task_circle(plant, q_start: np.ndarray, radius: float, duration: float, samp
         q[k] = previous = result.q
     return SplineReference(times, q)
 
+
+
+def _parallel_circle(plant, q_start: np.ndarray, radius: float, duration: float, samples: int) -> SplineReference:
+    """:func:`task_circle` of a parallel mechanism: its closed-form ik at every sample of the circle."""
+    if "ik" not in plant.model.functions:
+        raise SimulationError(f"{plant.name}: a task-space circle of a parallel mechanism needs the generated 'ik'")
+    times = np.linspace(0.0, duration, samples)
+    phi = 2.0 * np.pi * rest_to_rest(times, duration)
+    targets = np.tile(plant.pose(np.asarray(q_start, dtype=float)), (samples, 1))
+    targets[:, plant.point_rows[0]] += radius * (np.cos(phi) - 1.0)
+    targets[:, plant.point_rows[1]] += radius * np.sin(phi)
+    q = np.asarray(plant.model.ik(targets).joints, dtype=float)
+    lost = np.flatnonzero(~np.all(np.isfinite(q), axis=-1))
+    if lost.size:
+        raise SimulationError(f"{plant.name}: the circle leaves the reachable workspace at t = {times[lost[0]]:.4g} s; "
+                              "choose a smaller radius or another --q0")
+    return SplineReference(times, q)
