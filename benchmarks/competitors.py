@@ -118,3 +118,71 @@ def symforce_fk_jacobian_codegen(model: Model, out_dir: Path) -> Path:
     result = codegen.generate_function(output_dir=out_dir, skip_directory_nesting=True)
     headers = list(Path(result.generated_files[0]).parent.rglob("*.h")) if result.generated_files else []
     return headers[0].parent if headers else Path(out_dir)
+
+
+def pinocchio_delta(v: dict[str, float]):
+    """The DELTA of models/delta.yaml (parameter values ``v``) as a Pinocchio tree closed by three point
+    constraints: (pin, model, constraints, legs), legs as (r_i, arm joint, rod joint, (rod end, B_i frames)).
+
+    Tree: the platform on a translation joint (the parallelograms keep its orientation) with its mass;
+    per leg the arm on a revolute joint about u_i = r_i x z at A_i (a uniform rod, and the rotor's
+    gear^2 J_rotor about the axis), then the parallelogram as one rod on a universal joint at the elbow
+    C_i (axes u_i and z) carrying m_rod/2 at each end (a rigid dumbbell has the kinetic energy of the
+    model's rod halves lumped at C_i and B_i, exactly).  Each rod's end is held at the platform joint
+    B_i = P + r_tcp r_i by a 3-D rigid constraint (Pinocchio's constraintDynamics: the KKT system with
+    the loop multipliers, sharing no code with symkin's elimination through J)."""
+    import pinocchio as pin
+
+    model = pin.Model()
+    z = np.array([0.0, 0.0, 1.0])
+    platform = model.addJoint(0, pin.JointModelTranslation(), pin.SE3.Identity(), "platform")
+    model.appendBodyToJoint(platform, pin.Inertia(v["m_platform"], np.zeros(3), np.zeros((3, 3))), pin.SE3.Identity())
+    legs = []
+    constraints = pin.StdVec_RigidConstraintModel()
+    for i, phi in enumerate(np.radians([0.0, 120.0, 240.0])):
+        r = np.array([np.cos(phi), np.sin(phi), 0.0])
+        u = np.cross(r, z)
+        across = np.eye(3) - np.outer(r, r)
+        arm = model.addJoint(0, pin.JointModelRevoluteUnaligned(u), pin.SE3(np.eye(3), v["r_base"] * r), f"arm{i}")
+        model.appendBodyToJoint(arm, pin.Inertia(v["m_arm"], v["a"] / 2 * r, v["m_arm"] * v["a"] ** 2 / 12 * across),
+                                pin.SE3.Identity())
+        model.appendBodyToJoint(arm, pin.Inertia(0.0, np.zeros(3), v["gear"] ** 2 * v["J_rotor"] * np.outer(u, u)),
+                                pin.SE3.Identity())
+        hinge = model.addJoint(arm, pin.JointModelRevoluteUnaligned(u), pin.SE3(np.eye(3), v["a"] * r), f"hinge{i}")
+        swing = model.addJoint(hinge, pin.JointModelRevoluteUnaligned(z), pin.SE3.Identity(), f"swing{i}")
+        model.appendBodyToJoint(swing, pin.Inertia(v["m_rod"], v["b"] / 2 * r, v["m_rod"] * v["b"] ** 2 / 4 * across),
+                                pin.SE3.Identity())
+        constraints.append(pin.RigidConstraintModel(pin.ContactType.CONTACT_3D, model, swing,
+                                                    pin.SE3(np.eye(3), v["b"] * r), platform,
+                                                    pin.SE3(np.eye(3), v["r_tcp"] * r), pin.ReferenceFrame.LOCAL))
+        ends = (model.addFrame(pin.Frame(f"rod_end{i}", swing, 0, pin.SE3(np.eye(3), v["b"] * r), pin.FrameType.OP_FRAME)),
+                model.addFrame(pin.Frame(f"B{i}", platform, 0, pin.SE3(np.eye(3), v["r_tcp"] * r), pin.FrameType.OP_FRAME)))
+        legs.append((r, arm, swing, ends))
+    return pin, model, constraints, legs
+
+
+def delta_tree_state(pin, model, data, legs, v, P, theta, theta_d):
+    """Tree coordinates of the assembled DELTA (rod angles from e_i = (B_i - C_i)/b, by hand) and the
+    tree velocity whose arm rates are theta_d and whose point constraints hold (J_c v = 0)."""
+    z = np.array([0.0, 0.0, 1.0])
+    q = np.zeros(model.nq)
+    q[:3] = P
+    for (r, arm, swing, _), th in zip(legs, theta):
+        C = v["r_base"] * r + v["a"] * (np.cos(th) * r + np.sin(th) * z)
+        e = (P + v["r_tcp"] * r - C) / v["b"]
+        q[model.joints[arm].idx_q] = th
+        q[model.joints[arm].idx_q + 1] = np.arctan2(e @ z, e @ r) - th       # hinge: the rod's elevation
+        q[model.joints[swing].idx_q] = np.arcsin(e @ np.cross(z, r))         # swing: its side angle
+    pin.computeJointJacobians(model, data, q)
+    pin.updateFramePlacements(model, data)
+    gap = max(np.linalg.norm(data.oMf[a].translation - data.oMf[b].translation) for *_, (a, b) in legs)
+    if gap > 16 * np.finfo(float).eps * v["b"]:  # the tree closes at the configuration (a check of the angles above)
+        raise ValueError(f"the Pinocchio DELTA does not close at P = {P}: gap {gap:.3g} m")
+    J_c = np.vstack([pin.getFrameJacobian(model, data, a, pin.LOCAL_WORLD_ALIGNED)[:3]
+                     - pin.getFrameJacobian(model, data, b, pin.LOCAL_WORLD_ALIGNED)[:3] for *_, (a, b) in legs])
+    arms = [model.joints[arm].idx_v for _, arm, _, _ in legs]
+    rest = [k for k in range(model.nv) if k not in arms]
+    velocity = np.zeros(model.nv)
+    velocity[arms] = theta_d
+    velocity[rest] = np.linalg.solve(J_c[:, rest], -J_c[:, arms] @ theta_d)
+    return q, velocity, arms
