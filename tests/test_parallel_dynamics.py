@@ -28,7 +28,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from conftest import reference_function
-from tolerances import EPS
+from tolerances import CLOSED_FORM, EPS
 
 STEP = 1e-5
 G = np.array([0.0, 0.0, -9.81])
@@ -365,3 +365,38 @@ def test_symkin_quantities_lists_the_dynamics_of_parallel_models(capsys):
     parallel = {line.split()[0] for line in capsys.readouterr().out.splitlines() if " parallel " in line}
     assert {"mass_matrix", "coriolis_vector", "gravity_vector", "friction", "inverse_dynamics", "forward_dynamics",
             "operational_space", "kinetic_energy", "potential_energy", "tcp_force_map"} <= parallel
+
+
+#: Actuator friction on the DELTA (illustrative coefficients: viscous N m s/rad, Coulomb N m, v_s rad/s).
+FRICTION = """
+friction:
+  theta1: {viscous: 0.002, coulomb: 0.005, smoothing_velocity: 0.05}
+  theta2: {viscous: 0.002, coulomb: 0.005}
+"""
+
+
+def test_actuator_friction_enters_the_dynamics_of_a_parallel_model(models, derivations):
+    """F_f = viscous qd + coulomb tanh(qd / v_s) (or sign(qd)) per actuator, none on theta3: the inverse dynamics
+    gains exactly F_f, the friction output is F_f, and the forward dynamics inverts the inverse dynamics."""
+    from symkin.derivation import Derivation
+    from symkin.model import model_from_text
+    from conftest import MODELS_DIR
+
+    model = model_from_text((MODELS_DIR / "delta.yaml").read_text() + FRICTION, "delta", "delta.yaml")
+    d = Derivation(model)
+    f = {name: reference_function(model, d[name])
+         for name in ("ik", "friction", "mass_matrix", "inverse_dynamics", "forward_dynamics")}
+    plain = reference_function(models["delta"], derivations["delta"]["inverse_dynamics"])
+    rng = np.random.default_rng(1407)
+    home = np.array([0.0, 0.0, -0.15])
+    for p in _poses(home, rng, 4):
+        q, qd, qdd = f["ik"](p)[0], rng.uniform(-1, 1, 3), rng.uniform(-5, 5, 3)
+        expected = np.array([0.002 * qd[0] + 0.005 * np.tanh(qd[0] / 0.05), 0.002 * qd[1] + 0.005 * np.sign(qd[1]),
+                             0.0])
+        assert np.allclose(f["friction"](qd)[0], expected, rtol=CLOSED_FORM, atol=0)
+        tau = f["inverse_dynamics"](q, p, qd, qdd)[0]
+        difference = tau - plain(q, p, qd, qdd)[0]
+        assert np.allclose(difference, expected, rtol=0, atol=64 * EPS * np.abs(tau).max()), (difference, expected)
+        back = f["forward_dynamics"](q, p, qd, tau)[0]
+        kappa = np.linalg.cond(f["mass_matrix"](q, p)[0])  # a backward-stable solve: kappa eps, times n and slack
+        assert np.allclose(back, qdd, rtol=0, atol=64 * kappa * EPS * np.abs(qdd).max() * len(q))

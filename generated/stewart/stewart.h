@@ -359,6 +359,43 @@ void stewart_mass_matrix_packed(const double *in, double *out);
  * Uses 4672 bytes of stack for its blocks of 8 configurations. */
 void stewart_mass_matrix_batch(size_t n, const double *q, const double *p, const double *params, size_t params_stride, double *M);
 
+/* stewart_coriolis_vector: Coriolis and centrifugal efforts at the actuators.
+ *
+ * V = V_a + J^T (M_p b + V_p(p, pd)) with pd = J qd and b = dJ/dt qd = -J_x^-1 (zd^T H_i
+ * zd)_i (the second derivative of the leg equations along the motion); V_a and V_p from
+ * the Christoffel symbols of M_a(q) and M_p(p). Evaluate at a consistent pair q, p (p =
+ * fk(q) or q = ik(p)).
+ *
+ * Inputs:
+ *   q[6]: joint coordinates: l1 [m], l2 [m], l3 [m], l4 [m], l5 [m], l6 [m].
+ *   p[6]: task coordinates of the platform (TCP): x [m], y [m], z [m], roll [rad], pitch
+ *   [rad], yaw [rad].
+ *   qd[6]: joint velocities: l1 [m/s], l2 [m/s], l3 [m/s], l4 [m/s], l5 [m/s], l6 [m/s].
+ *   r_b: radius of the circle of the base joints [m]; default STEWART_DEFAULT_r_b = 0.2.
+ *   r_p: radius of the circle of the platform joints [m]; default STEWART_DEFAULT_r_p =
+ *   0.1.
+ *   gamma_b: half the angle between the two base joints of a pair [rad]; default
+ *   STEWART_DEFAULT_gamma_b = 0.26179938779914946.
+ *   gamma_p: half the angle between the two platform joints of a pair [rad]; default
+ *   STEWART_DEFAULT_gamma_p = 0.26179938779914946.
+ *   m_platform: mass of the platform disc [kg]; default STEWART_DEFAULT_m_platform = 1.22.
+ *   r_disc: radius of the platform disc [m]; default STEWART_DEFAULT_r_disc = 0.12.
+ *   t_disc: thickness of the platform disc [m]; default STEWART_DEFAULT_t_disc = 0.01.
+ *   m_strut: mass of a strut (electric linear actuator) [kg]; default
+ *   STEWART_DEFAULT_m_strut = 0.5.
+ * Outputs:
+ *   V[6]: 6; Coriolis and centrifugal efforts [N*m (revolute), N (prismatic)].
+ * Cost: 3252 operations.
+ */
+void stewart_coriolis_vector(const double *q, const double *p, const double *qd, double r_b, double r_p, double gamma_b, double gamma_p, double m_platform, double r_disc, double t_disc, double m_strut, double *V);
+
+/* stewart_coriolis_vector with packed arguments: in = q, p, qd, r_b, r_p, gamma_b, gamma_p, m_platform, r_disc, t_disc, m_strut one after the other; out = V one after the other. */
+void stewart_coriolis_vector_packed(const double *in, double *out);
+
+/* stewart_coriolis_vector for n configurations; params: r_b, r_p, gamma_b, gamma_p, m_platform, r_disc, t_disc, m_strut, stride 0 or 8.
+ * Uses 3008 bytes of stack for its blocks of 8 configurations. */
+void stewart_coriolis_vector_batch(size_t n, const double *q, const double *p, const double *qd, const double *params, size_t params_stride, double *V);
+
 /* stewart_inverse_dynamics: Inverse dynamics: actuator efforts for a motion.
  *
  * tau = M_a qdd + V_a + G_a + F_f + J^T (M_p pdd + V_p + G_p) with pdd = J qdd + b
@@ -489,6 +526,74 @@ void stewart_operational_space_packed(const double *in, double *out);
 /* stewart_operational_space for n configurations; params: r_b, r_p, gamma_b, gamma_p, m_platform, r_disc, t_disc, m_strut, J_rotor, lead, stride 0 or 10.
  * Uses 5568 bytes of stack for its blocks of 8 configurations. */
 void stewart_operational_space_batch(size_t n, const double *q, const double *p, const double *qd, const double *params, size_t params_stride, double *Mx, double *Vx, double *Gx);
+
+/* stewart_kinetic_energy: Kinetic energy.
+ *
+ * k = 1/2 qd^T M_a qd + 1/2 pd^T M_p pd with pd = J qd (= 1/2 qd^T M qd). Evaluate at a
+ * consistent pair q, p (p = fk(q) or q = ik(p)).
+ *
+ * Inputs:
+ *   q[6]: joint coordinates: l1 [m], l2 [m], l3 [m], l4 [m], l5 [m], l6 [m].
+ *   p[6]: task coordinates of the platform (TCP): x [m], y [m], z [m], roll [rad], pitch
+ *   [rad], yaw [rad].
+ *   qd[6]: joint velocities: l1 [m/s], l2 [m/s], l3 [m/s], l4 [m/s], l5 [m/s], l6 [m/s].
+ *   r_b: radius of the circle of the base joints [m]; default STEWART_DEFAULT_r_b = 0.2.
+ *   r_p: radius of the circle of the platform joints [m]; default STEWART_DEFAULT_r_p =
+ *   0.1.
+ *   gamma_b: half the angle between the two base joints of a pair [rad]; default
+ *   STEWART_DEFAULT_gamma_b = 0.26179938779914946.
+ *   gamma_p: half the angle between the two platform joints of a pair [rad]; default
+ *   STEWART_DEFAULT_gamma_p = 0.26179938779914946.
+ *   m_platform: mass of the platform disc [kg]; default STEWART_DEFAULT_m_platform = 1.22.
+ *   r_disc: radius of the platform disc [m]; default STEWART_DEFAULT_r_disc = 0.12.
+ *   t_disc: thickness of the platform disc [m]; default STEWART_DEFAULT_t_disc = 0.01.
+ *   m_strut: mass of a strut (electric linear actuator) [kg]; default
+ *   STEWART_DEFAULT_m_strut = 0.5.
+ *   J_rotor: rotor inertia of a strut's motor [kg*m^2]; default STEWART_DEFAULT_J_rotor =
+ *   1e-06.
+ *   lead: lead of a strut's ball screw (travel per motor turn) [m]; default
+ *   STEWART_DEFAULT_lead = 0.005.
+ * Outputs:
+ *   k[1]: scalar; kinetic energy of all bodies [J].
+ * Cost: 1903 operations.
+ */
+void stewart_kinetic_energy(const double *q, const double *p, const double *qd, double r_b, double r_p, double gamma_b, double gamma_p, double m_platform, double r_disc, double t_disc, double m_strut, double J_rotor, double lead, double *k);
+
+/* stewart_kinetic_energy with packed arguments: in = q, p, qd, r_b, r_p, gamma_b, gamma_p, m_platform, r_disc, t_disc, m_strut, J_rotor, lead one after the other; out = k one after the other. */
+void stewart_kinetic_energy_packed(const double *in, double *out);
+
+/* stewart_kinetic_energy for n configurations; params: r_b, r_p, gamma_b, gamma_p, m_platform, r_disc, t_disc, m_strut, J_rotor, lead, stride 0 or 10.
+ * Uses 2816 bytes of stack for its blocks of 8 configurations. */
+void stewart_kinetic_energy_batch(size_t n, const double *q, const double *p, const double *qd, const double *params, size_t params_stride, double *k);
+
+/* stewart_potential_energy: Gravitational potential energy.
+ *
+ * u = -g . (sum of mass times centre of mass), zero with every mass at the base origin.
+ * Evaluate at a consistent pair q, p (p = fk(q) or q = ik(p)).
+ *
+ * Inputs:
+ *   q[6]: joint coordinates: l1 [m], l2 [m], l3 [m], l4 [m], l5 [m], l6 [m].
+ *   p[6]: task coordinates of the platform (TCP): x [m], y [m], z [m], roll [rad], pitch
+ *   [rad], yaw [rad].
+ *   r_p: radius of the circle of the platform joints [m]; default STEWART_DEFAULT_r_p =
+ *   0.1.
+ *   gamma_p: half the angle between the two platform joints of a pair [rad]; default
+ *   STEWART_DEFAULT_gamma_p = 0.26179938779914946.
+ *   m_platform: mass of the platform disc [kg]; default STEWART_DEFAULT_m_platform = 1.22.
+ *   m_strut: mass of a strut (electric linear actuator) [kg]; default
+ *   STEWART_DEFAULT_m_strut = 0.5.
+ * Outputs:
+ *   u[1]: scalar; potential energy [J].
+ * Cost: 20 operations.
+ */
+void stewart_potential_energy(const double *q, const double *p, double r_p, double gamma_p, double m_platform, double m_strut, double *u);
+
+/* stewart_potential_energy with packed arguments: in = q, p, r_p, gamma_p, m_platform, m_strut one after the other; out = u one after the other. */
+void stewart_potential_energy_packed(const double *in, double *out);
+
+/* stewart_potential_energy for n configurations; params: r_p, gamma_p, m_platform, m_strut, stride 0 or 4.
+ * Uses 832 bytes of stack for its blocks of 8 configurations. */
+void stewart_potential_energy_batch(size_t n, const double *q, const double *p, const double *params, size_t params_stride, double *u);
 
 /* stewart_scene: ik, inverse_jacobian together, with one set of shared subexpressions.
  *
