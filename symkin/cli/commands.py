@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from symkin.cli import (
     bench_cmd,
+    cache_cmd,
     check_cmd,
     crosscheck_cmd,
     derive_cmd,
@@ -31,4 +32,5 @@ REGISTRY = [
     bench_cmd.register,
     ik_cmd.register,
     simulate_cmd.register,
+    cache_cmd.register,
 ]

@@ -2,17 +2,31 @@
 
 On a terminal, a status line shows the current stage and the elapsed time, refreshed by a
 background thread, once the work has taken longer than ``delay`` seconds (quick commands
-print nothing).  When stderr is not a terminal (CI logs, pipes), stages that take longer
+print nothing); it is one column narrower than the terminal, whatever its width.  When stderr is not a terminal (CI logs, pipes), stages that take longer
 than ``delay`` are reported as plain lines when they finish.
 """
 
 from __future__ import annotations
 
+import io
+import os
 import sys
 import threading
 import time
 from types import TracebackType
 from typing import TextIO
+
+
+def terminal_columns(stream: TextIO) -> int:
+    """The width of the terminal ``stream`` writes to: $COLUMNS if set, else the terminal's own
+    (asked each time: a window may be resized), else 80."""
+    explicit = os.environ.get("COLUMNS", "")
+    if explicit.isdigit() and int(explicit) > 0:
+        return int(explicit)
+    try:
+        return os.get_terminal_size(stream.fileno()).columns
+    except (AttributeError, OSError, ValueError, io.UnsupportedOperation):
+        return 80
 
 
 class Progress:
@@ -31,6 +45,7 @@ class Progress:
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._shown = False
+        self._width = 0
 
     def __enter__(self) -> Progress:
         if self.live:
@@ -57,8 +72,10 @@ class Progress:
             if elapsed < self.delay:
                 continue
             with self._lock:
-                line = f"\r{spinner[tick % 4]} [{self.title}] {self.stage} ({elapsed:5.1f} s)"
-            self.stream.write(line[:120].ljust(80))
+                line = f"{spinner[tick % 4]} [{self.title}] {self.stage} ({elapsed:5.1f} s)"
+            # one column short of the terminal, so the line never wraps; padded, so it covers the last one
+            self._width = max(1, terminal_columns(self.stream) - 1)
+            self.stream.write("\r" + line[:self._width].ljust(self._width))
             self.stream.flush()
             self._shown = True
             tick += 1
@@ -71,5 +88,5 @@ class Progress:
         with self._lock:
             self._finish_stage()
         if self._shown:
-            self.stream.write("\r" + " " * 80 + "\r")
+            self.stream.write("\r" + " " * self._width + "\r")
             self.stream.flush()

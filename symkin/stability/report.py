@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import csv
+import io
 import math
 from pathlib import Path
 
 import numpy as np
 
+from symkin.atomic import replace_file
 from symkin.text_table import format_table
 from symkin.stability.harness import BOUND, KAPPA_LIMIT, StabilityRun
 
@@ -122,23 +124,24 @@ def render(run: StabilityRun) -> str:
 
 
 def write_csv(run: StabilityRun, path: Path) -> None:
-    with open(path, "w", newline="") as handle:
-        writer = csv.writer(handle)
-        writer.writerow(["model", "quantity", "family", "label", "parameter", "kappa", "error"])
-        for r in run.records:
-            writer.writerow([run.model, r.quantity, r.family, r.label, repr(r.parameter), repr(r.kappa),
-                             repr(r.error)])
+    """Every record, one row each, written atomically (the previous file or the complete new one)."""
+    buffer = io.StringIO()
+    writer = csv.writer(buffer)
+    writer.writerow(["model", "quantity", "family", "label", "parameter", "kappa", "error"])
+    for r in run.records:
+        writer.writerow([run.model, r.quantity, r.family, r.label, repr(r.parameter), repr(r.kappa), repr(r.error)])
+    replace_file(Path(path), buffer.getvalue())
 
 
 def write_figure(run: StabilityRun, path: Path) -> None:
-    """Error vs kappa (float64 and float32), error vs length scale and the IK formulas, as a PNG/PDF/SVG."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    """Error vs kappa (float64 and float32), error vs length scale and the IK formulas, as a PNG/PDF/SVG (by
+    the suffix), written atomically; drawn on a ``matplotlib.figure.Figure``, so the caller's backend and
+    pyplot state (a notebook's) are left alone."""
+    from matplotlib.figure import Figure
 
     panels = 3 + (1 if run.formulas else 0)
-    fig, axes = plt.subplots(1, panels, figsize=(4.6 * panels, 4.2))
+    fig = Figure(figsize=(4.6 * panels, 4.2))
+    axes = fig.subplots(1, panels)
     floor = 1e-18
     ax = axes[0]
     for q in run.quantities:
@@ -174,6 +177,6 @@ def write_figure(run: StabilityRun, path: Path) -> None:
                title="closed-form IK near a singularity")
         ax.legend(fontsize=7)
     fig.tight_layout()
-    Path(path).parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format=Path(path).suffix.lstrip(".").lower() or "png", dpi=110)
+    replace_file(Path(path), buffer.getvalue())

@@ -13,7 +13,8 @@ compiler's version text, so editing any of them (or regenerating the model) buil
 while loading the same model again costs a hash and a ``dlopen``.  Libraries are written
 under a temporary name and renamed into place, under a lock file, so concurrent loaders
 (pytest-xdist workers, several processes of a control application) compile a library once
-and never see a half-written file.
+and never see a half-written file.  Nothing here removes a library: ``symkin cache list|clear``
+(:mod:`symkin.backends.c.cache`) shows and evicts them.
 
 Environment:
     SYMKIN_CACHE_DIR: cache directory (default ``$XDG_CACHE_HOME/symkin`` or ``~/.cache/symkin``).
@@ -119,6 +120,7 @@ def shared_library(source: Path, header: Path) -> Path:
     directory = cache_directory()
     target = directory / f"lib{source.stem}-{key.hexdigest()[:24]}{_library_suffix()}"
     if target.exists():
+        _touch(target)
         return target
     directory.mkdir(parents=True, exist_ok=True)
     with _locked(directory / f"{target.name}.lock"):
@@ -140,6 +142,15 @@ def _progress(line: str) -> None:
     if os.environ.get("SYMKIN_QUIET", "") not in ("", "0"):
         return
     print(line, file=sys.stderr, flush=True)
+
+
+def _touch(library: Path) -> None:
+    """Record a use of ``library`` (its modification time, the "last used" of ``symkin cache``); a
+    read-only cache keeps the old time."""
+    try:
+        os.utime(library)
+    except OSError:
+        pass
 
 
 @contextmanager
