@@ -22,7 +22,7 @@ from symkin.stability.ir_eval import compile_ir, flatten_outputs
 from symkin.stability.reference import MpmathReference, normwise_error
 from symkin.stability.states import parameter_values
 
-#: One xdist worker runs this module (`make test` uses --dist loadgroup), so the module-scoped
+#: One xdist worker runs this module (`make test` uses --dist loadgroup), so the session-scoped
 #: runs are computed once, not once per worker.
 pytestmark = pytest.mark.xdist_group("stability")
 
@@ -34,7 +34,7 @@ CHECKED = {"serial": {"fk", "frames", "jacobian", "jacobian_geometric", "mass_ma
            "parallel": {"ik", "inverse_jacobian", "constraints", "constraint_jacobians", "closure", "singularities"}}
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")  # not "module": xdist may interleave other modules' tests, which would recompute it
 def runs(models):
     out = {}
     for name in EXAMPLE_MODELS:
