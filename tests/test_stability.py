@@ -29,7 +29,10 @@ pytestmark = pytest.mark.xdist_group("stability")
 QUICK = dict(samples=12, scale_samples=3, float32_samples=6, steps=(1e-2, 1e-6, 1e-10))
 #: The Stewart platform's J = J_x^-1 J_q (a symbolic 6x6 inverse) takes a minute to derive and
 #: lambdify for mpmath: the suite checks every other quantity (`symkin bench stability` checks all).
-LEFT_OUT = {"stewart": ("jacobian",)}
+#: Its dynamics (large expressions at 50 digits) are checked at the bench's full defaults by
+#: tests/test_stability_table.py, and against Pinocchio by tests/test_parallel_dynamics.py.
+LEFT_OUT = {"stewart": ("jacobian", "mass_matrix", "coriolis_vector", "gravity_vector", "inverse_dynamics",
+                        "forward_dynamics", "operational_space", "kinetic_energy", "potential_energy")}
 CHECKED = {"serial": {"fk", "frames", "jacobian", "jacobian_geometric", "mass_matrix", "forward_dynamics"},
            "parallel": {"ik", "inverse_jacobian", "constraints", "constraint_jacobians", "closure", "singularities"}}
 
