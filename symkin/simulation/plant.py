@@ -21,7 +21,7 @@ import numpy as np
 
 from symkin.analysis import mechanism
 from symkin.errors import GeneratedCodeError
-from symkin.runtime import LoadedModel
+from symkin.runtime.info import GeneratedModel
 
 #: Functions a plant cannot do without, and how to get them.
 REQUIRED = ("forward_dynamics", "inverse_dynamics", "mass_matrix", "kinetic_energy")
@@ -44,7 +44,7 @@ class Plant:
         GeneratedCodeError: a needed function was not generated.
     """
 
-    def __init__(self, model: LoadedModel):
+    def __init__(self, model: GeneratedModel):
         self.parallel = model.info.mechanism == "parallel"
         required = REQUIRED_PARALLEL if self.parallel else REQUIRED
         missing = [name for name in required if name not in model.functions]
@@ -66,9 +66,9 @@ class Plant:
         self.revolute = mechanism.revolute_mask(model)
         self.task_space = mechanism.task_space(model)
         #: rows of the task Jacobian that are TCP translations, and their fk axes
-        self.point_rows = np.array(mechanism.position_rows(model), dtype=int)
+        self.point_rows = np.array(mechanism.position_rows(model), dtype=np.intp)
         self.point_axes = tuple(self.task_space[i] for i in self.point_rows)
-        self._point_index = np.array([mechanism.POSITION_COMPONENTS.index(c) for c in self.point_axes], dtype=int)
+        self._point_index = np.array([mechanism.POSITION_COMPONENTS.index(c) for c in self.point_axes], dtype=np.intp)
         self._point_error = None if self.point_rows.size and {"fk", "jacobian"} <= set(model.functions) else (
             f"{self.name}: task-space simulation needs 'fk' and 'jacobian' and a task space with x, y or z "
             f"(it is [{', '.join(self.task_space)}])")
