@@ -1,4 +1,4 @@
-"""Steps per second of the 1 kHz haptic loop, numpy against C, planar arm and UR10e.
+"""Steps per second of the 1 kHz haptic loop, numpy against C, planar arm, UR10e and DELTA.
 
 Run with `make bench` or `python benchmarks/bench_simulate.py [--seconds S]`.  One step is
 one control period: the wall renderer (fk, task Jacobian, gravity vector) and one RK4 step
@@ -7,7 +7,9 @@ with fk and the Jacobian for the hand's force).  A loop is real-time capable at 
 it runs faster than 1000 steps/s.  Also: the torque-only computed-torque loop (one
 inverse-dynamics call per step) and DOP853 evaluations/s for reference, and the same free
 swing with the joint stops (DOP853 restarted at every located contact) and the cost of the stops
-in the haptic loop (planar_2r only: the UR10e's +-2 pi limits are not met in 1 s).
+in the haptic loop (planar_2r only: the UR10e's +-2 pi limits are not met in 1 s).  The DELTA
+runs in its actuated joints with the platform at fk(q) (symkin.simulation.plant); its free swing
+is left out (without stops it falls until a leg stretches out).
 """
 
 from __future__ import annotations
@@ -29,7 +31,8 @@ from symkin.simulation import (ArmSystem, ComputedTorque, JointSine, MassSpringD
 from symkin.simulation.scenarios import balance_drift  # noqa: E402
 from symkin.simulation.stops import ContactModes, JointStops  # noqa: E402
 
-STARTS = {"planar_2r": np.radians([45.0, 45.0]), "ur10e": np.array([0.3, -1.2, 1.4, -1.6, -1.5, 0.2])}
+STARTS = {"planar_2r": np.radians([45.0, 45.0]), "ur10e": np.array([0.3, -1.2, 1.4, -1.6, -1.5, 0.2]),
+          "delta": np.radians([-15.0, -10.0, -20.0])}
 
 
 def _loops(plant, q0: np.ndarray, stops: JointStops | None) -> dict[str, tuple]:
@@ -66,6 +69,8 @@ def main(argv: list[str] | None = None) -> int:
                 rate = steps / (time.perf_counter() - start)
                 drift = balance_drift(system, run)
                 rows.append([name, backend, label, f"{rate:,.0f}", f"{rate / 1000:.1f}x", f"{drift:.1e}"])
+            if plant.parallel:
+                continue
             system = ArmSystem(plant)
             zero = np.zeros(plant.dof)
             start = time.perf_counter()

@@ -1,10 +1,12 @@
 """Exact rotation matrices and homogeneous transforms (seed sec. 3: ^iR_j and ^iT_j).
 
-Shared by the model builder (rotated inertia tensors) and the kinematics.
+Shared by the model builder (rotated inertia tensors), the kinematics and the parallel
+mechanisms (loop closure, platform inertia).
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 import sympy
@@ -46,3 +48,8 @@ def homogeneous(rotation: sympy.Matrix, position: sympy.Matrix) -> sympy.Immutab
     """The 4x4 transform [[R, p], [0, 1]] (seed: homogeneous transformation matrix)."""
     top = rotation.row_join(position)
     return sympy.ImmutableMatrix(top.col_join(sympy.Matrix([[0, 0, 0, 1]])))
+
+
+def skew(v: Sequence[sympy.Expr] | sympy.Matrix) -> sympy.Matrix:
+    """[v]x, the matrix of the cross product: [v]x w = v x w."""
+    return sympy.Matrix([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])

@@ -4,7 +4,8 @@ The references share no code with the derivation:
 
 * Pinocchio: the DELTA as a tree closed by three point constraints (constraintDynamics, with the
   loop multipliers), the Stewart platform as a free-flying rigid body (rnea) pushed by its struts;
-  both agree with symkin to a few eps (measured: <= 2e-15 relative);
+  both agree with symkin to a few eps (benchmarks/bench_parallel_dynamics.py prints the DELTA's
+  difference; the tests assert the issue's 1e-9);
 * the kinetic and potential energy of the bodies written out here from the model files' geometry
   (arm, elbow and platform positions of the DELTA by hand; the Stewart platform's attachment
   points from its leg angles), with velocities by central differences of the closed-form fk / ik

@@ -14,8 +14,9 @@ import pytest
 
 from symkin import load
 from symkin.cli import main
-from symkin.simulation import ArmSystem, MassSpringDamperUser, Plant, Wall, WallRenderer, run_sampled
+from symkin.simulation import ArmSystem, Plant, run_sampled
 from symkin.simulation import scenarios
+from test_simulation import assert_wall_equilibrium
 from tests.conftest import GENERATED_DIR
 from tolerances import EPS
 
@@ -52,22 +53,7 @@ def test_gravity_compensation_holds_the_delta_still(delta):
 
 
 def test_the_delta_renders_a_wall_at_the_series_spring_equilibrium(delta):
-    """At rest against the wall, k_a (r - p_h) = k_g (p_h - p) = k_w d: with the weight compensated
-    exactly the hand feels the wall's force and nothing else."""
-    p0 = delta.point(Q0)
-    normal = np.array([1.0, 0.0, 0.0])
-    target = p0 + 0.02 * normal
-    user = MassSpringDamperUser(lambda t: (target, np.zeros(3)), arm_damping=20.0)
-    wall = Wall(normal, float(p0[0]) + 0.01, stiffness=500.0, damping=5.0)
-    system = ArmSystem(delta, user)
-    run = run_sampled(system.derivative, WallRenderer(system, wall), system.initial(Q0), 1e-3, 2000)
-    s = system.split(run.x[-1])
-    d = wall.penetration(delta.point(s.q))
-    k_a, k_g, k_w = user.arm_stiffness, user.grip_stiffness, wall.stiffness
-    expected = k_a * 0.01 / (k_a + k_w + k_a * k_w / k_g)
-    np.testing.assert_allclose(d, expected, rtol=1e-3)
-    desired, felt = WallRenderer(system, wall).desired_and_sensed(run.t[-1], run.x[-1])
-    np.testing.assert_allclose(felt, desired, atol=1e-3 * np.abs(desired[0]))
+    assert_wall_equilibrium(delta, Q0, 2000)
 
 
 def test_numpy_and_c_backends_simulate_the_same_delta_haptic_loop():

@@ -2,8 +2,9 @@
 
 On a terminal, a status line shows the current stage and the elapsed time, refreshed by a
 background thread, once the work has taken longer than ``delay`` seconds (quick commands
-print nothing); it is one column narrower than the terminal, whatever its width.  When stderr is not a terminal (CI logs, pipes), stages that take longer
-than ``delay`` are reported as plain lines when they finish.
+print nothing); it is one column narrower than the terminal, whatever its width.  When
+stderr is not a terminal (CI logs, pipes), stages that take longer than ``delay`` are
+reported as plain lines when they finish.
 """
 
 from __future__ import annotations

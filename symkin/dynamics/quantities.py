@@ -55,7 +55,7 @@ Matrix = list[list[se.Basic]]
 EFFORT_UNIT = "N*m (revolute), N (prismatic)"
 
 
-def _symbols(d: Derivation, group: str) -> list[se.Symbol]:
+def coordinate_symbols(d: Derivation, group: str) -> list[se.Symbol]:
     return se_vector(coordinates.symbols(d.model, group))
 
 
@@ -114,7 +114,7 @@ def _mass_matrix_graph(d: Derivation) -> Matrix:
 
 @quantity("mass_matrix_partials", "dM/dq_k as SymEngine graphs", emitted=False)
 def _mass_matrix_partials(d: Derivation) -> list[Matrix]:
-    return lagrange.mass_matrix_partials(d[_mass_matrix_graph], _symbols(d, "q"))
+    return lagrange.mass_matrix_partials(d[_mass_matrix_graph], coordinate_symbols(d, "q"))
 
 
 @quantity("gravity_graph", "gravity vector in the base frame, or None if zero", emitted=False)
@@ -153,8 +153,9 @@ def _task_jacobian_graph(d: Derivation) -> Matrix:
     return se_matrix(J)
 
 
-def _require_gravity(d: Derivation, name: str) -> None:
-    if d[_gravity_graph] is None:
+def require_gravity(d: Derivation, name: str) -> None:
+    """Refuse ``name`` (a gravity term) for a model without gravity, where it is identically zero."""
+    if all(c == 0 for c in d.model.gravity):
         raise DerivationError(f"{d.model.name}: the model has no gravity, so {name} is identically zero and is "
                               f"not emitted; declare 'gravity:' in the model or remove '{name}' from the outputs")
 
@@ -225,7 +226,7 @@ def _mass_matrix(d: Derivation) -> FunctionSpec:
 def _coriolis_matrix(d: Derivation) -> FunctionSpec:
     n = d.model.dof
     program = Program()
-    C = lagrange.coriolis_matrix(_BoundTerms(d, program).partials(), _symbols(d, "qd"))
+    C = lagrange.coriolis_matrix(_BoundTerms(d, program).partials(), coordinate_symbols(d, "qd"))
     return function_spec(
         d, "coriolis_matrix", "Coriolis matrix from the Christoffel symbols of M.",
         "C_ij = sum_k c_ijk qd_k, c_ijk = 1/2 (dM_ij/dq_k + dM_ik/dq_j - dM_jk/dq_i); V = C qd and "
@@ -246,7 +247,7 @@ def _coriolis_vector(d: Derivation) -> FunctionSpec:
 
 @quantity("gravity_vector", "gravity vector G(q) = du/dq (n)")
 def _gravity_vector(d: Derivation) -> FunctionSpec:
-    _require_gravity(d, "gravity_vector")
+    require_gravity(d, "gravity_vector")
     program = Program()
     G = _BoundTerms(d, program).gravity_vector()
     return function_spec(
@@ -289,7 +290,7 @@ def _forward_dynamics(d: Derivation) -> FunctionSpec:
     program = Program()
     terms = _BoundTerms(d, program)
     M = terms.mass_matrix()
-    rhs = [[t - b] for t, b in zip(_symbols(d, "tau"), terms.torques(acceleration=False, with_friction=True))]
+    rhs = [[t - b] for t, b in zip(coordinate_symbols(d, "tau"), terms.torques(acceleration=False, with_friction=True))]
     qdd = [row[0] for row in ldl_solve(program, M, rhs)]
     return function_spec(
         d, "forward_dynamics", "Forward dynamics: joint accelerations under given torques.",
@@ -322,7 +323,7 @@ def _tcp_force(d: Derivation) -> FunctionSpec:
 def _operational_space(d: Derivation) -> FunctionSpec:
     n = d.model.dof
     J_graph = d[_task_jacobian_graph]
-    q, qd = _symbols(d, "q"), _symbols(d, "qd")
+    q, qd = coordinate_symbols(d, "q"), coordinate_symbols(d, "qd")
     # dJ/dt qd = sum_k dJ/dq_k qd_k qd.
     Jdot_qd = [sum((se.diff(J_graph[i][j], q[k]) * qd[k] * qd[j] for j in range(n) for k in range(n)),
                    se.Integer(0)) for i in range(n)]
@@ -355,7 +356,7 @@ def _operational_space(d: Derivation) -> FunctionSpec:
 @quantity("kinetic_energy", "kinetic energy k(q, qd) = 1/2 qd^T M qd (scalar)")
 def _kinetic_energy(d: Derivation) -> FunctionSpec:
     program = Program()
-    (k,) = program.bind([lagrange.kinetic_energy(_BoundTerms(d, program).mass_matrix(), _symbols(d, "qd"))])
+    (k,) = program.bind([lagrange.kinetic_energy(_BoundTerms(d, program).mass_matrix(), coordinate_symbols(d, "qd"))])
     return function_spec(
         d, "kinetic_energy", "Kinetic energy.", "k = 1/2 qd^T M(q) qd (seed eq. 8.32).",
         ["q", "qd"], program, [("k", [k], (), "kinetic energy of all bodies", "J")])
@@ -363,7 +364,7 @@ def _kinetic_energy(d: Derivation) -> FunctionSpec:
 
 @quantity("potential_energy", "potential energy u(q) = -sum m g . c (scalar)")
 def _potential_energy(d: Derivation) -> FunctionSpec:
-    _require_gravity(d, "potential_energy")
+    require_gravity(d, "potential_energy")
     program = Program()
     (u,) = program.bind([lagrange.potential_energy(d[_body_jacobians], d[_gravity_graph])])
     return function_spec(

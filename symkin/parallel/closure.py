@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import sympy
 
+from symkin.geometry import skew
 from symkin.kinematics.chain import Frame
 from symkin.parallel.legs import LegChain
 
@@ -42,9 +43,6 @@ def _vee_skew(M: sympy.Matrix) -> sympy.Matrix:
     """vee(M - M^T) = (M32 - M23, M13 - M31, M21 - M12)."""
     return sympy.Matrix([M[2, 1] - M[1, 2], M[0, 2] - M[2, 0], M[1, 0] - M[0, 1]])
 
-
-def _skew(w: sympy.Matrix) -> sympy.Matrix:
-    return sympy.Matrix([[0, -w[2], w[1]], [w[2], 0, -w[0]], [-w[1], w[0], 0]])
 
 
 class LegClosure:
@@ -76,7 +74,7 @@ class LegClosure:
             w = sympy.Matrix(motion.direction)
             if motion.rotation:
                 d_position = w.cross(self.p_end - sympy.Matrix(motion.point))
-                d_E = self.T.T * _skew(w) * self.R_end
+                d_E = self.T.T * skew(w) * self.R_end
             else:
                 d_position, d_E = w, sympy.zeros(3, 3)
             out[motion.variable] = self._rows(d_position, d_E)

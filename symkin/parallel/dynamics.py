@@ -50,7 +50,8 @@ import sympy
 from symkin.dynamics import lagrange
 from symkin.dynamics.linsolve import ldl_solve, transpose_solve
 from symkin.dynamics.program import Program, dot, mat_vec, se_matrix, se_vector
-from symkin.dynamics.quantities import EFFORT_UNIT, function_spec, joint_friction
+from symkin.dynamics.quantities import (EFFORT_UNIT, coordinate_symbols, function_spec, joint_friction,
+                                       require_gravity)
 from symkin.errors import DerivationError
 from symkin.ir.quantity import quantity
 from symkin.ir.spec import FunctionSpec
@@ -106,7 +107,7 @@ class _Terms:
         self.d, self.program = d, program
         self.n = d.model.dof
         self.parts: Inertia = d[_inertia]
-        self.q = se_vector(coordinates.symbols(d.model, "q"))
+        self.q = coordinate_symbols(d, "q")
         self.p = se_vector(task_symbols(d.model))
 
     @cached_property
@@ -227,16 +228,6 @@ def _inputs(d: Derivation, *groups: str) -> list:
     return ["q", task_input(d.model), *groups]
 
 
-def _symbols(d: Derivation, group: str) -> list[se.Basic]:
-    return se_vector(coordinates.symbols(d.model, group))
-
-
-def _require_gravity(d: Derivation, name: str) -> None:
-    if all(c == 0 for c in d.model.gravity):
-        raise DerivationError(f"{d.model.name}: the model has no gravity, so {name} is identically zero and is "
-                              f"not emitted; declare 'gravity:' in the model or remove '{name}' from the outputs")
-
-
 _PAIR = "Evaluate at a consistent pair q, p (p = fk(q) or q = ik(p))."
 
 
@@ -259,7 +250,7 @@ def _mass_matrix(d: Derivation) -> FunctionSpec:
           kappa_degree=4)
 def _coriolis_vector(d: Derivation) -> FunctionSpec:
     program = Program()
-    V = _Terms(d, program).torques(_symbols(d, "qd"), None, with_gravity=False, with_friction=False)
+    V = _Terms(d, program).torques(coordinate_symbols(d, "qd"), None, with_gravity=False, with_friction=False)
     return function_spec(
         d, "coriolis_vector", "Coriolis and centrifugal efforts at the actuators.",
         "V = V_a + J^T (M_p b + V_p(p, pd)) with pd = J qd and b = dJ/dt qd = -J_x^-1 (zd^T H_i zd)_i (the "
@@ -271,7 +262,7 @@ def _coriolis_vector(d: Derivation) -> FunctionSpec:
 @quantity("gravity_vector", "actuator efforts G = du_a/dq + J^T du_p/dp that hold the device against gravity",
           mechanism=PARALLEL)
 def _gravity_vector(d: Derivation) -> FunctionSpec:
-    _require_gravity(d, "gravity_vector")
+    require_gravity(d, "gravity_vector")
     program = Program()
     terms = _Terms(d, program)
     G_a, G_p = terms.gravity_parts  # type: ignore[misc]
@@ -287,7 +278,7 @@ def _gravity_vector(d: Derivation) -> FunctionSpec:
 @quantity("friction", "actuator friction F_f(qd): viscous + Coulomb (n)", mechanism=PARALLEL)
 def _friction(d: Derivation) -> FunctionSpec:
     program = Program()
-    F = _Terms(d, program).friction(_symbols(d, "qd"))
+    F = _Terms(d, program).friction(coordinate_symbols(d, "qd"))
     if F is None:
         raise DerivationError(f"{d.model.name}: the model declares no friction; add a 'friction:' section "
                               "or remove 'friction' from the outputs")
@@ -302,7 +293,7 @@ def _friction(d: Derivation) -> FunctionSpec:
           kappa_degree=4)
 def _inverse_dynamics(d: Derivation) -> FunctionSpec:
     program = Program()
-    tau = _Terms(d, program).torques(_symbols(d, "qd"), _symbols(d, "qdd"))
+    tau = _Terms(d, program).torques(coordinate_symbols(d, "qd"), coordinate_symbols(d, "qdd"))
     return function_spec(
         d, "inverse_dynamics", "Inverse dynamics: actuator efforts for a motion.",
         "tau = M_a qdd + V_a + G_a + F_f + J^T (M_p pdd + V_p + G_p) with pdd = J qdd + b (d'Alembert: the loop "
@@ -316,9 +307,9 @@ def _inverse_dynamics(d: Derivation) -> FunctionSpec:
 def _forward_dynamics(d: Derivation) -> FunctionSpec:
     program = Program()
     terms = _Terms(d, program)
-    rest = terms.torques(_symbols(d, "qd"), None)
+    rest = terms.torques(coordinate_symbols(d, "qd"), None)
     M = terms.mass_matrix()
-    qdd = [row[0] for row in ldl_solve(program, M, [[t - r] for t, r in zip(_symbols(d, "tau"), rest)])]
+    qdd = [row[0] for row in ldl_solve(program, M, [[t - r] for t, r in zip(coordinate_symbols(d, "tau"), rest)])]
     return function_spec(
         d, "forward_dynamics", "Forward dynamics: actuator accelerations under given efforts.",
         "qdd = M^-1 (tau - V - G - F_f) by a straight-line LDL^T factorization of the symmetric positive "
@@ -339,7 +330,7 @@ def _operational_space(d: Derivation) -> FunctionSpec:
     def inverse_transpose(v: list[se.Basic]) -> list[se.Basic]:  # J^-T v
         return [sum((J_inverse[i][k] * v[i] for i in range(n)), se.Integer(0)) for k in range(n)]
 
-    qd = _symbols(d, "qd")
+    qd = coordinate_symbols(d, "qd")
     pd = terms.task_rates(qd)
     J_inverse_b = [program.let(-h / J_q[i]) for i, h in enumerate(terms.curvature(qd, pd))]  # J^-1 b = -J_q^-1 h
     Mx: Matrix = [[se.Integer(0)] * n for _ in range(n)]
@@ -370,7 +361,7 @@ def _operational_space(d: Derivation) -> FunctionSpec:
 def _kinetic_energy(d: Derivation) -> FunctionSpec:
     program = Program()
     terms = _Terms(d, program)
-    qd = _symbols(d, "qd")
+    qd = coordinate_symbols(d, "qd")
     pd = terms.task_rates(qd)
     k = (sum((m * v * v for m, v in zip(terms.M_a, qd)), se.Integer(0)) + dot(pd, mat_vec(terms.M_p, pd))) / 2
     return function_spec(
@@ -381,7 +372,7 @@ def _kinetic_energy(d: Derivation) -> FunctionSpec:
 
 @quantity("potential_energy", "potential energy u = u_a(q) + u_p(p) (scalar)", mechanism=PARALLEL)
 def _potential_energy(d: Derivation) -> FunctionSpec:
-    _require_gravity(d, "potential_energy")
+    require_gravity(d, "potential_energy")
     program = Program()
     parts = d[_inertia]
     (u,) = program.bind([se.sympify(parts.actuator_potential + parts.platform_potential)])

@@ -33,6 +33,7 @@ from dataclasses import dataclass
 import sympy
 
 from symkin.errors import DerivationError
+from symkin.geometry import skew
 from symkin.model.schema import Body, Model, ParallelBodies, PlatformMotion
 from symkin.parallel.distance import DistanceLeg
 from symkin.parallel.inputs import task_symbols
@@ -55,9 +56,6 @@ class Inertia:
     platform_matrix: sympy.ImmutableMatrix
     platform_potential: sympy.Expr
 
-
-def _skew(v: sympy.Matrix) -> sympy.Matrix:
-    return sympy.Matrix([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
 
 
 def body_angular_velocity_matrix(model: Model) -> sympy.Matrix:
@@ -96,7 +94,7 @@ def _platform(model: Model, bodies: ParallelBodies, legs: tuple[DistanceLeg, ...
     if model.parallel.motion is PlatformMotion.TRANSLATION:  # type: ignore[union-attr]
         return sympy.ImmutableMatrix(m * sympy.eye(3)), sympy.expand(potential)
     E_b = body_angular_velocity_matrix(model)
-    coupling = -platform_R * _skew(h) * E_b  # -[R h]x E = -R [h]x R^T E
+    coupling = -platform_R * skew(h) * E_b  # -[R h]x E = -R [h]x R^T E
     rotation = E_b.T * I_o * E_b
     M = sympy.Matrix.vstack(sympy.Matrix.hstack(m * sympy.eye(3), coupling),
                             sympy.Matrix.hstack(coupling.T, rotation))

@@ -46,6 +46,7 @@ class Plant:
 
     def __init__(self, model: GeneratedModel):
         self.parallel = model.info.mechanism == "parallel"
+        self._last_pose: tuple[np.ndarray | None, np.ndarray] = (None, np.empty(0))
         required = REQUIRED_PARALLEL if self.parallel else REQUIRED
         missing = [name for name in required if name not in model.functions]
         if missing:
@@ -90,8 +91,17 @@ class Plant:
         return lambda q, *rest: function(q, self.pose(q), *rest)
 
     def pose(self, q: np.ndarray) -> np.ndarray:
-        """A parallel mechanism's platform pose p = fk(q) (..., task dof); NaN where it does not assemble."""
-        return np.asarray(self.model.fk(q).position)
+        """A parallel mechanism's platform pose p = fk(q) (..., task dof); NaN where it does not assemble.
+
+        The last q and its pose are kept: one step of the loop asks for the pose of one q up to five times
+        (the TCP point and Jacobian, gravity compensation, the acceleration)."""
+        q = np.asarray(q, dtype=float)
+        last_q, last_p = self._last_pose
+        if last_q is not None and q.shape == last_q.shape and np.array_equal(q, last_q):
+            return last_p
+        p = np.asarray(self.model.fk(q).position)
+        self._last_pose = (q.copy(), p)
+        return p
 
     def _test_configuration(self) -> np.ndarray:
         """A configuration to probe the generated functions at: random for a serial chain, the

@@ -371,14 +371,15 @@ def gravity_compensation(label: str, plant: Plant, q_start: np.ndarray, travel: 
     vertical = np.zeros(len(p0))
     vertical[-1] = 1.0
     user = MassSpringDamperUser(sine_intent(p0, vertical, travel, frequency), **(hand or {}))
-    runs = (("gravity compensated (tau = G)", lambda t, x, system: system.plant.gravity(system.split(x).q)),
-            ("actuators off (tau = 0)", lambda t, x, system: np.zeros(plant.dof)))
+    zero = np.zeros(plant.dof)
+    runs = (("gravity compensated (tau = G)", lambda t, x: plant.gravity(x[:plant.dof])),  # x = [q, qd, ...]
+            ("actuators off (tau = 0)", lambda t, x: zero))
     series, lines, felt_peaks = [], [], []
     names = plant.coordinates
     _, efforts = labels.joint_units(plant)
     for run_label, control in runs:
         system, stability = _system(plant, q_start, stops, timing, user)
-        run = integrate(system, lambda t, x, c=control, sy=system: c(t, x, sy), system.initial(q_start), timing)
+        run = integrate(system, control, system.initial(q_start), timing)
         report = stop_report(system, run, stability)
         s = system.split(run.x)
         p, _, v = system.tcp_motion(s.q, s.qd)
@@ -391,10 +392,10 @@ def gravity_compensation(label: str, plant: Plant, q_start: np.ndarray, travel: 
         series.append(Series(run_label, columns | report.columns, report.contacts))
         felt_peaks.append(_peak(felt))
         lines += [f"  {run_label}: the hand pushes with up to {_peak(felt):.3g} N (mean "
-                    f"{float(np.mean(felt[:, -1])):.3g} N along {axes[-1]}, rms "
-                    f"{float(np.sqrt(np.mean(np.sum(felt ** 2, axis=-1)))):.3g} N); peak torques "
-                    f"{labels.peaks('tau_', names, efforts, run.u)}; energy balance drift "
-                    f"{balance_drift(system, run):.3g}"] + declared_limit_lines(plant, run.u, s.qd) + report.lines
+                  f"{float(np.mean(felt[:, -1])):.3g} N along {axes[-1]}, rms "
+                  f"{float(np.sqrt(np.mean(np.sum(felt ** 2, axis=-1)))):.3g} N); peak torques "
+                  f"{labels.peaks('tau_', names, efforts, run.u)}; energy balance drift "
+                  f"{balance_drift(system, run):.3g}"] + declared_limit_lines(plant, run.u, s.qd) + report.lines
     summary = [f"{label}: the hand moves the handle {travel:g} m along {axes[-1]} at {frequency:g} Hz, loop at "
                f"{timing.rate:g} Hz ({timing.integrator}); compensation cuts the peak force felt from "
                f"{felt_peaks[1]:.3g} N to {felt_peaks[0]:.3g} N"]

@@ -118,7 +118,6 @@ def task_circle(plant, q_start: np.ndarray, radius: float, duration: float, samp
     return SplineReference(times, q)
 
 
-
 def _parallel_circle(plant, q_start: np.ndarray, radius: float, duration: float, samples: int) -> SplineReference:
     """:func:`task_circle` of a parallel mechanism: its closed-form ik at every sample of the circle."""
     if "ik" not in plant.model.functions:

@@ -46,6 +46,7 @@ from symkin import pipeline
 from symkin.derivation import Derivation, emitted_quantities, registry
 from symkin.model.schema import Model
 from symkin.runtime import load
+from symkin.runtime.info import GeneratedModel
 from symkin.stability.ik_forms import formula_errors
 from symkin.stability.ir_eval import compile_ir, flatten_outputs
 from symkin.stability.reference import DIGITS, MpmathReference, normwise_error
@@ -141,11 +142,19 @@ def _largest(kappas: Iterable[float]) -> float:
     return max(defined, default=float("nan"))
 
 
-def _ik_of(loaded: object, derivation: Derivation) -> Callable[..., object]:
+def _conditioning_sources(solves_with: str | None, task_matrix: str, parallel: bool) -> tuple[str, ...]:
+    """The matrices whose largest kappa judges a quantity: the one it inverts, else the task matrix; a
+    parallel mechanism's dynamics reach the actuators through J = J_x^-1 J_q, so there the task matrix too."""
+    if solves_with is None:
+        return (task_matrix,)
+    return (solves_with, task_matrix) if parallel else (solves_with,)
+
+
+def _ik_of(loaded: GeneratedModel, derivation: Derivation) -> Callable[..., object]:
     """The generated ik taking every parameter of the run by keyword and passing on the ones it has
     (a model's mass parameters, say, are inputs of its dynamics but not of its ik)."""
     own = [i.name for i in derivation["ik"].parameter_inputs]
-    ik = getattr(loaded, "ik")
+    ik = loaded.ik
     return lambda p, **parameters: ik(p, **{name: parameters[name] for name in own})
 
 
@@ -192,12 +201,8 @@ def run_stability(model: Model, *, samples: int = 32, float32_samples: int = 16,
     optimized = {f.name: f for f in generation.functions}
     references = {name: MpmathReference(derivation[name]) for name in names}
     definitions = registry(model.mechanism)
-    # A parallel mechanism's dynamics reach the actuators through J = J_x^-1 J_q: a quantity that
-    # inverts a matrix of its own (forward dynamics: M) is also judged by the task matrix.
-    conditioning = {name: tuple(dict.fromkeys(
-        ([definitions[name].solves_with] if definitions[name].solves_with else [])
-        + ([task_matrix] if model.parallel is not None or not definitions[name].solves_with else [])))
-        for name in names}
+    conditioning = {name: _conditioning_sources(definitions[name].solves_with, task_matrix, model.parallel is not None)
+                    for name in names}
     residual = [name for name in names if definitions[name].residual]
     regular = [name for name in names if not definitions[name].residual]
     kappa_sources = {}

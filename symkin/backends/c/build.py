@@ -123,7 +123,7 @@ def shared_library(source: Path, header: Path) -> Path:
         _touch(target)
         return target
     directory.mkdir(parents=True, exist_ok=True)
-    with _locked(directory / f"{target.name}.lock"):
+    with locked(directory / f"{target.name}.lock"):
         if not target.exists():  # another process may have built it while we waited
             units = translation_units(source.read_text())
             jobs = min(build_jobs(), len(units))
@@ -154,17 +154,23 @@ def _touch(library: Path) -> None:
 
 
 @contextmanager
-def _locked(path: Path) -> Iterator[None]:
-    """An exclusive lock on ``path`` (so concurrent loaders compile a library once)."""
+def locked(path: Path, wait: bool = True) -> Iterator[bool]:
+    """An exclusive lock on ``path`` (so concurrent loaders compile a library once), held for the
+    block; yields True.  With ``wait=False`` it yields False at once, holding nothing, if another
+    process has the lock (``symkin cache clear`` leaves a library being built alone)."""
     try:
         import fcntl
     except ImportError:  # no advisory locks (Windows): concurrent builds stay safe, just redundant
-        yield
+        yield True
         return
     with open(path, "a") as handle:
-        fcntl.flock(handle, fcntl.LOCK_EX)
         try:
-            yield
+            fcntl.flock(handle, fcntl.LOCK_EX if wait else fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            yield False
+            return
+        try:
+            yield True
         finally:
             fcntl.flock(handle, fcntl.LOCK_UN)
 

@@ -17,12 +17,10 @@ from __future__ import annotations
 import re
 import shutil
 import time
-from collections.abc import Iterator
-from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
-from symkin.backends.c.build import cache_directory
+from symkin.backends.c.build import cache_directory, locked
 
 _LIBRARY = re.compile(r"^lib(?P<model>.+)-(?P<key>[0-9a-f]{24})\.(so|dylib|dll)$")
 
@@ -49,26 +47,6 @@ def cached_libraries(directory: Path | None = None) -> list[CachedLibrary]:
     return sorted(found, key=lambda library: (library.last_used, library.path.name))
 
 
-@contextmanager
-def _held_without_waiting(lock: Path) -> Iterator[bool]:
-    """Whether the build lock ``lock`` was free (then held for the block); False if a build holds it."""
-    try:
-        import fcntl
-    except ImportError:  # no advisory locks (Windows): builds write under temporary names anyway
-        yield True
-        return
-    with open(lock, "a") as handle:
-        try:
-            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            yield False
-            return
-        try:
-            yield True
-        finally:
-            fcntl.flock(handle, fcntl.LOCK_UN)
-
-
 @dataclass(frozen=True)
 class Eviction:
     """What :func:`clear` did: the libraries removed, the bytes freed, the ones left because a build held them."""
@@ -90,7 +68,7 @@ def clear(directory: Path | None = None, *, model: str | None = None, older_than
                 (older_than is not None and now - library.last_used <= older_than):
             continue
         lock = library.path.with_name(library.path.name + ".lock")
-        with _held_without_waiting(lock) as free:
+        with locked(lock, wait=False) as free:
             if not free:
                 busy.append(library)
                 continue
