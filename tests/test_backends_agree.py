@@ -3,7 +3,7 @@
 Acceptance (issue 4): for every example model and every generated function, each backend
 agrees with plain lambdify of the un-optimized sympy outputs at 1000 random points to a
 relative 1e-12, plus the rounding a solve amplifies near singular matrices (eps times kappa^2,
-see _bound); wrong input shapes raise the same clear errors in every backend.
+see agreement_bound); wrong input shapes raise the same clear errors in every backend.
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ POINTS = 1000
 AGREEMENT = 1e-12
 
 
-def _bound(model, spec, inputs, numpy_model) -> np.ndarray:
+def agreement_bound(model, spec, inputs, numpy_model) -> np.ndarray:
     """Per batch entry: AGREEMENT, plus for a function that solves with a square matrix (tcp_force and
     operational_space with J, forward_dynamics with M) the rounding the solve amplifies: svd(n)
     times kappa^2 (the operational-space inertia J^-T M J^-1 solves twice; one solve gives kappa).
@@ -63,7 +63,7 @@ def test_every_function_matches_the_sympy_expressions(name, backend, models, der
         want = batch_reference(model, spec)(*inputs)
         got = _tuple(getattr(generated, record["name"])(*inputs))
         assert len(got) == len(want)
-        bound = _bound(model, spec, inputs, loaded(name, "numpy"))
+        bound = agreement_bound(model, spec, inputs, loaded(name, "numpy"))
         for g, w, out in zip(got, want, record["outputs"]):
             assert g.shape == w.shape == (POINTS,) + tuple(out["shape"])
             error = relative_errors(g, w)

@@ -53,9 +53,10 @@ def test_manifest_describes_every_function(generated_dir):
                                "doc": "joint coordinates"}
     assert fk["outputs"][0]["name"] == "base_T_tcp" and fk["outputs"][0]["shape"] == [4, 4]
     assert fk["op_counts"]["cse"] < fk["op_counts"]["derived"]
-    assert fk["backends"] == ["c", "casadi", "numpy"]
+    assert fk["backends"] == ["c", "casadi", "js", "numpy"]
     assert manifest["backends"]["numpy"]["files"] == ["ur10e.py"]
     assert manifest["backends"]["c"]["files"] == ["ur10e.c", "ur10e.h"]
+    assert manifest["backends"]["js"]["files"] == ["ur10e.js"]
     assert "ur10e_fk.casadi" in manifest["backends"]["casadi"]["files"]
     assert manifest["options"] == {"float32": False}
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 from symkin.backends.base import Backend
 from symkin.backends.c import CBackend
 from symkin.backends.casadi import CasadiBackend
+from symkin.backends.js import JavascriptBackend
 from symkin.backends.numpy import NumpyBackend
 from symkin.errors import SymkinError
 
@@ -13,6 +14,7 @@ BACKENDS: dict[str, Backend] = {
     "numpy": NumpyBackend(),
     "c": CBackend(),
     "casadi": CasadiBackend(),
+    "js": JavascriptBackend(),
 }
 
 

@@ -21,6 +21,14 @@ _C_KEYWORDS = frozenset(
     "union unsigned void volatile while _Bool _Complex _Imaginary bool true false NULL".split()
 )
 
+#: ECMAScript 2023 reserved words, strict-mode ones and the globals the JavaScript backend uses.
+_JS_KEYWORDS = frozenset(
+    "await break case catch class const continue debugger default delete do else enum export extends "
+    "false finally for function if import in instanceof new null return super switch this throw true try "
+    "typeof var void while with yield let static implements interface package private protected public "
+    "arguments eval undefined NaN Infinity Math Object Number Array module exports globalThis".split()
+)
+
 #: Words used by the generated code itself (inputs, modules, helpers).
 _GENERATED_CODE_WORDS = frozenset(
     "numpy np math casadi ca out q qd qdd tau batch params self result base tcp world "
@@ -28,7 +36,7 @@ _GENERATED_CODE_WORDS = frozenset(
 )
 
 RESERVED_IDENTIFIERS = (
-    frozenset(keyword.kwlist) | frozenset(keyword.softkwlist) | _C_KEYWORDS | _GENERATED_CODE_WORDS | RESERVED_NAMES
+    frozenset(keyword.kwlist) | frozenset(keyword.softkwlist) | _C_KEYWORDS | _JS_KEYWORDS | _GENERATED_CODE_WORDS | RESERVED_NAMES
 )
 
 

@@ -7,6 +7,7 @@
 ``distance_legs``          (internal) legs reduced to f_i(q_i, p) = (|B_i - C_i|^2 - L_i^2)/2
 ``constraints``            f(q, p), one equation per leg
 ``constraint_jacobians``   J_x = df/dp, J_q = -df/dq: J_x pdot = J_q qdot
+``leg_points``             joint centres A_i, C_i(q), B_i(p) of every leg (drawing)
 ``ik``                     closed-form inverse kinematics q(p) with per-leg margins
 ``fk``                     closed-form forward kinematics p(q) by trilateration (3 legs, translation)
 ``jacobian``               task Jacobian J = J_x^-1 J_q: pdot = J qdot (seed eq. 8.29)
@@ -186,6 +187,23 @@ def _constraint_jacobians(d: Derivation) -> FunctionSpec:
         [_q(d), task_input(d.model)],
         [OutputSpec("J_x", J_x, "df/dp: one row per leg, one column per task coordinate"),
          OutputSpec("J_q", J_q, "-df/dq: one row per leg, one column per actuated joint (diagonal)")],
+    )
+
+
+@quantity("leg_points", "joint centres of every leg: first joint A_i, proximal point joint C_i(q), platform joint "
+          "B_i(p)", mechanism=PARALLEL)
+def _leg_points(d: Derivation) -> FunctionSpec:
+    structure: ParallelStructure = d[_structure]
+    legs = d[_distance_legs]
+    points = [[*chain.centres[0], *leg.C, *leg.B] for chain, leg in zip(structure.chains, legs)]
+    return make_function(
+        d.model, "leg_points", "Joint centres of every leg, for drawing the mechanism.",
+        "Per leg, in the base frame: the centre A_i of its first joint (fixed), the proximal point joint C_i(q) "
+        "that the rod starts from (the DELTA's elbow; A_i itself when the rod starts at the base) and the "
+        "platform joint B_i(p) = P + R(p) b_i (seed sec. 3.2.1). Evaluate at a consistent pair q = ik(p).",
+        [_q(d), task_input(d.model)],
+        [OutputSpec("points", sympy.ImmutableMatrix(points), "per leg: the points A_i, C_i, B_i (rows x, y, z)",
+                    "m", shape=(len(points), 3, 3))],
     )
 
 

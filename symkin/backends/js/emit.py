@@ -1,0 +1,114 @@
+"""Printing of the JavaScript module from the optimized functions (see templates/js/module.js.j2).
+
+Calling convention (documented in the generated file):
+
+* ``fk(q, params)``: each vector input as an array of its n numbers, then an optional object
+  of parameter values (``{a: 0.12}``); a parameter left out takes the model's default, an
+  unknown name throws;
+* a function with one output returns it, one with several an object of its named outputs;
+  an output of shape () is a number, (n,) an array, (r, c) an array of r rows, (k, r, c)
+  an array of k such matrices: the shapes of the numpy backend without the batch axes.
+
+One configuration per call, in IEEE doubles: the same statements as the other backends print,
+so a value differs from numpy's only by the last-bit differences of the libraries' sin, cos and
+atan2 (each within one ulp).
+"""
+
+from __future__ import annotations
+
+import json
+import textwrap
+from typing import Any
+
+from symkin.backends.js.printer import JsPrinter
+from symkin.backends.templating import provenance, render
+from symkin.ir.bundle import ModelCode
+from symkin.ir.spec import InputSpec, OptimizedFunction
+
+TEMPLATE = "js/module.js.j2"
+DOC_WIDTH = 88
+
+
+def _nested(shape: tuple[int, ...], codes: list[str]) -> str:
+    """Array literal of ``codes`` (row-major) nested to ``shape``; a scalar is its code."""
+    if not shape:
+        return codes[0]
+    step = len(codes) // shape[0]
+    return "[" + ", ".join(_nested(shape[1:], codes[k * step:(k + 1) * step]) for k in range(shape[0])) + "]"
+
+
+def _js_type(shape: tuple[int, ...]) -> str:
+    return "number" + "[]" * len(shape)
+
+
+def _default(i: InputSpec) -> float:
+    """The default value of a parameter input."""
+    assert i.default is not None, i.name
+    return float(i.default)
+
+
+def _input_doc(i: InputSpec) -> str:
+    if i.kind == "parameter":
+        unit = f" [{i.units[0]}]" if i.units[0] else ""
+        return f"{i.name}: {i.doc or 'parameter'}{unit}; default {_default(i)!r}."
+    elements = ", ".join(f"{n} [{u}]" for n, u in zip(i.element_names, i.units))
+    return f"{i.doc}, {len(i.symbols)} numbers: {elements}."
+
+
+def _function_context(f: OptimizedFunction, printer: JsPrinter) -> dict[str, Any]:
+    spec = f.spec
+    used = {s for _, e in f.temporaries for s in e.free_symbols} | {s for entries in f.outputs for e in entries
+                                                                    for s in e.free_symbols}
+    vectors = [{"name": v.name, "size": len(v.symbols),
+                "doc": textwrap.wrap(_input_doc(v), DOC_WIDTH - len(v.name) - 20),
+                "elements": [{"local": printer.doprint(s), "index": k} for k, s in enumerate(v.symbols) if s in used]}
+               for v in spec.vector_inputs]
+    params = [{"name": p.name, "local": printer.doprint(p.symbols[0]), "default": printer.literal(_default(p)),
+               "doc": _input_doc(p)} for p in spec.parameter_inputs]
+    outputs = []
+    for out, entries in zip(spec.outputs, f.outputs):
+        codes = [printer.doprint(e) for e in entries]
+        outputs.append({"name": out.name, "value": _nested(tuple(out.shape), codes), "type": _js_type(tuple(out.shape)),
+                        "doc": textwrap.wrap(f"{out.name}: shape {tuple(out.shape)}; "
+                                             f"{out.doc}" + (f" [{out.unit}]" if out.unit else "") + ".",
+                                             DOC_WIDTH - 10)})
+    multi = len(spec.outputs) > 1
+    returns = ("{" + ", ".join(f"{o['name']}: {o['type']}" for o in outputs) + "}") if multi else outputs[0]["type"]
+    return {
+        "name": spec.name,
+        "summary": spec.summary,
+        "doc_lines": textwrap.wrap(spec.doc, DOC_WIDTH - 3),
+        "vectors": vectors,
+        "params": params,
+        "param_names": json.dumps([p.name for p in spec.parameter_inputs]),
+        "temporaries": [{"name": printer.doprint(s), "code": printer.doprint(e)} for s, e in f.temporaries],
+        "outputs": outputs,
+        "multi": multi,
+        "returns": returns,
+        "signature": ", ".join([v.name for v in spec.vector_inputs] + (["params"] if params else [])),
+        "metadata": json.dumps({
+            "inputs": [v.name for v in spec.vector_inputs],
+            "parameters": [p.name for p in spec.parameter_inputs],
+            "outputs": {o.name: list(o.shape) for o in spec.outputs},
+        }, separators=(", ", ": ")),
+    }
+
+
+def emit_script(code: ModelCode) -> dict[str, str | bytes]:
+    """{<model>.js: script text} for ``code``."""
+    printer = JsPrinter()
+    free = [p for p in code.parameters if not p.fixed]
+    text = render(
+        TEMPLATE,
+        provenance=provenance(TEMPLATE, code.name, code.hash),
+        model={"name": code.name, "hash": code.hash, "description": textwrap.wrap(code.description or code.name,
+                                                                                  DOC_WIDTH - 3),
+               "symkin_version": code.symkin_version},
+        coordinates=json.dumps(list(code.coordinates)),
+        parameters=[{"name": p.name, "default": printer.literal(float(p.default))} for p in free],
+        functions=[_function_context(f, printer) for f in code.functions],
+        name_json=json.dumps(code.name), hash_json=json.dumps(code.hash),
+        version_json=json.dumps(code.symkin_version),
+    )
+    return {f"{code.name}.js": text}
+
