@@ -14,7 +14,7 @@ BENCH_STAMP := $(BENCH_VENV)/.symkin-bench-installed
 MODELS := $(wildcard models/*.yaml)
 PYTEST_WORKERS ?= 2
 
-.PHONY: setup demo test generate bench clean
+.PHONY: setup demo test generate bench clean screenshots
 
 $(STAMP): pyproject.toml requirements/constraints.txt
 	$(PYTHON) -m venv $(VENV)
@@ -65,3 +65,7 @@ bench: $(BENCH_STAMP)
 
 clean:
 	rm -rf $(VENV) $(BENCH_VENV) build dist *.egg-info .pytest_cache
+
+## screenshots: the pictures of docs/viewer.md, taken in headless Chromium (Debian's chromium)
+screenshots: setup
+	$(BIN)/python tests/browser.py docs/images generated

@@ -29,7 +29,7 @@ LAYERS = (
     ("optimize", {"optimize"}),
     ("backends", {"backends", "manifest", "pipeline"}),
     ("runtime", {"runtime"}),
-    ("analyses", {"ik", "analysis", "design", "simulation", "stability"}),
+    ("analyses", {"ik", "analysis", "design", "simulation", "stability", "viewer"}),
     ("api", {"api"}),
     ("cli", {"cli", "__main__"}),
 )

@@ -321,6 +321,171 @@ void delta_fk_batch(size_t n, const double *restrict q, const double *restrict p
 
 #if !defined(DELTA_PART) || DELTA_PART == 0
 
+/* delta_leg_points: Joint centres of every leg, for drawing the mechanism. */
+void delta_leg_points(const double *restrict q, const double *restrict p, double r_base, double r_tcp, double a, double *restrict points)
+{
+    const double theta1 = q[0];
+    const double theta2 = q[1];
+    const double theta3 = q[2];
+    const double x = p[0];
+    const double y = p[1];
+    const double z = p[2];
+    const double _angle[3] = {theta1, theta2, theta3};
+    double _sin[3], _cos[3];
+    delta_sincos(3, _angle, _sin, _cos);
+    const double _sin_theta1 = _sin[0];
+    const double _cos_theta1 = _cos[0];
+    const double _sin_theta2 = _sin[1];
+    const double _cos_theta2 = _cos[1];
+    const double _sin_theta3 = _sin[2];
+    const double _cos_theta3 = _cos[2];
+    const double _x0 = 0.5*r_base;
+    const double _x1 = -_x0;
+    const double _x2 = 0.8660254037844386*r_base;
+    const double _x3 = _cos_theta2*a;
+    const double _x4 = -0.5*r_tcp + x;
+    const double _x5 = 0.8660254037844386*r_tcp;
+    const double _x6 = _cos_theta3*a;
+    points[0] = r_base;
+    points[1] = 0.0;
+    points[2] = 0.0;
+    points[3] = _cos_theta1*a + r_base;
+    points[4] = 0.0;
+    points[5] = _sin_theta1*a;
+    points[6] = r_tcp + x;
+    points[7] = y;
+    points[8] = z;
+    points[9] = _x1;
+    points[10] = _x2;
+    points[11] = 0.0;
+    points[12] = -(_x0 + 0.5*_x3);
+    points[13] = _x2 + 0.8660254037844386*_x3;
+    points[14] = _sin_theta2*a;
+    points[15] = _x4;
+    points[16] = _x5 + y;
+    points[17] = z;
+    points[18] = _x1;
+    points[19] = -_x2;
+    points[20] = 0.0;
+    points[21] = -(_x0 + 0.5*_x6);
+    points[22] = -(_x2 + 0.8660254037844386*_x6);
+    points[23] = _sin_theta3*a;
+    points[24] = _x4;
+    points[25] = -_x5 + y;
+    points[26] = z;
+}
+
+/* delta_leg_points_packed: delta_leg_points with packed inputs and outputs. */
+void delta_leg_points_packed(const double *restrict in, double *restrict out)
+{
+    delta_leg_points(in + 0, in + 3, in[6], in[7], in[8], out + 0);
+}
+
+/* delta_leg_points_batch: delta_leg_points for n configurations, in blocks of 8. */
+void delta_leg_points_batch(size_t n, const double *restrict q, const double *restrict p, const double *restrict params, size_t params_stride, double *restrict points)
+{
+    for (size_t _i = 0; _i < n; _i += DELTA_BLOCK) {
+        /* lanes past the end of the batch repeat configuration _i and are not stored */
+        const size_t _m = n - _i < DELTA_BLOCK ? n - _i : DELTA_BLOCK;
+        double _in[9][DELTA_BLOCK];
+        for (size_t _l = 0; _l < DELTA_BLOCK; ++_l) {
+            const size_t _j = _i + (_l < _m ? _l : 0);
+            _in[0][_l] = q[_j * 3 + 0];
+            _in[1][_l] = q[_j * 3 + 1];
+            _in[2][_l] = q[_j * 3 + 2];
+            _in[3][_l] = p[_j * 3 + 0];
+            _in[4][_l] = p[_j * 3 + 1];
+            _in[5][_l] = p[_j * 3 + 2];
+            _in[6][_l] = params[_j * params_stride + 0];
+            _in[7][_l] = params[_j * params_stride + 1];
+            _in[8][_l] = params[_j * params_stride + 2];
+        }
+        double _angle[3][DELTA_BLOCK], _sin[3][DELTA_BLOCK], _cos[3][DELTA_BLOCK];
+        for (size_t _l = 0; _l < DELTA_BLOCK; ++_l) {
+            _angle[0][_l] = _in[0][_l];
+            _angle[1][_l] = _in[1][_l];
+            _angle[2][_l] = _in[2][_l];
+        }
+        delta_sincos(3 * DELTA_BLOCK, &_angle[0][0], &_sin[0][0], &_cos[0][0]);
+        double _out[22][DELTA_BLOCK];
+        for (size_t _l = 0; _l < DELTA_BLOCK; ++_l) {
+            const double x = _in[3][_l];
+            const double y = _in[4][_l];
+            const double z = _in[5][_l];
+            const double r_base = _in[6][_l];
+            const double r_tcp = _in[7][_l];
+            const double a = _in[8][_l];
+            const double _sin_theta1 = _sin[0][_l];
+            const double _cos_theta1 = _cos[0][_l];
+            const double _sin_theta2 = _sin[1][_l];
+            const double _cos_theta2 = _cos[1][_l];
+            const double _sin_theta3 = _sin[2][_l];
+            const double _cos_theta3 = _cos[2][_l];
+            const double _x0 = 0.5*r_base;
+            const double _x1 = -_x0;
+            const double _x2 = 0.8660254037844386*r_base;
+            const double _x3 = _cos_theta2*a;
+            const double _x4 = -0.5*r_tcp + x;
+            const double _x5 = 0.8660254037844386*r_tcp;
+            const double _x6 = _cos_theta3*a;
+            _out[0][_l] = r_base;
+            _out[1][_l] = _cos_theta1*a + r_base;
+            _out[2][_l] = _sin_theta1*a;
+            _out[3][_l] = r_tcp + x;
+            _out[4][_l] = y;
+            _out[5][_l] = z;
+            _out[6][_l] = _x1;
+            _out[7][_l] = _x2;
+            _out[8][_l] = -(_x0 + 0.5*_x3);
+            _out[9][_l] = _x2 + 0.8660254037844386*_x3;
+            _out[10][_l] = _sin_theta2*a;
+            _out[11][_l] = _x4;
+            _out[12][_l] = _x5 + y;
+            _out[13][_l] = z;
+            _out[14][_l] = _x1;
+            _out[15][_l] = -_x2;
+            _out[16][_l] = -(_x0 + 0.5*_x6);
+            _out[17][_l] = -(_x2 + 0.8660254037844386*_x6);
+            _out[18][_l] = _sin_theta3*a;
+            _out[19][_l] = _x4;
+            _out[20][_l] = -_x5 + y;
+            _out[21][_l] = z;
+        }
+        for (size_t _l = 0; _l < _m; ++_l) {
+            points[(_i + _l) * 27 + 0] = _out[0][_l];
+            points[(_i + _l) * 27 + 1] = 0.0;
+            points[(_i + _l) * 27 + 2] = 0.0;
+            points[(_i + _l) * 27 + 3] = _out[1][_l];
+            points[(_i + _l) * 27 + 4] = 0.0;
+            points[(_i + _l) * 27 + 5] = _out[2][_l];
+            points[(_i + _l) * 27 + 6] = _out[3][_l];
+            points[(_i + _l) * 27 + 7] = _out[4][_l];
+            points[(_i + _l) * 27 + 8] = _out[5][_l];
+            points[(_i + _l) * 27 + 9] = _out[6][_l];
+            points[(_i + _l) * 27 + 10] = _out[7][_l];
+            points[(_i + _l) * 27 + 11] = 0.0;
+            points[(_i + _l) * 27 + 12] = _out[8][_l];
+            points[(_i + _l) * 27 + 13] = _out[9][_l];
+            points[(_i + _l) * 27 + 14] = _out[10][_l];
+            points[(_i + _l) * 27 + 15] = _out[11][_l];
+            points[(_i + _l) * 27 + 16] = _out[12][_l];
+            points[(_i + _l) * 27 + 17] = _out[13][_l];
+            points[(_i + _l) * 27 + 18] = _out[14][_l];
+            points[(_i + _l) * 27 + 19] = _out[15][_l];
+            points[(_i + _l) * 27 + 20] = 0.0;
+            points[(_i + _l) * 27 + 21] = _out[16][_l];
+            points[(_i + _l) * 27 + 22] = _out[17][_l];
+            points[(_i + _l) * 27 + 23] = _out[18][_l];
+            points[(_i + _l) * 27 + 24] = _out[19][_l];
+            points[(_i + _l) * 27 + 25] = _out[20][_l];
+            points[(_i + _l) * 27 + 26] = _out[21][_l];
+        }
+    }
+}
+#endif
+
+#if !defined(DELTA_PART) || DELTA_PART == 0
+
 /* delta_constraints: Leg equations in distance form. */
 void delta_constraints(const double *restrict q, const double *restrict p, double r_base, double r_tcp, double a, double b, double *restrict f)
 {

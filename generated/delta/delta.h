@@ -109,6 +109,35 @@ void delta_fk_packed(const double *in, double *out);
  * Uses 1280 bytes of stack for its blocks of 8 configurations. */
 void delta_fk_batch(size_t n, const double *q, const double *params, size_t params_stride, double *position, double *margin);
 
+/* delta_leg_points: Joint centres of every leg, for drawing the mechanism.
+ *
+ * Per leg, in the base frame: the centre A_i of its first joint (fixed), the proximal
+ * point joint C_i(q) that the rod starts from (the DELTA's elbow; A_i itself when the
+ * rod starts at the base) and the platform joint B_i(p) = P + R(p) b_i (seed sec.
+ * 3.2.1). Evaluate at a consistent pair q = ik(p).
+ *
+ * Inputs:
+ *   q[3]: joint coordinates: theta1 [rad], theta2 [rad], theta3 [rad].
+ *   p[3]: task coordinates of the platform (TCP): x [m], y [m], z [m].
+ *   r_base: distance from the base centre to the actuated joints A_i [m]; default
+ *   DELTA_DEFAULT_r_base = 0.07.
+ *   r_tcp: distance from the TCP to the platform joints B_i [m]; default
+ *   DELTA_DEFAULT_r_tcp = 0.025.
+ *   a: length of the upper (actuated) arms A_i C_i [m]; default DELTA_DEFAULT_a = 0.1.
+ * Outputs:
+ *   points[27]: 9 x 3, row-major; rows A_1, C_1, B_1, A_2, ...: three points per leg
+ *   (columns x, y, z) [m].
+ * Cost: 29 operations.
+ */
+void delta_leg_points(const double *q, const double *p, double r_base, double r_tcp, double a, double *points);
+
+/* delta_leg_points with packed arguments: in = q, p, r_base, r_tcp, a one after the other; out = points one after the other. */
+void delta_leg_points_packed(const double *in, double *out);
+
+/* delta_leg_points for n configurations; params: r_base, r_tcp, a, stride 0 or 3.
+ * Uses 2560 bytes of stack for its blocks of 8 configurations. */
+void delta_leg_points_batch(size_t n, const double *q, const double *p, const double *params, size_t params_stride, double *points);
+
 /* delta_constraints: Leg equations in distance form.
  *
  * f_i = (|B_i(p) - C_i(q)|^2 - L_i(q)^2) / 2 for every leg: the rod between the point

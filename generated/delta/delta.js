@@ -16,6 +16,7 @@
  * Functions:
  *   ik(p, params) -> {joints: number[], margin: number[]}
  *   fk(q, params) -> {position: number[], margin: number}
+ *   leg_points(q, p, params) -> number[][]
  *   constraints(q, p, params) -> number[]
  *   constraint_jacobians(q, p, params) -> {J_x: number[][], J_q: number[][]}
  *   jacobian(q, p, params) -> number[][]
@@ -197,6 +198,49 @@
       position: [_x0 + r_base - r_tcp + _x19*_x22 - _x11*_x27, _x19*_x25 - _x16*_x27, _x1 + _x19*_x24 - _x17*_x27],
       margin: _x26,
     };
+  }
+
+  /**
+   * Joint centres of every leg, for drawing the mechanism.
+   *
+   * Per leg, in the base frame: the centre A_i of its first joint (fixed), the proximal
+   * point joint C_i(q) that the rod starts from (the DELTA's elbow; A_i itself when the
+   * rod starts at the base) and the platform joint B_i(p) = P + R(p) b_i (seed sec.
+   * 3.2.1). Evaluate at a consistent pair q = ik(p).
+   *
+   * @param {number[]} q joint coordinates, 3 numbers: theta1 [rad], theta2 [rad], theta3
+   *     [rad].
+   * @param {number[]} p task coordinates of the platform (TCP), 3 numbers: x [m], y [m], z
+   *     [m].
+   * @param {Object} [params] parameter values (defaults in PARAMETERS):
+   *     r_base: distance from the base centre to the actuated joints A_i [m]; default 0.07.
+   *     r_tcp: distance from the TCP to the platform joints B_i [m]; default 0.025.
+   *     a: length of the upper (actuated) arms A_i C_i [m]; default 0.1.
+   * @returns {number[][]}
+   *     points: shape (9, 3); rows A_1, C_1, B_1, A_2, ...: three points per leg
+   *     (columns x, y, z) [m].
+   */
+  function leg_points(q, p, params) {
+    _vector(q, 3, "q", "leg_points");
+    _vector(p, 3, "p", "leg_points");
+    const _p = _params(params, ["r_base", "r_tcp", "a"], "leg_points");
+    const r_base = _p.r_base ?? 0.07;
+    const r_tcp = _p.r_tcp ?? 0.025;
+    const a = _p.a ?? 0.1;
+    const theta1 = q[0];
+    const theta2 = q[1];
+    const theta3 = q[2];
+    const x = p[0];
+    const y = p[1];
+    const z = p[2];
+    const _x0 = 0.5*r_base;
+    const _x1 = -_x0;
+    const _x2 = 0.8660254037844386*r_base;
+    const _x3 = a*Math.cos(theta2);
+    const _x4 = x - 0.5*r_tcp;
+    const _x5 = 0.8660254037844386*r_tcp;
+    const _x6 = a*Math.cos(theta3);
+    return [[r_base, 0.0, 0.0], [r_base + a*Math.cos(theta1), 0.0, a*Math.sin(theta1)], [r_tcp + x, y, z], [_x1, _x2, 0.0], [-(_x0 + 0.5*_x3), _x2 + 0.8660254037844386*_x3, a*Math.sin(theta2)], [_x4, _x5 + y, z], [_x1, -_x2, 0.0], [-(_x0 + 0.5*_x6), -(_x2 + 0.8660254037844386*_x6), a*Math.sin(theta3)], [_x4, y - _x5, z]];
   }
 
   /**
@@ -1966,6 +2010,7 @@
     FUNCTIONS: Object.freeze({
       ik: {"inputs": ["p"], "parameters": ["r_base", "r_tcp", "a", "b"], "outputs": {"joints": [3], "margin": [3]}},
       fk: {"inputs": ["q"], "parameters": ["r_base", "r_tcp", "a", "b"], "outputs": {"position": [3], "margin": []}},
+      leg_points: {"inputs": ["q", "p"], "parameters": ["r_base", "r_tcp", "a"], "outputs": {"points": [9, 3]}},
       constraints: {"inputs": ["q", "p"], "parameters": ["r_base", "r_tcp", "a", "b"], "outputs": {"f": [3]}},
       constraint_jacobians: {"inputs": ["q", "p"], "parameters": ["r_base", "r_tcp", "a"], "outputs": {"J_x": [3, 3], "J_q": [3, 3]}},
       jacobian: {"inputs": ["q", "p"], "parameters": ["r_base", "r_tcp", "a"], "outputs": {"J": [3, 3]}},
@@ -1985,6 +2030,7 @@
     }),
     ik: ik,
     fk: fk,
+    leg_points: leg_points,
     constraints: constraints,
     constraint_jacobians: constraint_jacobians,
     jacobian: jacobian,

@@ -13,6 +13,7 @@ the model's defaults and may be scalars or arrays broadcastable to the batch sha
 Functions:
     ik(p, **params) -> IkResult(joints, margin)
     fk(q, **params) -> FkResult(position, margin)
+    leg_points(q, p, **params) -> points (..., 9, 3)
     constraints(q, p, **params) -> f (..., 3)
     constraint_jacobians(q, p, **params) -> ConstraintJacobiansResult(J_x, J_q)
     jacobian(q, p, **params) -> J (..., 3, 3)
@@ -248,6 +249,72 @@ def fk(q, *, r_base=0.07, r_tcp=0.025, a=0.1, b=0.15):
     _out_margin = numpy.zeros(batch + ())
     _out_margin[...] = _x26
     return FkResult(_out_position, _out_margin)
+
+
+def leg_points(q, p, *, r_base=0.07, r_tcp=0.025, a=0.1):
+    """Joint centres of every leg, for drawing the mechanism.
+
+    Per leg, in the base frame: the centre A_i of its first joint (fixed), the proximal
+    point joint C_i(q) that the rod starts from (the DELTA's elbow; A_i itself when the
+    rod starts at the base) and the platform joint B_i(p) = P + R(p) b_i (seed sec.
+    3.2.1). Evaluate at a consistent pair q = ik(p).
+
+    Args:
+        q: joint coordinates, shape (..., 3): theta1 [rad], theta2 [rad], theta3 [rad].
+        p: task coordinates of the platform (TCP), shape (..., 3): x [m], y [m], z [m].
+        r_base: distance from the base centre to the actuated joints A_i [m]; default 0.07;
+            a scalar or an array broadcastable to the batch shape.
+        r_tcp: distance from the TCP to the platform joints B_i [m]; default 0.025; a scalar
+            or an array broadcastable to the batch shape.
+        a: length of the upper (actuated) arms A_i C_i [m]; default 0.1; a scalar or an
+            array broadcastable to the batch shape.
+
+    Returns:
+        points: shape (..., 9, 3); rows A_1, C_1, B_1, A_2, ...: three points per leg
+            (columns x, y, z) [m].
+    """
+    q = _vector(q, 3, "q", "leg_points")
+    p = _vector(p, 3, "p", "leg_points")
+    batch = _batch_shape("leg_points", q.shape[:-1], p.shape[:-1], numpy.shape(r_base), numpy.shape(r_tcp), numpy.shape(a))
+    if math.prod(batch) > CHUNK:
+        return _in_chunks(leg_points, batch, (q, p, ), {"r_base": r_base, "r_tcp": r_tcp, "a": a})
+    theta1 = q[..., 0]
+    theta2 = q[..., 1]
+    theta3 = q[..., 2]
+    x = p[..., 0]
+    y = p[..., 1]
+    z = p[..., 2]
+    _x0 = 0.5*r_base
+    _x1 = -_x0
+    _x2 = 0.8660254037844386*r_base
+    _x3 = a*numpy.cos(theta2)
+    _x4 = x - 0.5*r_tcp
+    _x5 = 0.8660254037844386*r_tcp
+    _x6 = a*numpy.cos(theta3)
+    _out_points = numpy.zeros(batch + (9, 3))
+    _out_points[..., 0, 0] = r_base
+    _out_points[..., 1, 0] = r_base + a*numpy.cos(theta1)
+    _out_points[..., 1, 2] = a*numpy.sin(theta1)
+    _out_points[..., 2, 0] = r_tcp + x
+    _out_points[..., 2, 1] = y
+    _out_points[..., 2, 2] = z
+    _out_points[..., 3, 0] = _x1
+    _out_points[..., 3, 1] = _x2
+    _out_points[..., 4, 0] = -(_x0 + 0.5*_x3)
+    _out_points[..., 4, 1] = _x2 + 0.8660254037844386*_x3
+    _out_points[..., 4, 2] = a*numpy.sin(theta2)
+    _out_points[..., 5, 0] = _x4
+    _out_points[..., 5, 1] = _x5 + y
+    _out_points[..., 5, 2] = z
+    _out_points[..., 6, 0] = _x1
+    _out_points[..., 6, 1] = -_x2
+    _out_points[..., 7, 0] = -(_x0 + 0.5*_x6)
+    _out_points[..., 7, 1] = -(_x2 + 0.8660254037844386*_x6)
+    _out_points[..., 7, 2] = a*numpy.sin(theta3)
+    _out_points[..., 8, 0] = _x4
+    _out_points[..., 8, 1] = y - _x5
+    _out_points[..., 8, 2] = z
+    return _out_points
 
 
 def constraints(q, p, *, r_base=0.07, r_tcp=0.025, a=0.1, b=0.15):

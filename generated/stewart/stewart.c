@@ -459,6 +459,363 @@ void stewart_ik_batch(size_t n, const double *restrict p, const double *restrict
 
 #if !defined(STEWART_PART) || STEWART_PART == 0
 
+/* stewart_leg_points: Joint centres of every leg, for drawing the mechanism. */
+void stewart_leg_points(const double *restrict q, const double *restrict p, double r_b, double r_p, double gamma_b, double gamma_p, double *restrict points)
+{
+    (void)q;
+    const double x = p[0];
+    const double y = p[1];
+    const double z = p[2];
+    const double roll = p[3];
+    const double pitch = p[4];
+    const double yaw = p[5];
+    const double _angle[5] = {gamma_b, gamma_p, pitch, roll, yaw};
+    double _sin[5], _cos[5];
+    stewart_sincos(5, _angle, _sin, _cos);
+    const double _sin_gamma_b = _sin[0];
+    const double _cos_gamma_b = _cos[0];
+    const double _sin_gamma_p = _sin[1];
+    const double _cos_gamma_p = _cos[1];
+    const double _sin_pitch = _sin[2];
+    const double _cos_pitch = _cos[2];
+    const double _sin_roll = _sin[3];
+    const double _cos_roll = _cos[3];
+    const double _sin_yaw = _sin[4];
+    const double _cos_yaw = _cos[4];
+    const double _x0 = _cos_gamma_b;
+    const double _x1 = _x0*r_b;
+    const double _x2 = _sin_gamma_b;
+    const double _x3 = _x2*r_b;
+    const double _x4 = -_x3;
+    const double _x5 = _sin_yaw;
+    const double _x6 = _cos_roll;
+    const double _x7 = _cos_yaw;
+    const double _x8 = _sin_pitch;
+    const double _x9 = _sin_roll;
+    const double _x10 = _x8*_x9;
+    const double _x11 = _x10*_x7 - _x5*_x6;
+    const double _x12 = _cos_gamma_p;
+    const double _x13 = 0.8660254037844386*_x12;
+    const double _x14 = _sin_gamma_p;
+    const double _x15 = 0.5*_x14;
+    const double _x16 = r_p*(_x13 - _x15);
+    const double _x17 = _x11*_x16;
+    const double _x18 = 0.8660254037844386*_x14;
+    const double _x19 = 0.5*_x12;
+    const double _x20 = _x18 + _x19;
+    const double _x21 = _cos_pitch;
+    const double _x22 = _x21*r_p;
+    const double _x23 = _x20*_x22;
+    const double _x24 = _x23*_x7 + x;
+    const double _x25 = _x10*_x5 + _x6*_x7;
+    const double _x26 = _x16*_x25;
+    const double _x27 = _x23*_x5 + y;
+    const double _x28 = -z;
+    const double _x29 = _x8*r_p;
+    const double _x30 = _x20*_x29;
+    const double _x31 = _x21*_x9;
+    const double _x32 = _x16*_x31;
+    const double _x33 = 0.8660254037844386*_x2;
+    const double _x34 = 0.5*_x0;
+    const double _x35 = -r_b*(-_x33 + _x34);
+    const double _x36 = 0.8660254037844386*_x0;
+    const double _x37 = 0.5*_x2;
+    const double _x38 = r_b*(_x36 + _x37);
+    const double _x39 = r_p*(_x13 + _x15);
+    const double _x40 = _x11*_x39;
+    const double _x41 = -_x18 + _x19;
+    const double _x42 = _x22*_x41;
+    const double _x43 = _x42*_x7 + x;
+    const double _x44 = _x25*_x39;
+    const double _x45 = _x42*_x5 + y;
+    const double _x46 = _x29*_x41;
+    const double _x47 = _x31*_x39;
+    const double _x48 = -r_b*(_x33 + _x34);
+    const double _x49 = r_b*(_x36 - _x37);
+    const double _x50 = _x12*_x22;
+    const double _x51 = _x50*_x7;
+    const double _x52 = _x14*r_p;
+    const double _x53 = _x11*_x52;
+    const double _x54 = _x5*_x50;
+    const double _x55 = _x25*_x52;
+    const double _x56 = _x31*_x52;
+    const double _x57 = _x12*_x29 + z;
+    const double _x58 = -_x49;
+    const double _x59 = -_x38;
+    points[0] = _x1;
+    points[1] = _x4;
+    points[2] = 0.0;
+    points[3] = _x1;
+    points[4] = _x4;
+    points[5] = 0.0;
+    points[6] = -_x17 + _x24;
+    points[7] = -_x26 + _x27;
+    points[8] = -(_x28 + _x30 + _x32);
+    points[9] = _x1;
+    points[10] = _x3;
+    points[11] = 0.0;
+    points[12] = _x1;
+    points[13] = _x3;
+    points[14] = 0.0;
+    points[15] = _x17 + _x24;
+    points[16] = _x26 + _x27;
+    points[17] = -_x30 + _x32 + z;
+    points[18] = _x35;
+    points[19] = _x38;
+    points[20] = 0.0;
+    points[21] = _x35;
+    points[22] = _x38;
+    points[23] = 0.0;
+    points[24] = _x40 + _x43;
+    points[25] = _x44 + _x45;
+    points[26] = -_x46 + _x47 + z;
+    points[27] = _x48;
+    points[28] = _x49;
+    points[29] = 0.0;
+    points[30] = _x48;
+    points[31] = _x49;
+    points[32] = 0.0;
+    points[33] = -_x51 + _x53 + x;
+    points[34] = -_x54 + _x55 + y;
+    points[35] = _x56 + _x57;
+    points[36] = _x48;
+    points[37] = _x58;
+    points[38] = 0.0;
+    points[39] = _x48;
+    points[40] = _x58;
+    points[41] = 0.0;
+    points[42] = -(_x51 + _x53 - x);
+    points[43] = -(_x54 + _x55 - y);
+    points[44] = -_x56 + _x57;
+    points[45] = _x35;
+    points[46] = _x59;
+    points[47] = 0.0;
+    points[48] = _x35;
+    points[49] = _x59;
+    points[50] = 0.0;
+    points[51] = -_x40 + _x43;
+    points[52] = -_x44 + _x45;
+    points[53] = -(_x28 + _x46 + _x47);
+}
+
+/* stewart_leg_points_packed: stewart_leg_points with packed inputs and outputs. */
+void stewart_leg_points_packed(const double *restrict in, double *restrict out)
+{
+    stewart_leg_points(in + 0, in + 6, in[12], in[13], in[14], in[15], out + 0);
+}
+
+/* stewart_leg_points_batch: stewart_leg_points for n configurations, in blocks of 8. */
+void stewart_leg_points_batch(size_t n, const double *restrict q, const double *restrict p, const double *restrict params, size_t params_stride, double *restrict points)
+{
+    (void)q;
+    for (size_t _i = 0; _i < n; _i += STEWART_BLOCK) {
+        /* lanes past the end of the batch repeat configuration _i and are not stored */
+        const size_t _m = n - _i < STEWART_BLOCK ? n - _i : STEWART_BLOCK;
+        double _in[10][STEWART_BLOCK];
+        for (size_t _l = 0; _l < STEWART_BLOCK; ++_l) {
+            const size_t _j = _i + (_l < _m ? _l : 0);
+            _in[0][_l] = p[_j * 6 + 0];
+            _in[1][_l] = p[_j * 6 + 1];
+            _in[2][_l] = p[_j * 6 + 2];
+            _in[3][_l] = p[_j * 6 + 3];
+            _in[4][_l] = p[_j * 6 + 4];
+            _in[5][_l] = p[_j * 6 + 5];
+            _in[6][_l] = params[_j * params_stride + 0];
+            _in[7][_l] = params[_j * params_stride + 1];
+            _in[8][_l] = params[_j * params_stride + 2];
+            _in[9][_l] = params[_j * params_stride + 3];
+        }
+        double _angle[5][STEWART_BLOCK], _sin[5][STEWART_BLOCK], _cos[5][STEWART_BLOCK];
+        for (size_t _l = 0; _l < STEWART_BLOCK; ++_l) {
+            _angle[0][_l] = _in[8][_l];
+            _angle[1][_l] = _in[9][_l];
+            _angle[2][_l] = _in[4][_l];
+            _angle[3][_l] = _in[3][_l];
+            _angle[4][_l] = _in[5][_l];
+        }
+        stewart_sincos(5 * STEWART_BLOCK, &_angle[0][0], &_sin[0][0], &_cos[0][0]);
+        double _out[42][STEWART_BLOCK];
+        for (size_t _l = 0; _l < STEWART_BLOCK; ++_l) {
+            const double x = _in[0][_l];
+            const double y = _in[1][_l];
+            const double z = _in[2][_l];
+            const double r_b = _in[6][_l];
+            const double r_p = _in[7][_l];
+            const double _sin_gamma_b = _sin[0][_l];
+            const double _cos_gamma_b = _cos[0][_l];
+            const double _sin_gamma_p = _sin[1][_l];
+            const double _cos_gamma_p = _cos[1][_l];
+            const double _sin_pitch = _sin[2][_l];
+            const double _cos_pitch = _cos[2][_l];
+            const double _sin_roll = _sin[3][_l];
+            const double _cos_roll = _cos[3][_l];
+            const double _sin_yaw = _sin[4][_l];
+            const double _cos_yaw = _cos[4][_l];
+            const double _x0 = _cos_gamma_b;
+            const double _x1 = _x0*r_b;
+            const double _x2 = _sin_gamma_b;
+            const double _x3 = _x2*r_b;
+            const double _x4 = -_x3;
+            const double _x5 = _sin_yaw;
+            const double _x6 = _cos_roll;
+            const double _x7 = _cos_yaw;
+            const double _x8 = _sin_pitch;
+            const double _x9 = _sin_roll;
+            const double _x10 = _x8*_x9;
+            const double _x11 = _x10*_x7 - _x5*_x6;
+            const double _x12 = _cos_gamma_p;
+            const double _x13 = 0.8660254037844386*_x12;
+            const double _x14 = _sin_gamma_p;
+            const double _x15 = 0.5*_x14;
+            const double _x16 = r_p*(_x13 - _x15);
+            const double _x17 = _x11*_x16;
+            const double _x18 = 0.8660254037844386*_x14;
+            const double _x19 = 0.5*_x12;
+            const double _x20 = _x18 + _x19;
+            const double _x21 = _cos_pitch;
+            const double _x22 = _x21*r_p;
+            const double _x23 = _x20*_x22;
+            const double _x24 = _x23*_x7 + x;
+            const double _x25 = _x10*_x5 + _x6*_x7;
+            const double _x26 = _x16*_x25;
+            const double _x27 = _x23*_x5 + y;
+            const double _x28 = -z;
+            const double _x29 = _x8*r_p;
+            const double _x30 = _x20*_x29;
+            const double _x31 = _x21*_x9;
+            const double _x32 = _x16*_x31;
+            const double _x33 = 0.8660254037844386*_x2;
+            const double _x34 = 0.5*_x0;
+            const double _x35 = -r_b*(-_x33 + _x34);
+            const double _x36 = 0.8660254037844386*_x0;
+            const double _x37 = 0.5*_x2;
+            const double _x38 = r_b*(_x36 + _x37);
+            const double _x39 = r_p*(_x13 + _x15);
+            const double _x40 = _x11*_x39;
+            const double _x41 = -_x18 + _x19;
+            const double _x42 = _x22*_x41;
+            const double _x43 = _x42*_x7 + x;
+            const double _x44 = _x25*_x39;
+            const double _x45 = _x42*_x5 + y;
+            const double _x46 = _x29*_x41;
+            const double _x47 = _x31*_x39;
+            const double _x48 = -r_b*(_x33 + _x34);
+            const double _x49 = r_b*(_x36 - _x37);
+            const double _x50 = _x12*_x22;
+            const double _x51 = _x50*_x7;
+            const double _x52 = _x14*r_p;
+            const double _x53 = _x11*_x52;
+            const double _x54 = _x5*_x50;
+            const double _x55 = _x25*_x52;
+            const double _x56 = _x31*_x52;
+            const double _x57 = _x12*_x29 + z;
+            const double _x58 = -_x49;
+            const double _x59 = -_x38;
+            _out[0][_l] = _x1;
+            _out[1][_l] = _x4;
+            _out[2][_l] = _x1;
+            _out[3][_l] = _x4;
+            _out[4][_l] = -_x17 + _x24;
+            _out[5][_l] = -_x26 + _x27;
+            _out[6][_l] = -(_x28 + _x30 + _x32);
+            _out[7][_l] = _x1;
+            _out[8][_l] = _x3;
+            _out[9][_l] = _x1;
+            _out[10][_l] = _x3;
+            _out[11][_l] = _x17 + _x24;
+            _out[12][_l] = _x26 + _x27;
+            _out[13][_l] = -_x30 + _x32 + z;
+            _out[14][_l] = _x35;
+            _out[15][_l] = _x38;
+            _out[16][_l] = _x35;
+            _out[17][_l] = _x38;
+            _out[18][_l] = _x40 + _x43;
+            _out[19][_l] = _x44 + _x45;
+            _out[20][_l] = -_x46 + _x47 + z;
+            _out[21][_l] = _x48;
+            _out[22][_l] = _x49;
+            _out[23][_l] = _x48;
+            _out[24][_l] = _x49;
+            _out[25][_l] = -_x51 + _x53 + x;
+            _out[26][_l] = -_x54 + _x55 + y;
+            _out[27][_l] = _x56 + _x57;
+            _out[28][_l] = _x48;
+            _out[29][_l] = _x58;
+            _out[30][_l] = _x48;
+            _out[31][_l] = _x58;
+            _out[32][_l] = -(_x51 + _x53 - x);
+            _out[33][_l] = -(_x54 + _x55 - y);
+            _out[34][_l] = -_x56 + _x57;
+            _out[35][_l] = _x35;
+            _out[36][_l] = _x59;
+            _out[37][_l] = _x35;
+            _out[38][_l] = _x59;
+            _out[39][_l] = -_x40 + _x43;
+            _out[40][_l] = -_x44 + _x45;
+            _out[41][_l] = -(_x28 + _x46 + _x47);
+        }
+        for (size_t _l = 0; _l < _m; ++_l) {
+            points[(_i + _l) * 54 + 0] = _out[0][_l];
+            points[(_i + _l) * 54 + 1] = _out[1][_l];
+            points[(_i + _l) * 54 + 2] = 0.0;
+            points[(_i + _l) * 54 + 3] = _out[2][_l];
+            points[(_i + _l) * 54 + 4] = _out[3][_l];
+            points[(_i + _l) * 54 + 5] = 0.0;
+            points[(_i + _l) * 54 + 6] = _out[4][_l];
+            points[(_i + _l) * 54 + 7] = _out[5][_l];
+            points[(_i + _l) * 54 + 8] = _out[6][_l];
+            points[(_i + _l) * 54 + 9] = _out[7][_l];
+            points[(_i + _l) * 54 + 10] = _out[8][_l];
+            points[(_i + _l) * 54 + 11] = 0.0;
+            points[(_i + _l) * 54 + 12] = _out[9][_l];
+            points[(_i + _l) * 54 + 13] = _out[10][_l];
+            points[(_i + _l) * 54 + 14] = 0.0;
+            points[(_i + _l) * 54 + 15] = _out[11][_l];
+            points[(_i + _l) * 54 + 16] = _out[12][_l];
+            points[(_i + _l) * 54 + 17] = _out[13][_l];
+            points[(_i + _l) * 54 + 18] = _out[14][_l];
+            points[(_i + _l) * 54 + 19] = _out[15][_l];
+            points[(_i + _l) * 54 + 20] = 0.0;
+            points[(_i + _l) * 54 + 21] = _out[16][_l];
+            points[(_i + _l) * 54 + 22] = _out[17][_l];
+            points[(_i + _l) * 54 + 23] = 0.0;
+            points[(_i + _l) * 54 + 24] = _out[18][_l];
+            points[(_i + _l) * 54 + 25] = _out[19][_l];
+            points[(_i + _l) * 54 + 26] = _out[20][_l];
+            points[(_i + _l) * 54 + 27] = _out[21][_l];
+            points[(_i + _l) * 54 + 28] = _out[22][_l];
+            points[(_i + _l) * 54 + 29] = 0.0;
+            points[(_i + _l) * 54 + 30] = _out[23][_l];
+            points[(_i + _l) * 54 + 31] = _out[24][_l];
+            points[(_i + _l) * 54 + 32] = 0.0;
+            points[(_i + _l) * 54 + 33] = _out[25][_l];
+            points[(_i + _l) * 54 + 34] = _out[26][_l];
+            points[(_i + _l) * 54 + 35] = _out[27][_l];
+            points[(_i + _l) * 54 + 36] = _out[28][_l];
+            points[(_i + _l) * 54 + 37] = _out[29][_l];
+            points[(_i + _l) * 54 + 38] = 0.0;
+            points[(_i + _l) * 54 + 39] = _out[30][_l];
+            points[(_i + _l) * 54 + 40] = _out[31][_l];
+            points[(_i + _l) * 54 + 41] = 0.0;
+            points[(_i + _l) * 54 + 42] = _out[32][_l];
+            points[(_i + _l) * 54 + 43] = _out[33][_l];
+            points[(_i + _l) * 54 + 44] = _out[34][_l];
+            points[(_i + _l) * 54 + 45] = _out[35][_l];
+            points[(_i + _l) * 54 + 46] = _out[36][_l];
+            points[(_i + _l) * 54 + 47] = 0.0;
+            points[(_i + _l) * 54 + 48] = _out[37][_l];
+            points[(_i + _l) * 54 + 49] = _out[38][_l];
+            points[(_i + _l) * 54 + 50] = 0.0;
+            points[(_i + _l) * 54 + 51] = _out[39][_l];
+            points[(_i + _l) * 54 + 52] = _out[40][_l];
+            points[(_i + _l) * 54 + 53] = _out[41][_l];
+        }
+    }
+}
+#endif
+
+#if !defined(STEWART_PART) || STEWART_PART == 0
+
 /* stewart_constraints: Leg equations in distance form. */
 void stewart_constraints(const double *restrict q, const double *restrict p, double r_b, double r_p, double gamma_b, double gamma_p, double *restrict f)
 {

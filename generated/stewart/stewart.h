@@ -81,6 +81,38 @@ void stewart_ik_packed(const double *in, double *out);
  * Uses 2368 bytes of stack for its blocks of 8 configurations. */
 void stewart_ik_batch(size_t n, const double *p, const double *params, size_t params_stride, double *joints, double *margin);
 
+/* stewart_leg_points: Joint centres of every leg, for drawing the mechanism.
+ *
+ * Per leg, in the base frame: the centre A_i of its first joint (fixed), the proximal
+ * point joint C_i(q) that the rod starts from (the DELTA's elbow; A_i itself when the
+ * rod starts at the base) and the platform joint B_i(p) = P + R(p) b_i (seed sec.
+ * 3.2.1). Evaluate at a consistent pair q = ik(p).
+ *
+ * Inputs:
+ *   q[6]: joint coordinates: l1 [m], l2 [m], l3 [m], l4 [m], l5 [m], l6 [m].
+ *   p[6]: task coordinates of the platform (TCP): x [m], y [m], z [m], roll [rad], pitch
+ *   [rad], yaw [rad].
+ *   r_b: radius of the circle of the base joints [m]; default STEWART_DEFAULT_r_b = 0.2.
+ *   r_p: radius of the circle of the platform joints [m]; default STEWART_DEFAULT_r_p =
+ *   0.1.
+ *   gamma_b: half the angle between the two base joints of a pair [rad]; default
+ *   STEWART_DEFAULT_gamma_b = 0.26179938779914946.
+ *   gamma_p: half the angle between the two platform joints of a pair [rad]; default
+ *   STEWART_DEFAULT_gamma_p = 0.26179938779914946.
+ * Outputs:
+ *   points[54]: 18 x 3, row-major; rows A_1, C_1, B_1, A_2, ...: three points per leg
+ *   (columns x, y, z) [m].
+ * Cost: 97 operations.
+ */
+void stewart_leg_points(const double *q, const double *p, double r_b, double r_p, double gamma_b, double gamma_p, double *points);
+
+/* stewart_leg_points with packed arguments: in = q, p, r_b, r_p, gamma_b, gamma_p one after the other; out = points one after the other. */
+void stewart_leg_points_packed(const double *in, double *out);
+
+/* stewart_leg_points for n configurations; params: r_b, r_p, gamma_b, gamma_p, stride 0 or 4.
+ * Uses 4288 bytes of stack for its blocks of 8 configurations. */
+void stewart_leg_points_batch(size_t n, const double *q, const double *p, const double *params, size_t params_stride, double *points);
+
 /* stewart_constraints: Leg equations in distance form.
  *
  * f_i = (|B_i(p) - C_i(q)|^2 - L_i(q)^2) / 2 for every leg: the rod between the point

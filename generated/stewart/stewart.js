@@ -15,6 +15,7 @@
  *
  * Functions:
  *   ik(p, params) -> {joints: number[], margin: number[]}
+ *   leg_points(q, p, params) -> number[][]
  *   constraints(q, p, params) -> number[]
  *   constraint_jacobians(q, p, params) -> {J_x: number[][], J_q: number[][]}
  *   inverse_jacobian(q, p, params) -> number[][]
@@ -245,6 +246,104 @@
       joints: [Math.sqrt(_x69), Math.sqrt(_x70), Math.sqrt(_x107), Math.sqrt(_x131), Math.sqrt(_x132), Math.sqrt(_x133)],
       margin: [_x69, _x70, _x107, _x131, _x132, _x133],
     };
+  }
+
+  /**
+   * Joint centres of every leg, for drawing the mechanism.
+   *
+   * Per leg, in the base frame: the centre A_i of its first joint (fixed), the proximal
+   * point joint C_i(q) that the rod starts from (the DELTA's elbow; A_i itself when the
+   * rod starts at the base) and the platform joint B_i(p) = P + R(p) b_i (seed sec.
+   * 3.2.1). Evaluate at a consistent pair q = ik(p).
+   *
+   * @param {number[]} q joint coordinates, 6 numbers: l1 [m], l2 [m], l3 [m], l4 [m], l5
+   *     [m], l6 [m].
+   * @param {number[]} p task coordinates of the platform (TCP), 6 numbers: x [m], y [m], z
+   *     [m], roll [rad], pitch [rad], yaw [rad].
+   * @param {Object} [params] parameter values (defaults in PARAMETERS):
+   *     r_b: radius of the circle of the base joints [m]; default 0.2.
+   *     r_p: radius of the circle of the platform joints [m]; default 0.1.
+   *     gamma_b: half the angle between the two base joints of a pair [rad]; default 0.26179938779914946.
+   *     gamma_p: half the angle between the two platform joints of a pair [rad]; default 0.26179938779914946.
+   * @returns {number[][]}
+   *     points: shape (18, 3); rows A_1, C_1, B_1, A_2, ...: three points per leg
+   *     (columns x, y, z) [m].
+   */
+  function leg_points(q, p, params) {
+    _vector(q, 6, "q", "leg_points");
+    _vector(p, 6, "p", "leg_points");
+    const _p = _params(params, ["r_b", "r_p", "gamma_b", "gamma_p"], "leg_points");
+    const r_b = _p.r_b ?? 0.2;
+    const r_p = _p.r_p ?? 0.1;
+    const gamma_b = _p.gamma_b ?? 0.26179938779914946;
+    const gamma_p = _p.gamma_p ?? 0.26179938779914946;
+    const x = p[0];
+    const y = p[1];
+    const z = p[2];
+    const roll = p[3];
+    const pitch = p[4];
+    const yaw = p[5];
+    const _x0 = Math.cos(gamma_b);
+    const _x1 = _x0*r_b;
+    const _x2 = Math.sin(gamma_b);
+    const _x3 = _x2*r_b;
+    const _x4 = -_x3;
+    const _x5 = Math.sin(yaw);
+    const _x6 = Math.cos(roll);
+    const _x7 = Math.cos(yaw);
+    const _x8 = Math.sin(pitch);
+    const _x9 = Math.sin(roll);
+    const _x10 = _x8*_x9;
+    const _x11 = _x10*_x7 - _x5*_x6;
+    const _x12 = Math.cos(gamma_p);
+    const _x13 = 0.8660254037844386*_x12;
+    const _x14 = Math.sin(gamma_p);
+    const _x15 = 0.5*_x14;
+    const _x16 = r_p*(_x13 - _x15);
+    const _x17 = _x11*_x16;
+    const _x18 = 0.8660254037844386*_x14;
+    const _x19 = 0.5*_x12;
+    const _x20 = _x18 + _x19;
+    const _x21 = Math.cos(pitch);
+    const _x22 = _x21*r_p;
+    const _x23 = _x20*_x22;
+    const _x24 = x + _x23*_x7;
+    const _x25 = _x10*_x5 + _x6*_x7;
+    const _x26 = _x16*_x25;
+    const _x27 = y + _x23*_x5;
+    const _x28 = -z;
+    const _x29 = _x8*r_p;
+    const _x30 = _x20*_x29;
+    const _x31 = _x21*_x9;
+    const _x32 = _x16*_x31;
+    const _x33 = 0.8660254037844386*_x2;
+    const _x34 = 0.5*_x0;
+    const _x35 = -r_b*(_x34 - _x33);
+    const _x36 = 0.8660254037844386*_x0;
+    const _x37 = 0.5*_x2;
+    const _x38 = r_b*(_x36 + _x37);
+    const _x39 = r_p*(_x13 + _x15);
+    const _x40 = _x11*_x39;
+    const _x41 = _x19 - _x18;
+    const _x42 = _x22*_x41;
+    const _x43 = x + _x42*_x7;
+    const _x44 = _x25*_x39;
+    const _x45 = y + _x42*_x5;
+    const _x46 = _x29*_x41;
+    const _x47 = _x31*_x39;
+    const _x48 = -r_b*(_x33 + _x34);
+    const _x49 = r_b*(_x36 - _x37);
+    const _x50 = _x12*_x22;
+    const _x51 = _x50*_x7;
+    const _x52 = _x14*r_p;
+    const _x53 = _x11*_x52;
+    const _x54 = _x5*_x50;
+    const _x55 = _x25*_x52;
+    const _x56 = _x31*_x52;
+    const _x57 = z + _x12*_x29;
+    const _x58 = -_x49;
+    const _x59 = -_x38;
+    return [[_x1, _x4, 0.0], [_x1, _x4, 0.0], [_x24 - _x17, _x27 - _x26, -(_x28 + _x30 + _x32)], [_x1, _x3, 0.0], [_x1, _x3, 0.0], [_x17 + _x24, _x26 + _x27, _x32 + z - _x30], [_x35, _x38, 0.0], [_x35, _x38, 0.0], [_x40 + _x43, _x44 + _x45, _x47 + z - _x46], [_x48, _x49, 0.0], [_x48, _x49, 0.0], [_x53 + x - _x51, _x55 + y - _x54, _x56 + _x57], [_x48, _x58, 0.0], [_x48, _x58, 0.0], [-(_x51 + _x53 - x), -(_x54 + _x55 - y), _x57 - _x56], [_x35, _x59, 0.0], [_x35, _x59, 0.0], [_x43 - _x40, _x45 - _x44, -(_x28 + _x46 + _x47)]];
   }
 
   /**
@@ -9770,6 +9869,7 @@
     /** Per function: its vector inputs, parameters and output shapes. */
     FUNCTIONS: Object.freeze({
       ik: {"inputs": ["p"], "parameters": ["r_b", "r_p", "gamma_b", "gamma_p"], "outputs": {"joints": [6], "margin": [6]}},
+      leg_points: {"inputs": ["q", "p"], "parameters": ["r_b", "r_p", "gamma_b", "gamma_p"], "outputs": {"points": [18, 3]}},
       constraints: {"inputs": ["q", "p"], "parameters": ["r_b", "r_p", "gamma_b", "gamma_p"], "outputs": {"f": [6]}},
       constraint_jacobians: {"inputs": ["q", "p"], "parameters": ["r_b", "r_p", "gamma_b", "gamma_p"], "outputs": {"J_x": [6, 6], "J_q": [6, 6]}},
       inverse_jacobian: {"inputs": ["q", "p"], "parameters": ["r_b", "r_p", "gamma_b", "gamma_p"], "outputs": {"J_inv": [6, 6]}},
@@ -9787,6 +9887,7 @@
       scene: {"inputs": ["p", "q"], "parameters": ["r_b", "r_p", "gamma_b", "gamma_p"], "outputs": {"joints": [6], "margin": [6], "J_inv": [6, 6]}},
     }),
     ik: ik,
+    leg_points: leg_points,
     constraints: constraints,
     constraint_jacobians: constraint_jacobians,
     inverse_jacobian: inverse_jacobian,

@@ -12,6 +12,7 @@ the model's defaults and may be scalars or arrays broadcastable to the batch sha
 
 Functions:
     ik(p, **params) -> IkResult(joints, margin)
+    leg_points(q, p, **params) -> points (..., 18, 3)
     constraints(q, p, **params) -> f (..., 6)
     constraint_jacobians(q, p, **params) -> ConstraintJacobiansResult(J_x, J_q)
     inverse_jacobian(q, p, **params) -> J_inv (..., 6, 6)
@@ -297,6 +298,155 @@ def ik(p, *, r_b=0.2, r_p=0.1, gamma_b=0.26179938779914946, gamma_p=0.2617993877
     _out_margin[..., 4] = _x132
     _out_margin[..., 5] = _x133
     return IkResult(_out_joints, _out_margin)
+
+
+def leg_points(q, p, *, r_b=0.2, r_p=0.1, gamma_b=0.26179938779914946, gamma_p=0.26179938779914946):
+    """Joint centres of every leg, for drawing the mechanism.
+
+    Per leg, in the base frame: the centre A_i of its first joint (fixed), the proximal
+    point joint C_i(q) that the rod starts from (the DELTA's elbow; A_i itself when the
+    rod starts at the base) and the platform joint B_i(p) = P + R(p) b_i (seed sec.
+    3.2.1). Evaluate at a consistent pair q = ik(p).
+
+    Args:
+        q: joint coordinates, shape (..., 6): l1 [m], l2 [m], l3 [m], l4 [m], l5 [m], l6
+            [m].
+        p: task coordinates of the platform (TCP), shape (..., 6): x [m], y [m], z [m], roll
+            [rad], pitch [rad], yaw [rad].
+        r_b: radius of the circle of the base joints [m]; default 0.2; a scalar or an array
+            broadcastable to the batch shape.
+        r_p: radius of the circle of the platform joints [m]; default 0.1; a scalar or an
+            array broadcastable to the batch shape.
+        gamma_b: half the angle between the two base joints of a pair [rad]; default
+            0.26179938779914946; a scalar or an array broadcastable to the batch shape.
+        gamma_p: half the angle between the two platform joints of a pair [rad]; default
+            0.26179938779914946; a scalar or an array broadcastable to the batch shape.
+
+    Returns:
+        points: shape (..., 18, 3); rows A_1, C_1, B_1, A_2, ...: three points per leg
+            (columns x, y, z) [m].
+    """
+    q = _vector(q, 6, "q", "leg_points")
+    p = _vector(p, 6, "p", "leg_points")
+    batch = _batch_shape("leg_points", q.shape[:-1], p.shape[:-1], numpy.shape(r_b), numpy.shape(r_p), numpy.shape(gamma_b), numpy.shape(gamma_p))
+    if math.prod(batch) > CHUNK:
+        return _in_chunks(leg_points, batch, (q, p, ), {"r_b": r_b, "r_p": r_p, "gamma_b": gamma_b, "gamma_p": gamma_p})
+    l1 = q[..., 0]
+    l2 = q[..., 1]
+    l3 = q[..., 2]
+    l4 = q[..., 3]
+    l5 = q[..., 4]
+    l6 = q[..., 5]
+    x = p[..., 0]
+    y = p[..., 1]
+    z = p[..., 2]
+    roll = p[..., 3]
+    pitch = p[..., 4]
+    yaw = p[..., 5]
+    _x0 = numpy.cos(gamma_b)
+    _x1 = _x0*r_b
+    _x2 = numpy.sin(gamma_b)
+    _x3 = _x2*r_b
+    _x4 = -_x3
+    _x5 = numpy.sin(yaw)
+    _x6 = numpy.cos(roll)
+    _x7 = numpy.cos(yaw)
+    _x8 = numpy.sin(pitch)
+    _x9 = numpy.sin(roll)
+    _x10 = _x8*_x9
+    _x11 = _x10*_x7 - _x5*_x6
+    _x12 = numpy.cos(gamma_p)
+    _x13 = 0.8660254037844386*_x12
+    _x14 = numpy.sin(gamma_p)
+    _x15 = 0.5*_x14
+    _x16 = r_p*(_x13 - _x15)
+    _x17 = _x11*_x16
+    _x18 = 0.8660254037844386*_x14
+    _x19 = 0.5*_x12
+    _x20 = _x18 + _x19
+    _x21 = numpy.cos(pitch)
+    _x22 = _x21*r_p
+    _x23 = _x20*_x22
+    _x24 = x + _x23*_x7
+    _x25 = _x10*_x5 + _x6*_x7
+    _x26 = _x16*_x25
+    _x27 = y + _x23*_x5
+    _x28 = -z
+    _x29 = _x8*r_p
+    _x30 = _x20*_x29
+    _x31 = _x21*_x9
+    _x32 = _x16*_x31
+    _x33 = 0.8660254037844386*_x2
+    _x34 = 0.5*_x0
+    _x35 = -r_b*(_x34 - _x33)
+    _x36 = 0.8660254037844386*_x0
+    _x37 = 0.5*_x2
+    _x38 = r_b*(_x36 + _x37)
+    _x39 = r_p*(_x13 + _x15)
+    _x40 = _x11*_x39
+    _x41 = _x19 - _x18
+    _x42 = _x22*_x41
+    _x43 = x + _x42*_x7
+    _x44 = _x25*_x39
+    _x45 = y + _x42*_x5
+    _x46 = _x29*_x41
+    _x47 = _x31*_x39
+    _x48 = -r_b*(_x33 + _x34)
+    _x49 = r_b*(_x36 - _x37)
+    _x50 = _x12*_x22
+    _x51 = _x50*_x7
+    _x52 = _x14*r_p
+    _x53 = _x11*_x52
+    _x54 = _x5*_x50
+    _x55 = _x25*_x52
+    _x56 = _x31*_x52
+    _x57 = z + _x12*_x29
+    _x58 = -_x49
+    _x59 = -_x38
+    _out_points = numpy.zeros(batch + (18, 3))
+    _out_points[..., 0, 0] = _x1
+    _out_points[..., 0, 1] = _x4
+    _out_points[..., 1, 0] = _x1
+    _out_points[..., 1, 1] = _x4
+    _out_points[..., 2, 0] = _x24 - _x17
+    _out_points[..., 2, 1] = _x27 - _x26
+    _out_points[..., 2, 2] = -(_x28 + _x30 + _x32)
+    _out_points[..., 3, 0] = _x1
+    _out_points[..., 3, 1] = _x3
+    _out_points[..., 4, 0] = _x1
+    _out_points[..., 4, 1] = _x3
+    _out_points[..., 5, 0] = _x17 + _x24
+    _out_points[..., 5, 1] = _x26 + _x27
+    _out_points[..., 5, 2] = _x32 + z - _x30
+    _out_points[..., 6, 0] = _x35
+    _out_points[..., 6, 1] = _x38
+    _out_points[..., 7, 0] = _x35
+    _out_points[..., 7, 1] = _x38
+    _out_points[..., 8, 0] = _x40 + _x43
+    _out_points[..., 8, 1] = _x44 + _x45
+    _out_points[..., 8, 2] = _x47 + z - _x46
+    _out_points[..., 9, 0] = _x48
+    _out_points[..., 9, 1] = _x49
+    _out_points[..., 10, 0] = _x48
+    _out_points[..., 10, 1] = _x49
+    _out_points[..., 11, 0] = _x53 + x - _x51
+    _out_points[..., 11, 1] = _x55 + y - _x54
+    _out_points[..., 11, 2] = _x56 + _x57
+    _out_points[..., 12, 0] = _x48
+    _out_points[..., 12, 1] = _x58
+    _out_points[..., 13, 0] = _x48
+    _out_points[..., 13, 1] = _x58
+    _out_points[..., 14, 0] = -(_x51 + _x53 - x)
+    _out_points[..., 14, 1] = -(_x54 + _x55 - y)
+    _out_points[..., 14, 2] = _x57 - _x56
+    _out_points[..., 15, 0] = _x35
+    _out_points[..., 15, 1] = _x59
+    _out_points[..., 16, 0] = _x35
+    _out_points[..., 16, 1] = _x59
+    _out_points[..., 17, 0] = _x43 - _x40
+    _out_points[..., 17, 1] = _x45 - _x44
+    _out_points[..., 17, 2] = -(_x28 + _x46 + _x47)
+    return _out_points
 
 
 def constraints(q, p, *, r_b=0.2, r_p=0.1, gamma_b=0.26179938779914946, gamma_p=0.26179938779914946):

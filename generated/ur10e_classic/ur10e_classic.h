@@ -75,6 +75,44 @@ void ur10e_classic_fk_packed(const double *in, double *out);
  * Uses 2688 bytes of stack for its blocks of 8 configurations. */
 void ur10e_classic_fk_batch(size_t n, const double *q, const double *params, size_t params_stride, double *base_T_tcp);
 
+/* ur10e_classic_frames: Pose of every link frame in the base frame.
+ *
+ * base_T_<link> = base_T_1 * ... * (i-1)_T_i for each link i (seed sec. 3.1).
+ *
+ * Inputs:
+ *   q[6]: joint coordinates: q1 [rad], q2 [rad], q3 [rad], q4 [rad], q5 [rad], q6 [rad].
+ *   d1: shoulder height [m]; default UR10E_CLASSIC_DEFAULT_d1 = 0.1807.
+ *   a2: upper arm length (UR sign convention) [m]; default UR10E_CLASSIC_DEFAULT_a2 =
+ *   -0.6127.
+ *   a3: forearm length (UR sign convention) [m]; default UR10E_CLASSIC_DEFAULT_a3 =
+ *   -0.57155.
+ *   d4: wrist 1 offset [m]; default UR10E_CLASSIC_DEFAULT_d4 = 0.17415.
+ *   d5: wrist 2 offset [m]; default UR10E_CLASSIC_DEFAULT_d5 = 0.11985.
+ *   d6: wrist 3 offset (flange) [m]; default UR10E_CLASSIC_DEFAULT_d6 = 0.11655.
+ * Outputs:
+ *   base_T_link1[16]: 4 x 4, row-major; homogeneous transform of frame 'link1' in the base
+ *   frame [m].
+ *   base_T_link2[16]: 4 x 4, row-major; homogeneous transform of frame 'link2' in the base
+ *   frame [m].
+ *   base_T_link3[16]: 4 x 4, row-major; homogeneous transform of frame 'link3' in the base
+ *   frame [m].
+ *   base_T_link4[16]: 4 x 4, row-major; homogeneous transform of frame 'link4' in the base
+ *   frame [m].
+ *   base_T_link5[16]: 4 x 4, row-major; homogeneous transform of frame 'link5' in the base
+ *   frame [m].
+ *   base_T_link6[16]: 4 x 4, row-major; homogeneous transform of frame 'link6' in the base
+ *   frame [m].
+ * Cost: 95 operations.
+ */
+void ur10e_classic_frames(const double *q, double d1, double a2, double a3, double d4, double d5, double d6, double *base_T_link1, double *base_T_link2, double *base_T_link3, double *base_T_link4, double *base_T_link5, double *base_T_link6);
+
+/* ur10e_classic_frames with packed arguments: in = q, d1, a2, a3, d4, d5, d6 one after the other; out = base_T_link1, base_T_link2, base_T_link3, base_T_link4, base_T_link5, base_T_link6 one after the other. */
+void ur10e_classic_frames_packed(const double *in, double *out);
+
+/* ur10e_classic_frames for n configurations; params: d1, a2, a3, d4, d5, d6, stride 0 or 6.
+ * Uses 5888 bytes of stack for its blocks of 8 configurations. */
+void ur10e_classic_frames_batch(size_t n, const double *q, const double *params, size_t params_stride, double *base_T_link1, double *base_T_link2, double *base_T_link3, double *base_T_link4, double *base_T_link5, double *base_T_link6);
+
 /* ur10e_classic_jacobian: Task Jacobian of the TCP.
  *
  * J = d[x, y, z, wx, wy, wz]/dq, dp = J dq (seed sec. 4 'Jacobian Matrix', eq. 8.29).
@@ -101,10 +139,10 @@ void ur10e_classic_jacobian_packed(const double *in, double *out);
  * Uses 3264 bytes of stack for its blocks of 8 configurations. */
 void ur10e_classic_jacobian_batch(size_t n, const double *q, const double *params, size_t params_stride, double *J);
 
-/* ur10e_classic_scene: fk, jacobian together, with one set of shared subexpressions.
+/* ur10e_classic_scene: fk, frames, jacobian together, with one set of shared subexpressions.
  *
- * Computes the outputs of fk, jacobian in one call; subexpressions common to several of
- * them are evaluated once.
+ * Computes the outputs of fk, frames, jacobian in one call; subexpressions common to
+ * several of them are evaluated once.
  *
  * Inputs:
  *   q[6]: joint coordinates: q1 [rad], q2 [rad], q3 [rad], q4 [rad], q5 [rad], q6 [rad].
@@ -119,17 +157,29 @@ void ur10e_classic_jacobian_batch(size_t n, const double *q, const double *param
  * Outputs:
  *   base_T_tcp[16]: 4 x 4, row-major; homogeneous transform of the TCP frame in the base
  *   frame (fk) [m].
+ *   base_T_link1[16]: 4 x 4, row-major; homogeneous transform of frame 'link1' in the base
+ *   frame (frames) [m].
+ *   base_T_link2[16]: 4 x 4, row-major; homogeneous transform of frame 'link2' in the base
+ *   frame (frames) [m].
+ *   base_T_link3[16]: 4 x 4, row-major; homogeneous transform of frame 'link3' in the base
+ *   frame (frames) [m].
+ *   base_T_link4[16]: 4 x 4, row-major; homogeneous transform of frame 'link4' in the base
+ *   frame (frames) [m].
+ *   base_T_link5[16]: 4 x 4, row-major; homogeneous transform of frame 'link5' in the base
+ *   frame (frames) [m].
+ *   base_T_link6[16]: 4 x 4, row-major; homogeneous transform of frame 'link6' in the base
+ *   frame (frames) [m].
  *   J[36]: 6 x 6, row-major; rows x, y, z, wx, wy, wz; one column per joint (jacobian).
- * Cost: 114 operations.
+ * Cost: 131 operations.
  */
-void ur10e_classic_scene(const double *q, double d1, double a2, double a3, double d4, double d5, double d6, double *base_T_tcp, double *J);
+void ur10e_classic_scene(const double *q, double d1, double a2, double a3, double d4, double d5, double d6, double *base_T_tcp, double *base_T_link1, double *base_T_link2, double *base_T_link3, double *base_T_link4, double *base_T_link5, double *base_T_link6, double *J);
 
-/* ur10e_classic_scene with packed arguments: in = q, d1, a2, a3, d4, d5, d6 one after the other; out = base_T_tcp, J one after the other. */
+/* ur10e_classic_scene with packed arguments: in = q, d1, a2, a3, d4, d5, d6 one after the other; out = base_T_tcp, base_T_link1, base_T_link2, base_T_link3, base_T_link4, base_T_link5, base_T_link6, J one after the other. */
 void ur10e_classic_scene_packed(const double *in, double *out);
 
 /* ur10e_classic_scene for n configurations; params: d1, a2, a3, d4, d5, d6, stride 0 or 6.
- * Uses 4352 bytes of stack for its blocks of 8 configurations. */
-void ur10e_classic_scene_batch(size_t n, const double *q, const double *params, size_t params_stride, double *base_T_tcp, double *J);
+ * Uses 8320 bytes of stack for its blocks of 8 configurations. */
+void ur10e_classic_scene_batch(size_t n, const double *q, const double *params, size_t params_stride, double *base_T_tcp, double *base_T_link1, double *base_T_link2, double *base_T_link3, double *base_T_link4, double *base_T_link5, double *base_T_link6, double *J);
 
 #ifdef __cplusplus
 }

@@ -14,8 +14,9 @@
  *
  * Functions:
  *   fk(q, params) -> number[][]
+ *   frames(q, params) -> {base_T_link1: number[][], base_T_link2: number[][], base_T_link3: number[][], base_T_link4: number[][], base_T_link5: number[][], base_T_link6: number[][]}
  *   jacobian(q, params) -> number[][]
- *   scene(q, params) -> {base_T_tcp: number[][], J: number[][]}
+ *   scene(q, params) -> {base_T_tcp: number[][], base_T_link1: number[][], base_T_link2: number[][], base_T_link3: number[][], base_T_link4: number[][], base_T_link5: number[][], base_T_link6: number[][], J: number[][]}
  */
 (function (root, factory) {
   "use strict";
@@ -122,6 +123,104 @@
   }
 
   /**
+   * Pose of every link frame in the base frame.
+   *
+   * base_T_<link> = base_T_1 * ... * (i-1)_T_i for each link i (seed sec. 3.1).
+   *
+   * @param {number[]} q joint coordinates, 6 numbers: q1 [rad], q2 [rad], q3 [rad], q4
+   *     [rad], q5 [rad], q6 [rad].
+   * @param {Object} [params] parameter values (defaults in PARAMETERS):
+   *     d1: shoulder height [m]; default 0.1807.
+   *     a2: upper arm length (UR sign convention) [m]; default -0.6127.
+   *     a3: forearm length (UR sign convention) [m]; default -0.57155.
+   *     d4: wrist 1 offset [m]; default 0.17415.
+   *     d5: wrist 2 offset [m]; default 0.11985.
+   *     d6: wrist 3 offset (flange) [m]; default 0.11655.
+   * @returns {{base_T_link1: number[][], base_T_link2: number[][], base_T_link3: number[][], base_T_link4: number[][], base_T_link5: number[][], base_T_link6: number[][]}}
+   *     base_T_link1: shape (4, 4); homogeneous transform of frame 'link1' in the base
+   *     frame [m].
+   *     base_T_link2: shape (4, 4); homogeneous transform of frame 'link2' in the base
+   *     frame [m].
+   *     base_T_link3: shape (4, 4); homogeneous transform of frame 'link3' in the base
+   *     frame [m].
+   *     base_T_link4: shape (4, 4); homogeneous transform of frame 'link4' in the base
+   *     frame [m].
+   *     base_T_link5: shape (4, 4); homogeneous transform of frame 'link5' in the base
+   *     frame [m].
+   *     base_T_link6: shape (4, 4); homogeneous transform of frame 'link6' in the base
+   *     frame [m].
+   */
+  function frames(q, params) {
+    _vector(q, 6, "q", "frames");
+    const _p = _params(params, ["d1", "a2", "a3", "d4", "d5", "d6"], "frames");
+    const d1 = _p.d1 ?? 0.1807;
+    const a2 = _p.a2 ?? -0.6127;
+    const a3 = _p.a3 ?? -0.57155;
+    const d4 = _p.d4 ?? 0.17415;
+    const d5 = _p.d5 ?? 0.11985;
+    const d6 = _p.d6 ?? 0.11655;
+    const q1 = q[0];
+    const q2 = q[1];
+    const q3 = q[2];
+    const q4 = q[3];
+    const q5 = q[4];
+    const q6 = q[5];
+    const _x0 = Math.cos(q1);
+    const _x1 = Math.sin(q1);
+    const _x2 = -_x0;
+    const _x3 = Math.cos(q2);
+    const _x4 = _x0*_x3;
+    const _x5 = Math.sin(q2);
+    const _x6 = _x4*a2;
+    const _x7 = _x1*_x3;
+    const _x8 = _x7*a2;
+    const _x9 = d1 + _x5*a2;
+    const _x10 = Math.cos(q3);
+    const _x11 = Math.sin(q3);
+    const _x12 = _x10*_x3 - _x11*_x5;
+    const _x13 = _x0*_x12;
+    const _x14 = _x10*_x5 + _x11*_x3;
+    const _x15 = _x6 + _x13*a3;
+    const _x16 = _x1*_x12;
+    const _x17 = _x8 + _x16*a3;
+    const _x18 = _x9 + _x14*a3;
+    const _x19 = Math.cos(q4);
+    const _x20 = _x12*_x19;
+    const _x21 = Math.sin(q4);
+    const _x22 = _x14*_x21;
+    const _x23 = _x20 - _x22;
+    const _x24 = _x0*_x23;
+    const _x25 = _x12*_x21 + _x14*_x19;
+    const _x26 = _x0*_x25;
+    const _x27 = _x15 + _x1*d4;
+    const _x28 = _x1*_x23;
+    const _x29 = _x1*_x25;
+    const _x30 = _x17 - _x0*d4;
+    const _x31 = Math.sin(q5);
+    const _x32 = Math.cos(q5);
+    const _x33 = _x1*_x31 + _x24*_x32;
+    const _x34 = _x1*_x32 - _x24*_x31;
+    const _x35 = _x27 + _x26*d5;
+    const _x36 = _x28*_x32 - _x0*_x31;
+    const _x37 = -(_x0*_x32 + _x28*_x31);
+    const _x38 = _x30 + _x29*d5;
+    const _x39 = _x25*_x32;
+    const _x40 = _x25*_x31;
+    const _x41 = -_x40;
+    const _x42 = _x18 - _x23*d5;
+    const _x43 = Math.sin(q6);
+    const _x44 = Math.cos(q6);
+    return {
+      base_T_link1: [[_x0, 0.0, _x1, 0.0], [_x1, 0.0, _x2, 0.0], [0.0, 1.0, 0.0, d1], [0.0, 0.0, 0.0, 1.0]],
+      base_T_link2: [[_x4, -_x0*_x5, _x1, _x6], [_x7, -_x1*_x5, _x2, _x8], [_x5, _x3, 0.0, _x9], [0.0, 0.0, 0.0, 1.0]],
+      base_T_link3: [[_x13, -_x0*_x14, _x1, _x15], [_x16, -_x1*_x14, _x2, _x17], [_x14, _x12, 0.0, _x18], [0.0, 0.0, 0.0, 1.0]],
+      base_T_link4: [[_x24, _x1, _x26, _x27], [_x28, _x2, _x29, _x30], [_x25, 0.0, _x22 - _x20, _x18], [0.0, 0.0, 0.0, 1.0]],
+      base_T_link5: [[_x33, -_x26, _x34, _x35], [_x36, -_x29, _x37, _x38], [_x39, _x23, _x41, _x42], [0.0, 0.0, 0.0, 1.0]],
+      base_T_link6: [[_x33*_x44 - _x26*_x43, -(_x26*_x44 + _x33*_x43), _x34, _x35 + _x34*d6], [_x36*_x44 - _x29*_x43, -(_x29*_x44 + _x36*_x43), _x37, _x38 + _x37*d6], [_x23*_x43 + _x39*_x44, _x23*_x44 - _x39*_x43, _x41, _x42 - _x40*d6], [0.0, 0.0, 0.0, 1.0]],
+    };
+  }
+
+  /**
    * Task Jacobian of the TCP.
    *
    * J = d[x, y, z, wx, wy, wz]/dq, dp = J dq (seed sec. 4 'Jacobian Matrix', eq. 8.29).
@@ -195,10 +294,10 @@
   }
 
   /**
-   * fk, jacobian together, with one set of shared subexpressions.
+   * fk, frames, jacobian together, with one set of shared subexpressions.
    *
-   * Computes the outputs of fk, jacobian in one call; subexpressions common to several of
-   * them are evaluated once.
+   * Computes the outputs of fk, frames, jacobian in one call; subexpressions common to
+   * several of them are evaluated once.
    *
    * @param {number[]} q joint coordinates, 6 numbers: q1 [rad], q2 [rad], q3 [rad], q4
    *     [rad], q5 [rad], q6 [rad].
@@ -209,9 +308,21 @@
    *     d4: wrist 1 offset [m]; default 0.17415.
    *     d5: wrist 2 offset [m]; default 0.11985.
    *     d6: wrist 3 offset (flange) [m]; default 0.11655.
-   * @returns {{base_T_tcp: number[][], J: number[][]}}
+   * @returns {{base_T_tcp: number[][], base_T_link1: number[][], base_T_link2: number[][], base_T_link3: number[][], base_T_link4: number[][], base_T_link5: number[][], base_T_link6: number[][], J: number[][]}}
    *     base_T_tcp: shape (4, 4); homogeneous transform of the TCP frame in the base
    *     frame (fk) [m].
+   *     base_T_link1: shape (4, 4); homogeneous transform of frame 'link1' in the base
+   *     frame (frames) [m].
+   *     base_T_link2: shape (4, 4); homogeneous transform of frame 'link2' in the base
+   *     frame (frames) [m].
+   *     base_T_link3: shape (4, 4); homogeneous transform of frame 'link3' in the base
+   *     frame (frames) [m].
+   *     base_T_link4: shape (4, 4); homogeneous transform of frame 'link4' in the base
+   *     frame (frames) [m].
+   *     base_T_link5: shape (4, 4); homogeneous transform of frame 'link5' in the base
+   *     frame (frames) [m].
+   *     base_T_link6: shape (4, 4); homogeneous transform of frame 'link6' in the base
+   *     frame (frames) [m].
    *     J: shape (6, 6); rows x, y, z, wx, wy, wz; one column per joint (jacobian).
    */
   function scene(q, params) {
@@ -251,37 +362,68 @@
     const _x19 = Math.cos(q5);
     const _x20 = _x1*_x19;
     const _x21 = _x15 + _x18*_x20;
-    const _x22 = _x13*_x19;
-    const _x23 = _x1*_x14;
-    const _x24 = _x22 - _x18*_x23;
-    const _x25 = _x6*a2;
-    const _x26 = _x9*a3;
-    const _x27 = _x11*d5 + _x24*d6;
-    const _x28 = _x27 + _x13*d4;
-    const _x29 = _x28 + _x1*_x26;
-    const _x30 = _x29 + _x1*_x25;
-    const _x31 = _x10*_x13;
-    const _x32 = -_x23 + _x18*_x22;
-    const _x33 = -(_x20 + _x15*_x18);
-    const _x34 = _x31*d5 + _x33*d6;
-    const _x35 = _x34 - _x1*d4;
-    const _x36 = _x35 + _x13*_x26;
-    const _x37 = _x36 + _x13*_x25;
-    const _x38 = _x10*_x19;
-    const _x39 = _x10*_x14;
-    const _x40 = -_x39;
-    const _x41 = _x18*d5;
-    const _x42 = _x39*d6;
-    const _x43 = -_x41 - _x42 + _x3*a2 + _x7*a3;
-    const _x44 = _x41 + _x42;
-    const _x45 = -(_x44 - _x7*a3);
-    const _x46 = -_x44;
-    const _x47 = _x1*_x46;
-    const _x48 = _x13*_x46;
-    const _x49 = -_x1;
+    const _x22 = _x12*_x21 - _x0*_x11;
+    const _x23 = -(_x0*_x21 + _x11*_x12);
+    const _x24 = _x13*_x19;
+    const _x25 = _x1*_x14;
+    const _x26 = _x24 - _x18*_x25;
+    const _x27 = _x11*d5;
+    const _x28 = _x27 + _x26*d6;
+    const _x29 = _x13*d4;
+    const _x30 = _x1*_x6;
+    const _x31 = _x30*a2;
+    const _x32 = _x1*_x9;
+    const _x33 = _x32*a3;
+    const _x34 = _x31 + _x33;
+    const _x35 = _x29 + _x34;
+    const _x36 = _x28 + _x35;
+    const _x37 = _x10*_x13;
+    const _x38 = -_x25 + _x18*_x24;
+    const _x39 = _x12*_x38 - _x0*_x37;
+    const _x40 = -(_x0*_x38 + _x12*_x37);
+    const _x41 = -(_x20 + _x15*_x18);
+    const _x42 = _x37*d5;
+    const _x43 = _x42 + _x41*d6;
+    const _x44 = -_x1*d4;
+    const _x45 = _x13*_x6;
+    const _x46 = _x45*a2;
+    const _x47 = _x13*_x9;
+    const _x48 = _x47*a3;
+    const _x49 = _x46 + _x48;
+    const _x50 = _x44 + _x49;
+    const _x51 = _x43 + _x50;
+    const _x52 = _x10*_x19;
+    const _x53 = _x0*_x18 + _x12*_x52;
+    const _x54 = _x12*_x18 - _x0*_x52;
+    const _x55 = _x10*_x14;
+    const _x56 = -_x55;
+    const _x57 = _x55*d6;
+    const _x58 = -_x57;
+    const _x59 = _x18*d5;
+    const _x60 = -_x59;
+    const _x61 = _x7*a3;
+    const _x62 = _x3*a2;
+    const _x63 = _x62 + d1;
+    const _x64 = _x61 + _x63;
+    const _x65 = _x60 + _x64;
+    const _x66 = _x58 + _x65;
+    const _x67 = -_x1;
+    const _x68 = _x17 - _x16;
+    const _x69 = _x58 + _x60 + _x61 + _x62;
+    const _x70 = _x57 + _x59;
+    const _x71 = -(_x70 - _x7*a3);
+    const _x72 = -_x70;
+    const _x73 = _x28 + _x29;
+    const _x74 = _x43 + _x44;
     return {
-      base_T_tcp: [[_x12*_x21 - _x0*_x11, -(_x0*_x21 + _x11*_x12), _x24, _x30], [_x12*_x32 - _x0*_x31, -(_x0*_x32 + _x12*_x31), _x33, _x37], [_x0*_x18 + _x12*_x38, _x12*_x18 - _x0*_x38, _x40, _x43 + d1], [0.0, 0.0, 0.0, 1.0]],
-      J: [[-_x37, -_x1*_x43, -_x1*_x45, -_x47, _x10*_x48 + _x18*_x34, 0.0], [_x30, -_x13*_x43, -_x13*_x45, -_x48, -(_x10*_x47 + _x18*_x27), 0.0], [0.0, _x1*_x30 + _x13*_x37, _x1*_x29 + _x13*_x36, _x1*_x28 + _x13*_x35, _x11*_x34 - _x27*_x31, 0.0], [0.0, _x13, _x13, _x13, _x11, _x24], [0.0, _x49, _x49, _x49, _x31, _x33], [1.0, 0.0, 0.0, 0.0, _x17 - _x16, _x40]],
+      base_T_tcp: [[_x22, _x23, _x26, _x36], [_x39, _x40, _x41, _x51], [_x53, _x54, _x56, _x66], [0.0, 0.0, 0.0, 1.0]],
+      base_T_link1: [[_x1, 0.0, _x13, 0.0], [_x13, 0.0, _x67, 0.0], [0.0, 1.0, 0.0, d1], [0.0, 0.0, 0.0, 1.0]],
+      base_T_link2: [[_x30, -_x1*_x3, _x13, _x31], [_x45, -_x13*_x3, _x67, _x46], [_x3, _x6, 0.0, _x63], [0.0, 0.0, 0.0, 1.0]],
+      base_T_link3: [[_x32, -_x1*_x7, _x13, _x34], [_x47, -_x13*_x7, _x67, _x49], [_x7, _x9, 0.0, _x64], [0.0, 0.0, 0.0, 1.0]],
+      base_T_link4: [[_x1*_x18, _x13, _x11, _x35], [_x13*_x18, _x67, _x37, _x50], [_x10, 0.0, _x68, _x64], [0.0, 0.0, 0.0, 1.0]],
+      base_T_link5: [[_x21, -_x11, _x26, _x27 + _x35], [_x38, -_x37, _x41, _x42 + _x50], [_x52, _x18, _x56, _x65], [0.0, 0.0, 0.0, 1.0]],
+      base_T_link6: [[_x22, _x23, _x26, _x36], [_x39, _x40, _x41, _x51], [_x53, _x54, _x56, _x66], [0.0, 0.0, 0.0, 1.0]],
+      J: [[-_x51, -_x1*_x69, -_x1*_x71, -_x1*_x72, _x18*_x43 + _x37*_x72, 0.0], [_x36, -_x13*_x69, -_x13*_x71, -_x13*_x72, -(_x11*_x72 + _x18*_x28), 0.0], [0.0, _x1*_x36 + _x13*_x51, _x1*(_x33 + _x73) + _x13*(_x48 + _x74), _x1*_x73 + _x13*_x74, _x11*_x43 - _x28*_x37, 0.0], [0.0, _x13, _x13, _x13, _x11, _x26], [0.0, _x67, _x67, _x67, _x37, _x41], [1.0, 0.0, 0.0, 0.0, _x68, _x56]],
     };
   }
 
@@ -309,10 +451,12 @@
     /** Per function: its vector inputs, parameters and output shapes. */
     FUNCTIONS: Object.freeze({
       fk: {"inputs": ["q"], "parameters": ["d1", "a2", "a3", "d4", "d5", "d6"], "outputs": {"base_T_tcp": [4, 4]}},
+      frames: {"inputs": ["q"], "parameters": ["d1", "a2", "a3", "d4", "d5", "d6"], "outputs": {"base_T_link1": [4, 4], "base_T_link2": [4, 4], "base_T_link3": [4, 4], "base_T_link4": [4, 4], "base_T_link5": [4, 4], "base_T_link6": [4, 4]}},
       jacobian: {"inputs": ["q"], "parameters": ["a2", "a3", "d4", "d5", "d6"], "outputs": {"J": [6, 6]}},
-      scene: {"inputs": ["q"], "parameters": ["d1", "a2", "a3", "d4", "d5", "d6"], "outputs": {"base_T_tcp": [4, 4], "J": [6, 6]}},
+      scene: {"inputs": ["q"], "parameters": ["d1", "a2", "a3", "d4", "d5", "d6"], "outputs": {"base_T_tcp": [4, 4], "base_T_link1": [4, 4], "base_T_link2": [4, 4], "base_T_link3": [4, 4], "base_T_link4": [4, 4], "base_T_link5": [4, 4], "base_T_link6": [4, 4], "J": [6, 6]}},
     }),
     fk: fk,
+    frames: frames,
     jacobian: jacobian,
     scene: scene,
   });

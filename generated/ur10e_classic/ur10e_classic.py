@@ -11,8 +11,9 @@ the model's defaults and may be scalars or arrays broadcastable to the batch sha
 
 Functions:
     fk(q, **params) -> base_T_tcp (..., 4, 4)
+    frames(q, **params) -> FramesResult(base_T_link1, base_T_link2, base_T_link3, base_T_link4, base_T_link5, base_T_link6)
     jacobian(q, **params) -> J (..., 6, 6)
-    scene(q, **params) -> SceneResult(base_T_tcp, J)
+    scene(q, **params) -> SceneResult(base_T_tcp, base_T_link1, base_T_link2, base_T_link3, base_T_link4, base_T_link5, base_T_link6, J)
 """
 
 import collections
@@ -41,7 +42,9 @@ PARAMETERS = {
     "g": 9.81,
 }
 
-SceneResult = collections.namedtuple("SceneResult", ["base_T_tcp", "J"])
+FramesResult = collections.namedtuple("FramesResult", ["base_T_link1", "base_T_link2", "base_T_link3", "base_T_link4", "base_T_link5", "base_T_link6"])
+
+SceneResult = collections.namedtuple("SceneResult", ["base_T_tcp", "base_T_link1", "base_T_link2", "base_T_link3", "base_T_link4", "base_T_link5", "base_T_link6", "J"])
 
 
 def _vector(value, size, name, function):
@@ -167,6 +170,175 @@ def fk(q, *, d1=0.1807, a2=-0.6127, a3=-0.57155, d4=0.17415, d5=0.11985, d6=0.11
     return _out_base_T_tcp
 
 
+def frames(q, *, d1=0.1807, a2=-0.6127, a3=-0.57155, d4=0.17415, d5=0.11985, d6=0.11655):
+    """Pose of every link frame in the base frame.
+
+    base_T_<link> = base_T_1 * ... * (i-1)_T_i for each link i (seed sec. 3.1).
+
+    Args:
+        q: joint coordinates, shape (..., 6): q1 [rad], q2 [rad], q3 [rad], q4 [rad], q5
+            [rad], q6 [rad].
+        d1: shoulder height [m]; default 0.1807; a scalar or an array broadcastable to the
+            batch shape.
+        a2: upper arm length (UR sign convention) [m]; default -0.6127; a scalar or an array
+            broadcastable to the batch shape.
+        a3: forearm length (UR sign convention) [m]; default -0.57155; a scalar or an array
+            broadcastable to the batch shape.
+        d4: wrist 1 offset [m]; default 0.17415; a scalar or an array broadcastable to the
+            batch shape.
+        d5: wrist 2 offset [m]; default 0.11985; a scalar or an array broadcastable to the
+            batch shape.
+        d6: wrist 3 offset (flange) [m]; default 0.11655; a scalar or an array broadcastable
+            to the batch shape.
+
+    Returns:
+        FramesResult with the fields:
+        base_T_link1: shape (..., 4, 4); homogeneous transform of frame 'link1' in the base
+            frame [m].
+        base_T_link2: shape (..., 4, 4); homogeneous transform of frame 'link2' in the base
+            frame [m].
+        base_T_link3: shape (..., 4, 4); homogeneous transform of frame 'link3' in the base
+            frame [m].
+        base_T_link4: shape (..., 4, 4); homogeneous transform of frame 'link4' in the base
+            frame [m].
+        base_T_link5: shape (..., 4, 4); homogeneous transform of frame 'link5' in the base
+            frame [m].
+        base_T_link6: shape (..., 4, 4); homogeneous transform of frame 'link6' in the base
+            frame [m].
+    """
+    q = _vector(q, 6, "q", "frames")
+    batch = _batch_shape("frames", q.shape[:-1], numpy.shape(d1), numpy.shape(a2), numpy.shape(a3), numpy.shape(d4), numpy.shape(d5), numpy.shape(d6))
+    if math.prod(batch) > CHUNK:
+        return _in_chunks(frames, batch, (q, ), {"d1": d1, "a2": a2, "a3": a3, "d4": d4, "d5": d5, "d6": d6})
+    q1 = q[..., 0]
+    q2 = q[..., 1]
+    q3 = q[..., 2]
+    q4 = q[..., 3]
+    q5 = q[..., 4]
+    q6 = q[..., 5]
+    _x0 = numpy.cos(q1)
+    _x1 = numpy.sin(q1)
+    _x2 = -_x0
+    _x3 = numpy.cos(q2)
+    _x4 = _x0*_x3
+    _x5 = numpy.sin(q2)
+    _x6 = _x4*a2
+    _x7 = _x1*_x3
+    _x8 = _x7*a2
+    _x9 = d1 + _x5*a2
+    _x10 = numpy.cos(q3)
+    _x11 = numpy.sin(q3)
+    _x12 = _x10*_x3 - _x11*_x5
+    _x13 = _x0*_x12
+    _x14 = _x10*_x5 + _x11*_x3
+    _x15 = _x6 + _x13*a3
+    _x16 = _x1*_x12
+    _x17 = _x8 + _x16*a3
+    _x18 = _x9 + _x14*a3
+    _x19 = numpy.cos(q4)
+    _x20 = _x12*_x19
+    _x21 = numpy.sin(q4)
+    _x22 = _x14*_x21
+    _x23 = _x20 - _x22
+    _x24 = _x0*_x23
+    _x25 = _x12*_x21 + _x14*_x19
+    _x26 = _x0*_x25
+    _x27 = _x15 + _x1*d4
+    _x28 = _x1*_x23
+    _x29 = _x1*_x25
+    _x30 = _x17 - _x0*d4
+    _x31 = numpy.sin(q5)
+    _x32 = numpy.cos(q5)
+    _x33 = _x1*_x31 + _x24*_x32
+    _x34 = _x1*_x32 - _x24*_x31
+    _x35 = _x27 + _x26*d5
+    _x36 = _x28*_x32 - _x0*_x31
+    _x37 = -(_x0*_x32 + _x28*_x31)
+    _x38 = _x30 + _x29*d5
+    _x39 = _x25*_x32
+    _x40 = _x25*_x31
+    _x41 = -_x40
+    _x42 = _x18 - _x23*d5
+    _x43 = numpy.sin(q6)
+    _x44 = numpy.cos(q6)
+    _out_base_T_link1 = numpy.zeros(batch + (4, 4))
+    _out_base_T_link1[..., 0, 0] = _x0
+    _out_base_T_link1[..., 0, 2] = _x1
+    _out_base_T_link1[..., 1, 0] = _x1
+    _out_base_T_link1[..., 1, 2] = _x2
+    _out_base_T_link1[..., 2, 1] = 1.0
+    _out_base_T_link1[..., 2, 3] = d1
+    _out_base_T_link1[..., 3, 3] = 1.0
+    _out_base_T_link2 = numpy.zeros(batch + (4, 4))
+    _out_base_T_link2[..., 0, 0] = _x4
+    _out_base_T_link2[..., 0, 1] = -_x0*_x5
+    _out_base_T_link2[..., 0, 2] = _x1
+    _out_base_T_link2[..., 0, 3] = _x6
+    _out_base_T_link2[..., 1, 0] = _x7
+    _out_base_T_link2[..., 1, 1] = -_x1*_x5
+    _out_base_T_link2[..., 1, 2] = _x2
+    _out_base_T_link2[..., 1, 3] = _x8
+    _out_base_T_link2[..., 2, 0] = _x5
+    _out_base_T_link2[..., 2, 1] = _x3
+    _out_base_T_link2[..., 2, 3] = _x9
+    _out_base_T_link2[..., 3, 3] = 1.0
+    _out_base_T_link3 = numpy.zeros(batch + (4, 4))
+    _out_base_T_link3[..., 0, 0] = _x13
+    _out_base_T_link3[..., 0, 1] = -_x0*_x14
+    _out_base_T_link3[..., 0, 2] = _x1
+    _out_base_T_link3[..., 0, 3] = _x15
+    _out_base_T_link3[..., 1, 0] = _x16
+    _out_base_T_link3[..., 1, 1] = -_x1*_x14
+    _out_base_T_link3[..., 1, 2] = _x2
+    _out_base_T_link3[..., 1, 3] = _x17
+    _out_base_T_link3[..., 2, 0] = _x14
+    _out_base_T_link3[..., 2, 1] = _x12
+    _out_base_T_link3[..., 2, 3] = _x18
+    _out_base_T_link3[..., 3, 3] = 1.0
+    _out_base_T_link4 = numpy.zeros(batch + (4, 4))
+    _out_base_T_link4[..., 0, 0] = _x24
+    _out_base_T_link4[..., 0, 1] = _x1
+    _out_base_T_link4[..., 0, 2] = _x26
+    _out_base_T_link4[..., 0, 3] = _x27
+    _out_base_T_link4[..., 1, 0] = _x28
+    _out_base_T_link4[..., 1, 1] = _x2
+    _out_base_T_link4[..., 1, 2] = _x29
+    _out_base_T_link4[..., 1, 3] = _x30
+    _out_base_T_link4[..., 2, 0] = _x25
+    _out_base_T_link4[..., 2, 2] = _x22 - _x20
+    _out_base_T_link4[..., 2, 3] = _x18
+    _out_base_T_link4[..., 3, 3] = 1.0
+    _out_base_T_link5 = numpy.zeros(batch + (4, 4))
+    _out_base_T_link5[..., 0, 0] = _x33
+    _out_base_T_link5[..., 0, 1] = -_x26
+    _out_base_T_link5[..., 0, 2] = _x34
+    _out_base_T_link5[..., 0, 3] = _x35
+    _out_base_T_link5[..., 1, 0] = _x36
+    _out_base_T_link5[..., 1, 1] = -_x29
+    _out_base_T_link5[..., 1, 2] = _x37
+    _out_base_T_link5[..., 1, 3] = _x38
+    _out_base_T_link5[..., 2, 0] = _x39
+    _out_base_T_link5[..., 2, 1] = _x23
+    _out_base_T_link5[..., 2, 2] = _x41
+    _out_base_T_link5[..., 2, 3] = _x42
+    _out_base_T_link5[..., 3, 3] = 1.0
+    _out_base_T_link6 = numpy.zeros(batch + (4, 4))
+    _out_base_T_link6[..., 0, 0] = _x33*_x44 - _x26*_x43
+    _out_base_T_link6[..., 0, 1] = -(_x26*_x44 + _x33*_x43)
+    _out_base_T_link6[..., 0, 2] = _x34
+    _out_base_T_link6[..., 0, 3] = _x35 + _x34*d6
+    _out_base_T_link6[..., 1, 0] = _x36*_x44 - _x29*_x43
+    _out_base_T_link6[..., 1, 1] = -(_x29*_x44 + _x36*_x43)
+    _out_base_T_link6[..., 1, 2] = _x37
+    _out_base_T_link6[..., 1, 3] = _x38 + _x37*d6
+    _out_base_T_link6[..., 2, 0] = _x23*_x43 + _x39*_x44
+    _out_base_T_link6[..., 2, 1] = _x23*_x44 - _x39*_x43
+    _out_base_T_link6[..., 2, 2] = _x41
+    _out_base_T_link6[..., 2, 3] = _x42 - _x40*d6
+    _out_base_T_link6[..., 3, 3] = 1.0
+    return FramesResult(_out_base_T_link1, _out_base_T_link2, _out_base_T_link3, _out_base_T_link4, _out_base_T_link5, _out_base_T_link6)
+
+
 def jacobian(q, *, a2=-0.6127, a3=-0.57155, d4=0.17415, d5=0.11985, d6=0.11655):
     """Task Jacobian of the TCP.
 
@@ -272,10 +444,10 @@ def jacobian(q, *, a2=-0.6127, a3=-0.57155, d4=0.17415, d5=0.11985, d6=0.11655):
 
 
 def scene(q, *, d1=0.1807, a2=-0.6127, a3=-0.57155, d4=0.17415, d5=0.11985, d6=0.11655):
-    """fk, jacobian together, with one set of shared subexpressions.
+    """fk, frames, jacobian together, with one set of shared subexpressions.
 
-    Computes the outputs of fk, jacobian in one call; subexpressions common to several
-    of them are evaluated once.
+    Computes the outputs of fk, frames, jacobian in one call; subexpressions common to
+    several of them are evaluated once.
 
     Args:
         q: joint coordinates, shape (..., 6): q1 [rad], q2 [rad], q3 [rad], q4 [rad], q5
@@ -297,6 +469,18 @@ def scene(q, *, d1=0.1807, a2=-0.6127, a3=-0.57155, d4=0.17415, d5=0.11985, d6=0
         SceneResult with the fields:
         base_T_tcp: shape (..., 4, 4); homogeneous transform of the TCP frame in the base
             frame (fk) [m].
+        base_T_link1: shape (..., 4, 4); homogeneous transform of frame 'link1' in the base
+            frame (frames) [m].
+        base_T_link2: shape (..., 4, 4); homogeneous transform of frame 'link2' in the base
+            frame (frames) [m].
+        base_T_link3: shape (..., 4, 4); homogeneous transform of frame 'link3' in the base
+            frame (frames) [m].
+        base_T_link4: shape (..., 4, 4); homogeneous transform of frame 'link4' in the base
+            frame (frames) [m].
+        base_T_link5: shape (..., 4, 4); homogeneous transform of frame 'link5' in the base
+            frame (frames) [m].
+        base_T_link6: shape (..., 4, 4); homogeneous transform of frame 'link6' in the base
+            frame (frames) [m].
         J: shape (..., 6, 6); rows x, y, z, wx, wy, wz; one column per joint (jacobian).
     """
     q = _vector(q, 6, "q", "scene")
@@ -331,74 +515,174 @@ def scene(q, *, d1=0.1807, a2=-0.6127, a3=-0.57155, d4=0.17415, d5=0.11985, d6=0
     _x19 = numpy.cos(q5)
     _x20 = _x1*_x19
     _x21 = _x15 + _x18*_x20
-    _x22 = _x13*_x19
-    _x23 = _x1*_x14
-    _x24 = _x22 - _x18*_x23
-    _x25 = _x6*a2
-    _x26 = _x9*a3
-    _x27 = _x11*d5 + _x24*d6
-    _x28 = _x27 + _x13*d4
-    _x29 = _x28 + _x1*_x26
-    _x30 = _x29 + _x1*_x25
-    _x31 = _x10*_x13
-    _x32 = -_x23 + _x18*_x22
-    _x33 = -(_x20 + _x15*_x18)
-    _x34 = _x31*d5 + _x33*d6
-    _x35 = _x34 - _x1*d4
-    _x36 = _x35 + _x13*_x26
-    _x37 = _x36 + _x13*_x25
-    _x38 = _x10*_x19
-    _x39 = _x10*_x14
-    _x40 = -_x39
-    _x41 = _x18*d5
-    _x42 = _x39*d6
-    _x43 = -_x41 - _x42 + _x3*a2 + _x7*a3
-    _x44 = _x41 + _x42
-    _x45 = -(_x44 - _x7*a3)
-    _x46 = -_x44
-    _x47 = _x1*_x46
-    _x48 = _x13*_x46
-    _x49 = -_x1
+    _x22 = _x12*_x21 - _x0*_x11
+    _x23 = -(_x0*_x21 + _x11*_x12)
+    _x24 = _x13*_x19
+    _x25 = _x1*_x14
+    _x26 = _x24 - _x18*_x25
+    _x27 = _x11*d5
+    _x28 = _x27 + _x26*d6
+    _x29 = _x13*d4
+    _x30 = _x1*_x6
+    _x31 = _x30*a2
+    _x32 = _x1*_x9
+    _x33 = _x32*a3
+    _x34 = _x31 + _x33
+    _x35 = _x29 + _x34
+    _x36 = _x28 + _x35
+    _x37 = _x10*_x13
+    _x38 = -_x25 + _x18*_x24
+    _x39 = _x12*_x38 - _x0*_x37
+    _x40 = -(_x0*_x38 + _x12*_x37)
+    _x41 = -(_x20 + _x15*_x18)
+    _x42 = _x37*d5
+    _x43 = _x42 + _x41*d6
+    _x44 = -_x1*d4
+    _x45 = _x13*_x6
+    _x46 = _x45*a2
+    _x47 = _x13*_x9
+    _x48 = _x47*a3
+    _x49 = _x46 + _x48
+    _x50 = _x44 + _x49
+    _x51 = _x43 + _x50
+    _x52 = _x10*_x19
+    _x53 = _x0*_x18 + _x12*_x52
+    _x54 = _x12*_x18 - _x0*_x52
+    _x55 = _x10*_x14
+    _x56 = -_x55
+    _x57 = _x55*d6
+    _x58 = -_x57
+    _x59 = _x18*d5
+    _x60 = -_x59
+    _x61 = _x7*a3
+    _x62 = _x3*a2
+    _x63 = _x62 + d1
+    _x64 = _x61 + _x63
+    _x65 = _x60 + _x64
+    _x66 = _x58 + _x65
+    _x67 = -_x1
+    _x68 = _x17 - _x16
+    _x69 = _x58 + _x60 + _x61 + _x62
+    _x70 = _x57 + _x59
+    _x71 = -(_x70 - _x7*a3)
+    _x72 = -_x70
+    _x73 = _x28 + _x29
+    _x74 = _x43 + _x44
     _out_base_T_tcp = numpy.zeros(batch + (4, 4))
-    _out_base_T_tcp[..., 0, 0] = _x12*_x21 - _x0*_x11
-    _out_base_T_tcp[..., 0, 1] = -(_x0*_x21 + _x11*_x12)
-    _out_base_T_tcp[..., 0, 2] = _x24
-    _out_base_T_tcp[..., 0, 3] = _x30
-    _out_base_T_tcp[..., 1, 0] = _x12*_x32 - _x0*_x31
-    _out_base_T_tcp[..., 1, 1] = -(_x0*_x32 + _x12*_x31)
-    _out_base_T_tcp[..., 1, 2] = _x33
-    _out_base_T_tcp[..., 1, 3] = _x37
-    _out_base_T_tcp[..., 2, 0] = _x0*_x18 + _x12*_x38
-    _out_base_T_tcp[..., 2, 1] = _x12*_x18 - _x0*_x38
-    _out_base_T_tcp[..., 2, 2] = _x40
-    _out_base_T_tcp[..., 2, 3] = _x43 + d1
+    _out_base_T_tcp[..., 0, 0] = _x22
+    _out_base_T_tcp[..., 0, 1] = _x23
+    _out_base_T_tcp[..., 0, 2] = _x26
+    _out_base_T_tcp[..., 0, 3] = _x36
+    _out_base_T_tcp[..., 1, 0] = _x39
+    _out_base_T_tcp[..., 1, 1] = _x40
+    _out_base_T_tcp[..., 1, 2] = _x41
+    _out_base_T_tcp[..., 1, 3] = _x51
+    _out_base_T_tcp[..., 2, 0] = _x53
+    _out_base_T_tcp[..., 2, 1] = _x54
+    _out_base_T_tcp[..., 2, 2] = _x56
+    _out_base_T_tcp[..., 2, 3] = _x66
     _out_base_T_tcp[..., 3, 3] = 1.0
+    _out_base_T_link1 = numpy.zeros(batch + (4, 4))
+    _out_base_T_link1[..., 0, 0] = _x1
+    _out_base_T_link1[..., 0, 2] = _x13
+    _out_base_T_link1[..., 1, 0] = _x13
+    _out_base_T_link1[..., 1, 2] = _x67
+    _out_base_T_link1[..., 2, 1] = 1.0
+    _out_base_T_link1[..., 2, 3] = d1
+    _out_base_T_link1[..., 3, 3] = 1.0
+    _out_base_T_link2 = numpy.zeros(batch + (4, 4))
+    _out_base_T_link2[..., 0, 0] = _x30
+    _out_base_T_link2[..., 0, 1] = -_x1*_x3
+    _out_base_T_link2[..., 0, 2] = _x13
+    _out_base_T_link2[..., 0, 3] = _x31
+    _out_base_T_link2[..., 1, 0] = _x45
+    _out_base_T_link2[..., 1, 1] = -_x13*_x3
+    _out_base_T_link2[..., 1, 2] = _x67
+    _out_base_T_link2[..., 1, 3] = _x46
+    _out_base_T_link2[..., 2, 0] = _x3
+    _out_base_T_link2[..., 2, 1] = _x6
+    _out_base_T_link2[..., 2, 3] = _x63
+    _out_base_T_link2[..., 3, 3] = 1.0
+    _out_base_T_link3 = numpy.zeros(batch + (4, 4))
+    _out_base_T_link3[..., 0, 0] = _x32
+    _out_base_T_link3[..., 0, 1] = -_x1*_x7
+    _out_base_T_link3[..., 0, 2] = _x13
+    _out_base_T_link3[..., 0, 3] = _x34
+    _out_base_T_link3[..., 1, 0] = _x47
+    _out_base_T_link3[..., 1, 1] = -_x13*_x7
+    _out_base_T_link3[..., 1, 2] = _x67
+    _out_base_T_link3[..., 1, 3] = _x49
+    _out_base_T_link3[..., 2, 0] = _x7
+    _out_base_T_link3[..., 2, 1] = _x9
+    _out_base_T_link3[..., 2, 3] = _x64
+    _out_base_T_link3[..., 3, 3] = 1.0
+    _out_base_T_link4 = numpy.zeros(batch + (4, 4))
+    _out_base_T_link4[..., 0, 0] = _x1*_x18
+    _out_base_T_link4[..., 0, 1] = _x13
+    _out_base_T_link4[..., 0, 2] = _x11
+    _out_base_T_link4[..., 0, 3] = _x35
+    _out_base_T_link4[..., 1, 0] = _x13*_x18
+    _out_base_T_link4[..., 1, 1] = _x67
+    _out_base_T_link4[..., 1, 2] = _x37
+    _out_base_T_link4[..., 1, 3] = _x50
+    _out_base_T_link4[..., 2, 0] = _x10
+    _out_base_T_link4[..., 2, 2] = _x68
+    _out_base_T_link4[..., 2, 3] = _x64
+    _out_base_T_link4[..., 3, 3] = 1.0
+    _out_base_T_link5 = numpy.zeros(batch + (4, 4))
+    _out_base_T_link5[..., 0, 0] = _x21
+    _out_base_T_link5[..., 0, 1] = -_x11
+    _out_base_T_link5[..., 0, 2] = _x26
+    _out_base_T_link5[..., 0, 3] = _x27 + _x35
+    _out_base_T_link5[..., 1, 0] = _x38
+    _out_base_T_link5[..., 1, 1] = -_x37
+    _out_base_T_link5[..., 1, 2] = _x41
+    _out_base_T_link5[..., 1, 3] = _x42 + _x50
+    _out_base_T_link5[..., 2, 0] = _x52
+    _out_base_T_link5[..., 2, 1] = _x18
+    _out_base_T_link5[..., 2, 2] = _x56
+    _out_base_T_link5[..., 2, 3] = _x65
+    _out_base_T_link5[..., 3, 3] = 1.0
+    _out_base_T_link6 = numpy.zeros(batch + (4, 4))
+    _out_base_T_link6[..., 0, 0] = _x22
+    _out_base_T_link6[..., 0, 1] = _x23
+    _out_base_T_link6[..., 0, 2] = _x26
+    _out_base_T_link6[..., 0, 3] = _x36
+    _out_base_T_link6[..., 1, 0] = _x39
+    _out_base_T_link6[..., 1, 1] = _x40
+    _out_base_T_link6[..., 1, 2] = _x41
+    _out_base_T_link6[..., 1, 3] = _x51
+    _out_base_T_link6[..., 2, 0] = _x53
+    _out_base_T_link6[..., 2, 1] = _x54
+    _out_base_T_link6[..., 2, 2] = _x56
+    _out_base_T_link6[..., 2, 3] = _x66
+    _out_base_T_link6[..., 3, 3] = 1.0
     _out_J = numpy.zeros(batch + (6, 6))
-    _out_J[..., 0, 0] = -_x37
-    _out_J[..., 0, 1] = -_x1*_x43
-    _out_J[..., 0, 2] = -_x1*_x45
-    _out_J[..., 0, 3] = -_x47
-    _out_J[..., 0, 4] = _x10*_x48 + _x18*_x34
-    _out_J[..., 1, 0] = _x30
-    _out_J[..., 1, 1] = -_x13*_x43
-    _out_J[..., 1, 2] = -_x13*_x45
-    _out_J[..., 1, 3] = -_x48
-    _out_J[..., 1, 4] = -(_x10*_x47 + _x18*_x27)
-    _out_J[..., 2, 1] = _x1*_x30 + _x13*_x37
-    _out_J[..., 2, 2] = _x1*_x29 + _x13*_x36
-    _out_J[..., 2, 3] = _x1*_x28 + _x13*_x35
-    _out_J[..., 2, 4] = _x11*_x34 - _x27*_x31
+    _out_J[..., 0, 0] = -_x51
+    _out_J[..., 0, 1] = -_x1*_x69
+    _out_J[..., 0, 2] = -_x1*_x71
+    _out_J[..., 0, 3] = -_x1*_x72
+    _out_J[..., 0, 4] = _x18*_x43 + _x37*_x72
+    _out_J[..., 1, 0] = _x36
+    _out_J[..., 1, 1] = -_x13*_x69
+    _out_J[..., 1, 2] = -_x13*_x71
+    _out_J[..., 1, 3] = -_x13*_x72
+    _out_J[..., 1, 4] = -(_x11*_x72 + _x18*_x28)
+    _out_J[..., 2, 1] = _x1*_x36 + _x13*_x51
+    _out_J[..., 2, 2] = _x1*(_x33 + _x73) + _x13*(_x48 + _x74)
+    _out_J[..., 2, 3] = _x1*_x73 + _x13*_x74
+    _out_J[..., 2, 4] = _x11*_x43 - _x28*_x37
     _out_J[..., 3, 1] = _x13
     _out_J[..., 3, 2] = _x13
     _out_J[..., 3, 3] = _x13
     _out_J[..., 3, 4] = _x11
-    _out_J[..., 3, 5] = _x24
-    _out_J[..., 4, 1] = _x49
-    _out_J[..., 4, 2] = _x49
-    _out_J[..., 4, 3] = _x49
-    _out_J[..., 4, 4] = _x31
-    _out_J[..., 4, 5] = _x33
+    _out_J[..., 3, 5] = _x26
+    _out_J[..., 4, 1] = _x67
+    _out_J[..., 4, 2] = _x67
+    _out_J[..., 4, 3] = _x67
+    _out_J[..., 4, 4] = _x37
+    _out_J[..., 4, 5] = _x41
     _out_J[..., 5, 0] = 1.0
-    _out_J[..., 5, 4] = _x17 - _x16
-    _out_J[..., 5, 5] = _x40
-    return SceneResult(_out_base_T_tcp, _out_J)
+    _out_J[..., 5, 4] = _x68
+    _out_J[..., 5, 5] = _x56
+    return SceneResult(_out_base_T_tcp, _out_base_T_link1, _out_base_T_link2, _out_base_T_link3, _out_base_T_link4, _out_base_T_link5, _out_base_T_link6, _out_J)

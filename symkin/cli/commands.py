@@ -14,6 +14,7 @@ from symkin.cli import (
     simulate_cmd,
     structure_cmd,
     sweep_cmd,
+    view_cmd,
     workspace_cmd,
 )
 
@@ -24,6 +25,7 @@ REGISTRY = [
     crosscheck_cmd.register_crosscheck,
     crosscheck_cmd.register_export,
     workspace_cmd.register,
+    view_cmd.register,
     gci_cmd.register,
     optimize_cmd.register,
     sweep_cmd.register,

@@ -195,15 +195,15 @@ def _constraint_jacobians(d: Derivation) -> FunctionSpec:
 def _leg_points(d: Derivation) -> FunctionSpec:
     structure: ParallelStructure = d[_structure]
     legs = d[_distance_legs]
-    points = [[*chain.centres[0], *leg.C, *leg.B] for chain, leg in zip(structure.chains, legs)]
+    points = [list(point) for chain, leg in zip(structure.chains, legs) for point in (chain.centres[0], leg.C, leg.B)]
     return make_function(
         d.model, "leg_points", "Joint centres of every leg, for drawing the mechanism.",
         "Per leg, in the base frame: the centre A_i of its first joint (fixed), the proximal point joint C_i(q) "
         "that the rod starts from (the DELTA's elbow; A_i itself when the rod starts at the base) and the "
         "platform joint B_i(p) = P + R(p) b_i (seed sec. 3.2.1). Evaluate at a consistent pair q = ik(p).",
         [_q(d), task_input(d.model)],
-        [OutputSpec("points", sympy.ImmutableMatrix(points), "per leg: the points A_i, C_i, B_i (rows x, y, z)",
-                    "m", shape=(len(points), 3, 3))],
+        [OutputSpec("points", sympy.ImmutableMatrix(points), "rows A_1, C_1, B_1, A_2, ...: three points per leg "
+                    "(columns x, y, z)", "m")],
     )
 
 

@@ -1,0 +1,270 @@
+"""``symkin view``: one self-contained HTML page that shows a mechanism in 3D.
+
+The page (``templates/viewer/page.html.j2``) carries everything it needs, so it opens with no
+network: the model's generated JavaScript (:mod:`symkin.backends.js`) computes the pose at every
+slider move (serial: ``frames``, ``fk`` and ``jacobian`` of q; parallel: the closed-form ``ik``,
+``leg_points`` and the Jacobian of p), three.js (vendored in ``symkin/viewer/vendor`` with its
+MIT licence, embedded as data: modules behind an import map) draws it, and the workspace cloud
+with 1/kappa per point (seed Table 8.5) is computed here by the analyses, for the design given.
+
+The conditioning the page shows is that of the analyses (:func:`symkin.analysis.global_indices.local_index`):
+the same task Jacobian, homogenized by the same characteristic length when the task space mixes
+lengths and angles, and for a pose platform the twist Jacobian of
+:class:`symkin.analysis.parallel.ConstantOrientation`.
+"""
+
+from __future__ import annotations
+
+import base64
+import json
+import math
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from symkin._version import __version__
+from symkin.analysis import conditioning, global_indices, mechanism, parallel, sampling, workspace
+from symkin.backends.templating import render
+from symkin.runtime.info import GeneratedModel
+
+TEMPLATE = "viewer/page.html.j2"
+#: three.js release of the vendored files (symkin/viewer/vendor/VENDOR.md).
+THREE_VERSION = "170"
+#: Below this 1/kappa the page warns of a singular configuration.
+SINGULAR_THRESHOLD = 0.01
+#: Decimal places of the cloud's coordinates (m) and indices in the page: 1 um, far below a pixel.
+CLOUD_DIGITS = 6
+#: Largest Sobol sample (log2) of a pose platform's box when looking for its reachable points.
+MAX_SOBOL_LOG2 = 18
+#: Viridis at 5 stops (matplotlib's table): the cloud's colours and the colour bar.
+VIRIDIS = ("#440154", "#3b528b", "#21918c", "#5ec962", "#fde725")
+
+#: The generated functions the page evaluates, by kind of mechanism (the keys of
+#: symkin.cli.analysis_args.analysis_kind): a translational platform is driven through its
+#: closed-form ik and rated by J (its cloud comes from the closed-form fk); a pose platform
+#: (no closed-form fk) by the twist Jacobian from J^-1, at the home orientation for the cloud.
+VIEW_OUTPUTS = {
+    "serial": ("fk", "frames", "jacobian"),
+    "parallel": ("ik", "fk", "leg_points", "jacobian", "singularities"),
+    "parallel pose": ("ik", "leg_points", "inverse_jacobian", "singularities"),
+}
+
+
+@dataclass(frozen=True)
+class Cloud:
+    """Workspace points (N, 3) in m with the analyses' 1/kappa (N,), the joints q (N, n) and the
+    characteristic length used to homogenize J (None when the task space has one unit)."""
+
+    points: np.ndarray
+    inverse_kappa: np.ndarray
+    q: np.ndarray
+    length: float | None
+    note: str
+
+
+def missing_functions(model: GeneratedModel) -> list[str]:
+    """The generated functions the page needs that ``model`` lacks (empty: it can be shown)."""
+    return [f for f in VIEW_OUTPUTS[kind_of(model)] if f not in model.functions]
+
+
+def kind_of(model: GeneratedModel) -> str:
+    """The key of :data:`VIEW_OUTPUTS`: serial, parallel (with a closed-form fk) or parallel pose."""
+    if not mechanism.is_parallel(model):
+        return "serial"
+    return "parallel" if tuple(mechanism.task_space(model)) == ("x", "y", "z") else "parallel pose"
+
+
+def _pad3(points: np.ndarray, axes: tuple[str, ...]) -> np.ndarray:
+    out = np.zeros((len(points), 3))
+    for k, axis in enumerate(axes):
+        out[:, "xyz".index(axis)] = points[:, k]
+    return out
+
+
+def workspace_cloud(model: GeneratedModel, samples: int, seed: int = 0) -> Cloud:
+    """The workspace cloud with 1/kappa, as ``symkin workspace`` and ``symkin gci`` sample it."""
+    limits = mechanism.joint_limits(model)
+    length: float | None
+    if mechanism.is_parallel(model) and "fk" not in model.functions:
+        held = parallel.constant_orientation(model)
+        lower, upper = parallel.constant_orientation_box(held, limits)
+        log2 = max(1, math.ceil(math.log2(samples)))
+        while True:  # about ``samples`` reachable points: the box holds the workspace loosely
+            points = sampling.sobol(lower, upper, log2, np.random.default_rng(seed))
+            q, reachable = parallel.reachable_points(held, points, limits)
+            found = max(int(reachable.sum()), 1)
+            if found >= samples / 2 or log2 >= MAX_SOBOL_LOG2:
+                break
+            log2 = min(MAX_SOBOL_LOG2, log2 + math.ceil(math.log2(samples / found)))
+        length = global_indices.characteristic_length_of(held, limits)
+        index = global_indices.scaled_index(held, conditioning.inverse_condition_number, length, limits)
+        values = index(held.jacobian(q[reachable], points[reachable]))
+        note = (f"{int(reachable.sum())} reachable platform centres of {len(points)} Sobol points, platform held at "
+                f"roll, pitch, yaw = {parallel.orientation_text(held)}; J homogenized with L = {1000 * length:.1f} mm.")
+        return Cloud(points[reachable], values, q[reachable], length, note)
+    cloud = workspace.sample_workspace(model, samples, seed=seed)
+    mixed = mechanism.mixes_translations_and_rotations(model)
+    length = global_indices.characteristic_length_of(model, limits) if mixed else None
+    values = global_indices.local_index(model, cloud.q, length=length)
+    note = f"{len(cloud.q)} joint configurations sampled within the limits"
+    note += f"; J homogenized with L = {1000 * length:.1f} mm." if length else "."
+    return Cloud(_pad3(cloud.points, cloud.axes), values, cloud.q, length, note)
+
+
+def no_cloud(model: GeneratedModel) -> Cloud:
+    """An empty cloud (``--workspace 0``); a mixed task space still gets its characteristic length."""
+    n = len(model.info.coordinates)
+    length = None
+    if mechanism.is_parallel(model) and "fk" not in model.functions:
+        length = global_indices.characteristic_length_of(parallel.constant_orientation(model))
+    elif mechanism.mixes_translations_and_rotations(model):
+        length = global_indices.characteristic_length_of(model)
+    return Cloud(np.zeros((0, 3)), np.zeros(0), np.zeros((0, n)), length, "no workspace cloud (--workspace 0).")
+
+
+def _slider_units(unit: str, revolute: bool | None = None) -> tuple[float, str, float]:
+    """(scale to SI, shown unit, step) of a slider: angles in degrees, lengths in mm."""
+    if revolute or unit == "rad":
+        return math.pi / 180, "deg", 0.1
+    if unit == "m" or revolute is False:
+        return 1e-3, "mm", 0.1
+    return 1.0, unit, 0.001
+
+
+def _on_grid(value: float, scale: float, step: float, direction: int = 0) -> float:
+    """``value`` (SI) on the slider's grid, a multiple of ``step`` in the shown unit: the nearest
+    (``direction`` 0), the next below (-1) or above (+1).  A range input snaps to min + k step, so bounds
+    and start values on that grid keep the values the arrow keys give exact."""
+    k = value / scale / step
+    if abs(k - round(k)) < 1e-6 or direction == 0:
+        return round(k) * step * scale
+    return (math.floor(k) if direction < 0 else math.ceil(k)) * step * scale
+
+
+def _slider(name: str, lower: float, upper: float, scale: float, unit: str, step: float) -> dict[str, Any]:
+    """A slider's spec: bounds moved inwards onto its grid (so a joint slider stays within the limits)."""
+    return {"name": name, "lower": _on_grid(lower, scale, step, +1), "upper": _on_grid(upper, scale, step, -1),
+            "scale": scale, "unit": unit, "step": step}
+
+
+def _coordinates(model: GeneratedModel) -> list[dict[str, Any]]:
+    limits = mechanism.joint_limits(model)
+    out = []
+    for c, (lower, upper) in zip(model.info.coordinates, limits):
+        out.append(_slider(c.name, float(lower), float(upper), *_slider_units("", c.revolute)))
+    return out
+
+
+def _parameters(model: GeneratedModel, outputs: tuple[str, ...]) -> list[dict[str, Any]]:
+    used = {p for f in outputs if f in model.info.functions for p in model.info.functions[f].parameters}
+    out = []
+    for p in model.info.parameters:
+        if p.fixed or p.name not in used:
+            continue
+        value = float(model.parameters[p.name])
+        scale, unit, step = _slider_units(p.unit)
+        spread = 0.5 * abs(value) if value else 0.1
+        out.append(_slider(p.name, value - spread, value + spread, scale, unit, step) | {"value": value})
+    return out
+
+
+def _task(model: GeneratedModel, cloud: Cloud, home: np.ndarray) -> list[dict[str, Any]]:
+    """Sliders of the task coordinates: positions over the cloud's box (10 % margin), angles +-30 deg about home."""
+    names = mechanism.task_space(model)
+    if len(cloud.points):
+        lower, upper = cloud.points.min(axis=0), cloud.points.max(axis=0)
+    else:
+        lower, upper = home[:3] - 0.05, home[:3] + 0.05
+    margin = 0.1 * (upper - lower)
+    out = []
+    for k, name in enumerate(names):
+        if k < 3:
+            scale, unit, step = _slider_units("m")
+            bounds = (float(lower[k] - margin[k]), float(upper[k] + margin[k]))
+        else:
+            scale, unit, step = _slider_units("rad")
+            bounds = (float(home[k]) - math.pi / 6, float(home[k]) + math.pi / 6)
+        out.append(_slider(name, *bounds, scale, unit, step))
+    return out
+
+
+def page_data(model: GeneratedModel, cloud: Cloud) -> dict[str, Any]:
+    """Everything the page's program reads (the JSON in ``<script id="symkin-data">``)."""
+    kind = "parallel" if mechanism.is_parallel(model) else "serial"
+    outputs = VIEW_OUTPUTS[kind_of(model)]
+    points = np.round(cloud.points, CLOUD_DIGITS)
+    values = np.round(np.nan_to_num(cloud.inverse_kappa, nan=0.0), CLOUD_DIGITS)
+    if kind == "serial":
+        # start at the best-conditioned sampled configuration (else 0 within the limits)
+        q = cloud.q[int(np.argmax(values))] if len(values) else np.clip(0.0, *mechanism.joint_limits(model).T)
+        home: dict[str, list[float]] = {"q": [_on_grid(v, c["scale"], c["step"])
+                                              for v, c in zip(q, _coordinates(model))]}
+    else:
+        units = [_slider_units("m" if k < 3 else "rad") for k in range(len(mechanism.task_space(model)))]
+        home = {"q": [0.0] * len(model.info.coordinates),
+                "p": [_on_grid(v, scale, step) for v, (scale, _, step) in zip(mechanism.home_pose(model), units)]}
+    seen = np.concatenate([points, _mechanism_points(model, home)])
+    lower, upper = seen.min(axis=0), seen.max(axis=0)
+    centre, scale = (lower + upper) / 2, float(np.max(upper - lower))
+    data: dict[str, Any] = {
+        "name": model.name, "kind": kind, "coordinates": _coordinates(model),
+        "parameters": _parameters(model, outputs),
+        "conditioning": {"twist": "inverse_jacobian" in outputs, "length": cloud.length,
+                         "position_rows": list(mechanism.position_rows(model))},
+        "singular_threshold": SINGULAR_THRESHOLD,
+        "cloud": {"points": points.tolist(), "inverse_kappa": values.tolist(),
+                  "colour_max": float(max(values.max(initial=0.0), 1e-12))},
+        "scale": scale if scale > 0 else 1.0, "view_target": centre.tolist(),
+    }
+    data["home"] = home
+    if kind == "parallel":
+        data["task"] = _task(model, cloud, np.array(home["p"]))
+    return data
+
+
+def _mechanism_points(model: GeneratedModel, home: dict[str, list[float]]) -> np.ndarray:
+    """The joints' positions (k, 3) at the first pose shown: with the cloud, what the camera frames."""
+    if "p" not in home:
+        frames = model.frames(np.array(home["q"]))  # type: ignore[attr-defined]
+        return np.array([[0.0, 0.0, 0.0]] + [T[:3, 3] for T in frames])
+    p = np.array(home["p"])
+    return np.asarray(model.leg_points(model.ik(p).joints, p))  # type: ignore[attr-defined]
+
+
+def _vendor(name: str) -> str:
+    return resources.files("symkin.viewer").joinpath("vendor", name).read_text(encoding="utf-8")
+
+
+def _module_url(source: str) -> str:
+    return "data:text/javascript;base64," + base64.b64encode(source.encode("utf-8")).decode("ascii")
+
+
+def _script_safe(text: str, what: str) -> str:
+    if "</script" in text.lower():
+        raise ValueError(f"{what} contains '</script' and cannot be inlined in the page")
+    return text
+
+
+def render_page(model: GeneratedModel, model_script: str, cloud: Cloud, description: str) -> str:
+    """The page's HTML text: ``model`` (a loaded model, bound to the design to show), the text of its
+    generated JavaScript module, its workspace ``cloud`` (:func:`workspace_cloud`)."""
+    data = page_data(model, cloud)
+    top = data["cloud"]["colour_max"]
+    importmap = {"imports": {"three": _module_url(_vendor("three.module.min.js")),
+                             "three/addons/controls/OrbitControls.js": _module_url(_vendor("OrbitControls.js"))}}
+    return render(
+        TEMPLATE,
+        provenance=f"Generated by symkin {__version__} (symkin view) from model '{model.name}'",
+        title=f"{model.name}: symkin view", description=description, kind=data["kind"], version=__version__,
+        three_version=THREE_VERSION, cloud_note=cloud.note,
+        gradient=", ".join(VIRIDIS), ticks=[f"{t:.2f}" for t in (0.0, top / 2, top)],
+        data=json.dumps(data, separators=(",", ":"), allow_nan=False).replace("</", "<\\/"),
+        importmap=json.dumps(importmap),
+        model_script=_script_safe(model_script, f"the JavaScript module of {model.name}"),
+        viewer_script=_script_safe(resources.files("symkin.templates").joinpath("viewer", "viewer.js")
+                                   .read_text(encoding="utf-8"), "viewer.js"),
+        three_licence=_vendor("LICENSE-three.txt").replace("-->", "- ->"),
+    )

@@ -1,0 +1,128 @@
+"""The page of ``symkin view`` in a real browser (issue 19): headless Chromium moves sliders and the page
+shows what numpy computes; the workspace cloud toggles; screenshots are not blank.
+
+The page evaluates the generated JavaScript, so its TCP position matches numpy's to the backends'
+agreement (relative 1e-12, tests/test_js_backend.py); its 1/kappa comes from its own Jacobi SVD,
+within the rounding of two backward-stable SVDs (tests/tolerances.py: svd) of LAPACK's.  No browser
+is a failure, not a skip: .ci/run installs Debian's chromium.
+"""
+
+from __future__ import annotations
+
+import re
+import subprocess
+
+import numpy as np
+import pytest
+
+from browser import chromium, drawn, open_page, pixels
+from conftest import SYMKIN_CLI
+from symkin import load
+from symkin.analysis import conditioning, global_indices, parallel
+from tolerances import svd
+
+AGREEMENT = 1e-12
+pytestmark = pytest.mark.xdist_group("browser")
+
+
+@pytest.fixture(scope="module")
+def browser():
+    with chromium() as b:
+        yield b
+
+
+@pytest.fixture(scope="module")
+def pages(generated_dir, tmp_path_factory):
+    """name -> the page of the generated model (1024 cloud points)."""
+    out = tmp_path_factory.mktemp("pages")
+    written = {}
+    for name in ("ur10e", "delta", "stewart"):
+        written[name] = out / f"{name}.html"
+        subprocess.run(SYMKIN_CLI + ["view", str(generated_dir / name), "-o", str(written[name]), "--workspace",
+                                     "1024"], check=True, capture_output=True)
+    return written
+
+
+def press(page, slider: str, key: str, times: int) -> None:
+    page.focus(f"#{slider}")
+    for _ in range(times):
+        page.keyboard.press(key)
+
+
+def shown_tcp(page) -> tuple[np.ndarray, np.ndarray]:
+    """(the TCP position the page holds, in m; the one it prints, in mm)."""
+    tcp = page.locator("#tcp")
+    held = np.array([float(tcp.get_attribute(f"data-{axis}")) for axis in "xyz"])
+    printed = np.array([float(v) for v in re.findall(r"-?\d+\.\d+", tcp.inner_text())])
+    return held, printed
+
+
+def shown_inverse_kappa(page) -> float:
+    return float(page.locator("#inverse-kappa").get_attribute("data-value"))
+
+
+def test_a_joint_slider_moves_the_arm_to_numpys_fk(browser, pages, generated_dir):
+    model = load(generated_dir / "ur10e")
+    page = open_page(browser, pages["ur10e"])
+    before = np.array(page.evaluate("window.symkinView.state.q"))
+    press(page, "joint-q2", "ArrowRight", 25)  # 0.1 deg per step
+    q = np.array(page.evaluate("window.symkinView.state.q"))
+    assert q[1] - before[1] == pytest.approx(np.radians(2.5), abs=1e-9) and np.array_equal(q[[0, 2, 3, 4, 5]],
+                                                                                          before[[0, 2, 3, 4, 5]])
+    held, printed = shown_tcp(page)
+    want = model.fk(q)[:3, 3]
+    np.testing.assert_allclose(held, want, rtol=0, atol=AGREEMENT * np.abs(want).max())
+    np.testing.assert_allclose(printed, 1000 * want, rtol=0, atol=0.0005 + 1e-9)  # printed to 3 decimals (mm)
+    length = page.evaluate("JSON.parse(document.getElementById('symkin-data').textContent).conditioning.length")
+    expected = float(global_indices.local_index(model, q, length=length))
+    assert shown_inverse_kappa(page) == pytest.approx(expected, abs=AGREEMENT + svd(6))
+    assert int(page.evaluate("document.body.dataset.updates")) == 26 and not page.errors
+
+
+def test_the_delta_follows_its_tcp_through_the_closed_form_ik(browser, pages, generated_dir):
+    model = load(generated_dir / "delta")
+    page = open_page(browser, pages["delta"])
+    press(page, "task-x", "ArrowRight", 150)  # 15 mm
+    press(page, "task-z", "ArrowLeft", 100)   # 10 mm down
+    p = np.array(page.evaluate("window.symkinView.state.p"))
+    np.testing.assert_allclose(p, [0.015, 0.0, -0.16], rtol=0, atol=1e-12)
+    q = np.array(page.evaluate("window.symkinView.state.q"))
+    np.testing.assert_allclose(q, model.ik(p).joints, rtol=0, atol=AGREEMENT)
+    held, printed = shown_tcp(page)
+    np.testing.assert_array_equal(held, p)
+    np.testing.assert_allclose(printed, 1000 * p, atol=0.0005 + 1e-9)
+    expected = float(global_indices.local_index(model, q))
+    assert shown_inverse_kappa(page) == pytest.approx(expected, abs=AGREEMENT + svd(3))
+    assert page.locator("#warning").is_hidden()
+
+
+def test_the_stewart_platform_is_rated_by_its_twist_jacobian(browser, pages, generated_dir):
+    model = load(generated_dir / "stewart")
+    page = open_page(browser, pages["stewart"])
+    press(page, "task-roll", "ArrowRight", 80)  # 8 deg
+    press(page, "task-yaw", "ArrowLeft", 50)    # -5 deg
+    p = np.array(page.evaluate("window.symkinView.state.p"))
+    q = np.array(page.evaluate("window.symkinView.state.q"))
+    np.testing.assert_allclose(q, model.ik(p).joints, rtol=0, atol=AGREEMENT * np.abs(q).max())
+    held = parallel.ConstantOrientation(model, p[3:])
+    length = page.evaluate("JSON.parse(document.getElementById('symkin-data').textContent).conditioning.length")
+    J = conditioning.homogenize(held.jacobian(q, p[:3]), length, (0, 1, 2))
+    expected = float(conditioning.inverse_condition_number(J))
+    # J = diag(I, E) inv(J^-1): an inversion, whose rounding kappa(J^-1) amplifies, before the SVD
+    assert shown_inverse_kappa(page) == pytest.approx(expected, rel=AGREEMENT * np.linalg.cond(J), abs=svd(6))
+
+
+def test_the_cloud_toggles_and_the_screenshots_are_not_blank(browser, pages, tmp_path):
+    page = open_page(browser, pages["delta"])
+    canvas = page.locator("#view")
+    with_cloud = canvas.screenshot(path=str(tmp_path / "with-cloud.png"))
+    assert page.evaluate("window.symkinView.cloud.visible") and page.locator("#colour-bar").is_visible()
+    page.click("#show-cloud")
+    assert not page.evaluate("window.symkinView.cloud.visible") and page.locator("#colour-bar").is_hidden()
+    without = canvas.screenshot(path=str(tmp_path / "without-cloud.png"))
+    a, b = pixels(with_cloud), pixels(without)
+    assert drawn(a) and drawn(b)
+    changed = np.any(np.abs(a - b) > 0.05, axis=-1).mean()
+    assert changed > 0.005, f"hiding the cloud changed {changed:.2%} of the pixels"
+    page.click("#show-cloud")
+    assert page.evaluate("window.symkinView.cloud.visible")
