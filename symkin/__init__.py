@@ -10,7 +10,8 @@ Typical use::
     J = ur.jacobian(q)    # (..., 6, 6)
 
 ``load`` needs only numpy; the symbolic side (``load_model``, ``derive``) imports sympy
-on first use.
+on first use.  In a notebook, a loaded model shows as the interactive 3D viewer of
+``symkin view`` (its ``_repr_html_``, :mod:`symkin.viewer.notebook`).
 """
 
 from __future__ import annotations
@@ -18,7 +19,8 @@ from __future__ import annotations
 from typing import Any
 
 from symkin._version import __version__
-from symkin.runtime import LoadedModel, load
+from symkin.runtime import LoadedModel
+from symkin.viewer.notebook import load
 
 __all__ = ["LoadedModel", "__version__", "derive", "load", "load_model"]
 

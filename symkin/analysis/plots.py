@@ -216,7 +216,8 @@ def plot_index_slices(occupancy: Occupancy, values: np.ndarray, path: str | Path
     return _save(figure, path)
 
 
-def plot_index_sections(occupancy: Occupancy, values: np.ndarray, path: str | Path, through: Sequence[float], *,
+def plot_index_sections(occupancy: Occupancy, values: np.ndarray, path: str | Path,
+                        through: Sequence[float] | np.ndarray, *,
                         title: str = "1/kappa over the workspace", label: str = "1/kappa",
                         axes: Sequence[str] = ("x", "y", "z"), scale: float = 1.0, unit: str = "m") -> Path:
     """A local index over a 3-D workspace on the three grid sections through a point (e.g. the home pose).

@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 import webbrowser
 from pathlib import Path
-from typing import Any
 
 from symkin.cli import analysis_args
 from symkin.cli.analysis_args import sample_count
@@ -39,7 +38,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from symkin import load
+    from symkin.runtime import load
     from symkin.atomic import replace_file
     from symkin.cli.progress import Progress
     from symkin.viewer import page
@@ -49,7 +48,7 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as err:
         analysis_args.fail_on_bad_input(args, err)
     with analysis_args.generated_directory(args.model, ("numpy", "js"), page.VIEW_OUTPUTS) as directory:
-        model: Any = load(directory)  # a LoadedModel, or the view of one that bind() gives
+        model = load(directory)
         missing = page.missing_functions(model)
         script = directory / f"{model.name}.js"
         if missing or not script.is_file():

@@ -5,9 +5,13 @@ from __future__ import annotations
 import argparse
 import contextlib
 import time
+from typing import TYPE_CHECKING
 
 from symkin.cli import analysis_args
 from symkin.cli.progress import Progress
+
+if TYPE_CHECKING:
+    import numpy as np
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -95,7 +99,8 @@ def run(args: argparse.Namespace) -> int:
     except (ValueError, KeyError) as err:
         analysis_args.fail_on_bad_input(args, err)
     method = args.method or workspace.default_method(base)
-    layers, grids = [], []
+    layers: list[tuple[plots.WorkspaceLayer, np.ndarray | None]] = []  # 1/kappa of the cloud, unless a grid has it
+    grids: list[tuple[workspace.Occupancy, np.ndarray]] = []
     start = time.perf_counter()
     with Progress(base.name) as progress:
         studies: list = []
@@ -127,19 +132,21 @@ def run(args: argparse.Namespace) -> int:
                                          title=title, scale=scale, unit=args.unit)
             print(f"figure: {path}")
         if args.map:
-            layer, values = layers[0]
+            layer, inv_kappa = layers[0]
             title = f"1/kappa over the workspace of {base.name} ({layer.label})"
             if grids:
-                path = plots.plot_index_slices(*grids[0], args.map, scale=scale, unit=args.unit,
+                occupancy, cell_values = grids[0]
+                path = plots.plot_index_slices(occupancy, cell_values, args.map, scale=scale, unit=args.unit,
                                                title=f"{title}: Cartesian grid, reachability by ik")
                 if isinstance(models[0], parallel.ConstantOrientation):
                     sections = plots.plot_index_sections(
-                        *grids[0], sections_path(args.map), parallel.home_position(models[0]), scale=scale,
+                        occupancy, cell_values, sections_path(args.map), parallel.home_position(models[0]), scale=scale,
                         unit=args.unit, title=f"{title}: sections through the home position at roll, pitch, yaw "
                                               f"= {parallel.orientation_text(models[0])}")
                     print(f"1/kappa sections: {sections}")
             else:
-                path = plots.plot_index_map(layer.cloud, values, args.map, outline=layer.outline, scale=scale,
+                assert inv_kappa is not None, "a joint-space cloud carries its 1/kappa"
+                path = plots.plot_index_map(layer.cloud, inv_kappa, args.map, outline=layer.outline, scale=scale,
                                             unit=args.unit, title=title)
             print(f"1/kappa map: {path}")
         if args.force_map:

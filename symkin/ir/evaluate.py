@@ -21,14 +21,14 @@ from symkin.ir.spec import FunctionSpec
 SHARED_EVALUATION_OPS = 20000
 
 
-def lambdify_spec(spec: FunctionSpec, args: Sequence[object], modules: str = "numpy",
+def lambdify_spec(spec: FunctionSpec, args: Sequence[object], modules: str | Sequence[object] = "numpy",
                   values: Mapping[sympy.Symbol, sympy.Expr] | None = None) -> Callable[..., list]:
     """A function of ``args`` returning every output entry of ``spec`` (row-major, outputs in order).
 
     Args:
         spec: the derived function (its definitions become assignments before the outputs).
         args: lambdify arguments: symbols, or sequences of symbols for vector arguments.
-        modules: ``"numpy"`` or ``"mpmath"``.
+        modules: ``"numpy"`` or ``"mpmath"``, or a list of namespaces before one of them (as lambdify's).
         values: substitutions applied first (e.g. parameters at their defaults).
     """
     values = dict(values or {})
@@ -42,4 +42,6 @@ def lambdify_spec(spec: FunctionSpec, args: Sequence[object], modules: str = "nu
         shared, reduced = sympy.cse(exprs, symbols=sympy.numbered_symbols("_ref"), order="none")
         return definitions + shared, reduced
 
-    return sympy.lambdify(list(args), entries, modules=modules, cse=program)
+    # use_imps=False: no implemented functions occur, and looking for them walks every node of the
+    # expanded trees (three quarters of the lambdify time of the Stewart platform's dynamics)
+    return sympy.lambdify(list(args), entries, modules=modules, cse=program, use_imps=False)

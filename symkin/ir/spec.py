@@ -30,6 +30,26 @@ from symkin.model.schema import Model
 #: Prefix of definition symbols (``_w0``, ``_w1``...); no model name starts with "_".
 DEFINITION_PREFIX = "_w"
 
+#: The most that a notebook shows as LaTeX (``_repr_latex_``): equations, and operations over all of them
+#: (sympy.count_ops); beyond either the formulas no longer fit a screen and Jupyter shows the text repr.
+LATEX_MAX_EQUATIONS = 12
+LATEX_MAX_OPS = 200
+
+
+def latex_equations(equations: Sequence[tuple[sympy.Basic, sympy.Basic]]) -> str | None:
+    r"""``name = expression`` lines (names as symbols) as one LaTeX display (what ``_repr_latex_``
+    returns), or None beyond :data:`LATEX_MAX_EQUATIONS` equations or :data:`LATEX_MAX_OPS` operations.
+    Definition symbols ``_w<k>`` print as w_k, output names upright (``\mathrm{base\_T\_tcp}``)."""
+    if len(equations) > LATEX_MAX_EQUATIONS or sum(sympy.count_ops(e) for _, e in equations) > LATEX_MAX_OPS:
+        return None
+    names = {s: f"w_{{{str(s)[len(DEFINITION_PREFIX):]}}}" for name, expr in equations
+             for s in ({name} | expr.free_symbols) if isinstance(s, sympy.Symbol)
+             and str(s).startswith(DEFINITION_PREFIX)}
+    names.update({name: r"\mathrm{" + str(name).replace("_", r"\_") + "}" for name, _ in equations if name not in names})
+    rows = [sympy.latex(name, symbol_names=names) + " &= " + sympy.latex(expr, symbol_names=names)
+            for name, expr in equations]
+    return r"$\displaystyle \begin{aligned}" + r" \\ ".join(rows) + r"\end{aligned}$"
+
 
 @dataclass(frozen=True)
 class InputSpec:
@@ -86,6 +106,10 @@ class OutputSpec:
         """The entries in row-major order."""
         return list(self.expr)
 
+    def _repr_latex_(self) -> str | None:
+        """The output as an equation in a notebook, where it is small (:data:`LATEX_MAX_OPS`)."""
+        return latex_equations([(sympy.Symbol(self.name), self.expr if self.shape else self.expr[0])])
+
 
 @dataclass(frozen=True)
 class FunctionSpec:
@@ -116,6 +140,11 @@ class FunctionSpec:
     @property
     def vector_inputs(self) -> tuple[InputSpec, ...]:
         return tuple(i for i in self.inputs if i.kind != "parameter")
+
+    def _repr_latex_(self) -> str | None:
+        """Its definitions and outputs as equations in a notebook, where they are small (:data:`LATEX_MAX_OPS`)."""
+        return latex_equations([*self.definitions, *((sympy.Symbol(o.name), o.expr if o.shape else o.expr[0])
+                                                     for o in self.outputs)])
 
     @property
     def parameter_inputs(self) -> tuple[InputSpec, ...]:

@@ -9,7 +9,7 @@ from __future__ import annotations
 import functools
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar, overload
 
 from symkin.errors import GeneratedCodeError
 from symkin.manifest import MANIFEST_NAME, read_manifest
@@ -80,6 +80,12 @@ class LoadedModel:
         inf = float("inf")
         return tuple(c.limits if c.limits is not None else (-inf, inf) for c in self.info.coordinates)
 
+    def __getattr__(self, name: str) -> Any:
+        """Only for names that are not attributes: the generated functions are set in __init__."""
+        model = self.__dict__.get("name", "this model")
+        raise AttributeError(f"{model} has no generated function or attribute {name!r} "
+                             f"(generated: {', '.join(self.__dict__.get('functions', ()))})")
+
     def bind(self, **parameters: float) -> LoadedModel:
         """A view whose functions use these parameter values instead of the defaults.
 
@@ -92,20 +98,33 @@ class LoadedModel:
         unknown = set(parameters) - set(self.parameters)
         if unknown:
             raise KeyError(f"{self.name}: not free parameters: {sorted(unknown)}; free: {sorted(self.parameters)}")
-        return LoadedModel(self.directory, self.manifest, self.backend, self._raw, {**self._bound, **parameters},
-                           self.info)
+        return type(self)(self.directory, self.manifest, self.backend, self._raw, {**self._bound, **parameters},
+                          self.info)
 
     def __repr__(self) -> str:
         return f"<symkin model {self.name!r} ({self.backend}): {', '.join(self.functions)}>"
 
 
-def load(path: str | Path, backend: str = "numpy") -> LoadedModel:
+ModelT = TypeVar("ModelT", bound=LoadedModel)
+
+
+@overload
+def load(path: str | Path, backend: str = "numpy") -> LoadedModel: ...
+
+
+@overload
+def load(path: str | Path, backend: str = "numpy", *, model_class: type[ModelT]) -> ModelT: ...
+
+
+def load(path: str | Path, backend: str = "numpy", *, model_class: type[LoadedModel] = LoadedModel) -> LoadedModel:
     """Load the generated code of a model.
 
     Args:
         path: the model directory written by ``symkin derive`` (``OUT/<model>``) or its
             ``manifest.json``.
         backend: which emitted backend to use (``numpy`` by default).
+        model_class: the class of the result, LoadedModel or a subclass (``symkin.load`` gives
+            :class:`symkin.viewer.notebook.NotebookModel`, which notebooks show as the 3D viewer).
 
     Raises:
         GeneratedCodeError: no manifest, or the backend was not emitted for this model.
@@ -121,4 +140,4 @@ def load(path: str | Path, backend: str = "numpy") -> LoadedModel:
     if backend not in LOADERS:
         raise GeneratedCodeError(f"this symkin cannot load '{backend}' code (known: {', '.join(LOADERS)})")
     functions = LOADERS[backend](directory, manifest)
-    return LoadedModel(directory, manifest, backend, functions)
+    return model_class(directory, manifest, backend, functions)

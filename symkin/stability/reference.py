@@ -10,7 +10,8 @@ without the rounding of the reference getting in the way.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import functools
+from collections.abc import Callable, Mapping
 
 import mpmath
 import numpy as np
@@ -19,6 +20,20 @@ from symkin.ir.spec import FunctionSpec
 
 #: Working precision of the reference (significant decimal digits).
 DIGITS = 50
+
+#: Distinct (argument, precision) pairs each memoized function keeps.
+MEMO_SIZE = 1 << 14
+
+
+def _memoized(function: Callable[[object], object]) -> Callable[[object], object]:
+    """``function`` with its values kept per (argument, working precision): the expanded expressions
+    of a state call sin and cos of the same few angles thousands of times, and mpmath's are slow."""
+    cached = functools.lru_cache(maxsize=MEMO_SIZE)(lambda x, _precision: function(x))
+    return lambda x: cached(x, mpmath.mp.prec)
+
+
+#: The namespace in front of mpmath's for the reference: the same functions, memoized.
+MEMOIZED = {"sin": _memoized(mpmath.sin), "cos": _memoized(mpmath.cos)}
 
 
 class MpmathReference:
@@ -33,7 +48,7 @@ class MpmathReference:
         self.vector_names = tuple(i.name for i in spec.vector_inputs)
         self.parameter_names = tuple(i.name for i in spec.parameter_inputs)
         symbols = [s for i in spec.vector_inputs for s in i.symbols] + [i.symbols[0] for i in spec.parameter_inputs]
-        self._function = lambdify_spec(spec, symbols, modules="mpmath")
+        self._function = lambdify_spec(spec, symbols, modules=[MEMOIZED, "mpmath"])
         self.size = sum(len(out.entries) for out in spec.outputs)
 
     def exact(self, vectors: Mapping[str, np.ndarray], parameters: Mapping[str, float]) -> list:

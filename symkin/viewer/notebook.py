@@ -1,0 +1,45 @@
+"""Loaded models that Jupyter shows as the viewer of ``symkin view`` (``_repr_html_``).
+
+``symkin.load`` returns a :class:`NotebookModel`: a :class:`~symkin.runtime.loader.LoadedModel`
+whose rich representation is the page of :mod:`symkin.viewer.page`, inline in an ``<iframe srcdoc>``
+(the page keeps its own import map and scripts apart from the notebook's).  Nothing is computed
+until a notebook asks for the representation.
+"""
+
+from __future__ import annotations
+
+import html
+from pathlib import Path
+
+from symkin.runtime.loader import LoadedModel
+from symkin.runtime.loader import load as load_generated
+
+#: Workspace points of the cloud shown inline (symkin view's default is larger).
+NOTEBOOK_SAMPLES = 2048
+#: Height of the inline viewer in CSS pixels.
+HEIGHT = 600
+
+
+class NotebookModel(LoadedModel):
+    """A loaded model with the interactive 3D viewer as its notebook representation."""
+
+    def _repr_html_(self) -> str:
+        from symkin.viewer import page
+
+        script = self.directory / f"{self.name}.js"
+        missing = page.missing_functions(self)
+        if missing or not script.is_file():
+            needed = ",".join(page.VIEW_OUTPUTS[page.kind_of(self)])
+            what = ", ".join(missing) if missing else "its JavaScript"
+            return (f"<p><b>{html.escape(self.name)}</b> ({html.escape(str(self.directory))}): the 3D viewer needs "
+                    f"{html.escape(what)}; derive it with <code>--only {needed} --backend numpy,js</code>.</p>")
+        cloud = page.workspace_cloud(self, NOTEBOOK_SAMPLES)
+        document = page.render_page(self, script.read_text(encoding="utf-8"), cloud,
+                                    self.manifest["model"].get("description") or self.name)
+        return (f'<iframe title="{html.escape(self.name)}: symkin view" srcdoc="{html.escape(document, quote=True)}" '
+                f'style="width: 100%; height: {HEIGHT}px; border: 1px solid #ddd"></iframe>')
+
+
+def load(path: str | Path, backend: str = "numpy") -> NotebookModel:
+    """:func:`symkin.runtime.loader.load`, as a :class:`NotebookModel` (what ``symkin.load`` returns)."""
+    return load_generated(path, backend, model_class=NotebookModel)
