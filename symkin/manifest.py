@@ -61,7 +61,7 @@ def build_manifest(model: Model, code: ModelCode, derived: list[str], backend_fi
     """
     import sympy
 
-    manifest = {
+    manifest: dict[str, Any] = {
         "manifest_version": MANIFEST_VERSION,
         "generator": {"symkin": __version__, "sympy": sympy.__version__},
         "model": {
@@ -113,9 +113,9 @@ def _parallel_record(model: Model) -> dict[str, Any]:
     for leg in parallel.legs:
         record: dict[str, Any] = {"name": leg.name, "topology": "".join(j.type.value for j in leg.joints),
                                   "joints": [j.name for j in leg.joints]}
-        passive = {variable: [float(b.xreplace(model.parameter_values)) for b in joint.limits_of(k)]
+        passive = {variable: [float(b.xreplace(model.parameter_values)) for b in limits]
                    for joint in leg.joints for k, variable in enumerate(joint.variables)
-                   if k != joint.active and joint.limits_of(k) is not None}
+                   if k != joint.active and (limits := joint.limits_of(k)) is not None}
         if passive:
             record["passive_limits"] = passive
         legs.append(record)

@@ -124,15 +124,16 @@ def resolve_request(model: Model, only: str | Sequence[str] | None = None,
     check(fixed_names or (), pnames, "parameter", "fixed", fixed_names is not None)
     chosen_outputs = outputs or model.scene.outputs
     fused = _split(combine)
-    if fused == ("all",) or (fused is None and model.scene.combine is None):
-        fused = chosen_outputs
-    elif fused == ("none",):
+    scene_combine = model.scene.combine
+    if fused == ("none",):
         fused = ()
-    elif fused is not None:
+    elif fused is not None and fused != ("all",):
         check(fused, chosen_outputs, "output to combine", "combine", True)
-    else:
-        check(model.scene.combine, model.scene.outputs, "output to combine", "combine", False)
-        fused = tuple(name for name in model.scene.combine if name in chosen_outputs)
+    elif fused is None and scene_combine is not None:
+        check(scene_combine, model.scene.outputs, "output to combine", "combine", False)
+        fused = tuple(name for name in scene_combine if name in chosen_outputs)
+    else:  # "all", or neither the command line nor the scene names any
+        fused = chosen_outputs
     if not problems:
         problems += mass_matrix_problems(model, chosen_outputs)
     if problems:

@@ -97,6 +97,7 @@ def study_workspace(model: GeneratedModel, *, samples: int, method: str, seed: i
         progress("Cartesian grid")
         grid = cartesian_index_grid(model, box, limits, length)
     if isinstance(model, parallel.ConstantOrientation):  # no fk: the grid's surface is the cloud
+        assert grid is not None, "a platform held at a constant orientation is parallel: it has its grid"
         cloud = boundary_cloud(model, grid[0], limits)
         sampled = (f"{int(grid[0].occupied.sum())} reachable cells of a Cartesian grid at roll, pitch, "
                    f"yaw = {parallel.orientation_text(model)}")
@@ -151,13 +152,13 @@ def _report(model: GeneratedModel, cloud: WorkspaceCloud, inv_kappa: np.ndarray 
         measure = global_indices.workspace_measure(model, method="qmc", samples=2**16, seed=0, limits=limits,
                                                    domain="cartesian", inverse=ik, box=box)
         lines.append(f"{kind}: {measure} {unit} (qmc over a Cartesian box, reachability by inverse kinematics)")
-    if mechanism.is_parallel(model):
+    if mechanism.is_parallel(model) or inv_kappa is None:
         return lines  # the Cartesian grid (_cartesian_report) gives the volume, boundary and singularities
     occupancy = workspace.occupancy_from_cloud(cloud)
     boundary = occupancy.boundary()
     lines.append(f"{kind}: {occupancy.measure()} {unit} (occupancy of {occupancy.cell[0]:.3g} m cells: "
                  f"between interior and all occupied cells); {int(boundary.sum())} boundary cells")
-    singular = inv_kappa <= 0.0
+    singular = np.asarray(inv_kappa <= 0.0)
     on_boundary = int(occupancy.lookup(cloud.points[singular], boundary).sum())
     lines.append(f"1/kappa: min {inv_kappa.min():.4g}, mean {inv_kappa.mean():.4g}, max {inv_kappa.max():.4g}; "
                  f"singular configurations: {int(singular.sum())}, of which {on_boundary} on the workspace "

@@ -14,6 +14,8 @@ number, product and power printing so that every text backend writes the same ar
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING, Any
+
 import sympy
 from sympy.printing.precedence import PRECEDENCE
 
@@ -28,6 +30,9 @@ class ArithmeticPrinterMixin:
 
     #: Name of the square-root function in the target language.
     sqrt_function = "sqrt"
+
+    if TYPE_CHECKING:  # provided by the sympy printer the mixin goes in front of
+        def _print(self, expr: Any, **kwargs: Any) -> str: ...
 
     # -- hooks -------------------------------------------------------------------------
 

@@ -14,9 +14,12 @@ import math
 import tempfile
 from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from symkin.runtime.info import GeneratedModel
+
+if TYPE_CHECKING:
+    from symkin.model.schema import Model
 
 #: Quantities an analysis needs from a model file derived on the fly ...
 ANALYSIS_OUTPUTS = ("fk", "jacobian")
@@ -91,11 +94,12 @@ def resolve_length(model: GeneratedModel, text: str, limits: dict) -> float | No
     length = parse_length(text)
     if not mechanism.mixes_translations_and_rotations(model):
         return None
-    if length == "auto":
-        length = global_indices.characteristic_length_of(model, mechanism.joint_limits(model, limits))
-        print(f"{model.name}: characteristic length L = {length:.6g} m (minimizes the mean kappa_F^2; "
-              "set with --length)")
-    return length
+    if length != "auto":
+        return float(length)
+    computed = global_indices.characteristic_length_of(model, mechanism.joint_limits(model, limits))
+    print(f"{model.name}: characteristic length L = {computed:.6g} m (minimizes the mean kappa_F^2; "
+          "set with --length)")
+    return computed
 
 
 def parse_assignments(texts: list[str]) -> dict[str, float]:
@@ -221,7 +225,7 @@ def generated_directory(path: str, backends: Sequence[str],
         yield directory
 
 
-def analysis_kind(model: GeneratedModel) -> str:
+def analysis_kind(model: Model) -> str:
     """The key of a model file in :data:`ANALYSIS_OUTPUTS_BY_KIND`: serial, parallel, parallel pose."""
     from symkin.model.schema import PlatformMotion
 
@@ -230,7 +234,7 @@ def analysis_kind(model: GeneratedModel) -> str:
     return model.mechanism
 
 
-def _limits_passive_joints(model: GeneratedModel) -> bool:
+def _limits_passive_joints(model: Model) -> bool:
     """Whether a parallel model file declares limits on a passive joint variable."""
     return model.parallel is not None and any(
         joint.limits_of(k) is not None for leg in model.parallel.legs for joint in leg.joints

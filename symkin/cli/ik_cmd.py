@@ -9,9 +9,15 @@ import math
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from symkin.cli.progress import Progress
 from symkin.errors import ModelError, Problem
+
+if TYPE_CHECKING:
+    import numpy as np
+
+    from symkin.runtime import LoadedModel
 
 #: Outputs the solvers use; task_coordinates only where the task space has coordinates.
 IK_OUTPUTS = ("fk", "jacobian_geometric", "jacobian", "task_coordinates")
@@ -50,7 +56,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 @contextlib.contextmanager
-def _loaded(path: str) -> Iterator[object]:
+def _loaded(path: str) -> Iterator[LoadedModel]:
     """The generated code of ``path``: a derived directory as is, a model file derived to a temporary one."""
     from symkin import load
 
@@ -75,7 +81,7 @@ def _bad_argument(option: str, message: str, fix: str) -> ModelError:
     return ModelError([Problem("<command line>", None, None, option, message, fix)])
 
 
-def _target(values: list[float], kind: str, kin) -> object:
+def _target(values: list[float], kind: str, kin) -> np.ndarray:
     import numpy as np
 
     from symkin.ik.rotations import pose_from_vector
@@ -116,8 +122,9 @@ def run(args: argparse.Namespace) -> int:
             raise _bad_argument("--q0", f"{kin.name} has {kin.dof} joints, got {len(args.q0)} values",
                                 f"give {kin.dof} values: {' '.join(kin.coordinates)}")
         unit = "deg" if args.degrees else "rad"
-        report = {"model": kin.name, "kind": kind, "coordinates": list(kin.coordinates), "angle_unit": unit,
-                  "targets": []}
+        targets: list[dict[str, Any]] = []
+        report: dict[str, Any] = {"model": kin.name, "kind": kind, "coordinates": list(kin.coordinates), "angle_unit": unit,
+                  "targets": targets}
         for values in args.target:
             target = _target(values, kind, kin)
             entry: dict = {"target": values, "solutions": []}
@@ -153,7 +160,7 @@ def run(args: argparse.Namespace) -> int:
                     "position_error": float(result.position_error),
                     "orientation_error": float(result.orientation_error)})
                 entry["solved"] = bool(result.converged)
-            report["targets"].append(entry)
+            targets.append(entry)
     if args.json:
         print(json.dumps(report, indent=2))
     else:

@@ -85,8 +85,8 @@ def run_topologies(args: argparse.Namespace) -> int:
         print(json.dumps({
             "dof": result.dof, "legs": result.legs, "leg_dof": result.leg_dof, "budget": result.budget,
             "translational": result.translational, "survivors": list(result.survivors),
-            "eliminated": [{"topology": v.topology, "distribution": v.distribution, "criterion": v.eliminated_by.key,
-                            "group": v.eliminated_by.group, "reason": v.detail} for v in result.eliminated],
+            "eliminated": [{"topology": v.topology, "distribution": v.distribution, "criterion": v.criterion.key,
+                            "group": v.criterion.group, "reason": v.detail} for v in result.eliminated],
         }, indent=2))
         return 0
     pg = degree_of_parallelism(result.legs, result.dof)
@@ -103,13 +103,13 @@ def run_topologies(args: argparse.Namespace) -> int:
     if args.summary:
         counts: dict[str, int] = {}
         for v in result.eliminated:
-            counts[v.eliminated_by.key] = counts.get(v.eliminated_by.key, 0) + 1
+            counts[v.criterion.key] = counts.get(v.criterion.key, 0) + 1
         rows = [[c.group, c.rule, counts[key]] for key, c in CRITERION.items() if key in counts]
         print(format_table(["criterion", "rule", "eliminated"], rows))
     else:
         rank = {distribution: i for i, distribution in enumerate(groups)}
         ordered = sorted(result.eliminated, key=lambda v: rank[v.distribution])
-        rows = [[v.distribution, v.topology, v.eliminated_by.group, v.detail] for v in ordered]
+        rows = [[v.distribution, v.topology, v.criterion.group, v.detail] for v in ordered]
         print(format_table(["DoF", "topology", "criterion", "reason"], rows))
     print(f"\nSurviving ({len(result.survivors)}): {', '.join(result.survivors)}")
     rotary = [t for t in result.survivors if t[0] == "R"]

@@ -52,8 +52,15 @@ class SweepAxis:
     high: float
     count: int | None = None
 
+    @property
+    def grid_count(self) -> int:
+        """The number of grid values (a Sobol axis has none: ValueError)."""
+        if self.count is None:
+            raise ValueError(f"{self.name}: a grid needs a count, e.g. {self.name}={self.low:g}:{self.high:g}:20")
+        return self.count
+
     def values(self) -> np.ndarray:
-        return np.linspace(self.low, self.high, self.count)
+        return np.linspace(self.low, self.high, self.grid_count)
 
 
 @dataclass(frozen=True)
@@ -106,7 +113,7 @@ class SweepDefinition:
 
     @property
     def size(self) -> int:
-        return self.sobol if self.sobol is not None else math.prod(a.count for a in self.axes)
+        return self.sobol if self.sobol is not None else math.prod(a.grid_count for a in self.axes)
 
     @property
     def chunks(self) -> int:
@@ -127,7 +134,7 @@ class SweepDefinition:
             with warnings.catch_warnings():  # a chunk need not be a power of 2: the set as a whole is
                 warnings.simplefilter("ignore", UserWarning)
                 return low + (high - low) * sequence.random(stop - start)
-        index = np.unravel_index(np.arange(start, stop), tuple(a.count for a in self.axes))
+        index = np.unravel_index(np.arange(start, stop), tuple(a.grid_count for a in self.axes))
         return np.stack([a.values()[i] for a, i in zip(self.axes, index)], axis=-1)
 
     def columns(self) -> list[str]:

@@ -77,6 +77,13 @@ class InputSpec:
     def shape(self) -> tuple[int, ...]:
         return () if self.kind == "parameter" else (len(self.symbols),)
 
+    @property
+    def default_value(self) -> float:
+        """The default of a parameter input as a float (a vector input has none: ValueError)."""
+        if self.default is None:
+            raise ValueError(f"input '{self.name}' is a {self.kind}, it has no default value")
+        return float(self.default)
+
 
 @dataclass(frozen=True)
 class OutputSpec:

@@ -110,10 +110,13 @@ def coordinate_range(model: Model) -> tuple[np.ndarray, np.ndarray]:
         else:
             lower.append(-span)
             upper.append(span)
-    for follower in (j for j in model.joints if j.mimic is not None and j.limits is not None):
+    for follower in model.joints:
+        mimic, limits = follower.mimic, follower.limits
+        if mimic is None or limits is None:
+            continue
         # the follower's limits bound its leader: lo <= a q + b <= hi
-        k = [c.name for c in model.coordinates].index(follower.mimic.leader)
-        a, b = (float(sympy.sympify(v).xreplace(defaults)) for v in (follower.mimic.multiplier, follower.mimic.offset))
-        ends = sorted((float(limit.xreplace(defaults)) - b) / a for limit in follower.limits)
+        k = [c.name for c in model.coordinates].index(mimic.leader)
+        a, b = (float(sympy.sympify(v).xreplace(defaults)) for v in (mimic.multiplier, mimic.offset))
+        ends = sorted((float(limit.xreplace(defaults)) - b) / a for limit in limits)
         lower[k], upper[k] = max(lower[k], ends[0]), min(upper[k], ends[1])
     return np.array(lower), np.array(upper)

@@ -104,7 +104,7 @@ def delta_legs(r: Reader, path: KeyPath, value: Any) -> tuple[tuple[Leg, ...], i
     lengths = [_length(r, path + (key,), section[key]) for key in ("upper_arm", "lower_arm")]
     angles = _angles(r, path + ("leg_angles",), section["leg_angles"])
     prefix = r.name(path + ("actuator",), section["actuator"]) if "actuator" in section else "theta"
-    limits = ()
+    limits: tuple[tuple[sympy.Expr, sympy.Expr], ...] = ()
     if "actuator_limits" in section:
         bounds = position_limits(r, path + ("actuator_limits",), section["actuator_limits"])
         if bounds is None:
@@ -169,8 +169,8 @@ def _angles(r: Reader, path: KeyPath, value: Any) -> list[sympy.Expr] | None:
 
 def _orientation(r: Reader, path: KeyPath, angles: list[sympy.Expr]) -> int | None:
     """+1 if the legs go round counter-clockwise (seen from +z), -1 if clockwise."""
-    values = [r.default_value(a) for a in angles]
-    if any(v is None for v in values):
+    values = [v for v in (r.default_value(a) for a in angles) if v is not None]
+    if len(values) != len(angles):
         return 1  # symbolic angles: counter-clockwise as in the seed (phi_i = (i - 1) 120 deg)
     (x1, y1), (x2, y2), (x3, y3) = [(math.cos(v), math.sin(v)) for v in values]
     cross = (x2 - x1) * (y3 - y1) - (y2 - y1) * (x3 - x1)

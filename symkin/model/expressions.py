@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import difflib
 import re
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
 import sympy
@@ -42,7 +42,7 @@ def _degrees(x: sympy.Expr) -> sympy.Expr:
 
 
 #: Functions allowed in model expressions: name -> (arity, sympy constructor).
-FUNCTIONS: dict[str, tuple[int, object]] = {
+FUNCTIONS: dict[str, tuple[int, Callable[..., sympy.Expr]]] = {
     "sin": (1, sympy.sin),
     "cos": (1, sympy.cos),
     "tan": (1, sympy.tan),

@@ -78,10 +78,10 @@ def build_parallel(r: Reader, section: Any) -> Parallel | None:
         built = delta_legs(r, path + ("delta",), section["delta"])
         if built is None:
             return None
-        legs, fk_branch = built
+        delta_legs_built, delta_branch = built
         home = _home(r, path + ("home",), section.get("home"), PlatformMotion.TRANSLATION)
-        return _checked(r, path, Parallel(PlatformMotion.TRANSLATION, legs, fk_branch, identical, constraints, "delta",
-                                          home))
+        return _checked(r, path, Parallel(PlatformMotion.TRANSLATION, delta_legs_built, delta_branch, identical,
+                                          constraints, "delta", home))
     for key in ("motion", "legs"):
         if key not in section:
             r.fail(path, f"missing required key '{key}'", f"add '{key}:' (or use the DELTA shorthand 'delta:')")
@@ -199,9 +199,10 @@ def _legs(r: Reader, path: KeyPath, value: Any, chains: dict[str, tuple[KeyPath,
             jpath, entries = chains[item["chain"]]
         else:
             jpath = lpath + ("joints",)
-            entries = r.sequence(jpath, item["joints"], what="joints")
-            if entries is None:
+            listed = r.sequence(jpath, item["joints"], what="joints")
+            if listed is None:
                 continue
+            entries = listed
         joints = [_joint(r, jpath + (k,), entry, number) for k, entry in enumerate(entries)]
         base = attachment(r, lpath + ("base",), item["base"])
         platform = attachment(r, lpath + ("platform",), item["platform"])

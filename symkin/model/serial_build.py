@@ -193,7 +193,7 @@ def _chain(r: Reader, path: KeyPath, section: Any) -> list[Joint]:
         before = frame_ops(r, jpath + ("origin",), item["origin"]) if "origin" in item else ()
         offset = r.expr(jpath + ("offset",), item["offset"]) if "offset" in item else ZERO
         extras = _joint_extras(r, jpath, item, default_link=f"link{i + 1}")
-        if None in (jname, jtype, axis, before, offset, extras):
+        if jname is None or jtype is None or axis is None or before is None or offset is None or extras is None:
             r.invalid_links.add(_declared_link(item, i))
             continue
         joints.append(Joint(name=jname, type=jtype, axis=axis, offset=offset, before=before, after=(), **extras))
@@ -236,6 +236,6 @@ def _mimic(r: Reader, path: KeyPath, value: Any) -> Mimic | None:
         r.fail(path + ("multiplier",), "a multiplier of 0 makes the joint fixed, not a follower",
                "write a nonzero multiplier, or replace the joint by a fixed transform")
         return None
-    if None in (leader, multiplier, offset):
+    if leader is None or multiplier is None or offset is None:
         return None
     return Mimic(leader, multiplier, offset)

@@ -380,8 +380,8 @@ def _joints(r: _UrdfReader, robot: Element, links: dict[str, Element]) -> dict[s
                    "model a mobile base separately, or decompose the joint into revolute/prismatic joints")
             continue
         mimic = None
-        if element.find("mimic") is not None:
-            m = element.find("mimic")
+        m = element.find("mimic")
+        if m is not None:
             leader = m.attrib.get("joint")
             if not leader:
                 r.fail(m, key + ".mimic", f"the <mimic> of joint '{name}' names no joint", "add joint=\"LEADER\"")
@@ -527,11 +527,10 @@ def _locked_values(r: _UrdfReader, robot: Element, joints: dict[str, _Joint], ch
         if j.type == "fixed":
             continue
         if j.mimic is not None and j.name not in locks:
-            followers.append(j)
+            followers.append((j, j.mimic))
         else:
             values[j.name] = Fraction(repr(float(locks.get(j.name, 0.0))))
-    for j in followers:
-        leader, multiplier, offset = j.mimic
+    for j, (leader, multiplier, offset) in followers:
         if leader in chain_joints:
             r.fail(j.element.find("mimic"), f"joint[{j.name}].mimic",
                    f"joint '{j.name}' off the chain mimics '{leader}', a joint of the chain: the links it moves "

@@ -108,7 +108,7 @@ class ModelInfo:
         model = manifest["model"]
         parallel = model.get("parallel")
         coordinates = tuple(Coordinate(c["name"], c["type"] == "R",
-                                       tuple(float(v) for v in c["limits"]) if c.get("limits") else None,
+                                       (float(c["limits"][0]), float(c["limits"][1])) if c.get("limits") else None,
                                        c.get("velocity_limit"), c.get("effort_limit"))
                             for c in model["coordinates"])
         parameters = tuple(Parameter(p["name"], float(p["default"]), p.get("unit", ""), bool(p["fixed"]))

@@ -12,6 +12,7 @@ Like :mod:`symkin.runtime.loader`, this module imports neither sympy nor jinja2.
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Any
 from dataclasses import dataclass
 
 import numpy as np
@@ -47,7 +48,8 @@ class NewtonReport:
         return bool(np.all(self.converged))
 
 
-def _function(model: LoadedModel, name: str, purpose: str) -> Callable[..., object]:
+def _function(model: LoadedModel, name: str, purpose: str) -> Callable[..., Any]:
+    """The generated function ``name`` (its result is an array or a named tuple of arrays)."""
     if name not in model.functions:
         raise GeneratedCodeError(f"{purpose} needs the generated function '{name}' of model '{model.name}'; "
                                  f"derive it (scene outputs or --only {name})")
@@ -248,4 +250,4 @@ def solve_closure(model: LoadedModel, q, s, p, *, unknowns: tuple[str, ...] = ("
 
     start = np.concatenate([values[name] for name in order], axis=-1)
     report = _iterate(start, equations, tol, max_iterations, max_step)
-    return NewtonReport(unpack(report.solution), report.converged, report.iterations, report.residual, report.step)
+    return NewtonReport(unpack(np.asarray(report.solution)), report.converged, report.iterations, report.residual, report.step)

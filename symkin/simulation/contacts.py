@@ -65,9 +65,23 @@ def _from_switches(stops: JointStops, run: Run) -> list[Contact]:
     return sorted(found, key=lambda c: c.start)
 
 
+def _stopped(system: ArmSystem) -> JointStops:
+    """The system's joint stops: the contact reports are made only for a system that has them."""
+    if system.stops is None:
+        raise ValueError("the system has no joint stops to report on")
+    return system.stops
+
+
+def _dissipated(dissipated: np.ndarray | None) -> np.ndarray:
+    """The stops' dissipated energy of split states (present wherever the system has stops)."""
+    if dissipated is None:
+        raise ValueError("the states carry no dissipated energy: the system has no joint stops")
+    return dissipated
+
+
 def columns(system: ArmSystem, run: Run, units: tuple[Sequence[str], Sequence[str]]) -> dict[str, np.ndarray]:
     """Per-sample columns: penetration and stop torque per stopped joint, stored and dissipated energy."""
-    stops = system.stops
+    stops = _stopped(system)
     s = system.split(run.x)
     depth = stops.depth(s.q)
     tau, _ = stops.torque_and_dissipation(s.q, s.qd)
@@ -77,14 +91,14 @@ def columns(system: ArmSystem, run: Run, units: tuple[Sequence[str], Sequence[st
             out[f"penetration {name} [{units[0][j]}]"] = depth[:, j]
             out[f"tau_stop_{name} [{units[1][j]}]"] = tau[:, j]
     out["stop energy stored [J]"] = stops.stored_energy(s.q)
-    out["stop energy dissipated [J]"] = s.dissipated
+    out["stop energy dissipated [J]"] = _dissipated(s.dissipated)
     return out
 
 
 def summary(system: ArmSystem, run: Run, contacts: list[Contact], units: tuple[Sequence[str], Sequence[str]]
             ) -> list[str]:
     """Lines: per stopped joint the number of contacts, time in contact and peak penetration."""
-    stops = system.stops
+    stops = _stopped(system)
     depth = stops.depth(system.split(run.x).q)
     lines, free = [], []
     for j, name in enumerate(stops.names):
@@ -101,6 +115,6 @@ def summary(system: ArmSystem, run: Run, contacts: list[Contact], units: tuple[S
     if free:
         lines.append(f"  {', '.join(free)}: no contact with {'its' if len(free) == 1 else 'their'} stops")
     s = system.split(run.x[-1])
-    lines.append(f"  stops: {float(stops.stored_energy(s.q)):.3g} J stored at the end, {float(s.dissipated):.3g} J "
+    lines.append(f"  stops: {float(stops.stored_energy(s.q)):.3g} J stored at the end, {float(_dissipated(s.dissipated)):.3g} J "
                  "dissipated")
     return lines

@@ -84,6 +84,7 @@ class WallRenderer:
         if system.user is None:
             raise ValueError("the haptic loop needs a user model on the system")
         self.system = system
+        self.user = system.user
         self.wall = wall
         self.force_gain = force_gain
 
@@ -96,7 +97,7 @@ class WallRenderer:
     def _forces(self, s) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(F_d, F_s, J_p) at the split state ``s``: the TCP motion evaluated once."""
         p, Jp, v = self.system.tcp_motion(s.q, s.qd)
-        sensed = -self.system.user.force_on_tcp(p, v, s.hand, s.hand_velocity)
+        sensed = -self.user.force_on_tcp(p, v, s.hand, s.hand_velocity)
         return self.wall.force(p, v), sensed, Jp
 
     def __call__(self, t: float, x: np.ndarray) -> np.ndarray:

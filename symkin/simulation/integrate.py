@@ -178,14 +178,13 @@ def run_adaptive(rhs: Rhs, control: Control, x0: np.ndarray, t_eval: np.ndarray,
     t_eval = np.asarray(t_eval, dtype=float)
     t0, x, end = t_eval[0], np.asarray(x0, float), t_eval[-1]
     mode = modes.initial(x) if modes is not None else None
-    parts, switches, evaluations = [], [], 0
+    parts: list[np.ndarray] = []
+    switches: list[Switch] = []
+    evaluations = 0
     while True:
         argument = () if modes is None else (modes.argument(mode),)
-        guards = list(modes.guards(mode)) if modes is not None else None
-        if guards and switches:
-            events = [ArmedGuard(g, t0) for g in guards]
-        else:
-            events = guards
+        guards = list(modes.guards(mode)) if modes is not None else []
+        events: list[Any] = [ArmedGuard(g, t0) for g in guards] if guards and switches else list(guards)
         times = t_eval[(t_eval >= t0) if not parts else (t_eval > t0)]
         solution = solve_ivp(lambda t, y: rhs(t, y, control(t, y), *argument), (t0, end), x, method="DOP853",
                              t_eval=times, rtol=rtol, atol=atol, events=events or None)
@@ -196,6 +195,7 @@ def run_adaptive(rhs: Rhs, control: Control, x0: np.ndarray, t_eval: np.ndarray,
         parts.append(np.reshape(solution.y, (x.size, -1)).T)
         if solution.status != 1:  # reached the end
             break
+        assert modes is not None, "only a guard ends a segment before the end"
         fired = next(i for i, hits in enumerate(solution.t_events) if hits.size)
         t0, x = float(solution.t_events[fired][0]), solution.y_events[fired][0]
         switches.append(Switch(t0, x, guards[fired]))

@@ -32,6 +32,7 @@ q moved off the assembled state by up to :data:`OFF_MANIFOLD`.
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 import tempfile
@@ -50,7 +51,7 @@ from symkin.runtime.info import GeneratedModel
 from symkin.stability.ik_forms import formula_errors
 from symkin.stability.ir_eval import compile_ir, flatten_outputs
 from symkin.stability.reference import DIGITS, MpmathReference, normwise_error
-from symkin.stability.states import parameter_values, random_states, singular_paths
+from symkin.stability.states import IK, parameter_values, random_states, singular_paths
 
 SCALES = (1e-3, 1e-2, 1e-1, 1.0, 1e1, 1e2, 1e3)
 PATH_STEPS = tuple(10.0 ** -k for k in range(1, 13))
@@ -150,7 +151,7 @@ def _conditioning_sources(solves_with: str | None, task_matrix: str, parallel: b
     return (solves_with, task_matrix) if parallel else (solves_with,)
 
 
-def _ik_of(loaded: GeneratedModel, derivation: Derivation) -> Callable[..., object]:
+def _ik_of(loaded: GeneratedModel, derivation: Derivation) -> IK:
     """The generated ik taking every parameter of the run by keyword and passing on the ones it has
     (a model's mass parameters, say, are inputs of its dynamics but not of its ik)."""
     own = [i.name for i in derivation["ik"].parameter_inputs]
@@ -163,6 +164,11 @@ def conditioning_matrix(model: Model) -> str:
     serial chain; the inverse Jacobian J^-1 = J_q^-1 J_x of a parallel mechanism (its closed
     form; kappa(J^-1) = kappa(J), and a Stewart platform's J = J_x^-1 J_q is a huge expression)."""
     return "jacobian" if model.parallel is None else "inverse_jacobian"
+
+
+def _constant(value: float, _index: int) -> float:
+    """The parameter of every state of a family evaluated at one value (its ``parameter_of``)."""
+    return value
 
 
 def run_stability(model: Model, *, samples: int = 32, float32_samples: int = 16, scale_samples: int = 6,
@@ -205,7 +211,7 @@ def run_stability(model: Model, *, samples: int = 32, float32_samples: int = 16,
                     for name in names}
     residual = [name for name in names if definitions[name].residual]
     regular = [name for name in names if not definitions[name].residual]
-    kappa_sources = {}
+    kappa_sources: dict[str, tuple[MpmathReference | None, tuple[int, ...]]] = {}
     for source in sorted({source for sources in conditioning.values() for source in sources}):
         if source == task_matrix and not has_jacobian:
             kappa_sources[source] = (None, ())
@@ -278,7 +284,7 @@ def run_stability(model: Model, *, samples: int = 32, float32_samples: int = 16,
         for scale in scales:
             progress(f"length scale {scale:g}")
             check("scale", states_at(scale_samples, scale), parameter_values(model, scale),
-                  parameter_of=lambda _k, s=scale: s)
+                  parameter_of=functools.partial(_constant, scale))
         progress("closed-form IK near singularities")
         run.formulas = formula_errors(loaded, steps)
         progress("float32")

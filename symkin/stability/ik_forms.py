@@ -54,6 +54,7 @@ class FormulaErrors:
 
 def _ur_wrist(model: LoadedModel, ik: ClosedFormIK, steps: Sequence[float]) -> FormulaErrors:
     solver = ik.solver
+    assert isinstance(solver, URFamily), "the wrist formula is the UR family's"
     textbook, ours = [], []
     for t in steps:
         q = np.array([0.4, -1.1, 1.3, 0.7, t, -0.5])
@@ -71,6 +72,7 @@ def _ur_wrist(model: LoadedModel, ik: ClosedFormIK, steps: Sequence[float]) -> F
 
 def _planar_elbow(model: LoadedModel, ik: ClosedFormIK, steps: Sequence[float]) -> FormulaErrors:
     solver = ik.solver
+    assert isinstance(solver, Planar2R), "the elbow formula is the planar 2R's"
     pair = solver.pair
     l1 = float(np.linalg.norm(pair.c2 - pair.c1))
     l2 = float(np.linalg.norm(pair.point - pair.c2))

@@ -26,6 +26,7 @@ value x* from the side where the mechanism is assembled: x_j = x* +- t, t = 1e-1
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Protocol
 from dataclasses import dataclass
 
 import numpy as np
@@ -49,8 +50,15 @@ POSITION_SPREAD = 0.2
 ORIENTATION_SPREAD = 0.2
 
 States = dict[str, np.ndarray]
+class IKSolution(Protocol):
+    """What the generated closed-form IK of a parallel mechanism returns."""
+
+    joints: np.ndarray
+    margin: np.ndarray
+
+
 #: The generated closed-form IK of a parallel mechanism: ik(p, **parameters) -> (.joints, .margin).
-IK = Callable[..., object]
+IK = Callable[..., IKSolution]
 
 
 def length_parameters(model: Model) -> tuple[str, ...]:
@@ -88,8 +96,8 @@ def assembled(ik: IK, p: np.ndarray, parameters: dict[str, float]) -> tuple[np.n
     """(q = ik(p), whether the mechanism assembles there: finite joints, every leg's margin >= 0)."""
     with np.errstate(invalid="ignore"):  # sqrt of a negative discriminant: unreachable, NaN
         result = ik(p, **parameters)
-    q = np.asarray(result.joints, dtype=float)
-    margin = np.asarray(result.margin, dtype=float)
+    q = np.asarray(result.joints, dtype=np.float64)
+    margin = np.asarray(result.margin, dtype=np.float64)
     ok = np.all(np.isfinite(q), axis=-1) & np.all(margin >= 0, axis=-1)
     return q, ok
 
@@ -259,7 +267,9 @@ def singular_paths(model: Model, jacobian: Callable[..., np.ndarray], rng: np.ra
         ik: the generated IK (parallel mechanisms).
         reach: the largest step t a path takes (the mechanism must assemble up to it).
     """
-    sweep = _serial_sweep(model, rng) if model.parallel is None else _parallel_sweep(model, rng, ik)
+    if model.parallel is not None and ik is None:
+        raise ValueError(f"{model.name}: the singular paths of a parallel mechanism need its generated ik")
+    sweep = _serial_sweep(model, rng) if ik is None or model.parallel is None else _parallel_sweep(model, rng, ik)
     found: list[SingularPath] = []
     for j, name in enumerate(sweep.names):
         centre = 0.0 if sweep.angular[j] else sweep.base[j]  # angles: a full turn around 0

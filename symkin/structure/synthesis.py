@@ -92,6 +92,13 @@ class Verdict:
     detail: str = ""
 
     @property
+    def criterion(self) -> Criterion:
+        """The criterion that eliminated the topology (a survivor has none: ValueError)."""
+        if self.eliminated_by is None:
+            raise ValueError(f"{self.topology} survives: no criterion eliminated it")
+        return self.eliminated_by
+
+    @property
     def distribution(self) -> str:
         """How the leg's DoF are distributed over its joints, e.g. ``2+2+1`` (Table 8.2's grouping)."""
         return "+".join(str(d) for d in sorted((JOINT_DOF[j] for j in self.topology), reverse=True))

@@ -101,7 +101,7 @@ def _inputs(spec: FunctionSpec, used: set[sympy.Symbol], macro: str) -> tuple[li
     for k, p in enumerate(spec.parameter_inputs):
         unit = f" [{p.units[0]}]" if p.units[0] else ""
         params.append({"name": p.name, "offset": offset + k, "doc": _comment_lines(
-            f"{p.name}: {p.doc or 'parameter'}{unit}; default {macro}_DEFAULT_{p.name} = {float(p.default)!r}.")})
+            f"{p.name}: {p.doc or 'parameter'}{unit}; default {macro}_DEFAULT_{p.name} = {p.default_value!r}.")})
         if p.symbols[0] in used:
             scalars.append({"symbol": p.symbols[0], "local": p.name, "single": None,
                             "batch": f"params[_j * params_stride + {k}]"})

@@ -53,7 +53,7 @@ def build_function(f: OptimizedFunction) -> casadi.Function:
             if e != 0:
                 matrix[k // cols, k % cols] = builder.doprint(e)
         outputs.append(matrix)
-    defaults = [float(i.default) if i.kind == "parameter" else float("nan") for i in spec.inputs]
+    defaults = [i.default_value if i.kind == "parameter" else float("nan") for i in spec.inputs]
     return casadi.Function(spec.name, inputs, outputs, [i.name for i in spec.inputs], [o.name for o in spec.outputs],
                            {"default_in": defaults})
 

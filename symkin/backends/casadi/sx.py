@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import functools
 import operator
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 
 import casadi
 import sympy
@@ -19,7 +19,7 @@ from sympy.printing.printer import Printer
 from symkin.backends.printing import MAX_UNROLLED_POWER
 
 #: sympy function -> casadi function of the same meaning.
-FUNCTIONS = {
+FUNCTIONS: dict[str, Callable[..., casadi.SX]] = {
     "sin": casadi.sin, "cos": casadi.cos, "tan": casadi.tan,
     "asin": casadi.asin, "acos": casadi.acos, "atan": casadi.atan, "atan2": casadi.atan2,
     "sinh": casadi.sinh, "cosh": casadi.cosh, "tanh": casadi.tanh,
@@ -64,7 +64,7 @@ class SXBuilder(Printer):
     def _print_Add(self, expr: sympy.Add) -> casadi.SX:
         return functools.reduce(operator.add, (self._print(a) for a in expr.args))
 
-    def _print_Mul(self, expr: sympy.Mul) -> casadi.SX:
+    def _print_Mul(self, expr: sympy.Mul) -> casadi.SX | float:
         coeff, factors = expr.as_coeff_mul()
         numerator = [self._print(f) for f in factors if not (f.is_Pow and f.exp.is_Rational and f.exp.is_negative)]
         denominator = [self._print(sympy.Pow(f.base, -f.exp)) for f in factors

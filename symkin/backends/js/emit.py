@@ -41,16 +41,10 @@ def _js_type(shape: tuple[int, ...]) -> str:
     return "number" + "[]" * len(shape)
 
 
-def _default(i: InputSpec) -> float:
-    """The default value of a parameter input."""
-    assert i.default is not None, i.name
-    return float(i.default)
-
-
 def _input_doc(i: InputSpec) -> str:
     if i.kind == "parameter":
         unit = f" [{i.units[0]}]" if i.units[0] else ""
-        return f"{i.name}: {i.doc or 'parameter'}{unit}; default {_default(i)!r}."
+        return f"{i.name}: {i.doc or 'parameter'}{unit}; default {i.default_value!r}."
     elements = ", ".join(f"{n} [{u}]" for n, u in zip(i.element_names, i.units))
     return f"{i.doc}, {len(i.symbols)} numbers: {elements}."
 
@@ -63,7 +57,7 @@ def _function_context(f: OptimizedFunction, printer: JsPrinter) -> dict[str, Any
                 "doc": textwrap.wrap(_input_doc(v), DOC_WIDTH - len(v.name) - 20),
                 "elements": [{"local": printer.doprint(s), "index": k} for k, s in enumerate(v.symbols) if s in used]}
                for v in spec.vector_inputs]
-    params = [{"name": p.name, "local": printer.doprint(p.symbols[0]), "default": printer.literal(_default(p)),
+    params = [{"name": p.name, "local": printer.doprint(p.symbols[0]), "default": printer.literal(p.default_value),
                "doc": _input_doc(p)} for p in spec.parameter_inputs]
     outputs = []
     for out, entries in zip(spec.outputs, f.outputs):

@@ -25,7 +25,7 @@ def _wrap(text: str, indent: str = "    ") -> list[str]:
 def _input_doc(i: InputSpec) -> list[str]:
     if i.kind == "parameter":
         unit = f" [{i.units[0]}]" if i.units[0] else ""
-        return _wrap(f"{i.name}: {i.doc or 'parameter'}{unit}; default {float(i.default)!r}; "
+        return _wrap(f"{i.name}: {i.doc or 'parameter'}{unit}; default {i.default_value!r}; "
                      "a scalar or an array broadcastable to the batch shape.")
     elements = ", ".join(f"{n} [{u}]" for n, u in zip(i.element_names, i.units))
     return _wrap(f"{i.name}: {i.doc}, shape (..., {len(i.symbols)}): {elements}.")
@@ -36,7 +36,7 @@ def _function_context(f: OptimizedFunction, printer: BatchNumPyPrinter) -> dict[
     vectors = spec.vector_inputs
     params = spec.parameter_inputs
     signature = ", ".join([v.name for v in vectors] + (["*"] if params else [])
-                          + [f"{p.name}={float(p.default)!r}" for p in params])
+                          + [f"{p.name}={p.default_value!r}" for p in params])
     outputs = []
     for out, entries in zip(spec.outputs, f.outputs):
         outputs.append({
