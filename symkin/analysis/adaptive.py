@@ -91,21 +91,21 @@ def genz_malik_rule(d: int) -> GenzMalikRule:
             nodes.append(_LAMBDA3 * (si * eye[i] + sj * eye[j]))
     first_corner = len(nodes)
     nodes += [_LAMBDA5 * np.array(signs) for signs in product((1.0, -1.0), repeat=d)]
-    nodes = np.array(nodes)
+    points = np.array(nodes)
 
-    w7 = np.empty(len(nodes))
+    w7 = np.empty(len(points))
     w7[0] = (12824 - 9120 * d + 400 * d * d) / 19683
     w7[1:1 + 2 * d] = 980 / 6561
     w7[1 + 2 * d:first_pair] = (1820 - 400 * d) / 19683
     w7[first_pair:first_corner] = 200 / 19683
     w7[first_corner:] = 6859 / 19683 / 2**d
-    w5 = np.zeros(len(nodes))
+    w5 = np.zeros(len(points))
     w5[0] = (729 - 950 * d + 50 * d * d) / 729
     w5[1:1 + 2 * d] = 245 / 486
     w5[1 + 2 * d:first_pair] = (265 - 100 * d) / 1458
     w5[first_pair:first_corner] = 25 / 729
     corners = np.array(list(product((1.0, -1.0), repeat=d)))
-    return GenzMalikRule(nodes, w7, w5, axis_nodes, corners)
+    return GenzMalikRule(points, w7, w5, axis_nodes, corners)
 
 
 def _apply(integrand: Integrand, rule: GenzMalikRule, centers: np.ndarray, halves: np.ndarray,

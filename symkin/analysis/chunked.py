@@ -131,7 +131,8 @@ def integrate_chunked(payload: ModelPayload, spec: IntegrandSpec, method: str, s
         if replicates < 2 or m < 1:
             raise ValueError(f"quasi-Monte Carlo needs at least {2 * max(replicates, 2)} samples, got {samples}")
         size = 2**m
-        tasks = [(spec, seed, r, k, min(size, k + chunk)) for r in range(replicates) for k in range(0, size, chunk)]
+        tasks: list[tuple[Any, ...]] = [(spec, seed, r, k, min(size, k + chunk)) for r in range(replicates)
+                                        for k in range(0, size, chunk)]
         total = replicates * size
         counts = [task[4] - task[3] for task in tasks]
         function: Callable[..., Any] = _qmc_chunk

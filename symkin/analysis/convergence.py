@@ -123,6 +123,7 @@ def fastest_within(trials: Sequence[Trial], relative_error: float) -> dict[tuple
         key = (t.backend, t.domain, t.method)
         best.setdefault(key, None)
         reference = abs(t.estimate.value) or 1.0
-        if t.achieved <= relative_error * reference and (best[key] is None or t.seconds < best[key].seconds):
+        current = best[key]
+        if t.achieved <= relative_error * reference and (current is None or t.seconds < current.seconds):
             best[key] = t
     return best

@@ -206,7 +206,7 @@ def crosscheck(path: str | Path, *, reference_urdf: str | Path | None = None, sa
                 v[joint.idx_v], a[joint.idx_v] = rate, acceleration
             pin.framesForwardKinematics(reference, data, q)
             to_base = data.oMf[base].inverse()
-            pairs = {"fk": (values["fk"][k], (to_base * data.oMf[tip]).homogeneous)}
+            pairs: dict[str, tuple[Any, ...]] = {"fk": (values["fk"][k], (to_base * data.oMf[tip]).homogeneous)}
             for joint in model.joints:
                 pairs[f"frame {joint.link}"] = (getattr(values["frames"], f"base_T_{joint.link}")[k],
                                                 (to_base * data.oMf[_link_frame(pin, reference, joint.link)]).homogeneous)

@@ -106,12 +106,18 @@ class IntegralEstimate:
     def statistical(self) -> bool:
         return self.covariance is not None
 
+    def _bounds(self) -> np.ndarray:
+        """The per-component error bounds (set when neither a covariance nor coarse levels are)."""
+        if self.bounds is None:
+            raise ValueError("the estimate carries no error bounds")
+        return self.bounds
+
     def _estimate(self, value: float, error: float) -> Estimate:
         error = max(float(error), rounding_floor(float(value), self.evaluations))
         return Estimate(float(value), error, self.evaluations, self.method, self.statistical)
 
-    def _level_error(self, result) -> float:
-        fine, (half, quarter) = result(self.values), (result(v) for v in self.coarse)
+    def _level_error(self, coarse: np.ndarray, result) -> float:
+        fine, (half, quarter) = result(self.values), (result(v) for v in coarse)
         error = max(abs(fine - half), abs(half - quarter) / 2)
         return error if np.isfinite(error) else np.inf
 
@@ -120,9 +126,9 @@ class IntegralEstimate:
         if self.covariance is not None:
             error = self.quantile * np.sqrt(max(self.covariance[i, i], 0.0))
         elif self.coarse is not None:
-            error = self._level_error(lambda v: v[i])
+            error = self._level_error(self.coarse, lambda v: v[i])
         else:
-            error = self.bounds[i]
+            error = self._bounds()[i]
         return self._estimate(self.values[i], error)
 
     def ratio(self, i: int = 0, j: int = 1) -> Estimate:
@@ -141,7 +147,8 @@ class IntegralEstimate:
             variance = (C[i, i] - 2.0 * R * C[i, j] + R * R * C[j, j]) / denominator**2
             error = self.quantile * np.sqrt(max(variance, 0.0))
         elif self.coarse is not None:
-            error = self._level_error(lambda v: v[i] / v[j] if v[j] else np.inf)
+            error = self._level_error(self.coarse, lambda v: v[i] / v[j] if v[j] else np.inf)
         else:
-            error = (self.bounds[i] + abs(R) * self.bounds[j]) / abs(denominator)
+            bounds = self._bounds()
+            error = (bounds[i] + abs(R) * bounds[j]) / abs(denominator)
         return self._estimate(R, error)

@@ -100,6 +100,8 @@ class _GeneratedInverse:
 
     dimension: int = 3
     branches: int = 1
+    model: Any  # the subclasses' fields
+    passive_limits: passive.PassiveLimits | None
 
     def in_mode(self, q: np.ndarray, points: np.ndarray) -> np.ndarray:
         """Boolean (N,): the solutions q (N, n) of points (N, 3) are in the working mode."""
@@ -223,6 +225,8 @@ class ConstantOrientation:
         ValueError: the model is not a pose platform with a generated ``ik`` and
             ``inverse_jacobian``, or the orientation is not 3 finite angles away from pitch = +-90 deg.
     """
+
+    model: GeneratedModel
 
     def __init__(self, model: GeneratedModel, orientation) -> None:
         if isinstance(model, ConstantOrientation):

@@ -42,8 +42,8 @@ def grid(lower: np.ndarray, upper: np.ndarray, counts: int | tuple[int, ...], *,
         restores the grid).
     """
     lower, upper = _box(lower, upper)
-    counts = (counts,) * lower.size if np.isscalar(counts) else tuple(counts)
-    axes = [axis_points(lo, hi, c, midpoints=midpoints) for lo, hi, c in zip(lower, upper, counts)]
+    per_axis = (int(counts),) * lower.size if isinstance(counts, (int, np.integer)) else tuple(counts)
+    axes = [axis_points(lo, hi, c, midpoints=midpoints) for lo, hi, c in zip(lower, upper, per_axis)]
     mesh = np.meshgrid(*axes, indexing="ij")
     return np.stack([m.ravel() for m in mesh], axis=-1)
 

@@ -14,7 +14,7 @@ import math
 import tempfile
 from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NoReturn
 
 from symkin.runtime.info import GeneratedModel
 
@@ -165,7 +165,8 @@ def parse_limits(texts: list[str]) -> dict[str, tuple[float, float]]:
     return parse_ranges(texts, "--limit", "JOINT")
 
 
-def load_model(path: str, backend: str = "numpy", outputs: Sequence[str] = ANALYSIS_OUTPUTS,
+def load_model(path: str, backend: str = "numpy",
+               outputs: Sequence[str] | Mapping[str, Sequence[str]] = ANALYSIS_OUTPUTS,
                optional: Sequence[str] = ()) -> Any:
     """The loaded model of MODEL: a generated directory, or a model file derived on the fly.
 
@@ -262,10 +263,11 @@ def models_from_args(args: argparse.Namespace,
     return models, parse_limits(args.limits)
 
 
-def fail_on_bad_input(args: argparse.Namespace, err: Exception) -> None:
+def fail_on_bad_input(args: argparse.Namespace, err: Exception) -> NoReturn:
     """Report a bad argument or an analysis that does not apply to the model; exit code 2."""
     message = err.args[0] if isinstance(err, KeyError) and err.args else str(err)
-    args.parser.error(message)
+    parser: argparse.ArgumentParser = args.parser
+    parser.error(message)
 
 
 def sample_count(text: str) -> int:

@@ -3,11 +3,17 @@
 from __future__ import annotations
 
 import argparse
+import functools
+from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from symkin.cli import analysis_args
 from symkin.cli.progress import Progress
 from symkin.text_table import format_table
+
+if TYPE_CHECKING:
+    from symkin.analysis.convergence import Trial
 
 
 def register(kinds: argparse._SubParsersAction) -> None:
@@ -33,6 +39,15 @@ def register(kinds: argparse._SubParsersAction) -> None:
     p.add_argument("-o", "--out", metavar="FIGURE",
                    help="plot of time against error (default: bench-results/MODEL_NAME-gci-time-vs-error.png)")
     p.set_defaults(run=run, parser=p, backend=None)
+
+
+def _backend_progress(progress: Callable[[str], None], backend: str, text: str) -> None:
+    progress(f"{backend}: {text}")
+
+
+def _fastest_text(trial: Trial | None) -> str:
+    """'1.23 ms (4096)': the time and evaluations of the fastest run within a target, or '-'."""
+    return f"{trial.seconds * 1e3:.2f} ms ({trial.evaluations})" if trial is not None else "-"
 
 
 def run(args: argparse.Namespace) -> int:
@@ -64,7 +79,7 @@ def run(args: argparse.Namespace) -> int:
             for model in models:
                 trials += convergence.time_against_error(
                     model, reference, methods=methods, budgets=budgets, domains=domains, repeats=args.repeats,
-                    seed=args.seed, progress=lambda text, b=model.backend: progress(f"{b}: {text}"), limits=limits,
+                    seed=args.seed, progress=functools.partial(_backend_progress, progress, model.backend), limits=limits,
                     length=length, inverse=inverse.inverse_kinematics_for(model) if ik is not None else None)
     except (ValueError, KeyError) as err:
         analysis_args.fail_on_bad_input(args, err)
@@ -77,8 +92,7 @@ def run(args: argparse.Namespace) -> int:
     print("fastest run reaching a relative error of the GCI of:")
     targets = (1e-3, 1e-6, 1e-9)
     best = [convergence.fastest_within(trials, target) for target in targets]
-    summary = [[key[1], key[2], key[0]] + [f"{b[key].seconds * 1e3:.2f} ms ({b[key].evaluations})" if b[key] else "-"
-                                           for b in best]
+    summary = [[key[1], key[2], key[0]] + [_fastest_text(b[key]) for b in best]
                for key in best[0]]  # key = (backend, domain, method)
     print(format_table(["domain", "method", "backend"] + [f"{t:g}" for t in targets], summary))
     panels: dict = {}

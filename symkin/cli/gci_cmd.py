@@ -82,10 +82,11 @@ def _chunked(args: argparse.Namespace) -> int:
         if domain == "cartesian":
             if inverse.inverse_kinematics_for(held) is None:
                 raise ValueError(f"{model.name}: no inverse kinematics is available for the Cartesian domain")
-            box = tuple(tuple(float(v) for v in b) for b in workspace.bounding_box(held, limits=limits))
+            lower, upper = workspace.bounding_box(held, limits=limits)
+            box = (tuple(float(v) for v in lower), tuple(float(v) for v in upper))
         spec = IntegrandSpec(tuple(sorted(values.items())), INDICES[args.index], args.measure,
                              tuple(sorted(limits.items())), analysis_args.resolve_length(held, args.length, limits),
-                             domain, box, None if orientation is None else tuple(orientation))
+                             domain, box, None if orientation is None else (orientation[0], orientation[1], orientation[2]))
         start = time.perf_counter()
         with Progress(model.name) as progress:
             result = integrate_chunked(payload, spec, args.method, args.samples, seed=args.seed or 0,

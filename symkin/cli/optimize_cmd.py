@@ -88,14 +88,13 @@ def run(args: argparse.Namespace) -> int:
                 return 1
             progress("independent evaluation")
             start = time.perf_counter()
-            rating = tuple(design.evaluate(problem, numpy_model, d, samples=args.samples, seed=args.seed,
-                                           **({"box_points": solution.box_points,
-                                               "box_configurations": solution.box_configurations}
-                                              if d is solution.optimum else {}))
-                           for d in (solution.start, solution.optimum))
+            rating = (design.evaluate(problem, numpy_model, solution.start, samples=args.samples, seed=args.seed),
+                      design.evaluate(problem, numpy_model, solution.optimum, samples=args.samples, seed=args.seed,
+                                      box_points=solution.box_points,
+                                      box_configurations=solution.box_configurations))
             evaluation = time.perf_counter() - start
             progress("drawing")
-            files = {
+            files: dict[str, str | bytes] = {
                 "history.png": plots.png(plots.history_figure(solution, problem, numpy_model.name)),
                 "design.png": plots.png(plots.design_figure(problem, numpy_model, solution, rating)),
             }

@@ -49,25 +49,12 @@ def run(args: argparse.Namespace) -> int:
         analysis_args.fail_on_bad_input(args, err)
     with analysis_args.generated_directory(args.model, ("numpy", "js"), page.VIEW_OUTPUTS) as directory:
         model = load(directory)
-        missing = page.missing_functions(model)
-        script = directory / f"{model.name}.js"
-        if missing or not script.is_file():
-            what = ", ".join(missing) if missing else "its JavaScript"
-            args.parser.error(f"{directory}: the page needs {what}; derive the model with them, e.g. symkin derive "
-                              f"MODEL --only {','.join(page.VIEW_OUTPUTS[page.kind_of(model)])} --backend numpy,js")
         try:
             model = model.bind(**design) if design else model
-        except KeyError as err:
+            with Progress(model.name) as progress:
+                html, cloud = page.page_of(model, args.workspace, args.seed, progress)
+        except (ValueError, KeyError) as err:  # a ViewUnavailable too
             analysis_args.fail_on_bad_input(args, err)
-        with Progress(model.name) as progress:
-            progress(f"sampling the workspace ({args.workspace} points)")
-            try:
-                cloud = page.workspace_cloud(model, args.workspace, args.seed) if args.workspace else page.no_cloud(model)
-            except ValueError as err:
-                analysis_args.fail_on_bad_input(args, err)
-            progress("writing the page")
-            html = page.render_page(model, script.read_text(encoding="utf-8"), cloud,
-                                    model.manifest["model"].get("description") or model.name)
     out = Path(args.out or f"{model.name}-view.html")
     replace_file(out, html)
     print(f"{model.name}: {out} ({len(html) / 1e6:.1f} MB; {cloud.note})")

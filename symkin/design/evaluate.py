@@ -66,8 +66,7 @@ def evaluate(problem: DesignProblem, model: GeneratedModel, design: dict[str, fl
 
 def box_check_points(problem: DesignProblem) -> np.ndarray:
     """The points of the required box that are checked: a vertex grid with the corners."""
-    assert problem.box is not None
-    return sampling.grid(*problem.box, CHECK_POINTS_PER_AXIS, midpoints=False)
+    return sampling.grid(*problem.required_box, CHECK_POINTS_PER_AXIS, midpoints=False)
 
 
 #: Largest distance [m] between fk(q_b) and a box point for the optimizer's configuration to count.
@@ -84,12 +83,12 @@ def _serial_box(problem: DesignProblem, model: GeneratedModel, points: np.ndarra
             return None, "not checked: no closed-form inverse kinematics for this model"
         error = np.linalg.norm(mechanism.tcp_positions(model, configurations) - points, axis=-1)
         # within the limits up to the analyses' tolerance (IPOPT meets bounds to about 1e-8 relative)
-        _, in_limits = within_limits(configurations, problem.limits, mechanism.revolute_mask(model))
+        _, in_limits = within_limits(configurations, problem.joint_limits, mechanism.revolute_mask(model))
         inside = (error < POSITION_TOLERANCE) & in_limits
         return float(np.mean(inside)), (f"the optimizer's configurations at {len(points)} box points, by the "
                                         "generated fk (no closed-form inverse kinematics for this model)")
     points = box_check_points(problem)
-    inside = feasibility.reachable(ik, points, problem.limits, mechanism.revolute_mask(model))
+    inside = feasibility.reachable(ik, points, problem.joint_limits, mechanism.revolute_mask(model))
     return float(np.mean(inside)), f"closed-form inverse kinematics within the joint limits at {len(points)} points"
 
 

@@ -178,7 +178,7 @@ def formulate(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model:
 
 def _serial(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model: GeneratedModel, free: casadi.SX, values: dict[str, Any],
             design: casadi.MX, nodes: int | None, box_points: int, seed: int) -> _Terms:
-    limits = problem.limits
+    limits = problem.joint_limits
     n = limits.shape[0]
     q = sampling.sobol(limits[:, 0], limits[:, 1], SERIAL_NODES_LOG2 if nodes is None else nodes,
                        np.random.default_rng(seed))
@@ -208,7 +208,8 @@ def _serial(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model: G
     T = _call(casadi_function(casadi_model, "fk"), {"q": node, **values})[0]
     position = _node_function("tcp", node, free, T[axes, 3])
     qb = casadi.MX.sym("q_box", n, len(points))
-    size = float(np.max(problem.box[1] - problem.box[0]))
+    lower, upper = problem.required_box
+    size = float(np.max(upper - lower))
     residuals = (_mapped(position, qb, design) - casadi.DM(points.T)) / size
     start = _nearest_configurations(numpy_model.bind(**problem.start), limits, points, axes, seed)
     zeros = np.zeros(residuals.numel())
@@ -230,7 +231,7 @@ def _nearest_configurations(model: GeneratedModel, limits: np.ndarray, points: n
 def _parallel(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model: GeneratedModel, free: casadi.SX, values: dict[str, Any],
               design: casadi.MX, nodes: int | None, box_points: int, seed: int) -> _Terms:
     per_axis = PARALLEL_NODES_PER_AXIS if nodes is None else nodes
-    p = sampling.grid(*problem.box, per_axis)
+    p = sampling.grid(*problem.required_box, per_axis)
     node = casadi.SX.sym("p", p.shape[1])
     joints, margin = _call(casadi_function(casadi_model, "ik"), {"p": node, **values})
     J = _call(casadi_function(casadi_model, "jacobian"), {"q": joints, "p": node, **values})[0]

@@ -79,7 +79,7 @@ def _serial_panel(ax: Any, problem: DesignProblem, model: GeneratedModel) -> Any
 
 def _parallel_panel(ax: Any, problem: DesignProblem, model: GeneratedModel) -> Any:
     """1/kappa on the vertical slice through the box centre (first and last axis)."""
-    lower, upper = problem.box
+    lower, upper = problem.required_box
     border = SLICE_BORDER * (upper - lower)
     lo, hi = lower - border, upper + border
     first, last = 0, len(lower) - 1
@@ -114,5 +114,6 @@ def design_figure(problem: DesignProblem, model: GeneratedModel, solution: Solut
         mesh = panel(ax, problem, model.bind(**design))
         ax.set_aspect("equal")
         ax.set_title(_label(problem, design, evaluation, which), fontsize=8)
-    figure.colorbar(mesh, ax=figure.axes, label="1/kappa")
+    if mesh is not None:  # the two panels drew
+        figure.colorbar(mesh, ax=figure.axes, label="1/kappa")
     return figure

@@ -72,6 +72,20 @@ class DesignProblem:
         return {**self.values, **{p.name: float(v) for p, v in zip(self.free, free_values)}}
 
     @property
+    def joint_limits(self) -> np.ndarray:
+        """The joint limits (n, 2); a serial model always has them (ValueError for an unlimited parallel one)."""
+        if self.limits is None:
+            raise ValueError("this design problem has no joint limits (a parallel model's unlimited actuators)")
+        return self.limits
+
+    @property
+    def required_box(self) -> tuple[np.ndarray, np.ndarray]:
+        """The required workspace box (lower, upper) (ValueError when none is required)."""
+        if self.box is None:
+            raise ValueError("this design problem requires no workspace box (--require-box)")
+        return self.box
+
+    @property
     def start(self) -> dict[str, float]:
         return self.design([p.start for p in self.free])
 

@@ -4,6 +4,7 @@ gradient approach"), recording the objective history and the run times."""
 from __future__ import annotations
 
 import time
+from typing import Any
 from dataclasses import dataclass, field
 
 import casadi
@@ -13,7 +14,7 @@ from symkin.design.formulation import Program
 from symkin.design.problem import DesignProblem
 
 #: IPOPT options: quiet, tight tolerances (the problems are small and smooth).
-IPOPT_OPTIONS = {
+IPOPT_OPTIONS: dict[str, Any] = {
     "ipopt.print_level": 0,
     "ipopt.sb": "yes",
     "ipopt.tol": 1e-10,
@@ -61,8 +62,8 @@ def solve(problem: DesignProblem, program: Program, *, build_seconds: float = 0.
           options: dict | None = None) -> Solution:
     """Run IPOPT on the program and read the design off its solution."""
     start = time.perf_counter()
-    solver = casadi.nlpsol("design", "ipopt", {"x": program.x, "f": program.f, "g": program.g},
-                           {**IPOPT_OPTIONS, **(options or {})})
+    nlp: dict[str, Any] = {"x": program.x, "f": program.f, "g": program.g}  # MX expressions
+    solver = casadi.nlpsol("design", "ipopt", nlp, {**IPOPT_OPTIONS, **(options or {})})
     build_seconds += time.perf_counter() - start
     start = time.perf_counter()
     result = solver(x0=program.x0, lbx=program.lbx, ubx=program.ubx, lbg=program.lbg, ubg=program.ubg)
@@ -78,7 +79,7 @@ def solve(problem: DesignProblem, program: Program, *, build_seconds: float = 0.
     if program.box_points.size and box_q.size:
         box_q = box_q.reshape(len(program.box_points), -1)
     return Solution(
-        start=problem.start, optimum=problem.design(free),
+        start=problem.start, optimum=problem.design(list(free)),
         surrogate_start=float(program.objective(program.free_values(program.x0))),
         surrogate_optimum=float(program.objective(free)), history=history,
         infeasibility=np.asarray(stats["iterations"]["inf_pr"], dtype=np.float64),

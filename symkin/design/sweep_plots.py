@@ -7,9 +7,12 @@ Drawn with ``matplotlib.figure.Figure`` (no pyplot) and returned as PNG bytes
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from matplotlib.cm import ScalarMappable
 
 from symkin.design.plots import png
 from symkin.design.sweeps import OK, SweepDefinition
@@ -46,8 +49,8 @@ def metric_maps(table: Any, definition: SweepDefinition, model_name: str) -> byt
         scale = "log" if metric.startswith("kappa") else "linear"
         if definition.sobol is None and len(definition.axes) == 2:
             shape = (definition.axes[0].count, definition.axes[1].count)
-            mesh = ax.pcolormesh(x.reshape(shape), y.reshape(shape), values.reshape(shape), shading="nearest",
-                                 norm=scale)
+            mesh: ScalarMappable = ax.pcolormesh(x.reshape(shape), y.reshape(shape), values.reshape(shape),
+                                                 shading="nearest", norm=scale)
         else:
             mesh = ax.scatter(x, y, c=values, s=12, norm=scale)
         figure.colorbar(mesh, ax=ax, label=LABELS[metric])

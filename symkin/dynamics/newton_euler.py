@@ -312,9 +312,10 @@ def mass_matrix(links: Sequence[Link]) -> list[list[se.Basic]]:
     composite = _composites(links, rotational=True)
     M = [[se.Integer(0)] * n for _ in range(n)]
     for i in range(n):
-        if composite[i] is None:
+        body = composite[i]
+        if body is None:
             continue
-        f = composite[i].times(_motion_axis(links[i]))
+        f = body.times(_motion_axis(links[i]))
         for j in reversed(range(i + 1)):
             link = links[j]
             M[i][j] = M[j][i] = dot(link.axis, f[0] if link.type is JointType.REVOLUTE else f[1])

@@ -250,6 +250,7 @@ def _gravity_vector(d: Derivation) -> FunctionSpec:
     require_gravity(d, "gravity_vector")
     program = Program()
     G = _BoundTerms(d, program).gravity_vector()
+    assert G is not None, "require_gravity refuses a model without gravity"
     return function_spec(
         d, "gravity_vector", "Gravity torques.",
         "G(q) = du/dq with u = -sum m g . c over the bodies (seed eq. 8.31; 2-DoF example eq. 8.54), "

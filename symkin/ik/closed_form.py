@@ -29,7 +29,7 @@ from symkin.errors import GeneratedCodeError
 from symkin.ik.problem import ModelKinematics, Residual, as_target, residual_for
 from symkin.ik.rotations import wrap_angle
 from symkin.ik.screws import HomeScrews, home_screws
-from symkin.runtime import LoadedModel
+from symkin.runtime.info import GeneratedModel
 
 #: Branches whose separating quantity (relative to the mechanism's scale, or an angle in
 #: rad) is below this are flagged singular: the branches coincide there, and the joints the
@@ -60,7 +60,7 @@ class BranchFlag(enum.IntFlag):
 
     @classmethod
     def describe(cls, value: int) -> str:
-        names = [flag.name.lower().replace("_", " ") for flag in cls if value & flag]
+        names = [(flag.name or "").lower().replace("_", " ") for flag in cls if value & flag]
         return ", ".join(names) if names else "regular"
 
 
@@ -207,11 +207,11 @@ def _into_limits(kin: ModelKinematics, q: np.ndarray, reference: np.ndarray) -> 
     return shifted, within
 
 
-def closed_form_solver(model: LoadedModel | ModelKinematics,
+def closed_form_solver(model: GeneratedModel | ModelKinematics,
                        limits: Sequence[tuple[float, float]] | None = None) -> ClosedFormIK | None:
     """The closed-form solver of ``model``'s structure, or None if no known structure matches
     (or it is a parallel mechanism, whose IK is generated code of its own)."""
-    if isinstance(model, LoadedModel) and model.info.is_parallel:
+    if not isinstance(model, ModelKinematics) and model.info.is_parallel:
         return None
     kin = model if isinstance(model, ModelKinematics) else ModelKinematics(model, limits)
     try:

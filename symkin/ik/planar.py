@@ -99,7 +99,7 @@ class Planar2R:
 
     name = "planar 2R"
     kind = "task"
-    branches = ("elbow +", "elbow -")
+    branches: tuple[str, ...] = ("elbow +", "elbow -")
 
     def __init__(self, pair: ParallelPair, components: tuple[int, ...], home_point: np.ndarray):
         self.pair = pair

@@ -30,7 +30,7 @@ import numpy as np
 
 from symkin.errors import GeneratedCodeError
 from symkin.ik.rotations import log_so3, pose_error, right_jacobian_inverse, wrap_angle
-from symkin.runtime import LoadedModel
+from symkin.runtime.info import GeneratedModel
 
 POSE_TASK_SPACE = ("x", "y", "z", "wx", "wy", "wz")
 POSITION_INDEX = {"x": 0, "y": 1, "z": 2}
@@ -55,7 +55,7 @@ class ModelKinematics:
         GeneratedCodeError: ``fk`` was not generated.
     """
 
-    def __init__(self, model: LoadedModel, limits: Sequence[tuple[float, float]] | None = None):
+    def __init__(self, model: GeneratedModel, limits: Sequence[tuple[float, float]] | None = None):
         self.model = model
         functions = set(model.functions)
         if "fk" not in functions:
@@ -94,13 +94,14 @@ class ModelKinematics:
 
     def pose_jacobian(self, q: np.ndarray) -> np.ndarray:
         """Geometric Jacobian (..., 6, n), rows vx, vy, vz, wx, wy, wz (base frame)."""
-        self._require_pose()
-        return getattr(self.model, self._pose_jacobian)(q)
+        return getattr(self.model, self._require_pose())(q)
 
-    def _require_pose(self) -> None:
+    def _require_pose(self) -> str:
+        """The name of the generated geometric Jacobian, or a clear error."""
         if self._pose_jacobian is None:
             raise GeneratedCodeError(f"{self.name}: pose targets need the generated 'jacobian_geometric'; "
                                      + _derive_hint("fk,jacobian_geometric"))
+        return self._pose_jacobian
 
     def task_coordinates(self, q: np.ndarray) -> np.ndarray:
         """Task coordinates (..., m) of the model's task space."""
@@ -108,7 +109,8 @@ class ModelKinematics:
         if "task_coordinates" in self.model.functions:
             return self.model.task_coordinates(q)
         T = self.model.fk(q)
-        rotation = log_so3(T[..., :3, :3]) if any(c in ROTATION_INDEX for c in self.task_space) else None
+        rotation = (log_so3(T[..., :3, :3]) if any(c in ROTATION_INDEX for c in self.task_space)
+                    else np.empty(T.shape[:-2] + (0,)))  # no rotation component is read
         return np.stack([T[..., POSITION_INDEX[c], 3] if c in POSITION_INDEX else rotation[..., ROTATION_INDEX[c]]
                          for c in self.task_space], axis=-1)
 

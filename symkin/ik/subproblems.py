@@ -117,7 +117,7 @@ def sinusoid(a: np.ndarray, b: np.ndarray, c: np.ndarray, root: np.ndarray | Non
     return Roots(plus, minus, root, clamped, unreachable)
 
 
-def exterior_angle(a: np.ndarray, b: np.ndarray, d: np.ndarray) -> Roots:
+def exterior_angle(a: float | np.ndarray, b: float | np.ndarray, d: np.ndarray) -> Roots:
     """Subproblem 3 in the plane: the turn beta at the joint between links of lengths a and b
     that puts the far end at distance d from the first joint (beta = 0: stretched).
 

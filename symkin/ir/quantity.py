@@ -73,8 +73,8 @@ def quantity(name: str, summary: str, emitted: bool = True, solves_with: str | N
         raise ValueError(f"mechanism must be one of {MECHANISMS}, got {mechanism!r}")
 
     def mark(compute: Callable[[Derivation], Any]) -> Callable[[Derivation], Any]:
-        compute.quantity = QuantityDef(name, summary, compute, emitted, solves_with, mechanism, residual,
-                                               kappa_degree)  # type: ignore[attr-defined]
+        setattr(compute, "quantity", QuantityDef(name, summary, compute, emitted, solves_with, mechanism, residual,
+                                                 kappa_degree))
         return compute
 
     return mark

@@ -58,7 +58,7 @@ def _canonical(axis: Vec3, angle: sympy.Expr) -> tuple[Vec3, sympy.Expr]:
     """Write a rotation about -e_k as a rotation about +e_k by -angle."""
     principal = principal_axis(axis)
     if principal is not None and principal[1] < 0:
-        return tuple(-c for c in axis), -angle  # type: ignore[return-value]
+        return tuple(-c for c in axis), -angle
     return axis, angle
 
 
@@ -128,7 +128,7 @@ def compose_chain(model: Model) -> ChainFrames:
         if joint.type is JointType.REVOLUTE:
             moving.rotate(joint.axis, amount)
         else:
-            moving.translate(tuple(c * amount for c in joint.axis))  # type: ignore[arg-type]
+            moving.translate(tuple(c * amount for c in joint.axis))
         moving.apply(joint.after)
         links.append((joint.link, moving.frame()))
     moving.apply(model.tcp)

@@ -164,7 +164,7 @@ def _angles(r: Reader, path: KeyPath, value: Any) -> list[sympy.Expr] | None:
     if items is None:
         return None
     angles = [r.expr(path + (i,), v) for i, v in enumerate(items)]
-    return None if any(a is None for a in angles) else angles  # type: ignore[return-value]
+    return None if any(a is None for a in angles) else angles
 
 
 def _orientation(r: Reader, path: KeyPath, angles: list[sympy.Expr]) -> int | None:

@@ -129,7 +129,7 @@ def _home(r: Reader, path: KeyPath, value: Any, motion: PlatformMotion) -> tuple
     if items is None:
         return None
     parts = [r.expr(path + (i,), v) for i, v in enumerate(items)]
-    return None if any(p is None for p in parts) else tuple(parts)  # type: ignore[arg-type]
+    return None if any(p is None for p in parts) else tuple(parts)
 
 
 def _mobility(r: Reader, path: KeyPath, value: Any) -> tuple[int, int]:

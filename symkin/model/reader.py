@@ -176,7 +176,8 @@ def frame_ops(r: Reader, path: KeyPath, value: Any) -> tuple[Op, ...] | None:
     """
     if isinstance(value, list):
         parts = [frame_ops(r, path + (i,), item) for i, item in enumerate(value)]
-        return None if any(p is None for p in parts) else tuple(op for part in parts for op in part)  # type: ignore
+        known = [part for part in parts if part is not None]
+        return None if len(known) != len(parts) else tuple(op for part in known for op in part)
     section = r.mapping(path, value, optional=("xyz", "rpy"))
     if section is None:
         return None

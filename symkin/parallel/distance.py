@@ -75,10 +75,10 @@ def reduce_leg(leg: Leg, chain: LegChain, platform: Frame) -> DistanceLeg | str:
         proximal -= 1
     if proximal < 0 or joints[proximal].type not in POINT_JOINTS:
         return "no rod of prismatic joints between two point joints (U or S) ends the leg"
-    actuated = [(i, j) for i, j in enumerate(joints) if j.active is not None]
+    actuated = [(i, j, j.active) for i, j in enumerate(joints) if j.active is not None]
     if len(actuated) != 1:
         return f"it has {len(actuated)} actuated joints, the distance form needs exactly one"
-    index, active = actuated[0]
+    index, active, motion = actuated[0]
     if index == proximal or index == len(joints) - 1:
         return "its actuator is a point joint"
     C = chain.centres[proximal]
@@ -91,7 +91,7 @@ def reduce_leg(leg: Leg, chain: LegChain, platform: Frame) -> DistanceLeg | str:
     L2 = sympy.expand(sympy.Matrix(rod.p).dot(sympy.Matrix(rod.p)))
     if L2.free_symbols & passive:
         return "a passive prismatic joint changes the rod length"
-    variable, _, rotation = active.motions[active.active]
+    variable, _, rotation = active.motions[motion]
     return DistanceLeg(leg, symbol(variable), rotation, "before" if index < proximal else "rod", active.offset,
                        sympy.ImmutableMatrix(C), sympy.ImmutableMatrix(attachment_point(platform, chain)),
                        sympy.ImmutableMatrix(chain.attachment.p), L2)

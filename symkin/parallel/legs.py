@@ -81,7 +81,7 @@ def walk(leg: Leg, start: MovingFrame | None = None, joints: slice = slice(None)
             if rotation:
                 moving.rotate(axis, amount)
             else:
-                moving.translate(tuple(c * amount for c in axis))  # type: ignore[arg-type]
+                moving.translate(tuple(c * amount for c in axis))
     return LegChain(leg, tuple(centres), tuple(motions), moving.frame(), fixed_frame(leg.platform))
 
 

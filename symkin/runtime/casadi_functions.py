@@ -48,7 +48,7 @@ def _bind(packed: numpy.ndarray, sizes: list[int], setter: Any) -> list[numpy.nd
     views, start = [], 0
     for k, size in enumerate(sizes):
         views.append(packed[start:start + size])
-        setter(k, memoryview(views[-1]))
+        setter(k, views[-1].data)
         start += size
     return views
 
@@ -101,10 +101,10 @@ def _kernels(function: casadi.Function, record: dict[str, Any]) -> tuple[Kernel,
         keep += [p if p.ndim == 0 and n == 1 else numpy.ascontiguousarray(numpy.broadcast_to(p, batch))
                  for p in params]
         for k, array in enumerate(keep):
-            buffer.set_arg(k, memoryview(array))
+            buffer.set_arg(k, array.data)
         raw = [numpy.empty((n, cols, rows)) for rows, cols in output_2d]
         for k, array in enumerate(raw):
-            buffer.set_res(k, memoryview(array))
+            buffer.set_res(k, array.data)
         evaluate()
         return [numpy.ascontiguousarray(r.transpose(0, 2, 1)).reshape(batch + shape)
                 for r, shape in zip(raw, output_shapes)]
@@ -131,6 +131,6 @@ def bind_functions(directory: Path, manifest: dict[str, Any]) -> dict[str, Any]:
                                      f"not {record['name']}({', '.join(expected)}); derive the model again")
         kernel, one = _kernels(function, record)
         wrapper = make_function(record, kernel, "casadi", single=one)
-        wrapper.casadi = function
+        setattr(wrapper, "casadi", function)  # the raw casadi.Function, for AD and codegen
         functions[record["name"]] = wrapper
     return functions

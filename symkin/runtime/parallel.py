@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from symkin.errors import GeneratedCodeError
-from symkin.runtime.loader import LoadedModel
+from symkin.runtime.info import GeneratedModel
 
 
 @dataclass(frozen=True)
@@ -48,7 +48,7 @@ class NewtonReport:
         return bool(np.all(self.converged))
 
 
-def _function(model: LoadedModel, name: str, purpose: str) -> Callable[..., Any]:
+def _function(model: GeneratedModel, name: str, purpose: str) -> Callable[..., Any]:
     """The generated function ``name`` (its result is an array or a named tuple of arrays)."""
     if name not in model.functions:
         raise GeneratedCodeError(f"{purpose} needs the generated function '{name}' of model '{model.name}'; "
@@ -153,7 +153,7 @@ def _iterate(start: np.ndarray, equations: Callable[[np.ndarray, np.ndarray], tu
                         residual.reshape(batch), step_norm.reshape(batch))
 
 
-def home_pose(model: LoadedModel) -> np.ndarray:
+def home_pose(model: GeneratedModel) -> np.ndarray:
     """The model's declared home pose (task coordinates at the default parameters).
 
     Raises:
@@ -165,7 +165,7 @@ def home_pose(model: LoadedModel) -> np.ndarray:
     return np.array(home, dtype=float)
 
 
-def solve_fk(model: LoadedModel, q, p0=None, *, tol: float = 1e-12, max_iterations: int = 30) -> NewtonReport:
+def solve_fk(model: GeneratedModel, q, p0=None, *, tol: float = 1e-12, max_iterations: int = 30) -> NewtonReport:
     """Forward kinematics p(q) by Newton's method on the generated leg equations.
 
     Solves f(q, p) = 0 for p with the generated ``constraints`` and ``constraint_jacobians``:
@@ -201,7 +201,7 @@ def solve_fk(model: LoadedModel, q, p0=None, *, tol: float = 1e-12, max_iteratio
     return _iterate(start, equations, tol, max_iterations)
 
 
-def solve_closure(model: LoadedModel, q, s, p, *, unknowns: tuple[str, ...] = ("p", "s"), tol: float = 1e-12,
+def solve_closure(model: GeneratedModel, q, s, p, *, unknowns: tuple[str, ...] = ("p", "s"), tol: float = 1e-12,
                   max_iterations: int = 50, max_step: float | None = None) -> NewtonReport:
     """Solve the generated loop closure phi(q, s, p) = 0 for some of its vectors (any leg topology).
 

@@ -88,7 +88,7 @@ class WallRenderer:
         self.wall = wall
         self.force_gain = force_gain
 
-    def desired_and_sensed(self, t: float, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def desired_and_sensed(self, t: float | np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(F_d, F_s) at state x: wall force and the force felt by the hand (batched: x (..., state) -> (..., d))."""
         s = self.system.split(x)
         desired, sensed, _ = self._forces(s)

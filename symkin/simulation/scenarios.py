@@ -330,7 +330,7 @@ def haptic_wall(label: str, plant: Plant, q_start: np.ndarray, wall_offset: floa
     _, efforts = labels.joint_units(plant)
     columns = {"t [s]": run.t}
     columns |= labels.named("TCP ", axes, "m", p)
-    columns |= labels.named("hand ", axes, "m", s.hand)
+    columns |= labels.named("hand ", axes, "m", s.held()[0])
     columns["penetration [m]"] = np.maximum(0.0, wall.penetration(p))
     columns |= labels.named("F_desired_", axes, "N", desired)
     columns |= labels.named("F_felt_", axes, "N", sensed)
@@ -383,10 +383,11 @@ def gravity_compensation(label: str, plant: Plant, q_start: np.ndarray, travel: 
         report = stop_report(system, run, stability)
         s = system.split(run.x)
         p, _, v = system.tcp_motion(s.q, s.qd)
-        felt = user.force_on_tcp(p, v, s.hand, s.hand_velocity)
+        hand_position, hand_velocity = s.held()
+        felt = user.force_on_tcp(p, v, hand_position, hand_velocity)
         columns = {"t [s]": run.t}
         columns |= labels.named("TCP ", axes, "m", p)
-        columns |= labels.named("hand ", axes, "m", s.hand)
+        columns |= labels.named("hand ", axes, "m", hand_position)
         columns |= labels.named("F_hand_", axes, "N", felt)
         columns |= labels.named("tau_", names, efforts, run.u)
         series.append(Series(run_label, columns | report.columns, report.contacts))
@@ -435,7 +436,7 @@ def free_swing(label: str, plant: Plant, q_start: np.ndarray, timing: Timing,
                f"  energy change {float(energy[-1] - energy[0]):.3g} J (friction work {float(s.work[-1]):.3g} J), "
                f"energy balance drift {balance_drift(system, run, energy):.3g}"] + report.lines
     stopped = tuple(c for c in report.columns if c.startswith("penetration "))
-    panels = ((f"joint [{labels.label(positions)}]", tuple(f"{n} [{u}]" for n, u in zip(names, positions))),
+    panels: tuple[tuple[str, tuple[str, ...]], ...] = ((f"joint [{labels.label(positions)}]", tuple(f"{n} [{u}]" for n, u in zip(names, positions))),
               ("energy [J]", ("energy k + u [J]", "stop energy stored [J]", "stop energy dissipated [J]")))
     panels += ((f"penetration [{labels.label(positions)}]", stopped),) if stopped else ()
     figures = [FigureSpec("free-swing.png", f"Free swing: {plant.name}",

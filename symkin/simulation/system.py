@@ -36,6 +36,12 @@ class State:
     work: np.ndarray
     dissipated: np.ndarray | None = None
 
+    def held(self) -> tuple[np.ndarray, np.ndarray]:
+        """(position, velocity) of the user's hand: states of a system with a user carry them."""
+        if self.hand is None or self.hand_velocity is None:
+            raise ValueError("the state carries no user's hand: the system has no user")
+        return self.hand, self.hand_velocity
+
 
 class ArmSystem:
     """The mechanism under joint torques tau, optionally coupled to a user's hand.

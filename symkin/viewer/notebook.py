@@ -26,16 +26,10 @@ class NotebookModel(LoadedModel):
     def _repr_html_(self) -> str:
         from symkin.viewer import page
 
-        script = self.directory / f"{self.name}.js"
-        missing = page.missing_functions(self)
-        if missing or not script.is_file():
-            needed = ",".join(page.VIEW_OUTPUTS[page.kind_of(self)])
-            what = ", ".join(missing) if missing else "its JavaScript"
-            return (f"<p><b>{html.escape(self.name)}</b> ({html.escape(str(self.directory))}): the 3D viewer needs "
-                    f"{html.escape(what)}; derive it with <code>--only {needed} --backend numpy,js</code>.</p>")
-        cloud = page.workspace_cloud(self, NOTEBOOK_SAMPLES)
-        document = page.render_page(self, script.read_text(encoding="utf-8"), cloud,
-                                    self.manifest["model"].get("description") or self.name)
+        try:
+            document, _ = page.page_of(self, NOTEBOOK_SAMPLES)
+        except page.ViewUnavailable as err:
+            return f"<p><b>{html.escape(self.name)}</b>: {html.escape(str(err))}</p>"
         return (f'<iframe title="{html.escape(self.name)}: symkin view" srcdoc="{html.escape(document, quote=True)}" '
                 f'style="width: 100%; height: {HEIGHT}px; border: 1px solid #ddd"></iframe>')
 

@@ -21,6 +21,7 @@ import math
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -29,6 +30,7 @@ from symkin._version import __version__
 from symkin.analysis import conditioning, global_indices, mechanism, parallel, sampling, workspace
 from symkin.backends.templating import render
 from symkin.runtime.info import GeneratedModel
+from symkin.runtime.loader import LoadedModel
 
 TEMPLATE = "viewer/page.html.j2"
 #: three.js release of the vendored files (symkin/viewer/vendor/VENDOR.md).
@@ -63,6 +65,10 @@ class Cloud:
     q: np.ndarray
     length: float | None
     note: str
+
+
+class ViewUnavailable(ValueError):
+    """A model directory without what the page evaluates (the message says how to derive it)."""
 
 
 def missing_functions(model: GeneratedModel) -> list[str]:
@@ -228,10 +234,10 @@ def page_data(model: GeneratedModel, cloud: Cloud) -> dict[str, Any]:
 def _mechanism_points(model: GeneratedModel, home: dict[str, list[float]]) -> np.ndarray:
     """The joints' positions (k, 3) at the first pose shown: with the cloud, what the camera frames."""
     if "p" not in home:
-        frames = model.frames(np.array(home["q"]))  # type: ignore[attr-defined]
+        frames = model.frames(np.array(home["q"]))
         return np.array([[0.0, 0.0, 0.0]] + [T[:3, 3] for T in frames])
     p = np.array(home["p"])
-    return np.asarray(model.leg_points(model.ik(p).joints, p))  # type: ignore[attr-defined]
+    return np.asarray(model.leg_points(model.ik(p).joints, p))
 
 
 def _vendor(name: str) -> str:
@@ -268,3 +274,35 @@ def render_page(model: GeneratedModel, model_script: str, cloud: Cloud, descript
                                    .read_text(encoding="utf-8"), "viewer.js"),
         three_licence=_vendor("LICENSE-three.txt").replace("-->", "- ->"),
     )
+
+
+def model_script(model: LoadedModel) -> str:
+    """The text of the model's generated JavaScript, once checked to hold the functions the page evaluates.
+
+    Raises:
+        ViewUnavailable: the directory lacks them; the message names what and how to derive it.
+    """
+    missing = missing_functions(model)
+    script = model.directory / f"{model.name}.js"
+    if missing or not script.is_file():
+        what = ", ".join(missing) if missing else "its JavaScript"
+        raise ViewUnavailable(f"{model.directory}: the page needs {what}; derive the model with them, e.g. symkin "
+                              f"derive MODEL --only {','.join(VIEW_OUTPUTS[kind_of(model)])} --backend numpy,js")
+    return script.read_text(encoding="utf-8")
+
+
+def page_of(model: LoadedModel, samples: int, seed: int = 0,
+            progress: Callable[[str], None] = lambda _stage: None) -> tuple[str, Cloud]:
+    """(the page's HTML, its workspace cloud) for a loaded model (bound to the design to show) with about
+    ``samples`` cloud points (0: none).
+
+    Raises:
+        ViewUnavailable: see :func:`model_script`.
+        ValueError: the workspace cannot be sampled (e.g. no reachable point).
+    """
+    script = model_script(model)
+    progress(f"sampling the workspace ({samples} points)")
+    cloud = workspace_cloud(model, samples, seed) if samples else no_cloud(model)
+    progress("writing the page")
+    description = model.manifest["model"].get("description") or model.name
+    return render_page(model, script, cloud, description), cloud

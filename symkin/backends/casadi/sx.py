@@ -41,7 +41,7 @@ class SXBuilder(Printer):
         """Make ``symbol`` (a CSE temporary) stand for ``value`` in later expressions."""
         self.symbols[symbol] = value
 
-    def doprint(self, expr: sympy.Expr) -> casadi.SX:  # type: ignore[override]
+    def doprint(self, expr: sympy.Expr) -> casadi.SX:
         return casadi.SX(self._print(sympy.sympify(expr)))
 
     def emptyPrinter(self, expr: sympy.Expr) -> casadi.SX:  # noqa: N802 (sympy's hook name)
