@@ -10,15 +10,14 @@ is a failure, not a skip: .ci/run installs Debian's chromium.
 from __future__ import annotations
 
 import re
-import subprocess
 
 import numpy as np
 import pytest
 
 from browser import chromium, drawn, open_page, pixels
-from conftest import SYMKIN_CLI
 from symkin import load
 from symkin.analysis import conditioning, global_indices, parallel
+from symkin.viewer import page as viewer_page
 from tolerances import svd
 
 AGREEMENT = 1e-12
@@ -33,13 +32,12 @@ def browser():
 
 @pytest.fixture(scope="module")
 def pages(generated_dir, tmp_path_factory):
-    """name -> the page of the generated model (1024 cloud points)."""
+    """name -> the page of the generated model (1024 cloud points), written as symkin view writes it."""
     out = tmp_path_factory.mktemp("pages")
     written = {}
     for name in ("ur10e", "delta", "stewart"):
         written[name] = out / f"{name}.html"
-        subprocess.run(SYMKIN_CLI + ["view", str(generated_dir / name), "-o", str(written[name]), "--workspace",
-                                     "1024"], check=True, capture_output=True)
+        written[name].write_text(viewer_page.page_of(load(generated_dir / name), 1024)[0])
     return written
 
 
@@ -126,3 +124,27 @@ def test_the_cloud_toggles_and_the_screenshots_are_not_blank(browser, pages, tmp
     assert changed > 0.005, f"hiding the cloud changed {changed:.2%} of the pixels"
     page.click("#show-cloud")
     assert page.evaluate("window.symkinView.cloud.visible")
+
+
+def test_the_cloud_is_recomputed_for_a_moved_design(browser, pages, generated_dir):
+    """A design slider moves; the page recomputes the cloud from the same joint samples through the generated
+    JavaScript: the points and 1/kappa are numpy's for the new design (where the mechanism still assembles)."""
+    page = open_page(browser, pages["delta"])
+    assert page.locator("#cloud-note").is_hidden()
+    press(page, "param-a", "ArrowRight", 100)  # upper arm 100 -> 110 mm
+    assert page.locator("#cloud-note").is_visible()
+    page.click("#recompute-cloud")
+    assert page.locator("#cloud-note").is_hidden()
+    a = page.evaluate("window.symkinView.state.params.a")
+    assert a == pytest.approx(0.11, abs=1e-12)
+    samples = np.array(page.evaluate("JSON.parse(document.getElementById('symkin-data').textContent).cloud.samples"))
+    shown = page.evaluate("window.symkinView.cloud.userData")
+    model = load(generated_dir / "delta").bind(a=a)
+    with np.errstate(invalid="ignore"):  # samples where the longer arms no longer assemble: NaN, margin < 0
+        position, margin = model.fk(samples)
+    assembled = margin >= 0
+    np.testing.assert_allclose(np.array(shown["points"]), position[assembled], rtol=0, atol=AGREEMENT)
+    expected = global_indices.local_index(model, samples[assembled])
+    np.testing.assert_allclose(np.array(shown["values"]), expected, rtol=0, atol=AGREEMENT + svd(3))
+    ticks = page.locator("#colour-ticks span").all_inner_texts()
+    assert ticks[-1] == f"{max(shown['values']):.2f}"

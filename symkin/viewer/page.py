@@ -222,7 +222,10 @@ def page_data(model: GeneratedModel, cloud: Cloud) -> dict[str, Any]:
                          "position_rows": list(mechanism.position_rows(model))},
         "singular_threshold": SINGULAR_THRESHOLD,
         "cloud": {"points": points.tolist(), "inverse_kappa": values.tolist(),
-                  "colour_max": float(max(values.max(initial=0.0), 1e-12))},
+                  "colour_max": float(max(values.max(initial=0.0), 1e-12)),
+                  # what the page recomputes the cloud from for another design: the joint samples, or a
+                  # pose platform's sampled centres (rounded as the points are)
+                  "samples": (points if "inverse_jacobian" in outputs else np.round(cloud.q, CLOUD_DIGITS + 3)).tolist()},
         "scale": scale if scale > 0 else 1.0, "view_target": centre.tolist(),
     }
     data["home"] = home

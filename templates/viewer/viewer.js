@@ -238,14 +238,62 @@ scene.add(new THREE.Line(trace, new THREE.LineBasicMaterial({ color: 0x9467bd })
 let traceCount = 0;
 
 let cloud = null;
-if (data.cloud.points.length) {
+
+/** Show points (k, 3) coloured by their 1/kappa, scaled to the largest; the colour bar follows. */
+function showCloud(points, values) {
+  const top = Math.max(...values, 1e-12);
   const geometry = new THREE.BufferGeometry();
-  geometry.setAttribute("position", new THREE.Float32BufferAttribute(data.cloud.points.flat(), 3));
-  const top = data.cloud.colour_max;
-  geometry.setAttribute("color", new THREE.Float32BufferAttribute(
-    data.cloud.inverse_kappa.flatMap((v) => colour(v / top)), 3));
-  cloud = new THREE.Points(geometry, new THREE.PointsMaterial({ size: data.scale * 0.012, vertexColors: true }));
-  scene.add(cloud);
+  geometry.setAttribute("position", new THREE.Float32BufferAttribute(points.flat(), 3));
+  geometry.setAttribute("color", new THREE.Float32BufferAttribute(values.flatMap((v) => colour(v / top)), 3));
+  if (cloud === null) {
+    cloud = new THREE.Points(geometry, new THREE.PointsMaterial({ size: data.scale * 0.012, vertexColors: true }));
+    scene.add(cloud);
+  } else {
+    cloud.geometry.dispose();
+    cloud.geometry = geometry;
+  }
+  const ticks = document.getElementById("colour-ticks").children;
+  [0, top / 2, top].forEach((v, k) => { ticks[k].textContent = v.toFixed(2); });
+  cloud.userData = { points, values };
+}
+if (data.cloud.points.length) showCloud(data.cloud.points, data.cloud.inverse_kappa);
+
+/** The cloud again for the current design: the same samples (joint configurations; a pose platform's
+ *  centres at the home orientation) through the generated fk (ik) and the rated Jacobian.  Samples
+ *  that no longer assemble are left out; the characteristic length stays the one of the design at load. */
+function recomputeCloud() {
+  const points = [], values = [];
+  const orientation = data.kind === "parallel" ? data.home.p.slice(3) : [];
+  data.cloud.samples.forEach((sample) => {
+    let point, pose;
+    if (data.kind === "serial") {
+      const T = call("fk", sample);
+      point = [T[0][3], T[1][3], T[2][3]];
+      pose = { q: sample };
+    } else if (!data.conditioning.twist) {
+      const { position, margin } = call("fk", sample);
+      if (!(margin >= 0)) return;
+      point = position;
+      pose = { q: sample, p: position };
+    } else {
+      const p = [...sample, ...orientation];
+      const { joints, margin } = call("ik", p);
+      if (!margin.every((m) => m >= 0)) return;
+      point = sample;
+      pose = { q: joints, p };
+    }
+    const J = taskJacobian(pose);
+    let value = 0;
+    if (J && J.rated.every((r) => r.every(Number.isFinite))) {
+      const sigma = singularValues(J.rated);
+      value = sigma[sigma.length - 1] / sigma[0];
+    }
+    points.push(point);
+    values.push(Number.isFinite(value) ? value : 0);
+  });
+  showCloud(points, values);
+  document.getElementById("cloud-note").hidden = true;
+  render();
 }
 
 const unitCylinder = new THREE.CylinderGeometry(1, 1, 1, 12);
@@ -389,5 +437,6 @@ toggle.addEventListener("change", () => {
 document.getElementById("clear-trace").addEventListener("click", () => { traceCount = 0; trace.setDrawRange(0, 0); render(); });
 
 update();
-window.symkinView = { state, evaluate, update, cloud, singularValues, invert };
+document.getElementById("recompute-cloud").addEventListener("click", recomputeCloud);
+window.symkinView = { state, evaluate, update, get cloud() { return cloud; }, recomputeCloud, singularValues, invert };
 document.body.dataset.ready = "1";
