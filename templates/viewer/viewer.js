@@ -110,6 +110,13 @@ function taskJacobian(state) {
   return { raw: J, rated };
 }
 
+/** 1/kappa = sigma_min / sigma_max of a rated task Jacobian ({raw, rated}); null where J is missing or not finite. */
+function inverseCondition(J) {
+  if (!J || !J.rated.every((r) => r.every(Number.isFinite))) return null;
+  const sigma = singularValues(J.rated);
+  return sigma[sigma.length - 1] / sigma[0];
+}
+
 // ------------------------------------------------------------------ state and evaluation
 
 /** model[name](...vectors, parameters): each function gets the design parameters it takes. */
@@ -152,9 +159,9 @@ function evaluate() {
     }
   }
   const J = out.warnings.length && data.kind === "parallel" ? null : taskJacobian(state);
-  if (J && J.rated.every((r) => r.every(Number.isFinite))) {
-    const sigma = singularValues(J.rated);
-    out.inverseKappa = sigma[sigma.length - 1] / sigma[0];
+  const inverseKappa = inverseCondition(J);
+  if (inverseKappa !== null) {
+    out.inverseKappa = inverseKappa;
     out.det = J.raw.length === J.raw[0].length ? determinant(J.raw) : null;
     if (!(out.inverseKappa >= data.singular_threshold)) {
       out.warnings.push(`near a singular configuration (1/kappa < ${data.singular_threshold})`);
@@ -282,14 +289,9 @@ function recomputeCloud() {
       point = sample;
       pose = { q: joints, p };
     }
-    const J = taskJacobian(pose);
-    let value = 0;
-    if (J && J.rated.every((r) => r.every(Number.isFinite))) {
-      const sigma = singularValues(J.rated);
-      value = sigma[sigma.length - 1] / sigma[0];
-    }
+    const value = inverseCondition(taskJacobian(pose));
     points.push(point);
-    values.push(Number.isFinite(value) ? value : 0);
+    values.push(value !== null && Number.isFinite(value) ? value : 0);
   });
   showCloud(points, values);
   document.getElementById("cloud-note").hidden = true;
