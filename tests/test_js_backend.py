@@ -83,7 +83,7 @@ def test_parameters_are_an_optional_object_with_the_defaults(generated_dir, load
     assert "parameter 'l1' is not a number" in not_a_number["error"]
 
 
-def test_the_module_describes_itself_and_loads_as_a_browser_script(generated_dir, models):
+def test_the_module_describes_itself_and_loads_as_a_browser_script(generated_dir):
     """Metadata for the viewer (names, defaults, shapes); as a classic script it sets globalThis.symkin[name]."""
     module = (generated_dir / "delta" / "delta.js").resolve()
     script = (f"const vm = require('vm'); const context = {{}}; vm.createContext(context);"
@@ -96,4 +96,3 @@ def test_the_module_describes_itself_and_loads_as_a_browser_script(generated_dir
     assert (name, coordinates, a, frozen) == ("delta", ["theta1", "theta2", "theta3"], 0.1, True)
     assert ik == {"inputs": ["p"], "parameters": ["r_base", "r_tcp", "a", "b"],
                   "outputs": {"joints": [3], "margin": [3]}}
-    assert models["delta"].name == name

@@ -90,11 +90,21 @@ def _pad3(points: np.ndarray, axes: tuple[str, ...]) -> np.ndarray:
     return out
 
 
+def _length(model: GeneratedModel, limits: np.ndarray) -> float | None:
+    """The characteristic length that homogenizes J where the rated task space mixes lengths and angles
+    (a pose platform's twist, at its home orientation), as the analyses compute it; else None."""
+    if kind_of(model) == "parallel pose":
+        return global_indices.characteristic_length_of(parallel.constant_orientation(model), limits)
+    return global_indices.characteristic_length_of(model, limits) if mechanism.mixes_translations_and_rotations(model) \
+        else None
+
+
 def workspace_cloud(model: GeneratedModel, samples: int, seed: int = 0) -> Cloud:
     """The workspace cloud with 1/kappa, as ``symkin workspace`` and ``symkin gci`` sample it."""
     limits = mechanism.joint_limits(model)
-    length: float | None
-    if mechanism.is_parallel(model) and "fk" not in model.functions:
+    length = _length(model, limits)
+    homogenized = f"; J homogenized with L = {1000 * length:.1f} mm." if length is not None else "."
+    if kind_of(model) == "parallel pose":
         held = parallel.constant_orientation(model)
         lower, upper = parallel.constant_orientation_box(held, limits)
         log2 = max(1, math.ceil(math.log2(samples)))
@@ -105,30 +115,22 @@ def workspace_cloud(model: GeneratedModel, samples: int, seed: int = 0) -> Cloud
             if found >= samples / 2 or log2 >= MAX_SOBOL_LOG2:
                 break
             log2 = min(MAX_SOBOL_LOG2, log2 + math.ceil(math.log2(samples / found)))
-        length = global_indices.characteristic_length_of(held, limits)
         index = global_indices.scaled_index(held, conditioning.inverse_condition_number, length, limits)
         values = index(held.jacobian(q[reachable], points[reachable]))
         note = (f"{int(reachable.sum())} reachable platform centres of {len(points)} Sobol points, platform held at "
-                f"roll, pitch, yaw = {parallel.orientation_text(held)}; J homogenized with L = {1000 * length:.1f} mm.")
+                f"roll, pitch, yaw = {parallel.orientation_text(held)}{homogenized}")
         return Cloud(points[reachable], values, q[reachable], length, note)
     cloud = workspace.sample_workspace(model, samples, seed=seed)
-    mixed = mechanism.mixes_translations_and_rotations(model)
-    length = global_indices.characteristic_length_of(model, limits) if mixed else None
     values = global_indices.local_index(model, cloud.q, length=length)
-    note = f"{len(cloud.q)} joint configurations sampled within the limits"
-    note += f"; J homogenized with L = {1000 * length:.1f} mm." if length else "."
+    note = f"{len(cloud.q)} joint configurations sampled within the limits{homogenized}"
     return Cloud(_pad3(cloud.points, cloud.axes), values, cloud.q, length, note)
 
 
 def no_cloud(model: GeneratedModel) -> Cloud:
     """An empty cloud (``--workspace 0``); a mixed task space still gets its characteristic length."""
     n = len(model.info.coordinates)
-    length = None
-    if mechanism.is_parallel(model) and "fk" not in model.functions:
-        length = global_indices.characteristic_length_of(parallel.constant_orientation(model))
-    elif mechanism.mixes_translations_and_rotations(model):
-        length = global_indices.characteristic_length_of(model)
-    return Cloud(np.zeros((0, 3)), np.zeros(0), np.zeros((0, n)), length, "no workspace cloud (--workspace 0).")
+    return Cloud(np.zeros((0, 3)), np.zeros(0), np.zeros((0, n)), _length(model, mechanism.joint_limits(model)),
+                 "no workspace cloud (--workspace 0).")
 
 
 def _slider_units(unit: str, revolute: bool | None = None) -> tuple[float, str, float]:
@@ -203,11 +205,11 @@ def page_data(model: GeneratedModel, cloud: Cloud) -> dict[str, Any]:
     outputs = VIEW_OUTPUTS[kind_of(model)]
     points = np.round(cloud.points, CLOUD_DIGITS)
     values = np.round(np.nan_to_num(cloud.inverse_kappa, nan=0.0), CLOUD_DIGITS)
+    coordinates = _coordinates(model)
     if kind == "serial":
         # start at the best-conditioned sampled configuration (else 0 within the limits)
         q = cloud.q[int(np.argmax(values))] if len(values) else np.clip(0.0, *mechanism.joint_limits(model).T)
-        home: dict[str, list[float]] = {"q": [_on_grid(v, c["scale"], c["step"])
-                                              for v, c in zip(q, _coordinates(model))]}
+        home: dict[str, list[float]] = {"q": [_on_grid(v, c["scale"], c["step"]) for v, c in zip(q, coordinates)]}
     else:
         units = [_slider_units("m" if k < 3 else "rad") for k in range(len(mechanism.task_space(model)))]
         home = {"q": [0.0] * len(model.info.coordinates),
@@ -216,7 +218,7 @@ def page_data(model: GeneratedModel, cloud: Cloud) -> dict[str, Any]:
     lower, upper = seen.min(axis=0), seen.max(axis=0)
     centre, scale = (lower + upper) / 2, float(np.max(upper - lower))
     data: dict[str, Any] = {
-        "name": model.name, "kind": kind, "coordinates": _coordinates(model),
+        "name": model.name, "kind": kind, "coordinates": coordinates, "home": home,
         "parameters": _parameters(model, outputs),
         "conditioning": {"twist": "inverse_jacobian" in outputs, "length": cloud.length,
                          "position_rows": list(mechanism.position_rows(model))},
@@ -228,7 +230,6 @@ def page_data(model: GeneratedModel, cloud: Cloud) -> dict[str, Any]:
                   "samples": (points if "inverse_jacobian" in outputs else np.round(cloud.q, CLOUD_DIGITS + 3)).tolist()},
         "scale": scale if scale > 0 else 1.0, "view_target": centre.tolist(),
     }
-    data["home"] = home
     if kind == "parallel":
         data["task"] = _task(model, cloud, np.array(home["p"]))
     return data

@@ -42,6 +42,7 @@ import sympy
 from symkin.backends.c.build import part_macro, parts_line
 from symkin.backends.c.printer import C_TYPES, CPrinter
 from symkin.backends.c.trig import constants
+from symkin.backends.layout import element_text, expressions, used_symbols
 from symkin.backends.naming import c_symbol
 from symkin.backends.templating import provenance, render
 from symkin.ir.bundle import ModelCode
@@ -74,11 +75,6 @@ def _comment_lines(text: str, width: int = DOC_WIDTH) -> list[str]:
     return textwrap.wrap(text.replace("*/", "* /"), width) or [""]
 
 
-def _expressions(f: OptimizedFunction) -> list[sympy.Expr]:
-    """Every expression the function evaluates: temporaries, then output entries."""
-    return [e for _, e in f.temporaries] + [e for entries in f.outputs for e in entries]
-
-
 def _inputs(spec: FunctionSpec, used: set[sympy.Symbol], macro: str) -> tuple[list, list, list]:
     """(vectors, params, scalars) contexts; scalars: every used scalar input and where it is read."""
     scalars: list[dict[str, Any]] = []
@@ -94,7 +90,7 @@ def _inputs(spec: FunctionSpec, used: set[sympy.Symbol], macro: str) -> tuple[li
         vectors.append({
             "name": v.name, "size": len(v.symbols), "elements": elements, "offset": offset,
             "doc": _comment_lines(f"{v.name}[{len(v.symbols)}]: {v.doc}: "
-                                  + ", ".join(f"{n} [{u}]" for n, u in zip(v.element_names, v.units)) + "."),
+                                  + element_text(v) + "."),
         })
         offset += len(v.symbols)
     params = []
@@ -113,7 +109,7 @@ def _inputs(spec: FunctionSpec, used: set[sympy.Symbol], macro: str) -> tuple[li
 def _trigonometry(f: OptimizedFunction, scalars: list[dict[str, Any]]) -> tuple[list, dict]:
     """(trig contexts, {sin(a)/cos(a): local symbol}) for the input symbols under sin and cos."""
     row_of = {s["symbol"]: s["row"] for s in scalars}
-    calls = {call for e in _expressions(f) for call in e.atoms(sympy.sin, sympy.cos) if call.args[0] in row_of}
+    calls = {call for e in expressions(f) for call in e.atoms(sympy.sin, sympy.cos) if call.args[0] in row_of}
     names = {}
     trig = []
     for k, a in enumerate(sorted({call.args[0] for call in calls}, key=sympy.default_sort_key)):
@@ -152,14 +148,14 @@ def _outputs(spec: FunctionSpec, f: OptimizedFunction, text: Callable[[sympy.Exp
 def _function_context(code: ModelCode, f: OptimizedFunction, precision: str, printer: CPrinter) -> dict[str, Any]:
     spec = f.spec
     suffix = VARIANTS[precision]
-    used = {s for e in _expressions(f) for s in e.free_symbols}
+    used = used_symbols(f)
     vectors, params, scalars = _inputs(spec, used, code.name.upper())
     trig, trig_names = _trigonometry(f, scalars)
 
     def text(e: sympy.Expr) -> str:
         return printer.doprint(e.xreplace(trig_names) if trig_names else e)
 
-    direct = {s for e in _expressions(f) for s in (e.xreplace(trig_names) if trig_names else e).free_symbols}
+    direct = {s for e in expressions(f) for s in (e.xreplace(trig_names) if trig_names else e).free_symbols}
     for scalar in scalars:
         scalar["direct"] = scalar["symbol"] in direct  # used other than through its sin/cos
     outputs, slots = _outputs(spec, f, text)

@@ -6,8 +6,8 @@ Calling convention (documented in the generated file):
   of parameter values (``{a: 0.12}``); a parameter left out takes the model's default, an
   unknown name throws;
 * a function with one output returns it, one with several an object of its named outputs;
-  an output of shape () is a number, (n,) an array, (r, c) an array of r rows, (k, r, c)
-  an array of k such matrices: the shapes of the numpy backend without the batch axes.
+  an output of shape () is a number, (n,) an array, (r, c) an array of r rows: the shapes of
+  the numpy backend without the batch axes.
 
 One configuration per call, in IEEE doubles: the same statements as the other backends print,
 so a value differs from numpy's only by the last-bit differences of the libraries' sin, cos and
@@ -21,6 +21,7 @@ import textwrap
 from typing import Any
 
 from symkin.backends.js.printer import JsPrinter
+from symkin.backends.layout import element_text, used_symbols
 from symkin.backends.templating import provenance, render
 from symkin.ir.bundle import ModelCode
 from symkin.ir.spec import InputSpec, OptimizedFunction
@@ -45,14 +46,12 @@ def _input_doc(i: InputSpec) -> str:
     if i.kind == "parameter":
         unit = f" [{i.units[0]}]" if i.units[0] else ""
         return f"{i.name}: {i.doc or 'parameter'}{unit}; default {i.default_value!r}."
-    elements = ", ".join(f"{n} [{u}]" for n, u in zip(i.element_names, i.units))
-    return f"{i.doc}, {len(i.symbols)} numbers: {elements}."
+    return f"{i.doc}, {len(i.symbols)} numbers: {element_text(i)}."
 
 
 def _function_context(f: OptimizedFunction, printer: JsPrinter) -> dict[str, Any]:
     spec = f.spec
-    used = {s for _, e in f.temporaries for s in e.free_symbols} | {s for entries in f.outputs for e in entries
-                                                                    for s in e.free_symbols}
+    used = used_symbols(f)
     vectors = [{"name": v.name, "size": len(v.symbols),
                 "doc": textwrap.wrap(_input_doc(v), DOC_WIDTH - len(v.name) - 20),
                 "elements": [{"local": printer.doprint(s), "index": k} for k, s in enumerate(v.symbols) if s in used]}
@@ -99,7 +98,7 @@ def emit_script(code: ModelCode) -> dict[str, str | bytes]:
                                                                                   DOC_WIDTH - 3),
                "symkin_version": code.symkin_version},
         coordinates=json.dumps(list(code.coordinates)),
-        parameters=[{"name": p.name, "default": printer.literal(float(p.default))} for p in free],
+        parameters=[{"name": p.name, "default": printer.literal(p.default)} for p in free],
         functions=[_function_context(f, printer) for f in code.functions],
         name_json=json.dumps(code.name), hash_json=json.dumps(code.hash),
         version_json=json.dumps(code.symkin_version),

@@ -5,7 +5,7 @@ from __future__ import annotations
 import textwrap
 from typing import Any
 
-from symkin.backends.layout import nonzero_elements, shape_text, type_name
+from symkin.backends.layout import element_text, nonzero_elements, shape_text, type_name
 from symkin.backends.numpy.printer import BatchNumPyPrinter
 from symkin.backends.templating import provenance, render
 from symkin.ir.bundle import ModelCode
@@ -27,8 +27,7 @@ def _input_doc(i: InputSpec) -> list[str]:
         unit = f" [{i.units[0]}]" if i.units[0] else ""
         return _wrap(f"{i.name}: {i.doc or 'parameter'}{unit}; default {i.default_value!r}; "
                      "a scalar or an array broadcastable to the batch shape.")
-    elements = ", ".join(f"{n} [{u}]" for n, u in zip(i.element_names, i.units))
-    return _wrap(f"{i.name}: {i.doc}, shape (..., {len(i.symbols)}): {elements}.")
+    return _wrap(f"{i.name}: {i.doc}, shape (..., {len(i.symbols)}): {element_text(i)}.")
 
 
 def _function_context(f: OptimizedFunction, printer: BatchNumPyPrinter) -> dict[str, Any]:
