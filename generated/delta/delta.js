@@ -56,10 +56,14 @@
     }
   }
 
-  /** The parameter object of a call ({} when left out); an unknown name throws. */
+  /**
+   * The parameter values of a call as an object without prototype (a parameter named like an
+   * Object.prototype member, e.g. "constructor", is left out unless given); an unknown name throws.
+   */
   function _params(params, names, fn) {
+    const given = Object.create(null);
     if (params === undefined || params === null) {
-      return {};
+      return given;
     }
     for (const key of Object.keys(params)) {
       if (!names.includes(key)) {
@@ -68,8 +72,9 @@
       if (typeof params[key] !== "number") {
         throw new TypeError(fn + "(): parameter '" + key + "' is not a number: " + JSON.stringify(params[key]));
       }
+      given[key] = params[key];
     }
-    return params;
+    return given;
   }
 
   /**

@@ -13,6 +13,7 @@ from importlib import resources
 import jinja2
 
 from symkin._version import __version__
+from symkin.backends.comments import docstring_lines
 
 
 def _load(name: str) -> str:
@@ -24,8 +25,10 @@ def _load(name: str) -> str:
 
 @lru_cache(maxsize=1)
 def environment() -> jinja2.Environment:
-    """The shared jinja2 environment: strict about undefined names, no autoescaping (code, not HTML)."""
-    return jinja2.Environment(
+    """The shared jinja2 environment of code generation: strict about undefined names, no autoescaping
+    (code, not HTML: free text is made inert by :mod:`symkin.backends.comments`, also as the filter
+    ``docstring_lines``)."""
+    env = jinja2.Environment(
         loader=jinja2.FunctionLoader(_load),
         undefined=jinja2.StrictUndefined,
         trim_blocks=True,
@@ -33,6 +36,8 @@ def environment() -> jinja2.Environment:
         keep_trailing_newline=True,
         autoescape=False,
     )
+    env.filters["docstring_lines"] = docstring_lines
+    return env
 
 
 def provenance(template: str, model_name: str, model_hash: str) -> list[str]:

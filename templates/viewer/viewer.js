@@ -127,7 +127,8 @@ function call(name, ...vectors) {
 }
 
 const state = { q: data.home.q.slice(), p: data.home.p ? data.home.p.slice() : null,
-  params: Object.fromEntries(data.parameters.map((p) => [p.name, p.value])) };
+  // no prototype: a parameter named like an Object.prototype member ("constructor") is only what is set
+  params: Object.assign(Object.create(null), Object.fromEntries(data.parameters.map((p) => [p.name, p.value]))) };
 
 function evaluate() {
   const out = { warnings: [] };

@@ -42,6 +42,7 @@ import sympy
 from symkin.backends.c.build import part_macro, parts_line
 from symkin.backends.c.printer import C_TYPES, CPrinter
 from symkin.backends.c.trig import constants
+from symkin.backends.comments import block_comment, plain
 from symkin.backends.layout import element_text, expressions, used_symbols
 from symkin.backends.naming import c_symbol
 from symkin.backends.templating import provenance, render
@@ -72,7 +73,8 @@ VARIANTS = {"double": "", "float": "_f32"}
 
 
 def _comment_lines(text: str, width: int = DOC_WIDTH) -> list[str]:
-    return textwrap.wrap(text.replace("*/", "* /"), width) or [""]
+    """Lines of a ``/* */`` comment of ``text`` (free text made inert, :mod:`symkin.backends.comments`)."""
+    return [block_comment(line) for line in textwrap.wrap(plain(text), width)] or [""]
 
 
 def _inputs(spec: FunctionSpec, used: set[sympy.Symbol], macro: str) -> tuple[list, list, list]:
@@ -222,7 +224,7 @@ def emit_sources(code: ModelCode) -> dict[str, str | bytes]:
         "description": _comment_lines(code.description or code.name),
         "dof": len(code.coordinates), "coordinates": ", ".join(code.coordinates),
     }
-    free = [{"name": p.name, "default": repr(p.default), "unit": p.unit, "doc": p.doc}
+    free = [{"name": p.name, "default": repr(p.default), "unit": block_comment(p.unit), "doc": block_comment(p.doc)}
             for p in code.parameters if not p.fixed]
     fixed = [f"{p.name} = {p.default!r}" for p in code.parameters if p.fixed]
     parts = _assign_parts(functions)

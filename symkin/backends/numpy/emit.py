@@ -5,6 +5,7 @@ from __future__ import annotations
 import textwrap
 from typing import Any
 
+from symkin.backends.comments import docstring, plain
 from symkin.backends.layout import element_text, nonzero_elements, shape_text, type_name
 from symkin.backends.numpy.printer import BatchNumPyPrinter
 from symkin.backends.templating import provenance, render
@@ -18,7 +19,8 @@ DOC_WIDTH = 84
 
 
 def _wrap(text: str, indent: str = "    ") -> list[str]:
-    lines = textwrap.wrap(text, DOC_WIDTH)
+    """Docstring lines of ``text`` (free text made inert, :mod:`symkin.backends.comments`), later ones indented."""
+    lines = [docstring(line) for line in textwrap.wrap(plain(text), DOC_WIDTH)]
     return lines[:1] + [indent + line for line in lines[1:]]
 
 
@@ -51,8 +53,8 @@ def _function_context(f: OptimizedFunction, printer: BatchNumPyPrinter) -> dict[
     multi = len(spec.outputs) > 1
     return {
         "name": spec.name,
-        "summary": spec.summary,
-        "doc_lines": textwrap.wrap(spec.doc, DOC_WIDTH),
+        "summary": docstring(spec.summary),
+        "doc_lines": [docstring(line) for line in textwrap.wrap(plain(spec.doc), DOC_WIDTH)],
         "signature": signature,
         "signature_short": ", ".join(v.name for v in vectors) + (", **params" if params else ""),
         "returns_short": (type_name(spec.name) + "(" + ", ".join(o.name for o in spec.outputs) + ")") if multi
@@ -75,7 +77,7 @@ def emit_module(code: ModelCode) -> dict[str, str | bytes]:
     text = render(
         TEMPLATE,
         provenance=provenance(TEMPLATE, code.name, code.hash),
-        model={"name": code.name, "hash": code.hash, "description": code.description or code.name,
+        model={"name": code.name, "hash": code.hash, "description": plain(code.description or code.name, keep_newlines=True),
                "symkin_version": code.symkin_version, "coordinates": code.coordinates},
         free_parameters=[{"name": p.name, "default_text": repr(p.default)} for p in code.parameters if not p.fixed],
         chunk=CHUNK,
