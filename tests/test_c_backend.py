@@ -238,9 +238,17 @@ def test_an_interrupted_compile_leaves_nothing_in_the_cache(generated_dir, tmp_p
     cache = tmp_path / "cache"
     env = {**os.environ, "SYMKIN_CACHE_DIR": str(cache), "SYMKIN_QUIET": "0"}
     load_c = f"import symkin; symkin.load({str(generated_dir / 'planar_2r')!r}, 'c')"
-    process = subprocess.Popen([sys.executable, "-c", load_c], stderr=subprocess.PIPE, text=True, env=env)
+    # a compiler that takes 5 s, so that Ctrl-C always comes during the compile (planar_2r alone compiles
+    # in a fraction of a second: on a busy machine the signal came after it); the interrupted process
+    # waits for its compilers to end, which may ignore SIGINT (started in the background)
+    slow_cc = tmp_path / "slow-cc"
+    slow_cc.write_text(f'#!/bin/sh\n[ "$1" = --version ] || sleep 5\nexec {env.get("CC", "cc")} "$@"\n')
+    slow_cc.chmod(0o755)
+    slow = {**env, "CC": str(slow_cc)}
+    process = subprocess.Popen([sys.executable, "-c", load_c], stderr=subprocess.PIPE, text=True, env=slow,
+                               start_new_session=True)
     assert process.stderr.readline().startswith("symkin: compiling planar_2r.c")
-    process.send_signal(signal.SIGINT)
+    os.killpg(process.pid, signal.SIGINT)  # as Ctrl-C in a terminal: to the whole process group
     _, err = process.communicate(timeout=120)
     assert process.returncode != 0 and "KeyboardInterrupt" in err
     assert [p.name for p in cache.iterdir() if not p.name.endswith(".lock")] == []

@@ -23,7 +23,9 @@ def test_a_loaded_model_shows_as_the_viewer_inline(generated_dir):
     assert isinstance(model, NotebookModel) and isinstance(model, LoadedModel)
     assert isinstance(model.bind(a=0.11), NotebookModel)  # a bound design keeps its representation
     shown = model.bind(a=0.11)._repr_html_()
-    match = re.fullmatch(r'<iframe title="delta: symkin view" srcdoc="(.*)" style="[^"]*"></iframe>', shown, re.S)
+    # sandboxed: scripts run, in an opaque origin (no allow-same-origin: the page cannot reach the notebook)
+    match = re.fullmatch(r'<iframe title="delta: symkin view" sandbox="allow-scripts" srcdoc="(.*)" style="[^"]*">'
+                         r'</iframe>', shown, re.S)
     assert match, shown[:200]
     document = html.unescape(match.group(1))
     data = json.loads(re.search(r'id="symkin-data">(.*?)</script>', document, re.S).group(1))

@@ -40,6 +40,21 @@ def environment() -> jinja2.Environment:
     return env
 
 
+@lru_cache(maxsize=1)
+def html_environment() -> jinja2.Environment:
+    """The jinja2 environment of HTML pages (``symkin view``), apart from code generation's: every
+    ``{{ value }}`` is HTML-escaped for text and attributes (model files are hostile text); what is
+    already safe markup (a JSON island, a checked script) is passed as :class:`markupsafe.Markup`."""
+    return jinja2.Environment(
+        loader=jinja2.FunctionLoader(_load),
+        undefined=jinja2.StrictUndefined,
+        trim_blocks=True,
+        lstrip_blocks=True,
+        keep_trailing_newline=True,
+        autoescape=True,
+    )
+
+
 def provenance(template: str, model_name: str, model_hash: str) -> list[str]:
     """Header lines every generated file starts with (without comment markers)."""
     return [
@@ -52,3 +67,8 @@ def provenance(template: str, model_name: str, model_hash: str) -> list[str]:
 def render(template: str, **context: object) -> str:
     """Render ``template`` (a path under templates/) with ``context``."""
     return environment().get_template(template).render(**context)
+
+
+def render_html(template: str, **context: object) -> str:
+    """Render the HTML ``template`` with ``context``, escaping every value that is not Markup."""
+    return html_environment().get_template(template).render(**context)
