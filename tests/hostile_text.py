@@ -4,7 +4,8 @@ model file or URDF may hold in its description, references, units, parameter doc
 Every payload that could run sets a marker its test looks for: ``PWNED`` in ``document.title``, a
 ``window``/``globalThis`` property starting with ``pwned``, or a file ``pwned`` in the working
 directory.  :func:`model_text` puts one case into every free-text field of a model file,
-:func:`urdf_text` into a URDF's robot name (the free text a URDF carries into the page).
+:func:`urdf_text` into a URDF's robot name (the free text a URDF carries into the page), and a name
+case into its joint and link names.
 """
 
 from __future__ import annotations
@@ -77,21 +78,22 @@ def model_text(text: str, parameter: str = "l1") -> str:
     return json.dumps(model, indent=1)
 
 
-def urdf_text(robot_name: str) -> str:
-    """A 2-DoF URDF arm whose robot name is ``robot_name`` (escaped as an XML attribute)."""
+def urdf_text(robot_name: str, joint: str = "shoulder", link: str = "upper") -> str:
+    """A 2-DoF URDF arm whose robot name is ``robot_name`` and whose first joint and link are named
+    ``joint`` and ``link`` (each escaped as an XML attribute)."""
     from xml.sax.saxutils import quoteattr
 
     return f"""<?xml version="1.0"?>
 <robot name={quoteattr(robot_name)}>
   <link name="base"/>
-  <link name="upper"><inertial><mass value="1.0"/><origin xyz="0.1 0 0"/>
+  <link name={quoteattr(link)}><inertial><mass value="1.0"/><origin xyz="0.1 0 0"/>
     <inertia ixx="0.001" iyy="0.001" izz="0.001" ixy="0" ixz="0" iyz="0"/></inertial></link>
   <link name="lower"><inertial><mass value="0.5"/><origin xyz="0.1 0 0"/>
     <inertia ixx="0.001" iyy="0.001" izz="0.001" ixy="0" ixz="0" iyz="0"/></inertial></link>
   <link name="tip"/>
-  <joint name="shoulder" type="revolute"><parent link="base"/><child link="upper"/>
+  <joint name={quoteattr(joint)} type="revolute"><parent link="base"/><child link={quoteattr(link)}/>
     <axis xyz="0 0 1"/><limit lower="-1.5" upper="1.5" effort="10" velocity="2"/></joint>
-  <joint name="elbow" type="revolute"><parent link="upper"/><child link="lower"/><origin xyz="0.2 0 0"/>
+  <joint name="elbow" type="revolute"><parent link={quoteattr(link)}/><child link="lower"/><origin xyz="0.2 0 0"/>
     <axis xyz="0 0 1"/><limit lower="-1.5" upper="1.5" effort="10" velocity="2"/></joint>
   <joint name="tool" type="fixed"><parent link="lower"/><child link="tip"/><origin xyz="0.2 0 0"/></joint>
 </robot>

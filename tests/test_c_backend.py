@@ -238,6 +238,9 @@ def test_an_interrupted_compile_leaves_nothing_in_the_cache(generated_dir, tmp_p
     cache = tmp_path / "cache"
     env = {**os.environ, "SYMKIN_CACHE_DIR": str(cache), "SYMKIN_QUIET": "0"}
     load_c = f"import symkin; symkin.load({str(generated_dir / 'planar_2r')!r}, 'c')"
+    # Python turns SIGINT into KeyboardInterrupt only if its parent did not ignore the signal (a job started
+    # in the background of a non-interactive shell inherits it ignored): as an interactive session, it does
+    interrupted_load = f"import signal; signal.signal(signal.SIGINT, signal.default_int_handler); {load_c}"
     # a compiler that takes 5 s, so that Ctrl-C always comes during the compile (planar_2r alone compiles
     # in a fraction of a second: on a busy machine the signal came after it); the interrupted process
     # waits for its compilers to end, which may ignore SIGINT (started in the background)
@@ -245,7 +248,7 @@ def test_an_interrupted_compile_leaves_nothing_in_the_cache(generated_dir, tmp_p
     slow_cc.write_text(f'#!/bin/sh\n[ "$1" = --version ] || sleep 5\nexec {env.get("CC", "cc")} "$@"\n')
     slow_cc.chmod(0o755)
     slow = {**env, "CC": str(slow_cc)}
-    process = subprocess.Popen([sys.executable, "-c", load_c], stderr=subprocess.PIPE, text=True, env=slow,
+    process = subprocess.Popen([sys.executable, "-c", interrupted_load], stderr=subprocess.PIPE, text=True, env=slow,
                                start_new_session=True)
     assert process.stderr.readline().startswith("symkin: compiling planar_2r.c")
     os.killpg(process.pid, signal.SIGINT)  # as Ctrl-C in a terminal: to the whole process group

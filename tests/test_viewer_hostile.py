@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 from browser import VIEWPORT, chromium, drawn, pixels
-from hostile_text import MARKER_PREFIX, TEXT_CASES, model_text, urdf_text
+from hostile_text import MARKER_PREFIX, NAME_CASES, TEXT_CASES, model_text, urdf_text
 import symkin
 from symkin.cli import main
 from symkin.viewer import page as viewer_page
@@ -163,11 +163,22 @@ def test_a_tampered_model_script_is_refused_with_exit_2(tmp_path, capsys):
     assert not out.exists()
 
 
-def test_hostile_names_never_reach_a_page(tmp_path, capsys):
-    """A parameter name that is markup is refused where it stands; the reader's rule, seen from symkin view."""
-    path = tmp_path / "model.yaml"
-    path.write_text(model_text("a planar arm", parameter="<b>l1</b>"), encoding="utf-8")
-    out = tmp_path / "page.html"
-    assert main(["view", str(path), "-o", str(out)]) == 2
-    err = capsys.readouterr().err
-    assert f"{path}:" in err and "fix:" in err and not out.exists()
+@pytest.mark.parametrize("case,name", NAME_CASES, ids=[c for c, _ in NAME_CASES])
+def test_hostile_names_give_a_page_or_a_located_refusal(case, name, tmp_path, capsys):
+    """A name (of a model file's parameter; of a URDF's joint and link) either names a slider of a page that
+    holds the template's markup, or is refused where it stands with exit code 2 and no page."""
+    for kind, source in (("yaml", model_text("a planar arm", parameter=name)),
+                         ("urdf", urdf_text("arm", joint=name, link=name))):
+        path = tmp_path / f"arm.{kind}"
+        path.write_text(source, encoding="utf-8")
+        out = tmp_path / f"{kind}.html"
+        code = main(["view", str(path), "-o", str(out), "--workspace", SAMPLES])
+        err = capsys.readouterr().err
+        if code == 2:
+            assert f"{path}:" in err and "fix:" in err and "Traceback" not in err and not out.exists(), err
+            continue
+        assert code == 0, err
+        found = elements(out.read_text(encoding="utf-8"))
+        assert not any(attribute.startswith("on") for attribute in found.attributes)
+        assert set(found.tags) <= {"html", "head", "meta", "title", "style", "body", "div", "h1", "h2", "p", "span",
+                                   "label", "input", "button", "canvas", "script"}
