@@ -52,3 +52,42 @@ def chain_yaml(n: int) -> str:
         lines.append(f"  - {{link: link{i + 1}, mass: {link.mass!r}, com: {list(link.com)}, "
                      f"inertia: {{xx: {xx}, yy: {yy}, zz: {zz}, xy: {xy}, xz: {xz}, yz: {yz}}}}}")
     return "\n".join(lines) + "\n"
+
+
+def odd_frames_urdf(n: int, seed: int = 0, depth: int = 3) -> str:
+    """A URDF of n revolute joints as robot files ship them (TIAGo, iCub): every ``<origin>`` and inertial
+    frame with arbitrary rpy written to 5 decimals (angles such as -2.06791, no multiple of pi/2); between
+    two joints a fixed adapter link, and on each chain link a fixed chain of ``depth`` cover links (all
+    lumped into the chain link through their composed frames); a fixed tool frame; physical masses and
+    principal moments.  Joints q1..qn, tip ``tool``."""
+    import numpy as np
+
+    rng = np.random.default_rng(seed)
+
+    def origin() -> str:
+        return (f'<origin xyz="{" ".join(f"{v:.4f}" for v in rng.uniform(-0.2, 0.2, 3))}" '
+                f'rpy="{" ".join(f"{v:.5f}" for v in rng.uniform(-math.pi, math.pi, 3))}"/>')
+
+    def link(name: str) -> str:
+        mass, (a, b, c) = rng.uniform(0.5, 2.0), rng.uniform(0.001, 0.01, 3)
+        return (f'  <link name="{name}"><inertial><mass value="{mass:.4f}"/>{origin()}'
+                f'<inertia ixx="{a + b:.5f}" iyy="{b + c:.5f}" izz="{a + c:.5f}" ixy="0" ixz="0" iyz="0"/>'
+                "</inertial></link>")
+
+    def fixed(parent: str, child: str) -> str:
+        return (f'  <joint name="{child}_fixed" type="fixed"><parent link="{parent}"/><child link="{child}"/>'
+                f"{origin()}</joint>")
+
+    lines = ['<?xml version="1.0"?>', f'<robot name="odd_frames{n}">', '  <link name="base"/>']
+    parent = "base"
+    for k in range(1, n + 1):
+        lines += [link(f"adapter{k}"), fixed(parent, f"adapter{k}"), link(f"link{k}"),
+                  f'  <joint name="q{k}" type="revolute"><parent link="adapter{k}"/><child link="link{k}"/>'
+                  f'{origin()}<axis xyz="0 0 1"/><limit lower="-2.5" upper="2.5" effort="10" velocity="2"/></joint>']
+        holder = f"link{k}"
+        for d in range(1, depth + 1):
+            lines += [link(f"cover{k}_{d}"), fixed(holder, f"cover{k}_{d}")]
+            holder = f"cover{k}_{d}"
+        parent = f"link{k}"
+    lines += ['  <link name="tool"/>', fixed(parent, "tool"), "</robot>"]
+    return "\n".join(lines) + "\n"

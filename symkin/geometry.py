@@ -23,13 +23,32 @@ def principal_axis(axis: Vec3) -> tuple[int, int] | None:
     return None
 
 
+#: Significant digits of the cosine and sine of a numeric angle: products of a few dozen such
+#: numbers keep far more than the 17 digits a double literal prints.
+CONSTANT_TRIG_DIGITS = 30
+
+
+def cos_sin(angle: sympy.Expr) -> tuple[sympy.Expr, sympy.Expr]:
+    """(cos, sin) of ``angle``: exact where sympy evaluates them (0, pi/2, pi/3, ...) or the angle is
+    symbolic (a joint coordinate, a parameter, pi/7); for a plain number (a decimal from a file) each is
+    one evaluation to :data:`CONSTANT_TRIG_DIGITS` digits, a number rather than cos(20679/10000): a chain
+    of constant frames then composes to numbers instead of growing products of unevaluated trig, whose
+    sign queries sympy answers by ever longer evaluations (issue 29: minutes for a stock URDF)."""
+    c, s = sympy.cos(angle), sympy.sin(angle)
+    if angle.is_Number and (isinstance(c, sympy.cos) or isinstance(s, sympy.sin)):
+        return c.evalf(CONSTANT_TRIG_DIGITS), s.evalf(CONSTANT_TRIG_DIGITS)
+    return c, s
+
+
 def rotation_matrix(axis: Vec3, angle: sympy.Expr) -> sympy.Matrix:
     """Rotation by ``angle`` about the unit ``axis`` (right hand).
 
     Principal axes give the elementary matrices (e.g. the seed's rotation about z);
-    any other axis uses Rodrigues' formula R = I + sin(a) K + (1 - cos(a)) K^2.
+    any other axis uses Rodrigues' formula R = I + sin(a) K + (1 - cos(a)) K^2.  The cosine and
+    sine of an angle given as a plain number (a URDF's rpy such as -2.0679) are evaluated once,
+    to :data:`CONSTANT_TRIG_DIGITS` digits (:func:`cos_sin`).
     """
-    c, s = sympy.cos(angle), sympy.sin(angle)
+    c, s = cos_sin(angle)
     principal = principal_axis(axis)
     if principal is not None:
         index, sign = principal

@@ -239,3 +239,36 @@ def test_analysis_commands_take_a_urdf_as_a_model_file(tmp_path):
                                        "-o", str(tmp_path / "ws.png")], capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
     assert (tmp_path / "ws.png").exists() and "manifest.json" not in run.stderr
+
+
+def test_odd_constant_frames_compose_to_numbers_and_agree_with_pinocchio(tmp_path, capsys):
+    """Issue 29: a robot file's constant frames at angles such as -2.06791 (benchmarks/chain_models.py:
+    fixed adapters between joints, chains of fixed covers lumped into each link) compose to numbers,
+    evaluated once per cosine and sine, not to growing products of unevaluated trig (whose sign queries
+    took minutes: the mass matrix of this chain did not finish in 100 s).  The emitted code holds no
+    trig of a constant and stays small; Pinocchio, reading the same file, agrees."""
+    import re
+    import sys
+
+    from conftest import ROOT
+    from symkin.cli import main
+
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    from chain_models import chain_yaml, odd_frames_urdf
+
+    n = 3
+    path = _write(tmp_path, odd_frames_urdf(n), "odd_frames.urdf")
+    dh = _write(tmp_path, chain_yaml(n), "chain.yaml")
+    model = load_model(path, tip="tool")
+    assert all(sympy.sympify(v).is_Number for body in model.bodies for v in (*body.com, *body.inertia))
+    out = tmp_path / "out"
+    for source in ([str(path), "--tip", "tool"], [str(dh)]):
+        assert main(["derive", *source, "--only", "fk,jacobian,mass_matrix,inverse_dynamics", "--backend", "numpy",
+                     "-o", str(out), "-q"]) == 0
+    code = (out / f"odd_frames{n}" / f"odd_frames{n}.py").read_text()
+    assert not re.search(r"\b(cos|sin)\(\s*-?[\d.(]", code), "a cosine or sine of a constant was emitted"
+    # the same outputs of a generated DH chain of n joints (twists of 90 deg and 0.3 rad): general constant
+    # rotations cost more terms (2.5 times the text at n = 3), products of trig of constants grow without bound
+    assert len(code) < 4 * len((out / f"chain{n}" / f"chain{n}.py").read_text())
+    capsys.readouterr()
+    assert main(["crosscheck", str(path), "--tip", "tool", "--samples", "5"]) == 0, capsys.readouterr().out
