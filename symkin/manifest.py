@@ -92,6 +92,8 @@ def build_manifest(model: Model, code: ModelCode, derived: list[str], backend_fi
         ],
         "backends": {name: {"files": sorted(files)} for name, files in sorted(backend_files.items())},
     }
+    if model.notes:  # what the reading decided (locks clipped into limits, non-physical inertias accepted)
+        manifest["model"]["notes"] = list(model.notes)
     if model.parallel is not None:
         manifest["model"]["parallel"] = _parallel_record(model)
     return manifest

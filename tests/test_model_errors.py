@@ -107,6 +107,27 @@ def test_unphysical_inertia_is_refused(tmp_path):
         load_model(path)
 
 
+def test_unphysical_inertia_is_accepted_with_a_note_when_allowed(tmp_path):
+    """Issue 29: the model key or the load_model option accepts it; the note says where and what."""
+    bad = VALID.replace("{link: link2, mass: m2}", "{link: link2, mass: m2, inertia: {xx: 0, yy: 4, zz: 3}}")
+    path = tmp_path / "keyed.yaml"
+    path.write_text("allow_nonphysical: true\nnotes: [inertia from the vendor's CAD]\n" + bad)
+    keyed = load_model(path)
+    assert keyed.notes[0] == "inertia from the vendor's CAD"
+    assert "line 16, at 'bodies[0].inertia': the inertia tensor is not physical" in keyed.notes[1]
+    path = tmp_path / "option.yaml"
+    path.write_text(bad)
+    (note,) = load_model(path, allow_nonphysical=True).notes
+    assert note == keyed.notes[1].replace("line 16,", "line 14,")  # two lines fewer above it
+    path.write_text("allow_nonphysical: 1\n" + bad)
+    with pytest.raises(ModelError, match="expected true or false"):
+        load_model(path)
+    # rounding in a file is not a violation: a lone product of inertia of 1e-35 on a 0.5 kg body
+    path.write_text(VALID.replace("{link: link2, mass: m2}", "{link: link2, mass: m2, com: [0.1, 0, 0], "
+                                                              "inertia: {xx: 0, yy: 0, zz: 0, xz: 1.0e-35}}"))
+    assert load_model(path).notes == ()
+
+
 def test_billion_laughs_fails_fast(tmp_path):
     lines = ["a0: &a0 [x, x, x, x, x, x, x, x, x, x]"]
     lines += [f"a{i}: &a{i} [*a{i - 1}, *a{i - 1}, *a{i - 1}, *a{i - 1}, *a{i - 1}, *a{i - 1}, *a{i - 1}, "

@@ -107,3 +107,40 @@ def test_symkin_crosscheck_passes_on_every_zoo_robot(file, tip, dof):
     assert not report.failures, report.comparisons
     assert {"fk", "jacobian_geometric", "mass_matrix", "coriolis_vector", "gravity_vector"} <= \
         {c.quantity for c in report.comparisons}
+
+
+def test_off_chain_joints_whose_limits_exclude_0_lock_at_the_nearest_limit():
+    """Issue 29: iCub's right elbow (limits [0.0959931, 1.85005]) is locked, unasked, at its lower limit and
+    the reading says so; its head's lone product of inertia of 2.4e-35 is rounding, not a refusal.  The
+    left arm, as shipped, agrees with Pinocchio reduced at the same locks."""
+    from symkin.analysis.crosscheck import crosscheck
+
+    path = ROBOTS_DIR / "icub_description/robots/icub_reduced.urdf"
+    model = load_model(path, tip="l_hand_dh_frame")
+    clipped = [note for note in model.notes if "'r_elbow'" in note]
+    assert len(clipped) == 1 and "locked at 0.0959931" in clipped[0] and "--lock r_elbow=VALUE" in clipped[0]
+    report = crosscheck(path, samples=3, urdf={"tip": "l_hand_dh_frame"})
+    assert not report.failures, report.comparisons
+
+
+def test_non_physical_inertias_are_refused_or_accepted_with_a_note(tmp_path, capsys):
+    """Issue 29: romeo_small's wrist inertias violate the triangle inequality by up to 340 %: refused with a
+    located message that names --allow-nonphysical; with it, the arm derives, the notes are printed and kept
+    in the manifest, and Pinocchio (which loads the file as it is) agrees."""
+    import json
+
+    from symkin.analysis.crosscheck import crosscheck
+    from symkin.cli import main
+
+    path = str(ROBOTS_DIR / "romeo_description/urdf/romeo_small.urdf")
+    assert main(["check", path, "--tip", "l_gripper"]) == 2
+    err = capsys.readouterr().err
+    assert f"{path}:547:" in err and "not physical" in err and "--allow-nonphysical" in err
+    out = tmp_path / "out"
+    assert main(["derive", path, "--tip", "l_gripper", "--allow-nonphysical", "--only", "fk", "-o", str(out)]) == 0
+    printed = [line for line in capsys.readouterr().out.splitlines() if line.startswith("  note:")]
+    manifest = json.loads((out / "romeo" / "manifest.json").read_text())
+    assert len(printed) == len(manifest["model"]["notes"]) == 2
+    assert all("not physical" in note and "line " in note and path not in note for note in manifest["model"]["notes"])
+    report = crosscheck(path, samples=3, urdf={"tip": "l_gripper", "allow_nonphysical": True})
+    assert not report.failures, report.comparisons

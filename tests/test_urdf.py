@@ -169,9 +169,6 @@ def test_mimic_joints_off_the_chain_follow_their_leader_and_on_the_chain_are_cou
     (lambda t: t.replace("</robot>", '<joint name="loop" type="fixed"><parent link="base"/><child link="l2"/>'
                                      "</joint></robot>"), "closed loop: link 'l2'"),
     (lambda t: t.replace("</robot>", '<link name="b2"/><joint name="j4" type="revolute"><parent link="l1"/>'
-                                     '<child link="b2"/><limit lower="0.5" upper="1"/></joint></robot>'),
-     "'j4' is locked at 0, outside its limits"),
-    (lambda t: t.replace("</robot>", '<link name="b2"/><joint name="j4" type="revolute"><parent link="l1"/>'
                                      '<child link="b2"/><mimic joint="j2"/></joint></robot>'),
      "'j4' off the chain mimics 'j2', a joint of the chain"),
     (lambda t: t.replace('<child link="l2"/>', '<child link="l9"/>'), "unknown child link 'l9'"),
@@ -272,3 +269,20 @@ def test_odd_constant_frames_compose_to_numbers_and_agree_with_pinocchio(tmp_pat
     assert len(code) < 4 * len((out / f"chain{n}" / f"chain{n}.py").read_text())
     capsys.readouterr()
     assert main(["crosscheck", str(path), "--tip", "tool", "--samples", "5"]) == 0, capsys.readouterr().out
+
+
+def test_an_off_chain_joint_locks_at_0_clipped_into_its_limits_or_where_asked_within_them(tmp_path):
+    """Issue 29: limits that exclude 0 clip the default lock (with a note naming the joint, its line and the
+    option); an explicit lock outside the limits is still refused where the limits stand."""
+    text = ARM.replace("</robot>", '<link name="b2"><inertial><mass value="0.1"/><origin xyz="0.1 0 0"/>'
+                                   '</inertial></link><joint name="j4" type="revolute"><parent link="l1"/>'
+                                   '<child link="b2"/><axis xyz="0 0 1"/><limit lower="0.5" upper="1"/></joint>'
+                                   "</robot>")
+    path = _write(tmp_path, text, "clipped.urdf")
+    (note,) = load_model(path, tip="tool").notes
+    line = text[:text.index('<joint name="j4"')].count("\n") + 1
+    assert note == (f"line {line}: joint 'j4' off the chain locked at 0.5, 0 clipped into its limits [0.5, 1] "
+                    "(--lock j4=VALUE to choose)")
+    assert load_model(path, tip="tool", locks={"j4": 0.75}).notes == ()
+    with pytest.raises(ModelError, match="'j4' is locked at 2, outside its limits"):
+        load_model(path, tip="tool", locks={"j4": 2.0})

@@ -95,13 +95,15 @@ def _sources(path: Path, reference_urdf: Path | None, urdf: Mapping[str, Any]) -
     from symkin.model.urdf_export import ROOT_LINK, TCP_LINK, export_urdf
     from symkin.model.urdf_source import UrdfReduction, read_urdf_document
 
+    options = dict(urdf)
+    allow_nonphysical = bool(options.pop("allow_nonphysical", False))
     if path.suffix.lower() == ".urdf":
-        document = read_urdf_document(path, **urdf)
-        model = build_model(document, path.stem)
+        document = read_urdf_document(path, **options)
+        model = build_model(document, path.stem, allow_nonphysical)
         reduction = document.reduction
         text = (reference_urdf or path).read_text()
     else:
-        model = load_model(path)
+        model = load_model(path, allow_nonphysical=allow_nonphysical)
         reduction = UrdfReduction(ROOT_LINK, TCP_LINK, {})
         text = reference_urdf.read_text() if reference_urdf else export_urdf(model)
     if model.parallel is not None:
@@ -139,8 +141,8 @@ def crosscheck(path: str | Path, *, reference_urdf: str | Path | None = None, sa
     """Compare the model in ``path`` (YAML or URDF) with Pinocchio (see the module docstring).
 
     Args:
-        urdf: for a URDF model, the keyword arguments of :func:`symkin.model.load_model` (tip,
-            base, locks, snap_angles).
+        urdf: the keyword arguments of :func:`symkin.model.load_model` (for a URDF model tip, base,
+            locks, snap_angles; for any, allow_nonphysical).
 
     Raises:
         ModelError: bad model, a parallel model, a reference without the chain's joints or

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from symkin.cli.urdf_args import add_urdf_arguments, urdf_options
+from symkin.cli.urdf_args import add_urdf_arguments, print_notes, urdf_options
 from symkin.text_table import format_table
 
 
@@ -34,6 +34,7 @@ def run_check(args: argparse.Namespace) -> int:
               f"{len(model.parameters)} parameters, {len(model.bodies)} bodies, "
               f"task space [{', '.join(model.task_space)}]; "
               f"scene: {', '.join(request.outputs)} via {', '.join(request.backends)}")
+        print_notes(model)
     return 0
 
 

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from symkin.backends import BACKENDS
 from symkin.cli.progress import Progress
-from symkin.cli.urdf_args import add_urdf_arguments, urdf_options
+from symkin.cli.urdf_args import add_urdf_arguments, print_notes, urdf_options
 from symkin.text_table import format_table
 
 
@@ -65,6 +65,7 @@ def _summary(result, target: Path, seconds: float) -> None:
     free = sum(1 for p in model.parameters if p.name not in result.request.fixed)
     print(f"{model.name}: {model.dof} DoF, {free} free / {len(result.request.fixed)} fixed parameters "
           f"-> {target}  ({seconds:.2f} s)")
+    print_notes(model)
     rows = []
     for r in result.reports:
         counts = r.op_counts

@@ -27,6 +27,9 @@ def add_urdf_arguments(p: argparse.ArgumentParser) -> None:
     group.add_argument("--snap-angles", action="store_true",
                        help="read angles within 1e-12 rad of a multiple of pi/2 as that multiple (default: as "
                             "written)")
+    p.add_argument("--allow-nonphysical", action="store_true",
+                   help="accept inertia tensors that violate the triangle inequality, with a note, as simulators "
+                        "do (default: refuse them; the model key 'allow_nonphysical: true' does the same)")
 
 
 def urdf_options(args: argparse.Namespace, path: str) -> dict[str, Any]:
@@ -41,7 +44,7 @@ def urdf_options(args: argparse.Namespace, path: str) -> dict[str, Any]:
         raise ModelError([Problem("<command line>", None, None, given[0], f"{given[0]} applies to URDF files only",
                                   f"drop {given[0]}, or pass a .urdf file")])
     if not path.lower().endswith(".urdf"):
-        return {}
+        return {"allow_nonphysical": args.allow_nonphysical}
     locks = {}
     for item in args.lock:
         name, _, value = item.partition("=")
@@ -50,4 +53,13 @@ def urdf_options(args: argparse.Namespace, path: str) -> dict[str, Any]:
         except ValueError:
             raise ModelError([Problem("<command line>", None, None, "--lock", f"--lock '{item}' is not JOINT=VALUE",
                                       "write e.g. --lock finger_joint1=0.02 or --lock head_pan=30deg")]) from None
-    return {"tip": args.tip, "base": args.base, "locks": locks, "snap_angles": args.snap_angles}
+    return {"tip": args.tip, "base": args.base, "locks": locks, "snap_angles": args.snap_angles,
+            "allow_nonphysical": args.allow_nonphysical}
+
+
+def print_notes(model: Any) -> None:
+    """Print what the reading of ``model`` decided (Model.notes), one line each, as plain text."""
+    from symkin.backends.comments import plain
+
+    for note in model.notes:
+        print(f"  note: {plain(model.source)}, {plain(note)}")

@@ -16,7 +16,8 @@ __all__ = ["Body", "Friction", "Joint", "JointType", "Model", "Parameter", "Rota
 
 
 def load_model(path: str | Path, tip: str | None = None, *, base: str | None = None,
-               locks: Mapping[str, float] | None = None, snap_angles: bool = False) -> Model:
+               locks: Mapping[str, float] | None = None, snap_angles: bool = False,
+               allow_nonphysical: bool = False) -> Model:
     """Read, validate and build the model in the file ``path``: YAML, or URDF (``.urdf``).
 
     Args:
@@ -26,19 +27,21 @@ def load_model(path: str | Path, tip: str | None = None, *, base: str | None = N
         locks: URDF only: {joint: value} of joints off the chain (default 0; see
             :mod:`symkin.model.urdf_source`).
         snap_angles: URDF only: read angles within 1e-12 of a multiple of pi/2 as that multiple.
+        allow_nonphysical: accept inertia tensors that violate the triangle inequality (or have a
+            negative principal moment) with a note in ``Model.notes`` instead of refusing them.
 
     Raises:
         symkin.errors.ModelError: with every problem found, each located in the file.
     """
     if Path(path).suffix.lower() == ".urdf":
         return build_model(read_urdf_document(path, tip, base=base, locks=locks, snap_angles=snap_angles),
-                           Path(path).stem)
+                           Path(path).stem, allow_nonphysical)
     given = [name for name, value in (("tip", tip), ("base", base), ("locks", locks), ("snap_angles", snap_angles))
              if value]
     if given:
         raise ModelError([Problem(str(path), None, None, "", f"{given[0]} applies to URDF files only",
                                   f"drop {given[0]}, or pass a .urdf file")])
-    return build_model(read_document(path), Path(path).stem)
+    return build_model(read_document(path), Path(path).stem, allow_nonphysical)
 
 
 def model_from_text(text: str, name: str = "model", file: str = "<string>") -> Model:

@@ -52,6 +52,8 @@ def _mass_properties(r: Reader, path: KeyPath, item: dict[str, Any], link: str) 
         com, inertia = _body_in_link_frame(r, path + ("origin",), item["origin"], com, inertia)
     if mass is None or com is None or inertia is None or _negative(r, path + ("mass",), mass, "mass"):
         return None
+    if "inertia" in item:
+        _check_inertia_physical(r, path + ("inertia",), inertia, mass, com)
     return Body(link, mass, com, sympy.ImmutableMatrix(inertia))
 
 
@@ -146,7 +148,6 @@ def _inertia(r: Reader, path: KeyPath, value: Any) -> sympy.Matrix | None:
         if (tensor - tensor.T).is_zero_matrix is not True:
             r.fail(path, "the inertia tensor is not symmetric", "make entry [i][j] equal to entry [j][i]")
             return None
-    _check_inertia_physical(r, path, tensor)
     return tensor
 
 
@@ -161,17 +162,32 @@ def _rotate_inertia(r: Reader, path: KeyPath, value: Any, inertia: sympy.Matrix)
     return R * inertia * R.T
 
 
-def _check_inertia_physical(r: Reader, path: KeyPath, tensor: sympy.Matrix) -> None:
-    """At default parameter values the principal moments are >= 0 and obey the triangle inequality."""
-    values = [r.default_value(v) for v in tensor]
-    if any(v is None for v in values):
+def _check_inertia_physical(r: Reader, path: KeyPath, tensor: sympy.Matrix, mass: sympy.Expr, com: Vec3) -> None:
+    """At default parameter values the principal moments are >= 0 and obey the triangle inequality.
+
+    A violation is judged against the body's size as the dynamics see it, max(largest moment,
+    m |c|^2) with c the centre of mass in the link frame: one below 1e-12 of it (1e-9 for the
+    triangle inequality) is rounding in the file (iCub's head: a lone product of inertia of 2.4e-35
+    on a 1.3 kg body), invisible to any double computed from it.  A real violation is refused, or
+    with ``allow_nonphysical`` (``--allow-nonphysical``) noted: every simulator loads such files, and
+    M may then be indefinite, which forward dynamics and the analyses report as for a singular M.
+    """
+    given = [r.default_value(v) for v in (*tensor, mass, *com)]
+    values = [v for v in given if v is not None]
+    if len(values) < len(given):
         return
-    moments = np.linalg.eigvalsh(np.array(values, dtype=float).reshape(3, 3))
-    scale = max(1e-300, float(np.max(np.abs(moments))))
-    a, b, c = moments
-    if a < -1e-12 * scale or a + b < c - 1e-9 * scale:
-        r.fail(path, f"the inertia tensor is not physical (principal moments {a:.6g}, {b:.6g}, {c:.6g})",
-               "principal moments must be >= 0 and each at most the sum of the other two")
+    moments = np.linalg.eigvalsh(np.array(values[:9], dtype=float).reshape(3, 3))
+    m, c = values[9], np.array(values[10:], dtype=float)
+    scale = max(1e-300, float(np.max(np.abs(moments))), m * float(c @ c))
+    a, b, largest = moments
+    if a >= -1e-12 * scale and a + b >= largest - 1e-9 * scale:
+        return
+    message = f"the inertia tensor is not physical (principal moments {a:.6g}, {b:.6g}, {largest:.6g})"
+    if r.allow_nonphysical:
+        r.note(path, message + "; accepted (allow_nonphysical): M may be indefinite")
+    else:
+        r.fail(path, message, "principal moments must be >= 0 and each at most the sum of the other two; to "
+                              "proceed as simulators do, pass --allow-nonphysical (or 'allow_nonphysical: true')")
 
 
 def read_friction(r: Reader, value: Any, joint_names: tuple[str, ...]) -> tuple[Friction, ...]:

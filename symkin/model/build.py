@@ -28,16 +28,17 @@ FORMAT_VERSION = 1
 #: Sections that say how a model is emitted, not what the mechanism is: left out of the model hash,
 #: so that choosing other outputs, backends or folded parameters keeps the mechanism's identity.
 EMISSION_KEYS = ("scene",)
-TOP_LEVEL_KEYS = ("name", "description", "references", "parameters", "serial", "parallel", "task_space",
-                  "bodies", "gravity", "friction", "scene")
+TOP_LEVEL_KEYS = ("name", "description", "references", "notes", "allow_nonphysical", "parameters", "serial",
+                  "parallel", "task_space", "bodies", "gravity", "friction", "scene")
 
 
-def build_model(doc: Document, stem: str) -> Model:
+def build_model(doc: Document, stem: str, allow_nonphysical: bool = False) -> Model:
     """Validate ``doc`` and build its :class:`Model`.
 
     Args:
         doc: the composed YAML document.
         stem: file name without extension, the default model name.
+        allow_nonphysical: accept non-physical inertias with a note (as the model key does).
 
     Raises:
         ModelError: listing every problem found.
@@ -46,6 +47,8 @@ def build_model(doc: Document, stem: str) -> Model:
     data = r.mapping((), doc.data, optional=TOP_LEVEL_KEYS)
     if data is None:
         raise ModelError(r.problems)
+    r.notes = _texts(r, data, "notes", "notes")
+    r.allow_nonphysical = allow_nonphysical or _flag(r, data, "allow_nonphysical")
 
     name = _model_name(r, data, stem)
     description = r.string(("description",), data.get("description", "")) or ""
@@ -88,6 +91,7 @@ def build_model(doc: Document, stem: str) -> Model:
         name=name,
         description=description.strip(),
         references=references,
+        notes=tuple(r.notes),
         source=doc.file,
         hash=f"sha256:{digest}",
         parameters=parameters,
@@ -117,7 +121,19 @@ def _model_name(r: Reader, data: dict[str, Any], stem: str) -> str:
 
 
 def _references(r: Reader, data: dict[str, Any]) -> tuple[str, ...]:
-    refs = r.sequence(("references",), data.get("references", []), what="citations")
-    if refs is None:
-        return ()
-    return tuple(s for i, v in enumerate(refs) if (s := r.string(("references", i), v)) is not None)
+    return tuple(_texts(r, data, "references", "citations"))
+
+
+def _texts(r: Reader, data: dict[str, Any], key: str, what: str) -> list[str]:
+    items = r.sequence((key,), data.get(key, []), what=what)
+    if items is None:
+        return []
+    return [s for i, v in enumerate(items) if (s := r.string((key, i), v)) is not None]
+
+
+def _flag(r: Reader, data: dict[str, Any], key: str) -> bool:
+    value = data.get(key, False)
+    if not isinstance(value, bool):
+        r.fail((key,), f"expected true or false, got {value!r:.40}", f"write '{key}: true' or leave it out")
+        return False
+    return value

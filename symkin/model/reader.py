@@ -53,6 +53,17 @@ class Reader:
         self.invalid: set[str] = set()
         #: Links of joints whose definition failed: bodies on them are not reported as unknown.
         self.invalid_links: set[str] = set()
+        #: Accept non-physical inertias with a note instead of refusing them (``allow_nonphysical:``).
+        self.allow_nonphysical = False
+        #: Located notes on what the reading decided (Model.notes).
+        self.notes: list[str] = []
+
+    def note(self, path: KeyPath, message: str) -> None:
+        """Record ``message`` about the element at ``path``, located by line and key but not by the file's
+        path (notes go into the manifest, which is the same wherever the model file lies)."""
+        problem = self.doc.problem(path, message, "")
+        where = f"line {problem.line}, " if problem.line is not None else ""
+        self.notes.append(f"{where}at '{problem.key}': {message}" if problem.key else f"{where}{message}")
 
     def fail(self, path: KeyPath, message: str, fix: str) -> None:
         self.problems.append(self.doc.problem(path, message, fix))

@@ -394,6 +394,9 @@ class Model:
     scene: Scene = field(default_factory=lambda: Scene(outputs=("fk", "jacobian")))
     #: the legs and platform of a parallel mechanism (``joints`` is empty then), None for serial chains.
     parallel: Parallel | None = None
+    #: what the reading decided that the file leaves open (a joint locked at a value clipped into its
+    #: limits, a non-physical inertia accepted): printed by symkin check and derive, kept in the manifest.
+    notes: tuple[str, ...] = ()
     #: key path -> (line, column) in the model file, for located messages of later stages.
     locations: dict = field(default_factory=dict, compare=False, repr=False)
 

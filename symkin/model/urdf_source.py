@@ -263,10 +263,11 @@ def urdf_document(text: str, file: str = "<string>", tip: str | None = None, *, 
     tip = _tip(r, robot, root, children, parent_of, tip)
     path = _path(r, robot, parent_of, root, tip)  # joints root -> tip
     on_path = {root} | {j.child for j in path}
-    locked = _locked_values(r, robot, joints, children, on_path, path, dict(locks or {}))
+    notes: list[str] = []
+    locked = _locked_values(r, robot, joints, children, on_path, path, dict(locks or {}), notes)
     r.stop()
 
-    data: dict[str, Any] = {}
+    data: dict[str, Any] = {"notes": notes} if notes else {}
     robot_name = robot.attrib.get("name", "")
     if re.fullmatch(r"[A-Za-z][A-Za-z0-9_]*", robot_name):
         data["name"] = robot_name
@@ -497,9 +498,11 @@ def _path(r: _UrdfReader, robot: Element, parent_of: dict[str, _Joint], root: st
 
 
 def _locked_values(r: _UrdfReader, robot: Element, joints: dict[str, _Joint], children: dict[str, list[_Joint]],
-                   on_path: set[str], path: list[_Joint], locks: dict[str, float]) -> dict[str, Fraction]:
+                   on_path: set[str], path: list[_Joint], locks: dict[str, float],
+                   notes: list[str]) -> dict[str, Fraction]:
     """{joint: locked value} of every moving joint hanging off the chain (or beyond the tip) in the
-    base's subtree: the caller's value, a mimic follower's from its leader, else 0."""
+    base's subtree: the caller's value, a mimic follower's from its leader, else 0 clipped into the
+    joint's limits (iCub's elbows, the Allegro thumb: limits that exclude 0), with a note in ``notes``."""
     chain_joints = {j.name for j in path}
     for name in locks:
         if name not in joints:
@@ -528,8 +531,10 @@ def _locked_values(r: _UrdfReader, robot: Element, joints: dict[str, _Joint], ch
             continue
         if j.mimic is not None and j.name not in locks:
             followers.append((j, j.mimic))
+        elif j.name in locks:
+            values[j.name] = Fraction(repr(float(locks[j.name])))
         else:
-            values[j.name] = Fraction(repr(float(locks.get(j.name, 0.0))))
+            values[j.name] = _default_lock(r, j, notes)
     for j, (leader, multiplier, offset) in followers:
         if leader in chain_joints:
             r.fail(j.element.find("mimic"), f"joint[{j.name}].mimic",
@@ -549,13 +554,31 @@ def _locked_values(r: _UrdfReader, robot: Element, joints: dict[str, _Joint], ch
     return dict(sorted(values.items(), key=lambda item: joints[item[0]].element.line))
 
 
-def _check_lock_within_limits(r: _UrdfReader, j: _Joint, value: Fraction) -> None:
+def _limits(j: _Joint) -> tuple[Fraction, Fraction] | None:
+    """(lower, upper) of a joint with a proper range in its ``<limit>``, else None (continuous, none given)."""
     limit = j.element.find("limit")
     if j.type == "continuous" or limit is None or not ("lower" in limit.attrib or "upper" in limit.attrib):
-        return
+        return None
     lower = Fraction(limit.attrib.get("lower", "0")) if _NUMBER.fullmatch(limit.attrib.get("lower", "0")) else None
     upper = Fraction(limit.attrib.get("upper", "0")) if _NUMBER.fullmatch(limit.attrib.get("upper", "0")) else None
-    if lower is not None and upper is not None and lower < upper and not lower <= value <= upper:
+    return (lower, upper) if lower is not None and upper is not None and lower < upper else None
+
+
+def _default_lock(r: _UrdfReader, j: _Joint, notes: list[str]) -> Fraction:
+    """0 clipped into the joint's limits; a clipped value is noted (where, what, how to choose another)."""
+    limits = _limits(j)
+    if limits is None or limits[0] <= 0 <= limits[1]:
+        return Fraction(0)
+    value = limits[0] if limits[0] > 0 else limits[1]
+    notes.append(f"line {j.element.line}: joint '{j.name}' off the chain locked at {_decimal(value)}, 0 clipped "
+                 f"into its limits [{_decimal(limits[0])}, {_decimal(limits[1])}] (--lock {j.name}=VALUE to choose)")
+    return value
+
+
+def _check_lock_within_limits(r: _UrdfReader, j: _Joint, value: Fraction) -> None:
+    limits = _limits(j)
+    limit = j.element.find("limit")
+    if limits is not None and limit is not None and not limits[0] <= value <= limits[1]:
         r.fail(limit, f"joint[{j.name}].limit", f"joint '{j.name}' is locked at {_decimal(value)}, outside its "
                                                 f"limits [{limit.attrib.get('lower')}, {limit.attrib.get('upper')}]",
                f"lock it within its limits (--lock {j.name}=VALUE)")
