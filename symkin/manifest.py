@@ -40,6 +40,8 @@ def _coordinate_record(model: Model, coordinate) -> dict[str, Any]:
     analyses in :mod:`symkin.analysis` and the simulation read them without sympy).
     """
     record: dict[str, Any] = {"name": coordinate.name, "type": coordinate.type.value}
+    if model.source_name("joints", coordinate.name) != coordinate.name:  # a URDF's joint_0.0, as named there
+        record["source_name"] = model.source_name("joints", coordinate.name)
     values = model.parameter_values
     if coordinate.limits is not None:
         record["limits"] = [float(bound.xreplace(values)) for bound in coordinate.limits]
@@ -92,6 +94,8 @@ def build_manifest(model: Model, code: ModelCode, derived: list[str], backend_fi
         ],
         "backends": {name: {"files": sorted(files)} for name, files in sorted(backend_files.items())},
     }
+    if model.source_names:  # joints and links renamed to identifiers: {model name: name in the file}
+        manifest["model"]["source_names"] = model.source_names
     if model.notes:  # what the reading decided (locks clipped into limits, non-physical inertias accepted)
         manifest["model"]["notes"] = list(model.notes)
     if model.parallel is not None:

@@ -286,3 +286,56 @@ def test_an_off_chain_joint_locks_at_0_clipped_into_its_limits_or_where_asked_wi
     assert load_model(path, tip="tool", locks={"j4": 0.75}).notes == ()
     with pytest.raises(ModelError, match="'j4' is locked at 2, outside its limits"):
         load_model(path, tip="tool", locks={"j4": 2.0})
+
+
+VENDOR = """<?xml version="1.0"?>
+<robot name="my-robot v2">
+  <link name="/base_link"/>
+  <link name="link.1"><inertial><mass value="1.0"/><origin xyz="0.1 0 0"/>
+    <inertia ixx="0.001" iyy="0.002" izz="0.0025" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="8"><inertial><mass value="0.5"/><origin xyz="0.1 0 0.01"/>
+    <inertia ixx="0.001" iyy="0.001" izz="0.001" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="link_1"><inertial><mass value="0.2"/></inertial></link>
+  <link name="tool0"/>
+  <joint name="joint_0.0" type="revolute"><parent link="/base_link"/><child link="link.1"/>
+    <axis xyz="0 0 1"/><limit lower="-1.5" upper="1.5" effort="10" velocity="2"/></joint>
+  <joint name="'8'" type="revolute"><parent link="link.1"/><child link="8"/><origin xyz="0.2 0 0"/>
+    <axis xyz="0 1 0"/><limit lower="-1.5" upper="1.5" effort="10" velocity="2"/></joint>
+  <joint name="lambda" type="revolute"><parent link="8"/><child link="link_1"/><origin xyz="0.2 0 0"/>
+    <axis xyz="1 0 0"/><limit lower="-1.5" upper="1.5" effort="10" velocity="2"/></joint>
+  <joint name="flange" type="fixed"><parent link="link_1"/><child link="tool0"/><origin xyz="0.05 0 0"/></joint>
+</robot>
+"""
+
+
+def test_vendor_names_derive_unedited_and_keep_their_names(tmp_path, capsys):
+    """Issue 29: joint and link names that are not identifiers (pybullet's joint_0.0, ROS's /base_link, '8', a
+    Python keyword) get code names by the documented rule (symkin.model.names.code_names; a clash with a name
+    taken before gets _2), the file's names stay in the manifest, the page and the crosscheck's table, and
+    Pinocchio, which reads the file's names, agrees."""
+    import json
+
+    from symkin.analysis.crosscheck import crosscheck
+    from symkin.cli import main
+    from symkin.model.names import code_names
+
+    assert code_names(["a_b", "a.b", "a-b", "8", "lambda", "/x"], "joint") == {
+        "a_b": "a_b", "a.b": "a_b_2", "a-b": "a_b_3", "8": "joint_8", "lambda": "lambda_", "/x": "x"}
+    path = _write(tmp_path, VENDOR, "vendor.urdf")
+    model = load_model(path)
+    assert model.name == "vendor"  # the file's name: the robot's, my-robot v2, is not an identifier
+    assert [j.name for j in model.joints] == ["joint_0_0", "joint_8", "lambda_"]
+    assert [j.link for j in model.joints] == ["link_1_2", "link_8", "link_1"]  # link_1 is the file's own
+    assert model.source_names == {"joints": {"joint_0_0": "joint_0.0", "joint_8": "'8'", "lambda_": "lambda"},
+                                  "links": {"base_link": "/base_link", "link_1_2": "link.1", "link_8": "8"}}
+    out = tmp_path / "out"
+    assert main(["derive", str(path), "--backend", "numpy,js", "--only", "fk,frames,jacobian", "-o", str(out),
+                 "-q"]) == 0
+    manifest = json.loads((out / "vendor" / "manifest.json").read_text())
+    assert [c.get("source_name") for c in manifest["model"]["coordinates"]] == ["joint_0.0", "'8'", "lambda"]
+    assert main(["view", str(out / "vendor"), "-o", str(tmp_path / "page.html"), "--workspace", "64"]) == 0
+    page = (tmp_path / "page.html").read_text()
+    assert '"label":"joint_0.0"' in page and '"label":"\\u00278\\u0027"' in page
+    report = crosscheck(path, samples=3)
+    assert not report.failures, report.comparisons
+    assert {"frame link.1", "frame 8", "frame link_1"} <= {c.quantity for c in report.comparisons}

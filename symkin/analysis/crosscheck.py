@@ -164,15 +164,18 @@ def crosscheck(path: str | Path, *, reference_urdf: str | Path | None = None, sa
         ours = load(written)
         reference = pin.buildModelFromXML(text)
         data = reference.createData()
-        missing = [j.name for j in model.joints if not reference.existJointName(j.name)]
-        missing += [link for link in [reduction.base, reduction.tip] + [j.link for j in model.joints]
+        # the reference reads the file's own names (a URDF's joint_0.0, renamed joint_0_0 in the model)
+        joint_names = [model.source_name("joints", j.name) for j in model.joints]
+        link_names = {j.link: model.source_name("links", j.link) for j in model.joints}
+        missing = [name for name in joint_names if not reference.existJointName(name)]
+        missing += [link for link in [reduction.base, reduction.tip, *link_names.values()]
                     if not reference.existFrame(link)]
         if missing:
             source = str(reference_path or path)
             raise ModelError([Problem(source, None, None, "", f"the reference has no joint or link "
                                                               f"{', '.join(sorted(set(missing)))}",
                                       "give a reference URDF of the same robot (--reference-urdf)")])
-        chain = [reference.joints[reference.getJointId(j.name)] for j in model.joints]
+        chain = [reference.joints[reference.getJointId(name)] for name in joint_names]
         columns = [joint.idx_v for joint in chain]
         # joints that mimic others: the reference's joints are free, set at theta = A q + b (and A qd, A qdd)
         coupling = _coupling(model)
@@ -210,8 +213,9 @@ def crosscheck(path: str | Path, *, reference_urdf: str | Path | None = None, sa
             to_base = data.oMf[base].inverse()
             pairs: dict[str, tuple[Any, ...]] = {"fk": (values["fk"][k], (to_base * data.oMf[tip]).homogeneous)}
             for joint in model.joints:
-                pairs[f"frame {joint.link}"] = (getattr(values["frames"], f"base_T_{joint.link}")[k],
-                                                (to_base * data.oMf[_link_frame(pin, reference, joint.link)]).homogeneous)
+                pairs[f"frame {link_names[joint.link]}"] = (getattr(values["frames"], f"base_T_{joint.link}")[k],
+                                                (to_base * data.oMf[_link_frame(pin, reference,
+                                                                                link_names[joint.link])]).homogeneous)
             jacobian = pin.computeFrameJacobian(reference, data, q, tip, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
             pairs["jacobian_geometric"] = (values["jacobian_geometric"][k], rotate @ jacobian[:, columns] @ coupling)
             if model.bodies:

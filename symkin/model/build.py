@@ -28,8 +28,8 @@ FORMAT_VERSION = 1
 #: Sections that say how a model is emitted, not what the mechanism is: left out of the model hash,
 #: so that choosing other outputs, backends or folded parameters keeps the mechanism's identity.
 EMISSION_KEYS = ("scene",)
-TOP_LEVEL_KEYS = ("name", "description", "references", "notes", "allow_nonphysical", "parameters", "serial",
-                  "parallel", "task_space", "bodies", "gravity", "friction", "scene")
+TOP_LEVEL_KEYS = ("name", "description", "references", "notes", "allow_nonphysical", "source_names", "parameters",
+                  "serial", "parallel", "task_space", "bodies", "gravity", "friction", "scene")
 
 
 def build_model(doc: Document, stem: str, allow_nonphysical: bool = False) -> Model:
@@ -92,6 +92,7 @@ def build_model(doc: Document, stem: str, allow_nonphysical: bool = False) -> Mo
         description=description.strip(),
         references=references,
         notes=tuple(r.notes),
+        source_names=_source_names(r, data),
         source=doc.file,
         hash=f"sha256:{digest}",
         parameters=parameters,
@@ -129,6 +130,16 @@ def _texts(r: Reader, data: dict[str, Any], key: str, what: str) -> list[str]:
     if items is None:
         return []
     return [s for i, v in enumerate(items) if (s := r.string((key, i), v)) is not None]
+
+
+def _source_names(r: Reader, data: dict[str, Any]) -> dict[str, dict[str, str]]:
+    """``source_names: {joints: {name: source name}, links: {...}}`` (written by the URDF reader)."""
+    section = r.mapping(("source_names",), data.get("source_names", {}), optional=("joints", "links"))
+    out: dict[str, dict[str, str]] = {}
+    for kind, names in (section or {}).items():
+        mapping = r.mapping(("source_names", kind), names, optional=tuple(names) if isinstance(names, dict) else ())
+        out[kind] = {str(k): v for k, v in (mapping or {}).items() if r.string(("source_names", kind, k), v) is not None}
+    return out
 
 
 def _flag(r: Reader, data: dict[str, Any], key: str) -> bool:

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import keyword
 import re
+from collections.abc import Iterable
 
 from symkin.model.expressions import RESERVED_NAMES
 
@@ -49,3 +50,34 @@ def name_problem(name: object) -> str | None:
     if name in RESERVED_IDENTIFIERS:
         return f"'{name}' is a reserved word of symkin or of the generated code"
     return None
+
+
+def code_names(names: Iterable[str], prefix: str) -> dict[str, str]:
+    """{name: identifier} for the names of a robot file (URDF link and joint names are any text:
+    ``joint_0.0``, ``/shoulder_link``, ``8``), so that vendor files derive unedited.
+
+    The rule: a name that is already a valid model name (:func:`name_problem`) keeps it; any other
+    becomes one: each run of characters other than ASCII letters, digits and ``_`` becomes ``_``,
+    leading and trailing ``_`` go, a result that does not start with a letter gets ``prefix_`` in
+    front, a reserved word gets a trailing ``_``, and it is cut to 60 characters.  A clash with a
+    name taken before (valid names first, then the others in the given order) gets ``_2``, ``_3``...
+    """
+    names = list(dict.fromkeys(names))
+    taken = {name for name in names if name_problem(name) is None}
+    result = {name: name for name in taken}
+    for name in names:
+        if name in result:
+            continue
+        base = re.sub(r"[^A-Za-z0-9_]+", "_", name).strip("_")
+        if not base[:1].isalpha():
+            base = f"{prefix}_{base}".rstrip("_")
+        base = base[:60]
+        if base in RESERVED_IDENTIFIERS:
+            base += "_"
+        candidate, k = base, 1
+        while candidate in taken:
+            k += 1
+            candidate = f"{base}_{k}"
+        taken.add(candidate)
+        result[name] = candidate
+    return result

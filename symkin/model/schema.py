@@ -397,6 +397,9 @@ class Model:
     #: what the reading decided that the file leaves open (a joint locked at a value clipped into its
     #: limits, a non-physical inertia accepted): printed by symkin check and derive, kept in the manifest.
     notes: tuple[str, ...] = ()
+    #: the names in the source file of joints and links renamed to identifiers (a URDF's ``joint_0.0``):
+    #: {"joints": {model name: source name}, "links": {...}}; see :meth:`source_name`.
+    source_names: dict = field(default_factory=dict)
     #: key path -> (line, column) in the model file, for located messages of later stages.
     locations: dict = field(default_factory=dict, compare=False, repr=False)
 
@@ -409,6 +412,10 @@ class Model:
             probe = probe[:-1]
         line, column = self.locations.get(probe, (None, None))
         return Problem(self.source, line, column, format_path(path), message, fix)
+
+    def source_name(self, kind: str, name: str) -> str:
+        """The name in the source file of the joint (``kind`` "joints") or link ("links") ``name``."""
+        return str(self.source_names.get(kind, {}).get(name, name))
 
     @property
     def mechanism(self) -> str:

@@ -60,6 +60,7 @@ from xml.parsers import expat
 import numpy as np
 
 from symkin.errors import ModelError, Problem
+from symkin.model.names import code_names, name_problem
 from symkin.model.urdf_export import rotation_about, urdf_rpy
 from symkin.model.yaml_source import MAX_FILE_BYTES, Document, KeyPath
 
@@ -95,6 +96,9 @@ class _Fail(Exception):
 class _UrdfReader:
     def __init__(self, file: str, snap_angles: bool = False):
         self.file = file
+        #: {URDF name: model name} of the joints and links (symkin.model.names.code_names).
+        self.joint_ids: dict[str, str] = {}
+        self.link_ids: dict[str, str] = {}
         self.snap_angles = snap_angles
         self.problems: list[Problem] = []
         self.marks: dict[KeyPath, tuple[int, int]] = {}
@@ -249,6 +253,7 @@ def urdf_document(text: str, file: str = "<string>", tip: str | None = None, *, 
     links = _links(r, robot)
     joints = _joints(r, robot, links)
     r.stop()
+    r.joint_ids, r.link_ids = code_names(joints, "joint"), code_names(links, "link")
     parent_of = {j.child: j for j in joints.values()}
     children: dict[str, list[_Joint]] = {link: [] for link in links}
     for j in joints.values():
@@ -269,8 +274,17 @@ def urdf_document(text: str, file: str = "<string>", tip: str | None = None, *, 
 
     data: dict[str, Any] = {"notes": notes} if notes else {}
     robot_name = robot.attrib.get("name", "")
-    if re.fullmatch(r"[A-Za-z][A-Za-z0-9_]*", robot_name):
+    # the robot's name if it can name a model, else the file's (the default of any model file), else one
+    # made from either by the rule of the joints and links
+    if name_problem(robot_name) is None:
         data["name"] = robot_name
+    elif name_problem(Path(file).stem) is not None:
+        source = robot_name.strip() or Path(file).stem
+        data["name"] = code_names([source], "robot")[source]
+    renamed = {kind: {ids[name]: name for name in names if ids[name] != name}
+               for kind, names, ids in (("joints", joints, r.joint_ids), ("links", links, r.link_ids))}
+    if any(renamed.values()):
+        data["source_names"] = {kind: names for kind, names in renamed.items() if names}
     locked_text = ", ".join(f"{name} = {_decimal(value)}" for name, value in locked.items())
     data["description"] = (f"{robot_name or 'robot'} from the URDF {Path(file).name}, chain {root} -> {tip}"
                            + (f"; locked: {locked_text}" if locked else "")
@@ -301,8 +315,8 @@ def urdf_document(text: str, file: str = "<string>", tip: str | None = None, *, 
             if dynamics is not None:
                 coefficients = _friction(r, j, dynamics)
                 if coefficients:
-                    r.marks[("friction", j.name)] = (dynamics.line, dynamics.column)
-                    friction[j.name] = coefficients
+                    r.marks[("friction", r.joint_ids[j.name])] = (dynamics.line, dynamics.column)
+                    friction[r.joint_ids[j.name]] = coefficients
         if chain:
             carried[j.child] = (chain[-1]["link"], list(pending))
     if not chain:
@@ -615,8 +629,8 @@ def _fraction_text(value: Fraction) -> str:
 
 def _moving_joint(r: _UrdfReader, j: _Joint, origin: list[dict[str, list[str]]]) -> dict[str, Any]:
     key = f"joint[{j.name}]"
-    joint: dict[str, Any] = {"name": j.name, "type": "P" if j.type == "prismatic" else "R", "link": j.child,
-                             "origin": origin}
+    joint: dict[str, Any] = {"name": r.joint_ids[j.name], "type": "P" if j.type == "prismatic" else "R",
+                             "link": r.link_ids[j.child], "origin": origin}
     axis = j.element.find("axis")
     joint["axis"] = r.numbers(axis, "xyz", 3, "1 0 0", key + ".axis") if axis is not None else ["1", "0", "0"]
     limit = j.element.find("limit")
@@ -634,7 +648,8 @@ def _moving_joint(r: _UrdfReader, j: _Joint, origin: list[dict[str, list[str]]])
                 joint[field_name] = value
     if j.mimic is not None:  # a follower on the chain: q = multiplier q_leader + offset, exact
         leader, multiplier, offset = j.mimic
-        joint["mimic"] = {"joint": leader, "multiplier": str(multiplier), "offset": str(offset)}
+        joint["mimic"] = {"joint": r.joint_ids.get(leader, leader), "multiplier": str(multiplier),
+                          "offset": str(offset)}
     return joint
 
 

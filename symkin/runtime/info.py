@@ -24,6 +24,7 @@ class Coordinate:
         limits: (lower, upper) at the parameters' default values, or None where the model declares none.
         velocity_limit: the largest |qd| the joint allows (rad/s or m/s), or None.
         effort_limit: the largest |tau| its actuator gives (N m or N), or None.
+        label: its name in the robot file it came from (a URDF's ``joint_0.0``), for people; else ``name``.
     """
 
     name: str
@@ -31,6 +32,11 @@ class Coordinate:
     limits: tuple[float, float] | None
     velocity_limit: float | None = None
     effort_limit: float | None = None
+    label: str = ""
+
+    def __post_init__(self) -> None:
+        if not self.label:
+            object.__setattr__(self, "label", self.name)
 
 
 @dataclass(frozen=True)
@@ -109,7 +115,7 @@ class ModelInfo:
         parallel = model.get("parallel")
         coordinates = tuple(Coordinate(c["name"], c["type"] == "R",
                                        (float(c["limits"][0]), float(c["limits"][1])) if c.get("limits") else None,
-                                       c.get("velocity_limit"), c.get("effort_limit"))
+                                       c.get("velocity_limit"), c.get("effort_limit"), c.get("source_name", ""))
                             for c in model["coordinates"])
         parameters = tuple(Parameter(p["name"], float(p["default"]), p.get("unit", ""), bool(p["fixed"]))
                            for p in manifest["parameters"])

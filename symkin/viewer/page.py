@@ -165,7 +165,7 @@ def _coordinates(model: GeneratedModel) -> list[dict[str, Any]]:
     limits = mechanism.joint_limits(model)
     out = []
     for c, (lower, upper) in zip(model.info.coordinates, limits):
-        out.append(_slider(c.name, float(lower), float(upper), *_slider_units("", c.revolute)))
+        out.append(_slider(c.name, float(lower), float(upper), *_slider_units("", c.revolute)) | {"label": c.label})
     return out
 
 

@@ -143,7 +143,7 @@ function evaluate() {
     state.q = joints;
     const unreachable = margin.map((m, i) => (m >= 0 ? null : i + 1)).filter((i) => i !== null);
     if (unreachable.length) out.warnings.push(`out of reach of leg ${unreachable.join(", ")}`);
-    const limits = data.coordinates.map((c, i) => (joints[i] < c.lower || joints[i] > c.upper ? c.name : null))
+    const limits = data.coordinates.map((c, i) => (joints[i] < c.lower || joints[i] > c.upper ? c.label : null))
       .filter((n) => n !== null);
     if (limits.length) out.warnings.push(`beyond the limits of ${limits.join(", ")}`);
     const rows = unreachable.length ? null : call("leg_points", joints, state.p);
@@ -385,7 +385,7 @@ function show(out) {
   warning.hidden = out.warnings.length === 0;
   if (data.kind === "parallel") {
     document.getElementById("joints").textContent = state.q.map((v, i) =>
-      `${data.coordinates[i].name} = ${format(v / data.coordinates[i].scale, 2)} ${data.coordinates[i].unit}`).join(", ");
+      `${data.coordinates[i].label} = ${format(v / data.coordinates[i].scale, 2)} ${data.coordinates[i].unit}`).join(", ");
   }
 }
 
@@ -414,7 +414,7 @@ function slider(container, spec, value, onChange) {
 
 const sliders = document.getElementById("sliders");
 if (data.kind === "serial") {
-  data.coordinates.forEach((c, i) => slider(sliders, { id: `joint-${c.name}`, label: c.name, lower: c.lower / c.scale,
+  data.coordinates.forEach((c, i) => slider(sliders, { id: `joint-${c.name}`, label: c.label, lower: c.lower / c.scale,
     upper: c.upper / c.scale, step: c.step, unit: c.unit, digits: 1 }, state.q[i] / c.scale,
   (v) => { state.q[i] = v * c.scale; }));
 } else {
