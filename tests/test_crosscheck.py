@@ -34,6 +34,32 @@ def test_the_example_models_agree_with_pinocchio(name):
     assert not report.failures, report.comparisons
 
 
+def test_vanishing_quantities_are_judged_by_their_natural_size():
+    """Issue 29: where a quantity vanishes (V of one joint, of a leg at rest) symkin's is exactly 0 and the
+    reference's recursion leaves rounding (1e-27): relative to that noise the error was 1.0, a false failure.
+    The double pendulum held at its first link, as shipped: every row passes."""
+    from symkin.analysis.crosscheck import _normwise
+
+    assert _normwise(np.zeros(1), np.array([1e-27])) == 1.0  # relative to the noise: the old false alarm
+    assert _normwise(np.zeros(1), np.array([1e-27]), None, 2.5) == pytest.approx(4e-28)
+    assert _normwise(np.zeros(1), np.array([0.3]), None, 2.5) == pytest.approx(0.12)  # a real difference stays
+    report = crosscheck(ROBOTS_DIR / "double_pendulum_description/urdf/double_pendulum.urdf", samples=3,
+                        urdf={"tip": "link1"}, backends=("numpy",))
+    assert not report.failures, report.comparisons
+
+
+def test_friction_the_coriolis_matrix_and_the_c_code_are_checked():
+    """Issue 29: the file's <dynamics> enter tau (Pinocchio's damping and friction added to its RNEA) and the
+    friction row; C is checked through C qd = V and Mdot - 2C skew (Mdot = C_ref + C_ref^T); and the C
+    library is checked as the numpy module is."""
+    report = crosscheck(ROBOTS_DIR / "double_pendulum_description/urdf/double_pendulum.urdf", samples=3,
+                        urdf={"tip": "link2"})
+    rows = {c.quantity: c for c in report.comparisons}
+    for row in ("friction", "inverse_dynamics", "coriolis_matrix C qd", "coriolis_matrix Mdot - 2C skew"):
+        assert row in rows and f"{row} (c)" in rows and not rows[row].note, row
+    assert not report.failures, report.comparisons
+
+
 def test_a_stock_robot_with_locked_fingers_passes_on_the_command_line():
     run = subprocess.run(SYMKIN_CLI + ["crosscheck", str(ROBOTS_DIR / "panda_description/urdf/panda.urdf"), "--tip",
                                        "panda_link8", "--lock", "panda_finger_joint1=0.03", "--samples", "4"],

@@ -35,6 +35,10 @@ from symkin.model.coordinates import coordinate_range, coupling_matrix
 DEFAULT_TOLERANCE = 1e-12
 KINEMATICS_OUTPUTS = ("fk", "frames", "jacobian_geometric")
 DYNAMICS_OUTPUTS = ("mass_matrix", "coriolis_vector", "gravity_vector", "inverse_dynamics")
+#: The generated code checked by default: what users run in Python and in their control loops.
+BACKENDS = ("numpy", "c")
+#: Chains up to this many joints have C checked by default (its derivation grows as n^3: seconds at 7).
+CORIOLIS_MATRIX_JOINTS = 7
 
 
 @dataclass(frozen=True)
@@ -70,13 +74,15 @@ def _pinocchio() -> Any:
     return pinocchio
 
 
-def _normwise(got: np.ndarray, want: np.ndarray, terms: np.ndarray | None = None) -> float:
-    """||got - want|| / ||terms||, where ``terms`` (default ``want``) bounds the magnitudes summed into ``want``.
+def _normwise(got: np.ndarray, want: np.ndarray, terms: np.ndarray | None = None, natural: float = 0.0) -> float:
+    """||got - want|| / max(||terms||, natural), where ``terms`` (default ``want``) bounds the magnitudes
+    summed into ``want`` and ``natural`` is the quantity's natural size (:func:`_dynamics_references`).
 
     A quantity reduced to coordinates by a coupling, A^T v, can cancel to zero (a parallel-jaw
-    finger's Coriolis torque): its rounding is relative to |A|^T |v|, not to the sum.
+    finger's Coriolis torque): its rounding is relative to |A|^T |v|, not to the sum; one that
+    vanishes (V at rest) is compared with the size its terms have elsewhere, not with rounding noise.
     """
-    scale = float(np.linalg.norm(want if terms is None else terms))
+    scale = max(float(np.linalg.norm(want if terms is None else terms)), natural)
     difference = float(np.linalg.norm(np.asarray(got, dtype=float) - want))
     return difference / scale if scale > 0 else difference
 
@@ -137,12 +143,17 @@ def _states(model: Any, samples: int, seed: int) -> tuple[np.ndarray, np.ndarray
 
 def crosscheck(path: str | Path, *, reference_urdf: str | Path | None = None, samples: int = 20, seed: int = 0,
                tolerance: float = DEFAULT_TOLERANCE, urdf: Mapping[str, Any] | None = None,
+               backends: tuple[str, ...] = BACKENDS, coriolis_matrix: bool | None = None,
                progress: Callable[[str], None] | None = None) -> CrosscheckReport:
     """Compare the model in ``path`` (YAML or URDF) with Pinocchio (see the module docstring).
 
     Args:
         urdf: the keyword arguments of :func:`symkin.model.load_model` (for a URDF model tip, base,
             locks, snap_angles; for any, allow_nonphysical).
+        backends: the generated code checked, numpy and C by default; the rows of a backend after the
+            first are named ``<quantity> (<backend>)``.
+        coriolis_matrix: check C (default: for chains of up to :data:`CORIOLIS_MATRIX_JOINTS` joints;
+            its Christoffel symbols cost O(n^3) derivatives of M, minutes for a 10-joint arm).
 
     Raises:
         ModelError: bad model, a parallel model, a reference without the chain's joints or
@@ -155,13 +166,16 @@ def crosscheck(path: str | Path, *, reference_urdf: str | Path | None = None, sa
     path = Path(path)
     reference_path = Path(reference_urdf) if reference_urdf is not None else None
     model, text, reduction = _sources(path, reference_path, urdf or {})
-    outputs = KINEMATICS_OUTPUTS + (DYNAMICS_OUTPUTS if model.bodies else ())
+    with_c = bool(model.bodies) and (len(model.joints) <= CORIOLIS_MATRIX_JOINTS if coriolis_matrix is None
+                                     else coriolis_matrix)
+    outputs = KINEMATICS_OUTPUTS + (DYNAMICS_OUTPUTS + (("coriolis_matrix",) if with_c else ())
+                                    + (("friction",) if model.friction else ()) if model.bodies else ())
     say = progress or (lambda _line: None)
-    say(f"deriving {', '.join(outputs)} of {model.name} (numpy)")
-    request = pipeline.resolve_request(model, outputs, "numpy", None, False, "none")
+    say(f"deriving {', '.join(outputs)} of {model.name} ({', '.join(backends)})")
+    request = pipeline.resolve_request(model, outputs, ",".join(backends), None, False, "none")
     with tempfile.TemporaryDirectory(prefix="symkin-crosscheck-") as directory:
         written = pipeline.write(pipeline.generate(model, request), directory)
-        ours = load(written)
+        generated = {backend: load(written, backend) for backend in backends}
         reference = pin.buildModelFromXML(text)
         data = reference.createData()
         # the reference reads the file's own names (a URDF's joint_0.0, renamed joint_0_0 in the model)
@@ -176,6 +190,7 @@ def crosscheck(path: str | Path, *, reference_urdf: str | Path | None = None, sa
                                                               f"{', '.join(sorted(set(missing)))}",
                                       "give a reference URDF of the same robot (--reference-urdf)")])
         chain = [reference.joints[reference.getJointId(name)] for name in joint_names]
+        frame_links = {f"frame {link_names[j.link]}": j.link for j in model.joints}
         columns = [joint.idx_v for joint in chain]
         # joints that mimic others: the reference's joints are free, set at theta = A q + b (and A qd, A qdd)
         coupling = _coupling(model)
@@ -194,13 +209,11 @@ def crosscheck(path: str | Path, *, reference_urdf: str | Path | None = None, sa
         weightless = pin.Model(reference)
         weightless.gravity = pin.Motion.Zero()
         weightless_data = weightless.createData()
+        total_mass = float(sum(float(b.mass.xreplace(model.parameter_values)) for b in model.bodies))
+        smooth = any(f.smoothing_velocity is not None for f in model.friction)
         Q, QD, QDD = _states(model, samples, seed)
         say(f"comparing at {samples} states with Pinocchio {pin.__version__}")
-        values = {name: getattr(ours, name)(*args) for name, args in (
-            ("fk", (Q,)), ("frames", (Q,)), ("jacobian_geometric", (Q,)))}
-        if model.bodies:
-            values |= {"mass_matrix": ours.mass_matrix(Q), "coriolis_vector": ours.coriolis_vector(Q, QD),
-                       "gravity_vector": ours.gravity_vector(Q), "inverse_dynamics": ours.inverse_dynamics(Q, QD, QDD)}
+        values = {backend: _evaluate(ours, outputs, Q, QD, QDD) for backend, ours in generated.items()}
         errors: dict[str, float] = {}
         rotate = np.kron(np.eye(2), base_rotation.T)
         for k in range(samples):
@@ -211,33 +224,89 @@ def crosscheck(path: str | Path, *, reference_urdf: str | Path | None = None, sa
                 v[joint.idx_v], a[joint.idx_v] = rate, acceleration
             pin.framesForwardKinematics(reference, data, q)
             to_base = data.oMf[base].inverse()
-            pairs: dict[str, tuple[Any, ...]] = {"fk": (values["fk"][k], (to_base * data.oMf[tip]).homogeneous)}
-            for joint in model.joints:
-                pairs[f"frame {link_names[joint.link]}"] = (getattr(values["frames"], f"base_T_{joint.link}")[k],
-                                                (to_base * data.oMf[_link_frame(pin, reference,
-                                                                                link_names[joint.link])]).homogeneous)
+            want: dict[str, tuple[Any, ...]] = {"fk": ((to_base * data.oMf[tip]).homogeneous,)}
+            for row, link in frame_links.items():
+                frame = _link_frame(pin, reference, link_names[link])
+                want[row] = ((to_base * data.oMf[frame]).homogeneous,)
             jacobian = pin.computeFrameJacobian(reference, data, q, tip, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
-            pairs["jacobian_geometric"] = (values["jacobian_geometric"][k], rotate @ jacobian[:, columns] @ coupling)
+            want["jacobian_geometric"] = (rotate @ jacobian[:, columns] @ coupling,)
             if model.bodies:
-                mass = pin.crba(reference, data, q)
-                mass = np.triu(mass) + np.triu(mass, 1).T
-                g = pin.computeGeneralizedGravity(reference, data, q)
-                pairs["mass_matrix"] = (values["mass_matrix"][k],
-                                        *_reduced(coupling, mass[np.ix_(columns, columns)]))
-                pairs["gravity_vector"] = (values["gravity_vector"][k], *_reduced(coupling, g[columns]))
-                pairs["coriolis_vector"] = (values["coriolis_vector"][k], *_reduced(coupling, pin.nonLinearEffects(
-                    weightless, weightless_data, q, v)[columns]))
-                if not model.friction:
-                    pairs["inverse_dynamics"] = (values["inverse_dynamics"][k],
-                                                 *_reduced(coupling, pin.rnea(reference, data, q, v, a)[columns]))
-            for name, (got, want, *terms) in pairs.items():
-                errors[name] = max(errors.get(name, 0.0), _normwise(got, want, *terms))
+                want |= _dynamics_references(pin, reference, data, weightless, weightless_data, q, v, a, columns,
+                                             coupling, total_mass, float(np.linalg.norm(gravity)), smooth)
+            if not with_c:
+                want = {name: value for name, value in want.items() if not name.startswith("coriolis_matrix")}
+            for backend, got in values.items():
+                suffix = "" if backend == backends[0] else f" ({backend})"
+                for name, (expected, *scales) in want.items():
+                    error = _normwise(_ours(got, name, k, frame_links), expected, *scales)
+                    errors[name + suffix] = max(errors.get(name + suffix, 0.0), error)
     comparisons = [Comparison(name, error) for name, error in errors.items()]
-    if model.bodies and model.friction:
-        comparisons.append(Comparison("inverse_dynamics", 0.0, "skipped: the model has friction, Pinocchio's RNEA none"))
+    if model.bodies and not with_c:
+        comparisons.append(Comparison("coriolis_matrix", 0.0, "skipped: not asked for (--coriolis-matrix checks it)"))
+    if model.bodies and smooth:
+        comparisons.append(Comparison("inverse_dynamics", 0.0, "skipped: smoothed Coulomb friction (tanh), "
+                                                               "Pinocchio's sign(qd)"))
     if not model.bodies:
         comparisons.append(Comparison("dynamics", 0.0, "skipped: the model declares no bodies"))
     return CrosscheckReport(model.name, f"Pinocchio {pin.__version__}", samples, tolerance, tuple(comparisons))
+
+
+def _evaluate(ours: Any, outputs: tuple[str, ...], Q: np.ndarray, QD: np.ndarray, QDD: np.ndarray) -> dict[str, Any]:
+    """Every output of one backend's generated module at the sampled states."""
+    arguments = {"mass_matrix": (Q,), "coriolis_vector": (Q, QD), "coriolis_matrix": (Q, QD), "gravity_vector": (Q,),
+                 "friction": (QD,), "inverse_dynamics": (Q, QD, QDD)}
+    return {name: getattr(ours, name)(*arguments.get(name, (Q,))) for name in outputs} | {"_qd": QD}
+
+
+def _ours(values: dict[str, Any], row: str, k: int, frame_links: dict[str, str]) -> np.ndarray:
+    """symkin's value of the row ``row`` at state ``k`` (``frame_links``: {frame row: model link}; the
+    Coriolis matrix is checked through its properties)."""
+    if row in frame_links:
+        frames = values["frames"]  # a one-joint chain's frames function returns its one frame as an array
+        return frames[k] if isinstance(frames, np.ndarray) else getattr(frames, f"base_T_{frame_links[row]}")[k]
+    if row == "coriolis_matrix C qd":
+        return values["coriolis_matrix"][k] @ values["_qd"][k]
+    if row == "coriolis_matrix Mdot - 2C skew":
+        C = values["coriolis_matrix"][k]
+        return C + C.T  # the reference gives Mdot = C_ref + C_ref^T: Mdot - 2C is skew iff C + C^T = Mdot
+    return values[row][k]
+
+
+def _dynamics_references(pin: Any, reference: Any, data: Any, weightless: Any, weightless_data: Any,
+                         q: np.ndarray, v: np.ndarray, a: np.ndarray, columns: list[int], coupling: np.ndarray,
+                         total_mass: float, gravity: float, smooth: bool) -> dict[str, tuple[Any, ...]]:
+    """{row: (reference value, the magnitudes summed into it, natural size)} of the dynamics at one state.
+
+    The natural size is the scale the quantity's terms have even where they cancel or vanish (V at
+    qd = 0 is exactly 0 in symkin, 1e-27 in Pinocchio's recursion): ||M|| |qd|^2 for V, ||M|| |qd| for
+    C, g sqrt(||M|| m) (about m g L) for G, their sum with ||M|| |qdd| and the friction for tau.
+    """
+    mass = pin.crba(reference, data, q)
+    mass = np.triu(mass) + np.triu(mass, 1).T
+    M, M_terms = _reduced(coupling, mass[np.ix_(columns, columns)])
+    size = float(np.linalg.norm(M_terms))
+    qd, qdd = np.linalg.norm(coupling.T @ v[columns]), np.linalg.norm(coupling.T @ a[columns])
+    damping, dry = reference.damping[columns], reference.friction[columns]
+    friction_joint = damping * v[columns] + dry * np.sign(v[columns])
+    friction_size = float(np.linalg.norm(np.abs(damping * v[columns]) + np.abs(dry)))
+    G, G_terms = _reduced(coupling, pin.computeGeneralizedGravity(reference, data, q)[columns])
+    V, V_terms = _reduced(coupling, pin.nonLinearEffects(weightless, weightless_data, q, v)[columns])
+    coriolis = pin.computeCoriolisMatrix(weightless, weightless_data, q, v)[np.ix_(columns, columns)]
+    Mdot, Mdot_terms = _reduced(coupling, coriolis + coriolis.T)
+    g_size = gravity * math.sqrt(size * total_mass)
+    rows: dict[str, tuple[Any, ...]] = {
+        "mass_matrix": (M, M_terms),
+        "gravity_vector": (G, G_terms, g_size),
+        "coriolis_vector": (V, V_terms, size * qd ** 2),
+        "coriolis_matrix C qd": (V, V_terms, size * qd ** 2),
+        "coriolis_matrix Mdot - 2C skew": (Mdot, Mdot_terms, size * qd),
+    }
+    if np.any(damping) or np.any(dry):
+        rows["friction"] = (*_reduced(coupling, friction_joint), friction_size)
+    if not smooth:
+        tau = pin.rnea(reference, data, q, v, a)[columns] + friction_joint
+        rows["inverse_dynamics"] = (*_reduced(coupling, tau), size * (qdd + qd ** 2) + g_size + friction_size)
+    return rows
 
 
 def _set(q: np.ndarray, joint: Any, value: float) -> None:
