@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import subprocess
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -340,3 +341,29 @@ def test_vendor_names_derive_unedited_and_keep_their_names(tmp_path, capsys):
     report = crosscheck(path, samples=3, backends=("numpy",))
     assert not report.failures, report.comparisons
     assert {"frame link.1", "frame 8", "frame link_1"} <= {c.quantity for c in report.comparisons}
+
+
+def test_robot_files_are_told_by_their_content(tmp_path, capsys):
+    """Issue 29: a URDF named .xml is read as a URDF; a xacro file (the package's own hector quadrotor, and a
+    .urdf that still holds xacro: macros) and an MJCF file are refused with a located message that says what
+    they are and what to do (xacro's ${...} are Python expressions: symkin does not run them), exit code 2,
+    nothing written; they were parsed as YAML and got YAML keys suggested."""
+    from importlib.metadata import distribution
+
+    from symkin.cli import main
+
+    xml = _write(tmp_path, ARM, "arm.xml")
+    assert [j.name for j in load_model(xml, tip="tool").joints] == \
+        [j.name for j in load_model(_write(tmp_path, ARM), tip="tool").joints]
+    robots = Path(distribution("example-robot-data").locate_file("cmeel.prefix/share/example-robot-data/robots"))
+    macros = _write(tmp_path, ARM.replace('<robot name="arm">', '<robot name="arm" xmlns:xacro="http://ros.org/wiki/'
+                                                                 'xacro"><xacro:property name="l" value="0.2"/>'),
+                    "macros.urdf")
+    mjcf = _write(tmp_path, '<mujoco model="arm"><worldbody><body name="b"/></worldbody></mujoco>', "arm_mjcf.xml")
+    for path, what in ((robots / "hector_description/robots/quadrotor_base.urdf.xacro", "xacro file"),
+                       (macros, "xacro file"), (mjcf, "MJCF (MuJoCo) file")):
+        out = tmp_path / "out"
+        assert main(["derive", str(path), "-o", str(out)]) == 2
+        err = capsys.readouterr().err
+        assert f"{path}: this is a{'n' if what.startswith('M') else ''} {what}" in err and "fix:" in err, err
+        assert "did you mean" not in err and not out.exists()

@@ -98,12 +98,13 @@ def _sources(path: Path, reference_urdf: Path | None, urdf: Mapping[str, Any]) -
     """(model, reference URDF text, reduction) for the model file ``path``."""
     from symkin.model import load_model
     from symkin.model.build import build_model
+    from symkin.model.source_kind import URDF, source_kind
     from symkin.model.urdf_export import ROOT_LINK, TCP_LINK, export_urdf
     from symkin.model.urdf_source import UrdfReduction, read_urdf_document
 
     options = dict(urdf)
     allow_nonphysical = bool(options.pop("allow_nonphysical", False))
-    if path.suffix.lower() == ".urdf":
+    if source_kind(path) == URDF:
         document = read_urdf_document(path, **options)
         model = build_model(document, path.stem, allow_nonphysical)
         reduction = document.reduction

@@ -29,7 +29,7 @@ ANALYSIS_OUTPUTS = ("fk", "jacobian")
 ANALYSIS_OUTPUTS_BY_KIND = {"serial": ANALYSIS_OUTPUTS, "parallel": ("ik", "fk", "jacobian"),
                             "parallel pose": ("ik", "inverse_jacobian")}
 #: Suffixes of model files (derived on the fly); anything else is a generated directory.
-MODEL_FILE_SUFFIXES = (".yaml", ".yml", ".urdf")
+MODEL_FILE_SUFFIXES = (".yaml", ".yml", ".urdf", ".xml", ".xacro")
 #: Length units of figures and design labels: metres per unit.
 LENGTH_UNITS = {"m": 1.0, "cm": 100.0, "mm": 1000.0}
 #: Also derived for a parallel model file that limits passive joints: the analyses find the

@@ -13,6 +13,7 @@ from typing import Any
 
 from symkin.cli.analysis_args import parse_value
 from symkin.errors import ModelError, Problem
+from symkin.model.source_kind import URDF, source_kind
 
 
 def add_urdf_arguments(p: argparse.ArgumentParser) -> None:
@@ -40,10 +41,10 @@ def urdf_options(args: argparse.Namespace, path: str) -> dict[str, Any]:
     """
     given = [option for option, value in (("--tip", args.tip), ("--base", args.base), ("--lock", args.lock),
                                           ("--snap-angles", args.snap_angles)) if value]
-    if given and not any(model.lower().endswith(".urdf") for model in args.models):
+    if given and not any(source_kind(model) == URDF for model in args.models):
         raise ModelError([Problem("<command line>", None, None, given[0], f"{given[0]} applies to URDF files only",
                                   f"drop {given[0]}, or pass a .urdf file")])
-    if not path.lower().endswith(".urdf"):
+    if source_kind(path) != URDF:
         return {"allow_nonphysical": args.allow_nonphysical}
     locks = {}
     for item in args.lock:

@@ -1,4 +1,5 @@
-"""Mechanism models: read a YAML model file (or a URDF) into a frozen, validated :class:`Model`."""
+"""Mechanism models: read a YAML model file (or a URDF, told by its content) into a frozen, validated
+:class:`Model`."""
 
 from __future__ import annotations
 
@@ -8,6 +9,7 @@ from pathlib import Path
 from symkin.errors import ModelError, Problem
 from symkin.model.build import build_model
 from symkin.model.schema import Body, Friction, Joint, JointType, Model, Parameter, Rotation, Scene, Translation
+from symkin.model.source_kind import MJCF, URDF, XACRO, source_kind
 from symkin.model.urdf_source import read_urdf_document
 from symkin.model.yaml_source import parse_document, read_document
 
@@ -18,7 +20,8 @@ __all__ = ["Body", "Friction", "Joint", "JointType", "Model", "Parameter", "Rota
 def load_model(path: str | Path, tip: str | None = None, *, base: str | None = None,
                locks: Mapping[str, float] | None = None, snap_angles: bool = False,
                allow_nonphysical: bool = False) -> Model:
-    """Read, validate and build the model in the file ``path``: YAML, or URDF (``.urdf``).
+    """Read, validate and build the model in the file ``path``: YAML, or URDF (by its content: root
+    element ``<robot>``, whatever the file's name; xacro and MJCF files are refused with a located message).
 
     Args:
         path: the model file.
@@ -33,7 +36,10 @@ def load_model(path: str | Path, tip: str | None = None, *, base: str | None = N
     Raises:
         symkin.errors.ModelError: with every problem found, each located in the file.
     """
-    if Path(path).suffix.lower() == ".urdf":
+    kind = source_kind(path)
+    if kind in (XACRO, MJCF):
+        raise ModelError([_unsupported(str(path), kind)])
+    if kind == URDF:
         return build_model(read_urdf_document(path, tip, base=base, locks=locks, snap_angles=snap_angles),
                            Path(path).stem, allow_nonphysical)
     given = [name for name, value in (("tip", tip), ("base", base), ("locks", locks), ("snap_angles", snap_angles))
@@ -42,6 +48,18 @@ def load_model(path: str | Path, tip: str | None = None, *, base: str | None = N
         raise ModelError([Problem(str(path), None, None, "", f"{given[0]} applies to URDF files only",
                                   f"drop {given[0]}, or pass a .urdf file")])
     return build_model(read_document(path), Path(path).stem, allow_nonphysical)
+
+
+def _unsupported(file: str, kind: str) -> Problem:
+    """The located refusal of a robot file symkin does not read yet (told by its content)."""
+    if kind == XACRO:
+        return Problem(file, None, None, "", "this is a xacro file (XML with xacro: macros), not a plain URDF; "
+                                             "symkin does not expand xacro (its ${...} are Python expressions, "
+                                             "which a model file must never run)",
+                       "expand it where you trust it: xacro robot.urdf.xacro > robot.urdf (pip install xacro, or "
+                       "ROS), then symkin derive robot.urdf")
+    return Problem(file, None, None, "", "this is an MJCF (MuJoCo) file; symkin reads YAML models and URDFs",
+                   "declare the mechanism as a URDF or a YAML model (docs/model-format.md)")
 
 
 def model_from_text(text: str, name: str = "model", file: str = "<string>") -> Model:
