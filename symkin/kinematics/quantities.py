@@ -21,8 +21,7 @@ from symkin.ir.quantity import quantity
 from symkin.ir.spec import FunctionSpec, OutputSpec, make_function
 from symkin.kinematics import task_space
 from symkin.kinematics.chain import ChainFrames, compose_chain
-from symkin.model import coordinates
-from symkin.model.schema import JointType
+from symkin.model import coordinates, joint_kinds
 
 if TYPE_CHECKING:
     from symkin.derivation.graph import Derivation
@@ -77,11 +76,9 @@ def geometric_jacobian_matrix(d: Derivation) -> sympy.ImmutableMatrix:
     p_tcp = sympy.Matrix(chain.tcp.p)
     columns = []
     for axis in chain.axes:
-        z = sympy.Matrix(axis.direction)
-        if axis.type is JointType.REVOLUTE:
-            columns.append(z.cross(p_tcp - sympy.Matrix(axis.point)).col_join(z))
-        else:
-            columns.append(z.col_join(sympy.zeros(3, 1)))
+        angular, linear = joint_kinds.motion_subspace(axis.type, sympy.Matrix(axis.direction))
+        # the joint's twist moved from a point on its axis to the TCP: v = w x (p_tcp - p_axis) + v_axis
+        columns.append((angular.cross(p_tcp - sympy.Matrix(axis.point)) + linear).col_join(angular))
     J = sympy.Matrix.hstack(*columns)
     coupling = coordinates.coupling_matrix(d.model)
     return sympy.ImmutableMatrix(J if coupling is None else J * coupling)

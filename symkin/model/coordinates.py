@@ -14,7 +14,8 @@ from dataclasses import dataclass
 import numpy as np
 import sympy
 
-from symkin.model.schema import JointType, Model
+from symkin.model import joint_kinds
+from symkin.model.schema import Model
 
 
 @dataclass(frozen=True)
@@ -51,7 +52,7 @@ def symbols(model: Model, group: str) -> tuple[sympy.Symbol, ...]:
 def units(model: Model, group: str) -> tuple[str, ...]:
     """Per-joint units of one coordinate group."""
     g = GROUPS[group]
-    return tuple(g.revolute_unit if j.type is JointType.REVOLUTE else g.prismatic_unit for j in model.coordinates)
+    return tuple(g.revolute_unit if joint_kinds.is_rotation(j.type) else g.prismatic_unit for j in model.coordinates)
 
 
 def joint_values(model: Model, group: str) -> tuple[sympy.Expr, ...]:
@@ -102,7 +103,7 @@ def coordinate_range(model: Model) -> tuple[np.ndarray, np.ndarray]:
     lower, upper = [], []
     defaults = model.parameter_values
     for joint in model.coordinates:
-        span = np.pi if joint.type is JointType.REVOLUTE else 0.5
+        span = np.pi if joint_kinds.is_rotation(joint.type) else 0.5
         if joint.limits is not None:
             lo, hi = (float(b.xreplace(defaults)) for b in joint.limits)
             lower.append(max(lo, -4 * np.pi))

@@ -21,6 +21,7 @@ from enum import Enum
 import sympy
 
 from symkin.errors import Problem
+from symkin.model.joint_kinds import kind as joint_kind
 
 Vec3 = tuple[sympy.Expr, sympy.Expr, sympy.Expr]
 
@@ -213,7 +214,7 @@ class LegJointType(str, Enum):
 
     @property
     def dof(self) -> int:
-        return {"R": 1, "P": 1, "U": 2, "S": 3, "C": 2}[self.value]
+        return joint_kind(self).dof
 
 
 @dataclass(frozen=True)
@@ -399,7 +400,7 @@ class Model:
     notes: tuple[str, ...] = ()
     #: the names in the source file of joints and links renamed to identifiers (a URDF's ``joint_0.0``):
     #: {"joints": {model name: source name}, "links": {...}}; see :meth:`source_name`.
-    source_names: dict = field(default_factory=dict)
+    source_names: dict = field(default_factory=dict, compare=False)  # a dict: out of eq and hash
     #: key path -> (line, column) in the model file, for located messages of later stages.
     locations: dict = field(default_factory=dict, compare=False, repr=False)
 

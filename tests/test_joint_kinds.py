@@ -1,0 +1,60 @@
+"""The joint as one unit (issue 30): symkin/model/joint_kinds.py owns what each joint kind does, and a
+ratchet keeps branching on joint types from spreading: the modules that still compare with
+JointType/LegJointType members are listed with today's counts, which may only go down."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+import sympy
+
+from symkin.model import joint_kinds
+from symkin.model.schema import JointType, LegJointType
+
+PACKAGE = Path(joint_kinds.__file__).resolve().parents[1]
+#: Where the kinds are defined (the enums) and owned (their behaviour).
+OWNERS = {"model/schema.py", "model/joint_kinds.py"}
+#: module -> branches on joint-type members left to move into joint_kinds (shrink as they move).
+REMAINING = {
+    "dynamics/bodies.py": 1,
+    "dynamics/lagrange.py": 1,
+    "dynamics/newton_euler.py": 6,
+    "model/delta.py": 4,
+    "model/leg_joints.py": 3,
+    "model/parallel_build.py": 11,
+    "model/serial_build.py": 5,
+    "model/urdf_export.py": 3,
+    "parallel/distance.py": 3,
+    "structure/mobility.py": 3,
+}
+BRANCH = re.compile(r"\bJointType\.(REVOLUTE|PRISMATIC)\b|\bLegJointType\.[RPUSC]\b")
+
+
+def test_joint_type_branches_only_shrink():
+    found = {}
+    for path in sorted(PACKAGE.rglob("*.py")):
+        module = path.relative_to(PACKAGE).as_posix()
+        count = len(BRANCH.findall(path.read_text(encoding="utf-8")))
+        if count and module not in OWNERS:
+            found[module] = count
+    grown = {m: (n, REMAINING.get(m, 0)) for m, n in found.items() if n > REMAINING.get(m, 0)}
+    assert not grown, f"new branches on joint types (found, allowed): {grown}; ask symkin.model.joint_kinds instead"
+    shrunk = {m: (found.get(m, 0), n) for m, n in REMAINING.items() if found.get(m, 0) < n}
+    assert not shrunk, f"fewer branches than listed (found, listed): {shrunk}; lower REMAINING to lock it in"
+
+
+@pytest.mark.parametrize("member", list(JointType) + list(LegJointType))
+def test_every_joint_type_has_a_kind_with_its_degrees_of_freedom(member):
+    expected = member.dof if isinstance(member, LegJointType) else 1
+    assert joint_kinds.kind(member).dof == expected == joint_kinds.kind(member.value).dof
+
+
+def test_one_coordinate_joints_move_as_their_motion_subspace():
+    z = sympy.Matrix([0, 0, 1])
+    assert joint_kinds.motion_subspace(JointType.REVOLUTE, z) == (z, sympy.zeros(3, 1))
+    assert joint_kinds.motion_subspace(JointType.PRISMATIC, z) == (sympy.zeros(3, 1), z)
+    assert joint_kinds.is_rotation(LegJointType.R) and not joint_kinds.is_rotation("P")
+    with pytest.raises(ValueError):
+        joint_kinds.is_rotation(LegJointType.U)  # two motions: no single coordinate
