@@ -367,3 +367,12 @@ def test_robot_files_are_told_by_their_content(tmp_path, capsys):
         err = capsys.readouterr().err
         assert f"{path}: this is a{'n' if what.startswith('M') else ''} {what}" in err and "fix:" in err, err
         assert "did you mean" not in err and not out.exists()
+    # the URDF reader itself stops at a macro, located (one beyond what is sniffed, or text given directly)
+    from symkin.model.urdf_source import urdf_document
+
+    with pytest.raises(ModelError, match=r"macros.xml:4:\d+: this is a xacro file") as raised:
+        urdf_document(ARM.replace("<link name=\"world\"/>", "<link name=\"world\"/>\n<xacro:if value=\"1\"/>"),
+                      "macros.xml")
+    assert "fix: expand it where you trust it" in str(raised.value)
+    # an expanded URDF keeps its xmlns:xacro declaration and macros in comments: it is a URDF (the TALOS arm)
+    assert load_model(robots / "talos_data/robots/talos_left_arm.urdf", tip="arm_left_7_link").dof == 6

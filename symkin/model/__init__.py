@@ -9,7 +9,7 @@ from pathlib import Path
 from symkin.errors import ModelError, Problem
 from symkin.model.build import build_model
 from symkin.model.schema import Body, Friction, Joint, JointType, Model, Parameter, Rotation, Scene, Translation
-from symkin.model.source_kind import MJCF, URDF, XACRO, source_kind
+from symkin.model.source_kind import MJCF, URDF, XACRO, XACRO_FIX, XACRO_MESSAGE, source_kind
 from symkin.model.urdf_source import read_urdf_document
 from symkin.model.yaml_source import parse_document, read_document
 
@@ -53,11 +53,7 @@ def load_model(path: str | Path, tip: str | None = None, *, base: str | None = N
 def _unsupported(file: str, kind: str) -> Problem:
     """The located refusal of a robot file symkin does not read yet (told by its content)."""
     if kind == XACRO:
-        return Problem(file, None, None, "", "this is a xacro file (XML with xacro: macros), not a plain URDF; "
-                                             "symkin does not expand xacro (its ${...} are Python expressions, "
-                                             "which a model file must never run)",
-                       "expand it where you trust it: xacro robot.urdf.xacro > robot.urdf (pip install xacro, or "
-                       "ROS), then symkin derive robot.urdf")
+        return Problem(file, None, None, "", XACRO_MESSAGE, XACRO_FIX)
     return Problem(file, None, None, "", "this is an MJCF (MuJoCo) file; symkin reads YAML models and URDFs",
                    "declare the mechanism as a URDF or a YAML model (docs/model-format.md)")
 

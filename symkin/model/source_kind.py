@@ -17,7 +17,14 @@ SNIFF_BYTES = 65536
 _ROOT = re.compile(rb"\A(?:\xef\xbb\xbf)?\s*(?:<\?.*?\?>\s*|<!--.*?-->\s*|<!DOCTYPE[^>\[]*(?:\[.*?\])?\s*>\s*)*"
                    rb"<([A-Za-z_][\w.:-]*)", re.S)
 _XML = re.compile(rb"\A(?:\xef\xbb\xbf)?\s*<")
-_XACRO = re.compile(rb"xmlns:xacro\s*=|<xacro:")
+#: A xacro element (an expanded URDF may keep the xmlns:xacro declaration, and macros in comments: no macro).
+_XACRO = re.compile(rb"<xacro:")
+_COMMENT = re.compile(rb"<!--.*?(?:-->|\Z)", re.S)
+#: The refusal of a xacro file (here when told by its content; by the URDF reader at its first macro).
+XACRO_MESSAGE = ("this is a xacro file (XML with xacro: macros), not a plain URDF; symkin does not expand xacro "
+                 "(its ${...} are Python expressions, which a model file must never run)")
+XACRO_FIX = ("expand it where you trust it: xacro robot.urdf.xacro > robot.urdf (pip install xacro, or ROS), then "
+             "symkin derive robot.urdf")
 
 URDF, XACRO, MJCF, YAML = "urdf", "xacro", "mjcf", "yaml"
 
@@ -36,6 +43,6 @@ def source_kind(path: str | Path) -> str:
         return XACRO if path.suffix.lower() == ".xacro" else URDF if _XML.match(head) else YAML
     if root.group(1) == b"mujoco":
         return MJCF
-    if path.suffix.lower() == ".xacro" or _XACRO.search(head):
+    if path.suffix.lower() == ".xacro" or _XACRO.search(_COMMENT.sub(b"", head)):
         return XACRO
     return URDF

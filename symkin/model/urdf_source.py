@@ -61,6 +61,7 @@ import numpy as np
 
 from symkin.errors import ModelError, Problem
 from symkin.model.names import code_names, name_problem
+from symkin.model.source_kind import XACRO_FIX, XACRO_MESSAGE
 from symkin.model.urdf_export import rotation_about, urdf_rpy
 from symkin.model.yaml_source import MAX_FILE_BYTES, Document, KeyPath
 
@@ -93,6 +94,10 @@ class _Fail(Exception):
     """Stops reading after located problems were recorded."""
 
 
+class _Xacro(Exception):
+    """A xacro macro element met while parsing (a .urdf that still holds xacro)."""
+
+
 class _UrdfReader:
     def __init__(self, file: str, snap_angles: bool = False):
         self.file = file
@@ -123,6 +128,8 @@ class _UrdfReader:
             raise _Fail("document type declarations are not allowed")
 
         def start(tag: str, attrib: dict[str, str]) -> None:
+            if tag.startswith("xacro:"):
+                raise _Xacro()
             count[0] += 1
             if count[0] > MAX_ELEMENTS:
                 raise _Fail(f"more than {MAX_ELEMENTS} elements")
@@ -140,6 +147,10 @@ class _UrdfReader:
             self.problems.append(Problem(self.file, exc.lineno, exc.offset + 1, "",
                                          f"malformed XML: {expat.ErrorString(exc.code)}",
                                          "fix the XML syntax (a URDF is an XML file with a <robot> root)"))
+            raise ModelError(self.problems) from None
+        except _Xacro:
+            self.problems.append(Problem(self.file, parser.CurrentLineNumber, parser.CurrentColumnNumber + 1, "",
+                                         XACRO_MESSAGE, XACRO_FIX))
             raise ModelError(self.problems) from None
         except _Fail as exc:
             self.problems.append(Problem(self.file, parser.CurrentLineNumber, parser.CurrentColumnNumber + 1, "",
