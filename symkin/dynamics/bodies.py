@@ -24,7 +24,8 @@ import symengine as se
 
 from symkin.dynamics.program import cross, se_matrix, se_vector
 from symkin.kinematics.chain import ChainFrames
-from symkin.model.schema import JointType, Model
+from symkin.model import joint_kinds
+from symkin.model.schema import Model
 
 ZERO3 = (se.Integer(0), se.Integer(0), se.Integer(0))
 
@@ -68,7 +69,7 @@ def body_jacobians(model: Model, chain: ChainFrames) -> tuple[BodyJacobians, ...
         com = tuple(p[r] + sum((R[r][s] * com_local[s] for s in range(3)), se.Integer(0)) for r in range(3))
         linear, angular = [], []
         for jtype, z, point in axes[:k + 1]:
-            revolute = jtype is JointType.REVOLUTE
+            revolute = joint_kinds.is_rotation(jtype)
             if massless:
                 linear.append(ZERO3)
             elif revolute:

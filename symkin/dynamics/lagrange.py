@@ -27,7 +27,7 @@ import symengine as se
 from symkin.dynamics.bodies import BodyJacobians
 from symkin.dynamics.program import cross, dot, mat_vec, se_vector
 from symkin.kinematics.chain import JointAxis
-from symkin.model.schema import JointType
+from symkin.model import joint_kinds
 
 Matrix = list[list[se.Basic]]
 
@@ -68,7 +68,7 @@ def gravity_vector(bodies: Sequence[BodyJacobians], axes: Sequence[JointAxis], g
         moved = [b for b in bodies if b.joints > j and b.mass != 0]
         mass = sum((b.mass for b in moved), se.Integer(0))
         z = se_vector(axis.direction)
-        if axis.type is JointType.REVOLUTE:
+        if joint_kinds.is_rotation(axis.type):
             moment = [sum((b.mass * b.com[r] for b in moved), se.Integer(0)) for r in range(3)]
             point = se_vector(axis.point)
             column = cross(z, [moment[r] - mass * point[r] for r in range(3)])

@@ -57,6 +57,7 @@ from symkin.dynamics.program import cross, dot, mat_vec, se_matrix, se_vector
 from symkin.geometry import rotation_matrix
 from symkin.model import coordinates
 from symkin.kinematics.chain import MovingFrame
+from symkin.model import joint_kinds
 from symkin.model.schema import JointType, Model, Op
 
 Vec = list[se.Basic]
@@ -153,7 +154,7 @@ def chain_links(model: Model) -> tuple[Link, ...]:
         C_R, C_p = _compose(joint.before, R_prev, p_prev)
         amount = q + joint.offset
         axis = sympy.Matrix(joint.axis)
-        if joint.type is JointType.REVOLUTE:
+        if joint_kinds.is_rotation(joint.type):
             R, origin = C_R * rotation_matrix(joint.axis, amount), C_p
         else:
             R, origin = C_R, C_p + C_R * axis * amount
@@ -175,7 +176,7 @@ def _force_transform(link: Link, f: Spatial) -> Spatial:
 def _motion_axis(link: Link) -> Spatial:
     """S_i: (z_i, 0) for a revolute joint, (0, z_i) for a prismatic one."""
     zero = [se.Integer(0)] * 3
-    return (link.axis, zero) if link.type is JointType.REVOLUTE else (zero, link.axis)
+    return joint_kinds.motion_subspace(link.type, link.axis, zero)
 
 
 def _is_zero(v: Spatial) -> bool:
@@ -204,7 +205,7 @@ def inverse_dynamics(links: Sequence[Link], qd: Sequence[se.Basic] | None, qdd: 
         # The origin of F_i is a point of the parent link at r (moved along the axis if prismatic).
         acc = mat_vec(E, _add(acc, _add(cross(dw, r), cross(w, cross(w, r)))))
         w, dw = mat_vec(E, w), mat_vec(E, dw)
-        revolute = link.type is JointType.REVOLUTE
+        revolute = joint_kinds.is_rotation(link.type)
         if qd is not None:
             zqd = [c * qd[i] for c in link.axis]
             if revolute:
@@ -231,7 +232,7 @@ def inverse_dynamics(links: Sequence[Link], qd: Sequence[se.Basic] | None, qdd: 
     for i in reversed(range(len(links))):
         link = links[i]
         total = (_add(forces[i][0], carried[0]), _add(forces[i][1], carried[1]))
-        tau[i] = dot(link.axis, total[0] if link.type is JointType.REVOLUTE else total[1])
+        tau[i] = dot(link.axis, total[0] if joint_kinds.is_rotation(link.type) else total[1])
         carried = _force_transform(link, total) if i > 0 and not _is_zero(total) else (zero, zero)
     return tau
 
@@ -299,7 +300,7 @@ def gravity_torques(links: Sequence[Link], gravity: Sequence[se.Basic]) -> list[
         acc = mat_vec(link.rotation, acc)
         if body is None:
             G.append(se.Integer(0))
-        elif link.type is JointType.REVOLUTE:
+        elif joint_kinds.is_rotation(link.type):
             G.append(dot(link.axis, cross(body.moment, acc)))
         else:
             G.append(dot(link.axis, [body.mass * a for a in acc]))
@@ -318,7 +319,7 @@ def mass_matrix(links: Sequence[Link]) -> list[list[se.Basic]]:
         f = body.times(_motion_axis(links[i]))
         for j in reversed(range(i + 1)):
             link = links[j]
-            M[i][j] = M[j][i] = dot(link.axis, f[0] if link.type is JointType.REVOLUTE else f[1])
+            M[i][j] = M[j][i] = dot(link.axis, f[0] if joint_kinds.is_rotation(link.type) else f[1])
             if j > 0:
                 f = _force_transform(link, f)
     return M

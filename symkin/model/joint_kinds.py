@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from enum import Enum
+from typing import Any
 
 import sympy
 
@@ -52,8 +53,9 @@ def is_rotation(joint_type: str | Enum) -> bool:
     return rotation
 
 
-def motion_subspace(joint_type: str | Enum, axis: sympy.Matrix) -> tuple[sympy.Matrix, sympy.Matrix]:
-    """(angular, linear) 3-vectors of a one-coordinate joint about or along the unit ``axis``:
-    its twist per unit coordinate rate, taken at a point on the axis."""
-    zero = sympy.zeros(3, 1)
+def motion_subspace(joint_type: str | Enum, axis: Any, zero: Any = None) -> tuple[Any, Any]:
+    """(angular, linear) 3-vectors of a one-coordinate joint about or along the unit ``axis``: its
+    twist per unit coordinate rate, taken at a point on the axis.  ``zero`` is the zero vector of the
+    caller's vector type (default a sympy column; SymEngine lists in the dynamics)."""
+    zero = sympy.zeros(3, 1) if zero is None else zero
     return (axis, zero) if is_rotation(joint_type) else (zero, axis)

@@ -18,6 +18,7 @@ from symkin.model.reader import (
     positive_limit,
     unit_axis,
 )
+from symkin.model import joint_kinds
 from symkin.model.schema import Joint, JointType, Mimic, Op, Rotation, Translation
 from symkin.model.yaml_source import Document, KeyPath
 
@@ -129,7 +130,7 @@ def _dh_table(r: Reader, path: KeyPath, section: Any) -> list[Joint]:
             r.invalid_links.add(_declared_link(fields, i))
             continue
         theta, d, a, alpha = values["theta"], values["d"], values["a"], values["alpha"]
-        revolute = jtype is JointType.REVOLUTE
+        revolute = joint_kinds.is_rotation(jtype)
         if convention == "classic":
             before = () if revolute else ops(Rotation(Z_AXIS, theta))
             after = ops(*((Translation((ZERO, ZERO, d)),) if revolute else ()),

@@ -31,7 +31,8 @@ import numpy as np
 import sympy
 
 from symkin.errors import ModelError
-from symkin.model.schema import JointType, Model, Op, Rotation
+from symkin.model import joint_kinds
+from symkin.model.schema import Model, Op, Rotation
 
 ROOT_LINK = "base"
 TCP_LINK = "tcp"
@@ -108,14 +109,14 @@ def export_urdf(model: Model) -> str:
         axis = np.array([_number(a, values) for a in joint.axis])
         offset = _number(joint.offset, values)
         motion = np.eye(4)
-        if joint.type == JointType.REVOLUTE:
+        if joint_kinds.is_rotation(joint.type):
             motion[:3, :3] = rotation_about(axis, offset)
         else:
             motion[:3, 3] = offset * axis / np.linalg.norm(axis)
         origin = pending @ _transform(joint.before, values) @ motion
         after = _transform(joint.after, values)
         child = joint.link if _is_identity(after) else f"{joint.link}__joint"
-        kind = "prismatic" if joint.type == JointType.PRISMATIC else (
+        kind = "prismatic" if not joint_kinds.is_rotation(joint.type) else (
             "revolute" if joint.limits is not None else "continuous")
         lines.append(f"  <link name={quoteattr(child)}/>")
         lines.append(f"  <joint name={quoteattr(joint.name)} type=\"{kind}\">")
@@ -126,7 +127,7 @@ def export_urdf(model: Model) -> str:
         if joint.limits is not None:
             lower, upper = (_number(b, values) for b in joint.limits)
             limit = f'lower="{lower!r}" upper="{upper!r}" '
-        elif joint.type == JointType.PRISMATIC:
+        elif not joint_kinds.is_rotation(joint.type):
             limit = 'lower="-1e9" upper="1e9" '
         effort = _number(joint.effort_limit, values) if joint.effort_limit is not None else 0.0
         velocity = _number(joint.velocity_limit, values) if joint.velocity_limit is not None else 0.0
