@@ -23,19 +23,23 @@ def _load(name: str) -> str:
         raise jinja2.TemplateNotFound(name) from None
 
 
-@lru_cache(maxsize=1)
-def environment() -> jinja2.Environment:
-    """The shared jinja2 environment of code generation: strict about undefined names, no autoescaping
-    (code, not HTML: free text is made inert by :mod:`symkin.backends.comments`, also as the filter
-    ``docstring_lines``)."""
-    env = jinja2.Environment(
+def _environment(autoescape: bool) -> jinja2.Environment:
+    """A jinja2 environment over the shipped templates: strict about undefined names, blocks trimmed."""
+    return jinja2.Environment(
         loader=jinja2.FunctionLoader(_load),
         undefined=jinja2.StrictUndefined,
         trim_blocks=True,
         lstrip_blocks=True,
         keep_trailing_newline=True,
-        autoescape=False,
+        autoescape=autoescape,
     )
+
+
+@lru_cache(maxsize=1)
+def environment() -> jinja2.Environment:
+    """The jinja2 environment of code generation: no autoescaping (code, not HTML: free text is made
+    inert by :mod:`symkin.backends.comments`, also as the filter ``docstring_lines``)."""
+    env = _environment(autoescape=False)
     env.filters["docstring_lines"] = docstring_lines
     return env
 
@@ -45,14 +49,7 @@ def html_environment() -> jinja2.Environment:
     """The jinja2 environment of HTML pages (``symkin view``), apart from code generation's: every
     ``{{ value }}`` is HTML-escaped for text and attributes (model files are hostile text); what is
     already safe markup (a JSON island, a checked script) is passed as :class:`markupsafe.Markup`."""
-    return jinja2.Environment(
-        loader=jinja2.FunctionLoader(_load),
-        undefined=jinja2.StrictUndefined,
-        trim_blocks=True,
-        lstrip_blocks=True,
-        keep_trailing_newline=True,
-        autoescape=True,
-    )
+    return _environment(autoescape=True)
 
 
 def provenance(template: str, model_name: str, model_hash: str) -> list[str]:
