@@ -233,13 +233,11 @@ def crosscheck(path: str | Path, *, reference_urdf: str | Path | None = None, sa
             want["jacobian_geometric"] = (rotate @ jacobian[:, columns] @ coupling,)
             if model.bodies:
                 want |= _dynamics_references(pin, reference, data, weightless, weightless_data, q, v, a, columns,
-                                             coupling, total_mass, float(np.linalg.norm(gravity)), smooth)
-            if not with_c:
-                want = {name: value for name, value in want.items() if not name.startswith("coriolis_matrix")}
+                                             coupling, total_mass, float(np.linalg.norm(gravity)), smooth, with_c)
             for backend, got in values.items():
                 suffix = "" if backend == backends[0] else f" ({backend})"
                 for name, (expected, *scales) in want.items():
-                    error = _normwise(_ours(got, name, k, frame_links), expected, *scales)
+                    error = _normwise(_ours(got, name, k, frame_links, QD[k]), expected, *scales)
                     errors[name + suffix] = max(errors.get(name + suffix, 0.0), error)
     comparisons = [Comparison(name, error) for name, error in errors.items()]
     if model.bodies and not with_c:
@@ -256,17 +254,17 @@ def _evaluate(ours: Any, outputs: tuple[str, ...], Q: np.ndarray, QD: np.ndarray
     """Every output of one backend's generated module at the sampled states."""
     arguments = {"mass_matrix": (Q,), "coriolis_vector": (Q, QD), "coriolis_matrix": (Q, QD), "gravity_vector": (Q,),
                  "friction": (QD,), "inverse_dynamics": (Q, QD, QDD)}
-    return {name: getattr(ours, name)(*arguments.get(name, (Q,))) for name in outputs} | {"_qd": QD}
+    return {name: getattr(ours, name)(*arguments.get(name, (Q,))) for name in outputs}
 
 
-def _ours(values: dict[str, Any], row: str, k: int, frame_links: dict[str, str]) -> np.ndarray:
-    """symkin's value of the row ``row`` at state ``k`` (``frame_links``: {frame row: model link}; the
-    Coriolis matrix is checked through its properties)."""
+def _ours(values: dict[str, Any], row: str, k: int, frame_links: dict[str, str], qd: np.ndarray) -> np.ndarray:
+    """symkin's value of the row ``row`` at state ``k`` (velocities ``qd``; ``frame_links``: {frame row:
+    model link}; the Coriolis matrix is checked through its properties)."""
     if row in frame_links:
         frames = values["frames"]  # a one-joint chain's frames function returns its one frame as an array
         return frames[k] if isinstance(frames, np.ndarray) else getattr(frames, f"base_T_{frame_links[row]}")[k]
     if row == "coriolis_matrix C qd":
-        return values["coriolis_matrix"][k] @ values["_qd"][k]
+        return values["coriolis_matrix"][k] @ qd
     if row == "coriolis_matrix Mdot - 2C skew":
         C = values["coriolis_matrix"][k]
         return C + C.T  # the reference gives Mdot = C_ref + C_ref^T: Mdot - 2C is skew iff C + C^T = Mdot
@@ -275,7 +273,8 @@ def _ours(values: dict[str, Any], row: str, k: int, frame_links: dict[str, str])
 
 def _dynamics_references(pin: Any, reference: Any, data: Any, weightless: Any, weightless_data: Any,
                          q: np.ndarray, v: np.ndarray, a: np.ndarray, columns: list[int], coupling: np.ndarray,
-                         total_mass: float, gravity: float, smooth: bool) -> dict[str, tuple[Any, ...]]:
+                         total_mass: float, gravity: float, smooth: bool, with_c: bool
+                         ) -> dict[str, tuple[Any, ...]]:
     """{row: (reference value, the magnitudes summed into it, natural size)} of the dynamics at one state.
 
     The natural size is the scale the quantity's terms have even where they cancel or vanish (V at
@@ -292,16 +291,17 @@ def _dynamics_references(pin: Any, reference: Any, data: Any, weightless: Any, w
     friction_size = float(np.linalg.norm(np.abs(damping * v[columns]) + np.abs(dry)))
     G, G_terms = _reduced(coupling, pin.computeGeneralizedGravity(reference, data, q)[columns])
     V, V_terms = _reduced(coupling, pin.nonLinearEffects(weightless, weightless_data, q, v)[columns])
-    coriolis = pin.computeCoriolisMatrix(weightless, weightless_data, q, v)[np.ix_(columns, columns)]
-    Mdot, Mdot_terms = _reduced(coupling, coriolis + coriolis.T)
     g_size = gravity * math.sqrt(size * total_mass)
     rows: dict[str, tuple[Any, ...]] = {
         "mass_matrix": (M, M_terms),
         "gravity_vector": (G, G_terms, g_size),
         "coriolis_vector": (V, V_terms, size * qd ** 2),
-        "coriolis_matrix C qd": (V, V_terms, size * qd ** 2),
-        "coriolis_matrix Mdot - 2C skew": (Mdot, Mdot_terms, size * qd),
     }
+    if with_c:
+        coriolis = pin.computeCoriolisMatrix(weightless, weightless_data, q, v)[np.ix_(columns, columns)]
+        Mdot, Mdot_terms = _reduced(coupling, coriolis + coriolis.T)
+        rows["coriolis_matrix C qd"] = (V, V_terms, size * qd ** 2)
+        rows["coriolis_matrix Mdot - 2C skew"] = (Mdot, Mdot_terms, size * qd)
     if np.any(damping) or np.any(dry):
         rows["friction"] = (*_reduced(coupling, friction_joint), friction_size)
     if not smooth:

@@ -19,7 +19,9 @@ Wrap first, then escape each line: a wrap never splits an escape sequence.
 
 from __future__ import annotations
 
+import textwrap
 import unicodedata
+from collections.abc import Callable
 
 #: Unicode general categories that never reach generated code: control (Cc), format (Cf), line and
 #: paragraph separators (Zl, Zp: line terminators in JavaScript), surrogates (Cs).
@@ -49,3 +51,9 @@ def docstring(line: str) -> str:
 def docstring_lines(text: str) -> str:
     """:func:`docstring` on each line of ``text`` (newlines kept)."""
     return "\n".join(docstring(line) for line in plain(text, keep_newlines=True).split("\n"))
+
+
+def wrapped(text: str, width: int, escape: Callable[[str], str]) -> list[str]:
+    """``text`` wrapped to ``width`` and each line made inert by ``escape`` (:func:`block_comment`,
+    :func:`docstring`): the one way every backend turns free text into comment or docstring lines."""
+    return [escape(line) for line in textwrap.wrap(plain(text), width)]

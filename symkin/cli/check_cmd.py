@@ -12,7 +12,8 @@ def register_check(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("check", help="validate model files without deriving",
                        description="Validate model files (syntax, names, expressions, physical plausibility of "
                                    "masses and inertias, scene) and print a summary. Writes nothing.")
-    p.add_argument("models", nargs="+", metavar="MODEL", help="model file(s): YAML, or URDF (told by its content: a .urdf or .xml whose root is <robot>)")
+    p.add_argument("models", nargs="+", metavar="MODEL",
+                   help="model file(s): YAML, or URDF (told by its content: a .urdf or .xml whose root is <robot>)")
     add_urdf_arguments(p)
     p.set_defaults(run=run_check)
 

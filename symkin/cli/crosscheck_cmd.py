@@ -20,7 +20,8 @@ def register_crosscheck(sub: argparse._SubParsersAction) -> None:
                                    "at random states within the joint limits. Prints the largest normwise relative "
                                    "error of each quantity (relative to its natural size where it vanishes, e.g. V "
                                    "at rest); exit 1 if one exceeds the tolerance.")
-    p.add_argument("models", nargs="+", metavar="MODEL", help="model file(s): YAML, or URDF (told by its content: a .urdf or .xml whose root is <robot>)")
+    p.add_argument("models", nargs="+", metavar="MODEL",
+                   help="model file(s): YAML, or URDF (told by its content: a .urdf or .xml whose root is <robot>)")
     p.add_argument("--reference", choices=("pinocchio",), default="pinocchio",
                    help="the reference library (default: %(default)s; pip install 'symkin[crosscheck]')")
     p.add_argument("--reference-urdf", metavar="FILE", type=Path,

@@ -19,7 +19,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Derive the quantities a model's scene asks for (or --only), optimize them and "
                     "write the generated code and manifest.json to OUT/<model name>/, atomically.",
     )
-    p.add_argument("models", nargs="+", metavar="MODEL", help="model file(s): YAML, or URDF (told by its content: a .urdf or .xml whose root is <robot>)")
+    p.add_argument("models", nargs="+", metavar="MODEL",
+                   help="model file(s): YAML, or URDF (told by its content: a .urdf or .xml whose root is <robot>)")
     p.add_argument("-o", "--out", default="generated", metavar="OUT",
                    help="output directory (default: %(default)s)")
     p.add_argument("--only", metavar="NAMES",

@@ -137,8 +137,11 @@ def _source_names(r: Reader, data: dict[str, Any]) -> dict[str, dict[str, str]]:
     section = r.mapping(("source_names",), data.get("source_names", {}), optional=("joints", "links"))
     out: dict[str, dict[str, str]] = {}
     for kind, names in (section or {}).items():
-        mapping = r.mapping(("source_names", kind), names, optional=tuple(names) if isinstance(names, dict) else ())
-        out[kind] = {str(k): v for k, v in (mapping or {}).items() if r.string(("source_names", kind, k), v) is not None}
+        if not isinstance(names, dict):
+            r.fail(("source_names", kind), f"expected a mapping of names, got {names!r:.40}",
+                   "write {model name: name in the source file, ...}")
+            continue
+        out[kind] = {str(k): v for k, v in names.items() if r.string(("source_names", kind, k), v) is not None}
     return out
 
 

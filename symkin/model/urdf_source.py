@@ -559,7 +559,7 @@ def _locked_values(r: _UrdfReader, robot: Element, joints: dict[str, _Joint], ch
         elif j.name in locks:
             values[j.name] = Fraction(repr(float(locks[j.name])))
         else:
-            values[j.name] = _default_lock(r, j, notes)
+            values[j.name] = _default_lock(j, notes)
     for j, (leader, multiplier, offset) in followers:
         if leader in chain_joints:
             r.fail(j.element.find("mimic"), f"joint[{j.name}].mimic",
@@ -589,7 +589,7 @@ def _limits(j: _Joint) -> tuple[Fraction, Fraction] | None:
     return (lower, upper) if lower is not None and upper is not None and lower < upper else None
 
 
-def _default_lock(r: _UrdfReader, j: _Joint, notes: list[str]) -> Fraction:
+def _default_lock(j: _Joint, notes: list[str]) -> Fraction:
     """0 clipped into the joint's limits; a clipped value is noted (where, what, how to choose another)."""
     limits = _limits(j)
     if limits is None or limits[0] <= 0 <= limits[1]:

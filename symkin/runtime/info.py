@@ -24,7 +24,8 @@ class Coordinate:
         limits: (lower, upper) at the parameters' default values, or None where the model declares none.
         velocity_limit: the largest |qd| the joint allows (rad/s or m/s), or None.
         effort_limit: the largest |tau| its actuator gives (N m or N), or None.
-        label: its name in the robot file it came from (a URDF's ``joint_0.0``), for people; else ``name``.
+        source_name: its name in the robot file it came from where that is no identifier (a URDF's
+            ``joint_0.0``), else None; see :attr:`label`.
     """
 
     name: str
@@ -32,11 +33,12 @@ class Coordinate:
     limits: tuple[float, float] | None
     velocity_limit: float | None = None
     effort_limit: float | None = None
-    label: str = ""
+    source_name: str | None = None
 
-    def __post_init__(self) -> None:
-        if not self.label:
-            object.__setattr__(self, "label", self.name)
+    @property
+    def label(self) -> str:
+        """The name to show people: the robot file's, else the model's."""
+        return self.source_name or self.name
 
 
 @dataclass(frozen=True)
@@ -115,7 +117,7 @@ class ModelInfo:
         parallel = model.get("parallel")
         coordinates = tuple(Coordinate(c["name"], c["type"] == "R",
                                        (float(c["limits"][0]), float(c["limits"][1])) if c.get("limits") else None,
-                                       c.get("velocity_limit"), c.get("effort_limit"), c.get("source_name", ""))
+                                       c.get("velocity_limit"), c.get("effort_limit"), c.get("source_name"))
                             for c in model["coordinates"])
         parameters = tuple(Parameter(p["name"], float(p["default"]), p.get("unit", ""), bool(p["fixed"]))
                            for p in manifest["parameters"])

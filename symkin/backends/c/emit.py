@@ -33,7 +33,6 @@ helper too, for the units that use it), which the build compiles in parallel
 from __future__ import annotations
 
 import math
-import textwrap
 from collections.abc import Callable
 from typing import Any
 
@@ -42,7 +41,7 @@ import sympy
 from symkin.backends.c.build import part_macro, parts_line
 from symkin.backends.c.printer import C_TYPES, CPrinter
 from symkin.backends.c.trig import constants
-from symkin.backends.comments import block_comment, plain
+from symkin.backends.comments import block_comment, wrapped
 from symkin.backends.layout import element_text, expressions, used_symbols
 from symkin.backends.naming import c_symbol
 from symkin.backends.templating import provenance, render
@@ -74,7 +73,7 @@ VARIANTS = {"double": "", "float": "_f32"}
 
 def _comment_lines(text: str, width: int = DOC_WIDTH) -> list[str]:
     """Lines of a ``/* */`` comment of ``text`` (free text made inert, :mod:`symkin.backends.comments`)."""
-    return [block_comment(line) for line in textwrap.wrap(plain(text), width)] or [""]
+    return wrapped(text, width, block_comment) or [""]
 
 
 def _inputs(spec: FunctionSpec, used: set[sympy.Symbol], macro: str) -> tuple[list, list, list]:
@@ -224,7 +223,8 @@ def emit_sources(code: ModelCode) -> dict[str, str | bytes]:
         "description": _comment_lines(code.description or code.name),
         "dof": len(code.coordinates), "coordinates": ", ".join(code.coordinates),
     }
-    free = [{"name": p.name, "default": repr(p.default), "unit": block_comment(p.unit), "doc": block_comment(p.doc)}
+    free = [{"name": p.name, "default": repr(p.default), "unit": block_comment(p.unit),
+             "doc": block_comment(p.doc)}
             for p in code.parameters if not p.fixed]
     fixed = [f"{p.name} = {p.default!r}" for p in code.parameters if p.fixed]
     parts = _assign_parts(functions)

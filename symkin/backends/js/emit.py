@@ -17,10 +17,9 @@ atan2 (each within one ulp).
 from __future__ import annotations
 
 import json
-import textwrap
 from typing import Any
 
-from symkin.backends.comments import block_comment, plain
+from symkin.backends.comments import block_comment, wrapped
 from symkin.backends.js.printer import JsPrinter
 from symkin.backends.layout import element_text, used_symbols
 from symkin.backends.templating import provenance, render
@@ -39,11 +38,6 @@ def _nested(shape: tuple[int, ...], codes: list[str]) -> str:
     return "[" + ", ".join(_nested(shape[1:], codes[k * step:(k + 1) * step]) for k in range(shape[0])) + "]"
 
 
-def _comment(text: str, width: int) -> list[str]:
-    """Lines of a ``/** */`` comment of ``text`` (free text made inert, :mod:`symkin.backends.comments`)."""
-    return [block_comment(line) for line in textwrap.wrap(plain(text), width)]
-
-
 def _js_type(shape: tuple[int, ...]) -> str:
     return "number" + "[]" * len(shape)
 
@@ -59,7 +53,7 @@ def _function_context(f: OptimizedFunction, printer: JsPrinter) -> dict[str, Any
     spec = f.spec
     used = used_symbols(f)
     vectors = [{"name": v.name, "size": len(v.symbols),
-                "doc": _comment(_input_doc(v), DOC_WIDTH - len(v.name) - 20),
+                "doc": wrapped(_input_doc(v), DOC_WIDTH - len(v.name) - 20, block_comment),
                 "elements": [{"local": printer.doprint(s), "index": k} for k, s in enumerate(v.symbols) if s in used]}
                for v in spec.vector_inputs]
     params = [{"name": p.name, "local": printer.doprint(p.symbols[0]), "default": printer.literal(p.default_value),
@@ -68,15 +62,15 @@ def _function_context(f: OptimizedFunction, printer: JsPrinter) -> dict[str, Any
     for out, entries in zip(spec.outputs, f.outputs):
         codes = [printer.doprint(e) for e in entries]
         outputs.append({"name": out.name, "value": _nested(tuple(out.shape), codes), "type": _js_type(tuple(out.shape)),
-                        "doc": _comment(f"{out.name}: shape {tuple(out.shape)}; "
-                                             f"{out.doc}" + (f" [{out.unit}]" if out.unit else "") + ".",
-                                             DOC_WIDTH - 10)})
+                        "doc": wrapped(f"{out.name}: shape {tuple(out.shape)}; "
+                                       f"{out.doc}" + (f" [{out.unit}]" if out.unit else "") + ".",
+                                       DOC_WIDTH - 10, block_comment)})
     multi = len(spec.outputs) > 1
     returns = ("{" + ", ".join(f"{o['name']}: {o['type']}" for o in outputs) + "}") if multi else outputs[0]["type"]
     return {
         "name": spec.name,
         "summary": block_comment(spec.summary),
-        "doc_lines": _comment(spec.doc, DOC_WIDTH - 3),
+        "doc_lines": wrapped(spec.doc, DOC_WIDTH - 3, block_comment),
         "vectors": vectors,
         "params": params,
         "param_names": json.dumps([p.name for p in spec.parameter_inputs]),
@@ -100,7 +94,8 @@ def emit_script(code: ModelCode) -> dict[str, str | bytes]:
     text = render(
         TEMPLATE,
         provenance=provenance(TEMPLATE, code.name, code.hash),
-        model={"name": code.name, "hash": code.hash, "description": _comment(code.description or code.name, DOC_WIDTH - 3),
+        model={"name": code.name, "hash": code.hash,
+               "description": wrapped(code.description or code.name, DOC_WIDTH - 3, block_comment),
                "symkin_version": code.symkin_version},
         coordinates=json.dumps(list(code.coordinates)),
         parameters=[{"name": p.name, "default": printer.literal(p.default)} for p in free],

@@ -2,10 +2,9 @@
 
 from __future__ import annotations
 
-import textwrap
 from typing import Any
 
-from symkin.backends.comments import docstring, plain
+from symkin.backends.comments import docstring, plain, wrapped
 from symkin.backends.layout import element_text, nonzero_elements, shape_text, type_name
 from symkin.backends.numpy.printer import BatchNumPyPrinter
 from symkin.backends.templating import provenance, render
@@ -20,7 +19,7 @@ DOC_WIDTH = 84
 
 def _wrap(text: str, indent: str = "    ") -> list[str]:
     """Docstring lines of ``text`` (free text made inert, :mod:`symkin.backends.comments`), later ones indented."""
-    lines = [docstring(line) for line in textwrap.wrap(plain(text), DOC_WIDTH)]
+    lines = wrapped(text, DOC_WIDTH, docstring)
     return lines[:1] + [indent + line for line in lines[1:]]
 
 
@@ -54,7 +53,7 @@ def _function_context(f: OptimizedFunction, printer: BatchNumPyPrinter) -> dict[
     return {
         "name": spec.name,
         "summary": docstring(spec.summary),
-        "doc_lines": [docstring(line) for line in textwrap.wrap(plain(spec.doc), DOC_WIDTH)],
+        "doc_lines": wrapped(spec.doc, DOC_WIDTH, docstring),
         "signature": signature,
         "signature_short": ", ".join(v.name for v in vectors) + (", **params" if params else ""),
         "returns_short": (type_name(spec.name) + "(" + ", ".join(o.name for o in spec.outputs) + ")") if multi
@@ -77,7 +76,8 @@ def emit_module(code: ModelCode) -> dict[str, str | bytes]:
     text = render(
         TEMPLATE,
         provenance=provenance(TEMPLATE, code.name, code.hash),
-        model={"name": code.name, "hash": code.hash, "description": plain(code.description or code.name, keep_newlines=True),
+        model={"name": code.name, "hash": code.hash,
+               "description": plain(code.description or code.name, keep_newlines=True),
                "symkin_version": code.symkin_version, "coordinates": code.coordinates},
         free_parameters=[{"name": p.name, "default_text": repr(p.default)} for p in code.parameters if not p.fixed],
         chunk=CHUNK,
