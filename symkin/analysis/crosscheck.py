@@ -98,17 +98,25 @@ def _sources(path: Path, reference_urdf: Path | None, urdf: Mapping[str, Any]) -
     """(model, reference URDF text, reduction) for the model file ``path``."""
     from symkin.model import load_model
     from symkin.model.build import build_model
-    from symkin.model.source_kind import URDF, source_kind
+    from symkin.model.source_kind import URDF, XACRO, source_kind
     from symkin.model.urdf_export import ROOT_LINK, TCP_LINK, export_urdf
     from symkin.model.urdf_source import UrdfReduction, read_urdf_document
+    from symkin.model.xacro_source import read_xacro_document
 
     options = dict(urdf)
     allow_nonphysical = bool(options.pop("allow_nonphysical", False))
-    if source_kind(path) == URDF:
+    kind = source_kind(path)
+    if kind == URDF:
         document = read_urdf_document(path, **options)
         model = build_model(document, path.stem, allow_nonphysical)
         reduction = document.reduction
         text = (reference_urdf or path).read_text()
+    elif kind == XACRO:  # the reference reads symkin's expansion: the check is of the URDF reading and derivation
+        document, expanded = read_xacro_document(path, options.pop("xacro_args", None),
+                                                 options.pop("xacro_packages", None), **options)
+        model = build_model(document, path.stem, allow_nonphysical)
+        reduction = document.reduction
+        text = reference_urdf.read_text() if reference_urdf else expanded
     else:
         model = load_model(path, allow_nonphysical=allow_nonphysical)
         reduction = UrdfReduction(ROOT_LINK, TCP_LINK, {})

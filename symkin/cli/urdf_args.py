@@ -3,7 +3,9 @@
 The chain runs from the root link (or ``--base``) to ``--tip``; every joint off it is locked
 (``--lock JOINT=VALUE``, default 0) and what it carries is lumped into the chain link it hangs
 on (:mod:`symkin.model.urdf_source`); ``--snap-angles`` reads angles within 1e-12 of a
-multiple of pi/2 as that multiple.  The options apply to URDF files only.
+multiple of pi/2 as that multiple.  The options apply to URDF and xacro files only;
+``--xacro-arg NAME:=VALUE`` and ``--xacro-package NAME=DIR`` to xacro files
+(:mod:`symkin.model.xacro_source`).
 """
 
 from __future__ import annotations
@@ -13,11 +15,11 @@ from typing import Any
 
 from symkin.cli.analysis_args import parse_value
 from symkin.errors import ModelError, Problem
-from symkin.model.source_kind import URDF, source_kind
+from symkin.model.source_kind import URDF, XACRO, source_kind
 
 
 def add_urdf_arguments(p: argparse.ArgumentParser) -> None:
-    group = p.add_argument_group("URDF files")
+    group = p.add_argument_group("URDF and xacro files")
     group.add_argument("--tip", metavar="LINK",
                        help="the link that ends the chain (default: the leaf behind the most moving joints, if "
                             "unique)")
@@ -28,6 +30,11 @@ def add_urdf_arguments(p: argparse.ArgumentParser) -> None:
     group.add_argument("--snap-angles", action="store_true",
                        help="read angles within 1e-12 rad of a multiple of pi/2 as that multiple (default: as "
                             "written)")
+    group.add_argument("--xacro-arg", action="append", default=[], metavar="NAME:=VALUE",
+                       help="the value of a <xacro:arg> of a xacro file (repeatable; default: the file's default)")
+    group.add_argument("--xacro-package", action="append", default=[], metavar="NAME=DIR",
+                       help="the directory of the ROS package NAME for $(find NAME) (repeatable; default: the "
+                            "nearest directory so named, or with a package.xml naming it, around the file)")
     p.add_argument("--allow-nonphysical", action="store_true",
                    help="accept inertia tensors that violate the triangle inequality, with a note, as simulators "
                         "do (default: refuse them; the model key 'allow_nonphysical: true' does the same)")
@@ -41,10 +48,16 @@ def urdf_options(args: argparse.Namespace, path: str) -> dict[str, Any]:
     """
     given = [option for option, value in (("--tip", args.tip), ("--base", args.base), ("--lock", args.lock),
                                           ("--snap-angles", args.snap_angles)) if value]
-    if given and not any(source_kind(model) == URDF for model in args.models):
+    if given and not any(source_kind(model) in (URDF, XACRO) for model in args.models):
         raise ModelError([Problem("<command line>", None, None, given[0], f"{given[0]} applies to URDF files only",
                                   f"drop {given[0]}, or pass a .urdf file")])
-    if source_kind(path) != URDF:
+    xacro = [option for option, value in (("--xacro-arg", args.xacro_arg), ("--xacro-package", args.xacro_package))
+             if value]
+    if xacro and not any(source_kind(model) == XACRO for model in args.models):
+        raise ModelError([Problem("<command line>", None, None, xacro[0], f"{xacro[0]} applies to xacro files only",
+                                  f"drop {xacro[0]}, or pass a .xacro file")])
+    kind = source_kind(path)
+    if kind not in (URDF, XACRO):
         return {"allow_nonphysical": args.allow_nonphysical}
     locks = {}
     for item in args.lock:
@@ -54,8 +67,24 @@ def urdf_options(args: argparse.Namespace, path: str) -> dict[str, Any]:
         except ValueError:
             raise ModelError([Problem("<command line>", None, None, "--lock", f"--lock '{item}' is not JOINT=VALUE",
                                       "write e.g. --lock finger_joint1=0.02 or --lock head_pan=30deg")]) from None
-    return {"tip": args.tip, "base": args.base, "locks": locks, "snap_angles": args.snap_angles,
-            "allow_nonphysical": args.allow_nonphysical}
+    options = {"tip": args.tip, "base": args.base, "locks": locks, "snap_angles": args.snap_angles,
+               "allow_nonphysical": args.allow_nonphysical}
+    if kind == XACRO:
+        options["xacro_args"] = _pairs(args.xacro_arg, ":=", "--xacro-arg", "robot_name:=arm")
+        options["xacro_packages"] = _pairs(args.xacro_package, "=", "--xacro-package", "kuka_kr6_support=./kuka_kr6")
+    return options
+
+
+def _pairs(items: list[str], separator: str, option: str, example: str) -> dict[str, str]:
+    """{NAME: VALUE} of repeated ``NAME<separator>VALUE`` options."""
+    pairs = {}
+    for item in items:
+        name, sep, value = item.partition(separator)
+        if not sep or not name.strip():
+            raise ModelError([Problem("<command line>", None, None, option, f"{option} '{item}' is not "
+                                      f"NAME{separator}VALUE", f"write e.g. {option} {example}")])
+        pairs[name.strip()] = value
+    return pairs
 
 
 def print_notes(model: Any) -> None:

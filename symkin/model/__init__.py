@@ -9,8 +9,9 @@ from pathlib import Path
 from symkin.errors import ModelError, Problem
 from symkin.model.build import build_model
 from symkin.model.schema import Body, Friction, Joint, JointType, Model, Parameter, Rotation, Scene, Translation
-from symkin.model.source_kind import MJCF, URDF, XACRO, XACRO_FIX, XACRO_MESSAGE, source_kind
+from symkin.model.source_kind import MJCF, URDF, XACRO, source_kind
 from symkin.model.urdf_source import read_urdf_document
+from symkin.model.xacro_source import read_xacro_document
 from symkin.model.yaml_source import parse_document, read_document
 
 __all__ = ["Body", "Friction", "Joint", "JointType", "Model", "Parameter", "Rotation", "Scene", "Translation",
@@ -19,9 +20,11 @@ __all__ = ["Body", "Friction", "Joint", "JointType", "Model", "Parameter", "Rota
 
 def load_model(path: str | Path, tip: str | None = None, *, base: str | None = None,
                locks: Mapping[str, float] | None = None, snap_angles: bool = False,
-               allow_nonphysical: bool = False) -> Model:
-    """Read, validate and build the model in the file ``path``: YAML, or URDF (by its content: root
-    element ``<robot>``, whatever the file's name; xacro and MJCF files are refused with a located message).
+               allow_nonphysical: bool = False, xacro_args: Mapping[str, str] | None = None,
+               xacro_packages: Mapping[str, str | Path] | None = None) -> Model:
+    """Read, validate and build the model in the file ``path``: YAML, URDF or xacro, told by its content
+    (root element ``<robot>``, with ``<xacro:...>`` elements or a ``.xacro`` name for xacro; MJCF files are
+    refused with a located message).
 
     Args:
         path: the model file.
@@ -32,13 +35,25 @@ def load_model(path: str | Path, tip: str | None = None, *, base: str | None = N
         snap_angles: URDF only: read angles within 1e-12 of a multiple of pi/2 as that multiple.
         allow_nonphysical: accept inertia tensors that violate the triangle inequality (or have a
             negative principal moment) with a note in ``Model.notes`` instead of refusing them.
+        xacro_args: xacro only: values of its ``<xacro:arg>`` (``--xacro-arg NAME:=VALUE``).
+        xacro_packages: xacro only: {package: directory} for ``$(find package)`` (``--xacro-package``).
 
     Raises:
         symkin.errors.ModelError: with every problem found, each located in the file.
     """
     kind = source_kind(path)
-    if kind in (XACRO, MJCF):
-        raise ModelError([_unsupported(str(path), kind)])
+    if kind == MJCF:
+        raise ModelError([Problem(str(path), None, None, "", "this is an MJCF (MuJoCo) file; symkin reads YAML "
+                                  "models, URDF and xacro files", "declare the mechanism as a URDF or a YAML model "
+                                  "(docs/model-format.md)")])
+    xacro = {"xacro_args": xacro_args, "xacro_packages": xacro_packages}
+    if kind == XACRO:
+        document, _ = read_xacro_document(path, xacro_args, xacro_packages, tip=tip, base=base, locks=locks,
+                                          snap_angles=snap_angles)
+        return build_model(document, _stem(path), allow_nonphysical)
+    if any(xacro.values()):
+        raise ModelError([Problem(str(path), None, None, "", "xacro arguments and packages apply to xacro files only",
+                                  "drop them, or pass a .xacro file")])
     if kind == URDF:
         return build_model(read_urdf_document(path, tip, base=base, locks=locks, snap_angles=snap_angles),
                            Path(path).stem, allow_nonphysical)
@@ -50,12 +65,12 @@ def load_model(path: str | Path, tip: str | None = None, *, base: str | None = N
     return build_model(read_document(path), Path(path).stem, allow_nonphysical)
 
 
-def _unsupported(file: str, kind: str) -> Problem:
-    """The located refusal of a robot file symkin does not read yet (told by its content)."""
-    if kind == XACRO:
-        return Problem(file, None, None, "", XACRO_MESSAGE, XACRO_FIX)
-    return Problem(file, None, None, "", "this is an MJCF (MuJoCo) file; symkin reads YAML models and URDFs",
-                   "declare the mechanism as a URDF or a YAML model (docs/model-format.md)")
+def _stem(path: str | Path) -> str:
+    """The model's default name from a robot file's name: ``arm.urdf.xacro`` -> ``arm``."""
+    name = Path(path).name
+    for suffix in (".xacro", ".urdf", ".xml"):
+        name = name[:-len(suffix)] if name.lower().endswith(suffix) and len(name) > len(suffix) else name
+    return name
 
 
 def model_from_text(text: str, name: str = "model", file: str = "<string>") -> Model:

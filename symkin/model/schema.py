@@ -406,13 +406,12 @@ class Model:
 
     def problem(self, path: tuple, message: str, fix: str) -> Problem:
         """A located :class:`~symkin.errors.Problem` about the element at key ``path``."""
-        from symkin.model.yaml_source import format_path
+        from symkin.model.yaml_source import format_path, located_problem
 
         probe = tuple(path)
         while probe and probe not in self.locations:
             probe = probe[:-1]
-        line, column = self.locations.get(probe, (None, None))
-        return Problem(self.source, line, column, format_path(path), message, fix)
+        return located_problem(self.source, self.locations.get(probe), format_path(path), message, fix)
 
     def source_name(self, kind: str, name: str) -> str:
         """The name in the source file of the joint (``kind`` "joints") or link ("links") ``name``."""

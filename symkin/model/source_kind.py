@@ -2,7 +2,8 @@
 
 A URDF named ``robot.xml`` is read as a URDF; a xacro file (``robot.urdf.xacro``, or a ``.urdf``
 that still holds ``xacro:`` macros) and an MJCF file (root element ``<mujoco>``) are named as
-such in a located message instead of being parsed as YAML (issue 29).  Only the first
+such (xacro is expanded by :mod:`symkin.model.xacro_source`; MJCF is refused with a located
+message) instead of being parsed as YAML (issue 29).  Only the first
 :data:`SNIFF_BYTES` are read, as bytes; nothing in them is evaluated.
 """
 
@@ -21,10 +22,9 @@ _XML = re.compile(rb"\A(?:\xef\xbb\xbf)?\s*<")
 _XACRO = re.compile(rb"<xacro:")
 _COMMENT = re.compile(rb"<!--.*?(?:-->|\Z)", re.S)
 #: The refusal of a xacro file (here when told by its content; by the URDF reader at its first macro).
-XACRO_MESSAGE = ("this is a xacro file (XML with xacro: macros), not a plain URDF; symkin does not expand xacro "
-                 "(its ${...} are Python expressions, which a model file must never run)")
-XACRO_FIX = ("expand it where you trust it: xacro robot.urdf.xacro > robot.urdf (pip install xacro, or ROS), then "
-             "symkin derive robot.urdf")
+#: The URDF reader's refusal of a xacro element it meets (past the sniffed bytes, or in URDF text given directly).
+XACRO_MESSAGE = "a xacro element in a file read as a plain URDF (its first xacro macro lies past the first 64 kB)"
+XACRO_FIX = "name the file .xacro (robot.urdf.xacro), so that symkin expands it as xacro"
 
 URDF, XACRO, MJCF, YAML = "urdf", "xacro", "mjcf", "yaml"
 

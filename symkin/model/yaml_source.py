@@ -62,6 +62,13 @@ def format_path(path: KeyPath) -> str:
     return out
 
 
+def located_problem(file: str, mark: tuple[Any, ...] | None, key: str, message: str, fix: str) -> Problem:
+    """A :class:`Problem` at ``mark``: (line, column) in ``file``, (line, column, other file), or None."""
+    if mark is None:
+        return Problem(file, None, None, key, message, fix)
+    return Problem(mark[2] if len(mark) > 2 else file, mark[0], mark[1], key, message, fix)
+
+
 @dataclass
 class Document:
     """Plain data of a YAML file plus the location and raw text of every value.
@@ -69,7 +76,8 @@ class Document:
     Attributes:
         file: the path as given by the user (used in messages).
         data: the document as dict/list/str/int/float/bool/None.
-        marks: key path -> (line, column), 1-based.
+        marks: key path -> (line, column), 1-based, or (line, column, file) where the value was written in
+            another file than ``file`` (an element of an included xacro file).
         raw: key path -> raw scalar text, for scalars.
         reduction: for a URDF source, how its tree became the chain
             (:class:`symkin.model.urdf_source.UrdfReduction`); None for a YAML file.
@@ -77,7 +85,7 @@ class Document:
 
     file: str
     data: Any
-    marks: dict[KeyPath, tuple[int, int]] = field(default_factory=dict)
+    marks: dict[KeyPath, tuple[Any, ...]] = field(default_factory=dict)
     raw: dict[KeyPath, str] = field(default_factory=dict)
     reduction: Any = None
 
@@ -86,8 +94,7 @@ class Document:
         probe = tuple(path)
         while probe and probe not in self.marks:
             probe = probe[:-1]
-        line, column = self.marks.get(probe, (None, None))
-        return Problem(self.file, line, column, format_path(path), message, fix)
+        return located_problem(self.file, self.marks.get(probe), format_path(path), message, fix)
 
     def canonical_json(self, omit: tuple[str, ...] = ()) -> str:
         """The data as canonical JSON (sorted keys) without the top-level keys ``omit``: the input of the model hash."""
