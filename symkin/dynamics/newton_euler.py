@@ -108,6 +108,8 @@ class Link:
         rotation: E_i, F_p coordinates -> F_i coordinates (3x3 rows, functions of q_i).
         origin: r_i, the origin of F_i in F_p coordinates.
         inertia: the bodies of the link in F_i, or None if it has neither mass nor inertia.
+        armature: the drive's reflected rotor inertia N^2 J_m on the joint (0 without an actuator):
+            M_ii += armature, tau_i += armature qdd_i (:class:`~symkin.model.schema.Actuator`).
     """
 
     type: JointType
@@ -115,6 +117,7 @@ class Link:
     rotation: list[Vec]
     origin: Vec
     inertia: SpatialInertia | None
+    armature: se.Basic = se.Integer(0)
 
 
 def _compose(ops: Sequence[Op], R: sympy.Matrix, p: sympy.Matrix) -> tuple[sympy.Matrix, sympy.Matrix]:
@@ -150,6 +153,7 @@ def chain_links(model: Model) -> tuple[Link, ...]:
     eye, zero = sympy.eye(3), sympy.zeros(3, 1)
     R_prev, p_prev = _compose(model.base, eye, zero)  # F_0 = base frame, then the base's fixed operations
     links = []
+    armature = {a.joint: se.sympify(a.reflected_inertia) for a in model.actuators}
     for joint, q in zip(model.joints, coordinates.joint_values(model, "q")):
         C_R, C_p = _compose(joint.before, R_prev, p_prev)
         amount = q + joint.offset
@@ -160,7 +164,8 @@ def chain_links(model: Model) -> tuple[Link, ...]:
             R, origin = C_R, C_p + C_R * axis * amount
         after_R, after_p = _compose(joint.after, eye, zero)
         links.append(Link(joint.type, se_vector(axis), se_matrix(R.T), se_vector(origin),
-                          _link_inertia(model, joint.link, after_R, after_p)))
+                          _link_inertia(model, joint.link, after_R, after_p),
+                          armature.get(joint.name, se.Integer(0))))
         R_prev, p_prev = after_R, after_p
     return tuple(links)
 
@@ -233,6 +238,8 @@ def inverse_dynamics(links: Sequence[Link], qd: Sequence[se.Basic] | None, qdd: 
         link = links[i]
         total = (_add(forces[i][0], carried[0]), _add(forces[i][1], carried[1]))
         tau[i] = dot(link.axis, total[0] if joint_kinds.is_rotation(link.type) else total[1])
+        if qdd is not None and link.armature != 0:
+            tau[i] += link.armature * qdd[i]
         carried = _force_transform(link, total) if i > 0 and not _is_zero(total) else (zero, zero)
     return tau
 
@@ -322,4 +329,6 @@ def mass_matrix(links: Sequence[Link]) -> list[list[se.Basic]]:
             M[i][j] = M[j][i] = dot(link.axis, f[0] if joint_kinds.is_rotation(link.type) else f[1])
             if j > 0:
                 f = _force_transform(link, f)
+    for i, link in enumerate(links):
+        M[i][i] += link.armature
     return M

@@ -10,7 +10,7 @@ import sympy
 
 from symkin.geometry import rotation_matrix
 from symkin.model.reader import X_AXIS, Y_AXIS, Z_AXIS, ZERO, Reader, describe, frame_ops
-from symkin.model.schema import Body, Friction, ParallelBodies, Rotation, Vec3
+from symkin.model.schema import Actuator, Body, Friction, ParallelBodies, Rotation, Vec3
 from symkin.model.yaml_source import KeyPath
 
 _INERTIA_KEYS = ("xx", "yy", "zz", "xy", "xz", "yz")
@@ -220,4 +220,31 @@ def read_friction(r: Reader, value: Any, joint_names: tuple[str, ...]) -> tuple[
                 r.fail(fpath + ("smoothing_velocity",), f"the smoothing velocity must be positive, got {smoothing}",
                        "give the speed below which Coulomb friction fades out, e.g. a parameter v_s: 0.01")
         out.append(Friction(jname, viscous, coulomb, smoothing))
+    return tuple(out)
+
+
+def read_actuators(r: Reader, value: Any, joint_names: tuple[str, ...]) -> tuple[Actuator, ...]:
+    """``actuators:`` of a serial model: {joint: {rotor_inertia, gear_ratio}}, both >= 0 (gear ratio > 0)."""
+    path: KeyPath = ("actuators",)
+    section = r.mapping(path, value, optional=joint_names)
+    if section is None:
+        return ()
+    out = []
+    for jname, spec in section.items():
+        if jname not in joint_names:
+            continue  # already reported as an unknown key
+        apath = path + (jname,)
+        spec = r.mapping(apath, spec, required=("rotor_inertia",), optional=("gear_ratio",))
+        if spec is None or "rotor_inertia" not in spec:
+            continue
+        inertia = r.expr(apath + ("rotor_inertia",), spec["rotor_inertia"])
+        gear = r.expr(apath + ("gear_ratio",), spec["gear_ratio"]) if "gear_ratio" in spec else sympy.Integer(1)
+        if inertia is None or gear is None:
+            continue
+        _negative(r, apath + ("rotor_inertia",), inertia, "rotor inertia")
+        ratio = r.default_value(gear)
+        if gear == 0 or (ratio is not None and ratio <= 0):
+            r.fail(apath + ("gear_ratio",), f"the gear ratio must be positive, got {gear}",
+                   "give the motor turns per joint turn, e.g. 13.3 for a capstan drive, 1 for direct drive")
+        out.append(Actuator(jname, inertia, gear))
     return tuple(out)

@@ -12,7 +12,7 @@ import hashlib
 from typing import Any
 
 from symkin.errors import ModelError
-from symkin.model.body_build import read_bodies, read_friction, read_parallel_bodies
+from symkin.model.body_build import read_actuators, read_bodies, read_friction, read_parallel_bodies
 from symkin.model.names import name_problem
 from symkin.model.parallel_build import build_parallel, check_parallel_names, parallel_task_space
 from symkin.model.parameter_build import check_name_clashes, read_parameters
@@ -29,7 +29,7 @@ FORMAT_VERSION = 1
 #: so that choosing other outputs, backends or folded parameters keeps the mechanism's identity.
 EMISSION_KEYS = ("scene",)
 TOP_LEVEL_KEYS = ("name", "description", "references", "notes", "allow_nonphysical", "source_names", "parameters",
-                  "serial", "parallel", "task_space", "bodies", "gravity", "friction", "scene")
+                  "serial", "parallel", "task_space", "bodies", "gravity", "friction", "actuators", "scene")
 
 
 def build_model(doc: Document, stem: str, allow_nonphysical: bool = False) -> Model:
@@ -80,6 +80,10 @@ def build_model(doc: Document, stem: str, allow_nonphysical: bool = False) -> Mo
         parallel = dataclasses.replace(parallel, bodies=read_parallel_bodies(r, data["bodies"]))
     gravity = r.vector3(("gravity",), data["gravity"]) if "gravity" in data else (ZERO, ZERO, ZERO)
     friction = read_friction(r, data.get("friction", {}), coordinate_names)
+    actuators = read_actuators(r, data.get("actuators", {}), tuple(j.name for j in joints))
+    if parallel is not None and "actuators" in data:
+        r.fail(("actuators",), "a parallel model's actuator rotors are declared among its bodies",
+               "write bodies: {rotor: {inertia: J_m, gear_ratio: N}} (docs/model-format.md)")
     scene = read_scene(r, data.get("scene", {}), parameters,
                    ("fk", "jacobian") if parallel is None else ("closure", "closure_jacobians"))
 
@@ -104,6 +108,7 @@ def build_model(doc: Document, stem: str, allow_nonphysical: bool = False) -> Mo
         bodies=bodies,
         gravity=gravity or (ZERO, ZERO, ZERO),
         friction=friction,
+        actuators=actuators,
         scene=scene,
         parallel=parallel,
         locations=dict(doc.marks),

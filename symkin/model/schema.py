@@ -169,6 +169,31 @@ class Friction:
 
 
 @dataclass(frozen=True)
+class Actuator:
+    """The drive of one serial joint: a motor whose rotor turns ``gear_ratio`` times per joint turn.
+
+    The rotor's kinetic energy 1/2 J_m (N qd)^2 adds the reflected inertia N^2 J_m to M's diagonal
+    entry of the joint (and N^2 J_m qdd to its torque); the rotor's gyroscopic coupling with the
+    links that carry it is neglected, as in Pinocchio's and MuJoCo's ``armature`` (Featherstone
+    2008, sec. 9.4; Spong et al. 2006, sec. 7.4: valid for large gear ratios).
+
+    Attributes:
+        joint: the joint it drives.
+        rotor_inertia: J_m, the rotor's inertia about its axis (kg m^2; kg for a linear motor).
+        gear_ratio: N, motor turns per joint turn (1: direct drive).
+    """
+
+    joint: str
+    rotor_inertia: sympy.Expr
+    gear_ratio: sympy.Expr = sympy.Integer(1)
+
+    @property
+    def reflected_inertia(self) -> sympy.Expr:
+        """N^2 J_m: the inertia the joint sees (MuJoCo's and Pinocchio's ``armature``)."""
+        return self.gear_ratio ** 2 * self.rotor_inertia
+
+
+@dataclass(frozen=True)
 class Scene:
     """What a user needs from the model: the outputs to emit and how.
 
@@ -374,6 +399,7 @@ class Model:
         bodies: mass properties.
         gravity: gravity acceleration vector in the base frame.
         friction: per-joint friction.
+        actuators: per-joint drives (rotor inertia and gear ratio) of a serial chain.
         scene: default request.
         parallel: legs and platform of a parallel mechanism, None for a serial chain.
     """
@@ -392,6 +418,8 @@ class Model:
     bodies: tuple[Body, ...] = ()
     gravity: Vec3 = (sympy.Integer(0), sympy.Integer(0), sympy.Integer(0))
     friction: tuple[Friction, ...] = ()
+    #: the drives of serial joints (rotor inertia, gear ratio); a parallel model's rotors are in its bodies.
+    actuators: tuple[Actuator, ...] = ()
     scene: Scene = field(default_factory=lambda: Scene(outputs=("fk", "jacobian")))
     #: the legs and platform of a parallel mechanism (``joints`` is empty then), None for serial chains.
     parallel: Parallel | None = None
