@@ -345,8 +345,9 @@ def test_vendor_names_derive_unedited_and_keep_their_names(tmp_path, capsys):
 
 def test_robot_files_are_told_by_their_content(tmp_path, capsys):
     """Issue 29: a URDF named .xml is read as a URDF; a xacro file (a .urdf that still holds xacro: macros)
-    is expanded (tests/test_xacro.py); an MJCF file is refused with a located message that says what it is
-    and what to do, exit code 2, nothing written; they were parsed as YAML and got YAML keys suggested."""
+    is expanded (tests/test_xacro.py); an MJCF file is read by MuJoCo's compiler (tests/test_mjcf.py); they
+    were parsed as YAML and got YAML keys suggested. Their errors are the URDF reader's: exit code 2,
+    located, nothing written."""
     from importlib.metadata import distribution
 
     from symkin.cli import main
@@ -362,7 +363,7 @@ def test_robot_files_are_told_by_their_content(tmp_path, capsys):
     mjcf = _write(tmp_path, '<mujoco model="arm"><worldbody><body name="b"/></worldbody></mujoco>', "arm_mjcf.xml")
     # the package's hector quadrotor: its macro is never called, so it expands to an empty robot (as xacro's does)
     for path, what in ((robots / "hector_description/robots/quadrotor_base.urdf.xacro", ":3:1: the robot has no links"),
-                       (mjcf, ": this is an MJCF (MuJoCo) file")):
+                       (mjcf, ":1:1: the chain world -> b has no moving joint")):
         out = tmp_path / "out"
         assert main(["derive", str(path), "-o", str(out)]) == 2
         err = capsys.readouterr().err

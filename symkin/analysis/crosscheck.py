@@ -1,10 +1,12 @@
-"""symkin against an independent reference on the same robot: ``symkin crosscheck`` (Pinocchio).
+"""symkin against an independent reference on the same robot: ``symkin crosscheck`` (Pinocchio; MuJoCo
+as well for an MJCF file, :mod:`symkin.analysis.mujoco_reference`).
 
 The reference reads the robot from a URDF and shares no code with symkin's derivation: a
 URDF model file is given to Pinocchio as it is (with symkin's choice of chain: the joints
 off it locked at the same values, :class:`~symkin.model.urdf_source.UrdfReduction`); a YAML
 model goes through the URDF that ``symkin export`` writes (:mod:`symkin.model.urdf_export`);
-``reference_urdf`` replaces either by another file (e.g. the vendor's).  symkin's side is the
+a xacro or MJCF file goes through the URDF text symkin generates from it; ``reference_urdf``
+replaces any of them by another file (e.g. the vendor's).  symkin's side is the
 generated numpy code, derived into a temporary directory, so what is checked is what users run.
 
 At ``samples`` random states within the joint limits (q; qd and qdd in [-1, 1]) it compares
@@ -98,7 +100,8 @@ def _sources(path: Path, reference_urdf: Path | None, urdf: Mapping[str, Any]) -
     """(model, reference URDF text, reduction) for the model file ``path``."""
     from symkin.model import load_model
     from symkin.model.build import build_model
-    from symkin.model.source_kind import URDF, XACRO, source_kind
+    from symkin.model.mjcf_source import read_mjcf_document
+    from symkin.model.source_kind import MJCF, URDF, XACRO, source_kind
     from symkin.model.urdf_export import ROOT_LINK, TCP_LINK, export_urdf
     from symkin.model.urdf_source import UrdfReduction, read_urdf_document
     from symkin.model.xacro_source import read_xacro_document
@@ -111,9 +114,10 @@ def _sources(path: Path, reference_urdf: Path | None, urdf: Mapping[str, Any]) -
         model = build_model(document, path.stem, allow_nonphysical)
         reduction = document.reduction
         text = (reference_urdf or path).read_text()
-    elif kind == XACRO:  # the reference reads symkin's expansion: the check is of the URDF reading and derivation
+    elif kind in (XACRO, MJCF):  # the reference reads symkin's URDF text: the check is of its reading and derivation
         document, expanded = read_xacro_document(path, options.pop("xacro_args", None),
-                                                 options.pop("xacro_packages", None), **options)
+                                                 options.pop("xacro_packages", None), **options) if kind == XACRO \
+            else read_mjcf_document(path, **options)
         model = build_model(document, path.stem, allow_nonphysical)
         reduction = document.reduction
         text = reference_urdf.read_text() if reference_urdf else expanded
@@ -140,6 +144,12 @@ def _coupling(model: Any) -> np.ndarray:
     if A is None:
         return np.eye(len(model.joints))
     return np.array(A.xreplace(model.parameter_values), dtype=float)
+
+
+def _is_mjcf(path: Path) -> bool:
+    from symkin.model.source_kind import MJCF, source_kind
+
+    return source_kind(path) == MJCF
 
 
 def _states(model: Any, samples: int, seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -177,7 +187,9 @@ def crosscheck(path: str | Path, *, reference_urdf: str | Path | None = None, sa
     model, text, reduction = _sources(path, reference_path, urdf or {})
     with_c = bool(model.bodies) and (len(model.joints) <= CORIOLIS_MATRIX_JOINTS if coriolis_matrix is None
                                      else coriolis_matrix)
-    outputs = KINEMATICS_OUTPUTS + (DYNAMICS_OUTPUTS + (("coriolis_matrix",) if with_c else ())
+    weighted = any(g != 0 for g in model.gravity)  # without gravity G is identically zero and not emitted
+    dynamics = tuple(name for name in DYNAMICS_OUTPUTS if weighted or name != "gravity_vector")
+    outputs = KINEMATICS_OUTPUTS + (dynamics + (("coriolis_matrix",) if with_c else ())
                                     + (("friction",) if model.friction else ()) if model.bodies else ())
     say = progress or (lambda _line: None)
     say(f"deriving {', '.join(outputs)} of {model.name} ({', '.join(backends)})")
@@ -245,11 +257,21 @@ def crosscheck(path: str | Path, *, reference_urdf: str | Path | None = None, sa
             if model.bodies:
                 want |= _dynamics_references(pin, reference, data, weightless, weightless_data, q, v, a, columns,
                                              coupling, total_mass, float(np.linalg.norm(gravity)), smooth, with_c)
+                if not weighted:
+                    del want["gravity_vector"]
             for backend, got in values.items():
                 suffix = "" if backend == backends[0] else f" ({backend})"
                 for name, (expected, *scales) in want.items():
                     error = _normwise(_ours(got, name, k, frame_links, QD[k]), expected, *scales)
                     errors[name + suffix] = max(errors.get(name + suffix, 0.0), error)
+    if model.bodies and _is_mjcf(path):
+        from symkin.analysis.mujoco_reference import mujoco_errors
+
+        say("comparing M and V + G with MuJoCo on the MJCF file")
+        for backend, got in values.items():
+            suffix = "" if backend == backends[0] else f" ({backend})"
+            for name, error in mujoco_errors(path, model, reduction.locked, got, Q, QD, _normwise).items():
+                errors[name + suffix] = error
     comparisons = [Comparison(name, error) for name, error in errors.items()]
     if model.bodies and not with_c:
         comparisons.append(Comparison("coriolis_matrix", 0.0, "skipped: not asked for (--coriolis-matrix checks it)"))
@@ -258,7 +280,12 @@ def crosscheck(path: str | Path, *, reference_urdf: str | Path | None = None, sa
                                                                "Pinocchio's sign(qd)"))
     if not model.bodies:
         comparisons.append(Comparison("dynamics", 0.0, "skipped: the model declares no bodies"))
-    return CrosscheckReport(model.name, f"Pinocchio {pin.__version__}", samples, tolerance, tuple(comparisons))
+    reference_name = f"Pinocchio {pin.__version__}"
+    if model.bodies and _is_mjcf(path):
+        import mujoco
+
+        reference_name += f" and MuJoCo {mujoco.__version__}"
+    return CrosscheckReport(model.name, reference_name, samples, tolerance, tuple(comparisons))
 
 
 def _evaluate(ours: Any, outputs: tuple[str, ...], Q: np.ndarray, QD: np.ndarray, QDD: np.ndarray) -> dict[str, Any]:

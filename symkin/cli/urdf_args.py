@@ -15,11 +15,11 @@ from typing import Any
 
 from symkin.cli.analysis_args import parse_value
 from symkin.errors import ModelError, Problem
-from symkin.model.source_kind import URDF, XACRO, source_kind
+from symkin.model.source_kind import MJCF, URDF, XACRO, source_kind
 
 
 def add_urdf_arguments(p: argparse.ArgumentParser) -> None:
-    group = p.add_argument_group("URDF and xacro files")
+    group = p.add_argument_group("URDF, xacro and MJCF files (MJCF: bodies are links)")
     group.add_argument("--tip", metavar="LINK",
                        help="the link that ends the chain (default: the leaf behind the most moving joints, if "
                             "unique)")
@@ -48,7 +48,7 @@ def urdf_options(args: argparse.Namespace, path: str) -> dict[str, Any]:
     """
     given = [option for option, value in (("--tip", args.tip), ("--base", args.base), ("--lock", args.lock),
                                           ("--snap-angles", args.snap_angles)) if value]
-    if given and not any(source_kind(model) in (URDF, XACRO) for model in args.models):
+    if given and not any(source_kind(model) in (URDF, XACRO, MJCF) for model in args.models):
         raise ModelError([Problem("<command line>", None, None, given[0], f"{given[0]} applies to URDF files only",
                                   f"drop {given[0]}, or pass a .urdf file")])
     xacro = [option for option, value in (("--xacro-arg", args.xacro_arg), ("--xacro-package", args.xacro_package))
@@ -57,7 +57,7 @@ def urdf_options(args: argparse.Namespace, path: str) -> dict[str, Any]:
         raise ModelError([Problem("<command line>", None, None, xacro[0], f"{xacro[0]} applies to xacro files only",
                                   f"drop {xacro[0]}, or pass a .xacro file")])
     kind = source_kind(path)
-    if kind not in (URDF, XACRO):
+    if kind not in (URDF, XACRO, MJCF):
         return {"allow_nonphysical": args.allow_nonphysical}
     locks = {}
     for item in args.lock:

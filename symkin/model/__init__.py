@@ -1,5 +1,5 @@
-"""Mechanism models: read a YAML model file (or a URDF, told by its content) into a frozen, validated
-:class:`Model`."""
+"""Mechanism models: read a YAML model file (or a URDF, xacro or MJCF file, told by its content) into a
+frozen, validated :class:`Model`."""
 
 from __future__ import annotations
 
@@ -10,6 +10,7 @@ from symkin.errors import ModelError, Problem
 from symkin.model.build import build_model
 from symkin.model.schema import Body, Friction, Joint, JointType, Model, Parameter, Rotation, Scene, Translation
 from symkin.model.source_kind import MJCF, URDF, XACRO, source_kind
+from symkin.model.mjcf_source import read_mjcf_document
 from symkin.model.urdf_source import read_urdf_document
 from symkin.model.xacro_source import read_xacro_document
 from symkin.model.yaml_source import parse_document, read_document
@@ -22,13 +23,14 @@ def load_model(path: str | Path, tip: str | None = None, *, base: str | None = N
                locks: Mapping[str, float] | None = None, snap_angles: bool = False,
                allow_nonphysical: bool = False, xacro_args: Mapping[str, str] | None = None,
                xacro_packages: Mapping[str, str | Path] | None = None) -> Model:
-    """Read, validate and build the model in the file ``path``: YAML, URDF or xacro, told by its content
-    (root element ``<robot>``, with ``<xacro:...>`` elements or a ``.xacro`` name for xacro; MJCF files are
-    refused with a located message).
+    """Read, validate and build the model in the file ``path``: YAML, URDF, xacro or MJCF, told by its
+    content (root element ``<robot>``, with ``<xacro:...>`` elements or a ``.xacro`` name for xacro;
+    ``<mujoco>`` for MJCF, read through MuJoCo's compiler).
 
     Args:
         path: the model file.
-        tip: URDF only: the link that ends the chain (default: the leaf behind the most moving joints).
+        tip: URDF, xacro and MJCF (a body) only: the link that ends the chain (default: the leaf behind
+            the most moving joints).
         base: URDF only: the link the chain starts from (default: the root link).
         locks: URDF only: {joint: value} of joints off the chain (default 0; see
             :mod:`symkin.model.urdf_source`).
@@ -43,9 +45,11 @@ def load_model(path: str | Path, tip: str | None = None, *, base: str | None = N
     """
     kind = source_kind(path)
     if kind == MJCF:
-        raise ModelError([Problem(str(path), None, None, "", "this is an MJCF (MuJoCo) file; symkin reads YAML "
-                                  "models, URDF and xacro files", "declare the mechanism as a URDF or a YAML model "
-                                  "(docs/model-format.md)")])
+        if xacro_args or xacro_packages:
+            raise ModelError([Problem(str(path), None, None, "", "xacro arguments and packages apply to xacro "
+                                      "files only", "drop them, or pass a .xacro file")])
+        document, _ = read_mjcf_document(path, tip=tip, base=base, locks=locks, snap_angles=snap_angles)
+        return build_model(document, _stem(path), allow_nonphysical)
     xacro = {"xacro_args": xacro_args, "xacro_packages": xacro_packages}
     if kind == XACRO:
         document, _ = read_xacro_document(path, xacro_args, xacro_packages, tip=tip, base=base, locks=locks,

@@ -1,9 +1,9 @@
 """What kind of robot or model file a path holds, told by its content rather than its name.
 
 A URDF named ``robot.xml`` is read as a URDF; a xacro file (``robot.urdf.xacro``, or a ``.urdf``
-that still holds ``xacro:`` macros) and an MJCF file (root element ``<mujoco>``) are named as
-such (xacro is expanded by :mod:`symkin.model.xacro_source`; MJCF is refused with a located
-message) instead of being parsed as YAML (issue 29).  Only the first
+that still holds ``xacro:`` macros) is expanded by :mod:`symkin.model.xacro_source` and an MJCF
+file (root element ``<mujoco>``) compiled by :mod:`symkin.model.mjcf_source`, instead of being
+parsed as YAML (issue 29).  Only the first
 :data:`SNIFF_BYTES` are read, as bytes; nothing in them is evaluated.
 """
 

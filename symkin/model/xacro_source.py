@@ -28,9 +28,9 @@ Semantics follow xacro 2 (in-order processing, the ROS wiki's "xacro" page):
   each bounded in size like a model file; ``xacro.load_yaml``/``load_yaml`` reads ``.yaml``
   files with the safe loader.
 
-The output is URDF text with one element per line, and :class:`Expansion` maps each output
-line back to the element of the xacro file it came from, so that the URDF reader's messages
-point into the xacro source (:func:`located`).
+The output is URDF text with one element per line, and its line map
+(:class:`~symkin.model.generated_urdf.GeneratedUrdf`) leads each output line back to the element
+of the xacro file it came from, so that the URDF reader's messages point into the xacro source.
 
 Length: one expander of one format (scopes, properties, macros, includes, substitutions and the
 line map), whose parts only make sense together; the expression language is its own module.
@@ -50,7 +50,7 @@ from xml.sax.saxutils import quoteattr
 import yaml
 
 from symkin.errors import ModelError, Problem
-from symkin.model.urdf_source import urdf_document
+from symkin.model.generated_urdf import GeneratedUrdf, read_generated_urdf
 from symkin.model.xacro_expressions import (MAX_TEXT, Evaluator, XacroFail, as_text, boolean, literal, namespaced,
                                            pieces)
 from symkin.model.yaml_source import MAX_FILE_BYTES, Document
@@ -131,17 +131,8 @@ class _Scope:
         return None
 
 
-@dataclass(frozen=True)
-class Expansion:
-    """URDF text expanded from a xacro file, and the source element of every line of it."""
-
-    text: str
-    #: lines[i]: (file, line, column) of the xacro element written on output line i + 1.
-    lines: tuple[tuple[str, int, int], ...]
-
-
 def expand_xacro(path: str | Path, args: Mapping[str, str] | None = None,
-                 packages: Mapping[str, str | Path] | None = None) -> Expansion:
+                 packages: Mapping[str, str | Path] | None = None) -> GeneratedUrdf:
     """Expand the xacro file ``path`` (see the module docstring).
 
     Args:
@@ -169,19 +160,7 @@ def expand_xacro(path: str | Path, args: Mapping[str, str] | None = None,
     lines: list[str] = ['<?xml version="1.0"?>']
     where: list[tuple[str, int, int]] = [(root.file, root.line, root.column)]
     _write(out_root, 0, lines, where)
-    return Expansion("\n".join(lines) + "\n", tuple(where))
-
-
-def located(error: ModelError, expansion: Expansion, expanded_file: str) -> ModelError:
-    """``error`` of the URDF reader on the expanded text, each problem moved to its xacro source element."""
-    problems = []
-    for p in error.problems:
-        if p.file == expanded_file and p.line is not None and 1 <= p.line <= len(expansion.lines):
-            file, line, column = expansion.lines[p.line - 1]
-            problems.append(Problem(file, line, column, p.key, p.message, p.fix))
-        else:
-            problems.append(p)
-    return ModelError(problems)
+    return GeneratedUrdf("\n".join(lines) + "\n", tuple(where))
 
 
 def _write(node: _Node, depth: int, lines: list[str], where: list[tuple[str, int, int]]) -> None:
@@ -572,26 +551,4 @@ def read_xacro_document(path: str | Path, args: Mapping[str, str] | None = None,
     """(model document, expanded URDF text) of the xacro file ``path``: :func:`expand_xacro`, then the URDF
     reader (``urdf``: its tip, base, locks and snap_angles), whose messages point into the xacro files."""
     expansion = expand_xacro(path, args, packages)
-    try:
-        document = urdf_document(expansion.text, str(path), **urdf)
-    except ModelError as exc:
-        raise located(exc, expansion, str(path)) from None
-    for key, (line, column, *_) in list(document.marks.items()):
-        if 1 <= line <= len(expansion.lines):
-            file, line, column = expansion.lines[line - 1]
-            document.marks[key] = (line, column) if file == str(path) else (line, column, file)
-    if "notes" in document.data:
-        document.data["notes"] = [_NOTE_LINE.sub(lambda m: _note_place(expansion, int(m.group(1)), str(path)), note)
-                                  for note in document.data["notes"]]
-    return document, expansion.text
-
-
-_NOTE_LINE = re.compile(r"^line (\d+)")
-
-
-def _note_place(expansion: Expansion, line: int, main: str) -> str:
-    """``line N`` of a URDF reader's note on the expanded text, as the place in the xacro source."""
-    if not 1 <= line <= len(expansion.lines):
-        return f"line {line}"
-    file, source_line, _ = expansion.lines[line - 1]
-    return f"line {source_line}" if file == main else f"{file}, line {source_line}"
+    return read_generated_urdf(expansion, str(path), **urdf), expansion.text

@@ -1,0 +1,91 @@
+"""MJCF input (issue 29): MuJoCo's compiler reads the file, symkin derives the chain, and both references
+agree - Pinocchio on the URDF text symkin generates, MuJoCo on the file itself (M with armature, and
+qfrc_bias = V + G) - on the MJCF models that ship with gymnasium and on a file written to exercise
+what MJCF allows beyond URDF."""
+
+from __future__ import annotations
+
+from importlib.metadata import distribution
+from pathlib import Path
+
+import pytest
+
+from symkin.analysis.crosscheck import crosscheck
+from symkin.cli import main
+from symkin.errors import ModelError
+from symkin.model import load_model
+
+ASSETS = Path(distribution("gymnasium").locate_file("gymnasium/envs/mujoco/assets"))
+
+#: joints along hinges and slides about tilted axes through offset anchors, two and one per body, with
+#: ref (the model pose is at q = ref), a full inertia tensor (principal axes by MuJoCo), gravity off
+#: the z axis, armature, damping and frictionloss from defaults and per joint.
+ODD = """<mujoco model="odd">
+  <compiler angle="radian"/>
+  <option gravity="0.5 -1 -9"/>
+  <default><joint damping="0.2" armature="0.01"/></default>
+  <worldbody>
+    <body name="base" pos="0.1 0.2 0.3" quat="0.9 0.1 0.3 -0.2">
+      <joint name="slide" type="slide" axis="0.3 0.4 0.866" ref="0.05" range="-0.5 0.5"/>
+      <geom type="box" size="0.05 0.04 0.03" mass="1.3"/>
+      <body name="arm" pos="0 0.1 0.05" euler="0.3 -0.2 0.5">
+        <joint name="a1" type="hinge" pos="0.02 0 0.01" axis="0 0 1" ref="0.4"/>
+        <joint name="a2" type="hinge" pos="-0.03 0.02 0" axis="1 1 0" frictionloss="0.1"/>
+        <inertial pos="0.1 0.02 -0.01" mass="0.7" fullinertia="0.01 0.02 0.015 0.001 -0.002 0.003"/>
+        <body name="hand" pos="0.2 0 0" quat="0.7 0 0.7 0">
+          <joint name="a3" type="hinge" pos="0 0.01 0" axis="0 1 0" range="-2 2"/>
+          <geom type="capsule" fromto="0 0 0 0.1 0.02 0" size="0.02" mass="0.3"/>
+          <body name="tip" pos="0.1 0.02 0"/>
+        </body>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+
+
+def _passes_both(report) -> None:
+    rows = {c.quantity for c in report.comparisons}
+    assert {"mass_matrix", "inverse_dynamics", "mass_matrix (MuJoCo)",
+            "coriolis_vector + gravity_vector (MuJoCo)"} <= rows, rows
+    assert not report.failures, report.comparisons
+
+
+@pytest.mark.parametrize("file, tip", [("reacher.xml", "fingertip"), ("pusher.xml", "tips_arm"),
+                                       ("inverted_double_pendulum.xml", None), ("hopper.xml", "foot")])
+def test_gymnasium_models_agree_with_mujoco_and_pinocchio(file, tip):
+    """As shipped: reacher and pusher carry armature (the drives' reflected inertia), the hopper's chain
+    starts with two slides and a hinge at the root; the objects and targets beside them are locked."""
+    report = crosscheck(ASSETS / file, samples=3, backends=("numpy",), coriolis_matrix=False,
+                        urdf={"tip": tip} if tip else {})
+    _passes_both(report)
+    assert "MuJoCo" in report.reference
+
+
+def test_what_mjcf_allows_beyond_urdf_reads_right(tmp_path):
+    path = tmp_path / "odd.xml"
+    path.write_text(ODD)
+    model = load_model(path)
+    assert [j.name for j in model.joints] == ["slide", "a1", "a2", "a3"]
+    assert [(a.joint, float(a.reflected_inertia)) for a in model.actuators] == [(j, 0.01) for j in
+                                                                               ("slide", "a1", "a2", "a3")]
+    _passes_both(crosscheck(path, samples=3, backends=("numpy",)))
+
+
+def test_bad_mjcf_gets_located_errors(tmp_path, capsys):
+    ant = ASSETS / "ant.xml"
+    with pytest.raises(ModelError, match=r"ant\.xml:\d+:\d+: at 'joint\[root\]' joint 'root' on the chain world -> "
+                                         r"body4 is a free joint"):
+        load_model(ant, tip="body4")
+    # below the free joint, a leg is a chain (the other legs' joints locked)
+    assert load_model(ant, base="torso", tip="body4").dof == 2
+    bad = tmp_path / "bad.xml"
+    bad.write_text('<mujoco><worldbody><body name="b"><joint type="hinge" bogus="1"/></body></worldbody></mujoco>')
+    out = tmp_path / "out"
+    assert main(["derive", str(bad), "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert f"{bad}: MuJoCo's compiler refuses the file: XML Error: Schema violation: unrecognized attribute: " \
+           "'bogus'" in err and not out.exists()
+    assert main(["derive", str(ASSETS / "reacher.xml"), "--tip", "fingertip", "--only", "fk,mass_matrix",
+                 "-o", str(out), "-q"]) == 0
+    assert (out / "reacher" / "manifest.json").exists()
