@@ -243,7 +243,8 @@ def test_an_interrupted_compile_leaves_nothing_in_the_cache(generated_dir, tmp_p
     interrupted_load = f"import signal; signal.signal(signal.SIGINT, signal.default_int_handler); {load_c}"
     # a compiler that takes 5 s, so that Ctrl-C always comes during the compile (planar_2r alone compiles
     # in a fraction of a second: on a busy machine the signal came after it); the interrupted process
-    # waits for its compilers to end, which may ignore SIGINT (started in the background)
+    # kills its compilers with their children (each in a process group of its own: they may ignore SIGINT,
+    # and a linker left running wrote into the removed scratch directory) and waits for them
     slow_cc = tmp_path / "slow-cc"
     slow_cc.write_text(f'#!/bin/sh\n[ "$1" = --version ] || sleep 5\nexec {env.get("CC", "cc")} "$@"\n')
     slow_cc.chmod(0o755)

@@ -31,9 +31,11 @@ import os
 import re
 import shlex
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from collections.abc import Iterator
 from concurrent.futures import ThreadPoolExecutor
@@ -175,10 +177,41 @@ def locked(path: Path, wait: bool = True) -> Iterator[bool]:
             fcntl.flock(handle, fcntl.LOCK_UN)
 
 
-def _run(arguments: list[str], source: Path) -> None:
-    result = subprocess.run(arguments, capture_output=True, text=True)
-    if result.returncode != 0:
-        raise GeneratedCodeError(f"compiling {source} failed:\n{result.stderr.strip()}")
+class _Compilers:
+    """The compiler processes of one build, each in a process group of its own.
+
+    An interrupted build (Ctrl-C) kills every running compiler with its children (the assembler,
+    the linker: killing the driver alone let a linker write into the scratch directory after it was
+    removed) and waits for them, so nothing writes into the cache once the build has stopped.
+    """
+
+    def __init__(self) -> None:
+        self.running: set[subprocess.Popen[str]] = set()
+        self.lock = threading.Lock()
+
+    def run(self, arguments: list[str], source: Path) -> None:
+        process = subprocess.Popen(arguments, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                                   start_new_session=True)
+        with self.lock:
+            self.running.add(process)
+        try:
+            _, err = process.communicate()
+        finally:
+            with self.lock:
+                self.running.discard(process)
+        if process.returncode != 0:
+            raise GeneratedCodeError(f"compiling {source} failed:\n{err.strip()}")
+
+    def kill(self) -> None:
+        with self.lock:
+            running = list(self.running)
+        for process in running:
+            try:
+                os.killpg(process.pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
+        for process in running:
+            process.wait()
 
 
 def _compile(command: list[str], source: Path, header: Path, target: Path, units: list[list[str]],
@@ -186,18 +219,27 @@ def _compile(command: list[str], source: Path, header: Path, target: Path, units
     """Compile each unit into an object, link them into a temporary file next to ``target``, then
     rename it into place (so no reader ever sees a half-written library)."""
     scratch = Path(tempfile.mkdtemp(prefix=target.name + ".", dir=target.parent))
+    compilers = _Compilers()
     try:
         objects = [str(scratch / f"part{k}.o") for k in range(len(units))]
         compile_base = command + list(BASE_FLAGS) + ["-I", str(header.parent), "-c"]
         with ThreadPoolExecutor(max_workers=jobs) as pool:
-            # list() re-raises the first failure once every started compilation has finished
-            list(pool.map(lambda unit, obj: _run(compile_base + unit + ["-o", obj, str(source)], source),
-                          units, objects))
+            try:
+                # list() re-raises the first failure once every started compilation has finished
+                list(pool.map(lambda unit, obj: compilers.run(compile_base + unit + ["-o", obj, str(source)], source),
+                              units, objects))
+            except BaseException:
+                compilers.kill()  # before the pool waits for its threads, which wait for their compilers
+                raise
         partial = scratch / target.name
-        _run(command + list(BASE_FLAGS) + ["-shared", "-o", str(partial)] + objects + ["-lm"], source)
+        try:
+            compilers.run(command + list(BASE_FLAGS) + ["-shared", "-o", str(partial)] + objects + ["-lm"], source)
+        except BaseException:
+            compilers.kill()
+            raise
         os.replace(partial, target)
     finally:
-        # An interrupted compiler may still be removing its own output while the tree goes: never let
+        # The compilers are dead (killed on an interruption) but the file system may lag behind: never let
         # that leave the scratch directory in the cache (or hide the KeyboardInterrupt behind an OSError).
         for _ in range(20):
             shutil.rmtree(scratch, ignore_errors=True)
