@@ -25,12 +25,12 @@ A_NUMERIC = np.array([[1, 0], [0, 1], [-0.5, 0], [0, 3]])
 B_NUMERIC = np.array([0, 0, 0.2, -0.1])
 
 
-def _coupled(arm: str, followers: dict[str, str]) -> str:
+def _coupled(arm: str, followers: dict[str, str], key: str = "mimic") -> str:
     for name, mimic in followers.items():
         start = arm.index(f"{{name: {name},")
         end = arm.index("}\n", arm.index("origin", start)) if "origin" in arm[start:arm.index("\n", start)] else \
             arm.index("}\n", start)
-        arm = arm[:end] + f", mimic: {mimic}" + arm[end:]
+        arm = arm[:end] + f", {key}: {mimic}" + arm[end:]
     return arm
 
 
@@ -48,15 +48,35 @@ def test_followers_have_no_coordinate_and_a_constant_coupling(arms):
 
 def test_the_coupled_arm_is_the_free_arm_on_the_coupling(arms):
     (free, fd), (coupled, cd) = arms
+    _agrees_on_the_coupling(free, fd, coupled, cd, A_NUMERIC, B_NUMERIC)
+
+
+#: Issue 30: j3 keeps its coordinate but moves relative to j1 (a parallelogram's distal joint, whose
+#: coordinate is the link's absolute angle), j4 follows two coordinates (a differential).
+COUPLINGS = {"j3": '"j3 - j1 + 0.2"', "j4": '"j1 + 2*j2 - l1/3"'}
+A_GENERAL = np.array([[1, 0, 0], [0, 1, 0], [-1, 0, 1], [1, 2, 0]])
+B_GENERAL = np.array([0, 0, 0.2, -0.1])
+
+
+def test_affine_couplings_of_several_coordinates_are_the_free_arm_on_the_coupling(arms):
+    (free, fd), _ = arms
+    coupled = model_from_text(_coupled(ODD_ARM, COUPLINGS, "coupling"))
+    assert [c.name for c in coupled.coordinates] == ["j1", "j2", "j3"] and coupled.dof == 3
+    assert np.array_equal(np.array(coordinates.coupling_matrix(coupled), dtype=float), A_GENERAL)
+    _agrees_on_the_coupling(free, fd, coupled, Derivation(coupled), A_GENERAL, B_GENERAL)
+
+
+def _agrees_on_the_coupling(free, fd, coupled, cd, A, b):
+    """fk(theta), J(theta) A, A^T M A, A^T V, A^T G, A^T F_f, A^T tau and the energies at theta = A q + b."""
     functions = ("fk", "jacobian_geometric", "mass_matrix", "coriolis_vector", "gravity_vector", "friction",
                  "inverse_dynamics", "potential_energy", "kinetic_energy")
     f = {name: reference_function(free, fd[name]) for name in functions}
     c = {name: reference_function(coupled, cd[name]) for name in functions}
-    A = A_NUMERIC
+    n = A.shape[1]
     rng = np.random.default_rng(13)
     for _ in range(5):
-        q, qd, qdd = rng.uniform(-2, 2, 2), rng.uniform(-2, 2, 2), rng.uniform(-3, 3, 2)
-        theta, theta_d, theta_dd = A @ q + B_NUMERIC, A @ qd, A @ qdd
+        q, qd, qdd = rng.uniform(-2, 2, n), rng.uniform(-2, 2, n), rng.uniform(-3, 3, n)
+        theta, theta_d, theta_dd = A @ q + b, A @ qd, A @ qdd
         np.testing.assert_allclose(c["fk"](q)[0], f["fk"](theta)[0], rtol=0, atol=KINEMATICS)
         np.testing.assert_allclose(c["jacobian_geometric"](q)[0], f["jacobian_geometric"](theta)[0] @ A,
                                    rtol=0, atol=KINEMATICS)
@@ -138,3 +158,17 @@ def test_pinocchio_with_native_mimic_joints_agrees(arms):
         tau = pin.rnea(reference, data, q, qd, qdd)  # without friction: Pinocchio's RNEA has none
         ours = M(q)[0] @ qdd + V(q, qd)[0] + G(q)[0]
         np.testing.assert_allclose(ours, tau, rtol=0, atol=DYNAMICS * max(1.0, np.abs(tau).max()))
+
+
+@pytest.mark.parametrize(("couplings", "message"), [
+    ({"j3": '"j1 * j2"'}, "is not affine in the coordinates"),
+    ({"j3": '"sin(j1)"'}, "is not affine in the coordinates"),
+    ({"j3": '"j9 + 1"'}, "j9"),
+    ({"j3": '"0.3"'}, "names no coordinate: the joint would be fixed"),
+    ({"j3": '"j4"', "j4": '"j3"'}, "joint 'j3' moves with 'j4', a joint that mimics another"),
+    ({"j3": '"2 * j1"', "j4": '"j3 + j2"'}, "joint 'j4' moves with 'j3', a joint that mimics another"),
+])
+def test_a_bad_coupling_is_a_located_error(couplings, message):
+    with pytest.raises(ModelError, match=message) as error:
+        model_from_text(_coupled(ODD_ARM, couplings, "coupling"), file="arm.yaml")
+    assert "arm.yaml:" in str(error.value) and "coupling" in str(error.value)

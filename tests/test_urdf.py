@@ -155,8 +155,9 @@ def test_mimic_joints_off_the_chain_follow_their_leader_and_on_the_chain_are_cou
                                                       'multiplier="0.5" offset="0.05"/><axis xyz="1 0 0"/><limit'),
                                 "coupled.urdf"))
     assert [c.name for c in coupled.coordinates] == ["j1", "j2"]
-    mimic = coupled.joints[2].mimic
+    mimic = coupled.joints[2].coupling
     assert (mimic.leader, mimic.multiplier, mimic.offset) == ("j2", sympy.Rational(1, 2), sympy.Rational(1, 20))
+    assert coupled.joints[2].follower
     # the slider's stroke [0, 0.2] bounds j2 through s = j2 / 2 + 0.05: j2 in [-0.1, 0.3]
     np.testing.assert_allclose(np.array(coordinate_range(coupled)), [[-np.pi, -0.1], [np.pi, 0.3]], rtol=0,
                                atol=KINEMATICS)

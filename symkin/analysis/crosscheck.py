@@ -218,7 +218,7 @@ def crosscheck(path: str | Path, *, reference_urdf: str | Path | None = None, sa
         columns = [joint.idx_v for joint in chain]
         # joints that mimic others: the reference's joints are free, set at theta = A q + b (and A qd, A qdd)
         coupling = _coupling(model)
-        shift = np.array([0.0 if j.mimic is None else float(j.mimic.offset.xreplace(model.parameter_values))
+        shift = np.array([0.0 if j.coupling is None else float(j.coupling.offset.xreplace(model.parameter_values))
                           for j in model.joints])
         q_rest = pin.neutral(reference)
         for name, value in reduction.locked.items():

@@ -58,18 +58,18 @@ def units(model: Model, group: str) -> tuple[str, ...]:
 def joint_values(model: Model, group: str) -> tuple[sympy.Expr, ...]:
     """The value of every joint of a serial chain in ``group`` ("q", "qd" or "qdd"), in joint order.
 
-    A joint with its own coordinate is its symbol; a follower (:class:`~symkin.model.schema.Mimic`)
-    is ``multiplier * leader (+ offset for q)``, so that everything built on these values is a
-    function of the coordinates alone.
+    A joint that moves by its own coordinate is its symbol; a coupled joint
+    (:class:`~symkin.model.schema.Coupling`) is ``sum_k a_k q_k (+ b for q)``, so that everything
+    built on these values is a function of the coordinates alone.
     """
     own = dict(zip((c.name for c in model.coordinates), symbols(model, group)))
     values = []
     for joint in model.joints:
-        if joint.mimic is None:
+        if joint.coupling is None:
             values.append(own[joint.name])
         else:
-            value = joint.mimic.multiplier * own[joint.mimic.leader]
-            values.append(value + joint.mimic.offset if group == "q" else value)
+            value = sympy.Add(*(a * own[name] for name, a in joint.coupling.terms))
+            values.append(value + joint.coupling.offset if group == "q" else value)
     return tuple(values)
 
 
@@ -79,15 +79,16 @@ def coupling_matrix(model: Model) -> sympy.ImmutableMatrix | None:
     Joint rates are A qd; the coordinates' Jacobian columns are J A, their mass matrix A^T M A and
     their generalized forces A^T tau (virtual work, the coupling being linear).
     """
-    if all(j.mimic is None for j in model.joints):
+    if all(j.coupling is None for j in model.joints):
         return None
     index = {c.name: k for k, c in enumerate(model.coordinates)}
     A = sympy.zeros(len(model.joints), len(index))
     for row, joint in enumerate(model.joints):
-        if joint.mimic is None:
+        if joint.coupling is None:
             A[row, index[joint.name]] = 1
         else:
-            A[row, index[joint.mimic.leader]] = joint.mimic.multiplier
+            for name, a in joint.coupling.terms:
+                A[row, index[name]] = a
     return sympy.ImmutableMatrix(A)
 
 
@@ -112,12 +113,12 @@ def coordinate_range(model: Model) -> tuple[np.ndarray, np.ndarray]:
             lower.append(-span)
             upper.append(span)
     for follower in model.joints:
-        mimic, limits = follower.mimic, follower.limits
-        if mimic is None or limits is None:
-            continue
+        coupling, limits = follower.coupling, follower.limits
+        if coupling is None or coupling.leader is None or not follower.follower or limits is None:
+            continue  # a box of coordinates bounds a one-term follower only
         # the follower's limits bound its leader: lo <= a q + b <= hi
-        k = [c.name for c in model.coordinates].index(mimic.leader)
-        a, b = (float(sympy.sympify(v).xreplace(defaults)) for v in (mimic.multiplier, mimic.offset))
+        k = [c.name for c in model.coordinates].index(coupling.leader)
+        a, b = (float(sympy.sympify(v).xreplace(defaults)) for v in (coupling.multiplier, coupling.offset))
         ends = sorted((float(limit.xreplace(defaults)) - b) / a for limit in limits)
         lower[k], upper[k] = max(lower[k], ends[0]), min(upper[k], ends[1])
     return np.array(lower), np.array(upper)

@@ -81,15 +81,39 @@ class DerivedParameter:
 
 
 @dataclass(frozen=True)
-class Mimic:
-    """A joint that follows another: q_follower = multiplier * q_leader + offset (URDF ``<mimic>``).
+class Coupling:
+    """A joint whose motion is an affine combination of the coordinates: theta = sum_k a_k q_k + b.
 
-    The follower adds no coordinate; its rates are multiplier times the leader's.
+    The map is constant, so the coordinates' Jacobian columns are J A, their mass matrix A^T M A and
+    their generalized forces A^T tau (virtual work; Featherstone 2008, sec. 8.1). ``mimic:`` (URDF
+    ``<mimic>``) is the one-term case q = a q_leader + b; a parallelogram's distal joint moves by
+    q3 - q2 (the PHANToM's elbow, q3 the distal link's absolute angle), a differential by q4 + q5.
+    A joint whose own name is among the terms keeps its coordinate (the PHANToM's q3); one without
+    is a follower and adds none.
+
+    Attributes:
+        terms: (coordinate, multiplier a_k) pairs, in chain order, every multiplier nonzero.
+        offset: b, added to the position (not to rates and accelerations).
     """
 
-    leader: str
-    multiplier: sympy.Expr
+    terms: tuple[tuple[str, sympy.Expr], ...]
     offset: sympy.Expr
+    #: declared as ``mimic:`` (or a URDF ``<mimic>``): a follower of another joint by definition.
+    mimic: bool = False
+
+    @property
+    def leader(self) -> str | None:
+        """The one coordinate of a one-term coupling (URDF's mimic leader), else None."""
+        return self.terms[0][0] if len(self.terms) == 1 else None
+
+    @property
+    def multiplier(self) -> sympy.Expr:
+        """a of a one-term coupling q = a q_leader + b."""
+        return self.terms[0][1]
+
+    def follows_others(self, name: str) -> bool:
+        """True if the joint ``name`` with this coupling is a follower (has no coordinate of its own)."""
+        return self.mimic or all(coordinate != name for coordinate, _ in self.terms)
 
 
 @dataclass(frozen=True)
@@ -115,7 +139,8 @@ class Joint:
         velocity_limit: maximal speed or None.
         effort_limit: maximal torque/force or None.
         active: actuated (True) or passive.
-        mimic: the coupling to a leader joint, None for a joint with its own coordinate.
+        coupling: the motion as an affine combination of coordinates, None for a joint that moves
+            by its own coordinate.
     """
 
     name: str
@@ -129,7 +154,12 @@ class Joint:
     velocity_limit: sympy.Expr | None = None
     effort_limit: sympy.Expr | None = None
     active: bool = True
-    mimic: Mimic | None = None
+    coupling: Coupling | None = None
+
+    @property
+    def follower(self) -> bool:
+        """True if the joint has no coordinate of its own (it moves by others')."""
+        return self.coupling is not None and self.coupling.follows_others(self.name)
 
 
 @dataclass(frozen=True)
@@ -454,12 +484,12 @@ class Model:
     def coordinates(self) -> tuple[Joint | Coordinate, ...]:
         """The generalized coordinates q, each with a ``name`` and a ``type`` (R or P).
 
-        A serial chain's coordinates are its joints but those that mimic another; a parallel
+        A serial chain's coordinates are its joints but the followers (:class:`Coupling`); a parallel
         mechanism's are its actuated joint variables, leg by leg (the passive ones follow from
         the loop closure).
         """
         if self.parallel is None:
-            return tuple(j for j in self.joints if j.mimic is None)
+            return tuple(j for j in self.joints if not j.follower)
         out = []
         for leg in self.parallel.legs:
             for joint in leg.joints:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
 import sympy
@@ -19,7 +20,7 @@ from symkin.model.reader import (
     unit_axis,
 )
 from symkin.model import joint_kinds
-from symkin.model.schema import Joint, JointType, Mimic, Op, Rotation, Translation
+from symkin.model.schema import Coupling, Joint, JointType, Op, Rotation, Translation
 from symkin.model.yaml_source import Document, KeyPath
 
 #: Most joints of one chain (exact expressions grow with the chain; beyond this, derivation
@@ -55,20 +56,70 @@ def read_serial(r: Reader, section: Any) -> tuple[tuple[Joint, ...], tuple[Op, .
                "split the mechanism; symbolic expressions grow with every joint of a chain")
     check_unique(r, [(path, j.name) for j in joints], "joint")
     check_unique(r, [(path, j.link) for j in joints], "link")
-    _check_leaders(r, path + (("dh", "rows") if "dh" in section else ("chain",)), joints)
+    rows_path = path + (("dh", "rows") if "dh" in section else ("chain",))
+    rows = section["dh"].get("rows") if "dh" in section and isinstance(section["dh"], dict) else section.get("chain")
+    joints = _couplings(r, rows_path, rows if isinstance(rows, list) else [], joints)
+    _check_leaders(r, rows_path, joints)
     return tuple(joints), base or (), tcp or ()
 
 
+def _couplings(r: Reader, path: KeyPath, rows: list[Any], joints: list[Joint]) -> list[Joint]:
+    """The joints with their ``coupling:`` expressions read (they may name any joint of the chain)."""
+    by_name = {j.name: k for k, j in enumerate(joints)}
+    symbols = {j.name: sympy.Dummy(j.name) for j in joints}
+    for i, item in enumerate(rows):
+        if not isinstance(item, dict) or "coupling" not in item or item.get("name") not in by_name:
+            continue
+        cpath = path + (i, "coupling")
+        if "mimic" in item:
+            r.fail(cpath, "a joint has either 'mimic:' or 'coupling:'", "keep 'coupling:' (mimic is its one-term form)")
+            continue
+        coupling = _coupling(r, cpath, item["coupling"], symbols)
+        if coupling is not None:
+            k = by_name[item["name"]]
+            joints[k] = dataclasses.replace(joints[k], coupling=coupling)
+    return joints
+
+
+def _coupling(r: Reader, path: KeyPath, value: Any, symbols: dict[str, sympy.Dummy]) -> Coupling | None:
+    """``coupling: q3 - q2 + pi/2``: an affine expression in the chain's joints (coordinates) and parameters."""
+    expr = r.expr(path, value, {**r.names, **symbols})
+    if expr is None:
+        return None
+    terms = []
+    for name, symbol in symbols.items():
+        a = sympy.diff(expr, symbol)
+        if a.free_symbols & set(symbols.values()):
+            r.fail(path, f"'{value}' is not affine in the coordinates ({name} enters nonlinearly)",
+                   "write a constant combination such as 'q3 - q2 + pi/2': a coupling is a gear, belt or linkage "
+                   "ratio")
+            return None
+        if a != 0:
+            terms.append((name, a))
+    if not terms:
+        r.fail(path, f"'{value}' names no coordinate: the joint would be fixed",
+               "name the coordinates the joint moves with, or replace the joint by a fixed transform")
+        return None
+    offset = expr.xreplace({symbol: 0 for symbol in symbols.values()})
+    return Coupling(tuple(terms), offset)
+
+
 def _check_leaders(r: Reader, path: KeyPath, joints: list[Joint]) -> None:
-    """Every ``mimic:`` names another joint of the chain that has a coordinate of its own."""
-    own = {j.name for j in joints if j.mimic is None}
+    """Every coupling (``mimic:``, ``coupling:``) names joints of the chain that have a coordinate of their own."""
+    own = {j.name for j in joints if not j.follower}
+    names = {j.name for j in joints}
     for i, joint in enumerate(joints):
-        if joint.mimic is not None and joint.mimic.leader not in own:
-            what = ("the joint itself" if joint.mimic.leader == joint.name else
-                    "a joint that mimics another" if joint.mimic.leader in {j.name for j in joints} else
-                    "no joint of the chain")
-            r.fail(path + (i, "mimic", "joint"), f"joint '{joint.name}' mimics '{joint.mimic.leader}', {what}",
-                   f"name a joint with its own coordinate: {', '.join(sorted(own)) or '(none)'}")
+        if joint.coupling is None:
+            continue
+        mimic = joint.coupling.mimic
+        for leader, _ in joint.coupling.terms:
+            if leader in own and not (mimic and leader == joint.name):
+                continue
+            what = ("the joint itself" if leader == joint.name else
+                    "a joint that mimics another" if leader in names else "no joint of the chain")
+            r.fail(path + (i, "mimic", "joint") if mimic else path + (i, "coupling"),
+                   f"joint '{joint.name}' {'mimics' if mimic else 'moves with'} '{leader}', {what}",
+                   f"name joints with a coordinate of their own: {', '.join(sorted(own - {joint.name})) or '(none)'}")
 
 
 def check_unique(r: Reader, items: list[tuple[KeyPath, str]], what: str) -> None:
@@ -93,7 +144,7 @@ def _joint_type(r: Reader, path: KeyPath, value: Any) -> JointType | None:
     return None
 
 
-_JOINT_EXTRAS = ("link", "limits", "velocity_limit", "effort_limit", "active", "mimic")
+_JOINT_EXTRAS = ("link", "limits", "velocity_limit", "effort_limit", "active", "mimic", "coupling")
 
 
 def _dh_table(r: Reader, path: KeyPath, section: Any) -> list[Joint]:
@@ -218,14 +269,14 @@ def _joint_extras(r: Reader, path: KeyPath, item: dict[str, Any], default_link: 
         r.fail(path + ("active",), f"'active' must be true or false, got {describe(active)}", "write true or false")
         ok = False
     extras["active"] = active
-    extras["mimic"] = None
+    extras["coupling"] = None  # a coupling: expression is read once every joint is known (_couplings)
     if "mimic" in item:
-        extras["mimic"] = _mimic(r, path + ("mimic",), item["mimic"])
-        ok = ok and extras["mimic"] is not None
+        extras["coupling"] = _mimic(r, path + ("mimic",), item["mimic"])
+        ok = ok and extras["coupling"] is not None
     return extras if ok else None
 
 
-def _mimic(r: Reader, path: KeyPath, value: Any) -> Mimic | None:
+def _mimic(r: Reader, path: KeyPath, value: Any) -> Coupling | None:
     """``mimic: {joint: LEADER, multiplier: a, offset: b}``: q = a q_leader + b (a defaults to 1, b to 0)."""
     value = r.mapping(path, value, required=("joint",), optional=("multiplier", "offset"))
     if value is None or "joint" not in value:
@@ -239,4 +290,4 @@ def _mimic(r: Reader, path: KeyPath, value: Any) -> Mimic | None:
         return None
     if leader is None or multiplier is None or offset is None:
         return None
-    return Mimic(leader, multiplier, offset)
+    return Coupling(((leader, multiplier),), offset, mimic=True)

@@ -132,10 +132,11 @@ def export_urdf(model: Model) -> str:
         effort = _number(joint.effort_limit, values) if joint.effort_limit is not None else 0.0
         velocity = _number(joint.velocity_limit, values) if joint.velocity_limit is not None else 0.0
         lines.append(f'    <limit {limit}effort="{effort!r}" velocity="{velocity!r}"/>')
-        if joint.mimic is not None:
-            lines.append(f"    <mimic joint={quoteattr(joint.mimic.leader)} "
-                         f'multiplier="{_number(joint.mimic.multiplier, values)!r}" '
-                         f'offset="{_number(joint.mimic.offset, values)!r}"/>')
+        coupling = joint.coupling
+        if coupling is not None and coupling.leader is not None and joint.follower:  # URDF's <mimic> has one leader
+            lines.append(f"    <mimic joint={quoteattr(coupling.leader)} "
+                         f'multiplier="{_number(coupling.multiplier, values)!r}" '
+                         f'offset="{_number(coupling.offset, values)!r}"/>')
         if joint.name in friction:
             f = friction[joint.name]
             lines.append(f'    <dynamics damping="{_number(f.viscous, values)!r}" '
