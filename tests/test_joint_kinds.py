@@ -18,12 +18,8 @@ PACKAGE = Path(joint_kinds.__file__).resolve().parents[1]
 OWNERS = {"model/schema.py", "model/joint_kinds.py"}
 #: module -> branches on joint-type members left to move into joint_kinds (shrink as they move).
 REMAINING = {
-    "model/delta.py": 4,
-    "model/leg_joints.py": 3,
-    "model/parallel_build.py": 11,
+    "model/delta.py": 4,  # the DELTA shorthand declares its joints' kinds (R, U): declarations, no branch
     "model/serial_build.py": 4,  # reading the letters and words of joint types
-    "parallel/distance.py": 3,
-    "structure/mobility.py": 3,
 }
 BRANCH = re.compile(r"\bJointType\.(REVOLUTE|PRISMATIC)\b|\bLegJointType\.[RPUSC]\b")
 
@@ -57,3 +53,18 @@ def test_one_coordinate_joints_move_as_their_motion_subspace():
     assert joint_kinds.is_rotation(LegJointType.R) and not joint_kinds.is_rotation("P")
     with pytest.raises(ValueError):
         joint_kinds.is_rotation(LegJointType.U)  # two motions: no single coordinate
+
+
+#: What a leg joint of each kind is, written out independently of joint_kinds: its variables for a joint
+#: named "j", the axes a model declares, whether an actuator may drive it, and whether it is a point joint.
+LEG_JOINTS = {"R": (("j",), 1, True, False), "P": (("j",), 1, True, False), "U": (("j_1", "j_2"), 2, False, True),
+              "S": (("j_1", "j_2", "j_3"), 3, False, True), "C": (("j_t", "j_r"), 1, True, False)}
+
+
+@pytest.mark.parametrize("letter", sorted(LEG_JOINTS))
+def test_every_leg_joint_kind_names_declares_and_actuates_as_documented(letter):
+    kind = joint_kinds.kind(letter)
+    variables, axes, actuable, point = LEG_JOINTS[letter]
+    assert (kind.variables("j"), kind.axes, kind.actuable is not None, kind.point) == (variables, axes, actuable, point)
+    assert kind.default_axes("z", "y", "x") == ("z", "y", "x")[:axes]
+    assert kind.sliding == (letter == "P") and kind.ball == (letter == "S")

@@ -20,23 +20,64 @@ import sympy
 
 @dataclass(frozen=True)
 class Kind:
-    """A joint kind: its letter and, per elementary motion, whether it is a rotation (angular)."""
+    """A joint kind: its letter and, per elementary motion, whether it is a rotation (angular), which
+    declared axis it moves about or along, and how its variable is named.
+
+    Attributes:
+        letter: R, P, U, S or C.
+        rotations: per motion, True for a rotation, False for a translation.
+        motion_axes: per motion, the index of the declared axis it uses (a C joint declares one axis,
+            along which it slides and about which it turns).
+        actuable: the index of the motion an actuator may drive, None if none may (U, S).
+        suffixes: per motion, the suffix of its variable's name ("" for the joint's own name).
+    """
 
     letter: str
     rotations: tuple[bool, ...]
+    motion_axes: tuple[int, ...]
+    actuable: int | None
+    suffixes: tuple[str, ...]
 
     @property
     def dof(self) -> int:
         return len(self.rotations)
 
+    @property
+    def axes(self) -> int:
+        """How many axes a model declares for the joint."""
+        return max(self.motion_axes) + 1
+
+    @property
+    def point(self) -> bool:
+        """Rotations only, about axes through one point (U, S): the joint is a point of both links."""
+        return self.dof > 1 and all(self.rotations)
+
+    @property
+    def sliding(self) -> bool:
+        """One translation (P): it changes a distance and adds no point."""
+        return self.rotations == (False,)
+
+    @property
+    def ball(self) -> bool:
+        """Three rotations (S): any orientation about its point."""
+        return self.dof == 3 and all(self.rotations)
+
+    def variables(self, name: str) -> tuple[str, ...]:
+        """The names of the motions' variables of a joint called ``name``."""
+        return tuple(name + suffix for suffix in self.suffixes)
+
+    def default_axes(self, z: Any, y: Any, x: Any) -> tuple[Any, ...]:
+        """The axes of a joint that declares none: z, then y, then x of its frame."""
+        return (z, y, x)[:self.axes]
+
 
 #: Every joint kind of serial chains (R, P) and of parallel mechanisms' legs (seed Fig. 8.2).
 KINDS = {
-    "R": Kind("R", (True,)),            # revolute: rotation about axes[0]
-    "P": Kind("P", (False,)),           # prismatic: translation along axes[0]
-    "U": Kind("U", (True, True)),       # universal: rotation about axes[0], then axes[1] (moved frame)
-    "S": Kind("S", (True, True, True)),  # spherical: three rotations about moved axes
-    "C": Kind("C", (False, True)),      # cylindrical: translation along axes[0], then rotation about it
+    "R": Kind("R", (True,), (0,), 0, ("",)),                       # revolute: rotation about axes[0]
+    "P": Kind("P", (False,), (0,), 0, ("",)),                      # prismatic: translation along axes[0]
+    "U": Kind("U", (True, True), (0, 1), None, ("_1", "_2")),       # universal: about axes[0], then axes[1]
+    "S": Kind("S", (True, True, True), (0, 1, 2), None, ("_1", "_2", "_3")),  # spherical: three moved axes
+    "C": Kind("C", (False, True), (0, 0), 0, ("_t", "_r")),        # cylindrical: along axes[0], then about it
 }
 
 

@@ -7,6 +7,7 @@ from typing import Any
 
 import sympy
 
+from symkin.model import joint_kinds
 from symkin.model.reader import Reader, position_limits
 from symkin.model.schema import LegJointType
 from symkin.model.yaml_source import KeyPath
@@ -14,11 +15,7 @@ from symkin.model.yaml_source import KeyPath
 
 def variable_names(name: str, jtype: LegJointType) -> tuple[str, ...]:
     """Coordinate names of a leg joint's motions: ``name`` (R, P), ``name_1``... (U, S), ``name_t``, ``name_r`` (C)."""
-    if jtype in (LegJointType.R, LegJointType.P):
-        return (name,)
-    if jtype is LegJointType.C:
-        return (f"{name}_t", f"{name}_r")
-    return tuple(f"{name}_{k + 1}" for k in range(jtype.dof))
+    return joint_kinds.kind(jtype).variables(name)
 
 
 def leg_joint_limits(r: Reader, path: KeyPath, value: Any,

@@ -24,7 +24,7 @@ from typing import Any
 
 import sympy
 
-from symkin.model import coordinates
+from symkin.model import coordinates, joint_kinds
 from symkin.model.delta import delta_legs
 from symkin.model.leg_joints import leg_joint_limits, variable_names
 from symkin.model.reader import (
@@ -52,15 +52,6 @@ TASK_COORDINATES = {PlatformMotion.TRANSLATION: ("x", "y", "z"),
 #: Names of the vector inputs of parallel functions (besides q): platform pose and passive joints.
 PARALLEL_INPUT_NAMES = ("p", "s")
 
-#: Default motion axes of each joint type (in the joint frame).
-DEFAULT_AXES: dict[LegJointType, tuple[Vec3, ...]] = {
-    LegJointType.R: (Z_AXIS,),
-    LegJointType.P: (Z_AXIS,),
-    LegJointType.C: (Z_AXIS,),
-    LegJointType.U: (Z_AXIS, Y_AXIS),
-    LegJointType.S: (Z_AXIS, Y_AXIS, X_AXIS),
-}
-_ACTUABLE = {LegJointType.R: 0, LegJointType.P: 0, LegJointType.C: 0}  # index of the actuable motion
 
 
 def build_parallel(r: Reader, section: Any) -> Parallel | None:
@@ -250,7 +241,7 @@ def _joint(r: Reader, path: KeyPath, item: Any, number: int) -> LegJoint | None:
     if not isinstance(active, bool):
         r.fail(path + ("active",), f"'active' must be true or false, got {describe(active)}", "write true or false")
         return None
-    if active and jtype not in _ACTUABLE:
+    if active and joint_kinds.kind(jtype).actuable is None:
         r.fail(path + ("active",), f"a {jtype.value} joint cannot be actuated",
                "actuate an R joint (rotary motor), a P joint (linear actuator) or the slide of a C joint (piston)")
         return None
@@ -275,18 +266,18 @@ def _joint(r: Reader, path: KeyPath, item: Any, number: int) -> LegJoint | None:
     if base_name is None or axes is None or origin is None or offset is None or limits is None:
         return None
     name = f"{base_name}{number}"
-    return LegJoint(name, jtype, axes, origin, variable_names(name, jtype), _ACTUABLE[jtype] if active else None,
-                    offset, limits, **actuator)
+    return LegJoint(name, jtype, axes, origin, variable_names(name, jtype),
+                    joint_kinds.kind(jtype).actuable if active else None, offset, limits, **actuator)
 
 
 def _axes(r: Reader, path: KeyPath, item: dict[str, Any], jtype: LegJointType) -> tuple[Vec3, ...] | None:
-    single = jtype in (LegJointType.R, LegJointType.P, LegJointType.C)
+    single = joint_kinds.kind(jtype).axes == 1
     key, other = ("axis", "axes") if single else ("axes", "axis")
     if other in item:
         r.fail(path + (other,), f"a {jtype.value} joint takes '{key}', not '{other}'", f"write '{key}:'")
         return None
     if key not in item:
-        axes = DEFAULT_AXES[jtype]
+        axes = joint_kinds.kind(jtype).default_axes(Z_AXIS, Y_AXIS, X_AXIS)
     elif single:
         axis = unit_axis(r, path + ("axis",), item["axis"])
         if axis is None:
@@ -299,7 +290,7 @@ def _axes(r: Reader, path: KeyPath, item: dict[str, Any], jtype: LegJointType) -
         parsed = [unit_axis(r, path + ("axes", k), row) for k, row in enumerate(rows)]
         if any(a is None for a in parsed):
             return None
-        axes = tuple(parsed)  # type: ignore[arg-type]
+        axes = tuple(parsed)
     for k in range(1, len(axes)):
         cross = sympy.Matrix(axes[k - 1]).cross(sympy.Matrix(axes[k]))
         if cross.is_zero_matrix:

@@ -21,6 +21,7 @@ from enum import Enum
 import sympy
 
 from symkin.errors import Problem
+from symkin.model import joint_kinds
 from symkin.model.joint_kinds import kind as joint_kind
 
 Vec3 = tuple[sympy.Expr, sympy.Expr, sympy.Expr]
@@ -315,10 +316,8 @@ class LegJoint:
     @property
     def motions(self) -> tuple[tuple[str, Vec3, bool], ...]:
         """(variable, axis, is_rotation) of every elementary motion, in order."""
-        rotation = {LegJointType.R: (True,), LegJointType.P: (False,), LegJointType.U: (True, True),
-                    LegJointType.S: (True, True, True), LegJointType.C: (False, True)}[self.type]
-        axes = self.axes * 2 if self.type is LegJointType.C else self.axes  # C: slide along and turn about one axis
-        return tuple(zip(self.variables, axes, rotation))
+        kind = joint_kinds.kind(self.type)
+        return tuple(zip(self.variables, (self.axes[k] for k in kind.motion_axes), kind.rotations))
 
 
 @dataclass(frozen=True)

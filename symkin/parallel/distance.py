@@ -26,10 +26,10 @@ from dataclasses import dataclass
 import sympy
 
 from symkin.kinematics.chain import Frame, MovingFrame
-from symkin.model.schema import Leg, LegJointType
+from symkin.model import joint_kinds
+from symkin.model.schema import Leg
 from symkin.parallel.legs import LegChain, attachment_point, symbol, walk
 
-POINT_JOINTS = (LegJointType.U, LegJointType.S)
 
 
 @dataclass(frozen=True)
@@ -68,12 +68,12 @@ class DistanceLeg:
 def reduce_leg(leg: Leg, chain: LegChain, platform: Frame) -> DistanceLeg | str:
     """The distance form of ``leg``, or the reason it has none."""
     joints = leg.joints
-    if joints[-1].type not in POINT_JOINTS:
+    if not joint_kinds.kind(joints[-1].type).point:
         return f"its last joint {joints[-1].name} is a {joints[-1].type.value} joint, not a point joint (U or S)"
     proximal = len(joints) - 2
-    while proximal >= 0 and joints[proximal].type is LegJointType.P:
+    while proximal >= 0 and joint_kinds.kind(joints[proximal].type).sliding:
         proximal -= 1
-    if proximal < 0 or joints[proximal].type not in POINT_JOINTS:
+    if proximal < 0 or not joint_kinds.kind(joints[proximal].type).point:
         return "no rod of prismatic joints between two point joints (U or S) ends the leg"
     actuated = [(i, j, j.active) for i, j in enumerate(joints) if j.active is not None]
     if len(actuated) != 1:

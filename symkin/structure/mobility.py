@@ -22,7 +22,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from fractions import Fraction
 
-from symkin.model.schema import LegJointType, Model
+from symkin.model import joint_kinds
+from symkin.model.schema import Model
 
 SPATIAL = 6
 PLANAR = 3
@@ -103,11 +104,11 @@ def idle_rods(model: Model) -> int:
     assert model.parallel is not None
     count = 0
     for leg in model.parallel.legs:
-        types = [j.type for j in leg.joints]
-        k = len(types) - 2
-        while k >= 0 and types[k] is LegJointType.P:
+        kinds = [joint_kinds.kind(j.type) for j in leg.joints]
+        k = len(kinds) - 2
+        while k >= 0 and kinds[k].sliding:
             k -= 1
-        if types[-1] is LegJointType.S and k >= 0 and types[k] is LegJointType.S:
+        if kinds[-1].ball and k >= 0 and kinds[k].ball:
             count += 1
     return count
 
