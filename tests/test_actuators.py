@@ -64,3 +64,39 @@ def test_bad_drives_get_located_errors(drives, message):
     with pytest.raises(ModelError, match=message) as raised:
         model_from_text(PLANAR + drives, "driven", "driven.yaml")
     assert "driven.yaml:" in str(raised.value)
+
+
+def test_coulomb_friction_may_differ_with_the_direction_of_motion(tmp_path):
+    """Corke's Puma 560 has Tc+ != Tc- (issue 30): c+ opposes positive motion, c- negative motion, nothing at
+    rest; smoothed, the same levels are reached through tanh. The numpy module and the C library agree."""
+    import numpy as np
+
+    from symkin import pipeline
+    from symkin.runtime.loader import load
+
+    text = PLANAR + """
+friction:
+  theta1: {viscous: 0.1, coulomb: {positive: 0.4, negative: 0.25}}
+  theta2: {coulomb: {positive: 0.3, negative: 0.1}, smoothing_velocity: 0.01}
+"""
+    model = model_from_text(text, "asymmetric")
+    request = pipeline.resolve_request(model, ("friction", "inverse_dynamics"), "numpy,c", None, False, "none")
+    written = pipeline.write(pipeline.generate(model, request), tmp_path)
+    qd = np.array([[1.0, 1.0], [-1.0, -1.0], [0.0, 0.0], [2.0, -0.005]])
+    want = np.array([[0.5, 0.3], [-0.35, -0.1],  [0.0, 0.0],
+                     [0.6, 0.1 * np.tanh(-0.5) + 0.1 * np.tanh(-0.5) ** 2 + 0.1 * np.tanh(-0.5)]])
+    for backend in ("numpy", "c"):
+        got = load(written, backend).friction(qd)
+        np.testing.assert_allclose(got, want, rtol=0, atol=4 * np.finfo(float).eps)
+    with pytest.raises(ModelError, match="negative Coulomb friction level"):
+        model_from_text(text.replace("negative: 0.25", "negative: -0.25"), "asymmetric")
+
+
+def test_a_dh_row_may_flip_its_joint(derivations):
+    """RTB's 'flip' (the Kinova Jaco): the joint turns by -q, written as the coupling '-theta2'."""
+    flipped = model_from_text(PLANAR.replace("      - [theta2, R, 0, 0, l2, 0, [0, deg(90)]]",
+                                             "      - {name: theta2, type: R, theta: 0, d: 0, a: l2, alpha: 0, "
+                                             "coupling: -theta2}"), "flipped")
+    q1, q2 = coordinates.symbols(flipped, "q")
+    plain = _output(derivations["planar_2r"], "fk")
+    assert sympy.simplify(_output(Derivation(flipped), "fk") - plain.subs(q2, -q2)) == sympy.zeros(*plain.shape)

@@ -234,7 +234,8 @@ def crosscheck(path: str | Path, *, reference_urdf: str | Path | None = None, sa
         weightless.gravity = pin.Motion.Zero()
         weightless_data = weightless.createData()
         total_mass = float(sum(float(b.mass.xreplace(model.parameter_values)) for b in model.bodies))
-        smooth = any(f.smoothing_velocity is not None for f in model.friction)
+        # the reference's friction is URDF's: one sign(qd) level per joint
+        beyond_urdf = any(f.smoothing_velocity is not None or f.asymmetric for f in model.friction)
         Q, QD, QDD = _states(model, samples, seed)
         say(f"comparing at {samples} states with Pinocchio {pin.__version__}")
         values = {backend: _evaluate(ours, outputs, Q, QD, QDD) for backend, ours in generated.items()}
@@ -256,7 +257,7 @@ def crosscheck(path: str | Path, *, reference_urdf: str | Path | None = None, sa
             want["jacobian_geometric"] = (rotate @ jacobian[:, columns] @ coupling,)
             if model.bodies:
                 want |= _dynamics_references(pin, reference, data, weightless, weightless_data, q, v, a, columns,
-                                             coupling, total_mass, float(np.linalg.norm(gravity)), smooth, with_c)
+                                             coupling, total_mass, float(np.linalg.norm(gravity)), beyond_urdf, with_c)
                 if not weighted:
                     del want["gravity_vector"]
             for backend, got in values.items():
@@ -275,9 +276,11 @@ def crosscheck(path: str | Path, *, reference_urdf: str | Path | None = None, sa
     comparisons = [Comparison(name, error) for name, error in errors.items()]
     if model.bodies and not with_c:
         comparisons.append(Comparison("coriolis_matrix", 0.0, "skipped: not asked for (--coriolis-matrix checks it)"))
-    if model.bodies and smooth:
-        comparisons.append(Comparison("inverse_dynamics", 0.0, "skipped: smoothed Coulomb friction (tanh), "
-                                                               "Pinocchio's sign(qd)"))
+    if model.bodies and beyond_urdf:
+        comparisons.append(Comparison("friction", 0.0, "skipped: smoothed (tanh) or direction-dependent Coulomb "
+                                                       "friction; Pinocchio's is one sign(qd) level"))
+        comparisons.append(Comparison("inverse_dynamics", 0.0, "skipped: smoothed (tanh) or direction-dependent "
+                                                               "Coulomb friction; Pinocchio's is one sign(qd) level"))
     if not model.bodies:
         comparisons.append(Comparison("dynamics", 0.0, "skipped: the model declares no bodies"))
     reference_name = f"Pinocchio {pin.__version__}"
@@ -311,7 +314,7 @@ def _ours(values: dict[str, Any], row: str, k: int, frame_links: dict[str, str],
 
 def _dynamics_references(pin: Any, reference: Any, data: Any, weightless: Any, weightless_data: Any,
                          q: np.ndarray, v: np.ndarray, a: np.ndarray, columns: list[int], coupling: np.ndarray,
-                         total_mass: float, gravity: float, smooth: bool, with_c: bool
+                         total_mass: float, gravity: float, beyond_urdf: bool, with_c: bool
                          ) -> dict[str, tuple[Any, ...]]:
     """{row: (reference value, the magnitudes summed into it, natural size)} of the dynamics at one state.
 
@@ -340,9 +343,9 @@ def _dynamics_references(pin: Any, reference: Any, data: Any, weightless: Any, w
         Mdot, Mdot_terms = _reduced(coupling, coriolis + coriolis.T)
         rows["coriolis_matrix C qd"] = (V, V_terms, size * qd ** 2)
         rows["coriolis_matrix Mdot - 2C skew"] = (Mdot, Mdot_terms, size * qd)
-    if np.any(damping) or np.any(dry):
+    if (np.any(damping) or np.any(dry)) and not beyond_urdf:
         rows["friction"] = (*_reduced(coupling, friction_joint), friction_size)
-    if not smooth:
+    if not beyond_urdf:
         tau = pin.rnea(reference, data, q, v, a)[columns] + friction_joint
         rows["inverse_dynamics"] = (*_reduced(coupling, tau), size * (qdd + qd ** 2) + g_size + friction_size)
     return rows

@@ -137,9 +137,17 @@ def _friction_graph(d: Derivation) -> list[se.Basic] | None:
 
 
 def joint_friction(f: Friction, v: se.Basic) -> se.Basic:
-    """viscous v + coulomb sign(v), or coulomb tanh(v / v_s) with a smoothing velocity v_s (seed eq. 8.34)."""
-    coulomb = se.sign(v) if f.smoothing_velocity is None else se.tanh(v / se.sympify(f.smoothing_velocity))
-    return se.sympify(f.viscous) * v + se.sympify(f.coulomb) * coulomb
+    """viscous v + coulomb sign(v), or coulomb tanh(v / v_s) with a smoothing velocity v_s (seed eq. 8.34).
+
+    Levels c+ (positive motion) and c- (negative motion) give (c+ + c-)/2 s + (c+ - c-)/2 s^2 with
+    s = sign(v) or tanh(v / v_s): c+ for v > 0, -c- for v < 0, 0 at rest.
+    """
+    s = se.sign(v) if f.smoothing_velocity is None else se.tanh(v / se.sympify(f.smoothing_velocity))
+    viscous = se.sympify(f.viscous) * v
+    if not f.asymmetric:
+        return viscous + se.sympify(f.coulomb) * s
+    positive, negative = se.sympify(f.coulomb), se.sympify(f.coulomb_negative)
+    return viscous + (positive + negative) / 2 * s + (positive - negative) / 2 * s ** 2
 
 
 @quantity("task_jacobian_graph", "task Jacobian J (square) as SymEngine expressions", emitted=False)
@@ -268,7 +276,8 @@ def _friction(d: Derivation) -> FunctionSpec:
     return function_spec(
         d, "friction", "Joint friction torques.",
         "F_f = viscous qd + coulomb sign(qd) per joint (seed eq. 8.34), or coulomb tanh(qd / v_s) where the "
-        "model gives a smoothing velocity v_s.",
+        "model gives a smoothing velocity v_s; with levels c+ and c- for the two directions, "
+        "(c+ + c-)/2 s + (c+ - c-)/2 s^2.",
         ["qd"], program, [("F_f", F, (d.model.dof,), "friction torques opposing the motion", EFFORT_UNIT)])
 
 

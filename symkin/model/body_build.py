@@ -204,7 +204,18 @@ def read_friction(r: Reader, value: Any, joint_names: tuple[str, ...]) -> tuple[
         if spec is None:
             continue
         viscous = r.expr(fpath + ("viscous",), spec["viscous"]) if "viscous" in spec else ZERO
-        coulomb = r.expr(fpath + ("coulomb",), spec["coulomb"]) if "coulomb" in spec else ZERO
+        coulomb_negative = None
+        if isinstance(spec.get("coulomb"), dict):  # {positive: c+, negative: c-}: a level per direction
+            levels = r.mapping(fpath + ("coulomb",), spec["coulomb"], required=("positive", "negative"))
+            if levels is None or "positive" not in levels or "negative" not in levels:
+                continue
+            coulomb = r.expr(fpath + ("coulomb", "positive"), levels["positive"])
+            coulomb_negative = r.expr(fpath + ("coulomb", "negative"), levels["negative"])
+            if coulomb_negative is None:
+                continue
+            _negative(r, fpath + ("coulomb", "negative"), coulomb_negative, "Coulomb friction level (a magnitude)")
+        else:
+            coulomb = r.expr(fpath + ("coulomb",), spec["coulomb"]) if "coulomb" in spec else ZERO
         smoothing = r.expr(fpath + ("smoothing_velocity",), spec["smoothing_velocity"]) \
             if "smoothing_velocity" in spec else None
         if viscous is None or coulomb is None or ("smoothing_velocity" in spec and smoothing is None):
@@ -219,7 +230,7 @@ def read_friction(r: Reader, value: Any, joint_names: tuple[str, ...]) -> tuple[
             if smoothing == 0 or (v is not None and v <= 0):
                 r.fail(fpath + ("smoothing_velocity",), f"the smoothing velocity must be positive, got {smoothing}",
                        "give the speed below which Coulomb friction fades out, e.g. a parameter v_s: 0.01")
-        out.append(Friction(jname, viscous, coulomb, smoothing))
+        out.append(Friction(jname, viscous, coulomb, smoothing, coulomb_negative))
     return tuple(out)
 
 

@@ -191,12 +191,20 @@ class Friction:
 
     With ``smoothing_velocity`` v_s the Coulomb term is the smooth
     coulomb * tanh(qd / v_s) instead (differentiable, for optimization and simulation).
+    With ``coulomb_negative`` the Coulomb level differs with the direction of motion (as the
+    Puma 560's in Corke's Robotics Toolbox, Tc+ != Tc-): ``coulomb`` opposes positive motion,
+    ``coulomb_negative`` (a magnitude) negative motion.
     """
 
     joint: str
     viscous: sympy.Expr
     coulomb: sympy.Expr
     smoothing_velocity: sympy.Expr | None = None
+    coulomb_negative: sympy.Expr | None = None
+
+    @property
+    def asymmetric(self) -> bool:
+        return self.coulomb_negative is not None and self.coulomb_negative != self.coulomb
 
 
 @dataclass(frozen=True)
