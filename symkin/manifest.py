@@ -63,6 +63,8 @@ def build_manifest(model: Model, code: ModelCode, derived: list[str], backend_fi
     """
     import sympy
 
+    from symkin.model import tree
+
     manifest: dict[str, Any] = {
         "manifest_version": MANIFEST_VERSION,
         "generator": {"symkin": __version__, "sympy": sympy.__version__},
@@ -100,6 +102,8 @@ def build_manifest(model: Model, code: ModelCode, derived: list[str], backend_fi
         manifest["model"]["notes"] = list(model.notes)
     if model.parallel is not None:
         manifest["model"]["parallel"] = _parallel_record(model)
+    elif not tree.is_chain(model):  # a branched serial model: each joint's parent (-1: the base), the TCP's link
+        manifest["model"]["tree"] = {"parents": list(tree.parent_indices(model)), "tip": tree.tip_index(model)}
     return manifest
 
 

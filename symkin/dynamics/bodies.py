@@ -24,7 +24,7 @@ import symengine as se
 
 from symkin.dynamics.program import cross, se_matrix, se_vector
 from symkin.kinematics.chain import ChainFrames
-from symkin.model import joint_kinds
+from symkin.model import joint_kinds, tree
 from symkin.model.schema import Model
 
 ZERO3 = (se.Integer(0), se.Integer(0), se.Integer(0))
@@ -56,6 +56,7 @@ class BodyJacobians:
 def body_jacobians(model: Model, chain: ChainFrames) -> tuple[BodyJacobians, ...]:
     """The velocity Jacobians of every body with mass or inertia, in model order."""
     frames = {name: (k, frame) for k, (name, frame) in enumerate(chain.links)}
+    parents = tree.parent_indices(model)
     axes = [(axis.type, se_vector(axis.direction), se_vector(axis.point)) for axis in chain.axes]
     out = []
     for body in model.bodies:
@@ -68,8 +69,13 @@ def body_jacobians(model: Model, chain: ChainFrames) -> tuple[BodyJacobians, ...
         com_local = se_vector(body.com)
         com = tuple(p[r] + sum((R[r][s] * com_local[s] for s in range(3)), se.Integer(0)) for r in range(3))
         linear, angular = [], []
-        for jtype, z, point in axes[:k + 1]:
+        moving = set(tree.path_to(parents, k))
+        for j, (jtype, z, point) in enumerate(axes[:k + 1]):
             revolute = joint_kinds.is_rotation(jtype)
+            if j not in moving:  # a joint on another branch does not move the body
+                linear.append(ZERO3)
+                angular.append(ZERO3)
+                continue
             if massless:
                 linear.append(ZERO3)
             elif revolute:

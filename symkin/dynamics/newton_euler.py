@@ -57,7 +57,7 @@ from symkin.dynamics.program import cross, dot, mat_vec, se_matrix, se_vector
 from symkin.geometry import rotation_matrix
 from symkin.model import coordinates
 from symkin.kinematics.chain import MovingFrame
-from symkin.model import joint_kinds
+from symkin.model import joint_kinds, tree
 from symkin.model.schema import JointType, Model, Op
 
 Vec = list[se.Basic]
@@ -110,6 +110,7 @@ class Link:
         inertia: the bodies of the link in F_i, or None if it has neither mass nor inertia.
         armature: the drive's reflected rotor inertia N^2 J_m on the joint (0 without an actuator):
             M_ii += armature, tau_i += armature qdd_i (:class:`~symkin.model.schema.Actuator`).
+        parent: the index of the parent link, -1 for the base (:mod:`symkin.model.tree`).
     """
 
     type: JointType
@@ -118,6 +119,8 @@ class Link:
     origin: Vec
     inertia: SpatialInertia | None
     armature: se.Basic = se.Integer(0)
+    #: the index of the parent link (-1: the base); the previous link in a chain, any earlier one in a tree.
+    parent: int = -1
 
 
 def _compose(ops: Sequence[Op], R: sympy.Matrix, p: sympy.Matrix) -> tuple[sympy.Matrix, sympy.Matrix]:
@@ -149,12 +152,15 @@ def _link_inertia(model: Model, link: str, R: sympy.Matrix, p: sympy.Matrix) -> 
 
 
 def chain_links(model: Model) -> tuple[Link, ...]:
-    """The links of a serial ``model`` in their joint frames, base to tip."""
+    """The links of a serial ``model`` in their joint frames, parents first (a chain or a tree)."""
     eye, zero = sympy.eye(3), sympy.zeros(3, 1)
-    R_prev, p_prev = _compose(model.base, eye, zero)  # F_0 = base frame, then the base's fixed operations
+    base = _compose(model.base, eye, zero)  # F_0 = base frame, then the base's fixed operations
     links = []
     armature = {a.joint: se.sympify(a.reflected_inertia) for a in model.actuators}
-    for joint, q in zip(model.joints, coordinates.joint_values(model, "q")):
+    parents = tree.parent_indices(model)
+    afters: list[tuple[sympy.Matrix, sympy.Matrix]] = []  # each link's frame in its joint frame
+    for joint, q, parent in zip(model.joints, coordinates.joint_values(model, "q"), parents):
+        R_prev, p_prev = base if parent < 0 else afters[parent]
         C_R, C_p = _compose(joint.before, R_prev, p_prev)
         amount = q + joint.offset
         axis = sympy.Matrix(joint.axis)
@@ -165,8 +171,8 @@ def chain_links(model: Model) -> tuple[Link, ...]:
         after_R, after_p = _compose(joint.after, eye, zero)
         links.append(Link(joint.type, se_vector(axis), se_matrix(R.T), se_vector(origin),
                           _link_inertia(model, joint.link, after_R, after_p),
-                          armature.get(joint.name, se.Integer(0))))
-        R_prev, p_prev = after_R, after_p
+                          armature.get(joint.name, se.Integer(0)), parent))
+        afters.append((after_R, after_p))
     return tuple(links)
 
 
@@ -202,10 +208,11 @@ def inverse_dynamics(links: Sequence[Link], qd: Sequence[se.Basic] | None, qdd: 
         The joint torques (forces for prismatic joints), without friction.
     """
     zero = [se.Integer(0)] * 3
-    w, dw = zero, zero
-    acc = [-g for g in gravity] if gravity is not None else zero
+    base_acc = [-g for g in gravity] if gravity is not None else zero
+    motion: list[tuple[Vec, Vec, Vec]] = []  # (w, dw, a) of each link, in its frame
     forces: list[Spatial] = []
     for i, link in enumerate(links):
+        w, dw, acc = (zero, zero, base_acc) if link.parent < 0 else motion[link.parent]
         E, r = link.rotation, link.origin
         # The origin of F_i is a point of the parent link at r (moved along the axis if prismatic).
         acc = mat_vec(E, _add(acc, _add(cross(dw, r), cross(w, cross(w, r)))))
@@ -224,6 +231,7 @@ def inverse_dynamics(links: Sequence[Link], qd: Sequence[se.Basic] | None, qdd: 
                 dw = _add(dw, zqdd)
             else:
                 acc = _add(acc, zqdd)
+        motion.append((w, dw, acc))
         body = link.inertia
         if body is None:
             forces.append((zero, zero))
@@ -233,14 +241,18 @@ def inverse_dynamics(links: Sequence[Link], qd: Sequence[se.Basic] | None, qdd: 
         n = _add(_add(mat_vec(J, dw), cross(w, mat_vec(J, w))), cross(h, acc))
         forces.append((n, f))
     tau: list[se.Basic] = [se.Integer(0)] * len(links)
-    carried: Spatial = (zero, zero)
+    carried: list[Spatial] = [(zero, zero) for _ in links]  # what the children pass to each link
     for i in reversed(range(len(links))):
         link = links[i]
-        total = (_add(forces[i][0], carried[0]), _add(forces[i][1], carried[1]))
+        total = (_add(forces[i][0], carried[i][0]), _add(forces[i][1], carried[i][1]))
         tau[i] = dot(link.axis, total[0] if joint_kinds.is_rotation(link.type) else total[1])
         if qdd is not None and link.armature != 0:
             tau[i] += link.armature * qdd[i]
-        carried = _force_transform(link, total) if i > 0 and not _is_zero(total) else (zero, zero)
+        if link.parent >= 0 and not _is_zero(total):
+            moved = _force_transform(link, total)
+            p = link.parent
+            carried[p] = moved if _is_zero(carried[p]) else (_add(carried[p][0], moved[0]),
+                                                             _add(carried[p][1], moved[1]))
     return tau
 
 
@@ -278,16 +290,16 @@ def _composites(links: Sequence[Link], rotational: bool) -> list[SpatialInertia 
     rotational inertia is left as it is): all that gravity needs.
     """
     composite: list[SpatialInertia | None] = [link.inertia for link in links]
-    for i in reversed(range(1, len(links))):
+    for i in reversed(range(len(links))):
         child = composite[i]
-        if child is None:
+        if child is None or links[i].parent < 0:
             continue
         if rotational:
             moved = _to_parent(links[i], child)
         else:
             moved = SpatialInertia(child.mass, _moment_to_parent(links[i], child.mass, child.moment),
                                    [[se.Integer(0)] * 3 for _ in range(3)])
-        composite[i - 1] = _sum(composite[i - 1], moved)
+        composite[links[i].parent] = _sum(composite[links[i].parent], moved)
     return composite
 
 
@@ -301,10 +313,11 @@ def gravity_torques(links: Sequence[Link], gravity: Sequence[se.Basic]) -> list[
     z_i . m^c_i a_i for a prismatic one.
     """
     composite = _composites(links, rotational=False)
-    acc = [-g for g in gravity]
+    accelerations: list[Vec] = []
     G = []
     for link, body in zip(links, composite):
-        acc = mat_vec(link.rotation, acc)
+        acc = mat_vec(link.rotation, [-g for g in gravity] if link.parent < 0 else accelerations[link.parent])
+        accelerations.append(acc)
         if body is None:
             G.append(se.Integer(0))
         elif joint_kinds.is_rotation(link.type):
@@ -324,11 +337,13 @@ def mass_matrix(links: Sequence[Link]) -> list[list[se.Basic]]:
         if body is None:
             continue
         f = body.times(_motion_axis(links[i]))
-        for j in reversed(range(i + 1)):
+        j = i
+        while j >= 0:  # i and its ancestors; M_ij = 0 for a j on another branch
             link = links[j]
             M[i][j] = M[j][i] = dot(link.axis, f[0] if joint_kinds.is_rotation(link.type) else f[1])
-            if j > 0:
+            if link.parent >= 0:
                 f = _force_transform(link, f)
+            j = link.parent
     for i, link in enumerate(links):
         M[i][i] += link.armature
     return M

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import sympy
 
 from symkin.geometry import homogeneous, principal_axis, rotation_matrix
-from symkin.model import coordinates, joint_kinds
+from symkin.model import coordinates, joint_kinds, tree
 from symkin.model.schema import JointType, Model, Op, Rotation, Translation, Vec3
 
 
@@ -109,18 +109,29 @@ class MovingFrame:
     def frame(self) -> Frame:
         return Frame(sympy.ImmutableMatrix(self.rotation()), sympy.ImmutableMatrix(self.p))
 
+    def copy(self) -> MovingFrame:
+        """An independent frame at the same pose with the same factored rotation (a branch starts here)."""
+        other = MovingFrame.__new__(MovingFrame)
+        other.prefix, other.trail_axis, other.trail_angle = self.prefix, self.trail_axis, self.trail_angle
+        other.p, other._rotation = self.p, self._rotation
+        return other
+
 
 def compose_chain(model: Model) -> ChainFrames:
-    """Walk the chain of ``model`` and return every link frame, joint axis and the TCP.
+    """Walk the chain (or tree) of ``model`` and return every link frame, joint axis and the TCP.
 
     There is one axis per joint; a follower's moves with its leader's coordinate
-    (:func:`~symkin.model.coordinates.joint_values`).
+    (:func:`~symkin.model.coordinates.joint_values`). A branch starts from its parent link's frame
+    (:mod:`symkin.model.tree`); the TCP hangs on the tip link.
     """
-    moving = MovingFrame()
-    moving.apply(model.base)
+    base = MovingFrame()
+    base.apply(model.base)
     links = []
     axes = []
-    for joint, q in zip(model.joints, coordinates.joint_values(model, "q")):
+    moved: list[MovingFrame] = []  # each link's frame, where its children start
+    parents = tree.parent_indices(model)
+    for joint, q, parent in zip(model.joints, coordinates.joint_values(model, "q"), parents):
+        moving = (base if parent < 0 else moved[parent]).copy()
         moving.apply(joint.before)
         axes.append(JointAxis(joint.name, joint.type, sympy.ImmutableMatrix(moving.direction(joint.axis)),
                               sympy.ImmutableMatrix(moving.p)))
@@ -131,5 +142,7 @@ def compose_chain(model: Model) -> ChainFrames:
             moving.translate(tuple(c * amount for c in joint.axis))
         moving.apply(joint.after)
         links.append((joint.link, moving.frame()))
-    moving.apply(model.tcp)
-    return ChainFrames(tuple(links), tuple(axes), moving.frame())
+        moved.append(moving)
+    tcp = moved[tree.tip_index(model)].copy() if moved else base
+    tcp.apply(model.tcp)
+    return ChainFrames(tuple(links), tuple(axes), tcp.frame())

@@ -21,7 +21,7 @@ from symkin.ir.quantity import quantity
 from symkin.ir.spec import FunctionSpec, OutputSpec, make_function
 from symkin.kinematics import task_space
 from symkin.kinematics.chain import ChainFrames, compose_chain
-from symkin.model import coordinates, joint_kinds
+from symkin.model import coordinates, joint_kinds, tree
 
 if TYPE_CHECKING:
     from symkin.derivation.graph import Derivation
@@ -74,8 +74,12 @@ def geometric_jacobian_matrix(d: Derivation) -> sympy.ImmutableMatrix:
     coupling matrix A when joints mimic others (one column per coordinate)."""
     chain: ChainFrames = d[chain_frames]
     p_tcp = sympy.Matrix(chain.tcp.p)
+    moving = set(tree.path_to(tree.parent_indices(d.model), tree.tip_index(d.model)))  # joints that move the TCP
     columns = []
-    for axis in chain.axes:
+    for k, axis in enumerate(chain.axes):
+        if k not in moving:  # a joint on another branch
+            columns.append(sympy.zeros(6, 1))
+            continue
         angular, linear = joint_kinds.motion_subspace(axis.type, sympy.Matrix(axis.direction))
         # the joint's twist moved from a point on its axis to the TCP: v = w x (p_tcp - p_axis) + v_axis
         columns.append((angular.cross(p_tcp - sympy.Matrix(axis.point)) + linear).col_join(angular))

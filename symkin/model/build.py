@@ -19,7 +19,7 @@ from symkin.model.parameter_build import check_name_clashes, read_parameters
 from symkin.model.reader import ZERO, Reader
 from symkin.model.scene_build import read_scene
 from symkin.model.schema import Model
-from symkin.model.serial_build import read_serial
+from symkin.model.serial_build import read_serial, read_tip
 from symkin.model.task_space_build import read_task_space
 from symkin.model.yaml_source import Document
 
@@ -62,11 +62,12 @@ def build_model(doc: Document, stem: str, allow_nonphysical: bool = False) -> Mo
     parallel = None
     if "serial" in data:
         joints, base, tcp = read_serial(r, data["serial"])
+        tip = read_tip(r, data["serial"], joints)
         check_name_clashes(r, parameters, derived, joints)
         task_space = read_task_space(r, data.get("task_space", "position"))
         coordinate_names = tuple(j.name for j in joints)
     else:
-        joints, base, tcp = (), (), ()
+        joints, base, tcp, tip = (), (), (), None
         parallel = build_parallel(r, data["parallel"])
         if parallel is None:
             raise ModelError(r.problems)
@@ -109,6 +110,7 @@ def build_model(doc: Document, stem: str, allow_nonphysical: bool = False) -> Mo
         gravity=gravity or (ZERO, ZERO, ZERO),
         friction=friction,
         actuators=actuators,
+        tip=tip,
         scene=scene,
         parallel=parallel,
         locations=dict(doc.marks),

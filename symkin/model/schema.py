@@ -156,6 +156,9 @@ class Joint:
     effort_limit: sympy.Expr | None = None
     active: bool = True
     coupling: Coupling | None = None
+    #: the link this joint hangs on (a branch of a tree: :mod:`symkin.model.tree`), None for the previous
+    #: joint's link (the base for the first joint).
+    parent: str | None = None
 
     @property
     def follower(self) -> bool:
@@ -457,6 +460,8 @@ class Model:
     friction: tuple[Friction, ...] = ()
     #: the drives of serial joints (rotor inertia, gear ratio); a parallel model's rotors are in its bodies.
     actuators: tuple[Actuator, ...] = ()
+    #: the link that carries the TCP (``serial.tip``), None for the last joint's link.
+    tip: str | None = None
     scene: Scene = field(default_factory=lambda: Scene(outputs=("fk", "jacobian")))
     #: the legs and platform of a parallel mechanism (``joints`` is empty then), None for serial chains.
     parallel: Parallel | None = None

@@ -19,7 +19,7 @@ from symkin.model.reader import (
     positive_limit,
     unit_axis,
 )
-from symkin.model import joint_kinds
+from symkin.model import joint_kinds, tree
 from symkin.model.schema import Coupling, Joint, JointType, Op, Rotation, Translation
 from symkin.model.yaml_source import Document, KeyPath
 
@@ -36,7 +36,7 @@ DH_COLUMNS = ("name", "type", "theta", "d", "a", "alpha")
 
 def read_serial(r: Reader, section: Any) -> tuple[tuple[Joint, ...], tuple[Op, ...], tuple[Op, ...]]:
     path: KeyPath = ("serial",)
-    section = r.mapping(path, section, optional=("dh", "chain", "base", "tcp"))
+    section = r.mapping(path, section, optional=("dh", "chain", "base", "tcp", "tip"))
     if section is None:
         return (), (), ()
     joints: list[Joint] = []
@@ -60,7 +60,34 @@ def read_serial(r: Reader, section: Any) -> tuple[tuple[Joint, ...], tuple[Op, .
     rows = section["dh"].get("rows") if "dh" in section and isinstance(section["dh"], dict) else section.get("chain")
     joints = _couplings(r, rows_path, rows if isinstance(rows, list) else [], joints)
     _check_leaders(r, rows_path, joints)
+    _check_parents(r, rows_path, joints)
     return tuple(joints), base or (), tcp or ()
+
+
+def read_tip(r: Reader, section: Any, joints: tuple[Joint, ...]) -> str | None:
+    """``serial.tip``: the link that carries the TCP (default: the last joint's link)."""
+    if not isinstance(section, dict) or "tip" not in section:
+        return None
+    tip = r.name(("serial", "tip"), section["tip"])
+    links = [j.link for j in joints]
+    if tip is not None and joints and tip not in links:
+        r.fail(("serial", "tip"), f"the tip '{tip}' is not a link of the chain",
+               f"name one of: {', '.join(links)}")
+        return None
+    return tip
+
+
+def _check_parents(r: Reader, path: KeyPath, joints: list[Joint]) -> None:
+    """Every ``parent:`` names the base or the link of an earlier joint (parents first: no cycle)."""
+    earlier: list[str] = []
+    for i, joint in enumerate(joints):
+        if joint.parent is not None and joint.parent != tree.BASE and joint.parent not in earlier:
+            later = joint.parent in {j.link for j in joints}
+            r.fail(path + (i, "parent"), f"joint '{joint.name}' hangs on '{joint.parent}', "
+                                         f"{'a link declared after it' if later else 'no link of the chain'}",
+                   f"name '{tree.BASE}' or the link of an earlier joint: {', '.join(earlier) or '(none yet)'}; "
+                   "list the joints of a tree parents first")
+        earlier.append(joint.link)
 
 
 def _couplings(r: Reader, path: KeyPath, rows: list[Any], joints: list[Joint]) -> list[Joint]:
@@ -236,7 +263,8 @@ def _chain(r: Reader, path: KeyPath, section: Any) -> list[Joint]:
     joints = []
     for i, item in enumerate(items):
         jpath = path + (i,)
-        item = r.mapping(jpath, item, required=("name",), optional=("type", "axis", "origin", "offset") + _JOINT_EXTRAS)
+        item = r.mapping(jpath, item, required=("name",),
+                         optional=("type", "axis", "origin", "offset", "parent") + _JOINT_EXTRAS)
         if item is None or "name" not in item:
             continue
         jname = r.name(jpath + ("name",), item["name"])
@@ -245,10 +273,14 @@ def _chain(r: Reader, path: KeyPath, section: Any) -> list[Joint]:
         before = frame_ops(r, jpath + ("origin",), item["origin"]) if "origin" in item else ()
         offset = r.expr(jpath + ("offset",), item["offset"]) if "offset" in item else ZERO
         extras = _joint_extras(r, jpath, item, default_link=f"link{i + 1}")
-        if jname is None or jtype is None or axis is None or before is None or offset is None or extras is None:
+        parent = None if "parent" not in item else tree.BASE if item["parent"] == tree.BASE else \
+            r.name(jpath + ("parent",), item["parent"])
+        if jname is None or jtype is None or axis is None or before is None or offset is None or extras is None \
+                or ("parent" in item and parent is None):
             r.invalid_links.add(_declared_link(item, i))
             continue
-        joints.append(Joint(name=jname, type=jtype, axis=axis, offset=offset, before=before, after=(), **extras))
+        joints.append(Joint(name=jname, type=jtype, axis=axis, offset=offset, before=before, after=(),
+                            parent=parent, **extras))
     return joints
 
 

@@ -31,7 +31,7 @@ import numpy as np
 import sympy
 
 from symkin.errors import ModelError
-from symkin.model import joint_kinds
+from symkin.model import joint_kinds, tree
 from symkin.model.schema import Model, Op, Rotation
 
 ROOT_LINK = "base"
@@ -103,9 +103,9 @@ def export_urdf(model: Model) -> str:
              f"<!-- {model.name}: exported by symkin from {model.source} (model {model.hash}); numbers at the "
              "parameters' default values -->",
              f"<robot name={quoteattr(model.name)}>", f'  <link name="{ROOT_LINK}"/>']
-    parent = ROOT_LINK
-    pending = _transform(model.base, values)
-    for joint in model.joints:
+    base = _transform(model.base, values)
+    for joint, p in zip(model.joints, tree.parent_indices(model)):
+        parent, pending = (ROOT_LINK, base) if p < 0 else (model.joints[p].link, np.eye(4))
         axis = np.array([_number(a, values) for a in joint.axis])
         offset = _number(joint.offset, values)
         motion = np.eye(4)
@@ -148,10 +148,10 @@ def export_urdf(model: Model) -> str:
             lines.append(f"    <parent link={quoteattr(child)}/><child link={quoteattr(joint.link)}/>")
             lines.append(f"    {_origin(after)}")
             lines.append("  </joint>")
-        parent, pending = joint.link, np.eye(4)
+    tip = model.joints[tree.tip_index(model)].link if model.joints else ROOT_LINK
     lines.append(f'  <link name="{TCP_LINK}"/>')
     lines.append(f'  <joint name="{TCP_LINK}_joint" type="fixed">')
-    lines.append(f'    <parent link={quoteattr(parent)}/><child link="{TCP_LINK}"/>')
+    lines.append(f'    <parent link={quoteattr(tip)}/><child link="{TCP_LINK}"/>')
     lines.append(f"    {_origin(_transform(model.tcp, values))}")
     lines.append("  </joint>")
     for k, body in enumerate(model.bodies):

@@ -233,6 +233,8 @@ def page_data(model: GeneratedModel, cloud: Cloud) -> dict[str, Any]:
                   "samples": (points if "inverse_jacobian" in outputs else np.round(cloud.q, CLOUD_DIGITS + 3)).tolist()},
         "scale": scale if scale > 0 else 1.0, "view_target": centre.tolist(),
     }
+    if "tree" in model.manifest["model"]:  # a branched serial model: the page draws each link from its parent
+        data["tree"] = model.manifest["model"]["tree"]
     if kind == "parallel":
         data["task"] = _task(model, cloud, np.array(home["p"]))
     return data

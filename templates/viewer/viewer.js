@@ -327,7 +327,11 @@ function joint(p) {
 function draw(out) {
   links.clear();
   const radius = data.scale * 0.006;
-  if (out.points) {
+  if (out.points && data.tree) {  // points: the base, each link's frame, the TCP
+    data.tree.parents.forEach((p, k) => rod(out.points[p + 1], out.points[k + 1], radius, linkMaterial));
+    rod(out.points[data.tree.tip + 1], out.points[out.points.length - 1], radius, linkMaterial);
+    out.points.slice(0, -1).forEach(joint);
+  } else if (out.points) {
     chain(out.points, radius, linkMaterial);
     out.points.slice(0, -1).forEach(joint);
   }
