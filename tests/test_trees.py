@@ -112,3 +112,20 @@ def test_the_manifest_and_the_viewer_know_the_tree(tmp_path):
     assert main(["view", str(tmp_path / "out" / "torso"), "-o", str(tmp_path / "torso.html"), "--workspace",
                  "32"]) == 0
     assert '"tree":{"parents":[-1,0,1,2,0,4,0],"tip":3}' in (tmp_path / "torso.html").read_text()
+
+
+def test_a_stock_two_arm_robot_is_one_tree(capsys):
+    """Baxter as shipped (example-robot-data) with --branch: both arms move, their grippers and head locked, the
+    TCP on the left hand; Pinocchio reads the whole file with the same joints locked. On the command line,
+    --branch of an unknown link is a located error."""
+    from symkin.cli import main
+    from test_robot_zoo import ROBOTS_DIR
+
+    baxter = ROBOTS_DIR / "baxter_description/urdf/baxter.urdf"
+    report = crosscheck(baxter, samples=2, backends=("numpy",), urdf={"tip": "left_hand_link",
+                                                                     "branches": ("right_hand_link",)})
+    assert not report.failures, report.comparisons
+    assert {"frame right_lower_forearm", "frame left_wrist", "mass_matrix", "inverse_dynamics"} <= \
+        {c.quantity for c in report.comparisons}
+    assert main(["check", str(baxter), "--tip", "left_hand_link", "--branch", "right_hand"]) == 2
+    assert "the branch link 'right_hand' is not a link of the robot" in capsys.readouterr().err

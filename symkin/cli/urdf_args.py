@@ -24,6 +24,9 @@ def add_urdf_arguments(p: argparse.ArgumentParser) -> None:
                        help="the link that ends the chain (default: the leaf behind the most moving joints, if "
                             "unique)")
     group.add_argument("--base", metavar="LINK", help="the link the chain starts from (default: the root link)")
+    group.add_argument("--branch", action="append", default=[], metavar="LINK",
+                       help="another link whose joints from the base stay moving: the model is the tree of the "
+                            "paths to --tip (which carries the TCP) and to each --branch (repeatable)")
     group.add_argument("--lock", action="append", default=[], metavar="JOINT=VALUE",
                        help="the value of a joint off the chain, in rad or m, or degrees with 'deg' (repeatable; "
                             "default 0, a mimic joint follows its leader)")
@@ -47,7 +50,7 @@ def urdf_options(args: argparse.Namespace, path: str) -> dict[str, Any]:
         ModelError: URDF options given with no URDF among the models, or a malformed --lock.
     """
     given = [option for option, value in (("--tip", args.tip), ("--base", args.base), ("--lock", args.lock),
-                                          ("--snap-angles", args.snap_angles)) if value]
+                                          ("--snap-angles", args.snap_angles), ("--branch", args.branch)) if value]
     if given and not any(source_kind(model) in (URDF, XACRO, MJCF) for model in args.models):
         raise ModelError([Problem("<command line>", None, None, given[0], f"{given[0]} applies to URDF files only",
                                   f"drop {given[0]}, or pass a .urdf file")])
@@ -68,7 +71,7 @@ def urdf_options(args: argparse.Namespace, path: str) -> dict[str, Any]:
             raise ModelError([Problem("<command line>", None, None, "--lock", f"--lock '{item}' is not JOINT=VALUE",
                                       "write e.g. --lock finger_joint1=0.02 or --lock head_pan=30deg")]) from None
     options = {"tip": args.tip, "base": args.base, "locks": locks, "snap_angles": args.snap_angles,
-               "allow_nonphysical": args.allow_nonphysical}
+               "allow_nonphysical": args.allow_nonphysical, "branches": tuple(args.branch)}
     if kind == XACRO:
         options["xacro_args"] = _pairs(args.xacro_arg, ":=", "--xacro-arg", "robot_name:=arm")
         options["xacro_packages"] = _pairs(args.xacro_package, "=", "--xacro-package", "kuka_kr6_support=./kuka_kr6")

@@ -3,7 +3,7 @@ frozen, validated :class:`Model`."""
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 from symkin.errors import ModelError, Problem
@@ -22,7 +22,7 @@ __all__ = ["Body", "Friction", "Joint", "JointType", "Model", "Parameter", "Rota
 def load_model(path: str | Path, tip: str | None = None, *, base: str | None = None,
                locks: Mapping[str, float] | None = None, snap_angles: bool = False,
                allow_nonphysical: bool = False, xacro_args: Mapping[str, str] | None = None,
-               xacro_packages: Mapping[str, str | Path] | None = None) -> Model:
+               xacro_packages: Mapping[str, str | Path] | None = None, branches: Sequence[str] = ()) -> Model:
     """Read, validate and build the model in the file ``path``: YAML, URDF, xacro or MJCF, told by its
     content (root element ``<robot>``, with ``<xacro:...>`` elements or a ``.xacro`` name for xacro;
     ``<mujoco>`` for MJCF, read through MuJoCo's compiler).
@@ -39,6 +39,8 @@ def load_model(path: str | Path, tip: str | None = None, *, base: str | None = N
             negative principal moment) with a note in ``Model.notes`` instead of refusing them.
         xacro_args: xacro only: values of its ``<xacro:arg>`` (``--xacro-arg NAME:=VALUE``).
         xacro_packages: xacro only: {package: directory} for ``$(find package)`` (``--xacro-package``).
+        branches: URDF, xacro and MJCF only: more links whose joints from the base stay moving (the model is
+            the tree of the paths to the tip and to them; ``--branch LINK``).
 
     Raises:
         symkin.errors.ModelError: with every problem found, each located in the file.
@@ -48,21 +50,22 @@ def load_model(path: str | Path, tip: str | None = None, *, base: str | None = N
         if xacro_args or xacro_packages:
             raise ModelError([Problem(str(path), None, None, "", "xacro arguments and packages apply to xacro "
                                       "files only", "drop them, or pass a .xacro file")])
-        document, _ = read_mjcf_document(path, tip=tip, base=base, locks=locks, snap_angles=snap_angles)
+        document, _ = read_mjcf_document(path, tip=tip, base=base, locks=locks, snap_angles=snap_angles,
+                                          branches=branches)
         return build_model(document, _stem(path), allow_nonphysical)
     xacro = {"xacro_args": xacro_args, "xacro_packages": xacro_packages}
     if kind == XACRO:
         document, _ = read_xacro_document(path, xacro_args, xacro_packages, tip=tip, base=base, locks=locks,
-                                          snap_angles=snap_angles)
+                                          snap_angles=snap_angles, branches=branches)
         return build_model(document, _stem(path), allow_nonphysical)
     if any(xacro.values()):
         raise ModelError([Problem(str(path), None, None, "", "xacro arguments and packages apply to xacro files only",
                                   "drop them, or pass a .xacro file")])
     if kind == URDF:
-        return build_model(read_urdf_document(path, tip, base=base, locks=locks, snap_angles=snap_angles),
-                           Path(path).stem, allow_nonphysical)
-    given = [name for name, value in (("tip", tip), ("base", base), ("locks", locks), ("snap_angles", snap_angles))
-             if value]
+        return build_model(read_urdf_document(path, tip, base=base, locks=locks, snap_angles=snap_angles,
+                                              branches=branches), Path(path).stem, allow_nonphysical)
+    given = [name for name, value in (("tip", tip), ("base", base), ("locks", locks), ("snap_angles", snap_angles),
+                                      ("branches", branches)) if value]
     if given:
         raise ModelError([Problem(str(path), None, None, "", f"{given[0]} applies to URDF files only",
                                   f"drop {given[0]}, or pass a .urdf file")])

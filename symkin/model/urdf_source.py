@@ -30,6 +30,10 @@ it), so M and G are those of the arm holding them.
 * gravity is ``[0, 0, -g]`` with a free parameter ``g = 9.81`` (ROS convention: z up);
   the task space is ``pose``.
 
+With ``branches`` (``--branch LINK``) the joints from the base to each branch link stay moving as
+well: the model is the tree of those paths (``parent:`` of the joints that start a branch), the TCP
+on the tip.
+
 The tip is the link named by the caller (``symkin derive --tip LINK``,
 ``load_model(path, tip=...)``), or else the leaf link behind the most moving joints (so
 sensor frames fixed to the base or to a link do not count, nor do mimic followers), if that
@@ -50,7 +54,7 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
@@ -224,7 +228,8 @@ class _Joint:
 
 
 def read_urdf_document(path: str | Path, tip: str | None = None, *, base: str | None = None,
-                       locks: Mapping[str, float] | None = None, snap_angles: bool = False) -> Document:
+                       locks: Mapping[str, float] | None = None, snap_angles: bool = False,
+                       branches: Sequence[str] = ()) -> Document:
     """Read the URDF at ``path`` as a model document (see the module docstring).
 
     Raises:
@@ -244,15 +249,18 @@ def read_urdf_document(path: str | Path, tip: str | None = None, *, base: str | 
     except UnicodeDecodeError as exc:
         raise ModelError([Problem(name, None, None, "", f"the file is not UTF-8 text ({exc.reason})",
                                   "save the URDF as UTF-8 text")]) from None
-    return urdf_document(text, name, tip, base=base, locks=locks, snap_angles=snap_angles)
+    return urdf_document(text, name, tip, base=base, locks=locks, snap_angles=snap_angles, branches=branches)
 
 
 def urdf_document(text: str, file: str = "<string>", tip: str | None = None, *, base: str | None = None,
-                  locks: Mapping[str, float] | None = None, snap_angles: bool = False) -> Document:
+                  locks: Mapping[str, float] | None = None, snap_angles: bool = False,
+                  branches: Sequence[str] = ()) -> Document:
     """The model document of URDF ``text`` (see :func:`read_urdf_document`).
 
     Args:
-        tip: the link that ends the chain (default: see the module docstring).
+        tip: the link that ends the chain and carries the TCP (default: see the module docstring).
+        branches: more links whose joints from the base stay moving: the model is then the tree of the
+            paths to the tip and to each of them (a torso's two arms; :mod:`symkin.model.tree`).
         base: the link the chain starts from (default: the root link); links outside its subtree
             are ignored (they do not move relative to it once their joints are locked).
         locks: {joint: value} for joints off the chain (rad or m; default 0, mimic followers from
@@ -277,7 +285,13 @@ def urdf_document(text: str, file: str = "<string>", tip: str | None = None, *, 
             r.stop()
         root = base
     tip = _tip(r, robot, root, children, parent_of, tip)
-    path = _path(r, robot, parent_of, root, tip)  # joints root -> tip
+    for branch in branches:
+        if branch not in links:
+            r.fail(robot, "branch", f"the branch link '{branch}' is not a link of the robot",
+                   f"choose one of: {', '.join(_subtree(root, children))}")
+            r.stop()
+    kept = {j.name for end in (tip, *branches) for j in _path(r, robot, parent_of, root, end)}
+    path = [j for j in _preorder(root, children) if j.name in kept]  # the tree's joints, parents first
     on_path = {root} | {j.child for j in path}
     notes: list[str] = []
     locked = _locked_values(r, robot, joints, children, on_path, path, dict(locks or {}), notes)
@@ -304,37 +318,47 @@ def urdf_document(text: str, file: str = "<string>", tip: str | None = None, *, 
     data["parameters"] = {"g": {"value": "9.81", "unit": "m/s^2", "doc": "gravitational acceleration"}}
     serial: dict[str, Any] = {}
     chain: list[dict[str, Any]] = []
-    pending: list[dict[str, list[str]]] = []  # fixed frames since the last moving joint (or the root)
+    # Each link of the tree: (the model link it moves with, None for the base; fixed frames from there).
+    state: dict[str, tuple[str | None, list[dict[str, list[str]]]]] = {root: (None, [])}
     # Links that move: (model link carrying them, frames from that link's frame to theirs).
     carried: dict[str, tuple[str, list[dict[str, list[str]]]]] = {}
     friction: dict[str, dict[str, str]] = {}
+    # one branch from the base: its fixed frames before the first moving joint are serial.base, as for a chain
+    from_base = sum(1 for j in path if j.type != "fixed" and _moving_ancestor(j, parent_of, root, kept) is None)
     for j in path:
+        moving, pending = state[j.parent]
         origin = r.frame(j.element.find("origin"), f"joint[{j.name}].origin")
         if j.type == "fixed":
-            pending.append(origin)
+            state[j.child] = (moving, pending + [origin])
         else:
-            if chain:
-                joint = _moving_joint(r, j, _nontrivial(pending + [origin]))
-            else:
+            if moving is None and from_base == 1:
                 joint = _moving_joint(r, j, _nontrivial([origin]))
                 if _nontrivial(pending):
                     serial["base"] = _nontrivial(pending)
+            else:
+                joint = _moving_joint(r, j, _nontrivial(pending + [origin]))
+            if chain and moving != chain[-1]["link"]:  # a branch: it hangs on an earlier link or the base
+                joint["parent"] = moving if moving is not None else "base"
             r.marks[("serial", "chain", len(chain))] = (j.element.line, j.element.column)
             chain.append(joint)
-            pending = []
+            state[j.child] = (joint["link"], [])
             dynamics = j.element.find("dynamics")
             if dynamics is not None:
                 coefficients = _friction(r, j, dynamics)
                 if coefficients:
                     r.marks[("friction", r.joint_ids[j.name])] = (dynamics.line, dynamics.column)
                     friction[r.joint_ids[j.name]] = coefficients
-        if chain:
-            carried[j.child] = (chain[-1]["link"], list(pending))
+        carrier, frames = state[j.child]
+        if carrier is not None:
+            carried[j.child] = (carrier, list(frames))
     if not chain:
         r.fail(robot, "", f"the chain {root} -> {tip} has no moving joint", "choose another tip link (--tip)")
         r.stop()
+    carrier, pending = state[tip]
     if _nontrivial(pending):
         serial["tcp"] = _nontrivial(pending)
+    if carrier != chain[-1]["link"]:
+        serial["tip"] = carrier
     serial["chain"] = chain
     data["serial"] = serial
     # Links fixed to a moving link off the chain (sensors, flanges) move with it.
@@ -465,6 +489,27 @@ def _root(r: _UrdfReader, robot: Element, links: dict[str, Element], parent_of: 
             link = parent_of[link].parent
         seen |= path
     return root
+
+
+def _preorder(root: str, children: dict[str, list[_Joint]]) -> list[_Joint]:
+    """The joints of ``root``'s subtree, each after its parent's (depth first, in file order)."""
+    out, stack = [], list(reversed(children[root]))
+    while stack:
+        j = stack.pop()
+        out.append(j)
+        stack.extend(reversed(children[j.child]))
+    return out
+
+
+def _moving_ancestor(j: _Joint, parent_of: dict[str, _Joint], root: str, kept: set[str]) -> str | None:
+    """The nearest moving joint of the tree above ``j`` (its name), None if only fixed joints lead to the root."""
+    link = j.parent
+    while link != root:
+        above = parent_of[link]
+        if above.type != "fixed" and above.name in kept:
+            return above.name
+        link = above.parent
+    return None
 
 
 def _subtree(root: str, children: dict[str, list[_Joint]]) -> list[str]:
