@@ -49,6 +49,9 @@ def _coordinate_record(model: Model, coordinate) -> dict[str, Any]:
         bound = getattr(coordinate, key, None)
         if bound is not None:
             record[key] = float(bound.xreplace(values))
+    drive = next((a for a in model.actuators if a.joint == coordinate.name), None)
+    if drive is not None and drive.continuous_effort is not None:  # N K_t I_cont: what the motor holds for long
+        record["continuous_effort_limit"] = float(drive.continuous_effort.xreplace(values))
     return record
 
 

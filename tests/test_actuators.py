@@ -56,7 +56,7 @@ def test_a_driven_arm_agrees_with_pinocchio_armature(tmp_path):
 
 @pytest.mark.parametrize("drives, message", [
     ("actuators:\n  theta3: {rotor_inertia: 1}\n", "theta3"),
-    ("actuators:\n  theta1: {gear_ratio: 2}\n", "rotor_inertia"),
+    ("actuators:\n  theta1: {rotor_inertia: 1, inertia: 2}\n", "inertia"),
     ("actuators:\n  theta1: {rotor_inertia: -1}\n", "negative rotor inertia"),
     ("actuators:\n  theta1: {rotor_inertia: 1, gear_ratio: 0}\n", "the gear ratio must be positive"),
 ])
@@ -100,3 +100,28 @@ def test_a_dh_row_may_flip_its_joint(derivations):
     q1, q2 = coordinates.symbols(flipped, "q")
     plain = _output(derivations["planar_2r"], "fk")
     assert sympy.simplify(_output(Derivation(flipped), "fk") - plain.subs(q2, -q2)) == sympy.zeros(*plain.shape)
+
+
+def test_a_motor_s_torque_constant_and_currents_give_the_joint_s_effort_limits(tmp_path):
+    """N K_t I_peak is the joint's effort limit unless it declares one; N K_t I_cont is in the manifest."""
+    import json
+
+    from symkin.cli import main
+
+    text = PLANAR + """
+actuators:
+  theta1: {rotor_inertia: 1e-6, gear_ratio: 13.3, torque_constant: 0.0234, peak_current: 2.5,
+           continuous_current: 0.8}
+  theta2: {torque_constant: 0.0234, peak_current: 2.5}
+"""
+    text = text.replace("      - [theta2, R, 0, 0, l2, 0, [0, deg(90)]]",
+                        "      - {name: theta2, type: R, theta: 0, d: 0, a: l2, alpha: 0, effort_limit: 0.05}")
+    model = model_from_text(text, "driven")
+    assert [float(j.effort_limit) for j in model.joints] == [pytest.approx(13.3 * 0.0234 * 2.5, rel=1e-15), 0.05]
+    path = tmp_path / "driven.yaml"
+    path.write_text(text)
+    assert main(["derive", str(path), "--only", "fk", "-o", str(tmp_path / "out"), "-q"]) == 0
+    record = json.loads((tmp_path / "out" / "planar_2r" / "manifest.json").read_text())["model"]["coordinates"][0]
+    assert record["continuous_effort_limit"] == pytest.approx(13.3 * 0.0234 * 0.8, rel=1e-15)
+    with pytest.raises(ModelError, match="a current limit needs the motor's torque constant"):
+        model_from_text(PLANAR + "actuators:\n  theta1: {peak_current: 2}\n", "driven")

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import difflib
 from typing import Any
 
@@ -10,7 +11,7 @@ import sympy
 
 from symkin.geometry import rotation_matrix
 from symkin.model.reader import X_AXIS, Y_AXIS, Z_AXIS, ZERO, Reader, describe, frame_ops
-from symkin.model.schema import Actuator, Body, Friction, ParallelBodies, Rotation, Vec3
+from symkin.model.schema import Actuator, Body, Friction, Joint, ParallelBodies, Rotation, Vec3
 from symkin.model.yaml_source import KeyPath
 
 _INERTIA_KEYS = ("xx", "yy", "zz", "xy", "xz", "yz")
@@ -235,7 +236,8 @@ def read_friction(r: Reader, value: Any, joint_names: tuple[str, ...]) -> tuple[
 
 
 def read_actuators(r: Reader, value: Any, joint_names: tuple[str, ...]) -> tuple[Actuator, ...]:
-    """``actuators:`` of a serial model: {joint: {rotor_inertia, gear_ratio}}, both >= 0 (gear ratio > 0)."""
+    """``actuators:`` of a serial model: {joint: {rotor_inertia, gear_ratio, torque_constant, peak_current,
+    continuous_current}}, all >= 0 (the gear ratio > 0)."""
     path: KeyPath = ("actuators",)
     section = r.mapping(path, value, optional=joint_names)
     if section is None:
@@ -245,17 +247,35 @@ def read_actuators(r: Reader, value: Any, joint_names: tuple[str, ...]) -> tuple
         if jname not in joint_names:
             continue  # already reported as an unknown key
         apath = path + (jname,)
-        spec = r.mapping(apath, spec, required=("rotor_inertia",), optional=("gear_ratio",))
-        if spec is None or "rotor_inertia" not in spec:
+        spec = r.mapping(apath, spec, optional=ACTUATOR_KEYS)
+        if spec is None:
             continue
-        inertia = r.expr(apath + ("rotor_inertia",), spec["rotor_inertia"])
-        gear = r.expr(apath + ("gear_ratio",), spec["gear_ratio"]) if "gear_ratio" in spec else sympy.Integer(1)
-        if inertia is None or gear is None:
+        values = {key: r.expr(apath + (key,), spec[key]) for key in ACTUATOR_KEYS if key in spec}
+        if any(v is None for v in values.values()):
             continue
-        _negative(r, apath + ("rotor_inertia",), inertia, "rotor inertia")
+        inertia = values.get("rotor_inertia", sympy.Integer(0))
+        gear = values.get("gear_ratio", sympy.Integer(1))
+        for key in ("rotor_inertia", "torque_constant", "peak_current", "continuous_current"):
+            if key in values:
+                _negative(r, apath + (key,), values[key], key.replace("_", " "))
+        if ("peak_current" in values or "continuous_current" in values) and "torque_constant" not in values:
+            r.fail(apath, "a current limit needs the motor's torque constant to become a torque",
+                   "add torque_constant: K_t (N m/A)")
         ratio = r.default_value(gear)
         if gear == 0 or (ratio is not None and ratio <= 0):
             r.fail(apath + ("gear_ratio",), f"the gear ratio must be positive, got {gear}",
                    "give the motor turns per joint turn, e.g. 13.3 for a capstan drive, 1 for direct drive")
-        out.append(Actuator(jname, inertia, gear))
+        out.append(Actuator(jname, inertia, gear, values.get("torque_constant"), values.get("peak_current"),
+                            values.get("continuous_current")))
     return tuple(out)
+
+
+#: Keys of one joint's entry of ``actuators:``.
+ACTUATOR_KEYS = ("rotor_inertia", "gear_ratio", "torque_constant", "peak_current", "continuous_current")
+
+
+def with_motor_effort_limits(joints: tuple[Joint, ...], actuators: tuple[Actuator, ...]) -> tuple[Joint, ...]:
+    """The joints, each without an ``effort_limit`` of its own given its motor's peak torque N K_t I_peak."""
+    peak = {a.joint: a.peak_effort for a in actuators if a.peak_effort is not None}
+    return tuple(dataclasses.replace(j, effort_limit=peak[j.name]) if j.effort_limit is None and j.name in peak
+                 else j for j in joints)

@@ -12,7 +12,8 @@ import hashlib
 from typing import Any
 
 from symkin.errors import ModelError
-from symkin.model.body_build import read_actuators, read_bodies, read_friction, read_parallel_bodies
+from symkin.model.body_build import (read_actuators, read_bodies, read_friction, read_parallel_bodies,
+                                     with_motor_effort_limits)
 from symkin.model.names import name_problem
 from symkin.model.parallel_build import build_parallel, check_parallel_names, parallel_task_space
 from symkin.model.parameter_build import check_name_clashes, read_parameters
@@ -82,6 +83,7 @@ def build_model(doc: Document, stem: str, allow_nonphysical: bool = False) -> Mo
     gravity = r.vector3(("gravity",), data["gravity"]) if "gravity" in data else (ZERO, ZERO, ZERO)
     friction = read_friction(r, data.get("friction", {}), coordinate_names)
     actuators = read_actuators(r, data.get("actuators", {}), tuple(j.name for j in joints))
+    joints = with_motor_effort_limits(joints, actuators)
     if parallel is not None and "actuators" in data:
         r.fail(("actuators",), "a parallel model's actuator rotors are declared among its bodies",
                "write bodies: {rotor: {inertia: J_m, gear_ratio: N}} (docs/model-format.md)")

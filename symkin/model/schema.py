@@ -223,11 +223,30 @@ class Actuator:
         joint: the joint it drives.
         rotor_inertia: J_m, the rotor's inertia about its axis (kg m^2; kg for a linear motor).
         gear_ratio: N, motor turns per joint turn (1: direct drive).
+        torque_constant: K_t, motor torque per ampere (N m/A; N/A for a linear motor), or None.
+        peak_current, continuous_current: the drive's current limits (A), or None.
     """
 
     joint: str
-    rotor_inertia: sympy.Expr
+    rotor_inertia: sympy.Expr = sympy.Integer(0)
     gear_ratio: sympy.Expr = sympy.Integer(1)
+    torque_constant: sympy.Expr | None = None
+    peak_current: sympy.Expr | None = None
+    continuous_current: sympy.Expr | None = None
+
+    @property
+    def peak_effort(self) -> sympy.Expr | None:
+        """N K_t I_peak: the largest joint torque the motor gives (None without K_t and I_peak)."""
+        if self.torque_constant is None or self.peak_current is None:
+            return None
+        return self.gear_ratio * self.torque_constant * self.peak_current
+
+    @property
+    def continuous_effort(self) -> sympy.Expr | None:
+        """N K_t I_cont: the joint torque the motor holds without overheating (None without them)."""
+        if self.torque_constant is None or self.continuous_current is None:
+            return None
+        return self.gear_ratio * self.torque_constant * self.continuous_current
 
     @property
     def reflected_inertia(self) -> sympy.Expr:
