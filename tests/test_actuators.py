@@ -125,3 +125,16 @@ actuators:
     assert record["continuous_effort_limit"] == pytest.approx(13.3 * 0.0234 * 0.8, rel=1e-15)
     with pytest.raises(ModelError, match="a current limit needs the motor's torque constant"):
         model_from_text(PLANAR + "actuators:\n  theta1: {peak_current: 2}\n", "driven")
+
+
+def test_urdf_transmissions_give_the_chain_s_gear_ratios():
+    """The PR2's arm as shipped: one-joint transmissions give |mechanicalReduction| (negative ones turn the motor
+    the other way); its wrist differential couples two joints and gives none."""
+    from symkin.model import load_model
+    from test_robot_zoo import ROBOTS_DIR
+
+    model = load_model(ROBOTS_DIR / "pr2_description/urdf/pr2.urdf", base="torso_lift_link", tip="l_gripper_palm_link")
+    ratios = {a.joint: float(a.gear_ratio) for a in model.actuators}
+    assert ratios["l_shoulder_pan_joint"] == pytest.approx(63.1552452977, rel=1e-15)
+    assert ratios["l_upper_arm_roll_joint"] == pytest.approx(32.6525111499, rel=1e-15)
+    assert "l_wrist_flex_joint" not in ratios and all(float(a.rotor_inertia) == 0 for a in model.actuators)

@@ -200,3 +200,12 @@ def test_bad_xacro_gets_a_located_error(tmp_path, body, message):
     with pytest.raises(ModelError) as raised:
         load_model(arm)
     assert message in str(raised.value) and f"{arm}:21:" in str(raised.value), str(raised.value)
+
+
+def test_element_text_is_expanded_and_a_transmission_gives_the_gear_ratio(tmp_path):
+    """A transmission's mechanicalReduction is element text, with ${...} like any attribute (issue 30)."""
+    arm = _arm(tmp_path, '<transmission name="t"><type>transmission_interface/SimpleTransmission</type>'
+                         '<joint name="elbow"/><actuator name="m"><mechanicalReduction>${2 * l * 100}'
+                         '</mechanicalReduction></actuator></transmission>')
+    model = load_model(arm)
+    assert [(a.joint, float(a.gear_ratio)) for a in model.actuators] == [("elbow", 60.0)]

@@ -70,6 +70,8 @@ from symkin.model.urdf_export import rotation_about, urdf_rpy
 from symkin.model.yaml_source import MAX_FILE_BYTES, Document, KeyPath
 
 MAX_ELEMENTS = 100_000
+#: Characters of text kept per element (URDF keeps numbers in attributes; a transmission's reduction is text).
+MAX_TEXT = 256
 _NUMBER = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?")
 #: With ``snap_angles``, angles this close to a multiple of pi/2 are read as that multiple.
 ANGLE_SNAP = 1e-12
@@ -86,6 +88,9 @@ class Element:
     line: int
     column: int
     children: list[Element] = field(default_factory=list)
+    #: the character data directly inside it (``<mechanicalReduction>50</mechanicalReduction>``), at most
+    #: :data:`MAX_TEXT` characters.
+    text: str = ""
 
     def find(self, tag: str) -> Element | None:
         return next((c for c in self.children if c.tag == tag), None)
@@ -141,9 +146,14 @@ class _UrdfReader:
             (stack[-1].children if stack else root).append(element)
             stack.append(element)
 
+        def characters(data: str) -> None:
+            if stack and len(stack[-1].text) < MAX_TEXT:
+                stack[-1].text = (stack[-1].text + data)[:MAX_TEXT]
+
         parser.StartDoctypeDeclHandler = refuse_dtd
         parser.EntityDeclHandler = refuse_dtd
         parser.StartElementHandler = start
+        parser.CharacterDataHandler = characters
         parser.EndElementHandler = lambda _tag: stack.pop()
         try:
             parser.Parse(text, True)
@@ -382,11 +392,41 @@ def urdf_document(text: str, file: str = "<string>", tip: str | None = None, *, 
         data["bodies"] = bodies
     if friction:
         data["friction"] = friction
+    drives = _transmissions(r, robot, {r.joint_ids[j.name] for j in path if j.type != "fixed"})
+    if drives:
+        data["actuators"] = drives
     data["gravity"] = ["0", "0", "-g"]
     data["task_space"] = "pose"
     r.stop()
     return Document(file=file, data=data, marks=r.marks,
                     reduction=UrdfReduction(root, tip, {name: float(value) for name, value in locked.items()}))
+
+
+def _transmissions(r: _UrdfReader, robot: Element, chain: set[str]) -> dict[str, dict[str, str]]:
+    """{joint: {gear_ratio: |N|}} of the chain's joints with a one-joint ``<transmission>`` whose
+    ``mechanicalReduction`` (under ``<actuator>``, or directly under the transmission in the older
+    format) is not 1. URDF gives no rotor inertia: the ratio is the drive's, for its resolution and
+    effort through the gear (``actuators:``)."""
+    drives: dict[str, dict[str, str]] = {}
+    for transmission in robot.findall("transmission"):
+        joints, actuators = transmission.findall("joint"), transmission.findall("actuator")
+        if len(joints) != 1 or len(actuators) > 1:
+            continue  # differentials couple several joints: not a one-joint gear
+        joint = r.joint_ids.get(joints[0].attrib.get("name", ""))
+        reduction = (actuators[0].find("mechanicalReduction") if actuators else None) or \
+            transmission.find("mechanicalReduction")
+        if joint not in chain or reduction is None:
+            continue
+        text = reduction.text.strip()
+        if not _NUMBER.fullmatch(text) or Fraction(text) == 0:
+            r.fail(reduction, f"transmission[{transmission.attrib.get('name', '')}]",
+                   f"mechanicalReduction '{text[:40]}' is not a nonzero number", "write the gear ratio, e.g. 50")
+            continue
+        ratio = abs(Fraction(text))  # a negative reduction only turns the motor the other way
+        if ratio != 1:
+            r.marks[("actuators", joint)] = (reduction.line, reduction.column)
+            drives[joint] = {"gear_ratio": text.lstrip("+-")}
+    return drives
 
 
 def _nontrivial(frames: list[dict[str, list[str]]]) -> list[dict[str, list[str]]]:

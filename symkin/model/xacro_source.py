@@ -45,7 +45,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 from xml.parsers import expat
-from xml.sax.saxutils import quoteattr
+from xml.sax.saxutils import escape, quoteattr
 
 import yaml
 
@@ -59,6 +59,8 @@ from symkin.model.yaml_source import MAX_FILE_BYTES, Document
 MAX_ELEMENTS = 100_000
 MAX_DEPTH = 100
 MAX_INCLUDES = 500
+#: Characters of an element's text kept (URDF holds numbers in attributes; a transmission's reduction is text).
+MAX_TEXT_KEPT = 256
 #: Directories above the file, and children of each, searched for a package (``$(find NAME)``).
 PACKAGE_SEARCH_LEVELS = 6
 PACKAGE_SEARCH_CHILDREN = 1000
@@ -82,6 +84,8 @@ class _Node:
     children: list[_Node] = field(default_factory=list)
     #: True once expanded (blocks are expanded in the caller's scope before a macro inserts them).
     expanded: bool = False
+    #: its character data, stripped (a transmission's ``<mechanicalReduction>${ratio}</...>``), bounded.
+    text: str = ""
 
 
 @dataclass
@@ -167,6 +171,9 @@ def _write(node: _Node, depth: int, lines: list[str], where: list[tuple[str, int
     attributes = "".join(f" {name}={quoteattr(value)}" for name, value in node.attrib.items())
     indent = "  " * depth
     where.append((node.file, node.line, node.column))
+    if node.text and not node.children:
+        lines.append(f"{indent}<{node.tag}{attributes}>{escape(node.text)}</{node.tag}>")
+        return
     if not node.children:
         lines.append(f"{indent}<{node.tag}{attributes}/>")
         return
@@ -213,9 +220,14 @@ class _Expander:
             (stack[-1].children if stack else roots).append(node)
             stack.append(node)
 
+        def characters(data: str) -> None:
+            if stack and len(stack[-1].text) < MAX_TEXT_KEPT:
+                stack[-1].text = (stack[-1].text + data)[:MAX_TEXT_KEPT]
+
         parser.StartDoctypeDeclHandler = refuse
         parser.EntityDeclHandler = refuse
         parser.StartElementHandler = start
+        parser.CharacterDataHandler = characters
         parser.EndElementHandler = lambda _tag: stack.pop()
         try:
             parser.Parse(raw, True)
@@ -242,7 +254,8 @@ class _Expander:
                 raise XacroFail(f"the expansion has more than {MAX_ELEMENTS} elements", "check for runaway macros", node)
             attrib = {k: self.text(v, scope, file, node) for k, v in node.attrib.items()
                       if not k.startswith("xmlns:xacro")}
-            result = _Node(node.tag, attrib, node.file, node.line, node.column, expanded=True)
+            result = _Node(node.tag, attrib, node.file, node.line, node.column, expanded=True,
+                           text=self.text(node.text.strip(), scope, file, node) if node.text.strip() else "")
             result.children = self.expand_children(node, scope, file)
             for child in node.children:  # <xacro:attribute> of this element
                 if child.tag == _XACRO + "attribute":
