@@ -12,6 +12,7 @@ from symkin.analysis.crosscheck import crosscheck
 from symkin.derivation import Derivation
 from symkin.errors import ModelError
 from symkin.model import coordinates, model_from_text
+from tolerances import CLOSED_FORM
 
 PLANAR = (MODELS_DIR / "planar_2r.yaml").read_text()
 DRIVES = """
@@ -87,7 +88,7 @@ friction:
                      [0.6, 0.1 * np.tanh(-0.5) + 0.1 * np.tanh(-0.5) ** 2 + 0.1 * np.tanh(-0.5)]])
     for backend in ("numpy", "c"):
         got = load(written, backend).friction(qd)
-        np.testing.assert_allclose(got, want, rtol=0, atol=4 * np.finfo(float).eps)
+        np.testing.assert_allclose(got, want, rtol=0, atol=CLOSED_FORM)  # a few operations and one tanh on O(1)
     with pytest.raises(ModelError, match="negative Coulomb friction level"):
         model_from_text(text.replace("negative: 0.25", "negative: -0.25"), "asymmetric")
 
@@ -117,12 +118,12 @@ actuators:
     text = text.replace("      - [theta2, R, 0, 0, l2, 0, [0, deg(90)]]",
                         "      - {name: theta2, type: R, theta: 0, d: 0, a: l2, alpha: 0, effort_limit: 0.05}")
     model = model_from_text(text, "driven")
-    assert [float(j.effort_limit) for j in model.joints] == [pytest.approx(13.3 * 0.0234 * 2.5, rel=1e-15), 0.05]
+    assert [float(j.effort_limit) for j in model.joints] == [pytest.approx(13.3 * 0.0234 * 2.5, rel=CLOSED_FORM), 0.05]
     path = tmp_path / "driven.yaml"
     path.write_text(text)
     assert main(["derive", str(path), "--only", "fk", "-o", str(tmp_path / "out"), "-q"]) == 0
     record = json.loads((tmp_path / "out" / "planar_2r" / "manifest.json").read_text())["model"]["coordinates"][0]
-    assert record["continuous_effort_limit"] == pytest.approx(13.3 * 0.0234 * 0.8, rel=1e-15)
+    assert record["continuous_effort_limit"] == pytest.approx(13.3 * 0.0234 * 0.8, rel=CLOSED_FORM)
     with pytest.raises(ModelError, match="a current limit needs the motor's torque constant"):
         model_from_text(PLANAR + "actuators:\n  theta1: {peak_current: 2}\n", "driven")
 
@@ -135,6 +136,6 @@ def test_urdf_transmissions_give_the_chain_s_gear_ratios():
 
     model = load_model(ROBOTS_DIR / "pr2_description/urdf/pr2.urdf", base="torso_lift_link", tip="l_gripper_palm_link")
     ratios = {a.joint: float(a.gear_ratio) for a in model.actuators}
-    assert ratios["l_shoulder_pan_joint"] == pytest.approx(63.1552452977, rel=1e-15)
-    assert ratios["l_upper_arm_roll_joint"] == pytest.approx(32.6525111499, rel=1e-15)
+    # the decimals of the file, read exactly and rounded once: equal to the literals
+    assert ratios["l_shoulder_pan_joint"] == 63.1552452977 and ratios["l_upper_arm_roll_joint"] == 32.6525111499
     assert "l_wrist_flex_joint" not in ratios and all(float(a.rotor_inertia) == 0 for a in model.actuators)
