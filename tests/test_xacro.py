@@ -194,6 +194,9 @@ def test_hostile_expressions_are_refused_located_and_never_run(tmp_path, monkeyp
     ('<xacro:link name="x" colour="red"><origin/></xacro:link>', "macro 'link' has no parameter 'colour'"),
     ('<xacro:link><origin/></xacro:link>', "macro 'link' needs the parameter 'name'"),
     ('<xacro:if value="maybe"/>', "the condition 'maybe' is neither true nor false"),
+    ('<xacro:property name="s" value="${\'x\' * 900000}"/><xacro:macro name="m" params=""><link name="${s}"/>'
+     '<link name="${s}"/></xacro:macro><xacro:m/><xacro:m/><xacro:m/><xacro:m/><xacro:m/><xacro:m/>',
+     "the expansion grows beyond 10000000 characters"),
 ])
 def test_bad_xacro_gets_a_located_error(tmp_path, body, message):
     arm = _arm(tmp_path, body)

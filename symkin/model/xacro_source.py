@@ -55,8 +55,10 @@ from symkin.model.xacro_expressions import (MAX_TEXT, Evaluator, XacroFail, as_t
                                            pieces)
 from symkin.model.yaml_source import MAX_FILE_BYTES, Document
 
-#: Elements the expansion may produce (as the URDF reader's bound), macro and property depth, includes.
+#: Elements and characters the expansion may produce (as the URDF reader's bounds: a file of at most ten
+#: model files' size), macro and property depth, includes.
 MAX_ELEMENTS = 100_000
+MAX_OUTPUT = 10 * MAX_FILE_BYTES
 MAX_DEPTH = 100
 MAX_INCLUDES = 500
 #: Characters of an element's text kept (URDF holds numbers in attributes; a transmission's reduction is text).
@@ -192,6 +194,7 @@ class _Expander:
         self.declared_args: set[str] = set()
         self.arg_values: dict[str, str] = {}
         self.elements = 0
+        self.characters = 0
         self.includes = 0
         self.depth = 0
 
@@ -254,6 +257,10 @@ class _Expander:
                 raise XacroFail(f"the expansion has more than {MAX_ELEMENTS} elements", "check for runaway macros", node)
             attrib = {k: self.text(v, scope, file, node) for k, v in node.attrib.items()
                       if not k.startswith("xmlns:xacro")}
+            self.characters += sum(len(v) for v in attrib.values())
+            if self.characters > MAX_OUTPUT:
+                raise XacroFail(f"the expansion grows beyond {MAX_OUTPUT} characters", "check for runaway macros",
+                                node)
             result = _Node(node.tag, attrib, node.file, node.line, node.column, expanded=True,
                            text=self.text(node.text.strip(), scope, file, node) if node.text.strip() else "")
             result.children = self.expand_children(node, scope, file)
