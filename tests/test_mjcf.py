@@ -14,6 +14,7 @@ from symkin.analysis.crosscheck import crosscheck
 from symkin.cli import main
 from symkin.errors import ModelError
 from symkin.model import load_model
+from tolerances import CLOSED_FORM
 
 ASSETS = Path(distribution("gymnasium").locate_file("gymnasium/envs/mujoco/assets"))
 
@@ -89,3 +90,39 @@ def test_bad_mjcf_gets_located_errors(tmp_path, capsys):
     assert main(["derive", str(ASSETS / "reacher.xml"), "--tip", "fingertip", "--only", "fk,mass_matrix",
                  "-o", str(out), "-q"]) == 0
     assert (out / "reacher" / "manifest.json").exists()
+
+
+COUPLED = """<mujoco model="coupled">
+  <compiler angle="radian"/>
+  <worldbody>
+    <body name="a" pos="0 0 0.1">
+      <joint name="j1" type="hinge" axis="0 0 1" range="-2 2"/>
+      <geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.02" mass="1"/>
+      <body name="b" pos="0.3 0 0">
+        <joint name="j2" type="hinge" axis="0 1 0" ref="0.2" range="-2 2"/>
+        <geom type="capsule" fromto="0 0 0 0.25 0 0" size="0.02" mass="0.7"/>
+        <body name="c" pos="0.25 0 0">
+          <joint name="j3" type="hinge" axis="0 1 0" range="-3 3"/>
+          <geom type="capsule" fromto="0 0 0 0.1 0 0" size="0.02" mass="0.3"/>
+          <body name="tip" pos="0.1 0 0"/>
+        </body>
+      </body>
+    </body>
+  </worldbody>
+  <equality><joint joint1="j3" joint2="j2" polycoef="0.1 -1 0 0 0"/></equality>
+  <tendon><fixed name="t"><joint joint="j1" coef="1"/></fixed></tendon>
+</mujoco>
+"""
+
+
+def test_a_joint_equality_is_a_coupling_and_other_constraints_are_noted(tmp_path):
+    """MuJoCo's affine joint equality q3 - ref3 = c0 + c1 (q2 - ref2) is the coupling q3 = c1 q2 + b (one coordinate
+    less), checked against MuJoCo's open-tree M and bias projected on the coordinates (A^T M A); a tendon is
+    noted as not modelled."""
+    path = tmp_path / "coupled.xml"
+    path.write_text(COUPLED)
+    model = load_model(path)
+    assert model.dof == 2 and model.joints[2].coupling.leader == "j2"
+    assert float(model.joints[2].coupling.offset) == pytest.approx(0.1 + 0.2, rel=CLOSED_FORM)
+    assert any("tendon" in note for note in model.notes)
+    _passes_both(crosscheck(path, samples=3, backends=("numpy",)))

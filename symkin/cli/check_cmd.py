@@ -26,7 +26,9 @@ def run_check(args: argparse.Namespace) -> int:
         model = load_model(path, **urdf_options(args, path))
         request = pipeline.resolve_request(model)
         if model.parallel is None:
-            structure = f"{model.dof} joints ({', '.join(f'{j.name}:{j.type.value}' for j in model.joints)})"
+            structure = f"{len(model.joints)} joints ({', '.join(f'{j.name}:{j.type.value}' for j in model.joints)})"
+            if model.dof != len(model.joints):  # couplings: fewer coordinates than joints
+                structure += f", {model.dof} coordinates"
         else:
             legs = ", ".join(f"{leg.name}:{''.join(j.type.value for j in leg.joints)}" for leg in model.parallel.legs)
             structure = (f"parallel, {len(model.parallel.legs)} legs ({legs}), {model.dof} actuated "

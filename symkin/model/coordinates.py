@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 import sympy
 
+from symkin.errors import ModelError
 from symkin.model import joint_kinds
 from symkin.model.schema import Model
 
@@ -120,5 +121,11 @@ def coordinate_range(model: Model) -> tuple[np.ndarray, np.ndarray]:
         k = [c.name for c in model.coordinates].index(coupling.leader)
         a, b = (float(sympy.sympify(v).xreplace(defaults)) for v in (coupling.multiplier, coupling.offset))
         ends = sorted((float(limit.xreplace(defaults)) - b) / a for limit in limits)
+        if max(lower[k], ends[0]) > min(upper[k], ends[1]):
+            raise ModelError([model.problem(("serial",), f"the limits of '{follower.name}' and of its leader "
+                                                        f"'{coupling.leader}' leave no common value "
+                                                        f"(q = {a:g} {coupling.leader} + {b:g})",
+                                            "widen the limits, or fix the coupling's multiplier and offset "
+                                            "(an MJCF range is in degrees unless <compiler angle=\"radian\">)")])
         lower[k], upper[k] = max(lower[k], ends[0]), min(upper[k], ends[1])
     return np.array(lower), np.array(upper)

@@ -19,6 +19,9 @@ locking and lumping of everything off it, the tip rule and the messages are thos
 * ``damping`` is viscous and ``frictionloss`` Coulomb friction; ``armature`` is the reflected
   rotor inertia of the joint's drive (``actuators:`` with gear ratio 1, see docs/model-format.md);
   joint stiffness (a spring) is not modelled and is noted;
+* an active joint equality that is affine (``polycoef`` with only c0, c1) couples its joints as a
+  URDF ``<mimic>`` (q1 = c1 q2 + c0 + ref1 - c1 ref2); other equalities and tendons are noted as not
+  modelled;
 * gravity is ``option/gravity``: ``[0, 0, -g]`` with the parameter ``g`` its magnitude when it
   points down z, else the vector as given.
 
@@ -153,6 +156,7 @@ def _urdf(model: Any, file: str, lines: dict[tuple[str, str], tuple[int, int]]
         out.append(text)
         where.append((file, *place) if place else (file, None, None))
 
+    couplings = _joint_couplings(model)
     bodies = [_name(model, mujoco.mjtObj.mjOBJ_BODY, b, "body") for b in range(model.nbody)]
     bodies[0] = "world"
     offset = {0: np.eye(4)}  # body -> the transform from its last link frame to its MuJoCo frame
@@ -186,6 +190,8 @@ def _urdf(model: Any, file: str, lines: dict[tuple[str, str], tuple[int, int]]
             emit(f"<joint name={quoteattr(jname)} type=\"{kind_text}\">", jplace)
             emit(f"  <parent link={quoteattr(previous)}/><child link={quoteattr(link)}/>{_origin(origin)}"
                  f"<axis xyz=\"{' '.join(repr(float(a)) for a in axis)}\"/>", jplace)
+            if j in couplings:
+                emit(f"  {couplings[j]}", jplace)
             emit(f"  {_limit(model, j)}<dynamics damping=\"{float(model.dof_damping[model.jnt_dofadr[j]])!r}\" "
                  f"friction=\"{float(model.dof_frictionloss[model.jnt_dofadr[j]])!r}\"/>", jplace)
             emit("</joint>", jplace)
@@ -227,10 +233,9 @@ def _refuse_unmoving_on_chain(document: Document, model: Any, unmoving: list[tup
 
 
 def _model_name(model: Any, file: str) -> str:
-    import mujoco
-
-    return mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_MUJOCO if hasattr(mujoco.mjtObj, "mjOBJ_MUJOCO")
-                             else mujoco.mjtObj.mjOBJ_UNKNOWN, 0) or Path(file).stem
+    """The ``<mujoco model="...">`` name (the first of MuJoCo's names), else the file's stem."""
+    names = bytes(model.names)
+    return names[:names.index(b"\0")].decode("utf-8", "replace") or Path(file).stem
 
 
 def _link(model: Any, b: int, name: str, offset: np.ndarray) -> str:
@@ -244,6 +249,27 @@ def _link(model: Any, b: int, name: str, offset: np.ndarray) -> str:
     ixx, iyy, izz = (repr(float(v)) for v in model.body_inertia[b])
     return (f"<link name={quoteattr(name)}><inertial>{_origin(frame)}<mass value=\"{mass!r}\"/>"
             f"<inertia ixx=\"{ixx}\" iyy=\"{iyy}\" izz=\"{izz}\" ixy=\"0\" ixz=\"0\" iyz=\"0\"/></inertial></link>")
+
+
+def _joint_couplings(model: Any) -> dict[int, str]:
+    """{joint: <mimic> element} of the active joint equalities that are affine: MuJoCo's
+    q1 - ref1 = c0 + c1 (q2 - ref2) (polycoef c2..c4 zero) is q1 = c1 q2 + (c0 + ref1 - c1 ref2)."""
+    import mujoco
+    from xml.sax.saxutils import quoteattr
+
+    out = {}
+    for e in range(model.neq):
+        if model.eq_type[e] != mujoco.mjtEq.mjEQ_JOINT or not model.eq_active0[e] or model.eq_obj2id[e] < 0:
+            continue
+        c0, c1, *higher = (float(v) for v in model.eq_data[e][:5])
+        first, second = int(model.eq_obj1id[e]), int(model.eq_obj2id[e])
+        if any(higher) or first in out:
+            continue  # a polynomial coupling is not a constant map: noted by _drives
+        ref1, ref2 = (float(model.qpos0[model.jnt_qposadr[j]]) for j in (first, second))
+        leader = _name(model, mujoco.mjtObj.mjOBJ_JOINT, second, "joint")
+        out[first] = (f"<mimic joint={quoteattr(leader)} multiplier=\"{c1!r}\" "
+                      f"offset=\"{c0 + ref1 - c1 * ref2!r}\"/>")
+    return out
 
 
 def _limit(model: Any, j: int) -> str:
@@ -299,6 +325,16 @@ def _drives(document: Document, model: Any, lines: dict[tuple[str, str], tuple[i
         if float(model.jnt_stiffness[j]):
             notes.append(f"joint '{source}' has a spring (stiffness {float(model.jnt_stiffness[j])!r}), which "
                          "symkin does not model: its force is not in the dynamics")
+    couplings = _joint_couplings(model)
+    for e in range(model.neq):
+        if not model.eq_active0[e] or (model.eq_type[e] == mujoco.mjtEq.mjEQ_JOINT
+                                       and int(model.eq_obj1id[e]) in couplings):
+            continue
+        kind = mujoco.mjtEq(model.eq_type[e]).name[len("mjEQ_"):].lower()
+        notes.append(f"equality constraint {_name(model, mujoco.mjtObj.mjOBJ_EQUALITY, e, 'equality')} ({kind}) is "
+                     "not modelled: symkin's model is the open tree (lock or couple the joints it ties)")
+    if model.ntendon:
+        notes.append(f"{model.ntendon} tendon(s) not modelled (their forces and couplings are not in the dynamics)")
     if actuators:
         document.data["actuators"] = actuators
     if notes:
