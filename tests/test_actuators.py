@@ -44,15 +44,20 @@ def test_the_reflected_rotor_inertia_adds_to_m_and_tau_exactly(derivations):
         assert sympy.simplify(_output(driven, name) - _output(plain, name)) == sympy.zeros(2, 1)
 
 
-def test_a_driven_arm_agrees_with_pinocchio_armature(tmp_path):
-    """The UR10e with harmonic drives (ratio 101; rotor inertias of the size of its motors', illustrative)."""
-    path = tmp_path / "ur10e_driven.yaml"
+def _driven_ur10e(path, options: str = "") -> object:
+    """crosscheck of the UR10e with harmonic drives (ratio 101; rotor inertias of the size of its motors',
+    illustrative) and the actuator ``options``."""
     path.write_text((MODELS_DIR / "ur10e.yaml").read_text() + "\nactuators:\n" + "".join(
-        f"  q{i}: {{rotor_inertia: {j}, gear_ratio: 101}}\n" for i, j in
+        f"  q{i}: {{rotor_inertia: {j}, gear_ratio: 101{options}}}\n" for i, j in
         ((1, 3.3e-5), (2, 3.3e-5), (3, 1.9e-5), (4, 6.8e-6), (5, 6.8e-6), (6, 6.8e-6))))
     report = crosscheck(path, samples=3, backends=("numpy",), coriolis_matrix=False)
     assert not report.failures, report.comparisons
-    assert {"mass_matrix", "inverse_dynamics"} <= {c.quantity for c in report.comparisons}
+    assert {"mass_matrix", "coriolis_vector", "inverse_dynamics"} <= {c.quantity for c in report.comparisons}
+    return report
+
+
+def test_a_driven_arm_agrees_with_pinocchio_armature(tmp_path):
+    _driven_ur10e(tmp_path / "ur10e_driven.yaml")
 
 
 @pytest.mark.parametrize("drives, message", [
@@ -139,3 +144,28 @@ def test_urdf_transmissions_give_the_chain_s_gear_ratios():
     # the decimals of the file, read exactly and rounded once: equal to the literals
     assert ratios["l_shoulder_pan_joint"] == 63.1552452977 and ratios["l_upper_arm_roll_joint"] == 32.6525111499
     assert "l_wrist_flex_joint" not in ratios and all(float(a.rotor_inertia) == 0 for a in model.actuators)
+
+
+def test_gyroscopic_rotors_couple_with_the_links_that_carry_them(derivations):
+    """With 'gyroscopic: true' the rotor of theta2 spins on link 1 at qd1 + N2 qd2 (parallel axes): its kinetic
+    energy 1/2 J2 (qd1 + N2 qd2)^2 adds J2 [[1, N2], [N2, N2^2]] to M; theta1's rotor sits on the base: J1 N1^2."""
+    text = PLANAR.replace(PARAMETERS, DRIVE_PARAMETERS + "  N2: 7\n") + """
+actuators:
+  theta1: {rotor_inertia: J1, gear_ratio: N1, gyroscopic: true}
+  theta2: {rotor_inertia: J2, gear_ratio: N2, gyroscopic: true}
+"""
+    model = model_from_text(text, "rotors")
+    assert [j.name for j in model.joints] == ["theta1_rotor", "theta1", "theta2_rotor", "theta2"]
+    assert [c.name for c in model.coordinates] == ["theta1", "theta2"]
+    J1, N1, J2, N2 = (model.parameter(name).symbol for name in ("J1", "N1", "J2", "N2"))
+    extra = sympy.Matrix([[N1 ** 2 * J1 + J2, N2 * J2], [N2 * J2, N2 ** 2 * J2]])
+    driven = Derivation(model)
+    assert sympy.simplify(_output(driven, "mass_matrix") - _output(derivations["planar_2r"], "mass_matrix")) == extra
+    for name in ("coriolis_vector", "gravity_vector"):
+        assert sympy.simplify(_output(driven, name) - _output(derivations["planar_2r"], name)) == sympy.zeros(2, 1)
+
+
+def test_gyroscopic_rotors_of_a_spatial_arm_agree_with_pinocchio(tmp_path):
+    """The UR10e's rotors as bodies on the links before their joints (Pinocchio: the exported rotor joints set to
+    N q, M and tau projected through A), where the coupling terms of z . w_carrier do not vanish."""
+    _driven_ur10e(tmp_path / "ur10e_rotors.yaml", ", gyroscopic: true")

@@ -211,7 +211,7 @@ def crosscheck(path: str | Path, *, reference_urdf: str | Path | None = None, sa
                                                               f"{', '.join(sorted(set(missing)))}",
                                       "give a reference URDF of the same robot (--reference-urdf)")])
         chain = [reference.joints[reference.getJointId(name)] for name in joint_names]
-        for actuator in model.actuators:  # the drives' reflected rotor inertia N^2 J_m: Pinocchio's armature
+        for actuator in (a for a in model.actuators if not a.gyroscopic):  # reflected N^2 J_m: Pinocchio's armature
             joint = reference.joints[reference.getJointId(model.source_name("joints", actuator.joint))]
             reference.armature[joint.idx_v] = float(actuator.reflected_inertia.xreplace(model.parameter_values))
         frame_links = {f"frame {link_names[j.link]}": j.link for j in model.joints}

@@ -156,7 +156,8 @@ def chain_links(model: Model) -> tuple[Link, ...]:
     eye, zero = sympy.eye(3), sympy.zeros(3, 1)
     base = _compose(model.base, eye, zero)  # F_0 = base frame, then the base's fixed operations
     links = []
-    armature = {a.joint: se.sympify(a.reflected_inertia) for a in model.actuators}
+    # the reflected inertia of drives without a rotor body of their own (symkin.model.rotors)
+    armature = {a.joint: se.sympify(a.reflected_inertia) for a in model.actuators if not a.gyroscopic}
     parents = tree.parent_indices(model)
     afters: list[tuple[sympy.Matrix, sympy.Matrix]] = []  # each link's frame in its joint frame
     for joint, q, parent in zip(model.joints, coordinates.joint_values(model, "q"), parents):

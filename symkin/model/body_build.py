@@ -247,8 +247,13 @@ def read_actuators(r: Reader, value: Any, joint_names: tuple[str, ...]) -> tuple
         if jname not in joint_names:
             continue  # already reported as an unknown key
         apath = path + (jname,)
-        spec = r.mapping(apath, spec, optional=ACTUATOR_KEYS)
+        spec = r.mapping(apath, spec, optional=ACTUATOR_KEYS + ("gyroscopic",))
         if spec is None:
+            continue
+        gyroscopic = spec.get("gyroscopic", False)
+        if not isinstance(gyroscopic, bool):
+            r.fail(apath + ("gyroscopic",), f"'gyroscopic' must be true or false, got {describe(gyroscopic)}",
+                   "write true (the rotor as a body spinning on the link before) or false (reflected inertia)")
             continue
         values = {key: r.expr(apath + (key,), spec[key]) for key in ACTUATOR_KEYS if key in spec}
         if any(v is None for v in values.values()):
@@ -266,7 +271,7 @@ def read_actuators(r: Reader, value: Any, joint_names: tuple[str, ...]) -> tuple
             r.fail(apath + ("gear_ratio",), f"the gear ratio must be positive, got {gear}",
                    "give the motor turns per joint turn, e.g. 13.3 for a capstan drive, 1 for direct drive")
         out.append(Actuator(jname, inertia, gear, values.get("torque_constant"), values.get("peak_current"),
-                            values.get("continuous_current")))
+                            values.get("continuous_current"), gyroscopic))
     return tuple(out)
 
 

@@ -20,6 +20,7 @@ from symkin.model.parameter_build import check_name_clashes, read_parameters
 from symkin.model.reader import ZERO, Reader
 from symkin.model.scene_build import read_scene
 from symkin.model.schema import Model
+from symkin.model.rotors import with_rotors
 from symkin.model.serial_build import read_serial, read_tip
 from symkin.model.task_space_build import read_task_space
 from symkin.model.yaml_source import Document
@@ -84,6 +85,7 @@ def build_model(doc: Document, stem: str, allow_nonphysical: bool = False) -> Mo
     friction = read_friction(r, data.get("friction", {}), coordinate_names)
     actuators = read_actuators(r, data.get("actuators", {}), tuple(j.name for j in joints))
     joints = with_motor_effort_limits(joints, actuators)
+    joints, bodies = with_rotors(r, joints, actuators, bodies)
     if parallel is not None and "actuators" in data:
         r.fail(("actuators",), "a parallel model's actuator rotors are declared among its bodies",
                "write bodies: {rotor: {inertia: J_m, gear_ratio: N}} (docs/model-format.md)")

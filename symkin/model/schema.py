@@ -225,6 +225,10 @@ class Actuator:
         gear_ratio: N, motor turns per joint turn (1: direct drive).
         torque_constant: K_t, motor torque per ampere (N m/A; N/A for a linear motor), or None.
         peak_current, continuous_current: the drive's current limits (A), or None.
+        gyroscopic: model the rotor as a body of its own on the link that carries the motor, spinning
+            N times as fast as the joint (:mod:`symkin.model.rotors`), instead of the reflected inertia
+            alone: its kinetic energy 1/2 J_m (z . w_carrier + N qd)^2 then couples it with the motion of
+            the links before it (Spong 1987; Featherstone 2008, sec. 9.4 treats the gear as this constraint).
     """
 
     joint: str
@@ -233,6 +237,7 @@ class Actuator:
     torque_constant: sympy.Expr | None = None
     peak_current: sympy.Expr | None = None
     continuous_current: sympy.Expr | None = None
+    gyroscopic: bool = False
 
     @property
     def peak_effort(self) -> sympy.Expr | None:

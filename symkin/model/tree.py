@@ -8,7 +8,9 @@ module for each joint's parent and for the joints between the base and a link.
 
 from __future__ import annotations
 
-from symkin.model.schema import Model
+from collections.abc import Sequence
+
+from symkin.model.schema import Joint, Model
 
 #: The name of the base in ``parent:``.
 BASE = "base"
@@ -16,9 +18,14 @@ BASE = "base"
 
 def parent_indices(model: Model) -> tuple[int, ...]:
     """The index of each joint's parent joint (-1 for the base): the previous joint unless ``parent`` says."""
-    index = {joint.link: k for k, joint in enumerate(model.joints)}
+    return parent_indices_of(model.joints)
+
+
+def parent_indices_of(joints: Sequence[Joint]) -> tuple[int, ...]:
+    """:func:`parent_indices` of a sequence of joints."""
+    index = {joint.link: k for k, joint in enumerate(joints)}
     return tuple(k - 1 if joint.parent is None else -1 if joint.parent == BASE else index[joint.parent]
-                 for k, joint in enumerate(model.joints))
+                 for k, joint in enumerate(joints))
 
 
 def path_to(parents: tuple[int, ...], k: int) -> tuple[int, ...]:
