@@ -1,7 +1,8 @@
 """Issue 30: the Puma 560 and the Stanford arm as Robotics Toolbox for Python publishes them - with the motors'
 reflected inertia G^2 Jm, and for the Puma its direction-dependent Coulomb friction - against RTB's own rne,
 inertia, gravload, coriolis and friction, recorded by tests/reference/record_rtb.py (RTB is not a test
-dependency). The models (tests/reference/*_rtb.yaml) transcribe RTB's numbers; nothing is fitted."""
+dependency), and the Kinova Jaco's kinematics with its flipped joint. The models (tests/reference/*_rtb.yaml)
+transcribe RTB's numbers; nothing is fitted."""
 
 from __future__ import annotations
 
@@ -42,3 +43,20 @@ def test_published_arms_agree_with_the_robotics_toolbox(arm, tmp_path):
         for k, state in enumerate(states):
             # both sides evaluate the same published numbers by exact methods: rounding only
             assert _normwise(values[k], np.array(state[name])) <= 1e-12, (arm, name, k, values[k], state[name])
+
+
+def test_the_jaco_with_its_flipped_joint_agrees_with_the_robotics_toolbox(tmp_path):
+    """RTB's flip=True (joint 1 turns by -q1) is the coupling '-q1'; fkine and jacob0 at RTB's recorded states."""
+    from tolerances import KINEMATICS
+
+    model = load_model(REFERENCE / "jaco_rtb.yaml")
+    assert model.joints[0].coupling is not None and not model.joints[0].follower
+    request = pipeline.resolve_request(model, ("fk", "jacobian_geometric"), "numpy", None, False, "none")
+    ours = load(pipeline.write(pipeline.generate(model, request), tmp_path), "numpy")
+    states = RECORDED["jaco"]
+    q = np.array([s["q"] for s in states])
+    fk, J = ours.fk(q), ours.jacobian_geometric(q)
+    for k, state in enumerate(states):
+        # both are exact chain products: rounding only, on a reach of about 1 m
+        np.testing.assert_allclose(fk[k], state["fkine"], rtol=0, atol=KINEMATICS)
+        np.testing.assert_allclose(J[k], state["jacob0"], rtol=0, atol=KINEMATICS)
