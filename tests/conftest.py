@@ -211,8 +211,21 @@ def generated_dir(tmp_path_factory, models) -> Path:
     return out
 
 
+#: Modules whose tests take longest (the 50-digit stability runs, the documents run as written): collected
+#: first, so that the workers start them first and never end the session with one of them while the other
+#: worker waits (xdist hands out tests in collection order).
+LONG_FIRST = ("test_stability_table", "test_stability", "test_docs")
+
+
 def pytest_collection_modifyitems(config, items):
-    """Mark the numerics-sensitive modules ``numerics`` (the foreign-arithmetic run selects them)."""
+    """Mark the numerics-sensitive modules ``numerics`` (the foreign-arithmetic run selects them) and put the
+    longest modules first (:data:`LONG_FIRST`)."""
     for item in items:
         if item.module.__name__.rsplit(".", 1)[-1] in NUMERICS_MODULES:
             item.add_marker(pytest.mark.numerics)
+
+    def rank(item: pytest.Item) -> int:
+        module = item.module.__name__.rsplit(".", 1)[-1]
+        return LONG_FIRST.index(module) if module in LONG_FIRST else len(LONG_FIRST)
+
+    items.sort(key=rank)  # stable: the order within and between the other modules is kept
