@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
+from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
@@ -191,16 +192,18 @@ def _check_inertia_physical(r: Reader, path: KeyPath, tensor: sympy.Matrix, mass
                               "proceed as simulators do, pass --allow-nonphysical (or 'allow_nonphysical: true')")
 
 
+def _per_joint(r: Reader, key: str, value: Any, joint_names: tuple[str, ...]) -> Iterator[tuple[str, KeyPath, Any]]:
+    """(joint, key path, entry) of a section keyed by joint names (``friction:``, ``actuators:``); unknown
+    joints are reported by the mapping check and skipped."""
+    section = r.mapping((key,), value, optional=joint_names)
+    for jname, spec in (section or {}).items():
+        if jname in joint_names:
+            yield jname, (key, jname), spec
+
+
 def read_friction(r: Reader, value: Any, joint_names: tuple[str, ...]) -> tuple[Friction, ...]:
-    path: KeyPath = ("friction",)
-    section = r.mapping(path, value, optional=joint_names)
-    if section is None:
-        return ()
     out = []
-    for jname, spec in section.items():
-        if jname not in joint_names:
-            continue  # already reported as unknown key
-        fpath = path + (jname,)
+    for jname, fpath, spec in _per_joint(r, "friction", value, joint_names):
         spec = r.mapping(fpath, spec, optional=("viscous", "coulomb", "smoothing_velocity"))
         if spec is None:
             continue
@@ -238,15 +241,8 @@ def read_friction(r: Reader, value: Any, joint_names: tuple[str, ...]) -> tuple[
 def read_actuators(r: Reader, value: Any, joint_names: tuple[str, ...]) -> tuple[Actuator, ...]:
     """``actuators:`` of a serial model: {joint: {rotor_inertia, gear_ratio, torque_constant, peak_current,
     continuous_current}}, all >= 0 (the gear ratio > 0)."""
-    path: KeyPath = ("actuators",)
-    section = r.mapping(path, value, optional=joint_names)
-    if section is None:
-        return ()
     out = []
-    for jname, spec in section.items():
-        if jname not in joint_names:
-            continue  # already reported as an unknown key
-        apath = path + (jname,)
+    for jname, apath, spec in _per_joint(r, "actuators", value, joint_names):
         spec = r.mapping(apath, spec, optional=ACTUATOR_KEYS + ("gyroscopic",))
         if spec is None:
             continue
