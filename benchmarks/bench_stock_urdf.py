@@ -41,6 +41,8 @@ STOCK = [
     ("xarm7", "xarm_description/urdf/xarm7.urdf", None, {}),
     ("tiago arm", "tiago_description/robots/tiago.urdf", "arm_tool_link", {}),
     ("tiago pro arm", "tiago_pro_description/robots/tiago_pro.urdf", "arm_left_tool_link", {}),
+    # issue 29's second hang: 10 joints from the torso to the left hand, the right elbow as the issue locked it
+    ("icub arm", "icub_description/robots/icub_reduced.urdf", "l_hand_dh_frame", {"r_elbow": 1.0}),
 ]
 
 KINEMATICS = ("fk", "jacobian")

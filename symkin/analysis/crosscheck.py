@@ -96,8 +96,8 @@ def _reduced(coupling: np.ndarray, value: np.ndarray) -> tuple[np.ndarray, np.nd
     return coupling.T @ value @ coupling, np.abs(coupling).T @ np.abs(value) @ np.abs(coupling)
 
 
-def _sources(path: Path, reference_urdf: Path | None, urdf: Mapping[str, Any]) -> tuple[Any, str, Any]:
-    """(model, reference URDF text, reduction) for the model file ``path``."""
+def _sources(path: Path, reference_urdf: Path | None, urdf: Mapping[str, Any]) -> tuple[Any, str, Any, bool]:
+    """(model, reference URDF text, reduction, whether the file is MJCF) for the model file ``path``."""
     from symkin.model import load_model
     from symkin.model.build import build_model
     from symkin.model.mjcf_source import read_mjcf_document
@@ -130,7 +130,7 @@ def _sources(path: Path, reference_urdf: Path | None, urdf: Mapping[str, Any]) -
                                                        "a parallel mechanism has closed loops",
                                         "cross-check a serial model (the parallel models' tests use their own "
                                         "closed-loop references)")])
-    return model, text, reduction
+    return model, text, reduction, kind == MJCF
 
 
 def _link_frame(pin: Any, reference: Any, link: str) -> int:
@@ -144,12 +144,6 @@ def _coupling(model: Any) -> np.ndarray:
     if A is None:
         return np.eye(len(model.joints))
     return np.array(A.xreplace(model.parameter_values), dtype=float)
-
-
-def _is_mjcf(path: Path) -> bool:
-    from symkin.model.source_kind import MJCF, source_kind
-
-    return source_kind(path) == MJCF
 
 
 def _states(model: Any, samples: int, seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -184,7 +178,7 @@ def crosscheck(path: str | Path, *, reference_urdf: str | Path | None = None, sa
     pin = _pinocchio()
     path = Path(path)
     reference_path = Path(reference_urdf) if reference_urdf is not None else None
-    model, text, reduction = _sources(path, reference_path, urdf or {})
+    model, text, reduction, mjcf = _sources(path, reference_path, urdf or {})
     with_c = bool(model.bodies) and (len(model.joints) <= CORIOLIS_MATRIX_JOINTS if coriolis_matrix is None
                                      else coriolis_matrix)
     weighted = any(g != 0 for g in model.gravity)  # without gravity G is identically zero and not emitted
@@ -265,7 +259,7 @@ def crosscheck(path: str | Path, *, reference_urdf: str | Path | None = None, sa
                 for name, (expected, *scales) in want.items():
                     error = _normwise(_ours(got, name, k, frame_links, QD[k]), expected, *scales)
                     errors[name + suffix] = max(errors.get(name + suffix, 0.0), error)
-    if model.bodies and _is_mjcf(path):
+    if model.bodies and mjcf:
         from symkin.analysis.mujoco_reference import mujoco_errors
 
         say("comparing M and V + G with MuJoCo on the MJCF file")
@@ -284,7 +278,7 @@ def crosscheck(path: str | Path, *, reference_urdf: str | Path | None = None, sa
     if not model.bodies:
         comparisons.append(Comparison("dynamics", 0.0, "skipped: the model declares no bodies"))
     reference_name = f"Pinocchio {pin.__version__}"
-    if model.bodies and _is_mjcf(path):
+    if model.bodies and mjcf:
         import mujoco
 
         reference_name += f" and MuJoCo {mujoco.__version__}"

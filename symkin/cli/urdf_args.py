@@ -43,22 +43,25 @@ def add_urdf_arguments(p: argparse.ArgumentParser) -> None:
                         "do (default: refuse them; the model key 'allow_nonphysical: true' does the same)")
 
 
+#: (options, the file kinds they apply to, those kinds in words, a suffix of such a file).
+_OPTION_KINDS = ((("--tip", "--base", "--lock", "--snap-angles", "--branch"), {URDF, XACRO, MJCF},
+                  "robot files (URDF, xacro, MJCF)", ".urdf"),
+                 (("--xacro-arg", "--xacro-package"), {XACRO}, "xacro files", ".xacro"))
+
+
 def urdf_options(args: argparse.Namespace, path: str) -> dict[str, Any]:
     """Keyword arguments of :func:`symkin.model.load_model` for the model file ``path``.
 
     Raises:
-        ModelError: URDF options given with no URDF among the models, or a malformed --lock.
+        ModelError: robot-file (or xacro) options given with no such file among the models, or a malformed
+            --lock.
     """
-    given = [option for option, value in (("--tip", args.tip), ("--base", args.base), ("--lock", args.lock),
-                                          ("--snap-angles", args.snap_angles), ("--branch", args.branch)) if value]
-    if given and not any(source_kind(model) in (URDF, XACRO, MJCF) for model in args.models):
-        raise ModelError([Problem("<command line>", None, None, given[0], f"{given[0]} applies to URDF files only",
-                                  f"drop {given[0]}, or pass a .urdf file")])
-    xacro = [option for option, value in (("--xacro-arg", args.xacro_arg), ("--xacro-package", args.xacro_package))
-             if value]
-    if xacro and not any(source_kind(model) == XACRO for model in args.models):
-        raise ModelError([Problem("<command line>", None, None, xacro[0], f"{xacro[0]} applies to xacro files only",
-                                  f"drop {xacro[0]}, or pass a .xacro file")])
+    kinds = {source_kind(model) for model in args.models}
+    for names, accepting, what, suffix in _OPTION_KINDS:
+        given = [option for option in names if getattr(args, option[2:].replace("-", "_"))]
+        if given and not kinds & accepting:
+            raise ModelError([Problem("<command line>", None, None, given[0], f"{given[0]} applies to {what} only",
+                                      f"drop {given[0]}, or pass a {suffix} file")])
     kind = source_kind(path)
     if kind not in (URDF, XACRO, MJCF):
         return {"allow_nonphysical": args.allow_nonphysical}

@@ -67,8 +67,8 @@ def load_model(path: str | Path, tip: str | None = None, *, base: str | None = N
     given = [name for name, value in (("tip", tip), ("base", base), ("locks", locks), ("snap_angles", snap_angles),
                                       ("branches", branches)) if value]
     if given:
-        raise ModelError([Problem(str(path), None, None, "", f"{given[0]} applies to URDF files only",
-                                  f"drop {given[0]}, or pass a .urdf file")])
+        raise ModelError([Problem(str(path), None, None, "", f"{given[0]} applies to robot files (URDF, xacro, "
+                                  "MJCF) only", f"drop {given[0]}, or pass a .urdf file")])
     return build_model(read_document(path), Path(path).stem, allow_nonphysical)
 
 

@@ -58,10 +58,11 @@ def read_mjcf_document(path: str | Path, **urdf: Any) -> tuple[Document, str]:
     file = str(path)
     model = _compile(Path(path))
     lines = _element_lines(Path(path))
-    generated, unmoving = _urdf(model, file, lines)
+    couplings = _joint_couplings(model)
+    generated, unmoving = _urdf(model, file, lines, couplings)
     document = read_generated_urdf(generated, file, **urdf)
     _refuse_unmoving_on_chain(document, model, unmoving, file)
-    _drives(document, model, lines, file)
+    _drives(document, model, lines, couplings)
     _gravity(document, model)
     document.data["description"] = document.data["description"].replace("from the URDF", "from the MJCF", 1)
     return document, generated.text
@@ -142,7 +143,7 @@ def _origin(T: np.ndarray) -> str:
     return f'<origin xyz="{xyz}" rpy="{rpy}"/>'
 
 
-def _urdf(model: Any, file: str, lines: dict[tuple[str, str], tuple[int, int]]
+def _urdf(model: Any, file: str, lines: dict[tuple[str, str], tuple[int, int]], couplings: dict[int, str]
           ) -> tuple[GeneratedUrdf, list[tuple[int, str, int, tuple[int, int] | None]]]:
     """The compiled body tree as URDF text, one element per line, with each line's source place; and the
     free and ball joints (body, name, type, place), which the text leaves at their reference pose."""
@@ -156,7 +157,6 @@ def _urdf(model: Any, file: str, lines: dict[tuple[str, str], tuple[int, int]]
         out.append(text)
         where.append((file, *place) if place else (file, None, None))
 
-    couplings = _joint_couplings(model)
     bodies = [_name(model, mujoco.mjtObj.mjOBJ_BODY, b, "body") for b in range(model.nbody)]
     bodies[0] = "world"
     offset = {0: np.eye(4)}  # body -> the transform from its last link frame to its MuJoCo frame
@@ -303,7 +303,8 @@ def _effort(model: Any, j: int) -> float:
     return effort
 
 
-def _drives(document: Document, model: Any, lines: dict[tuple[str, str], tuple[int, int]], file: str) -> None:
+def _drives(document: Document, model: Any, lines: dict[tuple[str, str], tuple[int, int]],
+            couplings: dict[int, str]) -> None:
     """Armature of the chain's joints as their drives' reflected inertia; stiffness noted."""
     import mujoco
 
@@ -325,7 +326,6 @@ def _drives(document: Document, model: Any, lines: dict[tuple[str, str], tuple[i
         if float(model.jnt_stiffness[j]):
             notes.append(f"joint '{source}' has a spring (stiffness {float(model.jnt_stiffness[j])!r}), which "
                          "symkin does not model: its force is not in the dynamics")
-    couplings = _joint_couplings(model)
     for e in range(model.neq):
         if not model.eq_active0[e] or (model.eq_type[e] == mujoco.mjtEq.mjEQ_JOINT
                                        and int(model.eq_obj1id[e]) in couplings):

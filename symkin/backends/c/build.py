@@ -34,7 +34,6 @@ import shutil
 import signal
 import subprocess
 import sys
-import tempfile
 import threading
 import time
 from collections.abc import Iterator
@@ -218,9 +217,14 @@ def _compile(command: list[str], source: Path, header: Path, target: Path, units
              jobs: int) -> None:
     """Compile each unit into an object, link them into a temporary file next to ``target``, then
     rename it into place (so no reader ever sees a half-written library)."""
-    scratch = Path(tempfile.mkdtemp(prefix=target.name + ".", dir=target.parent))
+    # named before it exists, so that an interrupt at any point (the progress line has just been printed,
+    # Ctrl-C often lands here) leaves nothing: the finally block knows the name even if mkdir was the last step
+    # (the build lock makes this process and thread the only builder of ``target``)
+    scratch = target.parent / f"{target.name}.{os.getpid()}-{threading.get_ident()}.build"
     compilers = _Compilers()
     try:
+        shutil.rmtree(scratch, ignore_errors=True)  # left by a killed process that had this pid
+        scratch.mkdir()
         objects = [str(scratch / f"part{k}.o") for k in range(len(units))]
         compile_base = command + list(BASE_FLAGS) + ["-I", str(header.parent), "-c"]
         with ThreadPoolExecutor(max_workers=jobs) as pool:

@@ -2,7 +2,7 @@
 
 :func:`symkin.backends.c.build.shared_library` keeps every library it compiles, named
 ``lib<model>-<key>.so`` after the hash of its source, header, compiler and flags, beside a lock
-file ``<library>.lock`` and, while a build runs, a scratch directory ``<library>.<random>``.
+file ``<library>.lock`` and, while a build runs, a scratch directory ``<library>.<pid>-<thread>.build``.
 Regenerating a model or changing a flag adds a library; nothing removes the old ones, so the
 cache grows until it is cleared.  A load touches its library's modification time, so that
 "last used" is the time since a program last loaded it.
