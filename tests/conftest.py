@@ -122,11 +122,42 @@ def home_joints(model: Model) -> np.ndarray:
     return np.array(_home_joints(model))
 
 
+@functools.lru_cache(maxsize=None)
+def _home_passive(model: Model) -> tuple[float, ...]:
+    """The passive joints that close the legs at the home pose: Gauss-Newton on the un-optimized closure from 0."""
+    derivation = Derivation(model)
+    closure, jacobians = derivation["closure"], derivation["closure_jacobians"]
+    symbols = [list(i.symbols) for i in closure.vector_inputs]
+    phi = lambdify_spec(closure, symbols, "numpy", model.parameter_values)
+    phi_s = lambdify_spec(jacobians, symbols, "numpy", model.parameter_values)
+    q = list(home_joints(model))
+    p = [float(e.xreplace(model.parameter_values)) for e in model.parallel.home]
+    s = np.zeros(len(symbols[1]))
+    rows = len(phi(q, list(s), p))
+    for _ in range(50):
+        values = np.array(phi(q, list(s), p), dtype=float)
+        flat = np.array(phi_s(q, list(s), p), dtype=float)
+        block = flat[rows * len(p) + rows * len(q):].reshape(rows, len(s))  # Phi_p, Phi_q, then Phi_s
+        step = np.linalg.lstsq(block, -values, rcond=None)[0]
+        s = s + step
+        if np.max(np.abs(step)) < 1e-14:
+            break
+    angles = np.array([unit == "rad" for unit in closure.vector_inputs[1].units])
+    s = np.where(angles, np.angle(np.exp(1j * s)), s)  # an assembly's angles, within (-pi, pi]
+    return tuple(float(v) for v in s)
+
+
+def home_passive(model: Model) -> np.ndarray:
+    """The passive joint variables s of a parallel mechanism assembled at its home pose."""
+    return np.array(_home_passive(model))
+
+
 def random_inputs(model: Model, spec: FunctionSpec, rng: np.random.Generator, size: int) -> list[np.ndarray]:
     """Random values of every vector input of ``spec``: q as :func:`random_q` (for a parallel
     mechanism within 0.3 of its joints at the home pose, near assembled states), the passive joints s
-    within +-0.5 rad (the closure's orientation rows are 2 tan(angle/2) axis of the orientation
-    error, which grows without bound - with its rounding error - towards half turns), the platform
+    within +-0.5 rad of those that close the legs at the home pose (the closure's orientation rows are
+    2 tan(angle/2) axis of the orientation error, which grows without bound - with its rounding error -
+    towards half turns, where a pantograph's legs would be at random passive joints), the platform
     pose p within 2 cm / 0.1 rad of the model's home pose."""
     values = []
     for vector in spec.vector_inputs:
@@ -138,6 +169,8 @@ def random_inputs(model: Model, spec: FunctionSpec, rng: np.random.Generator, si
             home = np.array([float(e.xreplace(model.parameter_values)) for e in model.parallel.home])
             spread = np.where([u == "m" for u in vector.units], 0.02, 0.1)
             values.append(home + rng.uniform(-1, 1, (size, len(home))) * spread)
+        elif vector.name == "s":
+            values.append(home_passive(model) + rng.uniform(-0.5, 0.5, (size, len(vector.symbols))))
         else:
             values.append(rng.uniform(-0.5, 0.5, (size, len(vector.symbols))))
     return values

@@ -86,3 +86,6 @@ DELTA_SCALE = 0.32
 #: The scale of the example Stewart platform's lengths (metres): legs of at most 0.32 m (their stroke
 #: in models/stewart.yaml), joint radii below 0.2 m; 0.5 m bounds both.
 STEWART_SCALE = 0.5
+
+#: The scale of the example pantograph's positions (metres): d/2 + l + L = 0.179 m (models/pantograph.yaml).
+PANTOGRAPH_SCALE = 0.2

@@ -48,12 +48,13 @@ extern "C" {
  *
  * Per leg (seed sec. 3.2, step 3), the equation |B_i(p) - C_i(q_i)| = L_i(q_i) solved in
  * closed form: q = atan2(gamma, beta) + sigma atan2(sqrt(beta^2 + gamma^2 - alpha^2),
- * -alpha) for a revolute actuator (a robust form of seed eqs. 8.18-8.20), the root of a
- * quadratic for a prismatic one. Branches: leg1: theta1 on the negative branch; leg2:
- * theta2 on the negative branch; leg3: theta3 on the negative branch (positive: the
- * platform joint B_i lies at a positive rotation about the actuator axis from the elbow
- * C_i, or the larger root of a prismatic actuator; negative: the other solution). Where
- * a leg's margin is negative p is out of its reach and its q is NaN.
+ * -alpha), in (-pi, pi] as one atan2 of its sine and cosine, for a revolute actuator (a
+ * robust form of seed eqs. 8.18-8.20), the root of a quadratic for a prismatic one.
+ * Branches: leg1: theta1 on the negative branch; leg2: theta2 on the negative branch;
+ * leg3: theta3 on the negative branch (positive: the platform joint B_i lies at a
+ * positive rotation about the actuator axis from the elbow C_i, or the larger root of a
+ * prismatic actuator; negative: the other solution). Where a leg's margin is negative p
+ * is out of its reach and its q is NaN.
  *
  * Inputs:
  *   p[3]: task coordinates of the platform (TCP): x [m], y [m], z [m].
@@ -67,7 +68,7 @@ extern "C" {
  * Outputs:
  *   joints[3]: 3; actuated joint variables q.
  *   margin[3]: 3; per leg: >= 0 iff the leg reaches p (the radicand of its solution).
- * Cost: 75 operations.
+ * Cost: 88 operations.
  */
 void delta_ik(const double *p, double r_base, double r_tcp, double a, double b, double *joints, double *margin);
 

@@ -82,12 +82,13 @@
    *
    * Per leg (seed sec. 3.2, step 3), the equation |B_i(p) - C_i(q_i)| = L_i(q_i) solved
    * in closed form: q = atan2(gamma, beta) + sigma atan2(sqrt(beta^2 + gamma^2 -
-   * alpha^2), -alpha) for a revolute actuator (a robust form of seed eqs. 8.18-8.20), the
-   * root of a quadratic for a prismatic one. Branches: leg1: theta1 on the negative
-   * branch; leg2: theta2 on the negative branch; leg3: theta3 on the negative branch
-   * (positive: the platform joint B_i lies at a positive rotation about the actuator axis
-   * from the elbow C_i, or the larger root of a prismatic actuator; negative: the other
-   * solution). Where a leg's margin is negative p is out of its reach and its q is NaN.
+   * alpha^2), -alpha), in (-pi, pi] as one atan2 of its sine and cosine, for a revolute
+   * actuator (a robust form of seed eqs. 8.18-8.20), the root of a quadratic for a
+   * prismatic one. Branches: leg1: theta1 on the negative branch; leg2: theta2 on the
+   * negative branch; leg3: theta3 on the negative branch (positive: the platform joint
+   * B_i lies at a positive rotation about the actuator axis from the elbow C_i, or the
+   * larger root of a prismatic actuator; negative: the other solution). Where a leg's
+   * margin is negative p is out of its reach and its q is NaN.
    *
    * @param {number[]} p task coordinates of the platform (TCP), 3 numbers: x [m], y [m], z
    *     [m].
@@ -111,33 +112,40 @@
     const x = p[0];
     const y = p[1];
     const z = p[2];
-    const _x0 = -a*z;
-    const _x1 = a*r_tcp;
-    const _x2 = a*x;
-    const _x3 = -(_x1 + _x2 - a*r_base);
-    const _x4 = a*a;
-    const _x5 = z*z;
-    const _x6 = _x4*_x5;
-    const _x7 = r_tcp*x;
-    const _x8 = r_base*x;
-    const _x9 = 0.5*_x4 + 0.5*_x5 + 0.5*r_base*r_base + 0.5*r_tcp*r_tcp + 0.5*x*x + 0.5*y*y - 0.5*b*b - r_base*r_tcp;
-    const _x10 = _x7 + _x9 - _x8;
-    const _x11 = _x6 + _x3*_x3 - _x10*_x10;
-    const _x12 = 0.8660254037844386*y;
-    const _x13 = _x12*a;
-    const _x14 = 0.5*_x2 - _x1 + a*r_base;
-    const _x15 = _x14 - _x13;
-    const _x16 = _x12*r_tcp;
-    const _x17 = _x12*r_base;
-    const _x18 = _x9 + 0.5*_x8 - 0.5*_x7;
-    const _x19 = _x16 + _x18 - _x17;
-    const _x20 = _x6 + _x15*_x15 - _x19*_x19;
-    const _x21 = _x13 + _x14;
-    const _x22 = _x17 + _x18 - _x16;
-    const _x23 = _x6 + _x21*_x21 - _x22*_x22;
+    const _x0 = r_tcp*x;
+    const _x1 = r_base*x;
+    const _x2 = a*a;
+    const _x3 = z*z;
+    const _x4 = 0.5*_x2 + 0.5*_x3 + 0.5*r_base*r_base + 0.5*r_tcp*r_tcp + 0.5*x*x + 0.5*y*y - 0.5*b*b - r_base*r_tcp;
+    const _x5 = _x0 + _x4 - _x1;
+    const _x6 = a*z;
+    const _x7 = a*x;
+    const _x8 = a*r_tcp;
+    const _x9 = a*r_base;
+    const _x10 = _x8 - _x9;
+    const _x11 = _x10 + _x7;
+    const _x12 = _x2*_x3;
+    const _x13 = -_x11;
+    const _x14 = _x12 + _x13*_x13 - _x5*_x5;
+    const _x15 = Math.sqrt(_x14);
+    const _x16 = 0.8660254037844386*y;
+    const _x17 = _x16*r_tcp;
+    const _x18 = _x16*r_base;
+    const _x19 = _x4 + 0.5*_x1 - 0.5*_x0;
+    const _x20 = _x17 + _x19 - _x18;
+    const _x21 = 0.5*_x7;
+    const _x22 = _x16*a;
+    const _x23 = _x21 + _x9 - _x8;
+    const _x24 = _x23 - _x22;
+    const _x25 = _x12 + _x24*_x24 - _x20*_x20;
+    const _x26 = Math.sqrt(_x25);
+    const _x27 = _x18 + _x19 - _x17;
+    const _x28 = _x22 + _x23;
+    const _x29 = _x12 + _x28*_x28 - _x27*_x27;
+    const _x30 = Math.sqrt(_x29);
     return {
-      joints: [-Math.atan2(Math.sqrt(_x11), -_x10) + Math.atan2(_x0, _x3), -Math.atan2(Math.sqrt(_x20), -_x19) + Math.atan2(_x0, _x15), -Math.atan2(Math.sqrt(_x23), -_x22) + Math.atan2(_x0, _x21)],
-      margin: [_x11, _x20, _x23],
+      joints: [Math.atan2(_x11*_x15 + _x5*_x6, -_x13*_x5 - _x15*_x6), Math.atan2(_x20*_x6 + _x26*(_x10 + _x22 - _x21), -_x20*_x24 - _x26*_x6), Math.atan2(_x27*_x6 - _x28*_x30, -_x27*_x28 - _x30*_x6)],
+      margin: [_x14, _x25, _x29],
     };
   }
 

@@ -115,13 +115,13 @@ def ik(p, *, r_base=0.07, r_tcp=0.025, a=0.1, b=0.15):
 
     Per leg (seed sec. 3.2, step 3), the equation |B_i(p) - C_i(q_i)| = L_i(q_i) solved
     in closed form: q = atan2(gamma, beta) + sigma atan2(sqrt(beta^2 + gamma^2 -
-    alpha^2), -alpha) for a revolute actuator (a robust form of seed eqs. 8.18-8.20),
-    the root of a quadratic for a prismatic one. Branches: leg1: theta1 on the negative
-    branch; leg2: theta2 on the negative branch; leg3: theta3 on the negative branch
-    (positive: the platform joint B_i lies at a positive rotation about the actuator
-    axis from the elbow C_i, or the larger root of a prismatic actuator; negative: the
-    other solution). Where a leg's margin is negative p is out of its reach and its q is
-    NaN.
+    alpha^2), -alpha), in (-pi, pi] as one atan2 of its sine and cosine, for a revolute
+    actuator (a robust form of seed eqs. 8.18-8.20), the root of a quadratic for a
+    prismatic one. Branches: leg1: theta1 on the negative branch; leg2: theta2 on the
+    negative branch; leg3: theta3 on the negative branch (positive: the platform joint
+    B_i lies at a positive rotation about the actuator axis from the elbow C_i, or the
+    larger root of a prismatic actuator; negative: the other solution). Where a leg's
+    margin is negative p is out of its reach and its q is NaN.
 
     Args:
         p: task coordinates of the platform (TCP), shape (..., 3): x [m], y [m], z [m].
@@ -147,38 +147,45 @@ def ik(p, *, r_base=0.07, r_tcp=0.025, a=0.1, b=0.15):
     x = p[..., 0]
     y = p[..., 1]
     z = p[..., 2]
-    _x0 = -a*z
-    _x1 = a*r_tcp
-    _x2 = a*x
-    _x3 = -(_x1 + _x2 - a*r_base)
-    _x4 = a*a
-    _x5 = z*z
-    _x6 = _x4*_x5
-    _x7 = r_tcp*x
-    _x8 = r_base*x
-    _x9 = 0.5*_x4 + 0.5*_x5 + 0.5*r_base*r_base + 0.5*r_tcp*r_tcp + 0.5*x*x + 0.5*y*y - 0.5*b*b - r_base*r_tcp
-    _x10 = _x7 + _x9 - _x8
-    _x11 = _x6 + _x3*_x3 - _x10*_x10
-    _x12 = 0.8660254037844386*y
-    _x13 = _x12*a
-    _x14 = 0.5*_x2 - _x1 + a*r_base
-    _x15 = _x14 - _x13
-    _x16 = _x12*r_tcp
-    _x17 = _x12*r_base
-    _x18 = _x9 + 0.5*_x8 - 0.5*_x7
-    _x19 = _x16 + _x18 - _x17
-    _x20 = _x6 + _x15*_x15 - _x19*_x19
-    _x21 = _x13 + _x14
-    _x22 = _x17 + _x18 - _x16
-    _x23 = _x6 + _x21*_x21 - _x22*_x22
+    _x0 = r_tcp*x
+    _x1 = r_base*x
+    _x2 = a*a
+    _x3 = z*z
+    _x4 = 0.5*_x2 + 0.5*_x3 + 0.5*r_base*r_base + 0.5*r_tcp*r_tcp + 0.5*x*x + 0.5*y*y - 0.5*b*b - r_base*r_tcp
+    _x5 = _x0 + _x4 - _x1
+    _x6 = a*z
+    _x7 = a*x
+    _x8 = a*r_tcp
+    _x9 = a*r_base
+    _x10 = _x8 - _x9
+    _x11 = _x10 + _x7
+    _x12 = _x2*_x3
+    _x13 = -_x11
+    _x14 = _x12 + _x13*_x13 - _x5*_x5
+    _x15 = numpy.sqrt(_x14)
+    _x16 = 0.8660254037844386*y
+    _x17 = _x16*r_tcp
+    _x18 = _x16*r_base
+    _x19 = _x4 + 0.5*_x1 - 0.5*_x0
+    _x20 = _x17 + _x19 - _x18
+    _x21 = 0.5*_x7
+    _x22 = _x16*a
+    _x23 = _x21 + _x9 - _x8
+    _x24 = _x23 - _x22
+    _x25 = _x12 + _x24*_x24 - _x20*_x20
+    _x26 = numpy.sqrt(_x25)
+    _x27 = _x18 + _x19 - _x17
+    _x28 = _x22 + _x23
+    _x29 = _x12 + _x28*_x28 - _x27*_x27
+    _x30 = numpy.sqrt(_x29)
     _out_joints = numpy.zeros(batch + (3,))
-    _out_joints[..., 0] = -numpy.arctan2(numpy.sqrt(_x11), -_x10) + numpy.arctan2(_x0, _x3)
-    _out_joints[..., 1] = -numpy.arctan2(numpy.sqrt(_x20), -_x19) + numpy.arctan2(_x0, _x15)
-    _out_joints[..., 2] = -numpy.arctan2(numpy.sqrt(_x23), -_x22) + numpy.arctan2(_x0, _x21)
+    _out_joints[..., 0] = numpy.arctan2(_x11*_x15 + _x5*_x6, -_x13*_x5 - _x15*_x6)
+    _out_joints[..., 1] = numpy.arctan2(_x20*_x6 + _x26*(_x10 + _x22 - _x21), -_x20*_x24 - _x26*_x6)
+    _out_joints[..., 2] = numpy.arctan2(_x27*_x6 - _x28*_x30, -_x27*_x28 - _x30*_x6)
     _out_margin = numpy.zeros(batch + (3,))
-    _out_margin[..., 0] = _x11
-    _out_margin[..., 1] = _x20
-    _out_margin[..., 2] = _x23
+    _out_margin[..., 0] = _x14
+    _out_margin[..., 1] = _x25
+    _out_margin[..., 2] = _x29
     return IkResult(_out_joints, _out_margin)
 
 

@@ -80,13 +80,14 @@
    *
    * Per leg (seed sec. 3.2, step 3), the equation |B_i(p) - C_i(q_i)| = L_i(q_i) solved
    * in closed form: q = atan2(gamma, beta) + sigma atan2(sqrt(beta^2 + gamma^2 -
-   * alpha^2), -alpha) for a revolute actuator (a robust form of seed eqs. 8.18-8.20), the
-   * root of a quadratic for a prismatic one. Branches: leg1: l1 on the positive branch;
-   * leg2: l2 on the positive branch; leg3: l3 on the positive branch; leg4: l4 on the
-   * positive branch; leg5: l5 on the positive branch; leg6: l6 on the positive branch
-   * (positive: the platform joint B_i lies at a positive rotation about the actuator axis
-   * from the elbow C_i, or the larger root of a prismatic actuator; negative: the other
-   * solution). Where a leg's margin is negative p is out of its reach and its q is NaN.
+   * alpha^2), -alpha), in (-pi, pi] as one atan2 of its sine and cosine, for a revolute
+   * actuator (a robust form of seed eqs. 8.18-8.20), the root of a quadratic for a
+   * prismatic one. Branches: leg1: l1 on the positive branch; leg2: l2 on the positive
+   * branch; leg3: l3 on the positive branch; leg4: l4 on the positive branch; leg5: l5 on
+   * the positive branch; leg6: l6 on the positive branch (positive: the platform joint
+   * B_i lies at a positive rotation about the actuator axis from the elbow C_i, or the
+   * larger root of a prismatic actuator; negative: the other solution). Where a leg's
+   * margin is negative p is out of its reach and its q is NaN.
    *
    * @param {number[]} p task coordinates of the platform (TCP), 6 numbers: x [m], y [m], z
    *     [m], roll [rad], pitch [rad], yaw [rad].

@@ -28,8 +28,11 @@ class InverseKinematics(Protocol):
         branches: B, the number of solution branches returned per point.
     """
 
-    dimension: int
-    branches: int
+    @property
+    def dimension(self) -> int: ...
+
+    @property
+    def branches(self) -> int: ...
 
     def solve(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Solutions of points (N, d): joint coordinates (N, B, n) and validity (N, B).

@@ -137,11 +137,14 @@ class ParallelInverse(_GeneratedInverse):
         model: the loaded parallel model (with ``ik`` and ``fk``).
         size: a length of the mechanism (m) that scales the round-trip tolerance.
         passive_limits: the declared passive-joint limits, None if there are none.
+        dimension: the number of task coordinates, all positions.
     """
 
     model: GeneratedModel
     size: float
     passive_limits: passive.PassiveLimits | None = None
+    #: the platform's coordinates (3 for a translational platform, 2 for a planar point such as a pantograph's)
+    dimension: int = 3
 
     def in_mode(self, q: np.ndarray, points: np.ndarray) -> np.ndarray:
         """fk(q) returns to the point (the fk branch of the working mode)."""
@@ -165,13 +168,13 @@ def parallel_inverse(model: GeneratedModel) -> ParallelInverse | ConstantOrienta
         return constant_orientation_inverse(model)
     if not mechanism.is_parallel(model):
         raise ValueError(f"{model.name}: not a parallel mechanism")
-    if tuple(mechanism.task_space(model)) != mechanism.POSITION_COMPONENTS:
+    if not set(mechanism.task_space(model)) <= set(mechanism.POSITION_COMPONENTS):
         raise ValueError(f"{model.name}: the platform also rotates (task space {list(mechanism.task_space(model))}): "
                          "its Cartesian workspace is analysed at a constant orientation "
                          "(symkin.analysis.parallel.constant_orientation(model, (roll, pitch, yaw)))")
     _require(model, ("ik", "fk", "jacobian"))
     size = max(float(np.linalg.norm(mechanism.home_pose(model))), 1e-3)
-    return ParallelInverse(model, size, passive.declared_limits(model))
+    return ParallelInverse(model, size, passive.declared_limits(model), len(mechanism.task_space(model)))
 
 
 # --- pose platforms (Stewart-Gough) at a constant orientation --------------------------------

@@ -172,7 +172,8 @@ def plot_time_against_error(panels: dict[str, dict[str, tuple[Sequence[float], S
 def plot_index_slices(occupancy: Occupancy, values: np.ndarray, path: str | Path, *, count: int = 6,
                       title: str = "1/kappa over the workspace", label: str = "1/kappa",
                       axes: Sequence[str] = ("x", "y", "z"), scale: float = 1.0, unit: str = "m") -> Path:
-    """A local index over a 3-D workspace as horizontal slices (the last axis, z, held fixed).
+    """A local index over a 3-D workspace as horizontal slices (the last axis, z, held fixed); over a
+    2-D (planar) workspace as one map.
 
     Args:
         occupancy: the Cartesian grid (:func:`symkin.analysis.grids.index_grid`).
@@ -182,8 +183,11 @@ def plot_index_slices(occupancy: Occupancy, values: np.ndarray, path: str | Path
             (between 10 % and 90 % of their height).
     """
     values = np.asarray(values, dtype=np.float64)
+    planar = values.ndim == 2
+    if planar:
+        values = values[:, :, None]
     if values.ndim != 3:
-        raise ValueError(f"slices need a 3-D grid, got shape {values.shape}")
+        raise ValueError(f"slices need a 2-D or 3-D grid, got shape {values.shape}")
     layers = np.nonzero(np.isfinite(values).any(axis=(0, 1)))[0]
     if layers.size == 0:
         raise ValueError("the workspace is empty: nothing to draw")
@@ -202,7 +206,8 @@ def plot_index_slices(occupancy: Occupancy, values: np.ndarray, path: str | Path
     for ax, layer in zip(grid.ravel(), chosen):
         mesh = ax.pcolormesh(edges[0], edges[1], values[:, :, layer].T, cmap="viridis", vmin=0.0, vmax=vmax,
                              rasterized=True)
-        ax.set_title(f"{axes[2]} = {lower[2] + (layer + 0.5) * cell[2]:.4g} {unit}", fontsize="medium")
+        if not planar:
+            ax.set_title(f"{axes[2]} = {lower[2] + (layer + 0.5) * cell[2]:.4g} {unit}", fontsize="medium")
         ax.set_aspect("equal")
         ax.grid(True, lw=0.3)
     for ax in grid.ravel()[len(chosen):]:

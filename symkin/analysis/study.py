@@ -115,10 +115,12 @@ def study_workspace(model: GeneratedModel, *, samples: int, method: str, seed: i
 
 
 def _cartesian_report(occupancy: Occupancy, values: np.ndarray) -> list[str]:
-    """Volume, boundary and where the (near-)singular cells lie, from the Cartesian grid."""
+    """Area or volume, boundary and where the (near-)singular cells lie, from the Cartesian grid."""
     boundary = occupancy.boundary()
     interior = occupancy.interior()
-    lines = [f"volume: {occupancy.measure()} m^3 (Cartesian grid of {occupancy.cell[0]:.3g} m cells, reachability "
+    d = occupancy.occupied.ndim
+    lines = [f"{'area' if d == 2 else 'volume'}: {occupancy.measure()} m^{d} (Cartesian grid of {occupancy.cell[0]:.3g} m "
+             "cells, reachability "
              f"by ik in the working mode: between interior and all reachable cells, a bracket unless thin parts of the "
              f"workspace fall between cell centres); {int(boundary.sum())} boundary cells"]
     if interior.any():

@@ -5,7 +5,7 @@ to the platform (seed sec. 1.3, "Parallel Mechanisms").  The section is either t
 shorthand (see :mod:`symkin.model.delta`) or a list of legs::
 
     parallel:
-      motion: pose                    # translation (x, y, z) or pose (x, y, z, roll, pitch, yaw)
+      motion: pose                    # or translation, planar, spherical, schoenflies, or a list: [x, y]
       chains:                         # leg types, shared by several legs (optional)
         ups:
           - {name: ub, type: U, axes: [[0, 0, 1], [0, 1, 0]]}
@@ -39,16 +39,30 @@ from symkin.model.reader import (
     positive_limit,
     unit_axis,
 )
-from symkin.model.schema import Leg, LegJoint, LegJointType, Op, Parallel, PlatformMotion, Rotation, Translation, Vec3
+from symkin.model.schema import (
+    PLATFORM_COORDINATES,
+    Leg,
+    LegJoint,
+    LegJointType,
+    Op,
+    Parallel,
+    PlatformMotion,
+    Rotation,
+    Translation,
+    Vec3,
+)
 from symkin.model.yaml_source import KeyPath
 
 PARALLEL_KEYS = ("delta", "motion", "chains", "legs", "fk_branch", "mobility", "home")
 LEG_KEYS = ("name", "chain", "joints", "base", "platform", "ik_branch")
 JOINT_KEYS = ("name", "type", "axis", "axes", "origin", "active", "offset", "limits", "velocity_limit", "effort_limit")
 BRANCHES = {"positive": 1, "negative": -1}
-#: Task coordinates p of a parallel mechanism by platform motion (names of task_space components).
-TASK_COORDINATES = {PlatformMotion.TRANSLATION: ("x", "y", "z"),
-                    PlatformMotion.POSE: ("x", "y", "z", "roll", "pitch", "yaw")}
+#: The platform motions a model may name instead of listing its coordinates.
+MOTION_SHORTHANDS = {PlatformMotion.TRANSLATION.value: ("x", "y", "z"),
+                     PlatformMotion.POSE.value: PLATFORM_COORDINATES,
+                     PlatformMotion.PLANAR.value: ("x", "y", "yaw"),
+                     PlatformMotion.SPHERICAL.value: ("roll", "pitch", "yaw"),
+                     PlatformMotion.SCHOENFLIES.value: ("x", "y", "z", "yaw")}
 #: Names of the vector inputs of parallel functions (besides q): platform pose and passive joints.
 PARALLEL_INPUT_NAMES = ("p", "s")
 
@@ -70,8 +84,9 @@ def build_parallel(r: Reader, section: Any) -> Parallel | None:
         if built is None:
             return None
         delta_legs_built, delta_branch = built
-        home = _home(r, path + ("home",), section.get("home"), PlatformMotion.TRANSLATION)
-        return _checked(r, path, Parallel(PlatformMotion.TRANSLATION, delta_legs_built, delta_branch, identical,
+        translation = MOTION_SHORTHANDS[PlatformMotion.TRANSLATION.value]
+        home = _home(r, path + ("home",), section.get("home"), translation)
+        return _checked(r, path, Parallel(translation, delta_legs_built, delta_branch, identical,
                                           constraints, "delta", home))
     for key in ("motion", "legs"):
         if key not in section:
@@ -102,7 +117,7 @@ def _checked(r: Reader, path: KeyPath, parallel: Parallel) -> Parallel:
         r.fail(path + ("legs",), "two legs have the same name", "give every leg its own name")
     active = sum(1 for leg in parallel.legs for joint in leg.joints if joint.active is not None)
     if active != parallel.task_dof:
-        r.fail(path, f"the platform has {parallel.task_dof} degrees of freedom ({parallel.motion.value}) but the legs "
+        r.fail(path, f"the platform has {parallel.task_dof} degrees of freedom ({', '.join(parallel.coordinates)}) but the legs "
                      f"have {active} active joints",
                f"mark exactly {parallel.task_dof} joints 'active: true' (fully actuated, seed sec. 2.2)")
     if len(parallel.legs) < 2:
@@ -111,11 +126,10 @@ def _checked(r: Reader, path: KeyPath, parallel: Parallel) -> Parallel:
     return parallel
 
 
-def _home(r: Reader, path: KeyPath, value: Any, motion: PlatformMotion) -> tuple[sympy.Expr, ...] | None:
+def _home(r: Reader, path: KeyPath, value: Any, names: tuple[str, ...]) -> tuple[sympy.Expr, ...] | None:
     """The optional home pose: one expression per task coordinate."""
     if value is None:
         return None
-    names = TASK_COORDINATES[motion]
     items = r.sequence(path, value, len(names), f"task coordinates [{', '.join(names)}]")
     if items is None:
         return None
@@ -136,13 +150,24 @@ def _mobility(r: Reader, path: KeyPath, value: Any) -> tuple[int, int]:
     return counts[0], counts[1]
 
 
-def _motion(r: Reader, path: KeyPath, value: Any) -> PlatformMotion | None:
-    for motion in PlatformMotion:
-        if value == motion.value:
-            return motion
-    r.fail(path, f"unknown platform motion {describe(value)}",
-           "use 'translation' (x, y, z; a TPM) or 'pose' (x, y, z, roll, pitch, yaw)")
-    return None
+def _motion(r: Reader, path: KeyPath, value: Any) -> tuple[str, ...] | None:
+    """The platform's coordinates: a shorthand (``translation``, ``planar``, ...) or a list such as [x, y]."""
+    if isinstance(value, str) and value in MOTION_SHORTHANDS:
+        return MOTION_SHORTHANDS[value]
+    fix = (f"write one of {', '.join(MOTION_SHORTHANDS)} or a list of platform coordinates from "
+           f"[{', '.join(PLATFORM_COORDINATES)}] in that order, e.g. [x, y] for a planar point")
+    if not isinstance(value, list):
+        r.fail(path, f"unknown platform motion {describe(value)}", fix)
+        return None
+    if not value or any(not isinstance(v, str) or v not in PLATFORM_COORDINATES for v in value):
+        r.fail(path, f"{describe(value)} is not a list of platform coordinates", fix)
+        return None
+    canonical = tuple(c for c in PLATFORM_COORDINATES if c in value)
+    if tuple(value) != canonical:
+        r.fail(path, "the platform coordinates are repeated or out of order",
+               f"write [{', '.join(canonical)}] (the order of p: x, y, z, roll, pitch, yaw)")
+        return None
+    return canonical
 
 
 def _branch(r: Reader, path: KeyPath, value: Any) -> int | None:
@@ -304,8 +329,8 @@ def parallel_task_space(r: Reader, data: dict[str, Any], parallel: Parallel) -> 
     """The task coordinates follow from the platform motion; a model may not set them otherwise."""
     if "task_space" in data:
         r.fail(("task_space",), "a parallel mechanism's task space follows from 'parallel.motion'",
-               "remove 'task_space:' (translation gives [x, y, z], pose [x, y, z, roll, pitch, yaw])")
-    return TASK_COORDINATES[parallel.motion]
+               "remove 'task_space:' (list the platform's coordinates under 'parallel.motion')")
+    return parallel.coordinates
 
 
 def check_parallel_names(r: Reader, parameters: tuple, derived: tuple, parallel: Parallel) -> None:
@@ -313,7 +338,7 @@ def check_parallel_names(r: Reader, parameters: tuple, derived: tuple, parallel:
     taken: dict[str, str] = {}
     for name in PARALLEL_INPUT_NAMES:
         taken[name] = f"the input vector '{name}' of generated functions"
-    for name in TASK_COORDINATES[parallel.motion]:
+    for name in parallel.coordinates:
         taken[name] = f"the task coordinate '{name}'"
     for leg in parallel.legs:
         for joint in leg.joints:

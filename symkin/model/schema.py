@@ -404,11 +404,43 @@ class ParallelBodies:
     gear_ratio: sympy.Expr = sympy.Integer(1)
 
 
+#: The coordinates a platform may move in, in the order of the task coordinates p: position in the base
+#: frame, then the angles of R = Rz(yaw) Ry(pitch) Rx(roll).  Coordinates a model does not declare stay 0.
+PLATFORM_COORDINATES = ("x", "y", "z", "roll", "pitch", "yaw")
+_POSITION = frozenset(("x", "y", "z"))
+_ANGLES = frozenset(("roll", "pitch", "yaw"))
+
+
 class PlatformMotion(str, Enum):
-    """What the moving platform can do, and hence its task coordinates p."""
+    """The kind of motion of a platform, classified from its declared coordinates."""
 
     TRANSLATION = "translation"  # p = (x, y, z), orientation constant (TPM, seed sec. 2.2.1)
     POSE = "pose"  # p = (x, y, z, roll, pitch, yaw), R = Rz(yaw) Ry(pitch) Rx(roll)
+    PLANAR = "planar"  # p within (x, y, yaw): the platform moves in the plane z = 0 (lambda = 3)
+    SPHERICAL = "spherical"  # p within (roll, pitch, yaw): rotations about the base origin (lambda = 3)
+    SCHOENFLIES = "schoenflies"  # p = (x, y, z, yaw): translations and rotations about the vertical
+    LOWER = "lower mobility"  # any other independent subset (a 5-DoF platform, ...)
+
+    @classmethod
+    def of(cls, coordinates: tuple[str, ...]) -> PlatformMotion:
+        """The kind of a platform moving in ``coordinates`` (names from :data:`PLATFORM_COORDINATES`)."""
+        declared = frozenset(coordinates)
+        if declared == _POSITION:
+            return cls.TRANSLATION
+        if declared == _POSITION | _ANGLES:
+            return cls.POSE
+        if declared <= {"x", "y", "yaw"}:
+            return cls.PLANAR
+        if declared <= _ANGLES:
+            return cls.SPHERICAL
+        if declared == _POSITION | {"yaw"}:
+            return cls.SCHOENFLIES
+        return cls.LOWER
+
+    @property
+    def spatial_factor(self) -> int:
+        """lambda of eq. (8.2): 3 for planar and spherical mechanisms, 6 otherwise (seed sec. 2.2)."""
+        return 3 if self in (PlatformMotion.PLANAR, PlatformMotion.SPHERICAL) else 6
 
 
 @dataclass(frozen=True)
@@ -416,7 +448,8 @@ class Parallel:
     """The structure of a parallel mechanism.
 
     Attributes:
-        motion: translation (3 DoF) or full pose (6 DoF) of the platform.
+        coordinates: the platform's task coordinates p, a subset of :data:`PLATFORM_COORDINATES` in
+            its order (``x, y, z`` for a translational platform).
         legs: the kinematic chains, in order.
         fk_branch: +1 or -1, the root of the closed-form forward kinematics (trilateration).
         identical: identical (idle) conditions declared in addition to the detected ones
@@ -428,7 +461,7 @@ class Parallel:
         bodies: mass properties of the legs and the platform; None for a kinematic model.
     """
 
-    motion: PlatformMotion
+    coordinates: tuple[str, ...]
     legs: tuple[Leg, ...]
     fk_branch: int = -1
     identical: int = 0
@@ -438,8 +471,13 @@ class Parallel:
     bodies: ParallelBodies | None = None
 
     @property
+    def motion(self) -> PlatformMotion:
+        """The kind of the platform's motion (translation, pose, planar, spherical, ...)."""
+        return PlatformMotion.of(self.coordinates)
+
+    @property
     def task_dof(self) -> int:
-        return 3 if self.motion is PlatformMotion.TRANSLATION else 6
+        return len(self.coordinates)
 
 
 @dataclass(frozen=True)

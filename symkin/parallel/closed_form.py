@@ -7,7 +7,14 @@ v = q_i + offset:
 * revolute actuator before the rod (DELTA): C_i runs on a circle, so
   f = alpha + beta cos v + gamma sin v exactly, and
 
-      v = atan2(gamma, beta) + sigma * atan2(sqrt(beta^2 + gamma^2 - alpha^2), -alpha).
+      v = atan2(gamma, beta) + sigma * atan2(sqrt(beta^2 + gamma^2 - alpha^2), -alpha),
+
+  evaluated as one atan2 of the sum's sine and cosine (both scaled by beta^2 + gamma^2 > 0),
+
+      v = atan2(sigma beta sqrt(m) - alpha gamma, -alpha beta - sigma gamma sqrt(m)),   m = beta^2 + gamma^2 - alpha^2,
+
+  so that v lies in (-pi, pi] (the sum of two atan2 spans (-2 pi, 2 pi]: a pantograph's
+  elbow-out arm at 132 deg would come out as -228 deg, outside its joint limits).
 
   This replaces the seed's eqs. (8.18)-(8.20), which are inconsistent (eq. 8.20 has
   theta_1 on both sides, and 8.19 leaves the sign of theta_2 open).  The atan2 form is
@@ -31,6 +38,16 @@ whose solutions are P = S1 + w + t n with
 The two roots are mirror images through the plane of the centres; sigma picks the
 geometrically meaningful one (for the DELTA: the TCP below its elbows), and the margin
 L1^2 - |w|^2 < 0 (no intersection) makes P NaN.
+
+Forward kinematics of a planar point (p = (x, y), the plane z = 0) on two distance legs, as
+the pantograph's handle: the same construction in the plane.  The spheres meet z = 0 in the
+circles of radius^2 r_i^2 = L_i^2 - S_iz^2 about (S_ix, S_iy); with u = S2 - S1 in the plane
+and n = z x u = (-u_y, u_x) its normal in the plane,
+
+    P = S1 + w + t n,    w = (r1^2 - r2^2 + |u|^2) u / (2 |u|^2),    t = sigma sqrt((r1^2 - |w|^2) / |u|^2),
+
+the two assembly modes mirrored through the line of the centres: sigma = +1 puts P to the left
+of S1 -> S2 (a positive turn about z), sigma = -1 to the right.
 """
 
 from __future__ import annotations
@@ -92,7 +109,8 @@ def solve_leg(leg: DistanceLeg) -> Solution:
     if leg.rotation:
         alpha, beta, gamma = trig_coefficients(f_v, v)
         margin = beta**2 + gamma**2 - alpha**2
-        value = sympy.atan2(gamma, beta) + sigma * sympy.atan2(sympy.sqrt(margin), -alpha)
+        root = sympy.sqrt(margin)
+        value = sympy.atan2(sigma * beta * root - alpha * gamma, -alpha * beta - sigma * gamma * root)
     else:
         poly = sympy.Poly(sympy.expand(f_v), v)
         if poly.degree() != 2 or not poly.LC().is_number:
@@ -116,3 +134,16 @@ def trilaterate(legs: tuple[DistanceLeg, ...], sigma: int) -> tuple[sympy.Matrix
     margin = r2[0] - w.dot(w)
     t = sigma * sympy.sqrt(margin / nn)
     return S[0] + w + t * n, margin
+
+
+def intersect_circles(legs: tuple[DistanceLeg, ...], sigma: int) -> tuple[sympy.Matrix, sympy.Expr]:
+    """(x, y) of a planar point on two distance legs and its margin (see the module docstring)."""
+    S = [sympy.Matrix(leg.C) - sympy.Matrix(leg.b) for leg in legs]
+    r2 = [leg.L2 - centre[2] ** 2 for leg, centre in zip(legs, S)]
+    u = sympy.Matrix([S[1][0] - S[0][0], S[1][1] - S[0][1]])
+    n = sympy.Matrix([-u[1], u[0]])
+    uu = u.dot(u)
+    w = (r2[0] - r2[1] + uu) * u / (2 * uu)
+    margin = r2[0] - w.dot(w)
+    t = sigma * sympy.sqrt(margin / uu)
+    return sympy.Matrix(S[0][:2]) + w + t * n, margin

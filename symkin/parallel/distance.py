@@ -17,6 +17,11 @@ B_i lie on a sphere of radius b about C_i.
 A leg qualifies when its last joint is U or S, the joints between the proximal point joint
 and the last one are prismatic (the rod), C_i depends on no passive variable and the leg
 has exactly one actuated variable, before the proximal joint or inside the rod.
+
+In a planar mechanism (every point in planes z = const, seed eq. 8.2 with lambda = 3) a
+revolute joint about the plane's normal z is a point joint of the plane: a rod between two
+of them fixes only the distance between their centres, as the pantograph's distal links do
+(C_i its elbow, B_i the handle).  The equation is the same, with circles for spheres.
 """
 
 from __future__ import annotations
@@ -65,16 +70,32 @@ class DistanceLeg:
         return (d.dot(d) - self.L2) / 2
 
 
-def reduce_leg(leg: Leg, chain: LegChain, platform: Frame) -> DistanceLeg | str:
-    """The distance form of ``leg``, or the reason it has none."""
+def _point_joints(chain: LegChain, planar: bool) -> list[bool]:
+    """Per joint of the leg: does it leave its centre in place whatever the rod's direction (U, S; in a
+    planar mechanism also R about the normal z)?"""
+    out = []
+    first = 0
+    for joint in chain.leg.joints:
+        motions = chain.motions[first:first + len(joint.motions)]
+        first += len(joint.motions)
+        normal = (len(motions) == 1 and motions[0].rotation
+                  and all(sympy.simplify(c) == 0 for c in motions[0].direction[:2]))
+        out.append(joint_kinds.kind(joint.type).point or (planar and normal))
+    return out
+
+
+def reduce_leg(leg: Leg, chain: LegChain, platform: Frame, planar: bool = False) -> DistanceLeg | str:
+    """The distance form of ``leg``, or the reason it has none (``planar``: R joints about z are point joints)."""
     joints = leg.joints
-    if not joint_kinds.kind(joints[-1].type).point:
-        return f"its last joint {joints[-1].name} is a {joints[-1].type.value} joint, not a point joint (U or S)"
+    point = _point_joints(chain, planar)
+    what = "U, S or R about the plane's normal z" if planar else "U or S"
+    if not point[-1]:
+        return f"its last joint {joints[-1].name} is a {joints[-1].type.value} joint, not a point joint ({what})"
     proximal = len(joints) - 2
     while proximal >= 0 and joint_kinds.kind(joints[proximal].type).sliding:
         proximal -= 1
-    if proximal < 0 or not joint_kinds.kind(joints[proximal].type).point:
-        return "no rod of prismatic joints between two point joints (U or S) ends the leg"
+    if proximal < 0 or not point[proximal]:
+        return f"no rod of prismatic joints between two point joints ({what}) ends the leg"
     actuated = [(i, j, j.active) for i, j in enumerate(joints) if j.active is not None]
     if len(actuated) != 1:
         return f"it has {len(actuated)} actuated joints, the distance form needs exactly one"
@@ -97,11 +118,12 @@ def reduce_leg(leg: Leg, chain: LegChain, platform: Frame) -> DistanceLeg | str:
                        sympy.ImmutableMatrix(chain.attachment.p), L2)
 
 
-def distance_legs(chains: tuple[LegChain, ...], platform: Frame) -> tuple[DistanceLeg, ...] | str:
+def distance_legs(chains: tuple[LegChain, ...], platform: Frame, planar: bool = False
+                  ) -> tuple[DistanceLeg, ...] | str:
     """Every leg in distance form, or why one of them has none."""
     out = []
     for chain in chains:
-        reduced = reduce_leg(chain.leg, chain, platform)
+        reduced = reduce_leg(chain.leg, chain, platform, planar)
         if isinstance(reduced, str):
             return f"leg '{chain.leg.name}' has no distance form: {reduced}"
         out.append(reduced)

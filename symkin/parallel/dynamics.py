@@ -78,7 +78,7 @@ TASK_FORCE_UNIT = "N (position rows), N*m (angle rows)"
           mechanism=PARALLEL)
 def _inertia(d: Derivation) -> Inertia:
     structure = d[_structure]
-    return split_inertia(d.model, d[_distance_legs], structure.chains, sympy.Matrix(structure.platform.R))
+    return split_inertia(d.model, d[_distance_legs], structure.chains, structure.platform)
 
 
 @quantity("constraint_hessians", "second derivatives of the leg equations in (q, p)", emitted=False,

@@ -18,7 +18,9 @@ separate accordingly:
       k_p = 1/2 m |v_o|^2 + v_o . R (w_b x h) + 1/2 w_b^T I_o w_b,
 
   so M_p = [[m 1, -R [h]x E_b], [.., E_b^T I_o E_b]] (constant, m 1, for a translational
-  platform);
+  platform); a platform moving in fewer coordinates (planar, spherical, Schoenflies) takes the
+  rows and columns of its own: v_o = J_v pd and w_b = W pd, M_p = m J_v^T J_v + C + C^T + W^T I_o W
+  with C = -J_v^T R [h]x W;
 * u = -g . (sum of mass times centre of mass), the same split.
 
 This is what makes the Lagrangian of the closed chain reducible through the task Jacobian
@@ -34,7 +36,8 @@ import sympy
 
 from symkin.errors import DerivationError
 from symkin.geometry import skew
-from symkin.model.schema import Body, Model, ParallelBodies, PlatformMotion
+from symkin.kinematics.chain import Frame
+from symkin.model.schema import Body, Model, ParallelBodies
 from symkin.parallel.distance import DistanceLeg
 from symkin.parallel.inputs import task_symbols
 from symkin.parallel.legs import LegChain, walk
@@ -59,16 +62,21 @@ class Inertia:
 
 
 def body_angular_velocity_matrix(model: Model) -> sympy.Matrix:
-    """E_b with w_body = R^T w = E_b d(roll, pitch, yaw)/dt for R = Rz(yaw) Ry(pitch) Rx(roll).
+    """W with w_body = R^T w = W pd for R = Rz(yaw) Ry(pitch) Rx(roll): one column per task coordinate.
 
     w = yawd z + pitchd Rz y + rolld Rz Ry x, so R^T w = rolld x + pitchd Rx^T y + yawd Rx^T Ry^T z:
-    E_b = [[1, 0, -sin(pitch)], [0, cos(roll), sin(roll) cos(pitch)], [0, -sin(roll), cos(roll) cos(pitch)]].
+    E_b = [[1, 0, -sin(pitch)], [0, cos(roll), sin(roll) cos(pitch)], [0, -sin(roll), cos(roll) cos(pitch)]]
+    maps d(roll, pitch, yaw)/dt to w_body.  W holds E_b's column for each angle the platform turns by
+    (the others held at 0) and a zero column for each position coordinate.
     """
     values = dict(zip(model.task_space, task_symbols(model)))
-    roll, pitch = values["roll"], values["pitch"]
-    return sympy.Matrix([[1, 0, -sympy.sin(pitch)],
-                         [0, sympy.cos(roll), sympy.sin(roll) * sympy.cos(pitch)],
-                         [0, -sympy.sin(roll), sympy.cos(roll) * sympy.cos(pitch)]])
+    roll, pitch = values.get("roll", sympy.Integer(0)), values.get("pitch", sympy.Integer(0))
+    E_b = sympy.Matrix([[1, 0, -sympy.sin(pitch)],
+                        [0, sympy.cos(roll), sympy.sin(roll) * sympy.cos(pitch)],
+                        [0, -sympy.sin(roll), sympy.cos(roll) * sympy.cos(pitch)]])
+    angles = ("roll", "pitch", "yaw")
+    return sympy.Matrix.hstack(*[E_b[:, angles.index(c)] if c in angles else sympy.zeros(3, 1)
+                                 for c in model.task_space])
 
 
 def _about_origin(body: Body) -> tuple[sympy.Expr, sympy.Matrix, sympy.Matrix]:
@@ -78,7 +86,7 @@ def _about_origin(body: Body) -> tuple[sympy.Expr, sympy.Matrix, sympy.Matrix]:
     return body.mass, body.mass * c, sympy.Matrix(body.inertia) + body.mass * (c.dot(c) * sympy.eye(3) - c * c.T)
 
 
-def _platform(model: Model, bodies: ParallelBodies, legs: tuple[DistanceLeg, ...], platform_R: sympy.Matrix
+def _platform(model: Model, bodies: ParallelBodies, legs: tuple[DistanceLeg, ...], platform: Frame
               ) -> tuple[sympy.ImmutableMatrix, sympy.Expr]:
     """M_p(p) and u_p(p) of the platform body and the rods' shares at the platform joints."""
     parts = [_about_origin(bodies.platform)] if bodies.platform is not None else []
@@ -87,18 +95,14 @@ def _platform(model: Model, bodies: ParallelBodies, legs: tuple[DistanceLeg, ...
     m = sum((part[0] for part in parts), sympy.Integer(0))
     h = sum((part[1] for part in parts), sympy.zeros(3, 1))
     I_o = sum((part[2] for part in parts), sympy.zeros(3, 3))
-    p = task_symbols(model)
+    position, platform_R = sympy.Matrix(platform.p), sympy.Matrix(platform.R)
     g = sympy.Matrix(model.gravity)
-    position = sympy.Matrix(p[:3])
     potential = -g.dot(m * position + platform_R * h)
-    if model.parallel.motion is PlatformMotion.TRANSLATION:  # type: ignore[union-attr]
-        return sympy.ImmutableMatrix(m * sympy.eye(3)), sympy.expand(potential)
-    E_b = body_angular_velocity_matrix(model)
-    coupling = -platform_R * skew(h) * E_b  # -[R h]x E = -R [h]x R^T E
-    rotation = E_b.T * I_o * E_b
-    M = sympy.Matrix.vstack(sympy.Matrix.hstack(m * sympy.eye(3), coupling),
-                            sympy.Matrix.hstack(coupling.T, rotation))
-    return sympy.ImmutableMatrix(M), potential
+    J_v = position.jacobian(task_symbols(model))
+    W = body_angular_velocity_matrix(model)
+    coupling = -J_v.T * platform_R * skew(h) * W  # v_o . R (w_b x h) = -v_o . R [h]x w_b
+    M = m * J_v.T * J_v + coupling + coupling.T + W.T * I_o * W
+    return sympy.ImmutableMatrix(M), sympy.expand(potential) if W.is_zero_matrix else potential
 
 
 def _actuator_side(model: Model, bodies: ParallelBodies, leg: DistanceLeg, chain: LegChain
@@ -137,12 +141,12 @@ def _variables(leg: DistanceLeg, exclude: set[sympy.Symbol]) -> set[sympy.Symbol
 
 
 def split_inertia(model: Model, legs: tuple[DistanceLeg, ...], chains: tuple[LegChain, ...],
-                  platform_R: sympy.Matrix) -> Inertia:
+                  platform: Frame) -> Inertia:
     """The mass distribution of ``model`` (which must declare ``bodies:``) split as in the module docstring."""
     bodies = model.parallel.bodies if model.parallel is not None else None
     if bodies is None:
         raise DerivationError(f"model '{model.name}' declares no bodies, so it has no dynamics; add a 'bodies:' "
                               "section (platform, actuated_link, rod, rotor; see docs/model-format.md)")
     sides = [_actuator_side(model, bodies, leg, chain) for leg, chain in zip(legs, chains)]
-    M_p, u_p = _platform(model, bodies, legs, platform_R)
+    M_p, u_p = _platform(model, bodies, legs, platform)
     return Inertia(tuple(s[0] for s in sides), sum((s[1] for s in sides), sympy.Integer(0)), M_p, u_p)

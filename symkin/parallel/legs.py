@@ -14,7 +14,7 @@ import sympy
 
 from symkin.geometry import rotation_matrix
 from symkin.kinematics.chain import Frame, MovingFrame
-from symkin.model.schema import Leg, Model, Op, PlatformMotion
+from symkin.model.schema import Leg, Model, Op
 from symkin.parallel.inputs import task_symbols
 
 X_AXIS = (sympy.Integer(1), sympy.Integer(0), sympy.Integer(0))
@@ -88,16 +88,18 @@ def walk(leg: Leg, start: MovingFrame | None = None, joints: slice = slice(None)
 def platform_frame(model: Model) -> Frame:
     """base_T_platform(p): the TCP frame at the task coordinates p.
 
-    Translation: (x, y, z) with the base's orientation (a TPM keeps it, seed sec. 2.2.1);
-    pose: R = Rz(yaw) Ry(pitch) Rx(roll), the Z-Y-X convention of the serial task space.
+    Position (x, y, z) and orientation R = Rz(yaw) Ry(pitch) Rx(roll), the Z-Y-X convention of
+    the serial task space, with every coordinate the platform does not move in held at 0: a
+    translational platform keeps the base's orientation (a TPM, seed sec. 2.2.1), a planar one
+    moves in the plane z = 0, a spherical one turns about the base origin.
     """
     assert model.parallel is not None
     values = dict(zip(model.task_space, task_symbols(model)))
-    position = sympy.ImmutableMatrix([values["x"], values["y"], values["z"]])
-    if model.parallel.motion is PlatformMotion.TRANSLATION:
-        return Frame(sympy.ImmutableMatrix(sympy.eye(3)), position)
-    rotation = (rotation_matrix(Z_AXIS, values["yaw"]) * rotation_matrix(Y_AXIS, values["pitch"])
-                * rotation_matrix(X_AXIS, values["roll"]))
+    position = sympy.ImmutableMatrix([values.get(c, sympy.Integer(0)) for c in ("x", "y", "z")])
+    rotation = sympy.eye(3)
+    for axis, angle in ((Z_AXIS, "yaw"), (Y_AXIS, "pitch"), (X_AXIS, "roll")):
+        if angle in values:
+            rotation = rotation * rotation_matrix(axis, values[angle])
     return Frame(sympy.ImmutableMatrix(rotation), position)
 
 

@@ -144,7 +144,8 @@ def _closure_jacobians(d: Derivation) -> FunctionSpec:
 @quantity("distance_legs", "legs reduced to one distance equation each", emitted=False, mechanism=PARALLEL)
 def _distance_legs(d: Derivation) -> tuple[distance.DistanceLeg, ...]:
     structure: ParallelStructure = d[_structure]
-    legs = distance.distance_legs(structure.chains, structure.platform)
+    planar = d.model.parallel is not None and d.model.parallel.motion is PlatformMotion.PLANAR
+    legs = distance.distance_legs(structure.chains, structure.platform, planar)
     if isinstance(legs, str):
         raise DerivationError(f"model '{d.model.name}': {legs}; use the generic outputs closure and "
                               "closure_jacobians for this topology")
@@ -216,7 +217,8 @@ def _ik(d: Derivation) -> FunctionSpec:
     return make_function(
         d.model, "ik", "Inverse kinematics: actuated joint variables from the task coordinates.",
         "Per leg (seed sec. 3.2, step 3), the equation |B_i(p) - C_i(q_i)| = L_i(q_i) solved in closed form: "
-        "q = atan2(gamma, beta) + sigma atan2(sqrt(beta^2 + gamma^2 - alpha^2), -alpha) for a revolute "
+        "q = atan2(gamma, beta) + sigma atan2(sqrt(beta^2 + gamma^2 - alpha^2), -alpha), in (-pi, pi] as one atan2 "
+        "of its sine and cosine, for a revolute "
         "actuator (a robust form of seed eqs. 8.18-8.20), the root of a quadratic for a prismatic one. "
         f"Branches: {branches} (positive: the platform joint B_i lies at a positive rotation about the actuator "
         "axis from the elbow C_i, or the larger root of a prismatic actuator; negative: the other solution). "
@@ -229,26 +231,38 @@ def _ik(d: Derivation) -> FunctionSpec:
     )
 
 
-@quantity("fk", "closed-form forward kinematics p(q) by trilateration (3 legs, translational platform)",
-          mechanism=PARALLEL)
+@quantity("fk", "closed-form forward kinematics p(q): trilateration (3 legs, translational platform) or "
+          "circle intersection (2 legs, planar point)", mechanism=PARALLEL)
 def _fk(d: Derivation) -> FunctionSpec:
     parallel = d.model.parallel
     assert parallel is not None
-    if parallel.motion is not PlatformMotion.TRANSLATION or len(parallel.legs) != 3:
+    side = _branch_text(parallel.fk_branch)
+    if parallel.motion is PlatformMotion.TRANSLATION and len(parallel.legs) == 3:
+        position, margin = closed_form.trilaterate(d[_distance_legs], parallel.fk_branch)
+        text = ("Trilateration (seed sec. 3.2.1): P lies on the spheres of radius L_i about S_i = C_i(q) - b_i; "
+                "P = S1 + w + t n with n = (S2 - S1) x (S3 - S1), w in the plane of the centres and "
+                f"t = sigma sqrt(margin / |n|^2). The root on the {side} side of n is returned. Where the margin "
+                "is negative the spheres do not meet and the position is NaN.")
+        names, what = "x, y, z", "spheres"
+    elif parallel.coordinates == ("x", "y") and len(parallel.legs) == 2:
+        position, margin = closed_form.intersect_circles(d[_distance_legs], parallel.fk_branch)
+        text = ("Circle intersection (the planar case of seed sec. 3.2.1): P lies on the circles in z = 0 about "
+                "S_i = C_i(q) - b_i; P = S1 + w + t n with n = z x (S2 - S1), w on the line of the centres and "
+                f"t = sigma sqrt(margin / |S2 - S1|^2). The assembly mode on the {side} side of S1 -> S2 is "
+                "returned (positive: left, a positive turn about z). Where the margin is negative the circles do "
+                "not meet and the position is NaN.")
+        names, what = "x, y", "circles"
+    else:
         raise DerivationError(
             f"model '{d.model.name}': closed-form forward kinematics needs a translational platform on three "
-            "legs (trilateration); solve it numerically with symkin.runtime.parallel.solve_fk (Newton on the "
-            "generated ik and inverse_jacobian)")
-    position, margin = closed_form.trilaterate(d[_distance_legs], parallel.fk_branch)
+            "legs (trilateration) or a planar point [x, y] on two (circle intersection); solve it numerically "
+            "with symkin.runtime.parallel.solve_fk (Newton on the generated ik and inverse_jacobian)")
     return make_function(
-        d.model, "fk", "Forward kinematics: TCP position from the actuated joint variables.",
-        "Trilateration (seed sec. 3.2.1): P lies on the spheres of radius L_i about S_i = C_i(q) - b_i; "
-        "P = S1 + w + t n with n = (S2 - S1) x (S3 - S1), w in the plane of the centres and "
-        f"t = sigma sqrt(margin / |n|^2). The root on the {_branch_text(parallel.fk_branch)} side of n is "
-        "returned. Where the margin is negative the spheres do not meet and the position is NaN.",
+        d.model, "fk", "Forward kinematics: TCP position from the actuated joint variables.", text,
         [_q(d)],
-        [OutputSpec("position", sympy.ImmutableMatrix(position), "TCP position x, y, z", "m", shape=(3,)),
-         OutputSpec("margin", sympy.ImmutableMatrix([margin]), ">= 0 iff the spheres meet (a real solution)",
+        [OutputSpec("position", sympy.ImmutableMatrix(position), f"TCP position {names}", "m",
+                    shape=(len(position),)),
+         OutputSpec("margin", sympy.ImmutableMatrix([margin]), f">= 0 iff the {what} meet (a real solution)",
                     "m^2", shape=())],
     )
 

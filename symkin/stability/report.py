@@ -11,7 +11,7 @@ import numpy as np
 
 from symkin.atomic import replace_file
 from symkin.text_table import format_table
-from symkin.stability.harness import BOUND, KAPPA_LIMIT, StabilityRun
+from symkin.stability.harness import BOUND, KAPPA_LIMIT, SOLVE_ULPS, StabilityRun
 
 KAPPA_BINS = (1.0, 1e1, 1e2, 1e3, 1e6, 1e9, 1e12, math.inf)
 SHOWN_STEPS = (1e-1, 1e-3, 1e-6, 1e-9, 1e-12)
@@ -118,8 +118,8 @@ def render(run: StabilityRun) -> str:
         parts += ["", "closed-form IK near singularities", formula_table(run)]
     nonfinite = [r for r in run.records if math.isinf(r.error)]
     parts += ["", f"non-finite values: {len(nonfinite)}",
-              f"acceptance: largest error where kappa < {KAPPA_LIMIT:g}: {worst:.2e} "
-              f"{'<=' if passed else '>'} {BOUND:g}: {'PASS' if passed else 'FAIL'}"]
+              f"acceptance: every error where kappa < {KAPPA_LIMIT:g} <= max({BOUND:g}, {SOLVE_ULPS:g} kappa eps) "
+              f"(largest {worst:.2e}): {'PASS' if passed else 'FAIL'}"]
     return "\n".join(parts)
 
 

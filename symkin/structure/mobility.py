@@ -22,8 +22,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 from fractions import Fraction
 
+import sympy
+
+from symkin.geometry import rotation_matrix
 from symkin.model import joint_kinds
-from symkin.model.schema import Model
+from symkin.model.schema import Model, Op, PlatformMotion, Rotation
 
 SPATIAL = 6
 PLANAR = 3
@@ -113,8 +116,34 @@ def idle_rods(model: Model) -> int:
     return count
 
 
+def idle_platform_spin(model: Model) -> int:
+    """1 when a planar platform without 'yaw' is a point that every leg ends on (a pantograph's handle joint).
+
+    The legs then end in revolute joints about one axis through that point, and the platform can spin
+    about it without moving anything else: an identical condition of eq. (8.2).
+    """
+    assert model.parallel is not None
+    parallel = model.parallel
+    if parallel.motion is not PlatformMotion.PLANAR or "yaw" in parallel.coordinates:
+        return 0
+    attachments = {tuple(sympy.simplify(c) for c in _origin(leg.platform)) for leg in parallel.legs}
+    return 1 if len(attachments) == 1 else 0
+
+
+def _origin(ops: tuple[Op, ...]) -> sympy.Matrix:
+    """The origin of the frame reached by fixed operations (moving-frame order, left to right)."""
+    rotation, origin = sympy.eye(3), sympy.zeros(3, 1)
+    for op in ops:
+        if isinstance(op, Rotation):
+            rotation = rotation * rotation_matrix(op.axis, op.angle)
+        else:
+            origin = origin + rotation * sympy.Matrix(op.vector)
+    return origin
+
+
 def model_mobility(model: Model) -> MobilityReport:
-    """The mobility terms of ``model``: spatial (lambda = 6), bodies and joints from its chain or legs."""
+    """The mobility terms of ``model``: bodies and joints from its chain or legs; lambda = 3 for a planar or
+    spherical platform, 6 otherwise."""
     if model.parallel is None:
         dofs = tuple(1 for _ in model.joints)
         # a follower's motion is fixed by its leader's (a gear coupling): it takes a DoF like an idle one
@@ -122,6 +151,7 @@ def model_mobility(model: Model) -> MobilityReport:
         return MobilityReport(model.name, "serial", SPATIAL, len(dofs) + 1, dofs, followers, 0, 1, model.dof)
     legs = model.parallel.legs
     dofs = tuple(j.type.dof for leg in legs for j in leg.joints)
-    identical = idle_rods(model) + model.parallel.identical
-    return MobilityReport(model.name, "parallel", SPATIAL, bodies_of_legs(len(dofs), len(legs)), dofs, identical,
+    identical = idle_rods(model) + idle_platform_spin(model) + model.parallel.identical
+    return MobilityReport(model.name, "parallel", model.parallel.motion.spatial_factor,
+                          bodies_of_legs(len(dofs), len(legs)), dofs, identical,
                           model.parallel.constraints, len(legs), model.parallel.task_dof)

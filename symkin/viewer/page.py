@@ -83,7 +83,8 @@ def kind_of(model: GeneratedModel) -> str:
     """The key of :data:`VIEW_OUTPUTS`: serial, parallel (with a closed-form fk) or parallel pose."""
     if not mechanism.is_parallel(model):
         return "serial"
-    return "parallel" if tuple(mechanism.task_space(model)) == ("x", "y", "z") else "parallel pose"
+    positions = set(mechanism.task_space(model)) <= set(mechanism.POSITION_COMPONENTS)
+    return "parallel" if positions else "parallel pose"
 
 
 def _pad3(points: np.ndarray, axes: tuple[str, ...]) -> np.ndarray:
@@ -192,7 +193,7 @@ def _task(model: GeneratedModel, cloud: Cloud, home: np.ndarray) -> list[dict[st
     margin = 0.1 * (upper - lower)
     out = []
     for k, name in enumerate(names):
-        if k < 3:
+        if name in mechanism.POSITION_COMPONENTS:
             scale, unit, step = _slider_units("m")
             bounds = (float(lower[k] - margin[k]), float(upper[k] + margin[k]))
         else:
@@ -214,7 +215,7 @@ def page_data(model: GeneratedModel, cloud: Cloud) -> dict[str, Any]:
         q = cloud.q[int(np.argmax(values))] if len(values) else np.clip(0.0, *mechanism.joint_limits(model).T)
         home: dict[str, list[float]] = {"q": [_on_grid(v, c["scale"], c["step"]) for v, c in zip(q, coordinates)]}
     else:
-        units = [_slider_units("m" if k < 3 else "rad") for k in range(len(mechanism.task_space(model)))]
+        units = [_slider_units("m" if c in mechanism.POSITION_COMPONENTS else "rad") for c in mechanism.task_space(model)]
         home = {"q": [0.0] * len(model.info.coordinates),
                 "p": [_on_grid(v, scale, step) for v, (scale, _, step) in zip(mechanism.home_pose(model), units)]}
     seen = np.concatenate([points, _mechanism_points(model, home)])
@@ -222,6 +223,7 @@ def page_data(model: GeneratedModel, cloud: Cloud) -> dict[str, Any]:
     centre, scale = (lower + upper) / 2, float(np.max(upper - lower))
     data: dict[str, Any] = {
         "name": model.name, "kind": kind, "coordinates": coordinates, "home": home,
+        "task_space": list(mechanism.task_space(model)),
         "parameters": _parameters(model, outputs),
         "conditioning": {"twist": "inverse_jacobian" in outputs, "length": cloud.length,
                          "position_rows": list(mechanism.position_rows(model))},

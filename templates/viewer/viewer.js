@@ -126,6 +126,12 @@ function call(name, ...vectors) {
   return model[name](...vectors, params);
 }
 
+/** A platform's position and roll, pitch, yaw from its task coordinates p (those it does not move in are 0). */
+function platformPose(p) {
+  const get = (name) => { const k = data.task_space.indexOf(name); return k < 0 ? 0 : p[k]; };
+  return { position: ["x", "y", "z"].map(get), angles: ["roll", "pitch", "yaw"].map(get) };
+}
+
 const state = { q: data.home.q.slice(), p: data.home.p ? data.home.p.slice() : null,
   // no prototype: a parameter named like an Object.prototype member ("constructor") is only what is set
   params: Object.assign(Object.create(null), Object.fromEntries(data.parameters.map((p) => [p.name, p.value]))) };
@@ -148,8 +154,9 @@ function evaluate() {
     if (limits.length) out.warnings.push(`beyond the limits of ${limits.join(", ")}`);
     const rows = unreachable.length ? null : call("leg_points", joints, state.p);
     out.legs = rows && rows.map((_, k) => rows.slice(3 * k, 3 * k + 3)).slice(0, rows.length / 3);
-    out.tcp = state.p.slice(0, 3);
-    const [roll, pitch, yaw] = state.p.length === 6 ? state.p.slice(3) : [0, 0, 0];
+    const pose = platformPose(state.p);
+    out.tcp = pose.position;
+    const [roll, pitch, yaw] = pose.angles;
     const R = new THREE.Matrix4().makeRotationFromEuler(new THREE.Euler(roll, pitch, yaw, "ZYX"));
     const e = R.elements;  // column-major
     out.frames = [[[e[0], e[4], e[8], out.tcp[0]], [e[1], e[5], e[9], out.tcp[1]], [e[2], e[6], e[10], out.tcp[2]],
@@ -281,7 +288,7 @@ function recomputeCloud() {
     } else if (!data.conditioning.twist) {
       const { position, margin } = call("fk", sample);
       if (!(margin >= 0)) return;
-      point = position;
+      point = platformPose(position).position;
       pose = { q: sample, p: position };
     } else {
       const p = [...sample, ...orientation];
