@@ -42,10 +42,16 @@ def models() -> dict[str, Model]:
     return {name: load_model(MODELS_DIR / f"{name}.yaml") for name in EXAMPLE_MODELS}
 
 
+@functools.lru_cache(maxsize=None)
+def shared_derivation(model: Model) -> Derivation:
+    """The derivation graph of ``model`` shared by every test of a worker (quantities are memoized)."""
+    return Derivation(model)
+
+
 @pytest.fixture(scope="session")
 def derivations(models: dict[str, Model]) -> dict[str, Derivation]:
     """One shared derivation graph per example model (quantities are memoized across tests)."""
-    return {name: Derivation(model) for name, model in models.items()}
+    return {name: shared_derivation(model) for name, model in models.items()}
 
 
 def reference_function(model: Model, spec: FunctionSpec, modules: str = "numpy"):
@@ -111,7 +117,7 @@ def random_q(model: Model, rng: np.random.Generator, size=None) -> np.ndarray:
 
 @functools.lru_cache(maxsize=None)
 def _home_joints(model: Model) -> tuple[float, ...]:
-    spec = Derivation(model)["ik"]
+    spec = shared_derivation(model)["ik"]
     fn = lambdify_spec(spec, [list(spec.vector_inputs[0].symbols)], "numpy", model.parameter_values)
     home = [float(e.xreplace(model.parameter_values)) for e in model.parallel.home]
     return tuple(float(v) for v in fn(home)[:model.dof])
@@ -125,7 +131,7 @@ def home_joints(model: Model) -> np.ndarray:
 @functools.lru_cache(maxsize=None)
 def _home_passive(model: Model) -> tuple[float, ...]:
     """The passive joints that close the legs at the home pose: Gauss-Newton on the un-optimized closure from 0."""
-    derivation = Derivation(model)
+    derivation = shared_derivation(model)
     closure, jacobians = derivation["closure"], derivation["closure_jacobians"]
     symbols = [list(i.symbols) for i in closure.vector_inputs]
     phi = lambdify_spec(closure, symbols, "numpy", model.parameter_values)

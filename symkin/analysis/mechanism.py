@@ -100,6 +100,17 @@ def position_axes(model: GeneratedModel) -> tuple[int, ...]:
     return tuple(sorted(axes))
 
 
+def parallel_kind(task: Sequence[str]) -> str:
+    """How the analyses and the viewer treat a parallel mechanism with the task coordinates ``task``:
+    ``parallel`` (positions only: a translational or planar platform, analysed through its closed-form ik
+    and fk), ``parallel orientation`` (angles only: a spherical platform) or ``parallel pose`` (both: held
+    at a constant orientation)."""
+    positions = set(task) & set(POSITION_COMPONENTS)
+    if positions == set(task):
+        return "parallel"
+    return "parallel pose" if positions else "parallel orientation"
+
+
 def is_parallel(model: GeneratedModel) -> bool:
     """Whether the loaded model is a parallel mechanism."""
     return model.info.is_parallel

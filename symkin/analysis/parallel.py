@@ -168,6 +168,11 @@ def parallel_inverse(model: GeneratedModel) -> ParallelInverse | ConstantOrienta
         return constant_orientation_inverse(model)
     if not mechanism.is_parallel(model):
         raise ValueError(f"{model.name}: not a parallel mechanism")
+    if not set(mechanism.task_space(model)) & set(mechanism.POSITION_COMPONENTS):
+        raise ValueError(f"{model.name}: the platform only turns (task space {list(mechanism.task_space(model))}): "
+                         "its workspace is a set of orientations, which the positional workspace and GCI analyses do "
+                         "not cover; rate it with the generated inverse_jacobian and singularities at chosen "
+                         "orientations")
     if not set(mechanism.task_space(model)) <= set(mechanism.POSITION_COMPONENTS):
         raise ValueError(f"{model.name}: the platform also rotates (task space {list(mechanism.task_space(model))}): "
                          "its Cartesian workspace is analysed at a constant orientation "

@@ -25,9 +25,11 @@ if TYPE_CHECKING:
 ANALYSIS_OUTPUTS = ("fk", "jacobian")
 #: ... by kind of mechanism (:func:`analysis_kind`): a translational parallel one also needs
 #: its closed-form ik (reachability, working mode); a platform that also rotates (Stewart-Gough)
-#: has no closed-form fk, and its analyses at a constant orientation use ik and J^-1.
+#: has no closed-form fk, and its analyses at a constant orientation use ik and J^-1; so does a
+#: spherical platform (orientations only).
 ANALYSIS_OUTPUTS_BY_KIND = {"serial": ANALYSIS_OUTPUTS, "parallel": ("ik", "fk", "jacobian"),
-                            "parallel pose": ("ik", "inverse_jacobian")}
+                            "parallel pose": ("ik", "inverse_jacobian"),
+                            "parallel orientation": ("ik", "inverse_jacobian")}
 #: Suffixes of model files (derived on the fly); anything else is a generated directory.
 MODEL_FILE_SUFFIXES = (".yaml", ".yml", ".urdf", ".xml", ".xacro")
 #: Length units of figures and design labels: metres per unit.
@@ -227,12 +229,11 @@ def generated_directory(path: str, backends: Sequence[str],
 
 
 def analysis_kind(model: Model) -> str:
-    """The key of a model file in :data:`ANALYSIS_OUTPUTS_BY_KIND`: serial, parallel, parallel pose."""
-    from symkin.model.schema import PlatformMotion
+    """The key of a model file in :data:`ANALYSIS_OUTPUTS_BY_KIND`: serial, or the parallel kinds of
+    :func:`symkin.analysis.mechanism.parallel_kind`."""
+    from symkin.analysis.mechanism import parallel_kind
 
-    if model.parallel is not None and model.parallel.motion is PlatformMotion.POSE:
-        return "parallel pose"
-    return model.mechanism
+    return model.mechanism if model.parallel is None else parallel_kind(model.task_space)
 
 
 def _limits_passive_joints(model: Model) -> bool:

@@ -22,6 +22,13 @@ In a planar mechanism (every point in planes z = const, seed eq. 8.2 with lambda
 revolute joint about the plane's normal z is a point joint of the plane: a rod between two
 of them fixes only the distance between their centres, as the pantograph's distal links do
 (C_i its elbow, B_i the handle).  The equation is the same, with circles for spheres.
+
+On a sphere (a spherical mechanism: every joint axis through the centre, the platform turning
+about it) the points are the axes' directions: a leg R-R-R whose middle axis w_i(q_i) is turned
+by the actuator and whose last axis v_i(p) = R(p) v_i0 is fixed in the platform keeps the angle
+alpha_i between them, |v_i - w_i|^2 = 2 - 2 cos alpha_i: the same equation with C_i = w_i,
+B_i = v_i, b_i = v_i0 (unit vectors) and L_i^2 = 2 - 2 cos alpha_i (Gosselin's spherical 3-RRR:
+w_i . v_i = cos alpha_2).
 """
 
 from __future__ import annotations
@@ -118,12 +125,47 @@ def reduce_leg(leg: Leg, chain: LegChain, platform: Frame, planar: bool = False)
                        sympy.ImmutableMatrix(chain.attachment.p), L2)
 
 
-def distance_legs(chains: tuple[LegChain, ...], platform: Frame, planar: bool = False
+def reduce_spherical_leg(leg: Leg, chain: LegChain, platform: Frame) -> DistanceLeg | str:
+    """The distance form on the unit sphere of a leg of revolute joints about axes through the centre (the
+    base origin), or the reason it has none (see the module docstring)."""
+    joints = leg.joints
+    if len(joints) < 3 or any(len(j.motions) != 1 or not j.motions[0][2] for j in joints):
+        return "a spherical leg is a chain of at least three revolute joints"
+    for joint, motion in zip(joints, chain.motions):
+        moment = sympy.Matrix(motion.point).cross(sympy.Matrix(motion.direction))
+        if any(sympy.simplify(c) != 0 for c in moment):
+            return f"the axis of {joint.name} does not pass through the centre of rotation (the base origin)"
+    actuated = [(i, j) for i, j in enumerate(joints) if j.active is not None]
+    proximal = len(joints) - 2
+    if len(actuated) != 1 or actuated[0][0] >= proximal:
+        return "it needs exactly one actuated joint before its last two"
+    index, active = actuated[0]
+    C = chain.motions[proximal].direction
+    passive = {symbol(v) for j in joints for k, v in enumerate(j.variables) if k != j.active}
+    if C.free_symbols & passive:
+        return f"the axis of {joints[proximal].name} moves with passive joints before it"
+    last_axis = joints[-1].motions[0][1]
+    b_i = sympy.Matrix(chain.attachment.R) * sympy.Matrix(last_axis)
+    rod = MovingFrame()  # the frame of the middle joint after its rotation: its own axis is fixed there
+    rod.apply(joints[-1].origin)
+    w, v = sympy.Matrix(joints[proximal].motions[0][1]), rod.direction(last_axis)
+    L2 = sympy.simplify((w - v).dot(w - v))
+    variable, _, _ = active.motions[active.active]  # type: ignore[index]
+    return DistanceLeg(leg, symbol(variable), True, "before", active.offset, sympy.ImmutableMatrix(C),
+                       sympy.ImmutableMatrix(sympy.Matrix(platform.R) * b_i), sympy.ImmutableMatrix(b_i), L2)
+
+
+def distance_legs(chains: tuple[LegChain, ...], platform: Frame, surface: str = "space"
                   ) -> tuple[DistanceLeg, ...] | str:
-    """Every leg in distance form, or why one of them has none."""
+    """Every leg in distance form, or why one of them has none.
+
+    ``surface``: ``space``, ``plane`` (R joints about z are point joints) or ``sphere`` (the points are
+    the directions of axes through the centre).
+    """
     out = []
     for chain in chains:
-        reduced = reduce_leg(chain.leg, chain, platform, planar)
+        reduced = (reduce_spherical_leg(chain.leg, chain, platform) if surface == "sphere"
+                   else reduce_leg(chain.leg, chain, platform, surface == "plane"))
         if isinstance(reduced, str):
             return f"leg '{chain.leg.name}' has no distance form: {reduced}"
         out.append(reduced)

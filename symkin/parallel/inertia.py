@@ -37,7 +37,7 @@ import sympy
 from symkin.errors import DerivationError
 from symkin.geometry import skew
 from symkin.kinematics.chain import Frame
-from symkin.model.schema import Body, Model, ParallelBodies
+from symkin.model.schema import Body, Model, ParallelBodies, PlatformMotion
 from symkin.parallel.distance import DistanceLeg
 from symkin.parallel.inputs import task_symbols
 from symkin.parallel.legs import LegChain, walk
@@ -147,6 +147,9 @@ def split_inertia(model: Model, legs: tuple[DistanceLeg, ...], chains: tuple[Leg
     if bodies is None:
         raise DerivationError(f"model '{model.name}' declares no bodies, so it has no dynamics; add a 'bodies:' "
                               "section (platform, actuated_link, rod, rotor; see docs/model-format.md)")
+    if model.parallel.motion is PlatformMotion.SPHERICAL:  # type: ignore[union-attr]
+        raise DerivationError(f"model '{model.name}': the dynamics of a spherical platform's legs (distal links turning "
+                              "about the centre, not rods between point joints) are not derived yet; remove 'bodies:'")
     sides = [_actuator_side(model, bodies, leg, chain) for leg, chain in zip(legs, chains)]
     M_p, u_p = _platform(model, bodies, legs, platform)
     return Inertia(tuple(s[0] for s in sides), sum((s[1] for s in sides), sympy.Integer(0)), M_p, u_p)

@@ -144,8 +144,9 @@ def _closure_jacobians(d: Derivation) -> FunctionSpec:
 @quantity("distance_legs", "legs reduced to one distance equation each", emitted=False, mechanism=PARALLEL)
 def _distance_legs(d: Derivation) -> tuple[distance.DistanceLeg, ...]:
     structure: ParallelStructure = d[_structure]
-    planar = d.model.parallel is not None and d.model.parallel.motion is PlatformMotion.PLANAR
-    legs = distance.distance_legs(structure.chains, structure.platform, planar)
+    motion = d.model.parallel.motion  # type: ignore[union-attr]
+    surface = {PlatformMotion.PLANAR: "plane", PlatformMotion.SPHERICAL: "sphere"}.get(motion, "space")
+    legs = distance.distance_legs(structure.chains, structure.platform, surface)
     if isinstance(legs, str):
         raise DerivationError(f"model '{d.model.name}': {legs}; use the generic outputs closure and "
                               "closure_jacobians for this topology")

@@ -55,6 +55,7 @@ VIEW_OUTPUTS = {
     "serial": ("fk", "frames", "jacobian"),
     "parallel": ("ik", "fk", "leg_points", "jacobian", "singularities"),
     "parallel pose": ("ik", "leg_points", "inverse_jacobian", "singularities"),
+    "parallel orientation": ("ik", "leg_points", "inverse_jacobian", "singularities"),
 }
 
 
@@ -80,11 +81,10 @@ def missing_functions(model: GeneratedModel) -> list[str]:
 
 
 def kind_of(model: GeneratedModel) -> str:
-    """The key of :data:`VIEW_OUTPUTS`: serial, parallel (with a closed-form fk) or parallel pose."""
-    if not mechanism.is_parallel(model):
-        return "serial"
-    positions = set(mechanism.task_space(model)) <= set(mechanism.POSITION_COMPONENTS)
-    return "parallel" if positions else "parallel pose"
+    """The key of :data:`VIEW_OUTPUTS`: serial, parallel (a platform that only translates, with a closed-form
+    fk), parallel orientation (a spherical platform: no positional workspace, rated by its angular velocity)
+    or parallel pose."""
+    return mechanism.parallel_kind(mechanism.task_space(model)) if mechanism.is_parallel(model) else "serial"
 
 
 def _pad3(points: np.ndarray, axes: tuple[str, ...]) -> np.ndarray:
@@ -105,6 +105,10 @@ def _length(model: GeneratedModel, limits: np.ndarray) -> float | None:
 
 def workspace_cloud(model: GeneratedModel, samples: int, seed: int = 0) -> Cloud:
     """The workspace cloud with 1/kappa, as ``symkin workspace`` and ``symkin gci`` sample it."""
+    if kind_of(model) == "parallel orientation":
+        n = len(model.info.coordinates)
+        return Cloud(np.zeros((0, 3)), np.zeros(0), np.zeros((0, n)), None,
+                     "no workspace cloud: a spherical platform's workspace is a set of orientations, not of points.")
     limits = mechanism.joint_limits(model)
     length = _length(model, limits)
     homogenized = f"; J homogenized with L = {1000 * length:.1f} mm." if length is not None else "."

@@ -96,12 +96,16 @@ function taskJacobian(state) {
   let J;
   if (data.kind === "serial") {
     J = call("jacobian", state.q);
-  } else if (c.twist) {  // pose platform: twist Jacobian diag(I, E) (J^-1)^-1
+  } else if (c.twist) {  // a rotating platform: twist Jacobian diag(I, E) (J^-1)^-1, angle rates to omega by E
     const inverse = invert(call("inverse_jacobian", state.q, state.p));
     if (inverse === null) return null;
-    const E = angularVelocityMatrix(state.p[4], state.p[5]);
-    const rates = [0, 1, 2, 3, 4, 5].map((i) => [0, 1, 2, 3, 4, 5].map((j) =>
-      (i < 3 ? (i === j ? 1 : 0) : (j < 3 ? 0 : E[i - 3][j - 3]))));
+    const angles = ["roll", "pitch", "yaw"];
+    const pose = platformPose(state.p);
+    const E = angularVelocityMatrix(pose.angles[1], pose.angles[2]);
+    const rates = data.task_space.map((row, i) => data.task_space.map((column, j) => {
+      const [a, b] = [angles.indexOf(row), angles.indexOf(column)];
+      return a < 0 || b < 0 ? (i === j ? 1 : 0) : E[a][b];
+    }));
     J = matmul(rates, inverse);
   } else {
     J = call("jacobian", state.q, state.p);

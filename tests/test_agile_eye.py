@@ -1,0 +1,114 @@
+"""The Agile Eye (models/agile_eye.yaml): a spherical 3-RRR platform, the distance form on the unit sphere.
+
+Independent oracles: the Agile Eye's inverse kinematics in closed form from the rotation matrix (each leg's
+middle axis perpendicular to its platform axis: theta_1 = atan2(-R23, R33), theta_2 = atan2(-R31, R11),
+theta_3 = atan2(-R12, R22); Bonev, Chablat and Wenger 2006), finite differences of it, and rotation matrices
+composed here with numpy.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from symkin import load, load_model
+from symkin.errors import DerivationError
+from symkin.derivation import Derivation
+from symkin.model.schema import PlatformMotion
+from symkin.runtime.parallel import solve_fk
+from symkin.structure.mobility import model_mobility
+from conftest import MODELS_DIR
+from tolerances import CLOSED_FORM, KINEMATICS, NEWTON
+
+
+@pytest.fixture(scope="module")
+def eye(generated_dir):
+    return load(generated_dir / "agile_eye")
+
+
+def rotation(p):
+    """R = Rz(yaw) Ry(pitch) Rx(roll) of rows p = (roll, pitch, yaw)."""
+    roll, pitch, yaw = np.moveaxis(np.asarray(p), -1, 0)
+    c, s = np.cos, np.sin
+    return np.stack([
+        np.stack([c(yaw) * c(pitch), c(yaw) * s(pitch) * s(roll) - s(yaw) * c(roll),
+                  c(yaw) * s(pitch) * c(roll) + s(yaw) * s(roll)], axis=-1),
+        np.stack([s(yaw) * c(pitch), s(yaw) * s(pitch) * s(roll) + c(yaw) * c(roll),
+                  s(yaw) * s(pitch) * c(roll) - c(yaw) * s(roll)], axis=-1),
+        np.stack([-s(pitch), c(pitch) * s(roll), c(pitch) * c(roll)], axis=-1)], axis=-2)
+
+
+def agile_eye_ik(p):
+    R = rotation(p)
+    return np.stack([np.arctan2(-R[..., 1, 2], R[..., 2, 2]), np.arctan2(-R[..., 2, 0], R[..., 0, 0]),
+                     np.arctan2(-R[..., 0, 1], R[..., 1, 1])], axis=-1)
+
+
+def orientations(seed, count, spread=0.5):
+    return np.random.default_rng(seed).uniform(-spread, spread, (count, 3))
+
+
+def test_the_model_is_spherical_with_lambda_three(models):
+    parallel = models["agile_eye"].parallel
+    assert parallel.motion is PlatformMotion.SPHERICAL and parallel.coordinates == ("roll", "pitch", "yaw")
+    report = model_mobility(models["agile_eye"])
+    assert (report.lam, report.bodies, report.joints, report.mobility) == (3, 8, 9, 3)
+
+
+def test_inverse_kinematics_is_the_agile_eyes_closed_form(eye):
+    p = orientations(1, 500)
+    q, margin = eye.ik(p)
+    assert np.all(margin > 0)
+    assert np.max(np.abs(q - agile_eye_ik(p))) <= 4 * CLOSED_FORM
+
+
+def test_the_home_orientation_is_isotropic(eye):
+    p = np.zeros(3)
+    q = eye.ik(p).joints
+    assert np.allclose(q, 0.0, atol=CLOSED_FORM)
+    assert np.allclose(eye.jacobian(q, p), np.eye(3), atol=CLOSED_FORM)
+
+
+def test_inverse_jacobian_matches_finite_differences_of_the_closed_form(eye):
+    p = orientations(2, 40)
+    h = 1e-6
+    J_fd = np.stack([(agile_eye_ik(p + h * e) - agile_eye_ik(p - h * e)) / (2 * h) for e in np.eye(3)], axis=-1)
+    J_inv = eye.inverse_jacobian(agile_eye_ik(p), p)
+    # central differences: truncation h^2 |q'''| / 6 ~ 1e-12, rounding eps / h ~ 2e-10
+    assert np.allclose(J_inv, J_fd, rtol=0, atol=1e-8)
+    assert np.allclose(np.einsum("...ij,...jk->...ik", eye.jacobian(agile_eye_ik(p), p), J_inv), np.eye(3), atol=1e-9)
+
+
+def test_forward_kinematics_by_newton_returns_the_orientation(eye):
+    p = orientations(3, 200)
+    q = eye.ik(p).joints
+    report = solve_fk(eye, q, np.zeros(3))
+    assert report.all_converged
+    kappa = np.linalg.cond(eye.inverse_jacobian(q, p))
+    error = np.max(np.abs(rotation(report.solution) - rotation(p)), axis=(-2, -1))
+    assert np.all(error <= NEWTON * kappa)
+
+
+def test_the_closure_vanishes_at_the_assembly(eye):
+    """Leg i at (theta_i, s): R = R_u(theta) R_w(s1) R_v(s2) with the leg's axes; s from the rotation."""
+    p = np.array([0.2, -0.1, 0.3])
+    q = eye.ik(p).joints
+    s = np.asarray(solve_closure_passive(eye, q, p))
+    phi = eye.closure(q, s, p)
+    assert np.max(np.abs(phi)) <= KINEMATICS
+
+
+def solve_closure_passive(eye, q, p):
+    from symkin.runtime.parallel import solve_closure
+
+    report = solve_closure(eye, q, np.zeros(6), p, unknowns=("s",))
+    assert report.all_converged
+    return report.solution["s"]
+
+
+def test_a_leg_whose_axis_misses_the_centre_has_no_distance_form(tmp_path):
+    text = (MODELS_DIR / "agile_eye.yaml").read_text().replace(
+        "{name: mid, type: R, axis: [0, 1, 0]}", "{name: mid, type: R, axis: [0, 1, 0], origin: {xyz: [0.01, 0, 0]}}", 1)
+    (tmp_path / "bent.yaml").write_text(text)
+    with pytest.raises(DerivationError, match="does not pass through the centre"):
+        Derivation(load_model(tmp_path / "bent.yaml"))["ik"]
