@@ -8,16 +8,20 @@ composed here with numpy.
 
 from __future__ import annotations
 
+import os
+import subprocess
+
 import numpy as np
 import pytest
 
 from symkin import load, load_model
+from symkin.analysis import orientations
 from symkin.errors import DerivationError
 from symkin.derivation import Derivation
 from symkin.model.schema import PlatformMotion
 from symkin.runtime.parallel import solve_fk
 from symkin.structure.mobility import model_mobility
-from conftest import MODELS_DIR
+from conftest import MODELS_DIR, SYMKIN_CLI
 from tolerances import CLOSED_FORM, KINEMATICS, NEWTON
 
 
@@ -44,7 +48,7 @@ def agile_eye_ik(p):
                      np.arctan2(-R[..., 0, 1], R[..., 1, 1])], axis=-1)
 
 
-def orientations(seed, count, spread=0.5):
+def random_orientations(seed, count, spread=0.5):
     return np.random.default_rng(seed).uniform(-spread, spread, (count, 3))
 
 
@@ -56,7 +60,7 @@ def test_the_model_is_spherical_with_lambda_three(models):
 
 
 def test_inverse_kinematics_is_the_agile_eyes_closed_form(eye):
-    p = orientations(1, 500)
+    p = random_orientations(1, 500)
     q, margin = eye.ik(p)
     assert np.all(margin > 0)
     assert np.max(np.abs(q - agile_eye_ik(p))) <= 4 * CLOSED_FORM
@@ -70,7 +74,7 @@ def test_the_home_orientation_is_isotropic(eye):
 
 
 def test_inverse_jacobian_matches_finite_differences_of_the_closed_form(eye):
-    p = orientations(2, 40)
+    p = random_orientations(2, 40)
     h = 1e-6
     J_fd = np.stack([(agile_eye_ik(p + h * e) - agile_eye_ik(p - h * e)) / (2 * h) for e in np.eye(3)], axis=-1)
     J_inv = eye.inverse_jacobian(agile_eye_ik(p), p)
@@ -80,7 +84,7 @@ def test_inverse_jacobian_matches_finite_differences_of_the_closed_form(eye):
 
 
 def test_forward_kinematics_by_newton_returns_the_orientation(eye):
-    p = orientations(3, 200)
+    p = random_orientations(3, 200)
     q = eye.ik(p).joints
     report = solve_fk(eye, q, np.zeros(3))
     assert report.all_converged
@@ -112,3 +116,29 @@ def test_a_leg_whose_axis_misses_the_centre_has_no_distance_form(tmp_path):
     (tmp_path / "bent.yaml").write_text(text)
     with pytest.raises(DerivationError, match="does not pass through the centre"):
         Derivation(load_model(tmp_path / "bent.yaml"))["ik"]
+
+
+def test_orientation_workspace_measure_matches_uniformly_random_rotations(eye):
+    """Rotations drawn uniformly from SO(3) (scipy's Haar sampler), reachable where every leg's closed-form angle
+    lies within its +-60 deg limits: the fraction times 8 pi^2 against the |cos pitch| integral over the chart."""
+    from scipy.spatial.transform import Rotation
+
+    yaw_pitch_roll = Rotation.random(200_000, random_state=5).as_euler("ZYX")
+    q = agile_eye_ik(yaw_pitch_roll[:, ::-1])
+    reachable = np.all(np.abs(q) <= np.deg2rad(60.0), axis=-1)
+    fraction = reachable.mean()
+    monte_carlo = fraction * orientations.SO3_MEASURE
+    sigma = orientations.SO3_MEASURE * np.sqrt(fraction * (1 - fraction) / len(q))
+    result = orientations.orientation_gci(eye, samples=2**16, seed=0)
+    assert abs(result.measure.value - monte_carlo) <= 4 * sigma + result.measure.error
+    assert 0 < result.value.value < 1
+
+
+def test_the_gci_command_states_the_measure_of_orientations(generated_dir):
+    run = subprocess.run([*SYMKIN_CLI, "gci", str(generated_dir / "agile_eye"), "--samples", "4096"],
+                         capture_output=True, text=True, env=dict(os.environ, SYMKIN_QUIET="1"))
+    assert run.returncode == 0, run.stderr
+    assert "rad^3" in run.stdout and "invariant measure of SO(3)" in run.stdout
+    refused = subprocess.run([*SYMKIN_CLI, "gci", str(generated_dir / "agile_eye"), "--map", "map.png"],
+                             capture_output=True, text=True)
+    assert refused.returncode == 2 and "spherical platform" in refused.stderr

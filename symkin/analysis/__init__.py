@@ -17,7 +17,8 @@ over joint or Cartesian domains), :mod:`~symkin.analysis.grids` (reachability an
 Cartesian grids), :mod:`~symkin.analysis.integrators` (grid, Monte Carlo, quasi-Monte Carlo,
 adaptive), :mod:`~symkin.analysis.feasibility` (the reachability interface and joint limits),
 :mod:`~symkin.analysis.inverse` (which inverse kinematics a model gets: planar 2R closed form,
-parallel closed forms), :mod:`~symkin.analysis.plots` (figures),
+parallel closed forms), :mod:`~symkin.analysis.orientations` (a spherical platform's orientation
+workspace and GCI, with the invariant measure of SO(3)), :mod:`~symkin.analysis.plots` (figures),
 :mod:`~symkin.analysis.convergence` (run time against error).
 """
 

@@ -34,7 +34,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "as the DELTA). A parallel mechanism's workspace is the set reached in its declared working "
                     "mode (ik and fk branches) within the actuator limits, on both domains. A platform that also "
                     "rotates (Stewart-Gough) is analysed at a constant orientation (--orientation) over the "
-                    "Cartesian domain, 1/kappa of its twist Jacobian homogenized by --length.",
+                    "Cartesian domain, 1/kappa of its twist Jacobian homogenized by --length. A spherical platform "
+                    "(the Agile Eye) is rated over its orientations with the invariant measure of SO(3) (rad^3), "
+                    "1/kappa of its angular-velocity Jacobian.",
     )
     analysis_args.add_model_arguments(p)
     p.add_argument("--method", choices=("grid", "mc", "qmc", "adaptive"), default="qmc",
@@ -129,7 +131,7 @@ def _domain(args: argparse.Namespace, model: GeneratedModel) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-    from symkin.analysis import conditioning, global_indices, inverse, mechanism, plots, study, workspace
+    from symkin.analysis import conditioning, global_indices, inverse, mechanism, orientations, plots, study, workspace
     from symkin.analysis.integrators import STATISTICAL
 
     if args.scheduler is not None:
@@ -138,6 +140,8 @@ def run(args: argparse.Namespace) -> int:
     path = None
     try:
         model, limits = analysis_args.model_from_args(args)
+        if orientations.is_spherical(model):
+            return _orientations(args, model, limits)
         model = study.at_orientation(model, analysis_args.parse_orientation(args.orientation))
         args.domain = _domain(args, model)
         length = analysis_args.resolve_length(model, args.length, limits)
@@ -171,6 +175,29 @@ def run(args: argparse.Namespace) -> int:
     except (ValueError, KeyError) as err:
         analysis_args.fail_on_bad_input(args, err)
     _print(args, model, result, seconds, path)
+    return 0
+
+
+def _orientations(args: argparse.Namespace, model: GeneratedModel, limits: dict) -> int:
+    """A spherical platform: the GCI over its orientation workspace with the invariant measure of SO(3)."""
+    from symkin.analysis import orientations
+
+    try:
+        for given, option in ((args.index != "inverse-condition", "--index"), (args.map, "--map"),
+                              (args.domain not in (None, "cartesian"), "--domain"), (args.orientation, "--orientation"),
+                              (args.measure != "cartesian", "--measure")):
+            if given:
+                raise ValueError(f"{option}: {model.name} is a spherical platform, rated by 1/kappa of its "
+                                 "angular-velocity Jacobian over its orientations (leave the option out)")
+        options = {"rtol": args.rtol} if args.method == "adaptive" else {}
+        start = time.perf_counter()
+        with Progress(model.name) as progress:
+            progress(f"{args.method} over the orientations, {args.samples} samples")
+            result = orientations.orientation_gci(model, method=args.method, samples=args.samples, seed=args.seed,
+                                                  limits=limits, **options)
+    except (ValueError, KeyError) as err:
+        analysis_args.fail_on_bad_input(args, err)
+    _print(args, model, result, time.perf_counter() - start, None)
     return 0
 
 

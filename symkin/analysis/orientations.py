@@ -1,0 +1,108 @@
+"""The orientation workspace of a spherical platform (p = roll, pitch, yaw) and its global conditioning.
+
+A spherical parallel mechanism (the Agile Eye) turns its platform about a fixed centre: its workspace
+is a set of orientations, measured with the invariant (Haar) measure of SO(3).  In the task coordinates
+p = (roll, pitch, yaw), R = Rz(yaw) Ry(pitch) Rx(roll), that measure is
+
+    dW = |cos(pitch)| d(roll) d(pitch) d(yaw)            (rad^3; all of SO(3): 8 pi^2 = 78.96 rad^3),
+
+|det E| with omega = E d(roll, pitch, yaw)/dt (:func:`symkin.analysis.parallel.angular_velocity_matrix`),
+the volume element that does not depend on how the orientations are parametrized (Chirikjian and Kyatkin,
+Engineering Applications of Noncommutative Harmonic Analysis, 2001, sec. 9.2).  Its conditioning is that
+of the angular-velocity Jacobian J_w = E (J^-1)^-1 (omega = J_w qdot), whose condition number does not
+depend on the angles either; kappa(J_w) = kappa(J^-1 E^-1), formed without inverting J^-1.
+
+The workspace is integrated over the roll-pitch-yaw box (the whole chart of SO(3) by default: roll and
+yaw over a full turn, pitch over [-90, 90] deg, each orientation once) with reachability from the
+generated closed-form ``ik`` (every leg reaches p on its declared branch, the joints within their limits):
+
+    GCI = int_W 1/kappa(J_w) dW / int_W dW.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from symkin.analysis import conditioning, mechanism
+from symkin.analysis.global_indices import GlobalIndex
+from symkin.analysis.integrand import Integrand
+from symkin.analysis.integrators import integrate
+from symkin.analysis.limits import within_limits
+from symkin.analysis.mechanism import Limits
+from symkin.runtime.info import GeneratedModel
+
+#: The roll-pitch-yaw chart of SO(3): each orientation once (up to the measure-zero gimbal-lock set).
+FULL_CHART = (np.array([-np.pi, -np.pi / 2, -np.pi]), np.array([np.pi, np.pi / 2, np.pi]))
+#: The measure of all of SO(3) in rad^3.
+SO3_MEASURE = 8 * np.pi**2
+ANGLES = ("roll", "pitch", "yaw")
+
+
+def is_spherical(model: GeneratedModel) -> bool:
+    """Whether ``model`` is a parallel mechanism whose task coordinates are roll, pitch, yaw."""
+    return mechanism.is_parallel(model) and tuple(mechanism.task_space(model)) == ANGLES
+
+
+def angular_velocity_matrices(p: np.ndarray) -> np.ndarray:
+    """E (..., 3, 3) with omega = E d(roll, pitch, yaw)/dt (base frame) at orientations p (..., 3)."""
+    _, pitch, yaw = np.moveaxis(np.asarray(p, dtype=np.float64), -1, 0)
+    cp, sp, cy, sy = np.cos(pitch), np.sin(pitch), np.cos(yaw), np.sin(yaw)
+    zero, one = np.zeros_like(cp), np.ones_like(cp)
+    return np.stack([np.stack([cy * cp, -sy, zero], -1), np.stack([sy * cp, cy, zero], -1),
+                     np.stack([-sp, zero, one], -1)], -2)
+
+
+def inverse_condition(model: GeneratedModel, q: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """1/kappa of the angular-velocity Jacobian at consistent (q, p): of J^-1 E^-1 (0 where singular)."""
+    E = angular_velocity_matrices(p)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        inverse = np.einsum("...ij,...jk->...ik", model.inverse_jacobian(q, p), np.linalg.inv(E))
+    finite = np.isfinite(inverse).all(axis=(-2, -1))
+    out = np.zeros(np.shape(finite))
+    out[finite] = conditioning.inverse_condition_number(inverse[finite])
+    return out
+
+
+def orientation_integrand(model: GeneratedModel, box: tuple[np.ndarray, np.ndarray] = FULL_CHART, *,
+                          limits: Limits | None = None, index: bool = True) -> Integrand:
+    """Components [1_W |cos pitch| 1/kappa, 1_W |cos pitch|] (or the measure alone) over a roll-pitch-yaw box.
+
+    Raises:
+        ValueError: the model is not a spherical platform with generated ``ik`` and ``inverse_jacobian``.
+    """
+    if not is_spherical(model):
+        raise ValueError(f"{model.name}: the orientation workspace is that of a spherical platform (task coordinates "
+                         f"roll, pitch, yaw), not of {list(mechanism.task_space(model))}")
+    for name in ("ik", "inverse_jacobian") if index else ("ik",):
+        mechanism.parallel_function(model, name)
+    joint_box = mechanism.joint_limits(model, limits)
+    revolute = mechanism.revolute_mask(model)
+    lower, upper = (np.asarray(b, dtype=np.float64) for b in box)
+
+    def function(p: np.ndarray) -> np.ndarray:
+        with np.errstate(invalid="ignore"):  # NaN where a leg cannot reach: unreachable
+            q = np.asarray(model.ik(p).joints)
+        inside = np.isfinite(q).all(axis=-1)
+        inside[inside] = within_limits(q[inside], joint_box, revolute)[1]
+        weight = np.where(inside, np.abs(np.cos(p[:, 1])), 0.0)
+        if not index:
+            return weight[:, None]
+        values = np.zeros(len(p))
+        if inside.any():
+            values[inside] = inverse_condition(model, q[inside], p[inside])
+        return np.stack([weight * values, weight], axis=-1)
+
+    components = ("index dW", "dW") if index else ("dW",)
+    return Integrand(lower, upper, function, components, ANGLES, indicator=len(components) - 1)
+
+
+def orientation_gci(model: GeneratedModel, *, method: str = "qmc", samples: int = 2**16, seed: int | None = None,
+                    box: tuple[np.ndarray, np.ndarray] = FULL_CHART, limits: Limits | None = None,
+                    **options) -> GlobalIndex:
+    """GCI over the orientation workspace and its Haar measure in rad^3 (see the module docstring)."""
+    result = integrate(orientation_integrand(model, box, limits=limits), method, samples, seed=seed, **options)
+    description = ("orientations (roll, pitch, yaw) with reachability from the closed-form ik, dW = |cos pitch| "
+                   "droll dpitch dyaw: the invariant measure of SO(3) in rad^3 (all orientations: 8 pi^2 = 78.96)")
+    caveat = "" if result.statistical else ("the reachability indicator is discontinuous: mc and qmc give a "
+                                            "confidence interval without assumptions on the boundary")
+    return GlobalIndex(result.ratio(0, 1), result.component(1), result, description, caveat)
