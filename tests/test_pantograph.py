@@ -190,3 +190,111 @@ def test_workspace_area_matches_a_monte_carlo_estimate_of_the_reachable_set(pant
     sigma = box * np.sqrt(fraction * (1 - fraction) / len(points))
     measured = analysis.workspace_measure(pantograph, samples=2**16, seed=0)
     assert abs(measured.value - monte_carlo) <= 4 * sigma + measured.error
+
+
+# --------------------------------------------------------------------------- dynamics against MuJoCo
+
+def mujoco_five_bar(v):
+    """The five-bar with the model's bodies as MuJoCo sees them: each proximal link a uniform bar, the distal
+    links massless with their mass lumped half at the elbow (welded to the proximal link) and half at the
+    handle, the handle a point mass on distal link 1, the loop closed by a point constraint (connect) at the
+    handle.  MuJoCo needs positive masses and inertias on moving bodies: the massless ones get TINY, whose
+    share of M (TINY_MASS L^2 + TINY_INERTIA ~ 1e-14 kg m^2 of 1e-4) is below the comparison's bound."""
+    import mujoco
+
+    d, l, L = v["d"], v["l"], v["L"]
+    bar = v["m_proximal"] * l**2 / 12
+    point = f'diaginertia="{TINY_INERTIA} {TINY_INERTIA} {TINY_INERTIA}"'
+    legs = []
+    for i, x in ((1, -d / 2), (2, d / 2)):
+        handle = (f'<body name="handle" pos="{L} 0 0"><inertial pos="0 0 0" mass="{v["m_handle"] + v["m_distal"]}" '
+                  f'{point}/><site name="handle1"/></body>' if i == 1 else f'<site name="handle2" pos="{L} 0 0"/>')
+        legs.append(
+            f'<body name="proximal{i}" pos="{x} 0 0">'
+            f'<joint name="theta{i}" type="hinge" axis="0 0 1" armature="{v["J_rotor"]}"/>'
+            f'<inertial pos="{l / 2} 0 0" mass="{v["m_proximal"]}" diaginertia="{TINY_INERTIA} {bar} {bar}"/>'
+            f'<body name="elbow{i}" pos="{l} 0 0"><inertial pos="0 0 0" mass="{v["m_distal"] / 2}" {point}/></body>'
+            f'<body name="distal{i}" pos="{l} 0 0"><joint name="elbow{i}" type="hinge" axis="0 0 1"/>'
+            f'<inertial pos="{L / 2} 0 0" mass="{TINY_MASS}" {point}/>{handle}</body></body>')
+    xml = (f'<mujoco><option gravity="0 0 -9.81"/><worldbody>{"".join(legs)}</worldbody>'
+           '<equality><connect site1="handle2" site2="handle1"/></equality></mujoco>')
+    model = mujoco.MjModel.from_xml_string(xml)
+    return model, mujoco.MjData(model)
+
+
+TINY_MASS, TINY_INERTIA = 1e-12, 1e-14
+#: the MuJoCo model's TINY bodies (above) and central differences of its constraint Jacobian (step 1e-5 rad:
+#: truncation ~1e-10, rounding eps / h ~ 2e-11), relative to the largest entry
+MUJOCO_AGREEMENT = 1e-9
+
+
+def reduced_mujoco_dynamics(reference, data, q, qd, qdd):
+    """(M, tau) of the closed loop in the actuated coordinates from MuJoCo's tree: tree velocities T qd with the
+    passive rows from the loop's constraint Jacobian J_c T = 0, accelerations T qdd + c with J_c c = -Jdot_c
+    qd_tree (Jdot qd by central differences), M = T^T M_tree T and tau = T^T (M_tree qdd_tree + bias_tree)."""
+    import mujoco
+
+    active, passive = [0, 2], [1, 3]
+    C = elbows(q)
+    p = handle(q)
+    distal = [np.arctan2(*(p - C[i])[::-1]) for i in range(2)]
+    position = np.array([q[0], distal[0] - q[0], q[1], distal[1] - q[1]])
+
+    def constraint_jacobian(at):
+        data.qpos[:] = at
+        mujoco.mj_forward(reference, data)
+        return data.efc_J.reshape(data.nefc, reference.nv)[:3].copy()
+
+    J = constraint_jacobian(position)
+    T = np.zeros((4, 2))
+    T[active] = np.eye(2)
+    T[passive] = np.linalg.lstsq(J[:, passive], -J[:, active], rcond=None)[0]
+    velocity = T @ qd
+    h = 1e-5
+    J_dot_qd = (constraint_jacobian(position + h * velocity) - constraint_jacobian(position - h * velocity)) @ velocity / (2 * h)
+    offset = np.zeros(4)
+    offset[passive] = np.linalg.lstsq(J[:, passive], -J_dot_qd, rcond=None)[0]
+    data.qpos[:], data.qvel[:] = position, velocity
+    mujoco.mj_forward(reference, data)
+    M = np.zeros((4, 4))
+    mujoco.mj_fullM(reference, data, M)
+    tau = T.T @ (M @ (T @ qdd + offset) + data.qfrc_bias)
+    return T.T @ M @ T, tau, p
+
+
+def test_dynamics_match_mujoco_with_the_loop_closed_by_an_equality(models, pantograph):
+    values = {p.name: float(p.value) for p in models["pantograph"].parameters}
+    reference, data = mujoco_five_bar(values)
+    rng = np.random.default_rng(6)
+    for q in sample_joint_angles(rng, 12):
+        qd, qdd = rng.uniform(-2, 2, 2), rng.uniform(-20, 20, 2)
+        M_ref, tau_ref, p = reduced_mujoco_dynamics(reference, data, q, qd, qdd)
+        M = pantograph.mass_matrix(q, p)
+        assert np.max(np.abs(M - M_ref)) <= MUJOCO_AGREEMENT * np.max(np.abs(M_ref))
+        tau = pantograph.inverse_dynamics(q, p, qd, qdd)
+        assert np.max(np.abs(tau - tau_ref)) <= MUJOCO_AGREEMENT * np.max(np.abs(tau_ref))
+
+
+def test_a_free_frictionless_motion_keeps_its_energy(pantograph):
+    """The forward dynamics in q (p = fk(q)) integrated for 0.2 s without actuator efforts: k + u stays constant to
+    the integrator's tolerance (a wrong V would feed or drain energy)."""
+    from scipy.integrate import solve_ivp
+
+    rtol = 1e-11
+
+    def state(y):
+        q, qd = y[:2], y[2:]
+        return q, pantograph.fk(q).position, qd
+
+    def rate(_t, y):
+        q, p, qd = state(y)
+        return np.concatenate([qd, pantograph.forward_dynamics(q, p, qd, np.zeros(2))])
+
+    y0 = np.concatenate([pantograph.ik(np.array([0.0, 0.1])).joints, [3.0, -2.0]])
+    solution = solve_ivp(rate, (0.0, 0.2), y0, method="DOP853", rtol=rtol, atol=rtol * 1e-2)
+    assert solution.success
+    energies = np.array([pantograph.kinetic_energy(*state(y)) + pantograph.potential_energy(*state(y)[:2])
+                         for y in solution.y.T])
+    # the local errors of ~len(t) steps, each <= rtol relative to the state, times the energy's scale
+    bound = 10 * len(solution.t) * rtol * np.max(np.abs(energies))
+    assert np.ptp(energies) <= bound and np.ptp(solution.y[0]) > 0.1  # it moved
