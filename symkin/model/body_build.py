@@ -12,7 +12,7 @@ import sympy
 
 from symkin.geometry import rotation_matrix
 from symkin.model.reader import X_AXIS, Y_AXIS, Z_AXIS, ZERO, Reader, describe, frame_ops
-from symkin.model.schema import Actuator, Body, Friction, Joint, ParallelBodies, Rotation, Vec3
+from symkin.model.schema import Actuator, Body, Friction, Joint, ParallelBodies, Vec3, fixed_pose
 from symkin.model.yaml_source import KeyPath
 
 _INERTIA_KEYS = ("xx", "yy", "zz", "xy", "xz", "yz")
@@ -112,12 +112,7 @@ def _body_in_link_frame(r: Reader, path: KeyPath, value: Any, com: Vec3, inertia
     ops = frame_ops(r, path, value)
     if ops is None:
         return None, None
-    R, p = sympy.eye(3), sympy.zeros(3, 1)
-    for op in ops:
-        if isinstance(op, Rotation):
-            R = R * rotation_matrix(op.axis, op.angle)
-        else:
-            p = p + R * sympy.Matrix(op.vector)
+    R, p = fixed_pose(ops)
     c = p + R * sympy.Matrix(com)
     return (c[0], c[1], c[2]), R * inertia * R.T
 

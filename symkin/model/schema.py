@@ -21,6 +21,7 @@ from enum import Enum
 import sympy
 
 from symkin.errors import Problem
+from symkin.geometry import rotation_matrix
 from symkin.model import joint_kinds
 from symkin.model.joint_kinds import kind as joint_kind
 
@@ -50,6 +51,17 @@ class Translation:
 
 
 Op = Rotation | Translation
+
+
+def fixed_pose(ops: tuple[Op, ...]) -> tuple[sympy.Matrix, sympy.Matrix]:
+    """(R, p) of the frame reached from the identity by fixed operations (moving-frame order, left to right)."""
+    rotation, origin = sympy.eye(3), sympy.zeros(3, 1)
+    for op in ops:
+        if isinstance(op, Rotation):
+            rotation = rotation * rotation_matrix(op.axis, op.angle)
+        else:
+            origin = origin + rotation * sympy.Matrix(op.vector)
+    return rotation, origin
 
 
 @dataclass(frozen=True)

@@ -24,9 +24,8 @@ from fractions import Fraction
 
 import sympy
 
-from symkin.geometry import rotation_matrix
 from symkin.model import joint_kinds
-from symkin.model.schema import Model, Op, PlatformMotion, Rotation
+from symkin.model.schema import Model, PlatformMotion, fixed_pose
 
 SPATIAL = 6
 PLANAR = 3
@@ -126,19 +125,8 @@ def idle_platform_spin(model: Model) -> int:
     parallel = model.parallel
     if parallel.motion is not PlatformMotion.PLANAR or "yaw" in parallel.coordinates:
         return 0
-    attachments = {tuple(sympy.simplify(c) for c in _origin(leg.platform)) for leg in parallel.legs}
+    attachments = {tuple(sympy.simplify(c) for c in fixed_pose(leg.platform)[1]) for leg in parallel.legs}
     return 1 if len(attachments) == 1 else 0
-
-
-def _origin(ops: tuple[Op, ...]) -> sympy.Matrix:
-    """The origin of the frame reached by fixed operations (moving-frame order, left to right)."""
-    rotation, origin = sympy.eye(3), sympy.zeros(3, 1)
-    for op in ops:
-        if isinstance(op, Rotation):
-            rotation = rotation * rotation_matrix(op.axis, op.angle)
-        else:
-            origin = origin + rotation * sympy.Matrix(op.vector)
-    return origin
 
 
 def model_mobility(model: Model) -> MobilityReport:
