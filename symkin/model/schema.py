@@ -463,7 +463,7 @@ class Parallel:
         coordinates: the platform's task coordinates p, a subset of :data:`PLATFORM_COORDINATES` in
             its order (``x, y, z`` for a translational platform).
         legs: the kinematic chains, in order.
-        fk_branch: +1 or -1, the root of the closed-form forward kinematics (trilateration).
+        fk_branch: +1 or -1, the root of the closed-form forward kinematics (trilateration, circle intersection).
         identical: identical (idle) conditions declared in addition to the detected ones
             (f_id of eq. 8.2).
         constraints: constraints that must hold for the mechanism to move (s of eq. 8.2).
