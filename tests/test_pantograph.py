@@ -130,11 +130,14 @@ def test_both_assembly_modes(tmp_path):
     text = (MODELS / "pantograph.yaml").read_text().replace("fk_branch: positive", "fk_branch: negative")
     (tmp_path / "pantograph.yaml").write_text(text)
     model = load_model(tmp_path / "pantograph.yaml")
-    pipeline.write(pipeline.generate(model, pipeline.resolve_request(model, "fk", "numpy")), tmp_path / "out")
+    pipeline.write(pipeline.generate(model, pipeline.resolve_request(model, "fk,jacobian", "numpy")), tmp_path / "out")
     mirrored = load(tmp_path / "out" / "pantograph", backend="numpy")
     q = np.array([2.0, 1.0])
     p, _ = mirrored.fk(q)
-    assert np.allclose(p, handle(q, side=-1), atol=KINEMATICS * PANTOGRAPH_SCALE * 10)
+    expected = handle(q, side=-1)
+    assert np.linalg.norm(expected - handle(q)) > 0.05  # the other assembly mode, far from the first
+    kappa = np.linalg.cond(mirrored.jacobian(q, expected))
+    assert np.linalg.norm(p - expected) <= KINEMATICS * PANTOGRAPH_SCALE * kappa
 
 
 @pytest.mark.parametrize("motion, message", [

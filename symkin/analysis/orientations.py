@@ -29,6 +29,7 @@ from symkin.analysis.integrand import Integrand
 from symkin.analysis.integrators import integrate
 from symkin.analysis.limits import within_limits
 from symkin.analysis.mechanism import Limits
+from symkin.analysis.parallel import angular_velocity_matrix
 from symkin.runtime.info import GeneratedModel
 
 #: The roll-pitch-yaw chart of SO(3): each orientation once (up to the measure-zero gimbal-lock set).
@@ -43,18 +44,9 @@ def is_spherical(model: GeneratedModel) -> bool:
     return mechanism.is_parallel(model) and tuple(mechanism.task_space(model)) == ANGLES
 
 
-def angular_velocity_matrices(p: np.ndarray) -> np.ndarray:
-    """E (..., 3, 3) with omega = E d(roll, pitch, yaw)/dt (base frame) at orientations p (..., 3)."""
-    _, pitch, yaw = np.moveaxis(np.asarray(p, dtype=np.float64), -1, 0)
-    cp, sp, cy, sy = np.cos(pitch), np.sin(pitch), np.cos(yaw), np.sin(yaw)
-    zero, one = np.zeros_like(cp), np.ones_like(cp)
-    return np.stack([np.stack([cy * cp, -sy, zero], -1), np.stack([sy * cp, cy, zero], -1),
-                     np.stack([-sp, zero, one], -1)], -2)
-
-
 def inverse_condition(model: GeneratedModel, q: np.ndarray, p: np.ndarray) -> np.ndarray:
     """1/kappa of the angular-velocity Jacobian at consistent (q, p): of J^-1 E^-1 (0 where singular)."""
-    E = angular_velocity_matrices(p)
+    E = angular_velocity_matrix(p)
     with np.errstate(invalid="ignore", divide="ignore"):
         inverse = np.einsum("...ij,...jk->...ik", model.inverse_jacobian(q, p), np.linalg.inv(E))
     finite = np.isfinite(inverse).all(axis=(-2, -1))

@@ -168,12 +168,13 @@ def parallel_inverse(model: GeneratedModel) -> ParallelInverse | ConstantOrienta
         return constant_orientation_inverse(model)
     if not mechanism.is_parallel(model):
         raise ValueError(f"{model.name}: not a parallel mechanism")
-    if not set(mechanism.task_space(model)) & set(mechanism.POSITION_COMPONENTS):
+    kind = mechanism.parallel_kind(mechanism.task_space(model))
+    if kind == "parallel orientation":
         raise ValueError(f"{model.name}: the platform only turns (task space {list(mechanism.task_space(model))}): "
                          "its workspace is a set of orientations, which the positional workspace and GCI analyses do "
                          "not cover; rate it with the generated inverse_jacobian and singularities at chosen "
                          "orientations")
-    if not set(mechanism.task_space(model)) <= set(mechanism.POSITION_COMPONENTS):
+    if kind == "parallel pose":
         raise ValueError(f"{model.name}: the platform also rotates (task space {list(mechanism.task_space(model))}): "
                          "its Cartesian workspace is analysed at a constant orientation "
                          "(symkin.analysis.parallel.constant_orientation(model, (roll, pitch, yaw)))")
@@ -198,15 +199,18 @@ SPHERE_TOLERANCE = 1e-9
 
 
 def angular_velocity_matrix(orientation: np.ndarray) -> np.ndarray:
-    """E (3, 3) with omega = E d(roll, pitch, yaw)/dt, omega in the base frame, R = Rz(yaw) Ry(pitch) Rx(roll).
+    """E (..., 3, 3) with omega = E d(roll, pitch, yaw)/dt, omega in the base frame, R = Rz(yaw) Ry(pitch)
+    Rx(roll), at orientations (..., 3).
 
     omega = e_z dyaw + Rz(yaw) e_y dpitch + Rz(yaw) Ry(pitch) e_x droll, so the columns of E
     are Rz Ry e_x = (cy cp, sy cp, -sp), Rz e_y = (-sy, cy, 0) and e_z; E = I at roll = pitch =
     yaw = 0 and det E = cos(pitch).
     """
-    _, pitch, yaw = orientation
+    _, pitch, yaw = np.moveaxis(np.asarray(orientation, dtype=np.float64), -1, 0)
     cp, sp, cy, sy = np.cos(pitch), np.sin(pitch), np.cos(yaw), np.sin(yaw)
-    return np.array([[cy * cp, -sy, 0.0], [sy * cp, cy, 0.0], [-sp, 0.0, 1.0]])
+    zero, one = np.zeros_like(cp), np.ones_like(cp)
+    return np.stack([np.stack([cy * cp, -sy, zero], -1), np.stack([sy * cp, cy, zero], -1),
+                     np.stack([-sp, zero, one], -1)], -2)
 
 
 class ConstantOrientation:

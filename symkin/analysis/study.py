@@ -119,10 +119,10 @@ def _cartesian_report(occupancy: Occupancy, values: np.ndarray) -> list[str]:
     boundary = occupancy.boundary()
     interior = occupancy.interior()
     d = occupancy.occupied.ndim
-    lines = [f"{'area' if d == 2 else 'volume'}: {occupancy.measure()} m^{d} (Cartesian grid of {occupancy.cell[0]:.3g} m "
-             "cells, reachability "
-             f"by ik in the working mode: between interior and all reachable cells, a bracket unless thin parts of the "
-             f"workspace fall between cell centres); {int(boundary.sum())} boundary cells"]
+    lines = [f"{'area' if d == 2 else 'volume'}: {occupancy.measure()} m^{d} (Cartesian grid of "
+             f"{occupancy.cell[0]:.3g} m cells, reachability by ik in the working mode: between interior and all "
+             "reachable cells, a bracket unless thin parts of the workspace fall between cell centres); "
+             f"{int(boundary.sum())} boundary cells"]
     if interior.any():
         lines.append(f"1/kappa at the cell centres: min {np.nanmin(values[boundary]):.4g} on boundary cells, "
                      f"min {np.nanmin(values[interior]):.4g} on interior cells")

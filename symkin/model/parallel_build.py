@@ -117,8 +117,8 @@ def _checked(r: Reader, path: KeyPath, parallel: Parallel) -> Parallel:
         r.fail(path + ("legs",), "two legs have the same name", "give every leg its own name")
     active = sum(1 for leg in parallel.legs for joint in leg.joints if joint.active is not None)
     if active != parallel.task_dof:
-        r.fail(path, f"the platform has {parallel.task_dof} degrees of freedom ({', '.join(parallel.coordinates)}) but the legs "
-                     f"have {active} active joints",
+        r.fail(path, f"the platform has {parallel.task_dof} degrees of freedom ({', '.join(parallel.coordinates)}) "
+                     f"but the legs have {active} active joints",
                f"mark exactly {parallel.task_dof} joints 'active: true' (fully actuated, seed sec. 2.2)")
     if len(parallel.legs) < 2:
         r.fail(path + ("legs",), "a parallel mechanism has at least two legs (seed sec. 1.3)",

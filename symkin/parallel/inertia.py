@@ -102,6 +102,7 @@ def _platform(model: Model, bodies: ParallelBodies, legs: tuple[DistanceLeg, ...
     W = body_angular_velocity_matrix(model)
     coupling = -J_v.T * platform_R * skew(h) * W  # v_o . R (w_b x h) = -v_o . R [h]x w_b
     M = m * J_v.T * J_v + coupling + coupling.T + W.T * I_o * W
+    # a platform that does not turn has a potential linear in p: expanded, as the DELTA's has always been emitted
     return sympy.ImmutableMatrix(M), sympy.expand(potential) if W.is_zero_matrix else potential
 
 
@@ -148,8 +149,9 @@ def split_inertia(model: Model, legs: tuple[DistanceLeg, ...], chains: tuple[Leg
         raise DerivationError(f"model '{model.name}' declares no bodies, so it has no dynamics; add a 'bodies:' "
                               "section (platform, actuated_link, rod, rotor; see docs/model-format.md)")
     if model.parallel.motion is PlatformMotion.SPHERICAL:  # type: ignore[union-attr]
-        raise DerivationError(f"model '{model.name}': the dynamics of a spherical platform's legs (distal links turning "
-                              "about the centre, not rods between point joints) are not derived yet; remove 'bodies:'")
+        raise DerivationError(f"model '{model.name}': the dynamics of a spherical platform's legs (distal links "
+                              "turning about the centre, not rods between point joints) are not derived yet; remove "
+                              "'bodies:'")
     sides = [_actuator_side(model, bodies, leg, chain) for leg, chain in zip(legs, chains)]
     M_p, u_p = _platform(model, bodies, legs, platform)
     return Inertia(tuple(s[0] for s in sides), sum((s[1] for s in sides), sympy.Integer(0)), M_p, u_p)

@@ -253,17 +253,20 @@ def run_stability(model: Model, *, samples: int = 32, float32_samples: int = 16,
 
         calls = itertools.count()
 
-        def states_at(count: int, scale: float = 1.0) -> dict[str, np.ndarray]:
+        def states_at(count: int, scale: float = 1.0, moved: dict[str, np.ndarray] | None = None
+                      ) -> dict[str, np.ndarray]:
             """Random states, plus any input group they lack in [-0.5, 0.5]: the passive joint variables s from
             the run's stream, every other group (forces, efforts) from a generator of its own (seed, group,
             call), so that a quantity with a new input group leaves the states of the others as they were.
-            The passive joints are then solved from the loop closure (:func:`assembled_passive`)."""
+            ``moved`` replaces groups (a path's q and p) before the passive joints are solved from the loop
+            closure (:func:`assembled_passive`)."""
             states = random_states(model, count, rng, scale=scale, ik=ik)
             call = next(calls)
             for group, size in sizes.items():
                 if group not in states:
                     source = rng if group == "s" else np.random.default_rng([seed, zlib.crc32(group.encode()), call])
                     states[group] = source.uniform(-0.5, 0.5, size=(count, size))
+            states.update(moved or {})
             if "s" in sizes:
                 states["s"] = assembled_passive(loaded.bind(**parameter_values(model, scale)), states)
             return states
@@ -306,10 +309,7 @@ def run_stability(model: Model, *, samples: int = 32, float32_samples: int = 16,
             run.paths = singular_paths(model, getattr(loaded, task_matrix), rng, max_paths, ik=ik, reach=max(steps))
             for path in run.paths:
                 progress(f"path {path.label}")
-                states = states_at(len(steps))
-                states.update(path.states(np.asarray(steps)))
-                if "s" in sizes:
-                    states["s"] = assembled_passive(loaded.bind(**defaults), states)
+                states = states_at(len(steps), moved=path.states(np.asarray(steps)))
                 check("singular", states, defaults, path.label, lambda k: steps[k])
         for scale in scales:
             progress(f"length scale {scale:g}")
