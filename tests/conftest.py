@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from symkin import load, pipeline
+from symkin import load
 from symkin.derivation import Derivation
 from symkin.ir.evaluate import lambdify_spec
 from symkin.ir.spec import FunctionSpec, combine_functions
@@ -27,6 +27,11 @@ from symkin.model import Model, load_model
 FOREIGN_ARITHMETIC = os.environ.get("SYMKIN_TEST_ARITHMETIC") == "foreign"
 NUMERICS_MODULES = {"test_stability", "test_backends_agree", "test_pinocchio", "test_dynamics_newton_euler",
                     "test_dynamics_ur10e", "test_numpy_backend", "test_golden", "test_tolerances"}
+
+# Importing a generated numpy module from generated/ must not leave a __pycache__ in it (nor in the
+# commands the tests run: they inherit the environment).
+sys.dont_write_bytecode = True
+os.environ["PYTHONDONTWRITEBYTECODE"] = "1"
 
 ROOT = Path(__file__).resolve().parent.parent
 MODELS_DIR = ROOT / "models"
@@ -242,12 +247,11 @@ def loaded(generated_dir):
 
 
 @pytest.fixture(scope="session")
-def generated_dir(tmp_path_factory, models) -> Path:
-    """All example models derived with their scenes into a session temp directory."""
-    out = tmp_path_factory.mktemp("generated")
-    for model in models.values():
-        pipeline.write(pipeline.generate(model, pipeline.resolve_request(model)), out)
-    return out
+def generated_dir() -> Path:
+    """The committed generated/: every example model derived with its scene.  tests/test_golden.py checks
+    that it is byte for byte what `symkin derive` gives now, so the tests read it instead of deriving every
+    model again in each worker (and no test writes into it: copy it first)."""
+    return GENERATED_DIR
 
 
 #: Modules whose tests take longest (the 50-digit stability runs, the documents run as written): collected
