@@ -15,13 +15,17 @@ from symkin.structure.mobility import (bodies_of_legs, degree_of_parallelism, gr
                                        model_mobility, parallelism_class)
 from symkin.structure.synthesis import leg_topologies, synthesize
 
-INTENDED = {"planar_2r": 2, "ur10e": 6, "ur10e_classic": 6, "delta": 3, "stewart": 6, "pantograph": 2, "agile_eye": 3}
+INTENDED = {"planar_2r": 2, "ur10e": 6, "ur10e_classic": 6, "delta": 3, "stewart": 6, "pantograph": 2, "agile_eye": 3,
+            "delta_wrist": 6}
 
 
 @pytest.mark.parametrize("name", EXAMPLE_MODELS)
 def test_mobility_of_every_example_model_is_its_intended_dof(name, models):
-    report = model_mobility(models[name])
-    assert report.mobility == report.intended == INTENDED[name] == models[name].dof
+    model = models[name]
+    report = model_mobility(model)
+    wrist = model.parallel.wrist if model.parallel is not None else None
+    wrist_dof = 0 if wrist is None else len(wrist.coordinates)  # a hybrid device moves by its legs and its wrist
+    assert report.mobility == report.intended == INTENDED[name] == model.dof + wrist_dof
 
 
 def test_mobility_terms_of_the_parallel_examples(models):

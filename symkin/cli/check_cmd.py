@@ -33,6 +33,10 @@ def run_check(args: argparse.Namespace) -> int:
             legs = ", ".join(f"{leg.name}:{''.join(j.type.value for j in leg.joints)}" for leg in model.parallel.legs)
             structure = (f"parallel, {len(model.parallel.legs)} legs ({legs}), {model.dof} actuated "
                          f"({', '.join(f'{j.name}:{j.type.value}' for j in model.coordinates)})")
+            wrist = model.parallel.wrist
+            if wrist is not None:
+                structure += (f", a wrist of {len(wrist.joints)} joints on the platform "
+                              f"({', '.join(f'{j.name}:{j.type.value}' for j in wrist.joints)})")
         print(f"{path}: ok - model '{model.name}', {structure}, "
               f"{len(model.parameters)} parameters, {len(model.bodies)} bodies, "
               f"task space [{', '.join(model.task_space)}]; "

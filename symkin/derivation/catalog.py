@@ -15,10 +15,11 @@ from symkin.ir.quantity import MECHANISMS, QuantityDef
 from symkin.kinematics import quantities as kinematics_quantities
 from symkin.parallel import dynamics as parallel_dynamics
 from symkin.parallel import forces as parallel_forces
+from symkin.parallel import hybrid
 from symkin.parallel import quantities as parallel_quantities
 
 QUANTITY_MODULES: tuple[ModuleType, ...] = (kinematics_quantities, dynamics_quantities, parallel_quantities,
-                                            parallel_forces, parallel_dynamics)
+                                            parallel_forces, parallel_dynamics, hybrid)
 
 
 def collect(modules: tuple[ModuleType, ...]) -> dict[str, dict[str, QuantityDef]]:

@@ -40,6 +40,11 @@ class Derivation:
         self.computed: list[str] = []
         self.seconds: dict[str, float] = {}
 
+    def of(self, model: Model) -> Derivation:
+        """A new graph for a model built from this one (a hybrid device's serial chain,
+        :mod:`symkin.parallel.hybrid`): quantities ask for it through a memoized quantity of their own."""
+        return Derivation(model)
+
     def _definition(self, name: str) -> QuantityDef:
         if name not in catalog.QUANTITIES:
             raise DerivationError(f"unknown quantity {name!r}; known: {', '.join(sorted(catalog.QUANTITIES))}")

@@ -18,8 +18,8 @@ from symkin.model.yaml_source import KeyPath
 _INERTIA_KEYS = ("xx", "yy", "zz", "xy", "xz", "yz")
 
 
-def read_bodies(r: Reader, value: Any, links: tuple[str, ...]) -> tuple[Body, ...]:
-    path: KeyPath = ("bodies",)
+def read_bodies(r: Reader, value: Any, links: tuple[str, ...], path: KeyPath = ("bodies",)) -> tuple[Body, ...]:
+    """The bodies of a serial model's links (``bodies:``, or a hybrid device's ``wrist.bodies``)."""
     items = r.sequence(path, value, what="bodies")
     if items is None:
         return ()
@@ -187,18 +187,21 @@ def _check_inertia_physical(r: Reader, path: KeyPath, tensor: sympy.Matrix, mass
                               "proceed as simulators do, pass --allow-nonphysical (or 'allow_nonphysical: true')")
 
 
-def _per_joint(r: Reader, key: str, value: Any, joint_names: tuple[str, ...]) -> Iterator[tuple[str, KeyPath, Any]]:
+def _per_joint(r: Reader, path: KeyPath, value: Any, joint_names: tuple[str, ...]
+               ) -> Iterator[tuple[str, KeyPath, Any]]:
     """(joint, key path, entry) of a section keyed by joint names (``friction:``, ``actuators:``); unknown
     joints are reported by the mapping check and skipped."""
-    section = r.mapping((key,), value, optional=joint_names)
+    section = r.mapping(path, value, optional=joint_names)
     for jname, spec in (section or {}).items():
         if jname in joint_names:
-            yield jname, (key, jname), spec
+            yield jname, path + (jname,), spec
 
 
-def read_friction(r: Reader, value: Any, joint_names: tuple[str, ...]) -> tuple[Friction, ...]:
+def read_friction(r: Reader, value: Any, joint_names: tuple[str, ...], path: KeyPath = ("friction",)
+                  ) -> tuple[Friction, ...]:
+    """Per-joint friction (``friction:``, or a hybrid device's ``wrist.friction``)."""
     out = []
-    for jname, fpath, spec in _per_joint(r, "friction", value, joint_names):
+    for jname, fpath, spec in _per_joint(r, path, value, joint_names):
         spec = r.mapping(fpath, spec, optional=("viscous", "coulomb", "smoothing_velocity"))
         if spec is None:
             continue
@@ -233,11 +236,12 @@ def read_friction(r: Reader, value: Any, joint_names: tuple[str, ...]) -> tuple[
     return tuple(out)
 
 
-def read_actuators(r: Reader, value: Any, joint_names: tuple[str, ...]) -> tuple[Actuator, ...]:
-    """``actuators:`` of a serial model: {joint: {rotor_inertia, gear_ratio, torque_constant, peak_current,
-    continuous_current}}, all >= 0 (the gear ratio > 0)."""
+def read_actuators(r: Reader, value: Any, joint_names: tuple[str, ...], path: KeyPath = ("actuators",)
+                   ) -> tuple[Actuator, ...]:
+    """``actuators:`` of a serial model (or a hybrid device's wrist): {joint: {rotor_inertia, gear_ratio,
+    torque_constant, peak_current, continuous_current}}, all >= 0 (the gear ratio > 0)."""
     out = []
-    for jname, apath, spec in _per_joint(r, "actuators", value, joint_names):
+    for jname, apath, spec in _per_joint(r, path, value, joint_names):
         spec = r.mapping(apath, spec, optional=ACTUATOR_KEYS + ("gyroscopic",))
         if spec is None:
             continue

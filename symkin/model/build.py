@@ -23,6 +23,7 @@ from symkin.model.schema import Model
 from symkin.model.rotors import with_rotors
 from symkin.model.serial_build import read_serial, read_tip
 from symkin.model.task_space_build import read_task_space
+from symkin.model.wrist_build import read_wrist
 from symkin.model.yaml_source import Document
 
 #: Version of the model format; part of the model hash.
@@ -31,7 +32,7 @@ FORMAT_VERSION = 1
 #: so that choosing other outputs, backends or folded parameters keeps the mechanism's identity.
 EMISSION_KEYS = ("scene",)
 TOP_LEVEL_KEYS = ("name", "description", "references", "notes", "allow_nonphysical", "source_names", "parameters",
-                  "serial", "parallel", "task_space", "bodies", "gravity", "friction", "actuators", "scene")
+                  "serial", "parallel", "wrist", "task_space", "bodies", "gravity", "friction", "actuators", "scene")
 
 
 def build_model(doc: Document, stem: str, allow_nonphysical: bool = False) -> Model:
@@ -83,6 +84,15 @@ def build_model(doc: Document, stem: str, allow_nonphysical: bool = False) -> Mo
         parallel = dataclasses.replace(parallel, bodies=read_parallel_bodies(r, data["bodies"]))
     gravity = r.vector3(("gravity",), data["gravity"]) if "gravity" in data else (ZERO, ZERO, ZERO)
     friction = read_friction(r, data.get("friction", {}), coordinate_names)
+    if "wrist" in data and parallel is None:
+        r.fail(("wrist",), "a wrist is carried by a parallel platform; a serial chain goes on in 'serial:'",
+               "append the wrist's joints to the serial chain, or declare the mechanism under 'parallel:'")
+    elif "wrist" in data and parallel is not None:
+        wrist, wrist_friction = read_wrist(r, data["wrist"], parallel)
+        if wrist is not None:
+            check_name_clashes(r, parameters, derived, wrist.joints)
+        parallel = dataclasses.replace(parallel, wrist=wrist)
+        friction += wrist_friction
     actuators = read_actuators(r, data.get("actuators", {}), tuple(j.name for j in joints))
     joints = with_motor_effort_limits(joints, actuators)
     joints, bodies = with_rotors(r, joints, actuators, bodies)

@@ -63,8 +63,9 @@ MOTION_SHORTHANDS = {PlatformMotion.TRANSLATION.value: ("x", "y", "z"),
                      PlatformMotion.PLANAR.value: ("x", "y", "yaw"),
                      PlatformMotion.SPHERICAL.value: ("roll", "pitch", "yaw"),
                      PlatformMotion.SCHOENFLIES.value: ("x", "y", "z", "yaw")}
-#: Names of the vector inputs of parallel functions (besides q): platform pose and passive joints.
-PARALLEL_INPUT_NAMES = ("p", "s")
+#: Names of the vector inputs of parallel functions (besides q): platform pose, passive joints and a hybrid
+#: device's wrist coordinates.
+PARALLEL_INPUT_NAMES = ("p", "s", "qw")
 
 
 

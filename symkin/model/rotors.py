@@ -23,12 +23,13 @@ import sympy
 from symkin.model import joint_kinds, tree
 from symkin.model.reader import Reader
 from symkin.model.schema import Actuator, Body, Coupling, Joint
+from symkin.model.yaml_source import KeyPath
 
 ZERO = sympy.Integer(0)
 
 
-def with_rotors(r: Reader, joints: tuple[Joint, ...], actuators: tuple[Actuator, ...], bodies: tuple[Body, ...]
-                ) -> tuple[tuple[Joint, ...], tuple[Body, ...]]:
+def with_rotors(r: Reader, joints: tuple[Joint, ...], actuators: tuple[Actuator, ...], bodies: tuple[Body, ...],
+                path: KeyPath = ("actuators",)) -> tuple[tuple[Joint, ...], tuple[Body, ...]]:
     """The joints with a rotor joint before each joint whose actuator is ``gyroscopic``, and the bodies
     with the rotors' (problems: a prismatic or coupled joint, a name already taken)."""
     gyroscopic = {a.joint: a for a in actuators if a.gyroscopic}
@@ -45,9 +46,9 @@ def with_rotors(r: Reader, joints: tuple[Joint, ...], actuators: tuple[Actuator,
         if drive is None:
             out.append(dataclasses.replace(joint, parent=carrier))
             continue
-        path = ("actuators", joint.name, "gyroscopic")
+        where = path + (joint.name, "gyroscopic")
         if not joint_kinds.is_rotation(joint.type) or joint.coupling is not None:
-            r.fail(path, f"joint '{joint.name}' is {'coupled' if joint.coupling is not None else 'prismatic'}: "
+            r.fail(where, f"joint '{joint.name}' is {'coupled' if joint.coupling is not None else 'prismatic'}: "
                          "a gyroscopic rotor turns N times a revolute joint's own coordinate",
                    "drop 'gyroscopic' (the reflected inertia N^2 J_m stays)")
             out.append(dataclasses.replace(joint, parent=carrier))
@@ -55,7 +56,7 @@ def with_rotors(r: Reader, joints: tuple[Joint, ...], actuators: tuple[Actuator,
         name, link = f"{joint.name}_rotor", f"{joint.link}_rotor"
         taken = sorted({name, link} & names)
         if taken:
-            r.fail(path, f"the rotor's joint or link name '{taken[0]}' is taken", "rename that joint or link")
+            r.fail(where, f"the rotor's joint or link name '{taken[0]}' is taken", "rename that joint or link")
         out.append(Joint(name=name, type=joint.type, axis=joint.axis, offset=ZERO, before=joint.before, after=(),
                          link=link, coupling=Coupling(((joint.name, drive.gear_ratio),), ZERO), parent=carrier))
         axis = sympy.Matrix(joint.axis)

@@ -456,6 +456,39 @@ class PlatformMotion(str, Enum):
 
 
 @dataclass(frozen=True)
+class Wrist:
+    """A serial chain carried by the platform of a parallel mechanism (a hybrid device: a DELTA with a
+    3R wrist, as Force Dimension's omega.7 and sigma.7; ``wrist:`` of a parallel model).
+
+    Its joints, bodies and actuators are a serial model's (:class:`Joint`, :class:`Body`,
+    :class:`Actuator`); the chain starts in the platform (TCP) frame, where a serial chain starts in
+    the base frame, and a joint's ``parent: base`` names the platform.  The device's combined
+    coordinates are the platform's task coordinates p followed by the wrist's coordinates qw
+    (:mod:`symkin.parallel.hybrid`).
+
+    Attributes:
+        joints: the wrist's joints, platform to tip.
+        base: fixed operations from the platform frame to the first joint's parent frame.
+        tcp: fixed operations from the tip link frame to the device's TCP (the handle, the tool).
+        tip: the link that carries the TCP, None for the last joint's link.
+        bodies: mass properties of the wrist's links.
+        actuators: the drives of the wrist's joints.
+    """
+
+    joints: tuple[Joint, ...]
+    base: tuple[Op, ...] = ()
+    tcp: tuple[Op, ...] = ()
+    tip: str | None = None
+    bodies: tuple[Body, ...] = ()
+    actuators: tuple[Actuator, ...] = ()
+
+    @property
+    def coordinates(self) -> tuple[Joint, ...]:
+        """The wrist's own coordinates qw: its joints but the followers (:class:`Coupling`)."""
+        return tuple(j for j in self.joints if not j.follower)
+
+
+@dataclass(frozen=True)
 class Parallel:
     """The structure of a parallel mechanism.
 
@@ -471,6 +504,7 @@ class Parallel:
         home: a reachable platform pose (task coordinates): the default start of numerical
             solvers and the centre of sampled workspaces; None if not declared.
         bodies: mass properties of the legs and the platform; None for a kinematic model.
+        wrist: the serial chain the platform carries (a hybrid device), None for a plain parallel mechanism.
     """
 
     coordinates: tuple[str, ...]
@@ -481,6 +515,7 @@ class Parallel:
     kind: str = "legs"
     home: tuple[sympy.Expr, ...] | None = None
     bodies: ParallelBodies | None = None
+    wrist: Wrist | None = None
 
     @property
     def motion(self) -> PlatformMotion:

@@ -34,8 +34,9 @@ DH_CONVENTIONS = {"classic": "classic", "distal": "classic", "modified": "modifi
 DH_COLUMNS = ("name", "type", "theta", "d", "a", "alpha")
 
 
-def read_serial(r: Reader, section: Any) -> tuple[tuple[Joint, ...], tuple[Op, ...], tuple[Op, ...]]:
-    path: KeyPath = ("serial",)
+def read_serial(r: Reader, section: Any, path: KeyPath = ("serial",)
+                ) -> tuple[tuple[Joint, ...], tuple[Op, ...], tuple[Op, ...]]:
+    """(joints, base, tcp) of the serial section at ``path`` (``serial:``, or a hybrid device's ``wrist:``)."""
     section = r.mapping(path, section, optional=("dh", "chain", "base", "tcp", "tip"))
     if section is None:
         return (), (), ()
@@ -64,14 +65,14 @@ def read_serial(r: Reader, section: Any) -> tuple[tuple[Joint, ...], tuple[Op, .
     return tuple(joints), base or (), tcp or ()
 
 
-def read_tip(r: Reader, section: Any, joints: tuple[Joint, ...]) -> str | None:
+def read_tip(r: Reader, section: Any, joints: tuple[Joint, ...], path: KeyPath = ("serial",)) -> str | None:
     """``serial.tip``: the link that carries the TCP (default: the last joint's link)."""
     if not isinstance(section, dict) or "tip" not in section:
         return None
-    tip = r.name(("serial", "tip"), section["tip"])
+    tip = r.name(path + ("tip",), section["tip"])
     links = [j.link for j in joints]
     if tip is not None and joints and tip not in links:
-        r.fail(("serial", "tip"), f"the tip '{tip}' is not a link of the chain",
+        r.fail(path + ("tip",), f"the tip '{tip}' is not a link of the chain",
                f"name one of: {', '.join(links)}")
         return None
     return tip

@@ -140,6 +140,14 @@ def model_mobility(model: Model) -> MobilityReport:
     legs = model.parallel.legs
     dofs = tuple(j.type.dof for leg in legs for j in leg.joints)
     identical = idle_rods(model) + idle_platform_spin(model) + model.parallel.identical
-    return MobilityReport(model.name, "parallel", model.parallel.motion.spatial_factor,
-                          bodies_of_legs(len(dofs), len(legs)), dofs, identical,
-                          model.parallel.constraints, len(legs), model.parallel.task_dof)
+    bodies = bodies_of_legs(len(dofs), len(legs))
+    wrist = model.parallel.wrist
+    if wrist is not None:
+        # an open chain on the platform: each joint adds a body and its DoF, lambda (1 - 1) + 1 = 1 whatever
+        # lambda is; a follower's DoF is taken by its coupling, as in a serial chain
+        dofs += tuple(1 for _ in wrist.joints)
+        bodies += len(wrist.joints)
+        identical += len(wrist.joints) - len(wrist.coordinates)
+    intended = model.parallel.task_dof + (0 if wrist is None else len(wrist.coordinates))
+    return MobilityReport(model.name, "parallel", model.parallel.motion.spatial_factor, bodies, dofs, identical,
+                          model.parallel.constraints, len(legs), intended)
