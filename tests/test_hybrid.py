@@ -17,7 +17,7 @@ from conftest import MODELS_DIR, SYMKIN_CLI
 from symkin import load, load_model
 from symkin.derivation import Derivation
 from symkin.errors import DerivationError, ModelError
-from tolerances import DELTA_SCALE, KINEMATICS
+from tolerances import DELTA_SCALE, DYNAMICS, KINEMATICS
 
 W, H = 0.05, 0.03  # wrist centre below the platform, grip point along the handle (models/delta_wrist.yaml)
 
@@ -136,3 +136,125 @@ def test_a_wrist_on_a_serial_chain_is_refused_on_the_command_line(tmp_path):
     run = subprocess.run([*SYMKIN_CLI, "check", str(path)], capture_output=True, text=True)
     assert run.returncode == 2
     assert "a wrist is carried by a parallel platform" in run.stderr and "arm.yaml" in run.stderr
+
+
+# --------------------------------------------------------------------------- the dynamics of the whole device
+
+M_PLATFORM = 0.021  # the DELTA's platform plate without the handle (models/delta_wrist.yaml)
+STEP = 1e-5
+
+
+def pinocchio_device_with_bodies() -> tuple[pin.Model, int]:
+    """:func:`pinocchio_device` with the wrist's bodies (models/delta_wrist.yaml; the platform joints massless)."""
+    model, tool = pinocchio_device()
+    bar = 0.04 ** 2 / 12  # slender forks of 40 mm
+    r, length = 0.01, 0.08  # the handle, a cylinder along its y axis
+    bodies = {"psi1": pin.Inertia(0.012, np.zeros(3), np.diag([0.012 * bar, 0.012 * bar, 0])),
+              "psi2": pin.Inertia(0.009, np.zeros(3), np.diag([0, 0.009 * bar, 0.009 * bar])),
+              "psi3": pin.Inertia(0.03, np.array([0, H, 0]), 0.03 * np.diag([(3 * r * r + length ** 2) / 12, r * r / 2,
+                                                                              (3 * r * r + length ** 2) / 12]))}
+    for name, inertia in bodies.items():
+        model.appendBodyToJoint(model.getJointId(name), inertia, pin.SE3.Identity())
+    return model, tool
+
+
+@pytest.fixture(scope="module")
+def delta(generated_dir):
+    """The DELTA alone (models/delta.yaml: the same legs, arms, rods and rotors; its platform carries the handle)."""
+    return load(generated_dir / "delta")
+
+
+def test_the_device_dynamics_are_the_deltas_and_pinocchios_wrist_through_the_platform_jacobian(device, delta):
+    """M = diag(M_delta, 0) + B^T M_w B and G = (G_delta, 0) + B^T G_w, B = diag(J, 1): the DELTA's dynamics with
+    the plate alone on its platform, and the wrist's in (p, qw) by Pinocchio's CRBA and gravity."""
+    q, p, psi = random_device_states(device, 30, seed=3)
+    model, _ = pinocchio_device_with_bodies()
+    data = model.createData()
+    M, G = device.mass_matrix(q, p, psi), device.gravity_vector(q, p, psi)
+    M_delta, G_delta = delta.mass_matrix(q, p, m_platform=M_PLATFORM), delta.gravity_vector(q, p, m_platform=M_PLATFORM)
+    J = delta.jacobian(q, p)
+    for k in range(len(p)):
+        c = np.concatenate([p[k], psi[k]])
+        B = np.block([[J[k], np.zeros((3, 3))], [np.zeros((3, 3)), np.eye(3)]])
+        M_w = pin.crba(model, data, c)
+        M_w = np.triu(M_w) + np.triu(M_w, 1).T
+        expected_M = B.T @ M_w @ B
+        expected_M[:3, :3] += M_delta[k]
+        expected_G = B.T @ pin.computeGeneralizedGravity(model, data, c)
+        expected_G[:3] += G_delta[k]
+        # J enters twice (kappa_degree 2): the DYNAMICS budget times kappa(J)^2 of the entries' scale
+        kappa = np.linalg.cond(J[k])
+        assert np.max(np.abs(M[k] - expected_M)) <= DYNAMICS * kappa ** 2 * np.abs(expected_M).max()
+        assert np.max(np.abs(G[k] - expected_G)) <= DYNAMICS * kappa * np.abs(expected_G).max()
+
+
+def test_the_device_coriolis_vector_follows_from_its_mass_matrix(device):
+    """Lagrange in u = (q, qw): V = dM/dt ud - 1/2 d(ud^T M ud)/du with M(u) = mass_matrix(q, fk(q), qw)."""
+    rng = np.random.default_rng(4)
+
+    def M(u):
+        return device.mass_matrix(u[:3], device.fk(u[:3])[0], u[3:])
+
+    q, p, psi = random_device_states(device, 4, seed=4)
+    for k in range(len(p)):
+        u, ud = np.concatenate([q[k], psi[k]]), rng.uniform(-2, 2, 6)
+        Mdot = (M(u + STEP * ud) - M(u - STEP * ud)) / (2 * STEP)
+        dT = np.array([ud @ (M(u + STEP * e) - M(u - STEP * e)) @ ud / (2 * STEP) for e in np.eye(6)])
+        V = device.coriolis_vector(q[k], p[k], psi[k], ud[:3], ud[3:])
+        assert np.allclose(V, Mdot @ ud - dT / 2, rtol=0, atol=1e-7 * np.abs(M(u)).max() * ud @ ud)
+
+
+def test_the_inverse_dynamics_is_m_v_g_the_forward_dynamics_inverts_it_and_power_balances(device):
+    rng = np.random.default_rng(5)
+    q, p, psi = random_device_states(device, 4, seed=5)
+    for k in range(len(p)):
+        ud, udd = rng.uniform(-2, 2, 6), rng.uniform(-5, 5, 6)
+        args = (q[k], p[k], psi[k])
+        tau = device.inverse_dynamics(*args, ud[:3], ud[3:], udd[:3], udd[3:])
+        M, V, G = device.mass_matrix(*args), device.coriolis_vector(*args, ud[:3], ud[3:]), device.gravity_vector(*args)
+        scale = np.abs(M) @ np.abs(udd) + np.abs(V) + np.abs(G)
+        assert np.all(np.abs(tau - (M @ udd + V + G)) <= DYNAMICS * scale.max())
+        back = device.forward_dynamics(*args, ud[:3], ud[3:], tau[:3], tau[3:])
+        assert np.allclose(back, udd, rtol=0, atol=DYNAMICS * np.linalg.cond(M) * np.abs(udd).max())
+
+        def energy(t):
+            u = np.concatenate([q[k], psi[k]]) + t * ud + t * t / 2 * udd
+            at = (u[:3], device.fk(u[:3])[0], u[3:])
+            rates = ud + t * udd
+            return device.kinetic_energy(*at, rates[:3], rates[3:]) + device.potential_energy(*at)
+        h = 1e-4
+        power = (energy(h) - energy(-h)) / (2 * h)
+        assert abs(tau @ ud - power) <= 1e-5 * (np.abs(tau) @ np.abs(ud))
+
+
+def test_a_free_motion_keeps_its_energy(device):
+    """No effort, no friction: k + u stays constant along the forward dynamics, integrated in u = (q, qw)
+    with p = fk(q) at every step, to the integrator's tolerance."""
+    from scipy.integrate import solve_ivp
+
+    q, p, psi = random_device_states(device, 1, seed=6)
+    zero = np.zeros(3)
+
+    def rates(_t, x):
+        q, qw, qd, qwd = x[:3], x[3:6], x[6:9], x[9:]
+        udd = device.forward_dynamics(q, device.fk(q)[0], qw, qd, qwd, zero, zero)
+        return np.concatenate([qd, qwd, udd])
+
+    def energy(x):
+        q, qw, qd, qwd = x[:3], x[3:6], x[6:9], x[9:]
+        at = (q, device.fk(q)[0], qw)
+        return device.kinetic_energy(*at, qd, qwd) + device.potential_energy(*at)
+
+    start = np.concatenate([q[0], psi[0], [0.5, -0.3, 0.2], [2.0, -1.0, 3.0]])
+    run = solve_ivp(rates, (0, 0.1), start, method="DOP853", rtol=1e-11, atol=1e-12, dense_output=False)
+    assert run.success
+    energies = np.array([energy(x) for x in run.y.T])
+    swing = np.abs(energies[0]) + device.kinetic_energy(q[0], p[0], psi[0], start[6:9], start[9:])
+    assert np.max(np.abs(energies - energies[0])) <= 1e-8 * swing
+
+
+def test_simulating_a_hybrid_device_is_refused_with_the_reason(generated_dir, tmp_path):
+    run = subprocess.run([*SYMKIN_CLI, "simulate", str(generated_dir / "delta_wrist"), "--scenario", "haptic-wall",
+                          "-o", str(tmp_path / "out")], capture_output=True, text=True)
+    assert run.returncode == 2
+    assert "simulating a hybrid device" in run.stderr and not (tmp_path / "out").exists()

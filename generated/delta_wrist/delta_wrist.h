@@ -235,6 +235,329 @@ void delta_wrist_singularities_packed(const double *in, double *out);
  * Uses 1280 bytes of stack for its blocks of 8 configurations. */
 void delta_wrist_singularities_batch(size_t n, const double *q, const double *p, const double *params, size_t params_stride, double *det_Jq, double *det_Jx);
 
+/* delta_wrist_gravity_vector: Gravity compensation efforts.
+ *
+ * G = du_a/dq + J^T du_p/dp with u = -g . (sum of mass times centre of mass): the
+ * actuator efforts that hold the device still at the pose (gravity compensation of a
+ * haptic device). Evaluate at a consistent pair q, p (p = fk(q) or q = ik(p)).
+ *
+ * Inputs:
+ *   q[3]: joint coordinates: theta1 [rad], theta2 [rad], theta3 [rad].
+ *   p[3]: task coordinates of the platform (TCP): x [m], y [m], z [m].
+ *   qw[3]: wrist joint coordinates: psi1 [rad], psi2 [rad], psi3 [rad].
+ *   r_base: distance from the base centre to the actuated joints A_i [m]; default
+ *   DELTA_WRIST_DEFAULT_r_base = 0.07.
+ *   r_tcp: distance from the TCP to the platform joints B_i [m]; default
+ *   DELTA_WRIST_DEFAULT_r_tcp = 0.025.
+ *   a: length of the upper (actuated) arms A_i C_i [m]; default DELTA_WRIST_DEFAULT_a =
+ *   0.1.
+ *   m_arm: mass of an upper arm [kg]; default DELTA_WRIST_DEFAULT_m_arm = 0.0093.
+ *   m_rod: mass of a lower-arm parallelogram (two rods and four ball joints) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_rod = 0.0095.
+ *   m_platform: mass of the platform plate (the handle is on the wrist) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_platform = 0.021.
+ *   h: distance from the wrist centre to the grip point along the handle [m]; default
+ *   DELTA_WRIST_DEFAULT_h = 0.03.
+ *   m_fork1: mass of the first wrist fork (turns with psi1) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_fork1 = 0.012.
+ *   m_fork2: mass of the second wrist fork (turns with psi2) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_fork2 = 0.009.
+ *   m_handle: mass of the handle (turns with psi3) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_handle = 0.03.
+ * Outputs:
+ *   G[6]: 6; actuator efforts that hold the device against gravity [N*m (revolute), N
+ *   (prismatic)].
+ * Cost: 113 operations.
+ */
+void delta_wrist_gravity_vector(const double *q, const double *p, const double *qw, double r_base, double r_tcp, double a, double m_arm, double m_rod, double m_platform, double h, double m_fork1, double m_fork2, double m_handle, double *G);
+
+/* delta_wrist_gravity_vector with packed arguments: in = q, p, qw, r_base, r_tcp, a, m_arm, m_rod, m_platform, h, m_fork1, m_fork2, m_handle one after the other; out = G one after the other. */
+void delta_wrist_gravity_vector_packed(const double *in, double *out);
+
+/* delta_wrist_gravity_vector for n configurations; params: r_base, r_tcp, a, m_arm, m_rod, m_platform, h, m_fork1, m_fork2, m_handle, stride 0 or 10.
+ * Uses 2112 bytes of stack for its blocks of 8 configurations. */
+void delta_wrist_gravity_vector_batch(size_t n, const double *q, const double *p, const double *qw, const double *params, size_t params_stride, double *G);
+
+/* delta_wrist_mass_matrix: Mass matrix in the actuated coordinates.
+ *
+ * M = M_a + J^T M_p J: the actuator side (arms, rod shares at the elbows, rotors times
+ * the gear ratio squared; diagonal) plus the platform side (platform and rod shares at
+ * the platform joints) carried to the actuators by the task Jacobian J (k = 1/2 qd^T M
+ * qd). Evaluate at a consistent pair q, p (p = fk(q) or q = ik(p)).
+ *
+ * Inputs:
+ *   q[3]: joint coordinates: theta1 [rad], theta2 [rad], theta3 [rad].
+ *   p[3]: task coordinates of the platform (TCP): x [m], y [m], z [m].
+ *   qw[3]: wrist joint coordinates: psi1 [rad], psi2 [rad], psi3 [rad].
+ *   r_base: distance from the base centre to the actuated joints A_i [m]; default
+ *   DELTA_WRIST_DEFAULT_r_base = 0.07.
+ *   r_tcp: distance from the TCP to the platform joints B_i [m]; default
+ *   DELTA_WRIST_DEFAULT_r_tcp = 0.025.
+ *   a: length of the upper (actuated) arms A_i C_i [m]; default DELTA_WRIST_DEFAULT_a =
+ *   0.1.
+ *   m_arm: mass of an upper arm [kg]; default DELTA_WRIST_DEFAULT_m_arm = 0.0093.
+ *   m_rod: mass of a lower-arm parallelogram (two rods and four ball joints) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_rod = 0.0095.
+ *   m_platform: mass of the platform plate (the handle is on the wrist) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_platform = 0.021.
+ *   J_rotor: rotor inertia of an actuator (motor side) [kg*m^2]; default
+ *   DELTA_WRIST_DEFAULT_J_rotor = 1e-06.
+ *   gear: capstan reduction (motor turns per arm turn) [1]; default
+ *   DELTA_WRIST_DEFAULT_gear = 10.0.
+ *   h: distance from the wrist centre to the grip point along the handle [m]; default
+ *   DELTA_WRIST_DEFAULT_h = 0.03.
+ *   m_fork1: mass of the first wrist fork (turns with psi1) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_fork1 = 0.012.
+ *   m_fork2: mass of the second wrist fork (turns with psi2) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_fork2 = 0.009.
+ *   m_handle: mass of the handle (turns with psi3) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_handle = 0.03.
+ * Outputs:
+ *   M[36]: 6 x 6, row-major; symmetric positive definite mass matrix.
+ * Cost: 216 operations.
+ */
+void delta_wrist_mass_matrix(const double *q, const double *p, const double *qw, double r_base, double r_tcp, double a, double m_arm, double m_rod, double m_platform, double J_rotor, double gear, double h, double m_fork1, double m_fork2, double m_handle, double *M);
+
+/* delta_wrist_mass_matrix with packed arguments: in = q, p, qw, r_base, r_tcp, a, m_arm, m_rod, m_platform, J_rotor, gear, h, m_fork1, m_fork2, m_handle one after the other; out = M one after the other. */
+void delta_wrist_mass_matrix_packed(const double *in, double *out);
+
+/* delta_wrist_mass_matrix for n configurations; params: r_base, r_tcp, a, m_arm, m_rod, m_platform, J_rotor, gear, h, m_fork1, m_fork2, m_handle, stride 0 or 12.
+ * Uses 4160 bytes of stack for its blocks of 8 configurations. */
+void delta_wrist_mass_matrix_batch(size_t n, const double *q, const double *p, const double *qw, const double *params, size_t params_stride, double *M);
+
+/* delta_wrist_coriolis_vector: Coriolis and centrifugal efforts at the actuators.
+ *
+ * V = V_a + J^T (M_p b + V_p(p, pd)) with pd = J qd and b = dJ/dt qd = -J_x^-1 (zd^T H_i
+ * zd)_i (the second derivative of the leg equations along the motion); V_a and V_p from
+ * the Christoffel symbols of M_a(q) and M_p(p). Evaluate at a consistent pair q, p (p =
+ * fk(q) or q = ik(p)).
+ *
+ * Inputs:
+ *   q[3]: joint coordinates: theta1 [rad], theta2 [rad], theta3 [rad].
+ *   p[3]: task coordinates of the platform (TCP): x [m], y [m], z [m].
+ *   qw[3]: wrist joint coordinates: psi1 [rad], psi2 [rad], psi3 [rad].
+ *   qd[3]: joint velocities: theta1 [rad/s], theta2 [rad/s], theta3 [rad/s].
+ *   qwd[3]: wrist joint velocities: psi1 [rad/s], psi2 [rad/s], psi3 [rad/s].
+ *   r_base: distance from the base centre to the actuated joints A_i [m]; default
+ *   DELTA_WRIST_DEFAULT_r_base = 0.07.
+ *   r_tcp: distance from the TCP to the platform joints B_i [m]; default
+ *   DELTA_WRIST_DEFAULT_r_tcp = 0.025.
+ *   a: length of the upper (actuated) arms A_i C_i [m]; default DELTA_WRIST_DEFAULT_a =
+ *   0.1.
+ *   m_rod: mass of a lower-arm parallelogram (two rods and four ball joints) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_rod = 0.0095.
+ *   m_platform: mass of the platform plate (the handle is on the wrist) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_platform = 0.021.
+ *   h: distance from the wrist centre to the grip point along the handle [m]; default
+ *   DELTA_WRIST_DEFAULT_h = 0.03.
+ *   m_fork1: mass of the first wrist fork (turns with psi1) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_fork1 = 0.012.
+ *   m_fork2: mass of the second wrist fork (turns with psi2) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_fork2 = 0.009.
+ *   m_handle: mass of the handle (turns with psi3) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_handle = 0.03.
+ * Outputs:
+ *   V[6]: 6; Coriolis and centrifugal efforts [N*m (revolute), N (prismatic)].
+ * Cost: 334 operations.
+ */
+void delta_wrist_coriolis_vector(const double *q, const double *p, const double *qw, const double *qd, const double *qwd, double r_base, double r_tcp, double a, double m_rod, double m_platform, double h, double m_fork1, double m_fork2, double m_handle, double *V);
+
+/* delta_wrist_coriolis_vector with packed arguments: in = q, p, qw, qd, qwd, r_base, r_tcp, a, m_rod, m_platform, h, m_fork1, m_fork2, m_handle one after the other; out = V one after the other. */
+void delta_wrist_coriolis_vector_packed(const double *in, double *out);
+
+/* delta_wrist_coriolis_vector for n configurations; params: r_base, r_tcp, a, m_rod, m_platform, h, m_fork1, m_fork2, m_handle, stride 0 or 9.
+ * Uses 3072 bytes of stack for its blocks of 8 configurations. */
+void delta_wrist_coriolis_vector_batch(size_t n, const double *q, const double *p, const double *qw, const double *qd, const double *qwd, const double *params, size_t params_stride, double *V);
+
+/* delta_wrist_inverse_dynamics: Inverse dynamics: actuator efforts for a motion.
+ *
+ * tau = M_a qdd + V_a + G_a + F_f + J^T (M_p pdd + V_p + G_p) with pdd = J qdd + b
+ * (d'Alembert: the loop constraint forces do no work on motions pd = J qd), equal to M
+ * qdd + V + G + F_f without forming M. Evaluate at a consistent pair q, p (p = fk(q) or
+ * q = ik(p)).
+ *
+ * Inputs:
+ *   q[3]: joint coordinates: theta1 [rad], theta2 [rad], theta3 [rad].
+ *   p[3]: task coordinates of the platform (TCP): x [m], y [m], z [m].
+ *   qw[3]: wrist joint coordinates: psi1 [rad], psi2 [rad], psi3 [rad].
+ *   qd[3]: joint velocities: theta1 [rad/s], theta2 [rad/s], theta3 [rad/s].
+ *   qwd[3]: wrist joint velocities: psi1 [rad/s], psi2 [rad/s], psi3 [rad/s].
+ *   qdd[3]: joint accelerations: theta1 [rad/s^2], theta2 [rad/s^2], theta3 [rad/s^2].
+ *   qwdd[3]: wrist joint accelerations: psi1 [rad/s^2], psi2 [rad/s^2], psi3 [rad/s^2].
+ *   r_base: distance from the base centre to the actuated joints A_i [m]; default
+ *   DELTA_WRIST_DEFAULT_r_base = 0.07.
+ *   r_tcp: distance from the TCP to the platform joints B_i [m]; default
+ *   DELTA_WRIST_DEFAULT_r_tcp = 0.025.
+ *   a: length of the upper (actuated) arms A_i C_i [m]; default DELTA_WRIST_DEFAULT_a =
+ *   0.1.
+ *   m_arm: mass of an upper arm [kg]; default DELTA_WRIST_DEFAULT_m_arm = 0.0093.
+ *   m_rod: mass of a lower-arm parallelogram (two rods and four ball joints) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_rod = 0.0095.
+ *   m_platform: mass of the platform plate (the handle is on the wrist) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_platform = 0.021.
+ *   J_rotor: rotor inertia of an actuator (motor side) [kg*m^2]; default
+ *   DELTA_WRIST_DEFAULT_J_rotor = 1e-06.
+ *   gear: capstan reduction (motor turns per arm turn) [1]; default
+ *   DELTA_WRIST_DEFAULT_gear = 10.0.
+ *   h: distance from the wrist centre to the grip point along the handle [m]; default
+ *   DELTA_WRIST_DEFAULT_h = 0.03.
+ *   m_fork1: mass of the first wrist fork (turns with psi1) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_fork1 = 0.012.
+ *   m_fork2: mass of the second wrist fork (turns with psi2) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_fork2 = 0.009.
+ *   m_handle: mass of the handle (turns with psi3) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_handle = 0.03.
+ * Outputs:
+ *   tau[6]: 6; actuator efforts [N*m (revolute), N (prismatic)].
+ * Cost: 426 operations.
+ */
+void delta_wrist_inverse_dynamics(const double *q, const double *p, const double *qw, const double *qd, const double *qwd, const double *qdd, const double *qwdd, double r_base, double r_tcp, double a, double m_arm, double m_rod, double m_platform, double J_rotor, double gear, double h, double m_fork1, double m_fork2, double m_handle, double *tau);
+
+/* delta_wrist_inverse_dynamics with packed arguments: in = q, p, qw, qd, qwd, qdd, qwdd, r_base, r_tcp, a, m_arm, m_rod, m_platform, J_rotor, gear, h, m_fork1, m_fork2, m_handle one after the other; out = tau one after the other. */
+void delta_wrist_inverse_dynamics_packed(const double *in, double *out);
+
+/* delta_wrist_inverse_dynamics for n configurations; params: r_base, r_tcp, a, m_arm, m_rod, m_platform, J_rotor, gear, h, m_fork1, m_fork2, m_handle, stride 0 or 12.
+ * Uses 3648 bytes of stack for its blocks of 8 configurations. */
+void delta_wrist_inverse_dynamics_batch(size_t n, const double *q, const double *p, const double *qw, const double *qd, const double *qwd, const double *qdd, const double *qwdd, const double *params, size_t params_stride, double *tau);
+
+/* delta_wrist_forward_dynamics: Forward dynamics: actuator accelerations under given efforts.
+ *
+ * qdd = M^-1 (tau - V - G - F_f) by a straight-line LDL^T factorization of the symmetric
+ * positive definite M = M_a + J^T M_p J; the platform then accelerates with pdd = J qdd
+ * + b. Evaluate at a consistent pair q, p (p = fk(q) or q = ik(p)).
+ *
+ * Inputs:
+ *   q[3]: joint coordinates: theta1 [rad], theta2 [rad], theta3 [rad].
+ *   p[3]: task coordinates of the platform (TCP): x [m], y [m], z [m].
+ *   qw[3]: wrist joint coordinates: psi1 [rad], psi2 [rad], psi3 [rad].
+ *   qd[3]: joint velocities: theta1 [rad/s], theta2 [rad/s], theta3 [rad/s].
+ *   qwd[3]: wrist joint velocities: psi1 [rad/s], psi2 [rad/s], psi3 [rad/s].
+ *   tau[3]: joint torques (revolute) or forces (prismatic): theta1 [N*m], theta2 [N*m],
+ *   theta3 [N*m].
+ *   tauw[3]: wrist joint torques (revolute) or forces (prismatic): psi1 [N*m], psi2 [N*m],
+ *   psi3 [N*m].
+ *   r_base: distance from the base centre to the actuated joints A_i [m]; default
+ *   DELTA_WRIST_DEFAULT_r_base = 0.07.
+ *   r_tcp: distance from the TCP to the platform joints B_i [m]; default
+ *   DELTA_WRIST_DEFAULT_r_tcp = 0.025.
+ *   a: length of the upper (actuated) arms A_i C_i [m]; default DELTA_WRIST_DEFAULT_a =
+ *   0.1.
+ *   m_arm: mass of an upper arm [kg]; default DELTA_WRIST_DEFAULT_m_arm = 0.0093.
+ *   m_rod: mass of a lower-arm parallelogram (two rods and four ball joints) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_rod = 0.0095.
+ *   m_platform: mass of the platform plate (the handle is on the wrist) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_platform = 0.021.
+ *   J_rotor: rotor inertia of an actuator (motor side) [kg*m^2]; default
+ *   DELTA_WRIST_DEFAULT_J_rotor = 1e-06.
+ *   gear: capstan reduction (motor turns per arm turn) [1]; default
+ *   DELTA_WRIST_DEFAULT_gear = 10.0.
+ *   h: distance from the wrist centre to the grip point along the handle [m]; default
+ *   DELTA_WRIST_DEFAULT_h = 0.03.
+ *   m_fork1: mass of the first wrist fork (turns with psi1) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_fork1 = 0.012.
+ *   m_fork2: mass of the second wrist fork (turns with psi2) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_fork2 = 0.009.
+ *   m_handle: mass of the handle (turns with psi3) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_handle = 0.03.
+ * Outputs:
+ *   qdd[6]: 6; actuator accelerations [rad/s^2 (revolute), m/s^2 (prismatic)].
+ * Cost: 569 operations.
+ */
+void delta_wrist_forward_dynamics(const double *q, const double *p, const double *qw, const double *qd, const double *qwd, const double *tau, const double *tauw, double r_base, double r_tcp, double a, double m_arm, double m_rod, double m_platform, double J_rotor, double gear, double h, double m_fork1, double m_fork2, double m_handle, double *qdd);
+
+/* delta_wrist_forward_dynamics with packed arguments: in = q, p, qw, qd, qwd, tau, tauw, r_base, r_tcp, a, m_arm, m_rod, m_platform, J_rotor, gear, h, m_fork1, m_fork2, m_handle one after the other; out = qdd one after the other. */
+void delta_wrist_forward_dynamics_packed(const double *in, double *out);
+
+/* delta_wrist_forward_dynamics for n configurations; params: r_base, r_tcp, a, m_arm, m_rod, m_platform, J_rotor, gear, h, m_fork1, m_fork2, m_handle, stride 0 or 12.
+ * Uses 3648 bytes of stack for its blocks of 8 configurations. */
+void delta_wrist_forward_dynamics_batch(size_t n, const double *q, const double *p, const double *qw, const double *qd, const double *qwd, const double *tau, const double *tauw, const double *params, size_t params_stride, double *qdd);
+
+/* delta_wrist_kinetic_energy: Kinetic energy.
+ *
+ * k = 1/2 qd^T M_a qd + 1/2 pd^T M_p pd with pd = J qd (= 1/2 qd^T M qd). Evaluate at a
+ * consistent pair q, p (p = fk(q) or q = ik(p)).
+ *
+ * Inputs:
+ *   q[3]: joint coordinates: theta1 [rad], theta2 [rad], theta3 [rad].
+ *   p[3]: task coordinates of the platform (TCP): x [m], y [m], z [m].
+ *   qw[3]: wrist joint coordinates: psi1 [rad], psi2 [rad], psi3 [rad].
+ *   qd[3]: joint velocities: theta1 [rad/s], theta2 [rad/s], theta3 [rad/s].
+ *   qwd[3]: wrist joint velocities: psi1 [rad/s], psi2 [rad/s], psi3 [rad/s].
+ *   r_base: distance from the base centre to the actuated joints A_i [m]; default
+ *   DELTA_WRIST_DEFAULT_r_base = 0.07.
+ *   r_tcp: distance from the TCP to the platform joints B_i [m]; default
+ *   DELTA_WRIST_DEFAULT_r_tcp = 0.025.
+ *   a: length of the upper (actuated) arms A_i C_i [m]; default DELTA_WRIST_DEFAULT_a =
+ *   0.1.
+ *   m_arm: mass of an upper arm [kg]; default DELTA_WRIST_DEFAULT_m_arm = 0.0093.
+ *   m_rod: mass of a lower-arm parallelogram (two rods and four ball joints) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_rod = 0.0095.
+ *   m_platform: mass of the platform plate (the handle is on the wrist) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_platform = 0.021.
+ *   J_rotor: rotor inertia of an actuator (motor side) [kg*m^2]; default
+ *   DELTA_WRIST_DEFAULT_J_rotor = 1e-06.
+ *   gear: capstan reduction (motor turns per arm turn) [1]; default
+ *   DELTA_WRIST_DEFAULT_gear = 10.0.
+ *   h: distance from the wrist centre to the grip point along the handle [m]; default
+ *   DELTA_WRIST_DEFAULT_h = 0.03.
+ *   m_fork1: mass of the first wrist fork (turns with psi1) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_fork1 = 0.012.
+ *   m_fork2: mass of the second wrist fork (turns with psi2) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_fork2 = 0.009.
+ *   m_handle: mass of the handle (turns with psi3) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_handle = 0.03.
+ * Outputs:
+ *   k[1]: scalar; kinetic energy of all bodies [J].
+ * Cost: 216 operations.
+ */
+void delta_wrist_kinetic_energy(const double *q, const double *p, const double *qw, const double *qd, const double *qwd, double r_base, double r_tcp, double a, double m_arm, double m_rod, double m_platform, double J_rotor, double gear, double h, double m_fork1, double m_fork2, double m_handle, double *k);
+
+/* delta_wrist_kinetic_energy with packed arguments: in = q, p, qw, qd, qwd, r_base, r_tcp, a, m_arm, m_rod, m_platform, J_rotor, gear, h, m_fork1, m_fork2, m_handle one after the other; out = k one after the other. */
+void delta_wrist_kinetic_energy_packed(const double *in, double *out);
+
+/* delta_wrist_kinetic_energy for n configurations; params: r_base, r_tcp, a, m_arm, m_rod, m_platform, J_rotor, gear, h, m_fork1, m_fork2, m_handle, stride 0 or 12.
+ * Uses 2944 bytes of stack for its blocks of 8 configurations. */
+void delta_wrist_kinetic_energy_batch(size_t n, const double *q, const double *p, const double *qw, const double *qd, const double *qwd, const double *params, size_t params_stride, double *k);
+
+/* delta_wrist_potential_energy: Gravitational potential energy.
+ *
+ * u = -g . (sum of mass times centre of mass), zero with every mass at the base origin.
+ * Evaluate at a consistent pair q, p (p = fk(q) or q = ik(p)).
+ *
+ * Inputs:
+ *   q[3]: joint coordinates: theta1 [rad], theta2 [rad], theta3 [rad].
+ *   p[3]: task coordinates of the platform (TCP): x [m], y [m], z [m].
+ *   qw[3]: wrist joint coordinates: psi1 [rad], psi2 [rad], psi3 [rad].
+ *   a: length of the upper (actuated) arms A_i C_i [m]; default DELTA_WRIST_DEFAULT_a =
+ *   0.1.
+ *   m_arm: mass of an upper arm [kg]; default DELTA_WRIST_DEFAULT_m_arm = 0.0093.
+ *   m_rod: mass of a lower-arm parallelogram (two rods and four ball joints) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_rod = 0.0095.
+ *   m_platform: mass of the platform plate (the handle is on the wrist) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_platform = 0.021.
+ *   w: distance from the platform centre down to the wrist centre [m]; default
+ *   DELTA_WRIST_DEFAULT_w = 0.05.
+ *   h: distance from the wrist centre to the grip point along the handle [m]; default
+ *   DELTA_WRIST_DEFAULT_h = 0.03.
+ *   m_fork1: mass of the first wrist fork (turns with psi1) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_fork1 = 0.012.
+ *   m_fork2: mass of the second wrist fork (turns with psi2) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_fork2 = 0.009.
+ *   m_handle: mass of the handle (turns with psi3) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_handle = 0.03.
+ * Outputs:
+ *   u[1]: scalar; potential energy [J].
+ * Cost: 35 operations.
+ */
+void delta_wrist_potential_energy(const double *q, const double *p, const double *qw, double a, double m_arm, double m_rod, double m_platform, double w, double h, double m_fork1, double m_fork2, double m_handle, double *u);
+
+/* delta_wrist_potential_energy with packed arguments: in = q, p, qw, a, m_arm, m_rod, m_platform, w, h, m_fork1, m_fork2, m_handle one after the other; out = u one after the other. */
+void delta_wrist_potential_energy_packed(const double *in, double *out);
+
+/* delta_wrist_potential_energy for n configurations; params: a, m_arm, m_rod, m_platform, w, h, m_fork1, m_fork2, m_handle, stride 0 or 9.
+ * Uses 1728 bytes of stack for its blocks of 8 configurations. */
+void delta_wrist_potential_energy_batch(size_t n, const double *q, const double *p, const double *qw, const double *params, size_t params_stride, double *u);
+
 /* delta_wrist_device_fk: Forward kinematics of the hybrid device: pose of the wrist's TCP.
  *
  * base_T_tcp = base_T_platform(p) * platform_T_wrist(qw) * wrist_T_tcp: the platform
@@ -320,15 +643,14 @@ void delta_wrist_device_actuator_jacobian_packed(const double *in, double *out);
  * Uses 2944 bytes of stack for its blocks of 8 configurations. */
 void delta_wrist_device_actuator_jacobian_batch(size_t n, const double *q, const double *p, const double *qw, const double *params, size_t params_stride, double *J);
 
-/* delta_wrist_scene: ik, fk, leg_points, jacobian, inverse_jacobian, singularities, device_fk, device_jacobian, device_actuator_jacobian together, with one set of shared subexpressions.
+/* delta_wrist_scene: gravity_vector, device_fk, device_actuator_jacobian together, with one set of shared subexpressions.
  *
- * Computes the outputs of ik, fk, leg_points, jacobian, inverse_jacobian, singularities,
- * device_fk, device_jacobian, device_actuator_jacobian in one call; subexpressions
- * common to several of them are evaluated once.
+ * Computes the outputs of gravity_vector, device_fk, device_actuator_jacobian in one
+ * call; subexpressions common to several of them are evaluated once.
  *
  * Inputs:
- *   p[3]: task coordinates of the platform (TCP): x [m], y [m], z [m].
  *   q[3]: joint coordinates: theta1 [rad], theta2 [rad], theta3 [rad].
+ *   p[3]: task coordinates of the platform (TCP): x [m], y [m], z [m].
  *   qw[3]: wrist joint coordinates: psi1 [rad], psi2 [rad], psi3 [rad].
  *   r_base: distance from the base centre to the actuated joints A_i [m]; default
  *   DELTA_WRIST_DEFAULT_r_base = 0.07.
@@ -336,42 +658,38 @@ void delta_wrist_device_actuator_jacobian_batch(size_t n, const double *q, const
  *   DELTA_WRIST_DEFAULT_r_tcp = 0.025.
  *   a: length of the upper (actuated) arms A_i C_i [m]; default DELTA_WRIST_DEFAULT_a =
  *   0.1.
- *   b: length of the lower arms (parallelograms) C_i B_i [m]; default
- *   DELTA_WRIST_DEFAULT_b = 0.15.
+ *   m_arm: mass of an upper arm [kg]; default DELTA_WRIST_DEFAULT_m_arm = 0.0093.
+ *   m_rod: mass of a lower-arm parallelogram (two rods and four ball joints) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_rod = 0.0095.
+ *   m_platform: mass of the platform plate (the handle is on the wrist) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_platform = 0.021.
  *   w: distance from the platform centre down to the wrist centre [m]; default
  *   DELTA_WRIST_DEFAULT_w = 0.05.
  *   h: distance from the wrist centre to the grip point along the handle [m]; default
  *   DELTA_WRIST_DEFAULT_h = 0.03.
+ *   m_fork1: mass of the first wrist fork (turns with psi1) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_fork1 = 0.012.
+ *   m_fork2: mass of the second wrist fork (turns with psi2) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_fork2 = 0.009.
+ *   m_handle: mass of the handle (turns with psi3) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_handle = 0.03.
  * Outputs:
- *   joints[3]: 3; actuated joint variables q (ik).
- *   ik_margin[3]: 3; per leg: >= 0 iff the leg reaches p (the radicand of its solution)
- *   (ik).
- *   position[3]: 3; TCP position x, y, z (fk) [m].
- *   fk_margin[1]: scalar; >= 0 iff the spheres meet (a real solution) (fk) [m^2].
- *   points[27]: 9 x 3, row-major; rows A_1, C_1, B_1, A_2, ...: three points per leg
- *   (columns x, y, z) (leg_points) [m].
- *   jacobian_J[9]: 3 x 3, row-major; rows: task coordinates; columns: actuated joints
- *   (jacobian).
- *   J_inv[9]: 3 x 3, row-major; rows: actuated joints; columns: task coordinates
- *   (inverse_jacobian).
- *   det_Jq[1]: scalar; det J_q (boundary singularities where zero) (singularities).
- *   det_Jx[1]: scalar; det J_x (interior singularities where zero) (singularities).
+ *   G[6]: 6; actuator efforts that hold the device against gravity (gravity_vector) [N*m
+ *   (revolute), N (prismatic)].
  *   base_T_tcp[16]: 4 x 4, row-major; homogeneous transform of the TCP frame in the base
  *   frame (device_fk) [m].
- *   device_jacobian_J[36]: 6 x 6, row-major; rows vx, vy, vz, wx, wy, wz; columns:
- *   platform coordinates, then wrist joints (device_jacobian).
- *   device_actuator_jacobian_J[36]: 6 x 6, row-major; rows vx, vy, vz, wx, wy, wz;
- *   columns: the legs' actuated joints, then wrist joints (device_actuator_jacobian).
- * Cost: 337 operations.
+ *   J[36]: 6 x 6, row-major; rows vx, vy, vz, wx, wy, wz; columns: the legs' actuated
+ *   joints, then wrist joints (device_actuator_jacobian).
+ * Cost: 229 operations.
  */
-void delta_wrist_scene(const double *p, const double *q, const double *qw, double r_base, double r_tcp, double a, double b, double w, double h, double *joints, double *ik_margin, double *position, double *fk_margin, double *points, double *jacobian_J, double *J_inv, double *det_Jq, double *det_Jx, double *base_T_tcp, double *device_jacobian_J, double *device_actuator_jacobian_J);
+void delta_wrist_scene(const double *q, const double *p, const double *qw, double r_base, double r_tcp, double a, double m_arm, double m_rod, double m_platform, double w, double h, double m_fork1, double m_fork2, double m_handle, double *G, double *base_T_tcp, double *J);
 
-/* delta_wrist_scene with packed arguments: in = p, q, qw, r_base, r_tcp, a, b, w, h one after the other; out = joints, ik_margin, position, fk_margin, points, jacobian_J, J_inv, det_Jq, det_Jx, base_T_tcp, device_jacobian_J, device_actuator_jacobian_J one after the other. */
+/* delta_wrist_scene with packed arguments: in = q, p, qw, r_base, r_tcp, a, m_arm, m_rod, m_platform, w, h, m_fork1, m_fork2, m_handle one after the other; out = G, base_T_tcp, J one after the other. */
 void delta_wrist_scene_packed(const double *in, double *out);
 
-/* delta_wrist_scene for n configurations; params: r_base, r_tcp, a, b, w, h, stride 0 or 6.
- * Uses 8064 bytes of stack for its blocks of 8 configurations. */
-void delta_wrist_scene_batch(size_t n, const double *p, const double *q, const double *qw, const double *params, size_t params_stride, double *joints, double *ik_margin, double *position, double *fk_margin, double *points, double *jacobian_J, double *J_inv, double *det_Jq, double *det_Jx, double *base_T_tcp, double *device_jacobian_J, double *device_actuator_jacobian_J);
+/* delta_wrist_scene for n configurations; params: r_base, r_tcp, a, m_arm, m_rod, m_platform, w, h, m_fork1, m_fork2, m_handle, stride 0 or 11.
+ * Uses 4672 bytes of stack for its blocks of 8 configurations. */
+void delta_wrist_scene_batch(size_t n, const double *q, const double *p, const double *qw, const double *params, size_t params_stride, double *G, double *base_T_tcp, double *J);
 
 #ifdef __cplusplus
 }

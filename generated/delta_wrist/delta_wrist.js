@@ -22,10 +22,17 @@
  *   jacobian(q, p, params) -> number[][]
  *   inverse_jacobian(q, p, params) -> number[][]
  *   singularities(q, p, params) -> {det_Jq: number, det_Jx: number}
+ *   gravity_vector(q, p, qw, params) -> number[]
+ *   mass_matrix(q, p, qw, params) -> number[][]
+ *   coriolis_vector(q, p, qw, qd, qwd, params) -> number[]
+ *   inverse_dynamics(q, p, qw, qd, qwd, qdd, qwdd, params) -> number[]
+ *   forward_dynamics(q, p, qw, qd, qwd, tau, tauw, params) -> number[]
+ *   kinetic_energy(q, p, qw, qd, qwd, params) -> number
+ *   potential_energy(q, p, qw, params) -> number
  *   device_fk(p, qw, params) -> number[][]
  *   device_jacobian(p, qw, params) -> number[][]
  *   device_actuator_jacobian(q, p, qw, params) -> number[][]
- *   scene(p, q, qw, params) -> {joints: number[], ik_margin: number[], position: number[], fk_margin: number, points: number[][], jacobian_J: number[][], J_inv: number[][], det_Jq: number, det_Jx: number, base_T_tcp: number[][], device_jacobian_J: number[][], device_actuator_jacobian_J: number[][]}
+ *   scene(q, p, qw, params) -> {G: number[], base_T_tcp: number[][], J: number[][]}
  */
 (function (root, factory) {
   "use strict";
@@ -427,6 +434,1104 @@
   }
 
   /**
+   * Gravity compensation efforts.
+   *
+   * G = du_a/dq + J^T du_p/dp with u = -g . (sum of mass times centre of mass): the
+   * actuator efforts that hold the device still at the pose (gravity compensation of a
+   * haptic device). Evaluate at a consistent pair q, p (p = fk(q) or q = ik(p)).
+   *
+   * @param {number[]} q joint coordinates, 3 numbers: theta1 [rad], theta2 [rad], theta3
+   *     [rad].
+   * @param {number[]} p task coordinates of the platform (TCP), 3 numbers: x [m], y [m], z
+   *     [m].
+   * @param {number[]} qw wrist joint coordinates, 3 numbers: psi1 [rad], psi2 [rad], psi3
+   *     [rad].
+   * @param {Object} [params] parameter values (defaults in PARAMETERS):
+   *     r_base: distance from the base centre to the actuated joints A_i [m]; default 0.07.
+   *     r_tcp: distance from the TCP to the platform joints B_i [m]; default 0.025.
+   *     a: length of the upper (actuated) arms A_i C_i [m]; default 0.1.
+   *     m_arm: mass of an upper arm [kg]; default 0.0093.
+   *     m_rod: mass of a lower-arm parallelogram (two rods and four ball joints) [kg]; default 0.0095.
+   *     m_platform: mass of the platform plate (the handle is on the wrist) [kg]; default 0.021.
+   *     h: distance from the wrist centre to the grip point along the handle [m]; default 0.03.
+   *     m_fork1: mass of the first wrist fork (turns with psi1) [kg]; default 0.012.
+   *     m_fork2: mass of the second wrist fork (turns with psi2) [kg]; default 0.009.
+   *     m_handle: mass of the handle (turns with psi3) [kg]; default 0.03.
+   * @returns {number[]}
+   *     G: shape (6,); actuator efforts that hold the device against gravity [N*m
+   *     (revolute), N (prismatic)].
+   */
+  function gravity_vector(q, p, qw, params) {
+    _vector(q, 3, "q", "gravity_vector");
+    _vector(p, 3, "p", "gravity_vector");
+    _vector(qw, 3, "qw", "gravity_vector");
+    const _p = _params(params, ["r_base", "r_tcp", "a", "m_arm", "m_rod", "m_platform", "h", "m_fork1", "m_fork2", "m_handle"], "gravity_vector");
+    const r_base = _p.r_base ?? 0.07;
+    const r_tcp = _p.r_tcp ?? 0.025;
+    const a = _p.a ?? 0.1;
+    const m_arm = _p.m_arm ?? 0.0093;
+    const m_rod = _p.m_rod ?? 0.0095;
+    const m_platform = _p.m_platform ?? 0.021;
+    const h = _p.h ?? 0.03;
+    const m_fork1 = _p.m_fork1 ?? 0.012;
+    const m_fork2 = _p.m_fork2 ?? 0.009;
+    const m_handle = _p.m_handle ?? 0.03;
+    const theta1 = q[0];
+    const theta2 = q[1];
+    const theta3 = q[2];
+    const x = p[0];
+    const y = p[1];
+    const z = p[2];
+    const psi2 = qw[1];
+    const _x0 = Math.cos(theta1);
+    const _x1 = Math.cos(theta2);
+    const _x2 = Math.cos(theta3);
+    const _x3 = 9.81*m_handle;
+    const _x4 = 9.81*m_platform + 14.715*m_rod + 9.81*m_fork2 + _x3 + 9.81*m_fork1;
+    const _x5 = 4.905*a;
+    const _x6 = _x5*m_arm;
+    const _x7 = _x5*m_rod;
+    const _x8 = a*_x0;
+    const _x9 = -_x8 - r_base + x + r_tcp;
+    const _x10 = a*Math.sin(theta1);
+    const _x11 = -_x10 + z;
+    const _x12 = a*_x1;
+    const _x13 = 0.5*_x12;
+    const _x14 = 0.5*r_tcp;
+    const _x15 = 0.5*r_base;
+    const _x16 = -_x14 + x + _x15;
+    const _x17 = _x13 + _x16;
+    const _x18 = 1.7320508075688772*_x15;
+    const _x19 = 1.7320508075688772*_x14;
+    const _x20 = _x19 - _x18 + y - 1.7320508075688772*_x13;
+    const _x21 = a*Math.sin(theta2);
+    const _x22 = -_x21 + z;
+    const _x23 = a*_x2;
+    const _x24 = 0.5*_x23;
+    const _x25 = _x24 + _x16;
+    const _x26 = y + _x18 - _x19 + 1.7320508075688772*_x24;
+    const _x27 = a*Math.sin(theta3);
+    const _x28 = -_x27 + z;
+    const _x29 = 0.5*_x21;
+    const _x30 = 0.5*_x27;
+    const _x31 = -_x22*_x26 + _x28*_x20;
+    const _x32 = -(-_x26*_x11 + y*_x28);
+    const _x33 = -_x20*_x11 + y*_x22;
+    const _x34 = -_x25*_x20 + _x26*_x17;
+    const _x35 = -(-y*_x25 + _x9*_x26);
+    const _x36 = -y*_x17 + _x9*_x20;
+    const _x37 = _x25*_x33 + _x32*_x17 + _x9*_x31;
+    const _x38 = 1.0/_x37;
+    const _x39 = _x34*_x38;
+    const _x40 = _x35*_x38;
+    const _x41 = _x36*_x38;
+    const _x42 = _x39*(-_x9*_x10 + _x8*_x11);
+    const _x43 = _x40*(_x22*_x12 + _x29*_x17 - 1.7320508075688772*_x20*_x29);
+    const _x44 = _x41*(_x23*_x28 + _x25*_x30 + 1.7320508075688772*_x26*_x30);
+    return [_x0*_x7 + _x0*_x6 + _x4*_x42, _x1*_x7 + _x1*_x6 + _x4*_x43, _x2*_x7 + _x4*_x44 + _x2*_x6, 0.0, h*_x3*Math.cos(psi2), 0.0];
+  }
+
+  /**
+   * Mass matrix in the actuated coordinates.
+   *
+   * M = M_a + J^T M_p J: the actuator side (arms, rod shares at the elbows, rotors times
+   * the gear ratio squared; diagonal) plus the platform side (platform and rod shares at
+   * the platform joints) carried to the actuators by the task Jacobian J (k = 1/2 qd^T M
+   * qd). Evaluate at a consistent pair q, p (p = fk(q) or q = ik(p)).
+   *
+   * @param {number[]} q joint coordinates, 3 numbers: theta1 [rad], theta2 [rad], theta3
+   *     [rad].
+   * @param {number[]} p task coordinates of the platform (TCP), 3 numbers: x [m], y [m], z
+   *     [m].
+   * @param {number[]} qw wrist joint coordinates, 3 numbers: psi1 [rad], psi2 [rad], psi3
+   *     [rad].
+   * @param {Object} [params] parameter values (defaults in PARAMETERS):
+   *     r_base: distance from the base centre to the actuated joints A_i [m]; default 0.07.
+   *     r_tcp: distance from the TCP to the platform joints B_i [m]; default 0.025.
+   *     a: length of the upper (actuated) arms A_i C_i [m]; default 0.1.
+   *     m_arm: mass of an upper arm [kg]; default 0.0093.
+   *     m_rod: mass of a lower-arm parallelogram (two rods and four ball joints) [kg]; default 0.0095.
+   *     m_platform: mass of the platform plate (the handle is on the wrist) [kg]; default 0.021.
+   *     J_rotor: rotor inertia of an actuator (motor side) [kg*m^2]; default 1e-06.
+   *     gear: capstan reduction (motor turns per arm turn) [1]; default 10.0.
+   *     h: distance from the wrist centre to the grip point along the handle [m]; default 0.03.
+   *     m_fork1: mass of the first wrist fork (turns with psi1) [kg]; default 0.012.
+   *     m_fork2: mass of the second wrist fork (turns with psi2) [kg]; default 0.009.
+   *     m_handle: mass of the handle (turns with psi3) [kg]; default 0.03.
+   * @returns {number[][]}
+   *     M: shape (6, 6); symmetric positive definite mass matrix.
+   */
+  function mass_matrix(q, p, qw, params) {
+    _vector(q, 3, "q", "mass_matrix");
+    _vector(p, 3, "p", "mass_matrix");
+    _vector(qw, 3, "qw", "mass_matrix");
+    const _p = _params(params, ["r_base", "r_tcp", "a", "m_arm", "m_rod", "m_platform", "J_rotor", "gear", "h", "m_fork1", "m_fork2", "m_handle"], "mass_matrix");
+    const r_base = _p.r_base ?? 0.07;
+    const r_tcp = _p.r_tcp ?? 0.025;
+    const a = _p.a ?? 0.1;
+    const m_arm = _p.m_arm ?? 0.0093;
+    const m_rod = _p.m_rod ?? 0.0095;
+    const m_platform = _p.m_platform ?? 0.021;
+    const J_rotor = _p.J_rotor ?? 1e-06;
+    const gear = _p.gear ?? 10.0;
+    const h = _p.h ?? 0.03;
+    const m_fork1 = _p.m_fork1 ?? 0.012;
+    const m_fork2 = _p.m_fork2 ?? 0.009;
+    const m_handle = _p.m_handle ?? 0.03;
+    const theta1 = q[0];
+    const theta2 = q[1];
+    const theta3 = q[2];
+    const x = p[0];
+    const y = p[1];
+    const z = p[2];
+    const psi1 = qw[0];
+    const psi2 = qw[1];
+    const psi3 = qw[2];
+    const _x0 = a*Math.cos(theta1);
+    const _x1 = -_x0 - r_base + x + r_tcp;
+    const _x2 = a*Math.sin(theta1);
+    const _x3 = -_x2 + z;
+    const _x4 = -_x2*_x1 + _x3*_x0;
+    const _x5 = a*Math.cos(theta2);
+    const _x6 = 0.5*_x5;
+    const _x7 = 0.5*r_tcp;
+    const _x8 = 0.5*r_base;
+    const _x9 = x - _x7 + _x8;
+    const _x10 = _x6 + _x9;
+    const _x11 = 1.7320508075688772*_x8;
+    const _x12 = 1.7320508075688772*_x7;
+    const _x13 = _x12 - _x11 + y - 1.7320508075688772*_x6;
+    const _x14 = a*Math.sin(theta2);
+    const _x15 = -_x14 + z;
+    const _x16 = 0.5*_x14;
+    const _x17 = _x5*_x15 - 1.7320508075688772*_x16*_x13 + _x10*_x16;
+    const _x18 = a*Math.cos(theta3);
+    const _x19 = 0.5*_x18;
+    const _x20 = _x19 + _x9;
+    const _x21 = y + _x11 - _x12 + 1.7320508075688772*_x19;
+    const _x22 = a*Math.sin(theta3);
+    const _x23 = -_x22 + z;
+    const _x24 = 0.5*_x22;
+    const _x25 = _x23*_x18 + _x24*_x20 + 1.7320508075688772*_x24*_x21;
+    const _x26 = -_x15*_x21 + _x23*_x13;
+    const _x27 = -(-_x3*_x21 + y*_x23);
+    const _x28 = -_x3*_x13 + y*_x15;
+    const _x29 = -(-_x20*_x15 + _x10*_x23);
+    const _x30 = -_x3*_x20 + _x1*_x23;
+    const _x31 = -(-_x10*_x3 + _x1*_x15);
+    const _x32 = -_x13*_x20 + _x10*_x21;
+    const _x33 = -(-y*_x20 + _x1*_x21);
+    const _x34 = -y*_x10 + _x1*_x13;
+    const _x35 = _x28*_x20 + _x10*_x27 + _x1*_x26;
+    const _x36 = 1.0/_x35;
+    const _x37 = _x26*_x36;
+    const _x38 = _x27*_x36;
+    const _x39 = _x28*_x36;
+    const _x40 = _x29*_x36;
+    const _x41 = _x30*_x36;
+    const _x42 = _x36*_x31;
+    const _x43 = _x36*_x32;
+    const _x44 = _x33*_x36;
+    const _x45 = _x34*_x36;
+    const _x46 = _x4*_x37;
+    const _x47 = _x17*_x38;
+    const _x48 = _x25*_x39;
+    const _x49 = _x4*_x40;
+    const _x50 = _x17*_x41;
+    const _x51 = _x25*_x42;
+    const _x52 = _x4*_x43;
+    const _x53 = _x17*_x44;
+    const _x54 = _x25*_x45;
+    const _x55 = m_platform + 1.5*m_rod + m_fork1 + m_handle + m_fork2;
+    const _x56 = Math.cos(psi1);
+    const _x57 = Math.cos(psi2);
+    const _x58 = h*m_handle;
+    const _x59 = _x58*_x57;
+    const _x60 = -_x59*_x56;
+    const _x61 = Math.sin(psi1);
+    const _x62 = Math.sin(psi2);
+    const _x63 = _x58*_x62;
+    const _x64 = _x61*_x63;
+    const _x65 = -_x61*_x59;
+    const _x66 = -_x56*_x63;
+    const _x67 = 0.00013333333333333334*m_fork2;
+    const _x68 = 0.0005583333333333333*m_handle + h*h*m_handle;
+    const _x69 = _x68*Math.sin(psi3)*Math.sin(psi3) + _x68*Math.cos(psi3)*Math.cos(psi3);
+    const _x70 = 5e-05*m_handle;
+    const _x71 = _x62*_x70;
+    const _x72 = _x55*_x46;
+    const _x73 = _x55*_x49;
+    const _x74 = _x52*_x55;
+    const _x75 = _x55*_x47;
+    const _x76 = _x55*_x50;
+    const _x77 = _x53*_x55;
+    const _x78 = _x55*_x48;
+    const _x79 = _x55*_x51;
+    const _x80 = _x55*_x54;
+    const _x81 = a*a;
+    const _x82 = 0.3333333333333333*_x81*m_arm + gear*gear*J_rotor + 0.5*_x81*m_rod;
+    const _x83 = _x82 + _x52*_x74 + _x73*_x49 + _x72*_x46;
+    const _x84 = _x52*_x77 + _x76*_x49 + _x75*_x46;
+    const _x85 = _x52*_x80 + _x79*_x49 + _x78*_x46;
+    const _x86 = _x82 + _x53*_x77 + _x76*_x50 + _x75*_x47;
+    const _x87 = _x53*_x80 + _x79*_x50 + _x78*_x47;
+    const _x88 = _x82 + _x54*_x80 + _x79*_x51 + _x78*_x48;
+    const _x89 = _x65*_x49 + _x60*_x46;
+    const _x90 = _x65*_x50 + _x60*_x47;
+    const _x91 = _x65*_x51 + _x60*_x48;
+    const _x92 = _x52*_x59 + _x66*_x49 + _x64*_x46;
+    const _x93 = _x53*_x59 + _x66*_x50 + _x64*_x47;
+    const _x94 = _x59*_x54 + _x66*_x51 + _x64*_x48;
+    return [[_x83, _x84, _x85, _x89, _x92, 0.0], [_x84, _x86, _x87, _x90, _x93, 0.0], [_x85, _x87, _x88, _x91, _x94, 0.0], [_x89, _x90, _x91, (_x67 + _x70)*_x62*_x62 + (_x69 + _x67)*_x57*_x57, 0.0, _x71], [_x92, _x93, _x94, 0.0, _x69, 0.0], [0.0, 0.0, 0.0, _x71, 0.0, _x70]];
+  }
+
+  /**
+   * Coriolis and centrifugal efforts at the actuators.
+   *
+   * V = V_a + J^T (M_p b + V_p(p, pd)) with pd = J qd and b = dJ/dt qd = -J_x^-1 (zd^T
+   * H_i zd)_i (the second derivative of the leg equations along the motion); V_a and V_p
+   * from the Christoffel symbols of M_a(q) and M_p(p). Evaluate at a consistent pair q, p
+   * (p = fk(q) or q = ik(p)).
+   *
+   * @param {number[]} q joint coordinates, 3 numbers: theta1 [rad], theta2 [rad], theta3
+   *     [rad].
+   * @param {number[]} p task coordinates of the platform (TCP), 3 numbers: x [m], y [m], z
+   *     [m].
+   * @param {number[]} qw wrist joint coordinates, 3 numbers: psi1 [rad], psi2 [rad], psi3
+   *     [rad].
+   * @param {number[]} qd joint velocities, 3 numbers: theta1 [rad/s], theta2 [rad/s],
+   *     theta3 [rad/s].
+   * @param {number[]} qwd wrist joint velocities, 3 numbers: psi1 [rad/s], psi2 [rad/s],
+   *     psi3 [rad/s].
+   * @param {Object} [params] parameter values (defaults in PARAMETERS):
+   *     r_base: distance from the base centre to the actuated joints A_i [m]; default 0.07.
+   *     r_tcp: distance from the TCP to the platform joints B_i [m]; default 0.025.
+   *     a: length of the upper (actuated) arms A_i C_i [m]; default 0.1.
+   *     m_rod: mass of a lower-arm parallelogram (two rods and four ball joints) [kg]; default 0.0095.
+   *     m_platform: mass of the platform plate (the handle is on the wrist) [kg]; default 0.021.
+   *     h: distance from the wrist centre to the grip point along the handle [m]; default 0.03.
+   *     m_fork1: mass of the first wrist fork (turns with psi1) [kg]; default 0.012.
+   *     m_fork2: mass of the second wrist fork (turns with psi2) [kg]; default 0.009.
+   *     m_handle: mass of the handle (turns with psi3) [kg]; default 0.03.
+   * @returns {number[]}
+   *     V: shape (6,); Coriolis and centrifugal efforts [N*m (revolute), N
+   *     (prismatic)].
+   */
+  function coriolis_vector(q, p, qw, qd, qwd, params) {
+    _vector(q, 3, "q", "coriolis_vector");
+    _vector(p, 3, "p", "coriolis_vector");
+    _vector(qw, 3, "qw", "coriolis_vector");
+    _vector(qd, 3, "qd", "coriolis_vector");
+    _vector(qwd, 3, "qwd", "coriolis_vector");
+    const _p = _params(params, ["r_base", "r_tcp", "a", "m_rod", "m_platform", "h", "m_fork1", "m_fork2", "m_handle"], "coriolis_vector");
+    const r_base = _p.r_base ?? 0.07;
+    const r_tcp = _p.r_tcp ?? 0.025;
+    const a = _p.a ?? 0.1;
+    const m_rod = _p.m_rod ?? 0.0095;
+    const m_platform = _p.m_platform ?? 0.021;
+    const h = _p.h ?? 0.03;
+    const m_fork1 = _p.m_fork1 ?? 0.012;
+    const m_fork2 = _p.m_fork2 ?? 0.009;
+    const m_handle = _p.m_handle ?? 0.03;
+    const theta1 = q[0];
+    const theta2 = q[1];
+    const theta3 = q[2];
+    const x = p[0];
+    const y = p[1];
+    const z = p[2];
+    const psi1 = qw[0];
+    const psi2 = qw[1];
+    const psi3 = qw[2];
+    const theta1_d = qd[0];
+    const theta2_d = qd[1];
+    const theta3_d = qd[2];
+    const psi1_d = qwd[0];
+    const psi2_d = qwd[1];
+    const psi3_d = qwd[2];
+    const _x0 = a*Math.cos(theta1);
+    const _x1 = a*Math.sin(theta1);
+    const _x2 = a*Math.cos(theta2);
+    const _x3 = a*Math.sin(theta2);
+    const _x4 = a*Math.cos(theta3);
+    const _x5 = a*Math.sin(theta3);
+    const _x6 = r_tcp + x - r_base - _x0;
+    const _x7 = z - _x1;
+    const _x8 = _x0*_x7 - _x1*_x6;
+    const _x9 = 0.5*_x2;
+    const _x10 = 0.5*r_tcp;
+    const _x11 = 0.5*r_base;
+    const _x12 = x - _x10 + _x11;
+    const _x13 = _x9 + _x12;
+    const _x14 = 1.7320508075688772*_x11;
+    const _x15 = 1.7320508075688772*_x10;
+    const _x16 = _x15 - _x14 + y - 1.7320508075688772*_x9;
+    const _x17 = z - _x3;
+    const _x18 = 0.5*_x3;
+    const _x19 = _x2*_x17 - 1.7320508075688772*_x18*_x16 + _x13*_x18;
+    const _x20 = 0.5*_x4;
+    const _x21 = _x20 + _x12;
+    const _x22 = y + _x14 - _x15 + 1.7320508075688772*_x20;
+    const _x23 = z - _x5;
+    const _x24 = 0.5*_x5;
+    const _x25 = _x4*_x23 + _x24*_x21 + 1.7320508075688772*_x24*_x22;
+    const _x26 = 2.0*theta1_d;
+    const _x27 = -_x17*_x22 + _x23*_x16;
+    const _x28 = -(-_x7*_x22 + y*_x23);
+    const _x29 = -_x7*_x16 + y*_x17;
+    const _x30 = _x29*_x21 + _x13*_x28 + _x6*_x27;
+    const _x31 = 1.0/_x30;
+    const _x32 = _x27*_x31;
+    const _x33 = _x8*_x32;
+    const _x34 = _x28*_x31;
+    const _x35 = _x19*_x34;
+    const _x36 = _x29*_x31;
+    const _x37 = _x25*_x36;
+    const _x38 = _x37*theta3_d + _x35*theta2_d + _x33*theta1_d;
+    const _x39 = -(-_x21*_x17 + _x13*_x23);
+    const _x40 = _x39*_x31;
+    const _x41 = _x8*_x40;
+    const _x42 = -_x7*_x21 + _x6*_x23;
+    const _x43 = _x42*_x31;
+    const _x44 = _x19*_x43;
+    const _x45 = -(-_x13*_x7 + _x6*_x17);
+    const _x46 = _x31*_x45;
+    const _x47 = _x25*_x46;
+    const _x48 = _x47*theta3_d + _x44*theta2_d + _x41*theta1_d;
+    const _x49 = -_x16*_x21 + _x13*_x22;
+    const _x50 = _x31*_x49;
+    const _x51 = _x8*_x50;
+    const _x52 = -(-y*_x21 + _x6*_x22);
+    const _x53 = _x52*_x31;
+    const _x54 = _x19*_x53;
+    const _x55 = -y*_x13 + _x6*_x16;
+    const _x56 = _x55*_x31;
+    const _x57 = _x25*_x56;
+    const _x58 = _x57*theta3_d + _x54*theta2_d + _x51*theta1_d;
+    const _x59 = _x48*_x48 + _x58*_x58 + _x38*_x38;
+    const _x60 = _x3*theta2_d;
+    const _x61 = 1.7320508075688772*_x48;
+    const _x62 = 2.0*_x58;
+    const _x63 = 0.8660254037844386*y;
+    const _x64 = 0.5*x;
+    const _x65 = _x5*theta3_d;
+    const _x66 = Math.cos(psi1);
+    const _x67 = Math.cos(psi2);
+    const _x68 = h*m_handle;
+    const _x69 = Math.sin(psi1);
+    const _x70 = Math.sin(psi2);
+    const _x71 = _x59 - _x0*_x26*_x58 + _x1*_x26*_x38 + theta1_d*theta1_d*(-_x0*r_base + z*_x1 + x*_x0 + _x0*r_tcp);
+    const _x72 = _x59 + (_x2*r_tcp - _x2*r_base + z*_x3 - _x2*_x64 + _x2*_x63)*theta2_d*theta2_d - _x60*_x38 - _x2*_x62*theta2_d + _x61*_x60;
+    const _x73 = _x59 + (z*_x5 - _x4*r_base - _x4*_x64 + _x4*r_tcp - _x4*_x63)*theta3_d*theta3_d - _x65*_x38 - _x4*_x62*theta3_d - _x61*_x65;
+    const _x74 = -(_x73*_x36 + _x72*_x34 + _x71*_x32);
+    const _x75 = m_platform + 1.5*m_rod + m_fork1 + m_handle + m_fork2;
+    const _x76 = _x68*_x67;
+    const _x77 = _x69*psi2_d;
+    const _x78 = _x70*_x68;
+    const _x79 = _x66*_x78;
+    const _x80 = _x76*_x77 + _x79*psi1_d;
+    const _x81 = _x69*psi1_d;
+    const _x82 = _x79*psi2_d + _x76*_x81;
+    const _x83 = _x74*_x75 + _x80*psi2_d + _x82*psi1_d;
+    const _x84 = -(_x73*_x46 + _x72*_x43 + _x71*_x40);
+    const _x85 = _x66*_x76;
+    const _x86 = -_x85*psi2_d + _x78*_x81;
+    const _x87 = _x78*_x77 - _x85*psi1_d;
+    const _x88 = _x84*_x75 + _x86*psi2_d + _x87*psi1_d;
+    const _x89 = -(_x73*_x56 + _x72*_x53 + _x71*_x50);
+    const _x90 = -_x78*psi2_d*psi2_d + _x89*_x75;
+    const _x91 = -_x66*_x76;
+    const _x92 = _x69*_x78;
+    const _x93 = -_x69*_x76;
+    const _x94 = -_x66*_x78;
+    const _x95 = _x38*_x79 + _x69*_x48*_x78;
+    const _x96 = _x69*_x38*_x76 - _x48*_x85;
+    const _x97 = _x48*_x87 + _x38*_x82;
+    const _x98 = 5e-05*m_handle;
+    const _x99 = 0.00013333333333333334*m_fork2;
+    const _x100 = 2.0*_x70*_x67;
+    const _x101 = 0.0005583333333333333*m_handle + h*h*m_handle;
+    const _x102 = psi1_d*((_x98 + _x99)*_x100 - _x100*(_x99 + Math.cos(psi3)*Math.cos(psi3)*_x101 + Math.sin(psi3)*Math.sin(psi3)*_x101));
+    const _x103 = _x67*_x98;
+    const _x104 = _x103*psi3_d;
+    const _x105 = _x58*_x78;
+    const _x106 = -_x105*psi2_d + _x48*_x86 + _x38*_x80;
+    return [_x83*_x33 + _x90*_x51 + _x88*_x41, _x83*_x35 + _x88*_x44 + _x90*_x54, _x83*_x37 + _x88*_x47 + _x90*_x57, _x74*_x91 + _x84*_x93 - 0.5*(_x97 + _x96*psi1_d + _x95*psi2_d) + _x102*psi2_d + _x104*psi2_d + _x97, _x74*_x92 + _x84*_x94 + _x76*_x89 - 0.5*(_x106 + (_x95 + _x102 + _x104)*psi1_d + _x104*psi1_d + (_x96 - _x105)*psi2_d) + _x106, _x103*psi1_d*psi2_d];
+  }
+
+  /**
+   * Inverse dynamics: actuator efforts for a motion.
+   *
+   * tau = M_a qdd + V_a + G_a + F_f + J^T (M_p pdd + V_p + G_p) with pdd = J qdd + b
+   * (d'Alembert: the loop constraint forces do no work on motions pd = J qd), equal to M
+   * qdd + V + G + F_f without forming M. Evaluate at a consistent pair q, p (p = fk(q) or
+   * q = ik(p)).
+   *
+   * @param {number[]} q joint coordinates, 3 numbers: theta1 [rad], theta2 [rad], theta3
+   *     [rad].
+   * @param {number[]} p task coordinates of the platform (TCP), 3 numbers: x [m], y [m], z
+   *     [m].
+   * @param {number[]} qw wrist joint coordinates, 3 numbers: psi1 [rad], psi2 [rad], psi3
+   *     [rad].
+   * @param {number[]} qd joint velocities, 3 numbers: theta1 [rad/s], theta2 [rad/s],
+   *     theta3 [rad/s].
+   * @param {number[]} qwd wrist joint velocities, 3 numbers: psi1 [rad/s], psi2 [rad/s],
+   *     psi3 [rad/s].
+   * @param {number[]} qdd joint accelerations, 3 numbers: theta1 [rad/s^2], theta2
+   *     [rad/s^2], theta3 [rad/s^2].
+   * @param {number[]} qwdd wrist joint accelerations, 3 numbers: psi1 [rad/s^2], psi2
+   *     [rad/s^2], psi3 [rad/s^2].
+   * @param {Object} [params] parameter values (defaults in PARAMETERS):
+   *     r_base: distance from the base centre to the actuated joints A_i [m]; default 0.07.
+   *     r_tcp: distance from the TCP to the platform joints B_i [m]; default 0.025.
+   *     a: length of the upper (actuated) arms A_i C_i [m]; default 0.1.
+   *     m_arm: mass of an upper arm [kg]; default 0.0093.
+   *     m_rod: mass of a lower-arm parallelogram (two rods and four ball joints) [kg]; default 0.0095.
+   *     m_platform: mass of the platform plate (the handle is on the wrist) [kg]; default 0.021.
+   *     J_rotor: rotor inertia of an actuator (motor side) [kg*m^2]; default 1e-06.
+   *     gear: capstan reduction (motor turns per arm turn) [1]; default 10.0.
+   *     h: distance from the wrist centre to the grip point along the handle [m]; default 0.03.
+   *     m_fork1: mass of the first wrist fork (turns with psi1) [kg]; default 0.012.
+   *     m_fork2: mass of the second wrist fork (turns with psi2) [kg]; default 0.009.
+   *     m_handle: mass of the handle (turns with psi3) [kg]; default 0.03.
+   * @returns {number[]}
+   *     tau: shape (6,); actuator efforts [N*m (revolute), N (prismatic)].
+   */
+  function inverse_dynamics(q, p, qw, qd, qwd, qdd, qwdd, params) {
+    _vector(q, 3, "q", "inverse_dynamics");
+    _vector(p, 3, "p", "inverse_dynamics");
+    _vector(qw, 3, "qw", "inverse_dynamics");
+    _vector(qd, 3, "qd", "inverse_dynamics");
+    _vector(qwd, 3, "qwd", "inverse_dynamics");
+    _vector(qdd, 3, "qdd", "inverse_dynamics");
+    _vector(qwdd, 3, "qwdd", "inverse_dynamics");
+    const _p = _params(params, ["r_base", "r_tcp", "a", "m_arm", "m_rod", "m_platform", "J_rotor", "gear", "h", "m_fork1", "m_fork2", "m_handle"], "inverse_dynamics");
+    const r_base = _p.r_base ?? 0.07;
+    const r_tcp = _p.r_tcp ?? 0.025;
+    const a = _p.a ?? 0.1;
+    const m_arm = _p.m_arm ?? 0.0093;
+    const m_rod = _p.m_rod ?? 0.0095;
+    const m_platform = _p.m_platform ?? 0.021;
+    const J_rotor = _p.J_rotor ?? 1e-06;
+    const gear = _p.gear ?? 10.0;
+    const h = _p.h ?? 0.03;
+    const m_fork1 = _p.m_fork1 ?? 0.012;
+    const m_fork2 = _p.m_fork2 ?? 0.009;
+    const m_handle = _p.m_handle ?? 0.03;
+    const theta1 = q[0];
+    const theta2 = q[1];
+    const theta3 = q[2];
+    const x = p[0];
+    const y = p[1];
+    const z = p[2];
+    const psi1 = qw[0];
+    const psi2 = qw[1];
+    const psi3 = qw[2];
+    const theta1_d = qd[0];
+    const theta2_d = qd[1];
+    const theta3_d = qd[2];
+    const psi1_d = qwd[0];
+    const psi2_d = qwd[1];
+    const psi3_d = qwd[2];
+    const theta1_dd = qdd[0];
+    const theta2_dd = qdd[1];
+    const theta3_dd = qdd[2];
+    const psi1_dd = qwdd[0];
+    const psi2_dd = qwdd[1];
+    const psi3_dd = qwdd[2];
+    const _x0 = Math.cos(theta1);
+    const _x1 = a*_x0;
+    const _x2 = a*Math.sin(theta1);
+    const _x3 = Math.cos(theta2);
+    const _x4 = a*_x3;
+    const _x5 = a*Math.sin(theta2);
+    const _x6 = Math.cos(theta3);
+    const _x7 = a*_x6;
+    const _x8 = a*Math.sin(theta3);
+    const _x9 = r_tcp + x - r_base - _x1;
+    const _x10 = z - _x2;
+    const _x11 = _x1*_x10 - _x2*_x9;
+    const _x12 = 0.5*_x4;
+    const _x13 = 0.5*r_tcp;
+    const _x14 = 0.5*r_base;
+    const _x15 = x - _x13 + _x14;
+    const _x16 = _x12 + _x15;
+    const _x17 = 1.7320508075688772*_x14;
+    const _x18 = 1.7320508075688772*_x13;
+    const _x19 = _x18 - _x17 + y - 1.7320508075688772*_x12;
+    const _x20 = z - _x5;
+    const _x21 = 0.5*_x5;
+    const _x22 = _x4*_x20 - 1.7320508075688772*_x21*_x19 + _x16*_x21;
+    const _x23 = 0.5*_x7;
+    const _x24 = _x23 + _x15;
+    const _x25 = y + _x17 - _x18 + 1.7320508075688772*_x23;
+    const _x26 = z - _x8;
+    const _x27 = 0.5*_x8;
+    const _x28 = _x7*_x26 + _x27*_x24 + 1.7320508075688772*_x27*_x25;
+    const _x29 = 2.0*theta1_d;
+    const _x30 = -_x20*_x25 + _x26*_x19;
+    const _x31 = -(-_x10*_x25 + y*_x26);
+    const _x32 = -_x10*_x19 + y*_x20;
+    const _x33 = _x32*_x24 + _x16*_x31 + _x9*_x30;
+    const _x34 = 1.0/_x33;
+    const _x35 = _x30*_x34;
+    const _x36 = _x11*_x35;
+    const _x37 = _x31*_x34;
+    const _x38 = _x22*_x37;
+    const _x39 = _x32*_x34;
+    const _x40 = _x28*_x39;
+    const _x41 = _x40*theta3_d + _x38*theta2_d + _x36*theta1_d;
+    const _x42 = -(-_x24*_x20 + _x16*_x26);
+    const _x43 = _x42*_x34;
+    const _x44 = _x11*_x43;
+    const _x45 = -_x10*_x24 + _x9*_x26;
+    const _x46 = _x45*_x34;
+    const _x47 = _x22*_x46;
+    const _x48 = -(-_x16*_x10 + _x9*_x20);
+    const _x49 = _x34*_x48;
+    const _x50 = _x28*_x49;
+    const _x51 = _x50*theta3_d + _x47*theta2_d + _x44*theta1_d;
+    const _x52 = -_x19*_x24 + _x16*_x25;
+    const _x53 = _x34*_x52;
+    const _x54 = _x11*_x53;
+    const _x55 = -(-y*_x24 + _x9*_x25);
+    const _x56 = _x55*_x34;
+    const _x57 = _x22*_x56;
+    const _x58 = -y*_x16 + _x9*_x19;
+    const _x59 = _x58*_x34;
+    const _x60 = _x28*_x59;
+    const _x61 = _x60*theta3_d + _x57*theta2_d + _x54*theta1_d;
+    const _x62 = _x51*_x51 + _x61*_x61 + _x41*_x41;
+    const _x63 = _x5*theta2_d;
+    const _x64 = 1.7320508075688772*_x51;
+    const _x65 = 2.0*_x61;
+    const _x66 = 0.8660254037844386*y;
+    const _x67 = 0.5*x;
+    const _x68 = _x8*theta3_d;
+    const _x69 = Math.cos(psi1);
+    const _x70 = Math.cos(psi2);
+    const _x71 = h*m_handle;
+    const _x72 = Math.sin(psi1);
+    const _x73 = Math.sin(psi2);
+    const _x74 = 0.00013333333333333334*m_fork2;
+    const _x75 = 0.0005583333333333333*m_handle + h*h*m_handle;
+    const _x76 = Math.cos(psi3)*Math.cos(psi3);
+    const _x77 = Math.sin(psi3)*Math.sin(psi3);
+    const _x78 = 5e-05*m_handle;
+    const _x79 = _x62 - _x1*_x29*_x61 + _x2*_x29*_x41 + theta1_d*theta1_d*(-_x1*r_base + x*_x1 + z*_x2 + _x1*r_tcp);
+    const _x80 = _x62 + (_x4*r_tcp + z*_x5 - _x4*r_base - _x4*_x67 + _x4*_x66)*theta2_d*theta2_d - _x63*_x41 - _x4*_x65*theta2_d + _x64*_x63;
+    const _x81 = (z*_x8 - _x7*r_base + _x7*r_tcp - _x7*_x67 - _x7*_x66)*theta3_d*theta3_d - _x68*_x41 - _x7*_x65*theta3_d + _x62 - _x64*_x68;
+    const _x82 = -(_x81*_x49 + _x80*_x46 + _x79*_x43);
+    const _x83 = _x82 + _x50*theta3_dd + _x47*theta2_dd + _x44*theta1_dd;
+    const _x84 = m_platform + 1.5*m_rod + m_fork1 + m_handle + m_fork2;
+    const _x85 = _x71*_x70;
+    const _x86 = -_x72*_x85;
+    const _x87 = _x73*_x71;
+    const _x88 = -_x69*_x87;
+    const _x89 = _x72*psi1_d;
+    const _x90 = _x69*_x85;
+    const _x91 = _x89*_x87 - _x90*psi2_d;
+    const _x92 = _x72*psi2_d;
+    const _x93 = -_x90*psi1_d + _x92*_x87;
+    const _x94 = _x93*psi1_d + _x91*psi2_d + _x86*psi1_dd + _x88*psi2_dd + _x83*_x84;
+    const _x95 = -(_x81*_x59 + _x80*_x56 + _x79*_x53);
+    const _x96 = _x95 + _x60*theta3_dd + _x57*theta2_dd + _x54*theta1_dd;
+    const _x97 = 9.81*m_handle;
+    const _x98 = _x96*_x84 + 9.81*m_fork2 + _x85*psi2_dd + 9.81*m_platform - _x87*psi2_d*psi2_d + 14.715*m_rod + _x97 + 9.81*m_fork1;
+    const _x99 = -(_x81*_x39 + _x80*_x37 + _x79*_x35);
+    const _x100 = _x99 + _x38*theta2_dd + _x40*theta3_dd + _x36*theta1_dd;
+    const _x101 = -_x69*_x85;
+    const _x102 = _x72*_x87;
+    const _x103 = _x69*_x87;
+    const _x104 = _x103*psi1_d + _x92*_x85;
+    const _x105 = _x89*_x85 + _x103*psi2_d;
+    const _x106 = _x105*psi1_d + _x104*psi2_d + _x102*psi2_dd + _x101*psi1_dd + _x100*_x84;
+    const _x107 = _x75*_x76 + _x77*_x75;
+    const _x108 = _x73*_x78;
+    const _x109 = _x41*_x103 + _x72*_x51*_x87;
+    const _x110 = _x72*_x41*_x85 - _x51*_x90;
+    const _x111 = _x51*_x93 + _x41*_x105;
+    const _x112 = 2.0*_x73*_x70;
+    const _x113 = psi1_d*(-(_x77*_x75 + _x75*_x76 + _x74)*_x112 + (_x74 + _x78)*_x112);
+    const _x114 = _x70*_x78;
+    const _x115 = _x114*psi3_d;
+    const _x116 = _x61*_x87;
+    const _x117 = -_x116*psi2_d + _x51*_x91 + _x41*_x104;
+    const _x118 = a*a;
+    const _x119 = 0.3333333333333333*m_arm*_x118 + gear*gear*J_rotor + 0.5*m_rod*_x118;
+    const _x120 = 4.905*a;
+    const _x121 = m_arm*_x120;
+    const _x122 = m_rod*_x120;
+    return [_x94*_x44 + _x0*_x121 + _x119*theta1_dd + _x0*_x122 + _x98*_x54 + _x106*_x36, _x3*_x122 + _x3*_x121 + _x119*theta2_dd + _x98*_x57 + _x94*_x47 + _x106*_x38, _x6*_x122 + _x106*_x40 + _x119*theta3_dd + _x98*_x60 + _x6*_x121 + _x94*_x50, _x100*_x101 + _x113*psi2_d - 0.5*(_x111 + _x110*psi1_d + _x109*psi2_d) + _x83*_x86 + psi1_dd*((_x74 + _x78)*_x73*_x73 + _x70*_x70*(_x107 + _x74)) + _x108*psi3_dd + _x115*psi2_d + _x111, _x100*_x102 + _x83*_x88 + h*_x70*_x97 + _x107*psi2_dd + _x96*_x85 - 0.5*(_x117 + (_x109 + _x113 + _x115)*psi1_d + _x115*psi1_d + (_x110 - _x116)*psi2_d) + _x117, _x108*psi1_dd + _x78*psi3_dd + _x114*psi1_d*psi2_d];
+  }
+
+  /**
+   * Forward dynamics: actuator accelerations under given efforts.
+   *
+   * qdd = M^-1 (tau - V - G - F_f) by a straight-line LDL^T factorization of the
+   * symmetric positive definite M = M_a + J^T M_p J; the platform then accelerates with
+   * pdd = J qdd + b. Evaluate at a consistent pair q, p (p = fk(q) or q = ik(p)).
+   *
+   * @param {number[]} q joint coordinates, 3 numbers: theta1 [rad], theta2 [rad], theta3
+   *     [rad].
+   * @param {number[]} p task coordinates of the platform (TCP), 3 numbers: x [m], y [m], z
+   *     [m].
+   * @param {number[]} qw wrist joint coordinates, 3 numbers: psi1 [rad], psi2 [rad], psi3
+   *     [rad].
+   * @param {number[]} qd joint velocities, 3 numbers: theta1 [rad/s], theta2 [rad/s],
+   *     theta3 [rad/s].
+   * @param {number[]} qwd wrist joint velocities, 3 numbers: psi1 [rad/s], psi2 [rad/s],
+   *     psi3 [rad/s].
+   * @param {number[]} tau joint torques (revolute) or forces (prismatic), 3 numbers: theta1
+   *     [N*m], theta2 [N*m], theta3 [N*m].
+   * @param {number[]} tauw wrist joint torques (revolute) or forces (prismatic), 3 numbers:
+   *     psi1 [N*m], psi2 [N*m], psi3 [N*m].
+   * @param {Object} [params] parameter values (defaults in PARAMETERS):
+   *     r_base: distance from the base centre to the actuated joints A_i [m]; default 0.07.
+   *     r_tcp: distance from the TCP to the platform joints B_i [m]; default 0.025.
+   *     a: length of the upper (actuated) arms A_i C_i [m]; default 0.1.
+   *     m_arm: mass of an upper arm [kg]; default 0.0093.
+   *     m_rod: mass of a lower-arm parallelogram (two rods and four ball joints) [kg]; default 0.0095.
+   *     m_platform: mass of the platform plate (the handle is on the wrist) [kg]; default 0.021.
+   *     J_rotor: rotor inertia of an actuator (motor side) [kg*m^2]; default 1e-06.
+   *     gear: capstan reduction (motor turns per arm turn) [1]; default 10.0.
+   *     h: distance from the wrist centre to the grip point along the handle [m]; default 0.03.
+   *     m_fork1: mass of the first wrist fork (turns with psi1) [kg]; default 0.012.
+   *     m_fork2: mass of the second wrist fork (turns with psi2) [kg]; default 0.009.
+   *     m_handle: mass of the handle (turns with psi3) [kg]; default 0.03.
+   * @returns {number[]}
+   *     qdd: shape (6,); actuator accelerations [rad/s^2 (revolute), m/s^2
+   *     (prismatic)].
+   */
+  function forward_dynamics(q, p, qw, qd, qwd, tau, tauw, params) {
+    _vector(q, 3, "q", "forward_dynamics");
+    _vector(p, 3, "p", "forward_dynamics");
+    _vector(qw, 3, "qw", "forward_dynamics");
+    _vector(qd, 3, "qd", "forward_dynamics");
+    _vector(qwd, 3, "qwd", "forward_dynamics");
+    _vector(tau, 3, "tau", "forward_dynamics");
+    _vector(tauw, 3, "tauw", "forward_dynamics");
+    const _p = _params(params, ["r_base", "r_tcp", "a", "m_arm", "m_rod", "m_platform", "J_rotor", "gear", "h", "m_fork1", "m_fork2", "m_handle"], "forward_dynamics");
+    const r_base = _p.r_base ?? 0.07;
+    const r_tcp = _p.r_tcp ?? 0.025;
+    const a = _p.a ?? 0.1;
+    const m_arm = _p.m_arm ?? 0.0093;
+    const m_rod = _p.m_rod ?? 0.0095;
+    const m_platform = _p.m_platform ?? 0.021;
+    const J_rotor = _p.J_rotor ?? 1e-06;
+    const gear = _p.gear ?? 10.0;
+    const h = _p.h ?? 0.03;
+    const m_fork1 = _p.m_fork1 ?? 0.012;
+    const m_fork2 = _p.m_fork2 ?? 0.009;
+    const m_handle = _p.m_handle ?? 0.03;
+    const theta1 = q[0];
+    const theta2 = q[1];
+    const theta3 = q[2];
+    const x = p[0];
+    const y = p[1];
+    const z = p[2];
+    const psi1 = qw[0];
+    const psi2 = qw[1];
+    const psi3 = qw[2];
+    const theta1_d = qd[0];
+    const theta2_d = qd[1];
+    const theta3_d = qd[2];
+    const psi1_d = qwd[0];
+    const psi2_d = qwd[1];
+    const psi3_d = qwd[2];
+    const tau_theta1 = tau[0];
+    const tau_theta2 = tau[1];
+    const tau_theta3 = tau[2];
+    const tau_psi1 = tauw[0];
+    const tau_psi2 = tauw[1];
+    const tau_psi3 = tauw[2];
+    const _x0 = Math.cos(theta1);
+    const _x1 = a*_x0;
+    const _x2 = a*Math.sin(theta1);
+    const _x3 = Math.cos(theta2);
+    const _x4 = a*_x3;
+    const _x5 = a*Math.sin(theta2);
+    const _x6 = Math.cos(theta3);
+    const _x7 = a*_x6;
+    const _x8 = a*Math.sin(theta3);
+    const _x9 = r_tcp + x - r_base - _x1;
+    const _x10 = z - _x2;
+    const _x11 = _x1*_x10 - _x2*_x9;
+    const _x12 = 0.5*_x4;
+    const _x13 = 0.5*r_tcp;
+    const _x14 = 0.5*r_base;
+    const _x15 = x - _x13 + _x14;
+    const _x16 = _x12 + _x15;
+    const _x17 = 1.7320508075688772*_x14;
+    const _x18 = 1.7320508075688772*_x13;
+    const _x19 = _x18 - _x17 + y - 1.7320508075688772*_x12;
+    const _x20 = z - _x5;
+    const _x21 = 0.5*_x5;
+    const _x22 = _x4*_x20 - 1.7320508075688772*_x21*_x19 + _x16*_x21;
+    const _x23 = 0.5*_x7;
+    const _x24 = _x23 + _x15;
+    const _x25 = y + _x17 - _x18 + 1.7320508075688772*_x23;
+    const _x26 = z - _x8;
+    const _x27 = 0.5*_x8;
+    const _x28 = _x7*_x26 + _x27*_x24 + 1.7320508075688772*_x27*_x25;
+    const _x29 = 2.0*theta1_d;
+    const _x30 = -_x20*_x25 + _x26*_x19;
+    const _x31 = -(-_x10*_x25 + y*_x26);
+    const _x32 = -_x10*_x19 + y*_x20;
+    const _x33 = _x32*_x24 + _x16*_x31 + _x9*_x30;
+    const _x34 = 1.0/_x33;
+    const _x35 = _x30*_x34;
+    const _x36 = _x11*_x35;
+    const _x37 = _x31*_x34;
+    const _x38 = _x22*_x37;
+    const _x39 = _x32*_x34;
+    const _x40 = _x28*_x39;
+    const _x41 = _x40*theta3_d + _x38*theta2_d + _x36*theta1_d;
+    const _x42 = -(-_x24*_x20 + _x16*_x26);
+    const _x43 = _x42*_x34;
+    const _x44 = _x11*_x43;
+    const _x45 = -_x10*_x24 + _x9*_x26;
+    const _x46 = _x45*_x34;
+    const _x47 = _x22*_x46;
+    const _x48 = -(-_x16*_x10 + _x9*_x20);
+    const _x49 = _x34*_x48;
+    const _x50 = _x28*_x49;
+    const _x51 = _x50*theta3_d + _x47*theta2_d + _x44*theta1_d;
+    const _x52 = -_x19*_x24 + _x16*_x25;
+    const _x53 = _x34*_x52;
+    const _x54 = _x11*_x53;
+    const _x55 = -(-y*_x24 + _x9*_x25);
+    const _x56 = _x55*_x34;
+    const _x57 = _x22*_x56;
+    const _x58 = -y*_x16 + _x9*_x19;
+    const _x59 = _x58*_x34;
+    const _x60 = _x28*_x59;
+    const _x61 = _x60*theta3_d + _x57*theta2_d + _x54*theta1_d;
+    const _x62 = _x51*_x51 + _x61*_x61 + _x41*_x41;
+    const _x63 = _x5*theta2_d;
+    const _x64 = 1.7320508075688772*_x51;
+    const _x65 = 2.0*_x61;
+    const _x66 = 0.8660254037844386*y;
+    const _x67 = 0.5*x;
+    const _x68 = _x8*theta3_d;
+    const _x69 = Math.cos(psi1);
+    const _x70 = Math.cos(psi2);
+    const _x71 = h*m_handle;
+    const _x72 = Math.sin(psi1);
+    const _x73 = Math.sin(psi2);
+    const _x74 = 0.00013333333333333334*m_fork2;
+    const _x75 = 0.0005583333333333333*m_handle + h*h*m_handle;
+    const _x76 = Math.cos(psi3)*Math.cos(psi3);
+    const _x77 = Math.sin(psi3)*Math.sin(psi3);
+    const _x78 = 5e-05*m_handle;
+    const _x79 = m_platform + 1.5*m_rod + m_fork1 + m_handle + m_fork2;
+    const _x80 = _x79*_x36;
+    const _x81 = _x79*_x44;
+    const _x82 = _x54*_x79;
+    const _x83 = a*a;
+    const _x84 = 0.3333333333333333*m_arm*_x83 + gear*gear*J_rotor + 0.5*m_rod*_x83;
+    const _x85 = _x84 + _x54*_x82 + _x44*_x81 + _x36*_x80;
+    const _x86 = 1.0/_x85;
+    const _x87 = _x79*_x38;
+    const _x88 = _x79*_x47;
+    const _x89 = _x57*_x79;
+    const _x90 = _x54*_x89 + _x44*_x88 + _x36*_x87;
+    const _x91 = _x84 + _x47*_x88 + _x57*_x89 + _x38*_x87;
+    const _x92 = _x86*_x90;
+    const _x93 = -_x92*_x90 + _x91;
+    const _x94 = 1.0/_x93;
+    const _x95 = _x79*_x40;
+    const _x96 = _x79*_x50;
+    const _x97 = _x60*_x79;
+    const _x98 = _x54*_x97 + _x44*_x96 + _x36*_x95;
+    const _x99 = _x84 + _x60*_x97 + _x50*_x96 + _x40*_x95;
+    const _x100 = _x86*_x98;
+    const _x101 = _x57*_x97 + _x47*_x96 + _x38*_x95;
+    const _x102 = -_x100*_x90 + _x101;
+    const _x103 = _x94*_x102;
+    const _x104 = -(_x103*_x102 + _x100*_x98) + _x99;
+    const _x105 = 1.0/_x104;
+    const _x106 = _x71*_x70;
+    const _x107 = -_x69*_x106;
+    const _x108 = -_x72*_x106;
+    const _x109 = _x108*_x44 + _x107*_x36;
+    const _x110 = _x75*_x76 + _x77*_x75;
+    const _x111 = (_x74 + _x78)*_x73*_x73 + _x70*_x70*(_x110 + _x74);
+    const _x112 = _x86*_x109;
+    const _x113 = _x108*_x47 + _x107*_x38;
+    const _x114 = -_x112*_x90 + _x113;
+    const _x115 = _x94*_x114;
+    const _x116 = _x108*_x50 + _x107*_x40;
+    const _x117 = -(_x115*_x102 + _x112*_x98) + _x116;
+    const _x118 = _x105*_x117;
+    const _x119 = -(_x118*_x117 + _x115*_x114 + _x112*_x109) + _x111;
+    const _x120 = 1.0/_x119;
+    const _x121 = _x73*_x71;
+    const _x122 = _x72*_x121;
+    const _x123 = -_x69*_x121;
+    const _x124 = _x54*_x106 + _x123*_x44 + _x122*_x36;
+    const _x125 = _x86*_x124;
+    const _x126 = _x123*_x47 + _x57*_x106 + _x122*_x38;
+    const _x127 = -_x125*_x90 + _x126;
+    const _x128 = _x94*_x127;
+    const _x129 = _x60*_x106 + _x123*_x50 + _x122*_x40;
+    const _x130 = -(_x128*_x102 + _x125*_x98) + _x129;
+    const _x131 = _x105*_x130;
+    const _x132 = -(_x131*_x117 + _x128*_x114 + _x125*_x109);
+    const _x133 = _x120*_x132;
+    const _x134 = -(_x132*_x133 + _x130*_x131 + _x128*_x127 + _x125*_x124) + _x110;
+    const _x135 = 1.0/_x134;
+    const _x136 = _x62 - _x1*_x29*_x61 + _x2*_x29*_x41 + theta1_d*theta1_d*(-_x1*r_base + x*_x1 + z*_x2 + _x1*r_tcp);
+    const _x137 = _x62 + (_x4*r_tcp + z*_x5 - _x4*r_base - _x4*_x67 + _x4*_x66)*theta2_d*theta2_d - _x63*_x41 - _x4*_x65*theta2_d + _x64*_x63;
+    const _x138 = (z*_x8 - _x7*r_base + _x7*r_tcp - _x7*_x67 - _x7*_x66)*theta3_d*theta3_d - _x68*_x41 - _x7*_x65*theta3_d + _x62 - _x64*_x68;
+    const _x139 = -(_x138*_x59 + _x137*_x56 + _x136*_x53);
+    const _x140 = 9.81*m_handle;
+    const _x141 = _x139*_x79 + 9.81*m_platform - _x121*psi2_d*psi2_d + 14.715*m_rod + 9.81*m_fork2 + _x140 + 9.81*m_fork1;
+    const _x142 = -(_x138*_x49 + _x137*_x46 + _x136*_x43);
+    const _x143 = _x72*psi1_d;
+    const _x144 = _x69*_x106;
+    const _x145 = _x143*_x121 - _x144*psi2_d;
+    const _x146 = _x72*psi2_d;
+    const _x147 = -_x144*psi1_d + _x146*_x121;
+    const _x148 = _x142*_x79 + _x145*psi2_d + _x147*psi1_d;
+    const _x149 = -(_x138*_x39 + _x137*_x37 + _x136*_x35);
+    const _x150 = _x69*_x121;
+    const _x151 = _x150*psi1_d + _x146*_x106;
+    const _x152 = _x143*_x106 + _x150*psi2_d;
+    const _x153 = _x149*_x79 + _x151*psi2_d + _x152*psi1_d;
+    const _x154 = _x73*_x78;
+    const _x155 = _x41*_x150 + _x72*_x51*_x121;
+    const _x156 = _x72*_x41*_x106 - _x51*_x144;
+    const _x157 = _x51*_x147 + _x41*_x152;
+    const _x158 = 2.0*_x73*_x70;
+    const _x159 = psi1_d*(-(_x77*_x75 + _x75*_x76 + _x74)*_x158 + (_x74 + _x78)*_x158);
+    const _x160 = _x70*_x78;
+    const _x161 = _x160*psi3_d;
+    const _x162 = _x61*_x121;
+    const _x163 = -_x162*psi2_d + _x51*_x145 + _x41*_x151;
+    const _x164 = 4.905*a;
+    const _x165 = m_arm*_x164;
+    const _x166 = m_rod*_x164;
+    const _x167 = _x120*_x154;
+    const _x168 = -_x132*_x167;
+    const _x169 = _x135*_x168;
+    const _x170 = _x78 - (_x154*_x167 + _x169*_x168);
+    const _x171 = tau_theta1 - (_x0*_x165 + _x0*_x166 + _x141*_x54 + _x148*_x44 + _x153*_x36);
+    const _x172 = tau_theta2 - (_x3*_x165 + _x141*_x57 + _x148*_x47 + _x3*_x166 + _x153*_x38) - _x171*_x92;
+    const _x173 = tau_theta3 - (_x6*_x166 + _x6*_x165 + _x141*_x60 + _x148*_x50 + _x153*_x40) - (_x171*_x100 + _x172*_x103);
+    const _x174 = -(_x173*_x118 + _x172*_x115 + _x171*_x112) - (_x157 + _x161*psi2_d + _x159*psi2_d - 0.5*(_x155*psi2_d + _x156*psi1_d + _x157) + _x142*_x108 + _x149*_x107) + tau_psi1;
+    const _x175 = -(h*_x70*_x140 + _x163 - 0.5*((-_x162 + _x156)*psi2_d + _x161*psi1_d + (_x161 + _x159 + _x155)*psi1_d + _x163) + _x139*_x106 + _x142*_x123 + _x149*_x122) - (_x174*_x133 + _x173*_x131 + _x172*_x128 + _x171*_x125) + tau_psi2;
+    const _x176 = -(_x169*_x175 + _x174*_x167) - _x160*psi1_d*psi2_d + tau_psi3;
+    const _x177 = _x176/_x170;
+    const _x178 = -_x169*_x177 + _x135*_x175;
+    const _x179 = -(_x177*_x167 + _x178*_x133) + _x120*_x174;
+    const _x180 = -(_x178*_x131 + _x179*_x118) + _x105*_x173;
+    const _x181 = -(_x178*_x128 + _x179*_x115 + _x180*_x103) + _x94*_x172;
+    const _x182 = -(_x178*_x125 + _x179*_x112 + _x180*_x100 + _x181*_x92) + _x86*_x171;
+    return [_x182, _x181, _x180, _x179, _x178, _x177];
+  }
+
+  /**
+   * Kinetic energy.
+   *
+   * k = 1/2 qd^T M_a qd + 1/2 pd^T M_p pd with pd = J qd (= 1/2 qd^T M qd). Evaluate at a
+   * consistent pair q, p (p = fk(q) or q = ik(p)).
+   *
+   * @param {number[]} q joint coordinates, 3 numbers: theta1 [rad], theta2 [rad], theta3
+   *     [rad].
+   * @param {number[]} p task coordinates of the platform (TCP), 3 numbers: x [m], y [m], z
+   *     [m].
+   * @param {number[]} qw wrist joint coordinates, 3 numbers: psi1 [rad], psi2 [rad], psi3
+   *     [rad].
+   * @param {number[]} qd joint velocities, 3 numbers: theta1 [rad/s], theta2 [rad/s],
+   *     theta3 [rad/s].
+   * @param {number[]} qwd wrist joint velocities, 3 numbers: psi1 [rad/s], psi2 [rad/s],
+   *     psi3 [rad/s].
+   * @param {Object} [params] parameter values (defaults in PARAMETERS):
+   *     r_base: distance from the base centre to the actuated joints A_i [m]; default 0.07.
+   *     r_tcp: distance from the TCP to the platform joints B_i [m]; default 0.025.
+   *     a: length of the upper (actuated) arms A_i C_i [m]; default 0.1.
+   *     m_arm: mass of an upper arm [kg]; default 0.0093.
+   *     m_rod: mass of a lower-arm parallelogram (two rods and four ball joints) [kg]; default 0.0095.
+   *     m_platform: mass of the platform plate (the handle is on the wrist) [kg]; default 0.021.
+   *     J_rotor: rotor inertia of an actuator (motor side) [kg*m^2]; default 1e-06.
+   *     gear: capstan reduction (motor turns per arm turn) [1]; default 10.0.
+   *     h: distance from the wrist centre to the grip point along the handle [m]; default 0.03.
+   *     m_fork1: mass of the first wrist fork (turns with psi1) [kg]; default 0.012.
+   *     m_fork2: mass of the second wrist fork (turns with psi2) [kg]; default 0.009.
+   *     m_handle: mass of the handle (turns with psi3) [kg]; default 0.03.
+   * @returns {number}
+   *     k: shape (); kinetic energy of all bodies [J].
+   */
+  function kinetic_energy(q, p, qw, qd, qwd, params) {
+    _vector(q, 3, "q", "kinetic_energy");
+    _vector(p, 3, "p", "kinetic_energy");
+    _vector(qw, 3, "qw", "kinetic_energy");
+    _vector(qd, 3, "qd", "kinetic_energy");
+    _vector(qwd, 3, "qwd", "kinetic_energy");
+    const _p = _params(params, ["r_base", "r_tcp", "a", "m_arm", "m_rod", "m_platform", "J_rotor", "gear", "h", "m_fork1", "m_fork2", "m_handle"], "kinetic_energy");
+    const r_base = _p.r_base ?? 0.07;
+    const r_tcp = _p.r_tcp ?? 0.025;
+    const a = _p.a ?? 0.1;
+    const m_arm = _p.m_arm ?? 0.0093;
+    const m_rod = _p.m_rod ?? 0.0095;
+    const m_platform = _p.m_platform ?? 0.021;
+    const J_rotor = _p.J_rotor ?? 1e-06;
+    const gear = _p.gear ?? 10.0;
+    const h = _p.h ?? 0.03;
+    const m_fork1 = _p.m_fork1 ?? 0.012;
+    const m_fork2 = _p.m_fork2 ?? 0.009;
+    const m_handle = _p.m_handle ?? 0.03;
+    const theta1 = q[0];
+    const theta2 = q[1];
+    const theta3 = q[2];
+    const x = p[0];
+    const y = p[1];
+    const z = p[2];
+    const psi1 = qw[0];
+    const psi2 = qw[1];
+    const psi3 = qw[2];
+    const theta1_d = qd[0];
+    const theta2_d = qd[1];
+    const theta3_d = qd[2];
+    const psi1_d = qwd[0];
+    const psi2_d = qwd[1];
+    const psi3_d = qwd[2];
+    const _x0 = a*Math.cos(theta1);
+    const _x1 = -_x0 - r_base + x + r_tcp;
+    const _x2 = a*Math.sin(theta1);
+    const _x3 = -_x2 + z;
+    const _x4 = -_x2*_x1 + _x3*_x0;
+    const _x5 = a*Math.cos(theta2);
+    const _x6 = 0.5*_x5;
+    const _x7 = 0.5*r_tcp;
+    const _x8 = 0.5*r_base;
+    const _x9 = x - _x7 + _x8;
+    const _x10 = _x6 + _x9;
+    const _x11 = 1.7320508075688772*_x8;
+    const _x12 = 1.7320508075688772*_x7;
+    const _x13 = _x12 - _x11 + y - 1.7320508075688772*_x6;
+    const _x14 = a*Math.sin(theta2);
+    const _x15 = -_x14 + z;
+    const _x16 = 0.5*_x14;
+    const _x17 = _x5*_x15 - 1.7320508075688772*_x16*_x13 + _x10*_x16;
+    const _x18 = a*Math.cos(theta3);
+    const _x19 = 0.5*_x18;
+    const _x20 = _x19 + _x9;
+    const _x21 = y + _x11 - _x12 + 1.7320508075688772*_x19;
+    const _x22 = a*Math.sin(theta3);
+    const _x23 = -_x22 + z;
+    const _x24 = 0.5*_x22;
+    const _x25 = _x23*_x18 + _x24*_x20 + 1.7320508075688772*_x24*_x21;
+    const _x26 = -_x15*_x21 + _x23*_x13;
+    const _x27 = -(-_x3*_x21 + y*_x23);
+    const _x28 = -_x3*_x13 + y*_x15;
+    const _x29 = -(-_x20*_x15 + _x10*_x23);
+    const _x30 = -_x3*_x20 + _x1*_x23;
+    const _x31 = -(-_x10*_x3 + _x1*_x15);
+    const _x32 = -_x13*_x20 + _x10*_x21;
+    const _x33 = -(-y*_x20 + _x1*_x21);
+    const _x34 = -y*_x10 + _x1*_x13;
+    const _x35 = _x28*_x20 + _x10*_x27 + _x1*_x26;
+    const _x36 = 1.0/_x35;
+    const _x37 = _x26*_x36;
+    const _x38 = _x27*_x36;
+    const _x39 = _x28*_x36;
+    const _x40 = _x29*_x36;
+    const _x41 = _x30*_x36;
+    const _x42 = _x36*_x31;
+    const _x43 = _x36*_x32;
+    const _x44 = _x33*_x36;
+    const _x45 = _x34*_x36;
+    const _x46 = _x4*_x37;
+    const _x47 = _x17*_x38;
+    const _x48 = _x25*_x39;
+    const _x49 = _x4*_x40;
+    const _x50 = _x17*_x41;
+    const _x51 = _x25*_x42;
+    const _x52 = _x4*_x43;
+    const _x53 = _x17*_x44;
+    const _x54 = _x25*_x45;
+    const _x55 = _x48*theta3_d + _x47*theta2_d + _x46*theta1_d;
+    const _x56 = _x51*theta3_d + _x50*theta2_d + _x49*theta1_d;
+    const _x57 = _x54*theta3_d + _x53*theta2_d + _x52*theta1_d;
+    const _x58 = a*a;
+    const _x59 = 0.3333333333333333*_x58*m_arm + gear*gear*J_rotor + 0.5*_x58*m_rod;
+    const _x60 = m_platform + 1.5*m_rod + m_fork1 + m_handle + m_fork2;
+    const _x61 = Math.cos(psi1);
+    const _x62 = Math.cos(psi2);
+    const _x63 = h*m_handle;
+    const _x64 = _x62*_x63;
+    const _x65 = -_x61*_x64;
+    const _x66 = Math.sin(psi1);
+    const _x67 = Math.sin(psi2);
+    const _x68 = _x63*_x67;
+    const _x69 = _x68*_x66;
+    const _x70 = -_x64*_x66;
+    const _x71 = -_x61*_x68;
+    const _x72 = 0.00013333333333333334*m_fork2;
+    const _x73 = 0.0005583333333333333*m_handle + h*h*m_handle;
+    const _x74 = _x73*Math.sin(psi3)*Math.sin(psi3) + _x73*Math.cos(psi3)*Math.cos(psi3);
+    const _x75 = 5e-05*m_handle;
+    const _x76 = _x67*_x75;
+    return 0.5*(_x59*theta1_d*theta1_d + _x59*theta2_d*theta2_d + _x59*theta3_d*theta3_d + (_x76*psi1_d + _x75*psi3_d)*psi3_d + (_x55*_x69 + _x74*psi2_d + _x56*_x71 + _x57*_x64)*psi2_d + _x57*(_x60*_x57 + _x64*psi2_d) + psi1_d*(_x55*_x65 + _x56*_x70 + _x76*psi3_d + ((_x72 + _x75)*_x67*_x67 + (_x74 + _x72)*_x62*_x62)*psi1_d) + _x56*(_x60*_x56 + _x70*psi1_d + _x71*psi2_d) + _x55*(_x60*_x55 + _x65*psi1_d + _x69*psi2_d));
+  }
+
+  /**
+   * Gravitational potential energy.
+   *
+   * u = -g . (sum of mass times centre of mass), zero with every mass at the base origin.
+   * Evaluate at a consistent pair q, p (p = fk(q) or q = ik(p)).
+   *
+   * @param {number[]} q joint coordinates, 3 numbers: theta1 [rad], theta2 [rad], theta3
+   *     [rad].
+   * @param {number[]} p task coordinates of the platform (TCP), 3 numbers: x [m], y [m], z
+   *     [m].
+   * @param {number[]} qw wrist joint coordinates, 3 numbers: psi1 [rad], psi2 [rad], psi3
+   *     [rad].
+   * @param {Object} [params] parameter values (defaults in PARAMETERS):
+   *     a: length of the upper (actuated) arms A_i C_i [m]; default 0.1.
+   *     m_arm: mass of an upper arm [kg]; default 0.0093.
+   *     m_rod: mass of a lower-arm parallelogram (two rods and four ball joints) [kg]; default 0.0095.
+   *     m_platform: mass of the platform plate (the handle is on the wrist) [kg]; default 0.021.
+   *     w: distance from the platform centre down to the wrist centre [m]; default 0.05.
+   *     h: distance from the wrist centre to the grip point along the handle [m]; default 0.03.
+   *     m_fork1: mass of the first wrist fork (turns with psi1) [kg]; default 0.012.
+   *     m_fork2: mass of the second wrist fork (turns with psi2) [kg]; default 0.009.
+   *     m_handle: mass of the handle (turns with psi3) [kg]; default 0.03.
+   * @returns {number}
+   *     u: shape (); potential energy [J].
+   */
+  function potential_energy(q, p, qw, params) {
+    _vector(q, 3, "q", "potential_energy");
+    _vector(p, 3, "p", "potential_energy");
+    _vector(qw, 3, "qw", "potential_energy");
+    const _p = _params(params, ["a", "m_arm", "m_rod", "m_platform", "w", "h", "m_fork1", "m_fork2", "m_handle"], "potential_energy");
+    const a = _p.a ?? 0.1;
+    const m_arm = _p.m_arm ?? 0.0093;
+    const m_rod = _p.m_rod ?? 0.0095;
+    const m_platform = _p.m_platform ?? 0.021;
+    const w = _p.w ?? 0.05;
+    const h = _p.h ?? 0.03;
+    const m_fork1 = _p.m_fork1 ?? 0.012;
+    const m_fork2 = _p.m_fork2 ?? 0.009;
+    const m_handle = _p.m_handle ?? 0.03;
+    const theta1 = q[0];
+    const theta2 = q[1];
+    const theta3 = q[2];
+    const z = p[2];
+    const psi2 = qw[1];
+    const _x0 = z - w;
+    const _x1 = Math.sin(theta2);
+    const _x2 = 4.905*a;
+    const _x3 = _x2*m_rod;
+    const _x4 = Math.sin(theta3);
+    const _x5 = Math.sin(theta1);
+    const _x6 = _x2*m_arm;
+    const _x7 = 9.81*_x0;
+    return _x7*m_fork2 + 14.715*z*m_rod + _x7*m_fork1 + _x3*_x1 + _x4*_x3 + _x6*_x4 + 9.81*(_x0 + h*Math.sin(psi2))*m_handle + _x5*_x3 + _x6*_x1 + _x6*_x5 + 9.81*z*m_platform;
+  }
+
+  /**
    * Forward kinematics of the hybrid device: pose of the wrist's TCP.
    *
    * base_T_tcp = base_T_platform(p) * platform_T_wrist(qw) * wrist_T_tcp: the platform
@@ -589,213 +1694,148 @@
   }
 
   /**
-   * ik, fk, leg_points, jacobian, inverse_jacobian, singularities, device_fk, device_jacobian, device_actuator_jacobian together, with one set of shared subexpressions.
+   * gravity_vector, device_fk, device_actuator_jacobian together, with one set of shared subexpressions.
    *
-   * Computes the outputs of ik, fk, leg_points, jacobian, inverse_jacobian,
-   * singularities, device_fk, device_jacobian, device_actuator_jacobian in one call;
-   * subexpressions common to several of them are evaluated once.
+   * Computes the outputs of gravity_vector, device_fk, device_actuator_jacobian in one
+   * call; subexpressions common to several of them are evaluated once.
    *
-   * @param {number[]} p task coordinates of the platform (TCP), 3 numbers: x [m], y [m], z
-   *     [m].
    * @param {number[]} q joint coordinates, 3 numbers: theta1 [rad], theta2 [rad], theta3
    *     [rad].
+   * @param {number[]} p task coordinates of the platform (TCP), 3 numbers: x [m], y [m], z
+   *     [m].
    * @param {number[]} qw wrist joint coordinates, 3 numbers: psi1 [rad], psi2 [rad], psi3
    *     [rad].
    * @param {Object} [params] parameter values (defaults in PARAMETERS):
    *     r_base: distance from the base centre to the actuated joints A_i [m]; default 0.07.
    *     r_tcp: distance from the TCP to the platform joints B_i [m]; default 0.025.
    *     a: length of the upper (actuated) arms A_i C_i [m]; default 0.1.
-   *     b: length of the lower arms (parallelograms) C_i B_i [m]; default 0.15.
+   *     m_arm: mass of an upper arm [kg]; default 0.0093.
+   *     m_rod: mass of a lower-arm parallelogram (two rods and four ball joints) [kg]; default 0.0095.
+   *     m_platform: mass of the platform plate (the handle is on the wrist) [kg]; default 0.021.
    *     w: distance from the platform centre down to the wrist centre [m]; default 0.05.
    *     h: distance from the wrist centre to the grip point along the handle [m]; default 0.03.
-   * @returns {{joints: number[], ik_margin: number[], position: number[], fk_margin: number, points: number[][], jacobian_J: number[][], J_inv: number[][], det_Jq: number, det_Jx: number, base_T_tcp: number[][], device_jacobian_J: number[][], device_actuator_jacobian_J: number[][]}}
-   *     joints: shape (3,); actuated joint variables q (ik).
-   *     ik_margin: shape (3,); per leg: >= 0 iff the leg reaches p (the radicand of
-   *     its solution) (ik).
-   *     position: shape (3,); TCP position x, y, z (fk) [m].
-   *     fk_margin: shape (); >= 0 iff the spheres meet (a real solution) (fk) [m^2].
-   *     points: shape (9, 3); rows A_1, C_1, B_1, A_2, ...: three points per leg
-   *     (columns x, y, z) (leg_points) [m].
-   *     jacobian_J: shape (3, 3); rows: task coordinates; columns: actuated joints
-   *     (jacobian).
-   *     J_inv: shape (3, 3); rows: actuated joints; columns: task coordinates
-   *     (inverse_jacobian).
-   *     det_Jq: shape (); det J_q (boundary singularities where zero) (singularities).
-   *     det_Jx: shape (); det J_x (interior singularities where zero) (singularities).
+   *     m_fork1: mass of the first wrist fork (turns with psi1) [kg]; default 0.012.
+   *     m_fork2: mass of the second wrist fork (turns with psi2) [kg]; default 0.009.
+   *     m_handle: mass of the handle (turns with psi3) [kg]; default 0.03.
+   * @returns {{G: number[], base_T_tcp: number[][], J: number[][]}}
+   *     G: shape (6,); actuator efforts that hold the device against gravity
+   *     (gravity_vector) [N*m (revolute), N (prismatic)].
    *     base_T_tcp: shape (4, 4); homogeneous transform of the TCP frame in the base
    *     frame (device_fk) [m].
-   *     device_jacobian_J: shape (6, 6); rows vx, vy, vz, wx, wy, wz; columns:
-   *     platform coordinates, then wrist joints (device_jacobian).
-   *     device_actuator_jacobian_J: shape (6, 6); rows vx, vy, vz, wx, wy, wz;
-   *     columns: the legs' actuated joints, then wrist joints
-   *     (device_actuator_jacobian).
+   *     J: shape (6, 6); rows vx, vy, vz, wx, wy, wz; columns: the legs' actuated
+   *     joints, then wrist joints (device_actuator_jacobian).
    */
-  function scene(p, q, qw, params) {
-    _vector(p, 3, "p", "scene");
+  function scene(q, p, qw, params) {
     _vector(q, 3, "q", "scene");
+    _vector(p, 3, "p", "scene");
     _vector(qw, 3, "qw", "scene");
-    const _p = _params(params, ["r_base", "r_tcp", "a", "b", "w", "h"], "scene");
+    const _p = _params(params, ["r_base", "r_tcp", "a", "m_arm", "m_rod", "m_platform", "w", "h", "m_fork1", "m_fork2", "m_handle"], "scene");
     const r_base = _p.r_base ?? 0.07;
     const r_tcp = _p.r_tcp ?? 0.025;
     const a = _p.a ?? 0.1;
-    const b = _p.b ?? 0.15;
+    const m_arm = _p.m_arm ?? 0.0093;
+    const m_rod = _p.m_rod ?? 0.0095;
+    const m_platform = _p.m_platform ?? 0.021;
     const w = _p.w ?? 0.05;
     const h = _p.h ?? 0.03;
-    const x = p[0];
-    const y = p[1];
-    const z = p[2];
+    const m_fork1 = _p.m_fork1 ?? 0.012;
+    const m_fork2 = _p.m_fork2 ?? 0.009;
+    const m_handle = _p.m_handle ?? 0.03;
     const theta1 = q[0];
     const theta2 = q[1];
     const theta3 = q[2];
+    const x = p[0];
+    const y = p[1];
+    const z = p[2];
     const psi1 = qw[0];
     const psi2 = qw[1];
     const psi3 = qw[2];
-    const _x0 = r_tcp*x;
-    const _x1 = r_base*x;
-    const _x2 = a*a;
-    const _x3 = z*z;
-    const _x4 = b*b;
-    const _x5 = 0.5*_x2 + 0.5*_x3 + 0.5*r_base*r_base + 0.5*r_tcp*r_tcp + 0.5*x*x + 0.5*y*y - 0.5*_x4 - r_base*r_tcp;
-    const _x6 = _x0 + _x5 - _x1;
-    const _x7 = a*z;
-    const _x8 = a*x;
-    const _x9 = a*r_tcp;
-    const _x10 = a*r_base;
-    const _x11 = _x9 - _x10;
-    const _x12 = _x11 + _x8;
-    const _x13 = _x2*_x3;
-    const _x14 = -_x12;
-    const _x15 = _x13 + _x14*_x14 - _x6*_x6;
-    const _x16 = Math.sqrt(_x15);
-    const _x17 = 0.8660254037844386*r_tcp;
-    const _x18 = _x17*y;
-    const _x19 = 0.8660254037844386*r_base;
-    const _x20 = _x19*y;
-    const _x21 = _x5 + 0.5*_x1 - 0.5*_x0;
-    const _x22 = _x18 + _x21 - _x20;
-    const _x23 = 0.5*_x8;
-    const _x24 = 0.8660254037844386*a;
-    const _x25 = _x24*y;
-    const _x26 = _x10 + _x23 - _x9;
-    const _x27 = _x26 - _x25;
-    const _x28 = _x13 + _x27*_x27 - _x22*_x22;
-    const _x29 = Math.sqrt(_x28);
-    const _x30 = _x20 + _x21 - _x18;
-    const _x31 = _x25 + _x26;
-    const _x32 = _x13 + _x31*_x31 - _x30*_x30;
-    const _x33 = Math.sqrt(_x32);
-    const _x34 = a*Math.sin(theta3);
-    const _x35 = a*Math.sin(theta1);
-    const _x36 = -_x35;
-    const _x37 = _x34 + _x36;
-    const _x38 = -_x17;
-    const _x39 = Math.cos(theta2);
-    const _x40 = _x24*_x39;
-    const _x41 = _x19 + _x40;
-    const _x42 = _x38 + _x41;
-    const _x43 = a*Math.sin(theta2);
-    const _x44 = _x36 + _x43;
-    const _x45 = Math.cos(theta3);
-    const _x46 = _x19 + _x24*_x45;
-    const _x47 = -(_x38 + _x46);
-    const _x48 = _x37*_x42 - _x44*_x47;
-    const _x49 = 0.5*a;
-    const _x50 = _x45*_x49;
-    const _x51 = a*Math.cos(theta1);
-    const _x52 = _x51 - 1.5*r_tcp + 1.5*r_base;
-    const _x53 = -(_x50 + _x52);
-    const _x54 = _x39*_x49;
-    const _x55 = -(_x52 + _x54);
-    const _x56 = _x44*_x53 - _x37*_x55;
-    const _x57 = _x47*_x55 - _x42*_x53;
-    const _x58 = _x48*_x48 + _x56*_x56 + _x57*_x57;
-    const _x59 = 1.0/_x58;
-    const _x60 = 0.5*_x37*_x37 + 0.5*_x47*_x47 + 0.5*_x53*_x53;
-    const _x61 = 0.5*_x42*_x42 + 0.5*_x44*_x44 + 0.5*_x55*_x55;
-    const _x62 = _x60*(_x44*_x56 - _x42*_x57) + _x61*(_x47*_x57 - _x37*_x56);
-    const _x63 = 1.0/(_x58*_x58);
-    const _x64 = _x60*(_x42*_x48 - _x55*_x56) + _x61*(_x53*_x56 - _x47*_x48);
-    const _x65 = _x60*(_x55*_x57 - _x44*_x48) + _x61*(_x37*_x48 - _x53*_x57);
-    const _x66 = -(-_x4 + _x63*_x62*_x62 + _x63*_x64*_x64 + _x63*_x65*_x65);
-    const _x67 = Math.sqrt(_x59*_x66);
-    const _x68 = _x51 + r_base;
-    const _x69 = r_tcp + x;
-    const _x70 = 0.5*r_base;
-    const _x71 = -_x70;
-    const _x72 = _x54 + _x70;
-    const _x73 = x - 0.5*r_tcp;
-    const _x74 = _x17 + y;
-    const _x75 = -_x19;
-    const _x76 = _x50 + _x70;
-    const _x77 = _x38 + y;
-    const _x78 = z - _x34;
-    const _x79 = _x74 + _x75 - _x40;
-    const _x80 = -z;
-    const _x81 = _x43 + _x80;
-    const _x82 = _x46 + _x77;
-    const _x83 = _x78*_x79 + _x81*_x82;
-    const _x84 = _x72 + _x73;
-    const _x85 = _x73 + _x76;
-    const _x86 = _x78*_x84 + _x81*_x85;
-    const _x87 = _x69 - _x51 - r_base;
-    const _x88 = _x36 + z;
-    const _x89 = _x82*_x84 + _x85*(_x42 - y);
-    const _x90 = _x83*_x87 + _x88*_x89 - _x86*y;
-    const _x91 = 1.0/_x90;
-    const _x92 = _x51*_x88 - _x35*_x87;
-    const _x93 = _x91*_x92;
-    const _x94 = _x83*_x93;
-    const _x95 = _x35 + _x80;
-    const _x96 = z - _x43;
-    const _x97 = 0.5*_x43*_x84 - 0.8660254037844386*_x43*_x79 + _x39*_x96*a;
-    const _x98 = _x91*_x97;
-    const _x99 = -_x98*(_x78*y + _x82*_x95);
-    const _x100 = 0.5*_x34*_x85 + 0.8660254037844386*_x34*_x82 + _x45*_x78*a;
-    const _x101 = _x100*_x91;
-    const _x102 = _x101*(_x79*_x95 + _x96*y);
-    const _x103 = -_x86*_x93;
-    const _x104 = _x98*(_x78*_x87 + _x85*_x95);
-    const _x105 = -_x101*(_x84*_x95 + _x87*_x96);
-    const _x106 = _x89*_x93;
-    const _x107 = _x98*(_x85*y - _x82*_x87);
-    const _x108 = _x101*(_x79*_x87 - _x84*y);
-    const _x109 = 1.0/_x92;
-    const _x110 = 1.0/_x97;
-    const _x111 = 1.0/_x100;
-    const _x112 = Math.cos(psi1);
-    const _x113 = Math.cos(psi3);
-    const _x114 = _x112*_x113;
-    const _x115 = Math.sin(psi2);
-    const _x116 = Math.sin(psi1);
-    const _x117 = Math.sin(psi3);
-    const _x118 = _x116*_x117;
-    const _x119 = Math.cos(psi2);
-    const _x120 = _x116*_x119;
-    const _x121 = -_x120;
-    const _x122 = _x112*_x117;
-    const _x123 = _x113*_x116;
-    const _x124 = -_x120*h;
-    const _x125 = _x112*_x119;
-    const _x126 = _x125*h;
-    const _x127 = _x115*h;
-    const _x128 = -_x126;
-    const _x129 = _x116*_x127;
-    const _x130 = -_x112*_x127;
-    const _x131 = _x119*h;
-    const _x132 = _x131*_x112*_x112 + _x131*_x116*_x116;
+    const _x0 = Math.cos(theta1);
+    const _x1 = Math.cos(theta2);
+    const _x2 = Math.cos(theta3);
+    const _x3 = a*_x0;
+    const _x4 = r_tcp - r_base + x;
+    const _x5 = a*Math.sin(theta1);
+    const _x6 = a*_x1;
+    const _x7 = 0.5*r_tcp;
+    const _x8 = 0.5*r_base;
+    const _x9 = a*Math.sin(theta2);
+    const _x10 = a*_x2;
+    const _x11 = a*Math.sin(theta3);
+    const _x12 = 9.81*m_handle;
+    const _x13 = _x12 + 9.81*m_fork1 + 9.81*m_fork2 + 9.81*m_platform + 14.715*m_rod;
+    const _x14 = Math.cos(psi2);
+    const _x15 = h*_x14;
+    const _x16 = Math.sin(psi2);
+    const _x17 = Math.sin(psi1);
+    const _x18 = Math.sin(psi3);
+    const _x19 = _x18*_x17;
+    const _x20 = Math.cos(psi3);
+    const _x21 = Math.cos(psi1);
+    const _x22 = _x21*_x20;
+    const _x23 = _x14*_x17;
+    const _x24 = -_x23;
+    const _x25 = _x20*_x17;
+    const _x26 = _x21*_x18;
+    const _x27 = -h*_x23;
+    const _x28 = _x21*_x14;
+    const _x29 = h*_x28;
+    const _x30 = h*_x16;
+    const _x31 = 0.8660254037844386*r_tcp;
+    const _x32 = 0.8660254037844386*r_base;
+    const _x33 = _x32 - _x31;
+    const _x34 = _x33 + 0.8660254037844386*_x10 + y;
+    const _x35 = -z;
+    const _x36 = _x35 + _x9;
+    const _x37 = 0.8660254037844386*_x6;
+    const _x38 = y + _x31 - _x32 - _x37;
+    const _x39 = z - _x11;
+    const _x40 = _x39*_x38 + _x34*_x36;
+    const _x41 = _x8 - _x7 + x;
+    const _x42 = _x41 + 0.5*_x10;
+    const _x43 = _x42*_x36;
+    const _x44 = _x41 + 0.5*_x6;
+    const _x45 = _x44*_x39;
+    const _x46 = _x4 - _x3;
+    const _x47 = _x44*_x34 + (_x33 - y + _x37)*_x42;
+    const _x48 = z - _x5;
+    const _x49 = 1.0/(_x47*_x48 + _x46*_x40 - y*(_x45 + _x43));
+    const _x50 = (_x3*_x48 - _x5*_x46)*_x49;
+    const _x51 = _x35 + _x5;
+    const _x52 = z - _x9;
+    const _x53 = _x49*(_x6*_x52 + 0.5*_x9*_x44 - 0.8660254037844386*_x9*_x38);
+    const _x54 = _x49*(_x39*_x10 + 0.5*_x42*_x11 + 0.8660254037844386*_x34*_x11);
+    const _x55 = 4.905*a;
+    const _x56 = _x55*m_arm;
+    const _x57 = _x55*m_rod;
+    const _x58 = 0.5*_x6;
+    const _x59 = _x41 + _x58;
+    const _x60 = 1.7320508075688772*_x8;
+    const _x61 = 1.7320508075688772*_x7;
+    const _x62 = -1.7320508075688772*_x58 - _x60 + y + _x61;
+    const _x63 = 0.5*_x10;
+    const _x64 = _x63 + _x41;
+    const _x65 = 1.7320508075688772*_x63 - _x61 + y + _x60;
+    const _x66 = 0.5*_x9;
+    const _x67 = 0.5*_x11;
+    const _x68 = -_x52*_x65 + _x39*_x62;
+    const _x69 = -y*_x39 + _x48*_x65;
+    const _x70 = -_x48*_x62 + y*_x52;
+    const _x71 = _x65*_x59 - _x64*_x62;
+    const _x72 = -_x46*_x65 + y*_x64;
+    const _x73 = -y*_x59 + _x46*_x62;
+    const _x74 = _x64*_x70 + _x46*_x68 + _x69*_x59;
+    const _x75 = 1.0/_x74;
+    const _x76 = _x71*_x75;
+    const _x77 = _x72*_x75;
+    const _x78 = _x73*_x75;
+    const _x79 = (_x3*_x48 - _x5*_x46)*_x76;
+    const _x80 = _x77*(-1.7320508075688772*_x62*_x66 + _x66*_x59 + _x6*_x52);
+    const _x81 = _x78*(1.7320508075688772*_x65*_x67 + _x64*_x67 + _x39*_x10);
     return {
-      joints: [Math.atan2(_x12*_x16 + _x6*_x7, -_x14*_x6 - _x16*_x7), Math.atan2(_x22*_x7 + _x29*(_x11 + _x25 - _x23), -_x22*_x27 - _x29*_x7), Math.atan2(_x30*_x7 - _x31*_x33, -_x30*_x31 - _x33*_x7)],
-      ik_margin: [_x15, _x28, _x32],
-      position: [_x68 - r_tcp + _x59*_x62 - _x48*_x67, _x59*_x65 - _x56*_x67, _x35 + _x59*_x64 - _x57*_x67],
-      fk_margin: _x66,
-      points: [[r_base, 0.0, 0.0], [_x68, 0.0, _x35], [_x69, y, z], [_x71, _x19, 0.0], [-_x72, _x41, _x43], [_x73, _x74, z], [_x71, _x75, 0.0], [-_x76, -_x46, _x34], [_x73, _x77, z]],
-      jacobian_J: [[_x94, _x99, _x102], [_x103, _x104, _x105], [_x106, _x107, _x108]],
-      J_inv: [[_x109*_x87, _x109*y, _x109*_x88], [_x110*_x84, _x110*_x79, _x110*_x96], [_x111*_x85, _x111*_x82, _x111*_x78]],
-      det_Jq: _x100*_x92*_x97,
-      det_Jx: _x90,
-      base_T_tcp: [[_x114 - _x115*_x118, _x121, _x122 + _x115*_x123, _x124 + x], [_x123 + _x115*_x122, _x125, _x118 - _x114*_x115, _x126 + y], [-_x117*_x119, _x115, _x113*_x119, _x127 + z - w], [0.0, 0.0, 0.0, 1.0]],
-      device_jacobian_J: [[1.0, 0.0, 0.0, _x128, _x129, 0.0], [0.0, 1.0, 0.0, _x124, _x130, 0.0], [0.0, 0.0, 1.0, 0.0, _x132, 0.0], [0.0, 0.0, 0.0, 0.0, _x112, _x121], [0.0, 0.0, 0.0, 0.0, _x116, _x125], [0.0, 0.0, 0.0, 1.0, 0.0, _x115]],
-      device_actuator_jacobian_J: [[_x94, _x99, _x102, _x128, _x129, 0.0], [_x103, _x104, _x105, _x124, _x130, 0.0], [_x106, _x107, _x108, 0.0, _x132, 0.0], [0.0, 0.0, 0.0, 0.0, _x112, _x121], [0.0, 0.0, 0.0, 0.0, _x116, _x125], [0.0, 0.0, 0.0, 1.0, 0.0, _x115]],
+      G: [_x13*_x79 + _x0*_x57 + _x0*_x56, _x1*_x57 + _x13*_x80 + _x1*_x56, _x13*_x81 + _x2*_x57 + _x2*_x56, 0.0, _x15*_x12, 0.0],
+      base_T_tcp: [[-_x16*_x19 + _x22, _x24, _x25*_x16 + _x26, _x27 + x], [_x26*_x16 + _x25, _x28, -_x22*_x16 + _x19, _x29 + y], [-_x14*_x18, _x16, _x14*_x20, _x30 - w + z], [0.0, 0.0, 0.0, 1.0]],
+      J: [[_x50*_x40, _x53*(-_x51*_x34 - y*_x39), _x54*(_x51*_x38 + y*_x52), -_x29, _x30*_x17, 0.0], [(-_x43 - _x45)*_x50, (_x51*_x42 + _x46*_x39)*_x53, (-_x51*_x44 - _x52*_x46)*_x54, _x27, -_x21*_x30, 0.0], [_x47*_x50, _x53*(-_x46*_x34 + y*_x42), _x54*(-y*_x44 + _x46*_x38), 0.0, _x15*_x17*_x17 + _x21*_x21*_x15, 0.0], [0.0, 0.0, 0.0, 0.0, _x21, _x24], [0.0, 0.0, 0.0, 0.0, _x17, _x28], [0.0, 0.0, 0.0, 1.0, 0.0, _x16]],
     };
   }
 
@@ -829,10 +1869,17 @@
       jacobian: {"inputs": ["q", "p"], "parameters": ["r_base", "r_tcp", "a"], "outputs": {"J": [3, 3]}},
       inverse_jacobian: {"inputs": ["q", "p"], "parameters": ["r_base", "r_tcp", "a"], "outputs": {"J_inv": [3, 3]}},
       singularities: {"inputs": ["q", "p"], "parameters": ["r_base", "r_tcp", "a"], "outputs": {"det_Jq": [], "det_Jx": []}},
+      gravity_vector: {"inputs": ["q", "p", "qw"], "parameters": ["r_base", "r_tcp", "a", "m_arm", "m_rod", "m_platform", "h", "m_fork1", "m_fork2", "m_handle"], "outputs": {"G": [6]}},
+      mass_matrix: {"inputs": ["q", "p", "qw"], "parameters": ["r_base", "r_tcp", "a", "m_arm", "m_rod", "m_platform", "J_rotor", "gear", "h", "m_fork1", "m_fork2", "m_handle"], "outputs": {"M": [6, 6]}},
+      coriolis_vector: {"inputs": ["q", "p", "qw", "qd", "qwd"], "parameters": ["r_base", "r_tcp", "a", "m_rod", "m_platform", "h", "m_fork1", "m_fork2", "m_handle"], "outputs": {"V": [6]}},
+      inverse_dynamics: {"inputs": ["q", "p", "qw", "qd", "qwd", "qdd", "qwdd"], "parameters": ["r_base", "r_tcp", "a", "m_arm", "m_rod", "m_platform", "J_rotor", "gear", "h", "m_fork1", "m_fork2", "m_handle"], "outputs": {"tau": [6]}},
+      forward_dynamics: {"inputs": ["q", "p", "qw", "qd", "qwd", "tau", "tauw"], "parameters": ["r_base", "r_tcp", "a", "m_arm", "m_rod", "m_platform", "J_rotor", "gear", "h", "m_fork1", "m_fork2", "m_handle"], "outputs": {"qdd": [6]}},
+      kinetic_energy: {"inputs": ["q", "p", "qw", "qd", "qwd"], "parameters": ["r_base", "r_tcp", "a", "m_arm", "m_rod", "m_platform", "J_rotor", "gear", "h", "m_fork1", "m_fork2", "m_handle"], "outputs": {"k": []}},
+      potential_energy: {"inputs": ["q", "p", "qw"], "parameters": ["a", "m_arm", "m_rod", "m_platform", "w", "h", "m_fork1", "m_fork2", "m_handle"], "outputs": {"u": []}},
       device_fk: {"inputs": ["p", "qw"], "parameters": ["w", "h"], "outputs": {"base_T_tcp": [4, 4]}},
       device_jacobian: {"inputs": ["p", "qw"], "parameters": ["h"], "outputs": {"J": [6, 6]}},
       device_actuator_jacobian: {"inputs": ["q", "p", "qw"], "parameters": ["r_base", "r_tcp", "a", "h"], "outputs": {"J": [6, 6]}},
-      scene: {"inputs": ["p", "q", "qw"], "parameters": ["r_base", "r_tcp", "a", "b", "w", "h"], "outputs": {"joints": [3], "ik_margin": [3], "position": [3], "fk_margin": [], "points": [9, 3], "jacobian_J": [3, 3], "J_inv": [3, 3], "det_Jq": [], "det_Jx": [], "base_T_tcp": [4, 4], "device_jacobian_J": [6, 6], "device_actuator_jacobian_J": [6, 6]}},
+      scene: {"inputs": ["q", "p", "qw"], "parameters": ["r_base", "r_tcp", "a", "m_arm", "m_rod", "m_platform", "w", "h", "m_fork1", "m_fork2", "m_handle"], "outputs": {"G": [6], "base_T_tcp": [4, 4], "J": [6, 6]}},
     }),
     ik: ik,
     fk: fk,
@@ -840,6 +1887,13 @@
     jacobian: jacobian,
     inverse_jacobian: inverse_jacobian,
     singularities: singularities,
+    gravity_vector: gravity_vector,
+    mass_matrix: mass_matrix,
+    coriolis_vector: coriolis_vector,
+    inverse_dynamics: inverse_dynamics,
+    forward_dynamics: forward_dynamics,
+    kinetic_energy: kinetic_energy,
+    potential_energy: potential_energy,
     device_fk: device_fk,
     device_jacobian: device_jacobian,
     device_actuator_jacobian: device_actuator_jacobian,

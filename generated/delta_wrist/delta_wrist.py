@@ -19,10 +19,17 @@ Functions:
     jacobian(q, p, **params) -> J (..., 3, 3)
     inverse_jacobian(q, p, **params) -> J_inv (..., 3, 3)
     singularities(q, p, **params) -> SingularitiesResult(det_Jq, det_Jx)
+    gravity_vector(q, p, qw, **params) -> G (..., 6)
+    mass_matrix(q, p, qw, **params) -> M (..., 6, 6)
+    coriolis_vector(q, p, qw, qd, qwd, **params) -> V (..., 6)
+    inverse_dynamics(q, p, qw, qd, qwd, qdd, qwdd, **params) -> tau (..., 6)
+    forward_dynamics(q, p, qw, qd, qwd, tau, tauw, **params) -> qdd (..., 6)
+    kinetic_energy(q, p, qw, qd, qwd, **params) -> k (...)
+    potential_energy(q, p, qw, **params) -> u (...)
     device_fk(p, qw, **params) -> base_T_tcp (..., 4, 4)
     device_jacobian(p, qw, **params) -> J (..., 6, 6)
     device_actuator_jacobian(q, p, qw, **params) -> J (..., 6, 6)
-    scene(p, q, qw, **params) -> SceneResult(joints, ik_margin, position, fk_margin, points, jacobian_J, J_inv, det_Jq, det_Jx, base_T_tcp, device_jacobian_J, device_actuator_jacobian_J)
+    scene(q, p, qw, **params) -> SceneResult(G, base_T_tcp, J)
 """
 
 import collections
@@ -58,7 +65,7 @@ FkResult = collections.namedtuple("FkResult", ["position", "margin"])
 
 SingularitiesResult = collections.namedtuple("SingularitiesResult", ["det_Jq", "det_Jx"])
 
-SceneResult = collections.namedtuple("SceneResult", ["joints", "ik_margin", "position", "fk_margin", "points", "jacobian_J", "J_inv", "det_Jq", "det_Jx", "base_T_tcp", "device_jacobian_J", "device_actuator_jacobian_J"])
+SceneResult = collections.namedtuple("SceneResult", ["G", "base_T_tcp", "J"])
 
 
 def _vector(value, size, name, function):
@@ -515,6 +522,1158 @@ def singularities(q, p, *, r_base=0.07, r_tcp=0.025, a=0.1):
     return SingularitiesResult(_out_det_Jq, _out_det_Jx)
 
 
+def gravity_vector(q, p, qw, *, r_base=0.07, r_tcp=0.025, a=0.1, m_arm=0.0093, m_rod=0.0095, m_platform=0.021, h=0.03, m_fork1=0.012, m_fork2=0.009, m_handle=0.03):
+    """Gravity compensation efforts.
+
+    G = du_a/dq + J^T du_p/dp with u = -g . (sum of mass times centre of mass): the
+    actuator efforts that hold the device still at the pose (gravity compensation of a
+    haptic device). Evaluate at a consistent pair q, p (p = fk(q) or q = ik(p)).
+
+    Args:
+        q: joint coordinates, shape (..., 3): theta1 [rad], theta2 [rad], theta3 [rad].
+        p: task coordinates of the platform (TCP), shape (..., 3): x [m], y [m], z [m].
+        qw: wrist joint coordinates, shape (..., 3): psi1 [rad], psi2 [rad], psi3 [rad].
+        r_base: distance from the base centre to the actuated joints A_i [m]; default 0.07;
+            a scalar or an array broadcastable to the batch shape.
+        r_tcp: distance from the TCP to the platform joints B_i [m]; default 0.025; a scalar
+            or an array broadcastable to the batch shape.
+        a: length of the upper (actuated) arms A_i C_i [m]; default 0.1; a scalar or an
+            array broadcastable to the batch shape.
+        m_arm: mass of an upper arm [kg]; default 0.0093; a scalar or an array broadcastable
+            to the batch shape.
+        m_rod: mass of a lower-arm parallelogram (two rods and four ball joints) [kg];
+            default 0.0095; a scalar or an array broadcastable to the batch shape.
+        m_platform: mass of the platform plate (the handle is on the wrist) [kg]; default
+            0.021; a scalar or an array broadcastable to the batch shape.
+        h: distance from the wrist centre to the grip point along the handle [m]; default
+            0.03; a scalar or an array broadcastable to the batch shape.
+        m_fork1: mass of the first wrist fork (turns with psi1) [kg]; default 0.012; a
+            scalar or an array broadcastable to the batch shape.
+        m_fork2: mass of the second wrist fork (turns with psi2) [kg]; default 0.009; a
+            scalar or an array broadcastable to the batch shape.
+        m_handle: mass of the handle (turns with psi3) [kg]; default 0.03; a scalar or an
+            array broadcastable to the batch shape.
+
+    Returns:
+        G: shape (..., 6); actuator efforts that hold the device against gravity [N*m
+            (revolute), N (prismatic)].
+    """
+    q = _vector(q, 3, "q", "gravity_vector")
+    p = _vector(p, 3, "p", "gravity_vector")
+    qw = _vector(qw, 3, "qw", "gravity_vector")
+    batch = _batch_shape("gravity_vector", q.shape[:-1], p.shape[:-1], qw.shape[:-1], numpy.shape(r_base), numpy.shape(r_tcp), numpy.shape(a), numpy.shape(m_arm), numpy.shape(m_rod), numpy.shape(m_platform), numpy.shape(h), numpy.shape(m_fork1), numpy.shape(m_fork2), numpy.shape(m_handle))
+    if math.prod(batch) > CHUNK:
+        return _in_chunks(gravity_vector, batch, (q, p, qw, ), {"r_base": r_base, "r_tcp": r_tcp, "a": a, "m_arm": m_arm, "m_rod": m_rod, "m_platform": m_platform, "h": h, "m_fork1": m_fork1, "m_fork2": m_fork2, "m_handle": m_handle})
+    theta1 = q[..., 0]
+    theta2 = q[..., 1]
+    theta3 = q[..., 2]
+    x = p[..., 0]
+    y = p[..., 1]
+    z = p[..., 2]
+    psi1 = qw[..., 0]
+    psi2 = qw[..., 1]
+    psi3 = qw[..., 2]
+    _x0 = numpy.cos(theta1)
+    _x1 = numpy.cos(theta2)
+    _x2 = numpy.cos(theta3)
+    _x3 = 9.81*m_handle
+    _x4 = 9.81*m_platform + 14.715*m_rod + 9.81*m_fork2 + _x3 + 9.81*m_fork1
+    _x5 = 4.905*a
+    _x6 = _x5*m_arm
+    _x7 = _x5*m_rod
+    _x8 = a*_x0
+    _x9 = -_x8 - r_base + x + r_tcp
+    _x10 = a*numpy.sin(theta1)
+    _x11 = -_x10 + z
+    _x12 = a*_x1
+    _x13 = 0.5*_x12
+    _x14 = 0.5*r_tcp
+    _x15 = 0.5*r_base
+    _x16 = -_x14 + x + _x15
+    _x17 = _x13 + _x16
+    _x18 = 1.7320508075688772*_x15
+    _x19 = 1.7320508075688772*_x14
+    _x20 = _x19 - _x18 + y - 1.7320508075688772*_x13
+    _x21 = a*numpy.sin(theta2)
+    _x22 = -_x21 + z
+    _x23 = a*_x2
+    _x24 = 0.5*_x23
+    _x25 = _x24 + _x16
+    _x26 = y + _x18 - _x19 + 1.7320508075688772*_x24
+    _x27 = a*numpy.sin(theta3)
+    _x28 = -_x27 + z
+    _x29 = 0.5*_x21
+    _x30 = 0.5*_x27
+    _x31 = -_x22*_x26 + _x28*_x20
+    _x32 = -(-_x26*_x11 + y*_x28)
+    _x33 = -_x20*_x11 + y*_x22
+    _x34 = -_x25*_x20 + _x26*_x17
+    _x35 = -(-y*_x25 + _x9*_x26)
+    _x36 = -y*_x17 + _x9*_x20
+    _x37 = _x25*_x33 + _x32*_x17 + _x9*_x31
+    _x38 = 1.0/_x37
+    _x39 = _x34*_x38
+    _x40 = _x35*_x38
+    _x41 = _x36*_x38
+    _x42 = _x39*(-_x9*_x10 + _x8*_x11)
+    _x43 = _x40*(_x22*_x12 + _x29*_x17 - 1.7320508075688772*_x20*_x29)
+    _x44 = _x41*(_x23*_x28 + _x25*_x30 + 1.7320508075688772*_x26*_x30)
+    _out_G = numpy.zeros(batch + (6,))
+    _out_G[..., 0] = _x0*_x7 + _x0*_x6 + _x4*_x42
+    _out_G[..., 1] = _x1*_x7 + _x1*_x6 + _x4*_x43
+    _out_G[..., 2] = _x2*_x7 + _x4*_x44 + _x2*_x6
+    _out_G[..., 4] = h*_x3*numpy.cos(psi2)
+    return _out_G
+
+
+def mass_matrix(q, p, qw, *, r_base=0.07, r_tcp=0.025, a=0.1, m_arm=0.0093, m_rod=0.0095, m_platform=0.021, J_rotor=1e-06, gear=10.0, h=0.03, m_fork1=0.012, m_fork2=0.009, m_handle=0.03):
+    """Mass matrix in the actuated coordinates.
+
+    M = M_a + J^T M_p J: the actuator side (arms, rod shares at the elbows, rotors times
+    the gear ratio squared; diagonal) plus the platform side (platform and rod shares at
+    the platform joints) carried to the actuators by the task Jacobian J (k = 1/2 qd^T M
+    qd). Evaluate at a consistent pair q, p (p = fk(q) or q = ik(p)).
+
+    Args:
+        q: joint coordinates, shape (..., 3): theta1 [rad], theta2 [rad], theta3 [rad].
+        p: task coordinates of the platform (TCP), shape (..., 3): x [m], y [m], z [m].
+        qw: wrist joint coordinates, shape (..., 3): psi1 [rad], psi2 [rad], psi3 [rad].
+        r_base: distance from the base centre to the actuated joints A_i [m]; default 0.07;
+            a scalar or an array broadcastable to the batch shape.
+        r_tcp: distance from the TCP to the platform joints B_i [m]; default 0.025; a scalar
+            or an array broadcastable to the batch shape.
+        a: length of the upper (actuated) arms A_i C_i [m]; default 0.1; a scalar or an
+            array broadcastable to the batch shape.
+        m_arm: mass of an upper arm [kg]; default 0.0093; a scalar or an array broadcastable
+            to the batch shape.
+        m_rod: mass of a lower-arm parallelogram (two rods and four ball joints) [kg];
+            default 0.0095; a scalar or an array broadcastable to the batch shape.
+        m_platform: mass of the platform plate (the handle is on the wrist) [kg]; default
+            0.021; a scalar or an array broadcastable to the batch shape.
+        J_rotor: rotor inertia of an actuator (motor side) [kg*m^2]; default 1e-06; a scalar
+            or an array broadcastable to the batch shape.
+        gear: capstan reduction (motor turns per arm turn) [1]; default 10.0; a scalar or an
+            array broadcastable to the batch shape.
+        h: distance from the wrist centre to the grip point along the handle [m]; default
+            0.03; a scalar or an array broadcastable to the batch shape.
+        m_fork1: mass of the first wrist fork (turns with psi1) [kg]; default 0.012; a
+            scalar or an array broadcastable to the batch shape.
+        m_fork2: mass of the second wrist fork (turns with psi2) [kg]; default 0.009; a
+            scalar or an array broadcastable to the batch shape.
+        m_handle: mass of the handle (turns with psi3) [kg]; default 0.03; a scalar or an
+            array broadcastable to the batch shape.
+
+    Returns:
+        M: shape (..., 6, 6); symmetric positive definite mass matrix.
+    """
+    q = _vector(q, 3, "q", "mass_matrix")
+    p = _vector(p, 3, "p", "mass_matrix")
+    qw = _vector(qw, 3, "qw", "mass_matrix")
+    batch = _batch_shape("mass_matrix", q.shape[:-1], p.shape[:-1], qw.shape[:-1], numpy.shape(r_base), numpy.shape(r_tcp), numpy.shape(a), numpy.shape(m_arm), numpy.shape(m_rod), numpy.shape(m_platform), numpy.shape(J_rotor), numpy.shape(gear), numpy.shape(h), numpy.shape(m_fork1), numpy.shape(m_fork2), numpy.shape(m_handle))
+    if math.prod(batch) > CHUNK:
+        return _in_chunks(mass_matrix, batch, (q, p, qw, ), {"r_base": r_base, "r_tcp": r_tcp, "a": a, "m_arm": m_arm, "m_rod": m_rod, "m_platform": m_platform, "J_rotor": J_rotor, "gear": gear, "h": h, "m_fork1": m_fork1, "m_fork2": m_fork2, "m_handle": m_handle})
+    theta1 = q[..., 0]
+    theta2 = q[..., 1]
+    theta3 = q[..., 2]
+    x = p[..., 0]
+    y = p[..., 1]
+    z = p[..., 2]
+    psi1 = qw[..., 0]
+    psi2 = qw[..., 1]
+    psi3 = qw[..., 2]
+    _x0 = a*numpy.cos(theta1)
+    _x1 = -_x0 - r_base + x + r_tcp
+    _x2 = a*numpy.sin(theta1)
+    _x3 = -_x2 + z
+    _x4 = -_x2*_x1 + _x3*_x0
+    _x5 = a*numpy.cos(theta2)
+    _x6 = 0.5*_x5
+    _x7 = 0.5*r_tcp
+    _x8 = 0.5*r_base
+    _x9 = x - _x7 + _x8
+    _x10 = _x6 + _x9
+    _x11 = 1.7320508075688772*_x8
+    _x12 = 1.7320508075688772*_x7
+    _x13 = _x12 - _x11 + y - 1.7320508075688772*_x6
+    _x14 = a*numpy.sin(theta2)
+    _x15 = -_x14 + z
+    _x16 = 0.5*_x14
+    _x17 = _x5*_x15 - 1.7320508075688772*_x16*_x13 + _x10*_x16
+    _x18 = a*numpy.cos(theta3)
+    _x19 = 0.5*_x18
+    _x20 = _x19 + _x9
+    _x21 = y + _x11 - _x12 + 1.7320508075688772*_x19
+    _x22 = a*numpy.sin(theta3)
+    _x23 = -_x22 + z
+    _x24 = 0.5*_x22
+    _x25 = _x23*_x18 + _x24*_x20 + 1.7320508075688772*_x24*_x21
+    _x26 = -_x15*_x21 + _x23*_x13
+    _x27 = -(-_x3*_x21 + y*_x23)
+    _x28 = -_x3*_x13 + y*_x15
+    _x29 = -(-_x20*_x15 + _x10*_x23)
+    _x30 = -_x3*_x20 + _x1*_x23
+    _x31 = -(-_x10*_x3 + _x1*_x15)
+    _x32 = -_x13*_x20 + _x10*_x21
+    _x33 = -(-y*_x20 + _x1*_x21)
+    _x34 = -y*_x10 + _x1*_x13
+    _x35 = _x28*_x20 + _x10*_x27 + _x1*_x26
+    _x36 = 1.0/_x35
+    _x37 = _x26*_x36
+    _x38 = _x27*_x36
+    _x39 = _x28*_x36
+    _x40 = _x29*_x36
+    _x41 = _x30*_x36
+    _x42 = _x36*_x31
+    _x43 = _x36*_x32
+    _x44 = _x33*_x36
+    _x45 = _x34*_x36
+    _x46 = _x4*_x37
+    _x47 = _x17*_x38
+    _x48 = _x25*_x39
+    _x49 = _x4*_x40
+    _x50 = _x17*_x41
+    _x51 = _x25*_x42
+    _x52 = _x4*_x43
+    _x53 = _x17*_x44
+    _x54 = _x25*_x45
+    _x55 = m_platform + 1.5*m_rod + m_fork1 + m_handle + m_fork2
+    _x56 = numpy.cos(psi1)
+    _x57 = numpy.cos(psi2)
+    _x58 = h*m_handle
+    _x59 = _x58*_x57
+    _x60 = -_x59*_x56
+    _x61 = numpy.sin(psi1)
+    _x62 = numpy.sin(psi2)
+    _x63 = _x58*_x62
+    _x64 = _x61*_x63
+    _x65 = -_x61*_x59
+    _x66 = -_x56*_x63
+    _x67 = 0.00013333333333333334*m_fork2
+    _x68 = 0.0005583333333333333*m_handle + h*h*m_handle
+    _x69 = _x68*numpy.sin(psi3)**2 + _x68*numpy.cos(psi3)**2
+    _x70 = 5e-05*m_handle
+    _x71 = _x62*_x70
+    _x72 = _x55*_x46
+    _x73 = _x55*_x49
+    _x74 = _x52*_x55
+    _x75 = _x55*_x47
+    _x76 = _x55*_x50
+    _x77 = _x53*_x55
+    _x78 = _x55*_x48
+    _x79 = _x55*_x51
+    _x80 = _x55*_x54
+    _x81 = a*a
+    _x82 = 0.3333333333333333*_x81*m_arm + gear*gear*J_rotor + 0.5*_x81*m_rod
+    _x83 = _x82 + _x52*_x74 + _x73*_x49 + _x72*_x46
+    _x84 = _x52*_x77 + _x76*_x49 + _x75*_x46
+    _x85 = _x52*_x80 + _x79*_x49 + _x78*_x46
+    _x86 = _x82 + _x53*_x77 + _x76*_x50 + _x75*_x47
+    _x87 = _x53*_x80 + _x79*_x50 + _x78*_x47
+    _x88 = _x82 + _x54*_x80 + _x79*_x51 + _x78*_x48
+    _x89 = _x65*_x49 + _x60*_x46
+    _x90 = _x65*_x50 + _x60*_x47
+    _x91 = _x65*_x51 + _x60*_x48
+    _x92 = _x52*_x59 + _x66*_x49 + _x64*_x46
+    _x93 = _x53*_x59 + _x66*_x50 + _x64*_x47
+    _x94 = _x59*_x54 + _x66*_x51 + _x64*_x48
+    _out_M = numpy.zeros(batch + (6, 6))
+    _out_M[..., 0, 0] = _x83
+    _out_M[..., 0, 1] = _x84
+    _out_M[..., 0, 2] = _x85
+    _out_M[..., 0, 3] = _x89
+    _out_M[..., 0, 4] = _x92
+    _out_M[..., 1, 0] = _x84
+    _out_M[..., 1, 1] = _x86
+    _out_M[..., 1, 2] = _x87
+    _out_M[..., 1, 3] = _x90
+    _out_M[..., 1, 4] = _x93
+    _out_M[..., 2, 0] = _x85
+    _out_M[..., 2, 1] = _x87
+    _out_M[..., 2, 2] = _x88
+    _out_M[..., 2, 3] = _x91
+    _out_M[..., 2, 4] = _x94
+    _out_M[..., 3, 0] = _x89
+    _out_M[..., 3, 1] = _x90
+    _out_M[..., 3, 2] = _x91
+    _out_M[..., 3, 3] = (_x67 + _x70)*_x62*_x62 + (_x69 + _x67)*_x57*_x57
+    _out_M[..., 3, 5] = _x71
+    _out_M[..., 4, 0] = _x92
+    _out_M[..., 4, 1] = _x93
+    _out_M[..., 4, 2] = _x94
+    _out_M[..., 4, 4] = _x69
+    _out_M[..., 5, 3] = _x71
+    _out_M[..., 5, 5] = _x70
+    return _out_M
+
+
+def coriolis_vector(q, p, qw, qd, qwd, *, r_base=0.07, r_tcp=0.025, a=0.1, m_rod=0.0095, m_platform=0.021, h=0.03, m_fork1=0.012, m_fork2=0.009, m_handle=0.03):
+    """Coriolis and centrifugal efforts at the actuators.
+
+    V = V_a + J^T (M_p b + V_p(p, pd)) with pd = J qd and b = dJ/dt qd = -J_x^-1 (zd^T
+    H_i zd)_i (the second derivative of the leg equations along the motion); V_a and V_p
+    from the Christoffel symbols of M_a(q) and M_p(p). Evaluate at a consistent pair q,
+    p (p = fk(q) or q = ik(p)).
+
+    Args:
+        q: joint coordinates, shape (..., 3): theta1 [rad], theta2 [rad], theta3 [rad].
+        p: task coordinates of the platform (TCP), shape (..., 3): x [m], y [m], z [m].
+        qw: wrist joint coordinates, shape (..., 3): psi1 [rad], psi2 [rad], psi3 [rad].
+        qd: joint velocities, shape (..., 3): theta1 [rad/s], theta2 [rad/s], theta3
+            [rad/s].
+        qwd: wrist joint velocities, shape (..., 3): psi1 [rad/s], psi2 [rad/s], psi3
+            [rad/s].
+        r_base: distance from the base centre to the actuated joints A_i [m]; default 0.07;
+            a scalar or an array broadcastable to the batch shape.
+        r_tcp: distance from the TCP to the platform joints B_i [m]; default 0.025; a scalar
+            or an array broadcastable to the batch shape.
+        a: length of the upper (actuated) arms A_i C_i [m]; default 0.1; a scalar or an
+            array broadcastable to the batch shape.
+        m_rod: mass of a lower-arm parallelogram (two rods and four ball joints) [kg];
+            default 0.0095; a scalar or an array broadcastable to the batch shape.
+        m_platform: mass of the platform plate (the handle is on the wrist) [kg]; default
+            0.021; a scalar or an array broadcastable to the batch shape.
+        h: distance from the wrist centre to the grip point along the handle [m]; default
+            0.03; a scalar or an array broadcastable to the batch shape.
+        m_fork1: mass of the first wrist fork (turns with psi1) [kg]; default 0.012; a
+            scalar or an array broadcastable to the batch shape.
+        m_fork2: mass of the second wrist fork (turns with psi2) [kg]; default 0.009; a
+            scalar or an array broadcastable to the batch shape.
+        m_handle: mass of the handle (turns with psi3) [kg]; default 0.03; a scalar or an
+            array broadcastable to the batch shape.
+
+    Returns:
+        V: shape (..., 6); Coriolis and centrifugal efforts [N*m (revolute), N (prismatic)].
+    """
+    q = _vector(q, 3, "q", "coriolis_vector")
+    p = _vector(p, 3, "p", "coriolis_vector")
+    qw = _vector(qw, 3, "qw", "coriolis_vector")
+    qd = _vector(qd, 3, "qd", "coriolis_vector")
+    qwd = _vector(qwd, 3, "qwd", "coriolis_vector")
+    batch = _batch_shape("coriolis_vector", q.shape[:-1], p.shape[:-1], qw.shape[:-1], qd.shape[:-1], qwd.shape[:-1], numpy.shape(r_base), numpy.shape(r_tcp), numpy.shape(a), numpy.shape(m_rod), numpy.shape(m_platform), numpy.shape(h), numpy.shape(m_fork1), numpy.shape(m_fork2), numpy.shape(m_handle))
+    if math.prod(batch) > CHUNK:
+        return _in_chunks(coriolis_vector, batch, (q, p, qw, qd, qwd, ), {"r_base": r_base, "r_tcp": r_tcp, "a": a, "m_rod": m_rod, "m_platform": m_platform, "h": h, "m_fork1": m_fork1, "m_fork2": m_fork2, "m_handle": m_handle})
+    theta1 = q[..., 0]
+    theta2 = q[..., 1]
+    theta3 = q[..., 2]
+    x = p[..., 0]
+    y = p[..., 1]
+    z = p[..., 2]
+    psi1 = qw[..., 0]
+    psi2 = qw[..., 1]
+    psi3 = qw[..., 2]
+    theta1_d = qd[..., 0]
+    theta2_d = qd[..., 1]
+    theta3_d = qd[..., 2]
+    psi1_d = qwd[..., 0]
+    psi2_d = qwd[..., 1]
+    psi3_d = qwd[..., 2]
+    _x0 = a*numpy.cos(theta1)
+    _x1 = a*numpy.sin(theta1)
+    _x2 = a*numpy.cos(theta2)
+    _x3 = a*numpy.sin(theta2)
+    _x4 = a*numpy.cos(theta3)
+    _x5 = a*numpy.sin(theta3)
+    _x6 = r_tcp + x - r_base - _x0
+    _x7 = z - _x1
+    _x8 = _x0*_x7 - _x1*_x6
+    _x9 = 0.5*_x2
+    _x10 = 0.5*r_tcp
+    _x11 = 0.5*r_base
+    _x12 = x - _x10 + _x11
+    _x13 = _x9 + _x12
+    _x14 = 1.7320508075688772*_x11
+    _x15 = 1.7320508075688772*_x10
+    _x16 = _x15 - _x14 + y - 1.7320508075688772*_x9
+    _x17 = z - _x3
+    _x18 = 0.5*_x3
+    _x19 = _x2*_x17 - 1.7320508075688772*_x18*_x16 + _x13*_x18
+    _x20 = 0.5*_x4
+    _x21 = _x20 + _x12
+    _x22 = y + _x14 - _x15 + 1.7320508075688772*_x20
+    _x23 = z - _x5
+    _x24 = 0.5*_x5
+    _x25 = _x4*_x23 + _x24*_x21 + 1.7320508075688772*_x24*_x22
+    _x26 = 2.0*theta1_d
+    _x27 = -_x17*_x22 + _x23*_x16
+    _x28 = -(-_x7*_x22 + y*_x23)
+    _x29 = -_x7*_x16 + y*_x17
+    _x30 = _x29*_x21 + _x13*_x28 + _x6*_x27
+    _x31 = 1.0/_x30
+    _x32 = _x27*_x31
+    _x33 = _x8*_x32
+    _x34 = _x28*_x31
+    _x35 = _x19*_x34
+    _x36 = _x29*_x31
+    _x37 = _x25*_x36
+    _x38 = _x37*theta3_d + _x35*theta2_d + _x33*theta1_d
+    _x39 = -(-_x21*_x17 + _x13*_x23)
+    _x40 = _x39*_x31
+    _x41 = _x8*_x40
+    _x42 = -_x7*_x21 + _x6*_x23
+    _x43 = _x42*_x31
+    _x44 = _x19*_x43
+    _x45 = -(-_x13*_x7 + _x6*_x17)
+    _x46 = _x31*_x45
+    _x47 = _x25*_x46
+    _x48 = _x47*theta3_d + _x44*theta2_d + _x41*theta1_d
+    _x49 = -_x16*_x21 + _x13*_x22
+    _x50 = _x31*_x49
+    _x51 = _x8*_x50
+    _x52 = -(-y*_x21 + _x6*_x22)
+    _x53 = _x52*_x31
+    _x54 = _x19*_x53
+    _x55 = -y*_x13 + _x6*_x16
+    _x56 = _x55*_x31
+    _x57 = _x25*_x56
+    _x58 = _x57*theta3_d + _x54*theta2_d + _x51*theta1_d
+    _x59 = _x48*_x48 + _x58*_x58 + _x38*_x38
+    _x60 = _x3*theta2_d
+    _x61 = 1.7320508075688772*_x48
+    _x62 = 2.0*_x58
+    _x63 = 0.8660254037844386*y
+    _x64 = 0.5*x
+    _x65 = _x5*theta3_d
+    _x66 = numpy.cos(psi1)
+    _x67 = numpy.cos(psi2)
+    _x68 = h*m_handle
+    _x69 = numpy.sin(psi1)
+    _x70 = numpy.sin(psi2)
+    _x71 = _x59 - _x0*_x26*_x58 + _x1*_x26*_x38 + theta1_d*theta1_d*(-_x0*r_base + z*_x1 + x*_x0 + _x0*r_tcp)
+    _x72 = _x59 + (_x2*r_tcp - _x2*r_base + z*_x3 - _x2*_x64 + _x2*_x63)*theta2_d*theta2_d - _x60*_x38 - _x2*_x62*theta2_d + _x61*_x60
+    _x73 = _x59 + (z*_x5 - _x4*r_base - _x4*_x64 + _x4*r_tcp - _x4*_x63)*theta3_d*theta3_d - _x65*_x38 - _x4*_x62*theta3_d - _x61*_x65
+    _x74 = -(_x73*_x36 + _x72*_x34 + _x71*_x32)
+    _x75 = m_platform + 1.5*m_rod + m_fork1 + m_handle + m_fork2
+    _x76 = _x68*_x67
+    _x77 = _x69*psi2_d
+    _x78 = _x70*_x68
+    _x79 = _x66*_x78
+    _x80 = _x76*_x77 + _x79*psi1_d
+    _x81 = _x69*psi1_d
+    _x82 = _x79*psi2_d + _x76*_x81
+    _x83 = _x74*_x75 + _x80*psi2_d + _x82*psi1_d
+    _x84 = -(_x73*_x46 + _x72*_x43 + _x71*_x40)
+    _x85 = _x66*_x76
+    _x86 = -_x85*psi2_d + _x78*_x81
+    _x87 = _x78*_x77 - _x85*psi1_d
+    _x88 = _x84*_x75 + _x86*psi2_d + _x87*psi1_d
+    _x89 = -(_x73*_x56 + _x72*_x53 + _x71*_x50)
+    _x90 = -_x78*psi2_d*psi2_d + _x89*_x75
+    _x91 = -_x66*_x76
+    _x92 = _x69*_x78
+    _x93 = -_x69*_x76
+    _x94 = -_x66*_x78
+    _x95 = _x38*_x79 + _x69*_x48*_x78
+    _x96 = _x69*_x38*_x76 - _x48*_x85
+    _x97 = _x48*_x87 + _x38*_x82
+    _x98 = 5e-05*m_handle
+    _x99 = 0.00013333333333333334*m_fork2
+    _x100 = 2.0*_x70*_x67
+    _x101 = 0.0005583333333333333*m_handle + h*h*m_handle
+    _x102 = psi1_d*((_x98 + _x99)*_x100 - _x100*(_x99 + numpy.cos(psi3)**2*_x101 + numpy.sin(psi3)**2*_x101))
+    _x103 = _x67*_x98
+    _x104 = _x103*psi3_d
+    _x105 = _x58*_x78
+    _x106 = -_x105*psi2_d + _x48*_x86 + _x38*_x80
+    _out_V = numpy.zeros(batch + (6,))
+    _out_V[..., 0] = _x83*_x33 + _x90*_x51 + _x88*_x41
+    _out_V[..., 1] = _x83*_x35 + _x88*_x44 + _x90*_x54
+    _out_V[..., 2] = _x83*_x37 + _x88*_x47 + _x90*_x57
+    _out_V[..., 3] = _x74*_x91 + _x84*_x93 - 0.5*(_x97 + _x96*psi1_d + _x95*psi2_d) + _x102*psi2_d + _x104*psi2_d + _x97
+    _out_V[..., 4] = _x74*_x92 + _x84*_x94 + _x76*_x89 - 0.5*(_x106 + (_x95 + _x102 + _x104)*psi1_d + _x104*psi1_d + (_x96 - _x105)*psi2_d) + _x106
+    _out_V[..., 5] = _x103*psi1_d*psi2_d
+    return _out_V
+
+
+def inverse_dynamics(q, p, qw, qd, qwd, qdd, qwdd, *, r_base=0.07, r_tcp=0.025, a=0.1, m_arm=0.0093, m_rod=0.0095, m_platform=0.021, J_rotor=1e-06, gear=10.0, h=0.03, m_fork1=0.012, m_fork2=0.009, m_handle=0.03):
+    """Inverse dynamics: actuator efforts for a motion.
+
+    tau = M_a qdd + V_a + G_a + F_f + J^T (M_p pdd + V_p + G_p) with pdd = J qdd + b
+    (d'Alembert: the loop constraint forces do no work on motions pd = J qd), equal to M
+    qdd + V + G + F_f without forming M. Evaluate at a consistent pair q, p (p = fk(q)
+    or q = ik(p)).
+
+    Args:
+        q: joint coordinates, shape (..., 3): theta1 [rad], theta2 [rad], theta3 [rad].
+        p: task coordinates of the platform (TCP), shape (..., 3): x [m], y [m], z [m].
+        qw: wrist joint coordinates, shape (..., 3): psi1 [rad], psi2 [rad], psi3 [rad].
+        qd: joint velocities, shape (..., 3): theta1 [rad/s], theta2 [rad/s], theta3
+            [rad/s].
+        qwd: wrist joint velocities, shape (..., 3): psi1 [rad/s], psi2 [rad/s], psi3
+            [rad/s].
+        qdd: joint accelerations, shape (..., 3): theta1 [rad/s^2], theta2 [rad/s^2], theta3
+            [rad/s^2].
+        qwdd: wrist joint accelerations, shape (..., 3): psi1 [rad/s^2], psi2 [rad/s^2],
+            psi3 [rad/s^2].
+        r_base: distance from the base centre to the actuated joints A_i [m]; default 0.07;
+            a scalar or an array broadcastable to the batch shape.
+        r_tcp: distance from the TCP to the platform joints B_i [m]; default 0.025; a scalar
+            or an array broadcastable to the batch shape.
+        a: length of the upper (actuated) arms A_i C_i [m]; default 0.1; a scalar or an
+            array broadcastable to the batch shape.
+        m_arm: mass of an upper arm [kg]; default 0.0093; a scalar or an array broadcastable
+            to the batch shape.
+        m_rod: mass of a lower-arm parallelogram (two rods and four ball joints) [kg];
+            default 0.0095; a scalar or an array broadcastable to the batch shape.
+        m_platform: mass of the platform plate (the handle is on the wrist) [kg]; default
+            0.021; a scalar or an array broadcastable to the batch shape.
+        J_rotor: rotor inertia of an actuator (motor side) [kg*m^2]; default 1e-06; a scalar
+            or an array broadcastable to the batch shape.
+        gear: capstan reduction (motor turns per arm turn) [1]; default 10.0; a scalar or an
+            array broadcastable to the batch shape.
+        h: distance from the wrist centre to the grip point along the handle [m]; default
+            0.03; a scalar or an array broadcastable to the batch shape.
+        m_fork1: mass of the first wrist fork (turns with psi1) [kg]; default 0.012; a
+            scalar or an array broadcastable to the batch shape.
+        m_fork2: mass of the second wrist fork (turns with psi2) [kg]; default 0.009; a
+            scalar or an array broadcastable to the batch shape.
+        m_handle: mass of the handle (turns with psi3) [kg]; default 0.03; a scalar or an
+            array broadcastable to the batch shape.
+
+    Returns:
+        tau: shape (..., 6); actuator efforts [N*m (revolute), N (prismatic)].
+    """
+    q = _vector(q, 3, "q", "inverse_dynamics")
+    p = _vector(p, 3, "p", "inverse_dynamics")
+    qw = _vector(qw, 3, "qw", "inverse_dynamics")
+    qd = _vector(qd, 3, "qd", "inverse_dynamics")
+    qwd = _vector(qwd, 3, "qwd", "inverse_dynamics")
+    qdd = _vector(qdd, 3, "qdd", "inverse_dynamics")
+    qwdd = _vector(qwdd, 3, "qwdd", "inverse_dynamics")
+    batch = _batch_shape("inverse_dynamics", q.shape[:-1], p.shape[:-1], qw.shape[:-1], qd.shape[:-1], qwd.shape[:-1], qdd.shape[:-1], qwdd.shape[:-1], numpy.shape(r_base), numpy.shape(r_tcp), numpy.shape(a), numpy.shape(m_arm), numpy.shape(m_rod), numpy.shape(m_platform), numpy.shape(J_rotor), numpy.shape(gear), numpy.shape(h), numpy.shape(m_fork1), numpy.shape(m_fork2), numpy.shape(m_handle))
+    if math.prod(batch) > CHUNK:
+        return _in_chunks(inverse_dynamics, batch, (q, p, qw, qd, qwd, qdd, qwdd, ), {"r_base": r_base, "r_tcp": r_tcp, "a": a, "m_arm": m_arm, "m_rod": m_rod, "m_platform": m_platform, "J_rotor": J_rotor, "gear": gear, "h": h, "m_fork1": m_fork1, "m_fork2": m_fork2, "m_handle": m_handle})
+    theta1 = q[..., 0]
+    theta2 = q[..., 1]
+    theta3 = q[..., 2]
+    x = p[..., 0]
+    y = p[..., 1]
+    z = p[..., 2]
+    psi1 = qw[..., 0]
+    psi2 = qw[..., 1]
+    psi3 = qw[..., 2]
+    theta1_d = qd[..., 0]
+    theta2_d = qd[..., 1]
+    theta3_d = qd[..., 2]
+    psi1_d = qwd[..., 0]
+    psi2_d = qwd[..., 1]
+    psi3_d = qwd[..., 2]
+    theta1_dd = qdd[..., 0]
+    theta2_dd = qdd[..., 1]
+    theta3_dd = qdd[..., 2]
+    psi1_dd = qwdd[..., 0]
+    psi2_dd = qwdd[..., 1]
+    psi3_dd = qwdd[..., 2]
+    _x0 = numpy.cos(theta1)
+    _x1 = a*_x0
+    _x2 = a*numpy.sin(theta1)
+    _x3 = numpy.cos(theta2)
+    _x4 = a*_x3
+    _x5 = a*numpy.sin(theta2)
+    _x6 = numpy.cos(theta3)
+    _x7 = a*_x6
+    _x8 = a*numpy.sin(theta3)
+    _x9 = r_tcp + x - r_base - _x1
+    _x10 = z - _x2
+    _x11 = _x1*_x10 - _x2*_x9
+    _x12 = 0.5*_x4
+    _x13 = 0.5*r_tcp
+    _x14 = 0.5*r_base
+    _x15 = x - _x13 + _x14
+    _x16 = _x12 + _x15
+    _x17 = 1.7320508075688772*_x14
+    _x18 = 1.7320508075688772*_x13
+    _x19 = _x18 - _x17 + y - 1.7320508075688772*_x12
+    _x20 = z - _x5
+    _x21 = 0.5*_x5
+    _x22 = _x4*_x20 - 1.7320508075688772*_x21*_x19 + _x16*_x21
+    _x23 = 0.5*_x7
+    _x24 = _x23 + _x15
+    _x25 = y + _x17 - _x18 + 1.7320508075688772*_x23
+    _x26 = z - _x8
+    _x27 = 0.5*_x8
+    _x28 = _x7*_x26 + _x27*_x24 + 1.7320508075688772*_x27*_x25
+    _x29 = 2.0*theta1_d
+    _x30 = -_x20*_x25 + _x26*_x19
+    _x31 = -(-_x10*_x25 + y*_x26)
+    _x32 = -_x10*_x19 + y*_x20
+    _x33 = _x32*_x24 + _x16*_x31 + _x9*_x30
+    _x34 = 1.0/_x33
+    _x35 = _x30*_x34
+    _x36 = _x11*_x35
+    _x37 = _x31*_x34
+    _x38 = _x22*_x37
+    _x39 = _x32*_x34
+    _x40 = _x28*_x39
+    _x41 = _x40*theta3_d + _x38*theta2_d + _x36*theta1_d
+    _x42 = -(-_x24*_x20 + _x16*_x26)
+    _x43 = _x42*_x34
+    _x44 = _x11*_x43
+    _x45 = -_x10*_x24 + _x9*_x26
+    _x46 = _x45*_x34
+    _x47 = _x22*_x46
+    _x48 = -(-_x16*_x10 + _x9*_x20)
+    _x49 = _x34*_x48
+    _x50 = _x28*_x49
+    _x51 = _x50*theta3_d + _x47*theta2_d + _x44*theta1_d
+    _x52 = -_x19*_x24 + _x16*_x25
+    _x53 = _x34*_x52
+    _x54 = _x11*_x53
+    _x55 = -(-y*_x24 + _x9*_x25)
+    _x56 = _x55*_x34
+    _x57 = _x22*_x56
+    _x58 = -y*_x16 + _x9*_x19
+    _x59 = _x58*_x34
+    _x60 = _x28*_x59
+    _x61 = _x60*theta3_d + _x57*theta2_d + _x54*theta1_d
+    _x62 = _x51*_x51 + _x61*_x61 + _x41*_x41
+    _x63 = _x5*theta2_d
+    _x64 = 1.7320508075688772*_x51
+    _x65 = 2.0*_x61
+    _x66 = 0.8660254037844386*y
+    _x67 = 0.5*x
+    _x68 = _x8*theta3_d
+    _x69 = numpy.cos(psi1)
+    _x70 = numpy.cos(psi2)
+    _x71 = h*m_handle
+    _x72 = numpy.sin(psi1)
+    _x73 = numpy.sin(psi2)
+    _x74 = 0.00013333333333333334*m_fork2
+    _x75 = 0.0005583333333333333*m_handle + h*h*m_handle
+    _x76 = numpy.cos(psi3)**2
+    _x77 = numpy.sin(psi3)**2
+    _x78 = 5e-05*m_handle
+    _x79 = _x62 - _x1*_x29*_x61 + _x2*_x29*_x41 + theta1_d*theta1_d*(-_x1*r_base + x*_x1 + z*_x2 + _x1*r_tcp)
+    _x80 = _x62 + (_x4*r_tcp + z*_x5 - _x4*r_base - _x4*_x67 + _x4*_x66)*theta2_d*theta2_d - _x63*_x41 - _x4*_x65*theta2_d + _x64*_x63
+    _x81 = (z*_x8 - _x7*r_base + _x7*r_tcp - _x7*_x67 - _x7*_x66)*theta3_d*theta3_d - _x68*_x41 - _x7*_x65*theta3_d + _x62 - _x64*_x68
+    _x82 = -(_x81*_x49 + _x80*_x46 + _x79*_x43)
+    _x83 = _x82 + _x50*theta3_dd + _x47*theta2_dd + _x44*theta1_dd
+    _x84 = m_platform + 1.5*m_rod + m_fork1 + m_handle + m_fork2
+    _x85 = _x71*_x70
+    _x86 = -_x72*_x85
+    _x87 = _x73*_x71
+    _x88 = -_x69*_x87
+    _x89 = _x72*psi1_d
+    _x90 = _x69*_x85
+    _x91 = _x89*_x87 - _x90*psi2_d
+    _x92 = _x72*psi2_d
+    _x93 = -_x90*psi1_d + _x92*_x87
+    _x94 = _x93*psi1_d + _x91*psi2_d + _x86*psi1_dd + _x88*psi2_dd + _x83*_x84
+    _x95 = -(_x81*_x59 + _x80*_x56 + _x79*_x53)
+    _x96 = _x95 + _x60*theta3_dd + _x57*theta2_dd + _x54*theta1_dd
+    _x97 = 9.81*m_handle
+    _x98 = _x96*_x84 + 9.81*m_fork2 + _x85*psi2_dd + 9.81*m_platform - _x87*psi2_d*psi2_d + 14.715*m_rod + _x97 + 9.81*m_fork1
+    _x99 = -(_x81*_x39 + _x80*_x37 + _x79*_x35)
+    _x100 = _x99 + _x38*theta2_dd + _x40*theta3_dd + _x36*theta1_dd
+    _x101 = -_x69*_x85
+    _x102 = _x72*_x87
+    _x103 = _x69*_x87
+    _x104 = _x103*psi1_d + _x92*_x85
+    _x105 = _x89*_x85 + _x103*psi2_d
+    _x106 = _x105*psi1_d + _x104*psi2_d + _x102*psi2_dd + _x101*psi1_dd + _x100*_x84
+    _x107 = _x75*_x76 + _x77*_x75
+    _x108 = _x73*_x78
+    _x109 = _x41*_x103 + _x72*_x51*_x87
+    _x110 = _x72*_x41*_x85 - _x51*_x90
+    _x111 = _x51*_x93 + _x41*_x105
+    _x112 = 2.0*_x73*_x70
+    _x113 = psi1_d*(-(_x77*_x75 + _x75*_x76 + _x74)*_x112 + (_x74 + _x78)*_x112)
+    _x114 = _x70*_x78
+    _x115 = _x114*psi3_d
+    _x116 = _x61*_x87
+    _x117 = -_x116*psi2_d + _x51*_x91 + _x41*_x104
+    _x118 = a*a
+    _x119 = 0.3333333333333333*m_arm*_x118 + gear*gear*J_rotor + 0.5*m_rod*_x118
+    _x120 = 4.905*a
+    _x121 = m_arm*_x120
+    _x122 = m_rod*_x120
+    _out_tau = numpy.zeros(batch + (6,))
+    _out_tau[..., 0] = _x94*_x44 + _x0*_x121 + _x119*theta1_dd + _x0*_x122 + _x98*_x54 + _x106*_x36
+    _out_tau[..., 1] = _x3*_x122 + _x3*_x121 + _x119*theta2_dd + _x98*_x57 + _x94*_x47 + _x106*_x38
+    _out_tau[..., 2] = _x6*_x122 + _x106*_x40 + _x119*theta3_dd + _x98*_x60 + _x6*_x121 + _x94*_x50
+    _out_tau[..., 3] = _x100*_x101 + _x113*psi2_d - 0.5*(_x111 + _x110*psi1_d + _x109*psi2_d) + _x83*_x86 + psi1_dd*((_x74 + _x78)*_x73*_x73 + _x70*_x70*(_x107 + _x74)) + _x108*psi3_dd + _x115*psi2_d + _x111
+    _out_tau[..., 4] = _x100*_x102 + _x83*_x88 + h*_x70*_x97 + _x107*psi2_dd + _x96*_x85 - 0.5*(_x117 + (_x109 + _x113 + _x115)*psi1_d + _x115*psi1_d + (_x110 - _x116)*psi2_d) + _x117
+    _out_tau[..., 5] = _x108*psi1_dd + _x78*psi3_dd + _x114*psi1_d*psi2_d
+    return _out_tau
+
+
+def forward_dynamics(q, p, qw, qd, qwd, tau, tauw, *, r_base=0.07, r_tcp=0.025, a=0.1, m_arm=0.0093, m_rod=0.0095, m_platform=0.021, J_rotor=1e-06, gear=10.0, h=0.03, m_fork1=0.012, m_fork2=0.009, m_handle=0.03):
+    """Forward dynamics: actuator accelerations under given efforts.
+
+    qdd = M^-1 (tau - V - G - F_f) by a straight-line LDL^T factorization of the
+    symmetric positive definite M = M_a + J^T M_p J; the platform then accelerates with
+    pdd = J qdd + b. Evaluate at a consistent pair q, p (p = fk(q) or q = ik(p)).
+
+    Args:
+        q: joint coordinates, shape (..., 3): theta1 [rad], theta2 [rad], theta3 [rad].
+        p: task coordinates of the platform (TCP), shape (..., 3): x [m], y [m], z [m].
+        qw: wrist joint coordinates, shape (..., 3): psi1 [rad], psi2 [rad], psi3 [rad].
+        qd: joint velocities, shape (..., 3): theta1 [rad/s], theta2 [rad/s], theta3
+            [rad/s].
+        qwd: wrist joint velocities, shape (..., 3): psi1 [rad/s], psi2 [rad/s], psi3
+            [rad/s].
+        tau: joint torques (revolute) or forces (prismatic), shape (..., 3): theta1 [N*m],
+            theta2 [N*m], theta3 [N*m].
+        tauw: wrist joint torques (revolute) or forces (prismatic), shape (..., 3): psi1
+            [N*m], psi2 [N*m], psi3 [N*m].
+        r_base: distance from the base centre to the actuated joints A_i [m]; default 0.07;
+            a scalar or an array broadcastable to the batch shape.
+        r_tcp: distance from the TCP to the platform joints B_i [m]; default 0.025; a scalar
+            or an array broadcastable to the batch shape.
+        a: length of the upper (actuated) arms A_i C_i [m]; default 0.1; a scalar or an
+            array broadcastable to the batch shape.
+        m_arm: mass of an upper arm [kg]; default 0.0093; a scalar or an array broadcastable
+            to the batch shape.
+        m_rod: mass of a lower-arm parallelogram (two rods and four ball joints) [kg];
+            default 0.0095; a scalar or an array broadcastable to the batch shape.
+        m_platform: mass of the platform plate (the handle is on the wrist) [kg]; default
+            0.021; a scalar or an array broadcastable to the batch shape.
+        J_rotor: rotor inertia of an actuator (motor side) [kg*m^2]; default 1e-06; a scalar
+            or an array broadcastable to the batch shape.
+        gear: capstan reduction (motor turns per arm turn) [1]; default 10.0; a scalar or an
+            array broadcastable to the batch shape.
+        h: distance from the wrist centre to the grip point along the handle [m]; default
+            0.03; a scalar or an array broadcastable to the batch shape.
+        m_fork1: mass of the first wrist fork (turns with psi1) [kg]; default 0.012; a
+            scalar or an array broadcastable to the batch shape.
+        m_fork2: mass of the second wrist fork (turns with psi2) [kg]; default 0.009; a
+            scalar or an array broadcastable to the batch shape.
+        m_handle: mass of the handle (turns with psi3) [kg]; default 0.03; a scalar or an
+            array broadcastable to the batch shape.
+
+    Returns:
+        qdd: shape (..., 6); actuator accelerations [rad/s^2 (revolute), m/s^2 (prismatic)].
+    """
+    q = _vector(q, 3, "q", "forward_dynamics")
+    p = _vector(p, 3, "p", "forward_dynamics")
+    qw = _vector(qw, 3, "qw", "forward_dynamics")
+    qd = _vector(qd, 3, "qd", "forward_dynamics")
+    qwd = _vector(qwd, 3, "qwd", "forward_dynamics")
+    tau = _vector(tau, 3, "tau", "forward_dynamics")
+    tauw = _vector(tauw, 3, "tauw", "forward_dynamics")
+    batch = _batch_shape("forward_dynamics", q.shape[:-1], p.shape[:-1], qw.shape[:-1], qd.shape[:-1], qwd.shape[:-1], tau.shape[:-1], tauw.shape[:-1], numpy.shape(r_base), numpy.shape(r_tcp), numpy.shape(a), numpy.shape(m_arm), numpy.shape(m_rod), numpy.shape(m_platform), numpy.shape(J_rotor), numpy.shape(gear), numpy.shape(h), numpy.shape(m_fork1), numpy.shape(m_fork2), numpy.shape(m_handle))
+    if math.prod(batch) > CHUNK:
+        return _in_chunks(forward_dynamics, batch, (q, p, qw, qd, qwd, tau, tauw, ), {"r_base": r_base, "r_tcp": r_tcp, "a": a, "m_arm": m_arm, "m_rod": m_rod, "m_platform": m_platform, "J_rotor": J_rotor, "gear": gear, "h": h, "m_fork1": m_fork1, "m_fork2": m_fork2, "m_handle": m_handle})
+    theta1 = q[..., 0]
+    theta2 = q[..., 1]
+    theta3 = q[..., 2]
+    x = p[..., 0]
+    y = p[..., 1]
+    z = p[..., 2]
+    psi1 = qw[..., 0]
+    psi2 = qw[..., 1]
+    psi3 = qw[..., 2]
+    theta1_d = qd[..., 0]
+    theta2_d = qd[..., 1]
+    theta3_d = qd[..., 2]
+    psi1_d = qwd[..., 0]
+    psi2_d = qwd[..., 1]
+    psi3_d = qwd[..., 2]
+    tau_theta1 = tau[..., 0]
+    tau_theta2 = tau[..., 1]
+    tau_theta3 = tau[..., 2]
+    tau_psi1 = tauw[..., 0]
+    tau_psi2 = tauw[..., 1]
+    tau_psi3 = tauw[..., 2]
+    _x0 = numpy.cos(theta1)
+    _x1 = a*_x0
+    _x2 = a*numpy.sin(theta1)
+    _x3 = numpy.cos(theta2)
+    _x4 = a*_x3
+    _x5 = a*numpy.sin(theta2)
+    _x6 = numpy.cos(theta3)
+    _x7 = a*_x6
+    _x8 = a*numpy.sin(theta3)
+    _x9 = r_tcp + x - r_base - _x1
+    _x10 = z - _x2
+    _x11 = _x1*_x10 - _x2*_x9
+    _x12 = 0.5*_x4
+    _x13 = 0.5*r_tcp
+    _x14 = 0.5*r_base
+    _x15 = x - _x13 + _x14
+    _x16 = _x12 + _x15
+    _x17 = 1.7320508075688772*_x14
+    _x18 = 1.7320508075688772*_x13
+    _x19 = _x18 - _x17 + y - 1.7320508075688772*_x12
+    _x20 = z - _x5
+    _x21 = 0.5*_x5
+    _x22 = _x4*_x20 - 1.7320508075688772*_x21*_x19 + _x16*_x21
+    _x23 = 0.5*_x7
+    _x24 = _x23 + _x15
+    _x25 = y + _x17 - _x18 + 1.7320508075688772*_x23
+    _x26 = z - _x8
+    _x27 = 0.5*_x8
+    _x28 = _x7*_x26 + _x27*_x24 + 1.7320508075688772*_x27*_x25
+    _x29 = 2.0*theta1_d
+    _x30 = -_x20*_x25 + _x26*_x19
+    _x31 = -(-_x10*_x25 + y*_x26)
+    _x32 = -_x10*_x19 + y*_x20
+    _x33 = _x32*_x24 + _x16*_x31 + _x9*_x30
+    _x34 = 1.0/_x33
+    _x35 = _x30*_x34
+    _x36 = _x11*_x35
+    _x37 = _x31*_x34
+    _x38 = _x22*_x37
+    _x39 = _x32*_x34
+    _x40 = _x28*_x39
+    _x41 = _x40*theta3_d + _x38*theta2_d + _x36*theta1_d
+    _x42 = -(-_x24*_x20 + _x16*_x26)
+    _x43 = _x42*_x34
+    _x44 = _x11*_x43
+    _x45 = -_x10*_x24 + _x9*_x26
+    _x46 = _x45*_x34
+    _x47 = _x22*_x46
+    _x48 = -(-_x16*_x10 + _x9*_x20)
+    _x49 = _x34*_x48
+    _x50 = _x28*_x49
+    _x51 = _x50*theta3_d + _x47*theta2_d + _x44*theta1_d
+    _x52 = -_x19*_x24 + _x16*_x25
+    _x53 = _x34*_x52
+    _x54 = _x11*_x53
+    _x55 = -(-y*_x24 + _x9*_x25)
+    _x56 = _x55*_x34
+    _x57 = _x22*_x56
+    _x58 = -y*_x16 + _x9*_x19
+    _x59 = _x58*_x34
+    _x60 = _x28*_x59
+    _x61 = _x60*theta3_d + _x57*theta2_d + _x54*theta1_d
+    _x62 = _x51*_x51 + _x61*_x61 + _x41*_x41
+    _x63 = _x5*theta2_d
+    _x64 = 1.7320508075688772*_x51
+    _x65 = 2.0*_x61
+    _x66 = 0.8660254037844386*y
+    _x67 = 0.5*x
+    _x68 = _x8*theta3_d
+    _x69 = numpy.cos(psi1)
+    _x70 = numpy.cos(psi2)
+    _x71 = h*m_handle
+    _x72 = numpy.sin(psi1)
+    _x73 = numpy.sin(psi2)
+    _x74 = 0.00013333333333333334*m_fork2
+    _x75 = 0.0005583333333333333*m_handle + h*h*m_handle
+    _x76 = numpy.cos(psi3)**2
+    _x77 = numpy.sin(psi3)**2
+    _x78 = 5e-05*m_handle
+    _x79 = m_platform + 1.5*m_rod + m_fork1 + m_handle + m_fork2
+    _x80 = _x79*_x36
+    _x81 = _x79*_x44
+    _x82 = _x54*_x79
+    _x83 = a*a
+    _x84 = 0.3333333333333333*m_arm*_x83 + gear*gear*J_rotor + 0.5*m_rod*_x83
+    _x85 = _x84 + _x54*_x82 + _x44*_x81 + _x36*_x80
+    _x86 = 1.0/_x85
+    _x87 = _x79*_x38
+    _x88 = _x79*_x47
+    _x89 = _x57*_x79
+    _x90 = _x54*_x89 + _x44*_x88 + _x36*_x87
+    _x91 = _x84 + _x47*_x88 + _x57*_x89 + _x38*_x87
+    _x92 = _x86*_x90
+    _x93 = -_x92*_x90 + _x91
+    _x94 = 1.0/_x93
+    _x95 = _x79*_x40
+    _x96 = _x79*_x50
+    _x97 = _x60*_x79
+    _x98 = _x54*_x97 + _x44*_x96 + _x36*_x95
+    _x99 = _x84 + _x60*_x97 + _x50*_x96 + _x40*_x95
+    _x100 = _x86*_x98
+    _x101 = _x57*_x97 + _x47*_x96 + _x38*_x95
+    _x102 = -_x100*_x90 + _x101
+    _x103 = _x94*_x102
+    _x104 = -(_x103*_x102 + _x100*_x98) + _x99
+    _x105 = 1.0/_x104
+    _x106 = _x71*_x70
+    _x107 = -_x69*_x106
+    _x108 = -_x72*_x106
+    _x109 = _x108*_x44 + _x107*_x36
+    _x110 = _x75*_x76 + _x77*_x75
+    _x111 = (_x74 + _x78)*_x73*_x73 + _x70*_x70*(_x110 + _x74)
+    _x112 = _x86*_x109
+    _x113 = _x108*_x47 + _x107*_x38
+    _x114 = -_x112*_x90 + _x113
+    _x115 = _x94*_x114
+    _x116 = _x108*_x50 + _x107*_x40
+    _x117 = -(_x115*_x102 + _x112*_x98) + _x116
+    _x118 = _x105*_x117
+    _x119 = -(_x118*_x117 + _x115*_x114 + _x112*_x109) + _x111
+    _x120 = 1.0/_x119
+    _x121 = _x73*_x71
+    _x122 = _x72*_x121
+    _x123 = -_x69*_x121
+    _x124 = _x54*_x106 + _x123*_x44 + _x122*_x36
+    _x125 = _x86*_x124
+    _x126 = _x123*_x47 + _x57*_x106 + _x122*_x38
+    _x127 = -_x125*_x90 + _x126
+    _x128 = _x94*_x127
+    _x129 = _x60*_x106 + _x123*_x50 + _x122*_x40
+    _x130 = -(_x128*_x102 + _x125*_x98) + _x129
+    _x131 = _x105*_x130
+    _x132 = -(_x131*_x117 + _x128*_x114 + _x125*_x109)
+    _x133 = _x120*_x132
+    _x134 = -(_x132*_x133 + _x130*_x131 + _x128*_x127 + _x125*_x124) + _x110
+    _x135 = 1.0/_x134
+    _x136 = _x62 - _x1*_x29*_x61 + _x2*_x29*_x41 + theta1_d*theta1_d*(-_x1*r_base + x*_x1 + z*_x2 + _x1*r_tcp)
+    _x137 = _x62 + (_x4*r_tcp + z*_x5 - _x4*r_base - _x4*_x67 + _x4*_x66)*theta2_d*theta2_d - _x63*_x41 - _x4*_x65*theta2_d + _x64*_x63
+    _x138 = (z*_x8 - _x7*r_base + _x7*r_tcp - _x7*_x67 - _x7*_x66)*theta3_d*theta3_d - _x68*_x41 - _x7*_x65*theta3_d + _x62 - _x64*_x68
+    _x139 = -(_x138*_x59 + _x137*_x56 + _x136*_x53)
+    _x140 = 9.81*m_handle
+    _x141 = _x139*_x79 + 9.81*m_platform - _x121*psi2_d*psi2_d + 14.715*m_rod + 9.81*m_fork2 + _x140 + 9.81*m_fork1
+    _x142 = -(_x138*_x49 + _x137*_x46 + _x136*_x43)
+    _x143 = _x72*psi1_d
+    _x144 = _x69*_x106
+    _x145 = _x143*_x121 - _x144*psi2_d
+    _x146 = _x72*psi2_d
+    _x147 = -_x144*psi1_d + _x146*_x121
+    _x148 = _x142*_x79 + _x145*psi2_d + _x147*psi1_d
+    _x149 = -(_x138*_x39 + _x137*_x37 + _x136*_x35)
+    _x150 = _x69*_x121
+    _x151 = _x150*psi1_d + _x146*_x106
+    _x152 = _x143*_x106 + _x150*psi2_d
+    _x153 = _x149*_x79 + _x151*psi2_d + _x152*psi1_d
+    _x154 = _x73*_x78
+    _x155 = _x41*_x150 + _x72*_x51*_x121
+    _x156 = _x72*_x41*_x106 - _x51*_x144
+    _x157 = _x51*_x147 + _x41*_x152
+    _x158 = 2.0*_x73*_x70
+    _x159 = psi1_d*(-(_x77*_x75 + _x75*_x76 + _x74)*_x158 + (_x74 + _x78)*_x158)
+    _x160 = _x70*_x78
+    _x161 = _x160*psi3_d
+    _x162 = _x61*_x121
+    _x163 = -_x162*psi2_d + _x51*_x145 + _x41*_x151
+    _x164 = 4.905*a
+    _x165 = m_arm*_x164
+    _x166 = m_rod*_x164
+    _x167 = _x120*_x154
+    _x168 = -_x132*_x167
+    _x169 = _x135*_x168
+    _x170 = _x78 - (_x154*_x167 + _x169*_x168)
+    _x171 = tau_theta1 - (_x0*_x165 + _x0*_x166 + _x141*_x54 + _x148*_x44 + _x153*_x36)
+    _x172 = tau_theta2 - (_x3*_x165 + _x141*_x57 + _x148*_x47 + _x3*_x166 + _x153*_x38) - _x171*_x92
+    _x173 = tau_theta3 - (_x6*_x166 + _x6*_x165 + _x141*_x60 + _x148*_x50 + _x153*_x40) - (_x171*_x100 + _x172*_x103)
+    _x174 = -(_x173*_x118 + _x172*_x115 + _x171*_x112) - (_x157 + _x161*psi2_d + _x159*psi2_d - 0.5*(_x155*psi2_d + _x156*psi1_d + _x157) + _x142*_x108 + _x149*_x107) + tau_psi1
+    _x175 = -(h*_x70*_x140 + _x163 - 0.5*((-_x162 + _x156)*psi2_d + _x161*psi1_d + (_x161 + _x159 + _x155)*psi1_d + _x163) + _x139*_x106 + _x142*_x123 + _x149*_x122) - (_x174*_x133 + _x173*_x131 + _x172*_x128 + _x171*_x125) + tau_psi2
+    _x176 = -(_x169*_x175 + _x174*_x167) - _x160*psi1_d*psi2_d + tau_psi3
+    _x177 = _x176/_x170
+    _x178 = -_x169*_x177 + _x135*_x175
+    _x179 = -(_x177*_x167 + _x178*_x133) + _x120*_x174
+    _x180 = -(_x178*_x131 + _x179*_x118) + _x105*_x173
+    _x181 = -(_x178*_x128 + _x179*_x115 + _x180*_x103) + _x94*_x172
+    _x182 = -(_x178*_x125 + _x179*_x112 + _x180*_x100 + _x181*_x92) + _x86*_x171
+    _out_qdd = numpy.zeros(batch + (6,))
+    _out_qdd[..., 0] = _x182
+    _out_qdd[..., 1] = _x181
+    _out_qdd[..., 2] = _x180
+    _out_qdd[..., 3] = _x179
+    _out_qdd[..., 4] = _x178
+    _out_qdd[..., 5] = _x177
+    return _out_qdd
+
+
+def kinetic_energy(q, p, qw, qd, qwd, *, r_base=0.07, r_tcp=0.025, a=0.1, m_arm=0.0093, m_rod=0.0095, m_platform=0.021, J_rotor=1e-06, gear=10.0, h=0.03, m_fork1=0.012, m_fork2=0.009, m_handle=0.03):
+    """Kinetic energy.
+
+    k = 1/2 qd^T M_a qd + 1/2 pd^T M_p pd with pd = J qd (= 1/2 qd^T M qd). Evaluate at
+    a consistent pair q, p (p = fk(q) or q = ik(p)).
+
+    Args:
+        q: joint coordinates, shape (..., 3): theta1 [rad], theta2 [rad], theta3 [rad].
+        p: task coordinates of the platform (TCP), shape (..., 3): x [m], y [m], z [m].
+        qw: wrist joint coordinates, shape (..., 3): psi1 [rad], psi2 [rad], psi3 [rad].
+        qd: joint velocities, shape (..., 3): theta1 [rad/s], theta2 [rad/s], theta3
+            [rad/s].
+        qwd: wrist joint velocities, shape (..., 3): psi1 [rad/s], psi2 [rad/s], psi3
+            [rad/s].
+        r_base: distance from the base centre to the actuated joints A_i [m]; default 0.07;
+            a scalar or an array broadcastable to the batch shape.
+        r_tcp: distance from the TCP to the platform joints B_i [m]; default 0.025; a scalar
+            or an array broadcastable to the batch shape.
+        a: length of the upper (actuated) arms A_i C_i [m]; default 0.1; a scalar or an
+            array broadcastable to the batch shape.
+        m_arm: mass of an upper arm [kg]; default 0.0093; a scalar or an array broadcastable
+            to the batch shape.
+        m_rod: mass of a lower-arm parallelogram (two rods and four ball joints) [kg];
+            default 0.0095; a scalar or an array broadcastable to the batch shape.
+        m_platform: mass of the platform plate (the handle is on the wrist) [kg]; default
+            0.021; a scalar or an array broadcastable to the batch shape.
+        J_rotor: rotor inertia of an actuator (motor side) [kg*m^2]; default 1e-06; a scalar
+            or an array broadcastable to the batch shape.
+        gear: capstan reduction (motor turns per arm turn) [1]; default 10.0; a scalar or an
+            array broadcastable to the batch shape.
+        h: distance from the wrist centre to the grip point along the handle [m]; default
+            0.03; a scalar or an array broadcastable to the batch shape.
+        m_fork1: mass of the first wrist fork (turns with psi1) [kg]; default 0.012; a
+            scalar or an array broadcastable to the batch shape.
+        m_fork2: mass of the second wrist fork (turns with psi2) [kg]; default 0.009; a
+            scalar or an array broadcastable to the batch shape.
+        m_handle: mass of the handle (turns with psi3) [kg]; default 0.03; a scalar or an
+            array broadcastable to the batch shape.
+
+    Returns:
+        k: shape (...); kinetic energy of all bodies [J].
+    """
+    q = _vector(q, 3, "q", "kinetic_energy")
+    p = _vector(p, 3, "p", "kinetic_energy")
+    qw = _vector(qw, 3, "qw", "kinetic_energy")
+    qd = _vector(qd, 3, "qd", "kinetic_energy")
+    qwd = _vector(qwd, 3, "qwd", "kinetic_energy")
+    batch = _batch_shape("kinetic_energy", q.shape[:-1], p.shape[:-1], qw.shape[:-1], qd.shape[:-1], qwd.shape[:-1], numpy.shape(r_base), numpy.shape(r_tcp), numpy.shape(a), numpy.shape(m_arm), numpy.shape(m_rod), numpy.shape(m_platform), numpy.shape(J_rotor), numpy.shape(gear), numpy.shape(h), numpy.shape(m_fork1), numpy.shape(m_fork2), numpy.shape(m_handle))
+    if math.prod(batch) > CHUNK:
+        return _in_chunks(kinetic_energy, batch, (q, p, qw, qd, qwd, ), {"r_base": r_base, "r_tcp": r_tcp, "a": a, "m_arm": m_arm, "m_rod": m_rod, "m_platform": m_platform, "J_rotor": J_rotor, "gear": gear, "h": h, "m_fork1": m_fork1, "m_fork2": m_fork2, "m_handle": m_handle})
+    theta1 = q[..., 0]
+    theta2 = q[..., 1]
+    theta3 = q[..., 2]
+    x = p[..., 0]
+    y = p[..., 1]
+    z = p[..., 2]
+    psi1 = qw[..., 0]
+    psi2 = qw[..., 1]
+    psi3 = qw[..., 2]
+    theta1_d = qd[..., 0]
+    theta2_d = qd[..., 1]
+    theta3_d = qd[..., 2]
+    psi1_d = qwd[..., 0]
+    psi2_d = qwd[..., 1]
+    psi3_d = qwd[..., 2]
+    _x0 = a*numpy.cos(theta1)
+    _x1 = -_x0 - r_base + x + r_tcp
+    _x2 = a*numpy.sin(theta1)
+    _x3 = -_x2 + z
+    _x4 = -_x2*_x1 + _x3*_x0
+    _x5 = a*numpy.cos(theta2)
+    _x6 = 0.5*_x5
+    _x7 = 0.5*r_tcp
+    _x8 = 0.5*r_base
+    _x9 = x - _x7 + _x8
+    _x10 = _x6 + _x9
+    _x11 = 1.7320508075688772*_x8
+    _x12 = 1.7320508075688772*_x7
+    _x13 = _x12 - _x11 + y - 1.7320508075688772*_x6
+    _x14 = a*numpy.sin(theta2)
+    _x15 = -_x14 + z
+    _x16 = 0.5*_x14
+    _x17 = _x5*_x15 - 1.7320508075688772*_x16*_x13 + _x10*_x16
+    _x18 = a*numpy.cos(theta3)
+    _x19 = 0.5*_x18
+    _x20 = _x19 + _x9
+    _x21 = y + _x11 - _x12 + 1.7320508075688772*_x19
+    _x22 = a*numpy.sin(theta3)
+    _x23 = -_x22 + z
+    _x24 = 0.5*_x22
+    _x25 = _x23*_x18 + _x24*_x20 + 1.7320508075688772*_x24*_x21
+    _x26 = -_x15*_x21 + _x23*_x13
+    _x27 = -(-_x3*_x21 + y*_x23)
+    _x28 = -_x3*_x13 + y*_x15
+    _x29 = -(-_x20*_x15 + _x10*_x23)
+    _x30 = -_x3*_x20 + _x1*_x23
+    _x31 = -(-_x10*_x3 + _x1*_x15)
+    _x32 = -_x13*_x20 + _x10*_x21
+    _x33 = -(-y*_x20 + _x1*_x21)
+    _x34 = -y*_x10 + _x1*_x13
+    _x35 = _x28*_x20 + _x10*_x27 + _x1*_x26
+    _x36 = 1.0/_x35
+    _x37 = _x26*_x36
+    _x38 = _x27*_x36
+    _x39 = _x28*_x36
+    _x40 = _x29*_x36
+    _x41 = _x30*_x36
+    _x42 = _x36*_x31
+    _x43 = _x36*_x32
+    _x44 = _x33*_x36
+    _x45 = _x34*_x36
+    _x46 = _x4*_x37
+    _x47 = _x17*_x38
+    _x48 = _x25*_x39
+    _x49 = _x4*_x40
+    _x50 = _x17*_x41
+    _x51 = _x25*_x42
+    _x52 = _x4*_x43
+    _x53 = _x17*_x44
+    _x54 = _x25*_x45
+    _x55 = _x48*theta3_d + _x47*theta2_d + _x46*theta1_d
+    _x56 = _x51*theta3_d + _x50*theta2_d + _x49*theta1_d
+    _x57 = _x54*theta3_d + _x53*theta2_d + _x52*theta1_d
+    _x58 = a*a
+    _x59 = 0.3333333333333333*_x58*m_arm + gear*gear*J_rotor + 0.5*_x58*m_rod
+    _x60 = m_platform + 1.5*m_rod + m_fork1 + m_handle + m_fork2
+    _x61 = numpy.cos(psi1)
+    _x62 = numpy.cos(psi2)
+    _x63 = h*m_handle
+    _x64 = _x62*_x63
+    _x65 = -_x61*_x64
+    _x66 = numpy.sin(psi1)
+    _x67 = numpy.sin(psi2)
+    _x68 = _x63*_x67
+    _x69 = _x68*_x66
+    _x70 = -_x64*_x66
+    _x71 = -_x61*_x68
+    _x72 = 0.00013333333333333334*m_fork2
+    _x73 = 0.0005583333333333333*m_handle + h*h*m_handle
+    _x74 = _x73*numpy.sin(psi3)**2 + _x73*numpy.cos(psi3)**2
+    _x75 = 5e-05*m_handle
+    _x76 = _x67*_x75
+    _out_k = numpy.zeros(batch + ())
+    _out_k[...] = 0.5*(_x59*theta1_d*theta1_d + _x59*theta2_d*theta2_d + _x59*theta3_d*theta3_d + (_x76*psi1_d + _x75*psi3_d)*psi3_d + (_x55*_x69 + _x74*psi2_d + _x56*_x71 + _x57*_x64)*psi2_d + _x57*(_x60*_x57 + _x64*psi2_d) + psi1_d*(_x55*_x65 + _x56*_x70 + _x76*psi3_d + ((_x72 + _x75)*_x67*_x67 + (_x74 + _x72)*_x62*_x62)*psi1_d) + _x56*(_x60*_x56 + _x70*psi1_d + _x71*psi2_d) + _x55*(_x60*_x55 + _x65*psi1_d + _x69*psi2_d))
+    return _out_k
+
+
+def potential_energy(q, p, qw, *, a=0.1, m_arm=0.0093, m_rod=0.0095, m_platform=0.021, w=0.05, h=0.03, m_fork1=0.012, m_fork2=0.009, m_handle=0.03):
+    """Gravitational potential energy.
+
+    u = -g . (sum of mass times centre of mass), zero with every mass at the base
+    origin. Evaluate at a consistent pair q, p (p = fk(q) or q = ik(p)).
+
+    Args:
+        q: joint coordinates, shape (..., 3): theta1 [rad], theta2 [rad], theta3 [rad].
+        p: task coordinates of the platform (TCP), shape (..., 3): x [m], y [m], z [m].
+        qw: wrist joint coordinates, shape (..., 3): psi1 [rad], psi2 [rad], psi3 [rad].
+        a: length of the upper (actuated) arms A_i C_i [m]; default 0.1; a scalar or an
+            array broadcastable to the batch shape.
+        m_arm: mass of an upper arm [kg]; default 0.0093; a scalar or an array broadcastable
+            to the batch shape.
+        m_rod: mass of a lower-arm parallelogram (two rods and four ball joints) [kg];
+            default 0.0095; a scalar or an array broadcastable to the batch shape.
+        m_platform: mass of the platform plate (the handle is on the wrist) [kg]; default
+            0.021; a scalar or an array broadcastable to the batch shape.
+        w: distance from the platform centre down to the wrist centre [m]; default 0.05; a
+            scalar or an array broadcastable to the batch shape.
+        h: distance from the wrist centre to the grip point along the handle [m]; default
+            0.03; a scalar or an array broadcastable to the batch shape.
+        m_fork1: mass of the first wrist fork (turns with psi1) [kg]; default 0.012; a
+            scalar or an array broadcastable to the batch shape.
+        m_fork2: mass of the second wrist fork (turns with psi2) [kg]; default 0.009; a
+            scalar or an array broadcastable to the batch shape.
+        m_handle: mass of the handle (turns with psi3) [kg]; default 0.03; a scalar or an
+            array broadcastable to the batch shape.
+
+    Returns:
+        u: shape (...); potential energy [J].
+    """
+    q = _vector(q, 3, "q", "potential_energy")
+    p = _vector(p, 3, "p", "potential_energy")
+    qw = _vector(qw, 3, "qw", "potential_energy")
+    batch = _batch_shape("potential_energy", q.shape[:-1], p.shape[:-1], qw.shape[:-1], numpy.shape(a), numpy.shape(m_arm), numpy.shape(m_rod), numpy.shape(m_platform), numpy.shape(w), numpy.shape(h), numpy.shape(m_fork1), numpy.shape(m_fork2), numpy.shape(m_handle))
+    if math.prod(batch) > CHUNK:
+        return _in_chunks(potential_energy, batch, (q, p, qw, ), {"a": a, "m_arm": m_arm, "m_rod": m_rod, "m_platform": m_platform, "w": w, "h": h, "m_fork1": m_fork1, "m_fork2": m_fork2, "m_handle": m_handle})
+    theta1 = q[..., 0]
+    theta2 = q[..., 1]
+    theta3 = q[..., 2]
+    x = p[..., 0]
+    y = p[..., 1]
+    z = p[..., 2]
+    psi1 = qw[..., 0]
+    psi2 = qw[..., 1]
+    psi3 = qw[..., 2]
+    _x0 = z - w
+    _x1 = numpy.sin(theta2)
+    _x2 = 4.905*a
+    _x3 = _x2*m_rod
+    _x4 = numpy.sin(theta3)
+    _x5 = numpy.sin(theta1)
+    _x6 = _x2*m_arm
+    _x7 = 9.81*_x0
+    _out_u = numpy.zeros(batch + ())
+    _out_u[...] = _x7*m_fork2 + 14.715*z*m_rod + _x7*m_fork1 + _x3*_x1 + _x4*_x3 + _x6*_x4 + 9.81*(_x0 + h*numpy.sin(psi2))*m_handle + _x5*_x3 + _x6*_x1 + _x6*_x5 + 9.81*z*m_platform
+    return _out_u
+
+
 def device_fk(p, qw, *, w=0.05, h=0.03):
     """Forward kinematics of the hybrid device: pose of the wrist's TCP.
 
@@ -731,16 +1890,15 @@ def device_actuator_jacobian(q, p, qw, *, r_base=0.07, r_tcp=0.025, a=0.1, h=0.0
     return _out_J
 
 
-def scene(p, q, qw, *, r_base=0.07, r_tcp=0.025, a=0.1, b=0.15, w=0.05, h=0.03):
-    """ik, fk, leg_points, jacobian, inverse_jacobian, singularities, device_fk, device_jacobian, device_actuator_jacobian together, with one set of shared subexpressions.
+def scene(q, p, qw, *, r_base=0.07, r_tcp=0.025, a=0.1, m_arm=0.0093, m_rod=0.0095, m_platform=0.021, w=0.05, h=0.03, m_fork1=0.012, m_fork2=0.009, m_handle=0.03):
+    """gravity_vector, device_fk, device_actuator_jacobian together, with one set of shared subexpressions.
 
-    Computes the outputs of ik, fk, leg_points, jacobian, inverse_jacobian,
-    singularities, device_fk, device_jacobian, device_actuator_jacobian in one call;
-    subexpressions common to several of them are evaluated once.
+    Computes the outputs of gravity_vector, device_fk, device_actuator_jacobian in one
+    call; subexpressions common to several of them are evaluated once.
 
     Args:
-        p: task coordinates of the platform (TCP), shape (..., 3): x [m], y [m], z [m].
         q: joint coordinates, shape (..., 3): theta1 [rad], theta2 [rad], theta3 [rad].
+        p: task coordinates of the platform (TCP), shape (..., 3): x [m], y [m], z [m].
         qw: wrist joint coordinates, shape (..., 3): psi1 [rad], psi2 [rad], psi3 [rad].
         r_base: distance from the base centre to the actuated joints A_i [m]; default 0.07;
             a scalar or an array broadcastable to the batch shape.
@@ -748,292 +1906,167 @@ def scene(p, q, qw, *, r_base=0.07, r_tcp=0.025, a=0.1, b=0.15, w=0.05, h=0.03):
             or an array broadcastable to the batch shape.
         a: length of the upper (actuated) arms A_i C_i [m]; default 0.1; a scalar or an
             array broadcastable to the batch shape.
-        b: length of the lower arms (parallelograms) C_i B_i [m]; default 0.15; a scalar or
-            an array broadcastable to the batch shape.
+        m_arm: mass of an upper arm [kg]; default 0.0093; a scalar or an array broadcastable
+            to the batch shape.
+        m_rod: mass of a lower-arm parallelogram (two rods and four ball joints) [kg];
+            default 0.0095; a scalar or an array broadcastable to the batch shape.
+        m_platform: mass of the platform plate (the handle is on the wrist) [kg]; default
+            0.021; a scalar or an array broadcastable to the batch shape.
         w: distance from the platform centre down to the wrist centre [m]; default 0.05; a
             scalar or an array broadcastable to the batch shape.
         h: distance from the wrist centre to the grip point along the handle [m]; default
             0.03; a scalar or an array broadcastable to the batch shape.
+        m_fork1: mass of the first wrist fork (turns with psi1) [kg]; default 0.012; a
+            scalar or an array broadcastable to the batch shape.
+        m_fork2: mass of the second wrist fork (turns with psi2) [kg]; default 0.009; a
+            scalar or an array broadcastable to the batch shape.
+        m_handle: mass of the handle (turns with psi3) [kg]; default 0.03; a scalar or an
+            array broadcastable to the batch shape.
 
     Returns:
         SceneResult with the fields:
-        joints: shape (..., 3); actuated joint variables q (ik).
-        ik_margin: shape (..., 3); per leg: >= 0 iff the leg reaches p (the radicand of its
-            solution) (ik).
-        position: shape (..., 3); TCP position x, y, z (fk) [m].
-        fk_margin: shape (...); >= 0 iff the spheres meet (a real solution) (fk) [m^2].
-        points: shape (..., 9, 3); rows A_1, C_1, B_1, A_2, ...: three points per leg
-            (columns x, y, z) (leg_points) [m].
-        jacobian_J: shape (..., 3, 3); rows: task coordinates; columns: actuated joints
-            (jacobian).
-        J_inv: shape (..., 3, 3); rows: actuated joints; columns: task coordinates
-            (inverse_jacobian).
-        det_Jq: shape (...); det J_q (boundary singularities where zero) (singularities).
-        det_Jx: shape (...); det J_x (interior singularities where zero) (singularities).
+        G: shape (..., 6); actuator efforts that hold the device against gravity
+            (gravity_vector) [N*m (revolute), N (prismatic)].
         base_T_tcp: shape (..., 4, 4); homogeneous transform of the TCP frame in the base
             frame (device_fk) [m].
-        device_jacobian_J: shape (..., 6, 6); rows vx, vy, vz, wx, wy, wz; columns: platform
-            coordinates, then wrist joints (device_jacobian).
-        device_actuator_jacobian_J: shape (..., 6, 6); rows vx, vy, vz, wx, wy, wz; columns:
-            the legs' actuated joints, then wrist joints (device_actuator_jacobian).
+        J: shape (..., 6, 6); rows vx, vy, vz, wx, wy, wz; columns: the legs' actuated
+            joints, then wrist joints (device_actuator_jacobian).
     """
-    p = _vector(p, 3, "p", "scene")
     q = _vector(q, 3, "q", "scene")
+    p = _vector(p, 3, "p", "scene")
     qw = _vector(qw, 3, "qw", "scene")
-    batch = _batch_shape("scene", p.shape[:-1], q.shape[:-1], qw.shape[:-1], numpy.shape(r_base), numpy.shape(r_tcp), numpy.shape(a), numpy.shape(b), numpy.shape(w), numpy.shape(h))
+    batch = _batch_shape("scene", q.shape[:-1], p.shape[:-1], qw.shape[:-1], numpy.shape(r_base), numpy.shape(r_tcp), numpy.shape(a), numpy.shape(m_arm), numpy.shape(m_rod), numpy.shape(m_platform), numpy.shape(w), numpy.shape(h), numpy.shape(m_fork1), numpy.shape(m_fork2), numpy.shape(m_handle))
     if math.prod(batch) > CHUNK:
-        return _in_chunks(scene, batch, (p, q, qw, ), {"r_base": r_base, "r_tcp": r_tcp, "a": a, "b": b, "w": w, "h": h})
-    x = p[..., 0]
-    y = p[..., 1]
-    z = p[..., 2]
+        return _in_chunks(scene, batch, (q, p, qw, ), {"r_base": r_base, "r_tcp": r_tcp, "a": a, "m_arm": m_arm, "m_rod": m_rod, "m_platform": m_platform, "w": w, "h": h, "m_fork1": m_fork1, "m_fork2": m_fork2, "m_handle": m_handle})
     theta1 = q[..., 0]
     theta2 = q[..., 1]
     theta3 = q[..., 2]
+    x = p[..., 0]
+    y = p[..., 1]
+    z = p[..., 2]
     psi1 = qw[..., 0]
     psi2 = qw[..., 1]
     psi3 = qw[..., 2]
-    _x0 = r_tcp*x
-    _x1 = r_base*x
-    _x2 = a*a
-    _x3 = z*z
-    _x4 = b*b
-    _x5 = 0.5*_x2 + 0.5*_x3 + 0.5*r_base*r_base + 0.5*r_tcp*r_tcp + 0.5*x*x + 0.5*y*y - 0.5*_x4 - r_base*r_tcp
-    _x6 = _x0 + _x5 - _x1
-    _x7 = a*z
-    _x8 = a*x
-    _x9 = a*r_tcp
-    _x10 = a*r_base
-    _x11 = _x9 - _x10
-    _x12 = _x11 + _x8
-    _x13 = _x2*_x3
-    _x14 = -_x12
-    _x15 = _x13 + _x14*_x14 - _x6*_x6
-    _x16 = numpy.sqrt(_x15)
-    _x17 = 0.8660254037844386*r_tcp
-    _x18 = _x17*y
-    _x19 = 0.8660254037844386*r_base
-    _x20 = _x19*y
-    _x21 = _x5 + 0.5*_x1 - 0.5*_x0
-    _x22 = _x18 + _x21 - _x20
-    _x23 = 0.5*_x8
-    _x24 = 0.8660254037844386*a
-    _x25 = _x24*y
-    _x26 = _x10 + _x23 - _x9
-    _x27 = _x26 - _x25
-    _x28 = _x13 + _x27*_x27 - _x22*_x22
-    _x29 = numpy.sqrt(_x28)
-    _x30 = _x20 + _x21 - _x18
-    _x31 = _x25 + _x26
-    _x32 = _x13 + _x31*_x31 - _x30*_x30
-    _x33 = numpy.sqrt(_x32)
-    _x34 = a*numpy.sin(theta3)
-    _x35 = a*numpy.sin(theta1)
-    _x36 = -_x35
-    _x37 = _x34 + _x36
-    _x38 = -_x17
-    _x39 = numpy.cos(theta2)
-    _x40 = _x24*_x39
-    _x41 = _x19 + _x40
-    _x42 = _x38 + _x41
-    _x43 = a*numpy.sin(theta2)
-    _x44 = _x36 + _x43
-    _x45 = numpy.cos(theta3)
-    _x46 = _x19 + _x24*_x45
-    _x47 = -(_x38 + _x46)
-    _x48 = _x37*_x42 - _x44*_x47
-    _x49 = 0.5*a
-    _x50 = _x45*_x49
-    _x51 = a*numpy.cos(theta1)
-    _x52 = _x51 - 1.5*r_tcp + 1.5*r_base
-    _x53 = -(_x50 + _x52)
-    _x54 = _x39*_x49
-    _x55 = -(_x52 + _x54)
-    _x56 = _x44*_x53 - _x37*_x55
-    _x57 = _x47*_x55 - _x42*_x53
-    _x58 = _x48*_x48 + _x56*_x56 + _x57*_x57
-    _x59 = 1.0/_x58
-    _x60 = 0.5*_x37*_x37 + 0.5*_x47*_x47 + 0.5*_x53*_x53
-    _x61 = 0.5*_x42*_x42 + 0.5*_x44*_x44 + 0.5*_x55*_x55
-    _x62 = _x60*(_x44*_x56 - _x42*_x57) + _x61*(_x47*_x57 - _x37*_x56)
-    _x63 = 1.0/(_x58*_x58)
-    _x64 = _x60*(_x42*_x48 - _x55*_x56) + _x61*(_x53*_x56 - _x47*_x48)
-    _x65 = _x60*(_x55*_x57 - _x44*_x48) + _x61*(_x37*_x48 - _x53*_x57)
-    _x66 = -(-_x4 + _x63*_x62*_x62 + _x63*_x64*_x64 + _x63*_x65*_x65)
-    _x67 = numpy.sqrt(_x59*_x66)
-    _x68 = _x51 + r_base
-    _x69 = r_tcp + x
-    _x70 = 0.5*r_base
-    _x71 = -_x70
-    _x72 = _x54 + _x70
-    _x73 = x - 0.5*r_tcp
-    _x74 = _x17 + y
-    _x75 = -_x19
-    _x76 = _x50 + _x70
-    _x77 = _x38 + y
-    _x78 = z - _x34
-    _x79 = _x74 + _x75 - _x40
-    _x80 = -z
-    _x81 = _x43 + _x80
-    _x82 = _x46 + _x77
-    _x83 = _x78*_x79 + _x81*_x82
-    _x84 = _x72 + _x73
-    _x85 = _x73 + _x76
-    _x86 = _x78*_x84 + _x81*_x85
-    _x87 = _x69 - _x51 - r_base
-    _x88 = _x36 + z
-    _x89 = _x82*_x84 + _x85*(_x42 - y)
-    _x90 = _x83*_x87 + _x88*_x89 - _x86*y
-    _x91 = 1.0/_x90
-    _x92 = _x51*_x88 - _x35*_x87
-    _x93 = _x91*_x92
-    _x94 = _x83*_x93
-    _x95 = _x35 + _x80
-    _x96 = z - _x43
-    _x97 = 0.5*_x43*_x84 - 0.8660254037844386*_x43*_x79 + _x39*_x96*a
-    _x98 = _x91*_x97
-    _x99 = -_x98*(_x78*y + _x82*_x95)
-    _x100 = 0.5*_x34*_x85 + 0.8660254037844386*_x34*_x82 + _x45*_x78*a
-    _x101 = _x100*_x91
-    _x102 = _x101*(_x79*_x95 + _x96*y)
-    _x103 = -_x86*_x93
-    _x104 = _x98*(_x78*_x87 + _x85*_x95)
-    _x105 = -_x101*(_x84*_x95 + _x87*_x96)
-    _x106 = _x89*_x93
-    _x107 = _x98*(_x85*y - _x82*_x87)
-    _x108 = _x101*(_x79*_x87 - _x84*y)
-    _x109 = 1.0/_x92
-    _x110 = 1.0/_x97
-    _x111 = 1.0/_x100
-    _x112 = numpy.cos(psi1)
-    _x113 = numpy.cos(psi3)
-    _x114 = _x112*_x113
-    _x115 = numpy.sin(psi2)
-    _x116 = numpy.sin(psi1)
-    _x117 = numpy.sin(psi3)
-    _x118 = _x116*_x117
-    _x119 = numpy.cos(psi2)
-    _x120 = _x116*_x119
-    _x121 = -_x120
-    _x122 = _x112*_x117
-    _x123 = _x113*_x116
-    _x124 = -_x120*h
-    _x125 = _x112*_x119
-    _x126 = _x125*h
-    _x127 = _x115*h
-    _x128 = -_x126
-    _x129 = _x116*_x127
-    _x130 = -_x112*_x127
-    _x131 = _x119*h
-    _x132 = _x131*_x112*_x112 + _x131*_x116*_x116
-    _out_joints = numpy.zeros(batch + (3,))
-    _out_joints[..., 0] = numpy.arctan2(_x12*_x16 + _x6*_x7, -_x14*_x6 - _x16*_x7)
-    _out_joints[..., 1] = numpy.arctan2(_x22*_x7 + _x29*(_x11 + _x25 - _x23), -_x22*_x27 - _x29*_x7)
-    _out_joints[..., 2] = numpy.arctan2(_x30*_x7 - _x31*_x33, -_x30*_x31 - _x33*_x7)
-    _out_ik_margin = numpy.zeros(batch + (3,))
-    _out_ik_margin[..., 0] = _x15
-    _out_ik_margin[..., 1] = _x28
-    _out_ik_margin[..., 2] = _x32
-    _out_position = numpy.zeros(batch + (3,))
-    _out_position[..., 0] = _x68 - r_tcp + _x59*_x62 - _x48*_x67
-    _out_position[..., 1] = _x59*_x65 - _x56*_x67
-    _out_position[..., 2] = _x35 + _x59*_x64 - _x57*_x67
-    _out_fk_margin = numpy.zeros(batch + ())
-    _out_fk_margin[...] = _x66
-    _out_points = numpy.zeros(batch + (9, 3))
-    _out_points[..., 0, 0] = r_base
-    _out_points[..., 1, 0] = _x68
-    _out_points[..., 1, 2] = _x35
-    _out_points[..., 2, 0] = _x69
-    _out_points[..., 2, 1] = y
-    _out_points[..., 2, 2] = z
-    _out_points[..., 3, 0] = _x71
-    _out_points[..., 3, 1] = _x19
-    _out_points[..., 4, 0] = -_x72
-    _out_points[..., 4, 1] = _x41
-    _out_points[..., 4, 2] = _x43
-    _out_points[..., 5, 0] = _x73
-    _out_points[..., 5, 1] = _x74
-    _out_points[..., 5, 2] = z
-    _out_points[..., 6, 0] = _x71
-    _out_points[..., 6, 1] = _x75
-    _out_points[..., 7, 0] = -_x76
-    _out_points[..., 7, 1] = -_x46
-    _out_points[..., 7, 2] = _x34
-    _out_points[..., 8, 0] = _x73
-    _out_points[..., 8, 1] = _x77
-    _out_points[..., 8, 2] = z
-    _out_jacobian_J = numpy.zeros(batch + (3, 3))
-    _out_jacobian_J[..., 0, 0] = _x94
-    _out_jacobian_J[..., 0, 1] = _x99
-    _out_jacobian_J[..., 0, 2] = _x102
-    _out_jacobian_J[..., 1, 0] = _x103
-    _out_jacobian_J[..., 1, 1] = _x104
-    _out_jacobian_J[..., 1, 2] = _x105
-    _out_jacobian_J[..., 2, 0] = _x106
-    _out_jacobian_J[..., 2, 1] = _x107
-    _out_jacobian_J[..., 2, 2] = _x108
-    _out_J_inv = numpy.zeros(batch + (3, 3))
-    _out_J_inv[..., 0, 0] = _x109*_x87
-    _out_J_inv[..., 0, 1] = _x109*y
-    _out_J_inv[..., 0, 2] = _x109*_x88
-    _out_J_inv[..., 1, 0] = _x110*_x84
-    _out_J_inv[..., 1, 1] = _x110*_x79
-    _out_J_inv[..., 1, 2] = _x110*_x96
-    _out_J_inv[..., 2, 0] = _x111*_x85
-    _out_J_inv[..., 2, 1] = _x111*_x82
-    _out_J_inv[..., 2, 2] = _x111*_x78
-    _out_det_Jq = numpy.zeros(batch + ())
-    _out_det_Jq[...] = _x100*_x92*_x97
-    _out_det_Jx = numpy.zeros(batch + ())
-    _out_det_Jx[...] = _x90
+    _x0 = numpy.cos(theta1)
+    _x1 = numpy.cos(theta2)
+    _x2 = numpy.cos(theta3)
+    _x3 = a*_x0
+    _x4 = r_tcp - r_base + x
+    _x5 = a*numpy.sin(theta1)
+    _x6 = a*_x1
+    _x7 = 0.5*r_tcp
+    _x8 = 0.5*r_base
+    _x9 = a*numpy.sin(theta2)
+    _x10 = a*_x2
+    _x11 = a*numpy.sin(theta3)
+    _x12 = 9.81*m_handle
+    _x13 = _x12 + 9.81*m_fork1 + 9.81*m_fork2 + 9.81*m_platform + 14.715*m_rod
+    _x14 = numpy.cos(psi2)
+    _x15 = h*_x14
+    _x16 = numpy.sin(psi2)
+    _x17 = numpy.sin(psi1)
+    _x18 = numpy.sin(psi3)
+    _x19 = _x18*_x17
+    _x20 = numpy.cos(psi3)
+    _x21 = numpy.cos(psi1)
+    _x22 = _x21*_x20
+    _x23 = _x14*_x17
+    _x24 = -_x23
+    _x25 = _x20*_x17
+    _x26 = _x21*_x18
+    _x27 = -h*_x23
+    _x28 = _x21*_x14
+    _x29 = h*_x28
+    _x30 = h*_x16
+    _x31 = 0.8660254037844386*r_tcp
+    _x32 = 0.8660254037844386*r_base
+    _x33 = _x32 - _x31
+    _x34 = _x33 + 0.8660254037844386*_x10 + y
+    _x35 = -z
+    _x36 = _x35 + _x9
+    _x37 = 0.8660254037844386*_x6
+    _x38 = y + _x31 - _x32 - _x37
+    _x39 = z - _x11
+    _x40 = _x39*_x38 + _x34*_x36
+    _x41 = _x8 - _x7 + x
+    _x42 = _x41 + 0.5*_x10
+    _x43 = _x42*_x36
+    _x44 = _x41 + 0.5*_x6
+    _x45 = _x44*_x39
+    _x46 = _x4 - _x3
+    _x47 = _x44*_x34 + (_x33 - y + _x37)*_x42
+    _x48 = z - _x5
+    _x49 = 1.0/(_x47*_x48 + _x46*_x40 - y*(_x45 + _x43))
+    _x50 = (_x3*_x48 - _x5*_x46)*_x49
+    _x51 = _x35 + _x5
+    _x52 = z - _x9
+    _x53 = _x49*(_x6*_x52 + 0.5*_x9*_x44 - 0.8660254037844386*_x9*_x38)
+    _x54 = _x49*(_x39*_x10 + 0.5*_x42*_x11 + 0.8660254037844386*_x34*_x11)
+    _x55 = 4.905*a
+    _x56 = _x55*m_arm
+    _x57 = _x55*m_rod
+    _x58 = 0.5*_x6
+    _x59 = _x41 + _x58
+    _x60 = 1.7320508075688772*_x8
+    _x61 = 1.7320508075688772*_x7
+    _x62 = -1.7320508075688772*_x58 - _x60 + y + _x61
+    _x63 = 0.5*_x10
+    _x64 = _x63 + _x41
+    _x65 = 1.7320508075688772*_x63 - _x61 + y + _x60
+    _x66 = 0.5*_x9
+    _x67 = 0.5*_x11
+    _x68 = -_x52*_x65 + _x39*_x62
+    _x69 = -y*_x39 + _x48*_x65
+    _x70 = -_x48*_x62 + y*_x52
+    _x71 = _x65*_x59 - _x64*_x62
+    _x72 = -_x46*_x65 + y*_x64
+    _x73 = -y*_x59 + _x46*_x62
+    _x74 = _x64*_x70 + _x46*_x68 + _x69*_x59
+    _x75 = 1.0/_x74
+    _x76 = _x71*_x75
+    _x77 = _x72*_x75
+    _x78 = _x73*_x75
+    _x79 = (_x3*_x48 - _x5*_x46)*_x76
+    _x80 = _x77*(-1.7320508075688772*_x62*_x66 + _x66*_x59 + _x6*_x52)
+    _x81 = _x78*(1.7320508075688772*_x65*_x67 + _x64*_x67 + _x39*_x10)
+    _out_G = numpy.zeros(batch + (6,))
+    _out_G[..., 0] = _x13*_x79 + _x0*_x57 + _x0*_x56
+    _out_G[..., 1] = _x1*_x57 + _x13*_x80 + _x1*_x56
+    _out_G[..., 2] = _x13*_x81 + _x2*_x57 + _x2*_x56
+    _out_G[..., 4] = _x15*_x12
     _out_base_T_tcp = numpy.zeros(batch + (4, 4))
-    _out_base_T_tcp[..., 0, 0] = _x114 - _x115*_x118
-    _out_base_T_tcp[..., 0, 1] = _x121
-    _out_base_T_tcp[..., 0, 2] = _x122 + _x115*_x123
-    _out_base_T_tcp[..., 0, 3] = _x124 + x
-    _out_base_T_tcp[..., 1, 0] = _x123 + _x115*_x122
-    _out_base_T_tcp[..., 1, 1] = _x125
-    _out_base_T_tcp[..., 1, 2] = _x118 - _x114*_x115
-    _out_base_T_tcp[..., 1, 3] = _x126 + y
-    _out_base_T_tcp[..., 2, 0] = -_x117*_x119
-    _out_base_T_tcp[..., 2, 1] = _x115
-    _out_base_T_tcp[..., 2, 2] = _x113*_x119
-    _out_base_T_tcp[..., 2, 3] = _x127 + z - w
+    _out_base_T_tcp[..., 0, 0] = -_x16*_x19 + _x22
+    _out_base_T_tcp[..., 0, 1] = _x24
+    _out_base_T_tcp[..., 0, 2] = _x25*_x16 + _x26
+    _out_base_T_tcp[..., 0, 3] = _x27 + x
+    _out_base_T_tcp[..., 1, 0] = _x26*_x16 + _x25
+    _out_base_T_tcp[..., 1, 1] = _x28
+    _out_base_T_tcp[..., 1, 2] = -_x22*_x16 + _x19
+    _out_base_T_tcp[..., 1, 3] = _x29 + y
+    _out_base_T_tcp[..., 2, 0] = -_x14*_x18
+    _out_base_T_tcp[..., 2, 1] = _x16
+    _out_base_T_tcp[..., 2, 2] = _x14*_x20
+    _out_base_T_tcp[..., 2, 3] = _x30 - w + z
     _out_base_T_tcp[..., 3, 3] = 1.0
-    _out_device_jacobian_J = numpy.zeros(batch + (6, 6))
-    _out_device_jacobian_J[..., 0, 0] = 1.0
-    _out_device_jacobian_J[..., 0, 3] = _x128
-    _out_device_jacobian_J[..., 0, 4] = _x129
-    _out_device_jacobian_J[..., 1, 1] = 1.0
-    _out_device_jacobian_J[..., 1, 3] = _x124
-    _out_device_jacobian_J[..., 1, 4] = _x130
-    _out_device_jacobian_J[..., 2, 2] = 1.0
-    _out_device_jacobian_J[..., 2, 4] = _x132
-    _out_device_jacobian_J[..., 3, 4] = _x112
-    _out_device_jacobian_J[..., 3, 5] = _x121
-    _out_device_jacobian_J[..., 4, 4] = _x116
-    _out_device_jacobian_J[..., 4, 5] = _x125
-    _out_device_jacobian_J[..., 5, 3] = 1.0
-    _out_device_jacobian_J[..., 5, 5] = _x115
-    _out_device_actuator_jacobian_J = numpy.zeros(batch + (6, 6))
-    _out_device_actuator_jacobian_J[..., 0, 0] = _x94
-    _out_device_actuator_jacobian_J[..., 0, 1] = _x99
-    _out_device_actuator_jacobian_J[..., 0, 2] = _x102
-    _out_device_actuator_jacobian_J[..., 0, 3] = _x128
-    _out_device_actuator_jacobian_J[..., 0, 4] = _x129
-    _out_device_actuator_jacobian_J[..., 1, 0] = _x103
-    _out_device_actuator_jacobian_J[..., 1, 1] = _x104
-    _out_device_actuator_jacobian_J[..., 1, 2] = _x105
-    _out_device_actuator_jacobian_J[..., 1, 3] = _x124
-    _out_device_actuator_jacobian_J[..., 1, 4] = _x130
-    _out_device_actuator_jacobian_J[..., 2, 0] = _x106
-    _out_device_actuator_jacobian_J[..., 2, 1] = _x107
-    _out_device_actuator_jacobian_J[..., 2, 2] = _x108
-    _out_device_actuator_jacobian_J[..., 2, 4] = _x132
-    _out_device_actuator_jacobian_J[..., 3, 4] = _x112
-    _out_device_actuator_jacobian_J[..., 3, 5] = _x121
-    _out_device_actuator_jacobian_J[..., 4, 4] = _x116
-    _out_device_actuator_jacobian_J[..., 4, 5] = _x125
-    _out_device_actuator_jacobian_J[..., 5, 3] = 1.0
-    _out_device_actuator_jacobian_J[..., 5, 5] = _x115
-    return SceneResult(_out_joints, _out_ik_margin, _out_position, _out_fk_margin, _out_points, _out_jacobian_J, _out_J_inv, _out_det_Jq, _out_det_Jx, _out_base_T_tcp, _out_device_jacobian_J, _out_device_actuator_jacobian_J)
+    _out_J = numpy.zeros(batch + (6, 6))
+    _out_J[..., 0, 0] = _x50*_x40
+    _out_J[..., 0, 1] = _x53*(-_x51*_x34 - y*_x39)
+    _out_J[..., 0, 2] = _x54*(_x51*_x38 + y*_x52)
+    _out_J[..., 0, 3] = -_x29
+    _out_J[..., 0, 4] = _x30*_x17
+    _out_J[..., 1, 0] = (-_x43 - _x45)*_x50
+    _out_J[..., 1, 1] = (_x51*_x42 + _x46*_x39)*_x53
+    _out_J[..., 1, 2] = (-_x51*_x44 - _x52*_x46)*_x54
+    _out_J[..., 1, 3] = _x27
+    _out_J[..., 1, 4] = -_x21*_x30
+    _out_J[..., 2, 0] = _x47*_x50
+    _out_J[..., 2, 1] = _x53*(-_x46*_x34 + y*_x42)
+    _out_J[..., 2, 2] = _x54*(-y*_x44 + _x46*_x38)
+    _out_J[..., 2, 4] = _x15*_x17*_x17 + _x21*_x21*_x15
+    _out_J[..., 3, 4] = _x21
+    _out_J[..., 3, 5] = _x24
+    _out_J[..., 4, 4] = _x17
+    _out_J[..., 4, 5] = _x28
+    _out_J[..., 5, 3] = 1.0
+    _out_J[..., 5, 5] = _x16
+    return SceneResult(_out_G, _out_base_T_tcp, _out_J)

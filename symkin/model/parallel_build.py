@@ -65,7 +65,7 @@ MOTION_SHORTHANDS = {PlatformMotion.TRANSLATION.value: ("x", "y", "z"),
                      PlatformMotion.SCHOENFLIES.value: ("x", "y", "z", "yaw")}
 #: Names of the vector inputs of parallel functions (besides q): platform pose, passive joints and a hybrid
 #: device's wrist coordinates.
-PARALLEL_INPUT_NAMES = ("p", "s", "qw")
+PARALLEL_INPUT_NAMES = ("p", "s", "qw", "qwd", "qwdd", "tauw")
 
 
 

@@ -34,9 +34,19 @@ Accuracy.  J_x^-1 enters M (through J^T M_p J) twice and the Coriolis and invers
 up to four times (J^T M_p J_x^-1 h(J qd, J qd)), so a relative error d of J^-1 (kappa(J^-1) eps
 at best) becomes up to 2 d and 4 d: their ``kappa_degree`` (:class:`~symkin.ir.quantity.QuantityDef`).
 
+Hybrid devices (:mod:`symkin.parallel.hybrid`).  A wrist on the platform moves with the platform
+and its own coordinates qw, so its bodies join the platform side in the combined coordinates
+c = (p, qw): M_c = M_p(p) + M_w(p, qw), V_c and G_c from M_c and u_p + u_w as above, and the device's
+coordinates are (q, qw) with cd = B (qd, qwd), B = diag(J, 1): M = diag(M_a, 0) + B^T M_c B and
+tau = (tau_a + J^T F_c,p, F_c,w) with cdd = (J qdd + b, qwdd).  The functions then take qw (and qwd,
+qwdd, tauw) after each of their inputs and return the device's n + n_w efforts.
+
 Every function takes the actuated variables q and the platform pose p = fk(q) (or q = ik(p))
 as a consistent pair, like the velocity functions.  J_x^-1 is formed once per function by the
 adjugate (3 legs) or a Gram-Schmidt QR (6 legs) (:mod:`symkin.dynamics.linsolve`).
+
+Length: every function is built from one set of terms (:class:`_Terms`: J, b, M_a, M_c, V, G bound
+once per program); split, the terms and the functions that combine them would import each other.
 """
 
 from __future__ import annotations
@@ -56,6 +66,7 @@ from symkin.errors import DerivationError
 from symkin.ir.quantity import quantity
 from symkin.ir.spec import FunctionSpec
 from symkin.model import coordinates
+from symkin.parallel import hybrid
 from symkin.parallel.inertia import Inertia, split_inertia
 from symkin.parallel.inputs import task_input, task_symbols
 from symkin.parallel.quantities import (
@@ -109,6 +120,9 @@ class _Terms:
         self.parts: Inertia = d[_inertia]
         self.q = coordinate_symbols(d, "q")
         self.p = se_vector(task_symbols(d.model))
+        # a hybrid device's wrist coordinates: the platform side moves in c = (p, qw)
+        self.qw = se_vector(hybrid.wrist_symbols(d.model, "q"))
+        self.c = self.p + self.qw
 
     @cached_property
     def jacobians(self) -> tuple[Matrix, list[se.Basic]]:
@@ -157,47 +171,82 @@ class _Terms:
         return self.program.bind(se_vector(self.parts.actuator_diagonal))
 
     @cached_property
+    def side_matrix(self) -> Matrix:
+        """M_c, the platform side's mass matrix in c: M_p(p), plus a hybrid device's wrist M_w(p, qw)."""
+        M = se_matrix(self.parts.platform_matrix)
+        if not self.qw:
+            return M
+        wrist, m = self.d[hybrid.wrist_inertia].matrix, len(self.p)
+        return [[(M[i][j] if i < m and j < m else se.Integer(0)) + wrist[i][j] for j in range(len(self.c))]
+                for i in range(len(self.c))]
+
+    @cached_property
     def M_p(self) -> Matrix:
-        n = self.n
-        values = self.program.bind([v for row in se_matrix(self.parts.platform_matrix) for v in row])
+        """M_c, bound."""
+        n = len(self.c)
+        values = self.program.bind([v for row in self.side_matrix for v in row])
         return [values[i * n:(i + 1) * n] for i in range(n)]
+
+    def wrist(self, group: str) -> list[se.Basic]:
+        """A hybrid device's wrist symbols of a coordinate group (qwd for "qd"), [] without a wrist."""
+        return se_vector(hybrid.wrist_symbols(self.d.model, group))
 
     def V_a(self, qd: list[se.Basic]) -> list[se.Basic]:
         """1/2 dM_a,ii/dq_i qd_i^2 (M_a diagonal, M_a,ii a function of q_i only)."""
         return [se.diff(m, q) * v * v / 2 for m, q, v in zip(se_vector(self.parts.actuator_diagonal), self.q, qd)]
 
     def V_p(self, pd: list[se.Basic]) -> list[se.Basic]:
-        """The platform's Coriolis and centrifugal force in p: Christoffel symbols of M_p(p)."""
-        M_p = se_matrix(self.parts.platform_matrix)
-        if all(se.diff(v, s) == 0 for row in M_p for v in row for s in self.p):
-            return [se.Integer(0)] * self.n
-        return self.program.bind(lagrange.coriolis_vector(lagrange.mass_matrix_partials(M_p, self.p), pd))
+        """The platform side's Coriolis and centrifugal force in c (pd: its rates): Christoffel symbols of M_c."""
+        M_p = self.side_matrix
+        if all(se.diff(v, s) == 0 for row in M_p for v in row for s in self.c):
+            return [se.Integer(0)] * len(self.c)
+        return self.program.bind(lagrange.coriolis_vector(lagrange.mass_matrix_partials(M_p, self.c), pd))
+
+    @cached_property
+    def potential(self) -> tuple[se.Basic, se.Basic]:
+        """(u_a(q), u_c(c)): the actuator side's and the platform side's (with a wrist's) potential energy."""
+        u_c = se.sympify(self.parts.platform_potential)
+        if self.qw:
+            u_c += self.d[hybrid.wrist_inertia].potential
+        return se.sympify(self.parts.actuator_potential), u_c
 
     @cached_property
     def gravity_parts(self) -> tuple[list[se.Basic], list[se.Basic]] | None:
-        """(G_a = du_a/dq, G_p = du_p/dp), bound; None without gravity."""
+        """(G_a = du_a/dq, G_p = du_c/dc), bound; None without gravity."""
         if all(c == 0 for c in self.d.model.gravity):
             return None
-        u_a, u_p = se.sympify(self.parts.actuator_potential), se.sympify(self.parts.platform_potential)
-        values = self.program.bind([se.diff(u_a, q) for q in self.q] + [se.diff(u_p, p) for p in self.p])
+        u_a, u_p = self.potential
+        values = self.program.bind([se.diff(u_a, q) for q in self.q] + [se.diff(u_p, p) for p in self.c])
         return values[:self.n], values[self.n:]
 
     def friction(self, qd: list[se.Basic]) -> list[se.Basic] | None:
+        """F_f of every coordinate (qd: the legs' then a wrist's rates), None without friction."""
         if not self.d.model.friction:
             return None
-        rates = dict(zip((c.name for c in self.d.model.coordinates), qd))
+        names = [c.name for c in self.d.model.coordinates]
+        if self.qw:
+            names += [j.name for j in hybrid.wrist_of(self.d.model).coordinates]
+        rates = dict(zip(names, qd))
         forces = {name: se.Integer(0) for name in rates}
         for f in self.d.model.friction:
             forces[f.joint] = joint_friction(f, rates[f.joint])
         return list(forces.values())
 
     def torques(self, qd: list[se.Basic], qdd: list[se.Basic] | None, with_gravity: bool = True,
-                with_friction: bool = True) -> list[se.Basic]:
-        """M_a qdd + V_a + G_a + F_f + J^T (M_p pdd + V_p + G_p), pdd = J qdd + b (qdd None: zero)."""
+                with_friction: bool = True, wrist: tuple[list[se.Basic], list[se.Basic] | None] = ([], None)
+                ) -> list[se.Basic]:
+        """M_a qdd + V_a + G_a + F_f + J^T (M_p pdd + V_p + G_p), pdd = J qdd + b (qdd None: zero).
+
+        On a hybrid device ``wrist`` = (qwd, qwdd) (qwdd None: zero) and the platform side is in c = (p, qw):
+        F_c = M_c cdd + V_c + G_c with cdd = (J qdd + b, qwdd); the legs take J^T of its p rows, the wrist its qw
+        rows (plus the wrist's friction), after the legs' efforts.
+        """
         pd = self.task_rates(qd)
         pdd = self.bias(qd, pd)
         if qdd is not None:
             pdd = [a + b for a, b in zip(mat_vec(self.J, qdd), pdd)]
+        qwd, qwdd = wrist
+        pd, pdd = pd + list(qwd), pdd + (list(qwdd) if qwdd is not None else [se.Integer(0)] * len(qwd))
         F_p = [a + b for a, b in zip(mat_vec(self.M_p, pdd), self.V_p(pd))]
         tau = [a for a in self.V_a(qd)]
         if qdd is not None:
@@ -206,26 +255,41 @@ class _Terms:
         if gravity is not None:
             F_p = [f + g for f, g in zip(F_p, gravity[1])]
             tau = [t + g for t, g in zip(tau, gravity[0])]
-        friction = self.friction(qd) if with_friction else None
+        tau += F_p[self.n:]  # a wrist's joints take its rows of F_c as they are
+        friction = self.friction(qd + list(qwd)) if with_friction else None
         if friction is not None:
             tau = [t + f for t, f in zip(tau, friction)]
-        return [t + f for t, f in zip(tau, self.J_transpose(F_p))]
+        return [t + f for t, f in zip(tau[:self.n], self.J_transpose(F_p[:self.n]))] + tau[self.n:]
 
     def mass_matrix(self) -> Matrix:
-        """M_a + J^T M_p J (symmetric by construction)."""
-        n, J = self.n, self.J
-        MJ = [[self.program.let(v) for v in mat_vec(self.M_p, [J[k][j] for k in range(n)])] for j in range(n)]
-        M: Matrix = [[se.Integer(0)] * n for _ in range(n)]
+        """M_a + B^T M_c B with B = diag(J, 1) (J^T M_p J without a wrist; symmetric by construction)."""
+        n, J, size = self.n, self.J, len(self.c)
+        columns = [[J[k][j] for k in range(n)] + [se.Integer(0)] * (size - n) for j in range(n)]
+        MJ = [[self.program.let(v) for v in mat_vec(self.M_p, column)] for column in columns]
+        M: Matrix = [[se.Integer(0)] * size for _ in range(size)]
         for i in range(n):
             for j in range(i, n):
                 M[i][j] = M[j][i] = self.program.let(
                     (self.M_a[i] if i == j else 0) + sum((J[k][i] * MJ[j][k] for k in range(n)), se.Integer(0)))
+        for w in range(n, size):  # a wrist's rows: (J^T M_c,pw) and M_c,ww
+            for i in range(n):
+                M[i][w] = M[w][i] = self.program.let(sum((J[k][i] * self.M_p[k][w] for k in range(n)), se.Integer(0)))
+            for v in range(w, size):
+                M[w][v] = M[v][w] = self.M_p[w][v]
         return M
 
 
 def _inputs(d: Derivation, *groups: str) -> list:
-    """q, then p, then the other coordinate groups."""
-    return ["q", task_input(d.model), *groups]
+    """q, then p, then the other coordinate groups; a hybrid device's wrist vector after each (qw after p)."""
+    if d.model.parallel is None or d.model.parallel.wrist is None:
+        return ["q", task_input(d.model), *groups]
+    return ["q", task_input(d.model), hybrid.wrist_input(d.model)] + \
+        [spec for group in groups for spec in (group, hybrid.wrist_input(d.model, group))]
+
+
+def _size(d: Derivation) -> int:
+    """The device's coordinates: the legs' actuated joints, then a hybrid device's wrist joints."""
+    return d.model.dof + len(hybrid.wrist_symbols(d.model, "q"))
 
 
 _PAIR = "Evaluate at a consistent pair q, p (p = fk(q) or q = ik(p))."
@@ -236,7 +300,7 @@ _PAIR = "Evaluate at a consistent pair q, p (p = fk(q) or q = ik(p))."
 def _mass_matrix(d: Derivation) -> FunctionSpec:
     program = Program()
     M = _Terms(d, program).mass_matrix()
-    n = d.model.dof
+    n = _size(d)
     return function_spec(
         d, "mass_matrix", "Mass matrix in the actuated coordinates.",
         "M = M_a + J^T M_p J: the actuator side (arms, rod shares at the elbows, rotors times the gear ratio "
@@ -250,13 +314,15 @@ def _mass_matrix(d: Derivation) -> FunctionSpec:
           kappa_degree=4)
 def _coriolis_vector(d: Derivation) -> FunctionSpec:
     program = Program()
-    V = _Terms(d, program).torques(coordinate_symbols(d, "qd"), None, with_gravity=False, with_friction=False)
+    terms = _Terms(d, program)
+    V = terms.torques(coordinate_symbols(d, "qd"), None, with_gravity=False, with_friction=False,
+                      wrist=(terms.wrist("qd"), None))
     return function_spec(
         d, "coriolis_vector", "Coriolis and centrifugal efforts at the actuators.",
         "V = V_a + J^T (M_p b + V_p(p, pd)) with pd = J qd and b = dJ/dt qd = -J_x^-1 (zd^T H_i zd)_i (the "
         "second derivative of the leg equations along the motion); V_a and V_p from the Christoffel symbols of "
         f"M_a(q) and M_p(p). {_PAIR}",
-        _inputs(d, "qd"), program, [("V", V, (d.model.dof,), "Coriolis and centrifugal efforts", EFFORT_UNIT)])
+        _inputs(d, "qd"), program, [("V", V, (_size(d),), "Coriolis and centrifugal efforts", EFFORT_UNIT)])
 
 
 @quantity("gravity_vector", "actuator efforts G = du_a/dq + J^T du_p/dp that hold the device against gravity",
@@ -266,19 +332,20 @@ def _gravity_vector(d: Derivation) -> FunctionSpec:
     program = Program()
     terms = _Terms(d, program)
     G_a, G_p = terms.gravity_parts  # type: ignore[misc]
-    G = [a + b for a, b in zip(G_a, terms.J_transpose(G_p))]
+    G = [a + b for a, b in zip(G_a, terms.J_transpose(G_p[:d.model.dof]))] + G_p[d.model.dof:]
     return function_spec(
         d, "gravity_vector", "Gravity compensation efforts.",
         "G = du_a/dq + J^T du_p/dp with u = -g . (sum of mass times centre of mass): the actuator efforts that "
         f"hold the device still at the pose (gravity compensation of a haptic device). {_PAIR}",
-        _inputs(d), program, [("G", G, (d.model.dof,), "actuator efforts that hold the device against gravity",
+        _inputs(d), program, [("G", G, (_size(d),), "actuator efforts that hold the device against gravity",
                                EFFORT_UNIT)])
 
 
 @quantity("friction", "actuator friction F_f(qd): viscous + Coulomb (n)", mechanism=PARALLEL)
 def _friction(d: Derivation) -> FunctionSpec:
     program = Program()
-    F = _Terms(d, program).friction(coordinate_symbols(d, "qd"))
+    terms = _Terms(d, program)
+    F = terms.friction(coordinate_symbols(d, "qd") + terms.wrist("qd"))
     if F is None:
         raise DerivationError(f"{d.model.name}: the model declares no friction; add a 'friction:' section "
                               "or remove 'friction' from the outputs")
@@ -286,20 +353,23 @@ def _friction(d: Derivation) -> FunctionSpec:
         d, "friction", "Actuator friction efforts.",
         "F_f = viscous qd + coulomb sign(qd) per actuator (seed eq. 8.34), or coulomb tanh(qd / v_s) where the "
         "model gives a smoothing velocity v_s.",
-        ["qd"], program, [("F_f", F, (d.model.dof,), "friction efforts opposing the motion", EFFORT_UNIT)])
+        ["qd"] + ([hybrid.wrist_input(d.model, "qd")] if terms.wrist("qd") else []), program,
+        [("F_f", F, (_size(d),), "friction efforts opposing the motion", EFFORT_UNIT)])
 
 
 @quantity("inverse_dynamics", "inverse dynamics tau = M qdd + V + G + F_f at the actuators (n)", mechanism=PARALLEL,
           kappa_degree=4)
 def _inverse_dynamics(d: Derivation) -> FunctionSpec:
     program = Program()
-    tau = _Terms(d, program).torques(coordinate_symbols(d, "qd"), coordinate_symbols(d, "qdd"))
+    terms = _Terms(d, program)
+    tau = terms.torques(coordinate_symbols(d, "qd"), coordinate_symbols(d, "qdd"),
+                        wrist=(terms.wrist("qd"), terms.wrist("qdd")))
     return function_spec(
         d, "inverse_dynamics", "Inverse dynamics: actuator efforts for a motion.",
         "tau = M_a qdd + V_a + G_a + F_f + J^T (M_p pdd + V_p + G_p) with pdd = J qdd + b (d'Alembert: the loop "
         "constraint forces do no work on motions pd = J qd), equal to M qdd + V + G + F_f without forming M. "
         f"{_PAIR}",
-        _inputs(d, "qd", "qdd"), program, [("tau", tau, (d.model.dof,), "actuator efforts", EFFORT_UNIT)])
+        _inputs(d, "qd", "qdd"), program, [("tau", tau, (_size(d),), "actuator efforts", EFFORT_UNIT)])
 
 
 @quantity("forward_dynamics", "forward dynamics qdd = M^-1 (tau - V - G - F_f) (n)", solves_with="mass_matrix",
@@ -307,20 +377,24 @@ def _inverse_dynamics(d: Derivation) -> FunctionSpec:
 def _forward_dynamics(d: Derivation) -> FunctionSpec:
     program = Program()
     terms = _Terms(d, program)
-    rest = terms.torques(coordinate_symbols(d, "qd"), None)
+    rest = terms.torques(coordinate_symbols(d, "qd"), None, wrist=(terms.wrist("qd"), None))
     M = terms.mass_matrix()
-    qdd = [row[0] for row in ldl_solve(program, M, [[t - r] for t, r in zip(coordinate_symbols(d, "tau"), rest)])]
+    efforts = coordinate_symbols(d, "tau") + terms.wrist("tau")
+    qdd = [row[0] for row in ldl_solve(program, M, [[t - r] for t, r in zip(efforts, rest)])]
     return function_spec(
         d, "forward_dynamics", "Forward dynamics: actuator accelerations under given efforts.",
         "qdd = M^-1 (tau - V - G - F_f) by a straight-line LDL^T factorization of the symmetric positive "
         f"definite M = M_a + J^T M_p J; the platform then accelerates with pdd = J qdd + b. {_PAIR}",
         _inputs(d, "qd", "tau"), program,
-        [("qdd", qdd, (d.model.dof,), "actuator accelerations", "rad/s^2 (revolute), m/s^2 (prismatic)")])
+        [("qdd", qdd, (_size(d),), "actuator accelerations", "rad/s^2 (revolute), m/s^2 (prismatic)")])
 
 
 @quantity("operational_space", "task-space dynamics F = Mx pdd + Vx + Gx of the platform", mechanism=PARALLEL,
           kappa_degree=3)
 def _operational_space(d: Derivation) -> FunctionSpec:
+    if d.model.parallel is not None and d.model.parallel.wrist is not None:
+        raise DerivationError(f"model '{d.model.name}': the operational-space dynamics of a hybrid device (in the "
+                              "task space of the wrist's TCP) are not derived yet; remove 'operational_space'")
     program = Program()
     terms = _Terms(d, program)
     n = d.model.dof
@@ -339,8 +413,8 @@ def _operational_space(d: Derivation) -> FunctionSpec:
             Mx[k][m] = Mx[m][k] = program.let(terms.M_p[k][m] + sum(
                 (J_inverse[i][k] * terms.M_a[i] * J_inverse[i][m] for i in range(n)), se.Integer(0)))
     # Vx = J^-T (V_a - M_a J^-1 b) + V_p: the actuator side seen in p, minus its share of the bias.
-    Vx = [a + c for a, c in zip(inverse_transpose([v - m * x for v, m, x in zip(terms.V_a(qd), terms.M_a, J_inverse_b)]),
-                                terms.V_p(pd))]
+    actuator_side = inverse_transpose([v - m * x for v, m, x in zip(terms.V_a(qd), terms.M_a, J_inverse_b)])
+    Vx = [a + c for a, c in zip(actuator_side, terms.V_p(pd))]
     outputs = [("Mx", [v for row in Mx for v in row], (n, n), "task-space mass matrix J^-T M J^-1", ""),
                ("Vx", Vx, (n,), "task-space Coriolis and centrifugal force", TASK_FORCE_UNIT)]
     if terms.gravity_parts is not None:
@@ -362,7 +436,7 @@ def _kinetic_energy(d: Derivation) -> FunctionSpec:
     program = Program()
     terms = _Terms(d, program)
     qd = coordinate_symbols(d, "qd")
-    pd = terms.task_rates(qd)
+    pd = terms.task_rates(qd) + terms.wrist("qd")  # c-rates (pd, qwd) on a hybrid device
     k = (sum((m * v * v for m, v in zip(terms.M_a, qd)), se.Integer(0)) + dot(pd, mat_vec(terms.M_p, pd))) / 2
     return function_spec(
         d, "kinetic_energy", "Kinetic energy.",
@@ -375,7 +449,10 @@ def _potential_energy(d: Derivation) -> FunctionSpec:
     require_gravity(d, "potential_energy")
     program = Program()
     parts = d[_inertia]
-    (u,) = program.bind([se.sympify(parts.actuator_potential + parts.platform_potential)])
+    if d.model.parallel is not None and d.model.parallel.wrist is not None:
+        (u,) = program.bind([sum(_Terms(d, program).potential, se.Integer(0))])
+    else:
+        (u,) = program.bind([se.sympify(parts.actuator_potential + parts.platform_potential)])
     return function_spec(
         d, "potential_energy", "Gravitational potential energy.",
         f"u = -g . (sum of mass times centre of mass), zero with every mass at the base origin. {_PAIR}",

@@ -14,6 +14,10 @@ kinematics and geometric Jacobian are that chain's serial derivations: exact, an
 ``device_actuator_jacobian``    [v; w] = J_a [qd; qwd], J_a = J_c diag(J, I), J = J_x^-1 J_q the platform's
 ==============================  ================================================================
 
+The dynamics of a hybrid device are the parallel dynamics (:mod:`symkin.parallel.dynamics`) with the
+platform side in the combined coordinates: the wrist's bodies add M_w(p, qw) (:func:`wrist_inertia`)
+to the platform's M_p(p), and the device's coordinates are the legs' q followed by qw.
+
 Every function takes the platform pose p (p = fk(q) or q = ik(p), as the velocity functions of the
 parallel part) and the wrist coordinates ``qw``; ``device_actuator_jacobian`` also q.
 """
@@ -21,10 +25,14 @@ parallel part) and the wrist coordinates ``qw``; ``device_actuator_jacobian`` al
 from __future__ import annotations
 
 import dataclasses
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
+import symengine as se
 import sympy
 
+from symkin.dynamics.quantities import _body_jacobians as body_jacobians
+from symkin.dynamics.quantities import _mass_matrix_graph as mass_matrix_graph
 from symkin.errors import DerivationError
 from symkin.ir.quantity import quantity
 from symkin.ir.spec import FunctionSpec, InputSpec, OutputSpec, make_function
@@ -88,13 +96,52 @@ def device_chain(model: Model) -> Model:
         friction=tuple(f for f in model.friction if f.joint in names))
 
 
-def wrist_input(model: Model) -> InputSpec:
-    """The input ``qw``: the wrist's coordinates."""
+#: The input vector of each coordinate group of the wrist: ``qw`` (joint coordinates), ``qwd``, ``qwdd``, ``tauw``.
+WRIST_GROUPS = {"q": "qw", "qd": "qwd", "qdd": "qwdd", "tau": "tauw"}
+
+
+def wrist_symbols(model: Model, group: str) -> tuple[sympy.Symbol, ...]:
+    """The symbols of the wrist's coordinates in ``group`` (``psi1``, ``psi1_d``...), none without a wrist."""
+    wrist = None if model.parallel is None else model.parallel.wrist
+    if wrist is None:
+        return ()
+    chain = device_chain(model)
+    return coordinates.symbols(chain, group)[len(chain.coordinates) - len(wrist.coordinates):]
+
+
+def wrist_input(model: Model, group: str = "q") -> InputSpec:
+    """The wrist's input vector of a coordinate group (:data:`WRIST_GROUPS`): ``qw`` for its joint coordinates."""
     wrist = wrist_of(model)
     chain = device_chain(model)
     k = len(chain.coordinates) - len(wrist.coordinates)
-    return InputSpec("qw", "vector", coordinates.symbols(chain, "q")[k:], tuple(j.name for j in wrist.coordinates),
-                     coordinates.units(chain, "q")[k:], "wrist joint coordinates")
+    return InputSpec(WRIST_GROUPS[group], "vector", coordinates.symbols(chain, group)[k:],
+                     tuple(j.name for j in wrist.coordinates), coordinates.units(chain, group)[k:],
+                     f"wrist {coordinates.GROUPS[group].doc}")
+
+
+@dataclass(frozen=True)
+class WristInertia:
+    """The wrist's bodies in the combined coordinates c = (p, qw), SymEngine expressions:
+    k_w = 1/2 cd^T matrix cd and u_w = potential = -g . (sum of mass times centre of mass)."""
+
+    matrix: list[list[se.Basic]]
+    potential: se.Basic
+
+
+@quantity("wrist_inertia", "mass matrix and potential of a hybrid device's wrist in its combined coordinates",
+          emitted=False, mechanism=PARALLEL)
+def wrist_inertia(d: Derivation) -> WristInertia:
+    """M_w(c) by the composite-rigid-body algorithm on the device's chain (its platform joints massless, so
+    only the wrist's bodies and rotors count), rows and columns in the order of c; u_w from the bodies' centres."""
+    chain = d[_device_derivation]
+    M = chain[mass_matrix_graph]
+    order = [name for name, _, _ in PLATFORM_JOINTS if name in d.model.task_space]
+    index = [order.index(name) for name in d.model.task_space] + list(range(len(order), len(M)))
+    g = [se.sympify(v) for v in d.model.gravity]
+    potential = se.Integer(0)
+    for body in chain[body_jacobians]:
+        potential -= body.mass * sum((g[r] * body.com[r] for r in range(3)), se.Integer(0))
+    return WristInertia([[M[i][j] for j in index] for i in index], potential)
 
 
 @quantity("device_derivation", "the derivation graph of the hybrid device's serial chain", emitted=False,

@@ -103,6 +103,11 @@ class ModelInfo:
         return tuple(c.name for c in self.coordinates)
 
     @property
+    def wrist(self) -> tuple[str, ...]:
+        """The wrist joints of a hybrid device (the elements of its functions' ``qw`` input), () otherwise."""
+        return next((f.vectors["qw"].elements for f in self.functions.values() if "qw" in f.vectors), ())
+
+    @property
     def units(self) -> dict[str, str]:
         """{parameter name: unit}."""
         return {p.name: p.unit for p in self.parameters}

@@ -46,6 +46,10 @@ class Plant:
 
     def __init__(self, model: GeneratedModel):
         self.parallel = model.info.mechanism == "parallel"
+        if model.info.wrist:
+            raise GeneratedCodeError(f"{model.name}: simulating a hybrid device (a wrist of {len(model.info.wrist)} "
+                                     "joints on the platform) is not supported yet; its dynamics functions are "
+                                     "generated (mass_matrix, forward_dynamics... take qw, qwd, tauw besides q)")
         self._last_pose: tuple[np.ndarray | None, np.ndarray] = (None, np.empty(0))
         required = REQUIRED_PARALLEL if self.parallel else REQUIRED
         missing = [name for name in required if name not in model.functions]
