@@ -20,7 +20,7 @@ from symkin.model import coordinates
 from symkin.stability import BOUND, KAPPA_LIMIT, run_stability
 from symkin.stability.harness import SOLVE_ULPS, allowed_error
 from symkin.stability.ir_eval import compile_ir, flatten_outputs
-from symkin.stability.reference import MpmathReference, normwise_error
+from symkin.stability.reference import BallReference, normwise_error
 from symkin.stability.states import parameter_values
 
 #: One xdist worker runs this module (`make test` uses --dist loadgroup), so the session-scoped
@@ -160,7 +160,7 @@ def test_reference_and_error_measure():
     x = sympy.Symbol("x", real=True)
     spec = FunctionSpec("f", "f", "f", (InputSpec("q", "vector", (x,), ("x",), ("m",), "x"),),
                         (OutputSpec("y", sympy.ImmutableMatrix([[1 - sympy.cos(x), x]]), "y"),))
-    reference = MpmathReference(spec)
+    reference = BallReference(spec)
     hi, lo = reference({"q": np.array([1e-8])}, {})
     # 1 - cos(x) = x^2/2 - x^4/24 + ...: 5e-17 to 4e-33 relative, the reference's 50 digits keep it
     # to its last bit; one rounding of the hi part: EPS/2.

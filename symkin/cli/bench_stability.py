@@ -1,4 +1,4 @@
-"""``symkin bench stability MODEL``: generated code against mpmath (error vs kappa, scale, float32)."""
+"""``symkin bench stability MODEL``: generated code against a 50-digit reference (error vs kappa, scale, float32)."""
 
 from __future__ import annotations
 
@@ -10,12 +10,12 @@ from symkin.cli.progress import Progress
 
 def register(kinds: argparse._SubParsersAction) -> None:
     p = kinds.add_parser(
-        "stability", help="accuracy of the generated code against mpmath at 50 digits",
+        "stability", help="accuracy of the generated code against a 50-digit reference",
         description="Evaluate every quantity the model can derive - generated and optimized as 'symkin derive' "
                     "does, all parameters as inputs - at random states, along paths into the singular "
                     "configurations found by sweeping each joint, with every length parameter scaled by 1e-3 to "
                     "1e3, and in float32 (the optimized code printed by the numpy printer, run on float32 "
-                    "arrays); compare with the un-optimized expressions evaluated by mpmath at 50 digits. "
+                    "arrays); compare with the un-optimized expressions evaluated at 50 digits (arb ball arithmetic). "
                     "Prints tables of the normwise relative error against kappa (condition number of the task "
                     "Jacobian) and against the length scale, the closed-form IK angles near singularities "
                     "(textbook acos against symkin's atan2 forms), and the acceptance line "

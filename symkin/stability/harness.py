@@ -1,4 +1,4 @@
-"""The stability harness: every generated quantity of a model against mpmath at 50 digits.
+"""The stability harness: every generated quantity of a model against a 50-digit reference.
 
 For each quantity the model can derive (every registered output, so dynamics quantities
 join automatically once they are registered), the generated numpy code - derived with all
@@ -11,8 +11,8 @@ evaluated
 * with every length parameter multiplied by 1e-3 ... 1e3 (``scale``),
 * in float32, through :func:`~symkin.stability.ir_eval.compile_ir` (``float32``),
 
-and compared with the un-optimized expressions evaluated by mpmath at the same inputs
-(:class:`~symkin.stability.reference.MpmathReference`).  Each comparison is a
+and compared with the un-optimized expressions evaluated in 50-digit ball arithmetic at the same inputs
+(:class:`~symkin.stability.reference.BallReference`).  Each comparison is a
 :class:`Record` with the normwise relative error and kappa, the condition number
 sigma_max/sigma_min (seed sec. 4.2), computed from 50-digit values, of the matrix that
 bounds the accuracy of the quantity: the matrix it inverts when its registration declares
@@ -52,7 +52,7 @@ from symkin.runtime.info import GeneratedModel
 from symkin.runtime.parallel import solve_closure
 from symkin.stability.ik_forms import formula_errors
 from symkin.stability.ir_eval import compile_ir, flatten_outputs
-from symkin.stability.reference import DIGITS, MpmathReference, normwise_error
+from symkin.stability.reference import DIGITS, BallReference, normwise_error
 from symkin.stability.states import IK, parameter_values, random_states, singular_paths
 
 SCALES = (1e-3, 1e-2, 1e-1, 1.0, 1e1, 1e2, 1e3)
@@ -85,7 +85,7 @@ class Record:
             for ``scale``, 1 otherwise.
         kappa: condition number, at the state, of the matrix the quantity inverts, else of the
             task Jacobian (inf if singular, nan if the model has no such matrix).
-        error: normwise relative error against mpmath (inf: a non-finite value came out).
+        error: normwise relative error against the reference (inf: a non-finite value came out).
         state: the inputs it was evaluated at, ``((group, values), ...)`` (``q``, ``qd``, ``p``, ...),
             so that a failure on a machine nobody here has can be reproduced from its log.
     """
@@ -135,7 +135,7 @@ def allowed_error(kappa: float, bound: float = BOUND) -> float:
     return max(bound, SOLVE_ULPS * kappa * EPS) if math.isfinite(kappa) else bound
 
 
-def _kappa(reference: MpmathReference | None, shape: tuple[int, ...], vectors: dict, parameters: dict) -> float:
+def _kappa(reference: BallReference | None, shape: tuple[int, ...], vectors: dict, parameters: dict) -> float:
     """sigma_max / sigma_min of a 50-digit matrix output (inf at a singular state; nan without one,
     or where it is undefined)."""
     if reference is None:
@@ -198,7 +198,7 @@ def run_stability(model: Model, *, samples: int = 32, float32_samples: int = 16,
                   scales: Sequence[float] = SCALES, steps: Sequence[float] = PATH_STEPS,
                   quantities: Sequence[str] | None = None, max_paths: int = 8, seed: int = 0,
                   progress: Callable[[str], None] = lambda _stage: None) -> StabilityRun:
-    """Check every generated quantity of ``model`` against mpmath (see the module docstring).
+    """Check every generated quantity of ``model`` against the 50-digit reference (see the module docstring).
 
     Args:
         model: the model.
@@ -230,18 +230,18 @@ def run_stability(model: Model, *, samples: int = 32, float32_samples: int = 16,
     progress("generating code")
     generation = pipeline.generate(model, pipeline.Request(generated, (), ("numpy",)))
     optimized = {f.name: f for f in generation.functions}
-    references = {name: MpmathReference(derivation[name]) for name in names}
+    references = {name: BallReference(derivation[name]) for name in names}
     definitions = registry(model.mechanism)
     conditioning = {name: _conditioning_sources(definitions[name].solves_with, task_matrix, model.parallel is not None)
                     for name in names}
     residual = [name for name in names if definitions[name].residual]
     regular = [name for name in names if not definitions[name].residual]
-    kappa_sources: dict[str, tuple[MpmathReference | None, tuple[int, ...]]] = {}
+    kappa_sources: dict[str, tuple[BallReference | None, tuple[int, ...]]] = {}
     for source in sorted({source for sources in conditioning.values() for source in sources}):
         if source == task_matrix and not has_jacobian:
             kappa_sources[source] = (None, ())
         else:
-            kappa_sources[source] = (references.get(source) or MpmathReference(derivation[source]),
+            kappa_sources[source] = (references.get(source) or BallReference(derivation[source]),
                                      derivation[source].outputs[0].shape)
     with tempfile.TemporaryDirectory(prefix="symkin-stability-") as tmp:
         loaded = load(pipeline.write(generation, tmp))

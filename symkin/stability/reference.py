@@ -1,42 +1,73 @@
-"""High-precision reference values: the un-optimized sympy expressions evaluated by mpmath.
+"""High-precision reference values: the un-optimized sympy expressions evaluated in ball arithmetic.
 
 The reference is independent of everything the generated code goes through (parameter and
-constant folding, CSE, the printer, floating point): the expressions exactly as derived
-are lambdified for mpmath and evaluated at 50 significant digits, at exactly the float
-inputs the generated code receives.  Values come back as double-doubles ``(hi, lo)`` with
-hi + lo equal to the reference to about 1e-32, so that errors down to 1e-17 are measured
-without the rounding of the reference getting in the way.
+constant folding, CSE, the printer, floating point): the expressions exactly as derived are
+lambdified (with sympy's mpmath printer) onto FLINT's arb ball arithmetic (python-flint) and
+evaluated with 256-bit midpoints (77 significant digits; at least 50 are kept), at exactly the float
+inputs the generated code receives.  Each operation rounds its midpoint as mpmath would, in C: 4 to 9
+times faster per state than mpmath at 50 digits on the Stewart platform's functions, the two agreeing
+to 1e-48 (benchmarks/bench_reference.py), which is what makes the thousands of states of
+``symkin bench stability`` cheap (the Stewart platform's default run: 25 s instead of 41 s, the rest
+being code generation and the condition numbers).  A ball's
+radius bounds the midpoint's error; 170 bits (50 digits) let it grow over the longest programs near
+singularities (kappa 1e14) until a divisor's ball held zero, 256 bits do not.  Values come back
+as double-doubles ``(hi, lo)`` with hi + lo equal to the reference to about 1e-32, so that errors
+down to 1e-17 are measured without the rounding of the reference getting in the way; as mpmath
+values (:meth:`BallReference.exact`) for the condition numbers.
+
+An operation without a real value (the square root of a negative discriminant: a parallel mechanism
+that does not assemble at these exact inputs, a division by zero) gives arb's indeterminate ball,
+which comes back as NaN, as the generated code flags it.
 """
 
 from __future__ import annotations
 
-import functools
 from collections.abc import Callable, Mapping
 
+import flint
 import mpmath
 import numpy as np
 from symkin.ir.evaluate import lambdify_spec
 from symkin.ir.spec import FunctionSpec
 
-#: Working precision of the reference (significant decimal digits).
+#: Digits the reference keeps (and the condition numbers' SVD works at), and its midpoints' bits.
 DIGITS = 50
-
-#: Distinct (argument, precision) pairs each memoized function keeps.
-MEMO_SIZE = 1 << 14
+PRECISION = 256
 
 
-def _memoized(function: Callable[[object], object]) -> Callable[[object], object]:
-    """``function`` with its values kept per (argument, working precision): the expanded expressions
-    of a state call sin and cos of the same few angles thousands of times, and mpmath's are slow."""
-    cached = functools.lru_cache(maxsize=MEMO_SIZE)(lambda x, _precision: function(x))
-    return lambda x: cached(x, mpmath.mp.prec)
+def _number(value: int | tuple[int, int, int, int]) -> flint.arb:
+    """sympy's mpmath printer writes numbers as ``mpf(n)`` and ``mpf((sign, mantissa, exponent, bits))``."""
+    if isinstance(value, tuple):
+        sign, mantissa, exponent, _ = value
+        exact = flint.arb(mantissa) * flint.arb(2) ** exponent  # a power of two times an integer: exact
+        return -exact if sign else exact
+    return flint.arb(value)
 
 
-#: The namespace in front of mpmath's for the reference: the same functions, memoized.
-MEMOIZED = {"sin": _memoized(mpmath.sin), "cos": _memoized(mpmath.cos)}
+def _sign(x: flint.arb) -> flint.arb:
+    return flint.arb(int(x > 0) - int(x < 0)) if x.is_finite() else flint.arb("nan")
 
 
-class MpmathReference:
+def _ball(value: flint.arb | int | float) -> flint.arb:
+    """An arb value (a printed constant such as 0 or the 2 of sqrt(2) is a Python number)."""
+    return value if isinstance(value, flint.arb) else flint.arb(value)
+
+
+def _unary(method: str) -> Callable[[flint.arb | int | float], flint.arb]:
+    """The arb method ``method`` as a function of one argument, numbers included."""
+    return lambda x: getattr(_ball(x), method)()
+
+
+with flint.ctx.workprec(PRECISION):
+    #: The names the printed expressions use, on arb balls.
+    NAMESPACE: dict[str, object] = {
+        name: _unary(name) for name in ("sqrt", "sin", "cos", "tan", "asin", "acos", "atan", "exp", "log",
+                                        "sinh", "cosh", "tanh")}
+    NAMESPACE.update({"mpf": _number, "pi": flint.arb.pi(), "sign": _sign,
+                      "atan2": lambda y, x: flint.arb.atan2(_ball(y), _ball(x))})
+
+
+class BallReference:
     """Evaluate a function spec's outputs at ``DIGITS`` digits.
 
     Args:
@@ -48,38 +79,37 @@ class MpmathReference:
         self.vector_names = tuple(i.name for i in spec.vector_inputs)
         self.parameter_names = tuple(i.name for i in spec.parameter_inputs)
         symbols = [s for i in spec.vector_inputs for s in i.symbols] + [i.symbols[0] for i in spec.parameter_inputs]
-        self._function = lambdify_spec(spec, symbols, modules=[MEMOIZED, "mpmath"])
+        self._function = lambdify_spec(spec, symbols, modules=[NAMESPACE, "mpmath"])
         self.size = sum(len(out.entries) for out in spec.outputs)
 
-    def exact(self, vectors: Mapping[str, np.ndarray], parameters: Mapping[str, float]) -> list:
-        """The outputs (flattened, row-major, outputs in order) as mpmath reals.
-
-        An output that comes out complex (the square root of a negative discriminant: a
-        parallel mechanism that does not assemble at these exact inputs) is undefined there:
-        NaN, as the generated code flags it.
-        """
-        args = [mpmath.mpf(float(v)) for name in self.vector_names for v in np.asarray(vectors[name], dtype=float)]
-        args += [mpmath.mpf(float(parameters[name])) for name in self.parameter_names]
-        with mpmath.workdps(DIGITS):
+    def balls(self, vectors: Mapping[str, np.ndarray], parameters: Mapping[str, float]) -> list[flint.arb]:
+        """The outputs (flattened, row-major, outputs in order) as arb balls; NaN where undefined."""
+        args = [flint.arb(float(v)) for name in self.vector_names for v in np.asarray(vectors[name], dtype=float)]
+        args += [flint.arb(float(parameters[name])) for name in self.parameter_names]
+        with flint.ctx.workprec(PRECISION):
             values = self._function(*args)
-            return [_real_or_nan(values[k]) for k in range(self.size)]
+            return [_ball(values[k]) for k in range(self.size)]
+
+    def exact(self, vectors: Mapping[str, np.ndarray], parameters: Mapping[str, float]) -> list[mpmath.mpf]:
+        """The outputs' midpoints as mpmath reals (exactly), NaN where undefined."""
+        return [_to_mpmath(v) for v in self.balls(vectors, parameters)]
 
     def __call__(self, vectors: Mapping[str, np.ndarray], parameters: Mapping[str, float]) -> tuple[np.ndarray, np.ndarray]:
         """(hi, lo) double-double arrays of the flattened outputs at one state."""
-        exact = self.exact(vectors, parameters)
-        with mpmath.workdps(DIGITS):
-            hi = np.array([float(v) for v in exact])
-            lo = np.array([float(v - mpmath.mpf(h)) for v, h in zip(exact, hi)])
+        balls = self.balls(vectors, parameters)
+        hi = np.array([float(v.mid()) if v.is_finite() else np.nan for v in balls])
+        with flint.ctx.workprec(PRECISION):
+            lo = np.array([float(v.mid() - flint.arb(h)) if v.is_finite() else np.nan for v, h in zip(balls, hi)])
         return hi, lo
 
 
-def _real_or_nan(value: object) -> mpmath.mpf:
-    """A real mpmath value; a complex one with a non-negligible imaginary part is NaN."""
-    if isinstance(value, mpmath.mpc):
-        if abs(value.imag) > mpmath.mpf(10) ** (10 - DIGITS) * max(abs(value.real), 1):
-            return mpmath.mpf("nan")
-        return mpmath.mpf(value.real)
-    return mpmath.mpf(value)
+def _to_mpmath(value: flint.arb) -> mpmath.mpf:
+    """The midpoint as an mpmath real, exactly (made at the midpoint's precision, whatever mpmath's is)."""
+    if not value.is_finite():
+        return mpmath.mpf("nan")
+    mantissa, exponent = value.mid().man_exp()
+    with mpmath.workprec(PRECISION):
+        return mpmath.ldexp(mpmath.mpf(int(mantissa)), int(exponent))
 
 
 def normwise_error(computed: np.ndarray, hi: np.ndarray, lo: np.ndarray) -> float:

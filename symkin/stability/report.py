@@ -92,7 +92,7 @@ def render(run: StabilityRun) -> str:
     passed, worst = run.acceptance()
     random = run.select("random")
     parts = [
-        f"numerical stability of {run.model}: generated numpy code against mpmath at 50 digits "
+        f"numerical stability of {run.model}: generated numpy code against a 50-digit reference "
         f"(normwise relative error |f - f_ref| / |f_ref| per function; kappa = condition number of the matrix "
         f"the function inverts: M for forward_dynamics, J for tcp_force and operational_space; "
         f"of the task Jacobian J for the others)",
