@@ -32,7 +32,7 @@ def _input_record(i) -> dict[str, Any]:
     return record
 
 
-def _coordinate_record(model: Model, coordinate) -> dict[str, Any]:
+def _coordinate_record(model: Model, coordinate, actuators: tuple | None = None) -> dict[str, Any]:
     """Name and type of a joint coordinate, and its position, velocity and effort limits where the
     model declares them.
 
@@ -49,7 +49,7 @@ def _coordinate_record(model: Model, coordinate) -> dict[str, Any]:
         bound = getattr(coordinate, key, None)
         if bound is not None:
             record[key] = float(bound.xreplace(values))
-    drive = next((a for a in model.actuators if a.joint == coordinate.name), None)
+    drive = next((a for a in (model.actuators if actuators is None else actuators) if a.joint == coordinate.name), None)
     if drive is not None and drive.continuous_effort is not None:  # N K_t I_cont: what the motor holds for long
         record["continuous_effort_limit"] = float(drive.continuous_effort.xreplace(values))
     return record
@@ -132,7 +132,11 @@ def _parallel_record(model: Model) -> dict[str, Any]:
         if passive:
             record["passive_limits"] = passive
         legs.append(record)
-    return {"motion": parallel.motion.value, "legs": legs, "home": home}
+    record = {"motion": parallel.motion.value, "legs": legs, "home": home}
+    if parallel.wrist is not None:  # a hybrid device: the wrist's coordinates qw, as the model's q are recorded
+        record["wrist"] = [_coordinate_record(model, joint, parallel.wrist.actuators)
+                           for joint in parallel.wrist.coordinates]
+    return record
 
 
 def dumps(manifest: dict) -> str:

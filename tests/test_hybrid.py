@@ -17,7 +17,7 @@ from conftest import MODELS_DIR, SYMKIN_CLI
 from symkin import load, load_model
 from symkin.derivation import Derivation
 from symkin.errors import DerivationError, ModelError
-from tolerances import DELTA_SCALE, DYNAMICS, KINEMATICS
+from tolerances import CLOSED_FORM, DELTA_SCALE, DYNAMICS, KINEMATICS
 
 W, H = 0.05, 0.03  # wrist centre below the platform, grip point along the handle (models/delta_wrist.yaml)
 
@@ -72,6 +72,15 @@ def test_the_device_moves_by_its_platform_and_its_wrist(models):
     wrist = model.parallel.wrist
     assert [j.name for j in wrist.coordinates] == ["psi1", "psi2", "psi3"]
     assert model.task_space == ("x", "y", "z") and model.dof == 3  # the legs' actuators; the wrist's joints on top
+
+
+def test_the_manifest_records_the_wrist_coordinates_with_their_limits(device):
+    wrist = device.info.wrist
+    assert [c.name for c in wrist] == ["psi1", "psi2", "psi3"]
+    assert all(c.revolute for c in wrist)
+    assert np.allclose([c.limits for c in wrist], np.deg2rad([[-120, 120], [-70, 70], [-160, 160]]), rtol=0,
+                       atol=CLOSED_FORM * np.pi)
+    assert [c.name for c in device.info.coordinates] == ["theta1", "theta2", "theta3"]
 
 
 def test_device_fk_and_jacobian_agree_with_pinocchio_and_the_written_out_wrist(device):

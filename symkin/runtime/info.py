@@ -83,6 +83,7 @@ class ModelInfo:
         passive_limits: per leg of a parallel mechanism, {passive variable: [lower, upper]} as recorded
             (validated where they are used, :func:`symkin.analysis.passive.declared_limits`, with the
             manifest's place in the message).
+        wrist: a hybrid device's wrist coordinates, in the order of the functions' ``qw``; () otherwise.
     """
 
     name: str
@@ -93,6 +94,7 @@ class ModelInfo:
     functions: dict[str, Function]
     home: tuple[float, ...] | None = None
     passive_limits: tuple[dict[str, Any], ...] = ()
+    wrist: tuple[Coordinate, ...] = ()
 
     @property
     def is_parallel(self) -> bool:
@@ -102,10 +104,6 @@ class ModelInfo:
     def coordinate_names(self) -> tuple[str, ...]:
         return tuple(c.name for c in self.coordinates)
 
-    @property
-    def wrist(self) -> tuple[str, ...]:
-        """The wrist joints of a hybrid device (the elements of its functions' ``qw`` input), () otherwise."""
-        return next((f.vectors["qw"].elements for f in self.functions.values() if "qw" in f.vectors), ())
 
     @property
     def units(self) -> dict[str, str]:
@@ -120,10 +118,7 @@ class ModelInfo:
     def from_manifest(cls, manifest: dict[str, Any]) -> ModelInfo:
         model = manifest["model"]
         parallel = model.get("parallel")
-        coordinates = tuple(Coordinate(c["name"], c["type"] == "R",
-                                       (float(c["limits"][0]), float(c["limits"][1])) if c.get("limits") else None,
-                                       c.get("velocity_limit"), c.get("effort_limit"), c.get("source_name"))
-                            for c in model["coordinates"])
+        coordinates = tuple(_coordinate(c) for c in model["coordinates"])
         parameters = tuple(Parameter(p["name"], float(p["default"]), p.get("unit", ""), bool(p["fixed"]))
                            for p in manifest["parameters"])
         functions = {f["name"]: Function(f["name"],
@@ -133,8 +128,16 @@ class ModelInfo:
                      for f in manifest["functions"]}
         home = tuple(float(v) for v in parallel["home"]) if parallel and parallel.get("home") is not None else None
         passive = tuple(dict(leg.get("passive_limits") or {}) for leg in parallel["legs"]) if parallel else ()
+        wrist = tuple(_coordinate(c) for c in parallel.get("wrist", ())) if parallel else ()
         return cls(model["name"], "parallel" if parallel else "serial", coordinates, tuple(model["task_space"]),
-                   parameters, functions, home, passive)
+                   parameters, functions, home, passive, wrist)
+
+
+def _coordinate(record: dict[str, Any]) -> Coordinate:
+    """A coordinate of the manifest (the model's ``coordinates``, a hybrid device's ``wrist``)."""
+    return Coordinate(record["name"], record["type"] == "R",
+                      (float(record["limits"][0]), float(record["limits"][1])) if record.get("limits") else None,
+                      record.get("velocity_limit"), record.get("effort_limit"), record.get("source_name"))
 
 
 class GeneratedModel(Protocol):
