@@ -150,3 +150,30 @@ def test_the_gci_command_states_the_measure_of_orientations(generated_dir):
     refused = subprocess.run([*SYMKIN_CLI, "gci", str(generated_dir / "agile_eye"), "--map", "map.png"],
                              capture_output=True, text=True)
     assert refused.returncode == 2 and "spherical platform" in refused.stderr
+
+
+def test_the_orientation_cloud_holds_the_reachable_orientations_with_their_conditioning(eye):
+    p, values = orientations.orientation_cloud(eye, 4096, seed=1)
+    q, margin = eye.ik(p)
+    assert np.all(np.isfinite(q))
+    assert np.all(np.abs(q) <= np.deg2rad(60) * (1 + CLOSED_FORM))  # the actuators' limits of models/agile_eye.yaml
+    # the cloud's values are (|cos pitch| 1/kappa) / |cos pitch| of the integrand: one rounding
+    np.testing.assert_allclose(values, orientations.inverse_condition(eye, q, p), rtol=CLOSED_FORM, atol=0)
+    # 8.9 % of SO(3) in the Haar measure; the chart's uniform density puts more of the samples near pitch = 0
+    assert 0.05 < len(p) / 4096 < 0.2
+
+
+def test_the_workspace_command_draws_the_orientations_and_states_their_measure(eye, generated_dir, tmp_path):
+    figure = tmp_path / "eye.png"
+    run = subprocess.run([*SYMKIN_CLI, "workspace", str(generated_dir / "agile_eye"), "-n", "4096", "-o", str(figure)],
+                         capture_output=True, text=True, env=dict(os.environ, SYMKIN_QUIET="1"))
+    assert run.returncode == 0, run.stderr
+    measure = orientations.orientation_gci(eye, samples=4096, seed=0).measure
+    assert f"orientation workspace {measure.value:.4g} +- {measure.error:.2g} rad^3" in run.stdout
+    assert figure.stat().st_size > 0
+    refused = subprocess.run([*SYMKIN_CLI, "workspace", str(generated_dir / "agile_eye"),
+                              "--map", str(tmp_path / "m.png"), "-o", str(tmp_path / "w.png")],
+                             capture_output=True, text=True)
+    assert refused.returncode == 2
+    assert "spherical platform" in refused.stderr
+    assert not (tmp_path / "m.png").exists() and not (tmp_path / "w.png").exists()

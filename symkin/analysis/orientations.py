@@ -88,6 +88,22 @@ def orientation_integrand(model: GeneratedModel, box: tuple[np.ndarray, np.ndarr
     return Integrand(lower, upper, function, components, ANGLES, indicator=len(components) - 1)
 
 
+def orientation_cloud(model: GeneratedModel, samples: int = 2**14, *, seed: int = 0,
+                      box: tuple[np.ndarray, np.ndarray] = FULL_CHART, limits: Limits | None = None
+                      ) -> tuple[np.ndarray, np.ndarray]:
+    """(p, 1/kappa): the reachable orientations among ``samples`` (rounded up to a power of 2) scrambled Sobol
+    points of the roll-pitch-yaw box (their density in the chart is uniform, not Haar: a picture; the measure is
+    :func:`orientation_gci`'s)."""
+    from scipy.stats import qmc
+
+    integrand = orientation_integrand(model, box, limits=limits)
+    unit = qmc.Sobol(3, seed=seed).random_base2(max(1, int(np.ceil(np.log2(samples)))))
+    points = qmc.scale(unit, integrand.lower, integrand.upper)
+    values = integrand.function(points)
+    reachable = values[:, 1] > 0  # the weight |cos pitch| of a reachable orientation (pitch = +-90 deg: never drawn)
+    return points[reachable], values[reachable, 0] / values[reachable, 1]
+
+
 def orientation_gci(model: GeneratedModel, *, method: str = "qmc", samples: int = 2**16, seed: int | None = None,
                     box: tuple[np.ndarray, np.ndarray] = FULL_CHART, limits: Limits | None = None,
                     **options) -> GlobalIndex:

@@ -38,11 +38,24 @@ def run_check(args: argparse.Namespace) -> int:
                 structure += (f", a wrist of {len(wrist.joints)} joints on the platform "
                               f"({', '.join(f'{j.name}:{j.type.value}' for j in wrist.joints)})")
         print(f"{path}: ok - model '{model.name}', {structure}, "
-              f"{len(model.parameters)} parameters, {len(model.bodies)} bodies, "
+              f"{len(model.parameters)} parameters, {_bodies(model)}, "
               f"task space [{', '.join(model.task_space)}]; "
               f"scene: {', '.join(request.outputs)} via {', '.join(request.backends)}")
         print_notes(model)
     return 0
+
+
+def _bodies(model) -> str:
+    """The bodies a model declares: a serial model's count; a parallel model's kinds (and its wrist's count)."""
+    if model.parallel is None:
+        return f"{len(model.bodies)} bodies"
+    declared = model.parallel.bodies
+    kinds = [] if declared is None else [name for name, present in (
+        ("platform", declared.platform is not None), ("actuated links", declared.actuated_link is not None),
+        ("rods", declared.rod_mass != 0), ("rotors", declared.rotor_inertia != 0)) if present]
+    text = f"bodies: {', '.join(kinds)}" if kinds else "no bodies"
+    wrist = model.parallel.wrist
+    return text if wrist is None else f"{text} (+ {len(wrist.bodies)} on the wrist)"
 
 
 def register_quantities(sub: argparse._SubParsersAction) -> None:

@@ -87,11 +87,53 @@ def _chunked_study(args: argparse.Namespace, models: list, designs: list[dict[st
     return found
 
 
+def _orientations(args: argparse.Namespace, model, limits: dict) -> int:
+    """A spherical platform: its orientation workspace (the Haar measure of SO(3)) and a cloud of the reachable
+    orientations in the roll-pitch-yaw chart, coloured by 1/kappa of the angular-velocity Jacobian."""
+    import numpy as np
+
+    from symkin.analysis import orientations, plots, workspace
+
+    start = time.perf_counter()
+    try:
+        for given, option in ((args.design, "--design"), (args.orientation, "--orientation"),
+                              (args.length != "auto", "--length"), (args.scheduler, "--scheduler"),
+                              (args.force_map, "--force-map"), (args.map, "--map"), (args.method, "--method"),
+                              (args.unit != "m", "--unit")):
+            if given:
+                raise ValueError(f"{option}: {model.name} is a spherical platform, its workspace a set of orientations "
+                                 "(roll, pitch, yaw) drawn with 1/kappa of its angular-velocity Jacobian (leave the "
+                                 "option out)")
+        with Progress(model.name) as progress:
+            progress(f"{args.samples} orientations")
+            points, values = orientations.orientation_cloud(model, args.samples, seed=args.seed, limits=limits)
+            found = orientations.orientation_gci(model, samples=args.samples, seed=args.seed, limits=limits)
+            measure = found.measure
+            print(f"{model.name}: orientation workspace {measure.value:.4g} +- {measure.error:.2g} rad^3 (the Haar "
+                  f"measure of SO(3): {100 * measure.value / orientations.SO3_MEASURE:.3g} % of all orientations), "
+                  f"1/kappa of the angular-velocity Jacobian {values.min():.3g} to {values.max():.3g}, "
+                  f"mean over the workspace (GCI) {found.value.value:.4g}; {len(points)} of the sampled orientations "
+                  "reachable")
+            if not args.no_figure:
+                progress("drawing")
+                cloud = workspace.WorkspaceCloud(points, points, orientations.ANGLES)
+                path = plots.plot_index_map(cloud, values, args.out or f"{model.name}-workspace.png",
+                                            scale=180 / np.pi, unit="deg", title=args.title or
+                                            f"Orientation workspace of {model.name}: 1/kappa of J_w")
+                print(f"figure: {path}")
+    except (ValueError, KeyError) as err:
+        analysis_args.fail_on_bad_input(args, err)
+    print(f"done in {time.perf_counter() - start:.2f} s")
+    return 0
+
+
 def run(args: argparse.Namespace) -> int:
-    from symkin.analysis import parallel, plots, study, workspace
+    from symkin.analysis import orientations, parallel, plots, study, workspace
 
     try:
         base, limits = analysis_args.model_from_args(args)
+        if orientations.is_spherical(base):
+            return _orientations(args, base, limits)
         base = study.at_orientation(base, analysis_args.parse_orientation(args.orientation))
         designs = [analysis_args.parse_assignments([text]) for text in args.design] or [{}]
         models = [base.bind(**values) if values else base for values in designs]
