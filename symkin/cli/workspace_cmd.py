@@ -25,7 +25,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "seed Fig. 8.19: symkin workspace generated/planar_2r --design l1=0.1,l2=0.1 "
                     "--design l1=0.2,l2=0.2 --unit cm -o fig-8-19.png. A platform that also rotates "
                     "(Stewart-Gough) is analysed at a constant orientation (--orientation) on a Cartesian grid "
-                    "(its joint space is not sampled: -n, --method and --seed do not apply).",
+                    "(its joint space is not sampled: -n, --method and --seed do not apply). A spherical platform "
+                    "(the Agile Eye) is a set of orientations: its measure in rad^3 (the invariant measure of SO(3)), "
+                    "the GCI of its angular-velocity Jacobian and a figure of the reachable orientations (-n, --seed).",
     )
     analysis_args.add_model_arguments(p)
     p.add_argument("--design", action="append", default=[], metavar="NAME=VALUE[,...]",
