@@ -9,6 +9,7 @@ are equal, so every module sees the same symbols without sharing state.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -16,7 +17,7 @@ import sympy
 
 from symkin.errors import ModelError
 from symkin.model import joint_kinds
-from symkin.model.schema import Model
+from symkin.model.schema import Coordinate, Joint, Model
 
 
 @dataclass(frozen=True)
@@ -47,13 +48,23 @@ def symbol_name(group: str, joint_name: str) -> str:
 
 def symbols(model: Model, group: str) -> tuple[sympy.Symbol, ...]:
     """The symbols of one coordinate group, in joint order."""
-    return tuple(sympy.Symbol(symbol_name(group, j.name), real=True) for j in model.coordinates)
+    return symbols_of(model.coordinates, group)
+
+
+def symbols_of(joints: Sequence[Joint | Coordinate], group: str) -> tuple[sympy.Symbol, ...]:
+    """The symbols of one coordinate group of ``joints`` (a model's coordinates, a hybrid device's wrist's)."""
+    return tuple(sympy.Symbol(symbol_name(group, j.name), real=True) for j in joints)
 
 
 def units(model: Model, group: str) -> tuple[str, ...]:
     """Per-joint units of one coordinate group."""
+    return units_of(model.coordinates, group)
+
+
+def units_of(joints: Sequence[Joint | Coordinate], group: str) -> tuple[str, ...]:
+    """Per-joint units of one coordinate group of ``joints``."""
     g = GROUPS[group]
-    return tuple(g.revolute_unit if joint_kinds.is_rotation(j.type) else g.prismatic_unit for j in model.coordinates)
+    return tuple(g.revolute_unit if joint_kinds.is_rotation(j.type) else g.prismatic_unit for j in joints)
 
 
 def joint_values(model: Model, group: str) -> tuple[sympy.Expr, ...]:

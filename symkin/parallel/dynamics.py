@@ -150,6 +150,11 @@ class _Terms:
         J = self.J
         return [sum((J[k][i] * v[k] for k in range(self.n)), se.Integer(0)) for i in range(self.n)]
 
+    def B_transpose(self, F: list[se.Basic]) -> list[se.Basic]:
+        """B^T F with B = diag(J, 1): the legs' efforts J^T F_p of a platform-side force F in c, then a wrist's
+        rows of F as they are."""
+        return self.J_transpose(F[:self.n]) + F[self.n:]
+
     def task_rates(self, qd: list[se.Basic]) -> list[se.Basic]:
         """pd = J qd, bound."""
         return [self.program.let(v) for v in mat_vec(self.J, qd)]
@@ -255,11 +260,11 @@ class _Terms:
         if gravity is not None:
             F_p = [f + g for f, g in zip(F_p, gravity[1])]
             tau = [t + g for t, g in zip(tau, gravity[0])]
-        tau += F_p[self.n:]  # a wrist's joints take its rows of F_c as they are
+        tau += [se.Integer(0)] * len(qwd)  # a wrist's joints: their rows of B^T F_c and their friction
         friction = self.friction(qd + list(qwd)) if with_friction else None
         if friction is not None:
             tau = [t + f for t, f in zip(tau, friction)]
-        return [t + f for t, f in zip(tau[:self.n], self.J_transpose(F_p[:self.n]))] + tau[self.n:]
+        return [t + f for t, f in zip(tau, self.B_transpose(F_p))]
 
     def mass_matrix(self) -> Matrix:
         """M_a + B^T M_c B with B = diag(J, 1) (J^T M_p J without a wrist; symmetric by construction)."""
@@ -332,7 +337,7 @@ def _gravity_vector(d: Derivation) -> FunctionSpec:
     program = Program()
     terms = _Terms(d, program)
     G_a, G_p = terms.gravity_parts  # type: ignore[misc]
-    G = [a + b for a, b in zip(G_a, terms.J_transpose(G_p[:d.model.dof]))] + G_p[d.model.dof:]
+    G = [a + b for a, b in zip(G_a + [se.Integer(0)] * (_size(d) - d.model.dof), terms.B_transpose(G_p))]
     return function_spec(
         d, "gravity_vector", "Gravity compensation efforts.",
         "G = du_a/dq + J^T du_p/dp with u = -g . (sum of mass times centre of mass): the actuator efforts that "

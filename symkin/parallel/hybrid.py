@@ -42,9 +42,8 @@ from symkin.model import coordinates, tree
 from symkin.model.reader import X_AXIS, Y_AXIS, Z_AXIS
 from symkin.model.schema import Joint, JointType, Model, Wrist
 from symkin.model.wrist_build import PLATFORM_LINK
-from symkin.parallel import determinant
 from symkin.parallel.inputs import task_input
-from symkin.parallel.quantities import PARALLEL, _q, square_constraint_jacobians
+from symkin.parallel.quantities import PARALLEL, _q, platform_jacobian
 
 if TYPE_CHECKING:
     from symkin.derivation.graph import Derivation
@@ -103,20 +102,22 @@ WRIST_GROUPS = {"q": "qw", "qd": "qwd", "qdd": "qwdd", "tau": "tauw"}
 def wrist_symbols(model: Model, group: str) -> tuple[sympy.Symbol, ...]:
     """The symbols of the wrist's coordinates in ``group`` (``psi1``, ``psi1_d``...), none without a wrist."""
     wrist = None if model.parallel is None else model.parallel.wrist
-    if wrist is None:
-        return ()
-    chain = device_chain(model)
-    return coordinates.symbols(chain, group)[len(chain.coordinates) - len(wrist.coordinates):]
+    return () if wrist is None else coordinates.symbols_of(wrist.coordinates, group)
 
 
 def wrist_input(model: Model, group: str = "q") -> InputSpec:
     """The wrist's input vector of a coordinate group (:data:`WRIST_GROUPS`): ``qw`` for its joint coordinates."""
-    wrist = wrist_of(model)
-    chain = device_chain(model)
-    k = len(chain.coordinates) - len(wrist.coordinates)
-    return InputSpec(WRIST_GROUPS[group], "vector", coordinates.symbols(chain, group)[k:],
-                     tuple(j.name for j in wrist.coordinates), coordinates.units(chain, group)[k:],
+    joints = wrist_of(model).coordinates
+    return InputSpec(WRIST_GROUPS[group], "vector", coordinates.symbols_of(joints, group),
+                     tuple(j.name for j in joints), coordinates.units_of(joints, group),
                      f"wrist {coordinates.GROUPS[group].doc}")
+
+
+def combined_order(model: Model, size: int) -> list[int]:
+    """The device chain's coordinate indices in the order of c = (p, qw) (``size``: the chain's coordinates):
+    the chain moves the platform x, y, z, yaw, pitch, roll; p lists them x, y, z, roll, pitch, yaw."""
+    order = [name for name, _, _ in PLATFORM_JOINTS if name in model.task_space]
+    return [order.index(name) for name in model.task_space] + list(range(len(order), size))
 
 
 @dataclass(frozen=True)
@@ -135,8 +136,7 @@ def wrist_inertia(d: Derivation) -> WristInertia:
     only the wrist's bodies and rotors count), rows and columns in the order of c; u_w from the bodies' centres."""
     chain = d[_device_derivation]
     M = chain[mass_matrix_graph]
-    order = [name for name, _, _ in PLATFORM_JOINTS if name in d.model.task_space]
-    index = [order.index(name) for name in d.model.task_space] + list(range(len(order), len(M)))
+    index = combined_order(d.model, len(M))
     g = [se.sympify(v) for v in d.model.gravity]
     potential = se.Integer(0)
     for body in chain[body_jacobians]:
@@ -152,11 +152,8 @@ def _device_derivation(d: Derivation) -> Derivation:
 
 def combined_jacobian(d: Derivation) -> sympy.Matrix:
     """J_c, the geometric Jacobian of the TCP in (p, qw): the platform columns in the order of p."""
-    chain = d[_device_derivation]
-    J = sympy.Matrix(chain[geometric_jacobian_matrix])
-    order = [name for name, _, _ in PLATFORM_JOINTS if name in d.model.task_space]
-    platform = [J[:, order.index(name)] for name in d.model.task_space]
-    return sympy.Matrix.hstack(*platform, J[:, len(order):])
+    J = sympy.Matrix(d[_device_derivation][geometric_jacobian_matrix])
+    return sympy.Matrix.hstack(*(J[:, k] for k in combined_order(d.model, J.shape[1])))
 
 
 @quantity("device_fk", "pose of the hybrid device's TCP base_T_tcp(p, qw) (4x4)", mechanism=PARALLEL)
@@ -188,10 +185,9 @@ def _device_jacobian(d: Derivation) -> FunctionSpec:
 @quantity("device_actuator_jacobian", "geometric Jacobian of the hybrid device in its actuated coordinates",
           mechanism=PARALLEL)
 def _device_actuator_jacobian(d: Derivation) -> FunctionSpec:
-    J_x, J_q = square_constraint_jacobians(d, "the device's actuator Jacobian")
     J_c = combined_jacobian(d)
     k = len(d.model.task_space)
-    J_platform = J_c[:, :k] * determinant.adjugate(J_x) * J_q / determinant.determinant(J_x)
+    J_platform = J_c[:, :k] * platform_jacobian(d, "the device's actuator Jacobian")
     return make_function(
         d.model, "device_actuator_jacobian", "Geometric Jacobian of the hybrid device in its actuated coordinates.",
         "[v; w] = J_a [qd; qwd] with J_a = [J_c,p J, J_c,w]: the platform columns of the combined Jacobian "

@@ -276,10 +276,15 @@ def square_constraint_jacobians(d: Derivation, name: str) -> tuple[sympy.Matrix,
     return sympy.Matrix(J_x), sympy.Matrix(J_q)
 
 
+def platform_jacobian(d: Derivation, name: str) -> sympy.Matrix:
+    """J = J_x^-1 J_q = adj(J_x) J_q / det(J_x), pdot = J qdot (``name``: what needs it, for the error)."""
+    J_x, J_q = square_constraint_jacobians(d, name)
+    return determinant.adjugate(J_x) * J_q / determinant.determinant(J_x)
+
+
 @quantity("jacobian", "task Jacobian J = J_x^-1 J_q of the platform: pdot = J qdot", mechanism=PARALLEL)
 def _jacobian(d: Derivation) -> FunctionSpec:
-    J_x, J_q = square_constraint_jacobians(d, "the task Jacobian")
-    J = determinant.adjugate(J_x) * J_q / determinant.determinant(J_x)
+    J = platform_jacobian(d, "the task Jacobian")
     return make_function(
         d.model, "jacobian", "Task Jacobian of the platform.",
         "J = J_x^-1 J_q from J_x pdot = J_q qdot, so that dp = J dq (seed eq. 8.29); J_x^-1 = adj(J_x) / "
