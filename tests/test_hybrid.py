@@ -17,6 +17,8 @@ from conftest import MODELS_DIR, SYMKIN_CLI
 from symkin import load, load_model
 from symkin.derivation import Derivation
 from symkin.errors import DerivationError, ModelError
+from symkin.simulation import Plant, scenarios
+from test_simulation import assert_wall_equilibrium
 from tolerances import CLOSED_FORM, DELTA_SCALE, DYNAMICS, KINEMATICS
 
 W, H = 0.05, 0.03  # wrist centre below the platform, grip point along the handle (models/delta_wrist.yaml)
@@ -262,8 +264,47 @@ def test_a_free_motion_keeps_its_energy(device):
     assert np.max(np.abs(energies - energies[0])) <= 1e-8 * swing
 
 
-def test_simulating_a_hybrid_device_is_refused_with_the_reason(generated_dir, tmp_path):
+Z0 = np.radians([-15.0, -10.0, -20.0, 20.0, -30.0, 40.0])  # the legs' theta, then the wrist's psi
+
+
+@pytest.fixture(scope="module")
+def plant(device):
+    return Plant(device)
+
+
+def test_the_plant_of_a_hybrid_device_is_its_legs_and_wrist_with_the_wrists_tcp(plant, device):
+    assert plant.coordinates == ("theta1", "theta2", "theta3", "psi1", "psi2", "psi3")
+    assert plant.joint_limits[4].tolist() == pytest.approx(np.radians([-70.0, 70.0]).tolist(), rel=CLOSED_FORM)
+    q, psi = Z0[:3], Z0[3:]
+    p = device.fk(q).position
+    np.testing.assert_allclose(plant.point(Z0), written_out(p, psi)[:3, 3], rtol=0, atol=KINEMATICS * DELTA_SCALE)
+    assert np.array_equal(plant.point_jacobian(Z0), device.device_actuator_jacobian(q, p, psi)[:3])
+    qd, tau = np.array([0.3, -0.2, 0.1, 1.0, -2.0, 0.5]), np.array([0.01, -0.02, 0.03, 0.004, -0.002, 0.001])
+    assert np.array_equal(plant.acceleration(Z0, qd, tau), device.forward_dynamics(q, p, psi, qd[:3], qd[3:],
+                                                                                    tau[:3], tau[3:]))
+    assert np.array_equal(plant.energy(Z0, qd), device.kinetic_energy(q, p, psi, qd[:3], qd[3:])
+                          + device.potential_energy(q, p, psi))
+
+
+def test_a_hybrid_device_renders_a_wall_at_the_series_spring_equilibrium(plant):
+    """The hand's force reaches every actuator through J_a^T, the wrist's included: at rest the renderer's
+    wrist torques balance the hand's moment about the wrist, and the hand feels the wall."""
+    assert_wall_equilibrium(plant, Z0, 2000)
+
+
+def test_a_hybrid_device_follows_a_tcp_circle_with_its_wrist_held(plant):
+    result = scenarios.tracking("", plant, Z0, 0.02, scenarios.Timing(0.6, 1000, "rk4"), bandwidth=80.0)
+    c = result.series[0].columns
+    psi = np.stack([c[f"psi{i} [rad]"] for i in (1, 2, 3)], -1)
+    assert np.max(np.abs(psi - Z0[3:])) < 1e-4                  # the wrist holds its angles...
+    assert np.max(c["TCP error [m]"]) < 1e-4                      # ...while the handle draws the circle
+    assert np.ptp(c["reference TCP x [m]"]) > 0.039
+
+
+def test_cli_simulates_a_hybrid_device(generated_dir, tmp_path):
     run = subprocess.run([*SYMKIN_CLI, "simulate", str(generated_dir / "delta_wrist"), "--scenario", "haptic-wall",
-                          "-o", str(tmp_path / "out")], capture_output=True, text=True)
-    assert run.returncode == 2
-    assert "simulating a hybrid device" in run.stderr and not (tmp_path / "out").exists()
+                          "--duration", "0.3", "--backend", "c", "-o", str(tmp_path / "out")],
+                         capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    assert "|tau_psi2|" in run.stdout and "peak felt force" in run.stdout
+    assert (tmp_path / "out" / "haptic-wall.png").read_bytes()[:4] == b"\x89PNG"

@@ -17,7 +17,8 @@ DYNAMICS_OUTPUTS = ("forward_dynamics", "inverse_dynamics", "mass_matrix", "kine
 SIMULATION_OUTPUTS = {"serial": ("fk", "jacobian", "jacobian_geometric") + DYNAMICS_OUTPUTS,
                       "parallel": ("ik", "fk", "jacobian") + DYNAMICS_OUTPUTS,
                       "parallel pose": ("ik", "inverse_jacobian") + DYNAMICS_OUTPUTS}
-OPTIONAL_OUTPUTS = ("gravity_vector", "potential_energy", "friction")
+#: ... and a hybrid device's TCP (device_fk, device_actuator_jacobian), derived where the model has a wrist
+OPTIONAL_OUTPUTS = ("gravity_vector", "potential_energy", "friction", "device_fk", "device_actuator_jacobian")
 SCENARIOS = ("sine", "tracking", "haptic-wall", "gravity-compensation", "free-swing")
 #: the integrator each scenario uses unless --integrator says otherwise
 DEFAULT_INTEGRATOR = {"sine": "dop853", "tracking": "rk4", "haptic-wall": "rk4", "gravity-compensation": "rk4",
@@ -28,7 +29,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "simulate", help="simulate the dynamics: seed haptic scenario, trajectory following, virtual wall",
         description="Integrate the forward dynamics of a serial model, or of a parallel mechanism with a closed-form "
-                    "fk (a DELTA: in its actuated joints, the platform at fk(q)), with its generated functions. Scenarios: "
+                    "fk (a DELTA: in its actuated joints, the platform at fk(q); a DELTA carrying a wrist: in the legs' and the "
+                    "wrist's joints, the TCP the wrist's), with its generated functions. Scenarios: "
                     "'sine' (seed sec. 5.3, Figs. 8.21, 8.22: one joint follows a sine, the others are fixed; joint "
                     "torques and TCP forces F = J^-T tau, checked by a forward simulation), 'tracking' (Fig. 8.17: a "
                     "TCP circle through inverse kinematics and computed-torque control), 'haptic-wall' (Fig. 8.18: a "
@@ -133,7 +135,7 @@ def _stops(args: argparse.Namespace, plant, q0):
     """
     from symkin.simulation.scenarios import StopSettings
 
-    limited = any(math.isfinite(v) for bounds in plant.model.joint_limits for v in bounds)
+    limited = any(math.isfinite(v) for bounds in plant.joint_limits for v in bounds)
     tuning = [name for name, given in (("--stop-time-constant", args.stop_time_constant is not None),
                                        ("--stop-damping-ratio", args.stop_damping_ratio is not None),
                                        ("--stop-stiffness", bool(args.stop_stiffness)),

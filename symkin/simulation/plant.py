@@ -13,6 +13,12 @@ tau = J^T F (seed eq. 8.35) with zeros in the rotational rows.
 A parallel mechanism (a DELTA) is a plant in its actuated coordinates q too: its generated
 dynamics take the platform pose p with q (symkin.parallel.dynamics), which the plant supplies
 from the closed-form forward kinematics, p = fk(q), so the state stays (q, qd).
+
+A hybrid device (a DELTA carrying a wrist, symkin.parallel.hybrid) is a plant in its actuated
+coordinates z = (q, qw): the legs' then the wrist's joints, as its generated dynamics return
+them.  Its TCP is the wrist's (``device_fk(p, qw)``), its velocity Jacobian the translational
+rows of the actuator Jacobian J_a = [J_c,p J, J_c,w] (``device_actuator_jacobian``), so
+tau = J_a^T [F; 0] drives every actuator, the wrist's included.
 """
 
 from __future__ import annotations
@@ -20,6 +26,7 @@ from __future__ import annotations
 import numpy as np
 
 from symkin.analysis import mechanism
+from symkin.analysis.conditioning import inverse_condition_number
 from symkin.errors import GeneratedCodeError
 from symkin.runtime.info import GeneratedModel
 
@@ -27,6 +34,10 @@ from symkin.runtime.info import GeneratedModel
 REQUIRED = ("forward_dynamics", "inverse_dynamics", "mass_matrix", "kinetic_energy")
 #: ... and a parallel mechanism's: its platform pose p = fk(q) (closed form).
 REQUIRED_PARALLEL = REQUIRED + ("fk",)
+#: A hybrid device's task space: the wrist TCP's velocity and angular velocity (rows of device_actuator_jacobian).
+DEVICE_TASK_SPACE = ("x", "y", "z", "wx", "wy", "wz")
+#: The wrist's input of a hybrid device's generated function beside each of the legs' (symkin.parallel.dynamics).
+WRIST_INPUTS = {"q": "qw", "qd": "qwd", "qdd": "qwdd", "tau": "tauw"}
 
 
 class Plant:
@@ -45,11 +56,11 @@ class Plant:
     """
 
     def __init__(self, model: GeneratedModel):
-        self.parallel = model.info.mechanism == "parallel"
-        if model.info.wrist:
-            raise GeneratedCodeError(f"{model.name}: simulating a hybrid device (a wrist of {len(model.info.wrist)} "
-                                     "joints on the platform) is not supported yet; its dynamics functions are "
-                                     "generated (mass_matrix, forward_dynamics... take qw, qwd, tauw besides q)")
+        info = model.info
+        self.parallel = info.is_parallel
+        #: a hybrid device (a wrist on the platform): the plant's joints are the legs' then the wrist's
+        self.hybrid = bool(info.wrist)
+        self.legs = len(info.coordinates)
         self._last_pose: tuple[np.ndarray | None, np.ndarray] = (None, np.empty(0))
         required = REQUIRED_PARALLEL if self.parallel else REQUIRED
         missing = [name for name in required if name not in model.functions]
@@ -61,45 +72,64 @@ class Plant:
                                      f"derive the model with them, e.g. 'symkin derive MODEL --only {suggested}'")
         self.model = model
         self.name = model.name
-        self.coordinates = mechanism.coordinate_names(model)
+        coordinates = info.coordinates + info.wrist
+        self.coordinates = tuple(c.name for c in coordinates)
         self.dof = len(self.coordinates)
-        #: the model's declared velocity and effort limits per joint (NaN where it declares none)
+        #: the model's declared position, velocity and effort limits per joint (inf, NaN where it declares none)
+        self.joint_limits = np.array([c.limits if c.limits is not None else (-np.inf, np.inf) for c in coordinates],
+                                     dtype=float).reshape(self.dof, 2)
         self.velocity_limits = np.array([np.nan if c.velocity_limit is None else c.velocity_limit
-                                         for c in model.info.coordinates])
-        self.effort_limits = np.array([np.nan if c.effort_limit is None else c.effort_limit
-                                       for c in model.info.coordinates])
-        self.revolute = mechanism.revolute_mask(model)
-        self.task_space = mechanism.task_space(model)
+                                         for c in coordinates])
+        self.effort_limits = np.array([np.nan if c.effort_limit is None else c.effort_limit for c in coordinates])
+        self.revolute = np.array([c.revolute for c in coordinates], dtype=bool)
+        self.task_space = DEVICE_TASK_SPACE if self.hybrid else mechanism.task_space(model)
         #: rows of the task Jacobian that are TCP translations, and their fk axes
-        self.point_rows = np.array(mechanism.position_rows(model), dtype=np.intp)
+        self.point_rows = np.array([i for i, c in enumerate(self.task_space) if c in mechanism.POSITION_COMPONENTS],
+                                   dtype=np.intp)
         self.point_axes = tuple(self.task_space[i] for i in self.point_rows)
         self._point_index = np.array([mechanism.POSITION_COMPONENTS.index(c) for c in self.point_axes], dtype=np.intp)
-        self._point_error = None if self.point_rows.size and {"fk", "jacobian"} <= set(model.functions) else (
-            f"{self.name}: task-space simulation needs 'fk' and 'jacobian' and a task space with x, y or z "
-            f"(it is [{', '.join(self.task_space)}])")
         functions = set(model.functions)
+        task_functions = {"device_fk", "device_actuator_jacobian"} if self.hybrid else {"fk", "jacobian"}
+        self._point_error = None if self.point_rows.size and task_functions <= functions else (
+            f"{self.name}: task-space simulation needs {' and '.join(sorted(task_functions))} and a task space with "
+            f"x, y or z (it is [{', '.join(self.task_space)}])")
         self._forward, self._inverse = self._of_joints("forward_dynamics"), self._of_joints("inverse_dynamics")
         self._mass, self._kinetic = self._of_joints("mass_matrix"), self._of_joints("kinetic_energy")
-        self._jacobian = self._of_joints("jacobian") if "jacobian" in functions else None
+        task_jacobian = "device_actuator_jacobian" if self.hybrid else "jacobian"
+        self._jacobian = self._of_joints(task_jacobian) if task_jacobian in functions else None
         self._gravity = self._of_joints("gravity_vector") if "gravity_vector" in functions else None
         self._potential = self._of_joints("potential_energy") if "potential_energy" in functions else None
-        self._friction = model.friction if "friction" in functions else None  # F_f(qd): no pose
+        self._friction = self._of_joints("friction") if "friction" in functions else None  # F_f(qd): no pose
         self._check_complete(functions)
 
     def _of_joints(self, name: str):
-        """The generated function ``name`` as a function of the joint variables q (and the rest): a parallel
-        mechanism's takes the platform pose p = fk(q) after q."""
+        """The generated function ``name`` as a function of the plant's joint vectors (q, then qd, qdd or tau as
+        the function takes them): a parallel mechanism's takes the platform pose p = fk(q) after q, a hybrid
+        device's the wrist's part of each vector after the legs' (``qw`` after ``q``...), as its manifest names
+        the inputs."""
         function = getattr(self.model, name)
         if not self.parallel:
             return function
-        return lambda q, *rest: function(q, self.pose(q), *rest)
+        inputs = tuple(self.model.info.functions[name].vectors)
+        joint_inputs = [i for i in inputs if i != "p" and i not in WRIST_INPUTS.values()]
+        legs = self.legs
+
+        def of_joints(*vectors):
+            values = {}
+            for input_name, vector in zip(joint_inputs, vectors, strict=True):
+                values[input_name], values[WRIST_INPUTS[input_name]] = vector[..., :legs], vector[..., legs:]
+            if "p" in inputs:
+                values["p"] = self.pose(values["q"])
+            return function(*(values[i] for i in inputs))
+        return of_joints
 
     def pose(self, q: np.ndarray) -> np.ndarray:
-        """A parallel mechanism's platform pose p = fk(q) (..., task dof); NaN where it does not assemble.
+        """A parallel mechanism's platform pose p = fk(q) (..., task dof) of the legs' joints q (a hybrid
+        device's: the first :attr:`legs` of its joints); NaN where it does not assemble.
 
         The last q and its pose are kept: one step of the loop asks for the pose of one q up to five times
         (the TCP point and Jacobian, gravity compensation, the acceleration)."""
-        q = np.asarray(q, dtype=float)
+        q = np.asarray(q, dtype=float)[..., :self.legs]
         last_q, last_p = self._last_pose
         if last_q is not None and q.shape == last_q.shape and np.array_equal(q, last_q):
             return last_p
@@ -109,13 +139,19 @@ class Plant:
 
     def _test_configuration(self) -> np.ndarray:
         """A configuration to probe the generated functions at: random for a serial chain, the
-        declared home pose's (q = ik(home)) or q = 0 for a parallel mechanism, which must assemble."""
+        declared home pose's (q = ik(home)) or q = 0 for a parallel mechanism, which must assemble
+        (a hybrid device's wrist in the middle of its limits)."""
         if not self.parallel:
             return np.random.default_rng(7).uniform(-1.0, 1.0, self.dof)
         home = self.model.info.home
-        if home is not None and "ik" in self.model.functions:
-            return np.asarray(self.model.ik(np.asarray(home, dtype=float)).joints, dtype=float)
-        return np.zeros(self.dof)
+        legs = (np.asarray(self.model.ik(np.asarray(home, dtype=float)).joints, dtype=float)
+                if home is not None and "ik" in self.model.functions else np.zeros(self.legs))
+        return np.concatenate([legs, self.middle_of_limits()[self.legs:]])
+
+    def middle_of_limits(self) -> np.ndarray:
+        """(n,): the middle of each joint's limits, 0 for an unlimited joint."""
+        finite = np.isfinite(self.joint_limits).all(axis=1)
+        return np.where(finite, np.where(finite[:, None], self.joint_limits, 0.0).mean(axis=1), 0.0)
 
     def _check_complete(self, functions: set[str]) -> None:
         """Refuse a plant whose missing functions would silently read as zero.
@@ -170,6 +206,8 @@ class Plant:
     def point(self, q: np.ndarray) -> np.ndarray:
         """Position (..., d) of the TCP in the translational task axes (:attr:`point_axes`)."""
         self._require_point()
+        if self.hybrid:
+            return self.model.device_fk(self.pose(q), q[..., self.legs:])[..., self._point_index, 3]
         if self.parallel:
             return self.pose(q)[..., self._point_index]
         return self.model.fk(q)[..., self._point_index, 3]
@@ -180,10 +218,28 @@ class Plant:
         return self.task_jacobian(q)[..., self.point_rows, :]
 
     def task_jacobian(self, q: np.ndarray) -> np.ndarray:
-        """(..., m, n): the task Jacobian J, pd = J qd (generated ``jacobian``)."""
+        """(..., m, n): the task Jacobian J, pd = J qd (generated ``jacobian``; a hybrid device's
+        ``device_actuator_jacobian``, the TCP's velocity and angular velocity)."""
         if self._jacobian is None:
-            raise GeneratedCodeError(f"{self.name}: task-space simulation needs the generated 'jacobian'")
+            raise GeneratedCodeError(f"{self.name}: task-space simulation needs the generated "
+                                     f"'{'device_actuator_jacobian' if self.hybrid else 'jacobian'}'")
         return self._jacobian(q)
+
+    def dexterity(self, q: np.ndarray) -> np.ndarray:
+        """1/kappa of the task Jacobian at q (...,): how well the TCP is driven from there.
+
+        A hybrid device's rows and columns mix units (m/rad, rad/rad), so its figure is the worse of
+        its parts': the platform's Jacobian J (the legs) and the wrist's angular Jacobian (the
+        angular rows of J_a in the wrist's columns), each free of a characteristic length."""
+        if not self.hybrid:
+            return inverse_condition_number(self.task_jacobian(q))
+        if "jacobian" not in self.model.functions:
+            raise GeneratedCodeError(f"{self.name}: the platform's dexterity needs the generated 'jacobian'")
+        legs = np.asarray(q, dtype=float)[..., :self.legs]
+        platform = inverse_condition_number(self.model.jacobian(legs, self.pose(legs)))
+        angular = [i for i, c in enumerate(self.task_space) if c not in mechanism.POSITION_COMPONENTS]
+        wrist = inverse_condition_number(self.task_jacobian(q)[..., angular, self.legs:])
+        return np.minimum(platform, wrist)
 
     def _require_point(self) -> None:
         if self._point_error is not None:

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from symkin.analysis.conditioning import inverse_condition_number
 from symkin.simulation.plant import Plant
 
 #: 1/kappa of the task Jacobian above which the middle of the limits is kept.
@@ -22,11 +21,10 @@ START_CANDIDATES = 256
 
 def start_pose(plant: Plant) -> tuple[np.ndarray, str]:
     """(q0, how it was chosen, for the output)."""
-    limits = np.array(plant.model.joint_limits, dtype=float).reshape(plant.dof, 2)
+    limits = plant.joint_limits
     finite = np.isfinite(limits).all(axis=1)
-    middle = np.zeros(plant.dof)
-    middle[finite] = limits[finite].mean(axis=1)
-    conditioning = float(inverse_condition_number(plant.task_jacobian(middle)))
+    middle = plant.middle_of_limits()
+    conditioning = float(plant.dexterity(middle))
     if conditioning >= WELL_CONDITIONED:
         return middle, f"the middle of the joint limits (1/kappa = {conditioning:.3g})"
     from scipy.stats import qmc
@@ -34,7 +32,7 @@ def start_pose(plant: Plant) -> tuple[np.ndarray, str]:
     span = np.where(finite[:, None], limits, np.where(plant.revolute, np.pi, 0.5)[:, None] * [-1.0, 1.0])
     low, high = span[:, 0] + 0.1 * np.ptp(span, axis=1), span[:, 1] - 0.1 * np.ptp(span, axis=1)
     candidates = qmc.scale(qmc.Sobol(plant.dof, scramble=False).random(START_CANDIDATES), low, high)
-    measures = inverse_condition_number(plant.task_jacobian(candidates))
+    measures = np.nan_to_num(plant.dexterity(candidates), nan=0.0)
     best = int(np.argmax(measures))
     return candidates[best], (f"the best-conditioned of {START_CANDIDATES} poses within the limits (1/kappa = "
                               f"{float(measures[best]):.3g}); the middle of the limits has 1/kappa = {conditioning:.3g}")

@@ -114,7 +114,7 @@ class JointStops:
             raise ValueError(f"stop time constant must be positive, got {time_constant:g} s")
         if not damping_ratio >= 0.0:
             raise ValueError(f"stop damping ratio must not be negative, got {damping_ratio:g}")
-        limits = np.array(plant.model.joint_limits, dtype=float).reshape(plant.dof, 2)
+        limits = plant.joint_limits
         limited = np.isfinite(limits).any(axis=1)
         if not limited.any():
             return None

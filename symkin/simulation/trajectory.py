@@ -119,15 +119,19 @@ def task_circle(plant, q_start: np.ndarray, radius: float, duration: float, samp
 
 
 def _parallel_circle(plant, q_start: np.ndarray, radius: float, duration: float, samples: int) -> SplineReference:
-    """:func:`task_circle` of a parallel mechanism: its closed-form ik at every sample of the circle."""
+    """:func:`task_circle` of a parallel mechanism: its closed-form ik at every sample of the circle (a hybrid
+    device's wrist held at its start: the platform translates, so the TCP follows the platform's circle)."""
     if "ik" not in plant.model.functions:
         raise SimulationError(f"{plant.name}: a task-space circle of a parallel mechanism needs the generated 'ik'")
+    q_start = np.asarray(q_start, dtype=float)
     times = np.linspace(0.0, duration, samples)
     phi = 2.0 * np.pi * rest_to_rest(times, duration)
-    targets = np.tile(plant.pose(np.asarray(q_start, dtype=float)), (samples, 1))
-    targets[:, plant.point_rows[0]] += radius * (np.cos(phi) - 1.0)
-    targets[:, plant.point_rows[1]] += radius * np.sin(phi)
-    q = np.asarray(plant.model.ik(targets).joints, dtype=float)
+    targets = np.tile(plant.pose(q_start), (samples, 1))
+    first, second = (plant.model.info.task_space.index(axis) for axis in plant.point_axes[:2])
+    targets[:, first] += radius * (np.cos(phi) - 1.0)
+    targets[:, second] += radius * np.sin(phi)
+    legs = np.asarray(plant.model.ik(targets).joints, dtype=float)
+    q = np.concatenate([legs, np.tile(q_start[plant.legs:], (samples, 1))], axis=-1)
     lost = np.flatnonzero(~np.all(np.isfinite(q), axis=-1))
     if lost.size:
         raise SimulationError(f"{plant.name}: the circle leaves the reachable workspace at t = {times[lost[0]]:.4g} s; "
