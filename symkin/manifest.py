@@ -33,13 +33,15 @@ def _input_record(i) -> dict[str, Any]:
 
 
 def _coordinate_record(model: Model, coordinate, actuators: tuple | None = None) -> dict[str, Any]:
-    """Name and type of a joint coordinate, and its position, velocity and effort limits where the
-    model declares them.
+    """Name and type of a joint coordinate, whether it is passive, and its position, velocity and effort
+    limits where the model declares them.
 
     Limits are numbers: their expressions evaluated at the parameters' default values (the
     analyses in :mod:`symkin.analysis` and the simulation read them without sympy).
     """
     record: dict[str, Any] = {"name": coordinate.name, "type": coordinate.type.value}
+    if not getattr(coordinate, "active", True):  # a passive joint (active: false): no actuator drives it
+        record["active"] = False
     if model.source_name("joints", coordinate.name) != coordinate.name:  # a URDF's joint_0.0, as named there
         record["source_name"] = model.source_name("joints", coordinate.name)
     values = model.parameter_values

@@ -17,6 +17,7 @@ from conftest import MODELS_DIR, SYMKIN_CLI
 from symkin import load, load_model
 from symkin.derivation import Derivation
 from symkin.errors import DerivationError, ModelError
+from symkin.cli import main
 from symkin.simulation import Plant, scenarios
 from test_simulation import assert_wall_equilibrium
 from tolerances import CLOSED_FORM, DELTA_SCALE, DYNAMICS, KINEMATICS
@@ -272,6 +273,17 @@ def plant(device):
     return Plant(device)
 
 
+@pytest.fixture(scope="module")
+def motorized(tmp_path_factory):
+    """The device with motors on its wrist: models/delta_wrist.yaml without its wrist's ``active: false``."""
+    out = tmp_path_factory.mktemp("motorized")
+    text = (MODELS_DIR / "delta_wrist.yaml").read_text()
+    assert text.count(", active: false}") == 3
+    (out / "delta_wrist.yaml").write_text(text.replace(", active: false}", "}"))
+    assert main(["derive", str(out / "delta_wrist.yaml"), "-o", str(out), "--backend", "numpy", "-q"]) == 0
+    return Plant(load(out / "delta_wrist"))
+
+
 def test_the_plant_of_a_hybrid_device_is_its_legs_and_wrist_with_the_wrists_tcp(plant, device):
     assert plant.coordinates == ("theta1", "theta2", "theta3", "psi1", "psi2", "psi3")
     assert plant.joint_limits[4].tolist() == pytest.approx(np.radians([-70.0, 70.0]).tolist(), rel=CLOSED_FORM)
@@ -284,16 +296,43 @@ def test_the_plant_of_a_hybrid_device_is_its_legs_and_wrist_with_the_wrists_tcp(
                                                                                     tau[:3], tau[3:]))
     assert np.array_equal(plant.energy(Z0, qd), device.kinetic_energy(q, p, psi, qd[:3], qd[3:])
                           + device.potential_energy(q, p, psi))
+    assert plant.passive == ("psi1", "psi2", "psi3")               # models/delta_wrist.yaml: active: false
+    assert plant.drive(tau).tolist() == [0.01, -0.02, 0.03, 0.0, 0.0, 0.0]
 
 
-def test_a_hybrid_device_renders_a_wall_at_the_series_spring_equilibrium(plant):
+def test_a_passive_wrist_gets_no_actuator_effort_and_keeps_the_power_balance(plant):
+    """The renderer's command reaches the DELTA's motors only; the wrist moves under the hand, its weight
+    and its stops, and k + u + U + D - w stays constant (the work w counts the efforts actually exerted)."""
+    result = scenarios.haptic_wall("", plant, Z0, 0.01, 0.02, scenarios.Timing(0.3, 1000, "dop853"),
+                                   stops=scenarios.StopSettings())
+    c = result.series[0].columns
+    for name in ("psi1", "psi2", "psi3"):
+        assert not np.any(c[f"tau_{name} [N m]"])
+    assert np.max(np.abs(c["tau_theta1 [N m]"])) > 0.01
+    assert np.max(c["penetration psi1 [rad]"]) > 0.01        # the wrist swings (here into psi1's stop)
+    drift = float(next(line for line in result.summary if "energy balance drift" in line)
+                  .split("energy balance drift ")[1].split()[0])
+    assert drift < 1e-6
+
+
+@pytest.mark.parametrize("scenario", ["sine", "tracking"])
+def test_prescribing_a_passive_wrists_motion_is_refused_with_exit_2(scenario, generated_dir, tmp_path, capsys):
+    with pytest.raises(SystemExit) as exit:
+        main(["simulate", str(generated_dir / "delta_wrist"), "--scenario", scenario, "-o", str(tmp_path / "out")])
+    assert exit.value.code == 2
+    assert "psi1, psi2, psi3 are passive" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_motorized_wrist_renders_a_wall_at_the_series_spring_equilibrium(motorized):
     """The hand's force reaches every actuator through J_a^T, the wrist's included: at rest the renderer's
     wrist torques balance the hand's moment about the wrist, and the hand feels the wall."""
-    assert_wall_equilibrium(plant, Z0, 2000)
+    assert not motorized.passive
+    assert_wall_equilibrium(motorized, Z0, 2000)
 
 
-def test_a_hybrid_device_follows_a_tcp_circle_with_its_wrist_held(plant):
-    result = scenarios.tracking("", plant, Z0, 0.02, scenarios.Timing(0.6, 1000, "rk4"), bandwidth=80.0)
+def test_a_motorized_wrist_is_held_while_the_handle_follows_a_tcp_circle(motorized):
+    result = scenarios.tracking("", motorized, Z0, 0.02, scenarios.Timing(0.6, 1000, "rk4"), bandwidth=80.0)
     c = result.series[0].columns
     psi = np.stack([c[f"psi{i} [rad]"] for i in (1, 2, 3)], -1)
     assert np.max(np.abs(psi - Z0[3:])) < 1e-4                  # the wrist holds its angles...
@@ -306,5 +345,5 @@ def test_cli_simulates_a_hybrid_device(generated_dir, tmp_path):
                           "--duration", "0.3", "--backend", "c", "-o", str(tmp_path / "out")],
                          capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
-    assert "|tau_psi2|" in run.stdout and "peak felt force" in run.stdout
+    assert "|tau_psi2| <= 0 N m" in run.stdout and "peak felt force" in run.stdout
     assert (tmp_path / "out" / "haptic-wall.png").read_bytes()[:4] == b"\x89PNG"

@@ -35,7 +35,7 @@ def pages(generated_dir, tmp_path_factory):
     """name -> the page of the generated model (1024 cloud points), written as symkin view writes it."""
     out = tmp_path_factory.mktemp("pages")
     written = {}
-    for name in ("ur10e", "delta", "stewart"):
+    for name in ("ur10e", "delta", "stewart", "delta_wrist"):
         written[name] = out / f"{name}.html"
         written[name].write_text(viewer_page.page_of(load(generated_dir / name), 1024)[0])
     return written
@@ -108,6 +108,32 @@ def test_the_stewart_platform_is_rated_by_its_twist_jacobian(browser, pages, gen
     expected = float(conditioning.inverse_condition_number(J))
     # J = diag(I, E) inv(J^-1): an inversion, whose rounding kappa(J^-1) amplifies, before the SVD
     assert shown_inverse_kappa(page) == pytest.approx(expected, rel=AGREEMENT * np.linalg.cond(J), abs=svd(6))
+
+
+def test_a_hybrid_device_shows_its_wrist_on_the_platform(browser, pages, generated_dir):
+    """The wrist's sliders turn its joints on the platform the task sliders move: the TCP the page shows is the
+    wrist's (numpy's device_fk), its links are drawn, and its 1/kappa is that of the angular rows of
+    device_jacobian in the wrist's columns: tan(45 deg - |psi2| / 2) for this Z-X-Y wrist (docs/analysis.md)."""
+    model = load(generated_dir / "delta_wrist")
+    page = open_page(browser, pages["delta_wrist"])
+    assert page.evaluate("window.symkinView.state.qw") == [0.0, 0.0, 0.0]
+    press(page, "task-x", "ArrowRight", 100)   # 10 mm
+    press(page, "wrist-psi1", "ArrowRight", 300)  # 30 deg
+    press(page, "wrist-psi2", "ArrowLeft", 400)   # -40 deg
+    p = np.array(page.evaluate("window.symkinView.state.p"))
+    qw = np.array(page.evaluate("window.symkinView.state.qw"))
+    np.testing.assert_allclose(qw, np.radians([30.0, -40.0, 0.0]), rtol=0, atol=1e-12)
+    held, printed = shown_tcp(page)
+    want = model.device_fk(p, qw)[:3, 3]
+    np.testing.assert_allclose(held, want, rtol=0, atol=AGREEMENT * np.abs(want).max())
+    np.testing.assert_allclose(printed, 1000 * want, rtol=0, atol=0.0005 + 1e-9)
+    wrist = float(page.locator("#wrist-kappa").get_attribute("data-value"))
+    assert wrist == pytest.approx(np.tan(np.radians(45.0 - 20.0)), abs=AGREEMENT + svd(3))
+    drawn_wrist = page.evaluate("window.symkinView.evaluate().wrist")
+    frames = model.device_frames(p, qw)
+    expected = [p] + [T[:3, 3] for T in frames] + [want]
+    np.testing.assert_allclose(np.array(drawn_wrist), np.array(expected), rtol=0, atol=AGREEMENT)
+    assert not page.errors
 
 
 def test_the_cloud_toggles_and_the_screenshots_are_not_blank(browser, pages, tmp_path):

@@ -47,7 +47,8 @@ def run(args: argparse.Namespace) -> int:
         design = analysis_args.parse_assignments(args.design)
     except ValueError as err:
         analysis_args.fail_on_bad_input(args, err)
-    with analysis_args.generated_directory(args.model, ("numpy", "js"), page.VIEW_OUTPUTS) as directory:
+    with analysis_args.generated_directory(args.model, ("numpy", "js"), page.VIEW_OUTPUTS,
+                                           page.WRIST_VIEW_OUTPUTS) as directory:
         model = load(directory)
         try:
             model = model.bind(**design) if design else model

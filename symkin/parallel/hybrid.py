@@ -10,6 +10,7 @@ kinematics and geometric Jacobian are that chain's serial derivations: exact, an
 
 ==============================  ================================================================
 ``device_fk``                   base_T_tcp(p, qw): the pose of the wrist's TCP (4x4)
+``device_frames``               base_T_<link>(p, qw) of each wrist link (4x4 each)
 ``device_jacobian``             [v; w] = J_c [pd; qwd]: geometric Jacobian in the combined coordinates
 ``device_actuator_jacobian``    [v; w] = J_a [qd; qwd], J_a = J_c diag(J, I), J = J_x^-1 J_q the platform's
 ==============================  ================================================================
@@ -165,6 +166,19 @@ def _device_fk(d: Derivation) -> FunctionSpec:
         "Trans(x, y, z) Rz(yaw) Ry(pitch) Rx(roll) (p = fk(q)), then the wrist's chain.",
         [task_input(d.model), wrist_input(d.model)],
         [OutputSpec("base_T_tcp", chain.tcp.T, "homogeneous transform of the TCP frame in the base frame", "m")],
+    )
+
+
+@quantity("device_frames", "base_T_<link> (4x4) of every link of a hybrid device's wrist", mechanism=PARALLEL)
+def _device_frames(d: Derivation) -> FunctionSpec:
+    chain: ChainFrames = d[_device_derivation][chain_frames]
+    platform = {joint.link for joint in platform_joints(d.model)}
+    return make_function(
+        d.model, "device_frames", "Pose of every link frame of the wrist in the base frame (the viewer draws them).",
+        "base_T_<link> = base_T_platform(p) * platform_T_1 * ... * (i-1)_T_i for each wrist link i.",
+        [task_input(d.model), wrist_input(d.model)],
+        [OutputSpec(f"base_T_{name}", frame.T, f"homogeneous transform of frame '{name}' in the base frame", "m")
+         for name, frame in chain.links if name not in platform],
     )
 
 

@@ -26,6 +26,8 @@ class Coordinate:
         effort_limit: the largest |tau| its actuator gives (N m or N), or None.
         source_name: its name in the robot file it came from where that is no identifier (a URDF's
             ``joint_0.0``), else None; see :attr:`label`.
+        active: driven by an actuator; False for a passive joint (``active: false``, e.g. the measured but
+            unmotorized wrist of a haptic device), on which a controller exerts no effort.
     """
 
     name: str
@@ -34,6 +36,7 @@ class Coordinate:
     velocity_limit: float | None = None
     effort_limit: float | None = None
     source_name: str | None = None
+    active: bool = True
 
     @property
     def label(self) -> str:
@@ -137,7 +140,8 @@ def _coordinate(record: dict[str, Any]) -> Coordinate:
     """A coordinate of the manifest (the model's ``coordinates``, a hybrid device's ``wrist``)."""
     return Coordinate(record["name"], record["type"] == "R",
                       (float(record["limits"][0]), float(record["limits"][1])) if record.get("limits") else None,
-                      record.get("velocity_limit"), record.get("effort_limit"), record.get("source_name"))
+                      record.get("velocity_limit"), record.get("effort_limit"), record.get("source_name"),
+                      bool(record.get("active", True)))
 
 
 class GeneratedModel(Protocol):

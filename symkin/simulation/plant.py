@@ -82,6 +82,9 @@ class Plant:
                                          for c in coordinates])
         self.effort_limits = np.array([np.nan if c.effort_limit is None else c.effort_limit for c in coordinates])
         self.revolute = np.array([c.revolute for c in coordinates], dtype=bool)
+        #: which joints an actuator drives (False: passive, ``active: false``: no controller effort reaches it)
+        self.actuated = np.array([c.active for c in coordinates], dtype=bool)
+        self.passive = tuple(c.name for c in coordinates if not c.active)
         self.task_space = DEVICE_TASK_SPACE if self.hybrid else mechanism.task_space(model)
         #: rows of the task Jacobian that are TCP translations, and their fk axes
         self.point_rows = np.array([i for i, c in enumerate(self.task_space) if c in mechanism.POSITION_COMPONENTS],
@@ -177,6 +180,10 @@ class Plant:
             if np.max(np.abs(friction)) > 1e-9 * scale:
                 raise GeneratedCodeError(f"{self.name}: the model has friction but 'friction' was not generated; "
                                          "derive it with friction")
+
+    def drive(self, tau: np.ndarray) -> np.ndarray:
+        """The efforts the actuators exert when a controller commands ``tau``: zero at a passive joint."""
+        return np.where(self.actuated, tau, 0.0) if self.passive else tau
 
     def acceleration(self, q: np.ndarray, qd: np.ndarray, tau: np.ndarray) -> np.ndarray:
         """qdd = M^-1 (tau - V - G - F_f) (generated ``forward_dynamics``)."""

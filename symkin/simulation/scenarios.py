@@ -129,13 +129,21 @@ class Timing:
 
 
 def integrate(system: ArmSystem, control, x0: np.ndarray, timing: Timing) -> Run:
-    """Run the loop with the chosen integrator (see :mod:`symkin.simulation.integrate`)."""
+    """Run the loop with the chosen integrator (see :mod:`symkin.simulation.integrate`); the controller's
+    command reaches the actuated joints only (:meth:`Plant.drive`), and the run records what they exert."""
+    if system.plant.passive:
+        control = _driven(system.plant, control)
     if timing.integrator == "rk4":
         return run_sampled(system.derivative, control, x0, 1.0 / timing.rate, timing.steps, timing.substeps)
     if timing.integrator == "dop853":
         modes = ContactModes(system.stops) if system.stops is not None else None
         return run_adaptive(system.derivative, control, x0, np.arange(timing.steps + 1) / timing.rate, modes=modes)
     raise ValueError(f"unknown integrator {timing.integrator!r}; use one of {', '.join(INTEGRATORS)}")
+
+
+def _driven(plant: Plant, control):
+    """``control`` as the actuators exert it: its command zeroed at the passive joints."""
+    return lambda t, x: plant.drive(control(t, x))
 
 
 def balance_drift(system: ArmSystem, run: Run, energy: np.ndarray | None = None) -> float:
@@ -203,6 +211,18 @@ def _peak(values: np.ndarray) -> float:
     return float(np.max(np.abs(values)))
 
 
+def require_actuated(plant: Plant, scenario: str) -> None:
+    """Refuse a scenario that prescribes every joint's motion on a plant with passive joints.
+
+    Raises:
+        ValueError: the plant has passive joints; the message names them and the scenarios that apply.
+    """
+    if plant.passive:
+        raise ValueError(f"{plant.name}: the {scenario} scenario prescribes the motion of every joint, but "
+                         f"{', '.join(plant.passive)} {'is' if len(plant.passive) == 1 else 'are'} passive (active: "
+                         "false: no actuator holds it); simulate haptic-wall, gravity-compensation or free-swing")
+
+
 def tcp_forces(J: np.ndarray, tau: np.ndarray) -> np.ndarray:
     """F = J^-T tau (seed eq. 8.35) per sample (N, m); NaN where J is singular (kappa > 1e12).
 
@@ -222,6 +242,7 @@ def sine(designs: Sequence[tuple[str, Plant]], center: np.ndarray, joint: int, a
     """The seed's simplified haptic scenario for each design (Figs. 8.21, 8.22)."""
     series, summary = [], []
     plant0 = designs[0][1]
+    require_actuated(plant0, "sine")
     names = plant0.coordinates
     positions, efforts = labels.joint_units(plant0)
     reference = JointSine(np.asarray(center, float), joint, amplitude, frequency)
@@ -273,6 +294,7 @@ def sine(designs: Sequence[tuple[str, Plant]], center: np.ndarray, joint: int, a
 def tracking(label: str, plant: Plant, q_start: np.ndarray, radius: float, timing: Timing,
              bandwidth: float = 50.0, stops: StopSettings | None = None) -> ScenarioResult:
     """A TCP circle followed by computed-torque control (seed Fig. 8.17)."""
+    require_actuated(plant, "tracking")
     reference = task_circle(plant, q_start, radius, timing.duration)
     system, stability = _system(plant, q_start, stops, timing)
     run = integrate(system, ComputedTorque(system, reference, bandwidth), system.initial(q_start), timing)

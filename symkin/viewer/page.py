@@ -3,7 +3,8 @@
 The page (``templates/viewer/page.html.j2``) carries everything it needs, so it opens with no
 network: the model's generated JavaScript (:mod:`symkin.backends.js`) computes the pose at every
 slider move (serial: ``frames``, ``fk`` and ``jacobian`` of q; parallel: the closed-form ``ik``,
-``leg_points`` and the Jacobian of p), three.js (vendored in ``symkin/viewer/vendor`` with its
+``leg_points`` and the Jacobian of p; a hybrid device's wrist: ``device_frames`` and ``device_fk`` of p
+and its joints qw), three.js (vendored in ``symkin/viewer/vendor`` with its
 MIT licence, embedded as data: modules behind an import map) draws it, and the workspace cloud
 with 1/kappa per point (seed Table 8.5) is computed here by the analyses, for the design given.
 
@@ -75,9 +76,18 @@ class ViewUnavailable(ValueError):
     """A model directory without what the page evaluates (the message says how to derive it)."""
 
 
+#: ... and a hybrid device's wrist on the platform: its links' frames, the TCP and the wrist's angular Jacobian.
+WRIST_VIEW_OUTPUTS = ("device_fk", "device_frames", "device_jacobian")
+
+
+def view_outputs(model: GeneratedModel) -> tuple[str, ...]:
+    """The generated functions the page evaluates for ``model``."""
+    return VIEW_OUTPUTS[kind_of(model)] + (WRIST_VIEW_OUTPUTS if model.info.wrist else ())
+
+
 def missing_functions(model: GeneratedModel) -> list[str]:
     """The generated functions the page needs that ``model`` lacks (empty: it can be shown)."""
-    return [f for f in VIEW_OUTPUTS[kind_of(model)] if f not in model.functions]
+    return [f for f in view_outputs(model) if f not in model.functions]
 
 
 def kind_of(model: GeneratedModel) -> str:
@@ -168,8 +178,16 @@ def _slider(name: str, lower: float, upper: float, scale: float, unit: str, step
 
 def _coordinates(model: GeneratedModel) -> list[dict[str, Any]]:
     limits = mechanism.joint_limits(model)
+    return [_slider(c.name, float(lower), float(upper), *_slider_units("", c.revolute)) | {"label": c.label}
+            for c, (lower, upper) in zip(model.info.coordinates, limits)]
+
+
+def _wrist(model: GeneratedModel) -> list[dict[str, Any]]:
+    """Sliders of a hybrid device's wrist joints, over their declared limits (a full turn, or +-0.1 m, without)."""
     out = []
-    for c, (lower, upper) in zip(model.info.coordinates, limits):
+    for c in model.info.wrist:
+        unlimited = mechanism.DEFAULT_REVOLUTE_LIMITS if c.revolute else (-0.1, 0.1)
+        lower, upper = c.limits if c.limits is not None else unlimited
         out.append(_slider(c.name, float(lower), float(upper), *_slider_units("", c.revolute)) | {"label": c.label})
     return out
 
@@ -210,7 +228,7 @@ def _task(model: GeneratedModel, cloud: Cloud, home: np.ndarray) -> list[dict[st
 def page_data(model: GeneratedModel, cloud: Cloud) -> dict[str, Any]:
     """Everything the page's program reads (the JSON in ``<script id="symkin-data">``)."""
     kind = "parallel" if mechanism.is_parallel(model) else "serial"
-    outputs = VIEW_OUTPUTS[kind_of(model)]
+    outputs = view_outputs(model)
     points = np.round(cloud.points, CLOUD_DIGITS)
     values = np.round(np.nan_to_num(cloud.inverse_kappa, nan=0.0), CLOUD_DIGITS)
     coordinates = _coordinates(model)
@@ -222,6 +240,9 @@ def page_data(model: GeneratedModel, cloud: Cloud) -> dict[str, Any]:
         units = [_slider_units("m" if c in mechanism.POSITION_COMPONENTS else "rad") for c in mechanism.task_space(model)]
         home = {"q": [0.0] * len(model.info.coordinates),
                 "p": [_on_grid(v, scale, step) for v, (scale, _, step) in zip(mechanism.home_pose(model), units)]}
+        wrist = _wrist(model)
+        if wrist:  # a hybrid device: its wrist starts in the middle of its sliders
+            home["qw"] = [_on_grid((w["lower"] + w["upper"]) / 2, w["scale"], w["step"]) for w in wrist]
     seen = np.concatenate([points, _mechanism_points(model, home)])
     lower, upper = seen.min(axis=0), seen.max(axis=0)
     centre, scale = (lower + upper) / 2, float(np.max(upper - lower))
@@ -243,6 +264,8 @@ def page_data(model: GeneratedModel, cloud: Cloud) -> dict[str, Any]:
         data["tree"] = model.manifest["model"]["tree"]
     if kind == "parallel":
         data["task"] = _task(model, cloud, np.array(home["p"]))
+    if "qw" in home:
+        data["wrist"] = wrist
     return data
 
 
@@ -252,7 +275,10 @@ def _mechanism_points(model: GeneratedModel, home: dict[str, list[float]]) -> np
         frames = model.frames(np.array(home["q"]))
         return np.array([[0.0, 0.0, 0.0]] + [T[:3, 3] for T in frames])
     p = np.array(home["p"])
-    return np.asarray(model.leg_points(model.ik(p).joints, p))
+    legs = np.asarray(model.leg_points(model.ik(p).joints, p))
+    if "qw" not in home:
+        return legs
+    return np.concatenate([legs, model.device_fk(p, np.array(home["qw"]))[None, :3, 3]])
 
 
 def _vendor(name: str) -> str:
@@ -318,7 +344,8 @@ def render_page(model: GeneratedModel, model_script: str, cloud: Cloud, descript
         TEMPLATE,
         csp=content_security_policy([str(importmap)] + [str(s) for s in scripts]),
         provenance=f"Generated by symkin {__version__} (symkin view) from model '{model.name}'",
-        title=f"{model.name}: symkin view", description=description, kind=data["kind"], version=__version__,
+        title=f"{model.name}: symkin view", description=description, kind=data["kind"], wrist="wrist" in data,
+        version=__version__,
         three_version=THREE_VERSION, cloud_note=cloud.note,
         gradient=", ".join(VIRIDIS), ticks=[f"{t:.2f}" for t in (0.0, top / 2, top)],
         data=_json_island(data), importmap=importmap, model_script=scripts[0], viewer_script=scripts[1],
@@ -337,7 +364,7 @@ def model_script(model: LoadedModel) -> str:
     if missing or not script.is_file():
         what = ", ".join(missing) if missing else "its JavaScript"
         raise ViewUnavailable(f"{model.directory}: the page needs {what}; derive the model with them, e.g. symkin "
-                              f"derive MODEL --only {','.join(VIEW_OUTPUTS[kind_of(model)])} --backend numpy,js")
+                              f"derive MODEL --only {','.join(view_outputs(model))} --backend numpy,js")
     text = script.read_text(encoding="utf-8")
     try:
         _inline_script(text, str(script))

@@ -7,6 +7,8 @@ import { OrbitControls } from "three/addons/controls/OrbitControls.js";
 const data = JSON.parse(document.getElementById("symkin-data").textContent);
 const model = globalThis.symkin[data.name];
 const frameNames = data.kind === "serial" ? Object.keys(model.FUNCTIONS.frames.outputs) : [];
+// a hybrid device's wrist links (device_frames), drawn from the platform centre to its TCP
+const wristFrameNames = data.wrist ? Object.keys(model.FUNCTIONS.device_frames.outputs) : [];
 
 // ------------------------------------------------------------------ linear algebra (small dense)
 
@@ -137,6 +139,7 @@ function platformPose(p) {
 }
 
 const state = { q: data.home.q.slice(), p: data.home.p ? data.home.p.slice() : null,
+  qw: data.home.qw ? data.home.qw.slice() : null,
   // no prototype: a parameter named like an Object.prototype member ("constructor") is only what is set
   params: Object.assign(Object.create(null), Object.fromEntries(data.parameters.map((p) => [p.name, p.value]))) };
 
@@ -165,6 +168,7 @@ function evaluate() {
     const e = R.elements;  // column-major
     out.frames = [[[e[0], e[4], e[8], out.tcp[0]], [e[1], e[5], e[9], out.tcp[1]], [e[2], e[6], e[10], out.tcp[2]],
       [0, 0, 0, 1]]];
+    if (data.wrist) evaluateWrist(out);
     if (model.singularities && !unreachable.length) {
       const { det_Jq, det_Jx } = call("singularities", joints, state.p);
       out.detJq = det_Jq; out.detJx = det_Jx;
@@ -180,6 +184,20 @@ function evaluate() {
     }
   }
   return out;
+}
+
+/** A hybrid device's wrist on the platform at state.p: its links' frames and TCP (the TCP the page shows
+ *  becomes the wrist's), and the wrist's 1/kappa from the angular rows of device_jacobian in its columns. */
+function evaluateWrist(out) {
+  const frames = call("device_frames", state.p, state.qw);
+  const tcp = call("device_fk", state.p, state.qw);
+  const wristFrames = [...wristFrameNames.map((name) => frames[name]), tcp];
+  out.wrist = [out.tcp, ...wristFrames.map((T) => [T[0][3], T[1][3], T[2][3]])];
+  out.frames.push(...wristFrames);
+  out.tcp = out.wrist[out.wrist.length - 1];
+  const J = call("device_jacobian", state.p, state.qw);
+  const angular = J.slice(3).map((row) => row.slice(data.task_space.length));
+  out.wristKappa = inverseCondition({ raw: angular, rated: angular });
 }
 
 // ------------------------------------------------------------------ drawing
@@ -245,7 +263,7 @@ const links = new THREE.Group();
 scene.add(links);
 const jointMaterial = new THREE.MeshLambertMaterial({ color: 0xff7f0e });
 const jointGeometry = new THREE.SphereGeometry(data.scale * 0.012, 12, 8);
-const frameCount = data.kind === "serial" ? frameNames.length + 1 : 1;
+const frameCount = data.kind === "serial" ? frameNames.length + 1 : 1 + (data.wrist ? wristFrameNames.length + 1 : 0);
 const triads = Array.from({ length: frameCount }, (_, k) => triad(k === frameCount - 1 ? axisLength * 1.6 : axisLength));
 triad(axisLength * 1.2);  // the base frame
 
@@ -353,6 +371,10 @@ function draw(out) {
     chain(ring(2), radius * 1.2, platformMaterial);
     out.legs.flat().forEach(joint);
   }
+  if (out.wrist) {
+    chain(out.wrist, radius, linkMaterial);
+    out.wrist.slice(1, -1).forEach(joint);
+  }
   out.frames.forEach((T, k) => setPose(triads[k], T));
   const position = trace.getAttribute("position");
   if (traceCount === traceLength) position.array.copyWithin(0, 3);
@@ -398,6 +420,11 @@ function show(out) {
   const warning = document.getElementById("warning");
   warning.textContent = out.warnings.join("; ");
   warning.hidden = out.warnings.length === 0;
+  if (data.wrist) {
+    const wrist = document.getElementById("wrist-kappa");
+    wrist.dataset.value = String(out.wristKappa ?? NaN);
+    wrist.textContent = format(out.wristKappa, 4);
+  }
   if (data.kind === "parallel") {
     document.getElementById("joints").textContent = state.q.map((v, i) =>
       `${data.coordinates[i].label} = ${format(v / data.coordinates[i].scale, 2)} ${data.coordinates[i].unit}`).join(", ");
@@ -436,6 +463,11 @@ if (data.kind === "serial") {
   data.task.forEach((t, i) => slider(sliders, { id: `task-${t.name}`, label: t.name, lower: t.lower / t.scale,
     upper: t.upper / t.scale, step: t.step, unit: t.unit, digits: 1 }, state.p[i] / t.scale,
   (v) => { state.p[i] = v * t.scale; }));
+}
+if (data.wrist) {
+  data.wrist.forEach((c, i) => slider(document.getElementById("wrist-sliders"), { id: `wrist-${c.name}`, label: c.label,
+    lower: c.lower / c.scale, upper: c.upper / c.scale, step: c.step, unit: c.unit, digits: 1 }, state.qw[i] / c.scale,
+  (v) => { state.qw[i] = v * c.scale; }));
 }
 const design = document.getElementById("design");
 data.parameters.forEach((p) => slider(design, { id: `param-${p.name}`, label: p.name, lower: p.lower / p.scale,
