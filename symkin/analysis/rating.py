@@ -1,0 +1,111 @@
+"""A haptic device rated as its datasheet rates it: what the hand feels and what the device can render
+at the handle, from the joint-space M, the task Jacobian J (v = J qd), G and the actuators' data.
+
+At one pose (every function takes stacks, ``...``), with n joints and a square J (a translational
+device: 3 x 3 for a DELTA, 2 x 2 for a pantograph or a planar arm):
+
+* **apparent mass**: Lambda = (J M^-1 J^T)^-1 (Khatib 1987; J^-T M J^-1 for a square J), F = Lambda a
+  from rest.  Its eigenvalues are the masses the hand feels along its principal directions, their
+  ratio its isotropy (Salcudean and Stocco 2000; the inertia conditioning of Cammarata 2010).
+* **force capability**: with |tau_i| <= tau_max,i the renderable forces F = J^-T tau fill a
+  parallelepiped.  The isotropic force (in every direction) is min_i tau_max,i / |J_i|
+  (:func:`symkin.analysis.forces.isotropic_force`), the peak force (in the best direction) its
+  farthest vertex, max over s in {-1, 1}^n of |J^-T (s * tau_max)|.
+* **position resolution**: encoders that step q_i by dq_i (rad or m per count at the joint) move the
+  handle between neighbouring readings (each joint by at most one count) by at most the farthest
+  vertex of the zonotope J [-dq, dq], max_s |J (s * dq)|, to first order in dq.
+* **Coulomb friction at the handle**: moving with the velocity v the joints resist with
+  tau_c,i sign(qd_i), qd = J^-1 v, felt along u = v / |v| as u . J^-T (tau_c * sign(qd)).  Its largest
+  value over all directions is again a farthest vertex, max_s |J^-T (s * tau_c)|: with w = J^-1 v,
+  sum_i tau_c,i |w_i| = max_s (s * tau_c) . w, and max_w c . w / |J w| = |J^-T c| (Cauchy-Schwarz).
+* **gravity budget**: max_i |G_i| / tau_max,i, the largest share of an actuator's effort that holding
+  the device against gravity takes from what it can render.
+* **renderable stiffness**: a virtual wall K (with virtual damping B) rendered by a loop of period T
+  on a device with physical damping b is passive iff b > K T / 2 + |B| (Colgate and Schenkel 1997,
+  after Colgate and Brown 1994), so K_max = 2 (b - |B|) / T and |B| < b.  At the handle b is the
+  smallest eigenvalue of the joints' viscous damping seen there, J^-T diag(b_j) J^-1: the direction
+  in which the device is least damped limits the wall.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Sequence
+
+import numpy as np
+
+
+def apparent_mass(M: np.ndarray, J: np.ndarray) -> np.ndarray:
+    """Lambda = (J M^-1 J^T)^-1 (..., m, m): the inertia the hand feels at the handle, F = Lambda a from rest.
+
+    Args:
+        M: joint-space mass matrices (..., n, n).
+        J: task Jacobians (..., m, n), v = J qd, of full row rank m <= n.
+    """
+    M, J = np.asarray(M, dtype=float), np.asarray(J, dtype=float)
+    mobility = J @ np.linalg.solve(M, np.swapaxes(J, -1, -2))
+    return np.linalg.inv(mobility)
+
+
+def principal_masses(M: np.ndarray, J: np.ndarray) -> np.ndarray:
+    """The eigenvalues of the apparent mass (..., m), ascending: the masses felt along its principal axes."""
+    return np.linalg.eigvalsh(apparent_mass(M, J))
+
+
+def farthest_vertex(A: np.ndarray, half_widths: Sequence[float] | np.ndarray) -> np.ndarray:
+    """max over s in {-1, 1}^n of |A (s * h)| (...,): the largest image under A (..., m, n) of the box
+    |x_i| <= h_i, reached at a vertex as |A x| is convex.  s and -s give the same length, so 2^(n-1)
+    sign vectors are tried."""
+    A = np.asarray(A, dtype=float)
+    h = np.broadcast_to(np.asarray(half_widths, dtype=float), A.shape[-1:])
+    n = A.shape[-1]
+    signs = np.array([(1.0,) + rest for rest in itertools.product((1.0, -1.0), repeat=n - 1)])  # (2^(n-1), n)
+    images = np.einsum("...mn,kn->...km", A, signs * h)
+    return np.max(np.linalg.norm(images, axis=-1), axis=-1)
+
+
+def _inverse_transpose(J: np.ndarray) -> np.ndarray:
+    J = np.asarray(J, dtype=float)
+    if J.shape[-1] != J.shape[-2]:
+        raise ValueError(f"the handle's forces need a square task Jacobian (F = J^-T tau), got "
+                         f"{J.shape[-2]} x {J.shape[-1]}")
+    return np.swapaxes(np.linalg.inv(J), -1, -2)
+
+
+def peak_force(J: np.ndarray, effort_limits: Sequence[float] | np.ndarray) -> np.ndarray:
+    """The largest force the actuators render in the best direction (...,): max_s |J^-T (s * tau_max)|."""
+    return farthest_vertex(_inverse_transpose(J), effort_limits)
+
+
+def position_resolution(J: np.ndarray, joint_steps: Sequence[float] | np.ndarray) -> np.ndarray:
+    """The largest handle step between neighbouring encoder readings (...,): max_s |J (s * dq)|, dq the joints'
+    steps per count (rad or m)."""
+    return farthest_vertex(J, joint_steps)
+
+
+def coulomb_friction_felt(J: np.ndarray, coulomb: Sequence[float] | np.ndarray) -> np.ndarray:
+    """The largest Coulomb friction force the hand feels, over all directions of motion (...,):
+    max_s |J^-T (s * tau_c)|."""
+    return farthest_vertex(_inverse_transpose(J), coulomb)
+
+
+def gravity_share(G: np.ndarray, effort_limits: Sequence[float] | np.ndarray) -> np.ndarray:
+    """max_i |G_i| / tau_max,i (...,): the largest share of an actuator's effort limit spent holding the device."""
+    G = np.asarray(G, dtype=float)
+    return np.max(np.abs(G) / np.broadcast_to(np.asarray(effort_limits, dtype=float), G.shape[-1:]), axis=-1)
+
+
+def handle_damping(J: np.ndarray, viscous: Sequence[float] | np.ndarray) -> np.ndarray:
+    """The smallest viscous damping at the handle (...,): the least eigenvalue of J^-T diag(b) J^-1, N s/m."""
+    inverse_transpose = _inverse_transpose(J)
+    b = np.broadcast_to(np.asarray(viscous, dtype=float), inverse_transpose.shape[-1:])
+    damping = (inverse_transpose * b) @ np.swapaxes(inverse_transpose, -1, -2)
+    return np.linalg.eigvalsh(damping)[..., 0]
+
+
+def renderable_stiffness(damping: np.ndarray | float, period: float, virtual_damping: float = 0.0) -> np.ndarray:
+    """K_max = 2 (b - |B|) / T (N/m): the stiffest virtual wall a loop of period T renders passively on a device
+    with physical damping b at the handle and virtual damping B (Colgate and Schenkel 1997); 0 where |B| >= b."""
+    if not period > 0.0:
+        raise ValueError(f"the servo period must be positive, got {period:g} s")
+    return np.maximum(2.0 * (np.asarray(damping, dtype=float) - abs(virtual_damping)) / period, 0.0)

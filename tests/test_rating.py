@@ -1,0 +1,113 @@
+"""The datasheet measures of symkin.analysis.rating (issue 32) on the seed's planar 2R arm with point masses.
+
+Oracles written here from the seed's J (eq. 8.56) and the point masses m1 at the elbow, m2 at the tip:
+the apparent mass in closed form, Lambda = m2 I + m1 / sin^2(theta2) u u^T with u the forearm's direction
+(J^-T M J^-1 with M = J_e^T m1 J_e + J^T m2 J, J_e the elbow's Jacobian: J_e J^-1 = a r^T, |a| = l1,
+r = u / (l1 sin theta2)); the force capability and the friction felt against a dense scan of directions;
+the position resolution against encoders simulated by rounding q to counts and mapping the neighbouring
+readings through fk.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from symkin import load
+from symkin.analysis import forces, rating
+from tolerances import CLOSED_FORM, EPS
+
+L1 = L2 = 0.1
+M1 = M2 = 0.1
+POSES = np.radians([[10.0, 30.0], [45.0, 90.0], [80.0, 150.0], [0.0, 12.0]])
+
+
+@pytest.fixture(scope="module")
+def arm(generated_dir):
+    return load(generated_dir / "planar_2r")
+
+
+def seed_jacobian(q: np.ndarray) -> np.ndarray:
+    s1, c1, s12, c12 = np.sin(q[0]), np.cos(q[0]), np.sin(q.sum()), np.cos(q.sum())
+    return np.array([[-L1 * s1 - L2 * s12, -L2 * s12], [L1 * c1 + L2 * c12, L2 * c12]])
+
+
+def directions(count: int) -> np.ndarray:
+    angle = np.linspace(0.0, 2.0 * np.pi, count, endpoint=False)
+    return np.stack([np.cos(angle), np.sin(angle)], axis=-1)
+
+
+@pytest.mark.parametrize("q", POSES)
+def test_the_apparent_mass_is_m2_across_the_forearm_and_grows_as_1_over_sin2_along_it(arm, q):
+    M, J = arm.mass_matrix(q), seed_jacobian(q)
+    forearm = np.array([np.cos(q.sum()), np.sin(q.sum())])
+    expected = M2 * np.eye(2) + M1 / np.sin(q[1]) ** 2 * np.outer(forearm, forearm)
+    Lambda = rating.apparent_mass(M, J)
+    # two solves with J's conditioning, each backward stable: relative error ~ kappa(J)^2 kappa(M) eps
+    bound = 16 * np.linalg.cond(J) ** 2 * np.linalg.cond(M) * EPS
+    np.testing.assert_allclose(Lambda, expected, rtol=0, atol=bound * np.abs(expected).max())
+    np.testing.assert_allclose(arm.operational_space(q, np.zeros(2)).Mx, Lambda, rtol=0,  # the derived Mx
+                               atol=bound * np.abs(expected).max())
+    masses = rating.principal_masses(M, J)
+    np.testing.assert_allclose(masses, [M2, M2 + M1 / np.sin(q[1]) ** 2], rtol=bound)
+
+
+@pytest.mark.parametrize("q", POSES)
+def test_the_peak_force_is_the_best_direction_of_a_dense_scan(arm, q):
+    J, limits = seed_jacobian(q), np.array([0.3, 0.2])
+    peak = float(rating.peak_force(J, limits))
+    scanned = forces.directional_force(J, limits, directions(200_000))
+    assert np.max(scanned) <= peak * (1 + 1e-12)
+    assert np.max(scanned) >= peak * (1 - 1e-3)          # the scan's angular step, 3e-5 rad, near a kink
+    assert float(forces.isotropic_force(J, limits)) == pytest.approx(np.min(scanned), rel=1e-3)
+
+
+@pytest.mark.parametrize("q", POSES)
+def test_the_coulomb_friction_felt_is_the_worst_direction_of_motion(arm, q):
+    J, coulomb = seed_jacobian(q), np.array([0.004, 0.0025])
+    u = directions(200_000)
+    qd = np.linalg.solve(J, u.T).T                          # moving the handle with unit speed along u
+    felt = np.abs(qd) @ coulomb                             # u . J^-T (tau_c sign(qd)) = sum tau_c |qd_i|
+    worst = float(rating.coulomb_friction_felt(J, coulomb))
+    assert np.max(felt) <= worst * (1 + 1e-12)
+    assert np.max(felt) >= worst * (1 - 1e-3)
+
+
+@pytest.mark.parametrize("q", POSES)
+def test_the_damping_at_the_handle_is_its_least_damped_direction(arm, q):
+    J, viscous = seed_jacobian(q), np.array([0.002, 0.001])
+    count = 200_000
+    qd = np.linalg.solve(J, directions(count).T).T
+    along = np.sum(viscous * qd ** 2, axis=-1)              # u . J^-T diag(b) J^-1 u
+    least = float(rating.handle_damping(J, viscous))
+    # the scan misses the least direction by at most half its angular step h: u . B u exceeds the least
+    # eigenvalue by at most (h / 2)^2 (largest - least)
+    spread = np.max(along) - least
+    assert least <= np.min(along) * (1 + 1e-12)
+    assert np.min(along) - least <= (np.pi / count) ** 2 * spread
+    assert float(rating.renderable_stiffness(least, 1e-3)) == pytest.approx(2 * least / 1e-3, rel=CLOSED_FORM)
+
+
+@pytest.mark.parametrize("q", POSES)
+def test_the_position_resolution_is_the_largest_step_between_neighbouring_encoder_readings(arm, q):
+    counts = np.array([4096.0, 2000.0])                     # per joint turn
+    step = 2 * np.pi / counts
+    read = np.round(q / step) * step
+    neighbours = read + np.array([[a, b] for a in (-1, 0, 1) for b in (-1, 0, 1)]) * step
+    tcp = arm.fk(neighbours)[:, :2, 3]
+    simulated = np.max(np.linalg.norm(tcp - arm.fk(read)[:2, 3], axis=-1))
+    first_order = float(rating.position_resolution(arm.jacobian(read), step))
+    # fk - its linearization is at most 1/2 |dq|^2 max|fk''| <= (l1 + l2) |dq|^2 (two joints)
+    assert abs(simulated - first_order) <= (L1 + L2) * float(np.sum(step ** 2))
+
+
+def test_the_gravity_budget_is_the_largest_share_of_an_effort_limit(arm):
+    q = POSES[0]
+    G = arm.gravity_vector(q)
+    assert float(rating.gravity_share(G, [0.5, 0.1])) == pytest.approx(max(abs(G[0]) / 0.5, abs(G[1]) / 0.1),
+                                                                      rel=CLOSED_FORM)
+
+
+def test_forces_at_the_handle_need_a_square_jacobian():
+    with pytest.raises(ValueError, match="square task Jacobian"):
+        rating.peak_force(np.ones((2, 3)), [1.0, 1.0, 1.0])
