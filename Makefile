@@ -28,7 +28,8 @@ setup: $(STAMP)
 ## demo: derive every example model into generated/ and print what was derived;
 ## draw seed Fig. 8.19 (2-DoF workspaces) and 1/kappa maps (planar arm, DELTA) into out/figures/, and the
 ## seed's haptic scenario (Figs. 8.21, 8.22: torques, TCP forces, CSV) into out/figures/seed-haptic-scenario/, and the
-## DELTA's haptic wall and gravity compensation (1 kHz loop, felt forces) into out/figures/delta-*/
+## DELTA's haptic wall and gravity compensation (1 kHz loop, felt forces) and its datasheet (symkin rate) into
+## out/figures/delta-*/
 demo: setup
 	$(BIN)/symkin derive $(MODELS) -o generated
 	$(BIN)/symkin workspace generated/planar_2r --design l1=0.1,l2=0.1 --design l1=0.2,l2=0.2 --unit cm \
@@ -38,6 +39,7 @@ demo: setup
 	$(BIN)/symkin simulate generated/planar_2r --scenario sine --design l1=0.1,l2=0.1 --design l1=0.2,l2=0.2 -o out/figures/seed-haptic-scenario
 	$(BIN)/symkin simulate generated/delta --scenario haptic-wall -o out/figures/delta-haptic-wall
 	$(BIN)/symkin simulate generated/delta --scenario gravity-compensation -o out/figures/delta-gravity-compensation
+	$(BIN)/symkin rate generated/delta -o out/figures/delta-datasheet
 
 # The numerics-sensitive tests run a second time on foreign arithmetic (tests/conftest.py): numpy's
 # wide SIMD loops off, generated C with FMA contraction.  x86-64 feature names; elsewhere only the C flags.

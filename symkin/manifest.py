@@ -54,6 +54,11 @@ def _coordinate_record(model: Model, coordinate, actuators: tuple | None = None)
     drive = next((a for a in (model.actuators if actuators is None else actuators) if a.joint == coordinate.name), None)
     if drive is not None and drive.continuous_effort is not None:  # N K_t I_cont: what the motor holds for long
         record["continuous_effort_limit"] = float(drive.continuous_effort.xreplace(values))
+    friction = next((f for f in model.friction if f.joint == coordinate.name), None)
+    if friction is not None:  # what the hand feels at the handle (symkin rate): b and the larger Coulomb level
+        coulomb = [friction.coulomb] + ([friction.coulomb_negative] if friction.coulomb_negative is not None else [])
+        record["friction"] = {"viscous": float(friction.viscous.xreplace(values)),
+                              "coulomb": max(abs(float(c.xreplace(values))) for c in coulomb)}
     return record
 
 

@@ -13,8 +13,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+import json
+
+from conftest import MODELS_DIR
 from symkin import load
 from symkin.analysis import forces, rating
+from symkin.cli import main
 from tolerances import CLOSED_FORM, EPS
 
 L1 = L2 = 0.1
@@ -110,4 +114,108 @@ def test_the_gravity_budget_is_the_largest_share_of_an_effort_limit(arm):
 
 def test_forces_at_the_handle_need_a_square_jacobian():
     with pytest.raises(ValueError, match="square task Jacobian"):
-        rating.peak_force(np.ones((2, 3)), [1.0, 1.0, 1.0])
+        rating.coulomb_friction_felt(np.ones((2, 3)), [1.0, 1.0, 1.0])
+
+
+def test_the_peak_force_of_a_redundant_arm_is_the_farthest_point_its_efforts_allow():
+    """Three joints, two task coordinates: the polytope |J^T F| <= tau_max against a dense scan of f(u)."""
+    J = np.array([[-0.12, -0.07, -0.02], [0.15, 0.09, 0.05]])
+    limits = np.array([0.4, 0.25, 0.1])
+    peak = float(rating.peak_force(J, limits))
+    scanned = forces.directional_force(J, limits, directions(200_000))
+    assert np.max(scanned) <= peak * (1 + 1e-9)
+    assert np.max(scanned) >= peak * (1 - 1e-3)
+
+
+def test_the_delta_feels_the_mass_pinocchio_accelerates_with_a_push_at_the_handle(generated_dir):
+    """The DELTA of models/delta.yaml as Pinocchio's tree closed by three point constraints
+    (benchmarks/competitors.pinocchio_delta): pushed from rest at the platform by a unit force along each
+    axis, without gravity and with the motors off, its acceleration is the mobility J M^-1 J^T, the
+    inverse of the apparent mass.  Both are solves with kappa <= 1e4 (tests/test_parallel_dynamics.py):
+    1e-9 relative leaves room for two algorithms."""
+    pin = pytest.importorskip("pinocchio")
+    from benchmarks.competitors import delta_tree_state, pinocchio_delta
+
+    delta = load(generated_dir / "delta")
+    values = dict(delta.parameters) | {p.name: p.default for p in delta.info.parameters}
+    _, tree, constraints, legs = pinocchio_delta(values)
+    tree.gravity = pin.Motion.Zero()
+    data = tree.createData()
+    datas = pin.StdVec_RigidConstraintData()
+    for c in constraints:
+        datas.append(c.createData())
+    pin.initConstraintDynamics(tree, data, constraints, datas)
+    settings = pin.ProximalSettings(1e-14, 0.0, 1)
+    platform = tree.joints[tree.getJointId("platform")].idx_v
+    for P in (np.array(delta.info.home), np.array([0.03, -0.02, -0.13]), np.array([-0.05, 0.04, -0.18])):
+        theta = delta.ik(P).joints
+        q, velocity, _ = delta_tree_state(pin, tree, data, legs, values, P, theta, np.zeros(3))
+        pushed = []
+        for axis in np.eye(3):
+            efforts = np.zeros(tree.nv)
+            efforts[platform:platform + 3] = axis                     # 1 N on the platform, motors off
+            acceleration = pin.constraintDynamics(tree, data, q, velocity, efforts, constraints, datas, settings)
+            pushed.append(acceleration[platform:platform + 3])
+        mobility = np.array(pushed).T
+        Lambda = rating.apparent_mass(delta.mass_matrix(theta, P), delta.jacobian(theta, P))
+        np.testing.assert_allclose(Lambda @ mobility, np.eye(3), rtol=0, atol=1e-9)
+
+
+def test_cli_rates_the_delta_and_writes_its_datasheet(generated_dir, tmp_path):
+    out = tmp_path / "rate"
+    assert main(["rate", str(generated_dir / "delta"), "-n", "1000", "--effort-limit", "0.3", "--encoder", "4096",
+                 "--gear", "10", "-o", str(out)]) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["datasheet.csv", "datasheet.json", "datasheet.png", "summary.txt"]
+    sheet = json.loads((out / "datasheet.json").read_text())
+    assert sheet["not_rated"] == {"friction": "no joint friction declared (friction: in the model file)"}
+    rows = np.loadtxt(out / "datasheet.csv", delimiter=",", skiprows=2)
+    header = (out / "datasheet.csv").read_text().splitlines()[1].split(",")
+    for name, measure in sheet["measures"].items():
+        column = rows[:, next(k for k, h in enumerate(header) if h.split(" [")[0] == name)]
+        assert measure["max"]["value"] == pytest.approx(np.max(column), rel=1e-8)
+        assert measure["home"] == pytest.approx(column[-1], rel=1e-8)       # the home pose is the last row
+    # at home the DELTA is symmetric about its axis: the same mass in every direction, to its 1e-3 isotropy
+    assert sheet["measures"]["inertia_isotropy"]["home"] == pytest.approx(1.0, abs=2e-3)
+    home = np.array(sheet["home"]["q"])
+    delta = load(generated_dir / "delta")
+    J = delta.jacobian(home, delta.fk(home).position)
+    step = 2 * np.pi / (4096 * 10)
+    assert sheet["measures"]["resolution"]["home"] == pytest.approx(float(rating.position_resolution(J, step)),
+                                                                     rel=1e-8)
+    assert (out / "datasheet.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_cli_lists_what_it_cannot_rate_and_refuses_what_it_does_not_rate(generated_dir, tmp_path, capsys):
+    assert main(["rate", str(generated_dir / "planar_2r"), "-n", "400", "--no-figure", "-o", str(tmp_path / "a")]) == 0
+    text = capsys.readouterr().out
+    assert "force: not rated (no effort limits" in text
+    assert "resolution: not rated (no encoder data" in text
+    for arguments in (["agile_eye"], ["delta", "--encoder", "0"], ["delta", "--gear", "10"],
+                      ["delta", "--box", "w=0:1"]):
+        with pytest.raises(SystemExit) as exit:
+            main(["rate", str(generated_dir / arguments[0]), *arguments[1:], "-o", str(tmp_path / "b")])
+        assert exit.value.code == 2
+        assert not (tmp_path / "b").exists()
+
+
+def test_friction_declared_in_the_model_is_felt_at_the_handle(tmp_path):
+    """planar_2r with joint friction and effort limits: the Coulomb friction, the damping at the handle and
+    the Colgate-Brown stiffness at 1 kHz come from the manifest's friction record."""
+    text = (MODELS_DIR / "planar_2r.yaml").read_text()
+    text = text.replace("gravity: [0, -g, 0]", "gravity: [0, -g, 0]\nfriction:\n"
+                        "  theta1: {viscous: 0.002, coulomb: 0.004}\n"
+                        "  theta2: {viscous: 0.001, coulomb: 0.0025}")
+    path = tmp_path / "planar_2r.yaml"
+    path.write_text(text)
+    out = tmp_path / "rate"
+    assert main(["rate", str(path), "-n", "400", "--effort-limit", "0.5,0.3", "--no-figure", "-o", str(out)]) == 0
+    sheet = json.loads((out / "datasheet.json").read_text())
+    assert "friction" not in sheet["not_rated"]
+    home = np.array(sheet["home"]["q"])
+    J = seed_jacobian(home)
+    measures = sheet["measures"]
+    assert measures["coulomb_friction"]["home"] == pytest.approx(
+        float(rating.coulomb_friction_felt(J, [0.004, 0.0025])), rel=1e-9)
+    damping = float(rating.handle_damping(J, [0.002, 0.001]))
+    assert measures["handle_damping"]["home"] == pytest.approx(damping, rel=1e-9)
+    assert measures["renderable_stiffness"]["home"] == pytest.approx(2 * damping / 1e-3, rel=1e-9)

@@ -1,8 +1,9 @@
 """A haptic device rated as its datasheet rates it: what the hand feels and what the device can render
 at the handle, from the joint-space M, the task Jacobian J (v = J qd), G and the actuators' data.
 
-At one pose (every function takes stacks, ``...``), with n joints and a square J (a translational
-device: 3 x 3 for a DELTA, 2 x 2 for a pantograph or a planar arm):
+At one pose (every function takes stacks, ``...``), with n joints and J the m x n translational rows
+of the task Jacobian (square for a translational device: 3 x 3 for a DELTA, 2 x 2 for a pantograph or a
+planar arm; the friction and damping at the handle need it square):
 
 * **apparent mass**: Lambda = (J M^-1 J^T)^-1 (Khatib 1987; J^-T M J^-1 for a square J), F = Lambda a
   from rest.  Its eigenvalues are the masses the hand feels along its principal directions, their
@@ -10,7 +11,9 @@ device: 3 x 3 for a DELTA, 2 x 2 for a pantograph or a planar arm):
 * **force capability**: with |tau_i| <= tau_max,i the renderable forces F = J^-T tau fill a
   parallelepiped.  The isotropic force (in every direction) is min_i tau_max,i / |J_i|
   (:func:`symkin.analysis.forces.isotropic_force`), the peak force (in the best direction) its
-  farthest vertex, max over s in {-1, 1}^n of |J^-T (s * tau_max)|.
+  farthest vertex, max over s in {-1, 1}^n of |J^-T (s * tau_max)| (with more joints than task
+  coordinates, J the translational rows of an arm pushed at its TCP: the farthest vertex of the
+  polytope |J^T F| <= tau_max, tried at every choice of m joints at their limits).
 * **position resolution**: encoders that step q_i by dq_i (rad or m per count at the joint) move the
   handle between neighbouring readings (each joint by at most one count) by at most the farthest
   vertex of the zonotope J [-dq, dq], max_s |J (s * dq)|, to first order in dq.
@@ -48,8 +51,12 @@ def apparent_mass(M: np.ndarray, J: np.ndarray) -> np.ndarray:
 
 
 def principal_masses(M: np.ndarray, J: np.ndarray) -> np.ndarray:
-    """The eigenvalues of the apparent mass (..., m), ascending: the masses felt along its principal axes."""
-    return np.linalg.eigvalsh(apparent_mass(M, J))
+    """The eigenvalues of the apparent mass (..., m), ascending: the masses felt along its principal axes, the
+    reciprocals of the eigenvalues of the mobility J M^-1 J^T (inf along a direction a singular J cannot move)."""
+    M, J = np.asarray(M, dtype=float), np.asarray(J, dtype=float)
+    mobility = np.linalg.eigvalsh(J @ np.linalg.solve(M, np.swapaxes(J, -1, -2)))[..., ::-1]
+    with np.errstate(divide="ignore"):
+        return np.where(mobility > 0.0, 1.0 / np.where(mobility > 0.0, mobility, 1.0), np.inf)
 
 
 def farthest_vertex(A: np.ndarray, half_widths: Sequence[float] | np.ndarray) -> np.ndarray:
@@ -64,17 +71,48 @@ def farthest_vertex(A: np.ndarray, half_widths: Sequence[float] | np.ndarray) ->
     return np.max(np.linalg.norm(images, axis=-1), axis=-1)
 
 
+#: Above this condition number J is taken as singular: the forces at the handle are NaN there.
+SINGULAR_CONDITION = 1e12
+
+
 def _inverse_transpose(J: np.ndarray) -> np.ndarray:
+    """J^-T (..., m, m), NaN where J is singular (kappa > :data:`SINGULAR_CONDITION`)."""
     J = np.asarray(J, dtype=float)
     if J.shape[-1] != J.shape[-2]:
         raise ValueError(f"the handle's forces need a square task Jacobian (F = J^-T tau), got "
                          f"{J.shape[-2]} x {J.shape[-1]}")
-    return np.swapaxes(np.linalg.inv(J), -1, -2)
+    with np.errstate(invalid="ignore"):
+        regular = np.linalg.cond(J) < SINGULAR_CONDITION
+    safe = np.where(regular[..., None, None], J, np.eye(J.shape[-1]))
+    return np.where(regular[..., None, None], np.swapaxes(np.linalg.inv(safe), -1, -2), np.nan)
 
 
 def peak_force(J: np.ndarray, effort_limits: Sequence[float] | np.ndarray) -> np.ndarray:
-    """The largest force the actuators render in the best direction (...,): max_s |J^-T (s * tau_max)|."""
-    return farthest_vertex(_inverse_transpose(J), effort_limits)
+    """The largest force the actuators render in the best direction (...,): max |F| over the polytope
+    |J_i . F| <= tau_max,i (tau = J^T F).
+
+    Its farthest point is a vertex, where m of the n slabs' faces meet: for a square J the 2^n points
+    J^-T (s * tau_max); with more joints than task coordinates (an arm pushed at its TCP, J its
+    translational rows) every choice of m joints at their limits whose point the others can hold
+    (within a relative 1e-9 of their limits) is tried.
+    """
+    J = np.asarray(J, dtype=float)
+    m, n = J.shape[-2:]
+    limits = np.broadcast_to(np.asarray(effort_limits, dtype=float), (n,))
+    if m == n:
+        return farthest_vertex(_inverse_transpose(J), limits)
+    best = np.zeros(J.shape[:-2])
+    signs = np.array([(1.0,) + rest for rest in itertools.product((1.0, -1.0), repeat=m - 1)])
+    for chosen in itertools.combinations(range(n), m):
+        columns = J[..., :, list(chosen)]                                        # (..., m, m)
+        regular = np.abs(np.linalg.det(columns)) > 1e-12 * np.prod(np.linalg.norm(columns, axis=-2), axis=-1)
+        square = np.where(regular[..., None, None], columns, np.eye(m))
+        for s in signs:
+            F = np.linalg.solve(np.swapaxes(square, -1, -2), (s * limits[list(chosen)])[..., None])[..., 0]
+            efforts = np.abs(np.einsum("...mn,...m->...n", J, F))
+            feasible = regular & np.all(efforts <= limits * (1 + 1e-9), axis=-1)
+            best = np.where(feasible, np.maximum(best, np.linalg.norm(F, axis=-1)), best)
+    return best
 
 
 def position_resolution(J: np.ndarray, joint_steps: Sequence[float] | np.ndarray) -> np.ndarray:

@@ -264,6 +264,30 @@ def models_from_args(args: argparse.Namespace,
     return models, parse_limits(args.limits)
 
 
+def per_joint(option: str, text: str, count: int) -> list[float]:
+    """``T[,T...]``: one number for every joint, or one per joint (``option`` names it in the message).
+
+    Raises:
+        ValueError: not numbers separated by commas, or neither 1 nor ``count`` of them.
+    """
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        raise ValueError(f"{option} '{text}': write numbers separated by commas") from None
+    if len(values) not in (1, count):
+        raise ValueError(f"{option}: give one value or {count} (one per actuator), got {len(values)}")
+    return values * count if len(values) == 1 else values
+
+
+def effort_limits(text: str | None, model: GeneratedModel) -> list[float] | None:
+    """--effort-limit ``text``, else the model's effort limits; None where it declares none for some actuator."""
+    count = len(model.info.coordinates)
+    if text:
+        return per_joint("--effort-limit", text, count)
+    declared = [c.effort_limit for c in model.info.coordinates]
+    return [float(v) for v in declared if v is not None] if None not in declared else None
+
+
 def fail_on_bad_input(args: argparse.Namespace, err: Exception) -> NoReturn:
     """Report a bad argument or an analysis that does not apply to the model; exit code 2."""
     message = err.args[0] if isinstance(err, KeyError) and err.args else str(err)

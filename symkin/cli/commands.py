@@ -11,6 +11,7 @@ from symkin.cli import (
     gci_cmd,
     ik_cmd,
     optimize_cmd,
+    rate_cmd,
     simulate_cmd,
     structure_cmd,
     sweep_cmd,
@@ -34,5 +35,6 @@ REGISTRY = [
     bench_cmd.register,
     ik_cmd.register,
     simulate_cmd.register,
+    rate_cmd.register,
     cache_cmd.register,
 ]

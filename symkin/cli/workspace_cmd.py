@@ -205,23 +205,6 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _effort_limits(args: argparse.Namespace, model) -> list[float]:
-    """--effort-limit, else the model's effort limits (all of them declared)."""
-    count = len(model.info.coordinates)
-    if args.effort_limit:
-        try:
-            values = [float(v) for v in args.effort_limit.split(",")]
-        except ValueError:
-            raise ValueError(f"--effort-limit '{args.effort_limit}': write numbers separated by commas") from None
-        if len(values) not in (1, count):
-            raise ValueError(f"--effort-limit: give one value or {count} (one per actuator), got {len(values)}")
-        return values * count if len(values) == 1 else values
-    declared = [c.effort_limit for c in model.info.coordinates]
-    if None in declared:
-        raise ValueError(f"{model.name} declares no effort limit for every actuator: give --effort-limit T[,T...]")
-    return [float(v) for v in declared]
-
-
 def _force_map(args: argparse.Namespace, model, layer, limits, scale: float):
     """(figure path, summary) of the isotropic force over the workspace (symkin.analysis.forces)."""
     import numpy as np
@@ -231,7 +214,9 @@ def _force_map(args: argparse.Namespace, model, layer, limits, scale: float):
     if not mechanism.is_positional(model):
         raise ValueError(f"--force-map: the task space of {model.name} ({', '.join(mechanism.task_space(model))}) "
                          "is not translations only")
-    efforts = _effort_limits(args, model)
+    efforts = analysis_args.effort_limits(args.effort_limit, model)
+    if efforts is None:
+        raise ValueError(f"{model.name} declares no effort limit for every actuator: give --effort-limit T[,T...]")
     title = f"isotropic force over the workspace of {model.name} (effort limits {', '.join(f'{e:g}' for e in efforts)})"
     if mechanism.is_parallel(model):
         grid, values = study.cartesian_index_grid(model, workspace.bounding_box(model, limits=limits), limits, None,

@@ -28,6 +28,9 @@ class Coordinate:
             ``joint_0.0``), else None; see :attr:`label`.
         active: driven by an actuator; False for a passive joint (``active: false``, e.g. the measured but
             unmotorized wrist of a haptic device), on which a controller exerts no effort.
+        continuous_effort_limit: the effort its drive holds for long (N K_t I_cont), or None.
+        viscous, coulomb: its friction, tau_f = viscous qd + coulomb sign(qd) (the larger Coulomb level of
+            an asymmetric one), or None where the model declares none.
     """
 
     name: str
@@ -37,6 +40,9 @@ class Coordinate:
     effort_limit: float | None = None
     source_name: str | None = None
     active: bool = True
+    continuous_effort_limit: float | None = None
+    viscous: float | None = None
+    coulomb: float | None = None
 
     @property
     def label(self) -> str:
@@ -141,7 +147,8 @@ def _coordinate(record: dict[str, Any]) -> Coordinate:
     return Coordinate(record["name"], record["type"] == "R",
                       (float(record["limits"][0]), float(record["limits"][1])) if record.get("limits") else None,
                       record.get("velocity_limit"), record.get("effort_limit"), record.get("source_name"),
-                      bool(record.get("active", True)))
+                      bool(record.get("active", True)), record.get("continuous_effort_limit"),
+                      record.get("friction", {}).get("viscous"), record.get("friction", {}).get("coulomb"))
 
 
 class GeneratedModel(Protocol):

@@ -1,0 +1,277 @@
+"""A haptic device's datasheet: the measures of :mod:`symkin.analysis.rating` over its workspace and at its
+home pose, with the pose where each extreme occurs (``symkin rate``).
+
+The workspace is sampled in the joint space within the limits (:func:`symkin.analysis.workspace.sample_workspace`,
+a parallel mechanism through its closed-form fk), cut to its usable part (1/kappa of the translational
+Jacobian at least :data:`USABLE_CONDITIONING`: near a singularity the apparent mass and the forces
+diverge) and optionally to a required box of TCP positions.  At
+every sample the generated functions give M (``mass_matrix``), J (``jacobian``: its translational rows) and
+G (``gravity_vector``); the actuators' data come from the manifest (effort limits, continuous effort,
+friction) or from the caller (encoders, servo rate).  A measure whose data the model lacks is not rated,
+and the datasheet says why.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from symkin.analysis import forces, mechanism, rating, workspace
+from symkin.analysis.conditioning import inverse_condition_number
+from symkin.runtime.info import GeneratedModel
+
+
+@dataclass(frozen=True)
+class Measure:
+    """One row of the datasheet: a name, its unit, its value at every sample and whether its worst value
+    is its smallest (a force) or its largest (a mass, a resolution step)."""
+
+    name: str
+    unit: str
+    values: np.ndarray
+    worst_is_min: bool
+    doc: str
+
+
+@dataclass(frozen=True)
+class Actuation:
+    """What the rating needs beyond the generated functions, per joint (None: not known).
+
+    Attributes:
+        effort_limits: peak efforts tau_max (N m or N).
+        continuous_limits: efforts the drives hold for long.
+        joint_steps: encoder steps at the joints (rad or m per count).
+        coulomb, viscous: joint friction (N m or N; N m s/rad or N s/m).
+        period: servo period T (s).
+    """
+
+    effort_limits: np.ndarray | None = None
+    continuous_limits: np.ndarray | None = None
+    joint_steps: np.ndarray | None = None
+    coulomb: np.ndarray | None = None
+    viscous: np.ndarray | None = None
+    period: float = 1e-3
+
+    @classmethod
+    def of_model(cls, model: GeneratedModel, *, effort_limits: Sequence[float] | None = None,
+                 joint_steps: Sequence[float] | None = None, period: float = 1e-3) -> Actuation:
+        """The model's declared data (effort limits, continuous effort, friction), overridden by the arguments."""
+        coordinates = model.info.coordinates
+
+        def declared(values: Sequence[float | None]) -> np.ndarray | None:
+            return None if any(v is None for v in values) else np.array(values, dtype=float)
+
+        efforts = (np.array(effort_limits, dtype=float) if effort_limits is not None
+                   else declared([c.effort_limit for c in coordinates]))
+        return cls(efforts, declared([c.continuous_effort_limit for c in coordinates]),
+                   None if joint_steps is None else np.array(joint_steps, dtype=float),
+                   declared([c.coulomb for c in coordinates]), declared([c.viscous for c in coordinates]), period)
+
+
+@dataclass(frozen=True)
+class Datasheet:
+    """The rated samples: joint configurations q (N, n), TCP points (N, d) with their axes, the measures,
+    the index of the home pose among the samples, and {measure: why it is not rated}."""
+
+    model: str
+    q: np.ndarray
+    points: np.ndarray
+    axes: tuple[str, ...]
+    measures: tuple[Measure, ...]
+    home: int
+    skipped: dict[str, str] = field(default_factory=dict)
+
+    def extremes(self, measure: Measure) -> dict[str, Any]:
+        """min, max, mean and the worst value of a measure, each extreme with its pose (q, TCP)."""
+        values = measure.values
+        finite = np.flatnonzero(np.isfinite(values))
+        low, high = finite[np.argmin(values[finite])], finite[np.argmax(values[finite])]
+
+        def at(k: int) -> dict[str, Any]:
+            return {"value": float(values[k]), "q": self.q[k].tolist(), "tcp": self.points[k].tolist()}
+
+        return {"unit": measure.unit, "doc": measure.doc, "min": at(low), "max": at(high),
+                "mean": float(np.mean(values[finite])), "worst": "min" if measure.worst_is_min else "max",
+                "home": float(values[self.home]) if np.isfinite(values[self.home]) else None}
+
+    def to_json(self) -> dict[str, Any]:
+        return {"model": self.model, "samples": len(self.q), "axes": list(self.axes),
+                "home": {"q": self.q[self.home].tolist(), "tcp": self.points[self.home].tolist()},
+                "measures": {m.name: self.extremes(m) for m in self.measures}, "not_rated": dict(self.skipped)}
+
+    def summary(self) -> list[str]:
+        """One line per measure: its worst value over the workspace, its range and its value at home."""
+        lines = []
+        for m in self.measures:
+            e = self.extremes(m)
+            worst = e[e["worst"]]
+            lines.append(f"{m.name}: {worst['value']:.4g} {m.unit} at worst ({e['worst']} over the workspace, "
+                         f"at TCP {_point(worst['tcp'])}); range {e['min']['value']:.4g} .. {e['max']['value']:.4g}, "
+                         f"at home {'-' if e['home'] is None else format(e['home'], '.4g')}")
+        lines += [f"{name}: not rated ({why})" for name, why in self.skipped.items()]
+        return lines
+
+
+def _point(tcp: Sequence[float]) -> str:
+    return "(" + ", ".join(f"{1000 * v:.1f}" for v in tcp) + ") mm"
+
+
+def home_configuration(model: GeneratedModel, limits: np.ndarray) -> np.ndarray:
+    """The pose a datasheet quotes besides the workspace: a parallel mechanism's declared home (q = ik(home)),
+    else the middle of the joint limits."""
+    if mechanism.is_parallel(model) and model.info.home is not None:
+        return np.asarray(model.ik(np.array(model.info.home)).joints, dtype=float)
+    return limits.mean(axis=1)
+
+
+def _within(points: np.ndarray, axes: Sequence[str], box: Mapping[str, tuple[float, float]]) -> np.ndarray:
+    unknown = set(box) - set(axes)
+    if unknown:
+        raise ValueError(f"--box: no task axes {sorted(unknown)}; the TCP moves along {', '.join(axes)}")
+    inside = np.ones(len(points), dtype=bool)
+    for name, (low, high) in box.items():
+        column = points[:, list(axes).index(name)]
+        inside &= (column >= low) & (column <= high)
+    return inside
+
+
+def _dynamics(model: GeneratedModel, name: str, q: np.ndarray, points: np.ndarray) -> np.ndarray:
+    function = getattr(model, name)
+    return function(q, points) if mechanism.is_parallel(model) else function(q)
+
+
+#: The usable workspace a datasheet rates: where 1/kappa of J's translational rows is at least this (near a
+#: singularity the apparent mass and the force capability diverge, and no device is used there).
+USABLE_CONDITIONING = 0.05
+
+
+def rate(model: GeneratedModel, actuation: Actuation, *, samples: int = 4096, seed: int = 0,
+         box: Mapping[str, tuple[float, float]] | None = None, limits: mechanism.Limits | None = None,
+         conditioning: float = USABLE_CONDITIONING) -> Datasheet:
+    """The datasheet of a device whose handle translates (its task space has x, y or z), over the sampled
+    poses in ``box`` (TCP coordinates, m) where 1/kappa >= ``conditioning``, and at its home pose.
+
+    Raises:
+        ValueError: the model cannot be rated (no translational task coordinate, a platform that
+            rotates, a wrist on the platform, no mass matrix), or the box holds no sample.
+    """
+    kind = mechanism.parallel_kind(mechanism.task_space(model)) if mechanism.is_parallel(model) else "serial"
+    if kind not in ("serial", "parallel") or model.info.wrist:
+        raise ValueError(f"{model.name}: symkin rate rates devices whose handle translates with the platform or is "
+                         f"a serial arm's TCP; this is a {kind} mechanism{' with a wrist' if model.info.wrist else ''}")
+    rows = list(mechanism.position_rows(model))
+    if not rows:
+        raise ValueError(f"{model.name}: the task space ({', '.join(mechanism.task_space(model))}) has no translation")
+    if "mass_matrix" not in model.functions:
+        raise ValueError(f"{model.name}: the rating needs the generated mass_matrix (derive it with bodies declared)")
+    box_limits = mechanism.joint_limits(model, limits)
+    cloud = workspace.sample_workspace(model, samples, limits=limits, seed=seed)
+    home = home_configuration(model, box_limits)
+    q = np.concatenate([cloud.q, home[None]])
+    points = np.concatenate([cloud.points, mechanism.tcp_positions(model, home[None])])
+    keep = np.all(np.isfinite(points), axis=-1)
+    if box:
+        keep &= _within(points, cloud.axes, box)
+        keep[-1] = True  # the home pose is quoted whether or not it lies in the box
+    J = mechanism.jacobian(model, q, points if mechanism.is_parallel(model) else None)[..., rows, :]
+    with np.errstate(invalid="ignore"):
+        keep &= np.nan_to_num(inverse_condition_number(J), nan=0.0) >= conditioning
+    keep[-1] = True
+    q, points, J = q[keep], points[keep], J[keep]
+    if len(q) < 2:
+        raise ValueError(f"{model.name}: no sampled pose lies in the box {dict(box or {})} with 1/kappa >= "
+                         f"{conditioning:g}")
+    M = _dynamics(model, "mass_matrix", q, points)
+    measures, skipped = _measures(model, J, M, q, points, actuation)
+    return Datasheet(model.name, q, points, cloud.axes, measures, len(q) - 1, skipped)
+
+
+def _measures(model: GeneratedModel, J: np.ndarray, M: np.ndarray, q: np.ndarray, points: np.ndarray,
+              actuation: Actuation) -> tuple[tuple[Measure, ...], dict[str, str]]:
+    masses = rating.principal_masses(M, J)
+    out = [Measure("apparent_mass_min", "kg", masses[:, 0], False, "smallest principal mass felt at the handle"),
+           Measure("apparent_mass_max", "kg", masses[:, -1], False, "largest principal mass felt at the handle"),
+           Measure("inertia_isotropy", "", masses[:, -1] / masses[:, 0], False,
+                   "largest over smallest principal mass (1: the same mass in every direction)")]
+    skipped = {}
+    square = J.shape[-1] == J.shape[-2]
+    efforts = actuation.effort_limits
+    if efforts is None:
+        skipped["force"] = "no effort limits: declare effort_limit per joint or give --effort-limit"
+    else:
+        out += [Measure("isotropic_force", "N", forces.isotropic_force(J, efforts), True,
+                        "largest force rendered in every direction (peak efforts)"),
+                Measure("peak_force", "N", rating.peak_force(J, efforts), True,
+                        "largest force rendered in the best direction (peak efforts)")]
+        if "gravity_vector" in model.functions:
+            out.append(Measure("gravity_share", "", rating.gravity_share(_dynamics(model, "gravity_vector", q, points),
+                                                                         efforts), False,
+                               "largest share of an effort limit spent holding the device against gravity"))
+    if actuation.continuous_limits is not None:
+        out.append(Measure("continuous_force", "N", forces.isotropic_force(J, actuation.continuous_limits), True,
+                           "largest force held for long in every direction (continuous efforts)"))
+    if actuation.joint_steps is None:
+        skipped["resolution"] = "no encoder data: give --encoder COUNTS[,...] (and --gear)"
+    else:
+        out.append(Measure("resolution", "m", rating.position_resolution(J, actuation.joint_steps), False,
+                           "largest handle step between neighbouring encoder readings"))
+    if not square:
+        skipped["friction"] = "friction and damping at the handle need as many joints as task translations"
+    elif actuation.coulomb is None or actuation.viscous is None:
+        skipped["friction"] = "no joint friction declared (friction: in the model file)"
+    else:
+        out.append(Measure("coulomb_friction", "N", rating.coulomb_friction_felt(J, actuation.coulomb), False,
+                           "largest Coulomb friction felt at the handle, over the directions of motion"))
+        damping = rating.handle_damping(J, actuation.viscous)
+        out += [Measure("handle_damping", "N s/m", damping, True, "least viscous damping at the handle"),
+                Measure("renderable_stiffness", "N/m", rating.renderable_stiffness(damping, actuation.period), True,
+                        f"stiffest passive virtual wall at {1 / actuation.period:g} Hz (Colgate-Brown, "
+                        "K < 2 b / T)")]
+    return tuple(out), skipped
+
+
+def csv_text(sheet: Datasheet, coordinates: Sequence[str]) -> str:
+    """One row per rated pose: q, the TCP and every measure (the home pose last)."""
+    header = [*coordinates, *(f"{a} [m]" for a in sheet.axes),
+              *(f"{m.name} [{m.unit}]" if m.unit else m.name for m in sheet.measures)]
+    columns = np.column_stack([sheet.q, sheet.points, *(m.values for m in sheet.measures)])
+    rows = [",".join(f"{v:.9g}" for v in row) for row in columns]
+    return "\n".join([f"# symkin rate: {sheet.model}, {len(rows)} poses (the last is the home pose)",
+                      ",".join(header), *rows]) + "\n"
+
+
+def figure_png(sheet: Datasheet, title: str) -> bytes:
+    """The datasheet figure: one map per measure over the rated poses (x-y, or 3-D for a spatial device),
+    coloured by its value, the home pose marked."""
+    import io
+
+    from matplotlib.figure import Figure
+
+    count = len(sheet.measures)
+    columns = min(3, count)
+    rows = -(-count // columns)
+    spatial = sheet.points.shape[1] == 3
+    figure = Figure(figsize=(4.2 * columns, 3.6 * rows + 0.6), layout="constrained")
+    points = 1000 * sheet.points
+    for k, measure in enumerate(sheet.measures):
+        ax: Any = figure.add_subplot(rows, columns, k + 1, **({"projection": "3d"} if spatial else {}))
+        values = measure.values
+        finite = np.isfinite(values)
+        low, high = np.percentile(values[finite], [1, 99]) if finite.any() else (0.0, 1.0)
+        mesh = ax.scatter(*points.T, c=values, cmap="viridis", vmin=low, vmax=max(high, low + 1e-300), s=2,
+                          linewidths=0, rasterized=True)
+        ax.scatter(*points[sheet.home][:, None], marker="*", s=80, c="red", label="home")
+        figure.colorbar(mesh, ax=ax, shrink=0.8, label=f"{measure.name} [{measure.unit or '-'}]")
+        ax.set_xlabel(f"{sheet.axes[0]} [mm]")
+        ax.set_ylabel(f"{sheet.axes[1]} [mm]")
+        if spatial:
+            ax.set_zlabel(f"{sheet.axes[2]} [mm]")
+        else:
+            ax.set_aspect("equal")
+    figure.suptitle(title)
+    buffer = io.BytesIO()
+    figure.savefig(buffer, format="png", dpi=110)
+    return buffer.getvalue()

@@ -1,0 +1,115 @@
+"""``symkin rate``: a haptic device's datasheet over its usable workspace (symkin.analysis.datasheet)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import time
+from pathlib import Path
+
+from symkin.cli import analysis_args
+from symkin.cli.progress import Progress
+
+#: What a model file is derived with on the fly (gravity_vector where the model has gravity).
+RATE_OUTPUTS = {"serial": ("fk", "jacobian", "mass_matrix"), "parallel": ("ik", "fk", "jacobian", "mass_matrix"),
+                "parallel pose": ("ik", "inverse_jacobian"), "parallel orientation": ("ik", "inverse_jacobian")}
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "rate", help="rate a haptic device as its datasheet does: apparent mass, forces, resolution, stiffness",
+        description="Rate a device whose handle translates (a serial arm's TCP, a DELTA's or a pantograph's "
+                    "handle) over its usable workspace (the sampled poses where 1/kappa of the translational "
+                    "Jacobian is at least --conditioning, within --box) and at its home pose: the apparent mass "
+                    "(principal masses of (J M^-1 J^T)^-1 and their ratio), the isotropic and peak force from the "
+                    "actuators' effort limits (and the continuous force where the drives declare it), the share "
+                    "of the efforts spent holding the device against gravity, the position resolution from "
+                    "--encoder, and from the joints' declared friction the Coulomb friction felt at the handle, "
+                    "the least viscous damping there and the stiffest wall a --rate loop renders passively "
+                    "(Colgate-Brown, K < 2 b / T). A measure whose data the model lacks is listed as not rated, "
+                    "with what to give. Writes datasheet.json (every number with its unit and the pose of each "
+                    "extreme), datasheet.csv (every rated pose), datasheet.png (a map per measure) and "
+                    "summary.txt into the output directory (replaced as a whole).",
+        epilog="e.g. symkin rate generated/delta --effort-limit 0.3 --encoder 4096 --gear 10 -o out/rate/delta")
+    analysis_args.add_model_arguments(p)
+    p.add_argument("-n", "--samples", type=analysis_args.sample_count, default=4096, metavar="N",
+                   help="joint configurations sampled within the limits (default: %(default)s)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the sampling (default: %(default)s)")
+    p.add_argument("--box", action="append", default=[], metavar="AXIS=LO:HI[,...]",
+                   help="rate only the poses whose TCP lies in this box, in m, e.g. --box x=-0.03:0.03,z=-0.17:-0.11 "
+                        "(the required workspace; the home pose is quoted anyway)")
+    p.add_argument("--conditioning", type=float, default=None, metavar="C",
+                   help="the usable workspace: poses with 1/kappa >= C (default: 0.05; 0 rates every pose)")
+    p.add_argument("--effort-limit", metavar="T[,T...]",
+                   help="peak actuator efforts (N m or N at the joints; one value for all or one per actuator; "
+                        "default: the model's effort limits)")
+    p.add_argument("--encoder", metavar="COUNTS[,...]",
+                   help="encoder counts per turn of each actuator's motor (revolute joints) or per metre of "
+                        "travel (prismatic): the position resolution")
+    p.add_argument("--gear", metavar="N[,...]",
+                   help="motor turns per joint turn between encoder and revolute joint (default: 1)")
+    p.add_argument("--rate", type=float, default=1000.0, metavar="HZ",
+                   help="servo rate of the haptic loop, for the renderable stiffness (default: 1000)")
+    p.add_argument("-o", "--out", metavar="DIR", help="output directory (default: out/rate/MODEL)")
+    p.add_argument("--no-figure", action="store_true", help="write the numbers only")
+    p.set_defaults(run=run, parser=p)
+
+
+def _joint_steps(args: argparse.Namespace, model) -> list[float] | None:
+    """Encoder steps at the joints: 2 pi / (counts N) rad (revolute), 1 / counts m (prismatic)."""
+    if args.encoder is None:
+        if args.gear is not None:
+            raise ValueError("--gear: give --encoder too (the gear scales the encoder's counts)")
+        return None
+    count = len(model.info.coordinates)
+    counts = analysis_args.per_joint("--encoder", args.encoder, count)
+    gears = analysis_args.per_joint("--gear", args.gear, count) if args.gear else [1.0] * count
+    if not all(c > 0 and math.isfinite(c) for c in counts + gears):
+        raise ValueError("--encoder and --gear must be positive numbers")
+    return [2 * math.pi / (c * n) if coordinate.revolute else 1.0 / c
+            for c, n, coordinate in zip(counts, gears, model.info.coordinates)]
+
+
+def run(args: argparse.Namespace) -> int:
+    from symkin.analysis import datasheet
+    from symkin.atomic import replace_directory
+
+    start = time.perf_counter()
+    try:
+        if not args.rate > 0:
+            raise ValueError(f"--rate must be positive, got {args.rate:g}")
+        conditioning = datasheet.USABLE_CONDITIONING if args.conditioning is None else args.conditioning
+        if not 0.0 <= conditioning <= 1.0:
+            raise ValueError(f"--conditioning must lie in [0, 1], got {conditioning:g}")
+        box = analysis_args.parse_ranges(args.box, "--box", "AXIS")
+        models = analysis_args.load_models(args.model, (args.backend,), RATE_OUTPUTS, ("gravity_vector",))
+        values = analysis_args.parse_assignments(args.assignments)
+        model = models[0].bind(**values) if values else models[0]
+        actuation = datasheet.Actuation.of_model(model, effort_limits=analysis_args.effort_limits(args.effort_limit,
+                                                                                                  model),
+                                                 joint_steps=_joint_steps(args, model), period=1.0 / args.rate)
+        with Progress(model.name) as progress:
+            progress(f"rating {args.samples} poses")
+            sheet = datasheet.rate(model, actuation, samples=args.samples, seed=args.seed, box=box,
+                                   limits=analysis_args.parse_limits(args.limits), conditioning=conditioning)
+            summary = [f"{model.name}: {len(sheet.q) - 1} poses of the usable workspace (1/kappa >= {conditioning:g}"
+                       + (f", TCP in {args.box[0] if len(args.box) == 1 else args.box}" if box else "")
+                       + ") and the home pose", *("  " + line for line in sheet.summary())]
+            files: dict[str, str | bytes] = {
+                "datasheet.json": json.dumps(sheet.to_json() | {"servo_rate_hz": args.rate,
+                                                                "usable_conditioning": conditioning},
+                                             indent=2, allow_nan=False) + "\n",
+                "datasheet.csv": datasheet.csv_text(sheet, model.info.coordinate_names),
+                "summary.txt": "\n".join(summary) + "\n"}
+            if not args.no_figure:
+                progress("drawing the datasheet")
+                files["datasheet.png"] = datasheet.figure_png(sheet, f"{model.name}: datasheet over the usable "
+                                                                     "workspace")
+    except (ValueError, KeyError) as err:
+        analysis_args.fail_on_bad_input(args, err)
+    out = Path(args.out or f"out/rate/{model.name}")
+    replace_directory(out, files)
+    print("\n".join(summary))
+    print(f"wrote {len(files)} files to {out}/ ({', '.join(sorted(files))}) in {time.perf_counter() - start:.2f} s")
+    return 0
