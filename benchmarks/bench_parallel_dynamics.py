@@ -35,7 +35,7 @@ sys.path.insert(0, str(ROOT.parent))
 sys.path.insert(0, str(ROOT))
 
 from bench_eval import HARNESS_HEAD, HARNESS_TAIL, RING, run_harness, symkin_case_c  # noqa: E402
-from competitors import delta_tree_state, pinocchio_delta  # noqa: E402
+from competitors import constraint_dynamics_of, delta_tree_state, pinocchio_delta  # noqa: E402
 from symkin import load, pipeline  # noqa: E402
 from symkin.model import load_model  # noqa: E402
 from symkin.text_table import format_table  # noqa: E402
@@ -110,12 +110,7 @@ def main(argv: list[str] | None = None) -> int:
         else:
             values = {s.name: float(v) for s, v in load_model(ROOT / "models" / "delta.yaml").parameter_values.items()}
             pin, tree, constraints, legs = pinocchio_delta(values)
-            data = tree.createData()
-            datas = pin.StdVec_RigidConstraintData()
-            for c in constraints:
-                datas.append(c.createData())
-            pin.initConstraintDynamics(tree, data, constraints, datas)
-            settings = pin.ProximalSettings(1e-14, 0.0, 1)
+            data, datas, settings = constraint_dynamics_of(pin, tree, constraints)
             states = []
             for k in range(RING):
                 x, v, arms = delta_tree_state(pin, tree, data, legs, values, p[k], q[k], qd[k])

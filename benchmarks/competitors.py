@@ -161,6 +161,18 @@ def pinocchio_delta(v: dict[str, float]):
     return pin, model, constraints, legs
 
 
+def constraint_dynamics_of(pin, model, constraints):
+    """(data, constraint datas, settings) for ``pin.constraintDynamics(model, data, q, v, tau, constraints,
+    datas, settings)`` on the closed DELTA of :func:`pinocchio_delta`: the exact KKT solve (mu = 0, one
+    proximal iteration at 1e-14)."""
+    data = model.createData()
+    datas = pin.StdVec_RigidConstraintData()
+    for c in constraints:
+        datas.append(c.createData())
+    pin.initConstraintDynamics(model, data, constraints, datas)
+    return data, datas, pin.ProximalSettings(1e-14, 0.0, 1)
+
+
 def delta_tree_state(pin, model, data, legs, v, P, theta, theta_d):
     """Tree coordinates of the assembled DELTA (rod angles from e_i = (B_i - C_i)/b, by hand) and the
     tree velocity whose arm rates are theta_d and whose point constraints hold (J_c v = 0)."""

@@ -283,17 +283,12 @@ def test_delta_forward_and_inverse_dynamics_match_pinocchio_constraint_dynamics(
     kappa <= 1e4 here (kappa eps ~ 2e-12): the issue's 1e-9 relative leaves room for the differences of
     two algorithms and is still seven orders below any modelling error."""
     pytest.importorskip("pinocchio")
-    from benchmarks.competitors import delta_tree_state, pinocchio_delta
+    from benchmarks.competitors import constraint_dynamics_of, delta_tree_state, pinocchio_delta
 
     model, d = models["delta"], derivations["delta"]
     v = _values(model)
     pin, tree, constraints, legs = pinocchio_delta(v)
-    data = tree.createData()
-    datas = pin.StdVec_RigidConstraintData()
-    for c in constraints:
-        datas.append(c.createData())
-    pin.initConstraintDynamics(tree, data, constraints, datas)
-    settings = pin.ProximalSettings(1e-14, 0.0, 1)
+    data, datas, settings = constraint_dynamics_of(pin, tree, constraints)
     f = {name: reference_function(model, d[name]) for name in ("ik", "forward_dynamics", "inverse_dynamics")}
     rng = np.random.default_rng(1405)
     home = np.array([float(e.xreplace(model.parameter_values)) for e in model.parallel.home])

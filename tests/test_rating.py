@@ -134,18 +134,13 @@ def test_the_delta_feels_the_mass_pinocchio_accelerates_with_a_push_at_the_handl
     inverse of the apparent mass.  Both are solves with kappa <= 1e4 (tests/test_parallel_dynamics.py):
     1e-9 relative leaves room for two algorithms."""
     pin = pytest.importorskip("pinocchio")
-    from benchmarks.competitors import delta_tree_state, pinocchio_delta
+    from benchmarks.competitors import constraint_dynamics_of, delta_tree_state, pinocchio_delta
 
     delta = load(generated_dir / "delta")
     values = dict(delta.parameters) | {p.name: p.default for p in delta.info.parameters}
     _, tree, constraints, legs = pinocchio_delta(values)
     tree.gravity = pin.Motion.Zero()
-    data = tree.createData()
-    datas = pin.StdVec_RigidConstraintData()
-    for c in constraints:
-        datas.append(c.createData())
-    pin.initConstraintDynamics(tree, data, constraints, datas)
-    settings = pin.ProximalSettings(1e-14, 0.0, 1)
+    data, datas, settings = constraint_dynamics_of(pin, tree, constraints)
     platform = tree.joints[tree.getJointId("platform")].idx_v
     for P in (np.array(delta.info.home), np.array([0.03, -0.02, -0.13]), np.array([-0.05, 0.04, -0.18])):
         theta = delta.ik(P).joints
@@ -219,3 +214,45 @@ def test_friction_declared_in_the_model_is_felt_at_the_handle(tmp_path):
     damping = float(rating.handle_damping(J, [0.002, 0.001]))
     assert measures["handle_damping"]["home"] == pytest.approx(damping, rel=1e-9)
     assert measures["renderable_stiffness"]["home"] == pytest.approx(2 * damping / 1e-3, rel=1e-9)
+
+
+@pytest.fixture(scope="module")
+def damped_delta(tmp_path_factory):
+    """The DELTA of models/delta.yaml with viscous friction 0.01 N m s/rad at its motors, as a plant."""
+    from symkin.cli import analysis_args, simulate_cmd
+    from symkin.simulation import Plant
+
+    path = tmp_path_factory.mktemp("damped") / "delta.yaml"
+    path.write_text((MODELS_DIR / "delta.yaml").read_text() + "\nfriction:\n"
+                    + "".join(f"  theta{i}: {{viscous: 0.01}}\n" for i in (1, 2, 3)))
+    return Plant(analysis_args.load_model(str(path), "numpy", simulate_cmd.SIMULATION_OUTPUTS,
+                                          simulate_cmd.OPTIONAL_OUTPUTS))
+
+
+@pytest.mark.parametrize("factor, grows", [(0.97, False), (1.03, True)])
+def test_a_virtual_spring_beyond_the_colgate_brown_stiffness_makes_the_loop_unstable(damped_delta, factor, grows):
+    """A virtual spring K (no virtual damping) about the DELTA's home pose, rendered by a 1 kHz loop that holds
+    tau = G + J^T F for a period, the handle let go 0.1 mm away: below K_max = 2 b / T (b the least damping at
+    the handle, symkin rate's renderable_stiffness) the oscillation decays, above it grows: 3 % on either side
+    of the bound decides.  For one mass m with damping b under a sampled spring the exact boundary (the
+    discrete system's spectral radius 1) lies at K_max (1 + O(b T / m)), here within 0.1 %; over 1 s the
+    amplitude changes by rho^1000, about 0.79 at 0.97 K_max and 1.19 at 1.03 K_max for the DELTA's apparent
+    mass (isotropic at home to 1e-3)."""
+    from symkin.simulation import ArmSystem, run_sampled
+
+    plant = damped_delta
+    home = np.array(plant.model.info.home)
+    q0 = plant.model.ik(home).joints
+    J = plant.point_jacobian(q0)
+    K = factor * float(rating.renderable_stiffness(rating.handle_damping(J, [0.01, 0.01, 0.01]), 1e-3))
+
+    def spring(t, x):
+        q = x[:3]
+        return plant.gravity(q) + plant.point_jacobian(q).T @ (-K * (plant.point(q) - home))
+
+    start = plant.model.ik(home + 1e-4 * np.array([1.0, 1.0, 1.0]) / np.sqrt(3)).joints
+    system = ArmSystem(plant)
+    run = run_sampled(system.derivative, spring, system.initial(start), 1e-3, 1000)
+    distance = np.linalg.norm(plant.point(run.x[:, :3]) - home, axis=-1)
+    first, last = np.max(distance[:100]), np.max(distance[-100:])
+    assert (last > 1.1 * first) if grows else (last < 0.9 * first), (first, last)

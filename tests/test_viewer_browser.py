@@ -117,9 +117,10 @@ def test_a_hybrid_device_shows_its_wrist_on_the_platform(browser, pages, generat
     model = load(generated_dir / "delta_wrist")
     page = open_page(browser, pages["delta_wrist"])
     assert page.evaluate("window.symkinView.state.qw") == [0.0, 0.0, 0.0]
-    press(page, "task-x", "ArrowRight", 100)   # 10 mm
-    press(page, "wrist-psi1", "ArrowRight", 300)  # 30 deg
-    press(page, "wrist-psi2", "ArrowLeft", 400)   # -40 deg
+    press(page, "task-x", "ArrowRight", 20)    # 2 mm
+    for slider, degrees in (("wrist-psi1", 30.0), ("wrist-psi2", -40.0)):  # as a drag: one input event each
+        page.eval_on_selector(f"#{slider}", "(e, v) => { e.value = v; e.dispatchEvent(new Event('input')); }",
+                              degrees)
     p = np.array(page.evaluate("window.symkinView.state.p"))
     qw = np.array(page.evaluate("window.symkinView.state.qw"))
     np.testing.assert_allclose(qw, np.radians([30.0, -40.0, 0.0]), rtol=0, atol=1e-12)
