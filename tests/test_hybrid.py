@@ -17,6 +17,8 @@ from conftest import MODELS_DIR, SYMKIN_CLI
 from symkin import load, load_model
 from symkin.derivation import Derivation
 from symkin.errors import DerivationError, ModelError
+from symkin.analysis import global_indices
+from symkin.analysis.device import WholeDevice
 from symkin.cli import main
 from symkin.simulation import Plant, scenarios
 from test_simulation import assert_wall_equilibrium
@@ -347,3 +349,62 @@ def test_cli_simulates_a_hybrid_device(generated_dir, tmp_path):
     assert run.returncode == 0, run.stderr
     assert "|tau_psi2| <= 0 N m" in run.stdout and "peak felt force" in run.stdout
     assert (tmp_path / "out" / "haptic-wall.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_the_whole_device_is_its_legs_and_wrist_with_the_grip_as_tcp(device, generated_dir):
+    view = WholeDevice(device)
+    assert view.info.coordinate_names == ("theta1", "theta2", "theta3", "psi1", "psi2", "psi3")
+    assert view.info.task_space == ("x", "y", "z", "wx", "wy", "wz")
+    T = view.fk(Z0)
+    np.testing.assert_allclose(T, written_out(device.fk(Z0[:3]).position, Z0[3:]), rtol=0,
+                               atol=KINEMATICS * DELTA_SCALE)
+    out_of_reach = np.array([1.0, 1.0, 1.0, 0.0, 0.0, 0.0])       # the arms up: the legs do not assemble
+    assert np.all(np.isnan(view.fk(out_of_reach)))
+    assert not np.any(view.jacobian(out_of_reach))
+    with pytest.raises(ValueError, match="no wrist"):
+        WholeDevice(load(generated_dir / "delta"))
+
+
+def test_the_whole_devices_gci_is_a_monte_carlo_of_its_homogenized_actuator_jacobian(device):
+    """GCI = int g |det J_a| dz / int |det J_a| dz over the legs' and the wrist's joint box, g = 1/kappa of J_a
+    with its translational rows divided by L, against a plain Monte-Carlo written here with the raw generated
+    functions (the working mode checked as ik(fk(q)) = q); both are estimates, compared within four standard
+    errors of their difference."""
+    view = WholeDevice(device)
+    limits = np.array(view.joint_limits)
+    length = global_indices.characteristic_length_of(view, limits)
+    ours = global_indices.global_index(view, method="qmc", samples=2**14, seed=0, length=length)
+    rng = np.random.default_rng(31)
+    z = rng.uniform(limits[:, 0], limits[:, 1], (2**15, 6))
+    q, psi = z[:, :3], z[:, 3:]
+    with np.errstate(invalid="ignore"):
+        p = device.fk(q).position
+        inside = np.isfinite(p).all(axis=1)
+        inside[inside] = np.all(np.abs(device.ik(p[inside]).joints - q[inside]) < 1e-9, axis=1)
+    J = device.device_actuator_jacobian(q[inside], p[inside], psi[inside])
+    weight = np.abs(np.linalg.det(J))
+    scaled = J.copy()
+    scaled[:, :3] /= length
+    sigma = np.linalg.svd(scaled, compute_uv=False)
+    g = sigma[:, -1] / sigma[:, 0]
+    numerator, denominator = np.zeros(len(z)), np.zeros(len(z))
+    numerator[inside], denominator[inside] = weight * g, weight
+    reference = numerator.mean() / denominator.mean()
+    residual = (numerator - reference * denominator) / denominator.mean()   # the ratio estimator's error
+    error = residual.std() / np.sqrt(len(z))
+    standard_error = ours.value.error / ours.integral.quantile           # its half-width over its quantile
+    assert abs(ours.value.value - reference) < 4 * np.hypot(error, standard_error)
+
+
+def test_cli_analyses_the_whole_device_and_refuses_a_model_without_wrist(generated_dir, tmp_path, capsys):
+    assert main(["gci", str(generated_dir / "delta_wrist"), "--device", "-n", "4096", "--seed", "0"]) == 0
+    text = capsys.readouterr().out
+    assert "characteristic length L" in text
+    assert "m^3 rad^3" in text
+    assert main(["workspace", str(generated_dir / "delta_wrist"), "--device", "-n", "4096",
+                 "-o", str(tmp_path / "device.png")]) == 0
+    assert (tmp_path / "device.png").read_bytes()[:4] == b"\x89PNG"
+    with pytest.raises(SystemExit) as exit:
+        main(["gci", str(generated_dir / "delta"), "--device"])
+    assert exit.value.code == 2
+    assert "has no wrist" in capsys.readouterr().err

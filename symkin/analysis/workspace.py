@@ -89,7 +89,11 @@ def sample_workspace(model: GeneratedModel, samples: int = 2**14, *, method: str
         if not inside.all():
             return WorkspaceCloud(q[inside], points[inside], axes, None)
         return WorkspaceCloud(q, points, axes, grid_shape)
-    return WorkspaceCloud(q, mechanism.tcp_positions(model, q), axes, grid_shape)
+    points = mechanism.tcp_positions(model, q)
+    placed = np.isfinite(points).all(axis=-1)  # a view's configurations that do not assemble (a hybrid device's)
+    if not placed.all():
+        return WorkspaceCloud(q[placed], points[placed], axes, None)
+    return WorkspaceCloud(q, points, axes, grid_shape)
 
 
 def bounding_box(model: GeneratedModel, *, limits: Limits | None = None, samples: int = BOX_SAMPLES) -> tuple[np.ndarray, np.ndarray]:

@@ -257,7 +257,8 @@ def models_from_args(args: argparse.Namespace,
                      backends: Sequence[str]) -> tuple[list[Any], dict[str, tuple[float, float]]]:
     """MODEL loaded once per backend (a model file derived once), with --set applied, and the
     --limit overrides (see :func:`model_from_args`)."""
-    models = load_models(args.model, backends, ANALYSIS_OUTPUTS_BY_KIND)
+    models = load_models(args.model, backends, ANALYSIS_OUTPUTS_BY_KIND,
+                         DEVICE_OUTPUTS if getattr(args, "device", False) else ())
     values = parse_assignments(args.assignments)
     if values:
         models = [model.bind(**values) for model in models]
@@ -315,6 +316,27 @@ def add_chunk_arguments(p: argparse.ArgumentParser, what: str) -> None:
     p.add_argument("--workers", type=int, default=None, metavar="K",
                    help="LocalCluster: worker processes (default: one per core)")
     p.add_argument("--chunk", type=int, default=2**20, metavar="N", help="points per task (default: %(default)s)")
+
+
+#: What a hybrid device's whole-device analyses (--device) derive from a model file besides the platform's.
+DEVICE_OUTPUTS = ("device_fk", "device_actuator_jacobian")
+
+
+def add_device_argument(p: argparse.ArgumentParser) -> None:
+    """--device: analyse a hybrid device as a whole (symkin.analysis.device.WholeDevice)."""
+    p.add_argument("--device", action="store_true",
+                   help="a parallel platform carrying a wrist (a hybrid device): analyse the whole device in its "
+                        "actuated joints (legs, then wrist), the wrist's TCP and its actuator Jacobian, with a "
+                        "characteristic length (default: the platform alone)")
+
+
+def device_view(args: argparse.Namespace, model: Any) -> Any:
+    """The model, or with --device the whole device (:class:`symkin.analysis.device.WholeDevice`)."""
+    if not getattr(args, "device", False):
+        return model
+    from symkin.analysis.device import WholeDevice
+
+    return WholeDevice(model)
 
 
 def add_orientation_argument(p: argparse.ArgumentParser) -> None:

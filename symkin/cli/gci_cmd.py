@@ -54,6 +54,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="local index to average (default: %(default)s = 1/kappa, the GCI)")
     analysis_args.add_length_argument(p)
     analysis_args.add_orientation_argument(p)
+    analysis_args.add_device_argument(p)
     p.add_argument("--seed", type=int, default=None, help="seed of mc/qmc (default: fresh randomness)")
     analysis_args.add_chunk_arguments(p, "mc/qmc on the joint domain")
     p.add_argument("--map", metavar="FIGURE", help="also draw the local index over the workspace into FIGURE")
@@ -140,6 +141,7 @@ def run(args: argparse.Namespace) -> int:
     path = None
     try:
         model, limits = analysis_args.model_from_args(args)
+        model = analysis_args.device_view(args, model)
         if orientations.is_spherical(model):
             return _orientations(args, model, limits)
         model = study.at_orientation(model, analysis_args.parse_orientation(args.orientation))

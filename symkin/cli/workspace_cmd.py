@@ -51,6 +51,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--no-figure", action="store_true", help="print the report only")
     analysis_args.add_length_argument(p)
     analysis_args.add_orientation_argument(p)
+    analysis_args.add_device_argument(p)
     p.add_argument("--unit", choices=tuple(analysis_args.LENGTH_UNITS), default="m",
                    help="length unit of the figures (default: m)")
     p.add_argument("--title", help="figure title")
@@ -134,6 +135,7 @@ def run(args: argparse.Namespace) -> int:
 
     try:
         base, limits = analysis_args.model_from_args(args)
+        base = analysis_args.device_view(args, base)
         if orientations.is_spherical(base):
             return _orientations(args, base, limits)
         base = study.at_orientation(base, analysis_args.parse_orientation(args.orientation))

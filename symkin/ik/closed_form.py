@@ -210,8 +210,9 @@ def _into_limits(kin: ModelKinematics, q: np.ndarray, reference: np.ndarray) -> 
 def closed_form_solver(model: GeneratedModel | ModelKinematics,
                        limits: Sequence[tuple[float, float]] | None = None) -> ClosedFormIK | None:
     """The closed-form solver of ``model``'s structure, or None if no known structure matches
-    (or it is a parallel mechanism, whose IK is generated code of its own)."""
-    if not isinstance(model, ModelKinematics) and model.info.is_parallel:
+    (or it is no serial chain: a parallel mechanism, whose IK is generated code of its own, or a view of a
+    hybrid device as a whole, symkin.analysis.device)."""
+    if not isinstance(model, ModelKinematics) and model.info.mechanism != "serial":
         return None
     kin = model if isinstance(model, ModelKinematics) else ModelKinematics(model, limits)
     try:
