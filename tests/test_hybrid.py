@@ -7,6 +7,7 @@ differences through the DELTA's closed-form fk, and the located errors of wrist 
 
 from __future__ import annotations
 
+import json
 import subprocess
 
 import numpy as np
@@ -17,7 +18,7 @@ from conftest import MODELS_DIR, SYMKIN_CLI
 from symkin import load, load_model
 from symkin.derivation import Derivation
 from symkin.errors import DerivationError, ModelError
-from symkin.analysis import global_indices
+from symkin.analysis import global_indices, rating
 from symkin.analysis.device import WholeDevice
 from symkin.cli import main
 from symkin.simulation import Plant, scenarios
@@ -408,3 +409,32 @@ def test_cli_analyses_the_whole_device_and_refuses_a_model_without_wrist(generat
         main(["gci", str(generated_dir / "delta"), "--device"])
     assert exit.value.code == 2
     assert "has no wrist" in capsys.readouterr().err
+
+
+def test_the_grip_feels_the_mass_the_forward_dynamics_accelerates_with_a_push(device, plant):
+    """Lambda = (J_p M^-1 J_p^T)^-1 of the whole device at its grip point (J_p the translational rows of J_a, M
+    the device's mass matrix in z): a unit force at the grip, mapped to the joints by J_p^T and fed to the
+    generated forward dynamics from rest (the wrist free: no motor holds it), accelerates the grip by the
+    mobility J_p M^-1 J_p^T (the weight's acceleration subtracted)."""
+    view = WholeDevice(device)
+    J = view.jacobian(Z0)[:3]
+    still = np.zeros(6)
+    falling = J @ plant.acceleration(Z0, still, still)
+    mobility = np.array([J @ plant.acceleration(Z0, still, J.T @ force) - falling for force in np.eye(3)]).T
+    Lambda = rating.apparent_mass(view.mass_matrix(Z0), J)
+    np.testing.assert_allclose(Lambda @ mobility, np.eye(3), rtol=0, atol=1e-9)
+
+
+def test_cli_rates_the_whole_device_at_its_grip(generated_dir, tmp_path):
+    out = tmp_path / "rate"
+    assert main(["rate", str(generated_dir / "delta_wrist"), "--device", "-n", "1000", "--no-figure",
+                 "-o", str(out)]) == 0
+    sheet = json.loads((out / "datasheet.json").read_text())
+    view = WholeDevice(load(generated_dir / "delta_wrist"))
+    home = np.array(sheet["home"]["q"])
+    masses = rating.principal_masses(view.mass_matrix(home), view.jacobian(home)[:3])
+    assert sheet["measures"]["apparent_mass_min"]["home"] == pytest.approx(masses[0], rel=1e-9)
+    assert sheet["measures"]["apparent_mass_max"]["home"] == pytest.approx(masses[-1], rel=1e-9)
+    with pytest.raises(SystemExit) as exit:
+        main(["rate", str(generated_dir / "delta_wrist"), "-o", str(tmp_path / "refused")])
+    assert exit.value.code == 2

@@ -159,9 +159,12 @@ def rate(model: GeneratedModel, actuation: Actuation, *, samples: int = 4096, se
             rotates, a wrist on the platform, no mass matrix), or the box holds no sample.
     """
     kind = mechanism.parallel_kind(mechanism.task_space(model)) if mechanism.is_parallel(model) else "serial"
-    if kind not in ("serial", "parallel") or model.info.wrist:
+    if model.info.wrist:
+        raise ValueError(f"{model.name}: a platform carrying a wrist: rate the whole device at its grip point "
+                         "(symkin rate --device, symkin.analysis.device.WholeDevice)")
+    if kind not in ("serial", "parallel"):
         raise ValueError(f"{model.name}: symkin rate rates devices whose handle translates with the platform or is "
-                         f"a serial arm's TCP; this is a {kind} mechanism{' with a wrist' if model.info.wrist else ''}")
+                         f"a serial arm's TCP; this is a {kind} mechanism")
     rows = list(mechanism.position_rows(model))
     if not rows:
         raise ValueError(f"{model.name}: the task space ({', '.join(mechanism.task_space(model))}) has no translation")

@@ -5,7 +5,7 @@ actuated coordinates z = (q, qw): the legs' actuators, then the wrist's joints.
 is of a pose platform): its joints are z within the legs' and the wrist's limits, its TCP the wrist's
 (``device_fk(fk(q), qw)``), its task Jacobian the actuator Jacobian J_a = [J_c,p J, J_c,w]
 (``device_actuator_jacobian``: the TCP's velocity and angular velocity, 6 x n).  So the serial analyses
-(``symkin workspace``, ``symkin gci``) cover the combined workspace: the grip point's reachable positions,
+(``symkin workspace``, ``symkin gci``, ``symkin rate``) cover the combined workspace: the grip point's reachable positions,
 and 1/kappa of J_a homogenized by a characteristic length (its rows mix m/rad and rad/rad), weighted by
 |det J_a| (the pose workspace's measure) where the device is square.  Where the legs do not assemble or
 leave the working mode of the platform (:func:`symkin.analysis.parallel.working_mode`) the TCP is NaN and
@@ -26,6 +26,8 @@ from symkin.runtime.info import GeneratedModel
 DEVICE_TASK_SPACE = ("x", "y", "z", "wx", "wy", "wz")
 #: The generated functions the view evaluates.
 DEVICE_FUNCTIONS = ("fk", "ik", "device_fk", "device_actuator_jacobian")
+#: The device's dynamics in (q, p, qw), offered in z where generated.
+DEVICE_DYNAMICS = ("mass_matrix", "gravity_vector")
 
 
 class WholeDevice:
@@ -56,7 +58,8 @@ class WholeDevice:
         self.info = dataclasses.replace(model.info, mechanism="hybrid", coordinates=model.info.coordinates
                                         + model.info.wrist, task_space=DEVICE_TASK_SPACE, wrist=(), home=None,
                                         passive_limits=())
-        self.functions = ("fk", "jacobian")
+        #: the dynamics the view evaluates in z where the model has them (symkin rate's apparent mass at the grip)
+        self.functions = ("fk", "jacobian") + tuple(f for f in DEVICE_DYNAMICS if f in model.functions)
 
     def __getattr__(self, name: str) -> Any:  # the model's name, parameters, generated functions
         if name == "model":  # not yet set (copy, pickle): no recursion
@@ -88,6 +91,17 @@ class WholeDevice:
         """base_T_tcp (..., 4, 4) of the wrist's TCP; NaN outside the platform's working mode."""
         _, p, qw, inside = self._platform(z)
         return np.where(inside[..., None, None], self.model.device_fk(p, qw), np.nan)
+
+    def mass_matrix(self, z: np.ndarray) -> np.ndarray:
+        """M(z) (..., n, n) of the whole device (legs, then wrist: symkin.parallel.dynamics); NaN outside the
+        platform's working mode."""
+        q, p, qw, inside = self._platform(z)
+        return np.where(inside[..., None, None], self.model.mass_matrix(q, p, qw), np.nan)
+
+    def gravity_vector(self, z: np.ndarray) -> np.ndarray:
+        """G(z) (..., n): the actuator efforts that hold the device; NaN outside the platform's working mode."""
+        q, p, qw, inside = self._platform(z)
+        return np.where(inside[..., None], self.model.gravity_vector(q, p, qw), np.nan)
 
     def jacobian(self, z: np.ndarray) -> np.ndarray:
         """J_a (..., 6, n): [v; w] = J_a zd; zero outside the platform's working mode."""

@@ -51,6 +51,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="motor turns per joint turn between encoder and revolute joint (default: 1)")
     p.add_argument("--rate", type=float, default=1000.0, metavar="HZ",
                    help="servo rate of the haptic loop, for the renderable stiffness (default: 1000)")
+    analysis_args.add_device_argument(p)
     p.add_argument("-o", "--out", metavar="DIR", help="output directory (default: out/rate/MODEL)")
     p.add_argument("--no-figure", action="store_true", help="write the numbers only")
     p.set_defaults(run=run, parser=p)
@@ -83,9 +84,10 @@ def run(args: argparse.Namespace) -> int:
         if not 0.0 <= conditioning <= 1.0:
             raise ValueError(f"--conditioning must lie in [0, 1], got {conditioning:g}")
         box = analysis_args.parse_ranges(args.box, "--box", "AXIS")
-        models = analysis_args.load_models(args.model, (args.backend,), RATE_OUTPUTS, ("gravity_vector",))
+        device = analysis_args.DEVICE_OUTPUTS if args.device else ()
+        models = analysis_args.load_models(args.model, (args.backend,), RATE_OUTPUTS, ("gravity_vector", *device))
         values = analysis_args.parse_assignments(args.assignments)
-        model = models[0].bind(**values) if values else models[0]
+        model = analysis_args.device_view(args, models[0].bind(**values) if values else models[0])
         actuation = datasheet.Actuation.of_model(model, effort_limits=analysis_args.effort_limits(args.effort_limit,
                                                                                                   model),
                                                  joint_steps=_joint_steps(args, model), period=1.0 / args.rate)
