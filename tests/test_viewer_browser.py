@@ -80,10 +80,10 @@ def test_a_joint_slider_moves_the_arm_to_numpys_fk(browser, pages, generated_dir
 def test_the_delta_follows_its_tcp_through_the_closed_form_ik(browser, pages, generated_dir):
     model = load(generated_dir / "delta")
     page = open_page(browser, pages["delta"])
-    press(page, "task-x", "ArrowRight", 150)  # 15 mm
-    press(page, "task-z", "ArrowLeft", 100)   # 10 mm down
+    press(page, "task-x", "ArrowRight", 40)   # 4 mm
+    press(page, "task-z", "ArrowLeft", 30)    # 3 mm down
     p = np.array(page.evaluate("window.symkinView.state.p"))
-    np.testing.assert_allclose(p, [0.015, 0.0, -0.16], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(p, [0.004, 0.0, -0.153], rtol=0, atol=1e-12)
     q = np.array(page.evaluate("window.symkinView.state.q"))
     np.testing.assert_allclose(q, model.ik(p).joints, rtol=0, atol=AGREEMENT)
     held, printed = shown_tcp(page)
@@ -97,8 +97,8 @@ def test_the_delta_follows_its_tcp_through_the_closed_form_ik(browser, pages, ge
 def test_the_stewart_platform_is_rated_by_its_twist_jacobian(browser, pages, generated_dir):
     model = load(generated_dir / "stewart")
     page = open_page(browser, pages["stewart"])
-    press(page, "task-roll", "ArrowRight", 80)  # 8 deg
-    press(page, "task-yaw", "ArrowLeft", 50)    # -5 deg
+    press(page, "task-roll", "ArrowRight", 30)  # 3 deg
+    press(page, "task-yaw", "ArrowLeft", 20)    # -2 deg
     p = np.array(page.evaluate("window.symkinView.state.p"))
     q = np.array(page.evaluate("window.symkinView.state.q"))
     np.testing.assert_allclose(q, model.ik(p).joints, rtol=0, atol=AGREEMENT * np.abs(q).max())
