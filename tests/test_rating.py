@@ -137,7 +137,7 @@ def test_the_delta_feels_the_mass_pinocchio_accelerates_with_a_push_at_the_handl
     from benchmarks.competitors import constraint_dynamics_of, delta_tree_state, pinocchio_delta
 
     delta = load(generated_dir / "delta")
-    values = dict(delta.parameters) | {p.name: p.default for p in delta.info.parameters}
+    values = {p.name: p.default for p in delta.info.parameters}
     _, tree, constraints, legs = pinocchio_delta(values)
     tree.gravity = pin.Motion.Zero()
     data, datas, settings = constraint_dynamics_of(pin, tree, constraints)

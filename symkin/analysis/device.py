@@ -72,9 +72,7 @@ class WholeDevice:
     @property
     def joint_limits(self) -> tuple[tuple[float, float], ...]:
         """The legs' then the wrist's (lower, upper) limits ((-inf, inf) where none are declared)."""
-        inf = float("inf")
-        return tuple(self.model.joint_limits) + tuple(c.limits if c.limits is not None else (-inf, inf)
-                                                      for c in self.model.info.wrist)
+        return tuple(c.bounds for c in self.info.coordinates)
 
     def bind(self, **parameters: float) -> WholeDevice:
         return WholeDevice(self.model.bind(**parameters))

@@ -45,18 +45,20 @@ def apparent_mass(M: np.ndarray, J: np.ndarray) -> np.ndarray:
         M: joint-space mass matrices (..., n, n).
         J: task Jacobians (..., m, n), v = J qd, of full row rank m <= n.
     """
+    return np.linalg.inv(mobility(M, J))
+
+
+def mobility(M: np.ndarray, J: np.ndarray) -> np.ndarray:
+    """J M^-1 J^T (..., m, m): the handle's acceleration per unit force from rest, the inverse apparent mass."""
     M, J = np.asarray(M, dtype=float), np.asarray(J, dtype=float)
-    mobility = J @ np.linalg.solve(M, np.swapaxes(J, -1, -2))
-    return np.linalg.inv(mobility)
+    return J @ np.linalg.solve(M, np.swapaxes(J, -1, -2))
 
 
 def principal_masses(M: np.ndarray, J: np.ndarray) -> np.ndarray:
     """The eigenvalues of the apparent mass (..., m), ascending: the masses felt along its principal axes, the
     reciprocals of the eigenvalues of the mobility J M^-1 J^T (inf along a direction a singular J cannot move)."""
-    M, J = np.asarray(M, dtype=float), np.asarray(J, dtype=float)
-    mobility = np.linalg.eigvalsh(J @ np.linalg.solve(M, np.swapaxes(J, -1, -2)))[..., ::-1]
-    with np.errstate(divide="ignore"):
-        return np.where(mobility > 0.0, 1.0 / np.where(mobility > 0.0, mobility, 1.0), np.inf)
+    eigenvalues = np.linalg.eigvalsh(mobility(M, J))[..., ::-1]
+    return np.where(eigenvalues > 0.0, 1.0 / np.where(eigenvalues > 0.0, eigenvalues, 1.0), np.inf)
 
 
 def farthest_vertex(A: np.ndarray, half_widths: Sequence[float] | np.ndarray) -> np.ndarray:

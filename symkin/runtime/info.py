@@ -10,6 +10,7 @@ home pose and the passive-joint limits of its legs.
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
 from typing import Any, Protocol
 
@@ -43,6 +44,11 @@ class Coordinate:
     continuous_effort_limit: float | None = None
     viscous: float | None = None
     coulomb: float | None = None
+
+    @property
+    def bounds(self) -> tuple[float, float]:
+        """(lower, upper) position limits, (-inf, inf) where none are declared."""
+        return self.limits if self.limits is not None else (-math.inf, math.inf)
 
     @property
     def label(self) -> str:

@@ -77,8 +77,7 @@ class LoadedModel:
     def joint_limits(self) -> tuple[tuple[float, float], ...]:
         """(lower, upper) position limit of every joint, at the parameters' default values;
         (-inf, inf) for a joint without limits."""
-        inf = float("inf")
-        return tuple(c.limits if c.limits is not None else (-inf, inf) for c in self.info.coordinates)
+        return tuple(c.bounds for c in self.info.coordinates)
 
     def __getattr__(self, name: str) -> Any:
         """Only for names that are not attributes: the generated functions are set in __init__."""

@@ -27,6 +27,7 @@ import numpy as np
 
 from symkin.analysis import mechanism
 from symkin.analysis.conditioning import inverse_condition_number
+from symkin.analysis.device import DEVICE_TASK_SPACE
 from symkin.errors import GeneratedCodeError
 from symkin.runtime.info import GeneratedModel
 
@@ -34,8 +35,6 @@ from symkin.runtime.info import GeneratedModel
 REQUIRED = ("forward_dynamics", "inverse_dynamics", "mass_matrix", "kinetic_energy")
 #: ... and a parallel mechanism's: its platform pose p = fk(q) (closed form).
 REQUIRED_PARALLEL = REQUIRED + ("fk",)
-#: A hybrid device's task space: the wrist TCP's velocity and angular velocity (rows of device_actuator_jacobian).
-DEVICE_TASK_SPACE = ("x", "y", "z", "wx", "wy", "wz")
 #: The wrist's input of a hybrid device's generated function beside each of the legs' (symkin.parallel.dynamics).
 WRIST_INPUTS = {"q": "qw", "qd": "qwd", "qdd": "qwdd", "tau": "tauw"}
 
@@ -76,8 +75,7 @@ class Plant:
         self.coordinates = tuple(c.name for c in coordinates)
         self.dof = len(self.coordinates)
         #: the model's declared position, velocity and effort limits per joint (inf, NaN where it declares none)
-        self.joint_limits = np.array([c.limits if c.limits is not None else (-np.inf, np.inf) for c in coordinates],
-                                     dtype=float).reshape(self.dof, 2)
+        self.joint_limits = np.array([c.bounds for c in coordinates], dtype=float).reshape(self.dof, 2)
         self.velocity_limits = np.array([np.nan if c.velocity_limit is None else c.velocity_limit
                                          for c in coordinates])
         self.effort_limits = np.array([np.nan if c.effort_limit is None else c.effort_limit for c in coordinates])
