@@ -6,9 +6,9 @@ import argparse
 import importlib
 import time
 
+from symkin.analysis.mechanism import POSITION_COMPONENTS
 from symkin.cli import analysis_args
 from symkin.cli.progress import Progress
-from symkin.kinematics.task_space import POSITION
 from symkin.runtime.info import GeneratedModel
 
 #: Configurations drawn for --map (serial mechanisms).
@@ -210,6 +210,6 @@ def measure_unit(model: GeneratedModel, measure: str) -> str:
     if measure == "joint":
         units = ["rad" if c.revolute else "m" for c in model.info.coordinates]
     else:
-        units = ["m" if c in POSITION else "rad" for c in model.info.task_space]
+        units = ["m" if c in POSITION_COMPONENTS else "rad" for c in model.info.task_space]
     powers = {u: units.count(u) for u in ("m", "rad") if u in units}
     return " ".join(u if n == 1 else f"{u}^{n}" for u, n in powers.items())

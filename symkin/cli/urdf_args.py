@@ -15,7 +15,6 @@ from typing import Any
 
 from symkin.cli.analysis_args import parse_value
 from symkin.errors import ModelError, Problem
-from symkin.model.source_kind import MJCF, URDF, XACRO, source_kind
 
 
 def add_urdf_arguments(p: argparse.ArgumentParser) -> None:
@@ -43,12 +42,6 @@ def add_urdf_arguments(p: argparse.ArgumentParser) -> None:
                         "do (default: refuse them; the model key 'allow_nonphysical: true' does the same)")
 
 
-#: (options, the file kinds they apply to, those kinds in words, a suffix of such a file).
-_OPTION_KINDS = ((("--tip", "--base", "--lock", "--snap-angles", "--branch"), {URDF, XACRO, MJCF},
-                  "robot files (URDF, xacro, MJCF)", ".urdf"),
-                 (("--xacro-arg", "--xacro-package"), {XACRO}, "xacro files", ".xacro"))
-
-
 def urdf_options(args: argparse.Namespace, path: str) -> dict[str, Any]:
     """Keyword arguments of :func:`symkin.model.load_model` for the model file ``path``.
 
@@ -56,8 +49,14 @@ def urdf_options(args: argparse.Namespace, path: str) -> dict[str, Any]:
         ModelError: robot-file (or xacro) options given with no such file among the models, or a malformed
             --lock.
     """
+    from symkin.model.source_kind import MJCF, URDF, XACRO, source_kind  # the model package imports sympy
+
+    # (options, the file kinds they apply to, those kinds in words, a suffix of such a file)
+    option_kinds = ((("--tip", "--base", "--lock", "--snap-angles", "--branch"), {URDF, XACRO, MJCF},
+                     "robot files (URDF, xacro, MJCF)", ".urdf"),
+                    (("--xacro-arg", "--xacro-package"), {XACRO}, "xacro files", ".xacro"))
     kinds = {source_kind(model) for model in args.models}
-    for names, accepting, what, suffix in _OPTION_KINDS:
+    for names, accepting, what, suffix in option_kinds:
         given = [option for option in names if getattr(args, option[2:].replace("-", "_"))]
         if given and not kinds & accepting:
             raise ModelError([Problem("<command line>", None, None, given[0], f"{given[0]} applies to {what} only",
