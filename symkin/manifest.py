@@ -96,7 +96,8 @@ def build_manifest(model: Model, code: ModelCode, derived: list[str], backend_fi
                 "name": f.name,
                 "summary": f.spec.summary,
                 "inputs": [_input_record(i) for i in f.spec.inputs],
-                "outputs": [{"name": o.name, "shape": list(o.shape), "unit": o.unit, "doc": o.doc}
+                "outputs": [{"name": o.name, "shape": list(o.shape), "unit": o.unit, "doc": o.doc,
+                             **({"elements": list(o.elements)} if o.elements else {})}
                             for o in f.spec.outputs],
                 **({"combines": list(f.spec.parts)} if f.spec.parts else {}),
                 "op_counts": f.op_counts,

@@ -11,6 +11,7 @@ from __future__ import annotations
 from types import ModuleType
 
 from symkin.dynamics import quantities as dynamics_quantities
+from symkin.dynamics import regressor
 from symkin.ir.quantity import MECHANISMS, QuantityDef
 from symkin.kinematics import quantities as kinematics_quantities
 from symkin.parallel import dynamics as parallel_dynamics
@@ -18,7 +19,7 @@ from symkin.parallel import forces as parallel_forces
 from symkin.parallel import hybrid
 from symkin.parallel import quantities as parallel_quantities
 
-QUANTITY_MODULES: tuple[ModuleType, ...] = (kinematics_quantities, dynamics_quantities, parallel_quantities,
+QUANTITY_MODULES: tuple[ModuleType, ...] = (kinematics_quantities, dynamics_quantities, regressor, parallel_quantities,
                                             parallel_forces, parallel_dynamics, hybrid)
 
 

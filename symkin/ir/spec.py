@@ -90,7 +90,9 @@ class OutputSpec:
     """One output: a sympy matrix and the array shape it is returned with.
 
     ``shape`` is (r, c) for matrices, (r,) for column vectors and () for scalars; ``expr``
-    is always a sympy matrix with r*c (or r, or 1) entries in row-major order.
+    is always a sympy matrix with r*c (or r, or 1) entries in row-major order.  ``elements``
+    names the entries along the last axis where they are more than numbers in a row (the
+    regressor's columns and parameters: ``link1.m``...); empty otherwise.
     """
 
     name: str
@@ -98,6 +100,7 @@ class OutputSpec:
     doc: str
     unit: str = ""
     shape: tuple[int, ...] = field(default=())
+    elements: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         if not self.shape:
@@ -107,6 +110,9 @@ class OutputSpec:
             size *= s
         if size != len(self.expr):
             raise ValueError(f"output {self.name}: shape {self.shape} does not fit a {self.expr.shape} matrix")
+        if self.elements and len(self.elements) != self.shape[-1]:
+            raise ValueError(f"output {self.name}: {len(self.elements)} element names for a last axis of "
+                             f"{self.shape[-1]}")
 
     @property
     def entries(self) -> list[sympy.Expr]:
@@ -249,7 +255,7 @@ def combine_functions(model: Model, name: str, specs: Sequence[FunctionSpec]) ->
             definitions.append((renamed[symbol], expr.xreplace(renamed)))
         outputs += [OutputSpec(out.name if counts[out.name] == 1 else f"{spec.name}_{out.name}",
                                sympy.ImmutableMatrix(out.expr.xreplace(renamed)), f"{out.doc} ({spec.name})",
-                               out.unit, out.shape)
+                               out.unit, out.shape, out.elements)
                     for out in spec.outputs]
     parts = tuple(spec.name for spec in specs)
     summary = f"{', '.join(parts)} together, with one set of shared subexpressions."

@@ -17,7 +17,7 @@ from collections.abc import Callable, Iterable
 import sympy
 
 from symkin.errors import DerivationError
-from symkin.ir.spec import FunctionSpec, OptimizedFunction, OutputSpec
+from symkin.ir.spec import FunctionSpec, OptimizedFunction
 from symkin.ir.opcount import node_cost, op_count
 
 #: Digits used to evaluate constant subexpressions before they are rounded to double.
@@ -66,7 +66,7 @@ def _rebuild(expr: sympy.Expr, replace: Replacement, memo: dict, costs: dict) ->
 
 def map_spec(spec: FunctionSpec, rewrite: Callable[[sympy.Expr], sympy.Expr]) -> FunctionSpec:
     """``spec`` with ``rewrite`` applied to every output entry and every definition."""
-    outputs = tuple(OutputSpec(o.name, sympy.ImmutableMatrix(o.expr.applyfunc(rewrite)), o.doc, o.unit, o.shape)
+    outputs = tuple(dataclasses.replace(o, expr=sympy.ImmutableMatrix(o.expr.applyfunc(rewrite)))
                     for o in spec.outputs)
     definitions = tuple((symbol, rewrite(expr)) for symbol, expr in spec.definitions)
     return dataclasses.replace(spec, outputs=outputs, definitions=definitions)

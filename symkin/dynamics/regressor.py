@@ -1,0 +1,153 @@
+"""The dynamics regressor of a serial chain: tau = Y(q, qd, qdd) pi, linear in the standard parameters.
+
+Every term of the inverse dynamics tau = M qdd + V + G + F_f (seed eq. 8.34) is linear in the mass
+properties of the links and in the drives' constants (Atkeson, An and Hollerbach, "Estimation of
+inertial parameters of manipulator loads and links", IJRR 5(3), 1986; Khalil and Dombre, *Modeling,
+Identification and Control of Robots*, 2002, sec. 12.3), so tau = Y pi with
+
+* per link (a joint's moving link, in the joint's Newton-Euler frame F_i of
+  :mod:`symkin.dynamics.newton_euler`, about its origin): the ten standard inertial parameters in
+  Pinocchio's order (``Inertia::toDynamicParameters``)::
+
+      m, m c_x, m c_y, m c_z, I_xx, I_xy, I_yy, I_xz, I_yz, I_zz
+
+  with I = I_c + m ([c]^T [c]) the rotational inertia about the origin of F_i (parallel axes);
+* per joint: the drive's reflected rotor inertia I_a (tau_j += I_a qdd_j), viscous friction f_v
+  (f_v qd_j), Coulomb friction f_c (f_c sign(qd_j), or f_c tanh(qd_j / v_s) where the model smooths
+  it) and an offset f_o (a constant torque: sensor offsets, the asymmetric part (c+ - c-)/2 of a
+  direction-dependent Coulomb level while the joint moves).
+
+Y is derived exactly: tau is linear and homogeneous in pi, so column k of Y is the inverse dynamics with
+pi = e_k (the recursive Newton-Euler pass with one link carrying one unit parameter and every other
+link massless; Atkeson et al. 1986 build the same columns per link), nothing approximated.  The
+links' frames F_i coincide with the link frames of a URDF (whose joint frame is the child link's),
+so a URDF model's parameters are Pinocchio's in the same order; a coupled joint's columns reach the
+coordinates through A^T (:mod:`symkin.dynamics.coupling`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
+import symengine as se
+
+from symkin.dynamics import newton_euler
+from symkin.dynamics.coupling import forces_on_coordinates, joint_rates
+from symkin.dynamics.program import Program
+from symkin.dynamics.quantities import _gravity_graph as gravity_graph
+from symkin.dynamics.quantities import _newton_euler_links as newton_euler_links
+from symkin.dynamics.quantities import function_spec
+from symkin.ir.quantity import quantity
+from symkin.ir.spec import FunctionSpec
+from symkin.model.schema import Friction, Model
+
+if TYPE_CHECKING:
+    from symkin.derivation.graph import Derivation
+
+#: The ten standard inertial parameters of a link, in Pinocchio's order.
+INERTIAL = ("m", "mx", "my", "mz", "Ixx", "Ixy", "Iyy", "Ixz", "Iyz", "Izz")
+#: The parameters of a joint's drive: reflected rotor inertia, viscous, Coulomb, offset.
+DRIVE = ("Ia", "fv", "fc", "fo")
+
+
+def parameter_names(model: Model) -> tuple[str, ...]:
+    """The names of the standard parameters pi, in the order of Y's columns: ``<link>.<INERTIAL>`` for
+    every moving link in joint order, then ``<joint>.<DRIVE>`` for every joint."""
+    return (tuple(f"{j.link}.{p}" for j in model.joints for p in INERTIAL)
+            + tuple(f"{j.name}.{p}" for j in model.joints for p in DRIVE))
+
+
+def _unit_inertias() -> list[newton_euler.SpatialInertia]:
+    """The spatial inertia of each standard parameter set to one and the others to zero, in INERTIAL order."""
+    zero, one = se.Integer(0), se.Integer(1)
+
+    def unit(row: int, col: int) -> list[list[se.Basic]]:
+        return [[one if {r, c} == {row, col} else zero for c in range(3)] for r in range(3)]
+
+    vectors = [[one if k == axis else zero for k in range(3)] for axis in range(3)]
+    none = [[zero] * 3 for _ in range(3)]
+    return ([newton_euler.SpatialInertia(one, [zero] * 3, none)]
+            + [newton_euler.SpatialInertia(zero, v, none) for v in vectors]
+            + [newton_euler.SpatialInertia(zero, [zero] * 3, unit(r, c))
+               for r, c in ((0, 0), (0, 1), (1, 1), (0, 2), (1, 2), (2, 2))])
+
+
+def _coulomb_shape(friction: Friction | None, v: se.Basic) -> se.Basic:
+    """sign(v), or tanh(v / v_s) where the model smooths the Coulomb friction of the joint."""
+    if friction is None or friction.smoothing_velocity is None:
+        return se.sign(v)
+    return se.tanh(v / se.sympify(friction.smoothing_velocity))
+
+
+def regressor_rows(model: Model, links: Sequence[newton_euler.Link],
+                   gravity: Sequence[se.Basic] | None) -> list[list[se.Basic]]:
+    """Y (coordinates x parameters) with tau = Y pi, as SymEngine expressions (see the module docstring).
+
+    tau is linear and homogeneous in pi, so column k is tau with pi = e_k: the Newton-Euler pass with one link
+    carrying one unit parameter (the others massless), and the drive terms' own factors.
+    """
+    qd, qdd = joint_rates(model, "qd"), joint_rates(model, "qdd")
+    bare = [dataclasses.replace(link, inertia=None, armature=se.Integer(0)) for link in links]
+    columns: list[list[se.Basic]] = []
+    for i in range(len(links)):
+        for inertia in _unit_inertias():
+            loaded = list(bare)
+            loaded[i] = dataclasses.replace(bare[i], inertia=inertia)
+            columns.append(newton_euler.inverse_dynamics(loaded, qd, qdd, gravity))
+    friction = {f.joint: f for f in model.friction}
+    zero = se.Integer(0)
+    for j, joint in enumerate(model.joints):
+        terms = (qdd[j], qd[j], _coulomb_shape(friction.get(joint.name), qd[j]), se.Integer(1))
+        columns += [[term if row == j else zero for row in range(len(links))] for term in terms]
+    on_coordinates = [forces_on_coordinates(model, column) for column in columns]
+    return [list(row) for row in zip(*on_coordinates)]
+
+
+def standard_parameters(model: Model, links: Sequence[newton_euler.Link]) -> list[se.Basic]:
+    """The model's own pi: its links' summed bodies in F_i, its drives' reflected inertia and friction."""
+    values: list[se.Basic] = []
+    for link in links:
+        body = link.inertia
+        if body is None:
+            values += [se.Integer(0)] * 10
+            continue
+        J = body.rotational
+        values += [body.mass, *body.moment, J[0][0], J[0][1], J[1][1], J[0][2], J[1][2], J[2][2]]
+    friction = {f.joint: f for f in model.friction}
+    for joint, link in zip(model.joints, links):
+        f = friction.get(joint.name)
+        if f is None:
+            values += [link.armature, se.Integer(0), se.Integer(0), se.Integer(0)]
+            continue
+        negative = f.coulomb_negative if f.asymmetric else f.coulomb
+        values += [link.armature, se.sympify(f.viscous), se.sympify((f.coulomb + negative) / 2),
+                   se.sympify((f.coulomb - negative) / 2)]
+    return values
+
+
+@quantity("regressor", "dynamics regressor Y(q, qd, qdd) with tau = Y pi, and the model's standard parameters pi")
+def regressor(d: Derivation) -> FunctionSpec:
+    """One function giving Y (coordinates x parameters) and the model's pi, whose names are both outputs'
+    elements (:func:`parameter_names`)."""
+    model = d.model
+    links = d[newton_euler_links]
+    program = Program()
+    Y = [program.bind(row) for row in regressor_rows(model, links, d[gravity_graph])]
+    pi = program.bind(standard_parameters(model, links))
+    names = parameter_names(model)
+    spec = function_spec(
+        d, "regressor", "Dynamics regressor: tau = Y(q, qd, qdd) pi, linear in the standard parameters.",
+        "Column k of Y is the Newton-Euler inverse dynamics with friction (seed eq. 8.34) at pi = e_k, exact; pi "
+        "holds per link m, m c_x, m c_y, m c_z, I_xx, I_xy, I_yy, I_xz, I_yz, I_zz (about the joint frame's "
+        "origin, Pinocchio's order) and per joint the reflected rotor inertia I_a and the friction f_v, f_c, f_o "
+        "(tau += I_a qdd + f_v qd + f_c sign(qd) + f_o); Y pi equals inverse_dynamics (with Coulomb levels that "
+        "differ by direction, while the joints move). The names of pi are the outputs' elements in the manifest.",
+        ["q", "qd", "qdd"], program,
+        [("Y", [e for row in Y for e in row], (model.dof, len(names)),
+          "regressor: column k is the torque per unit of parameter k", ""),
+         ("pi", pi, (len(names),), "the model's standard parameters (kg, kg*m, kg*m^2; drives: kg*m^2 or kg, "
+          "N*m*s/rad or N*s/m, N*m or N)", "")])
+    outputs = tuple(dataclasses.replace(o, elements=names) for o in spec.outputs)
+    return dataclasses.replace(spec, outputs=outputs)

@@ -1,0 +1,145 @@
+"""Issue 33, step 1: the dynamics regressor tau = Y(q, qd, qdd) pi, linear in the standard parameters.
+
+References: Y pi against the inverse dynamics symbolically (the seed's 2R arm with drives and friction) and
+numerically (every serial example model, a tree with gyroscopic rotors and couplings); Y and pi against
+Pinocchio's computeJointTorqueRegressor and Inertia.toDynamicParameters on the UR10e's URDF; the generated
+numpy, C and CasADi code against the generated inverse dynamics.
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pinocchio as pin
+import pytest
+import sympy
+
+from conftest import MODELS_DIR, random_q, reference_function
+from symkin import pipeline
+from symkin.derivation import Derivation
+from symkin.dynamics.regressor import DRIVE, INERTIAL, parameter_names
+from symkin.model import load_model, model_from_text
+from symkin.runtime.loader import load
+from tolerances import DYNAMICS, EPS
+
+PLANAR = (MODELS_DIR / "planar_2r.yaml").read_text()
+PARAMETERS = "  g: {value: 9.81, unit: m/s^2, doc: gravitational acceleration}\n"
+#: The 2R arm with a drive on each joint and friction on both (one smoothed).
+DRIVEN = PLANAR.replace(PARAMETERS, PARAMETERS + "  J1: 1.2e-6\n  N1: 13.3\n  J2: 3.4e-6\n  b1: 0.1\n  c2: 0.3\n") + """
+actuators:
+  theta1: {rotor_inertia: J1, gear_ratio: N1}
+  theta2: {rotor_inertia: J2}
+friction:
+  theta1: {viscous: b1, coulomb: 0.2}
+  theta2: {coulomb: c2, smoothing_velocity: 0.01}
+"""
+#: The same with gyroscopic rotors: a tree (each rotor joint a branch on the link before its joint) whose rotor
+#: joints are coupled to the coordinates (angle N q).
+ROTORS = PLANAR.replace(PARAMETERS, PARAMETERS + "  J1: 1.2e-6\n  N1: 13.3\n  J2: 3.4e-6\n  N2: 7\n") + """
+actuators:
+  theta1: {rotor_inertia: J1, gear_ratio: N1, gyroscopic: true}
+  theta2: {rotor_inertia: J2, gear_ratio: N2, gyroscopic: true}
+friction:
+  theta2: {viscous: 0.05, coulomb: 0.1}
+"""
+SERIAL_EXAMPLES = ("planar_2r", "ur10e", "ur10e_classic")
+
+
+def _check_y_pi(model, d, rng, samples=8):
+    """Y pi = tau at random states, to DYNAMICS relative to sum_k |Y_k pi_k| (the dot product adds <= 14 n
+    roundings of u to the evaluations' DYNAMICS: within the bound's margin for n <= 7)."""
+    Y_pi = reference_function(model, d["regressor"])
+    tau = reference_function(model, d["inverse_dynamics"])
+    for _ in range(samples):
+        q, qd, qdd = random_q(model, rng), rng.uniform(-2, 2, model.dof), rng.uniform(-5, 5, model.dof)
+        Y, pi = Y_pi(q, qd, qdd)
+        scale = float(np.max(np.abs(Y) @ np.abs(pi)))
+        error = float(np.max(np.abs(Y @ pi - tau(q, qd, qdd)[0])))
+        assert error <= DYNAMICS * scale, f"{model.name}: error {error:.3g} at q={q}, qd={qd}, qdd={qdd}"
+
+
+def test_y_pi_is_the_inverse_dynamics_of_the_driven_planar_arm_exactly():
+    """Symbolic: Y pi - tau simplifies to zero with the drives' reflected inertia and the friction in pi."""
+    model = model_from_text(DRIVEN, "driven")
+    d = Derivation(model)
+    Y, pi = d["regressor"].expanded_outputs()
+    tau = d["inverse_dynamics"].expanded_outputs()[0]
+    assert sympy.simplify(Y * pi - tau) == sympy.zeros(2, 1)
+    names = parameter_names(model)
+    assert names[:10] == tuple(f"link1.{p}" for p in INERTIAL)
+    assert names[20:24] == tuple(f"theta1.{p}" for p in DRIVE)
+    J1, N1, b1 = (model.parameter(n).symbol for n in ("J1", "N1", "b1"))
+    values = dict(zip(names, pi))
+    # the conversion from SymEngine leaves products unsorted: compare by difference
+    assert sympy.simplify(values["theta1.Ia"] - N1 ** 2 * J1) == 0
+    assert sympy.simplify(values["theta1.fv"] - b1) == 0
+    assert values["link2.mz"] == 0  # the planar arm's links carry their masses in their x-y plane
+
+
+@pytest.mark.parametrize("name", SERIAL_EXAMPLES)
+def test_y_pi_is_the_inverse_dynamics_of_every_serial_example(name, models, derivations):
+    _check_y_pi(models[name], derivations[name], np.random.default_rng(33))
+
+
+def test_y_pi_through_a_tree_of_coupled_rotor_joints():
+    """Gyroscopic rotors are bodies on branch links moved by coupled joints: their ten parameters reach the
+    coordinates through A^T as every other term does."""
+    model = model_from_text(ROTORS, "rotors")
+    assert [j.link for j in model.joints] == ["link1_rotor", "link1", "link2_rotor", "link2"]
+    assert parameter_names(model)[:10] == tuple(f"link1_rotor.{p}" for p in INERTIAL)
+    _check_y_pi(model, Derivation(model), np.random.default_rng(34))
+
+
+def test_asymmetric_coulomb_friction_is_an_offset_while_the_joint_moves():
+    """Levels c+ != c-: pi holds f_c = (c+ + c-)/2 and f_o = (c+ - c-)/2, so Y pi = tau wherever the joint moves
+    (sign(qd)^2 = 1) and differs by f_o at rest, where the model's friction vanishes."""
+    model = model_from_text(PLANAR + "friction:\n  theta1: {coulomb: {positive: 0.4, negative: 0.25}}\n", "asym")
+    d = Derivation(model)
+    values = dict(zip(parameter_names(model), reference_function(model, d["regressor"])(
+        [0.1, 0.2], [1.0, 1.0], [0.0, 0.0])[1]))
+    assert values["theta1.fc"] == pytest.approx(0.325, abs=4 * EPS)
+    assert values["theta1.fo"] == pytest.approx(0.075, abs=4 * EPS)
+    Y_pi, tau = reference_function(model, d["regressor"]), reference_function(model, d["inverse_dynamics"])
+    for qd, offset in (([1.0, -0.5], 0.0), ([-1.0, 0.5], 0.0), ([0.0, 0.5], 0.075)):
+        Y, pi = Y_pi([0.1, 0.2], qd, [0.3, -0.2])
+        assert (Y @ pi - tau([0.1, 0.2], qd, [0.3, -0.2])[0])[0] == pytest.approx(offset, abs=DYNAMICS)
+
+
+def test_the_regressor_is_pinocchios_on_the_ur10e_urdf():
+    """A URDF's joint frame is its child link's frame, Newton-Euler's F_i: the 60 inertial columns are
+    computeJointTorqueRegressor's, pi's first 60 entries the links' toDynamicParameters (same order)."""
+    pmodel = pin.buildModelFromUrdf(str(MODELS_DIR / "ur10e.urdf"))
+    pdata = pmodel.createData()
+    model = load_model(MODELS_DIR / "ur10e.urdf")
+    Y_pi = reference_function(model, Derivation(model)["regressor"])
+    rng = np.random.default_rng(35)
+    pin_pi = np.concatenate([pmodel.inertias[i].toDynamicParameters() for i in range(1, pmodel.njoints)])
+    for _ in range(5):
+        q, qd, qdd = random_q(model, rng), rng.uniform(-2, 2, 6), rng.uniform(-5, 5, 6)
+        Y, pi = Y_pi(q, qd, qdd)
+        want = pin.computeJointTorqueRegressor(pmodel, pdata, q, qd, qdd)
+        scale = float(np.max(np.abs(want)))
+        np.testing.assert_allclose(Y[:, :60], want, rtol=0, atol=DYNAMICS * scale)
+        assert not np.any(Y[:, 60:] @ pi[60:])  # the URDF declares neither drives nor friction
+    np.testing.assert_allclose(pi[:60], pin_pi, rtol=0, atol=4 * EPS * float(np.max(np.abs(pin_pi))))
+
+
+def test_the_generated_regressor_in_numpy_c_and_casadi(tmp_path):
+    """One call gives (Y, pi); the manifest names pi's elements; each backend's Y pi is its inverse dynamics."""
+    model = model_from_text(DRIVEN, "driven")
+    request = pipeline.resolve_request(model, ("regressor", "inverse_dynamics"), "numpy,c,casadi", None, False,
+                                       "none")
+    written = pipeline.write(pipeline.generate(model, request), tmp_path)
+    manifest = json.loads((written / "manifest.json").read_text())
+    record = next(f for f in manifest["functions"] if f["name"] == "regressor")
+    assert [o["elements"] for o in record["outputs"]] == [list(parameter_names(model))] * 2
+    rng = np.random.default_rng(36)
+    q, qd, qdd = rng.uniform(-2, 2, (3, 20, 2))
+    for backend in ("numpy", "c", "casadi"):
+        generated = load(written, backend)
+        Y, pi = generated.regressor(q, qd, qdd)
+        assert Y.shape == (20, 2, 28) and pi.shape == (20, 28)
+        tau = generated.inverse_dynamics(q, qd, qdd)
+        scale = np.max(np.einsum("bij,bj->bi", np.abs(Y), np.abs(pi)))
+        np.testing.assert_allclose(np.einsum("bij,bj->bi", Y, pi), tau, rtol=0, atol=DYNAMICS * scale)
