@@ -143,3 +143,64 @@ def test_the_generated_regressor_in_numpy_c_and_casadi(tmp_path):
         tau = generated.inverse_dynamics(q, qd, qdd)
         scale = np.max(np.einsum("bij,bj->bi", np.abs(Y), np.abs(pi)))
         np.testing.assert_allclose(np.einsum("bij,bj->bi", Y, pi), tau, rtol=0, atol=DYNAMICS * scale)
+
+
+def test_the_planar_arms_base_parameters_are_khalils_regrouping():
+    """The 2R arm (l1 = 0.1 m) with drives: link 2's mass acts as a first moment and an inertia of link 1, the first
+    rotor as link 1's I_zz (Khalil and Dombre 2002, sec. 12.5: MXR1 = MX1 + l1 M2, ZZR1 = ZZ1 + l1^2 M2 + Ia1);
+    what no motion of a planar arm excites (m_z, I_xx...) is gone."""
+    d = Derivation(model_from_text(DRIVEN, "driven"))
+    found = d["base_parameters"]
+    assert found.base_names == ("link1.mxR", "link1.my", "link1.IzzR", "link2.mx", "link2.my", "link2.Izz",
+                                "theta1.fv", "theta1.fc", "theta1.fo", "theta2.Ia", "theta2.fv", "theta2.fc",
+                                "theta2.fo")
+    assert found.equations()[0] == "link1.mxR = link1.mx + 1/10 link2.m"
+    assert found.equations()[2] == "link1.IzzR = link1.Izz + 1/100 link2.m + theta1.Ia"
+
+
+def _stacked(function, model, rng, states):
+    return [function(random_q(model, rng), rng.uniform(-2, 2, model.dof), rng.uniform(-5, 5, model.dof))
+            for _ in range(states)]
+
+
+def test_the_base_regressor_has_full_rank_and_the_same_torques(models, derivations):
+    """UR10e: Y = Y_b K and Y pi = Y_b pi_b at random states, and the stacked Y_b has full column rank (its
+    smallest singular value far above the rounding of its entries)."""
+    model, d = models["ur10e"], derivations["ur10e"]
+    full, base = reference_function(model, d["regressor"]), reference_function(model, d["base_regressor"])
+    rng = np.random.default_rng(37)
+    stacked = []
+    for q, qd, qdd in _stacked(lambda *state: state, model, rng, 30):
+        (Y, pi), (Y_b, pi_b, K) = full(q, qd, qdd), base(q, qd, qdd)
+        scale = float(np.max(np.abs(Y_b) @ np.abs(K)))
+        np.testing.assert_allclose(Y_b @ K, Y, rtol=0, atol=DYNAMICS * scale)
+        np.testing.assert_allclose(Y_b @ pi_b, Y @ pi, rtol=0, atol=DYNAMICS * float(np.max(np.abs(Y) @ np.abs(pi))))
+        stacked.append(Y_b)
+    singular = np.linalg.svd(np.vstack(stacked), compute_uv=False)
+    assert singular[-1] > 1e6 * EPS * singular[0] * len(singular)
+
+
+def test_the_number_of_base_inertial_parameters_is_the_rank_of_pinocchios_regressors():
+    """The UR10e's 60 inertial parameters (its URDF, angles snapped to multiples of 90 deg) have as many base
+    combinations as Pinocchio's stacked joint-torque regressors have rank over random states (SVD, default
+    tolerance: the exact count against an independent numeric one)."""
+    from symkin.dynamics.base_parameters import base_parameters
+
+    model = load_model(MODELS_DIR / "ur10e.urdf", snap_angles=True)
+    d = Derivation(model)
+    inertial = base_parameters(model, [row[:60] for row in d["regressor_graph"]], parameter_names(model)[:60])
+    pmodel = pin.buildModelFromUrdf(str(MODELS_DIR / "ur10e.urdf"))
+    pdata = pmodel.createData()
+    rng = np.random.default_rng(38)
+    stacked = np.vstack([pin.computeJointTorqueRegressor(pmodel, pdata, *state).copy()
+                         for state in _stacked(lambda *state: state, model, rng, 40)])
+    assert len(inertial.base) == np.linalg.matrix_rank(stacked) == 36
+
+
+def test_what_rational_arithmetic_cannot_evaluate_is_refused_with_the_fix():
+    from symkin.errors import DerivationError
+
+    with pytest.raises(DerivationError, match="--snap-angles"):
+        Derivation(load_model(MODELS_DIR / "ur10e.urdf"))["base_parameters"]
+    with pytest.raises(DerivationError, match="non-integer multiple of a coordinate"):
+        Derivation(model_from_text(ROTORS, "rotors"))["base_parameters"]

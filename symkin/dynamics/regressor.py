@@ -34,6 +34,7 @@ from typing import TYPE_CHECKING
 import symengine as se
 
 from symkin.dynamics import newton_euler
+from symkin.dynamics.base_parameters import BaseParameters, base_parameters, require_exact_constants
 from symkin.dynamics.coupling import forces_on_coordinates, joint_rates
 from symkin.dynamics.program import Program
 from symkin.dynamics.quantities import _gravity_graph as gravity_graph
@@ -127,6 +128,21 @@ def standard_parameters(model: Model, links: Sequence[newton_euler.Link]) -> lis
     return values
 
 
+@quantity("regressor_graph", "the regressor Y as SymEngine rows (coordinates x standard parameters)", emitted=False)
+def regressor_graph(d: Derivation) -> list[list[se.Basic]]:
+    return regressor_rows(d.model, d[newton_euler_links], d[gravity_graph])
+
+
+@quantity("base_parameters", "the base parameters pi_b = K pi and the columns of Y_b, exact", emitted=False)
+def base_parameters_of(d: Derivation) -> BaseParameters:
+    links = d[newton_euler_links]
+    require_exact_constants(d.model, [e for link in links for row in link.rotation for e in row]
+                            + [e for link in links for e in link.origin])
+    return base_parameters(d.model, d[regressor_graph], parameter_names(d.model))
+
+
+
+
 @quantity("regressor", "dynamics regressor Y(q, qd, qdd) with tau = Y pi, and the model's standard parameters pi")
 def regressor(d: Derivation) -> FunctionSpec:
     """One function giving Y (coordinates x parameters) and the model's pi, whose names are both outputs'
@@ -134,7 +150,7 @@ def regressor(d: Derivation) -> FunctionSpec:
     model = d.model
     links = d[newton_euler_links]
     program = Program()
-    Y = [program.bind(row) for row in regressor_rows(model, links, d[gravity_graph])]
+    Y = [program.bind(row) for row in d[regressor_graph]]
     pi = program.bind(standard_parameters(model, links))
     names = parameter_names(model)
     spec = function_spec(
@@ -150,4 +166,31 @@ def regressor(d: Derivation) -> FunctionSpec:
          ("pi", pi, (len(names),), "the model's standard parameters (kg, kg*m, kg*m^2; drives: kg*m^2 or kg, "
           "N*m*s/rad or N*s/m, N*m or N)", "")])
     outputs = tuple(dataclasses.replace(o, elements=names) for o in spec.outputs)
+    return dataclasses.replace(spec, outputs=outputs)
+
+
+@quantity("base_regressor", "base regressor Y_b (full column rank) with tau = Y_b pi_b, pi_b = K pi, and K")
+def base_regressor(d: Derivation) -> FunctionSpec:
+    """Y_b, the model's pi_b and K, named by the outputs' elements (base names for Y_b and pi_b, standard for K)."""
+    model = d.model
+    found = d[base_parameters_of]
+    Y = d[regressor_graph]
+    program = Program()
+    Y_b = [program.bind([row[b] for b in found.base]) for row in Y]
+    pi = standard_parameters(model, d[newton_euler_links])
+    pi_b = program.bind([se.Add(*(se.Rational(k.numerator, k.denominator) * p for k, p in zip(row, pi) if k != 0))
+                         for row in found.combinations])
+    K = [se.Rational(k.numerator, k.denominator) for row in found.combinations for k in row]
+    rank = len(found.base)
+    spec = function_spec(
+        d, "base_regressor", "Base regressor: tau = Y_b(q, qd, qdd) pi_b, Y_b of full column rank.",
+        "The linearly independent columns of the regressor (Gautier and Khalil 1990), found exactly by a rational "
+        "echelon form over random rational states (symkin.dynamics.base_parameters); Y = Y_b K and pi_b = K pi "
+        "with K exact at the model's geometry: " + "; ".join(found.equations()) + ".",
+        ["q", "qd", "qdd"], program,
+        [("Y_b", [e for row in Y_b for e in row], (model.dof, rank), "base regressor: full column rank", ""),
+         ("pi_b", pi_b, (rank,), "the model's base parameters (the identifiable combinations)", ""),
+         ("K", K, (rank, len(found.names)), "pi_b = K pi, Y = Y_b K", "")])
+    elements = (found.base_names, found.base_names, found.names)
+    outputs = tuple(dataclasses.replace(o, elements=e) for o, e in zip(spec.outputs, elements))
     return dataclasses.replace(spec, outputs=outputs)
