@@ -9,6 +9,7 @@ from symkin.cli import (
     crosscheck_cmd,
     derive_cmd,
     gci_cmd,
+    identify_cmd,
     ik_cmd,
     optimize_cmd,
     rate_cmd,
@@ -36,5 +37,6 @@ REGISTRY = [
     ik_cmd.register,
     simulate_cmd.register,
     rate_cmd.register,
+    identify_cmd.register,
     cache_cmd.register,
 ]

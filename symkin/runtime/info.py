@@ -76,11 +76,13 @@ class VectorInput:
 
 @dataclass(frozen=True)
 class Function:
-    """A generated function: its name, its vector inputs by name, and its parameter inputs."""
+    """A generated function: its name, its vector inputs by name, its parameter inputs, and the names of its
+    outputs' elements where the manifest gives them (the regressors' parameters), by output."""
 
     name: str
     vectors: dict[str, VectorInput]
     parameters: tuple[str, ...]
+    outputs: dict[str, tuple[str, ...]] = dataclasses.field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -140,7 +142,8 @@ class ModelInfo:
         functions = {f["name"]: Function(f["name"],
                                          {i["name"]: VectorInput(tuple(i["elements"]), tuple(i["units"]))
                                           for i in f["inputs"] if i["kind"] != "parameter"},
-                                         tuple(i["name"] for i in f["inputs"] if i["kind"] == "parameter"))
+                                         tuple(i["name"] for i in f["inputs"] if i["kind"] == "parameter"),
+                                         {o["name"]: tuple(o.get("elements", ())) for o in f["outputs"]})
                      for f in manifest["functions"]}
         home = tuple(float(v) for v in parallel["home"]) if parallel and parallel.get("home") is not None else None
         passive = tuple(dict(leg.get("passive_limits") or {}) for leg in parallel["legs"]) if parallel else ()

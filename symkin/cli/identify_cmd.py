@@ -1,0 +1,113 @@
+"""``symkin identify MODEL DATA.csv``: a device's base parameters from a run (symkin.analysis.identification)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import time
+from pathlib import Path
+
+from symkin.cli import analysis_args
+from symkin.cli.progress import Progress
+
+#: What a model file is derived with on the fly.
+IDENTIFY_OUTPUTS = ("base_regressor",)
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "identify", help="identify a device's base parameters from a measured run (CSV of q, tau)",
+        description="Estimate the base parameters pi_b (the identifiable combinations of the links' masses, first "
+                    "moments and inertias, the rotor inertias and the joints' friction; symkin quantities: "
+                    "base_regressor) from a run recorded on the device: least squares on tau = Y_b(q, qd, qdd) pi_b "
+                    "over the samples, with each estimate's standard deviation, validated on the last --holdout "
+                    "part of the run (torque RMS per joint). DATA.csv has a column t (s) and, per coordinate, "
+                    "q_<name>, tau_<name> and optionally qd_<name>, qdd_<name> (without them, --cutoff derives the "
+                    "rates from q by a zero-phase low-pass filter). Writes estimate.json, estimate.csv, "
+                    "summary.txt and validation.png (measured and predicted efforts) into the output directory "
+                    "(replaced as a whole); bad data are refused with the file, row and column, and nothing "
+                    "is written.",
+        epilog="e.g. symkin identify models/planar_2r.yaml run.csv --method wls -o out/identify/planar_2r")
+    analysis_args.add_model_arguments(p)
+    p.add_argument("data", metavar="DATA.csv", help="the measured run")
+    p.add_argument("--method", choices=("ols", "wls"), default="wls",
+                   help="ordinary least squares, or weighted by each joint's residual (default: %(default)s)")
+    p.add_argument("--holdout", type=float, default=0.25, metavar="F",
+                   help="the last fraction of the run kept for validation (default: %(default)s; 0: none)")
+    p.add_argument("--cutoff", type=float, metavar="HZ",
+                   help="low-pass cutoff that derives qd and qdd from q when the file has no rate columns")
+    p.add_argument("-o", "--out", metavar="DIR", help="output directory (default: out/identify/MODEL)")
+    p.add_argument("--no-figure", action="store_true", help="write the numbers only")
+    p.set_defaults(run=run, parser=p)
+
+
+def run(args: argparse.Namespace) -> int:
+    from symkin.analysis import identification
+    from symkin.atomic import replace_directory
+
+    start = time.perf_counter()
+    try:
+        if not 0.0 <= args.holdout < 1.0:
+            raise ValueError(f"--holdout must lie in [0, 1), got {args.holdout:g}")
+        model = analysis_args.load_model(args.model, args.backend, IDENTIFY_OUTPUTS)
+        values = analysis_args.parse_assignments(args.assignments)
+        model = model.bind(**values) if values else model
+        coordinates = model.info.coordinate_names
+        data = identification.read_measurements(args.data, coordinates, args.cutoff)
+        fit, held = data.split(args.holdout)
+        names = model.info.functions["base_regressor"].outputs["pi_b"]
+        with Progress(model.name) as progress:
+            progress(f"estimating {len(names)} base parameters from {len(fit.time)} samples")
+            Y_b, pi_model, _ = model.base_regressor(fit.q, fit.qd, fit.qdd)
+            found = identification.estimate(Y_b, fit.tau, names, args.method)
+            check = None
+            if len(held.time):
+                Y_held = model.base_regressor(held.q, held.qd, held.qdd)[0]
+                check = identification.validate(Y_held, held.tau, found.values)
+            files = _report(args, model, data, found, pi_model[0], check)
+            if check is not None and not args.no_figure:
+                progress("drawing the validation")
+                files["validation.png"] = identification.validation_figure_png(
+                    held.time, held.tau, Y_held @ found.values, coordinates,
+                    ["N*m" if c.revolute else "N" for c in model.info.coordinates],
+                    f"{model.name}: held-out efforts, measured and predicted ({args.method})")
+    except (ValueError, KeyError) as err:
+        analysis_args.fail_on_bad_input(args, err)
+    out = Path(args.out or f"out/identify/{model.name}")
+    replace_directory(out, files)
+    print(files["summary.txt"], end="")
+    print(f"wrote {len(files)} files to {out}/ ({', '.join(sorted(files))}) in {time.perf_counter() - start:.2f} s")
+    return 0
+
+
+def _report(args, model, data, found, pi_model, check) -> dict[str, str | bytes]:
+    """estimate.json, estimate.csv and summary.txt."""
+    rows = [{"name": n, "value": float(v), "std": float(s), "relative_std": float(r) if math.isfinite(r) else None,
+             "model": float(m)}
+            for n, v, s, r, m in zip(found.names, found.values, found.std, found.relative_std, pi_model)]
+    record = {"model": model.name, "data": str(args.data), "method": found.method, "samples": found.samples,
+              "rates": data.rates, "condition": found.condition,
+              "joint_residual_std": dict(zip(model.info.coordinate_names, map(float, found.joint_std))),
+              "parameters": rows}
+    lines = [f"{model.name}: {len(found.names)} base parameters from {found.samples} samples of {args.data} "
+             f"({found.method}, condition {found.condition:.3g}; rates {data.rates})",
+             f"  {'parameter':<22} {'estimate':>13} {'std':>11} {'std %':>8} {'model':>13}"]
+    for row in rows:
+        lines.append(f"  {row['name']:<22} {row['value']:>13.6g} {row['std']:>11.3g} "
+                     f"{_percent(row['relative_std']):>8} {row['model']:>13.6g}")
+    if check is not None:
+        record["validation"] = {"samples": check.samples, "rms": dict(zip(model.info.coordinate_names,
+                                                                           map(float, check.rms))),
+                                "relative_rms": dict(zip(model.info.coordinate_names, map(float, check.relative)))}
+        lines.append(f"  validation on the last {check.samples} samples: torque RMS "
+                     + ", ".join(f"{n} {r:.3g} ({100 * rel:.2g} %)" for n, r, rel in
+                                 zip(model.info.coordinate_names, check.rms, check.relative)))
+    csv_lines = ["name,value,std,relative_std,model"] + [
+        f"{r['name']},{r['value']!r},{r['std']!r},{r['relative_std']!r},{r['model']!r}" for r in rows]
+    return {"estimate.json": json.dumps(record, indent=2, allow_nan=False) + "\n",
+            "estimate.csv": "\n".join(csv_lines) + "\n", "summary.txt": "\n".join(lines) + "\n"}
+
+
+def _percent(relative: float | None) -> str:
+    return "-" if relative is None else f"{100 * relative:.3g}"
