@@ -38,6 +38,12 @@ MODELS_DIR = ROOT / "models"
 GENERATED_DIR = ROOT / "generated"
 EXAMPLE_MODELS = sorted(p.stem for p in MODELS_DIR.glob("*.yaml"))
 BACKENDS = ("numpy", "c", "casadi")
+
+
+def reference_group(name: str):
+    """``name`` as a parameter whose tests share one xdist worker (and so the lambdified references of its
+    model's generated functions, :func:`lambdified`): tests/test_numpy_backend.py, tests/test_backends_agree.py."""
+    return pytest.param(name, marks=pytest.mark.xdist_group(f"reference-{name}"))
 SYMKIN_CLI = [sys.executable, "-m", "symkin"]
 
 
@@ -59,12 +65,28 @@ def derivations(models: dict[str, Model]) -> dict[str, Derivation]:
     return {name: shared_derivation(model) for name, model in models.items()}
 
 
+#: (id of a spec, modules) -> (the spec, its lambdified function): the reference of a generated function is
+#: printed and compiled once per worker (the Stewart platform's take 9 s), however many tests evaluate it; the
+#: spec is kept so that its id is not reused.
+_LAMBDIFIED: dict[tuple[int, str], tuple[FunctionSpec, object]] = {}
+
+
+def lambdified(model: Model, spec: FunctionSpec, modules: str = "numpy"):
+    """``lambdify_spec`` of ``spec``'s vector inputs with ``model``'s parameter values, once per spec and modules."""
+    cached = _LAMBDIFIED.get((id(spec), modules))
+    if cached is None or cached[0] is not spec:
+        cached = (spec, lambdify_spec(spec, [list(i.symbols) for i in spec.vector_inputs], modules,
+                                      model.parameter_values))
+        _LAMBDIFIED[(id(spec), modules)] = cached
+    return cached[1]
+
+
 def reference_function(model: Model, spec: FunctionSpec, modules: str = "numpy"):
     """Plain lambdify of the un-optimized outputs, parameters at their defaults.
 
     Returns f(*vectors) -> list of arrays (one per output, shaped as declared).
     """
-    fn = lambdify_spec(spec, [list(i.symbols) for i in spec.vector_inputs], modules, model.parameter_values)
+    fn = lambdified(model, spec, modules)
     shapes = [o.shape for o in spec.outputs]
 
     def evaluate(*args):
@@ -106,11 +128,21 @@ def worst_state(got: np.ndarray, want: np.ndarray, inputs: list[np.ndarray]) -> 
             "want": want[k].tolist()}
 
 
+#: (id of a derivation, combined function, its parts) -> (the derivation, the combined spec): one object per
+#: combination, so that its reference is lambdified once (:func:`lambdified`).
+_COMBINED: dict[tuple[int, str, tuple[str, ...]], tuple[Derivation, FunctionSpec]] = {}
+
+
 def function_spec(model: Model, derivation: Derivation, record: dict) -> FunctionSpec:
     """The un-optimized spec of the generated function described by a manifest ``record``
-    (for the combined scene function: the combination of its parts)."""
+    (for the combined scene function: the combination of its parts, built once per derivation)."""
     if record.get("combines"):
-        return combine_functions(model, record["name"], derivation.functions(record["combines"]))
+        key = (id(derivation), record["name"], tuple(record["combines"]))
+        cached = _COMBINED.get(key)
+        if cached is None or cached[0] is not derivation:
+            cached = (derivation, combine_functions(model, record["name"], derivation.functions(record["combines"])))
+            _COMBINED[key] = cached
+        return cached[1]
     return derivation[record["name"]]
 
 
@@ -192,7 +224,7 @@ def batch_reference(model: Model, spec: FunctionSpec):
 
     Returns f(*vectors) with vectors of shape (N, n) -> list of arrays (N,) + output shape.
     """
-    fn = lambdify_spec(spec, [list(i.symbols) for i in spec.vector_inputs], "numpy", model.parameter_values)
+    fn = lambdified(model, spec)
 
     def evaluate(*args):
         n = len(args[0])
@@ -272,3 +304,22 @@ def pytest_collection_modifyitems(config, items):
         return LONG_FIRST.index(module) if module in LONG_FIRST else len(LONG_FIRST)
 
     items.sort(key=rank)  # stable: the order within and between the other modules is kept
+    _tag_xdist_groups(config, items)
+
+
+def _tag_xdist_groups(config, items) -> None:
+    """In an xdist worker under ``--dist loadgroup``, end the node id of each test marked ``xdist_group`` with
+    ``@<group>``, as pytest-xdist does: xdist 3.8 writes it to ``Item._nodeid``, which pytest 9 no longer reads
+    (a node id is ``Item._id``), so every group was spread over the workers and each session fixture of a
+    group (tests/test_stability.py's runs) was computed once per worker."""
+    if not getattr(config.option, "loadgroup", False):
+        return
+    try:
+        from _pytest.nodeid import coerce_node_id
+    except ImportError:  # an older pytest: xdist's own tag works
+        return
+    for item in items:
+        names = sorted({str(mark.args[0] if mark.args else mark.kwargs.get("name", "default"))
+                        for mark in item.iter_markers("xdist_group")})
+        if names and "@" not in item.nodeid and hasattr(item, "_id"):
+            item._id = coerce_node_id(f"{item.nodeid}@{'_'.join(names)}")

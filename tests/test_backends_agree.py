@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from conftest import (BACKENDS, EXAMPLE_MODELS, batch_reference, function_spec, random_inputs, random_q,
-                      relative_errors, worst_state)
+                      reference_group, relative_errors, worst_state)
 from symkin.derivation import catalog
 from tolerances import CLOSED_FORM, DYNAMICS, EPS, KINEMATICS, UR10E_SCALE, svd
 
@@ -50,7 +50,7 @@ def _tuple(result):
 
 
 @pytest.mark.parametrize("backend", BACKENDS)
-@pytest.mark.parametrize("name", EXAMPLE_MODELS)
+@pytest.mark.parametrize("name", [reference_group(name) for name in EXAMPLE_MODELS])
 def test_every_function_matches_the_sympy_expressions(name, backend, models, derivations, loaded):
     model = models[name]
     generated = loaded(name, backend)

@@ -8,12 +8,13 @@ import sys
 import numpy as np
 import pytest
 
-from conftest import EXAMPLE_MODELS, function_spec, random_inputs, random_q, reference_function, relative_error
+from conftest import (EXAMPLE_MODELS, function_spec, random_inputs, random_q, reference_function, reference_group,
+                      relative_error)
 from symkin import load
 from tolerances import CLOSED_FORM, EPS, KINEMATICS, UR10E_SCALE
 
 
-@pytest.mark.parametrize("name", EXAMPLE_MODELS)
+@pytest.mark.parametrize("name", [reference_group(name) for name in EXAMPLE_MODELS])
 def test_generated_functions_match_the_sympy_expressions(name, models, derivations, generated_dir):
     model = models[name]
     generated = load(generated_dir / name)
