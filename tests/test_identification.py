@@ -66,7 +66,7 @@ def _run(arm, seed=1):
 @pytest.mark.parametrize("method", ["ols", "wls"])
 def test_a_simulated_run_gives_back_the_models_base_parameters(arm, method):
     t, q, qd, qdd, tau = _run(arm)
-    Y_b, pi_b, _ = arm.base_regressor(q, qd, qdd)
+    Y_b, pi_b = arm.base_regressor(q, qd, qdd)
     names = arm.info.functions["base_regressor"].outputs["pi_b"]
     found = identification.estimate(Y_b, tau, names, method)
     error = np.abs(found.values - pi_b[0]) / found.std
@@ -142,6 +142,6 @@ def test_a_run_that_does_not_excite_a_parameter_or_a_combination_names_them(arm)
 
 def test_too_few_samples_for_the_base_parameters_are_refused(arm):
     t, q, qd, qdd, tau = _run(arm)
-    Y_b, _, _ = arm.base_regressor(q[:5], qd[:5], qdd[:5])
+    Y_b, _ = arm.base_regressor(q[:5], qd[:5], qdd[:5])
     with pytest.raises(identification.DataError, match="5 samples give 10 equations for 13 base parameters"):
         identification.estimate(Y_b, tau[:5], arm.info.functions["base_regressor"].outputs["pi_b"])

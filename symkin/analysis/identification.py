@@ -12,7 +12,8 @@ W pi_b = y (W: N n x b, y: N n), solved here by
   squares dynamic identification of robot", Control Engineering Practice 9(12), 2001), so that a noisy
   joint does not drown an accurate one.
 
-Both solve through the SVD of W with unit columns (column equilibration): a run that does not excite
+Both solve through the SVD of W with unit columns (column equilibration; of the triangular factor of its QR
+decomposition, which has the same singular values): a run that does not excite
 some combination of parameters (a singular value below :data:`RANK_TOLERANCE` times the largest) is
 refused, naming the parameters of that combination, instead of printing huge estimates.  The standard
 deviation of each estimate comes with it, and the estimate is validated on held-out samples (the last
@@ -198,7 +199,9 @@ class Estimate:
 
 
 def _solve(W: np.ndarray, y: np.ndarray, names: Sequence[str]) -> tuple[np.ndarray, np.ndarray, float]:
-    """pi, (W^T W)^-1 and the condition number, through the SVD of W with unit columns.
+    """pi, (W^T W)^-1 and the condition number, through the SVD of W with unit columns: of its triangular factor
+    R ([W y] = Q [R z; 0 r], Householder; W and R have the same singular values, and Q^T y = z), so that the
+    tall W is factored once, without forming its U (10^5 samples of a 6-DoF arm: 600 000 rows).
 
     Raises:
         DataError: a combination of parameters the rows do not excite, named.
@@ -208,14 +211,17 @@ def _solve(W: np.ndarray, y: np.ndarray, names: Sequence[str]) -> tuple[np.ndarr
     if silent:
         raise DataError(f"the run does not excite {', '.join(silent)} (their regressor columns are zero): move "
                         "the joints that act on them")
-    U, S, Vt = np.linalg.svd(W / scale, full_matrices=False)
+    count = W.shape[1]
+    triangle = np.asarray(np.linalg.qr(np.column_stack([W / scale, y]), mode="r"))
+    U, S, Vt = np.linalg.svd(triangle[:count, :count])
+    y = triangle[:count, count]
     weak = np.flatnonzero(S < RANK_TOLERANCE * S[0])
     if weak.size:
         direction = np.abs(Vt[weak[0]])
         involved = [names[int(k)] for k in np.argsort(direction)[::-1] if direction[k] > 0.1][:6]
         raise DataError(f"the run does not identify the combination of {', '.join(involved)} (singular value "
                         f"{S[weak[0]] / S[0]:.1e} of the largest, condition {S[0] / S[-1]:.1e}): excite the joints "
-                        "more richly (symkin's excitation trajectories), or fix these parameters")
+                        "more richly (symkin excite), or fix these parameters")
     pi = (Vt.T @ ((U.T @ y) / S)) / scale
     inverse = (Vt.T / S ** 2) @ Vt / np.outer(scale, scale)
     return pi, inverse, float(S[0] / S[-1])

@@ -8,6 +8,7 @@ from symkin.cli import (
     check_cmd,
     crosscheck_cmd,
     derive_cmd,
+    excite_cmd,
     gci_cmd,
     identify_cmd,
     ik_cmd,
@@ -38,5 +39,6 @@ REGISTRY = [
     simulate_cmd.register,
     rate_cmd.register,
     identify_cmd.register,
+    excite_cmd.register,
     cache_cmd.register,
 ]

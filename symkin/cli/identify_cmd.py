@@ -59,7 +59,7 @@ def run(args: argparse.Namespace) -> int:
         names = model.info.functions["base_regressor"].outputs["pi_b"]
         with Progress(model.name) as progress:
             progress(f"estimating {len(names)} base parameters from {len(fit.time)} samples")
-            Y_b, pi_model, _ = model.base_regressor(fit.q, fit.qd, fit.qdd)
+            Y_b, pi_model = model.base_regressor(fit.q, fit.qd, fit.qdd)
             found = identification.estimate(Y_b, fit.tau, names, args.method)
             check = None
             if len(held.time):

@@ -169,9 +169,11 @@ def regressor(d: Derivation) -> FunctionSpec:
     return dataclasses.replace(spec, outputs=outputs)
 
 
-@quantity("base_regressor", "base regressor Y_b (full column rank) with tau = Y_b pi_b, pi_b = K pi, and K")
+@quantity("base_regressor", "base regressor Y_b (full column rank) with tau = Y_b pi_b, and the model's pi_b = K pi")
 def base_regressor(d: Derivation) -> FunctionSpec:
-    """Y_b, the model's pi_b and K, named by the outputs' elements (base names for Y_b and pi_b, standard for K)."""
+    """Y_b and the model's pi_b, named by the outputs' elements (the base parameters' names).  K, constant, is not an
+    output (a batch would repeat it per state): its rows are the equations in the function's doc, and
+    ``Derivation["base_parameters"].combinations``."""
     model = d.model
     found = d[base_parameters_of]
     Y = d[regressor_graph]
@@ -180,7 +182,6 @@ def base_regressor(d: Derivation) -> FunctionSpec:
     pi = standard_parameters(model, d[newton_euler_links])
     pi_b = program.bind([se.Add(*(se.Rational(k.numerator, k.denominator) * p for k, p in zip(row, pi) if k != 0))
                          for row in found.combinations])
-    K = [se.Rational(k.numerator, k.denominator) for row in found.combinations for k in row]
     rank = len(found.base)
     spec = function_spec(
         d, "base_regressor", "Base regressor: tau = Y_b(q, qd, qdd) pi_b, Y_b of full column rank.",
@@ -189,8 +190,6 @@ def base_regressor(d: Derivation) -> FunctionSpec:
         "with K exact at the model's geometry: " + "; ".join(found.equations()) + ".",
         ["q", "qd", "qdd"], program,
         [("Y_b", [e for row in Y_b for e in row], (model.dof, rank), "base regressor: full column rank", ""),
-         ("pi_b", pi_b, (rank,), "the model's base parameters (the identifiable combinations)", ""),
-         ("K", K, (rank, len(found.names)), "pi_b = K pi, Y = Y_b K", "")])
-    elements = (found.base_names, found.base_names, found.names)
-    outputs = tuple(dataclasses.replace(o, elements=e) for o, e in zip(spec.outputs, elements))
+         ("pi_b", pi_b, (rank,), "the model's base parameters (the identifiable combinations)", "")])
+    outputs = tuple(dataclasses.replace(o, elements=found.base_names) for o in spec.outputs)
     return dataclasses.replace(spec, outputs=outputs)

@@ -1,0 +1,73 @@
+"""Identification (issue 33): derive time of the UR10e's regressor and base regressor, and `symkin identify`'s
+estimate from 10^5 samples of the UR10e, against Pinocchio's joint-torque regressor stacked over the same samples
+(the competitor's route to the same least-squares problem; it has no base parameters, so its 60 standard columns
+are solved by a minimum-norm lstsq).
+
+Run with `make bench` or `python benchmarks/bench_identification.py [--samples N]`.  Targets (issue 33): derive
+<= 10 s, identify 10^5 samples <= 10 s on 2 cores.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+from symkin import pipeline  # noqa: E402
+from symkin.analysis import identification  # noqa: E402
+from symkin.model import load_model  # noqa: E402
+from symkin.runtime.loader import load  # noqa: E402
+from symkin.text_table import format_table  # noqa: E402
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--samples", type=int, default=100_000)
+    args = parser.parse_args(argv)
+    rows = []
+    model = load_model(ROOT / "models" / "ur10e.yaml")
+    start = time.perf_counter()
+    generation = pipeline.generate(model, pipeline.resolve_request(model, ("regressor", "base_regressor",
+                                                                           "inverse_dynamics"), "numpy,c"))
+    rows.append(["derive regressor + base regressor + inverse dynamics (numpy, C)",
+                 f"{time.perf_counter() - start:.2f} s", "<= 10 s"])
+    with tempfile.TemporaryDirectory() as scratch:
+        directory = pipeline.write(generation, scratch)
+        for backend in ("numpy", "c"):
+            arm = load(directory, backend)
+            rng = np.random.default_rng(0)
+            q, qd, qdd = rng.uniform(-2, 2, (3, args.samples, 6))
+            tau = arm.inverse_dynamics(q, qd, qdd) + rng.normal(0, 0.01, (args.samples, 6))
+            names = arm.info.functions["base_regressor"].outputs["pi_b"]
+            start = time.perf_counter()
+            Y_b = arm.base_regressor(q, qd, qdd)[0]
+            found = identification.estimate(Y_b, tau, names, "wls")
+            rows.append([f"identify {args.samples} samples, WLS ({backend} base regressor)",
+                         f"{time.perf_counter() - start:.2f} s", "<= 10 s"])
+        try:
+            import pinocchio as pin
+        except ImportError:
+            pin = None
+        if pin is not None:
+            pmodel = pin.buildModelFromUrdf(str(ROOT / "models" / "ur10e.urdf"))
+            pdata = pmodel.createData()
+            start = time.perf_counter()
+            W = np.vstack([pin.computeJointTorqueRegressor(pmodel, pdata, q[k], qd[k], qdd[k])
+                           for k in range(args.samples)])
+            np.linalg.lstsq(W, tau.reshape(-1), rcond=None)
+            rows.append([f"Pinocchio: stacked joint-torque regressors + lstsq, {args.samples} samples",
+                         f"{time.perf_counter() - start:.2f} s", "(no base parameters)"])
+    print(format_table(["UR10e", "time", "target"], rows))
+    print(f"largest relative std of the estimate: {np.max(found.relative_std[np.isfinite(found.relative_std)]):.2g}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

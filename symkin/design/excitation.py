@@ -1,0 +1,246 @@
+"""Excitation trajectories for identification: a periodic motion that makes the base regressor well conditioned.
+
+The estimate's accuracy is bounded by the conditioning of the stacked base regressor W = [Y_b(t_1); ...;
+Y_b(t_K)] over the run (:mod:`symkin.analysis.identification`): each joint follows a finite Fourier series
+(Swevers, Ganseman, Tukel, De Schutter and Van Brussel, "Optimal robot excitation and identification", IEEE
+Trans. Robot. Autom. 13(5), 1997)
+
+    q_j(t)   = q0_j + sum_l a_jl / (l w) sin(l w t) - b_jl / (l w) cos(l w t)
+    qd_j(t)  =        sum_l a_jl cos(l w t) + b_jl sin(l w t)
+    qdd_j(t) =        sum_l -a_jl l w sin(l w t) + b_jl l w cos(l w t),      w = 2 pi / T,
+
+periodic by construction (the run may repeat and be averaged), starting and ending at rest (qd = qdd = 0 at
+t = 0).  The coefficients are chosen with CasADi and IPOPT (:mod:`symkin.design`'s solver) to minimize a
+smooth bound of cond(W S)^2, S the column scaling of the start (so that the criterion does not depend on
+the parameters' units):
+
+    log ||F||_F + log trace(F^-1) >= log cond(F),   F = (W S)^T (W S) / K,
+
+both terms differentiable where cond(W S) is finite (||F||_F >= lambda_max, trace(F^-1) >= 1 / lambda_min,
+each within a factor of the number of parameters), subject to the joint position limits and the given
+velocity and acceleration limits at every sample (and checked on a grid ten times as dense).  The columns
+of the Coulomb friction (sign(qd)) are piecewise constant: they count in W but give no gradient.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import casadi
+import numpy as np
+
+from symkin.design.formulation import casadi_function
+from symkin.design.solve import IPOPT_OPTIONS
+from symkin.runtime.info import GeneratedModel
+
+#: How much of each joint range the start's motion uses (a small motion about the middle of the limits).
+START_AMPLITUDE = 0.1
+#: The constraints hold at this many times the criterion's samples ...
+CONSTRAINT_DENSITY = 4
+#: ... and are checked after the solve on a grid this many times as dense again.
+CHECK_DENSITY = 10
+
+
+@dataclass(frozen=True)
+class Excitation:
+    """A finite Fourier series per joint and how well it excites the base parameters.
+
+    Attributes:
+        period: T (s).
+        harmonics: L.
+        offsets: q0 (n,).
+        a, b: the coefficients (n, L).
+        condition_start, condition: cond(W S) of the start and of the optimum, at the samples.
+        samples: K, the samples of one period the criterion was evaluated at.
+        status: IPOPT's return status.
+    """
+
+    period: float
+    harmonics: int
+    offsets: np.ndarray
+    a: np.ndarray
+    b: np.ndarray
+    condition_start: float
+    condition: float
+    samples: int
+    status: str
+
+    def states(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """q, qd, qdd (len(t), n) at the times ``t``."""
+        return _series(np, self.offsets, self.a, self.b, self.period, np.asarray(t, dtype=np.float64))
+
+
+def _series(lib: Any, offsets: Any, a: Any, b: Any, period: float, t: np.ndarray) -> tuple[Any, Any, Any]:
+    """q, qd, qdd of the Fourier series at the times t, with numpy or CasADi (``lib``) coefficients."""
+    harmonics = a.shape[1]
+    omega = 2 * np.pi / period * np.arange(1, harmonics + 1)       # (L,)
+    sine, cosine = np.sin(np.outer(t, omega)), np.cos(np.outer(t, omega))  # (K, L)
+    q = lib.repmat(offsets.T, len(t), 1) if lib is casadi else np.tile(offsets, (len(t), 1))
+    q = q + (sine / omega) @ a.T - (cosine / omega) @ b.T
+    qd = cosine @ a.T + sine @ b.T
+    qdd = -(sine * omega) @ a.T + (cosine * omega) @ b.T
+    return q, qd, qdd
+
+
+def _limits(model: GeneratedModel, velocity: float | None, acceleration: float | None
+            ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Per joint: lower and upper position limits, and the velocity and acceleration bounds.
+
+    Raises:
+        ValueError: a joint without position limits, or no velocity or acceleration bound.
+    """
+    lower, upper, speeds = [], [], []
+    for c in model.info.coordinates:
+        if c.limits is None:  # (--limit gives them)
+            raise ValueError(f"{model.name}: joint {c.name} has no limits; declare them (or give --limit)")
+        lower.append(c.limits[0])
+        upper.append(c.limits[1])
+        speeds.append(velocity if velocity is not None else c.velocity_limit)
+    if any(s is None for s in speeds):
+        raise ValueError(f"{model.name}: give --max-velocity (the model declares no velocity limit for every joint)")
+    if acceleration is None:
+        raise ValueError("give --max-acceleration (models declare no acceleration limits)")
+    n = len(lower)
+    return np.array(lower), np.array(upper), np.array(speeds, dtype=float), np.full(n, float(acceleration))
+
+
+def optimize(model: GeneratedModel, *, period: float = 10.0, harmonics: int = 5, samples: int | None = None,
+             max_velocity: float | None = None, max_acceleration: float | None = None, seed: int = 0,
+             limits: dict[str, tuple[float, float]] | None = None, max_iterations: int = 200) -> Excitation:
+    """The excitation trajectory of the module docstring for ``model`` (loaded with ``backend="casadi"``, with
+    ``base_regressor``).
+
+    Raises:
+        ValueError: missing limits, or a start IPOPT cannot leave (see the message).
+    """
+    function = casadi_function(model, "base_regressor")
+    lower, upper, speeds, accelerations = _limits(model, max_velocity, max_acceleration)
+    for k, c in enumerate(model.info.coordinates):
+        if limits and c.name in limits:
+            lower[k], upper[k] = limits[c.name]
+    n = len(lower)
+    count = len(model.info.functions["base_regressor"].outputs["pi_b"])
+    samples = samples or max(4 * -(-count // n), 50)
+    t = np.arange(samples) * period / samples
+    rng = np.random.default_rng(seed)
+    middle, half = (lower + upper) / 2, (upper - lower) / 2
+    omega = 2 * np.pi / period * np.arange(1, harmonics + 1)
+    # a start that moves every joint by ~START_AMPLITUDE of its range, within the velocity bound
+    scale = np.minimum(START_AMPLITUDE * half[:, None] * omega / harmonics, 0.5 * speeds[:, None] / harmonics)
+    a0, b0 = rng.uniform(-1, 1, (2, n, harmonics)) * scale
+    x = casadi.MX.sym("x", n + 2 * n * harmonics)
+    offsets, a, b = x[:n], casadi.reshape(x[n:n + n * harmonics], harmonics, n).T, \
+        casadi.reshape(x[n + n * harmonics:], harmonics, n).T
+    q, qd, qdd = _series(casadi, offsets, a, b, period, t)
+    dense = np.arange(CONSTRAINT_DENSITY * samples) * period / (CONSTRAINT_DENSITY * samples)
+    q_c, qd_c, qdd_c = _series(casadi, offsets, a, b, period, dense)
+    mapped = function.map(samples, "serial")
+    Y = mapped(*_arguments(function, model, q.T, qd.T, qdd.T, samples))[0]     # (n, count * samples), column-major
+    x0 = np.concatenate([middle, a0.ravel(), b0.ravel()])  # each joint's L coefficients in a row
+    start = casadi.Function("W", [x], [Y])(x0).full()
+    W0 = _stacked(start, n, count, samples)
+    column = np.linalg.norm(W0, axis=0)
+    column[column == 0] = 1.0
+    W = casadi.mtimes(_stacked_mx(Y, n, count, samples), casadi.diag(casadi.DM(1.0 / column)))
+    F = W.T @ W / samples
+    objective = casadi.log(casadi.sumsqr(F)) / 2 + casadi.log(casadi.trace(casadi.solve(F, casadi.DM.eye(count))))
+    at_rest = casadi.vertcat(casadi.sum2(a), casadi.mtimes(b, casadi.DM(omega)))  # qd(0) and qdd(0)
+    g = casadi.vertcat(casadi.vec(q_c), casadi.vec(qd_c), casadi.vec(qdd_c), at_rest)
+    points = len(dense)
+    lbg = np.concatenate([np.repeat(lower, points), np.repeat(-speeds, points), np.repeat(-accelerations, points),
+                          np.zeros(2 * n)])
+    ubg = np.concatenate([np.repeat(upper, points), np.repeat(speeds, points), np.repeat(accelerations, points),
+                          np.zeros(2 * n)])
+    solver = casadi.nlpsol("excitation", "ipopt", {"x": x, "f": objective, "g": g},
+                           {**IPOPT_OPTIONS, "ipopt.tol": 1e-6, "ipopt.constr_viol_tol": 1e-9,
+                            "ipopt.max_iter": max_iterations, "ipopt.hessian_approximation": "limited-memory"})
+    result = solver(x0=x0, lbg=lbg, ubg=ubg)
+    best = np.asarray(result["x"]).ravel()
+    offsets_best = best[:n]
+    a_best, b_best = (best[n + k * n * harmonics:n + (k + 1) * n * harmonics].reshape(n, harmonics) for k in (0, 1))
+    # between the constraint points the motion may overshoot by O(dt^2 qdd): shrink it about q0 to fit a grid
+    # ten times as dense (a common factor keeps the start at rest and the period)
+    check = np.arange(CHECK_DENSITY * len(dense)) * period / (CHECK_DENSITY * len(dense))
+    spacing = period / len(check)
+    shrink = _fitting_factor(_series(np, offsets_best, a_best, b_best, period, check), offsets_best,
+                             _between_points(a_best, b_best, omega, spacing), (lower, upper, speeds, accelerations))
+    best = np.concatenate([offsets_best, shrink * best[n:]])
+    W_best = _stacked(casadi.Function("W", [x], [Y])(best).full(), n, count, samples)
+    return Excitation(period, harmonics, offsets_best, shrink * a_best, shrink * b_best, _condition(W0 / column),
+                      _condition(W_best / column), samples, solver.stats()["return_status"])
+
+
+def _between_points(a: np.ndarray, b: np.ndarray, omega: np.ndarray, spacing: float) -> tuple[np.ndarray, ...]:
+    """Per joint, how far q, qd and qdd can stray between two grid points ``spacing`` apart beyond the larger of
+    their values there: h^2 / 8 max |f''| for each (the error of linear interpolation), with max |q''| <=
+    sum_l (|a| + |b|) l w and each further derivative one more factor l w."""
+    size = np.abs(a) + np.abs(b)
+    return tuple(spacing ** 2 / 8 * size @ omega ** k for k in (1, 2, 3))
+
+
+def _fitting_factor(states: tuple[np.ndarray, np.ndarray, np.ndarray], offsets: np.ndarray,
+                    margins: tuple[np.ndarray, ...], bounds: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+                    ) -> float:
+    """The largest s <= 1 with q0 + s (q - q0), s qd and s qdd within the bounds at every time, not only at the
+    checked ones (``margins``: what each may add between them, proportional to the motion as s is).
+
+    Raises:
+        ValueError: the offsets themselves outside the limits (IPOPT did not find a feasible motion).
+    """
+    q, qd, qdd = states
+    lower, upper, speeds, accelerations = bounds
+    if np.any(offsets < lower) or np.any(offsets > upper):
+        raise ValueError("IPOPT found no motion within the joint limits; check the limits and bounds")
+    motion = q - offsets
+    ratios = [(upper - offsets) / (np.max(motion, axis=0) + margins[0]),
+              (offsets - lower) / (np.max(-motion, axis=0) + margins[0]),
+              speeds / (np.max(np.abs(qd), axis=0) + margins[1]),
+              accelerations / (np.max(np.abs(qdd), axis=0) + margins[2])]
+    return float(min(1.0, *(float(np.min(r)) for r in ratios)))
+
+
+def _arguments(function: casadi.Function, model: GeneratedModel, q: Any, qd: Any, qdd: Any, samples: int) -> list[Any]:
+    """The mapped function's inputs: the state matrices, then each parameter at the model's (bound) value."""
+    values = {"q": q, "qd": qd, "qdd": qdd}
+    bound = getattr(model, "_bound", {})
+    defaults = {p.name: p.default for p in model.info.parameters}
+    return [values[name] if name in values else casadi.repmat(casadi.DM(bound.get(name, defaults[name])), 1, samples)
+            for name in function.name_in()]
+
+
+def _stacked(Y: np.ndarray, n: int, count: int, samples: int) -> np.ndarray:
+    """The (n x count*samples) output of the mapped function as W (samples*n x count)."""
+    return np.concatenate([Y[:, k * count:(k + 1) * count] for k in range(samples)], axis=0)
+
+
+def _stacked_mx(Y: casadi.MX, n: int, count: int, samples: int) -> casadi.MX:
+    return casadi.vertcat(*[Y[:, k * count:(k + 1) * count] for k in range(samples)])
+
+
+def _condition(W: np.ndarray) -> float:
+    singular = np.linalg.svd(W, compute_uv=False)
+    return float(singular[0] / singular[-1]) if singular[-1] > 0 else float("inf")
+
+
+def figure_png(excitation: Excitation, coordinates: list[str], revolute: list[bool], title: str) -> bytes:
+    """q, qd and qdd of one period, one panel each, a line per joint."""
+    import io
+
+    from matplotlib.figure import Figure
+
+    t = np.linspace(0.0, excitation.period, 1001)
+    states = excitation.states(t)
+    figure = Figure(figsize=(8.0, 7.0), layout="constrained")
+    axes = figure.subplots(3, 1, sharex=True)
+    units = ("rad or m", "rad/s or m/s", "rad/s^2 or m/s^2") if not all(revolute) else ("rad", "rad/s", "rad/s^2")
+    for ax, values, label, unit in zip(axes, states, ("q", "qd", "qdd"), units):
+        for k, name in enumerate(coordinates):
+            ax.plot(t, values[:, k], linewidth=1.0, label=name)
+        ax.set_ylabel(f"{label} [{unit}]")
+    axes[0].legend(loc="upper right", fontsize="small", ncol=min(len(coordinates), 6))
+    axes[-1].set_xlabel("t [s]")
+    figure.suptitle(title)
+    buffer = io.BytesIO()
+    figure.savefig(buffer, format="png", dpi=110)
+    return buffer.getvalue()

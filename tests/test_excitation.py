@@ -1,0 +1,104 @@
+"""Issue 33, step 4: excitation trajectories (symkin excite) - a finite Fourier series per joint that makes the
+stacked base regressor well conditioned, within the joint limits and the velocity and acceleration bounds.
+
+References: the condition number of the optimum against the start's, both computed by numpy's SVD; the bounds
+on a grid 50 times as dense as the criterion's samples; rest at t = 0 and periodicity; a run simulated along
+the optimum (the model's inverse dynamics with noise) identified by symkin identify within its standard
+deviations.
+"""
+
+from __future__ import annotations
+
+import subprocess
+
+import numpy as np
+import pytest
+
+from conftest import GENERATED_DIR, MODELS_DIR, SYMKIN_CLI
+from symkin import pipeline
+from symkin.analysis import identification
+from symkin.design import excitation
+from symkin.model import model_from_text
+from symkin.runtime.loader import load
+from test_regressor import DRIVEN
+from tolerances import CLOSED_FORM
+
+PERIOD, HARMONICS, SPEED, ACCELERATION = 4.0, 4, 2.0, 10.0
+
+
+@pytest.fixture(scope="module")
+def arm(tmp_path_factory):
+    model = model_from_text(DRIVEN, "driven")
+    request = pipeline.resolve_request(model, ("base_regressor", "inverse_dynamics"), "numpy,casadi", None, False,
+                                       "none")
+    directory = pipeline.write(pipeline.generate(model, request), tmp_path_factory.mktemp("excite"))
+    return load(directory, "numpy"), load(directory, "casadi")
+
+
+@pytest.fixture(scope="module")
+def optimum(arm):
+    return excitation.optimize(arm[1], period=PERIOD, harmonics=HARMONICS, max_velocity=SPEED,
+                               max_acceleration=ACCELERATION, max_iterations=80)
+
+
+def test_the_optimum_is_far_better_conditioned_than_the_start(arm, optimum):
+    assert optimum.condition < optimum.condition_start / 10
+    numpy_arm = arm[0]
+    t = np.arange(optimum.samples) * PERIOD / optimum.samples
+    W = numpy_arm.base_regressor(*optimum.states(t))[0].reshape(-1, 13)
+    scaled = W / np.linalg.norm(W, axis=0)
+    singular = np.linalg.svd(scaled, compute_uv=False)
+    assert singular[0] / singular[-1] < 1e3                    # well conditioned, whatever the column scaling
+
+
+def test_the_optimum_keeps_its_bounds_starts_at_rest_and_repeats(arm, optimum):
+    t = np.linspace(0.0, PERIOD, 50 * optimum.samples * 4 + 1)
+    q, qd, qdd = optimum.states(t)
+    lower, upper = np.array([c.limits for c in arm[0].info.coordinates]).T
+    assert np.all(q >= lower)
+    assert np.all(q <= upper)
+    assert np.max(np.abs(qd)) <= SPEED
+    assert np.max(np.abs(qdd)) <= ACCELERATION
+    np.testing.assert_allclose(qd[0], 0.0, atol=CLOSED_FORM * SPEED * HARMONICS)
+    np.testing.assert_allclose(qdd[0], 0.0, atol=CLOSED_FORM * ACCELERATION * HARMONICS)
+    np.testing.assert_allclose(q[-1], q[0], atol=CLOSED_FORM * HARMONICS * float(np.max(upper - lower)))
+
+
+def test_a_run_along_the_optimum_identifies_the_arm(arm, optimum):
+    numpy_arm = arm[0]
+    t = np.arange(0.0, 3 * PERIOD, 0.005)
+    q, qd, qdd = optimum.states(t)
+    noise = 1e-3
+    tau = numpy_arm.inverse_dynamics(q, qd, qdd) + np.random.default_rng(5).normal(0.0, noise, q.shape)
+    Y_b, pi_b = numpy_arm.base_regressor(q, qd, qdd)
+    names = numpy_arm.info.functions["base_regressor"].outputs["pi_b"]
+    found = identification.estimate(Y_b, tau, names, "wls")
+    assert np.all(np.abs(found.values - pi_b[0]) < 5 * found.std)
+
+
+def test_the_command_writes_a_trajectory_symkin_identify_reads(tmp_path):
+    """symkin excite on the 2R arm's model file; the arm's generated inverse dynamics "measures" tau along the
+    trajectory; the file with tau appended is what symkin identify reads, and the run identifies the arm."""
+    result = subprocess.run(SYMKIN_CLI + ["excite", str(MODELS_DIR / "planar_2r.yaml"), "--max-velocity", "2",
+                                          "--max-acceleration", "10", "--period", "4", "--harmonics", "3",
+                                          "--periods", "3", "--max-iterations", "40", "-o", str(tmp_path / "out")],
+                            capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    assert "cond(W)" in result.stdout
+    assert (tmp_path / "out" / "excitation.png").stat().st_size > 10_000
+    text = (tmp_path / "out" / "excitation.csv").read_text()
+    assert text.splitlines()[0] == "t,q_theta1,q_theta2,qd_theta1,qd_theta2,qdd_theta1,qdd_theta2"
+    table = np.loadtxt(tmp_path / "out" / "excitation.csv", delimiter=",", skiprows=1)
+    arm = load(GENERATED_DIR / "planar_2r")
+    tau = arm.inverse_dynamics(table[:, 1:3], table[:, 3:5], table[:, 5:7])
+    data = tmp_path / "run.csv"
+    np.savetxt(data, np.column_stack([table, tau]), delimiter=",", comments="",
+               header=text.splitlines()[0] + ",tau_theta1,tau_theta2")
+    run = identification.read_measurements(data, ["theta1", "theta2"])
+    assert run.rates == "measured"
+    np.testing.assert_array_equal(run.tau, tau)
+
+
+def test_a_missing_bound_is_refused(arm):
+    with pytest.raises(ValueError, match="--max-velocity"):
+        excitation.optimize(arm[1], max_acceleration=ACCELERATION)
