@@ -20,6 +20,7 @@ from symkin.analysis import identification
 from symkin.model import model_from_text
 from symkin.runtime.loader import load
 from test_regressor import DRIVEN
+from tolerances import EPS
 
 #: Noise on the efforts (N m): large against rounding, small against the 2R arm's torques (~0.1 N m).
 NOISE = 1e-3
@@ -30,7 +31,8 @@ DURATION, RATE = 10.0, 200.0
 @pytest.fixture(scope="module")
 def arm(tmp_path_factory):
     model = model_from_text(DRIVEN, "driven")
-    request = pipeline.resolve_request(model, ("base_regressor", "inverse_dynamics"), "numpy", None, False, "none")
+    request = pipeline.resolve_request(model, ("regressor", "base_regressor", "inverse_dynamics"), "numpy", None,
+                                       False, "none")
     return load(pipeline.write(pipeline.generate(model, request), tmp_path_factory.mktemp("identify")), "numpy")
 
 
@@ -145,3 +147,39 @@ def test_too_few_samples_for_the_base_parameters_are_refused(arm):
     Y_b, _ = arm.base_regressor(q[:5], qd[:5], qdd[:5])
     with pytest.raises(identification.DataError, match="5 samples give 10 equations for 13 base parameters"):
         identification.estimate(Y_b, tau[:5], arm.info.functions["base_regressor"].outputs["pi_b"])
+
+
+def test_the_consistent_estimate_is_physical_and_fits_the_run(arm):
+    """From a wrong prior (every link's mass properties 30 % off), the consistent estimate keeps every link a rigid
+    body (pseudo-inertia positive semidefinite to rounding) and the drives non-negative, fits the run to the
+    noise, and its identifiable combinations K pi are the true base parameters within a few standard deviations
+    of the least-squares estimate."""
+    from symkin.analysis import consistent
+    from symkin.derivation import Derivation
+
+    t, q, qd, qdd, tau = _run(arm)
+    Y, pi = arm.regressor(q, qd, qdd)
+    Y_b, pi_b = arm.base_regressor(q, qd, qdd)
+    base_names = arm.info.functions["base_regressor"].outputs["pi_b"]
+    wls = identification.estimate(Y_b, tau, base_names, "wls")
+    triangle, target = identification.weighted_triangle(Y, tau, 1.0 / wls.joint_std)
+    prior = pi[0].copy()
+    prior[:20] *= 1.3
+    found = consistent.estimate(triangle, target, arm.info.functions["regressor"].outputs["pi"], prior, 2)
+    for J in found.pseudo_inertias():
+        assert np.linalg.eigvalsh(J)[0] >= -1e3 * EPS * np.max(np.abs(J))
+    assert np.all(found.values[20:23] >= 0)                       # theta1's rotor inertia, viscous, Coulomb
+    assert np.allclose(np.sqrt(np.mean((Y @ found.values - tau) ** 2, axis=0)), NOISE, rtol=0.1)
+    K = np.array(Derivation(model_from_text(DRIVEN, "driven"))["base_parameters"].combinations, dtype=float)
+    assert np.all(np.abs(K @ found.values - pi_b[0]) < 5 * wls.std)
+
+
+def test_the_command_estimates_consistent_standard_parameters(arm, tmp_path):
+    t, q, qd, qdd, tau = _run(arm)
+    data = write_run(tmp_path / "run.csv", ["theta1", "theta2"], t, q, tau, qd, qdd)
+    result = subprocess.run(SYMKIN_CLI + ["identify", str(arm.directory), str(data), "--method", "consistent",
+                                          "--no-figure", "-o", str(tmp_path / "out")], capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    record = json.loads((tmp_path / "out" / "estimate.json").read_text())
+    assert set(record["standard"]["parameters"]) >= {"link1.m", "link2.Izz", "theta2.fc"}
+    assert record["standard"]["parameters"]["link2.m"] > 0

@@ -268,7 +268,12 @@ class Validation:
 
 def validate(Y_b: np.ndarray, tau: np.ndarray, values: np.ndarray) -> Validation:
     """The torque error of ``values`` on held-out samples (Y_b (N, n, b), tau (N, n))."""
-    error = tau - Y_b @ values
+    return validation_of(Y_b @ values, tau)
+
+
+def validation_of(predicted: np.ndarray, tau: np.ndarray) -> Validation:
+    """The error of ``predicted`` efforts against the held-out ones (both (N, n))."""
+    error = tau - predicted
     return Validation(np.sqrt(np.mean(error ** 2, axis=0)), np.sqrt(np.mean(tau ** 2, axis=0)), len(tau))
 
 
@@ -292,3 +297,13 @@ def validation_figure_png(time: np.ndarray, tau: np.ndarray, predicted: np.ndarr
     buffer = io.BytesIO()
     figure.savefig(buffer, format="png", dpi=110)
     return buffer.getvalue()
+
+
+def weighted_triangle(Y: np.ndarray, tau: np.ndarray, weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """R and z of [W y] = Q [R z; 0 r] (Householder QR) for a regressor Y (N, n, P) and efforts (N, n) with each
+    joint's rows weighted: |W pi - y|^2 = |R pi - z|^2 + r^2, the data of an estimate in P numbers (for the
+    consistent estimate, :mod:`symkin.analysis.consistent`)."""
+    count = Y.shape[-1]
+    rows = (Y * weights[None, :, None]).reshape(-1, count)
+    triangle = np.asarray(np.linalg.qr(np.column_stack([rows, (tau * weights).reshape(-1)]), mode="r"))
+    return triangle[:count, :count], triangle[:count, count]

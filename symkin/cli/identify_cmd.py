@@ -8,11 +8,13 @@ import math
 import time
 from pathlib import Path
 
+import numpy as np
+
 from symkin.cli import analysis_args
 from symkin.cli.progress import Progress
 
-#: What a model file is derived with on the fly.
-IDENTIFY_OUTPUTS = ("base_regressor",)
+#: What a model file is derived with on the fly (the full regressor for the consistent estimate).
+IDENTIFY_OUTPUTS = ("base_regressor", "regressor")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -31,8 +33,11 @@ def register(sub: argparse._SubParsersAction) -> None:
         epilog="e.g. symkin identify models/planar_2r.yaml run.csv --method wls -o out/identify/planar_2r")
     analysis_args.add_model_arguments(p)
     p.add_argument("data", metavar="DATA.csv", help="the measured run")
-    p.add_argument("--method", choices=("ols", "wls"), default="wls",
-                   help="ordinary least squares, or weighted by each joint's residual (default: %(default)s)")
+    p.add_argument("--method", choices=("ols", "wls", "consistent"), default="wls",
+                   help="ordinary least squares, or weighted by each joint's residual, on the base parameters; or "
+                        "'consistent': also the standard parameters, every link a physical rigid body (positive "
+                        "definite pseudo-inertia) and the drives' inertia and friction non-negative, nearest the "
+                        "model's values among the fits (default: %(default)s)")
     p.add_argument("--holdout", type=float, default=0.25, metavar="F",
                    help="the last fraction of the run kept for validation (default: %(default)s; 0: none)")
     p.add_argument("--cutoff", type=float, metavar="HZ",
@@ -60,16 +65,23 @@ def run(args: argparse.Namespace) -> int:
         with Progress(model.name) as progress:
             progress(f"estimating {len(names)} base parameters from {len(fit.time)} samples")
             Y_b, pi_model = model.base_regressor(fit.q, fit.qd, fit.qdd)
-            found = identification.estimate(Y_b, fit.tau, names, args.method)
-            check = None
+            found = identification.estimate(Y_b, fit.tau, names, "ols" if args.method == "ols" else "wls")
+            predict = None
             if len(held.time):
                 Y_held = model.base_regressor(held.q, held.qd, held.qdd)[0]
-                check = identification.validate(Y_held, held.tau, found.values)
-            files = _report(args, model, data, found, pi_model[0], check)
-            if check is not None and not args.no_figure:
+                predict = Y_held @ found.values
+            standard = None
+            if args.method == "consistent":
+                progress("estimating physically consistent standard parameters")
+                standard = _consistent(model, fit, found)
+                if len(held.time):
+                    predict = model.regressor(held.q, held.qd, held.qdd)[0] @ standard.values
+            check = None if predict is None else identification.validation_of(predict, held.tau)
+            files = _report(args, model, data, found, pi_model[0], check, standard)
+            if check is not None and predict is not None and not args.no_figure:
                 progress("drawing the validation")
                 files["validation.png"] = identification.validation_figure_png(
-                    held.time, held.tau, Y_held @ found.values, coordinates,
+                    held.time, held.tau, predict, coordinates,
                     ["N*m" if c.revolute else "N" for c in model.info.coordinates],
                     f"{model.name}: held-out efforts, measured and predicted ({args.method})")
     except (ValueError, KeyError) as err:
@@ -81,7 +93,22 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _report(args, model, data, found, pi_model, check) -> dict[str, str | bytes]:
+def _consistent(model, fit, found):
+    """The consistent standard parameters from the fit part of the run, weighted as the WLS estimate."""
+    from symkin.analysis import consistent, identification
+
+    if "regressor" not in model.info.functions:
+        raise ValueError(f"{model.name}: --method consistent needs the regressor; derive it (--only regressor,"
+                         "base_regressor) or give the model file")
+    Y, pi = model.regressor(fit.q, fit.qd, fit.qdd)
+    weights = 1.0 / np.where(found.joint_std > 0, found.joint_std, 1.0)
+    triangle, target = identification.weighted_triangle(Y, fit.tau, weights)
+    names = model.info.functions["regressor"].outputs["pi"]
+    links = sum(1 for name in names if name.endswith(".m"))
+    return consistent.estimate(triangle, target, names, pi[0], links)
+
+
+def _report(args, model, data, found, pi_model, check, standard=None) -> dict[str, str | bytes]:
     """estimate.json, estimate.csv and summary.txt."""
     rows = [{"name": n, "value": float(v), "std": float(s), "relative_std": float(r) if math.isfinite(r) else None,
              "model": float(m)}
@@ -103,6 +130,13 @@ def _report(args, model, data, found, pi_model, check) -> dict[str, str | bytes]
         lines.append(f"  validation on the last {check.samples} samples: torque RMS "
                      + ", ".join(f"{n} {r:.3g} ({100 * rel:.2g} %)" for n, r, rel in
                                  zip(model.info.coordinate_names, check.rms, check.relative)))
+    if standard is not None:
+        record["standard"] = {"parameters": dict(zip(standard.names, map(float, standard.values))),
+                              "smallest_pseudo_inertia_eigenvalue": [float(np.linalg.eigvalsh(J)[0])
+                                                                     for J in standard.pseudo_inertias()],
+                              "data_cost": standard.cost, "least_squares_cost": standard.best_cost}
+        lines.append(f"  physically consistent standard parameters (every link's pseudo-inertia positive definite): "
+                     f"weighted data cost {standard.cost:.4g} against {standard.best_cost:.4g} unconstrained")
     csv_lines = ["name,value,std,relative_std,model"] + [
         f"{r['name']},{r['value']!r},{r['std']!r},{r['relative_std']!r},{r['model']!r}" for r in rows]
     return {"estimate.json": json.dumps(record, indent=2, allow_nan=False) + "\n",

@@ -1,0 +1,144 @@
+"""Physically consistent identification: standard parameters whose every body is a real rigid body.
+
+Least squares on the base parameters (:mod:`symkin.analysis.identification`) fits the torques but can return
+combinations no set of bodies has (a negative mass hidden in a regrouped parameter), which a simulation or
+an inertia-cancelling controller then meets as a mass matrix that is not positive definite.  Here the
+standard parameters pi themselves are estimated, each link's ten as a pseudo-inertia
+
+    J = [[Sigma, h], [h^T, m]] = U U^T,   Sigma = 1/2 tr(I) 1 - I,  h = m c,
+
+positive definite by construction through its log-Cholesky factor (Rucker and Wensing, "Smooth
+parameterization of rigid-body inertia", IEEE Robot. Autom. Lett. 7(2), 2022: U upper triangular with
+exp(alpha) times [[e^d1, s12, s13, t1], [0, e^d2, s23, t2], [0, 0, e^d3, t3], [0, 0, 0, 1]]); J
+positive definite is exactly the density realizability of the link (Wensing, Kim and Slotine 2017), which
+implies m > 0 and the triangle inequalities of the principal moments.  The drives' rotor inertia and
+viscous and Coulomb friction are bounded below by zero; the offset is free.
+
+The data enter through the triangular factor of the weighted regressor ([W y] = Q [R z; 0 r], as the
+least-squares estimate), so the objective is |R pi(theta) - z|^2 + lambda |D (pi(theta) - pi_prior)|^2:
+the standard regressor is rank-deficient (only the base combinations are identifiable) and the small
+prior term (D: the prior's scale per parameter) picks, among the parameter sets that fit the data equally,
+the one closest to the model's (CAD) values.  Solved with SciPy's trust-region reflective least squares.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+#: Weight of the prior against the data (relative, after both are scaled): small, it only picks among fits.
+PRIOR_WEIGHT = 1e-4
+#: The standard parameters of a link, in the regressor's order (symkin.dynamics.regressor.INERTIAL).
+LINK_PARAMETERS = 10
+#: The drive parameters of a joint (Ia, fv, fc, fo) and which are bounded below by zero.
+DRIVE_PARAMETERS = 4
+DRIVE_NONNEGATIVE = (True, True, True, False)
+
+
+@dataclass(frozen=True)
+class ConsistentEstimate:
+    """Standard parameters of physically consistent links and the drives, and how they fit.
+
+    Attributes:
+        names: the standard parameters' names (the regressor's columns).
+        values: the estimate.
+        links: the number of links (the first 10 * links values).
+        cost: |R pi - z|^2 at the estimate, against the unconstrained least squares' (``best_cost``).
+    """
+
+    names: tuple[str, ...]
+    values: np.ndarray
+    links: int
+    cost: float
+    best_cost: float
+
+    def pseudo_inertias(self) -> list[np.ndarray]:
+        """Each link's 4 x 4 pseudo-inertia (positive definite)."""
+        return [pseudo_inertia(self.values[LINK_PARAMETERS * k:LINK_PARAMETERS * (k + 1)]) for k in range(self.links)]
+
+
+def pseudo_inertia(link: np.ndarray) -> np.ndarray:
+    """J of ten standard parameters (m, m c, I about the frame origin: xx, xy, yy, xz, yz, zz)."""
+    m, hx, hy, hz, xx, xy, yy, xz, yz, zz = link
+    inertia = np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
+    sigma = 0.5 * np.trace(inertia) * np.eye(3) - inertia
+    h = np.array([hx, hy, hz])
+    return np.block([[sigma, h[:, None]], [h[None, :], np.array([[m]])]])
+
+
+def _standard_of(J: np.ndarray) -> np.ndarray:
+    """The ten standard parameters of a pseudo-inertia (inverse of :func:`pseudo_inertia`)."""
+    sigma, h, m = J[:3, :3], J[:3, 3], J[3, 3]
+    inertia = np.trace(sigma) * np.eye(3) - sigma
+    return np.array([m, *h, inertia[0, 0], inertia[0, 1], inertia[1, 1], inertia[0, 2], inertia[1, 2], inertia[2, 2]])
+
+
+#: The log-Cholesky exponents are clipped here while the solver explores (e^50: far beyond any body).
+EXPONENT_LIMIT = 50.0
+
+
+def _factor(theta: np.ndarray) -> np.ndarray:
+    """U(theta) of the module docstring."""
+    alpha, d1, d2, d3, s12, s23, s13, t1, t2, t3 = theta
+    alpha, d1, d2, d3 = np.clip([alpha, d1, d2, d3], -EXPONENT_LIMIT, EXPONENT_LIMIT)
+    return np.exp(alpha) * np.array([[np.exp(d1), s12, s13, t1], [0.0, np.exp(d2), s23, t2],
+                                     [0.0, 0.0, np.exp(d3), t3], [0.0, 0.0, 0.0, 1.0]])
+
+
+def _log_cholesky(J: np.ndarray) -> np.ndarray:
+    """theta with U(theta) U(theta)^T = J (J positive definite): U = P L^T P of the Cholesky factor of P J P."""
+    flip = np.eye(4)[::-1]
+    lower = np.linalg.cholesky(flip @ J @ flip)
+    U = flip @ lower @ flip                                # upper triangular, U U^T = J
+    alpha = np.log(U[3, 3])
+    U = U / U[3, 3]
+    return np.array([alpha, np.log(U[0, 0]), np.log(U[1, 1]), np.log(U[2, 2]), U[0, 1], U[1, 2], U[0, 2],
+                     U[0, 3], U[1, 3], U[2, 3]])
+
+
+def _regularized(J: np.ndarray, scale: float) -> np.ndarray:
+    """J made positive definite for a start: a point mass or a massless link (J singular) gets a small body."""
+    eigenvalues, vectors = np.linalg.eigh(J)
+    floor = 1e-6 * max(scale, 1e-12)
+    return (vectors * np.maximum(eigenvalues, floor)) @ vectors.T
+
+
+def estimate(triangle: np.ndarray, target: np.ndarray, names: Sequence[str], prior: np.ndarray,
+             links: int) -> ConsistentEstimate:
+    """The consistent estimate of the module docstring from the triangular factor ``triangle`` (P x P) and
+    ``target`` (z) of the weighted standard regressor, the prior (the model's pi) and the number of links."""
+    from scipy.optimize import least_squares
+
+    count = len(names)
+    drives = count - LINK_PARAMETERS * links
+    link_scale = [max(float(np.max(np.abs(prior[LINK_PARAMETERS * k:LINK_PARAMETERS * (k + 1)]))), 1e-9)
+                  for k in range(links)]
+    theta0 = np.concatenate([_log_cholesky(_regularized(pseudo_inertia(prior[LINK_PARAMETERS * k:
+                                                                               LINK_PARAMETERS * (k + 1)]),
+                                                        link_scale[k]))
+                             for k in range(links)] + [np.maximum(prior[LINK_PARAMETERS * links:], 0.0)])
+    lower = np.full(len(theta0), -np.inf)
+    nonnegative = np.tile(DRIVE_NONNEGATIVE, drives // DRIVE_PARAMETERS)
+    lower[LINK_PARAMETERS * links:][nonnegative] = 0.0
+    theta0 = np.maximum(theta0, lower)
+    # the prior term's scale per parameter: its own size, at least 1e-3 of the largest (a zero prior is no scale)
+    scale = np.maximum(np.abs(prior), 1e-3 * float(np.max(np.abs(prior))) if np.any(prior) else 1.0)
+    data_scale = max(float(np.linalg.norm(target)), 1e-300)
+    weight = np.sqrt(PRIOR_WEIGHT) * data_scale / np.sqrt(count)
+
+    def standard(theta: np.ndarray) -> np.ndarray:
+        factors = [_factor(theta[LINK_PARAMETERS * k:LINK_PARAMETERS * (k + 1)]) for k in range(links)]
+        return np.concatenate([_standard_of(U @ U.T) for U in factors] + [theta[LINK_PARAMETERS * links:]])
+
+    def residual(theta: np.ndarray) -> np.ndarray:
+        pi = standard(theta)
+        return np.concatenate([triangle @ pi - target, weight * (pi - prior) / scale])
+
+    result = least_squares(residual, theta0, bounds=(lower, np.full(len(theta0), np.inf)), method="trf",
+                           x_scale="jac", xtol=1e-12, ftol=1e-12, gtol=1e-12, max_nfev=2000)
+    pi = standard(result.x)
+    best = np.linalg.lstsq(triangle, target, rcond=None)[0]
+    return ConsistentEstimate(tuple(names), pi, links, float(np.sum((triangle @ pi - target) ** 2)),
+                              float(np.sum((triangle @ best - target) ** 2)))
