@@ -12,6 +12,7 @@ import argparse
 import contextlib
 import math
 import tempfile
+import time
 from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn
@@ -363,3 +364,13 @@ def parse_orientation(text: str | None) -> list[float] | None:
     except ValueError:
         raise ValueError(f"--orientation: '{text}' is not ROLL,PITCH,YAW (three numbers in rad, or with 'deg', "
                          "e.g. 0,10deg,0)") from None
+
+
+def write_outputs(out: Path, files: Mapping[str, str | bytes], start: float) -> None:
+    """Replace the directory ``out`` with ``files`` as a whole (atomically), then print their ``summary.txt`` and
+    what was written, with the time since ``start`` (``symkin rate``, ``identify``, ``excite``)."""
+    from symkin.atomic import replace_directory
+
+    replace_directory(out, dict(files))
+    print(str(files["summary.txt"]), end="")
+    print(f"wrote {len(files)} files to {out}/ ({', '.join(sorted(files))}) in {time.perf_counter() - start:.2f} s")

@@ -44,7 +44,6 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from symkin.atomic import replace_directory
     from symkin.design import excitation
 
     start = time.perf_counter()
@@ -71,10 +70,7 @@ def run(args: argparse.Namespace) -> int:
                     f"{model.name}: excitation, cond {found.condition_start:.3g} -> {found.condition:.3g}")
     except (ValueError, KeyError) as err:
         analysis_args.fail_on_bad_input(args, err)
-    out = Path(args.out or f"out/excite/{model.name}")
-    replace_directory(out, files)
-    print(files["summary.txt"], end="")
-    print(f"wrote {len(files)} files to {out}/ ({', '.join(sorted(files))}) in {time.perf_counter() - start:.2f} s")
+    analysis_args.write_outputs(Path(args.out or f"out/excite/{model.name}"), files, start)
     return 0
 
 

@@ -49,7 +49,6 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from symkin.analysis import identification
-    from symkin.atomic import replace_directory
 
     start = time.perf_counter()
     try:
@@ -86,10 +85,7 @@ def run(args: argparse.Namespace) -> int:
                     f"{model.name}: held-out efforts, measured and predicted ({args.method})")
     except (ValueError, KeyError) as err:
         analysis_args.fail_on_bad_input(args, err)
-    out = Path(args.out or f"out/identify/{model.name}")
-    replace_directory(out, files)
-    print(files["summary.txt"], end="")
-    print(f"wrote {len(files)} files to {out}/ ({', '.join(sorted(files))}) in {time.perf_counter() - start:.2f} s")
+    analysis_args.write_outputs(Path(args.out or f"out/identify/{model.name}"), files, start)
     return 0
 
 

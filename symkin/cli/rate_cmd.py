@@ -74,7 +74,6 @@ def _joint_steps(args: argparse.Namespace, model) -> list[float] | None:
 
 def run(args: argparse.Namespace) -> int:
     from symkin.analysis import datasheet
-    from symkin.atomic import replace_directory
 
     start = time.perf_counter()
     try:
@@ -110,8 +109,5 @@ def run(args: argparse.Namespace) -> int:
                                                                      "workspace")
     except (ValueError, KeyError) as err:
         analysis_args.fail_on_bad_input(args, err)
-    out = Path(args.out or f"out/rate/{model.name}")
-    replace_directory(out, files)
-    print("\n".join(summary))
-    print(f"wrote {len(files)} files to {out}/ ({', '.join(sorted(files))}) in {time.perf_counter() - start:.2f} s")
+    analysis_args.write_outputs(Path(args.out or f"out/rate/{model.name}"), files, start)
     return 0
