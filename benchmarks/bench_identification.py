@@ -1,7 +1,7 @@
 """Identification (issue 33): derive time of the UR10e's regressor and base regressor, and `symkin identify`'s
 estimate from 10^5 samples of the UR10e, against Pinocchio's joint-torque regressor stacked over the same samples
 (the competitor's route to the same least-squares problem; it has no base parameters, so its 60 standard columns
-are solved by a minimum-norm lstsq).
+are solved by a minimum-norm lstsq); `symkin excite` and `symkin identify --method consistent` end to end.
 
 Run with `make bench` or `python benchmarks/bench_identification.py [--samples N]`.  Targets (issue 33): derive
 <= 10 s, identify 10^5 samples <= 10 s on 2 cores.
@@ -10,6 +10,7 @@ Run with `make bench` or `python benchmarks/bench_identification.py [--samples N
 from __future__ import annotations
 
 import argparse
+import subprocess
 import sys
 import tempfile
 import time
@@ -35,8 +36,8 @@ def main(argv: list[str] | None = None) -> int:
     model = load_model(ROOT / "models" / "ur10e.yaml")
     start = time.perf_counter()
     generation = pipeline.generate(model, pipeline.resolve_request(model, ("regressor", "base_regressor",
-                                                                           "inverse_dynamics"), "numpy,c"))
-    rows.append(["derive regressor + base regressor + inverse dynamics (numpy, C)",
+                                                                           "inverse_dynamics"), "numpy,c,casadi"))
+    rows.append(["derive regressor + base regressor + inverse dynamics (numpy, C, CasADi)",
                  f"{time.perf_counter() - start:.2f} s", "<= 10 s"])
     with tempfile.TemporaryDirectory() as scratch:
         directory = pipeline.write(generation, scratch)
@@ -64,6 +65,24 @@ def main(argv: list[str] | None = None) -> int:
             np.linalg.lstsq(W, tau.reshape(-1), rcond=None)
             rows.append([f"Pinocchio: stacked joint-torque regressors + lstsq, {args.samples} samples",
                          f"{time.perf_counter() - start:.2f} s", "(no base parameters)"])
+        start = time.perf_counter()
+        subprocess.run([sys.executable, "-m", "symkin", "excite", str(directory), "--max-velocity", "1",
+                        "--max-acceleration", "3", "--period", "10", "--harmonics", "5", "--max-iterations", "100",
+                        "--no-figure", "-o", str(Path(scratch) / "excite")], check=True, capture_output=True)
+        rows.append(["symkin excite (IPOPT, 100 iterations, 5 harmonics)", f"{time.perf_counter() - start:.2f} s",
+                     "-"])
+        arm = load(directory, "numpy")
+        sample = slice(0, 6000)                                   # the size of a 30 s run at 200 Hz
+        np.savetxt(Path(scratch) / "run.csv", np.column_stack([np.arange(6000) / 200.0, q[sample], qd[sample],
+                                                               qdd[sample], tau[sample]]), delimiter=",",
+                   comments="", header=",".join(["t"] + [f"{g}_{c.name}" for g in ("q", "qd", "qdd", "tau")
+                                                         for c in arm.info.coordinates]))
+        start = time.perf_counter()
+        subprocess.run([sys.executable, "-m", "symkin", "identify", str(directory), str(Path(scratch) / "run.csv"),
+                        "--method", "consistent", "--no-figure", "-o", str(Path(scratch) / "identify")],
+                       check=True, capture_output=True)
+        rows.append(["symkin identify --method consistent, 6000 samples (with start-up)",
+                     f"{time.perf_counter() - start:.2f} s", "-"])
     print(format_table(["UR10e", "time", "target"], rows))
     print(f"largest relative std of the estimate: {np.max(found.relative_std[np.isfinite(found.relative_std)]):.2g}")
     return 0

@@ -102,3 +102,12 @@ def test_the_command_writes_a_trajectory_symkin_identify_reads(tmp_path):
 def test_a_missing_bound_is_refused(arm):
     with pytest.raises(ValueError, match="--max-velocity"):
         excitation.optimize(arm[1], max_acceleration=ACCELERATION)
+
+
+def test_limits_given_for_the_run_replace_the_models(arm):
+    """--limit narrows the motion (here theta1 to [0.2, 0.8] rad), and the bounds hold for all t."""
+    found = excitation.optimize(arm[1], period=PERIOD, harmonics=2, max_velocity=SPEED,
+                                max_acceleration=ACCELERATION, max_iterations=20, limits={"theta1": (0.2, 0.8)})
+    q = found.states(np.linspace(0.0, PERIOD, 20001))[0]
+    assert np.min(q[:, 0]) >= 0.2
+    assert np.max(q[:, 0]) <= 0.8

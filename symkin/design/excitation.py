@@ -83,19 +83,21 @@ def _series(lib: Any, offsets: Any, a: Any, b: Any, period: float, t: np.ndarray
     return q, qd, qdd
 
 
-def _limits(model: GeneratedModel, velocity: float | None, acceleration: float | None
-            ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Per joint: lower and upper position limits, and the velocity and acceleration bounds.
+def _limits(model: GeneratedModel, velocity: float | None, acceleration: float | None,
+            overrides: dict[str, tuple[float, float]]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Per joint: lower and upper position limits (``overrides`` before the model's), and the velocity and
+    acceleration bounds.
 
     Raises:
         ValueError: a joint without position limits, or no velocity or acceleration bound.
     """
     lower, upper, speeds = [], [], []
     for c in model.info.coordinates:
-        if c.limits is None:  # (--limit gives them)
+        limits = overrides.get(c.name, c.limits)
+        if limits is None:
             raise ValueError(f"{model.name}: joint {c.name} has no limits; declare them (or give --limit)")
-        lower.append(c.limits[0])
-        upper.append(c.limits[1])
+        lower.append(limits[0])
+        upper.append(limits[1])
         speeds.append(velocity if velocity is not None else c.velocity_limit)
     if any(s is None for s in speeds):
         raise ValueError(f"{model.name}: give --max-velocity (the model declares no velocity limit for every joint)")
@@ -115,10 +117,7 @@ def optimize(model: GeneratedModel, *, period: float = 10.0, harmonics: int = 5,
         ValueError: missing limits, or a start IPOPT cannot leave (see the message).
     """
     function = casadi_function(model, "base_regressor")
-    lower, upper, speeds, accelerations = _limits(model, max_velocity, max_acceleration)
-    for k, c in enumerate(model.info.coordinates):
-        if limits and c.name in limits:
-            lower[k], upper[k] = limits[c.name]
+    lower, upper, speeds, accelerations = _limits(model, max_velocity, max_acceleration, limits or {})
     n = len(lower)
     count = len(model.info.functions["base_regressor"].outputs["pi_b"])
     samples = samples or max(4 * -(-count // n), 50)
@@ -138,8 +137,8 @@ def optimize(model: GeneratedModel, *, period: float = 10.0, harmonics: int = 5,
     mapped = function.map(samples, "serial")
     Y = mapped(*_arguments(function, model, q.T, qd.T, qdd.T, samples))[0]     # (n, count * samples), column-major
     x0 = np.concatenate([middle, a0.ravel(), b0.ravel()])  # each joint's L coefficients in a row
-    start = casadi.Function("W", [x], [Y])(x0).full()
-    W0 = _stacked(start, n, count, samples)
+    regressor_at = casadi.Function("W", [x], [Y])
+    W0 = _stacked(regressor_at(x0).full(), n, count, samples)
     column = np.linalg.norm(W0, axis=0)
     column[column == 0] = 1.0
     W = casadi.mtimes(_stacked_mx(Y, n, count, samples), casadi.diag(casadi.DM(1.0 / column)))
@@ -166,7 +165,7 @@ def optimize(model: GeneratedModel, *, period: float = 10.0, harmonics: int = 5,
     shrink = _fitting_factor(_series(np, offsets_best, a_best, b_best, period, check), offsets_best,
                              _between_points(a_best, b_best, omega, spacing), (lower, upper, speeds, accelerations))
     best = np.concatenate([offsets_best, shrink * best[n:]])
-    W_best = _stacked(casadi.Function("W", [x], [Y])(best).full(), n, count, samples)
+    W_best = _stacked(regressor_at(best).full(), n, count, samples)
     return Excitation(period, harmonics, offsets_best, shrink * a_best, shrink * b_best, _condition(W0 / column),
                       _condition(W_best / column), samples, solver.stats()["return_status"])
 
@@ -203,9 +202,7 @@ def _fitting_factor(states: tuple[np.ndarray, np.ndarray, np.ndarray], offsets: 
 def _arguments(function: casadi.Function, model: GeneratedModel, q: Any, qd: Any, qdd: Any, samples: int) -> list[Any]:
     """The mapped function's inputs: the state matrices, then each parameter at the model's (bound) value."""
     values = {"q": q, "qd": qd, "qdd": qdd}
-    bound = getattr(model, "_bound", {})
-    defaults = {p.name: p.default for p in model.info.parameters}
-    return [values[name] if name in values else casadi.repmat(casadi.DM(bound.get(name, defaults[name])), 1, samples)
+    return [values[name] if name in values else casadi.repmat(casadi.DM(model.parameters[name]), 1, samples)
             for name in function.name_in()]
 
 

@@ -208,10 +208,23 @@ def inverse_dynamics(links: Sequence[Link], qd: Sequence[se.Basic] | None, qdd: 
     Returns:
         The joint torques (forces for prismatic joints), without friction.
     """
+    motions = link_motions(links, qd, qdd, gravity)
+    zero = [se.Integer(0)] * 3
+    wrenches = [(zero, zero) if link.inertia is None else body_wrench(link.inertia, motion)
+                for link, motion in zip(links, motions)]
+    return joint_torques(links, wrenches, qdd)
+
+
+#: The angular velocity w, angular acceleration dw and acceleration a of a link's origin, in its frame.
+Motion = tuple[Vec, Vec, Vec]
+
+
+def link_motions(links: Sequence[Link], qd: Sequence[se.Basic] | None, qdd: Sequence[se.Basic] | None,
+                 gravity: Sequence[se.Basic] | None) -> list[Motion]:
+    """Step 1 of the module docstring: (w, dw, a) of every link, outward from the base (a_0 = -g)."""
     zero = [se.Integer(0)] * 3
     base_acc = [-g for g in gravity] if gravity is not None else zero
-    motion: list[tuple[Vec, Vec, Vec]] = []  # (w, dw, a) of each link, in its frame
-    forces: list[Spatial] = []
+    motion: list[Motion] = []
     for i, link in enumerate(links):
         w, dw, acc = (zero, zero, base_acc) if link.parent < 0 else motion[link.parent]
         E, r = link.rotation, link.origin
@@ -233,19 +246,28 @@ def inverse_dynamics(links: Sequence[Link], qd: Sequence[se.Basic] | None, qdd: 
             else:
                 acc = _add(acc, zqdd)
         motion.append((w, dw, acc))
-        body = link.inertia
-        if body is None:
-            forces.append((zero, zero))
-            continue
-        h, J = body.moment, body.rotational
-        f = _add([body.mass * a for a in acc], _add(cross(dw, h), cross(w, cross(w, h))))
-        n = _add(_add(mat_vec(J, dw), cross(w, mat_vec(J, w))), cross(h, acc))
-        forces.append((n, f))
+    return motion
+
+
+def body_wrench(body: SpatialInertia, motion: Motion) -> Spatial:
+    """Step 2: the moment about the origin and the force that move ``body`` (in its link's frame) with ``motion``."""
+    w, dw, acc = motion
+    h, J = body.moment, body.rotational
+    f = _add([body.mass * a for a in acc], _add(cross(dw, h), cross(w, cross(w, h))))
+    n = _add(_add(mat_vec(J, dw), cross(w, mat_vec(J, w))), cross(h, acc))
+    return n, f
+
+
+def joint_torques(links: Sequence[Link], wrenches: Sequence[Spatial], qdd: Sequence[se.Basic] | None
+                  ) -> list[se.Basic]:
+    """Step 3: each link's wrench carried inward, tau_i = z_i . n_i (revolute) or z_i . f_i (prismatic), plus the
+    drive's armature qdd_i where ``qdd`` is given."""
+    zero = [se.Integer(0)] * 3
     tau: list[se.Basic] = [se.Integer(0)] * len(links)
     carried: list[Spatial] = [(zero, zero) for _ in links]  # what the children pass to each link
     for i in reversed(range(len(links))):
         link = links[i]
-        total = (_add(forces[i][0], carried[i][0]), _add(forces[i][1], carried[i][1]))
+        total = (_add(wrenches[i][0], carried[i][0]), _add(wrenches[i][1], carried[i][1]))
         tau[i] = dot(link.axis, total[0] if joint_kinds.is_rotation(link.type) else total[1])
         if qdd is not None and link.armature != 0:
             tau[i] += link.armature * qdd[i]

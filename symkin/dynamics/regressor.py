@@ -86,22 +86,22 @@ def regressor_rows(model: Model, links: Sequence[newton_euler.Link],
                    gravity: Sequence[se.Basic] | None) -> list[list[se.Basic]]:
     """Y (coordinates x parameters) with tau = Y pi, as SymEngine expressions (see the module docstring).
 
-    tau is linear and homogeneous in pi, so column k is tau with pi = e_k: the Newton-Euler pass with one link
-    carrying one unit parameter (the others massless), and the drive terms' own factors.
+    tau is linear and homogeneous in pi, so column k is tau with pi = e_k: the links' motions once, then per
+    column the wrench of one link carrying one unit parameter carried inward, and the drive terms' own factors.
     """
     qd, qdd = joint_rates(model, "qd"), joint_rates(model, "qdd")
-    bare = [dataclasses.replace(link, inertia=None, armature=se.Integer(0)) for link in links]
+    motions = newton_euler.link_motions(links, qd, qdd, gravity)  # the same for every column: once
+    zero = [se.Integer(0)] * 3
     columns: list[list[se.Basic]] = []
     for i in range(len(links)):
         for inertia in _unit_inertias():
-            loaded = list(bare)
-            loaded[i] = dataclasses.replace(bare[i], inertia=inertia)
-            columns.append(newton_euler.inverse_dynamics(loaded, qd, qdd, gravity))
+            wrenches = [(zero, zero)] * len(links)
+            wrenches[i] = newton_euler.body_wrench(inertia, motions[i])
+            columns.append(newton_euler.joint_torques(links, wrenches, None))
     friction = {f.joint: f for f in model.friction}
-    zero = se.Integer(0)
     for j, joint in enumerate(model.joints):
         terms = (qdd[j], qd[j], _coulomb_shape(friction.get(joint.name), qd[j]), se.Integer(1))
-        columns += [[term if row == j else zero for row in range(len(links))] for term in terms]
+        columns += [[term if row == j else se.Integer(0) for row in range(len(links))] for term in terms]
     on_coordinates = [forces_on_coordinates(model, column) for column in columns]
     return [list(row) for row in zip(*on_coordinates)]
 
