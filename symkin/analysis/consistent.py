@@ -105,6 +105,12 @@ def _regularized(J: np.ndarray, scale: float) -> np.ndarray:
     return (vectors * np.maximum(eigenvalues, floor)) @ vectors.T
 
 
+def prior_scale(prior: np.ndarray) -> np.ndarray:
+    """The scale of each standard parameter in the prior term: its own size, at least 1e-3 of the largest
+    (a zero prior is no scale; all zero: 1)."""
+    return np.maximum(np.abs(prior), 1e-3 * float(np.max(np.abs(prior))) if np.any(prior) else 1.0)
+
+
 def estimate(triangle: np.ndarray, target: np.ndarray, names: Sequence[str], prior: np.ndarray,
              links: int) -> ConsistentEstimate:
     """The consistent estimate of the module docstring from the triangular factor ``triangle`` (P x P) and
@@ -123,8 +129,7 @@ def estimate(triangle: np.ndarray, target: np.ndarray, names: Sequence[str], pri
     nonnegative = np.tile(DRIVE_NONNEGATIVE, drives // DRIVE_PARAMETERS)
     lower[LINK_PARAMETERS * links:][nonnegative] = 0.0
     theta0 = np.maximum(theta0, lower)
-    # the prior term's scale per parameter: its own size, at least 1e-3 of the largest (a zero prior is no scale)
-    scale = np.maximum(np.abs(prior), 1e-3 * float(np.max(np.abs(prior))) if np.any(prior) else 1.0)
+    scale = prior_scale(prior)
     data_scale = max(float(np.linalg.norm(target)), 1e-300)
     weight = np.sqrt(PRIOR_WEIGHT) * data_scale / np.sqrt(count)
 

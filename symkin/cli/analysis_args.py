@@ -168,6 +168,11 @@ def parse_limits(texts: list[str]) -> dict[str, tuple[float, float]]:
     return parse_ranges(texts, "--limit", "JOINT")
 
 
+def is_model_file(path: str | Path) -> bool:
+    """True if MODEL names a model file (derived on the fly), not a generated directory."""
+    return Path(path).suffix.lower() in MODEL_FILE_SUFFIXES
+
+
 def load_model(path: str, backend: str = "numpy",
                outputs: Sequence[str] | Mapping[str, Sequence[str]] = ANALYSIS_OUTPUTS,
                optional: Sequence[str] = ()) -> Any:
@@ -209,7 +214,7 @@ def generated_directory(path: str, backends: Sequence[str],
     """The generated directory of MODEL while the block runs: MODEL itself, or for a model file
     a scratch directory it is derived into (``outputs`` and ``optional`` as :func:`load_models`)."""
     source = Path(path)
-    if source.suffix.lower() not in MODEL_FILE_SUFFIXES:
+    if not is_model_file(path):
         yield source.parent if source.name == "manifest.json" else source
         return
     from symkin import pipeline

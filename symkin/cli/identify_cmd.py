@@ -77,6 +77,12 @@ def run(args: argparse.Namespace) -> int:
                     predict = model.regressor(held.q, held.qd, held.qdd)[0] @ standard.values
             check = None if predict is None else identification.validation_of(predict, held.tau)
             files = _report(args, model, data, found, pi_model[0], check, standard)
+            if analysis_args.is_model_file(args.model):
+                progress("writing the model file with the identified values")
+                text, line = _updated_model(args, model, fit, found, standard, values)
+                files["summary.txt"] = f"{_report_text(files)}  {line}\n"
+                if text is not None:
+                    files["identified.yaml"] = text
             if check is not None and predict is not None and not args.no_figure:
                 progress("drawing the validation")
                 files["validation.png"] = identification.validation_figure_png(
@@ -102,6 +108,34 @@ def _consistent(model, fit, found):
     names = model.info.functions["regressor"].outputs["pi"]
     links = sum(1 for name in names if name.endswith(".m"))
     return consistent.estimate(triangle, target, names, pi[0], links)
+
+
+def _updated_model(args: argparse.Namespace, model, fit, found, standard,
+                   values: dict[str, float]) -> tuple[str | None, str]:
+    """identified.yaml: the model file with what the run identifies replaced (the consistent standard parameters,
+    or the least-squares base parameters' nearest standard ones), and the summary's line on it (or why not)."""
+    from symkin.analysis import identified_model
+    from symkin.model import load_model as load_model_file
+
+    Y, pi = model.regressor(fit.q, fit.qd, fit.qdd)
+    K = identified_model.combinations(Y, model.base_regressor(fit.q, fit.qd, fit.qdd)[0])
+    names = model.info.functions["regressor"].outputs["pi"]
+    estimate = standard.values if standard is not None else identified_model.nearest_standard(K, found.values, pi[0])
+    record = {"method": found.method if standard is None else "consistent", "data": Path(args.data).name,
+              "samples": found.samples}
+    try:
+        updated = identified_model.updated_model(args.model, load_model_file(args.model), names, estimate,
+                                                 identified_model.identifiable(K), record, values)
+    except identified_model.NotUpdated as why:
+        return None, f"no identified.yaml: {why}"
+    return updated.text, (f"identified.yaml: {args.model} with the bodies of {', '.join(updated.links) or 'no link'} "
+                          f"and the drives of {', '.join(updated.joints) or 'no joint'} identified "
+                          f"({len(updated.identified)} standard parameters)")
+
+
+def _report_text(files: dict[str, str | bytes]) -> str:
+    text = files["summary.txt"]
+    return text.decode() if isinstance(text, bytes) else text
 
 
 def _report(args, model, data, found, pi_model, check, standard=None) -> dict[str, str | bytes]:

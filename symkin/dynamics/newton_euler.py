@@ -58,7 +58,7 @@ from symkin.geometry import rotation_matrix
 from symkin.model import coordinates
 from symkin.kinematics.chain import MovingFrame
 from symkin.model import joint_kinds, tree
-from symkin.model.schema import JointType, Model, Op
+from symkin.model.schema import Joint, JointType, Model, Op
 
 Vec = list[se.Basic]
 #: A pair of 3-vectors: (angular, linear) motion or (moment, force).
@@ -130,6 +130,11 @@ def _compose(ops: Sequence[Op], R: sympy.Matrix, p: sympy.Matrix) -> tuple[sympy
     return frame.rotation(), frame.p
 
 
+def link_frame(joint: Joint) -> tuple[sympy.Matrix, sympy.Matrix]:
+    """(R, p): the rotation and origin of the joint's link frame in its joint frame F_i (the ``after`` operations)."""
+    return _compose(joint.after, sympy.eye(3), sympy.zeros(3, 1))
+
+
 def _link_inertia(model: Model, link: str, R: sympy.Matrix, p: sympy.Matrix) -> SpatialInertia | None:
     """The bodies on ``link`` summed into F_i, where the link frame has rotation R and origin p.
 
@@ -169,7 +174,7 @@ def chain_links(model: Model) -> tuple[Link, ...]:
             R, origin = C_R * rotation_matrix(joint.axis, amount), C_p
         else:
             R, origin = C_R, C_p + C_R * axis * amount
-        after_R, after_p = _compose(joint.after, eye, zero)
+        after_R, after_p = link_frame(joint)
         links.append(Link(joint.type, se_vector(axis), se_matrix(R.T), se_vector(origin),
                           _link_inertia(model, joint.link, after_R, after_p),
                           armature.get(joint.name, se.Integer(0)), parent))

@@ -17,7 +17,7 @@ from symkin.model.body_build import (read_actuators, read_bodies, read_friction,
 from symkin.model.names import name_problem
 from symkin.model.parallel_build import build_parallel, check_parallel_names, parallel_task_space
 from symkin.model.parameter_build import check_name_clashes, read_parameters
-from symkin.model.reader import ZERO, Reader
+from symkin.model.reader import ZERO, Reader, describe
 from symkin.model.scene_build import read_scene
 from symkin.model.schema import Model
 from symkin.model.rotors import with_rotors
@@ -32,7 +32,8 @@ FORMAT_VERSION = 1
 #: so that choosing other outputs, backends or folded parameters keeps the mechanism's identity.
 EMISSION_KEYS = ("scene",)
 TOP_LEVEL_KEYS = ("name", "description", "references", "notes", "allow_nonphysical", "source_names", "parameters",
-                  "serial", "parallel", "wrist", "task_space", "bodies", "gravity", "friction", "actuators", "scene")
+                  "serial", "parallel", "wrist", "task_space", "bodies", "gravity", "friction", "actuators", "scene",
+                  "identified")
 
 
 def build_model(doc: Document, stem: str, allow_nonphysical: bool = False) -> Model:
@@ -50,7 +51,7 @@ def build_model(doc: Document, stem: str, allow_nonphysical: bool = False) -> Mo
     data = r.mapping((), doc.data, optional=TOP_LEVEL_KEYS)
     if data is None:
         raise ModelError(r.problems)
-    r.notes = _texts(r, data, "notes", "notes")
+    r.notes = _texts(r, data, "notes", "notes") + _identified(r, data)
     r.allow_nonphysical = allow_nonphysical or _flag(r, data, "allow_nonphysical")
 
     name = _model_name(r, data, stem)
@@ -144,6 +145,27 @@ def _model_name(r: Reader, data: dict[str, Any], stem: str) -> str:
 
 def _references(r: Reader, data: dict[str, Any]) -> tuple[str, ...]:
     return tuple(_texts(r, data, "references", "citations"))
+
+
+def _identified(r: Reader, data: dict[str, Any]) -> list[str]:
+    """``identified: {method, data, samples, parameters: [names]}`` (written by ``symkin identify``): a note."""
+    if "identified" not in data:
+        return []
+    section = r.mapping(("identified",), data["identified"], required=("method", "data", "samples", "parameters"))
+    if section is None or not {"method", "data", "samples", "parameters"} <= set(section):
+        return []
+    method, source = r.string(("identified", "method"), section["method"]), r.string(("identified", "data"),
+                                                                                    section["data"])
+    samples = section["samples"]
+    if not isinstance(samples, int) or isinstance(samples, bool) or samples < 1:
+        r.fail(("identified", "samples"), f"expected a number of samples, got {describe(samples)}",
+               "write the run's sample count, e.g. 'samples: 4500'")
+    items = r.sequence(("identified", "parameters"), section["parameters"], what="standard parameter names") or []
+    names = [n for i, v in enumerate(items) if (n := r.string(("identified", "parameters", i), v)) is not None]
+    if method is None or source is None:
+        return []
+    return [f"identified by symkin identify ({method}) from {source}, {samples} samples: "
+            f"{len(names)} standard parameters"]
 
 
 def _texts(r: Reader, data: dict[str, Any], key: str, what: str) -> list[str]:

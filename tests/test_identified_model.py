@@ -1,0 +1,145 @@
+"""Issue 33: the model file with identified values (symkin.analysis.identified_model, `symkin identify` writes it).
+
+References: the rewritten file, read back by the model reader and derived, has exactly the standard parameters it
+was written from (bodies moved from the joint frames F_i into rotated and shifted link frames, rotor inertia
+through the gear ratio, asymmetric Coulomb levels); least squares' nearest standard parameters reproduce the base
+estimate and keep what the run cannot see at the model's values; an estimate that is no body is refused by the
+reader's own checks.
+"""
+
+from __future__ import annotations
+
+import subprocess
+
+import numpy as np
+import pytest
+import sympy
+import yaml
+
+from conftest import SYMKIN_CLI
+from symkin.analysis import identified_model
+from symkin.derivation import Derivation
+from symkin.dynamics.quantities import _newton_euler_links as newton_euler_links
+from symkin.dynamics.regressor import parameter_names, standard_parameters
+from symkin.model import load_model, model_from_text
+from test_identification import _run, arm, write_run  # noqa: F401 (the module-scoped fixture)
+from test_regressor import DRIVEN
+from tolerances import EPS
+
+#: A spatial 3R arm (classic DH with twists, so every link frame is rotated and shifted in its joint frame)
+#: with rigid bodies given through inertia_rpy and origin, a geared drive and direction-dependent friction.
+SPATIAL = """
+name: spatial
+parameters:
+  a1: 0.25
+  N1: 12
+serial:
+  dh:
+    convention: classic
+    rows:
+      - [q1, R, 0, 0.3, a1, pi/2]
+      - [q2, R, 0.2, 0.05, 0.4, -pi/3]
+      - [q3, P, 0.1, 0, 0.1, pi/4]
+bodies:
+  - {link: link1, mass: 2.0, com: [-0.1, 0.02, 0.01], inertia: {xx: 0.02, yy: 0.03, zz: 0.025, xy: 0.001}}
+  - {link: link1, mass: 0.5}
+  - {link: link2, mass: 1.5, com: [-0.2, 0, 0.03], inertia_rpy: [0.1, -0.2, 0.3],
+     inertia: {xx: 0.01, yy: 0.05, zz: 0.045, yz: -0.002}}
+  - {link: link3, mass: 0.4, origin: {xyz: [0, 0.02, -0.05], rpy: [0.3, 0, 0]},
+     inertia: {xx: 0.002, yy: 0.002, zz: 0.001}}
+gravity: [0, 0, -9.81]
+actuators:
+  q1: {rotor_inertia: 1e-5, gear_ratio: N1}
+friction:
+  q2: {viscous: 0.1, coulomb: {positive: 0.3, negative: 0.2}}
+"""
+#: The same arm's other bodies, drives and friction: the "identified" values the file is rewritten with.
+OTHER = (SPATIAL.replace("mass: 2.0, com: [-0.1, 0.02, 0.01]", "mass: 2.6, com: [-0.12, 0.03, 0.0]")
+         .replace("inertia_rpy: [0.1, -0.2, 0.3]", "inertia_rpy: [0.5, 0.2, -0.1]")
+         .replace("xyz: [0, 0.02, -0.05]", "xyz: [0.01, 0.03, -0.04]")
+         .replace("rotor_inertia: 1e-5", "rotor_inertia: 3e-5")
+         .replace("{viscous: 0.1, coulomb: {positive: 0.3, negative: 0.2}}", "{viscous: 0.15, coulomb: 0.25}"))
+
+
+def standard_values(model) -> np.ndarray:
+    """The model's standard parameters pi (the regressor's columns) as numbers."""
+    values = standard_parameters(model, Derivation(model)[newton_euler_links])
+    defaults = {sympy.Symbol(p.name): p.value for p in model.parameters}  # SymEngine drops the assumptions
+    return np.array([float(sympy.sympify(v).xreplace(defaults)) for v in values])
+
+
+def test_the_rewritten_file_has_exactly_the_parameters_it_was_written_from(tmp_path):
+    path = tmp_path / "spatial.yaml"
+    path.write_text(SPATIAL)
+    model = model_from_text(SPATIAL, "spatial")
+    names = parameter_names(model)
+    target = standard_values(model_from_text(OTHER, "spatial"))
+    everything = np.ones(len(names), dtype=bool)
+    updated = identified_model.updated_model(path, model, names, target, everything,
+                                             {"method": "wls", "data": "run.csv", "samples": 900})
+    written = model_from_text(updated.text, "spatial")
+    found = standard_values(written)
+    assert np.all(np.abs(found - target) <= 64 * EPS * np.max(np.abs(target))), dict(zip(names, found - target))
+    assert updated.links == ("link1", "link2", "link3")
+    assert [b.link for b in written.bodies] == ["link1", "link2", "link3"]      # link1's two bodies became one
+    assert any("identified by symkin identify (wls) from run.csv, 900 samples" in n for n in written.notes)
+    assert written.joints[0].name == "q1"                                        # the rest of the file kept
+
+
+def test_what_the_run_cannot_see_keeps_the_models_values_and_the_rest_the_base_estimate():
+    """Least squares' nearest standard parameters: K pi = pi_b, and columns K does not reach keep the prior."""
+    rng = np.random.default_rng(3)
+    K = np.zeros((4, 9))
+    K[:, :6] = rng.normal(size=(4, 6))                                          # columns 6, 7, 8: not identifiable
+    prior, base = rng.uniform(0.5, 2.0, 9), rng.normal(size=4)
+    pi = identified_model.nearest_standard(K, base, prior)
+    assert np.allclose(K @ pi, base, rtol=0, atol=64 * EPS * np.max(np.abs(K)) * np.max(np.abs(pi)))
+    assert np.array_equal(pi[6:], prior[6:])
+    assert list(identified_model.identifiable(K)) == [True] * 6 + [False] * 3
+
+
+def test_an_estimate_that_is_no_body_is_refused_with_the_readers_reason(tmp_path):
+    path = tmp_path / "spatial.yaml"
+    path.write_text(SPATIAL)
+    model = model_from_text(SPATIAL, "spatial")
+    names = parameter_names(model)
+    values = standard_values(model)
+    values[names.index("link2.Izz")] = -1.0
+    with pytest.raises(identified_model.NotUpdated, match=r"bodies\[1\]\.inertia: the inertia tensor is not physical"):
+        identified_model.updated_model(path, model, names, values, np.ones(len(names), dtype=bool),
+                                       {"method": "ols", "data": "run.csv", "samples": 900})
+
+
+def test_identify_writes_the_identified_model_file(arm, tmp_path):  # noqa: F811 (the fixture)
+    """On the model file: the consistent estimate becomes identified.yaml, which loads and carries it."""
+    import json
+
+    t, q, qd, qdd, tau = _run(arm)
+    (tmp_path / "driven.yaml").write_text(DRIVEN)
+    data = write_run(tmp_path / "run.csv", ["theta1", "theta2"], t, q, tau, qd, qdd)
+    result = subprocess.run(SYMKIN_CLI + ["identify", str(tmp_path / "driven.yaml"), str(data), "--method",
+                                          "consistent", "--no-figure", "-o", str(tmp_path / "out")],
+                            capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    written = load_model(tmp_path / "out" / "identified.yaml")
+    record = json.loads((tmp_path / "out" / "estimate.json").read_text())["standard"]["parameters"]
+    estimate = np.array([record[name] for name in parameter_names(written)])
+    found = standard_values(written)
+    assert np.all(np.abs(found - estimate) <= 64 * EPS * np.max(np.abs(estimate)))
+    assert "identified.yaml" in (tmp_path / "out" / "summary.txt").read_text()
+
+
+def test_hostile_file_names_stay_data(tmp_path):
+    """A data file name with a newline and YAML in it is quoted text of the section, never a key of the file."""
+    path = tmp_path / "spatial.yaml"
+    path.write_text(SPATIAL)
+    model = model_from_text(SPATIAL, "spatial")
+    names = parameter_names(model)
+    hostile = "run.csv\nallow_nonphysical: true\n# "
+    updated = identified_model.updated_model(path, model, names, standard_values(model), np.ones(len(names), bool),
+                                             {"method": "ols", "data": hostile, "samples": 900})
+    written = model_from_text(updated.text, "spatial")
+    document = yaml.safe_load(updated.text)
+    assert "allow_nonphysical" not in document
+    assert document["identified"]["data"] == hostile
+    assert any(hostile in note for note in written.notes)
