@@ -46,7 +46,7 @@ def test_help_and_numeric_commands_import_no_sympy(tmp_path):
 
 
 def test_derive_prints_a_summary_table(tmp_path):
-    result = subprocess.run(SYMKIN_CLI + ["derive", str(MODELS_DIR / "planar_2r.yaml"), "-o", str(tmp_path)],
+    result = subprocess.run(SYMKIN_CLI + ["derive", str(MODELS_DIR / "planar_2r.yaml"), "-o", str(tmp_path), "--no-cache"],
                             capture_output=True, text=True, check=True)
     assert "planar_2r: 2 DoF" in result.stdout
     assert "ops derived -> cse" in result.stdout

@@ -27,7 +27,7 @@ LAYERS = (
     ("ir", {"ir"}),
     ("derivation", {"derivation", "kinematics", "dynamics", "parallel"}),
     ("optimize", {"optimize"}),
-    ("backends", {"backends", "manifest", "pipeline"}),
+    ("backends", {"backends", "manifest", "pipeline", "pipeline_cache"}),
     ("runtime", {"runtime"}),
     ("analyses", {"ik", "analysis", "design", "simulation", "stability", "viewer"}),
     ("api", {"api"}),

@@ -219,13 +219,13 @@ def test_friction_declared_in_the_model_is_felt_at_the_handle(tmp_path):
 @pytest.fixture(scope="module")
 def damped_delta(tmp_path_factory):
     """The DELTA of models/delta.yaml with viscous friction 0.01 N m s/rad at its motors, as a plant."""
-    from symkin.cli import analysis_args, simulate_cmd
+    from symkin.cli import model_files, simulate_cmd
     from symkin.simulation import Plant
 
     path = tmp_path_factory.mktemp("damped") / "delta.yaml"
     path.write_text((MODELS_DIR / "delta.yaml").read_text() + "\nfriction:\n"
                     + "".join(f"  theta{i}: {{viscous: 0.01}}\n" for i in (1, 2, 3)))
-    return Plant(analysis_args.load_model(str(path), "numpy", simulate_cmd.SIMULATION_OUTPUTS,
+    return Plant(model_files.load_model(str(path), "numpy", simulate_cmd.SIMULATION_OUTPUTS,
                                           simulate_cmd.OPTIONAL_OUTPUTS))
 
 

@@ -6,6 +6,7 @@ Exit codes: 0 success, 2 bad input (model file, arguments), 1 anything else.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import re
 import signal
 import sys
@@ -44,13 +45,23 @@ def _terminate(signum: int, _frame: object) -> None:
     raise SystemExit(128 + signum)
 
 
+def _cache_choice(args: argparse.Namespace) -> contextlib.AbstractContextManager[None]:
+    """--no-cache: the command derives model files afresh (the cache module is imported only then: start-up)."""
+    if not getattr(args, "no_cache", False):
+        return contextlib.nullcontext()
+    from symkin import pipeline_cache
+
+    return pipeline_cache.bypassed()
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the CLI; returns the exit code."""
     parser = build_parser()
     args = parser.parse_args(argv)
     previous = signal.signal(signal.SIGTERM, _terminate)
     try:
-        return int(args.run(args) or 0)
+        with _cache_choice(args):
+            return int(args.run(args) or 0)
     except ModelError as err:
         print(f"error: {err}", file=sys.stderr)
         return 2

@@ -8,7 +8,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from symkin.cli import analysis_args
+from symkin.cli import analysis_args, model_files
 from symkin.cli.progress import Progress
 from symkin.text_table import format_table
 
@@ -119,7 +119,7 @@ def _backends(args: argparse.Namespace) -> list[str]:
         return [b.strip() for b in args.backends.split(",") if b.strip()]
     if args.backend:
         return [args.backend]
-    if Path(args.model).suffix.lower() in analysis_args.MODEL_FILE_SUFFIXES:
+    if Path(args.model).suffix.lower() in model_files.MODEL_FILE_SUFFIXES:
         return ["numpy"]  # a model file is derived on the fly, for numpy
     from symkin.manifest import read_manifest
 

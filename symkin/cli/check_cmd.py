@@ -41,7 +41,7 @@ def run_check(args: argparse.Namespace) -> int:
               f"{len(model.parameters)} parameters, {_bodies(model)}, "
               f"task space [{', '.join(model.task_space)}]; "
               f"scene: {', '.join(request.outputs)} via {', '.join(request.backends)}")
-        print_notes(model)
+        print_notes(model.source, model.notes)
     return 0
 
 

@@ -6,9 +6,10 @@ import argparse
 import time
 from pathlib import Path
 
+from symkin.atomic import replace_directory
 from symkin.backends import BACKENDS
 from symkin.cli.progress import Progress
-from symkin.cli.urdf_args import add_urdf_arguments, print_notes, urdf_options
+from symkin.cli.urdf_args import ROBOT_FILE_OPTIONS, add_urdf_arguments, print_notes, urdf_options
 from symkin.text_table import format_table
 
 
@@ -37,28 +38,63 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="outputs also computed together by one function 'scene' sharing one CSE "
                         "(comma-separated, 'all' or 'none'; default: the scene's, else all)")
     p.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
+    p.add_argument("--no-cache", action="store_true",
+                   help="derive even if the derivation cache holds this model and request (and do not keep it); "
+                        "see 'symkin cache list'")
     add_urdf_arguments(p)
     p.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    from symkin import pipeline
-    from symkin.model import load_model
+    from symkin import pipeline_cache
 
-    # Validate every model and request first: a bad file writes nothing at all.
+    # Validate every model and request first: a bad file writes nothing at all (a cached one was valid).
     jobs = []
     for path in args.models:
-        model = load_model(path, **urdf_options(args, path))
-        jobs.append((model, pipeline.resolve_request(model, args.only, args.backend, args.fixed, args.float32,
-                                                            args.combine)))
-    for model, request in jobs:
+        key = pipeline_cache.request_key(path, _request(args)) if pipeline_cache.enabled() else None
+        entry = None if key is None else pipeline_cache.lookup(key)
+        if entry is not None and any(getattr(args, name) for name in ROBOT_FILE_OPTIONS):
+            urdf_options(args, path)  # the options' own checks (robot-file options given a YAML file)
+        jobs.append((path, key, entry, None if entry is not None else _validated(args, path)))
+    for path, key, entry, job in jobs:
         start = time.perf_counter()
+        if entry is not None:
+            target = Path(args.out) / entry.model
+            replace_directory(target, entry.files)
+            if not args.quiet:
+                print(f"{entry.model}: unchanged since a derivation kept in the cache -> {target}  "
+                      f"({time.perf_counter() - start:.2f} s; --no-cache derives it again)")
+                print_notes(path, entry.notes)
+            continue
+        from symkin import pipeline
+
+        model, request = job or _validated(args, path)
         with Progress(model.name, enabled=not args.quiet) as progress:
             result = pipeline.generate(model, request, progress)
             target = pipeline.write(result, args.out)
+        if key is not None:
+            pipeline_cache.store(key, model.name, model.notes, result.files)
         if not args.quiet:
             _summary(result, target, time.perf_counter() - start)
     return 0
+
+
+def _validated(args: argparse.Namespace, path: str):
+    """The model of ``path`` and its request (both checked)."""
+    from symkin import pipeline
+    from symkin.model import load_model
+
+    model = load_model(path, **urdf_options(args, path))
+    return model, pipeline.resolve_request(model, args.only, args.backend, args.fixed, args.float32, args.combine)
+
+
+#: The options that decide what is derived: with the model file's bytes and name, the cache key.
+REQUEST_OPTIONS = ("only", "backend", "fixed", "float32", "combine", *ROBOT_FILE_OPTIONS, "allow_nonphysical")
+
+
+def _request(args: argparse.Namespace) -> dict[str, object]:
+    """What of the command line decides the derivation (the cache key's request)."""
+    return {"command": "derive", **{name: getattr(args, name) for name in REQUEST_OPTIONS}}
 
 
 def _summary(result, target: Path, seconds: float) -> None:
@@ -66,7 +102,7 @@ def _summary(result, target: Path, seconds: float) -> None:
     free = sum(1 for p in model.parameters if p.name not in result.request.fixed)
     print(f"{model.name}: {model.dof} DoF, {free} free / {len(result.request.fixed)} fixed parameters "
           f"-> {target}  ({seconds:.2f} s)")
-    print_notes(model)
+    print_notes(model.source, model.notes)
     rows = []
     for r in result.reports:
         counts = r.op_counts

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from symkin.cli import analysis_args
+from symkin.cli import analysis_args, model_files
 from symkin.cli.progress import Progress
 
 #: What a model file is derived with on the fly (the full regressor for the consistent estimate).
@@ -54,7 +54,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         if not 0.0 <= args.holdout < 1.0:
             raise ValueError(f"--holdout must lie in [0, 1), got {args.holdout:g}")
-        model = analysis_args.load_model(args.model, args.backend, IDENTIFY_OUTPUTS)
+        model = model_files.load_model(args.model, args.backend, IDENTIFY_OUTPUTS)
         values = analysis_args.parse_assignments(args.assignments)
         model = model.bind(**values) if values else model
         coordinates = model.info.coordinate_names
@@ -77,7 +77,7 @@ def run(args: argparse.Namespace) -> int:
                     predict = model.regressor(held.q, held.qd, held.qdd)[0] @ standard.values
             check = None if predict is None else identification.validation_of(predict, held.tau)
             files = _report(args, model, data, found, pi_model[0], check, standard)
-            if analysis_args.is_model_file(args.model):
+            if model_files.is_model_file(args.model):
                 progress("writing the model file with the identified values")
                 text, line = _updated_model(args, model, fit, found, standard, values)
                 files["summary.txt"] = f"{_report_text(files)}  {line}\n"

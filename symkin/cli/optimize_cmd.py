@@ -8,7 +8,7 @@ import sys
 import time
 from pathlib import Path
 
-from symkin.cli import analysis_args
+from symkin.cli import analysis_args, model_files
 from symkin.cli.progress import Progress
 
 #: Largest --nodes: 2^16 Sobol nodes, or 16^3 grid points of a parallel model's box.
@@ -72,7 +72,7 @@ def run(args: argparse.Namespace) -> int:
         with Progress(Path(args.model).stem) as progress:
             progress("loading the generated code")
             outputs = {kind: design.needed_functions(kind == "parallel") for kind in ("serial", "parallel")}
-            numpy_model, casadi_model = analysis_args.load_models(args.model, ("numpy", "casadi"), outputs)
+            numpy_model, casadi_model = model_files.load_models(args.model, ("numpy", "casadi"), outputs)
             problem = design.design_problem(numpy_model, args.maximize, free, bounds=bounds, values=values, box=box,
                                             margin=args.margin, limits=limits, length=args.length)
             progress("building the CasADi program")

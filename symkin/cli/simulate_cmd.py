@@ -9,7 +9,7 @@ import time
 import warnings
 from pathlib import Path
 
-from symkin.cli import analysis_args
+from symkin.cli import analysis_args, model_files
 from symkin.cli.progress import Progress
 
 #: What a model file is derived with on the fly; the optional ones where the model has them.
@@ -163,7 +163,7 @@ def run(args: argparse.Namespace) -> int:
     from symkin.simulation.output import scenario_files
 
     try:
-        base = analysis_args.load_model(args.model, args.backend, SIMULATION_OUTPUTS, OPTIONAL_OUTPUTS)
+        base = model_files.load_model(args.model, args.backend, SIMULATION_OUTPUTS, OPTIONAL_OUTPUTS)
         values = analysis_args.parse_assignments(args.assignments)
         if values:
             base = base.bind(**values)

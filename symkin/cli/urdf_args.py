@@ -11,10 +11,15 @@ multiple of pi/2 as that multiple.  The options apply to URDF and xacro files on
 from __future__ import annotations
 
 import argparse
+from collections.abc import Sequence
 from typing import Any
 
 from symkin.cli.analysis_args import parse_value
 from symkin.errors import ModelError, Problem
+
+
+#: The options of robot files (argparse destinations).
+ROBOT_FILE_OPTIONS = ("tip", "base", "branch", "lock", "snap_angles", "xacro_arg", "xacro_package")
 
 
 def add_urdf_arguments(p: argparse.ArgumentParser) -> None:
@@ -92,9 +97,9 @@ def _pairs(items: list[str], separator: str, option: str, example: str) -> dict[
     return pairs
 
 
-def print_notes(model: Any) -> None:
-    """Print what the reading of ``model`` decided (Model.notes), one line each, as plain text."""
+def print_notes(source: str, notes: Sequence[str]) -> None:
+    """Print what the reading of the model file ``source`` decided (Model.notes), one line each, as plain text."""
     from symkin.backends.comments import plain
 
-    for note in model.notes:
-        print(f"  note: {plain(model.source)}, {plain(note)}")
+    for note in notes:
+        print(f"  note: {plain(source)}, {plain(note)}")

@@ -6,7 +6,7 @@ import argparse
 import webbrowser
 from pathlib import Path
 
-from symkin.cli import analysis_args
+from symkin.cli import analysis_args, model_files
 from symkin.cli.analysis_args import sample_count
 
 #: Workspace points of the cloud by default: enough to see its shape and where 1/kappa falls off.
@@ -47,7 +47,7 @@ def run(args: argparse.Namespace) -> int:
         design = analysis_args.parse_assignments(args.design)
     except ValueError as err:
         analysis_args.fail_on_bad_input(args, err)
-    with analysis_args.generated_directory(args.model, ("numpy", "js"), page.VIEW_OUTPUTS,
+    with model_files.generated_directory(args.model, ("numpy", "js"), page.VIEW_OUTPUTS,
                                            page.WRIST_VIEW_OUTPUTS) as directory:
         model = load(directory)
         try:

@@ -49,7 +49,7 @@ MAX_SOBOL_LOG2 = 18
 VIRIDIS = ("#440154", "#3b528b", "#21918c", "#5ec962", "#fde725")
 
 #: The generated functions the page evaluates, by kind of mechanism (the keys of
-#: symkin.cli.analysis_args.analysis_kind): a translational platform is driven through its
+#: symkin.cli.model_files.analysis_kind): a translational platform is driven through its
 #: closed-form ik and rated by J (its cloud comes from the closed-form fk); a pose platform
 #: (no closed-form fk) by the twist Jacobian from J^-1, at the home orientation for the cloud.
 VIEW_OUTPUTS = {

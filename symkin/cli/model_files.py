@@ -1,0 +1,134 @@
+"""MODEL as a model file: derived on the fly into a scratch directory, through the derivation cache.
+
+An analysis command's MODEL is a generated model directory (the output of ``symkin derive``) or a model file,
+which is derived into a temporary directory: fk and jacobian; ik as well for a translational parallel
+mechanism; ik and the inverse Jacobian for a platform that also rotates (:data:`ANALYSIS_OUTPUTS_BY_KIND`).
+A derivation is kept in the derivation cache (:mod:`symkin.pipeline_cache`), so that the next command given
+the unchanged file copies it.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import tempfile
+from collections.abc import Iterator, Mapping, Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from symkin.model.schema import Model
+
+#: Quantities an analysis needs from a model file derived on the fly ...
+ANALYSIS_OUTPUTS = ("fk", "jacobian")
+#: ... by kind of mechanism (:func:`analysis_kind`): a translational parallel one also needs
+#: its closed-form ik (reachability, working mode); a platform that also rotates (Stewart-Gough)
+#: has no closed-form fk, and its analyses at a constant orientation use ik and J^-1; so does a
+#: spherical platform (orientations only).
+ANALYSIS_OUTPUTS_BY_KIND = {"serial": ANALYSIS_OUTPUTS, "parallel": ("ik", "fk", "jacobian"),
+                            "parallel pose": ("ik", "inverse_jacobian"),
+                            "parallel orientation": ("ik", "inverse_jacobian")}
+#: Suffixes of model files (derived on the fly); anything else is a generated directory.
+MODEL_FILE_SUFFIXES = (".yaml", ".yml", ".urdf", ".xml", ".xacro")
+#: Also derived for a parallel model file that limits passive joints: the analyses find the
+#: passive joint variables from the loop closure (symkin.analysis.passive).
+PASSIVE_LIMIT_OUTPUTS = ("closure", "closure_jacobians")
+
+
+def is_model_file(path: str | Path) -> bool:
+    """True if MODEL names a model file (derived on the fly), not a generated directory."""
+    return Path(path).suffix.lower() in MODEL_FILE_SUFFIXES
+
+
+def load_model(path: str, backend: str = "numpy",
+               outputs: Sequence[str] | Mapping[str, Sequence[str]] = ANALYSIS_OUTPUTS,
+               optional: Sequence[str] = ()) -> Any:
+    """The loaded model of MODEL: a generated directory, or a model file derived on the fly.
+
+    Args:
+        path: generated directory (or its manifest.json), or a model file (YAML, or URDF with its default tip).
+        backend: the backend to load (and, for a model file, to emit).
+        outputs: the quantities to derive from a model file.
+        optional: quantities also derived where the model has them (e.g. ``friction``,
+            ``gravity_vector``); skipped silently where it does not.
+
+    Raises:
+        ModelError: a model file is invalid.
+        GeneratedCodeError: a directory holds no usable generated code.
+    """
+    return load_models(path, (backend,), outputs, optional)[0]
+
+
+def load_models(path: str, backends: Sequence[str],
+                outputs: Sequence[str] | Mapping[str, Sequence[str]] = ANALYSIS_OUTPUTS,
+                optional: Sequence[str] = ()) -> list[Any]:
+    """MODEL loaded once per backend (as :func:`load_model`); a model file is derived once, for all of them.
+
+    ``outputs`` may map the kind of mechanism ("serial", "parallel") to the quantities
+    to derive (e.g. fk for a serial arm, the closed-form ik for a parallel one).
+    """
+    from symkin import load
+
+    # The generated module is imported (numpy) or read (C, CasADi) by load(): the files may go afterwards.
+    with generated_directory(path, backends, outputs, optional) as directory:
+        return [load(directory, backend) for backend in backends]
+
+
+@contextlib.contextmanager
+def generated_directory(path: str, backends: Sequence[str],
+                        outputs: Sequence[str] | Mapping[str, Sequence[str]] = ANALYSIS_OUTPUTS,
+                        optional: Sequence[str] = ()) -> Iterator[Path]:
+    """The generated directory of MODEL while the block runs: MODEL itself, or for a model file
+    a scratch directory it is derived into (``outputs`` and ``optional`` as :func:`load_models`)."""
+    source = Path(path)
+    if not is_model_file(path):
+        yield source.parent if source.name == "manifest.json" else source
+        return
+    from symkin import pipeline_cache
+    from symkin.atomic import replace_directory
+
+    key = pipeline_cache.request_key(source, {"command": "analysis", "backends": list(backends), "outputs": outputs,
+                                              "optional": list(optional)}) if pipeline_cache.enabled() else None
+    entry = None if key is None else pipeline_cache.lookup(key)
+    with tempfile.TemporaryDirectory(prefix="symkin-analysis-") as scratch:
+        if entry is not None:
+            directory = Path(scratch) / entry.model
+            replace_directory(directory, entry.files)
+        else:
+            directory = _derived(source, backends, outputs, optional, scratch, key)
+        yield directory
+
+
+def _derived(source: Path, backends: Sequence[str], outputs: Sequence[str] | Mapping[str, Sequence[str]],
+             optional: Sequence[str], scratch: str, key: str | None) -> Path:
+    """The model file derived into ``scratch`` (and kept in the derivation cache under ``key``)."""
+    from symkin import pipeline, pipeline_cache
+    from symkin.cli.progress import Progress
+    from symkin.derivation import Derivation
+    from symkin.model import load_model as load_model_file
+
+    model = load_model_file(source)
+    wanted = outputs.get(analysis_kind(model), ANALYSIS_OUTPUTS) if isinstance(outputs, Mapping) else outputs
+    if isinstance(outputs, Mapping) and _limits_passive_joints(model):
+        wanted = (*wanted, *PASSIVE_LIMIT_OUTPUTS)
+    request = pipeline.resolve_request(model, ",".join([*wanted, *Derivation(model).available(optional)[0]]),
+                                       ",".join(backends), None)
+    with Progress(model.name) as progress:
+        generation = pipeline.generate(model, request, progress)
+    if key is not None:
+        pipeline_cache.store(key, model.name, model.notes, generation.files)
+    return pipeline.write(generation, scratch)
+
+
+def analysis_kind(model: Model) -> str:
+    """The key of a model file in :data:`ANALYSIS_OUTPUTS_BY_KIND`: serial, or the parallel kinds of
+    :func:`symkin.analysis.mechanism.parallel_kind`."""
+    from symkin.analysis.mechanism import parallel_kind
+
+    return model.mechanism if model.parallel is None else parallel_kind(model.task_space)
+
+
+def _limits_passive_joints(model: Model) -> bool:
+    """Whether a parallel model file declares limits on a passive joint variable."""
+    return model.parallel is not None and any(
+        joint.limits_of(k) is not None for leg in model.parallel.legs for joint in leg.joints
+        for k in range(len(joint.variables)) if k != joint.active)

@@ -1,0 +1,228 @@
+"""The derivation cache: a repeated derive of an unchanged model copies its files instead of deriving (issue 34).
+
+What :mod:`symkin.pipeline` generates is a function of the model file's bytes and name (the manifest records the
+name), of the request (the command's options: outputs, backends, folded parameters, scene, robot-file options)
+and of the code that derives it (symkin's modules and templates, the sympy, symengine and jinja2 versions).  The
+key is the SHA-256 of all of them (:func:`request_key`), so a changed model, request or version misses.  Looking
+up a key reads no model and imports no sympy: a hit costs reading the files.
+
+Each entry is a directory ``<cache>/derivations/<model>-<key>/`` (``<cache>``: the C build cache's root,
+``SYMKIN_CACHE_DIR``, else ``$XDG_CACHE_HOME/symkin`` or ``~/.cache/symkin``) holding ``entry.json`` (the model
+name, the reader's notes, every file's SHA-256) and the files under ``files/``.  An entry is written under a
+temporary name and renamed into place, so a reader never sees half of one and two concurrent derives of a model
+both succeed (the later rename finds the entry and drops its copy); it is used only when every file's hash
+matches, and a corrupted or partial one is removed and derived again.  A hit touches ``entry.json``, so that
+``symkin cache list`` shows when an entry was last used and ``symkin cache clear --older-than`` evicts by it.
+
+Robot files that name other files (xacro includes, MJCF ``<include>``) are not cached: their inputs are not all
+in the key.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import json
+import os
+import shutil
+import sys
+import tempfile
+import time
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path, PurePosixPath
+from typing import Any
+
+from symkin._version import __version__
+
+#: Version of the entry format (part of the key).
+FORMAT = 1
+#: The libraries whose versions change what is derived or how it is printed.
+DERIVING_LIBRARIES = ("sympy", "symengine", "jinja2")
+#: Markers of robot files that pull in other files (not cached).
+INCLUDING_MARKERS = (b"xacro", b"<include", b"<mujoco")
+ENTRY_FILE = "entry.json"
+FILES = "files"
+#: Set while a command runs with --no-cache (:func:`bypassed`).
+_BYPASSED: list[bool] = []
+
+
+def enabled() -> bool:
+    """False inside :func:`bypassed` (``--no-cache``)."""
+    return not any(_BYPASSED)
+
+
+@contextlib.contextmanager
+def bypassed() -> Iterator[None]:
+    """While the block runs, commands derive model files afresh and keep nothing (``--no-cache``)."""
+    _BYPASSED.append(True)
+    try:
+        yield
+    finally:
+        _BYPASSED.pop()
+
+
+def directory() -> Path:
+    """Where the entries live."""
+    from symkin.backends.c.build import cache_directory
+
+    return cache_directory() / "derivations"
+
+
+@lru_cache(maxsize=1)
+def code_digest() -> str:
+    """SHA-256 of symkin's modules and templates and of the deriving libraries' versions."""
+    from importlib import metadata, resources  # here: the CLI imports this module and starts fast
+
+    digest = hashlib.sha256(f"{__version__}\n{sys.version_info[:2]}\n".encode())
+    for library in DERIVING_LIBRARIES:
+        try:
+            digest.update(f"{library}={metadata.version(library)}\n".encode())
+        except metadata.PackageNotFoundError:
+            digest.update(f"{library}=none\n".encode())
+    package = Path(__file__).resolve().parent
+    for path in sorted(package.rglob("*.py")):
+        digest.update(path.relative_to(package).as_posix().encode() + b"\0" + path.read_bytes() + b"\0")
+    _digest_tree(digest, resources.files("symkin.templates"), "templates")
+    return digest.hexdigest()
+
+
+def _digest_tree(digest: Any, node: Any, name: str) -> None:
+    for child in sorted(node.iterdir(), key=lambda c: c.name):
+        if child.is_dir():
+            _digest_tree(digest, child, f"{name}/{child.name}")
+        elif not child.name.endswith(".pyc"):
+            digest.update(f"{name}/{child.name}".encode() + b"\0" + child.read_bytes() + b"\0")
+
+
+def request_key(path: str | Path, request: Mapping[str, Any]) -> str | None:
+    """The key of deriving the model file ``path`` with ``request`` (JSON-able options), or None when the file
+    cannot be cached (unreadable: the reader reports it; a robot file that includes others)."""
+    try:
+        content = Path(path).read_bytes()
+    except OSError:
+        return None
+    if content.lstrip().startswith(b"<") and any(marker in content for marker in INCLUDING_MARKERS):
+        return None
+    text = json.dumps({"format": FORMAT, "file": Path(path).name, "sha256": hashlib.sha256(content).hexdigest(),
+                       "request": request, "code": code_digest()}, sort_keys=True)
+    return hashlib.sha256(text.encode()).hexdigest()[:32]
+
+
+@dataclass(frozen=True)
+class Entry:
+    """A cached derivation: the model's name, the reader's notes and the generated files (relative path: bytes)."""
+
+    path: Path
+    model: str
+    notes: tuple[str, ...]
+    files: dict[str, bytes]
+
+
+def lookup(key: str) -> Entry | None:
+    """The entry of ``key`` if it is whole (every file present with its recorded hash); a damaged one is removed."""
+    for candidate in directory().glob(f"*-{key}"):
+        entry = _read(candidate)
+        if entry is None:
+            _remove(candidate)
+            continue
+        os.utime(candidate / ENTRY_FILE)
+        return entry
+    return None
+
+
+def _read(place: Path) -> Entry | None:
+    try:
+        record = json.loads((place / ENTRY_FILE).read_text(encoding="utf-8"))
+        files = {}
+        for name, sha in record["files"].items():
+            data = (place / FILES / _relative(name)).read_bytes()
+            if hashlib.sha256(data).hexdigest() != sha:
+                return None
+            files[name] = data
+        return Entry(place, str(record["model"]), tuple(map(str, record["notes"])), files)
+    except (OSError, ValueError, KeyError, TypeError, AttributeError):
+        return None
+
+
+def _relative(name: str) -> PurePosixPath:
+    relative = PurePosixPath(name)
+    if relative.is_absolute() or ".." in relative.parts:
+        raise ValueError(f"not a relative path: {name}")
+    return relative
+
+
+def store(key: str, model: str, notes: tuple[str, ...], files: Mapping[str, str | bytes]) -> None:
+    """Keep a derivation's files under ``key`` (best effort: a cache that cannot be written is no error)."""
+    root = directory()
+    target = root / f"{model}-{key}"
+    try:
+        root.mkdir(parents=True, exist_ok=True)
+        staging = Path(tempfile.mkdtemp(prefix=f".{target.name}.", dir=root))
+    except OSError:
+        return
+    try:
+        hashes = {}
+        for name, content in sorted(files.items()):
+            data = content.encode("utf-8") if isinstance(content, str) else content
+            path = staging / FILES / _relative(name)
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_bytes(data)
+            hashes[name] = hashlib.sha256(data).hexdigest()
+        (staging / ENTRY_FILE).write_text(json.dumps({"model": model, "notes": list(notes), "files": hashes},
+                                                     indent=1), encoding="utf-8")
+        os.rename(staging, target)  # atomic; fails if a concurrent derive stored the entry first
+    except OSError:
+        pass
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+
+
+def _remove(place: Path) -> None:
+    """Move ``place`` aside (atomic) and delete it, so no reader sees it half removed."""
+    aside = place.with_name(f".{place.name}.removed-{os.getpid()}")
+    try:
+        os.rename(place, aside)
+    except OSError:
+        return
+    shutil.rmtree(aside, ignore_errors=True)
+
+
+@dataclass(frozen=True)
+class CachedDerivation:
+    """An entry as ``symkin cache list`` shows it: path, model, size in bytes, last use (epoch seconds)."""
+
+    path: Path
+    model: str
+    size: int
+    last_used: float
+
+
+def cached_derivations() -> list[CachedDerivation]:
+    """The entries, least recently used first."""
+    root = directory()
+    found = []
+    for place in root.iterdir() if root.is_dir() else ():
+        if place.name.startswith(".") or not (place / ENTRY_FILE).is_file():
+            continue
+        size = sum(p.stat().st_size for p in place.rglob("*") if p.is_file())
+        found.append(CachedDerivation(place, place.name.rsplit("-", 1)[0], size, (place / ENTRY_FILE).stat().st_mtime))
+    return sorted(found, key=lambda entry: (entry.last_used, entry.path.name))
+
+
+def clear(*, model: str | None = None, older_than: float | None = None, now: float | None = None
+          ) -> list[CachedDerivation]:
+    """Remove entries (all, those of ``model``, or those last used more than ``older_than`` s ago) and what
+    interrupted stores left; returns the removed entries."""
+    now = time.time() if now is None else now
+    removed = []
+    for entry in cached_derivations():
+        if (model is not None and entry.model != model) or (older_than is not None and now - entry.last_used <= older_than):
+            continue
+        _remove(entry.path)
+        removed.append(entry)
+    root = directory()
+    for leftover in root.glob(".*") if root.is_dir() and model is None and older_than is None else ():
+        shutil.rmtree(leftover, ignore_errors=True)
+    return removed
