@@ -11,7 +11,10 @@ Cases (functions generated with every parameter folded, as in a fixed-geometry s
 
 Columns:
 
-* ``py call``   microseconds per call from Python, one configuration (median of 5 runs);
+* ``py call``   microseconds per call from Python, one configuration (median of 5 runs); ``symkin c`` is the
+  compiled CPython entry point, ``symkin c (ctypes)`` the same library through ctypes (SYMKIN_C_ENTRY=ctypes);
+  a last table sets them beside Pinocchio's binding and the floor: an empty call of a CPython builtin (``id``)
+  in the same loop plus the C time;
 * ``py batch``  nanoseconds per configuration of one batched call over ``--batch`` configurations
   (numpy and C: the generated vectorized functions; CasADi: ``Function.map``; Pinocchio: a
   Python loop, as a Python user would write it);
@@ -31,6 +34,7 @@ numpy batch <= 1 us/config.
 from __future__ import annotations
 
 import argparse
+import functools
 import os
 import shutil
 import statistics
@@ -52,6 +56,7 @@ from symkin.text_table import format_table  # noqa: E402
 from symkin.derivation import Derivation, emitted_quantities  # noqa: E402
 from symkin.errors import DerivationError  # noqa: E402
 from symkin.model import load_model  # noqa: E402
+from symkin.runtime.c_extension import ENTRY_VARIABLE  # noqa: E402
 
 MODEL = ROOT.parent / "models" / "ur10e.yaml"
 RING = 1024  # configurations cycled through by the single-call timings
@@ -278,6 +283,8 @@ def main(argv: list[str] | None = None) -> int:
             pm, tcp = None, None
             print("Pinocchio: not installed (pip install pin==4.1.0); its rows are left out")
         rows = {}
+        empty_calls: dict[str, float] = {}
+        out_calls: dict[str, float] = {}
         c_timings: dict[tuple[str, str], float] = {}
         op_counts = {}
         for label, quantities in cases.items():
@@ -290,6 +297,15 @@ def main(argv: list[str] | None = None) -> int:
             for backend in ("numpy", "c", "casadi"):
                 fn = getattr(load(target, backend=backend), name)
                 rows[label, f"symkin {backend}"] = (median_call_us(fn, ring), batch_ns(fn, inputs, args.batch))
+            os.environ[ENTRY_VARIABLE] = "ctypes"                  # the same library through ctypes alone
+            fn = getattr(load(target, backend="c"), name)
+            del os.environ[ENTRY_VARIABLE]
+            rows[label, "symkin c (ctypes)"] = (median_call_us(fn, ring), batch_ns(fn, inputs, args.batch))
+            empty_calls[label] = median_call_us(id, [(a[0],) for a in ring])
+            fn = getattr(load(target, backend="c"), name)
+            out = tuple(np.empty(o["shape"]) for o in record["outputs"])
+            into = out[0] if len(out) == 1 else out
+            out_calls[label] = median_call_us(functools.partial(fn, out=into), ring)  # partial: no Python frame
             source = HARNESS_HEAD % {"includes": f'#include "{model.name}.h"'} + symkin_case_c(label, model.name, record) \
                 + HARNESS_TAIL
             c_timings.update(run_harness(source, [target / f"{model.name}.c"], [target], compiler,
@@ -315,9 +331,25 @@ def main(argv: list[str] | None = None) -> int:
                             "C batch [ns/config]"], table))
         if symforce_note:
             print(symforce_note)
+        print(python_call_summary(rows, empty_calls, out_calls, c_timings))
     finally:
         shutil.rmtree(work, ignore_errors=True)
     return 0
+
+
+def python_call_summary(rows, empty_calls, out_calls, c_timings) -> str:
+    """The compiled entry points' Python call beside ctypes, Pinocchio's binding and the floor (an empty CPython
+    call of a builtin plus the C time), with the targets of issue 34."""
+    table = []
+    for label, empty in empty_calls.items():
+        compiled, plain = rows[label, "symkin c"][0], rows[label, "symkin c (ctypes)"][0]
+        pinocchio = rows.get((label, "pinocchio"), (float("nan"),))[0]
+        floor = empty + 1e-3 * c_timings.get((label, "single"), float("nan"))
+        table.append([label, f"{compiled:.3f}", f"{out_calls[label]:.3f}", f"{plain:.2f}", f"{pinocchio:.2f}",
+                      f"{floor:.3f}", f"{pinocchio / compiled:.1f}x"])
+    return ("Python call, one configuration [us] (targets: FK, M <= 0.4, M+V+G <= 0.6, each >= 2.5x faster than "
+            "Pinocchio's binding)\n" + format_table(["case", "compiled entry", "with out=", "ctypes", "pinocchio",
+                                                      "floor (empty call + C)", "vs pinocchio"], table))
 
 
 def pinocchio_timings(label, pm, tcp, inputs, ring, n):

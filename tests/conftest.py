@@ -250,13 +250,17 @@ def compile_cache(tmp_path_factory, worker_id) -> Path:
     base = tmp_path_factory.getbasetemp()
     path = (base.parent if worker_id != "master" else base) / "symkin-cache"
     path.mkdir(exist_ok=True)
-    previous = {name: os.environ.get(name) for name in ("SYMKIN_CACHE_DIR", "SYMKIN_CFLAGS")}
+    previous = {name: os.environ.get(name) for name in ("SYMKIN_CACHE_DIR", "SYMKIN_CFLAGS", "SYMKIN_C_ENTRY")}
     os.environ["SYMKIN_CACHE_DIR"] = str(path)
     # The suite checks values and interfaces, which do not depend on the optimization level
     # (IEEE arithmetic, -std=c99: no contraction into FMAs, no fast-math); -O3 takes a minute on
     # the UR10e's dynamics and several on the Stewart platform's closure Jacobians.  The
     # issue's strict -O3 compile is its own test (test_c_backend.py).
     os.environ.setdefault("SYMKIN_CFLAGS", "-O0")
+    # The C backend's functions are its ctypes ones here: the compiled CPython entry points over them (an
+    # extension module per library: half a second of numpy's headers per build) are checked against them for
+    # every example model and function by tests/test_c_entry_points.py, which turns them on.
+    os.environ.setdefault("SYMKIN_C_ENTRY", "ctypes")
     yield path
     for name, value in previous.items():
         if value is None:

@@ -105,6 +105,7 @@ def test_a_document_runs_as_written(workspace, path, monkeypatch):
     """The document's blocks in order: sh in a shell, python in one namespace, all in the same directory."""
     monkeypatch.chdir(workspace)
     monkeypatch.setenv("SYMKIN_QUIET", "1")
+    monkeypatch.delenv("SYMKIN_C_ENTRY", raising=False)  # the C backend as a user gets it (conftest: ctypes)
     monkeypatch.setenv("MPLBACKEND", "Agg")
     namespace: dict[str, object] = {"__name__": "__docs__"}
     for language, line, code, runnable in blocks(path):

@@ -22,6 +22,7 @@ import numpy
 from symkin.backends.c.build import shared_library
 from symkin.backends.naming import c_symbol
 from symkin.errors import GeneratedCodeError
+from symkin.runtime.c_extension import entry_points
 from symkin.runtime.packed import single_kernel
 from symkin.runtime.wrappers import Kernel, SingleKernel, make_function
 
@@ -109,12 +110,14 @@ def _kernels(library: ctypes.CDLL, model: str, record: dict[str, Any]) -> tuple[
 
 
 def bind_library(directory: Path, manifest: dict[str, Any]) -> dict[str, Any]:
-    """Compile (or find in the cache) the model's C code and bind every function of the manifest."""
+    """Compile (or find in the cache) the model's C code and bind every function of the manifest: the compiled
+    CPython entry points (:mod:`symkin.runtime.c_extension`) over the ctypes functions, or those alone."""
     source, header = _files(directory, manifest)
-    library = ctypes.CDLL(str(shared_library(source, header)))
+    path = shared_library(source, header)
+    library = ctypes.CDLL(str(path))
     model = manifest["model"]["name"]
     functions = {}
     for record in manifest["functions"]:
         kernel, one = _kernels(library, model, record)
         functions[record["name"]] = make_function(record, kernel, "c", single=one)
-    return functions
+    return entry_points(path, header, manifest, functions) or functions

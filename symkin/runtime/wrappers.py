@@ -85,6 +85,13 @@ def _docstring(record: dict[str, Any], backend: str) -> str:
     return "\n".join(lines)
 
 
+def signature_text(record: dict[str, Any]) -> str:
+    """The parameter list of the manifest function ``record``: ``q, qd, *, l1=0.1, l2=0.1``."""
+    vectors = [_identifier(i["name"]) for i in record["inputs"] if i["kind"] != "parameter"]
+    params = [f"{_identifier(i['name'])}={float(i['default'])!r}" for i in record["inputs"] if i["kind"] == "parameter"]
+    return ", ".join(vectors + (["*"] if params else []) + params)
+
+
 def make_function(record: dict[str, Any], kernel: Kernel, backend: str,
                   single: SingleKernel | None = None) -> Callable[..., Any]:
     """The Python function of the manifest function ``record`` evaluated by ``kernel``.
@@ -118,8 +125,7 @@ def make_function(record: dict[str, Any], kernel: Kernel, backend: str,
         results = kernel(batch, arrays, param_arrays)
         return result_type(*results) if result_type is not None else results[0]
 
-    signature = ", ".join([v for v, _ in vectors] + (["*"] if params else [])
-                          + [f"{p}={default!r}" for p, default in params])
+    signature = signature_text(record)
     arguments = f"({''.join(v + ', ' for v, _ in vectors)}), ({''.join(p + ', ' for p, _ in params)})"
     source = f"def {name}({signature}):\n"
     if single is not None:

@@ -36,7 +36,7 @@ import subprocess
 import sys
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
 from functools import lru_cache
@@ -47,6 +47,10 @@ from symkin.errors import GeneratedCodeError
 DEFAULT_CFLAGS = "-O3"
 #: Flags every compilation uses (the generated code must compile warning-free with them).
 BASE_FLAGS = ("-std=c99", "-fPIC", "-Wall", "-Wextra")
+#: Flags of the CPython extension module (C11: Python's headers need it; numpy's are not warning-free).
+EXTENSION_FLAGS = ("-std=c11", "-fPIC", "-Wall")
+#: Infix of an extension module's file name in the cache, ``lib<model>-py-<key>.so``.
+EXTENSION_TAG = "-py"
 #: The generated source's statement of its translation units (see :func:`parts_line`).
 _PARTS_PATTERN = re.compile(r"^/\* symkin: translation units (\w+)=0\.\.(\d+) \*/$", re.MULTILINE)
 
@@ -132,9 +136,60 @@ def shared_library(source: Path, header: Path) -> Path:
                       f"{len(units)} translation unit{'s' if len(units) > 1 else ''}, {jobs} at once) with "
                       f"{' '.join(command)}; cached in {directory} afterwards ...")
             start = time.perf_counter()
-            _compile(command, source, header, target, units, jobs)
+            _compile(command, [(list(BASE_FLAGS) + ["-I", str(header.parent)] + unit, source) for unit in units],
+                     target, jobs, ["-lm"])
             _progress(f"symkin: compiled {source.name} in {time.perf_counter() - start:.1f} s")
     return target
+
+
+def python_include_directories() -> tuple[str, str] | None:
+    """The C header directories of this Python (with Python.h) and of numpy, or None without Python.h."""
+    import sysconfig
+
+    import numpy
+
+    python = sysconfig.get_paths().get("include")
+    if not python or not (Path(python) / "Python.h").is_file():
+        return None
+    return python, numpy.get_include()
+
+
+def extension_module(source: Callable[[], str], what: bytes, model: str, header: Path,
+                     library: Path) -> tuple[Path, str]:
+    """The compiled CPython extension module of the C source ``source()`` (which includes ``header``), linked to
+    the model's ``library``, and its module name: from the cache, or built there.  The key: ``what`` (all that
+    decides the source, so that a cached module is found without rendering it), the header, the library's path
+    (itself named by its key), the compiler, its flags and version, the header directories.
+
+    Raises:
+        GeneratedCodeError: no Python headers, or the compiler is missing or fails.
+    """
+    includes = python_include_directories()
+    if includes is None:
+        raise GeneratedCodeError("this Python has no C headers (Python.h)")
+    command = compiler_command()
+    key = hashlib.sha256()
+    for part in (what, header.read_bytes(), str(library).encode(),
+                 "\0".join(command + list(EXTENSION_FLAGS) + list(includes)).encode(),
+                 _compiler_version(command[0]).encode()):
+        key.update(hashlib.sha256(part).digest())
+    digest = key.hexdigest()[:24]
+    name = f"_symkin_{model}_{digest}"
+    directory = cache_directory()
+    target = directory / f"lib{model}{EXTENSION_TAG}-{digest}{_library_suffix()}"
+    if target.exists():
+        _touch(target)
+        return target, name
+    directory.mkdir(parents=True, exist_ok=True)
+    with locked(directory / f"{target.name}.lock"):
+        if not target.exists():
+            _progress(f"symkin: compiling the CPython entry points of {model} with {' '.join(command)} ...")
+            start = time.perf_counter()
+            flags = [*EXTENSION_FLAGS, "-I", str(header.parent), "-I", includes[0], "-I", includes[1],
+                     f'-DSYMKIN_MODULE_NAME="{name}"', f"-DSYMKIN_MODULE_INIT=PyInit_{name}"]
+            _compile(command, [(flags, source())], target, 1, [str(library), "-lm"])
+            _progress(f"symkin: compiled the entry points of {model} in {time.perf_counter() - start:.1f} s")
+    return target, name
 
 
 def _progress(line: str) -> None:
@@ -213,10 +268,11 @@ class _Compilers:
             process.wait()
 
 
-def _compile(command: list[str], source: Path, header: Path, target: Path, units: list[list[str]],
-             jobs: int) -> None:
-    """Compile each unit into an object, link them into a temporary file next to ``target``, then
-    rename it into place (so no reader ever sees a half-written library)."""
+def _compile(command: list[str], units: list[tuple[list[str], Path | str]], target: Path, jobs: int,
+             link: list[str]) -> None:
+    """Compile each unit (its flags and its source: a file, or C text) into an object, link them with ``link``
+    into a temporary file next to ``target``, then rename it into place (so no reader ever sees a half-written
+    library)."""
     # named before it exists, so that an interrupt at any point (the progress line has just been printed,
     # Ctrl-C often lands here) leaves nothing: the finally block knows the name even if mkdir was the last step
     # (the build lock makes this process and thread the only builder of ``target``)
@@ -226,18 +282,24 @@ def _compile(command: list[str], source: Path, header: Path, target: Path, units
         shutil.rmtree(scratch, ignore_errors=True)  # left by a killed process that had this pid
         scratch.mkdir()
         objects = [str(scratch / f"part{k}.o") for k in range(len(units))]
-        compile_base = command + list(BASE_FLAGS) + ["-I", str(header.parent), "-c"]
+        sources = []
+        for k, (_flags, source) in enumerate(units):
+            if isinstance(source, str):
+                text, source = source, scratch / f"unit{k}.c"
+                source.write_text(text, encoding="utf-8")
+            sources.append(source)
         with ThreadPoolExecutor(max_workers=jobs) as pool:
             try:
                 # list() re-raises the first failure once every started compilation has finished
-                list(pool.map(lambda unit, obj: compilers.run(compile_base + unit + ["-o", obj, str(source)], source),
-                              units, objects))
+                list(pool.map(lambda unit, source, obj: compilers.run(command + unit[0] + ["-c", "-o", obj, str(source)],
+                                                                      source),
+                              units, sources, objects))
             except BaseException:
                 compilers.kill()  # before the pool waits for its threads, which wait for their compilers
                 raise
         partial = scratch / target.name
         try:
-            compilers.run(command + list(BASE_FLAGS) + ["-shared", "-o", str(partial)] + objects + ["-lm"], source)
+            compilers.run(command + ["-shared", "-o", str(partial)] + objects + link, target)
         except BaseException:
             compilers.kill()
             raise

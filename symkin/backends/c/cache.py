@@ -22,7 +22,8 @@ from pathlib import Path
 
 from symkin.backends.c.build import cache_directory, locked
 
-_LIBRARY = re.compile(r"^lib(?P<model>.+)-(?P<key>[0-9a-f]{24})\.(so|dylib|dll)$")
+#: ``lib<model>-<key>.so``, or ``lib<model>-py-<key>.so`` for the model's CPython entry points.
+_LIBRARY = re.compile(r"^lib(?P<model>.+?)(-py)?-(?P<key>[0-9a-f]{24})\.(so|dylib|dll)$")
 
 
 @dataclass(frozen=True)
