@@ -7,12 +7,11 @@ mechanisms (loop closure, platform inertia).
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
 
 import sympy
 
-if TYPE_CHECKING:
-    from symkin.model.schema import Vec3
+#: A 3-vector of exact expressions (an axis, a position, a centre of mass).
+Vec3 = tuple[sympy.Expr, sympy.Expr, sympy.Expr]
 
 
 def principal_axis(axis: Vec3) -> tuple[int, int] | None:

@@ -1,9 +1,10 @@
 """The package's layers, read from its imports (issue 11): data flows one way, and nothing imports in a circle.
 
 Every ``import`` in ``symkin/`` is read, at module level and inside functions, and resolved to the
-symkin module it loads, including the parent packages whose ``__init__`` runs first (the root
-``symkin`` facade excepted: it is the public entry point, and lazy); imports under
-``if TYPE_CHECKING:`` name types for annotations and are never executed, so they do not count.  A module may import from its
+symkin module it loads, including the parent packages whose ``__init__`` runs first; imports under
+``if TYPE_CHECKING:`` count too (a type that must point up goes through a protocol of the lower layer, as
+``symkin.ir.quantity.Deriving`` for the derivation graph), and so does an import of the root ``symkin`` facade
+(the api layer; only as a parent package run first it does not count).  A module may import from its
 own layer or from a lower one, never from a higher one; and no set of modules may import each
 other in a circle, however indirectly.  The layers, lowest first, are those of README.md.
 
@@ -34,6 +35,7 @@ LAYERS = (
     ("cli", {"cli", "__main__"}),
 )
 RANK = {part: rank for rank, (_name, parts) in enumerate(LAYERS) for part in parts}
+ROOT_PACKAGE = "symkin"
 
 #: Imports against the layer order that exist today: (importer, imported).  Shrinks to empty.
 KNOWN_UPWARD: set[tuple[str, str]] = set()
@@ -73,21 +75,28 @@ def _annotation_only(tree: ast.Module) -> set[int]:
     return {id(i) for g in guarded for statement in g.body for i in ast.walk(statement)}
 
 
-def import_graph(package: Path = PACKAGE) -> dict[str, set[str]]:
-    """module -> the symkin modules it imports (anywhere in it), with the packages they run first."""
+def import_graph(package: Path = PACKAGE, *, annotations: bool = True) -> dict[str, set[str]]:
+    """module -> the symkin modules it imports (anywhere in it), with the packages they run first.
+
+    With ``annotations`` (the layer order's count) the imports under ``if TYPE_CHECKING:`` count too (a type
+    that must point up goes through a protocol of the lower layer), and so does an import of the root facade
+    (``from symkin import load``: the api layer).  Without, the graph is what runs.
+    """
     known = modules(package)
     graph: dict[str, set[str]] = defaultdict(set)
     for module, path in known.items():
         tree = ast.parse(path.read_text(), str(path))
-        annotation_only = _annotation_only(tree)
+        skipped = set() if annotations else _annotation_only(tree)
         for node in ast.walk(tree):
-            if not isinstance(node, (ast.Import, ast.ImportFrom)) or id(node) in annotation_only:
+            if not isinstance(node, (ast.Import, ast.ImportFrom)) or id(node) in skipped:
                 continue
             for name in _imported_names(module, path, node, known):
                 if not name.startswith("symkin"):
                     continue
                 while name not in known and "." in name:
                     name = name.rsplit(".", 1)[0]
+                if annotations and name == ROOT_PACKAGE and module != ROOT_PACKAGE:
+                    graph[module].add(ROOT_PACKAGE)  # the facade itself, not a parent package run first
                 target = name
                 while target.count("."):  # the module and its parent packages, the root facade excepted
                     if target in known and target != module and not module.startswith(target + "."):
@@ -178,11 +187,16 @@ def test_the_reader_sees_function_level_and_relative_imports_and_the_packages_th
     (package / "low" / "other.py").write_text("from typing import TYPE_CHECKING\nfrom . import base\nimport numpy\n"
                                               "if TYPE_CHECKING:\n    from symkin.high import use\n")
     (package / "high.py").write_text("from symkin.low import other\nuse = 1\n")
-    graph = import_graph(package)
-    assert graph["symkin.low.base"] == {"symkin.high"}  # inside a function, relative
-    assert graph["symkin.high"] == {"symkin.low.other", "symkin.low"}  # the package's __init__ runs first
-    assert graph["symkin.low.other"] == {"symkin.low.base"}
-    assert cycles(graph) == {frozenset({"symkin.low", "symkin.low.base", "symkin.low.other", "symkin.high"})}
+    (package / "low" / "facade_user.py").write_text("def f():\n    from symkin import thing\n    return thing\n")
+    running = import_graph(package, annotations=False)
+    assert running["symkin.low.base"] == {"symkin.high"}  # inside a function, relative
+    assert running["symkin.high"] == {"symkin.low.other", "symkin.low"}  # the package's __init__ runs first
+    assert running["symkin.low.other"] == {"symkin.low.base"}
+    assert "symkin.low.facade_user" not in running
+    assert cycles(running) == {frozenset({"symkin.low", "symkin.low.base", "symkin.low.other", "symkin.high"})}
+    counted = import_graph(package)  # the layer order's count: type-only imports and the facade too
+    assert counted["symkin.low.other"] == {"symkin.low.base", "symkin.high"}
+    assert counted["symkin.low.facade_user"] == {"symkin"}
 
 
 #: A module longer than this says why in its docstring (a paragraph starting ``Length:``).

@@ -28,8 +28,6 @@ gravity is zero has no gravity terms anywhere (and no ``gravity_vector`` or
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
-
 import symengine as se
 import sympy
 
@@ -40,26 +38,24 @@ from symkin.dynamics.linsolve import ldl_solve, transpose_solve
 from symkin.dynamics.program import Program, se_matrix, se_vector
 from symkin.errors import DerivationError
 from symkin.ir.inputs import coordinate_input
-from symkin.ir.quantity import quantity
+from symkin.ir.quantity import Deriving, quantity
 from symkin.ir.spec import FunctionSpec, InputSpec, OutputSpec, make_function
 from symkin.kinematics.quantities import chain_frames, task_jacobian
 from symkin.model import coordinates
 from symkin.model.schema import Friction
 from symkin.symengine_bridge import SympyConverter
 
-if TYPE_CHECKING:
-    from symkin.derivation.graph import Derivation
 
 Matrix = list[list[se.Basic]]
 
 EFFORT_UNIT = "N*m (revolute), N (prismatic)"
 
 
-def coordinate_symbols(d: Derivation, group: str) -> list[se.Symbol]:
+def coordinate_symbols(d: Deriving, group: str) -> list[se.Symbol]:
     return se_vector(coordinates.symbols(d.model, group))
 
 
-def function_spec(d: Derivation, name: str, summary: str, doc: str, groups: Sequence[str | InputSpec],
+def function_spec(d: Deriving, name: str, summary: str, doc: str, groups: Sequence[str | InputSpec],
                   program: Program, outputs: Sequence[tuple[str, Sequence[se.Basic], tuple[int, ...], str, str]]
                   ) -> FunctionSpec:
     """The spec of a function whose outputs are SymEngine values of ``program`` (its inputs: the coordinate
@@ -89,7 +85,7 @@ def _flat(matrix: Matrix) -> list[se.Basic]:
 
 @quantity("sympy_converter", "SymEngine -> sympy conversion shared by the functions of one model", emitted=False,
           mechanism="any")
-def _sympy_converter(d: Derivation) -> SympyConverter:
+def _sympy_converter(d: Deriving) -> SympyConverter:
     """One memo for every function: programs that start alike (M, then dM/dq) convert their
     common assignments once."""
     symbols = [s for g in coordinates.GROUPS for s in coordinates.symbols(d.model, g)]
@@ -98,34 +94,34 @@ def _sympy_converter(d: Derivation) -> SympyConverter:
 
 
 @quantity("body_jacobians", "velocity Jacobians of the bodies at their centres of mass", emitted=False)
-def _body_jacobians(d: Derivation) -> tuple[BodyJacobians, ...]:
+def _body_jacobians(d: Deriving) -> tuple[BodyJacobians, ...]:
     return body_jacobians(d.model, d[chain_frames])
 
 
 @quantity("newton_euler_links", "links in their joint frames with spatial inertias (Newton-Euler)", emitted=False)
-def _newton_euler_links(d: Derivation) -> tuple[newton_euler.Link, ...]:
+def _newton_euler_links(d: Deriving) -> tuple[newton_euler.Link, ...]:
     return newton_euler.chain_links(d.model)
 
 
 @quantity("mass_matrix_graph", "M(q) by the composite-rigid-body algorithm, as a SymEngine graph", emitted=False)
-def _mass_matrix_graph(d: Derivation) -> Matrix:
+def _mass_matrix_graph(d: Deriving) -> Matrix:
     return matrix_on_coordinates(d.model, newton_euler.mass_matrix(d[_newton_euler_links]))
 
 
 @quantity("mass_matrix_partials", "dM/dq_k as SymEngine graphs", emitted=False)
-def _mass_matrix_partials(d: Derivation) -> list[Matrix]:
+def _mass_matrix_partials(d: Deriving) -> list[Matrix]:
     return lagrange.mass_matrix_partials(d[_mass_matrix_graph], coordinate_symbols(d, "q"))
 
 
 @quantity("gravity_graph", "gravity vector in the base frame, or None if zero", emitted=False)
-def _gravity_graph(d: Derivation) -> list[se.Basic] | None:
+def _gravity_graph(d: Deriving) -> list[se.Basic] | None:
     if all(c == 0 for c in d.model.gravity):
         return None
     return se_vector(d.model.gravity)
 
 
 @quantity("friction_graph", "F_f(qd) as SymEngine expressions, or None without friction", emitted=False)
-def _friction_graph(d: Derivation) -> list[se.Basic] | None:
+def _friction_graph(d: Deriving) -> list[se.Basic] | None:
     """F_f,j = viscous_j qd_j + coulomb_j sign(qd_j), or coulomb_j tanh(qd_j / v_s,j) when smoothed."""
     if not d.model.friction:
         return None
@@ -151,7 +147,7 @@ def joint_friction(f: Friction, v: se.Basic) -> se.Basic:
 
 
 @quantity("task_jacobian_graph", "task Jacobian J (square) as SymEngine expressions", emitted=False)
-def _task_jacobian_graph(d: Derivation) -> Matrix:
+def _task_jacobian_graph(d: Deriving) -> Matrix:
     J = d[task_jacobian].outputs[0].expr
     if J.shape[0] != J.shape[1]:
         raise DerivationError(
@@ -161,7 +157,7 @@ def _task_jacobian_graph(d: Derivation) -> Matrix:
     return se_matrix(J)
 
 
-def require_gravity(d: Derivation, name: str) -> None:
+def require_gravity(d: Deriving, name: str) -> None:
     """Refuse ``name`` (a gravity term) for a model without gravity, where it is identically zero."""
     if all(c == 0 for c in d.model.gravity):
         raise DerivationError(f"{d.model.name}: the model has no gravity, so {name} is identically zero and is "
@@ -176,7 +172,7 @@ class _BoundTerms:
     pass (:func:`~symkin.dynamics.newton_euler.inverse_dynamics`).
     """
 
-    def __init__(self, d: Derivation, program: Program):
+    def __init__(self, d: Deriving, program: Program):
         self.d, self.program = d, program
         self.n = d.model.dof
 
@@ -219,7 +215,7 @@ class _BoundTerms:
 # --------------------------------------------------------------------------- emitted functions
 
 @quantity("mass_matrix", "mass matrix M(q) (n x n, symmetric positive definite)")
-def _mass_matrix(d: Derivation) -> FunctionSpec:
+def _mass_matrix(d: Deriving) -> FunctionSpec:
     program = Program()
     M = _flat(_BoundTerms(d, program).mass_matrix())
     return function_spec(
@@ -231,7 +227,7 @@ def _mass_matrix(d: Derivation) -> FunctionSpec:
 
 
 @quantity("coriolis_matrix", "Coriolis matrix C(q, qd) from Christoffel symbols (n x n)")
-def _coriolis_matrix(d: Derivation) -> FunctionSpec:
+def _coriolis_matrix(d: Deriving) -> FunctionSpec:
     n = d.model.dof
     program = Program()
     C = lagrange.coriolis_matrix(_BoundTerms(d, program).partials(), coordinate_symbols(d, "qd"))
@@ -243,7 +239,7 @@ def _coriolis_matrix(d: Derivation) -> FunctionSpec:
 
 
 @quantity("coriolis_vector", "Coriolis and centrifugal vector V(q, qd) = C qd (n)")
-def _coriolis_vector(d: Derivation) -> FunctionSpec:
+def _coriolis_vector(d: Deriving) -> FunctionSpec:
     program = Program()
     V = _BoundTerms(d, program).coriolis_vector()
     return function_spec(
@@ -254,7 +250,7 @@ def _coriolis_vector(d: Derivation) -> FunctionSpec:
 
 
 @quantity("gravity_vector", "gravity vector G(q) = du/dq (n)")
-def _gravity_vector(d: Derivation) -> FunctionSpec:
+def _gravity_vector(d: Deriving) -> FunctionSpec:
     require_gravity(d, "gravity_vector")
     program = Program()
     G = _BoundTerms(d, program).gravity_vector()
@@ -267,7 +263,7 @@ def _gravity_vector(d: Derivation) -> FunctionSpec:
 
 
 @quantity("friction", "joint friction F_f(qd): viscous + Coulomb (n)")
-def _friction(d: Derivation) -> FunctionSpec:
+def _friction(d: Deriving) -> FunctionSpec:
     F = d[_friction_graph]
     if F is None:
         raise DerivationError(f"{d.model.name}: the model declares no friction; add a 'friction:' section "
@@ -282,7 +278,7 @@ def _friction(d: Derivation) -> FunctionSpec:
 
 
 @quantity("inverse_dynamics", "inverse dynamics tau = M qdd + V + G + F_f (n)")
-def _inverse_dynamics(d: Derivation) -> FunctionSpec:
+def _inverse_dynamics(d: Deriving) -> FunctionSpec:
     n = d.model.dof
     program = Program()
     tau = _BoundTerms(d, program).torques(acceleration=True, with_friction=True)
@@ -295,7 +291,7 @@ def _inverse_dynamics(d: Derivation) -> FunctionSpec:
 
 
 @quantity("forward_dynamics", "forward dynamics qdd = M^-1 (tau - V - G - F_f) (n)", solves_with="mass_matrix")
-def _forward_dynamics(d: Derivation) -> FunctionSpec:
+def _forward_dynamics(d: Deriving) -> FunctionSpec:
     n = d.model.dof
     program = Program()
     terms = _BoundTerms(d, program)
@@ -311,7 +307,7 @@ def _forward_dynamics(d: Derivation) -> FunctionSpec:
 
 
 @quantity("tcp_force", "TCP force F = J^-T (M qdd + V + G) (m, square task Jacobian)", solves_with="jacobian")
-def _tcp_force(d: Derivation) -> FunctionSpec:
+def _tcp_force(d: Deriving) -> FunctionSpec:
     n = d.model.dof
     J = d[_task_jacobian_graph]
     program = Program()
@@ -330,7 +326,7 @@ def _tcp_force(d: Derivation) -> FunctionSpec:
 
 @quantity("operational_space", "operational-space dynamics Mx, Vx, Gx (square task Jacobian)",
           solves_with="jacobian")
-def _operational_space(d: Derivation) -> FunctionSpec:
+def _operational_space(d: Deriving) -> FunctionSpec:
     n = d.model.dof
     J_graph = d[_task_jacobian_graph]
     q, qd = coordinate_symbols(d, "q"), coordinate_symbols(d, "qd")
@@ -364,7 +360,7 @@ def _operational_space(d: Derivation) -> FunctionSpec:
 
 
 @quantity("kinetic_energy", "kinetic energy k(q, qd) = 1/2 qd^T M qd (scalar)")
-def _kinetic_energy(d: Derivation) -> FunctionSpec:
+def _kinetic_energy(d: Deriving) -> FunctionSpec:
     program = Program()
     (k,) = program.bind([lagrange.kinetic_energy(_BoundTerms(d, program).mass_matrix(), coordinate_symbols(d, "qd"))])
     return function_spec(
@@ -373,7 +369,7 @@ def _kinetic_energy(d: Derivation) -> FunctionSpec:
 
 
 @quantity("potential_energy", "potential energy u(q) = -sum m g . c (scalar)")
-def _potential_energy(d: Derivation) -> FunctionSpec:
+def _potential_energy(d: Deriving) -> FunctionSpec:
     require_gravity(d, "potential_energy")
     program = Program()
     (u,) = program.bind([lagrange.potential_energy(d[_body_jacobians], d[_gravity_graph])])

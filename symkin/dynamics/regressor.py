@@ -29,8 +29,6 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
-
 import symengine as se
 
 from symkin.dynamics import newton_euler
@@ -40,12 +38,10 @@ from symkin.dynamics.program import Program
 from symkin.dynamics.quantities import _gravity_graph as gravity_graph
 from symkin.dynamics.quantities import _newton_euler_links as newton_euler_links
 from symkin.dynamics.quantities import function_spec
-from symkin.ir.quantity import quantity
+from symkin.ir.quantity import Deriving, quantity
 from symkin.ir.spec import FunctionSpec
 from symkin.model.schema import Friction, Model
 
-if TYPE_CHECKING:
-    from symkin.derivation.graph import Derivation
 
 #: The ten standard inertial parameters of a link, in Pinocchio's order.
 INERTIAL = ("m", "mx", "my", "mz", "Ixx", "Ixy", "Iyy", "Ixz", "Iyz", "Izz")
@@ -129,22 +125,20 @@ def standard_parameters(model: Model, links: Sequence[newton_euler.Link]) -> lis
 
 
 @quantity("regressor_graph", "the regressor Y as SymEngine rows (coordinates x standard parameters)", emitted=False)
-def regressor_graph(d: Derivation) -> list[list[se.Basic]]:
+def regressor_graph(d: Deriving) -> list[list[se.Basic]]:
     return regressor_rows(d.model, d[newton_euler_links], d[gravity_graph])
 
 
 @quantity("base_parameters", "the base parameters pi_b = K pi and the columns of Y_b, exact", emitted=False)
-def base_parameters_of(d: Derivation) -> BaseParameters:
+def base_parameters_of(d: Deriving) -> BaseParameters:
     links = d[newton_euler_links]
     require_exact_constants(d.model, [e for link in links for row in link.rotation for e in row]
                             + [e for link in links for e in link.origin])
     return base_parameters(d.model, d[regressor_graph], parameter_names(d.model))
 
 
-
-
 @quantity("regressor", "dynamics regressor Y(q, qd, qdd) with tau = Y pi, and the model's standard parameters pi")
-def regressor(d: Derivation) -> FunctionSpec:
+def regressor(d: Deriving) -> FunctionSpec:
     """One function giving Y (coordinates x parameters) and the model's pi, whose names are both outputs'
     elements (:func:`parameter_names`)."""
     model = d.model
@@ -170,7 +164,7 @@ def regressor(d: Derivation) -> FunctionSpec:
 
 
 @quantity("base_regressor", "base regressor Y_b (full column rank) with tau = Y_b pi_b, and the model's pi_b = K pi")
-def base_regressor(d: Derivation) -> FunctionSpec:
+def base_regressor(d: Deriving) -> FunctionSpec:
     """Y_b and the model's pi_b, named by the outputs' elements (the base parameters' names).  K, constant, is not an
     output (a batch would repeat it per state): its rows are the equations in the function's doc, and
     ``Derivation["base_parameters"].combinations``."""

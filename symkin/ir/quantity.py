@@ -11,12 +11,29 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
-if TYPE_CHECKING:
-    from symkin.derivation.graph import Derivation
+from symkin.model.schema import Model
 
 MECHANISMS = ("serial", "parallel", "any")
+
+#: What a derivation is asked for.  Inside symkin, a quantity asks for another by the marked
+#: function itself (``d[chain_frames]``): a misspelt key is a NameError at import, and the
+#: definition used is the one named, never looked up.  Names (``d["fk"]``) are for the
+#: boundary, where they come from a model file, a command line or a test, and are validated.
+QuantityKey = str | Callable[..., Any]
+
+
+class Deriving(Protocol):
+    """What a quantity's compute function is given: the model, any other quantity by its key, and the derivation
+    of another model (a hybrid device's wrist).  :class:`symkin.derivation.graph.Derivation` is one; the quantity
+    modules type against this protocol, so that nothing below the derivation graph names it."""
+
+    model: Model
+
+    def __getitem__(self, key: QuantityKey) -> Any: ...
+
+    def of(self, model: Model) -> Deriving: ...
 
 
 @dataclass(frozen=True)
@@ -42,19 +59,12 @@ class QuantityDef:
 
     name: str
     summary: str
-    compute: Callable[[Derivation], Any]
+    compute: Callable[[Deriving], Any]
     emitted: bool
     solves_with: str | None = None
     mechanism: str = "serial"
     residual: bool = False
     kappa_degree: int = 1
-
-
-#: What a derivation is asked for.  Inside symkin, a quantity asks for another by the marked
-#: function itself (``d[chain_frames]``): a misspelt key is a NameError at import, and the
-#: definition used is the one named, never looked up.  Names (``d["fk"]``) are for the
-#: boundary, where they come from a model file, a command line or a test, and are validated.
-QuantityKey = str | Callable[..., Any]
 
 
 def definition_of(key: QuantityKey) -> QuantityDef | None:
@@ -65,14 +75,14 @@ def definition_of(key: QuantityKey) -> QuantityDef | None:
 
 def quantity(name: str, summary: str, emitted: bool = True, solves_with: str | None = None,
              mechanism: str = "serial", residual: bool = False, kappa_degree: int = 1
-             ) -> Callable[[Callable[[Derivation], Any]], Callable[[Derivation], Any]]:
+             ) -> Callable[[Callable[[Deriving], Any]], Callable[[Deriving], Any]]:
     """Mark ``compute`` as the derivation of quantity ``name`` for ``mechanism`` models (see
     :class:`QuantityDef`); the function keeps working as itself and carries its definition as
     ``compute.quantity``."""
     if mechanism not in MECHANISMS:
         raise ValueError(f"mechanism must be one of {MECHANISMS}, got {mechanism!r}")
 
-    def mark(compute: Callable[[Derivation], Any]) -> Callable[[Derivation], Any]:
+    def mark(compute: Callable[[Deriving], Any]) -> Callable[[Deriving], Any]:
         setattr(compute, "quantity", QuantityDef(name, summary, compute, emitted, solves_with, mechanism, residual,
                                                  kappa_degree))
         return compute

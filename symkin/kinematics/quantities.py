@@ -12,28 +12,23 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import sympy
 
 from symkin.ir.inputs import coordinate_input
-from symkin.ir.quantity import quantity
+from symkin.ir.quantity import Deriving, quantity
 from symkin.ir.spec import FunctionSpec, OutputSpec, make_function
 from symkin.kinematics import task_space
 from symkin.kinematics.chain import ChainFrames, compose_chain
 from symkin.model import coordinates, joint_kinds, tree
 
-if TYPE_CHECKING:
-    from symkin.derivation.graph import Derivation
-
 
 @quantity("chain", "link frames, joint axes and TCP frame of the serial chain", emitted=False)
-def chain_frames(d: Derivation) -> ChainFrames:
+def chain_frames(d: Deriving) -> ChainFrames:
     return compose_chain(d.model)
 
 
 @quantity("fk", "forward kinematics: base_T_tcp (4x4)")
-def _fk(d: Derivation) -> FunctionSpec:
+def _fk(d: Deriving) -> FunctionSpec:
     chain: ChainFrames = d[chain_frames]
     return make_function(
         d.model, "fk", "Forward kinematics: pose of the TCP in the base frame.",
@@ -44,7 +39,7 @@ def _fk(d: Derivation) -> FunctionSpec:
 
 
 @quantity("frames", "base_T_<link> (4x4) of every link frame")
-def _frames(d: Derivation) -> FunctionSpec:
+def _frames(d: Deriving) -> FunctionSpec:
     chain: ChainFrames = d[chain_frames]
     return make_function(
         d.model, "frames", "Pose of every link frame in the base frame.",
@@ -56,7 +51,7 @@ def _frames(d: Derivation) -> FunctionSpec:
 
 
 @quantity("task_coordinates", "task-space coordinates p = f(q) of the TCP (m)")
-def _task_coordinates(d: Derivation) -> FunctionSpec:
+def _task_coordinates(d: Deriving) -> FunctionSpec:
     chain: ChainFrames = d[chain_frames]
     p = task_space.coordinates(d.model.task_space, chain.tcp)
     units = ", ".join(f"{c} [{task_space.UNITS[c]}]" for c in d.model.task_space)
@@ -69,7 +64,7 @@ def _task_coordinates(d: Derivation) -> FunctionSpec:
 
 
 @quantity("jacobian_geometric_matrix", "geometric Jacobian matrix of the TCP (6 x n)", emitted=False)
-def geometric_jacobian_matrix(d: Derivation) -> sympy.ImmutableMatrix:
+def geometric_jacobian_matrix(d: Deriving) -> sympy.ImmutableMatrix:
     """Columns [z_i x (p_tcp - p_i); z_i] for revolute and [z_i; 0] for prismatic joints, times the
     coupling matrix A when joints mimic others (one column per coordinate)."""
     chain: ChainFrames = d[chain_frames]
@@ -89,7 +84,7 @@ def geometric_jacobian_matrix(d: Derivation) -> sympy.ImmutableMatrix:
 
 
 @quantity("jacobian_geometric", "geometric Jacobian of the TCP, [v; w] = J qd (6 x n, base frame)")
-def _jacobian_geometric(d: Derivation) -> FunctionSpec:
+def _jacobian_geometric(d: Deriving) -> FunctionSpec:
     return make_function(
         d.model, "jacobian_geometric", "Geometric Jacobian of the TCP in the base frame.",
         "[v; w] = J qd with v the TCP velocity and w the angular velocity, both in the base frame; "
@@ -100,7 +95,7 @@ def _jacobian_geometric(d: Derivation) -> FunctionSpec:
 
 
 @quantity("jacobian", "task Jacobian J = dp/dq (m x n, task space of the model)")
-def task_jacobian(d: Derivation) -> FunctionSpec:
+def task_jacobian(d: Deriving) -> FunctionSpec:
     chain: ChainFrames = d[chain_frames]
     components = d.model.task_space
     J = task_space.jacobian_rows(components, sympy.Matrix(d[geometric_jacobian_matrix]), chain.tcp,

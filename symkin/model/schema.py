@@ -21,11 +21,10 @@ from enum import Enum
 import sympy
 
 from symkin.errors import Problem
-from symkin.geometry import rotation_matrix
+from symkin.geometry import Vec3, rotation_matrix
 from symkin.model import joint_kinds
 from symkin.model.joint_kinds import kind as joint_kind
 
-Vec3 = tuple[sympy.Expr, sympy.Expr, sympy.Expr]
 
 
 class JointType(str, Enum):

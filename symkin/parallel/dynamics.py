@@ -52,8 +52,6 @@ once per program); split, the terms and the functions that combine them would im
 from __future__ import annotations
 
 from functools import cached_property
-from typing import TYPE_CHECKING
-
 import symengine as se
 import sympy
 
@@ -63,7 +61,7 @@ from symkin.dynamics.program import Program, dot, mat_vec, se_matrix, se_vector
 from symkin.dynamics.quantities import (EFFORT_UNIT, coordinate_symbols, function_spec, joint_friction,
                                        require_gravity)
 from symkin.errors import DerivationError
-from symkin.ir.quantity import quantity
+from symkin.ir.quantity import Deriving, quantity
 from symkin.ir.spec import FunctionSpec
 from symkin.model import coordinates
 from symkin.parallel import hybrid
@@ -77,8 +75,6 @@ from symkin.parallel.quantities import (
     square_constraint_jacobians,
 )
 
-if TYPE_CHECKING:
-    from symkin.derivation.graph import Derivation
 
 Matrix = list[list[se.Basic]]
 
@@ -87,14 +83,14 @@ TASK_FORCE_UNIT = "N (position rows), N*m (angle rows)"
 
 @quantity("parallel_inertia", "mass distribution split into actuator side and platform side", emitted=False,
           mechanism=PARALLEL)
-def _inertia(d: Derivation) -> Inertia:
+def _inertia(d: Deriving) -> Inertia:
     structure = d[_structure]
     return split_inertia(d.model, d[_distance_legs], structure.chains, structure.platform)
 
 
 @quantity("constraint_hessians", "second derivatives of the leg equations in (q, p)", emitted=False,
           mechanism=PARALLEL)
-def _constraint_hessians(d: Derivation) -> tuple[tuple[tuple[int, int, sympy.Expr], ...], ...]:
+def _constraint_hessians(d: Deriving) -> tuple[tuple[tuple[int, int, sympy.Expr], ...], ...]:
     """Per leg equation f_i, the nonzero (a, b, c) with a <= b such that zd^T H_i zd = sum c zd_a zd_b."""
     z = coordinates.symbols(d.model, "q") + task_symbols(d.model)
     out = []
@@ -114,7 +110,7 @@ def _constraint_hessians(d: Derivation) -> tuple[tuple[tuple[int, int, sympy.Exp
 class _Terms:
     """The pieces of the equations of motion bound into one program, each formed once when first used."""
 
-    def __init__(self, d: Derivation, program: Program):
+    def __init__(self, d: Deriving, program: Program):
         self.d, self.program = d, program
         self.n = d.model.dof
         self.parts: Inertia = d[_inertia]
@@ -284,7 +280,7 @@ class _Terms:
         return M
 
 
-def _inputs(d: Derivation, *groups: str) -> list:
+def _inputs(d: Deriving, *groups: str) -> list:
     """q, then p, then the other coordinate groups; a hybrid device's wrist vector after each (qw after p)."""
     if d.model.parallel is None or d.model.parallel.wrist is None:
         return ["q", task_input(d.model), *groups]
@@ -292,7 +288,7 @@ def _inputs(d: Derivation, *groups: str) -> list:
         [spec for group in groups for spec in (group, hybrid.wrist_input(d.model, group))]
 
 
-def _size(d: Derivation) -> int:
+def _size(d: Deriving) -> int:
     """The device's coordinates: the legs' actuated joints, then a hybrid device's wrist joints."""
     return d.model.dof + len(hybrid.wrist_symbols(d.model, "q"))
 
@@ -302,7 +298,7 @@ _PAIR = "Evaluate at a consistent pair q, p (p = fk(q) or q = ik(p))."
 
 @quantity("mass_matrix", "mass matrix M(q) = M_a + J^T M_p J in the actuated coordinates (n x n)", mechanism=PARALLEL,
           kappa_degree=2)
-def _mass_matrix(d: Derivation) -> FunctionSpec:
+def _mass_matrix(d: Deriving) -> FunctionSpec:
     program = Program()
     M = _Terms(d, program).mass_matrix()
     n = _size(d)
@@ -317,7 +313,7 @@ def _mass_matrix(d: Derivation) -> FunctionSpec:
 
 @quantity("coriolis_vector", "Coriolis and centrifugal efforts V = V_a + J^T (M_p b + V_p) (n)", mechanism=PARALLEL,
           kappa_degree=4)
-def _coriolis_vector(d: Derivation) -> FunctionSpec:
+def _coriolis_vector(d: Deriving) -> FunctionSpec:
     program = Program()
     terms = _Terms(d, program)
     V = terms.torques(coordinate_symbols(d, "qd"), None, with_gravity=False, with_friction=False,
@@ -332,7 +328,7 @@ def _coriolis_vector(d: Derivation) -> FunctionSpec:
 
 @quantity("gravity_vector", "actuator efforts G = du_a/dq + J^T du_p/dp that hold the device against gravity",
           mechanism=PARALLEL)
-def _gravity_vector(d: Derivation) -> FunctionSpec:
+def _gravity_vector(d: Deriving) -> FunctionSpec:
     require_gravity(d, "gravity_vector")
     program = Program()
     terms = _Terms(d, program)
@@ -347,7 +343,7 @@ def _gravity_vector(d: Derivation) -> FunctionSpec:
 
 
 @quantity("friction", "actuator friction F_f(qd): viscous + Coulomb (n)", mechanism=PARALLEL)
-def _friction(d: Derivation) -> FunctionSpec:
+def _friction(d: Deriving) -> FunctionSpec:
     program = Program()
     terms = _Terms(d, program)
     F = terms.friction(coordinate_symbols(d, "qd") + terms.wrist("qd"))
@@ -364,7 +360,7 @@ def _friction(d: Derivation) -> FunctionSpec:
 
 @quantity("inverse_dynamics", "inverse dynamics tau = M qdd + V + G + F_f at the actuators (n)", mechanism=PARALLEL,
           kappa_degree=4)
-def _inverse_dynamics(d: Derivation) -> FunctionSpec:
+def _inverse_dynamics(d: Deriving) -> FunctionSpec:
     program = Program()
     terms = _Terms(d, program)
     tau = terms.torques(coordinate_symbols(d, "qd"), coordinate_symbols(d, "qdd"),
@@ -379,7 +375,7 @@ def _inverse_dynamics(d: Derivation) -> FunctionSpec:
 
 @quantity("forward_dynamics", "forward dynamics qdd = M^-1 (tau - V - G - F_f) (n)", solves_with="mass_matrix",
           mechanism=PARALLEL, kappa_degree=4)
-def _forward_dynamics(d: Derivation) -> FunctionSpec:
+def _forward_dynamics(d: Deriving) -> FunctionSpec:
     program = Program()
     terms = _Terms(d, program)
     rest = terms.torques(coordinate_symbols(d, "qd"), None, wrist=(terms.wrist("qd"), None))
@@ -396,7 +392,7 @@ def _forward_dynamics(d: Derivation) -> FunctionSpec:
 
 @quantity("operational_space", "task-space dynamics F = Mx pdd + Vx + Gx of the platform", mechanism=PARALLEL,
           kappa_degree=3)
-def _operational_space(d: Derivation) -> FunctionSpec:
+def _operational_space(d: Deriving) -> FunctionSpec:
     if d.model.parallel is not None and d.model.parallel.wrist is not None:
         raise DerivationError(f"model '{d.model.name}': the operational-space dynamics of a hybrid device (in the "
                               "task space of the wrist's TCP) are not derived yet; remove 'operational_space'")
@@ -437,7 +433,7 @@ def _operational_space(d: Derivation) -> FunctionSpec:
 
 @quantity("kinetic_energy", "kinetic energy k = 1/2 qd^T M_a qd + 1/2 pd^T M_p pd (scalar)", mechanism=PARALLEL,
           kappa_degree=2)
-def _kinetic_energy(d: Derivation) -> FunctionSpec:
+def _kinetic_energy(d: Deriving) -> FunctionSpec:
     program = Program()
     terms = _Terms(d, program)
     qd = coordinate_symbols(d, "qd")
@@ -450,7 +446,7 @@ def _kinetic_energy(d: Derivation) -> FunctionSpec:
 
 
 @quantity("potential_energy", "potential energy u = u_a(q) + u_p(p) (scalar)", mechanism=PARALLEL)
-def _potential_energy(d: Derivation) -> FunctionSpec:
+def _potential_energy(d: Deriving) -> FunctionSpec:
     require_gravity(d, "potential_energy")
     program = Program()
     parts = d[_inertia]

@@ -18,25 +18,21 @@ Gravity and the device's inertia are not included (they are the dynamics quantit
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import sympy
 
 from symkin.ir.inputs import coordinate_input
-from symkin.ir.quantity import quantity
+from symkin.ir.quantity import Deriving, quantity
 from symkin.ir.spec import FunctionSpec, InputSpec, OutputSpec, make_function
 from symkin.parallel import determinant
 from symkin.parallel.inputs import TASK_UNITS, task_input
 from symkin.parallel.quantities import PARALLEL, square_constraint_jacobians
 
-if TYPE_CHECKING:
-    from symkin.derivation.graph import Derivation
 
 #: unit of the force component conjugate to each task coordinate
 FORCE_UNITS = {"m": "N", "rad": "N*m"}
 
 
-def force_input(d: Derivation) -> InputSpec:
+def force_input(d: Deriving) -> InputSpec:
     """The input ``F``: the task-space force conjugate to p (one component per task coordinate)."""
     names = tuple(f"F_{c}" for c in d.model.task_space)
     return InputSpec("F", "vector", tuple(sympy.Symbol(n, real=True) for n in names), names,
@@ -44,13 +40,13 @@ def force_input(d: Derivation) -> InputSpec:
                      "task-space force on the platform, conjugate to p")
 
 
-def _efforts_unit(d: Derivation) -> str:
+def _efforts_unit(d: Deriving) -> str:
     return "N*m (revolute actuators), N (prismatic)"
 
 
 @quantity("tcp_force_map", "actuator efforts tau = J^T F with which the platform exerts the force F",
           mechanism=PARALLEL)
-def _tcp_force_map(d: Derivation) -> FunctionSpec:
+def _tcp_force_map(d: Deriving) -> FunctionSpec:
     J_x, J_q = square_constraint_jacobians(d, "the force map")
     F = sympy.Matrix(force_input(d).symbols)
     # J^T F = J_q^T J_x^-T F with J_x^-T = adj(J_x)^T / det(J_x)
@@ -66,7 +62,7 @@ def _tcp_force_map(d: Derivation) -> FunctionSpec:
 
 
 @quantity("tcp_force_map_inverse", "task-space force F = J^-T tau of the actuator efforts tau", mechanism=PARALLEL)
-def _tcp_force_map_inverse(d: Derivation) -> FunctionSpec:
+def _tcp_force_map_inverse(d: Deriving) -> FunctionSpec:
     J_x, J_q = square_constraint_jacobians(d, "the force map")
     tau = coordinate_input(d.model, "tau")
     scaled = sympy.Matrix([s / J_q[i, i] for i, s in enumerate(tau.symbols)])  # J_q^-T tau (J_q diagonal)

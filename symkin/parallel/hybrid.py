@@ -27,15 +27,13 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
-
 import symengine as se
 import sympy
 
 from symkin.dynamics.quantities import _body_jacobians as body_jacobians
 from symkin.dynamics.quantities import _mass_matrix_graph as mass_matrix_graph
 from symkin.errors import DerivationError
-from symkin.ir.quantity import quantity
+from symkin.ir.quantity import Deriving, quantity
 from symkin.ir.spec import FunctionSpec, InputSpec, OutputSpec, make_function
 from symkin.kinematics.chain import ChainFrames
 from symkin.kinematics.quantities import chain_frames, geometric_jacobian_matrix
@@ -46,8 +44,6 @@ from symkin.model.wrist_build import PLATFORM_LINK
 from symkin.parallel.inputs import task_input
 from symkin.parallel.quantities import PARALLEL, _q, platform_jacobian
 
-if TYPE_CHECKING:
-    from symkin.derivation.graph import Derivation
 
 #: The platform joints in chain order: (coordinate, joint type, axis in the moved frame).  The
 #: translations come first, so their axes are the base axes; then R = Rz(yaw) Ry(pitch) Rx(roll).
@@ -132,7 +128,7 @@ class WristInertia:
 
 @quantity("wrist_inertia", "mass matrix and potential of a hybrid device's wrist in its combined coordinates",
           emitted=False, mechanism=PARALLEL)
-def wrist_inertia(d: Derivation) -> WristInertia:
+def wrist_inertia(d: Deriving) -> WristInertia:
     """M_w(c) by the composite-rigid-body algorithm on the device's chain (its platform joints massless, so
     only the wrist's bodies and rotors count), rows and columns in the order of c; u_w from the bodies' centres."""
     chain = d[_device_derivation]
@@ -147,18 +143,18 @@ def wrist_inertia(d: Derivation) -> WristInertia:
 
 @quantity("device_derivation", "the derivation graph of the hybrid device's serial chain", emitted=False,
           mechanism=PARALLEL)
-def _device_derivation(d: Derivation) -> Derivation:
+def _device_derivation(d: Deriving) -> Deriving:
     return d.of(device_chain(d.model))
 
 
-def combined_jacobian(d: Derivation) -> sympy.Matrix:
+def combined_jacobian(d: Deriving) -> sympy.Matrix:
     """J_c, the geometric Jacobian of the TCP in (p, qw): the platform columns in the order of p."""
     J = sympy.Matrix(d[_device_derivation][geometric_jacobian_matrix])
     return sympy.Matrix.hstack(*(J[:, k] for k in combined_order(d.model, J.shape[1])))
 
 
 @quantity("device_fk", "pose of the hybrid device's TCP base_T_tcp(p, qw) (4x4)", mechanism=PARALLEL)
-def _device_fk(d: Derivation) -> FunctionSpec:
+def _device_fk(d: Deriving) -> FunctionSpec:
     chain: ChainFrames = d[_device_derivation][chain_frames]
     return make_function(
         d.model, "device_fk", "Forward kinematics of the hybrid device: pose of the wrist's TCP.",
@@ -170,7 +166,7 @@ def _device_fk(d: Derivation) -> FunctionSpec:
 
 
 @quantity("device_frames", "base_T_<link> (4x4) of every link of a hybrid device's wrist", mechanism=PARALLEL)
-def _device_frames(d: Derivation) -> FunctionSpec:
+def _device_frames(d: Deriving) -> FunctionSpec:
     chain: ChainFrames = d[_device_derivation][chain_frames]
     platform = {joint.link for joint in platform_joints(d.model)}
     return make_function(
@@ -184,7 +180,7 @@ def _device_frames(d: Derivation) -> FunctionSpec:
 
 @quantity("device_jacobian", "geometric Jacobian of the hybrid device in its combined coordinates (p, qw)",
           mechanism=PARALLEL)
-def _device_jacobian(d: Derivation) -> FunctionSpec:
+def _device_jacobian(d: Deriving) -> FunctionSpec:
     return make_function(
         d.model, "device_jacobian", "Geometric Jacobian of the hybrid device in its combined coordinates.",
         "[v; w] = J_c [pd; qwd] with v the TCP velocity and w its angular velocity in the base frame; a "
@@ -198,7 +194,7 @@ def _device_jacobian(d: Derivation) -> FunctionSpec:
 
 @quantity("device_actuator_jacobian", "geometric Jacobian of the hybrid device in its actuated coordinates",
           mechanism=PARALLEL)
-def _device_actuator_jacobian(d: Derivation) -> FunctionSpec:
+def _device_actuator_jacobian(d: Deriving) -> FunctionSpec:
     J_c = combined_jacobian(d)
     k = len(d.model.task_space)
     J_platform = J_c[:, :k] * platform_jacobian(d, "the device's actuator Jacobian")

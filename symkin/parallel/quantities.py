@@ -24,13 +24,11 @@ p = fk(q) or q = ik(p).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
-
 import sympy
 
 from symkin.errors import DerivationError
 from symkin.ir.inputs import coordinate_input
-from symkin.ir.quantity import quantity
+from symkin.ir.quantity import Deriving, quantity
 from symkin.ir.spec import FunctionSpec, OutputSpec, make_function
 from symkin.kinematics.chain import Frame
 from symkin.model import coordinates
@@ -44,8 +42,6 @@ from symkin.parallel.inputs import (
 )
 from symkin.parallel.legs import LegChain, platform_frame, walk
 
-if TYPE_CHECKING:
-    from symkin.derivation.graph import Derivation
 
 PARALLEL = "parallel"
 
@@ -58,7 +54,7 @@ class ParallelStructure:
     chains: tuple[LegChain, ...]
 
 
-def _q(d: Derivation):
+def _q(d: Deriving):
     return coordinate_input(d.model, "q")
 
 
@@ -78,7 +74,7 @@ def _branch_text(sigma: int) -> str:
 
 
 @quantity("parallel_structure", "legs walked from the base and the platform frame", emitted=False, mechanism=PARALLEL)
-def _structure(d: Derivation) -> ParallelStructure:
+def _structure(d: Deriving) -> ParallelStructure:
     assert d.model.parallel is not None
     return ParallelStructure(platform_frame(d.model), tuple(walk(leg) for leg in d.model.parallel.legs))
 
@@ -86,23 +82,23 @@ def _structure(d: Derivation) -> ParallelStructure:
 # --------------------------------------------------------------------------- generic loop closure
 
 @quantity("leg_closures", "closure equations of every leg", emitted=False, mechanism=PARALLEL)
-def _leg_closures(d: Derivation) -> tuple[closure.LegClosure, ...]:
+def _leg_closures(d: Deriving) -> tuple[closure.LegClosure, ...]:
     structure: ParallelStructure = d[_structure]
     return tuple(closure.LegClosure(structure.platform, chain) for chain in structure.chains)
 
 
 @quantity("closure_residual", "loop-closure equations Phi(q, s, p) (sympy)", emitted=False, mechanism=PARALLEL)
-def _closure_residual(d: Derivation) -> sympy.ImmutableMatrix:
+def _closure_residual(d: Deriving) -> sympy.ImmutableMatrix:
     return sympy.ImmutableMatrix([e for leg in d[_leg_closures] for e in leg.residual()])
 
 
-def _closure_rows(d: Derivation) -> str:
+def _closure_rows(d: Deriving) -> str:
     return ", ".join(f"{leg.name}: x, y, z, rx, ry, rz" for leg in d.model.parallel.legs)  # type: ignore[union-attr]
 
 
 @quantity("closure", "loop-closure residual Phi(q, s, p), 6 rows per leg (zero when the legs close)",
           mechanism=PARALLEL, residual=True)
-def _closure(d: Derivation) -> FunctionSpec:
+def _closure(d: Deriving) -> FunctionSpec:
     phi = d[_closure_residual]
     return make_function(
         d.model, "closure", "Loop-closure residual of every leg.",
@@ -117,7 +113,7 @@ def _closure(d: Derivation) -> FunctionSpec:
 
 
 @quantity("closure_jacobians", "implicit Jacobians Phi_p, Phi_q, Phi_s of the loop closure", mechanism=PARALLEL)
-def _closure_jacobians(d: Derivation) -> FunctionSpec:
+def _closure_jacobians(d: Deriving) -> FunctionSpec:
     task = task_symbols(d.model)
     columns: list[dict[sympy.Symbol, list[sympy.Expr]]] = []
     for leg in d[_leg_closures]:
@@ -142,7 +138,7 @@ def _closure_jacobians(d: Derivation) -> FunctionSpec:
 # --------------------------------------------------------------------------- distance form
 
 @quantity("distance_legs", "legs reduced to one distance equation each", emitted=False, mechanism=PARALLEL)
-def _distance_legs(d: Derivation) -> tuple[distance.DistanceLeg, ...]:
+def _distance_legs(d: Deriving) -> tuple[distance.DistanceLeg, ...]:
     structure: ParallelStructure = d[_structure]
     motion = d.model.parallel.motion  # type: ignore[union-attr]
     surface = {PlatformMotion.PLANAR: "plane", PlatformMotion.SPHERICAL: "sphere"}.get(motion, "space")
@@ -154,13 +150,13 @@ def _distance_legs(d: Derivation) -> tuple[distance.DistanceLeg, ...]:
 
 
 @quantity("constraint_vector", "f(q, p) (sympy)", emitted=False, mechanism=PARALLEL)
-def _constraint_vector(d: Derivation) -> sympy.ImmutableMatrix:
+def _constraint_vector(d: Deriving) -> sympy.ImmutableMatrix:
     return sympy.ImmutableMatrix([leg.constraint for leg in d[_distance_legs]])
 
 
 @quantity("constraints", "leg equations f(q, p) = (|B_i - C_i|^2 - L_i^2)/2, zero when assembled",
           mechanism=PARALLEL, residual=True)
-def _constraints(d: Derivation) -> FunctionSpec:
+def _constraints(d: Deriving) -> FunctionSpec:
     f = d[_constraint_vector]
     return make_function(
         d.model, "constraints", "Leg equations in distance form.",
@@ -172,7 +168,7 @@ def _constraints(d: Derivation) -> FunctionSpec:
 
 
 @quantity("constraint_jacobian_matrices", "J_x and J_q (sympy)", emitted=False, mechanism=PARALLEL)
-def _constraint_jacobian_matrices(d: Derivation) -> tuple[sympy.ImmutableMatrix, sympy.ImmutableMatrix]:
+def _constraint_jacobian_matrices(d: Deriving) -> tuple[sympy.ImmutableMatrix, sympy.ImmutableMatrix]:
     f = sympy.Matrix(d[_constraint_vector])
     J_x = jacobian(f, task_symbols(d.model))
     J_q = -jacobian(f, coordinates.symbols(d.model, "q"))
@@ -180,7 +176,7 @@ def _constraint_jacobian_matrices(d: Derivation) -> tuple[sympy.ImmutableMatrix,
 
 
 @quantity("constraint_jacobians", "J_x = df/dp and J_q = -df/dq, so that J_x pdot = J_q qdot", mechanism=PARALLEL)
-def _constraint_jacobians(d: Derivation) -> FunctionSpec:
+def _constraint_jacobians(d: Deriving) -> FunctionSpec:
     J_x, J_q = d[_constraint_jacobian_matrices]
     return make_function(
         d.model, "constraint_jacobians", "Jacobians of the leg equations.",
@@ -194,7 +190,7 @@ def _constraint_jacobians(d: Derivation) -> FunctionSpec:
 
 @quantity("leg_points", "joint centres of every leg: first joint A_i, proximal point joint C_i(q), platform joint "
           "B_i(p)", mechanism=PARALLEL)
-def _leg_points(d: Derivation) -> FunctionSpec:
+def _leg_points(d: Deriving) -> FunctionSpec:
     structure: ParallelStructure = d[_structure]
     legs = d[_distance_legs]
     points = [list(point) for chain, leg in zip(structure.chains, legs) for point in (chain.centres[0], leg.C, leg.B)]
@@ -210,7 +206,7 @@ def _leg_points(d: Derivation) -> FunctionSpec:
 
 
 @quantity("ik", "closed-form inverse kinematics q(p) per leg, with reachability margins", mechanism=PARALLEL)
-def _ik(d: Derivation) -> FunctionSpec:
+def _ik(d: Deriving) -> FunctionSpec:
     legs = d[_distance_legs]
     solutions = [closed_form.solve_leg(leg) for leg in legs]
     branches = "; ".join(f"{leg.leg.name}: {leg.q} on the {_branch_text(leg.leg.ik_branch)} branch"
@@ -234,7 +230,7 @@ def _ik(d: Derivation) -> FunctionSpec:
 
 @quantity("fk", "closed-form forward kinematics p(q): trilateration (3 legs, translational platform) or "
           "circle intersection (2 legs, planar point)", mechanism=PARALLEL)
-def _fk(d: Derivation) -> FunctionSpec:
+def _fk(d: Deriving) -> FunctionSpec:
     parallel = d.model.parallel
     assert parallel is not None
     side = _branch_text(parallel.fk_branch)
@@ -268,7 +264,7 @@ def _fk(d: Derivation) -> FunctionSpec:
     )
 
 
-def square_constraint_jacobians(d: Derivation, name: str) -> tuple[sympy.Matrix, sympy.Matrix]:
+def square_constraint_jacobians(d: Deriving, name: str) -> tuple[sympy.Matrix, sympy.Matrix]:
     """(J_x, J_q) of a model with as many legs as task coordinates (``name``: what needs them, for the error)."""
     J_x, J_q = d[_constraint_jacobian_matrices]
     if J_x.shape[0] != J_x.shape[1]:
@@ -276,14 +272,14 @@ def square_constraint_jacobians(d: Derivation, name: str) -> tuple[sympy.Matrix,
     return sympy.Matrix(J_x), sympy.Matrix(J_q)
 
 
-def platform_jacobian(d: Derivation, name: str) -> sympy.Matrix:
+def platform_jacobian(d: Deriving, name: str) -> sympy.Matrix:
     """J = J_x^-1 J_q = adj(J_x) J_q / det(J_x), pdot = J qdot (``name``: what needs it, for the error)."""
     J_x, J_q = square_constraint_jacobians(d, name)
     return determinant.adjugate(J_x) * J_q / determinant.determinant(J_x)
 
 
 @quantity("jacobian", "task Jacobian J = J_x^-1 J_q of the platform: pdot = J qdot", mechanism=PARALLEL)
-def _jacobian(d: Derivation) -> FunctionSpec:
+def _jacobian(d: Deriving) -> FunctionSpec:
     J = platform_jacobian(d, "the task Jacobian")
     return make_function(
         d.model, "jacobian", "Task Jacobian of the platform.",
@@ -295,7 +291,7 @@ def _jacobian(d: Derivation) -> FunctionSpec:
 
 
 @quantity("inverse_jacobian", "inverse Jacobian J^-1 = J_q^-1 J_x: qdot = J^-1 pdot", mechanism=PARALLEL)
-def _inverse_jacobian(d: Derivation) -> FunctionSpec:
+def _inverse_jacobian(d: Deriving) -> FunctionSpec:
     J_x, J_q = square_constraint_jacobians(d, "the inverse Jacobian")
     J_inv = sympy.Matrix([[J_x[i, j] / J_q[i, i] for j in range(J_x.shape[1])] for i in range(J_x.shape[0])])
     return make_function(
@@ -310,7 +306,7 @@ def _inverse_jacobian(d: Derivation) -> FunctionSpec:
 
 @quantity("singularities", "det J_q (zero at workspace-boundary singularities) and det J_x (interior)",
           mechanism=PARALLEL)
-def _singularities(d: Derivation) -> FunctionSpec:
+def _singularities(d: Deriving) -> FunctionSpec:
     J_x, J_q = square_constraint_jacobians(d, "the singularity measures")
     det_q = sympy.Mul(*[J_q[i, i] for i in range(J_q.shape[0])])
     return make_function(

@@ -57,7 +57,7 @@ class ModelPayload:
         """The loaded numpy model (see the module docstring)."""
         digest = self.digest
         if digest not in _LOADED:
-            from symkin import load
+            from symkin.runtime.loader import load  # the plain model: workers show no viewer
             from symkin.backends.c.build import cache_directory
 
             target = cache_directory() / "payloads" / digest[:24]
