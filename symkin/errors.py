@@ -65,6 +65,13 @@ class ModelError(SymkinError):
         return f"{head}\n{body}" if head else body
 
 
+class NotApplicable(ValueError):
+    """An analysis does not apply to this model (a serial arm asked for a parallel inverse, a solver that takes
+    poses asked for positions...): the message says why.  Code that tries several analyses catches this one,
+    never a bare ValueError, so that a real error inside an analysis is not taken for "does not apply"; the
+    command line reports it as bad input (a ValueError)."""
+
+
 class DerivationError(SymkinError):
     """A requested quantity cannot be derived for this model (e.g. FK of a model without joints)."""
 

@@ -11,6 +11,7 @@ import symkin
 from symkin.analysis import feasibility, global_indices, grids, inverse, mechanism, workspace
 from symkin.analysis.inverse import closed_form_inverse
 from symkin.analysis.limits import within_limits
+from symkin.errors import NotApplicable
 from symkin.runtime import LoadedModel
 
 from conftest import EXAMPLE_MODELS, GENERATED_DIR
@@ -112,9 +113,26 @@ def test_closed_form_inverse_adapts_symkin_ik_to_positions_and_refuses_pose_solv
         assert np.allclose(mechanism.tcp_positions(arm, q), points[:, None], rtol=0, atol=KINEMATICS * 0.42)
     _, valid = ik.solve(rim * (1 + 1e-12))
     assert not valid.any()
-    with pytest.raises(ValueError, match="takes pose targets"):
+    with pytest.raises(NotApplicable, match="takes pose targets"):
         closed_form_inverse(symkin.load(GENERATED_DIR / "ur10e"))
     assert isinstance(inverse.inverse_kinematics_for(ARM), inverse.ClosedFormInverse)
+
+
+def test_only_a_named_not_applicable_means_the_next_inverse_is_tried(monkeypatch):
+    """inverse_kinematics_for goes on past NotApplicable; a real error inside a factory surfaces."""
+    def broken(model):
+        raise ValueError("a bug inside the analysis")
+
+    def not_mine(model):
+        raise NotApplicable("not this kind of model")
+
+    monkeypatch.setattr(inverse, "INVERSE_FACTORIES", [not_mine, closed_form_inverse])
+    assert isinstance(inverse.inverse_kinematics_for(ARM), inverse.ClosedFormInverse)
+    monkeypatch.setattr(inverse, "INVERSE_FACTORIES", [broken, closed_form_inverse])
+    with pytest.raises(ValueError, match="a bug inside the analysis"):
+        inverse.inverse_kinematics_for(ARM)
+    monkeypatch.setattr(inverse, "INVERSE_FACTORIES", [not_mine])
+    assert inverse.inverse_kinematics_for(ARM) is None
 
 
 def test_inverse_kinematics_round_trips_on_both_branches():

@@ -17,6 +17,7 @@ import numpy as np
 from symkin.analysis import mechanism
 from symkin.analysis.feasibility import InverseKinematics
 from symkin.analysis.parallel import parallel_inverse
+from symkin.errors import NotApplicable
 from symkin.ik import ClosedFormIK, closed_form_solver
 from symkin.runtime.info import GeneratedModel
 
@@ -56,19 +57,19 @@ def closed_form_inverse(model: GeneratedModel) -> ClosedFormInverse:
     """The closed-form inverse kinematics of a serial model whose task space is positional.
 
     Raises:
-        ValueError: :func:`symkin.ik.closed_form.closed_form_solver` recognises no structure
+        NotApplicable: :func:`symkin.ik.closed_form.closed_form_solver` recognises no structure
             (or the model is parallel), or its solver takes poses (the UR family): the
             Cartesian analyses work on positions, the solver's target must be the model's
             positional task space.
     """
     if mechanism.is_parallel(model):  # also views of one, e.g. a platform held at a constant orientation
-        raise ValueError(f"{model.name}: a parallel mechanism; its inverse kinematics is its generated 'ik'")
+        raise NotApplicable(f"{model.name}: a parallel mechanism; its inverse kinematics is its generated 'ik'")
     solver = closed_form_solver(model)
     if solver is None:
-        raise ValueError(f"{model.name}: no closed-form inverse kinematics recognised (symkin.ik)")
+        raise NotApplicable(f"{model.name}: no closed-form inverse kinematics recognised (symkin.ik)")
     task = mechanism.task_space(model)
     if solver.kind != "task" or not all(c in mechanism.POSITION_COMPONENTS for c in task):
-        raise ValueError(f"{model.name}: the closed-form inverse kinematics ({solver.name}) takes "
+        raise NotApplicable(f"{model.name}: the closed-form inverse kinematics ({solver.name}) takes "
                          f"{solver.kind} targets, not positions [{', '.join(task)}]: the Cartesian "
                          "workspace analyses need one that takes TCP positions")
     axes = mechanism.position_axes(model)
@@ -77,7 +78,7 @@ def closed_form_inverse(model: GeneratedModel) -> ClosedFormInverse:
 
 
 #: Factories tried in order by :func:`inverse_kinematics_for`; each returns an
-#: InverseKinematics for the model or raises ValueError: serial closed forms of symkin.ik,
+#: InverseKinematics for the model or raises NotApplicable: serial closed forms of symkin.ik,
 #: then parallel mechanisms' generated ``ik``.
 INVERSE_FACTORIES: list = [closed_form_inverse, parallel_inverse]
 
@@ -87,6 +88,6 @@ def inverse_kinematics_for(model: GeneratedModel) -> InverseKinematics | None:
     for factory in INVERSE_FACTORIES:
         try:
             return factory(model)
-        except ValueError:
+        except NotApplicable:
             continue
     return None

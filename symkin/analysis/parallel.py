@@ -45,6 +45,7 @@ import numpy as np
 
 from symkin.analysis import conditioning, mechanism, passive, sampling
 from symkin.analysis.feasibility import feasible_configurations
+from symkin.errors import NotApplicable
 from symkin.ik.rotations import wrap_angle
 from symkin.runtime.info import GeneratedModel
 
@@ -160,22 +161,22 @@ def parallel_inverse(model: GeneratedModel) -> ParallelInverse | ConstantOrienta
     one orientation (:class:`ConstantOrientation`) a :class:`ConstantOrientationInverse`.
 
     Raises:
-        ValueError: the model is not parallel, its platform also rotates and it was not held at
+        NotApplicable: the model is not parallel, its platform also rotates and it was not held at
             a constant orientation, it lacks the generated ``ik`` or ``fk``, or its passive-joint
             limits are malformed or cannot be evaluated (no generated ``closure``).
     """
     if isinstance(model, ConstantOrientation):
         return constant_orientation_inverse(model)
     if not mechanism.is_parallel(model):
-        raise ValueError(f"{model.name}: not a parallel mechanism")
+        raise NotApplicable(f"{model.name}: not a parallel mechanism")
     kind = mechanism.parallel_kind(mechanism.task_space(model))
     if kind == "parallel orientation":
-        raise ValueError(f"{model.name}: the platform only turns (task space {list(mechanism.task_space(model))}): "
+        raise NotApplicable(f"{model.name}: the platform only turns (task space {list(mechanism.task_space(model))}): "
                          "its workspace is a set of orientations, which the positional workspace and GCI analyses do "
                          "not cover; rate it with the generated inverse_jacobian and singularities at chosen "
                          "orientations")
     if kind == "parallel pose":
-        raise ValueError(f"{model.name}: the platform also rotates (task space {list(mechanism.task_space(model))}): "
+        raise NotApplicable(f"{model.name}: the platform also rotates (task space {list(mechanism.task_space(model))}): "
                          "its Cartesian workspace is analysed at a constant orientation "
                          "(symkin.analysis.parallel.constant_orientation(model, (roll, pitch, yaw)))")
     _require(model, ("ik", "fk", "jacobian"))
