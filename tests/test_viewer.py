@@ -15,7 +15,7 @@ import pytest
 
 from conftest import EXAMPLE_MODELS, MODELS_DIR, SYMKIN_CLI
 from symkin import load
-from symkin.analysis import global_indices
+from symkin.analysis import global_indices, mechanism
 from symkin.viewer import page
 from tolerances import KINEMATICS
 
@@ -53,7 +53,7 @@ def test_every_example_model_gets_a_self_contained_page(name, generated_dir):
     assert f'globalThis.symkin[{json.dumps(name)}]' in html  # the generated module, inlined
     cloud = data["cloud"]
     assert [c["name"] for c in data["coordinates"]] == [c.name for c in model.info.coordinates]
-    if page.kind_of(model) == "parallel orientation":  # a spherical platform: orientations, no cloud of points
+    if mechanism.kind_of(model) is mechanism.MechanismKind.PARALLEL_ORIENTATION:  # a spherical platform: no cloud
         assert cloud["points"] == [] and "set of orientations" in page.workspace_cloud(model, 1024).note
         return
     assert len(cloud["points"]) >= 512 and len(cloud["points"]) == len(cloud["inverse_kappa"])

@@ -158,13 +158,13 @@ def rate(model: GeneratedModel, actuation: Actuation, *, samples: int = 4096, se
         ValueError: the model cannot be rated (no translational task coordinate, a platform that
             rotates, a wrist on the platform, no mass matrix), or the box holds no sample.
     """
-    kind = mechanism.parallel_kind(mechanism.task_space(model)) if mechanism.is_parallel(model) else "serial"
+    kind = mechanism.kind_of(model)
     if model.info.wrist:
         raise ValueError(f"{model.name}: a platform carrying a wrist: rate the whole device at its grip point "
                          "(symkin rate --device, symkin.analysis.device.WholeDevice)")
-    if kind not in ("serial", "parallel"):
+    if kind not in (mechanism.MechanismKind.SERIAL, mechanism.MechanismKind.PARALLEL):
         raise ValueError(f"{model.name}: symkin rate rates devices whose handle translates with the platform or is "
-                         f"a serial arm's TCP; this is a {kind} mechanism")
+                         f"a serial arm's TCP; this is a {kind.value} mechanism")
     rows = list(mechanism.position_rows(model))
     if not rows:
         raise ValueError(f"{model.name}: the task space ({', '.join(mechanism.task_space(model))}) has no translation")

@@ -9,6 +9,7 @@ task space.  The C backend plugs in by being loaded instead of the numpy one: on
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from enum import Enum
 
 import numpy as np
 
@@ -100,15 +101,30 @@ def position_axes(model: GeneratedModel) -> tuple[int, ...]:
     return tuple(sorted(axes))
 
 
-def parallel_kind(task: Sequence[str]) -> str:
-    """How the analyses and the viewer treat a parallel mechanism with the task coordinates ``task``:
-    ``parallel`` (positions only: a translational or planar platform, analysed through its closed-form ik
-    and fk), ``parallel orientation`` (angles only: a spherical platform) or ``parallel pose`` (both: held
-    at a constant orientation)."""
+class MechanismKind(str, Enum):
+    """How the analyses, the viewer and the commands treat a mechanism: the keys of their tables of generated
+    functions (a str, so that a kind prints and serializes as its value)."""
+
+    SERIAL = "serial"
+    #: positions only: a translational or planar platform, analysed through its closed-form ik and fk
+    PARALLEL = "parallel"
+    #: positions and angles: a platform that also rotates, analysed held at a constant orientation
+    PARALLEL_POSE = "parallel pose"
+    #: angles only: a spherical platform
+    PARALLEL_ORIENTATION = "parallel orientation"
+
+
+def parallel_kind(task: Sequence[str]) -> MechanismKind:
+    """The kind of a parallel mechanism with the task coordinates ``task`` (:class:`MechanismKind`)."""
     positions = set(task) & set(POSITION_COMPONENTS)
     if positions == set(task):
-        return "parallel"
-    return "parallel pose" if positions else "parallel orientation"
+        return MechanismKind.PARALLEL
+    return MechanismKind.PARALLEL_POSE if positions else MechanismKind.PARALLEL_ORIENTATION
+
+
+def kind_of(model: GeneratedModel) -> MechanismKind:
+    """The kind of a loaded model (:class:`MechanismKind`)."""
+    return parallel_kind(task_space(model)) if is_parallel(model) else MechanismKind.SERIAL
 
 
 def is_parallel(model: GeneratedModel) -> bool:

@@ -170,15 +170,15 @@ def parallel_inverse(model: GeneratedModel) -> ParallelInverse | ConstantOrienta
     if not mechanism.is_parallel(model):
         raise NotApplicable(f"{model.name}: not a parallel mechanism")
     kind = mechanism.parallel_kind(mechanism.task_space(model))
-    if kind == "parallel orientation":
+    if kind is mechanism.MechanismKind.PARALLEL_ORIENTATION:
         raise NotApplicable(f"{model.name}: the platform only turns (task space {list(mechanism.task_space(model))}): "
-                         "its workspace is a set of orientations, which the positional workspace and GCI analyses do "
-                         "not cover; rate it with the generated inverse_jacobian and singularities at chosen "
-                         "orientations")
-    if kind == "parallel pose":
+                            "its workspace is a set of orientations, which the positional workspace and GCI analyses do "
+                            "not cover; rate it with the generated inverse_jacobian and singularities at chosen "
+                            "orientations")
+    if kind is mechanism.MechanismKind.PARALLEL_POSE:
         raise NotApplicable(f"{model.name}: the platform also rotates (task space {list(mechanism.task_space(model))}): "
-                         "its Cartesian workspace is analysed at a constant orientation "
-                         "(symkin.analysis.parallel.constant_orientation(model, (roll, pitch, yaw)))")
+                            "its Cartesian workspace is analysed at a constant orientation "
+                            "(symkin.analysis.parallel.constant_orientation(model, (roll, pitch, yaw)))")
     _require(model, ("ik", "fk", "jacobian"))
     size = max(float(np.linalg.norm(mechanism.home_pose(model))), 1e-3)
     return ParallelInverse(model, size, passive.declared_limits(model), len(mechanism.task_space(model)))

@@ -15,6 +15,8 @@ from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from symkin.analysis.mechanism import MechanismKind, parallel_kind
+
 if TYPE_CHECKING:
     from symkin.model.schema import Model
 
@@ -24,9 +26,9 @@ ANALYSIS_OUTPUTS = ("fk", "jacobian")
 #: its closed-form ik (reachability, working mode); a platform that also rotates (Stewart-Gough)
 #: has no closed-form fk, and its analyses at a constant orientation use ik and J^-1; so does a
 #: spherical platform (orientations only).
-ANALYSIS_OUTPUTS_BY_KIND = {"serial": ANALYSIS_OUTPUTS, "parallel": ("ik", "fk", "jacobian"),
-                            "parallel pose": ("ik", "inverse_jacobian"),
-                            "parallel orientation": ("ik", "inverse_jacobian")}
+ANALYSIS_OUTPUTS_BY_KIND = {MechanismKind.SERIAL: ANALYSIS_OUTPUTS, MechanismKind.PARALLEL: ("ik", "fk", "jacobian"),
+                            MechanismKind.PARALLEL_POSE: ("ik", "inverse_jacobian"),
+                            MechanismKind.PARALLEL_ORIENTATION: ("ik", "inverse_jacobian")}
 #: Suffixes of model files (derived on the fly); anything else is a generated directory.
 MODEL_FILE_SUFFIXES = (".yaml", ".yml", ".urdf", ".xml", ".xacro")
 #: Also derived for a parallel model file that limits passive joints: the analyses find the
@@ -40,7 +42,7 @@ def is_model_file(path: str | Path) -> bool:
 
 
 def load_model(path: str, backend: str = "numpy",
-               outputs: Sequence[str] | Mapping[str, Sequence[str]] = ANALYSIS_OUTPUTS,
+               outputs: Sequence[str] | Mapping[MechanismKind, Sequence[str]] = ANALYSIS_OUTPUTS,
                optional: Sequence[str] = ()) -> Any:
     """The loaded model of MODEL: a generated directory, or a model file derived on the fly.
 
@@ -59,7 +61,7 @@ def load_model(path: str, backend: str = "numpy",
 
 
 def load_models(path: str, backends: Sequence[str],
-                outputs: Sequence[str] | Mapping[str, Sequence[str]] = ANALYSIS_OUTPUTS,
+                outputs: Sequence[str] | Mapping[MechanismKind, Sequence[str]] = ANALYSIS_OUTPUTS,
                 optional: Sequence[str] = ()) -> list[Any]:
     """MODEL loaded once per backend (as :func:`load_model`); a model file is derived once, for all of them.
 
@@ -75,7 +77,7 @@ def load_models(path: str, backends: Sequence[str],
 
 @contextlib.contextmanager
 def generated_directory(path: str, backends: Sequence[str],
-                        outputs: Sequence[str] | Mapping[str, Sequence[str]] = ANALYSIS_OUTPUTS,
+                        outputs: Sequence[str] | Mapping[MechanismKind, Sequence[str]] = ANALYSIS_OUTPUTS,
                         optional: Sequence[str] = ()) -> Iterator[Path]:
     """The generated directory of MODEL while the block runs: MODEL itself, or for a model file
     a scratch directory it is derived into (``outputs`` and ``optional`` as :func:`load_models`)."""
@@ -98,7 +100,7 @@ def generated_directory(path: str, backends: Sequence[str],
         yield directory
 
 
-def _derived(source: Path, backends: Sequence[str], outputs: Sequence[str] | Mapping[str, Sequence[str]],
+def _derived(source: Path, backends: Sequence[str], outputs: Sequence[str] | Mapping[MechanismKind, Sequence[str]],
              optional: Sequence[str], scratch: str, key: str | None) -> Path:
     """The model file derived into ``scratch`` (and kept in the derivation cache under ``key``)."""
     from symkin import pipeline, pipeline_cache
@@ -119,12 +121,10 @@ def _derived(source: Path, backends: Sequence[str], outputs: Sequence[str] | Map
     return pipeline.write(generation, scratch)
 
 
-def analysis_kind(model: Model) -> str:
-    """The key of a model file in :data:`ANALYSIS_OUTPUTS_BY_KIND`: serial, or the parallel kinds of
-    :func:`symkin.analysis.mechanism.parallel_kind`."""
-    from symkin.analysis.mechanism import parallel_kind
-
-    return model.mechanism if model.parallel is None else parallel_kind(model.task_space)
+def analysis_kind(model: Model) -> MechanismKind:
+    """The kind of a model file (:class:`symkin.analysis.mechanism.MechanismKind`, the keys of
+    :data:`ANALYSIS_OUTPUTS_BY_KIND`)."""
+    return MechanismKind.SERIAL if model.parallel is None else parallel_kind(model.task_space)
 
 
 def _limits_passive_joints(model: Model) -> bool:

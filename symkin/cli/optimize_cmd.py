@@ -8,6 +8,7 @@ import sys
 import time
 from pathlib import Path
 
+from symkin.analysis.mechanism import MechanismKind
 from symkin.cli import analysis_args, model_files
 from symkin.cli.progress import Progress
 
@@ -71,7 +72,8 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError(f"--samples must be at least 16, got {args.samples}")
         with Progress(Path(args.model).stem) as progress:
             progress("loading the generated code")
-            outputs = {kind: design.needed_functions(kind == "parallel") for kind in ("serial", "parallel")}
+            outputs = {kind: design.needed_functions(kind is MechanismKind.PARALLEL)
+                       for kind in (MechanismKind.SERIAL, MechanismKind.PARALLEL)}
             numpy_model, casadi_model = model_files.load_models(args.model, ("numpy", "casadi"), outputs)
             problem = design.design_problem(numpy_model, args.maximize, free, bounds=bounds, values=values, box=box,
                                             margin=args.margin, limits=limits, length=args.length)

@@ -8,12 +8,15 @@ import math
 import time
 from pathlib import Path
 
+from symkin.analysis.mechanism import MechanismKind
 from symkin.cli import analysis_args, model_files
 from symkin.cli.progress import Progress
 
 #: What a model file is derived with on the fly (gravity_vector where the model has gravity).
-RATE_OUTPUTS = {"serial": ("fk", "jacobian", "mass_matrix"), "parallel": ("ik", "fk", "jacobian", "mass_matrix"),
-                "parallel pose": ("ik", "inverse_jacobian"), "parallel orientation": ("ik", "inverse_jacobian")}
+RATE_OUTPUTS = {MechanismKind.SERIAL: ("fk", "jacobian", "mass_matrix"),
+                MechanismKind.PARALLEL: ("ik", "fk", "jacobian", "mass_matrix"),
+                MechanismKind.PARALLEL_POSE: ("ik", "inverse_jacobian"),
+                MechanismKind.PARALLEL_ORIENTATION: ("ik", "inverse_jacobian")}
 
 
 def register(sub: argparse._SubParsersAction) -> None:

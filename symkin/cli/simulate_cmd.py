@@ -9,14 +9,15 @@ import time
 import warnings
 from pathlib import Path
 
+from symkin.analysis.mechanism import MechanismKind
 from symkin.cli import analysis_args, model_files
 from symkin.cli.progress import Progress
 
 #: What a model file is derived with on the fly; the optional ones where the model has them.
 DYNAMICS_OUTPUTS = ("forward_dynamics", "inverse_dynamics", "mass_matrix", "kinetic_energy", "coriolis_vector")
-SIMULATION_OUTPUTS = {"serial": ("fk", "jacobian", "jacobian_geometric") + DYNAMICS_OUTPUTS,
-                      "parallel": ("ik", "fk", "jacobian") + DYNAMICS_OUTPUTS,
-                      "parallel pose": ("ik", "inverse_jacobian") + DYNAMICS_OUTPUTS}
+SIMULATION_OUTPUTS = {MechanismKind.SERIAL: ("fk", "jacobian", "jacobian_geometric") + DYNAMICS_OUTPUTS,
+                      MechanismKind.PARALLEL: ("ik", "fk", "jacobian") + DYNAMICS_OUTPUTS,
+                      MechanismKind.PARALLEL_POSE: ("ik", "inverse_jacobian") + DYNAMICS_OUTPUTS}
 #: ... and a hybrid device's TCP (device_fk, device_actuator_jacobian), derived where the model has a wrist
 OPTIONAL_OUTPUTS = ("gravity_vector", "potential_energy", "friction", "device_fk", "device_actuator_jacobian")
 SCENARIOS = ("sine", "tracking", "haptic-wall", "gravity-compensation", "free-swing")

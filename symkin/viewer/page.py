@@ -32,6 +32,7 @@ from markupsafe import Markup
 
 from symkin._version import __version__
 from symkin.analysis import conditioning, global_indices, mechanism, parallel, sampling, workspace
+from symkin.analysis.mechanism import MechanismKind
 from symkin.backends.templating import render_html
 from symkin.runtime.info import GeneratedModel
 from symkin.runtime.loader import LoadedModel
@@ -49,14 +50,14 @@ MAX_SOBOL_LOG2 = 18
 VIRIDIS = ("#440154", "#3b528b", "#21918c", "#5ec962", "#fde725")
 
 #: The generated functions the page evaluates, by kind of mechanism (the keys of
-#: symkin.cli.model_files.analysis_kind): a translational platform is driven through its
+#: symkin.analysis.mechanism.MechanismKind): a translational platform is driven through its
 #: closed-form ik and rated by J (its cloud comes from the closed-form fk); a pose platform
 #: (no closed-form fk) by the twist Jacobian from J^-1, at the home orientation for the cloud.
 VIEW_OUTPUTS = {
-    "serial": ("fk", "frames", "jacobian"),
-    "parallel": ("ik", "fk", "leg_points", "jacobian", "singularities"),
-    "parallel pose": ("ik", "leg_points", "inverse_jacobian", "singularities"),
-    "parallel orientation": ("ik", "leg_points", "inverse_jacobian", "singularities"),
+    MechanismKind.SERIAL: ("fk", "frames", "jacobian"),
+    MechanismKind.PARALLEL: ("ik", "fk", "leg_points", "jacobian", "singularities"),
+    MechanismKind.PARALLEL_POSE: ("ik", "leg_points", "inverse_jacobian", "singularities"),
+    MechanismKind.PARALLEL_ORIENTATION: ("ik", "leg_points", "inverse_jacobian", "singularities"),
 }
 
 
@@ -82,19 +83,12 @@ WRIST_VIEW_OUTPUTS = ("device_fk", "device_frames", "device_jacobian")
 
 def view_outputs(model: GeneratedModel) -> tuple[str, ...]:
     """The generated functions the page evaluates for ``model``."""
-    return VIEW_OUTPUTS[kind_of(model)] + (WRIST_VIEW_OUTPUTS if model.info.wrist else ())
+    return VIEW_OUTPUTS[mechanism.kind_of(model)] + (WRIST_VIEW_OUTPUTS if model.info.wrist else ())
 
 
 def missing_functions(model: GeneratedModel) -> list[str]:
     """The generated functions the page needs that ``model`` lacks (empty: it can be shown)."""
     return [f for f in view_outputs(model) if f not in model.functions]
-
-
-def kind_of(model: GeneratedModel) -> str:
-    """The key of :data:`VIEW_OUTPUTS`: serial, parallel (a platform that only translates, with a closed-form
-    fk), parallel orientation (a spherical platform: no positional workspace, rated by its angular velocity)
-    or parallel pose."""
-    return mechanism.parallel_kind(mechanism.task_space(model)) if mechanism.is_parallel(model) else "serial"
 
 
 def _pad3(points: np.ndarray, axes: tuple[str, ...]) -> np.ndarray:
@@ -107,7 +101,7 @@ def _pad3(points: np.ndarray, axes: tuple[str, ...]) -> np.ndarray:
 def _length(model: GeneratedModel, limits: np.ndarray) -> float | None:
     """The characteristic length that homogenizes J where the rated task space mixes lengths and angles
     (a pose platform's twist, at its home orientation), as the analyses compute it; else None."""
-    if kind_of(model) == "parallel pose":
+    if mechanism.kind_of(model) is MechanismKind.PARALLEL_POSE:
         return global_indices.characteristic_length_of(parallel.constant_orientation(model), limits)
     return global_indices.characteristic_length_of(model, limits) if mechanism.mixes_translations_and_rotations(model) \
         else None
@@ -115,14 +109,14 @@ def _length(model: GeneratedModel, limits: np.ndarray) -> float | None:
 
 def workspace_cloud(model: GeneratedModel, samples: int, seed: int = 0) -> Cloud:
     """The workspace cloud with 1/kappa, as ``symkin workspace`` and ``symkin gci`` sample it."""
-    if kind_of(model) == "parallel orientation":
+    if mechanism.kind_of(model) is MechanismKind.PARALLEL_ORIENTATION:
         n = len(model.info.coordinates)
         return Cloud(np.zeros((0, 3)), np.zeros(0), np.zeros((0, n)), None,
                      "no workspace cloud: a spherical platform's workspace is a set of orientations, not of points.")
     limits = mechanism.joint_limits(model)
     length = _length(model, limits)
     homogenized = f"; J homogenized with L = {1000 * length:.1f} mm." if length is not None else "."
-    if kind_of(model) == "parallel pose":
+    if mechanism.kind_of(model) is MechanismKind.PARALLEL_POSE:
         held = parallel.constant_orientation(model)
         lower, upper = parallel.constant_orientation_box(held, limits)
         log2 = max(1, math.ceil(math.log2(samples)))
