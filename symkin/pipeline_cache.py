@@ -207,7 +207,8 @@ def cached_derivations() -> list[CachedDerivation]:
         if place.name.startswith(".") or not (place / ENTRY_FILE).is_file():
             continue
         size = sum(p.stat().st_size for p in place.rglob("*") if p.is_file())
-        found.append(CachedDerivation(place, place.name.rsplit("-", 1)[0], size, (place / ENTRY_FILE).stat().st_mtime))
+        used = (place / ENTRY_FILE).stat().st_mtime
+        found.append(CachedDerivation(place, place.name.rsplit("-", 1)[0], size, used))
     return sorted(found, key=lambda entry: (entry.last_used, entry.path.name))
 
 
@@ -218,7 +219,8 @@ def clear(*, model: str | None = None, older_than: float | None = None, now: flo
     now = time.time() if now is None else now
     removed = []
     for entry in cached_derivations():
-        if (model is not None and entry.model != model) or (older_than is not None and now - entry.last_used <= older_than):
+        if (model is not None and entry.model != model) or \
+                (older_than is not None and now - entry.last_used <= older_than):
             continue
         _remove(entry.path)
         removed.append(entry)

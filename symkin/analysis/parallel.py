@@ -171,12 +171,13 @@ def parallel_inverse(model: GeneratedModel) -> ParallelInverse | ConstantOrienta
         raise NotApplicable(f"{model.name}: not a parallel mechanism")
     kind = mechanism.parallel_kind(mechanism.task_space(model))
     if kind is mechanism.MechanismKind.PARALLEL_ORIENTATION:
-        raise NotApplicable(f"{model.name}: the platform only turns (task space {list(mechanism.task_space(model))}): "
-                            "its workspace is a set of orientations, which the positional workspace and GCI analyses do "
-                            "not cover; rate it with the generated inverse_jacobian and singularities at chosen "
-                            "orientations")
+        task = list(mechanism.task_space(model))
+        raise NotApplicable(f"{model.name}: the platform only turns (task space {task}): its workspace is a set of "
+                            "orientations, which the positional workspace and GCI analyses do not cover; rate it "
+                            "with the generated inverse_jacobian and singularities at chosen orientations")
     if kind is mechanism.MechanismKind.PARALLEL_POSE:
-        raise NotApplicable(f"{model.name}: the platform also rotates (task space {list(mechanism.task_space(model))}): "
+        task = list(mechanism.task_space(model))
+        raise NotApplicable(f"{model.name}: the platform also rotates (task space {task}): "
                             "its Cartesian workspace is analysed at a constant orientation "
                             "(symkin.analysis.parallel.constant_orientation(model, (roll, pitch, yaw)))")
     _require(model, ("ik", "fk", "jacobian"))

@@ -291,9 +291,8 @@ def _compile(command: list[str], units: list[tuple[list[str], Path | str]], targ
         with ThreadPoolExecutor(max_workers=jobs) as pool:
             try:
                 # list() re-raises the first failure once every started compilation has finished
-                list(pool.map(lambda unit, source, obj: compilers.run(command + unit[0] + ["-c", "-o", obj, str(source)],
-                                                                      source),
-                              units, sources, objects))
+                list(pool.map(lambda unit, source, obj: compilers.run(
+                    command + unit[0] + ["-c", "-o", obj, str(source)], source), units, sources, objects))
             except BaseException:
                 compilers.kill()  # before the pool waits for its threads, which wait for their compilers
                 raise
