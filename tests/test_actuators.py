@@ -142,8 +142,10 @@ def test_urdf_transmissions_give_the_chain_s_gear_ratios():
     model = load_model(ROBOTS_DIR / "pr2_description/urdf/pr2.urdf", base="torso_lift_link", tip="l_gripper_palm_link")
     ratios = {a.joint: float(a.gear_ratio) for a in model.actuators}
     # the decimals of the file, read exactly and rounded once: equal to the literals
-    assert ratios["l_shoulder_pan_joint"] == 63.1552452977 and ratios["l_upper_arm_roll_joint"] == 32.6525111499
-    assert "l_wrist_flex_joint" not in ratios and all(float(a.rotor_inertia) == 0 for a in model.actuators)
+    assert ratios["l_shoulder_pan_joint"] == 63.1552452977
+    assert ratios["l_upper_arm_roll_joint"] == 32.6525111499
+    assert "l_wrist_flex_joint" not in ratios
+    assert all(float(a.rotor_inertia) == 0 for a in model.actuators)
 
 
 def test_gyroscopic_rotors_couple_with_the_links_that_carry_them(derivations):

@@ -54,7 +54,8 @@ def random_orientations(seed, count, spread=0.5):
 
 def test_the_model_is_spherical_with_lambda_three(models):
     parallel = models["agile_eye"].parallel
-    assert parallel.motion is PlatformMotion.SPHERICAL and parallel.coordinates == ("roll", "pitch", "yaw")
+    assert parallel.motion is PlatformMotion.SPHERICAL
+    assert parallel.coordinates == ("roll", "pitch", "yaw")
     report = model_mobility(models["agile_eye"])
     assert (report.lam, report.bodies, report.joints, report.mobility) == (3, 8, 9, 3)
 
@@ -146,10 +147,12 @@ def test_the_gci_command_states_the_measure_of_orientations(generated_dir):
     run = subprocess.run([*SYMKIN_CLI, "gci", str(generated_dir / "agile_eye"), "--samples", "4096"],
                          capture_output=True, text=True, env=dict(os.environ, SYMKIN_QUIET="1"))
     assert run.returncode == 0, run.stderr
-    assert "rad^3" in run.stdout and "invariant measure of SO(3)" in run.stdout
+    assert "rad^3" in run.stdout
+    assert "invariant measure of SO(3)" in run.stdout
     refused = subprocess.run([*SYMKIN_CLI, "gci", str(generated_dir / "agile_eye"), "--map", "map.png"],
                              capture_output=True, text=True)
-    assert refused.returncode == 2 and "spherical platform" in refused.stderr
+    assert refused.returncode == 2
+    assert "spherical platform" in refused.stderr
 
 
 def test_the_orientation_cloud_holds_the_reachable_orientations_with_their_conditioning(eye):
@@ -176,4 +179,5 @@ def test_the_workspace_command_draws_the_orientations_and_states_their_measure(e
                              capture_output=True, text=True)
     assert refused.returncode == 2
     assert "spherical platform" in refused.stderr
-    assert not (tmp_path / "m.png").exists() and not (tmp_path / "w.png").exists()
+    assert not (tmp_path / "m.png").exists()
+    assert not (tmp_path / "w.png").exists()

@@ -36,7 +36,8 @@ def test_fig_8_19_is_reproduced_by_the_documented_command(tmp_path, capsys):
                  "-o", str(figure), "--map", str(kappa_map)]) == 0
     out = capsys.readouterr().out
     for path in (figure, kappa_map):
-        assert path.read_bytes()[:8] == PNG and path.stat().st_size > 20_000
+        assert path.read_bytes()[:8] == PNG
+        assert path.stat().st_size > 20_000
     areas = [float(a) for a in re.findall(r"area: ([0-9.e-]+) \+- [0-9.e-]+ m\^2 \(qmc, \|det J\|", out)]
     assert areas == pytest.approx([np.pi / 2 * 0.01, np.pi / 2 * 0.04], rel=1e-6)
     assert out.count("singular configurations: 200, of which 200 on the workspace boundary") == 2
@@ -133,6 +134,7 @@ def test_the_workspace_measure_is_printed_with_its_unit(capsys):
     assert main(["gci", str(GENERATED_DIR / "planar_2r"), "--samples", "256", "--measure", "joint"]) == 0
     out = capsys.readouterr().out
     measure = float(re.search(r"int dW = (\S+)", out).group(1))
-    assert re.search(r" rad\^2$", out, re.MULTILINE) and abs(measure - (np.pi / 2) ** 2) < 1e-9  # the joint box
+    assert re.search(r" rad\^2$", out, re.MULTILINE)
+    assert abs(measure - (np.pi / 2) ** 2) < 1e-9  # the joint box
     assert main(["gci", str(GENERATED_DIR / "delta"), "--samples", "256"]) == 0
     assert re.search(r"workspace measure int dW = .* m\^3$", capsys.readouterr().out, re.MULTILINE)

@@ -71,7 +71,8 @@ def test_every_function_matches_the_sympy_expressions(name, backend, models, der
             assert error[worst] < bound[worst], (record["name"], out["name"], f"error {error[worst]:.3g} > bound "
                                                  f"{bound[worst]:.3g}", worst_state(g, w, inputs))
         checked.append(record["name"])
-    assert checked == list(generated.functions) and "scene" in checked
+    assert checked == list(generated.functions)
+    assert "scene" in checked
 
 
 def assert_close_at_scale(got, want):
@@ -99,7 +100,8 @@ def test_same_signatures_and_batch_semantics_as_numpy(name, backend, models, der
             want, got = _tuple(f_ref(*args)), _tuple(f_other(*args))
             assert type(got).__name__ == type(want).__name__
             for g, w in zip(got, want):
-                assert g.shape == w.shape and g.dtype == np.float64
+                assert g.shape == w.shape
+                assert g.dtype == np.float64
                 assert_close_at_scale(g, w)
 
 
@@ -166,7 +168,8 @@ def test_results_are_fresh_arrays(loaded):
         np.testing.assert_array_equal(first, loaded("ur10e", "numpy").fk(np.zeros(6)))
         result = ur.scene(np.zeros(6), np.zeros(6))
         result.base_T_tcp[:] = 7.0
-        assert not np.any(result.J == 7.0) and not np.any(result.M == 7.0)
+        assert not np.any(result.J == 7.0)
+        assert not np.any(result.M == 7.0)
 
 
 def test_large_batches_are_evaluated_in_chunks_with_the_same_results(loaded, models):

@@ -46,7 +46,8 @@ def test_generated_c_is_strict_c99_and_a_c_program_uses_it_without_python(genera
         source = generated_dir / name / f"{name}.c"
         result = subprocess.run([CC, *_strict_flags(source), "-c", str(source),
                                  "-o", str(objects[name])], capture_output=True, text=True)
-        assert result.returncode == 0 and not result.stderr, (name, result.stderr)
+        assert result.returncode == 0, (name, result.stderr)
+        assert not result.stderr, (name, result.stderr)
         # The header alone is valid C: it compiles as a translation unit on its own.
         subprocess.run([CC, *STRICT_FLAGS, "-fsyntax-only", "-x", "c", str(generated_dir / name / f"{name}.h")],
                        check=True, capture_output=True, text=True)
@@ -60,7 +61,8 @@ def test_generated_c_is_strict_c99_and_a_c_program_uses_it_without_python(genera
     assert result.returncode == 0, result.stdout
     last = result.stdout.strip().splitlines()[-1]
     passed = int(last.split()[0])
-    assert last.endswith(" 0 failed") and passed > 400, result.stdout
+    assert last.endswith(" 0 failed"), result.stdout
+    assert passed > 400, result.stdout
 
 
 def test_header_documents_layout_defaults_and_float32(generated_dir):
@@ -76,7 +78,8 @@ def test_header_documents_layout_defaults_and_float32(generated_dir):
     planar = (generated_dir / "planar_2r" / "planar_2r.h").read_text()
     assert "void planar_2r_fk_f32(const float *q, float l1, float l2, float *base_T_tcp);" in planar
     source = (generated_dir / "ur10e" / "ur10e.c").read_text()
-    assert "malloc" not in source and "static double" not in source  # no heap, no global state
+    assert "malloc" not in source
+    assert "static double" not in source  # no heap, no global state
     assert "pow(" not in source  # squares and cubes are multiplications
 
 
@@ -102,15 +105,19 @@ def test_libraries_are_cached_by_content(generated_dir, tmp_path, monkeypatch, c
     shutil.copytree(generated_dir / "planar_2r", work)
     source, header = work / "planar_2r.c", work / "planar_2r.h"
     first = build.shared_library(source, header)
-    assert first.parent == tmp_path / "cache" and first.exists()
+    assert first.parent == tmp_path / "cache"
+    assert first.exists()
     progress = capsys.readouterr().err  # a build says what it compiles and how long it took
-    assert "symkin: compiling planar_2r.c" in progress and "symkin: compiled planar_2r.c in" in progress
+    assert "symkin: compiling planar_2r.c" in progress
+    assert "symkin: compiled planar_2r.c in" in progress
     inode = first.stat().st_ino  # a rebuild renames a new file into place; a load only touches the mtime
-    assert build.shared_library(source, header) == first and first.stat().st_ino == inode
+    assert build.shared_library(source, header) == first
+    assert first.stat().st_ino == inode
     assert capsys.readouterr().err == ""  # loading from the cache is silent
     source.write_text(source.read_text() + "\n/* changed */\n")
     second = build.shared_library(source, header)
-    assert second != first and second.exists()
+    assert second != first
+    assert second.exists()
     monkeypatch.setenv("SYMKIN_CFLAGS", "-O1")
     assert build.shared_library(source, header) not in (first, second)
     assert not list((tmp_path / "cache").glob("*.partial"))
@@ -128,7 +135,8 @@ def test_compiler_problems_are_clear_errors(generated_dir, tmp_path, monkeypatch
     (work / "planar_2r.c").write_text("this is not C\n")
     with pytest.raises(GeneratedCodeError, match="compiling .*planar_2r.c failed"):
         build.shared_library(work / "planar_2r.c", work / "planar_2r.h")
-    assert not list((tmp_path / "cache").glob("*.so")) and not list((tmp_path / "cache").glob("*.partial"))
+    assert not list((tmp_path / "cache").glob("*.so"))
+    assert not list((tmp_path / "cache").glob("*.partial"))
 
 
 def test_load_without_c_code_says_how_to_get_it(tmp_path, models):
@@ -202,11 +210,13 @@ def test_the_source_compiles_as_parallel_translation_units_with_the_bits_of_the_
     name = "ur10e"
     source, header = generated_dir / name / f"{name}.c", generated_dir / name / f"{name}.h"
     units = build.translation_units(source.read_text())
-    assert len(units) > 1 and build.translation_units("int f(void);\n") == [[]]
+    assert len(units) > 1
+    assert build.translation_units("int f(void);\n") == [[]]
     for k, unit in enumerate(units):
         result = subprocess.run([CC, *[f for f in STRICT_FLAGS if f != "-O3"], "-O0", *unit, "-c", str(source),
                                  "-o", str(tmp_path / f"part{k}.o")], capture_output=True, text=True)
-        assert result.returncode == 0 and not result.stderr, (unit, result.stderr)
+        assert result.returncode == 0, (unit, result.stderr)
+        assert not result.stderr, (unit, result.stderr)
     monkeypatch.setenv("SYMKIN_CACHE_DIR", str(tmp_path / "cache"))
     monkeypatch.setenv("SYMKIN_BUILD_JOBS", "2")
     split = ctypes.CDLL(str(build.shared_library(source, header)))
@@ -255,7 +265,8 @@ def test_an_interrupted_compile_leaves_nothing_in_the_cache(generated_dir, tmp_p
     assert process.stderr.readline().startswith("symkin: compiling planar_2r.c")
     os.killpg(process.pid, signal.SIGINT)  # as Ctrl-C in a terminal: to the whole process group
     _, err = process.communicate(timeout=120)
-    assert process.returncode != 0 and "KeyboardInterrupt" in err
+    assert process.returncode != 0
+    assert "KeyboardInterrupt" in err
     assert [p.name for p in cache.iterdir() if not p.name.endswith(".lock")] == []
     subprocess.run([sys.executable, "-c", load_c], env=env, check=True, capture_output=True)
     assert [p.suffix for p in cache.iterdir() if not p.name.endswith(".lock")] == [".so"]

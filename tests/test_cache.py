@@ -32,10 +32,13 @@ def _age(path, days):
 
 def test_list_shows_the_compiled_library_and_a_load_marks_its_use(cache, capsys):
     (library,) = cached_libraries(cache)
-    assert library.model == "planar_2r" and library.size > 0
+    assert library.model == "planar_2r"
+    assert library.size > 0
     assert main(["cache", "list"]) == 0
     out = capsys.readouterr().out
-    assert str(cache) in out and library.path.name in out and "1 library" in out
+    assert str(cache) in out
+    assert library.path.name in out
+    assert "1 library" in out
     _age(library.path, 10)
     load(GENERATED_DIR / "planar_2r", "c")          # a cache hit: no build, but a use
     assert time.time() - cached_libraries(cache)[0].last_used < DAY
@@ -48,10 +51,12 @@ def test_clear_by_age_and_model_and_everything(cache, capsys):
     assert clear(cache, model="delta").removed == ()
     assert main(["cache", "clear", "--older-than", "5"]) == 0
     assert "removed 1 library" in capsys.readouterr().out
-    assert cached_libraries(cache) == [] and not any(cache.iterdir())   # the lock file went with it
+    assert cached_libraries(cache) == []
+    assert not any(cache.iterdir())   # the lock file went with it
     model = load(GENERATED_DIR / "planar_2r", "c")   # rebuilt on the next load
     assert model.fk([0.1, 0.2]).shape == (4, 4)
-    assert main(["cache", "clear"]) == 0 and cached_libraries(cache) == []
+    assert main(["cache", "clear"]) == 0
+    assert cached_libraries(cache) == []
 
 
 def test_a_library_whose_build_lock_is_held_is_left_alone(cache, capsys):

@@ -24,7 +24,8 @@ def test_functions_have_named_inputs_outputs_and_defaults(loaded):
     assert fk.name() == "fk"
     assert fk.name_in() == ["q", "d1", "a2", "a3", "d4", "d5", "d6"]
     assert fk.name_out() == ["base_T_tcp"]
-    assert fk.size_in(0) == (6, 1) and fk.size_out(0) == (4, 4)
+    assert fk.size_in(0) == (6, 1)
+    assert fk.size_out(0) == (4, 4)
     assert fk.nnz_out(0) == 16  # dense, as the other backends
     # Called by name: omitted parameters take the model defaults, an omitted q is NaN.
     q = np.linspace(-1, 1, 6)

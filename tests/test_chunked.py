@@ -81,7 +81,8 @@ def test_cli_chunked_gci(capsys):
     assert main(["gci", str(GENERATED_DIR / "planar_2r"), "-n", "1e5", "--scheduler", "serial", "--chunk", "5000",
                  "--seed", "1"]) == 0
     out = capsys.readouterr().out
-    assert "65536 evaluations by qmc" in out and "in chunks of at most 5000 points in this process" in out
+    assert "65536 evaluations by qmc" in out
+    assert "in chunks of at most 5000 points in this process" in out
     measure = float(out.split("int dW = ")[1].split()[0])
     error = float(out.split("int dW = ")[1].split()[2])
     assert abs(measure - AREA) <= 3 * error

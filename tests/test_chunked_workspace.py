@@ -58,7 +58,8 @@ def test_a_chunked_grid_is_the_in_memory_study(grid_result):
     assert grid_result.singular_count == singular.sum() == 70  # theta2 = 0, the grid's first column
     assert grid_result.singular_on_boundary == occupancy.lookup(cloud.points[singular], occupancy.boundary()).sum()
     assert abs(grid_result.measure.value - AREA) <= 3 * grid_result.measure.error
-    assert len(grid_result.cloud.q) <= 7 * math.ceil(300 / 7) and len(grid_result.inv_kappa) == len(grid_result.cloud.q)
+    assert len(grid_result.cloud.q) <= 7 * math.ceil(300 / 7)
+    assert len(grid_result.inv_kappa) == len(grid_result.cloud.q)
 
 
 def test_every_task_holds_at_most_a_chunk_and_returns_summaries_bounded_by_the_grid(payload, monkeypatch):
@@ -75,7 +76,8 @@ def test_every_task_holds_at_most_a_chunk_and_returns_summaries_bounded_by_the_g
     found = chunked_workspace.chunked_workspace(payload, spec, chunk=1200, keep=100, scheduler="serial")
     assert [count for count, _ in seen] == [1200, 1200, 1200, 1200, 200]
     for _, summary in seen:
-        assert len(summary.occupied) <= found.occupancy.occupied.size and len(summary.kept_q) <= 100 // 5 + 1
+        assert len(summary.occupied) <= found.occupancy.occupied.size
+        assert len(summary.kept_q) <= 100 // 5 + 1
 
 
 def test_serial_and_a_local_cluster_agree_to_the_bit(payload, grid_result):
@@ -92,10 +94,12 @@ def test_cli_workspace_in_chunks(tmp_path, capsys):
     assert main(["workspace", str(GENERATED_DIR / "planar_2r"), "-n", "1e5", "--scheduler", "serial", "--chunk",
                  "20000", "-o", str(figure), "--map", str(tmp_path / "map.png")]) == 0
     out = capsys.readouterr().out
-    assert "99856 configurations (grid, in chunks of 20000)" in out and "in 5 chunks in this process" in out
+    assert "99856 configurations (grid, in chunks of 20000)" in out
+    assert "in 5 chunks in this process" in out
     area = out.split("area: ")[1].split()
     assert abs(float(area[0]) - AREA) <= 3 * float(area[2])
-    assert figure.stat().st_size > 0 and (tmp_path / "map.png").stat().st_size > 0
+    assert figure.stat().st_size > 0
+    assert (tmp_path / "map.png").stat().st_size > 0
 
 
 @pytest.mark.parametrize("model, arguments, message", [

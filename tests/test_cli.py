@@ -22,7 +22,8 @@ def test_every_command_has_help(command):
     assert result.returncode == 0
     assert "usage: symkin" in result.stdout
     # argparse %-formats help strings but prints descriptions as written: an escaped %% there shows
-    assert "%%" not in result.stdout and "%(" not in result.stdout
+    assert "%%" not in result.stdout
+    assert "%(" not in result.stdout
 
 
 #: Commands on generated code, run with sympy made unimportable: the CLI imports the symbolic side only for
@@ -78,7 +79,8 @@ def test_ci_runs_exactly_the_readme_test_command():
     """.ci/run is what CI executes; it must run the README's `make test` line, word for word."""
     readme = [line for line in (ROOT / "README.md").read_text().splitlines() if line.startswith("make test")]
     ci = [line for line in (ROOT / ".ci" / "run").read_text().splitlines() if line.startswith("make ")]
-    assert len(readme) == 1 and ci == readme, (readme, ci)
+    assert len(readme) == 1, (readme, ci)
+    assert ci == readme, (readme, ci)
 
 
 def test_negative_values_with_units_are_values_not_options():
@@ -87,6 +89,7 @@ def test_negative_values_with_units_are_values_not_options():
 
     args = build_parser().parse_args(["simulate", "generated/ur10e", "--q0", "0", "30deg", "0", "-60deg", "-1e-3",
                                       "-.5", "--scenario", "sine"])
-    assert args.q0 == ["0", "30deg", "0", "-60deg", "-1e-3", "-.5"] and args.scenario == "sine"
+    assert args.q0 == ["0", "30deg", "0", "-60deg", "-1e-3", "-.5"]
+    assert args.scenario == "sine"
     with pytest.raises(SystemExit):  # an unknown option is still an error
         build_parser().parse_args(["simulate", "generated/ur10e", "--q0", "0", "-x"])

@@ -131,7 +131,8 @@ def test_indices_match_numpy_svd(shape):
         assert np.allclose(C.frobenius_condition_number(J), np.linalg.cond(J, "fro") / k, rtol=1e-10)
     # kappa / k <= kappa_F <= kappa
     kF = C.frobenius_condition_number(J)
-    assert np.all(kF <= cond * (1 + 1e-12)) and np.all(kF >= cond / k * (1 - 1e-12))
+    assert np.all(kF <= cond * (1 + 1e-12))
+    assert np.all(kF >= cond / k * (1 - 1e-12))
     assert np.allclose(C.manipulability(J), np.sqrt(np.linalg.det(J @ np.swapaxes(J, -1, -2)))
                        if shape[0] <= shape[1] else np.prod(s, axis=-1), rtol=1e-10)
 
@@ -173,7 +174,8 @@ def test_homogenize_scales_only_the_translational_rows():
     rows = mechanism.position_rows(UR10E)
     assert rows == (0, 1, 2)
     H = C.homogenize(J, 0.5, rows)
-    assert np.allclose(H[:3], J[:3] / 0.5) and np.array_equal(H[3:], J[3:])
+    assert np.allclose(H[:3], J[:3] / 0.5)
+    assert np.array_equal(H[3:], J[3:])
     with pytest.raises(ValueError):
         C.homogenize(J, 0.0, rows)
 
@@ -189,7 +191,8 @@ def test_characteristic_length_minimizes_the_mean_frobenius_conditioning():
             C.inverse_condition_number(J) > 0] ** 2)
 
     assert 0.05 < L < 1.5  # metres, for an arm of 1.3 m reach
-    assert cost(L) < cost(1.05 * L) and cost(L) < cost(L / 1.05)
+    assert cost(L) < cost(1.05 * L)
+    assert cost(L) < cost(L / 1.05)
 
 
 def test_characteristic_length_scales_with_the_mechanism():

@@ -56,7 +56,9 @@ def test_friction_the_coriolis_matrix_and_the_c_code_are_checked():
                         urdf={"tip": "link2"})
     rows = {c.quantity: c for c in report.comparisons}
     for row in ("friction", "inverse_dynamics", "coriolis_matrix C qd", "coriolis_matrix Mdot - 2C skew"):
-        assert row in rows and f"{row} (c)" in rows and not rows[row].note, row
+        assert row in rows, row
+        assert f"{row} (c)" in rows, row
+        assert not rows[row].note, row
     assert not report.failures, report.comparisons
 
 
@@ -65,7 +67,9 @@ def test_a_stock_robot_with_locked_fingers_passes_on_the_command_line():
                                        "panda_link8", "--lock", "panda_finger_joint1=0.03", "--samples", "4"],
                          capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
-    assert "mass_matrix" in run.stdout and "FAIL" not in run.stdout and "frame panda_link7" in run.stdout
+    assert "mass_matrix" in run.stdout
+    assert "FAIL" not in run.stdout
+    assert "frame panda_link7" in run.stdout
 
 
 def test_a_stock_arm_with_a_mimic_joint_on_the_chain_passes():
@@ -93,7 +97,9 @@ def test_a_reference_that_disagrees_fails_naming_the_quantity(tmp_path):
     run = subprocess.run(SYMKIN_CLI + ["crosscheck", str(MODELS_DIR / "ur10e.yaml"), "--reference-urdf", str(edited),
                                        "--samples", "3"], capture_output=True, text=True)
     assert run.returncode == 1, run.stdout + run.stderr
-    assert "crosscheck failed" in run.stderr and "mass_matrix" in run.stderr and "fk (" not in run.stderr
+    assert "crosscheck failed" in run.stderr
+    assert "mass_matrix" in run.stderr
+    assert "fk (" not in run.stderr
 
 
 def test_the_exported_urdf_reads_back_as_the_same_robot(tmp_path):
@@ -115,7 +121,9 @@ def test_the_exported_urdf_reads_back_as_the_same_robot(tmp_path):
 def test_export_refuses_a_parallel_model_and_crosscheck_says_when_pinocchio_is_missing(tmp_path, monkeypatch):
     run = subprocess.run(SYMKIN_CLI + ["export", str(MODELS_DIR / "delta.yaml"), "-o", str(tmp_path / "d.urdf")],
                          capture_output=True, text=True)
-    assert run.returncode == 2 and "closed loops" in run.stderr and not (tmp_path / "d.urdf").exists()
+    assert run.returncode == 2
+    assert "closed loops" in run.stderr
+    assert not (tmp_path / "d.urdf").exists()
     monkeypatch.setitem(sys.modules, "pinocchio", None)  # import pinocchio raises ImportError
     with pytest.raises(ModelError, match="'pinocchio' is not installed"):
         crosscheck(MODELS_DIR / "planar_2r.yaml", samples=1)

@@ -113,7 +113,8 @@ def test_no_real_solution_gives_nan_and_a_negative_margin(delta, dims):
         fk = delta.fk(theta)
     none = fk.margin < 0
     assert 20 < none.sum() < 380
-    assert np.all(np.isnan(fk.position[none])) and np.all(np.isfinite(fk.position[~none]))
+    assert np.all(np.isnan(fk.position[none]))
+    assert np.all(np.isfinite(fk.position[~none]))
     rods = np.linalg.norm(platform_joints(fk.position[~none], dims) - elbows(theta[~none], dims), axis=-1)
     np.testing.assert_allclose(rods, dims["b"], atol=1e-12)
     # Independently: the circle where spheres 1 and 2 meet never reaches sphere 3 (or they do not meet).
@@ -227,7 +228,8 @@ def test_coplanar_rods_are_interior_singular(delta, dims):
     # product of rods (terms <= b^3 = 3.4e-3 m^3) that vanishes: both at the rounding of their terms
     assert wide.constraints(theta, p) == pytest.approx(np.zeros(3), abs=KINEMATICS * 0.1)
     s = wide.singularities(theta, p)
-    assert abs(s.det_Jx) < KINEMATICS * dims["b"] ** 3 and abs(s.det_Jq) > 1e-9
+    assert abs(s.det_Jx) < KINEMATICS * dims["b"] ** 3
+    assert abs(s.det_Jq) > 1e-9
 
 
 def test_regular_points_are_not_singular(delta, dims):

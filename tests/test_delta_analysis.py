@@ -35,7 +35,8 @@ def reference():
     """High-accuracy GCI and volume (adaptive, joint domain, C backend), with their error estimates."""
     model = symkin.load(DELTA_DIR, backend="c")
     result = global_indices.gci(model, method="adaptive", samples=2**18, rtol=1e-13)
-    assert result.value.relative_error < 1e-5 and result.measure.relative_error < 1e-5
+    assert result.value.relative_error < 1e-5
+    assert result.measure.relative_error < 1e-5
     return result
 
 
@@ -136,7 +137,8 @@ def test_ik_reachability_respects_the_actuator_limits(ik):
     with np.errstate(invalid="ignore"):
         raw = DELTA.ik(grid).joints
     outside = np.isfinite(raw).all(axis=1) & np.any((raw < limits[:, 0] - 1e-6) | (raw > limits[:, 1] + 1e-6), axis=1)
-    assert outside.any() and not inside[outside].any()
+    assert outside.any()
+    assert not inside[outside].any()
 
 
 def test_joint_and_cartesian_workspaces_have_the_same_volume(reference, ik):
@@ -176,7 +178,8 @@ def test_lowest_conditioning_lies_on_the_boundary_within_the_actuator_limits(ik)
 def test_working_mode_excludes_other_branches():
     q = workspace.sample_workspace(DELTA, 8000, method="sobol", seed=2).q
     p, inside = parallel.working_mode(DELTA, q)
-    assert inside.all() and np.allclose(DELTA.ik(p).joints, q, atol=1e-9)
+    assert inside.all()
+    assert np.allclose(DELTA.ik(p).joints, q, atol=1e-9)
     box_q = np.random.default_rng(4).uniform(*np.radians([-90, 60]), (8000, 3))
     _, inside = parallel.working_mode(DELTA, box_q)
     assert 0.5 < inside.mean() < 0.99  # some actuator angles put a knee inwards
@@ -237,7 +240,8 @@ def test_convergence_table_reaches_the_target_accuracy(reference):
     trials = convergence.time_against_error(DELTA, reference.value, methods=["grid", "qmc"], budgets=[4096, 32768],
                                             repeats=1)
     best = convergence.fastest_within(trials, 1e-3)
-    assert best[("numpy", "joint", "grid")] is not None and best[("numpy", "joint", "qmc")] is not None
+    assert best[("numpy", "joint", "grid")] is not None
+    assert best[("numpy", "joint", "qmc")] is not None
 
 
 # --- commands --------------------------------------------------------------------------------
@@ -249,14 +253,17 @@ def test_workspace_command_reports_the_cartesian_grid_and_draws_slices(tmp_path,
     out = capsys.readouterr().out
     assert "reachability by ik in the working mode" in out
     match = re.search(r"the (\d+) cells of lowest 1/kappa \(1%\): (\d+) on the workspace boundary", out)
-    assert match and int(match.group(2)) >= 0.9 * int(match.group(1))
-    assert cloud.read_bytes()[:8] == PNG and kappa_map.read_bytes()[:8] == PNG
+    assert match
+    assert int(match.group(2)) >= 0.9 * int(match.group(1))
+    assert cloud.read_bytes()[:8] == PNG
+    assert kappa_map.read_bytes()[:8] == PNG
 
 
 def test_gci_command_states_the_domain(capsys):
     assert main(["gci", DELTA_DIR, "--domain", "cartesian", "--method", "qmc", "-n", "4096", "--seed", "0"]) == 0
     out = capsys.readouterr().out
-    assert "Cartesian box with reachability from inverse kinematics" in out and "working mode" in out
+    assert "Cartesian box with reachability from inverse kinematics" in out
+    assert "working mode" in out
     assert 0.5 < float(re.search(r"GCI = ([0-9.]+)", out).group(1)) < 0.54
 
 
@@ -312,7 +319,8 @@ def test_bad_leg_joint_limits_are_located(tmp_path, limits_u, limits_p, message)
 
     with pytest.raises(ModelError) as info:
         load_model(_legs_model(tmp_path, limits_u, limits_p))
-    assert message in str(info.value) and "parallel.chains.ups[" in str(info.value)
+    assert message in str(info.value)
+    assert "parallel.chains.ups[" in str(info.value)
 
 
 def test_delta_actuator_limits_are_validated(tmp_path):

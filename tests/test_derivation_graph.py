@@ -29,7 +29,8 @@ def test_quantities_are_memoized(models):
     first = d["jacobian"]
     assert d["jacobian"] is first
     d["jacobian_geometric"]
-    assert d.computed.count("chain") == 1 and d.computed.count("jacobian_geometric_matrix") == 1
+    assert d.computed.count("chain") == 1
+    assert d.computed.count("jacobian_geometric_matrix") == 1
 
 
 def test_only_fk_on_the_command_line_is_recorded_in_the_manifest(tmp_path):
@@ -51,7 +52,8 @@ def test_manifest_describes_every_function(generated_dir):
     assert fk["inputs"][0] == {"name": "q", "kind": "vector", "shape": [6],
                                "elements": ["q1", "q2", "q3", "q4", "q5", "q6"], "units": ["rad"] * 6,
                                "doc": "joint coordinates"}
-    assert fk["outputs"][0]["name"] == "base_T_tcp" and fk["outputs"][0]["shape"] == [4, 4]
+    assert fk["outputs"][0]["name"] == "base_T_tcp"
+    assert fk["outputs"][0]["shape"] == [4, 4]
     assert fk["op_counts"]["cse"] < fk["op_counts"]["derived"]
     assert fk["backends"] == ["c", "casadi", "js", "numpy"]
     assert manifest["backends"]["numpy"]["files"] == ["ur10e.py"]
@@ -65,7 +67,8 @@ def test_unknown_output_on_the_command_line_is_a_usage_error(tmp_path):
     result = subprocess.run(SYMKIN_CLI + ["derive", str(MODELS_DIR / "ur10e.yaml"), "--only", "fk,jacobain",
                                           "-o", str(tmp_path / "out")], capture_output=True, text=True)
     assert result.returncode == 2
-    assert "unknown output 'jacobain'" in result.stderr and "jacobian" in result.stderr
+    assert "unknown output 'jacobain'" in result.stderr
+    assert "jacobian" in result.stderr
     assert not (tmp_path / "out").exists()
 
 
@@ -91,7 +94,8 @@ def test_the_catalog_refuses_a_quantity_defined_twice_and_keeps_definition_order
 
     define(first, "b"), define(first, "a"), define(second, "b", "parallel")
     table = catalog.collect((first, second))
-    assert list(table) == ["b", "a"] and set(table["b"]) == {"serial", "parallel"}
+    assert list(table) == ["b", "a"]
+    assert set(table["b"]) == {"serial", "parallel"}
     define(second, "a")
     with pytest.raises(ValueError, match="'a' defined twice"):
         catalog.collect((first, second))
@@ -114,7 +118,8 @@ def test_available_keeps_what_the_model_can_derive_and_says_why_not(models):
     kept, skipped = d.available(["ik", "frames", "no_such_quantity", "jacobian"])
     assert kept == ["ik", "jacobian"]
     assert set(skipped) == {"frames", "no_such_quantity"}
-    assert "serial" in skipped["frames"] and "unknown quantity" in skipped["no_such_quantity"]
+    assert "serial" in skipped["frames"]
+    assert "unknown quantity" in skipped["no_such_quantity"]
     assert "frames" not in d.computed
 
 

@@ -109,7 +109,8 @@ def test_maximizing_the_gci_of_the_2r_improves_its_independent_gci_and_keeps_the
     numpy_model, _ = arm
     box = {"x": (0.11, 0.14), "y": (0.11, 0.14)}
     problem, _, solution = _optimize(arm, "gci", ["l1"], bounds={"l1": (0.05, 0.3)}, box=box)
-    assert solution.success and solution.constraint_violation < 1e-9
+    assert solution.success
+    assert solution.constraint_violation < 1e-9
     # the box corner nearest the base needs the smallest reach sqrt(l1^2 + l2^2) (theta2 = 90 deg) <= |corner|
     assert solution.optimum["l1"] == pytest.approx(np.sqrt(2 * 0.11**2 - 0.1**2), rel=1e-7)
     before, after = (design.evaluate(problem, numpy_model, d, samples=2**12)
@@ -125,7 +126,8 @@ def test_maximizing_the_gci_of_the_2r_improves_its_independent_gci_and_keeps_the
     monkeypatch.setattr("symkin.analysis.inverse.inverse_kinematics_for", lambda model: None)
     checked = design.evaluate(problem, numpy_model, solution.optimum, samples=2**10,
                               box_points=solution.box_points, box_configurations=q)
-    assert checked.box_reachable == 1.0 and "generated fk" in checked.box_check
+    assert checked.box_reachable == 1.0
+    assert "generated fk" in checked.box_check
     moved = design.evaluate(problem, numpy_model, solution.optimum, samples=2**10,
                             box_points=solution.box_points + 1e-6, box_configurations=q)
     assert moved.box_reachable == 0.0
@@ -145,7 +147,8 @@ def test_delta_optimization_improves_the_gci_and_keeps_the_box_reachable(delta):
     numpy_model, _ = delta
     problem, program, solution = _optimize(delta, "gci", ["r_base", "r_tcp", "a", "b"], box=DELTA_BOX,
                                            margin=0.005, nodes=4)
-    assert solution.success and solution.constraint_violation < 1e-9
+    assert solution.success
+    assert solution.constraint_violation < 1e-9
     assert solution.surrogate_optimum > solution.surrogate_start
     before, after = (design.evaluate(problem, numpy_model, d, samples=2**12)
                      for d in (solution.start, solution.optimum))
@@ -164,7 +167,9 @@ def test_cli_on_a_model_file_writes_figures_and_result(tmp_path, capsys):
     assert main(["optimize", str(MODELS_DIR / "planar_2r.yaml"), "--free", "l1", "--bounds", "l1=0.05:0.3",
                  "--nodes", "6", "-n", "1024", "-o", str(out)]) == 0
     text = capsys.readouterr().out
-    assert "l1: 0.1 -> 0.1414213562" in text and "IPOPT" in text and "wall" in text
+    assert "l1: 0.1 -> 0.1414213562" in text
+    assert "IPOPT" in text
+    assert "wall" in text
     assert sorted(p.name for p in out.iterdir()) == ["design.png", "history.png", "result.json"]
     for name in ("design.png", "history.png"):
         assert (out / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

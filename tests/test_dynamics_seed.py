@@ -60,7 +60,8 @@ def test_torques_equal_the_seed_equations_of_motion(arm):
             + m2 * l2 * g * cos(th1 + th2) + (m1 + m2) * l1 * g * cos(th1))
     tau2 = m2 * l2 * ((th1dd + th2dd) * l2 + l1 * cos(th2) * th1dd + l1 * sin(th2) * th1d**2 + g * cos(th1 + th2))
     tau = _output(d, "inverse_dynamics")
-    assert _zero(tau[0] - tau1) and _zero(tau[1] - tau2)
+    assert _zero(tau[0] - tau1)
+    assert _zero(tau[1] - tau2)
 
 
 def test_tcp_force_terms_equal_the_seed_M_V_G_primes(arm):

@@ -49,7 +49,8 @@ def test_massless_links_contribute_nothing_and_cost_nothing():
     assert len(with_massless.bodies) == len(base.bodies) + 1
     for name in ("mass_matrix", "coriolis_matrix", "gravity_vector", "inverse_dynamics"):
         a, b = Derivation(base)[name], Derivation(with_massless)[name]
-        assert a.definitions == b.definitions and a.outputs == b.outputs, name
+        assert a.definitions == b.definitions, name
+        assert a.outputs == b.outputs, name
         assert optimize(a).op_counts == optimize(b).op_counts
 
 
@@ -92,7 +93,8 @@ def test_programs_are_deterministic():
     """Two fresh derivations give identical definitions (symengine's CSE does not depend on hash seeds)."""
     model = model_from_text(ARM, "arm")
     a, b = Derivation(model)["forward_dynamics"], Derivation(model)["forward_dynamics"]
-    assert a == b and a.definitions
+    assert a == b
+    assert a.definitions
 
 
 def test_generated_friction_and_dynamics_match_the_expressions(tmp_path):
@@ -130,7 +132,8 @@ def test_tcp_force_where_elimination_without_pivoting_fails(models, derivations)
     x, y = fk(q)[0][:2, 3]
     q[0] = -np.arctan2(y, x)  # turn the base until the TCP lies in the x-z plane: J_11 = -y = 0
     Jq = J(q)[0]
-    assert abs(Jq[0, 0]) < 1e-12 and abs(np.linalg.det(Jq)) > 1e-3
+    assert abs(Jq[0, 0]) < 1e-12
+    assert abs(np.linalg.det(Jq)) > 1e-3
     qd, qdd = np.linspace(-1, 1, 6), np.linspace(2, -2, 6)
     rhs = M(q)[0] @ qdd + V(q, qd)[0] + G(q)[0]
     np.testing.assert_allclose(Jq.T @ F(q, qd, qdd)[0], rhs, rtol=1e-10, atol=1e-10 * np.abs(rhs).max())

@@ -32,7 +32,9 @@ def _check_layout(figure) -> None:
     titles += [(ax.title, ax) for ax in figure.axes if ax.get_title()]
     for title, owner in titles:
         box = title.get_window_extent(renderer)
-        assert frame.x0 - 1 <= box.x0 and box.x1 <= frame.x1 + 1 and box.y1 <= frame.y1 + 1, "a title is cut"
+        assert frame.x0 - 1 <= box.x0, "a title is cut"
+        assert box.x1 <= frame.x1 + 1, "a title is cut"
+        assert box.y1 <= frame.y1 + 1, "a title is cut"
         others = [b for ax, b in zip(figure.axes, boxes) if ax is not owner]
         assert not any(box.overlaps(other) for other in others), "a title runs into a panel or the colour bar"
 

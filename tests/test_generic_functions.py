@@ -69,14 +69,17 @@ def test_two_vector_inputs_and_scalar_vector_matrix_outputs(dynamics_like, backe
     qd[3] = 0.0  # sign(0) = 0 in every backend
     result = generated.energy(q, qd)
     assert type(result).__name__ == "EnergyResult"
-    assert result.k.shape == (7,) and result.G.shape == (7, 2) and result.M.shape == (7, 2, 2)
+    assert result.k.shape == (7,)
+    assert result.G.shape == (7, 2)
+    assert result.M.shape == (7, 2, 2)
     for i in range(7):
         k, G, M, F = reference(q[i], qd[i])
         # dynamics of a two-body cart-pendulum, relative to each output's largest entry
         for got, want in ((result.F[i], np.ravel(F)), (result.k[i], k), (result.G[i], np.ravel(G)), (result.M[i], M)):
             np.testing.assert_allclose(got, want, rtol=0, atol=DYNAMICS * max(np.abs(want).max(), 1.0))
     single = generated.energy(q[0], qd[0])
-    assert single.k.shape == () and single.G.shape == (2,)
+    assert single.k.shape == ()
+    assert single.G.shape == (2,)
     # one configuration through the batch code or the single-call path: the same operations (the C
     # batch loop may vectorize sin/cos, which differ in the last bit): CLOSED_FORM
     np.testing.assert_allclose(single.k, result.k[0], rtol=CLOSED_FORM)
@@ -103,7 +106,8 @@ def test_generic_c_compiles_without_warnings(dynamics_like, tmp_path):
     target, _ = dynamics_like
     result = subprocess.run([CC, *STRICT_FLAGS, "-c", str(target / "planar_2r.c"), "-o", str(tmp_path / "g.o")],
                             capture_output=True, text=True)
-    assert result.returncode == 0 and not result.stderr, result.stderr
+    assert result.returncode == 0, result.stderr
+    assert not result.stderr, result.stderr
 
 
 def test_constant_outputs_and_prismatic_joints(tmp_path):
@@ -123,7 +127,8 @@ def test_constant_outputs_and_prismatic_joints(tmp_path):
     if CC is not None:
         result = subprocess.run([CC, *STRICT_FLAGS, "-c", str(target / "cart.c"), "-o", str(tmp_path / "cart.o")],
                                 capture_output=True, text=True)
-        assert result.returncode == 0 and not result.stderr, result.stderr
+        assert result.returncode == 0, result.stderr
+        assert not result.stderr, result.stderr
     q = np.random.default_rng(1).uniform(-1, 1, (5, 2))
     reference = load(target)
     for backend in ("c", "casadi"):

@@ -46,7 +46,8 @@ def test_hostile_model_is_refused_with_a_located_message(case, tmp_path, monkeyp
         assert case["expect"] in err, err[:2000]
         location = f"{path}:{case['line']}:" if case["line"] else str(path)
         assert location in err, err[:2000]
-        assert "fix:" in err and "Traceback" not in err
+        assert "fix:" in err
+        assert "Traceback" not in err
         assert len(err) < 5000, "messages echo bounded excerpts of the input, not the input"
         assert list(workdir.iterdir()) == [], "nothing written, nothing executed"
 
@@ -56,7 +57,8 @@ def test_code_payloads_do_not_run_in_a_fresh_process(name, tmp_path):
     (case,) = [c for c in MANIFEST if c["file"][4:-5] == name]
     result = subprocess.run(SYMKIN_CLI + ["derive", str(CORPUS / case["file"]), "-o", "out"], capture_output=True,
                             text=True, cwd=tmp_path)
-    assert result.returncode == 2 and case["expect"] in result.stderr
+    assert result.returncode == 2
+    assert case["expect"] in result.stderr
     assert list(tmp_path.iterdir()) == []
 
 
@@ -65,7 +67,9 @@ def test_a_file_over_the_size_limit_is_refused_unread(tmp_path, monkeypatch, cap
     path.write_text("name: arm\ndescription: '" + "x" * MAX_FILE_BYTES + "'\n")
     (tmp_path / "work").mkdir()
     code, err = _run(["derive", str(path), "-o", "out"], tmp_path / "work", monkeypatch, capsys)
-    assert code == 2 and "more than the limit" in err and str(path) in err
+    assert code == 2
+    assert "more than the limit" in err
+    assert str(path) in err
     assert list((tmp_path / "work").iterdir()) == []
 
 
@@ -76,7 +80,9 @@ def test_fuzzed_models_load_or_fail_with_a_model_error(text):
         model_from_text(text, "arm", "fuzz.yaml")
     except ModelError as err:
         for problem in err.problems:
-            assert problem.message and problem.fix and problem.file == "fuzz.yaml"
+            assert problem.message
+            assert problem.fix
+            assert problem.file == "fuzz.yaml"
 
 
 @settings(max_examples=25, deadline=None, database=None, suppress_health_check=list(HealthCheck))
@@ -100,4 +106,6 @@ def test_deep_block_nesting_is_refused_with_a_location(tmp_path, monkeypatch, ca
     path.write_text(text)
     (tmp_path / "work").mkdir()
     code, err = _run(["check", str(path)], tmp_path / "work", monkeypatch, capsys)
-    assert code == 2 and "nested deeper than 64 levels" in err and f"{path}:" in err
+    assert code == 2
+    assert "nested deeper than 64 levels" in err
+    assert f"{path}:" in err

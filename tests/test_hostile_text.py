@@ -86,7 +86,8 @@ def test_the_javascript_modules_load_and_run_no_payload(derived, tmp_path):
     for case, text in TEXT_CASES:
         source = (derived / case / "arm" / "arm.js").read_text(encoding="utf-8")
         assert block_comment(text)[:60] in source, case
-        assert "</" not in source.lower().replace("<\\/", "") and "<!--" not in source, case
+        assert "</" not in source.lower().replace("<\\/", ""), case
+        assert "<!--" not in source, case
         np.testing.assert_allclose(result[case], result[TEXT_CASES[0][0]], rtol=0, atol=KINEMATICS)
 
 
@@ -101,7 +102,10 @@ def test_comment_text_cannot_leave_its_comment(line):
     comment line holds no comment or script delimiter."""
     assert ast.literal_eval('"""' + docstring(line) + '\n"""') == plain(line) + "\n"
     comment = block_comment(line)
-    assert "*/" not in comment and "/*" not in comment and "</" not in comment and "<!--" not in comment
+    assert "*/" not in comment
+    assert "/*" not in comment
+    assert "</" not in comment
+    assert "<!--" not in comment
     assert not any(c in comment for c in "\n\r\u2028\u2029\u202e")
 
 
@@ -111,7 +115,9 @@ def test_hostile_names_are_used_as_names_or_refused_where_they_stand(case, name,
     path.write_text(model_text("a planar arm", parameter=name), encoding="utf-8")
     code, err = _derive(path, tmp_path / "out", capsys)
     if code == 2:
-        assert f"{path}:" in err and "fix:" in err and "Traceback" not in err, err
+        assert f"{path}:" in err, err
+        assert "fix:" in err, err
+        assert "Traceback" not in err, err
         assert not (tmp_path / "out").exists(), "nothing half-written"
         return
     assert code == 0, err

@@ -77,7 +77,8 @@ def test_the_device_moves_by_its_platform_and_its_wrist(models):
     model = models["delta_wrist"]
     wrist = model.parallel.wrist
     assert [j.name for j in wrist.coordinates] == ["psi1", "psi2", "psi3"]
-    assert model.task_space == ("x", "y", "z") and model.dof == 3  # the legs' actuators; the wrist's joints on top
+    assert model.task_space == ("x", "y", "z")
+    assert model.dof == 3  # the legs' actuators; the wrist's joints on top
 
 
 def test_the_manifest_records_the_wrist_coordinates_with_their_limits(device):
@@ -150,7 +151,8 @@ def test_a_wrist_on_a_serial_chain_is_refused_on_the_command_line(tmp_path):
     path.write_text((MODELS_DIR / "planar_2r.yaml").read_text() + "\nwrist:\n  chain:\n    - {name: w1}\n")
     run = subprocess.run([*SYMKIN_CLI, "check", str(path)], capture_output=True, text=True)
     assert run.returncode == 2
-    assert "a wrist is carried by a parallel platform" in run.stderr and "arm.yaml" in run.stderr
+    assert "a wrist is carried by a parallel platform" in run.stderr
+    assert "arm.yaml" in run.stderr
 
 
 # --------------------------------------------------------------------------- the dynamics of the whole device
@@ -348,7 +350,8 @@ def test_cli_simulates_a_hybrid_device(generated_dir, tmp_path):
                           "--duration", "0.3", "--backend", "c", "-o", str(tmp_path / "out")],
                          capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
-    assert "|tau_psi2| <= 0 N m" in run.stdout and "peak felt force" in run.stdout
+    assert "|tau_psi2| <= 0 N m" in run.stdout
+    assert "peak felt force" in run.stdout
     assert (tmp_path / "out" / "haptic-wall.png").read_bytes()[:4] == b"\x89PNG"
 
 

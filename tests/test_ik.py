@@ -74,7 +74,8 @@ def test_right_jacobian_inverse_matches_finite_differences_of_the_log():
 def test_ur_closed_form_reproduces_every_target_to_1e_12(ur, name):
     model = ur[name]
     solver = closed_form_solver(model)
-    assert solver is not None and solver.name.startswith("UR family")
+    assert solver is not None
+    assert solver.name.startswith("UR family")
     assert len(solver.solver.branches) == 8
     rng = np.random.default_rng(2)
     q = rng.uniform(-np.pi, np.pi, (2000, 6))
@@ -84,10 +85,12 @@ def test_ur_closed_form_reproduces_every_target_to_1e_12(ur, name):
     assert np.all(found.reachable)
     valid = found.valid
     position, rotation = _fk_error(model, found.q[valid], np.broadcast_to(T[:, None], (2000, 8, 4, 4))[valid])
-    assert position <= 1e-12 and rotation <= 1e-12
+    assert position <= 1e-12
+    assert rotation <= 1e-12
     # the configuration that made the target is one of the branches
     distance = np.where(valid, _angle_distance(found.q, q[:, None, :]), np.inf).min(-1)
-    assert np.quantile(distance, 0.99) < 1e-10 and distance.max() < 1e-7
+    assert np.quantile(distance, 0.99) < 1e-10
+    assert distance.max() < 1e-7
     # branches that do not exist are reported as such (elbow out of reach), never approximated
     assert np.all((found.flags[~valid] & BranchFlag.UNREACHABLE_ELBOW) != 0)
     assert np.all(np.isnan(found.position_error[~valid]))
@@ -129,11 +132,13 @@ def test_ur_wrist_singularity_is_flagged_and_still_exact(ur):
         found = solver.solve(T)
         wrist = (found.flags & BranchFlag.WRIST) != 0
         same_shoulder = np.abs(wrap_angle(found.q[:, 0] - q[0])) < 1e-9
-        assert wrist[same_shoulder].all() and same_shoulder.sum() == 4
+        assert wrist[same_shoulder].all()
+        assert same_shoulder.sum() == 4
         assert not wrist[~same_shoulder].any()  # the other shoulder branch has q5 != 0
         assert found.valid.all()
         position, rotation = _fk_error(model, found.q, np.broadcast_to(T, (8, 4, 4)))
-        assert position <= 1e-12 and rotation <= 1e-12
+        assert position <= 1e-12
+        assert rotation <= 1e-12
         # there the solutions form a one-parameter family (q6 free, q2, q3, q4 follow): the
         # returned member has q5 exactly at the singular value and reproduces the target
         assert np.all(np.abs(wrap_angle(found.q[same_shoulder, 4] - q5)) < 1e-12)
@@ -150,9 +155,11 @@ def test_ur_elbow_singularity_stretched_arm(ur):
     T = model.fk(q)
     found = closed_form_solver(model).solve(T)
     elbow = (found.flags & BranchFlag.ELBOW) != 0
-    assert elbow.sum() >= 2 and found.valid[elbow].all()
+    assert elbow.sum() >= 2
+    assert found.valid[elbow].all()
     position, rotation = _fk_error(model, found.q[found.valid], np.broadcast_to(T, (8, 4, 4))[found.valid])
-    assert position <= 1e-12 and rotation <= 1e-12
+    assert position <= 1e-12
+    assert rotation <= 1e-12
     assert np.min(_angle_distance(found.q[found.valid], q)) < 1e-7
 
 
@@ -180,14 +187,16 @@ def test_ur_shoulder_singularity_branches_merge(ur):
     assert found.valid.any()
     np.testing.assert_allclose(found.q[:4, 0], found.q[4:, 0], atol=1e-6)
     position, rotation = _fk_error(model, found.q[found.valid], np.broadcast_to(T, (8, 4, 4))[found.valid])
-    assert position <= 1e-12 and rotation <= 1e-12
+    assert position <= 1e-12
+    assert rotation <= 1e-12
 
 
 def test_unreachable_pose_is_reported_by_both_solvers(ur):
     model = ur["ur10e"]
     target = pose_from_vector([2.5, 0.3, 0.2, 0.0, 3.0, 0.0])
     found = closed_form_solver(model).solve(target)
-    assert not found.reachable and not found.valid.any()
+    assert not found.reachable
+    assert not found.valid.any()
     assert all("no solution" in line for line in found.describe())
     result = solve_numeric(model, target, q0=np.zeros(6))
     assert not result.converged
@@ -217,7 +226,8 @@ def test_closed_form_respects_joint_limits(ur):
     solver = closed_form_solver(kin)
     q = np.array([0.4, -1.1, 1.3, 0.7, 0.9, 0.5])
     found = solver.solve(model.fk(q))
-    assert found.within_limits.any() and not found.within_limits[found.valid].all()
+    assert found.within_limits.any()
+    assert not found.within_limits[found.valid].all()
     inside = found.q[found.within_limits]
     assert np.all((inside >= kin.lower) & (inside <= kin.upper))
 
@@ -226,7 +236,9 @@ def test_closed_form_respects_joint_limits(ur):
 
 def test_planar_2r_both_elbow_branches(arm):
     solver = closed_form_solver(arm)
-    assert solver is not None and solver.name == "planar 2R" and solver.kind == "task"
+    assert solver is not None
+    assert solver.name == "planar 2R"
+    assert solver.kind == "task"
     rng = np.random.default_rng(6)
     q = rng.uniform(-np.pi, np.pi, (2000, 2))
     x = arm.fk(q)[:, :2, 3]
@@ -240,7 +252,8 @@ def test_planar_2r_both_elbow_branches(arm):
     # the seed's limits (0..90 deg) keep only the elbow + branch for targets made within them
     q_in = rng.uniform(0.01, np.pi / 2 - 0.01, (500, 2))
     found = solver.solve(arm.fk(q_in)[:, :2, 3])
-    assert found.within_limits[:, 0].all() and not found.within_limits[:, 1].any()
+    assert found.within_limits[:, 0].all()
+    assert not found.within_limits[:, 1].any()
 
 
 def test_planar_2r_matches_the_textbook_solution_and_its_singular_cases(arm):
@@ -253,14 +266,18 @@ def test_planar_2r_matches_the_textbook_solution_and_its_singular_cases(arm):
     # two closed forms of the same angles (acos, two atan2, sin, cos: ~10 roundings of angles <= pi)
     np.testing.assert_allclose(found.q[0], [theta1, theta2], rtol=0, atol=KINEMATICS * np.pi)
     stretched = solver.solve([0.2, 0.0])
-    assert stretched.valid.all() and ((stretched.flags & BranchFlag.ELBOW) != 0).all()
+    assert stretched.valid.all()
+    assert ((stretched.flags & BranchFlag.ELBOW) != 0).all()
     np.testing.assert_allclose(stretched.q, 0.0, rtol=0, atol=CLOSED_FORM)
     beyond = solver.solve([0.2 + 1e-9, 0.0])
-    assert not beyond.valid.any() and ((beyond.flags & BranchFlag.UNREACHABLE_ELBOW) != 0).all()
+    assert not beyond.valid.any()
+    assert ((beyond.flags & BranchFlag.UNREACHABLE_ELBOW) != 0).all()
     rounding = solver.solve([np.nextafter(0.2, 1.0), 0.0])  # on the boundary up to rounding: clamped, flagged
-    assert rounding.valid.all() and ((rounding.flags & BranchFlag.CLAMPED) != 0).all()
+    assert rounding.valid.all()
+    assert ((rounding.flags & BranchFlag.CLAMPED) != 0).all()
     folded = solver.solve([0.0, 0.0])
-    assert folded.valid.all() and ((folded.flags & BranchFlag.SHOULDER) != 0).all()
+    assert folded.valid.all()
+    assert ((folded.flags & BranchFlag.SHOULDER) != 0).all()
 
 
 def test_planar_2r_elbow_angle_error_is_bounded_by_its_conditioning(arm):
@@ -309,9 +326,11 @@ def test_numeric_ik_converges_to_1e_12_on_batches(ur, name):
     assert result.converged.all(), result.reason[~result.converged]
     assert np.all(result.reason == "converged")
     position, rotation = _fk_error(model, result.q, T)
-    assert position <= 1e-12 and rotation <= 1e-12
+    assert position <= 1e-12
+    assert rotation <= 1e-12
     assert result.iterations.max() < 50
-    assert result.q.shape == (300, 6) and result.position_error.shape == (300,)
+    assert result.q.shape == (300, 6)
+    assert result.position_error.shape == (300,)
 
 
 def test_numeric_ik_from_one_start_reports_local_minima_honestly(ur):
@@ -324,7 +343,8 @@ def test_numeric_ik_from_one_start_reports_local_minima_honestly(ur):
     assert np.all(np.isin(result.reason[failed], ["stalled", "max_iterations"]))
     assert np.all(np.maximum(result.position_error[failed], result.orientation_error[failed]) > 1e-6)
     position, rotation = _fk_error(model, result.q[~failed], T[~failed])
-    assert position <= 1e-12 and rotation <= 1e-12
+    assert position <= 1e-12
+    assert rotation <= 1e-12
 
 
 def test_numeric_ik_respects_joint_limits(arm):
@@ -332,12 +352,14 @@ def test_numeric_ik_respects_joint_limits(arm):
     q = rng.uniform(0.05, np.pi / 2 - 0.05, (200, 2))
     x = arm.fk(q)[:, :2, 3]
     result = solve_numeric(arm, x, q0=[np.pi / 4, np.pi / 4])
-    assert result.kind == "task" and result.converged.all()
+    assert result.kind == "task"
+    assert result.converged.all()
     np.testing.assert_allclose(result.q, q, atol=1e-9)
     assert np.all((result.q >= 0) & (result.q <= np.pi / 2))
     # reachable only with theta1 < 0: the solver stops at the limit and says so
     blocked = solve_numeric(arm, [0.15, -0.05], q0=[0.5, 0.5])
-    assert not blocked.converged and blocked.at_limit[0]
+    assert not blocked.converged
+    assert blocked.at_limit[0]
     assert blocked.q[0] == 0.0
     assert blocked.position_error > 1e-3
     assert "joints at a limit: 1" in blocked.summary()
@@ -352,7 +374,8 @@ def test_numeric_ik_beyond_reach_is_not_reported_as_converged(arm):
 def test_numeric_ik_pose_targets_of_a_planar_model(arm):
     q = np.array([0.3, 0.9])
     result = solve_numeric(arm, arm.fk(q), q0=[0.5, 0.5], kind="pose")
-    assert result.converged and result.kind == "pose"
+    assert result.converged
+    assert result.kind == "pose"
     np.testing.assert_allclose(result.q, q, atol=1e-12)
 
 
@@ -399,21 +422,26 @@ def test_cli_lists_the_eight_ur_solutions(tmp_path):
     assert result.returncode == 0, result.stderr
     report = json.loads(result.stdout)
     solutions = report["targets"][0]["solutions"]
-    assert len(solutions) == 8 and all(s["valid"] for s in solutions)
+    assert len(solutions) == 8
+    assert all(s["valid"] for s in solutions)
     assert list(tmp_path.iterdir()) == []
 
 
 def test_cli_exit_codes(generated_dir):
     arm = str(generated_dir / "planar_2r")
     ok = subprocess.run(SYMKIN_CLI + ["ik", arm, "-t", "0.1", "0.1"], capture_output=True, text=True)
-    assert ok.returncode == 0 and "elbow +" in ok.stdout
+    assert ok.returncode == 0
+    assert "elbow +" in ok.stdout
     unreachable = subprocess.run(SYMKIN_CLI + ["ik", arm, "-t", "0.3", "0"], capture_output=True, text=True)
-    assert unreachable.returncode == 1 and "no solution" in unreachable.stdout
+    assert unreachable.returncode == 1
+    assert "no solution" in unreachable.stdout
     numeric = subprocess.run(SYMKIN_CLI + ["ik", arm, "-t", "0.1", "0.1", "--method", "numeric", "--q0", "0.5",
                                            "0.5"], capture_output=True, text=True)
-    assert numeric.returncode == 0 and "converged after" in numeric.stdout
+    assert numeric.returncode == 0
+    assert "converged after" in numeric.stdout
     bad = subprocess.run(SYMKIN_CLI + ["ik", arm, "-t", "0.1"], capture_output=True, text=True)
-    assert bad.returncode == 2 and "has 2 values, got 1" in bad.stderr
+    assert bad.returncode == 2
+    assert "has 2 values, got 1" in bad.stderr
 
 
 def test_joint_limits_come_from_the_manifest(arm, ur):
@@ -437,7 +465,8 @@ def test_joint_screws_from_fk_alone_match_the_jacobian_ones(ur, arm, tmp_path):
     lean = load(symkin.derive(MODELS_DIR / "planar_2r.yaml", tmp_path, outputs=["fk", "jacobian"]))
     q = np.array([[0.3, 0.9], [1.2, 0.0]])
     found = closed_form_solver(lean).solve(lean.fk(q)[:, :2, 3])
-    assert found.valid.all() and found.solver == "planar 2R"
+    assert found.valid.all()
+    assert found.solver == "planar 2R"
     assert np.max(_angle_distance(found.q[:, 0], q)) < 1e-7
 
 
@@ -448,6 +477,8 @@ def test_solve_without_shifting_keeps_the_solver_angles(ur):
     solver = closed_form_solver(model, limits=[(0.0, 2.0 * np.pi)] * 6)
     T = model.fk(np.random.default_rng(11).uniform(-np.pi, np.pi, (50, 6)))
     shifted, raw = solver.solve(T), solver.solve(T, shift=False)
-    assert np.array_equal(shifted.valid, raw.valid) and np.array_equal(shifted.flags, raw.flags)
+    assert np.array_equal(shifted.valid, raw.valid)
+    assert np.array_equal(shifted.flags, raw.flags)
     assert np.all(_angle_distance(shifted.q, raw.q)[shifted.valid] < 1e-12)
-    assert shifted.within_limits[shifted.valid].all() and not raw.within_limits[raw.valid].all()
+    assert shifted.within_limits[shifted.valid].all()
+    assert not raw.within_limits[raw.valid].all()

@@ -52,7 +52,8 @@ def test_a_planar_arm_with_an_orientation_takes_x_y_and_the_angle(tmp_path):
     report = json.loads(run.stdout)
     assert report["kind"] == "task"
     solutions = [s["q"] for t in report["targets"] for s in t["solutions"]]
-    assert solutions and all(np.allclose(_planar_3r_tcp(np.array(q)), target, atol=1e-10) for q in solutions)
+    assert solutions
+    assert all(np.allclose(_planar_3r_tcp(np.array(q)), target, atol=1e-10) for q in solutions)
 
 
 def test_a_scara_takes_x_y_z_and_yaw(tmp_path):
@@ -70,4 +71,6 @@ def test_a_generated_directory_without_task_coordinates_names_what_to_derive(tmp
     assert subprocess.run(SYMKIN_CLI + ["derive", str(model), "--only", "fk,jacobian", "-o", str(out), "-q"]
                           ).returncode == 0
     run = _ik(out / "scara", 0.35, 0.2, 0.3, 0.4)
-    assert run.returncode == 2 and "task_coordinates" in run.stderr and "6 values or 16" not in run.stderr
+    assert run.returncode == 2
+    assert "task_coordinates" in run.stderr
+    assert "6 values or 16" not in run.stderr

@@ -50,7 +50,8 @@ def test_one_coordinate_joints_move_as_their_motion_subspace():
     z = sympy.Matrix([0, 0, 1])
     assert joint_kinds.motion_subspace(JointType.REVOLUTE, z) == (z, sympy.zeros(3, 1))
     assert joint_kinds.motion_subspace(JointType.PRISMATIC, z) == (sympy.zeros(3, 1), z)
-    assert joint_kinds.is_rotation(LegJointType.R) and not joint_kinds.is_rotation("P")
+    assert joint_kinds.is_rotation(LegJointType.R)
+    assert not joint_kinds.is_rotation("P")
     with pytest.raises(ValueError):
         joint_kinds.is_rotation(LegJointType.U)  # two motions: no single coordinate
 
@@ -67,4 +68,5 @@ def test_every_leg_joint_kind_names_declares_and_actuates_as_documented(letter):
     variables, axes, actuable, point = LEG_JOINTS[letter]
     assert (kind.variables("j"), kind.axes, kind.actuable is not None, kind.point) == (variables, axes, actuable, point)
     assert kind.default_axes("z", "y", "x") == ("z", "y", "x")[:axes]
-    assert kind.sliding == (letter == "P") and kind.ball == (letter == "S")
+    assert kind.sliding == (letter == "P")
+    assert kind.ball == (letter == "S")

@@ -42,7 +42,8 @@ def arms():
 
 def test_followers_have_no_coordinate_and_a_constant_coupling(arms):
     _, (coupled, _) = arms
-    assert [c.name for c in coupled.coordinates] == ["j1", "j2"] and coupled.dof == 2
+    assert [c.name for c in coupled.coordinates] == ["j1", "j2"]
+    assert coupled.dof == 2
     assert np.array_equal(np.array(coordinates.coupling_matrix(coupled), dtype=float), A_NUMERIC)
 
 
@@ -61,7 +62,8 @@ B_GENERAL = np.array([0, 0, 0.2, -0.1])
 def test_affine_couplings_of_several_coordinates_are_the_free_arm_on_the_coupling(arms):
     (free, fd), _ = arms
     coupled = model_from_text(_coupled(ODD_ARM, COUPLINGS, "coupling"))
-    assert [c.name for c in coupled.coordinates] == ["j1", "j2", "j3"] and coupled.dof == 3
+    assert [c.name for c in coupled.coordinates] == ["j1", "j2", "j3"]
+    assert coupled.dof == 3
     assert np.array_equal(np.array(coordinates.coupling_matrix(coupled), dtype=float), A_GENERAL)
     _agrees_on_the_coupling(free, fd, coupled, Derivation(coupled), A_GENERAL, B_GENERAL)
 
@@ -171,4 +173,5 @@ def test_pinocchio_with_native_mimic_joints_agrees(arms):
 def test_a_bad_coupling_is_a_located_error(couplings, message):
     with pytest.raises(ModelError, match=message) as error:
         model_from_text(_coupled(ODD_ARM, couplings, "coupling"), file="arm.yaml")
-    assert "arm.yaml:" in str(error.value) and "coupling" in str(error.value)
+    assert "arm.yaml:" in str(error.value)
+    assert "coupling" in str(error.value)

@@ -122,7 +122,8 @@ def test_a_joint_equality_is_a_coupling_and_other_constraints_are_noted(tmp_path
     path = tmp_path / "coupled.xml"
     path.write_text(COUPLED)
     model = load_model(path)
-    assert model.dof == 2 and model.joints[2].coupling.leader == "j2"
+    assert model.dof == 2
+    assert model.joints[2].coupling.leader == "j2"
     assert float(model.joints[2].coupling.offset) == pytest.approx(0.1 + 0.2, rel=CLOSED_FORM)
     assert any("tendon" in note for note in model.notes)
     _passes_both(crosscheck(path, samples=3, backends=("numpy",)))

@@ -17,7 +17,9 @@ def test_the_view_says_what_the_manifest_records():
     arm = load(GENERATED_DIR / "planar_2r")
     manifest = json.loads((GENERATED_DIR / "planar_2r" / "manifest.json").read_text())
     info = arm.info
-    assert info.name == "planar_2r" and info.mechanism == "serial" and not info.is_parallel
+    assert info.name == "planar_2r"
+    assert info.mechanism == "serial"
+    assert not info.is_parallel
     assert info.coordinate_names == tuple(c["name"] for c in manifest["model"]["coordinates"])
     assert all(c.revolute for c in info.coordinates)
     assert [c.limits for c in info.coordinates] == [tuple(c["limits"]) for c in manifest["model"]["coordinates"]]
@@ -32,13 +34,15 @@ def test_the_view_says_what_the_manifest_records():
 
 def test_a_parallel_view_and_a_platform_held_at_a_constant_orientation():
     delta = load(GENERATED_DIR / "delta")
-    assert delta.info.is_parallel and delta.info.home == (0.0, 0.0, -0.15)
+    assert delta.info.is_parallel
+    assert delta.info.home == (0.0, 0.0, -0.15)
     assert len(delta.info.passive_limits) == 3
     stewart = load(GENERATED_DIR / "stewart")
     held = parallel.constant_orientation(stewart, np.zeros(3))
     assert stewart.info.task_space == ("x", "y", "z", "roll", "pitch", "yaw")
     assert held.info.task_space == parallel.TWIST_COMPONENTS  # a view, the loaded model is untouched
-    assert held.info.coordinates == stewart.info.coordinates and held.manifest is stewart.manifest
+    assert held.info.coordinates == stewart.info.coordinates
+    assert held.manifest is stewart.manifest
 
 
 def test_the_model_hash_names_the_mechanism_not_what_is_emitted_from_it(tmp_path):
@@ -63,4 +67,5 @@ def test_the_model_hash_names_the_mechanism_not_what_is_emitted_from_it(tmp_path
     assert full.info.parameters != folded.info.parameters  # l1 is an input of one, folded in the other
     q = np.array([0.3, -0.7])
     np.testing.assert_allclose(folded.fk(q), full.fk(q), rtol=0, atol=KINEMATICS)
-    assert set(folded.functions) == {"fk"} and "mass_matrix" in full.functions
+    assert set(folded.functions) == {"fk"}
+    assert "mass_matrix" in full.functions

@@ -20,7 +20,8 @@ from symkin.viewer.notebook import NotebookModel
 
 def test_a_loaded_model_shows_as_the_viewer_inline(generated_dir):
     model = symkin.load(generated_dir / "delta")
-    assert isinstance(model, NotebookModel) and isinstance(model, LoadedModel)
+    assert isinstance(model, NotebookModel)
+    assert isinstance(model, LoadedModel)
     assert isinstance(model.bind(a=0.11), NotebookModel)  # a bound design keeps its representation
     shown = model.bind(a=0.11)._repr_html_()
     # sandboxed: scripts run, in an opaque origin (no allow-same-origin: the page cannot reach the notebook)
@@ -29,15 +30,19 @@ def test_a_loaded_model_shows_as_the_viewer_inline(generated_dir):
     assert match, shown[:200]
     document = html.unescape(match.group(1))
     data = json.loads(re.search(r'id="symkin-data">(.*?)</script>', document, re.S).group(1))
-    assert data["name"] == "delta" and {p["name"]: p["value"] for p in data["parameters"]}["a"] == 0.11
-    assert len(data["cloud"]["points"]) > 1000 and 'globalThis.symkin["delta"]' in document
+    assert data["name"] == "delta"
+    assert {p["name"]: p["value"] for p in data["parameters"]}["a"] == 0.11
+    assert len(data["cloud"]["points"]) > 1000
+    assert 'globalThis.symkin["delta"]' in document
 
 
 def test_without_its_javascript_a_model_says_how_to_get_the_viewer(tmp_path):
     subprocess.run(SYMKIN_CLI + ["derive", str(MODELS_DIR / "planar_2r.yaml"), "--only", "fk,frames,jacobian",
                                  "--backend", "numpy", "-o", str(tmp_path), "-q"], check=True)
     shown = symkin.load(tmp_path / "planar_2r")._repr_html_()
-    assert "needs its JavaScript" in shown and "--backend numpy,js" in shown and "<iframe" not in shown
+    assert "needs its JavaScript" in shown
+    assert "--backend numpy,js" in shown
+    assert "<iframe" not in shown
 
 
 def test_a_missing_attribute_names_the_generated_functions(generated_dir):
@@ -49,14 +54,18 @@ def test_a_missing_attribute_names_the_generated_functions(generated_dir):
 def test_small_derived_quantities_show_as_latex(derivations):
     fk = derivations["planar_2r"]["fk"]
     shown = fk._repr_latex_()
-    assert shown.startswith(r"$\displaystyle \begin{aligned}\mathrm{base\_T\_tcp} &= ") and shown.endswith("$")
+    assert shown.startswith(r"$\displaystyle \begin{aligned}\mathrm{base\_T\_tcp} &= ")
+    assert shown.endswith("$")
     assert sympy.latex(fk.outputs[0].expr) in shown
     mass = derivations["planar_2r"]["mass_matrix"]._repr_latex_()
-    assert r"w_{0} &= l_{1}^{2}" in mass and r"\mathrm{M} &= " in mass and "_w" not in mass
+    assert r"w_{0} &= l_{1}^{2}" in mass
+    assert r"\mathrm{M} &= " in mass
+    assert "_w" not in mass
     assert fk.outputs[0]._repr_latex_() == shown
 
 
 def test_large_derived_quantities_fall_back_to_text(derivations):
     ur_fk = derivations["ur10e"]["fk"]
     assert sympy.count_ops(ur_fk.outputs[0].expr) > spec.LATEX_MAX_OPS
-    assert ur_fk._repr_latex_() is None and derivations["ur10e"]["mass_matrix"]._repr_latex_() is None
+    assert ur_fk._repr_latex_() is None
+    assert derivations["ur10e"]["mass_matrix"]._repr_latex_() is None

@@ -162,7 +162,9 @@ def test_combined_function_shares_one_cse_and_is_recorded(models):
     assert scene["op_counts"]["cse"] < sum(p["op_counts"]["cse"] for p in parts)
     assert scene["op_counts"]["derived"] == sum(p["op_counts"]["derived"] for p in parts)
     names = [o["name"] for o in scene["outputs"]]
-    assert names[0] == "base_T_tcp" and "jacobian_J" in names and "jacobian_geometric_J" in names
+    assert names[0] == "base_T_tcp"
+    assert "jacobian_J" in names
+    assert "jacobian_geometric_J" in names
     assert len(set(names)) == len(names)
     assert [i["name"] for i in scene["inputs"]] == ["q", "d1", "a2", "a3", "d4", "d5", "d6"]
 
@@ -205,4 +207,5 @@ def test_angle_sums_are_expanded_to_one_sin_cos_pair_per_angle(derivations):
     # In the optimized UR10e functions every trigonometric call takes a single joint angle.
     optimized = optimize(derivations["ur10e"]["jacobian"])
     arguments = {call.args[0] for _, e in optimized.temporaries for call in e.atoms(sympy.sin, sympy.cos)}
-    assert arguments and all(a.is_Symbol for a in arguments)
+    assert arguments
+    assert all(a.is_Symbol for a in arguments)

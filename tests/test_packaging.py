@@ -38,7 +38,8 @@ def test_wheel_installs_in_a_fresh_venv_and_derives_a_model(tmp_path):
     names = zipfile.ZipFile(wheel).namelist()
     assert "symkin/templates/numpy/module.py.j2" in names
     assert "symkin/py.typed" in names  # a typed package (PEP 561)
-    assert "symkin/templates/c/header.h.j2" in names and "symkin/templates/c/source.c.j2" in names
+    assert "symkin/templates/c/header.h.j2" in names
+    assert "symkin/templates/c/source.c.j2" in names
     assert "symkin/templates/js/module.js.j2" in names
     assert "symkin/backends/casadi/emit.py" in names
     assert "symkin/cli/__init__.py" in names

@@ -64,7 +64,8 @@ def elbows_out(q, p):
 def test_the_model_is_planar_with_two_coordinates(models):
     parallel = models["pantograph"].parallel
     assert parallel.coordinates == ("x", "y")
-    assert parallel.motion is PlatformMotion.PLANAR and parallel.task_dof == 2
+    assert parallel.motion is PlatformMotion.PLANAR
+    assert parallel.task_dof == 2
 
 
 def test_mobility_is_two_with_lambda_three_and_the_handle_spin_idle(models):
@@ -151,7 +152,8 @@ def test_bad_motions_are_refused_with_a_fix(tmp_path, motion, message):
     (tmp_path / "bad.yaml").write_text(text)
     with pytest.raises(ModelError) as caught:
         load_model(tmp_path / "bad.yaml")
-    assert "parallel.motion" in str(caught.value) and message in str(caught.value)
+    assert "parallel.motion" in str(caught.value)
+    assert message in str(caught.value)
 
 
 def test_legs_that_do_not_match_the_declared_motion_count_actuators(tmp_path):
@@ -300,4 +302,5 @@ def test_a_free_frictionless_motion_keeps_its_energy(pantograph):
                          for y in solution.y.T])
     # the local errors of ~len(t) steps, each <= rtol relative to the state, times the energy's scale
     bound = 10 * len(solution.t) * rtol * np.max(np.abs(energies))
-    assert np.ptp(energies) <= bound and np.ptp(solution.y[0]) > 0.1  # it moved
+    assert np.ptp(energies) <= bound
+    assert np.ptp(solution.y[0]) > 0.1  # it moved

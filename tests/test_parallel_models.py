@@ -116,10 +116,13 @@ def test_delta_radius_convention_is_explicit(spec, radius):
 def test_coordinates_of_parallel_models(models):
     delta, stewart = models["delta"], models["stewart"]
     assert [c.name for c in delta.coordinates] == ["theta1", "theta2", "theta3"]
-    assert delta.task_space == ("x", "y", "z") and delta.dof == 3 and delta.joints == ()
+    assert delta.task_space == ("x", "y", "z")
+    assert delta.dof == 3
+    assert delta.joints == ()
     assert [c.type.value for c in stewart.coordinates] == ["P"] * 6
     assert stewart.task_space == ("x", "y", "z", "roll", "pitch", "yaw")
-    assert delta.mechanism == "parallel" and models["ur10e"].mechanism == "serial"
+    assert delta.mechanism == "parallel"
+    assert models["ur10e"].mechanism == "serial"
 
 
 BAD = [
@@ -150,7 +153,9 @@ def test_bad_delta_models_give_located_errors(case, old, new, key, message):
         model_from_text(DELTA.replace(old, new, 1), file="bad.yaml")
     problems = [p for p in err.value.problems if message in p.message]
     assert problems, str(err.value)
-    assert problems[0].key == key and problems[0].file == "bad.yaml" and problems[0].fix
+    assert problems[0].key == key
+    assert problems[0].file == "bad.yaml"
+    assert problems[0].fix
 
 
 BAD_LEGS = [
@@ -186,7 +191,8 @@ def test_bad_leg_models_give_located_errors(case, old, new, key, message):
         model_from_text(TSAI_UPU.replace(old, new, 1), file="legs.yaml")
     problems = [p for p in err.value.problems if message in p.message]
     assert problems, str(err.value)
-    assert problems[0].key.endswith(key) and problems[0].line is not None
+    assert problems[0].key.endswith(key)
+    assert problems[0].line is not None
 
 
 def test_bad_parallel_model_on_the_command_line_exits_2(tmp_path):
@@ -195,7 +201,8 @@ def test_bad_parallel_model_on_the_command_line_exits_2(tmp_path):
     result = subprocess.run(SYMKIN_CLI + ["derive", str(path), "-o", str(tmp_path / "out")], capture_output=True,
                             text=True)
     assert result.returncode == 2
-    assert "bad.yaml:9:" in result.stderr and "unknown joint position 'corner'" in result.stderr
+    assert "bad.yaml:9:" in result.stderr
+    assert "unknown joint position 'corner'" in result.stderr
     assert not (tmp_path / "out").exists()
 
 
@@ -212,8 +219,10 @@ def test_serial_quantities_on_a_parallel_model_and_vice_versa(models):
     # fk and jacobian exist for both kinds, derived differently.
     assert Derivation(models["delta"])["fk"].outputs[0].name == "position"
     assert Derivation(models["ur10e"])["fk"].outputs[0].name == "base_T_tcp"
-    assert "ik" in emitted_quantities("parallel") and "ik" not in emitted_quantities("serial")
-    assert "frames" in emitted_quantities() and "closure" in emitted_quantities()
+    assert "ik" in emitted_quantities("parallel")
+    assert "ik" not in emitted_quantities("serial")
+    assert "frames" in emitted_quantities()
+    assert "closure" in emitted_quantities()
     with pytest.raises(ModelError, match="unknown output 'frames'"):
         pipeline.resolve_request(models["delta"], "frames")
 
@@ -273,7 +282,8 @@ def test_delta_loop_closure_agrees_with_the_closed_forms(generated_dir):
     p = np.column_stack([rng.uniform(-0.04, 0.04, (500, 2)), rng.uniform(-0.18, -0.12, 500)])
     theta = delta.ik(p).joints
     report = solve_closure(delta, theta, np.zeros(12), p, unknowns=("s",))
-    assert report.all_converged and report.residual.max() <= NEWTON * DELTA_SCALE, report.residual.max()
+    assert report.all_converged, report.residual.max()
+    assert report.residual.max() <= NEWTON * DELTA_SCALE, report.residual.max()
     s = report.solution["s"]
     J = delta.closure_jacobians(theta, s, p)
     A = np.concatenate([J.Phi_p, J.Phi_s], axis=-1)  # 18 x 15, consistent
@@ -317,13 +327,16 @@ def test_new_topologies_need_only_a_model_file(text, box, tmp_path):
 def test_manifest_records_the_parallel_structure(generated_dir):
     delta = load(generated_dir / "delta")
     record = delta.manifest["model"]["parallel"]
-    assert record["motion"] == "translation" and record["home"] == [0.0, 0.0, -0.15]
+    assert record["motion"] == "translation"
+    assert record["home"] == [0.0, 0.0, -0.15]
     assert [leg["topology"] for leg in record["legs"]] == ["RUU"] * 3
     theta1 = delta.manifest["model"]["coordinates"][0]
-    assert theta1["name"] == "theta1" and theta1["type"] == "R"
+    assert theta1["name"] == "theta1"
+    assert theta1["type"] == "R"
     assert theta1["limits"] == pytest.approx([-np.pi / 2, np.pi / 3], rel=EPS)  # actuator_limits, rounded once
     ik = next(f for f in delta.manifest["functions"] if f["name"] == "ik")
-    assert ik["inputs"][0]["name"] == "p" and ik["inputs"][0]["elements"] == ["x", "y", "z"]
+    assert ik["inputs"][0]["name"] == "p"
+    assert ik["inputs"][0]["elements"] == ["x", "y", "z"]
     assert [o["name"] for o in ik["outputs"]] == ["joints", "margin"]
 
 
@@ -336,4 +349,5 @@ def test_parallel_runtime_does_not_import_sympy(generated_dir):
 
 
 def test_example_model_files_exist():
-    assert (MODELS_DIR / "delta.yaml").exists() and (MODELS_DIR / "stewart.yaml").exists()
+    assert (MODELS_DIR / "delta.yaml").exists()
+    assert (MODELS_DIR / "stewart.yaml").exists()

@@ -33,7 +33,8 @@ def test_the_plant_evaluates_the_dynamics_at_the_platform_pose_of_the_joints(del
     model = delta.model
     tau = np.array([0.01, -0.02, 0.03])
     assert np.array_equal(delta.acceleration(Q0, np.zeros(3), tau), model.forward_dynamics(Q0, p, np.zeros(3), tau))
-    assert np.array_equal(delta.point(Q0), p) and np.array_equal(delta.point_jacobian(Q0), model.jacobian(Q0, p))
+    assert np.array_equal(delta.point(Q0), p)
+    assert np.array_equal(delta.point_jacobian(Q0), model.jacobian(Q0, p))
     assert np.array_equal(delta.gravity(Q0), model.gravity_vector(Q0, p))
 
 
@@ -71,11 +72,14 @@ def test_cli_runs_the_haptic_scenarios_on_the_delta(scenario, figure, tmp_path, 
     assert main(["simulate", str(GENERATED_DIR / "delta"), "--scenario", scenario, "--duration", "0.5",
                  "-o", str(out)]) == 0
     names = {p.name for p in out.iterdir()}
-    assert figure in names and "summary.txt" in names and any(n.endswith(".csv") for n in names)
+    assert figure in names
+    assert "summary.txt" in names
+    assert any(n.endswith(".csv") for n in names)
     assert (out / figure).read_bytes()[:4] == b"\x89PNG"
     text = capsys.readouterr().out
     if scenario == "haptic-wall":
-        assert "peak felt force" in text and "desired" in text
+        assert "peak felt force" in text
+        assert "desired" in text
     else:
         cut = text.split("cuts the peak force felt from ")[1].split(" N")
         without, with_compensation = float(cut[0]), float(cut[1].split("to ")[1])

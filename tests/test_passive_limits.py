@@ -126,7 +126,8 @@ def test_a_pose_beyond_a_passive_limit_is_excluded_one_inside_kept(limited, pose
     q, p, expected = poses
     swing = np.degrees(np.max(np.abs(expected[:, [1, 5, 9]]), axis=1))
     inside, beyond = np.argmin(np.abs(swing - 15)), np.argmin(np.abs(swing - 25))
-    assert abs(swing[inside] - 15) < 2 and abs(swing[beyond] - 25) < 2
+    assert abs(swing[inside] - 15) < 2
+    assert abs(swing[beyond] - 25) < 2
     ik = parallel.parallel_inverse(limited)  # +-20 deg
     points = p[[inside, beyond]]
     _, valid = ik.solve(points)

@@ -28,7 +28,8 @@ def _lines(columns: int, stage: str, monkeypatch) -> list[str]:
 def test_the_line_is_as_wide_as_the_terminal_less_one_column(columns, monkeypatch):
     stage = "derive " + "x" * 300
     lines = _lines(columns, stage, monkeypatch)
-    assert lines and all(len(line) == columns - 1 for line in lines)     # never wraps, always clears the last
+    assert lines
+    assert all(len(line) == columns - 1 for line in lines)     # never wraps, always clears the last
     assert lines[0].lstrip("|/-\\ ").startswith("[model] derive xxx")
 
 

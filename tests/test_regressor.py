@@ -139,7 +139,8 @@ def test_the_generated_regressor_in_numpy_c_and_casadi(tmp_path):
     for backend in ("numpy", "c", "casadi"):
         generated = load(written, backend)
         Y, pi = generated.regressor(q, qd, qdd)
-        assert Y.shape == (20, 2, 28) and pi.shape == (20, 28)
+        assert Y.shape == (20, 2, 28)
+        assert pi.shape == (20, 28)
         tau = generated.inverse_dynamics(q, qd, qdd)
         scale = np.max(np.einsum("bij,bj->bi", np.abs(Y), np.abs(pi)))
         np.testing.assert_allclose(np.einsum("bij,bj->bi", Y, pi), tau, rtol=0, atol=DYNAMICS * scale)

@@ -119,7 +119,9 @@ def test_off_chain_joints_whose_limits_exclude_0_lock_at_the_nearest_limit():
     path = ROBOTS_DIR / "icub_description/robots/icub_reduced.urdf"
     model = load_model(path, tip="l_hand_dh_frame")
     clipped = [note for note in model.notes if "'r_elbow'" in note]
-    assert len(clipped) == 1 and "locked at 0.0959931" in clipped[0] and "--lock r_elbow=VALUE" in clipped[0]
+    assert len(clipped) == 1
+    assert "locked at 0.0959931" in clipped[0]
+    assert "--lock r_elbow=VALUE" in clipped[0]
     report = crosscheck(path, samples=3, urdf={"tip": "l_hand_dh_frame"}, backends=("numpy",))
     assert not report.failures, report.comparisons
 
@@ -136,7 +138,9 @@ def test_non_physical_inertias_are_refused_or_accepted_with_a_note(tmp_path, cap
     path = str(ROBOTS_DIR / "romeo_description/urdf/romeo_small.urdf")
     assert main(["check", path, "--tip", "l_gripper"]) == 2
     err = capsys.readouterr().err
-    assert f"{path}:547:" in err and "not physical" in err and "--allow-nonphysical" in err
+    assert f"{path}:547:" in err
+    assert "not physical" in err
+    assert "--allow-nonphysical" in err
     out = tmp_path / "out"
     assert main(["derive", path, "--tip", "l_gripper", "--allow-nonphysical", "--only", "fk", "-o", str(out)]) == 0
     printed = [line for line in capsys.readouterr().out.splitlines() if line.startswith("  note:")]

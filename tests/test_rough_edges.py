@@ -14,7 +14,8 @@ from symkin.simulation import Plant, scenarios
 
 def test_the_repository_has_the_licence_its_metadata_names():
     metadata = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
-    assert metadata["license"] == "MIT" and "LICENSE" in metadata.get("license-files", [])
+    assert metadata["license"] == "MIT"
+    assert "LICENSE" in metadata.get("license-files", [])
     assert (ROOT / "LICENSE").read_text().startswith("MIT License")
     assert not list(ROOT.glob("*.png"))  # no stray figure at the root (ur10e-stability.png was committed)
 
@@ -45,13 +46,18 @@ def test_the_sine_scenario_labels_rotational_task_forces_in_newton_metres_and_ci
     center = np.array([0.3, -1.2, 1.4, -1.6, -1.5, 0.2])
     result = scenarios.sine([("ur10e", ur)], center, 1, 0.1, 1.0, scenarios.Timing(0.02, 1000, "rk4"))
     columns = result.series[0].columns
-    assert "F_x [N]" in columns and "F_wz [N m]" in columns and "F_wz [N]" not in columns
+    assert "F_x [N]" in columns
+    assert "F_wz [N m]" in columns
+    assert "F_wz [N]" not in columns
     line = next(text for text in result.summary if "peak TCP forces" in text)
-    assert "|F_wz| <= " in line and line.rstrip().endswith("N m") and "|F_x| <= " in line
+    assert "|F_wz| <= " in line
+    assert line.rstrip().endswith("N m")
+    assert "|F_x| <= " in line
     assert all("seed" not in figure.title.lower() for figure in result.figures[:2])
     arm = Plant(load(GENERATED_DIR / "planar_2r"))
     seed = scenarios.sine([("arm", arm)], np.radians([45, 45]), 1, 0.1, 1.0, scenarios.Timing(0.02, 1000, "rk4"))
-    assert "(seed Fig. 8.21)" in seed.figures[0].title and "(seed Fig. 8.22)" in seed.figures[1].title
+    assert "(seed Fig. 8.21)" in seed.figures[0].title
+    assert "(seed Fig. 8.22)" in seed.figures[1].title
 
 
 def test_simulate_starts_from_a_well_conditioned_pose_and_says_which(tmp_path):
@@ -66,13 +72,17 @@ def test_simulate_starts_from_a_well_conditioned_pose_and_says_which(tmp_path):
     run = subprocess.run(SYMKIN_CLI + ["simulate", str(model), "--scenario", "sine", "--duration", "0.2", "-o",
                                        str(tmp_path / "out"), "--no-figure"], capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
-    assert "start: q0 = [" in run.stdout and "best-conditioned of 256 poses" in run.stdout
+    assert "start: q0 = [" in run.stdout
+    assert "best-conditioned of 256 poses" in run.stdout
     assert "singular configuration" not in run.stdout  # no NaN TCP forces
     # each joint with its own unit: the prismatic q3 in m and N, no "N m|N" mixed into one line
-    assert "|tau_q3| <= " in run.stdout and "N m|N" not in run.stdout and "rad|m, k =" not in run.stdout
+    assert "|tau_q3| <= " in run.stdout
+    assert "N m|N" not in run.stdout
+    assert "rad|m, k =" not in run.stdout
     assert "q3: [0, 0.2] m, k = " in run.stdout
     assert "tau_q1 > tau_q2 at every sample" not in run.stdout  # the seed's remark is for its 2R arm only
     seed = subprocess.run(SYMKIN_CLI + ["simulate", str(GENERATED_DIR / "planar_2r"), "--scenario", "sine",
                                         "--duration", "0.05", "-o", str(tmp_path / "arm"), "--no-figure"],
                           capture_output=True, text=True)
-    assert seed.returncode == 0 and "the middle of the joint limits (1/kappa = " in seed.stdout, seed.stderr
+    assert seed.returncode == 0, seed.stderr
+    assert "the middle of the joint limits (1/kappa = " in seed.stdout, seed.stderr

@@ -50,7 +50,8 @@ def test_the_jaco_with_its_flipped_joint_agrees_with_the_robotics_toolbox(tmp_pa
     from tolerances import KINEMATICS
 
     model = load_model(REFERENCE / "jaco_rtb.yaml")
-    assert model.joints[0].coupling is not None and not model.joints[0].follower
+    assert model.joints[0].coupling is not None
+    assert not model.joints[0].follower
     request = pipeline.resolve_request(model, ("fk", "jacobian_geometric"), "numpy", None, False, "none")
     ours = load(pipeline.write(pipeline.generate(model, request), tmp_path), "numpy")
     states = RECORDED["jaco"]

@@ -215,7 +215,8 @@ def test_ur10e_follows_a_tcp_circle():
     result = scenarios.tracking("", plant, q0, 0.05, scenarios.Timing(0.6, 1000, "rk4"), bandwidth=80.0)
     c = result.series[0].columns
     reference = np.stack([c[f"reference TCP {a} [m]"] for a in "xy"], -1)
-    assert np.ptp(reference[:, 0]) > 0.099 and np.ptp(reference[:, 1]) > 0.099     # the circle is really drawn
+    assert np.ptp(reference[:, 0]) > 0.099
+    assert np.ptp(reference[:, 1]) > 0.099     # the circle is really drawn
     assert np.max(c["TCP error [m]"]) < 1e-4                    # with the torque held for 1 ms (ZOH)
     assert c["TCP error [m]"][-1] < 2e-5
     q = np.stack([c[f"q{i} [rad]"] for i in range(1, 7)], -1)
@@ -243,7 +244,8 @@ def test_cli_writes_the_seed_figures_and_csv(tmp_path, capsys):
     assert sum(n.endswith(".csv") for n in names) == 2
     assert (out / "fig-8-21-torques.png").read_bytes()[:4] == b"\x89PNG"
     lines = (out / "sine-1-l1=10cm_l2=10cm.csv").read_text().splitlines()
-    assert lines[1].startswith("t [s],theta1 [rad],theta2 [rad],tau_theta1 [N m]") and len(lines) == 2 + 101
+    assert lines[1].startswith("t [s],theta1 [rad],theta2 [rad],tau_theta1 [N m]")
+    assert len(lines) == 2 + 101
     assert "tau_theta1 > tau_theta2 at every sample: yes" in capsys.readouterr().out
 
 

@@ -52,7 +52,8 @@ def test_defaults_follow_from_the_effective_inertia(plant):
     np.testing.assert_allclose(stops.lower, [0.0, 0.0])
     np.testing.assert_allclose(stops.upper, [np.pi / 2, np.pi / 2])
     custom = JointStops.from_plant(plant, START, stiffness={"theta2": 50.0}, damping={"theta1": 0.0})
-    assert custom.stiffness[1] == 50.0 and custom.damping[0] == 0.0
+    assert custom.stiffness[1] == 50.0
+    assert custom.damping[0] == 0.0
 
 
 def test_inside_the_limits_the_stops_change_nothing(plant):
@@ -60,7 +61,8 @@ def test_inside_the_limits_the_stops_change_nothing(plant):
     rng = np.random.default_rng(3)
     q = rng.uniform(0.0, np.pi / 2, (50, 2))
     tau, _ = stops.torque_and_dissipation(q, rng.normal(size=(50, 2)))
-    assert np.all(tau == 0.0) and np.all(stops.stored_energy(q) == 0.0)
+    assert np.all(tau == 0.0)
+    assert np.all(stops.stored_energy(q) == 0.0)
     reference = JointSine(START, 1, np.radians(30), 1.0)
     q0, qd0, _ = reference(0.0)
     runs = []
@@ -106,7 +108,8 @@ def test_an_impact_follows_the_linear_spring_damper_closed_forms(impact):
     plant, stops, system, run = impact
     assert [(s.guard.joint, s.guard.side, s.guard.entering) for s in run.switches] == [(1, -1, True), (1, -1, False)]
     enter, leave = run.switches
-    assert abs(enter.x[1]) < 1e-12 and abs(leave.x[1]) < 1e-12              # located on the limit
+    assert abs(enter.x[1]) < 1e-12
+    assert abs(leave.x[1]) < 1e-12              # located on the limit
     # the contact oscillator: effective inertia of theta2 with theta1 free, at the contact
     m = effective_inertia(plant.mass_matrix(enter.x[:2]))[1]
     k, c = stops.stiffness[1], stops.damping[1]
@@ -177,7 +180,8 @@ def test_sampled_contacts_agree_with_the_located_events(plant, fall):
     first = intervals(stops, run)[0]
     exact = fall.series[0].contacts[0]
     assert (first.joint, first.side) == (exact.joint, exact.side)
-    assert abs(first.start - exact.start) < 1e-4 and abs(first.end - exact.end) < 1e-3
+    assert abs(first.start - exact.start) < 1e-4
+    assert abs(first.end - exact.end) < 1e-3
 
 
 def test_rk4_is_stable_in_contact_exactly_where_the_condition_says(plant):
@@ -188,7 +192,8 @@ def test_rk4_is_stable_in_contact_exactly_where_the_condition_says(plant):
         depth = plant.gravity(-depth) / stops.stiffness
     rest = -depth
     stability = rk4_stability(stops, plant.mass_matrix(rest), 1e-3)
-    assert not stability.stable and stability.substeps_needed > 1
+    assert not stability.stable
+    assert stability.substeps_needed > 1
     deviation = {}
     for substeps in (stability.substeps_needed - 1, stability.substeps_needed):
         run = run_sampled(system.derivative, lambda t, x: ZERO, system.initial(rest + 1e-3 * depth), 1e-3, 100,
@@ -212,7 +217,8 @@ def test_cli_reports_stops_and_warns_before_an_unstable_loop(tmp_path, capsys):
     assert "joint stops: linear spring-damper" in printed
     assert re.search(r"theta1: in contact \d+ x lower [0-9.]+ s; max penetration", printed)
     header = (out / "free-swing-1-modelparameters.csv").read_text().splitlines()[1]
-    assert "penetration theta1 [rad]" in header and "stop energy dissipated [J]" in header
+    assert "penetration theta1 [rad]" in header
+    assert "stop energy dissipated [J]" in header
     assert (out / "free-swing.png").read_bytes()[:4] == b"\x89PNG"
     off = tmp_path / "off"
     assert main(["simulate", str(GENERATED_DIR / "planar_2r"), "--scenario", "free-swing", "--duration", "0.1",
@@ -277,7 +283,8 @@ def test_a_joint_pushed_back_onto_its_stop_right_after_leaving_it_does_not_chatt
     release, contact = run.switches[3], run.switches[4]
     v = release.x[6 + 3]
     a = -system.derivative(release.t, release.x, np.zeros(6), np.zeros(6))[6 + 3]
-    assert v > 0.0 and a > 0.0
+    assert v > 0.0
+    assert a > 0.0
     np.testing.assert_allclose(contact.t - release.t, 2.0 * v / a, rtol=0.1)
     # resting on the stop at the end, and the power balance holds through all five switches
     assert stops.contact(run.x[-1, :6])[3] == -1

@@ -83,13 +83,15 @@ def test_singular_paths_are_found_generically(runs):
     assert {"q5 -> 0", "q3 -> 0"} <= ur
     for path in runs["ur10e"].paths:
         kappas = _kappas_along(runs["ur10e"], path)
-        assert max(kappas) > 1e9 and min(kappas) < 1e4
+        assert max(kappas) > 1e9
+        assert min(kappas) < 1e4
     # Stewart-Gough: interior singular poses (kappa ~ 1/t) in position and in every orientation angle
     stewart = runs["stewart"]
     assert {p.name for p in stewart.paths} >= {"roll", "pitch", "yaw"}
     for path in stewart.paths:
         kappas = [k for k in _kappas_along(stewart, path) if math.isfinite(k)]
-        assert max(kappas) > 1e8 and min(kappas) < 1e5
+        assert max(kappas) > 1e8
+        assert min(kappas) < 1e5
 
 
 def test_delta_paths_end_in_its_singularities_and_on_its_workspace_boundary(runs, models):
@@ -104,7 +106,8 @@ def test_delta_paths_end_in_its_singularities_and_on_its_workspace_boundary(runs
     boundaries = 0
     for path in delta.paths:
         kappas = _kappas_along(delta, path)
-        assert max(kappas) > 1e4 and min(kappas) < 1e3
+        assert max(kappas) > 1e4
+        assert min(kappas) < 1e3
         end, beyond = (path.states(np.array([t])) for t in (0.0, -1e-6))
         dets = loaded.singularities(end["q"][0], end["p"][0])
         on_boundary = abs(dets.det_Jq) < 1e-6 * abs(typical.det_Jq)
@@ -171,7 +174,8 @@ def test_reference_and_error_measure():
     hi, lo = reference({"q": np.array([1e-8])}, {})
     # 1 - cos(x) = x^2/2 - x^4/24 + ...: 5e-17 to 4e-33 relative, the reference's 50 digits keep it
     # to its last bit; one rounding of the hi part: EPS/2.
-    assert hi[0] == pytest.approx(5e-17, rel=EPS) and hi[1] == 1e-8
+    assert hi[0] == pytest.approx(5e-17, rel=EPS)
+    assert hi[1] == 1e-8
     naive = np.array([1 - np.cos(1e-8), 1e-8])  # 1 - cos cancels to 0: 100 % wrong in that entry
     assert normwise_error(naive, hi, lo) == pytest.approx(5e-9, rel=1e-6)
     assert normwise_error(np.array([5e-17, 1e-8]), hi, lo) < EPS  # exact up to the rounding of 5e-17
@@ -203,7 +207,8 @@ def test_ik_wrist_formula_error_drop(runs):
     textbook, ours = at[1e-6]
     # symkin's wrist angle is an atan2 of two computed components: a closed form (CLOSED_FORM);
     # the textbook acos loses half the digits near its singular value (sqrt(EPS) ~ 1.5e-8).
-    assert textbook > 1e-12 and ours <= CLOSED_FORM
+    assert textbook > 1e-12
+    assert ours <= CLOSED_FORM
     assert np.all(wrist.symkin <= CLOSED_FORM), (wrist.steps, wrist.symkin, CLOSED_FORM)
     (elbow,) = runs["planar_2r"].formulas
     finite = np.isfinite(elbow.bound)

@@ -30,12 +30,14 @@ def test_a_failed_csv_write_leaves_the_previous_file(tmp_path):
     path = tmp_path / "records.csv"
     write_csv(small_run(), path)
     before = path.read_text()
-    assert before.splitlines()[0] == "model,quantity,family,label,parameter,kappa,error" and len(before.splitlines()) == 13
+    assert before.splitlines()[0] == "model,quantity,family,label,parameter,kappa,error"
+    assert len(before.splitlines()) == 13
     run = small_run()
     run.records.insert(3, _Broken())
     with pytest.raises(RuntimeError):
         write_csv(run, path)
-    assert path.read_text() == before and [p.name for p in tmp_path.iterdir()] == ["records.csv"]
+    assert path.read_text() == before
+    assert [p.name for p in tmp_path.iterdir()] == ["records.csv"]
 
 
 def test_the_figure_leaves_the_callers_matplotlib_backend_and_pyplot_alone(tmp_path):

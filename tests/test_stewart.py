@@ -75,10 +75,12 @@ def test_fk_reports_failure_instead_of_a_wrong_pose(stewart):
     impossible = lengths * [1, 1, 1, 1, 1, 3]
     report = solve_fk(stewart, impossible, pose, max_iterations=25)
     assert not report.converged.any()
-    assert np.all(np.isnan(report.solution)) and np.all(report.iterations == 25)
+    assert np.all(np.isnan(report.solution))
+    assert np.all(report.iterations == 25)
     # A start in the base plane is singular (all legs horizontal): reported at once.
     report = solve_fk(stewart, lengths, np.zeros(6))
-    assert not report.converged.any() and np.all(np.isnan(report.solution))
+    assert not report.converged.any()
+    assert np.all(np.isnan(report.solution))
     # From far starts some runs converge (perhaps to another assembly mode) and some fail, but
     # whatever converged has exactly the measured leg lengths.
     far = pose + rng.normal(0, [0.1, 0.1, 0.1, 0.8, 0.8, 0.8], pose.shape)
@@ -152,7 +154,8 @@ def test_generic_closure_agrees_with_the_distance_form(stewart, geometry):
     s0 = np.concatenate([np.stack([u1[:, i], u2[:, i], 0 * u1[:, i], 0 * u1[:, i], 0 * u1[:, i]], -1)
                          for i in range(6)], axis=-1)
     report = solve_closure(stewart, lengths, s0, pose, unknowns=("s",))
-    assert report.all_converged and report.residual.max() <= NEWTON * STEWART_SCALE, report.residual.max()
+    assert report.all_converged, report.residual.max()
+    assert report.residual.max() <= NEWTON * STEWART_SCALE, report.residual.max()
     s = report.solution["s"]
     np.testing.assert_allclose(stewart.closure(lengths, s, pose), 0, atol=NEWTON * STEWART_SCALE)
     J = stewart.closure_jacobians(lengths, s, pose)

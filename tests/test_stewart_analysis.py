@@ -40,7 +40,8 @@ def _geometry():
 
     text = (MODELS_DIR / "stewart.yaml").read_text()
     data = yaml.safe_load(text)
-    assert "limits: [0.20, 0.32]" in text and data["parameters"]["r_b"]["value"] == 0.2
+    assert "limits: [0.20, 0.32]" in text
+    assert data["parameters"]["r_b"]["value"] == 0.2
     gamma = np.radians(15.0)
     base = np.radians([0, 0, 120, 120, 240, 240]) + np.array([-gamma, gamma] * 3)
     top = np.radians([-60, 60, 60, 180, 180, 300]) + np.array([gamma, -gamma] * 3)
@@ -89,7 +90,8 @@ def _monte_carlo(orientation=(0.0, 0.0, 0.0), count=1_000_000, seed=1):
     box = np.prod(upper - lower)
     reached = points[inside]
     # the box holds the workspace: no reachable sample near its faces
-    assert np.all(reached - lower > 0.02) and np.all(upper - reached > 0.02)
+    assert np.all(reached - lower > 0.02)
+    assert np.all(upper - reached > 0.02)
     return box * fraction, box * np.sqrt(fraction * (1 - fraction) / count), reached
 
 
@@ -107,8 +109,10 @@ def ik():
 
 
 def test_the_held_platform_is_a_positional_parallel_mechanism_with_the_leg_limits(ik):
-    assert isinstance(ik, parallel.ConstantOrientationInverse) and ik.dimension == 3
-    assert mechanism.position_axes(HELD) == (0, 1, 2) and mechanism.mixes_translations_and_rotations(HELD)
+    assert isinstance(ik, parallel.ConstantOrientationInverse)
+    assert ik.dimension == 3
+    assert mechanism.position_axes(HELD) == (0, 1, 2)
+    assert mechanism.mixes_translations_and_rotations(HELD)
     np.testing.assert_array_equal(mechanism.joint_limits(HELD), [STROKE] * 6)
     np.testing.assert_allclose(HELD.orientation, 0.0)
     # the sphere centres c_i = a_i - R b_i, read off the generated ik
@@ -151,7 +155,8 @@ def test_reachable_cells_approach_the_volume_and_the_boundary_holds_the_lowest_c
     # workspace fall between centres, so the interior/occupied bracket is not guaranteed)
     assert abs(occupancy.occupied.sum() * occupancy.cell_volume - oracle[0]) < 0.02 * oracle[0]
     reachable = occupancy.occupied
-    assert np.all(np.isfinite(values[reachable])) and np.all(np.isnan(values[~reachable]))
+    assert np.all(np.isfinite(values[reachable]))
+    assert np.all(np.isnan(values[~reachable]))
     worst = reachable & (values <= np.quantile(values[reachable], 0.01))
     assert (worst & occupancy.boundary()).sum() >= 0.9 * worst.sum()
 

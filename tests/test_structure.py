@@ -31,7 +31,8 @@ def test_mobility_of_every_example_model_is_its_intended_dof(name, models):
 def test_mobility_terms_of_the_parallel_examples(models):
     delta = model_mobility(models["delta"])
     assert (delta.lam, delta.bodies, delta.joints, sum(delta.joint_dofs), delta.identical) == (6, 8, 9, 15, 0)
-    assert delta.parallelism == 1 and delta.budget == 15  # the seed's 15 joint DoF for the DELTA
+    assert delta.parallelism == 1
+    assert delta.budget == 15  # the seed's 15 joint DoF for the DELTA
     stewart = model_mobility(models["stewart"])
     assert (stewart.bodies, stewart.joints, sum(stewart.joint_dofs), stewart.identical) == (14, 18, 36, 0)
 
@@ -44,10 +45,13 @@ def test_gruebler_formula_and_its_corollaries():
     assert gruebler(3, 4, [1, 1, 1, 1]) == 1
     # A closed loop of six revolute joints: rigid by eq. 8.2 (F = 0) unless its axes are constrained, e.g.
     # all parallel, when it moves as a planar loop with F = 3 (lambda = 3 gives the same).
-    assert gruebler(6, 6, [1] * 6) == 0 and gruebler(6, 6, [1] * 6, constraints=3) == gruebler(3, 6, [1] * 6) == 3
+    assert gruebler(6, 6, [1] * 6) == 0
+    assert gruebler(6, 6, [1] * 6, constraints=3) == gruebler(3, 6, [1] * 6) == 3
     assert bodies_of_legs(9, 3) == 8  # eq. 8.3
-    assert joint_dof_budget(3, 3) == 15 and joint_dof_budget(6, 6) == 36  # eq. 8.4
-    assert degree_of_parallelism(3, 3) == 1 and parallelism_class(Fraction(2, 3)) == "partially parallel"
+    assert joint_dof_budget(3, 3) == 15
+    assert joint_dof_budget(6, 6) == 36  # eq. 8.4
+    assert degree_of_parallelism(3, 3) == 1
+    assert parallelism_class(Fraction(2, 3)) == "partially parallel"
     assert parallelism_class(Fraction(4, 3)) == "highly parallel"
 
 
@@ -56,7 +60,9 @@ def test_idle_rods_between_spherical_joints_count_as_identical_conditions(models
                                                              "{name: ub, type: S}")
     sps = model_from_text(text)
     report = model_mobility(sps)
-    assert sum(report.joint_dofs) == 42 and report.identical == 6 and report.mobility == 6
+    assert sum(report.joint_dofs) == 42
+    assert report.identical == 6
+    assert report.mobility == 6
 
 
 def test_declared_identical_conditions_and_constraints_enter_eq_8_2():
@@ -126,7 +132,8 @@ def test_only_ruu_and_ruc_start_with_a_revolute_joint():
 
 def test_six_dof_synthesis_keeps_the_stewart_legs():
     synthesis = synthesize(6, 6)
-    assert synthesis.leg_dof == 6 and not synthesis.translational
+    assert synthesis.leg_dof == 6
+    assert not synthesis.translational
     assert {"UPS", "SPU", "RUS", "PUS"} <= set(synthesis.survivors)
     # SPS has 7 joint DoF (one idle rod spin): not a candidate of the 6 + 6 (6 - 1) = 36 budget.
     assert "SPS" not in {v.topology for v in synthesis.verdicts}
@@ -154,19 +161,24 @@ def test_topologies_command():
     assert "position of actuators" in line
     data = json.loads(subprocess.run(SYMKIN_CLI + ["topologies", "--json"], capture_output=True, text=True,
                                      check=True).stdout)
-    assert len(data["eliminated"]) == 130 and data["leg_dof"] == 5
+    assert len(data["eliminated"]) == 130
+    assert data["leg_dof"] == 5
     bad = subprocess.run(SYMKIN_CLI + ["topologies", "--dof", "3", "--legs", "2"], capture_output=True, text=True)
-    assert bad.returncode == 1 and "do not split evenly" in bad.stderr
+    assert bad.returncode == 1
+    assert "do not split evenly" in bad.stderr
 
 
 def test_mobility_command(tmp_path):
     paths = [str(MODELS_DIR / f"{name}.yaml") for name in ("delta", "stewart", "ur10e")]
     out = subprocess.run(SYMKIN_CLI + ["mobility", *paths], capture_output=True, text=True, check=True).stdout
-    assert "F = 6 (8 - 9 - 1) + 15 - 0 + 0 = 3" in out and "F = 6 (14 - 18 - 1) + 36 - 0 + 0 = 6" in out
-    assert out.count("as intended") == 3 and "P_g = k / F = 3/3 = 1: fully parallel" in out
+    assert "F = 6 (8 - 9 - 1) + 15 - 0 + 0 = 3" in out
+    assert "F = 6 (14 - 18 - 1) + 36 - 0 + 0 = 6" in out
+    assert out.count("as intended") == 3
+    assert "P_g = k / F = 3/3 = 1: fully parallel" in out
     # A model whose legs cannot move the platform as intended: exit code 1.
     locked = (MODELS_DIR / "delta.yaml").read_text().replace("  home:", "  mobility: {identical: 1}\n  home:")
     path = tmp_path / "locked.yaml"
     path.write_text(locked)
     result = subprocess.run(SYMKIN_CLI + ["mobility", str(path), "--json"], capture_output=True, text=True)
-    assert result.returncode == 1 and json.loads(result.stdout)["mobility"] == 2
+    assert result.returncode == 1
+    assert json.loads(result.stdout)["mobility"] == 2

@@ -48,15 +48,18 @@ def reference(payload, tmp_path_factory):
 
 
 def test_designs_are_fixed_by_the_definition():
-    assert GRID.size == 36 and GRID.chunks == 8
+    assert GRID.size == 36
+    assert GRID.chunks == 8
     designs = GRID.designs()
     np.testing.assert_array_equal(designs[:7, 0], [0.05] * 6 + [0.1])             # row-major, l2 fastest
     np.testing.assert_array_equal(np.vstack([GRID.designs(k) for k in range(GRID.chunks)]), designs)
     sobol = SweepDefinition((SweepAxis("l1", 0.1, 0.2), SweepAxis("l2", 0.0, 1.0)), sobol=100, chunk=7)
     whole = sobol.designs()
-    assert whole.shape == (100, 2) and len(np.unique(whole, axis=0)) == 100
+    assert whole.shape == (100, 2)
+    assert len(np.unique(whole, axis=0)) == 100
     np.testing.assert_array_equal(np.vstack([sobol.designs(k) for k in range(sobol.chunks)]), whole)
-    assert whole[:, 0].min() >= 0.1 and whole[:, 0].max() <= 0.2
+    assert whole[:, 0].min() >= 0.1
+    assert whole[:, 0].max() <= 0.2
     assert SweepDefinition.from_json(sobol.to_json()) == sobol
     assert parse_axis("l1=0.05:0.3:40", True) == SweepAxis("l1", 0.05, 0.3, 40)
     for text, grid in (("l1=0.05:0.3", True), ("l1=a:b:3", True), ("l1=0.1:0.2:3", False), ("=1:2:3", True)):
@@ -70,12 +73,15 @@ def test_designs_are_fixed_by_the_definition():
 
 def test_rows_are_the_gci_of_each_design(reference, payload):
     rows = reference.to_pydict()
-    assert rows["design"] == list(range(36)) and set(rows["status"]) == {OK}
+    assert rows["design"] == list(range(36))
+    assert set(rows["status"]) == {OK}
     model = payload.load()
     for i in (0, 17, 35):
         direct = gci(model.bind(l1=rows["l1"][i], l2=rows["l2"][i]), samples=GRID.samples, seed=GRID.seed)
-        assert rows["gci"][i] == direct.value.value and rows["gci_error"][i] == direct.value.error
-        assert rows["volume"][i] == direct.measure.value and rows["volume_error"][i] == direct.measure.error
+        assert rows["gci"][i] == direct.value.value
+        assert rows["gci_error"][i] == direct.value.error
+        assert rows["volume"][i] == direct.measure.value
+        assert rows["volume_error"][i] == direct.measure.error
         assert 1.0 <= rows["kappa_min"][i] <= 1.0 / rows["gci"][i] <= rows["kappa_max"][i]
     # the 2R arm's GCI is best near l2 / l1 = 1 / sqrt(2), for every l1 of the grid
     gcis = np.array(rows["gci"]).reshape(6, 6)
@@ -161,7 +167,8 @@ def test_a_design_without_workspace_is_a_row_not_a_crash(payload, tmp_path):
     rows = table.to_pydict()
     # det J = l1 l2 sin(theta2): with a zero length the workspace is an arc (or a point), of area 0
     assert rows["status"] == [EMPTY, EMPTY, EMPTY, OK]
-    assert math.isnan(rows["gci"][0]) and rows["gci"][3] > 0.0
+    assert math.isnan(rows["gci"][0])
+    assert rows["gci"][3] > 0.0
 
 
 def test_cli_writes_the_table_with_its_metadata_and_figures(tmp_path, capsys):
@@ -173,9 +180,12 @@ def test_cli_writes_the_table_with_its_metadata_and_figures(tmp_path, capsys):
     assert "sweep of delta: 6 designs in 2 chunks of 4, in this process" in printed
     assert "best gci" in printed
     table, definition, metadata = read_sweep(out)
-    assert table.num_rows == 6 and set(table.column("status").to_pylist()) == {OK}
-    assert metadata["symkin.model"] == "delta" and metadata["symkin.model_hash"].startswith("sha256:")
-    assert definition.names == ("a", "b") and definition.samples == 512
+    assert table.num_rows == 6
+    assert set(table.column("status").to_pylist()) == {OK}
+    assert metadata["symkin.model"] == "delta"
+    assert metadata["symkin.model_hash"].startswith("sha256:")
+    assert definition.names == ("a", "b")
+    assert definition.samples == 512
     assert (tmp_path / "fig" / "delta-sweep-maps.png").read_bytes()[:4] == b"\x89PNG"
     assert (tmp_path / "fig" / "delta-sweep-pareto.png").read_bytes()[:4] == b"\x89PNG"
     assert not (tmp_path / "sweep.parquet.parts").exists()
@@ -233,7 +243,8 @@ def test_cli_sigterm_then_resume_gives_the_uninterrupted_table(tmp_path):
     assert process.returncode == 130, err
     assert "rerun the same command with --resume" in err
     kept = len(list(parts.glob("chunk-*.parquet")))
-    assert 0 < kept < 32 and not out.exists()
+    assert 0 < kept < 32
+    assert not out.exists()
     resumed = subprocess.run([*command, "-o", str(out), "--resume"], capture_output=True, text=True, check=True)
     assert f"resuming with {kept} chunks done" in resumed.stdout
     whole = tmp_path / "whole.parquet"

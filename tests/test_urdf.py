@@ -56,8 +56,10 @@ def test_a_chain_with_fixed_joints_branches_and_all_joint_types(tmp_path):
                                                                       ("j3", "P", "slider")]
     j1, j2, j3 = model.joints
     assert j1.limits is None  # continuous
-    assert [float(v) for v in j2.limits] == [-1.5, 1.5] and float(j3.effort_limit) == 50
-    assert model.base and model.tcp  # the fixed mount and flange
+    assert [float(v) for v in j2.limits] == [-1.5, 1.5]
+    assert float(j3.effort_limit) == 50
+    assert model.base
+    assert model.tcp  # the fixed mount and flange
     # The sensor, fixed to l1 off the chain, moves with l1: its mass is a body of l1.
     assert sorted((b.link, float(b.mass)) for b in model.bodies) == [("l1", 0.2), ("l1", 1.5), ("l2", 0.5),
                                                                     ("slider", 0.25)]
@@ -100,9 +102,11 @@ def test_joints_off_the_chain_are_locked_and_their_links_lumped_into_the_chain(t
     tool it carries become rigid parts of l2, as in Pinocchio's buildReducedModel."""
     path = _write(tmp_path, ARM)
     at_zero = load_model(path, tip="l2")
-    assert [j.name for j in at_zero.joints] == ["j1", "j2"] and "locked: j3 = 0" in at_zero.description
+    assert [j.name for j in at_zero.joints] == ["j1", "j2"]
+    assert "locked: j3 = 0" in at_zero.description
     slider = next(b for b in at_zero.bodies if float(b.mass) == 0.25)
-    assert slider.link == "l2" and [float(c) for c in slider.com] == [0.1, 0.0, 0.0]
+    assert slider.link == "l2"
+    assert [float(c) for c in slider.com] == [0.1, 0.0, 0.0]
     moved = load_model(path, tip="l2", locks={"j3": 0.15})
     slider = next(b for b in moved.bodies if float(b.mass) == 0.25)
     assert [float(c) for c in slider.com] == [0.25, 0.0, 0.0]  # 0.1 + 0.15 along the axis x
@@ -203,7 +207,9 @@ def test_cli_derives_a_urdf_with_a_tip(tmp_path):
     bad = subprocess.run(SYMKIN_CLI + ["derive", str(_write(tmp_path, ARM.replace('type="prismatic"', 'type="floating"'),
                                                             "bad.urdf")), "-o", str(out)],
                          capture_output=True, text=True)
-    assert bad.returncode == 2 and "bad.urdf:" in bad.stderr and "floating" in bad.stderr
+    assert bad.returncode == 2
+    assert "bad.urdf:" in bad.stderr
+    assert "floating" in bad.stderr
 
 
 def test_the_example_urdf_is_the_yaml_robot(models):
@@ -237,7 +243,8 @@ def test_analysis_commands_take_a_urdf_as_a_model_file(tmp_path):
     run = subprocess.run(SYMKIN_CLI + ["workspace", str(MODELS_DIR / "ur10e.urdf"), "-n", "500",
                                        "-o", str(tmp_path / "ws.png")], capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
-    assert (tmp_path / "ws.png").exists() and "manifest.json" not in run.stderr
+    assert (tmp_path / "ws.png").exists()
+    assert "manifest.json" not in run.stderr
 
 
 def test_odd_constant_frames_compose_to_numbers_and_agree_with_pinocchio(tmp_path, capsys):
@@ -338,7 +345,8 @@ def test_vendor_names_derive_unedited_and_keep_their_names(tmp_path, capsys):
     assert [c.get("source_name") for c in manifest["model"]["coordinates"]] == ["joint_0.0", "'8'", "lambda"]
     assert main(["view", str(out / "vendor"), "-o", str(tmp_path / "page.html"), "--workspace", "64"]) == 0
     page = (tmp_path / "page.html").read_text()
-    assert '"label":"joint_0.0"' in page and '"label":"\\u00278\\u0027"' in page
+    assert '"label":"joint_0.0"' in page
+    assert '"label":"\\u00278\\u0027"' in page
     report = crosscheck(path, samples=3, backends=("numpy",))
     assert not report.failures, report.comparisons
     assert {"frame link.1", "frame 8", "frame link_1"} <= {c.quantity for c in report.comparisons}
@@ -368,8 +376,10 @@ def test_robot_files_are_told_by_their_content(tmp_path, capsys):
         out = tmp_path / "out"
         assert main(["derive", str(path), "-o", str(out)]) == 2
         err = capsys.readouterr().err
-        assert f"{path}{what}" in err and "fix:" in err, err
-        assert "did you mean" not in err and not out.exists()
+        assert f"{path}{what}" in err, err
+        assert "fix:" in err, err
+        assert "did you mean" not in err
+        assert not out.exists()
     # the URDF reader itself stops at a macro, located (one beyond what is sniffed, or text given directly)
     from symkin.model.urdf_source import urdf_document
 

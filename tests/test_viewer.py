@@ -49,15 +49,19 @@ def test_every_example_model_gets_a_self_contained_page(name, generated_dir):
     html, _ = page.page_of(model, 1024)
     assert_self_contained(html)
     data, _ = page_parts(html)
-    assert data["name"] == name and data["kind"] == ("parallel" if model.info.is_parallel else "serial")
+    assert data["name"] == name
+    assert data["kind"] == ("parallel" if model.info.is_parallel else "serial")
     assert f'globalThis.symkin[{json.dumps(name)}]' in html  # the generated module, inlined
     cloud = data["cloud"]
     assert [c["name"] for c in data["coordinates"]] == [c.name for c in model.info.coordinates]
     if mechanism.kind_of(model) is mechanism.MechanismKind.PARALLEL_ORIENTATION:  # a spherical platform: no cloud
-        assert cloud["points"] == [] and "set of orientations" in page.workspace_cloud(model, 1024).note
+        assert cloud["points"] == []
+        assert "set of orientations" in page.workspace_cloud(model, 1024).note
         return
-    assert len(cloud["points"]) >= 512 and len(cloud["points"]) == len(cloud["inverse_kappa"])
-    assert all(0 <= v <= 1 for v in cloud["inverse_kappa"]) and cloud["colour_max"] == max(cloud["inverse_kappa"])
+    assert len(cloud["points"]) >= 512
+    assert len(cloud["points"]) == len(cloud["inverse_kappa"])
+    assert all(0 <= v <= 1 for v in cloud["inverse_kappa"])
+    assert cloud["colour_max"] == max(cloud["inverse_kappa"])
 
 
 def test_the_cloud_is_rated_as_the_analyses_rate_it(generated_dir):
@@ -80,7 +84,8 @@ def test_model_files_and_stock_urdfs_are_derived_on_the_fly(source, tmp_path):
     html = written.read_text()
     assert_self_contained(html)
     data, _ = page_parts(html)
-    assert written.name == f"{data['name']}-view.html" and data["cloud"]["points"]
+    assert written.name == f"{data['name']}-view.html"
+    assert data["cloud"]["points"]
 
 
 def test_a_design_is_shown_and_sampled_with_its_parameters(generated_dir, tmp_path):
@@ -95,13 +100,18 @@ def test_a_design_is_shown_and_sampled_with_its_parameters(generated_dir, tmp_pa
 def test_bad_input_exits_2_and_writes_nothing(generated_dir, tmp_path):
     out = tmp_path / "page.html"
     unknown = view(str(generated_dir / "planar_2r"), "-o", str(out), "--design", "l9=1")
-    assert unknown.returncode == 2 and "l9" in unknown.stderr and not out.exists()
+    assert unknown.returncode == 2
+    assert "l9" in unknown.stderr
+    assert not out.exists()
     numpy_only = tmp_path / "numpy-only"
     subprocess.run(SYMKIN_CLI + ["derive", str(MODELS_DIR / "planar_2r.yaml"), "--backend", "numpy", "-o",
                                  str(numpy_only), "-q"], check=True)
     missing = view(str(numpy_only / "planar_2r"), "-o", str(out))
-    assert missing.returncode == 2 and "--backend numpy,js" in missing.stderr and not out.exists()
-    assert view(str(tmp_path / "nowhere.yaml"), "-o", str(out)).returncode == 2 and not out.exists()
+    assert missing.returncode == 2
+    assert "--backend numpy,js" in missing.stderr
+    assert not out.exists()
+    assert view(str(tmp_path / "nowhere.yaml"), "-o", str(out)).returncode == 2
+    assert not out.exists()
 
 
 def test_the_vendored_files_are_the_ones_vendor_md_names():

@@ -74,7 +74,8 @@ def test_a_joint_slider_moves_the_arm_to_numpys_fk(browser, pages, generated_dir
     length = page.evaluate("JSON.parse(document.getElementById('symkin-data').textContent).conditioning.length")
     expected = float(global_indices.local_index(model, q, length=length))
     assert shown_inverse_kappa(page) == pytest.approx(expected, abs=AGREEMENT + svd(6))
-    assert int(page.evaluate("document.body.dataset.updates")) == 26 and not page.errors
+    assert int(page.evaluate("document.body.dataset.updates")) == 26
+    assert not page.errors
 
 
 def test_the_delta_follows_its_tcp_through_the_closed_form_ik(browser, pages, generated_dir):
@@ -141,12 +142,15 @@ def test_the_cloud_toggles_and_the_screenshots_are_not_blank(browser, pages, tmp
     page = open_page(browser, pages["delta"])
     canvas = page.locator("#view")
     with_cloud = canvas.screenshot(path=str(tmp_path / "with-cloud.png"))
-    assert page.evaluate("window.symkinView.cloud.visible") and page.locator("#colour-bar").is_visible()
+    assert page.evaluate("window.symkinView.cloud.visible")
+    assert page.locator("#colour-bar").is_visible()
     page.click("#show-cloud")
-    assert not page.evaluate("window.symkinView.cloud.visible") and page.locator("#colour-bar").is_hidden()
+    assert not page.evaluate("window.symkinView.cloud.visible")
+    assert page.locator("#colour-bar").is_hidden()
     without = canvas.screenshot(path=str(tmp_path / "without-cloud.png"))
     a, b = pixels(with_cloud), pixels(without)
-    assert drawn(a) and drawn(b)
+    assert drawn(a)
+    assert drawn(b)
     changed = np.any(np.abs(a - b) > 0.05, axis=-1).mean()
     assert changed > 0.005, f"hiding the cloud changed {changed:.2%} of the pixels"
     page.click("#show-cloud")

@@ -80,7 +80,8 @@ def browser():
 def test_a_hostile_page_holds_only_its_templates_markup(case, kind, pages, reference):
     document = pages[case, kind].read_text(encoding="utf-8")
     found = elements(document)
-    assert found.tags == reference.tags and found.attributes == reference.attributes
+    assert found.tags == reference.tags
+    assert found.attributes == reference.attributes
     assert not any(name.startswith("on") for name in found.attributes)
     # the text reads as text: the description paragraph shows it, unescaped once by the browser's parser
     text = dict(TEXT_CASES)[case]
@@ -89,7 +90,8 @@ def test_a_hostile_page_holds_only_its_templates_markup(case, kind, pages, refer
     # every inline script is pinned by its hash in the Content-Security-Policy
     scripts = re.findall(r"<script(?: type=\"(?:module|importmap)\")?>(.*?)</script>", document, re.S)
     policy = html.unescape(re.search(r'http-equiv="Content-Security-Policy" content="([^"]*)"', document).group(1))
-    assert len(scripts) == 3 and viewer_page.content_security_policy(scripts) == policy
+    assert len(scripts) == 3
+    assert viewer_page.content_security_policy(scripts) == policy
 
 
 def _injected(page) -> dict:
@@ -130,7 +132,8 @@ def test_the_notebook_frame_is_sandboxed_and_the_viewer_works_in_it(tmp_path, br
     assert main(["derive", str(path), "-o", str(tmp_path / "out"), "--backend", "numpy,js",
                  "--only", "fk,frames,jacobian", "-q"]) == 0
     shown = symkin.load(tmp_path / "out" / "arm")._repr_html_()
-    assert 'sandbox="allow-scripts"' in shown and "allow-same-origin" not in shown
+    assert 'sandbox="allow-scripts"' in shown
+    assert "allow-same-origin" not in shown
     notebook = tmp_path / "notebook.html"
     notebook.write_text(f"<!DOCTYPE html><html><body><script>window.secret = 42;</script>{shown}</body></html>")
     page = browser.new_page()
@@ -159,7 +162,10 @@ def test_a_tampered_model_script_is_refused_with_exit_2(tmp_path, capsys):
     with pytest.raises(SystemExit) as exit_:
         main(["view", str(directory), "-o", str(out)])
     err = capsys.readouterr().err
-    assert exit_.value.code == 2 and f"{script}" in err and "</script" in err and "derive the model again" in err
+    assert exit_.value.code == 2
+    assert f"{script}" in err
+    assert "</script" in err
+    assert "derive the model again" in err
     assert not out.exists()
 
 
@@ -175,7 +181,10 @@ def test_hostile_names_give_a_page_or_a_located_refusal(case, name, tmp_path, ca
         code = main(["view", str(path), "-o", str(out), "--workspace", SAMPLES])
         err = capsys.readouterr().err
         if code == 2:
-            assert f"{path}:" in err and "fix:" in err and "Traceback" not in err and not out.exists(), err
+            assert f"{path}:" in err, err
+            assert "fix:" in err, err
+            assert "Traceback" not in err, err
+            assert not out.exists(), err
             continue
         assert code == 0, err
         found = elements(out.read_text(encoding="utf-8"))

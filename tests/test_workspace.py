@@ -78,7 +78,8 @@ def test_point_cloud_is_the_forward_kinematics_of_configurations_within_limits(m
 def test_ur10e_cloud_is_three_dimensional_within_reach():
     ur = symkin.load(GENERATED_DIR / "ur10e")
     cloud = workspace.sample_workspace(ur, 4096, seed=0)
-    assert cloud.axes == ("x", "y", "z") and cloud.grid_shape is None  # 6 joints: Sobol by default
+    assert cloud.axes == ("x", "y", "z")
+    assert cloud.grid_shape is None  # 6 joints: Sobol by default
     reach = 0.6127 + 0.57155 + 0.17415 + 0.11985 + 0.11655 + 0.1807
     assert np.all(np.linalg.norm(cloud.points, axis=1) <= reach)
 
@@ -89,7 +90,8 @@ def test_bounding_box_contains_the_workspace():
         extent = points.max(axis=0) - points.min(axis=0)
         for samples, slack in ((64, 2.0), (workspace.BOX_SAMPLES, 1.05)):  # coarse joint grids pad more
             lower, upper = workspace.bounding_box(arm, samples=samples)
-            assert np.all(points >= lower) and np.all(points <= upper)
+            assert np.all(points >= lower)
+            assert np.all(points <= upper)
             assert np.all(upper - lower < slack * extent)
 
 
@@ -102,7 +104,8 @@ def test_closed_form_inverse_adapts_symkin_ik_to_positions_and_refuses_pose_solv
     takes poses and is refused."""
     arm = ARM.bind(l1=0.3, l2=0.12)
     ik = closed_form_inverse(arm)
-    assert (ik.dimension, ik.branches) == (2, 2) and ik.solver.name == "planar 2R"
+    assert (ik.dimension, ik.branches) == (2, 2)
+    assert ik.solver.name == "planar 2R"
     rim = 0.42 * np.array([np.cos(np.linspace(0, 2 * np.pi, 37)), np.sin(np.linspace(0, 2 * np.pi, 37))]).T
     hole = rim * (0.18 / 0.42)
     for points, theta2 in ((rim, 0.0), (hole, np.pi)):
@@ -160,14 +163,16 @@ def test_reachability_respects_joint_limits():
     q_out = np.random.default_rng(5).uniform([-np.pi, -np.pi], [-0.1, -0.1], (500, 2))  # both joints below 0
     assert not feasibility.reachable(ik, _seed_fk(q_out), limits, revolute).any()
     q, ok = feasibility.feasible_configurations(ik, inside.points, limits, revolute)
-    assert ok.all() and np.allclose(q, inside.q, atol=1e-7)
+    assert ok.all()
+    assert np.allclose(q, inside.q, atol=1e-7)
 
 
 def test_within_limits_wraps_angles_only():
     limits = np.array([[0.0, np.pi / 2], [0.0, 1.0]])
     q, inside = within_limits(np.array([[2 * np.pi + 0.5, 0.5], [-1e-12, 0.5], [0.5, 1.5], [0.5, 2 * np.pi + 0.5]]),
                               limits, np.array([True, False]))
-    assert np.allclose(q[0], [0.5, 0.5]) and inside[0]
+    assert np.allclose(q[0], [0.5, 0.5])
+    assert inside[0]
     assert inside[1]  # rounding just below a limit is inside
     assert not inside[2]
     assert not inside[3]  # a prismatic coordinate is not periodic

@@ -93,7 +93,8 @@ def test_a_xacro_arm_derives_and_crosschecks(tmp_path, capsys):
     line = int(re.search(r"px100\.urdf\.xacro, line (\d+): joint 'left_finger' off the chain", out).group(1))
     assert '<joint name="left_finger"' in px100.read_text().splitlines()[line - 1]
     model = load_model(px100, tip="px/gripper_prop_link", xacro_args={"robot_name": "px"})
-    assert model.dof == 5 and model.source_names["links"]["px_gripper_prop_link"] == "px/gripper_prop_link"
+    assert model.dof == 5
+    assert model.source_names["links"]["px_gripper_prop_link"] == "px/gripper_prop_link"
     # an option of the wrong file kind, an undeclared argument, a missing package: exit 2, located
     yaml_model = Path("models/planar_2r.yaml")
     assert main(["check", str(yaml_model), "--xacro-arg", "a:=1"]) == 2
@@ -150,7 +151,9 @@ def test_macros_properties_and_arguments_expand(tmp_path):
     model = load_model(arm)
     assert [j.name for j in model.joints] == ["shoulder", "elbow"]
     text = expand_xacro(arm).text
-    assert '<origin xyz="0.3 0 0"/>' in text and '<origin xyz="0.15 0 0"/>' in text and '<mass value="0.6"/>' in text
+    assert '<origin xyz="0.3 0 0"/>' in text
+    assert '<origin xyz="0.15 0 0"/>' in text
+    assert '<mass value="0.6"/>' in text
     assert [float(b.mass) for b in model.bodies] == [0.6, 1.0]
     with pytest.raises(ModelError, match="2 root links \\(world, fore\\)"):  # xacro:if dropped the elbow
         load_model(arm, xacro_args={"length": "0.1"})
@@ -180,7 +183,8 @@ def test_hostile_expressions_are_refused_located_and_never_run(tmp_path, monkeyp
     arm = _arm(tmp_path, f'<link name="extra"><visual><origin xyz="{text}"/></visual></link>')
     with pytest.raises(ModelError) as raised:
         load_model(arm)
-    assert message in str(raised.value) and f"{arm}:21:" in str(raised.value), str(raised.value)
+    assert message in str(raised.value), str(raised.value)
+    assert f"{arm}:21:" in str(raised.value), str(raised.value)
     assert not (tmp_path / "PWNED").exists()
 
 
@@ -202,7 +206,8 @@ def test_bad_xacro_gets_a_located_error(tmp_path, body, message):
     arm = _arm(tmp_path, body)
     with pytest.raises(ModelError) as raised:
         load_model(arm)
-    assert message in str(raised.value) and f"{arm}:21:" in str(raised.value), str(raised.value)
+    assert message in str(raised.value), str(raised.value)
+    assert f"{arm}:21:" in str(raised.value), str(raised.value)
 
 
 def test_element_text_is_expanded_and_a_transmission_gives_the_gear_ratio(tmp_path):
