@@ -30,7 +30,8 @@ def test_the_example_models_agree_with_pinocchio(name):
     report = crosscheck(MODELS_DIR / name, samples=5)
     names = {c.quantity for c in report.comparisons}
     assert {"fk", "jacobian_geometric", "mass_matrix", "coriolis_vector", "gravity_vector",
-            "inverse_dynamics"} <= names and any(n.startswith("frame ") for n in names)
+            "inverse_dynamics"} <= names
+    assert any(n.startswith("frame ") for n in names)
     assert not report.failures, report.comparisons
 
 

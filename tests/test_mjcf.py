@@ -86,7 +86,8 @@ def test_bad_mjcf_gets_located_errors(tmp_path, capsys):
     assert main(["derive", str(bad), "-o", str(out)]) == 2
     err = capsys.readouterr().err
     assert f"{bad}: MuJoCo's compiler refuses the file: XML Error: Schema violation: unrecognized attribute: " \
-           "'bogus'" in err and not out.exists()
+           "'bogus'" in err
+    assert not out.exists()
     assert main(["derive", str(ASSETS / "reacher.xml"), "--tip", "fingertip", "--only", "fk,mass_matrix",
                  "-o", str(out), "-q"]) == 0
     assert (out / "reacher" / "manifest.json").exists()

@@ -65,8 +65,8 @@ def test_a_joint_slider_moves_the_arm_to_numpys_fk(browser, pages, generated_dir
     before = np.array(page.evaluate("window.symkinView.state.q"))
     press(page, "joint-q2", "ArrowRight", 25)  # 0.1 deg per step
     q = np.array(page.evaluate("window.symkinView.state.q"))
-    assert q[1] - before[1] == pytest.approx(np.radians(2.5), abs=1e-9) and np.array_equal(q[[0, 2, 3, 4, 5]],
-                                                                                          before[[0, 2, 3, 4, 5]])
+    assert q[1] - before[1] == pytest.approx(np.radians(2.5), abs=1e-9)
+    assert np.array_equal(q[[0, 2, 3, 4, 5]], before[[0, 2, 3, 4, 5]])
     held, printed = shown_tcp(page)
     want = model.fk(q)[:3, 3]
     np.testing.assert_allclose(held, want, rtol=0, atol=AGREEMENT * np.abs(want).max())

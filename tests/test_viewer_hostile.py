@@ -144,8 +144,8 @@ def test_the_notebook_frame_is_sandboxed_and_the_viewer_works_in_it(tmp_path, br
     assert frame.evaluate("(() => { try { return String(parent.secret); } catch (e) { return 'blocked'; } })()") \
         == "blocked"
     assert drawn(pixels(frame.locator("#view").screenshot()))
-    assert page.evaluate("document.title") == "" and not page.evaluate(
-        f"Object.getOwnPropertyNames(window).filter((k) => k.startsWith({MARKER_PREFIX!r}))")
+    assert page.evaluate("document.title") == ""
+    assert not page.evaluate(f"Object.getOwnPropertyNames(window).filter((k) => k.startsWith({MARKER_PREFIX!r}))")
     page.close()
 
 
