@@ -44,23 +44,24 @@ DERIVING_LIBRARIES = ("sympy", "symengine", "jinja2")
 INCLUDING_MARKERS = (b"xacro", b"<include", b"<mujoco")
 ENTRY_FILE = "entry.json"
 FILES = "files"
-#: Set while a command runs with --no-cache (:func:`bypassed`).
-_BYPASSED: list[bool] = []
+#: How many :func:`bypassed` blocks are running (``--no-cache``).
+_bypassing = 0
 
 
 def enabled() -> bool:
     """False inside :func:`bypassed` (``--no-cache``)."""
-    return not any(_BYPASSED)
+    return _bypassing == 0
 
 
 @contextlib.contextmanager
 def bypassed() -> Iterator[None]:
     """While the block runs, commands derive model files afresh and keep nothing (``--no-cache``)."""
-    _BYPASSED.append(True)
+    global _bypassing
+    _bypassing += 1
     try:
         yield
     finally:
-        _BYPASSED.pop()
+        _bypassing -= 1
 
 
 def directory() -> Path:

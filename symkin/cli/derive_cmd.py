@@ -68,7 +68,8 @@ def run(args: argparse.Namespace) -> int:
             continue
         from symkin import pipeline
 
-        model, request = job or _validated(args, path)
+        assert job is not None  # validated above: every job is a cache hit or a checked model and request
+        model, request = job
         with Progress(model.name, enabled=not args.quiet) as progress:
             result = pipeline.generate(model, request, progress)
             target = pipeline.write(result, args.out)

@@ -69,20 +69,23 @@ def run(args: argparse.Namespace) -> int:
             if len(held.time):
                 Y_held = model.base_regressor(held.q, held.qd, held.qdd)[0]
                 predict = Y_held @ found.values
+            writes_model = model_files.is_model_file(args.model)
+            # the standard regressor over the fit, evaluated once: for the consistent estimate and the model file
+            Y, pi = _regressor(model, fit) if args.method == "consistent" or writes_model else (None, None)
             standard = None
             if args.method == "consistent":
                 progress("estimating physically consistent standard parameters")
-                standard = _consistent(model, fit, found)
+                standard = _consistent(model, Y, pi, fit, found)
                 if len(held.time):
                     predict = model.regressor(held.q, held.qd, held.qdd)[0] @ standard.values
             check = None if predict is None else identification.validation_of(predict, held.tau)
-            files = _report(args, model, data, found, pi_model[0], check, standard)
-            if model_files.is_model_file(args.model):
+            text, line = None, None
+            if writes_model:
                 progress("writing the model file with the identified values")
-                text, line = _updated_model(args, model, fit, found, standard, values)
-                files["summary.txt"] = f"{_report_text(files)}  {line}\n"
-                if text is not None:
-                    files["identified.yaml"] = text
+                text, line = _updated_model(args, model, Y, Y_b, pi, found, standard, values)
+            files = _report(args, model, data, found, pi_model[0], check, standard, line)
+            if text is not None:
+                files["identified.yaml"] = text
             if check is not None and predict is not None and not args.no_figure:
                 progress("drawing the validation")
                 files["validation.png"] = identification.validation_figure_png(
@@ -95,14 +98,18 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _consistent(model, fit, found):
-    """The consistent standard parameters from the fit part of the run, weighted as the WLS estimate."""
-    from symkin.analysis import consistent, identification
-
+def _regressor(model, fit) -> tuple[np.ndarray, np.ndarray]:
+    """Y and the model's pi over the fit part of the run (the standard parameters' regressor)."""
     if "regressor" not in model.info.functions:
         raise ValueError(f"{model.name}: --method consistent needs the regressor; derive it (--only regressor,"
                          "base_regressor) or give the model file")
-    Y, pi = model.regressor(fit.q, fit.qd, fit.qdd)
+    return model.regressor(fit.q, fit.qd, fit.qdd)
+
+
+def _consistent(model, Y, pi, fit, found):
+    """The consistent standard parameters from the fit part of the run, weighted as the WLS estimate."""
+    from symkin.analysis import consistent, identification
+
     weights = 1.0 / np.where(found.joint_std > 0, found.joint_std, 1.0)
     triangle, target = identification.weighted_triangle(Y, fit.tau, weights)
     names = model.info.functions["regressor"].outputs["pi"]
@@ -110,15 +117,14 @@ def _consistent(model, fit, found):
     return consistent.estimate(triangle, target, names, pi[0], links)
 
 
-def _updated_model(args: argparse.Namespace, model, fit, found, standard,
+def _updated_model(args: argparse.Namespace, model, Y, Y_b, pi, found, standard,
                    values: dict[str, float]) -> tuple[str | None, str]:
     """identified.yaml: the model file with what the run identifies replaced (the consistent standard parameters,
     or the least-squares base parameters' nearest standard ones), and the summary's line on it (or why not)."""
     from symkin.analysis import identified_model
     from symkin.model import load_model as load_model_file
 
-    Y, pi = model.regressor(fit.q, fit.qd, fit.qdd)
-    K = identified_model.combinations(Y, model.base_regressor(fit.q, fit.qd, fit.qdd)[0])
+    K = identified_model.combinations(Y, Y_b)
     names = model.info.functions["regressor"].outputs["pi"]
     estimate = standard.values if standard is not None else identified_model.nearest_standard(K, found.values, pi[0])
     record = {"method": found.method if standard is None else "consistent", "data": Path(args.data).name,
@@ -133,13 +139,8 @@ def _updated_model(args: argparse.Namespace, model, fit, found, standard,
                           f"({len(updated.identified)} standard parameters)")
 
 
-def _report_text(files: dict[str, str | bytes]) -> str:
-    text = files["summary.txt"]
-    return text.decode() if isinstance(text, bytes) else text
-
-
-def _report(args, model, data, found, pi_model, check, standard=None) -> dict[str, str | bytes]:
-    """estimate.json, estimate.csv and summary.txt."""
+def _report(args, model, data, found, pi_model, check, standard=None, model_line=None) -> dict[str, str | bytes]:
+    """estimate.json, estimate.csv and summary.txt (ending with ``model_line``, on identified.yaml, if given)."""
     rows = [{"name": n, "value": float(v), "std": float(s), "relative_std": float(r) if math.isfinite(r) else None,
              "model": float(m)}
             for n, v, s, r, m in zip(found.names, found.values, found.std, found.relative_std, pi_model)]
@@ -167,6 +168,8 @@ def _report(args, model, data, found, pi_model, check, standard=None) -> dict[st
                               "data_cost": standard.cost, "least_squares_cost": standard.best_cost}
         lines.append(f"  physically consistent standard parameters (every link's pseudo-inertia positive definite): "
                      f"weighted data cost {standard.cost:.4g} against {standard.best_cost:.4g} unconstrained")
+    if model_line is not None:
+        lines.append(f"  {model_line}")
     csv_lines = ["name,value,std,relative_std,model"] + [
         f"{r['name']},{r['value']!r},{r['std']!r},{r['relative_std']!r},{r['model']!r}" for r in rows]
     return {"estimate.json": json.dumps(record, indent=2, allow_nan=False) + "\n",

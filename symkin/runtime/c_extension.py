@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from symkin._version import __version__
-from symkin.backends.c.build import extension_module, python_include_directories
+from symkin.backends.c.build import extension_module, progress, python_include_directories
 from symkin.backends.naming import c_symbol
 from symkin.errors import GeneratedCodeError
 from symkin.runtime.wrappers import signature_text
@@ -115,7 +115,7 @@ def entry_points(library: Path, header: Path, manifest: dict[str, Any],
     model = manifest["model"]["name"]
     records = manifest["functions"]
     if python_include_directories() is None:
-        _say(f"symkin: no Python or numpy C headers for {sys.executable}; {model}'s Python calls go through ctypes "
+        progress(f"symkin: no Python or numpy C headers for {sys.executable}; {model}'s Python calls go through ctypes "
              "(install the Python development package, e.g. python3-dev, for the compiled entry points)")
         return None
     docstrings = [functions[r["name"]].__doc__ or "" for r in records]
@@ -123,7 +123,7 @@ def entry_points(library: Path, header: Path, manifest: dict[str, Any],
         path, name = extension_module(lambda: module_source(model, header.name, records, docstrings),
                                       _source_inputs(model, header.name, records, docstrings), model, header, library)
     except GeneratedCodeError as err:
-        _say(f"symkin: the compiled entry points of {model} did not build; its Python calls go through ctypes:\n{err}")
+        progress(f"symkin: the compiled entry points of {model} did not build; its Python calls go through ctypes:\n{err}")
         return None
     loader = importlib.machinery.ExtensionFileLoader(name, str(path))
     spec = importlib.util.spec_from_file_location(name, str(path), loader=loader)
@@ -133,13 +133,4 @@ def entry_points(library: Path, header: Path, manifest: dict[str, Any],
     loader.exec_module(module)
     python = tuple(functions[r["name"]] for r in records)
     module._bind(python, tuple(getattr(f, "result_type", None) for f in python))
-    compiled = {}
-    for record in records:
-        function = getattr(module, record["name"])
-        compiled[record["name"]] = function
-    return compiled
-
-
-def _say(line: str) -> None:
-    if os.environ.get("SYMKIN_QUIET", "") in ("", "0"):
-        print(line, file=sys.stderr, flush=True)
+    return {record["name"]: getattr(module, record["name"]) for record in records}

@@ -118,27 +118,42 @@ def shared_library(source: Path, header: Path) -> Path:
         GeneratedCodeError: the compiler is missing or fails (its messages are included).
     """
     command = compiler_command()
-    key = hashlib.sha256()
-    for part in (source.read_bytes(), header.read_bytes(), "\0".join(command + list(BASE_FLAGS)).encode(),
-                 _compiler_version(command[0]).encode()):
-        key.update(hashlib.sha256(part).digest())
+    key = _key(source.read_bytes(), header.read_bytes(), "\0".join(command + list(BASE_FLAGS)).encode(),
+               _compiler_version(command[0]).encode())
     directory = cache_directory()
-    target = directory / f"lib{source.stem}-{key.hexdigest()[:24]}{_library_suffix()}"
+
+    def build(target: Path) -> None:
+        units = translation_units(source.read_text())
+        jobs = min(build_jobs(), len(units))
+        progress(f"symkin: compiling {source.name} ({source.stat().st_size // 1024} kB, "
+                 f"{len(units)} translation unit{'s' if len(units) > 1 else ''}, {jobs} at once) with "
+                 f"{' '.join(command)}; cached in {directory} afterwards ...")
+        _compile(command, [(list(BASE_FLAGS) + ["-I", str(header.parent)] + unit, source) for unit in units],
+                 target, jobs, ["-lm"])
+
+    return _cached(directory / f"lib{source.stem}-{key}{_library_suffix()}", build, source.name)
+
+
+def _key(*parts: bytes) -> str:
+    """The cache key of what goes into a build: 24 hex digits of the SHA-256 of the parts' digests."""
+    key = hashlib.sha256()
+    for part in parts:
+        key.update(hashlib.sha256(part).digest())
+    return key.hexdigest()[:24]
+
+
+def _cached(target: Path, build: Callable[[Path], None], what: str) -> Path:
+    """``target`` from the cache (its use recorded), or made by ``build(target)`` under its build lock, once
+    however many processes ask at the same time; the time it took goes to stderr."""
     if target.exists():
         _touch(target)
         return target
-    directory.mkdir(parents=True, exist_ok=True)
-    with locked(directory / f"{target.name}.lock"):
+    target.parent.mkdir(parents=True, exist_ok=True)
+    with locked(target.parent / f"{target.name}.lock"):
         if not target.exists():  # another process may have built it while we waited
-            units = translation_units(source.read_text())
-            jobs = min(build_jobs(), len(units))
-            _progress(f"symkin: compiling {source.name} ({source.stat().st_size // 1024} kB, "
-                      f"{len(units)} translation unit{'s' if len(units) > 1 else ''}, {jobs} at once) with "
-                      f"{' '.join(command)}; cached in {directory} afterwards ...")
             start = time.perf_counter()
-            _compile(command, [(list(BASE_FLAGS) + ["-I", str(header.parent)] + unit, source) for unit in units],
-                     target, jobs, ["-lm"])
-            _progress(f"symkin: compiled {source.name} in {time.perf_counter() - start:.1f} s")
+            build(target)
+            progress(f"symkin: compiled {what} in {time.perf_counter() - start:.1f} s")
     return target
 
 
@@ -168,31 +183,22 @@ def extension_module(source: Callable[[], str], what: bytes, model: str, header:
     if includes is None:
         raise GeneratedCodeError("this Python has no C headers (Python.h)")
     command = compiler_command()
-    key = hashlib.sha256()
-    for part in (what, header.read_bytes(), str(library).encode(),
-                 "\0".join(command + list(EXTENSION_FLAGS) + list(includes)).encode(),
-                 _compiler_version(command[0]).encode()):
-        key.update(hashlib.sha256(part).digest())
-    digest = key.hexdigest()[:24]
+    digest = _key(what, header.read_bytes(), str(library).encode(),
+                  "\0".join(command + list(EXTENSION_FLAGS) + list(includes)).encode(),
+                  _compiler_version(command[0]).encode())
     name = f"_symkin_{model}_{digest}"
-    directory = cache_directory()
-    target = directory / f"lib{model}{EXTENSION_TAG}-{digest}{_library_suffix()}"
-    if target.exists():
-        _touch(target)
-        return target, name
-    directory.mkdir(parents=True, exist_ok=True)
-    with locked(directory / f"{target.name}.lock"):
-        if not target.exists():
-            _progress(f"symkin: compiling the CPython entry points of {model} with {' '.join(command)} ...")
-            start = time.perf_counter()
-            flags = [*EXTENSION_FLAGS, "-I", str(header.parent), "-I", includes[0], "-I", includes[1],
-                     f'-DSYMKIN_MODULE_NAME="{name}"', f"-DSYMKIN_MODULE_INIT=PyInit_{name}"]
-            _compile(command, [(flags, source())], target, 1, [str(library), "-lm"])
-            _progress(f"symkin: compiled the entry points of {model} in {time.perf_counter() - start:.1f} s")
-    return target, name
+
+    def build(target: Path) -> None:
+        progress(f"symkin: compiling the CPython entry points of {model} with {' '.join(command)} ...")
+        flags = [*EXTENSION_FLAGS, "-I", str(header.parent), "-I", includes[0], "-I", includes[1],
+                 f'-DSYMKIN_MODULE_NAME="{name}"', f"-DSYMKIN_MODULE_INIT=PyInit_{name}"]
+        _compile(command, [(flags, source())], target, 1, [str(library), "-lm"])
+
+    target = cache_directory() / f"lib{model}{EXTENSION_TAG}-{digest}{_library_suffix()}"
+    return _cached(target, build, f"the entry points of {model}"), name
 
 
-def _progress(line: str) -> None:
+def progress(line: str) -> None:
     """A progress line on stderr: a build takes seconds, loading from the cache is silent
     (``SYMKIN_QUIET=1`` silences builds too)."""
     if os.environ.get("SYMKIN_QUIET", "") not in ("", "0"):
