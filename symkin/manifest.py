@@ -32,7 +32,8 @@ def _input_record(i) -> dict[str, Any]:
     return record
 
 
-def _coordinate_record(model: Model, coordinate, actuators: tuple | None = None) -> dict[str, Any]:
+def _coordinate_record(model: Model, coordinate, joints: tuple | None = None, actuators: tuple | None = None
+                       ) -> dict[str, Any]:
     """Name and type of a joint coordinate, whether it is passive, and its position, velocity and effort
     limits where the model declares them.
 
@@ -51,9 +52,12 @@ def _coordinate_record(model: Model, coordinate, actuators: tuple | None = None)
         bound = getattr(coordinate, key, None)
         if bound is not None:
             record[key] = float(bound.xreplace(values))
-    drive = next((a for a in (model.actuators if actuators is None else actuators) if a.joint == coordinate.name), None)
-    if drive is not None and drive.continuous_effort is not None:  # N K_t I_cont: what the motor holds for long
-        record["continuous_effort_limit"] = float(drive.continuous_effort.xreplace(values))
+    from symkin.model.body_build import drive_of  # sympy: only when a manifest is built
+
+    drive = drive_of(coordinate.name, model.joints if joints is None else joints,
+                     model.actuators if actuators is None else actuators)
+    if drive is not None and drive[0].continuous_effort is not None:  # s N K_t I_cont: what the motor holds for long
+        record["continuous_effort_limit"] = float((drive[1] * drive[0].continuous_effort).xreplace(values))
     friction = next((f for f in model.friction if f.joint == coordinate.name), None)
     if friction is not None:  # what the hand feels at the handle (symkin rate): b and the larger Coulomb level
         coulomb = [friction.coulomb] + ([friction.coulomb_negative] if friction.coulomb_negative is not None else [])
@@ -142,7 +146,7 @@ def _parallel_record(model: Model) -> dict[str, Any]:
         legs.append(record)
     record = {"motion": parallel.motion.value, "legs": legs, "home": home}
     if parallel.wrist is not None:  # a hybrid device: the wrist's coordinates qw, as the model's q are recorded
-        record["wrist"] = [_coordinate_record(model, joint, parallel.wrist.actuators)
+        record["wrist"] = [_coordinate_record(model, joint, parallel.wrist.joints, parallel.wrist.actuators)
                            for joint in parallel.wrist.coordinates]
     return record
 

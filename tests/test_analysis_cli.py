@@ -114,6 +114,9 @@ def test_bench_gci_prints_a_table_and_plots_time_against_error(tmp_path, capsys)
     (["gci", str(GENERATED_DIR / "ur10e"), "--domain", "cartesian"], "no inverse kinematics"),
     (["workspace", ARM_DIR, "--limit", "theta1=1:0", "--no-figure"], "LOWER must be smaller than UPPER"),
     (["bench", "gci", ARM_DIR, "--methods", "simpson"], "unknown integrators"),
+    # a figure without an image suffix failed in matplotlib after the whole sampling
+    (["workspace", ARM_DIR, "-o", "ws"], "'ws' names no image format"),
+    (["workspace", ARM_DIR, "--map", "map.pnj"], "end it in one of .png"),
 ])
 def test_bad_arguments_exit_with_code_2(arguments, message, capsys):
     with pytest.raises(SystemExit) as exit_info:

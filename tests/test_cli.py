@@ -62,6 +62,18 @@ def test_check_validates_and_writes_nothing(tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
+def test_a_reader_that_closes_the_pipe_ends_the_command_quietly():
+    """'symkin check models/*.yaml | head -1': stdout closed before symkin writes; no BrokenPipeError traceback,
+    the exit code of a command killed by SIGPIPE (128 + 13)."""
+    process = subprocess.Popen([*SYMKIN_CLI, "check", *map(str, sorted(MODELS_DIR.glob("*.yaml")))],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    process.stdout.close()  # before the interpreter has started: every write of symkin's finds no reader
+    _, err = process.communicate(timeout=120)
+    assert b"Traceback" not in err, err
+    assert b"BrokenPipe" not in err, err
+    assert process.returncode == 141
+
+
 def test_quantities_lists_the_outputs():
     result = subprocess.run(SYMKIN_CLI + ["quantities"], capture_output=True, text=True, check=True)
     for name in ("fk", "frames", "jacobian", "jacobian_geometric", "task_coordinates"):

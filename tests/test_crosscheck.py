@@ -25,7 +25,7 @@ from test_robot_zoo import ROBOTS_DIR
 from tolerances import DYNAMICS
 
 
-@pytest.mark.parametrize("name", ["planar_2r.yaml", "ur10e.yaml", "ur10e_classic.yaml", "ur10e.urdf"])
+@pytest.mark.parametrize("name", ["planar_2r.yaml", "ur10e.yaml", "ur10e_classic.yaml", "ur10e.urdf", "phantom_premium.yaml"])
 def test_the_example_models_agree_with_pinocchio(name):
     report = crosscheck(MODELS_DIR / name, samples=5)
     names = {c.quantity for c in report.comparisons}

@@ -16,7 +16,7 @@ from symkin.structure.mobility import (bodies_of_legs, degree_of_parallelism, gr
 from symkin.structure.synthesis import leg_topologies, synthesize
 
 INTENDED = {"planar_2r": 2, "ur10e": 6, "ur10e_classic": 6, "delta": 3, "stewart": 6, "pantograph": 2, "agile_eye": 3,
-            "delta_wrist": 6}
+            "delta_wrist": 6, "phantom_premium": 3}
 
 
 @pytest.mark.parametrize("name", EXAMPLE_MODELS)

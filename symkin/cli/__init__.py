@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import os
 import re
 import signal
 import sys
@@ -61,7 +62,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     previous = signal.signal(signal.SIGTERM, _terminate)
     try:
         with _cache_choice(args):
-            return int(args.run(args) or 0)
+            code = int(args.run(args) or 0)
+        sys.stdout.flush()  # here, where a closed pipe is caught below, not at the interpreter's exit
+        return code
+    except BrokenPipeError:
+        # the reader of stdout went away ('symkin check models/*.yaml | head -1'): stop quietly, as a
+        # command killed by SIGPIPE does; stdout goes to /dev/null so that Python's final flush cannot fail
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 128 + signal.SIGPIPE
     except ModelError as err:
         print(f"error: {err}", file=sys.stderr)
         return 2

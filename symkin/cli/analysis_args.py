@@ -200,6 +200,18 @@ def fail_on_bad_input(args: argparse.Namespace, err: Exception) -> NoReturn:
     parser.error(message)
 
 
+#: The image formats matplotlib writes without extra packages, by file suffix.
+FIGURE_SUFFIXES = (".png", ".pdf", ".svg", ".eps", ".ps", ".jpg", ".jpeg", ".tif", ".tiff", ".webp")
+
+
+def figure_path(text: str) -> str:
+    """A figure's file name, its format told by its suffix (an argparse type: refused before any work)."""
+    if not text.lower().endswith(FIGURE_SUFFIXES):
+        raise argparse.ArgumentTypeError(f"'{text}' names no image format: end it in one of "
+                                         f"{', '.join(FIGURE_SUFFIXES)} (e.g. '{text}.png')")
+    return text
+
+
 def sample_count(text: str) -> int:
     """A sample count, also written like 1e9 (an argparse type)."""
     try:

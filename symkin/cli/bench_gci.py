@@ -36,7 +36,7 @@ def register(kinds: argparse._SubParsersAction) -> None:
     p.add_argument("--repeats", type=int, default=3, help="timed runs per point, the fastest kept (default: 3)")
     p.add_argument("--seed", type=int, default=0, help="seed of mc/qmc (default: %(default)s)")
     analysis_args.add_length_argument(p)
-    p.add_argument("-o", "--out", metavar="FIGURE",
+    p.add_argument("-o", "--out", metavar="FIGURE", type=analysis_args.figure_path,
                    help="plot of time against error (default: bench-results/MODEL_NAME-gci-time-vs-error.png)")
     p.set_defaults(run=run, parser=p, backend=None)
 

@@ -37,11 +37,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--method", choices=("grid", "random", "sobol"), default=None,
                    help="joint-space sampling (default: grid up to 3 joints, else sobol)")
     p.add_argument("--seed", type=int, default=0, help="seed of random/sobol sampling (default: %(default)s)")
-    p.add_argument("-o", "--out", metavar="FIGURE", help="workspace figure (default: MODEL_NAME-workspace.png)")
-    p.add_argument("--map", metavar="FIGURE", help="also draw 1/kappa over the workspace into FIGURE "
-                                                   "(first design); a platform at a constant orientation also "
-                                                   "gets FIGURE-sections (x-y, x-z, y-z through the home position)")
-    p.add_argument("--force-map", metavar="FIGURE",
+    p.add_argument("-o", "--out", metavar="FIGURE", type=analysis_args.figure_path,
+                   help="workspace figure (default: MODEL_NAME-workspace.png)")
+    p.add_argument("--map", metavar="FIGURE", type=analysis_args.figure_path,
+                   help="also draw 1/kappa over the workspace into FIGURE (first design); a platform at a constant "
+                        "orientation also gets FIGURE-sections (x-y, x-z, y-z through the home position)")
+    p.add_argument("--force-map", metavar="FIGURE", type=analysis_args.figure_path,
                    help="also draw the isotropic force (the largest force rendered in every direction, from the "
                         "actuators' effort limits) over the workspace of the first design into FIGURE; "
                         "translational task spaces only")

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from typing import Any
 
 import numpy as np
@@ -274,8 +274,30 @@ def read_actuators(r: Reader, value: Any, joint_names: tuple[str, ...], path: Ke
 ACTUATOR_KEYS = ("rotor_inertia", "gear_ratio", "torque_constant", "peak_current", "continuous_current")
 
 
+def drive_of(name: str, joints: Sequence[Joint], actuators: Sequence[Actuator]) -> tuple[Actuator, sympy.Expr] | None:
+    """The motor that drives joint ``name`` and the factor s from its joint torque to ``name``'s effort.
+
+    A joint's own actuator (s = 1); else, for a coordinate, the one motor on a follower of it alone,
+    q_f = a q + b (the PHANToM's q3 motor turns the parallelogram's lever, whose angle is q3): by virtual
+    work its torque tau_f gives q the generalized force a tau_f, so s = |a|.  None if there is no such
+    motor or several followers' motors share the coordinate (their limits are not a box in q).
+    """
+    own = next((a for a in actuators if a.joint == name), None)
+    if own is not None:
+        return own, sympy.Integer(1)
+    by_joint = {a.joint: a for a in actuators}
+    driving = [(by_joint[j.name], sympy.Abs(j.coupling.multiplier)) for j in joints
+               if j.follower and j.coupling is not None and j.coupling.leader == name and j.name in by_joint]
+    return driving[0] if len(driving) == 1 else None
+
+
 def with_motor_effort_limits(joints: tuple[Joint, ...], actuators: tuple[Actuator, ...]) -> tuple[Joint, ...]:
-    """The joints, each without an ``effort_limit`` of its own given its motor's peak torque N K_t I_peak."""
-    peak = {a.joint: a.peak_effort for a in actuators if a.peak_effort is not None}
-    return tuple(dataclasses.replace(j, effort_limit=peak[j.name]) if j.effort_limit is None and j.name in peak
-                 else j for j in joints)
+    """The joints, each without an ``effort_limit`` of its own given its drive's peak torque s N K_t I_peak
+    (:func:`drive_of`)."""
+    out = []
+    for joint in joints:
+        drive = drive_of(joint.name, joints, actuators)
+        if joint.effort_limit is None and drive is not None and drive[0].peak_effort is not None:
+            joint = dataclasses.replace(joint, effort_limit=drive[1] * drive[0].peak_effort)
+        out.append(joint)
+    return tuple(out)

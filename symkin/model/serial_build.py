@@ -128,7 +128,7 @@ def _coupling(r: Reader, path: KeyPath, value: Any, symbols: dict[str, sympy.Dum
         r.fail(path, f"'{value}' names no coordinate: the joint would be fixed",
                "name the coordinates the joint moves with, or replace the joint by a fixed transform")
         return None
-    offset = expr.xreplace({symbol: 0 for symbol in symbols.values()})
+    offset = expr.xreplace({symbol: sympy.S.Zero for symbol in symbols.values()})  # an Expr, also for 'q3'
     return Coupling(tuple(terms), offset)
 
 
