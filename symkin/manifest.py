@@ -56,6 +56,8 @@ def _coordinate_record(model: Model, coordinate, joints: tuple | None = None, ac
 
     drive = drive_of(coordinate.name, model.joints if joints is None else joints,
                      model.actuators if actuators is None else actuators)
+    if drive is not None:  # motor turns per turn of the coordinate, s N (an encoder on the motor: symkin rate)
+        record["gear_ratio"] = float((drive[1] * drive[0].gear_ratio).xreplace(values))
     if drive is not None and drive[0].continuous_effort is not None:  # s N K_t I_cont: what the motor holds for long
         record["continuous_effort_limit"] = float((drive[1] * drive[0].continuous_effort).xreplace(values))
     friction = next((f for f in model.friction if f.joint == coordinate.name), None)

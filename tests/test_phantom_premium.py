@@ -21,6 +21,7 @@ from sympy import Rational, cos, sin
 from conftest import GENERATED_DIR
 from symkin import load
 from symkin.model import coordinates
+from tolerances import CLOSED_FORM
 
 PAPER_PARAMETERS = ("l1", "l2", "l3", "l5", "l6", "m_a", "m_c", "m_be", "m_df", "I_axx", "I_ayy", "I_azz",
                     "I_cxx", "I_cyy", "I_czz", "I_bexx", "I_beyy", "I_bezz", "I_dfxx", "I_dfyy", "I_dfzz",
@@ -147,11 +148,15 @@ def test_each_coordinate_has_its_motors_effort_limits(models):
     model = models["phantom_premium"]
     values = model.parameter_values
     limits = {c.name: float(c.effort_limit.xreplace(values)) for c in model.coordinates}
-    assert limits == pytest.approx({"q1": 13.3 * 0.129, "q2": 11.2 * 0.129, "q3": 11.2 * 0.129}, rel=1e-12)
-    # and what the motors hold for long, in the generated code's manifest (N tau_nominal)
+    stall, continuous = 0.0234 * 5.5, 0.0234 * 1.24  # K_t I: the motor's torques
+    assert limits == pytest.approx({"q1": 13.3 * stall, "q2": 11.2 * stall, "q3": 11.2 * stall}, rel=1e-12)
+    # what the motors hold for long, and the motor turns per turn of each coordinate (an encoder's resolution),
+    # in the generated code's manifest
     arm = load(GENERATED_DIR / "phantom_premium")
-    continuous = {c.name: c.continuous_effort_limit for c in arm.info.coordinates}
-    assert continuous == pytest.approx({"q1": 13.3 * 0.0286, "q2": 11.2 * 0.0286, "q3": 11.2 * 0.0286}, rel=1e-12)
+    held = {c.name: c.continuous_effort_limit for c in arm.info.coordinates}
+    assert held == pytest.approx({"q1": 13.3 * continuous, "q2": 11.2 * continuous, "q3": 11.2 * continuous},
+                                 rel=1e-12)
+    assert [c.gear_ratio for c in arm.info.coordinates] == [13.3, 11.2, 11.2]
 
 
 def test_the_generated_arm_keeps_its_energy_without_friction_and_torques():
@@ -172,3 +177,17 @@ def test_the_generated_arm_keeps_its_energy_without_friction_and_torques():
     energies = [float(arm.kinetic_energy(x[:3], x[3:]) + arm.potential_energy(x[:3])) for x in solution.y.T]
     assert solution.success
     assert max(energies) - min(energies) < 1e-8 * max(abs(e) for e in energies) + 1e-12
+
+
+def test_symkin_rate_reads_the_encoders_gear_ratios_from_the_model():
+    """--encoder 4096 alone: the joint steps are 2 pi / (4096 N) with the capstans of the model (q3's through the
+    lever), and --gear still overrides them."""
+    import argparse
+
+    from symkin.cli.rate_cmd import _joint_steps
+
+    arm = load(GENERATED_DIR / "phantom_premium")
+    steps = _joint_steps(argparse.Namespace(encoder="4096", gear=None), arm)
+    assert steps == pytest.approx([2 * np.pi / (4096 * n) for n in (13.3, 11.2, 11.2)], rel=CLOSED_FORM)
+    direct = _joint_steps(argparse.Namespace(encoder="4096", gear="1"), arm)
+    assert direct == pytest.approx([2 * np.pi / 4096] * 3, rel=CLOSED_FORM)

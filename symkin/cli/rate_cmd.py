@@ -51,7 +51,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="encoder counts per turn of each actuator's motor (revolute joints) or per metre of "
                         "travel (prismatic): the position resolution")
     p.add_argument("--gear", metavar="N[,...]",
-                   help="motor turns per joint turn between encoder and revolute joint (default: 1)")
+                   help="motor turns per joint turn between encoder and revolute joint (default: the gear ratios of "
+                        "the model's actuators, else 1)")
     p.add_argument("--rate", type=float, default=1000.0, metavar="HZ",
                    help="servo rate of the haptic loop, for the renderable stiffness (default: 1000)")
     analysis_args.add_device_argument(p)
@@ -68,7 +69,8 @@ def _joint_steps(args: argparse.Namespace, model) -> list[float] | None:
         return None
     count = len(model.info.coordinates)
     counts = analysis_args.per_joint("--encoder", args.encoder, count)
-    gears = analysis_args.per_joint("--gear", args.gear, count) if args.gear else [1.0] * count
+    declared = [c.gear_ratio or 1.0 for c in model.info.coordinates]  # the model's drives, else direct
+    gears = analysis_args.per_joint("--gear", args.gear, count) if args.gear else declared
     if not all(c > 0 and math.isfinite(c) for c in counts + gears):
         raise ValueError("--encoder and --gear must be positive numbers")
     return [2 * math.pi / (c * n) if coordinate.revolute else 1.0 / c

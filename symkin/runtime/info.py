@@ -32,6 +32,8 @@ class Coordinate:
         continuous_effort_limit: the effort its drive holds for long (N K_t I_cont), or None.
         viscous, coulomb: its friction, tau_f = viscous qd + coulomb sign(qd) (the larger Coulomb level of
             an asymmetric one), or None where the model declares none.
+        gear_ratio: turns of its drive's motor per turn of the coordinate (the model's ``actuators``), or
+            None without a declared drive.
     """
 
     name: str
@@ -44,6 +46,7 @@ class Coordinate:
     continuous_effort_limit: float | None = None
     viscous: float | None = None
     coulomb: float | None = None
+    gear_ratio: float | None = None
 
     @property
     def bounds(self) -> tuple[float, float]:
@@ -158,7 +161,8 @@ def _coordinate(record: dict[str, Any]) -> Coordinate:
                       (float(record["limits"][0]), float(record["limits"][1])) if record.get("limits") else None,
                       record.get("velocity_limit"), record.get("effort_limit"), record.get("source_name"),
                       bool(record.get("active", True)), record.get("continuous_effort_limit"),
-                      record.get("friction", {}).get("viscous"), record.get("friction", {}).get("coulomb"))
+                      record.get("friction", {}).get("viscous"), record.get("friction", {}).get("coulomb"),
+                      record.get("gear_ratio"))
 
 
 class GeneratedModel(Protocol):
