@@ -7,6 +7,7 @@ differences through the DELTA's closed-form fk, and the located errors of wrist 
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import subprocess
 
@@ -23,7 +24,7 @@ from symkin.analysis.device import WholeDevice
 from symkin.cli import main
 from symkin.simulation import Plant, scenarios
 from test_simulation import assert_wall_equilibrium
-from tolerances import CLOSED_FORM, DELTA_SCALE, DYNAMICS, KINEMATICS
+from tolerances import CLOSED_FORM, DELTA_SCALE, DYNAMICS, EPS, KINEMATICS
 
 W, H = 0.05, 0.03  # wrist centre below the platform, grip point along the handle (models/delta_wrist.yaml)
 
@@ -426,6 +427,53 @@ def test_the_grip_feels_the_mass_the_forward_dynamics_accelerates_with_a_push(de
     mobility = np.array([J @ plant.acceleration(Z0, still, J.T @ force) - falling for force in np.eye(3)]).T
     Lambda = rating.apparent_mass(view.mass_matrix(Z0), J)
     np.testing.assert_allclose(Lambda @ mobility, np.eye(3), rtol=0, atol=1e-9)
+
+
+def test_the_operational_space_at_the_tcp_gives_the_device_efforts_and_the_grips_apparent_mass(device):
+    """F = Mx xdd + Vx + Gx at the wrist's TCP, xdd = J_a udd + dJ_a/dt ud (J_a = device_actuator_jacobian, u = (q, qw)):
+    J_a^T F is the device's M udd + V + G.  At rest (Vx = 0) exactly, so Mx and Gx are checked to rounding; in motion
+    at udd = 0 with dJ_a/dt ud by central differences along the motion (q + t qd, fk, qw + t qwd).  The translational
+    block of Mx^-1 = J_a M^-1 J_a^T is the inverse of the apparent mass symkin rate --device quotes at the grip."""
+    q, p, psi = random_device_states(device, 6, seed=8)
+    rng = np.random.default_rng(9)
+    step = 1e-6
+    finite_difference = 100 * EPS / step  # rounding of J_a over 2 step; the truncation (step^2 times J's third
+    still = np.zeros(3)                    # derivative) is far below it
+    for k in range(len(p)):
+        args = (q[k], p[k], psi[k])
+        J_a, M = device.device_actuator_jacobian(*args), device.mass_matrix(*args)
+        udd, ud = rng.uniform(-5, 5, 6), rng.uniform(-2, 2, 6)
+        Mx, Vx, Gx = device.operational_space(*args, still, still)
+        expected = M @ udd + device.gravity_vector(*args)
+        kappa = np.linalg.cond(J_a)
+        assert np.abs(Vx).max() == 0.0  # no motion, no velocity terms
+        # J_a^-1 enters Mx and Gx twice and once, J_a^T maps them back: the budget times kappa(J_a)^2
+        assert np.abs(J_a.T @ (Mx @ J_a @ udd + Gx) - expected).max() <= DYNAMICS * kappa ** 2 * np.abs(expected).max()
+
+        def J(t):
+            moved = q[k] + t * ud[:3]
+            return device.device_actuator_jacobian(moved, device.fk(moved)[0], psi[k] + t * ud[3:])
+
+        Jdot_ud = (J(step) - J(-step)) / (2 * step) @ ud
+        Mx, Vx, _ = device.operational_space(*args, ud[:3], ud[3:])
+        V = device.coriolis_vector(*args, ud[:3], ud[3:])
+        assert np.abs(J_a.T @ (Mx @ Jdot_ud + Vx) - V).max() <= finite_difference * kappa ** 2 * np.abs(V).max()
+        Lambda = rating.apparent_mass(M, J_a[:3])
+        grip = np.linalg.inv(np.linalg.inv(Mx)[:3, :3])
+        assert np.abs(Lambda - grip).max() <= DYNAMICS * np.linalg.cond(M) * kappa ** 2 * np.abs(Lambda).max()
+
+
+def test_a_device_whose_coordinates_do_not_span_the_tcps_twist_has_no_operational_space():
+    """The DELTA with a 2R wrist (5 coordinates) cannot give its TCP every twist (Mx would not exist): refused."""
+    model = load_model(MODELS_DIR / "delta_wrist.yaml")
+    wrist = model.parallel.wrist
+    joints = wrist.joints[:-1]
+    links = {j.link for j in joints}
+    shorter = dataclasses.replace(wrist, joints=joints, tip=joints[-1].link,
+                                  bodies=tuple(b for b in wrist.bodies if b.link in links))
+    two_r = dataclasses.replace(model, parallel=dataclasses.replace(model.parallel, wrist=shorter))
+    with pytest.raises(DerivationError, match="as many device coordinates as the TCP's twist"):
+        Derivation(two_r)["operational_space"]
 
 
 def test_cli_rates_the_whole_device_at_its_grip(generated_dir, tmp_path):

@@ -472,6 +472,61 @@ void delta_wrist_forward_dynamics_packed(const double *in, double *out);
  * Uses 3648 bytes of stack for its blocks of 8 configurations. */
 void delta_wrist_forward_dynamics_batch(size_t n, const double *q, const double *p, const double *qw, const double *qd, const double *qwd, const double *tau, const double *tauw, const double *params, size_t params_stride, double *qdd);
 
+/* delta_wrist_operational_space: Operational-space dynamics of the hybrid device at the wrist's TCP.
+ *
+ * F = Mx xdd + Vx + Gx is the wrench [f; m] at the TCP (base axes) that produces the
+ * motion whose twist is x = [v; w] = J_c [pd; qwd] (device_jacobian), tau = J_a^T F: the
+ * legs' actuator side carried into c = (p, qw) by J^-1 = J_q^-1 J_x, M_cc = M_c +
+ * diag(J^-T M_a J^-1, 0), V_cc = V_c + (J^-T (V_a - M_a J^-1 b), 0), G_cc = G_c + (J^-T
+ * G_a, 0), then Mx = J_c^-T M_cc J_c^-1, Vx = J_c^-T V_cc - Mx dJ_c/dt cd, Gx = J_c^-T
+ * G_cc (J_c^-T by a Gram-Schmidt QR). Gx is omitted without gravity. Evaluate at a
+ * consistent pair q, p (p = fk(q) or q = ik(p)).
+ *
+ * Inputs:
+ *   q[3]: joint coordinates: theta1 [rad], theta2 [rad], theta3 [rad].
+ *   p[3]: task coordinates of the platform (TCP): x [m], y [m], z [m].
+ *   qw[3]: wrist joint coordinates: psi1 [rad], psi2 [rad], psi3 [rad].
+ *   qd[3]: joint velocities: theta1 [rad/s], theta2 [rad/s], theta3 [rad/s].
+ *   qwd[3]: wrist joint velocities: psi1 [rad/s], psi2 [rad/s], psi3 [rad/s].
+ *   r_base: distance from the base centre to the actuated joints A_i [m]; default
+ *   DELTA_WRIST_DEFAULT_r_base = 0.07.
+ *   r_tcp: distance from the TCP to the platform joints B_i [m]; default
+ *   DELTA_WRIST_DEFAULT_r_tcp = 0.025.
+ *   a: length of the upper (actuated) arms A_i C_i [m]; default DELTA_WRIST_DEFAULT_a =
+ *   0.1.
+ *   m_arm: mass of an upper arm [kg]; default DELTA_WRIST_DEFAULT_m_arm = 0.0093.
+ *   m_rod: mass of a lower-arm parallelogram (two rods and four ball joints) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_rod = 0.0095.
+ *   m_platform: mass of the platform plate (the handle is on the wrist) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_platform = 0.021.
+ *   J_rotor: rotor inertia of an actuator (motor side) [kg*m^2]; default
+ *   DELTA_WRIST_DEFAULT_J_rotor = 1e-06.
+ *   gear: capstan reduction (motor turns per arm turn) [1]; default
+ *   DELTA_WRIST_DEFAULT_gear = 10.0.
+ *   h: distance from the wrist centre to the grip point along the handle [m]; default
+ *   DELTA_WRIST_DEFAULT_h = 0.03.
+ *   m_fork1: mass of the first wrist fork (turns with psi1) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_fork1 = 0.012.
+ *   m_fork2: mass of the second wrist fork (turns with psi2) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_fork2 = 0.009.
+ *   m_handle: mass of the handle (turns with psi3) [kg]; default
+ *   DELTA_WRIST_DEFAULT_m_handle = 0.03.
+ * Outputs:
+ *   Mx[36]: 6 x 6, row-major; mass matrix at the TCP J_c^-T M_cc J_c^-1.
+ *   Vx[6]: 6; Coriolis and centrifugal wrench at the TCP [N (force rows), N*m (moment
+ *   rows)].
+ *   Gx[6]: 6; gravity wrench at the TCP [N (force rows), N*m (moment rows)].
+ * Cost: 2592 operations.
+ */
+void delta_wrist_operational_space(const double *q, const double *p, const double *qw, const double *qd, const double *qwd, double r_base, double r_tcp, double a, double m_arm, double m_rod, double m_platform, double J_rotor, double gear, double h, double m_fork1, double m_fork2, double m_handle, double *Mx, double *Vx, double *Gx);
+
+/* delta_wrist_operational_space with packed arguments: in = q, p, qw, qd, qwd, r_base, r_tcp, a, m_arm, m_rod, m_platform, J_rotor, gear, h, m_fork1, m_fork2, m_handle one after the other; out = Mx, Vx, Gx one after the other. */
+void delta_wrist_operational_space_packed(const double *in, double *out);
+
+/* delta_wrist_operational_space for n configurations; params: r_base, r_tcp, a, m_arm, m_rod, m_platform, J_rotor, gear, h, m_fork1, m_fork2, m_handle, stride 0 or 12.
+ * Uses 5952 bytes of stack for its blocks of 8 configurations. */
+void delta_wrist_operational_space_batch(size_t n, const double *q, const double *p, const double *qw, const double *qd, const double *qwd, const double *params, size_t params_stride, double *Mx, double *Vx, double *Gx);
+
 /* delta_wrist_kinetic_energy: Kinetic energy.
  *
  * k = 1/2 qd^T M_a qd + 1/2 pd^T M_p pd with pd = J qd (= 1/2 qd^T M qd). Evaluate at a

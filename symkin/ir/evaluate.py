@@ -22,7 +22,8 @@ SHARED_EVALUATION_OPS = 20000
 
 
 def lambdify_spec(spec: FunctionSpec, args: Sequence[object], modules: str | Sequence[object] = "numpy",
-                  values: Mapping[sympy.Symbol, sympy.Expr] | None = None) -> Callable[..., list]:
+                  values: Mapping[sympy.Symbol, sympy.Expr] | None = None, printer: object = None
+                  ) -> Callable[..., list]:
     """A function of ``args`` returning every output entry of ``spec`` (row-major, outputs in order).
 
     Args:
@@ -30,6 +31,7 @@ def lambdify_spec(spec: FunctionSpec, args: Sequence[object], modules: str | Seq
         args: lambdify arguments: symbols, or sequences of symbols for vector arguments.
         modules: ``"numpy"`` or ``"mpmath"``, or a list of namespaces before one of them (as lambdify's).
         values: substitutions applied first (e.g. parameters at their defaults).
+        printer: lambdify's code printer (default: the one of ``modules``).
     """
     values = dict(values or {})
     definitions = [(s, e.xreplace(values)) for s, e in spec.definitions]
@@ -44,4 +46,4 @@ def lambdify_spec(spec: FunctionSpec, args: Sequence[object], modules: str | Seq
 
     # use_imps=False: no implemented functions occur, and looking for them walks every node of the
     # expanded trees (three quarters of the lambdify time of the Stewart platform's dynamics)
-    return sympy.lambdify(list(args), entries, modules=modules, cse=program, use_imps=False)
+    return sympy.lambdify(list(args), entries, modules=modules, cse=program, use_imps=False, printer=printer)

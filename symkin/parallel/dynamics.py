@@ -7,7 +7,7 @@
 ``friction``           F_f(qd) at the actuators: viscous + Coulomb (sign or tanh)
 ``inverse_dynamics``   tau = M qdd + V + G + F_f
 ``forward_dynamics``   qdd = M^-1 (tau - V - G - F_f), by an LDL^T solve
-``operational_space``  Mx, Vx, Gx in the task coordinates: F = Mx pdd + Vx + Gx
+``operational_space``  Mx, Vx, Gx in the task coordinates: F = Mx pdd + Vx + Gx (a hybrid device: at its TCP)
 ``kinetic_energy``     k = 1/2 qd^T M_a qd + 1/2 pd^T M_p pd
 ``potential_energy``   u = u_a(q) + u_p(p)
 =====================  ====================================================================
@@ -79,6 +79,7 @@ from symkin.parallel.quantities import (
 Matrix = list[list[se.Basic]]
 
 TASK_FORCE_UNIT = "N (position rows), N*m (angle rows)"
+WRENCH_UNIT = "N (force rows), N*m (moment rows)"
 
 
 @quantity("parallel_inertia", "mass distribution split into actuator side and platform side", emitted=False,
@@ -394,8 +395,7 @@ def _forward_dynamics(d: Deriving) -> FunctionSpec:
           kappa_degree=3)
 def _operational_space(d: Deriving) -> FunctionSpec:
     if d.model.parallel is not None and d.model.parallel.wrist is not None:
-        raise DerivationError(f"model '{d.model.name}': the operational-space dynamics of a hybrid device (in the "
-                              "task space of the wrist's TCP) are not derived yet; remove 'operational_space'")
+        return _device_operational_space(d)
     program = Program()
     terms = _Terms(d, program)
     n = d.model.dof
@@ -428,6 +428,76 @@ def _operational_space(d: Deriving) -> FunctionSpec:
         "Mx = J^-T M_a J^-1 + M_p, Vx = J^-T (V_a - M_a J^-1 b) + V_p, Gx = J^-T G_a + G_p with J^-1 = J_q^-1 J_x "
         "and J^-1 b = -J_q^-1 h (h: the leg equations' second derivative along the motion; no solve but pd = J qd: "
         f"J_q is diagonal; seed eqs. 8.61-8.64). Gx is omitted for a model without gravity. {_PAIR}",
+        _inputs(d, "qd"), program, outputs)
+
+
+def _device_operational_space(d: Deriving) -> FunctionSpec:
+    """Mx, Vx, Gx of a hybrid device at its wrist's TCP, in the device's coordinates (q, qw).
+
+    The legs' actuator side is carried into c = (p, qw) through J^-1 = J_q^-1 J_x, as for the platform's
+    operational space: M_cc = M_c + diag(J^-T M_a J^-1, 0), V_cc = V_c + (J^-T (V_a - M_a J^-1 b), 0),
+    G_cc = G_c + (J^-T G_a, 0), so that the generalized forces in c are F_c = M_cc cdd + V_cc + G_cc; with
+    the TCP's twist x = J_c cd (J_c = ``device_jacobian``, square) F_c = J_c^T F and
+    Mx = J_c^-T M_cc J_c^-1, Vx = J_c^-T V_cc - Mx dJ_c/dt cd, Gx = J_c^-T G_cc.
+    """
+    J_graph = se_matrix(hybrid.combined_jacobian(d))
+    size = len(J_graph[0])
+    if size != len(J_graph):
+        raise DerivationError(
+            f"model '{d.model.name}': the operational-space dynamics at the wrist's TCP need as many device "
+            f"coordinates as the TCP's twist has components ({len(J_graph)}); the platform moves in "
+            f"{len(d.model.task_space)} and the wrist in {size - len(d.model.task_space)}: remove "
+            "'operational_space' (symkin rate --device gives the apparent mass at the grip)")
+    program = Program()
+    terms = _Terms(d, program)
+    n = d.model.dof
+    J_x, J_q = terms.jacobians
+    J_inverse = [[program.let(J_x[i][k] / J_q[i]) for k in range(n)] for i in range(n)]  # J^-1 = J_q^-1 J_x
+
+    def carried(v: list[se.Basic]) -> list[se.Basic]:  # (J^-T v, 0): a leg-side effort as a force in c
+        return [sum((J_inverse[i][k] * v[i] for i in range(n)), se.Integer(0)) for k in range(n)] + \
+            [se.Integer(0)] * (size - n)
+
+    qd = coordinate_symbols(d, "qd")
+    pd = terms.task_rates(qd)
+    cd = pd + terms.wrist("qd")
+    J_inverse_b = [program.let(-h / J_q[i]) for i, h in enumerate(terms.curvature(qd, pd))]  # J^-1 b
+    M_cc: Matrix = [[se.Integer(0)] * size for _ in range(size)]
+    for k in range(size):
+        for m in range(k, size):
+            leg_side = sum((J_inverse[i][k] * terms.M_a[i] * J_inverse[i][m] for i in range(n)), se.Integer(0)) \
+                if m < n else se.Integer(0)
+            M_cc[k][m] = M_cc[m][k] = program.let(terms.M_p[k][m] + leg_side)
+    V_cc = [a + c for a, c in zip(carried([v - m * x for v, m, x in zip(terms.V_a(qd), terms.M_a, J_inverse_b)]),
+                                  terms.V_p(cd))]
+    G_cc = None
+    if terms.gravity_parts is not None:
+        G_a, G_c = terms.gravity_parts
+        G_cc = [a + c for a, c in zip(carried(G_a), G_c)]
+    # dJ_c/dt cd = sum_k dJ_c/dc_k cd_k cd
+    Jdot_cd = [sum((se.diff(J_graph[i][j], terms.c[k]) * cd[k] * cd[j] for j in range(size) for k in range(size)),
+                   se.Integer(0)) for i in range(size)]
+    values = program.bind([v for row in J_graph for v in row] + Jdot_cd)
+    J = [values[i * size:(i + 1) * size] for i in range(size)]
+    jdot_cd = values[size * size:]
+    # J_c^-T [M_cc | V_cc | G_cc] in one solve; Mx = J_c^-T (J_c^-T M_cc)^T (M_cc symmetric)
+    first = transpose_solve(program, J, [M_cc[i] + [V_cc[i]] + ([G_cc[i]] if G_cc is not None else [])
+                                         for i in range(size)])
+    Mx = transpose_solve(program, J, [[first[j][i] for j in range(size)] for i in range(size)])
+    Mx = [[Mx[i][j] if i >= j else Mx[j][i] for j in range(size)] for i in range(size)]  # exactly symmetric
+    Vx = [first[i][size] - sum((Mx[i][k] * jdot_cd[k] for k in range(size)), se.Integer(0)) for i in range(size)]
+    outputs = [("Mx", [v for row in Mx for v in row], (size, size), "mass matrix at the TCP J_c^-T M_cc J_c^-1", ""),
+               ("Vx", Vx, (size,), "Coriolis and centrifugal wrench at the TCP", WRENCH_UNIT)]
+    if G_cc is not None:
+        outputs.append(("Gx", [first[i][size + 1] for i in range(size)], (size,), "gravity wrench at the TCP",
+                        WRENCH_UNIT))
+    return function_spec(
+        d, "operational_space", "Operational-space dynamics of the hybrid device at the wrist's TCP.",
+        "F = Mx xdd + Vx + Gx is the wrench [f; m] at the TCP (base axes) that produces the motion whose twist is "
+        "x = [v; w] = J_c [pd; qwd] (device_jacobian), tau = J_a^T F: the legs' actuator side carried into "
+        "c = (p, qw) by J^-1 = J_q^-1 J_x, M_cc = M_c + diag(J^-T M_a J^-1, 0), V_cc = V_c + (J^-T (V_a - M_a "
+        "J^-1 b), 0), G_cc = G_c + (J^-T G_a, 0), then Mx = J_c^-T M_cc J_c^-1, Vx = J_c^-T V_cc - Mx dJ_c/dt cd, "
+        f"Gx = J_c^-T G_cc (J_c^-T by a Gram-Schmidt QR). Gx is omitted without gravity. {_PAIR}",
         _inputs(d, "qd"), program, outputs)
 
 

@@ -17,7 +17,10 @@ values (:meth:`BallReference.exact`) for the condition numbers.
 
 An operation without a real value (the square root of a negative discriminant: a parallel mechanism
 that does not assemble at these exact inputs, a division by zero) gives arb's indeterminate ball,
-which comes back as NaN, as the generated code flags it.
+which comes back as NaN, as the generated code flags it.  Integer powers are products
+(:func:`_integer_power`): arb's general power of a ball that holds zero (a value that is zero in
+exact arithmetic, reached with a radius, such as the components of a hybrid device's twist that its
+geometry cancels) is indeterminate, while x^2 of [0 +- r] is [0 +- r^2].
 """
 
 from __future__ import annotations
@@ -27,6 +30,8 @@ from collections.abc import Callable, Mapping
 import flint
 import mpmath
 import numpy as np
+from sympy.printing.pycode import MpmathPrinter
+
 from symkin.ir.evaluate import lambdify_spec
 from symkin.ir.spec import FunctionSpec
 
@@ -53,6 +58,25 @@ def _ball(value: flint.arb | int | float) -> flint.arb:
     return value if isinstance(value, flint.arb) else flint.arb(value)
 
 
+def _integer_power(x: flint.arb | int | float, n: int) -> flint.arb:
+    """x^n by repeated squaring (n an integer; negative: the reciprocal)."""
+    base, exponent, result = _ball(x), abs(int(n)), flint.arb(1)
+    while exponent:
+        if exponent & 1:
+            result = result * base
+        base, exponent = base * base, exponent >> 1
+    return result if n >= 0 else 1 / result
+
+
+class _BallPrinter(MpmathPrinter):
+    """sympy's mpmath printer, integer powers written as :func:`_integer_power` calls."""
+
+    def _print_Pow(self, expr, rational=False):  # noqa: N802 - sympy's printer protocol
+        if expr.exp.is_Integer and expr.exp != -1:
+            return f"ipow({self._print(expr.base)}, {int(expr.exp)})"
+        return super()._print_Pow(expr, rational=rational)
+
+
 def _unary(method: str) -> Callable[[flint.arb | int | float], flint.arb]:
     """The arb method ``method`` as a function of one argument, numbers included."""
     return lambda x: getattr(_ball(x), method)()
@@ -63,7 +87,7 @@ with flint.ctx.workprec(PRECISION):
     NAMESPACE: dict[str, object] = {
         name: _unary(name) for name in ("sqrt", "sin", "cos", "tan", "asin", "acos", "atan", "exp", "log",
                                         "sinh", "cosh", "tanh")}
-    NAMESPACE.update({"mpf": _number, "pi": flint.arb.pi(), "sign": _sign,
+    NAMESPACE.update({"mpf": _number, "pi": flint.arb.pi(), "sign": _sign, "ipow": _integer_power,
                       "atan2": lambda y, x: flint.arb.atan2(_ball(y), _ball(x))})
 
 
@@ -79,7 +103,10 @@ class BallReference:
         self.vector_names = tuple(i.name for i in spec.vector_inputs)
         self.parameter_names = tuple(i.name for i in spec.parameter_inputs)
         symbols = [s for i in spec.vector_inputs for s in i.symbols] + [i.symbols[0] for i in spec.parameter_inputs]
-        self._function = lambdify_spec(spec, symbols, modules=[NAMESPACE, "mpmath"])
+        self._function = lambdify_spec(spec, symbols, modules=[NAMESPACE, "mpmath"],
+                                       printer=_BallPrinter({"fully_qualified_modules": False, "inline": True,
+                                                             "allow_unknown_functions": True,
+                                                             "user_functions": {}}))
         self.size = sum(len(out.entries) for out in spec.outputs)
 
     def balls(self, vectors: Mapping[str, np.ndarray], parameters: Mapping[str, float]) -> list[flint.arb]:
