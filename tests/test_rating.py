@@ -19,7 +19,7 @@ from conftest import MODELS_DIR
 from symkin import load
 from symkin.analysis import forces, rating
 from symkin.cli import main
-from tolerances import CLOSED_FORM, EPS
+from tolerances import CLOSED_FORM, DYNAMICS, EPS
 
 L1 = L2 = 0.1
 M1 = M2 = 0.1
@@ -256,3 +256,74 @@ def test_a_virtual_spring_beyond_the_colgate_brown_stiffness_makes_the_loop_unst
     distance = np.linalg.norm(plant.point(run.x[:, :3]) - home, axis=-1)
     first, last = np.max(distance[:100]), np.max(distance[-100:])
     assert (last > 1.1 * first) if grows else (last < 0.9 * first), (first, last)
+
+
+@pytest.fixture(scope="module")
+def stewart_sheet(generated_dir):
+    from symkin.analysis import datasheet
+
+    stewart = load(generated_dir / "stewart")
+    limits = np.full(6, 300.0)  # N per leg: an assumed actuator, the model declares none
+    sheet = datasheet.rate(stewart, datasheet.Actuation(effort_limits=limits, joint_steps=np.full(6, 1e-5)),
+                           samples=512)
+    return stewart, sheet, limits
+
+
+def test_a_rotating_platform_is_rated_pushed_with_its_orientation_free_and_twisted_with_its_position_free(
+        stewart_sheet):
+    """The Stewart platform at its home orientation: the principal masses and inertias of the datasheet are those
+    of the generated operational-space mass matrix Mx (task coordinates p, roll-pitch-yaw rates): the mobility
+    J_t M^-1 J_t^T of the twist t = (v, omega) = diag(I, E) pd is diag(I, E) Mx^-1 diag(I, E)^T, so the apparent
+    mass is the inverse of its translational block and the apparent inertia of its rotational one."""
+    from symkin.analysis.parallel import angular_velocity_matrix
+
+    stewart, sheet, _ = stewart_sheet
+    measures = {m.name: m.values for m in sheet.measures}
+    assert len(sheet.q) > 40
+    for k in range(0, len(sheet.q), 5):
+        pose = np.concatenate([sheet.points[k], np.zeros(3)])  # the home orientation of models/stewart.yaml
+        Mx = stewart.operational_space(sheet.q[k], pose, np.zeros(6)).Mx
+        mobility = np.linalg.inv(Mx)
+        E = angular_velocity_matrix(pose[3:])
+        masses = 1.0 / np.linalg.eigvalsh(mobility[:3, :3])[::-1]
+        inertias = 1.0 / np.linalg.eigvalsh(E @ mobility[3:, 3:] @ E.T)[::-1]
+        # M^-1 and Mx^-1 both go through kappa(M) (and J's two inverses): the dynamics budget times them
+        bound = DYNAMICS * np.linalg.cond(Mx) ** 2
+        np.testing.assert_allclose([measures["apparent_mass_min"][k], measures["apparent_mass_max"][k]],
+                                   masses[[0, -1]], rtol=bound)
+        np.testing.assert_allclose([measures["apparent_inertia_min"][k], measures["apparent_inertia_max"][k]],
+                                   inertias[[0, -1]], rtol=bound)
+
+
+def test_a_rotating_platforms_isotropic_torque_is_its_weakest_axis_and_loads_a_leg_to_its_limit(stewart_sheet):
+    """About the weakest of a dense scan of axes the legs render the isotropic torque (no force), and the torque
+    tau = J_w^T m of that size about the axis that sets it loads one leg exactly to its limit."""
+    from symkin.analysis import parallel
+
+    stewart, sheet, limits = stewart_sheet
+    torque = {m.name: m.values for m in sheet.measures}["isotropic_torque"]
+    view = parallel.constant_orientation(stewart)
+    rng = np.random.default_rng(3)
+    axes = rng.normal(size=(20000, 3))
+    axes /= np.linalg.norm(axes, axis=-1, keepdims=True)
+    for k in (0, len(sheet.q) // 2, sheet.home):
+        J_w = view.jacobian(sheet.q[k], sheet.points[k])[3:]
+        scanned = forces.directional_force(J_w, limits, axes)
+        assert torque[k] <= scanned.min() * (1 + CLOSED_FORM)
+        assert torque[k] >= 0.98 * scanned.min()  # 20000 random axes come within 2 % of the weakest
+        weakest = np.argmin(limits / np.linalg.norm(J_w, axis=0))  # the leg whose column sets it
+        m = torque[k] * J_w[:, weakest] / np.linalg.norm(J_w[:, weakest])
+        assert np.max(np.abs(J_w.T @ m) / limits) == pytest.approx(1.0, rel=CLOSED_FORM)
+
+
+def test_cli_rates_a_rotating_platform_at_a_constant_orientation(generated_dir, tmp_path, capsys):
+    out = tmp_path / "stewart"
+    assert main(["rate", str(generated_dir / "stewart"), "--effort-limit", "300", "--orientation", "0,5deg,0",
+                 "-n", "256", "--no-figure", "-o", str(out)]) == 0
+    sheet = json.loads((out / "datasheet.json").read_text())
+    assert {"apparent_mass_min", "isotropic_force", "apparent_inertia_max", "isotropic_torque"} <= set(sheet["measures"])
+    assert sheet["measures"]["isotropic_torque"]["unit"] == "N m"
+    with pytest.raises(SystemExit) as exit_info:  # --orientation on a mechanism that does not rotate
+        main(["rate", str(generated_dir / "delta"), "--orientation", "0,0,0", "-o", str(tmp_path / "d")])
+    assert exit_info.value.code == 2
+    assert "--orientation applies to platforms that also rotate" in capsys.readouterr().err

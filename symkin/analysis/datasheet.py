@@ -138,9 +138,10 @@ def _within(points: np.ndarray, axes: Sequence[str], box: Mapping[str, tuple[flo
     return inside
 
 
-def _dynamics(model: GeneratedModel, name: str, q: np.ndarray, points: np.ndarray) -> np.ndarray:
+def _dynamics(model: GeneratedModel, name: str, q: np.ndarray, poses: np.ndarray) -> np.ndarray:
+    """A generated dynamics function at the samples: of q (a serial arm), of (q, p) (a parallel platform)."""
     function = getattr(model, name)
-    return function(q, points) if mechanism.is_parallel(model) else function(q)
+    return function(q, poses) if mechanism.is_parallel(model) else function(q)
 
 
 #: The usable workspace a datasheet rates: where 1/kappa of J's translational rows is at least this (near a
@@ -150,18 +151,27 @@ USABLE_CONDITIONING = 0.05
 
 def rate(model: GeneratedModel, actuation: Actuation, *, samples: int = 4096, seed: int = 0,
          box: Mapping[str, tuple[float, float]] | None = None, limits: mechanism.Limits | None = None,
-         conditioning: float = USABLE_CONDITIONING) -> Datasheet:
+         conditioning: float = USABLE_CONDITIONING, orientation: Sequence[float] | None = None) -> Datasheet:
     """The datasheet of a device whose handle translates (its task space has x, y or z), over the sampled
     poses in ``box`` (TCP coordinates, m) where 1/kappa >= ``conditioning``, and at its home pose.
 
+    A platform that also rotates (Stewart-Gough) is rated over its workspace at the constant ``orientation``
+    (roll, pitch, yaw in rad; default: its home pose's) by :func:`rate_pose_platform`.
+
     Raises:
-        ValueError: the model cannot be rated (no translational task coordinate, a platform that
-            rotates, a wrist on the platform, no mass matrix), or the box holds no sample.
+        ValueError: the model cannot be rated (no translational task coordinate, a spherical platform,
+            a wrist on the platform, no mass matrix), or the box holds no sample.
     """
     kind = mechanism.kind_of(model)
     if model.info.wrist:
         raise ValueError(f"{model.name}: a platform carrying a wrist: rate the whole device at its grip point "
                          "(symkin rate --device, symkin.analysis.device.WholeDevice)")
+    if kind is mechanism.MechanismKind.PARALLEL_POSE:
+        return rate_pose_platform(model, actuation, samples=samples, seed=seed, box=box, limits=limits,
+                                  conditioning=conditioning, orientation=orientation)
+    if orientation is not None:
+        raise ValueError(f"{model.name}: --orientation applies to platforms that also rotate (Stewart-Gough); "
+                         f"this is a {kind.value} mechanism")
     if kind not in (mechanism.MechanismKind.SERIAL, mechanism.MechanismKind.PARALLEL):
         raise ValueError(f"{model.name}: symkin rate rates devices whose handle translates with the platform or is "
                          f"a serial arm's TCP; this is a {kind.value} mechanism")
@@ -192,15 +202,87 @@ def rate(model: GeneratedModel, actuation: Actuation, *, samples: int = 4096, se
     return Datasheet(model.name, q, points, cloud.axes, measures, len(q) - 1, skipped)
 
 
-def _measures(model: GeneratedModel, J: np.ndarray, M: np.ndarray, q: np.ndarray, points: np.ndarray,
+def rate_pose_platform(model: GeneratedModel, actuation: Actuation, *, samples: int = 4096, seed: int = 0,
+                       box: Mapping[str, tuple[float, float]] | None = None, limits: mechanism.Limits | None = None,
+                       conditioning: float = USABLE_CONDITIONING,
+                       orientation: Sequence[float] | None = None) -> Datasheet:
+    """The datasheet of a platform that translates and rotates, over its workspace at a constant orientation.
+
+    Platform centres are sampled (Sobol) in the box around the constant-orientation workspace
+    (:func:`symkin.analysis.parallel.constant_orientation_box`) and kept where reachable; the twist Jacobian
+    t = (v, omega) = J_t qd (:class:`symkin.analysis.parallel.ConstantOrientation`) splits into J_v and J_w.
+    The handle's measures are those of a device whose hand pushes and twists it: the apparent mass
+    (J_v M^-1 J_v^T)^-1 with the orientation free, forces with no moment (tau = J_v^T f), the translation's
+    resolution; then the apparent rotational inertia (J_w M^-1 J_w^T)^-1 with the position free, torques with
+    no force (tau = J_w^T m) and the angular resolution.  A sample is usable where 1/kappa of J_v and of J_w
+    are both at least ``conditioning``.
+    """
+    from symkin.analysis import parallel, sampling
+
+    view = parallel.constant_orientation(model, orientation)
+    box_limits = mechanism.joint_limits(model, limits)
+    lower, upper = parallel.constant_orientation_box(view, box_limits)
+    points = sampling.sobol(lower, upper, max(1, int(np.ceil(np.log2(samples)))), np.random.default_rng(seed))
+    q, reachable = parallel.reachable_points(view, points, box_limits)
+    q, points = q[reachable], points[reachable]
+    home = parallel.home_position(model)[None]
+    home_q, home_reachable = parallel.reachable_points(view, home, box_limits)
+    if not home_reachable[0]:
+        raise ValueError(f"{model.name}: the home position is not reachable at the orientation "
+                         f"{parallel.orientation_text(view)}; rate it at the home pose's orientation")
+    q, points = np.concatenate([q, home_q]), np.concatenate([points, home])
+    keep = np.ones(len(q), dtype=bool)
+    if box:
+        keep &= _within(points, mechanism.POSITION_COMPONENTS, box)
+    twist = view.jacobian(q, points)
+    J_v, J_w = twist[..., :3, :], twist[..., 3:, :]
+    with np.errstate(invalid="ignore"):
+        keep &= np.nan_to_num(inverse_condition_number(J_v), nan=0.0) >= conditioning
+        keep &= np.nan_to_num(inverse_condition_number(J_w), nan=0.0) >= conditioning
+    keep[-1] = True  # the home pose is quoted whether or not it lies in the box
+    q, points, J_v, J_w = q[keep], points[keep], J_v[keep], J_w[keep]
+    if len(q) < 2:
+        raise ValueError(f"{model.name}: no reachable platform centre at the orientation "
+                         f"{parallel.orientation_text(view)} lies in the box {dict(box or {})} with 1/kappa >= "
+                         f"{conditioning:g}")
+    poses = view.poses(points)
+    M = _dynamics(model, "mass_matrix", q, poses)
+    measures, skipped = _measures(model, J_v, M, q, poses, actuation)
+    return Datasheet(model.name, q, points, mechanism.POSITION_COMPONENTS,
+                     measures + _rotation_measures(J_w, M, actuation), len(q) - 1, skipped)
+
+
+def _rotation_measures(J_w: np.ndarray, M: np.ndarray, actuation: Actuation) -> tuple[Measure, ...]:
+    """A rotating handle's inertia felt with its position free, torque capability and angular resolution."""
+    inertias = rating.principal_masses(M, J_w)
+    out = [Measure("apparent_inertia_min", "kg m^2", inertias[:, 0], False,
+                   "smallest principal inertia felt turning the handle (its position free)"),
+           Measure("apparent_inertia_max", "kg m^2", inertias[:, -1], False,
+                   "largest principal inertia felt turning the handle (its position free)")]
+    if actuation.effort_limits is not None:
+        out += [Measure("isotropic_torque", "N m", forces.isotropic_force(J_w, actuation.effort_limits), True,
+                        "largest torque rendered about every axis, with no force (peak efforts)"),
+                Measure("peak_torque", "N m", rating.peak_force(J_w, actuation.effort_limits), True,
+                        "largest torque rendered about the best axis, with no force (peak efforts)")]
+    if actuation.continuous_limits is not None:
+        out.append(Measure("continuous_torque", "N m", forces.isotropic_force(J_w, actuation.continuous_limits), True,
+                           "largest torque held for long about every axis (continuous efforts)"))
+    if actuation.joint_steps is not None:
+        out.append(Measure("angular_resolution", "rad", rating.position_resolution(J_w, actuation.joint_steps), False,
+                           "largest handle rotation between neighbouring encoder readings"))
+    return tuple(out)
+
+
+def _measures(model: GeneratedModel, J: np.ndarray, M: np.ndarray, q: np.ndarray, poses: np.ndarray,
               actuation: Actuation) -> tuple[tuple[Measure, ...], dict[str, str]]:
+    """The handle's measures from J (its translational rows), M and the generated functions at (q, poses)."""
     masses = rating.principal_masses(M, J)
     out = [Measure("apparent_mass_min", "kg", masses[:, 0], False, "smallest principal mass felt at the handle"),
            Measure("apparent_mass_max", "kg", masses[:, -1], False, "largest principal mass felt at the handle"),
            Measure("inertia_isotropy", "", masses[:, -1] / masses[:, 0], False,
                    "largest over smallest principal mass (1: the same mass in every direction)")]
     skipped = {}
-    square = J.shape[-1] == J.shape[-2]
+    square = J.shape[-1] == J.shape[-2]  # J: the translational rows (of the twist Jacobian of a rotating platform)
     efforts = actuation.effort_limits
     if efforts is None:
         skipped["force"] = "no effort limits: declare effort_limit per joint or give --effort-limit"
@@ -210,7 +292,7 @@ def _measures(model: GeneratedModel, J: np.ndarray, M: np.ndarray, q: np.ndarray
                 Measure("peak_force", "N", rating.peak_force(J, efforts), True,
                         "largest force rendered in the best direction (peak efforts)")]
         if "gravity_vector" in model.functions:
-            out.append(Measure("gravity_share", "", rating.gravity_share(_dynamics(model, "gravity_vector", q, points),
+            out.append(Measure("gravity_share", "", rating.gravity_share(_dynamics(model, "gravity_vector", q, poses),
                                                                          efforts), False,
                                "largest share of an effort limit spent holding the device against gravity"))
     if actuation.continuous_limits is not None:

@@ -30,7 +30,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "of the efforts spent holding the device against gravity, the position resolution from "
                     "--encoder, and from the joints' declared friction the Coulomb friction felt at the handle, "
                     "the least viscous damping there and the stiffest wall a --rate loop renders passively "
-                    "(Colgate-Brown, K < 2 b / T). A measure whose data the model lacks is listed as not rated, "
+                    "(Colgate-Brown, K < 2 b / T). A platform that also rotates (Stewart-Gough) is rated at a "
+                    "constant --orientation, its handle pushed (orientation free) and twisted (position free): "
+                    "the apparent rotational inertia, the isotropic and peak torque and the angular resolution "
+                    "join the table. A measure whose data the model lacks is listed as not rated, "
                     "with what to give. Writes datasheet.json (every number with its unit and the pose of each "
                     "extreme), datasheet.csv (every rated pose), datasheet.png (a map per measure) and "
                     "summary.txt into the output directory (replaced as a whole).",
@@ -56,6 +59,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--rate", type=float, default=1000.0, metavar="HZ",
                    help="servo rate of the haptic loop, for the renderable stiffness (default: 1000)")
     analysis_args.add_device_argument(p)
+    analysis_args.add_orientation_argument(p)
     p.add_argument("-o", "--out", metavar="DIR", help="output directory (default: out/rate/MODEL)")
     p.add_argument("--no-figure", action="store_true", help="write the numbers only")
     p.set_defaults(run=run, parser=p)
@@ -98,7 +102,8 @@ def run(args: argparse.Namespace) -> int:
         with Progress(model.name) as progress:
             progress(f"rating {args.samples} poses")
             sheet = datasheet.rate(model, actuation, samples=args.samples, seed=args.seed, box=box,
-                                   limits=analysis_args.parse_limits(args.limits), conditioning=conditioning)
+                                   limits=analysis_args.parse_limits(args.limits), conditioning=conditioning,
+                                   orientation=analysis_args.parse_orientation(args.orientation))
             summary = [f"{model.name}: {len(sheet.q) - 1} poses of the usable workspace (1/kappa >= {conditioning:g}"
                        + (f", TCP in {args.box[0] if len(args.box) == 1 else args.box}" if box else "")
                        + ") and the home pose", *("  " + line for line in sheet.summary())]
