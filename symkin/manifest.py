@@ -121,6 +121,9 @@ def build_manifest(model: Model, code: ModelCode, derived: list[str], backend_fi
         manifest["model"]["parallel"] = _parallel_record(model)
     elif not tree.is_chain(model):  # a branched serial model: each joint's parent (-1: the base), the TCP's link
         manifest["model"]["tree"] = {"parents": list(tree.parent_indices(model)), "tip": tree.tip_index(model)}
+    if model.home_configuration is not None:  # a serial device's declared rest configuration (serial.home)
+        manifest["model"]["home_configuration"] = [float(v.xreplace(model.parameter_values))
+                                                   for v in model.home_configuration]
     return manifest
 
 

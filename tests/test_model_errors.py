@@ -41,6 +41,10 @@ CASES = [
     ("yaml syntax", "task_space: [x, y]", "task_space: [x, y", 13, "", "(opened at line 12)"),
     ("unknown scene output", "task_space: [x, y]", "task_space: [x, y]\nscene: {outputs: [fk, jacobain]}", 13,
      "scene.outputs[1]", "unknown output 'jacobain'"),
+    ("home of the wrong length", "serial:\n  dh:", "serial:\n  home: [0]\n  dh:", 7, "serial.home",
+     "expected 2 joint coordinates [theta1, theta2]"),
+    ("home outside the limits", "serial:\n  dh:", "serial:\n  home: [0, 4]\n  dh:", 7, "serial.home[1]",
+     "the home value 4 of 'theta2' lies outside its limits"),
 ]
 
 

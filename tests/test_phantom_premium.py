@@ -191,3 +191,21 @@ def test_symkin_rate_reads_the_encoders_gear_ratios_from_the_model():
     assert steps == pytest.approx([2 * np.pi / (4096 * n) for n in (13.3, 11.2, 11.2)], rel=CLOSED_FORM)
     direct = _joint_steps(argparse.Namespace(encoder="4096", gear="1"), arm)
     assert direct == pytest.approx([2 * np.pi / 4096] * 3, rel=CLOSED_FORM)
+
+
+def test_the_declared_home_is_where_the_datasheet_and_the_simulation_start(models):
+    """serial.home (the PHANToM's reset pose q = 0, where the middle of its limits is the stretched, singular arm):
+    in the model, the manifest, the datasheet's home pose and the simulation's default start."""
+    from symkin.analysis import datasheet, mechanism
+    from symkin.simulation import Plant
+    from symkin.simulation.start import start_pose
+
+    assert models["phantom_premium"].home_configuration == (0, 0, 0)
+    arm = load(GENERATED_DIR / "phantom_premium")
+    assert arm.info.home_configuration == (0.0, 0.0, 0.0)
+    limits = mechanism.joint_limits(arm)
+    assert np.array_equal(datasheet.home_configuration(arm, limits), np.zeros(3))
+    assert not np.array_equal(limits.mean(axis=1), np.zeros(3))  # the declaration decides, not the limits
+    q0, how = start_pose(Plant(arm))
+    assert np.array_equal(q0, np.zeros(3))
+    assert "home configuration" in how

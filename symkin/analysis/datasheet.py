@@ -121,9 +121,11 @@ def _point(tcp: Sequence[float]) -> str:
 
 def home_configuration(model: GeneratedModel, limits: np.ndarray) -> np.ndarray:
     """The pose a datasheet quotes besides the workspace: a parallel mechanism's declared home (q = ik(home)),
-    else the middle of the joint limits."""
+    a serial device's declared rest configuration (``serial.home``), else the middle of the joint limits."""
     if mechanism.is_parallel(model) and model.info.home is not None:
         return np.asarray(model.ik(np.array(model.info.home)).joints, dtype=float)
+    if model.info.home_configuration is not None:
+        return np.array(model.info.home_configuration, dtype=float)
     return limits.mean(axis=1)
 
 

@@ -21,7 +21,7 @@ from symkin.model.reader import ZERO, Reader, describe
 from symkin.model.scene_build import read_scene
 from symkin.model.schema import Model
 from symkin.model.rotors import with_rotors
-from symkin.model.serial_build import read_serial, read_tip
+from symkin.model.serial_build import read_home, read_serial, read_tip
 from symkin.model.task_space_build import read_task_space
 from symkin.model.wrist_build import read_wrist
 from symkin.model.yaml_source import Document
@@ -67,11 +67,12 @@ def build_model(doc: Document, stem: str, allow_nonphysical: bool = False) -> Mo
     if "serial" in data:
         joints, base, tcp = read_serial(r, data["serial"])
         tip = read_tip(r, data["serial"], joints)
+        home = read_home(r, data["serial"], joints)
         check_name_clashes(r, parameters, derived, joints)
         task_space = read_task_space(r, data.get("task_space", "position"))
         coordinate_names = tuple(j.name for j in joints)
     else:
-        joints, base, tcp, tip = (), (), (), None
+        joints, base, tcp, tip, home = (), (), (), None, None
         parallel = build_parallel(r, data["parallel"])
         if parallel is None:
             raise ModelError(r.problems)
@@ -126,6 +127,7 @@ def build_model(doc: Document, stem: str, allow_nonphysical: bool = False) -> Mo
         friction=friction,
         actuators=actuators,
         tip=tip,
+        home_configuration=home,
         scene=scene,
         parallel=parallel,
         locations=dict(doc.marks),

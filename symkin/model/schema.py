@@ -570,6 +570,8 @@ class Model:
     actuators: tuple[Actuator, ...] = ()
     #: the link that carries the TCP (``serial.tip``), None for the last joint's link.
     tip: str | None = None
+    #: a serial device's rest configuration (``serial.home``), one expression per coordinate, or None.
+    home_configuration: tuple[sympy.Expr, ...] | None = None
     scene: Scene = field(default_factory=lambda: Scene(outputs=("fk", "jacobian")))
     #: the legs and platform of a parallel mechanism (``joints`` is empty then), None for serial chains.
     parallel: Parallel | None = None

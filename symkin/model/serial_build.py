@@ -37,7 +37,7 @@ DH_COLUMNS = ("name", "type", "theta", "d", "a", "alpha")
 def read_serial(r: Reader, section: Any, path: KeyPath = ("serial",)
                 ) -> tuple[tuple[Joint, ...], tuple[Op, ...], tuple[Op, ...]]:
     """(joints, base, tcp) of the serial section at ``path`` (``serial:``, or a hybrid device's ``wrist:``)."""
-    section = r.mapping(path, section, optional=("dh", "chain", "base", "tcp", "tip"))
+    section = r.mapping(path, section, optional=("dh", "chain", "base", "tcp", "tip", "home"))
     if section is None:
         return (), (), ()
     joints: list[Joint] = []
@@ -76,6 +76,33 @@ def read_tip(r: Reader, section: Any, joints: tuple[Joint, ...], path: KeyPath =
                f"name one of: {', '.join(links)}")
         return None
     return tip
+
+
+def read_home(r: Reader, section: Any, joints: tuple[Joint, ...], path: KeyPath = ("serial",)
+              ) -> tuple[sympy.Expr, ...] | None:
+    """``serial.home``: the device's rest configuration, one expression per coordinate (the joints but the
+    followers), within the limits at the parameters' defaults; None where the model declares none."""
+    if not isinstance(section, dict) or "home" not in section:
+        return None
+    coordinates = [j for j in joints if not j.follower]
+    names = ", ".join(j.name for j in coordinates)
+    items = r.sequence(path + ("home",), section["home"], len(coordinates), f"joint coordinates [{names}]")
+    if items is None:
+        return None
+    values = [r.expr(path + ("home", i), item) for i, item in enumerate(items)]
+    if any(v is None for v in values):
+        return None
+    expressions = tuple(v for v in values if v is not None)
+    for i, (joint, value) in enumerate(zip(coordinates, expressions)):
+        number = r.default_value(value)
+        if number is None or joint.limits is None:
+            continue
+        lower, upper = (r.default_value(b) for b in joint.limits)
+        if lower is not None and upper is not None and not lower <= number <= upper:
+            r.fail(path + ("home", i), f"the home value {number:g} of '{joint.name}' lies outside its limits "
+                                       f"[{lower:g}, {upper:g}]",
+                   "choose a home configuration within the joint limits")
+    return expressions
 
 
 def _check_parents(r: Reader, path: KeyPath, joints: list[Joint]) -> None:

@@ -105,6 +105,7 @@ class ModelInfo:
             (validated where they are used, :func:`symkin.analysis.passive.declared_limits`, with the
             manifest's place in the message).
         wrist: a hybrid device's wrist coordinates, in the order of the functions' ``qw``; () otherwise.
+        home_configuration: a serial device's declared rest configuration (``serial.home``), else None.
     """
 
     name: str
@@ -116,6 +117,7 @@ class ModelInfo:
     home: tuple[float, ...] | None = None
     passive_limits: tuple[dict[str, Any], ...] = ()
     wrist: tuple[Coordinate, ...] = ()
+    home_configuration: tuple[float, ...] | None = None
 
     @property
     def is_parallel(self) -> bool:
@@ -151,8 +153,9 @@ class ModelInfo:
         home = tuple(float(v) for v in parallel["home"]) if parallel and parallel.get("home") is not None else None
         passive = tuple(dict(leg.get("passive_limits") or {}) for leg in parallel["legs"]) if parallel else ()
         wrist = tuple(_coordinate(c) for c in parallel.get("wrist", ())) if parallel else ()
+        rest = tuple(float(v) for v in model["home_configuration"]) if "home_configuration" in model else None
         return cls(model["name"], "parallel" if parallel else "serial", coordinates, tuple(model["task_space"]),
-                   parameters, functions, home, passive, wrist)
+                   parameters, functions, home, passive, wrist, rest)
 
 
 def _coordinate(record: dict[str, Any]) -> Coordinate:

@@ -149,6 +149,12 @@ class Plant:
                 if home is not None and "ik" in self.model.functions else np.zeros(self.legs))
         return np.concatenate([legs, self.middle_of_limits()[self.legs:]])
 
+    @property
+    def home_configuration(self) -> np.ndarray | None:
+        """(n,): a serial device's declared rest configuration (``serial.home``), None where it declares none."""
+        declared = getattr(self.model.info, "home_configuration", None)
+        return None if declared is None or self.parallel else np.array(declared, dtype=float)
+
     def middle_of_limits(self) -> np.ndarray:
         """(n,): the middle of each joint's limits, 0 for an unlimited joint."""
         finite = np.isfinite(self.joint_limits).all(axis=1)

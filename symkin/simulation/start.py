@@ -1,6 +1,6 @@
 """The default start pose of a simulation: a well-conditioned configuration within the limits.
 
-The middle of the joint limits (0 for an unlimited joint) is the start unless the task
+A serial device's declared rest configuration (``serial.home``) is the start where the model has one.  Else the middle of the joint limits (0 for an unlimited joint) is the start unless the task
 Jacobian is worse conditioned there than :data:`WELL_CONDITIONED`: symmetric limits put many
 arms at a singularity (a SCARA or a UR arm stretched out), where TCP forces are undefined and
 a task-space reference leaves the workspace.  Then the start is the best-conditioned pose of a
@@ -21,6 +21,9 @@ START_CANDIDATES = 256
 
 def start_pose(plant: Plant) -> tuple[np.ndarray, str]:
     """(q0, how it was chosen, for the output)."""
+    declared = plant.home_configuration
+    if declared is not None:
+        return declared, f"the model's home configuration (1/kappa = {float(plant.dexterity(declared)):.3g})"
     limits = plant.joint_limits
     finite = np.isfinite(limits).all(axis=1)
     middle = plant.middle_of_limits()
