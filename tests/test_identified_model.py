@@ -143,3 +143,16 @@ def test_hostile_file_names_stay_data(tmp_path):
     assert "allow_nonphysical" not in document
     assert document["identified"]["data"] == hostile
     assert any(hostile in note for note in written.notes)
+
+
+def test_the_combinations_come_from_states_spread_over_the_run_or_from_all_where_those_miss_a_parameter():
+    """K of Y = Y_b K from COMBINATION_STATES evenly spread states equals K from all of them (the identity holds at
+    every state); where the spread states leave a base parameter unexcited (its column zero there), all are taken."""
+    rng = np.random.default_rng(5)
+    count, n, b, P = 4 * identified_model.COMBINATION_STATES + 3, 2, 3, 5
+    K = rng.normal(size=(b, P))
+    Y_b = rng.normal(size=(count, n, b))
+    np.testing.assert_allclose(identified_model.combinations(Y_b @ K, Y_b), K, rtol=0, atol=64 * EPS)
+    spread = np.unique(np.linspace(0, count - 1, identified_model.COMBINATION_STATES).astype(int))
+    Y_b[spread, :, 2] = 0.0  # the third base parameter moves only between the spread states
+    np.testing.assert_allclose(identified_model.combinations(Y_b @ K, Y_b), K, rtol=0, atol=64 * EPS)

@@ -40,7 +40,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         epilog="e.g. symkin rate generated/delta --effort-limit 0.3 --encoder 4096 --gear 10 -o out/rate/delta")
     analysis_args.add_model_arguments(p)
     p.add_argument("-n", "--samples", type=analysis_args.sample_count, default=4096, metavar="N",
-                   help="joint configurations sampled within the limits (default: %(default)s)")
+                   help="poses sampled: joint configurations within the limits, or a rotating platform's centres "
+                        "(default: %(default)s)")
     p.add_argument("--seed", type=int, default=0, help="seed of the sampling (default: %(default)s)")
     p.add_argument("--box", action="append", default=[], metavar="AXIS=LO:HI[,...]",
                    help="rate only the poses whose TCP lies in this box, in m, e.g. --box x=-0.03:0.03,z=-0.17:-0.11 "
