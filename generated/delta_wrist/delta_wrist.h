@@ -476,10 +476,10 @@ void delta_wrist_forward_dynamics_batch(size_t n, const double *q, const double 
  *
  * F = Mx xdd + Vx + Gx is the wrench [f; m] at the TCP (base axes) that produces the
  * motion whose twist is x = [v; w] = J_c [pd; qwd] (device_jacobian), tau = J_a^T F: the
- * legs' actuator side carried into c = (p, qw) by J^-1 = J_q^-1 J_x, M_cc = M_c +
- * diag(J^-T M_a J^-1, 0), V_cc = V_c + (J^-T (V_a - M_a J^-1 b), 0), G_cc = G_c + (J^-T
- * G_a, 0), then Mx = J_c^-T M_cc J_c^-1, Vx = J_c^-T V_cc - Mx dJ_c/dt cd, Gx = J_c^-T
- * G_cc (J_c^-T by a Gram-Schmidt QR). Gx is omitted without gravity. Evaluate at a
+ * legs' actuator side carried into c = (p, qw) by J^-1 = J_q^-1 J_x, M_c = M_c,p +
+ * diag(J^-T M_a J^-1, 0), V_c = V_c,p + (J^-T (V_a - M_a J^-1 b), 0), G_c = G_c,p +
+ * (J^-T G_a, 0), then Mx = J_c^-T M_c J_c^-1, Vx = J_c^-T V_c - Mx dJ_c/dt cd, Gx =
+ * J_c^-T G_c (J_c^-T by a Gram-Schmidt QR). Gx is omitted without gravity. Evaluate at a
  * consistent pair q, p (p = fk(q) or q = ik(p)).
  *
  * Inputs:
@@ -512,7 +512,7 @@ void delta_wrist_forward_dynamics_batch(size_t n, const double *q, const double 
  *   m_handle: mass of the handle (turns with psi3) [kg]; default
  *   DELTA_WRIST_DEFAULT_m_handle = 0.03.
  * Outputs:
- *   Mx[36]: 6 x 6, row-major; mass matrix at the TCP J_c^-T M_cc J_c^-1.
+ *   Mx[36]: 6 x 6, row-major; mass matrix at the TCP J_c^-T M_c J_c^-1.
  *   Vx[6]: 6; Coriolis and centrifugal wrench at the TCP [N (force rows), N*m (moment
  *   rows)].
  *   Gx[6]: 6; gravity wrench at the TCP [N (force rows), N*m (moment rows)].

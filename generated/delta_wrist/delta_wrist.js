@@ -1337,11 +1337,11 @@
    *
    * F = Mx xdd + Vx + Gx is the wrench [f; m] at the TCP (base axes) that produces the
    * motion whose twist is x = [v; w] = J_c [pd; qwd] (device_jacobian), tau = J_a^T F:
-   * the legs' actuator side carried into c = (p, qw) by J^-1 = J_q^-1 J_x, M_cc = M_c +
-   * diag(J^-T M_a J^-1, 0), V_cc = V_c + (J^-T (V_a - M_a J^-1 b), 0), G_cc = G_c + (J^-T
-   * G_a, 0), then Mx = J_c^-T M_cc J_c^-1, Vx = J_c^-T V_cc - Mx dJ_c/dt cd, Gx = J_c^-T
-   * G_cc (J_c^-T by a Gram-Schmidt QR). Gx is omitted without gravity. Evaluate at a
-   * consistent pair q, p (p = fk(q) or q = ik(p)).
+   * the legs' actuator side carried into c = (p, qw) by J^-1 = J_q^-1 J_x, M_c = M_c,p +
+   * diag(J^-T M_a J^-1, 0), V_c = V_c,p + (J^-T (V_a - M_a J^-1 b), 0), G_c = G_c,p +
+   * (J^-T G_a, 0), then Mx = J_c^-T M_c J_c^-1, Vx = J_c^-T V_c - Mx dJ_c/dt cd, Gx =
+   * J_c^-T G_c (J_c^-T by a Gram-Schmidt QR). Gx is omitted without gravity. Evaluate at
+   * a consistent pair q, p (p = fk(q) or q = ik(p)).
    *
    * @param {number[]} q joint coordinates, 3 numbers: theta1 [rad], theta2 [rad], theta3
    *     [rad].
@@ -1367,7 +1367,7 @@
    *     m_fork2: mass of the second wrist fork (turns with psi2) [kg]; default 0.009.
    *     m_handle: mass of the handle (turns with psi3) [kg]; default 0.03.
    * @returns {{Mx: number[][], Vx: number[], Gx: number[]}}
-   *     Mx: shape (6, 6); mass matrix at the TCP J_c^-T M_cc J_c^-1.
+   *     Mx: shape (6, 6); mass matrix at the TCP J_c^-T M_c J_c^-1.
    *     Vx: shape (6,); Coriolis and centrifugal wrench at the TCP [N (force rows),
    *     N*m (moment rows)].
    *     Gx: shape (6,); gravity wrench at the TCP [N (force rows), N*m (moment rows)].
@@ -1490,9 +1490,9 @@
     const _x81 = 5e-05*m_handle;
     const _x82 = _x12*_x9;
     const _x83 = a*a;
-    const _x84 = gear*gear*J_rotor + 0.3333333333333333*_x83*m_arm + 0.5*_x83*m_rod;
+    const _x84 = 0.3333333333333333*_x83*m_arm + gear*gear*J_rotor + 0.5*_x83*m_rod;
     const _x85 = _x82*_x84;
-    const _x86 = _x24*_x20;
+    const _x86 = _x24*_x17;
     const _x87 = _x86*_x84;
     const _x88 = _x31*_x26;
     const _x89 = _x88*_x84;
@@ -1516,10 +1516,10 @@
     const _x107 = -_x99;
     const _x108 = _x65 - _x1*_x32*_x64 + _x2*_x32*_x44 + theta1_d*theta1_d*(-_x1*r_base + x*_x1 + z*_x2 + _x1*r_tcp);
     const _x109 = -_x12*_x108;
-    const _x110 = _x109*_x84;
+    const _x110 = _x84*_x109;
     const _x111 = _x65 + (_x4*r_tcp + z*_x5 - _x4*r_base - _x4*_x70 + _x4*_x69)*theta2_d*theta2_d - _x66*_x44 - _x4*_x68*theta2_d + _x67*_x66;
     const _x112 = -_x24*_x111;
-    const _x113 = _x112*_x84;
+    const _x113 = _x84*_x112;
     const _x114 = 4.905*a;
     const _x115 = m_arm*_x114;
     const _x116 = m_rod*_x114;
@@ -1650,7 +1650,7 @@
     const _x241 = _x73*_x236;
     const _x242 = y*_x12;
     const _x243 = _x12*_x10;
-    const _x244 = _x24*_x17;
+    const _x244 = _x24*_x20;
     const _x245 = _x24*_x21;
     const _x246 = _x31*_x27;
     const _x247 = _x65 + (_x7*r_tcp + z*_x8 - _x7*r_base - _x7*_x70 - _x7*_x69)*theta3_d*theta3_d - _x71*_x44 - _x7*_x68*theta3_d - _x71*_x67;
@@ -1664,11 +1664,11 @@
     const _x255 = -_x72*_x252;
     const _x256 = _x79*_x78 + _x80*_x78;
     const _x257 = _x81*_x76;
-    const _x258 = _x249 + _x88*_x88*_x84 + _x244*_x244*_x84 + _x82*_x82*_x84;
+    const _x258 = _x249 + _x88*_x88*_x84 + _x86*_x86*_x84 + _x82*_x82*_x84;
     const _x259 = _x89*_x246 + _x87*_x244 + _x85*_x242;
-    const _x260 = _x89*_x90 + _x244*_x245*_x84 + _x85*_x243;
-    const _x261 = _x249 + _x246*_x246*_x84 + _x86*_x86*_x84 + _x242*_x242*_x84;
-    const _x262 = _x91*_x246 + _x87*_x245 + _x242*_x243*_x84;
+    const _x260 = _x87*_x245 + _x89*_x90 + _x85*_x243;
+    const _x261 = _x249 + _x246*_x246*_x84 + _x244*_x244*_x84 + _x242*_x242*_x84;
+    const _x262 = _x91*_x246 + _x244*_x245*_x84 + _x242*_x243*_x84;
     const _x263 = _x249 + _x90*_x90*_x84 + _x245*_x245*_x84 + _x243*_x243*_x84;
     const _x264 = (_x77 + _x81)*_x76*_x76 + _x73*_x73*(_x256 + _x77);
     const _x265 = _x75*_x250;
@@ -1685,20 +1685,20 @@
     const _x276 = _x275*psi3_d;
     const _x277 = 2.0*_x73*_x76;
     const _x278 = psi1_d*(-(_x80*_x78 + _x79*_x78 + _x77)*_x277 + (_x77 + _x81)*_x277);
-    const _x279 = _x252*_x64;
+    const _x279 = _x64*_x252;
     const _x280 = -_x279*psi2_d + _x54*_x270 + _x44*_x267;
     const _x281 = 9.81*m_handle;
-    const _x282 = _x267*psi2_d + _x268*psi1_d - _x89*_x248 - _x113*_x244 - _x110*_x82;
-    const _x283 = _x119*_x88 + _x118*_x244 + _x117*_x82;
-    const _x284 = _x270*psi2_d + _x271*psi1_d - _x246*_x248*_x84 - _x87*_x112 - _x110*_x242;
-    const _x285 = _x118*_x86 + _x119*_x246 + _x117*_x242;
+    const _x282 = _x267*psi2_d + _x268*psi1_d - _x89*_x248 - _x113*_x86 - _x110*_x82;
+    const _x283 = _x119*_x88 + _x118*_x86 + _x117*_x82;
+    const _x284 = _x271*psi1_d - _x246*_x84*_x248 + _x270*psi2_d - _x113*_x244 - _x110*_x242;
+    const _x285 = _x118*_x244 + _x119*_x246 + _x117*_x242;
     const _x286 = -_x110*_x243 - _x113*_x245 - _x91*_x248 - _x92*_x252;
     const _x287 = _x281 + 9.81*m_fork2 + 14.715*m_rod + 9.81*m_platform + _x119*_x90 + _x118*_x245 + 9.81*m_fork1 + _x117*_x243;
     const _x288 = _x278*psi2_d - 0.5*(_x272*psi2_d + _x273*psi1_d + _x274) + _x276*psi2_d + _x274;
     const _x289 = -0.5*(_x276*psi1_d + (-_x279 + _x273)*psi2_d + psi1_d*(_x276 + _x278 + _x272) + _x280) + _x280;
     const _x290 = h*_x73*_x281;
     const _x291 = _x93*_x275;
-    const _x292 = _x121*_x258 + _x253*_x123 + _x251*_x122;
+    const _x292 = _x121*_x258 + _x251*_x122 + _x253*_x123;
     const _x293 = _x258 - _x121*_x292;
     const _x294 = -_x292*_x122 + _x251;
     const _x295 = -_x292*_x123 + _x253;
@@ -1794,7 +1794,7 @@
     const _x385 = -_x143*_x382;
     const _x386 = -_x382*_x155 + _x342;
     const _x387 = -_x382*_x156 + _x343;
-    const _x388 = _x345*_x150 + _x346*_x154 + _x143*_x250 + _x347*_x155 + _x348*_x156;
+    const _x388 = _x345*_x150 + _x143*_x250 + _x346*_x154 + _x347*_x155 + _x348*_x156;
     const _x389 = -_x150*_x388 + _x345;
     const _x390 = -_x154*_x388 + _x346;
     const _x391 = _x250 - _x143*_x388;
@@ -1839,7 +1839,7 @@
     const _x430 = -_x183*_x426 + _x380;
     const _x431 = -_x184*_x426 + _x381;
     const _x432 = -_x185*_x426;
-    const _x433 = _x387*_x184 + _x385*_x182 + _x386*_x183 + _x384*_x181 + _x257*_x185 + _x383*_x176;
+    const _x433 = _x387*_x184 + _x385*_x182 + _x257*_x185 + _x386*_x183 + _x384*_x181 + _x383*_x176;
     const _x434 = -_x176*_x433 + _x383;
     const _x435 = -_x181*_x433 + _x384;
     const _x436 = -_x182*_x433 + _x385;

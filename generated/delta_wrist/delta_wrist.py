@@ -1478,11 +1478,11 @@ def operational_space(q, p, qw, qd, qwd, *, r_base=0.07, r_tcp=0.025, a=0.1, m_a
 
     F = Mx xdd + Vx + Gx is the wrench [f; m] at the TCP (base axes) that produces the
     motion whose twist is x = [v; w] = J_c [pd; qwd] (device_jacobian), tau = J_a^T F:
-    the legs' actuator side carried into c = (p, qw) by J^-1 = J_q^-1 J_x, M_cc = M_c +
-    diag(J^-T M_a J^-1, 0), V_cc = V_c + (J^-T (V_a - M_a J^-1 b), 0), G_cc = G_c +
-    (J^-T G_a, 0), then Mx = J_c^-T M_cc J_c^-1, Vx = J_c^-T V_cc - Mx dJ_c/dt cd, Gx =
-    J_c^-T G_cc (J_c^-T by a Gram-Schmidt QR). Gx is omitted without gravity. Evaluate
-    at a consistent pair q, p (p = fk(q) or q = ik(p)).
+    the legs' actuator side carried into c = (p, qw) by J^-1 = J_q^-1 J_x, M_c = M_c,p +
+    diag(J^-T M_a J^-1, 0), V_c = V_c,p + (J^-T (V_a - M_a J^-1 b), 0), G_c = G_c,p +
+    (J^-T G_a, 0), then Mx = J_c^-T M_c J_c^-1, Vx = J_c^-T V_c - Mx dJ_c/dt cd, Gx =
+    J_c^-T G_c (J_c^-T by a Gram-Schmidt QR). Gx is omitted without gravity. Evaluate at
+    a consistent pair q, p (p = fk(q) or q = ik(p)).
 
     Args:
         q: joint coordinates, shape (..., 3): theta1 [rad], theta2 [rad], theta3 [rad].
@@ -1519,7 +1519,7 @@ def operational_space(q, p, qw, qd, qwd, *, r_base=0.07, r_tcp=0.025, a=0.1, m_a
 
     Returns:
         OperationalSpaceResult with the fields:
-        Mx: shape (..., 6, 6); mass matrix at the TCP J_c^-T M_cc J_c^-1.
+        Mx: shape (..., 6, 6); mass matrix at the TCP J_c^-T M_c J_c^-1.
         Vx: shape (..., 6); Coriolis and centrifugal wrench at the TCP [N (force rows), N*m
             (moment rows)].
         Gx: shape (..., 6); gravity wrench at the TCP [N (force rows), N*m (moment rows)].
@@ -1631,9 +1631,9 @@ def operational_space(q, p, qw, qd, qwd, *, r_base=0.07, r_tcp=0.025, a=0.1, m_a
     _x81 = 5e-05*m_handle
     _x82 = _x12*_x9
     _x83 = a*a
-    _x84 = gear*gear*J_rotor + 0.3333333333333333*_x83*m_arm + 0.5*_x83*m_rod
+    _x84 = 0.3333333333333333*_x83*m_arm + gear*gear*J_rotor + 0.5*_x83*m_rod
     _x85 = _x82*_x84
-    _x86 = _x24*_x20
+    _x86 = _x24*_x17
     _x87 = _x86*_x84
     _x88 = _x31*_x26
     _x89 = _x88*_x84
@@ -1657,10 +1657,10 @@ def operational_space(q, p, qw, qd, qwd, *, r_base=0.07, r_tcp=0.025, a=0.1, m_a
     _x107 = -_x99
     _x108 = _x65 - _x1*_x32*_x64 + _x2*_x32*_x44 + theta1_d*theta1_d*(-_x1*r_base + x*_x1 + z*_x2 + _x1*r_tcp)
     _x109 = -_x12*_x108
-    _x110 = _x109*_x84
+    _x110 = _x84*_x109
     _x111 = _x65 + (_x4*r_tcp + z*_x5 - _x4*r_base - _x4*_x70 + _x4*_x69)*theta2_d*theta2_d - _x66*_x44 - _x4*_x68*theta2_d + _x67*_x66
     _x112 = -_x24*_x111
-    _x113 = _x112*_x84
+    _x113 = _x84*_x112
     _x114 = 4.905*a
     _x115 = m_arm*_x114
     _x116 = m_rod*_x114
@@ -1791,7 +1791,7 @@ def operational_space(q, p, qw, qd, qwd, *, r_base=0.07, r_tcp=0.025, a=0.1, m_a
     _x241 = _x73*_x236
     _x242 = y*_x12
     _x243 = _x12*_x10
-    _x244 = _x24*_x17
+    _x244 = _x24*_x20
     _x245 = _x24*_x21
     _x246 = _x31*_x27
     _x247 = _x65 + (_x7*r_tcp + z*_x8 - _x7*r_base - _x7*_x70 - _x7*_x69)*theta3_d*theta3_d - _x71*_x44 - _x7*_x68*theta3_d - _x71*_x67
@@ -1805,11 +1805,11 @@ def operational_space(q, p, qw, qd, qwd, *, r_base=0.07, r_tcp=0.025, a=0.1, m_a
     _x255 = -_x72*_x252
     _x256 = _x79*_x78 + _x80*_x78
     _x257 = _x81*_x76
-    _x258 = _x249 + _x88*_x88*_x84 + _x244*_x244*_x84 + _x82*_x82*_x84
+    _x258 = _x249 + _x88*_x88*_x84 + _x86*_x86*_x84 + _x82*_x82*_x84
     _x259 = _x89*_x246 + _x87*_x244 + _x85*_x242
-    _x260 = _x89*_x90 + _x244*_x245*_x84 + _x85*_x243
-    _x261 = _x249 + _x246*_x246*_x84 + _x86*_x86*_x84 + _x242*_x242*_x84
-    _x262 = _x91*_x246 + _x87*_x245 + _x242*_x243*_x84
+    _x260 = _x87*_x245 + _x89*_x90 + _x85*_x243
+    _x261 = _x249 + _x246*_x246*_x84 + _x244*_x244*_x84 + _x242*_x242*_x84
+    _x262 = _x91*_x246 + _x244*_x245*_x84 + _x242*_x243*_x84
     _x263 = _x249 + _x90*_x90*_x84 + _x245*_x245*_x84 + _x243*_x243*_x84
     _x264 = (_x77 + _x81)*_x76*_x76 + _x73*_x73*(_x256 + _x77)
     _x265 = _x75*_x250
@@ -1826,20 +1826,20 @@ def operational_space(q, p, qw, qd, qwd, *, r_base=0.07, r_tcp=0.025, a=0.1, m_a
     _x276 = _x275*psi3_d
     _x277 = 2.0*_x73*_x76
     _x278 = psi1_d*(-(_x80*_x78 + _x79*_x78 + _x77)*_x277 + (_x77 + _x81)*_x277)
-    _x279 = _x252*_x64
+    _x279 = _x64*_x252
     _x280 = -_x279*psi2_d + _x54*_x270 + _x44*_x267
     _x281 = 9.81*m_handle
-    _x282 = _x267*psi2_d + _x268*psi1_d - _x89*_x248 - _x113*_x244 - _x110*_x82
-    _x283 = _x119*_x88 + _x118*_x244 + _x117*_x82
-    _x284 = _x270*psi2_d + _x271*psi1_d - _x246*_x248*_x84 - _x87*_x112 - _x110*_x242
-    _x285 = _x118*_x86 + _x119*_x246 + _x117*_x242
+    _x282 = _x267*psi2_d + _x268*psi1_d - _x89*_x248 - _x113*_x86 - _x110*_x82
+    _x283 = _x119*_x88 + _x118*_x86 + _x117*_x82
+    _x284 = _x271*psi1_d - _x246*_x84*_x248 + _x270*psi2_d - _x113*_x244 - _x110*_x242
+    _x285 = _x118*_x244 + _x119*_x246 + _x117*_x242
     _x286 = -_x110*_x243 - _x113*_x245 - _x91*_x248 - _x92*_x252
     _x287 = _x281 + 9.81*m_fork2 + 14.715*m_rod + 9.81*m_platform + _x119*_x90 + _x118*_x245 + 9.81*m_fork1 + _x117*_x243
     _x288 = _x278*psi2_d - 0.5*(_x272*psi2_d + _x273*psi1_d + _x274) + _x276*psi2_d + _x274
     _x289 = -0.5*(_x276*psi1_d + (-_x279 + _x273)*psi2_d + psi1_d*(_x276 + _x278 + _x272) + _x280) + _x280
     _x290 = h*_x73*_x281
     _x291 = _x93*_x275
-    _x292 = _x121*_x258 + _x253*_x123 + _x251*_x122
+    _x292 = _x121*_x258 + _x251*_x122 + _x253*_x123
     _x293 = _x258 - _x121*_x292
     _x294 = -_x292*_x122 + _x251
     _x295 = -_x292*_x123 + _x253
@@ -1935,7 +1935,7 @@ def operational_space(q, p, qw, qd, qwd, *, r_base=0.07, r_tcp=0.025, a=0.1, m_a
     _x385 = -_x143*_x382
     _x386 = -_x382*_x155 + _x342
     _x387 = -_x382*_x156 + _x343
-    _x388 = _x345*_x150 + _x346*_x154 + _x143*_x250 + _x347*_x155 + _x348*_x156
+    _x388 = _x345*_x150 + _x143*_x250 + _x346*_x154 + _x347*_x155 + _x348*_x156
     _x389 = -_x150*_x388 + _x345
     _x390 = -_x154*_x388 + _x346
     _x391 = _x250 - _x143*_x388
@@ -1980,7 +1980,7 @@ def operational_space(q, p, qw, qd, qwd, *, r_base=0.07, r_tcp=0.025, a=0.1, m_a
     _x430 = -_x183*_x426 + _x380
     _x431 = -_x184*_x426 + _x381
     _x432 = -_x185*_x426
-    _x433 = _x387*_x184 + _x385*_x182 + _x386*_x183 + _x384*_x181 + _x257*_x185 + _x383*_x176
+    _x433 = _x387*_x184 + _x385*_x182 + _x257*_x185 + _x386*_x183 + _x384*_x181 + _x383*_x176
     _x434 = -_x176*_x433 + _x383
     _x435 = -_x181*_x433 + _x384
     _x436 = -_x182*_x433 + _x385

@@ -324,33 +324,45 @@ def _tcp_force(d: Deriving) -> FunctionSpec:
         ["q", "qd", "qdd"], program, [("F", F, (n,), f"TCP force components [{components}]", "N, N*m")])
 
 
+def task_space_dynamics(program: Program, J_graph: Matrix, coordinates: Sequence[se.Basic], rates: Sequence[se.Basic],
+                        M: Matrix, V: list[se.Basic], G: list[se.Basic] | None
+                        ) -> tuple[Matrix, list[se.Basic], list[se.Basic] | None]:
+    """(Mx, Vx, Gx) of the equations M qdd + V + G = J^T F seen at x, xd = J qd (seed eqs. 8.61-8.64; Craig sec.
+    6.11): Mx = J^-T M J^-1, Vx = J^-T V - Mx dJ/dt qd, Gx = J^-T G (None without G).
+
+    ``J_graph`` is the square Jacobian in ``coordinates`` (unbound), ``rates`` their rates, M, V, G bound in
+    ``program``; dJ/dt qd = sum_k dJ/dq_k qd_k qd, and J^-T [M | V | G] comes from one
+    :func:`~symkin.dynamics.linsolve.transpose_solve`, Mx = J^-T (J^-T M)^T (M symmetric).
+    """
+    n = len(J_graph)
+    Jdot_rates = [sum((se.diff(J_graph[i][j], coordinates[k]) * rates[k] * rates[j] for j in range(n)
+                       for k in range(n)), se.Integer(0)) for i in range(n)]
+    values = program.bind(_flat(J_graph) + Jdot_rates)
+    J = [values[i * n:(i + 1) * n] for i in range(n)]
+    jdot = values[n * n:]
+    first = transpose_solve(program, J, [M[i] + [V[i]] + ([G[i]] if G is not None else []) for i in range(n)])
+    Mx = transpose_solve(program, J, [[first[j][i] for j in range(n)] for i in range(n)])
+    Mx = [[Mx[i][j] if i >= j else Mx[j][i] for j in range(n)] for i in range(n)]  # exactly symmetric
+    Vx = [first[i][n] - sum((Mx[i][k] * jdot[k] for k in range(n)), se.Integer(0)) for i in range(n)]
+    return Mx, Vx, None if G is None else [first[i][n + 1] for i in range(n)]
+
+
 @quantity("operational_space", "operational-space dynamics Mx, Vx, Gx (square task Jacobian)",
           solves_with="jacobian")
 def _operational_space(d: Deriving) -> FunctionSpec:
     n = d.model.dof
-    J_graph = d[_task_jacobian_graph]
-    q, qd = coordinate_symbols(d, "q"), coordinate_symbols(d, "qd")
-    # dJ/dt qd = sum_k dJ/dq_k qd_k qd.
-    Jdot_qd = [sum((se.diff(J_graph[i][j], q[k]) * qd[k] * qd[j] for j in range(n) for k in range(n)),
-                   se.Integer(0)) for i in range(n)]
+    J_graph = d[_task_jacobian_graph]  # refuses a task Jacobian that is not square before any dynamics
     program = Program()
     terms = _BoundTerms(d, program)
     M = terms.mass_matrix()
     V = terms.coriolis_vector()
     G = terms.gravity_vector()
-    values = program.bind(_flat(J_graph) + Jdot_qd)
-    J = [values[i * n:(i + 1) * n] for i in range(n)]
-    jdot_qd = values[n * n:]
-    # J^-T [M | V | G] in one solve; Mx = J^-T (J^-T M)^T = J^-T M J^-1 (M symmetric).
-    first = transpose_solve(program, J, [M[i] + [V[i]] + ([G[i]] if G is not None else []) for i in range(n)])
-    Mx = transpose_solve(program, J, [[first[j][i] for j in range(n)] for i in range(n)])
-    Mx = [[Mx[i][j] if i >= j else Mx[j][i] for j in range(n)] for i in range(n)]  # exactly symmetric
-    Vx = [first[i][n] - sum((Mx[i][k] * jdot_qd[k] for k in range(n)), se.Integer(0)) for i in range(n)]
+    Mx, Vx, Gx = task_space_dynamics(program, J_graph, coordinate_symbols(d, "q"), coordinate_symbols(d, "qd"),
+                                     M, V, G)
     outputs = [("Mx", _flat(Mx), (n, n), "operational-space mass matrix J^-T M J^-1", ""),
                ("Vx", Vx, (n,), "operational-space Coriolis and centrifugal force J^-T (V - M J^-1 dJ/dt qd)", "")]
-    if G is not None:
-        outputs.append(("Gx", [first[i][n + 1] for i in range(n)], (n,), "operational-space gravity force J^-T G",
-                        ""))
+    if Gx is not None:
+        outputs.append(("Gx", Gx, (n,), "operational-space gravity force J^-T G", ""))
     components = ", ".join(d.model.task_space)
     return function_spec(
         d, "operational_space", "Operational-space dynamics F = Mx xdd + Vx + Gx.",

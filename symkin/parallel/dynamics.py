@@ -59,7 +59,7 @@ from symkin.dynamics import lagrange
 from symkin.dynamics.linsolve import ldl_solve, transpose_solve
 from symkin.dynamics.program import Program, dot, mat_vec, se_matrix, se_vector
 from symkin.dynamics.quantities import (EFFORT_UNIT, coordinate_symbols, function_spec, joint_friction,
-                                       require_gravity)
+                                       require_gravity, task_space_dynamics)
 from symkin.errors import DerivationError
 from symkin.ir.quantity import Deriving, quantity
 from symkin.ir.spec import FunctionSpec
@@ -167,6 +167,40 @@ class _Terms:
         """b = dJ/dt qd = -J_x^-1 h, so that pdd = J qdd + b."""
         h = self.curvature(qd, pd)
         return [self.program.let(-dot(row, h)) for row in self.J_x_inverse]
+
+    def task_side(self, qd: list[se.Basic]) -> tuple[Matrix, list[se.Basic], list[se.Basic] | None, list[se.Basic]]:
+        """(M_c, V_c, G_c, cd): the equations F_c = M_c cdd + V_c + G_c of the force conjugate to c = (p, qw) (p alone
+        without a wrist: the platform's operational space), and the rates cd = (J qd, qwd).
+
+        The legs' actuator side is carried into c by J^-1 = J_q^-1 J_x (J_q diagonal: no solve):
+        M_c = M_p + diag(J^-T M_a J^-1, 0), V_c = V_p + (J^-T (V_a - M_a J^-1 b), 0) with J^-1 b = -J_q^-1 h,
+        G_c = G_p + (J^-T G_a, 0) (None without gravity).
+        """
+        program, n, size = self.program, self.n, len(self.c)
+        J_x, J_q = self.jacobians
+        J_inverse = [[program.let(J_x[i][k] / J_q[i]) for k in range(n)] for i in range(n)]
+
+        def carried(v: list[se.Basic]) -> list[se.Basic]:  # (J^-T v, 0): a leg-side effort as a force in c
+            return [sum((J_inverse[i][k] * v[i] for i in range(n)), se.Integer(0)) for k in range(n)] + \
+                [se.Integer(0)] * (size - n)
+
+        pd = self.task_rates(qd)
+        J_inverse_b = [program.let(-h / J_q[i]) for i, h in enumerate(self.curvature(qd, pd))]
+        M: Matrix = [[se.Integer(0)] * size for _ in range(size)]
+        M_p = self.M_p  # bound before M_a
+        for k in range(size):
+            for m in range(k, size):
+                leg_side = sum((J_inverse[i][k] * self.M_a[i] * J_inverse[i][m] for i in range(n)), se.Integer(0)) \
+                    if m < n else se.Integer(0)
+                M[k][m] = M[m][k] = program.let(M_p[k][m] + leg_side)
+        cd = pd + self.wrist("qd")
+        # the actuator side seen in c, minus its share of the bias; then the platform side's own
+        V = [a + c for a, c in zip(carried([v - m * x for v, m, x in zip(self.V_a(qd), self.M_a, J_inverse_b)]),
+                                   self.V_p(cd))]
+        if self.gravity_parts is None:
+            return M, V, None, cd
+        G_a, G_p = self.gravity_parts
+        return M, V, [a + c for a, c in zip(carried(G_a), G_p)], cd
 
     @cached_property
     def M_a(self) -> list[se.Basic]:
@@ -397,31 +431,12 @@ def _operational_space(d: Deriving) -> FunctionSpec:
     if d.model.parallel is not None and d.model.parallel.wrist is not None:
         return _device_operational_space(d)
     program = Program()
-    terms = _Terms(d, program)
     n = d.model.dof
-    J_x, J_q = terms.jacobians
-    J_inverse = [[program.let(J_x[i][k] / J_q[i]) for k in range(n)] for i in range(n)]  # J^-1 = J_q^-1 J_x
-
-    def inverse_transpose(v: list[se.Basic]) -> list[se.Basic]:  # J^-T v
-        return [sum((J_inverse[i][k] * v[i] for i in range(n)), se.Integer(0)) for k in range(n)]
-
-    qd = coordinate_symbols(d, "qd")
-    pd = terms.task_rates(qd)
-    J_inverse_b = [program.let(-h / J_q[i]) for i, h in enumerate(terms.curvature(qd, pd))]  # J^-1 b = -J_q^-1 h
-    Mx: Matrix = [[se.Integer(0)] * n for _ in range(n)]
-    for k in range(n):
-        for m in range(k, n):
-            Mx[k][m] = Mx[m][k] = program.let(terms.M_p[k][m] + sum(
-                (J_inverse[i][k] * terms.M_a[i] * J_inverse[i][m] for i in range(n)), se.Integer(0)))
-    # Vx = J^-T (V_a - M_a J^-1 b) + V_p: the actuator side seen in p, minus its share of the bias.
-    actuator_side = inverse_transpose([v - m * x for v, m, x in zip(terms.V_a(qd), terms.M_a, J_inverse_b)])
-    Vx = [a + c for a, c in zip(actuator_side, terms.V_p(pd))]
+    Mx, Vx, Gx, _ = _Terms(d, program).task_side(coordinate_symbols(d, "qd"))
     outputs = [("Mx", [v for row in Mx for v in row], (n, n), "task-space mass matrix J^-T M J^-1", ""),
                ("Vx", Vx, (n,), "task-space Coriolis and centrifugal force", TASK_FORCE_UNIT)]
-    if terms.gravity_parts is not None:
-        G_a, G_p = terms.gravity_parts
-        outputs.append(("Gx", [a + c for a, c in zip(inverse_transpose(G_a), G_p)], (n,),
-                        "task-space gravity force J^-T G", TASK_FORCE_UNIT))
+    if Gx is not None:
+        outputs.append(("Gx", Gx, (n,), "task-space gravity force J^-T G", TASK_FORCE_UNIT))
     return function_spec(
         d, "operational_space", "Task-space dynamics of the platform.",
         "F = Mx pdd + Vx + Gx is the force on the platform (conjugate to p) that produces the motion, tau = J^T F: "
@@ -432,14 +447,9 @@ def _operational_space(d: Deriving) -> FunctionSpec:
 
 
 def _device_operational_space(d: Deriving) -> FunctionSpec:
-    """Mx, Vx, Gx of a hybrid device at its wrist's TCP, in the device's coordinates (q, qw).
-
-    The legs' actuator side is carried into c = (p, qw) through J^-1 = J_q^-1 J_x, as for the platform's
-    operational space: M_cc = M_c + diag(J^-T M_a J^-1, 0), V_cc = V_c + (J^-T (V_a - M_a J^-1 b), 0),
-    G_cc = G_c + (J^-T G_a, 0), so that the generalized forces in c are F_c = M_cc cdd + V_cc + G_cc; with
-    the TCP's twist x = J_c cd (J_c = ``device_jacobian``, square) F_c = J_c^T F and
-    Mx = J_c^-T M_cc J_c^-1, Vx = J_c^-T V_cc - Mx dJ_c/dt cd, Gx = J_c^-T G_cc.
-    """
+    """Mx, Vx, Gx of a hybrid device at its wrist's TCP, in the device's coordinates (q, qw): the forces conjugate
+    to c = (p, qw) (:meth:`_Terms.task_side`) seen at the TCP, whose twist is x = J_c cd (J_c = ``device_jacobian``,
+    square), by :func:`~symkin.dynamics.quantities.task_space_dynamics`."""
     J_graph = se_matrix(hybrid.combined_jacobian(d))
     size = len(J_graph[0])
     if size != len(J_graph):
@@ -450,54 +460,19 @@ def _device_operational_space(d: Deriving) -> FunctionSpec:
             "'operational_space' (symkin rate --device gives the apparent mass at the grip)")
     program = Program()
     terms = _Terms(d, program)
-    n = d.model.dof
-    J_x, J_q = terms.jacobians
-    J_inverse = [[program.let(J_x[i][k] / J_q[i]) for k in range(n)] for i in range(n)]  # J^-1 = J_q^-1 J_x
-
-    def carried(v: list[se.Basic]) -> list[se.Basic]:  # (J^-T v, 0): a leg-side effort as a force in c
-        return [sum((J_inverse[i][k] * v[i] for i in range(n)), se.Integer(0)) for k in range(n)] + \
-            [se.Integer(0)] * (size - n)
-
-    qd = coordinate_symbols(d, "qd")
-    pd = terms.task_rates(qd)
-    cd = pd + terms.wrist("qd")
-    J_inverse_b = [program.let(-h / J_q[i]) for i, h in enumerate(terms.curvature(qd, pd))]  # J^-1 b
-    M_cc: Matrix = [[se.Integer(0)] * size for _ in range(size)]
-    for k in range(size):
-        for m in range(k, size):
-            leg_side = sum((J_inverse[i][k] * terms.M_a[i] * J_inverse[i][m] for i in range(n)), se.Integer(0)) \
-                if m < n else se.Integer(0)
-            M_cc[k][m] = M_cc[m][k] = program.let(terms.M_p[k][m] + leg_side)
-    V_cc = [a + c for a, c in zip(carried([v - m * x for v, m, x in zip(terms.V_a(qd), terms.M_a, J_inverse_b)]),
-                                  terms.V_p(cd))]
-    G_cc = None
-    if terms.gravity_parts is not None:
-        G_a, G_c = terms.gravity_parts
-        G_cc = [a + c for a, c in zip(carried(G_a), G_c)]
-    # dJ_c/dt cd = sum_k dJ_c/dc_k cd_k cd
-    Jdot_cd = [sum((se.diff(J_graph[i][j], terms.c[k]) * cd[k] * cd[j] for j in range(size) for k in range(size)),
-                   se.Integer(0)) for i in range(size)]
-    values = program.bind([v for row in J_graph for v in row] + Jdot_cd)
-    J = [values[i * size:(i + 1) * size] for i in range(size)]
-    jdot_cd = values[size * size:]
-    # J_c^-T [M_cc | V_cc | G_cc] in one solve; Mx = J_c^-T (J_c^-T M_cc)^T (M_cc symmetric)
-    first = transpose_solve(program, J, [M_cc[i] + [V_cc[i]] + ([G_cc[i]] if G_cc is not None else [])
-                                         for i in range(size)])
-    Mx = transpose_solve(program, J, [[first[j][i] for j in range(size)] for i in range(size)])
-    Mx = [[Mx[i][j] if i >= j else Mx[j][i] for j in range(size)] for i in range(size)]  # exactly symmetric
-    Vx = [first[i][size] - sum((Mx[i][k] * jdot_cd[k] for k in range(size)), se.Integer(0)) for i in range(size)]
-    outputs = [("Mx", [v for row in Mx for v in row], (size, size), "mass matrix at the TCP J_c^-T M_cc J_c^-1", ""),
+    M_c, V_c, G_c, cd = terms.task_side(coordinate_symbols(d, "qd"))
+    Mx, Vx, Gx = task_space_dynamics(program, J_graph, terms.c, cd, M_c, V_c, G_c)
+    outputs = [("Mx", [v for row in Mx for v in row], (size, size), "mass matrix at the TCP J_c^-T M_c J_c^-1", ""),
                ("Vx", Vx, (size,), "Coriolis and centrifugal wrench at the TCP", WRENCH_UNIT)]
-    if G_cc is not None:
-        outputs.append(("Gx", [first[i][size + 1] for i in range(size)], (size,), "gravity wrench at the TCP",
-                        WRENCH_UNIT))
+    if Gx is not None:
+        outputs.append(("Gx", Gx, (size,), "gravity wrench at the TCP", WRENCH_UNIT))
     return function_spec(
         d, "operational_space", "Operational-space dynamics of the hybrid device at the wrist's TCP.",
         "F = Mx xdd + Vx + Gx is the wrench [f; m] at the TCP (base axes) that produces the motion whose twist is "
         "x = [v; w] = J_c [pd; qwd] (device_jacobian), tau = J_a^T F: the legs' actuator side carried into "
-        "c = (p, qw) by J^-1 = J_q^-1 J_x, M_cc = M_c + diag(J^-T M_a J^-1, 0), V_cc = V_c + (J^-T (V_a - M_a "
-        "J^-1 b), 0), G_cc = G_c + (J^-T G_a, 0), then Mx = J_c^-T M_cc J_c^-1, Vx = J_c^-T V_cc - Mx dJ_c/dt cd, "
-        f"Gx = J_c^-T G_cc (J_c^-T by a Gram-Schmidt QR). Gx is omitted without gravity. {_PAIR}",
+        "c = (p, qw) by J^-1 = J_q^-1 J_x, M_c = M_c,p + diag(J^-T M_a J^-1, 0), V_c = V_c,p + (J^-T (V_a - M_a "
+        "J^-1 b), 0), G_c = G_c,p + (J^-T G_a, 0), then Mx = J_c^-T M_c J_c^-1, Vx = J_c^-T V_c - Mx dJ_c/dt cd, "
+        f"Gx = J_c^-T G_c (J_c^-T by a Gram-Schmidt QR). Gx is omitted without gravity. {_PAIR}",
         _inputs(d, "qd"), program, outputs)
 
 

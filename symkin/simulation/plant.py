@@ -152,7 +152,7 @@ class Plant:
     @property
     def home_configuration(self) -> np.ndarray | None:
         """(n,): a serial device's declared rest configuration (``serial.home``), None where it declares none."""
-        declared = getattr(self.model.info, "home_configuration", None)
+        declared = self.model.info.home_configuration
         return None if declared is None or self.parallel else np.array(declared, dtype=float)
 
     def middle_of_limits(self) -> np.ndarray:
