@@ -181,3 +181,158 @@ def test_the_workspace_command_draws_the_orientations_and_states_their_measure(e
     assert "spherical platform" in refused.stderr
     assert not (tmp_path / "m.png").exists()
     assert not (tmp_path / "w.png").exists()
+
+
+# --------------------------------------------------------------------------- dynamics against MuJoCo
+
+#: each leg's frame: leg 1 the base frame, leg 2 turned by P (x -> y -> z -> x), leg 3 by P^2 (the model's bases)
+LEG_FRAMES = [np.eye(3), np.array([[0.0, 0, 1], [1, 0, 0], [0, 1, 0]]), np.array([[0.0, 1, 0], [0, 0, 1], [1, 0, 0]])]
+
+
+def arc_inertial(mass, radius, plane):
+    """A MuJoCo <inertial> of a thin quarter arc of ``radius`` from the first to the second axis of ``plane``
+    (indices into x, y, z), integrated here: centre (2r/pi)(e_i + e_j), I = m r^2 [(1/2, 1/2, 1) on (i, j, k),
+    -1/pi on (i, j)] about the centre of rotation, moved to the centre of mass."""
+    i, j = plane
+    com = np.zeros(3)
+    com[[i, j]] = 2 * radius / np.pi
+    about_centre = np.zeros((3, 3))
+    k = 3 - i - j
+    about_centre[i, i] = about_centre[j, j] = mass * radius**2 / 2
+    about_centre[k, k] = mass * radius**2
+    about_centre[i, j] = about_centre[j, i] = -mass * radius**2 / np.pi
+    I = about_centre - mass * (com @ com * np.eye(3) - np.outer(com, com))
+    full = " ".join(f"{v:.17g}" for v in (I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2]))
+    return f'<inertial pos="{com[0]:.17g} {com[1]:.17g} {com[2]:.17g}" mass="{mass:.17g}" fullinertia="{full}"/>'
+
+
+def mujoco_agile_eye(v):
+    """The Agile Eye as MuJoCo sees it: three hinge chains (actuator x, middle y, platform z in each leg's frame),
+    the arcs integrated by :func:`arc_inertial`, the camera on leg 1's last body, legs 2 and 3 welded to it."""
+    import mujoco
+
+    from mujoco_reference import TINY_INERTIA, TINY_MASS
+
+    tiny = f'<inertial pos="0 0 0" mass="{TINY_MASS}" diaginertia="{TINY_INERTIA} {TINY_INERTIA} {TINY_INERTIA}"/>'
+    camera = (f'<inertial pos="0 0 0" mass="{v["m_camera"]}" diaginertia="{v["I_camera"]} {v["I_camera"]} '
+              f'{v["I_camera"]}"/>')
+    legs = []
+    for i, frame in enumerate(LEG_FRAMES, start=1):
+        axes = " ".join(f"{c:.17g}" for c in np.concatenate([frame[:, 0], frame[:, 1]]))
+        legs.append(
+            f'<body name="proximal{i}" xyaxes="{axes}"><joint name="theta{i}" axis="1 0 0" armature="{v["J_rotor"]}"/>'
+            f'{arc_inertial(v["m_p"], v["r_p"], (0, 1))}'
+            f'<body name="distal{i}"><joint name="mid{i}" axis="0 1 0"/>{arc_inertial(v["m_d"], v["r_d"], (1, 2))}'
+            f'<body name="top{i}"><joint name="top{i}" axis="0 0 1"/>{camera if i == 1 else tiny}</body></body></body>')
+    xml = (f'<mujoco><option gravity="0 0 -9.81"/><worldbody>{"".join(legs)}</worldbody>'
+           '<equality><weld body1="top2" body2="top1"/><weld body1="top3" body2="top1"/></equality></mujoco>')
+    model = mujoco.MjModel.from_xml_string(xml)
+    return model, mujoco.MjData(model)
+
+
+def tree_angles(q, p):
+    """Every joint angle of the three chains at the assembly (q, p): frame_i Rx(theta) Ry(mid) Rz(top) =
+    R(p) frame_i, so Ry(mid) Rz(top) = Rx(theta)^T frame_i^T R(p) frame_i =: S, mid = atan2(S02, S22),
+    top = atan2(S10, S11)."""
+    R = rotation(p)
+    angles = []
+    for theta, frame in zip(q, LEG_FRAMES):
+        c, s = np.cos(theta), np.sin(theta)
+        S = np.array([[1, 0, 0], [0, c, s], [0, -s, c]]) @ frame.T @ R @ frame
+        angles += [theta, np.arctan2(S[0, 2], S[2, 2]), np.arctan2(S[1, 0], S[1, 1])]
+    return np.array(angles)
+
+
+def test_dynamics_with_the_distal_arcs_match_mujoco_with_the_legs_welded(models, eye):
+    """M and tau (gravity, rotors, proximal and distal arcs with their full inertia, the camera) against MuJoCo's
+    tree of the three chains closed by two welds, reduced to the actuated joints."""
+    pytest.importorskip("mujoco")
+    from mujoco_reference import MUJOCO_AGREEMENT, reduced_dynamics
+
+    values = {p.name: float(p.value) for p in models["agile_eye"].parameters}
+    reference, data = mujoco_agile_eye(values)
+    rng = np.random.default_rng(3)
+    for p in random_orientations(4, 8):
+        q = eye.ik(p).joints
+        qd, qdd = rng.uniform(-3, 3, 3), rng.uniform(-30, 30, 3)
+        M_ref, tau_ref = reduced_dynamics(reference, data, tree_angles(q, p), [0, 3, 6], [1, 2, 4, 5, 7, 8], qd, qdd)
+        M = eye.mass_matrix(q, p)
+        assert np.max(np.abs(M - M_ref)) <= MUJOCO_AGREEMENT * np.max(np.abs(M_ref))
+        tau = eye.inverse_dynamics(q, p, qd, qdd)
+        assert np.max(np.abs(tau - tau_ref)) <= MUJOCO_AGREEMENT * np.max(np.abs(tau_ref))
+
+
+def test_the_task_space_form_and_the_power_balance_of_the_dynamics(eye):
+    """Along platform paths p + t pd + t^2/2 pdd (q = ik(p), rates by differences, h = 1e-4: second differences
+    ~ eps / h^2 ~ 2e-8 relative): tau = J^T (Mx pdd + Vx + Gx) (the operational space, with the distal arcs
+    carried into p) and tau . qd = d(k + u)/dt."""
+    rng = np.random.default_rng(17)
+    h = 1e-4
+
+    def motion(p, pd, pdd, step):
+        q = lambda t: eye.ik(p + t * pd + t * t / 2 * pdd).joints  # noqa: E731
+        q0, plus, minus = q(0.0), q(step), q(-step)
+        return q0, (plus - minus) / (2 * step), (plus - 2 * q0 + minus) / step**2
+
+    for p in random_orientations(5, 5):
+        pd, pdd = rng.uniform(-2, 2, 3), rng.uniform(-20, 20, 3)
+        q, qd, qdd = motion(p, pd, pdd, h)
+        tau = eye.inverse_dynamics(q, p, qd, qdd)
+        Mx, Vx, Gx = eye.operational_space(q, p, qd)
+        F = Mx @ pdd + Vx + Gx
+        scale = np.abs(eye.jacobian(q, p).T) @ (np.abs(Mx) @ np.abs(pdd) + np.abs(Vx) + np.abs(Gx))
+        assert np.max(np.abs(eye.jacobian(q, p).T @ F - tau)) <= 1e-5 * scale.max()
+
+        def energy(t):
+            pt = p + t * pd + t * t / 2 * pdd
+            qt, qdt, _ = motion(pt, pd + t * pdd, pdd, 1e-5)
+            return eye.kinetic_energy(qt, pt, qdt) + eye.potential_energy(qt, pt)
+        power = (energy(h) - energy(-h)) / (2 * h)
+        assert abs(tau @ qd - power) <= 1e-5 * (np.abs(tau) @ np.abs(qd))
+
+
+def test_a_free_frictionless_motion_keeps_its_energy(eye):
+    """The operational-space dynamics in p (q = ik(p), qd = J^-1 pd) integrated for 0.2 s without efforts: k + u
+    stays constant to the integrator's tolerance (a wrong Vx would feed or drain energy)."""
+    from scipy.integrate import solve_ivp
+
+    rtol = 1e-11
+
+    def state(y):
+        p, pd = y[:3], y[3:]
+        q = eye.ik(p).joints
+        return q, p, eye.inverse_jacobian(q, p) @ pd
+
+    def rate(_t, y):
+        Mx, Vx, Gx = eye.operational_space(*state(y))
+        return np.concatenate([y[3:], np.linalg.solve(Mx, -Vx - Gx)])
+
+    solution = solve_ivp(rate, (0.0, 0.2), [0.1, -0.2, 0.15, 2.0, -1.0, 1.5], method="DOP853", rtol=rtol,
+                         atol=rtol * 1e-2)
+    assert solution.success
+    kinetic = np.array([eye.kinetic_energy(*state(y)) for y in solution.y.T])
+    potential = np.array([eye.potential_energy(*state(y)[:2]) for y in solution.y.T])
+    bound = 10 * len(solution.t) * rtol * (kinetic.max() + np.abs(potential).max())
+    assert np.ptp(kinetic + potential) <= bound
+    assert np.ptp(solution.y[0]) > 0.1  # it moved
+
+
+@pytest.mark.parametrize("model,old,new,key,message", [
+    ("agile_eye.yaml", "  rotor: {inertia: J_rotor", "  rod: {mass: m_d}\n  rotor: {inertia: J_rotor", "bodies.rod",
+     "a spherical leg has no rod between point joints"),
+    ("pantograph.yaml", "  rod: {mass: m_distal, platform_fraction: 1/2}", "  distal_link: {mass: m_distal}",
+     "bodies.distal_link", "a distal link's own inertia is derived for spherical legs only"),
+])
+def test_the_link_between_the_last_two_joints_is_declared_as_the_legs_kind_needs(tmp_path, model, old, new, key,
+                                                                                 message):
+    from symkin.errors import ModelError
+
+    text = (MODELS_DIR / model).read_text()
+    assert old in text
+    path = tmp_path / model
+    path.write_text(text.replace(old, new))
+    with pytest.raises(ModelError) as error:
+        load_model(path)
+    assert key in str(error.value)
+    assert message in str(error.value)
+    assert "fix:" in str(error.value)

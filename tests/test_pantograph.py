@@ -15,6 +15,7 @@ from symkin import analysis, load, load_model, pipeline
 from symkin.errors import ModelError
 from symkin.model.schema import PlatformMotion
 from symkin.structure.mobility import model_mobility
+from mujoco_reference import MUJOCO_AGREEMENT, TINY_INERTIA, TINY_MASS, reduced_dynamics
 from tolerances import KINEMATICS, PANTOGRAPH_SCALE
 
 D, L_PROX, L_DIST = 0.038, 0.07, 0.09
@@ -203,8 +204,7 @@ def mujoco_five_bar(v):
     """The five-bar with the model's bodies as MuJoCo sees them: each proximal link a uniform bar, the distal
     links massless with their mass lumped half at the elbow (welded to the proximal link) and half at the
     handle, the handle a point mass on distal link 1, the loop closed by a point constraint (connect) at the
-    handle.  MuJoCo needs positive masses and inertias on moving bodies: the massless ones get TINY, whose
-    share of M (TINY_MASS L^2 + TINY_INERTIA ~ 1e-14 kg m^2 of 1e-4) is below the comparison's bound."""
+    handle; the massless bodies TINY (:mod:`mujoco_reference`)."""
     import mujoco
 
     d, l, L = v["d"], v["l"], v["L"]
@@ -227,44 +227,15 @@ def mujoco_five_bar(v):
     return model, mujoco.MjData(model)
 
 
-TINY_MASS, TINY_INERTIA = 1e-12, 1e-14
-#: the MuJoCo model's TINY bodies (above) and central differences of its constraint Jacobian (step 1e-5 rad:
-#: truncation ~1e-10, rounding eps / h ~ 2e-11), relative to the largest entry
-MUJOCO_AGREEMENT = 1e-9
-
-
 def reduced_mujoco_dynamics(reference, data, q, qd, qdd):
-    """(M, tau) of the closed loop in the actuated coordinates from MuJoCo's tree: tree velocities T qd with the
-    passive rows from the loop's constraint Jacobian J_c T = 0, accelerations T qdd + c with J_c c = -Jdot_c
-    qd_tree (Jdot qd by central differences), M = T^T M_tree T and tau = T^T (M_tree qdd_tree + bias_tree)."""
-    import mujoco
-
-    active, passive = [0, 2], [1, 3]
+    """(M, tau, p) of the five-bar in its actuated coordinates (:func:`mujoco_reference.reduced_dynamics`), the
+    tree's passive angles from the closed-form handle."""
     C = elbows(q)
     p = handle(q)
     distal = [np.arctan2(*(p - C[i])[::-1]) for i in range(2)]
     position = np.array([q[0], distal[0] - q[0], q[1], distal[1] - q[1]])
-
-    def constraint_jacobian(at):
-        data.qpos[:] = at
-        mujoco.mj_forward(reference, data)
-        return data.efc_J.reshape(data.nefc, reference.nv)[:3].copy()
-
-    J = constraint_jacobian(position)
-    T = np.zeros((4, 2))
-    T[active] = np.eye(2)
-    T[passive] = np.linalg.lstsq(J[:, passive], -J[:, active], rcond=None)[0]
-    velocity = T @ qd
-    h = 1e-5
-    J_dot_qd = (constraint_jacobian(position + h * velocity) - constraint_jacobian(position - h * velocity)) @ velocity / (2 * h)
-    offset = np.zeros(4)
-    offset[passive] = np.linalg.lstsq(J[:, passive], -J_dot_qd, rcond=None)[0]
-    data.qpos[:], data.qvel[:] = position, velocity
-    mujoco.mj_forward(reference, data)
-    M = np.zeros((4, 4))
-    mujoco.mj_fullM(reference, data, M)
-    tau = T.T @ (M @ (T @ qdd + offset) + data.qfrc_bias)
-    return T.T @ M @ T, tau, p
+    M, tau = reduced_dynamics(reference, data, position, [0, 2], [1, 3], qd, qdd)
+    return M, tau, p
 
 
 def test_dynamics_match_mujoco_with_the_loop_closed_by_an_equality(models, pantograph):

@@ -12,7 +12,8 @@ import sympy
 
 from symkin.geometry import rotation_matrix
 from symkin.model.reader import X_AXIS, Y_AXIS, Z_AXIS, ZERO, Reader, describe, frame_ops
-from symkin.model.schema import Actuator, Body, Friction, Joint, ParallelBodies, Vec3, fixed_pose
+from symkin.model.schema import (Actuator, Body, Friction, Joint, Parallel, ParallelBodies, PlatformMotion, Vec3,
+                                 fixed_pose)
 from symkin.model.yaml_source import KeyPath
 
 _INERTIA_KEYS = ("xx", "yy", "zz", "xy", "xz", "yz")
@@ -69,19 +70,19 @@ def _negative(r: Reader, path: KeyPath, value: sympy.Expr, what: str) -> bool:
 
 
 #: keys of a parallel model's ``bodies:`` (:class:`~symkin.model.schema.ParallelBodies`)
-PARALLEL_BODY_KEYS = ("platform", "actuated_link", "rod", "rotor")
+PARALLEL_BODY_KEYS = ("platform", "actuated_link", "distal_link", "rod", "rotor")
 _MASS_KEYS = ("mass", "com", "inertia", "inertia_rpy", "origin")
 
 
 def read_parallel_bodies(r: Reader, value: Any) -> ParallelBodies | None:
     """``bodies:`` of a parallel model: the platform, and on every leg the actuated link, the rod
-    (point masses at its ends) and the actuator's rotor."""
+    (point masses at its ends) or a spherical leg's distal link, and the actuator's rotor."""
     path: KeyPath = ("bodies",)
     section = r.mapping(path, value, optional=PARALLEL_BODY_KEYS)
     if section is None:
         return None
     fields: dict[str, Any] = {}
-    for key in ("platform", "actuated_link"):
+    for key in ("platform", "actuated_link", "distal_link"):
         if key in section:
             item = r.mapping(path + (key,), section[key], required=("mass",), optional=_MASS_KEYS[1:])
             if item is not None and "mass" in item:
@@ -103,6 +104,22 @@ def read_parallel_bodies(r: Reader, value: Any) -> ParallelBodies | None:
         r.fail(path + ("rod", "platform_fraction"), f"the fraction of the rod mass at the platform is {fraction:g}",
                "give a number between 0 (all at C_i) and 1 (all at the platform joint B_i)")
     return ParallelBodies(**fields)
+
+
+def check_leg_bodies(r: Reader, parallel: Parallel) -> None:
+    """A spherical leg's link between its last two joints is a ``distal_link`` (its axes fix its orientation); the
+    other legs' is a ``rod`` lumped at its point joints."""
+    bodies = parallel.bodies
+    if bodies is None:
+        return
+    spherical = parallel.motion is PlatformMotion.SPHERICAL
+    if spherical and bodies.rod_mass != 0:
+        r.fail(("bodies", "rod"), "a spherical leg has no rod between point joints: its last two joints turn about "
+               "axes through the centre", "declare the link between them as 'distal_link: {mass, com, inertia}'")
+    if not spherical and bodies.distal_link is not None:
+        r.fail(("bodies", "distal_link"), "a distal link's own inertia is derived for spherical legs only; this "
+               f"platform's motion is {parallel.motion.value}", "lump the link at its ends with 'rod: {mass, "
+               "platform_fraction}'")
 
 
 def _body_in_link_frame(r: Reader, path: KeyPath, value: Any, com: Vec3, inertia: sympy.Matrix

@@ -12,7 +12,7 @@ import hashlib
 from typing import Any
 
 from symkin.errors import ModelError
-from symkin.model.body_build import (read_actuators, read_bodies, read_friction, read_parallel_bodies,
+from symkin.model.body_build import (check_leg_bodies, read_actuators, read_bodies, read_friction, read_parallel_bodies,
                                      with_motor_effort_limits)
 from symkin.model.names import name_problem
 from symkin.model.parallel_build import build_parallel, check_parallel_names, parallel_task_space
@@ -84,6 +84,7 @@ def build_model(doc: Document, stem: str, allow_nonphysical: bool = False) -> Mo
     bodies = read_bodies(r, data.get("bodies", []), links) if parallel is None else ()
     if parallel is not None and "bodies" in data:
         parallel = dataclasses.replace(parallel, bodies=read_parallel_bodies(r, data["bodies"]))
+        check_leg_bodies(r, parallel)
     gravity = r.vector3(("gravity",), data["gravity"]) if "gravity" in data else (ZERO, ZERO, ZERO)
     friction = read_friction(r, data.get("friction", {}), coordinate_names)
     if "wrist" in data and parallel is None:

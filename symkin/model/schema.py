@@ -398,6 +398,9 @@ class ParallelBodies:
         platform: the moving platform, com and inertia in the platform (TCP) frame; None if massless.
         actuated_link: the link the actuator moves (the DELTA's upper arm), com and inertia in the
             frame right after the actuated motion; None if massless.
+        distal_link: the link between a spherical leg's last two joints (the Agile Eye's distal arc), com and
+            inertia in the frame right after the leg's second-to-last joint; its orientation is fixed by
+            the two axes it carries, so its full inertia enters the dynamics (spherical models only).
         rod_mass: mass of each leg's rod between its point joints C_i and B_i (the DELTA's
             parallelogram, a Stewart strut), lumped at its two ends.
         rod_platform_fraction: the part of ``rod_mass`` lumped at the platform joint B_i; the rest
@@ -409,6 +412,7 @@ class ParallelBodies:
 
     platform: Body | None = None
     actuated_link: Body | None = None
+    distal_link: Body | None = None
     rod_mass: sympy.Expr = sympy.Integer(0)
     rod_platform_fraction: sympy.Expr = sympy.Rational(1, 2)
     rotor_inertia: sympy.Expr = sympy.Integer(0)

@@ -144,15 +144,21 @@ def reduce_spherical_leg(leg: Leg, chain: LegChain, platform: Frame) -> Distance
     passive = {symbol(v) for j in joints for k, v in enumerate(j.variables) if k != j.active}
     if C.free_symbols & passive:
         return f"the axis of {joints[proximal].name} moves with passive joints before it"
-    last_axis = joints[-1].motions[0][1]
-    b_i = sympy.Matrix(chain.attachment.R) * sympy.Matrix(last_axis)
-    rod = MovingFrame()  # the frame of the middle joint after its rotation: its own axis is fixed there
-    rod.apply(joints[-1].origin)
-    w, v = sympy.Matrix(joints[proximal].motions[0][1]), rod.direction(last_axis)
+    b_i = sympy.Matrix(chain.attachment.R) * sympy.Matrix(joints[-1].motions[0][1])
+    w, v = distal_axes(leg)
     L2 = sympy.simplify((w - v).dot(w - v))
     variable, _, _ = active.motions[active.active]  # type: ignore[index]
     return DistanceLeg(leg, symbol(variable), True, "before", active.offset, sympy.ImmutableMatrix(C),
                        sympy.ImmutableMatrix(sympy.Matrix(platform.R) * b_i), sympy.ImmutableMatrix(b_i), L2)
+
+
+def distal_axes(leg: Leg) -> tuple[sympy.Matrix, sympy.Matrix]:
+    """(w, v): the axes of a spherical leg's last two joints in the frame of the second-to-last joint after its
+    rotation, the frame of the distal link that carries both (its own axis is fixed there)."""
+    joints = leg.joints
+    link = MovingFrame()
+    link.apply(joints[-1].origin)
+    return sympy.Matrix(joints[-2].motions[0][1]), sympy.Matrix(link.direction(joints[-1].motions[0][1]))
 
 
 def distance_legs(chains: tuple[LegChain, ...], platform: Frame, surface: str = "space"

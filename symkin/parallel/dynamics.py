@@ -65,6 +65,7 @@ from symkin.ir.quantity import Deriving, quantity
 from symkin.ir.spec import FunctionSpec
 from symkin.model import coordinates
 from symkin.parallel import hybrid
+from symkin.parallel.distal import DistalLinks
 from symkin.parallel.inertia import Inertia, split_inertia
 from symkin.parallel.inputs import task_input, task_symbols
 from symkin.parallel.quantities import (
@@ -197,10 +198,31 @@ class _Terms:
         # the actuator side seen in c, minus its share of the bias; then the platform side's own
         V = [a + c for a, c in zip(carried([v - m * x for v, m, x in zip(self.V_a(qd), self.M_a, J_inverse_b)]),
                                    self.V_p(cd))]
+        if self.distal is not None:  # distal links: the rates of p_m are (qd, pd) = (J^-1 e_m, e_m); qdd = -J^-1 b
+            one = [[se.Integer(int(i == j)) for i in range(n)] for j in range(n)]
+            columns = [([row[m] for row in J_inverse], one[m]) for m in range(n)]
+            force = self.distal.efforts(columns, list(qd), pd, [-x for x in J_inverse_b], [se.Integer(0)] * n)
+            V = [v + f for v, f in zip(V, force + [se.Integer(0)] * (size - n))]
+            distal = self.distal.mass_matrix(columns)
+            for k in range(n):
+                for m in range(k, n):
+                    M[k][m] = M[m][k] = program.let(M[k][m] + distal[k][m])
         if self.gravity_parts is None:
             return M, V, None, cd
         G_a, G_p = self.gravity_parts
         return M, V, [a + c for a, c in zip(carried(G_a), G_p)], cd
+
+    @cached_property
+    def distal(self) -> DistalLinks | None:
+        """The spherical legs' distal links in this program (:mod:`symkin.parallel.distal`), None without them."""
+        if not self.parts.distal_links:
+            return None
+        return DistalLinks(self.program, self.parts.distal_links, self.q, list(task_symbols(self.d.model)))
+
+    def leg_columns(self) -> list[tuple[list[se.Basic], list[se.Basic]]]:
+        """The rates (qd, pd) = (e_j, J e_j) of each actuated coordinate q_j."""
+        one = [[se.Integer(int(i == j)) for i in range(self.n)] for j in range(self.n)]
+        return [(one[j], [row[j] for row in self.J]) for j in range(self.n)]
 
     @cached_property
     def M_a(self) -> list[se.Basic]:
@@ -252,6 +274,9 @@ class _Terms:
         if all(c == 0 for c in self.d.model.gravity):
             return None
         u_a, u_p = self.potential
+        if self.parts.distal_links:  # the distal links' potential u_d(q, p) on both sides
+            u_d = se.sympify(self.parts.distal_potential)
+            u_a, u_p = u_a + u_d, u_p + u_d
         values = self.program.bind([se.diff(u_a, q) for q in self.q] + [se.diff(u_p, p) for p in self.c])
         return values[:self.n], values[self.n:]
 
@@ -291,6 +316,10 @@ class _Terms:
         if gravity is not None:
             F_p = [f + g for f, g in zip(F_p, gravity[1])]
             tau = [t + g for t, g in zip(tau, gravity[0])]
+        if self.distal is not None:
+            accelerations = list(qdd) if qdd is not None else [se.Integer(0)] * self.n
+            tau = [t + e for t, e in zip(tau, self.distal.efforts(self.leg_columns(), list(qd), pd[:self.n],
+                                                                  accelerations, pdd[:self.n]))]
         tau += [se.Integer(0)] * len(qwd)  # a wrist's joints: their rows of B^T F_c and their friction
         friction = self.friction(qd + list(qwd)) if with_friction else None
         if friction is not None:
@@ -302,17 +331,20 @@ class _Terms:
         n, J, size = self.n, self.J, len(self.c)
         columns = [[J[k][j] for k in range(n)] + [se.Integer(0)] * (size - n) for j in range(n)]
         MJ = [[self.program.let(v) for v in mat_vec(self.M_p, column)] for column in columns]
+        distal = self.distal.mass_matrix(self.leg_columns()) if self.distal is not None else None
         M: Matrix = [[se.Integer(0)] * size for _ in range(size)]
         for i in range(n):
             for j in range(i, n):
                 M[i][j] = M[j][i] = self.program.let(
-                    (self.M_a[i] if i == j else 0) + sum((J[k][i] * MJ[j][k] for k in range(n)), se.Integer(0)))
+                    (self.M_a[i] if i == j else 0) + sum((J[k][i] * MJ[j][k] for k in range(n)), se.Integer(0))
+                    + (distal[i][j] if distal is not None else 0))
         for w in range(n, size):  # a wrist's rows: (J^T M_c,pw) and M_c,ww
             for i in range(n):
                 M[i][w] = M[w][i] = self.program.let(sum((J[k][i] * self.M_p[k][w] for k in range(n)), se.Integer(0)))
             for v in range(w, size):
                 M[w][v] = M[v][w] = self.M_p[w][v]
         return M
+
 
 
 def _inputs(d: Deriving, *groups: str) -> list:
@@ -484,6 +516,8 @@ def _kinetic_energy(d: Deriving) -> FunctionSpec:
     qd = coordinate_symbols(d, "qd")
     pd = terms.task_rates(qd) + terms.wrist("qd")  # c-rates (pd, qwd) on a hybrid device
     k = (sum((m * v * v for m, v in zip(terms.M_a, qd)), se.Integer(0)) + dot(pd, mat_vec(terms.M_p, pd))) / 2
+    if terms.distal is not None:  # spherical legs' distal links: 1/2 w_b^T I_o w_b each
+        k += terms.distal.kinetic_energy(list(qd), pd[:d.model.dof])
     return function_spec(
         d, "kinetic_energy", "Kinetic energy.",
         f"k = 1/2 qd^T M_a qd + 1/2 pd^T M_p pd with pd = J qd (= 1/2 qd^T M qd). {_PAIR}",
@@ -498,7 +532,7 @@ def _potential_energy(d: Deriving) -> FunctionSpec:
     if d.model.parallel is not None and d.model.parallel.wrist is not None:
         (u,) = program.bind([sum(_Terms(d, program).potential, se.Integer(0))])
     else:
-        (u,) = program.bind([se.sympify(parts.actuator_potential + parts.platform_potential)])
+        (u,) = program.bind([se.sympify(parts.actuator_potential + parts.platform_potential + parts.distal_potential)])
     return function_spec(
         d, "potential_energy", "Gravitational potential energy.",
         f"u = -g . (sum of mass times centre of mass), zero with every mass at the base origin. {_PAIR}",

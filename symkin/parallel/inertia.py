@@ -24,23 +24,61 @@ separate accordingly:
 * u = -g . (sum of mass times centre of mass), the same split.
 
 This is what makes the Lagrangian of the closed chain reducible through the task Jacobian
-(:mod:`symkin.parallel.dynamics`).  A distal link with rotational inertia of its own (not
-lumped) moves with passive joint variables too, and is not covered here.
+(:mod:`symkin.parallel.dynamics`).
+
+A spherical leg's distal link (between its last two joints) turns with a passive joint, but it carries
+two axes whose directions are known without it: the middle axis C_i = w_i(q_i), turned by the actuator,
+and the platform's axis B_i = v_i(p) = R(p) v_i0 (:mod:`symkin.parallel.distance`).  With w and v those
+axes in the link's own frame (constant, at the constant angle alpha_i), the link's orientation is
+R_d = W L^-1 with W = [C_i, B_i, C_i x B_i] and L = [w, v, w x v], exact on the assembled mechanism:
+:class:`DistalLink` holds what its dynamics need (:mod:`symkin.parallel.distal`), and its potential
+energy joins u as u_d(q, p) = -m g . R_d c_b.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import sympy
 
 from symkin.errors import DerivationError
 from symkin.geometry import skew
 from symkin.kinematics.chain import Frame
-from symkin.model.schema import Body, Model, ParallelBodies, PlatformMotion
-from symkin.parallel.distance import DistanceLeg
+from symkin.model.schema import Body, Model, ParallelBodies
+from symkin.parallel.distance import DistanceLeg, distal_axes
 from symkin.parallel.inputs import task_symbols
 from symkin.parallel.legs import LegChain, walk
+
+
+@dataclass(frozen=True)
+class DistalLink:
+    """A spherical leg's distal link, turning about the centre of rotation (the base origin) with R_d = W L^-1.
+
+    Attributes:
+        q: the leg's actuated variable.
+        C: the middle axis C_i(q_i) in the base frame (unit).
+        B: the platform's axis B_i(p) in the base frame (unit).
+        frame_inverse: L^-1, L = [w, v, w x v] (the two axes in the link frame).
+        cosine: w . v = C . B, the cosine of the constant angle between the two axes.
+        mass: the link's mass.
+        com: its centre of mass in the link frame, from the centre of rotation.
+        inertia: its inertia about the centre of rotation in the link frame.
+    """
+
+    q: sympy.Symbol
+    C: sympy.ImmutableMatrix
+    B: sympy.ImmutableMatrix
+    frame_inverse: sympy.ImmutableMatrix
+    cosine: sympy.Expr
+    mass: sympy.Expr
+    com: sympy.ImmutableMatrix
+    inertia: sympy.ImmutableMatrix
+
+    @property
+    def rotation(self) -> sympy.Matrix:
+        """R_d = W L^-1."""
+        C, B = sympy.Matrix(self.C), sympy.Matrix(self.B)
+        return sympy.Matrix.hstack(C, B, C.cross(B)) * sympy.Matrix(self.frame_inverse)
 
 
 @dataclass(frozen=True)
@@ -52,12 +90,16 @@ class Inertia:
         actuator_potential: u_a(q).
         platform_matrix: M_p(p), symmetric, one row per task coordinate.
         platform_potential: u_p(p).
+        distal_links: the spherical legs' distal links, one per leg (none for other mechanisms).
+        distal_potential: their potential energy u_d(q, p).
     """
 
     actuator_diagonal: tuple[sympy.Expr, ...]
     actuator_potential: sympy.Expr
     platform_matrix: sympy.ImmutableMatrix
     platform_potential: sympy.Expr
+    distal_links: tuple[DistalLink, ...] = ()
+    distal_potential: sympy.Expr = sympy.Integer(0)
 
 
 
@@ -135,6 +177,26 @@ def _actuator_side(model: Model, bodies: ParallelBodies, leg: DistanceLeg, chain
     return inertia, potential
 
 
+def _distal_link(model: Model, link: Body, leg: DistanceLeg, chain: LegChain) -> DistalLink:
+    """One spherical leg's distal link (see the module docstring)."""
+    w, v = distal_axes(leg.leg)
+    L = sympy.Matrix.hstack(w, v, w.cross(v))
+    if L.det() == 0:
+        raise DerivationError(f"model '{model.name}': leg '{leg.leg.name}' has its last two axes parallel, so they do "
+                              "not fix its distal link's orientation; remove 'bodies: distal_link:'")
+    # the link frame's origin lies on the middle axis C_i (it passes through the centre): at d w in the link frame
+    origin, C = sympy.Matrix(chain.centres[-2]), sympy.Matrix(leg.C)
+    d = sympy.simplify(origin.dot(C))
+    if any(sympy.simplify(e) != 0 for e in origin - d * C):
+        raise DerivationError(f"model '{model.name}': the frame of leg '{leg.leg.name}''s distal link is off its "
+                              "middle axis; remove 'bodies: distal_link:'")
+    com = d * w + sympy.Matrix(link.com)
+    _, _, about_centre = _about_origin(Body(link.link, link.mass, tuple(com), link.inertia))
+    return DistalLink(leg.q, leg.C, leg.B, sympy.ImmutableMatrix(L.inv()), sympy.simplify(w.dot(v)), link.mass,
+                      sympy.ImmutableMatrix(com),
+                      sympy.ImmutableMatrix(about_centre))
+
+
 def _variables(leg: DistanceLeg, exclude: set[sympy.Symbol]) -> set[sympy.Symbol]:
     """The symbols of every joint variable of the leg but ``exclude``."""
     names = {v for j in leg.leg.joints for v in j.variables}
@@ -148,10 +210,12 @@ def split_inertia(model: Model, legs: tuple[DistanceLeg, ...], chains: tuple[Leg
     if bodies is None:
         raise DerivationError(f"model '{model.name}' declares no bodies, so it has no dynamics; add a 'bodies:' "
                               "section (platform, actuated_link, rod, rotor; see docs/model-format.md)")
-    if model.parallel.motion is PlatformMotion.SPHERICAL:  # type: ignore[union-attr]
-        raise DerivationError(f"model '{model.name}': the dynamics of a spherical platform's legs (distal links "
-                              "turning about the centre, not rods between point joints) are not derived yet; remove "
-                              "'bodies:'")
     sides = [_actuator_side(model, bodies, leg, chain) for leg, chain in zip(legs, chains)]
     M_p, u_p = _platform(model, bodies, legs, platform)
-    return Inertia(tuple(s[0] for s in sides), sum((s[1] for s in sides), sympy.Integer(0)), M_p, u_p)
+    inertia = Inertia(tuple(s[0] for s in sides), sum((s[1] for s in sides), sympy.Integer(0)), M_p, u_p)
+    if bodies.distal_link is None:
+        return inertia
+    links = tuple(_distal_link(model, bodies.distal_link, leg, chain) for leg, chain in zip(legs, chains))
+    g = sympy.Matrix(model.gravity)
+    potential = sum((-link.mass * g.dot(link.rotation * sympy.Matrix(link.com)) for link in links), sympy.Integer(0))
+    return replace(inertia, distal_links=links, distal_potential=potential)
