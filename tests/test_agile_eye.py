@@ -84,6 +84,27 @@ def test_inverse_jacobian_matches_finite_differences_of_the_closed_form(eye):
     assert np.allclose(np.einsum("...ij,...jk->...ik", eye.jacobian(agile_eye_ik(p), p), J_inv), np.eye(3), atol=1e-9)
 
 
+def test_the_closed_form_fk_inverts_the_ik_over_the_workspace(eye):
+    """FK(IK(R)) = R to rounding (kappa(J^-1) times a few eps) at every sampled orientation whose actuators lie
+    within their limits; a configuration outside the home pose's working mode is not claimed (ik(fk(q)) = q
+    is the working-mode test of symkin.analysis.parallel)."""
+    p = random_orientations(7, 4000, spread=1.2)
+    q = eye.ik(p).joints
+    inside = np.all(np.abs(q) <= np.deg2rad(60), axis=-1)
+    assert inside.sum() > 1000
+    p, q = p[inside], q[inside]
+    solution = eye.fk(q)
+    assert np.all(solution.margin >= 0)
+    kappa = np.linalg.cond(eye.inverse_jacobian(q, p))
+    error = np.max(np.abs(rotation(solution.orientation) - rotation(p)), axis=(-2, -1))
+    assert np.all(error <= KINEMATICS * kappa)
+
+
+def test_the_closed_form_fk_returns_the_home_pose(eye, models):
+    home = np.array([float(e) for e in models["agile_eye"].parallel.home])
+    assert np.max(np.abs(eye.fk(eye.ik(home).joints).orientation - home)) <= CLOSED_FORM
+
+
 def test_forward_kinematics_by_newton_returns_the_orientation(eye):
     p = random_orientations(3, 200)
     q = eye.ik(p).joints
@@ -185,8 +206,8 @@ def test_the_workspace_command_draws_the_orientations_and_states_their_measure(e
 
 # --------------------------------------------------------------------------- dynamics against MuJoCo
 
-#: each leg's frame: leg 1 the base frame, leg 2 turned by P (x -> y -> z -> x), leg 3 by P^2 (the model's bases)
-LEG_FRAMES = [np.eye(3), np.array([[0.0, 0, 1], [1, 0, 0], [0, 1, 0]]), np.array([[0.0, 1, 0], [0, 0, 1], [1, 0, 0]])]
+#: each leg's frame P_k: leg 1 the base frame, leg 2 turned by x -> y -> z -> x, leg 3 twice (the model's bases)
+LEG_FRAMES = [np.roll(np.eye(3), k, axis=0) for k in range(3)]
 
 
 def arc_inertial(mass, radius, plane):
@@ -231,16 +252,10 @@ def mujoco_agile_eye(v):
 
 
 def tree_angles(q, p):
-    """Every joint angle of the three chains at the assembly (q, p): frame_i Rx(theta) Ry(mid) Rz(top) =
-    R(p) frame_i, so Ry(mid) Rz(top) = Rx(theta)^T frame_i^T R(p) frame_i =: S, mid = atan2(S02, S22),
-    top = atan2(S10, S11)."""
-    R = rotation(p)
-    angles = []
-    for theta, frame in zip(q, LEG_FRAMES):
-        c, s = np.cos(theta), np.sin(theta)
-        S = np.array([[1, 0, 0], [0, c, s], [0, -s, c]]) @ frame.T @ R @ frame
-        angles += [theta, np.arctan2(S[0, 2], S[2, 2]), np.arctan2(S[1, 0], S[1, 1])]
-    return np.array(angles)
+    """Every joint angle of the three chains at the assembly (q, p): theta, then :func:`passive_joints`' middle and
+    top angles, per leg."""
+    passive = passive_joints(q, p).reshape(3, 2)
+    return np.concatenate([[theta, *angles] for theta, angles in zip(q, passive)])
 
 
 def test_dynamics_with_the_distal_arcs_match_mujoco_with_the_legs_welded(models, eye):

@@ -70,6 +70,32 @@ void agile_eye_ik_packed(const double *in, double *out);
  * Uses 1152 bytes of stack for its blocks of 8 configurations. */
 void agile_eye_ik_batch(size_t n, const double *p, double *joints, double *margin);
 
+/* agile_eye_fk: Forward kinematics: platform orientation from the actuated joint variables.
+ *
+ * Orthogonal spherical platform (the Agile Eye; Bonev, Chablat and Wenger 2006): the
+ * platform axes f_i = R b_i are an orthonormal frame with f_i . C_i = 0; f_1 = cos phi u
+ * + sin phi v about the first middle axis, f_2 ~ C_2 x f_1, and f_3 . C_3 = 0 gives X
+ * cos 2 phi + Y sin 2 phi = Z in closed form (symkin.parallel.closed_form). Of its eight
+ * solutions the one with the home pose's root and the legs' ik branches is returned;
+ * where the margin is negative the legs cannot be assembled and the orientation is NaN.
+ *
+ * Inputs:
+ *   q[3]: joint coordinates: theta1 [rad], theta2 [rad], theta3 [rad].
+ * Outputs:
+ *   orientation[3]: 3; platform orientation roll, pitch, yaw (R = Rz(yaw) Ry(pitch)
+ *   Rx(roll)) [rad].
+ *   margin[1]: scalar; >= 0 iff the legs assemble (a real solution).
+ * Cost: 111 operations.
+ */
+void agile_eye_fk(const double *q, double *orientation, double *margin);
+
+/* agile_eye_fk with packed arguments: in = q one after the other; out = orientation, margin one after the other. */
+void agile_eye_fk_packed(const double *in, double *out);
+
+/* agile_eye_fk for n configurations.
+ * Uses 1024 bytes of stack for its blocks of 8 configurations. */
+void agile_eye_fk_batch(size_t n, const double *q, double *orientation, double *margin);
+
 /* agile_eye_leg_points: Joint centres of every leg, for drawing the mechanism.
  *
  * Per leg, in the base frame: the centre A_i of its first joint (fixed), the proximal
@@ -539,10 +565,10 @@ void agile_eye_potential_energy_packed(const double *in, double *out);
  * Uses 1344 bytes of stack for its blocks of 8 configurations. */
 void agile_eye_potential_energy_batch(size_t n, const double *q, const double *p, const double *params, size_t params_stride, double *u);
 
-/* agile_eye_scene: ik, leg_points, constraints, constraint_jacobians, jacobian, inverse_jacobian, singularities, closure, closure_jacobians, gravity_vector, mass_matrix, coriolis_vector, inverse_dynamics, forward_dynamics, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions.
+/* agile_eye_scene: ik, fk, leg_points, constraints, constraint_jacobians, jacobian, inverse_jacobian, singularities, closure, closure_jacobians, gravity_vector, mass_matrix, coriolis_vector, inverse_dynamics, forward_dynamics, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions.
  *
- * Computes the outputs of ik, leg_points, constraints, constraint_jacobians, jacobian,
- * inverse_jacobian, singularities, closure, closure_jacobians, gravity_vector,
+ * Computes the outputs of ik, fk, leg_points, constraints, constraint_jacobians,
+ * jacobian, inverse_jacobian, singularities, closure, closure_jacobians, gravity_vector,
  * mass_matrix, coriolis_vector, inverse_dynamics, forward_dynamics, operational_space,
  * kinetic_energy, potential_energy in one call; subexpressions common to several of them
  * are evaluated once.
@@ -570,7 +596,11 @@ void agile_eye_potential_energy_batch(size_t n, const double *q, const double *p
  *   1e-05.
  * Outputs:
  *   joints[3]: 3; actuated joint variables q (ik).
- *   margin[3]: 3; per leg: >= 0 iff the leg reaches p (the radicand of its solution) (ik).
+ *   ik_margin[3]: 3; per leg: >= 0 iff the leg reaches p (the radicand of its solution)
+ *   (ik).
+ *   orientation[3]: 3; platform orientation roll, pitch, yaw (R = Rz(yaw) Ry(pitch)
+ *   Rx(roll)) (fk) [rad].
+ *   fk_margin[1]: scalar; >= 0 iff the legs assemble (a real solution) (fk).
  *   points[27]: 9 x 3, row-major; rows A_1, C_1, B_1, A_2, ...: three points per leg
  *   (columns x, y, z) (leg_points) [m].
  *   f[3]: 3; one equation per leg (constraints) [m^2].
@@ -607,16 +637,16 @@ void agile_eye_potential_energy_batch(size_t n, const double *q, const double *p
  *   (angle rows)].
  *   k[1]: scalar; kinetic energy of all bodies (kinetic_energy) [J].
  *   u[1]: scalar; potential energy (potential_energy) [J].
- * Cost: 4438 operations.
+ * Cost: 4552 operations.
  */
-void agile_eye_scene(const double *p, const double *q, const double *s, const double *qd, const double *qdd, const double *tau, double r_p, double r_d, double m_p, double m_d, double I_camera, double J_rotor, double *joints, double *margin, double *points, double *f, double *J_x, double *J_q, double *J, double *J_inv, double *det_Jq, double *det_Jx, double *phi, double *Phi_p, double *Phi_q, double *Phi_s, double *G, double *M, double *V, double *inverse_dynamics_tau, double *forward_dynamics_qdd, double *Mx, double *Vx, double *Gx, double *k, double *u);
+void agile_eye_scene(const double *p, const double *q, const double *s, const double *qd, const double *qdd, const double *tau, double r_p, double r_d, double m_p, double m_d, double I_camera, double J_rotor, double *joints, double *ik_margin, double *orientation, double *fk_margin, double *points, double *f, double *J_x, double *J_q, double *J, double *J_inv, double *det_Jq, double *det_Jx, double *phi, double *Phi_p, double *Phi_q, double *Phi_s, double *G, double *M, double *V, double *inverse_dynamics_tau, double *forward_dynamics_qdd, double *Mx, double *Vx, double *Gx, double *k, double *u);
 
-/* agile_eye_scene with packed arguments: in = p, q, s, qd, qdd, tau, r_p, r_d, m_p, m_d, I_camera, J_rotor one after the other; out = joints, margin, points, f, J_x, J_q, J, J_inv, det_Jq, det_Jx, phi, Phi_p, Phi_q, Phi_s, G, M, V, inverse_dynamics_tau, forward_dynamics_qdd, Mx, Vx, Gx, k, u one after the other. */
+/* agile_eye_scene with packed arguments: in = p, q, s, qd, qdd, tau, r_p, r_d, m_p, m_d, I_camera, J_rotor one after the other; out = joints, ik_margin, orientation, fk_margin, points, f, J_x, J_q, J, J_inv, det_Jq, det_Jx, phi, Phi_p, Phi_q, Phi_s, G, M, V, inverse_dynamics_tau, forward_dynamics_qdd, Mx, Vx, Gx, k, u one after the other. */
 void agile_eye_scene_packed(const double *in, double *out);
 
 /* agile_eye_scene for n configurations; params: r_p, r_d, m_p, m_d, I_camera, J_rotor, stride 0 or 6.
  * Calls agile_eye_scene once per configuration. */
-void agile_eye_scene_batch(size_t n, const double *p, const double *q, const double *s, const double *qd, const double *qdd, const double *tau, const double *params, size_t params_stride, double *joints, double *margin, double *points, double *f, double *J_x, double *J_q, double *J, double *J_inv, double *det_Jq, double *det_Jx, double *phi, double *Phi_p, double *Phi_q, double *Phi_s, double *G, double *M, double *V, double *inverse_dynamics_tau, double *forward_dynamics_qdd, double *Mx, double *Vx, double *Gx, double *k, double *u);
+void agile_eye_scene_batch(size_t n, const double *p, const double *q, const double *s, const double *qd, const double *qdd, const double *tau, const double *params, size_t params_stride, double *joints, double *ik_margin, double *orientation, double *fk_margin, double *points, double *f, double *J_x, double *J_q, double *J, double *J_inv, double *det_Jq, double *det_Jx, double *phi, double *Phi_p, double *Phi_q, double *Phi_s, double *G, double *M, double *V, double *inverse_dynamics_tau, double *forward_dynamics_qdd, double *Mx, double *Vx, double *Gx, double *k, double *u);
 
 #ifdef __cplusplus
 }

@@ -48,6 +48,30 @@ and n = z x u = (-u_y, u_x) its normal in the plane,
 
 the two assembly modes mirrored through the line of the centres: sigma = +1 puts P to the left
 of S1 -> S2 (a positive turn about z), sigma = -1 to the right.
+
+Forward kinematics of an orthogonal spherical platform (the Agile Eye: three R-R-R legs whose middle axes
+C_i(q_i) stay at 90 deg from platform axes R b_i, with b_1, b_2, b_3 mutually orthogonal; Bonev, Chablat
+and Wenger 2006 show its direct kinematics in closed form).  The columns f_i = R b_i of F = R B are an
+orthonormal frame with f_i . C_i = 0.  With u = C_1' / |C_1'| and v = C_1 x u (both perpendicular to C_1),
+f_1 = +-(cos phi u + sin phi v); f_3 is perpendicular to f_1 and C_3, so f_3 = +-(C_3 x f_1) / |C_3 x f_1|
+(not C_2 x f_1: at the Agile Eye's home pose f_1 = C_2), and f_2 ~ f_1 x (C_3 x f_1) = C_3 - (C_3 . f_1) f_1,
+whose condition f_2 . C_2 = 0 reads (C_2 . f_1)(C_3 . f_1) = C_2 . C_3: with a = C_2 . u, b = C_2 . v,
+c = C_3 . u, d = C_3 . v, k = C_2 . C_3,
+
+    X cos 2 phi + Y sin 2 phi = Z,   X = ac - bd,  Y = ad + bc,  Z = 2k - ac - bd,
+
+so cos(2 phi - psi) = Z / rho (rho^2 = X^2 + Y^2, psi = atan2(Y, X)) and, with the margin m = rho^2 - Z^2
+(>= 0 iff the legs assemble) and the root sigma = +-1,
+
+    rho^2 cos 2 phi = X Z - sigma Y sqrt(m),   rho^2 sin 2 phi = Y Z + sigma X sqrt(m).
+
+Each root leaves the signs of two columns of F free (four solutions).  The legs' ik fixes them: leg i's
+branch is the side of f_i . C_i' (C_i' = dC_i/dq_i = u_i x C_i), so f_1 and f_3 take the side s_i of the
+home pose (then f_2 = det(B) f_3 x f_1 has its own where the legs are in the home pose's working mode).
+The line of f_1 comes from the half angle without a division by cos phi or sin phi:
+(1 + cos 2 phi) u + sin 2 phi v = 2 cos phi f and sin 2 phi u + (1 - cos 2 phi) v = 2 sin phi f, each
+turned to the side of C_1' and summed, have length 2 (|cos phi| + |sin phi|) >= 2.  R = F B^T; the root is
+the home pose's, and p = (roll, pitch, yaw) of R = Rz(yaw) Ry(pitch) Rx(roll).
 """
 
 from __future__ import annotations
@@ -147,3 +171,50 @@ def intersect_circles(legs: tuple[DistanceLeg, ...], sigma: int) -> tuple[sympy.
     margin = r2[0] - w.dot(w)
     t = sigma * sympy.sqrt(margin / uu)
     return sympy.Matrix(S[0][:2]) + w + t * n, margin
+
+
+def orthogonal_spherical(legs: tuple[DistanceLeg, ...], signs: tuple[int, int, int]
+                         ) -> tuple[sympy.Matrix, sympy.Expr]:
+    """R(q) of an orthogonal spherical platform on three legs and its margin, for the signs (sigma, s_1, s_3): the
+    root and the sides of f_1 . C_1' and f_3 . C_3' (see the module docstring).
+
+    Raises:
+        DerivationError: a leg's axes are not at 90 deg, the platform axes are not orthogonal, or the first
+            leg's middle axis does not turn at a constant rate about the centre.
+    """
+    if len(legs) != 3 or any(sympy.simplify(leg.L2 - 2) != 0 for leg in legs):
+        raise DerivationError("the closed-form fk of a spherical platform needs three legs whose middle and "
+                              "platform axes stay at 90 deg (the Agile Eye)")
+    b = [sympy.Matrix(leg.b) for leg in legs]
+    if any(sympy.simplify(b[i].dot(b[j])) != 0 for i, j in ((0, 1), (0, 2), (1, 2))):
+        raise DerivationError("the closed-form fk of a spherical platform needs mutually orthogonal platform "
+                              "axes (the Agile Eye)")
+    C = [sympy.Matrix(leg.C) for leg in legs]
+    rates = [sympy.diff(axis, leg.q) for axis, leg in zip(C, legs)]
+    speed = sympy.sqrt(sympy.simplify(rates[0].dot(rates[0])))
+    if speed.free_symbols & {legs[0].q} or speed == 0:
+        raise DerivationError(f"leg '{legs[0].leg.name}': its middle axis does not turn at a constant rate")
+    sigma, side_1, side_3 = signs
+    u = rates[0] / speed
+    v = C[0].cross(u)
+    a, b_, c, d = C[1].dot(u), C[1].dot(v), C[2].dot(u), C[2].dot(v)
+    X, Y, Z = a * c - b_ * d, a * d + b_ * c, 2 * C[1].dot(C[2]) - a * c - b_ * d
+    rho2 = X**2 + Y**2
+    margin = rho2 - Z**2
+    root = sympy.sqrt(margin)
+    cos2, sin2 = X * Z - sigma * Y * root, Y * Z + sigma * X * root  # rho^2 (cos 2 phi, sin 2 phi)
+    halves = [(rho2 + cos2) * u + sin2 * v, sin2 * u + (rho2 - cos2) * v]
+    line = sum((h * sympy.sign(h.dot(rates[0])) for h in halves), sympy.zeros(3, 1))
+    f1 = side_1 * line / sympy.sqrt(line.dot(line))
+    normal = C[2].cross(f1)
+    f3 = side_3 * sympy.sign(normal.dot(rates[2])) * normal / sympy.sqrt(normal.dot(normal))
+    B = sympy.Matrix.hstack(*b)
+    f2 = B.det() * f3.cross(f1)
+    return sympy.Matrix.hstack(f1, f2, f3) * B.T, margin
+
+
+def rpy_of(R: sympy.Matrix) -> sympy.Matrix:
+    """(roll, pitch, yaw) of R = Rz(yaw) Ry(pitch) Rx(roll), pitch in [-pi/2, pi/2]."""
+    return sympy.Matrix([sympy.atan2(R[2, 1], R[2, 2]),
+                         sympy.atan2(-R[2, 0], sympy.sqrt(R[0, 0]**2 + R[1, 0]**2)),
+                         sympy.atan2(R[1, 0], R[0, 0])])

@@ -23,7 +23,9 @@ p = fk(q) or q = ik(p).
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
+
 import sympy
 
 from symkin.errors import DerivationError
@@ -249,11 +251,27 @@ def _fk(d: Deriving) -> FunctionSpec:
                 "returned (positive: left, a positive turn about z). Where the margin is negative the circles do "
                 "not meet and the position is NaN.")
         names, what = "x, y", "circles"
+    elif parallel.motion is PlatformMotion.SPHERICAL and parallel.coordinates == ("roll", "pitch", "yaw"):
+        R, margin = closed_form.orthogonal_spherical(d[_distance_legs], _home_signs(d))
+        text = ("Orthogonal spherical platform (the Agile Eye; Bonev, Chablat and Wenger 2006): the platform axes "
+                "f_i = R b_i are an orthonormal frame with f_i . C_i = 0; f_1 = cos phi u + sin phi v about the first "
+                "middle axis, f_2 ~ C_2 x f_1, and f_3 . C_3 = 0 gives X cos 2 phi + Y sin 2 phi = Z in closed form "
+                "(symkin.parallel.closed_form). Of its eight solutions the one with the home pose's root and the legs' "
+                "ik branches is returned; where the margin is negative the legs cannot be assembled and the "
+                "orientation is NaN.")
+        return make_function(
+            d.model, "fk", "Forward kinematics: platform orientation from the actuated joint variables.", text,
+            [_q(d)],
+            [OutputSpec("orientation", sympy.ImmutableMatrix(closed_form.rpy_of(R)),
+                        "platform orientation roll, pitch, yaw (R = Rz(yaw) Ry(pitch) Rx(roll))", "rad", shape=(3,)),
+             OutputSpec("margin", sympy.ImmutableMatrix([margin]), ">= 0 iff the legs assemble (a real solution)",
+                        "", shape=())])
     else:
         raise DerivationError(
             f"model '{d.model.name}': closed-form forward kinematics needs a translational platform on three "
-            "legs (trilateration) or a planar point [x, y] on two (circle intersection); solve it numerically "
-            "with symkin.runtime.parallel.solve_fk (Newton on the generated ik and inverse_jacobian)")
+            "legs (trilateration), a planar point [x, y] on two (circle intersection) or an orthogonal spherical "
+            "platform (the Agile Eye); solve it numerically with symkin.runtime.parallel.solve_fk (Newton on the "
+            "generated ik and inverse_jacobian)")
     return make_function(
         d.model, "fk", "Forward kinematics: TCP position from the actuated joint variables.", text,
         [_q(d)],
@@ -262,6 +280,30 @@ def _fk(d: Deriving) -> FunctionSpec:
          OutputSpec("margin", sympy.ImmutableMatrix([margin]), f">= 0 iff the {what} meet (a real solution)",
                     "m^2", shape=())],
     )
+
+
+def _home_signs(d: Deriving) -> tuple[int, int, int]:
+    """The signs (sigma, s_1, s_3) of :func:`closed_form.orthogonal_spherical` whose solution is the home pose
+    (at the parameters' default values).
+
+    Raises:
+        DerivationError: none is (the home pose is not an assembly of the legs' ik).
+    """
+    legs, model = d[_distance_legs], d.model
+    if model.parallel is None or model.parallel.home is None:
+        raise DerivationError(f"model '{model.name}': the fk of a spherical platform returns the home pose's "
+                              "assembly mode; declare parallel.home")
+    values = model.parameter_values
+    home = {s: sympy.sympify(e).xreplace(values) for s, e in zip(task_symbols(model), model.parallel.home)}
+    q = {leg.q: closed_form.solve_leg(leg).value.xreplace(values).xreplace(home) for leg in legs}
+    target = sympy.Matrix(platform_frame(model).R).xreplace(values).xreplace(home).evalf()
+    for signs in itertools.product((1, -1), repeat=3):
+        R, _ = closed_form.orthogonal_spherical(legs, signs)  # type: ignore[arg-type]
+        deviation = (R.xreplace(values).xreplace(q).evalf() - target).norm()
+        if deviation.is_number and deviation.is_finite and deviation < 1e-9:
+            return signs  # type: ignore[return-value]
+    raise DerivationError(f"model '{model.name}': the home pose is not an assembly of the legs' ik, so no fk "
+                          "branch can be chosen; check parallel.home and the legs' ik_branch")
 
 
 def square_constraint_jacobians(d: Deriving, name: str) -> tuple[sympy.Matrix, sympy.Matrix]:
