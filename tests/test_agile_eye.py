@@ -351,3 +351,14 @@ def test_the_link_between_the_last_two_joints_is_declared_as_the_legs_kind_needs
     assert key in str(error.value)
     assert message in str(error.value)
     assert "fix:" in str(error.value)
+
+
+def test_a_spherical_platform_whose_links_are_not_at_90_degrees_has_no_closed_form_fk(tmp_path):
+    text = (MODELS_DIR / "agile_eye.yaml").read_text()
+    old = "{name: top, type: R, axis: [0, 0, 1]}"
+    assert old in text
+    (tmp_path / "tilted.yaml").write_text(text.replace(old, "{name: top, type: R, axis: [0, 1, 1]}"))
+    derivation = Derivation(load_model(tmp_path / "tilted.yaml"))
+    assert derivation["ik"] is not None  # the legs keep their distance form and closed-form ik
+    with pytest.raises(DerivationError, match="middle and platform axes stay at 90 deg"):
+        derivation["fk"]

@@ -93,3 +93,19 @@ def test_a_parallel_model_without_closed_form_fk_is_refused_with_exit_code_2(tmp
     assert main(["simulate", str(GENERATED_DIR / "stewart"), "--scenario", "free-swing", "-o", str(tmp_path / "out")]) == 2
     assert "closed-form fk" in capsys.readouterr().err
     assert not (tmp_path / "out").exists()
+
+
+def test_the_agile_eye_swings_with_its_energy_balanced_and_refuses_a_tcp_circle(tmp_path, capsys):
+    """A spherical platform is a plant too (p = fk(q), its orientation): a free swing against its joint stops keeps
+    k + u + the stops' work to the integrator's tolerance; a TCP circle has no TCP point to follow."""
+    out = tmp_path / "swing"
+    assert main(["simulate", str(GENERATED_DIR / "agile_eye"), "--scenario", "free-swing", "--duration", "0.5",
+                 "-o", str(out)]) == 0
+    summary = (out / "summary.txt").read_text()
+    drift = float(summary.split("energy balance drift ")[1].split()[0].rstrip(","))
+    assert drift <= 1e-8, summary
+    capsys.readouterr()
+    assert main(["simulate", str(GENERATED_DIR / "agile_eye"), "--scenario", "tracking", "-o",
+                 str(tmp_path / "circle")]) == 2
+    assert "a task space with x, y or z (it is [roll, pitch, yaw])" in capsys.readouterr().err
+    assert not (tmp_path / "circle").exists()

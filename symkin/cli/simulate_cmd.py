@@ -1,4 +1,4 @@
-"""``symkin simulate``: forward dynamics of a serial model or a DELTA-type parallel mechanism in a scenario (seed sec. 5)."""
+"""``symkin simulate``: forward dynamics of a serial model or a parallel mechanism with a closed-form fk in a scenario (seed sec. 5)."""
 
 from __future__ import annotations
 
@@ -17,7 +17,8 @@ from symkin.cli.progress import Progress
 DYNAMICS_OUTPUTS = ("forward_dynamics", "inverse_dynamics", "mass_matrix", "kinetic_energy", "coriolis_vector")
 SIMULATION_OUTPUTS = {MechanismKind.SERIAL: ("fk", "jacobian", "jacobian_geometric") + DYNAMICS_OUTPUTS,
                       MechanismKind.PARALLEL: ("ik", "fk", "jacobian") + DYNAMICS_OUTPUTS,
-                      MechanismKind.PARALLEL_POSE: ("ik", "inverse_jacobian") + DYNAMICS_OUTPUTS}
+                      MechanismKind.PARALLEL_POSE: ("ik", "inverse_jacobian") + DYNAMICS_OUTPUTS,
+                      MechanismKind.PARALLEL_ORIENTATION: ("ik", "fk", "jacobian") + DYNAMICS_OUTPUTS}
 #: ... and a hybrid device's TCP (device_fk, device_actuator_jacobian), derived where the model has a wrist
 OPTIONAL_OUTPUTS = ("gravity_vector", "potential_energy", "friction", "device_fk", "device_actuator_jacobian")
 SCENARIOS = ("sine", "tracking", "haptic-wall", "gravity-compensation", "free-swing")
@@ -30,7 +31,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "simulate", help="simulate the dynamics: seed haptic scenario, trajectory following, virtual wall",
         description="Integrate the forward dynamics of a serial model, or of a parallel mechanism with a closed-form "
-                    "fk (a DELTA: in its actuated joints, the platform at fk(q); a DELTA carrying a wrist: in the legs' and the "
+                    "fk (a DELTA, a pantograph, the Agile Eye: in its actuated joints, the platform at fk(q); a DELTA carrying a "
+                    "wrist: in the legs' and the "
                     "wrist's joints, the TCP the wrist's), with its generated functions. Scenarios: "
                     "'sine' (seed sec. 5.3, Figs. 8.21, 8.22: one joint follows a sine, the others are fixed; joint "
                     "torques and TCP forces F = J^-T tau, checked by a forward simulation), 'tracking' (Fig. 8.17: a "

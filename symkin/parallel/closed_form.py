@@ -173,10 +173,9 @@ def intersect_circles(legs: tuple[DistanceLeg, ...], sigma: int) -> tuple[sympy.
     return sympy.Matrix(S[0][:2]) + w + t * n, margin
 
 
-def orthogonal_spherical(legs: tuple[DistanceLeg, ...], signs: tuple[int, int, int]
-                         ) -> tuple[sympy.Matrix, sympy.Expr]:
-    """R(q) of an orthogonal spherical platform on three legs and its margin, for the signs (sigma, s_1, s_3): the
-    root and the sides of f_1 . C_1' and f_3 . C_3' (see the module docstring).
+def require_orthogonal(legs: tuple[DistanceLeg, ...]) -> sympy.Expr:
+    """|C_1'| of an orthogonal spherical platform's first leg, after checking that the legs are one (see the module
+    docstring).
 
     Raises:
         DerivationError: a leg's axes are not at 90 deg, the platform axes are not orthogonal, or the first
@@ -189,11 +188,31 @@ def orthogonal_spherical(legs: tuple[DistanceLeg, ...], signs: tuple[int, int, i
     if any(sympy.simplify(b[i].dot(b[j])) != 0 for i, j in ((0, 1), (0, 2), (1, 2))):
         raise DerivationError("the closed-form fk of a spherical platform needs mutually orthogonal platform "
                               "axes (the Agile Eye)")
-    C = [sympy.Matrix(leg.C) for leg in legs]
-    rates = [sympy.diff(axis, leg.q) for axis, leg in zip(C, legs)]
-    speed = sympy.sqrt(sympy.simplify(rates[0].dot(rates[0])))
+    rate = sympy.diff(sympy.Matrix(legs[0].C), legs[0].q)
+    speed = sympy.sqrt(sympy.simplify(rate.dot(rate)))
     if speed.free_symbols & {legs[0].q} or speed == 0:
         raise DerivationError(f"leg '{legs[0].leg.name}': its middle axis does not turn at a constant rate")
+    return speed
+
+
+def orthogonal_spherical(legs: tuple[DistanceLeg, ...], signs: tuple[int, int, int]
+                         ) -> tuple[sympy.Matrix, sympy.Expr]:
+    """R(q) of an orthogonal spherical platform on three legs and its margin, for the signs (sigma, s_1, s_3): the
+    root and the sides of f_1 . C_1' and f_3 . C_3' (see the module docstring).
+
+    Raises:
+        DerivationError: the legs are not those of an orthogonal spherical platform (:func:`require_orthogonal`).
+    """
+    speed = require_orthogonal(legs)
+    C = [sympy.Matrix(leg.C) for leg in legs]
+    rates = [sympy.diff(axis, leg.q) for axis, leg in zip(C, legs)]
+    return orthogonal_frame(C, rates, speed, [sympy.Matrix(leg.b) for leg in legs], signs)
+
+
+def orthogonal_frame(C: list[sympy.Matrix], rates: list[sympy.Matrix], speed: sympy.Expr, b: list[sympy.Matrix],
+                     signs: tuple[int, int, int]) -> tuple[sympy.Matrix, sympy.Expr]:
+    """R and the margin of :func:`orthogonal_spherical` from the middle axes C_i, their rates C_i', |C_1'| and the
+    platform axes b_i (symbols or numbers: the fk's branch is chosen by evaluating it at the home pose)."""
     sigma, side_1, side_3 = signs
     u = rates[0] / speed
     v = C[0].cross(u)

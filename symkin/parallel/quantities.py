@@ -290,17 +290,25 @@ def _home_signs(d: Deriving) -> tuple[int, int, int]:
         DerivationError: none is (the home pose is not an assembly of the legs' ik).
     """
     legs, model = d[_distance_legs], d.model
+    closed_form.require_orthogonal(legs)
     if model.parallel is None or model.parallel.home is None:
         raise DerivationError(f"model '{model.name}': the fk of a spherical platform returns the home pose's "
                               "assembly mode; declare parallel.home")
     values = model.parameter_values
     home = {s: sympy.sympify(e).xreplace(values) for s, e in zip(task_symbols(model), model.parallel.home)}
-    q = {leg.q: closed_form.solve_leg(leg).value.xreplace(values).xreplace(home) for leg in legs}
+    q = {leg.q: closed_form.solve_leg(leg).value.xreplace(values).xreplace(home).evalf() for leg in legs}
+
+    def at_home(vector: sympy.Matrix) -> sympy.Matrix:
+        return sympy.Matrix(vector).xreplace(values).xreplace(q).evalf()
+    C = [at_home(leg.C) for leg in legs]
+    rates = [at_home(sympy.diff(sympy.Matrix(leg.C), leg.q)) for leg in legs]
+    b = [at_home(leg.b) for leg in legs]
     target = sympy.Matrix(platform_frame(model).R).xreplace(values).xreplace(home).evalf()
     for signs in itertools.product((1, -1), repeat=3):
-        R, _ = closed_form.orthogonal_spherical(legs, signs)  # type: ignore[arg-type]
-        deviation = (R.xreplace(values).xreplace(q).evalf() - target).norm()
-        if deviation.is_number and deviation.is_finite and deviation < 1e-9:
+        R, _ = closed_form.orthogonal_frame(C, rates, sympy.sqrt(rates[0].dot(rates[0])), b,
+                                            signs)  # type: ignore[arg-type]
+        deviation = (R - target).norm()
+        if deviation.is_number and deviation.is_finite and deviation < 1e-9:  # NaN: a degenerate sign
             return signs  # type: ignore[return-value]
     raise DerivationError(f"model '{model.name}': the home pose is not an assembly of the legs' ik, so no fk "
                           "branch can be chosen; check parallel.home and the legs' ik_branch")

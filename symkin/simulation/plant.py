@@ -10,9 +10,10 @@ The TCP point of the haptic loop is the translational part of the model's task s
 from the rows of the task Jacobian ``jacobian``, so forces map to joint torques by
 tau = J^T F (seed eq. 8.35) with zeros in the rotational rows.
 
-A parallel mechanism (a DELTA) is a plant in its actuated coordinates q too: its generated
-dynamics take the platform pose p with q (symkin.parallel.dynamics), which the plant supplies
-from the closed-form forward kinematics, p = fk(q), so the state stays (q, qd).
+A parallel mechanism (a DELTA, a pantograph, the Agile Eye) is a plant in its actuated coordinates q
+too: its generated dynamics take the platform pose p with q (symkin.parallel.dynamics), which the plant
+supplies from the closed-form forward kinematics, p = fk(q) (a spherical platform's orientation), so the
+state stays (q, qd).
 
 A hybrid device (a DELTA carrying a wrist, symkin.parallel.hybrid) is a plant in its actuated
 coordinates z = (q, qw): the legs' then the wrist's joints, as its generated dynamics return
@@ -64,7 +65,7 @@ class Plant:
         required = REQUIRED_PARALLEL if self.parallel else REQUIRED
         missing = [name for name in required if name not in model.functions]
         if missing:
-            hint = (" (a closed-form fk: three legs and a translating platform, e.g. a DELTA)"
+            hint = (" (a closed-form fk: a DELTA, a pantograph, the Agile Eye; not a Stewart-Gough platform)"
                     if self.parallel and "fk" in missing else "")
             suggested = ",".join(dict.fromkeys(required + ("gravity_vector", "potential_energy", "fk", "jacobian")))
             raise GeneratedCodeError(f"{model.name}: simulation needs the generated {', '.join(missing)}{hint}; "
@@ -134,7 +135,7 @@ class Plant:
         last_q, last_p = self._last_pose
         if last_q is not None and q.shape == last_q.shape and np.array_equal(q, last_q):
             return last_p
-        p = np.asarray(self.model.fk(q).position)
+        p = np.asarray(self.model.fk(q)[0])  # the platform's coordinates: a position, or a spherical one's angles
         self._last_pose = (q.copy(), p)
         return p
 
@@ -216,7 +217,7 @@ class Plant:
 
     def point(self, q: np.ndarray) -> np.ndarray:
         """Position (..., d) of the TCP in the translational task axes (:attr:`point_axes`)."""
-        self._require_point()
+        self.require_point()
         if self.hybrid:
             return self.model.device_fk(self.pose(q), q[..., self.legs:])[..., self._point_index, 3]
         if self.parallel:
@@ -225,7 +226,7 @@ class Plant:
 
     def point_jacobian(self, q: np.ndarray) -> np.ndarray:
         """(..., d, n): TCP velocity = J_p qd, the translational rows of the task Jacobian."""
-        self._require_point()
+        self.require_point()
         return self.task_jacobian(q)[..., self.point_rows, :]
 
     def task_jacobian(self, q: np.ndarray) -> np.ndarray:
@@ -252,6 +253,7 @@ class Plant:
         wrist = inverse_condition_number(self.task_jacobian(q)[..., angular, self.legs:])
         return np.minimum(platform, wrist)
 
-    def _require_point(self) -> None:
+    def require_point(self) -> None:
+        """Raise GeneratedCodeError unless the plant has a TCP point (translational task axes, fk and a Jacobian)."""
         if self._point_error is not None:
             raise GeneratedCodeError(self._point_error)

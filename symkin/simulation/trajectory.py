@@ -89,6 +89,7 @@ def task_circle(plant, q_start: np.ndarray, radius: float, duration: float, samp
         SimulationError: a point of the circle has no inverse-kinematics solution within the
             joint limits near the previous sample.
     """
+    plant.require_point()
     if plant.parallel:
         return _parallel_circle(plant, q_start, radius, duration, samples)
     from symkin.ik import ModelKinematics, solve_numeric
