@@ -185,7 +185,7 @@ def test_cli_lists_what_it_cannot_rate_and_refuses_what_it_does_not_rate(generat
     text = capsys.readouterr().out
     assert "force: not rated (no effort limits" in text
     assert "resolution: not rated (no encoder data" in text
-    for arguments in (["agile_eye"], ["delta", "--encoder", "0"], ["delta", "--gear", "10"],
+    for arguments in (["agile_eye", "--box", "x=0:1"], ["delta", "--encoder", "0"], ["delta", "--gear", "10"],
                       ["delta", "--box", "w=0:1"]):
         with pytest.raises(SystemExit) as exit:
             main(["rate", str(generated_dir / arguments[0]), *arguments[1:], "-o", str(tmp_path / "b")])
@@ -327,3 +327,94 @@ def test_cli_rates_a_rotating_platform_at_a_constant_orientation(generated_dir, 
         main(["rate", str(generated_dir / "delta"), "--orientation", "0,0,0", "-o", str(tmp_path / "d")])
     assert exit_info.value.code == 2
     assert "--orientation applies to platforms that also rotate" in capsys.readouterr().err
+
+
+# --------------------------------------------------------------------------- a spherical platform (the Agile Eye)
+
+@pytest.fixture(scope="module")
+def eye_sheet(generated_dir):
+    from symkin.analysis import datasheet
+
+    eye = load(generated_dir / "agile_eye")
+    limits = np.full(3, 1.0)  # N m per actuator: an assumed drive, the model declares none
+    sheet = datasheet.rate(eye, datasheet.Actuation(effort_limits=limits, joint_steps=np.full(3, 2 * np.pi / 4096)),
+                           samples=2048)
+    return eye, sheet, limits
+
+
+def _angular_jacobian_by_differences(eye, q):
+    """omega = J_w qd from central differences of R(fk(q)) (h = 1e-6: truncation ~h^2, rounding ~eps / h)."""
+    from scipy.spatial.transform import Rotation
+
+    def rotation_matrix(p):  # R = Rz(yaw) Ry(pitch) Rx(roll): intrinsic Z-Y-X
+        return Rotation.from_euler("ZYX", p[::-1]).as_matrix()
+
+    h = 1e-6
+    R = rotation_matrix(eye.fk(q).orientation)
+    columns = []
+    for e in np.eye(3):
+        rate = (rotation_matrix(eye.fk(q + h * e).orientation) - rotation_matrix(eye.fk(q - h * e).orientation)) / (2 * h)
+        W = rate @ R.T
+        columns.append([W[2, 1], W[0, 2], W[1, 0]])
+    return np.array(columns).T
+
+
+def test_a_spherical_platform_is_rated_by_the_inertia_and_torques_felt_turning_its_handle(eye_sheet):
+    """The Agile Eye over its orientations: the principal inertias are those of the generated operational-space
+    Mx (roll-pitch-yaw coordinates: the mobility of omega = E pd is E Mx^-1 E^T); the isotropic torque is the
+    weakest of 20000 axes through a J_w taken from differences of the closed-form fk; at the home pose, where the
+    Agile Eye is isotropic (J_w orthogonal), the inertia is the same about every axis and the isotropic torque is
+    the effort limit."""
+    from symkin.analysis.parallel import angular_velocity_matrix
+
+    eye, sheet, limits = eye_sheet
+    measures = {m.name: m.values for m in sheet.measures}
+    assert sheet.axes == ("roll", "pitch", "yaw")
+    assert len(sheet.q) > 60
+    rng = np.random.default_rng(5)
+    axes = rng.normal(size=(20000, 3))
+    axes /= np.linalg.norm(axes, axis=-1, keepdims=True)
+    for k in list(range(0, len(sheet.q), 15)) + [sheet.home]:
+        q, p = sheet.q[k], sheet.points[k]
+        Mx = eye.operational_space(q, p, np.zeros(3)).Mx
+        E = angular_velocity_matrix(p)
+        inertias = 1.0 / np.linalg.eigvalsh(E @ np.linalg.inv(Mx) @ E.T)[::-1]
+        bound = DYNAMICS * np.linalg.cond(Mx) ** 2
+        np.testing.assert_allclose([measures["apparent_inertia_min"][k], measures["apparent_inertia_max"][k]],
+                                   inertias[[0, -1]], rtol=bound)
+        scanned = forces.directional_force(_angular_jacobian_by_differences(eye, q), limits, axes)
+        assert measures["isotropic_torque"][k] <= scanned.min() * (1 + 1e-6)  # the differences' error, ~1e-10
+        assert measures["isotropic_torque"][k] >= 0.98 * scanned.min()  # 20000 random axes come within 2 %
+    home = sheet.home
+    assert measures["apparent_inertia_max"][home] == pytest.approx(measures["apparent_inertia_min"][home],
+                                                                   rel=DYNAMICS)
+    assert measures["isotropic_torque"][home] == pytest.approx(1.0, rel=CLOSED_FORM)
+
+
+def test_the_agile_eyes_inertia_at_home_is_the_sum_of_what_turns_about_an_axis(eye_sheet):
+    """By hand, at home (J = 1): turning the handle about x turns leg 1's actuator alone, so leg 1's proximal arc
+    (x-y plane: m_p r_p^2 / 2 about x) and rotor, the camera, leg 1's distal arc (y-z plane: m_d r_d^2) and leg 3's
+    (x-y plane, about its middle axis x: m_d r_d^2 / 2) turn about x; leg 2's distal arc, between the fixed axes z
+    and x, stays.  By the symmetry of the legs the same holds about y and z."""
+    from symkin import load_model
+
+    _, sheet, _ = eye_sheet
+    v = {p.name: float(p.value) for p in load_model(MODELS_DIR / "agile_eye.yaml").parameters}
+    by_hand = (v["m_p"] * v["r_p"] ** 2 / 2 + v["J_rotor"] + v["I_camera"] + v["m_d"] * v["r_d"] ** 2
+               + v["m_d"] * v["r_d"] ** 2 / 2)
+    measures = {m.name: m.values for m in sheet.measures}
+    assert measures["apparent_inertia_min"][sheet.home] == pytest.approx(by_hand, rel=DYNAMICS)
+    assert measures["apparent_inertia_max"][sheet.home] == pytest.approx(by_hand, rel=DYNAMICS)
+
+
+def test_cli_rates_a_spherical_platform_over_its_orientations(generated_dir, tmp_path):
+    out = tmp_path / "eye"
+    assert main(["rate", str(generated_dir / "agile_eye"), "--effort-limit", "1", "--encoder", "4096",
+                 "--box", "yaw=-0.5:0.5", "-n", "1024", "--no-figure", "-o", str(out)]) == 0
+    sheet = json.loads((out / "datasheet.json").read_text())
+    assert sheet["axes"] == ["roll", "pitch", "yaw"]
+    assert sheet["measures"]["apparent_inertia_min"]["unit"] == "kg m^2"
+    assert sheet["measures"]["angular_resolution"]["unit"] == "rad"
+    assert all(abs(m["min"]["tcp"][2]) <= 0.5 for m in sheet["measures"].values())
+    assert "roll [rad],pitch [rad],yaw [rad]" in (out / "datasheet.csv").read_text()
+    assert "at orientation (" in (out / "summary.txt").read_text()

@@ -109,14 +109,25 @@ class Datasheet:
             e = self.extremes(m)
             worst = e[e["worst"]]
             lines.append(f"{m.name}: {worst['value']:.4g} {m.unit} at worst ({e['worst']} over the workspace, "
-                         f"at TCP {_point(worst['tcp'])}); range {e['min']['value']:.4g} .. {e['max']['value']:.4g}, "
+                         f"at {'TCP' if self.axes[0] not in ANGLES else 'orientation'} "
+                         f"{_point(worst['tcp'], self.axes)}); range {e['min']['value']:.4g} .. {e['max']['value']:.4g}, "
                          f"at home {'-' if e['home'] is None else format(e['home'], '.4g')}")
         lines += [f"{name}: not rated ({why})" for name, why in self.skipped.items()]
         return lines
 
 
-def _point(tcp: Sequence[float]) -> str:
-    return "(" + ", ".join(f"{1000 * v:.1f}" for v in tcp) + ") mm"
+#: The handle's coordinates a datasheet maps: positions (m, drawn in mm) or a spherical platform's angles (rad, deg).
+ANGLES = ("roll", "pitch", "yaw")
+
+
+def axis_scale(axes: Sequence[str]) -> tuple[float, str, str]:
+    """(drawing scale, drawing unit, SI unit) of the handle's coordinates: mm of m, or deg of rad."""
+    return (180.0 / np.pi, "deg", "rad") if set(axes) <= set(ANGLES) else (1000.0, "mm", "m")
+
+
+def _point(tcp: Sequence[float], axes: Sequence[str]) -> str:
+    scale, unit, _ = axis_scale(axes)
+    return "(" + ", ".join(f"{scale * v:.1f}" for v in tcp) + f") {unit}"
 
 
 def home_configuration(model: GeneratedModel, limits: np.ndarray) -> np.ndarray:
@@ -158,11 +169,12 @@ def rate(model: GeneratedModel, actuation: Actuation, *, samples: int = 4096, se
     poses in ``box`` (TCP coordinates, m) where 1/kappa >= ``conditioning``, and at its home pose.
 
     A platform that also rotates (Stewart-Gough) is rated over its workspace at the constant ``orientation``
-    (roll, pitch, yaw in rad; default: its home pose's) by :func:`rate_pose_platform`.
+    (roll, pitch, yaw in rad; default: its home pose's) by :func:`rate_pose_platform`, a spherical platform (the
+    Agile Eye) over its orientations by :func:`rate_orientation_platform`.
 
     Raises:
-        ValueError: the model cannot be rated (no translational task coordinate, a spherical platform,
-            a wrist on the platform, no mass matrix), or the box holds no sample.
+        ValueError: the model cannot be rated (no task coordinate it rates, a wrist on the platform, no mass
+            matrix), or the box holds no sample.
     """
     kind = mechanism.kind_of(model)
     if model.info.wrist:
@@ -171,6 +183,9 @@ def rate(model: GeneratedModel, actuation: Actuation, *, samples: int = 4096, se
     if kind is mechanism.MechanismKind.PARALLEL_POSE:
         return rate_pose_platform(model, actuation, samples=samples, seed=seed, box=box, limits=limits,
                                   conditioning=conditioning, orientation=orientation)
+    if kind is mechanism.MechanismKind.PARALLEL_ORIENTATION and orientation is None:
+        return rate_orientation_platform(model, actuation, samples=samples, seed=seed, box=box, limits=limits,
+                                         conditioning=conditioning)
     if orientation is not None:
         raise ValueError(f"{model.name}: --orientation applies to platforms that also rotate (Stewart-Gough); "
                          f"this is a {kind.value} mechanism")
@@ -254,6 +269,67 @@ def rate_pose_platform(model: GeneratedModel, actuation: Actuation, *, samples: 
                      measures + _rotation_measures(J_w, M, actuation), len(q) - 1, skipped)
 
 
+def rate_orientation_platform(model: GeneratedModel, actuation: Actuation, *, samples: int = 4096, seed: int = 0,
+                              box: Mapping[str, tuple[float, float]] | None = None,
+                              limits: mechanism.Limits | None = None,
+                              conditioning: float = USABLE_CONDITIONING) -> Datasheet:
+    """The datasheet of a spherical platform (the Agile Eye): its handle twisted about the centre of rotation.
+
+    Orientations are sampled (scrambled Sobol) over the roll-pitch-yaw chart, or the ``box`` of angles (rad), and
+    kept where every leg reaches them within the joint limits (:func:`symkin.analysis.orientations.orientation_cloud`).
+    The angular-velocity Jacobian J_w = E(p) J (omega = J_w qd; E maps the roll-pitch-yaw rates to omega, J is the
+    generated ``jacobian``) rates the handle: the apparent rotational inertia (J_w M^-1 J_w^T)^-1, the isotropic and
+    peak torque, the angular resolution, the gravity share, and with joint friction the Coulomb torque felt, the
+    least rotational damping and the stiffest passive rotational wall at the servo rate.  A sample is usable where
+    1/kappa(J_w) >= ``conditioning``.
+    """
+    from symkin.analysis import orientations
+    from symkin.analysis.parallel import angular_velocity_matrix
+
+    for name in ("ik", "jacobian", "mass_matrix"):
+        mechanism.parallel_function(model, name)
+    unknown = set(box or {}) - set(ANGLES)
+    if unknown:
+        raise ValueError(f"--box: no task axes {sorted(unknown)}; the platform turns in {', '.join(ANGLES)} (rad)")
+    lower, upper = (np.array(bound, dtype=float) for bound in orientations.FULL_CHART)
+    for name, (low, high) in (box or {}).items():
+        k = ANGLES.index(name)
+        lower[k], upper[k] = max(lower[k], low), min(upper[k], high)
+    points, _ = orientations.orientation_cloud(model, samples, seed=seed, box=(lower, upper), limits=limits)
+    points = np.concatenate([points, mechanism.home_pose(model)[None]])  # the home pose is quoted anyway
+    q = np.asarray(model.ik(points).joints, dtype=float)
+    J_w = angular_velocity_matrix(points) @ model.jacobian(q, points)
+    with np.errstate(invalid="ignore"):
+        keep = np.nan_to_num(inverse_condition_number(J_w), nan=0.0) >= conditioning
+    keep[-1] = True
+    q, points, J_w = q[keep], points[keep], J_w[keep]
+    if len(q) < 2:
+        raise ValueError(f"{model.name}: no reachable orientation in the box {dict(box or {})} has 1/kappa >= "
+                         f"{conditioning:g}")
+    M = _dynamics(model, "mass_matrix", q, points)
+    measures, skipped = _rotation_measures(J_w, M, actuation), {}
+    if actuation.effort_limits is None:
+        skipped["torque"] = "no effort limits: declare effort_limit per joint or give --effort-limit"
+    elif "gravity_vector" in model.functions:
+        measures += (Measure("gravity_share", "", rating.gravity_share(_dynamics(model, "gravity_vector", q, points),
+                                                                      actuation.effort_limits), False,
+                             "largest share of an effort limit spent holding the device against gravity"),)
+    if actuation.joint_steps is None:
+        skipped["angular_resolution"] = "no encoder data: give --encoder COUNTS[,...] (and --gear)"
+    if actuation.coulomb is None or actuation.viscous is None:
+        skipped["friction"] = "no joint friction declared (friction: in the model file)"
+    else:
+        damping = rating.handle_damping(J_w, actuation.viscous)
+        measures += (Measure("coulomb_torque", "N m", rating.coulomb_friction_felt(J_w, actuation.coulomb), False,
+                             "largest Coulomb friction torque felt turning the handle, over the axes of rotation"),
+                     Measure("handle_damping", "N m s/rad", damping, True,
+                             "least viscous damping turning the handle"),
+                     Measure("renderable_stiffness", "N m/rad", rating.renderable_stiffness(damping, actuation.period),
+                             True, f"stiffest passive rotational virtual wall at {1 / actuation.period:g} Hz "
+                                   "(Colgate-Brown, K < 2 b / T)"))
+    return Datasheet(model.name, q, points, ANGLES, measures, len(q) - 1, skipped)
+
+
 def _rotation_measures(J_w: np.ndarray, M: np.ndarray, actuation: Actuation) -> tuple[Measure, ...]:
     """A rotating handle's inertia felt with its position free, torque capability and angular resolution."""
     inertias = rating.principal_masses(M, J_w)
@@ -318,47 +394,3 @@ def _measures(model: GeneratedModel, J: np.ndarray, M: np.ndarray, q: np.ndarray
                         f"stiffest passive virtual wall at {1 / actuation.period:g} Hz (Colgate-Brown, "
                         "K < 2 b / T)")]
     return tuple(out), skipped
-
-
-def csv_text(sheet: Datasheet, coordinates: Sequence[str]) -> str:
-    """One row per rated pose: q, the TCP and every measure (the home pose last)."""
-    header = [*coordinates, *(f"{a} [m]" for a in sheet.axes),
-              *(f"{m.name} [{m.unit}]" if m.unit else m.name for m in sheet.measures)]
-    columns = np.column_stack([sheet.q, sheet.points, *(m.values for m in sheet.measures)])
-    rows = [",".join(f"{v:.9g}" for v in row) for row in columns]
-    return "\n".join([f"# symkin rate: {sheet.model}, {len(rows)} poses (the last is the home pose)",
-                      ",".join(header), *rows]) + "\n"
-
-
-def figure_png(sheet: Datasheet, title: str) -> bytes:
-    """The datasheet figure: one map per measure over the rated poses (x-y, or 3-D for a spatial device),
-    coloured by its value, the home pose marked."""
-    import io
-
-    from matplotlib.figure import Figure
-
-    count = len(sheet.measures)
-    columns = min(3, count)
-    rows = -(-count // columns)
-    spatial = sheet.points.shape[1] == 3
-    figure = Figure(figsize=(4.2 * columns, 3.6 * rows + 0.6), layout="constrained")
-    points = 1000 * sheet.points
-    for k, measure in enumerate(sheet.measures):
-        ax: Any = figure.add_subplot(rows, columns, k + 1, **({"projection": "3d"} if spatial else {}))
-        values = measure.values
-        finite = np.isfinite(values)
-        low, high = np.percentile(values[finite], [1, 99]) if finite.any() else (0.0, 1.0)
-        mesh = ax.scatter(*points.T, c=values, cmap="viridis", vmin=low, vmax=max(high, low + 1e-300), s=2,
-                          linewidths=0, rasterized=True)
-        ax.scatter(*points[sheet.home][:, None], marker="*", s=80, c="red", label="home")
-        figure.colorbar(mesh, ax=ax, shrink=0.8, label=f"{measure.name} [{measure.unit or '-'}]")
-        ax.set_xlabel(f"{sheet.axes[0]} [mm]")
-        ax.set_ylabel(f"{sheet.axes[1]} [mm]")
-        if spatial:
-            ax.set_zlabel(f"{sheet.axes[2]} [mm]")
-        else:
-            ax.set_aspect("equal")
-    figure.suptitle(title)
-    buffer = io.BytesIO()
-    figure.savefig(buffer, format="png", dpi=110)
-    return buffer.getvalue()

@@ -16,7 +16,7 @@ from symkin.cli.progress import Progress
 RATE_OUTPUTS = {MechanismKind.SERIAL: ("fk", "jacobian", "mass_matrix"),
                 MechanismKind.PARALLEL: ("ik", "fk", "jacobian", "mass_matrix"),
                 MechanismKind.PARALLEL_POSE: ("ik", "inverse_jacobian"),
-                MechanismKind.PARALLEL_ORIENTATION: ("ik", "inverse_jacobian")}
+                MechanismKind.PARALLEL_ORIENTATION: ("ik", "inverse_jacobian", "jacobian", "mass_matrix")}
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -33,7 +33,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "(Colgate-Brown, K < 2 b / T). A platform that also rotates (Stewart-Gough) is rated at a "
                     "constant --orientation, its handle pushed (orientation free) and twisted (position free): "
                     "the apparent rotational inertia, the isotropic and peak torque and the angular resolution "
-                    "join the table. A measure whose data the model lacks is listed as not rated, "
+                    "join the table; a spherical platform (the Agile Eye) is rated over its orientations, its "
+                    "handle twisted about the centre (--box in rad of roll, pitch, yaw). A measure whose data the model lacks is listed as not rated, "
                     "with what to give. Writes datasheet.json (every number with its unit and the pose of each "
                     "extreme), datasheet.csv (every rated pose), datasheet.png (a map per measure) and "
                     "summary.txt into the output directory (replaced as a whole).",
@@ -83,7 +84,7 @@ def _joint_steps(args: argparse.Namespace, model) -> list[float] | None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from symkin.analysis import datasheet
+    from symkin.analysis import datasheet, datasheet_files
 
     start = time.perf_counter()
     try:
@@ -112,11 +113,11 @@ def run(args: argparse.Namespace) -> int:
                 "datasheet.json": json.dumps(sheet.to_json() | {"servo_rate_hz": args.rate,
                                                                 "usable_conditioning": conditioning},
                                              indent=2, allow_nan=False) + "\n",
-                "datasheet.csv": datasheet.csv_text(sheet, model.info.coordinate_names),
+                "datasheet.csv": datasheet_files.csv_text(sheet, model.info.coordinate_names),
                 "summary.txt": "\n".join(summary) + "\n"}
             if not args.no_figure:
                 progress("drawing the datasheet")
-                files["datasheet.png"] = datasheet.figure_png(sheet, f"{model.name}: datasheet over the usable "
+                files["datasheet.png"] = datasheet_files.figure_png(sheet, f"{model.name}: datasheet over the usable "
                                                                      "workspace")
     except (ValueError, KeyError) as err:
         analysis_args.fail_on_bad_input(args, err)
