@@ -27,7 +27,7 @@ from symkin.derivation import Derivation  # noqa: E402
 from symkin.ir.evaluate import lambdify_spec  # noqa: E402
 from symkin.model import load_model  # noqa: E402
 from symkin.stability.reference import DIGITS, BallReference  # noqa: E402
-from symkin.stability.states import home_pose, parameter_values  # noqa: E402
+from symkin.stability.states import scaled_home_pose, parameter_values  # noqa: E402
 from symkin.text_table import format_table  # noqa: E402
 
 QUANTITIES = ("closure", "jacobian", "mass_matrix", "coriolis_vector", "inverse_dynamics")
@@ -46,7 +46,7 @@ def main() -> None:
     model = load_model(ROOT / "models" / "stewart.yaml")
     derivation = Derivation(model)
     parameters = parameter_values(model)
-    home = np.asarray(home_pose(model), dtype=float)
+    home = np.asarray(scaled_home_pose(model), dtype=float)
     rows = []
     for name in QUANTITIES:
         spec = derivation[name]

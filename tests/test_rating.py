@@ -225,7 +225,7 @@ def damped_delta(tmp_path_factory):
     path = tmp_path_factory.mktemp("damped") / "delta.yaml"
     path.write_text((MODELS_DIR / "delta.yaml").read_text() + "\nfriction:\n"
                     + "".join(f"  theta{i}: {{viscous: 0.01}}\n" for i in (1, 2, 3)))
-    return Plant(model_files.load_model(str(path), "numpy", simulate_cmd.SIMULATION_OUTPUTS,
+    return Plant(model_files.generated_model(str(path), "numpy", simulate_cmd.SIMULATION_OUTPUTS,
                                           simulate_cmd.OPTIONAL_OUTPUTS))
 
 

@@ -87,11 +87,11 @@ def characteristic_length_of(model: GeneratedModel, limits: np.ndarray | None = 
     """Characteristic length of a model with a mixed task space, from a Sobol sample of its joint space.
 
     See :func:`symkin.analysis.conditioning.characteristic_length`; a platform at a constant
-    orientation is sampled over its Cartesian workspace (:func:`symkin.analysis.parallel.characteristic_length`).
+    orientation is sampled over its Cartesian workspace (:func:`symkin.analysis.parallel.platform_characteristic_length`).
     """
     limits = mechanism.joint_limits(model) if limits is None else limits
     if isinstance(model, parallel.ConstantOrientation):  # no fk: sampled over its Cartesian workspace
-        return parallel.characteristic_length(model, limits, seed)
+        return parallel.platform_characteristic_length(model, limits, seed)
     q = sampling.sobol(limits[:, 0], limits[:, 1], LENGTH_SAMPLES_LOG2, np.random.default_rng(seed))
     return conditioning.characteristic_length(mechanism.jacobian(model, q), mechanism.position_rows(model))
 

@@ -28,7 +28,7 @@ no closed-form fk and no ``jacobian``, only ``inverse_jacobian``.  They are anal
 constant orientation (:class:`ConstantOrientation`, Gosselin's constant-orientation
 workspace): platform centres p (3 coordinates) in, leg lengths out, the pose in the
 assembly mode of the home pose (sign of det J^-1), the 6 x 6 twist Jacobian for the
-conditioning (homogenized by a characteristic length, :func:`characteristic_length`), and
+conditioning (homogenized by a characteristic length, :func:`platform_characteristic_length`), and
 the Cartesian domain only.
 
 Length: the two adapters of parallel mechanisms to the analyses (working mode, constant
@@ -442,7 +442,7 @@ def constant_orientation_box(model: ConstantOrientation, limits: np.ndarray) -> 
 LENGTH_SAMPLES_LOG2 = 12
 
 
-def characteristic_length(model: ConstantOrientation, limits: np.ndarray, seed: int = 0) -> float:
+def platform_characteristic_length(model: ConstantOrientation, limits: np.ndarray, seed: int = 0) -> float:
     """The characteristic length of a platform at a constant orientation: the L minimizing the
     mean kappa_F^2 of the homogenized twist Jacobian over the reachable points of a Sobol
     sample of its workspace box (:func:`symkin.analysis.conditioning.characteristic_length`).

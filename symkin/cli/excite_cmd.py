@@ -53,7 +53,7 @@ def run(args: argparse.Namespace) -> int:
                 raise ValueError(f"--{name.replace('_', '-')} must be positive")
         if args.harmonics < 1 or args.periods < 1:
             raise ValueError("--harmonics and --periods must be at least 1")
-        model = model_files.load_model(args.model, "casadi", ("base_regressor",))
+        model = model_files.generated_model(args.model, "casadi", ("base_regressor",))
         values = analysis_args.parse_assignments(args.assignments)
         model = model.bind(**values) if values else model
         with Progress(model.name) as progress:

@@ -54,7 +54,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         if not 0.0 <= args.holdout < 1.0:
             raise ValueError(f"--holdout must lie in [0, 1), got {args.holdout:g}")
-        model = model_files.load_model(args.model, args.backend, IDENTIFY_OUTPUTS)
+        model = model_files.generated_model(args.model, args.backend, IDENTIFY_OUTPUTS)
         values = analysis_args.parse_assignments(args.assignments)
         model = model.bind(**values) if values else model
         coordinates = model.info.coordinate_names

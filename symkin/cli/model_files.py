@@ -41,7 +41,7 @@ def is_model_file(path: str | Path) -> bool:
     return Path(path).suffix.lower() in MODEL_FILE_SUFFIXES
 
 
-def load_model(path: str, backend: str = "numpy",
+def generated_model(path: str, backend: str = "numpy",
                outputs: Sequence[str] | Mapping[MechanismKind, Sequence[str]] = ANALYSIS_OUTPUTS,
                optional: Sequence[str] = ()) -> Any:
     """The loaded model of MODEL: a generated directory, or a model file derived on the fly.
@@ -63,7 +63,7 @@ def load_model(path: str, backend: str = "numpy",
 def load_models(path: str, backends: Sequence[str],
                 outputs: Sequence[str] | Mapping[MechanismKind, Sequence[str]] = ANALYSIS_OUTPUTS,
                 optional: Sequence[str] = ()) -> list[Any]:
-    """MODEL loaded once per backend (as :func:`load_model`); a model file is derived once, for all of them.
+    """MODEL loaded once per backend (as :func:`generated_model`); a model file is derived once, for all of them.
 
     ``outputs`` may map the kind of mechanism ("serial", "parallel") to the quantities
     to derive (e.g. fk for a serial arm, the closed-form ik for a parallel one).

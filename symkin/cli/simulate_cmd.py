@@ -166,7 +166,7 @@ def run(args: argparse.Namespace) -> int:
     from symkin.simulation.output import scenario_files
 
     try:
-        base = model_files.load_model(args.model, args.backend, SIMULATION_OUTPUTS, OPTIONAL_OUTPUTS)
+        base = model_files.generated_model(args.model, args.backend, SIMULATION_OUTPUTS, OPTIONAL_OUTPUTS)
         values = analysis_args.parse_assignments(args.assignments)
         if values:
             base = base.bind(**values)

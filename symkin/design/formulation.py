@@ -100,7 +100,7 @@ NO_VARIABLES = (casadi.MX(0, 1), np.empty(0), np.empty(0), np.empty(0))
 
 
 @dataclass
-class Program:
+class DesignProgram:
     """A nonlinear program min f(x) s.t. lbg <= g(x) <= ubg, lbx <= x <= ubx, and how to read it.
 
     Attributes:
@@ -137,7 +137,7 @@ class Program:
 
 
 def formulate(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model: GeneratedModel, *, nodes: int | None = None,
-              box_points: int = BOX_POINTS_PER_AXIS, seed: int = 0) -> Program:
+              box_points: int = BOX_POINTS_PER_AXIS, seed: int = 0) -> DesignProgram:
     """The CasADi program of a dimensioning problem.
 
     Each term is a CasADi function of one sample point and the free parameter values, built
@@ -168,7 +168,7 @@ def formulate(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model:
     if not reference > 0:
         raise ValueError(f"the {problem.objective} surrogate is 0 at the start design {problem.start}: "
                          "start from a design with a nonsingular, reachable workspace")
-    return Program(casadi.vertcat(z, terms.variables), -terms.objective / reference, terms.g,
+    return DesignProgram(casadi.vertcat(z, terms.variables), -terms.objective / reference, terms.g,
                    np.concatenate([start / scales, terms.start]),
                    np.concatenate([[p.lower for p in problem.free] / scales, terms.lower]),
                    np.concatenate([[p.upper for p in problem.free] / scales, terms.upper]),

@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 import casadi
 import numpy as np
 
-from symkin.design.formulation import Program
+from symkin.design.formulation import DesignProgram
 from symkin.design.problem import DesignProblem
 
 #: IPOPT options: quiet, tight tolerances (the problems are small and smooth).
@@ -58,7 +58,7 @@ class Solution:
     constraint_violation: float = 0.0
 
 
-def solve(problem: DesignProblem, program: Program, *, build_seconds: float = 0.0,
+def solve(problem: DesignProblem, program: DesignProgram, *, build_seconds: float = 0.0,
           options: dict | None = None) -> Solution:
     """Run IPOPT on the program and read the design off its solution."""
     start = time.perf_counter()

@@ -6,7 +6,7 @@ an extension module rendered from the manifest (``templates/c/python_module.c.j2
 library: a call with one configuration (each vector a float64 C-contiguous ndarray of its exact shape, or a
 list or tuple of floats), parameters as Python floats or ints, and optionally ``out=`` (an array, or a tuple
 of arrays for several outputs, written in place) is evaluated without leaving C; every other call is passed
-on, with the same arguments, to the ctypes binding's Python function (:func:`symkin.runtime.wrappers.make_function`),
+on, with the same arguments, to the ctypes binding's Python function (:func:`symkin.runtime.wrappers.wrap_function`),
 so batches, broadcasting, conversions and the numpy backend's errors stay as they are, and ``out=`` then
 receives a copy of the result.  The extension is built by the C backend's cached, locked build
 (:func:`symkin.backends.c.build.extension_module`); without Python's or numpy's headers, or if the build fails,

@@ -24,7 +24,7 @@ from symkin.backends.naming import c_symbol
 from symkin.errors import GeneratedCodeError
 from symkin.runtime.c_extension import entry_points
 from symkin.runtime.packed import single_kernel
-from symkin.runtime.wrappers import Kernel, SingleKernel, make_function
+from symkin.runtime.wrappers import Kernel, SingleKernel, wrap_function
 
 DOUBLE_SIZE = 8
 
@@ -119,5 +119,5 @@ def bind_library(directory: Path, manifest: dict[str, Any]) -> dict[str, Any]:
     functions = {}
     for record in manifest["functions"]:
         kernel, one = _kernels(library, model, record)
-        functions[record["name"]] = make_function(record, kernel, "c", single=one)
+        functions[record["name"]] = wrap_function(record, kernel, "c", single=one)
     return entry_points(path, header, manifest, functions) or functions

@@ -25,7 +25,7 @@ import numpy
 from symkin.backends.naming import casadi_file, matrix_shape
 from symkin.errors import GeneratedCodeError
 from symkin.runtime.packed import single_kernel
-from symkin.runtime.wrappers import Kernel, SingleKernel, make_function
+from symkin.runtime.wrappers import Kernel, SingleKernel, wrap_function
 
 #: How many batch sizes (mapped functions and their buffers) each function keeps per thread.
 CACHE_SIZE = 4
@@ -130,7 +130,7 @@ def bind_functions(directory: Path, manifest: dict[str, Any]) -> dict[str, Any]:
             raise GeneratedCodeError(f"{path} holds {function.name()}({', '.join(function.name_in())}), "
                                      f"not {record['name']}({', '.join(expected)}); derive the model again")
         kernel, one = _kernels(function, record)
-        wrapper = make_function(record, kernel, "casadi", single=one)
+        wrapper = wrap_function(record, kernel, "casadi", single=one)
         setattr(wrapper, "casadi", function)  # the raw casadi.Function, for AD and codegen
         functions[record["name"]] = wrapper
     return functions

@@ -153,7 +153,7 @@ def _iterate(start: np.ndarray, equations: Callable[[np.ndarray, np.ndarray], tu
                         residual.reshape(batch), step_norm.reshape(batch))
 
 
-def home_pose(model: GeneratedModel) -> np.ndarray:
+def _declared_home(model: GeneratedModel) -> np.ndarray:
     """The model's declared home pose (task coordinates at the default parameters).
 
     Raises:
@@ -188,7 +188,7 @@ def solve_fk(model: GeneratedModel, q, p0=None, *, tol: float = 1e-12, max_itera
     constraints = _function(model, "constraints", "solve_fk")
     jacobians = _function(model, "constraint_jacobians", "solve_fk")
     q = np.asarray(q, dtype=float)
-    p0 = home_pose(model) if p0 is None else np.asarray(p0, dtype=float)
+    p0 = _declared_home(model) if p0 is None else np.asarray(p0, dtype=float)
     batch = np.broadcast_shapes(q.shape[:-1], p0.shape[:-1])
     q = np.broadcast_to(q, batch + q.shape[-1:])
     start = np.broadcast_to(p0, batch + p0.shape[-1:])

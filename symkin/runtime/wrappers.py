@@ -5,7 +5,7 @@ The numpy backend's generated functions define the Python interface of every mod
 shape, keyword-only parameters that broadcast against the batch, outputs of shape
 batch + output shape (a namedtuple when there are several), and ``ValueError`` messages
 such as ``fk(): 'q' must have shape (..., 6), got (5,)``.  The C and CasADi loaders wrap
-their kernels with :func:`make_function`, which gives them the same interface from the
+their kernels with :func:`wrap_function`, which gives them the same interface from the
 manifest alone: the function is a real Python ``def`` (compiled from a signature built of
 validated identifiers and float literals), so argument binding, ``inspect.signature``,
 ``functools.partial`` and the TypeErrors of a wrong call are those of the numpy module.
@@ -92,7 +92,7 @@ def signature_text(record: dict[str, Any]) -> str:
     return ", ".join(vectors + (["*"] if params else []) + params)
 
 
-def make_function(record: dict[str, Any], kernel: Kernel, backend: str,
+def wrap_function(record: dict[str, Any], kernel: Kernel, backend: str,
                   single: SingleKernel | None = None) -> Callable[..., Any]:
     """The Python function of the manifest function ``record`` evaluated by ``kernel``.
 

@@ -128,7 +128,7 @@ class Timing:
         return max(1, int(round(self.duration * self.rate)))
 
 
-def integrate(system: ArmSystem, control, x0: np.ndarray, timing: Timing) -> Run:
+def run_loop(system: ArmSystem, control, x0: np.ndarray, timing: Timing) -> Run:
     """Run the loop with the chosen integrator (see :mod:`symkin.simulation.integrate`); the controller's
     command reaches the actuated joints only (:meth:`Plant.drive`), and the run records what they exert."""
     if system.plant.passive:
@@ -252,7 +252,7 @@ def sine(designs: Sequence[tuple[str, Plant]], center: np.ndarray, joint: int, a
         tau = plant.torque(q, qd, qdd)
         force = tcp_forces(plant.task_jacobian(q), tau)
         system, stability = _system(plant, center, stops, timing)
-        run = integrate(system, ComputedTorque(system, reference), system.initial(q[0], qd[0]), timing)
+        run = run_loop(system, ComputedTorque(system, reference), system.initial(q[0], qd[0]), timing)
         report = stop_report(system, run, stability)
         simulated = system.split(run.x)
         error = _peak(simulated.q - q)
@@ -297,7 +297,7 @@ def tracking(label: str, plant: Plant, q_start: np.ndarray, radius: float, timin
     require_actuated(plant, "tracking")
     reference = task_circle(plant, q_start, radius, timing.duration)
     system, stability = _system(plant, q_start, stops, timing)
-    run = integrate(system, ComputedTorque(system, reference, bandwidth), system.initial(q_start), timing)
+    run = run_loop(system, ComputedTorque(system, reference, bandwidth), system.initial(q_start), timing)
     report = stop_report(system, run, stability)
     q_r = reference(run.t)[0]
     s = system.split(run.x)
@@ -343,7 +343,7 @@ def haptic_wall(label: str, plant: Plant, q_start: np.ndarray, wall_offset: floa
     wall = Wall(normal, float(p0 @ normal) + wall_offset, stiffness, damping)
     system, stability = _system(plant, q_start, stops, timing, user)
     renderer = WallRenderer(system, wall, force_gain)
-    run = integrate(system, renderer, system.initial(q_start), timing)
+    run = run_loop(system, renderer, system.initial(q_start), timing)
     report = stop_report(system, run, stability)
     s = system.split(run.x)
     p = plant.point(s.q)
@@ -401,7 +401,7 @@ def gravity_compensation(label: str, plant: Plant, q_start: np.ndarray, travel: 
     _, efforts = labels.joint_units(plant)
     for run_label, control in runs:
         system, stability = _system(plant, q_start, stops, timing, user)
-        run = integrate(system, control, system.initial(q_start), timing)
+        run = run_loop(system, control, system.initial(q_start), timing)
         report = stop_report(system, run, stability)
         s = system.split(run.x)
         p, _, v = system.tcp_motion(s.q, s.qd)
@@ -441,7 +441,7 @@ def free_swing(label: str, plant: Plant, q_start: np.ndarray, timing: Timing,
     (with stops: k + u + U + D, U stored in and D dissipated by them)."""
     system, stability = _system(plant, q_start, stops, timing)
     zero = np.zeros(plant.dof)
-    run = integrate(system, lambda t, x: zero, system.initial(q_start), timing)
+    run = run_loop(system, lambda t, x: zero, system.initial(q_start), timing)
     report = stop_report(system, run, stability)
     s = system.split(run.x)
     energy = plant.energy(s.q, s.qd)

@@ -72,7 +72,7 @@ def parameter_values(model: Model, scale: float = 1.0) -> dict[str, float]:
     return {p.name: float(p.value) * (scale if p.name in lengths else 1.0) for p in model.parameters}
 
 
-def characteristic_length(model: Model, scale: float = 1.0) -> float:
+def model_size(model: Model, scale: float = 1.0) -> float:
     """The largest length parameter (m) at ``scale``: the size of a parallel mechanism."""
     values = parameter_values(model, scale)
     return max((abs(values[name]) for name in length_parameters(model)), default=scale)
@@ -82,7 +82,7 @@ def _task_is_position(model: Model) -> np.ndarray:
     return np.array([TASK_UNITS[c] == "m" for c in model.task_space])
 
 
-def home_pose(model: Model, scale: float = 1.0) -> np.ndarray:
+def scaled_home_pose(model: Model, scale: float = 1.0) -> np.ndarray:
     """The model's ``home`` task coordinates, positions multiplied by ``scale``."""
     assert model.parallel is not None
     if model.parallel.home is None:
@@ -114,7 +114,7 @@ def random_states(model: Model, count: int, rng: np.random.Generator, *, scale: 
     """``count`` random states; qd, qdd, tau uniform in [-1, 1].
 
     Serial: q uniform within the joint ranges (:func:`coordinate_range`).  Parallel (``ik``
-    required): p uniform around :func:`home_pose` (+-POSITION_SPREAD characteristic lengths,
+    required): p uniform around :func:`scaled_home_pose` (+-POSITION_SPREAD characteristic lengths,
     +-ORIENTATION_SPREAD rad), kept where the mechanism assembles, q = ik(p).  ``scale``
     multiplies every length (parameters and positions).
     """
@@ -124,9 +124,9 @@ def random_states(model: Model, count: int, rng: np.random.Generator, *, scale: 
     if ik is None:
         raise ValueError("random states of a parallel mechanism need its generated ik")
     parameters = parameter_values(model, scale)
-    spread = np.where(_task_is_position(model), POSITION_SPREAD * characteristic_length(model, scale),
+    spread = np.where(_task_is_position(model), POSITION_SPREAD * model_size(model, scale),
                       ORIENTATION_SPREAD)
-    home = home_pose(model, scale)
+    home = scaled_home_pose(model, scale)
     ps, qs = [], []
     for _attempt in range(50):
         p = home + rng.uniform(-1.0, 1.0, size=(2 * count, len(home))) * spread
@@ -187,7 +187,7 @@ def _serial_sweep(model: Model, rng: np.random.Generator) -> _Sweep:
 
 def _parallel_sweep(model: Model, rng: np.random.Generator, ik: IK) -> _Sweep:
     parameters = parameter_values(model)
-    length = characteristic_length(model)
+    length = model_size(model)
     position = _task_is_position(model)
 
     def configure(p: np.ndarray) -> States:
