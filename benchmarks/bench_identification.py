@@ -49,7 +49,7 @@ def main(argv: list[str] | None = None) -> int:
             names = arm.info.functions["base_regressor"].outputs["pi_b"]
             start = time.perf_counter()
             Y_b = arm.base_regressor(q, qd, qdd)[0]
-            found = identification.estimate(Y_b, tau, names, "wls")
+            found = identification.least_squares(Y_b, tau, names, "wls")
             rows.append([f"identify {args.samples} samples, WLS ({backend} base regressor)",
                          f"{time.perf_counter() - start:.2f} s", "<= 10 s"])
         Y = arm.regressor(q, qd, qdd)[0]  # K of Y = Y_b K for identified.yaml: spread states against all of them

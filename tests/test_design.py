@@ -178,6 +178,16 @@ def test_cli_on_a_model_file_writes_figures_and_result(tmp_path, capsys):
     assert result["ipopt"]["history"][-1] == pytest.approx(result["surrogate_value"]["optimum"])
 
 
+def test_cli_dimensions_a_parallel_model_file(tmp_path, capsys):
+    """A parallel model file is derived with its closed-form fk too: the rating checks the working mode with it."""
+    out = tmp_path / "pantograph"
+    assert main(["optimize", str(MODELS_DIR / "pantograph.yaml"), "--free", "l,L", "--bounds", "l=0.05:0.1,L=0.07:0.12",
+                 "--require-box", "x=-0.03:0.03,y=0.08:0.12", "-n", "64", "--no-cache", "-o", str(out)]) == 0
+    result = json.loads((out / "result.json").read_text())
+    assert result["evaluation"]["optimum"]["gci"] > result["evaluation"]["start"]["gci"]
+    assert "fk(ik(x)) = x" in capsys.readouterr().out
+
+
 @pytest.mark.parametrize("arguments, message", [
     ([ARM_DIR, "--free", "l3"], "'l3' is not a free parameter of the model; parameters: g, l1, l2, m1, m2"),
     ([ARM_DIR, "--free", "m1"], "the objective does not depend on 'm1'"),

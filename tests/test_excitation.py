@@ -37,7 +37,7 @@ def arm(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def optimum(arm):
-    return excitation.optimize(arm[1], period=PERIOD, harmonics=HARMONICS, max_velocity=SPEED,
+    return excitation.optimize_excitation(arm[1], period=PERIOD, harmonics=HARMONICS, max_velocity=SPEED,
                                max_acceleration=ACCELERATION, max_iterations=80)
 
 
@@ -72,7 +72,7 @@ def test_a_run_along_the_optimum_identifies_the_arm(arm, optimum):
     tau = numpy_arm.inverse_dynamics(q, qd, qdd) + np.random.default_rng(5).normal(0.0, noise, q.shape)
     Y_b, pi_b = numpy_arm.base_regressor(q, qd, qdd)
     names = numpy_arm.info.functions["base_regressor"].outputs["pi_b"]
-    found = identification.estimate(Y_b, tau, names, "wls")
+    found = identification.least_squares(Y_b, tau, names, "wls")
     assert np.all(np.abs(found.values - pi_b[0]) < 5 * found.std)
 
 
@@ -101,12 +101,12 @@ def test_the_command_writes_a_trajectory_symkin_identify_reads(tmp_path):
 
 def test_a_missing_bound_is_refused(arm):
     with pytest.raises(ValueError, match="--max-velocity"):
-        excitation.optimize(arm[1], max_acceleration=ACCELERATION)
+        excitation.optimize_excitation(arm[1], max_acceleration=ACCELERATION)
 
 
 def test_limits_given_for_the_run_replace_the_models(arm):
     """--limit narrows the motion (here theta1 to [0.2, 0.8] rad), and the bounds hold for all t."""
-    found = excitation.optimize(arm[1], period=PERIOD, harmonics=2, max_velocity=SPEED,
+    found = excitation.optimize_excitation(arm[1], period=PERIOD, harmonics=2, max_velocity=SPEED,
                                 max_acceleration=ACCELERATION, max_iterations=20, limits={"theta1": (0.2, 0.8)})
     q = found.states(np.linspace(0.0, PERIOD, 20001))[0]
     assert np.min(q[:, 0]) >= 0.2

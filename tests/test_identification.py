@@ -70,7 +70,7 @@ def test_a_simulated_run_gives_back_the_models_base_parameters(arm, method):
     t, q, qd, qdd, tau = _run(arm)
     Y_b, pi_b = arm.base_regressor(q, qd, qdd)
     names = arm.info.functions["base_regressor"].outputs["pi_b"]
-    found = identification.estimate(Y_b, tau, names, method)
+    found = identification.least_squares(Y_b, tau, names, method)
     error = np.abs(found.values - pi_b[0]) / found.std
     assert np.all(error < 5), dict(zip(names, error))           # 5 standard deviations: 1 in 1.7 million
     assert np.median(error) < 1.5                                 # and distributed as standard deviations are
@@ -133,12 +133,12 @@ def test_a_run_that_does_not_excite_a_parameter_or_a_combination_names_them(arm)
     still = q.copy(), qd.copy(), qdd.copy()
     still[0][:, 1], still[1][:, 1], still[2][:, 1] = 0.3, 0.0, 0.0
     with pytest.raises(identification.DataError, match="does not excite theta2.Ia, theta2.fv, theta2.fc"):
-        identification.estimate(arm.base_regressor(*still)[0], arm.inverse_dynamics(*still), names)
+        identification.least_squares(arm.base_regressor(*still)[0], arm.inverse_dynamics(*still), names)
     still = q.copy(), qd.copy(), qdd.copy()
     still[0][:, 0], still[1][:, 0], still[2][:, 0] = 0.3, 0.0, 0.0
     inertial = [k for k, name in enumerate(names) if name.startswith("link") and name != "link1.IzzR"]
     with pytest.raises(identification.DataError, match="does not identify the combination of link1.m"):
-        identification.estimate(arm.base_regressor(*still)[0][..., inertial], arm.inverse_dynamics(*still),
+        identification.least_squares(arm.base_regressor(*still)[0][..., inertial], arm.inverse_dynamics(*still),
                                 [names[k] for k in inertial])
 
 
@@ -146,7 +146,7 @@ def test_too_few_samples_for_the_base_parameters_are_refused(arm):
     t, q, qd, qdd, tau = _run(arm)
     Y_b, _ = arm.base_regressor(q[:5], qd[:5], qdd[:5])
     with pytest.raises(identification.DataError, match="5 samples give 10 equations for 13 base parameters"):
-        identification.estimate(Y_b, tau[:5], arm.info.functions["base_regressor"].outputs["pi_b"])
+        identification.least_squares(Y_b, tau[:5], arm.info.functions["base_regressor"].outputs["pi_b"])
 
 
 def test_the_consistent_estimate_is_physical_and_fits_the_run(arm):
@@ -161,7 +161,7 @@ def test_the_consistent_estimate_is_physical_and_fits_the_run(arm):
     Y, pi = arm.regressor(q, qd, qdd)
     Y_b, pi_b = arm.base_regressor(q, qd, qdd)
     base_names = arm.info.functions["base_regressor"].outputs["pi_b"]
-    wls = identification.estimate(Y_b, tau, base_names, "wls")
+    wls = identification.least_squares(Y_b, tau, base_names, "wls")
     triangle, target = identification.weighted_triangle(Y, tau, 1.0 / wls.joint_std)
     prior = pi[0].copy()
     prior[:20] *= 1.3

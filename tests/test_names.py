@@ -38,16 +38,7 @@ SAME_MEANING = {
     "clear": "clearing a cache: the C build cache and the derivation cache",
 }
 #: Two meanings still: renamed one at a time (issue 35).
-TO_RENAME = {
-    "estimate": "analysis.consistent.estimate (the physically consistent estimate) and "
-                "analysis.identification.estimate (least squares)",
-    "Estimate": "analysis.estimates.Estimate (a value with its error) and analysis.identification.Estimate",
-    "grid": "analysis.integrators.grid (a quadrature rule) and analysis.sampling.grid (sample points)",
-    "render": "backends.templating.render (jinja2) and stability.report.render (the report's text)",
-    "optimize": "optimize.optimize (the IR passes) and design.excitation.optimize (the excitation trajectory)",
-    "Solution": "design.solve.Solution (an optimized design) and parallel.closed_form.Solution (a closed form "
-                "with its margin)",
-}
+TO_RENAME: dict[str, str] = {}
 
 
 def defined_names() -> dict[str, list[str]]:

@@ -170,7 +170,7 @@ def _differentiated(source: str, time: np.ndarray, q: np.ndarray, tau: np.ndarra
 
 
 @dataclass(frozen=True)
-class Estimate:
+class LeastSquaresEstimate:
     """Base parameters estimated from a run.
 
     Attributes:
@@ -227,7 +227,7 @@ def _solve(W: np.ndarray, y: np.ndarray, names: Sequence[str]) -> tuple[np.ndarr
     return pi, inverse, float(S[0] / S[-1])
 
 
-def estimate(Y_b: np.ndarray, tau: np.ndarray, names: Sequence[str], method: str = "ols") -> Estimate:
+def least_squares(Y_b: np.ndarray, tau: np.ndarray, names: Sequence[str], method: str = "ols") -> LeastSquaresEstimate:
     """Least-squares base parameters from the base regressor ``Y_b`` (N, n, b) and the efforts ``tau`` (N, n).
 
     Raises:
@@ -250,7 +250,7 @@ def estimate(Y_b: np.ndarray, tau: np.ndarray, names: Sequence[str], method: str
                                         (tau * weights).reshape(-1), names)
         residual = (tau - Y_b @ pi) * weights
     variance = float(np.sum(residual ** 2) / dof)
-    return Estimate(tuple(names), pi, np.sqrt(variance * np.diag(inverse)), method, joint_std, condition, samples)
+    return LeastSquaresEstimate(tuple(names), pi, np.sqrt(variance * np.diag(inverse)), method, joint_std, condition, samples)
 
 
 @dataclass(frozen=True)

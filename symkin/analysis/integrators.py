@@ -35,7 +35,7 @@ from symkin.analysis.integrand import Integrand
 QMC_REPLICATES = 16
 
 
-def grid(integrand: Integrand, samples: int, *, rng: np.random.Generator | None = None) -> IntegralEstimate:
+def midpoint_grid(integrand: Integrand, samples: int, *, rng: np.random.Generator | None = None) -> IntegralEstimate:
     """Tensor midpoint rule with a three-level difference as error estimate (``rng`` is unused)."""
     d = integrand.dimension
     n = 4
@@ -103,7 +103,7 @@ def adaptive_integrator(integrand: Integrand, samples: int, *, rng: np.random.Ge
 
 #: The integrators by name (``--method`` of ``symkin gci``).
 INTEGRATORS: dict[str, Callable[..., IntegralEstimate]] = {
-    "grid": grid,
+    "grid": midpoint_grid,
     "mc": monte_carlo,
     "qmc": quasi_monte_carlo,
     "adaptive": adaptive_integrator,

@@ -44,7 +44,7 @@ def run(args: argparse.Namespace) -> int:
         result = run_stability(model, samples=args.samples, scale_samples=args.scale_samples,
                                float32_samples=args.float32_samples, quantities=only, seed=args.seed,
                                progress=progress)
-    print(report.render(result))
+    print(report.report_text(result))
     if args.csv:
         report.write_csv(result, args.csv)
         print(f"records written to {args.csv}")

@@ -58,7 +58,7 @@ def run(args: argparse.Namespace) -> int:
         model = model.bind(**values) if values else model
         with Progress(model.name) as progress:
             progress(f"optimizing {len(model.info.coordinates) * (2 * args.harmonics + 1)} coefficients with IPOPT")
-            found = excitation.optimize(model, period=args.period, harmonics=args.harmonics, samples=args.samples,
+            found = excitation.optimize_excitation(model, period=args.period, harmonics=args.harmonics, samples=args.samples,
                                         max_velocity=args.max_velocity, max_acceleration=args.max_acceleration,
                                         seed=args.seed, limits=analysis_args.parse_limits(args.limits),
                                         max_iterations=args.max_iterations)

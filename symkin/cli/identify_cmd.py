@@ -64,7 +64,7 @@ def run(args: argparse.Namespace) -> int:
         with Progress(model.name) as progress:
             progress(f"estimating {len(names)} base parameters from {len(fit.time)} samples")
             Y_b, pi_model = model.base_regressor(fit.q, fit.qd, fit.qdd)
-            found = identification.estimate(Y_b, fit.tau, names, "ols" if args.method == "ols" else "wls")
+            found = identification.least_squares(Y_b, fit.tau, names, "ols" if args.method == "ols" else "wls")
             predict = None
             if len(held.time):
                 Y_held = model.base_regressor(held.q, held.qd, held.qdd)[0]

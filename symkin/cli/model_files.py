@@ -112,7 +112,8 @@ def _derived(source: Path, backends: Sequence[str], outputs: Sequence[str] | Map
     wanted = outputs.get(analysis_kind(model), ANALYSIS_OUTPUTS) if isinstance(outputs, Mapping) else outputs
     if isinstance(outputs, Mapping) and _limits_passive_joints(model):
         wanted = (*wanted, *PASSIVE_LIMIT_OUTPUTS)
-    request = pipeline.resolve_request(model, ",".join([*wanted, *Derivation(model).available(optional)[0]]),
+    names = dict.fromkeys([*wanted, *Derivation(model).available(optional)[0]])  # in order, each once
+    request = pipeline.resolve_request(model, ",".join(names),
                                        ",".join(backends), None)
     with Progress(model.name) as progress:
         generation = pipeline.generate(model, request, progress)

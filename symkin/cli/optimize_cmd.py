@@ -74,7 +74,8 @@ def run(args: argparse.Namespace) -> int:
             progress("loading the generated code")
             outputs = {kind: design.needed_functions(kind is MechanismKind.PARALLEL)
                        for kind in (MechanismKind.SERIAL, MechanismKind.PARALLEL)}
-            numpy_model, casadi_model = model_files.load_models(args.model, ("numpy", "casadi"), outputs)
+            # a parallel model's rating checks the working mode by its closed-form fk, where it has one
+            numpy_model, casadi_model = model_files.load_models(args.model, ("numpy", "casadi"), outputs, ("fk",))
             problem = design.design_problem(numpy_model, args.maximize, free, bounds=bounds, values=values, box=box,
                                             margin=args.margin, limits=limits, length=args.length)
             progress("building the CasADi program")

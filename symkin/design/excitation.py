@@ -107,7 +107,7 @@ def _limits(model: GeneratedModel, velocity: float | None, acceleration: float |
     return np.array(lower), np.array(upper), np.array(speeds, dtype=float), np.full(n, float(acceleration))
 
 
-def optimize(model: GeneratedModel, *, period: float = 10.0, harmonics: int = 5, samples: int | None = None,
+def optimize_excitation(model: GeneratedModel, *, period: float = 10.0, harmonics: int = 5, samples: int | None = None,
              max_velocity: float | None = None, max_acceleration: float | None = None, seed: int = 0,
              limits: dict[str, tuple[float, float]] | None = None, max_iterations: int = 200) -> Excitation:
     """The excitation trajectory of the module docstring for ``model`` (loaded with ``backend="casadi"``, with

@@ -86,7 +86,7 @@ from symkin.parallel.distance import DistanceLeg
 
 
 @dataclass(frozen=True)
-class Solution:
+class ClosedForm:
     """A closed-form solution and its margin (>= 0 iff it is real)."""
 
     value: sympy.Expr
@@ -117,7 +117,7 @@ def trig_coefficients(f: sympy.Expr, v: sympy.Symbol) -> tuple[sympy.Expr, sympy
     return alpha, beta, gamma
 
 
-def solve_leg(leg: DistanceLeg) -> Solution:
+def solve_leg(leg: DistanceLeg) -> ClosedForm:
     """q_i(p) of one leg in distance form, with the branch ``leg.leg.ik_branch``.
 
     Raises:
@@ -142,7 +142,7 @@ def solve_leg(leg: DistanceLeg) -> Solution:
         c2, c1, c0 = (poly.coeff_monomial(v**k) for k in (2, 1, 0))
         margin = c1**2 - 4 * c2 * c0
         value = (-c1 + sigma * sympy.sign(c2) * sympy.sqrt(margin)) / (2 * c2)
-    return Solution(value - leg.offset, margin)
+    return ClosedForm(value - leg.offset, margin)
 
 
 def trilaterate(legs: tuple[DistanceLeg, ...], sigma: int) -> tuple[sympy.Matrix, sympy.Expr]:

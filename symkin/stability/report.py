@@ -87,7 +87,7 @@ def formula_table(run: StabilityRun) -> str:
     return "\n".join(blocks)
 
 
-def render(run: StabilityRun) -> str:
+def report_text(run: StabilityRun) -> str:
     """The whole text report."""
     passed, worst = run.acceptance()
     random = run.select("random")
