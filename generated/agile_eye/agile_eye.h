@@ -74,7 +74,7 @@ void agile_eye_ik_batch(size_t n, const double *p, double *joints, double *margi
  *
  * Orthogonal spherical platform (the Agile Eye; Bonev, Chablat and Wenger 2006): the
  * platform axes f_i = R b_i are an orthonormal frame with f_i . C_i = 0; f_1 = cos phi u
- * + sin phi v about the first middle axis, f_2 ~ C_2 x f_1, and f_3 . C_3 = 0 gives X
+ * + sin phi v about the first middle axis, f_3 ~ C_3 x f_1, and f_2 . C_2 = 0 gives X
  * cos 2 phi + Y sin 2 phi = Z in closed form (symkin.parallel.closed_form). Of its eight
  * solutions the one with the home pose's root and the legs' ik branches is returned;
  * where the margin is negative the legs cannot be assembled and the orientation is NaN.

@@ -157,6 +157,16 @@ def _dynamics(model: GeneratedModel, name: str, q: np.ndarray, poses: np.ndarray
     return function(q, poses) if mechanism.is_parallel(model) else function(q)
 
 
+def _usable(keep: np.ndarray, conditioning: float, *jacobians: np.ndarray) -> np.ndarray:
+    """``keep`` where 1/kappa of every Jacobian is at least ``conditioning``; the last sample, the home pose, is kept
+    whatever (a datasheet quotes it)."""
+    with np.errstate(invalid="ignore"):
+        for J in jacobians:
+            keep = keep & (np.nan_to_num(inverse_condition_number(J), nan=0.0) >= conditioning)
+    keep[-1] = True
+    return keep
+
+
 #: The usable workspace a datasheet rates: where 1/kappa of J's translational rows is at least this (near a
 #: singularity the apparent mass and the force capability diverge, and no device is used there).
 USABLE_CONDITIONING = 0.05
@@ -204,12 +214,9 @@ def rate(model: GeneratedModel, actuation: Actuation, *, samples: int = 4096, se
     points = np.concatenate([cloud.points, mechanism.tcp_positions(model, home[None])])
     keep = np.all(np.isfinite(points), axis=-1)
     if box:
-        keep &= _within(points, cloud.axes, box)
-        keep[-1] = True  # the home pose is quoted whether or not it lies in the box
+        keep &= _within(points, cloud.axes, box)  # the home pose (last) is quoted anyway: _usable keeps it
     J = mechanism.jacobian(model, q, points if mechanism.is_parallel(model) else None)[..., rows, :]
-    with np.errstate(invalid="ignore"):
-        keep &= np.nan_to_num(inverse_condition_number(J), nan=0.0) >= conditioning
-    keep[-1] = True
+    keep = _usable(keep, conditioning, J)
     q, points, J = q[keep], points[keep], J[keep]
     if len(q) < 2:
         raise ValueError(f"{model.name}: no sampled pose lies in the box {dict(box or {})} with 1/kappa >= "
@@ -253,10 +260,7 @@ def rate_pose_platform(model: GeneratedModel, actuation: Actuation, *, samples: 
         keep &= _within(points, mechanism.POSITION_COMPONENTS, box)
     twist = view.jacobian(q, points)
     J_v, J_w = twist[..., :3, :], twist[..., 3:, :]
-    with np.errstate(invalid="ignore"):
-        keep &= np.nan_to_num(inverse_condition_number(J_v), nan=0.0) >= conditioning
-        keep &= np.nan_to_num(inverse_condition_number(J_w), nan=0.0) >= conditioning
-    keep[-1] = True  # the home pose is quoted whether or not it lies in the box
+    keep = _usable(keep, conditioning, J_v, J_w)
     q, points, J_v, J_w = q[keep], points[keep], J_v[keep], J_w[keep]
     if len(q) < 2:
         raise ValueError(f"{model.name}: no reachable platform centre at the orientation "
@@ -299,9 +303,7 @@ def rate_orientation_platform(model: GeneratedModel, actuation: Actuation, *, sa
     points = np.concatenate([points, mechanism.home_pose(model)[None]])  # the home pose is quoted anyway
     q = np.asarray(model.ik(points).joints, dtype=float)
     J_w = angular_velocity_matrix(points) @ model.jacobian(q, points)
-    with np.errstate(invalid="ignore"):
-        keep = np.nan_to_num(inverse_condition_number(J_w), nan=0.0) >= conditioning
-    keep[-1] = True
+    keep = _usable(np.ones(len(q), dtype=bool), conditioning, J_w)
     q, points, J_w = q[keep], points[keep], J_w[keep]
     if len(q) < 2:
         raise ValueError(f"{model.name}: no reachable orientation in the box {dict(box or {})} has 1/kappa >= "
