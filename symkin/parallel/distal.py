@@ -43,7 +43,7 @@ class _Link:
     """One distal link's vectors bound into a program."""
 
     def __init__(self, program: Program, link: DistalLink, p: list[sympy.Symbol]):
-        self.program, self.link = program, link
+        self.program = program
         C, B = sympy.Matrix(link.C), sympy.Matrix(link.B)
         C_q = sympy.diff(C, link.q)
         B_p = [sympy.diff(B, s) for s in p]
@@ -103,7 +103,7 @@ class DistalLinks:
     legs' actuated rates (n) and pd the platform's (n)."""
 
     def __init__(self, program: Program, links: tuple[DistalLink, ...], q: list[se.Basic], p: list[sympy.Symbol]):
-        self.program, self.q = program, q
+        self.program = program
         self.links = [_Link(program, link, p) for link in links]
         self.leg_of = [q.index(se.sympify(link.q)) for link in links]
 
