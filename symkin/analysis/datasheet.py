@@ -19,56 +19,12 @@ from typing import Any
 
 import numpy as np
 
-from symkin.analysis import forces, mechanism, rating, workspace
+from symkin.analysis import mechanism, workspace
 from symkin.analysis.conditioning import inverse_condition_number
+from symkin.analysis.handle_measures import (ROTATIONAL_FRICTION, Actuation, Measure, dynamics_at, friction_measures,
+                                             gravity_share_measure, rotation_measures, translation_measures)
+from symkin.analysis.orientations import ANGLES
 from symkin.runtime.info import GeneratedModel
-
-
-@dataclass(frozen=True)
-class Measure:
-    """One row of the datasheet: a name, its unit, its value at every sample and whether its worst value
-    is its smallest (a force) or its largest (a mass, a resolution step)."""
-
-    name: str
-    unit: str
-    values: np.ndarray
-    worst_is_min: bool
-    doc: str
-
-
-@dataclass(frozen=True)
-class Actuation:
-    """What the rating needs beyond the generated functions, per joint (None: not known).
-
-    Attributes:
-        effort_limits: peak efforts tau_max (N m or N).
-        continuous_limits: efforts the drives hold for long.
-        joint_steps: encoder steps at the joints (rad or m per count).
-        coulomb, viscous: joint friction (N m or N; N m s/rad or N s/m).
-        period: servo period T (s).
-    """
-
-    effort_limits: np.ndarray | None = None
-    continuous_limits: np.ndarray | None = None
-    joint_steps: np.ndarray | None = None
-    coulomb: np.ndarray | None = None
-    viscous: np.ndarray | None = None
-    period: float = 1e-3
-
-    @classmethod
-    def of_model(cls, model: GeneratedModel, *, effort_limits: Sequence[float] | None = None,
-                 joint_steps: Sequence[float] | None = None, period: float = 1e-3) -> Actuation:
-        """The model's declared data (effort limits, continuous effort, friction), overridden by the arguments."""
-        coordinates = model.info.coordinates
-
-        def declared(values: Sequence[float | None]) -> np.ndarray | None:
-            return None if any(v is None for v in values) else np.array(values, dtype=float)
-
-        efforts = (np.array(effort_limits, dtype=float) if effort_limits is not None
-                   else declared([c.effort_limit for c in coordinates]))
-        return cls(efforts, declared([c.continuous_effort_limit for c in coordinates]),
-                   None if joint_steps is None else np.array(joint_steps, dtype=float),
-                   declared([c.coulomb for c in coordinates]), declared([c.viscous for c in coordinates]), period)
 
 
 @dataclass(frozen=True)
@@ -116,12 +72,9 @@ class Datasheet:
         return lines
 
 
-#: The handle's coordinates a datasheet maps: positions (m, drawn in mm) or a spherical platform's angles (rad, deg).
-ANGLES = ("roll", "pitch", "yaw")
-
-
 def axis_scale(axes: Sequence[str]) -> tuple[float, str, str]:
-    """(drawing scale, drawing unit, SI unit) of the handle's coordinates: mm of m, or deg of rad."""
+    """(drawing scale, drawing unit, SI unit) of the handle's coordinates: positions (mm of m) or a spherical
+    platform's angles (deg of rad)."""
     return (180.0 / np.pi, "deg", "rad") if set(axes) <= set(ANGLES) else (1000.0, "mm", "m")
 
 
@@ -149,12 +102,6 @@ def _within(points: np.ndarray, axes: Sequence[str], box: Mapping[str, tuple[flo
         column = points[:, list(axes).index(name)]
         inside &= (column >= low) & (column <= high)
     return inside
-
-
-def _dynamics(model: GeneratedModel, name: str, q: np.ndarray, poses: np.ndarray) -> np.ndarray:
-    """A generated dynamics function at the samples: of q (a serial arm), of (q, p) (a parallel platform)."""
-    function = getattr(model, name)
-    return function(q, poses) if mechanism.is_parallel(model) else function(q)
 
 
 def _usable(keep: np.ndarray, conditioning: float, *jacobians: np.ndarray) -> np.ndarray:
@@ -221,8 +168,8 @@ def rate(model: GeneratedModel, actuation: Actuation, *, samples: int = 4096, se
     if len(q) < 2:
         raise ValueError(f"{model.name}: no sampled pose lies in the box {dict(box or {})} with 1/kappa >= "
                          f"{conditioning:g}")
-    M = _dynamics(model, "mass_matrix", q, points)
-    measures, skipped = _measures(model, J, M, q, points, actuation)
+    M = dynamics_at(model, "mass_matrix", q, points)
+    measures, skipped = translation_measures(model, J, M, q, points, actuation)
     return Datasheet(model.name, q, points, cloud.axes, measures, len(q) - 1, skipped)
 
 
@@ -267,10 +214,10 @@ def rate_pose_platform(model: GeneratedModel, actuation: Actuation, *, samples: 
                          f"{parallel.orientation_text(view)} lies in the box {dict(box or {})} with 1/kappa >= "
                          f"{conditioning:g}")
     poses = view.poses(points)
-    M = _dynamics(model, "mass_matrix", q, poses)
-    measures, skipped = _measures(model, J_v, M, q, poses, actuation)
+    M = dynamics_at(model, "mass_matrix", q, poses)
+    measures, skipped = translation_measures(model, J_v, M, q, poses, actuation)
     return Datasheet(model.name, q, points, mechanism.POSITION_COMPONENTS,
-                     measures + _rotation_measures(J_w, M, actuation), len(q) - 1, skipped)
+                     measures + rotation_measures(J_w, M, actuation), len(q) - 1, skipped)
 
 
 def rate_orientation_platform(model: GeneratedModel, actuation: Actuation, *, samples: int = 4096, seed: int = 0,
@@ -308,91 +255,17 @@ def rate_orientation_platform(model: GeneratedModel, actuation: Actuation, *, sa
     if len(q) < 2:
         raise ValueError(f"{model.name}: no reachable orientation in the box {dict(box or {})} has 1/kappa >= "
                          f"{conditioning:g}")
-    M = _dynamics(model, "mass_matrix", q, points)
-    measures, skipped = _rotation_measures(J_w, M, actuation), {}
+    M = dynamics_at(model, "mass_matrix", q, points)
+    measures, skipped = list(rotation_measures(J_w, M, actuation)), {}
     if actuation.effort_limits is None:
         skipped["torque"] = "no effort limits: declare effort_limit per joint or give --effort-limit"
-    elif "gravity_vector" in model.functions:
-        measures += (Measure("gravity_share", "", rating.gravity_share(_dynamics(model, "gravity_vector", q, points),
-                                                                      actuation.effort_limits), False,
-                             "largest share of an effort limit spent holding the device against gravity"),)
+    else:
+        measures += gravity_share_measure(model, q, points, actuation.effort_limits)
     if actuation.joint_steps is None:
         skipped["angular_resolution"] = "no encoder data: give --encoder COUNTS[,...] (and --gear)"
-    if actuation.coulomb is None or actuation.viscous is None:
-        skipped["friction"] = "no joint friction declared (friction: in the model file)"
+    friction = friction_measures(J_w, actuation, ROTATIONAL_FRICTION)
+    if isinstance(friction, str):
+        skipped["friction"] = friction
     else:
-        damping = rating.handle_damping(J_w, actuation.viscous)
-        measures += (Measure("coulomb_torque", "N m", rating.coulomb_friction_felt(J_w, actuation.coulomb), False,
-                             "largest Coulomb friction torque felt turning the handle, over the axes of rotation"),
-                     Measure("handle_damping", "N m s/rad", damping, True,
-                             "least viscous damping turning the handle"),
-                     Measure("renderable_stiffness", "N m/rad", rating.renderable_stiffness(damping, actuation.period),
-                             True, f"stiffest passive rotational virtual wall at {1 / actuation.period:g} Hz "
-                                   "(Colgate-Brown, K < 2 b / T)"))
-    return Datasheet(model.name, q, points, ANGLES, measures, len(q) - 1, skipped)
-
-
-def _rotation_measures(J_w: np.ndarray, M: np.ndarray, actuation: Actuation) -> tuple[Measure, ...]:
-    """A rotating handle's inertia felt with its position free, torque capability and angular resolution."""
-    inertias = rating.principal_masses(M, J_w)
-    out = [Measure("apparent_inertia_min", "kg m^2", inertias[:, 0], False,
-                   "smallest principal inertia felt turning the handle (its position free)"),
-           Measure("apparent_inertia_max", "kg m^2", inertias[:, -1], False,
-                   "largest principal inertia felt turning the handle (its position free)")]
-    if actuation.effort_limits is not None:
-        out += [Measure("isotropic_torque", "N m", forces.isotropic_force(J_w, actuation.effort_limits), True,
-                        "largest torque rendered about every axis, with no force (peak efforts)"),
-                Measure("peak_torque", "N m", rating.peak_force(J_w, actuation.effort_limits), True,
-                        "largest torque rendered about the best axis, with no force (peak efforts)")]
-    if actuation.continuous_limits is not None:
-        out.append(Measure("continuous_torque", "N m", forces.isotropic_force(J_w, actuation.continuous_limits), True,
-                           "largest torque held for long about every axis (continuous efforts)"))
-    if actuation.joint_steps is not None:
-        out.append(Measure("angular_resolution", "rad", rating.position_resolution(J_w, actuation.joint_steps), False,
-                           "largest handle rotation between neighbouring encoder readings"))
-    return tuple(out)
-
-
-def _measures(model: GeneratedModel, J: np.ndarray, M: np.ndarray, q: np.ndarray, poses: np.ndarray,
-              actuation: Actuation) -> tuple[tuple[Measure, ...], dict[str, str]]:
-    """The handle's measures from J (its translational rows), M and the generated functions at (q, poses)."""
-    masses = rating.principal_masses(M, J)
-    out = [Measure("apparent_mass_min", "kg", masses[:, 0], False, "smallest principal mass felt at the handle"),
-           Measure("apparent_mass_max", "kg", masses[:, -1], False, "largest principal mass felt at the handle"),
-           Measure("inertia_isotropy", "", masses[:, -1] / masses[:, 0], False,
-                   "largest over smallest principal mass (1: the same mass in every direction)")]
-    skipped = {}
-    square = J.shape[-1] == J.shape[-2]  # J: the translational rows (of the twist Jacobian of a rotating platform)
-    efforts = actuation.effort_limits
-    if efforts is None:
-        skipped["force"] = "no effort limits: declare effort_limit per joint or give --effort-limit"
-    else:
-        out += [Measure("isotropic_force", "N", forces.isotropic_force(J, efforts), True,
-                        "largest force rendered in every direction (peak efforts)"),
-                Measure("peak_force", "N", rating.peak_force(J, efforts), True,
-                        "largest force rendered in the best direction (peak efforts)")]
-        if "gravity_vector" in model.functions:
-            out.append(Measure("gravity_share", "", rating.gravity_share(_dynamics(model, "gravity_vector", q, poses),
-                                                                         efforts), False,
-                               "largest share of an effort limit spent holding the device against gravity"))
-    if actuation.continuous_limits is not None:
-        out.append(Measure("continuous_force", "N", forces.isotropic_force(J, actuation.continuous_limits), True,
-                           "largest force held for long in every direction (continuous efforts)"))
-    if actuation.joint_steps is None:
-        skipped["resolution"] = "no encoder data: give --encoder COUNTS[,...] (and --gear)"
-    else:
-        out.append(Measure("resolution", "m", rating.position_resolution(J, actuation.joint_steps), False,
-                           "largest handle step between neighbouring encoder readings"))
-    if not square:
-        skipped["friction"] = "friction and damping at the handle need as many joints as task translations"
-    elif actuation.coulomb is None or actuation.viscous is None:
-        skipped["friction"] = "no joint friction declared (friction: in the model file)"
-    else:
-        out.append(Measure("coulomb_friction", "N", rating.coulomb_friction_felt(J, actuation.coulomb), False,
-                           "largest Coulomb friction felt at the handle, over the directions of motion"))
-        damping = rating.handle_damping(J, actuation.viscous)
-        out += [Measure("handle_damping", "N s/m", damping, True, "least viscous damping at the handle"),
-                Measure("renderable_stiffness", "N/m", rating.renderable_stiffness(damping, actuation.period), True,
-                        f"stiffest passive virtual wall at {1 / actuation.period:g} Hz (Colgate-Brown, "
-                        "K < 2 b / T)")]
-    return tuple(out), skipped
+        measures += friction
+    return Datasheet(model.name, q, points, ANGLES, tuple(measures), len(q) - 1, skipped)
