@@ -6,20 +6,25 @@ differences), the true GCI by ``symkin.analysis.gci`` (1/kappa from singular val
 randomized QMC), the closed forms of the 2R arm (isotropy at l1 = sqrt(2) l2,
 theta2 = 135 deg; the pointwise optimum of 1/kappa_F(theta2; l1/l2) is l1/l2 = sqrt(2) for
 every theta2; the smallest reach sqrt(l1^2 + l2^2) at theta2 = 90 deg) and the DELTA's
-closed-form ik on a grid denser than the optimizer's constraint points.
+closed-form ik on a grid denser than the optimizer's constraint points; for a spherical platform
+(the spherical 3-RRR of docs/design-optimization.md) the numpy code with E(p) of
+``analysis.parallel`` and central differences of its surrogate.
 """
 
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 import pytest
 
 import symkin
-from conftest import GENERATED_DIR, MODELS_DIR
+from conftest import GENERATED_DIR, MODELS_DIR, ROOT
 from symkin import design
 from symkin.analysis import conditioning
+from symkin.analysis.mechanism import MechanismKind
+from symkin.analysis.parallel import angular_velocity_matrix
 from symkin.cli import main
 from symkin.design import formulation
 from tolerances import CLOSED_FORM, KINEMATICS, svd
@@ -89,6 +94,73 @@ def test_parallel_surrogate_matches_the_numpy_code(delta):
     expected = np.mean(conditioning.inverse_frobenius_condition_number(J))
     # the same mean through the DELTA's IK and a 3x3 SVD: KINEMATICS + svd(3)
     assert float(program.objective([0.11, 0.16])) == pytest.approx(expected, rel=KINEMATICS + svd(3))
+
+
+#: The spherical 3-RRR with free link angles that docs/design-optimization.md declares (its heredoc).
+SPHERICAL_MODEL = re.search(r"^cat > spherical_3rrr\.yaml <<'EOF'\n(.*?)^EOF$",
+                            (ROOT / "docs" / "design-optimization.md").read_text(), re.S | re.M)
+#: A box of orientations symmetric about the home orientation.
+SPHERICAL_BOX = {axis: (-np.radians(30), np.radians(30)) for axis in ("roll", "pitch", "yaw")}
+ORTHOGONAL = np.pi / 2
+
+
+@pytest.fixture(scope="module")
+def spherical(tmp_path_factory):
+    assert SPHERICAL_MODEL, "docs/design-optimization.md no longer declares spherical_3rrr.yaml"
+    path = tmp_path_factory.mktemp("spherical") / "spherical_3rrr.yaml"
+    path.write_text(SPHERICAL_MODEL.group(1))
+    directory = symkin.derive(path, path.parent, outputs=design.needed_functions(MechanismKind.PARALLEL_ORIENTATION),
+                              backends=["numpy", "casadi"])
+    return symkin.load(directory), symkin.load(directory, "casadi")
+
+
+def _spherical_surrogate(model, points, alpha1, alpha2):
+    """sum cos(pitch) / kappa_F(E J) / sum cos(pitch) by the numpy code (E from analysis.parallel)."""
+    bound = model.bind(alpha1=alpha1, alpha2=alpha2)
+    J_w = angular_velocity_matrix(points) @ bound.jacobian(bound.ik(points).joints, points)
+    weights = np.cos(points[:, 1])
+    return np.sum(weights * conditioning.inverse_frobenius_condition_number(J_w)) / np.sum(weights)
+
+
+def test_spherical_surrogate_weighs_the_angular_velocity_jacobian_by_the_invariant_measure(spherical):
+    numpy_model, casadi_model = spherical
+    problem = design.design_problem(numpy_model, "gci", ["alpha1", "alpha2"], box=SPHERICAL_BOX)
+    program = design.formulate(problem, casadi_model, numpy_model, nodes=3)
+    alphas = np.radians([75.0, 100.0])
+    # a weighted mean through the spherical legs' IK and a 3x3 SVD: KINEMATICS + svd(3)
+    assert float(program.objective(alphas)) == pytest.approx(_spherical_surrogate(numpy_model, program.nodes, *alphas),
+                                                             rel=KINEMATICS + svd(3))
+
+
+def test_spherical_3rrr_optimum_over_a_symmetric_box_is_the_agile_eyes_orthogonal_design(spherical):
+    numpy_model, _ = spherical
+    bounds = {"alpha1": (np.radians(60), np.radians(120)), "alpha2": (np.radians(60), np.radians(120))}
+    problem, program, solution = _optimize(spherical, "gci", ["alpha1", "alpha2"], bounds=bounds, box=SPHERICAL_BOX)
+    assert solution.success
+    # IPOPT's tolerance (1e-8 on the scaled KKT conditions) at a curvature of order 1
+    assert [solution.optimum["alpha1"], solution.optimum["alpha2"]] == pytest.approx([ORTHOGONAL] * 2, abs=1e-7)
+    # the numpy code alone: the surrogate's gradient vanishes at 90 deg (central differences, step h: truncation
+    # ~ h^2, rounding ~ KINEMATICS / h) and every neighbouring design 2 deg away does worse
+    h = 1e-4
+    for e in np.eye(2):
+        slope = (_spherical_surrogate(numpy_model, program.nodes, *(ORTHOGONAL + h * e))
+                 - _spherical_surrogate(numpy_model, program.nodes, *(ORTHOGONAL - h * e))) / (2 * h)
+        assert abs(slope) < 10 * h**2 + KINEMATICS / h
+    best = _spherical_surrogate(numpy_model, program.nodes, ORTHOGONAL, ORTHOGONAL)
+    for step in np.radians([[2, 0], [-2, 0], [0, 2], [0, -2], [2, 2], [2, -2], [-2, 2], [-2, -2]]):
+        assert _spherical_surrogate(numpy_model, program.nodes, *(ORTHOGONAL + step)) < best
+    before, after = (design.evaluate(problem, numpy_model, d, samples=2**10) for d in (solution.start, solution.optimum))
+    assert after.gci.value - after.gci.error > before.gci.value + before.gci.error
+    assert after.box_reachable == 1.0
+
+
+@pytest.mark.parametrize("box, message", [
+    ({"x": (0, 1), "y": (0, 1), "z": (0, 1)}, "needs exactly the axes roll, pitch, yaw"),
+    ({**SPHERICAL_BOX, "pitch": (0.0, np.radians(100))}, "the pitch of the required box must lie within (-90 deg"),
+])
+def test_a_spherical_box_is_one_of_orientations_within_the_chart(spherical, box, message):
+    with pytest.raises(ValueError, match=re.escape(message)):
+        design.design_problem(spherical[0], "gci", ["alpha1"], box=box)
 
 
 @pytest.mark.parametrize("theta2_limits", [(0.0, np.pi / 2), (0.0, np.pi)])

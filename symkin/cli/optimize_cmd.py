@@ -27,8 +27,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "start and optimized designs are then rated independently on the generated numpy code (the "
                     "true GCI with 1/kappa from singular values, randomized QMC with a 95 % confidence "
                     "half-width; box reachability on a dense grid). Serial models integrate over the joint limits "
-                    "with dW = |det J| dq; parallel models over the required box. Writes history.png, design.png "
-                    "and result.json into the output directory (replaced atomically).",
+                    "with dW = |det J| dq; parallel models over the required box (a spherical platform's box of "
+                    "orientations with the invariant measure of SO(3) and 1/kappa of its angular-velocity "
+                    "Jacobian). Writes history.png, design.png and result.json into the output directory "
+                    "(replaced atomically).",
     )
     analysis_args.add_model_arguments(p, backend=False)
     p.add_argument("--maximize", choices=("gci", "workspace"), default="gci",
@@ -39,9 +41,11 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="span of a free parameter in its unit (default: half to twice its start value); repeatable")
     p.add_argument("--require-box", metavar="x=LOWER:UPPER,y=...",
                    help="workspace box [m] that must stay reachable (all task position axes); required for a "
-                        "parallel model, whose GCI is taken over it")
+                        "parallel model, whose GCI is taken over it; a spherical platform's box is one of "
+                        "orientations, e.g. roll=-20deg:20deg,pitch=-20deg:20deg,yaw=-20deg:20deg")
     p.add_argument("--margin", type=float, default=0.0, metavar="M",
-                   help="the box is required with this clearance on every side [m] (default: %(default)s)")
+                   help="the box is required with this clearance on every side, in its unit (m, or rad for "
+                        "orientations) (default: %(default)s)")
     p.add_argument("--length", type=float, default=None, metavar="L",
                    help="characteristic length [m] of a task space mixing translations and rotations")
     p.add_argument("--nodes", type=int, default=None, metavar="N",
@@ -72,8 +76,7 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError(f"--samples must be at least 16, got {args.samples}")
         with Progress(Path(args.model).stem) as progress:
             progress("loading the generated code")
-            outputs = {kind: design.needed_functions(kind is MechanismKind.PARALLEL)
-                       for kind in (MechanismKind.SERIAL, MechanismKind.PARALLEL)}
+            outputs = {kind: design.needed_functions(kind) for kind in MechanismKind}
             # a parallel model's rating checks the working mode by its closed-form fk, where it has one
             numpy_model, casadi_model = model_files.load_models(args.model, ("numpy", "casadi"), outputs, ("fk",))
             problem = design.design_problem(numpy_model, args.maximize, free, bounds=bounds, values=values, box=box,

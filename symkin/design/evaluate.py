@@ -4,7 +4,9 @@ with an error estimate, and the reachability of the required box, on the generat
 Nothing here shares code with the optimizer's CasADi surrogate: a serial model is rated by
 :func:`symkin.analysis.gci` (randomized QMC over the joint limits, dW = |det J| dq); a
 parallel model by the same function on the Cartesian domain of the required box, with the
-analyses' reachability test of its closed-form ``ik`` (dW = 1_W(x) dx).  The box is
+analyses' reachability test of its closed-form ``ik`` (dW = 1_W(x) dx); a spherical platform by
+:func:`symkin.analysis.orientations.orientation_gci` over the box of orientations (1/kappa of the
+angular-velocity Jacobian, the invariant measure of SO(3)).  The box is
 checked on a vertex grid denser than the optimizer's constraint points: by the closed-form
 inverse of :mod:`symkin.analysis.inverse` where one exists, else by the ``ik`` margin.
 """
@@ -15,7 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from symkin.analysis import conditioning, feasibility, global_indices, inverse, mechanism, parallel, sampling
+from symkin.analysis import (conditioning, feasibility, global_indices, inverse, mechanism, orientations, parallel,
+                             sampling)
 from symkin.analysis.estimates import Estimate
 from symkin.analysis.limits import within_limits
 from symkin.design.problem import DesignProblem
@@ -95,7 +98,13 @@ def _serial_box(problem: DesignProblem, model: GeneratedModel, points: np.ndarra
 def parallel_index(model: GeneratedModel, points: np.ndarray, limits: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
     """1/kappa of J at each point (0 where unreachable), and whether it is reachable: by the
     analyses' own test (:func:`symkin.analysis.parallel.parallel_inverse`: IK margin, fk round
-    trip, declared passive-joint limits) within the actuated-joint ``limits``."""
+    trip, declared passive-joint limits) within the actuated-joint ``limits``; a spherical
+    platform's orientations by :func:`symkin.analysis.orientations.orientation_integrand` (1/kappa
+    of J_w)."""
+    if orientations.is_spherical(model):
+        weighted, weight = orientations.orientation_integrand(model, _chart(points), limits=limits).function(points).T
+        inside = weight > 0
+        return np.divide(weighted, weight, out=np.zeros(len(points)), where=inside), inside
     ik = parallel.parallel_inverse(model)
     q, inside = feasibility.feasible_configurations(ik, points, mechanism.joint_limits(model, limits),
                                                 mechanism.revolute_mask(model))
@@ -105,7 +114,23 @@ def parallel_index(model: GeneratedModel, points: np.ndarray, limits: np.ndarray
     return values, inside
 
 
+def _chart(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The smallest box holding ``points``."""
+    return points.min(axis=0), points.max(axis=0)
+
+
+def _spherical(problem: DesignProblem, model: GeneratedModel, samples: int, seed: int) -> Evaluation:
+    result = orientations.orientation_gci(model, method="qmc", samples=samples, seed=seed, box=problem.required_box,
+                                          limits=problem.limits)
+    points = box_check_points(problem)
+    inside = parallel_index(model, points, problem.limits)[1]
+    return Evaluation(result.value, result.measure, f"qmc over the required box, {result.description}",
+                      float(np.mean(inside)), f"closed-form ik within the joint limits at {len(points)} orientations")
+
+
 def _parallel(problem: DesignProblem, model: GeneratedModel, samples: int, seed: int) -> Evaluation:
+    if problem.spherical:
+        return _spherical(problem, model, samples, seed)
     ik = parallel.parallel_inverse(model)
     result = global_indices.gci(model, method="qmc", samples=samples, seed=seed, domain="cartesian", inverse=ik,
                                 box=problem.box, limits=problem.limits)

@@ -19,7 +19,11 @@ over fixed sample points, so the objective is a smooth function of the design:
   grows by at most eps, relatively ~1e-6 at typical nodes;
 * ``gci`` of a parallel model: the mean of 1/kappa_F over a midpoint grid of the required
   box (the Cartesian measure over the region the design must serve), the joints from the
-  closed-form ``ik``;
+  closed-form ``ik``; of a spherical platform (a box of roll, pitch, yaw) the mean of
+  1/kappa_F of the angular-velocity Jacobian J_w = E(p) J weighted by the invariant measure
+  of SO(3), dW = cos(pitch) d(roll) d(pitch) d(yaw) (:mod:`symkin.analysis.orientations`):
+
+      v_F = sum_j cos(pitch_j) / kappa_F(E_j J_j)  /  sum_j cos(pitch_j);
 * ``workspace`` of a serial model: int |det J| dq over the joint limits (area/volume in
   m^d), estimated at the same nodes (with the same smoothed |det J|).
 
@@ -61,6 +65,13 @@ def casadi_function(model: GeneratedModel, name: str) -> casadi.Function:
     if function is None or not hasattr(function, "casadi"):
         raise ValueError(f"{model.name}: no CasADi function '{name}'; derive the model with --backend numpy,casadi")
     return function.casadi
+
+
+def angular_velocity_matrix(orientation: casadi.SX) -> casadi.SX:
+    """E with omega = E d(roll, pitch, yaw)/dt: :func:`symkin.analysis.parallel.angular_velocity_matrix` in CasADi."""
+    pitch, yaw = orientation[1], orientation[2]
+    cp, sp, cy, sy = casadi.cos(pitch), casadi.sin(pitch), casadi.cos(yaw), casadi.sin(yaw)
+    return casadi.vertcat(casadi.horzcat(cy * cp, -sy, 0), casadi.horzcat(sy * cp, cy, 0), casadi.horzcat(-sp, 0, 1))
 
 
 def _node_function(name: str, node: casadi.SX, free: casadi.SX, outputs: casadi.SX) -> casadi.Function:
@@ -235,10 +246,17 @@ def _parallel(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model:
     node = casadi.SX.sym("p", p.shape[1])
     joints, margin = _call(casadi_function(casadi_model, "ik"), {"p": node, **values})
     J = _call(casadi_function(casadi_model, "jacobian"), {"q": joints, "p": node, **values})[0]
+    if problem.spherical:
+        weights = np.cos(p[:, 1])
+        J = angular_velocity_matrix(node) @ J
+        measure = "the invariant measure of SO(3), cos(pitch) droll dpitch dyaw, for J_w = E(p) J"
+    else:
+        weights = np.ones(len(p))
+        measure = "Cartesian measure"
     index = _node_function("inverse_frobenius", node, free, smooth.inverse_frobenius(J))
-    objective = casadi.sum2(_mapped(index, casadi.DM(p.T), design)) / len(p)
+    objective = casadi.mtimes(_mapped(index, casadi.DM(p.T), design), casadi.DM(weights / weights.sum()))
     description = (f"Frobenius GCI surrogate: mean 1/kappa_F over a {per_axis}^{p.shape[1]} midpoint grid of the "
-                   "required box (Cartesian measure), joints from the closed-form ik")
+                   f"required box ({measure}), joints from the closed-form ik")
     corners = sampling.grid(*problem.inflated_box, box_points, midpoints=False)
     points = np.concatenate([corners, p])
     start_margin = np.asarray(numpy_model.ik(points, **problem.start)[1])

@@ -12,9 +12,9 @@ from typing import Any
 
 import numpy as np
 
-from symkin.analysis import global_indices, mechanism, workspace
+from symkin.analysis import global_indices, workspace
 from symkin.design.evaluate import Evaluation, parallel_index
-from symkin.design.problem import DesignProblem
+from symkin.design.problem import DesignProblem, box_axes
 from symkin.design.solve import Solution
 from symkin.runtime.info import GeneratedModel
 
@@ -53,15 +53,25 @@ def history_figure(solution: Solution, problem: DesignProblem, model_name: str) 
     return figure
 
 
-def _label(problem: DesignProblem, design: dict[str, float], evaluation: Evaluation, which: str) -> str:
-    values = ", ".join(f"{n} = {design[n] * 1e3:.4g} mm" for n in problem.names)
+def _quantity(value: float, unit: str) -> str:
+    """A parameter value for a title: lengths in mm, angles in deg, other units as declared."""
+    if unit == "m":
+        return f"{value * 1e3:.4g} mm"
+    if unit == "rad":
+        return f"{np.degrees(value):.4g} deg"
+    return f"{value:.4g} {unit}".rstrip()
+
+
+def _label(problem: DesignProblem, units: dict[str, str], design: dict[str, float], evaluation: Evaluation,
+           which: str) -> str:
+    values = ", ".join(f"{n} = {_quantity(design[n], units.get(n, ''))}" for n in problem.names)
     return f"{which}: {values}\nGCI = {evaluation.gci}"
 
 
-def _box_outline(ax: Any, problem: DesignProblem, axes: Sequence[int]) -> None:
+def _box_outline(ax: Any, problem: DesignProblem, axes: Sequence[int], scale: float = 1.0) -> None:
     if problem.box is None:
         return
-    (x0, y0), (x1, y1) = problem.box[0][list(axes)], problem.box[1][list(axes)]
+    (x0, y0), (x1, y1) = scale * problem.box[0][list(axes)], scale * problem.box[1][list(axes)]
     ax.plot([x0, x1, x1, x0, x0], [y0, y0, y1, y1, y0], color="red", lw=1.0, label="required box")
     ax.legend(loc="lower left", fontsize=7)
 
@@ -89,12 +99,13 @@ def _parallel_panel(ax: Any, problem: DesignProblem, model: GeneratedModel) -> A
     points = np.tile((lower + upper) / 2, (U.size, 1))
     points[:, first], points[:, last] = U.ravel(), V.ravel()
     values = parallel_index(model, points, problem.limits)[0].reshape(U.shape)
-    mesh = ax.pcolormesh(U, V, np.ma.masked_equal(values, 0.0), shading="auto", cmap="viridis", vmin=0.0, vmax=1.0,
-                         rasterized=True)
-    axes = mechanism.position_axes(model)
-    ax.set_xlabel(f"{'xyz'[axes[first]]} [m]")
-    ax.set_ylabel(f"{'xyz'[axes[last]]} [m] (slice through the box centre)")
-    _box_outline(ax, problem, (first, last))
+    scale, unit = (np.degrees(1.0), "deg") if problem.spherical else (1.0, "m")
+    mesh = ax.pcolormesh(scale * U, scale * V, np.ma.masked_equal(values, 0.0), shading="auto", cmap="viridis",
+                         vmin=0.0, vmax=1.0, rasterized=True)
+    axes = box_axes(model)
+    ax.set_xlabel(f"{axes[first]} [{unit}]")
+    ax.set_ylabel(f"{axes[last]} [{unit}] (slice through the box centre)")
+    _box_outline(ax, problem, (first, last), scale)
     return mesh
 
 
@@ -113,7 +124,7 @@ def design_figure(problem: DesignProblem, model: GeneratedModel, solution: Solut
         first = first or ax
         mesh = panel(ax, problem, model.bind(**design))
         ax.set_aspect("equal")
-        ax.set_title(_label(problem, design, evaluation, which), fontsize=8)
+        ax.set_title(_label(problem, model.info.units, design, evaluation, which), fontsize=8)
     if mesh is not None:  # the two panels drew
         figure.colorbar(mesh, ax=figure.axes, label="1/kappa")
     return figure

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from symkin.analysis import mechanism
+from symkin.analysis import mechanism, orientations
 from symkin.runtime.info import GeneratedModel
 
 #: What can be maximized.
@@ -49,9 +49,12 @@ class DesignProblem:
         parallel: whether the model is a parallel mechanism (integration over the box).
         limits: joint limits (n, 2): of a serial model the GCI's integration domain; of a
             parallel model the range of its actuated joints (None: unlimited).
-        box: the required workspace box (lower, upper) over the task's position axes, or None.
-        margin: the box is required with this clearance on every side [m].
+        box: the required workspace box (lower, upper) over the task's position axes [m], or a
+            spherical platform's roll, pitch and yaw [rad]; or None.
+        margin: the box is required with this clearance on every side (in the box's unit).
         length: characteristic length of a mixed translation/rotation task [m], or None.
+        spherical: whether the box is one of orientations (a spherical platform, whose GCI is
+            taken with the invariant measure of SO(3), :mod:`symkin.analysis.orientations`).
     """
 
     objective: str
@@ -62,6 +65,7 @@ class DesignProblem:
     box: tuple[np.ndarray, np.ndarray] | None
     margin: float
     length: float | None
+    spherical: bool = False
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -96,9 +100,14 @@ class DesignProblem:
         return self.box[0] - self.margin, self.box[1] + self.margin
 
 
-def needed_functions(parallel: bool) -> tuple[str, ...]:
-    """The generated functions a dimensioning problem evaluates."""
-    return ("ik", "jacobian") if parallel else ("fk", "jacobian")
+def needed_functions(kind: mechanism.MechanismKind) -> tuple[str, ...]:
+    """The generated functions a dimensioning problem of a kind of mechanism evaluates (a spherical
+    platform's rating also takes J^-1: :mod:`symkin.analysis.orientations`)."""
+    if kind is mechanism.MechanismKind.SERIAL:
+        return ("fk", "jacobian")
+    if kind is mechanism.MechanismKind.PARALLEL_ORIENTATION:
+        return ("ik", "jacobian", "inverse_jacobian")
+    return ("ik", "jacobian")
 
 
 def _parameter_inputs(model: GeneratedModel, functions: Sequence[str]) -> set[str]:
@@ -143,10 +152,17 @@ def _free_parameters(model: GeneratedModel, free: Sequence[str], bounds: Mapping
     return tuple(result)
 
 
+def box_axes(model: GeneratedModel) -> tuple[str, ...]:
+    """The axes of the required box: the task's position axes, or a spherical platform's roll, pitch, yaw."""
+    if orientations.is_spherical(model):
+        return orientations.ANGLES
+    return tuple("xyz"[a] for a in mechanism.position_axes(model))
+
+
 def _box(model: GeneratedModel, box: Mapping[str, tuple[float, float]] | None) -> tuple[np.ndarray, np.ndarray] | None:
     if box is None:
         return None
-    axes = ["xyz"[a] for a in mechanism.position_axes(model)]
+    axes = box_axes(model)
     unknown = sorted(set(box) - set(axes))
     missing = [a for a in axes if a not in box]
     if unknown or missing:
@@ -157,6 +173,9 @@ def _box(model: GeneratedModel, box: Mapping[str, tuple[float, float]] | None) -
     upper = np.array([box[a][1] for a in axes], dtype=np.float64)
     if not np.all(np.isfinite(lower) & np.isfinite(upper) & (lower < upper)):
         raise ValueError(f"{model.name}: every side of the required box needs finite LOWER < UPPER")
+    if axes == orientations.ANGLES and not (-np.pi / 2 < lower[1] and upper[1] < np.pi / 2):
+        raise ValueError(f"{model.name}: the pitch of the required box must lie within (-90 deg, 90 deg), the chart "
+                         "of the roll-pitch-yaw angles (at +-90 deg roll and yaw turn about one axis)")
     return lower, upper
 
 
@@ -174,8 +193,9 @@ def design_problem(model: GeneratedModel, objective: str, free: Sequence[str], *
         bounds: {name: (lower, upper)}; default from start / 2 to 2 start (a start of 0 needs bounds).
         values: parameter values instead of the defaults (also the start of free ones).
         box: the required workspace box {axis: (lower, upper)} over the task's position
-            axes (x, y, z); required for parallel models, whose GCI is taken over it.
-        margin: clearance of the box [m].
+            axes (x, y, z) in m, or a spherical platform's roll, pitch, yaw in rad; required for
+            parallel models, whose GCI is taken over it.
+        margin: clearance of the box (m, or rad for orientations).
         limits: joint-limit overrides.
         length: characteristic length [m] of a task space mixing translations and rotations.
 
@@ -191,11 +211,11 @@ def design_problem(model: GeneratedModel, objective: str, free: Sequence[str], *
     if unknown:
         raise ValueError(f"{model.name}: not parameters of the model: {', '.join(unknown)}; "
                          f"parameters: {', '.join(sorted(model.parameters))}")
-    used = _parameter_inputs(model, needed_functions(parallel))
+    used = _parameter_inputs(model, needed_functions(mechanism.kind_of(model)))
     free_parameters = _free_parameters(model, list(free), dict(bounds or {}), values, used)
     required = _box(model, box)
     if not margin >= 0:
-        raise ValueError(f"the box margin must be >= 0 m, got {margin}")
+        raise ValueError(f"the box margin must be >= 0, got {margin}")
     task = mechanism.task_space(model)
     n = len(mechanism.coordinate_names(model))
     if mechanism.mixes_translations_and_rotations(model):
@@ -214,18 +234,21 @@ def design_problem(model: GeneratedModel, objective: str, free: Sequence[str], *
             raise ValueError(f"{model.name}: maximizing the workspace of a parallel mechanism is not supported "
                              "(its workspace has no joint-space parametrization here); maximize the GCI over a "
                              "required box instead (--maximize gci --require-box ...)")
+        spherical = orientations.is_spherical(model)
         if required is None:
-            axes = ["xyz"[a] for a in mechanism.position_axes(model)]
+            axes = box_axes(model)
+            unit = "in rad, or with 'deg'" if spherical else "in m"
             raise ValueError(f"{model.name}: the GCI of a parallel mechanism is taken over the required workspace "
-                             f"box: give --require-box {','.join(f'{a}=LOWER:UPPER' for a in axes)} (in m)")
-        if len(mechanism.position_rows(model)) != len(task):
-            raise ValueError(f"{model.name}: the task space {list(task)} includes orientations; the GCI of a "
-                             "parallel mechanism is taken over a box of TCP positions, which leaves the orientation "
-                             "open: only position task spaces (such as the DELTA's) are supported")
+                             f"box: give --require-box {','.join(f'{a}=LOWER:UPPER' for a in axes)} ({unit})")
+        if not spherical and len(mechanism.position_rows(model)) != len(task):
+            raise ValueError(f"{model.name}: the task space {list(task)} mixes positions and orientations; the GCI "
+                             "of a parallel mechanism is taken over a box of TCP positions (such as the DELTA's) or "
+                             "of a spherical platform's orientations (roll, pitch, yaw), not over both")
         declared = np.array(model.joint_limits, dtype=np.float64)
         joint_box = mechanism.joint_limits(model, limits) if limits or np.isfinite(declared).any() else None
     else:
         joint_box = mechanism.joint_limits(model, limits)
     fixed = {k: float(v) for k, v in {**model.parameters, **values}.items()
              if k in used and k not in {p.name for p in free_parameters}}
-    return DesignProblem(objective, free_parameters, fixed, parallel, joint_box, required, float(margin), length)
+    return DesignProblem(objective, free_parameters, fixed, parallel, joint_box, required, float(margin), length,
+                         parallel and orientations.is_spherical(model))
