@@ -120,9 +120,10 @@ def symforce_fk_jacobian_codegen(model: Model, out_dir: Path) -> Path:
     return headers[0].parent if headers else Path(out_dir)
 
 
-def pinocchio_delta(v: dict[str, float]):
+def pinocchio_delta(v: dict[str, float], rod_inertia: float | None = None):
     """The DELTA of models/delta.yaml (parameter values ``v``) as a Pinocchio tree closed by three point
     constraints: (pin, model, constraints, legs), legs as (r_i, arm joint, rod joint, (rod end, B_i frames)).
+    ``rod_inertia``: each rod's moment of inertia across it about its centre (default: its ends' m b^2 / 4).
 
     Tree: the platform on a translation joint (the parallelograms keep its orientation) with its mass;
     per leg the arm on a revolute joint about u_i = r_i x z at A_i (a uniform rod, and the rotor's
@@ -150,7 +151,8 @@ def pinocchio_delta(v: dict[str, float]):
                                 pin.SE3.Identity())
         hinge = model.addJoint(arm, pin.JointModelRevoluteUnaligned(u), pin.SE3(np.eye(3), v["a"] * r), f"hinge{i}")
         swing = model.addJoint(hinge, pin.JointModelRevoluteUnaligned(z), pin.SE3.Identity(), f"swing{i}")
-        model.appendBodyToJoint(swing, pin.Inertia(v["m_rod"], v["b"] / 2 * r, v["m_rod"] * v["b"] ** 2 / 4 * across),
+        across_rod = v["m_rod"] * v["b"] ** 2 / 4 if rod_inertia is None else rod_inertia
+        model.appendBodyToJoint(swing, pin.Inertia(v["m_rod"], v["b"] / 2 * r, across_rod * across),
                                 pin.SE3.Identity())
         constraints.append(pin.RigidConstraintModel(pin.ContactType.CONTACT_3D, model, swing,
                                                     pin.SE3(np.eye(3), v["b"] * r), platform,

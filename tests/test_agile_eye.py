@@ -335,7 +335,10 @@ def test_a_free_frictionless_motion_keeps_its_energy(eye):
 @pytest.mark.parametrize("model,old,new,key,message", [
     ("agile_eye.yaml", "  rotor: {inertia: J_rotor", "  rod: {mass: m_d}\n  rotor: {inertia: J_rotor", "bodies.rod",
      "a spherical leg has no rod between point joints"),
-    ("pantograph.yaml", "  rod: {mass: m_distal, platform_fraction: 1/2}", "  distal_link: {mass: m_distal}",
+    ("agile_eye.yaml", "  rotor: {inertia: J_rotor", "  rod: {inertia: 1e-6}\n  rotor: {inertia: J_rotor", "bodies.rod",
+     "a spherical leg has no rod between point joints"),
+    ("pantograph.yaml", "  rod: {mass: m_distal, platform_fraction: 1/2, inertia: m_distal*L^2/12}",
+     "  distal_link: {mass: m_distal}",
      "bodies.distal_link", "a distal link's own inertia is derived for spherical legs only"),
 ])
 def test_the_link_between_the_last_two_joints_is_declared_as_the_legs_kind_needs(tmp_path, model, old, new, key,

@@ -201,26 +201,26 @@ def test_workspace_area_matches_a_monte_carlo_estimate_of_the_reachable_set(pant
 # --------------------------------------------------------------------------- dynamics against MuJoCo
 
 def mujoco_five_bar(v):
-    """The five-bar with the model's bodies as MuJoCo sees them: each proximal link a uniform bar, the distal
-    links massless with their mass lumped half at the elbow (welded to the proximal link) and half at the
-    handle, the handle a point mass on distal link 1, the loop closed by a point constraint (connect) at the
-    handle; the massless bodies TINY (:mod:`mujoco_reference`)."""
+    """The five-bar with the model's bodies as MuJoCo sees them: each proximal and distal link a uniform bar
+    (the model's distal `rod` with its inertia across it, m L^2 / 12), the handle a point mass on distal link 1,
+    the loop closed by a point constraint (connect) at the handle; the massless inertias TINY
+    (:mod:`mujoco_reference`)."""
     import mujoco
 
     d, l, L = v["d"], v["l"], v["L"]
-    bar = v["m_proximal"] * l**2 / 12
+    bar, distal_bar = v["m_proximal"] * l**2 / 12, v["m_distal"] * L**2 / 12
     point = f'diaginertia="{TINY_INERTIA} {TINY_INERTIA} {TINY_INERTIA}"'
     legs = []
     for i, x in ((1, -d / 2), (2, d / 2)):
-        handle = (f'<body name="handle" pos="{L} 0 0"><inertial pos="0 0 0" mass="{v["m_handle"] + v["m_distal"]}" '
+        handle = (f'<body name="handle" pos="{L} 0 0"><inertial pos="0 0 0" mass="{v["m_handle"]}" '
                   f'{point}/><site name="handle1"/></body>' if i == 1 else f'<site name="handle2" pos="{L} 0 0"/>')
         legs.append(
             f'<body name="proximal{i}" pos="{x} 0 0">'
             f'<joint name="theta{i}" type="hinge" axis="0 0 1" armature="{v["J_rotor"]}"/>'
             f'<inertial pos="{l / 2} 0 0" mass="{v["m_proximal"]}" diaginertia="{TINY_INERTIA} {bar} {bar}"/>'
-            f'<body name="elbow{i}" pos="{l} 0 0"><inertial pos="0 0 0" mass="{v["m_distal"] / 2}" {point}/></body>'
             f'<body name="distal{i}" pos="{l} 0 0"><joint name="elbow{i}" type="hinge" axis="0 0 1"/>'
-            f'<inertial pos="{L / 2} 0 0" mass="{TINY_MASS}" {point}/>{handle}</body></body>')
+            f'<inertial pos="{L / 2} 0 0" mass="{v["m_distal"]}" diaginertia="{TINY_INERTIA} {distal_bar} '
+            f'{distal_bar}"/>{handle}</body></body>')
     xml = (f'<mujoco><option gravity="0 0 -9.81"/><worldbody>{"".join(legs)}</worldbody>'
            '<equality><connect site1="handle2" site2="handle1"/></equality></mujoco>')
     model = mujoco.MjModel.from_xml_string(xml)

@@ -76,7 +76,8 @@ _MASS_KEYS = ("mass", "com", "inertia", "inertia_rpy", "origin")
 
 def read_parallel_bodies(r: Reader, value: Any) -> ParallelBodies | None:
     """``bodies:`` of a parallel model: the platform, and on every leg the actuated link, the rod
-    (point masses at its ends) or a spherical leg's distal link, and the actuator's rotor."""
+    (point masses at its ends, or a slender rod with its inertia across it) or a spherical leg's distal
+    link, and the actuator's rotor."""
     path: KeyPath = ("bodies",)
     section = r.mapping(path, value, optional=PARALLEL_BODY_KEYS)
     if section is None:
@@ -87,7 +88,7 @@ def read_parallel_bodies(r: Reader, value: Any) -> ParallelBodies | None:
             item = r.mapping(path + (key,), section[key], required=("mass",), optional=_MASS_KEYS[1:])
             if item is not None and "mass" in item:
                 fields[key] = _mass_properties(r, path + (key,), item, key)
-    scalars = {"rod": {"mass": "rod_mass", "platform_fraction": "rod_platform_fraction"},
+    scalars = {"rod": {"mass": "rod_mass", "platform_fraction": "rod_platform_fraction", "inertia": "rod_inertia"},
                "rotor": {"inertia": "rotor_inertia", "gear_ratio": "gear_ratio"}}
     for key, names in scalars.items():
         if key not in section:
@@ -108,18 +109,18 @@ def read_parallel_bodies(r: Reader, value: Any) -> ParallelBodies | None:
 
 def check_leg_bodies(r: Reader, parallel: Parallel) -> None:
     """A spherical leg's link between its last two joints is a ``distal_link`` (its axes fix its orientation); the
-    other legs' is a ``rod`` lumped at its point joints."""
+    other legs' is a ``rod`` between its point joints."""
     bodies = parallel.bodies
     if bodies is None:
         return
     spherical = parallel.motion is PlatformMotion.SPHERICAL
-    if spherical and bodies.rod_mass != 0:
+    if spherical and (bodies.rod_mass != 0 or bodies.rod_inertia is not None):
         r.fail(("bodies", "rod"), "a spherical leg has no rod between point joints: its last two joints turn about "
                "axes through the centre", "declare the link between them as 'distal_link: {mass, com, inertia}'")
     if not spherical and bodies.distal_link is not None:
         r.fail(("bodies", "distal_link"), "a distal link's own inertia is derived for spherical legs only; this "
-               f"platform's motion is {parallel.motion.value}", "lump the link at its ends with 'rod: {mass, "
-               "platform_fraction}'")
+               f"platform's motion is {parallel.motion.value}", "declare the link between the point joints as "
+               "'rod: {mass, platform_fraction, inertia}'")
 
 
 def _body_in_link_frame(r: Reader, path: KeyPath, value: Any, com: Vec3, inertia: sympy.Matrix

@@ -405,6 +405,10 @@ class ParallelBodies:
             parallelogram, a Stewart strut), lumped at its two ends.
         rod_platform_fraction: the part of ``rod_mass`` lumped at the platform joint B_i; the rest
             is at C_i (the elbow of a DELTA, the fixed base joint of a Stewart strut).
+        rod_inertia: the rod's moment of inertia about its centre of mass (at ``rod_platform_fraction``
+            of the way from C_i to B_i) about any axis across it (a uniform bar: m L^2 / 12), for a rod
+            of fixed length; its inertia about its own axis is neglected (a slender rod).  None: the
+            rod is its two lumped ends (a dumbbell, m f (1 - f) L^2).
         rotor_inertia: each actuator's rotor inertia about its axis (motor side).
         gear_ratio: motor turns per actuated-joint turn (1: direct drive); the joint sees
             gear_ratio^2 rotor_inertia.
@@ -415,6 +419,7 @@ class ParallelBodies:
     distal_link: Body | None = None
     rod_mass: sympy.Expr = sympy.Integer(0)
     rod_platform_fraction: sympy.Expr = sympy.Rational(1, 2)
+    rod_inertia: sympy.Expr | None = None
     rotor_inertia: sympy.Expr = sympy.Integer(0)
     gear_ratio: sympy.Expr = sympy.Integer(1)
 

@@ -1,4 +1,7 @@
-"""The distal links of spherical legs in the equations of motion (Kane's method about the centre of rotation).
+"""Leg links whose motion follows from their two ends, in the equations of motion (Kane's method).
+
+Two kinds: a spherical leg's distal link, which turns about the centre of rotation carrying two axes, and a
+rod of fixed length swinging between its ends C_i(q_i) and B_i(p) with an inertia of its own across it.
 
 A spherical leg's distal link turns about the fixed centre with R_d = W L^-1, W = [a, b, n] for its two unit
 axes a = C(q_i) (the middle axis), b = B(p) (the platform's) and n = a x b, which keep the angle of cosine
@@ -23,6 +26,12 @@ pd = e_k for the task coordinates) Kane's equations give the link's share of the
 and of the mass matrix M_kl = w_b^(k) . I_o w_b^(l).  Gravity enters through the potential u_d
 (:mod:`symkin.parallel.inertia`).
 
+A rod (:class:`~symkin.parallel.inertia.SwingingRod`) of fixed length L, d = B_i - C_i, adds the kinetic energy
+1/2 dI |w|^2 of its angular velocity across it, w = d x dd/dt / L^2 (base frame), to its lumped ends; its
+angular momentum dI w changes at N = dI dw/dt = dI d x d''/dt^2 / L^2 (dd/dt x dd/dt = 0), so its share of
+the efforts is Q_k = w^(k) . N and of the mass matrix M_kl = dI w^(k) . w^(l), with the same partial rates;
+d'' = B_p pdd + pd^T B_pp pd - C' qdd_i - C'' qd_i^2.
+
 Reference: T. R. Kane, D. A. Levinson, Dynamics: Theory and Applications, McGraw-Hill 1985, ch. 6 (generalized
 inertia forces); the rotation from two body-fixed axes: W L^-1 maps the link-frame axes (w, v, w x v) to
 (C, B, C x B).
@@ -34,25 +43,45 @@ import symengine as se
 import sympy
 
 from symkin.dynamics.program import Program, cross, dot, mat_vec, se_matrix, se_vector
-from symkin.parallel.inertia import DistalLink
+from symkin.parallel.inertia import DistalLink, SwingingRod
 
 Vector = list[se.Basic]
 
 
-class _Link:
-    """One distal link's vectors bound into a program."""
+class _Ends:
+    """A link's two end vectors, C(q_i) (moved by the leg's actuator) and B(p) (by the platform), and their
+    derivatives bound into a program."""
 
-    def __init__(self, program: Program, link: DistalLink, p: list[sympy.Symbol]):
+    def __init__(self, program: Program, q: sympy.Symbol, C: sympy.Matrix, B: sympy.Matrix, p: list[sympy.Symbol]):
         self.program = program
-        C, B = sympy.Matrix(link.C), sympy.Matrix(link.B)
-        C_q = sympy.diff(C, link.q)
+        C_q = sympy.diff(C, q)
         B_p = [sympy.diff(B, s) for s in p]
-        values = program.bind(se_vector(list(C) + list(B) + list(C_q) + list(sympy.diff(C_q, link.q))
+        values = program.bind(se_vector(list(C) + list(B) + list(C_q) + list(sympy.diff(C_q, q))
                                         + [e for column in B_p for e in column]))
         self.a, self.b, self.C_q, self.C_qq = values[0:3], values[3:6], values[6:9], values[9:12]
-        self.n = [program.let(v) for v in cross(self.a, self.b)]
         self.B_p = [values[12 + 3 * k:15 + 3 * k] for k in range(len(p))]
         self._B_pp = [[se_vector(sympy.diff(column, s)) for s in p] for column in B_p]
+
+    def _b_rate(self, pd: Vector) -> Vector:
+        return [sum((column[i] * r for column, r in zip(self.B_p, pd)), se.Integer(0)) for i in range(3)]
+
+    def _b_acceleration(self, pd: Vector, pdd: Vector) -> Vector:
+        """d^2 B/dt^2 = B_p pdd + pd^T B_pp pd."""
+        curvature = [sum((self._B_pp[k][m][i] * pd[k] * pd[m] for k in range(len(pd)) for m in range(len(pd))),
+                         se.Integer(0)) for i in range(3)]
+        return [r + q for r, q in zip(self._b_rate(pdd), curvature)]
+
+    def _a_acceleration(self, qd: se.Basic, qdd: se.Basic) -> Vector:
+        """d^2 C/dt^2 = C'' qd^2 + C' qdd."""
+        return [c * qd * qd + c_q * qdd for c, c_q in zip(self.C_qq, self.C_q)]
+
+
+class _Link(_Ends):
+    """One spherical leg's distal link, its axes a = C(q_i) and b = B(p) bound into a program."""
+
+    def __init__(self, program: Program, link: DistalLink, p: list[sympy.Symbol]):
+        super().__init__(program, link.q, sympy.Matrix(link.C), sympy.Matrix(link.B), p)
+        self.n = [program.let(v) for v in cross(self.a, self.b)]
         self.c = se.sympify(link.cosine)
         self.s2 = se.sympify(sympy.simplify(1 - link.cosine**2))
         self.L_inverse = se_matrix(link.frame_inverse)
@@ -62,9 +91,6 @@ class _Link:
         """L^-T (v . a, v . b, v . n): a vector's components in the link frame from its projections, bound."""
         L = self.L_inverse
         return [self.program.let(sum((L[k][i] * projections[k] for k in range(3)), se.Integer(0))) for i in range(3)]
-
-    def _b_rate(self, pd: Vector) -> Vector:
-        return [sum((column[i] * r for column, r in zip(self.B_p, pd)), se.Integer(0)) for i in range(3)]
 
     def _projections(self, qd: se.Basic, pd: Vector) -> Vector:
         """(w . a, w . b, w . n), bound."""
@@ -80,10 +106,8 @@ class _Link:
     def body_motion(self, qd: se.Basic, qdd: se.Basic, pd: Vector, pdd: Vector) -> tuple[Vector, Vector]:
         """(w_b, a_b) for the rates (qd, pd) and accelerations (qdd, pdd)."""
         w_a, w_b, w_n = self._projections(qd, pd)
-        dda = [c * qd * qd + c_q * qdd for c, c_q in zip(self.C_qq, self.C_q)]
-        curvature = [sum((self._B_pp[k][m][i] * pd[k] * pd[m] for k in range(len(pd)) for m in range(len(pd))),
-                         se.Integer(0)) for i in range(3)]
-        ddb = [r + q for r, q in zip(self._b_rate(pdd), curvature)]
+        dda = self._a_acceleration(qd, qdd)
+        ddb = self._b_acceleration(pd, pdd)
         body = self._body([w_a, w_b, w_n])
         dda_n = self.program.let(dot(dda, self.n) - w_a * w_n)
         alpha_a = self.program.let((dot(ddb, self.n) - w_b * w_n - self.c * dda_n) / self.s2)
@@ -95,17 +119,55 @@ class _Link:
         return [self.program.let(v) for v in
                 [x + y for x, y in zip(mat_vec(self.inertia, a), cross(w, mat_vec(self.inertia, w)))]]
 
+    def inertia_times(self, w: Vector) -> Vector:
+        """I_o w_b."""
+        return mat_vec(self.inertia, w)
+
+    def effort_moment(self, qd: se.Basic, qdd: se.Basic, pd: Vector, pdd: Vector) -> Vector:
+        """N of the motion, in the frame of :meth:`body_rate` (the link frame)."""
+        return self.moment(*self.body_motion(qd, qdd, pd, pdd))
+
+
+class _Rod(_Ends):
+    """One rod's inertia across it beyond its lumped ends (see the module docstring): a = C(q_i), b = B(p)."""
+
+    def __init__(self, program: Program, rod: SwingingRod, p: list[sympy.Symbol]):
+        super().__init__(program, rod.q, sympy.Matrix(rod.C), sympy.Matrix(rod.B), p)
+        self.d = [program.let(b - a) for a, b in zip(self.a, self.b)]
+        self.inertia = se.sympify(rod.inertia)
+        self.length_squared = se.sympify(rod.length_squared)
+
+    def _across(self, rate: Vector) -> Vector:
+        """d x rate / L^2, bound."""
+        return [self.program.let(v / self.length_squared) for v in cross(self.d, rate)]
+
+    def body_rate(self, qd: se.Basic, pd: Vector) -> Vector:
+        """w = d x dd/dt / L^2 (base frame) for the leg's actuated rate qd and the platform rates pd."""
+        return self._across([b - c * qd for b, c in zip(self._b_rate(pd), self.C_q)])
+
+    def inertia_times(self, w: Vector) -> Vector:
+        """dI w."""
+        return [self.inertia * v for v in w]
+
+    def effort_moment(self, qd: se.Basic, qdd: se.Basic, pd: Vector, pdd: Vector) -> Vector:
+        """N = dI d x d''/dt^2 / L^2, bound."""
+        acceleration = [b - a for a, b in zip(self._a_acceleration(qd, qdd), self._b_acceleration(pd, pdd))]
+        return [self.program.let(self.inertia * v) for v in self._across(acceleration)]
+
 
 class DistalLinks:
-    """The distal links of a spherical mechanism in one program: their share of M, of the efforts and of k.
+    """The links of a mechanism's legs that move with their ends (spherical legs' distal links, rods with an
+    inertia of their own) in one program: their share of M, of the efforts and of k.
 
     A generalized coordinate is given by its rates: ``columns`` lists, per coordinate, (qd, pd) with qd the
     legs' actuated rates (n) and pd the platform's (n)."""
 
-    def __init__(self, program: Program, links: tuple[DistalLink, ...], q: list[se.Basic], p: list[sympy.Symbol]):
+    def __init__(self, program: Program, links: tuple[DistalLink, ...], rods: tuple[SwingingRod, ...],
+                 q: list[se.Basic], p: list[sympy.Symbol]):
         self.program = program
-        self.links = [_Link(program, link, p) for link in links]
-        self.leg_of = [q.index(se.sympify(link.q)) for link in links]
+        self.links: list[_Link | _Rod] = [_Link(program, link, p) for link in links]
+        self.links += [_Rod(program, rod, p) for rod in rods]
+        self.leg_of = [q.index(se.sympify(link.q)) for link in links] + [q.index(se.sympify(rod.q)) for rod in rods]
 
     def partial_rates(self, columns: list[tuple[Vector, Vector]]) -> list[list[Vector]]:
         """w_b^(k) per link, per coordinate."""
@@ -116,7 +178,7 @@ class DistalLinks:
         size = len(columns)
         M = [[se.Integer(0)] * size for _ in range(size)]
         for link, partials in zip(self.links, self.partial_rates(columns)):
-            moments = [[self.program.let(v) for v in mat_vec(link.inertia, w)] for w in partials]
+            moments = [[self.program.let(v) for v in link.inertia_times(w)] for w in partials]
             for k in range(size):
                 for m in range(k, size):
                     M[k][m] = M[m][k] = M[k][m] + dot(partials[k], moments[m])
@@ -127,14 +189,14 @@ class DistalLinks:
         """Q_k = sum over the links of w_b^(k) . N for the motion (qd, pd, qdd, pdd)."""
         Q = [se.Integer(0)] * len(columns)
         for link, i, partials in zip(self.links, self.leg_of, self.partial_rates(columns)):
-            N = link.moment(*link.body_motion(qd[i], qdd[i], pd, pdd))
+            N = link.effort_moment(qd[i], qdd[i], pd, pdd)
             Q = [total + dot(w, N) for total, w in zip(Q, partials)]
         return Q
 
     def kinetic_energy(self, qd: Vector, pd: Vector) -> se.Basic:
-        """sum over the links of 1/2 w_b . I_o w_b."""
+        """sum over the links of 1/2 w_b . I_o w_b (a rod's 1/2 dI |w|^2)."""
         total = se.Integer(0)
         for link, i in zip(self.links, self.leg_of):
             w = link.body_rate(qd[i], pd)
-            total += dot(w, mat_vec(link.inertia, w)) / 2
+            total += dot(w, link.inertia_times(w)) / 2
         return total

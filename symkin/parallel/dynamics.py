@@ -198,7 +198,7 @@ class _Terms:
         # the actuator side seen in c, minus its share of the bias; then the platform side's own
         V = [a + c for a, c in zip(carried([v - m * x for v, m, x in zip(self.V_a(qd), self.M_a, J_inverse_b)]),
                                    self.V_p(cd))]
-        if self.distal is not None:  # distal links: the rates of p_m are (qd, pd) = (J^-1 e_m, e_m); qdd = -J^-1 b
+        if self.distal is not None:  # distal links, rods: the rates of p_m are (qd, pd) = (J^-1 e_m, e_m); qdd = -J^-1 b
             one = [[se.Integer(int(i == j)) for i in range(n)] for j in range(n)]
             columns = [([row[m] for row in J_inverse], one[m]) for m in range(n)]
             force = self.distal.efforts(columns, list(qd), pd, [-x for x in J_inverse_b], [se.Integer(0)] * n)
@@ -214,10 +214,12 @@ class _Terms:
 
     @cached_property
     def distal(self) -> DistalLinks | None:
-        """The spherical legs' distal links in this program (:mod:`symkin.parallel.distal`), None without them."""
-        if not self.parts.distal_links:
+        """The spherical legs' distal links and the rods with an inertia of their own in this program
+        (:mod:`symkin.parallel.distal`), None without them."""
+        if not self.parts.distal_links and not self.parts.rods:
             return None
-        return DistalLinks(self.program, self.parts.distal_links, self.q, list(task_symbols(self.d.model)))
+        return DistalLinks(self.program, self.parts.distal_links, self.parts.rods, self.q,
+                           list(task_symbols(self.d.model)))
 
     def leg_columns(self) -> list[tuple[list[se.Basic], list[se.Basic]]]:
         """The rates (qd, pd) = (e_j, J e_j) of each actuated coordinate q_j."""
@@ -516,7 +518,7 @@ def _kinetic_energy(d: Deriving) -> FunctionSpec:
     qd = coordinate_symbols(d, "qd")
     pd = terms.task_rates(qd) + terms.wrist("qd")  # c-rates (pd, qwd) on a hybrid device
     k = (sum((m * v * v for m, v in zip(terms.M_a, qd)), se.Integer(0)) + dot(pd, mat_vec(terms.M_p, pd))) / 2
-    if terms.distal is not None:  # spherical legs' distal links: 1/2 w_b^T I_o w_b each
+    if terms.distal is not None:  # spherical legs' distal links: 1/2 w_b^T I_o w_b each; rods 1/2 dI |w|^2
         k += terms.distal.kinetic_energy(list(qd), pd[:d.model.dof])
     return function_spec(
         d, "kinetic_energy", "Kinetic energy.",

@@ -33,6 +33,14 @@ axes in the link's own frame (constant, at the constant angle alpha_i), the link
 R_d = W L^-1 with W = [C_i, B_i, C_i x B_i] and L = [w, v, w x v], exact on the assembled mechanism:
 :class:`DistalLink` holds what its dynamics need (:mod:`symkin.parallel.distal`), and its potential
 energy joins u as u_d(q, p) = -m g . R_d c_b.
+
+A rod of fixed length L between C_i(q_i) and B_i(p) with its own inertia I_c across it (``rod: inertia:``,
+a slender rod whose centre of mass lies at the fraction f of the way to B_i) is its lumped ends, which carry
+its mass and centre of mass, plus the difference of the inertias, dI = I_c - m f (1 - f) L^2 (the ends' own
+inertia about the centre of mass; dI < 0 for a real bar, -m L^2 / 6 for a uniform one): the kinetic energy
+1/2 dI |w_perp|^2 of the rod's angular velocity across it, w_perp = d x dd/dt / L^2 with d = B_i - C_i (its
+spin about its own axis carries no inertia).  :class:`SwingingRod` holds what its dynamics need
+(:mod:`symkin.parallel.distal`); its potential is that of its ends.
 """
 
 from __future__ import annotations
@@ -82,6 +90,25 @@ class DistalLink:
 
 
 @dataclass(frozen=True)
+class SwingingRod:
+    """A leg's rod of fixed length between C_i(q_i) and B_i(p), its inertia beyond its lumped ends.
+
+    Attributes:
+        q: the leg's actuated variable.
+        C: the rod's end C_i(q_i) in the base frame.
+        B: its end B_i(p) at the platform, in the base frame.
+        length_squared: L^2 = |B_i - C_i|^2, constant.
+        inertia: dI = I_c - m f (1 - f) L^2, its moment of inertia across it beyond that of its ends.
+    """
+
+    q: sympy.Symbol
+    C: sympy.ImmutableMatrix
+    B: sympy.ImmutableMatrix
+    length_squared: sympy.Expr
+    inertia: sympy.Expr
+
+
+@dataclass(frozen=True)
 class Inertia:
     """The split mass distribution (see the module docstring).
 
@@ -92,6 +119,7 @@ class Inertia:
         platform_potential: u_p(p).
         distal_links: the spherical legs' distal links, one per leg (none for other mechanisms).
         distal_potential: their potential energy u_d(q, p).
+        rods: the legs' rods with an inertia of their own (``rod: inertia:``), one per leg, or none.
     """
 
     actuator_diagonal: tuple[sympy.Expr, ...]
@@ -100,7 +128,7 @@ class Inertia:
     platform_potential: sympy.Expr
     distal_links: tuple[DistalLink, ...] = ()
     distal_potential: sympy.Expr = sympy.Integer(0)
-
+    rods: tuple[SwingingRod, ...] = ()
 
 
 def body_angular_velocity_matrix(model: Model) -> sympy.Matrix:
@@ -197,6 +225,22 @@ def _distal_link(model: Model, link: Body, leg: DistanceLeg, chain: LegChain) ->
                       sympy.ImmutableMatrix(about_centre))
 
 
+def _swinging_rods(model: Model, bodies: ParallelBodies, legs: tuple[DistanceLeg, ...]) -> tuple[SwingingRod, ...]:
+    """The legs' rods with ``rod: inertia:`` (see the module docstring); () without it."""
+    if bodies.rod_inertia is None:
+        return ()
+    rods = []
+    f = bodies.rod_platform_fraction
+    for leg in legs:
+        if leg.actuator == "rod":
+            raise DerivationError(f"model '{model.name}': leg '{leg.leg.name}''s rod changes its length (its actuator "
+                                  "is inside it), and a rod's own inertia is derived for rods of fixed length; "
+                                  "remove 'bodies: rod: inertia:' (the rod's mass stays lumped at its ends)")
+        rods.append(SwingingRod(leg.q, leg.C, leg.B, leg.L2,
+                                bodies.rod_inertia - bodies.rod_mass * f * (1 - f) * leg.L2))
+    return tuple(rods)
+
+
 def _variables(leg: DistanceLeg, exclude: set[sympy.Symbol]) -> set[sympy.Symbol]:
     """The symbols of every joint variable of the leg but ``exclude``."""
     names = {v for j in leg.leg.joints for v in j.variables}
@@ -212,7 +256,8 @@ def split_inertia(model: Model, legs: tuple[DistanceLeg, ...], chains: tuple[Leg
                               "section (platform, actuated_link, rod, rotor; see docs/model-format.md)")
     sides = [_actuator_side(model, bodies, leg, chain) for leg, chain in zip(legs, chains)]
     M_p, u_p = _platform(model, bodies, legs, platform)
-    inertia = Inertia(tuple(s[0] for s in sides), sum((s[1] for s in sides), sympy.Integer(0)), M_p, u_p)
+    inertia = Inertia(tuple(s[0] for s in sides), sum((s[1] for s in sides), sympy.Integer(0)), M_p, u_p,
+                      rods=_swinging_rods(model, bodies, legs))
     if bodies.distal_link is None:
         return inertia
     links = tuple(_distal_link(model, bodies.distal_link, leg, chain) for leg, chain in zip(legs, chains))
