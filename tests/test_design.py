@@ -22,7 +22,7 @@ import pytest
 import symkin
 from conftest import GENERATED_DIR, MODELS_DIR, ROOT
 from symkin import design
-from symkin.analysis import conditioning
+from symkin.analysis import conditioning, forces
 from symkin.analysis.mechanism import MechanismKind
 from symkin.analysis.parallel import angular_velocity_matrix
 from symkin.cli import main
@@ -232,6 +232,60 @@ def test_delta_optimization_improves_the_gci_and_keeps_the_box_reachable(delta):
     assert np.all(numpy_model.bind(**solution.optimum).ik(points).margin >= -1e-12)
     for p in problem.free:
         assert p.lower - 1e-12 <= solution.optimum[p.name] <= p.upper + 1e-12
+
+
+def _worst_force(model, design_values, points, limits, joint_limits):
+    """min over the points of the isotropic force min_i tau_i / |J_i| by the numpy code, and whether every leg
+    reaches every point with its actuated joint within ``joint_limits`` (n, 2), up to IPOPT's constraint
+    tolerance (1e-10; 1e-9 rad here)."""
+    bound = model.bind(**design_values)
+    solution = bound.ik(points)
+    q = np.asarray(solution.joints)
+    within = (q >= joint_limits[:, 0] - 1e-9) & (q <= joint_limits[:, 1] + 1e-9)
+    feasible = np.all(np.asarray(solution.margin) >= -1e-12) and np.all(within)
+    return float(np.min(forces.isotropic_force(bound.jacobian(q, points), limits))), bool(feasible)
+
+
+def test_the_delta_with_the_largest_worst_case_isotropic_force_keeps_the_box(delta):
+    """--maximize force: the epigraph optimum is the numpy code's worst force over the program's points, no
+    feasible design nearby does better (random designs 1 % around it, numpy only: every point reached with the
+    arms within their declared -90..60 deg, which are active), and the independent rating on the 11^3 grid
+    improves on the start design."""
+    numpy_model, _ = delta
+    bounds = {"a": (0.06, 0.15), "b": (0.10, 0.25)}
+    limits = np.ones(3)
+    problem, program, solution = _optimize(delta, "force", ["a", "b"], bounds=bounds, box=DELTA_BOX,
+                                           effort_limits=limits)
+    assert solution.success
+    assert solution.constraint_violation < 1e-9
+    worst, reached = _worst_force(numpy_model, solution.optimum, program.box_points, limits, problem.limits)
+    assert reached
+    # the surrogate's minimum over the points and the numpy code's: KINEMATICS (a norm of a 3x3 Jacobian's column)
+    assert solution.surrogate_optimum == pytest.approx(worst, rel=KINEMATICS)
+    assert solution.surrogate_optimum > 1.3 * solution.surrogate_start
+    rng = np.random.default_rng(5)
+    optimum = np.array([solution.optimum["a"], solution.optimum["b"]])
+    for design_values in optimum * (1 + 0.01 * rng.uniform(-1, 1, (40, 2))):
+        nearby = {**solution.optimum, "a": design_values[0], "b": design_values[1]}
+        force, reached = _worst_force(numpy_model, nearby, program.box_points, limits, problem.limits)
+        if reached and bounds["a"][0] <= design_values[0]:
+            assert force <= worst * (1 + 1e-9)
+    before, after = (design.evaluate(problem, numpy_model, d, samples=2**10) for d in (solution.start, solution.optimum))
+    assert after.force > 1.3 * before.force
+    assert after.box_reachable == 1.0
+
+
+@pytest.mark.parametrize("model_dir, kwargs, message", [
+    (ARM_DIR, {"box": {"x": (0.11, 0.14), "y": (0.11, 0.14)}, "effort_limits": [1, 1]},
+     "the force objective is derived for parallel mechanisms"),
+    (DELTA_DIR, {"box": DELTA_BOX}, "give --effort-limit T"),
+    (DELTA_DIR, {"effort_limits": [1, 1, 1]}, "the worst-case force of a parallel mechanism is taken over the "
+                                              "required workspace box: give --require-box x=LOWER:UPPER"),
+    (DELTA_DIR, {"box": DELTA_BOX, "effort_limits": [1, -1, 1]}, "one positive effort limit per actuator"),
+])
+def test_the_force_objective_says_what_it_needs(model_dir, kwargs, message):
+    with pytest.raises(ValueError, match=re.escape(message)):
+        design.design_problem(symkin.load(model_dir), "force", ["a"] if model_dir == DELTA_DIR else ["l1"], **kwargs)
 
 
 def test_cli_on_a_model_file_writes_figures_and_result(tmp_path, capsys):

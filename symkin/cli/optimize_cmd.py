@@ -33,8 +33,12 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "(replaced atomically).",
     )
     analysis_args.add_model_arguments(p, backend=False)
-    p.add_argument("--maximize", choices=("gci", "workspace"), default="gci",
-                   help="objective (default: %(default)s; workspace: serial models only)")
+    p.add_argument("--maximize", choices=("gci", "workspace", "force"), default="gci",
+                   help="objective (default: %(default)s; workspace: serial models only; force: the isotropic force "
+                        "at the worst point of the required box, parallel models)")
+    p.add_argument("--effort-limit", metavar="T[,T...]",
+                   help="the actuators' peak efforts of --maximize force (N m or N; one value for all or one per "
+                        "actuator; default: the model's effort limits)")
     p.add_argument("--free", required=True, metavar="A,B",
                    help="the parameters to optimize, e.g. --free l1 (the others keep their values)")
     p.add_argument("--bounds", action="append", default=[], metavar="NAME=LOWER:UPPER[,...]",
@@ -79,8 +83,11 @@ def run(args: argparse.Namespace) -> int:
             outputs = {kind: design.needed_functions(kind) for kind in MechanismKind}
             # a parallel model's rating checks the working mode by its closed-form fk, where it has one
             numpy_model, casadi_model = model_files.load_models(args.model, ("numpy", "casadi"), outputs, ("fk",))
+            efforts = (analysis_args.per_joint("--effort-limit", args.effort_limit, len(numpy_model.info.coordinates))
+                       if args.effort_limit else None)
             problem = design.design_problem(numpy_model, args.maximize, free, bounds=bounds, values=values, box=box,
-                                            margin=args.margin, limits=limits, length=args.length)
+                                            margin=args.margin, limits=limits, length=args.length,
+                                            effort_limits=efforts)
             progress("building the CasADi program")
             start = time.perf_counter()
             program = design.formulate(problem, casadi_model, numpy_model, nodes=args.nodes, seed=args.seed)
@@ -130,7 +137,7 @@ def _report(args, problem, program, solution, rating, seconds: dict[str, float])
                   "constraint_violation": solution.constraint_violation, "history": solution.history.tolist()},
         "evaluation": {"method": before.description, "box_check": after.box_check, **{
             which: {"gci": r.gci.value, "gci_error": r.gci.error, "measure": r.measure.value,
-                    "measure_error": r.measure.error, "box_reachable": r.box_reachable}
+                    "measure_error": r.measure.error, "box_reachable": r.box_reachable, "force": r.force}
             for which, r in (("start", before), ("optimum", after))}},
         "required_box": None if problem.box is None else {"lower": problem.box[0].tolist(),
                                                           "upper": problem.box[1].tolist(),
@@ -150,8 +157,9 @@ def _print(report: dict, out: Path) -> None:
     for which in ("start", "optimum"):
         r = ev[which]
         box = "" if r["box_reachable"] is None else f", box reachable at {100 * r['box_reachable']:.1f} % of the points"
+        force = "" if r["force"] is None else f"; isotropic force at the worst box point {r['force']:.6g} N"
         print(f"  GCI ({which}): {r['gci']:.6g} +- {r['gci_error']:.2g}; measure {r['measure']:.6g} +- "
-              f"{r['measure_error']:.2g}{box}")
+              f"{r['measure_error']:.2g}{box}{force}")
     print(f"  independent evaluation: {ev['method']}; box: {ev['box_check']}")
     t = report["seconds"]
     print(f"  time: build {t['build']:.2f} s, IPOPT {t['ipopt']:.3f} s, evaluation {t['evaluation']:.2f} s, "

@@ -17,8 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from symkin.analysis import (conditioning, feasibility, global_indices, inverse, mechanism, orientations, parallel,
-                             sampling)
+from symkin.analysis import (conditioning, feasibility, forces, global_indices, inverse, mechanism, orientations,
+                             parallel, sampling)
 from symkin.analysis.estimates import Estimate
 from symkin.analysis.limits import within_limits
 from symkin.design.problem import DesignProblem
@@ -40,6 +40,8 @@ class Evaluation:
         description: the domain and measure, in words.
         box_reachable: fraction of the box check points that are reachable (None without a box).
         box_check: how the box was checked, in words.
+        force: the force objective's isotropic force at the worst reachable check point of the box (N;
+            :func:`symkin.analysis.forces.isotropic_force`), else None.
     """
 
     gci: Estimate
@@ -47,6 +49,7 @@ class Evaluation:
     description: str
     box_reachable: float | None
     box_check: str
+    force: float | None = None
 
 
 def evaluate(problem: DesignProblem, model: GeneratedModel, design: dict[str, float], *, samples: int = EVALUATION_SAMPLES,
@@ -135,7 +138,11 @@ def _parallel(problem: DesignProblem, model: GeneratedModel, samples: int, seed:
     result = global_indices.gci(model, method="qmc", samples=samples, seed=seed, domain="cartesian", inverse=ik,
                                 box=problem.box, limits=problem.limits)
     points = box_check_points(problem)
-    fraction = float(np.mean(feasibility.reachable(ik, points, mechanism.joint_limits(model, problem.limits),
-                                               mechanism.revolute_mask(model))))
-    return Evaluation(result.value, result.measure, f"qmc over the required box, {result.description}", fraction,
-                      f"closed-form ik (margin, fk round trip, joint limits) at {len(points)} points")
+    q, inside = feasibility.feasible_configurations(ik, points, mechanism.joint_limits(model, problem.limits),
+                                                    mechanism.revolute_mask(model))
+    force = None
+    if problem.effort_limits is not None and inside.any():
+        force = float(np.min(forces.isotropic_force(model.jacobian(q[inside], points[inside]), problem.effort_limits)))
+    return Evaluation(result.value, result.measure, f"qmc over the required box, {result.description}",
+                      float(np.mean(inside)), f"closed-form ik (margin, fk round trip, joint limits) at {len(points)} "
+                      "points", force)

@@ -25,7 +25,12 @@ over fixed sample points, so the objective is a smooth function of the design:
 
       v_F = sum_j cos(pitch_j) / kappa_F(E_j J_j)  /  sum_j cos(pitch_j);
 * ``workspace`` of a serial model: int |det J| dq over the joint limits (area/volume in
-  m^d), estimated at the same nodes (with the same smoothed |det J|).
+  m^d), estimated at the same nodes (with the same smoothed |det J|);
+* ``force`` of a parallel model: the isotropic force f_iso = min_i tau_max,i / |J_i|
+  (:mod:`symkin.analysis.forces`, J_i the i-th column of J) at the worst point of the required
+  box, in epigraph form: maximize a bound t subject to t |J_i(p_j)| <= tau_max,i at every
+  point p_j of the box and of its grid and every actuator i, written (t |J_i| / tau_max,i)^2 <= 1
+  (smooth; the minimum over points and actuators has kinks where the worst one changes).
 
 Constraints (the required box, inflated by the margin, sampled on a vertex grid with its
 corners): a serial model's box configurations q_b satisfy fk(q_b) = p_b within the joint
@@ -42,7 +47,7 @@ from typing import Any, NamedTuple
 import casadi
 import numpy as np
 
-from symkin.analysis import mechanism, sampling
+from symkin.analysis import forces, mechanism, sampling
 from symkin.design import smooth
 from symkin.design.problem import DesignProblem
 from symkin.runtime.info import GeneratedModel
@@ -105,6 +110,7 @@ class _Terms(NamedTuple):
     nodes: np.ndarray
     box_points: np.ndarray
     description: str
+    surrogate: casadi.MX | None = None  # the reported value as a function of the design alone (else: objective)
 
 
 NO_VARIABLES = (casadi.MX(0, 1), np.empty(0), np.empty(0), np.empty(0))
@@ -124,6 +130,8 @@ class DesignProgram:
         nodes: the objective's sample points (joint configurations or box points).
         box_points: the constraint points of the required box (or an empty array).
         description: the surrogate and its domain, in words.
+        configuration_count: the entries of x after the free parameters that are a serial model's joint
+            configurations at the box points (a force bound follows them).
     """
 
     x: casadi.MX
@@ -141,6 +149,7 @@ class DesignProgram:
     nodes: np.ndarray
     box_points: np.ndarray
     description: str
+    configuration_count: int = 0
 
     def free_values(self, x: np.ndarray) -> np.ndarray:
         """The free parameter values of a solution vector."""
@@ -171,8 +180,9 @@ def formulate(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model:
     build = _parallel if problem.parallel else _serial
     terms = build(problem, casadi_model, numpy_model, free, values, z * scales, nodes, box_points, seed)
     free_values = casadi.MX.sym("free", len(problem.free))
+    surrogate = terms.objective if terms.surrogate is None else terms.surrogate
     objective_function = casadi.Function("surrogate", [free_values],
-                                         [casadi.substitute(terms.objective, z, free_values / scales)],
+                                         [casadi.substitute(surrogate, z, free_values / scales)],
                                          ["free"], ["surrogate"])
     start = np.array([p.start for p in problem.free])
     reference = abs(float(objective_function(start)))
@@ -184,7 +194,8 @@ def formulate(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model:
                    np.concatenate([[p.lower for p in problem.free] / scales, terms.lower]),
                    np.concatenate([[p.upper for p in problem.free] / scales, terms.upper]),
                    np.asarray(terms.lbg, float), np.asarray(terms.ubg, float), objective_function,
-                   reference, len(problem.free), scales, terms.nodes, terms.box_points, terms.description)
+                   reference, len(problem.free), scales, terms.nodes, terms.box_points, terms.description,
+                   0 if problem.parallel else terms.variables.numel())
 
 
 def _serial(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model: GeneratedModel, free: casadi.SX, values: dict[str, Any],
@@ -246,6 +257,8 @@ def _parallel(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model:
     node = casadi.SX.sym("p", p.shape[1])
     joints, margin = _call(casadi_function(casadi_model, "ik"), {"p": node, **values})
     J = _call(casadi_function(casadi_model, "jacobian"), {"q": joints, "p": node, **values})[0]
+    if problem.objective == "force":
+        return _force(problem, numpy_model, node, free, J, margin, joints, design, per_axis, box_points)
     if problem.spherical:
         weights = np.cos(p[:, 1])
         J = angular_velocity_matrix(node) @ J
@@ -259,13 +272,24 @@ def _parallel(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model:
                    f"required box ({measure}), joints from the closed-form ik")
     corners = sampling.grid(*problem.inflated_box, box_points, midpoints=False)
     points = np.concatenate([corners, p])
+    _, g, lbg, ubg = _reach(problem, numpy_model, node, free, margin, joints, casadi.SX(0, 1), points, design)
+    description += f"; the box is required at {len(points)} points (ik margin >= 0)"
+    return _Terms(objective, casadi.vertcat(*g), np.concatenate(lbg), np.concatenate(ubg), *NO_VARIABLES, p, points,
+                  description)
+
+
+def _reach(problem: DesignProblem, numpy_model: GeneratedModel, node: casadi.SX, free: casadi.SX,
+           margin: casadi.SX, joints: casadi.SX, extra: casadi.SX, points: np.ndarray, design: casadi.MX
+           ) -> tuple[casadi.MX, list[casadi.MX], list[np.ndarray], list[np.ndarray]]:
+    """The ``extra`` rows at every point, and the constraints that every leg reaches every point (ik margin
+    >= 0, scaled by its median at the start) with its actuated joints within their limits: (extra, g, lbg, ubg)."""
     start_margin = np.asarray(numpy_model.ik(points, **problem.start)[1])
     if not np.all(np.isfinite(start_margin)):
         raise ValueError(f"{numpy_model.name}: the inverse kinematics fails at the start design")
     reference = float(np.median(np.abs(start_margin))) or 1.0
-    reach = _node_function("reach", node, free, casadi.vertcat(margin / reference, joints))
     legs = margin.numel()
-    reached = _mapped(reach, casadi.DM(points.T), design)
+    reached = _mapped(_node_function("reach", node, free, casadi.vertcat(margin / reference, joints, extra)),
+                      casadi.DM(points.T), design)
     g = [casadi.vec(reached[:legs, :])]
     lbg, ubg = [np.zeros(legs * len(points))], [np.full(legs * len(points), np.inf)]
     if problem.limits is not None:
@@ -273,6 +297,31 @@ def _parallel(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model:
             g.append(reached[legs + k, :].T)
             lbg.append(np.full(len(points), lo))
             ubg.append(np.full(len(points), hi))
-    description += f"; the box is required at {len(points)} points (ik margin >= 0)"
-    return _Terms(objective, casadi.vertcat(*g), np.concatenate(lbg), np.concatenate(ubg), *NO_VARIABLES, p, points,
-                  description)
+    return reached[legs + joints.numel():, :], g, lbg, ubg
+
+
+def _force(problem: DesignProblem, numpy_model: GeneratedModel, node: casadi.SX, free: casadi.SX, J: casadi.SX,
+           margin: casadi.SX, joints: casadi.SX, design: casadi.MX, per_axis: int, box_points: int) -> _Terms:
+    """The isotropic force at the worst point of the box, in epigraph form (see the module docstring)."""
+    corners = sampling.grid(*problem.inflated_box, box_points, midpoints=False)
+    p = sampling.grid(*problem.required_box, per_axis)
+    points = np.concatenate([corners, p])
+    limits = np.asarray(problem.effort_limits, dtype=np.float64)
+    # (|J_i| / tau_max,i)^2 per actuator i (rows) and point (columns)
+    squared, g, lbg, ubg = _reach(problem, numpy_model, node, free, margin, joints,
+                                  (casadi.sum1(J * J) / casadi.DM(limits**2).T).T, points, design)
+    worst = casadi.mmin(1 / casadi.sqrt(squared))
+    at_start = numpy_model.bind(**problem.start)
+    start = float(np.min(forces.isotropic_force(at_start.jacobian(at_start.ik(points).joints, points), limits)))
+    if not start > 0:
+        raise ValueError(f"{numpy_model.name}: the isotropic force vanishes in the box at the start design")
+    bound = casadi.MX.sym("force_bound")  # t / (the start design's worst force)
+    g.append(casadi.vec((bound * start) ** 2 * squared))
+    lbg.append(np.full(squared.numel(), -np.inf))
+    ubg.append(np.ones(squared.numel()))
+    description = (f"isotropic force min_i tau_max,i / |J_i| at the worst of {len(points)} points (the box's "
+                   f"{box_points}^{p.shape[1]} vertex grid and {per_axis}^{p.shape[1]} midpoints; epigraph form), "
+                   f"effort limits {', '.join(f'{v:g}' for v in limits)}; the box is required at every point "
+                   "(ik margin >= 0)")
+    return _Terms(bound * start, casadi.vertcat(*g), np.concatenate(lbg), np.concatenate(ubg), bound, np.ones(1),
+                  np.zeros(1), np.full(1, np.inf), p, points, description, worst)

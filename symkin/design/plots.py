@@ -26,6 +26,11 @@ SLICE_POINTS = 121
 SLICE_BORDER = 0.5
 
 
+#: The y label of the objective history, per objective.
+HISTORY_LABELS = {"gci": "GCI surrogate (1/kappa_F)", "workspace": "workspace measure",
+                  "force": "force bound at the worst box point [N]"}
+
+
 def png(figure: Any) -> bytes:
     """The figure as PNG bytes."""
     buffer = io.BytesIO()
@@ -41,7 +46,7 @@ def history_figure(solution: Solution, problem: DesignProblem, model_name: str) 
     ax = figure.add_subplot()
     ax.plot(np.arange(len(solution.history)), solution.history, marker="o", ms=3)
     ax.set_xlabel("IPOPT iteration")
-    ax.set_ylabel("GCI surrogate (1/kappa_F)" if problem.objective == "gci" else "workspace measure")
+    ax.set_ylabel(HISTORY_LABELS[problem.objective])
     ax.set_title(f"{model_name}: maximize {problem.objective} over {', '.join(problem.names)} "
                  f"({solution.iterations} iterations, {solution.status})", fontsize=9)
     ax.grid(alpha=0.3)
@@ -65,7 +70,8 @@ def _quantity(value: float, unit: str) -> str:
 def _label(problem: DesignProblem, units: dict[str, str], design: dict[str, float], evaluation: Evaluation,
            which: str) -> str:
     values = ", ".join(f"{n} = {_quantity(design[n], units.get(n, ''))}" for n in problem.names)
-    return f"{which}: {values}\nGCI = {evaluation.gci}"
+    force = "" if evaluation.force is None else f", isotropic force >= {evaluation.force:.4g} N in the box"
+    return f"{which}: {values}\nGCI = {evaluation.gci}{force}"
 
 
 def _box_outline(ax: Any, problem: DesignProblem, axes: Sequence[int], scale: float = 1.0) -> None:

@@ -16,8 +16,8 @@ import numpy as np
 from symkin.analysis import mechanism, orientations
 from symkin.runtime.info import GeneratedModel
 
-#: What can be maximized.
-OBJECTIVES = ("gci", "workspace")
+#: What can be maximized: the GCI, the workspace measure, the isotropic force at the worst point of the box.
+OBJECTIVES = ("gci", "workspace", "force")
 
 #: Default span of a free parameter without --bounds: from start / SPAN to start * SPAN.
 SPAN = 2.0
@@ -55,6 +55,7 @@ class DesignProblem:
         length: characteristic length of a mixed translation/rotation task [m], or None.
         spherical: whether the box is one of orientations (a spherical platform, whose GCI is
             taken with the invariant measure of SO(3), :mod:`symkin.analysis.orientations`).
+        effort_limits: the actuators' effort limits tau_max (N m or N) of the ``force`` objective, else None.
     """
 
     objective: str
@@ -66,6 +67,7 @@ class DesignProblem:
     margin: float
     length: float | None
     spherical: bool = False
+    effort_limits: np.ndarray | None = None
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -179,16 +181,46 @@ def _box(model: GeneratedModel, box: Mapping[str, tuple[float, float]] | None) -
     return lower, upper
 
 
+def _effort_limits(model: GeneratedModel, objective: str, effort_limits: Sequence[float] | None,
+                   box: tuple[np.ndarray, np.ndarray] | None) -> np.ndarray | None:
+    """The effort limits of the ``force`` objective (declared, or given), after checking that it applies."""
+    if objective != "force":
+        if effort_limits is not None:
+            raise ValueError("effort limits belong to the force objective (--maximize force)")
+        return None
+    if not mechanism.is_positional(model):
+        raise ValueError(f"{model.name}: the force objective rates a handle that translates (the isotropic force in "
+                         f"N), and the task space {list(mechanism.task_space(model))} is not one of positions only")
+    if box is None:
+        axes = box_axes(model)
+        raise ValueError(f"{model.name}: the force objective is the isotropic force at the worst point of the required "
+                         f"box: give --require-box {','.join(f'{a}=LOWER:UPPER' for a in axes)} (in m)")
+    names = mechanism.coordinate_names(model)
+    if effort_limits is None:
+        declared = [c.effort_limit for c in model.info.coordinates]
+        if None in declared:
+            raise ValueError(f"{model.name}: the force objective needs the actuators' effort limits, and the model "
+                             "declares none for some of them: give --effort-limit T (one value, or one per actuator)")
+        effort_limits = [float(v) for v in declared if v is not None]
+    limits = np.asarray(effort_limits, dtype=np.float64)
+    if limits.shape != (len(names),) or not np.all(np.isfinite(limits) & (limits > 0)):
+        raise ValueError(f"{model.name}: the force objective needs one positive effort limit per actuator "
+                         f"({', '.join(names)}), got {list(effort_limits)}")
+    return limits
+
+
 def design_problem(model: GeneratedModel, objective: str, free: Sequence[str], *,
                    bounds: Mapping[str, tuple[float, float]] | None = None,
                    values: Mapping[str, float] | None = None,
                    box: Mapping[str, tuple[float, float]] | None = None, margin: float = 0.0,
-                   limits: mechanism.Limits | None = None, length: float | None = None) -> DesignProblem:
+                   limits: mechanism.Limits | None = None, length: float | None = None,
+                   effort_limits: Sequence[float] | None = None) -> DesignProblem:
     """Check a dimensioning problem against a loaded model and describe it.
 
     Args:
         model: the loaded model (any backend; only its manifest is read).
-        objective: ``gci`` or ``workspace``.
+        objective: ``gci``, ``workspace`` or ``force`` (the isotropic force of
+            :func:`symkin.analysis.forces.isotropic_force` at the worst point of the required box).
         free: names of the parameters to optimize.
         bounds: {name: (lower, upper)}; default from start / 2 to 2 start (a start of 0 needs bounds).
         values: parameter values instead of the defaults (also the start of free ones).
@@ -198,6 +230,7 @@ def design_problem(model: GeneratedModel, objective: str, free: Sequence[str], *
         margin: clearance of the box (m, or rad for orientations).
         limits: joint-limit overrides.
         length: characteristic length [m] of a task space mixing translations and rotations.
+        effort_limits: the actuators' effort limits of the force objective (default: the model's).
 
     Raises:
         ValueError: an unknown or irrelevant parameter, bad bounds, a malformed box, or a
@@ -229,6 +262,10 @@ def design_problem(model: GeneratedModel, objective: str, free: Sequence[str], *
     if len(task) != n:
         raise ValueError(f"{model.name}: the task Jacobian is {len(task)} x {n}; dimensioning needs a square one "
                          "(the Cartesian measure |det J| dq and kappa_F of J^-1)")
+    if objective == "force" and not parallel:
+        raise ValueError(f"{model.name}: the force objective is derived for parallel mechanisms (their box points "
+                         "have the closed-form ik's joints); for a serial arm, rate designs with 'symkin rate' or "
+                         "maximize its GCI with the required box")
     if parallel:
         if objective == "workspace":
             raise ValueError(f"{model.name}: maximizing the workspace of a parallel mechanism is not supported "
@@ -238,7 +275,8 @@ def design_problem(model: GeneratedModel, objective: str, free: Sequence[str], *
         if required is None:
             axes = box_axes(model)
             unit = "in rad, or with 'deg'" if spherical else "in m"
-            raise ValueError(f"{model.name}: the GCI of a parallel mechanism is taken over the required workspace "
+            what = {"gci": "GCI", "force": "worst-case force"}.get(objective, objective)
+            raise ValueError(f"{model.name}: the {what} of a parallel mechanism is taken over the required workspace "
                              f"box: give --require-box {','.join(f'{a}=LOWER:UPPER' for a in axes)} ({unit})")
         if not spherical and len(mechanism.position_rows(model)) != len(task):
             raise ValueError(f"{model.name}: the task space {list(task)} mixes positions and orientations; the GCI "
@@ -251,4 +289,5 @@ def design_problem(model: GeneratedModel, objective: str, free: Sequence[str], *
     fixed = {k: float(v) for k, v in {**model.parameters, **values}.items()
              if k in used and k not in {p.name for p in free_parameters}}
     return DesignProblem(objective, free_parameters, fixed, parallel, joint_box, required, float(margin), length,
-                         parallel and orientations.is_spherical(model))
+                         parallel and orientations.is_spherical(model),
+                         _effort_limits(model, objective, effort_limits, required))

@@ -75,7 +75,7 @@ def solve(problem: DesignProblem, program: DesignProgram, *, build_seconds: floa
     free = program.free_values(x)
     # CasADi records the scaled objective f = -surrogate / reference at every iterate.
     history = -np.asarray(stats["iterations"]["obj"], dtype=np.float64) * program.reference
-    box_q = x[program.free_count:]
+    box_q = x[program.free_count:program.free_count + program.configuration_count]
     if program.box_points.size and box_q.size:
         box_q = box_q.reshape(len(program.box_points), -1)
     return Solution(
