@@ -15,7 +15,7 @@ import pytest
 from symkin import load
 from symkin.cli import main
 from symkin.simulation import ArmSystem, Plant, run_sampled
-from symkin.simulation import scenarios
+from symkin.simulation import scenarios, user
 from test_simulation import assert_wall_equilibrium
 from tests.conftest import GENERATED_DIR
 from tolerances import EPS
@@ -95,9 +95,19 @@ def test_a_parallel_model_without_closed_form_fk_is_refused_with_exit_code_2(tmp
     assert not (tmp_path / "out").exists()
 
 
+def test_the_agile_eyes_turning_handle_rests_on_a_virtual_wall_at_the_series_spring_equilibrium():
+    """A handle that only turns is held by its angles: a hand pulled 0.2 rad in roll beyond a wall 0.1 rad away
+    (2 N m/rad) settles where the torsional springs in series balance, feeling the wall's moment, the weight
+    compensated (:func:`test_simulation.assert_wall_equilibrium`)."""
+    hand = {**user.TURNING.hand, "arm_damping": 0.2}  # overdamped: settled (1e-6) within the 1.5 s
+    assert_wall_equilibrium(Plant(load(GENERATED_DIR / "agile_eye")), np.zeros(3), 1500, offset=0.1, stiffness=2.0,
+                            damping=0.05, hand=hand)
+
+
 def test_the_agile_eye_swings_with_its_energy_balanced_and_refuses_a_tcp_circle(tmp_path, capsys):
     """A spherical platform is a plant too (p = fk(q), its orientation): a free swing against its joint stops keeps
-    k + u + the stops' work to the integrator's tolerance; a TCP circle has no TCP point to follow."""
+    k + u + the stops' work to the integrator's tolerance; a TCP circle has no TCP point to follow; a hand turns
+    its handle into a virtual wall in the 1 kHz loop (its units N m/rad), its energy balanced."""
     out = tmp_path / "swing"
     assert main(["simulate", str(GENERATED_DIR / "agile_eye"), "--scenario", "free-swing", "--duration", "0.5",
                  "-o", str(out)]) == 0
@@ -105,7 +115,16 @@ def test_the_agile_eye_swings_with_its_energy_balanced_and_refuses_a_tcp_circle(
     drift = float(summary.split("energy balance drift ")[1].split()[0].rstrip(","))
     assert drift <= 1e-8, summary
     capsys.readouterr()
-    assert main(["simulate", str(GENERATED_DIR / "agile_eye"), "--scenario", "tracking", "-o",
-                 str(tmp_path / "circle")]) == 2
-    assert "a task space with x, y or z (it is [roll, pitch, yaw])" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exit_info:
+        main(["simulate", str(GENERATED_DIR / "agile_eye"), "--scenario", "tracking", "-o", str(tmp_path / "circle")])
+    assert exit_info.value.code == 2
+    assert "tracking follows a TCP circle, and this device's handle only turns (roll, pitch, yaw)" \
+        in capsys.readouterr().err
     assert not (tmp_path / "circle").exists()
+    out = tmp_path / "wall"
+    assert main(["simulate", str(GENERATED_DIR / "agile_eye"), "--scenario", "haptic-wall", "--duration", "0.3",
+                 "-o", str(out)]) == 0
+    summary = (out / "summary.txt").read_text()
+    assert "wall at roll = 0.1 rad (k_w = 2 N m/rad, b_w = 0.01 N m s/rad)" in summary
+    assert float(summary.split("energy balance drift ")[1].split()[0].rstrip(",")) <= 1e-8, summary
+    assert "F_felt_roll [N m]" in (out / "haptic-wall-1-modelparameters.csv").read_text()

@@ -77,19 +77,23 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--radius", type=float, default=0.02, metavar="M", help="tracking: circle radius (default: 0.02)")
     p.add_argument("--bandwidth", type=float, default=50.0, metavar="RAD_S",
                    help="computed torque: omega of the error dynamics (default: 50)")
-    p.add_argument("--wall", type=float, default=0.01, metavar="M",
+    p.add_argument("--wall", type=float, metavar="M",
                    help="haptic-wall: distance of the wall from the start TCP along the first task axis "
-                        "(default: 0.01)")
-    p.add_argument("--push", type=float, default=0.02, metavar="M",
+                        "(default: 0.01 m; a handle that only turns: 0.1 rad along its first angle)")
+    p.add_argument("--push", type=float, metavar="M",
                    help="haptic-wall: how far the hand intends to move towards the wall; gravity-compensation: its "
-                        "travel up and down (default: 0.02)")
-    p.add_argument("--wall-stiffness", type=float, default=1000.0, metavar="N_M", help="k_w (default: 1000 N/m)")
-    p.add_argument("--wall-damping", type=float, default=2.0, metavar="NS_M", help="b_w (default: 2 N s/m)")
+                        "travel up and down (default: 0.02 m; a turning handle: 0.2 rad)")
+    p.add_argument("--wall-stiffness", type=float, metavar="N_M",
+                   help="k_w (default: 1000 N/m; a turning handle: 2 N m/rad)")
+    p.add_argument("--wall-damping", type=float, metavar="NS_M",
+                   help="b_w (default: 2 N s/m; a turning handle: 0.01 N m s/rad)")
     p.add_argument("--force-gain", type=float, default=0.0, metavar="K",
                    help="haptic-wall: force feedback gain K_f (default: 0, open-loop impedance rendering)")
     p.add_argument("--hand", action="append", default=[], metavar="NAME=VALUE[,...]",
                    help="haptic-wall, gravity-compensation: user model, of mass, arm_stiffness, arm_damping, "
-                        "grip_stiffness, grip_damping (default: 0.2 kg, 200 N/m, 5 N s/m, 2000 N/m, 10 N s/m)")
+                        "grip_stiffness, grip_damping (default: 0.2 kg, 200 N/m, 5 N s/m, 2000 N/m, 10 N s/m; a "
+                        "handle that only turns, held by its angles: 1e-3 kg m^2, 1.5 N m/rad, 0.03 N m s/rad, "
+                        "15 N m/rad, 0.1 N m s/rad)")
     p.add_argument("--joint-stops", choices=("on", "off"),
                    help="mechanical stops at the declared joint limits: a linear spring-damper beyond each limit "
                         "(default: on when the model declares limits)")
@@ -162,7 +166,7 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     from symkin.atomic import replace_directory
-    from symkin.simulation import Plant, SimulationError, scenarios
+    from symkin.simulation import Plant, SimulationError, scenarios, user
     from symkin.simulation.output import scenario_files
 
     try:
@@ -175,7 +179,8 @@ def run(args: argparse.Namespace) -> int:
         plant = plants[0][1]
         start_pose, start_reason = _start(args, plant)
         q0 = np.array(start_pose)
-        hand = analysis_args.parse_assignments(args.hand)
+        haptic = user.TURNING if plant.turning else user.TRANSLATING
+        hand = {**haptic.hand, **analysis_args.parse_assignments(args.hand)}
         unknown = set(hand) - {"mass", "arm_stiffness", "arm_damping", "grip_stiffness", "grip_damping"}
         if unknown:
             raise ValueError(f"--hand: unknown user parameters {sorted(unknown)}; use mass, arm_stiffness, "
@@ -208,13 +213,15 @@ def run(args: argparse.Namespace) -> int:
             elif args.scenario == "tracking":
                 result = scenarios.tracking(label, plant, q0, args.radius, timing, args.bandwidth, stops)
             elif args.scenario == "haptic-wall":
-                result = scenarios.haptic_wall(label, plant, q0, args.wall, args.push, timing,
-                                               frequency=args.frequency, stiffness=args.wall_stiffness,
-                                               damping=args.wall_damping, force_gain=args.force_gain, hand=hand,
+                result = scenarios.haptic_wall(label, plant, q0, _or(args.wall, haptic.wall),
+                                               _or(args.push, haptic.push), timing, frequency=args.frequency,
+                                               stiffness=_or(args.wall_stiffness, haptic.wall_stiffness),
+                                               damping=_or(args.wall_damping, haptic.wall_damping),
+                                               force_gain=args.force_gain, hand=hand,
                                                stops=stops)
             elif args.scenario == "gravity-compensation":
-                result = scenarios.gravity_compensation(label, plant, q0, args.push, timing, frequency=args.frequency,
-                                                        hand=hand, stops=stops)
+                result = scenarios.gravity_compensation(label, plant, q0, _or(args.push, haptic.push), timing,
+                                                        frequency=args.frequency, hand=hand, stops=stops)
             else:
                 result = scenarios.free_swing(label, plant, q0, timing, stops)
         except SimulationError as err:
@@ -232,3 +239,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"  {line}")
     print(f"wrote {len(files)} files to {out}/ ({', '.join(sorted(files))}) in {time.perf_counter() - start:.2f} s")
     return 0
+
+
+def _or(value: float | None, default: float) -> float:
+    """An option's value, or the default of the handle's kind where it was not given."""
+    return default if value is None else value

@@ -12,6 +12,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from symkin.analysis import mechanism
 from symkin.simulation.plant import Plant
 
 
@@ -40,7 +41,7 @@ def seed(plant: Plant, figure: str) -> str:
 
 def force_units(plant: Plant) -> list[tuple[str, str]]:
     """(task coordinate, unit of its generalized force): N along a translation, N m about a rotation."""
-    return [(c, "N" if c in plant.point_axes else "N m") for c in plant.task_space]
+    return [(c, "N" if c in mechanism.POSITION_COMPONENTS else "N m") for c in plant.task_space]
 
 
 def joint_units(plant: Plant) -> tuple[list[str], list[str]]:

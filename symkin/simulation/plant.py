@@ -8,7 +8,10 @@ here derives or imports sympy.
 The TCP point of the haptic loop is the translational part of the model's task space
 (``x``, ``y``, ``z`` components): its position comes from ``fk`` and its velocity Jacobian
 from the rows of the task Jacobian ``jacobian``, so forces map to joint torques by
-tau = J^T F (seed eq. 8.35) with zeros in the rotational rows.
+tau = J^T F (seed eq. 8.35) with zeros in the rotational rows.  A spherical platform's handle
+only turns: the user holds its angles p = (roll, pitch, yaw), pd = J qd, and a generalized
+force F conjugate to them (the moments about the partial rotation axes, N m) maps to the
+joints by the same tau = J^T F.
 
 A parallel mechanism (a DELTA, a pantograph, the Agile Eye) is a plant in its actuated coordinates q
 too: its generated dynamics take the platform pose p with q (symkin.parallel.dynamics), which the plant
@@ -85,16 +88,22 @@ class Plant:
         self.actuated = np.array([c.active for c in coordinates], dtype=bool)
         self.passive = tuple(c.name for c in coordinates if not c.active)
         self.task_space = DEVICE_TASK_SPACE if self.hybrid else mechanism.task_space(model)
-        #: rows of the task Jacobian that are TCP translations, and their fk axes
-        self.point_rows = np.array([i for i, c in enumerate(self.task_space) if c in mechanism.POSITION_COMPONENTS],
-                                   dtype=np.intp)
+        #: a spherical platform: its handle only turns, and the user holds its angles (roll, pitch, yaw)
+        self.turning = (self.parallel and not self.hybrid
+                        and mechanism.kind_of(model) is mechanism.MechanismKind.PARALLEL_ORIENTATION)
+        #: rows of the task Jacobian the user's hand holds (TCP translations; a turning handle's angles), their
+        #: fk axes, and the units of a handle coordinate and of the force conjugate to it
+        self.point_rows = np.array([i for i, c in enumerate(self.task_space)
+                                    if self.turning or c in mechanism.POSITION_COMPONENTS], dtype=np.intp)
         self.point_axes = tuple(self.task_space[i] for i in self.point_rows)
-        self._point_index = np.array([mechanism.POSITION_COMPONENTS.index(c) for c in self.point_axes], dtype=np.intp)
+        self.point_unit, self.force_unit = ("rad", "N m") if self.turning else ("m", "N")
+        self._point_index = (self.point_rows if self.turning else
+                             np.array([mechanism.POSITION_COMPONENTS.index(c) for c in self.point_axes], dtype=np.intp))
         functions = set(model.functions)
         task_functions = {"device_fk", "device_actuator_jacobian"} if self.hybrid else {"fk", "jacobian"}
         self._point_error = None if self.point_rows.size and task_functions <= functions else (
             f"{self.name}: task-space simulation needs {' and '.join(sorted(task_functions))} and a task space with "
-            f"x, y or z (it is [{', '.join(self.task_space)}])")
+            f"x, y or z, or a platform that only turns (it is [{', '.join(self.task_space)}])")
         self._forward, self._inverse = self._of_joints("forward_dynamics"), self._of_joints("inverse_dynamics")
         self._mass, self._kinetic = self._of_joints("mass_matrix"), self._of_joints("kinetic_energy")
         task_jacobian = "device_actuator_jacobian" if self.hybrid else "jacobian"
@@ -216,7 +225,8 @@ class Plant:
         return k + self._potential(q) if self._potential is not None else k
 
     def point(self, q: np.ndarray) -> np.ndarray:
-        """Position (..., d) of the TCP in the translational task axes (:attr:`point_axes`)."""
+        """Position (..., d) of the TCP in the translational task axes (:attr:`point_axes`); a turning handle's
+        angles (roll, pitch, yaw)."""
         self.require_point()
         if self.hybrid:
             return self.model.device_fk(self.pose(q), q[..., self.legs:])[..., self._point_index, 3]
@@ -225,7 +235,8 @@ class Plant:
         return self.model.fk(q)[..., self._point_index, 3]
 
     def point_jacobian(self, q: np.ndarray) -> np.ndarray:
-        """(..., d, n): TCP velocity = J_p qd, the translational rows of the task Jacobian."""
+        """(..., d, n): TCP velocity = J_p qd, the translational rows of the task Jacobian (a turning handle's
+        angle rates: all of J)."""
         self.require_point()
         return self.task_jacobian(q)[..., self.point_rows, :]
 

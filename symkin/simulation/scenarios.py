@@ -173,11 +173,13 @@ def _system(plant: Plant, q: np.ndarray, stops: StopSettings | None, timing: Tim
 
 
 def _stability(system: ArmSystem, timing: Timing, q: np.ndarray):
-    """RK4's stability in contact at q and the corners of the limits (None: no stops, or not a
-    fixed-step run)."""
+    """RK4's stability in contact at q and the corners of the limits where the mechanism assembles (a
+    parallel one's corners may not: its mass matrix is NaN there) (None: no stops, or not a fixed-step run)."""
     if system.stops is None or timing.integrator != "rk4":
         return None
-    masses = system.plant.mass_matrix(stop_configurations(system.stops, q))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        masses = system.plant.mass_matrix(stop_configurations(system.stops, q))
+    masses = masses[np.isfinite(masses).all(axis=(-2, -1))]
     return rk4_stability(system.stops, masses, 1.0 / timing.rate, timing.substeps)
 
 
@@ -350,26 +352,27 @@ def haptic_wall(label: str, plant: Plant, q_start: np.ndarray, wall_offset: floa
     desired, sensed = renderer.desired_and_sensed(run.t, run.x)
     names, axes = plant.coordinates, plant.point_axes
     _, efforts = labels.joint_units(plant)
+    m, N = plant.point_unit, plant.force_unit
     columns = {"t [s]": run.t}
-    columns |= labels.named("TCP ", axes, "m", p)
-    columns |= labels.named("hand ", axes, "m", s.held()[0])
-    columns["penetration [m]"] = np.maximum(0.0, wall.penetration(p))
-    columns |= labels.named("F_desired_", axes, "N", desired)
-    columns |= labels.named("F_felt_", axes, "N", sensed)
+    columns |= labels.named("TCP ", axes, m, p)
+    columns |= labels.named("hand ", axes, m, s.held()[0])
+    columns[f"penetration [{m}]"] = np.maximum(0.0, wall.penetration(p))
+    columns |= labels.named("F_desired_", axes, N, desired)
+    columns |= labels.named("F_felt_", axes, N, sensed)
     columns |= labels.named("tau_", names, efforts, run.u)
-    summary = [f"{label}: wall at {axes[0]} = {wall.offset:.4g} m (k_w = {wall.stiffness:g} N/m, b_w = "
-               f"{wall.damping:g} N s/m), hand pushing {push:g} m at {frequency:g} Hz, loop at {timing.rate:g} Hz "
+    summary = [f"{label}: wall at {axes[0]} = {wall.offset:.4g} {m} (k_w = {wall.stiffness:g} {N}/{m}, b_w = "
+               f"{wall.damping:g} {N} s/{m}), hand pushing {push:g} {m} at {frequency:g} Hz, loop at {timing.rate:g} Hz "
                f"({timing.integrator}), force feedback K_f = {force_gain:g}",
-               f"  peak penetration {_peak(columns['penetration [m]']):.3g} m, peak felt force "
-               f"{_peak(sensed[:, 0]):.3g} N (desired {_peak(desired[:, 0]):.3g} N), max |F_desired - F_felt| "
-               f"{_peak(desired - sensed):.3g} N",
+               f"  peak penetration {_peak(columns[f'penetration [{m}]']):.3g} {m}, peak felt force "
+               f"{_peak(sensed[:, 0]):.3g} {N} (desired {_peak(desired[:, 0]):.3g} {N}), max |F_desired - F_felt| "
+               f"{_peak(desired - sensed):.3g} {N}",
                f"  peak torques {labels.peaks('tau_', names, efforts, run.u)}; energy balance drift "
                f"{balance_drift(system, run):.3g}"]
     summary += declared_limit_lines(plant, run.u, s.qd) + report.lines
     figures = [FigureSpec("haptic-wall.png", f"Haptic loop with a virtual wall (seed Fig. 8.18): {plant.name}", (
-        ("position [m]", (f"TCP {axes[0]} [m]", f"hand {axes[0]} [m]")),
-        ("penetration [m]", ("penetration [m]",)),
-        ("force on the hand [N]", (f"F_desired_{axes[0]} [N]", f"F_felt_{axes[0]} [N]")),
+        (f"position [{m}]", (f"TCP {axes[0]} [{m}]", f"hand {axes[0]} [{m}]")),
+        (f"penetration [{m}]", (f"penetration [{m}]",)),
+        (f"force on the hand [{N}]", (f"F_desired_{axes[0]} [{N}]", f"F_felt_{axes[0]} [{N}]")),
         (f"torque [{labels.label(efforts)}]", tuple(f"tau_{n} [{u}]" for n, u in zip(names, efforts)))))]
     return ScenarioResult("haptic-wall", [Series(label, columns | report.columns, report.contacts)], figures,
                           summary)
@@ -399,6 +402,7 @@ def gravity_compensation(label: str, plant: Plant, q_start: np.ndarray, travel: 
     series, lines, felt_peaks = [], [], []
     names = plant.coordinates
     _, efforts = labels.joint_units(plant)
+    m, N = plant.point_unit, plant.force_unit
     for run_label, control in runs:
         system, stability = _system(plant, q_start, stops, timing, user)
         run = run_loop(system, control, system.initial(q_start), timing)
@@ -408,29 +412,29 @@ def gravity_compensation(label: str, plant: Plant, q_start: np.ndarray, travel: 
         hand_position, hand_velocity = s.held()
         felt = user.force_on_tcp(p, v, hand_position, hand_velocity)
         columns = {"t [s]": run.t}
-        columns |= labels.named("TCP ", axes, "m", p)
-        columns |= labels.named("hand ", axes, "m", hand_position)
-        columns |= labels.named("F_hand_", axes, "N", felt)
+        columns |= labels.named("TCP ", axes, m, p)
+        columns |= labels.named("hand ", axes, m, hand_position)
+        columns |= labels.named("F_hand_", axes, N, felt)
         columns |= labels.named("tau_", names, efforts, run.u)
         series.append(Series(run_label, columns | report.columns, report.contacts))
         felt_peaks.append(_peak(felt))
-        lines += [f"  {run_label}: the hand pushes with up to {_peak(felt):.3g} N (mean "
-                  f"{float(np.mean(felt[:, -1])):.3g} N along {axes[-1]}, rms "
-                  f"{float(np.sqrt(np.mean(np.sum(felt ** 2, axis=-1)))):.3g} N); peak torques "
+        lines += [f"  {run_label}: the hand pushes with up to {_peak(felt):.3g} {N} (mean "
+                  f"{float(np.mean(felt[:, -1])):.3g} {N} along {axes[-1]}, rms "
+                  f"{float(np.sqrt(np.mean(np.sum(felt ** 2, axis=-1)))):.3g} {N}); peak torques "
                   f"{labels.peaks('tau_', names, efforts, run.u)}; energy balance drift "
                   f"{balance_drift(system, run):.3g}"] + declared_limit_lines(plant, run.u, s.qd) + report.lines
-    summary = [f"{label}: the hand moves the handle {travel:g} m along {axes[-1]} at {frequency:g} Hz, loop at "
+    summary = [f"{label}: the hand moves the handle {travel:g} {m} along {axes[-1]} at {frequency:g} Hz, loop at "
                f"{timing.rate:g} Hz ({timing.integrator}); compensation cuts the peak force felt from "
-               f"{felt_peaks[1]:.3g} N to {felt_peaks[0]:.3g} N"]
+               f"{felt_peaks[1]:.3g} {N} to {felt_peaks[0]:.3g} {N}"]
     J0 = plant.task_jacobian(q_start)
     if J0.shape[0] == J0.shape[1]:
         weight = tcp_forces(J0[None], plant.gravity(q_start)[None])[0][plant.point_rows]
         summary.append(f"  the device's weight at the handle at the start: J^-T G = ("
-                       + ", ".join(f"{v:.4g}" for v in weight) + f") N along ({', '.join(axes)})")
+                       + ", ".join(f"{v:.4g}" for v in weight) + f") {N} along ({', '.join(axes)})")
     summary += lines
     figures = [FigureSpec("gravity-compensation.png", f"Gravity compensation, felt by a user's hand: {plant.name}", (
-        (f"TCP {axes[-1]} [m]", (f"TCP {axes[-1]} [m]", f"hand {axes[-1]} [m]")),
-        ("force of the hand [N]", tuple(f"F_hand_{c} [N]" for c in axes)),
+        (f"TCP {axes[-1]} [{m}]", (f"TCP {axes[-1]} [{m}]", f"hand {axes[-1]} [{m}]")),
+        (f"force of the hand [{N}]", tuple(f"F_hand_{c} [{N}]" for c in axes)),
         (f"torque [{labels.label(efforts)}]", tuple(f"tau_{n} [{u}]" for n, u in zip(names, efforts)))))]
     return ScenarioResult("gravity-compensation", series, figures, summary)
 

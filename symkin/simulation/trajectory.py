@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from symkin.simulation.integrate import SimulationError
+from symkin.errors import NotApplicable
 from symkin.analysis.mechanism import POSITION_COMPONENTS
 
 
@@ -88,8 +89,13 @@ def task_circle(plant, q_start: np.ndarray, radius: float, duration: float, samp
     Raises:
         SimulationError: a point of the circle has no inverse-kinematics solution within the
             joint limits near the previous sample.
+        NotApplicable: the handle only turns (a spherical platform).
     """
     plant.require_point()
+    if plant.turning:
+        raise NotApplicable(f"{plant.name}: tracking follows a TCP circle, and this device's handle only turns "
+                            f"({', '.join(plant.point_axes)}): simulate haptic-wall, gravity-compensation, sine or "
+                            "free-swing")
     if plant.parallel:
         return _parallel_circle(plant, q_start, radius, duration, samples)
     from symkin.ik import ModelKinematics, solve_numeric
