@@ -59,6 +59,16 @@ def shared_derivation(model: Model) -> Derivation:
     return Derivation(model)
 
 
+@functools.lru_cache(maxsize=None)
+def stability_run(name: str):
+    """``symkin bench stability models/<name>.yaml`` at its defaults, once per worker: the run that
+    docs/numerical-stability.md quotes (tests/test_stability_table.py) and, on native arithmetic, the one
+    tests/test_stability.py judges (both modules share the xdist group ``stability``)."""
+    from symkin.stability import run_stability
+
+    return run_stability(load_model(MODELS_DIR / f"{name}.yaml"))
+
+
 @pytest.fixture(scope="session")
 def derivations(models: dict[str, Model]) -> dict[str, Derivation]:
     """One shared derivation graph per example model (quantities are memoized across tests)."""

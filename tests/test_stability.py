@@ -8,7 +8,7 @@ import subprocess
 import numpy as np
 import pytest
 import sympy
-from conftest import EXAMPLE_MODELS, GENERATED_DIR, MODELS_DIR, SYMKIN_CLI
+from conftest import EXAMPLE_MODELS, FOREIGN_ARITHMETIC, GENERATED_DIR, MODELS_DIR, SYMKIN_CLI, stability_run
 from tolerances import CLOSED_FORM, EPS, FORWARD_AT_SINGULARITIES
 
 from symkin import load, pipeline
@@ -27,9 +27,10 @@ from symkin.stability.states import parameter_values
 #: runs are computed once, not once per worker.
 pytestmark = pytest.mark.xdist_group("stability")
 
+#: The runs on foreign arithmetic (`make test`'s second pass): fewer states, and not every quantity (below).
 QUICK = dict(samples=12, scale_samples=3, float32_samples=6, steps=(1e-2, 1e-6, 1e-10))
-#: The Stewart platform's J = J_x^-1 J_q (a symbolic 6x6 inverse) takes a minute to derive and
-#: lambdify for mpmath: the suite checks every other quantity (`symkin bench stability` checks all).
+#: Left out on foreign arithmetic. The Stewart platform's J = J_x^-1 J_q (a symbolic 6x6 inverse) takes a
+#: minute to derive and lambdify for mpmath: that pass checks every other quantity (the first, all).
 #: Its dynamics (large expressions at 50 digits) are checked at the bench's full defaults by
 #: tests/test_stability_table.py, and against Pinocchio by tests/test_parallel_dynamics.py.
 #: delta_wrist's platform is delta's, leg for leg: its kinematics are the same code (the golden files show it),
@@ -48,6 +49,11 @@ CHECKED = {"serial": {"fk", "frames", "jacobian", "jacobian_geometric", "mass_ma
 
 @pytest.fixture(scope="session")  # not "module": xdist may interleave other modules' tests, which would recompute it
 def runs(models):
+    """On native arithmetic the full runs the results table quotes (tests/test_stability_table.py runs them in
+    this worker anyway: every quantity, the bench's defaults); on foreign arithmetic, where the table is not
+    rerun, quick runs without :data:`LEFT_OUT`."""
+    if not FOREIGN_ARITHMETIC:
+        return {name: stability_run(name) for name in EXAMPLE_MODELS}
     out = {}
     for name in EXAMPLE_MODELS:
         mechanism = models[name].mechanism

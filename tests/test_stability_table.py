@@ -15,9 +15,7 @@ import math
 import re
 
 import pytest
-from conftest import EXAMPLE_MODELS, ROOT
-
-from symkin.stability import run_stability
+from conftest import EXAMPLE_MODELS, ROOT, stability_run
 
 #: a quoted maximum and the measured one may differ by this factor, either way (see above)
 DECADE = 10.0
@@ -44,11 +42,11 @@ def test_the_table_has_a_row_per_example_model():
     assert sorted(quoted_rows()) == EXAMPLE_MODELS
 
 
-@pytest.mark.parametrize("name", [pytest.param(name, marks=pytest.mark.xdist_group(f"stability-table-{name}"))
-                                  for name in EXAMPLE_MODELS])         # the rows spread over the workers
-def test_quoted_figures_are_what_the_bench_measures(models, name):
+@pytest.mark.xdist_group("stability")  # the runs are tests/test_stability.py's too (conftest.stability_run)
+@pytest.mark.parametrize("name", EXAMPLE_MODELS)
+def test_quoted_figures_are_what_the_bench_measures(name):
     quoted = quoted_rows()[name]
-    run = run_stability(models[name])                   # the defaults of `symkin bench stability`
+    run = stability_run(name)                           # the defaults of `symkin bench stability`
     float64 = [r.error for r in run.records if r.family != "float32"]
     measured = {"records": len(run.records), "kappa_below_1e3": run.acceptance()[1],
                 "any_kappa": max(e for e in float64 if math.isfinite(e)),
