@@ -122,7 +122,9 @@ def _backends(args: argparse.Namespace) -> list[str]:
     if Path(args.model).suffix.lower() in model_files.MODEL_FILE_SUFFIXES:
         return ["numpy"]  # a model file is derived on the fly, for numpy
     from symkin.manifest import read_manifest
+    from symkin.runtime.info import ModelInfo
 
     directory = Path(args.model)
-    emitted = read_manifest(directory.parent if directory.name == "manifest.json" else directory).get("backends", {})
+    emitted = ModelInfo.from_manifest(read_manifest(directory.parent if directory.name == "manifest.json"
+                                                    else directory)).backend_files
     return [b for b in DEFAULT_BACKENDS if b in emitted]

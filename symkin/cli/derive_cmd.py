@@ -10,6 +10,7 @@ from symkin.atomic import replace_directory
 from symkin.backends import BACKENDS
 from symkin.cli.progress import Progress
 from symkin.cli.urdf_args import ROBOT_FILE_OPTIONS, add_urdf_arguments, print_notes, urdf_options
+from symkin.runtime.info import ModelInfo
 from symkin.text_table import format_table
 
 
@@ -111,7 +112,8 @@ def _summary(result, target: Path, seconds: float) -> None:
         rows.append([r.name, r.outputs, f"{counts['derived']}{folded} -> {counts['cse']}",
                      f"{r.derive_seconds:.3f}", f"{r.optimize_seconds:.3f}"])
     print(format_table(["function", "outputs", "ops derived -> cse", "derive s", "optimize s"], rows))
-    files = ", ".join(f"{b}: {_listing(f['files'], 'files')}" for b, f in result.manifest["backends"].items())
+    emitted = ModelInfo.from_manifest(result.manifest).backend_files
+    files = ", ".join(f"{b}: {_listing(list(names), 'files')}" for b, names in emitted.items())
     print(f"  emitted {files} in {result.emit_seconds:.3f} s")
     print(f"  derived {len(result.derived)} graph nodes: {_listing(result.derived, 'nodes', 12)}")
 

@@ -106,6 +106,10 @@ class ModelInfo:
             manifest's place in the message).
         wrist: a hybrid device's wrist coordinates, in the order of the functions' ``qw``; () otherwise.
         home_configuration: a serial device's declared rest configuration (``serial.home``), else None.
+        model_hash: the hash of the model's source (what a derivation was made from).
+        description: the model file's description ("" without one).
+        backend_files: the files each backend emitted, by backend (its keys: the emitted backends).
+        tree: a branched serial model's links, each with its parent (the viewer draws them), else None.
     """
 
     name: str
@@ -118,6 +122,10 @@ class ModelInfo:
     passive_limits: tuple[dict[str, Any], ...] = ()
     wrist: tuple[Coordinate, ...] = ()
     home_configuration: tuple[float, ...] | None = None
+    model_hash: str = ""
+    description: str = ""
+    backend_files: dict[str, tuple[str, ...]] = dataclasses.field(default_factory=dict)
+    tree: Any = None
 
     @property
     def is_parallel(self) -> bool:
@@ -154,8 +162,10 @@ class ModelInfo:
         passive = tuple(dict(leg.get("passive_limits") or {}) for leg in parallel["legs"]) if parallel else ()
         wrist = tuple(_coordinate(c) for c in parallel.get("wrist", ())) if parallel else ()
         rest = tuple(float(v) for v in model["home_configuration"]) if "home_configuration" in model else None
+        backends = {name: tuple(record["files"]) for name, record in manifest.get("backends", {}).items()}
         return cls(model["name"], "parallel" if parallel else "serial", coordinates, tuple(model["task_space"]),
-                   parameters, functions, home, passive, wrist, rest)
+                   parameters, functions, home, passive, wrist, rest, model.get("hash", ""),
+                   model.get("description") or "", backends, model.get("tree"))
 
 
 def _coordinate(record: dict[str, Any]) -> Coordinate:

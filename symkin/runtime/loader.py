@@ -132,7 +132,7 @@ def load(path: str | Path, backend: str = "numpy", *, model_class: type[LoadedMo
     if directory.name == MANIFEST_NAME:
         directory = directory.parent
     manifest = read_manifest(directory)
-    emitted = manifest.get("backends", {})
+    emitted = ModelInfo.from_manifest(manifest).backend_files
     if backend not in emitted:
         raise GeneratedCodeError(f"{directory}: no '{backend}' code was emitted (emitted: {', '.join(emitted)}); "
                                  f"derive again with --backend {backend}")

@@ -12,13 +12,15 @@ from __future__ import annotations
 
 import functools
 import hashlib
-import json
 import os
 import shutil
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
+
+from symkin.manifest import MANIFEST_NAME, read_manifest
+from symkin.runtime.info import ModelInfo
 
 
 @dataclass(frozen=True)
@@ -38,12 +40,11 @@ class ModelPayload:
     @classmethod
     def from_directory(cls, directory: str | Path) -> ModelPayload:
         directory = Path(directory)
-        manifest = json.loads((directory / "manifest.json").read_text())
-        if "numpy" not in manifest.get("backends", {}):
+        info = ModelInfo.from_manifest(read_manifest(directory))
+        if "numpy" not in info.backend_files:
             raise ValueError(f"{directory}: no numpy code generated (derive with --backend numpy)")
-        names = ["manifest.json", *manifest["backends"]["numpy"]["files"]]
-        return cls(manifest["model"]["name"], manifest["model"]["hash"],
-                   tuple((n, (directory / n).read_bytes()) for n in names))
+        names = [MANIFEST_NAME, *info.backend_files["numpy"]]
+        return cls(info.name, info.model_hash, tuple((n, (directory / n).read_bytes()) for n in names))
 
     @functools.cached_property
     def digest(self) -> str:
@@ -61,7 +62,7 @@ class ModelPayload:
             from symkin.backends.c.build import cache_directory
 
             target = cache_directory() / "payloads" / digest[:24]
-            if not (target / "manifest.json").exists():
+            if not (target / MANIFEST_NAME).exists():
                 target.parent.mkdir(parents=True, exist_ok=True)
                 staging = Path(tempfile.mkdtemp(prefix=f".{target.name}.", dir=target.parent))
                 for name, content in self.files:

@@ -254,8 +254,8 @@ def page_data(model: GeneratedModel, cloud: Cloud) -> dict[str, Any]:
                   "samples": (points if "inverse_jacobian" in outputs else np.round(cloud.q, CLOUD_DIGITS + 3)).tolist()},
         "scale": scale if scale > 0 else 1.0, "view_target": centre.tolist(),
     }
-    if "tree" in model.manifest["model"]:  # a branched serial model: the page draws each link from its parent
-        data["tree"] = model.manifest["model"]["tree"]
+    if model.info.tree is not None:  # a branched serial model: the page draws each link from its parent
+        data["tree"] = model.info.tree
     if kind == "parallel":
         data["task"] = _task(model, cloud, np.array(home["p"]))
     if "qw" in home:
@@ -380,5 +380,5 @@ def page_of(model: LoadedModel, samples: int, seed: int = 0,
     progress(f"sampling the workspace ({samples} points)")
     cloud = workspace_cloud(model, samples, seed) if samples else no_cloud(model)
     progress("writing the page")
-    description = model.manifest["model"].get("description") or model.name
+    description = model.info.description or model.name
     return render_page(model, script, cloud, description), cloud

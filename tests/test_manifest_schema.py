@@ -1,0 +1,93 @@
+"""One manifest schema (issue 35): the manifest's keys are read in symkin/manifest.py (which writes them) and
+symkin/runtime/info.py (:class:`~symkin.runtime.info.ModelInfo`, the typed view every consumer reads), nowhere else.
+
+A reader elsewhere that indexes the manifest by key strings (``manifest["functions"]``,
+``manifest.get("backends")``) breaks silently when the writer changes; the readers that do it today are listed
+in :data:`KNOWN` with their count, a ratchet that only shrinks.  An old manifest is refused with a message
+that says to derive again, wherever it is read.
+"""
+
+from __future__ import annotations
+
+import ast
+import json
+import shutil
+
+import pytest
+
+from conftest import GENERATED_DIR, ROOT
+from symkin.errors import GeneratedCodeError
+
+#: Where the manifest's key strings belong: the writer and the typed reader.
+SCHEMA = {"symkin/manifest.py", "symkin/runtime/info.py"}
+#: Modules that still index the manifest by key strings today, with how often: the backends' loaders read
+#: each function's record (inputs, outputs, shapes) from it.  Shrinks to empty.
+KNOWN = {"symkin/runtime/c_library.py": 4, "symkin/runtime/numpy_module.py": 4, "symkin/runtime/c_extension.py": 3,
+         "symkin/runtime/casadi_functions.py": 3}
+
+
+def _is_manifest(node: ast.AST) -> bool:
+    """Whether an expression is a manifest or a part of one reached by keys (``manifest``, ``x.manifest``,
+    ``manifest["model"]``)."""
+    if isinstance(node, ast.Subscript):
+        return _is_manifest(node.value)
+    if isinstance(node, ast.Name):
+        return "manifest" in node.id
+    return isinstance(node, ast.Attribute) and node.attr == "manifest"
+
+
+def _key_reads(tree: ast.AST) -> int:
+    """Reads of a manifest by a key string: ``m["key"]`` and ``m.get("key", ...)``."""
+    count = 0
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Subscript) and isinstance(node.slice, ast.Constant) \
+                and isinstance(node.slice.value, str) and _is_manifest(node.value):
+            count += 1
+        elif isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "get" \
+                and _is_manifest(node.func.value) and node.args and isinstance(node.args[0], ast.Constant):
+            count += 1
+    return count
+
+
+def key_readers() -> dict[str, int]:
+    """{module path: reads of the manifest by key strings} outside :data:`SCHEMA`."""
+    found = {}
+    for path in sorted((ROOT / "symkin").rglob("*.py")):
+        name = path.relative_to(ROOT).as_posix()
+        if name in SCHEMA:
+            continue
+        count = _key_reads(ast.parse(path.read_text()))
+        if count:
+            found[name] = count
+    return found
+
+
+def test_only_the_schema_reads_the_manifest_by_its_keys():
+    found = key_readers()
+    new = {name: count for name, count in found.items() if count > KNOWN.get(name, 0)}
+    assert not new, f"read the manifest through runtime.info.ModelInfo (add what is missing there): {new}"
+
+
+def test_the_ratchet_only_shrinks():
+    found = key_readers()
+    stale = {name: count for name, count in KNOWN.items() if found.get(name, 0) < count}
+    assert not stale, f"fewer key reads than listed: lower KNOWN in tests/test_manifest_schema.py to {found}"
+
+
+def test_the_finder_sees_each_form_of_a_key_read():
+    source = 'a = manifest["model"]["name"]\nb = self.manifest.get("backends", {})\nc = info.backend_files["c"]'
+    assert _key_reads(ast.parse(source)) == 3  # the nested read counts twice; info.backend_files is typed
+
+
+def test_an_old_manifest_is_refused_by_every_reader_with_a_rederive_message(tmp_path):
+    from symkin import load
+    from symkin.runtime.payload import ModelPayload
+
+    directory = tmp_path / "planar_2r"
+    shutil.copytree(GENERATED_DIR / "planar_2r", directory)
+    manifest = json.loads((directory / "manifest.json").read_text())
+    manifest["manifest_version"] = 0
+    (directory / "manifest.json").write_text(json.dumps(manifest))
+    for read in (load, ModelPayload.from_directory):
+        with pytest.raises(GeneratedCodeError, match="derive the model again with this symkin"):
+            read(directory)
