@@ -29,6 +29,8 @@ from symkin._version import __version__
 from symkin.backends.c.build import extension_module, progress, python_include_directories
 from symkin.backends.naming import c_symbol
 from symkin.errors import GeneratedCodeError
+from symkin.manifest import function_records
+from symkin.runtime.info import ModelInfo
 from symkin.runtime.wrappers import signature_text
 
 #: Environment variable: ``ctypes`` keeps the ctypes functions (no extension module is built).
@@ -112,8 +114,8 @@ def entry_points(library: Path, header: Path, manifest: dict[str, Any],
     stderr)."""
     if os.environ.get(ENTRY_VARIABLE, "") == "ctypes":
         return None
-    model = manifest["model"]["name"]
-    records = manifest["functions"]
+    model = ModelInfo.from_manifest(manifest).name
+    records = function_records(manifest)
     if python_include_directories() is None:
         progress(f"symkin: no Python or numpy C headers for {sys.executable}; {model}'s Python calls go through ctypes "
              "(install the Python development package, e.g. python3-dev, for the compiled entry points)")

@@ -22,6 +22,8 @@ import numpy
 from symkin.backends.c.build import shared_library
 from symkin.backends.naming import c_symbol
 from symkin.errors import GeneratedCodeError
+from symkin.manifest import function_records
+from symkin.runtime.info import ModelInfo
 from symkin.runtime.c_extension import entry_points
 from symkin.runtime.packed import single_kernel
 from symkin.runtime.wrappers import Kernel, SingleKernel, wrap_function
@@ -29,8 +31,8 @@ from symkin.runtime.wrappers import Kernel, SingleKernel, wrap_function
 DOUBLE_SIZE = 8
 
 
-def _files(directory: Path, manifest: dict[str, Any]) -> tuple[Path, Path]:
-    files = manifest.get("backends", {}).get("c", {}).get("files", [])
+def _files(directory: Path, files: tuple[str, ...]) -> tuple[Path, Path]:
+    """The C source and header among the files the C backend emitted."""
     sources = [directory / f for f in files if f.endswith(".c")]
     headers = [directory / f for f in files if f.endswith(".h")]
     if len(sources) != 1 or len(headers) != 1:
@@ -112,12 +114,13 @@ def _kernels(library: ctypes.CDLL, model: str, record: dict[str, Any]) -> tuple[
 def bind_library(directory: Path, manifest: dict[str, Any]) -> dict[str, Any]:
     """Compile (or find in the cache) the model's C code and bind every function of the manifest: the compiled
     CPython entry points (:mod:`symkin.runtime.c_extension`) over the ctypes functions, or those alone."""
-    source, header = _files(directory, manifest)
+    info = ModelInfo.from_manifest(manifest)
+    source, header = _files(directory, info.backend_files.get("c", ()))
     path = shared_library(source, header)
     library = ctypes.CDLL(str(path))
-    model = manifest["model"]["name"]
+    model = info.name
     functions = {}
-    for record in manifest["functions"]:
+    for record in function_records(manifest):
         kernel, one = _kernels(library, model, record)
         functions[record["name"]] = wrap_function(record, kernel, "c", single=one)
     return entry_points(path, header, manifest, functions) or functions

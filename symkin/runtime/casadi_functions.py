@@ -24,6 +24,8 @@ import numpy
 
 from symkin.backends.naming import casadi_file, matrix_shape
 from symkin.errors import GeneratedCodeError
+from symkin.manifest import function_records
+from symkin.runtime.info import ModelInfo
 from symkin.runtime.packed import single_kernel
 from symkin.runtime.wrappers import Kernel, SingleKernel, wrap_function
 
@@ -118,9 +120,9 @@ def bind_functions(directory: Path, manifest: dict[str, Any]) -> dict[str, Any]:
     Raises:
         GeneratedCodeError: a file is missing or does not hold the function the manifest names.
     """
-    model = manifest["model"]["name"]
+    model = ModelInfo.from_manifest(manifest).name
     functions = {}
-    for record in manifest["functions"]:
+    for record in function_records(manifest):
         path = directory / casadi_file(model, record["name"])
         if not path.exists():
             raise GeneratedCodeError(f"{path} is missing; derive the model again with --backend casadi")

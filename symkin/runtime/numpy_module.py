@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from symkin.errors import GeneratedCodeError
+from symkin.runtime.info import ModelInfo
 
 
 def import_module(directory: Path, manifest: dict[str, Any]) -> dict[str, Callable[..., Any]]:
@@ -17,7 +18,8 @@ def import_module(directory: Path, manifest: dict[str, Any]) -> dict[str, Callab
     The model hash names the mechanism, not what was emitted from it (two scenes of one model give
     two modules), so the import name is keyed by the file's content.
     """
-    files = manifest.get("backends", {}).get("numpy", {}).get("files", [])
+    info = ModelInfo.from_manifest(manifest)
+    files = info.backend_files.get("numpy", ())
     if not files:
         raise GeneratedCodeError(f"{directory}: the manifest lists no numpy module")
     path = Path(directory) / files[0]
@@ -25,10 +27,10 @@ def import_module(directory: Path, manifest: dict[str, Any]) -> dict[str, Callab
         digest = hashlib.sha256(path.read_bytes()).hexdigest()
     except OSError as error:
         raise GeneratedCodeError(f"cannot read the generated module {path}: {error.strerror}") from error
-    module_name = f"symkin_generated_{manifest['model']['name']}_{digest[:12]}"
+    module_name = f"symkin_generated_{info.name}_{digest[:12]}"
     spec = importlib.util.spec_from_file_location(module_name, path)
     if spec is None or spec.loader is None:
         raise GeneratedCodeError(f"cannot import the generated module {path}")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
-    return {f["name"]: getattr(module, f["name"]) for f in manifest["functions"]}
+    return {name: getattr(module, name) for name in info.functions}
