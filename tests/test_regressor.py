@@ -91,6 +91,52 @@ def test_y_pi_through_a_tree_of_coupled_rotor_joints():
     _check_y_pi(model, Derivation(model), np.random.default_rng(34))
 
 
+def _check_energy(model, d, rng, samples=8):
+    """Y_e pi = k + u at random states, to DYNAMICS relative to sum_k |Y_e,k pi_k| (a dot product of the
+    evaluated columns, as :func:`_check_y_pi`)."""
+    Y_pi = reference_function(model, d["energy_regressor"])
+    kinetic = reference_function(model, d["kinetic_energy"])
+    potential = reference_function(model, d["potential_energy"]) if any(model.gravity) else None
+    for _ in range(samples):
+        q, qd = random_q(model, rng), rng.uniform(-2, 2, model.dof)
+        Y_e, pi = Y_pi(q, qd)
+        energy = float(kinetic(q, qd)[0]) + (float(potential(q)[0]) if potential is not None else 0.0)
+        scale = float(np.abs(Y_e) @ np.abs(pi))
+        assert abs(float(Y_e @ pi) - energy) <= DYNAMICS * scale, f"{model.name}: at q={q}, qd={qd}"
+
+
+@pytest.mark.parametrize("name", SERIAL_EXAMPLES + ("phantom_premium",))
+def test_the_energy_regressor_gives_the_energy_of_every_serial_example(name, models, derivations):
+    _check_energy(models[name], derivations[name], np.random.default_rng(35))
+
+
+def test_the_energy_regressor_through_a_tree_of_coupled_rotor_joints_and_drives():
+    """Gyroscopic rotors on branch links, and the reflected rotor inertia of plain drives (1/2 I_a qd^2)."""
+    for text, name in ((ROTORS, "rotors"), (DRIVEN, "driven")):
+        model = model_from_text(text, name)
+        _check_energy(model, Derivation(model), np.random.default_rng(36))
+
+
+def test_the_energy_changes_at_the_rate_of_the_power_of_the_efforts():
+    """d(Y_e pi)/dt = qd . (tau - F_f) along a motion (the identity identification from the power rests on):
+    the UR10e moved along q(t) = q0 + a t + b t^2, the derivative by a central difference (step h: truncation
+    ~ h^2, rounding ~ eps |h| / h), the power from the generated inverse dynamics."""
+    model = load_model(MODELS_DIR / "ur10e.yaml")
+    d = Derivation(model)
+    Y_pi = reference_function(model, d["energy_regressor"])
+    tau = reference_function(model, d["inverse_dynamics"])
+    rng = np.random.default_rng(37)
+    q0, a, b = random_q(model, rng), rng.uniform(-1, 1, 6), rng.uniform(-1, 1, 6)
+
+    def energy(t):
+        Y_e, pi = Y_pi(q0 + a * t + b * t * t, a + 2 * b * t)
+        return float(Y_e @ pi)
+    h = 1e-4
+    rate = (energy(h) - energy(-h)) / (2 * h)
+    power = float(a @ tau(q0, a, 2 * b)[0])  # the UR10e model has no friction
+    assert rate == pytest.approx(power, rel=1e-6, abs=1e-6 * abs(energy(0.0)))
+
+
 def test_asymmetric_coulomb_friction_is_an_offset_while_the_joint_moves():
     """Levels c+ != c-: pi holds f_c = (c+ + c-)/2 and f_o = (c+ - c-)/2, so Y pi = tau wherever the joint moves
     (sign(qd)^2 = 1) and differs by f_o at rest, where the model's friction vanishes."""

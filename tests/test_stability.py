@@ -37,7 +37,8 @@ QUICK = dict(samples=12, scale_samples=3, float32_samples=6, steps=(1e-2, 1e-6, 
 #: checked on delta; delta_wrist is checked where the wrist enters (the device functions and the dynamics).
 #: ur10e_classic's regressors (ur10e's arm in classic DH) and phantom_premium's are checked at the full defaults by
 #: test_stability_table.
-LEFT_OUT = {"ur10e_classic": ("regressor", "base_regressor"), "phantom_premium": ("regressor", "base_regressor"),
+LEFT_OUT = {"ur10e_classic": ("regressor", "base_regressor", "energy_regressor"),
+            "phantom_premium": ("regressor", "base_regressor", "energy_regressor"),
             "stewart": ("jacobian", "mass_matrix", "coriolis_vector", "gravity_vector", "inverse_dynamics",
                         "forward_dynamics", "operational_space", "kinetic_energy", "potential_energy"),
             "delta_wrist": ("fk", "jacobian", "ik", "inverse_jacobian", "singularities", "leg_points", "closure",

@@ -23,6 +23,14 @@ link massless; Atkeson et al. 1986 build the same columns per link), nothing app
 links' frames F_i coincide with the link frames of a URDF (whose joint frame is the child link's),
 so a URDF model's parameters are Pinocchio's in the same order; a coupled joint's columns reach the
 coordinates through A^T (:mod:`symkin.dynamics.coupling`).
+
+The energy regressor (Gautier and Khalil, "On the identification of the inertial parameters of robots",
+IEEE CDC 1988): the energy h = k + u is linear in the same pi, h = Y_e(q, qd) pi, and dh/dt = qd . (tau -
+F_f) along any motion, so pi can be identified from the power without accelerations.  A link whose joint
+frame's origin moves with v and turns with w (both in F_i) has k = 1/2 m |v|^2 + (m c) . (v x w) +
+1/2 w^T I w about that origin, and u = -g . (m p + R (m c)) with its pose (R, p) in the base frame: per
+link the columns 1/2 |v|^2 - g . p (m), (v x w)_k - (R^T g)_k (m c_k) and 1/2 w_k^2 or w_k w_l (I_kl),
+the drive's 1/2 qd_j^2 (I_a) and no friction column (friction does no work on the energy).
 """
 
 from __future__ import annotations
@@ -32,9 +40,10 @@ from collections.abc import Sequence
 import symengine as se
 
 from symkin.dynamics import newton_euler
+from symkin.model import joint_kinds
 from symkin.dynamics.base_parameters import BaseParameters, base_parameters, require_exact_constants
 from symkin.dynamics.coupling import forces_on_coordinates, joint_rates
-from symkin.dynamics.program import Program
+from symkin.dynamics.program import Program, cross, dot, mat_vec
 from symkin.dynamics.quantities import _gravity_graph as gravity_graph
 from symkin.dynamics.quantities import _newton_euler_links as newton_euler_links
 from symkin.dynamics.quantities import function_spec
@@ -102,6 +111,37 @@ def regressor_rows(model: Model, links: Sequence[newton_euler.Link],
     return [list(row) for row in zip(*on_coordinates)]
 
 
+def energy_row(model: Model, links: Sequence[newton_euler.Link], gravity: Sequence[se.Basic] | None
+               ) -> list[se.Basic]:
+    """Y_e with k + u = Y_e pi (see the module docstring): the frames' velocities and poses outward from the base."""
+    zero, half = [se.Integer(0)] * 3, se.Rational(1, 2)
+    g = list(gravity) if gravity is not None else zero
+    qd = joint_rates(model, "qd")
+    identity = [[se.Integer(int(i == j)) for j in range(3)] for i in range(3)]
+    frames: list[tuple[list[list[se.Basic]], list[se.Basic], list[se.Basic], list[se.Basic]]] = []
+    row: list[se.Basic] = []
+    for i, link in enumerate(links):
+        R_p, p_p, w_p, v_p = (identity, zero, zero, zero) if link.parent < 0 else frames[link.parent]
+        E, r = link.rotation, link.origin  # F_p -> F_i coordinates; the origin of F_i in F_p
+        rate = [c * qd[i] for c in link.axis]
+        w = mat_vec(E, w_p)
+        v = mat_vec(E, [a + b for a, b in zip(v_p, cross(w_p, r))])
+        if joint_kinds.is_rotation(link.type):
+            w = [a + b for a, b in zip(w, rate)]
+        else:
+            v = [a + b for a, b in zip(v, rate)]
+        R = [[sum((R_p[a][k] * E[b][k] for k in range(3)), se.Integer(0)) for b in range(3)] for a in range(3)]
+        p = [a + b for a, b in zip(p_p, mat_vec(R_p, r))]
+        frames.append((R, p, w, v))
+        g_local = [sum((R[k][a] * g[k] for k in range(3)), se.Integer(0)) for a in range(3)]  # R^T g
+        moment = cross(v, w)
+        row += [half * dot(v, v) - dot(g, p)] + [m - gl for m, gl in zip(moment, g_local)]
+        row += [half * w[0] * w[0], w[0] * w[1], half * w[1] * w[1], w[0] * w[2], w[1] * w[2], half * w[2] * w[2]]
+    for rate in qd:
+        row += [half * rate * rate, se.Integer(0), se.Integer(0), se.Integer(0)]
+    return row
+
+
 def standard_parameters(model: Model, links: Sequence[newton_euler.Link]) -> list[se.Basic]:
     """The model's own pi: its links' summed bodies in F_i, its drives' reflected inertia and friction."""
     values: list[se.Basic] = []
@@ -159,6 +199,28 @@ def regressor(d: Deriving) -> FunctionSpec:
           "regressor: column k is the torque per unit of parameter k", ""),
          ("pi", pi, (len(names),), "the model's standard parameters (kg, kg*m, kg*m^2; drives: kg*m^2 or kg, "
           "N*m*s/rad or N*s/m, N*m or N)", "")])
+    outputs = tuple(dataclasses.replace(o, elements=names) for o in spec.outputs)
+    return dataclasses.replace(spec, outputs=outputs)
+
+
+@quantity("energy_regressor", "energy regressor Y_e(q, qd) with k + u = Y_e pi, and the model's standard parameters pi")
+def energy_regressor(d: Deriving) -> FunctionSpec:
+    """Y_e and the model's pi, named as :func:`regressor`'s (the module docstring has the columns)."""
+    model = d.model
+    links = d[newton_euler_links]
+    program = Program()
+    Y_e = program.bind(energy_row(model, links, d[gravity_graph]))
+    pi = program.bind(standard_parameters(model, links))
+    names = parameter_names(model)
+    spec = function_spec(
+        d, "energy_regressor", "Energy regressor: k + u = Y_e(q, qd) pi, linear in the standard parameters.",
+        "The kinetic and potential energy of every link about its joint frame's origin (Gautier and Khalil 1988) "
+        "and of every drive's reflected rotor inertia, per unit of each standard parameter (the columns of "
+        "regressor; the friction columns are 0); Y_e pi equals kinetic_energy + potential_energy, and "
+        "d(Y_e pi)/dt = qd . (tau - F_f) along a motion: identification from the power, without accelerations.",
+        ["q", "qd"], program,
+        [("Y_e", Y_e, (len(names),), "energy per unit of each standard parameter", ""),
+         ("pi", pi, (len(names),), "the model's standard parameters (as regressor's)", "")])
     outputs = tuple(dataclasses.replace(o, elements=names) for o in spec.outputs)
     return dataclasses.replace(spec, outputs=outputs)
 
