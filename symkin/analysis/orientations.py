@@ -55,6 +55,32 @@ def inverse_condition(model: GeneratedModel, q: np.ndarray, p: np.ndarray) -> np
     return out
 
 
+def _reachable(model: GeneratedModel, p: np.ndarray, joint_box: np.ndarray, revolute: np.ndarray
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """(q, reachable) at orientations p: every leg reaches p on its declared branch, the joints within their limits."""
+    with np.errstate(invalid="ignore"):  # NaN where a leg cannot reach: unreachable
+        q = np.asarray(model.ik(p).joints)
+    inside = np.isfinite(q).all(axis=-1)
+    inside[inside] = within_limits(q[inside], joint_box, revolute)[1]
+    return q, inside
+
+
+def _index(model: GeneratedModel, p: np.ndarray, joint_box: np.ndarray, revolute: np.ndarray
+           ) -> tuple[np.ndarray, np.ndarray]:
+    """(1/kappa of J_w, 0 where unreachable; reachable) at orientations p."""
+    q, inside = _reachable(model, p, joint_box, revolute)
+    values = np.zeros(len(p))
+    if inside.any():
+        values[inside] = inverse_condition(model, q[inside], p[inside])
+    return values, inside
+
+
+def reachable_index(model: GeneratedModel, p: np.ndarray, limits: Limits | None = None
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """(1/kappa of J_w, 0 where unreachable; whether reachable) at orientations p (N, 3), as the GCI sees them."""
+    return _index(model, p, mechanism.joint_limits(model, limits), mechanism.revolute_mask(model))
+
+
 def orientation_integrand(model: GeneratedModel, box: tuple[np.ndarray, np.ndarray] = FULL_CHART, *,
                           limits: Limits | None = None, index: bool = True) -> Integrand:
     """Components [1_W |cos pitch| 1/kappa, 1_W |cos pitch|] (or the measure alone) over a roll-pitch-yaw box.
@@ -72,16 +98,10 @@ def orientation_integrand(model: GeneratedModel, box: tuple[np.ndarray, np.ndarr
     lower, upper = (np.asarray(b, dtype=np.float64) for b in box)
 
     def function(p: np.ndarray) -> np.ndarray:
-        with np.errstate(invalid="ignore"):  # NaN where a leg cannot reach: unreachable
-            q = np.asarray(model.ik(p).joints)
-        inside = np.isfinite(q).all(axis=-1)
-        inside[inside] = within_limits(q[inside], joint_box, revolute)[1]
-        weight = np.where(inside, np.abs(np.cos(p[:, 1])), 0.0)
         if not index:
-            return weight[:, None]
-        values = np.zeros(len(p))
-        if inside.any():
-            values[inside] = inverse_condition(model, q[inside], p[inside])
+            return np.where(_reachable(model, p, joint_box, revolute)[1], np.abs(np.cos(p[:, 1])), 0.0)[:, None]
+        values, inside = _index(model, p, joint_box, revolute)
+        weight = np.where(inside, np.abs(np.cos(p[:, 1])), 0.0)
         return np.stack([weight * values, weight], axis=-1)
 
     components = ("index dW", "dW") if index else ("dW",)

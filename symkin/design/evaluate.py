@@ -105,9 +105,7 @@ def parallel_index(model: GeneratedModel, points: np.ndarray, limits: np.ndarray
     platform's orientations by :func:`symkin.analysis.orientations.orientation_integrand` (1/kappa
     of J_w)."""
     if orientations.is_spherical(model):
-        weighted, weight = orientations.orientation_integrand(model, _chart(points), limits=limits).function(points).T
-        inside = weight > 0
-        return np.divide(weighted, weight, out=np.zeros(len(points)), where=inside), inside
+        return orientations.reachable_index(model, points, limits)
     ik = parallel.parallel_inverse(model)
     q, inside = feasibility.feasible_configurations(ik, points, mechanism.joint_limits(model, limits),
                                                 mechanism.revolute_mask(model))
@@ -115,11 +113,6 @@ def parallel_index(model: GeneratedModel, points: np.ndarray, limits: np.ndarray
     if inside.any():
         values[inside] = conditioning.inverse_condition_number(model.jacobian(q[inside], points[inside]))
     return values, inside
-
-
-def _chart(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The smallest box holding ``points``."""
-    return points.min(axis=0), points.max(axis=0)
 
 
 def _spherical(problem: DesignProblem, model: GeneratedModel, samples: int, seed: int) -> Evaluation:

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from symkin.analysis import mechanism, orientations
+from symkin.analysis.handle_measures import Actuation
 from symkin.runtime.info import GeneratedModel
 
 #: What can be maximized: the GCI, the workspace measure, the isotropic force at the worst point of the box.
@@ -196,16 +197,13 @@ def _effort_limits(model: GeneratedModel, objective: str, effort_limits: Sequenc
         raise ValueError(f"{model.name}: the force objective is the isotropic force at the worst point of the required "
                          f"box: give --require-box {','.join(f'{a}=LOWER:UPPER' for a in axes)} (in m)")
     names = mechanism.coordinate_names(model)
-    if effort_limits is None:
-        declared = [c.effort_limit for c in model.info.coordinates]
-        if None in declared:
-            raise ValueError(f"{model.name}: the force objective needs the actuators' effort limits, and the model "
-                             "declares none for some of them: give --effort-limit T (one value, or one per actuator)")
-        effort_limits = [float(v) for v in declared if v is not None]
-    limits = np.asarray(effort_limits, dtype=np.float64)
+    limits = Actuation.of_model(model, effort_limits=effort_limits).effort_limits  # declared, or given
+    if limits is None:
+        raise ValueError(f"{model.name}: the force objective needs the actuators' effort limits, and the model "
+                         "declares none for some of them: give --effort-limit T (one value, or one per actuator)")
     if limits.shape != (len(names),) or not np.all(np.isfinite(limits) & (limits > 0)):
         raise ValueError(f"{model.name}: the force objective needs one positive effort limit per actuator "
-                         f"({', '.join(names)}), got {list(effort_limits)}")
+                         f"({', '.join(names)}), got {list(limits)}")
     return limits
 
 

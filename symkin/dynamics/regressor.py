@@ -113,15 +113,16 @@ def regressor_rows(model: Model, links: Sequence[newton_euler.Link],
 
 def energy_row(model: Model, links: Sequence[newton_euler.Link], gravity: Sequence[se.Basic] | None
                ) -> list[se.Basic]:
-    """Y_e with k + u = Y_e pi (see the module docstring): the frames' velocities and poses outward from the base."""
+    """Y_e with k + u = Y_e pi (see the module docstring), outward from the base as
+    :func:`newton_euler.link_motions`: per frame F_i its w, v and the gravity g_i = R^T g in its own coordinates
+    (g_i = E g_p), and g . p of its origin (g . p_p + g_p . r), so no rotation into the base is formed."""
     zero, half = [se.Integer(0)] * 3, se.Rational(1, 2)
     g = list(gravity) if gravity is not None else zero
     qd = joint_rates(model, "qd")
-    identity = [[se.Integer(int(i == j)) for j in range(3)] for i in range(3)]
-    frames: list[tuple[list[list[se.Basic]], list[se.Basic], list[se.Basic], list[se.Basic]]] = []
+    frames: list[tuple[list[se.Basic], se.Basic, list[se.Basic], list[se.Basic]]] = []
     row: list[se.Basic] = []
     for i, link in enumerate(links):
-        R_p, p_p, w_p, v_p = (identity, zero, zero, zero) if link.parent < 0 else frames[link.parent]
+        g_p, height_p, w_p, v_p = (g, se.Integer(0), zero, zero) if link.parent < 0 else frames[link.parent]
         E, r = link.rotation, link.origin  # F_p -> F_i coordinates; the origin of F_i in F_p
         rate = [c * qd[i] for c in link.axis]
         w = mat_vec(E, w_p)
@@ -130,12 +131,9 @@ def energy_row(model: Model, links: Sequence[newton_euler.Link], gravity: Sequen
             w = [a + b for a, b in zip(w, rate)]
         else:
             v = [a + b for a, b in zip(v, rate)]
-        R = [[sum((R_p[a][k] * E[b][k] for k in range(3)), se.Integer(0)) for b in range(3)] for a in range(3)]
-        p = [a + b for a, b in zip(p_p, mat_vec(R_p, r))]
-        frames.append((R, p, w, v))
-        g_local = [sum((R[k][a] * g[k] for k in range(3)), se.Integer(0)) for a in range(3)]  # R^T g
-        moment = cross(v, w)
-        row += [half * dot(v, v) - dot(g, p)] + [m - gl for m, gl in zip(moment, g_local)]
+        g_i, height = mat_vec(E, g_p), height_p + dot(g_p, r)  # R^T g and g . p
+        frames.append((g_i, height, w, v))
+        row += [half * dot(v, v) - height] + [m - gl for m, gl in zip(cross(v, w), g_i)]
         row += [half * w[0] * w[0], w[0] * w[1], half * w[1] * w[1], w[0] * w[2], w[1] * w[2], half * w[2] * w[2]]
     for rate in qd:
         row += [half * rate * rate, se.Integer(0), se.Integer(0), se.Integer(0)]

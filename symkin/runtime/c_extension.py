@@ -29,8 +29,6 @@ from symkin._version import __version__
 from symkin.backends.c.build import extension_module, progress, python_include_directories
 from symkin.backends.naming import c_symbol
 from symkin.errors import GeneratedCodeError
-from symkin.manifest import function_records
-from symkin.runtime.info import ModelInfo
 from symkin.runtime.wrappers import signature_text
 
 #: Environment variable: ``ctypes`` keeps the ctypes functions (no extension module is built).
@@ -107,15 +105,13 @@ def _source_inputs(model: str, header: str, records: list[dict[str, Any]], docst
     return b"\0".join([Path(__file__).read_bytes(), template, functions])
 
 
-def entry_points(library: Path, header: Path, manifest: dict[str, Any],
+def entry_points(library: Path, header: Path, model: str, records: list[dict[str, Any]],
                  functions: dict[str, Callable[..., Any]]) -> dict[str, Callable[..., Any]] | None:
     """The compiled function of every manifest function (each passing what it does not take to ``functions``,
     the ctypes ones), or None where there is no extension (chosen off, no headers, a failed build: said on
     stderr)."""
     if os.environ.get(ENTRY_VARIABLE, "") == "ctypes":
         return None
-    model = ModelInfo.from_manifest(manifest).name
-    records = function_records(manifest)
     if python_include_directories() is None:
         progress(f"symkin: no Python or numpy C headers for {sys.executable}; {model}'s Python calls go through ctypes "
              "(install the Python development package, e.g. python3-dev, for the compiled entry points)")

@@ -22,7 +22,6 @@ import numpy
 from symkin.backends.c.build import shared_library
 from symkin.backends.naming import c_symbol
 from symkin.errors import GeneratedCodeError
-from symkin.manifest import function_records
 from symkin.runtime.info import ModelInfo
 from symkin.runtime.c_extension import entry_points
 from symkin.runtime.packed import single_kernel
@@ -111,16 +110,15 @@ def _kernels(library: ctypes.CDLL, model: str, record: dict[str, Any]) -> tuple[
     return kernel, one
 
 
-def bind_library(directory: Path, manifest: dict[str, Any]) -> dict[str, Any]:
+def bind_library(directory: Path, info: ModelInfo, records: list[dict[str, Any]]) -> dict[str, Any]:
     """Compile (or find in the cache) the model's C code and bind every function of the manifest: the compiled
     CPython entry points (:mod:`symkin.runtime.c_extension`) over the ctypes functions, or those alone."""
-    info = ModelInfo.from_manifest(manifest)
     source, header = _files(directory, info.backend_files.get("c", ()))
     path = shared_library(source, header)
     library = ctypes.CDLL(str(path))
     model = info.name
     functions = {}
-    for record in function_records(manifest):
+    for record in records:
         kernel, one = _kernels(library, model, record)
         functions[record["name"]] = wrap_function(record, kernel, "c", single=one)
-    return entry_points(path, header, manifest, functions) or functions
+    return entry_points(path, header, model, records, functions) or functions

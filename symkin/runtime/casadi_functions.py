@@ -24,7 +24,6 @@ import numpy
 
 from symkin.backends.naming import casadi_file, matrix_shape
 from symkin.errors import GeneratedCodeError
-from symkin.manifest import function_records
 from symkin.runtime.info import ModelInfo
 from symkin.runtime.packed import single_kernel
 from symkin.runtime.wrappers import Kernel, SingleKernel, wrap_function
@@ -114,15 +113,15 @@ def _kernels(function: casadi.Function, record: dict[str, Any]) -> tuple[Kernel,
     return kernel, one
 
 
-def bind_functions(directory: Path, manifest: dict[str, Any]) -> dict[str, Any]:
+def bind_functions(directory: Path, info: ModelInfo, records: list[dict[str, Any]]) -> dict[str, Any]:
     """Load every function of the manifest from its ``.casadi`` file and wrap it.
 
     Raises:
         GeneratedCodeError: a file is missing or does not hold the function the manifest names.
     """
-    model = ModelInfo.from_manifest(manifest).name
+    model = info.name
     functions = {}
-    for record in function_records(manifest):
+    for record in records:
         path = directory / casadi_file(model, record["name"])
         if not path.exists():
             raise GeneratedCodeError(f"{path} is missing; derive the model again with --backend casadi")

@@ -12,31 +12,34 @@ from pathlib import Path
 from typing import Any, TypeVar, overload
 
 from symkin.errors import GeneratedCodeError
-from symkin.manifest import MANIFEST_NAME, read_manifest
+from symkin.manifest import MANIFEST_NAME, function_records, read_manifest
 from symkin.runtime.info import ModelInfo
 
 
-def _numpy(directory: Path, manifest: dict[str, Any]) -> dict[str, Callable[..., Any]]:
+Records = list[dict[str, Any]]
+
+
+def _numpy(directory: Path, info: ModelInfo, _records: Records) -> dict[str, Callable[..., Any]]:
     from symkin.runtime.numpy_module import import_module
 
-    return import_module(directory, manifest)
+    return import_module(directory, info)
 
 
-def _c(directory: Path, manifest: dict[str, Any]) -> dict[str, Callable[..., Any]]:
+def _c(directory: Path, info: ModelInfo, records: Records) -> dict[str, Callable[..., Any]]:
     from symkin.runtime.c_library import bind_library
 
-    return bind_library(directory, manifest)
+    return bind_library(directory, info, records)
 
 
-def _casadi(directory: Path, manifest: dict[str, Any]) -> dict[str, Callable[..., Any]]:
+def _casadi(directory: Path, info: ModelInfo, records: Records) -> dict[str, Callable[..., Any]]:
     from symkin.runtime.casadi_functions import bind_functions  # imports casadi: only when asked for
 
-    return bind_functions(directory, manifest)
+    return bind_functions(directory, info, records)
 
 
 #: How the code of each backend (:data:`symkin.backends.BACKENDS`) is loaded:
-#: loader(model directory, manifest) -> {function name: Python function}.
-LOADERS: dict[str, Callable[[Path, dict[str, Any]], dict[str, Callable[..., Any]]]] = {
+#: loader(model directory, the model's ModelInfo, its function records) -> {function name: Python function}.
+LOADERS: dict[str, Callable[[Path, ModelInfo, Records], dict[str, Callable[..., Any]]]] = {
     "numpy": _numpy,
     "c": _c,
     "casadi": _casadi,
@@ -132,11 +135,12 @@ def load(path: str | Path, backend: str = "numpy", *, model_class: type[LoadedMo
     if directory.name == MANIFEST_NAME:
         directory = directory.parent
     manifest = read_manifest(directory)
-    emitted = ModelInfo.from_manifest(manifest).backend_files
+    info = ModelInfo.from_manifest(manifest)  # once: the loaders and the model read it
+    emitted = info.backend_files
     if backend not in emitted:
         raise GeneratedCodeError(f"{directory}: no '{backend}' code was emitted (emitted: {', '.join(emitted)}); "
                                  f"derive again with --backend {backend}")
     if backend not in LOADERS:
         raise GeneratedCodeError(f"this symkin cannot load '{backend}' code (known: {', '.join(LOADERS)})")
-    functions = LOADERS[backend](directory, manifest)
-    return model_class(directory, manifest, backend, functions)
+    functions = LOADERS[backend](directory, info, function_records(manifest))
+    return model_class(directory, manifest, backend, functions, info=info)

@@ -12,13 +12,12 @@ from symkin.errors import GeneratedCodeError
 from symkin.runtime.info import ModelInfo
 
 
-def import_module(directory: Path, manifest: dict[str, Any]) -> dict[str, Callable[..., Any]]:
-    """The functions of the manifest from ``<model>.py``, imported under a name unique to the module's bytes.
+def import_module(directory: Path, info: ModelInfo) -> dict[str, Callable[..., Any]]:
+    """The model's functions from ``<model>.py``, imported under a name unique to the module's bytes.
 
     The model hash names the mechanism, not what was emitted from it (two scenes of one model give
     two modules), so the import name is keyed by the file's content.
     """
-    info = ModelInfo.from_manifest(manifest)
     files = info.backend_files.get("numpy", ())
     if not files:
         raise GeneratedCodeError(f"{directory}: the manifest lists no numpy module")
