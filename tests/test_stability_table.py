@@ -1,7 +1,12 @@
 """The results table of docs/numerical-stability.md against a fresh run (issue 16: quoted figures are tested).
 
 Each row quotes ``symkin bench stability models/NAME.yaml`` with the default options.  The
-run is deterministic in its states, so the record and non-finite counts must match exactly.
+run is deterministic in its states, so the record counts must match exactly.  A non-finite value
+comes out only where kappa eps >= 1 (tests/test_stability.py checks that on native arithmetic):
+there no digit of a double is certain, and whether a tiny pivot rounds to zero, so that a value
+overflows, is up to the CPU's rounding (this count was 24 on one x86-64 machine and 25 on another
+for the Stewart platform).  So the quoted non-finite count is checked against what the states allow:
+it and the measured one lie between 0 and the number of records at kappa eps >= 1.
 The error columns are maxima of rounding errors: another CPU (another libm, other SIMD
 loops) rounds differently by a few ulps of each output, which moves a maximum by a small
 factor at any condition number (the amplification kappa is the same, only the rounding it
@@ -16,6 +21,8 @@ import re
 
 import pytest
 from conftest import EXAMPLE_MODELS, ROOT, stability_run
+
+from tolerances import EPS
 
 #: a quoted maximum and the measured one may differ by this factor, either way (see above)
 DECADE = 10.0
@@ -52,8 +59,14 @@ def test_quoted_figures_are_what_the_bench_measures(name):
                 "any_kappa": max(e for e in float64 if math.isfinite(e)),
                 "float32": max(r.error for r in run.select("float32")),
                 "nonfinite": sum(math.isinf(r.error) for r in run.records)}
-    assert (quoted["records"], quoted["nonfinite"]) == (measured["records"], measured["nonfinite"]), \
-        f"{name}: the table quotes {quoted}, the bench measures {measured}"
+    assert quoted["records"] == measured["records"], f"{name}: the table quotes {quoted}, the bench measures {measured}"
+    ill_posed = [r for r in run.records if r.kappa * EPS >= 1]         # no digit certain: rounding decides
+    assert all(r.kappa * EPS >= 1 for r in run.records if math.isinf(r.error)), \
+        f"{name}: a non-finite value where kappa eps < 1"
+    assert quoted["nonfinite"] <= len(ill_posed), f"{name}: the table quotes {quoted}, {len(ill_posed)} records at " \
+                                                   "kappa eps >= 1"
+    assert measured["nonfinite"] <= len(ill_posed), f"{name}: the bench measures {measured}, {len(ill_posed)} records " \
+                                                     "at kappa eps >= 1"
     for column in ("kappa_below_1e3", "any_kappa", "float32"):
         ratio = quoted[column] / measured[column]
         assert 1.0 / DECADE <= ratio <= DECADE, \
