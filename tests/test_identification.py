@@ -31,15 +31,15 @@ DURATION, RATE = 10.0, 200.0
 @pytest.fixture(scope="module")
 def arm(tmp_path_factory):
     model = model_from_text(DRIVEN, "driven")
-    request = pipeline.resolve_request(model, ("regressor", "base_regressor", "inverse_dynamics"), "numpy", None,
-                                       False, "none")
+    request = pipeline.resolve_request(model, ("regressor", "base_regressor", "inverse_dynamics", "energy_regressor"),
+                                       "numpy", None, False, "none")
     return load(pipeline.write(pipeline.generate(model, request), tmp_path_factory.mktemp("identify")), "numpy")
 
 
-def excitation(n: int, seed: int = 0, harmonics: int = 4, period: float = 2.0):
+def excitation(n: int, seed: int = 0, harmonics: int = 4, period: float = 2.0, rate: float = RATE):
     """t, q, qd, qdd of a finite Fourier series per joint (Swevers et al. 1997), exact derivatives."""
     rng = np.random.default_rng(seed)
-    t = np.arange(0.0, DURATION, 1.0 / RATE)
+    t = np.arange(0.0, DURATION, 1.0 / rate)
     omega = 2 * np.pi / period * np.arange(1, harmonics + 1)
     a, b = rng.uniform(-0.4, 0.4, (2, n, harmonics)) / np.arange(1, harmonics + 1)
     phase = np.outer(t, omega)                                  # (N, harmonics)
@@ -183,3 +183,71 @@ def test_the_command_estimates_consistent_standard_parameters(arm, tmp_path):
     record = json.loads((tmp_path / "out" / "estimate.json").read_text())
     assert set(record["standard"]["parameters"]) >= {"link1.m", "link2.Izz", "theta2.fc"}
     assert record["standard"]["parameters"]["link2.m"] > 0
+
+
+def _energy_estimate(arm, t, q, qd, qdd, tau, window=0.05):
+    run = identification.Measurements("run", t, q, qd, qdd, tau, "measured")
+    return identification.energy_least_squares(
+        run, arm.regressor(q, qd, qdd)[0], arm.energy_regressor(q, qd)[0], arm.base_regressor(q, qd, qdd)[0],
+        arm.info.functions["regressor"].outputs["pi"], arm.info.functions["base_regressor"].outputs["pi_b"], window)
+
+
+def test_the_energy_balance_holds_for_the_true_parameters_to_the_quadrature_error(arm):
+    """Noise-free runs: the balance of the model's own pi over every window misses only the trapezoidal rule's
+    error, O(h^2): sampled twice as fast, the largest miss shrinks fourfold (Richardson), and it is small against
+    the work itself. Friction (viscous, Coulomb on both joints) enters as the integral of its power."""
+    misses = []
+    for rate in (RATE, 2 * RATE):
+        t, q, qd, qdd = excitation(2, seed=1, rate=rate)
+        Y, pi = arm.regressor(q, qd, qdd)
+        dissipative = np.array([n.rsplit(".", 1)[-1] in identification.DISSIPATIVE
+                                for n in arm.info.functions["regressor"].outputs["pi"]])
+        W, work = identification.energy_balance(t, qd, arm.inverse_dynamics(q, qd, qdd),
+                                                arm.energy_regressor(q, qd)[0], np.where(dissipative, Y, 0.0), 0.05)
+        assert len(work) == 199
+        assert np.all(np.isfinite(W))
+        misses.append(np.max(np.abs(W @ pi[0] - work)))
+    assert misses[0] < 1e-3 * np.max(np.abs(work))
+    assert 3.0 < misses[0] / misses[1] < 5.0, misses
+
+
+def test_the_energy_estimate_gives_back_the_models_base_parameters(arm):
+    """From the noisy run of the least-squares tests, without its accelerations: each base parameter within a few
+    of its standard deviations (larger than OLS's: one equation per window instead of n per sample), and the
+    torques the estimate predicts (with the accelerations) fit to the noise."""
+    t, q, qd, qdd, tau = _run(arm)
+    found = _energy_estimate(arm, t, q, qd, qdd, tau)
+    pi_b = arm.base_regressor(q, qd, qdd)[1][0]
+    error = np.abs(found.values - pi_b) / found.std
+    assert found.method == "energy"
+    assert np.all(error < 5), dict(zip(found.names, error))
+    assert np.median(error) < 1.5
+    assert np.all(found.joint_std < 2 * NOISE)
+    ols = identification.least_squares(arm.base_regressor(q, qd, qdd)[0], tau, found.names, "ols")
+    assert np.all(found.std > ols.std)
+
+
+def test_the_energy_estimate_needs_no_acceleration(arm):
+    """The balance reads q, qd and tau only: accelerations that are wrong change the regressor's inertial
+    columns but not the estimate (they enter its torque residual alone)."""
+    t, q, qd, qdd, tau = _run(arm)
+    found = _energy_estimate(arm, t, q, qd, qdd, tau)
+    scrambled = _energy_estimate(arm, t, q, qd, qdd[::-1] * 3.0, tau)
+    assert np.allclose(scrambled.values, found.values, rtol=0, atol=1e-9 * np.max(np.abs(found.values)))
+
+
+def test_the_command_estimates_from_the_energy_balance_and_refuses_too_few_windows(arm, tmp_path):
+    t, q, qd, qdd, tau = _run(arm)
+    data = write_run(tmp_path / "run.csv", ["theta1", "theta2"], t, q, tau, qd, qdd)
+    result = subprocess.run(SYMKIN_CLI + ["identify", str(arm.directory), str(data), "--method", "energy",
+                                          "--window", "0.1", "-o", str(tmp_path / "out")], capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    record = json.loads((tmp_path / "out" / "estimate.json").read_text())
+    assert (record["method"], record["window"], len(record["parameters"])) == ("energy", 0.1, 13)
+    assert all(r < 3 * NOISE for r in record["validation"]["rms"].values())
+    assert "energy balance over windows of 0.1 s" in (tmp_path / "out" / "summary.txt").read_text()
+    result = subprocess.run(SYMKIN_CLI + ["identify", str(arm.directory), str(data), "--method", "energy",
+                                          "--window", "1", "-o", str(tmp_path / "long")], capture_output=True, text=True)
+    assert result.returncode == 2
+    assert "7 windows of the run give 7 energy equations for 13 base parameters: shorten --window" in result.stderr
+    assert not (tmp_path / "long").exists()

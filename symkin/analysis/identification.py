@@ -19,6 +19,17 @@ refused, naming the parameters of that combination, instead of printing huge est
 deviation of each estimate comes with it, and the estimate is validated on held-out samples (the last
 part of the run): the torque RMS per joint of tau - Y_b pi_b.
 
+The energy balance (``energy``: Gautier, "Dynamic identification of robots with power model", IEEE ICRA
+1997) needs no accelerations: the energy h = Y_e(q, qd) pi (:mod:`symkin.dynamics.regressor`) changes over a
+window [t_a, t_b] by the work of the efforts less what friction dissipates,
+
+    (Y_e(t_b) - Y_e(t_a)) pi + int qd . Y_d pi dt = int qd . tau dt,
+
+Y_d the friction columns of Y (its ``fv``, ``fc``, ``fo``: their efforts depend on qd alone).  A parameter
+change that moves no effort moves no power, so the rows W of this balance are W_b K with the base
+parameters' K of Y = Y_b K, and the windows of a run give W_b pi_b = y, one equation per window, solved as
+``ols``; the integrals are trapezoidal sums over the samples (error O(h^2) in the sampling step h).
+
 Measurements come from a CSV file (:func:`read_measurements`): a time column ``t`` (s) and per coordinate
 ``q_<name>``, ``tau_<name>`` and ``qd_<name>``, ``qdd_<name>``; without the rates, they are computed from q
 by a zero-phase low-pass filter (Butterworth, 4th order, forward and backward) and central
@@ -41,6 +52,9 @@ import numpy as np
 RANK_TOLERANCE = float(np.sqrt(np.finfo(np.float64).eps))
 #: Butterworth order of the filter that differentiates q (4: -80 dB per decade past the cutoff).
 FILTER_ORDER = 4
+#: The drive parameters whose efforts dissipate (of symkin.dynamics.regressor.DRIVE): the energy balance carries
+#: them as the integral of their power, every other parameter as a change of the stored energy.
+DISSIPATIVE = ("fv", "fc", "fo")
 
 
 class DataError(ValueError):
@@ -177,7 +191,7 @@ class LeastSquaresEstimate:
         names: the base parameters' names.
         values: the estimates.
         std: their standard deviations (from the residual and (W^T W)^-1).
-        method: "ols" or "wls".
+        method: "ols", "wls" or "energy".
         joint_std: the standard deviation of each joint's residual (the weights of WLS are its inverse).
         condition: the condition number of the column-equilibrated observation matrix.
         samples: the samples used.
@@ -307,3 +321,70 @@ def weighted_triangle(Y: np.ndarray, tau: np.ndarray, weights: np.ndarray) -> tu
     rows = (Y * weights[None, :, None]).reshape(-1, count)
     triangle = np.asarray(np.linalg.qr(np.column_stack([rows, (tau * weights).reshape(-1)]), mode="r"))
     return triangle[:count, :count], triangle[:count, count]
+
+
+def energy_windows(time: np.ndarray, window: float) -> np.ndarray:
+    """The sample indices that bound consecutive windows of ``window`` seconds or the next sample after (the
+    last window ends at the last sample whole; the run's remainder shorter than a window is left out)."""
+    bounds = [0]
+    for k in range(1, len(time)):
+        if time[k] - time[bounds[-1]] >= window * (1.0 - 1e-9):
+            bounds.append(k)
+    return np.asarray(bounds)
+
+
+def energy_balance(time: np.ndarray, qd: np.ndarray, tau: np.ndarray, Y_e: np.ndarray, Y_d: np.ndarray,
+                   window: float) -> tuple[np.ndarray, np.ndarray]:
+    """W (windows, P) and y (windows,) of the energy balance over consecutive windows (module docstring).
+
+    Args:
+        time, qd, tau: the run (N,), (N, n), (N, n).
+        Y_e: the energy regressor at its samples (N, P).
+        Y_d: the regressor's dissipative columns at its samples, the others zero (N, n, P).
+        window: the windows' length (s).
+    """
+    steps = np.diff(time)[:, None]
+
+    def integral(rate: np.ndarray) -> np.ndarray:           # trapezoidal, from the first sample to each one
+        return np.concatenate([np.zeros((1,) + rate.shape[1:]), np.cumsum(0.5 * steps * (rate[1:] + rate[:-1]),
+                                                                            axis=0)])
+
+    bounds = energy_windows(time, window)
+    stored = Y_e[bounds[1:]] - Y_e[bounds[:-1]]
+    dissipated = np.diff(integral(np.einsum("ni,nip->np", qd, Y_d))[bounds], axis=0)
+    work = np.diff(integral(np.einsum("ni,ni->n", qd, tau)[:, None])[bounds, 0])
+    return stored + dissipated, work
+
+
+def energy_least_squares(run: Measurements, Y: np.ndarray, Y_e: np.ndarray, Y_b: np.ndarray,
+                         standard: Sequence[str], names: Sequence[str], window: float) -> LeastSquaresEstimate:
+    """Base parameters from the energy balance over windows of ``run`` (module docstring), with their standard
+    deviations; ``joint_std`` is the torque residual per joint of the estimate over the run, as for the other
+    methods.
+
+    Args:
+        Y, Y_e, Y_b: the regressor (N, n, P), the energy regressor (N, P) and the base regressor (N, n, b) at the
+            run's samples.
+        standard, names: the standard (P) and the base (b) parameters' names.
+        window: the windows' length (s).
+
+    Raises:
+        DataError: fewer windows than parameters, or a combination the run does not excite.
+    """
+    from symkin.analysis.identified_model import combinations
+
+    dissipative = np.array([name.rsplit(".", 1)[-1] in DISSIPATIVE for name in standard])
+    W, work = energy_balance(run.time, run.qd, run.tau, Y_e, np.where(dissipative, Y, 0.0), window)
+    W_b = W @ np.linalg.pinv(combinations(Y, Y_b))            # W = W_b K, K of full row rank: W_b = W K^+
+    tau = run.tau
+    windows, count = W_b.shape
+    if windows <= count:
+        raise DataError(f"{windows} windows of the run give {windows} energy equations for {count} base parameters: "
+                        "shorten --window or record a longer run (many more windows than parameters, for a useful "
+                        "estimate)")
+    pi, inverse, condition = _solve(W_b, work, names)
+    variance = float(np.sum((work - W_b @ pi) ** 2) / (windows - count))
+    samples, joints = tau.shape
+    joint_std = np.sqrt(np.sum((tau - Y_b @ pi) ** 2, axis=0) / max(samples - count / joints, 1.0))
+    return LeastSquaresEstimate(tuple(names), pi, np.sqrt(variance * np.diag(inverse)), "energy", joint_std,
+                                condition, samples)

@@ -13,8 +13,10 @@ import numpy as np
 from symkin.cli import analysis_args, model_files
 from symkin.cli.progress import Progress
 
-#: What a model file is derived with on the fly (the full regressor for the consistent estimate).
+#: What a model file is derived with on the fly (the full regressor for the consistent estimate and the model
+#: file), and with --method energy (the energy regressor too).
 IDENTIFY_OUTPUTS = ("base_regressor", "regressor")
+ENERGY_OUTPUTS = (*IDENTIFY_OUTPUTS, "energy_regressor")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -33,11 +35,16 @@ def register(sub: argparse._SubParsersAction) -> None:
         epilog="e.g. symkin identify models/planar_2r.yaml run.csv --method wls -o out/identify/planar_2r")
     analysis_args.add_model_arguments(p)
     p.add_argument("data", metavar="DATA.csv", help="the measured run")
-    p.add_argument("--method", choices=("ols", "wls", "consistent"), default="wls",
+    p.add_argument("--method", choices=("ols", "wls", "consistent", "energy"), default="wls",
                    help="ordinary least squares, or weighted by each joint's residual, on the base parameters; or "
                         "'consistent': also the standard parameters, every link a physical rigid body (positive "
                         "definite pseudo-inertia) and the drives' inertia and friction non-negative, nearest the "
-                        "model's values among the fits (default: %(default)s)")
+                        "model's values among the fits; or 'energy': least squares on the energy balance over "
+                        "windows of the run (the work of tau against the change of the energy and the friction's "
+                        "loss; no accelerations enter the estimate) (default: %(default)s)")
+    p.add_argument("--window", type=float, default=0.05, metavar="S",
+                   help="--method energy: the length of the windows of the energy balance, one equation each "
+                        "(default: %(default)s s)")
     p.add_argument("--holdout", type=float, default=0.25, metavar="F",
                    help="the last fraction of the run kept for validation (default: %(default)s; 0: none)")
     p.add_argument("--cutoff", type=float, metavar="HZ",
@@ -54,7 +61,8 @@ def run(args: argparse.Namespace) -> int:
     try:
         if not 0.0 <= args.holdout < 1.0:
             raise ValueError(f"--holdout must lie in [0, 1), got {args.holdout:g}")
-        model = model_files.generated_model(args.model, args.backend, IDENTIFY_OUTPUTS)
+        model = model_files.generated_model(args.model, args.backend,
+                                            ENERGY_OUTPUTS if args.method == "energy" else IDENTIFY_OUTPUTS)
         values = analysis_args.parse_assignments(args.assignments)
         model = model.bind(**values) if values else model
         coordinates = model.info.coordinate_names
@@ -64,14 +72,19 @@ def run(args: argparse.Namespace) -> int:
         with Progress(model.name) as progress:
             progress(f"estimating {len(names)} base parameters from {len(fit.time)} samples")
             Y_b, pi_model = model.base_regressor(fit.q, fit.qd, fit.qdd)
-            found = identification.least_squares(Y_b, fit.tau, names, "ols" if args.method == "ols" else "wls")
+            writes_model = model_files.is_model_file(args.model)
+            # the standard regressor over the fit, evaluated once: for the consistent and energy estimates and the
+            # model file
+            needs_Y = args.method in ("consistent", "energy") or writes_model
+            Y, pi = _regressor(model, fit, args.method) if needs_Y else (None, None)
+            if args.method == "energy":
+                found = _energy(model, fit, Y, Y_b, names, args.window)
+            else:
+                found = identification.least_squares(Y_b, fit.tau, names, "ols" if args.method == "ols" else "wls")
             predict = None
             if len(held.time):
                 Y_held = model.base_regressor(held.q, held.qd, held.qdd)[0]
                 predict = Y_held @ found.values
-            writes_model = model_files.is_model_file(args.model)
-            # the standard regressor over the fit, evaluated once: for the consistent estimate and the model file
-            Y, pi = _regressor(model, fit) if args.method == "consistent" or writes_model else (None, None)
             standard = None
             if args.method == "consistent":
                 progress("estimating physically consistent standard parameters")
@@ -98,12 +111,25 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _regressor(model, fit) -> tuple[np.ndarray, np.ndarray]:
+def _regressor(model, fit, method: str) -> tuple[np.ndarray, np.ndarray]:
     """Y and the model's pi over the fit part of the run (the standard parameters' regressor)."""
     if "regressor" not in model.info.functions:
-        raise ValueError(f"{model.name}: --method consistent needs the regressor; derive it (--only regressor,"
-                         "base_regressor) or give the model file")
+        raise ValueError(f"{model.name}: --method {method} needs the regressor; derive it (--only regressor,"
+                         f"base_regressor{',energy_regressor' if method == 'energy' else ''}) or give the model file")
     return model.regressor(fit.q, fit.qd, fit.qdd)
+
+
+def _energy(model, fit, Y, Y_b, names, window: float):
+    """The base parameters from the energy balance over windows of the fit part of the run (Gautier 1997)."""
+    from symkin.analysis import identification
+
+    if "energy_regressor" not in model.info.functions:
+        raise ValueError(f"{model.name}: --method energy needs the energy regressor; derive it (--only regressor,"
+                         "base_regressor,energy_regressor) or give the model file")
+    if not window > 0:
+        raise ValueError(f"--window must be a positive number of seconds, got {window:g}")
+    return identification.energy_least_squares(fit, Y, model.energy_regressor(fit.q, fit.qd)[0], Y_b,
+                                               model.info.functions["regressor"].outputs["pi"], names, window)
 
 
 def _consistent(model, Y, pi, fit, found):
@@ -148,8 +174,12 @@ def _report(args, model, data, found, pi_model, check, standard=None, model_line
               "rates": data.rates, "condition": found.condition,
               "joint_residual_std": dict(zip(model.info.coordinate_names, map(float, found.joint_std))),
               "parameters": rows}
+    how = found.method
+    if found.method == "energy":
+        record["window"] = args.window
+        how = f"energy balance over windows of {args.window:g} s"
     lines = [f"{model.name}: {len(found.names)} base parameters from {found.samples} samples of {args.data} "
-             f"({found.method}, condition {found.condition:.3g}; rates {data.rates})",
+             f"({how}, condition {found.condition:.3g}; rates {data.rates})",
              f"  {'parameter':<22} {'estimate':>13} {'std':>11} {'std %':>8} {'model':>13}"]
     for row in rows:
         lines.append(f"  {row['name']:<22} {row['value']:>13.6g} {row['std']:>11.3g} "
