@@ -22,7 +22,7 @@ import pytest
 import symkin
 from conftest import GENERATED_DIR, MODELS_DIR, ROOT
 from symkin import design
-from symkin.analysis import conditioning, forces
+from symkin.analysis import conditioning, forces, rating
 from symkin.analysis.mechanism import MechanismKind
 from symkin.analysis.parallel import angular_velocity_matrix
 from symkin.cli import main
@@ -273,6 +273,58 @@ def test_the_delta_with_the_largest_worst_case_isotropic_force_keeps_the_box(del
     before, after = (design.evaluate(problem, numpy_model, d, samples=2**10) for d in (solution.start, solution.optimum))
     assert after.force > 1.3 * before.force
     assert after.box_reachable == 1.0
+
+
+def _heaviest(model, design_values, points):
+    """The largest apparent mass at the handle over the points (kg): the largest eigenvalue of (J M^-1 J^T)^-1 by
+    the numpy code (analysis.rating), the joints from the closed-form ik."""
+    bound = model.bind(**design_values)
+    q = np.asarray(bound.ik(points).joints)
+    return float(np.max(rating.principal_masses(bound.mass_matrix(q, points), bound.jacobian(q, points))))
+
+
+def test_the_strongest_delta_whose_handle_feels_at_most_200_grams(delta):
+    """--max-apparent-mass with --maximize force: the DELTA's start (a = 100 mm) feels 0.11 kg at most in the box, the
+    force optimum without the bound 0.37 kg (shorter arms reflect the rotors' inertia more). Under a 0.2 kg bound the
+    optimum's largest apparent mass over the program's points (numpy: the eigenvalues of (J M^-1 J^T)^-1) is the
+    bound, active; its worst force is the numpy code's and above the start's, and no feasible design nearby (1 %,
+    within the bound, the box and the arm limits) has more; the independent rating's largest mass over its 11^3 grid
+    is the bound's to the grid's resolution."""
+    numpy_model, _ = delta
+    bounds = {"a": (0.06, 0.15), "b": (0.10, 0.25)}
+    limits = np.ones(3)
+    problem, program, solution = _optimize(delta, "force", ["a", "b"], bounds=bounds, box=DELTA_BOX,
+                                           effort_limits=limits, max_apparent_mass=0.2)
+    assert solution.success
+    assert solution.constraint_violation < 1e-9
+    assert _heaviest(numpy_model, solution.start, program.box_points) < 0.12
+    assert _heaviest(numpy_model, solution.optimum, program.box_points) == pytest.approx(0.2, rel=1e-6)
+    worst, reached = _worst_force(numpy_model, solution.optimum, program.box_points, limits, problem.limits)
+    assert reached
+    assert solution.surrogate_optimum == pytest.approx(worst, rel=KINEMATICS)
+    assert 1.3 * solution.surrogate_start < worst
+    rng = np.random.default_rng(6)
+    optimum = np.array([solution.optimum["a"], solution.optimum["b"]])
+    for design_values in optimum * (1 + 0.01 * rng.uniform(-1, 1, (40, 2))):
+        nearby = {**solution.optimum, "a": design_values[0], "b": design_values[1]}
+        force, reached = _worst_force(numpy_model, nearby, program.box_points, limits, problem.limits)
+        if reached and _heaviest(numpy_model, nearby, program.box_points) <= 0.2:
+            assert force <= worst * (1 + 1e-9)
+    after = design.evaluate(problem, numpy_model, solution.optimum, samples=2**10)
+    assert after.apparent_mass == pytest.approx(0.2, rel=0.02)
+
+
+@pytest.mark.parametrize("model_dir, free, kwargs, message", [
+    (ARM_DIR, ["l1"], {"box": {"x": (0.11, 0.14), "y": (0.11, 0.14)}}, "rate a serial arm's apparent mass with "
+                                                                        "'symkin rate'"),
+    (str(GENERATED_DIR / "agile_eye"), ["m_p"], {"box": {"roll": (-0.1, 0.1), "pitch": (-0.1, 0.1),
+                                                         "yaw": (-0.1, 0.1)}},
+     "a parallel mechanism whose handle translates"),
+    (DELTA_DIR, ["a"], {"box": DELTA_BOX, "max_apparent_mass": -1.0}, "a positive mass in kg, got -1"),
+])
+def test_the_apparent_mass_bound_says_what_it_needs(model_dir, free, kwargs, message):
+    with pytest.raises(ValueError, match=re.escape(message)):
+        design.design_problem(symkin.load(model_dir), "gci", free, **{"max_apparent_mass": 0.2, **kwargs})
 
 
 @pytest.mark.parametrize("model_dir, kwargs, message", [

@@ -39,6 +39,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--effort-limit", metavar="T[,T...]",
                    help="the actuators' peak efforts of --maximize force (N m or N; one value for all or one per "
                         "actuator; default: the model's effort limits)")
+    p.add_argument("--max-apparent-mass", type=float, metavar="KG",
+                   help="a parallel model's handle may feel at most this mass in any direction at every point of the "
+                        "required box (the eigenvalues of (J M^-1 J^T)^-1; the model needs its mass_matrix)")
     p.add_argument("--free", required=True, metavar="A,B",
                    help="the parameters to optimize, e.g. --free l1 (the others keep their values)")
     p.add_argument("--bounds", action="append", default=[], metavar="NAME=LOWER:UPPER[,...]",
@@ -82,12 +85,14 @@ def run(args: argparse.Namespace) -> int:
             progress("loading the generated code")
             outputs = {kind: design.needed_functions(kind) for kind in MechanismKind}
             # a parallel model's rating checks the working mode by its closed-form fk, where it has one
-            numpy_model, casadi_model = model_files.load_models(args.model, ("numpy", "casadi"), outputs, ("fk",))
+            masses = design.APPARENT_MASS_FUNCTIONS if args.max_apparent_mass is not None else ()
+            numpy_model, casadi_model = model_files.load_models(args.model, ("numpy", "casadi"), outputs,
+                                                                ("fk", *masses))
             efforts = (analysis_args.per_joint("--effort-limit", args.effort_limit, len(numpy_model.info.coordinates))
                        if args.effort_limit else None)
             problem = design.design_problem(numpy_model, args.maximize, free, bounds=bounds, values=values, box=box,
                                             margin=args.margin, limits=limits, length=args.length,
-                                            effort_limits=efforts)
+                                            effort_limits=efforts, max_apparent_mass=args.max_apparent_mass)
             progress("building the CasADi program")
             start = time.perf_counter()
             program = design.formulate(problem, casadi_model, numpy_model, nodes=args.nodes, seed=args.seed)
@@ -95,8 +100,11 @@ def run(args: argparse.Namespace) -> int:
             progress("IPOPT")
             solution = design.solve(problem, program, build_seconds=build)
             if not solution.success:
+                lighter = ("" if args.max_apparent_mass is None else
+                           f" (or no design within them feels at most {args.max_apparent_mass:g} kg at the handle: "
+                           "raise --max-apparent-mass)")
                 print(f"error: IPOPT did not converge ({solution.status}, {solution.iterations} iterations); "
-                      "if the required box cannot be reached within the bounds, widen --bounds or shrink "
+                      f"if the required box cannot be reached within the bounds{lighter}, widen --bounds or shrink "
                       "--require-box; nothing was written", file=sys.stderr, flush=True)
                 return 1
             progress("independent evaluation")
@@ -137,7 +145,8 @@ def _report(args, problem, program, solution, rating, seconds: dict[str, float])
                   "constraint_violation": solution.constraint_violation, "history": solution.history.tolist()},
         "evaluation": {"method": before.description, "box_check": after.box_check, **{
             which: {"gci": r.gci.value, "gci_error": r.gci.error, "measure": r.measure.value,
-                    "measure_error": r.measure.error, "box_reachable": r.box_reachable, "force": r.force}
+                    "measure_error": r.measure.error, "box_reachable": r.box_reachable, "force": r.force,
+                    "apparent_mass": r.apparent_mass}
             for which, r in (("start", before), ("optimum", after))}},
         "required_box": None if problem.box is None else {"lower": problem.box[0].tolist(),
                                                           "upper": problem.box[1].tolist(),
@@ -158,8 +167,9 @@ def _print(report: dict, out: Path) -> None:
         r = ev[which]
         box = "" if r["box_reachable"] is None else f", box reachable at {100 * r['box_reachable']:.1f} % of the points"
         force = "" if r["force"] is None else f"; isotropic force at the worst box point {r['force']:.6g} N"
+        mass = "" if r["apparent_mass"] is None else f"; largest apparent mass in the box {r['apparent_mass']:.6g} kg"
         print(f"  GCI ({which}): {r['gci']:.6g} +- {r['gci_error']:.2g}; measure {r['measure']:.6g} +- "
-              f"{r['measure_error']:.2g}{box}{force}")
+              f"{r['measure_error']:.2g}{box}{force}{mass}")
     print(f"  independent evaluation: {ev['method']}; box: {ev['box_check']}")
     t = report["seconds"]
     print(f"  time: build {t['build']:.2f} s, IPOPT {t['ipopt']:.3f} s, evaluation {t['evaluation']:.2f} s, "

@@ -18,9 +18,10 @@ expression optimizer of the code generator.
 
 from symkin.design.evaluate import Evaluation, evaluate
 from symkin.design.formulation import DesignProgram, formulate
-from symkin.design.problem import OBJECTIVES, DesignProblem, FreeParameter, design_problem, needed_functions
+from symkin.design.problem import (APPARENT_MASS_FUNCTIONS, OBJECTIVES, DesignProblem, FreeParameter, design_problem,
+                                  needed_functions)
 from symkin.design.solve import Solution, solve
 from symkin.design.sweep_run import sweep
 
-__all__ = ["OBJECTIVES", "DesignProblem", "Evaluation", "FreeParameter", "DesignProgram", "Solution", "design_problem",
-           "evaluate", "formulate", "needed_functions", "solve", "sweep"]
+__all__ = ["APPARENT_MASS_FUNCTIONS", "OBJECTIVES", "DesignProblem", "Evaluation", "FreeParameter", "DesignProgram",
+           "Solution", "design_problem", "evaluate", "formulate", "needed_functions", "solve", "sweep"]

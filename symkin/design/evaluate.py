@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from symkin.analysis import (conditioning, feasibility, forces, global_indices, inverse, mechanism, orientations,
-                             parallel, sampling)
+                             parallel, rating, sampling)
 from symkin.analysis.estimates import Estimate
 from symkin.analysis.limits import within_limits
 from symkin.design.problem import DesignProblem
@@ -42,6 +42,9 @@ class Evaluation:
         box_check: how the box was checked, in words.
         force: the force objective's isotropic force at the worst reachable check point of the box (N;
             :func:`symkin.analysis.forces.isotropic_force`), else None.
+        apparent_mass: under an apparent-mass bound, the largest apparent mass at the handle (the largest
+            eigenvalue of (J M^-1 J^T)^-1, kg; :func:`symkin.analysis.rating.principal_masses`) over the reachable
+            check points of the box, else None.
     """
 
     gci: Estimate
@@ -50,6 +53,7 @@ class Evaluation:
     box_reachable: float | None
     box_check: str
     force: float | None = None
+    apparent_mass: float | None = None
 
 
 def evaluate(problem: DesignProblem, model: GeneratedModel, design: dict[str, float], *, samples: int = EVALUATION_SAMPLES,
@@ -133,9 +137,12 @@ def _parallel(problem: DesignProblem, model: GeneratedModel, samples: int, seed:
     points = box_check_points(problem)
     q, inside = feasibility.feasible_configurations(ik, points, mechanism.joint_limits(model, problem.limits),
                                                     mechanism.revolute_mask(model))
-    force = None
-    if problem.effort_limits is not None and inside.any():
-        force = float(np.min(forces.isotropic_force(model.jacobian(q[inside], points[inside]), problem.effort_limits)))
+    force = mass = None
+    J = model.jacobian(q[inside], points[inside]) if inside.any() else None
+    if problem.effort_limits is not None and J is not None:
+        force = float(np.min(forces.isotropic_force(J, problem.effort_limits)))
+    if problem.max_apparent_mass is not None and J is not None:
+        mass = float(np.max(rating.principal_masses(model.mass_matrix(q[inside], points[inside]), J)))
     return Evaluation(result.value, result.measure, f"qmc over the required box, {result.description}",
                       float(np.mean(inside)), f"closed-form ik (margin, fk round trip, joint limits) at {len(points)} "
-                      "points", force)
+                      "points", force, mass)

@@ -36,11 +36,15 @@ Constraints (the required box, inflated by the margin, sampled on a vertex grid 
 corners): a serial model's box configurations q_b satisfy fk(q_b) = p_b within the joint
 limits (bounds of the variables); a parallel model's ``ik`` margin (the radicand of each
 leg's solution) is >= 0 at every box point and objective node, and its actuated joints stay
-within their limits (declared or overridden), if any.
+within their limits (declared or overridden), if any.  A bound m_max on the apparent mass at
+the handle (every eigenvalue of Lambda = (J M^-1 J^T)^-1, :func:`symkin.analysis.rating.apparent_mass`,
+at most m_max) holds at the same points as B = m_max J M^-1 J^T - 1 positive semidefinite:
+every principal minor of B >= 0 (smooth in the design, where an eigenvalue is not).
 """
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 from typing import Any, NamedTuple
 
@@ -257,8 +261,9 @@ def _parallel(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model:
     node = casadi.SX.sym("p", p.shape[1])
     joints, margin = _call(casadi_function(casadi_model, "ik"), {"p": node, **values})
     J = _call(casadi_function(casadi_model, "jacobian"), {"q": joints, "p": node, **values})[0]
+    masses = _apparent_mass_rows(problem, casadi_model, node, joints, J, values)
     if problem.objective == "force":
-        return _force(problem, numpy_model, node, free, J, margin, joints, design, per_axis, box_points)
+        return _force(problem, numpy_model, node, free, J, margin, joints, masses, design, per_axis, box_points)
     if problem.spherical:
         weights = np.cos(p[:, 1])
         J = angular_velocity_matrix(node) @ J
@@ -272,8 +277,9 @@ def _parallel(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model:
                    f"required box ({measure}), joints from the closed-form ik")
     corners = sampling.grid(*problem.inflated_box, box_points, midpoints=False)
     points = np.concatenate([corners, p])
-    _, g, lbg, ubg = _reach(problem, numpy_model, node, free, margin, joints, casadi.SX(0, 1), points, design)
+    minors, g, lbg, ubg = _reach(problem, numpy_model, node, free, margin, joints, masses, points, design)
     description += f"; the box is required at {len(points)} points (ik margin >= 0)"
+    description += _bound_apparent_mass(problem, minors, g, lbg, ubg)
     return _Terms(objective, casadi.vertcat(*g), np.concatenate(lbg), np.concatenate(ubg), *NO_VARIABLES, p, points,
                   description)
 
@@ -283,7 +289,7 @@ def _reach(problem: DesignProblem, numpy_model: GeneratedModel, node: casadi.SX,
            ) -> tuple[casadi.MX, list[casadi.MX], list[np.ndarray], list[np.ndarray]]:
     """The ``extra`` rows at every point, and the constraints that every leg reaches every point (ik margin
     >= 0, scaled by its median at the start) with its actuated joints within their limits: (extra, g, lbg, ubg)."""
-    start_margin = np.asarray(numpy_model.ik(points, **problem.start)[1])
+    start_margin = np.asarray(numpy_model.bind(**problem.start).ik(points)[1])
     if not np.all(np.isfinite(start_margin)):
         raise ValueError(f"{numpy_model.name}: the inverse kinematics fails at the start design")
     reference = float(np.median(np.abs(start_margin))) or 1.0
@@ -300,16 +306,44 @@ def _reach(problem: DesignProblem, numpy_model: GeneratedModel, node: casadi.SX,
     return reached[legs + joints.numel():, :], g, lbg, ubg
 
 
+def _apparent_mass_rows(problem: DesignProblem, casadi_model: GeneratedModel, node: casadi.SX, joints: casadi.SX,
+                        J: casadi.SX, values: dict[str, Any]) -> casadi.SX:
+    """The principal minors of B = m_max J M^-1 J^T - 1 at a point (all >= 0: every apparent mass <= m_max; see the
+    module docstring), or no rows without a bound."""
+    if problem.max_apparent_mass is None:
+        return casadi.SX(0, 1)
+    M = _call(casadi_function(casadi_model, "mass_matrix"), {"q": joints, "p": node, **values})[0]
+    size = J.shape[0]
+    B = problem.max_apparent_mass * casadi.mtimes(J, casadi.solve(M, J.T)) - casadi.SX.eye(size)
+    subsets = [list(rows) for count in range(1, size + 1) for rows in itertools.combinations(range(size), count)]
+    return casadi.vertcat(*[casadi.det(B[rows, rows]) for rows in subsets])
+
+
+def _bound_apparent_mass(problem: DesignProblem, minors: casadi.MX, g: list[casadi.MX], lbg: list[np.ndarray],
+                         ubg: list[np.ndarray]) -> str:
+    """Append the apparent-mass constraints (``minors`` at every point >= 0) and describe them."""
+    if problem.max_apparent_mass is None:
+        return ""
+    g.append(casadi.vec(minors))
+    lbg.append(np.zeros(minors.numel()))
+    ubg.append(np.full(minors.numel(), np.inf))
+    return (f"; the apparent mass at the handle is at most {problem.max_apparent_mass:g} kg at every point "
+            "(principal minors of m_max J M^-1 J^T - 1 >= 0)")
+
+
 def _force(problem: DesignProblem, numpy_model: GeneratedModel, node: casadi.SX, free: casadi.SX, J: casadi.SX,
-           margin: casadi.SX, joints: casadi.SX, design: casadi.MX, per_axis: int, box_points: int) -> _Terms:
+           margin: casadi.SX, joints: casadi.SX, masses: casadi.SX, design: casadi.MX, per_axis: int,
+           box_points: int) -> _Terms:
     """The isotropic force at the worst point of the box, in epigraph form (see the module docstring)."""
     corners = sampling.grid(*problem.inflated_box, box_points, midpoints=False)
     p = sampling.grid(*problem.required_box, per_axis)
     points = np.concatenate([corners, p])
     limits = np.asarray(problem.effort_limits, dtype=np.float64)
     # (|J_i| / tau_max,i)^2 per actuator i (rows) and point (columns)
-    squared, g, lbg, ubg = _reach(problem, numpy_model, node, free, margin, joints,
-                                  (casadi.sum1(J * J) / casadi.DM(limits**2).T).T, points, design)
+    rows = (casadi.sum1(J * J) / casadi.DM(limits**2).T).T
+    extra, g, lbg, ubg = _reach(problem, numpy_model, node, free, margin, joints, casadi.vertcat(rows, masses),
+                                points, design)
+    squared, minors = extra[:rows.numel(), :], extra[rows.numel():, :]
     worst = casadi.mmin(1 / casadi.sqrt(squared))
     at_start = numpy_model.bind(**problem.start)
     start = float(np.min(forces.isotropic_force(at_start.jacobian(at_start.ik(points).joints, points), limits)))
@@ -322,6 +356,6 @@ def _force(problem: DesignProblem, numpy_model: GeneratedModel, node: casadi.SX,
     description = (f"isotropic force min_i tau_max,i / |J_i| at the worst of {len(points)} points (the box's "
                    f"{box_points}^{p.shape[1]} vertex grid and {per_axis}^{p.shape[1]} midpoints; epigraph form), "
                    f"effort limits {', '.join(f'{v:g}' for v in limits)}; the box is required at every point "
-                   "(ik margin >= 0)")
+                   "(ik margin >= 0)") + _bound_apparent_mass(problem, minors, g, lbg, ubg)
     return _Terms(bound * start, casadi.vertcat(*g), np.concatenate(lbg), np.concatenate(ubg), bound, np.ones(1),
                   np.zeros(1), np.full(1, np.inf), p, points, description, worst)

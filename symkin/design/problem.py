@@ -57,6 +57,9 @@ class DesignProblem:
         spherical: whether the box is one of orientations (a spherical platform, whose GCI is
             taken with the invariant measure of SO(3), :mod:`symkin.analysis.orientations`).
         effort_limits: the actuators' effort limits tau_max (N m or N) of the ``force`` objective, else None.
+        max_apparent_mass: the largest apparent mass the handle may have (kg): every eigenvalue of
+            (J M^-1 J^T)^-1 at every point of the required box at most this (a parallel model whose handle
+            translates), else None.
     """
 
     objective: str
@@ -69,6 +72,7 @@ class DesignProblem:
     length: float | None
     spherical: bool = False
     effort_limits: np.ndarray | None = None
+    max_apparent_mass: float | None = None
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -182,6 +186,24 @@ def _box(model: GeneratedModel, box: Mapping[str, tuple[float, float]] | None) -
     return lower, upper
 
 
+#: The generated function an apparent-mass constraint evaluates besides :func:`needed_functions`.
+APPARENT_MASS_FUNCTIONS = ("mass_matrix",)
+
+
+def _apparent_mass(model: GeneratedModel, max_apparent_mass: float | None) -> float | None:
+    """The apparent-mass bound (kg), after checking that it applies to the model (a parallel model's required box
+    is checked with its objective)."""
+    if max_apparent_mass is None:
+        return None
+    if not mechanism.is_parallel(model) or not mechanism.is_positional(model):
+        raise ValueError(f"{model.name}: the apparent-mass bound is a constraint at the points of the required box of "
+                         "a parallel mechanism whose handle translates (the masses felt at the handle, in kg); rate a "
+                         "serial arm's apparent mass with 'symkin rate'")
+    if not (np.isfinite(max_apparent_mass) and max_apparent_mass > 0):
+        raise ValueError(f"the apparent-mass bound must be a positive mass in kg, got {max_apparent_mass:g}")
+    return float(max_apparent_mass)
+
+
 def _effort_limits(model: GeneratedModel, objective: str, effort_limits: Sequence[float] | None,
                    box: tuple[np.ndarray, np.ndarray] | None) -> np.ndarray | None:
     """The effort limits of the ``force`` objective (declared, or given), after checking that it applies."""
@@ -212,7 +234,8 @@ def design_problem(model: GeneratedModel, objective: str, free: Sequence[str], *
                    values: Mapping[str, float] | None = None,
                    box: Mapping[str, tuple[float, float]] | None = None, margin: float = 0.0,
                    limits: mechanism.Limits | None = None, length: float | None = None,
-                   effort_limits: Sequence[float] | None = None) -> DesignProblem:
+                   effort_limits: Sequence[float] | None = None,
+                   max_apparent_mass: float | None = None) -> DesignProblem:
     """Check a dimensioning problem against a loaded model and describe it.
 
     Args:
@@ -229,6 +252,8 @@ def design_problem(model: GeneratedModel, objective: str, free: Sequence[str], *
         limits: joint-limit overrides.
         length: characteristic length [m] of a task space mixing translations and rotations.
         effort_limits: the actuators' effort limits of the force objective (default: the model's).
+        max_apparent_mass: a bound (kg) on the apparent mass at the handle over the required box (a
+            constraint of a parallel model whose handle translates; the model needs its mass_matrix).
 
     Raises:
         ValueError: an unknown or irrelevant parameter, bad bounds, a malformed box, or a
@@ -242,7 +267,8 @@ def design_problem(model: GeneratedModel, objective: str, free: Sequence[str], *
     if unknown:
         raise ValueError(f"{model.name}: not parameters of the model: {', '.join(unknown)}; "
                          f"parameters: {', '.join(sorted(model.parameters))}")
-    used = _parameter_inputs(model, needed_functions(mechanism.kind_of(model)))
+    needed = needed_functions(mechanism.kind_of(model))
+    used = _parameter_inputs(model, needed + (APPARENT_MASS_FUNCTIONS if max_apparent_mass is not None else ()))
     free_parameters = _free_parameters(model, list(free), dict(bounds or {}), values, used)
     required = _box(model, box)
     if not margin >= 0:
@@ -288,4 +314,5 @@ def design_problem(model: GeneratedModel, objective: str, free: Sequence[str], *
              if k in used and k not in {p.name for p in free_parameters}}
     return DesignProblem(objective, free_parameters, fixed, parallel, joint_box, required, float(margin), length,
                          parallel and orientations.is_spherical(model),
-                         _effort_limits(model, objective, effort_limits, required))
+                         _effort_limits(model, objective, effort_limits, required),
+                         _apparent_mass(model, max_apparent_mass))
