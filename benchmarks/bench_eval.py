@@ -11,10 +11,10 @@ Cases (functions generated with every parameter folded, as in a fixed-geometry s
 
 Columns:
 
-* ``py call``   microseconds per call from Python, one configuration (median of 5 runs); ``symkin c`` is the
-  compiled CPython entry point, ``symkin c (ctypes)`` the same library through ctypes (SYMKIN_C_ENTRY=ctypes);
-  a last table sets them beside Pinocchio's binding and the floor: an empty call of a CPython builtin (``id``)
-  in the same loop plus the C time;
+* ``py call``   microseconds per call from Python, one configuration (best of 9 runs of at least 0.1 s
+  each: :func:`best_call_us`); ``symkin c`` is the compiled CPython entry point, ``symkin c (ctypes)`` the
+  same library through ctypes (SYMKIN_C_ENTRY=ctypes); a last table sets them beside Pinocchio's binding and
+  the floor: an empty call of a CPython builtin (``id``) in the same loop plus the C time;
 * ``py batch``  nanoseconds per configuration of one batched call over ``--batch`` configurations
   (numpy and C: the generated vectorized functions; CasADi: ``Function.map``; Pinocchio: a
   Python loop, as a Python user would write it);
@@ -37,7 +37,6 @@ import argparse
 import functools
 import os
 import shutil
-import statistics
 import subprocess
 import sys
 import tempfile
@@ -96,14 +95,25 @@ def random_inputs(record: dict, n: int, rng: np.random.Generator) -> list[np.nda
     return [rng.uniform(-np.pi, np.pi, (n, i["shape"][0])) for i in record["inputs"] if i["kind"] == "vector"]
 
 
-def median_call_us(fn, args_ring: list[tuple], repeat: int = 5, calls: int = 2000) -> float:
-    runs = []
-    for _ in range(repeat):
+#: A timed run of Python calls lasts at least this long (s), and the best of :data:`CALL_REPEATS` runs is taken:
+#: on a shared machine other work only ever adds time, so the minimum of long enough runs is the steady figure
+#: (timeit's rule; the median of five 2000-call runs moved single cells by up to half between reruns).
+CALL_RUN_SECONDS = 0.1
+CALL_REPEATS = 9
+
+
+def best_call_us(fn, args_ring: list[tuple], repeat: int = CALL_REPEATS, seconds: float = CALL_RUN_SECONDS) -> float:
+    """Microseconds per call of ``fn`` over the argument ring: the best of ``repeat`` runs of at least ``seconds``."""
+    def run(calls: int) -> float:
         start = time.perf_counter()
         for k in range(calls):
             fn(*args_ring[k % len(args_ring)])
-        runs.append((time.perf_counter() - start) / calls)
-    return 1e6 * statistics.median(runs)
+        return time.perf_counter() - start
+
+    calls = 1000
+    while (elapsed := run(calls)) < seconds:
+        calls = int(calls * max(2.0, 1.2 * seconds / max(elapsed, 1e-9)))
+    return 1e6 * min(run(calls) for _ in range(repeat)) / calls
 
 
 def batch_ns(fn, args, n: int, repeat: int = 3) -> float:
@@ -296,16 +306,16 @@ def main(argv: list[str] | None = None) -> int:
             ring = [tuple(a[k] for a in inputs) for k in range(RING)]
             for backend in ("numpy", "c", "casadi"):
                 fn = getattr(load(target, backend=backend), name)
-                rows[label, f"symkin {backend}"] = (median_call_us(fn, ring), batch_ns(fn, inputs, args.batch))
+                rows[label, f"symkin {backend}"] = (best_call_us(fn, ring), batch_ns(fn, inputs, args.batch))
             os.environ[ENTRY_VARIABLE] = "ctypes"                  # the same library through ctypes alone
             fn = getattr(load(target, backend="c"), name)
             del os.environ[ENTRY_VARIABLE]
-            rows[label, "symkin c (ctypes)"] = (median_call_us(fn, ring), batch_ns(fn, inputs, args.batch))
-            empty_calls[label] = median_call_us(id, [(a[0],) for a in ring])
+            rows[label, "symkin c (ctypes)"] = (best_call_us(fn, ring), batch_ns(fn, inputs, args.batch))
+            empty_calls[label] = best_call_us(id, [(a[0],) for a in ring])
             fn = getattr(load(target, backend="c"), name)
             out = tuple(np.empty(o["shape"]) for o in record["outputs"])
             into = out[0] if len(out) == 1 else out
-            out_calls[label] = median_call_us(functools.partial(fn, out=into), ring)  # partial: no Python frame
+            out_calls[label] = best_call_us(functools.partial(fn, out=into), ring)  # partial: no Python frame
             source = HARNESS_HEAD % {"includes": f'#include "{model.name}.h"'} + symkin_case_c(label, model.name, record) \
                 + HARNESS_TAIL
             c_timings.update(run_harness(source, [target / f"{model.name}.c"], [target], compiler,
@@ -378,7 +388,7 @@ def pinocchio_timings(label, pm, tcp, inputs, ring, n):
         for k in range(len(arrays[0])):
             call(*[a[k] for a in arrays])
 
-    per_call = median_call_us(call, ring)
+    per_call = best_call_us(call, ring)
     return per_call, batch_ns(loop, inputs, n)
 
 

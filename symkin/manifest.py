@@ -156,13 +156,6 @@ def _parallel_record(model: Model) -> dict[str, Any]:
     return record
 
 
-def function_records(manifest: dict) -> list[dict[str, Any]]:
-    """The records of the generated functions, in the order they were emitted: each with its ``name``,
-    ``inputs`` (name, kind, shape, elements, units) and ``outputs`` (name, shape, ...), as
-    :func:`build_manifest` writes them (the backends' loaders bind each function from its record)."""
-    return list(manifest["functions"])
-
-
 def dumps(manifest: dict) -> str:
     """Deterministic JSON text of a manifest."""
     return json.dumps(manifest, indent=2, ensure_ascii=False) + "\n"

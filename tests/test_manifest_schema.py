@@ -2,9 +2,9 @@
 symkin/runtime/info.py (:class:`~symkin.runtime.info.ModelInfo`, the typed view every consumer reads), nowhere else.
 
 A reader elsewhere that indexes the manifest by key strings (``manifest["functions"]``,
-``manifest.get("backends")``) breaks silently when the writer changes; the readers that do it today are listed
-in :data:`KNOWN` with their count, a ratchet that only shrinks.  An old manifest is refused with a message
-that says to derive again, wherever it is read.
+``manifest.get("backends")``) breaks silently when the writer changes: there is none, and the backends' loaders
+bind each generated function from its typed record (``ModelInfo.functions``), not from the manifest's dicts.  An
+old manifest is refused with a message that says to derive again, wherever it is read.
 """
 
 from __future__ import annotations
@@ -20,10 +20,9 @@ from symkin.errors import GeneratedCodeError
 
 #: Where the manifest's key strings belong: the writer and the typed reader.
 SCHEMA = {"symkin/manifest.py", "symkin/runtime/info.py"}
-#: Modules that still index the manifest by key strings today, with how often.  Empty: a new one is a failure.
-#: (The backends' loaders take each function's record from :func:`symkin.manifest.function_records`; the records
-#: are dicts still, read by key in runtime/wrappers.py and the loaders: the next step types them.)
-KNOWN: dict[str, int] = {}
+#: The keys of a generated function's record (:func:`symkin.manifest.build_manifest`): outside :data:`SCHEMA` the
+#: runtime reads them as the fields of ``runtime.info.Function``, ``Input`` and ``Output``.
+RECORD_KEYS = {"inputs", "outputs", "summary", "kind", "shape", "elements", "units", "unit", "default", "doc"}
 
 
 def _is_manifest(node: ast.AST) -> bool:
@@ -64,14 +63,22 @@ def key_readers() -> dict[str, int]:
 
 def test_only_the_schema_reads_the_manifest_by_its_keys():
     found = key_readers()
-    new = {name: count for name, count in found.items() if count > KNOWN.get(name, 0)}
-    assert not new, f"read the manifest through runtime.info.ModelInfo (add what is missing there): {new}"
+    assert not found, f"read the manifest through runtime.info.ModelInfo (add what is missing there): {found}"
 
 
-def test_the_ratchet_only_shrinks():
-    found = key_readers()
-    stale = {name: count for name, count in KNOWN.items() if found.get(name, 0) < count}
-    assert not stale, f"fewer key reads than listed: lower KNOWN in tests/test_manifest_schema.py to {found}"
+def record_key_reads(tree: ast.AST) -> int:
+    """Subscripts by a key of a function record (``record["inputs"]``, ``i["kind"]``)."""
+    return sum(1 for node in ast.walk(tree)
+               if isinstance(node, ast.Subscript) and isinstance(node.slice, ast.Constant)
+               and node.slice.value in RECORD_KEYS)
+
+
+def test_the_loaders_read_typed_function_records():
+    """The backends' loaders and wrappers bind each function from ``ModelInfo.functions`` (typed), not from dicts."""
+    found = {path.name: count for path in sorted((ROOT / "symkin" / "runtime").glob("*.py"))
+             if path.name != "info.py" and (count := record_key_reads(ast.parse(path.read_text())))}
+    assert not found, f"read the function's fields of runtime.info.Function instead: {found}"
+    assert record_key_reads(ast.parse('n = record["inputs"][0]["shape"]\nk = i.kind')) == 2
 
 
 def test_the_finder_sees_each_form_of_a_key_read():

@@ -15,12 +15,13 @@ the functions stay the ctypes ones and a line on stderr says why.  ``SYMKIN_C_EN
 
 from __future__ import annotations
 
+import dataclasses
 import importlib.machinery
 import importlib.util
 import json
 import os
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -29,6 +30,7 @@ from symkin._version import __version__
 from symkin.backends.c.build import extension_module, progress, python_include_directories
 from symkin.backends.naming import c_symbol
 from symkin.errors import GeneratedCodeError
+from symkin.runtime.info import Function
 from symkin.runtime.wrappers import signature_text
 
 #: Environment variable: ``ctypes`` keeps the ctypes functions (no extension module is built).
@@ -56,56 +58,56 @@ def c_double(value: float) -> str:
     return value.hex()
 
 
-def _function(index: int, model: str, record: dict[str, Any], docstring: str) -> dict[str, Any]:
+def _function(index: int, model: str, record: Function, docstring: str) -> dict[str, Any]:
     """What the template needs of one manifest function."""
-    vectors = [int(i["shape"][0]) for i in record["inputs"] if i["kind"] != "parameter"]
-    parameters = [i["name"] for i in record["inputs"] if i["kind"] == "parameter"]
-    for name in [i["name"] for i in record["inputs"]] + [record["name"]]:
+    vectors = [i.size for i in record.vector_inputs]
+    for name in [i.name for i in record.inputs] + [record.name]:
         if not name.isidentifier() or not name.isascii():
             raise GeneratedCodeError(f"the manifest names {name!r}, which is no identifier")
     arguments, vector, parameter = [], 0, 0
-    for i in record["inputs"]:
-        if i["kind"] == "parameter":
+    for i in record.inputs:
+        if i.is_parameter:
             arguments.append(f"p[{parameter}]")
             parameter += 1
         else:
             arguments.append(f"v[{vector}]")
             vector += 1
-    outputs = [{"dims": [int(d) for d in o["shape"]]} for o in record["outputs"]]
+    outputs = [{"dims": list(o.shape)} for o in record.results]
     shapes = ", ".join(str(tuple(o["dims"])) for o in outputs)
     needs = (f"a writeable float64 C-contiguous array of shape {shapes}" if len(outputs) == 1 else
              f"a tuple of {len(outputs)} writeable float64 C-contiguous arrays of shapes {shapes}")
     signature = signature_text(record)
     keywords = "out=None" if "*" in signature else "*, out=None"
-    doc = f"{record['name']}($module, {signature + ', ' if signature else ''}{keywords})\n--\n\n{docstring}"
-    return {"index": index, "name": record["name"], "symbol": c_symbol(model, record["name"]),
-            "inputs": record["inputs"], "vectors": vectors, "offsets": [sum(vectors[:k]) for k in range(len(vectors))],
-            "buffer_size": sum(vectors), "parameters": parameters,
-            "defaults": [c_double(float(i["default"])) for i in record["inputs"] if i["kind"] == "parameter"],
+    doc = f"{record.name}($module, {signature + ', ' if signature else ''}{keywords})\n--\n\n{docstring}"
+    return {"index": index, "name": record.name, "symbol": c_symbol(model, record.name),
+            "inputs": record.inputs, "vectors": vectors, "offsets": [sum(vectors[:k]) for k in range(len(vectors))],
+            "buffer_size": sum(vectors), "parameters": list(record.parameters),
+            "defaults": [c_double(i.default) for i in record.parameter_inputs],
             "arguments": arguments, "outputs": outputs,
-            "out_message": c_string(f"{record['name']}(): out= must be {needs} (for one configuration; for a batch, "
+            "out_message": c_string(f"{record.name}(): out= must be {needs} (for one configuration; for a batch, "
                                     "the batch shape first)"),
             "doc": c_string(doc)}
 
 
-def module_source(model: str, header: str, records: list[dict[str, Any]], docstrings: list[str]) -> str:
+def module_source(model: str, header: str, records: Sequence[Function], docstrings: list[str]) -> str:
     """The extension module's C source for the manifest functions ``records``."""
     functions = [_function(k, model, record, doc) for k, (record, doc) in enumerate(zip(records, docstrings))]
     from symkin.backends.templating import render  # jinja2: only when the extension is built
 
     return render(TEMPLATE, model=model, header=header, version=__version__, functions=functions,
-                  max_outputs=max((len(f["outputs"]) for f in functions), default=1))
+                  max_outputs=max((len(r.results) for r in records), default=1))
 
 
-def _source_inputs(model: str, header: str, records: list[dict[str, Any]], docstrings: list[str]) -> bytes:
+def _source_inputs(model: str, header: str, records: Sequence[Function], docstrings: list[str]) -> bytes:
     """Everything :func:`module_source` renders from (this module, the template, the functions), so that a cached
     extension is found without rendering its source (loading imports no jinja2)."""
     template = resources.files("symkin.templates").joinpath(TEMPLATE).read_bytes()
-    functions = json.dumps([model, header, __version__, records, docstrings], sort_keys=True).encode()
+    functions = json.dumps([model, header, __version__, [dataclasses.asdict(r) for r in records], docstrings],
+                           sort_keys=True).encode()
     return b"\0".join([Path(__file__).read_bytes(), template, functions])
 
 
-def entry_points(library: Path, header: Path, model: str, records: list[dict[str, Any]],
+def entry_points(library: Path, header: Path, model: str, records: Sequence[Function],
                  functions: dict[str, Callable[..., Any]]) -> dict[str, Callable[..., Any]] | None:
     """The compiled function of every manifest function (each passing what it does not take to ``functions``,
     the ctypes ones), or None where there is no extension (chosen off, no headers, a failed build: said on
@@ -116,7 +118,7 @@ def entry_points(library: Path, header: Path, model: str, records: list[dict[str
         progress(f"symkin: no Python or numpy C headers for {sys.executable}; {model}'s Python calls go through ctypes "
              "(install the Python development package, e.g. python3-dev, for the compiled entry points)")
         return None
-    docstrings = [functions[r["name"]].__doc__ or "" for r in records]
+    docstrings = [functions[r.name].__doc__ or "" for r in records]
     try:
         path, name = extension_module(lambda: module_source(model, header.name, records, docstrings),
                                       _source_inputs(model, header.name, records, docstrings), model, header, library)
@@ -129,6 +131,6 @@ def entry_points(library: Path, header: Path, model: str, records: list[dict[str
         return None
     module = importlib.util.module_from_spec(spec)
     loader.exec_module(module)
-    python = tuple(functions[r["name"]] for r in records)
+    python = tuple(functions[r.name] for r in records)
     module._bind(python, tuple(getattr(f, "result_type", None) for f in python))
-    return {record["name"]: getattr(module, record["name"]) for record in records}
+    return {record.name: getattr(module, record.name) for record in records}

@@ -22,7 +22,7 @@ import numpy
 from symkin.backends.c.build import shared_library
 from symkin.backends.naming import c_symbol
 from symkin.errors import GeneratedCodeError
-from symkin.runtime.info import ModelInfo
+from symkin.runtime.info import Function, ModelInfo
 from symkin.runtime.c_extension import entry_points
 from symkin.runtime.packed import single_kernel
 from symkin.runtime.wrappers import Kernel, SingleKernel, wrap_function
@@ -52,17 +52,17 @@ def _entry(library: ctypes.CDLL, symbol: str, argtypes: list[Any]) -> Any:
     return entry
 
 
-def _kernels(library: ctypes.CDLL, model: str, record: dict[str, Any]) -> tuple[Kernel, SingleKernel]:
-    vector_sizes = [int(i["shape"][0]) for i in record["inputs"] if i["kind"] != "parameter"]
-    n_params = sum(1 for i in record["inputs"] if i["kind"] == "parameter")
-    output_shapes = [tuple(o["shape"]) for o in record["outputs"]]
+def _kernels(library: ctypes.CDLL, model: str, record: Function) -> tuple[Kernel, SingleKernel]:
+    vector_sizes = [i.size for i in record.vector_inputs]
+    n_params = len(record.parameter_inputs)
+    output_shapes = [o.shape for o in record.results]
     sizes = [math.prod(shape) for shape in output_shapes]
     offsets = [sum(sizes[:k]) for k in range(len(sizes))]
     total = sum(sizes)
     pointers = [ctypes.c_void_p] * len(vector_sizes)
     outputs = [ctypes.c_void_p] * len(output_shapes)
-    packed = _entry(library, c_symbol(model, record["name"], "_packed"), [ctypes.c_void_p, ctypes.c_void_p])
-    batched = _entry(library, c_symbol(model, record["name"], "_batch"),
+    packed = _entry(library, c_symbol(model, record.name, "_packed"), [ctypes.c_void_p, ctypes.c_void_p])
+    batched = _entry(library, c_symbol(model, record.name, "_batch"),
                      [ctypes.c_size_t] + pointers + ([ctypes.c_void_p, ctypes.c_size_t] if n_params else []) + outputs)
 
     def split(buffer: numpy.ndarray, n: int, batch: tuple[int, ...]) -> list[numpy.ndarray]:
@@ -110,7 +110,7 @@ def _kernels(library: ctypes.CDLL, model: str, record: dict[str, Any]) -> tuple[
     return kernel, one
 
 
-def bind_library(directory: Path, info: ModelInfo, records: list[dict[str, Any]]) -> dict[str, Any]:
+def bind_library(directory: Path, info: ModelInfo) -> dict[str, Any]:
     """Compile (or find in the cache) the model's C code and bind every function of the manifest: the compiled
     CPython entry points (:mod:`symkin.runtime.c_extension`) over the ctypes functions, or those alone."""
     source, header = _files(directory, info.backend_files.get("c", ()))
@@ -118,7 +118,8 @@ def bind_library(directory: Path, info: ModelInfo, records: list[dict[str, Any]]
     library = ctypes.CDLL(str(path))
     model = info.name
     functions = {}
+    records = tuple(info.functions.values())
     for record in records:
         kernel, one = _kernels(library, model, record)
-        functions[record["name"]] = wrap_function(record, kernel, "c", single=one)
+        functions[record.name] = wrap_function(record, kernel, "c", single=one)
     return entry_points(path, header, model, records, functions) or functions

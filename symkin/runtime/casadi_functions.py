@@ -24,7 +24,7 @@ import numpy
 
 from symkin.backends.naming import casadi_file, matrix_shape
 from symkin.errors import GeneratedCodeError
-from symkin.runtime.info import ModelInfo
+from symkin.runtime.info import Function, ModelInfo
 from symkin.runtime.packed import single_kernel
 from symkin.runtime.wrappers import Kernel, SingleKernel, wrap_function
 
@@ -54,9 +54,9 @@ def _bind(packed: numpy.ndarray, sizes: list[int], setter: Any) -> list[numpy.nd
     return views
 
 
-def _kernels(function: casadi.Function, record: dict[str, Any]) -> tuple[Kernel, SingleKernel]:
-    vector_sizes = [int(i["shape"][0]) for i in record["inputs"] if i["kind"] != "parameter"]
-    output_shapes = [tuple(o["shape"]) for o in record["outputs"]]
+def _kernels(function: casadi.Function, record: Function) -> tuple[Kernel, SingleKernel]:
+    vector_sizes = [i.size for i in record.vector_inputs]
+    output_shapes = [o.shape for o in record.results]
     output_2d = [matrix_shape(shape) for shape in output_shapes]
     buffers = _Buffers()
     lock = threading.Lock()  # function.map is not known to be thread-safe
@@ -73,7 +73,7 @@ def _kernels(function: casadi.Function, record: dict[str, Any]) -> tuple[Kernel,
             cache.popitem(last=False)
         return cache[n]
 
-    n_params = len(record["inputs"]) - len(vector_sizes)
+    n_params = len(record.parameter_inputs)
     output_sizes = [rows * cols for rows, cols in output_2d]
     output_starts = [sum(output_sizes[:k]) for k in range(len(output_sizes))]
 
@@ -113,7 +113,7 @@ def _kernels(function: casadi.Function, record: dict[str, Any]) -> tuple[Kernel,
     return kernel, one
 
 
-def bind_functions(directory: Path, info: ModelInfo, records: list[dict[str, Any]]) -> dict[str, Any]:
+def bind_functions(directory: Path, info: ModelInfo) -> dict[str, Any]:
     """Load every function of the manifest from its ``.casadi`` file and wrap it.
 
     Raises:
@@ -121,17 +121,17 @@ def bind_functions(directory: Path, info: ModelInfo, records: list[dict[str, Any
     """
     model = info.name
     functions = {}
-    for record in records:
-        path = directory / casadi_file(model, record["name"])
+    for record in info.functions.values():
+        path = directory / casadi_file(model, record.name)
         if not path.exists():
             raise GeneratedCodeError(f"{path} is missing; derive the model again with --backend casadi")
         function = casadi.Function.load(str(path))
-        expected = [i["name"] for i in record["inputs"]]
-        if function.name() != record["name"] or function.name_in() != expected:
+        expected = [i.name for i in record.inputs]
+        if function.name() != record.name or function.name_in() != expected:
             raise GeneratedCodeError(f"{path} holds {function.name()}({', '.join(function.name_in())}), "
-                                     f"not {record['name']}({', '.join(expected)}); derive the model again")
+                                     f"not {record.name}({', '.join(expected)}); derive the model again")
         kernel, one = _kernels(function, record)
         wrapper = wrap_function(record, kernel, "casadi", single=one)
         setattr(wrapper, "casadi", function)  # the raw casadi.Function, for AD and codegen
-        functions[record["name"]] = wrapper
+        functions[record.name] = wrapper
     return functions

@@ -78,14 +78,84 @@ class VectorInput:
 
 
 @dataclass(frozen=True)
-class Function:
-    """A generated function: its name, its vector inputs by name, its parameter inputs, and the names of its
-    outputs' elements where the manifest gives them (the regressors' parameters), by output."""
+class Input:
+    """An input of a generated function, in argument order: a vector (``kind`` "vector", ``shape`` (n,), its
+    elements and their units; ``default`` NaN) or a parameter (``kind`` "parameter", shape (), its unit and
+    ``default``)."""
 
     name: str
-    vectors: dict[str, VectorInput]
-    parameters: tuple[str, ...]
-    outputs: dict[str, tuple[str, ...]] = dataclasses.field(default_factory=dict)
+    kind: str
+    shape: tuple[int, ...]
+    elements: tuple[str, ...]
+    units: tuple[str, ...]
+    doc: str
+    default: float = math.nan
+
+    @property
+    def is_parameter(self) -> bool:
+        return self.kind == "parameter"
+
+    @property
+    def size(self) -> int:
+        """The vector's length (1 for a parameter)."""
+        return self.shape[0] if self.shape else 1
+
+
+@dataclass(frozen=True)
+class Output:
+    """An output of a generated function: its shape, unit and doc, and its elements' names where the manifest
+    gives them (the regressors' parameters)."""
+
+    name: str
+    shape: tuple[int, ...]
+    unit: str
+    doc: str
+    elements: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class Function:
+    """A generated function as the manifest records it: its name and one-line summary, its inputs in argument
+    order and its outputs in result order (the backends' loaders bind it from this record)."""
+
+    name: str
+    summary: str
+    inputs: tuple[Input, ...]
+    results: tuple[Output, ...]
+
+    @property
+    def vectors(self) -> dict[str, VectorInput]:
+        """The vector inputs by name."""
+        return {i.name: VectorInput(i.elements, i.units) for i in self.inputs if not i.is_parameter}
+
+    @property
+    def vector_inputs(self) -> tuple[Input, ...]:
+        return tuple(i for i in self.inputs if not i.is_parameter)
+
+    @property
+    def parameter_inputs(self) -> tuple[Input, ...]:
+        return tuple(i for i in self.inputs if i.is_parameter)
+
+    @property
+    def parameters(self) -> tuple[str, ...]:
+        """The parameter inputs' names."""
+        return tuple(i.name for i in self.parameter_inputs)
+
+    @property
+    def outputs(self) -> dict[str, tuple[str, ...]]:
+        """The outputs' element names by output (empty where the manifest names none)."""
+        return {o.name: o.elements for o in self.results}
+
+    @classmethod
+    def from_record(cls, record: dict[str, Any]) -> Function:
+        """The function of a manifest record (:func:`symkin.manifest.build_manifest` writes them)."""
+        inputs = tuple(Input(i["name"], i["kind"], tuple(int(d) for d in i["shape"]), tuple(i["elements"]),
+                             tuple(i["units"]), i.get("doc") or "",
+                             float(i["default"]) if i["kind"] == "parameter" else math.nan)
+                       for i in record["inputs"])
+        results = tuple(Output(o["name"], tuple(int(d) for d in o["shape"]), o.get("unit") or "", o.get("doc") or "",
+                               tuple(o.get("elements", ()))) for o in record["outputs"])
+        return cls(record["name"], record.get("summary") or "", inputs, results)
 
 
 @dataclass(frozen=True)
@@ -152,12 +222,7 @@ class ModelInfo:
         coordinates = tuple(_coordinate(c) for c in model["coordinates"])
         parameters = tuple(Parameter(p["name"], float(p["default"]), p.get("unit", ""), bool(p["fixed"]))
                            for p in manifest["parameters"])
-        functions = {f["name"]: Function(f["name"],
-                                         {i["name"]: VectorInput(tuple(i["elements"]), tuple(i["units"]))
-                                          for i in f["inputs"] if i["kind"] != "parameter"},
-                                         tuple(i["name"] for i in f["inputs"] if i["kind"] == "parameter"),
-                                         {o["name"]: tuple(o.get("elements", ())) for o in f["outputs"]})
-                     for f in manifest["functions"]}
+        functions = {f["name"]: Function.from_record(f) for f in manifest["functions"]}
         home = tuple(float(v) for v in parallel["home"]) if parallel and parallel.get("home") is not None else None
         passive = tuple(dict(leg.get("passive_limits") or {}) for leg in parallel["legs"]) if parallel else ()
         wrist = tuple(_coordinate(c) for c in parallel.get("wrist", ())) if parallel else ()

@@ -12,34 +12,31 @@ from pathlib import Path
 from typing import Any, TypeVar, overload
 
 from symkin.errors import GeneratedCodeError
-from symkin.manifest import MANIFEST_NAME, function_records, read_manifest
+from symkin.manifest import MANIFEST_NAME, read_manifest
 from symkin.runtime.info import ModelInfo
 
 
-Records = list[dict[str, Any]]
-
-
-def _numpy(directory: Path, info: ModelInfo, _records: Records) -> dict[str, Callable[..., Any]]:
+def _numpy(directory: Path, info: ModelInfo) -> dict[str, Callable[..., Any]]:
     from symkin.runtime.numpy_module import import_module
 
     return import_module(directory, info)
 
 
-def _c(directory: Path, info: ModelInfo, records: Records) -> dict[str, Callable[..., Any]]:
+def _c(directory: Path, info: ModelInfo) -> dict[str, Callable[..., Any]]:
     from symkin.runtime.c_library import bind_library
 
-    return bind_library(directory, info, records)
+    return bind_library(directory, info)
 
 
-def _casadi(directory: Path, info: ModelInfo, records: Records) -> dict[str, Callable[..., Any]]:
+def _casadi(directory: Path, info: ModelInfo) -> dict[str, Callable[..., Any]]:
     from symkin.runtime.casadi_functions import bind_functions  # imports casadi: only when asked for
 
-    return bind_functions(directory, info, records)
+    return bind_functions(directory, info)
 
 
-#: How the code of each backend (:data:`symkin.backends.BACKENDS`) is loaded:
-#: loader(model directory, the model's ModelInfo, its function records) -> {function name: Python function}.
-LOADERS: dict[str, Callable[[Path, ModelInfo, Records], dict[str, Callable[..., Any]]]] = {
+#: How the code of each backend (:data:`symkin.backends.BACKENDS`) is loaded: loader(model directory, the model's
+#: ModelInfo, whose ``functions`` are the typed records of the manifest) -> {function name: Python function}.
+LOADERS: dict[str, Callable[[Path, ModelInfo], dict[str, Callable[..., Any]]]] = {
     "numpy": _numpy,
     "c": _c,
     "casadi": _casadi,
@@ -142,5 +139,5 @@ def load(path: str | Path, backend: str = "numpy", *, model_class: type[LoadedMo
                                  f"derive again with --backend {backend}")
     if backend not in LOADERS:
         raise GeneratedCodeError(f"this symkin cannot load '{backend}' code (known: {', '.join(LOADERS)})")
-    functions = LOADERS[backend](directory, info, function_records(manifest))
+    functions = LOADERS[backend](directory, info)
     return model_class(directory, manifest, backend, functions, info=info)

@@ -26,6 +26,7 @@ import numpy
 
 from symkin.backends.naming import shape_text, type_name
 from symkin.errors import GeneratedCodeError
+from symkin.runtime.info import Function
 
 Kernel = Callable[[tuple[int, ...], list[numpy.ndarray], list[numpy.ndarray]], list[numpy.ndarray]]
 SingleKernel = Callable[[Sequence[numpy.ndarray], Sequence[float]], list[numpy.ndarray]]
@@ -65,39 +66,38 @@ def _identifier(name: str) -> str:
     return name
 
 
-def _docstring(record: dict[str, Any], backend: str) -> str:
-    lines = [record["summary"], "", f"Evaluated by the {backend} backend; any leading batch shape.", "", "Args:"]
-    for i in record["inputs"]:
-        if i["kind"] == "parameter":
-            unit = f" [{i['units'][0]}]" if i["units"][0] else ""
-            lines.append(f"    {i['name']}: {i['doc'] or 'parameter'}{unit}; default {i['default']!r}; "
+def _docstring(record: Function, backend: str) -> str:
+    lines = [record.summary, "", f"Evaluated by the {backend} backend; any leading batch shape.", "", "Args:"]
+    for i in record.inputs:
+        if i.is_parameter:
+            unit = f" [{i.units[0]}]" if i.units[0] else ""
+            lines.append(f"    {i.name}: {i.doc or 'parameter'}{unit}; default {i.default!r}; "
                          "a scalar or an array broadcastable to the batch shape.")
         else:
-            elements = ", ".join(f"{n} [{u}]" for n, u in zip(i["elements"], i["units"]))
-            lines.append(f"    {i['name']}: {i['doc']}, shape (..., {i['shape'][0]}): {elements}.")
+            elements = ", ".join(f"{n} [{u}]" for n, u in zip(i.elements, i.units))
+            lines.append(f"    {i.name}: {i.doc}, shape (..., {i.size}): {elements}.")
     lines += ["", "Returns:"]
-    outputs = record["outputs"]
-    if len(outputs) > 1:
-        lines.append(f"    {type_name(record['name'])} with the fields:")
-    for o in outputs:
-        unit = f" [{o['unit']}]" if o["unit"] else ""
-        lines.append(f"    {o['name']}: shape {shape_text(o['shape'])}; {o['doc']}{unit}.")
+    if len(record.results) > 1:
+        lines.append(f"    {type_name(record.name)} with the fields:")
+    for o in record.results:
+        unit = f" [{o.unit}]" if o.unit else ""
+        lines.append(f"    {o.name}: shape {shape_text(o.shape)}; {o.doc}{unit}.")
     return "\n".join(lines)
 
 
-def signature_text(record: dict[str, Any]) -> str:
-    """The parameter list of the manifest function ``record``: ``q, qd, *, l1=0.1, l2=0.1``."""
-    vectors = [_identifier(i["name"]) for i in record["inputs"] if i["kind"] != "parameter"]
-    params = [f"{_identifier(i['name'])}={float(i['default'])!r}" for i in record["inputs"] if i["kind"] == "parameter"]
+def signature_text(record: Function) -> str:
+    """The parameter list of the generated function ``record``: ``q, qd, *, l1=0.1, l2=0.1``."""
+    vectors = [_identifier(i.name) for i in record.vector_inputs]
+    params = [f"{_identifier(i.name)}={i.default!r}" for i in record.parameter_inputs]
     return ", ".join(vectors + (["*"] if params else []) + params)
 
 
-def wrap_function(record: dict[str, Any], kernel: Kernel, backend: str,
+def wrap_function(record: Function, kernel: Kernel, backend: str,
                   single: SingleKernel | None = None) -> Callable[..., Any]:
     """The Python function of the manifest function ``record`` evaluated by ``kernel``.
 
     Args:
-        record: the function's manifest record.
+        record: the function as the manifest records it.
         kernel: evaluates any batch (see the module docstring).
         backend: backend name, for docstrings and code object names.
         single: optional faster path for the common call of a control loop, used when every
@@ -107,10 +107,10 @@ def wrap_function(record: dict[str, Any], kernel: Kernel, backend: str,
     Raises:
         GeneratedCodeError: the manifest record has an input name that is no identifier.
     """
-    name = _identifier(record["name"])
-    vectors = [(_identifier(i["name"]), int(i["shape"][0])) for i in record["inputs"] if i["kind"] != "parameter"]
-    params = [(_identifier(i["name"]), float(i["default"])) for i in record["inputs"] if i["kind"] == "parameter"]
-    outputs = [o["name"] for o in record["outputs"]]
+    name = _identifier(record.name)
+    vectors = [(_identifier(i.name), i.size) for i in record.vector_inputs]
+    params = [(_identifier(i.name), i.default) for i in record.parameter_inputs]
+    outputs = [o.name for o in record.results]
     result_type: Callable[..., Any] | None = (
         collections.namedtuple(type_name(name), outputs) if len(outputs) > 1 else None)
 
