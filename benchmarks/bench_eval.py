@@ -12,9 +12,10 @@ Cases (functions generated with every parameter folded, as in a fixed-geometry s
 Columns:
 
 * ``py call``   microseconds per call from Python, one configuration (best of 9 runs of at least 0.1 s
-  each: :func:`best_call_us`); ``symkin c`` is the compiled CPython entry point, ``symkin c (ctypes)`` the
-  same library through ctypes (SYMKIN_C_ENTRY=ctypes); a last table sets them beside Pinocchio's binding and
-  the floor: an empty call of a CPython builtin (``id``) in the same loop plus the C time;
+  each, the implementations of a case in turn: :func:`interleaved_best_us`); ``symkin c`` is the compiled
+  CPython entry point, ``symkin c (ctypes)`` the same library through ctypes (SYMKIN_C_ENTRY=ctypes); a last
+  table sets them beside Pinocchio's binding and the floor: an empty call of a CPython builtin (``id``) in the
+  same loop plus the C time;
 * ``py batch``  nanoseconds per configuration of one batched call over ``--batch`` configurations
   (numpy and C: the generated vectorized functions; CasADi: ``Function.map``; Pinocchio: a
   Python loop, as a Python user would write it);
@@ -97,23 +98,38 @@ def random_inputs(record: dict, n: int, rng: np.random.Generator) -> list[np.nda
 
 #: A timed run of Python calls lasts at least this long (s), and the best of :data:`CALL_REPEATS` runs is taken:
 #: on a shared machine other work only ever adds time, so the minimum of long enough runs is the steady figure
-#: (timeit's rule; the median of five 2000-call runs moved single cells by up to half between reruns).
+#: (timeit's rule; the median of five 2000-call runs moved single cells by up to half between reruns).  The
+#: implementations of a case take their runs in turn (:func:`interleaved_best_us`), so that a slow spell of the
+#: machine falls on all of them and their ratios hold.
 CALL_RUN_SECONDS = 0.1
 CALL_REPEATS = 9
 
 
-def best_call_us(fn, args_ring: list[tuple], repeat: int = CALL_REPEATS, seconds: float = CALL_RUN_SECONDS) -> float:
-    """Microseconds per call of ``fn`` over the argument ring: the best of ``repeat`` runs of at least ``seconds``."""
-    def run(calls: int) -> float:
-        start = time.perf_counter()
-        for k in range(calls):
-            fn(*args_ring[k % len(args_ring)])
-        return time.perf_counter() - start
+def _timed_calls(fn, args_ring: list[tuple], calls: int) -> float:
+    start = time.perf_counter()
+    for k in range(calls):
+        fn(*args_ring[k % len(args_ring)])
+    return time.perf_counter() - start
 
+
+def _calibrated(fn, args_ring: list[tuple], seconds: float) -> int:
+    """A number of calls of ``fn`` that lasts at least ``seconds``."""
     calls = 1000
-    while (elapsed := run(calls)) < seconds:
+    while (elapsed := _timed_calls(fn, args_ring, calls)) < seconds:
         calls = int(calls * max(2.0, 1.2 * seconds / max(elapsed, 1e-9)))
-    return 1e6 * min(run(calls) for _ in range(repeat)) / calls
+    return calls
+
+
+def interleaved_best_us(cases: dict[str, tuple], repeat: int = CALL_REPEATS,
+                        seconds: float = CALL_RUN_SECONDS) -> dict[str, float]:
+    """{name: microseconds per call} of each ``(fn, args_ring)``: the best of ``repeat`` rounds, each round one run
+    of at least ``seconds`` of every function in turn."""
+    counts = {name: _calibrated(fn, ring, seconds) for name, (fn, ring) in cases.items()}
+    best = dict.fromkeys(cases, float("inf"))
+    for _ in range(repeat):
+        for name, (fn, ring) in cases.items():
+            best[name] = min(best[name], _timed_calls(fn, ring, counts[name]) / counts[name])
+    return {name: 1e6 * value for name, value in best.items()}
 
 
 def batch_ns(fn, args, n: int, repeat: int = 3) -> float:
@@ -304,25 +320,30 @@ def main(argv: list[str] | None = None) -> int:
             op_counts[label] = record["op_counts"]["cse"]
             inputs = random_inputs(record, args.batch, rng)
             ring = [tuple(a[k] for a in inputs) for k in range(RING)]
-            for backend in ("numpy", "c", "casadi"):
-                fn = getattr(load(target, backend=backend), name)
-                rows[label, f"symkin {backend}"] = (best_call_us(fn, ring), batch_ns(fn, inputs, args.batch))
+            functions = {f"symkin {backend}": getattr(load(target, backend=backend), name)
+                         for backend in ("numpy", "c", "casadi")}
             os.environ[ENTRY_VARIABLE] = "ctypes"                  # the same library through ctypes alone
-            fn = getattr(load(target, backend="c"), name)
+            functions["symkin c (ctypes)"] = getattr(load(target, backend="c"), name)
             del os.environ[ENTRY_VARIABLE]
-            rows[label, "symkin c (ctypes)"] = (best_call_us(fn, ring), batch_ns(fn, inputs, args.batch))
-            empty_calls[label] = best_call_us(id, [(a[0],) for a in ring])
-            fn = getattr(load(target, backend="c"), name)
             out = tuple(np.empty(o["shape"]) for o in record["outputs"])
             into = out[0] if len(out) == 1 else out
-            out_calls[label] = best_call_us(functools.partial(fn, out=into), ring)  # partial: no Python frame
+            calls = {impl: (fn, ring) for impl, fn in functions.items()}
+            calls["empty"] = (id, [(a[0],) for a in ring])
+            calls["out"] = (functools.partial(functions["symkin c"], out=into), ring)  # partial: no Python frame
+            if pm is not None:
+                calls["pinocchio"] = (pinocchio_call(label, pm, tcp), ring)
+            per_call = interleaved_best_us(calls)
+            for impl, fn in functions.items():
+                rows[label, impl] = (per_call[impl], batch_ns(fn, inputs, args.batch))
+            empty_calls[label], out_calls[label] = per_call["empty"], per_call["out"]
             source = HARNESS_HEAD % {"includes": f'#include "{model.name}.h"'} + symkin_case_c(label, model.name, record) \
                 + HARNESS_TAIL
             c_timings.update(run_harness(source, [target / f"{model.name}.c"], [target], compiler,
                                          ["-std=c99", *cflags], work, args.calls, args.batch,
                                          f"harness_{label.replace('+', '_')}"))
             if pm is not None:
-                rows[label, "pinocchio"] = pinocchio_timings(label, pm, tcp, inputs, ring, args.batch)
+                rows[label, "pinocchio"] = (per_call["pinocchio"], pinocchio_batch_ns(calls["pinocchio"][0], inputs,
+                                                                                    args.batch))
         symforce_note = ""
         if not args.no_symforce:
             symforce_note = symforce_timings(model, work, cflags, args.calls, c_timings)
@@ -362,7 +383,8 @@ def python_call_summary(rows, empty_calls, out_calls, c_timings) -> str:
                                                       "floor (empty call + C)", "vs pinocchio"], table))
 
 
-def pinocchio_timings(label, pm, tcp, inputs, ring, n):
+def pinocchio_call(label, pm, tcp):
+    """Pinocchio's Python calls of a case for one configuration (see the module docstring)."""
     import pinocchio as pin
 
     data = pm.createData()
@@ -383,13 +405,16 @@ def pinocchio_timings(label, pm, tcp, inputs, ring, n):
         def call(q, qd):
             M = pin.crba(pm, data, q).copy()
             return M, pin.rnea(pm, data, q, qd, zero).copy(), pin.computeGeneralizedGravity(pm, data, q).copy()
+    return call
 
+
+def pinocchio_batch_ns(call, inputs, n):
+    """Nanoseconds per configuration of a Python loop of Pinocchio's ``call`` over the batch."""
     def loop(*arrays):
         for k in range(len(arrays[0])):
             call(*[a[k] for a in arrays])
 
-    per_call = best_call_us(call, ring)
-    return per_call, batch_ns(loop, inputs, n)
+    return batch_ns(loop, inputs, n)
 
 
 def symforce_timings(model, work, cflags, calls, c_timings) -> str:
