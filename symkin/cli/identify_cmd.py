@@ -61,6 +61,8 @@ def run(args: argparse.Namespace) -> int:
     try:
         if not 0.0 <= args.holdout < 1.0:
             raise ValueError(f"--holdout must lie in [0, 1), got {args.holdout:g}")
+        if not args.window > 0:
+            raise ValueError(f"--window must be a positive number of seconds, got {args.window:g}")
         model = model_files.generated_model(args.model, args.backend,
                                             ENERGY_OUTPUTS if args.method == "energy" else IDENTIFY_OUTPUTS)
         values = analysis_args.parse_assignments(args.assignments)
@@ -126,8 +128,6 @@ def _energy(model, fit, Y, Y_b, names, window: float):
     if "energy_regressor" not in model.info.functions:
         raise ValueError(f"{model.name}: --method energy needs the energy regressor; derive it (--only regressor,"
                          "base_regressor,energy_regressor) or give the model file")
-    if not window > 0:
-        raise ValueError(f"--window must be a positive number of seconds, got {window:g}")
     return identification.energy_least_squares(fit, Y, model.energy_regressor(fit.q, fit.qd)[0], Y_b,
                                                model.info.functions["regressor"].outputs["pi"], names, window)
 

@@ -180,12 +180,10 @@ def regressor(d: Deriving) -> FunctionSpec:
     """One function giving Y (coordinates x parameters) and the model's pi, whose names are both outputs'
     elements (:func:`parameter_names`)."""
     model = d.model
-    links = d[newton_euler_links]
     program = Program()
     Y = [program.bind(row) for row in d[regressor_graph]]
-    pi = program.bind(standard_parameters(model, links))
     names = parameter_names(model)
-    spec = function_spec(
+    return _with_standard_parameters(
         d, "regressor", "Dynamics regressor: tau = Y(q, qd, qdd) pi, linear in the standard parameters.",
         "Column k of Y is the Newton-Euler inverse dynamics with friction (seed eq. 8.34) at pi = e_k, exact; pi "
         "holds per link m, m c_x, m c_y, m c_z, I_xx, I_xy, I_yy, I_xz, I_yz, I_zz (about the joint frame's "
@@ -193,32 +191,34 @@ def regressor(d: Deriving) -> FunctionSpec:
         "(tau += I_a qdd + f_v qd + f_c sign(qd) + f_o); Y pi equals inverse_dynamics (with Coulomb levels that "
         "differ by direction, while the joints move). The names of pi are the outputs' elements in the manifest.",
         ["q", "qd", "qdd"], program,
-        [("Y", [e for row in Y for e in row], (model.dof, len(names)),
-          "regressor: column k is the torque per unit of parameter k", ""),
-         ("pi", pi, (len(names),), "the model's standard parameters (kg, kg*m, kg*m^2; drives: kg*m^2 or kg, "
-          "N*m*s/rad or N*s/m, N*m or N)", "")])
-    outputs = tuple(dataclasses.replace(o, elements=names) for o in spec.outputs)
-    return dataclasses.replace(spec, outputs=outputs)
+        ("Y", [e for row in Y for e in row], (model.dof, len(names)),
+         "regressor: column k is the torque per unit of parameter k", ""),
+        "the model's standard parameters (kg, kg*m, kg*m^2; drives: kg*m^2 or kg, N*m*s/rad or N*s/m, N*m or N)")
 
 
 @quantity("energy_regressor", "energy regressor Y_e(q, qd) with k + u = Y_e pi, and the model's standard parameters pi")
 def energy_regressor(d: Deriving) -> FunctionSpec:
     """Y_e and the model's pi, named as :func:`regressor`'s (the module docstring has the columns)."""
-    model = d.model
-    links = d[newton_euler_links]
     program = Program()
-    Y_e = program.bind(energy_row(model, links, d[gravity_graph]))
-    pi = program.bind(standard_parameters(model, links))
-    names = parameter_names(model)
-    spec = function_spec(
+    Y_e = program.bind(energy_row(d.model, d[newton_euler_links], d[gravity_graph]))
+    return _with_standard_parameters(
         d, "energy_regressor", "Energy regressor: k + u = Y_e(q, qd) pi, linear in the standard parameters.",
         "The kinetic and potential energy of every link about its joint frame's origin (Gautier and Khalil 1988) "
         "and of every drive's reflected rotor inertia, per unit of each standard parameter (the columns of "
         "regressor; the friction columns are 0); Y_e pi equals kinetic_energy + potential_energy, and "
         "d(Y_e pi)/dt = qd . (tau - F_f) along a motion: identification from the power, without accelerations.",
-        ["q", "qd"], program,
-        [("Y_e", Y_e, (len(names),), "energy per unit of each standard parameter", ""),
-         ("pi", pi, (len(names),), "the model's standard parameters (as regressor's)", "")])
+        ["q", "qd"], program, ("Y_e", Y_e, (len(Y_e),), "energy per unit of each standard parameter", ""),
+        "the model's standard parameters (as regressor's)")
+
+
+def _with_standard_parameters(d: Deriving, name: str, summary: str, doc: str, inputs: list[str], program: Program,
+                              first: tuple[str, Sequence[se.Basic], tuple[int, ...], str, str],
+                              pi_doc: str) -> FunctionSpec:
+    """The function of outputs ``first`` (a function_spec output tuple) and the model's standard parameters pi, the
+    elements of both named by :func:`parameter_names` (the manifest's names of Y's columns and of pi)."""
+    names = parameter_names(d.model)
+    pi = program.bind(standard_parameters(d.model, d[newton_euler_links]))
+    spec = function_spec(d, name, summary, doc, inputs, program, [first, ("pi", pi, (len(names),), pi_doc, "")])
     outputs = tuple(dataclasses.replace(o, elements=names) for o in spec.outputs)
     return dataclasses.replace(spec, outputs=outputs)
 
