@@ -147,7 +147,9 @@ def _distance_legs(d: Deriving) -> tuple[distance.DistanceLeg, ...]:
     legs = distance.distance_legs(structure.chains, structure.platform, surface)
     if isinstance(legs, str):
         raise DerivationError(f"model '{d.model.name}': {legs}; use the generic outputs closure and "
-                              "closure_jacobians for this topology")
+                              "closure_jacobians for this topology, and symkin.runtime.parallel on them: "
+                              "solve_closure for its ik and fk, closure_velocities for its Jacobian and "
+                              "singularities (docs/model-format.md, 'Legs of any topology')")
     return legs
 
 

@@ -251,3 +251,91 @@ def solve_closure(model: GeneratedModel, q, s, p, *, unknowns: tuple[str, ...] =
     start = np.concatenate([values[name] for name in order], axis=-1)
     report = _iterate(start, equations, tol, max_iterations, max_step)
     return NewtonReport(unpack(np.asarray(report.solution)), report.converged, report.iterations, report.residual, report.step)
+
+
+@dataclass(frozen=True)
+class ClosureVelocities:
+    """First-order kinematics of any leg topology at an assembled pose (:func:`closure_velocities`).
+
+    Attributes:
+        J: task Jacobian dp/dq, shape (..., m, n): pdot = J qdot; NaN where ``interior`` is zero to
+            rounding (the platform is not determined by the actuators there).
+        passive: passive joint rates ds/dq, shape (..., ns, n) (the minimum-norm ones where a passive
+            motion is idle, e.g. a rod spinning between two S joints).
+        interior: per sample, the product of the singular values of N^T Phi_p (see the function):
+            zero at the interior (type 2, "parallel") singularities, where the platform moves with the
+            actuators locked.
+        boundary: per sample, the product of the singular values of N^T Phi_q: zero at the boundary
+            (type 1, "serial") singularities, where an actuator moves with the platform held.
+    """
+
+    J: np.ndarray
+    passive: np.ndarray
+    interior: np.ndarray
+    boundary: np.ndarray
+
+
+def _left_null_space(A: np.ndarray) -> np.ndarray:
+    """N (k, r, r) whose non-zero columns are an orthonormal basis of the complement of range(A) (k, r, c):
+    the left singular vectors of singular values at most r eps sigma_max (the rank test of
+    numpy.linalg.matrix_rank), the others zeroed so that every sample keeps the shape."""
+    if A.shape[-1] == 0:
+        return np.broadcast_to(np.eye(A.shape[1]), (A.shape[0], A.shape[1], A.shape[1])).copy()
+    U, S, _ = np.linalg.svd(A, full_matrices=True)
+    tolerance = S.max(axis=-1) * max(A.shape[-2:]) * np.finfo(float).eps
+    rank = np.count_nonzero(S > tolerance[:, None], axis=-1)
+    return U * (np.arange(A.shape[-2])[None, :] >= rank[:, None])[:, None, :]
+
+
+def closure_velocities(model: GeneratedModel, q, s, p) -> ClosureVelocities:
+    """Task Jacobian, passive rates and both singularity measures of any leg topology, from the closure.
+
+    Differentiating the generated closure phi(q, s, p) = 0 gives Phi_p pdot + Phi_q qdot + Phi_s sdot = 0
+    (``closure_jacobians``).  The passive rates are eliminated by the columns N of the orthogonal
+    complement of range(Phi_s) (the constraint directions the passive joints cannot take up; per leg,
+    its reciprocal wrenches): N^T Phi_p pdot = -N^T Phi_q qdot, the generic counterpart of the distance
+    form's J_x pdot = J_q qdot.  Then J = -(N^T Phi_p)^+ N^T Phi_q, exact when the pose is assembled, and
+    sdot = -Phi_s^+ (Phi_p J + Phi_q) qdot.  Singularities (Gosselin and Angeles 1990; seed sec. 4.2) are
+    where N^T Phi_p (interior) or N^T Phi_q (boundary) loses column rank: the products of their singular
+    values, sqrt(det(A^T A)), vanish there.  Their magnitudes mix the units of the closure's rows (m and
+    rad): compare a model with itself, e.g. along a path or over its workspace.
+
+    Samples with a non-finite input (an unconverged solve) give NaN throughout.
+
+    Evaluate at an assembled triple: p and s from :func:`solve_closure` at given q (forward kinematics)
+    or q and s at given p (inverse kinematics).  No sympy: the generated ``closure_jacobians`` only.
+
+    Args:
+        model: the loaded model (with ``closure_jacobians``).
+        q, s, p: actuated, passive and task coordinates, broadcast against each other.
+    """
+    jacobians = _function(model, "closure_jacobians", "closure_velocities")
+    q, s, p = (np.asarray(v, dtype=float) for v in (q, s, p))
+    batch = np.broadcast_shapes(q.shape[:-1], s.shape[:-1], p.shape[:-1])
+    flat = [np.broadcast_to(v, batch + v.shape[-1:]).reshape(-1, v.shape[-1]) for v in (q, s, p)]
+    blocks = jacobians(*flat)
+    Phi_p, Phi_q, Phi_s = (np.asarray(b, dtype=float).reshape(len(flat[0]), -1, b.shape[-1])
+                           for b in (blocks.Phi_p, blocks.Phi_q, blocks.Phi_s))
+    m, n, ns = Phi_p.shape[-1], Phi_q.shape[-1], Phi_s.shape[-1]
+    J = np.full((len(Phi_p), m, n), np.nan)
+    passive = np.full((len(Phi_p), ns, n), np.nan)
+    interior = np.full(len(Phi_p), np.nan)
+    boundary = np.full(len(Phi_p), np.nan)
+    finite = np.all(np.isfinite(np.concatenate([Phi_p, Phi_q, Phi_s], axis=-1)), axis=(1, 2))
+    if np.any(finite):
+        Phi_p, Phi_q, Phi_s = Phi_p[finite], Phi_q[finite], Phi_s[finite]
+        N = _left_null_space(Phi_s)
+        task = np.einsum("kri,krj->kij", N, Phi_p)
+        actuated = np.einsum("kri,krj->kij", N, Phi_q)
+        U, S, Vt = np.linalg.svd(task, full_matrices=False)
+        determined = S.min(axis=-1) > S.max(axis=-1) * max(task.shape[-2:]) * np.finfo(float).eps
+        with np.errstate(divide="ignore", invalid="ignore"):
+            rates = -np.einsum("kji,kj,klj,klm->kim", Vt, 1 / S, U, actuated)
+        rates[~determined] = np.nan
+        J[finite] = rates
+        passive[finite] = -np.einsum("kij,kjm->kim", np.linalg.pinv(Phi_s), Phi_p @ np.nan_to_num(rates) + Phi_q)
+        passive[np.flatnonzero(finite)[~determined]] = np.nan
+        interior[finite] = np.prod(S, axis=-1)
+        boundary[finite] = np.prod(np.linalg.svd(actuated, compute_uv=False), axis=-1)
+    return ClosureVelocities(J.reshape(batch + (m, n)), passive.reshape(batch + passive.shape[-2:]),
+                             interior.reshape(batch), boundary.reshape(batch))

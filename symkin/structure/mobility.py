@@ -29,6 +29,7 @@ from symkin.model.schema import Model, PlatformMotion, fixed_pose
 
 SPATIAL = 6
 PLANAR = 3
+SCHOENFLIES = 4
 
 
 def gruebler(lam: int, bodies: int, joint_dofs: list[int] | tuple[int, ...], identical: int = 0,
@@ -129,9 +130,38 @@ def idle_platform_spin(model: Model) -> int:
     return 1 if len(attachments) == 1 else 0
 
 
+def vertical_axes_only(model: Model) -> bool:
+    """Whether every revolute motion of every leg turns about a vertical axis (z of the base frame): the legs
+    then move within the Schoenflies group X(z) of translations and turns about z (Herve 1978).
+
+    Checked at zero joint values: if every earlier rotation of a leg is about z, a later axis that is vertical
+    there stays vertical at any joint values (a turn about z keeps z).
+    """
+    assert model.parallel is not None
+    for leg in model.parallel.legs:
+        rotation, _ = fixed_pose(leg.base)
+        for joint in leg.joints:
+            rotation = rotation * fixed_pose(joint.origin)[0]
+            for _variable, axis, turns in joint.motions:
+                direction = rotation * sympy.Matrix(axis)
+                if turns and any(sympy.simplify(c) != 0 for c in direction[:2]):
+                    return False
+    return True
+
+
+def spatial_factor(model: Model) -> int:
+    """lambda of eq. (8.2) for a parallel model: the dimension of the displacement group its joints move in -
+    3 for a planar or spherical platform, 4 for a Schoenflies platform whose legs turn about vertical axes
+    only (the SCARA-like legs of X(z)), 6 otherwise."""
+    assert model.parallel is not None
+    if model.parallel.motion is PlatformMotion.SCHOENFLIES and vertical_axes_only(model):
+        return SCHOENFLIES
+    return model.parallel.motion.spatial_factor
+
+
 def model_mobility(model: Model) -> MobilityReport:
-    """The mobility terms of ``model``: bodies and joints from its chain or legs; lambda = 3 for a planar or
-    spherical platform, 6 otherwise."""
+    """The mobility terms of ``model``: bodies and joints from its chain or legs; lambda from
+    :func:`spatial_factor` (6 for a serial chain)."""
     if model.parallel is None:
         dofs = tuple(1 for _ in model.joints)
         # a follower's motion is fixed by its leader's (a gear coupling): it takes a DoF like an idle one
@@ -149,5 +179,5 @@ def model_mobility(model: Model) -> MobilityReport:
         bodies += len(wrist.joints)
         identical += len(wrist.joints) - len(wrist.coordinates)
     intended = model.parallel.task_dof + (0 if wrist is None else len(wrist.coordinates))
-    return MobilityReport(model.name, "parallel", model.parallel.motion.spatial_factor, bodies, dofs, identical,
+    return MobilityReport(model.name, "parallel", spatial_factor(model), bodies, dofs, identical,
                           model.parallel.constraints, len(legs), intended)
