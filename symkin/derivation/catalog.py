@@ -18,9 +18,10 @@ from symkin.parallel import dynamics as parallel_dynamics
 from symkin.parallel import forces as parallel_forces
 from symkin.parallel import hybrid
 from symkin.parallel import quantities as parallel_quantities
+from symkin.parallel import regressor as parallel_regressor
 
 QUANTITY_MODULES: tuple[ModuleType, ...] = (kinematics_quantities, dynamics_quantities, regressor, parallel_quantities,
-                                            parallel_forces, parallel_dynamics, hybrid)
+                                            parallel_forces, parallel_dynamics, parallel_regressor, hybrid)
 
 
 def collect(modules: tuple[ModuleType, ...]) -> dict[str, dict[str, QuantityDef]]:

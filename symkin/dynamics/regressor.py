@@ -87,6 +87,21 @@ def _coulomb_shape(friction: Friction | None, v: se.Basic) -> se.Basic:
     return se.tanh(v / se.sympify(friction.smoothing_velocity))
 
 
+def drive_columns(friction: Friction | None, qd: se.Basic, qdd: se.Basic) -> tuple[se.Basic, ...]:
+    """A joint's torque per unit of each of its DRIVE parameters: qdd (I_a), qd (f_v), the Coulomb shape (f_c), 1 (f_o)."""
+    return (qdd, qd, _coulomb_shape(friction, qd), se.Integer(1))
+
+
+def drive_values(friction: Friction | None, armature: se.Basic) -> list[se.Basic]:
+    """A joint's DRIVE parameters in the model: reflected rotor inertia, viscous, Coulomb (the mean of the two
+    directions' levels) and offset (half their difference: the torque while the joint moves, whatever its sign)."""
+    if friction is None:
+        return [se.sympify(armature), se.Integer(0), se.Integer(0), se.Integer(0)]
+    negative = friction.coulomb_negative if friction.asymmetric else friction.coulomb
+    return [se.sympify(armature), se.sympify(friction.viscous), se.sympify((friction.coulomb + negative) / 2),
+            se.sympify((friction.coulomb - negative) / 2)]
+
+
 def regressor_rows(model: Model, links: Sequence[newton_euler.Link],
                    gravity: Sequence[se.Basic] | None) -> list[list[se.Basic]]:
     """Y (coordinates x parameters) with tau = Y pi, as SymEngine expressions (see the module docstring).
@@ -105,7 +120,7 @@ def regressor_rows(model: Model, links: Sequence[newton_euler.Link],
             columns.append(newton_euler.joint_torques(links, wrenches, None))
     friction = {f.joint: f for f in model.friction}
     for j, joint in enumerate(model.joints):
-        terms = (qdd[j], qd[j], _coulomb_shape(friction.get(joint.name), qd[j]), se.Integer(1))
+        terms = drive_columns(friction.get(joint.name), qd[j], qdd[j])
         columns += [[term if row == j else se.Integer(0) for row in range(len(links))] for term in terms]
     on_coordinates = [forces_on_coordinates(model, column) for column in columns]
     return [list(row) for row in zip(*on_coordinates)]
@@ -152,13 +167,7 @@ def standard_parameters(model: Model, links: Sequence[newton_euler.Link]) -> lis
         values += [body.mass, *body.moment, J[0][0], J[0][1], J[1][1], J[0][2], J[1][2], J[2][2]]
     friction = {f.joint: f for f in model.friction}
     for joint, link in zip(model.joints, links):
-        f = friction.get(joint.name)
-        if f is None:
-            values += [link.armature, se.Integer(0), se.Integer(0), se.Integer(0)]
-            continue
-        negative = f.coulomb_negative if f.asymmetric else f.coulomb
-        values += [link.armature, se.sympify(f.viscous), se.sympify((f.coulomb + negative) / 2),
-                   se.sympify((f.coulomb - negative) / 2)]
+        values += drive_values(friction.get(joint.name), link.armature)
     return values
 
 

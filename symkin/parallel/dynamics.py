@@ -112,15 +112,30 @@ def _constraint_hessians(d: Deriving) -> tuple[tuple[tuple[int, int, sympy.Expr]
 class _Terms:
     """The pieces of the equations of motion bound into one program, each formed once when first used."""
 
-    def __init__(self, d: Deriving, program: Program):
+    def __init__(self, d: Deriving, program: Program, parts: Inertia | None = None):
         self.d, self.program = d, program
         self.n = d.model.dof
-        self.parts: Inertia = d[_inertia]
+        self.parts: Inertia = d[_inertia] if parts is None else parts
         self.q = coordinate_symbols(d, "q")
         self.p = se_vector(task_symbols(d.model))
         # a hybrid device's wrist coordinates: the platform side moves in c = (p, qw)
         self.qw = se_vector(hybrid.wrist_symbols(d.model, "q"))
         self.c = self.p + self.qw
+
+    def with_parts(self, parts: Inertia) -> _Terms:
+        """The terms of another mass distribution on the same mechanism and program, sharing the kinematic terms
+        (J_x, J_q, J_x^-1, J) already bound."""
+        other = _Terms(self.d, self.program, parts)
+        other.__dict__.update({k: v for k, v in self.__dict__.items() if k in ("jacobians", "J_x_inverse", "J")})
+        return other
+
+    def platform_motion(self, qd: list[se.Basic], qdd: list[se.Basic] | None) -> tuple[list[se.Basic], list[se.Basic]]:
+        """(pd, pdd) = (J qd, J qdd + b), bound (qdd None: zero)."""
+        pd = self.task_rates(qd)
+        pdd = self.bias(qd, pd)
+        if qdd is not None:
+            pdd = [a + b for a, b in zip(mat_vec(self.J, qdd), pdd)]
+        return pd, pdd
 
     @cached_property
     def jacobians(self) -> tuple[Matrix, list[se.Basic]]:
@@ -296,18 +311,16 @@ class _Terms:
         return list(forces.values())
 
     def torques(self, qd: list[se.Basic], qdd: list[se.Basic] | None, with_gravity: bool = True,
-                with_friction: bool = True, wrist: tuple[list[se.Basic], list[se.Basic] | None] = ([], None)
-                ) -> list[se.Basic]:
+                with_friction: bool = True, wrist: tuple[list[se.Basic], list[se.Basic] | None] = ([], None),
+                motion: tuple[list[se.Basic], list[se.Basic]] | None = None) -> list[se.Basic]:
         """M_a qdd + V_a + G_a + F_f + J^T (M_p pdd + V_p + G_p), pdd = J qdd + b (qdd None: zero).
 
         On a hybrid device ``wrist`` = (qwd, qwdd) (qwdd None: zero) and the platform side is in c = (p, qw):
         F_c = M_c cdd + V_c + G_c with cdd = (J qdd + b, qwdd); the legs take J^T of its p rows, the wrist its qw
-        rows (plus the wrist's friction), after the legs' efforts.
+        rows (plus the wrist's friction), after the legs' efforts.  ``motion``: (pd, pdd) of
+        :meth:`platform_motion`, when several mass distributions share them (the regressor's columns).
         """
-        pd = self.task_rates(qd)
-        pdd = self.bias(qd, pd)
-        if qdd is not None:
-            pdd = [a + b for a, b in zip(mat_vec(self.J, qdd), pdd)]
+        pd, pdd = self.platform_motion(qd, qdd) if motion is None else motion
         qwd, qwdd = wrist
         pd, pdd = pd + list(qwd), pdd + (list(qwdd) if qwdd is not None else [se.Integer(0)] * len(qwd))
         F_p = [a + b for a, b in zip(mat_vec(self.M_p, pdd), self.V_p(pd))]

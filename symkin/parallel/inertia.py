@@ -156,12 +156,9 @@ def _about_origin(body: Body) -> tuple[sympy.Expr, sympy.Matrix, sympy.Matrix]:
     return body.mass, body.mass * c, sympy.Matrix(body.inertia) + body.mass * (c.dot(c) * sympy.eye(3) - c * c.T)
 
 
-def _platform(model: Model, bodies: ParallelBodies, legs: tuple[DistanceLeg, ...], platform: Frame
-              ) -> tuple[sympy.ImmutableMatrix, sympy.Expr]:
-    """M_p(p) and u_p(p) of the platform body and the rods' shares at the platform joints."""
-    parts = [_about_origin(bodies.platform)] if bodies.platform is not None else []
-    share = bodies.rod_mass * bodies.rod_platform_fraction
-    parts += [_about_origin(Body("rod", share, tuple(leg.b), sympy.zeros(3, 3))) for leg in legs]
+def platform_side(model: Model, parts: list[tuple[sympy.Expr, sympy.Matrix, sympy.Matrix]], platform: Frame
+                  ) -> tuple[sympy.ImmutableMatrix, sympy.Expr]:
+    """M_p(p) and u_p(p) of masses (m, h, I_o) that move with the platform (see the module docstring): linear in them."""
     m = sum((part[0] for part in parts), sympy.Integer(0))
     h = sum((part[1] for part in parts), sympy.zeros(3, 1))
     I_o = sum((part[2] for part in parts), sympy.zeros(3, 3))
@@ -176,6 +173,47 @@ def _platform(model: Model, bodies: ParallelBodies, legs: tuple[DistanceLeg, ...
     return sympy.ImmutableMatrix(M), sympy.expand(potential) if W.is_zero_matrix else potential
 
 
+def point_mass(mass: sympy.Expr, point: sympy.Matrix) -> tuple[sympy.Expr, sympy.Matrix, sympy.Matrix]:
+    """(m, h, I_o) of a point mass at ``point`` of the frame: (m, m b, m (|b|^2 E - b b^T))."""
+    return _about_origin(Body("point", mass, tuple(point), sympy.zeros(3, 3)))
+
+
+def _platform(model: Model, bodies: ParallelBodies, legs: tuple[DistanceLeg, ...], platform: Frame
+              ) -> tuple[sympy.ImmutableMatrix, sympy.Expr]:
+    """M_p(p) and u_p(p) of the platform body and the rods' shares at the platform joints."""
+    parts = [_about_origin(bodies.platform)] if bodies.platform is not None else []
+    share = bodies.rod_mass * bodies.rod_platform_fraction
+    parts += [point_mass(share, leg.b) for leg in legs]
+    return platform_side(model, parts, platform)
+
+
+def actuated_frame(model: Model, bodies_link: bool, leg: DistanceLeg, chain: LegChain
+                   ) -> tuple[sympy.Matrix, sympy.Matrix, sympy.Matrix]:
+    """(R, o, w): the frame right after leg ``leg``'s actuated joint (its actuated link's frame) in the base frame,
+    and the joint's angular velocity per unit rate (0 for a prismatic joint).
+
+    Raises:
+        DerivationError: the actuator is not the leg's first moving joint, so no link moves with it alone.
+    """
+    index = next(k for k, j in enumerate(leg.leg.joints) if j.active is not None)
+    frame = walk(leg.leg, joints=slice(0, index + 1)).end
+    if leg.actuator != "before" or (frame.p.free_symbols | frame.R.free_symbols) & _variables(leg, {leg.q}):
+        fix = "remove 'bodies: actuated_link:' and lump its mass" if bodies_link else "it has no actuated link"
+        raise DerivationError(
+            f"model '{model.name}': leg '{leg.leg.name}' has no link moved by its actuator alone (the actuated "
+            f"joint is not the first moving joint of the leg); {fix}")
+    motion = next(m for m in chain.motions if m.variable == leg.q)
+    w = sympy.Matrix(motion.direction) if motion.rotation else sympy.zeros(3, 1)
+    return sympy.Matrix(frame.R), sympy.Matrix(frame.p), w
+
+
+def elbow_mass_terms(model: Model, leg: DistanceLeg) -> tuple[sympy.Expr, sympy.Expr]:
+    """(|dC_i/dq_i|^2, g . C_i): M_a,ii and -u_a,i of a unit mass at the rod's end C_i."""
+    C = sympy.Matrix(leg.C)
+    rate = sympy.diff(C, leg.q)
+    return sympy.trigsimp(rate.dot(rate)), sympy.Matrix(model.gravity).dot(C)
+
+
 def _actuator_side(model: Model, bodies: ParallelBodies, leg: DistanceLeg, chain: LegChain
                    ) -> tuple[sympy.Expr, sympy.Expr]:
     """(M_a,ii, u_a,i) of one leg: actuated link, rod share at C_i and rotor."""
@@ -184,21 +222,13 @@ def _actuator_side(model: Model, bodies: ParallelBodies, leg: DistanceLeg, chain
     inertia = bodies.gear_ratio ** 2 * bodies.rotor_inertia
     potential = sympy.Integer(0)
     C_share = bodies.rod_mass * (1 - bodies.rod_platform_fraction)
-    C = sympy.Matrix(leg.C)
-    inertia += C_share * sympy.trigsimp(sympy.diff(C, q).dot(sympy.diff(C, q)))
-    potential += -C_share * g.dot(C)
+    elbow_inertia, elbow_height = elbow_mass_terms(model, leg)
+    inertia += C_share * elbow_inertia
+    potential += -C_share * elbow_height
     if bodies.actuated_link is not None:
         link = bodies.actuated_link
-        index = next(k for k, j in enumerate(leg.leg.joints) if j.active is not None)
-        frame = walk(leg.leg, joints=slice(0, index + 1)).end
-        if leg.actuator != "before" or (frame.p.free_symbols | frame.R.free_symbols) & _variables(leg, {q}):
-            raise DerivationError(
-                f"model '{model.name}': leg '{leg.leg.name}' has no link moved by its actuator alone (the actuated "
-                "joint is not the first moving joint of the leg); remove 'bodies: actuated_link:' and lump its mass")
-        R, origin = sympy.Matrix(frame.R), sympy.Matrix(frame.p)
+        R, origin, w = actuated_frame(model, True, leg, chain)
         c = origin + R * sympy.Matrix(link.com)
-        motion = next(m for m in chain.motions if m.variable == q)
-        w = sympy.Matrix(motion.direction) if motion.rotation else sympy.zeros(3, 1)
         v = sympy.diff(c, q)
         inertia += sympy.trigsimp(link.mass * v.dot(v) + (w.T * R * sympy.Matrix(link.inertia) * R.T * w)[0, 0])
         potential += -link.mass * g.dot(c)

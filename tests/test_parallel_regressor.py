@@ -1,0 +1,105 @@
+"""The dynamics regressor of parallel models (issue 33): tau = Y(q, p, qd, qdd) pi for the DELTA and the pantograph.
+
+Independent oracle: the models' own inverse dynamics (symkin.parallel.dynamics: the bodies entered by their
+centres of mass, the rods by their lumped ends), derived with the masses kept free and evaluated at random
+masses, inertias, gear ratios and friction levels - so a wrong column or a wrong mapping of the model's bodies
+to pi shows wherever the sampled parameters move it.  And the physics of a translating platform: its first
+moment and inertia do no work, so their columns vanish.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from conftest import MODELS_DIR
+from symkin import load, pipeline
+from symkin.errors import DerivationError
+from symkin.derivation import Derivation
+from symkin.model import model_from_text
+from tolerances import DYNAMICS
+
+FRICTION = """
+friction:
+  {a}: {{viscous: 0.002, coulomb: 0.01, smoothing_velocity: 0.05}}
+  {b}: {{viscous: 0.001, coulomb: {{positive: 0.02, negative: 0.015}}}}
+"""
+
+#: name: (geometry folded to numbers, the coordinates' names, task-space box half-widths about home)
+CASES = {
+    "delta": ("r_base,r_tcp,a,b", ("theta1", "theta2"), 0.03),
+    "pantograph": ("d,l,L", ("theta1", "theta2"), 0.01),
+}
+
+
+def _derive(name, tmp_path_factory):
+    geometry, joints, _ = CASES[name]
+    text = (MODELS_DIR / f"{name}.yaml").read_text() + FRICTION.format(a=joints[0], b=joints[1])
+    model = model_from_text(text, file=f"{name}.yaml")
+    request = pipeline.resolve_request(model, only="regressor,inverse_dynamics,ik", fixed=geometry)
+    return model, load(pipeline.write(pipeline.generate(model, request), tmp_path_factory.mktemp(name)))
+
+
+@pytest.fixture(scope="module", params=sorted(CASES))
+def derived(request, tmp_path_factory):
+    return request.param, *_derive(request.param, tmp_path_factory)
+
+
+def _states(generated, half_width, count, seed):
+    rng = np.random.default_rng(seed)
+    home = np.array(generated.info.home)
+    p = home + rng.uniform(-half_width, half_width, (count, len(home)))
+    q = generated.ik(p).joints
+    assert np.all(np.isfinite(q))
+    return rng, q, p, rng.normal(size=q.shape), rng.normal(size=q.shape)
+
+
+def test_regressor_times_parameters_is_the_inverse_dynamics(derived):
+    """At random masses, inertias, gear ratios and friction levels of the model's bodies."""
+    name, model, generated = derived
+    rng, q, p, qd, qdd = _states(generated, CASES[name][2], 64, 51)
+    free = [i for i in generated.info.functions["inverse_dynamics"].inputs if i.kind == "parameter"]
+    assert free  # the masses stay free
+    for _ in range(4):
+        values = {i.name: i.default * rng.uniform(0.2, 5.0) for i in free}
+        regressor = generated.regressor(q, p, qd, qdd, **values)
+        tau = generated.inverse_dynamics(q, p, qd, qdd, **values)
+        terms = np.abs(regressor.Y * regressor.pi[..., None, :])  # |Y_ik pi_k|: the scale the rounding acts on
+        np.testing.assert_array_less(np.abs(np.einsum("sik,sk->si", regressor.Y, regressor.pi) - tau),
+                                     DYNAMICS * terms.sum(axis=-1) + np.finfo(float).tiny)
+
+
+def test_parameter_names_and_values_follow_the_bodies(derived):
+    name, model, generated = derived
+    names = generated.info.functions["regressor"].results[1].elements
+    assert names[:2] == ("platform.m", "platform.mx")
+    assert "rod.mB" in names
+    assert "rod.dI" in names  # both have rods of one length
+    last = model.coordinates[-1].name
+    assert names[-4:] == tuple(f"{last}.{p}" for p in ("Ia", "fv", "fc", "fo"))
+    _, q, p, qd, qdd = _states(generated, CASES[name][2], 1, 52)
+    pi = dict(zip(names, generated.regressor(q, p, qd, qdd).pi[0]))
+    bodies = {"delta": ("m_platform", "m_rod", 0.5), "pantograph": ("m_handle", "m_distal", 0.5)}[name]
+    defaults = {i.name: i.default for i in generated.info.functions["regressor"].inputs if i.kind == "parameter"}
+    assert pi["platform.m"] == defaults[bodies[0]]
+    assert pi["rod.mB"] == pytest.approx(bodies[2] * defaults[bodies[1]], rel=4 * np.finfo(float).eps)
+    assert pi["theta2.fc"] == pytest.approx((0.02 + 0.015) / 2)
+    assert pi["theta2.fo"] == pytest.approx((0.02 - 0.015) / 2)
+
+
+def test_a_translating_platform_has_no_first_moment_or_inertia_columns(derived):
+    """The DELTA's platform and the pantograph's handle keep their orientation: their first moment and inertia
+    neither move nor weigh differently anywhere (k = 1/2 m |v|^2, u = -m g . p + const), so only the mass is in Y."""
+    name, model, generated = derived
+    _, q, p, qd, qdd = _states(generated, CASES[name][2], 32, 53)
+    Y = generated.regressor(q, p, qd, qdd).Y
+    names = generated.info.functions["regressor"].results[0].elements
+    platform = [k for k, n in enumerate(names) if n.startswith("platform.") and n != "platform.m"]
+    assert np.all(Y[:, :, platform] == 0)
+    assert np.all(np.abs(Y[:, :, names.index("platform.m")]).max(axis=-1) > 0)
+
+
+def test_models_the_regressor_does_not_cover_are_refused(models):
+    for name, what in (("agile_eye", "distal links"), ("delta_wrist", "wrist")):
+        with pytest.raises(DerivationError, match=f"regressor of a parallel model does not cover .*{what}"):
+            Derivation(models[name])["regressor"]
