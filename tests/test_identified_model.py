@@ -19,7 +19,7 @@ import yaml
 from conftest import SYMKIN_CLI
 from symkin.analysis import identified_model
 from symkin.derivation import Derivation
-from symkin.dynamics.quantities import _newton_euler_links as newton_euler_links
+from symkin.dynamics.quantities import newton_euler_links
 from symkin.dynamics.regressor import parameter_names, standard_parameters
 from symkin.model import load_model, model_from_text
 from test_identification import _run, arm, write_run  # noqa: F401 (the module-scoped fixture)

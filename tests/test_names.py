@@ -74,3 +74,35 @@ def test_the_names_the_review_found_with_two_meanings_have_one():
     names = defined_names()
     for name in ("characteristic_length", "make_function", "integrate", "load_model", "Program", "home_pose"):
         assert len(names.get(name, [])) == 1, (name, names.get(name))
+
+
+def imported_private_names(tree: ast.AST) -> list[tuple[str, str]]:
+    """(symkin module, name) of every private name ``tree`` imports from a symkin module."""
+    return [(node.module, a.name) for node in ast.walk(tree)
+            if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("symkin")
+            for a in node.names if a.name.startswith("_") and not a.name.startswith("__")]
+
+
+def private_imports() -> list[tuple[str, str, str]]:
+    """(importing module, imported module, name) of every import of another symkin module's private name."""
+    found = []
+    for path in sorted((ROOT / "symkin").rglob("*.py")):
+        module = ".".join(path.relative_to(ROOT).with_suffix("").parts)
+        found += [(module, *pair) for pair in imported_private_names(ast.parse(path.read_text()))]
+    return found
+
+
+def test_no_module_imports_another_modules_private_name():
+    """A name another module needs is public: the derivation graph's keys (the quantity functions other
+    quantities depend on: ``parallel_structure``, ``reduced_legs``, ``newton_euler_links``...) and the helpers
+    shared between quantity modules carry public names (issue 35: "the catalog's public keys are named
+    _private")."""
+    assert not private_imports()
+
+
+def test_the_private_import_scan_sees_an_import():
+    source = ("from symkin.parallel.quantities import _hidden, visible\n"
+              "def f():\n    from symkin.dynamics import _late as late\n"
+              "from numpy import _private_elsewhere\nfrom symkin import __version__\n")
+    assert imported_private_names(ast.parse(source)) == [("symkin.parallel.quantities", "_hidden"),
+                                                         ("symkin.dynamics", "_late")]

@@ -46,9 +46,7 @@ def mass_matrix_problems(model: Model, outputs: Sequence[str]) -> list[Problem]:
     inverting = [name for name in outputs if name in quantities and quantities[name].solves_with == "mass_matrix"]
     if not inverting:
         return []
-    from symkin.dynamics.quantities import _mass_matrix
-
-    spec = Derivation(model)[_mass_matrix]
+    spec = Derivation(model)["mass_matrix"]
     evaluate = lambdify_spec(spec, [list(i.symbols) for i in spec.vector_inputs], "numpy", model.parameter_values)
     n = model.dof
     rng = np.random.default_rng(0)

@@ -94,27 +94,27 @@ def _sympy_converter(d: Deriving) -> SympyConverter:
 
 
 @quantity("body_jacobians", "velocity Jacobians of the bodies at their centres of mass", emitted=False)
-def _body_jacobians(d: Deriving) -> tuple[BodyJacobians, ...]:
+def body_jacobians_of(d: Deriving) -> tuple[BodyJacobians, ...]:
     return body_jacobians(d.model, d[chain_frames])
 
 
 @quantity("newton_euler_links", "links in their joint frames with spatial inertias (Newton-Euler)", emitted=False)
-def _newton_euler_links(d: Deriving) -> tuple[newton_euler.Link, ...]:
+def newton_euler_links(d: Deriving) -> tuple[newton_euler.Link, ...]:
     return newton_euler.chain_links(d.model)
 
 
 @quantity("mass_matrix_graph", "M(q) by the composite-rigid-body algorithm, as a SymEngine graph", emitted=False)
-def _mass_matrix_graph(d: Deriving) -> Matrix:
-    return matrix_on_coordinates(d.model, newton_euler.mass_matrix(d[_newton_euler_links]))
+def mass_matrix_graph(d: Deriving) -> Matrix:
+    return matrix_on_coordinates(d.model, newton_euler.mass_matrix(d[newton_euler_links]))
 
 
 @quantity("mass_matrix_partials", "dM/dq_k as SymEngine graphs", emitted=False)
 def _mass_matrix_partials(d: Deriving) -> list[Matrix]:
-    return lagrange.mass_matrix_partials(d[_mass_matrix_graph], coordinate_symbols(d, "q"))
+    return lagrange.mass_matrix_partials(d[mass_matrix_graph], coordinate_symbols(d, "q"))
 
 
 @quantity("gravity_graph", "gravity vector in the base frame, or None if zero", emitted=False)
-def _gravity_graph(d: Deriving) -> list[se.Basic] | None:
+def gravity_graph(d: Deriving) -> list[se.Basic] | None:
     if all(c == 0 for c in d.model.gravity):
         return None
     return se_vector(d.model.gravity)
@@ -177,7 +177,7 @@ class _BoundTerms:
         self.n = d.model.dof
 
     def mass_matrix(self) -> Matrix:
-        values = self.program.bind(_flat(self.d[_mass_matrix_graph]))
+        values = self.program.bind(_flat(self.d[mass_matrix_graph]))
         return [values[i * self.n:(i + 1) * self.n] for i in range(self.n)]
 
     def partials(self) -> list[Matrix]:
@@ -191,16 +191,16 @@ class _BoundTerms:
         d = self.d
         qd, qdd = (joint_rates(d.model, g) if use else None for g, use in (("qd", velocity), ("qdd", acceleration)))
         return self.program.bind(forces_on_coordinates(d.model, newton_euler.inverse_dynamics(
-            d[_newton_euler_links], qd, qdd, d[_gravity_graph] if gravity else None)))
+            d[newton_euler_links], qd, qdd, d[gravity_graph] if gravity else None)))
 
     def coriolis_vector(self) -> list[se.Basic]:
         return self.newton_euler(velocity=True, acceleration=False, gravity=False)
 
     def gravity_vector(self) -> list[se.Basic] | None:
-        if self.d[_gravity_graph] is None:
+        if self.d[gravity_graph] is None:
             return None
         return self.program.bind(forces_on_coordinates(
-            self.d.model, newton_euler.gravity_torques(self.d[_newton_euler_links], self.d[_gravity_graph])))
+            self.d.model, newton_euler.gravity_torques(self.d[newton_euler_links], self.d[gravity_graph])))
 
     def friction(self) -> list[se.Basic] | None:
         return self.d[_friction_graph]
@@ -384,7 +384,7 @@ def _kinetic_energy(d: Deriving) -> FunctionSpec:
 def _potential_energy(d: Deriving) -> FunctionSpec:
     require_gravity(d, "potential_energy")
     program = Program()
-    (u,) = program.bind([lagrange.potential_energy(d[_body_jacobians], d[_gravity_graph])])
+    (u,) = program.bind([lagrange.potential_energy(d[body_jacobians_of], d[gravity_graph])])
     return function_spec(
         d, "potential_energy", "Gravitational potential energy.",
         "u = -sum m g . c over the bodies, zero with every centre of mass at the base origin (seed eq. 8.32).",

@@ -44,8 +44,7 @@ from symkin.model import joint_kinds
 from symkin.dynamics.base_parameters import BaseParameters, base_parameters, require_exact_constants
 from symkin.dynamics.coupling import forces_on_coordinates, joint_rates
 from symkin.dynamics.program import Program, cross, dot, mat_vec
-from symkin.dynamics.quantities import _gravity_graph as gravity_graph
-from symkin.dynamics.quantities import _newton_euler_links as newton_euler_links
+from symkin.dynamics.quantities import gravity_graph, newton_euler_links
 from symkin.dynamics.quantities import function_spec
 from symkin.ir.quantity import Deriving, quantity
 from symkin.ir.spec import FunctionSpec

@@ -45,7 +45,7 @@ Every function takes the actuated variables q and the platform pose p = fk(q) (o
 as a consistent pair, like the velocity functions.  J_x^-1 is formed once per function by the
 adjugate (3 legs) or a Gram-Schmidt QR (6 legs) (:mod:`symkin.dynamics.linsolve`).
 
-Length: every function is built from one set of terms (:class:`_Terms`: J, b, M_a, M_c, V, G bound
+Length: every function is built from one set of terms (:class:`ReducedDynamics`: J, b, M_a, M_c, V, G bound
 once per program); split, the terms and the functions that combine them would import each other.
 """
 
@@ -70,9 +70,9 @@ from symkin.parallel.inertia import Inertia, split_inertia
 from symkin.parallel.inputs import task_input, task_symbols
 from symkin.parallel.quantities import (
     PARALLEL,
-    _constraint_vector,
-    _distance_legs,
-    _structure,
+    constraint_vector,
+    reduced_legs,
+    parallel_structure,
     square_constraint_jacobians,
 )
 
@@ -86,8 +86,8 @@ WRENCH_UNIT = "N (force rows), N*m (moment rows)"
 @quantity("parallel_inertia", "mass distribution split into actuator side and platform side", emitted=False,
           mechanism=PARALLEL)
 def _inertia(d: Deriving) -> Inertia:
-    structure = d[_structure]
-    return split_inertia(d.model, d[_distance_legs], structure.chains, structure.platform)
+    structure = d[parallel_structure]
+    return split_inertia(d.model, d[reduced_legs], structure.chains, structure.platform)
 
 
 @quantity("constraint_hessians", "second derivatives of the leg equations in (q, p)", emitted=False,
@@ -96,7 +96,7 @@ def _constraint_hessians(d: Deriving) -> tuple[tuple[tuple[int, int, sympy.Expr]
     """Per leg equation f_i, the nonzero (a, b, c) with a <= b such that zd^T H_i zd = sum c zd_a zd_b."""
     z = coordinates.symbols(d.model, "q") + task_symbols(d.model)
     out = []
-    for f in d[_constraint_vector]:
+    for f in d[constraint_vector]:
         present = [k for k, s in enumerate(z) if s in f.free_symbols]
         terms = []
         for i, a in enumerate(present):
@@ -109,7 +109,7 @@ def _constraint_hessians(d: Deriving) -> tuple[tuple[tuple[int, int, sympy.Expr]
     return tuple(out)
 
 
-class _Terms:
+class ReducedDynamics:
     """The pieces of the equations of motion bound into one program, each formed once when first used."""
 
     def __init__(self, d: Deriving, program: Program, parts: Inertia | None = None):
@@ -122,10 +122,10 @@ class _Terms:
         self.qw = se_vector(hybrid.wrist_symbols(d.model, "q"))
         self.c = self.p + self.qw
 
-    def with_parts(self, parts: Inertia) -> _Terms:
+    def with_parts(self, parts: Inertia) -> ReducedDynamics:
         """The terms of another mass distribution on the same mechanism and program, sharing the kinematic terms
         (J_x, J_q, J_x^-1, J) already bound."""
-        other = _Terms(self.d, self.program, parts)
+        other = ReducedDynamics(self.d, self.program, parts)
         other.__dict__.update({k: v for k, v in self.__dict__.items() if k in ("jacobians", "J_x_inverse", "J")})
         return other
 
@@ -362,7 +362,7 @@ class _Terms:
 
 
 
-def _inputs(d: Deriving, *groups: str) -> list:
+def device_inputs(d: Deriving, *groups: str) -> list:
     """q, then p, then the other coordinate groups; a hybrid device's wrist vector after each (qw after p)."""
     if d.model.parallel is None or d.model.parallel.wrist is None:
         return ["q", task_input(d.model), *groups]
@@ -382,14 +382,14 @@ _PAIR = "Evaluate at a consistent pair q, p (p = fk(q) or q = ik(p))."
           kappa_degree=2)
 def _mass_matrix(d: Deriving) -> FunctionSpec:
     program = Program()
-    M = _Terms(d, program).mass_matrix()
+    M = ReducedDynamics(d, program).mass_matrix()
     n = _size(d)
     return function_spec(
         d, "mass_matrix", "Mass matrix in the actuated coordinates.",
         "M = M_a + J^T M_p J: the actuator side (arms, rod shares at the elbows, rotors times the gear ratio "
         "squared; diagonal) plus the platform side (platform and rod shares at the platform joints) carried "
         f"to the actuators by the task Jacobian J (k = 1/2 qd^T M qd). {_PAIR}",
-        _inputs(d), program, [("M", [v for row in M for v in row], (n, n), "symmetric positive definite mass matrix",
+        device_inputs(d), program, [("M", [v for row in M for v in row], (n, n), "symmetric positive definite mass matrix",
                                "")])
 
 
@@ -397,7 +397,7 @@ def _mass_matrix(d: Deriving) -> FunctionSpec:
           kappa_degree=4)
 def _coriolis_vector(d: Deriving) -> FunctionSpec:
     program = Program()
-    terms = _Terms(d, program)
+    terms = ReducedDynamics(d, program)
     V = terms.torques(coordinate_symbols(d, "qd"), None, with_gravity=False, with_friction=False,
                       wrist=(terms.wrist("qd"), None))
     return function_spec(
@@ -405,7 +405,7 @@ def _coriolis_vector(d: Deriving) -> FunctionSpec:
         "V = V_a + J^T (M_p b + V_p(p, pd)) with pd = J qd and b = dJ/dt qd = -J_x^-1 (zd^T H_i zd)_i (the "
         "second derivative of the leg equations along the motion); V_a and V_p from the Christoffel symbols of "
         f"M_a(q) and M_p(p). {_PAIR}",
-        _inputs(d, "qd"), program, [("V", V, (_size(d),), "Coriolis and centrifugal efforts", EFFORT_UNIT)])
+        device_inputs(d, "qd"), program, [("V", V, (_size(d),), "Coriolis and centrifugal efforts", EFFORT_UNIT)])
 
 
 @quantity("gravity_vector", "actuator efforts G = du_a/dq + J^T du_p/dp that hold the device against gravity",
@@ -413,21 +413,21 @@ def _coriolis_vector(d: Deriving) -> FunctionSpec:
 def _gravity_vector(d: Deriving) -> FunctionSpec:
     require_gravity(d, "gravity_vector")
     program = Program()
-    terms = _Terms(d, program)
+    terms = ReducedDynamics(d, program)
     G_a, G_p = terms.gravity_parts  # type: ignore[misc]
     G = [a + b for a, b in zip(G_a + [se.Integer(0)] * (_size(d) - d.model.dof), terms.B_transpose(G_p))]
     return function_spec(
         d, "gravity_vector", "Gravity compensation efforts.",
         "G = du_a/dq + J^T du_p/dp with u = -g . (sum of mass times centre of mass): the actuator efforts that "
         f"hold the device still at the pose (gravity compensation of a haptic device). {_PAIR}",
-        _inputs(d), program, [("G", G, (_size(d),), "actuator efforts that hold the device against gravity",
+        device_inputs(d), program, [("G", G, (_size(d),), "actuator efforts that hold the device against gravity",
                                EFFORT_UNIT)])
 
 
 @quantity("friction", "actuator friction F_f(qd): viscous + Coulomb (n)", mechanism=PARALLEL)
 def _friction(d: Deriving) -> FunctionSpec:
     program = Program()
-    terms = _Terms(d, program)
+    terms = ReducedDynamics(d, program)
     F = terms.friction(coordinate_symbols(d, "qd") + terms.wrist("qd"))
     if F is None:
         raise DerivationError(f"{d.model.name}: the model declares no friction; add a 'friction:' section "
@@ -444,7 +444,7 @@ def _friction(d: Deriving) -> FunctionSpec:
           kappa_degree=4)
 def _inverse_dynamics(d: Deriving) -> FunctionSpec:
     program = Program()
-    terms = _Terms(d, program)
+    terms = ReducedDynamics(d, program)
     tau = terms.torques(coordinate_symbols(d, "qd"), coordinate_symbols(d, "qdd"),
                         wrist=(terms.wrist("qd"), terms.wrist("qdd")))
     return function_spec(
@@ -452,14 +452,14 @@ def _inverse_dynamics(d: Deriving) -> FunctionSpec:
         "tau = M_a qdd + V_a + G_a + F_f + J^T (M_p pdd + V_p + G_p) with pdd = J qdd + b (d'Alembert: the loop "
         "constraint forces do no work on motions pd = J qd), equal to M qdd + V + G + F_f without forming M. "
         f"{_PAIR}",
-        _inputs(d, "qd", "qdd"), program, [("tau", tau, (_size(d),), "actuator efforts", EFFORT_UNIT)])
+        device_inputs(d, "qd", "qdd"), program, [("tau", tau, (_size(d),), "actuator efforts", EFFORT_UNIT)])
 
 
 @quantity("forward_dynamics", "forward dynamics qdd = M^-1 (tau - V - G - F_f) (n)", solves_with="mass_matrix",
           mechanism=PARALLEL, kappa_degree=4)
 def _forward_dynamics(d: Deriving) -> FunctionSpec:
     program = Program()
-    terms = _Terms(d, program)
+    terms = ReducedDynamics(d, program)
     rest = terms.torques(coordinate_symbols(d, "qd"), None, wrist=(terms.wrist("qd"), None))
     M = terms.mass_matrix()
     efforts = coordinate_symbols(d, "tau") + terms.wrist("tau")
@@ -468,7 +468,7 @@ def _forward_dynamics(d: Deriving) -> FunctionSpec:
         d, "forward_dynamics", "Forward dynamics: actuator accelerations under given efforts.",
         "qdd = M^-1 (tau - V - G - F_f) by a straight-line LDL^T factorization of the symmetric positive "
         f"definite M = M_a + J^T M_p J; the platform then accelerates with pdd = J qdd + b. {_PAIR}",
-        _inputs(d, "qd", "tau"), program,
+        device_inputs(d, "qd", "tau"), program,
         [("qdd", qdd, (_size(d),), "actuator accelerations", "rad/s^2 (revolute), m/s^2 (prismatic)")])
 
 
@@ -479,7 +479,7 @@ def _operational_space(d: Deriving) -> FunctionSpec:
         return _device_operational_space(d)
     program = Program()
     n = d.model.dof
-    Mx, Vx, Gx, _ = _Terms(d, program).task_side(coordinate_symbols(d, "qd"))
+    Mx, Vx, Gx, _ = ReducedDynamics(d, program).task_side(coordinate_symbols(d, "qd"))
     outputs = [("Mx", [v for row in Mx for v in row], (n, n), "task-space mass matrix J^-T M J^-1", ""),
                ("Vx", Vx, (n,), "task-space Coriolis and centrifugal force", TASK_FORCE_UNIT)]
     if Gx is not None:
@@ -490,12 +490,12 @@ def _operational_space(d: Deriving) -> FunctionSpec:
         "Mx = J^-T M_a J^-1 + M_p, Vx = J^-T (V_a - M_a J^-1 b) + V_p, Gx = J^-T G_a + G_p with J^-1 = J_q^-1 J_x "
         "and J^-1 b = -J_q^-1 h (h: the leg equations' second derivative along the motion; no solve but pd = J qd: "
         f"J_q is diagonal; seed eqs. 8.61-8.64). Gx is omitted for a model without gravity. {_PAIR}",
-        _inputs(d, "qd"), program, outputs)
+        device_inputs(d, "qd"), program, outputs)
 
 
 def _device_operational_space(d: Deriving) -> FunctionSpec:
     """Mx, Vx, Gx of a hybrid device at its wrist's TCP, in the device's coordinates (q, qw): the forces conjugate
-    to c = (p, qw) (:meth:`_Terms.task_side`) seen at the TCP, whose twist is x = J_c cd (J_c = ``device_jacobian``,
+    to c = (p, qw) (:meth:`ReducedDynamics.task_side`) seen at the TCP, whose twist is x = J_c cd (J_c = ``device_jacobian``,
     square), by :func:`~symkin.dynamics.quantities.task_space_dynamics`."""
     J_graph = se_matrix(hybrid.combined_jacobian(d))
     size = len(J_graph[0])
@@ -506,7 +506,7 @@ def _device_operational_space(d: Deriving) -> FunctionSpec:
             f"{len(d.model.task_space)} and the wrist in {size - len(d.model.task_space)}: remove "
             "'operational_space' (symkin rate --device gives the apparent mass at the grip)")
     program = Program()
-    terms = _Terms(d, program)
+    terms = ReducedDynamics(d, program)
     M_c, V_c, G_c, cd = terms.task_side(coordinate_symbols(d, "qd"))
     Mx, Vx, Gx = task_space_dynamics(program, J_graph, terms.c, cd, M_c, V_c, G_c)
     outputs = [("Mx", [v for row in Mx for v in row], (size, size), "mass matrix at the TCP J_c^-T M_c J_c^-1", ""),
@@ -520,14 +520,14 @@ def _device_operational_space(d: Deriving) -> FunctionSpec:
         "c = (p, qw) by J^-1 = J_q^-1 J_x, M_c = M_c,p + diag(J^-T M_a J^-1, 0), V_c = V_c,p + (J^-T (V_a - M_a "
         "J^-1 b), 0), G_c = G_c,p + (J^-T G_a, 0), then Mx = J_c^-T M_c J_c^-1, Vx = J_c^-T V_c - Mx dJ_c/dt cd, "
         f"Gx = J_c^-T G_c (J_c^-T by a Gram-Schmidt QR). Gx is omitted without gravity. {_PAIR}",
-        _inputs(d, "qd"), program, outputs)
+        device_inputs(d, "qd"), program, outputs)
 
 
 @quantity("kinetic_energy", "kinetic energy k = 1/2 qd^T M_a qd + 1/2 pd^T M_p pd (scalar)", mechanism=PARALLEL,
           kappa_degree=2)
 def _kinetic_energy(d: Deriving) -> FunctionSpec:
     program = Program()
-    terms = _Terms(d, program)
+    terms = ReducedDynamics(d, program)
     qd = coordinate_symbols(d, "qd")
     pd = terms.task_rates(qd) + terms.wrist("qd")  # c-rates (pd, qwd) on a hybrid device
     k = (sum((m * v * v for m, v in zip(terms.M_a, qd)), se.Integer(0)) + dot(pd, mat_vec(terms.M_p, pd))) / 2
@@ -536,7 +536,7 @@ def _kinetic_energy(d: Deriving) -> FunctionSpec:
     return function_spec(
         d, "kinetic_energy", "Kinetic energy.",
         f"k = 1/2 qd^T M_a qd + 1/2 pd^T M_p pd with pd = J qd (= 1/2 qd^T M qd). {_PAIR}",
-        _inputs(d, "qd"), program, [("k", [k], (), "kinetic energy of all bodies", "J")])
+        device_inputs(d, "qd"), program, [("k", [k], (), "kinetic energy of all bodies", "J")])
 
 
 @quantity("potential_energy", "potential energy u = u_a(q) + u_p(p) (scalar)", mechanism=PARALLEL)
@@ -545,10 +545,10 @@ def _potential_energy(d: Deriving) -> FunctionSpec:
     program = Program()
     parts = d[_inertia]
     if d.model.parallel is not None and d.model.parallel.wrist is not None:
-        (u,) = program.bind([sum(_Terms(d, program).potential, se.Integer(0))])
+        (u,) = program.bind([sum(ReducedDynamics(d, program).potential, se.Integer(0))])
     else:
         (u,) = program.bind([se.sympify(parts.actuator_potential + parts.platform_potential + parts.distal_potential)])
     return function_spec(
         d, "potential_energy", "Gravitational potential energy.",
         f"u = -g . (sum of mass times centre of mass), zero with every mass at the base origin. {_PAIR}",
-        _inputs(d), program, [("u", [u], (), "potential energy", "J")])
+        device_inputs(d), program, [("u", [u], (), "potential energy", "J")])

@@ -30,8 +30,7 @@ from dataclasses import dataclass
 import symengine as se
 import sympy
 
-from symkin.dynamics.quantities import _body_jacobians as body_jacobians
-from symkin.dynamics.quantities import _mass_matrix_graph as mass_matrix_graph
+from symkin.dynamics.quantities import body_jacobians_of, mass_matrix_graph
 from symkin.errors import DerivationError
 from symkin.ir.quantity import Deriving, quantity
 from symkin.ir.spec import FunctionSpec, InputSpec, OutputSpec, make_function
@@ -42,7 +41,7 @@ from symkin.model.reader import X_AXIS, Y_AXIS, Z_AXIS
 from symkin.model.schema import Joint, JointType, Model, Wrist
 from symkin.model.wrist_build import PLATFORM_LINK
 from symkin.parallel.inputs import task_input
-from symkin.parallel.quantities import PARALLEL, _q, platform_jacobian
+from symkin.parallel.quantities import PARALLEL, actuated_input, platform_jacobian
 
 
 #: The platform joints in chain order: (coordinate, joint type, axis in the moved frame).  The
@@ -136,7 +135,7 @@ def wrist_inertia(d: Deriving) -> WristInertia:
     index = combined_order(d.model, len(M))
     g = [se.sympify(v) for v in d.model.gravity]
     potential = se.Integer(0)
-    for body in chain[body_jacobians]:
+    for body in chain[body_jacobians_of]:
         potential -= body.mass * sum((g[r] * body.com[r] for r in range(3)), se.Integer(0))
     return WristInertia([[M[i][j] for j in index] for i in index], potential)
 
@@ -203,7 +202,7 @@ def _device_actuator_jacobian(d: Deriving) -> FunctionSpec:
         "[v; w] = J_a [qd; qwd] with J_a = [J_c,p J, J_c,w]: the platform columns of the combined Jacobian "
         "times the platform's J = J_x^-1 J_q (J_x^-1 = adj(J_x) / det(J_x)), the wrist columns as they are. "
         "tau = J_a^T [f; m] are the actuator efforts with which the TCP exerts the wrench [f; m].",
-        [_q(d), task_input(d.model), wrist_input(d.model)],
+        [actuated_input(d), task_input(d.model), wrist_input(d.model)],
         [OutputSpec("J", sympy.ImmutableMatrix(J_platform.row_join(J_c[:, k:])),
                     "rows vx, vy, vz, wx, wy, wz; columns: the legs' actuated joints, then wrist joints")],
     )

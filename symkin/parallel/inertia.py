@@ -149,7 +149,7 @@ def body_angular_velocity_matrix(model: Model) -> sympy.Matrix:
                                  for c in model.task_space])
 
 
-def _about_origin(body: Body) -> tuple[sympy.Expr, sympy.Matrix, sympy.Matrix]:
+def about_origin(body: Body) -> tuple[sympy.Expr, sympy.Matrix, sympy.Matrix]:
     """(m, h = m c, I_o = I_c + m (|c|^2 E - c c^T)): a body's mass, first moment and inertia about its
     frame origin (parallel-axis theorem)."""
     c = sympy.Matrix(body.com)
@@ -175,13 +175,13 @@ def platform_side(model: Model, parts: list[tuple[sympy.Expr, sympy.Matrix, symp
 
 def point_mass(mass: sympy.Expr, point: sympy.Matrix) -> tuple[sympy.Expr, sympy.Matrix, sympy.Matrix]:
     """(m, h, I_o) of a point mass at ``point`` of the frame: (m, m b, m (|b|^2 E - b b^T))."""
-    return _about_origin(Body("point", mass, tuple(point), sympy.zeros(3, 3)))
+    return about_origin(Body("point", mass, tuple(point), sympy.zeros(3, 3)))
 
 
 def _platform(model: Model, bodies: ParallelBodies, legs: tuple[DistanceLeg, ...], platform: Frame
               ) -> tuple[sympy.ImmutableMatrix, sympy.Expr]:
     """M_p(p) and u_p(p) of the platform body and the rods' shares at the platform joints."""
-    parts = [_about_origin(bodies.platform)] if bodies.platform is not None else []
+    parts = [about_origin(bodies.platform)] if bodies.platform is not None else []
     share = bodies.rod_mass * bodies.rod_platform_fraction
     parts += [point_mass(share, leg.b) for leg in legs]
     return platform_side(model, parts, platform)
@@ -249,7 +249,7 @@ def _distal_link(model: Model, link: Body, leg: DistanceLeg, chain: LegChain) ->
         raise DerivationError(f"model '{model.name}': the frame of leg '{leg.leg.name}''s distal link is off its "
                               "middle axis; remove 'bodies: distal_link:'")
     com = d * w + sympy.Matrix(link.com)
-    _, _, about_centre = _about_origin(Body(link.link, link.mass, tuple(com), link.inertia))
+    _, _, about_centre = about_origin(Body(link.link, link.mass, tuple(com), link.inertia))
     return DistalLink(leg.q, leg.C, leg.B, sympy.ImmutableMatrix(L.inv()), sympy.simplify(w.dot(v)), link.mass,
                       sympy.ImmutableMatrix(com),
                       sympy.ImmutableMatrix(about_centre))

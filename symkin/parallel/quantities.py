@@ -56,7 +56,7 @@ class ParallelStructure:
     chains: tuple[LegChain, ...]
 
 
-def _q(d: Deriving):
+def actuated_input(d: Deriving):
     return coordinate_input(d.model, "q")
 
 
@@ -76,7 +76,7 @@ def _branch_text(sigma: int) -> str:
 
 
 @quantity("parallel_structure", "legs walked from the base and the platform frame", emitted=False, mechanism=PARALLEL)
-def _structure(d: Deriving) -> ParallelStructure:
+def parallel_structure(d: Deriving) -> ParallelStructure:
     assert d.model.parallel is not None
     return ParallelStructure(platform_frame(d.model), tuple(walk(leg) for leg in d.model.parallel.legs))
 
@@ -85,7 +85,7 @@ def _structure(d: Deriving) -> ParallelStructure:
 
 @quantity("leg_closures", "closure equations of every leg", emitted=False, mechanism=PARALLEL)
 def _leg_closures(d: Deriving) -> tuple[closure.LegClosure, ...]:
-    structure: ParallelStructure = d[_structure]
+    structure: ParallelStructure = d[parallel_structure]
     return tuple(closure.LegClosure(structure.platform, chain) for chain in structure.chains)
 
 
@@ -109,7 +109,7 @@ def _closure(d: Deriving) -> FunctionSpec:
         "(position rows) and 2 vee(E - E^T) / (1 + trace E) = 2 tan(angle/2) axis of the residual rotation "
         "E = R_attachment^T R_end (orientation rows). "
         "Zero exactly when the mechanism is assembled at (q, s, p).",
-        [_q(d), passive_input(d.model), task_input(d.model)],
+        [actuated_input(d), passive_input(d.model), task_input(d.model)],
         [OutputSpec("phi", phi, f"residual rows ({_closure_rows(d)})", shape=(len(phi),))],
     )
 
@@ -133,15 +133,15 @@ def _closure_jacobians(d: Deriving) -> FunctionSpec:
         "relation of any leg topology; Newton steps on these matrices solve the closure numerically "
         "(symkin.runtime.parallel.solve_closure). Formed from the joint screws: a rotation about the axis w "
         "through o moves the leg end by w x (p_end - o) and turns it by w.",
-        [_q(d), passive_input(d.model), task_input(d.model)], outputs,
+        [actuated_input(d), passive_input(d.model), task_input(d.model)], outputs,
     )
 
 
 # --------------------------------------------------------------------------- distance form
 
 @quantity("distance_legs", "legs reduced to one distance equation each", emitted=False, mechanism=PARALLEL)
-def _distance_legs(d: Deriving) -> tuple[distance.DistanceLeg, ...]:
-    structure: ParallelStructure = d[_structure]
+def reduced_legs(d: Deriving) -> tuple[distance.DistanceLeg, ...]:
+    structure: ParallelStructure = d[parallel_structure]
     motion = d.model.parallel.motion  # type: ignore[union-attr]
     surface = {PlatformMotion.PLANAR: "plane", PlatformMotion.SPHERICAL: "sphere"}.get(motion, "space")
     legs = distance.distance_legs(structure.chains, structure.platform, surface)
@@ -154,26 +154,26 @@ def _distance_legs(d: Deriving) -> tuple[distance.DistanceLeg, ...]:
 
 
 @quantity("constraint_vector", "f(q, p) (sympy)", emitted=False, mechanism=PARALLEL)
-def _constraint_vector(d: Deriving) -> sympy.ImmutableMatrix:
-    return sympy.ImmutableMatrix([leg.constraint for leg in d[_distance_legs]])
+def constraint_vector(d: Deriving) -> sympy.ImmutableMatrix:
+    return sympy.ImmutableMatrix([leg.constraint for leg in d[reduced_legs]])
 
 
 @quantity("constraints", "leg equations f(q, p) = (|B_i - C_i|^2 - L_i^2)/2, zero when assembled",
           mechanism=PARALLEL, residual=True)
 def _constraints(d: Deriving) -> FunctionSpec:
-    f = d[_constraint_vector]
+    f = d[constraint_vector]
     return make_function(
         d.model, "constraints", "Leg equations in distance form.",
         "f_i = (|B_i(p) - C_i(q)|^2 - L_i(q)^2) / 2 for every leg: the rod between the point joints C_i and "
         "B_i has length L_i (seed sec. 3.2.1, the sphere equation about C'_i). Zero when assembled.",
-        [_q(d), task_input(d.model)],
+        [actuated_input(d), task_input(d.model)],
         [OutputSpec("f", f, "one equation per leg", "m^2", shape=(len(f),))],
     )
 
 
 @quantity("constraint_jacobian_matrices", "J_x and J_q (sympy)", emitted=False, mechanism=PARALLEL)
 def _constraint_jacobian_matrices(d: Deriving) -> tuple[sympy.ImmutableMatrix, sympy.ImmutableMatrix]:
-    f = sympy.Matrix(d[_constraint_vector])
+    f = sympy.Matrix(d[constraint_vector])
     J_x = jacobian(f, task_symbols(d.model))
     J_q = -jacobian(f, coordinates.symbols(d.model, "q"))
     return J_x, sympy.ImmutableMatrix(J_q)
@@ -186,7 +186,7 @@ def _constraint_jacobians(d: Deriving) -> FunctionSpec:
         d.model, "constraint_jacobians", "Jacobians of the leg equations.",
         "Differentiating f(q, p) = 0 gives the velocity relation J_x pdot = J_q qdot with J_x = df/dp "
         "(rows (B_i - C_i)^T dB_i/dp) and J_q = -df/dq (diagonal: one actuator per leg).",
-        [_q(d), task_input(d.model)],
+        [actuated_input(d), task_input(d.model)],
         [OutputSpec("J_x", J_x, "df/dp: one row per leg, one column per task coordinate"),
          OutputSpec("J_q", J_q, "-df/dq: one row per leg, one column per actuated joint (diagonal)")],
     )
@@ -195,15 +195,15 @@ def _constraint_jacobians(d: Deriving) -> FunctionSpec:
 @quantity("leg_points", "joint centres of every leg: first joint A_i, proximal point joint C_i(q), platform joint "
           "B_i(p)", mechanism=PARALLEL)
 def _leg_points(d: Deriving) -> FunctionSpec:
-    structure: ParallelStructure = d[_structure]
-    legs = d[_distance_legs]
+    structure: ParallelStructure = d[parallel_structure]
+    legs = d[reduced_legs]
     points = [list(point) for chain, leg in zip(structure.chains, legs) for point in (chain.centres[0], leg.C, leg.B)]
     return make_function(
         d.model, "leg_points", "Joint centres of every leg, for drawing the mechanism.",
         "Per leg, in the base frame: the centre A_i of its first joint (fixed), the proximal point joint C_i(q) "
         "that the rod starts from (the DELTA's elbow; A_i itself when the rod starts at the base) and the "
         "platform joint B_i(p) = P + R(p) b_i (seed sec. 3.2.1). Evaluate at a consistent pair q = ik(p).",
-        [_q(d), task_input(d.model)],
+        [actuated_input(d), task_input(d.model)],
         [OutputSpec("points", sympy.ImmutableMatrix(points), "rows A_1, C_1, B_1, A_2, ...: three points per leg "
                     "(columns x, y, z)", "m")],
     )
@@ -211,7 +211,7 @@ def _leg_points(d: Deriving) -> FunctionSpec:
 
 @quantity("ik", "closed-form inverse kinematics q(p) per leg, with reachability margins", mechanism=PARALLEL)
 def _ik(d: Deriving) -> FunctionSpec:
-    legs = d[_distance_legs]
+    legs = d[reduced_legs]
     solutions = [closed_form.solve_leg(leg) for leg in legs]
     branches = "; ".join(f"{leg.leg.name}: {leg.q} on the {_branch_text(leg.leg.ik_branch)} branch"
                          for leg in legs)
@@ -239,14 +239,14 @@ def _fk(d: Deriving) -> FunctionSpec:
     assert parallel is not None
     side = _branch_text(parallel.fk_branch)
     if parallel.motion is PlatformMotion.TRANSLATION and len(parallel.legs) == 3:
-        position, margin = closed_form.trilaterate(d[_distance_legs], parallel.fk_branch)
+        position, margin = closed_form.trilaterate(d[reduced_legs], parallel.fk_branch)
         text = ("Trilateration (seed sec. 3.2.1): P lies on the spheres of radius L_i about S_i = C_i(q) - b_i; "
                 "P = S1 + w + t n with n = (S2 - S1) x (S3 - S1), w in the plane of the centres and "
                 f"t = sigma sqrt(margin / |n|^2). The root on the {side} side of n is returned. Where the margin "
                 "is negative the spheres do not meet and the position is NaN.")
         names, what = "x, y, z", "spheres"
     elif parallel.coordinates == ("x", "y") and len(parallel.legs) == 2:
-        position, margin = closed_form.intersect_circles(d[_distance_legs], parallel.fk_branch)
+        position, margin = closed_form.intersect_circles(d[reduced_legs], parallel.fk_branch)
         text = ("Circle intersection (the planar case of seed sec. 3.2.1): P lies on the circles in z = 0 about "
                 "S_i = C_i(q) - b_i; P = S1 + w + t n with n = z x (S2 - S1), w on the line of the centres and "
                 f"t = sigma sqrt(margin / |S2 - S1|^2). The assembly mode on the {side} side of S1 -> S2 is "
@@ -254,7 +254,7 @@ def _fk(d: Deriving) -> FunctionSpec:
                 "not meet and the position is NaN.")
         names, what = "x, y", "circles"
     elif parallel.motion is PlatformMotion.SPHERICAL and parallel.coordinates == ("roll", "pitch", "yaw"):
-        R, margin = closed_form.orthogonal_spherical(d[_distance_legs], _home_signs(d))
+        R, margin = closed_form.orthogonal_spherical(d[reduced_legs], _home_signs(d))
         text = ("Orthogonal spherical platform (the Agile Eye; Bonev, Chablat and Wenger 2006): the platform axes "
                 "f_i = R b_i are an orthonormal frame with f_i . C_i = 0; f_1 = cos phi u + sin phi v about the first "
                 "middle axis, f_3 ~ C_3 x f_1, and f_2 . C_2 = 0 gives X cos 2 phi + Y sin 2 phi = Z in closed form "
@@ -263,7 +263,7 @@ def _fk(d: Deriving) -> FunctionSpec:
                 "orientation is NaN.")
         return make_function(
             d.model, "fk", "Forward kinematics: platform orientation from the actuated joint variables.", text,
-            [_q(d)],
+            [actuated_input(d)],
             [OutputSpec("orientation", sympy.ImmutableMatrix(closed_form.rpy_of(R)),
                         "platform orientation roll, pitch, yaw (R = Rz(yaw) Ry(pitch) Rx(roll))", "rad", shape=(3,)),
              OutputSpec("margin", sympy.ImmutableMatrix([margin]), ">= 0 iff the legs assemble (a real solution)",
@@ -276,7 +276,7 @@ def _fk(d: Deriving) -> FunctionSpec:
             "generated ik and inverse_jacobian)")
     return make_function(
         d.model, "fk", "Forward kinematics: TCP position from the actuated joint variables.", text,
-        [_q(d)],
+        [actuated_input(d)],
         [OutputSpec("position", sympy.ImmutableMatrix(position), f"TCP position {names}", "m",
                     shape=(len(position),)),
          OutputSpec("margin", sympy.ImmutableMatrix([margin]), f">= 0 iff the {what} meet (a real solution)",
@@ -291,7 +291,7 @@ def _home_signs(d: Deriving) -> tuple[int, int, int]:
     Raises:
         DerivationError: none is (the home pose is not an assembly of the legs' ik).
     """
-    legs, model = d[_distance_legs], d.model
+    legs, model = d[reduced_legs], d.model
     closed_form.require_orthogonal(legs)
     if model.parallel is None or model.parallel.home is None:
         raise DerivationError(f"model '{model.name}': the fk of a spherical platform returns the home pose's "
@@ -337,7 +337,7 @@ def _jacobian(d: Deriving) -> FunctionSpec:
         d.model, "jacobian", "Task Jacobian of the platform.",
         "J = J_x^-1 J_q from J_x pdot = J_q qdot, so that dp = J dq (seed eq. 8.29); J_x^-1 = adj(J_x) / "
         "det(J_x). Infinite at interior singularities (det J_x = 0).",
-        [_q(d), task_input(d.model)],
+        [actuated_input(d), task_input(d.model)],
         [OutputSpec("J", sympy.ImmutableMatrix(J), "rows: task coordinates; columns: actuated joints")],
     )
 
@@ -351,7 +351,7 @@ def _inverse_jacobian(d: Deriving) -> FunctionSpec:
         "J^-1 = J_q^-1 J_x (J_q is diagonal), so that dq = J^-1 dp (seed eq. 8.30): row i is the derivative of "
         "leg i's actuated variable with respect to the task coordinates. Its determinant vanishes at "
         "interior singularities.",
-        [_q(d), task_input(d.model)],
+        [actuated_input(d), task_input(d.model)],
         [OutputSpec("J_inv", sympy.ImmutableMatrix(J_inv), "rows: actuated joints; columns: task coordinates")],
     )
 
@@ -367,7 +367,7 @@ def _singularities(d: Deriving) -> FunctionSpec:
         "loses rank, the TCP cannot move in some direction); det J_x = 0 where the legs' constraint "
         "directions become dependent (workspace-interior singularity: J^-1 loses rank, the platform gains "
         "a degree of freedom). det J_x is expanded by minors, a polynomial in its entries.",
-        [_q(d), task_input(d.model)],
+        [actuated_input(d), task_input(d.model)],
         [OutputSpec("det_Jq", sympy.ImmutableMatrix([det_q]), "det J_q (boundary singularities where zero)",
                     shape=()),
          OutputSpec("det_Jx", sympy.ImmutableMatrix([determinant.determinant(J_x)]),

@@ -34,18 +34,18 @@ from symkin.ir.quantity import Deriving, quantity
 from symkin.ir.spec import FunctionSpec
 from symkin.model.schema import Model, PlatformMotion
 from symkin.parallel.distance import DistanceLeg
-from symkin.parallel.dynamics import _inputs, _Terms
+from symkin.parallel.dynamics import device_inputs, ReducedDynamics
 from symkin.parallel.inertia import (
     Inertia,
     SwingingRod,
-    _about_origin,
+    about_origin,
     actuated_frame,
     elbow_mass_terms,
     platform_side,
     point_mass,
 )
 from symkin.parallel.legs import LegChain
-from symkin.parallel.quantities import PARALLEL, _distance_legs, _structure
+from symkin.parallel.quantities import PARALLEL, reduced_legs, parallel_structure
 
 Triple = tuple[sympy.Expr, sympy.Matrix, sympy.Matrix]
 
@@ -158,9 +158,9 @@ def body_parameters(legs: _Legs) -> list[sympy.Expr]:
     bodies = model.parallel.bodies  # type: ignore[union-attr]
     assert bodies is not None
     zero: Triple = (sympy.Integer(0), sympy.zeros(3, 1), sympy.zeros(3, 3))
-    values = _flat(_about_origin(bodies.platform) if bodies.platform is not None else zero)
+    values = _flat(about_origin(bodies.platform) if bodies.platform is not None else zero)
     if legs.has_actuated_links:
-        values += _flat(_about_origin(bodies.actuated_link) if bodies.actuated_link is not None else zero)
+        values += _flat(about_origin(bodies.actuated_link) if bodies.actuated_link is not None else zero)
     f, m = bodies.rod_platform_fraction, bodies.rod_mass
     values += [m * f, m * (1 - f)]
     L2 = legs.rod_length_squared
@@ -177,13 +177,13 @@ def _regressor(d: Deriving) -> FunctionSpec:
     """Y (actuators x parameters) and the model's pi, both named by :func:`body_parameter_names` in the manifest."""
     model = d.model
     _require_regressor(model)
-    structure = d[_structure]
-    legs = _Legs(model, d[_distance_legs], structure.chains)
+    structure = d[parallel_structure]
+    legs = _Legs(model, d[reduced_legs], structure.chains)
     if model.parallel.bodies is None:  # type: ignore[union-attr]
         raise DerivationError(f"model '{model.name}' declares no bodies, so it has no regressor; add a 'bodies:' "
                               "section (see docs/model-format.md)")
     program = Program()
-    terms = _Terms(d, program)
+    terms = ReducedDynamics(d, program)
     qd, qdd = coordinate_symbols(d, "qd"), coordinate_symbols(d, "qdd")
     motion = terms.platform_motion(qd, qdd)
     columns = [terms.with_parts(parts).torques(qd, qdd, with_friction=False, motion=motion)
@@ -204,7 +204,7 @@ def _regressor(d: Deriving) -> FunctionSpec:
         "rods' masses at the platform joints (mB) and the proximal joints (mC) and their inertia beyond their ends "
         "(dI), and per actuator I_a, f_v, f_c, f_o; Y pi equals inverse_dynamics. Evaluate at a consistent pair "
         "q, p (p = fk(q) or q = ik(p)).",
-        _inputs(d, "qd", "qdd"), program,
+        device_inputs(d, "qd", "qdd"), program,
         [("Y", Y, (n, len(names)), "regressor: column k is the effort per unit of parameter k", ""),
          ("pi", pi, (len(names),), "the model's standard parameters (kg, kg*m, kg*m^2; drives as a serial model's)",
           "")])
