@@ -112,9 +112,59 @@ def test_the_gravity_budget_is_the_largest_share_of_an_effort_limit(arm):
                                                                       rel=CLOSED_FORM)
 
 
-def test_forces_at_the_handle_need_a_square_jacobian():
-    with pytest.raises(ValueError, match="square task Jacobian"):
-        rating.coulomb_friction_felt(np.ones((2, 3)), [1.0, 1.0, 1.0])
+def test_forces_at_the_handle_need_as_many_joints_as_task_coordinates():
+    with pytest.raises(ValueError, match="at least as many joints as task coordinates"):
+        rating.coulomb_friction_felt(np.ones((3, 2)), [1.0, 1.0])
+
+
+#: A redundant device: three joints move a handle in the plane (v = J qd).
+REDUNDANT = np.array([[-0.12, -0.07, -0.02], [0.15, 0.09, 0.05]])
+
+
+def test_a_redundant_device_slips_in_its_cheapest_joint_motion():
+    """The Coulomb friction felt moving along u is the least friction work over the joint motions J w = u (a
+    linear program, scipy's HiGHS); the largest over a dense scan of directions is the rated value."""
+    from scipy.optimize import linprog
+
+    coulomb = np.array([0.01, 0.004, 0.002])
+    felt = float(rating.coulomb_friction_felt(REDUNDANT, coulomb))
+    values = []
+    for u in directions(720):
+        # w = w+ - w-, both >= 0: min c . (w+ + w-) s.t. J (w+ - w-) = u
+        result = linprog(np.concatenate([coulomb, coulomb]), A_eq=np.hstack([REDUNDANT, -REDUNDANT]), b_eq=u,
+                         bounds=(0, None), method="highs")
+        assert result.status == 0
+        values.append(result.fun)
+    assert max(values) <= felt * (1 + 1e-9)
+    assert max(values) >= felt * (1 - 1e-4)
+    square = REDUNDANT[:, :2]
+    assert float(rating.coulomb_friction_felt(square, coulomb[:2])) == pytest.approx(
+        float(rating.farthest_vertex(np.linalg.inv(square).T, coulomb[:2])), rel=CLOSED_FORM)
+
+
+def test_a_redundant_devices_damping_is_its_least_dissipating_joint_motion():
+    """min over J w = u of w^T B w, solved in the null space of J (w = J^+ u + N z, least squares in z), is a
+    quadratic form u^T D u; its least eigenvalue is the rated damping.  An undamped joint that moves the handle
+    leaves it undamped."""
+    viscous = np.array([0.002, 0.001, 0.0005])
+    _, _, Vt = np.linalg.svd(REDUNDANT)
+    N = Vt[2:].T                                                        # null space of J (3 x 1)
+    root = np.sqrt(viscous)[:, None]
+
+    def least_dissipation(u):
+        particular = np.linalg.pinv(REDUNDANT) @ u
+        z = np.linalg.lstsq(root * N, -root[:, 0] * particular, rcond=None)[0]
+        w = particular + N @ z
+        return w @ (viscous * w)
+
+    e = np.eye(2)
+    D = np.array([[least_dissipation(e[i]) if i == j else
+                   (least_dissipation(e[i] + e[j]) - least_dissipation(e[i]) - least_dissipation(e[j])) / 2
+                   for j in range(2)] for i in range(2)])
+    expected = np.linalg.eigvalsh(D)[0]
+    # two solves, each within a few ulps times kappa(J B^-1 J^T) = 92: 1e3 EPS
+    assert float(rating.handle_damping(REDUNDANT, viscous)) == pytest.approx(expected, rel=1e3 * EPS)
+    assert float(rating.handle_damping(REDUNDANT, [0.002, 0.0, 0.0005])) == 0.0
 
 
 def test_the_peak_force_of_a_redundant_arm_is_the_farthest_point_its_efforts_allow():
@@ -418,3 +468,36 @@ def test_cli_rates_a_spherical_platform_over_its_orientations(generated_dir, tmp
     assert all(abs(m["min"]["tcp"][2]) <= 0.5 for m in sheet["measures"].values())
     assert "roll [rad],pitch [rad],yaw [rad]" in (out / "datasheet.csv").read_text()
     assert "at orientation (" in (out / "summary.txt").read_text()
+
+
+def test_a_device_carrying_a_wrist_feels_the_friction_of_its_cheapest_joint_motion(tmp_path):
+    """The DELTA with its wrist (models/delta_wrist.yaml) rated whole at its grip point (--device): six joints move
+    three grip coordinates, so the friction and damping felt are those of the least dissipating joint motion.  The
+    datasheet's home values against rating's functions on J from central differences of the generated fk and
+    device_fk (the grip's position as the legs and the wrist turn)."""
+    text = (MODELS_DIR / "delta_wrist.yaml").read_text()
+    text = text.replace("  tcp: {xyz: [0, h, 0]}\n", "  tcp: {xyz: [0, h, 0]}\n  friction:\n"
+                        + "".join(f"    psi{i}: {{viscous: 0.0002, coulomb: 0.001}}\n" for i in (1, 2, 3)))
+    text += "friction:\n" + "".join(f"  theta{i}: {{viscous: 0.01, coulomb: 0.02}}\n" for i in (1, 2, 3))
+    path = tmp_path / "delta_wrist.yaml"
+    path.write_text(text)
+    out = tmp_path / "rate"
+    assert main(["rate", str(path), "--device", "-n", "200", "--effort-limit", "1", "--no-figure", "-o", str(out)]) == 0
+    sheet = json.loads((out / "datasheet.json").read_text())
+    assert "friction" not in sheet["not_rated"]
+    from symkin import derive
+    device = load(derive(str(path), str(tmp_path / "code"), outputs=["fk", "device_fk"]))
+    home = np.array(sheet["home"]["q"])
+
+    def grip(coordinates):
+        q, qw = coordinates[:3], coordinates[3:]
+        return device.device_fk(device.fk(q).position, qw)[:3, 3]
+
+    h = 1e-6
+    J = np.stack([(grip(home + h * e) - grip(home - h * e)) / (2 * h) for e in np.eye(6)], axis=-1)
+    coulomb, viscous = [0.02] * 3 + [0.001] * 3, [0.01] * 3 + [0.0002] * 3
+    measures = sheet["measures"]
+    # central differences: truncation h^2 |grip'''| ~ 1e-12 and rounding EPS / h ~ 1e-10, relative to entries ~ 0.1
+    assert measures["coulomb_friction"]["home"] == pytest.approx(float(rating.coulomb_friction_felt(J, coulomb)),
+                                                                 rel=1e-7)
+    assert measures["handle_damping"]["home"] == pytest.approx(float(rating.handle_damping(J, viscous)), rel=1e-7)

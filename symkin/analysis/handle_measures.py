@@ -100,7 +100,6 @@ def translation_measures(model: GeneratedModel, J: np.ndarray, M: np.ndarray, q:
            Measure("inertia_isotropy", "", masses[:, -1] / masses[:, 0], False,
                    "largest over smallest principal mass (1: the same mass in every direction)")]
     skipped = {}
-    square = J.shape[-1] == J.shape[-2]  # J: the translational rows (of the twist Jacobian of a rotating platform)
     efforts = actuation.effort_limits
     if efforts is None:
         skipped["force"] = "no effort limits: declare effort_limit per joint or give --effort-limit"
@@ -118,8 +117,8 @@ def translation_measures(model: GeneratedModel, J: np.ndarray, M: np.ndarray, q:
     else:
         out.append(Measure("resolution", "m", rating.position_resolution(J, actuation.joint_steps), False,
                            "largest handle step between neighbouring encoder readings"))
-    friction = (friction_measures(J, actuation, TRANSLATIONAL_FRICTION) if square
-                else "friction and damping at the handle need as many joints as task translations")
+    friction = (friction_measures(J, actuation, TRANSLATIONAL_FRICTION) if J.shape[-2] <= J.shape[-1]
+                else "friction and damping at the handle need at least as many joints as task translations")
     if isinstance(friction, str):
         skipped["friction"] = friction
     else:
@@ -150,7 +149,8 @@ ROTATIONAL_FRICTION = (("coulomb_torque", "N m", "largest Coulomb friction torqu
 def friction_measures(J: np.ndarray, actuation: Actuation, labels: tuple[tuple[str, str, str], ...]
                        ) -> list[Measure] | str:
     """The Coulomb friction felt, the least damping and the stiffest passive wall at the servo rate (Colgate-Brown)
-    through a square J, labelled by ``labels``; or why not (no joint friction declared)."""
+    through J (square, or with more joints than rows: :mod:`symkin.analysis.rating`), labelled by ``labels``; or
+    why not (no joint friction declared)."""
     if actuation.coulomb is None or actuation.viscous is None:
         return "no joint friction declared (friction: in the model file)"
     (coulomb, coulomb_unit, coulomb_doc), (damped, damping_unit, damping_doc), (wall, wall_unit, wall_doc) = labels

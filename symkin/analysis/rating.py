@@ -3,7 +3,7 @@ at the handle, from the joint-space M, the task Jacobian J (v = J qd), G and the
 
 At one pose (every function takes stacks, ``...``), with n joints and J the m x n translational rows
 of the task Jacobian (square for a translational device: 3 x 3 for a DELTA, 2 x 2 for a pantograph or a
-planar arm; the friction and damping at the handle need it square):
+planar arm; m < n for a redundant device, e.g. a DELTA carrying a wrist pushed at its grip):
 
 * **apparent mass**: Lambda = (J M^-1 J^T)^-1 (Khatib 1987; J^-T M J^-1 for a square J), F = Lambda a
   from rest.  Its eigenvalues are the masses the hand feels along its principal directions, their
@@ -20,14 +20,16 @@ planar arm; the friction and damping at the handle need it square):
 * **Coulomb friction at the handle**: moving with the velocity v the joints resist with
   tau_c,i sign(qd_i), qd = J^-1 v, felt along u = v / |v| as u . J^-T (tau_c * sign(qd)).  Its largest
   value over all directions is again a farthest vertex, max_s |J^-T (s * tau_c)|: with w = J^-1 v,
-  sum_i tau_c,i |w_i| = max_s (s * tau_c) . w, and max_w c . w / |J w| = |J^-T c| (Cauchy-Schwarz).
+  sum_i tau_c,i |w_i| = max_s (s * tau_c) . w, and max_w c . w / |J w| = |J^-T c| (Cauchy-Schwarz).  A
+  redundant device slips in the joint motion that costs least, min over J w = u of sum tau_c,i |w_i|: the
+  farthest point of the polytope |J^T F| <= tau_c, as the peak force (:func:`coulomb_friction_felt`).
 * **gravity budget**: max_i |G_i| / tau_max,i, the largest share of an actuator's effort that holding
   the device against gravity takes from what it can render.
 * **renderable stiffness**: a virtual wall K (with virtual damping B) rendered by a loop of period T
   on a device with physical damping b is passive iff b > K T / 2 + |B| (Colgate and Schenkel 1997,
   after Colgate and Brown 1994), so K_max = 2 (b - |B|) / T and |B| < b.  At the handle b is the
-  smallest eigenvalue of the joints' viscous damping seen there, J^-T diag(b_j) J^-1: the direction
-  in which the device is least damped limits the wall.
+  smallest eigenvalue of the joints' viscous damping seen there, J^-T diag(b_j) J^-1 ((J B^-1 J^T)^-1 for a
+  redundant device, :func:`handle_damping`): the direction in which the device is least damped limits the wall.
 """
 
 from __future__ import annotations
@@ -100,6 +102,9 @@ def peak_force(J: np.ndarray, effort_limits: Sequence[float] | np.ndarray) -> np
     """
     J = np.asarray(J, dtype=float)
     m, n = J.shape[-2:]
+    if m > n:
+        raise ValueError(f"the handle's forces need at least as many joints as task coordinates, got a {m} x {n} "
+                         "task Jacobian")
     limits = np.broadcast_to(np.asarray(effort_limits, dtype=float), (n,))
     if m == n:
         return farthest_vertex(_inverse_transpose(J), limits)
@@ -124,9 +129,16 @@ def position_resolution(J: np.ndarray, joint_steps: Sequence[float] | np.ndarray
 
 
 def coulomb_friction_felt(J: np.ndarray, coulomb: Sequence[float] | np.ndarray) -> np.ndarray:
-    """The largest Coulomb friction force the hand feels, over all directions of motion (...,):
-    max_s |J^-T (s * tau_c)|."""
-    return farthest_vertex(_inverse_transpose(J), coulomb)
+    """The largest Coulomb friction force the hand feels, over all directions of motion (...,): the farthest
+    point of the polytope |J_i . F| <= tau_c,i, max_s |J^-T (s * tau_c)| for a square J.
+
+    Moving the handle along u, the joints slip with some w, J w = u, and dissipate sum_i tau_c,i |w_i|; the
+    hand pushes the device into the motion that costs least (a redundant device - more joints than task
+    coordinates - chooses among many w), so the friction felt along u is min over J w = u of sum tau_c,i |w_i|,
+    which by linear-programming duality is max over |J^T F| <= tau_c of F . u, the support function of that
+    polytope.  Its largest value over all directions u is the polytope's farthest point (:func:`peak_force`
+    with the Coulomb levels as limits)."""
+    return peak_force(J, coulomb)
 
 
 def gravity_share(G: np.ndarray, effort_limits: Sequence[float] | np.ndarray) -> np.ndarray:
@@ -136,11 +148,27 @@ def gravity_share(G: np.ndarray, effort_limits: Sequence[float] | np.ndarray) ->
 
 
 def handle_damping(J: np.ndarray, viscous: Sequence[float] | np.ndarray) -> np.ndarray:
-    """The smallest viscous damping at the handle (...,): the least eigenvalue of J^-T diag(b) J^-1, N s/m."""
-    inverse_transpose = _inverse_transpose(J)
-    b = np.broadcast_to(np.asarray(viscous, dtype=float), inverse_transpose.shape[-1:])
-    damping = (inverse_transpose * b) @ np.swapaxes(inverse_transpose, -1, -2)
-    return np.linalg.eigvalsh(damping)[..., 0]
+    """The smallest viscous damping at the handle (...,), N s/m: the least eigenvalue of J^-T diag(b) J^-1 for
+    a square J.
+
+    With more joints than task coordinates the joints the hand moves at the velocity v are those that dissipate
+    least, min over J w = v of w^T B w = v^T (J B^-1 J^T)^-1 v (B = diag(b); the damping's counterpart of the
+    apparent mass (J M^-1 J^T)^-1), so the least damping is 1 / the largest eigenvalue of J B^-1 J^T; 0 where an
+    undamped joint (b_j = 0) moves the handle.
+    """
+    J = np.asarray(J, dtype=float)
+    m, n = J.shape[-2:]
+    b = np.broadcast_to(np.asarray(viscous, dtype=float), (n,))
+    if m == n:
+        inverse_transpose = _inverse_transpose(J)
+        damping = (inverse_transpose * b) @ np.swapaxes(inverse_transpose, -1, -2)
+        return np.linalg.eigvalsh(damping)[..., 0]
+    damped = b > 0
+    free_motion = np.any(np.linalg.norm(J[..., :, ~damped], axis=-2) > 0, axis=-1)
+    mobility = (J[..., :, damped] / b[damped]) @ np.swapaxes(J[..., :, damped], -1, -2)
+    largest = np.linalg.eigvalsh(mobility)[..., -1]
+    with np.errstate(divide="ignore"):
+        return np.where(free_motion, 0.0, 1.0 / largest)
 
 
 def renderable_stiffness(damping: np.ndarray | float, period: float, virtual_damping: float = 0.0) -> np.ndarray:
