@@ -14,7 +14,7 @@ import subprocess
 import numpy as np
 import pytest
 
-from conftest import SYMKIN_CLI
+from conftest import ROOT, SYMKIN_CLI
 from symkin import pipeline
 from symkin.analysis import identification
 from symkin.model import model_from_text
@@ -251,3 +251,17 @@ def test_the_command_estimates_from_the_energy_balance_and_refuses_too_few_windo
     assert result.returncode == 2
     assert "7 windows of the run give 7 energy equations for 13 base parameters: shorten --window" in result.stderr
     assert not (tmp_path / "long").exists()
+
+
+@pytest.mark.parametrize("source", ["models/delta.yaml", "generated/delta"])
+def test_a_parallel_model_is_refused_before_any_work(source, tmp_path):
+    """Its regressors exist (tests/test_parallel_regressor.py), its base parameters not yet: exit 2, nothing
+    written, and the message says what there is."""
+    data = tmp_path / "run.csv"
+    data.write_text("t,theta1,theta2,theta3\n0,0,0,0\n")
+    result = subprocess.run(SYMKIN_CLI + ["identify", str(ROOT / source), str(data), "-o", str(tmp_path / "out")],
+                            capture_output=True, text=True)
+    assert result.returncode == 2
+    assert "estimates a serial model's base parameters; a parallel model's regressor and energy regressor" in \
+        result.stderr
+    assert not (tmp_path / "out").exists()

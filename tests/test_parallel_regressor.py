@@ -36,7 +36,7 @@ def _derive(name, tmp_path_factory):
     geometry, joints, _ = CASES[name]
     text = (MODELS_DIR / f"{name}.yaml").read_text() + FRICTION.format(a=joints[0], b=joints[1])
     model = model_from_text(text, file=f"{name}.yaml")
-    request = pipeline.resolve_request(model, only="regressor,inverse_dynamics,ik", fixed=geometry)
+    request = pipeline.resolve_request(model, only="regressor,energy_regressor,inverse_dynamics,kinetic_energy,potential_energy,ik", fixed=geometry)
     return model, load(pipeline.write(pipeline.generate(model, request), tmp_path_factory.mktemp(name)))
 
 
@@ -67,6 +67,29 @@ def test_regressor_times_parameters_is_the_inverse_dynamics(derived):
         terms = np.abs(regressor.Y * regressor.pi[..., None, :])  # |Y_ik pi_k|: the scale the rounding acts on
         np.testing.assert_array_less(np.abs(np.einsum("sik,sk->si", regressor.Y, regressor.pi) - tau),
                                      DYNAMICS * terms.sum(axis=-1) + np.finfo(float).tiny)
+
+
+def test_energy_regressor_times_parameters_is_the_energy(derived):
+    """k + u = Y_e pi at random masses, inertias and gear ratios (the energies bodies by their centres of mass)."""
+    name, model, generated = derived
+    rng, q, p, qd, _ = _states(generated, CASES[name][2], 64, 54)
+    functions = generated.info.functions
+    free = {i.name: i.default for f in ("energy_regressor", "kinetic_energy", "potential_energy")
+            for i in functions[f].inputs if i.kind == "parameter"}
+
+    def own(function, values):  # the parameters a generated function takes
+        return {k: v for k, v in values.items() if k in {i.name for i in functions[function].inputs}}
+
+    for _ in range(4):
+        values = {name: default * rng.uniform(0.2, 5.0) for name, default in free.items()}
+        regressor = generated.energy_regressor(q, p, qd, **own("energy_regressor", values))
+        energy = (generated.kinetic_energy(q, p, qd, **own("kinetic_energy", values))
+                  + generated.potential_energy(q, p, **own("potential_energy", values)))
+        terms = np.abs(regressor.Y_e * regressor.pi)
+        np.testing.assert_array_less(np.abs(np.einsum("sk,sk->s", regressor.Y_e, regressor.pi) - energy),
+                                     DYNAMICS * terms.sum(axis=-1) + np.finfo(float).tiny)
+        names = generated.info.functions["energy_regressor"].results[0].elements
+        assert names == generated.info.functions["regressor"].results[0].elements
 
 
 def test_parameter_names_and_values_follow_the_bodies(derived):

@@ -63,6 +63,7 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError(f"--holdout must lie in [0, 1), got {args.holdout:g}")
         if not args.window > 0:
             raise ValueError(f"--window must be a positive number of seconds, got {args.window:g}")
+        _require_serial(args.model)
         model = model_files.generated_model(args.model, args.backend,
                                             ENERGY_OUTPUTS if args.method == "energy" else IDENTIFY_OUTPUTS)
         values = analysis_args.parse_assignments(args.assignments)
@@ -111,6 +112,29 @@ def run(args: argparse.Namespace) -> int:
         analysis_args.fail_on_bad_input(args, err)
     analysis_args.write_outputs(Path(args.out or f"out/identify/{model.name}"), files, start)
     return 0
+
+
+def _require_serial(path: str) -> None:
+    """Refuse a parallel model before any derivation: its regressors exist, its base parameters not yet.
+
+    Raises:
+        ValueError: MODEL is a parallel mechanism (a model file, or a generated directory's manifest).
+    """
+    if model_files.is_model_file(path):
+        from symkin.model import load_model
+
+        parallel = load_model(path).parallel is not None
+    else:
+        from symkin.manifest import read_manifest
+        from symkin.runtime.info import ModelInfo
+
+        directory = Path(path).parent if Path(path).name == "manifest.json" else Path(path)
+        parallel = ModelInfo.from_manifest(read_manifest(directory)).mechanism == "parallel"
+    if parallel:
+        raise ValueError(f"{path}: symkin identify estimates a serial model's base parameters; a parallel model's "
+                         "regressor and energy regressor are derived (symkin derive --only regressor,"
+                         "energy_regressor; docs/identification.md, 'Parallel mechanisms'), its base parameters "
+                         "not yet")
 
 
 def _regressor(model, fit, method: str) -> tuple[np.ndarray, np.ndarray]:

@@ -341,6 +341,14 @@ class ReducedDynamics:
             tau = [t + f for t, f in zip(tau, friction)]
         return [t + f for t, f in zip(tau, self.B_transpose(F_p))]
 
+    def kinetic_energy(self, qd: list[se.Basic], cd: list[se.Basic]) -> se.Basic:
+        """k = 1/2 qd^T M_a qd + 1/2 cd^T M_c cd with the platform side's rates cd = (pd, qwd), plus the spherical legs'
+        distal links (1/2 w_b^T I_o w_b each) and the rods' own inertia (1/2 dI |w|^2)."""
+        k = (sum((m * v * v for m, v in zip(self.M_a, qd)), se.Integer(0)) + dot(cd, mat_vec(self.M_p, cd))) / 2
+        if self.distal is not None:
+            k += self.distal.kinetic_energy(list(qd), cd[:self.n])
+        return k
+
     def mass_matrix(self) -> Matrix:
         """M_a + B^T M_c B with B = diag(J, 1) (J^T M_p J without a wrist; symmetric by construction)."""
         n, J, size = self.n, self.J, len(self.c)
@@ -529,10 +537,7 @@ def _kinetic_energy(d: Deriving) -> FunctionSpec:
     program = Program()
     terms = ReducedDynamics(d, program)
     qd = coordinate_symbols(d, "qd")
-    pd = terms.task_rates(qd) + terms.wrist("qd")  # c-rates (pd, qwd) on a hybrid device
-    k = (sum((m * v * v for m, v in zip(terms.M_a, qd)), se.Integer(0)) + dot(pd, mat_vec(terms.M_p, pd))) / 2
-    if terms.distal is not None:  # spherical legs' distal links: 1/2 w_b^T I_o w_b each; rods 1/2 dI |w|^2
-        k += terms.distal.kinetic_energy(list(qd), pd[:d.model.dof])
+    k = terms.kinetic_energy(qd, terms.task_rates(qd) + terms.wrist("qd"))  # c-rates (pd, qwd) on a hybrid device
     return function_spec(
         d, "kinetic_energy", "Kinetic energy.",
         f"k = 1/2 qd^T M_a qd + 1/2 pd^T M_p pd with pd = J qd (= 1/2 qd^T M qd). {_PAIR}",

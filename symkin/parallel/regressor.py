@@ -16,7 +16,10 @@ sec. 14.4 for parallel robots: the legs' and platform's regressors combined thro
 * per actuated joint, as a serial chain's drive: reflected rotor inertia I_a and friction f_v, f_c, f_o.
 
 Column k of Y is the reduced inverse dynamics of the mass distribution with pi = e_k (friction: its own factor),
-exact; the kinematic terms (J, the bias b, pd and pdd) are bound once and shared by every column.
+exact; the kinematic terms (J, the bias b, pd and pdd) are bound once and shared by every column.  The energy
+regressor (Gautier and Khalil 1988) has the same columns: k + u = Y_e(q, p, qd) pi, the kinetic and potential
+energy of each unit mass distribution (a drive's reflected inertia 1/2 qd_j^2, friction none), for the
+identification from the power the drives deliver.
 """
 
 from __future__ import annotations
@@ -45,7 +48,7 @@ from symkin.parallel.inertia import (
     point_mass,
 )
 from symkin.parallel.legs import LegChain
-from symkin.parallel.quantities import PARALLEL, reduced_legs, parallel_structure
+from symkin.parallel.quantities import PARALLEL, ParallelStructure, parallel_structure, reduced_legs
 
 Triple = tuple[sympy.Expr, sympy.Matrix, sympy.Matrix]
 
@@ -176,12 +179,7 @@ def body_parameters(legs: _Legs) -> list[sympy.Expr]:
 def _regressor(d: Deriving) -> FunctionSpec:
     """Y (actuators x parameters) and the model's pi, both named by :func:`body_parameter_names` in the manifest."""
     model = d.model
-    _require_regressor(model)
-    structure = d[parallel_structure]
-    legs = _Legs(model, d[reduced_legs], structure.chains)
-    if model.parallel.bodies is None:  # type: ignore[union-attr]
-        raise DerivationError(f"model '{model.name}' declares no bodies, so it has no regressor; add a 'bodies:' "
-                              "section (see docs/model-format.md)")
+    legs, structure = _regressor_legs(d)
     program = Program()
     terms = ReducedDynamics(d, program)
     qd, qdd = coordinate_symbols(d, "qd"), coordinate_symbols(d, "qdd")
@@ -193,11 +191,9 @@ def _regressor(d: Deriving) -> FunctionSpec:
     for j, coordinate in enumerate(model.coordinates):
         for term in drive_columns(friction.get(coordinate.name), qd[j], qdd[j]):
             columns.append([term if row == j else se.Integer(0) for row in range(n)])
-    names = body_parameter_names(legs)
     Y = program.bind([column[row] for row in range(n) for column in columns])
-    pi = program.bind([se.sympify(v) for v in body_parameters(legs)])
-    spec = function_spec(
-        d, "regressor", "Dynamics regressor: tau = Y(q, p, qd, qdd) pi, linear in the standard parameters.",
+    return _with_body_parameters(
+        d, legs, "regressor", "Dynamics regressor: tau = Y(q, p, qd, qdd) pi, linear in the standard parameters.",
         "Column k of Y is the reduced inverse dynamics tau = M_a qdd + V_a + G_a + J^T (M_p pdd + V_p + G_p) + F_f "
         "with pi = e_k, exact (symkin.parallel.regressor): the platform's m, m c, I_o (about its origin, Pinocchio's "
         "order), the actuated links' (about the frame after the actuated joint, the same body on every leg), the "
@@ -205,7 +201,49 @@ def _regressor(d: Deriving) -> FunctionSpec:
         "(dI), and per actuator I_a, f_v, f_c, f_o; Y pi equals inverse_dynamics. Evaluate at a consistent pair "
         "q, p (p = fk(q) or q = ik(p)).",
         device_inputs(d, "qd", "qdd"), program,
-        [("Y", Y, (n, len(names)), "regressor: column k is the effort per unit of parameter k", ""),
-         ("pi", pi, (len(names),), "the model's standard parameters (kg, kg*m, kg*m^2; drives as a serial model's)",
-          "")])
+        ("Y", Y, (n, len(body_parameter_names(legs))), "regressor: column k is the effort per unit of parameter k", ""))
+
+
+@quantity("energy_regressor", "energy regressor Y_e(q, p, qd) with k + u = Y_e pi, and the model's standard "
+          "parameters pi", mechanism=PARALLEL, kappa_degree=2)
+def _energy_regressor(d: Deriving) -> FunctionSpec:
+    """Y_e and the model's pi, named as the regressor's: the energy of each unit mass distribution."""
+    legs, structure = _regressor_legs(d)
+    program = Program()
+    terms = ReducedDynamics(d, program)
+    qd = coordinate_symbols(d, "qd")
+    pd = terms.task_rates(qd)
+    row = [terms.with_parts(parts).kinetic_energy(qd, pd)
+           + se.sympify(parts.actuator_potential + parts.platform_potential + parts.distal_potential)
+           for parts in unit_inertias(legs, structure.platform)]
+    half = se.Rational(1, 2)
+    row += [e for rate in qd for e in (half * rate * rate, se.Integer(0), se.Integer(0), se.Integer(0))]
+    Y_e = program.bind(row)
+    return _with_body_parameters(
+        d, legs, "energy_regressor", "Energy regressor: k + u = Y_e(q, p, qd) pi, linear in the standard parameters.",
+        "The kinetic and potential energy of each mass distribution with pi = e_k (the columns of regressor; a "
+        "drive's reflected inertia 1/2 qd_j^2, friction 0); Y_e pi equals kinetic_energy + potential_energy, and "
+        "d(Y_e pi)/dt = qd . (tau - F_f) along a motion. Evaluate at a consistent pair q, p.",
+        device_inputs(d, "qd"), program, ("Y_e", Y_e, (len(Y_e),), "energy per unit of each standard parameter", ""))
+
+
+def _regressor_legs(d: Deriving) -> tuple[_Legs, ParallelStructure]:
+    """The legs the regressors are formed from, after checking that the model has them."""
+    model = d.model
+    _require_regressor(model)
+    if model.parallel.bodies is None:  # type: ignore[union-attr]
+        raise DerivationError(f"model '{model.name}' declares no bodies, so it has no regressor; add a 'bodies:' "
+                              "section (see docs/model-format.md)")
+    structure = d[parallel_structure]
+    return _Legs(model, d[reduced_legs], structure.chains), structure
+
+
+def _with_body_parameters(d: Deriving, legs: _Legs, name: str, summary: str, doc: str, inputs: list, program: Program,
+                          first: tuple[str, list[se.Basic], tuple[int, ...], str, str]) -> FunctionSpec:
+    """The function of the output ``first`` and the model's pi, both named by :func:`body_parameter_names`."""
+    names = body_parameter_names(legs)
+    pi = program.bind([se.sympify(v) for v in body_parameters(legs)])
+    spec = function_spec(d, name, summary, doc, inputs, program,
+                         [first, ("pi", pi, (len(names),), "the model's standard parameters (kg, kg*m, kg*m^2; "
+                                  "drives as a serial model's)", "")])
     return dataclasses.replace(spec, outputs=tuple(dataclasses.replace(o, elements=names) for o in spec.outputs))
