@@ -327,6 +327,14 @@ def test_the_apparent_mass_bound_says_what_it_needs(model_dir, free, kwargs, mes
         design.design_problem(symkin.load(model_dir), "gci", free, **{"max_apparent_mass": 0.2, **kwargs})
 
 
+def test_a_serial_arm_without_a_mass_matrix_is_told_the_bound_is_for_parallel_models(tmp_path):
+    """The apparent-mass bound is checked before the functions it needs are looked up: a serial model's code without
+    mass_matrix is told what the bound is for, not to derive mass_matrix."""
+    arm = symkin.load(symkin.derive(str(MODELS_DIR / "planar_2r.yaml"), str(tmp_path), outputs=["fk", "jacobian"]))
+    with pytest.raises(ValueError, match="rate a serial arm's apparent mass with 'symkin rate'"):
+        design.design_problem(arm, "gci", ["l1"], box={"x": (0.11, 0.14), "y": (0.11, 0.14)}, max_apparent_mass=0.2)
+
+
 @pytest.mark.parametrize("model_dir, kwargs, message", [
     (ARM_DIR, {"box": {"x": (0.11, 0.14), "y": (0.11, 0.14)}, "effort_limits": [1, 1]},
      "the force objective is derived for parallel mechanisms"),

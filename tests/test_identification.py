@@ -17,6 +17,7 @@ import pytest
 from conftest import ROOT, SYMKIN_CLI
 from symkin import pipeline
 from symkin.analysis import identification
+from symkin.dynamics.parameter_names import DISSIPATIVE
 from symkin.model import model_from_text
 from symkin.runtime.loader import load
 from test_regressor import DRIVEN
@@ -186,9 +187,12 @@ def test_the_command_estimates_consistent_standard_parameters(arm, tmp_path):
 
 
 def _energy_estimate(arm, t, q, qd, qdd, tau, window=0.05):
+    from symkin.analysis.identified_model import combinations
+
     run = identification.Measurements("run", t, q, qd, qdd, tau, "measured")
+    Y, Y_b = arm.regressor(q, qd, qdd)[0], arm.base_regressor(q, qd, qdd)[0]
     return identification.energy_least_squares(
-        run, arm.regressor(q, qd, qdd)[0], arm.energy_regressor(q, qd)[0], arm.base_regressor(q, qd, qdd)[0],
+        run, Y, arm.energy_regressor(q, qd)[0], Y_b, combinations(Y, Y_b),
         arm.info.functions["regressor"].outputs["pi"], arm.info.functions["base_regressor"].outputs["pi_b"], window)
 
 
@@ -200,7 +204,7 @@ def test_the_energy_balance_holds_for_the_true_parameters_to_the_quadrature_erro
     for rate in (RATE, 2 * RATE):
         t, q, qd, qdd = excitation(2, seed=1, rate=rate)
         Y, pi = arm.regressor(q, qd, qdd)
-        dissipative = np.array([n.rsplit(".", 1)[-1] in identification.DISSIPATIVE
+        dissipative = np.array([n.rsplit(".", 1)[-1] in DISSIPATIVE
                                 for n in arm.info.functions["regressor"].outputs["pi"]])
         W, work = identification.energy_balance(t, qd, arm.inverse_dynamics(q, qd, qdd),
                                                 arm.energy_regressor(q, qd)[0], np.where(dissipative, Y, 0.0), 0.05)

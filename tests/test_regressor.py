@@ -18,7 +18,8 @@ import sympy
 from conftest import MODELS_DIR, random_q, reference_function
 from symkin import pipeline
 from symkin.derivation import Derivation
-from symkin.dynamics.regressor import DRIVE, INERTIAL, parameter_names
+from symkin.dynamics.parameter_names import DRIVE, INERTIAL
+from symkin.dynamics.regressor import parameter_names
 from symkin.model import load_model, model_from_text
 from symkin.runtime.loader import load
 from tolerances import DYNAMICS, EPS

@@ -28,13 +28,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from symkin.dynamics.parameter_names import DRIVE, DRIVE_NONNEGATIVE, INERTIAL
+
 #: Weight of the prior against the data (relative, after both are scaled): small, it only picks among fits.
 PRIOR_WEIGHT = 1e-4
-#: The standard parameters of a link, in the regressor's order (symkin.dynamics.regressor.INERTIAL).
-LINK_PARAMETERS = 10
-#: The drive parameters of a joint (Ia, fv, fc, fo) and which are bounded below by zero.
-DRIVE_PARAMETERS = 4
-DRIVE_NONNEGATIVE = (True, True, True, False)
+#: The standard parameters of a link and of a joint's drive, in the regressor's order.
+LINK_PARAMETERS = len(INERTIAL)
+DRIVE_PARAMETERS = len(DRIVE)
 
 
 @dataclass(frozen=True)

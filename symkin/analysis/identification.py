@@ -47,14 +47,13 @@ from pathlib import Path
 
 import numpy as np
 
+from symkin.dynamics.parameter_names import DISSIPATIVE
+
 #: A singular value of the equilibrated observation matrix below this fraction of the largest one means
 #: the run does not excite that combination of parameters (sqrt(eps): the estimate would carry no digit).
 RANK_TOLERANCE = float(np.sqrt(np.finfo(np.float64).eps))
 #: Butterworth order of the filter that differentiates q (4: -80 dB per decade past the cutoff).
 FILTER_ORDER = 4
-#: The drive parameters whose efforts dissipate (of symkin.dynamics.regressor.DRIVE): the energy balance carries
-#: them as the integral of their power, every other parameter as a change of the stored energy.
-DISSIPATIVE = ("fv", "fc", "fo")
 
 
 class DataError(ValueError):
@@ -356,7 +355,7 @@ def energy_balance(time: np.ndarray, qd: np.ndarray, tau: np.ndarray, Y_e: np.nd
     return stored + dissipated, work
 
 
-def energy_least_squares(run: Measurements, Y: np.ndarray, Y_e: np.ndarray, Y_b: np.ndarray,
+def energy_least_squares(run: Measurements, Y: np.ndarray, Y_e: np.ndarray, Y_b: np.ndarray, K: np.ndarray,
                          standard: Sequence[str], names: Sequence[str], window: float) -> LeastSquaresEstimate:
     """Base parameters from the energy balance over windows of ``run`` (module docstring), with their standard
     deviations; ``joint_std`` is the torque residual per joint of the estimate over the run, as for the other
@@ -365,17 +364,16 @@ def energy_least_squares(run: Measurements, Y: np.ndarray, Y_e: np.ndarray, Y_b:
     Args:
         Y, Y_e, Y_b: the regressor (N, n, P), the energy regressor (N, P) and the base regressor (N, n, b) at the
             run's samples.
+        K: the base parameters' combinations (b, P), Y = Y_b K (:func:`symkin.analysis.identified_model.combinations`).
         standard, names: the standard (P) and the base (b) parameters' names.
         window: the windows' length (s).
 
     Raises:
         DataError: fewer windows than parameters, or a combination the run does not excite.
     """
-    from symkin.analysis.identified_model import combinations
-
     dissipative = np.array([name.rsplit(".", 1)[-1] in DISSIPATIVE for name in standard])
     W, work = energy_balance(run.time, run.qd, run.tau, Y_e, np.where(dissipative, Y, 0.0), window)
-    W_b = W @ np.linalg.pinv(combinations(Y, Y_b))            # W = W_b K, K of full row rank: W_b = W K^+
+    W_b = W @ np.linalg.pinv(K)            # W = W_b K, K of full row rank: W_b = W K^+
     tau = run.tau
     windows, count = W_b.shape
     if windows <= count:

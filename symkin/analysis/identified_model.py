@@ -34,7 +34,7 @@ import numpy as np
 import yaml
 
 from symkin.analysis.consistent import prior_scale
-from symkin.dynamics.regressor import DRIVE, INERTIAL
+from symkin.dynamics.parameter_names import DRIVE, INERTIAL
 from symkin.errors import ModelError
 from symkin.model.schema import Model
 

@@ -80,8 +80,9 @@ def run(args: argparse.Namespace) -> int:
             # model file
             needs_Y = args.method in ("consistent", "energy") or writes_model
             Y, pi = _regressor(model, fit, args.method) if needs_Y else (None, None)
+            K = _combinations(Y, Y_b) if args.method == "energy" or writes_model else None
             if args.method == "energy":
-                found = _energy(model, fit, Y, Y_b, names, args.window)
+                found = _energy(model, fit, Y, Y_b, K, names, args.window)
             else:
                 found = identification.least_squares(Y_b, fit.tau, names, "ols" if args.method == "ols" else "wls")
             predict = None
@@ -98,7 +99,7 @@ def run(args: argparse.Namespace) -> int:
             text, line = None, None
             if writes_model:
                 progress("writing the model file with the identified values")
-                text, line = _updated_model(args, model, Y, Y_b, pi, found, standard, values)
+                text, line = _updated_model(args, model, K, pi, found, standard, values)
             files = _report(args, model, data, found, pi_model[0], check, standard, line)
             if text is not None:
                 files["identified.yaml"] = text
@@ -145,14 +146,21 @@ def _regressor(model, fit, method: str) -> tuple[np.ndarray, np.ndarray]:
     return model.regressor(fit.q, fit.qd, fit.qdd)
 
 
-def _energy(model, fit, Y, Y_b, names, window: float):
+def _combinations(Y, Y_b):
+    """K with Y = Y_b K over the fit (fitted once: the energy estimate and identified.yaml both use it)."""
+    from symkin.analysis import identified_model
+
+    return identified_model.combinations(Y, Y_b)
+
+
+def _energy(model, fit, Y, Y_b, K, names, window: float):
     """The base parameters from the energy balance over windows of the fit part of the run (Gautier 1997)."""
     from symkin.analysis import identification
 
     if "energy_regressor" not in model.info.functions:
         raise ValueError(f"{model.name}: --method energy needs the energy regressor; derive it (--only regressor,"
                          "base_regressor,energy_regressor) or give the model file")
-    return identification.energy_least_squares(fit, Y, model.energy_regressor(fit.q, fit.qd)[0], Y_b,
+    return identification.energy_least_squares(fit, Y, model.energy_regressor(fit.q, fit.qd)[0], Y_b, K,
                                                model.info.functions["regressor"].outputs["pi"], names, window)
 
 
@@ -167,14 +175,13 @@ def _consistent(model, Y, pi, fit, found):
     return consistent.estimate(triangle, target, names, pi[0], links)
 
 
-def _updated_model(args: argparse.Namespace, model, Y, Y_b, pi, found, standard,
+def _updated_model(args: argparse.Namespace, model, K, pi, found, standard,
                    values: dict[str, float]) -> tuple[str | None, str]:
     """identified.yaml: the model file with what the run identifies replaced (the consistent standard parameters,
     or the least-squares base parameters' nearest standard ones), and the summary's line on it (or why not)."""
     from symkin.analysis import identified_model
     from symkin.model import load_model as load_model_file
 
-    K = identified_model.combinations(Y, Y_b)
     names = model.info.functions["regressor"].outputs["pi"]
     estimate = standard.values if standard is not None else identified_model.nearest_standard(K, found.values, pi[0])
     record = {"method": found.method if standard is None else "consistent", "data": Path(args.data).name,

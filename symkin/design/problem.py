@@ -267,8 +267,9 @@ def design_problem(model: GeneratedModel, objective: str, free: Sequence[str], *
     if unknown:
         raise ValueError(f"{model.name}: not parameters of the model: {', '.join(unknown)}; "
                          f"parameters: {', '.join(sorted(model.parameters))}")
+    bound = _apparent_mass(model, max_apparent_mass)  # before asking for mass_matrix: a serial model is told why
     needed = needed_functions(mechanism.kind_of(model))
-    used = _parameter_inputs(model, needed + (APPARENT_MASS_FUNCTIONS if max_apparent_mass is not None else ()))
+    used = _parameter_inputs(model, needed + (APPARENT_MASS_FUNCTIONS if bound is not None else ()))
     free_parameters = _free_parameters(model, list(free), dict(bounds or {}), values, used)
     required = _box(model, box)
     if not margin >= 0:
@@ -314,5 +315,4 @@ def design_problem(model: GeneratedModel, objective: str, free: Sequence[str], *
              if k in used and k not in {p.name for p in free_parameters}}
     return DesignProblem(objective, free_parameters, fixed, parallel, joint_box, required, float(margin), length,
                          parallel and orientations.is_spherical(model),
-                         _effort_limits(model, objective, effort_limits, required),
-                         _apparent_mass(model, max_apparent_mass))
+                         _effort_limits(model, objective, effort_limits, required), bound)

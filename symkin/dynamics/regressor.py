@@ -43,6 +43,7 @@ from symkin.dynamics import newton_euler
 from symkin.model import joint_kinds
 from symkin.dynamics.base_parameters import BaseParameters, base_parameters, require_exact_constants
 from symkin.dynamics.coupling import forces_on_coordinates, joint_rates
+from symkin.dynamics.parameter_names import DRIVE, INERTIAL
 from symkin.dynamics.program import Program, cross, dot, mat_vec
 from symkin.dynamics.quantities import gravity_graph, newton_euler_links
 from symkin.dynamics.quantities import function_spec
@@ -51,10 +52,6 @@ from symkin.ir.spec import FunctionSpec
 from symkin.model.schema import Friction, Model
 
 
-#: The ten standard inertial parameters of a link, in Pinocchio's order.
-INERTIAL = ("m", "mx", "my", "mz", "Ixx", "Ixy", "Iyy", "Ixz", "Iyz", "Izz")
-#: The parameters of a joint's drive: reflected rotor inertia, viscous, Coulomb, offset.
-DRIVE = ("Ia", "fv", "fc", "fo")
 
 
 def parameter_names(model: Model) -> tuple[str, ...]:

@@ -31,7 +31,8 @@ import sympy
 
 from symkin.dynamics.program import Program
 from symkin.dynamics.quantities import coordinate_symbols, function_spec
-from symkin.dynamics.regressor import DRIVE, INERTIAL, drive_columns, drive_values
+from symkin.dynamics.parameter_names import DRIVE, INERTIAL
+from symkin.dynamics.regressor import drive_columns, drive_values
 from symkin.errors import DerivationError
 from symkin.ir.quantity import Deriving, quantity
 from symkin.ir.spec import FunctionSpec

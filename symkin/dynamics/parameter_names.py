@@ -1,0 +1,20 @@
+"""The names of the standard parameters of the dynamics regressors, in their order (no symbolic imports: the
+identification analyses read them without loading symengine).
+
+Per body (a serial chain's link, a parallel model's platform or actuated link; about a frame origin, Pinocchio's
+order, ``Inertia::toDynamicParameters``): the mass, the first moment m c and the inertia about that origin.  Per
+drive: the reflected rotor inertia I_a, the viscous, Coulomb and offset friction (tau += I_a qdd + f_v qd +
+f_c sign(qd) + f_o).
+"""
+
+from __future__ import annotations
+
+#: The ten standard inertial parameters of a body.
+INERTIAL = ("m", "mx", "my", "mz", "Ixx", "Ixy", "Iyy", "Ixz", "Iyz", "Izz")
+#: The parameters of a joint's drive: reflected rotor inertia, viscous, Coulomb, offset.
+DRIVE = ("Ia", "fv", "fc", "fo")
+#: The drive parameters whose efforts dissipate: an energy balance carries them as the integral of their power,
+#: every other parameter as a change of the stored energy.
+DISSIPATIVE = DRIVE[1:]
+#: Which drive parameters a physical drive has non-negative (the offset has either sign).
+DRIVE_NONNEGATIVE = (True, True, True, False)
