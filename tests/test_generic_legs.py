@@ -6,18 +6,22 @@ oracles: the device's geometry written out here (leg 2's planar 2R places the ba
 left end B1 lies where the circle of leg 1's distal link about its elbow meets the circle of the bar's length
 about B2), finite differences of that closed form, the distance form of the DELTA (its generated jacobian
 and singularity measures), and the mobility of a mechanism of the Schoenflies group (eq. 8.2, lambda = 4).
+The check of the declared motion (symkin.parallel.motion_check) against the example models, which move as
+declared, and against declarations the legs contradict.
 """
 
 from __future__ import annotations
 
 import re
+import subprocess
 
 import numpy as np
 import pytest
 
-from conftest import ROOT
+from conftest import ROOT, SYMKIN_CLI
 from symkin import load, pipeline
 from symkin.model import model_from_text
+from symkin.parallel.motion_check import check_platform_motion
 from symkin.runtime.parallel import closure_velocities, solve_closure
 from symkin.structure.mobility import SCHOENFLIES, SPATIAL, model_mobility
 from tolerances import EPS, KINEMATICS
@@ -190,3 +194,48 @@ def test_unassembled_samples_give_nan(scara, home_joints):
     assert np.all(np.isfinite(velocities.J[0]))
     assert np.all(np.isnan(velocities.J[1]))
     assert np.isnan(velocities.interior[1])
+
+
+# --------------------------------------------------------------------------- the declared motion, checked
+
+@pytest.mark.parametrize("name", ["delta", "pantograph", "agile_eye", "delta_wrist", "stewart"])
+def test_the_example_models_legs_constrain_the_platform_to_its_declared_motion(name, models):
+    """At the home pose the legs' joint twists intersect in exactly the declared coordinates' twists (actuators
+    free) and in none (locked); the pantograph's handle is a point, its spin in the joint idle."""
+    check = check_platform_motion(models[name])
+    assert check.problems == ()
+    assert check.note == ""
+    assert (check.free, check.locked) == (len(models[name].task_space), 0)
+
+
+def test_the_schoenflies_platform_moves_as_declared_and_a_wrong_declaration_is_located():
+    check = check_platform_motion(model_from_text(model_text()))
+    assert (check.problems, check.free, check.locked) == ((), 4, 0)
+    # declared roll where the legs turn the bar about z: both directions named
+    rolling = check_platform_motion(model_from_text(model_text().replace("motion: schoenflies",
+                                                                         "motion: [x, y, z, roll]")))
+    assert len(rolling.problems) == 2
+    assert "turn about (0, 0, 1) (its coordinate yaw), which parallel.motion [x, y, z, roll] holds at 0" in \
+        rolling.problems[0]
+    assert "do not let the platform move in its coordinate roll" in rolling.problems[1]
+    # yaw left out and leg 2's knee made passive: the bar turns with every actuator locked
+    loose = (model_text().replace("motion: schoenflies", "motion: [x, y, z]").replace("home: [0, 0.3, 0.1, 0]",
+                                                                                       "home: [0, 0.3, 0.1]")
+             .replace("{name: knee, type: R, axis: [0, 0, 1], active: true,", "{name: knee, type: R, axis: [0, 0, 1],"))
+    check = check_platform_motion(model_from_text(loose))
+    assert check.locked == 1
+    assert "with the actuators locked the legs still let the platform turn about (0, 0, -1)" in check.problems[0]
+
+
+def test_the_mobility_command_reports_a_wrong_motion_with_its_place_and_exit_2(tmp_path):
+    path = tmp_path / "rolling.yaml"
+    path.write_text(model_text().replace("motion: schoenflies", "motion: [x, y, z, roll]"))
+    result = subprocess.run(SYMKIN_CLI + ["mobility", str(path)], capture_output=True, text=True)
+    assert result.returncode == 2
+    assert f"{path}: parallel.motion: the legs let the platform turn about (0, 0, 1) (its coordinate yaw)" in \
+        result.stderr
+    good = tmp_path / "dual_scara.yaml"
+    good.write_text(model_text())
+    result = subprocess.run(SYMKIN_CLI + ["mobility", str(good)], capture_output=True, text=True)
+    assert result.returncode == 0
+    assert "at the home pose: the legs let the platform move in [x, y, z, yaw] (4 DoF)" in result.stdout

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 
 from symkin.text_table import format_table
 
@@ -13,8 +14,11 @@ def register_mobility(sub: argparse._SubParsersAction) -> None:
                        description="Count bodies, joints and joint DoF of each model and print its mobility "
                                    "F = lambda (n - g - 1) + sum f_i - f_id + s (seed eq. 8.2), its degree of "
                                    "parallelism P_g = k / F (eq. 8.1) and the joint-DoF budget F + 6 (k - 1) "
-                                   "(eq. 8.4). Exit code 1 if a model's mobility differs from the DoF it is "
-                                   "built for (its task coordinates or joints).")
+                                   "(eq. 8.4); for a parallel model with a home pose, whether its legs let the "
+                                   "platform move in exactly the declared coordinates there (the intersection of "
+                                   "the legs' joint twists, actuators free and locked). Exit code 1 if a model's "
+                                   "mobility differs from the DoF it is built for (its task coordinates or joints), "
+                                   "2 if its legs do not constrain the platform to parallel.motion.")
     p.add_argument("models", nargs="+", metavar="MODEL", help="model file(s) (YAML)")
     p.add_argument("--json", action="store_true", help="print one JSON object per model instead of text")
     p.set_defaults(run=run_mobility)
@@ -22,6 +26,7 @@ def register_mobility(sub: argparse._SubParsersAction) -> None:
 
 def run_mobility(args: argparse.Namespace) -> int:
     from symkin.model import load_model
+    from symkin.parallel.motion_check import check_platform_motion
     from symkin.structure.mobility import model_mobility, parallelism_class
 
     status = 0
@@ -29,12 +34,21 @@ def run_mobility(args: argparse.Namespace) -> int:
         model = load_model(path)
         r = model_mobility(model)
         if r.mobility != r.intended:
-            status = 1
+            status = max(status, 1)
+        motion = check_platform_motion(model) if model.parallel is not None else None
+        if motion is not None and motion.problems:
+            status = 2
+            for problem in motion.problems:
+                print(f"{path}: parallel.motion: {problem}", file=sys.stderr)
         if args.json:
-            print(json.dumps({"model": r.model, "mechanism": r.mechanism, "lambda": r.lam, "bodies": r.bodies,
-                              "joints": r.joints, "joint_dof": sum(r.joint_dofs), "identical": r.identical,
-                              "constraints": r.constraints, "mobility": r.mobility, "intended": r.intended,
-                              "legs": r.legs, "parallelism": str(r.parallelism), "budget": r.budget}))
+            record = {"model": r.model, "mechanism": r.mechanism, "lambda": r.lam, "bodies": r.bodies,
+                      "joints": r.joints, "joint_dof": sum(r.joint_dofs), "identical": r.identical,
+                      "constraints": r.constraints, "mobility": r.mobility, "intended": r.intended,
+                      "legs": r.legs, "parallelism": str(r.parallelism), "budget": r.budget}
+            if motion is not None:
+                record["home_motion"] = {"free": motion.free, "locked": motion.locked,
+                                         "problems": list(motion.problems), "note": motion.note}
+            print(json.dumps(record))
             continue
         if model.parallel is not None:
             legs = " ".join("".join(j.type.value for j in leg.joints) for leg in model.parallel.legs)
@@ -49,7 +63,20 @@ def run_mobility(args: argparse.Namespace) -> int:
             print(f"  P_g = k / F = {r.legs}/{r.mobility} = {r.parallelism}: {parallelism_class(r.parallelism)}  "
                   "(eq. 8.1)")
         print(f"  joint-DoF budget F + {r.lam} (k - 1) = {r.budget}, the model has {sum(r.joint_dofs)}  (eq. 8.4)")
+        if motion is not None:
+            print(f"  at the home pose: {_motion_text(model, motion)}")
     return status
+
+
+def _motion_text(model, motion) -> str:
+    """The home pose's check of the platform motion, in one line."""
+    if motion.note:
+        return motion.note
+    declared = f"[{', '.join(model.task_space)}]"
+    if motion.problems:
+        return f"the legs do not constrain the platform to {declared} (see the errors above)"
+    return (f"the legs let the platform move in {declared} ({motion.free} DoF) with the actuators free, and hold it "
+            "with them locked: as declared")
 
 
 def register_topologies(sub: argparse._SubParsersAction) -> None:

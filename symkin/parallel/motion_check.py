@@ -1,0 +1,228 @@
+"""Do the legs constrain the platform to the motion the model declares?  A check at the home pose (issue 31).
+
+``parallel.motion`` names the platform's coordinates and holds the others at 0 in every derived function; the
+legs must do the same physically.  At the home pose, with the legs assembled (q and s solved from the generated
+closure by Gauss-Newton), each leg i lets the platform move with the twists of its joints' span S_i (base frame,
+twists (w, v) with v the velocity of the body point at the base origin: r x a for a turn about the axis a through
+r, (0, a) for a slide along a).  The platform's possible twists are the intersection of the legs' spans (Hunt;
+Kong and Gosselin, *Type Synthesis of Parallel Mechanisms*, 2007, ch. 2): with the actuators free they must be the
+declared coordinates' twists exactly, with the actuators locked there must be none.  A platform that is a point
+(no angle among its coordinates and every leg attached there, the pantograph's handle) is judged by the velocity
+of that point: its spin in the joint is idle.
+
+Subspaces are compared by their singular values: a direction counts when its singular value exceeds
+:data:`RANK_TOLERANCE` of the largest (a generic pose is far from both a rank drop and rounding), so the check
+is numerical and made at one pose; a home pose at a singularity is reported as such.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import sympy
+
+from symkin.derivation import Derivation
+from symkin.ir.evaluate import lambdify_spec
+from symkin.model import coordinates
+from symkin.model.schema import Model
+from symkin.parallel.inputs import passive_symbols, task_symbols
+from symkin.parallel.quantities import ParallelStructure, parallel_structure
+
+#: A singular value below this fraction of the largest is a direction the subspace does not have.
+RANK_TOLERANCE = 1e-8
+#: Gauss-Newton on the closure at the home pose: steps and the largest step (rad or m) from the start.
+ITERATIONS, MAX_STEP, TOLERANCE = 100, 0.2, 1e-12
+#: The step of the central differences of the closure (rad or m): their error h^2 ~ 1e-12 slows Newton's last
+#: steps a little, the residual still reaches rounding.
+DIFFERENCE = 1e-6
+#: Further starts when Gauss-Newton stops at a point that does not close the legs (a least-squares minimum).
+STARTS = 8
+#: The legs close when every closure row is below this (times the pose's scale, m): a converged Newton solve
+#: leaves rounding, ~1e-15; a least-squares minimum misses by a link length.
+CLOSED = 1e-9
+AXES = ("x", "y", "z")
+
+
+@dataclass(frozen=True)
+class MotionCheck:
+    """What the legs allow at the home pose.
+
+    Attributes:
+        problems: why the legs and ``parallel.motion`` disagree (empty: they agree).
+        free: the dimension of the platform's motion with the actuators free.
+        locked: the dimension with the actuators locked.
+        note: why the check could not be made (then ``problems`` is empty), else "".
+    """
+
+    problems: tuple[str, ...]
+    free: int = 0
+    locked: int = 0
+    note: str = ""
+
+
+def _null_space(A: np.ndarray) -> np.ndarray:
+    """An orthonormal basis (columns) of the null space of A."""
+    if A.shape[0] == 0:
+        return np.eye(A.shape[1])
+    _, S, Vt = np.linalg.svd(A)
+    rank = int(np.sum(S > RANK_TOLERANCE * (S[0] if len(S) else 0.0)))
+    return Vt[rank:].T
+
+
+def intersection(spans: list[np.ndarray]) -> np.ndarray:
+    """A basis (6 x k) of the twists in every span (each 6 x n_i): T = S_i a_i for all i."""
+    sizes = [S.shape[1] for S in spans]
+    rows = []
+    for i, S in enumerate(spans):
+        row = [np.eye(6)] + [np.zeros((6, n)) for n in sizes]
+        row[1 + i] = -S
+        rows.append(np.hstack(row))
+    null = _null_space(np.vstack(rows))
+    twists = null[:6]
+    if twists.size == 0:
+        return np.zeros((6, 0))
+    U, S, _ = np.linalg.svd(twists, full_matrices=False)
+    return U[:, S > RANK_TOLERANCE * max(S.max(initial=0.0), 1.0)]
+
+
+def _joint_twists(structure: ParallelStructure, values: dict[sympy.Symbol, float]) -> list[list[tuple[np.ndarray, bool]]]:
+    """Per leg, per elementary joint motion: its twist (w, v) at the assembled pose and whether it is actuated."""
+    out = []
+    for chain in structure.chains:
+        actuated = {sympy.Symbol(j.variables[j.active], real=True) for j in chain.leg.joints if j.active is not None}
+        twists = []
+        for motion in chain.motions:
+            a = np.array(sympy.Matrix(motion.direction).xreplace(values).evalf(), dtype=float).ravel()
+            r = np.array(sympy.Matrix(motion.point).xreplace(values).evalf(), dtype=float).ravel()
+            twist = np.concatenate([a, np.cross(r, a)]) if motion.rotation else np.concatenate([np.zeros(3), a])
+            twists.append((twist, motion.variable in actuated))
+        out.append(twists)
+    return out
+
+
+def _declared_twists(model: Model, structure: ParallelStructure, home: dict[sympy.Symbol, float]) -> np.ndarray:
+    """The twists of the declared coordinates at home (6 x m): w from dR/dp R^T, v = dP/dp - w x P."""
+    R, P = sympy.Matrix(structure.platform.R), sympy.Matrix(structure.platform.p)
+    at_home = np.array(P.xreplace(home).evalf(), dtype=float).ravel()
+    columns = []
+    for s in task_symbols(model):
+        W = np.array((R.diff(s) * R.T).xreplace(home).evalf(), dtype=float)
+        w = np.array([W[2, 1], W[0, 2], W[1, 0]])
+        v = np.array(P.diff(s).xreplace(home).evalf(), dtype=float).ravel() - np.cross(w, at_home)
+        columns.append(np.concatenate([w, v]))
+    return np.array(columns).T
+
+
+def _assemble(model: Model, derivation: Derivation, p: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    """(q, s) closing every leg at p (the closure's rows below :data:`CLOSED` of the pose's scale), by damped
+    Gauss-Newton on the generated closure (its Jacobian by central differences: the assembly needs no more than
+    the rows' zero, and the closure alone derives in a fraction of the time of its Jacobians) from q = s = 0 and
+    then from :data:`STARTS` fixed random starts; None if none closes."""
+    q_symbols, s_symbols = coordinates.symbols(model, "q"), passive_symbols(model)
+    function = lambdify_spec(derivation["closure"], [list(q_symbols), list(s_symbols), list(task_symbols(model))],
+                             "numpy", model.parameter_values)
+    n, k = len(q_symbols), len(s_symbols)
+
+    def residuals(X: np.ndarray) -> np.ndarray:  # rows of X: states; one call for the batch
+        columns = X.T
+        return np.array(np.broadcast_arrays(*function(columns[:n], columns[n:], p), np.zeros(len(X))),
+                        dtype=float)[:-1].T
+
+    def residual(x: np.ndarray) -> np.ndarray:
+        return residuals(x[None, :])[0]
+
+    def jacobian(x: np.ndarray) -> np.ndarray:
+        steps = DIFFERENCE * np.eye(n + k)
+        values = residuals(np.concatenate([x + steps, x - steps]))
+        return ((values[:n + k] - values[n + k:]) / (2 * DIFFERENCE)).T
+
+    scale = max(float(np.max(np.abs(p), initial=0.0)), 1.0)
+    rng = np.random.default_rng(0)
+    for start in [np.zeros(n + k)] + [rng.uniform(-np.pi / 2, np.pi / 2, n + k) for _ in range(STARTS)]:
+        x = start
+        for _ in range(ITERATIONS):
+            step = -np.linalg.lstsq(jacobian(x), residual(x), rcond=None)[0]
+            x = x + step * min(1.0, MAX_STEP / max(float(np.max(np.abs(step), initial=0.0)), MAX_STEP))
+            if not np.all(np.isfinite(x)) or np.max(np.abs(step), initial=0.0) <= TOLERANCE:
+                break
+        if np.all(np.isfinite(x)) and np.max(np.abs(residual(x))) <= CLOSED * scale:
+            return x[:n], x[n:]
+    return None
+
+
+def _direction(vector: np.ndarray) -> str:
+    """A unit direction as text, rounding noise of the SVD shown as 0."""
+    unit = vector / np.linalg.norm(vector)
+    unit = np.where(np.abs(unit) < 1e-9, 0.0, unit) + 0.0
+    return f"({unit[0]:.3g}, {unit[1]:.3g}, {unit[2]:.3g})"
+
+
+def _describe(twist: np.ndarray) -> str:
+    """A twist in words: its turn, or its slide, and the coordinate it is where it is along a base axis."""
+    w, v = twist[:3], twist[3:]
+    turns = np.linalg.norm(w) > RANK_TOLERANCE * max(float(np.linalg.norm(twist)), 1.0)
+    vector = w if turns else v
+    unit = np.abs(vector) / np.linalg.norm(vector)
+    axis = int(np.argmax(unit))
+    coordinate = (("roll", "pitch", "yaw") if turns else AXES)[axis] if unit[axis] > 1 - 1e-9 else None
+    text = f"turn about {_direction(w)}" if turns else f"slide along {_direction(v)}"
+    return text if coordinate is None else f"{text} (its coordinate {coordinate})"
+
+
+def _point_velocities(twists: np.ndarray, point: np.ndarray) -> np.ndarray:
+    """The velocities v + w x point of the body point at ``point`` under each twist (columns)."""
+    return twists[3:] + np.cross(twists[:3].T, point).T
+
+
+def check_platform_motion(model: Model) -> MotionCheck:
+    """Compare the platform motion the legs allow at the home pose with ``parallel.motion`` (module docstring)."""
+    parallel = model.parallel
+    assert parallel is not None
+    if parallel.home is None:
+        return MotionCheck((), note="no parallel.home: the motion is checked at the home pose")
+    derivation = Derivation(model)
+    structure = derivation[parallel_structure]
+    values = model.parameter_values
+    home_values = [float(sympy.sympify(e).xreplace(values)) for e in parallel.home]
+    assembled = _assemble(model, derivation, np.array(home_values))
+    if assembled is None:
+        return MotionCheck((), note=f"the legs did not close at the home pose from {STARTS + 1} starts "
+                                    "(Gauss-Newton on the closure): the motion was not checked")
+    q, s = assembled
+    joints = dict(zip(coordinates.symbols(model, "q") + passive_symbols(model), [*q, *s]))
+    joints.update(dict(zip(task_symbols(model), home_values)))
+    joints.update({k: float(v) for k, v in values.items()})
+    legs = _joint_twists(structure, joints)
+    free = intersection([np.array([t for t, _ in leg]).T for leg in legs])
+    locked = intersection([np.array([t for t, active in leg if not active] or [np.zeros(6)]).T for leg in legs])
+    declared = _declared_twists(model, structure, joints)
+    attachments = {tuple(np.round(np.array(sympy.Matrix(c.attachment.p).xreplace(joints).evalf(), dtype=float).ravel(),
+                                  12)) for c in structure.chains}
+    point_platform = not set(model.task_space) & {"roll", "pitch", "yaw"} and len(attachments) == 1
+    if point_platform:
+        point = np.array(sympy.Matrix(structure.platform.p).xreplace(joints).evalf(), dtype=float).ravel()
+        free, locked, declared = (_point_velocities(t, point) for t in (free, locked, declared))
+    problems = []
+    names = ", ".join(model.task_space)
+    if locked.size and np.linalg.svd(locked, compute_uv=False).max(initial=0.0) > RANK_TOLERANCE:
+        problems.append(f"with the actuators locked the legs still let the platform {_describe_any(locked, point_platform)}: "
+                        "the actuators do not hold it at the home pose (a singular home pose, or a leg without an "
+                        "actuator's constraint)")
+    outside = free - declared @ np.linalg.lstsq(declared, free, rcond=None)[0]
+    if outside.size and np.linalg.norm(outside, axis=0).max(initial=0.0) > RANK_TOLERANCE:
+        column = outside[:, int(np.argmax(np.linalg.norm(outside, axis=0)))]
+        problems.append(f"the legs let the platform {_describe_any(column[:, None], point_platform)}, which "
+                        f"parallel.motion [{names}] holds at 0: declare that coordinate or add legs that constrain it")
+    missing = declared - free @ np.linalg.lstsq(free, declared, rcond=None)[0] if free.size else declared
+    for k, name in enumerate(model.task_space):
+        if np.linalg.norm(missing[:, k]) > RANK_TOLERANCE * max(float(np.linalg.norm(declared[:, k])), 1.0):
+            problems.append(f"the legs do not let the platform move in its coordinate {name} at the home pose")
+    rank = (lambda M: int(np.sum(np.linalg.svd(M, compute_uv=False) > RANK_TOLERANCE)) if M.size else 0)
+    return MotionCheck(tuple(problems), rank(free), rank(locked))
+
+
+def _describe_any(twists: np.ndarray, point_platform: bool) -> str:
+    """The first twist (column) in words; a point platform's columns are its point's velocities."""
+    column = twists[:, 0]
+    return f"move along {_direction(column)}" if point_platform else _describe(column)
