@@ -6,7 +6,8 @@ symkin module it loads, including the parent packages whose ``__init__`` runs fi
 ``symkin.ir.quantity.Deriving`` for the derivation graph), and so does an import of the root ``symkin`` facade
 (the api layer; only as a parent package run first it does not count).  A module may import from its
 own layer or from a lower one, never from a higher one; and no set of modules may import each
-other in a circle, however indirectly.  The layers, lowest first, are those of README.md.
+other in a circle, however indirectly.  The layers, lowest first, are LAYERS below, which
+docs/architecture.md renders.
 
 ``KNOWN_UPWARD`` and ``KNOWN_CYCLES`` list the exceptions that exist today (a ratchet): the test
 fails on any new one, and on a listed one that has gone, so that each fix shortens the list.
@@ -35,6 +36,44 @@ LAYERS = (
     ("cli", {"cli", "__main__"}),
 )
 RANK = {part: rank for rank, (_name, parts) in enumerate(LAYERS) for part in parts}
+#: What each layer holds, for the table docs/architecture.md renders from LAYERS (checked below).
+ROLES = {
+    "foundation": "errors, atomic writes, the version, expression graphs, the SymEngine bridge, text tables",
+    "model": "the model format: reading, validating, the schema; geometry",
+    "structure": "mobility and topology synthesis",
+    "ir": "`FunctionSpec`, `OptimizedFunction`, inputs, op counts, `QuantityDef`",
+    "derivation": "the derivation graph and its catalog; serial kinematics and dynamics; parallel mechanisms",
+    "optimize": "expression optimization",
+    "backends": "the emitters, the manifest, the pipeline and its derivation cache",
+    "runtime": "loaders, bindings, Newton solvers for parallel mechanisms",
+    "analyses": "inverse kinematics, analyses, design, simulation, numerical stability, the viewer",
+    "api": "the public functions, and the `symkin` package facade",
+    "cli": "the commands",
+}
+ARCHITECTURE = PACKAGE.parent / "docs" / "architecture.md"
+
+
+def layer_table() -> list[str]:
+    """The rows of docs/architecture.md's layer table, rendered from LAYERS (packages as `name/`)."""
+    def shown(part: str) -> str:
+        return f"`{part}/`" if (PACKAGE / part).is_dir() else f"`{part}`"
+    rows = ["| layer | packages and modules | what it holds |", "|---|---|---|"]
+    for name, parts in LAYERS:
+        rows.append(f"| {name} | {', '.join(shown(p) for p in sorted(parts, key=lambda p: p.lstrip('_')))} | "
+                    f"{ROLES[name]} |")
+    return rows
+
+
+def test_the_architecture_document_renders_the_layers_written_here():
+    """The layer order is written once, in LAYERS above; docs/architecture.md's table is its rendering, and
+    README.md points there instead of listing the layers again."""
+    lines = ARCHITECTURE.read_text().splitlines()
+    start = lines.index("| layer | packages and modules | what it holds |")
+    rendered = layer_table()
+    assert lines[start:start + len(rendered)] == rendered, "\n".join(["replace the table with:"] + rendered)
+    readme = (PACKAGE.parent / "README.md").read_text()
+    assert "docs/architecture.md" in readme
+    assert "1. foundation:" not in readme
 ROOT_PACKAGE = "symkin"
 
 #: Imports against the layer order that exist today: (importer, imported).  Shrinks to empty.
