@@ -18,7 +18,9 @@ The data enter through the triangular factor of the weighted regressor ([W y] = 
 least-squares estimate), so the objective is |R pi(theta) - z|^2 + lambda |D (pi(theta) - pi_prior)|^2:
 the standard regressor is rank-deficient (only the base combinations are identifiable) and the small
 prior term (D: the prior's scale per parameter) picks, among the parameter sets that fit the data equally,
-the one closest to the model's (CAD) values.  Solved with SciPy's trust-region reflective least squares.
+the one closest to the model's (CAD) values.  Solved with SciPy's trust-region reflective least squares on
+the analytic Jacobian: J = U U^T is bilinear in U and the standard parameters linear in J, so d pi / d theta
+is dU U^T + U dU^T mapped to the ten parameters, with dU/dtheta read off U (:func:`_factor_derivatives`).
 """
 
 from __future__ import annotations
@@ -87,6 +89,32 @@ def _factor(theta: np.ndarray) -> np.ndarray:
                                      [0.0, 0.0, np.exp(d3), t3], [0.0, 0.0, 0.0, 1.0]])
 
 
+#: Where each log-Cholesky entry of theta (after alpha and the d's) sits in U: s12, s23, s13, t1, t2, t3.
+_OFF_DIAGONAL = ((0, 1), (1, 2), (0, 2), (0, 3), (1, 3), (2, 3))
+
+
+def _factor_derivatives(theta: np.ndarray) -> np.ndarray:
+    """dU/dtheta_j (10, 4, 4) of :func:`_factor`: U itself for alpha, e^alpha e^d_i at (i, i) for d_i,
+    e^alpha at the entry of each s and t; zero for an exponent held at its clip."""
+    U = _factor(theta)
+    scale = np.exp(np.clip(theta[0], -EXPONENT_LIMIT, EXPONENT_LIMIT))
+    inside = np.abs(theta[:4]) < EXPONENT_LIMIT
+    out = np.zeros((10, 4, 4))
+    out[0] = U * inside[0]
+    for i in range(3):
+        out[1 + i, i, i] = U[i, i] * inside[1 + i]
+    for k, (row, column) in enumerate(_OFF_DIAGONAL):
+        out[4 + k, row, column] = scale
+    return out
+
+
+def _standard_derivatives(theta: np.ndarray) -> np.ndarray:
+    """d standard / d theta (10, 10) of one link: J = U U^T, dJ = dU U^T + U dU^T, and the standard parameters are
+    linear in J (:func:`_standard_of`)."""
+    U = _factor(theta)
+    return np.array([_standard_of(dU @ U.T + U @ dU.T) for dU in _factor_derivatives(theta)]).T
+
+
 def _log_cholesky(J: np.ndarray) -> np.ndarray:
     """theta with U(theta) U(theta)^T = J (J positive definite): U = P L^T P of the Cholesky factor of P J P."""
     flip = np.eye(4)[::-1]
@@ -141,8 +169,19 @@ def estimate(triangle: np.ndarray, target: np.ndarray, names: Sequence[str], pri
         pi = standard(theta)
         return np.concatenate([triangle @ pi - target, weight * (pi - prior) / scale])
 
-    result = least_squares(residual, theta0, bounds=(lower, np.full(len(theta0), np.inf)), method="trf",
-                           x_scale="jac", xtol=1e-12, ftol=1e-12, gtol=1e-12, max_nfev=2000)
+    rows = np.vstack([triangle, np.diag(weight / scale)])
+
+    def jacobian(theta: np.ndarray) -> np.ndarray:
+        """[R; w D^-1] d pi / d theta: block diagonal over the links (:func:`_standard_derivatives`), one for a
+        drive's parameter."""
+        d_pi = np.eye(len(theta))
+        for k in range(links):
+            block = slice(LINK_PARAMETERS * k, LINK_PARAMETERS * (k + 1))
+            d_pi[block, block] = _standard_derivatives(theta[block])
+        return rows @ d_pi
+
+    result = least_squares(residual, theta0, jac=jacobian, bounds=(lower, np.full(len(theta0), np.inf)),
+                           method="trf", x_scale="jac", xtol=1e-12, ftol=1e-12, gtol=1e-12, max_nfev=2000)
     pi = standard(result.x)
     best = np.linalg.lstsq(triangle, target, rcond=None)[0]
     return ConsistentEstimate(tuple(names), pi, links, float(np.sum((triangle @ pi - target) ** 2)),
