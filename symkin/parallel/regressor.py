@@ -25,6 +25,7 @@ identification from the power the drives deliver.
 from __future__ import annotations
 
 import dataclasses
+from functools import cached_property
 
 import symengine as se
 import sympy
@@ -80,7 +81,7 @@ class _Legs:
     legs: tuple[DistanceLeg, ...]
     chains: tuple[LegChain, ...]
 
-    @property
+    @cached_property
     def has_actuated_links(self) -> bool:
         """Every leg's actuator is its first moving joint, so a link moves with it alone."""
         try:
@@ -90,7 +91,7 @@ class _Legs:
             return False
         return True
 
-    @property
+    @cached_property
     def rod_length_squared(self) -> sympy.Expr | None:
         """L^2 when every rod keeps one and the same length (the actuators before the rods), else None."""
         if any(leg.actuator != "before" for leg in self.legs):
