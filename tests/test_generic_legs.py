@@ -20,6 +20,7 @@ import pytest
 
 from conftest import ROOT, SYMKIN_CLI
 from symkin import load, pipeline
+from symkin.analysis.closure_workspace import assemble_at_home, closure_workspace
 from symkin.model import model_from_text
 from symkin.parallel.motion_check import check_platform_motion
 from symkin.runtime.parallel import closure_velocities, solve_closure
@@ -42,10 +43,15 @@ def model_text() -> str:
 
 
 @pytest.fixture(scope="module")
-def scara(tmp_path_factory):
+def scara_dir(tmp_path_factory):
     model = model_from_text(model_text(), file="dual_scara.yaml")
     request = pipeline.resolve_request(model, fixed="all")
-    return load(pipeline.write(pipeline.generate(model, request), tmp_path_factory.mktemp("scara")))
+    return pipeline.write(pipeline.generate(model, request), tmp_path_factory.mktemp("scara"))
+
+
+@pytest.fixture(scope="module")
+def scara(scara_dir):
+    return load(scara_dir)
 
 
 @pytest.fixture(scope="module")
@@ -239,3 +245,123 @@ def test_the_mobility_command_reports_a_wrong_motion_with_its_place_and_exit_2(t
     result = subprocess.run(SYMKIN_CLI + ["mobility", str(good)], capture_output=True, text=True)
     assert result.returncode == 0
     assert "at the home pose: the legs let the platform move in [x, y, z, yaw] (4 DoF)" in result.stdout
+
+
+#: The lift's stroke (m) for the workspace: a prismatic actuator needs limits, the model file declares none.
+STROKE = (0.0, 0.2)
+
+
+def _inverse_in_mode(poses, elbow_sign, knee_sign):
+    """The device's inverse kinematics at poses (x, y, z, yaw) in the branch (elbow_sign, knee_sign) of the legs,
+    written from the geometry: the bar's ends B1, B2 = (x, y) -+ e (cos yaw, sin yaw); leg 2 a planar 2R to B2,
+    leg 1 a planar 2R (theta, elbow) to B1.  Returns (q, wrist) with q NaN where a leg does not reach; wrist =
+    yaw - the distal link's angle."""
+    def two_r(base_x, target, sign):
+        dx, dy = target[..., 0] - base_x, target[..., 1]
+        cosine = (dx**2 + dy**2 - L1**2 - L2**2) / (2 * L1 * L2)
+        with np.errstate(invalid="ignore"):
+            second = sign * np.arccos(cosine)
+        first = np.arctan2(dy, dx) - np.arctan2(L2 * np.sin(second), L1 + L2 * np.cos(second))
+        return first, second
+    half_bar = E * np.stack([np.cos(poses[..., 3]), np.sin(poses[..., 3])], axis=-1)
+    theta, elbow = two_r(-D / 2, poses[..., :2] - half_bar, elbow_sign)
+    phi, knee = two_r(D / 2, poses[..., :2] + half_bar, knee_sign)
+    return np.stack([theta, poses[..., 2], phi, knee], axis=-1), poses[..., 3] - (theta + elbow)
+
+
+@pytest.fixture(scope="module")
+def scara_workspace(scara):
+    return closure_workspace(scara, limits={"lift1": STROKE}, cells=20)
+
+
+def test_the_home_assembly_closes_the_legs(scara):
+    q, s = assemble_at_home(scara)
+    p = np.array([closed_form(q, side)[0] for side in (1.0, -1.0)])
+    assert np.min(np.max(np.abs(p - HOME), axis=-1)) <= SOLVE_TOL
+
+
+def test_the_continued_workspace_is_the_working_mode_written_from_the_geometry(scara, scara_workspace):
+    """The reached cells are those where both legs reach the bar's ends in the home assembly's branches, the
+    distal link of leg 1 stays on the home side of the bar (sin(wrist1) keeps its sign: the interior
+    singularity is the distal link along the bar) and the lift is within its stroke, connected to the home cell
+    (scipy.ndimage's face connectivity, as the flood's)."""
+    from scipy import ndimage
+
+    q0, s0 = assemble_at_home(scara)
+    found = scara_workspace
+    centres = found.occupancy.centers()
+    poses = np.concatenate([centres, np.zeros(centres.shape[:-1] + (1,))], axis=-1)
+    q, wrist = _inverse_in_mode(poses, np.sign(np.sin(s0[0])), np.sign(np.sin(q0[3])))
+    mode = (np.all(np.isfinite(q), axis=-1) & (np.sign(np.sin(wrist)) == np.sign(np.sin(s0[1])))
+            & (centres[..., 2] >= STROKE[0]) & (centres[..., 2] <= STROKE[1]))
+    labels, _ = ndimage.label(mode)
+    home_cell = tuple(((HOME[:3] - found.occupancy.lower) // found.occupancy.cell).astype(int))
+    assert labels[home_cell] > 0, "the home pose lies in the working mode"
+    expected = labels == labels[home_cell]
+    assert expected.sum() > 300  # a volume, not a few cells
+    np.testing.assert_array_equal(found.occupancy.occupied, expected)
+    reached = found.occupancy.occupied
+    wrapped = np.angle(np.exp(1j * (found.q[reached] - q[reached])))  # the continuation does not wrap angles
+    np.testing.assert_allclose(wrapped[:, [0, 2, 3]], 0.0, atol=KINEMATICS)
+    np.testing.assert_allclose(found.q[reached][:, 1], centres[reached][:, 2], atol=KINEMATICS)
+
+
+def test_the_workspace_conditioning_is_that_of_the_closure_jacobian(scara, scara_workspace):
+    """1/kappa at a cell: the singular values of J = dp/dq written from the geometry (central differences of
+    the inverse kinematics, inverted) with the position rows divided by the characteristic length."""
+    from symkin.analysis.conditioning import homogenize, inverse_condition_number
+
+    q0, s0 = assemble_at_home(scara)
+    found = scara_workspace
+    reached = found.occupancy.occupied
+    points = found.occupancy.centers()[reached][::37]
+    poses = np.concatenate([points, np.zeros((len(points), 1))], axis=-1)
+    h = 1e-6
+    columns = []
+    for k in range(4):
+        step = np.zeros(4)
+        step[k] = h
+        plus = _inverse_in_mode(poses + step, np.sign(np.sin(s0[0])), np.sign(np.sin(q0[3])))[0]
+        minus = _inverse_in_mode(poses - step, np.sign(np.sin(s0[0])), np.sign(np.sin(q0[3])))[0]
+        columns.append((plus - minus) / (2 * h))
+    inverse_jacobian = np.stack(columns, axis=-1)  # dq/dp, the yaw column included
+    J = homogenize(np.linalg.inv(inverse_jacobian), found.length, (0, 1, 2))
+    # central differences: truncation h^2 ~ 1e-12, rounding eps / h ~ 1e-10 in dq/dp; 1/kappa moves by as much
+    np.testing.assert_allclose(found.inv_kappa[reached][::37], inverse_condition_number(J), atol=1e-6)
+    assert found.gci == pytest.approx(np.mean(found.inv_kappa[reached]))
+
+
+def test_the_workspace_command_continues_the_closure_and_refuses_an_unbounded_stroke(scara_dir, tmp_path):
+    result = subprocess.run(SYMKIN_CLI + ["workspace", str(scara_dir), "--limit", "lift1=0:0.2", "-n", "8000",
+                                          "--map", str(tmp_path / "map.png"), "-o", str(tmp_path / "ws.png")],
+                            capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    assert "working mode of the home assembly at yaw = 0 deg" in result.stdout
+    assert re.search(r"\d+ reached cells; volume: ", result.stdout)
+    assert "mean over the workspace (GCI)" in result.stdout
+    assert (tmp_path / "map.png").stat().st_size > 0
+    assert (tmp_path / "ws.png").stat().st_size > 0
+    result = subprocess.run(SYMKIN_CLI + ["workspace", str(scara_dir), "--limit", "lift1=0:1e6", "--no-figure"],
+                            capture_output=True, text=True)
+    assert result.returncode == 2
+    assert "it is unbounded within the joint limits; declare limits on the prismatic joints" in result.stderr
+    result = subprocess.run(SYMKIN_CLI + ["workspace", str(scara_dir), "--limit", "lift1=0:0.2",
+                                          "--orientation", "0,5deg,0", "--no-figure"], capture_output=True, text=True)
+    assert result.returncode == 2
+    assert "holds pitch = 0.0872665 at 0 (parallel.motion); give 0 there" in result.stderr
+
+
+def test_the_gci_command_averages_over_the_continued_workspace(scara_dir, scara_workspace):
+    """`symkin gci` of legs without closed forms: the mean 1/kappa of the same grid as closure_workspace (-n 8000:
+    20 cells a side), printed to the digits its error estimate supports, and the options that do not apply refused."""
+    result = subprocess.run(SYMKIN_CLI + ["gci", str(scara_dir), "--limit", "lift1=0:0.2", "-n", "8000"],
+                            capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    match = re.search(r"GCI = (\d+\.(\d+)) \+- ", result.stdout)
+    assert match, result.stdout
+    assert abs(float(match.group(1)) - scara_workspace.gci) <= 0.5 * 10.0 ** -len(match.group(2))
+    assert "the working mode of the home assembly at yaw = 0 deg" in result.stdout
+    result = subprocess.run(SYMKIN_CLI + ["gci", str(scara_dir), "--limit", "lift1=0:0.2", "--domain", "joint"],
+                            capture_output=True, text=True)
+    assert result.returncode == 2
+    assert "--domain: dual_scara's legs have no closed forms" in result.stderr

@@ -36,7 +36,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "rotates (Stewart-Gough) is analysed at a constant orientation (--orientation) over the "
                     "Cartesian domain, 1/kappa of its twist Jacobian homogenized by --length. A spherical platform "
                     "(the Agile Eye) is rated over its orientations with the invariant measure of SO(3) (rad^3), "
-                    "1/kappa of its angular-velocity Jacobian.",
+                    "1/kappa of its angular-velocity Jacobian. Legs without closed forms (any topology) are rated over the "
+                    "working mode of their home assembly at a constant orientation, on a grid the loop closure is "
+                    "continued over (-n N: about N^(1/3) cells a side; the error estimate is the change from half as "
+                    "many).",
     )
     analysis_args.add_model_arguments(p)
     p.add_argument("--method", choices=("grid", "mc", "qmc", "adaptive"), default="qmc",
@@ -132,7 +135,8 @@ def _domain(args: argparse.Namespace, model: GeneratedModel) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-    from symkin.analysis import conditioning, global_indices, inverse, mechanism, orientations, plots, study, workspace
+    from symkin.analysis import (closure_workspace, conditioning, global_indices, inverse, mechanism, orientations, plots,
+                                 study, workspace)
     from symkin.analysis.integrators import STATISTICAL
 
     if args.scheduler is not None:
@@ -144,6 +148,8 @@ def run(args: argparse.Namespace) -> int:
         model = analysis_args.device_view(args, model)
         if orientations.is_spherical(model):
             return _orientations(args, model, limits)
+        if closure_workspace.uses_closure(model):
+            return _closure(args, model, limits)
         model = study.at_orientation(model, analysis_args.parse_orientation(args.orientation))
         args.domain = _domain(args, model)
         length = analysis_args.resolve_length(model, args.length, limits)
@@ -200,6 +206,44 @@ def _orientations(args: argparse.Namespace, model: GeneratedModel, limits: dict)
     except (ValueError, KeyError) as err:
         analysis_args.fail_on_bad_input(args, err)
     _print(args, model, result, time.perf_counter() - start, None)
+    return 0
+
+
+def _closure(args: argparse.Namespace, model: GeneratedModel, limits: dict) -> int:
+    """Legs without closed forms: the GCI over the working mode of the home assembly at a constant orientation, on
+    the grid the loop closure is continued over (:func:`symkin.analysis.closure_workspace.closure_gci`)."""
+    from symkin.analysis import closure_workspace, plots
+    from symkin.cli.workspace_cmd import closure_options, held_text
+
+    try:
+        for given, option in ((args.index != "inverse-condition", "--index"), (args.domain == "joint", "--domain"),
+                              (args.measure != "cartesian", "--measure"), (args.method not in ("qmc", "grid"), "--method")):
+            if given:
+                raise ValueError(f"{option}: {model.name}'s legs have no closed forms: its GCI is the mean of 1/kappa "
+                                 "over a grid the loop closure is continued over (--method grid; leave the option out)")
+        options = closure_options(args, model)
+        start = time.perf_counter()
+        with Progress(model.name) as progress:
+            progress(f"continuing the loop closure over grids of {options['cells']} and {options['cells'] // 2} "
+                     "cells a side")
+            found = closure_workspace.closure_gci(model, limits=limits, **options)
+            path = None
+            if args.map:
+                progress("drawing")
+                path = plots.plot_index_slices(found.workspace.occupancy, found.workspace.inv_kappa, args.map,
+                                               axes=found.workspace.axes, title=f"1/kappa over the workspace of {model.name}")
+    except (ValueError, KeyError) as err:
+        analysis_args.fail_on_bad_input(args, err)
+    space = found.workspace
+    d = space.occupancy.occupied.ndim
+    scaled = f", position rows over the characteristic length {space.length:.4g} m" if space.length is not None else ""
+    print(f"{model.name}: GCI = {found.value} (error estimate: the change from a grid of half as many cells a side)")
+    print(f"  workspace measure int dW = {found.measure} m^{d} (between the interior and all reached cells)")
+    print(f"  the working mode of the home assembly at {held_text(model, space)}, continued from the home pose over a "
+          f"grid of {space.occupancy.cell[0]:.3g} m cells; 1/kappa of J = dp/dq{scaled}; "
+          f"{time.perf_counter() - start:.2f} s")
+    if path is not None:
+        print(f"  map: {path}")
     return 0
 
 

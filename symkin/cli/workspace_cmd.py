@@ -27,7 +27,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "(Stewart-Gough) is analysed at a constant orientation (--orientation) on a Cartesian grid "
                     "(its joint space is not sampled: -n, --method and --seed do not apply). A spherical platform "
                     "(the Agile Eye) is a set of orientations: its measure in rad^3 (the invariant measure of SO(3)), "
-                    "the GCI of its angular-velocity Jacobian and a figure of the reachable orientations (-n, --seed).",
+                    "the GCI of its angular-velocity Jacobian and a figure of the reachable orientations (-n, --seed). "
+                    "Legs without closed forms (any topology, e.g. two SCARA legs) are continued from the home pose "
+                    "over a Cartesian grid at a constant orientation: the working mode of the home assembly, its "
+                    "volume, 1/kappa and GCI (-n N: about N^(1/3) cells a side).",
     )
     analysis_args.add_model_arguments(p)
     p.add_argument("--design", action="append", default=[], metavar="NAME=VALUE[,...]",
@@ -131,14 +134,98 @@ def _orientations(args: argparse.Namespace, model, limits: dict) -> int:
     return 0
 
 
+def held_angles(args: argparse.Namespace, model) -> dict[str, float]:
+    """--orientation as the held angles of a platform whose task space has some of roll, pitch, yaw; an angle
+    outside its task space must be 0 (the legs hold it there)."""
+    from symkin.analysis import mechanism
+    from symkin.analysis.parallel import ORIENTATION_COMPONENTS
+
+    angles = analysis_args.parse_orientation(args.orientation)
+    if angles is None:
+        return {}
+    task = mechanism.task_space(model)
+    extra = [f"{name} = {value:g}" for name, value in zip(ORIENTATION_COMPONENTS, angles)
+             if name not in task and value != 0.0]
+    if extra:
+        raise ValueError(f"--orientation: {model.name}'s task space {list(task)} holds {', '.join(extra)} at 0 "
+                         "(parallel.motion); give 0 there")
+    return {name: value for name, value in zip(ORIENTATION_COMPONENTS, angles) if name in task}
+
+
+def closure_options(args: argparse.Namespace, model) -> dict:
+    """The held angles (--orientation), the characteristic length (--length) and the cells a side (-n N: about
+    N^(1/3)) of a workspace continued over a grid (:mod:`symkin.analysis.closure_workspace`)."""
+    length = analysis_args.parse_length(args.length)
+    return {"orientation": held_angles(args, model), "length": None if length == "auto" else float(length),
+            "cells": max(8, int(round(args.samples ** (1 / 3))))}
+
+
+def held_text(model, found) -> str:
+    """'yaw = 20 deg': the angles a closure workspace holds (``found.pose`` outside its gridded ``found.axes``)."""
+    import numpy as np
+
+    return ", ".join(f"{name} = {np.degrees(found.pose[i]):g} deg" for i, name in enumerate(model.info.task_space)
+                     if name not in found.axes) or "no angles"
+
+
+def _closure(args: argparse.Namespace, model, limits: dict) -> int:
+    """Legs without closed forms (any topology): the working mode of the home assembly at a constant orientation,
+    continued over a Cartesian grid from the home pose (:mod:`symkin.analysis.closure_workspace`)."""
+    import numpy as np
+
+    from symkin.analysis import closure_workspace, plots, workspace
+
+    start = time.perf_counter()
+    try:
+        for given, option in ((args.design, "--design"), (args.scheduler, "--scheduler"),
+                              (args.force_map, "--force-map")):
+            if given:
+                raise ValueError(f"{option}: {model.name}'s legs have no closed forms; its workspace is continued from "
+                                 "the home pose over one Cartesian grid (no designs, chunks or force map)")
+        options = closure_options(args, model)
+        with Progress(model.name) as progress:
+            progress(f"continuing the loop closure over a grid of {options['cells']} cells a side")
+            found = closure_workspace.closure_workspace(model, limits=limits, **options)
+    except (ValueError, KeyError) as err:
+        analysis_args.fail_on_bad_input(args, err)
+    occupancy, values = found.occupancy, found.inv_kappa
+    reached = occupancy.occupied
+    label = held_text(model, found)
+    kind = "area" if reached.ndim == 2 else "volume"
+    print(f"{model.name}: working mode of the home assembly at {label}, continued from the home pose over a "
+          f"Cartesian grid of {occupancy.cell[0]:.3g} m cells ({', '.join(found.axes)}; cells joined through a "
+          "singularity or beyond a limit are not reached)")
+    print(f"  {int(reached.sum())} reached cells; {kind}: {occupancy.measure()} m^{reached.ndim} (between the "
+          "interior and all reached cells)")
+    scaled = f" (characteristic length {found.length:.4g} m)" if found.length is not None else ""
+    print(f"  1/kappa{scaled}: min {np.min(values[reached]):.4g}, max {np.max(values[reached]):.4g}; "
+          f"mean over the workspace (GCI) {found.gci:.4g}")
+    scale = analysis_args.LENGTH_UNITS[args.unit]
+    if not args.no_figure:
+        points = occupancy.centers()[occupancy.boundary()]
+        cloud = workspace.WorkspaceCloud(found.q[occupancy.boundary()], points, found.axes)
+        path = plots.plot_workspaces([plots.WorkspaceLayer(label, cloud)], args.out or f"{model.name}-workspace.png",
+                                     title=args.title or f"Workspace of {model.name} (boundary cells)", scale=scale,
+                                     unit=args.unit)
+        print(f"figure: {path}")
+    if args.map:
+        path = plots.plot_index_slices(occupancy, values, args.map, axes=found.axes, scale=scale, unit=args.unit,
+                                       title=f"1/kappa over the workspace of {model.name} at {label}")
+        print(f"1/kappa map: {path}")
+    print(f"done in {time.perf_counter() - start:.2f} s")
+    return 0
+
+
 def run(args: argparse.Namespace) -> int:
-    from symkin.analysis import orientations, parallel, plots, study, workspace
+    from symkin.analysis import closure_workspace, orientations, parallel, plots, study, workspace
 
     try:
         base, limits = analysis_args.model_from_args(args)
         base = analysis_args.device_view(args, base)
         if orientations.is_spherical(base):
             return _orientations(args, base, limits)
+        if closure_workspace.uses_closure(base):
+            return _closure(args, base, limits)
         base = study.at_orientation(base, analysis_args.parse_orientation(args.orientation))
         designs = [analysis_args.parse_assignments([text]) for text in args.design] or [{}]
         models = [base.bind(**values) if values else base for values in designs]

@@ -287,6 +287,21 @@ def _left_null_space(A: np.ndarray) -> np.ndarray:
     return U * (np.arange(A.shape[-2])[None, :] >= rank[:, None])[:, None, :]
 
 
+def _closure_blocks(model: GeneratedModel, q, s, p, purpose: str) -> tuple[tuple[int, ...], np.ndarray, np.ndarray,
+                                                                           np.ndarray, np.ndarray]:
+    """(batch, Phi_p, Phi_q, Phi_s, finite): the generated closure_jacobians at q, s, p broadcast against each
+    other, flattened to (k, rows, .), and which samples have finite blocks."""
+    jacobians = _function(model, "closure_jacobians", purpose)
+    q, s, p = (np.asarray(v, dtype=float) for v in (q, s, p))
+    batch = np.broadcast_shapes(q.shape[:-1], s.shape[:-1], p.shape[:-1])
+    flat = [np.broadcast_to(v, batch + v.shape[-1:]).reshape(-1, v.shape[-1]) for v in (q, s, p)]
+    blocks = jacobians(*flat)
+    Phi_p, Phi_q, Phi_s = (np.asarray(b, dtype=float).reshape(len(flat[0]), -1, b.shape[-1])
+                           for b in (blocks.Phi_p, blocks.Phi_q, blocks.Phi_s))
+    finite = np.all(np.isfinite(np.concatenate([Phi_p, Phi_q, Phi_s], axis=-1)), axis=(1, 2))
+    return batch, Phi_p, Phi_q, Phi_s, finite
+
+
 def closure_velocities(model: GeneratedModel, q, s, p) -> ClosureVelocities:
     """Task Jacobian, passive rates and both singularity measures of any leg topology, from the closure.
 
@@ -309,19 +324,12 @@ def closure_velocities(model: GeneratedModel, q, s, p) -> ClosureVelocities:
         model: the loaded model (with ``closure_jacobians``).
         q, s, p: actuated, passive and task coordinates, broadcast against each other.
     """
-    jacobians = _function(model, "closure_jacobians", "closure_velocities")
-    q, s, p = (np.asarray(v, dtype=float) for v in (q, s, p))
-    batch = np.broadcast_shapes(q.shape[:-1], s.shape[:-1], p.shape[:-1])
-    flat = [np.broadcast_to(v, batch + v.shape[-1:]).reshape(-1, v.shape[-1]) for v in (q, s, p)]
-    blocks = jacobians(*flat)
-    Phi_p, Phi_q, Phi_s = (np.asarray(b, dtype=float).reshape(len(flat[0]), -1, b.shape[-1])
-                           for b in (blocks.Phi_p, blocks.Phi_q, blocks.Phi_s))
+    batch, Phi_p, Phi_q, Phi_s, finite = _closure_blocks(model, q, s, p, "closure_velocities")
     m, n, ns = Phi_p.shape[-1], Phi_q.shape[-1], Phi_s.shape[-1]
     J = np.full((len(Phi_p), m, n), np.nan)
     passive = np.full((len(Phi_p), ns, n), np.nan)
     interior = np.full(len(Phi_p), np.nan)
     boundary = np.full(len(Phi_p), np.nan)
-    finite = np.all(np.isfinite(np.concatenate([Phi_p, Phi_q, Phi_s], axis=-1)), axis=(1, 2))
     if np.any(finite):
         Phi_p, Phi_q, Phi_s = Phi_p[finite], Phi_q[finite], Phi_s[finite]
         N = _left_null_space(Phi_s)
@@ -339,3 +347,38 @@ def closure_velocities(model: GeneratedModel, q, s, p) -> ClosureVelocities:
         boundary[finite] = np.prod(np.linalg.svd(actuated, compute_uv=False), axis=-1)
     return ClosureVelocities(J.reshape(batch + (m, n)), passive.reshape(batch + passive.shape[-2:]),
                              interior.reshape(batch), boundary.reshape(batch))
+
+
+@dataclass(frozen=True)
+class ClosureFrames:
+    """The closure's task and actuator blocks seen by the constraints the passive joints cannot take up.
+
+    Attributes:
+        task: P Phi_p, shape (..., rows, m);
+        actuated: P Phi_q, shape (..., rows, n); P = N N^T projects onto the orthogonal complement of
+            range(Phi_s) (:func:`closure_velocities`), a basis-free form of N^T Phi_p and N^T Phi_q: two poses
+            compare through task_a^T task_b, whatever bases their N have.
+    """
+
+    task: np.ndarray
+    actuated: np.ndarray
+
+
+def closure_frames(model: GeneratedModel, q, s, p) -> ClosureFrames:
+    """P Phi_p and P Phi_q at assembled poses (see :class:`ClosureFrames`); NaN where an input is not finite.
+
+    A continuation tells whether a step crossed a singularity from these: between two nearby regular
+    poses a and b, det(task_a^T task_b) > 0 (the matrix is close to the positive definite task_a^T task_a),
+    while across an interior singularity, where one column combination of P Phi_p passes through zero
+    and comes back reversed, the determinant turns negative (the Schur complement on that direction is
+    -h^2 |(I - projection) d(P Phi_p v)|^2 for a step h); the same for P Phi_q and boundary singularities.
+    """
+    batch, Phi_p, Phi_q, Phi_s, finite = _closure_blocks(model, q, s, p, "closure_frames")
+    task = np.full(Phi_p.shape, np.nan)
+    actuated = np.full(Phi_q.shape, np.nan)
+    if np.any(finite):
+        N = _left_null_space(Phi_s[finite])
+        projector = np.einsum("kij,klj->kil", N, N)
+        task[finite] = projector @ Phi_p[finite]
+        actuated[finite] = projector @ Phi_q[finite]
+    return ClosureFrames(task.reshape(batch + task.shape[-2:]), actuated.reshape(batch + actuated.shape[-2:]))

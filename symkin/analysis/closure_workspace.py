@@ -1,0 +1,410 @@
+"""The workspace of a parallel mechanism of any leg topology, by continuation of its loop closure (issue 31).
+
+Legs without the distance form (the two SCARA legs of docs/model-format.md, "Legs of any topology") have no
+closed-form ``ik`` or ``fk``: the generated ``closure`` phi(q, s, p) = 0 and ``closure_jacobians`` are all there
+is.  The workspace analysed here is the *working mode* of the home assembly, the aspect of Wenger and Chablat
+(1998): the task poses connected to the home pose without crossing a singularity of either type, with the
+actuators and the declared passive joints within their limits.  The platform's positions (the x, y, z of its
+task space) are gridded with its angles held (a constant orientation, as for the Stewart-Gough platform), and
+the grid is flooded from the cell nearest the home pose: a cell is solved for (q, s) by Gauss-Newton
+(:func:`symkin.runtime.parallel.solve_closure`) from a reached face neighbour and is reached when
+
+* the solve converges (the legs close there),
+* the actuators and the declared passive joints are within their limits, and
+* no singularity lies between the two cells: det(T_a^T T_b) > 0 and det(A_a^T A_b) > 0 for the closure's
+  blocks T = P Phi_p and A = P Phi_q seen by the constraints the passive joints cannot take up
+  (:func:`symkin.runtime.parallel.closure_frames`): crossing an interior singularity (a change of assembly mode)
+  reverses T, crossing a boundary one (a leg changing branch) reverses A.
+
+A part of the workspace thinner than a cell, or joined to the rest only through one, is missed: the cell size
+is the resolution and is reported.  The grid's box is found by coarse floods from a box around the home pose,
+doubled on every side its reached cells touch, and the fine grid grows where its reached cells still touch
+its box; a workspace that still touches it after :data:`BOX_DOUBLINGS` doublings and :data:`BOX_GROWTHS`
+growths is reported unbounded (a prismatic actuator with limits far beyond the rest of the mechanism).
+
+Conditioning: 1/kappa of J = dp/dq (:func:`symkin.runtime.parallel.closure_velocities`), its position rows
+divided by a characteristic length L where the task space also has angles (given, or the L minimizing the
+mean kappa_F^2 over the reached cells: :func:`symkin.analysis.conditioning.characteristic_length`); the GCI is
+the mean of 1/kappa over the reached cells (the midpoint rule on the grid).
+
+Length: one analysis - the flood, the search for its box and the conditioning over the cells it reaches - whose
+parts only make sense together; the GCI with its error estimate is two of its grids.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from symkin.analysis import conditioning, mechanism, passive
+from symkin.analysis.estimates import Estimate
+from symkin.analysis.limits import within_limits
+from symkin.analysis.mechanism import Limits
+from symkin.analysis.workspace import Occupancy, grid_geometry
+from symkin.runtime.info import GeneratedModel
+from symkin.runtime.parallel import ClosureFrames, closure_frames, closure_velocities, solve_closure
+
+#: Cells along the longest side of the workspace's grid.
+CELLS = 32
+#: Cells along each side of the coarse grids that find the workspace's box ...
+BOX_CELLS = 12
+#: ... which doubles at most this many times on the sides its reached cells touch (the coarse cells stay within
+#: what Gauss-Newton crosses from a neighbour, SOLVE_ITERATIONS * MAX_STEP, for a workspace within a few metres);
+BOX_DOUBLINGS = 4
+#: the fine grid grows by half its width on a side its reached cells touch, at most this many times.
+BOX_GROWTHS = 3
+#: Random starts (besides q = s = 0) of the home assembly, uniform in [-pi/2, pi/2] per variable.
+HOME_STARTS = 16
+#: Gauss-Newton from a neighbouring cell: iterations, the longest step (rad or m) and the step that converges.
+SOLVE_ITERATIONS, MAX_STEP, SOLVE_TOLERANCE = 30, 0.2, 1e-12
+#: The legs close where every closure row is below this times the pose's scale (m): a converged solve leaves
+#: rounding, ~1e-15; Gauss-Newton can also stop at a least-squares minimum of the closure, which misses by a link.
+CLOSED = 1e-9
+#: The flood starts from the nearest of the SEEDS ** d cells around the home pose that it reaches.
+SEEDS = 3
+#: Largest change of a held angle (rad) per step of the path from the home pose to the first cell.
+ANGLE_STEP = 0.05
+
+
+def uses_closure(model: GeneratedModel) -> bool:
+    """Whether a parallel model is analysed through its loop closure: it has the generated ``closure`` and
+    ``closure_jacobians`` but no closed-form ``ik`` (legs without the distance form)."""
+    return (mechanism.is_parallel(model) and "ik" not in model.functions
+            and {"closure", "closure_jacobians"} <= set(model.functions))
+
+
+def _sizes(model: GeneratedModel) -> tuple[int, int]:
+    """(n, ns): the actuated and passive joint counts, from the generated closure's inputs."""
+    inputs = model.info.functions["closure"].inputs
+    return int(inputs[0].shape[0]), int(inputs[1].shape[0])
+
+
+def assemble_at_home(model: GeneratedModel) -> tuple[np.ndarray, np.ndarray]:
+    """(q, s) closing the legs at the home pose ``parallel.home``: the first of q = s = 0 and
+    :data:`HOME_STARTS` fixed random starts from which Gauss-Newton converges (deterministic).
+
+    Raises:
+        ValueError: no start closes the legs (the home pose is out of reach).
+    """
+    home = mechanism.home_pose(model)
+    n, ns = _sizes(model)
+    starts = np.vstack([np.zeros(n + ns), np.random.default_rng(0).uniform(-np.pi / 2, np.pi / 2, (HOME_STARTS, n + ns))])
+    report = solve_closure(model, starts[:, :n], starts[:, n:], home, unknowns=("q", "s"), max_step=MAX_STEP,
+                           max_iterations=100)
+    closed = np.flatnonzero(_closes(report, home))
+    if not len(closed):
+        raise ValueError(f"{model.name}: the legs do not close at the home pose {home.tolist()} (parallel.home) from "
+                         f"{len(starts)} starts: declare a home pose inside the workspace")
+    solution = report.solution
+    assert isinstance(solution, dict), "solve_closure names its vectors"
+    return solution["q"][closed[0]], solution["s"][closed[0]]
+
+
+def _closes(report, p: np.ndarray) -> np.ndarray:
+    """Boolean (K,): the solve converged to a pose that closes the legs (not a least-squares minimum)."""
+    scale = np.maximum(np.max(np.abs(p), axis=-1), 1.0)
+    return report.converged & (report.residual <= CLOSED * scale)
+
+
+def _same_side(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Boolean (K,): det(a^T b) > 0 for stacks a, b (K, rows, c); False where either is NaN."""
+    with np.errstate(invalid="ignore"):
+        return np.linalg.det(np.nan_to_num(np.swapaxes(a, -1, -2) @ b, nan=0.0)) > 0 if len(a) else np.zeros(0, bool)
+
+
+@dataclass(frozen=True)
+class _Limits:
+    """The actuators' limits (n, 2) and revolute mask, and the declared passive-joint limits (or None)."""
+
+    joints: np.ndarray
+    revolute: np.ndarray
+    passive: passive.PassiveLimits | None
+
+    def hold(self, q: np.ndarray, s: np.ndarray) -> np.ndarray:
+        inside = within_limits(q, self.joints, self.revolute)[1]
+        if self.passive is not None:
+            columns = self.passive.columns
+            inside &= within_limits(s[:, columns], self.passive.bounds, self.passive.revolute[columns])[1]
+        return inside
+
+
+def _advance(model: GeneratedModel, q: np.ndarray, s: np.ndarray, frames: ClosureFrames, p: np.ndarray,
+             limits: _Limits) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(q, s, taken) at the poses p (K, m) solved from the neighbouring solutions (q, s) whose closure frames
+    are ``frames``: taken where the solve converged within the limits and crossed no singularity."""
+    report = solve_closure(model, q, s, p, unknowns=("q", "s"), tol=SOLVE_TOLERANCE, max_iterations=SOLVE_ITERATIONS,
+                           max_step=MAX_STEP)
+    solution = report.solution
+    assert isinstance(solution, dict), "solve_closure names its vectors"
+    q1, s1 = solution["q"], solution["s"]
+    after = closure_frames(model, q1, s1, p)
+    taken = (_closes(report, p) & _same_side(frames.task, after.task) & _same_side(frames.actuated, after.actuated))
+    taken[taken] &= limits.hold(q1[taken], s1[taken])
+    return q1, s1, taken
+
+
+def _march(model: GeneratedModel, start: tuple[np.ndarray, np.ndarray, np.ndarray], targets: np.ndarray,
+           cell: float, limits: _Limits) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(q, s, taken) at the poses ``targets`` (K, m) continued along straight paths from the assembly
+    start = (q, s, p) in steps of at most a cell (positions) and :data:`ANGLE_STEP` (angles); taken is False
+    where a path leaves the working mode (a limit, a singularity, legs that do not close)."""
+    positions = np.array([c in mechanism.POSITION_COMPONENTS for c in mechanism.task_space(model)])
+    change = np.abs(targets - start[2]).max(axis=0)
+    steps = int(max(np.ceil(change[positions].max(initial=0.0) / cell),
+                    np.ceil(change[~positions].max(initial=0.0) / ANGLE_STEP), 1))
+    q = np.repeat(start[0][None], len(targets), axis=0)
+    s = np.repeat(start[1][None], len(targets), axis=0)
+    p = np.repeat(start[2][None], len(targets), axis=0)
+    taken = np.ones(len(targets), dtype=bool)
+    for t in np.linspace(0.0, 1.0, steps + 1)[1:]:
+        frames = closure_frames(model, q, s, p)
+        p = start[2] + t * (targets - start[2])
+        q, s, step_taken = _advance(model, q, s, frames, p, limits)
+        taken &= step_taken
+    return q, s, taken
+
+
+@dataclass(frozen=True)
+class _Flood:
+    """Which cells of a grid the working mode reaches, and their (q, s) (NaN elsewhere), flattened."""
+
+    reached: np.ndarray
+    q: np.ndarray
+    s: np.ndarray
+
+
+def _flood(model: GeneratedModel, poses: np.ndarray, shape: tuple[int, ...], seed: int, seed_solution: tuple,
+           limits: _Limits) -> _Flood:
+    """Breadth-first over the face neighbours of a grid of poses (prod(shape), m) from the reached cell
+    ``seed``: each layer solves every unreached neighbour of the last layer from one of its reached
+    neighbours in one batch (:func:`_advance`)."""
+    n, ns = _sizes(model)
+    reached = np.zeros(len(poses), dtype=bool)
+    q, s = np.full((len(poses), n), np.nan), np.full((len(poses), ns), np.nan)
+    reached[seed], q[seed], s[seed] = True, seed_solution[0], seed_solution[1]
+    frontier = np.array([seed])
+    while len(frontier):
+        index = np.array(np.unravel_index(frontier, shape)).T
+        candidates, parents = [], []
+        for axis in range(len(shape)):
+            for offset in (-1, 1):
+                neighbour = index.copy()
+                neighbour[:, axis] += offset
+                inside = (neighbour[:, axis] >= 0) & (neighbour[:, axis] < shape[axis])
+                candidates.append(np.ravel_multi_index(tuple(neighbour[inside].T), shape))
+                parents.append(frontier[inside])
+        cells, parent = np.concatenate(candidates), np.concatenate(parents)
+        fresh = ~reached[cells]
+        cells, first = np.unique(cells[fresh], return_index=True)
+        parent = parent[fresh][first]
+        if not len(cells):
+            break
+        frames = closure_frames(model, q[parent], s[parent], poses[parent])
+        q1, s1, taken = _advance(model, q[parent], s[parent], frames, poses[cells], limits)
+        frontier = cells[taken]
+        reached[frontier], q[frontier], s[frontier] = True, q1[taken], s1[taken]
+    return _Flood(reached, q, s)
+
+
+@dataclass(frozen=True)
+class _Grid:
+    """A grid over the positions of ``template`` (the held pose): its occupancy geometry and flattened poses."""
+
+    lower: np.ndarray
+    cell: np.ndarray
+    shape: tuple[int, ...]
+    poses: np.ndarray
+
+
+def _grid(template: np.ndarray, positions: np.ndarray, lower: np.ndarray, cell: np.ndarray,
+          shape: tuple[int, ...]) -> _Grid:
+    centres = Occupancy(lower, cell, np.zeros(shape, dtype=bool)).centers().reshape(-1, len(shape))
+    poses = np.repeat(template[None, :], len(centres), axis=0)
+    poses[:, positions] = centres
+    return _Grid(lower, cell, shape, poses)
+
+
+def _flood_grid(model: GeneratedModel, grid: _Grid, positions: np.ndarray, home: tuple, limits: _Limits) -> _Flood:
+    """Flood ``grid`` from the cell nearest the home pose among the :data:`SEEDS` ** d nearest that a straight
+    path from the home assembly reaches in the working mode (the nearest may lie beyond a limit the home pose
+    is close to)."""
+    distance = np.linalg.norm(grid.poses[:, positions] - home[2][positions], axis=-1)
+    nearest = np.argsort(distance, kind="stable")[:SEEDS ** len(grid.shape)]
+    q, s, taken = _march(model, home, grid.poses[nearest], float(grid.cell.min()), limits)
+    if not taken.any():
+        raise ValueError(f"{model.name}: the legs cannot be moved from the home pose {home[2].tolist()} to any of the "
+                         f"{len(nearest)} grid cells nearest it without leaving their limits or crossing a "
+                         "singularity: is the home pose inside the limits?")
+    first = int(np.argmax(taken))
+    return _flood(model, grid.poses, grid.shape, int(nearest[first]), (q[first], s[first]), limits)
+
+
+def _touched_sides(reached: np.ndarray) -> np.ndarray:
+    """Boolean (d, 2): whether the reached cells touch each grid's lower and upper face along each axis."""
+    return np.array([[np.take(reached, end, axis=axis).any() for end in (0, -1)] for axis in range(reached.ndim)])
+
+
+def _unbounded(model: GeneratedModel, lower: np.ndarray, upper: np.ndarray) -> ValueError:
+    axes = [c for c in mechanism.task_space(model) if c in mechanism.POSITION_COMPONENTS]
+    return ValueError(f"{model.name}: the workspace at this orientation still reaches the edge of a box "
+                      f"{(upper - lower).round(6).tolist()} m wide ({', '.join(axes)}): it is unbounded within the "
+                      "joint limits; declare limits on the prismatic joints (or pass --limit)")
+
+
+def _box(model: GeneratedModel, template: np.ndarray, positions: np.ndarray, home: tuple,
+         limits: _Limits) -> tuple[np.ndarray, np.ndarray]:
+    """A first box (lower, upper) around the working mode's positions: coarse floods (:data:`BOX_CELLS` a side)
+    from a box around the home pose, doubled on the sides its reached cells touch, then shrunk to them."""
+    centre = template[positions]
+    half = np.full(len(centre), max(float(np.linalg.norm(centre)), 1e-3))
+    lower, upper = centre - half, centre + half
+    for _ in range(BOX_DOUBLINGS + 1):
+        grid = _grid(template, positions, lower, (upper - lower) / BOX_CELLS, (BOX_CELLS,) * len(lower))
+        reached = _flood_grid(model, grid, positions, home, limits).reached.reshape(grid.shape)
+        touched = _touched_sides(reached)
+        if not touched.any():
+            index = np.array(np.nonzero(reached))
+            return grid.lower + (index.min(axis=1) - 1) * grid.cell, grid.lower + (index.max(axis=1) + 2) * grid.cell
+        width = upper - lower
+        lower, upper = lower - touched[:, 0] * width, upper + touched[:, 1] * width
+    raise _unbounded(model, lower, upper)
+
+
+@dataclass(frozen=True)
+class ClosureWorkspace:
+    """The working mode of the home assembly at a constant orientation, on a grid (:func:`closure_workspace`).
+
+    Attributes:
+        occupancy: the reached cells (their centres' positions in the axes ``axes``).
+        inv_kappa: 1/kappa at the cell centres, the grid's shape, NaN outside the workspace (0 at a cell whose
+            J is not determined, an interior singularity to rounding).
+        q: the actuators' coordinates at the cell centres, (*shape, n), NaN outside.
+        pose: the task pose held (the held angles; the positions are the cells').
+        axes: the gridded task coordinates, e.g. ("x", "y", "z").
+        length: the characteristic length of the conditioning (None: the task space has no angles).
+    """
+
+    occupancy: Occupancy
+    inv_kappa: np.ndarray
+    q: np.ndarray
+    pose: np.ndarray
+    axes: tuple[str, ...]
+    length: float | None
+
+    @property
+    def gci(self) -> float:
+        """The mean of 1/kappa over the reached cells (the global conditioning index)."""
+        return float(np.mean(self.inv_kappa[self.occupancy.occupied]))
+
+
+def _angular_rates(model: GeneratedModel, J: np.ndarray) -> np.ndarray:
+    """J with its roll-pitch-yaw rows turned into angular velocity (base frame) where the task space has all
+    three (so kappa does not depend on the angles' parametrization); a single angle (planar yaw) is a rate already."""
+    from symkin.analysis.parallel import ORIENTATION_COMPONENTS, angular_velocity_matrix
+
+    task = mechanism.task_space(model)
+    if not set(ORIENTATION_COMPONENTS) <= set(task):
+        return J
+    rows = [task.index(c) for c in ORIENTATION_COMPONENTS]
+    angles = mechanism.home_pose(model)[rows]
+    rates = np.eye(len(task))
+    rates[np.ix_(rows, rows)] = angular_velocity_matrix(angles)
+    return rates @ J
+
+
+def closure_workspace(model: GeneratedModel, *, orientation: dict[str, float] | None = None,
+                      limits: Limits | None = None, length: float | None = None, cells: int = CELLS,
+                      start: tuple[np.ndarray, np.ndarray] | None = None) -> ClosureWorkspace:
+    """The working mode of the home assembly at a constant orientation (see the module docstring).
+
+    Args:
+        model: a parallel model analysed through its closure (:func:`uses_closure`).
+        orientation: the held angles by name (e.g. {"yaw": 0.3}); the home pose's for the others.
+        limits: the actuators' limit overrides (:func:`symkin.analysis.mechanism.joint_limits`).
+        length: the characteristic length (m); default: computed over the reached cells.
+        cells: cells along the longest side of the grid.
+        start: (q, s) of the home assembly; default :func:`assemble_at_home`.
+
+    Raises:
+        ValueError: the model has no closure to continue, an orientation names no angle of its task space, the
+            home pose is out of reach, or the workspace is unbounded.
+    """
+    if not uses_closure(model):
+        raise ValueError(f"{model.name}: not a parallel model analysed through its loop closure (it needs the "
+                         "generated closure and closure_jacobians, and has a closed-form ik)")
+    task = mechanism.task_space(model)
+    positions = np.array([c in mechanism.POSITION_COMPONENTS for c in task])
+    unknown = set(orientation or {}) - {c for c in task if c not in mechanism.POSITION_COMPONENTS}
+    if unknown:
+        raise ValueError(f"{model.name}: the orientation names {sorted(unknown)}, which are not angles of its task "
+                         f"space {list(task)}")
+    home_pose = mechanism.home_pose(model)
+    template = home_pose.copy()
+    for name, value in (orientation or {}).items():
+        template[task.index(name)] = float(value)
+    q0, s0 = assemble_at_home(model) if start is None else (np.asarray(start[0], float), np.asarray(start[1], float))
+    bounds = _Limits(mechanism.joint_limits(model, limits), mechanism.revolute_mask(model),
+                     passive.declared_limits(model))
+    home = (q0, s0, home_pose)
+    lower, upper = _box(model, template, positions, home, bounds)
+    for _ in range(BOX_GROWTHS + 1):  # a coarse flood can miss a thin part; the fine grid must not touch its box
+        corner, size, counts = grid_geometry(lower, upper, float(np.max(upper - lower)) / cells)
+        grid = _grid(template, positions, corner, size, counts)
+        flood = _flood_grid(model, grid, positions, home, bounds)
+        touched = _touched_sides(flood.reached.reshape(grid.shape))
+        if not touched.any():
+            break
+        width = upper - lower
+        lower, upper = lower - touched[:, 0] * width / 2, upper + touched[:, 1] * width / 2
+    else:
+        raise _unbounded(model, lower, upper)
+    reached = flood.reached
+    inv_kappa = np.full(len(reached), np.nan)
+    rows = mechanism.position_rows(model)
+    J = _angular_rates(model, closure_velocities(model, flood.q[reached], flood.s[reached], grid.poses[reached]).J)
+    determined = np.all(np.isfinite(J), axis=(-2, -1))
+    if len(rows) < len(task):
+        length = length if length is not None else conditioning.characteristic_length(J[determined], rows)
+        J = conditioning.homogenize(np.nan_to_num(J), length, rows)
+    values = np.where(determined, conditioning.inverse_condition_number(np.nan_to_num(J)), 0.0)
+    inv_kappa[reached] = values
+    axes = tuple(c for c in task if c in mechanism.POSITION_COMPONENTS)
+    n = flood.q.shape[-1]
+    return ClosureWorkspace(Occupancy(grid.lower, grid.cell, reached.reshape(grid.shape)),
+                            inv_kappa.reshape(grid.shape), flood.q.reshape(grid.shape + (n,)), template, axes,
+                            length if len(rows) < len(task) else None)
+
+
+@dataclass(frozen=True)
+class ClosureIndex:
+    """The GCI over the working mode of a model analysed through its closure (:func:`closure_gci`).
+
+    Attributes:
+        value: the mean of 1/kappa over the reached cells, its error the change from a grid of half as many
+            cells a side.
+        measure: the area or volume, between the interior and all reached cells (m^d).
+        workspace: the grid it was averaged over.
+    """
+
+    value: Estimate
+    measure: Estimate
+    workspace: ClosureWorkspace
+
+
+def closure_gci(model: GeneratedModel, *, orientation: dict[str, float] | None = None, limits: Limits | None = None,
+                length: float | None = None, cells: int = CELLS) -> ClosureIndex:
+    """The GCI (seed eq. 8.28, midpoint rule over the reached cells) of the working mode at a constant orientation.
+
+    The error estimate is the change of the mean from a grid of half as many cells a side (with the fine grid's
+    characteristic length): the mean's error comes mostly from the cells along the workspace's boundary, whose
+    share halves with the cell size, so the change bounds the fine grid's error where the grids resolve the
+    workspace.  Arguments as :func:`closure_workspace`.
+    """
+    start = assemble_at_home(model)
+    fine = closure_workspace(model, orientation=orientation, limits=limits, length=length, cells=cells, start=start)
+    coarse = closure_workspace(model, orientation=orientation, limits=limits, length=fine.length,
+                               cells=max(cells // 2, 2), start=start)
+    evaluations = int(fine.occupancy.occupied.size + coarse.occupancy.occupied.size)
+    value = Estimate(fine.gci, abs(fine.gci - coarse.gci), evaluations, "grid", False)
+    return ClosureIndex(value, fine.occupancy.measure(), fine)
