@@ -48,7 +48,7 @@ FOREIGN_ARITHMETIC := SYMKIN_TEST_ARITHMETIC=foreign $(FOREIGN_SIMD) SYMKIN_CFLA
 
 ## test: run the whole test suite, then its numerics-sensitive part again on foreign arithmetic
 test: setup
-	$(BIN)/python -m pytest -n $(PYTEST_WORKERS) --dist loadgroup -q
+	$(BIN)/python -m pytest -n $(PYTEST_WORKERS) --dist loadgroup -q --durations=25
 	$(FOREIGN_ARITHMETIC) $(BIN)/python -m pytest -n $(PYTEST_WORKERS) --dist loadgroup -q -m numerics
 
 ## generate: rewrite generated/ from the example models (the "update" switch of the golden tests)

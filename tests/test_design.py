@@ -66,7 +66,7 @@ def test_serial_surrogate_and_gradient_match_the_numpy_code(arm):
     problem = design.design_problem(numpy_model, "gci", ["l1", "l2"], limits={"theta2": (0.0, np.pi)})
     program = design.formulate(problem, casadi_model, numpy_model, nodes=7)
     free = np.array([0.13, 0.08])
-    value = float(program.objective(free))
+    value = float(program.objective(free, program.x0[program.free_count:]))
     bound = numpy_model.bind(l1=0.13, l2=0.08)
     # a mean of kinematic quantities (CasADi's graph against numpy's): KINEMATICS
     assert value == pytest.approx(_serial_surrogate(bound, program.nodes), rel=KINEMATICS)
@@ -75,7 +75,8 @@ def test_serial_surrogate_and_gradient_match_the_numpy_code(arm):
     import casadi
 
     p = casadi.SX.sym("p", 2)
-    gradient = np.asarray(casadi.Function("g", [p], [casadi.gradient(program.objective(p), p)])(free)).ravel()
+    surrogate = program.objective(p, program.x0[program.free_count:])
+    gradient = np.asarray(casadi.Function("g", [p], [casadi.gradient(surrogate, p)])(free)).ravel()
     h = 1e-6
     numeric = [(_serial_surrogate(numpy_model.bind(**dict(zip(("l1", "l2"), free + h * e))), program.nodes)
                 - _serial_surrogate(numpy_model.bind(**dict(zip(("l1", "l2"), free - h * e))), program.nodes)) / (2 * h)
@@ -93,7 +94,8 @@ def test_parallel_surrogate_matches_the_numpy_code(delta):
     J = numpy_model.bind(a=0.11, b=0.16).jacobian(q, program.nodes)
     expected = np.mean(conditioning.inverse_frobenius_condition_number(J))
     # the same mean through the DELTA's IK and a 3x3 SVD: KINEMATICS + svd(3)
-    assert float(program.objective([0.11, 0.16])) == pytest.approx(expected, rel=KINEMATICS + svd(3))
+    value = float(program.objective([0.11, 0.16], program.x0[program.free_count:]))
+    assert value == pytest.approx(expected, rel=KINEMATICS + svd(3))
 
 
 #: The spherical 3-RRR with free link angles that docs/design-optimization.md declares (its heredoc).
@@ -128,8 +130,8 @@ def test_spherical_surrogate_weighs_the_angular_velocity_jacobian_by_the_invaria
     program = design.formulate(problem, casadi_model, numpy_model, nodes=3)
     alphas = np.radians([75.0, 100.0])
     # a weighted mean through the spherical legs' IK and a 3x3 SVD: KINEMATICS + svd(3)
-    assert float(program.objective(alphas)) == pytest.approx(_spherical_surrogate(numpy_model, program.nodes, *alphas),
-                                                             rel=KINEMATICS + svd(3))
+    value = float(program.objective(alphas, program.x0[program.free_count:]))
+    assert value == pytest.approx(_spherical_surrogate(numpy_model, program.nodes, *alphas), rel=KINEMATICS + svd(3))
 
 
 def test_spherical_3rrr_optimum_over_a_symmetric_box_is_the_agile_eyes_orthogonal_design(spherical):
@@ -275,6 +277,36 @@ def test_the_delta_with_the_largest_worst_case_isotropic_force_keeps_the_box(del
     assert after.box_reachable == 1.0
 
 
+def test_the_serial_arm_with_the_largest_worst_case_force_is_the_closed_form_optimum(arm):
+    """--maximize force of a serial arm, at its box configurations: the 2R arm (joints 0..90 deg) with tau_max =
+    (1, 0.1) N m.  Its columns are |J_1| = |p| and |J_2| = l2, so f_iso = min(1 / |p|, 0.1 / l2) = 0.1 / l2 here:
+    the strongest design has the shortest l2 whose arm still reaches every box point with theta2 in [0, 90 deg]:
+    the farthest point stretched, l1 + l2 = r_max, the nearest at theta2 = 90 deg, l1^2 + l2^2 = r_min^2, so
+    l2 = (r_max - sqrt(2 r_min^2 - r_max^2)) / 2.  IPOPT stops at a relative 1e-10 (ipopt.tol), the optimum
+    agrees to 1e-8; the surrogate is the numpy code's worst force at the optimizer's configurations, which
+    reach the box points; the independent rating (closed-form ik on an 11^2 grid) gives the same force."""
+    numpy_model, _ = arm
+    limits = np.array([1.0, 0.1])
+    problem, program, solution = _optimize(arm, "force", ["l1", "l2"], bounds={"l1": (0.05, 0.3), "l2": (0.02, 0.3)},
+                                           box={"x": (0.11, 0.14), "y": (0.11, 0.14)}, effort_limits=limits)
+    assert solution.success
+    assert solution.constraint_violation < 1e-9
+    reach = np.linalg.norm(program.box_points, axis=-1)
+    l2 = (reach.max() - np.sqrt(2 * reach.min() ** 2 - reach.max() ** 2)) / 2
+    assert solution.optimum["l2"] == pytest.approx(l2, rel=1e-8)
+    assert solution.optimum["l1"] == pytest.approx(reach.max() - l2, rel=1e-8)
+    bound = numpy_model.bind(**solution.optimum)
+    q = solution.box_configurations
+    np.testing.assert_allclose(bound.fk(q)[:, :2, 3], program.box_points, atol=1e-9)
+    worst = float(np.min(forces.isotropic_force(bound.jacobian(q), limits)))
+    assert solution.surrogate_optimum == pytest.approx(worst, rel=KINEMATICS)
+    assert worst == pytest.approx(0.1 / l2, rel=1e-8)
+    assert solution.surrogate_start == pytest.approx(0.1 / 0.1, rel=KINEMATICS)  # the start's l2 = 0.1 m
+    rating = design.evaluate(problem, numpy_model, solution.optimum, samples=2**10)
+    assert rating.box_reachable == 1.0
+    assert rating.force == pytest.approx(0.1 / l2, rel=1e-8)
+
+
 def _heaviest(model, design_values, points):
     """The largest apparent mass at the handle over the points (kg): the largest eigenvalue of (J M^-1 J^T)^-1 by
     the numpy code (analysis.rating), the joints from the closed-form ik."""
@@ -336,8 +368,8 @@ def test_a_serial_arm_without_a_mass_matrix_is_told_the_bound_is_for_parallel_mo
 
 
 @pytest.mark.parametrize("model_dir, kwargs, message", [
-    (ARM_DIR, {"box": {"x": (0.11, 0.14), "y": (0.11, 0.14)}, "effort_limits": [1, 1]},
-     "the force objective is derived for parallel mechanisms"),
+    (ARM_DIR, {"effort_limits": [1, 1]}, "the force objective is the isotropic force at the worst point of the "
+                                          "required box: give --require-box x=LOWER:UPPER,y=LOWER:UPPER"),
     (DELTA_DIR, {"box": DELTA_BOX}, "give --effort-limit T"),
     (DELTA_DIR, {"effort_limits": [1, 1, 1]}, "the worst-case force of a parallel mechanism is taken over the "
                                               "required workspace box: give --require-box x=LOWER:UPPER"),

@@ -126,3 +126,19 @@ def test_models_the_regressor_does_not_cover_are_refused(models):
     for name, what in (("agile_eye", "distal links"), ("delta_wrist", "wrist")):
         with pytest.raises(DerivationError, match=f"regressor of a parallel model does not cover .*{what}"):
             Derivation(models[name])["regressor"]
+
+
+def test_both_regressors_share_one_build_of_the_unit_mass_distributions(monkeypatch):
+    """The unit mass distributions of the columns are a node of the derivation graph: deriving the regressor and
+    the energy regressor builds them once."""
+    from symkin.derivation import Derivation
+    from symkin.parallel import regressor
+
+    calls = []
+    build = regressor.unit_inertias
+    monkeypatch.setattr(regressor, "unit_inertias", lambda *args: calls.append(args) or build(*args))
+    text = (MODELS_DIR / "pantograph.yaml").read_text() + FRICTION.format(a="theta1", b="theta2")
+    derivation = Derivation(model_from_text(text, file="pantograph.yaml"))
+    assert derivation["regressor"] is not None
+    assert derivation["energy_regressor"] is not None
+    assert len(calls) == 1

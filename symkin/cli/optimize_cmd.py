@@ -35,7 +35,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     analysis_args.add_model_arguments(p, backend=False)
     p.add_argument("--maximize", choices=("gci", "workspace", "force"), default="gci",
                    help="objective (default: %(default)s; workspace: serial models only; force: the isotropic force "
-                        "at the worst point of the required box, parallel models)")
+                        "at the worst point of the required box; a serial model's at its box configurations)")
     p.add_argument("--effort-limit", metavar="T[,T...]",
                    help="the actuators' peak efforts of --maximize force (N m or N; one value for all or one per "
                         "actuator; default: the model's effort limits)")

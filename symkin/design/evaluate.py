@@ -41,7 +41,8 @@ class Evaluation:
         box_reachable: fraction of the box check points that are reachable (None without a box).
         box_check: how the box was checked, in words.
         force: the force objective's isotropic force at the worst reachable check point of the box (N;
-            :func:`symkin.analysis.forces.isotropic_force`), else None.
+            :func:`symkin.analysis.forces.isotropic_force`; a serial model's in the first feasible branch of its
+            closed-form inverse, else at the optimizer's configurations), else None.
         apparent_mass: under an apparent-mass bound, the largest apparent mass at the handle (the largest
             eigenvalue of (J M^-1 J^T)^-1, kg; :func:`symkin.analysis.rating.principal_masses`) over the reachable
             check points of the box, else None.
@@ -70,8 +71,11 @@ def evaluate(problem: DesignProblem, model: GeneratedModel, design: dict[str, fl
         return _parallel(problem, bound, samples, seed)
     result = global_indices.gci(bound, method="qmc", samples=samples, seed=seed, limits=problem.limits,
                                 length=problem.length)
-    fraction, check = _serial_box(problem, bound, box_points, box_configurations)
-    return Evaluation(result.value, result.measure, f"qmc, {result.description}", fraction, check)
+    fraction, check, reached = _serial_box(problem, bound, box_points, box_configurations)
+    force = None
+    if problem.effort_limits is not None and reached is not None and len(reached):
+        force = float(np.min(forces.isotropic_force(bound.jacobian(reached), problem.effort_limits)))
+    return Evaluation(result.value, result.measure, f"qmc, {result.description}", fraction, check, force)
 
 
 def box_check_points(problem: DesignProblem) -> np.ndarray:
@@ -84,22 +88,26 @@ POSITION_TOLERANCE = 1e-9
 
 
 def _serial_box(problem: DesignProblem, model: GeneratedModel, points: np.ndarray | None,
-                configurations: np.ndarray | None) -> tuple[float | None, str]:
+                configurations: np.ndarray | None) -> tuple[float | None, str, np.ndarray | None]:
+    """The fraction of the box reached, how it was checked, and the configurations (k, n) that reach its
+    checked points (those of the force rating; None where nothing was checked)."""
     if problem.box is None:
-        return None, "no required box"
+        return None, "no required box", None
     ik = inverse.inverse_kinematics_for(model)
     if ik is None:
         if configurations is None or not configurations.size or points is None:
-            return None, "not checked: no closed-form inverse kinematics for this model"
+            return None, "not checked: no closed-form inverse kinematics for this model", None
         error = np.linalg.norm(mechanism.tcp_positions(model, configurations) - points, axis=-1)
         # within the limits up to the analyses' tolerance (IPOPT meets bounds to about 1e-8 relative)
         _, in_limits = within_limits(configurations, problem.joint_limits, mechanism.revolute_mask(model))
         inside = (error < POSITION_TOLERANCE) & in_limits
         return float(np.mean(inside)), (f"the optimizer's configurations at {len(points)} box points, by the "
-                                        "generated fk (no closed-form inverse kinematics for this model)")
+                                        "generated fk (no closed-form inverse kinematics for this model)"), \
+            configurations[inside]
     points = box_check_points(problem)
-    inside = feasibility.reachable(ik, points, problem.joint_limits, mechanism.revolute_mask(model))
-    return float(np.mean(inside)), f"closed-form inverse kinematics within the joint limits at {len(points)} points"
+    q, inside = feasibility.feasible_configurations(ik, points, problem.joint_limits, mechanism.revolute_mask(model))
+    return (float(np.mean(inside)), f"closed-form inverse kinematics within the joint limits at {len(points)} points "
+            "(the first feasible branch)", q[inside])
 
 
 def parallel_index(model: GeneratedModel, points: np.ndarray, limits: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:

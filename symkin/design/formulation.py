@@ -26,11 +26,16 @@ over fixed sample points, so the objective is a smooth function of the design:
       v_F = sum_j cos(pitch_j) / kappa_F(E_j J_j)  /  sum_j cos(pitch_j);
 * ``workspace`` of a serial model: int |det J| dq over the joint limits (area/volume in
   m^d), estimated at the same nodes (with the same smoothed |det J|);
-* ``force`` of a parallel model: the isotropic force f_iso = min_i tau_max,i / |J_i|
-  (:mod:`symkin.analysis.forces`, J_i the i-th column of J) at the worst point of the required
-  box, in epigraph form: maximize a bound t subject to t |J_i(p_j)| <= tau_max,i at every
-  point p_j of the box and of its grid and every actuator i, written (t |J_i| / tau_max,i)^2 <= 1
-  (smooth; the minimum over points and actuators has kinks where the worst one changes).
+* ``force``: the isotropic force f_iso = min_i tau_max,i / |J_i| (:mod:`symkin.analysis.forces`,
+  J_i the i-th column of J) at the worst point of the required box, in epigraph form: maximize a
+  bound t subject to t |J_i(p_j)| <= tau_max,i at every point p_j and every actuator i, written
+  (t |J_i| / tau_max,i)^2 <= 1 (smooth; the minimum over points and actuators has kinks where the
+  worst one changes).  A parallel model's points are the box's vertex grid and the objective's
+  midpoints, their joints from the closed-form ``ik``; a serial model's the box's vertex grid at
+  its box configurations q_b (below), so the optimizer also chooses the configuration (e.g. the
+  elbow's side) that holds each point best.  The reported surrogate is the worst force itself,
+  min_j f_iso(p_j): of the design alone for a parallel model, of the design and the q_b for a
+  serial one.
 
 Constraints (the required box, inflated by the margin, sampled on a vertex grid with its
 corners): a serial model's box configurations q_b satisfy fk(q_b) = p_b within the joint
@@ -40,6 +45,10 @@ within their limits (declared or overridden), if any.  A bound m_max on the appa
 the handle (every eigenvalue of Lambda = (J M^-1 J^T)^-1, :func:`symkin.analysis.rating.apparent_mass`,
 at most m_max) holds at the same points as B = m_max J M^-1 J^T - 1 positive semidefinite:
 every principal minor of B >= 0 (smooth in the design, where an eigenvalue is not).
+
+Length: one program builder per kind of mechanism (serial, parallel) with its objectives and constraints; they
+share the mapping of per-point functions over the points and the box configurations, which would otherwise be
+passed between modules as private parts.
 """
 
 from __future__ import annotations
@@ -114,7 +123,9 @@ class _Terms(NamedTuple):
     nodes: np.ndarray
     box_points: np.ndarray
     description: str
-    surrogate: casadi.MX | None = None  # the reported value as a function of the design alone (else: objective)
+    surrogate: casadi.MX | None = None  # the reported value (else: objective), of the design and ``symbols``
+    symbols: tuple = ()  # the symbols ``variables`` stacks (each by casadi.vec, in this order)
+    configuration_count: int = 0  # the entries of ``variables`` that are a serial model's box configurations
 
 
 NO_VARIABLES = (casadi.MX(0, 1), np.empty(0), np.empty(0), np.empty(0))
@@ -127,7 +138,9 @@ class DesignProgram:
     Attributes:
         x, f, g: CasADi MX expressions (f is -objective / reference).
         x0, lbx, ubx, lbg, ubg: numeric start and bounds.
-        objective: Function of the free parameter values (unscaled) -> the surrogate.
+        objective: Function of the free parameter values (unscaled) and the program's other variables
+            (x after them: a serial model's box configurations, an epigraph bound) -> the surrogate; the
+            surrogates of the GCI and the workspace measure depend on the free values only.
         reference: |objective(start)|, the scale of f (surrogate = -f * reference).
         free_count: the first ``free_count`` entries of x are the scaled free parameters.
         scales: value = x * scale for those.
@@ -159,6 +172,11 @@ class DesignProgram:
         """The free parameter values of a solution vector."""
         return np.asarray(x, dtype=np.float64).ravel()[:self.free_count] * self.scales
 
+    def surrogate(self, x: np.ndarray) -> float:
+        """The surrogate at a solution vector x (the free values and the other variables)."""
+        x = np.asarray(x, dtype=np.float64).ravel()
+        return float(self.objective(self.free_values(x), x[self.free_count:]))
+
 
 def formulate(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model: GeneratedModel, *, nodes: int | None = None,
               box_points: int = BOX_POINTS_PER_AXIS, seed: int = 0) -> DesignProgram:
@@ -184,12 +202,14 @@ def formulate(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model:
     build = _parallel if problem.parallel else _serial
     terms = build(problem, casadi_model, numpy_model, free, values, z * scales, nodes, box_points, seed)
     free_values = casadi.MX.sym("free", len(problem.free))
+    others = casadi.MX.sym("variables", terms.variables.numel())
     surrogate = terms.objective if terms.surrogate is None else terms.surrogate
-    objective_function = casadi.Function("surrogate", [free_values],
-                                         [casadi.substitute(surrogate, z, free_values / scales)],
-                                         ["free"], ["surrogate"])
+    inner = casadi.Function("surrogate_of_symbols", [z, *terms.symbols], [surrogate])
+    objective_function = casadi.Function("surrogate", [free_values, others],
+                                         [inner(free_values / scales, *_split(others, terms.symbols))],
+                                         ["free", "variables"], ["surrogate"])
     start = np.array([p.start for p in problem.free])
-    reference = abs(float(objective_function(start)))
+    reference = abs(float(objective_function(start, terms.start)))
     if not reference > 0:
         raise ValueError(f"the {problem.objective} surrogate is 0 at the start design {problem.start}: "
                          "start from a design with a nonsingular, reachable workspace")
@@ -199,18 +219,30 @@ def formulate(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model:
                    np.concatenate([[p.upper for p in problem.free] / scales, terms.upper]),
                    np.asarray(terms.lbg, float), np.asarray(terms.ubg, float), objective_function,
                    reference, len(problem.free), scales, terms.nodes, terms.box_points, terms.description,
-                   0 if problem.parallel else terms.variables.numel())
+                   terms.configuration_count)
+
+
+def _split(vector: casadi.MX, symbols: tuple[casadi.MX, ...]) -> list[casadi.MX]:
+    """``vector`` cut into the shapes of ``symbols`` (each filled column-major, as casadi.vec flattens)."""
+    parts, offset = [], 0
+    for symbol in symbols:
+        rows, columns = symbol.shape
+        parts.append(casadi.reshape(vector[offset:offset + rows * columns], rows, columns))
+        offset += rows * columns
+    return parts
 
 
 def _serial(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model: GeneratedModel, free: casadi.SX, values: dict[str, Any],
             design: casadi.MX, nodes: int | None, box_points: int, seed: int) -> _Terms:
     limits = problem.joint_limits
     n = limits.shape[0]
+    node = casadi.SX.sym("q", n)
+    J = _call(casadi_function(casadi_model, "jacobian"), {"q": node, **values})[0]
+    if problem.objective == "force":
+        return _serial_force(problem, casadi_model, numpy_model, node, free, J, values, design, box_points, seed)
     q = sampling.sobol(limits[:, 0], limits[:, 1], SERIAL_NODES_LOG2 if nodes is None else nodes,
                        np.random.default_rng(seed))
     count = len(q)
-    node = casadi.SX.sym("q", n)
-    J = _call(casadi_function(casadi_model, "jacobian"), {"q": node, **values})[0]
     rows = mechanism.position_rows(numpy_model)
     term = smooth.measure_weighted_inverse_frobenius(J, smooth.homogenized(J, problem.length, rows))
     per_node = _node_function("gci_terms", node, free, casadi.vertcat(term, smooth.determinant(J)))
@@ -229,20 +261,66 @@ def _serial(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model: G
     if problem.box is None:
         return _Terms(objective, casadi.MX(0, 1), np.empty(0), np.empty(0), *NO_VARIABLES, q, np.empty((0, 0)),
                       description)
+    box = _box_configurations(problem, casadi_model, numpy_model, node, free, values, design, box_points, seed)
+    zeros = np.zeros(box.residuals.numel())
+    description += f"; the box is required at {len(box.points)} points (fk(q_b) = p_b within the joint limits)"
+    return _Terms(objective, box.residuals, zeros, zeros, casadi.vec(box.qb), box.start.ravel(), box.lower,
+                  box.upper, q, box.points, description, symbols=(box.qb,), configuration_count=box.qb.numel())
+
+
+class _BoxConfigurations(NamedTuple):
+    """A serial model's joint configurations q_b (n, P) at the box points p_b, with fk(q_b) = p_b required."""
+
+    points: np.ndarray  # p_b (P, d)
+    qb: casadi.MX  # the configurations, decision variables
+    residuals: casadi.MX  # vec((fk(q_b) - p_b) / box size), to be 0
+    start: np.ndarray  # (P, n) start values
+    lower: np.ndarray  # bounds of vec(q_b): the joint limits
+    upper: np.ndarray
+
+
+def _box_configurations(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model: GeneratedModel,
+                        node: casadi.SX, free: casadi.SX, values: dict[str, Any], design: casadi.MX, box_points: int,
+                        seed: int) -> _BoxConfigurations:
+    """The configurations at the vertex grid of the inflated box (``box_points`` per axis)."""
+    limits = problem.joint_limits
     points = sampling.grid(*problem.inflated_box, box_points, midpoints=False)
     axes = list(mechanism.position_axes(numpy_model))
     T = _call(casadi_function(casadi_model, "fk"), {"q": node, **values})[0]
     position = _node_function("tcp", node, free, T[axes, 3])
-    qb = casadi.MX.sym("q_box", n, len(points))
+    qb = casadi.MX.sym("q_box", limits.shape[0], len(points))
     lower, upper = problem.required_box
     size = float(np.max(upper - lower))
     residuals = (_mapped(position, qb, design) - casadi.DM(points.T)) / size
     start = _nearest_configurations(numpy_model.bind(**problem.start), limits, points, axes, seed)
-    zeros = np.zeros(residuals.numel())
-    description += f"; the box is required at {len(points)} points (fk(q_b) = p_b within the joint limits)"
-    bounds = (np.tile(limits[:, 0], len(points)), np.tile(limits[:, 1], len(points)))
-    return _Terms(objective, casadi.vec(residuals), zeros, zeros, casadi.vec(qb), start.ravel(), *bounds, q, points,
-                  description)
+    return _BoxConfigurations(points, qb, casadi.vec(residuals), start, np.tile(limits[:, 0], len(points)),
+                              np.tile(limits[:, 1], len(points)))
+
+
+def _serial_force(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model: GeneratedModel, node: casadi.SX,
+                  free: casadi.SX, J: casadi.SX, values: dict[str, Any], design: casadi.MX, box_points: int,
+                  seed: int) -> _Terms:
+    """A serial model's isotropic force at the worst box point, at its box configurations (epigraph form)."""
+    box = _box_configurations(problem, casadi_model, numpy_model, node, free, values, design, box_points, seed)
+    limits = np.asarray(problem.effort_limits, dtype=np.float64)
+    # (|J_i| / tau_max,i)^2 per actuator i (rows) and box point (columns), at the box configurations
+    squared = _mapped(_node_function("force_rows", node, free, (casadi.sum1(J * J) / casadi.DM(limits**2).T).T),
+                      box.qb, design)
+    at_start = numpy_model.bind(**problem.start)
+    start = float(np.min(forces.isotropic_force(at_start.jacobian(box.start), limits)))
+    if not start > 0:
+        raise ValueError(f"{numpy_model.name}: the isotropic force vanishes in the box at the start design")
+    bound = casadi.MX.sym("force_bound")  # t / (the start's worst force, at the start configurations)
+    zeros = np.zeros(box.residuals.numel())
+    g = casadi.vertcat(box.residuals, casadi.vec((bound * start) ** 2 * squared))
+    description = (f"isotropic force min_i tau_max,i / |J_i| at the worst of the box's {box_points}^{box.points.shape[1]} "
+                   f"vertex grid (epigraph form), effort limits {', '.join(f'{v:g}' for v in limits)}, at the box "
+                   "configurations q_b with fk(q_b) = p_b within the joint limits")
+    return _Terms(bound * start, g, np.concatenate([zeros, np.full(squared.numel(), -np.inf)]),
+                  np.concatenate([zeros, np.ones(squared.numel())]), casadi.vertcat(casadi.vec(box.qb), bound),
+                  np.concatenate([box.start.ravel(), [1.0]]), np.concatenate([box.lower, [0.0]]),
+                  np.concatenate([box.upper, [np.inf]]), box.points, box.points, description,
+                  casadi.mmin(1 / casadi.sqrt(squared)), (box.qb, bound), box.qb.numel())
 
 
 def _nearest_configurations(model: GeneratedModel, limits: np.ndarray, points: np.ndarray, axes: list[int],
@@ -358,4 +436,4 @@ def _force(problem: DesignProblem, numpy_model: GeneratedModel, node: casadi.SX,
                    f"effort limits {', '.join(f'{v:g}' for v in limits)}; the box is required at every point "
                    "(ik margin >= 0)") + _bound_apparent_mass(problem, minors, g, lbg, ubg)
     return _Terms(bound * start, casadi.vertcat(*g), np.concatenate(lbg), np.concatenate(ubg), bound, np.ones(1),
-                  np.zeros(1), np.full(1, np.inf), p, points, description, worst)
+                  np.zeros(1), np.full(1, np.inf), p, points, description, worst, (bound,))

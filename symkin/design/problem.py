@@ -287,10 +287,6 @@ def design_problem(model: GeneratedModel, objective: str, free: Sequence[str], *
     if len(task) != n:
         raise ValueError(f"{model.name}: the task Jacobian is {len(task)} x {n}; dimensioning needs a square one "
                          "(the Cartesian measure |det J| dq and kappa_F of J^-1)")
-    if objective == "force" and not parallel:
-        raise ValueError(f"{model.name}: the force objective is derived for parallel mechanisms (their box points "
-                         "have the closed-form ik's joints); for a serial arm, rate designs with 'symkin rate' or "
-                         "maximize its GCI with the required box")
     if parallel:
         if objective == "workspace":
             raise ValueError(f"{model.name}: maximizing the workspace of a parallel mechanism is not supported "

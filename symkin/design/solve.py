@@ -80,8 +80,7 @@ def solve(problem: DesignProblem, program: DesignProgram, *, build_seconds: floa
         box_q = box_q.reshape(len(program.box_points), -1)
     return Solution(
         start=problem.start, optimum=problem.design(list(free)),
-        surrogate_start=float(program.objective(program.free_values(program.x0))),
-        surrogate_optimum=float(program.objective(free)), history=history,
+        surrogate_start=program.surrogate(program.x0), surrogate_optimum=program.surrogate(x), history=history,
         infeasibility=np.asarray(stats["iterations"]["inf_pr"], dtype=np.float64),
         status=str(stats["return_status"]), success=bool(stats["success"]), iterations=int(stats["iter_count"]),
         ipopt_seconds=ipopt_seconds, build_seconds=build_seconds,

@@ -50,7 +50,7 @@ from symkin.parallel.inertia import (
     point_mass,
 )
 from symkin.parallel.legs import LegChain
-from symkin.parallel.quantities import PARALLEL, ParallelStructure, parallel_structure, reduced_legs
+from symkin.parallel.quantities import PARALLEL, parallel_structure, reduced_legs
 
 Triple = tuple[sympy.Expr, sympy.Matrix, sympy.Matrix]
 
@@ -181,13 +181,14 @@ def body_parameters(legs: _Legs) -> list[sympy.Expr]:
 def _regressor(d: Deriving) -> FunctionSpec:
     """Y (actuators x parameters) and the model's pi, both named by :func:`body_parameter_names` in the manifest."""
     model = d.model
-    legs, structure = _regressor_legs(d)
+    shared = d[regressor_columns]
+    legs = shared.legs
     program = Program()
     terms = ReducedDynamics(d, program)
     qd, qdd = coordinate_symbols(d, "qd"), coordinate_symbols(d, "qdd")
     motion = terms.platform_motion(qd, qdd)
     columns = [terms.with_parts(parts).torques(qd, qdd, with_friction=False, motion=motion)
-               for parts in unit_inertias(legs, structure.platform)]
+               for parts in shared.unit_inertias]
     friction = {f.joint: f for f in model.friction}
     n = model.dof
     for j, coordinate in enumerate(model.coordinates):
@@ -210,14 +211,15 @@ def _regressor(d: Deriving) -> FunctionSpec:
           "parameters pi", mechanism=PARALLEL, kappa_degree=2)
 def _energy_regressor(d: Deriving) -> FunctionSpec:
     """Y_e and the model's pi, named as the regressor's: the energy of each unit mass distribution."""
-    legs, structure = _regressor_legs(d)
+    shared = d[regressor_columns]
+    legs = shared.legs
     program = Program()
     terms = ReducedDynamics(d, program)
     qd = coordinate_symbols(d, "qd")
     pd = terms.task_rates(qd)
     row = [terms.with_parts(parts).kinetic_energy(qd, pd)
            + se.sympify(parts.actuator_potential + parts.platform_potential + parts.distal_potential)
-           for parts in unit_inertias(legs, structure.platform)]
+           for parts in shared.unit_inertias]
     half = se.Rational(1, 2)
     row += [e for rate in qd for e in (half * rate * rate, se.Integer(0), se.Integer(0), se.Integer(0))]
     Y_e = program.bind(row)
@@ -229,15 +231,27 @@ def _energy_regressor(d: Deriving) -> FunctionSpec:
         device_inputs(d, "qd"), program, ("Y_e", Y_e, (len(Y_e),), "energy per unit of each standard parameter", ""))
 
 
-def _regressor_legs(d: Deriving) -> tuple[_Legs, ParallelStructure]:
-    """The legs the regressors are formed from, after checking that the model has them."""
+@dataclasses.dataclass(frozen=True)
+class RegressorColumns:
+    """What both parallel regressors are formed from: the legs and the unit mass distributions of their
+    inertial columns (:func:`unit_inertias`), built once per derivation (:func:`regressor_columns`)."""
+
+    legs: _Legs
+    unit_inertias: tuple[Inertia, ...]
+
+
+@quantity("parallel_regressor_columns", "the legs and unit mass distributions of the parallel regressors",
+          emitted=False, mechanism=PARALLEL)
+def regressor_columns(d: Deriving) -> RegressorColumns:
+    """The legs the regressors are formed from (after checking that the model has them) and their unit inertias."""
     model = d.model
     _require_regressor(model)
     if model.parallel.bodies is None:  # type: ignore[union-attr]
         raise DerivationError(f"model '{model.name}' declares no bodies, so it has no regressor; add a 'bodies:' "
                               "section (see docs/model-format.md)")
     structure = d[parallel_structure]
-    return _Legs(model, d[reduced_legs], structure.chains), structure
+    legs = _Legs(model, d[reduced_legs], structure.chains)
+    return RegressorColumns(legs, tuple(unit_inertias(legs, structure.platform)))
 
 
 def _with_body_parameters(d: Deriving, legs: _Legs, name: str, summary: str, doc: str, inputs: list, program: Program,
