@@ -119,6 +119,16 @@ def test_the_exported_urdf_reads_back_as_the_same_robot(tmp_path):
             assert np.max(np.abs(a - b)) <= DYNAMICS * np.max(np.abs(b)), name
 
 
+def test_a_model_file_named_with_dashes_exports_a_well_formed_urdf(tmp_path):
+    """The exported URDF's comment names the model file, hostile text: 'my--arm.yaml' once made the document
+    malformed (XML allows no '--' in a comment); it reads back with its comment in one piece."""
+    path = tmp_path / "my--arm-->.yaml"
+    path.write_text((MODELS_DIR / "planar_2r.yaml").read_text())
+    exported = tmp_path / "arm.urdf"
+    exported.write_text(export_urdf(load_model(path)))
+    assert [j.name for j in load_model(exported, tip="tcp").joints] == ["theta1", "theta2"]
+
+
 def test_export_refuses_a_parallel_model_and_crosscheck_says_when_pinocchio_is_missing(tmp_path, monkeypatch):
     run = subprocess.run(SYMKIN_CLI + ["export", str(MODELS_DIR / "delta.yaml"), "-o", str(tmp_path / "d.urdf")],
                          capture_output=True, text=True)

@@ -10,6 +10,8 @@ reader's own checks.
 from __future__ import annotations
 
 import subprocess
+from importlib.metadata import distribution
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -20,9 +22,11 @@ from conftest import SYMKIN_CLI
 from symkin.analysis import identified_model
 from symkin.derivation import Derivation
 from symkin.dynamics.quantities import newton_euler_links
+from symkin.dynamics.parameter_names import INERTIAL
 from symkin.dynamics.regressor import parameter_names, standard_parameters
 from symkin.model import load_model, model_from_text
-from test_identification import _run, arm, write_run  # noqa: F401 (the module-scoped fixture)
+from symkin.model.urdf_export import xml_comment
+from test_identification import _run, arm, excitation, write_run  # noqa: F401 (the module-scoped fixture)
 from test_regressor import DRIVEN
 from tolerances import EPS
 
@@ -156,3 +160,77 @@ def test_the_combinations_come_from_states_spread_over_the_run_or_from_all_where
     spread = np.unique(np.linspace(0, count - 1, identified_model.COMBINATION_STATES).astype(int))
     Y_b[spread, :, 2] = 0.0  # the third base parameter moves only between the spread states
     np.testing.assert_allclose(identified_model.combinations(Y_b @ K, Y_b), K, rtol=0, atol=64 * EPS)
+
+
+#: A stock URDF nobody here wrote: the 3-joint finger of the TriFinger (example-robot-data, shipped with Pinocchio).
+FINGER = Path(distribution("example-robot-data").locate_file(
+    "cmeel.prefix/share/example-robot-data/robots/finger_edu_description/robots/finger_edu.urdf"))
+
+
+def test_a_robot_files_identified_values_come_back_as_a_symkin_model_and_a_urdf(tmp_path):
+    """A URDF's estimate is written twice: identified.yaml (its chain as a symkin model, the robot file named in
+    identified:) and identified.urdf (symkin's URDF of it, its TCP the link tcp).  Both, read back, have exactly the
+    standard parameters they were written from (every link's scaled by 1.3, viscous and Coulomb friction), but the
+    rotor inertia, which a URDF cannot carry: identified.urdf's comment says it is in identified.yaml only."""
+    model = load_model(FINGER)
+    names = parameter_names(model)
+    target = standard_values(model)
+    target[[k for k, name in enumerate(names) if name.rsplit(".", 1)[1] in INERTIAL]] *= 1.3
+    for joint in model.joints:
+        target[names.index(f"{joint.name}.fv")] = 0.05
+        target[names.index(f"{joint.name}.fc")] = 0.02
+    rotor = names.index(f"{model.joints[0].name}.Ia")
+    target[rotor] = 1e-4
+    updated = identified_model.updated_model(FINGER, model, names, target, np.ones(len(names), dtype=bool),
+                                             {"method": "consistent", "data": "run.csv", "samples": 900})
+    as_yaml = model_from_text(updated.text, model.name)
+    tolerance = 64 * EPS * np.max(np.abs(target))
+    assert np.all(np.abs(standard_values(as_yaml) - target) <= tolerance)
+    assert any("(the chain of the robot file finger_edu.urdf)" in note for note in as_yaml.notes)
+    assert updated.urdf is not None
+    (tmp_path / "identified.urdf").write_text(updated.urdf)
+    as_urdf = load_model(tmp_path / "identified.urdf", tip="tcp")
+    assert parameter_names(as_urdf) == names
+    difference = standard_values(as_urdf) - target
+    assert np.all(np.abs(np.delete(difference, rotor)) <= tolerance)
+    assert difference[rotor] == -1e-4
+    assert f"in identified.yaml only: the rotor inertias of {model.joints[0].name} -->" in updated.urdf
+
+
+def test_identify_on_a_urdf_writes_identified_yaml_and_urdf(tmp_path):
+    """`symkin identify finger_edu.urdf` with a run its own dynamics made, with viscous and Coulomb friction added:
+    identified.urdf carries estimate.json's consistent standard parameters, as far as a URDF can."""
+    import json
+
+    from symkin import derive, load
+
+    finger = load(derive(str(FINGER), str(tmp_path / "generated"), outputs=["inverse_dynamics"]))
+    names = list(finger.info.coordinate_names)
+    t, q, qd, qdd = excitation(len(names), 2)
+    tau = finger.inverse_dynamics(q, qd, qdd) + 0.05 * qd + 0.02 * np.sign(qd)
+    data = write_run(tmp_path / "run.csv", names, t, q, tau, qd, qdd)
+    result = subprocess.run(SYMKIN_CLI + ["identify", str(FINGER), str(data), "--method", "consistent",
+                                          "--no-figure", "-o", str(tmp_path / "out")], capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    assert "identified.urdf: the same as a URDF" in (tmp_path / "out" / "summary.txt").read_text()
+    written = load_model(tmp_path / "out" / "identified.urdf", tip="tcp")
+    record = json.loads((tmp_path / "out" / "estimate.json").read_text())["standard"]["parameters"]
+    estimate = np.array([record[name] for name in parameter_names(written)])
+    # what a URDF carries: the inertials and the viscous friction; the estimate's Coulomb offset makes the levels
+    # direction-dependent, and the comment says that only the positive one is written
+    carried = [k for k, name in enumerate(parameter_names(written)) if name.rsplit(".", 1)[1] in (*INERTIAL, "fv")]
+    found = standard_values(written)
+    assert np.all(np.abs(found[carried] - estimate[carried]) <= 64 * EPS * np.max(np.abs(estimate)))
+    assert "the direction-dependent Coulomb levels of" in (tmp_path / "out" / "identified.urdf").read_text()
+
+
+@pytest.mark.parametrize("text", ["my--arm.yaml", "a-->b", "x-", "---", "ok"])
+def test_an_xml_comment_stays_one_comment_whatever_it_holds(text):
+    """A file name in a URDF's comment: '--' is not allowed inside one, '-->' would end it; the parser sees one
+    comment and the text with every '--' split."""
+    import xml.etree.ElementTree as ElementTree
+
+    parser = ElementTree.XMLParser(target=ElementTree.TreeBuilder(insert_comments=True))
+    root = ElementTree.fromstring(f"<robot>{xml_comment(text)}</robot>", parser=parser)
+    (comment,) = list(root)
+    assert comment.text.strip().replace("- -", "--").replace("- -", "--") == text.strip()

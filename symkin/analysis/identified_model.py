@@ -52,15 +52,17 @@ class UpdatedModel:
     """The rewritten model file and what it replaced.
 
     Attributes:
-        text: the YAML text of the updated model file.
+        text: the YAML text of the updated model file (of a robot file: its chain as a symkin model).
         identified: the standard parameters the run identifies (those with a part in some base parameter).
         links: the links whose bodies were replaced; joints: the joints whose drive or friction was.
+        urdf: of a URDF or xacro file, the identified model as a URDF (:func:`identified_urdf`), else None.
     """
 
     text: str
     identified: tuple[str, ...]
     links: tuple[str, ...]
     joints: tuple[str, ...]
+    urdf: str | None = None
 
 
 #: States of a run that :func:`combinations` solves Y = Y_b K over (evenly spread; all of a shorter run).
@@ -119,14 +121,13 @@ def updated_model(path: str | Path, model: Model, names: Sequence[str], values: 
     """
     from symkin.dynamics.newton_euler import link_frame
     from symkin.model import model_from_text
-    from symkin.model.yaml_source import read_document
+    from symkin.model.source_kind import URDF, XACRO, YAML, source_kind
 
-    if Path(path).suffix.lower() not in (".yaml", ".yml"):
-        raise NotUpdated(f"{path} is not a YAML model file: its identified values are in estimate.json")
     if any(a.gyroscopic for a in model.actuators):
         raise NotUpdated("the model's rotors are bodies of their own (gyroscopic: true), which the link bodies "
                          "identified here include; their values are in estimate.json")
-    data = read_document(path).data
+    kind = source_kind(path)
+    data = _source_data(path, kind)
     given = dict(parameter_values or {})
     numbers = {p.symbol: given.get(p.name, p.value) for p in model.parameters}
     _set_parameters(data, given)
@@ -143,17 +144,58 @@ def updated_model(path: str | Path, model: Model, names: Sequence[str], values: 
             _replace_drive(data, joint.name, values[drive], identified[drive], model, numbers)
             joints.append(joint.name)
     replaced = tuple(name for name, known in zip(names, identified) if known)
-    data["identified"] = {**record, "parameters": list(replaced)}
+    data["identified"] = {**record, **({} if kind == YAML else {"robot_file": Path(path).name}),
+                          "parameters": list(replaced)}
     # file names stay inside the YAML data (quoted by the dumper): in a comment a newline in one would start a key
-    header = f"# {model.name} with identified values, written by symkin identify (what was replaced: 'identified:')\n"
+    what = "" if kind == YAML else " (its robot file's chain as a symkin model)"
+    header = (f"# {model.name} with identified values{what}, written by symkin identify (what was replaced: "
+              "'identified:')\n")
     text = header + yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=110, allow_unicode=True)
     try:
-        model_from_text(text, model.name, file="identified.yaml")
+        written = model_from_text(text, model.name, file="identified.yaml")
     except ModelError as err:
         found = "; ".join(f"{p.key}: {p.message}" for p in err.problems)
         raise NotUpdated(f"the estimate is not a physical model ({found}); --method consistent keeps every link a "
                          "body and the drives' inertia and friction non-negative") from None
-    return UpdatedModel(text, replaced, tuple(links), tuple(joints))
+    urdf = identified_urdf(written, links, joints) if kind in (URDF, XACRO) else None
+    return UpdatedModel(text, replaced, tuple(links), tuple(joints), urdf)
+
+
+def _source_data(path: str | Path, kind: str) -> dict[str, Any]:
+    """The model document's data of ``path``: a YAML model file's, or a robot file's chain as the readers build
+    it (read with their defaults, as ``symkin identify`` reads it)."""
+    from symkin.model.mjcf_source import read_mjcf_document
+    from symkin.model.source_kind import MJCF, URDF, XACRO
+    from symkin.model.urdf_source import read_urdf_document
+    from symkin.model.xacro_source import read_xacro_document
+    from symkin.model.yaml_source import read_document
+
+    if kind == URDF:
+        return read_urdf_document(path).data
+    if kind == XACRO:
+        return read_xacro_document(path)[0].data
+    if kind == MJCF:
+        return read_mjcf_document(path)[0].data
+    return read_document(path).data
+
+
+def identified_urdf(model: Model, links: Sequence[str], joints: Sequence[str]) -> str:
+    """The identified ``model`` written as a URDF (:func:`symkin.model.urdf_export.export_urdf`: its TCP is the link
+    ``tcp``), with a comment on what was identified and what a URDF cannot carry: rotor inertias and
+    direction-dependent Coulomb levels stay in identified.yaml."""
+    from symkin.model.urdf_export import export_urdf, xml_comment
+
+    values = model.parameter_values
+    rotors = [a.joint for a in model.actuators if a.joint in joints and (a.rotor_inertia * a.gear_ratio ** 2).xreplace(values) != 0]
+    asymmetric = [f.joint for f in model.friction if f.joint in joints and f.asymmetric]
+    lost = ([f"the rotor inertias of {', '.join(rotors)}"] if rotors else []) + (
+        [f"the direction-dependent Coulomb levels of {', '.join(asymmetric)} (their positive one is written)"]
+        if asymmetric else [])
+    note = (f"identified by symkin identify: the inertials of {', '.join(links) or 'no link'} and the friction of "
+            f"{', '.join(joints) or 'no joint'} (the parameters: identified.yaml, its section identified)"
+            + (f"; not part of a URDF, in identified.yaml only: {'; '.join(lost)}" if lost else ""))
+    head, rest = export_urdf(model).split("\n", 1)
+    return f"{head}\n{xml_comment(note)}\n{rest}"
 
 
 def _body(link: np.ndarray, R: np.ndarray, p: np.ndarray) -> dict[str, Any] | str:

@@ -30,8 +30,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "q_<name>, tau_<name> and optionally qd_<name>, qdd_<name> (without them, --cutoff derives the "
                     "rates from q by a zero-phase low-pass filter). Writes estimate.json, estimate.csv, "
                     "summary.txt and validation.png (measured and predicted efforts) into the output directory "
-                    "(replaced as a whole); bad data are refused with the file, row and column, and nothing "
-                    "is written.",
+                    "(replaced as a whole), and given a model file identified.yaml, the model with the identified "
+                    "values (given a URDF or xacro file also identified.urdf); bad data are refused with the file, "
+                    "row and column, and nothing is written.",
         epilog="e.g. symkin identify models/planar_2r.yaml run.csv --method wls -o out/identify/planar_2r")
     analysis_args.add_model_arguments(p)
     p.add_argument("data", metavar="DATA.csv", help="the measured run")
@@ -96,13 +97,15 @@ def run(args: argparse.Namespace) -> int:
                 if len(held.time):
                     predict = model.regressor(held.q, held.qd, held.qdd)[0] @ standard.values
             check = None if predict is None else identification.validation_of(predict, held.tau)
-            text, line = None, None
+            updated, line = None, None
             if writes_model:
                 progress("writing the model file with the identified values")
-                text, line = _updated_model(args, model, K, pi, found, standard, values)
+                updated, line = _updated_model(args, model, K, pi, found, standard, values)
             files = _report(args, model, data, found, pi_model[0], check, standard, line)
-            if text is not None:
-                files["identified.yaml"] = text
+            if updated is not None:
+                files["identified.yaml"] = updated.text
+                if updated.urdf is not None:
+                    files["identified.urdf"] = updated.urdf
             if check is not None and predict is not None and not args.no_figure:
                 progress("drawing the validation")
                 files["validation.png"] = identification.validation_figure_png(
@@ -175,10 +178,14 @@ def _consistent(model, Y, pi, fit, found):
     return consistent.estimate(triangle, target, names, pi[0], links)
 
 
-def _updated_model(args: argparse.Namespace, model, K, pi, found, standard,
-                   values: dict[str, float]) -> tuple[str | None, str]:
+def _updated_model(args: argparse.Namespace, model, K, pi, found, standard, values: dict[str, float]):
     """identified.yaml: the model file with what the run identifies replaced (the consistent standard parameters,
-    or the least-squares base parameters' nearest standard ones), and the summary's line on it (or why not)."""
+    or the least-squares base parameters' nearest standard ones; of a URDF or xacro file its chain as a symkin
+    model, and identified.urdf), and the summary's line on it (or why not).
+
+    Returns:
+        (the :class:`~symkin.analysis.identified_model.UpdatedModel` or None, the summary's line).
+    """
     from symkin.analysis import identified_model
     from symkin.model import load_model as load_model_file
 
@@ -191,9 +198,10 @@ def _updated_model(args: argparse.Namespace, model, K, pi, found, standard,
                                                  identified_model.identifiable(K), record, values)
     except identified_model.NotUpdated as why:
         return None, f"no identified.yaml: {why}"
-    return updated.text, (f"identified.yaml: {args.model} with the bodies of {', '.join(updated.links) or 'no link'} "
-                          f"and the drives of {', '.join(updated.joints) or 'no joint'} identified "
-                          f"({len(updated.identified)} standard parameters)")
+    also = "" if updated.urdf is None else "; identified.urdf: the same as a URDF"
+    return updated, (f"identified.yaml: {args.model} with the bodies of {', '.join(updated.links) or 'no link'} "
+                     f"and the drives of {', '.join(updated.joints) or 'no joint'} identified "
+                     f"({len(updated.identified)} standard parameters){also}")
 
 
 def _report(args, model, data, found, pi_model, check, standard=None, model_line=None) -> dict[str, str | bytes]:

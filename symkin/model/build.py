@@ -151,10 +151,12 @@ def _references(r: Reader, data: dict[str, Any]) -> tuple[str, ...]:
 
 
 def _identified(r: Reader, data: dict[str, Any]) -> list[str]:
-    """``identified: {method, data, samples, parameters: [names]}`` (written by ``symkin identify``): a note."""
+    """``identified: {method, data, samples, parameters: [names], robot_file}`` (written by ``symkin identify``; the
+    robot file where the model was read from one): a note."""
     if "identified" not in data:
         return []
-    section = r.mapping(("identified",), data["identified"], required=("method", "data", "samples", "parameters"))
+    section = r.mapping(("identified",), data["identified"], required=("method", "data", "samples", "parameters"),
+                        optional=("robot_file",))
     if section is None or not {"method", "data", "samples", "parameters"} <= set(section):
         return []
     method, source = r.string(("identified", "method"), section["method"]), r.string(("identified", "data"),
@@ -165,10 +167,11 @@ def _identified(r: Reader, data: dict[str, Any]) -> list[str]:
                "write the run's sample count, e.g. 'samples: 4500'")
     items = r.sequence(("identified", "parameters"), section["parameters"], what="standard parameter names") or []
     names = [n for i, v in enumerate(items) if (n := r.string(("identified", "parameters", i), v)) is not None]
+    robot = r.string(("identified", "robot_file"), section["robot_file"]) if "robot_file" in section else None
     if method is None or source is None:
         return []
     return [f"identified by symkin identify ({method}) from {source}, {samples} samples: "
-            f"{len(names)} standard parameters"]
+            f"{len(names)} standard parameters" + (f" (the chain of the robot file {robot})" if robot else "")]
 
 
 def _texts(r: Reader, data: dict[str, Any], key: str, what: str) -> list[str]:

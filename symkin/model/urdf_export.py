@@ -82,6 +82,15 @@ def _is_identity(T: np.ndarray) -> bool:
     return bool(np.array_equal(T, np.eye(4)))
 
 
+def xml_comment(text: str) -> str:
+    """``<!-- text -->`` that stays one comment whatever ``text`` holds (a file name is hostile text): XML allows
+    no "--" inside a comment, so a model file named my--arm.yaml would leave the document malformed, and "-->"
+    would end the comment early; every "--" becomes "- -" (the space before the end keeps a final "-" apart)."""
+    while "--" in text:
+        text = text.replace("--", "- -")
+    return f"<!-- {text} -->"
+
+
 def export_urdf(model: Model) -> str:
     """The URDF text of the serial ``model`` (see the module docstring).
 
@@ -100,8 +109,8 @@ def export_urdf(model: Model) -> str:
                                         "rename that link of the model")])
     friction = {f.joint: f for f in model.friction}
     lines = ['<?xml version="1.0"?>',
-             f"<!-- {model.name}: exported by symkin from {model.source} (model {model.hash}); numbers at the "
-             "parameters' default values -->",
+             xml_comment(f"{model.name}: exported by symkin from {model.source} (model {model.hash}); numbers at "
+                         "the parameters' default values"),
              f"<robot name={quoteattr(model.name)}>", f'  <link name="{ROOT_LINK}"/>']
     base = _transform(model.base, values)
     for joint, p in zip(model.joints, tree.parent_indices(model)):
