@@ -175,6 +175,26 @@ def test_the_consistent_estimate_is_physical_and_fits_the_run(arm):
     assert np.all(np.abs(K @ found.values - pi_b[0]) < 5 * wls.std)
 
 
+def test_an_offset_beyond_the_coulomb_friction_keeps_both_levels_of_the_consistent_estimate():
+    """One drive, tau = 0.2 sign(qd) + 0.5 (a constant push of 0.5 N m against Coulomb friction of 0.2 N m): least
+    squares puts the push into the offset, f_o > f_c, a level f_c - f_o < 0 that would push the joint along its
+    motion; the consistent estimate keeps both Coulomb levels f_c + f_o and f_c - f_o non-negative (to the rounding
+    of their sum and difference), as the model file needs them (friction: {coulomb: {positive, negative}})."""
+    from symkin.analysis import consistent
+
+    rng = np.random.default_rng(4)
+    qd, qdd = np.sin(np.linspace(0, 20, 400)), np.cos(np.linspace(0, 20, 400))
+    Y = np.column_stack([qdd, qd, np.sign(qd), np.ones_like(qd)])     # I_a, f_v, f_c, f_o
+    tau = Y @ [0.01, 0.05, 0.2, 0.5] + rng.normal(0, 1e-3, len(qd))
+    Q, R = np.linalg.qr(Y)
+    unconstrained = np.linalg.lstsq(R, Q.T @ tau, rcond=None)[0]
+    assert unconstrained[3] - unconstrained[2] > 0.25                  # the data alone want a negative level
+    found = consistent.estimate(R, Q.T @ tau, ["j.Ia", "j.fv", "j.fc", "j.fo"], np.zeros(4), 0).values
+    rounding = 4 * EPS * (abs(found[2]) + abs(found[3]))
+    assert found[2] + found[3] >= -rounding
+    assert found[2] - found[3] >= -rounding
+
+
 def test_the_command_estimates_consistent_standard_parameters(arm, tmp_path):
     t, q, qd, qdd, tau = _run(arm)
     data = write_run(tmp_path / "run.csv", ["theta1", "theta2"], t, q, tau, qd, qdd)

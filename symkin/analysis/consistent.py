@@ -11,8 +11,11 @@ positive definite by construction through its log-Cholesky factor (Rucker and We
 parameterization of rigid-body inertia", IEEE Robot. Autom. Lett. 7(2), 2022: U upper triangular with
 exp(alpha) times [[e^d1, s12, s13, t1], [0, e^d2, s23, t2], [0, 0, e^d3, t3], [0, 0, 0, 1]]); J
 positive definite is exactly the density realizability of the link (Wensing, Kim and Slotine 2017), which
-implies m > 0 and the triangle inequalities of the principal moments.  The drives' rotor inertia and
-viscous and Coulomb friction are bounded below by zero; the offset is free.
+implies m > 0 and the triangle inequalities of the principal moments.  Each drive is estimated as its rotor
+inertia I_a, viscous friction f_v and its two Coulomb levels c+ = f_c + f_o (against positive motion) and
+c- = f_c - f_o (against negative motion), all four bounded below by zero: f_c = (c+ + c-)/2 and
+f_o = (c+ - c-)/2, so the offset may have either sign but never turns a level into a push (the friction the
+model file writes, ``coulomb: {positive: c+, negative: c-}``).
 
 The data enter through the triangular factor of the weighted regressor ([W y] = Q [R z; 0 r], as the
 least-squares estimate), so the objective is |R pi(theta) - z|^2 + lambda |D (pi(theta) - pi_prior)|^2:
@@ -30,13 +33,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from symkin.dynamics.parameter_names import DRIVE, DRIVE_NONNEGATIVE, INERTIAL
+from symkin.dynamics.parameter_names import DRIVE, INERTIAL
 
 #: Weight of the prior against the data (relative, after both are scaled): small, it only picks among fits.
 PRIOR_WEIGHT = 1e-4
 #: The standard parameters of a link and of a joint's drive, in the regressor's order.
 LINK_PARAMETERS = len(INERTIAL)
 DRIVE_PARAMETERS = len(DRIVE)
+#: A drive's standard parameters (I_a, f_v, f_c, f_o) from its estimated ones (I_a, f_v, c+, c-), all >= 0.
+DRIVE_OF_LEVELS = np.array([[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 0.5, 0.5], [0.0, 0.0, 0.5, -0.5]])
 
 
 @dataclass(frozen=True)
@@ -149,21 +154,22 @@ def estimate(triangle: np.ndarray, target: np.ndarray, names: Sequence[str], pri
     drives = count - LINK_PARAMETERS * links
     link_scale = [max(float(np.max(np.abs(prior[LINK_PARAMETERS * k:LINK_PARAMETERS * (k + 1)]))), 1e-9)
                   for k in range(links)]
+    to_drives = np.kron(np.eye(drives // DRIVE_PARAMETERS), DRIVE_OF_LEVELS)  # d pi_drives / d theta_drives
+    levels = np.linalg.solve(to_drives, prior[LINK_PARAMETERS * links:]) if drives else np.zeros(0)
     theta0 = np.concatenate([_log_cholesky(_regularized(pseudo_inertia(prior[LINK_PARAMETERS * k:
                                                                                LINK_PARAMETERS * (k + 1)]),
                                                         link_scale[k]))
-                             for k in range(links)] + [np.maximum(prior[LINK_PARAMETERS * links:], 0.0)])
+                             for k in range(links)] + [np.maximum(levels, 0.0)])
     lower = np.full(len(theta0), -np.inf)
-    nonnegative = np.tile(DRIVE_NONNEGATIVE, drives // DRIVE_PARAMETERS)
-    lower[LINK_PARAMETERS * links:][nonnegative] = 0.0
-    theta0 = np.maximum(theta0, lower)
+    lower[LINK_PARAMETERS * links:] = 0.0
     scale = prior_scale(prior)
     data_scale = max(float(np.linalg.norm(target)), 1e-300)
     weight = np.sqrt(PRIOR_WEIGHT) * data_scale / np.sqrt(count)
 
     def standard(theta: np.ndarray) -> np.ndarray:
         factors = [_factor(theta[LINK_PARAMETERS * k:LINK_PARAMETERS * (k + 1)]) for k in range(links)]
-        return np.concatenate([_standard_of(U @ U.T) for U in factors] + [theta[LINK_PARAMETERS * links:]])
+        drive_values = to_drives @ theta[LINK_PARAMETERS * links:]
+        return np.concatenate([_standard_of(U @ U.T) for U in factors] + [drive_values])
 
     def residual(theta: np.ndarray) -> np.ndarray:
         pi = standard(theta)
@@ -172,12 +178,13 @@ def estimate(triangle: np.ndarray, target: np.ndarray, names: Sequence[str], pri
     rows = np.vstack([triangle, np.diag(weight / scale)])
 
     def jacobian(theta: np.ndarray) -> np.ndarray:
-        """[R; w D^-1] d pi / d theta: block diagonal over the links (:func:`_standard_derivatives`), one for a
-        drive's parameter."""
-        d_pi = np.eye(len(theta))
+        """[R; w D^-1] d pi / d theta: block diagonal over the links (:func:`_standard_derivatives`) and the drives
+        (:data:`DRIVE_OF_LEVELS`)."""
+        d_pi = np.zeros((len(theta), len(theta)))
         for k in range(links):
             block = slice(LINK_PARAMETERS * k, LINK_PARAMETERS * (k + 1))
             d_pi[block, block] = _standard_derivatives(theta[block])
+        d_pi[LINK_PARAMETERS * links:, LINK_PARAMETERS * links:] = to_drives
         return rows @ d_pi
 
     result = least_squares(residual, theta0, jac=jacobian, bounds=(lower, np.full(len(theta0), np.inf)),

@@ -64,7 +64,8 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError(f"--holdout must lie in [0, 1), got {args.holdout:g}")
         if not args.window > 0:
             raise ValueError(f"--window must be a positive number of seconds, got {args.window:g}")
-        _require_serial(args.model)
+        source = _model_file(args.model)
+        _require_serial(args.model, source)
         model = model_files.generated_model(args.model, args.backend,
                                             ENERGY_OUTPUTS if args.method == "energy" else IDENTIFY_OUTPUTS)
         values = analysis_args.parse_assignments(args.assignments)
@@ -100,7 +101,7 @@ def run(args: argparse.Namespace) -> int:
             updated, line = None, None
             if writes_model:
                 progress("writing the model file with the identified values")
-                updated, line = _updated_model(args, model, K, pi, found, standard, values)
+                updated, line = _updated_model(args, source, model, K, pi, found, standard, values)
             files = _report(args, model, data, found, pi_model[0], check, standard, line)
             if updated is not None:
                 files["identified.yaml"] = updated.text
@@ -118,16 +119,27 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _require_serial(path: str) -> None:
+def _model_file(path: str):
+    """The :class:`~symkin.model.schema.Model` of MODEL when it is a model file (read once: refused if parallel,
+    rewritten into identified.yaml), None for a generated directory."""
+    if not model_files.is_model_file(path):
+        return None
+    from symkin.model import load_model
+
+    return load_model(path)
+
+
+def _require_serial(path: str, source) -> None:
     """Refuse a parallel model before any derivation: its regressors exist, its base parameters not yet.
+
+    Args:
+        path: MODEL; source: its model (:func:`_model_file`), None for a generated directory.
 
     Raises:
         ValueError: MODEL is a parallel mechanism (a model file, or a generated directory's manifest).
     """
-    if model_files.is_model_file(path):
-        from symkin.model import load_model
-
-        parallel = load_model(path).parallel is not None
+    if source is not None:
+        parallel = source.parallel is not None
     else:
         from symkin.manifest import read_manifest
         from symkin.runtime.info import ModelInfo
@@ -178,7 +190,7 @@ def _consistent(model, Y, pi, fit, found):
     return consistent.estimate(triangle, target, names, pi[0], links)
 
 
-def _updated_model(args: argparse.Namespace, model, K, pi, found, standard, values: dict[str, float]):
+def _updated_model(args: argparse.Namespace, source, model, K, pi, found, standard, values: dict[str, float]):
     """identified.yaml: the model file with what the run identifies replaced (the consistent standard parameters,
     or the least-squares base parameters' nearest standard ones; of a URDF or xacro file its chain as a symkin
     model, and identified.urdf), and the summary's line on it (or why not).
@@ -187,14 +199,13 @@ def _updated_model(args: argparse.Namespace, model, K, pi, found, standard, valu
         (the :class:`~symkin.analysis.identified_model.UpdatedModel` or None, the summary's line).
     """
     from symkin.analysis import identified_model
-    from symkin.model import load_model as load_model_file
 
     names = model.info.functions["regressor"].outputs["pi"]
     estimate = standard.values if standard is not None else identified_model.nearest_standard(K, found.values, pi[0])
     record = {"method": found.method if standard is None else "consistent", "data": Path(args.data).name,
               "samples": found.samples}
     try:
-        updated = identified_model.updated_model(args.model, load_model_file(args.model), names, estimate,
+        updated = identified_model.updated_model(args.model, source, names, estimate,
                                                  identified_model.identifiable(K), record, values)
     except identified_model.NotUpdated as why:
         return None, f"no identified.yaml: {why}"

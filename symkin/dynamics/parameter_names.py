@@ -16,5 +16,3 @@ DRIVE = ("Ia", "fv", "fc", "fo")
 #: The drive parameters whose efforts dissipate: an energy balance carries them as the integral of their power,
 #: every other parameter as a change of the stored energy.
 DISSIPATIVE = DRIVE[1:]
-#: Which drive parameters a physical drive has non-negative (the offset has either sign).
-DRIVE_NONNEGATIVE = (True, True, True, False)
