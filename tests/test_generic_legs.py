@@ -365,3 +365,49 @@ def test_the_gci_command_averages_over_the_continued_workspace(scara_dir, scara_
                             capture_output=True, text=True)
     assert result.returncode == 2
     assert "--domain: dual_scara's legs have no closed forms" in result.stderr
+
+
+def _geometry_jacobian(poses, elbow_sign, knee_sign):
+    """J = dp/dq (..., 4, 4) of the device from central differences of the geometry's inverse kinematics."""
+    h = 1e-6
+    columns = []
+    for k in range(4):
+        step = np.zeros(4)
+        step[k] = h
+        plus = _inverse_in_mode(poses + step, elbow_sign, knee_sign)[0]
+        minus = _inverse_in_mode(poses - step, elbow_sign, knee_sign)[0]
+        columns.append((plus - minus) / (2 * h))
+    return np.linalg.inv(np.stack(columns, axis=-1))
+
+
+def test_the_rating_of_legs_without_closed_forms_is_that_of_the_geometrys_jacobian(scara):
+    """datasheet.rate of the dual SCARA over its continued workspace: the isotropic force and the resolution are
+    those of J = dp/dq written from the geometry (its x, y, z rows: the handle pushed with its yaw free), the torque
+    about z that of its yaw row; no dynamics is derived for such legs, so the apparent mass is not rated and the
+    datasheet says why; the home pose is the last sample."""
+    from symkin.analysis import datasheet, forces, rating
+
+    efforts, steps = np.array([1.0, 2.0, 1.0, 0.5]), np.array([1e-3, 1e-5, 1e-3, 2e-3])
+    actuation = datasheet.Actuation.of_model(scara, effort_limits=efforts, joint_steps=steps)
+    sheet = datasheet.rate(scara, actuation, samples=4000, limits={"lift1": STROKE})
+    assert "no dynamics is derived for legs without closed forms" in sheet.skipped["apparent_mass"]
+    np.testing.assert_allclose(sheet.points[sheet.home], HOME[:3], atol=KINEMATICS)
+    q0, s0 = assemble_at_home(scara)
+    poses = np.concatenate([sheet.points, np.zeros((len(sheet.points), 1))], axis=-1)
+    J = _geometry_jacobian(poses, np.sign(np.sin(s0[0])), np.sign(np.sin(q0[3])))
+    measures = {m.name: m.values for m in sheet.measures}
+    # central differences: truncation h^2 ~ 1e-12, rounding eps / h ~ 1e-10 in dq/dp, amplified by J's conditioning
+    np.testing.assert_allclose(measures["isotropic_force"], forces.isotropic_force(J[:, :3], efforts), rtol=1e-6)
+    np.testing.assert_allclose(measures["resolution"], rating.position_resolution(J[:, :3], steps), rtol=1e-6)
+    np.testing.assert_allclose(measures["isotropic_torque"], forces.isotropic_force(J[:, 3:], efforts), rtol=1e-6)
+
+
+def test_the_viewer_says_what_analyses_legs_without_closed_forms(scara_dir):
+    """`symkin view` of the dual SCARA: no page (the viewer evaluates closed forms in the browser), and the message
+    says why instead of asking for outputs such legs cannot have."""
+    result = subprocess.run(SYMKIN_CLI + ["view", str(scara_dir), "-o", str(scara_dir.parent / "view.html")],
+                            capture_output=True, text=True)
+    assert result.returncode == 2
+    assert "the legs of dual_scara have no closed forms" in result.stderr
+    assert "symkin workspace, gci, rate and mobility" in result.stderr
+    assert not (scara_dir.parent / "view.html").exists()

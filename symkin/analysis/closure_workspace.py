@@ -33,6 +33,7 @@ parts only make sense together; the GCI with its error estimate is two of its gr
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -65,6 +66,26 @@ CLOSED = 1e-9
 SEEDS = 3
 #: Largest change of a held angle (rad) per step of the path from the home pose to the first cell.
 ANGLE_STEP = 0.05
+
+
+def held_orientation(model: GeneratedModel, angles: Sequence[float] | None) -> dict[str, float]:
+    """The angles (roll, pitch, yaw in rad, or None: the home pose's) as the held angles of the model's task space;
+    an angle outside its task space must be 0 (the legs hold it there).
+
+    Raises:
+        ValueError: a nonzero angle the task space does not have.
+    """
+    from symkin.analysis.parallel import ORIENTATION_COMPONENTS
+
+    if angles is None:
+        return {}
+    task = mechanism.task_space(model)
+    extra = [f"{name} = {value:g}" for name, value in zip(ORIENTATION_COMPONENTS, angles)
+             if name not in task and value != 0.0]
+    if extra:
+        raise ValueError(f"--orientation: {model.name}'s task space {list(task)} holds {', '.join(extra)} at 0 "
+                         "(parallel.motion); give 0 there")
+    return {name: float(value) for name, value in zip(ORIENTATION_COMPONENTS, angles) if name in task}
 
 
 def uses_closure(model: GeneratedModel) -> bool:
@@ -280,6 +301,7 @@ class ClosureWorkspace:
         inv_kappa: 1/kappa at the cell centres, the grid's shape, NaN outside the workspace (0 at a cell whose
             J is not determined, an interior singularity to rounding).
         q: the actuators' coordinates at the cell centres, (*shape, n), NaN outside.
+        s: the passive joints' variables there, (*shape, ns), NaN outside.
         pose: the task pose held (the held angles; the positions are the cells').
         axes: the gridded task coordinates, e.g. ("x", "y", "z").
         length: the characteristic length of the conditioning (None: the task space has no angles).
@@ -288,6 +310,7 @@ class ClosureWorkspace:
     occupancy: Occupancy
     inv_kappa: np.ndarray
     q: np.ndarray
+    s: np.ndarray
     pose: np.ndarray
     axes: tuple[str, ...]
     length: float | None
@@ -298,7 +321,7 @@ class ClosureWorkspace:
         return float(np.mean(self.inv_kappa[self.occupancy.occupied]))
 
 
-def _angular_rates(model: GeneratedModel, J: np.ndarray) -> np.ndarray:
+def angular_rates(model: GeneratedModel, J: np.ndarray) -> np.ndarray:
     """J with its roll-pitch-yaw rows turned into angular velocity (base frame) where the task space has all
     three (so kappa does not depend on the angles' parametrization); a single angle (planar yaw) is a rate already."""
     from symkin.analysis.parallel import ORIENTATION_COMPONENTS, angular_velocity_matrix
@@ -362,7 +385,7 @@ def closure_workspace(model: GeneratedModel, *, orientation: dict[str, float] | 
     reached = flood.reached
     inv_kappa = np.full(len(reached), np.nan)
     rows = mechanism.position_rows(model)
-    J = _angular_rates(model, closure_velocities(model, flood.q[reached], flood.s[reached], grid.poses[reached]).J)
+    J = angular_rates(model, closure_velocities(model, flood.q[reached], flood.s[reached], grid.poses[reached]).J)
     determined = np.all(np.isfinite(J), axis=(-2, -1))
     if len(rows) < len(task):
         length = length if length is not None else conditioning.characteristic_length(J[determined], rows)
@@ -370,9 +393,10 @@ def closure_workspace(model: GeneratedModel, *, orientation: dict[str, float] | 
     values = np.where(determined, conditioning.inverse_condition_number(np.nan_to_num(J)), 0.0)
     inv_kappa[reached] = values
     axes = tuple(c for c in task if c in mechanism.POSITION_COMPONENTS)
-    n = flood.q.shape[-1]
+    n, ns = _sizes(model)
     return ClosureWorkspace(Occupancy(grid.lower, grid.cell, reached.reshape(grid.shape)),
-                            inv_kappa.reshape(grid.shape), flood.q.reshape(grid.shape + (n,)), template, axes,
+                            inv_kappa.reshape(grid.shape), flood.q.reshape(grid.shape + (n,)),
+                            flood.s.reshape(grid.shape + (ns,)), template, axes,
                             length if len(rows) < len(task) else None)
 
 

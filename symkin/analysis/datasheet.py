@@ -133,6 +133,11 @@ def rate(model: GeneratedModel, actuation: Actuation, *, samples: int = 4096, se
         ValueError: the model cannot be rated (no task coordinate it rates, a wrist on the platform, no mass
             matrix), or the box holds no sample.
     """
+    from symkin.analysis import closure_workspace
+
+    if closure_workspace.uses_closure(model):
+        return rate_closure_platform(model, actuation, samples=samples, box=box, limits=limits,
+                                     conditioning=conditioning, orientation=orientation)
     kind = mechanism.kind_of(model)
     if model.info.wrist:
         raise ValueError(f"{model.name}: a platform carrying a wrist: rate the whole device at its grip point "
@@ -171,6 +176,62 @@ def rate(model: GeneratedModel, actuation: Actuation, *, samples: int = 4096, se
     M = dynamics_at(model, "mass_matrix", q, points)
     measures, skipped = translation_measures(model, J, M, q, points, actuation)
     return Datasheet(model.name, q, points, cloud.axes, measures, len(q) - 1, skipped)
+
+
+#: Why a platform on legs without closed forms has no apparent mass (nor a gravity budget) in its datasheet.
+NO_CLOSURE_DYNAMICS = ("no dynamics is derived for legs without closed forms (any topology): symkin rates their "
+                       "kinematics (forces, resolution, friction)")
+
+
+def rate_closure_platform(model: GeneratedModel, actuation: Actuation, *, samples: int = 4096,
+                          box: Mapping[str, tuple[float, float]] | None = None, limits: mechanism.Limits | None = None,
+                          conditioning: float = USABLE_CONDITIONING,
+                          orientation: Sequence[float] | None = None) -> Datasheet:
+    """The kinematic datasheet of a platform whose legs have no closed forms, over the working mode of its home
+    assembly at a constant ``orientation`` (roll, pitch, yaw in rad; default the home pose's), on the grid of
+    :func:`symkin.analysis.closure_workspace.closure_workspace` (about ``samples`` cells).
+
+    J = dp/dq at each reached cell from :func:`symkin.runtime.parallel.closure_velocities`: its position rows J_v
+    rate the handle pushed with its angles free (forces with no moment, tau = J_v^T f, the translation's
+    resolution and friction), its angle rows J_w (as angular velocity) the handle turned with its position free.
+    The home pose is the last sample.  No dynamics is derived for such legs (:data:`NO_CLOSURE_DYNAMICS`).
+    """
+    from symkin.analysis import closure_workspace
+    from symkin.runtime.parallel import closure_velocities
+
+    held = closure_workspace.held_orientation(model, orientation)
+    found = closure_workspace.closure_workspace(model, orientation=held, limits=limits,
+                                                cells=max(8, int(round(samples ** (1 / 3)))))
+    reached = found.occupancy.occupied
+    task = mechanism.task_space(model)
+    positions = [k for k, c in enumerate(task) if c in mechanism.POSITION_COMPONENTS]
+    angles = [k for k in range(len(task)) if k not in positions]
+    points = found.occupancy.centers()[reached]
+    poses = np.repeat(found.pose[None], len(points), axis=0)
+    poses[:, positions] = points
+    home_q, home_s = closure_workspace.assemble_at_home(model)
+    home_pose = mechanism.home_pose(model)
+    if not np.allclose(home_pose[angles], found.pose[angles]):
+        nearest = int(np.argmin(np.linalg.norm(points - home_pose[positions], axis=-1)))
+        home_q, home_s, home_pose = found.q[reached][nearest], found.s[reached][nearest], poses[nearest]
+    q = np.concatenate([found.q[reached], home_q[None]])
+    s = np.concatenate([found.s[reached], home_s[None]])
+    poses = np.concatenate([poses, home_pose[None]])
+    points = poses[:, positions]
+    J = closure_workspace.angular_rates(model, closure_velocities(model, q, s, poses).J)
+    J_v, J_w = J[:, positions, :], J[:, angles, :]
+    keep = np.all(np.isfinite(J), axis=(-2, -1))
+    if box:
+        keep &= _within(points, found.axes, box)
+    keep = _usable(keep, conditioning, J_v, *([J_w] if angles else []))
+    q, points, poses, J_v, J_w = q[keep], points[keep], poses[keep], J_v[keep], J_w[keep]
+    if len(q) < 2:
+        raise ValueError(f"{model.name}: no reached cell lies in the box {dict(box or {})} with 1/kappa >= "
+                         f"{conditioning:g}")
+    measures, skipped = translation_measures(model, J_v, NO_CLOSURE_DYNAMICS, q, poses, actuation)
+    if angles:
+        measures += rotation_measures(J_w, None, actuation)
+    return Datasheet(model.name, q, points, found.axes, measures, len(q) - 1, skipped)
 
 
 def rate_pose_platform(model: GeneratedModel, actuation: Actuation, *, samples: int = 4096, seed: int = 0,

@@ -70,13 +70,16 @@ def dynamics_at(model: GeneratedModel, name: str, q: np.ndarray, poses: np.ndarr
     return function(q, poses) if mechanism.is_parallel(model) else function(q)
 
 
-def rotation_measures(J_w: np.ndarray, M: np.ndarray, actuation: Actuation) -> tuple[Measure, ...]:
-    """A rotating handle's inertia felt with its position free, torque capability and angular resolution."""
-    inertias = rating.principal_masses(M, J_w)
-    out = [Measure("apparent_inertia_min", "kg m^2", inertias[:, 0], False,
-                   "smallest principal inertia felt turning the handle (its position free)"),
-           Measure("apparent_inertia_max", "kg m^2", inertias[:, -1], False,
-                   "largest principal inertia felt turning the handle (its position free)")]
+def rotation_measures(J_w: np.ndarray, M: np.ndarray | None, actuation: Actuation) -> tuple[Measure, ...]:
+    """A rotating handle's inertia felt with its position free (where M is given), torque capability and angular
+    resolution."""
+    out = []
+    if M is not None:
+        inertias = rating.principal_masses(M, J_w)
+        out += [Measure("apparent_inertia_min", "kg m^2", inertias[:, 0], False,
+                        "smallest principal inertia felt turning the handle (its position free)"),
+                Measure("apparent_inertia_max", "kg m^2", inertias[:, -1], False,
+                        "largest principal inertia felt turning the handle (its position free)")]
     if actuation.effort_limits is not None:
         out += [Measure("isotropic_torque", "N m", forces.isotropic_force(J_w, actuation.effort_limits), True,
                         "largest torque rendered about every axis, with no force (peak efforts)"),
@@ -91,15 +94,20 @@ def rotation_measures(J_w: np.ndarray, M: np.ndarray, actuation: Actuation) -> t
     return tuple(out)
 
 
-def translation_measures(model: GeneratedModel, J: np.ndarray, M: np.ndarray, q: np.ndarray, poses: np.ndarray,
+def translation_measures(model: GeneratedModel, J: np.ndarray, M: np.ndarray | str, q: np.ndarray, poses: np.ndarray,
               actuation: Actuation) -> tuple[tuple[Measure, ...], dict[str, str]]:
-    """The handle's measures from J (its translational rows), M and the generated functions at (q, poses)."""
-    masses = rating.principal_masses(M, J)
-    out = [Measure("apparent_mass_min", "kg", masses[:, 0], False, "smallest principal mass felt at the handle"),
-           Measure("apparent_mass_max", "kg", masses[:, -1], False, "largest principal mass felt at the handle"),
-           Measure("inertia_isotropy", "", masses[:, -1] / masses[:, 0], False,
-                   "largest over smallest principal mass (1: the same mass in every direction)")]
+    """The handle's measures from J (its translational rows), M (or why the model has none) and the generated
+    functions at (q, poses)."""
+    out: list[Measure] = []
     skipped = {}
+    if isinstance(M, str):
+        skipped["apparent_mass"] = M
+    else:
+        masses = rating.principal_masses(M, J)
+        out += [Measure("apparent_mass_min", "kg", masses[:, 0], False, "smallest principal mass felt at the handle"),
+                Measure("apparent_mass_max", "kg", masses[:, -1], False, "largest principal mass felt at the handle"),
+                Measure("inertia_isotropy", "", masses[:, -1] / masses[:, 0], False,
+                        "largest over smallest principal mass (1: the same mass in every direction)")]
     efforts = actuation.effort_limits
     if efforts is None:
         skipped["force"] = "no effort limits: declare effort_limit per joint or give --effort-limit"

@@ -34,7 +34,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "constant --orientation, its handle pushed (orientation free) and twisted (position free): "
                     "the apparent rotational inertia, the isotropic and peak torque and the angular resolution "
                     "join the table; a spherical platform (the Agile Eye) is rated over its orientations, its "
-                    "handle twisted about the centre (--box in rad of roll, pitch, yaw). A measure whose data the model lacks is listed as not rated, "
+                    "handle twisted about the centre (--box in rad of roll, pitch, yaw). Legs without closed forms "
+                    "(any topology) are rated over the working mode continued from the home pose at a constant "
+                    "--orientation (-n N: about N^(1/3) cells a side), by their kinematics only (no apparent mass). "
+                    "A measure whose data the model lacks is listed as not rated, "
                     "with what to give. Writes datasheet.json (every number with its unit and the pose of each "
                     "extreme), datasheet.csv (every rated pose), datasheet.png (a map per measure) and "
                     "summary.txt into the output directory (replaced as a whole).",

@@ -134,29 +134,14 @@ def _orientations(args: argparse.Namespace, model, limits: dict) -> int:
     return 0
 
 
-def held_angles(args: argparse.Namespace, model) -> dict[str, float]:
-    """--orientation as the held angles of a platform whose task space has some of roll, pitch, yaw; an angle
-    outside its task space must be 0 (the legs hold it there)."""
-    from symkin.analysis import mechanism
-    from symkin.analysis.parallel import ORIENTATION_COMPONENTS
-
-    angles = analysis_args.parse_orientation(args.orientation)
-    if angles is None:
-        return {}
-    task = mechanism.task_space(model)
-    extra = [f"{name} = {value:g}" for name, value in zip(ORIENTATION_COMPONENTS, angles)
-             if name not in task and value != 0.0]
-    if extra:
-        raise ValueError(f"--orientation: {model.name}'s task space {list(task)} holds {', '.join(extra)} at 0 "
-                         "(parallel.motion); give 0 there")
-    return {name: value for name, value in zip(ORIENTATION_COMPONENTS, angles) if name in task}
-
-
 def closure_options(args: argparse.Namespace, model) -> dict:
     """The held angles (--orientation), the characteristic length (--length) and the cells a side (-n N: about
     N^(1/3)) of a workspace continued over a grid (:mod:`symkin.analysis.closure_workspace`)."""
     length = analysis_args.parse_length(args.length)
-    return {"orientation": held_angles(args, model), "length": None if length == "auto" else float(length),
+    from symkin.analysis.closure_workspace import held_orientation
+
+    orientation = held_orientation(model, analysis_args.parse_orientation(args.orientation))
+    return {"orientation": orientation, "length": None if length == "auto" else float(length),
             "cells": max(8, int(round(args.samples ** (1 / 3))))}
 
 

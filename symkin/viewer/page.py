@@ -351,8 +351,16 @@ def model_script(model: LoadedModel) -> str:
     """The text of the model's generated JavaScript, once checked to hold the functions the page evaluates.
 
     Raises:
-        ViewUnavailable: the directory lacks them; the message names what and how to derive it.
+        ViewUnavailable: the directory lacks them; the message names what and how to derive it (or, for legs
+            without closed forms, that they have no such functions and what analyses them).
     """
+    from symkin.analysis.closure_workspace import uses_closure
+
+    if uses_closure(model):
+        raise ViewUnavailable(f"{model.directory}: the legs of {model.name} have no closed forms (legs of any "
+                              "topology): the page evaluates the closed-form ik and leg_points in the browser, "
+                              "which such legs do not have; analyse them with symkin workspace, gci, rate and "
+                              "mobility, or symkin.runtime.parallel (solve_closure, closure_velocities)")
     missing = missing_functions(model)
     script = model.directory / f"{model.name}.js"
     if missing or not script.is_file():
