@@ -402,12 +402,39 @@ def test_the_rating_of_legs_without_closed_forms_is_that_of_the_geometrys_jacobi
     np.testing.assert_allclose(measures["isotropic_torque"], forces.isotropic_force(J[:, 3:], efforts), rtol=1e-6)
 
 
-def test_the_viewer_says_what_analyses_legs_without_closed_forms(scara_dir):
-    """`symkin view` of the dual SCARA: no page (the viewer evaluates closed forms in the browser), and the message
-    says why instead of asking for outputs such legs cannot have."""
+def test_the_viewer_and_the_simulation_say_what_analyses_legs_without_closed_forms(scara_dir):
+    """`symkin view` and `symkin simulate` of the dual SCARA: no page (the viewer evaluates closed forms in the
+    browser), no simulation (no dynamics for such legs), and the messages say why instead of asking for outputs such
+    legs cannot have."""
     result = subprocess.run(SYMKIN_CLI + ["view", str(scara_dir), "-o", str(scara_dir.parent / "view.html")],
                             capture_output=True, text=True)
     assert result.returncode == 2
     assert "the legs of dual_scara have no closed forms" in result.stderr
     assert "symkin workspace, gci, rate and mobility" in result.stderr
     assert not (scara_dir.parent / "view.html").exists()
+    result = subprocess.run(SYMKIN_CLI + ["simulate", str(scara_dir), "-o", str(scara_dir.parent / "simulation")],
+                            capture_output=True, text=True)
+    assert result.returncode == 2
+    assert "no dynamics is derived for such legs, so it cannot be simulated" in result.stderr
+    assert not (scara_dir.parent / "simulation").exists()
+
+
+def test_angle_rows_become_angular_velocity_at_each_pose():
+    """A task space with roll, pitch and yaw: each sample's angle rows are turned into angular velocity by E of its
+    own pose (omega = E d(roll, pitch, yaw)/dt, analysis.parallel.angular_velocity_matrix), not of the home pose;
+    a task space with yaw alone keeps its rows."""
+    from types import SimpleNamespace
+
+    from symkin.analysis.closure_workspace import angular_rates
+    from symkin.analysis.parallel import angular_velocity_matrix
+
+    rng = np.random.default_rng(8)
+    J, poses = rng.normal(size=(5, 6, 6)), rng.uniform(-1, 1, (5, 6))
+    pose_model = SimpleNamespace(info=SimpleNamespace(task_space=("x", "y", "z", "roll", "pitch", "yaw")))
+    turned = angular_rates(pose_model, J, poses)
+    for k in range(5):
+        E = np.eye(6)
+        E[3:, 3:] = angular_velocity_matrix(poses[k, 3:])
+        np.testing.assert_allclose(turned[k], E @ J[k], rtol=0, atol=16 * EPS * np.max(np.abs(J[k])))
+    schoenflies = SimpleNamespace(info=SimpleNamespace(task_space=("x", "y", "z", "yaw")))
+    np.testing.assert_array_equal(angular_rates(schoenflies, J[:, :4, :4], poses[:, :4]), J[:, :4, :4])

@@ -321,18 +321,18 @@ class ClosureWorkspace:
         return float(np.mean(self.inv_kappa[self.occupancy.occupied]))
 
 
-def angular_rates(model: GeneratedModel, J: np.ndarray) -> np.ndarray:
-    """J with its roll-pitch-yaw rows turned into angular velocity (base frame) where the task space has all
-    three (so kappa does not depend on the angles' parametrization); a single angle (planar yaw) is a rate already."""
+def angular_rates(model: GeneratedModel, J: np.ndarray, poses: np.ndarray) -> np.ndarray:
+    """J (..., m, n) at the task poses (..., m) with its roll-pitch-yaw rows turned into angular velocity (base frame,
+    E of each pose: :func:`symkin.analysis.parallel.angular_velocity_matrix`) where the task space has all three (so
+    kappa does not depend on the angles' parametrization); a single angle (planar yaw) is a rate already."""
     from symkin.analysis.parallel import ORIENTATION_COMPONENTS, angular_velocity_matrix
 
     task = mechanism.task_space(model)
     if not set(ORIENTATION_COMPONENTS) <= set(task):
         return J
-    rows = [task.index(c) for c in ORIENTATION_COMPONENTS]
-    angles = mechanism.home_pose(model)[rows]
-    rates = np.eye(len(task))
-    rates[np.ix_(rows, rows)] = angular_velocity_matrix(angles)
+    rows = np.array([task.index(c) for c in ORIENTATION_COMPONENTS])
+    rates = np.broadcast_to(np.eye(len(task)), J.shape[:-2] + (len(task), len(task))).copy()
+    rates[..., rows[:, None], rows[None, :]] = angular_velocity_matrix(np.asarray(poses)[..., rows])
     return rates @ J
 
 
@@ -385,7 +385,8 @@ def closure_workspace(model: GeneratedModel, *, orientation: dict[str, float] | 
     reached = flood.reached
     inv_kappa = np.full(len(reached), np.nan)
     rows = mechanism.position_rows(model)
-    J = angular_rates(model, closure_velocities(model, flood.q[reached], flood.s[reached], grid.poses[reached]).J)
+    poses = grid.poses[reached]
+    J = angular_rates(model, closure_velocities(model, flood.q[reached], flood.s[reached], poses).J, poses)
     determined = np.all(np.isfinite(J), axis=(-2, -1))
     if len(rows) < len(task):
         length = length if length is not None else conditioning.characteristic_length(J[determined], rows)

@@ -218,7 +218,7 @@ def rate_closure_platform(model: GeneratedModel, actuation: Actuation, *, sample
     s = np.concatenate([found.s[reached], home_s[None]])
     poses = np.concatenate([poses, home_pose[None]])
     points = poses[:, positions]
-    J = closure_workspace.angular_rates(model, closure_velocities(model, q, s, poses).J)
+    J = closure_workspace.angular_rates(model, closure_velocities(model, q, s, poses).J, poses)
     J_v, J_w = J[:, positions, :], J[:, angles, :]
     keep = np.all(np.isfinite(J), axis=(-2, -1))
     if box:

@@ -30,6 +30,7 @@ from __future__ import annotations
 import numpy as np
 
 from symkin.analysis import mechanism
+from symkin.analysis.closure_workspace import uses_closure
 from symkin.analysis.conditioning import inverse_condition_number
 from symkin.analysis.device import DEVICE_TASK_SPACE
 from symkin.errors import GeneratedCodeError
@@ -65,6 +66,10 @@ class Plant:
         self.hybrid = bool(info.wrist)
         self.legs = len(info.coordinates)
         self._last_pose: tuple[np.ndarray | None, np.ndarray] = (None, np.empty(0))
+        if uses_closure(model):
+            raise GeneratedCodeError(f"{model.name}: its legs have no closed forms (legs of any topology), and no "
+                                     "dynamics is derived for such legs, so it cannot be simulated; analyse it with "
+                                     "symkin workspace, gci, rate and mobility")
         required = REQUIRED_PARALLEL if self.parallel else REQUIRED
         missing = [name for name in required if name not in model.functions]
         if missing:
