@@ -151,9 +151,10 @@ class _Limits:
 
 
 def _advance(model: GeneratedModel, q: np.ndarray, s: np.ndarray, frames: ClosureFrames, p: np.ndarray,
-             limits: _Limits) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(q, s, taken) at the poses p (K, m) solved from the neighbouring solutions (q, s) whose closure frames
-    are ``frames``: taken where the solve converged within the limits and crossed no singularity."""
+             limits: _Limits) -> tuple[np.ndarray, np.ndarray, ClosureFrames, np.ndarray]:
+    """(q, s, their closure frames, taken) at the poses p (K, m) solved from the neighbouring solutions (q, s)
+    whose closure frames are ``frames``: taken where the solve converged within the limits and crossed no
+    singularity.  The frames returned serve the next step from these solutions (computed once per solve)."""
     report = solve_closure(model, q, s, p, unknowns=("q", "s"), tol=SOLVE_TOLERANCE, max_iterations=SOLVE_ITERATIONS,
                            max_step=MAX_STEP)
     solution = report.solution
@@ -162,7 +163,7 @@ def _advance(model: GeneratedModel, q: np.ndarray, s: np.ndarray, frames: Closur
     after = closure_frames(model, q1, s1, p)
     taken = (_closes(report, p) & _same_side(frames.task, after.task) & _same_side(frames.actuated, after.actuated))
     taken[taken] &= limits.hold(q1[taken], s1[taken])
-    return q1, s1, taken
+    return q1, s1, after, taken
 
 
 def _march(model: GeneratedModel, start: tuple[np.ndarray, np.ndarray, np.ndarray], targets: np.ndarray,
@@ -178,10 +179,10 @@ def _march(model: GeneratedModel, start: tuple[np.ndarray, np.ndarray, np.ndarra
     s = np.repeat(start[1][None], len(targets), axis=0)
     p = np.repeat(start[2][None], len(targets), axis=0)
     taken = np.ones(len(targets), dtype=bool)
+    frames = closure_frames(model, q, s, p)
     for t in np.linspace(0.0, 1.0, steps + 1)[1:]:
-        frames = closure_frames(model, q, s, p)
         p = start[2] + t * (targets - start[2])
-        q, s, step_taken = _advance(model, q, s, frames, p, limits)
+        q, s, frames, step_taken = _advance(model, q, s, frames, p, limits)
         taken &= step_taken
     return q, s, taken
 
@@ -204,7 +205,8 @@ def _flood(model: GeneratedModel, poses: np.ndarray, shape: tuple[int, ...], see
     reached = np.zeros(len(poses), dtype=bool)
     q, s = np.full((len(poses), n), np.nan), np.full((len(poses), ns), np.nan)
     reached[seed], q[seed], s[seed] = True, seed_solution[0], seed_solution[1]
-    frontier = np.array([seed])
+    frontier = np.array([seed])  # sorted, as np.unique leaves each layer's cells
+    frontier_frames = closure_frames(model, q[frontier], s[frontier], poses[frontier])
     while len(frontier):
         index = np.array(np.unravel_index(frontier, shape)).T
         candidates, parents = [], []
@@ -221,9 +223,11 @@ def _flood(model: GeneratedModel, poses: np.ndarray, shape: tuple[int, ...], see
         parent = parent[fresh][first]
         if not len(cells):
             break
-        frames = closure_frames(model, q[parent], s[parent], poses[parent])
-        q1, s1, taken = _advance(model, q[parent], s[parent], frames, poses[cells], limits)
+        at = np.searchsorted(frontier, parent)  # the parents are cells of the last layer, whose frames are known
+        frames = ClosureFrames(frontier_frames.task[at], frontier_frames.actuated[at])
+        q1, s1, after, taken = _advance(model, q[parent], s[parent], frames, poses[cells], limits)
         frontier = cells[taken]
+        frontier_frames = ClosureFrames(after.task[taken], after.actuated[taken])
         reached[frontier], q[frontier], s[frontier] = True, q1[taken], s1[taken]
     return _Flood(reached, q, s)
 
