@@ -304,20 +304,26 @@ class ClosureWorkspace:
         occupancy: the reached cells (their centres' positions in the axes ``axes``).
         inv_kappa: 1/kappa at the cell centres, the grid's shape, NaN outside the workspace (0 at a cell whose
             J is not determined, an interior singularity to rounding).
+        J: dp/dq at the cell centres, (*shape, m, n), its angle rows as angular velocity
+            (:func:`angular_rates`), not homogenized; NaN outside the workspace.
         q: the actuators' coordinates at the cell centres, (*shape, n), NaN outside.
         s: the passive joints' variables there, (*shape, ns), NaN outside.
         pose: the task pose held (the held angles; the positions are the cells').
         axes: the gridded task coordinates, e.g. ("x", "y", "z").
         length: the characteristic length of the conditioning (None: the task space has no angles).
+        box: (lower, upper) of the positions the grid was laid over (another grid over the same box:
+            ``closure_workspace(..., box=found.box)``).
     """
 
     occupancy: Occupancy
     inv_kappa: np.ndarray
+    J: np.ndarray
     q: np.ndarray
     s: np.ndarray
     pose: np.ndarray
     axes: tuple[str, ...]
     length: float | None
+    box: tuple[np.ndarray, np.ndarray]
 
     @property
     def gci(self) -> float:
@@ -342,7 +348,8 @@ def angular_rates(model: GeneratedModel, J: np.ndarray, poses: np.ndarray) -> np
 
 def closure_workspace(model: GeneratedModel, *, orientation: dict[str, float] | None = None,
                       limits: Limits | None = None, length: float | None = None, cells: int = CELLS,
-                      start: tuple[np.ndarray, np.ndarray] | None = None) -> ClosureWorkspace:
+                      start: tuple[np.ndarray, np.ndarray] | None = None,
+                      box: tuple[np.ndarray, np.ndarray] | None = None) -> ClosureWorkspace:
     """The working mode of the home assembly at a constant orientation (see the module docstring).
 
     Args:
@@ -352,6 +359,8 @@ def closure_workspace(model: GeneratedModel, *, orientation: dict[str, float] | 
         length: the characteristic length (m); default: computed over the reached cells.
         cells: cells along the longest side of the grid.
         start: (q, s) of the home assembly; default :func:`assemble_at_home`.
+        box: (lower, upper) of the positions to grid, e.g. another grid's ``box``; default: found by coarse
+            floods from the home pose.  The grid still grows where its reached cells touch the box.
 
     Raises:
         ValueError: the model has no closure to continue, an orientation names no angle of its task space, the
@@ -374,7 +383,10 @@ def closure_workspace(model: GeneratedModel, *, orientation: dict[str, float] | 
     bounds = _Limits(mechanism.joint_limits(model, limits), mechanism.revolute_mask(model),
                      passive.declared_limits(model))
     home = (q0, s0, home_pose)
-    lower, upper = _box(model, template, positions, home, bounds)
+    if box is None:
+        lower, upper = _box(model, template, positions, home, bounds)
+    else:
+        lower, upper = np.asarray(box[0], dtype=float), np.asarray(box[1], dtype=float)
     for _ in range(BOX_GROWTHS + 1):  # a coarse flood can miss a thin part; the fine grid must not touch its box
         corner, size, counts = grid_geometry(lower, upper, float(np.max(upper - lower)) / cells)
         grid = _grid(template, positions, corner, size, counts)
@@ -387,10 +399,13 @@ def closure_workspace(model: GeneratedModel, *, orientation: dict[str, float] | 
     else:
         raise _unbounded(model, lower, upper)
     reached = flood.reached
+    n, ns = _sizes(model)
     inv_kappa = np.full(len(reached), np.nan)
+    rates = np.full((len(reached), len(task), n), np.nan)
     rows = mechanism.position_rows(model)
     poses = grid.poses[reached]
     J = angular_rates(model, closure_velocities(model, flood.q[reached], flood.s[reached], poses).J, poses)
+    rates[reached] = J
     determined = np.all(np.isfinite(J), axis=(-2, -1))
     if len(rows) < len(task):
         length = length if length is not None else conditioning.characteristic_length(J[determined], rows)
@@ -398,11 +413,10 @@ def closure_workspace(model: GeneratedModel, *, orientation: dict[str, float] | 
     values = np.where(determined, conditioning.inverse_condition_number(np.nan_to_num(J)), 0.0)
     inv_kappa[reached] = values
     axes = tuple(c for c in task if c in mechanism.POSITION_COMPONENTS)
-    n, ns = _sizes(model)
     return ClosureWorkspace(Occupancy(grid.lower, grid.cell, reached.reshape(grid.shape)),
-                            inv_kappa.reshape(grid.shape), flood.q.reshape(grid.shape + (n,)),
-                            flood.s.reshape(grid.shape + (ns,)), template, axes,
-                            length if len(rows) < len(task) else None)
+                            inv_kappa.reshape(grid.shape), rates.reshape(grid.shape + (len(task), n)),
+                            flood.q.reshape(grid.shape + (n,)), flood.s.reshape(grid.shape + (ns,)), template, axes,
+                            length if len(rows) < len(task) else None, (lower, upper))
 
 
 @dataclass(frozen=True)
@@ -428,12 +442,12 @@ def closure_gci(model: GeneratedModel, *, orientation: dict[str, float] | None =
     The error estimate is the change of the mean from a grid of half as many cells a side (with the fine grid's
     characteristic length): the mean's error comes mostly from the cells along the workspace's boundary, whose
     share halves with the cell size, so the change bounds the fine grid's error where the grids resolve the
-    workspace.  Arguments as :func:`closure_workspace`.
+    workspace.  The coarse grid is laid over the fine grid's box.  Arguments as :func:`closure_workspace`.
     """
     start = assemble_at_home(model)
     fine = closure_workspace(model, orientation=orientation, limits=limits, length=length, cells=cells, start=start)
     coarse = closure_workspace(model, orientation=orientation, limits=limits, length=fine.length,
-                               cells=max(cells // 2, 2), start=start)
+                               cells=max(cells // 2, 2), start=start, box=fine.box)
     evaluations = int(fine.occupancy.occupied.size + coarse.occupancy.occupied.size)
     value = Estimate(fine.gci, abs(fine.gci - coarse.gci), evaluations, "grid", False)
     return ClosureIndex(value, fine.occupancy.measure(), fine)

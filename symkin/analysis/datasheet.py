@@ -200,8 +200,9 @@ def rate_closure_platform(model: GeneratedModel, actuation: Actuation, *, sample
     from symkin.runtime.parallel import closure_velocities
 
     held = closure_workspace.held_orientation(model, orientation)
+    home_q, home_s = closure_workspace.assemble_at_home(model)
     found = closure_workspace.closure_workspace(model, orientation=held, limits=limits,
-                                                cells=max(8, int(round(samples ** (1 / 3)))))
+                                                cells=max(8, int(round(samples ** (1 / 3)))), start=(home_q, home_s))
     reached = found.occupancy.occupied
     task = mechanism.task_space(model)
     positions = [k for k, c in enumerate(task) if c in mechanism.POSITION_COMPONENTS]
@@ -209,16 +210,17 @@ def rate_closure_platform(model: GeneratedModel, actuation: Actuation, *, sample
     points = found.occupancy.centers()[reached]
     poses = np.repeat(found.pose[None], len(points), axis=0)
     poses[:, positions] = points
-    home_q, home_s = closure_workspace.assemble_at_home(model)
     home_pose = mechanism.home_pose(model)
-    if not np.allclose(home_pose[angles], found.pose[angles]):
+    if np.allclose(home_pose[angles], found.pose[angles]):
+        home_J = closure_workspace.angular_rates(
+            model, closure_velocities(model, home_q[None], home_s[None], home_pose[None]).J, home_pose[None])[0]
+    else:
         nearest = int(np.argmin(np.linalg.norm(points - home_pose[positions], axis=-1)))
-        home_q, home_s, home_pose = found.q[reached][nearest], found.s[reached][nearest], poses[nearest]
+        home_q, home_pose, home_J = found.q[reached][nearest], poses[nearest], found.J[reached][nearest]
     q = np.concatenate([found.q[reached], home_q[None]])
-    s = np.concatenate([found.s[reached], home_s[None]])
     poses = np.concatenate([poses, home_pose[None]])
     points = poses[:, positions]
-    J = closure_workspace.angular_rates(model, closure_velocities(model, q, s, poses).J, poses)
+    J = np.concatenate([found.J[reached], home_J[None]])
     J_v, J_w = J[:, positions, :], J[:, angles, :]
     keep = np.all(np.isfinite(J), axis=(-2, -1))
     if box:
@@ -228,7 +230,8 @@ def rate_closure_platform(model: GeneratedModel, actuation: Actuation, *, sample
     if len(q) < 2:
         raise ValueError(f"{model.name}: no reached cell lies in the box {dict(box or {})} with 1/kappa >= "
                          f"{conditioning:g}")
-    measures, skipped = translation_measures(model, J_v, NO_CLOSURE_DYNAMICS, q, poses, actuation)
+    measures, skipped = translation_measures(model, J_v, None, q, poses, actuation,
+                                             no_mass=NO_CLOSURE_DYNAMICS)
     if angles:
         measures += rotation_measures(J_w, None, actuation)
     return Datasheet(model.name, q, points, found.axes, measures, len(q) - 1, skipped)

@@ -94,14 +94,14 @@ def rotation_measures(J_w: np.ndarray, M: np.ndarray | None, actuation: Actuatio
     return tuple(out)
 
 
-def translation_measures(model: GeneratedModel, J: np.ndarray, M: np.ndarray | str, q: np.ndarray, poses: np.ndarray,
-              actuation: Actuation) -> tuple[tuple[Measure, ...], dict[str, str]]:
-    """The handle's measures from J (its translational rows), M (or why the model has none) and the generated
-    functions at (q, poses)."""
+def translation_measures(model: GeneratedModel, J: np.ndarray, M: np.ndarray | None, q: np.ndarray, poses: np.ndarray,
+                         actuation: Actuation, *, no_mass: str = "") -> tuple[tuple[Measure, ...], dict[str, str]]:
+    """The handle's measures from J (its translational rows), M and the generated functions at (q, poses); where M
+    is None, the apparent mass is listed as skipped with the reason ``no_mass``."""
     out: list[Measure] = []
     skipped = {}
-    if isinstance(M, str):
-        skipped["apparent_mass"] = M
+    if M is None:
+        skipped["apparent_mass"] = no_mass
     else:
         masses = rating.principal_masses(M, J)
         out += [Measure("apparent_mass_min", "kg", masses[:, 0], False, "smallest principal mass felt at the handle"),
