@@ -18,7 +18,8 @@ import subprocess
 import numpy as np
 import pytest
 
-from conftest import ROOT, SYMKIN_CLI
+from conftest import SYMKIN_CLI
+from sample_models import dual_scara_text
 from symkin import load, pipeline
 from symkin.analysis.closure_workspace import assemble_at_home, closure_workspace
 from symkin.model import model_from_text
@@ -27,7 +28,6 @@ from symkin.runtime.parallel import closure_velocities, solve_closure
 from symkin.structure.mobility import SCHOENFLIES, SPATIAL, model_mobility
 from tolerances import EPS, KINEMATICS
 
-DOC = ROOT / "docs" / "model-format.md"
 D, L1, L2, E = 0.3, 0.25, 0.25, 0.1
 HOME = np.array([0.0, 0.3, 0.1, 0.0])
 #: solve_closure's step tolerance: with quadratic convergence the error after the last step is far below it.
@@ -36,16 +36,10 @@ SOLVE_TOL = 1e-12
 SCALE = 0.8
 
 
-def model_text() -> str:
-    match = re.search(r"cat > dual_scara.yaml <<'EOF_MODEL'\n(.*?)^EOF_MODEL$", DOC.read_text(), re.S | re.M)
-    assert match, "docs/model-format.md lost the dual SCARA"
-    return match.group(1)
-
-
 @pytest.fixture(scope="module")
 def scara_dir(tmp_path_factory):
-    model = model_from_text(model_text(), file="dual_scara.yaml")
-    request = pipeline.resolve_request(model, fixed="all")
+    model = model_from_text(dual_scara_text(), file="dual_scara.yaml")
+    request = pipeline.resolve_request(model, "closure,closure_jacobians,leg_joints", fixed="all")
     return pipeline.write(pipeline.generate(model, request), tmp_path_factory.mktemp("scara"))
 
 
@@ -96,10 +90,10 @@ def _near_home(home_joints, count, seed):
 
 
 def test_the_schoenflies_group_has_lambda_4():
-    report = model_mobility(model_from_text(model_text()))
+    report = model_mobility(model_from_text(dual_scara_text()))
     assert report.lam == SCHOENFLIES
     assert report.mobility == report.intended == 4
-    tilted = model_text().replace("{name: hand, type: R, axis: [0, 0, 1]}", "{name: hand, type: R, axis: [0, 1, 0]}")
+    tilted = dual_scara_text().replace("{name: hand, type: R, axis: [0, 0, 1]}", "{name: hand, type: R, axis: [0, 1, 0]}")
     assert model_mobility(model_from_text(tilted)).lam == SPATIAL
 
 
@@ -215,17 +209,17 @@ def test_the_example_models_legs_constrain_the_platform_to_its_declared_motion(n
 
 
 def test_the_schoenflies_platform_moves_as_declared_and_a_wrong_declaration_is_located():
-    check = check_platform_motion(model_from_text(model_text()))
+    check = check_platform_motion(model_from_text(dual_scara_text()))
     assert (check.problems, check.free, check.locked) == ((), 4, 0)
     # declared roll where the legs turn the bar about z: both directions named
-    rolling = check_platform_motion(model_from_text(model_text().replace("motion: schoenflies",
+    rolling = check_platform_motion(model_from_text(dual_scara_text().replace("motion: schoenflies",
                                                                          "motion: [x, y, z, roll]")))
     assert len(rolling.problems) == 2
     assert "turn about (0, 0, 1) (its coordinate yaw), which parallel.motion [x, y, z, roll] holds at 0" in \
         rolling.problems[0]
     assert "do not let the platform move in its coordinate roll" in rolling.problems[1]
     # yaw left out and leg 2's knee made passive: the bar turns with every actuator locked
-    loose = (model_text().replace("motion: schoenflies", "motion: [x, y, z]").replace("home: [0, 0.3, 0.1, 0]",
+    loose = (dual_scara_text().replace("motion: schoenflies", "motion: [x, y, z]").replace("home: [0, 0.3, 0.1, 0]",
                                                                                        "home: [0, 0.3, 0.1]")
              .replace("{name: knee, type: R, axis: [0, 0, 1], active: true,", "{name: knee, type: R, axis: [0, 0, 1],"))
     check = check_platform_motion(model_from_text(loose))
@@ -235,13 +229,13 @@ def test_the_schoenflies_platform_moves_as_declared_and_a_wrong_declaration_is_l
 
 def test_the_mobility_command_reports_a_wrong_motion_with_its_place_and_exit_2(tmp_path):
     path = tmp_path / "rolling.yaml"
-    path.write_text(model_text().replace("motion: schoenflies", "motion: [x, y, z, roll]"))
+    path.write_text(dual_scara_text().replace("motion: schoenflies", "motion: [x, y, z, roll]"))
     result = subprocess.run(SYMKIN_CLI + ["mobility", str(path)], capture_output=True, text=True)
     assert result.returncode == 2
     assert f"{path}: parallel.motion: the legs let the platform turn about (0, 0, 1) (its coordinate yaw)" in \
         result.stderr
     good = tmp_path / "dual_scara.yaml"
-    good.write_text(model_text())
+    good.write_text(dual_scara_text())
     result = subprocess.run(SYMKIN_CLI + ["mobility", str(good)], capture_output=True, text=True)
     assert result.returncode == 0
     assert "at the home pose: the legs let the platform move in [x, y, z, yaw] (4 DoF)" in result.stdout
@@ -402,21 +396,57 @@ def test_the_rating_of_legs_without_closed_forms_is_that_of_the_geometrys_jacobi
     np.testing.assert_allclose(measures["isotropic_torque"], forces.isotropic_force(J[:, 3:], efforts), rtol=1e-6)
 
 
-def test_the_viewer_and_the_simulation_say_what_analyses_legs_without_closed_forms(scara_dir):
-    """`symkin view` and `symkin simulate` of the dual SCARA: no page (the viewer evaluates closed forms in the
-    browser), no simulation (no dynamics for such legs), and the messages say why instead of asking for outputs such
-    legs cannot have."""
-    result = subprocess.run(SYMKIN_CLI + ["view", str(scara_dir), "-o", str(scara_dir.parent / "view.html")],
-                            capture_output=True, text=True)
-    assert result.returncode == 2
-    assert "the legs of dual_scara have no closed forms" in result.stderr
-    assert "symkin workspace, gci, rate and mobility" in result.stderr
-    assert not (scara_dir.parent / "view.html").exists()
+def test_the_simulation_says_what_analyses_legs_without_closed_forms(scara_dir):
+    """`symkin simulate` of the dual SCARA: no simulation (no dynamics for such legs), and the message says why
+    instead of asking for outputs such legs cannot have."""
     result = subprocess.run(SYMKIN_CLI + ["simulate", str(scara_dir), "-o", str(scara_dir.parent / "simulation")],
                             capture_output=True, text=True)
     assert result.returncode == 2
     assert "no dynamics is derived for such legs, so it cannot be simulated" in result.stderr
     assert not (scara_dir.parent / "simulation").exists()
+
+
+def test_symkin_view_of_the_model_file_needs_the_lifts_stroke(tmp_path, capsys):
+    """`symkin view` derives the dual SCARA's model file with what its page evaluates (the closure, its Jacobians,
+    leg_joints; the browser's side: tests/test_viewer_browser.py); its unlimited lift is refused with the option
+    that bounds it, and nothing is written."""
+    from symkin.cli import main
+
+    (tmp_path / "dual_scara.yaml").write_text(dual_scara_text())
+    out = tmp_path / "scara.html"
+    command = ["view", str(tmp_path / "dual_scara.yaml"), "-o", str(out), "--workspace", "64"]
+    with pytest.raises(SystemExit) as refused:
+        main(command)
+    assert refused.value.code == 2
+    assert "prismatic joint 'lift1' declares no limits" in capsys.readouterr().err
+    assert not out.exists()
+    assert main(command + ["--limit", "lift1=0:0.2"]) == 0
+    assert "reached by continuing the loop closure from the home pose" in capsys.readouterr().out
+    assert "function leg_joints(q, s, params)" in out.read_text()
+
+
+def test_leg_joints_walk_each_leg_to_its_platform_attachment(scara, home_joints):
+    """leg_joints at an assembled (q, s): each leg from its first joint at its base point to its end, which is the
+    bar's end the leg carries (p -+ e along the bar's direction); the joint centres as the geometry places them."""
+    q, s = home_joints
+    theta, lift, phi, knee = q
+    legs = scara.leg_joints(q, s)
+    assert legs._fields == ("leg1", "leg2")
+    yaw = HOME[3]
+    bar = np.array([np.cos(yaw), np.sin(yaw), 0.0]) * E
+    elbow1 = [-D / 2 + L1 * np.cos(theta), L1 * np.sin(theta), 0.0]
+    np.testing.assert_allclose(legs.leg1[:2], [[-D / 2, 0, 0], elbow1], atol=KINEMATICS)
+    np.testing.assert_allclose(legs.leg1[-1], HOME[:3] - bar, atol=KINEMATICS)
+    assert legs.leg1[-1][2] == pytest.approx(lift, abs=KINEMATICS)  # the lift raises the wrist to the bar
+    np.testing.assert_allclose(legs.leg2[1], [D / 2 + L1 * np.cos(phi), L1 * np.sin(phi), 0.0], atol=KINEMATICS)
+    np.testing.assert_allclose(legs.leg2[2][:2], _planar_2r(D / 2, phi, knee), atol=KINEMATICS)
+    np.testing.assert_allclose(legs.leg2[-1], HOME[:3] + bar, atol=KINEMATICS)
+
+
+def test_legs_with_the_distance_form_are_drawn_by_leg_points(derivations):
+    kept, skipped = derivations["delta"].available(["leg_joints"])
+    assert kept == []
+    assert "drawn by leg_points" in skipped["leg_joints"]
 
 
 def test_angle_rows_become_angular_velocity_at_each_pose():

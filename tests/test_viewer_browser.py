@@ -15,10 +15,13 @@ import numpy as np
 import pytest
 
 from browser import chromium, drawn, open_page, pixels
-from symkin import load
+from sample_models import dual_scara_text
+from symkin import load, pipeline
 from symkin.analysis import conditioning, global_indices, parallel
+from symkin.model import model_from_text
+from symkin.runtime.parallel import closure_velocities, solve_closure
 from symkin.viewer import page as viewer_page
-from tolerances import svd
+from tolerances import KINEMATICS, NEWTON, svd
 
 AGREEMENT = 1e-12
 pytestmark = pytest.mark.xdist_group("browser")
@@ -179,3 +182,88 @@ def test_the_cloud_is_recomputed_for_a_moved_design(browser, pages, generated_di
     np.testing.assert_allclose(np.array(shown["values"]), expected, rtol=0, atol=AGREEMENT + svd(3))
     ticks = page.locator("#colour-ticks span").all_inner_texts()
     assert ticks[-1] == f"{max(shown['values']):.2f}"
+
+
+#: The dual SCARA's lifts: its model file declares no stroke (tests/sample_models.py).
+SCARA_STROKE = (0.0, 0.2)
+
+
+@pytest.fixture(scope="module")
+def scara_page(tmp_path_factory):
+    """(the dual SCARA's model, numpy; its page with about 512 cloud cells, as symkin view writes it; the cloud)."""
+    model = model_from_text(dual_scara_text(), file="dual_scara.yaml")
+    request = pipeline.resolve_request(model, "closure,closure_jacobians,leg_joints", "numpy,js")
+    directory = pipeline.write(pipeline.generate(model, request), tmp_path_factory.mktemp("scara"))
+    loaded = load(directory)
+    html, cloud = viewer_page.page_of(loaded, 512, limits={"lift1": SCARA_STROKE})
+    path = directory.parent / "dual_scara.html"
+    path.write_text(html)
+    return loaded, path, cloud
+
+
+def _scara_inverse_kappa(model, q, s, p, length) -> np.ndarray:
+    """1/kappa as symkin workspace rates the dual SCARA: J = dp/dq from the closure (its yaw row a rate already),
+    homogenized by the page's characteristic length."""
+    J = conditioning.homogenize(closure_velocities(model, q, s, p).J, length, (0, 1, 2))
+    return conditioning.inverse_condition_number(J)
+
+
+def test_legs_of_any_topology_follow_the_platform_by_newton_on_their_closure(browser, scara_page):
+    """The task sliders move the bar; the page solves the closure for (q, s) from its last assembly in the generated
+    JavaScript: the legs close where numpy's Gauss-Newton from the home assembly closes them (the same working
+    mode), the joints drawn are leg_joints there, and 1/kappa is that of numpy's closure_velocities."""
+    model, html, _ = scara_page
+    page = open_page(browser, html)
+    q0, s0 = (np.array(page.evaluate(f"window.symkinView.state.{v}")) for v in "qs")
+    press(page, "task-x", "ArrowRight", 20)     # 2 mm
+    press(page, "task-yaw", "ArrowRight", 30)   # 3 deg
+    p = np.array(page.evaluate("window.symkinView.state.p"))
+    np.testing.assert_allclose(p, [0.002, 0.3, 0.1, np.radians(3.0)], rtol=0, atol=1e-12)
+    q, s = (np.array(page.evaluate(f"window.symkinView.state.{v}")) for v in "qs")
+    assert np.max(np.abs(model.closure(q, s, p))) <= NEWTON
+    report = solve_closure(model, q0, s0, p, unknowns=("q", "s"), max_step=0.2)
+    assert report.all_converged
+    turned = np.angle(np.exp(1j * (q - report.solution["q"])))   # angles on the page: within the limits' turn
+    turned[1] = q[1] - report.solution["q"][1]                    # the lift: a length
+    Phi = model.closure_jacobians(q, s, p)
+    # two converged solves: each within NEWTON of the closure, so within kappa([Phi_q Phi_s]) NEWTON of the root
+    np.testing.assert_allclose(turned, 0.0, atol=2 * NEWTON * np.linalg.cond(np.hstack([Phi.Phi_q, Phi.Phi_s])))
+    drawn_legs = page.evaluate("window.symkinView.evaluate().legs")
+    for shown, want in zip(drawn_legs, model.leg_joints(q, s)):
+        np.testing.assert_allclose(np.array(shown), want, rtol=0, atol=AGREEMENT)
+    length = page.evaluate("JSON.parse(document.getElementById('symkin-data').textContent).conditioning.length")
+    expected = float(_scara_inverse_kappa(model, q, s, p, length))
+    assert shown_inverse_kappa(page) == pytest.approx(expected, abs=AGREEMENT + svd(4))
+    assert page.locator("#warning").is_hidden()
+    assert not page.errors
+
+
+def test_the_cloud_of_legs_of_any_topology_is_solved_again_for_a_moved_design(browser, scara_page):
+    """The page's cloud is the working mode's cells (symkin.analysis.closure_workspace); for a moved design each
+    cell is solved again from its (q, s) at load, and its 1/kappa is numpy's at the new design's assembly."""
+    model, html, cloud = scara_page
+    page = open_page(browser, html)
+    shown = page.evaluate("window.symkinView.cloud.userData")
+    np.testing.assert_allclose(np.array(shown["points"]), cloud.points, rtol=0, atol=1e-6)   # CLOUD_DIGITS
+    assert len(shown["points"]) >= 256                                                       # about 512 asked
+    press(page, "param-l1", "ArrowRight", 100)   # first links 250 -> 260 mm
+    page.click("#recompute-cloud")
+    l1 = page.evaluate("window.symkinView.state.params.l1")
+    assert l1 == pytest.approx(0.26, abs=1e-12)
+    recomputed = page.evaluate("window.symkinView.cloud.userData")
+    assert len(recomputed["points"]) >= len(shown["points"]) // 2
+    moved = model.bind(l1=l1)
+    data = page.evaluate("JSON.parse(document.getElementById('symkin-data').textContent)")
+    samples = {tuple(np.round(platform, 9)): sample for sample in data["cloud"]["samples"]
+               for platform in [sample["p"][:3]]}
+    for point, value in zip(recomputed["points"][:64], recomputed["values"][:64]):
+        sample = samples[tuple(np.round(point, 9))]
+        report = solve_closure(moved, sample["q"], sample["s"], sample["p"], unknowns=("q", "s"), max_step=0.2)
+        want = _scara_inverse_kappa(moved, report.solution["q"], report.solution["s"], np.array(sample["p"]),
+                                    data["conditioning"]["length"])
+        Phi = moved.closure_jacobians(report.solution["q"], report.solution["s"], sample["p"])
+        # the page solves for J by the normal equations, whose error grows with kappa(B)^2 (Higham sec. 20.4),
+        # B = [Phi_p Phi_s]; numpy's by an orthogonal projector (kappa(B))
+        allowed = KINEMATICS * np.linalg.cond(np.hstack([Phi.Phi_p, Phi.Phi_s])) ** 2 + svd(4)
+        assert value == pytest.approx(float(want), abs=allowed)
+    assert not page.errors

@@ -2,7 +2,9 @@
 
 An analysis command's MODEL is a generated model directory (the output of ``symkin derive``) or a model file,
 which is derived into a temporary directory: fk and jacobian; ik as well for a translational parallel
-mechanism; ik and the inverse Jacobian for a platform that also rotates (:data:`ANALYSIS_OUTPUTS_BY_KIND`).
+mechanism; ik and the inverse Jacobian for a platform that also rotates (:data:`ANALYSIS_OUTPUTS_BY_KIND`);
+the loop closure and its Jacobians for legs without the distance form, whose analyses continue the closure
+(:data:`CLOSURE_OUTPUTS`).
 A derivation is kept in the derivation cache (:mod:`symkin.pipeline_cache`), so that the next command given
 the unchanged file copies it.
 """
@@ -34,6 +36,9 @@ MODEL_FILE_SUFFIXES = (".yaml", ".yml", ".urdf", ".xml", ".xacro")
 #: Also derived for a parallel model file that limits passive joints: the analyses find the
 #: passive joint variables from the loop closure (symkin.analysis.passive).
 PASSIVE_LIMIT_OUTPUTS = ("closure", "closure_jacobians")
+#: What the analyses of legs of any topology (no distance form, so no closed-form ik) use instead of the kind's
+#: outputs (symkin.analysis.closure_workspace).
+CLOSURE_OUTPUTS = ("closure", "closure_jacobians")
 
 
 def is_model_file(path: str | Path) -> bool:
@@ -109,10 +114,13 @@ def _derived(source: Path, backends: Sequence[str], outputs: Sequence[str] | Map
     from symkin.model import load_model as load_model_file
 
     model = load_model_file(source)
+    derivation = Derivation(model)
     wanted = outputs.get(analysis_kind(model), ANALYSIS_OUTPUTS) if isinstance(outputs, Mapping) else outputs
+    if isinstance(outputs, Mapping) and model.parallel is not None and not derivation.available(["distance_legs"])[0]:
+        wanted = CLOSURE_OUTPUTS
     if isinstance(outputs, Mapping) and _limits_passive_joints(model):
         wanted = (*wanted, *PASSIVE_LIMIT_OUTPUTS)
-    names = dict.fromkeys([*wanted, *Derivation(model).available(optional)[0]])  # in order, each once
+    names = dict.fromkeys([*wanted, *derivation.available(optional)[0]])  # in order, each once
     request = pipeline.resolve_request(model, ",".join(names),
                                        ",".join(backends), None)
     with Progress(model.name) as progress:

@@ -19,7 +19,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="write an interactive 3D page of a mechanism (HTML, opens without network)",
         description="Write one self-contained HTML page that shows the mechanism at a pose: its links and joint "
                     "frames, a slider per joint (a serial arm) or per platform coordinate (a parallel mechanism, "
-                    "through its closed-form inverse kinematics) and per design parameter, the TCP frame and its "
+                    "through its closed-form inverse kinematics, or for legs without closed forms by Newton's "
+                    "method on the loop closure from the last assembly) and per design parameter, the TCP frame and its "
                     "trace, 1/kappa and det J with a warning near singular configurations, and the workspace as a "
                     "cloud coloured by 1/kappa. The pose is computed in the page by the model's generated "
                     "JavaScript; three.js is embedded. Example: symkin view models/delta.yaml -o delta.html --open",
@@ -33,6 +34,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    default=DEFAULT_SAMPLES, metavar="N",
                    help="about N sampled points in the workspace cloud, 0 for none (default: %(default)s)")
     p.add_argument("--seed", type=int, default=0, help="seed of the cloud's sampling (default: %(default)s)")
+    p.add_argument("--limit", dest="limits", action="append", default=[], metavar="JOINT=LOWER:UPPER",
+                   help="override an actuated joint's limits (of the cloud and the page's warnings), e.g. --limit "
+                        "lift1=0:0.2 for a prismatic joint the model file leaves unlimited (repeatable)")
     p.add_argument("--open", action="store_true", help="open the page in the web browser")
     p.set_defaults(run=run, parser=p)
 
@@ -45,15 +49,16 @@ def run(args: argparse.Namespace) -> int:
 
     try:
         design = analysis_args.parse_assignments(args.design)
+        limits = analysis_args.parse_limits(args.limits)
     except ValueError as err:
         analysis_args.fail_on_bad_input(args, err)
     with model_files.generated_directory(args.model, ("numpy", "js"), page.VIEW_OUTPUTS,
-                                           page.WRIST_VIEW_OUTPUTS) as directory:
+                                           page.WRIST_VIEW_OUTPUTS + ("leg_joints",)) as directory:
         model = load(directory)
         try:
             model = model.bind(**design) if design else model
             with Progress(model.name) as progress:
-                html, cloud = page.page_of(model, args.workspace, args.seed, progress)
+                html, cloud = page.page_of(model, args.workspace, args.seed, progress, limits)
         except (ValueError, KeyError) as err:  # a ViewUnavailable too
             analysis_args.fail_on_bad_input(args, err)
     out = Path(args.out or f"{model.name}-view.html")

@@ -4,6 +4,7 @@
 ``parallel_structure``     (internal) every leg walked once, and the platform frame
 ``closure``                loop-closure residual Phi(q, s, p), 6 rows per leg (seed sec. 3.2 steps 1-2)
 ``closure_jacobians``      implicit Jacobians Phi_p, Phi_q, Phi_s of the closure
+``leg_joints``             every joint centre of every leg and its end at (q, s) (drawing legs without a distance form)
 ``distance_legs``          (internal) legs reduced to f_i(q_i, p) = (|B_i - C_i|^2 - L_i^2)/2
 ``constraints``            f(q, p), one equation per leg
 ``constraint_jacobians``   J_x = df/dp, J_q = -df/dq: J_x pdot = J_q qdot
@@ -135,6 +136,28 @@ def _closure_jacobians(d: Deriving) -> FunctionSpec:
         "through o moves the leg end by w x (p_end - o) and turns it by w.",
         [actuated_input(d), passive_input(d.model), task_input(d.model)], outputs,
     )
+
+
+@quantity("leg_joints", "every joint centre of every leg and its end, at (q, s), for legs without the distance form "
+          "(drawing)", mechanism=PARALLEL)
+def _leg_joints(d: Deriving) -> FunctionSpec:
+    try:
+        d[reduced_legs]
+    except DerivationError:
+        pass
+    else:
+        raise DerivationError(f"model '{d.model.name}': its legs have the distance form, drawn by leg_points from the "
+                              "closed-form ik; leg_joints draws legs without it (from the closure's q and s)")
+    outputs = [OutputSpec(c.leg.name, sympy.ImmutableMatrix([list(point) for point in (*c.centres, c.end.p)]),
+                          f"leg {c.leg.name}: its joints' centres, base to platform, then its end (columns x, y, z)", "m")
+               for c in d[parallel_structure].chains]
+    return make_function(
+        d.model, "leg_joints", "Joint centres of every leg and its end, for drawing legs of any topology.",
+        "Per leg (an output named by the leg), in the base frame, walking its joints from the base: the centre of "
+        "each joint (its frame's origin after the joint's origin operations, moved by the joints before it) and the "
+        "end of the leg's chain, the platform attachment point where the legs close (closure() = 0). Evaluate at "
+        "an assembled (q, s) (symkin.runtime.parallel.solve_closure).", [actuated_input(d), passive_input(d.model)],
+        outputs)
 
 
 # --------------------------------------------------------------------------- distance form

@@ -3,10 +3,14 @@
 The page (``templates/viewer/page.html.j2``) carries everything it needs, so it opens with no
 network: the model's generated JavaScript (:mod:`symkin.backends.js`) computes the pose at every
 slider move (serial: ``frames``, ``fk`` and ``jacobian`` of q; parallel: the closed-form ``ik``,
-``leg_points`` and the Jacobian of p; a hybrid device's wrist: ``device_frames`` and ``device_fk`` of p
-and its joints qw), three.js (vendored in ``symkin/viewer/vendor`` with its
+``leg_points`` and the Jacobian of p; legs of any topology: Gauss-Newton on the ``closure`` and its
+``closure_jacobians`` from the last assembly, drawn by ``leg_joints``; a hybrid device's wrist:
+``device_frames`` and ``device_fk`` of p and its joints qw), three.js (vendored in ``symkin/viewer/vendor`` with its
 MIT licence, embedded as data: modules behind an import map) draws it, and the workspace cloud
 with 1/kappa per point (seed Table 8.5) is computed here by the analyses, for the design given.
+
+Length: the page's data (sliders, cloud, home pose) for every kind of mechanism the analyses know, each a
+few lines, with the one rendering and safety path (escaping, CSP hashes) they all share.
 
 The conditioning the page shows is that of the analyses (:func:`symkin.analysis.global_indices.local_index`):
 the same task Jacobian, homogenized by the same characteristic length when the task space mixes
@@ -31,8 +35,8 @@ from jinja2.utils import htmlsafe_json_dumps
 from markupsafe import Markup
 
 from symkin._version import __version__
-from symkin.analysis import conditioning, global_indices, mechanism, parallel, sampling, workspace
-from symkin.analysis.mechanism import MechanismKind
+from symkin.analysis import closure_workspace, conditioning, global_indices, mechanism, parallel, sampling, workspace
+from symkin.analysis.mechanism import Limits, MechanismKind
 from symkin.backends.templating import render_html
 from symkin.runtime.info import GeneratedModel
 from symkin.runtime.loader import LoadedModel
@@ -46,6 +50,11 @@ SINGULAR_THRESHOLD = 0.01
 CLOUD_DIGITS = 6
 #: Largest Sobol sample (log2) of a pose platform's box when looking for its reachable points.
 MAX_SOBOL_LOG2 = 18
+#: The first grid of legs solved through their closure has at least this many cells a side (a coarser one steps
+#: farther than Gauss-Newton follows from a neighbour, as symkin rate's grid) ...
+MIN_CLOSURE_CELLS = 8
+#: ... and is refined to at most this many times the first grid's cells a side.
+REFINED_CELLS_LIMIT = 4
 #: Viridis at 5 stops (matplotlib's table): the cloud's colours and the colour bar.
 VIRIDIS = ("#440154", "#3b528b", "#21918c", "#5ec962", "#fde725")
 
@@ -64,13 +73,16 @@ VIEW_OUTPUTS = {
 @dataclass(frozen=True)
 class Cloud:
     """Workspace points (N, 3) in m with the analyses' 1/kappa (N,), the joints q (N, n) and the
-    characteristic length used to homogenize J (None when the task space has one unit)."""
+    characteristic length used to homogenize J (None when the task space has one unit); for legs solved through
+    their closure, the passive joints' variables s (N, ns) and the task poses p (N, m) too."""
 
     points: np.ndarray
     inverse_kappa: np.ndarray
     q: np.ndarray
     length: float | None
     note: str
+    s: np.ndarray | None = None
+    poses: np.ndarray | None = None
 
 
 class ViewUnavailable(ValueError):
@@ -79,11 +91,23 @@ class ViewUnavailable(ValueError):
 
 #: ... and a hybrid device's wrist on the platform: its links' frames, the TCP and the wrist's angular Jacobian.
 WRIST_VIEW_OUTPUTS = ("device_fk", "device_frames", "device_jacobian")
+#: Legs without closed forms (:func:`symkin.analysis.closure_workspace.uses_closure`): the page solves the closure
+#: for (q, s) from the last assembly, J = dp/dq from its Jacobians, and draws every joint of every leg.
+CLOSURE_VIEW_OUTPUTS = ("closure", "closure_jacobians", "leg_joints")
 
 
 def view_outputs(model: GeneratedModel) -> tuple[str, ...]:
     """The generated functions the page evaluates for ``model``."""
+    if _solved_through_closure(model):
+        return CLOSURE_VIEW_OUTPUTS
     return VIEW_OUTPUTS[mechanism.kind_of(model)] + (WRIST_VIEW_OUTPUTS if model.info.wrist else ())
+
+
+def _solved_through_closure(model: GeneratedModel) -> bool:
+    """A parallel model without the closed-form ik whose directory holds the closure's functions (legs of any
+    topology; a directory derived with only some of them is told which it lacks)."""
+    return (mechanism.is_parallel(model) and "ik" not in model.functions
+            and any(name in model.functions for name in CLOSURE_VIEW_OUTPUTS))
 
 
 def missing_functions(model: GeneratedModel) -> list[str]:
@@ -107,41 +131,76 @@ def _length(model: GeneratedModel, limits: np.ndarray) -> float | None:
         else None
 
 
-def workspace_cloud(model: GeneratedModel, samples: int, seed: int = 0) -> Cloud:
-    """The workspace cloud with 1/kappa, as ``symkin workspace`` and ``symkin gci`` sample it."""
+def workspace_cloud(model: GeneratedModel, samples: int, seed: int = 0, limits: Limits | None = None) -> Cloud:
+    """The workspace cloud with 1/kappa, as ``symkin workspace`` and ``symkin gci`` sample it (``limits``: the
+    actuators' limit overrides, :func:`symkin.analysis.mechanism.joint_limits`)."""
+    if _solved_through_closure(model):
+        return _closure_cloud(model, samples, limits)
     if mechanism.kind_of(model) is MechanismKind.PARALLEL_ORIENTATION:
         n = len(model.info.coordinates)
         return Cloud(np.zeros((0, 3)), np.zeros(0), np.zeros((0, n)), None,
                      "no workspace cloud: a spherical platform's workspace is a set of orientations, not of points.")
-    limits = mechanism.joint_limits(model)
-    length = _length(model, limits)
+    bounds = mechanism.joint_limits(model, limits)
+    length = _length(model, bounds)
     homogenized = f"; J homogenized with L = {1000 * length:.1f} mm." if length is not None else "."
     if mechanism.kind_of(model) is MechanismKind.PARALLEL_POSE:
         held = parallel.constant_orientation(model)
-        lower, upper = parallel.constant_orientation_box(held, limits)
+        lower, upper = parallel.constant_orientation_box(held, bounds)
         log2 = max(1, math.ceil(math.log2(samples)))
         while True:  # about ``samples`` reachable points: the box holds the workspace loosely
             points = sampling.sobol(lower, upper, log2, np.random.default_rng(seed))
-            q, reachable = parallel.reachable_points(held, points, limits)
+            q, reachable = parallel.reachable_points(held, points, bounds)
             found = max(int(reachable.sum()), 1)
             if found >= samples / 2 or log2 >= MAX_SOBOL_LOG2:
                 break
             log2 = min(MAX_SOBOL_LOG2, log2 + math.ceil(math.log2(samples / found)))
-        index = global_indices.scaled_index(held, conditioning.inverse_condition_number, length, limits)
+        index = global_indices.scaled_index(held, conditioning.inverse_condition_number, length, bounds)
         values = index(held.jacobian(q[reachable], points[reachable]))
         note = (f"{int(reachable.sum())} reachable platform centres of {len(points)} Sobol points, platform held at "
                 f"roll, pitch, yaw = {parallel.orientation_text(held)}{homogenized}")
         return Cloud(points[reachable], values, q[reachable], length, note)
-    cloud = workspace.sample_workspace(model, samples, seed=seed)
+    cloud = workspace.sample_workspace(model, samples, limits=limits, seed=seed)
     values = global_indices.local_index(model, cloud.q, length=length)
     note = f"{len(cloud.q)} joint configurations sampled within the limits{homogenized}"
     return Cloud(_pad3(cloud.points, cloud.axes), values, cloud.q, length, note)
 
 
-def no_cloud(model: GeneratedModel) -> Cloud:
-    """An empty cloud (``--workspace 0``); a mixed task space still gets its characteristic length."""
+def _closure_cloud(model: GeneratedModel, samples: int, limits: Limits | None) -> Cloud:
+    """The cell centres of the working mode of the home assembly on a grid of about ``samples`` cells, at the home
+    orientation, with 1/kappa (:func:`symkin.analysis.closure_workspace.closure_workspace`)."""
+    task = mechanism.task_space(model)
+    axes = tuple(c for c in task if c in mechanism.POSITION_COMPONENTS)
+    if not axes:
+        return Cloud(np.zeros((0, 3)), np.zeros(0), np.zeros((0, len(model.info.coordinates))), None,
+                     "no workspace cloud: the platform's workspace is a set of orientations, not of points.")
+    start = closure_workspace.assemble_at_home(model)
+    cells = max(MIN_CLOSURE_CELLS, round(samples ** (1 / len(axes))))
+    found = closure_workspace.closure_workspace(model, limits=limits, cells=cells, start=start)
+    count = int(found.occupancy.occupied.sum())
+    if count < samples / 2:  # the grid's box holds the workspace loosely: refine to about ``samples`` cells
+        cells = min(round(cells * (samples / max(count, 1)) ** (1 / len(axes))), REFINED_CELLS_LIMIT * cells)
+        found = closure_workspace.closure_workspace(model, limits=limits, cells=cells, start=start, box=found.box)
+    reached = found.occupancy.occupied
+    poses = np.repeat(found.pose[None], int(reached.sum()), axis=0)
+    poses[:, list(mechanism.position_rows(model))] = found.occupancy.centers()[reached]
+    angles = ", ".join(f"{name} = {found.pose[k]:.4g} rad" for k, name in enumerate(task) if name not in axes)
+    orientation = f", platform held at {angles}" if angles else ""
+    homogenized = f"; J homogenized with L = {1000 * found.length:.1f} mm" if found.length is not None else ""
+    note = (f"{int(reached.sum())} cells of {1000 * float(found.occupancy.cell.max()):.3g} mm reached by continuing "
+            f"the loop closure from the home pose (the home assembly's working mode){orientation}{homogenized}.")
+    return Cloud(_pad3(found.occupancy.centers()[reached], axes), found.inv_kappa[reached], found.q[reached],
+                 found.length, note, found.s[reached], poses)
+
+
+def no_cloud(model: GeneratedModel, limits: Limits | None = None) -> Cloud:
+    """An empty cloud (``--workspace 0``); a mixed task space still gets its characteristic length (but for legs
+    solved through their closure, whose length is computed over the cells of the cloud: the page then rates J
+    unhomogenized, and says so)."""
     n = len(model.info.coordinates)
-    return Cloud(np.zeros((0, 3)), np.zeros(0), np.zeros((0, n)), _length(model, mechanism.joint_limits(model)),
+    if _solved_through_closure(model):
+        return Cloud(np.zeros((0, 3)), np.zeros(0), np.zeros((0, n)), None,
+                     "no workspace cloud (--workspace 0); 1/kappa of J unhomogenized (no characteristic length).")
+    return Cloud(np.zeros((0, 3)), np.zeros(0), np.zeros((0, n)), _length(model, mechanism.joint_limits(model, limits)),
                  "no workspace cloud (--workspace 0).")
 
 
@@ -170,10 +229,10 @@ def _slider(name: str, lower: float, upper: float, scale: float, unit: str, step
             "scale": scale, "unit": unit, "step": step}
 
 
-def _coordinates(model: GeneratedModel) -> list[dict[str, Any]]:
-    limits = mechanism.joint_limits(model)
-    return [_slider(c.name, float(lower), float(upper), *_slider_units("", c.revolute)) | {"label": c.label}
-            for c, (lower, upper) in zip(model.info.coordinates, limits)]
+def _coordinates(model: GeneratedModel, limits: Limits | None) -> list[dict[str, Any]]:
+    return [_slider(c.name, float(lower), float(upper), *_slider_units("", c.revolute))
+            | {"label": c.label, "revolute": bool(c.revolute)}
+            for c, (lower, upper) in zip(model.info.coordinates, mechanism.joint_limits(model, limits))]
 
 
 def _wrist(model: GeneratedModel) -> list[dict[str, Any]]:
@@ -219,21 +278,25 @@ def _task(model: GeneratedModel, cloud: Cloud, home: np.ndarray) -> list[dict[st
     return out
 
 
-def page_data(model: GeneratedModel, cloud: Cloud) -> dict[str, Any]:
-    """Everything the page's program reads (the JSON in ``<script id="symkin-data">``)."""
+def page_data(model: GeneratedModel, cloud: Cloud, limits: Limits | None = None) -> dict[str, Any]:
+    """Everything the page's program reads (the JSON in ``<script id="symkin-data">``); ``limits``: the actuators'
+    limit overrides."""
     kind = "parallel" if mechanism.is_parallel(model) else "serial"
     outputs = view_outputs(model)
     points = np.round(cloud.points, CLOUD_DIGITS)
     values = np.round(np.nan_to_num(cloud.inverse_kappa, nan=0.0), CLOUD_DIGITS)
-    coordinates = _coordinates(model)
+    coordinates = _coordinates(model, limits)
     if kind == "serial":
         # start at the best-conditioned sampled configuration (else 0 within the limits)
-        q = cloud.q[int(np.argmax(values))] if len(values) else np.clip(0.0, *mechanism.joint_limits(model).T)
+        q = cloud.q[int(np.argmax(values))] if len(values) else np.clip(0.0, *mechanism.joint_limits(model, limits).T)
         home: dict[str, list[float]] = {"q": [_on_grid(v, c["scale"], c["step"]) for v, c in zip(q, coordinates)]}
     else:
         units = [_slider_units("m" if c in mechanism.POSITION_COMPONENTS else "rad") for c in mechanism.task_space(model)]
         home = {"q": [0.0] * len(model.info.coordinates),
                 "p": [_on_grid(v, scale, step) for v, (scale, _, step) in zip(mechanism.home_pose(model), units)]}
+        if _solved_through_closure(model):  # the page continues the home assembly
+            q0, s0 = closure_workspace.assemble_at_home(model)
+            home |= {"q": q0.tolist(), "s": s0.tolist()}
         wrist = _wrist(model)
         if wrist:  # a hybrid device: its wrist starts in the middle of its sliders
             home["qw"] = [_on_grid((w["lower"] + w["upper"]) / 2, w["scale"], w["step"]) for w in wrist]
@@ -249,9 +312,9 @@ def page_data(model: GeneratedModel, cloud: Cloud) -> dict[str, Any]:
         "singular_threshold": SINGULAR_THRESHOLD,
         "cloud": {"points": points.tolist(), "inverse_kappa": values.tolist(),
                   "colour_max": float(max(values.max(initial=0.0), 1e-12)),
-                  # what the page recomputes the cloud from for another design: the joint samples, or a
-                  # pose platform's sampled centres (rounded as the points are)
-                  "samples": (points if "inverse_jacobian" in outputs else np.round(cloud.q, CLOUD_DIGITS + 3)).tolist()},
+                  # what the page recomputes the cloud from for another design: the joint samples, a pose
+                  # platform's sampled centres (rounded as the points are), or each cell's (q, s) to solve from
+                  "samples": _cloud_samples(cloud, points, outputs)},
         "scale": scale if scale > 0 else 1.0, "view_target": centre.tolist(),
     }
     if model.info.tree is not None:  # a branched serial model: the page draws each link from its parent
@@ -263,11 +326,20 @@ def page_data(model: GeneratedModel, cloud: Cloud) -> dict[str, Any]:
     return data
 
 
+def _cloud_samples(cloud: Cloud, points: np.ndarray, outputs: tuple[str, ...]) -> list:
+    if cloud.s is not None and cloud.poses is not None:  # legs solved through their closure: each cell's pose and
+        return [{"p": p, "q": q, "s": s}                  # the (q, s) its solve starts from
+                for p, q, s in zip(cloud.poses.tolist(), cloud.q.tolist(), cloud.s.tolist())]
+    return (points if "inverse_jacobian" in outputs else np.round(cloud.q, CLOUD_DIGITS + 3)).tolist()
+
+
 def _mechanism_points(model: GeneratedModel, home: dict[str, list[float]]) -> np.ndarray:
     """The joints' positions (k, 3) at the first pose shown: with the cloud, what the camera frames."""
     if "p" not in home:
         frames = model.frames(np.array(home["q"]))
         return np.array([[0.0, 0.0, 0.0]] + [T[:3, 3] for T in frames])
+    if "s" in home:
+        return np.concatenate(tuple(model.leg_joints(np.array(home["q"]), np.array(home["s"]))))
     p = np.array(home["p"])
     legs = np.asarray(model.leg_points(model.ik(p).joints, p))
     if "qw" not in home:
@@ -318,7 +390,8 @@ def content_security_policy(scripts: list[str]) -> str:
     ])
 
 
-def render_page(model: GeneratedModel, model_script: str, cloud: Cloud, description: str) -> str:
+def render_page(model: GeneratedModel, model_script: str, cloud: Cloud, description: str,
+                limits: Limits | None = None) -> str:
     """The page's HTML text: ``model`` (a loaded model, bound to the design to show), the text of its
     generated JavaScript module, its workspace ``cloud`` (:func:`workspace_cloud`).
 
@@ -326,7 +399,7 @@ def render_page(model: GeneratedModel, model_script: str, cloud: Cloud, descript
     data goes in as a JSON island (:func:`_json_island`); the scripts are checked (:func:`_inline_script`)
     and pinned by hash in the Content-Security-Policy.
     """
-    data = page_data(model, cloud)
+    data = page_data(model, cloud, limits)
     top = data["cloud"]["colour_max"]
     importmap = _json_island({"imports": {
         "three": _module_url(_vendor("three.module.min.js")),
@@ -351,16 +424,8 @@ def model_script(model: LoadedModel) -> str:
     """The text of the model's generated JavaScript, once checked to hold the functions the page evaluates.
 
     Raises:
-        ViewUnavailable: the directory lacks them; the message names what and how to derive it (or, for legs
-            without closed forms, that they have no such functions and what analyses them).
+        ViewUnavailable: the directory lacks them; the message names what and how to derive it.
     """
-    from symkin.analysis.closure_workspace import uses_closure
-
-    if uses_closure(model):
-        raise ViewUnavailable(f"{model.directory}: the legs of {model.name} have no closed forms (legs of any "
-                              "topology): the page evaluates the closed-form ik and leg_points in the browser, "
-                              "which such legs do not have; analyse them with symkin workspace, gci, rate and "
-                              "mobility, or symkin.runtime.parallel (solve_closure, closure_velocities)")
     missing = missing_functions(model)
     script = model.directory / f"{model.name}.js"
     if missing or not script.is_file():
@@ -376,9 +441,9 @@ def model_script(model: LoadedModel) -> str:
 
 
 def page_of(model: LoadedModel, samples: int, seed: int = 0,
-            progress: Callable[[str], None] = lambda _stage: None) -> tuple[str, Cloud]:
+            progress: Callable[[str], None] = lambda _stage: None, limits: Limits | None = None) -> tuple[str, Cloud]:
     """(the page's HTML, its workspace cloud) for a loaded model (bound to the design to show) with about
-    ``samples`` cloud points (0: none).
+    ``samples`` cloud points (0: none), the actuators' limits overridden by ``limits`` ({joint: (lower, upper)}).
 
     Raises:
         ViewUnavailable: see :func:`model_script`.
@@ -386,7 +451,7 @@ def page_of(model: LoadedModel, samples: int, seed: int = 0,
     """
     script = model_script(model)
     progress(f"sampling the workspace ({samples} points)")
-    cloud = workspace_cloud(model, samples, seed) if samples else no_cloud(model)
+    cloud = workspace_cloud(model, samples, seed, limits) if samples else no_cloud(model, limits)
     progress("writing the page")
     description = model.info.description or model.name
-    return render_page(model, script, cloud, description), cloud
+    return render_page(model, script, cloud, description, limits), cloud

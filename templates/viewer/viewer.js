@@ -9,6 +9,9 @@ const model = globalThis.symkin[data.name];
 const frameNames = data.kind === "serial" ? Object.keys(model.FUNCTIONS.frames.outputs) : [];
 // a hybrid device's wrist links (device_frames), drawn from the platform centre to its TCP
 const wristFrameNames = data.wrist ? Object.keys(model.FUNCTIONS.device_frames.outputs) : [];
+// legs of any topology: the page solves their loop closure for (q, s) (data.home.s: the home assembly's s)
+const solvesClosure = data.home.s !== undefined;
+const legNames = solvesClosure ? Object.keys(model.FUNCTIONS.leg_joints.outputs) : [];
 
 // ------------------------------------------------------------------ linear algebra (small dense)
 
@@ -62,6 +65,18 @@ function invert(A) {
   return M.map((r) => r.slice(n));
 }
 
+function transpose(A) {
+  return A[0].map((_, j) => A.map((r) => r[j]));
+}
+
+/** The least-squares solution X of A X = B (A of full column rank; consistent systems are solved exactly) by the
+ *  normal equations; null where A^T A is singular. */
+function leastSquares(A, B) {
+  const At = transpose(A);
+  const inverse = invert(matmul(At, A));
+  return inverse === null ? null : matmul(inverse, matmul(At, B));
+}
+
 function matmul(A, B) {
   return A.map((r) => B[0].map((_, j) => r.reduce((s, v, k) => s + v * B[k][j], 0)));
 }
@@ -98,22 +113,63 @@ function taskJacobian(state) {
   let J;
   if (data.kind === "serial") {
     J = call("jacobian", state.q);
+  } else if (solvesClosure) {
+    J = closureJacobian(state);
+    if (J === null) return null;
+    if (["roll", "pitch", "yaw"].every((a) => data.task_space.includes(a))) J = matmul(angularRates(state.p), J);
   } else if (c.twist) {  // a rotating platform: twist Jacobian diag(I, E) (J^-1)^-1, angle rates to omega by E
     const inverse = invert(call("inverse_jacobian", state.q, state.p));
     if (inverse === null) return null;
-    const angles = ["roll", "pitch", "yaw"];
-    const pose = platformPose(state.p);
-    const E = angularVelocityMatrix(pose.angles[1], pose.angles[2]);
-    const rates = data.task_space.map((row, i) => data.task_space.map((column, j) => {
-      const [a, b] = [angles.indexOf(row), angles.indexOf(column)];
-      return a < 0 || b < 0 ? (i === j ? 1 : 0) : E[a][b];
-    }));
-    J = matmul(rates, inverse);
+    J = matmul(angularRates(state.p), inverse);
   } else {
     J = call("jacobian", state.q, state.p);
   }
   const rated = c.length ? J.map((row, i) => (c.position_rows.includes(i) ? row.map((v) => v / c.length) : row)) : J;
   return { raw: J, rated };
+}
+
+/** diag(I, E): the task coordinates' rates with roll, pitch, yaw rates turned into angular velocity by E(p). */
+function angularRates(p) {
+  const angles = ["roll", "pitch", "yaw"];
+  const pose = platformPose(p);
+  const E = angularVelocityMatrix(pose.angles[1], pose.angles[2]);
+  return data.task_space.map((row, i) => data.task_space.map((column, j) => {
+    const [a, b] = [angles.indexOf(row), angles.indexOf(column)];
+    return a < 0 || b < 0 ? (i === j ? 1 : 0) : E[a][b];
+  }));
+}
+
+/** J = dp/dq of legs of any topology at an assembled (q, s, p): Phi_p dp + Phi_s ds = -Phi_q dq solved for
+ *  (dp, ds) by least squares (exact: the actuators move the assembled mechanism), as
+ *  symkin.runtime.parallel.closure_velocities; null at a singularity. */
+function closureJacobian(state) {
+  const { Phi_p, Phi_q, Phi_s } = call("closure_jacobians", state.q, state.s, state.p);
+  const rates = leastSquares(Phi_p.map((row, i) => [...row, ...Phi_s[i]]), Phi_q.map((row) => row.map((v) => -v)));
+  return rates === null ? null : rates.slice(0, data.task_space.length);
+}
+
+/** Gauss-Newton on the generated closure for (q, s) at the pose p from the assembly (q, s) nearby (steps on
+ *  [Phi_q Phi_s] by least squares, each at most CLOSURE_STEP long), as symkin.runtime.parallel.solve_closure:
+ *  {q, s} where the legs close (every row below CLOSED times the pose's scale), else null. */
+const TURN = 2 * Math.PI;
+const CLOSURE_STEP = 0.2, CLOSURE_TOLERANCE = 1e-12, CLOSED = 1e-9, CLOSURE_ITERATIONS = 50;
+function solveClosure(q, s, p) {
+  let x = [...q, ...s];
+  const n = q.length, scale = Math.max(1, ...p.map(Math.abs));
+  for (let k = 0; k < CLOSURE_ITERATIONS; k++) {
+    const [qk, sk] = [x.slice(0, n), x.slice(n)];
+    const phi = call("closure", qk, sk, p);
+    const { Phi_q, Phi_s } = call("closure_jacobians", qk, sk, p);
+    const step = leastSquares(Phi_q.map((row, i) => [...row, ...Phi_s[i]]), phi.map((v) => [-v]));
+    if (step === null || !step.every((r) => Number.isFinite(r[0]))) return null;
+    const longest = Math.max(...step.map((r) => Math.abs(r[0])));
+    const shrink = longest > CLOSURE_STEP ? CLOSURE_STEP / longest : 1;
+    x = x.map((v, i) => v + shrink * step[i][0]);
+    if (longest <= CLOSURE_TOLERANCE) break;
+  }
+  const [qs, ss] = [x.slice(0, n), x.slice(n)];
+  const residual = Math.max(...call("closure", qs, ss, p).map(Math.abs));
+  return residual <= CLOSED * scale ? { q: qs, s: ss } : null;
 }
 
 /** 1/kappa = sigma_min / sigma_max of a rated task Jacobian ({raw, rated}); null where J is missing or not finite. */
@@ -139,6 +195,7 @@ function platformPose(p) {
 }
 
 const state = { q: data.home.q.slice(), p: data.home.p ? data.home.p.slice() : null,
+  s: solvesClosure ? data.home.s.slice() : null,
   qw: data.home.qw ? data.home.qw.slice() : null,
   // no prototype: a parameter named like an Object.prototype member ("constructor") is only what is set
   params: Object.assign(Object.create(null), Object.fromEntries(data.parameters.map((p) => [p.name, p.value]))) };
@@ -151,6 +208,8 @@ function evaluate() {
     out.frames = [...frameNames.map((name) => frames[name]), tcp];
     out.tcp = [tcp[0][3], tcp[1][3], tcp[2][3]];
     out.points = [[0, 0, 0], ...out.frames.map((T) => [T[0][3], T[1][3], T[2][3]])];
+  } else if (solvesClosure) {
+    evaluateClosure(out);
   } else {
     const { joints, margin } = call("ik", state.p);
     state.q = joints;
@@ -161,13 +220,7 @@ function evaluate() {
     if (limits.length) out.warnings.push(`beyond the limits of ${limits.join(", ")}`);
     const rows = unreachable.length ? null : call("leg_points", joints, state.p);
     out.legs = rows && rows.map((_, k) => rows.slice(3 * k, 3 * k + 3)).slice(0, rows.length / 3);
-    const pose = platformPose(state.p);
-    out.tcp = pose.position;
-    const [roll, pitch, yaw] = pose.angles;
-    const R = new THREE.Matrix4().makeRotationFromEuler(new THREE.Euler(roll, pitch, yaw, "ZYX"));
-    const e = R.elements;  // column-major
-    out.frames = [[[e[0], e[4], e[8], out.tcp[0]], [e[1], e[5], e[9], out.tcp[1]], [e[2], e[6], e[10], out.tcp[2]],
-      [0, 0, 0, 1]]];
+    platformFrame(out);
     if (data.wrist) evaluateWrist(out);
     if (model.singularities && !unreachable.length) {
       const { det_Jq, det_Jx } = call("singularities", joints, state.p);
@@ -184,6 +237,36 @@ function evaluate() {
     }
   }
   return out;
+}
+
+/** Legs of any topology at state.p: the closure solved from the last assembly (kept where the legs do not close
+ *  there, so that moving back finds them again), every leg's joints, the platform's frame. */
+function evaluateClosure(out) {
+  const solved = solveClosure(state.q, state.s, state.p);
+  if (solved === null) {
+    out.warnings.push("the legs do not close at this pose from the last assembly (out of reach)");
+  } else {
+    // an angle is shown as its first representative at or above its lower limit (symkin.analysis.limits)
+    const wrap = (v, c) => (c.revolute ? c.lower + (((v - c.lower) % TURN) + TURN) % TURN : v);
+    Object.assign(state, { q: solved.q.map((v, i) => wrap(v, data.coordinates[i])), s: solved.s });
+    const limits = data.coordinates.map((c, i) => (state.q[i] < c.lower || state.q[i] > c.upper ? c.label : null))
+      .filter((n) => n !== null);
+    if (limits.length) out.warnings.push(`beyond the limits of ${limits.join(", ")}`);
+    const joints = call("leg_joints", state.q, state.s);
+    out.legs = legNames.map((name) => joints[name]);
+  }
+  platformFrame(out);
+}
+
+/** The platform's position (the TCP shown) and frame at state.p. */
+function platformFrame(out) {
+  const pose = platformPose(state.p);
+  out.tcp = pose.position;
+  const [roll, pitch, yaw] = pose.angles;
+  const R = new THREE.Matrix4().makeRotationFromEuler(new THREE.Euler(roll, pitch, yaw, "ZYX"));
+  const e = R.elements;  // column-major
+  out.frames = [[[e[0], e[4], e[8], out.tcp[0]], [e[1], e[5], e[9], out.tcp[1]], [e[2], e[6], e[10], out.tcp[2]],
+    [0, 0, 0, 1]]];
 }
 
 /** A hybrid device's wrist on the platform at state.p: its links' frames and TCP (the TCP the page shows
@@ -307,6 +390,12 @@ function recomputeCloud() {
       const T = call("fk", sample);
       point = [T[0][3], T[1][3], T[2][3]];
       pose = { q: sample };
+    } else if (solvesClosure) {  // the cell's pose, solved again from its (q, s) at load
+      const p = [...sample.p];
+      const solved = solveClosure(sample.q, sample.s, p);
+      if (solved === null) return;
+      point = platformPose(p).position;
+      pose = { ...solved, p };
     } else if (!data.conditioning.twist) {
       const { position, margin } = call("fk", sample);
       if (!(margin >= 0)) return;
@@ -366,9 +455,9 @@ function draw(out) {
   }
   if (out.legs) {
     out.legs.forEach((leg) => chain(leg, radius, linkMaterial));
-    const ring = (k) => [...out.legs.map((leg) => leg[k]), out.legs[0][k]];
-    chain(ring(0), radius * 1.5, baseMaterial);
-    chain(ring(2), radius * 1.2, platformMaterial);
+    const ring = (end) => [...out.legs.map(end), end(out.legs[0])];  // through each leg's first or last point
+    chain(ring((leg) => leg[0]), radius * 1.5, baseMaterial);
+    chain(ring((leg) => leg[leg.length - 1]), radius * 1.2, platformMaterial);
     out.legs.flat().forEach(joint);
   }
   if (out.wrist) {
