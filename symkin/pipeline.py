@@ -155,9 +155,11 @@ def _quiet(_stage: str) -> None:
     pass
 
 
-def generate(model: Model, request: Request, progress: Progress = _quiet) -> Generation:
-    """Derive, optimize and emit everything ``request`` asks for (files stay in memory)."""
-    derivation = Derivation(model)
+def generate(model: Model, request: Request, progress: Progress = _quiet,
+             derivation: Derivation | None = None) -> Generation:
+    """Derive, optimize and emit everything ``request`` asks for (files stay in memory); ``derivation``: the model's
+    derivation graph where the caller has one, whose quantities derived so far are reused."""
+    derivation = Derivation(model) if derivation is None else derivation
     functions: list[OptimizedFunction] = []
     specs: list[FunctionSpec] = []
     reports = []

@@ -241,6 +241,26 @@ def test_the_mobility_command_reports_a_wrong_motion_with_its_place_and_exit_2(t
     assert "at the home pose: the legs let the platform move in [x, y, z, yaw] (4 DoF)" in result.stdout
 
 
+def test_symkin_check_locates_a_motion_the_legs_contradict(tmp_path, capsys):
+    """`symkin check` runs the motion check: the wrong parallel.motion is refused with its line and exit 2, the
+    declared one passes."""
+    from symkin.cli import main
+
+    path = tmp_path / "rolling.yaml"
+    text = dual_scara_text().replace("motion: schoenflies", "motion: [x, y, z, roll]")
+    path.write_text(text)
+    line = text[:text.index("motion: [x, y, z, roll]")].count("\n") + 1
+    assert main(["check", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert f"{path}:{line}" in err
+    assert "the legs let the platform turn about (0, 0, 1) (its coordinate yaw)" in err
+    assert "symkin mobility MODEL prints them" in err
+    good = tmp_path / "dual_scara.yaml"
+    good.write_text(dual_scara_text())
+    assert main(["check", str(good)]) == 0
+    assert "ok - model 'dual_scara'" in capsys.readouterr().out
+
+
 #: The lift's stroke (m) for the workspace: a prismatic actuator needs limits, the model file declares none.
 STROKE = (0.0, 0.2)
 

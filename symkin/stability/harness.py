@@ -14,7 +14,8 @@ evaluated
 and compared with the un-optimized expressions evaluated in 50-digit ball arithmetic at the same inputs
 (:class:`~symkin.stability.reference.BallReference`).  Each comparison is a
 :class:`Record` with the normwise relative error and kappa, the condition number
-sigma_max/sigma_min (seed sec. 4.2), computed from 50-digit values, of the matrix that
+sigma_max/sigma_min (seed sec. 4.2), computed from 50-digit values (by numpy's SVD of them rounded to doubles
+where that is within 1e-8, :data:`DOUBLE_KAPPA`), of the matrix that
 bounds the accuracy of the quantity: the matrix it inverts when its registration declares
 one (``solves_with``: the mass matrix for forward dynamics, the task Jacobian for TCP forces
 and operational-space dynamics), else the task Jacobian (:func:`conditioning_matrix`); a
@@ -67,6 +68,10 @@ PATH_STEPS = tuple(10.0 ** -k for k in range(1, 13))
 BOUND = 1e-13
 SOLVE_ULPS = 4.0
 KAPPA_LIMIT = 1e3
+#: Below this condition number, kappa is that of the reference rounded to doubles (numpy's SVD): rounding moves
+#: each singular value by <= p(n) u sigma_max (two backward-stable steps, p(n) ~ 4n + sqrt(mn)), so kappa by a
+#: relative p(n) u kappa < 1e-8 here, far below the factor of ten between the table's classes; above it, 50 digits.
+DOUBLE_KAPPA = 1e6
 #: Residual quantities (zero wherever the mechanism is assembled) are evaluated with q moved off
 #: the assembled state by up to this fraction of max(|q|, 1), so that their relative error is
 #: meaningful (and scales with the mechanism).
@@ -136,14 +141,19 @@ def allowed_error(kappa: float, bound: float = BOUND) -> float:
 
 
 def _kappa(reference: BallReference | None, shape: tuple[int, ...], vectors: dict, parameters: dict) -> float:
-    """sigma_max / sigma_min of a 50-digit matrix output (inf at a singular state; nan without one,
-    or where it is undefined)."""
+    """sigma_max / sigma_min of a matrix output evaluated at 50 digits (inf at a singular state; nan without one,
+    or where it is undefined): of its rounding to doubles where kappa < :data:`DOUBLE_KAPPA`, else at 50 digits."""
     if reference is None:
         return float("nan")
     exact = reference.exact({g: vectors[g] for g in reference.vector_names}, parameters)
     if any(mpmath.isnan(v) for v in exact):
         return float("nan")
     rows, columns = shape
+    rounded = np.array([float(v) for v in exact]).reshape(rows, columns)
+    if np.all(np.isfinite(rounded)):
+        singular = np.linalg.svd(rounded, compute_uv=False)
+        if singular[-1] > 0 and singular[0] < DOUBLE_KAPPA * singular[-1]:
+            return float(singular[0] / singular[-1])
     with mpmath.workdps(DIGITS):
         J = mpmath.matrix([exact[i * columns:(i + 1) * columns] for i in range(rows)])
         singular = mpmath.svd_r(J, compute_uv=False)
@@ -228,7 +238,7 @@ def run_stability(model: Model, *, samples: int = 32, float32_samples: int = 16,
             support += derivation.available(["closure", "closure_jacobians"])[0]  # the sampler's assembled s
     generated = tuple(names) + tuple(dict.fromkeys(name for name in support if name not in names))
     progress("generating code")
-    generation = pipeline.generate(model, pipeline.Request(generated, (), ("numpy",)))
+    generation = pipeline.generate(model, pipeline.Request(generated, (), ("numpy",)), derivation=derivation)
     optimized = {f.name: f for f in generation.functions}
     references = {name: BallReference(derivation[name]) for name in names}
     definitions = registry(model.mechanism)

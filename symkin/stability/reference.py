@@ -91,6 +91,10 @@ with flint.ctx.workprec(PRECISION):
                       "atan2": lambda y, x: flint.arb.atan2(_ball(y), _ball(x))})
 
 
+#: States whose outputs a reference keeps (the largest batch of states the stability run evaluates at once).
+RECENT = 64
+
+
 class BallReference:
     """Evaluate a function spec's outputs at ``DIGITS`` digits.
 
@@ -108,14 +112,21 @@ class BallReference:
                                                              "allow_unknown_functions": True,
                                                              "user_functions": {}}))
         self.size = sum(len(out.entries) for out in spec.outputs)
+        self._recent: dict[tuple[float, ...], list[flint.arb]] = {}
 
     def balls(self, vectors: Mapping[str, np.ndarray], parameters: Mapping[str, float]) -> list[flint.arb]:
-        """The outputs (flattened, row-major, outputs in order) as arb balls; NaN where undefined."""
-        args = [flint.arb(float(v)) for name in self.vector_names for v in np.asarray(vectors[name], dtype=float)]
-        args += [flint.arb(float(parameters[name])) for name in self.parameter_names]
-        with flint.ctx.workprec(PRECISION):
-            values = self._function(*args)
-            return [_ball(values[k]) for k in range(self.size)]
+        """The outputs (flattened, row-major, outputs in order) as arb balls; NaN where undefined.  The last
+        :data:`RECENT` states' are kept: a matrix output is evaluated for its condition number and then checked at
+        the same states."""
+        key = tuple(float(v) for name in self.vector_names for v in np.asarray(vectors[name], dtype=float))
+        key += tuple(float(parameters[name]) for name in self.parameter_names)
+        if key not in self._recent:
+            if len(self._recent) >= RECENT:
+                self._recent.clear()
+            with flint.ctx.workprec(PRECISION):
+                values = self._function(*(flint.arb(v) for v in key))
+                self._recent[key] = [_ball(values[k]) for k in range(self.size)]
+        return self._recent[key]
 
     def exact(self, vectors: Mapping[str, np.ndarray], parameters: Mapping[str, float]) -> list[mpmath.mpf]:
         """The outputs' midpoints as mpmath reals (exactly), NaN where undefined."""
