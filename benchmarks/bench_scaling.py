@@ -44,13 +44,13 @@ def measure(n: int, directory: Path) -> dict[str, float]:
     generated = time.perf_counter()
     pipeline.write(result, directory / "out")
     seconds = time.perf_counter() - start
-    parts = {r.name: r.op_counts for r in result.reports if r.name != "scene"}
+    parts = {r.name: r.op_counts for r in result.reports if r.name != "combined"}
     derive = sum(r.derive_seconds for r in result.reports)
     optimize = sum(r.optimize_seconds for r in result.reports)
     return {"n": n, "seconds": seconds, "derive": derive, "optimize": optimize, "emit": result.emit_seconds,
             "other": generated - start - derive - optimize - result.emit_seconds, "write": seconds - (generated - start),
             "derived": sum(c["derived"] for c in parts.values()), "cse": sum(c["cse"] for c in parts.values()),
-            "scene": next((r.op_counts["cse"] for r in result.reports if r.name == "scene"), 0),
+            "combined": next((r.op_counts["cse"] for r in result.reports if r.name == "combined"), 0),
             "mass_matrix": parts["mass_matrix"]["cse"],
             "bias": parts["coriolis_vector"]["cse"] + parts["gravity_vector"]["cse"],
             "crba": arithmetic_operations(crba_function(dh_chain(n))),
@@ -78,8 +78,8 @@ def main(argv: list[str] | None = None) -> int:
             r = rows[-1]
             print(f"  n = {n}: {r['seconds']:.2f} s", file=sys.stderr, flush=True)
     print(f"derive {OUTPUTS} (numpy, c) for generated n-joint chains")
-    print(format_table(["n", "wall (s)", "ops derived (tree)", "ops after CSE", "scene ops"],
-                       [[r["n"], f"{r['seconds']:.2f}", f"{r['derived']:,}", f"{r['cse']:,}", f"{r['scene']:,}"]
+    print(format_table(["n", "wall (s)", "ops derived (tree)", "ops after CSE", "combined ops"],
+                       [[r["n"], f"{r['seconds']:.2f}", f"{r['derived']:,}", f"{r['cse']:,}", f"{r['combined']:,}"]
                         for r in rows]))
     print(f"fitted exponent of the derive time in n (n >= 6): {fitted_exponent(rows):.2f}")
     print()

@@ -22,7 +22,7 @@ def derive(model: str | Path | Model, out_dir: str | Path = "generated", *,
         backends: backends to run (default: the scene's, else numpy).
         fixed: parameters to fold (default: the scene's).
         float32: also emit single-precision C functions (default: the scene's).
-        combine: outputs also fused into one function ``scene`` (default: the scene's, else all).
+        combine: outputs also fused into one function ``combined`` (default: the scene's, else all).
 
     Returns:
         The model's output directory, ready for :func:`symkin.load`.

@@ -27,7 +27,7 @@ from symkin.optimize import optimize
 Progress = Callable[[str], None]
 
 #: Name of the function that computes every output of a scene together (one shared CSE).
-COMBINED_FUNCTION = "scene"
+COMBINED_FUNCTION = "combined"
 
 
 @dataclass(frozen=True)
@@ -89,7 +89,7 @@ def resolve_request(model: Model, only: str | Sequence[str] | None = None,
                     combine: str | Sequence[str] | None = None) -> Request:
     """The request from the model's scene, overridden by explicit arguments (the CLI's flags).
 
-    ``combine`` (or the scene's) names the outputs also fused into the function ``scene``;
+    ``combine`` (or the scene's) names the outputs also fused into the function ``combined``;
     ``all`` (the default) fuses every output, ``none`` none.  Scene entries that ``only``
     leaves out are dropped; explicit names must be among the outputs.
 

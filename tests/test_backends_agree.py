@@ -72,7 +72,7 @@ def test_every_function_matches_the_sympy_expressions(name, backend, models, der
                                                  f"{bound[worst]:.3g}", worst_state(g, w, inputs))
         checked.append(record["name"])
     assert checked == list(generated.functions)
-    assert "scene" in checked
+    assert "combined" in checked
 
 
 def assert_close_at_scale(got, want):
@@ -154,7 +154,7 @@ def test_missing_or_unknown_arguments_raise_the_same_type_errors(backend, loaded
 def test_loading_does_not_import_sympy(backend, generated_dir, compile_cache):
     code = ("import sys, numpy as np; from symkin import load; "
             f"m = load({str(generated_dir / 'ur10e')!r}, backend={backend!r}); m.fk(np.zeros(6)); "
-            "m.scene(np.zeros((3, 6)), np.zeros((3, 6))); print('sympy' in sys.modules, 'jinja2' in sys.modules)")
+            "m.combined(np.zeros((3, 6)), np.zeros((3, 6))); print('sympy' in sys.modules, 'jinja2' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.split() == ["False", "False"]
 
@@ -166,7 +166,7 @@ def test_results_are_fresh_arrays(loaded):
         first = ur.fk(np.zeros(6))
         ur.fk(np.ones(6))
         np.testing.assert_array_equal(first, loaded("ur10e", "numpy").fk(np.zeros(6)))
-        result = ur.scene(np.zeros(6), np.zeros(6))
+        result = ur.combined(np.zeros(6), np.zeros(6))
         result.base_T_tcp[:] = 7.0
         assert not np.any(result.J == 7.0)
         assert not np.any(result.M == 7.0)
@@ -179,8 +179,8 @@ def test_large_batches_are_evaluated_in_chunks_with_the_same_results(loaded, mod
     qd = np.random.default_rng(10).uniform(-1, 1, q.shape)
     d6 = np.linspace(0.1, 0.2, 5000)
     for kwargs in ({}, {"d6": d6}, {"d6": d6[:, None].T}):
-        got, want = numpy_ur.scene(q, qd, **kwargs), c_ur.scene(q, qd, **kwargs)
-        assert type(got).__name__ == "SceneResult"
+        got, want = numpy_ur.combined(q, qd, **kwargs), c_ur.combined(q, qd, **kwargs)
+        assert type(got).__name__ == "CombinedResult"
         for g, w in zip(got, want):
             assert g.shape == w.shape
             assert_close_at_scale(g, w)

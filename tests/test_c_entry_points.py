@@ -134,7 +134,7 @@ def test_any_other_call_behaves_as_the_ctypes_function_and_never_crashes(model):
     assert compiled.fk(batch, out=out) is out                                        # a batch into out=: a copy
     assert np.array_equal(out, plain.fk(batch))
     with pytest.raises(ValueError, match="out= must be a tuple of 5"):
-        compiled.scene(q, q, out=np.empty((4, 4)))
+        compiled.combined(q, q, out=np.empty((4, 4)))
     assert np.array_equal(compiled.fk(q, out=None), expected)
 
 
@@ -145,8 +145,8 @@ def test_calls_hold_no_references():
     out = tuple(np.empty(shape) for shape in ((4, 4), (6, 6), (6, 6), (6,), (6,)))
     before = [sys.getrefcount(x) for x in (q, qd, *out)]
     for _ in range(1000):
-        compiled.scene(q, qd)
-        compiled.scene(q, qd, out=out)
+        compiled.combined(q, qd)
+        compiled.combined(q, qd, out=out)
         compiled.fk(q, out=out[0])
         compiled.fk(q[None, :])
     assert [sys.getrefcount(x) for x in (q, qd, *out)] == before

@@ -31,9 +31,9 @@ def test_functions_have_named_inputs_outputs_and_defaults(loaded):
     q = np.linspace(-1, 1, 6)
     np.testing.assert_allclose(fk(q=q)["base_T_tcp"].full(), ur.fk(q), atol=KINEMATICS * UR10E_SCALE)
     assert np.all(np.isnan(fk(d1=0.2)["base_T_tcp"].full()[:3, :]))
-    scene = ur.scene.casadi
-    assert scene.name_out() == ["base_T_tcp", "J", "M", "V", "G"]
-    assert scene.name_in()[:2] == ["q", "qd"]
+    combined = ur.combined.casadi
+    assert combined.name_out() == ["base_T_tcp", "J", "M", "V", "G"]
+    assert combined.name_in()[:2] == ["q", "qd"]
     # The raw function names the wrong input itself (the wrappers raise the numpy backend's errors).
     with pytest.raises(RuntimeError, match=r"Input 0 \(q\) has mismatching shape"):
         fk(q=np.zeros(5))
@@ -74,7 +74,7 @@ def test_functions_differentiate_like_the_generated_jacobian(loaded, models):
 def test_casadi_generates_c_that_compiles_and_agrees(loaded, models, tmp_path):
     ur = loaded("ur10e", "casadi")
     generator = casadi.CodeGenerator("ur10e_casadi.c", {"with_header": True})
-    for name in ("fk", "jacobian", "scene"):
+    for name in ("fk", "jacobian", "combined"):
         generator.add(getattr(ur, name).casadi)
     generator.generate(str(tmp_path) + os.sep)
     library = tmp_path / "libur10e_casadi.so"

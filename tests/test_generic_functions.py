@@ -41,7 +41,7 @@ def dynamics_like(models, tmp_path_factory):
                                      OutputSpec("F", friction, "friction-like terms", shape=(2,))])
     mass = make_function(model, "mass", "Mass matrix.", "test function", [q],
                          [OutputSpec("M", M, "mass matrix", "kg*m^2")])
-    specs = [energy, mass, combine_functions(model, "scene", [energy, mass])]
+    specs = [energy, mass, combine_functions(model, "combined", [energy, mass])]
     code = ModelCode(model.name, model.hash, model.description, "test", tuple(j.name for j in model.joints),
                      tuple(ParameterInfo(p.name, float(p.value), p.unit, p.doc, p.name == "g")
                            for p in model.parameters),
@@ -90,9 +90,9 @@ def test_two_vector_inputs_and_scalar_vector_matrix_outputs(dynamics_like, backe
         generated.energy(q, qd, g=9.81)
     with pytest.raises(ValueError, match=r"energy\(\): 'qd' must have shape \(\.\.\., 2\), got \(7, 3\)"):
         generated.energy(q, np.zeros((7, 3)))
-    scene = generated.scene(q, qd)
-    assert scene._fields == ("k", "G", "energy_M", "F", "mass_M")
-    np.testing.assert_allclose(scene.mass_M, result.M, rtol=0, atol=DYNAMICS * np.abs(result.M).max())
+    combined = generated.combined(q, qd)
+    assert combined._fields == ("k", "G", "energy_M", "F", "mass_M")
+    np.testing.assert_allclose(combined.mass_M, result.M, rtol=0, atol=DYNAMICS * np.abs(result.M).max())
     assert generated.mass(q).shape == (7, 2, 2)
 
 

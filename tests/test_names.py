@@ -69,8 +69,8 @@ def test_the_lists_name_only_names_defined_twice():
 
 
 def test_the_names_the_review_found_with_two_meanings_have_one():
-    """Issue 35's list: the fused generated function's and the section's 'scene' aside (a generated name), each of
-    these is now defined once."""
+    """Issue 35's list: each of these is now defined once (and 'scene' names only the model file's section: the
+    fused generated function is ``combined``, symkin.pipeline.COMBINED_FUNCTION)."""
     names = defined_names()
     for name in ("characteristic_length", "make_function", "integrate", "load_model", "Program", "home_pose"):
         assert len(names.get(name, [])) == 1, (name, names.get(name))

@@ -565,7 +565,7 @@ void agile_eye_potential_energy_packed(const double *in, double *out);
  * Uses 1344 bytes of stack for its blocks of 8 configurations. */
 void agile_eye_potential_energy_batch(size_t n, const double *q, const double *p, const double *params, size_t params_stride, double *u);
 
-/* agile_eye_scene: ik, fk, leg_points, constraints, constraint_jacobians, jacobian, inverse_jacobian, singularities, closure, closure_jacobians, gravity_vector, mass_matrix, coriolis_vector, inverse_dynamics, forward_dynamics, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions.
+/* agile_eye_combined: ik, fk, leg_points, constraints, constraint_jacobians, jacobian, inverse_jacobian, singularities, closure, closure_jacobians, gravity_vector, mass_matrix, coriolis_vector, inverse_dynamics, forward_dynamics, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions.
  *
  * Computes the outputs of ik, fk, leg_points, constraints, constraint_jacobians,
  * jacobian, inverse_jacobian, singularities, closure, closure_jacobians, gravity_vector,
@@ -639,14 +639,14 @@ void agile_eye_potential_energy_batch(size_t n, const double *q, const double *p
  *   u[1]: scalar; potential energy (potential_energy) [J].
  * Cost: 4552 operations.
  */
-void agile_eye_scene(const double *p, const double *q, const double *s, const double *qd, const double *qdd, const double *tau, double r_p, double r_d, double m_p, double m_d, double I_camera, double J_rotor, double *joints, double *ik_margin, double *orientation, double *fk_margin, double *points, double *f, double *J_x, double *J_q, double *J, double *J_inv, double *det_Jq, double *det_Jx, double *phi, double *Phi_p, double *Phi_q, double *Phi_s, double *G, double *M, double *V, double *inverse_dynamics_tau, double *forward_dynamics_qdd, double *Mx, double *Vx, double *Gx, double *k, double *u);
+void agile_eye_combined(const double *p, const double *q, const double *s, const double *qd, const double *qdd, const double *tau, double r_p, double r_d, double m_p, double m_d, double I_camera, double J_rotor, double *joints, double *ik_margin, double *orientation, double *fk_margin, double *points, double *f, double *J_x, double *J_q, double *J, double *J_inv, double *det_Jq, double *det_Jx, double *phi, double *Phi_p, double *Phi_q, double *Phi_s, double *G, double *M, double *V, double *inverse_dynamics_tau, double *forward_dynamics_qdd, double *Mx, double *Vx, double *Gx, double *k, double *u);
 
-/* agile_eye_scene with packed arguments: in = p, q, s, qd, qdd, tau, r_p, r_d, m_p, m_d, I_camera, J_rotor one after the other; out = joints, ik_margin, orientation, fk_margin, points, f, J_x, J_q, J, J_inv, det_Jq, det_Jx, phi, Phi_p, Phi_q, Phi_s, G, M, V, inverse_dynamics_tau, forward_dynamics_qdd, Mx, Vx, Gx, k, u one after the other. */
-void agile_eye_scene_packed(const double *in, double *out);
+/* agile_eye_combined with packed arguments: in = p, q, s, qd, qdd, tau, r_p, r_d, m_p, m_d, I_camera, J_rotor one after the other; out = joints, ik_margin, orientation, fk_margin, points, f, J_x, J_q, J, J_inv, det_Jq, det_Jx, phi, Phi_p, Phi_q, Phi_s, G, M, V, inverse_dynamics_tau, forward_dynamics_qdd, Mx, Vx, Gx, k, u one after the other. */
+void agile_eye_combined_packed(const double *in, double *out);
 
-/* agile_eye_scene for n configurations; params: r_p, r_d, m_p, m_d, I_camera, J_rotor, stride 0 or 6.
- * Calls agile_eye_scene once per configuration. */
-void agile_eye_scene_batch(size_t n, const double *p, const double *q, const double *s, const double *qd, const double *qdd, const double *tau, const double *params, size_t params_stride, double *joints, double *ik_margin, double *orientation, double *fk_margin, double *points, double *f, double *J_x, double *J_q, double *J, double *J_inv, double *det_Jq, double *det_Jx, double *phi, double *Phi_p, double *Phi_q, double *Phi_s, double *G, double *M, double *V, double *inverse_dynamics_tau, double *forward_dynamics_qdd, double *Mx, double *Vx, double *Gx, double *k, double *u);
+/* agile_eye_combined for n configurations; params: r_p, r_d, m_p, m_d, I_camera, J_rotor, stride 0 or 6.
+ * Calls agile_eye_combined once per configuration. */
+void agile_eye_combined_batch(size_t n, const double *p, const double *q, const double *s, const double *qd, const double *qdd, const double *tau, const double *params, size_t params_stride, double *joints, double *ik_margin, double *orientation, double *fk_margin, double *points, double *f, double *J_x, double *J_q, double *J, double *J_inv, double *det_Jq, double *det_Jx, double *phi, double *Phi_p, double *Phi_q, double *Phi_s, double *G, double *M, double *V, double *inverse_dynamics_tau, double *forward_dynamics_qdd, double *Mx, double *Vx, double *Gx, double *k, double *u);
 
 #ifdef __cplusplus
 }

@@ -32,7 +32,7 @@
  *   operational_space(q, p, qd, params) -> {Mx: number[][], Vx: number[], Gx: number[]}
  *   kinetic_energy(q, p, qd, params) -> number
  *   potential_energy(q, p, params) -> number
- *   scene(p, q, s, qd, qdd, tau, params) -> {joints: number[], ik_margin: number[], orientation: number[], fk_margin: number, points: number[][], f: number[], J_x: number[][], J_q: number[][], J: number[][], J_inv: number[][], det_Jq: number, det_Jx: number, phi: number[], Phi_p: number[][], Phi_q: number[][], Phi_s: number[][], G: number[], M: number[][], V: number[], inverse_dynamics_tau: number[], forward_dynamics_qdd: number[], Mx: number[][], Vx: number[], Gx: number[], k: number, u: number}
+ *   combined(p, q, s, qd, qdd, tau, params) -> {joints: number[], ik_margin: number[], orientation: number[], fk_margin: number, points: number[][], f: number[], J_x: number[][], J_q: number[][], J: number[][], J_inv: number[][], det_Jq: number, det_Jx: number, phi: number[], Phi_p: number[][], Phi_q: number[][], Phi_s: number[][], G: number[], M: number[][], V: number[], inverse_dynamics_tau: number[], forward_dynamics_qdd: number[], Mx: number[][], Vx: number[], Gx: number[], k: number, u: number}
  */
 (function (root, factory) {
   "use strict";
@@ -3215,14 +3215,14 @@
    *     k: shape (); kinetic energy of all bodies (kinetic_energy) [J].
    *     u: shape (); potential energy (potential_energy) [J].
    */
-  function scene(p, q, s, qd, qdd, tau, params) {
-    _vector(p, 3, "p", "scene");
-    _vector(q, 3, "q", "scene");
-    _vector(s, 6, "s", "scene");
-    _vector(qd, 3, "qd", "scene");
-    _vector(qdd, 3, "qdd", "scene");
-    _vector(tau, 3, "tau", "scene");
-    const _p = _params(params, ["r_p", "r_d", "m_p", "m_d", "I_camera", "J_rotor"], "scene");
+  function combined(p, q, s, qd, qdd, tau, params) {
+    _vector(p, 3, "p", "combined");
+    _vector(q, 3, "q", "combined");
+    _vector(s, 6, "s", "combined");
+    _vector(qd, 3, "qd", "combined");
+    _vector(qdd, 3, "qdd", "combined");
+    _vector(tau, 3, "tau", "combined");
+    const _p = _params(params, ["r_p", "r_d", "m_p", "m_d", "I_camera", "J_rotor"], "combined");
     const r_p = _p.r_p ?? 0.08;
     const r_d = _p.r_d ?? 0.1;
     const m_p = _p.m_p ?? 0.0244;
@@ -4361,7 +4361,7 @@
       operational_space: {"inputs": ["q", "p", "qd"], "parameters": ["r_p", "r_d", "m_p", "m_d", "I_camera", "J_rotor"], "outputs": {"Mx": [3, 3], "Vx": [3], "Gx": [3]}},
       kinetic_energy: {"inputs": ["q", "p", "qd"], "parameters": ["r_p", "r_d", "m_p", "m_d", "I_camera", "J_rotor"], "outputs": {"k": []}},
       potential_energy: {"inputs": ["q", "p"], "parameters": ["r_p", "r_d", "m_p", "m_d"], "outputs": {"u": []}},
-      scene: {"inputs": ["p", "q", "s", "qd", "qdd", "tau"], "parameters": ["r_p", "r_d", "m_p", "m_d", "I_camera", "J_rotor"], "outputs": {"joints": [3], "ik_margin": [3], "orientation": [3], "fk_margin": [], "points": [9, 3], "f": [3], "J_x": [3, 3], "J_q": [3, 3], "J": [3, 3], "J_inv": [3, 3], "det_Jq": [], "det_Jx": [], "phi": [18], "Phi_p": [18, 3], "Phi_q": [18, 3], "Phi_s": [18, 6], "G": [3], "M": [3, 3], "V": [3], "inverse_dynamics_tau": [3], "forward_dynamics_qdd": [3], "Mx": [3, 3], "Vx": [3], "Gx": [3], "k": [], "u": []}},
+      combined: {"inputs": ["p", "q", "s", "qd", "qdd", "tau"], "parameters": ["r_p", "r_d", "m_p", "m_d", "I_camera", "J_rotor"], "outputs": {"joints": [3], "ik_margin": [3], "orientation": [3], "fk_margin": [], "points": [9, 3], "f": [3], "J_x": [3, 3], "J_q": [3, 3], "J": [3, 3], "J_inv": [3, 3], "det_Jq": [], "det_Jx": [], "phi": [18], "Phi_p": [18, 3], "Phi_q": [18, 3], "Phi_s": [18, 6], "G": [3], "M": [3, 3], "V": [3], "inverse_dynamics_tau": [3], "forward_dynamics_qdd": [3], "Mx": [3, 3], "Vx": [3], "Gx": [3], "k": [], "u": []}},
     }),
     ik: ik,
     fk: fk,
@@ -4381,6 +4381,6 @@
     operational_space: operational_space,
     kinetic_energy: kinetic_energy,
     potential_energy: potential_energy,
-    scene: scene,
+    combined: combined,
   });
 });

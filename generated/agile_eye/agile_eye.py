@@ -29,7 +29,7 @@ Functions:
     operational_space(q, p, qd, **params) -> OperationalSpaceResult(Mx, Vx, Gx)
     kinetic_energy(q, p, qd, **params) -> k (...)
     potential_energy(q, p, **params) -> u (...)
-    scene(p, q, s, qd, qdd, tau, **params) -> SceneResult(joints, ik_margin, orientation, fk_margin, points, f, J_x, J_q, J, J_inv, det_Jq, det_Jx, phi, Phi_p, Phi_q, Phi_s, G, M, V, inverse_dynamics_tau, forward_dynamics_qdd, Mx, Vx, Gx, k, u)
+    combined(p, q, s, qd, qdd, tau, **params) -> CombinedResult(joints, ik_margin, orientation, fk_margin, points, f, J_x, J_q, J, J_inv, det_Jq, det_Jx, phi, Phi_p, Phi_q, Phi_s, G, M, V, inverse_dynamics_tau, forward_dynamics_qdd, Mx, Vx, Gx, k, u)
 """
 
 import collections
@@ -64,7 +64,7 @@ ClosureJacobiansResult = collections.namedtuple("ClosureJacobiansResult", ["Phi_
 
 OperationalSpaceResult = collections.namedtuple("OperationalSpaceResult", ["Mx", "Vx", "Gx"])
 
-SceneResult = collections.namedtuple("SceneResult", ["joints", "ik_margin", "orientation", "fk_margin", "points", "f", "J_x", "J_q", "J", "J_inv", "det_Jq", "det_Jx", "phi", "Phi_p", "Phi_q", "Phi_s", "G", "M", "V", "inverse_dynamics_tau", "forward_dynamics_qdd", "Mx", "Vx", "Gx", "k", "u"])
+CombinedResult = collections.namedtuple("CombinedResult", ["joints", "ik_margin", "orientation", "fk_margin", "points", "f", "J_x", "J_q", "J", "J_inv", "det_Jq", "det_Jx", "phi", "Phi_p", "Phi_q", "Phi_s", "G", "M", "V", "inverse_dynamics_tau", "forward_dynamics_qdd", "Mx", "Vx", "Gx", "k", "u"])
 
 
 def _vector(value, size, name, function):
@@ -3384,7 +3384,7 @@ def potential_energy(q, p, *, r_p=0.08, r_d=0.1, m_p=0.0244, m_d=0.0305):
     return _out_u
 
 
-def scene(p, q, s, qd, qdd, tau, *, r_p=0.08, r_d=0.1, m_p=0.0244, m_d=0.0305, I_camera=2.5e-05, J_rotor=1e-05):
+def combined(p, q, s, qd, qdd, tau, *, r_p=0.08, r_d=0.1, m_p=0.0244, m_d=0.0305, I_camera=2.5e-05, J_rotor=1e-05):
     """ik, fk, leg_points, constraints, constraint_jacobians, jacobian, inverse_jacobian, singularities, closure, closure_jacobians, gravity_vector, mass_matrix, coriolis_vector, inverse_dynamics, forward_dynamics, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions.
 
     Computes the outputs of ik, fk, leg_points, constraints, constraint_jacobians,
@@ -3419,7 +3419,7 @@ def scene(p, q, s, qd, qdd, tau, *, r_p=0.08, r_d=0.1, m_p=0.0244, m_d=0.0305, I
             array broadcastable to the batch shape.
 
     Returns:
-        SceneResult with the fields:
+        CombinedResult with the fields:
         joints: shape (..., 3); actuated joint variables q (ik).
         ik_margin: shape (..., 3); per leg: >= 0 iff the leg reaches p (the radicand of its
             solution) (ik).
@@ -3463,15 +3463,15 @@ def scene(p, q, s, qd, qdd, tau, *, r_p=0.08, r_d=0.1, m_p=0.0244, m_d=0.0305, I
         k: shape (...); kinetic energy of all bodies (kinetic_energy) [J].
         u: shape (...); potential energy (potential_energy) [J].
     """
-    p = _vector(p, 3, "p", "scene")
-    q = _vector(q, 3, "q", "scene")
-    s = _vector(s, 6, "s", "scene")
-    qd = _vector(qd, 3, "qd", "scene")
-    qdd = _vector(qdd, 3, "qdd", "scene")
-    tau = _vector(tau, 3, "tau", "scene")
-    batch = _batch_shape("scene", p.shape[:-1], q.shape[:-1], s.shape[:-1], qd.shape[:-1], qdd.shape[:-1], tau.shape[:-1], numpy.shape(r_p), numpy.shape(r_d), numpy.shape(m_p), numpy.shape(m_d), numpy.shape(I_camera), numpy.shape(J_rotor))
+    p = _vector(p, 3, "p", "combined")
+    q = _vector(q, 3, "q", "combined")
+    s = _vector(s, 6, "s", "combined")
+    qd = _vector(qd, 3, "qd", "combined")
+    qdd = _vector(qdd, 3, "qdd", "combined")
+    tau = _vector(tau, 3, "tau", "combined")
+    batch = _batch_shape("combined", p.shape[:-1], q.shape[:-1], s.shape[:-1], qd.shape[:-1], qdd.shape[:-1], tau.shape[:-1], numpy.shape(r_p), numpy.shape(r_d), numpy.shape(m_p), numpy.shape(m_d), numpy.shape(I_camera), numpy.shape(J_rotor))
     if math.prod(batch) > CHUNK:
-        return _in_chunks(scene, batch, (p, q, s, qd, qdd, tau, ), {"r_p": r_p, "r_d": r_d, "m_p": m_p, "m_d": m_d, "I_camera": I_camera, "J_rotor": J_rotor})
+        return _in_chunks(combined, batch, (p, q, s, qd, qdd, tau, ), {"r_p": r_p, "r_d": r_d, "m_p": m_p, "m_d": m_d, "I_camera": I_camera, "J_rotor": J_rotor})
     roll = p[..., 0]
     pitch = p[..., 1]
     yaw = p[..., 2]
@@ -4724,4 +4724,4 @@ def scene(p, q, s, qd, qdd, tau, *, r_p=0.08, r_d=0.1, m_p=0.0244, m_d=0.0305, I
     _out_k[...] = _x99*_x1042*_x1042 + 0.5*_x123*(_x133*_x324 + _x123*I_camera) + 0.5*(-_x98*_x1034 + _x99*_x1033)*_x1033 + _x147*_x840 + 0.5*(-_x98*_x1037 + _x99*_x1038)*_x1038 + _x840*_x180 + 0.5*(_x35 + _x33)*_x142*_x142 + _x840*_x204 + 0.5*(-_x98*_x1033 + _x99*_x1034)*_x1034 + _x99*_x412*_x412 + 0.5*_x133*(_x133*(_x36*_x33 + _x36*_x35 + _x7*_x7*I_camera) + _x123*_x324) + 0.5*(-_x98*_x1040 + _x99*_x1041)*_x1041 + 0.5*(-_x98*_x1041 + _x99*_x1040)*_x1040 + 0.5*(-_x98*_x1038 + _x99*_x1037)*_x1037 + _x99*_x1035*_x1035
     _out_u = numpy.zeros(batch + ())
     _out_u[...] = _x6*m_d*_x1045 - (-_x4*_x1045 - _x8*_x1044)*m_d - m_d*(-_x11*_x1044 + _x7*_x1044) + _x11*_x1043 + _x8*_x1043 + _x1043
-    return SceneResult(_out_joints, _out_ik_margin, _out_orientation, _out_fk_margin, _out_points, _out_f, _out_J_x, _out_J_q, _out_J, _out_J_inv, _out_det_Jq, _out_det_Jx, _out_phi, _out_Phi_p, _out_Phi_q, _out_Phi_s, _out_G, _out_M, _out_V, _out_inverse_dynamics_tau, _out_forward_dynamics_qdd, _out_Mx, _out_Vx, _out_Gx, _out_k, _out_u)
+    return CombinedResult(_out_joints, _out_ik_margin, _out_orientation, _out_fk_margin, _out_points, _out_f, _out_J_x, _out_J_q, _out_J, _out_J_inv, _out_det_Jq, _out_det_Jx, _out_phi, _out_Phi_p, _out_Phi_q, _out_Phi_s, _out_G, _out_M, _out_V, _out_inverse_dynamics_tau, _out_forward_dynamics_qdd, _out_Mx, _out_Vx, _out_Gx, _out_k, _out_u)

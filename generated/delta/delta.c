@@ -4868,8 +4868,8 @@ void delta_potential_energy_batch(size_t n, const double *restrict q, const doub
 
 #if !defined(DELTA_PART) || DELTA_PART == 3
 
-/* delta_scene: jacobian, inverse_jacobian, singularities together, with one set of shared subexpressions. */
-void delta_scene(const double *restrict q, const double *restrict p, double r_base, double r_tcp, double a, double *restrict J, double *restrict J_inv, double *restrict det_Jq, double *restrict det_Jx)
+/* delta_combined: jacobian, inverse_jacobian, singularities together, with one set of shared subexpressions. */
+void delta_combined(const double *restrict q, const double *restrict p, double r_base, double r_tcp, double a, double *restrict J, double *restrict J_inv, double *restrict det_Jq, double *restrict det_Jx)
 {
     const double theta1 = q[0];
     const double theta2 = q[1];
@@ -4946,14 +4946,14 @@ void delta_scene(const double *restrict q, const double *restrict p, double r_ba
     det_Jx[0] = _x25;
 }
 
-/* delta_scene_packed: delta_scene with packed inputs and outputs. */
-void delta_scene_packed(const double *restrict in, double *restrict out)
+/* delta_combined_packed: delta_combined with packed inputs and outputs. */
+void delta_combined_packed(const double *restrict in, double *restrict out)
 {
-    delta_scene(in + 0, in + 3, in[6], in[7], in[8], out + 0, out + 9, out + 18, out + 19);
+    delta_combined(in + 0, in + 3, in[6], in[7], in[8], out + 0, out + 9, out + 18, out + 19);
 }
 
-/* delta_scene_batch: delta_scene for n configurations, in blocks of 8. */
-void delta_scene_batch(size_t n, const double *restrict q, const double *restrict p, const double *restrict params, size_t params_stride, double *restrict J, double *restrict J_inv, double *restrict det_Jq, double *restrict det_Jx)
+/* delta_combined_batch: delta_combined for n configurations, in blocks of 8. */
+void delta_combined_batch(size_t n, const double *restrict q, const double *restrict p, const double *restrict params, size_t params_stride, double *restrict J, double *restrict J_inv, double *restrict det_Jq, double *restrict det_Jx)
 {
     for (size_t _i = 0; _i < n; _i += DELTA_BLOCK) {
         /* lanes past the end of the batch repeat configuration _i and are not stored */

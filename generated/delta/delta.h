@@ -636,7 +636,7 @@ void delta_potential_energy_packed(const double *in, double *out);
  * Uses 1152 bytes of stack for its blocks of 8 configurations. */
 void delta_potential_energy_batch(size_t n, const double *q, const double *p, const double *params, size_t params_stride, double *u);
 
-/* delta_scene: jacobian, inverse_jacobian, singularities together, with one set of shared subexpressions.
+/* delta_combined: jacobian, inverse_jacobian, singularities together, with one set of shared subexpressions.
  *
  * Computes the outputs of jacobian, inverse_jacobian, singularities in one call;
  * subexpressions common to several of them are evaluated once.
@@ -657,14 +657,14 @@ void delta_potential_energy_batch(size_t n, const double *q, const double *p, co
  *   det_Jx[1]: scalar; det J_x (interior singularities where zero) (singularities).
  * Cost: 118 operations.
  */
-void delta_scene(const double *q, const double *p, double r_base, double r_tcp, double a, double *J, double *J_inv, double *det_Jq, double *det_Jx);
+void delta_combined(const double *q, const double *p, double r_base, double r_tcp, double a, double *J, double *J_inv, double *det_Jq, double *det_Jx);
 
-/* delta_scene with packed arguments: in = q, p, r_base, r_tcp, a one after the other; out = J, J_inv, det_Jq, det_Jx one after the other. */
-void delta_scene_packed(const double *in, double *out);
+/* delta_combined with packed arguments: in = q, p, r_base, r_tcp, a one after the other; out = J, J_inv, det_Jq, det_Jx one after the other. */
+void delta_combined_packed(const double *in, double *out);
 
-/* delta_scene for n configurations; params: r_base, r_tcp, a, stride 0 or 3.
+/* delta_combined for n configurations; params: r_base, r_tcp, a, stride 0 or 3.
  * Uses 2432 bytes of stack for its blocks of 8 configurations. */
-void delta_scene_batch(size_t n, const double *q, const double *p, const double *params, size_t params_stride, double *J, double *J_inv, double *det_Jq, double *det_Jx);
+void delta_combined_batch(size_t n, const double *q, const double *p, const double *params, size_t params_stride, double *J, double *J_inv, double *det_Jq, double *det_Jx);
 
 #ifdef __cplusplus
 }

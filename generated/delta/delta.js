@@ -32,7 +32,7 @@
  *   operational_space(q, p, qd, params) -> {Mx: number[][], Vx: number[], Gx: number[]}
  *   kinetic_energy(q, p, qd, params) -> number
  *   potential_energy(q, p, params) -> number
- *   scene(q, p, params) -> {J: number[][], J_inv: number[][], det_Jq: number, det_Jx: number}
+ *   combined(q, p, params) -> {J: number[][], J_inv: number[][], det_Jq: number, det_Jx: number}
  */
 (function (root, factory) {
   "use strict";
@@ -1943,10 +1943,10 @@
    *     det_Jq: shape (); det J_q (boundary singularities where zero) (singularities).
    *     det_Jx: shape (); det J_x (interior singularities where zero) (singularities).
    */
-  function scene(q, p, params) {
-    _vector(q, 3, "q", "scene");
-    _vector(p, 3, "p", "scene");
-    const _p = _params(params, ["r_base", "r_tcp", "a"], "scene");
+  function combined(q, p, params) {
+    _vector(q, 3, "q", "combined");
+    _vector(p, 3, "p", "combined");
+    const _p = _params(params, ["r_base", "r_tcp", "a"], "combined");
     const r_base = _p.r_base ?? 0.07;
     const r_tcp = _p.r_tcp ?? 0.025;
     const a = _p.a ?? 0.1;
@@ -2039,7 +2039,7 @@
       operational_space: {"inputs": ["q", "p", "qd"], "parameters": ["r_base", "r_tcp", "a", "m_arm", "m_rod", "m_platform", "J_rotor", "gear"], "outputs": {"Mx": [3, 3], "Vx": [3], "Gx": [3]}},
       kinetic_energy: {"inputs": ["q", "p", "qd"], "parameters": ["r_base", "r_tcp", "a", "m_arm", "m_rod", "m_platform", "J_rotor", "gear"], "outputs": {"k": []}},
       potential_energy: {"inputs": ["q", "p"], "parameters": ["a", "m_arm", "m_rod", "m_platform"], "outputs": {"u": []}},
-      scene: {"inputs": ["q", "p"], "parameters": ["r_base", "r_tcp", "a"], "outputs": {"J": [3, 3], "J_inv": [3, 3], "det_Jq": [], "det_Jx": []}},
+      combined: {"inputs": ["q", "p"], "parameters": ["r_base", "r_tcp", "a"], "outputs": {"J": [3, 3], "J_inv": [3, 3], "det_Jq": [], "det_Jx": []}},
     }),
     ik: ik,
     fk: fk,
@@ -2059,6 +2059,6 @@
     operational_space: operational_space,
     kinetic_energy: kinetic_energy,
     potential_energy: potential_energy,
-    scene: scene,
+    combined: combined,
   });
 });

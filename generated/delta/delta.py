@@ -29,7 +29,7 @@ Functions:
     operational_space(q, p, qd, **params) -> OperationalSpaceResult(Mx, Vx, Gx)
     kinetic_energy(q, p, qd, **params) -> k (...)
     potential_energy(q, p, **params) -> u (...)
-    scene(q, p, **params) -> SceneResult(J, J_inv, det_Jq, det_Jx)
+    combined(q, p, **params) -> CombinedResult(J, J_inv, det_Jq, det_Jx)
 """
 
 import collections
@@ -66,7 +66,7 @@ ClosureJacobiansResult = collections.namedtuple("ClosureJacobiansResult", ["Phi_
 
 OperationalSpaceResult = collections.namedtuple("OperationalSpaceResult", ["Mx", "Vx", "Gx"])
 
-SceneResult = collections.namedtuple("SceneResult", ["J", "J_inv", "det_Jq", "det_Jx"])
+CombinedResult = collections.namedtuple("CombinedResult", ["J", "J_inv", "det_Jq", "det_Jx"])
 
 
 def _vector(value, size, name, function):
@@ -2172,7 +2172,7 @@ def potential_energy(q, p, *, a=0.1, m_arm=0.0093, m_rod=0.0095, m_platform=0.05
     return _out_u
 
 
-def scene(q, p, *, r_base=0.07, r_tcp=0.025, a=0.1):
+def combined(q, p, *, r_base=0.07, r_tcp=0.025, a=0.1):
     """jacobian, inverse_jacobian, singularities together, with one set of shared subexpressions.
 
     Computes the outputs of jacobian, inverse_jacobian, singularities in one call;
@@ -2189,18 +2189,18 @@ def scene(q, p, *, r_base=0.07, r_tcp=0.025, a=0.1):
             array broadcastable to the batch shape.
 
     Returns:
-        SceneResult with the fields:
+        CombinedResult with the fields:
         J: shape (..., 3, 3); rows: task coordinates; columns: actuated joints (jacobian).
         J_inv: shape (..., 3, 3); rows: actuated joints; columns: task coordinates
             (inverse_jacobian).
         det_Jq: shape (...); det J_q (boundary singularities where zero) (singularities).
         det_Jx: shape (...); det J_x (interior singularities where zero) (singularities).
     """
-    q = _vector(q, 3, "q", "scene")
-    p = _vector(p, 3, "p", "scene")
-    batch = _batch_shape("scene", q.shape[:-1], p.shape[:-1], numpy.shape(r_base), numpy.shape(r_tcp), numpy.shape(a))
+    q = _vector(q, 3, "q", "combined")
+    p = _vector(p, 3, "p", "combined")
+    batch = _batch_shape("combined", q.shape[:-1], p.shape[:-1], numpy.shape(r_base), numpy.shape(r_tcp), numpy.shape(a))
     if math.prod(batch) > CHUNK:
-        return _in_chunks(scene, batch, (q, p, ), {"r_base": r_base, "r_tcp": r_tcp, "a": a})
+        return _in_chunks(combined, batch, (q, p, ), {"r_base": r_base, "r_tcp": r_tcp, "a": a})
     theta1 = q[..., 0]
     theta2 = q[..., 1]
     theta3 = q[..., 2]
@@ -2269,4 +2269,4 @@ def scene(q, p, *, r_base=0.07, r_tcp=0.025, a=0.1):
     _out_det_Jq[...] = _x27*_x31*_x33
     _out_det_Jx = numpy.zeros(batch + ())
     _out_det_Jx[...] = _x25
-    return SceneResult(_out_J, _out_J_inv, _out_det_Jq, _out_det_Jx)
+    return CombinedResult(_out_J, _out_J_inv, _out_det_Jq, _out_det_Jx)

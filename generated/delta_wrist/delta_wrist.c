@@ -5846,8 +5846,8 @@ void delta_wrist_device_actuator_jacobian_batch(size_t n, const double *restrict
 
 #if !defined(DELTA_WRIST_PART) || DELTA_WRIST_PART == 3
 
-/* delta_wrist_scene: gravity_vector, device_fk, device_actuator_jacobian together, with one set of shared subexpressions. */
-void delta_wrist_scene(const double *restrict q, const double *restrict p, const double *restrict qw, double r_base, double r_tcp, double a, double m_arm, double m_rod, double m_platform, double w, double h, double m_fork1, double m_fork2, double m_handle, double *restrict G, double *restrict base_T_tcp, double *restrict J)
+/* delta_wrist_combined: gravity_vector, device_fk, device_actuator_jacobian together, with one set of shared subexpressions. */
+void delta_wrist_combined(const double *restrict q, const double *restrict p, const double *restrict qw, double r_base, double r_tcp, double a, double m_arm, double m_rod, double m_platform, double w, double h, double m_fork1, double m_fork2, double m_handle, double *restrict G, double *restrict base_T_tcp, double *restrict J)
 {
     const double theta1 = q[0];
     const double theta2 = q[1];
@@ -6015,14 +6015,14 @@ void delta_wrist_scene(const double *restrict q, const double *restrict p, const
     J[35] = _x16;
 }
 
-/* delta_wrist_scene_packed: delta_wrist_scene with packed inputs and outputs. */
-void delta_wrist_scene_packed(const double *restrict in, double *restrict out)
+/* delta_wrist_combined_packed: delta_wrist_combined with packed inputs and outputs. */
+void delta_wrist_combined_packed(const double *restrict in, double *restrict out)
 {
-    delta_wrist_scene(in + 0, in + 3, in + 6, in[9], in[10], in[11], in[12], in[13], in[14], in[15], in[16], in[17], in[18], in[19], out + 0, out + 6, out + 22);
+    delta_wrist_combined(in + 0, in + 3, in + 6, in[9], in[10], in[11], in[12], in[13], in[14], in[15], in[16], in[17], in[18], in[19], out + 0, out + 6, out + 22);
 }
 
-/* delta_wrist_scene_batch: delta_wrist_scene for n configurations, in blocks of 8. */
-void delta_wrist_scene_batch(size_t n, const double *restrict q, const double *restrict p, const double *restrict qw, const double *restrict params, size_t params_stride, double *restrict G, double *restrict base_T_tcp, double *restrict J)
+/* delta_wrist_combined_batch: delta_wrist_combined for n configurations, in blocks of 8. */
+void delta_wrist_combined_batch(size_t n, const double *restrict q, const double *restrict p, const double *restrict qw, const double *restrict params, size_t params_stride, double *restrict G, double *restrict base_T_tcp, double *restrict J)
 {
     for (size_t _i = 0; _i < n; _i += DELTA_WRIST_BLOCK) {
         /* lanes past the end of the batch repeat configuration _i and are not stored */

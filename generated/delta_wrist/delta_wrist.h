@@ -726,7 +726,7 @@ void delta_wrist_device_actuator_jacobian_packed(const double *in, double *out);
  * Uses 2944 bytes of stack for its blocks of 8 configurations. */
 void delta_wrist_device_actuator_jacobian_batch(size_t n, const double *q, const double *p, const double *qw, const double *params, size_t params_stride, double *J);
 
-/* delta_wrist_scene: gravity_vector, device_fk, device_actuator_jacobian together, with one set of shared subexpressions.
+/* delta_wrist_combined: gravity_vector, device_fk, device_actuator_jacobian together, with one set of shared subexpressions.
  *
  * Computes the outputs of gravity_vector, device_fk, device_actuator_jacobian in one
  * call; subexpressions common to several of them are evaluated once.
@@ -765,14 +765,14 @@ void delta_wrist_device_actuator_jacobian_batch(size_t n, const double *q, const
  *   joints, then wrist joints (device_actuator_jacobian).
  * Cost: 229 operations.
  */
-void delta_wrist_scene(const double *q, const double *p, const double *qw, double r_base, double r_tcp, double a, double m_arm, double m_rod, double m_platform, double w, double h, double m_fork1, double m_fork2, double m_handle, double *G, double *base_T_tcp, double *J);
+void delta_wrist_combined(const double *q, const double *p, const double *qw, double r_base, double r_tcp, double a, double m_arm, double m_rod, double m_platform, double w, double h, double m_fork1, double m_fork2, double m_handle, double *G, double *base_T_tcp, double *J);
 
-/* delta_wrist_scene with packed arguments: in = q, p, qw, r_base, r_tcp, a, m_arm, m_rod, m_platform, w, h, m_fork1, m_fork2, m_handle one after the other; out = G, base_T_tcp, J one after the other. */
-void delta_wrist_scene_packed(const double *in, double *out);
+/* delta_wrist_combined with packed arguments: in = q, p, qw, r_base, r_tcp, a, m_arm, m_rod, m_platform, w, h, m_fork1, m_fork2, m_handle one after the other; out = G, base_T_tcp, J one after the other. */
+void delta_wrist_combined_packed(const double *in, double *out);
 
-/* delta_wrist_scene for n configurations; params: r_base, r_tcp, a, m_arm, m_rod, m_platform, w, h, m_fork1, m_fork2, m_handle, stride 0 or 11.
+/* delta_wrist_combined for n configurations; params: r_base, r_tcp, a, m_arm, m_rod, m_platform, w, h, m_fork1, m_fork2, m_handle, stride 0 or 11.
  * Uses 4672 bytes of stack for its blocks of 8 configurations. */
-void delta_wrist_scene_batch(size_t n, const double *q, const double *p, const double *qw, const double *params, size_t params_stride, double *G, double *base_T_tcp, double *J);
+void delta_wrist_combined_batch(size_t n, const double *q, const double *p, const double *qw, const double *params, size_t params_stride, double *G, double *base_T_tcp, double *J);
 
 #ifdef __cplusplus
 }

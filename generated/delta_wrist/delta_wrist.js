@@ -34,7 +34,7 @@
  *   device_frames(p, qw, params) -> {base_T_fork1: number[][], base_T_fork2: number[][], base_T_handle: number[][]}
  *   device_jacobian(p, qw, params) -> number[][]
  *   device_actuator_jacobian(q, p, qw, params) -> number[][]
- *   scene(q, p, qw, params) -> {G: number[], base_T_tcp: number[][], J: number[][]}
+ *   combined(q, p, qw, params) -> {G: number[], base_T_tcp: number[][], J: number[][]}
  */
 (function (root, factory) {
   "use strict";
@@ -2644,11 +2644,11 @@
    *     J: shape (6, 6); rows vx, vy, vz, wx, wy, wz; columns: the legs' actuated
    *     joints, then wrist joints (device_actuator_jacobian).
    */
-  function scene(q, p, qw, params) {
-    _vector(q, 3, "q", "scene");
-    _vector(p, 3, "p", "scene");
-    _vector(qw, 3, "qw", "scene");
-    const _p = _params(params, ["r_base", "r_tcp", "a", "m_arm", "m_rod", "m_platform", "w", "h", "m_fork1", "m_fork2", "m_handle"], "scene");
+  function combined(q, p, qw, params) {
+    _vector(q, 3, "q", "combined");
+    _vector(p, 3, "p", "combined");
+    _vector(qw, 3, "qw", "combined");
+    const _p = _params(params, ["r_base", "r_tcp", "a", "m_arm", "m_rod", "m_platform", "w", "h", "m_fork1", "m_fork2", "m_handle"], "combined");
     const r_base = _p.r_base ?? 0.07;
     const r_tcp = _p.r_tcp ?? 0.025;
     const a = _p.a ?? 0.1;
@@ -2800,7 +2800,7 @@
       device_frames: {"inputs": ["p", "qw"], "parameters": ["w"], "outputs": {"base_T_fork1": [4, 4], "base_T_fork2": [4, 4], "base_T_handle": [4, 4]}},
       device_jacobian: {"inputs": ["p", "qw"], "parameters": ["h"], "outputs": {"J": [6, 6]}},
       device_actuator_jacobian: {"inputs": ["q", "p", "qw"], "parameters": ["r_base", "r_tcp", "a", "h"], "outputs": {"J": [6, 6]}},
-      scene: {"inputs": ["q", "p", "qw"], "parameters": ["r_base", "r_tcp", "a", "m_arm", "m_rod", "m_platform", "w", "h", "m_fork1", "m_fork2", "m_handle"], "outputs": {"G": [6], "base_T_tcp": [4, 4], "J": [6, 6]}},
+      combined: {"inputs": ["q", "p", "qw"], "parameters": ["r_base", "r_tcp", "a", "m_arm", "m_rod", "m_platform", "w", "h", "m_fork1", "m_fork2", "m_handle"], "outputs": {"G": [6], "base_T_tcp": [4, 4], "J": [6, 6]}},
     }),
     ik: ik,
     fk: fk,
@@ -2820,6 +2820,6 @@
     device_frames: device_frames,
     device_jacobian: device_jacobian,
     device_actuator_jacobian: device_actuator_jacobian,
-    scene: scene,
+    combined: combined,
   });
 });

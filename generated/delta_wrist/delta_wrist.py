@@ -31,7 +31,7 @@ Functions:
     device_frames(p, qw, **params) -> DeviceFramesResult(base_T_fork1, base_T_fork2, base_T_handle)
     device_jacobian(p, qw, **params) -> J (..., 6, 6)
     device_actuator_jacobian(q, p, qw, **params) -> J (..., 6, 6)
-    scene(q, p, qw, **params) -> SceneResult(G, base_T_tcp, J)
+    combined(q, p, qw, **params) -> CombinedResult(G, base_T_tcp, J)
 """
 
 import collections
@@ -71,7 +71,7 @@ OperationalSpaceResult = collections.namedtuple("OperationalSpaceResult", ["Mx",
 
 DeviceFramesResult = collections.namedtuple("DeviceFramesResult", ["base_T_fork1", "base_T_fork2", "base_T_handle"])
 
-SceneResult = collections.namedtuple("SceneResult", ["G", "base_T_tcp", "J"])
+CombinedResult = collections.namedtuple("CombinedResult", ["G", "base_T_tcp", "J"])
 
 
 def _vector(value, size, name, function):
@@ -2894,7 +2894,7 @@ def device_actuator_jacobian(q, p, qw, *, r_base=0.07, r_tcp=0.025, a=0.1, h=0.0
     return _out_J
 
 
-def scene(q, p, qw, *, r_base=0.07, r_tcp=0.025, a=0.1, m_arm=0.0093, m_rod=0.0095, m_platform=0.021, w=0.05, h=0.03, m_fork1=0.012, m_fork2=0.009, m_handle=0.03):
+def combined(q, p, qw, *, r_base=0.07, r_tcp=0.025, a=0.1, m_arm=0.0093, m_rod=0.0095, m_platform=0.021, w=0.05, h=0.03, m_fork1=0.012, m_fork2=0.009, m_handle=0.03):
     """gravity_vector, device_fk, device_actuator_jacobian together, with one set of shared subexpressions.
 
     Computes the outputs of gravity_vector, device_fk, device_actuator_jacobian in one
@@ -2928,7 +2928,7 @@ def scene(q, p, qw, *, r_base=0.07, r_tcp=0.025, a=0.1, m_arm=0.0093, m_rod=0.00
             array broadcastable to the batch shape.
 
     Returns:
-        SceneResult with the fields:
+        CombinedResult with the fields:
         G: shape (..., 6); actuator efforts that hold the device against gravity
             (gravity_vector) [N*m (revolute), N (prismatic)].
         base_T_tcp: shape (..., 4, 4); homogeneous transform of the TCP frame in the base
@@ -2936,12 +2936,12 @@ def scene(q, p, qw, *, r_base=0.07, r_tcp=0.025, a=0.1, m_arm=0.0093, m_rod=0.00
         J: shape (..., 6, 6); rows vx, vy, vz, wx, wy, wz; columns: the legs' actuated
             joints, then wrist joints (device_actuator_jacobian).
     """
-    q = _vector(q, 3, "q", "scene")
-    p = _vector(p, 3, "p", "scene")
-    qw = _vector(qw, 3, "qw", "scene")
-    batch = _batch_shape("scene", q.shape[:-1], p.shape[:-1], qw.shape[:-1], numpy.shape(r_base), numpy.shape(r_tcp), numpy.shape(a), numpy.shape(m_arm), numpy.shape(m_rod), numpy.shape(m_platform), numpy.shape(w), numpy.shape(h), numpy.shape(m_fork1), numpy.shape(m_fork2), numpy.shape(m_handle))
+    q = _vector(q, 3, "q", "combined")
+    p = _vector(p, 3, "p", "combined")
+    qw = _vector(qw, 3, "qw", "combined")
+    batch = _batch_shape("combined", q.shape[:-1], p.shape[:-1], qw.shape[:-1], numpy.shape(r_base), numpy.shape(r_tcp), numpy.shape(a), numpy.shape(m_arm), numpy.shape(m_rod), numpy.shape(m_platform), numpy.shape(w), numpy.shape(h), numpy.shape(m_fork1), numpy.shape(m_fork2), numpy.shape(m_handle))
     if math.prod(batch) > CHUNK:
-        return _in_chunks(scene, batch, (q, p, qw, ), {"r_base": r_base, "r_tcp": r_tcp, "a": a, "m_arm": m_arm, "m_rod": m_rod, "m_platform": m_platform, "w": w, "h": h, "m_fork1": m_fork1, "m_fork2": m_fork2, "m_handle": m_handle})
+        return _in_chunks(combined, batch, (q, p, qw, ), {"r_base": r_base, "r_tcp": r_tcp, "a": a, "m_arm": m_arm, "m_rod": m_rod, "m_platform": m_platform, "w": w, "h": h, "m_fork1": m_fork1, "m_fork2": m_fork2, "m_handle": m_handle})
     theta1 = q[..., 0]
     theta2 = q[..., 1]
     theta3 = q[..., 2]
@@ -3073,4 +3073,4 @@ def scene(q, p, qw, *, r_base=0.07, r_tcp=0.025, a=0.1, m_arm=0.0093, m_rod=0.00
     _out_J[..., 4, 5] = _x28
     _out_J[..., 5, 3] = 1.0
     _out_J[..., 5, 5] = _x16
-    return SceneResult(_out_G, _out_base_T_tcp, _out_J)
+    return CombinedResult(_out_G, _out_base_T_tcp, _out_J)

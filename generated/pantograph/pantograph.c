@@ -2625,8 +2625,8 @@ void pantograph_potential_energy_batch(size_t n, const double *restrict q, const
 
 #if !defined(PANTOGRAPH_PART) || PANTOGRAPH_PART == 1
 
-/* pantograph_scene: ik, fk, leg_points, constraints, constraint_jacobians, jacobian, inverse_jacobian, singularities, closure, closure_jacobians, gravity_vector, mass_matrix, coriolis_vector, inverse_dynamics, forward_dynamics, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions. */
-void pantograph_scene(const double *restrict p, const double *restrict q, const double *restrict s, const double *restrict qd, const double *restrict qdd, const double *restrict tau, double d, double l, double L, double m_proximal, double m_distal, double m_handle, double J_rotor, double *restrict joints, double *restrict ik_margin, double *restrict position, double *restrict fk_margin, double *restrict points, double *restrict f, double *restrict J_x, double *restrict J_q, double *restrict J, double *restrict J_inv, double *restrict det_Jq, double *restrict det_Jx, double *restrict phi, double *restrict Phi_p, double *restrict Phi_q, double *restrict Phi_s, double *restrict G, double *restrict M, double *restrict V, double *restrict inverse_dynamics_tau, double *restrict forward_dynamics_qdd, double *restrict Mx, double *restrict Vx, double *restrict Gx, double *restrict k, double *restrict u)
+/* pantograph_combined: ik, fk, leg_points, constraints, constraint_jacobians, jacobian, inverse_jacobian, singularities, closure, closure_jacobians, gravity_vector, mass_matrix, coriolis_vector, inverse_dynamics, forward_dynamics, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions. */
+void pantograph_combined(const double *restrict p, const double *restrict q, const double *restrict s, const double *restrict qd, const double *restrict qdd, const double *restrict tau, double d, double l, double L, double m_proximal, double m_distal, double m_handle, double J_rotor, double *restrict joints, double *restrict ik_margin, double *restrict position, double *restrict fk_margin, double *restrict points, double *restrict f, double *restrict J_x, double *restrict J_q, double *restrict J, double *restrict J_inv, double *restrict det_Jq, double *restrict det_Jx, double *restrict phi, double *restrict Phi_p, double *restrict Phi_q, double *restrict Phi_s, double *restrict G, double *restrict M, double *restrict V, double *restrict inverse_dynamics_tau, double *restrict forward_dynamics_qdd, double *restrict Mx, double *restrict Vx, double *restrict Gx, double *restrict k, double *restrict u)
 {
     const double x = p[0];
     const double y = p[1];
@@ -3047,14 +3047,14 @@ void pantograph_scene(const double *restrict p, const double *restrict q, const 
     u[0] = 0.0;
 }
 
-/* pantograph_scene_packed: pantograph_scene with packed inputs and outputs. */
-void pantograph_scene_packed(const double *restrict in, double *restrict out)
+/* pantograph_combined_packed: pantograph_combined with packed inputs and outputs. */
+void pantograph_combined_packed(const double *restrict in, double *restrict out)
 {
-    pantograph_scene(in + 0, in + 2, in + 4, in + 8, in + 10, in + 12, in[14], in[15], in[16], in[17], in[18], in[19], in[20], out + 0, out + 2, out + 4, out + 6, out + 7, out + 25, out + 27, out + 31, out + 35, out + 39, out + 43, out + 44, out + 45, out + 57, out + 81, out + 105, out + 153, out + 155, out + 159, out + 161, out + 163, out + 165, out + 169, out + 171, out + 173, out + 174);
+    pantograph_combined(in + 0, in + 2, in + 4, in + 8, in + 10, in + 12, in[14], in[15], in[16], in[17], in[18], in[19], in[20], out + 0, out + 2, out + 4, out + 6, out + 7, out + 25, out + 27, out + 31, out + 35, out + 39, out + 43, out + 44, out + 45, out + 57, out + 81, out + 105, out + 153, out + 155, out + 159, out + 161, out + 163, out + 165, out + 169, out + 171, out + 173, out + 174);
 }
 
-/* pantograph_scene_batch: pantograph_scene for n configurations, in blocks of 8. */
-void pantograph_scene_batch(size_t n, const double *restrict p, const double *restrict q, const double *restrict s, const double *restrict qd, const double *restrict qdd, const double *restrict tau, const double *restrict params, size_t params_stride, double *restrict joints, double *restrict ik_margin, double *restrict position, double *restrict fk_margin, double *restrict points, double *restrict f, double *restrict J_x, double *restrict J_q, double *restrict J, double *restrict J_inv, double *restrict det_Jq, double *restrict det_Jx, double *restrict phi, double *restrict Phi_p, double *restrict Phi_q, double *restrict Phi_s, double *restrict G, double *restrict M, double *restrict V, double *restrict inverse_dynamics_tau, double *restrict forward_dynamics_qdd, double *restrict Mx, double *restrict Vx, double *restrict Gx, double *restrict k, double *restrict u)
+/* pantograph_combined_batch: pantograph_combined for n configurations, in blocks of 8. */
+void pantograph_combined_batch(size_t n, const double *restrict p, const double *restrict q, const double *restrict s, const double *restrict qd, const double *restrict qdd, const double *restrict tau, const double *restrict params, size_t params_stride, double *restrict joints, double *restrict ik_margin, double *restrict position, double *restrict fk_margin, double *restrict points, double *restrict f, double *restrict J_x, double *restrict J_q, double *restrict J, double *restrict J_inv, double *restrict det_Jq, double *restrict det_Jx, double *restrict phi, double *restrict Phi_p, double *restrict Phi_q, double *restrict Phi_s, double *restrict G, double *restrict M, double *restrict V, double *restrict inverse_dynamics_tau, double *restrict forward_dynamics_qdd, double *restrict Mx, double *restrict Vx, double *restrict Gx, double *restrict k, double *restrict u)
 {
     for (size_t _i = 0; _i < n; _i += PANTOGRAPH_BLOCK) {
         /* lanes past the end of the batch repeat configuration _i and are not stored */

@@ -574,7 +574,7 @@ void pantograph_potential_energy_packed(const double *in, double *out);
  * Uses 0 bytes of stack for its blocks of 8 configurations. */
 void pantograph_potential_energy_batch(size_t n, const double *q, const double *p, double *u);
 
-/* pantograph_scene: ik, fk, leg_points, constraints, constraint_jacobians, jacobian, inverse_jacobian, singularities, closure, closure_jacobians, gravity_vector, mass_matrix, coriolis_vector, inverse_dynamics, forward_dynamics, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions.
+/* pantograph_combined: ik, fk, leg_points, constraints, constraint_jacobians, jacobian, inverse_jacobian, singularities, closure, closure_jacobians, gravity_vector, mass_matrix, coriolis_vector, inverse_dynamics, forward_dynamics, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions.
  *
  * Computes the outputs of ik, fk, leg_points, constraints, constraint_jacobians,
  * jacobian, inverse_jacobian, singularities, closure, closure_jacobians, gravity_vector,
@@ -645,14 +645,14 @@ void pantograph_potential_energy_batch(size_t n, const double *q, const double *
  *   u[1]: scalar; potential energy (potential_energy) [J].
  * Cost: 605 operations.
  */
-void pantograph_scene(const double *p, const double *q, const double *s, const double *qd, const double *qdd, const double *tau, double d, double l, double L, double m_proximal, double m_distal, double m_handle, double J_rotor, double *joints, double *ik_margin, double *position, double *fk_margin, double *points, double *f, double *J_x, double *J_q, double *J, double *J_inv, double *det_Jq, double *det_Jx, double *phi, double *Phi_p, double *Phi_q, double *Phi_s, double *G, double *M, double *V, double *inverse_dynamics_tau, double *forward_dynamics_qdd, double *Mx, double *Vx, double *Gx, double *k, double *u);
+void pantograph_combined(const double *p, const double *q, const double *s, const double *qd, const double *qdd, const double *tau, double d, double l, double L, double m_proximal, double m_distal, double m_handle, double J_rotor, double *joints, double *ik_margin, double *position, double *fk_margin, double *points, double *f, double *J_x, double *J_q, double *J, double *J_inv, double *det_Jq, double *det_Jx, double *phi, double *Phi_p, double *Phi_q, double *Phi_s, double *G, double *M, double *V, double *inverse_dynamics_tau, double *forward_dynamics_qdd, double *Mx, double *Vx, double *Gx, double *k, double *u);
 
-/* pantograph_scene with packed arguments: in = p, q, s, qd, qdd, tau, d, l, L, m_proximal, m_distal, m_handle, J_rotor one after the other; out = joints, ik_margin, position, fk_margin, points, f, J_x, J_q, J, J_inv, det_Jq, det_Jx, phi, Phi_p, Phi_q, Phi_s, G, M, V, inverse_dynamics_tau, forward_dynamics_qdd, Mx, Vx, Gx, k, u one after the other. */
-void pantograph_scene_packed(const double *in, double *out);
+/* pantograph_combined with packed arguments: in = p, q, s, qd, qdd, tau, d, l, L, m_proximal, m_distal, m_handle, J_rotor one after the other; out = joints, ik_margin, position, fk_margin, points, f, J_x, J_q, J, J_inv, det_Jq, det_Jx, phi, Phi_p, Phi_q, Phi_s, G, M, V, inverse_dynamics_tau, forward_dynamics_qdd, Mx, Vx, Gx, k, u one after the other. */
+void pantograph_combined_packed(const double *in, double *out);
 
-/* pantograph_scene for n configurations; params: d, l, L, m_proximal, m_distal, m_handle, J_rotor, stride 0 or 7.
+/* pantograph_combined for n configurations; params: d, l, L, m_proximal, m_distal, m_handle, J_rotor, stride 0 or 7.
  * Uses 7104 bytes of stack for its blocks of 8 configurations. */
-void pantograph_scene_batch(size_t n, const double *p, const double *q, const double *s, const double *qd, const double *qdd, const double *tau, const double *params, size_t params_stride, double *joints, double *ik_margin, double *position, double *fk_margin, double *points, double *f, double *J_x, double *J_q, double *J, double *J_inv, double *det_Jq, double *det_Jx, double *phi, double *Phi_p, double *Phi_q, double *Phi_s, double *G, double *M, double *V, double *inverse_dynamics_tau, double *forward_dynamics_qdd, double *Mx, double *Vx, double *Gx, double *k, double *u);
+void pantograph_combined_batch(size_t n, const double *p, const double *q, const double *s, const double *qd, const double *qdd, const double *tau, const double *params, size_t params_stride, double *joints, double *ik_margin, double *position, double *fk_margin, double *points, double *f, double *J_x, double *J_q, double *J, double *J_inv, double *det_Jq, double *det_Jx, double *phi, double *Phi_p, double *Phi_q, double *Phi_s, double *G, double *M, double *V, double *inverse_dynamics_tau, double *forward_dynamics_qdd, double *Mx, double *Vx, double *Gx, double *k, double *u);
 
 #ifdef __cplusplus
 }

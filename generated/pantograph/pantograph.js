@@ -32,7 +32,7 @@
  *   operational_space(q, p, qd, params) -> {Mx: number[][], Vx: number[], Gx: number[]}
  *   kinetic_energy(q, p, qd, params) -> number
  *   potential_energy(q, p) -> number
- *   scene(p, q, s, qd, qdd, tau, params) -> {joints: number[], ik_margin: number[], position: number[], fk_margin: number, points: number[][], f: number[], J_x: number[][], J_q: number[][], J: number[][], J_inv: number[][], det_Jq: number, det_Jx: number, phi: number[], Phi_p: number[][], Phi_q: number[][], Phi_s: number[][], G: number[], M: number[][], V: number[], inverse_dynamics_tau: number[], forward_dynamics_qdd: number[], Mx: number[][], Vx: number[], Gx: number[], k: number, u: number}
+ *   combined(p, q, s, qd, qdd, tau, params) -> {joints: number[], ik_margin: number[], position: number[], fk_margin: number, points: number[][], f: number[], J_x: number[][], J_q: number[][], J: number[][], J_inv: number[][], det_Jq: number, det_Jx: number, phi: number[], Phi_p: number[][], Phi_q: number[][], Phi_s: number[][], G: number[], M: number[][], V: number[], inverse_dynamics_tau: number[], forward_dynamics_qdd: number[], Mx: number[][], Vx: number[], Gx: number[], k: number, u: number}
  */
 (function (root, factory) {
   "use strict";
@@ -1254,14 +1254,14 @@
    *     k: shape (); kinetic energy of all bodies (kinetic_energy) [J].
    *     u: shape (); potential energy (potential_energy) [J].
    */
-  function scene(p, q, s, qd, qdd, tau, params) {
-    _vector(p, 2, "p", "scene");
-    _vector(q, 2, "q", "scene");
-    _vector(s, 4, "s", "scene");
-    _vector(qd, 2, "qd", "scene");
-    _vector(qdd, 2, "qdd", "scene");
-    _vector(tau, 2, "tau", "scene");
-    const _p = _params(params, ["d", "l", "L", "m_proximal", "m_distal", "m_handle", "J_rotor"], "scene");
+  function combined(p, q, s, qd, qdd, tau, params) {
+    _vector(p, 2, "p", "combined");
+    _vector(q, 2, "q", "combined");
+    _vector(s, 4, "s", "combined");
+    _vector(qd, 2, "qd", "combined");
+    _vector(qdd, 2, "qdd", "combined");
+    _vector(tau, 2, "tau", "combined");
+    const _p = _params(params, ["d", "l", "L", "m_proximal", "m_distal", "m_handle", "J_rotor"], "combined");
     const d = _p.d ?? 0.038;
     const l = _p.l ?? 0.07;
     const L = _p.L ?? 0.09;
@@ -1561,7 +1561,7 @@
       operational_space: {"inputs": ["q", "p", "qd"], "parameters": ["d", "l", "L", "m_proximal", "m_distal", "m_handle", "J_rotor"], "outputs": {"Mx": [2, 2], "Vx": [2], "Gx": [2]}},
       kinetic_energy: {"inputs": ["q", "p", "qd"], "parameters": ["d", "l", "L", "m_proximal", "m_distal", "m_handle", "J_rotor"], "outputs": {"k": []}},
       potential_energy: {"inputs": ["q", "p"], "parameters": [], "outputs": {"u": []}},
-      scene: {"inputs": ["p", "q", "s", "qd", "qdd", "tau"], "parameters": ["d", "l", "L", "m_proximal", "m_distal", "m_handle", "J_rotor"], "outputs": {"joints": [2], "ik_margin": [2], "position": [2], "fk_margin": [], "points": [6, 3], "f": [2], "J_x": [2, 2], "J_q": [2, 2], "J": [2, 2], "J_inv": [2, 2], "det_Jq": [], "det_Jx": [], "phi": [12], "Phi_p": [12, 2], "Phi_q": [12, 2], "Phi_s": [12, 4], "G": [2], "M": [2, 2], "V": [2], "inverse_dynamics_tau": [2], "forward_dynamics_qdd": [2], "Mx": [2, 2], "Vx": [2], "Gx": [2], "k": [], "u": []}},
+      combined: {"inputs": ["p", "q", "s", "qd", "qdd", "tau"], "parameters": ["d", "l", "L", "m_proximal", "m_distal", "m_handle", "J_rotor"], "outputs": {"joints": [2], "ik_margin": [2], "position": [2], "fk_margin": [], "points": [6, 3], "f": [2], "J_x": [2, 2], "J_q": [2, 2], "J": [2, 2], "J_inv": [2, 2], "det_Jq": [], "det_Jx": [], "phi": [12], "Phi_p": [12, 2], "Phi_q": [12, 2], "Phi_s": [12, 4], "G": [2], "M": [2, 2], "V": [2], "inverse_dynamics_tau": [2], "forward_dynamics_qdd": [2], "Mx": [2, 2], "Vx": [2], "Gx": [2], "k": [], "u": []}},
     }),
     ik: ik,
     fk: fk,
@@ -1581,6 +1581,6 @@
     operational_space: operational_space,
     kinetic_energy: kinetic_energy,
     potential_energy: potential_energy,
-    scene: scene,
+    combined: combined,
   });
 });

@@ -29,7 +29,7 @@ Functions:
     operational_space(q, p, qd, **params) -> OperationalSpaceResult(Mx, Vx, Gx)
     kinetic_energy(q, p, qd, **params) -> k (...)
     potential_energy(q, p) -> u (...)
-    scene(p, q, s, qd, qdd, tau, **params) -> SceneResult(joints, ik_margin, position, fk_margin, points, f, J_x, J_q, J, J_inv, det_Jq, det_Jx, phi, Phi_p, Phi_q, Phi_s, G, M, V, inverse_dynamics_tau, forward_dynamics_qdd, Mx, Vx, Gx, k, u)
+    combined(p, q, s, qd, qdd, tau, **params) -> CombinedResult(joints, ik_margin, position, fk_margin, points, f, J_x, J_q, J, J_inv, det_Jq, det_Jx, phi, Phi_p, Phi_q, Phi_s, G, M, V, inverse_dynamics_tau, forward_dynamics_qdd, Mx, Vx, Gx, k, u)
 """
 
 import collections
@@ -64,7 +64,7 @@ ClosureJacobiansResult = collections.namedtuple("ClosureJacobiansResult", ["Phi_
 
 OperationalSpaceResult = collections.namedtuple("OperationalSpaceResult", ["Mx", "Vx", "Gx"])
 
-SceneResult = collections.namedtuple("SceneResult", ["joints", "ik_margin", "position", "fk_margin", "points", "f", "J_x", "J_q", "J", "J_inv", "det_Jq", "det_Jx", "phi", "Phi_p", "Phi_q", "Phi_s", "G", "M", "V", "inverse_dynamics_tau", "forward_dynamics_qdd", "Mx", "Vx", "Gx", "k", "u"])
+CombinedResult = collections.namedtuple("CombinedResult", ["joints", "ik_margin", "position", "fk_margin", "points", "f", "J_x", "J_q", "J", "J_inv", "det_Jq", "det_Jx", "phi", "Phi_p", "Phi_q", "Phi_s", "G", "M", "V", "inverse_dynamics_tau", "forward_dynamics_qdd", "Mx", "Vx", "Gx", "k", "u"])
 
 
 def _vector(value, size, name, function):
@@ -1351,7 +1351,7 @@ def potential_energy(q, p):
     return _out_u
 
 
-def scene(p, q, s, qd, qdd, tau, *, d=0.038, l=0.07, L=0.09, m_proximal=0.00567, m_distal=0.00729, m_handle=0.02, J_rotor=1e-06):
+def combined(p, q, s, qd, qdd, tau, *, d=0.038, l=0.07, L=0.09, m_proximal=0.00567, m_distal=0.00729, m_handle=0.02, J_rotor=1e-06):
     """ik, fk, leg_points, constraints, constraint_jacobians, jacobian, inverse_jacobian, singularities, closure, closure_jacobians, gravity_vector, mass_matrix, coriolis_vector, inverse_dynamics, forward_dynamics, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions.
 
     Computes the outputs of ik, fk, leg_points, constraints, constraint_jacobians,
@@ -1385,7 +1385,7 @@ def scene(p, q, s, qd, qdd, tau, *, d=0.038, l=0.07, L=0.09, m_proximal=0.00567,
             broadcastable to the batch shape.
 
     Returns:
-        SceneResult with the fields:
+        CombinedResult with the fields:
         joints: shape (..., 2); actuated joint variables q (ik).
         ik_margin: shape (..., 2); per leg: >= 0 iff the leg reaches p (the radicand of its
             solution) (ik).
@@ -1428,15 +1428,15 @@ def scene(p, q, s, qd, qdd, tau, *, d=0.038, l=0.07, L=0.09, m_proximal=0.00567,
         k: shape (...); kinetic energy of all bodies (kinetic_energy) [J].
         u: shape (...); potential energy (potential_energy) [J].
     """
-    p = _vector(p, 2, "p", "scene")
-    q = _vector(q, 2, "q", "scene")
-    s = _vector(s, 4, "s", "scene")
-    qd = _vector(qd, 2, "qd", "scene")
-    qdd = _vector(qdd, 2, "qdd", "scene")
-    tau = _vector(tau, 2, "tau", "scene")
-    batch = _batch_shape("scene", p.shape[:-1], q.shape[:-1], s.shape[:-1], qd.shape[:-1], qdd.shape[:-1], tau.shape[:-1], numpy.shape(d), numpy.shape(l), numpy.shape(L), numpy.shape(m_proximal), numpy.shape(m_distal), numpy.shape(m_handle), numpy.shape(J_rotor))
+    p = _vector(p, 2, "p", "combined")
+    q = _vector(q, 2, "q", "combined")
+    s = _vector(s, 4, "s", "combined")
+    qd = _vector(qd, 2, "qd", "combined")
+    qdd = _vector(qdd, 2, "qdd", "combined")
+    tau = _vector(tau, 2, "tau", "combined")
+    batch = _batch_shape("combined", p.shape[:-1], q.shape[:-1], s.shape[:-1], qd.shape[:-1], qdd.shape[:-1], tau.shape[:-1], numpy.shape(d), numpy.shape(l), numpy.shape(L), numpy.shape(m_proximal), numpy.shape(m_distal), numpy.shape(m_handle), numpy.shape(J_rotor))
     if math.prod(batch) > CHUNK:
-        return _in_chunks(scene, batch, (p, q, s, qd, qdd, tau, ), {"d": d, "l": l, "L": L, "m_proximal": m_proximal, "m_distal": m_distal, "m_handle": m_handle, "J_rotor": J_rotor})
+        return _in_chunks(combined, batch, (p, q, s, qd, qdd, tau, ), {"d": d, "l": l, "L": L, "m_proximal": m_proximal, "m_distal": m_distal, "m_handle": m_handle, "J_rotor": J_rotor})
     x = p[..., 0]
     y = p[..., 1]
     theta1 = q[..., 0]
@@ -1766,4 +1766,4 @@ def scene(p, q, s, qd, qdd, tau, *, d=0.038, l=0.07, L=0.09, m_proximal=0.00567,
     _out_k = numpy.zeros(batch + ())
     _out_k[...] = -_x174*_x212*_x212 - _x174*_x211*_x211 + _x175*_x48*_x48 + _x175*_x42*_x42 + _x50*_x176 + _x30*_x176
     _out_u = numpy.zeros(batch + ())
-    return SceneResult(_out_joints, _out_ik_margin, _out_position, _out_fk_margin, _out_points, _out_f, _out_J_x, _out_J_q, _out_J, _out_J_inv, _out_det_Jq, _out_det_Jx, _out_phi, _out_Phi_p, _out_Phi_q, _out_Phi_s, _out_G, _out_M, _out_V, _out_inverse_dynamics_tau, _out_forward_dynamics_qdd, _out_Mx, _out_Vx, _out_Gx, _out_k, _out_u)
+    return CombinedResult(_out_joints, _out_ik_margin, _out_position, _out_fk_margin, _out_points, _out_f, _out_J_x, _out_J_q, _out_J, _out_J_inv, _out_det_Jq, _out_det_Jx, _out_phi, _out_Phi_p, _out_Phi_q, _out_Phi_s, _out_G, _out_M, _out_V, _out_inverse_dynamics_tau, _out_forward_dynamics_qdd, _out_Mx, _out_Vx, _out_Gx, _out_k, _out_u)

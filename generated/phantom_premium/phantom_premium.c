@@ -3204,8 +3204,8 @@ void phantom_premium_potential_energy_batch(size_t n, const double *restrict q, 
 
 #if !defined(PHANTOM_PREMIUM_PART) || PHANTOM_PREMIUM_PART == 2
 
-/* phantom_premium_scene: fk, frames, jacobian, mass_matrix, coriolis_matrix, coriolis_vector, gravity_vector, friction, inverse_dynamics, forward_dynamics, tcp_force, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions. */
-void phantom_premium_scene(const double *restrict q, const double *restrict qd, const double *restrict qdd, const double *restrict tau, double l1, double l2, double l3, double l5, double l6, double m_a, double I_axx, double I_ayy, double I_azz, double m_c, double I_cxx, double I_cyy, double I_czz, double m_be, double I_bexx, double I_beyy, double I_bezz, double m_df, double I_dfxx, double I_dfyy, double I_dfzz, double I_baseyy, double J_m, double g, double *restrict base_T_tcp, double *restrict base_T_turret, double *restrict base_T_upper_arm, double *restrict base_T_distal, double *restrict base_T_lever, double *restrict base_T_link_c, double *restrict J, double *restrict M, double *restrict C, double *restrict V, double *restrict G, double *restrict F_f, double *restrict inverse_dynamics_tau, double *restrict forward_dynamics_qdd, double *restrict F, double *restrict Mx, double *restrict Vx, double *restrict Gx, double *restrict k, double *restrict u)
+/* phantom_premium_combined: fk, frames, jacobian, mass_matrix, coriolis_matrix, coriolis_vector, gravity_vector, friction, inverse_dynamics, forward_dynamics, tcp_force, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions. */
+void phantom_premium_combined(const double *restrict q, const double *restrict qd, const double *restrict qdd, const double *restrict tau, double l1, double l2, double l3, double l5, double l6, double m_a, double I_axx, double I_ayy, double I_azz, double m_c, double I_cxx, double I_cyy, double I_czz, double m_be, double I_bexx, double I_beyy, double I_bezz, double m_df, double I_dfxx, double I_dfyy, double I_dfzz, double I_baseyy, double J_m, double g, double *restrict base_T_tcp, double *restrict base_T_turret, double *restrict base_T_upper_arm, double *restrict base_T_distal, double *restrict base_T_lever, double *restrict base_T_link_c, double *restrict J, double *restrict M, double *restrict C, double *restrict V, double *restrict G, double *restrict F_f, double *restrict inverse_dynamics_tau, double *restrict forward_dynamics_qdd, double *restrict F, double *restrict Mx, double *restrict Vx, double *restrict Gx, double *restrict k, double *restrict u)
 {
     const double q1 = q[0];
     const double q2 = q[1];
@@ -3749,14 +3749,14 @@ void phantom_premium_scene(const double *restrict q, const double *restrict qd, 
     u[0] = g*_x0*_x49 + g*_x4*_x56 + g*m_a*(-_x4*_x17 + _x62) + g*m_c*(-l3*_x4 + 0.5*_x62);
 }
 
-/* phantom_premium_scene_packed: phantom_premium_scene with packed inputs and outputs. */
-void phantom_premium_scene_packed(const double *restrict in, double *restrict out)
+/* phantom_premium_combined_packed: phantom_premium_combined with packed inputs and outputs. */
+void phantom_premium_combined_packed(const double *restrict in, double *restrict out)
 {
-    phantom_premium_scene(in + 0, in + 3, in + 6, in + 9, in[12], in[13], in[14], in[15], in[16], in[17], in[18], in[19], in[20], in[21], in[22], in[23], in[24], in[25], in[26], in[27], in[28], in[29], in[30], in[31], in[32], in[33], in[34], in[35], out + 0, out + 16, out + 32, out + 48, out + 64, out + 80, out + 96, out + 105, out + 114, out + 123, out + 126, out + 129, out + 132, out + 135, out + 138, out + 141, out + 150, out + 153, out + 156, out + 157);
+    phantom_premium_combined(in + 0, in + 3, in + 6, in + 9, in[12], in[13], in[14], in[15], in[16], in[17], in[18], in[19], in[20], in[21], in[22], in[23], in[24], in[25], in[26], in[27], in[28], in[29], in[30], in[31], in[32], in[33], in[34], in[35], out + 0, out + 16, out + 32, out + 48, out + 64, out + 80, out + 96, out + 105, out + 114, out + 123, out + 126, out + 129, out + 132, out + 135, out + 138, out + 141, out + 150, out + 153, out + 156, out + 157);
 }
 
-/* phantom_premium_scene_batch: phantom_premium_scene for n configurations, in blocks of 8. */
-void phantom_premium_scene_batch(size_t n, const double *restrict q, const double *restrict qd, const double *restrict qdd, const double *restrict tau, const double *restrict params, size_t params_stride, double *restrict base_T_tcp, double *restrict base_T_turret, double *restrict base_T_upper_arm, double *restrict base_T_distal, double *restrict base_T_lever, double *restrict base_T_link_c, double *restrict J, double *restrict M, double *restrict C, double *restrict V, double *restrict G, double *restrict F_f, double *restrict inverse_dynamics_tau, double *restrict forward_dynamics_qdd, double *restrict F, double *restrict Mx, double *restrict Vx, double *restrict Gx, double *restrict k, double *restrict u)
+/* phantom_premium_combined_batch: phantom_premium_combined for n configurations, in blocks of 8. */
+void phantom_premium_combined_batch(size_t n, const double *restrict q, const double *restrict qd, const double *restrict qdd, const double *restrict tau, const double *restrict params, size_t params_stride, double *restrict base_T_tcp, double *restrict base_T_turret, double *restrict base_T_upper_arm, double *restrict base_T_distal, double *restrict base_T_lever, double *restrict base_T_link_c, double *restrict J, double *restrict M, double *restrict C, double *restrict V, double *restrict G, double *restrict F_f, double *restrict inverse_dynamics_tau, double *restrict forward_dynamics_qdd, double *restrict F, double *restrict Mx, double *restrict Vx, double *restrict Gx, double *restrict k, double *restrict u)
 {
     for (size_t _i = 0; _i < n; _i += PHANTOM_PREMIUM_BLOCK) {
         /* lanes past the end of the batch repeat configuration _i and are not stored */

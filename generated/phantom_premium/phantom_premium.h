@@ -743,7 +743,7 @@ void phantom_premium_potential_energy_packed(const double *in, double *out);
  * Uses 1216 bytes of stack for its blocks of 8 configurations. */
 void phantom_premium_potential_energy_batch(size_t n, const double *q, const double *params, size_t params_stride, double *u);
 
-/* phantom_premium_scene: fk, frames, jacobian, mass_matrix, coriolis_matrix, coriolis_vector, gravity_vector, friction, inverse_dynamics, forward_dynamics, tcp_force, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions.
+/* phantom_premium_combined: fk, frames, jacobian, mass_matrix, coriolis_matrix, coriolis_vector, gravity_vector, friction, inverse_dynamics, forward_dynamics, tcp_force, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions.
  *
  * Computes the outputs of fk, frames, jacobian, mass_matrix, coriolis_matrix,
  * coriolis_vector, gravity_vector, friction, inverse_dynamics, forward_dynamics,
@@ -838,14 +838,14 @@ void phantom_premium_potential_energy_batch(size_t n, const double *q, const dou
  *   u[1]: scalar; potential energy (potential_energy) [J].
  * Cost: 1592 operations.
  */
-void phantom_premium_scene(const double *q, const double *qd, const double *qdd, const double *tau, double l1, double l2, double l3, double l5, double l6, double m_a, double I_axx, double I_ayy, double I_azz, double m_c, double I_cxx, double I_cyy, double I_czz, double m_be, double I_bexx, double I_beyy, double I_bezz, double m_df, double I_dfxx, double I_dfyy, double I_dfzz, double I_baseyy, double J_m, double g, double *base_T_tcp, double *base_T_turret, double *base_T_upper_arm, double *base_T_distal, double *base_T_lever, double *base_T_link_c, double *J, double *M, double *C, double *V, double *G, double *F_f, double *inverse_dynamics_tau, double *forward_dynamics_qdd, double *F, double *Mx, double *Vx, double *Gx, double *k, double *u);
+void phantom_premium_combined(const double *q, const double *qd, const double *qdd, const double *tau, double l1, double l2, double l3, double l5, double l6, double m_a, double I_axx, double I_ayy, double I_azz, double m_c, double I_cxx, double I_cyy, double I_czz, double m_be, double I_bexx, double I_beyy, double I_bezz, double m_df, double I_dfxx, double I_dfyy, double I_dfzz, double I_baseyy, double J_m, double g, double *base_T_tcp, double *base_T_turret, double *base_T_upper_arm, double *base_T_distal, double *base_T_lever, double *base_T_link_c, double *J, double *M, double *C, double *V, double *G, double *F_f, double *inverse_dynamics_tau, double *forward_dynamics_qdd, double *F, double *Mx, double *Vx, double *Gx, double *k, double *u);
 
-/* phantom_premium_scene with packed arguments: in = q, qd, qdd, tau, l1, l2, l3, l5, l6, m_a, I_axx, I_ayy, I_azz, m_c, I_cxx, I_cyy, I_czz, m_be, I_bexx, I_beyy, I_bezz, m_df, I_dfxx, I_dfyy, I_dfzz, I_baseyy, J_m, g one after the other; out = base_T_tcp, base_T_turret, base_T_upper_arm, base_T_distal, base_T_lever, base_T_link_c, J, M, C, V, G, F_f, inverse_dynamics_tau, forward_dynamics_qdd, F, Mx, Vx, Gx, k, u one after the other. */
-void phantom_premium_scene_packed(const double *in, double *out);
+/* phantom_premium_combined with packed arguments: in = q, qd, qdd, tau, l1, l2, l3, l5, l6, m_a, I_axx, I_ayy, I_azz, m_c, I_cxx, I_cyy, I_czz, m_be, I_bexx, I_beyy, I_bezz, m_df, I_dfxx, I_dfyy, I_dfzz, I_baseyy, J_m, g one after the other; out = base_T_tcp, base_T_turret, base_T_upper_arm, base_T_distal, base_T_lever, base_T_link_c, J, M, C, V, G, F_f, inverse_dynamics_tau, forward_dynamics_qdd, F, Mx, Vx, Gx, k, u one after the other. */
+void phantom_premium_combined_packed(const double *in, double *out);
 
-/* phantom_premium_scene for n configurations; params: l1, l2, l3, l5, l6, m_a, I_axx, I_ayy, I_azz, m_c, I_cxx, I_cyy, I_czz, m_be, I_bexx, I_beyy, I_bezz, m_df, I_dfxx, I_dfyy, I_dfzz, I_baseyy, J_m, g, stride 0 or 24.
+/* phantom_premium_combined for n configurations; params: l1, l2, l3, l5, l6, m_a, I_axx, I_ayy, I_azz, m_c, I_cxx, I_cyy, I_czz, m_be, I_bexx, I_beyy, I_bezz, m_df, I_dfxx, I_dfyy, I_dfzz, I_baseyy, J_m, g, stride 0 or 24.
  * Uses 9728 bytes of stack for its blocks of 8 configurations. */
-void phantom_premium_scene_batch(size_t n, const double *q, const double *qd, const double *qdd, const double *tau, const double *params, size_t params_stride, double *base_T_tcp, double *base_T_turret, double *base_T_upper_arm, double *base_T_distal, double *base_T_lever, double *base_T_link_c, double *J, double *M, double *C, double *V, double *G, double *F_f, double *inverse_dynamics_tau, double *forward_dynamics_qdd, double *F, double *Mx, double *Vx, double *Gx, double *k, double *u);
+void phantom_premium_combined_batch(size_t n, const double *q, const double *qd, const double *qdd, const double *tau, const double *params, size_t params_stride, double *base_T_tcp, double *base_T_turret, double *base_T_upper_arm, double *base_T_distal, double *base_T_lever, double *base_T_link_c, double *J, double *M, double *C, double *V, double *G, double *F_f, double *inverse_dynamics_tau, double *forward_dynamics_qdd, double *F, double *Mx, double *Vx, double *Gx, double *k, double *u);
 
 #ifdef __cplusplus
 }

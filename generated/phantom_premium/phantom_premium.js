@@ -30,7 +30,7 @@
  *   operational_space(q, qd, params) -> {Mx: number[][], Vx: number[], Gx: number[]}
  *   kinetic_energy(q, qd, params) -> number
  *   potential_energy(q, params) -> number
- *   scene(q, qd, qdd, tau, params) -> {base_T_tcp: number[][], base_T_turret: number[][], base_T_upper_arm: number[][], base_T_distal: number[][], base_T_lever: number[][], base_T_link_c: number[][], J: number[][], M: number[][], C: number[][], V: number[], G: number[], F_f: number[], inverse_dynamics_tau: number[], forward_dynamics_qdd: number[], F: number[], Mx: number[][], Vx: number[], Gx: number[], k: number, u: number}
+ *   combined(q, qd, qdd, tau, params) -> {base_T_tcp: number[][], base_T_turret: number[][], base_T_upper_arm: number[][], base_T_distal: number[][], base_T_lever: number[][], base_T_link_c: number[][], J: number[][], M: number[][], C: number[][], V: number[], G: number[], F_f: number[], inverse_dynamics_tau: number[], forward_dynamics_qdd: number[], F: number[], Mx: number[][], Vx: number[], Gx: number[], k: number, u: number}
  */
 (function (root, factory) {
   "use strict";
@@ -1620,12 +1620,12 @@
    *     k: shape (); kinetic energy of all bodies (kinetic_energy) [J].
    *     u: shape (); potential energy (potential_energy) [J].
    */
-  function scene(q, qd, qdd, tau, params) {
-    _vector(q, 3, "q", "scene");
-    _vector(qd, 3, "qd", "scene");
-    _vector(qdd, 3, "qdd", "scene");
-    _vector(tau, 3, "tau", "scene");
-    const _p = _params(params, ["l1", "l2", "l3", "l5", "l6", "m_a", "I_axx", "I_ayy", "I_azz", "m_c", "I_cxx", "I_cyy", "I_czz", "m_be", "I_bexx", "I_beyy", "I_bezz", "m_df", "I_dfxx", "I_dfyy", "I_dfzz", "I_baseyy", "J_m", "g"], "scene");
+  function combined(q, qd, qdd, tau, params) {
+    _vector(q, 3, "q", "combined");
+    _vector(qd, 3, "qd", "combined");
+    _vector(qdd, 3, "qdd", "combined");
+    _vector(tau, 3, "tau", "combined");
+    const _p = _params(params, ["l1", "l2", "l3", "l5", "l6", "m_a", "I_axx", "I_ayy", "I_azz", "m_c", "I_cxx", "I_cyy", "I_czz", "m_be", "I_bexx", "I_beyy", "I_bezz", "m_df", "I_dfxx", "I_dfyy", "I_dfzz", "I_baseyy", "J_m", "g"], "combined");
     const l1 = _p.l1 ?? 0.215;
     const l2 = _p.l2 ?? 0.17;
     const l3 = _p.l3 ?? 0.0325;
@@ -2098,7 +2098,7 @@
       operational_space: {"inputs": ["q", "qd"], "parameters": ["l1", "l2", "l3", "l5", "l6", "m_a", "I_axx", "I_ayy", "I_azz", "m_c", "I_cxx", "I_cyy", "I_czz", "m_be", "I_bexx", "I_beyy", "I_bezz", "m_df", "I_dfxx", "I_dfyy", "I_dfzz", "I_baseyy", "J_m", "g"], "outputs": {"Mx": [3, 3], "Vx": [3], "Gx": [3]}},
       kinetic_energy: {"inputs": ["q", "qd"], "parameters": ["l1", "l2", "l3", "m_a", "I_axx", "I_ayy", "I_azz", "m_c", "I_cxx", "I_cyy", "I_czz", "I_bexx", "I_beyy", "I_bezz", "I_dfxx", "I_dfyy", "I_dfzz", "I_baseyy", "J_m"], "outputs": {"k": []}},
       potential_energy: {"inputs": ["q"], "parameters": ["l1", "l2", "l3", "l5", "l6", "m_a", "m_c", "m_be", "m_df", "g"], "outputs": {"u": []}},
-      scene: {"inputs": ["q", "qd", "qdd", "tau"], "parameters": ["l1", "l2", "l3", "l5", "l6", "m_a", "I_axx", "I_ayy", "I_azz", "m_c", "I_cxx", "I_cyy", "I_czz", "m_be", "I_bexx", "I_beyy", "I_bezz", "m_df", "I_dfxx", "I_dfyy", "I_dfzz", "I_baseyy", "J_m", "g"], "outputs": {"base_T_tcp": [4, 4], "base_T_turret": [4, 4], "base_T_upper_arm": [4, 4], "base_T_distal": [4, 4], "base_T_lever": [4, 4], "base_T_link_c": [4, 4], "J": [3, 3], "M": [3, 3], "C": [3, 3], "V": [3], "G": [3], "F_f": [3], "inverse_dynamics_tau": [3], "forward_dynamics_qdd": [3], "F": [3], "Mx": [3, 3], "Vx": [3], "Gx": [3], "k": [], "u": []}},
+      combined: {"inputs": ["q", "qd", "qdd", "tau"], "parameters": ["l1", "l2", "l3", "l5", "l6", "m_a", "I_axx", "I_ayy", "I_azz", "m_c", "I_cxx", "I_cyy", "I_czz", "m_be", "I_bexx", "I_beyy", "I_bezz", "m_df", "I_dfxx", "I_dfyy", "I_dfzz", "I_baseyy", "J_m", "g"], "outputs": {"base_T_tcp": [4, 4], "base_T_turret": [4, 4], "base_T_upper_arm": [4, 4], "base_T_distal": [4, 4], "base_T_lever": [4, 4], "base_T_link_c": [4, 4], "J": [3, 3], "M": [3, 3], "C": [3, 3], "V": [3], "G": [3], "F_f": [3], "inverse_dynamics_tau": [3], "forward_dynamics_qdd": [3], "F": [3], "Mx": [3, 3], "Vx": [3], "Gx": [3], "k": [], "u": []}},
     }),
     fk: fk,
     frames: frames,
@@ -2114,6 +2114,6 @@
     operational_space: operational_space,
     kinetic_energy: kinetic_energy,
     potential_energy: potential_energy,
-    scene: scene,
+    combined: combined,
   });
 });

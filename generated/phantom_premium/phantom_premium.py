@@ -27,7 +27,7 @@ Functions:
     operational_space(q, qd, **params) -> OperationalSpaceResult(Mx, Vx, Gx)
     kinetic_energy(q, qd, **params) -> k (...)
     potential_energy(q, **params) -> u (...)
-    scene(q, qd, qdd, tau, **params) -> SceneResult(base_T_tcp, base_T_turret, base_T_upper_arm, base_T_distal, base_T_lever, base_T_link_c, J, M, C, V, G, F_f, inverse_dynamics_tau, forward_dynamics_qdd, F, Mx, Vx, Gx, k, u)
+    combined(q, qd, qdd, tau, **params) -> CombinedResult(base_T_tcp, base_T_turret, base_T_upper_arm, base_T_distal, base_T_lever, base_T_link_c, J, M, C, V, G, F_f, inverse_dynamics_tau, forward_dynamics_qdd, F, Mx, Vx, Gx, k, u)
 """
 
 import collections
@@ -74,7 +74,7 @@ FramesResult = collections.namedtuple("FramesResult", ["base_T_turret", "base_T_
 
 OperationalSpaceResult = collections.namedtuple("OperationalSpaceResult", ["Mx", "Vx", "Gx"])
 
-SceneResult = collections.namedtuple("SceneResult", ["base_T_tcp", "base_T_turret", "base_T_upper_arm", "base_T_distal", "base_T_lever", "base_T_link_c", "J", "M", "C", "V", "G", "F_f", "inverse_dynamics_tau", "forward_dynamics_qdd", "F", "Mx", "Vx", "Gx", "k", "u"])
+CombinedResult = collections.namedtuple("CombinedResult", ["base_T_tcp", "base_T_turret", "base_T_upper_arm", "base_T_distal", "base_T_lever", "base_T_link_c", "J", "M", "C", "V", "G", "F_f", "inverse_dynamics_tau", "forward_dynamics_qdd", "F", "Mx", "Vx", "Gx", "k", "u"])
 
 
 def _vector(value, size, name, function):
@@ -1757,7 +1757,7 @@ def potential_energy(q, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6=0.0527, 
     return _out_u
 
 
-def scene(q, qd, qdd, tau, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6=0.0527, m_a=0.0202, I_axx=4.864e-05, I_ayy=1.843e-07, I_azz=4.864e-05, m_c=0.0249, I_cxx=9.59e-05, I_cyy=9.59e-05, I_czz=5.1e-07, m_be=0.2359, I_bexx=0.001109, I_beyy=0.001006, I_bezz=5.91e-05, m_df=0.1906, I_dfxx=0.000711, I_dfyy=6.29e-05, I_dfzz=0.0006246, I_baseyy=0.001187, J_m=1.03e-06, g=9.80665):
+def combined(q, qd, qdd, tau, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6=0.0527, m_a=0.0202, I_axx=4.864e-05, I_ayy=1.843e-07, I_azz=4.864e-05, m_c=0.0249, I_cxx=9.59e-05, I_cyy=9.59e-05, I_czz=5.1e-07, m_be=0.2359, I_bexx=0.001109, I_beyy=0.001006, I_bezz=5.91e-05, m_df=0.1906, I_dfxx=0.000711, I_dfyy=6.29e-05, I_dfzz=0.0006246, I_baseyy=0.001187, J_m=1.03e-06, g=9.80665):
     """fk, frames, jacobian, mass_matrix, coriolis_matrix, coriolis_vector, gravity_vector, friction, inverse_dynamics, forward_dynamics, tcp_force, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions.
 
     Computes the outputs of fk, frames, jacobian, mass_matrix, coriolis_matrix,
@@ -1822,7 +1822,7 @@ def scene(q, qd, qdd, tau, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6=0.052
             the batch shape.
 
     Returns:
-        SceneResult with the fields:
+        CombinedResult with the fields:
         base_T_tcp: shape (..., 4, 4); homogeneous transform of the TCP frame in the base
             frame (fk) [m].
         base_T_turret: shape (..., 4, 4); homogeneous transform of frame 'turret' in the
@@ -1857,13 +1857,13 @@ def scene(q, qd, qdd, tau, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6=0.052
         k: shape (...); kinetic energy of all bodies (kinetic_energy) [J].
         u: shape (...); potential energy (potential_energy) [J].
     """
-    q = _vector(q, 3, "q", "scene")
-    qd = _vector(qd, 3, "qd", "scene")
-    qdd = _vector(qdd, 3, "qdd", "scene")
-    tau = _vector(tau, 3, "tau", "scene")
-    batch = _batch_shape("scene", q.shape[:-1], qd.shape[:-1], qdd.shape[:-1], tau.shape[:-1], numpy.shape(l1), numpy.shape(l2), numpy.shape(l3), numpy.shape(l5), numpy.shape(l6), numpy.shape(m_a), numpy.shape(I_axx), numpy.shape(I_ayy), numpy.shape(I_azz), numpy.shape(m_c), numpy.shape(I_cxx), numpy.shape(I_cyy), numpy.shape(I_czz), numpy.shape(m_be), numpy.shape(I_bexx), numpy.shape(I_beyy), numpy.shape(I_bezz), numpy.shape(m_df), numpy.shape(I_dfxx), numpy.shape(I_dfyy), numpy.shape(I_dfzz), numpy.shape(I_baseyy), numpy.shape(J_m), numpy.shape(g))
+    q = _vector(q, 3, "q", "combined")
+    qd = _vector(qd, 3, "qd", "combined")
+    qdd = _vector(qdd, 3, "qdd", "combined")
+    tau = _vector(tau, 3, "tau", "combined")
+    batch = _batch_shape("combined", q.shape[:-1], qd.shape[:-1], qdd.shape[:-1], tau.shape[:-1], numpy.shape(l1), numpy.shape(l2), numpy.shape(l3), numpy.shape(l5), numpy.shape(l6), numpy.shape(m_a), numpy.shape(I_axx), numpy.shape(I_ayy), numpy.shape(I_azz), numpy.shape(m_c), numpy.shape(I_cxx), numpy.shape(I_cyy), numpy.shape(I_czz), numpy.shape(m_be), numpy.shape(I_bexx), numpy.shape(I_beyy), numpy.shape(I_bezz), numpy.shape(m_df), numpy.shape(I_dfxx), numpy.shape(I_dfyy), numpy.shape(I_dfzz), numpy.shape(I_baseyy), numpy.shape(J_m), numpy.shape(g))
     if math.prod(batch) > CHUNK:
-        return _in_chunks(scene, batch, (q, qd, qdd, tau, ), {"l1": l1, "l2": l2, "l3": l3, "l5": l5, "l6": l6, "m_a": m_a, "I_axx": I_axx, "I_ayy": I_ayy, "I_azz": I_azz, "m_c": m_c, "I_cxx": I_cxx, "I_cyy": I_cyy, "I_czz": I_czz, "m_be": m_be, "I_bexx": I_bexx, "I_beyy": I_beyy, "I_bezz": I_bezz, "m_df": m_df, "I_dfxx": I_dfxx, "I_dfyy": I_dfyy, "I_dfzz": I_dfzz, "I_baseyy": I_baseyy, "J_m": J_m, "g": g})
+        return _in_chunks(combined, batch, (q, qd, qdd, tau, ), {"l1": l1, "l2": l2, "l3": l3, "l5": l5, "l6": l6, "m_a": m_a, "I_axx": I_axx, "I_ayy": I_ayy, "I_azz": I_azz, "m_c": m_c, "I_cxx": I_cxx, "I_cyy": I_cyy, "I_czz": I_czz, "m_be": m_be, "I_bexx": I_bexx, "I_beyy": I_beyy, "I_bezz": I_bezz, "m_df": m_df, "I_dfxx": I_dfxx, "I_dfyy": I_dfyy, "I_dfzz": I_dfzz, "I_baseyy": I_baseyy, "J_m": J_m, "g": g})
     q1 = q[..., 0]
     q2 = q[..., 1]
     q3 = q[..., 2]
@@ -2371,4 +2371,4 @@ def scene(q, qd, qdd, tau, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6=0.052
     _out_k[...] = 0.5*_x21*(_x0*(_x1*_x93 + _x0*(_x90*_x95 + _x94*I_ayy + I_bezz)) + _x4*(_x3*_x97 + _x4*(_x96*_x95 + _x94*I_czz + I_dfyy)) + _x3*(_x3*(_x96*_x94 + _x95*I_czz + _x98 + _x12 + I_dfzz) + _x4*_x97) + _x1*(_x1*(_x90*_x94 + _x95*I_ayy + _x41 + _x37 + I_beyy) + _x0*_x93) + _x36) + 0.5*q3_d*(q3_d*(_x176 + _x44 + _x12 + I_dfxx) + q2_d*_x177) + 0.5*q2_d*(q2_d*(_x44 + _x39 + _x37 + I_bexx) + q3_d*_x177)
     _out_u = numpy.zeros(batch + ())
     _out_u[...] = g*_x4*_x56 + g*_x0*_x49 + g*m_c*(-l3*_x4 + 0.5*_x62) + g*m_a*(-_x4*_x17 + _x62)
-    return SceneResult(_out_base_T_tcp, _out_base_T_turret, _out_base_T_upper_arm, _out_base_T_distal, _out_base_T_lever, _out_base_T_link_c, _out_J, _out_M, _out_C, _out_V, _out_G, _out_F_f, _out_inverse_dynamics_tau, _out_forward_dynamics_qdd, _out_F, _out_Mx, _out_Vx, _out_Gx, _out_k, _out_u)
+    return CombinedResult(_out_base_T_tcp, _out_base_T_turret, _out_base_T_upper_arm, _out_base_T_distal, _out_base_T_lever, _out_base_T_link_c, _out_J, _out_M, _out_C, _out_V, _out_G, _out_F_f, _out_inverse_dynamics_tau, _out_forward_dynamics_qdd, _out_F, _out_Mx, _out_Vx, _out_Gx, _out_k, _out_u)

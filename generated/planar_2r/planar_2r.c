@@ -1509,8 +1509,8 @@ void planar_2r_potential_energy_batch(size_t n, const double *restrict q, const 
 
 #if !defined(PLANAR_2R_PART) || PLANAR_2R_PART == 0
 
-/* planar_2r_scene: fk, frames, jacobian, jacobian_geometric, mass_matrix, coriolis_matrix, coriolis_vector, gravity_vector, inverse_dynamics, forward_dynamics, tcp_force, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions. */
-void planar_2r_scene(const double *restrict q, const double *restrict qd, const double *restrict qdd, const double *restrict tau, double l1, double l2, double m1, double m2, double g, double *restrict base_T_tcp, double *restrict base_T_link1, double *restrict base_T_link2, double *restrict jacobian_J, double *restrict jacobian_geometric_J, double *restrict M, double *restrict C, double *restrict V, double *restrict G, double *restrict inverse_dynamics_tau, double *restrict forward_dynamics_qdd, double *restrict F, double *restrict Mx, double *restrict Vx, double *restrict Gx, double *restrict k, double *restrict u)
+/* planar_2r_combined: fk, frames, jacobian, jacobian_geometric, mass_matrix, coriolis_matrix, coriolis_vector, gravity_vector, inverse_dynamics, forward_dynamics, tcp_force, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions. */
+void planar_2r_combined(const double *restrict q, const double *restrict qd, const double *restrict qdd, const double *restrict tau, double l1, double l2, double m1, double m2, double g, double *restrict base_T_tcp, double *restrict base_T_link1, double *restrict base_T_link2, double *restrict jacobian_J, double *restrict jacobian_geometric_J, double *restrict M, double *restrict C, double *restrict V, double *restrict G, double *restrict inverse_dynamics_tau, double *restrict forward_dynamics_qdd, double *restrict F, double *restrict Mx, double *restrict Vx, double *restrict Gx, double *restrict k, double *restrict u)
 {
     const double theta1 = q[0];
     const double theta2 = q[1];
@@ -1705,14 +1705,14 @@ void planar_2r_scene(const double *restrict q, const double *restrict qd, const 
     u[0] = g*m1*_x32 + (_x28 + _x32)*g*m2;
 }
 
-/* planar_2r_scene_packed: planar_2r_scene with packed inputs and outputs. */
-void planar_2r_scene_packed(const double *restrict in, double *restrict out)
+/* planar_2r_combined_packed: planar_2r_combined with packed inputs and outputs. */
+void planar_2r_combined_packed(const double *restrict in, double *restrict out)
 {
-    planar_2r_scene(in + 0, in + 2, in + 4, in + 6, in[8], in[9], in[10], in[11], in[12], out + 0, out + 16, out + 32, out + 48, out + 52, out + 64, out + 68, out + 72, out + 74, out + 76, out + 78, out + 80, out + 82, out + 86, out + 88, out + 90, out + 91);
+    planar_2r_combined(in + 0, in + 2, in + 4, in + 6, in[8], in[9], in[10], in[11], in[12], out + 0, out + 16, out + 32, out + 48, out + 52, out + 64, out + 68, out + 72, out + 74, out + 76, out + 78, out + 80, out + 82, out + 86, out + 88, out + 90, out + 91);
 }
 
-/* planar_2r_scene_batch: planar_2r_scene for n configurations, in blocks of 8. */
-void planar_2r_scene_batch(size_t n, const double *restrict q, const double *restrict qd, const double *restrict qdd, const double *restrict tau, const double *restrict params, size_t params_stride, double *restrict base_T_tcp, double *restrict base_T_link1, double *restrict base_T_link2, double *restrict jacobian_J, double *restrict jacobian_geometric_J, double *restrict M, double *restrict C, double *restrict V, double *restrict G, double *restrict inverse_dynamics_tau, double *restrict forward_dynamics_qdd, double *restrict F, double *restrict Mx, double *restrict Vx, double *restrict Gx, double *restrict k, double *restrict u)
+/* planar_2r_combined_batch: planar_2r_combined for n configurations, in blocks of 8. */
+void planar_2r_combined_batch(size_t n, const double *restrict q, const double *restrict qd, const double *restrict qdd, const double *restrict tau, const double *restrict params, size_t params_stride, double *restrict base_T_tcp, double *restrict base_T_link1, double *restrict base_T_link2, double *restrict jacobian_J, double *restrict jacobian_geometric_J, double *restrict M, double *restrict C, double *restrict V, double *restrict G, double *restrict inverse_dynamics_tau, double *restrict forward_dynamics_qdd, double *restrict F, double *restrict Mx, double *restrict Vx, double *restrict Gx, double *restrict k, double *restrict u)
 {
     for (size_t _i = 0; _i < n; _i += PLANAR_2R_BLOCK) {
         /* lanes past the end of the batch repeat configuration _i and are not stored */
@@ -3392,8 +3392,8 @@ void planar_2r_potential_energy_batch_f32(size_t n, const float *restrict q, con
 
 #if !defined(PLANAR_2R_PART) || PLANAR_2R_PART == 1
 
-/* planar_2r_scene_f32: fk, frames, jacobian, jacobian_geometric, mass_matrix, coriolis_matrix, coriolis_vector, gravity_vector, inverse_dynamics, forward_dynamics, tcp_force, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions. */
-void planar_2r_scene_f32(const float *restrict q, const float *restrict qd, const float *restrict qdd, const float *restrict tau, float l1, float l2, float m1, float m2, float g, float *restrict base_T_tcp, float *restrict base_T_link1, float *restrict base_T_link2, float *restrict jacobian_J, float *restrict jacobian_geometric_J, float *restrict M, float *restrict C, float *restrict V, float *restrict G, float *restrict inverse_dynamics_tau, float *restrict forward_dynamics_qdd, float *restrict F, float *restrict Mx, float *restrict Vx, float *restrict Gx, float *restrict k, float *restrict u)
+/* planar_2r_combined_f32: fk, frames, jacobian, jacobian_geometric, mass_matrix, coriolis_matrix, coriolis_vector, gravity_vector, inverse_dynamics, forward_dynamics, tcp_force, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions. */
+void planar_2r_combined_f32(const float *restrict q, const float *restrict qd, const float *restrict qdd, const float *restrict tau, float l1, float l2, float m1, float m2, float g, float *restrict base_T_tcp, float *restrict base_T_link1, float *restrict base_T_link2, float *restrict jacobian_J, float *restrict jacobian_geometric_J, float *restrict M, float *restrict C, float *restrict V, float *restrict G, float *restrict inverse_dynamics_tau, float *restrict forward_dynamics_qdd, float *restrict F, float *restrict Mx, float *restrict Vx, float *restrict Gx, float *restrict k, float *restrict u)
 {
     const float theta1 = q[0];
     const float theta2 = q[1];
@@ -3588,14 +3588,14 @@ void planar_2r_scene_f32(const float *restrict q, const float *restrict qd, cons
     u[0] = g*m1*_x32 + (_x28 + _x32)*g*m2;
 }
 
-/* planar_2r_scene_packed_f32: planar_2r_scene_f32 with packed inputs and outputs. */
-void planar_2r_scene_packed_f32(const float *restrict in, float *restrict out)
+/* planar_2r_combined_packed_f32: planar_2r_combined_f32 with packed inputs and outputs. */
+void planar_2r_combined_packed_f32(const float *restrict in, float *restrict out)
 {
-    planar_2r_scene_f32(in + 0, in + 2, in + 4, in + 6, in[8], in[9], in[10], in[11], in[12], out + 0, out + 16, out + 32, out + 48, out + 52, out + 64, out + 68, out + 72, out + 74, out + 76, out + 78, out + 80, out + 82, out + 86, out + 88, out + 90, out + 91);
+    planar_2r_combined_f32(in + 0, in + 2, in + 4, in + 6, in[8], in[9], in[10], in[11], in[12], out + 0, out + 16, out + 32, out + 48, out + 52, out + 64, out + 68, out + 72, out + 74, out + 76, out + 78, out + 80, out + 82, out + 86, out + 88, out + 90, out + 91);
 }
 
-/* planar_2r_scene_batch_f32: planar_2r_scene_f32 for n configurations, in blocks of 8. */
-void planar_2r_scene_batch_f32(size_t n, const float *restrict q, const float *restrict qd, const float *restrict qdd, const float *restrict tau, const float *restrict params, size_t params_stride, float *restrict base_T_tcp, float *restrict base_T_link1, float *restrict base_T_link2, float *restrict jacobian_J, float *restrict jacobian_geometric_J, float *restrict M, float *restrict C, float *restrict V, float *restrict G, float *restrict inverse_dynamics_tau, float *restrict forward_dynamics_qdd, float *restrict F, float *restrict Mx, float *restrict Vx, float *restrict Gx, float *restrict k, float *restrict u)
+/* planar_2r_combined_batch_f32: planar_2r_combined_f32 for n configurations, in blocks of 8. */
+void planar_2r_combined_batch_f32(size_t n, const float *restrict q, const float *restrict qd, const float *restrict qdd, const float *restrict tau, const float *restrict params, size_t params_stride, float *restrict base_T_tcp, float *restrict base_T_link1, float *restrict base_T_link2, float *restrict jacobian_J, float *restrict jacobian_geometric_J, float *restrict M, float *restrict C, float *restrict V, float *restrict G, float *restrict inverse_dynamics_tau, float *restrict forward_dynamics_qdd, float *restrict F, float *restrict Mx, float *restrict Vx, float *restrict Gx, float *restrict k, float *restrict u)
 {
     for (size_t _i = 0; _i < n; _i += PLANAR_2R_BLOCK) {
         /* lanes past the end of the batch repeat configuration _i and are not stored */

@@ -392,7 +392,7 @@ void planar_2r_potential_energy_packed(const double *in, double *out);
  * Uses 896 bytes of stack for its blocks of 8 configurations. */
 void planar_2r_potential_energy_batch(size_t n, const double *q, const double *params, size_t params_stride, double *u);
 
-/* planar_2r_scene: fk, frames, jacobian, jacobian_geometric, mass_matrix, coriolis_matrix, coriolis_vector, gravity_vector, inverse_dynamics, forward_dynamics, tcp_force, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions.
+/* planar_2r_combined: fk, frames, jacobian, jacobian_geometric, mass_matrix, coriolis_matrix, coriolis_vector, gravity_vector, inverse_dynamics, forward_dynamics, tcp_force, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions.
  *
  * Computes the outputs of fk, frames, jacobian, jacobian_geometric, mass_matrix,
  * coriolis_matrix, coriolis_vector, gravity_vector, inverse_dynamics, forward_dynamics,
@@ -439,14 +439,14 @@ void planar_2r_potential_energy_batch(size_t n, const double *q, const double *p
  *   u[1]: scalar; potential energy (potential_energy) [J].
  * Cost: 266 operations.
  */
-void planar_2r_scene(const double *q, const double *qd, const double *qdd, const double *tau, double l1, double l2, double m1, double m2, double g, double *base_T_tcp, double *base_T_link1, double *base_T_link2, double *jacobian_J, double *jacobian_geometric_J, double *M, double *C, double *V, double *G, double *inverse_dynamics_tau, double *forward_dynamics_qdd, double *F, double *Mx, double *Vx, double *Gx, double *k, double *u);
+void planar_2r_combined(const double *q, const double *qd, const double *qdd, const double *tau, double l1, double l2, double m1, double m2, double g, double *base_T_tcp, double *base_T_link1, double *base_T_link2, double *jacobian_J, double *jacobian_geometric_J, double *M, double *C, double *V, double *G, double *inverse_dynamics_tau, double *forward_dynamics_qdd, double *F, double *Mx, double *Vx, double *Gx, double *k, double *u);
 
-/* planar_2r_scene with packed arguments: in = q, qd, qdd, tau, l1, l2, m1, m2, g one after the other; out = base_T_tcp, base_T_link1, base_T_link2, jacobian_J, jacobian_geometric_J, M, C, V, G, inverse_dynamics_tau, forward_dynamics_qdd, F, Mx, Vx, Gx, k, u one after the other. */
-void planar_2r_scene_packed(const double *in, double *out);
+/* planar_2r_combined with packed arguments: in = q, qd, qdd, tau, l1, l2, m1, m2, g one after the other; out = base_T_tcp, base_T_link1, base_T_link2, jacobian_J, jacobian_geometric_J, M, C, V, G, inverse_dynamics_tau, forward_dynamics_qdd, F, Mx, Vx, Gx, k, u one after the other. */
+void planar_2r_combined_packed(const double *in, double *out);
 
-/* planar_2r_scene for n configurations; params: l1, l2, m1, m2, g, stride 0 or 5.
+/* planar_2r_combined for n configurations; params: l1, l2, m1, m2, g, stride 0 or 5.
  * Uses 4608 bytes of stack for its blocks of 8 configurations. */
-void planar_2r_scene_batch(size_t n, const double *q, const double *qd, const double *qdd, const double *tau, const double *params, size_t params_stride, double *base_T_tcp, double *base_T_link1, double *base_T_link2, double *jacobian_J, double *jacobian_geometric_J, double *M, double *C, double *V, double *G, double *inverse_dynamics_tau, double *forward_dynamics_qdd, double *F, double *Mx, double *Vx, double *Gx, double *k, double *u);
+void planar_2r_combined_batch(size_t n, const double *q, const double *qd, const double *qdd, const double *tau, const double *params, size_t params_stride, double *base_T_tcp, double *base_T_link1, double *base_T_link2, double *jacobian_J, double *jacobian_geometric_J, double *M, double *C, double *V, double *G, double *inverse_dynamics_tau, double *forward_dynamics_qdd, double *F, double *Mx, double *Vx, double *Gx, double *k, double *u);
 
 /* planar_2r_fk_f32: Forward kinematics: pose of the TCP in the base frame.
  *
@@ -799,7 +799,7 @@ void planar_2r_potential_energy_packed_f32(const float *in, float *out);
  * Uses 448 bytes of stack for its blocks of 8 configurations. */
 void planar_2r_potential_energy_batch_f32(size_t n, const float *q, const float *params, size_t params_stride, float *u);
 
-/* planar_2r_scene_f32: fk, frames, jacobian, jacobian_geometric, mass_matrix, coriolis_matrix, coriolis_vector, gravity_vector, inverse_dynamics, forward_dynamics, tcp_force, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions.
+/* planar_2r_combined_f32: fk, frames, jacobian, jacobian_geometric, mass_matrix, coriolis_matrix, coriolis_vector, gravity_vector, inverse_dynamics, forward_dynamics, tcp_force, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions.
  *
  * Computes the outputs of fk, frames, jacobian, jacobian_geometric, mass_matrix,
  * coriolis_matrix, coriolis_vector, gravity_vector, inverse_dynamics, forward_dynamics,
@@ -846,14 +846,14 @@ void planar_2r_potential_energy_batch_f32(size_t n, const float *q, const float 
  *   u[1]: scalar; potential energy (potential_energy) [J].
  * Cost: 266 operations.
  */
-void planar_2r_scene_f32(const float *q, const float *qd, const float *qdd, const float *tau, float l1, float l2, float m1, float m2, float g, float *base_T_tcp, float *base_T_link1, float *base_T_link2, float *jacobian_J, float *jacobian_geometric_J, float *M, float *C, float *V, float *G, float *inverse_dynamics_tau, float *forward_dynamics_qdd, float *F, float *Mx, float *Vx, float *Gx, float *k, float *u);
+void planar_2r_combined_f32(const float *q, const float *qd, const float *qdd, const float *tau, float l1, float l2, float m1, float m2, float g, float *base_T_tcp, float *base_T_link1, float *base_T_link2, float *jacobian_J, float *jacobian_geometric_J, float *M, float *C, float *V, float *G, float *inverse_dynamics_tau, float *forward_dynamics_qdd, float *F, float *Mx, float *Vx, float *Gx, float *k, float *u);
 
-/* planar_2r_scene_f32 with packed arguments: in = q, qd, qdd, tau, l1, l2, m1, m2, g one after the other; out = base_T_tcp, base_T_link1, base_T_link2, jacobian_J, jacobian_geometric_J, M, C, V, G, inverse_dynamics_tau, forward_dynamics_qdd, F, Mx, Vx, Gx, k, u one after the other. */
-void planar_2r_scene_packed_f32(const float *in, float *out);
+/* planar_2r_combined_f32 with packed arguments: in = q, qd, qdd, tau, l1, l2, m1, m2, g one after the other; out = base_T_tcp, base_T_link1, base_T_link2, jacobian_J, jacobian_geometric_J, M, C, V, G, inverse_dynamics_tau, forward_dynamics_qdd, F, Mx, Vx, Gx, k, u one after the other. */
+void planar_2r_combined_packed_f32(const float *in, float *out);
 
-/* planar_2r_scene_f32 for n configurations; params: l1, l2, m1, m2, g, stride 0 or 5.
+/* planar_2r_combined_f32 for n configurations; params: l1, l2, m1, m2, g, stride 0 or 5.
  * Uses 2304 bytes of stack for its blocks of 8 configurations. */
-void planar_2r_scene_batch_f32(size_t n, const float *q, const float *qd, const float *qdd, const float *tau, const float *params, size_t params_stride, float *base_T_tcp, float *base_T_link1, float *base_T_link2, float *jacobian_J, float *jacobian_geometric_J, float *M, float *C, float *V, float *G, float *inverse_dynamics_tau, float *forward_dynamics_qdd, float *F, float *Mx, float *Vx, float *Gx, float *k, float *u);
+void planar_2r_combined_batch_f32(size_t n, const float *q, const float *qd, const float *qdd, const float *tau, const float *params, size_t params_stride, float *base_T_tcp, float *base_T_link1, float *base_T_link2, float *jacobian_J, float *jacobian_geometric_J, float *M, float *C, float *V, float *G, float *inverse_dynamics_tau, float *forward_dynamics_qdd, float *F, float *Mx, float *Vx, float *Gx, float *k, float *u);
 
 #ifdef __cplusplus
 }

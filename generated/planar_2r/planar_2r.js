@@ -29,7 +29,7 @@
  *   operational_space(q, qd, params) -> {Mx: number[][], Vx: number[], Gx: number[]}
  *   kinetic_energy(q, qd, params) -> number
  *   potential_energy(q, params) -> number
- *   scene(q, qd, qdd, tau, params) -> {base_T_tcp: number[][], base_T_link1: number[][], base_T_link2: number[][], jacobian_J: number[][], jacobian_geometric_J: number[][], M: number[][], C: number[][], V: number[], G: number[], inverse_dynamics_tau: number[], forward_dynamics_qdd: number[], F: number[], Mx: number[][], Vx: number[], Gx: number[], k: number, u: number}
+ *   combined(q, qd, qdd, tau, params) -> {base_T_tcp: number[][], base_T_link1: number[][], base_T_link2: number[][], jacobian_J: number[][], jacobian_geometric_J: number[][], M: number[][], C: number[][], V: number[], G: number[], inverse_dynamics_tau: number[], forward_dynamics_qdd: number[], F: number[], Mx: number[][], Vx: number[], Gx: number[], k: number, u: number}
  */
 (function (root, factory) {
   "use strict";
@@ -694,12 +694,12 @@
    *     k: shape (); kinetic energy of all bodies (kinetic_energy) [J].
    *     u: shape (); potential energy (potential_energy) [J].
    */
-  function scene(q, qd, qdd, tau, params) {
-    _vector(q, 2, "q", "scene");
-    _vector(qd, 2, "qd", "scene");
-    _vector(qdd, 2, "qdd", "scene");
-    _vector(tau, 2, "tau", "scene");
-    const _p = _params(params, ["l1", "l2", "m1", "m2", "g"], "scene");
+  function combined(q, qd, qdd, tau, params) {
+    _vector(q, 2, "q", "combined");
+    _vector(qd, 2, "qd", "combined");
+    _vector(qdd, 2, "qdd", "combined");
+    _vector(tau, 2, "tau", "combined");
+    const _p = _params(params, ["l1", "l2", "m1", "m2", "g"], "combined");
     const l1 = _p.l1 ?? 0.1;
     const l2 = _p.l2 ?? 0.1;
     const m1 = _p.m1 ?? 0.1;
@@ -847,7 +847,7 @@
       operational_space: {"inputs": ["q", "qd"], "parameters": ["l1", "l2", "m1", "m2", "g"], "outputs": {"Mx": [2, 2], "Vx": [2], "Gx": [2]}},
       kinetic_energy: {"inputs": ["q", "qd"], "parameters": ["l1", "l2", "m1", "m2"], "outputs": {"k": []}},
       potential_energy: {"inputs": ["q"], "parameters": ["l1", "l2", "m1", "m2", "g"], "outputs": {"u": []}},
-      scene: {"inputs": ["q", "qd", "qdd", "tau"], "parameters": ["l1", "l2", "m1", "m2", "g"], "outputs": {"base_T_tcp": [4, 4], "base_T_link1": [4, 4], "base_T_link2": [4, 4], "jacobian_J": [2, 2], "jacobian_geometric_J": [6, 2], "M": [2, 2], "C": [2, 2], "V": [2], "G": [2], "inverse_dynamics_tau": [2], "forward_dynamics_qdd": [2], "F": [2], "Mx": [2, 2], "Vx": [2], "Gx": [2], "k": [], "u": []}},
+      combined: {"inputs": ["q", "qd", "qdd", "tau"], "parameters": ["l1", "l2", "m1", "m2", "g"], "outputs": {"base_T_tcp": [4, 4], "base_T_link1": [4, 4], "base_T_link2": [4, 4], "jacobian_J": [2, 2], "jacobian_geometric_J": [6, 2], "M": [2, 2], "C": [2, 2], "V": [2], "G": [2], "inverse_dynamics_tau": [2], "forward_dynamics_qdd": [2], "F": [2], "Mx": [2, 2], "Vx": [2], "Gx": [2], "k": [], "u": []}},
     }),
     fk: fk,
     frames: frames,
@@ -863,6 +863,6 @@
     operational_space: operational_space,
     kinetic_energy: kinetic_energy,
     potential_energy: potential_energy,
-    scene: scene,
+    combined: combined,
   });
 });

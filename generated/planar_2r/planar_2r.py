@@ -25,7 +25,7 @@ Functions:
     operational_space(q, qd, **params) -> OperationalSpaceResult(Mx, Vx, Gx)
     kinetic_energy(q, qd, **params) -> k (...)
     potential_energy(q, **params) -> u (...)
-    scene(q, qd, qdd, tau, **params) -> SceneResult(base_T_tcp, base_T_link1, base_T_link2, jacobian_J, jacobian_geometric_J, M, C, V, G, inverse_dynamics_tau, forward_dynamics_qdd, F, Mx, Vx, Gx, k, u)
+    combined(q, qd, qdd, tau, **params) -> CombinedResult(base_T_tcp, base_T_link1, base_T_link2, jacobian_J, jacobian_geometric_J, M, C, V, G, inverse_dynamics_tau, forward_dynamics_qdd, F, Mx, Vx, Gx, k, u)
 """
 
 import collections
@@ -50,7 +50,7 @@ FramesResult = collections.namedtuple("FramesResult", ["base_T_link1", "base_T_l
 
 OperationalSpaceResult = collections.namedtuple("OperationalSpaceResult", ["Mx", "Vx", "Gx"])
 
-SceneResult = collections.namedtuple("SceneResult", ["base_T_tcp", "base_T_link1", "base_T_link2", "jacobian_J", "jacobian_geometric_J", "M", "C", "V", "G", "inverse_dynamics_tau", "forward_dynamics_qdd", "F", "Mx", "Vx", "Gx", "k", "u"])
+CombinedResult = collections.namedtuple("CombinedResult", ["base_T_tcp", "base_T_link1", "base_T_link2", "jacobian_J", "jacobian_geometric_J", "M", "C", "V", "G", "inverse_dynamics_tau", "forward_dynamics_qdd", "F", "Mx", "Vx", "Gx", "k", "u"])
 
 
 def _vector(value, size, name, function):
@@ -768,7 +768,7 @@ def potential_energy(q, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
     return _out_u
 
 
-def scene(q, qd, qdd, tau, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
+def combined(q, qd, qdd, tau, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
     """fk, frames, jacobian, jacobian_geometric, mass_matrix, coriolis_matrix, coriolis_vector, gravity_vector, inverse_dynamics, forward_dynamics, tcp_force, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions.
 
     Computes the outputs of fk, frames, jacobian, jacobian_geometric, mass_matrix,
@@ -794,7 +794,7 @@ def scene(q, qd, qdd, tau, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
             broadcastable to the batch shape.
 
     Returns:
-        SceneResult with the fields:
+        CombinedResult with the fields:
         base_T_tcp: shape (..., 4, 4); homogeneous transform of the TCP frame in the base
             frame (fk) [m].
         base_T_link1: shape (..., 4, 4); homogeneous transform of frame 'link1' in the base
@@ -823,13 +823,13 @@ def scene(q, qd, qdd, tau, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
         k: shape (...); kinetic energy of all bodies (kinetic_energy) [J].
         u: shape (...); potential energy (potential_energy) [J].
     """
-    q = _vector(q, 2, "q", "scene")
-    qd = _vector(qd, 2, "qd", "scene")
-    qdd = _vector(qdd, 2, "qdd", "scene")
-    tau = _vector(tau, 2, "tau", "scene")
-    batch = _batch_shape("scene", q.shape[:-1], qd.shape[:-1], qdd.shape[:-1], tau.shape[:-1], numpy.shape(l1), numpy.shape(l2), numpy.shape(m1), numpy.shape(m2), numpy.shape(g))
+    q = _vector(q, 2, "q", "combined")
+    qd = _vector(qd, 2, "qd", "combined")
+    qdd = _vector(qdd, 2, "qdd", "combined")
+    tau = _vector(tau, 2, "tau", "combined")
+    batch = _batch_shape("combined", q.shape[:-1], qd.shape[:-1], qdd.shape[:-1], tau.shape[:-1], numpy.shape(l1), numpy.shape(l2), numpy.shape(m1), numpy.shape(m2), numpy.shape(g))
     if math.prod(batch) > CHUNK:
-        return _in_chunks(scene, batch, (q, qd, qdd, tau, ), {"l1": l1, "l2": l2, "m1": m1, "m2": m2, "g": g})
+        return _in_chunks(combined, batch, (q, qd, qdd, tau, ), {"l1": l1, "l2": l2, "m1": m1, "m2": m2, "g": g})
     theta1 = q[..., 0]
     theta2 = q[..., 1]
     theta1_d = qd[..., 0]
@@ -1000,4 +1000,4 @@ def scene(q, qd, qdd, tau, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
     _out_k[...] = 0.5*(_x49*theta1_d + _x5*theta2_d)*theta2_d + 0.5*((m1*_x0 + 2.0*_x4 + m2*_x0 + _x5)*theta1_d + _x49*theta2_d)*theta1_d
     _out_u = numpy.zeros(batch + ())
     _out_u[...] = (_x32 + _x28)*g*m2 + g*m1*_x32
-    return SceneResult(_out_base_T_tcp, _out_base_T_link1, _out_base_T_link2, _out_jacobian_J, _out_jacobian_geometric_J, _out_M, _out_C, _out_V, _out_G, _out_inverse_dynamics_tau, _out_forward_dynamics_qdd, _out_F, _out_Mx, _out_Vx, _out_Gx, _out_k, _out_u)
+    return CombinedResult(_out_base_T_tcp, _out_base_T_link1, _out_base_T_link2, _out_jacobian_J, _out_jacobian_geometric_J, _out_M, _out_C, _out_V, _out_G, _out_inverse_dynamics_tau, _out_forward_dynamics_qdd, _out_F, _out_Mx, _out_Vx, _out_Gx, _out_k, _out_u)

@@ -20668,8 +20668,8 @@ void stewart_potential_energy_batch(size_t n, const double *restrict q, const do
 
 #if !defined(STEWART_PART) || STEWART_PART == 11
 
-/* stewart_scene: ik, inverse_jacobian together, with one set of shared subexpressions. */
-void stewart_scene(const double *restrict p, const double *restrict q, double r_b, double r_p, double gamma_b, double gamma_p, double *restrict joints, double *restrict margin, double *restrict J_inv)
+/* stewart_combined: ik, inverse_jacobian together, with one set of shared subexpressions. */
+void stewart_combined(const double *restrict p, const double *restrict q, double r_b, double r_p, double gamma_b, double gamma_p, double *restrict joints, double *restrict margin, double *restrict J_inv)
 {
     const double x = p[0];
     const double y = p[1];
@@ -20996,14 +20996,14 @@ void stewart_scene(const double *restrict p, const double *restrict q, double r_
     J_inv[35] = _x244*(_x248*(_x115 - _x212) - _x249*(_x213 + _x99));
 }
 
-/* stewart_scene_packed: stewart_scene with packed inputs and outputs. */
-void stewart_scene_packed(const double *restrict in, double *restrict out)
+/* stewart_combined_packed: stewart_combined with packed inputs and outputs. */
+void stewart_combined_packed(const double *restrict in, double *restrict out)
 {
-    stewart_scene(in + 0, in + 6, in[12], in[13], in[14], in[15], out + 0, out + 6, out + 12);
+    stewart_combined(in + 0, in + 6, in[12], in[13], in[14], in[15], out + 0, out + 6, out + 12);
 }
 
-/* stewart_scene_batch: stewart_scene for n configurations, in blocks of 8. */
-void stewart_scene_batch(size_t n, const double *restrict p, const double *restrict q, const double *restrict params, size_t params_stride, double *restrict joints, double *restrict margin, double *restrict J_inv)
+/* stewart_combined_batch: stewart_combined for n configurations, in blocks of 8. */
+void stewart_combined_batch(size_t n, const double *restrict p, const double *restrict q, const double *restrict params, size_t params_stride, double *restrict joints, double *restrict margin, double *restrict J_inv)
 {
     for (size_t _i = 0; _i < n; _i += STEWART_BLOCK) {
         /* lanes past the end of the batch repeat configuration _i and are not stored */

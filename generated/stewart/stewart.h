@@ -628,7 +628,7 @@ void stewart_potential_energy_packed(const double *in, double *out);
  * Uses 832 bytes of stack for its blocks of 8 configurations. */
 void stewart_potential_energy_batch(size_t n, const double *q, const double *p, const double *params, size_t params_stride, double *u);
 
-/* stewart_scene: ik, inverse_jacobian together, with one set of shared subexpressions.
+/* stewart_combined: ik, inverse_jacobian together, with one set of shared subexpressions.
  *
  * Computes the outputs of ik, inverse_jacobian in one call; subexpressions common to
  * several of them are evaluated once.
@@ -651,14 +651,14 @@ void stewart_potential_energy_batch(size_t n, const double *q, const double *p, 
  *   (inverse_jacobian).
  * Cost: 604 operations.
  */
-void stewart_scene(const double *p, const double *q, double r_b, double r_p, double gamma_b, double gamma_p, double *joints, double *margin, double *J_inv);
+void stewart_combined(const double *p, const double *q, double r_b, double r_p, double gamma_b, double gamma_p, double *joints, double *margin, double *J_inv);
 
-/* stewart_scene with packed arguments: in = p, q, r_b, r_p, gamma_b, gamma_p one after the other; out = joints, margin, J_inv one after the other. */
-void stewart_scene_packed(const double *in, double *out);
+/* stewart_combined with packed arguments: in = p, q, r_b, r_p, gamma_b, gamma_p one after the other; out = joints, margin, J_inv one after the other. */
+void stewart_combined_packed(const double *in, double *out);
 
-/* stewart_scene for n configurations; params: r_b, r_p, gamma_b, gamma_p, stride 0 or 4.
+/* stewart_combined for n configurations; params: r_b, r_p, gamma_b, gamma_p, stride 0 or 4.
  * Uses 5056 bytes of stack for its blocks of 8 configurations. */
-void stewart_scene_batch(size_t n, const double *p, const double *q, const double *params, size_t params_stride, double *joints, double *margin, double *J_inv);
+void stewart_combined_batch(size_t n, const double *p, const double *q, const double *params, size_t params_stride, double *joints, double *margin, double *J_inv);
 
 #ifdef __cplusplus
 }

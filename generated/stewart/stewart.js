@@ -30,7 +30,7 @@
  *   operational_space(q, p, qd, params) -> {Mx: number[][], Vx: number[], Gx: number[]}
  *   kinetic_energy(q, p, qd, params) -> number
  *   potential_energy(q, p, params) -> number
- *   scene(p, q, params) -> {joints: number[], margin: number[], J_inv: number[][]}
+ *   combined(p, q, params) -> {joints: number[], margin: number[], J_inv: number[][]}
  */
 (function (root, factory) {
   "use strict";
@@ -9577,10 +9577,10 @@
    *     J_inv: shape (6, 6); rows: actuated joints; columns: task coordinates
    *     (inverse_jacobian).
    */
-  function scene(p, q, params) {
-    _vector(p, 6, "p", "scene");
-    _vector(q, 6, "q", "scene");
-    const _p = _params(params, ["r_b", "r_p", "gamma_b", "gamma_p"], "scene");
+  function combined(p, q, params) {
+    _vector(p, 6, "p", "combined");
+    _vector(q, 6, "q", "combined");
+    const _p = _params(params, ["r_b", "r_p", "gamma_b", "gamma_p"], "combined");
     const r_b = _p.r_b ?? 0.2;
     const r_p = _p.r_p ?? 0.1;
     const gamma_b = _p.gamma_b ?? 0.26179938779914946;
@@ -9890,7 +9890,7 @@
       operational_space: {"inputs": ["q", "p", "qd"], "parameters": ["r_b", "r_p", "gamma_b", "gamma_p", "m_platform", "r_disc", "t_disc", "m_strut", "J_rotor", "lead"], "outputs": {"Mx": [6, 6], "Vx": [6], "Gx": [6]}},
       kinetic_energy: {"inputs": ["q", "p", "qd"], "parameters": ["r_b", "r_p", "gamma_b", "gamma_p", "m_platform", "r_disc", "t_disc", "m_strut", "J_rotor", "lead"], "outputs": {"k": []}},
       potential_energy: {"inputs": ["q", "p"], "parameters": ["r_p", "gamma_p", "m_platform", "m_strut"], "outputs": {"u": []}},
-      scene: {"inputs": ["p", "q"], "parameters": ["r_b", "r_p", "gamma_b", "gamma_p"], "outputs": {"joints": [6], "margin": [6], "J_inv": [6, 6]}},
+      combined: {"inputs": ["p", "q"], "parameters": ["r_b", "r_p", "gamma_b", "gamma_p"], "outputs": {"joints": [6], "margin": [6], "J_inv": [6, 6]}},
     }),
     ik: ik,
     leg_points: leg_points,
@@ -9908,6 +9908,6 @@
     operational_space: operational_space,
     kinetic_energy: kinetic_energy,
     potential_energy: potential_energy,
-    scene: scene,
+    combined: combined,
   });
 });

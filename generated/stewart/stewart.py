@@ -27,7 +27,7 @@ Functions:
     operational_space(q, p, qd, **params) -> OperationalSpaceResult(Mx, Vx, Gx)
     kinetic_energy(q, p, qd, **params) -> k (...)
     potential_energy(q, p, **params) -> u (...)
-    scene(p, q, **params) -> SceneResult(joints, margin, J_inv)
+    combined(p, q, **params) -> CombinedResult(joints, margin, J_inv)
 """
 
 import collections
@@ -63,7 +63,7 @@ ClosureJacobiansResult = collections.namedtuple("ClosureJacobiansResult", ["Phi_
 
 OperationalSpaceResult = collections.namedtuple("OperationalSpaceResult", ["Mx", "Vx", "Gx"])
 
-SceneResult = collections.namedtuple("SceneResult", ["joints", "margin", "J_inv"])
+CombinedResult = collections.namedtuple("CombinedResult", ["joints", "margin", "J_inv"])
 
 
 def _vector(value, size, name, function):
@@ -10185,7 +10185,7 @@ def potential_energy(q, p, *, r_p=0.1, gamma_p=0.26179938779914946, m_platform=1
     return _out_u
 
 
-def scene(p, q, *, r_b=0.2, r_p=0.1, gamma_b=0.26179938779914946, gamma_p=0.26179938779914946):
+def combined(p, q, *, r_b=0.2, r_p=0.1, gamma_b=0.26179938779914946, gamma_p=0.26179938779914946):
     """ik, inverse_jacobian together, with one set of shared subexpressions.
 
     Computes the outputs of ik, inverse_jacobian in one call; subexpressions common to
@@ -10206,18 +10206,18 @@ def scene(p, q, *, r_b=0.2, r_p=0.1, gamma_b=0.26179938779914946, gamma_p=0.2617
             0.26179938779914946; a scalar or an array broadcastable to the batch shape.
 
     Returns:
-        SceneResult with the fields:
+        CombinedResult with the fields:
         joints: shape (..., 6); actuated joint variables q (ik).
         margin: shape (..., 6); per leg: >= 0 iff the leg reaches p (the radicand of its
             solution) (ik).
         J_inv: shape (..., 6, 6); rows: actuated joints; columns: task coordinates
             (inverse_jacobian).
     """
-    p = _vector(p, 6, "p", "scene")
-    q = _vector(q, 6, "q", "scene")
-    batch = _batch_shape("scene", p.shape[:-1], q.shape[:-1], numpy.shape(r_b), numpy.shape(r_p), numpy.shape(gamma_b), numpy.shape(gamma_p))
+    p = _vector(p, 6, "p", "combined")
+    q = _vector(q, 6, "q", "combined")
+    batch = _batch_shape("combined", p.shape[:-1], q.shape[:-1], numpy.shape(r_b), numpy.shape(r_p), numpy.shape(gamma_b), numpy.shape(gamma_p))
     if math.prod(batch) > CHUNK:
-        return _in_chunks(scene, batch, (p, q, ), {"r_b": r_b, "r_p": r_p, "gamma_b": gamma_b, "gamma_p": gamma_p})
+        return _in_chunks(combined, batch, (p, q, ), {"r_b": r_b, "r_p": r_p, "gamma_b": gamma_b, "gamma_p": gamma_p})
     x = p[..., 0]
     y = p[..., 1]
     z = p[..., 2]
@@ -10531,4 +10531,4 @@ def scene(p, q, *, r_b=0.2, r_p=0.1, gamma_b=0.26179938779914946, gamma_p=0.2617
     _out_J_inv[..., 5, 3] = -_x244*(_x198*_x247 + _x199*_x245 + _x200*_x246)
     _out_J_inv[..., 5, 4] = _x244*(0.5*_x247*(_x203 - _x201) - _x248*(_x205 + _x207) - _x249*(_x209 + _x210))
     _out_J_inv[..., 5, 5] = _x244*(_x248*(_x115 - _x212) - _x249*(_x213 + _x99))
-    return SceneResult(_out_joints, _out_margin, _out_J_inv)
+    return CombinedResult(_out_joints, _out_margin, _out_J_inv)

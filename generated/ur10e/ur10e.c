@@ -8120,8 +8120,8 @@ void ur10e_potential_energy_batch(size_t n, const double *restrict q, const doub
 
 #if !defined(UR10E_PART) || UR10E_PART == 5
 
-/* ur10e_scene: fk, jacobian, mass_matrix, coriolis_vector, gravity_vector together, with one set of shared subexpressions. */
-void ur10e_scene(const double *restrict q, const double *restrict qd, double d1, double a2, double a3, double d4, double d5, double d6, double m1, double m2, double m3, double m4, double m5, double m6, double g, double *restrict base_T_tcp, double *restrict J, double *restrict M, double *restrict V, double *restrict G)
+/* ur10e_combined: fk, jacobian, mass_matrix, coriolis_vector, gravity_vector together, with one set of shared subexpressions. */
+void ur10e_combined(const double *restrict q, const double *restrict qd, double d1, double a2, double a3, double d4, double d5, double d6, double m1, double m2, double m3, double m4, double m5, double m6, double g, double *restrict base_T_tcp, double *restrict J, double *restrict M, double *restrict V, double *restrict G)
 {
     const double q1 = q[0];
     const double q2 = q[1];
@@ -8544,14 +8544,14 @@ void ur10e_scene(const double *restrict q, const double *restrict qd, double d1,
     G[5] = 0.0;
 }
 
-/* ur10e_scene_packed: ur10e_scene with packed inputs and outputs. */
-void ur10e_scene_packed(const double *restrict in, double *restrict out)
+/* ur10e_combined_packed: ur10e_combined with packed inputs and outputs. */
+void ur10e_combined_packed(const double *restrict in, double *restrict out)
 {
-    ur10e_scene(in + 0, in + 6, in[12], in[13], in[14], in[15], in[16], in[17], in[18], in[19], in[20], in[21], in[22], in[23], in[24], out + 0, out + 16, out + 52, out + 88, out + 94);
+    ur10e_combined(in + 0, in + 6, in[12], in[13], in[14], in[15], in[16], in[17], in[18], in[19], in[20], in[21], in[22], in[23], in[24], out + 0, out + 16, out + 52, out + 88, out + 94);
 }
 
-/* ur10e_scene_batch: ur10e_scene for n configurations, in blocks of 8. */
-void ur10e_scene_batch(size_t n, const double *restrict q, const double *restrict qd, const double *restrict params, size_t params_stride, double *restrict base_T_tcp, double *restrict J, double *restrict M, double *restrict V, double *restrict G)
+/* ur10e_combined_batch: ur10e_combined for n configurations, in blocks of 8. */
+void ur10e_combined_batch(size_t n, const double *restrict q, const double *restrict qd, const double *restrict params, size_t params_stride, double *restrict base_T_tcp, double *restrict J, double *restrict M, double *restrict V, double *restrict G)
 {
     for (size_t _i = 0; _i < n; _i += UR10E_BLOCK) {
         /* lanes past the end of the batch repeat configuration _i and are not stored */

@@ -499,7 +499,7 @@ void ur10e_potential_energy_packed(const double *in, double *out);
  * Uses 1856 bytes of stack for its blocks of 8 configurations. */
 void ur10e_potential_energy_batch(size_t n, const double *q, const double *params, size_t params_stride, double *u);
 
-/* ur10e_scene: fk, jacobian, mass_matrix, coriolis_vector, gravity_vector together, with one set of shared subexpressions.
+/* ur10e_combined: fk, jacobian, mass_matrix, coriolis_vector, gravity_vector together, with one set of shared subexpressions.
  *
  * Computes the outputs of fk, jacobian, mass_matrix, coriolis_vector, gravity_vector in
  * one call; subexpressions common to several of them are evaluated once.
@@ -532,14 +532,14 @@ void ur10e_potential_energy_batch(size_t n, const double *q, const double *param
  *   (revolute), N (prismatic)].
  * Cost: 1012 operations.
  */
-void ur10e_scene(const double *q, const double *qd, double d1, double a2, double a3, double d4, double d5, double d6, double m1, double m2, double m3, double m4, double m5, double m6, double g, double *base_T_tcp, double *J, double *M, double *V, double *G);
+void ur10e_combined(const double *q, const double *qd, double d1, double a2, double a3, double d4, double d5, double d6, double m1, double m2, double m3, double m4, double m5, double m6, double g, double *base_T_tcp, double *J, double *M, double *V, double *G);
 
-/* ur10e_scene with packed arguments: in = q, qd, d1, a2, a3, d4, d5, d6, m1, m2, m3, m4, m5, m6, g one after the other; out = base_T_tcp, J, M, V, G one after the other. */
-void ur10e_scene_packed(const double *in, double *out);
+/* ur10e_combined with packed arguments: in = q, qd, d1, a2, a3, d4, d5, d6, m1, m2, m3, m4, m5, m6, g one after the other; out = base_T_tcp, J, M, V, G one after the other. */
+void ur10e_combined_packed(const double *in, double *out);
 
-/* ur10e_scene for n configurations; params: d1, a2, a3, d4, d5, d6, m1, m2, m3, m4, m5, m6, g, stride 0 or 13.
+/* ur10e_combined for n configurations; params: d1, a2, a3, d4, d5, d6, m1, m2, m3, m4, m5, m6, g, stride 0 or 13.
  * Uses 7936 bytes of stack for its blocks of 8 configurations. */
-void ur10e_scene_batch(size_t n, const double *q, const double *qd, const double *params, size_t params_stride, double *base_T_tcp, double *J, double *M, double *V, double *G);
+void ur10e_combined_batch(size_t n, const double *q, const double *qd, const double *params, size_t params_stride, double *base_T_tcp, double *J, double *M, double *V, double *G);
 
 #ifdef __cplusplus
 }

@@ -28,7 +28,7 @@
  *   operational_space(q, qd, params) -> {Mx: number[][], Vx: number[], Gx: number[]}
  *   kinetic_energy(q, qd, params) -> number
  *   potential_energy(q, params) -> number
- *   scene(q, qd, params) -> {base_T_tcp: number[][], J: number[][], M: number[][], V: number[], G: number[]}
+ *   combined(q, qd, params) -> {base_T_tcp: number[][], J: number[][], M: number[][], V: number[], G: number[]}
  */
 (function (root, factory) {
   "use strict";
@@ -3625,10 +3625,10 @@
    *     G: shape (6,); joint torques that hold the arm against gravity
    *     (gravity_vector) [N*m (revolute), N (prismatic)].
    */
-  function scene(q, qd, params) {
-    _vector(q, 6, "q", "scene");
-    _vector(qd, 6, "qd", "scene");
-    const _p = _params(params, ["d1", "a2", "a3", "d4", "d5", "d6", "m1", "m2", "m3", "m4", "m5", "m6", "g"], "scene");
+  function combined(q, qd, params) {
+    _vector(q, 6, "q", "combined");
+    _vector(qd, 6, "qd", "combined");
+    const _p = _params(params, ["d1", "a2", "a3", "d4", "d5", "d6", "m1", "m2", "m3", "m4", "m5", "m6", "g"], "combined");
     const d1 = _p.d1 ?? 0.1807;
     const a2 = _p.a2 ?? -0.6127;
     const a3 = _p.a3 ?? -0.57155;
@@ -3992,7 +3992,7 @@
       operational_space: {"inputs": ["q", "qd"], "parameters": ["a2", "a3", "d4", "d5", "d6", "m1", "m2", "m3", "m4", "m5", "m6", "g"], "outputs": {"Mx": [6, 6], "Vx": [6], "Gx": [6]}},
       kinetic_energy: {"inputs": ["q", "qd"], "parameters": ["a2", "a3", "d4", "d5", "d6", "m1", "m2", "m3", "m4", "m5", "m6"], "outputs": {"k": []}},
       potential_energy: {"inputs": ["q"], "parameters": ["d1", "a2", "a3", "d5", "d6", "m1", "m2", "m3", "m4", "m5", "m6", "g"], "outputs": {"u": []}},
-      scene: {"inputs": ["q", "qd"], "parameters": ["d1", "a2", "a3", "d4", "d5", "d6", "m1", "m2", "m3", "m4", "m5", "m6", "g"], "outputs": {"base_T_tcp": [4, 4], "J": [6, 6], "M": [6, 6], "V": [6], "G": [6]}},
+      combined: {"inputs": ["q", "qd"], "parameters": ["d1", "a2", "a3", "d4", "d5", "d6", "m1", "m2", "m3", "m4", "m5", "m6", "g"], "outputs": {"base_T_tcp": [4, 4], "J": [6, 6], "M": [6, 6], "V": [6], "G": [6]}},
     }),
     fk: fk,
     frames: frames,
@@ -4008,6 +4008,6 @@
     operational_space: operational_space,
     kinetic_energy: kinetic_energy,
     potential_energy: potential_energy,
-    scene: scene,
+    combined: combined,
   });
 });

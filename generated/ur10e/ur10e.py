@@ -25,7 +25,7 @@ Functions:
     operational_space(q, qd, **params) -> OperationalSpaceResult(Mx, Vx, Gx)
     kinetic_energy(q, qd, **params) -> k (...)
     potential_energy(q, **params) -> u (...)
-    scene(q, qd, **params) -> SceneResult(base_T_tcp, J, M, V, G)
+    combined(q, qd, **params) -> CombinedResult(base_T_tcp, J, M, V, G)
 """
 
 import collections
@@ -58,7 +58,7 @@ FramesResult = collections.namedtuple("FramesResult", ["base_T_shoulder", "base_
 
 OperationalSpaceResult = collections.namedtuple("OperationalSpaceResult", ["Mx", "Vx", "Gx"])
 
-SceneResult = collections.namedtuple("SceneResult", ["base_T_tcp", "J", "M", "V", "G"])
+CombinedResult = collections.namedtuple("CombinedResult", ["base_T_tcp", "J", "M", "V", "G"])
 
 
 def _vector(value, size, name, function):
@@ -3953,7 +3953,7 @@ def potential_energy(q, *, d1=0.1807, a2=-0.6127, a3=-0.57155, d5=0.11985, d6=0.
     return _out_u
 
 
-def scene(q, qd, *, d1=0.1807, a2=-0.6127, a3=-0.57155, d4=0.17415, d5=0.11985, d6=0.11655, m1=7.369, m2=13.051, m3=3.989, m4=2.1, m5=1.98, m6=0.615, g=9.81):
+def combined(q, qd, *, d1=0.1807, a2=-0.6127, a3=-0.57155, d4=0.17415, d5=0.11985, d6=0.11655, m1=7.369, m2=13.051, m3=3.989, m4=2.1, m5=1.98, m6=0.615, g=9.81):
     """fk, jacobian, mass_matrix, coriolis_vector, gravity_vector together, with one set of shared subexpressions.
 
     Computes the outputs of fk, jacobian, mass_matrix, coriolis_vector, gravity_vector
@@ -3992,7 +3992,7 @@ def scene(q, qd, *, d1=0.1807, a2=-0.6127, a3=-0.57155, d4=0.17415, d5=0.11985, 
             broadcastable to the batch shape.
 
     Returns:
-        SceneResult with the fields:
+        CombinedResult with the fields:
         base_T_tcp: shape (..., 4, 4); homogeneous transform of the TCP frame in the base
             frame (fk) [m].
         J: shape (..., 6, 6); rows x, y, z, wx, wy, wz; one column per joint (jacobian).
@@ -4002,11 +4002,11 @@ def scene(q, qd, *, d1=0.1807, a2=-0.6127, a3=-0.57155, d4=0.17415, d5=0.11985, 
         G: shape (..., 6); joint torques that hold the arm against gravity (gravity_vector)
             [N*m (revolute), N (prismatic)].
     """
-    q = _vector(q, 6, "q", "scene")
-    qd = _vector(qd, 6, "qd", "scene")
-    batch = _batch_shape("scene", q.shape[:-1], qd.shape[:-1], numpy.shape(d1), numpy.shape(a2), numpy.shape(a3), numpy.shape(d4), numpy.shape(d5), numpy.shape(d6), numpy.shape(m1), numpy.shape(m2), numpy.shape(m3), numpy.shape(m4), numpy.shape(m5), numpy.shape(m6), numpy.shape(g))
+    q = _vector(q, 6, "q", "combined")
+    qd = _vector(qd, 6, "qd", "combined")
+    batch = _batch_shape("combined", q.shape[:-1], qd.shape[:-1], numpy.shape(d1), numpy.shape(a2), numpy.shape(a3), numpy.shape(d4), numpy.shape(d5), numpy.shape(d6), numpy.shape(m1), numpy.shape(m2), numpy.shape(m3), numpy.shape(m4), numpy.shape(m5), numpy.shape(m6), numpy.shape(g))
     if math.prod(batch) > CHUNK:
-        return _in_chunks(scene, batch, (q, qd, ), {"d1": d1, "a2": a2, "a3": a3, "d4": d4, "d5": d5, "d6": d6, "m1": m1, "m2": m2, "m3": m3, "m4": m4, "m5": m5, "m6": m6, "g": g})
+        return _in_chunks(combined, batch, (q, qd, ), {"d1": d1, "a2": a2, "a3": a3, "d4": d4, "d5": d5, "d6": d6, "m1": m1, "m2": m2, "m3": m3, "m4": m4, "m5": m5, "m6": m6, "g": g})
     q1 = q[..., 0]
     q2 = q[..., 1]
     q3 = q[..., 2]
@@ -4400,4 +4400,4 @@ def scene(q, qd, *, d1=0.1807, a2=-0.6127, a3=-0.57155, d4=0.17415, d5=0.11985, 
     _out_G[..., 2] = -_x289*_x285 + _x286*_x290
     _out_G[..., 3] = -(-_x3*_x289 + _x4*_x290)*_x284 - _x291*_x282
     _out_G[..., 4] = -_x10*_x291*_x283
-    return SceneResult(_out_base_T_tcp, _out_J, _out_M, _out_V, _out_G)
+    return CombinedResult(_out_base_T_tcp, _out_J, _out_M, _out_V, _out_G)

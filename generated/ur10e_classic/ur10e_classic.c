@@ -968,8 +968,8 @@ void ur10e_classic_jacobian_batch(size_t n, const double *restrict q, const doub
 
 #if !defined(UR10E_CLASSIC_PART) || UR10E_CLASSIC_PART == 0
 
-/* ur10e_classic_scene: fk, frames, jacobian together, with one set of shared subexpressions. */
-void ur10e_classic_scene(const double *restrict q, double d1, double a2, double a3, double d4, double d5, double d6, double *restrict base_T_tcp, double *restrict base_T_link1, double *restrict base_T_link2, double *restrict base_T_link3, double *restrict base_T_link4, double *restrict base_T_link5, double *restrict base_T_link6, double *restrict J)
+/* ur10e_classic_combined: fk, frames, jacobian together, with one set of shared subexpressions. */
+void ur10e_classic_combined(const double *restrict q, double d1, double a2, double a3, double d4, double d5, double d6, double *restrict base_T_tcp, double *restrict base_T_link1, double *restrict base_T_link2, double *restrict base_T_link3, double *restrict base_T_link4, double *restrict base_T_link5, double *restrict base_T_link6, double *restrict J)
 {
     const double q1 = q[0];
     const double q2 = q[1];
@@ -1217,14 +1217,14 @@ void ur10e_classic_scene(const double *restrict q, double d1, double a2, double 
     J[35] = _x56;
 }
 
-/* ur10e_classic_scene_packed: ur10e_classic_scene with packed inputs and outputs. */
-void ur10e_classic_scene_packed(const double *restrict in, double *restrict out)
+/* ur10e_classic_combined_packed: ur10e_classic_combined with packed inputs and outputs. */
+void ur10e_classic_combined_packed(const double *restrict in, double *restrict out)
 {
-    ur10e_classic_scene(in + 0, in[6], in[7], in[8], in[9], in[10], in[11], out + 0, out + 16, out + 32, out + 48, out + 64, out + 80, out + 96, out + 112);
+    ur10e_classic_combined(in + 0, in[6], in[7], in[8], in[9], in[10], in[11], out + 0, out + 16, out + 32, out + 48, out + 64, out + 80, out + 96, out + 112);
 }
 
-/* ur10e_classic_scene_batch: ur10e_classic_scene for n configurations, in blocks of 8. */
-void ur10e_classic_scene_batch(size_t n, const double *restrict q, const double *restrict params, size_t params_stride, double *restrict base_T_tcp, double *restrict base_T_link1, double *restrict base_T_link2, double *restrict base_T_link3, double *restrict base_T_link4, double *restrict base_T_link5, double *restrict base_T_link6, double *restrict J)
+/* ur10e_classic_combined_batch: ur10e_classic_combined for n configurations, in blocks of 8. */
+void ur10e_classic_combined_batch(size_t n, const double *restrict q, const double *restrict params, size_t params_stride, double *restrict base_T_tcp, double *restrict base_T_link1, double *restrict base_T_link2, double *restrict base_T_link3, double *restrict base_T_link4, double *restrict base_T_link5, double *restrict base_T_link6, double *restrict J)
 {
     for (size_t _i = 0; _i < n; _i += UR10E_CLASSIC_BLOCK) {
         /* lanes past the end of the batch repeat configuration _i and are not stored */

@@ -139,7 +139,7 @@ void ur10e_classic_jacobian_packed(const double *in, double *out);
  * Uses 3264 bytes of stack for its blocks of 8 configurations. */
 void ur10e_classic_jacobian_batch(size_t n, const double *q, const double *params, size_t params_stride, double *J);
 
-/* ur10e_classic_scene: fk, frames, jacobian together, with one set of shared subexpressions.
+/* ur10e_classic_combined: fk, frames, jacobian together, with one set of shared subexpressions.
  *
  * Computes the outputs of fk, frames, jacobian in one call; subexpressions common to
  * several of them are evaluated once.
@@ -172,14 +172,14 @@ void ur10e_classic_jacobian_batch(size_t n, const double *q, const double *param
  *   J[36]: 6 x 6, row-major; rows x, y, z, wx, wy, wz; one column per joint (jacobian).
  * Cost: 131 operations.
  */
-void ur10e_classic_scene(const double *q, double d1, double a2, double a3, double d4, double d5, double d6, double *base_T_tcp, double *base_T_link1, double *base_T_link2, double *base_T_link3, double *base_T_link4, double *base_T_link5, double *base_T_link6, double *J);
+void ur10e_classic_combined(const double *q, double d1, double a2, double a3, double d4, double d5, double d6, double *base_T_tcp, double *base_T_link1, double *base_T_link2, double *base_T_link3, double *base_T_link4, double *base_T_link5, double *base_T_link6, double *J);
 
-/* ur10e_classic_scene with packed arguments: in = q, d1, a2, a3, d4, d5, d6 one after the other; out = base_T_tcp, base_T_link1, base_T_link2, base_T_link3, base_T_link4, base_T_link5, base_T_link6, J one after the other. */
-void ur10e_classic_scene_packed(const double *in, double *out);
+/* ur10e_classic_combined with packed arguments: in = q, d1, a2, a3, d4, d5, d6 one after the other; out = base_T_tcp, base_T_link1, base_T_link2, base_T_link3, base_T_link4, base_T_link5, base_T_link6, J one after the other. */
+void ur10e_classic_combined_packed(const double *in, double *out);
 
-/* ur10e_classic_scene for n configurations; params: d1, a2, a3, d4, d5, d6, stride 0 or 6.
+/* ur10e_classic_combined for n configurations; params: d1, a2, a3, d4, d5, d6, stride 0 or 6.
  * Uses 8320 bytes of stack for its blocks of 8 configurations. */
-void ur10e_classic_scene_batch(size_t n, const double *q, const double *params, size_t params_stride, double *base_T_tcp, double *base_T_link1, double *base_T_link2, double *base_T_link3, double *base_T_link4, double *base_T_link5, double *base_T_link6, double *J);
+void ur10e_classic_combined_batch(size_t n, const double *q, const double *params, size_t params_stride, double *base_T_tcp, double *base_T_link1, double *base_T_link2, double *base_T_link3, double *base_T_link4, double *base_T_link5, double *base_T_link6, double *J);
 
 #ifdef __cplusplus
 }

@@ -16,7 +16,7 @@
  *   fk(q, params) -> number[][]
  *   frames(q, params) -> {base_T_link1: number[][], base_T_link2: number[][], base_T_link3: number[][], base_T_link4: number[][], base_T_link5: number[][], base_T_link6: number[][]}
  *   jacobian(q, params) -> number[][]
- *   scene(q, params) -> {base_T_tcp: number[][], base_T_link1: number[][], base_T_link2: number[][], base_T_link3: number[][], base_T_link4: number[][], base_T_link5: number[][], base_T_link6: number[][], J: number[][]}
+ *   combined(q, params) -> {base_T_tcp: number[][], base_T_link1: number[][], base_T_link2: number[][], base_T_link3: number[][], base_T_link4: number[][], base_T_link5: number[][], base_T_link6: number[][], J: number[][]}
  */
 (function (root, factory) {
   "use strict";
@@ -330,9 +330,9 @@
    *     frame (frames) [m].
    *     J: shape (6, 6); rows x, y, z, wx, wy, wz; one column per joint (jacobian).
    */
-  function scene(q, params) {
-    _vector(q, 6, "q", "scene");
-    const _p = _params(params, ["d1", "a2", "a3", "d4", "d5", "d6"], "scene");
+  function combined(q, params) {
+    _vector(q, 6, "q", "combined");
+    const _p = _params(params, ["d1", "a2", "a3", "d4", "d5", "d6"], "combined");
     const d1 = _p.d1 ?? 0.1807;
     const a2 = _p.a2 ?? -0.6127;
     const a3 = _p.a3 ?? -0.57155;
@@ -458,11 +458,11 @@
       fk: {"inputs": ["q"], "parameters": ["d1", "a2", "a3", "d4", "d5", "d6"], "outputs": {"base_T_tcp": [4, 4]}},
       frames: {"inputs": ["q"], "parameters": ["d1", "a2", "a3", "d4", "d5", "d6"], "outputs": {"base_T_link1": [4, 4], "base_T_link2": [4, 4], "base_T_link3": [4, 4], "base_T_link4": [4, 4], "base_T_link5": [4, 4], "base_T_link6": [4, 4]}},
       jacobian: {"inputs": ["q"], "parameters": ["a2", "a3", "d4", "d5", "d6"], "outputs": {"J": [6, 6]}},
-      scene: {"inputs": ["q"], "parameters": ["d1", "a2", "a3", "d4", "d5", "d6"], "outputs": {"base_T_tcp": [4, 4], "base_T_link1": [4, 4], "base_T_link2": [4, 4], "base_T_link3": [4, 4], "base_T_link4": [4, 4], "base_T_link5": [4, 4], "base_T_link6": [4, 4], "J": [6, 6]}},
+      combined: {"inputs": ["q"], "parameters": ["d1", "a2", "a3", "d4", "d5", "d6"], "outputs": {"base_T_tcp": [4, 4], "base_T_link1": [4, 4], "base_T_link2": [4, 4], "base_T_link3": [4, 4], "base_T_link4": [4, 4], "base_T_link5": [4, 4], "base_T_link6": [4, 4], "J": [6, 6]}},
     }),
     fk: fk,
     frames: frames,
     jacobian: jacobian,
-    scene: scene,
+    combined: combined,
   });
 });

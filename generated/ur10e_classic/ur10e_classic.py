@@ -13,7 +13,7 @@ Functions:
     fk(q, **params) -> base_T_tcp (..., 4, 4)
     frames(q, **params) -> FramesResult(base_T_link1, base_T_link2, base_T_link3, base_T_link4, base_T_link5, base_T_link6)
     jacobian(q, **params) -> J (..., 6, 6)
-    scene(q, **params) -> SceneResult(base_T_tcp, base_T_link1, base_T_link2, base_T_link3, base_T_link4, base_T_link5, base_T_link6, J)
+    combined(q, **params) -> CombinedResult(base_T_tcp, base_T_link1, base_T_link2, base_T_link3, base_T_link4, base_T_link5, base_T_link6, J)
 """
 
 import collections
@@ -44,7 +44,7 @@ PARAMETERS = {
 
 FramesResult = collections.namedtuple("FramesResult", ["base_T_link1", "base_T_link2", "base_T_link3", "base_T_link4", "base_T_link5", "base_T_link6"])
 
-SceneResult = collections.namedtuple("SceneResult", ["base_T_tcp", "base_T_link1", "base_T_link2", "base_T_link3", "base_T_link4", "base_T_link5", "base_T_link6", "J"])
+CombinedResult = collections.namedtuple("CombinedResult", ["base_T_tcp", "base_T_link1", "base_T_link2", "base_T_link3", "base_T_link4", "base_T_link5", "base_T_link6", "J"])
 
 
 def _vector(value, size, name, function):
@@ -443,7 +443,7 @@ def jacobian(q, *, a2=-0.6127, a3=-0.57155, d4=0.17415, d5=0.11985, d6=0.11655):
     return _out_J
 
 
-def scene(q, *, d1=0.1807, a2=-0.6127, a3=-0.57155, d4=0.17415, d5=0.11985, d6=0.11655):
+def combined(q, *, d1=0.1807, a2=-0.6127, a3=-0.57155, d4=0.17415, d5=0.11985, d6=0.11655):
     """fk, frames, jacobian together, with one set of shared subexpressions.
 
     Computes the outputs of fk, frames, jacobian in one call; subexpressions common to
@@ -466,7 +466,7 @@ def scene(q, *, d1=0.1807, a2=-0.6127, a3=-0.57155, d4=0.17415, d5=0.11985, d6=0
             to the batch shape.
 
     Returns:
-        SceneResult with the fields:
+        CombinedResult with the fields:
         base_T_tcp: shape (..., 4, 4); homogeneous transform of the TCP frame in the base
             frame (fk) [m].
         base_T_link1: shape (..., 4, 4); homogeneous transform of frame 'link1' in the base
@@ -483,10 +483,10 @@ def scene(q, *, d1=0.1807, a2=-0.6127, a3=-0.57155, d4=0.17415, d5=0.11985, d6=0
             frame (frames) [m].
         J: shape (..., 6, 6); rows x, y, z, wx, wy, wz; one column per joint (jacobian).
     """
-    q = _vector(q, 6, "q", "scene")
-    batch = _batch_shape("scene", q.shape[:-1], numpy.shape(d1), numpy.shape(a2), numpy.shape(a3), numpy.shape(d4), numpy.shape(d5), numpy.shape(d6))
+    q = _vector(q, 6, "q", "combined")
+    batch = _batch_shape("combined", q.shape[:-1], numpy.shape(d1), numpy.shape(a2), numpy.shape(a3), numpy.shape(d4), numpy.shape(d5), numpy.shape(d6))
     if math.prod(batch) > CHUNK:
-        return _in_chunks(scene, batch, (q, ), {"d1": d1, "a2": a2, "a3": a3, "d4": d4, "d5": d5, "d6": d6})
+        return _in_chunks(combined, batch, (q, ), {"d1": d1, "a2": a2, "a3": a3, "d4": d4, "d5": d5, "d6": d6})
     q1 = q[..., 0]
     q2 = q[..., 1]
     q3 = q[..., 2]
@@ -685,4 +685,4 @@ def scene(q, *, d1=0.1807, a2=-0.6127, a3=-0.57155, d4=0.17415, d5=0.11985, d6=0
     _out_J[..., 5, 0] = 1.0
     _out_J[..., 5, 4] = _x68
     _out_J[..., 5, 5] = _x56
-    return SceneResult(_out_base_T_tcp, _out_base_T_link1, _out_base_T_link2, _out_base_T_link3, _out_base_T_link4, _out_base_T_link5, _out_base_T_link6, _out_J)
+    return CombinedResult(_out_base_T_tcp, _out_base_T_link1, _out_base_T_link2, _out_base_T_link3, _out_base_T_link4, _out_base_T_link5, _out_base_T_link6, _out_J)

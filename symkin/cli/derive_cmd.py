@@ -36,7 +36,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--float32", action=argparse.BooleanOptionalAction, default=None,
                    help="also emit single-precision (float) C functions, suffix _f32 (default: the scene's)")
     p.add_argument("--combine", metavar="NAMES",
-                   help="outputs also computed together by one function 'scene' sharing one CSE "
+                   help="outputs also computed together by one function 'combined' sharing one CSE "
                         "(comma-separated, 'all' or 'none'; default: the scene's, else all)")
     p.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
     p.add_argument("--no-cache", action="store_true",

@@ -8,7 +8,7 @@
  *   - ur10e: rotations orthonormal, frames' last link = fk, the geometric Jacobian equal
  *     to central finite differences of fk (linear rows: dp/dq; angular rows: vee(dR/dq R^T));
  *   - batch entry points equal single calls bit for bit, with shared (stride 0) and
- *     per-configuration parameters; the combined scene function equals the separate ones;
+ *     per-configuration parameters; the combined function equals the separate ones;
  *   - the float32 variants agree with double to single precision;
  *   - the generated branch-free sin/cos agrees with libm (large, special and odd arguments).
  * Prints one line per failed check and "N passed, N failed"; exits 1 on any failure.
@@ -190,10 +190,10 @@ static void check_ur10e(void)
     }
 }
 
-static void check_scene_batch_and_float32(void)
+static void check_combined_batch_and_float32(void)
 {
     enum { N = 16 };
-    /* scene parameters: d1 a2 a3 d4 d5 d6 m1..m6 g; each part takes the ones it uses (see ur10e.h):
+    /* combined parameters: d1 a2 a3 d4 d5 d6 m1..m6 g; each part takes the ones it uses (see ur10e.h):
      * M: a2 a3 d4 d5 d6 m1..m6; V: a2 a3 d4 d5 d6 m2..m6; G: a2 a3 d5 d6 m2..m6 g. */
     double params[13] = {UR_PARAMS, UR10E_DEFAULT_m1, UR10E_DEFAULT_m2, UR10E_DEFAULT_m3, UR10E_DEFAULT_m4,
                          UR10E_DEFAULT_m5, UR10E_DEFAULT_m6, UR10E_DEFAULT_g};
@@ -220,7 +220,7 @@ static void check_scene_batch_and_float32(void)
     ur10e_mass_matrix_batch(N, q, params + 1, 0, M);
     ur10e_coriolis_vector_batch(N, q, qd, coriolis_params, 0, V);
     ur10e_gravity_vector_batch(N, q, gravity_params, 0, G);
-    ur10e_scene_batch(N, q, qd, params, 0, s_fk, s_J, s_M, s_V, s_G);
+    ur10e_combined_batch(N, q, qd, params, 0, s_fk, s_J, s_M, s_V, s_G);
     planar_2r_fk_batch(N, q2, params2, 0, T2);
     planar_2r_jacobian_batch(N, q2, params2, 0, J2);
     planar_2r_fk_batch_f32(N, qf, paramsf, 0, Tf);
@@ -229,11 +229,11 @@ static void check_scene_batch_and_float32(void)
         double T1[16];
         ur10e_fk(q + 6 * i, UR_PARAMS, T1);
         check(memcmp(T1, T + 16 * i, sizeof T1) == 0, "ur10e fk_batch = fk", i);
-        check(max_abs_diff(s_fk + 16 * i, T1, 16) < 1e-14, "ur10e scene base_T_tcp = fk", i);
-        check(max_abs_diff(s_J + 36 * i, J + 36 * i, 36) < 1e-13, "ur10e scene J = jacobian", i);
-        check(max_abs_diff(s_M + 36 * i, M + 36 * i, 36) < 1e-12, "ur10e scene M = mass_matrix", i);
-        check(max_abs_diff(s_V + 6 * i, V + 6 * i, 6) < 1e-12, "ur10e scene V = coriolis_vector", i);
-        check(max_abs_diff(s_G + 6 * i, G + 6 * i, 6) < 1e-12, "ur10e scene G = gravity_vector", i);
+        check(max_abs_diff(s_fk + 16 * i, T1, 16) < 1e-14, "ur10e combined base_T_tcp = fk", i);
+        check(max_abs_diff(s_J + 36 * i, J + 36 * i, 36) < 1e-13, "ur10e combined J = jacobian", i);
+        check(max_abs_diff(s_M + 36 * i, M + 36 * i, 36) < 1e-12, "ur10e combined M = mass_matrix", i);
+        check(max_abs_diff(s_V + 6 * i, V + 6 * i, 6) < 1e-12, "ur10e combined V = coriolis_vector", i);
+        check(max_abs_diff(s_G + 6 * i, G + 6 * i, 6) < 1e-12, "ur10e combined G = gravity_vector", i);
         double err = 0.0;
         for (int m = 0; m < 16; ++m) {
             err = fmax(err, fabs((double)Tf[16 * i + m] - T2[16 * i + m]));
@@ -251,7 +251,7 @@ int main(void)
     check_planar_2r_batch();
     check_sincos_against_libm();
     check_ur10e();
-    check_scene_batch_and_float32();
+    check_combined_batch_and_float32();
     printf("%d passed, %d failed\n", passed, failed);
     return failed ? 1 : 0;
 }
