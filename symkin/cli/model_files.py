@@ -124,7 +124,7 @@ def _derived(source: Path, backends: Sequence[str], outputs: Sequence[str] | Map
     request = pipeline.resolve_request(model, ",".join(names),
                                        ",".join(backends), None)
     with Progress(model.name) as progress:
-        generation = pipeline.generate(model, request, progress)
+        generation = pipeline.generate(model, request, progress, derivation=derivation)
     if key is not None:
         pipeline_cache.store(key, model.name, model.notes, generation.files)
     return pipeline.write(generation, scratch)

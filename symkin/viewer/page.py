@@ -74,7 +74,8 @@ VIEW_OUTPUTS = {
 class Cloud:
     """Workspace points (N, 3) in m with the analyses' 1/kappa (N,), the joints q (N, n) and the
     characteristic length used to homogenize J (None when the task space has one unit); for legs solved through
-    their closure, the passive joints' variables s (N, ns) and the task poses p (N, m) too."""
+    their closure, the passive joints' variables s (N, ns), the task poses p (N, m) and the home assembly (q, s)
+    the page starts from too."""
 
     points: np.ndarray
     inverse_kappa: np.ndarray
@@ -83,6 +84,7 @@ class Cloud:
     note: str
     s: np.ndarray | None = None
     poses: np.ndarray | None = None
+    home_assembly: tuple[np.ndarray, np.ndarray] | None = None
 
 
 class ViewUnavailable(ValueError):
@@ -170,10 +172,11 @@ def _closure_cloud(model: GeneratedModel, samples: int, limits: Limits | None) -
     orientation, with 1/kappa (:func:`symkin.analysis.closure_workspace.closure_workspace`)."""
     task = mechanism.task_space(model)
     axes = tuple(c for c in task if c in mechanism.POSITION_COMPONENTS)
+    start = closure_workspace.assemble_at_home(model)
     if not axes:
         return Cloud(np.zeros((0, 3)), np.zeros(0), np.zeros((0, len(model.info.coordinates))), None,
-                     "no workspace cloud: the platform's workspace is a set of orientations, not of points.")
-    start = closure_workspace.assemble_at_home(model)
+                     "no workspace cloud: the platform's workspace is a set of orientations, not of points.",
+                     home_assembly=start)
     cells = max(MIN_CLOSURE_CELLS, round(samples ** (1 / len(axes))))
     found = closure_workspace.closure_workspace(model, limits=limits, cells=cells, start=start)
     count = int(found.occupancy.occupied.sum())
@@ -189,7 +192,7 @@ def _closure_cloud(model: GeneratedModel, samples: int, limits: Limits | None) -
     note = (f"{int(reached.sum())} cells of {1000 * float(found.occupancy.cell.max()):.3g} mm reached by continuing "
             f"the loop closure from the home pose (the home assembly's working mode){orientation}{homogenized}.")
     return Cloud(_pad3(found.occupancy.centers()[reached], axes), found.inv_kappa[reached], found.q[reached],
-                 found.length, note, found.s[reached], poses)
+                 found.length, note, found.s[reached], poses, start)
 
 
 def no_cloud(model: GeneratedModel, limits: Limits | None = None) -> Cloud:
@@ -199,7 +202,8 @@ def no_cloud(model: GeneratedModel, limits: Limits | None = None) -> Cloud:
     n = len(model.info.coordinates)
     if _solved_through_closure(model):
         return Cloud(np.zeros((0, 3)), np.zeros(0), np.zeros((0, n)), None,
-                     "no workspace cloud (--workspace 0); 1/kappa of J unhomogenized (no characteristic length).")
+                     "no workspace cloud (--workspace 0); 1/kappa of J unhomogenized (no characteristic length).",
+                     home_assembly=closure_workspace.assemble_at_home(model))
     return Cloud(np.zeros((0, 3)), np.zeros(0), np.zeros((0, n)), _length(model, mechanism.joint_limits(model, limits)),
                  "no workspace cloud (--workspace 0).")
 
@@ -294,8 +298,8 @@ def page_data(model: GeneratedModel, cloud: Cloud, limits: Limits | None = None)
         units = [_slider_units("m" if c in mechanism.POSITION_COMPONENTS else "rad") for c in mechanism.task_space(model)]
         home = {"q": [0.0] * len(model.info.coordinates),
                 "p": [_on_grid(v, scale, step) for v, (scale, _, step) in zip(mechanism.home_pose(model), units)]}
-        if _solved_through_closure(model):  # the page continues the home assembly
-            q0, s0 = closure_workspace.assemble_at_home(model)
+        if cloud.home_assembly is not None:  # legs solved through their closure: the page continues it
+            q0, s0 = cloud.home_assembly
             home |= {"q": q0.tolist(), "s": s0.tolist()}
         wrist = _wrist(model)
         if wrist:  # a hybrid device: its wrist starts in the middle of its sliders
@@ -321,6 +325,9 @@ def page_data(model: GeneratedModel, cloud: Cloud, limits: Limits | None = None)
         data["tree"] = model.info.tree
     if kind == "parallel":
         data["task"] = _task(model, cloud, np.array(home["p"]))
+    if cloud.home_assembly is not None:  # the page's Gauss-Newton takes the analyses' settings
+        data["closure"] = {"max_step": closure_workspace.MAX_STEP, "tolerance": closure_workspace.SOLVE_TOLERANCE,
+                           "closed": closure_workspace.CLOSED, "iterations": closure_workspace.SOLVE_ITERATIONS}
     if "qw" in home:
         data["wrist"] = wrist
     return data

@@ -149,27 +149,27 @@ function closureJacobian(state) {
 }
 
 /** Gauss-Newton on the generated closure for (q, s) at the pose p from the assembly (q, s) nearby (steps on
- *  [Phi_q Phi_s] by least squares, each at most CLOSURE_STEP long), as symkin.runtime.parallel.solve_closure:
- *  {q, s} where the legs close (every row below CLOSED times the pose's scale), else null. */
-const TURN = 2 * Math.PI;
-const CLOSURE_STEP = 0.2, CLOSURE_TOLERANCE = 1e-12, CLOSED = 1e-9, CLOSURE_ITERATIONS = 50;
+ *  [Phi_q Phi_s] by least squares, each at most max_step long), as symkin.runtime.parallel.solve_closure with the
+ *  settings of symkin.analysis.closure_workspace (data.closure): {q, s} where the legs close (every row below
+ *  closed times the pose's scale), else null. */
 function solveClosure(q, s, p) {
+  const { max_step: maxStep, tolerance, closed, iterations } = data.closure;
   let x = [...q, ...s];
   const n = q.length, scale = Math.max(1, ...p.map(Math.abs));
-  for (let k = 0; k < CLOSURE_ITERATIONS; k++) {
+  for (let k = 0; k < iterations; k++) {
     const [qk, sk] = [x.slice(0, n), x.slice(n)];
     const phi = call("closure", qk, sk, p);
     const { Phi_q, Phi_s } = call("closure_jacobians", qk, sk, p);
     const step = leastSquares(Phi_q.map((row, i) => [...row, ...Phi_s[i]]), phi.map((v) => [-v]));
     if (step === null || !step.every((r) => Number.isFinite(r[0]))) return null;
     const longest = Math.max(...step.map((r) => Math.abs(r[0])));
-    const shrink = longest > CLOSURE_STEP ? CLOSURE_STEP / longest : 1;
+    const shrink = longest > maxStep ? maxStep / longest : 1;
     x = x.map((v, i) => v + shrink * step[i][0]);
-    if (longest <= CLOSURE_TOLERANCE) break;
+    if (longest <= tolerance) break;
   }
   const [qs, ss] = [x.slice(0, n), x.slice(n)];
   const residual = Math.max(...call("closure", qs, ss, p).map(Math.abs));
-  return residual <= CLOSED * scale ? { q: qs, s: ss } : null;
+  return residual <= closed * scale ? { q: qs, s: ss } : null;
 }
 
 /** 1/kappa = sigma_min / sigma_max of a rated task Jacobian ({raw, rated}); null where J is missing or not finite. */
@@ -215,9 +215,7 @@ function evaluate() {
     state.q = joints;
     const unreachable = margin.map((m, i) => (m >= 0 ? null : i + 1)).filter((i) => i !== null);
     if (unreachable.length) out.warnings.push(`out of reach of leg ${unreachable.join(", ")}`);
-    const limits = data.coordinates.map((c, i) => (joints[i] < c.lower || joints[i] > c.upper ? c.label : null))
-      .filter((n) => n !== null);
-    if (limits.length) out.warnings.push(`beyond the limits of ${limits.join(", ")}`);
+    warnBeyondLimits(joints, out);
     const rows = unreachable.length ? null : call("leg_points", joints, state.p);
     out.legs = rows && rows.map((_, k) => rows.slice(3 * k, 3 * k + 3)).slice(0, rows.length / 3);
     platformFrame(out);
@@ -247,15 +245,21 @@ function evaluateClosure(out) {
     out.warnings.push("the legs do not close at this pose from the last assembly (out of reach)");
   } else {
     // an angle is shown as its first representative at or above its lower limit (symkin.analysis.limits)
-    const wrap = (v, c) => (c.revolute ? c.lower + (((v - c.lower) % TURN) + TURN) % TURN : v);
+    const turn = 2 * Math.PI;
+    const wrap = (v, c) => (c.revolute ? c.lower + (((v - c.lower) % turn) + turn) % turn : v);
     Object.assign(state, { q: solved.q.map((v, i) => wrap(v, data.coordinates[i])), s: solved.s });
-    const limits = data.coordinates.map((c, i) => (state.q[i] < c.lower || state.q[i] > c.upper ? c.label : null))
-      .filter((n) => n !== null);
-    if (limits.length) out.warnings.push(`beyond the limits of ${limits.join(", ")}`);
+    warnBeyondLimits(state.q, out);
     const joints = call("leg_joints", state.q, state.s);
     out.legs = legNames.map((name) => joints[name]);
   }
   platformFrame(out);
+}
+
+/** A warning naming the actuators whose joints q lie beyond their limits, if any. */
+function warnBeyondLimits(q, out) {
+  const beyond = data.coordinates.map((c, i) => (q[i] < c.lower || q[i] > c.upper ? c.label : null))
+    .filter((n) => n !== null);
+  if (beyond.length) out.warnings.push(`beyond the limits of ${beyond.join(", ")}`);
 }
 
 /** The platform's position (the TCP shown) and frame at state.p. */
