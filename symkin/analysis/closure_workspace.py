@@ -402,21 +402,107 @@ def closure_workspace(model: GeneratedModel, *, orientation: dict[str, float] | 
     n, ns = _sizes(model)
     inv_kappa = np.full(len(reached), np.nan)
     rates = np.full((len(reached), len(task), n), np.nan)
-    rows = mechanism.position_rows(model)
-    poses = grid.poses[reached]
-    J = angular_rates(model, closure_velocities(model, flood.q[reached], flood.s[reached], poses).J, poses)
-    rates[reached] = J
-    determined = np.all(np.isfinite(J), axis=(-2, -1))
-    if len(rows) < len(task):
-        length = length if length is not None else conditioning.characteristic_length(J[determined], rows)
-        J = conditioning.homogenize(np.nan_to_num(J), length, rows)
-    values = np.where(determined, conditioning.inverse_condition_number(np.nan_to_num(J)), 0.0)
-    inv_kappa[reached] = values
+    local = closure_conditioning(model, flood.q[reached], flood.s[reached], grid.poses[reached], length)
+    rates[reached], inv_kappa[reached] = local.J, local.inv_kappa
     axes = tuple(c for c in task if c in mechanism.POSITION_COMPONENTS)
     return ClosureWorkspace(Occupancy(grid.lower, grid.cell, reached.reshape(grid.shape)),
                             inv_kappa.reshape(grid.shape), rates.reshape(grid.shape + (len(task), n)),
                             flood.q.reshape(grid.shape + (n,)), flood.s.reshape(grid.shape + (ns,)), template, axes,
-                            length if len(rows) < len(task) else None, (lower, upper))
+                            local.length, (lower, upper))
+
+
+@dataclass(frozen=True)
+class ClosureConditioning:
+    """1/kappa at assembled poses (:func:`closure_conditioning`).
+
+    Attributes:
+        inv_kappa: (K,) 1/kappa of J with its position rows divided by ``length`` (0 where J is not determined).
+        J: (K, m, n) dp/dq, its angle rows as angular velocity (:func:`angular_rates`), not homogenized.
+        length: the characteristic length used (None: the task space has no angles).
+    """
+
+    inv_kappa: np.ndarray
+    J: np.ndarray
+    length: float | None
+
+
+def closure_conditioning(model: GeneratedModel, q: np.ndarray, s: np.ndarray, poses: np.ndarray,
+                         length: float | None = None) -> ClosureConditioning:
+    """1/kappa of J = dp/dq (:func:`symkin.runtime.parallel.closure_velocities`) at the assembled (q, s, p) (K, .):
+    where the task space also has angles, its position rows divided by the characteristic length (given, or the
+    one minimizing the mean kappa_F^2 over these poses, :func:`symkin.analysis.conditioning.characteristic_length`)."""
+    task = mechanism.task_space(model)
+    rows = mechanism.position_rows(model)
+    J = angular_rates(model, closure_velocities(model, q, s, poses).J, poses)
+    determined = np.all(np.isfinite(J), axis=(-2, -1))
+    homogeneous = np.nan_to_num(J)
+    if len(rows) < len(task):
+        length = length if length is not None else conditioning.characteristic_length(J[determined], rows)
+        homogeneous = conditioning.homogenize(homogeneous, length, rows)
+    else:
+        length = None
+    values = np.where(determined, conditioning.inverse_condition_number(homogeneous), 0.0) if len(J) else np.zeros(0)
+    return ClosureConditioning(values, J, length)
+
+
+@dataclass(frozen=True)
+class BoxFlood:
+    """The working mode's cells of a grid over a box of positions (:func:`flood_box`), flattened.
+
+    Attributes:
+        poses: (K, m) the grid's task poses (its positions; the held angles of the home pose).
+        reached: (K,) whether the flood from the home assembly reached the pose through the grid.
+        q, s: (K, n), (K, ns) the assembly there (NaN where not reached).
+        shape: the grid's points per position axis.
+    """
+
+    poses: np.ndarray
+    reached: np.ndarray
+    q: np.ndarray
+    s: np.ndarray
+    shape: tuple[int, ...]
+
+
+def flood_box(model: GeneratedModel, lower: np.ndarray, upper: np.ndarray, counts: Sequence[int], *,
+              start: tuple[np.ndarray, np.ndarray], vertices: bool = False, limits: Limits | None = None) -> BoxFlood:
+    """The working mode of the home assembly ``start`` = (q, s) on a grid over the box [lower, upper] of the
+    task's positions, at the home pose's angles, flooded from the home pose through the grid's own cells only (a
+    cell joined to the rest only outside the box counts as not reached: the box is asked to be reachable in one
+    piece).  ``counts`` points per axis, at the cells' midpoints or (``vertices``) on the box's vertex grid with its
+    corners; an axis of one point lies at its box centre (a slice).  Nothing is reached when no straight path from
+    the home pose reaches the grid's cells nearest it."""
+    task = mechanism.task_space(model)
+    positions = np.array([c in mechanism.POSITION_COMPONENTS for c in task])
+    lower, upper = np.asarray(lower, float), np.asarray(upper, float)
+    points = np.asarray(counts, dtype=int)
+    single = points == 1
+    on_vertices = vertices & ~single
+    width: np.ndarray = np.where(on_vertices, (upper - lower) / np.maximum(points - 1, 1), (upper - lower) / points)
+    cell: np.ndarray = np.where(width > 0, width, np.max(width))  # a slice's axis: a cell as wide as the others
+    corner = np.where(on_vertices, lower - cell / 2, np.where(single, (lower + upper) / 2 - cell / 2, lower))
+    shape = tuple(int(c) for c in points)
+    home_pose = mechanism.home_pose(model)
+    grid = _grid(home_pose, positions, corner, cell, shape)
+    bounds = _Limits(mechanism.joint_limits(model, limits), mechanism.revolute_mask(model),
+                     passive.declared_limits(model))
+    try:
+        flood = _flood_grid(model, grid, positions, (np.asarray(start[0], float), np.asarray(start[1], float),
+                                                     home_pose), bounds)
+    except ValueError:  # no path from the home pose into the grid
+        n, ns = _sizes(model)
+        flood = _Flood(np.zeros(len(grid.poses), bool), np.full((len(grid.poses), n), np.nan),
+                       np.full((len(grid.poses), ns), np.nan))
+    return BoxFlood(grid.poses, flood.reached, flood.q, flood.s, shape)
+
+
+def continue_from(model: GeneratedModel, start: tuple[np.ndarray, np.ndarray, np.ndarray], targets: np.ndarray, *,
+                  step: float, limits: Limits | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(q, s, taken) at the task poses ``targets`` (K, m), each continued along a straight path from the
+    assembly start = (q, s, p) in steps of at most ``step`` (m; angles :data:`ANGLE_STEP`); taken is False where a
+    path leaves the working mode (a limit, a singularity, legs that do not close)."""
+    bounds = _Limits(mechanism.joint_limits(model, limits), mechanism.revolute_mask(model),
+                     passive.declared_limits(model))
+    return _march(model, start, np.asarray(targets, dtype=float), step, bounds)
 
 
 @dataclass(frozen=True)

@@ -37,16 +37,28 @@ over fixed sample points, so the objective is a smooth function of the design:
   min_j f_iso(p_j): of the design alone for a parallel model, of the design and the q_b for a
   serial one.
 
+* ``gci`` of a parallel model without closed forms (legs analysed through their loop closure,
+  :mod:`symkin.analysis.closure_workspace`): the same mean of 1/kappa_F over a midpoint grid of the
+  required box of positions, the angles held at the home pose's; each point p_j has its assembly
+  (q_j, s_j) as decision variables, constrained by the generated closure phi(q_j, s_j, p_j) = 0 (the rows
+  that are identically zero, e.g. a Schoenflies platform's roll and pitch rows, dropped: IPOPT needs
+  independent equality constraints), and J_j = dp/dq from Phi_p dp + Phi_s ds = -Phi_q dq by least
+  squares, [dp; ds] = -(A^T A)^-1 A^T Phi_q dq with A = [Phi_p Phi_s] (exact at an assembled pose where
+  A has full column rank: J is determined); roll-pitch-yaw rows as angular velocity (E(p) J) where the
+  task space has all three, position rows divided by the characteristic length.
+
 Constraints (the required box, inflated by the margin, sampled on a vertex grid with its
 corners): a serial model's box configurations q_b satisfy fk(q_b) = p_b within the joint
-limits (bounds of the variables); a parallel model's ``ik`` margin (the radicand of each
+limits (bounds of the variables); a closure model's (q_b, s_b) close the legs within the actuators' limits
+and the declared passive-joint limits (bounds), their start continued from the home assembly in the working
+mode (:func:`symkin.analysis.closure_workspace.continue_from`); a parallel model's ``ik`` margin (the radicand of each
 leg's solution) is >= 0 at every box point and objective node, and its actuated joints stay
 within their limits (declared or overridden), if any.  A bound m_max on the apparent mass at
 the handle (every eigenvalue of Lambda = (J M^-1 J^T)^-1, :func:`symkin.analysis.rating.apparent_mass`,
 at most m_max) holds at the same points as B = m_max J M^-1 J^T - 1 positive semidefinite:
 every principal minor of B >= 0 (smooth in the design, where an eigenvalue is not).
 
-Length: one program builder per kind of mechanism (serial, parallel) with its objectives and constraints; they
+Length: one program builder per kind of mechanism (serial, parallel, parallel through its closure) with its objectives and constraints; they
 share the mapping of per-point functions over the points and the box configurations, which would otherwise be
 passed between modules as private parts.
 """
@@ -60,7 +72,8 @@ from typing import Any, NamedTuple
 import casadi
 import numpy as np
 
-from symkin.analysis import forces, mechanism, sampling
+from symkin.analysis import closure_workspace, forces, mechanism, passive, sampling
+from symkin.analysis.limits import within_limits
 from symkin.design import smooth
 from symkin.design.problem import DesignProblem
 from symkin.runtime.info import GeneratedModel
@@ -199,7 +212,7 @@ def formulate(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model:
     values: dict[str, Any] = dict(problem.values)
     values.update({p.name: free[k] for k, p in enumerate(problem.free)})
     z = casadi.MX.sym("z", len(problem.free))
-    build = _parallel if problem.parallel else _serial
+    build = _closure if problem.closure else _parallel if problem.parallel else _serial
     terms = build(problem, casadi_model, numpy_model, free, values, z * scales, nodes, box_points, seed)
     free_values = casadi.MX.sym("free", len(problem.free))
     others = casadi.MX.sym("variables", terms.variables.numel())
@@ -437,3 +450,101 @@ def _force(problem: DesignProblem, numpy_model: GeneratedModel, node: casadi.SX,
                    "(ik margin >= 0)") + _bound_apparent_mass(problem, minors, g, lbg, ubg)
     return _Terms(bound * start, casadi.vertcat(*g), np.concatenate(lbg), np.concatenate(ubg), bound, np.ones(1),
                   np.zeros(1), np.full(1, np.inf), p, points, description, worst, (bound,))
+
+
+def _closure_bounds(problem: DesignProblem, model: GeneratedModel, n: int, ns: int) -> tuple[np.ndarray, np.ndarray]:
+    """(lower, upper), each (n + ns,): the bounds of one point's (q, s), the actuators' limits (problem.limits) and
+    the declared passive-joint limits; an angle whose limits span a full turn (a revolute joint without declared
+    limits) is unbounded (a bound at +-pi would stop it turning through pi as the design changes)."""
+    lower, upper = np.full(n + ns, -np.inf), np.full(n + ns, np.inf)
+    if problem.limits is not None:
+        turn = mechanism.revolute_mask(model) & (problem.limits[:, 1] - problem.limits[:, 0] >= 2 * np.pi)
+        lower[:n] = np.where(turn, -np.inf, problem.limits[:, 0])
+        upper[:n] = np.where(turn, np.inf, problem.limits[:, 1])
+    declared = passive.declared_limits(model)
+    if declared is not None:
+        lower[n + declared.columns], upper[n + declared.columns] = declared.bounds[:, 0], declared.bounds[:, 1]
+    return lower, upper
+
+
+def _closure_starts(problem: DesignProblem, model: GeneratedModel, poses: np.ndarray, lower: np.ndarray,
+                    upper: np.ndarray) -> np.ndarray:
+    """(P, n + ns): the start design's assembly at each pose, continued from its home assembly in the working mode
+    (straight paths in steps of 1/64 of the box), revolute joints shifted by 2 pi into their bounds.
+
+    Raises:
+        ValueError: a pose is not reached that way (the start design does not serve the box).
+    """
+    bound = model.bind(**problem.start)
+    home = closure_workspace.assemble_at_home(bound)
+    step = float(np.max(problem.inflated_box[1] - problem.inflated_box[0])) / 64
+    q, s, taken = closure_workspace.continue_from(bound, (*home, mechanism.home_pose(bound)), poses, step=step,
+                                                  limits=problem.limits)
+    if not taken.all():
+        missed = poses[~taken][0]
+        raise ValueError(f"{model.name}: the start design does not reach the required box from its home pose in the "
+                         f"working mode ({int(np.count_nonzero(~taken))} of {len(poses)} points missed, e.g. "
+                         f"{missed.round(6).tolist()}): start from a design that serves the box, or shrink it")
+    revolute = np.concatenate([mechanism.revolute_mask(bound),
+                               [unit == "rad" for unit in bound.info.functions["closure"].inputs[1].units]])
+    values = np.hstack([q, s])
+    finite = np.isfinite(lower)
+    shifted = within_limits(values[:, finite], np.stack([lower[finite], upper[finite]], axis=1), revolute[finite])[0]
+    values[:, finite] = np.where(revolute[finite], shifted, values[:, finite])
+    return values
+
+
+def _closure(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model: GeneratedModel, free: casadi.SX,
+             values: dict[str, Any], design: casadi.MX, nodes: int | None, box_points: int, seed: int) -> _Terms:
+    """The GCI over the required box of legs without closed forms, each point's assembly a decision variable (see
+    the module docstring)."""
+    per_axis = PARALLEL_NODES_PER_AXIS if nodes is None else nodes
+    task = mechanism.task_space(numpy_model)
+    positions = np.array([c in mechanism.POSITION_COMPONENTS for c in task])
+    template = mechanism.home_pose(numpy_model)
+
+    def poses(points: np.ndarray) -> np.ndarray:
+        result = np.repeat(template[None, :], len(points), axis=0)
+        result[:, positions] = points
+        return result
+
+    p = sampling.grid(*problem.required_box, per_axis)
+    corners = sampling.grid(*problem.inflated_box, box_points, midpoints=False)
+    targets = poses(np.concatenate([corners, p]))
+    inputs = numpy_model.info.functions["closure"].inputs
+    n, ns, m = (int(inputs[k].shape[0]) for k in range(3))
+    q, s, pose = casadi.SX.sym("q", n), casadi.SX.sym("s", ns), casadi.SX.sym("p", m)
+    arguments = {"q": q, "s": s, "p": pose, **values}
+    phi = _call(casadi_function(casadi_model, "closure"), arguments)[0]
+    rows = [i for i in range(phi.numel()) if not phi[i].is_zero()]
+    Phi_p, Phi_q, Phi_s = (block[rows, :] for block in _call(casadi_function(casadi_model, "closure_jacobians"),
+                                                                arguments))
+    A = casadi.horzcat(Phi_p, Phi_s)
+    J = casadi.solve(casadi.mtimes(A.T, A), -casadi.mtimes(A.T, Phi_q))[:m, :]
+    if {"roll", "pitch", "yaw"} <= set(task):
+        angles = [task.index(c) for c in ("roll", "pitch", "yaw")]
+        rates = casadi.SX.eye(m)
+        rates[angles, angles] = angular_velocity_matrix(pose[angles])
+        J = rates @ J
+    J = smooth.homogenized(J, problem.length, mechanism.position_rows(numpy_model))
+    per_point = _node_function("closure_terms", casadi.vertcat(q, s, pose), free,
+                               casadi.vertcat(phi[rows], smooth.inverse_frobenius(J)))
+    assemblies = casadi.MX.sym("assemblies", n + ns, len(targets))
+    terms = _mapped(per_point, casadi.vertcat(assemblies, casadi.DM(targets.T)), design)
+    objective = casadi.sum2(terms[len(rows), len(corners):]) / len(p)
+    lower, upper = _closure_bounds(problem, numpy_model, n, ns)
+    start = _closure_starts(problem, numpy_model, targets, lower, upper)
+    zeros = np.zeros(len(rows) * len(targets))
+    held = ", ".join(f"{c} = {template[k]:g}" for k, c in enumerate(task) if not positions[k])
+    description = (f"Frobenius GCI surrogate: mean 1/kappa_F over a {per_axis}^{p.shape[1]} midpoint grid of the "
+                   f"required box ({held} held; position rows divided by L = {problem.length:g} m)"
+                   if problem.length is not None else
+                   f"Frobenius GCI surrogate: mean 1/kappa_F over a {per_axis}^{p.shape[1]} midpoint grid of the "
+                   "required box")
+    description += (f", J by least squares from the closure at each point's assembly (q, s), a decision variable; "
+                    f"the box is required at {len(targets)} points (the {len(rows)} closure rows that are not "
+                    "identically zero = 0, the joints within their limits, started in the home assembly's working "
+                    "mode)")
+    return _Terms(objective, casadi.vec(terms[:len(rows), :]), zeros, zeros, casadi.vec(assemblies), start.ravel(),
+                  np.tile(lower, len(targets)), np.tile(upper, len(targets)), p, targets[:, positions], description,
+                  symbols=(assemblies,), configuration_count=assemblies.numel())

@@ -12,8 +12,8 @@ from typing import Any
 
 import numpy as np
 
-from symkin.analysis import global_indices, workspace
-from symkin.design.evaluate import Evaluation, parallel_index
+from symkin.analysis import closure_workspace, global_indices, workspace
+from symkin.design.evaluate import Evaluation, closure_home, parallel_index
 from symkin.design.problem import DesignProblem, box_axes
 from symkin.design.solve import Solution
 from symkin.runtime.info import GeneratedModel
@@ -22,6 +22,8 @@ DPI = 150
 #: Configurations drawn per serial workspace; points per axis of a parallel slice.
 CLOUD_SAMPLES = 20_000
 SLICE_POINTS = 121
+#: Points per axis of the slice of legs without closed forms (flooded cell by cell from the home assembly).
+CLOSURE_SLICE_POINTS = 61
 #: A parallel slice shows the required box grown by this fraction of its size on each side.
 SLICE_BORDER = 0.5
 
@@ -82,7 +84,8 @@ def _box_outline(ax: Any, problem: DesignProblem, axes: Sequence[int], scale: fl
     ax.legend(loc="lower left", fontsize=7)
 
 
-def _serial_panel(ax: Any, problem: DesignProblem, model: GeneratedModel) -> Any:
+def _serial_panel(ax: Any, problem: DesignProblem, model: GeneratedModel, design: dict[str, float]) -> Any:
+    model = model.bind(**design)
     cloud = workspace.sample_workspace(model, CLOUD_SAMPLES, method="sobol", limits=problem.limits, seed=0)
     values = global_indices.local_index(model, cloud.q, length=problem.length, limits=problem.limits)
     mesh = ax.scatter(cloud.points[:, 0], cloud.points[:, 1], c=values, s=2, linewidths=0, rasterized=True,
@@ -93,18 +96,39 @@ def _serial_panel(ax: Any, problem: DesignProblem, model: GeneratedModel) -> Any
     return mesh
 
 
-def _parallel_panel(ax: Any, problem: DesignProblem, model: GeneratedModel) -> Any:
-    """1/kappa on the vertical slice through the box centre (first and last axis)."""
+def _slice(problem: DesignProblem, points: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(U, V, lower, upper): the vertical slice through the box centre (first and last axis, the box grown by
+    SLICE_BORDER), as meshgrids of ``points`` a side, and its bounds in every axis (the others at the centre)."""
     lower, upper = problem.required_box
     border = SLICE_BORDER * (upper - lower)
     lo, hi = lower - border, upper + border
     first, last = 0, len(lower) - 1
-    u = np.linspace(lo[first], hi[first], SLICE_POINTS)
-    v = np.linspace(lo[last], hi[last], SLICE_POINTS)
-    U, V = np.meshgrid(u, v)
-    points = np.tile((lower + upper) / 2, (U.size, 1))
-    points[:, first], points[:, last] = U.ravel(), V.ravel()
-    values = parallel_index(model, points, problem.limits)[0].reshape(U.shape)
+    U, V = np.meshgrid(np.linspace(lo[first], hi[first], points), np.linspace(lo[last], hi[last], points))
+    centre = (lower + upper) / 2
+    lo[1:-1], hi[1:-1] = centre[1:-1], centre[1:-1]
+    return U, V, lo, hi
+
+
+def _parallel_panel(ax: Any, problem: DesignProblem, model: GeneratedModel, design: dict[str, float]) -> Any:
+    """1/kappa on the vertical slice through the box centre (first and last axis): by the closed-form ik, or for
+    legs without closed forms on the working mode's cells of the slice flooded from the design's home assembly."""
+    points_per_axis = CLOSURE_SLICE_POINTS if problem.closure else SLICE_POINTS
+    U, V, lo, hi = _slice(problem, points_per_axis)
+    first, last = 0, len(lo) - 1
+    if problem.closure:
+        bound = model.bind(**design)
+        counts = [points_per_axis if axis in (first, last) else 1 for axis in range(len(lo))]
+        flood = closure_workspace.flood_box(bound, lo, hi, counts, start=closure_home(problem, model, design),
+                                            vertices=True, limits=problem.limits)
+        reached = flood.reached
+        cells = np.zeros(len(reached))
+        cells[reached] = closure_workspace.closure_conditioning(bound, flood.q[reached], flood.s[reached],
+                                                                flood.poses[reached], problem.length).inv_kappa
+        values: np.ndarray = cells.reshape(points_per_axis, points_per_axis).T  # the grid's (u, v) -> the meshgrid's (v, u)
+    else:
+        points = np.tile(lo, (U.size, 1))
+        points[:, first], points[:, last] = U.ravel(), V.ravel()
+        values = parallel_index(model.bind(**design), points, problem.limits)[0].reshape(U.shape)
     scale, unit = (np.degrees(1.0), "deg") if problem.spherical else (1.0, "m")
     mesh = ax.pcolormesh(scale * U, scale * V, np.ma.masked_equal(values, 0.0), shading="auto", cmap="viridis",
                          vmin=0.0, vmax=1.0, rasterized=True)
@@ -128,7 +152,7 @@ def design_figure(problem: DesignProblem, model: GeneratedModel, solution: Solut
                                                         ("before", "after"))):
         ax = figure.add_subplot(1, 2, k + 1, sharex=first, sharey=first)
         first = first or ax
-        mesh = panel(ax, problem, model.bind(**design))
+        mesh = panel(ax, problem, model, design)
         ax.set_aspect("equal")
         ax.set_title(_label(problem, model.info.units, design, evaluation, which), fontsize=8)
     if mesh is not None:  # the two panels drew

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from symkin.analysis import mechanism, orientations
+from symkin.analysis import closure_workspace, mechanism, orientations
 from symkin.analysis.handle_measures import Actuation
 from symkin.runtime.info import GeneratedModel
 
@@ -60,6 +60,9 @@ class DesignProblem:
         max_apparent_mass: the largest apparent mass the handle may have (kg): every eigenvalue of
             (J M^-1 J^T)^-1 at every point of the required box at most this (a parallel model whose handle
             translates), else None.
+        closure: whether the model is a parallel one analysed through its loop closure (legs without closed forms,
+            :func:`symkin.analysis.closure_workspace.uses_closure`): its box is one of positions at the home pose's
+            angles, each point with its assembly (q, s) as variables of the program.
     """
 
     objective: str
@@ -73,6 +76,7 @@ class DesignProblem:
     spherical: bool = False
     effort_limits: np.ndarray | None = None
     max_apparent_mass: float | None = None
+    closure: bool = False
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -105,6 +109,10 @@ class DesignProblem:
         """The required box grown by the margin on every side."""
         assert self.box is not None
         return self.box[0] - self.margin, self.box[1] + self.margin
+
+
+#: The generated functions of a dimensioning problem on legs without closed forms (:func:`needed_functions`).
+CLOSURE_FUNCTIONS = ("closure", "closure_jacobians")
 
 
 def needed_functions(kind: mechanism.MechanismKind) -> tuple[str, ...]:
@@ -267,8 +275,13 @@ def design_problem(model: GeneratedModel, objective: str, free: Sequence[str], *
     if unknown:
         raise ValueError(f"{model.name}: not parameters of the model: {', '.join(unknown)}; "
                          f"parameters: {', '.join(sorted(model.parameters))}")
+    closure = closure_workspace.uses_closure(model)
+    if closure and (objective == "force" or max_apparent_mass is not None):
+        raise ValueError(f"{model.name}: its legs have no closed-form inverse kinematics; their dimensioning "
+                         "maximizes the GCI over the required box (--maximize gci), without force objectives or "
+                         "apparent-mass bounds (no dynamics is derived for such legs)")
     bound = _apparent_mass(model, max_apparent_mass)  # before asking for mass_matrix: a serial model is told why
-    needed = needed_functions(mechanism.kind_of(model))
+    needed = CLOSURE_FUNCTIONS if closure else needed_functions(mechanism.kind_of(model))
     used = _parameter_inputs(model, needed + (APPARENT_MASS_FUNCTIONS if bound is not None else ()))
     free_parameters = _free_parameters(model, list(free), dict(bounds or {}), values, used)
     required = _box(model, box)
@@ -299,7 +312,7 @@ def design_problem(model: GeneratedModel, objective: str, free: Sequence[str], *
             what = {"gci": "GCI", "force": "worst-case force"}.get(objective, objective)
             raise ValueError(f"{model.name}: the {what} of a parallel mechanism is taken over the required workspace "
                              f"box: give --require-box {','.join(f'{a}=LOWER:UPPER' for a in axes)} ({unit})")
-        if not spherical and len(mechanism.position_rows(model)) != len(task):
+        if not spherical and not closure and len(mechanism.position_rows(model)) != len(task):
             raise ValueError(f"{model.name}: the task space {list(task)} mixes positions and orientations; the GCI "
                              "of a parallel mechanism is taken over a box of TCP positions (such as the DELTA's) or "
                              "of a spherical platform's orientations (roll, pitch, yaw), not over both")
@@ -311,4 +324,4 @@ def design_problem(model: GeneratedModel, objective: str, free: Sequence[str], *
              if k in used and k not in {p.name for p in free_parameters}}
     return DesignProblem(objective, free_parameters, fixed, parallel, joint_box, required, float(margin), length,
                          parallel and orientations.is_spherical(model),
-                         _effort_limits(model, objective, effort_limits, required), bound)
+                         _effort_limits(model, objective, effort_limits, required), bound, closure)
