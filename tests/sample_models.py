@@ -16,3 +16,11 @@ def dual_scara_text() -> str:
     match = re.search(r"cat > dual_scara.yaml <<'EOF_MODEL'\n(.*?)^EOF_MODEL$", MODEL_FORMAT.read_text(), re.S | re.M)
     assert match, "docs/model-format.md lost the dual SCARA"
     return match.group(1)
+
+
+def dual_scara_dynamics_text() -> str:
+    """The dual SCARA with its link bodies, bar and rotors (docs/model-format.md, after "Legs of any topology"): the
+    model above with the gravity and bodies the document appends to it."""
+    match = re.search(r"<<'EOF_BODIES'\n(.*?)^EOF_BODIES$", MODEL_FORMAT.read_text(), re.S | re.M)
+    assert match, "docs/model-format.md lost the dual SCARA's bodies"
+    return dual_scara_text() + match.group(1)

@@ -179,7 +179,8 @@ def rate(model: GeneratedModel, actuation: Actuation, *, samples: int = 4096, se
 
 
 #: Why a platform on legs without closed forms has no apparent mass (nor a gravity budget) in its datasheet.
-NO_CLOSURE_DYNAMICS = ("no dynamics is derived for legs without closed forms (any topology): symkin rates their "
+NO_CLOSURE_DYNAMICS = ("the apparent mass of legs without closed forms (any topology) is not rated yet (their "
+                       "dynamics, the output closure_dynamics, are not part of the rating): symkin rates their "
                        "kinematics (forces, resolution, friction)")
 
 
@@ -194,7 +195,7 @@ def rate_closure_platform(model: GeneratedModel, actuation: Actuation, *, sample
     J = dp/dq at each reached cell from :func:`symkin.runtime.parallel.closure_velocities`: its position rows J_v
     rate the handle pushed with its angles free (forces with no moment, tau = J_v^T f, the translation's
     resolution and friction), its angle rows J_w (as angular velocity) the handle turned with its position free.
-    The home pose is the last sample.  No dynamics is derived for such legs (:data:`NO_CLOSURE_DYNAMICS`).
+    The home pose is the last sample.  Their apparent mass is not rated yet (:data:`NO_CLOSURE_DYNAMICS`).
     """
     from symkin.analysis import closure_workspace
     from symkin.runtime.parallel import closure_velocities

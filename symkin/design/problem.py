@@ -279,7 +279,7 @@ def design_problem(model: GeneratedModel, objective: str, free: Sequence[str], *
     if closure and (objective == "force" or max_apparent_mass is not None):
         raise ValueError(f"{model.name}: its legs have no closed-form inverse kinematics; their dimensioning "
                          "maximizes the GCI over the required box (--maximize gci), without force objectives or "
-                         "apparent-mass bounds (no dynamics is derived for such legs)")
+                         "apparent-mass bounds (their dynamics are not part of the dimensioning yet)")
     bound = _apparent_mass(model, max_apparent_mass)  # before asking for mass_matrix: a serial model is told why
     needed = CLOSURE_FUNCTIONS if closure else needed_functions(mechanism.kind_of(model))
     used = _parameter_inputs(model, needed + (APPARENT_MASS_FUNCTIONS if bound is not None else ()))

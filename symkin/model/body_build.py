@@ -70,14 +70,15 @@ def _negative(r: Reader, path: KeyPath, value: sympy.Expr, what: str) -> bool:
 
 
 #: keys of a parallel model's ``bodies:`` (:class:`~symkin.model.schema.ParallelBodies`)
-PARALLEL_BODY_KEYS = ("platform", "actuated_link", "distal_link", "rod", "rotor")
+PARALLEL_BODY_KEYS = ("platform", "actuated_link", "distal_link", "rod", "rotor", "links")
 _MASS_KEYS = ("mass", "com", "inertia", "inertia_rpy", "origin")
 
 
 def read_parallel_bodies(r: Reader, value: Any) -> ParallelBodies | None:
     """``bodies:`` of a parallel model: the platform, and on every leg the actuated link, the rod
     (point masses at its ends, or a slender rod with its inertia across it) or a spherical leg's distal
-    link, and the actuator's rotor."""
+    link, and the actuator's rotor; or, for legs without the distance form, the link each leg joint moves
+    (``links: {JOINT: {mass, com, inertia}}``, checked against the legs by :func:`check_leg_bodies`)."""
     path: KeyPath = ("bodies",)
     section = r.mapping(path, value, optional=PARALLEL_BODY_KEYS)
     if section is None:
@@ -100,6 +101,8 @@ def read_parallel_bodies(r: Reader, value: Any) -> ParallelBodies | None:
             amount = r.expr(path + (key, name), item[name])
             if amount is not None and not _negative(r, path + (key, name), amount, name.replace("_", " ")):
                 fields[field_name] = amount
+    if "links" in section:
+        fields["links"] = _leg_links(r, path + ("links",), section["links"])
     fraction = r.default_value(fields.get("rod_platform_fraction", ZERO))
     if fraction is not None and fraction > 1:
         r.fail(path + ("rod", "platform_fraction"), f"the fraction of the rod mass at the platform is {fraction:g}",
@@ -107,12 +110,44 @@ def read_parallel_bodies(r: Reader, value: Any) -> ParallelBodies | None:
     return ParallelBodies(**fields)
 
 
+def _leg_links(r: Reader, path: KeyPath, value: Any) -> tuple[Body, ...]:
+    """``links:`` - {leg joint name: mass properties of the link it moves}."""
+    if not isinstance(value, dict):
+        r.fail(path, f"expected a mapping, got {describe(value)}",
+               "write a mapping from leg joint names to {mass, com, inertia}, e.g. 'theta1: {mass: 0.1}'")
+        return ()
+    bodies = []
+    for key, item in value.items():
+        name = r.name(path + (key,), key)
+        item = r.mapping(path + (key,), item, required=("mass",), optional=_MASS_KEYS[1:])
+        if name is not None and item is not None and "mass" in item:
+            body = _mass_properties(r, path + (key,), item, name)
+            if body is not None:
+                bodies.append(body)
+    return tuple(bodies)
+
+
 def check_leg_bodies(r: Reader, parallel: Parallel) -> None:
     """A spherical leg's link between its last two joints is a ``distal_link`` (its axes fix its orientation); the
-    other legs' is a ``rod`` between its point joints."""
+    other legs' is a ``rod`` between its point joints; ``links:`` name joints of the legs, and do not mix with
+    the distance form's lumped bodies."""
     bodies = parallel.bodies
     if bodies is None:
         return
+    joints = [joint.name for leg in parallel.legs for joint in leg.joints]
+    for body in bodies.links:
+        if body.link not in joints:
+            close = difflib.get_close_matches(body.link, joints, n=1)
+            hint = f"did you mean '{close[0]}'? " if close else ""
+            r.fail(("bodies", "links", body.link), f"no leg joint named {describe(body.link)}",
+                   f"{hint}name the joint that moves the link, with its leg's number: {', '.join(joints)}")
+    lumped = [key for key, present in (("actuated_link", bodies.actuated_link is not None),
+                                       ("distal_link", bodies.distal_link is not None),
+                                       ("rod", bodies.rod_mass != 0 or bodies.rod_inertia is not None)) if present]
+    if bodies.links and lumped:
+        r.fail(("bodies", "links"), f"'links:' (a body per leg joint, for legs without the distance form) cannot be "
+               f"combined with {', '.join(lumped)} (the distance form's lumped bodies)",
+               "declare every leg body under 'links:', or none")
     spherical = parallel.motion is PlatformMotion.SPHERICAL
     if spherical and (bodies.rod_mass != 0 or bodies.rod_inertia is not None):
         r.fail(("bodies", "rod"), "a spherical leg has no rod between point joints: its last two joints turn about "

@@ -412,6 +412,9 @@ class ParallelBodies:
         rotor_inertia: each actuator's rotor inertia about its axis (motor side).
         gear_ratio: motor turns per actuated-joint turn (1: direct drive); the joint sees
             gear_ratio^2 rotor_inertia.
+        links: the links of legs without the distance form (``links:``), each a Body whose ``link`` is the leg
+            joint that moves it (e.g. ``theta1``), com and inertia in that joint's frame after its motion
+            (:mod:`symkin.parallel.closure_dynamics`).
     """
 
     platform: Body | None = None
@@ -422,6 +425,7 @@ class ParallelBodies:
     rod_inertia: sympy.Expr | None = None
     rotor_inertia: sympy.Expr = sympy.Integer(0)
     gear_ratio: sympy.Expr = sympy.Integer(1)
+    links: tuple[Body, ...] = ()
 
 
 #: The coordinates a platform may move in, in the order of the task coordinates p: position in the base

@@ -43,6 +43,7 @@ class LegChain:
         motions: every elementary motion, base to platform.
         end: the last joint's frame in the base frame (after all motions).
         attachment: the attachment frame B_i in the platform frame.
+        links: per joint, the frame of the link it moves (after all its motions) in the base frame.
     """
 
     leg: Leg
@@ -50,6 +51,7 @@ class LegChain:
     motions: tuple[Motion, ...]
     end: Frame
     attachment: Frame
+    links: tuple[Frame, ...] = ()
 
 
 def symbol(name: str) -> sympy.Symbol:
@@ -71,6 +73,7 @@ def walk(leg: Leg, start: MovingFrame | None = None, joints: slice = slice(None)
         moving.apply(leg.base)
     centres = []
     motions = []
+    links = []
     for joint in leg.joints[joints]:
         moving.apply(joint.origin)
         centres.append(sympy.ImmutableMatrix(moving.p))
@@ -82,7 +85,8 @@ def walk(leg: Leg, start: MovingFrame | None = None, joints: slice = slice(None)
                 moving.rotate(axis, amount)
             else:
                 moving.translate(tuple(c * amount for c in axis))
-    return LegChain(leg, tuple(centres), tuple(motions), moving.frame(), fixed_frame(leg.platform))
+        links.append(moving.frame())
+    return LegChain(leg, tuple(centres), tuple(motions), moving.frame(), fixed_frame(leg.platform), tuple(links))
 
 
 def platform_frame(model: Model) -> Frame:

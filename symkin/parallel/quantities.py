@@ -115,19 +115,20 @@ def _closure(d: Deriving) -> FunctionSpec:
     )
 
 
+def closure_jacobian_matrices(d: Deriving) -> tuple[sympy.ImmutableMatrix, ...]:
+    """(Phi_p, Phi_q, Phi_s) = d phi / d (p, q, s), from the joint screws (:class:`symkin.parallel.closure.LegClosure`;
+    a plain function, not a node of the graph: the derived quantities a manifest lists stay those of before)."""
+    task = task_symbols(d.model)
+    columns = [{**leg.joint_derivatives(), **leg.task_derivatives(task)} for leg in d[_leg_closures]]
+    return tuple(sympy.ImmutableMatrix([[leg.get(s, [0] * 6)[k] for s in symbols] for leg in columns for k in range(6)])
+                 for symbols in (task, coordinates.symbols(d.model, "q"), passive_symbols(d.model)))
+
+
 @quantity("closure_jacobians", "implicit Jacobians Phi_p, Phi_q, Phi_s of the loop closure", mechanism=PARALLEL)
 def _closure_jacobians(d: Deriving) -> FunctionSpec:
-    task = task_symbols(d.model)
-    columns: list[dict[sympy.Symbol, list[sympy.Expr]]] = []
-    for leg in d[_leg_closures]:
-        columns.append({**leg.joint_derivatives(), **leg.task_derivatives(task)})
-    groups = [("Phi_p", task, "p"), ("Phi_q", coordinates.symbols(d.model, "q"), "q"),
-              ("Phi_s", passive_symbols(d.model), "s")]
-    outputs = []
-    for name, symbols, wrt in groups:
-        rows = [[leg.get(s, [0] * 6)[k] for s in symbols] for leg in columns for k in range(6)]
-        outputs.append(OutputSpec(name, sympy.ImmutableMatrix(rows),
-                                  f"d phi / d {wrt}, rows as in closure(), one column per element of {wrt}"))
+    outputs = [OutputSpec(name, matrix, f"d phi / d {wrt}, rows as in closure(), one column per element of {wrt}")
+               for matrix, (name, wrt) in zip(closure_jacobian_matrices(d), (("Phi_p", "p"), ("Phi_q", "q"),
+                                                                              ("Phi_s", "s")))]
     return make_function(
         d.model, "closure_jacobians", "Implicit Jacobians of the loop closure.",
         "Differentiating Phi(q, s, p) = 0 gives Phi_p pdot + Phi_q qdot + Phi_s sdot = 0, the velocity "

@@ -67,9 +67,10 @@ class Plant:
         self.legs = len(info.coordinates)
         self._last_pose: tuple[np.ndarray | None, np.ndarray] = (None, np.empty(0))
         if uses_closure(model):
-            raise GeneratedCodeError(f"{model.name}: its legs have no closed forms (legs of any topology), and no "
-                                     "dynamics is derived for such legs, so it cannot be simulated; analyse it with "
-                                     "symkin workspace, gci, rate and mobility")
+            raise GeneratedCodeError(f"{model.name}: its legs have no closed forms (legs of any topology), which the "
+                                     "simulator does not integrate yet (their dynamics: the output closure_dynamics, "
+                                     "reduced by symkin.runtime.closure_dynamics); analyse it with symkin workspace, "
+                                     "gci, rate and mobility")
         required = REQUIRED_PARALLEL if self.parallel else REQUIRED
         missing = [name for name in required if name not in model.functions]
         if missing:

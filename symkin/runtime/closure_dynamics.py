@@ -1,0 +1,88 @@
+"""Dynamics of legs without the distance form in the actuated coordinates, from the generated ``closure_dynamics``.
+
+The generated function gives the Lagrangian terms over all the mechanism's variables z = (q, s, p) (M_z, h_z) and
+the closure's acceleration term gamma (:mod:`symkin.parallel.closure_dynamics`).  At an assembled state the
+closure allows the velocities zd = W qd,
+
+    W = [1; -A^+ Phi_q],   A = [Phi_s Phi_p]   (Phi_z zd = 0; A^+ the pseudo-inverse, exact where A has full
+                                                column rank: the passive joints and the platform are determined),
+
+and the accelerations zdd = W qdd + c with c = [0; -A^+ gamma] (Phi_z zdd + gamma = 0).  The constraint forces do no
+work on the allowed motions (d'Alembert), so projecting the Lagrange equations M_z zdd + h_z = Q onto them gives the
+actuator efforts
+
+    tau = M qdd + b,   M = W^T M_z W,   b = W^T (M_z c + h_z)
+
+(M includes the rotors' gear_ratio^2 J_rotor; b the Coriolis, centrifugal and gravity efforts).  Evaluate at an
+assembled (q, s, p) (:func:`symkin.runtime.parallel.solve_closure`).  No sympy: the generated functions only.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from symkin.runtime.info import GeneratedModel
+
+
+@dataclass(frozen=True)
+class ActuatedDynamics:
+    """The dynamics of an assembled state in the actuated coordinates (:func:`actuated_dynamics`).
+
+    Attributes:
+        M: (..., n, n) the mass matrix W^T M_z W (symmetric positive definite away from singularities).
+        bias: (..., n) the efforts at qdd = 0: Coriolis, centrifugal and gravity, W^T (M_z c + h_z).
+        W: (..., N, n) the velocities the closure allows, zd = W qd over z = (q, s, p).
+        zd: (..., N) the mechanism's velocities W qd.
+    """
+
+    M: np.ndarray
+    bias: np.ndarray
+    W: np.ndarray
+    zd: np.ndarray
+
+
+def actuated_dynamics(model: GeneratedModel, q, s, p, qd) -> ActuatedDynamics:
+    """M and the bias efforts in the actuated coordinates at an assembled (q, s, p) moving at qd (see the module
+    docstring); inputs broadcast against each other.  The model needs ``closure_jacobians`` and ``closure_dynamics``.
+    """
+    for name in ("closure_jacobians", "closure_dynamics"):
+        if name not in model.functions:
+            raise ValueError(f"{model.name}: the dynamics of legs without the distance form need the generated "
+                             f"'{name}' (derive with --only closure,closure_jacobians,closure_dynamics and declare "
+                             "bodies: links: and platform:)")
+    q, s, p, qd = (np.asarray(v, dtype=float) for v in (q, s, p, qd))
+    batch = np.broadcast_shapes(q.shape[:-1], s.shape[:-1], p.shape[:-1], qd.shape[:-1])
+    q, s, p, qd = (np.broadcast_to(v, batch + v.shape[-1:]).reshape(-1, v.shape[-1]) for v in (q, s, p, qd))
+    n, ns = q.shape[-1], s.shape[-1]
+    blocks = model.closure_jacobians(q, s, p)
+    Phi_q, Phi_s, Phi_p = (np.asarray(b, dtype=float).reshape(len(q), -1, b.shape[-1])
+                           for b in (blocks.Phi_q, blocks.Phi_s, blocks.Phi_p))
+    inverse = np.linalg.pinv(np.concatenate([Phi_s, Phi_p], axis=-1))
+    W = np.concatenate([np.broadcast_to(np.eye(n), (len(q), n, n)), -inverse @ Phi_q], axis=1)
+    zd = np.einsum("kij,kj->ki", W, qd)
+    terms = model.closure_dynamics(q, s, p, qd, zd[:, n:n + ns], zd[:, n + ns:])
+    M_z = np.asarray(terms.M_z, dtype=float).reshape(len(q), W.shape[1], W.shape[1])
+    h_z = np.asarray(terms.h_z, dtype=float).reshape(len(q), -1)
+    c = np.concatenate([np.zeros((len(q), n)),
+                        -np.einsum("kij,kj->ki", inverse, np.asarray(terms.gamma, dtype=float).reshape(len(q), -1))],
+                       axis=1)
+    WT = np.swapaxes(W, -1, -2)
+    M = WT @ M_z @ W
+    bias = np.einsum("kij,kj->ki", WT, np.einsum("kij,kj->ki", M_z, c) + h_z)
+    N = W.shape[1]
+    return ActuatedDynamics(M.reshape(batch + (n, n)), bias.reshape(batch + (n,)), W.reshape(batch + (N, n)),
+                           zd.reshape(batch + (N,)))
+
+
+def closure_inverse_dynamics(model: GeneratedModel, q, s, p, qd, qdd) -> np.ndarray:
+    """tau = M qdd + b: the actuator efforts (..., n) that move the assembled mechanism with qdd."""
+    terms = actuated_dynamics(model, q, s, p, qd)
+    return np.einsum("...ij,...j->...i", terms.M, np.asarray(qdd, dtype=float)) + terms.bias
+
+
+def closure_forward_dynamics(model: GeneratedModel, q, s, p, qd, tau) -> np.ndarray:
+    """qdd = M^-1 (tau - b): the actuated accelerations (..., n) under the actuator efforts tau."""
+    terms = actuated_dynamics(model, q, s, p, qd)
+    return np.linalg.solve(terms.M, (np.asarray(tau, dtype=float) - terms.bias)[..., None])[..., 0]
