@@ -20,6 +20,8 @@ from symkin.errors import DerivationError, ModelError
 from symkin.model import load_model, model_from_text
 from symkin.runtime.closure_dynamics import closure_forward_dynamics, closure_inverse_dynamics, actuated_dynamics
 from symkin.runtime.parallel import solve_closure
+from symkin.simulation import ArmSystem, Plant, run_adaptive
+from symkin.cli import main
 from tolerances import DYNAMICS
 
 D, L1, L2, E = 0.3, 0.25, 0.25, 0.1
@@ -140,6 +142,49 @@ def test_the_casadi_function_gives_the_numpy_terms(scara, scara_dir):
     for name in ("M_z", "h_z", "gamma"):
         expected, got = np.asarray(getattr(numpy_terms, name)), np.asarray(getattr(casadi_terms, name))
         assert np.max(np.abs(got.reshape(expected.shape) - expected)) <= DYNAMICS * np.max(np.abs(expected)), name
+
+
+def test_a_free_motion_keeps_its_energy(scara):
+    """Released from the home assembly with joint velocities and no efforts, under gravity: k + u stays constant
+    along DOP853's solution to rtol 1e-10 (the plant solves each state's assembly from the last).  A V_z that did
+    not follow from M_z, a missing closure acceleration c or a wrong W would change it by > 1e-4 J within 0.2 s."""
+    plant = Plant(scara)
+    system = ArmSystem(plant)
+    x0 = system.initial(plant.home_configuration, np.array([0.8, 0.05, -0.6, 0.7]))
+    run = run_adaptive(system.derivative, lambda t, x: np.zeros(4), x0, np.linspace(0.0, 0.2, 21))
+    state = system.split(run.x)
+    energy = plant.energy(state.q, state.qd)
+    scale = float(np.max(np.abs(energy)))
+    assert np.ptp(energy) <= 1e-8 * scale, (np.ptp(energy), scale)
+    assert np.ptp(state.q[:, 0]) > 0.1  # it moved
+
+
+def test_symkin_simulate_runs_the_haptic_wall_on_the_model_file(tmp_path):
+    """The model file derived on the fly with closure_dynamics (an optional output of the simulation), a 1 kHz
+    wall rendered against the hand for 0.1 s: the loop's power balance holds to the integrator's error."""
+    (tmp_path / "dual_scara.yaml").write_text(dual_scara_dynamics_text())
+    out = tmp_path / "wall"
+    assert main(["simulate", str(tmp_path / "dual_scara.yaml"), "--scenario", "haptic-wall", "--duration", "0.1",
+                 "--no-figure", "-o", str(out)]) == 0
+    summary = (out / "summary.txt").read_text()
+    drift = float(summary.split("energy balance drift ")[1].split()[0])
+    assert drift <= 1e-8, summary
+
+
+def test_the_datasheet_rates_the_apparent_mass_from_the_closure_dynamics(scara):
+    """With bodies, symkin rate's apparent mass (J_v M^-1 J_v^T)^-1 (the yaw free) over the working mode: along z the
+    handle moves with the lift alone and nothing else moves with z, so the smallest principal mass at every cell is
+    what rides on the lift, 0.45 kg, plus its rotor (closed form; the solves' rounding, kappa(M) <= 1e3, times
+    64 eps); the horizontal ones are heavier (the arms and their geared rotors)."""
+    from symkin.analysis import datasheet
+    from symkin.analysis.handle_measures import Actuation
+
+    sheet = datasheet.rate_closure_platform(scara, Actuation.of_model(scara, effort_limits=[1.0] * 4), samples=216,
+                                            limits={"lift1": (0.0, 0.2)})
+    measures = {measure.name: measure.values for measure in sheet.measures}
+    assert "apparent_mass" not in sheet.skipped
+    assert np.max(np.abs(measures["apparent_mass_min"] - (0.45 + ROTOR))) <= 1e3 * 64 * np.finfo(float).eps
+    assert np.all(measures["apparent_mass_max"] > 1.5 * measures["apparent_mass_min"])
 
 
 @pytest.mark.parametrize("bodies, message", [

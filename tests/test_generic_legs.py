@@ -397,14 +397,14 @@ def _geometry_jacobian(poses, elbow_sign, knee_sign):
 def test_the_rating_of_legs_without_closed_forms_is_that_of_the_geometrys_jacobian(scara):
     """datasheet.rate of the dual SCARA over its continued workspace: the isotropic force and the resolution are
     those of J = dp/dq written from the geometry (its x, y, z rows: the handle pushed with its yaw free), the torque
-    about z that of its yaw row; the apparent mass of such legs is not rated yet, and the
+    about z that of its yaw row; without bodies the apparent mass is not rated, and the
     datasheet says why; the home pose is the last sample."""
     from symkin.analysis import datasheet, forces, rating
 
     efforts, steps = np.array([1.0, 2.0, 1.0, 0.5]), np.array([1e-3, 1e-5, 1e-3, 2e-3])
     actuation = datasheet.Actuation.of_model(scara, effort_limits=efforts, joint_steps=steps)
     sheet = datasheet.rate(scara, actuation, samples=4000, limits={"lift1": STROKE})
-    assert "is not rated yet" in sheet.skipped["apparent_mass"]
+    assert "no mass properties" in sheet.skipped["apparent_mass"]
     np.testing.assert_allclose(sheet.points[sheet.home], HOME[:3], atol=KINEMATICS)
     q0, s0 = assemble_at_home(scara)
     poses = np.concatenate([sheet.points, np.zeros((len(sheet.points), 1))], axis=-1)
@@ -417,12 +417,12 @@ def test_the_rating_of_legs_without_closed_forms_is_that_of_the_geometrys_jacobi
 
 
 def test_the_simulation_says_what_analyses_legs_without_closed_forms(scara_dir):
-    """`symkin simulate` of the dual SCARA: no simulation (the simulator does not integrate such legs yet), and the
-    message says why instead of asking for outputs such legs cannot have."""
+    """`symkin simulate` of the dual SCARA without bodies: no simulation, and the message says what it needs (the
+    legs' closure_dynamics, from bodies) instead of asking for outputs such legs cannot have."""
     result = subprocess.run(SYMKIN_CLI + ["simulate", str(scara_dir), "-o", str(scara_dir.parent / "simulation")],
                             capture_output=True, text=True)
     assert result.returncode == 2
-    assert "which the simulator does not integrate yet" in result.stderr
+    assert "simulating them needs the generated closure_dynamics (declare bodies" in result.stderr
     assert not (scara_dir.parent / "simulation").exists()
 
 

@@ -179,8 +179,8 @@ def rate(model: GeneratedModel, actuation: Actuation, *, samples: int = 4096, se
 
 
 #: Why a platform on legs without closed forms has no apparent mass (nor a gravity budget) in its datasheet.
-NO_CLOSURE_DYNAMICS = ("the apparent mass of legs without closed forms (any topology) is not rated yet (their "
-                       "dynamics, the output closure_dynamics, are not part of the rating): symkin rates their "
+NO_CLOSURE_DYNAMICS = ("no mass properties: legs without closed forms (any topology) rate their apparent mass from the "
+                       "generated closure_dynamics (declare bodies: links: and platform:); symkin rates their "
                        "kinematics (forces, resolution, friction)")
 
 
@@ -195,9 +195,13 @@ def rate_closure_platform(model: GeneratedModel, actuation: Actuation, *, sample
     J = dp/dq at each reached cell from :func:`symkin.runtime.parallel.closure_velocities`: its position rows J_v
     rate the handle pushed with its angles free (forces with no moment, tau = J_v^T f, the translation's
     resolution and friction), its angle rows J_w (as angular velocity) the handle turned with its position free.
-    The home pose is the last sample.  Their apparent mass is not rated yet (:data:`NO_CLOSURE_DYNAMICS`).
+    The home pose is the last sample.  With the generated ``closure_dynamics`` (bodies declared), M = W^T M_z W
+    (:func:`symkin.runtime.closure_dynamics.actuated_dynamics`) gives the apparent mass (J_v M^-1 J_v^T)^-1 with the
+    angles free and the apparent inertia (J_w M^-1 J_w^T)^-1 with the position free; without it the apparent mass
+    is listed as not rated (:data:`NO_CLOSURE_DYNAMICS`).
     """
     from symkin.analysis import closure_workspace
+    from symkin.runtime.closure_dynamics import actuated_dynamics
     from symkin.runtime.parallel import closure_velocities
 
     held = closure_workspace.held_orientation(model, orientation)
@@ -217,8 +221,10 @@ def rate_closure_platform(model: GeneratedModel, actuation: Actuation, *, sample
             model, closure_velocities(model, home_q[None], home_s[None], home_pose[None]).J, home_pose[None])[0]
     else:
         nearest = int(np.argmin(np.linalg.norm(points - home_pose[positions], axis=-1)))
-        home_q, home_pose, home_J = found.q[reached][nearest], poses[nearest], found.J[reached][nearest]
+        home_q, home_s = found.q[reached][nearest], found.s[reached][nearest]
+        home_pose, home_J = poses[nearest], found.J[reached][nearest]
     q = np.concatenate([found.q[reached], home_q[None]])
+    s = np.concatenate([found.s[reached], home_s[None]])
     poses = np.concatenate([poses, home_pose[None]])
     points = poses[:, positions]
     J = np.concatenate([found.J[reached], home_J[None]])
@@ -227,14 +233,15 @@ def rate_closure_platform(model: GeneratedModel, actuation: Actuation, *, sample
     if box:
         keep &= _within(points, found.axes, box)
     keep = _usable(keep, conditioning, J_v, *([J_w] if angles else []))
-    q, points, poses, J_v, J_w = q[keep], points[keep], poses[keep], J_v[keep], J_w[keep]
+    q, s, points, poses, J_v, J_w = q[keep], s[keep], points[keep], poses[keep], J_v[keep], J_w[keep]
     if len(q) < 2:
         raise ValueError(f"{model.name}: no reached cell lies in the box {dict(box or {})} with 1/kappa >= "
                          f"{conditioning:g}")
-    measures, skipped = translation_measures(model, J_v, None, q, poses, actuation,
-                                             no_mass=NO_CLOSURE_DYNAMICS)
+    M = (actuated_dynamics(model, q, s, poses, np.zeros_like(q)).M if "closure_dynamics" in model.functions
+         else None)
+    measures, skipped = translation_measures(model, J_v, M, q, poses, actuation, no_mass=NO_CLOSURE_DYNAMICS)
     if angles:
-        measures += rotation_measures(J_w, None, actuation)
+        measures += rotation_measures(J_w, M, actuation)
     return Datasheet(model.name, q, points, found.axes, measures, len(q) - 1, skipped)
 
 

@@ -98,7 +98,8 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError(f"--conditioning must lie in [0, 1], got {conditioning:g}")
         box = analysis_args.parse_ranges(args.box, "--box", "AXIS")
         device = analysis_args.DEVICE_OUTPUTS if args.device else ()
-        models = model_files.load_models(args.model, (args.backend,), RATE_OUTPUTS, ("gravity_vector", *device))
+        models = model_files.load_models(args.model, (args.backend,), RATE_OUTPUTS,
+                                         ("gravity_vector", "closure_dynamics", *device))
         values = analysis_args.parse_assignments(args.assignments)
         model = analysis_args.device_view(args, models[0].bind(**values) if values else models[0])
         actuation = datasheet.Actuation.of_model(model, effort_limits=analysis_args.effort_limits(args.effort_limit,

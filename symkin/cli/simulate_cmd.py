@@ -20,7 +20,8 @@ SIMULATION_OUTPUTS = {MechanismKind.SERIAL: ("fk", "jacobian", "jacobian_geometr
                       MechanismKind.PARALLEL_POSE: ("ik", "inverse_jacobian") + DYNAMICS_OUTPUTS,
                       MechanismKind.PARALLEL_ORIENTATION: ("ik", "fk", "jacobian") + DYNAMICS_OUTPUTS}
 #: ... and a hybrid device's TCP (device_fk, device_actuator_jacobian), derived where the model has a wrist
-OPTIONAL_OUTPUTS = ("gravity_vector", "potential_energy", "friction", "device_fk", "device_actuator_jacobian")
+OPTIONAL_OUTPUTS = ("gravity_vector", "potential_energy", "friction", "device_fk", "device_actuator_jacobian",
+                    "closure_dynamics")
 SCENARIOS = ("sine", "tracking", "haptic-wall", "gravity-compensation", "free-swing")
 #: the integrator each scenario uses unless --integrator says otherwise
 DEFAULT_INTEGRATOR = {"sine": "dop853", "tracking": "rk4", "haptic-wall": "rk4", "gravity-compensation": "rk4",
@@ -33,7 +34,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Integrate the forward dynamics of a serial model, or of a parallel mechanism with a closed-form "
                     "fk (a DELTA, a pantograph, the Agile Eye: in its actuated joints, the platform at fk(q); a DELTA carrying a "
                     "wrist: in the legs' and the "
-                    "wrist's joints, the TCP the wrist's), with its generated functions. Scenarios: "
+                    "wrist's joints, the TCP the wrist's; legs without closed forms with bodies: in the actuated "
+                    "joints, the dynamics reduced through the loop closure, the assembly solved step by step from the "
+                    "home assembly), with its generated functions. Scenarios: "
                     "'sine' (seed sec. 5.3, Figs. 8.21, 8.22: one joint follows a sine, the others are fixed; joint "
                     "torques and TCP forces F = J^-T tau, checked by a forward simulation), 'tracking' (Fig. 8.17: a "
                     "TCP circle through inverse kinematics and computed-torque control), 'haptic-wall' (Fig. 8.18: a "

@@ -15,7 +15,7 @@ variables of every leg and the platform's task coordinates - where every body's 
 
 ``closure_dynamics`` returns, at (q, s, p) and rates zd = (qd, sd, pd):
 
-    M_z(z),    h_z = V_z + G_z  (V_z = C_z(z, zd) zd from the Christoffel symbols of M_z, G_z = du/dz),
+    M_z(z),    h_z = V_z + G_z  (V_z = C_z(z, zd) zd from the Christoffel symbols of M_z, G_z = du/dz),   u(z),
     gamma = d/dt (Phi_z) zd = sum_i d(Phi_z zd)/dz_i zd_i,
 
 with Phi_z = [Phi_q Phi_s Phi_p] the closure's Jacobians (:mod:`symkin.parallel.closure`), so that every motion
@@ -149,7 +149,7 @@ def _closure_dynamics(d: Deriving) -> FunctionSpec:
         model, "closure_dynamics", "Dynamics of legs without the distance form, over z = (q, s, p).",
         "The Lagrangian of every leg link (bodies.links), the platform and the rotors in all the mechanism's "
         "variables z = (q, s, p): M_z(z) (k = 1/2 zd^T M_z zd), h_z = V_z + G_z (Christoffel symbols of M_z; "
-        "G_z = du/dz), and gamma = d(Phi_z)/dt zd, so that an assembled motion has Phi_z zdd + gamma = 0 "
+        "G_z = du/dz), the potential energy u, and gamma = d(Phi_z)/dt zd, so that an assembled motion has Phi_z zdd + gamma = 0 "
         "(Phi_z = [Phi_q Phi_s Phi_p], closure_jacobians). With zd = W qd the velocities the closure allows, "
         "M = W^T M_z W and tau = W^T (M_z zdd + h_z) (symkin.runtime.closure_dynamics).",
         inputs,
@@ -157,5 +157,6 @@ def _closure_dynamics(d: Deriving) -> FunctionSpec:
          OutputSpec("h_z", sympy.ImmutableMatrix(V + G), "Coriolis, centrifugal and gravity terms over z",
                     shape=(len(z),)),
          OutputSpec("gamma", sympy.ImmutableMatrix(gamma), f"d(Phi_z)/dt zd, rows as in closure() ({rows})",
-                    shape=(gamma.shape[0],))],
+                    shape=(gamma.shape[0],)),
+         OutputSpec("u", sympy.ImmutableMatrix([u]), "potential energy (zero at the base origin)", "J", shape=())],
     )

@@ -14,7 +14,8 @@ actuator efforts
     tau = M qdd + b,   M = W^T M_z W,   b = W^T (M_z c + h_z)
 
 (M includes the rotors' gear_ratio^2 J_rotor; b the Coriolis, centrifugal and gravity efforts).  Evaluate at an
-assembled (q, s, p) (:func:`symkin.runtime.parallel.solve_closure`).  No sympy: the generated functions only.
+assembled (q, s, p) (:func:`symkin.runtime.parallel.solve_closure`); NaN in a state gives NaN.  No sympy: the
+generated functions only.
 """
 
 from __future__ import annotations
@@ -35,12 +36,28 @@ class ActuatedDynamics:
         bias: (..., n) the efforts at qdd = 0: Coriolis, centrifugal and gravity, W^T (M_z c + h_z).
         W: (..., N, n) the velocities the closure allows, zd = W qd over z = (q, s, p).
         zd: (..., N) the mechanism's velocities W qd.
+        potential: (...,) the potential energy u(z).
     """
 
     M: np.ndarray
     bias: np.ndarray
     W: np.ndarray
     zd: np.ndarray
+    potential: np.ndarray
+
+    def accelerations(self, tau) -> np.ndarray:
+        """qdd = M^-1 (tau - b) (..., n): the actuated accelerations under the actuator efforts tau."""
+        return np.linalg.solve(self.M, (np.asarray(tau, dtype=float) - self.bias)[..., None])[..., 0]
+
+    def efforts(self, qdd) -> np.ndarray:
+        """tau = M qdd + b (..., n): the actuator efforts that move the mechanism with qdd."""
+        return np.einsum("...ij,...j->...i", self.M, np.asarray(qdd, dtype=float)) + self.bias
+
+    @property
+    def kinetic(self) -> np.ndarray:
+        """(...,) k = 1/2 qd^T M qd = 1/2 zd^T M_z zd."""
+        qd = self.zd[..., :self.M.shape[-1]]
+        return 0.5 * np.einsum("...i,...ij,...j->...", qd, self.M, qd)
 
 
 def actuated_dynamics(model: GeneratedModel, q, s, p, qd) -> ActuatedDynamics:
@@ -59,7 +76,10 @@ def actuated_dynamics(model: GeneratedModel, q, s, p, qd) -> ActuatedDynamics:
     blocks = model.closure_jacobians(q, s, p)
     Phi_q, Phi_s, Phi_p = (np.asarray(b, dtype=float).reshape(len(q), -1, b.shape[-1])
                            for b in (blocks.Phi_q, blocks.Phi_s, blocks.Phi_p))
-    inverse = np.linalg.pinv(np.concatenate([Phi_s, Phi_p], axis=-1))
+    A = np.concatenate([Phi_s, Phi_p], axis=-1)
+    assembled = np.all(np.isfinite(A), axis=(-2, -1))  # NaN in, NaN out (an unassembled state)
+    inverse = np.full(np.swapaxes(A, -1, -2).shape, np.nan)
+    inverse[assembled] = np.linalg.pinv(A[assembled])
     W = np.concatenate([np.broadcast_to(np.eye(n), (len(q), n, n)), -inverse @ Phi_q], axis=1)
     zd = np.einsum("kij,kj->ki", W, qd)
     terms = model.closure_dynamics(q, s, p, qd, zd[:, n:n + ns], zd[:, n + ns:])
@@ -73,16 +93,14 @@ def actuated_dynamics(model: GeneratedModel, q, s, p, qd) -> ActuatedDynamics:
     bias = np.einsum("kij,kj->ki", WT, np.einsum("kij,kj->ki", M_z, c) + h_z)
     N = W.shape[1]
     return ActuatedDynamics(M.reshape(batch + (n, n)), bias.reshape(batch + (n,)), W.reshape(batch + (N, n)),
-                           zd.reshape(batch + (N,)))
+                           zd.reshape(batch + (N,)), np.asarray(terms.u, dtype=float).reshape(batch))
 
 
 def closure_inverse_dynamics(model: GeneratedModel, q, s, p, qd, qdd) -> np.ndarray:
     """tau = M qdd + b: the actuator efforts (..., n) that move the assembled mechanism with qdd."""
-    terms = actuated_dynamics(model, q, s, p, qd)
-    return np.einsum("...ij,...j->...i", terms.M, np.asarray(qdd, dtype=float)) + terms.bias
+    return actuated_dynamics(model, q, s, p, qd).efforts(qdd)
 
 
 def closure_forward_dynamics(model: GeneratedModel, q, s, p, qd, tau) -> np.ndarray:
     """qdd = M^-1 (tau - b): the actuated accelerations (..., n) under the actuator efforts tau."""
-    terms = actuated_dynamics(model, q, s, p, qd)
-    return np.linalg.solve(terms.M, (np.asarray(tau, dtype=float) - terms.bias)[..., None])[..., 0]
+    return actuated_dynamics(model, q, s, p, qd).accelerations(tau)

@@ -16,7 +16,8 @@ joints by the same tau = J^T F.
 A parallel mechanism (a DELTA, a pantograph, the Agile Eye) is a plant in its actuated coordinates q
 too: its generated dynamics take the platform pose p with q (symkin.parallel.dynamics), which the plant
 supplies from the closed-form forward kinematics, p = fk(q) (a spherical platform's orientation), so the
-state stays (q, qd).
+state stays (q, qd).  Legs without closed forms (the dual SCARA) take their dynamics reduced through the loop
+closure and their pose solved from the last one (:mod:`symkin.simulation.closure_functions`).
 
 A hybrid device (a DELTA carrying a wrist, symkin.parallel.hybrid) is a plant in its actuated
 coordinates z = (q, qw): the legs' then the wrist's joints, as its generated dynamics return
@@ -35,6 +36,7 @@ from symkin.analysis.conditioning import inverse_condition_number
 from symkin.analysis.device import DEVICE_TASK_SPACE
 from symkin.errors import GeneratedCodeError
 from symkin.runtime.info import GeneratedModel
+from symkin.simulation.closure_functions import PLANT_FUNCTIONS, ClosureFunctions
 
 #: Functions a plant cannot do without, and how to get them.
 REQUIRED = ("forward_dynamics", "inverse_dynamics", "mass_matrix", "kinetic_energy")
@@ -66,13 +68,11 @@ class Plant:
         self.hybrid = bool(info.wrist)
         self.legs = len(info.coordinates)
         self._last_pose: tuple[np.ndarray | None, np.ndarray] = (None, np.empty(0))
-        if uses_closure(model):
-            raise GeneratedCodeError(f"{model.name}: its legs have no closed forms (legs of any topology), which the "
-                                     "simulator does not integrate yet (their dynamics: the output closure_dynamics, "
-                                     "reduced by symkin.runtime.closure_dynamics); analyse it with symkin workspace, "
-                                     "gci, rate and mobility")
+        #: legs without closed forms: the dynamics reduced through the closure, the pose solved from the last one
+        self._closure = ClosureFunctions(model) if uses_closure(model) else None
+        functions = set(model.functions) | set(PLANT_FUNCTIONS if self._closure is not None else ())
         required = REQUIRED_PARALLEL if self.parallel else REQUIRED
-        missing = [name for name in required if name not in model.functions]
+        missing = [name for name in required if name not in functions]
         if missing:
             hint = (" (a closed-form fk: a DELTA, a pantograph, the Agile Eye; not a Stewart-Gough platform)"
                     if self.parallel and "fk" in missing else "")
@@ -105,7 +105,6 @@ class Plant:
         self.point_unit, self.force_unit = ("rad", "N m") if self.turning else ("m", "N")
         self._point_index = (self.point_rows if self.turning else
                              np.array([mechanism.POSITION_COMPONENTS.index(c) for c in self.point_axes], dtype=np.intp))
-        functions = set(model.functions)
         task_functions = {"device_fk", "device_actuator_jacobian"} if self.hybrid else {"fk", "jacobian"}
         self._point_error = None if self.point_rows.size and task_functions <= functions else (
             f"{self.name}: task-space simulation needs {' and '.join(sorted(task_functions))} and a task space with "
@@ -124,6 +123,8 @@ class Plant:
         the function takes them): a parallel mechanism's takes the platform pose p = fk(q) after q, a hybrid
         device's the wrist's part of each vector after the legs' (``qw`` after ``q``...), as its manifest names
         the inputs."""
+        if self._closure is not None:
+            return self._closure.function(name)
         function = getattr(self.model, name)
         if not self.parallel:
             return function
@@ -147,6 +148,8 @@ class Plant:
         The last q and its pose are kept: one step of the loop asks for the pose of one q up to five times
         (the TCP point and Jacobian, gravity compensation, the acceleration)."""
         q = np.asarray(q, dtype=float)[..., :self.legs]
+        if self._closure is not None:
+            return self._closure.pose(q)
         last_q, last_p = self._last_pose
         if last_q is not None and q.shape == last_q.shape and np.array_equal(q, last_q):
             return last_p
@@ -160,6 +163,8 @@ class Plant:
         (a hybrid device's wrist in the middle of its limits)."""
         if not self.parallel:
             return np.random.default_rng(7).uniform(-1.0, 1.0, self.dof)
+        if self._closure is not None:
+            return self._closure.home
         home = self.model.info.home
         legs = (np.asarray(self.model.ik(np.asarray(home, dtype=float)).joints, dtype=float)
                 if home is not None and "ik" in self.model.functions else np.zeros(self.legs))
@@ -167,7 +172,10 @@ class Plant:
 
     @property
     def home_configuration(self) -> np.ndarray | None:
-        """(n,): a serial device's declared rest configuration (``serial.home``), None where it declares none."""
+        """(n,): a serial device's declared rest configuration (``serial.home``), None where it declares none; legs
+        without closed forms: the actuators of their home assembly (at the declared home pose ``parallel.home``)."""
+        if self._closure is not None:
+            return self._closure.home
         declared = self.model.info.home_configuration
         return None if declared is None or self.parallel else np.array(declared, dtype=float)
 
