@@ -22,7 +22,7 @@ from symkin.runtime.closure_dynamics import closure_forward_dynamics, closure_in
 from symkin.runtime.parallel import solve_closure
 from symkin.simulation import ArmSystem, Plant, run_adaptive
 from symkin.cli import main
-from tolerances import DYNAMICS
+from tolerances import DYNAMICS, NEWTON
 
 D, L1, L2, E = 0.3, 0.25, 0.25, 0.1
 HOME = np.array([0.0, 0.3, 0.1, 0.0])
@@ -40,6 +40,8 @@ TREE = [("theta1", None, "R", [-D / 2, 0, 0], 0.3, [0.12, 0, 0], [0.0001, 0.0015
 #: The bar on leg 1's wrist, whose frame is the bar's attachment (-e, 0, 0): the bar's frame is e along x.
 BAR = (0.2, [0, 0.01, 0], [0.0001, 0.0003, 0.0004])
 ACTIVE = ("theta1", "lift1", "phi2", "knee2")
+#: The closure's rows that are not identically zero (each leg's x, y, z and yaw; all axes are vertical).
+CLOSURE_ROWS = [0, 1, 2, 5, 6, 7, 8, 11]
 PASSIVE = ("elbow1", "wrist1", "slide2", "hand2")
 
 
@@ -157,6 +159,28 @@ def test_a_free_motion_keeps_its_energy(scara):
     scale = float(np.max(np.abs(energy)))
     assert np.ptp(energy) <= 1e-8 * scale, (np.ptp(energy), scale)
     assert np.ptp(state.q[:, 0]) > 0.1  # it moved
+
+
+def test_the_plant_continues_the_home_assembly_to_a_far_configuration(scara):
+    """The plant's assembly at actuator positions 0.4 rad away is the home assembly continued (in steps of at most
+    0.2 rad: two here) and equals a continuation written here in 40 steps; a batch read after the plant moved
+    there gives the home pose back at the home configuration (solved from the home assembly, the nearer one)."""
+    from symkin.simulation.closure_functions import ClosureFunctions
+
+    functions = ClosureFunctions(scara)
+    home_q, home_s = functions.home, functions.assembly(functions.home)[0]
+    far = home_q + np.array([0.4, 0.05, -0.3, 0.3])
+    s, p = home_s, HOME
+    for fraction in np.linspace(0.0, 1.0, 41)[1:]:
+        report = solve_closure(scara, home_q + fraction * (far - home_q), s, p, unknowns=("p", "s"))
+        s, p = report.solution["s"], report.solution["p"]
+    s_far, p_far = functions.assembly(far)
+    blocks = scara.closure_jacobians(far, s, p)
+    kappa = float(np.linalg.cond(np.concatenate([blocks.Phi_s, blocks.Phi_p], axis=-1)[CLOSURE_ROWS]))
+    assert np.max(np.abs(np.concatenate([s_far - s, p_far - p]))) <= kappa * NEWTON
+    s_batch, p_batch = functions.assembly(np.stack([home_q, far]))
+    assert np.max(np.abs(p_batch[0] - HOME)) <= kappa * NEWTON
+    assert np.max(np.abs(p_batch[1] - p_far)) <= kappa * NEWTON
 
 
 def test_symkin_simulate_runs_the_haptic_wall_on_the_model_file(tmp_path):

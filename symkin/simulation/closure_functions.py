@@ -7,7 +7,9 @@ with a closed-form fk takes p = fk(q)).  Legs without closed forms have no fk: t
 from the last one (:func:`symkin.runtime.parallel.solve_closure`, unknowns p and s), which a simulation's steps keep
 near, so the mechanism stays in the assembly mode it starts in (the home assembly,
 :func:`symkin.analysis.closure_workspace.assemble_at_home`).  A batch of configurations (a recorded trajectory) is
-solved row by row, each from the previous row's assembly.
+solved row by row, each from the previous row's assembly or the home assembly, whichever is nearer, continued
+along the straight line of actuator positions in steps of at most MAX_STEP (a trajectory's first row, read after
+the run ended far from it, is not solved from the run's end).
 """
 
 from __future__ import annotations
@@ -48,31 +50,45 @@ class ClosureFunctions:
         except ValueError as error:
             raise GeneratedCodeError(str(error)) from None
         self.home = q
-        self._last = (q, s, np.asarray(model.info.home, dtype=float))
+        self._home = (q, s, np.asarray(model.info.home, dtype=float))
+        self._last = self._home
         self._last_dynamics: tuple[np.ndarray, np.ndarray, ActuatedDynamics] | None = None
 
+    def _solve(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """(q, s, p) at q, continued from the nearer (in the actuators) of the last assembly and the home assembly
+        along the straight line of actuator positions, in steps of at most MAX_STEP (one step within a simulation);
+        None where the legs stop closing on the way."""
+        start = min((self._last, self._home), key=lambda known: float(np.max(np.abs(q - known[0]))))
+        if np.array_equal(q, start[0]):
+            return start
+        steps = max(1, int(np.ceil(np.max(np.abs(q - start[0])) / MAX_STEP)))
+        s, p = start[1], start[2]
+        for fraction in np.linspace(0.0, 1.0, steps + 1)[1:]:
+            report = solve_closure(self.model, start[0] + fraction * (q - start[0]), s, p, unknowns=("p", "s"),
+                                   max_step=MAX_STEP)
+            solution = report.solution
+            assert isinstance(solution, dict), "solve_closure names its vectors"
+            if not report.all_converged:
+                return None
+            s, p = solution["s"], solution["p"]
+        return q.copy(), s, p
+
     def assembly(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(s, p) (..., ns), (..., m) at the actuated joints q, solved from the last assembly (row by row for a batch);
-        NaN where the legs do not close."""
+        """(s, p) (..., ns), (..., m) at the actuated joints q, each row continued from the last assembly or the home
+        assembly, whichever is nearer (row by row for a batch: a recorded trajectory from its start); NaN where the
+        legs do not close."""
         q = np.asarray(q, dtype=float)
         rows = q.reshape(-1, q.shape[-1])
         s, p = [], []
         for row in rows:
-            last_q, last_s, last_p = self._last
-            if np.array_equal(row, last_q):
-                s.append(last_s)
-                p.append(last_p)
-                continue
-            report = solve_closure(self.model, row, last_s, last_p, unknowns=("p", "s"), max_step=MAX_STEP)
-            solution = report.solution
-            assert isinstance(solution, dict), "solve_closure names its vectors"
-            if report.all_converged:
-                self._last = (row.copy(), solution["s"], solution["p"])
-                s.append(solution["s"])
-                p.append(solution["p"])
+            solved = self._solve(row)
+            if solved is None:
+                s.append(np.full_like(self._home[1], np.nan))
+                p.append(np.full_like(self._home[2], np.nan))
             else:
-                s.append(np.full_like(last_s, np.nan))
-                p.append(np.full_like(last_p, np.nan))
+                self._last = solved
+                s.append(solved[1])
+                p.append(solved[2])
         return np.reshape(s, q.shape[:-1] + (-1,)), np.reshape(p, q.shape[:-1] + (-1,))
 
     def pose(self, q: np.ndarray) -> np.ndarray:
