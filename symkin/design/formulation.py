@@ -527,11 +527,12 @@ def _closure(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model: 
         rates[angles, angles] = angular_velocity_matrix(pose[angles])
         J = rates @ J
     J = smooth.homogenized(J, problem.length, mechanism.position_rows(numpy_model))
-    per_point = _node_function("closure_terms", casadi.vertcat(q, s, pose), free,
-                               casadi.vertcat(phi[rows], smooth.inverse_frobenius(J)))
+    node = casadi.vertcat(q, s, pose)
     assemblies = casadi.MX.sym("assemblies", n + ns, len(targets))
-    terms = _mapped(per_point, casadi.vertcat(assemblies, casadi.DM(targets.T)), design)
-    objective = casadi.sum2(terms[len(rows), len(corners):]) / len(p)
+    columns = casadi.vertcat(assemblies, casadi.DM(targets.T))
+    residuals = _mapped(_node_function("closure_rows", node, free, phi[rows]), columns, design)
+    index = _node_function("inverse_frobenius", node, free, smooth.inverse_frobenius(J))
+    objective = casadi.sum2(_mapped(index, columns[:, len(corners):], design)) / len(p)  # the midpoints only
     lower, upper = _closure_bounds(problem, numpy_model, n, ns)
     start = _closure_starts(problem, numpy_model, targets, lower, upper)
     zeros = np.zeros(len(rows) * len(targets))
@@ -545,6 +546,6 @@ def _closure(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model: 
                     f"the box is required at {len(targets)} points (the {len(rows)} closure rows that are not "
                     "identically zero = 0, the joints within their limits, started in the home assembly's working "
                     "mode)")
-    return _Terms(objective, casadi.vec(terms[:len(rows), :]), zeros, zeros, casadi.vec(assemblies), start.ravel(),
+    return _Terms(objective, casadi.vec(residuals), zeros, zeros, casadi.vec(assemblies), start.ravel(),
                   np.tile(lower, len(targets)), np.tile(upper, len(targets)), p, targets[:, positions], description,
                   symbols=(assemblies,), configuration_count=assemblies.numel())
