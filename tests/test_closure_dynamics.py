@@ -230,3 +230,82 @@ def test_closure_dynamics_is_for_legs_without_the_distance_form():
     bare = model_from_text(dual_scara_dynamics_text().split("gravity:")[0], file="bare.yaml")
     with pytest.raises(DerivationError, match="needs the mass properties"):
         Derivation(bare)["closure_dynamics"]
+
+
+#: Friction the test declares on the actuators (viscous N m s/rad or N s/m, Coulomb N m or N).
+FRICTION = {"theta1": (0.02, 0.05), "lift1": (3.0, 0.8), "knee2": (0.01, 0.0)}
+
+
+@pytest.fixture(scope="module")
+def rubbing_dir(tmp_path_factory):
+    """The document's dual SCARA with friction on three actuators, derived for numpy and C; beside it the same
+    model derived without ``closure_dynamics`` and ``friction`` (sharing the derivation)."""
+    text = dual_scara_dynamics_text() + "friction:\n" + "".join(
+        f"  {joint}: {{viscous: {viscous}, coulomb: {coulomb}}}\n" for joint, (viscous, coulomb) in FRICTION.items())
+    model = model_from_text(text, file="rubbing.yaml")
+    derivation = Derivation(model)
+    out = tmp_path_factory.mktemp("rubbing")
+    full = pipeline.resolve_request(model, "closure,closure_jacobians,closure_dynamics,friction", "numpy,c",
+                                    fixed="all")
+    bare = pipeline.resolve_request(model, "closure,closure_jacobians", "numpy", fixed="all")
+    return (pipeline.write(pipeline.generate(model, full, derivation=derivation), out / "full"),
+            pipeline.write(pipeline.generate(model, bare, derivation=derivation), out / "bare"))
+
+
+def test_friction_enters_the_dynamics_as_efforts_against_the_motion(rubbing_dir):
+    """F_f = viscous qd + coulomb sign(qd) (written here from the declared coefficients) opposes the actuators:
+    the forward dynamics equals Pinocchio's constraintDynamics under the efforts tau - F_f, and the inverse
+    dynamics gives tau back (1e-9 relative, as without friction)."""
+    pin = pytest.importorskip("pinocchio")
+    from benchmarks.competitors import constraint_dynamics_of
+
+    rubbing = load(rubbing_dir[0])
+    tree, constraints, order = _pinocchio_tree(pin)
+    data, datas, _ = constraint_dynamics_of(pin, tree, constraints)
+    settings = pin.ProximalSettings(1e-14, 1e-6, 100)
+    active = [order.index(name) for name in ACTIVE]
+    passive = [order.index(name) for name in PASSIVE]
+    rng = np.random.default_rng(3108)
+    for q, s, p in _states(rubbing, 3, rng):
+        qd, tau = rng.uniform(-1, 1, 4), rng.uniform(-0.5, 0.5, 4) + [0, 4.4, 0, 0]
+        friction = np.array([FRICTION[name][0] * v + FRICTION[name][1] * np.sign(v) if name in FRICTION else 0.0
+                             for name, v in zip(ACTIVE, qd)])
+        zd = actuated_dynamics(rubbing, q, s, p, qd).zd
+        x, v, efforts = np.zeros(8), np.zeros(8), np.zeros(8)
+        x[active], x[passive], v[active], v[passive], efforts[active] = q, s, zd[:4], zd[4:8], tau - friction
+        reference = pin.constraintDynamics(tree, data, x, v, efforts, constraints, datas, settings)[active]
+        qdd = closure_forward_dynamics(rubbing, q, s, p, qd, tau)
+        assert np.max(np.abs(qdd - reference)) <= 1e-9 * np.max(np.abs(reference)), (qdd, reference)
+        back = closure_inverse_dynamics(rubbing, q, s, p, qd, reference)
+        assert np.max(np.abs(back - tau)) <= 1e-9 * np.max(np.abs(tau)), (back, tau)
+
+
+def test_the_c_library_gives_the_numpy_terms(rubbing_dir):
+    """closure_dynamics and friction compiled in C: each output within DYNAMICS of its largest entry."""
+    numpy_model, c_model = load(rubbing_dir[0]), load(rubbing_dir[0], "c")
+    (q, s, p), = _states(numpy_model, 1, np.random.default_rng(13))
+    rates = np.random.default_rng(14).uniform(-1, 1, 12)
+    numpy_terms = numpy_model.closure_dynamics(q, s, p, rates[:4], rates[4:8], rates[8:])
+    c_terms = c_model.closure_dynamics(q, s, p, rates[:4], rates[4:8], rates[8:])
+    for name in ("M_z", "h_z", "gamma", "u"):
+        expected, got = np.asarray(getattr(numpy_terms, name)), np.asarray(getattr(c_terms, name))
+        assert np.max(np.abs(got.reshape(expected.shape) - expected)) <= DYNAMICS * np.max(np.abs(expected)), name
+    expected = numpy_model.friction(rates[:4])
+    assert np.max(np.abs(c_model.friction(rates[:4]) - expected)) <= DYNAMICS * np.max(np.abs(expected))
+
+
+def test_a_plant_of_rubbing_legs_needs_their_friction(rubbing_dir):
+    """Without the generated friction its joints declare, the plant would simulate a frictionless device: refused,
+    naming what to derive."""
+    from symkin.errors import GeneratedCodeError
+
+    with pytest.raises(GeneratedCodeError, match="closure_dynamics, friction .*--only closure,closure_jacobians,"
+                                                 "closure_dynamics,friction"):
+        Plant(load(rubbing_dir[1]))
+    plant = Plant(load(rubbing_dir[0]))
+    q = plant.home_configuration
+    qd = np.array([0.3, -0.2, 0.0, 0.1])
+    assert np.array_equal(plant.friction(qd), load(rubbing_dir[0]).friction(qd))
+    # the plant's acceleration under the efforts that hold and move it with qdd = 0 is zero
+    hold = plant.torque(q, qd, np.zeros(4))
+    assert np.max(np.abs(plant.acceleration(q, qd, hold))) <= DYNAMICS * np.max(np.abs(hold))

@@ -64,6 +64,7 @@ from symkin.errors import DerivationError
 from symkin.ir.quantity import Deriving, quantity
 from symkin.ir.spec import FunctionSpec
 from symkin.model import coordinates
+from symkin.model.schema import Model
 from symkin.parallel import hybrid
 from symkin.parallel.distal import DistalLinks
 from symkin.parallel.inertia import Inertia, split_inertia
@@ -297,19 +298,6 @@ class ReducedDynamics:
         values = self.program.bind([se.diff(u_a, q) for q in self.q] + [se.diff(u_p, p) for p in self.c])
         return values[:self.n], values[self.n:]
 
-    def friction(self, qd: list[se.Basic]) -> list[se.Basic] | None:
-        """F_f of every coordinate (qd: the legs' then a wrist's rates), None without friction."""
-        if not self.d.model.friction:
-            return None
-        names = [c.name for c in self.d.model.coordinates]
-        if self.qw:
-            names += [j.name for j in hybrid.wrist_of(self.d.model).coordinates]
-        rates = dict(zip(names, qd))
-        forces = {name: se.Integer(0) for name in rates}
-        for f in self.d.model.friction:
-            forces[f.joint] = joint_friction(f, rates[f.joint])
-        return list(forces.values())
-
     def torques(self, qd: list[se.Basic], qdd: list[se.Basic] | None, with_gravity: bool = True,
                 with_friction: bool = True, wrist: tuple[list[se.Basic], list[se.Basic] | None] = ([], None),
                 motion: tuple[list[se.Basic], list[se.Basic]] | None = None) -> list[se.Basic]:
@@ -336,7 +324,7 @@ class ReducedDynamics:
             tau = [t + e for t, e in zip(tau, self.distal.efforts(self.leg_columns(), list(qd), pd[:self.n],
                                                                   accelerations, pdd[:self.n]))]
         tau += [se.Integer(0)] * len(qwd)  # a wrist's joints: their rows of B^T F_c and their friction
-        friction = self.friction(qd + list(qwd)) if with_friction else None
+        friction = actuator_friction(self.d.model, qd + list(qwd)) if with_friction else None
         if friction is not None:
             tau = [t + f for t, f in zip(tau, friction)]
         return [t + f for t, f in zip(tau, self.B_transpose(F_p))]
@@ -376,6 +364,21 @@ def device_inputs(d: Deriving, *groups: str) -> list:
         return ["q", task_input(d.model), *groups]
     return ["q", task_input(d.model), hybrid.wrist_input(d.model)] + \
         [spec for group in groups for spec in (group, hybrid.wrist_input(d.model, group))]
+
+
+def actuator_friction(model: Model, qd: list[se.Basic]) -> list[se.Basic] | None:
+    """F_f of every coordinate (qd: the legs' then a wrist's rates), None without friction.  It needs no leg
+    geometry: legs of any topology (with or without the distance form) have it."""
+    if not model.friction:
+        return None
+    names = [c.name for c in model.coordinates]
+    if hybrid.wrist_symbols(model, "q"):
+        names += [j.name for j in hybrid.wrist_of(model).coordinates]
+    rates = dict(zip(names, qd))
+    forces = {name: se.Integer(0) for name in rates}
+    for f in model.friction:
+        forces[f.joint] = joint_friction(f, rates[f.joint])
+    return list(forces.values())
 
 
 def _size(d: Deriving) -> int:
@@ -435,8 +438,8 @@ def _gravity_vector(d: Deriving) -> FunctionSpec:
 @quantity("friction", "actuator friction F_f(qd): viscous + Coulomb (n)", mechanism=PARALLEL)
 def _friction(d: Deriving) -> FunctionSpec:
     program = Program()
-    terms = ReducedDynamics(d, program)
-    F = terms.friction(coordinate_symbols(d, "qd") + terms.wrist("qd"))
+    wrist_rates = se_vector(hybrid.wrist_symbols(d.model, "qd"))
+    F = actuator_friction(d.model, coordinate_symbols(d, "qd") + wrist_rates)
     if F is None:
         raise DerivationError(f"{d.model.name}: the model declares no friction; add a 'friction:' section "
                               "or remove 'friction' from the outputs")
@@ -444,7 +447,7 @@ def _friction(d: Deriving) -> FunctionSpec:
         d, "friction", "Actuator friction efforts.",
         "F_f = viscous qd + coulomb sign(qd) per actuator (seed eq. 8.34), or coulomb tanh(qd / v_s) where the "
         "model gives a smoothing velocity v_s.",
-        ["qd"] + ([hybrid.wrist_input(d.model, "qd")] if terms.wrist("qd") else []), program,
+        ["qd"] + ([hybrid.wrist_input(d.model, "qd")] if wrist_rates else []), program,
         [("F_f", F, (_size(d),), "friction efforts opposing the motion", EFFORT_UNIT)])
 
 

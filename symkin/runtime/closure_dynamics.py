@@ -13,7 +13,8 @@ actuator efforts
 
     tau = M qdd + b,   M = W^T M_z W,   b = W^T (M_z c + h_z)
 
-(M includes the rotors' gear_ratio^2 J_rotor; b the Coriolis, centrifugal and gravity efforts).  Evaluate at an
+(M includes the rotors' gear_ratio^2 J_rotor; b the Coriolis, centrifugal and gravity efforts), plus the actuators'
+friction F_f(qd) where the model generates ``friction`` (tau = M qdd + b + F_f, seed eq. 8.34).  Evaluate at an
 assembled (q, s, p) (:func:`symkin.runtime.parallel.solve_closure`); NaN in a state gives NaN.  No sympy: the
 generated functions only.
 """
@@ -34,6 +35,7 @@ class ActuatedDynamics:
     Attributes:
         M: (..., n, n) the mass matrix W^T M_z W (symmetric positive definite away from singularities).
         bias: (..., n) the efforts at qdd = 0: Coriolis, centrifugal and gravity, W^T (M_z c + h_z).
+        friction: (..., n) the actuators' friction efforts F_f(qd) (zero where the model generates no ``friction``).
         W: (..., N, n) the velocities the closure allows, zd = W qd over z = (q, s, p).
         zd: (..., N) the mechanism's velocities W qd.
         potential: (...,) the potential energy u(z).
@@ -41,17 +43,18 @@ class ActuatedDynamics:
 
     M: np.ndarray
     bias: np.ndarray
+    friction: np.ndarray
     W: np.ndarray
     zd: np.ndarray
     potential: np.ndarray
 
     def accelerations(self, tau) -> np.ndarray:
-        """qdd = M^-1 (tau - b) (..., n): the actuated accelerations under the actuator efforts tau."""
-        return np.linalg.solve(self.M, (np.asarray(tau, dtype=float) - self.bias)[..., None])[..., 0]
+        """qdd = M^-1 (tau - b - F_f) (..., n): the actuated accelerations under the actuator efforts tau."""
+        return np.linalg.solve(self.M, (np.asarray(tau, dtype=float) - self.bias - self.friction)[..., None])[..., 0]
 
     def efforts(self, qdd) -> np.ndarray:
-        """tau = M qdd + b (..., n): the actuator efforts that move the mechanism with qdd."""
-        return np.einsum("...ij,...j->...i", self.M, np.asarray(qdd, dtype=float)) + self.bias
+        """tau = M qdd + b + F_f (..., n): the actuator efforts that move the mechanism with qdd."""
+        return np.einsum("...ij,...j->...i", self.M, np.asarray(qdd, dtype=float)) + self.bias + self.friction
 
     @property
     def kinetic(self) -> np.ndarray:
@@ -61,8 +64,9 @@ class ActuatedDynamics:
 
 
 def actuated_dynamics(model: GeneratedModel, q, s, p, qd) -> ActuatedDynamics:
-    """M and the bias efforts in the actuated coordinates at an assembled (q, s, p) moving at qd (see the module
-    docstring); inputs broadcast against each other.  The model needs ``closure_jacobians`` and ``closure_dynamics``.
+    """M, the bias and the friction efforts in the actuated coordinates at an assembled (q, s, p) moving at qd (see
+    the module docstring); inputs broadcast against each other.  The model needs ``closure_jacobians`` and
+    ``closure_dynamics`` (and ``friction`` for the friction efforts).
     """
     for name in ("closure_jacobians", "closure_dynamics"):
         if name not in model.functions:
@@ -91,16 +95,19 @@ def actuated_dynamics(model: GeneratedModel, q, s, p, qd) -> ActuatedDynamics:
     WT = np.swapaxes(W, -1, -2)
     M = WT @ M_z @ W
     bias = np.einsum("kij,kj->ki", WT, np.einsum("kij,kj->ki", M_z, c) + h_z)
+    friction = (np.asarray(model.friction(qd), dtype=float).reshape(len(q), n) if "friction" in model.functions
+                else np.zeros((len(q), n)))
     N = W.shape[1]
-    return ActuatedDynamics(M.reshape(batch + (n, n)), bias.reshape(batch + (n,)), W.reshape(batch + (N, n)),
-                           zd.reshape(batch + (N,)), np.asarray(terms.u, dtype=float).reshape(batch))
+    return ActuatedDynamics(M.reshape(batch + (n, n)), bias.reshape(batch + (n,)), friction.reshape(batch + (n,)),
+                            W.reshape(batch + (N, n)),
+                            zd.reshape(batch + (N,)), np.asarray(terms.u, dtype=float).reshape(batch))
 
 
 def closure_inverse_dynamics(model: GeneratedModel, q, s, p, qd, qdd) -> np.ndarray:
-    """tau = M qdd + b: the actuator efforts (..., n) that move the assembled mechanism with qdd."""
+    """tau = M qdd + b + F_f: the actuator efforts (..., n) that move the assembled mechanism with qdd."""
     return actuated_dynamics(model, q, s, p, qd).efforts(qdd)
 
 
 def closure_forward_dynamics(model: GeneratedModel, q, s, p, qd, tau) -> np.ndarray:
-    """qdd = M^-1 (tau - b): the actuated accelerations (..., n) under the actuator efforts tau."""
+    """qdd = M^-1 (tau - b - F_f): the actuated accelerations (..., n) under the actuator efforts tau."""
     return actuated_dynamics(model, q, s, p, qd).accelerations(tau)

@@ -28,22 +28,27 @@ from symkin.runtime.parallel import solve_closure
 #: The generated functions a plant asks for, which :class:`ClosureFunctions` provides for legs without closed forms.
 PLANT_FUNCTIONS = ("forward_dynamics", "inverse_dynamics", "mass_matrix", "kinetic_energy", "gravity_vector",
                    "potential_energy", "jacobian", "fk")
+#: The generated closure functions the plant needs.
+NEEDED = ("closure", "closure_jacobians", "closure_dynamics")
 
 
 class ClosureFunctions:
     """The dynamics of legs without closed forms as functions of the actuated joints (see the module docstring).
 
     Raises:
-        GeneratedCodeError: the model lacks ``closure_dynamics`` (no bodies declared) or its legs do not close at
-            the home pose.
+        GeneratedCodeError: the model lacks ``closure_dynamics`` (no bodies declared), or ``friction`` where its
+            joints declare friction, or its legs do not close at the home pose.
     """
 
     def __init__(self, model: GeneratedModel):
-        missing = [name for name in ("closure", "closure_jacobians", "closure_dynamics") if name not in model.functions]
+        missing = [name for name in NEEDED if name not in model.functions]
+        if "friction" not in model.functions and any(c.viscous is not None for c in model.info.coordinates):
+            missing.append("friction")  # it would silently read as zero
         if missing:
+            outputs = ",".join(NEEDED + (("friction",) if "friction" in missing else ()))
             raise GeneratedCodeError(f"{model.name}: its legs have no closed forms; simulating them needs the generated "
                                      f"{', '.join(missing)} (declare bodies: links: and platform:, and derive with "
-                                     "--only closure,closure_jacobians,closure_dynamics)")
+                                     f"--only {outputs})")
         self.model = model
         try:
             q, s = assemble_at_home(model)
@@ -133,6 +138,9 @@ class ClosureFunctions:
 
     def _gravity_vector(self, q):
         return self._at(q, at_rest=True).bias
+
+    def _friction(self, qd):
+        return self.model.friction(qd)
 
     def _kinetic_energy(self, q, qd):
         return self.dynamics(q, qd).kinetic
