@@ -33,6 +33,21 @@ NUMERIC_COMMANDS = (["--help"], ["gci", "--help"], ["gci", str(GENERATED_DIR / "
                     ["rate", str(GENERATED_DIR / "planar_2r"), "-n", "16", "--no-figure"])
 
 
+#: What the parser of every command may not import (issue 34: ``symkin --help`` at most 0.15 s more than importing
+#: numpy, benchmarks/bench_startup.py): the libraries a command imports when it runs.
+HEAVY_MODULES = ("sympy", "symengine", "casadi", "scipy", "matplotlib", "jinja2", "yaml", "dask", "mpmath",
+                 "symkin.analysis.conditioning", "symkin.design.formulation", "symkin.model")
+
+
+def test_the_parser_imports_no_heavy_library():
+    script = ("import sys\n"
+              "from symkin.cli import build_parser\n"
+              "build_parser()\n"
+              f"print(sorted(name for name in {HEAVY_MODULES!r} if name in sys.modules))\n")
+    result = subprocess.run([SYMKIN_CLI[0], "-c", script], capture_output=True, text=True, check=True)
+    assert result.stdout.strip() == "[]", result.stdout
+
+
 def test_help_and_numeric_commands_import_no_sympy(tmp_path):
     script = ("import sys; sys.modules['sympy'] = None\n"
               "from symkin.cli import main\n"

@@ -21,7 +21,7 @@ from symkin import design, load, pipeline
 from symkin.analysis import conditioning, mechanism
 from symkin.analysis.closure_workspace import angular_rates, continue_from
 from symkin.cli import main
-from symkin.design.evaluate import closure_home
+from symkin.design.evaluation import closure_home
 from symkin.model import model_from_text
 from symkin.runtime.parallel import closure_velocities, solve_closure
 from tolerances import NEWTON, svd

@@ -23,7 +23,7 @@ PACKAGE = Path(__file__).resolve().parent.parent / "symkin"
 
 #: Lowest first.  Each entry: the layer's name and its top-level modules or packages of symkin.
 LAYERS = (
-    ("foundation", {"_version", "errors", "atomic", "expression_dag", "symengine_bridge", "text_table"}),
+    ("foundation", {"_version", "errors", "atomic", "expression_dag", "symengine_bridge", "text_table", "lazy"}),
     ("model", {"model", "geometry"}),
     ("structure", {"structure"}),
     ("ir", {"ir"}),
@@ -38,7 +38,8 @@ LAYERS = (
 RANK = {part: rank for rank, (_name, parts) in enumerate(LAYERS) for part in parts}
 #: What each layer holds, for the table docs/architecture.md renders from LAYERS (checked below).
 ROLES = {
-    "foundation": "errors, atomic writes, the version, expression graphs, the SymEngine bridge, text tables",
+    "foundation": "errors, atomic writes, the version, expression graphs, the SymEngine bridge, text tables, "
+                  "packages imported lazily",
     "model": "the model format: reading, validating, the schema; geometry",
     "structure": "mobility and topology synthesis",
     "ir": "`FunctionSpec`, `OptimizedFunction`, inputs, op counts, `QuantityDef`",

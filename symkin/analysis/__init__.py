@@ -22,52 +22,48 @@ workspace and GCI, with the invariant measure of SO(3)), :mod:`~symkin.analysis.
 :mod:`~symkin.analysis.convergence` (run time against error).
 """
 
-from symkin.analysis.conditioning import (
-    characteristic_length,
-    condition_number,
-    frobenius_condition_number,
-    homogenize,
-    inverse_condition_number,
-    inverse_frobenius_condition_number,
-    manipulability,
-    singular_values,
-    transmission_indices,
-)
-from symkin.analysis.estimates import Estimate, IntegralEstimate
-from symkin.analysis.feasibility import InverseKinematics, feasible_configurations, reachable
-from symkin.analysis.global_indices import GlobalIndex, gci, global_index, workspace_measure
-from symkin.analysis.grids import index_grid, reachability_grid
-from symkin.analysis.integrators import INTEGRATORS, integrate
-from symkin.analysis.inverse import closed_form_inverse
-from symkin.analysis.workspace import Occupancy, WorkspaceCloud, bounding_box, occupancy_from_cloud, sample_workspace
+from __future__ import annotations
 
-__all__ = [
-    "INTEGRATORS",
-    "Estimate",
-    "GlobalIndex",
-    "IntegralEstimate",
-    "InverseKinematics",
-    "Occupancy",
-    "WorkspaceCloud",
-    "bounding_box",
-    "characteristic_length",
-    "closed_form_inverse",
-    "condition_number",
-    "feasible_configurations",
-    "frobenius_condition_number",
-    "gci",
-    "global_index",
-    "homogenize",
-    "index_grid",
-    "integrate",
-    "inverse_condition_number",
-    "inverse_frobenius_condition_number",
-    "manipulability",
-    "occupancy_from_cloud",
-    "reachability_grid",
-    "reachable",
-    "sample_workspace",
-    "singular_values",
-    "transmission_indices",
-    "workspace_measure",
-]
+from typing import TYPE_CHECKING
+
+from symkin.lazy import lazy_exports
+
+if TYPE_CHECKING:  # the names as the type checker sees them
+    from symkin.analysis.conditioning import (
+        characteristic_length,
+        condition_number,
+        frobenius_condition_number,
+        homogenize,
+        inverse_condition_number,
+        inverse_frobenius_condition_number,
+        manipulability,
+        singular_values,
+        transmission_indices,
+    )
+    from symkin.analysis.estimates import Estimate, IntegralEstimate
+    from symkin.analysis.feasibility import InverseKinematics, feasible_configurations, reachable
+    from symkin.analysis.global_indices import GlobalIndex, gci, global_index, workspace_measure
+    from symkin.analysis.grids import index_grid, reachability_grid
+    from symkin.analysis.integrators import INTEGRATORS, integrate
+    from symkin.analysis.inverse import closed_form_inverse
+    from symkin.analysis.workspace import (Occupancy, WorkspaceCloud, bounding_box, occupancy_from_cloud,
+                                           sample_workspace)
+
+#: Each public name and the module that defines it: imported when first asked for (PEP 562), so that importing one
+#: light module of the package (:mod:`~symkin.analysis.mechanism` for a command line parser) imports no other.
+_EXPORTS = {name: module for module, names in (
+    ("conditioning", ("characteristic_length", "condition_number", "frobenius_condition_number", "homogenize",
+                      "inverse_condition_number", "inverse_frobenius_condition_number", "manipulability",
+                      "singular_values", "transmission_indices",)),
+    ("estimates", ("Estimate", "IntegralEstimate",)),
+    ("feasibility", ("InverseKinematics", "feasible_configurations", "reachable",)),
+    ("global_indices", ("GlobalIndex", "gci", "global_index", "workspace_measure",)),
+    ("grids", ("index_grid", "reachability_grid",)),
+    ("integrators", ("INTEGRATORS", "integrate",)),
+    ("inverse", ("closed_form_inverse",)),
+    ("workspace", ("Occupancy", "WorkspaceCloud", "bounding_box", "occupancy_from_cloud", "sample_workspace",)),
+) for name in names}
+
+__all__ = sorted(_EXPORTS)
+
+__getattr__, __dir__ = lazy_exports(__name__, globals(), _EXPORTS)

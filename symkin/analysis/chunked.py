@@ -10,9 +10,9 @@ there from the model's :class:`~symkin.runtime.payload.ModelPayload` and an
 machine:
 
 * ``qmc``: replicate r is the scrambled Sobol sequence of 2^m points whose scrambling comes
-  from the seed sequence (seed, r) (scipy's ``qmc.Sobol``, its points k0 ... k1 reached by
-  ``fast_forward``); as in :func:`~symkin.analysis.sampling.sobol`, the digits below scipy's
-  30 bits are uniform random, here from the generator (seed, r, k0) of the chunk.  A task
+  from the seed sequence (seed, r) (:class:`~symkin.analysis.sobol.Sobol`, its points k0 ... k1
+  drawn alone); as in :func:`~symkin.analysis.sampling.sobol`, the digits below its 30 bits
+  are uniform random, here from the generator (seed, r, k0) of the chunk.  A task
   returns sum f over its points; the replicate means and the Student-t half-width of their
   spread are those of the in-memory integrator (Owen, "Monte Carlo theory, methods and
   examples", ch. 17);

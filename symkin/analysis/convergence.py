@@ -65,7 +65,7 @@ def reference_gci(model: GeneratedModel, *, samples: int = REFERENCE_SAMPLES, rt
 
 
 def _warm_up(model: GeneratedModel, methods: Sequence[str], domains: Sequence[str], seed: int, kwargs: dict) -> None:
-    """One small run of each integrator, so that one-time imports (scipy.stats) are not timed."""
+    """One small run of each integrator, so that one-time imports (scipy.special) are not timed."""
     for domain in domains:
         for method in methods:
             gci(model, method=method, samples=512, seed=seed, domain=domain, **kwargs)

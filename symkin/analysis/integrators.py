@@ -64,11 +64,11 @@ def monte_carlo_estimate(volume: float, mean: np.ndarray, covariance: np.ndarray
 
     ``covariance``: the sample covariance of f (divisor N - 1).
     """
-    from scipy.stats import norm
+    from scipy.special import ndtri
 
     return IntegralEstimate(values=volume * mean, evaluations=samples, method="mc",
                             covariance=np.atleast_2d(covariance) * volume**2 / samples,
-                            quantile=float(norm.ppf(0.5 + CONFIDENCE / 2)))
+                            quantile=float(ndtri(0.5 + CONFIDENCE / 2)))
 
 
 def quasi_monte_carlo(integrand: Integrand, samples: int, *, rng: np.random.Generator | None = None,
@@ -87,12 +87,12 @@ def quasi_monte_carlo(integrand: Integrand, samples: int, *, rng: np.random.Gene
 
 def quasi_monte_carlo_estimate(means: np.ndarray, evaluations: int) -> IntegralEstimate:
     """The mean of the replicate estimates (replicates, k) and the Student-t half-width of their spread."""
-    from scipy.stats import t
+    from scipy.special import stdtrit
 
     replicates = len(means)
     return IntegralEstimate(values=means.mean(axis=0), evaluations=evaluations, method="qmc",
                             covariance=np.atleast_2d(np.cov(means, rowvar=False)) / replicates,
-                            quantile=float(t.ppf(0.5 + CONFIDENCE / 2, replicates - 1)))
+                            quantile=float(stdtrit(replicates - 1, 0.5 + CONFIDENCE / 2)))
 
 
 def adaptive_integrator(integrand: Integrand, samples: int, *, rng: np.random.Generator | None = None,

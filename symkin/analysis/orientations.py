@@ -28,6 +28,7 @@ from symkin.analysis.global_indices import GlobalIndex
 from symkin.analysis.integrand import Integrand
 from symkin.analysis.integrators import integrate
 from symkin.analysis.limits import within_limits
+from symkin.analysis.sobol import Sobol
 from symkin.analysis.mechanism import Limits
 from symkin.analysis.parallel import angular_velocity_matrix
 from symkin.runtime.info import GeneratedModel
@@ -114,11 +115,9 @@ def orientation_cloud(model: GeneratedModel, samples: int = 2**14, *, seed: int 
     """(p, 1/kappa): the reachable orientations among ``samples`` (rounded up to a power of 2) scrambled Sobol
     points of the roll-pitch-yaw box (their density in the chart is uniform, not Haar: a picture; the measure is
     :func:`orientation_gci`'s)."""
-    from scipy.stats import qmc
-
     integrand = orientation_integrand(model, box, limits=limits)
-    unit = qmc.Sobol(3, seed=seed).random_base2(max(1, int(np.ceil(np.log2(samples)))))
-    points = qmc.scale(unit, integrand.lower, integrand.upper)
+    unit = Sobol(3, np.random.default_rng(seed)).points(0, 2**max(1, int(np.ceil(np.log2(samples)))))
+    points = unit * (integrand.upper - integrand.lower) + integrand.lower
     values = integrand.function(points)
     reachable = values[:, 1] > 0  # the weight |cos pitch| of a reachable orientation (pitch = +-90 deg: never drawn)
     return points[reachable], values[reachable, 0] / values[reachable, 1]

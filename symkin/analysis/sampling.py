@@ -10,6 +10,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from symkin.analysis.sobol import BITS, Sobol
+
 
 def _box(lower: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     lower = np.atleast_1d(np.asarray(lower, dtype=np.float64))
@@ -54,17 +56,13 @@ def uniform(lower: np.ndarray, upper: np.ndarray, count: int, rng: np.random.Gen
     return lower + rng.random((count, lower.size)) * (upper - lower)
 
 
-#: Digits of the scrambled Sobol points that scipy computes (its default); the digits
-#: beyond are drawn uniformly at random (see :func:`sobol`).
-SOBOL_BITS = 30
-
-
 def sobol(lower: np.ndarray, upper: np.ndarray, log2_count: int, rng: np.random.Generator,
           replicates: int | None = None) -> np.ndarray:
     """Scrambled Sobol points in the box: 2**log2_count points, or ``replicates`` independent sets of them.
 
-    Each set is an independent scramble of scipy.stats.qmc's Sobol sequence (random
-    linear matrix scramble and digital shift).  scipy computes 30 digits, so every point
+    Each set is an independent scramble of the Sobol sequence (random linear matrix scramble
+    and digital shift, :class:`symkin.analysis.sobol.Sobol`, drawn from a child of ``rng`` as
+    scipy.stats.qmc.Sobol does: the same points).  It has 30 digits, so every point
     would sit on the lower corner of its 2^-30 cell, a bias of about 1e-10 that randomized
     QMC reaches at 2^18 points; the remaining digits are therefore drawn uniformly at
     random, which makes every point exactly uniform (unbiased estimates) and keeps the
@@ -74,13 +72,10 @@ def sobol(lower: np.ndarray, upper: np.ndarray, log2_count: int, rng: np.random.
     Returns:
         (2**log2_count, d) points, or (replicates, 2**log2_count, d).
     """
-    from scipy.stats import qmc
-
     lower, upper = _box(lower, upper)
     count = 1 if replicates is None else replicates
-    sets = np.stack([qmc.Sobol(d=lower.size, scramble=True, bits=SOBOL_BITS, rng=rng).random_base2(log2_count)
-                     for _ in range(count)])
-    unit = sets + rng.random(sets.shape) * 2.0**-SOBOL_BITS
+    sets = np.stack([Sobol(lower.size, rng.spawn(1)[0]).points(0, 2**log2_count) for _ in range(count)])
+    unit = sets + rng.random(sets.shape) * 2.0**-BITS
     points = lower + unit * (upper - lower)
     return points[0] if replicates is None else points
 
@@ -88,19 +83,10 @@ def sobol(lower: np.ndarray, upper: np.ndarray, log2_count: int, rng: np.random.
 def sobol_range(dimension: int, key: Sequence[int], start: int, stop: int) -> np.ndarray:
     """Points start ... stop - 1 (in the unit cube) of one scrambled Sobol sequence, drawn without the others.
 
-    The scramble comes from the seed sequence ``key``, the digits beyond :data:`SOBOL_BITS`
+    The scramble comes from the seed sequence ``key``, the digits beyond :data:`~symkin.analysis.sobol.BITS`
     from the generator (``*key``, start), as in :func:`sobol`: a chunk of a sequence can be
     drawn by any process from its definition alone (the chunked integrators and workspace).
     """
-    import warnings
-
-    from scipy.stats import qmc
-
-    sequence = qmc.Sobol(dimension, scramble=True, bits=SOBOL_BITS,
-                         rng=np.random.default_rng(np.random.SeedSequence(list(key))))
-    if start:
-        sequence.fast_forward(start)
-    with warnings.catch_warnings():  # a chunk need not be a power of 2: the sequence as a whole is
-        warnings.simplefilter("ignore", UserWarning)
-        unit = sequence.random(stop - start)
-    return unit + np.random.default_rng([*key, start]).random(unit.shape) * 2.0**-SOBOL_BITS
+    sequence = Sobol(dimension, np.random.default_rng(np.random.SeedSequence(list(key))).spawn(1)[0])
+    unit = sequence.points(start, stop)
+    return unit + np.random.default_rng([*key, start]).random(unit.shape) * 2.0**-BITS

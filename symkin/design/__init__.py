@@ -8,20 +8,39 @@
 :mod:`~symkin.design.problem` (free parameters, bounds, required box; refusals),
 :mod:`~symkin.design.smooth` (1/kappa_F of CasADi Jacobians),
 :mod:`~symkin.design.formulation` (the nonlinear program over the generated CasADi functions),
-:mod:`~symkin.design.solve` (IPOPT, history, run times),
-:mod:`~symkin.design.evaluate` (true GCI with error estimates and box reachability on the numpy code),
+:mod:`~symkin.design.solving` (IPOPT, history, run times),
+:mod:`~symkin.design.evaluation` (true GCI with error estimates and box reachability on the numpy code),
 :mod:`~symkin.design.plots` (figures); design sweeps: :func:`sweep` (:mod:`~symkin.design.sweep_run`) over
 :mod:`~symkin.design.sweeps`, :mod:`~symkin.design.sweep_metrics`, :mod:`~symkin.design.sweep_store` and
 :mod:`~symkin.design.sweep_plots`.  Not to be confused with :mod:`symkin.optimize`, the
 expression optimizer of the code generator.
 """
 
-from symkin.design.evaluate import Evaluation, evaluate
-from symkin.design.formulation import DesignProgram, formulate
-from symkin.design.problem import (APPARENT_MASS_FUNCTIONS, OBJECTIVES, DesignProblem, FreeParameter, design_problem,
-                                  needed_functions)
-from symkin.design.solve import Solution, solve
-from symkin.design.sweep_run import sweep
+from __future__ import annotations
 
-__all__ = ["APPARENT_MASS_FUNCTIONS", "OBJECTIVES", "DesignProblem", "Evaluation", "FreeParameter", "DesignProgram",
-           "Solution", "design_problem", "evaluate", "formulate", "needed_functions", "solve", "sweep"]
+from typing import TYPE_CHECKING
+
+from symkin.lazy import lazy_exports
+
+if TYPE_CHECKING:  # the names as the type checker sees them
+    from symkin.design.evaluation import Evaluation, evaluate
+    from symkin.design.formulation import DesignProgram, formulate
+    from symkin.design.problem import (APPARENT_MASS_FUNCTIONS, OBJECTIVES, DesignProblem, FreeParameter,
+                                      design_problem, needed_functions)
+    from symkin.design.solving import Solution, solve
+    from symkin.design.sweep_run import sweep
+
+#: Each public name and the module that defines it: imported when first asked for (PEP 562), so that a command
+#: line parser reading :mod:`~symkin.design.sweep_metrics` does not import CasADi and the analyses.
+_EXPORTS = {
+    "APPARENT_MASS_FUNCTIONS": "problem", "OBJECTIVES": "problem", "DesignProblem": "problem",
+    "FreeParameter": "problem", "design_problem": "problem", "needed_functions": "problem",
+    "Evaluation": "evaluation", "evaluate": "evaluation",
+    "DesignProgram": "formulation", "formulate": "formulation",
+    "Solution": "solving", "solve": "solving",
+    "sweep": "sweep_run",
+}
+
+__all__ = sorted(_EXPORTS)
+
+__getattr__, __dir__ = lazy_exports(__name__, globals(), _EXPORTS)

@@ -31,7 +31,7 @@ import casadi
 import numpy as np
 
 from symkin.design.formulation import casadi_function
-from symkin.design.solve import IPOPT_OPTIONS
+from symkin.design.solving import IPOPT_OPTIONS
 from symkin.runtime.info import GeneratedModel
 
 #: How much of each joint range the start's motion uses (a small motion about the middle of the limits).

@@ -13,9 +13,9 @@ from typing import Any
 import numpy as np
 
 from symkin.analysis import closure_workspace, global_indices, workspace
-from symkin.design.evaluate import Evaluation, closure_home, parallel_index
+from symkin.design.evaluation import Evaluation, closure_home, parallel_index
 from symkin.design.problem import DesignProblem, box_axes
-from symkin.design.solve import Solution
+from symkin.design.solving import Solution
 from symkin.runtime.info import GeneratedModel
 
 DPI = 150

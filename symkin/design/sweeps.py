@@ -3,7 +3,7 @@
 The one-call entry point is :func:`symkin.design.sweep` (:mod:`symkin.design.sweep_run`).
 
 The seed's dimensioning step (sec. 5) searches the link lengths for the best workspace and
-GCI; before a local optimum (:mod:`symkin.design.solve`) a designer wants the map: every
+GCI; before a local optimum (:mod:`symkin.design.solving`) a designer wants the map: every
 design of a grid or a Sobol set with its GCI (eq. 8.28), workspace measure and extreme
 condition numbers.  One derivation serves every design: the parameters are inputs of the
 generated functions, so a design is ``model.bind(**values)``.
@@ -38,6 +38,7 @@ from typing import Any
 
 import numpy as np
 
+from symkin.analysis.sobol import Sobol
 from symkin.design.sweep_metrics import DEFAULT_METRICS, EMPTY, ESTIMATED, METRICS, OK, evaluate_design
 from symkin.runtime.cluster import run_tasks
 from symkin.runtime.payload import ModelPayload
@@ -123,17 +124,8 @@ class SweepDefinition:
         """(N, p) parameter values of every design, or of one chunk's designs."""
         start, stop = (0, self.size) if chunk is None else (chunk * self.chunk, min(self.size, (chunk + 1) * self.chunk))
         if self.sobol is not None:
-            import warnings
-
-            from scipy.stats import qmc
-
             low, high = np.array([a.low for a in self.axes]), np.array([a.high for a in self.axes])
-            sequence = qmc.Sobol(len(self.axes), scramble=False)
-            if start:  # (scipy refuses a fast-forward by 0)
-                sequence.fast_forward(start)
-            with warnings.catch_warnings():  # a chunk need not be a power of 2: the set as a whole is
-                warnings.simplefilter("ignore", UserWarning)
-                return low + (high - low) * sequence.random(stop - start)
+            return low + (high - low) * Sobol(len(self.axes)).points(start, stop)
         index = np.unravel_index(np.arange(start, stop), tuple(a.grid_count for a in self.axes))
         return np.stack([a.values()[i] for a, i in zip(self.axes, index)], axis=-1)
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from symkin.analysis.sobol import Sobol
 from symkin.simulation.plant import Plant
 
 #: 1/kappa of the task Jacobian above which the middle of the limits is kept.
@@ -30,11 +31,9 @@ def start_pose(plant: Plant) -> tuple[np.ndarray, str]:
     conditioning = float(plant.dexterity(middle))
     if conditioning >= WELL_CONDITIONED:
         return middle, f"the middle of the joint limits (1/kappa = {conditioning:.3g})"
-    from scipy.stats import qmc
-
     span = np.where(finite[:, None], limits, np.where(plant.revolute, np.pi, 0.5)[:, None] * [-1.0, 1.0])
     low, high = span[:, 0] + 0.1 * np.ptp(span, axis=1), span[:, 1] - 0.1 * np.ptp(span, axis=1)
-    candidates = qmc.scale(qmc.Sobol(plant.dof, scramble=False).random(START_CANDIDATES), low, high)
+    candidates = low + Sobol(plant.dof).points(0, START_CANDIDATES) * (high - low)
     measures = np.nan_to_num(plant.dexterity(candidates), nan=0.0)
     best = int(np.argmax(measures))
     return candidates[best], (f"the best-conditioned of {START_CANDIDATES} poses within the limits (1/kappa = "

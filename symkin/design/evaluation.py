@@ -71,7 +71,7 @@ def evaluate(problem: DesignProblem, model: GeneratedModel, design: dict[str, fl
     """Rate ``design`` (all parameter values) of ``model`` (numpy backend, unbound).
 
     ``box_points``, ``box_configurations``: the optimizer's box points and a serial model's
-    joint configurations at them (:class:`~symkin.design.solve.Solution`), checked by forward
+    joint configurations at them (:class:`~symkin.design.solving.Solution`), checked by forward
     kinematics when no closed-form inverse applies.
     """
     bound = model.bind(**design)
