@@ -224,7 +224,7 @@ def test_the_schoenflies_platform_moves_as_declared_and_a_wrong_declaration_is_l
              .replace("{name: knee, type: R, axis: [0, 0, 1], active: true,", "{name: knee, type: R, axis: [0, 0, 1],"))
     check = check_platform_motion(model_from_text(loose))
     assert check.locked == 1
-    assert "with the actuators locked the legs still let the platform turn about (0, 0, -1)" in check.problems[0]
+    assert "with the actuators locked the legs still let the platform turn about (0, 0, 1)" in check.problems[0]
 
 
 def test_the_mobility_command_reports_a_wrong_motion_with_its_place_and_exit_2(tmp_path):
@@ -488,3 +488,24 @@ def test_angle_rows_become_angular_velocity_at_each_pose():
         np.testing.assert_allclose(turned[k], E @ J[k], rtol=0, atol=16 * EPS * np.max(np.abs(J[k])))
     schoenflies = SimpleNamespace(info=SimpleNamespace(task_space=("x", "y", "z", "yaw")))
     np.testing.assert_array_equal(angular_rates(schoenflies, J[:, :4, :4], poses[:, :4]), J[:, :4, :4])
+
+
+def test_symkin_derive_refuses_a_motion_the_legs_contradict_and_writes_nothing(tmp_path, capsys):
+    """`symkin derive` runs the check of `symkin check` before deriving: the same located refusal, exit 2, no output
+    directory; the declared motion derives."""
+    from symkin.cli import main
+
+    path = tmp_path / "rolling.yaml"
+    text = dual_scara_text().replace("motion: schoenflies", "motion: [x, y, z, roll]")
+    path.write_text(text)
+    line = text[:text.index("motion: [x, y, z, roll]")].count("\n") + 1
+    out = tmp_path / "out"
+    assert main(["derive", str(path), "-o", str(out), "--only", "closure", "--no-cache"]) == 2
+    err = capsys.readouterr().err
+    assert f"{path}:{line}" in err
+    assert "do not let the platform move in its coordinate roll" in err
+    assert not out.exists()
+    good = tmp_path / "dual_scara.yaml"
+    good.write_text(dual_scara_text())
+    assert main(["derive", str(good), "-o", str(out), "--only", "closure", "--no-cache", "-q"]) == 0
+    assert (out / "dual_scara" / "manifest.json").exists()

@@ -8,11 +8,6 @@ from symkin.cli.urdf_args import add_urdf_arguments, print_notes, urdf_options
 from symkin.text_table import format_table
 
 
-#: How to mend a parallel.motion the legs contradict (symkin.parallel.motion_check says how they differ).
-MOTION_FIX = ("declare the coordinates the legs let the platform move in (symkin mobility MODEL prints them), or change "
-              "the legs")
-
-
 def register_check(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("check", help="validate model files without deriving",
                        description="Validate model files (syntax, names, expressions, physical plausibility of "
@@ -28,16 +23,14 @@ def register_check(sub: argparse._SubParsersAction) -> None:
 
 def run_check(args: argparse.Namespace) -> int:
     from symkin import pipeline
-    from symkin.errors import ModelError
     from symkin.model import load_model
-    from symkin.parallel.motion_check import check_platform_motion
+    from symkin.parallel.motion_check import require_declared_motion
 
     for path in args.models:
         model = load_model(path, **urdf_options(args, path))
         request = pipeline.resolve_request(model)
-        motion = check_platform_motion(model) if model.parallel is not None else None
-        if motion is not None and motion.problems:
-            raise ModelError([model.problem(("parallel", "motion"), problem, MOTION_FIX) for problem in motion.problems])
+        if model.parallel is not None:
+            require_declared_motion(model)
         if model.parallel is None:
             structure = f"{len(model.joints)} joints ({', '.join(f'{j.name}:{j.type.value}' for j in model.joints)})"
             if model.dof != len(model.joints):  # couplings: fewer coordinates than joints

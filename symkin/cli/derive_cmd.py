@@ -82,12 +82,17 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _validated(args: argparse.Namespace, path: str):
-    """The model of ``path`` and its request (both checked)."""
+    """The model of ``path`` and its request (both checked; a parallel model's legs against its declared
+    ``parallel.motion`` at the home pose, as ``symkin check``)."""
     from symkin import pipeline
     from symkin.model import load_model
+    from symkin.parallel.motion_check import require_declared_motion
 
     model = load_model(path, **urdf_options(args, path))
-    return model, pipeline.resolve_request(model, args.only, args.backend, args.fixed, args.float32, args.combine)
+    request = pipeline.resolve_request(model, args.only, args.backend, args.fixed, args.float32, args.combine)
+    if model.parallel is not None:
+        require_declared_motion(model)
+    return model, request
 
 
 #: The options that decide what is derived: with the model file's bytes and name, the cache key.

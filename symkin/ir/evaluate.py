@@ -2,15 +2,20 @@
 
 The un-optimized outputs (and the spec's definitions program, evaluated in order as
 assignments) are lambdified for numpy or mpmath; nothing of the optimizer or the printers
-is involved, so the result is an independent check of generated code.
+is involved, so the result is an independent check of generated code.  For numeric work
+inside symkin on a derived function (the platform-motion check), :func:`symengine_entries`
+builds the same values through SymEngine in a fraction of lambdify's time.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
 
+import numpy as np
+import symengine as se
 import sympy
 
+from symkin.symengine_bridge import to_symengine
 from symkin.ir.opcount import spec_op_count
 from symkin.ir.spec import FunctionSpec
 
@@ -47,3 +52,19 @@ def lambdify_spec(spec: FunctionSpec, args: Sequence[object], modules: str | Seq
     # use_imps=False: no implemented functions occur, and looking for them walks every node of the
     # expanded trees (three quarters of the lambdify time of the Stewart platform's dynamics)
     return sympy.lambdify(list(args), entries, modules=modules, cse=program, use_imps=False, printer=printer)
+
+
+def symengine_entries(spec: FunctionSpec, args: Sequence[sympy.Symbol],
+                      values: Mapping[sympy.Symbol, sympy.Expr] | None = None) -> Callable[[np.ndarray], np.ndarray]:
+    """f(X): every output entry of ``spec`` (row-major, outputs in order), (..., entries), at the rows X (...,
+    len(args)) of argument values, through SymEngine's Lambdify with common subexpressions (its definitions
+    substituted in order, ``values`` first).  Built in a fraction of :func:`lambdify_spec`'s time (the Stewart
+    platform's closure: 0.2 s against 12 s); lambdify_spec stays the backends' reference."""
+    values = dict(values or {})
+    memo: dict[sympy.Basic, se.Basic] = {}
+    definitions: dict[se.Basic, se.Basic] = {}
+    for symbol, expr in spec.definitions:
+        definitions[to_symengine(symbol)] = to_symengine(expr.xreplace(values), memo).subs(definitions)
+    entries = [to_symengine(e.xreplace(values), memo).subs(definitions) for out in spec.outputs for e in out.entries]
+    function = se.Lambdify([to_symengine(a) for a in args], entries, backend="lambda", cse=True)
+    return lambda X: np.asarray(function(np.asarray(X, dtype=float)), dtype=float)

@@ -23,7 +23,8 @@ import numpy as np
 import sympy
 
 from symkin.derivation import Derivation
-from symkin.ir.evaluate import lambdify_spec
+from symkin.errors import ModelError
+from symkin.ir.evaluate import symengine_entries
 from symkin.model import coordinates
 from symkin.model.schema import Model
 from symkin.parallel.inputs import passive_symbols, task_symbols
@@ -42,6 +43,9 @@ STARTS = 8
 #: leaves rounding, ~1e-15; a least-squares minimum misses by a link length.
 CLOSED = 1e-9
 AXES = ("x", "y", "z")
+#: How to mend a parallel.motion the legs contradict (the problems say how they differ).
+MOTION_FIX = ("declare the coordinates the legs let the platform move in (symkin mobility MODEL prints them), or change "
+              "the legs")
 
 
 @dataclass(frozen=True)
@@ -120,14 +124,12 @@ def _assemble(model: Model, derivation: Derivation, p: np.ndarray) -> tuple[np.n
     the rows' zero, and the closure alone derives in a fraction of the time of its Jacobians) from q = s = 0 and
     then from :data:`STARTS` fixed random starts; None if none closes."""
     q_symbols, s_symbols = coordinates.symbols(model, "q"), passive_symbols(model)
-    function = lambdify_spec(derivation["closure"], [list(q_symbols), list(s_symbols), list(task_symbols(model))],
-                             "numpy", model.parameter_values)
+    function = symengine_entries(derivation["closure"], q_symbols + s_symbols + task_symbols(model),
+                                 model.parameter_values)
     n, k = len(q_symbols), len(s_symbols)
 
     def residuals(X: np.ndarray) -> np.ndarray:  # rows of X: states; one call for the batch
-        columns = X.T
-        return np.array(np.broadcast_arrays(*function(columns[:n], columns[n:], p), np.zeros(len(X))),
-                        dtype=float)[:-1].T
+        return function(np.concatenate([X, np.broadcast_to(p, (len(X), len(p)))], axis=1))
 
     def residual(x: np.ndarray) -> np.ndarray:
         return residuals(x[None, :])[0]
@@ -152,8 +154,10 @@ def _assemble(model: Model, derivation: Derivation, p: np.ndarray) -> tuple[np.n
 
 
 def _direction(vector: np.ndarray) -> str:
-    """A unit direction as text, rounding noise of the SVD shown as 0."""
+    """A unit direction as text, rounding noise of the SVD shown as 0, its largest component positive (a subspace's
+    basis vector has either sign: which one the SVD returns depends on rounding)."""
     unit = vector / np.linalg.norm(vector)
+    unit = unit if unit[int(np.argmax(np.abs(unit)))] > 0 else -unit
     unit = np.where(np.abs(unit) < 1e-9, 0.0, unit) + 0.0
     return f"({unit[0]:.3g}, {unit[1]:.3g}, {unit[2]:.3g})"
 
@@ -220,6 +224,19 @@ def check_platform_motion(model: Model) -> MotionCheck:
             problems.append(f"the legs do not let the platform move in its coordinate {name} at the home pose")
     rank = (lambda M: int(np.sum(np.linalg.svd(M, compute_uv=False) > RANK_TOLERANCE)) if M.size else 0)
     return MotionCheck(tuple(problems), rank(free), rank(locked))
+
+
+def require_declared_motion(model: Model) -> MotionCheck:
+    """The check of a parallel model (:func:`check_platform_motion`), refused where the legs contradict
+    ``parallel.motion``.
+
+    Raises:
+        ModelError: the problems, each located at the model file's ``parallel.motion``, with the fix.
+    """
+    motion = check_platform_motion(model)
+    if motion.problems:
+        raise ModelError([model.problem(("parallel", "motion"), problem, MOTION_FIX) for problem in motion.problems])
+    return motion
 
 
 def _describe_any(twists: np.ndarray, point_platform: bool) -> str:
