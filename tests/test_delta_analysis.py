@@ -300,12 +300,12 @@ parallel:
 
 
 def test_leg_joint_limits_become_coordinate_and_passive_limits(tmp_path):
-    from symkin.manifest import _parallel_record
+    from symkin.manifest import parallel_record
 
     model = load_model(_legs_model(tmp_path, "[[deg(-45), deg(45)], null]", "[0.1, 0.4]"))
     assert [tuple(float(b) for b in c.limits) for c in model.coordinates] == [(0.1, 0.4)] * 3
-    record = _parallel_record(model)
-    assert record["legs"][0]["passive_limits"] == {"u1_1": [pytest.approx(-np.pi / 4), pytest.approx(np.pi / 4)]}
+    record = parallel_record(model)
+    assert record.legs[0].passive_limits == {"u1_1": [pytest.approx(-np.pi / 4), pytest.approx(np.pi / 4)]}
 
 
 @pytest.mark.parametrize("limits_u, limits_p, message", [

@@ -29,7 +29,8 @@ from symkin.analysis.integrators import INTEGRATORS, integrate
 from symkin.analysis.inverse import closed_form_inverse
 from symkin.analysis.workspace import bounding_box
 from symkin.model import coordinates
-from symkin.runtime.info import Coordinate, ModelInfo
+from symkin.manifest_schema import Coordinate
+from symkin.runtime.info import ModelInfo
 
 ARM = symkin.load(GENERATED_DIR / "planar_2r")
 QUARTER = (0.0, np.pi / 2)
@@ -285,7 +286,7 @@ class _RectangularStub:
     """A loaded-model stand-in with a 3 x 2 task Jacobian (x, y, z from two joints)."""
 
     name = "stub"
-    info = ModelInfo("stub", "serial", (Coordinate("a", True, None), Coordinate("b", True, None)), ("x", "y", "z"),
+    info = ModelInfo("stub", "serial", (Coordinate("a", "R", None), Coordinate("b", "R", None)), ("x", "y", "z"),
                      (), {})
     joint_limits = ((-np.pi, np.pi), (-np.pi, np.pi))
 

@@ -1,5 +1,7 @@
-"""One manifest schema (issue 35): the manifest's keys are read in symkin/manifest.py (which writes them) and
-symkin/runtime/info.py (:class:`~symkin.runtime.info.ModelInfo`, the typed view every consumer reads), nowhere else.
+"""One manifest schema (issue 35): the manifest is the types of symkin/manifest_schema.py (:class:`Manifest` and
+its records), which symkin/manifest.py builds and serializes and symkin/runtime/info.py
+(:class:`~symkin.runtime.info.ModelInfo`, the typed view every consumer reads) parses; the manifest's keys are
+read in the schema and in manifest.py's version check, nowhere else.
 
 A reader elsewhere that indexes the manifest by key strings (``manifest["functions"]``,
 ``manifest.get("backends")``) breaks silently when the writer changes: there is none, and the backends' loaders
@@ -19,7 +21,7 @@ from conftest import GENERATED_DIR, ROOT
 from symkin.errors import GeneratedCodeError
 
 #: Where the manifest's key strings belong: the writer and the typed reader.
-SCHEMA = {"symkin/manifest.py", "symkin/runtime/info.py"}
+SCHEMA = {"symkin/manifest.py", "symkin/manifest_schema.py"}
 #: The keys of a generated function's record (:func:`symkin.manifest.build_manifest`): outside :data:`SCHEMA` the
 #: runtime reads them as the fields of ``runtime.info.Function``, ``Input`` and ``Output``.
 RECORD_KEYS = {"inputs", "outputs", "summary", "kind", "shape", "elements", "units", "unit", "default", "doc"}
@@ -98,3 +100,19 @@ def test_an_old_manifest_is_refused_by_every_reader_with_a_rederive_message(tmp_
     for read in (load, ModelPayload.from_directory):
         with pytest.raises(GeneratedCodeError, match="derive the model again with this symkin"):
             read(directory)
+
+
+@pytest.mark.parametrize("directory", sorted(p.parent.name for p in GENERATED_DIR.glob("*/manifest.json")))
+def test_a_written_manifest_is_its_type_serialized(directory):
+    """The writer serializes the schema's types and the reader parses them: every manifest of the example models
+    is ``Manifest.from_record(manifest).to_record()``, key order included (the bytes of generated/ are checked by
+    tests/test_golden.py), and so is each record alone."""
+    from symkin.manifest import dumps
+    from symkin.manifest_schema import Coordinate, Function, Manifest
+
+    text = (GENERATED_DIR / directory / "manifest.json").read_text()
+    manifest = json.loads(text)
+    assert dumps(Manifest.from_record(manifest).to_record()) == text
+    for kind, record in [(Function, r) for r in manifest["functions"]] + \
+            [(Coordinate, r) for r in manifest["model"]["coordinates"]]:
+        assert json.dumps(kind.from_record(record).to_record()) == json.dumps(record), (kind.__name__, record)

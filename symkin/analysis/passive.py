@@ -33,7 +33,8 @@ import numpy as np
 
 from symkin.analysis import mechanism
 from symkin.analysis.limits import within_limits
-from symkin.runtime.info import GeneratedModel, VectorInput
+from symkin.manifest_schema import VectorInput
+from symkin.runtime.info import GeneratedModel
 from symkin.runtime.parallel import solve_closure
 
 #: Damping of the Gauss-Newton iteration: the largest step (max-norm, rad or m).

@@ -30,7 +30,7 @@ from symkin._version import __version__
 from symkin.backends.c.build import extension_module, progress, python_include_directories
 from symkin.backends.naming import c_symbol
 from symkin.errors import GeneratedCodeError
-from symkin.runtime.info import Function
+from symkin.manifest_schema import Function
 from symkin.runtime.wrappers import signature_text
 
 #: Environment variable: ``ctypes`` keeps the ctypes functions (no extension module is built).

@@ -10,152 +10,10 @@ home pose and the passive-joint limits of its legs.
 from __future__ import annotations
 
 import dataclasses
-import math
 from dataclasses import dataclass
 from typing import Any, Protocol
 
-
-@dataclass(frozen=True)
-class Coordinate:
-    """A joint coordinate (an element of ``q``).
-
-    Attributes:
-        name: its name in the model file.
-        revolute: an angle (periodic) rather than a length.
-        limits: (lower, upper) at the parameters' default values, or None where the model declares none.
-        velocity_limit: the largest |qd| the joint allows (rad/s or m/s), or None.
-        effort_limit: the largest |tau| its actuator gives (N m or N), or None.
-        source_name: its name in the robot file it came from where that is no identifier (a URDF's
-            ``joint_0.0``), else None; see :attr:`label`.
-        active: driven by an actuator; False for a passive joint (``active: false``, e.g. the measured but
-            unmotorized wrist of a haptic device), on which a controller exerts no effort.
-        continuous_effort_limit: the effort its drive holds for long (N K_t I_cont), or None.
-        viscous, coulomb: its friction, tau_f = viscous qd + coulomb sign(qd) (the larger Coulomb level of
-            an asymmetric one), or None where the model declares none.
-        gear_ratio: turns of its drive's motor per turn of the coordinate (the model's ``actuators``), or
-            None without a declared drive.
-    """
-
-    name: str
-    revolute: bool
-    limits: tuple[float, float] | None
-    velocity_limit: float | None = None
-    effort_limit: float | None = None
-    source_name: str | None = None
-    active: bool = True
-    continuous_effort_limit: float | None = None
-    viscous: float | None = None
-    coulomb: float | None = None
-    gear_ratio: float | None = None
-
-    @property
-    def bounds(self) -> tuple[float, float]:
-        """(lower, upper) position limits, (-inf, inf) where none are declared."""
-        return self.limits if self.limits is not None else (-math.inf, math.inf)
-
-    @property
-    def label(self) -> str:
-        """The name to show people: the robot file's, else the model's."""
-        return self.source_name or self.name
-
-
-@dataclass(frozen=True)
-class Parameter:
-    """A model parameter: ``fixed`` ones are folded into the code, the others are function arguments."""
-
-    name: str
-    default: float
-    unit: str
-    fixed: bool
-
-
-@dataclass(frozen=True)
-class VectorInput:
-    """A vector input of a generated function (``q``, ``qd``, ``p``, ``s``...): its elements and their units."""
-
-    elements: tuple[str, ...]
-    units: tuple[str, ...]
-
-
-@dataclass(frozen=True)
-class Input:
-    """An input of a generated function, in argument order: a vector (``kind`` "vector", ``shape`` (n,), its
-    elements and their units; ``default`` NaN) or a parameter (``kind`` "parameter", shape (), its unit and
-    ``default``)."""
-
-    name: str
-    kind: str
-    shape: tuple[int, ...]
-    elements: tuple[str, ...]
-    units: tuple[str, ...]
-    doc: str
-    default: float = math.nan
-
-    @property
-    def is_parameter(self) -> bool:
-        return self.kind == "parameter"
-
-    @property
-    def size(self) -> int:
-        """The vector's length (1 for a parameter)."""
-        return self.shape[0] if self.shape else 1
-
-
-@dataclass(frozen=True)
-class Output:
-    """An output of a generated function: its shape, unit and doc, and its elements' names where the manifest
-    gives them (the regressors' parameters)."""
-
-    name: str
-    shape: tuple[int, ...]
-    unit: str
-    doc: str
-    elements: tuple[str, ...] = ()
-
-
-@dataclass(frozen=True)
-class Function:
-    """A generated function as the manifest records it: its name and one-line summary, its inputs in argument
-    order and its outputs in result order (the backends' loaders bind it from this record)."""
-
-    name: str
-    summary: str
-    inputs: tuple[Input, ...]
-    results: tuple[Output, ...]
-
-    @property
-    def vectors(self) -> dict[str, VectorInput]:
-        """The vector inputs by name."""
-        return {i.name: VectorInput(i.elements, i.units) for i in self.inputs if not i.is_parameter}
-
-    @property
-    def vector_inputs(self) -> tuple[Input, ...]:
-        return tuple(i for i in self.inputs if not i.is_parameter)
-
-    @property
-    def parameter_inputs(self) -> tuple[Input, ...]:
-        return tuple(i for i in self.inputs if i.is_parameter)
-
-    @property
-    def parameters(self) -> tuple[str, ...]:
-        """The parameter inputs' names."""
-        return tuple(i.name for i in self.parameter_inputs)
-
-    @property
-    def outputs(self) -> dict[str, tuple[str, ...]]:
-        """The outputs' element names by output (empty where the manifest names none)."""
-        return {o.name: o.elements for o in self.results}
-
-    @classmethod
-    def from_record(cls, record: dict[str, Any]) -> Function:
-        """The function of a manifest record (:func:`symkin.manifest.build_manifest` writes them)."""
-        inputs = tuple(Input(i["name"], i["kind"], tuple(int(d) for d in i["shape"]), tuple(i["elements"]),
-                             tuple(i["units"]), i.get("doc") or "",
-                             float(i["default"]) if i["kind"] == "parameter" else math.nan)
-                       for i in record["inputs"])
-        results = tuple(Output(o["name"], tuple(int(d) for d in o["shape"]), o.get("unit") or "", o.get("doc") or "",
-                               tuple(o.get("elements", ()))) for o in record["outputs"])
-        return cls(record["name"], record.get("summary") or "", inputs, results)
+from symkin.manifest_schema import Coordinate, Function, Manifest, Parameter
 
 
 @dataclass(frozen=True)
@@ -217,30 +75,15 @@ class ModelInfo:
 
     @classmethod
     def from_manifest(cls, manifest: dict[str, Any]) -> ModelInfo:
-        model = manifest["model"]
-        parallel = model.get("parallel")
-        coordinates = tuple(_coordinate(c) for c in model["coordinates"])
-        parameters = tuple(Parameter(p["name"], float(p["default"]), p.get("unit", ""), bool(p["fixed"]))
-                           for p in manifest["parameters"])
-        functions = {f["name"]: Function.from_record(f) for f in manifest["functions"]}
-        home = tuple(float(v) for v in parallel["home"]) if parallel and parallel.get("home") is not None else None
-        passive = tuple(dict(leg.get("passive_limits") or {}) for leg in parallel["legs"]) if parallel else ()
-        wrist = tuple(_coordinate(c) for c in parallel.get("wrist", ())) if parallel else ()
-        rest = tuple(float(v) for v in model["home_configuration"]) if "home_configuration" in model else None
-        backends = {name: tuple(record["files"]) for name, record in manifest.get("backends", {}).items()}
-        return cls(model["name"], "parallel" if parallel else "serial", coordinates, tuple(model["task_space"]),
-                   parameters, functions, home, passive, wrist, rest, model.get("hash", ""),
-                   model.get("description") or "", backends, model.get("tree"))
-
-
-def _coordinate(record: dict[str, Any]) -> Coordinate:
-    """A coordinate of the manifest (the model's ``coordinates``, a hybrid device's ``wrist``)."""
-    return Coordinate(record["name"], record["type"] == "R",
-                      (float(record["limits"][0]), float(record["limits"][1])) if record.get("limits") else None,
-                      record.get("velocity_limit"), record.get("effort_limit"), record.get("source_name"),
-                      bool(record.get("active", True)), record.get("continuous_effort_limit"),
-                      record.get("friction", {}).get("viscous"), record.get("friction", {}).get("coulomb"),
-                      record.get("gear_ratio"))
+        """The view of a manifest's JSON object (:class:`symkin.manifest_schema.Manifest`)."""
+        record = Manifest.from_record(manifest)
+        model, parallel = record.model, record.model.parallel
+        return cls(model.name, "parallel" if parallel else "serial", model.coordinates, model.task_space,
+                   record.parameters, {f.name: f for f in record.functions},
+                   None if parallel is None else parallel.home,
+                   () if parallel is None else tuple(leg.passive_limits for leg in parallel.legs),
+                   () if parallel is None else parallel.wrist, model.home_configuration, model.hash,
+                   model.description, dict(record.backends), model.tree)
 
 
 class GeneratedModel(Protocol):

@@ -26,7 +26,7 @@ import numpy
 
 from symkin.backends.naming import shape_text, type_name
 from symkin.errors import GeneratedCodeError
-from symkin.runtime.info import Function
+from symkin.manifest_schema import Function
 
 Kernel = Callable[[tuple[int, ...], list[numpy.ndarray], list[numpy.ndarray]], list[numpy.ndarray]]
 SingleKernel = Callable[[Sequence[numpy.ndarray], Sequence[float]], list[numpy.ndarray]]
