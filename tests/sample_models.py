@@ -1,11 +1,14 @@
 """Sample models shared by test modules (issue 35: one place, not defined in one test module and imported by
-another).  Each is read from where the documentation declares it, so the tests check the model a reader sees."""
+another).  Those the documentation declares are read from it, so the tests check the model a reader sees; the
+others are written here, each for what the example models do not exercise."""
 
 from __future__ import annotations
 
 import re
+from importlib.metadata import distribution
+from pathlib import Path
 
-from conftest import ROOT
+from conftest import MODELS_DIR, ROOT
 
 MODEL_FORMAT = ROOT / "docs" / "model-format.md"
 
@@ -24,3 +27,95 @@ def dual_scara_dynamics_text() -> str:
     match = re.search(r"<<'EOF_BODIES'\n(.*?)^EOF_BODIES$", MODEL_FORMAT.read_text(), re.S | re.M)
     assert match, "docs/model-format.md lost the dual SCARA's bodies"
     return dual_scara_text() + match.group(1)
+
+
+PLANAR = (MODELS_DIR / "planar_2r.yaml").read_text()
+PARAMETERS = "  g: {value: 9.81, unit: m/s^2, doc: gravitational acceleration}\n"
+#: The 2R arm with a drive on each joint and friction on both (one smoothed).
+DRIVEN = PLANAR.replace(PARAMETERS, PARAMETERS + "  J1: 1.2e-6\n  N1: 13.3\n  J2: 3.4e-6\n  b1: 0.1\n  c2: 0.3\n") + """
+actuators:
+  theta1: {rotor_inertia: J1, gear_ratio: N1}
+  theta2: {rotor_inertia: J2}
+friction:
+  theta1: {viscous: b1, coulomb: 0.2}
+  theta2: {coulomb: c2, smoothing_velocity: 0.01}
+"""
+
+#: A planar arm with distributed rigid links, viscous and smooth Coulomb friction, and
+#: gravity with a component along every axis: exercises what the example models do not.
+FRICTION_ARM = """
+name: friction_arm
+parameters:
+  l1: 0.3
+  l2: 0.25
+  v_s: {value: 0.05, unit: rad/s, doc: Coulomb smoothing velocity}
+  g: 9.81
+serial:
+  chain:
+    - {name: j1, axis: [0, 0, 1]}
+    - {name: j2, axis: [0, 1, 0], origin: {xyz: [l1, 0, 0]}}
+    - {name: j3, type: P, axis: [1, 0, 0], origin: {xyz: [l2, 0, 0], rpy: [0.1, 0.2, 0.3]}}
+task_space: position
+bodies:
+  - {link: link1, mass: 1.2, com: [0.15, 0.01, 0], inertia: {xx: 0.002, yy: 0.01, zz: 0.011, xy: 0.0003}}
+  - {link: link2, mass: 0.8, com: [0.12, 0, 0.02], inertia: {xx: 0.001, yy: 0.006, zz: 0.0065, xz: -0.0002}}
+  - {link: link3, mass: 0.3, com: [0.05, 0, 0]}
+gravity: [0.5, -1, -g]
+friction:
+  j1: {viscous: 0.1, coulomb: 0.3, smoothing_velocity: v_s}
+  j2: {viscous: 0.05, coulomb: 0.1}
+  j3: {coulomb: 0.2, smoothing_velocity: v_s}
+"""
+
+#: A SCARA arm (classic DH) whose last two links are point masses on the last axis: its mass matrix is singular
+#: everywhere (refused by check and derive), its IK has closed forms.
+SCARA = """name: scara
+parameters:
+  g: {value: 9.81, unit: m/s^2}
+serial:
+  dh:
+    convention: classic
+    rows:
+      - [q1, R, 0, 0.4, 0.3, 0, [-2.5, 2.5]]
+      - [q2, R, 0, 0, 0.25, pi, [-2.5, 2.5]]
+      - [q3, P, 0, 0, 0, 0, [0, 0.2]]
+      - [q4, R, 0, 0, 0, 0]
+task_space: [x, y, z, wz]
+bodies:
+  - {link: link1, mass: 5, com: [-0.15, 0, 0], inertia: {xx: 0.01, yy: 0.04, zz: 0.04}}
+  - {link: link2, mass: 3, com: [-0.12, 0, 0], inertia: {xx: 0.01, yy: 0.02, zz: 0.02}}
+  - {link: link3, mass: 1}
+  - {link: link4, mass: 0.5}
+gravity: [0, 0, -g]
+scene:
+  outputs: [fk, jacobian, mass_matrix, forward_dynamics]
+"""
+
+#: Every branch of symkin.dynamics.newton_euler at once.
+ODD_ARM = """
+name: odd_arm
+parameters:
+  l1: 0.3
+  g: 9.81
+serial:
+  base: {xyz: [0.1, -0.2, 0.5], rpy: [0.3, -0.2, 0.7]}
+  chain:
+    - {name: j1, axis: [0, 0, 1], offset: 0.4}
+    - {name: j2, type: P, axis: [0, 0.6, 0.8], origin: {xyz: [l1, 0, 0.05], rpy: [0.2, 0.1, -0.3]}, offset: 0.1}
+    - {name: j3, axis: [1, 2, 2], origin: {xyz: [0.2, 0.1, 0], rpy: [-0.4, 0.3, 0.2]}}
+    - {name: j4, axis: [0, -1, 0], origin: {xyz: [0.15, 0, 0.1], rpy: [1.1, 0, 0]}}
+  tcp: {xyz: [0, 0, 0.1]}
+task_space: position
+bodies:
+  - {link: link1, mass: 1.2, com: [0.15, 0.01, 0], inertia: {xx: 0.002, yy: 0.01, zz: 0.011, xy: 0.0003}}
+  - {link: link1, mass: 0.4, com: [0.05, -0.02, 0.03]}
+  - {link: link2, mass: 0, inertia: {xx: 0.001, yy: 0.002, zz: 0.0025, yz: 0.0001}}
+  - {link: link4, mass: 0.3, com: [0.05, 0.01, 0], origin: {xyz: [0.01, 0, 0], rpy: [0, 0.5, 0]},
+     inertia: {xx: 0.0004, yy: 0.0005, zz: 0.0003}}
+gravity: [1.5, -2, -g]
+friction:
+  j3: {viscous: 0.1, coulomb: 0.3}
+"""
+
+#: The stock robot files of the example-robot-data package (its URDFs and meshes).
+ROBOTS_DIR = Path(distribution("example-robot-data").locate_file("cmeel.prefix/share/example-robot-data/robots"))

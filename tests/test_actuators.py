@@ -137,7 +137,7 @@ def test_urdf_transmissions_give_the_chain_s_gear_ratios():
     """The PR2's arm as shipped: one-joint transmissions give |mechanicalReduction| (negative ones turn the motor
     the other way); its wrist differential couples two joints and gives none."""
     from symkin.model import load_model
-    from test_robot_zoo import ROBOTS_DIR
+    from sample_models import ROBOTS_DIR
 
     model = load_model(ROBOTS_DIR / "pr2_description/urdf/pr2.urdf", base="torso_lift_link", tip="l_gripper_palm_link")
     ratios = {a.joint: float(a.gear_ratio) for a in model.actuators}

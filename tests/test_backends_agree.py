@@ -17,32 +17,12 @@ import pytest
 
 from conftest import (BACKENDS, EXAMPLE_MODELS, batch_reference, function_spec, random_inputs, random_q,
                       reference_group, relative_errors, worst_state)
-from symkin.derivation import catalog
-from tolerances import CLOSED_FORM, DYNAMICS, EPS, KINEMATICS, UR10E_SCALE, svd
+from tolerances import CLOSED_FORM, DYNAMICS, EPS, KINEMATICS, UR10E_SCALE
+from checks import agreement_bound
 
 POINTS = 1000
 
 
-#: Agreement bound of a well-conditioned function, relative to the largest entry of each output.
-AGREEMENT = 1e-12
-
-
-def agreement_bound(model, spec, inputs, numpy_model) -> np.ndarray:
-    """Per batch entry: AGREEMENT, plus for a function that solves with a square matrix (tcp_force and
-    operational_space with J, forward_dynamics with M) the rounding the solve amplifies: svd(n)
-    times kappa^2 (the operational-space inertia J^-T M J^-1 solves twice; one solve gives kappa).
-    Two evaluation orders of the same exact function then differ by that much near singularities."""
-    bound = np.full(len(inputs[0]), AGREEMENT)
-    by_name = {v.name: value for v, value in zip(spec.vector_inputs, inputs)}
-    for part in spec.parts or (spec.name,):  # a combined function: the worst of its parts
-        solves_with = catalog.definition(part, model.mechanism).solves_with
-        if solves_with is None:
-            continue
-        solved = numpy_model.info.functions[solves_with]
-        matrix = getattr(numpy_model, solves_with)(*(by_name[v] for v in solved.vectors))
-        matrix = matrix[0] if isinstance(matrix, tuple) else matrix
-        bound = np.maximum(bound, AGREEMENT + svd(matrix.shape[-1]) * np.linalg.cond(matrix) ** 2)
-    return bound
 
 
 def _tuple(result):

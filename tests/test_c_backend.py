@@ -15,13 +15,10 @@ from conftest import EXAMPLE_MODELS, ROOT, function_spec, random_inputs
 from symkin.backends.c import build
 from symkin.backends.c.printer import CPrinter
 from symkin.errors import GeneratedCodeError
+from checks import CC, STRICT_FLAGS
 
-CC = shutil.which(os.environ.get("CC", "cc")) or shutil.which("gcc")
+
 pytestmark = pytest.mark.skipif(CC is None, reason="no C compiler")
-
-#: The issue's flags, plus what keeps float32 code honest (-Wconversion, -Wdouble-promotion).
-STRICT_FLAGS = ["-std=c99", "-O3", "-Wall", "-Wextra", "-Werror", "-pedantic", "-Wconversion",
-                "-Wdouble-promotion", "-Wshadow", "-Wstrict-prototypes", "-Wmissing-prototypes"]
 
 
 #: Sources larger than this are compiled at -O1 instead of -O3: the same warnings (GCC's

@@ -21,7 +21,7 @@ from symkin.derivation import Derivation
 from symkin.errors import ModelError
 from symkin.model import load_model
 from symkin.model.urdf_export import export_urdf
-from test_robot_zoo import ROBOTS_DIR
+from sample_models import ROBOTS_DIR
 from tolerances import DYNAMICS
 
 

@@ -13,28 +13,8 @@ from __future__ import annotations
 import subprocess
 
 from conftest import SYMKIN_CLI
+from sample_models import SCARA
 
-SCARA = """name: scara
-parameters:
-  g: {value: 9.81, unit: m/s^2}
-serial:
-  dh:
-    convention: classic
-    rows:
-      - [q1, R, 0, 0.4, 0.3, 0, [-2.5, 2.5]]
-      - [q2, R, 0, 0, 0.25, pi, [-2.5, 2.5]]
-      - [q3, P, 0, 0, 0, 0, [0, 0.2]]
-      - [q4, R, 0, 0, 0, 0]
-task_space: [x, y, z, wz]
-bodies:
-  - {link: link1, mass: 5, com: [-0.15, 0, 0], inertia: {xx: 0.01, yy: 0.04, zz: 0.04}}
-  - {link: link2, mass: 3, com: [-0.12, 0, 0], inertia: {xx: 0.01, yy: 0.02, zz: 0.02}}
-  - {link: link3, mass: 1}
-  - {link: link4, mass: 0.5}
-gravity: [0, 0, -g]
-scene:
-  outputs: [fk, jacobian, mass_matrix, forward_dynamics]
-"""
 
 
 def _run(*args):

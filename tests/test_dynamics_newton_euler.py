@@ -19,34 +19,9 @@ from conftest import EXAMPLE_MODELS, MODELS_DIR, random_q, reference_function
 from lagrangian_reference import lagrangian_dynamics
 from symkin.derivation import Derivation
 from symkin.model import load_model, model_from_text, tree
-from test_dynamics_properties import FRICTION_ARM
+from sample_models import FRICTION_ARM, ODD_ARM
 from tolerances import DYNAMICS
 
-#: Every branch of symkin.dynamics.newton_euler at once.
-ODD_ARM = """
-name: odd_arm
-parameters:
-  l1: 0.3
-  g: 9.81
-serial:
-  base: {xyz: [0.1, -0.2, 0.5], rpy: [0.3, -0.2, 0.7]}
-  chain:
-    - {name: j1, axis: [0, 0, 1], offset: 0.4}
-    - {name: j2, type: P, axis: [0, 0.6, 0.8], origin: {xyz: [l1, 0, 0.05], rpy: [0.2, 0.1, -0.3]}, offset: 0.1}
-    - {name: j3, axis: [1, 2, 2], origin: {xyz: [0.2, 0.1, 0], rpy: [-0.4, 0.3, 0.2]}}
-    - {name: j4, axis: [0, -1, 0], origin: {xyz: [0.15, 0, 0.1], rpy: [1.1, 0, 0]}}
-  tcp: {xyz: [0, 0, 0.1]}
-task_space: position
-bodies:
-  - {link: link1, mass: 1.2, com: [0.15, 0.01, 0], inertia: {xx: 0.002, yy: 0.01, zz: 0.011, xy: 0.0003}}
-  - {link: link1, mass: 0.4, com: [0.05, -0.02, 0.03]}
-  - {link: link2, mass: 0, inertia: {xx: 0.001, yy: 0.002, zz: 0.0025, yz: 0.0001}}
-  - {link: link4, mass: 0.3, com: [0.05, 0.01, 0], origin: {xyz: [0.01, 0, 0], rpy: [0, 0.5, 0]},
-     inertia: {xx: 0.0004, yy: 0.0005, zz: 0.0003}}
-gravity: [1.5, -2, -g]
-friction:
-  j3: {viscous: 0.1, coulomb: 0.3}
-"""
 
 STATES = 6
 

@@ -18,34 +18,10 @@ from conftest import EXAMPLE_MODELS, MODELS_DIR, random_q, reference_function
 from symkin.derivation import Derivation
 from symkin.model import model_from_text
 from tolerances import CLOSED_FORM
+from sample_models import FRICTION_ARM
 
 STATES = 4
 
-#: A planar arm with distributed rigid links, viscous and smooth Coulomb friction, and
-#: gravity with a component along every axis: exercises what the example models do not.
-FRICTION_ARM = """
-name: friction_arm
-parameters:
-  l1: 0.3
-  l2: 0.25
-  v_s: {value: 0.05, unit: rad/s, doc: Coulomb smoothing velocity}
-  g: 9.81
-serial:
-  chain:
-    - {name: j1, axis: [0, 0, 1]}
-    - {name: j2, axis: [0, 1, 0], origin: {xyz: [l1, 0, 0]}}
-    - {name: j3, type: P, axis: [1, 0, 0], origin: {xyz: [l2, 0, 0], rpy: [0.1, 0.2, 0.3]}}
-task_space: position
-bodies:
-  - {link: link1, mass: 1.2, com: [0.15, 0.01, 0], inertia: {xx: 0.002, yy: 0.01, zz: 0.011, xy: 0.0003}}
-  - {link: link2, mass: 0.8, com: [0.12, 0, 0.02], inertia: {xx: 0.001, yy: 0.006, zz: 0.0065, xz: -0.0002}}
-  - {link: link3, mass: 0.3, com: [0.05, 0, 0]}
-gravity: [0.5, -1, -g]
-friction:
-  j1: {viscous: 0.1, coulomb: 0.3, smoothing_velocity: v_s}
-  j2: {viscous: 0.05, coulomb: 0.1}
-  j3: {coulomb: 0.2, smoothing_velocity: v_s}
-"""
 
 
 def _dynamic_models(models):

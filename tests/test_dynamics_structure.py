@@ -100,7 +100,7 @@ def test_programs_are_deterministic():
 def test_generated_friction_and_dynamics_match_the_expressions(tmp_path):
     """sign and tanh friction through the numpy backend (the example models have no friction)."""
     from symkin import load, pipeline
-    from test_dynamics_properties import FRICTION_ARM
+    from sample_models import FRICTION_ARM
 
     model = model_from_text(FRICTION_ARM)
     request = pipeline.resolve_request(model, only="friction,inverse_dynamics,forward_dynamics")

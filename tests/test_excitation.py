@@ -20,7 +20,7 @@ from symkin.analysis import identification
 from symkin.design import excitation
 from symkin.model import model_from_text
 from symkin.runtime.loader import load
-from test_regressor import DRIVEN
+from sample_models import DRIVEN
 from tolerances import CLOSED_FORM
 
 PERIOD, HARMONICS, SPEED, ACCELERATION = 4.0, 4, 2.0, 10.0

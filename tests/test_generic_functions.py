@@ -99,7 +99,7 @@ def test_two_vector_inputs_and_scalar_vector_matrix_outputs(dynamics_like, backe
 def test_generic_c_compiles_without_warnings(dynamics_like, tmp_path):
     import subprocess
 
-    from test_c_backend import CC, STRICT_FLAGS
+    from checks import CC, STRICT_FLAGS
 
     if CC is None:
         pytest.skip("no C compiler")
@@ -116,7 +116,7 @@ def test_constant_outputs_and_prismatic_joints(tmp_path):
 
     from symkin import pipeline
     from symkin.model import load_model
-    from test_c_backend import CC, STRICT_FLAGS
+    from checks import CC, STRICT_FLAGS
 
     path = tmp_path / "cart.yaml"
     path.write_text("name: cart\nparameters:\n  h: 0.5\nserial:\n  dh:\n    convention: classic\n    rows:\n"

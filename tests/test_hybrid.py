@@ -23,7 +23,7 @@ from symkin.analysis import global_indices, rating
 from symkin.analysis.device import WholeDevice
 from symkin.cli import main
 from symkin.simulation import Plant, scenarios
-from test_simulation import assert_wall_equilibrium
+from checks import assert_wall_equilibrium
 from tolerances import CLOSED_FORM, DELTA_SCALE, DYNAMICS, EPS, KINEMATICS
 
 W, H = 0.05, 0.03  # wrist centre below the platform, grip point along the handle (models/delta_wrist.yaml)

@@ -15,60 +15,16 @@ import numpy as np
 import pytest
 
 from conftest import ROOT, SYMKIN_CLI
-from symkin import pipeline
 from symkin.analysis import identification
 from symkin.dynamics.parameter_names import DISSIPATIVE
 from symkin.model import model_from_text
-from symkin.runtime.loader import load
-from test_regressor import DRIVEN
+from identification_runs import NOISE, RATE, arm, excitation, simulated_run, write_run  # noqa: F401 (the fixture arm)
+from sample_models import DRIVEN
 from tolerances import EPS
-
-#: Noise on the efforts (N m): large against rounding, small against the 2R arm's torques (~0.1 N m).
-NOISE = 1e-3
-#: A run's duration and sampling (s): five periods of the excitation at 200 Hz.
-DURATION, RATE = 10.0, 200.0
-
-
-@pytest.fixture(scope="module")
-def arm(tmp_path_factory):
-    model = model_from_text(DRIVEN, "driven")
-    request = pipeline.resolve_request(model, ("regressor", "base_regressor", "inverse_dynamics", "energy_regressor"),
-                                       "numpy", None, False, "none")
-    return load(pipeline.write(pipeline.generate(model, request), tmp_path_factory.mktemp("identify")), "numpy")
-
-
-def excitation(n: int, seed: int = 0, harmonics: int = 4, period: float = 2.0, rate: float = RATE):
-    """t, q, qd, qdd of a finite Fourier series per joint (Swevers et al. 1997), exact derivatives."""
-    rng = np.random.default_rng(seed)
-    t = np.arange(0.0, DURATION, 1.0 / rate)
-    omega = 2 * np.pi / period * np.arange(1, harmonics + 1)
-    a, b = rng.uniform(-0.4, 0.4, (2, n, harmonics)) / np.arange(1, harmonics + 1)
-    phase = np.outer(t, omega)                                  # (N, harmonics)
-    q = np.sin(phase) @ a.T + np.cos(phase) @ b.T + 0.7
-    qd = (np.cos(phase) * omega) @ a.T - (np.sin(phase) * omega) @ b.T
-    qdd = -(np.sin(phase) * omega ** 2) @ a.T - (np.cos(phase) * omega ** 2) @ b.T
-    return t, q, qd, qdd
-
-
-def write_run(path, names, t, q, tau, qd=None, qdd=None):
-    columns = {"t": t[:, None], **{f"q_{n}": q[:, [k]] for k, n in enumerate(names)}}
-    if qd is not None:
-        columns.update({f"qd_{n}": qd[:, [k]] for k, n in enumerate(names)})
-        columns.update({f"qdd_{n}": qdd[:, [k]] for k, n in enumerate(names)})
-    columns.update({f"tau_{n}": tau[:, [k]] for k, n in enumerate(names)})
-    np.savetxt(path, np.hstack(list(columns.values())), delimiter=",", header=",".join(columns), comments="")
-    return path
-
-
-def _run(arm, seed=1):
-    t, q, qd, qdd = excitation(len(arm.info.coordinates), seed)
-    tau = arm.inverse_dynamics(q, qd, qdd) + np.random.default_rng(seed).normal(0, NOISE, q.shape)
-    return t, q, qd, qdd, tau
-
 
 @pytest.mark.parametrize("method", ["ols", "wls"])
 def test_a_simulated_run_gives_back_the_models_base_parameters(arm, method):
-    t, q, qd, qdd, tau = _run(arm)
+    t, q, qd, qdd, tau = simulated_run(arm)
     Y_b, pi_b = arm.base_regressor(q, qd, qdd)
     names = arm.info.functions["base_regressor"].outputs["pi_b"]
     found = identification.least_squares(Y_b, tau, names, method)
@@ -81,7 +37,7 @@ def test_a_simulated_run_gives_back_the_models_base_parameters(arm, method):
 def test_rates_derived_from_q_by_the_stated_filter(arm, tmp_path):
     """Without qd and qdd columns, a zero-phase low-pass at --cutoff and central differences: at 200 Hz and a 5 Hz
     cutoff the derived accelerations of the 2 s excitation (4 harmonics, up to 2 Hz) are close to the exact ones."""
-    t, q, qd, qdd, tau = _run(arm)
+    t, q, qd, qdd, tau = simulated_run(arm)
     run = identification.read_measurements(write_run(tmp_path / "run.csv", ["theta1", "theta2"], t, q, tau),
                                            ["theta1", "theta2"], cutoff=5.0)
     inner = slice(100, -100)                                      # away from the filter's edge transients
@@ -90,7 +46,7 @@ def test_rates_derived_from_q_by_the_stated_filter(arm, tmp_path):
 
 
 def test_the_command_writes_the_estimate_and_its_validation(arm, tmp_path):
-    t, q, qd, qdd, tau = _run(arm)
+    t, q, qd, qdd, tau = simulated_run(arm)
     data = write_run(tmp_path / "run.csv", ["theta1", "theta2"], t, q, tau, qd, qdd)
     result = subprocess.run(SYMKIN_CLI + ["identify", str(arm.directory), str(data), "-o", str(tmp_path / "out")],
                             capture_output=True, text=True)
@@ -114,7 +70,7 @@ def test_the_command_writes_the_estimate_and_its_validation(arm, tmp_path):
      "row 4, column 1 (t): the time does not increase"),
 ])
 def test_bad_data_are_refused_with_file_row_and_column_and_nothing_is_written(arm, tmp_path, change, message):
-    t, q, qd, qdd, tau = _run(arm)
+    t, q, qd, qdd, tau = simulated_run(arm)
     data = write_run(tmp_path / "run.csv", ["theta1", "theta2"], t, q, tau)
     data.write_text(change(data.read_text()))
     result = subprocess.run(SYMKIN_CLI + ["identify", str(arm.directory), str(data), "--cutoff", "5",
@@ -129,7 +85,7 @@ def test_a_run_that_does_not_excite_a_parameter_or_a_combination_names_them(arm)
     """Joint 2 held still: its rotor and friction columns vanish. Joint 1 held still: gravity acts on link 1's
     first moments through a constant angle, so m c_x and m c_y of link 1 are not told apart (their columns are
     parallel; with the columns that vanish left out, the SVD finds the combination). Named, not estimated."""
-    t, q, qd, qdd, tau = _run(arm)
+    t, q, qd, qdd, tau = simulated_run(arm)
     names = arm.info.functions["base_regressor"].outputs["pi_b"]
     still = q.copy(), qd.copy(), qdd.copy()
     still[0][:, 1], still[1][:, 1], still[2][:, 1] = 0.3, 0.0, 0.0
@@ -144,7 +100,7 @@ def test_a_run_that_does_not_excite_a_parameter_or_a_combination_names_them(arm)
 
 
 def test_too_few_samples_for_the_base_parameters_are_refused(arm):
-    t, q, qd, qdd, tau = _run(arm)
+    t, q, qd, qdd, tau = simulated_run(arm)
     Y_b, _ = arm.base_regressor(q[:5], qd[:5], qdd[:5])
     with pytest.raises(identification.DataError, match="5 samples give 10 equations for 13 base parameters"):
         identification.least_squares(Y_b, tau[:5], arm.info.functions["base_regressor"].outputs["pi_b"])
@@ -158,7 +114,7 @@ def test_the_consistent_estimate_is_physical_and_fits_the_run(arm):
     from symkin.analysis import consistent
     from symkin.derivation import Derivation
 
-    t, q, qd, qdd, tau = _run(arm)
+    t, q, qd, qdd, tau = simulated_run(arm)
     Y, pi = arm.regressor(q, qd, qdd)
     Y_b, pi_b = arm.base_regressor(q, qd, qdd)
     base_names = arm.info.functions["base_regressor"].outputs["pi_b"]
@@ -196,7 +152,7 @@ def test_an_offset_beyond_the_coulomb_friction_keeps_both_levels_of_the_consiste
 
 
 def test_the_command_estimates_consistent_standard_parameters(arm, tmp_path):
-    t, q, qd, qdd, tau = _run(arm)
+    t, q, qd, qdd, tau = simulated_run(arm)
     data = write_run(tmp_path / "run.csv", ["theta1", "theta2"], t, q, tau, qd, qdd)
     result = subprocess.run(SYMKIN_CLI + ["identify", str(arm.directory), str(data), "--method", "consistent",
                                           "--no-figure", "-o", str(tmp_path / "out")], capture_output=True, text=True)
@@ -239,7 +195,7 @@ def test_the_energy_estimate_gives_back_the_models_base_parameters(arm):
     """From the noisy run of the least-squares tests, without its accelerations: each base parameter within a few
     of its standard deviations (larger than OLS's: one equation per window instead of n per sample), and the
     torques the estimate predicts (with the accelerations) fit to the noise."""
-    t, q, qd, qdd, tau = _run(arm)
+    t, q, qd, qdd, tau = simulated_run(arm)
     found = _energy_estimate(arm, t, q, qd, qdd, tau)
     pi_b = arm.base_regressor(q, qd, qdd)[1][0]
     error = np.abs(found.values - pi_b) / found.std
@@ -254,14 +210,14 @@ def test_the_energy_estimate_gives_back_the_models_base_parameters(arm):
 def test_the_energy_estimate_needs_no_acceleration(arm):
     """The balance reads q, qd and tau only: accelerations that are wrong change the regressor's inertial
     columns but not the estimate (they enter its torque residual alone)."""
-    t, q, qd, qdd, tau = _run(arm)
+    t, q, qd, qdd, tau = simulated_run(arm)
     found = _energy_estimate(arm, t, q, qd, qdd, tau)
     scrambled = _energy_estimate(arm, t, q, qd, qdd[::-1] * 3.0, tau)
     assert np.allclose(scrambled.values, found.values, rtol=0, atol=1e-9 * np.max(np.abs(found.values)))
 
 
 def test_the_command_estimates_from_the_energy_balance_and_refuses_too_few_windows(arm, tmp_path):
-    t, q, qd, qdd, tau = _run(arm)
+    t, q, qd, qdd, tau = simulated_run(arm)
     data = write_run(tmp_path / "run.csv", ["theta1", "theta2"], t, q, tau, qd, qdd)
     result = subprocess.run(SYMKIN_CLI + ["identify", str(arm.directory), str(data), "--method", "energy",
                                           "--window", "0.1", "-o", str(tmp_path / "out")], capture_output=True, text=True)

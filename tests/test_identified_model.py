@@ -26,8 +26,8 @@ from symkin.dynamics.parameter_names import INERTIAL
 from symkin.dynamics.regressor import parameter_names, standard_parameters
 from symkin.model import load_model, model_from_text
 from symkin.model.urdf_export import xml_comment
-from test_identification import _run, arm, excitation, write_run  # noqa: F401 (the module-scoped fixture)
-from test_regressor import DRIVEN
+from identification_runs import arm, excitation, simulated_run, write_run  # noqa: F401 (the module fixture arm)
+from sample_models import DRIVEN
 from tolerances import EPS
 
 #: A spatial 3R arm (classic DH with twists, so every link frame is rotated and shifted in its joint frame)
@@ -118,7 +118,7 @@ def test_identify_writes_the_identified_model_file(arm, tmp_path):  # noqa: F811
     """On the model file: the consistent estimate becomes identified.yaml, which loads and carries it."""
     import json
 
-    t, q, qd, qdd, tau = _run(arm)
+    t, q, qd, qdd, tau = simulated_run(arm)
     (tmp_path / "driven.yaml").write_text(DRIVEN)
     data = write_run(tmp_path / "run.csv", ["theta1", "theta2"], t, q, tau, qd, qdd)
     result = subprocess.run(SYMKIN_CLI + ["identify", str(tmp_path / "driven.yaml"), str(data), "--method",

@@ -15,7 +15,7 @@ import subprocess
 import numpy as np
 
 from conftest import SYMKIN_CLI
-from test_dynamics_feasibility import SCARA as FEASIBILITY_SCARA
+from sample_models import SCARA as FEASIBILITY_SCARA
 
 PLANAR_3R = """name: planar_3r
 serial:

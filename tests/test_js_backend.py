@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from conftest import EXAMPLE_MODELS, function_spec, random_inputs, relative_errors, worst_state
-from test_backends_agree import agreement_bound
+from checks import agreement_bound
 
 POINTS = 200
 EVALUATOR = Path(__file__).parent / "js" / "evaluate.js"

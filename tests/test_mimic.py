@@ -16,7 +16,7 @@ from conftest import reference_function
 from symkin.derivation import Derivation
 from symkin.errors import ModelError
 from symkin.model import coordinates, model_from_text
-from test_dynamics_newton_euler import ODD_ARM
+from sample_models import ODD_ARM
 from tolerances import DYNAMICS, KINEMATICS
 
 #: j3 follows j1 (and carries the arm's friction), j4 follows the prismatic j2.

@@ -16,7 +16,7 @@ from symkin import load
 from symkin.cli import main
 from symkin.simulation import ArmSystem, Plant, run_sampled
 from symkin.simulation import scenarios, user
-from test_simulation import assert_wall_equilibrium
+from checks import assert_wall_equilibrium
 from tests.conftest import GENERATED_DIR
 from tolerances import EPS
 

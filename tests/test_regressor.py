@@ -23,18 +23,8 @@ from symkin.dynamics.regressor import parameter_names
 from symkin.model import load_model, model_from_text
 from symkin.runtime.loader import load
 from tolerances import DYNAMICS, EPS
+from sample_models import DRIVEN, PARAMETERS, PLANAR
 
-PLANAR = (MODELS_DIR / "planar_2r.yaml").read_text()
-PARAMETERS = "  g: {value: 9.81, unit: m/s^2, doc: gravitational acceleration}\n"
-#: The 2R arm with a drive on each joint and friction on both (one smoothed).
-DRIVEN = PLANAR.replace(PARAMETERS, PARAMETERS + "  J1: 1.2e-6\n  N1: 13.3\n  J2: 3.4e-6\n  b1: 0.1\n  c2: 0.3\n") + """
-actuators:
-  theta1: {rotor_inertia: J1, gear_ratio: N1}
-  theta2: {rotor_inertia: J2}
-friction:
-  theta1: {viscous: b1, coulomb: 0.2}
-  theta2: {coulomb: c2, smoothing_velocity: 0.01}
-"""
 #: The same with gyroscopic rotors: a tree (each rotor joint a branch on the link before its joint) whose rotor
 #: joints are coupled to the coordinates (angle N q).
 ROTORS = PLANAR.replace(PARAMETERS, PARAMETERS + "  J1: 1.2e-6\n  N1: 13.3\n  J2: 3.4e-6\n  N2: 7\n") + """

@@ -19,7 +19,6 @@ not a skip: ``example-robot-data`` is a test dependency (pyproject's test extra)
 
 from __future__ import annotations
 
-from importlib.metadata import distribution
 from pathlib import Path
 
 import numpy as np
@@ -30,8 +29,8 @@ from conftest import reference_function
 from symkin.derivation import Derivation
 from symkin.model import load_model
 from tolerances import DYNAMICS, KINEMATICS
+from sample_models import ROBOTS_DIR
 
-ROBOTS_DIR = Path(distribution("example-robot-data").locate_file("cmeel.prefix/share/example-robot-data/robots"))
 
 #: (file under the package's robots/, tip link or None for symkin's default tip, joints symkin keeps).
 ZOO = [

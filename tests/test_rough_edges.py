@@ -64,7 +64,7 @@ def test_simulate_starts_from_a_well_conditioned_pose_and_says_which(tmp_path):
     """Symmetric limits put a SCARA's default start (the middle of the limits) on its stretched-arm
     singularity: the sine scenario gave 2001 NaN TCP-force samples.  Now the start is the best-
     conditioned pose of a Sobol set within the limits, and the output says so."""
-    from test_dynamics_feasibility import SCARA
+    from sample_models import SCARA
 
     model = tmp_path / "scara.yaml"
     model.write_text(SCARA.replace("{link: link4, mass: 0.5}",

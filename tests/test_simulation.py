@@ -14,11 +14,11 @@ import pytest
 from symkin import load
 from symkin.cli import main
 from symkin.errors import GeneratedCodeError
-from symkin.simulation import (ArmSystem, ComputedTorque, JointSine, MassSpringDamperUser, Plant, Wall, WallRenderer,
-                               run_adaptive, run_sampled)
+from symkin.simulation import ArmSystem, ComputedTorque, JointSine, Plant, run_adaptive, run_sampled
 from symkin.simulation import scenarios
 from tests.conftest import GENERATED_DIR, MODELS_DIR
 from tolerances import CLOSED_FORM, DYNAMICS
+from checks import assert_wall_equilibrium
 
 SEED_CENTER = np.radians([45.0, 45.0])
 SEED_DESIGNS = ({"l1": 0.1, "l2": 0.1}, {"l1": 0.2, "l2": 0.2})
@@ -183,28 +183,6 @@ def test_rk4_converges_with_fourth_order(arm):
     assert 11.0 < errors[0] / errors[1] < 32.0, errors   # 2^4 = 16 asymptotically; 3rd order: 8
 
 
-def assert_wall_equilibrium(plant: Plant, q0: np.ndarray, steps: int, offset: float = 0.01, stiffness: float = 500.0,
-                            damping: float = 5.0, hand: dict[str, float] | None = None) -> None:
-    """A hand pulled 2 ``offset`` (2 cm) beyond a wall ``offset`` from the TCP along the first handle coordinate
-    comes to rest where k_a (r - p_h) = k_g (p_h - p) = k_w d (springs in series, p = x_w + d), and then feels
-    exactly the wall's force: the renderer's gravity compensation must cancel the weight (shared with the
-    DELTA's and the Agile Eye's tests; a turning handle's coordinates are angles)."""
-    p0 = plant.point(q0)
-    normal = np.zeros(len(p0))
-    normal[0] = 1.0
-    target = p0 + 2 * offset * normal
-    user = MassSpringDamperUser(lambda t: (target, np.zeros(len(p0))), **(hand or {"arm_damping": 20.0}))
-    wall = Wall(normal, float(p0[0]) + offset, stiffness=stiffness, damping=damping)
-    system = ArmSystem(plant, user)
-    run = run_sampled(system.derivative, WallRenderer(system, wall), system.initial(q0), 1e-3, steps)
-    s = system.split(run.x[-1])
-    d = wall.penetration(plant.point(s.q))
-    k_a, k_g, k_w = user.arm_stiffness, user.grip_stiffness, wall.stiffness
-    expected = k_a * offset / (k_a + k_w + k_a * k_w / k_g)
-    np.testing.assert_allclose(d, expected, rtol=1e-3)
-    desired, felt = WallRenderer(system, wall).desired_and_sensed(run.t[-1], run.x[-1])
-    np.testing.assert_allclose(felt, desired, atol=1e-3 * np.abs(desired[0]))
-    np.testing.assert_allclose(desired[0], -k_w * expected, rtol=1e-3)
 
 
 def test_virtual_wall_settles_at_the_series_spring_equilibrium(arm):

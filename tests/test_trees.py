@@ -121,7 +121,7 @@ def test_a_stock_two_arm_robot_is_one_tree(capsys):
     TCP on the left hand; Pinocchio reads the whole file with the same joints locked. On the command line,
     --branch of an unknown link is a located error."""
     from symkin.cli import main
-    from test_robot_zoo import ROBOTS_DIR
+    from sample_models import ROBOTS_DIR
 
     baxter = ROBOTS_DIR / "baxter_description/urdf/baxter.urdf"
     report = crosscheck(baxter, samples=2, backends=("numpy",), urdf={"tip": "left_hand_link",

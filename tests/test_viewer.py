@@ -7,7 +7,6 @@ import hashlib
 import json
 import re
 import subprocess
-from importlib.metadata import distribution
 from pathlib import Path
 
 import numpy as np
@@ -18,8 +17,8 @@ from symkin import load
 from symkin.analysis import global_indices, mechanism
 from symkin.viewer import page
 from tolerances import KINEMATICS
+from sample_models import ROBOTS_DIR
 
-ROBOTS_DIR = Path(distribution("example-robot-data").locate_file("cmeel.prefix/share/example-robot-data/robots"))
 VENDOR = Path(page.__file__).parent / "vendor"
 
 

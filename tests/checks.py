@@ -1,0 +1,65 @@
+"""Checks shared by test modules (issue 35: not defined in one test module and imported by another): the strict C
+compile, the agreement bound of two evaluations of one function, and the haptic wall's equilibrium."""
+
+from __future__ import annotations
+
+import os
+import shutil
+
+import numpy as np
+
+from symkin.derivation import catalog
+from symkin.simulation import ArmSystem, MassSpringDamperUser, Plant, Wall, WallRenderer, run_sampled
+from tolerances import svd
+
+CC = shutil.which(os.environ.get("CC", "cc")) or shutil.which("gcc")
+
+#: The issue's flags, plus what keeps float32 code honest (-Wconversion, -Wdouble-promotion).
+STRICT_FLAGS = ["-std=c99", "-O3", "-Wall", "-Wextra", "-Werror", "-pedantic", "-Wconversion",
+                "-Wdouble-promotion", "-Wshadow", "-Wstrict-prototypes", "-Wmissing-prototypes"]
+
+
+#: Agreement bound of a well-conditioned function, relative to the largest entry of each output.
+AGREEMENT = 1e-12
+
+
+def agreement_bound(model, spec, inputs, numpy_model) -> np.ndarray:
+    """Per batch entry: AGREEMENT, plus for a function that solves with a square matrix (tcp_force and
+    operational_space with J, forward_dynamics with M) the rounding the solve amplifies: svd(n)
+    times kappa^2 (the operational-space inertia J^-T M J^-1 solves twice; one solve gives kappa).
+    Two evaluation orders of the same exact function then differ by that much near singularities."""
+    bound = np.full(len(inputs[0]), AGREEMENT)
+    by_name = {v.name: value for v, value in zip(spec.vector_inputs, inputs)}
+    for part in spec.parts or (spec.name,):  # a combined function: the worst of its parts
+        solves_with = catalog.definition(part, model.mechanism).solves_with
+        if solves_with is None:
+            continue
+        solved = numpy_model.info.functions[solves_with]
+        matrix = getattr(numpy_model, solves_with)(*(by_name[v] for v in solved.vectors))
+        matrix = matrix[0] if isinstance(matrix, tuple) else matrix
+        bound = np.maximum(bound, AGREEMENT + svd(matrix.shape[-1]) * np.linalg.cond(matrix) ** 2)
+    return bound
+
+
+def assert_wall_equilibrium(plant: Plant, q0: np.ndarray, steps: int, offset: float = 0.01, stiffness: float = 500.0,
+                            damping: float = 5.0, hand: dict[str, float] | None = None) -> None:
+    """A hand pulled 2 ``offset`` (2 cm) beyond a wall ``offset`` from the TCP along the first handle coordinate
+    comes to rest where k_a (r - p_h) = k_g (p_h - p) = k_w d (springs in series, p = x_w + d), and then feels
+    exactly the wall's force: the renderer's gravity compensation must cancel the weight (shared with the
+    DELTA's and the Agile Eye's tests; a turning handle's coordinates are angles)."""
+    p0 = plant.point(q0)
+    normal = np.zeros(len(p0))
+    normal[0] = 1.0
+    target = p0 + 2 * offset * normal
+    user = MassSpringDamperUser(lambda t: (target, np.zeros(len(p0))), **(hand or {"arm_damping": 20.0}))
+    wall = Wall(normal, float(p0[0]) + offset, stiffness=stiffness, damping=damping)
+    system = ArmSystem(plant, user)
+    run = run_sampled(system.derivative, WallRenderer(system, wall), system.initial(q0), 1e-3, steps)
+    s = system.split(run.x[-1])
+    d = wall.penetration(plant.point(s.q))
+    k_a, k_g, k_w = user.arm_stiffness, user.grip_stiffness, wall.stiffness
+    expected = k_a * offset / (k_a + k_w + k_a * k_w / k_g)
+    np.testing.assert_allclose(d, expected, rtol=1e-3)
+    desired, felt = WallRenderer(system, wall).desired_and_sensed(run.t[-1], run.x[-1])
+    np.testing.assert_allclose(felt, desired, atol=1e-3 * np.abs(desired[0]))
+    np.testing.assert_allclose(desired[0], -k_w * expected, rtol=1e-3)
