@@ -302,10 +302,20 @@ def test_a_plant_of_rubbing_legs_needs_their_friction(rubbing_dir):
     with pytest.raises(GeneratedCodeError, match="closure_dynamics, friction .*--only closure,closure_jacobians,"
                                                  "closure_dynamics,friction"):
         Plant(load(rubbing_dir[1]))
-    plant = Plant(load(rubbing_dir[0]))
-    q = plant.home_configuration
-    qd = np.array([0.3, -0.2, 0.0, 0.1])
-    assert np.array_equal(plant.friction(qd), load(rubbing_dir[0]).friction(qd))
-    # the plant's acceleration under the efforts that hold and move it with qdd = 0 is zero
-    hold = plant.torque(q, qd, np.zeros(4))
-    assert np.max(np.abs(plant.acceleration(q, qd, hold))) <= DYNAMICS * np.max(np.abs(hold))
+    rubbing = load(rubbing_dir[0])
+    plant = Plant(rubbing)
+    # near its home assembly, the plant's acceleration is the reduced dynamics with friction (checked against
+    # Pinocchio above) at the assembly solved here: its own assembly and friction are wired in
+    from symkin.analysis.closure_workspace import assemble_at_home
+
+    home_q, home_s = assemble_at_home(rubbing)
+    q = home_q + np.array([0.05, 0.01, -0.04, 0.03])
+    solved = solve_closure(rubbing, q, home_s, HOME, unknowns=("p", "s"))
+    s, p = solved.solution["s"], solved.solution["p"]
+    qd, tau = np.array([0.3, -0.2, 0.05, 0.1]), np.array([0.1, 4.4, -0.1, 0.05])
+    expected = closure_forward_dynamics(rubbing, q, s, p, qd, tau)
+    frictionless = expected - closure_forward_dynamics(rubbing, q, s, p, qd, tau + rubbing.friction(qd))
+    assert np.max(np.abs(frictionless)) > 1e-3 * np.max(np.abs(expected))  # the friction matters here
+    # two Gauss-Newton solves of one assembly agree to rounding, which the solve with M amplifies by kappa(M)
+    kappa = float(np.linalg.cond(actuated_dynamics(rubbing, q, s, p, qd).M))
+    assert np.max(np.abs(plant.acceleration(q, qd, tau) - expected)) <= kappa * DYNAMICS * np.max(np.abs(expected))

@@ -3,7 +3,7 @@
 scipy's engine lives in scipy.stats, whose import (all its distributions, about a second) every analysis command
 paid for its sample points.  This module draws the same points (the same direction numbers, the same random
 linear matrix scramble and digital shift from the same generator draws, the same order), so every figure quoted
-from a scrambled QMC estimate stays as it was (tests/test_sampling.py compares them with scipy's).
+from a scrambled QMC estimate stays as it was (tests/test_sobol.py compares them with scipy's).
 
 The sequence (Bratley and Fox, ACM TOMS 14 (1988) 88-100, Algorithm 659, with the direction numbers of Joe and
 Kuo 2008, :mod:`symkin.analysis.sobol_directions`): in dimension j the direction integers v_jk (k = 0 ... b-1,
@@ -20,6 +20,8 @@ unit diagonal, and XORs every point with a random shift.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from symkin.analysis.sobol_directions import DIRECTIONS
@@ -30,8 +32,10 @@ BITS = 30
 MAX_DIMENSION = len(DIRECTIONS) + 1
 
 
+@functools.lru_cache(maxsize=None)
 def direction_integers(dimension: int) -> np.ndarray:
-    """(dimension, BITS) the direction integers v_jk, the first digit most significant (see the module docstring).
+    """(dimension, BITS) the direction integers v_jk, the first digit most significant (see the module docstring);
+    read-only, formed once per dimension (a QMC estimate draws 16 scrambles of one sequence).
 
     Raises:
         ValueError: more dimensions than :data:`MAX_DIMENSION`.
@@ -48,7 +52,9 @@ def direction_integers(dimension: int) -> np.ndarray:
                 if (polynomial >> (degree - i)) & 1:
                     value ^= m[j, k - i] << i
             m[j, k] = value
-    return (m << (BITS - 1 - np.arange(BITS))).astype(np.uint32)
+    v = (m << (BITS - 1 - np.arange(BITS))).astype(np.uint32)
+    v.setflags(write=False)
+    return v
 
 
 def _scrambled(v: np.ndarray, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
