@@ -127,7 +127,8 @@ def test_the_consistent_estimate_is_physical_and_fits_the_run(arm):
         assert np.linalg.eigvalsh(J)[0] >= -1e3 * EPS * np.max(np.abs(J))
     assert np.all(found.values[20:23] >= 0)                       # theta1's rotor inertia, viscous, Coulomb
     assert np.allclose(np.sqrt(np.mean((Y @ found.values - tau) ** 2, axis=0)), NOISE, rtol=0.1)
-    K = np.array(Derivation(model_from_text(DRIVEN, "driven"))["base_parameters"].combinations, dtype=float)
+    driven = model_from_text(DRIVEN, "driven")
+    K = Derivation(driven)["base_parameters"].evaluate({p.name: float(p.value) for p in driven.parameters})
     assert np.all(np.abs(K @ found.values - pi_b[0]) < 5 * wls.std)
 
 

@@ -20,6 +20,7 @@ from symkin import pipeline
 from symkin.derivation import Derivation
 from symkin.dynamics.parameter_names import DRIVE, INERTIAL
 from symkin.dynamics.regressor import parameter_names
+from symkin.ir.evaluate import lambdify_spec
 from symkin.model import load_model, model_from_text
 from symkin.runtime.loader import load
 from tolerances import DYNAMICS, EPS
@@ -165,8 +166,8 @@ def test_the_regressor_is_pinocchios_on_the_ur10e_urdf():
 def test_the_generated_regressor_in_numpy_c_and_casadi(tmp_path):
     """One call gives (Y, pi); the manifest names pi's elements; each backend's Y pi is its inverse dynamics."""
     model = model_from_text(DRIVEN, "driven")
-    request = pipeline.resolve_request(model, ("regressor", "inverse_dynamics"), "numpy,c,casadi", None, False,
-                                       "none")
+    request = pipeline.resolve_request(model, ("regressor", "base_regressor", "inverse_dynamics"), "numpy,c,casadi",
+                                       None, False, "none")
     written = pipeline.write(pipeline.generate(model, request), tmp_path)
     manifest = json.loads((written / "manifest.json").read_text())
     record = next(f for f in manifest["functions"] if f["name"] == "regressor")
@@ -181,6 +182,11 @@ def test_the_generated_regressor_in_numpy_c_and_casadi(tmp_path):
         tau = generated.inverse_dynamics(q, qd, qdd)
         scale = np.max(np.einsum("bij,bj->bi", np.abs(Y), np.abs(pi)))
         np.testing.assert_allclose(np.einsum("bij,bj->bi", Y, pi), tau, rtol=0, atol=DYNAMICS * scale)
+        for l1 in (0.1, 0.25):  # the default and a longer first link: pi_b regroups link 2's mass with l1
+            Y_b, pi_b = generated.base_regressor(q, qd, qdd, l1=l1)
+            tau = generated.inverse_dynamics(q, qd, qdd, l1=l1)
+            scale = np.max(np.einsum("bij,bj->bi", np.abs(Y_b), np.abs(pi_b)))
+            np.testing.assert_allclose(np.einsum("bij,bj->bi", Y_b, pi_b), tau, rtol=0, atol=DYNAMICS * scale)
 
 
 def test_the_planar_arms_base_parameters_are_khalils_regrouping():
@@ -192,8 +198,49 @@ def test_the_planar_arms_base_parameters_are_khalils_regrouping():
     assert found.base_names == ("link1.mxR", "link1.my", "link1.IzzR", "link2.mx", "link2.my", "link2.Izz",
                                 "theta1.fv", "theta1.fc", "theta1.fo", "theta2.Ia", "theta2.fv", "theta2.fc",
                                 "theta2.fo")
-    assert found.equations()[0] == "link1.mxR = link1.mx + 1/10 link2.m"
-    assert found.equations()[2] == "link1.IzzR = link1.Izz + 1/100 link2.m + theta1.Ia"
+    l1 = sympy.Symbol("l1")
+    mx, Izz = (found.base_names.index(n) for n in ("link1.mxR", "link1.IzzR"))
+    m2, Ia1 = (found.names.index(n) for n in ("link2.m", "theta1.Ia"))
+    assert found.combinations[mx][m2] == l1
+    assert found.combinations[Izz][m2] == l1 ** 2
+    assert found.combinations[Izz][Ia1] == 1
+    assert found.geometry == ("l1",)
+    assert found.equations()[mx] == "link1.mxR = link1.mx + l1 link2.m"
+    assert found.equations()[Izz] == "link1.IzzR = link1.Izz + l1**2 link2.m + theta1.Ia"
+    assert found.evaluate({"l1": 0.25})[Izz, m2] == 0.0625
+
+
+def _off_default(model, rng, names):
+    """The model's parameter values with ``names`` moved to random values of 0.5 to 1.5 times their defaults."""
+    values = dict(model.parameter_values)
+    for name in names:
+        symbol = model.parameter(name).symbol
+        values[symbol] = sympy.Float(float(values[symbol]) * rng.uniform(0.5, 1.5))
+    return values
+
+
+def test_the_regrouping_holds_at_every_geometry_not_only_the_defaults(models, derivations):
+    """The UR10e with its lengths and offsets moved off their defaults: Y = Y_b K(P) at random states, K evaluated
+    at the moved values (a K taken at the defaults misses by the moved lengths); K is Khalil's with the geometry
+    kept (link 3's mass in link 2's first moment as a2 m3, link 5's in the shoulder's inertia as
+    (a2^2 + a3^2 + d4^2) m5)."""
+    model, d = models["ur10e"], derivations["ur10e"]
+    found = d["base_parameters"]
+    a2, a3, d4 = sympy.symbols("a2 a3 d4")
+    row = dict(zip(found.base_names, found.combinations))
+    assert row["upper_arm.mxR"][found.names.index("forearm.m")] == a2
+    assert sympy.expand(row["shoulder.IzzR"][found.names.index("wrist2.m")] - (a2 ** 2 + a3 ** 2 + d4 ** 2)) == 0
+    assert set(found.geometry) == {"a2", "a3", "d4", "d5"}
+    rng = np.random.default_rng(40)
+    spec = d["regressor"]
+    for _ in range(3):
+        values = _off_default(model, rng, found.geometry)
+        Y_pi = lambdify_spec(spec, [list(i.symbols) for i in spec.vector_inputs], "numpy", values)
+        K = found.evaluate({name: float(values[model.parameter(name).symbol]) for name in found.geometry})
+        q, qd, qdd = random_q(model, rng), rng.uniform(-2, 2, 6), rng.uniform(-5, 5, 6)
+        Y = np.array(Y_pi(q, qd, qdd)[:6 * len(found.names)], dtype=float).reshape(6, -1)
+        Y_b = Y[:, list(found.base)]
+        np.testing.assert_allclose(Y_b @ K, Y, rtol=0, atol=DYNAMICS * float(np.max(np.abs(Y_b) @ np.abs(K))))
 
 
 def _stacked(function, model, rng, states):
@@ -206,7 +253,7 @@ def test_the_base_regressor_has_full_rank_and_the_same_torques(models, derivatio
     smallest singular value far above the rounding of its entries)."""
     model, d = models["ur10e"], derivations["ur10e"]
     full, base = reference_function(model, d["regressor"]), reference_function(model, d["base_regressor"])
-    K = np.array(d["base_parameters"].combinations, dtype=float)
+    K = d["base_parameters"].evaluate({p.name: float(p.value) for p in model.parameters})
     rng = np.random.default_rng(37)
     stacked = []
     for q, qd, qdd in _stacked(lambda *state: state, model, rng, 30):

@@ -19,21 +19,35 @@ are polynomials in the sampled values), and more samples than parameters are sta
 base columns are the earlier ones (links from the base out, inertial before drive parameters), so the
 parameters of outer links and the rotor inertias are regrouped into inner ones, as in Khalil's rules.
 
-The geometry is taken at the model's values (a parameter kept free enters at its default): a constant
-whose sine or cosine is not rational (a URDF angle of 1.5708 rad; read it with ``--snap-angles``) or a
-coupling with a non-integer ratio (a gyroscopic rotor's N q) cannot be evaluated exactly, and is refused.
+The model's parameters that enter Y (lengths, offsets, gravity) stay symbols: K is exact for every value
+of them, as the generated functions take them (a base regressor evaluated at another link length than the
+default keeps Y_b pi_b = Y pi).  The echelon form is taken at two random rational values of those
+parameters (nonzero, from a wide range); the pivots and the support of each column of K (which base
+parameters a standard one regroups into) come from it, and each dependent column is then solved
+symbolically from as many sampled rows as its support has entries, Y_S(q, P) k_j(P) = Y_j(q, P), over the
+rational functions of P (sympy's DomainMatrix).  The result is checked against both echelon forms exactly.
+For a serial chain these are Khalil's regrouping rules with the geometry kept: link 2's mass enters link
+1's first moment as l1 m2 and its inertia as l1^2 m2, for any l1.
+
+A constant angle whose sine or cosine is not rational (a URDF angle of 1.5708 rad; read it with
+``--snap-angles``), an angle kept as a parameter, or a coupling with a non-integer ratio (a gyroscopic
+rotor's N q) cannot be evaluated exactly, and is refused.
 """
 
 from __future__ import annotations
 
 import random
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from typing import Any
 from dataclasses import dataclass
 from fractions import Fraction
 
 import flint
+import numpy as np
 import symengine as se
 import sympy
+from sympy.polys.matrices import DomainMatrix
+from sympy.polys.rings import ring as sympy_ring
 
 from symkin.errors import DerivationError
 from symkin.model import coordinates, joint_kinds
@@ -43,6 +57,9 @@ from symkin.model.schema import Model
 EXTRA_SAMPLES = 4
 #: Numerators and denominators of the sampled rationals: small, so that the exact arithmetic stays fast.
 SAMPLE_RANGE = 97
+#: Numerators and denominators of the parameters' sampled values (nonzero): wide, so that a regrouping
+#: coefficient vanishes at them only by a negligible chance.
+PARAMETER_RANGE = 10007
 
 
 @dataclass(frozen=True)
@@ -52,12 +69,15 @@ class BaseParameters:
     Attributes:
         names: the standard parameters' names (Y's columns).
         base: the indices of Y's columns that form Y_b (each base parameter is named after its column).
-        combinations: K, rows of exact rationals (len(base) x len(names)): pi_b = K pi and Y = Y_b K.
+        combinations: K (len(base) x len(names)), exact: sympy numbers, or rational functions of the model's
+            parameters named in ``geometry`` where those enter Y; pi_b = K pi and Y = Y_b K for every value of them.
+        geometry: the names of the model's parameters that K depends on (empty: K is a matrix of rationals).
     """
 
     names: tuple[str, ...]
     base: tuple[int, ...]
-    combinations: tuple[tuple[Fraction, ...], ...]
+    combinations: tuple[tuple[sympy.Expr, ...], ...]
+    geometry: tuple[str, ...] = ()
 
     @property
     def base_names(self) -> tuple[str, ...]:
@@ -66,19 +86,27 @@ class BaseParameters:
                      for b, row in zip(self.base, self.combinations))
 
     def equations(self) -> tuple[str, ...]:
-        """Each base parameter as the combination it stands for: ``link1.mxR = link1.mx + 1/5 link2.m``."""
+        """Each base parameter as the combination it stands for: ``link1.mxR = link1.mx + l1 link2.m``."""
         lines = []
         for name, row in zip(self.base_names, self.combinations):
             terms = []
             for k, coefficient in enumerate(row):
                 if coefficient == 0:
                     continue
-                sign = "-" if coefficient < 0 else "+"
-                size = abs(coefficient)
-                terms.append(f"{sign} {'' if size == 1 else f'{size} '}{self.names[k]}")
+                negative = coefficient.could_extract_minus_sign()
+                size = -coefficient if negative else coefficient
+                factor = "" if size == 1 else f"({size}) " if isinstance(size, sympy.Add) else f"{size} "
+                terms.append(f"{'-' if negative else '+'} {factor}{self.names[k]}")
             text = " ".join(terms)
             lines.append(f"{name} = {text[2:] if text.startswith('+ ') else text}")
         return tuple(lines)
+
+    def evaluate(self, values: Mapping[str, float]) -> np.ndarray:
+        """K as floats at the values of its ``geometry`` (keyed by parameter name; a model's defaults:
+        ``{p.name: p.value for p in model.parameters}``)."""
+        symbols = [sympy.Symbol(name) for name in self.geometry]
+        point = {symbol: sympy.sympify(values[name]) for symbol, name in zip(symbols, self.geometry)}
+        return np.array([[float(k.xreplace(point)) for k in row] for row in self.combinations], dtype=float)
 
 
 def _unit_point(t: Fraction) -> tuple[Fraction, Fraction]:
@@ -108,7 +136,6 @@ class _ExactSample:
         self.values: dict[se.Basic, se.Basic] = {}
         for group in ("qd", "qdd"):
             self.values.update({se.sympify(s): _rational(rational()) for s in coordinates.symbols(model, group)})
-        self.values.update({se.sympify(p.symbol): se.sympify(p.value) for p in model.parameters})
         revolute = {se.sympify(s) for s, c in zip(coordinates.symbols(model, "q"), model.coordinates)
                     if joint_kinds.is_rotation(c.type)}
         self.values.update({s: _rational(v) for s, v in self.q.items() if s not in revolute})
@@ -182,7 +209,8 @@ def require_exact_constants(model: Model, constants: Sequence[se.Basic]) -> None
 
 def base_parameters(model: Model, Y: Sequence[Sequence[se.Basic]], names: Sequence[str],
                     seed: int = 0) -> BaseParameters:
-    """The base parameters of the regressor rows ``Y`` (coordinates x parameters, SymEngine), exactly.
+    """The base parameters of the regressor rows ``Y`` (coordinates x parameters, SymEngine), exactly, with the
+    model's parameters that enter Y kept as symbols (the module docstring has the method).
 
     Raises:
         DerivationError: a constant or a coupling that rational arithmetic cannot evaluate (see the module
@@ -192,21 +220,103 @@ def base_parameters(model: Model, Y: Sequence[Sequence[se.Basic]], names: Sequen
     flat = [e for row in Y for e in row]
     rng = random.Random(seed)
     samples = -(-columns // max(rows, 1)) + EXTRA_SAMPLES
-    entries: list[flint.fmpq] = []
     where = f"{model.name}: base parameters"
     symbolic = [e for e in flat if not e.is_number]
-    trigonometric = sorted(set().union(*(e.atoms(se.sin, se.cos) for e in symbolic)), key=str)
-    coulomb = sorted(set().union(*(e.atoms(se.sign, se.tanh) for e in symbolic)), key=str)
+    atoms = set().union(*(e.atoms(se.sin, se.cos, se.sign, se.tanh) for e in symbolic))
+    trigonometric = sorted((a for a in atoms if isinstance(a, (se.sin, se.cos))), key=str)
+    coulomb = sorted((a for a in atoms if isinstance(a, (se.sign, se.tanh))), key=str)
+    stacked: list[se.Basic] = []  # the samples' rows: Y at rational states, a function of the parameters only
     for _ in range(samples):
         sample = _ExactSample(model, rng)
         sample.bind_atoms(trigonometric, coulomb, where)
-        values = sample.values
-        entries += [_exact(e.xreplace(values) if not e.is_number else e, where) for e in flat]
-    stacked = flint.fmpq_mat(samples * rows, columns, entries)
-    echelon, rank = stacked.rref()
-    base, combinations = [], []
-    for r in range(rank):
-        row = [Fraction(int(echelon[r, c].p), int(echelon[r, c].q)) for c in range(columns)]
-        base.append(next(c for c, v in enumerate(row) if v != 0))
-        combinations.append(tuple(row))
-    return BaseParameters(tuple(names), tuple(base), tuple(combinations))
+        stacked += [e.xreplace(sample.values) if not e.is_number else e for e in flat]
+    geometry = _entering_parameters(model, stacked, where)
+    if not geometry:
+        only = _Echelon(stacked, samples * rows, columns, {}, where)
+        combinations = tuple(tuple(sympy.Rational(k.numerator, k.denominator) for k in row) for row in only.K)
+        return BaseParameters(tuple(names), only.base, combinations)
+    echelons = [_Echelon(stacked, samples * rows, columns, _parameter_point(geometry, rng), where) for _ in range(2)]
+    first, second = echelons
+    if first.base != second.base:
+        raise DerivationError(f"{where}: the base columns differ between two random values of the parameters "
+                              f"{', '.join(map(str, geometry))} (a special value drawn by chance: please report it)")
+    K = _symbolic_combinations(stacked, columns, echelons, geometry)
+    for echelon in echelons:
+        point = {sympy.Symbol(str(p)): sympy.Rational(v.numerator, v.denominator) for p, v in echelon.point.items()}
+        if any(k.xreplace(point) != sympy.Rational(e.numerator, e.denominator)
+               for row, exact in zip(K, echelon.K) for k, e in zip(row, exact)):
+            raise DerivationError(f"{where}: the symbolic regrouping disagrees with the echelon form at a sampled "
+                                  "value of the parameters (a special value drawn by chance: please report it)")
+    depends = sorted({str(symbol) for row in K for k in row for symbol in k.free_symbols})
+    return BaseParameters(tuple(names), first.base, K, tuple(depends))
+
+
+def _entering_parameters(model: Model, stacked: Sequence[se.Basic], where: str) -> list[se.Symbol]:
+    """The model's parameters left in the sampled rows (outside every sine, cosine and Coulomb shape)."""
+    left = sorted(set().union(*(e.free_symbols for e in stacked if not e.is_number)), key=str)
+    known = {str(p.symbol) for p in model.parameters}
+    strangers = [str(s) for s in left if str(s) not in known]
+    if strangers:
+        raise DerivationError(f"{where}: the regressor keeps the symbols {', '.join(strangers)} at a sampled state, "
+                              "which are neither coordinates nor the model's parameters")
+    return left
+
+
+def _parameter_point(geometry: Sequence[se.Symbol], rng: random.Random) -> dict[se.Symbol, Fraction]:
+    """A random nonzero rational value of each parameter, from a range wide enough that a polynomial of the
+    regrouping vanishes there only by a chance of about its degree in PARAMETER_RANGE."""
+    return {p: Fraction(rng.choice((-1, 1)) * rng.randint(1, PARAMETER_RANGE), rng.randint(1, PARAMETER_RANGE))
+            for p in geometry}
+
+
+class _Echelon:
+    """The sampled rows at one value of the parameters, brought to reduced row echelon form over the rationals."""
+
+    def __init__(self, stacked: Sequence[se.Basic], rows: int, columns: int, point: dict[se.Symbol, Fraction],
+                 where: str):
+        values = {p: _rational(v) for p, v in point.items()}
+        self.point = point
+        self.matrix = flint.fmpq_mat(rows, columns, [_exact(e.xreplace(values) if not e.is_number else e, where)
+                                                     for e in stacked])
+        echelon, rank = self.matrix.rref()
+        self.K = [[Fraction(int(echelon[r, c].p), int(echelon[r, c].q)) for c in range(columns)]
+                  for r in range(rank)]
+        self.base = tuple(next(c for c, v in enumerate(row) if v != 0) for row in self.K)
+
+    def independent_rows(self, columns: Sequence[int]) -> list[int]:
+        """As many rows as ``columns`` on which those columns are linearly independent."""
+        block = flint.fmpq_mat([[self.matrix[r, c] for r in range(self.matrix.nrows())] for c in columns])
+        echelon, rank = block.rref()
+        return [next(r for r in range(echelon.ncols()) if echelon[i, r] != 0) for i in range(rank)]
+
+
+def _symbolic_combinations(stacked: Sequence[se.Basic], columns: int, echelons: Sequence[_Echelon],
+                           geometry: Sequence[se.Symbol]) -> tuple[tuple[sympy.Expr, ...], ...]:
+    """K over the rational functions of the parameters: the dependent columns j of one support S (the base
+    parameters they regroup into) solved together from |S| sampled rows, Y_S k_j = Y_j (the rows on which Y_S
+    has full rank at the first sampled value); the rows' entries are polynomials in the parameters."""
+    first = echelons[0]
+    base, rank = first.base, len(first.base)
+    polynomials, *_ = sympy_ring([str(p) for p in geometry], sympy.QQ)
+    domain = polynomials.to_domain()
+
+    def entry(row: int, column: int) -> Any:
+        return polynomials.from_expr(sympy.sympify(se.expand(stacked[row * columns + column])))
+
+    K = [[sympy.Integer(1 if c == b else 0) for c in range(columns)] for b in base]
+    groups: dict[tuple[int, ...], list[int]] = {}
+    for j in range(columns):
+        support = tuple(r for r in range(rank) if j not in base and any(e.K[r][j] != 0 for e in echelons))
+        if support:
+            groups.setdefault(support, []).append(j)
+    for support, dependent in groups.items():
+        picked = first.independent_rows([base[r] for r in support])
+        system = DomainMatrix([[entry(row, base[r]) for r in support] for row in picked], (len(picked), len(support)),
+                              domain)
+        rhs = DomainMatrix([[entry(row, j) for j in dependent] for row in picked], (len(picked), len(dependent)),
+                           domain)
+        solution = system.to_field().lu_solve(rhs.to_field()).to_Matrix()
+        for i, r in enumerate(support):
+            for k, j in enumerate(dependent):
+                K[r][j] = sympy.factor_terms(solution[i, k])
+    return tuple(tuple(row) for row in K)

@@ -239,14 +239,14 @@ def base_regressor(d: Deriving) -> FunctionSpec:
     program = Program()
     Y_b = [program.bind([row[b] for b in found.base]) for row in Y]
     pi = standard_parameters(model, d[newton_euler_links])
-    pi_b = program.bind([se.Add(*(se.Rational(k.numerator, k.denominator) * p for k, p in zip(row, pi) if k != 0))
+    pi_b = program.bind([se.Add(*(se.sympify(k) * p for k, p in zip(row, pi) if k != 0))
                          for row in found.combinations])
     rank = len(found.base)
     spec = function_spec(
         d, "base_regressor", "Base regressor: tau = Y_b(q, qd, qdd) pi_b, Y_b of full column rank.",
         "The linearly independent columns of the regressor (Gautier and Khalil 1990), found exactly by a rational "
         "echelon form over random rational states (symkin.dynamics.base_parameters); Y = Y_b K and pi_b = K pi "
-        "with K exact at the model's geometry: " + "; ".join(found.equations()) + ".",
+        "with K exact for every value of the model's parameters: " + "; ".join(found.equations()) + ".",
         ["q", "qd", "qdd"], program,
         [("Y_b", [e for row in Y_b for e in row], (model.dof, rank), "base regressor: full column rank", ""),
          ("pi_b", pi_b, (rank,), "the model's base parameters (the identifiable combinations)", "")])
