@@ -16,6 +16,7 @@ from conftest import MODELS_DIR
 from symkin import load, pipeline
 from symkin.errors import DerivationError
 from symkin.derivation import Derivation
+from symkin.dynamics.parameter_names import DRIVE, INERTIAL
 from symkin.model import model_from_text
 from tolerances import DYNAMICS
 
@@ -122,10 +123,82 @@ def test_a_translating_platform_has_no_first_moment_or_inertia_columns(derived):
     assert np.all(np.abs(Y[:, :, names.index("platform.m")]).max(axis=-1) > 0)
 
 
-def test_models_the_regressor_does_not_cover_are_refused(models):
-    for name, what in (("agile_eye", "distal links"), ("delta_wrist", "wrist")):
-        with pytest.raises(DerivationError, match=f"regressor of a parallel model does not cover .*{what}"):
-            Derivation(models[name])["regressor"]
+def _assert_both_regressors(generated, states, rates, rng):
+    """Y pi = tau and Y_e pi = k + u at the device's states ``states`` (q, p and a wrist's qw) and rates ``rates``
+    ((qd, qdd), a wrist's after each), at three random draws of every free parameter (0.2 to 5 times its default)."""
+    functions = generated.info.functions
+    free = {i.name: i.default for f in ("regressor", "energy_regressor", "kinetic_energy", "potential_energy")
+            for i in functions[f].inputs if i.kind == "parameter"}
+
+    def own(function, values):  # the parameters a generated function takes
+        return {k: v for k, v in values.items() if k in {i.name for i in functions[function].inputs}}
+
+    velocities = rates[:len(rates) // 2]
+    for _ in range(3):
+        values = {name: default * rng.uniform(0.2, 5.0) for name, default in free.items()}
+        regressor = generated.regressor(*states, *rates, **own("regressor", values))
+        tau = generated.inverse_dynamics(*states, *rates, **own("inverse_dynamics", values))
+        terms = np.abs(regressor.Y * regressor.pi[..., None, :])
+        np.testing.assert_array_less(np.abs(np.einsum("sik,sk->si", regressor.Y, regressor.pi) - tau),
+                                     DYNAMICS * terms.sum(axis=-1) + np.finfo(float).tiny)
+        energy = generated.energy_regressor(*states, *velocities, **own("energy_regressor", values))
+        k_u = (generated.kinetic_energy(*states, *velocities, **own("kinetic_energy", values))
+               + generated.potential_energy(*states, **own("potential_energy", values)))
+        np.testing.assert_array_less(np.abs(np.einsum("sk,sk->s", energy.Y_e, energy.pi) - k_u),
+                                     DYNAMICS * np.abs(energy.Y_e * energy.pi).sum(axis=-1) + np.finfo(float).tiny)
+    return free
+
+
+def _generated(text, file, fixed, tmp_path):
+    model = model_from_text(text, file=file)
+    request = pipeline.resolve_request(model, only="regressor,energy_regressor,inverse_dynamics,kinetic_energy,"
+                                       "potential_energy,ik", fixed=fixed)
+    return model, load(pipeline.write(pipeline.generate(model, request), tmp_path))
+
+
+def test_a_hybrid_devices_wrist_enters_both_regressors(tmp_path):
+    """The DELTA carrying a 3R wrist, friction on the legs and on a wrist joint: Y pi = tau and Y_e pi = k + u at
+    random masses of the arms, rods, platform and wrist bodies, random wrist states and a rotor on the actuators;
+    the rows are the legs' then the wrist's, the wrist's columns its links' and joints' after the legs' drives."""
+    tcp = "  tcp: {xyz: [0, h, 0]}\n"
+    text = (MODELS_DIR / "delta_wrist.yaml").read_text().replace(
+        tcp, tcp + "  friction:\n    psi2: {viscous: 0.001, coulomb: 0.004}\n") + FRICTION.format(a="theta1", b="theta2")
+    assert "psi2: {viscous" in text
+    model, generated = _generated(text, "delta_wrist.yaml", "r_base,r_tcp,a,b,w,h", tmp_path)
+    rng, q, p, qd, qdd = _states(generated, 0.03, 64, 55)
+    qw, qwd, qwdd = rng.uniform(-1.2, 1.2, q.shape), rng.normal(size=q.shape), rng.normal(size=q.shape)
+    names = generated.info.functions["regressor"].results[1].elements
+    wrist = [j.name for j in model.parallel.wrist.coordinates]
+    assert names[names.index("theta3.fo") + 1:] == tuple(
+        [f"{link}.{p}" for link in ("fork1", "fork2", "handle") for p in INERTIAL]
+        + [f"{joint}.{p}" for joint in wrist for p in DRIVE])
+    assert generated.regressor(q, p, qw, qd, qwd, qdd, qwdd).Y.shape == (64, 6, len(names))
+    free = _assert_both_regressors(generated, (q, p, qw), (qd, qwd, qdd, qwdd), rng)
+    assert {"m_fork1", "m_handle", "m_platform", "m_arm"} <= set(free)
+
+
+def test_a_spherical_platforms_distal_links_enter_both_regressors(tmp_path):
+    """The Agile Eye (distal arcs, a camera on the turning platform): Y pi = tau and Y_e pi = k + u at random masses
+    and radii of the arcs and the camera; the distal link's ten columns follow the actuated link's, its values are
+    its body about its frame's origin, and its columns carry effort (the arcs turn with every motion) but for the
+    mass's: the arcs' frames sit at the centre of rotation, where a point mass neither moves nor rises."""
+    text = (MODELS_DIR / "agile_eye.yaml").read_text() + FRICTION.format(a="theta1", b="theta2")
+    model, generated = _generated(text, "agile_eye.yaml", None, tmp_path)
+    rng, q, p, qd, qdd = _states(generated, 0.2, 64, 56)
+    names = generated.info.functions["regressor"].results[1].elements
+    distal = [f"distal_link.{p}" for p in INERTIAL]
+    assert names[names.index("actuated_link.Izz") + 1:names.index("actuated_link.Izz") + 11] == tuple(distal)
+    regressor = generated.regressor(q, p, qd, qdd)
+    pi = dict(zip(names, regressor.pi[0]))
+    defaults = {i.name: i.default for i in generated.info.functions["regressor"].inputs if i.kind == "parameter"}
+    r_d, m_d = defaults["r_d"], defaults["m_d"]
+    assert pi["distal_link.m"] == m_d
+    assert pi["distal_link.my"] == pytest.approx(m_d * 2 * r_d / np.pi, rel=4 * np.finfo(float).eps)
+    largest = np.abs(regressor.Y[:, :, [names.index(n) for n in distal]]).max(axis=(0, 1))
+    assert largest[0] == 0
+    assert np.all(largest[1:] > 0)
+    free = _assert_both_regressors(generated, (q, p), (qd, qdd), rng)
+    assert {"m_d", "r_d", "m_camera", "I_camera"} <= set(free)
 
 
 def test_both_regressors_share_one_build_of_the_unit_mass_distributions(monkeypatch):

@@ -113,8 +113,11 @@ def _constraint_hessians(d: Deriving) -> tuple[tuple[tuple[int, int, sympy.Expr]
 class ReducedDynamics:
     """The pieces of the equations of motion bound into one program, each formed once when first used."""
 
-    def __init__(self, d: Deriving, program: Program, parts: Inertia | None = None):
+    def __init__(self, d: Deriving, program: Program, parts: Inertia | None = None, wrist_bodies: bool = True):
+        """``parts``: the mass distribution (the model's by default); ``wrist_bodies``: whether a hybrid device's
+        wrist bodies are in it (the regressor's columns of the legs' and platform's parameters leave them out)."""
         self.d, self.program = d, program
+        self.wrist_bodies = wrist_bodies
         self.n = d.model.dof
         self.parts: Inertia = d[_inertia] if parts is None else parts
         self.q = coordinate_symbols(d, "q")
@@ -123,10 +126,10 @@ class ReducedDynamics:
         self.qw = se_vector(hybrid.wrist_symbols(d.model, "q"))
         self.c = self.p + self.qw
 
-    def with_parts(self, parts: Inertia) -> ReducedDynamics:
+    def with_parts(self, parts: Inertia, wrist_bodies: bool = True) -> ReducedDynamics:
         """The terms of another mass distribution on the same mechanism and program, sharing the kinematic terms
-        (J_x, J_q, J_x^-1, J) already bound."""
-        other = ReducedDynamics(self.d, self.program, parts)
+        (J_x, J_q, J_x^-1, J) already bound; ``wrist_bodies`` as :class:`ReducedDynamics`'."""
+        other = ReducedDynamics(self.d, self.program, parts, wrist_bodies)
         other.__dict__.update({k: v for k, v in self.__dict__.items() if k in ("jacobians", "J_x_inverse", "J")})
         return other
 
@@ -252,9 +255,10 @@ class ReducedDynamics:
         M = se_matrix(self.parts.platform_matrix)
         if not self.qw:
             return M
-        wrist, m = self.d[hybrid.wrist_inertia].matrix, len(self.p)
-        return [[(M[i][j] if i < m and j < m else se.Integer(0)) + wrist[i][j] for j in range(len(self.c))]
-                for i in range(len(self.c))]
+        m, size = len(self.p), len(self.c)
+        wrist = self.d[hybrid.wrist_inertia].matrix if self.wrist_bodies else [[se.Integer(0)] * size] * size
+        return [[(M[i][j] if i < m and j < m else se.Integer(0)) + wrist[i][j] for j in range(size)]
+                for i in range(size)]
 
     @cached_property
     def M_p(self) -> Matrix:
@@ -282,7 +286,7 @@ class ReducedDynamics:
     def potential(self) -> tuple[se.Basic, se.Basic]:
         """(u_a(q), u_c(c)): the actuator side's and the platform side's (with a wrist's) potential energy."""
         u_c = se.sympify(self.parts.platform_potential)
-        if self.qw:
+        if self.qw and self.wrist_bodies:
             u_c += self.d[hybrid.wrist_inertia].potential
         return se.sympify(self.parts.actuator_potential), u_c
 

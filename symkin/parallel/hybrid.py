@@ -130,7 +130,7 @@ class WristInertia:
 def wrist_inertia(d: Deriving) -> WristInertia:
     """M_w(c) by the composite-rigid-body algorithm on the device's chain (its platform joints massless, so
     only the wrist's bodies and rotors count), rows and columns in the order of c; u_w from the bodies' centres."""
-    chain = d[_device_derivation]
+    chain = d[device_derivation]
     M = chain[mass_matrix_graph]
     index = combined_order(d.model, len(M))
     g = [se.sympify(v) for v in d.model.gravity]
@@ -142,19 +142,20 @@ def wrist_inertia(d: Deriving) -> WristInertia:
 
 @quantity("device_derivation", "the derivation graph of the hybrid device's serial chain", emitted=False,
           mechanism=PARALLEL)
-def _device_derivation(d: Deriving) -> Deriving:
+def device_derivation(d: Deriving) -> Deriving:
+    """The derivation graph of :func:`device_chain` (its serial quantities: frames, Jacobian, mass matrix, regressor)."""
     return d.of(device_chain(d.model))
 
 
 def combined_jacobian(d: Deriving) -> sympy.Matrix:
     """J_c, the geometric Jacobian of the TCP in (p, qw): the platform columns in the order of p."""
-    J = sympy.Matrix(d[_device_derivation][geometric_jacobian_matrix])
+    J = sympy.Matrix(d[device_derivation][geometric_jacobian_matrix])
     return sympy.Matrix.hstack(*(J[:, k] for k in combined_order(d.model, J.shape[1])))
 
 
 @quantity("device_fk", "pose of the hybrid device's TCP base_T_tcp(p, qw) (4x4)", mechanism=PARALLEL)
 def _device_fk(d: Deriving) -> FunctionSpec:
-    chain: ChainFrames = d[_device_derivation][chain_frames]
+    chain: ChainFrames = d[device_derivation][chain_frames]
     return make_function(
         d.model, "device_fk", "Forward kinematics of the hybrid device: pose of the wrist's TCP.",
         "base_T_tcp = base_T_platform(p) * platform_T_wrist(qw) * wrist_T_tcp: the platform pose "
@@ -166,7 +167,7 @@ def _device_fk(d: Deriving) -> FunctionSpec:
 
 @quantity("device_frames", "base_T_<link> (4x4) of every link of a hybrid device's wrist", mechanism=PARALLEL)
 def _device_frames(d: Deriving) -> FunctionSpec:
-    chain: ChainFrames = d[_device_derivation][chain_frames]
+    chain: ChainFrames = d[device_derivation][chain_frames]
     platform = {joint.link for joint in platform_joints(d.model)}
     return make_function(
         d.model, "device_frames", "Pose of every link frame of the wrist in the base frame (the viewer draws them).",

@@ -235,8 +235,8 @@ def _actuator_side(model: Model, bodies: ParallelBodies, leg: DistanceLeg, chain
     return inertia, potential
 
 
-def _distal_link(model: Model, link: Body, leg: DistanceLeg, chain: LegChain) -> DistalLink:
-    """One spherical leg's distal link (see the module docstring)."""
+def distal_link(model: Model, link: Body, leg: DistanceLeg, chain: LegChain) -> DistalLink:
+    """One spherical leg's distal link carrying the body ``link`` (see the module docstring)."""
     w, v = distal_axes(leg.leg)
     L = sympy.Matrix.hstack(w, v, w.cross(v))
     if L.det() == 0:
@@ -290,7 +290,7 @@ def split_inertia(model: Model, legs: tuple[DistanceLeg, ...], chains: tuple[Leg
                       rods=_swinging_rods(model, bodies, legs))
     if bodies.distal_link is None:
         return inertia
-    links = tuple(_distal_link(model, bodies.distal_link, leg, chain) for leg, chain in zip(legs, chains))
+    links = tuple(distal_link(model, bodies.distal_link, leg, chain) for leg, chain in zip(legs, chains))
     g = sympy.Matrix(model.gravity)
     potential = sum((-link.mass * g.dot(link.rotation * sympy.Matrix(link.com)) for link in links), sympy.Integer(0))
     return replace(inertia, distal_links=links, distal_potential=potential)
