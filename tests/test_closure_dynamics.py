@@ -9,6 +9,8 @@ redundant; it converges to the exact solution).  Every mass property is written 
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -16,13 +18,15 @@ from conftest import MODELS_DIR
 from sample_models import dual_scara_dynamics_text
 from symkin import load, pipeline
 from symkin.derivation import Derivation
+from symkin.dynamics.parameter_names import DRIVE, INERTIAL
 from symkin.errors import DerivationError, ModelError
 from symkin.model import load_model, model_from_text
-from symkin.runtime.closure_dynamics import closure_forward_dynamics, closure_inverse_dynamics, actuated_dynamics
+from symkin.runtime.closure_dynamics import (actuated_dynamics, closure_forward_dynamics, closure_inverse_dynamics,
+                                             closure_regressor)
 from symkin.runtime.parallel import solve_closure
 from symkin.simulation import ArmSystem, Plant, run_adaptive
 from symkin.cli import main
-from tolerances import DYNAMICS, NEWTON
+from tolerances import DYNAMICS, EPS, NEWTON
 
 D, L1, L2, E = 0.3, 0.25, 0.25, 0.1
 HOME = np.array([0.0, 0.3, 0.1, 0.0])
@@ -319,3 +323,50 @@ def test_a_plant_of_rubbing_legs_needs_their_friction(rubbing_dir):
     # two Gauss-Newton solves of one assembly agree to rounding, which the solve with M amplifies by kappa(M)
     kappa = float(np.linalg.cond(actuated_dynamics(rubbing, q, s, p, qd).M))
     assert np.max(np.abs(plant.acceleration(q, qd, tau) - expected)) <= kappa * DYNAMICS * np.max(np.abs(expected))
+
+
+def _randomized_bodies(text, rng):
+    """Every body of the document's dual SCARA with a random mass, an off-axis centre of mass and a full inertia
+    (principal-like moments 1-1.5e-3 kg m^2, products below 2e-5: positive definite), so that every standard
+    parameter of the regressor is nonzero."""
+    def body(_):
+        m, c = rng.uniform(0.05, 0.4), rng.uniform(-0.05, 0.05, 3)
+        d, off = rng.uniform(1e-3, 1.5e-3, 3), rng.uniform(-2e-5, 2e-5, 3)
+        return (f"{{mass: {m:.4f}, com: [{c[0]:.4f}, {c[1]:.4f}, {c[2]:.4f}], inertia: {{xx: {d[0]:.6f}, "
+                f"yy: {d[1]:.6f}, zz: {d[2]:.6f}, xy: {off[0]:.7f}, xz: {off[1]:.7f}, yz: {off[2]:.7f}}}}}")
+
+    changed, count = re.subn(r"\{mass: [^{}]*\{[^{}]*\}\}", body, text)
+    assert count == 8  # the platform and the seven link bodies
+    return changed
+
+
+def test_the_regressor_of_legs_without_the_distance_form_is_their_inverse_dynamics(tmp_path):
+    """The dual SCARA with random full bodies and friction on two actuators: at assembled states, random rates and
+    accelerations, Y pi (Y = W^T Y_z at the motion the closure allows) equals closure_inverse_dynamics (friction
+    included) to DYNAMICS of sum |Y_ik pi_k|; pi lists each link body's ten parameters about its joint's frame, the
+    platform's, then each actuator's drive."""
+    rng = np.random.default_rng(57)
+    text = _randomized_bodies(dual_scara_dynamics_text(), rng) + (
+        "\nfriction:\n  theta1: {viscous: 0.01, coulomb: 0.02}\n"
+        "  knee2: {viscous: 0.02, coulomb: {positive: 0.03, negative: 0.01}}\n")
+    model = model_from_text(text, file="dual_scara_random.yaml")
+    request = pipeline.resolve_request(model, "closure,closure_jacobians,closure_dynamics,closure_regressor,friction",
+                                       "numpy", fixed="all")
+    generated = load(pipeline.write(pipeline.generate(model, request), tmp_path))
+    names = generated.info.functions["closure_regressor"].results[1].elements
+    links = [body.link for body in model.parallel.bodies.links]
+    assert names == tuple([f"{link}.{p}" for link in links + ["platform"] for p in INERTIAL]
+                          + [f"{c.name}.{p}" for c in model.coordinates for p in DRIVE])
+    ik = solve_closure(generated, [1.0, 0.1, 1.6, 0.0], np.zeros(4), HOME, unknowns=("q", "s"), max_step=0.2)
+    for _ in range(4):
+        q = ik.solution["q"] + rng.uniform(-0.03, 0.03, 4)
+        fk = solve_closure(generated, q, ik.solution["s"], HOME, unknowns=("p", "s"))
+        assert fk.all_converged
+        qd, qdd = rng.normal(size=4), rng.normal(size=4)
+        Y, pi = closure_regressor(generated, q, fk.solution["s"], fk.solution["p"], qd, qdd)
+        assert np.all(pi[:len(INERTIAL) * (len(links) + 1)] != 0)  # every body's parameters are exercised
+        tau = closure_inverse_dynamics(generated, q, fk.solution["s"], fk.solution["p"], qd, qdd)
+        np.testing.assert_array_less(np.abs(Y @ pi - tau), DYNAMICS * np.abs(Y * pi).sum(axis=-1))
+    first = model.parallel.bodies.links[0]
+    assert pi[names.index(f"{first.link}.m")] == float(first.mass)
+    assert pi[names.index(f"{first.link}.my")] == pytest.approx(float(first.mass * first.com[1]), rel=2 * EPS)

@@ -27,6 +27,7 @@ with W from the closure's Jacobians by a linear solve, as the DELTA's J_x^-1 (no
 
 from __future__ import annotations
 
+import symengine as se
 import sympy
 
 from symkin.errors import DerivationError
@@ -34,47 +35,61 @@ from symkin.ir.inputs import coordinate_input
 from symkin.ir.quantity import Deriving, quantity
 from symkin.ir.spec import FunctionSpec, InputSpec, OutputSpec, make_function
 from symkin.model import coordinates
-from symkin.model.schema import Body, Model
-from symkin.parallel.inertia import about_origin, platform_side
+from symkin.model.schema import Model, ParallelBodies
+from symkin.dynamics.parameter_names import DRIVE, INERTIAL
+from symkin.dynamics.regressor import drive_columns, drive_values
+from symkin.geometry import skew
+from symkin.parallel.inertia import Triple, about_origin, platform_side, standard_values, unit_triples
 from symkin.parallel.inputs import TASK_UNITS, passive_input, passive_symbols, passive_variables, task_input, task_symbols
 from symkin.parallel.legs import LegChain
 from symkin.parallel.quantities import (PARALLEL, ParallelStructure, actuated_input, closure_jacobian_matrices, jacobian,
                                         parallel_structure, reduced_legs)
 
 
-def rate_symbols(symbols: tuple[sympy.Symbol, ...]) -> tuple[sympy.Symbol, ...]:
-    """The rate of each coordinate symbol, named as the coordinates' velocities (``x`` -> ``x_d``)."""
-    return tuple(sympy.Symbol(coordinates.symbol_name("qd", s.name), real=True) for s in symbols)
+#: Per coordinate group of z's rates: the names of the passive and the platform inputs, the unit's time power, a word.
+_RATE_GROUPS = {"qd": ("sd", "pd", "/s", "velocities"), "qdd": ("sdd", "pdd", "/s^2", "accelerations")}
 
 
-def _rate_inputs(model: Model) -> tuple[InputSpec, InputSpec, InputSpec]:
-    """The inputs qd, sd, pd."""
+def rate_symbols(symbols: tuple[sympy.Symbol, ...], group: str = "qd") -> tuple[sympy.Symbol, ...]:
+    """The rate of each coordinate symbol in ``group``, named as the coordinates' (``x`` -> ``x_d``, ``x_dd``)."""
+    return tuple(sympy.Symbol(coordinates.symbol_name(group, s.name), real=True) for s in symbols)
+
+
+def _rate_inputs(model: Model, group: str = "qd") -> tuple[InputSpec, InputSpec, InputSpec]:
+    """The inputs qd, sd, pd (``group`` "qd") or qdd, sdd, pdd ("qdd")."""
+    passive_name, platform_name, per_time, word = _RATE_GROUPS[group]
     passive = passive_variables(model)
-    sd = InputSpec("sd", "vector", rate_symbols(passive_symbols(model)), tuple(name for name, _ in passive),
-                   tuple("rad/s" if rotation else "m/s" for _, rotation in passive), "passive joint velocities")
-    pd = InputSpec("pd", "vector", rate_symbols(task_symbols(model)), model.task_space,
-                   tuple(f"{TASK_UNITS[c]}/s" for c in model.task_space), "task velocities of the platform (TCP)")
-    return coordinate_input(model, "qd"), sd, pd
+    s = InputSpec(passive_name, "vector", rate_symbols(passive_symbols(model), group),
+                  tuple(name for name, _ in passive),
+                  tuple(("rad" if rotation else "m") + per_time for _, rotation in passive), f"passive joint {word}")
+    p = InputSpec(platform_name, "vector", rate_symbols(task_symbols(model), group), model.task_space,
+                  tuple(f"{TASK_UNITS[c]}{per_time}" for c in model.task_space), f"task {word} of the platform (TCP)")
+    return coordinate_input(model, group), s, p
 
 
-def _link_mass_matrix(body: Body, chain: LegChain, joint: int, index: dict[sympy.Symbol, int], size: int
+def _link_mass_matrix(body: Triple, chain: LegChain, joint: int, index: dict[sympy.Symbol, int], size: int
                       ) -> tuple[sympy.Matrix, sympy.Matrix]:
-    """(M contribution over z, m c_w) of the link moved by the leg's joint ``joint``."""
+    """(M contribution over z, m o + R h) of the link moved by the leg's joint ``joint``, its body given about that
+    link's frame (origin o, axes R) as (m, h, I_o): k = 1/2 m |v_o|^2 + v_o . (w x R h) + 1/2 w^T R I_o R^T w, so
+    M = m Jv^T Jv + A + A^T + Jw^T R I_o R^T Jw with A = Jv^T [R h]x^T Jw (Jv, Jw: the origin's velocity and the
+    link's angular velocity per unit rate of each variable of z)."""
+    mass, first_moment, inertia = body
     frame = chain.links[joint]
     R = sympy.Matrix(frame.R)
-    c = sympy.Matrix(frame.p) + R * sympy.Matrix(body.com)
-    inertia = R * sympy.Matrix(body.inertia) * R.T
+    origin = sympy.Matrix(frame.p)
     moved = sum(len(j.variables) for j in chain.leg.joints[:joint + 1])
     Jv, Jw = sympy.zeros(3, size), sympy.zeros(3, size)
     for motion in chain.motions[:moved]:
         w = sympy.Matrix(motion.direction)
         column = index[motion.variable]
         if motion.rotation:
-            Jv[:, column] = w.cross(c - sympy.Matrix(motion.point))
+            Jv[:, column] = w.cross(origin - sympy.Matrix(motion.point))
             Jw[:, column] = w
         else:
             Jv[:, column] = w
-    return body.mass * Jv.T * Jv + Jw.T * inertia * Jw, body.mass * c
+    r = R * first_moment
+    A = Jv.T * skew(r).T * Jw
+    return mass * Jv.T * Jv + A + A.T + Jw.T * (R * inertia * R.T) * Jw, mass * origin + r
 
 
 def _variables(model: Model) -> tuple[sympy.Symbol, ...]:
@@ -82,21 +97,24 @@ def _variables(model: Model) -> tuple[sympy.Symbol, ...]:
     return coordinates.symbols(model, "q") + passive_symbols(model) + task_symbols(model)
 
 
+def _setting(d: Deriving) -> tuple[ParallelBodies, ParallelStructure, tuple[sympy.Symbol, ...], dict[sympy.Symbol, int]]:
+    """The model's bodies, its legs' structure, z = (q, s, p) and each variable's index in z."""
+    assert d.model.parallel is not None and d.model.parallel.bodies is not None
+    z = _variables(d.model)
+    return d.model.parallel.bodies, d[parallel_structure], z, {symbol: k for k, symbol in enumerate(z)}
+
+
 def _mass_and_potential(d: Deriving) -> tuple[sympy.Matrix, sympy.Expr]:
     """M_z and u over z (see the module docstring)."""
     model = d.model
-    assert model.parallel is not None and model.parallel.bodies is not None
-    bodies = model.parallel.bodies
-    structure: ParallelStructure = d[parallel_structure]
-    z = _variables(model)
-    index = {symbol: k for k, symbol in enumerate(z)}
+    bodies, structure, z, index = _setting(d)
     M = sympy.zeros(len(z), len(z))
     moment = sympy.zeros(3, 1)
     by_joint = {body.link: body for body in bodies.links}
     for chain in structure.chains:
         for k, joint in enumerate(chain.leg.joints):
             if joint.name in by_joint:
-                term, first_moment = _link_mass_matrix(by_joint[joint.name], chain, k, index, len(z))
+                term, first_moment = _link_mass_matrix(about_origin(by_joint[joint.name]), chain, k, index, len(z))
                 M += term
                 moment += first_moment
     parts = [about_origin(bodies.platform)] if bodies.platform is not None else []
@@ -107,6 +125,16 @@ def _mass_and_potential(d: Deriving) -> tuple[sympy.Matrix, sympy.Expr]:
     for k in range(n):
         M[k, k] += rotor
     return M, -sympy.Matrix(model.gravity).dot(moment) + u_p
+
+
+def _lagrange_terms(M: sympy.Matrix, u: sympy.Expr, z: tuple[sympy.Symbol, ...], zd: sympy.Matrix
+                    ) -> tuple[sympy.Matrix, sympy.Matrix]:
+    """(V_z, G_z) of the Lagrangian 1/2 zd^T M zd - u: V_k = sum_ij (dM_kj/dz_i - 1/2 dM_ij/dz_k) zd_i zd_j
+    (dM/dt zd - 1/2 d(zd^T M zd)/dz), G = du/dz."""
+    partials = [M.diff(symbol) for symbol in z]
+    M_dot = sum((partials[i] * zd[i] for i in range(len(z))), sympy.zeros(len(z), len(z)))
+    V = M_dot * zd - sympy.Matrix([(zd.T * partials[k] * zd)[0] for k in range(len(z))]) / 2
+    return V, sympy.Matrix([sympy.diff(u, symbol) for symbol in z])
 
 
 def _check_bodies(d: Deriving) -> None:
@@ -135,11 +163,7 @@ def _closure_dynamics(d: Deriving) -> FunctionSpec:
     qd, sd, pd = _rate_inputs(model)
     zd = sympy.Matrix(qd.symbols + sd.symbols + pd.symbols)
     M, u = _mass_and_potential(d)
-    partials = [M.diff(symbol) for symbol in z]
-    # V_k = sum_ij (dM_kj/dz_i - 1/2 dM_ij/dz_k) zd_i zd_j: dM/dt zd - 1/2 d(zd^T M zd)/dz
-    M_dot = sum((partials[i] * zd[i] for i in range(len(z))), sympy.zeros(len(z), len(z)))
-    V = M_dot * zd - sympy.Matrix([(zd.T * partials[k] * zd)[0] for k in range(len(z))]) / 2
-    G = sympy.Matrix([sympy.diff(u, symbol) for symbol in z])
+    V, G = _lagrange_terms(M, u, z, zd)
     Phi_p, Phi_q, Phi_s = closure_jacobian_matrices(d)
     Phi = sympy.Matrix.hstack(Phi_q, Phi_s, Phi_p)
     gamma = jacobian(Phi * zd, z) * zd
@@ -159,4 +183,72 @@ def _closure_dynamics(d: Deriving) -> FunctionSpec:
          OutputSpec("gamma", sympy.ImmutableMatrix(gamma), f"d(Phi_z)/dt zd, rows as in closure() ({rows})",
                     shape=(gamma.shape[0],)),
          OutputSpec("u", sympy.ImmutableMatrix([u]), "potential energy (zero at the base origin)", "J", shape=())],
+    )
+
+
+@quantity("closure_regressor", "regressor Y_z(z, zd, zdd) over z = (q, s, p) with M_z zdd + h_z + F_f = Y_z pi, and the "
+          "model's standard parameters pi, for legs without the distance form", mechanism=PARALLEL)
+def _closure_regressor(d: Deriving) -> FunctionSpec:
+    """Column k of Y_z is the Lagrangian's M_z zdd + V_z + G_z (and friction) with pi = e_k: each leg link's body
+    (bodies.links) and the platform's as ten standard parameters about their frames' origins, and per actuator
+    the drive's I_a, f_v, f_c, f_o (as the serial regressor's, symkin.dynamics.regressor)."""
+    _check_bodies(d)
+    model = d.model
+    bodies, structure, z, index = _setting(d)
+    rates, accelerations = _rate_inputs(model), _rate_inputs(model, "qdd")
+    zd = sympy.Matrix([s for spec in rates for s in spec.symbols])
+    zdd = sympy.Matrix([s for spec in accelerations for s in spec.symbols])
+    g = sympy.Matrix(model.gravity)
+    columns: list[sympy.Matrix] = []
+    names: list[str] = []
+    values: list[sympy.Expr] = []
+
+    def add(M: sympy.Matrix, u: sympy.Expr) -> None:
+        V, G = _lagrange_terms(M, u, z, zd)
+        columns.append(M * zdd + V + G)
+
+    for body in bodies.links:
+        places = [(chain, k) for chain in structure.chains for k, joint in enumerate(chain.leg.joints)
+                  if joint.name == body.link]
+        for triple in unit_triples():
+            M, moment = sympy.zeros(len(z), len(z)), sympy.zeros(3, 1)
+            for chain, k in places:
+                term, first_moment = _link_mass_matrix(triple, chain, k, index, len(z))
+                M, moment = M + term, moment + first_moment
+            add(M, -g.dot(moment))
+        names += [f"{body.link}.{p}" for p in INERTIAL]
+        values += standard_values(about_origin(body))
+    m = len(model.task_space)
+    for triple in unit_triples():
+        M_p, u_p = platform_side(model, [triple], structure.platform)
+        M = sympy.zeros(len(z), len(z))
+        M[len(z) - m:, len(z) - m:] = M_p
+        add(M, u_p)
+    names += [f"platform.{p}" for p in INERTIAL]
+    values += (standard_values(about_origin(bodies.platform)) if bodies.platform is not None
+               else [sympy.Integer(0)] * len(INERTIAL))
+    friction = {f.joint: f for f in model.friction}
+    armature = bodies.gear_ratio ** 2 * bodies.rotor_inertia
+    qd, qdd = rates[0].symbols, accelerations[0].symbols
+    real = {sympy.Symbol(symbol.name): symbol for symbol in qd + qdd}  # SymEngine's symbols come back plain
+    for j, coordinate in enumerate(model.coordinates):
+        for term in drive_columns(friction.get(coordinate.name), se.sympify(qd[j]), se.sympify(qdd[j])):
+            entry = sympy.sympify(term).xreplace(real)
+            columns.append(sympy.Matrix([entry if row == j else 0 for row in range(len(z))]))
+        names += [f"{coordinate.name}.{p}" for p in DRIVE]
+        values += [sympy.sympify(v) for v in drive_values(friction.get(coordinate.name), se.sympify(armature))]
+    Y = sympy.Matrix.hstack(*columns)
+    inputs = [actuated_input(d), passive_input(model), task_input(model), *rates, *accelerations]
+    return make_function(
+        model, "closure_regressor", "Regressor of legs without the distance form over z = (q, s, p), and pi.",
+        "Y_z(z, zd, zdd) with M_z zdd + h_z + F_f = Y_z pi (closure_dynamics' Lagrange equations, friction on the "
+        "actuators), linear in the standard parameters pi: per leg link body (bodies.links) and the platform m, "
+        "m c, I_o about their frames' origins (Pinocchio's order), per actuator I_a, f_v, f_c, f_o. With zd = W qd "
+        "and zdd = W qdd + c the motion the closure allows, tau = W^T Y_z pi (symkin.runtime.closure_dynamics."
+        "closure_regressor). The names of pi are the outputs' elements in the manifest.",
+        inputs,
+        [OutputSpec("Y_z", sympy.ImmutableMatrix(Y), "regressor over z: column k is the effort per unit of "
+                    "parameter k", elements=tuple(names)),
+         OutputSpec("pi", sympy.ImmutableMatrix(values), "the model's standard parameters", shape=(len(values),),
+                    elements=tuple(names))],
     )

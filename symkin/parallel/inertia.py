@@ -149,7 +149,30 @@ def body_angular_velocity_matrix(model: Model) -> sympy.Matrix:
                                  for c in model.task_space])
 
 
-def about_origin(body: Body) -> tuple[sympy.Expr, sympy.Matrix, sympy.Matrix]:
+#: A body about a frame's origin: (mass m, first moment h = m c, inertia I_o about the origin), frame axes.
+Triple = tuple[sympy.Expr, sympy.Matrix, sympy.Matrix]
+
+
+def unit_triples() -> list[Triple]:
+    """(m, h, I_o) with one standard parameter 1 and the others 0, in INERTIAL order
+    (:data:`symkin.dynamics.parameter_names.INERTIAL`: m, mx, my, mz, Ixx, Ixy, Iyy, Ixz, Iyz, Izz)."""
+    out: list[Triple] = [(sympy.Integer(1), sympy.zeros(3, 1), sympy.zeros(3, 3))]
+    out += [(sympy.Integer(0), sympy.Matrix([int(k == axis) for k in range(3)]), sympy.zeros(3, 3))
+            for axis in range(3)]
+    for r, c in ((0, 0), (0, 1), (1, 1), (0, 2), (1, 2), (2, 2)):
+        inertia = sympy.zeros(3, 3)
+        inertia[r, c] = inertia[c, r] = 1
+        out.append((sympy.Integer(0), sympy.zeros(3, 1), inertia))
+    return out
+
+
+def standard_values(triple: Triple) -> list[sympy.Expr]:
+    """(m, h, I_o) as the ten standard parameters, in INERTIAL order."""
+    m, h, I = triple
+    return [m, h[0], h[1], h[2], I[0, 0], I[0, 1], I[1, 1], I[0, 2], I[1, 2], I[2, 2]]
+
+
+def about_origin(body: Body) -> Triple:
     """(m, h = m c, I_o = I_c + m (|c|^2 E - c c^T)): a body's mass, first moment and inertia about its
     frame origin (parallel-axis theorem)."""
     c = sympy.Matrix(body.com)

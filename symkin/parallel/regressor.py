@@ -61,34 +61,16 @@ from symkin.parallel.inertia import (
     SwingingRod,
     about_origin,
     actuated_frame,
+    Triple,
     distal_link,
     elbow_mass_terms,
     platform_side,
     point_mass,
+    standard_values,
+    unit_triples,
 )
 from symkin.parallel.legs import LegChain
 from symkin.parallel.quantities import PARALLEL, parallel_structure, reduced_legs
-
-Triple = tuple[sympy.Expr, sympy.Matrix, sympy.Matrix]
-
-
-def _unit_triples() -> list[Triple]:
-    """(m, h, I_o) with one standard parameter 1 and the others 0, in INERTIAL order."""
-    out: list[Triple] = [(sympy.Integer(1), sympy.zeros(3, 1), sympy.zeros(3, 3))]
-    out += [(sympy.Integer(0), sympy.Matrix([int(k == axis) for k in range(3)]), sympy.zeros(3, 3))
-            for axis in range(3)]
-    for r, c in ((0, 0), (0, 1), (1, 1), (0, 2), (1, 2), (2, 2)):
-        inertia = sympy.zeros(3, 3)
-        inertia[r, c] = inertia[c, r] = 1
-        out.append((sympy.Integer(0), sympy.zeros(3, 1), inertia))
-    return out
-
-
-def _flat(triple: Triple) -> list[sympy.Expr]:
-    """(m, h, I_o) as the ten standard parameters."""
-    m, h, I = triple
-    return [m, h[0], h[1], h[2], I[0, 0], I[0, 1], I[1, 1], I[0, 2], I[1, 2], I[2, 2]]
-
 
 @dataclasses.dataclass(frozen=True)
 class _Legs:
@@ -147,11 +129,11 @@ def unit_inertias(legs: _Legs, platform) -> list[Inertia]:
         M_p, u_p = platform_side(model, parts, platform)
         return dataclasses.replace(empty, platform_matrix=M_p, platform_potential=u_p)
 
-    out = [on_platform([triple]) for triple in _unit_triples()]
+    out = [on_platform([triple]) for triple in unit_triples()]
     g = sympy.Matrix(model.gravity)
     if legs.has_actuated_links:
         frames = [actuated_frame(model, False, leg, chain) for leg, chain in zip(legs.legs, legs.chains)]
-        for m, h, I in _unit_triples():
+        for m, h, I in unit_triples():
             diagonal, potential = [], sympy.Integer(0)
             for leg, (R, o, w) in zip(legs.legs, frames):
                 v = sympy.diff(o, leg.q)
@@ -182,7 +164,7 @@ def _distal_unit_inertias(legs: _Legs, empty: Inertia) -> list[Inertia]:
     frames = [distal_link(model, massless, leg, chain) for leg, chain in zip(legs.legs, legs.chains)]
     g, E = sympy.Matrix(model.gravity), sympy.eye(3)
     out = []
-    for m, h, I in _unit_triples():
+    for m, h, I in unit_triples():
         links, potential = [], sympy.Integer(0)
         for frame in frames:
             s = sympy.Matrix(frame.com)  # the massless link's "centre of mass": its frame's origin, d w
@@ -199,11 +181,11 @@ def body_parameters(legs: _Legs) -> list[sympy.Expr]:
     bodies = model.parallel.bodies  # type: ignore[union-attr]
     assert bodies is not None
     zero: Triple = (sympy.Integer(0), sympy.zeros(3, 1), sympy.zeros(3, 3))
-    values = _flat(about_origin(bodies.platform) if bodies.platform is not None else zero)
+    values = standard_values(about_origin(bodies.platform) if bodies.platform is not None else zero)
     if legs.has_actuated_links:
-        values += _flat(about_origin(bodies.actuated_link) if bodies.actuated_link is not None else zero)
+        values += standard_values(about_origin(bodies.actuated_link) if bodies.actuated_link is not None else zero)
     if legs.distal_body is not None:
-        values += _flat(about_origin(legs.distal_body))
+        values += standard_values(about_origin(legs.distal_body))
     f, m = bodies.rod_platform_fraction, bodies.rod_mass
     values += [m * f, m * (1 - f)]
     L2 = legs.rod_length_squared

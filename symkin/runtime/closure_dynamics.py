@@ -39,6 +39,7 @@ class ActuatedDynamics:
         W: (..., N, n) the velocities the closure allows, zd = W qd over z = (q, s, p).
         zd: (..., N) the mechanism's velocities W qd.
         potential: (...,) the potential energy u(z).
+        drift: (..., N) c, the mechanism's accelerations at qdd = 0: zdd = W qdd + c.
     """
 
     M: np.ndarray
@@ -47,6 +48,7 @@ class ActuatedDynamics:
     W: np.ndarray
     zd: np.ndarray
     potential: np.ndarray
+    drift: np.ndarray
 
     def accelerations(self, tau) -> np.ndarray:
         """qdd = M^-1 (tau - b - F_f) (..., n): the actuated accelerations under the actuator efforts tau."""
@@ -100,7 +102,8 @@ def actuated_dynamics(model: GeneratedModel, q, s, p, qd) -> ActuatedDynamics:
     N = W.shape[1]
     return ActuatedDynamics(M.reshape(batch + (n, n)), bias.reshape(batch + (n,)), friction.reshape(batch + (n,)),
                             W.reshape(batch + (N, n)),
-                            zd.reshape(batch + (N,)), np.asarray(terms.u, dtype=float).reshape(batch))
+                            zd.reshape(batch + (N,)), np.asarray(terms.u, dtype=float).reshape(batch),
+                            c.reshape(batch + (N,)))
 
 
 def closure_inverse_dynamics(model: GeneratedModel, q, s, p, qd, qdd) -> np.ndarray:
@@ -111,3 +114,24 @@ def closure_inverse_dynamics(model: GeneratedModel, q, s, p, qd, qdd) -> np.ndar
 def closure_forward_dynamics(model: GeneratedModel, q, s, p, qd, tau) -> np.ndarray:
     """qdd = M^-1 (tau - b - F_f): the actuated accelerations (..., n) under the actuator efforts tau."""
     return actuated_dynamics(model, q, s, p, qd).accelerations(tau)
+
+
+def closure_regressor(model: GeneratedModel, q, s, p, qd, qdd) -> tuple[np.ndarray, np.ndarray]:
+    """(Y, pi) with tau = Y pi (..., n) the actuator efforts that move the assembled mechanism with qdd, friction
+    included: Y = W^T Y_z(z, zd, zdd) (..., n, P) at zd = W qd and zdd = W qdd + c, and the model's standard
+    parameters pi (..., P), named by the generated ``closure_regressor``'s output elements.  The model needs
+    ``closure_jacobians``, ``closure_dynamics`` (for c) and ``closure_regressor``.
+    """
+    if "closure_regressor" not in model.functions:
+        raise ValueError(f"{model.name}: the regressor of legs without the distance form needs the generated "
+                         "'closure_regressor' (derive with --only closure_jacobians,closure_dynamics,closure_regressor)")
+    motion = actuated_dynamics(model, q, s, p, qd)
+    batch = motion.zd.shape[:-1]
+    q, s, p, qdd = (np.broadcast_to(np.asarray(v, dtype=float), batch + np.shape(v)[-1:]) for v in (q, s, p, qdd))
+    n, ns = motion.W.shape[-1], s.shape[-1]
+    zdd = np.einsum("...ij,...j->...i", motion.W, qdd) + motion.drift
+    zd = motion.zd
+    terms = model.closure_regressor(q, s, p, zd[..., :n], zd[..., n:n + ns], zd[..., n + ns:],
+                                    zdd[..., :n], zdd[..., n:n + ns], zdd[..., n + ns:])
+    Y_z = np.broadcast_to(np.asarray(terms.Y_z, dtype=float), batch + np.shape(terms.Y_z)[-2:])
+    return np.einsum("...ki,...kj->...ij", motion.W, Y_z), np.broadcast_to(terms.pi, batch + np.shape(terms.pi)[-1:])
