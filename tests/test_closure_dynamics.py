@@ -358,15 +358,19 @@ def test_the_regressor_of_legs_without_the_distance_form_is_their_inverse_dynami
     assert names == tuple([f"{link}.{p}" for link in links + ["platform"] for p in INERTIAL]
                           + [f"{c.name}.{p}" for c in model.coordinates for p in DRIVE])
     ik = solve_closure(generated, [1.0, 0.1, 1.6, 0.0], np.zeros(4), HOME, unknowns=("q", "s"), max_step=0.2)
+    states = []
     for _ in range(4):
         q = ik.solution["q"] + rng.uniform(-0.03, 0.03, 4)
         fk = solve_closure(generated, q, ik.solution["s"], HOME, unknowns=("p", "s"))
         assert fk.all_converged
-        qd, qdd = rng.normal(size=4), rng.normal(size=4)
-        Y, pi = closure_regressor(generated, q, fk.solution["s"], fk.solution["p"], qd, qdd)
+        states.append((q, fk.solution["s"], fk.solution["p"], rng.normal(size=4), rng.normal(size=4)))
+        Y, pi = closure_regressor(generated, *states[-1])
         assert np.all(pi[:len(INERTIAL) * (len(links) + 1)] != 0)  # every body's parameters are exercised
-        tau = closure_inverse_dynamics(generated, q, fk.solution["s"], fk.solution["p"], qd, qdd)
+        tau = closure_inverse_dynamics(generated, *states[-1])
         np.testing.assert_array_less(np.abs(Y @ pi - tau), DYNAMICS * np.abs(Y * pi).sum(axis=-1))
+    batch = closure_regressor(generated, *(np.stack(values) for values in zip(*states)))  # one call, four states
+    np.testing.assert_allclose(batch[0][-1], Y, rtol=0, atol=DYNAMICS * np.abs(Y).max())
+    np.testing.assert_array_equal(batch[1][-1], pi)
     first = model.parallel.bodies.links[0]
     assert pi[names.index(f"{first.link}.m")] == float(first.mass)
     assert pi[names.index(f"{first.link}.my")] == pytest.approx(float(first.mass * first.com[1]), rel=2 * EPS)

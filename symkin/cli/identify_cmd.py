@@ -149,8 +149,8 @@ def _require_serial(path: str, source) -> None:
     if parallel:
         raise ValueError(f"{path}: symkin identify estimates a serial model's base parameters; a parallel model's "
                          "regressor and energy regressor are derived (symkin derive --only regressor,"
-                         "energy_regressor; docs/identification.md, 'Parallel mechanisms'), its base parameters "
-                         "not yet")
+                         "energy_regressor, or closure_regressor for legs without the distance form; "
+                         "docs/identification.md, 'Parallel mechanisms'), its base parameters not yet")
 
 
 def _regressor(model, fit, method: str) -> tuple[np.ndarray, np.ndarray]:
