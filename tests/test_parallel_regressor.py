@@ -14,8 +14,6 @@ import pytest
 
 from conftest import MODELS_DIR
 from symkin import load, pipeline
-from symkin.errors import DerivationError
-from symkin.derivation import Derivation
 from symkin.dynamics.parameter_names import DRIVE, INERTIAL
 from symkin.model import model_from_text
 from tolerances import DYNAMICS
