@@ -234,17 +234,20 @@ def test_the_command_estimates_from_the_energy_balance_and_refuses_too_few_windo
     assert not (tmp_path / "long").exists()
 
 
-@pytest.mark.parametrize("source", ["models/delta.yaml", "generated/delta"])
-def test_a_parallel_model_is_refused_before_any_work(source, tmp_path):
-    """Its regressors exist (tests/test_parallel_regressor.py), its base parameters not yet: exit 2, nothing
-    written, and the message says what there is."""
+@pytest.mark.parametrize("source, method, reason", [
+    ("models/delta.yaml", "consistent", "--method consistent needs a serial model (each link's pseudo-inertia)"),
+    ("generated/delta", "wls", "a parallel model's identification needs base_regressor; derive them"),
+])
+def test_what_a_parallel_model_cannot_give_is_refused_before_any_work(source, method, reason, tmp_path):
+    """A parallel model is identified by ols, wls or energy (tests/test_parallel_base_parameters.py); the consistent
+    estimate, and a generated directory without the base regressor, are refused: exit 2, nothing written, and the
+    message says what to do."""
     data = tmp_path / "run.csv"
     data.write_text("t,theta1,theta2,theta3\n0,0,0,0\n")
-    result = subprocess.run(SYMKIN_CLI + ["identify", str(ROOT / source), str(data), "-o", str(tmp_path / "out")],
-                            capture_output=True, text=True)
+    result = subprocess.run(SYMKIN_CLI + ["identify", str(ROOT / source), str(data), "--method", method,
+                                          "-o", str(tmp_path / "out")], capture_output=True, text=True)
     assert result.returncode == 2
-    assert "estimates a serial model's base parameters; a parallel model's regressor and energy regressor" in \
-        result.stderr
+    assert reason in result.stderr
     assert not (tmp_path / "out").exists()
 
 

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from symkin.analysis.mechanism import MechanismKind
 from symkin.cli import analysis_args, model_files
 from symkin.cli.progress import Progress
 
@@ -30,9 +31,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "q_<name>, tau_<name> and optionally qd_<name>, qdd_<name> (without them, --cutoff derives the "
                     "rates from q by a zero-phase low-pass filter). Writes estimate.json, estimate.csv, "
                     "summary.txt and validation.png (measured and predicted efforts) into the output directory "
-                    "(replaced as a whole), and given a model file identified.yaml, the model with the identified "
-                    "values (given a URDF or xacro file also identified.urdf); bad data are refused with the file, "
-                    "row and column, and nothing is written.",
+                    "(replaced as a whole), and given a serial model file identified.yaml, the model with the "
+                    "identified values (given a URDF or xacro file also identified.urdf). A parallel model's run "
+                    "records its actuators (and a hybrid device's wrist joints): each sample's platform pose is "
+                    "fk(q). Bad data are refused with the file, row and column, and nothing is written.",
         epilog="e.g. symkin identify models/planar_2r.yaml run.csv --method wls -o out/identify/planar_2r")
     analysis_args.add_model_arguments(p)
     p.add_argument("data", metavar="DATA.csv", help="the measured run")
@@ -65,11 +67,16 @@ def run(args: argparse.Namespace) -> int:
         if not args.window > 0:
             raise ValueError(f"--window must be a positive number of seconds, got {args.window:g}")
         source = _model_file(args.model)
-        _require_serial(args.model, source)
-        model = model_files.generated_model(args.model, args.backend,
-                                            ENERGY_OUTPUTS if args.method == "energy" else IDENTIFY_OUTPUTS)
+        if source is not None and source.parallel is not None:
+            _require_parallel_method(args)  # before the derivation
+        outputs = ENERGY_OUTPUTS if args.method == "energy" else IDENTIFY_OUTPUTS
+        model = model_files.generated_model(args.model, args.backend, {
+            kind: outputs if kind is MechanismKind.SERIAL else (*outputs, "fk") for kind in MechanismKind})
         values = analysis_args.parse_assignments(args.assignments)
         model = model.bind(**values) if values else model
+        parallel = model.info.is_parallel
+        if parallel:
+            model = _device_regressors(args, model)
         coordinates = model.info.coordinate_names
         data = identification.read_measurements(args.data, coordinates, args.cutoff)
         fit, held = data.split(args.holdout)
@@ -77,7 +84,7 @@ def run(args: argparse.Namespace) -> int:
         with Progress(model.name) as progress:
             progress(f"estimating {len(names)} base parameters from {len(fit.time)} samples")
             Y_b, pi_model = model.base_regressor(fit.q, fit.qd, fit.qdd)
-            writes_model = model_files.is_model_file(args.model)
+            writes_model = model_files.is_model_file(args.model) and not parallel
             # the standard regressor over the fit, evaluated once: for the consistent and energy estimates and the
             # model file
             needs_Y = args.method in ("consistent", "energy") or writes_model
@@ -99,6 +106,8 @@ def run(args: argparse.Namespace) -> int:
                     predict = model.regressor(held.q, held.qd, held.qdd)[0] @ standard.values
             check = None if predict is None else identification.validation_of(predict, held.tau)
             updated, line = None, None
+            if parallel and model_files.is_model_file(args.model):
+                line = "no identified.yaml: a parallel model's bodies are not rewritten into its file yet"
             if writes_model:
                 progress("writing the model file with the identified values")
                 updated, line = _updated_model(args, source, model, K, pi, found, standard, values)
@@ -120,7 +129,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _model_file(path: str):
-    """The :class:`~symkin.model.schema.Model` of MODEL when it is a model file (read once: refused if parallel,
+    """The :class:`~symkin.model.schema.Model` of MODEL when it is a model file (read once: a serial one is
     rewritten into identified.yaml), None for a generated directory."""
     if not model_files.is_model_file(path):
         return None
@@ -129,28 +138,28 @@ def _model_file(path: str):
     return load_model(path)
 
 
-def _require_serial(path: str, source) -> None:
-    """Refuse a parallel model before any derivation: its regressors exist, its base parameters not yet.
+def _require_parallel_method(args: argparse.Namespace) -> None:
+    """Refuse --method consistent for a parallel model (ValueError): its bodies are not a chain of links."""
+    if args.method == "consistent":
+        raise ValueError(f"{args.model}: --method consistent needs a serial model (each link's pseudo-inertia); a "
+                         "parallel model's bodies are identified by --method ols, wls or energy")
 
-    Args:
-        path: MODEL; source: its model (:func:`_model_file`), None for a generated directory.
+
+def _device_regressors(args: argparse.Namespace, model):
+    """A parallel model's regressors taking the device's joints (the platform's pose from fk per sample).
 
     Raises:
-        ValueError: MODEL is a parallel mechanism (a model file, or a generated directory's manifest).
+        ValueError: --method consistent (its bodies are not a chain of links), or a generated directory without the
+            base regressor or fk.
     """
-    if source is not None:
-        parallel = source.parallel is not None
-    else:
-        from symkin.manifest import read_manifest
-        from symkin.runtime.info import ModelInfo
+    from symkin.analysis.device_regressors import DeviceRegressors
 
-        directory = Path(path).parent if Path(path).name == "manifest.json" else Path(path)
-        parallel = ModelInfo.from_manifest(read_manifest(directory)).mechanism == "parallel"
-    if parallel:
-        raise ValueError(f"{path}: symkin identify estimates a serial model's base parameters; a parallel model's "
-                         "regressor and energy regressor are derived (symkin derive --only regressor,"
-                         "energy_regressor, or closure_regressor for legs without the distance form; "
-                         "docs/identification.md, 'Parallel mechanisms'), its base parameters not yet")
+    _require_parallel_method(args)
+    missing = [f for f in ("base_regressor", "fk") if f not in model.info.functions]
+    if missing:
+        raise ValueError(f"{args.model}: a parallel model's identification needs {' and '.join(missing)}; derive "
+                         "them (symkin derive --only base_regressor,regressor,fk) or give the model file")
+    return DeviceRegressors(model, args.data)
 
 
 def _regressor(model, fit, method: str) -> tuple[np.ndarray, np.ndarray]:

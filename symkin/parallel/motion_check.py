@@ -24,24 +24,14 @@ import sympy
 
 from symkin.derivation import Derivation
 from symkin.errors import ModelError
-from symkin.ir.evaluate import symengine_entries
 from symkin.model import coordinates
 from symkin.model.schema import Model
+from symkin.parallel.assembly import STARTS, assemble
 from symkin.parallel.inputs import passive_symbols, task_symbols
 from symkin.parallel.quantities import ParallelStructure, parallel_structure
 
 #: A singular value below this fraction of the largest is a direction the subspace does not have.
 RANK_TOLERANCE = 1e-8
-#: Gauss-Newton on the closure at the home pose: steps and the largest step (rad or m) from the start.
-ITERATIONS, MAX_STEP, TOLERANCE = 100, 0.2, 1e-12
-#: The step of the central differences of the closure (rad or m): their error h^2 ~ 1e-12 slows Newton's last
-#: steps a little, the residual still reaches rounding.
-DIFFERENCE = 1e-6
-#: Further starts when Gauss-Newton stops at a point that does not close the legs (a least-squares minimum).
-STARTS = 8
-#: The legs close when every closure row is below this (times the pose's scale, m): a converged Newton solve
-#: leaves rounding, ~1e-15; a least-squares minimum misses by a link length.
-CLOSED = 1e-9
 AXES = ("x", "y", "z")
 #: How to mend a parallel.motion the legs contradict (the problems say how they differ).
 MOTION_FIX = ("declare the coordinates the legs let the platform move in (symkin mobility MODEL prints them), or change "
@@ -118,41 +108,6 @@ def _declared_twists(model: Model, structure: ParallelStructure, home: dict[symp
     return np.array(columns).T
 
 
-def _assemble(model: Model, derivation: Derivation, p: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
-    """(q, s) closing every leg at p (the closure's rows below :data:`CLOSED` of the pose's scale), by damped
-    Gauss-Newton on the generated closure (its Jacobian by central differences: the assembly needs no more than
-    the rows' zero, and the closure alone derives in a fraction of the time of its Jacobians) from q = s = 0 and
-    then from :data:`STARTS` fixed random starts; None if none closes."""
-    q_symbols, s_symbols = coordinates.symbols(model, "q"), passive_symbols(model)
-    function = symengine_entries(derivation["closure"], q_symbols + s_symbols + task_symbols(model),
-                                 model.parameter_values)
-    n, k = len(q_symbols), len(s_symbols)
-
-    def residuals(X: np.ndarray) -> np.ndarray:  # rows of X: states; one call for the batch
-        return function(np.concatenate([X, np.broadcast_to(p, (len(X), len(p)))], axis=1))
-
-    def residual(x: np.ndarray) -> np.ndarray:
-        return residuals(x[None, :])[0]
-
-    def jacobian(x: np.ndarray) -> np.ndarray:
-        steps = DIFFERENCE * np.eye(n + k)
-        values = residuals(np.concatenate([x + steps, x - steps]))
-        return ((values[:n + k] - values[n + k:]) / (2 * DIFFERENCE)).T
-
-    scale = max(float(np.max(np.abs(p), initial=0.0)), 1.0)
-    rng = np.random.default_rng(0)
-    for start in [np.zeros(n + k)] + [rng.uniform(-np.pi / 2, np.pi / 2, n + k) for _ in range(STARTS)]:
-        x = start
-        for _ in range(ITERATIONS):
-            step = -np.linalg.lstsq(jacobian(x), residual(x), rcond=None)[0]
-            x = x + step * min(1.0, MAX_STEP / max(float(np.max(np.abs(step), initial=0.0)), MAX_STEP))
-            if not np.all(np.isfinite(x)) or np.max(np.abs(step), initial=0.0) <= TOLERANCE:
-                break
-        if np.all(np.isfinite(x)) and np.max(np.abs(residual(x))) <= CLOSED * scale:
-            return x[:n], x[n:]
-    return None
-
-
 def _direction(vector: np.ndarray) -> str:
     """A unit direction as text, rounding noise of the SVD shown as 0, its largest component positive (a subspace's
     basis vector has either sign: which one the SVD returns depends on rounding)."""
@@ -189,7 +144,7 @@ def check_platform_motion(model: Model) -> MotionCheck:
     structure = derivation[parallel_structure]
     values = model.parameter_values
     home_values = [float(sympy.sympify(e).xreplace(values)) for e in parallel.home]
-    assembled = _assemble(model, derivation, np.array(home_values))
+    assembled = assemble(derivation, np.array(home_values))
     if assembled is None:
         return MotionCheck((), note=f"the legs did not close at the home pose from {STARTS + 1} starts "
                                     "(Gauss-Newton on the closure): the motion was not checked")

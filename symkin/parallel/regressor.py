@@ -198,7 +198,7 @@ def body_parameters(legs: _Legs) -> list[sympy.Expr]:
 
 @quantity("regressor", "dynamics regressor Y(q, p, qd, qdd) with tau = Y pi, and the model's standard parameters pi",
           mechanism=PARALLEL, kappa_degree=4)
-def _regressor(d: Deriving) -> FunctionSpec:
+def reduced_regressor(d: Deriving) -> FunctionSpec:
     """Y (device coordinates x parameters) and the model's pi, both named by :attr:`RegressorColumns.names` in the
     manifest."""
     model = d.model
@@ -360,3 +360,4 @@ def _with_body_parameters(d: Deriving, shared: RegressorColumns, name: str, summ
                          [first, ("pi", pi, (len(names),), "the model's standard parameters (kg, kg*m, kg*m^2; "
                                   "drives as a serial model's)", "")])
     return dataclasses.replace(spec, outputs=tuple(dataclasses.replace(o, elements=names) for o in spec.outputs))
+

@@ -1,0 +1,65 @@
+"""A parallel model's regressors as functions of what a run records: the device's joints alone.
+
+A run on a parallel device records its actuators' angles (and a hybrid device's wrist joints), while the
+parallel regressors take the platform's pose as well, tau = Y(q, p, qd, qdd) pi (the consistent pair of
+:mod:`symkin.parallel.regressor`).  Each sample's pose is the forward kinematics of its actuators, p = fk(q)
+(the generated closed form; the same assembly the model's home pose is in); a sample where the legs do not
+assemble is refused with its row.  The device's coordinates are the legs' actuators, then a hybrid device's
+wrist joints, as the regressors' rows.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+import numpy as np
+
+from symkin.analysis.identification import DataError
+
+
+class DeviceRegressors:
+    """The regressors of a loaded parallel model taking (q, qd, qdd) of the device's coordinates; every other
+    attribute is the model's, but ``info``, whose coordinates are the device's (legs, then wrist)."""
+
+    def __init__(self, model: Any, source: str):
+        self.model, self.source = model, source
+        info = model.info
+        self.legs = len(info.coordinates)
+        self.info = dataclasses.replace(info, coordinates=info.coordinates + info.wrist, wrist=())
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self.model, name)
+
+    def pose(self, q: np.ndarray) -> np.ndarray:
+        """p = fk(q_legs) of every sample (N, task).
+
+        Raises:
+            DataError: naming the first sample (its CSV row) whose legs do not assemble.
+        """
+        with np.errstate(invalid="ignore"):  # NaN where the legs do not assemble: refused below with the row
+            p = np.asarray(self.model.fk(q[..., :self.legs])[0], dtype=float)
+        bad = ~np.all(np.isfinite(p), axis=-1)
+        if np.any(bad):
+            row = int(np.argmax(bad))
+            raise DataError(f"{self.source}: sample {row + 1} (row {row + 2}): the legs do not assemble at q = "
+                            f"{np.array2string(q[row, :self.legs], precision=6)} (fk has no solution); check the "
+                            "angles' zero and sign against the model's")
+        return p
+
+    def _arguments(self, function: str, q: np.ndarray, *rates: np.ndarray) -> list[np.ndarray]:
+        """The vector inputs of ``function`` in its order: q, p, qw and the rates of legs and wrist."""
+        legs = self.legs
+        values = {"q": q[..., :legs], "p": self.pose(q), "qw": q[..., legs:]}
+        for rate, name in zip(rates, ("qd", "qdd")):
+            values[name], values[name.replace("q", "qw", 1)] = rate[..., :legs], rate[..., legs:]
+        return [values[i.name] for i in self.model.info.functions[function].inputs if i.kind != "parameter"]
+
+    def regressor(self, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> Any:
+        return self.model.regressor(*self._arguments("regressor", q, qd, qdd))
+
+    def base_regressor(self, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> Any:
+        return self.model.base_regressor(*self._arguments("base_regressor", q, qd, qdd))
+
+    def energy_regressor(self, q: np.ndarray, qd: np.ndarray) -> Any:
+        return self.model.energy_regressor(*self._arguments("energy_regressor", q, qd))

@@ -1,0 +1,60 @@
+"""Assembling a parallel mechanism numerically: the actuated and passive joints that close every leg at a pose.
+
+Damped Gauss-Newton on the generated closure rows (:mod:`symkin.parallel.closure`), for the checks that need the
+mechanism assembled at a few poses (the platform-motion check at home, the base parameters' rank on the closure).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from symkin.ir.evaluate import symengine_entries
+from symkin.ir.quantity import Deriving
+from symkin.model import coordinates
+from symkin.parallel.inputs import passive_symbols, task_symbols
+
+#: Gauss-Newton on the closure at the home pose: steps and the largest step (rad or m) from the start.
+ITERATIONS, MAX_STEP, TOLERANCE = 100, 0.2, 1e-12
+#: The step of the central differences of the closure (rad or m): their error h^2 ~ 1e-12 slows Newton's last
+#: steps a little, the residual still reaches rounding.
+DIFFERENCE = 1e-6
+#: Further starts when Gauss-Newton stops at a point that does not close the legs (a least-squares minimum).
+STARTS = 8
+#: The legs close when every closure row is below this (times the pose's scale, m): a converged Newton solve
+#: leaves rounding, ~1e-15; a least-squares minimum misses by a link length.
+CLOSED = 1e-9
+
+
+def assemble(d: Deriving, p: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    """(q, s) closing every leg at p (the closure's rows below :data:`CLOSED` of the pose's scale), by damped
+    Gauss-Newton on the generated closure (its Jacobian by central differences: the assembly needs no more than
+    the rows' zero, and the closure alone derives in a fraction of the time of its Jacobians) from q = s = 0 and
+    then from :data:`STARTS` fixed random starts; None if none closes."""
+    model = d.model
+    q_symbols, s_symbols = coordinates.symbols(model, "q"), passive_symbols(model)
+    function = symengine_entries(d["closure"], q_symbols + s_symbols + task_symbols(model), model.parameter_values)
+    n, k = len(q_symbols), len(s_symbols)
+
+    def residuals(X: np.ndarray) -> np.ndarray:  # rows of X: states; one call for the batch
+        return function(np.concatenate([X, np.broadcast_to(p, (len(X), len(p)))], axis=1))
+
+    def residual(x: np.ndarray) -> np.ndarray:
+        return residuals(x[None, :])[0]
+
+    def jacobian(x: np.ndarray) -> np.ndarray:
+        steps = DIFFERENCE * np.eye(n + k)
+        values = residuals(np.concatenate([x + steps, x - steps]))
+        return ((values[:n + k] - values[n + k:]) / (2 * DIFFERENCE)).T
+
+    scale = max(float(np.max(np.abs(p), initial=0.0)), 1.0)
+    rng = np.random.default_rng(0)
+    for start in [np.zeros(n + k)] + [rng.uniform(-np.pi / 2, np.pi / 2, n + k) for _ in range(STARTS)]:
+        x = start
+        for _ in range(ITERATIONS):
+            step = -np.linalg.lstsq(jacobian(x), residual(x), rcond=None)[0]
+            x = x + step * min(1.0, MAX_STEP / max(float(np.max(np.abs(step), initial=0.0)), MAX_STEP))
+            if not np.all(np.isfinite(x)) or np.max(np.abs(step), initial=0.0) <= TOLERANCE:
+                break
+        if np.all(np.isfinite(x)) and np.max(np.abs(residual(x))) <= CLOSED * scale:
+            return x[:n], x[n:]
+    return None

@@ -1,0 +1,235 @@
+"""The base parameters of a parallel mechanism's regressor, exactly, by modular arithmetic.
+
+A serial chain's regressor is rational at rational states (:mod:`symkin.dynamics.base_parameters`).  A
+parallel mechanism's is not: its legs stand at constant angles whose sines are irrational (the DELTA's
+120 deg: sqrt(3)/2), so at a rational state Y lies in a number field Q(sqrt r_1, ..., sqrt r_m), and rational
+arithmetic in that field with the geometry kept symbolic is far too slow (minutes for the DELTA).  Here Y is
+evaluated in the prime field GF(P) instead (:mod:`symkin.parallel.prime_field`), P a random prime of about 61
+bits in which every radicand r_i has a square root: each sqrt r_i is sent to one of its roots mod P, the
+platform's angles to random points of the unit circle mod P ((1 - t^2, 2t) / (1 + t^2)), its positions, the
+rates and the geometry (the model's parameters that enter Y) to random residues, and each leg's actuated
+variable to a root of its closure at that pose (a quadratic; its square root exists mod P at half the poses,
+the others are redrawn).  That is a point of the assembled mechanism over GF(P), and evaluating Y there a ring
+homomorphism of the exact values, so every linear dependency of Y's columns on the closure holds mod P; one
+seen mod P at random points holds exactly but with a probability of order (degree) / P (Schwartz-Zippel; the
+same argument as the rational samples of the serial method, with far more room).  On the closure matters: the
+Agile Eye's formula has 31 columns independent for every (q, p), 28 on the closure.  The base parameters'
+quantity (:mod:`symkin.parallel.base_regressor`) still compares the count with the numerical rank of Y stacked
+over states assembled in floating point.
+
+The base columns are the pivots of the reduced row echelon form of the stacked samples mod P (the earlier
+columns preferred, as in the serial method); its rows are K(G) mod P at the geometry G drawn.  K depends on
+G (the DELTA's elbow masses regroup as a m_C and a^2 m_C): each entry is taken as a polynomial in the
+parameters it depends on (those whose change moves it), of the least total degree that fits, interpolated
+from the echelon forms at as many values of G as it has monomials and checked at two more; each coefficient,
+an element of the number field, is recovered from its images under the 2^m choices of the roots' signs
+(their signed sums give its coordinates on the products of square roots) by rational reconstruction.  The
+result is verified with an independent prime: Y_j = Y_b K_j at fresh states and geometry.
+"""
+
+from __future__ import annotations
+
+import itertools
+import random
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import flint
+import sympy
+
+from symkin.dynamics.base_parameters import EXTRA_SAMPLES, BaseParameters
+from symkin.errors import DerivationError
+from symkin.ir.spec import FunctionSpec
+from symkin.parallel.prime_field import Closure, FormulaEvaluator, PrimeField
+
+#: The highest total degree in the geometry tried for an entry of K before giving up.
+MAX_DEGREE = 6
+#: Values of the geometry at which a fitted entry of K is checked beyond those it was fitted to.
+CHECK_POINTS = 2
+
+
+@dataclass
+class _Echelon:
+    """The stacked samples' reduced row echelon form mod P at one geometry: the pivots and K mod P."""
+
+    base: tuple[int, ...]
+    K: list[list[int]]
+
+
+def _echelon(evaluator: FormulaEvaluator, field: PrimeField, geometry: dict[sympy.Symbol, int], seed: int) -> _Echelon:
+    rows, columns = evaluator.shape
+    samples = -(-columns // max(rows, 1)) + EXTRA_SAMPLES
+    rng = random.Random(seed)
+    stacked: list[int] = []
+    for _ in range(samples):
+        stacked += evaluator.rows(field, rng, geometry)
+    echelon, rank = flint.nmod_mat(samples * rows, columns, stacked, field.P).rref()
+    K = [[int(echelon[r, c]) for c in range(columns)] for r in range(rank)]
+    return _Echelon(tuple(next(c for c, v in enumerate(row) if v) for row in K), K)
+
+
+def _reconstruct(value: int, P: int) -> sympy.Rational | None:
+    """The rational n/d with |n|, d <= sqrt(P/2) that is ``value`` mod P (Wang's rational reconstruction)."""
+    bound = int((P // 2) ** 0.5)
+    r0, r1, s0, s1 = P, value % P, 0, 1
+    while r1 > bound:
+        quotient = r0 // r1
+        r0, r1, s0, s1 = r1, r0 - quotient * r1, s1, s0 - quotient * s1
+    if s1 == 0 or abs(s1) > bound:
+        return None
+    return sympy.Rational(r1, s1)
+
+
+def modular_base_parameters(spec: FunctionSpec, names: Sequence[str], where: str, closures: Sequence[Closure] = (),
+                            seed: int = 0) -> BaseParameters:
+    """The base parameters of the parallel regressor ``spec`` (its first output Y, columns ``names``), exactly,
+    with the geometry that enters Y kept as symbols (the module docstring has the method), at states on the
+    legs' ``closures``.
+
+    Raises:
+        DerivationError: an atom or constant the modular evaluation cannot take, or a dependency of K on the
+            geometry that is not a polynomial of degree <= MAX_DEGREE, with the fix.
+    """
+    evaluator = FormulaEvaluator(spec, where, closures)
+    rng = random.Random(seed)
+    embeddings = PrimeField.embeddings(rng, evaluator.radicands)
+    field = embeddings[0]
+    geometry = evaluator.geometry
+
+    def draw() -> dict[sympy.Symbol, int]:
+        return {g: field.residue(rng) for g in geometry}
+
+    first_point = draw()
+    first = _echelon(evaluator, field, first_point, seed)
+    dependent = [(r, j) for r, row in enumerate(first.K) for j, v in enumerate(row) if j not in first.base and v]
+    moved: dict[tuple[int, int], list[sympy.Symbol]] = {key: [] for key in dependent}
+    for g in geometry:
+        nudged = _echelon(evaluator, field, {**first_point, g: field.residue(rng)}, seed)
+        if nudged.base != first.base:
+            raise DerivationError(f"{where}: the base columns differ between two random values of the geometry (a "
+                                  "special value drawn by chance: please report it)")
+        for r, j in dependent:
+            if nudged.K[r][j] != first.K[r][j]:
+                moved[(r, j)].append(g)
+    samples = _Samples(evaluator, embeddings, seed, draw, first_point, first, where)
+    combinations = [[sympy.Integer(1 if c == b else 0) for c in range(len(names))] for b in first.base]
+    for r, j in dependent:
+        combinations[r][j] = _fitted(samples, (r, j), moved[(r, j)], f"{where}: K[{names[first.base[r]]}, {names[j]}]")
+    found = BaseParameters(tuple(names), first.base, tuple(tuple(row) for row in combinations),
+                           tuple(sorted({str(s) for row in combinations for k in row for s in k.free_symbols})))
+    _verify(evaluator, found, random.Random(seed + 1), where)
+    return found
+
+
+class _Samples:
+    """The echelon forms at the k-th value of the geometry (the first given, the others drawn when first asked for),
+    one per embedding."""
+
+    def __init__(self, evaluator: FormulaEvaluator, embeddings: list[PrimeField], seed: int,
+                 draw: Callable[[], dict[sympy.Symbol, int]], first_point: dict[sympy.Symbol, int], first: _Echelon,
+                 where: str):
+        self.evaluator, self.embeddings, self.seed, self.draw, self.where = evaluator, embeddings, seed, draw, where
+        self.points = [first_point]
+        self.echelons = [[first] + [_echelon(evaluator, e, first_point, seed) for e in embeddings[1:]]]
+        self._check(first.base)
+
+    def _check(self, base: tuple[int, ...]) -> None:
+        if any(e.base != base for e in self.echelons[-1]):
+            raise DerivationError(f"{self.where}: the base columns differ between random values of the geometry or "
+                                  "choices of the square roots (please report it)")
+
+    def point(self, k: int) -> dict[sympy.Symbol, int]:
+        while len(self.points) <= k:
+            self.points.append(self.draw())
+            self.echelons.append([_echelon(self.evaluator, e, self.points[-1], self.seed) for e in self.embeddings])
+            self._check(self.echelons[0][0].base)
+        return self.points[k]
+
+    def value(self, k: int, embedding: int, entry: tuple[int, int]) -> int:
+        self.point(k)
+        return self.echelons[k][embedding].K[entry[0]][entry[1]]
+
+
+def _fitted(samples: _Samples, entry: tuple[int, int], variables: Sequence[sympy.Symbol], where: str) -> sympy.Expr:
+    """An entry of K as a polynomial in ``variables``: the least total degree whose interpolation at the first
+    points also fits the next CHECK_POINTS, its coefficients taken from the embeddings' images to the number
+    field."""
+    field, radicands = samples.embeddings[0], samples.evaluator.radicands
+    P = field.P
+    for degree in range((MAX_DEGREE if variables else 0) + 1):
+        monomials = [m for m in itertools.product(range(degree + 1), repeat=len(variables)) if sum(m) <= degree]
+
+        def row(k: int) -> list[int]:
+            return [_monomial(samples.point(k), variables, m, P) for m in monomials]
+
+        count = len(monomials)
+        system = flint.nmod_mat([row(k) for k in range(count)], P)
+        try:
+            inverse = system.inv()
+        except ZeroDivisionError:
+            continue
+        per_embedding = []
+        for s in range(2 ** len(radicands)):
+            coefficients = inverse * flint.nmod_mat([[samples.value(k, s, entry)] for k in range(count)], P)
+            fits = all(sum(int(c) * x for c, x in zip((coefficients[i, 0] for i in range(count)), row(k))) % P
+                       == samples.value(k, s, entry) for k in range(count, count + CHECK_POINTS))
+            if not fits:
+                break
+            per_embedding.append([int(coefficients[i, 0]) for i in range(count)])
+        else:
+            plain = [sympy.Symbol(str(v)) for v in variables]  # as the serial K's: BaseParameters.evaluate's keys
+            return sum((_number(field, radicands, [c[i] for c in per_embedding], where)
+                        * sympy.Mul(*(v ** e for v, e in zip(plain, m))) for i, m in enumerate(monomials)),
+                       sympy.Integer(0))
+    raise DerivationError(f"{where}: depends on the geometry ({', '.join(map(str, variables))}) otherwise than as a "
+                          f"polynomial of degree <= {MAX_DEGREE} (a ratio, or a sine of an angle), which the exact "
+                          "regrouping does not represent yet; write those parameters' values into the model file "
+                          "in their place")
+
+
+def _monomial(point: dict[sympy.Symbol, int], variables: Sequence[sympy.Symbol], powers: Sequence[int], P: int) -> int:
+    out = 1
+    for v, e in zip(variables, powers):
+        out = out * pow(point[v], e, P) % P
+    return out
+
+
+def _number(field: PrimeField, radicands: Sequence[int], images: Sequence[int], where: str) -> sympy.Expr:
+    """The element of Q(sqrt r_1, ...) whose images under the sign choices (itertools.product order) are ``images``:
+    its coordinate on prod_{i in S} sqrt r_i is the signed mean of the images over prod_{i in S} root_i."""
+    P = field.P
+    signs = list(itertools.product((1, -1), repeat=len(radicands)))
+    total = sympy.Integer(0)
+    for subset in itertools.product((0, 1), repeat=len(radicands)):
+        mean = 0
+        for sign, image in zip(signs, images):
+            weight = 1
+            for s, inside in zip(sign, subset):
+                weight *= s if inside else 1
+            mean = (mean + weight * image) % P
+        root = 1
+        for r, inside in zip(radicands, subset):
+            root = root * (field.roots[r] if inside else 1) % P
+        coordinate = _reconstruct(mean * field.inverse(len(signs) * root % P) % P, P)
+        if coordinate is None:
+            raise DerivationError(f"{where}: a coefficient is not a rational of moderate size (please report it)")
+        total += coordinate * sympy.Mul(*(sympy.sqrt(r) for r, inside in zip(radicands, subset) if inside))
+    return total
+
+
+def _verify(evaluator: FormulaEvaluator, found: BaseParameters, rng: random.Random, where: str) -> None:
+    """Y_j = Y_b K_j for every column at fresh states and geometry, with an independent prime and either sign of
+    each square root."""
+    rows, columns = evaluator.shape
+    for embedding in PrimeField.embeddings(rng, evaluator.radicands):
+        geometry = {g: embedding.residue(rng) for g in evaluator.geometry}
+        values = {sympy.Symbol(str(g)): v for g, v in geometry.items()}
+        K = [[evaluator.evaluate(embedding, k, values) for k in row] for row in found.combinations]
+        for _ in range(EXTRA_SAMPLES):
+            Y = evaluator.rows(embedding, rng, geometry)
+            for i in range(rows):
+                for j in range(columns):
+                    rebuilt = sum(Y[i * columns + b] * K[r][j] for r, b in enumerate(found.base)) % embedding.P
+                    if rebuilt != Y[i * columns + j]:
+                        raise DerivationError(f"{where}: the regrouping fails a check with another prime at column "
+                                              f"{found.names[j]} (please report it)")
