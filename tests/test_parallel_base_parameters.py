@@ -108,8 +108,11 @@ def test_the_deltas_regrouping_is_its_mechanics(derived):
 @pytest.mark.parametrize("derived", ["delta"], indirect=True)
 def test_symkin_identify_gives_back_the_deltas_base_parameters(derived, tmp_path):
     """A run simulated with the DELTA's own inverse dynamics along a periodic excitation about home (a finite
-    Fourier series of the actuators, the poses from fk), noise on the efforts: `symkin identify models/delta.yaml`
-    (poses from fk per sample) recovers the model's pi_b within 5 standard deviations; no identified.yaml."""
+    Fourier series of the actuators, the poses from fk), noise on the efforts: `symkin identify models/delta.yaml
+    --method consistent` (poses from fk per sample) recovers the model's pi_b within 5 standard deviations (its
+    weighted least squares), and standard parameters whose platform and arm are rigid bodies (pseudo-inertias
+    positive semidefinite to rounding) and whose rods' end masses are not negative, fitting the run as well as
+    the true parameters do; no identified.yaml."""
     name, found, generated = derived
     t, q, qd, qdd = excitation(3, seed=3)
     home = generated.ik(np.array(generated.info.home)).joints
@@ -118,13 +121,21 @@ def test_symkin_identify_gives_back_the_deltas_base_parameters(derived, tmp_path
     tau = generated.inverse_dynamics(q, p, qd, qdd) + np.random.default_rng(3).normal(0, NOISE, q.shape)
     run = write_run(tmp_path / "run.csv", generated.info.coordinate_names, t, q, tau, qd, qdd)
     out = tmp_path / "out"
-    result = subprocess.run(SYMKIN_CLI + ["identify", str(MODELS_DIR / "delta.yaml"), str(run), "--method", "wls",
-                                          "--no-figure", "-o", str(out)], capture_output=True, text=True)
+    result = subprocess.run(SYMKIN_CLI + ["identify", str(MODELS_DIR / "delta.yaml"), str(run), "--method",
+                                          "consistent", "--no-figure", "-o", str(out)], capture_output=True, text=True)
     assert result.returncode == 0, result.stderr
     record = json.loads((out / "estimate.json").read_text())
     assert [row["name"] for row in record["parameters"]] == list(found.base_names)
     error = {row["name"]: abs(row["value"] - row["model"]) / row["std"] for row in record["parameters"]}
     assert max(error.values()) < 5, error                          # 5 standard deviations: 1 in 1.7 million
+    standard = record["standard"]
+    assert len(standard["smallest_pseudo_inertia_eigenvalue"]) == 2               # the platform and the arm
+    largest = max(abs(v) for v in standard["parameters"].values())
+    assert min(standard["smallest_pseudo_inertia_eigenvalue"]) >= -1e3 * EPS * largest
+    assert min(standard["parameters"]["rod.mB"], standard["parameters"]["rod.mC"]) >= 0
+    # the data weighted by the noise, the true parameters cost chi^2 with len(pi_b) = 16 degrees of freedom more than
+    # least squares (mean 16, beyond 64 with a probability below 1e-7): the consistent estimate may cost no more
+    assert standard["data_cost"] - standard["least_squares_cost"] < 4 * len(found.base)
     assert "no identified.yaml: a parallel model's bodies" in (out / "summary.txt").read_text()
 
 

@@ -11,7 +11,8 @@ positive definite by construction through its log-Cholesky factor (Rucker and We
 parameterization of rigid-body inertia", IEEE Robot. Autom. Lett. 7(2), 2022: U upper triangular with
 exp(alpha) times [[e^d1, s12, s13, t1], [0, e^d2, s23, t2], [0, 0, e^d3, t3], [0, 0, 0, 1]]); J
 positive definite is exactly the density realizability of the link (Wensing, Kim and Slotine 2017), which
-implies m > 0 and the triangle inequalities of the principal moments.  Each drive is estimated as its rotor
+implies m > 0 and the triangle inequalities of the principal moments.  A parallel model's rods are masses at
+their ends (each non-negative) and an inertia beyond them (free).  Each drive is estimated as its rotor
 inertia I_a, viscous friction f_v and its two Coulomb levels c+ = f_c + f_o (against positive motion) and
 c- = f_c - f_o (against negative motion), all four bounded below by zero: f_c = (c+ + c-)/2 and
 f_o = (c+ - c-)/2, so the offset may have either sign but never turns a level into a push (the friction the
@@ -33,7 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from symkin.dynamics.parameter_names import DRIVE, INERTIAL
+from symkin.dynamics.parameter_names import DRIVE, INERTIAL, ROD_MASSES
 
 #: Weight of the prior against the data (relative, after both are scaled): small, it only picks among fits.
 PRIOR_WEIGHT = 1e-4
@@ -44,26 +45,54 @@ DRIVE_PARAMETERS = len(DRIVE)
 DRIVE_OF_LEVELS = np.array([[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 0.5, 0.5], [0.0, 0.0, 0.5, -0.5]])
 
 
+#: The kinds of blocks of the standard parameters, and their sizes: a body (a pseudo-inertia), a drive, a mass
+#: (>= 0), a free parameter.
+BLOCK_SIZES = {"body": LINK_PARAMETERS, "drive": DRIVE_PARAMETERS, "mass": 1, "free": 1}
+
+
+def layout(names: Sequence[str]) -> tuple[str, ...]:
+    """The blocks of the standard parameters ``names`` in order: ``<body>.m`` ... ``<body>.Izz`` a body,
+    ``<joint>.Ia`` ... ``<joint>.fo`` a drive, a rod's mass (``rod.mB``) a mass, anything else free."""
+    blocks: list[str] = []
+    k = 0
+    while k < len(names):
+        owner, _, parameter = names[k].rpartition(".")
+        for kind, parameters in (("body", INERTIAL), ("drive", DRIVE)):
+            if list(names[k:k + len(parameters)]) == [f"{owner}.{p}" for p in parameters]:
+                break
+        else:
+            kind = "mass" if parameter in ROD_MASSES else "free"
+        blocks.append(kind)
+        k += BLOCK_SIZES[kind]
+    return tuple(blocks)
+
+
 @dataclass(frozen=True)
 class ConsistentEstimate:
-    """Standard parameters of physically consistent links and the drives, and how they fit.
+    """Standard parameters of physically consistent bodies and the drives, and how they fit.
 
     Attributes:
         names: the standard parameters' names (the regressor's columns).
         values: the estimate.
-        links: the number of links (the first 10 * links values).
+        blocks: the kind of each block of the parameters (:func:`layout`).
         cost: |R pi - z|^2 at the estimate, against the unconstrained least squares' (``best_cost``).
     """
 
     names: tuple[str, ...]
     values: np.ndarray
-    links: int
+    blocks: tuple[str, ...]
     cost: float
     best_cost: float
 
     def pseudo_inertias(self) -> list[np.ndarray]:
-        """Each link's 4 x 4 pseudo-inertia (positive definite)."""
-        return [pseudo_inertia(self.values[LINK_PARAMETERS * k:LINK_PARAMETERS * (k + 1)]) for k in range(self.links)]
+        """Each body's 4 x 4 pseudo-inertia (positive definite)."""
+        return [pseudo_inertia(self.values[start:start + LINK_PARAMETERS])
+                for kind, start in zip(self.blocks, _starts(self.blocks)) if kind == "body"]
+
+
+def _starts(blocks: Sequence[str]) -> list[int]:
+    """The index of each block's first parameter."""
+    return list(np.cumsum([0] + [BLOCK_SIZES[kind] for kind in blocks[:-1]]).astype(int)) if blocks else []
 
 
 def pseudo_inertia(link: np.ndarray) -> np.ndarray:
@@ -144,32 +173,39 @@ def prior_scale(prior: np.ndarray) -> np.ndarray:
     return np.maximum(np.abs(prior), 1e-3 * float(np.max(np.abs(prior))) if np.any(prior) else 1.0)
 
 
-def estimate(triangle: np.ndarray, target: np.ndarray, names: Sequence[str], prior: np.ndarray,
-             links: int) -> ConsistentEstimate:
+def estimate(triangle: np.ndarray, target: np.ndarray, names: Sequence[str], prior: np.ndarray) -> ConsistentEstimate:
     """The consistent estimate of the module docstring from the triangular factor ``triangle`` (P x P) and
-    ``target`` (z) of the weighted standard regressor, the prior (the model's pi) and the number of links."""
+    ``target`` (z) of the weighted standard regressor and the prior (the model's pi); the blocks from ``names``."""
     from scipy.optimize import least_squares
 
     count = len(names)
-    drives = count - LINK_PARAMETERS * links
-    link_scale = [max(float(np.max(np.abs(prior[LINK_PARAMETERS * k:LINK_PARAMETERS * (k + 1)]))), 1e-9)
-                  for k in range(links)]
-    to_drives = np.kron(np.eye(drives // DRIVE_PARAMETERS), DRIVE_OF_LEVELS)  # d pi_drives / d theta_drives
-    levels = np.linalg.solve(to_drives, prior[LINK_PARAMETERS * links:]) if drives else np.zeros(0)
-    theta0 = np.concatenate([_log_cholesky(_regularized(pseudo_inertia(prior[LINK_PARAMETERS * k:
-                                                                               LINK_PARAMETERS * (k + 1)]),
-                                                        link_scale[k]))
-                             for k in range(links)] + [np.maximum(levels, 0.0)])
-    lower = np.full(len(theta0), -np.inf)
-    lower[LINK_PARAMETERS * links:] = 0.0
+    blocks = layout(names)
+    spans = [slice(start, start + BLOCK_SIZES[kind]) for kind, start in zip(blocks, _starts(blocks))]
+    starts = []
+    for kind, span in zip(blocks, spans):  # theta of the prior: each block's own parameterization
+        if kind == "body":
+            size = max(float(np.max(np.abs(prior[span]))), 1e-9)
+            starts.append(_log_cholesky(_regularized(pseudo_inertia(prior[span]), size)))
+        elif kind == "drive":
+            starts.append(np.maximum(np.linalg.solve(DRIVE_OF_LEVELS, prior[span]), 0.0))
+        else:
+            starts.append(np.maximum(prior[span], 0.0) if kind == "mass" else prior[span])
+    theta0 = np.concatenate(starts) if starts else np.zeros(0)
+    lower = np.concatenate([np.full(BLOCK_SIZES[kind], -np.inf if kind in ("body", "free") else 0.0)
+                            for kind in blocks]) if blocks else np.zeros(0)
     scale = prior_scale(prior)
     data_scale = max(float(np.linalg.norm(target)), 1e-300)
     weight = np.sqrt(PRIOR_WEIGHT) * data_scale / np.sqrt(count)
 
     def standard(theta: np.ndarray) -> np.ndarray:
-        factors = [_factor(theta[LINK_PARAMETERS * k:LINK_PARAMETERS * (k + 1)]) for k in range(links)]
-        drive_values = to_drives @ theta[LINK_PARAMETERS * links:]
-        return np.concatenate([_standard_of(U @ U.T) for U in factors] + [drive_values])
+        out = np.empty(count)
+        for kind, span in zip(blocks, spans):
+            if kind == "body":
+                U = _factor(theta[span])
+                out[span] = _standard_of(U @ U.T)
+            else:
+                out[span] = DRIVE_OF_LEVELS @ theta[span] if kind == "drive" else theta[span]
+        return out
 
     def residual(theta: np.ndarray) -> np.ndarray:
         pi = standard(theta)
@@ -178,18 +214,19 @@ def estimate(triangle: np.ndarray, target: np.ndarray, names: Sequence[str], pri
     rows = np.vstack([triangle, np.diag(weight / scale)])
 
     def jacobian(theta: np.ndarray) -> np.ndarray:
-        """[R; w D^-1] d pi / d theta: block diagonal over the links (:func:`_standard_derivatives`) and the drives
-        (:data:`DRIVE_OF_LEVELS`)."""
+        """[R; w D^-1] d pi / d theta: block diagonal over the bodies (:func:`_standard_derivatives`), the drives
+        (:data:`DRIVE_OF_LEVELS`) and the masses and free parameters (1)."""
         d_pi = np.zeros((len(theta), len(theta)))
-        for k in range(links):
-            block = slice(LINK_PARAMETERS * k, LINK_PARAMETERS * (k + 1))
-            d_pi[block, block] = _standard_derivatives(theta[block])
-        d_pi[LINK_PARAMETERS * links:, LINK_PARAMETERS * links:] = to_drives
+        for kind, span in zip(blocks, spans):
+            if kind == "body":
+                d_pi[span, span] = _standard_derivatives(theta[span])
+            else:
+                d_pi[span, span] = DRIVE_OF_LEVELS if kind == "drive" else 1.0
         return rows @ d_pi
 
     result = least_squares(residual, theta0, jac=jacobian, bounds=(lower, np.full(len(theta0), np.inf)),
                            method="trf", x_scale="jac", xtol=1e-12, ftol=1e-12, gtol=1e-12, max_nfev=2000)
     pi = standard(result.x)
     best = np.linalg.lstsq(triangle, target, rcond=None)[0]
-    return ConsistentEstimate(tuple(names), pi, links, float(np.sum((triangle @ pi - target) ** 2)),
+    return ConsistentEstimate(tuple(names), pi, blocks, float(np.sum((triangle @ pi - target) ** 2)),
                               float(np.sum((triangle @ best - target) ** 2)))

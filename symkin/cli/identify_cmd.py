@@ -40,9 +40,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("data", metavar="DATA.csv", help="the measured run")
     p.add_argument("--method", choices=("ols", "wls", "consistent", "energy"), default="wls",
                    help="ordinary least squares, or weighted by each joint's residual, on the base parameters; or "
-                        "'consistent': also the standard parameters, every link a physical rigid body (positive "
-                        "definite pseudo-inertia) and the drives' inertia and friction non-negative, nearest the "
-                        "model's values among the fits; or 'energy': least squares on the energy balance over "
+                        "'consistent': also the standard parameters, every body (a link; a parallel model's platform "
+                        "and arms) a physical rigid body (positive definite pseudo-inertia), a rod's end masses and "
+                        "the drives' inertia and friction non-negative, nearest the model's values among the fits; or 'energy': least squares on the energy balance over "
                         "windows of the run (the work of tau against the change of the energy and the friction's "
                         "loss; no accelerations enter the estimate) (default: %(default)s)")
     p.add_argument("--window", type=float, default=0.05, metavar="S",
@@ -67,8 +67,6 @@ def run(args: argparse.Namespace) -> int:
         if not args.window > 0:
             raise ValueError(f"--window must be a positive number of seconds, got {args.window:g}")
         source = _model_file(args.model)
-        if source is not None and source.parallel is not None:
-            _require_parallel_method(args)  # before the derivation
         outputs = ENERGY_OUTPUTS if args.method == "energy" else IDENTIFY_OUTPUTS
         model = model_files.generated_model(args.model, args.backend, {
             kind: outputs if kind is MechanismKind.SERIAL else (*outputs, "fk") for kind in MechanismKind})
@@ -138,23 +136,14 @@ def _model_file(path: str):
     return load_model(path)
 
 
-def _require_parallel_method(args: argparse.Namespace) -> None:
-    """Refuse --method consistent for a parallel model (ValueError): its bodies are not a chain of links."""
-    if args.method == "consistent":
-        raise ValueError(f"{args.model}: --method consistent needs a serial model (each link's pseudo-inertia); a "
-                         "parallel model's bodies are identified by --method ols, wls or energy")
-
-
 def _device_regressors(args: argparse.Namespace, model):
     """A parallel model's regressors taking the device's joints (the platform's pose from fk per sample).
 
     Raises:
-        ValueError: --method consistent (its bodies are not a chain of links), or a generated directory without the
-            base regressor or fk.
+        ValueError: a generated directory without the base regressor or fk.
     """
     from symkin.analysis.device_regressors import DeviceRegressors
 
-    _require_parallel_method(args)
     missing = [f for f in ("base_regressor", "fk") if f not in model.info.functions]
     if missing:
         raise ValueError(f"{args.model}: a parallel model's identification needs {' and '.join(missing)}; derive "
@@ -194,9 +183,7 @@ def _consistent(model, Y, pi, fit, found):
 
     weights = 1.0 / np.where(found.joint_std > 0, found.joint_std, 1.0)
     triangle, target = identification.weighted_triangle(Y, fit.tau, weights)
-    names = model.info.functions["regressor"].outputs["pi"]
-    links = sum(1 for name in names if name.endswith(".m"))
-    return consistent.estimate(triangle, target, names, pi[0], links)
+    return consistent.estimate(triangle, target, model.info.functions["regressor"].outputs["pi"], pi[0])
 
 
 def _updated_model(args: argparse.Namespace, source, model, K, pi, found, standard, values: dict[str, float]):

@@ -16,3 +16,8 @@ DRIVE = ("Ia", "fv", "fc", "fo")
 #: The drive parameters whose efforts dissipate: an energy balance carries them as the integral of their power,
 #: every other parameter as a change of the stored energy.
 DISSIPATIVE = DRIVE[1:]
+#: A parallel model's rods (``rod.<name>``): the masses lumped at their platform and proximal joints, and their
+#: inertia across them beyond those ends' (I_c - m f (1 - f) L^2, of either sign).
+ROD = ("mB", "mC", "dI")
+#: The rods' parameters that are masses (never negative in a physical estimate).
+ROD_MASSES = ROD[:2]

@@ -6,6 +6,8 @@ mechanism assembled at a few poses (the platform-motion check at home, the base 
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from symkin.ir.evaluate import symengine_entries
@@ -25,16 +27,20 @@ STARTS = 8
 CLOSED = 1e-9
 
 
-def assemble(d: Deriving, p: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
-    """(q, s) closing every leg at p (the closure's rows below :data:`CLOSED` of the pose's scale), by damped
-    Gauss-Newton on the generated closure (its Jacobian by central differences: the assembly needs no more than
-    the rows' zero, and the closure alone derives in a fraction of the time of its Jacobians) from q = s = 0 and
-    then from :data:`STARTS` fixed random starts; None if none closes."""
+def assembler(d: Deriving) -> Callable[[np.ndarray], tuple[np.ndarray, np.ndarray] | None]:
+    """assemble(p): (q, s) closing every leg at p (the closure's rows below :data:`CLOSED` of the pose's scale), by
+    damped Gauss-Newton on the generated closure (its Jacobian by central differences: the assembly needs no more
+    than the rows' zero, and the closure alone derives in a fraction of the time of its Jacobians) from q = s = 0
+    and then from :data:`STARTS` fixed random starts; None if none closes.  The closure is compiled once."""
     model = d.model
     q_symbols, s_symbols = coordinates.symbols(model, "q"), passive_symbols(model)
     function = symengine_entries(d["closure"], q_symbols + s_symbols + task_symbols(model), model.parameter_values)
     n, k = len(q_symbols), len(s_symbols)
+    return lambda p: _gauss_newton(function, n, k, p)
 
+
+def _gauss_newton(function: Callable[[np.ndarray], np.ndarray], n: int, k: int, p: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray] | None:
     def residuals(X: np.ndarray) -> np.ndarray:  # rows of X: states; one call for the batch
         return function(np.concatenate([X, np.broadcast_to(p, (len(X), len(p)))], axis=1))
 

@@ -156,6 +156,7 @@ def _fitted(samples: _Samples, entry: tuple[int, int], variables: Sequence[sympy
     field."""
     field, radicands = samples.embeddings[0], samples.evaluator.radicands
     P = field.P
+    checks = CHECK_POINTS if variables else 0  # without geometry every draw is the first: nothing to check
     for degree in range((MAX_DEGREE if variables else 0) + 1):
         monomials = [m for m in itertools.product(range(degree + 1), repeat=len(variables)) if sum(m) <= degree]
 
@@ -172,7 +173,7 @@ def _fitted(samples: _Samples, entry: tuple[int, int], variables: Sequence[sympy
         for s in range(2 ** len(radicands)):
             coefficients = inverse * flint.nmod_mat([[samples.value(k, s, entry)] for k in range(count)], P)
             fits = all(sum(int(c) * x for c, x in zip((coefficients[i, 0] for i in range(count)), row(k))) % P
-                       == samples.value(k, s, entry) for k in range(count, count + CHECK_POINTS))
+                       == samples.value(k, s, entry) for k in range(count, count + checks))
             if not fits:
                 break
             per_embedding.append([int(coefficients[i, 0]) for i in range(count)])

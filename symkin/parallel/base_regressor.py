@@ -19,7 +19,7 @@ from symkin.errors import DerivationError
 from symkin.ir.evaluate import symengine_entries
 from symkin.ir.quantity import Deriving, quantity
 from symkin.ir.spec import FunctionSpec, OutputSpec
-from symkin.parallel.assembly import assemble
+from symkin.parallel.assembly import assembler
 from symkin.parallel.base_parameters import modular_base_parameters
 from symkin.parallel.prime_field import Closure
 from symkin.parallel.quantities import PARALLEL, reduced_legs
@@ -66,10 +66,11 @@ def closure_rank(d: Deriving, base: int) -> int:
     rng = np.random.default_rng(0)
     centre = np.array([float(sympy.sympify(e).xreplace(values)) for e in home])
     function = symengine_entries(spec, [s for i in spec.inputs if i.kind != "parameter" for s in i.symbols], values)
+    assemble = assembler(d)
     stacked = []
     for _ in range(CLOSURE_SAMPLES * columns // max(rows, 1) + 1):
         p = centre + rng.uniform(-CLOSURE_SPREAD, CLOSURE_SPREAD, centre.shape)
-        assembled = assemble(d, p)
+        assembled = assemble(p)
         if assembled is None:
             continue
         state = {"q": assembled[0], "p": p}

@@ -26,7 +26,7 @@ from symkin.derivation import Derivation
 from symkin.errors import ModelError
 from symkin.model import coordinates
 from symkin.model.schema import Model
-from symkin.parallel.assembly import STARTS, assemble
+from symkin.parallel.assembly import STARTS, assembler
 from symkin.parallel.inputs import passive_symbols, task_symbols
 from symkin.parallel.quantities import ParallelStructure, parallel_structure
 
@@ -144,7 +144,7 @@ def check_platform_motion(model: Model) -> MotionCheck:
     structure = derivation[parallel_structure]
     values = model.parameter_values
     home_values = [float(sympy.sympify(e).xreplace(values)) for e in parallel.home]
-    assembled = assemble(derivation, np.array(home_values))
+    assembled = assembler(derivation)(np.array(home_values))
     if assembled is None:
         return MotionCheck((), note=f"the legs did not close at the home pose from {STARTS + 1} starts "
                                     "(Gauss-Newton on the closure): the motion was not checked")

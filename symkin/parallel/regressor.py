@@ -38,7 +38,7 @@ import sympy
 
 from symkin.dynamics.program import Program
 from symkin.dynamics.quantities import coordinate_symbols, function_spec
-from symkin.dynamics.parameter_names import DRIVE, INERTIAL
+from symkin.dynamics.parameter_names import DRIVE, INERTIAL, ROD
 from symkin.dynamics.quantities import gravity_graph, newton_euler_links
 from symkin.dynamics.regressor import (
     drive_columns,
@@ -113,7 +113,7 @@ def body_parameter_names(legs: _Legs) -> tuple[str, ...]:
         names += [f"actuated_link.{p}" for p in INERTIAL]
     if legs.distal_body is not None:
         names += [f"distal_link.{p}" for p in INERTIAL]
-    names += ["rod.mB", "rod.mC"] + (["rod.dI"] if legs.rod_length_squared is not None else [])
+    names += [f"rod.{p}" for p in ROD[:3 if legs.rod_length_squared is not None else 2]]
     return tuple(names) + tuple(f"{c.name}.{p}" for c in legs.model.coordinates for p in DRIVE)
 
 
