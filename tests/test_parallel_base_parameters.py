@@ -20,7 +20,7 @@ from identification_runs import excitation, write_run
 from symkin import load, pipeline
 from symkin.derivation.graph import Derivation
 from symkin.errors import DerivationError
-from symkin.model import load_model
+from symkin.model import load_model, model_from_text
 from tolerances import DYNAMICS, EPS
 
 TINY = np.finfo(float).tiny
@@ -139,6 +139,26 @@ def test_symkin_identify_gives_back_the_deltas_base_parameters(derived, tmp_path
     assert "no identified.yaml: a parallel model's bodies" in (out / "summary.txt").read_text()
 
 
+@pytest.mark.parametrize("derived", ["delta"], indirect=True)
+def test_symkin_excite_designs_a_run_the_deltas_legs_follow(derived, tmp_path):
+    """symkin excite on the DELTA: its base regressor is taken at the poses fk(q) of the trajectory (CasADi), whose
+    legs must assemble (fk's margin >= 0) within the actuators' limits; a few IPOPT iterations lower cond(W)."""
+    name, found, generated = derived
+    out = tmp_path / "out"
+    result = subprocess.run(SYMKIN_CLI + ["excite", str(MODELS_DIR / "delta.yaml"), "--max-velocity", "3",
+                                          "--max-acceleration", "20", "--period", "4", "--harmonics", "2",
+                                          "--max-iterations", "15", "--no-figure", "-o", str(out)],
+                            capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    record = json.loads((out / "excitation.json").read_text())
+    assert record["condition"] < record["condition_start"]
+    table = np.loadtxt(out / "excitation.csv", delimiter=",", skiprows=1)
+    q = table[:, 1:4]
+    lower, upper = np.array(generated.info.coordinates[0].limits)
+    assert np.all((q >= lower) & (q <= upper)), (q.min(), q.max(), lower, upper)
+    assert np.all(generated.fk(q).margin >= 0)
+
+
 @pytest.mark.parametrize("derived", ["delta_wrist"], indirect=True)
 def test_a_hybrid_devices_run_is_its_legs_then_its_wrist(derived):
     """symkin identify's view of a hybrid device (analysis.device_regressors): the run's coordinates are the legs'
@@ -168,6 +188,20 @@ def test_the_agile_eyes_closure_regroups_what_its_formula_keeps_apart(derived):
     name, found, generated = derived
     assert len(found.base) == 28
     assert "distal_link.IyzR = distal_link.Iyz + 1/2 rod.dI" in found.equations()
+
+
+def test_a_parallel_model_without_bodies_has_no_regressor_and_says_what_to_add():
+    """The pantograph without its bodies section: the regressor (and so the base parameters) is refused with the
+    section to add, not derived as zero columns."""
+    text = (MODELS_DIR / "pantograph.yaml").read_text()
+    start = text.index("\nbodies:\n")
+    bodiless = text[:start + 1] + text[text.index("\n\n", start) + 2:]
+    model = model_from_text(bodiless, file="pantograph.yaml")
+    assert model.parallel.bodies is None
+    for quantity in ("regressor", "base_parameters"):
+        with pytest.raises(DerivationError, match="model 'pantograph' declares no bodies, so it has no regressor; "
+                                                  "add a 'bodies:' section"):
+            Derivation(model)[quantity]
 
 
 def test_what_the_exact_elimination_cannot_do_is_refused_with_the_reason():

@@ -208,6 +208,8 @@ def test_the_planar_arms_base_parameters_are_khalils_regrouping():
     assert found.equations()[mx] == "link1.mxR = link1.mx + l1 link2.m"
     assert found.equations()[Izz] == "link1.IzzR = link1.Izz + l1**2 link2.m + theta1.Ia"
     assert found.evaluate({"l1": 0.25})[Izz, m2] == 0.0625
+    with pytest.raises(ValueError, match="K depends on l1: give the value of l1"):
+        found.evaluate({"l2": 0.25})
 
 
 def _off_default(model, rng, names):

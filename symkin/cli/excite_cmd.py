@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from symkin.analysis.mechanism import MechanismKind
 from symkin.cli import analysis_args, model_files
 from symkin.cli.progress import Progress
 
@@ -53,7 +54,9 @@ def run(args: argparse.Namespace) -> int:
                 raise ValueError(f"--{name.replace('_', '-')} must be positive")
         if args.harmonics < 1 or args.periods < 1:
             raise ValueError("--harmonics and --periods must be at least 1")
-        model = model_files.generated_model(args.model, "casadi", ("base_regressor",))
+        model = model_files.generated_model(args.model, "casadi", {
+            kind: ("base_regressor",) if kind is MechanismKind.SERIAL else ("base_regressor", "fk")
+            for kind in MechanismKind})
         values = analysis_args.parse_assignments(args.assignments)
         model = model.bind(**values) if values else model
         with Progress(model.name) as progress:

@@ -19,7 +19,9 @@ the parameters' units):
 both terms differentiable where cond(W S) is finite (||F||_F >= lambda_max, trace(F^-1) >= 1 / lambda_min,
 each within a factor of the number of parameters), subject to the joint position limits and the given
 velocity and acceleration limits at every sample (and checked on a grid ten times as dense).  The columns
-of the Coulomb friction (sign(qd)) are piecewise constant: they count in W but give no gradient.
+of the Coulomb friction (sign(qd)) are piecewise constant: they count in W but give no gradient.  A parallel
+model's base regressor takes the platform's pose: p = fk(q) along the motion (its CasADi fk composed), whose
+legs must assemble at every constraint point (fk's margin >= 0).
 """
 
 from __future__ import annotations
@@ -114,8 +116,11 @@ def optimize_excitation(model: GeneratedModel, *, period: float = 10.0, harmonic
     ``base_regressor``).
 
     Raises:
-        ValueError: missing limits, or a start IPOPT cannot leave (see the message).
+        ValueError: missing limits, a hybrid device, or a start IPOPT cannot leave (see the message).
     """
+    if model.info.wrist:
+        raise ValueError(f"{model.name}: the excitation of a hybrid device is not designed yet (its wrist joints "
+                         "are not in the Fourier series); design the legs' and the wrist's motions apart")
     function = casadi_function(model, "base_regressor")
     lower, upper, speeds, accelerations = _limits(model, max_velocity, max_acceleration, limits or {})
     n = len(lower)
@@ -135,7 +140,8 @@ def optimize_excitation(model: GeneratedModel, *, period: float = 10.0, harmonic
     dense = np.arange(CONSTRAINT_DENSITY * samples) * period / (CONSTRAINT_DENSITY * samples)
     q_c, qd_c, qdd_c = _series(casadi, offsets, a, b, period, dense)
     mapped = function.map(samples, "serial")
-    Y = mapped(*_arguments(function, model, q.T, qd.T, qdd.T, samples))[0]     # (n, count * samples), column-major
+    pose = _pose_function(model, samples) if model.info.is_parallel else None
+    Y = mapped(*_arguments(function, model, q.T, qd.T, qdd.T, samples, pose))[0]  # (n, count * samples), column-major
     x0 = np.concatenate([middle, a0.ravel(), b0.ravel()])  # each joint's L coefficients in a row
     regressor_at = casadi.Function("W", [x], [Y])
     W0 = _stacked(regressor_at(x0).full(), n, count, samples)
@@ -151,6 +157,10 @@ def optimize_excitation(model: GeneratedModel, *, period: float = 10.0, harmonic
                           np.zeros(2 * n)])
     ubg = np.concatenate([np.repeat(upper, points), np.repeat(speeds, points), np.repeat(accelerations, points),
                           np.zeros(2 * n)])
+    if pose is not None:  # a parallel model's legs assemble along the motion: fk's margin >= 0 at the points
+        margin = _pose_function(model, points)(q_c.T)[1]
+        g = casadi.vertcat(g, casadi.vec(margin))
+        lbg, ubg = np.concatenate([lbg, np.zeros(points)]), np.concatenate([ubg, np.full(points, np.inf)])
     solver = casadi.nlpsol("excitation", "ipopt", {"x": x, "f": objective, "g": g},
                            {**IPOPT_OPTIONS, "ipopt.tol": 1e-6, "ipopt.constr_viol_tol": 1e-9,
                             "ipopt.max_iter": max_iterations, "ipopt.hessian_approximation": "limited-memory"})
@@ -199,9 +209,24 @@ def _fitting_factor(states: tuple[np.ndarray, np.ndarray, np.ndarray], offsets: 
     return float(min(1.0, *(float(np.min(r)) for r in ratios)))
 
 
-def _arguments(function: casadi.Function, model: GeneratedModel, q: Any, qd: Any, qdd: Any, samples: int) -> list[Any]:
-    """The mapped function's inputs: the state matrices, then each parameter at the model's (bound) value."""
+def _pose_function(model: GeneratedModel, samples: int) -> casadi.Function:
+    """A parallel model's fk (pose, margin) mapped over ``samples`` configurations at the model's parameter values
+    (its regressors take the pose p = fk(q))."""
+    fk = casadi_function(model, "fk")
+    mapped = fk.map(samples, "serial")
+    q = casadi.MX.sym("q", fk.size1_in(0), samples)
+    outputs = mapped(*[q if name == "q" else casadi.repmat(casadi.DM(model.parameters[name]), 1, samples)
+                       for name in fk.name_in()])
+    return casadi.Function("pose", [q], list(outputs[:2]))
+
+
+def _arguments(function: casadi.Function, model: GeneratedModel, q: Any, qd: Any, qdd: Any, samples: int,
+               pose: casadi.Function | None = None) -> list[Any]:
+    """The mapped function's inputs: the state matrices (a parallel model's pose p = fk(q)), then each parameter at
+    the model's (bound) value."""
     values = {"q": q, "qd": qd, "qdd": qdd}
+    if pose is not None:
+        values["p"] = pose(q)[0]
     return [values[name] if name in values else casadi.repmat(casadi.DM(model.parameters[name]), 1, samples)
             for name in function.name_in()]
 

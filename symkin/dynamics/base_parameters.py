@@ -103,7 +103,14 @@ class BaseParameters:
 
     def evaluate(self, values: Mapping[str, float]) -> np.ndarray:
         """K as floats at the values of its ``geometry`` (keyed by parameter name; a model's defaults:
-        ``{p.name: p.value for p in model.parameters}``)."""
+        ``{p.name: p.value for p in model.parameters}``).
+
+        Raises:
+            ValueError: ``values`` misses a parameter K depends on (named, with the ones it needs).
+        """
+        missing = [name for name in self.geometry if name not in values]
+        if missing:
+            raise ValueError(f"K depends on {', '.join(self.geometry)}: give the value of {', '.join(missing)}")
         symbols = [sympy.Symbol(name) for name in self.geometry]
         point = {symbol: sympy.sympify(values[name]) for symbol, name in zip(symbols, self.geometry)}
         return np.array([[float(k.xreplace(point)) for k in row] for row in self.combinations], dtype=float)
