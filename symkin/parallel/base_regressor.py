@@ -98,7 +98,8 @@ def _base_regressor(d: Deriving) -> FunctionSpec:
     return dataclasses.replace(
         full, name="base_regressor", summary="Base regressor: tau = Y_b(q, p, qd, qdd) pi_b, Y_b of full column rank.",
         doc="The regressor's linearly independent columns (Khalil and Dombre 2002, sec. 14.4), found by a modular "
-            "echelon form of the formula at random states (symkin.parallel.base_parameters): Y = Y_b K and "
+            "echelon form of the formula at random states of the assembled mechanism over a prime field "
+            "(symkin.parallel.base_parameters): Y = Y_b K and "
             "pi_b = K pi with K exact for every value of the model's parameters: " + "; ".join(found.equations())
             + ". Evaluate at a consistent pair q, p (p = fk(q) or q = ik(p)).",
         outputs=(OutputSpec("Y_b", Y_b, "base regressor: full column rank", shape=(rows, len(found.base)),

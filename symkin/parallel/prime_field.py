@@ -144,6 +144,12 @@ def _split(closure: Closure, where: str) -> _Split:
     return _Split(q, closure.rotation, coefficients, atoms)
 
 
+def _outside_angles(expr: sympy.Expr) -> set[sympy.Symbol]:
+    """The symbols of ``expr`` outside its sines and cosines (those inside are taken as the angles' points)."""
+    angles = expr.atoms(sympy.sin, sympy.cos)
+    return expr.xreplace({a: sympy.Integer(1) for a in angles}).free_symbols if angles else expr.free_symbols
+
+
 class _NoPoint(Exception):
     """The drawn state has no point over GF(P): a leg's closure or a square root in the formula needs the square
     root of a non-residue (about half the draws each)."""
@@ -167,11 +173,17 @@ class FormulaEvaluator:
             if s not in needed:
                 needed[s] = definitions[s]
                 stack.extend(t for t in definitions[s].free_symbols if t in definitions)
-        self.definitions = [(s, e) for s, e in spec.definitions if s in needed]
-        expressions = [e for _, e in self.definitions] + self.entries + [e for c in self.closures
-                                                                          for e in c.coefficients]
+        expressions = [needed[s] for s, _ in spec.definitions if s in needed] + self.entries + [
+            e for c in self.closures for e in c.coefficients]
         self.functions = sorted(set().union(*(e.atoms(sympy.Function) for e in expressions)), key=str)
-        self.inline = inline = dict(self.definitions)
+        inline = dict(needed)
+        #: The definitions evaluated at a state, in order: those outside every sine and cosine (the angles' are
+        #: inlined into them, whose values come from the angles' points; an angle may be a transcendental sum).
+        outside = {s for e in self.entries for s in _outside_angles(e) if s in needed}
+        for symbol, expr in reversed(spec.definitions):
+            if symbol in outside:
+                outside |= {s for s in _outside_angles(expr) if s in needed}
+        self.definitions = [(s, e) for s, e in spec.definitions if s in outside]
         self.angles: dict[sympy.Function, tuple[dict[sympy.Symbol, int], sympy.Expr]] = {}
         inputs = {s for i in spec.inputs for s in i.symbols}
         parameters = {s for i in spec.inputs if i.kind == "parameter" for s in i.symbols}
@@ -185,13 +197,12 @@ class FormulaEvaluator:
                 raise DerivationError(f"{where}: the regressor holds {atom}, which the exact elimination cannot "
                                       "evaluate (sines and cosines of the coordinates, Coulomb shapes only)")
         used = set().union(*(e.free_symbols for e in expressions)) - inline.keys()
-        self.geometry = sorted(used & parameters, key=str)
         self.variables = sorted(used - parameters, key=str)
         #: Parameters in an angle (the Stewart platform's joint spacing): their value t stands for the angle
         #: 2 atan(t) in sines and cosines, and for itself elsewhere (an identity for every angle holds there too).
         self.angle_parameters = sorted({x for coefficients, _ in self.angles.values() for x in coefficients}
                                        & parameters, key=str)
-        self.geometry = sorted(set(self.geometry) | set(self.angle_parameters), key=str)
+        self.geometry = sorted((used & parameters) | set(self.angle_parameters), key=str)
         roots = {x for e in expressions for x in e.atoms(sympy.Pow)
                  if x.args[1].is_Rational and x.args[1].q == 2 and not x.args[0].is_number}
         if len(self.closures) + len(roots) > MAX_SQUARE_ROOTS:
@@ -226,11 +237,13 @@ class FormulaEvaluator:
             points = {x: field.circle_point(rng) for x in self.variables}
             points.update({g: field.circle(geometry[g]) for g in self.angle_parameters})
             values.update({x: field.residue(rng) for x in self.variables})
-            memo: dict[sympy.Expr, int] = {}  # the definitions too, evaluated when first used (not those in angles)
+            memo: dict[sympy.Expr, int] = {}
             try:
                 for closure in self.closures:
                     self._close(field, rng, closure, values, points)
                 values.update(self._atoms(field, rng, self.functions, points))
+                for symbol, expr in self.definitions:
+                    values[symbol] = self._value(field, expr, values, memo)
                 return [self._value(field, e, values, memo) for e in self.entries]
             except _NoPoint:
                 continue
@@ -293,9 +306,7 @@ class FormulaEvaluator:
         if expr in memo:
             return memo[expr]
         P = field.P
-        if expr in self.inline:
-            out = self._value(field, self.inline[expr], values, memo)
-        elif expr.is_Rational:
+        if expr.is_Rational:
             out = field.rational(expr)
         elif expr.is_Add:
             out = sum(self._value(field, a, values, memo) for a in expr.args) % P
