@@ -180,6 +180,34 @@ def test_a_hybrid_devices_run_is_its_legs_then_its_wrist(derived):
         short.pose(np.hstack([q, qw]))
 
 
+@pytest.mark.parametrize("derived", ["delta"], indirect=True)
+def test_a_parts_poses_are_computed_once_for_all_its_regressors(derived):
+    """symkin identify passes one part of a run (one array) to the base regressor and the regressor: fk runs once
+    for it, and again for another array."""
+    from symkin.analysis.device_regressors import DeviceRegressors
+
+    name, found, generated = derived
+    solved = []
+
+    class CountingFk:
+        info = generated.info
+
+        def __getattr__(self, attribute):
+            return getattr(generated, attribute)
+
+        def fk(self, q):
+            solved.append(len(q))
+            return generated.fk(q)
+
+    q, p, qd, qdd = _inputs(generated, name, 8, 5)
+    device = DeviceRegressors(CountingFk(), "run.csv")
+    first = device.base_regressor(q, qd, qdd).Y_b
+    device.regressor(q, qd, qdd)
+    assert solved == [8]
+    np.testing.assert_array_equal(device.base_regressor(q.copy(), qd, qdd).Y_b, first)
+    assert solved == [8, 8]
+
+
 @pytest.mark.parametrize("derived", ["agile_eye"], indirect=True)
 def test_the_agile_eyes_closure_regroups_what_its_formula_keeps_apart(derived):
     """The Agile Eye's regressor has 31 columns independent for every (q, p), but on the assembled mechanism only 28:

@@ -27,16 +27,20 @@ class DeviceRegressors:
         info = model.info
         self.legs = len(info.coordinates)
         self.info = dataclasses.replace(info, coordinates=info.coordinates + info.wrist, wrist=())
+        self._last_pose: tuple[np.ndarray, np.ndarray] | None = None  # (q, fk(q)) of the last part of a run
 
     def __getattr__(self, name: str) -> Any:
         return getattr(self.model, name)
 
     def pose(self, q: np.ndarray) -> np.ndarray:
-        """p = fk(q_legs) of every sample (N, task).
+        """p = fk(q_legs) of every sample (N, task); of the same array as the last call, that call's (a part of a
+        run goes through several regressors: its poses are computed once).
 
         Raises:
             DataError: naming the first sample (its CSV row) whose legs do not assemble.
         """
+        if self._last_pose is not None and self._last_pose[0] is q:
+            return self._last_pose[1]
         with np.errstate(invalid="ignore"):  # NaN where the legs do not assemble: refused below with the row
             p = np.asarray(self.model.fk(q[..., :self.legs])[0], dtype=float)
         bad = ~np.all(np.isfinite(p), axis=-1)
@@ -45,6 +49,7 @@ class DeviceRegressors:
             raise DataError(f"{self.source}: sample {row + 1} (row {row + 2}): the legs do not assemble at q = "
                             f"{np.array2string(q[row, :self.legs], precision=6)} (fk has no solution); check the "
                             "angles' zero and sign against the model's")
+        self._last_pose = (q, p)
         return p
 
     def _arguments(self, function: str, q: np.ndarray, *rates: np.ndarray) -> list[np.ndarray]:

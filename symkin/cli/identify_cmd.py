@@ -42,9 +42,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="ordinary least squares, or weighted by each joint's residual, on the base parameters; or "
                         "'consistent': also the standard parameters, every body (a link; a parallel model's platform "
                         "and arms) a physical rigid body (positive definite pseudo-inertia), a rod's end masses and "
-                        "the drives' inertia and friction non-negative, nearest the model's values among the fits; or 'energy': least squares on the energy balance over "
-                        "windows of the run (the work of tau against the change of the energy and the friction's "
-                        "loss; no accelerations enter the estimate) (default: %(default)s)")
+                        "the drives' inertia and friction non-negative, nearest the model's values among the fits; "
+                        "or 'energy': least squares on the energy balance over windows of the run (the work of tau "
+                        "against the change of the energy and the friction's loss; no accelerations enter the "
+                        "estimate) (default: %(default)s)")
     p.add_argument("--window", type=float, default=0.05, metavar="S",
                    help="--method energy: the length of the windows of the energy balance, one equation each "
                         "(default: %(default)s s)")

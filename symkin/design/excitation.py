@@ -141,7 +141,8 @@ def optimize_excitation(model: GeneratedModel, *, period: float = 10.0, harmonic
     q_c, qd_c, qdd_c = _series(casadi, offsets, a, b, period, dense)
     mapped = function.map(samples, "serial")
     pose = _pose_function(model, samples) if model.info.is_parallel else None
-    Y = mapped(*_arguments(function, model, q.T, qd.T, qdd.T, samples, pose))[0]  # (n, count * samples), column-major
+    states = {"q": q.T, "qd": qd.T, "qdd": qdd.T, **({} if pose is None else {"p": pose(q.T)[0]})}
+    Y = mapped(*_arguments(function, model, states, samples))[0]  # (n, count * samples), column-major
     x0 = np.concatenate([middle, a0.ravel(), b0.ravel()])  # each joint's L coefficients in a row
     regressor_at = casadi.Function("W", [x], [Y])
     W0 = _stacked(regressor_at(x0).full(), n, count, samples)
@@ -213,21 +214,15 @@ def _pose_function(model: GeneratedModel, samples: int) -> casadi.Function:
     """A parallel model's fk (pose, margin) mapped over ``samples`` configurations at the model's parameter values
     (its regressors take the pose p = fk(q))."""
     fk = casadi_function(model, "fk")
-    mapped = fk.map(samples, "serial")
     q = casadi.MX.sym("q", fk.size1_in(0), samples)
-    outputs = mapped(*[q if name == "q" else casadi.repmat(casadi.DM(model.parameters[name]), 1, samples)
-                       for name in fk.name_in()])
+    outputs = fk.map(samples, "serial")(*_arguments(fk, model, {"q": q}, samples))
     return casadi.Function("pose", [q], list(outputs[:2]))
 
 
-def _arguments(function: casadi.Function, model: GeneratedModel, q: Any, qd: Any, qdd: Any, samples: int,
-               pose: casadi.Function | None = None) -> list[Any]:
-    """The mapped function's inputs: the state matrices (a parallel model's pose p = fk(q)), then each parameter at
-    the model's (bound) value."""
-    values = {"q": q, "qd": qd, "qdd": qdd}
-    if pose is not None:
-        values["p"] = pose(q)[0]
-    return [values[name] if name in values else casadi.repmat(casadi.DM(model.parameters[name]), 1, samples)
+def _arguments(function: casadi.Function, model: GeneratedModel, states: dict[str, Any], samples: int) -> list[Any]:
+    """The inputs of ``function`` mapped over ``samples``: the given state matrices by name, then each parameter
+    at the model's (bound) value."""
+    return [states[name] if name in states else casadi.repmat(casadi.DM(model.parameters[name]), 1, samples)
             for name in function.name_in()]
 
 

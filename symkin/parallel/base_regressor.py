@@ -61,7 +61,7 @@ def closure_rank(d: Deriving, base: int) -> int:
     if home is None:
         return base
     values = model.parameter_values
-    spec = d[reduced_regressor]
+    spec = dataclasses.replace(d[reduced_regressor], outputs=d[reduced_regressor].outputs[:1])  # Y alone, not pi
     rows, columns = spec.outputs[0].shape
     rng = np.random.default_rng(0)
     centre = np.array([float(sympy.sympify(e).xreplace(values)) for e in home])
@@ -76,7 +76,7 @@ def closure_rank(d: Deriving, base: int) -> int:
         state = {"q": assembled[0], "p": p}
         arguments = np.concatenate([state[i.name] if i.name in state else rng.normal(size=len(i.symbols))
                                     for i in spec.inputs if i.kind != "parameter"])
-        stacked.append(function(arguments)[:rows * columns].reshape(rows, columns))
+        stacked.append(function(arguments).reshape(rows, columns))
     Y = np.concatenate(stacked) if stacked else np.zeros((0, columns))
     norms = np.linalg.norm(Y, axis=0)
     singular = np.linalg.svd(Y[:, norms > 0] / norms[norms > 0], compute_uv=False) if Y.size else np.zeros(0)
