@@ -22,7 +22,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from symkin import pipeline  # noqa: E402
-from symkin.analysis import identification, identified_model  # noqa: E402
+from symkin.analysis import identification, implied_parameters  # noqa: E402
 from symkin.model import load_model  # noqa: E402
 from symkin.runtime.loader import load  # noqa: E402
 from symkin.text_table import format_table  # noqa: E402
@@ -54,11 +54,11 @@ def main(argv: list[str] | None = None) -> int:
                          f"{time.perf_counter() - start:.2f} s", "<= 10 s"])
         Y = arm.regressor(q, qd, qdd)[0]  # K of Y = Y_b K for identified.yaml: spread states against all of them
         start = time.perf_counter()
-        identified_model.combinations(Y, Y_b)
+        implied_parameters.combinations(Y, Y_b)
         spread = time.perf_counter() - start
         start = time.perf_counter()
         np.linalg.lstsq(Y_b.reshape(-1, Y_b.shape[-1]), Y.reshape(-1, Y.shape[-1]), rcond=None)
-        rows.append([f"K of Y = Y_b K: {identified_model.COMBINATION_STATES} spread states (all {args.samples})",
+        rows.append([f"K of Y = Y_b K: {implied_parameters.COMBINATION_STATES} spread states (all {args.samples})",
                      f"{spread:.3f} s ({time.perf_counter() - start:.2f} s)", "-"])
         try:
             import pinocchio as pin

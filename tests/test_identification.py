@@ -164,7 +164,7 @@ def test_the_command_estimates_consistent_standard_parameters(arm, tmp_path):
 
 
 def _energy_estimate(arm, t, q, qd, qdd, tau, window=0.05):
-    from symkin.analysis.identified_model import combinations
+    from symkin.analysis.implied_parameters import combinations
 
     run = identification.Measurements("run", t, q, qd, qdd, tau, "measured")
     Y, Y_b = arm.regressor(q, qd, qdd)[0], arm.base_regressor(q, qd, qdd)[0]

@@ -19,7 +19,7 @@ import sympy
 import yaml
 
 from conftest import SYMKIN_CLI
-from symkin.analysis import identified_model
+from symkin.analysis import identified_model, implied_parameters
 from symkin.derivation import Derivation
 from symkin.dynamics.quantities import newton_euler_links
 from symkin.dynamics.parameter_names import INERTIAL
@@ -96,10 +96,10 @@ def test_what_the_run_cannot_see_keeps_the_models_values_and_the_rest_the_base_e
     K = np.zeros((4, 9))
     K[:, :6] = rng.normal(size=(4, 6))                                          # columns 6, 7, 8: not identifiable
     prior, base = rng.uniform(0.5, 2.0, 9), rng.normal(size=4)
-    pi = identified_model.nearest_standard(K, base, prior)
+    pi = implied_parameters.nearest_standard(K, base, prior)
     assert np.allclose(K @ pi, base, rtol=0, atol=64 * EPS * np.max(np.abs(K)) * np.max(np.abs(pi)))
     assert np.array_equal(pi[6:], prior[6:])
-    assert list(identified_model.identifiable(K)) == [True] * 6 + [False] * 3
+    assert list(implied_parameters.identifiable(K)) == [True] * 6 + [False] * 3
 
 
 def test_an_estimate_that_is_no_body_is_refused_with_the_readers_reason(tmp_path):
@@ -153,13 +153,13 @@ def test_the_combinations_come_from_states_spread_over_the_run_or_from_all_where
     """K of Y = Y_b K from COMBINATION_STATES evenly spread states equals K from all of them (the identity holds at
     every state); where the spread states leave a base parameter unexcited (its column zero there), all are taken."""
     rng = np.random.default_rng(5)
-    count, n, b, P = 4 * identified_model.COMBINATION_STATES + 3, 2, 3, 5
+    count, n, b, P = 4 * implied_parameters.COMBINATION_STATES + 3, 2, 3, 5
     K = rng.normal(size=(b, P))
     Y_b = rng.normal(size=(count, n, b))
-    np.testing.assert_allclose(identified_model.combinations(Y_b @ K, Y_b), K, rtol=0, atol=64 * EPS)
-    spread = np.unique(np.linspace(0, count - 1, identified_model.COMBINATION_STATES).astype(int))
+    np.testing.assert_allclose(implied_parameters.combinations(Y_b @ K, Y_b), K, rtol=0, atol=64 * EPS)
+    spread = np.unique(np.linspace(0, count - 1, implied_parameters.COMBINATION_STATES).astype(int))
     Y_b[spread, :, 2] = 0.0  # the third base parameter moves only between the spread states
-    np.testing.assert_allclose(identified_model.combinations(Y_b @ K, Y_b), K, rtol=0, atol=64 * EPS)
+    np.testing.assert_allclose(implied_parameters.combinations(Y_b @ K, Y_b), K, rtol=0, atol=64 * EPS)
 
 
 #: A stock URDF nobody here wrote: the 3-joint finger of the TriFinger (example-robot-data, shipped with Pinocchio).

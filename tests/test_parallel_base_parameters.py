@@ -9,17 +9,22 @@ arm, every rotor turns about its arm's axis).
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import subprocess
 
 import numpy as np
 import pytest
+import sympy
+import yaml
 
 from conftest import MODELS_DIR, SYMKIN_CLI
 from identification_runs import excitation, write_run
 from symkin import load, pipeline
 from symkin.derivation.graph import Derivation
+from symkin.dynamics.parameter_names import DRIVE, INERTIAL
 from symkin.errors import DerivationError
+from symkin.ir.evaluate import symengine_entries
 from symkin.model import load_model, model_from_text
 from tolerances import DYNAMICS, EPS
 
@@ -136,7 +141,114 @@ def test_symkin_identify_gives_back_the_deltas_base_parameters(derived, tmp_path
     # the data weighted by the noise, the true parameters cost chi^2 with len(pi_b) = 16 degrees of freedom more than
     # least squares (mean 16, beyond 64 with a probability below 1e-7): the consistent estimate may cost no more
     assert standard["data_cost"] - standard["least_squares_cost"] < 4 * len(found.base)
-    assert "no identified.yaml: a parallel model's bodies" in (out / "summary.txt").read_text()
+    _check_identified_model(out, found, record)
+
+
+def _check_identified_model(out, found, record):
+    """identified.yaml holds what the DELTA's file can (the consistent estimate among its values: one rotor for
+    all actuators): the model reader takes it, and its standard parameters (from its own derivation) have base
+    parameters within 5 standard deviations of the least-squares estimate's, the rotors' differences
+    (theta1.IaR = theta1.Ia - theta3.Ia, theta2's) 0; the summary and the file say what was replaced."""
+    model = load_model(out / "identified.yaml")
+    names, pi = _standard_parameters(model)
+    assert names == list(record["standard"]["parameters"])
+    written = found.evaluate({"a": 0.1}) @ pi
+    rotors = [found.base_names.index(f"theta{k}.IaR") for k in (1, 2)]
+    np.testing.assert_array_less(np.abs(written[rotors]), DYNAMICS * np.abs(pi).max())
+    error = {row["name"]: abs(w - row["value"]) / row["std"] for w, row in zip(written, record["parameters"])}
+    assert max(error.values()) < 5, error
+    assert model.parallel.bodies.rod_inertia is not None      # rod.dI identified: the rods' inertia declared
+    document = yaml.safe_load((out / "identified.yaml").read_text())
+    assert document["identified"]["method"] == "consistent"
+    K = found.evaluate({"a": 0.1})
+    assert document["identified"]["parameters"] == [n for n, k in zip(found.names, K.T) if np.any(k != 0)]
+    summary = (out / "summary.txt").read_text()
+    assert "with the bodies of platform, actuated_link, rod and the drives of theta1, theta2, theta3 identified " \
+        "(19 standard parameters); its base parameters within " in summary, summary
+
+
+def _standard_parameters(model):
+    """The names and values of a model's standard parameters, pi of its regressor (from its own derivation)."""
+    regressor = Derivation(model)["regressor"]
+    pi = symengine_entries(dataclasses.replace(regressor, outputs=regressor.outputs[1:]), [sympy.Symbol("unused")],
+                           model.parameter_values)(np.zeros(1))    # pi depends on the parameters alone
+    return list(regressor.outputs[1].elements), pi
+
+
+#: Per model, what the round trip of its file changes beyond the actuators' drives: (links, joints replaced).
+ROUND_TRIPS = {"delta": (("platform", "actuated_link", "rod"), ()),
+               "delta_wrist": (("platform", "actuated_link", "rod", "fork1", "fork2", "handle"), ("psi1", "psi2", "psi3")),
+               "agile_eye": (("platform", "actuated_link", "distal_link"), ())}
+
+
+@pytest.mark.parametrize("name", sorted(ROUND_TRIPS))
+def test_a_parallel_models_file_takes_the_standard_parameters_it_holds(name, tmp_path):
+    """identified_model.updated_model maps a parallel model's standard parameters into its file exactly: bodies
+    about their frames' origins back to centres of mass, the rods' end masses and inertia beyond them to mass,
+    platform fraction and inertia across (the DELTA's L = b), the actuators' one I_a to the rotor (over gear^2),
+    friction levels per actuator, a hybrid device's wrist as a serial chain (links in their joint frames, rotor
+    inertias, friction), a spherical model without rods; read back and derived, the file has those parameters to
+    rounding."""
+    from symkin.analysis import identified_model
+
+    path = MODELS_DIR / f"{name}.yaml"
+    model = load_model(path)
+    names, pi = _standard_parameters(model)
+    values = pi.copy()
+    column = {name: k for k, name in enumerate(names)}
+    for k in (1, 2, 3):
+        values[[column[f"theta{k}.{p}"] for p in DRIVE]] = 2e-4, 0.01 * k, 0.02, 0.005
+    if name == "delta":
+        values[column["platform.m"]] = 0.07
+        m, c = 0.012, np.array([0.06, 0.0, 0.004])             # an arm about its centre: diag(2, 10, 11) 1e-6
+        I_o = np.diag([2e-6, 1e-5, 1.1e-5]) + m * (c @ c * np.eye(3) - np.outer(c, c))
+        values[[column[f"actuated_link.{p}"] for p in INERTIAL]] = \
+            m, *(m * c), I_o[0, 0], I_o[0, 1], I_o[1, 1], I_o[0, 2], I_o[1, 2], I_o[2, 2]
+        values[column["rod.mB"]], values[column["rod.mC"]], values[column["rod.dI"]] = 0.004, 0.006, 2e-6
+    elif name == "delta_wrist":
+        values[column["fork1.m"]] *= 1.5
+        values[column["psi1.Ia"]], values[column["psi2.fv"]], values[column["psi3.fc"]] = 1e-6, 0.01, 0.002
+    else:
+        values[[column[f"distal_link.{p}"] for p in INERTIAL]] *= 1.5
+    updated = identified_model.updated_model(path, model, names, values, np.ones(len(names), dtype=bool),
+                                             {"method": "wls", "data": "run.csv", "samples": 100})
+    links, joints = ROUND_TRIPS[name]
+    assert (updated.links, updated.joints) == (links, ("theta1", "theta2", "theta3") + joints)
+    (tmp_path / "identified.yaml").write_text(updated.text)
+    back = load_model(tmp_path / "identified.yaml")
+    if name == "delta":
+        assert float(back.parallel.bodies.rod_platform_fraction) == 0.4
+    written = _standard_parameters(back)[1]
+    np.testing.assert_array_less(np.abs(written - values), DYNAMICS * np.abs(values).max())
+
+
+@pytest.mark.parametrize("derived", ["delta"], indirect=True)
+def test_what_a_parallel_models_file_holds_is_the_nearest_it_can(derived):
+    """implied_parameters.nearest_held on the DELTA's file (one rotor for the actuators): base parameters it can
+    hold are met to rounding with the three I_a equal; the rotors' differences (theta1.IaR, theta2.IaR), which it
+    cannot, are left out (0) and the rest still met."""
+    from symkin.analysis import implied_parameters
+
+    name, found, generated = derived
+    model = load_model(MODELS_DIR / "delta.yaml")
+    names, pi = _standard_parameters(model)
+    K = found.evaluate({"a": 0.1})
+    held = implied_parameters.parallel_held(model, names, pi)
+    assert held.names[-1] == "rotor.Ia"
+    assert held.T.shape == (len(names), len(names) - 2)
+    assert held.columns.all()
+    rotors = [names.index(f"theta{k}.Ia") for k in (1, 2, 3)]
+    reachable = K @ pi + 0.1 * np.abs(K @ pi)
+    base = reachable.copy()
+    base[[found.base_names.index("theta1.IaR"), found.base_names.index("theta2.IaR")]] = 1e-5, -2e-5
+    for target, missed in ((reachable, []), (base, ["theta1.IaR", "theta2.IaR"])):
+        estimate = implied_parameters.nearest_held(K, target, pi, held)
+        assert np.ptp(estimate[rotors]) <= DYNAMICS * np.abs(estimate[rotors]).max()
+        met = [k for k, n in enumerate(found.base_names) if n not in missed]
+        np.testing.assert_array_less(np.abs(K @ estimate - target)[met],
+                                     (DYNAMICS * np.abs(K) @ np.abs(estimate) + TINY)[met])
+        np.testing.assert_array_less(np.abs(K @ estimate)[[found.base_names.index(n) for n in missed]],
+                                     DYNAMICS * np.abs(estimate).max())
 
 
 @pytest.mark.parametrize("derived", ["delta"], indirect=True)

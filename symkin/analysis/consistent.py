@@ -43,25 +43,30 @@ LINK_PARAMETERS = len(INERTIAL)
 DRIVE_PARAMETERS = len(DRIVE)
 #: A drive's standard parameters (I_a, f_v, f_c, f_o) from its estimated ones (I_a, f_v, c+, c-), all >= 0.
 DRIVE_OF_LEVELS = np.array([[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 0.5, 0.5], [0.0, 0.0, 0.5, -0.5]])
+#: The standard parameters of a block of levels from its estimated ones: a drive's, or a joint's friction alone
+#: (f_v, f_c, f_o from f_v, c+, c-: a drive whose rotor is shared with others, estimated apart as a mass).
+LEVELS = {"drive": DRIVE_OF_LEVELS, "friction": DRIVE_OF_LEVELS[1:, 1:]}
 
 
-#: The kinds of blocks of the standard parameters, and their sizes: a body (a pseudo-inertia), a drive, a mass
-#: (>= 0), a free parameter.
-BLOCK_SIZES = {"body": LINK_PARAMETERS, "drive": DRIVE_PARAMETERS, "mass": 1, "free": 1}
+#: The kinds of blocks of the standard parameters, and their sizes: a body (a pseudo-inertia), a drive, a joint's
+#: friction, a mass (>= 0), a free parameter.
+BLOCK_SIZES = {"body": LINK_PARAMETERS, "drive": DRIVE_PARAMETERS, "friction": DRIVE_PARAMETERS - 1, "mass": 1,
+               "free": 1}
 
 
 def layout(names: Sequence[str]) -> tuple[str, ...]:
     """The blocks of the standard parameters ``names`` in order: ``<body>.m`` ... ``<body>.Izz`` a body,
-    ``<joint>.Ia`` ... ``<joint>.fo`` a drive, a rod's mass (``rod.mB``) a mass, anything else free."""
+    ``<joint>.Ia`` ... ``<joint>.fo`` a drive, ``<joint>.fv`` ... ``<joint>.fo`` a joint's friction, a rod's mass
+    (``rod.mB``) or a rotor inertia alone (``rotor.Ia``: one for several joints) a mass, anything else free."""
     blocks: list[str] = []
     k = 0
     while k < len(names):
         owner, _, parameter = names[k].rpartition(".")
-        for kind, parameters in (("body", INERTIAL), ("drive", DRIVE)):
+        for kind, parameters in (("body", INERTIAL), ("drive", DRIVE), ("friction", DRIVE[1:])):
             if list(names[k:k + len(parameters)]) == [f"{owner}.{p}" for p in parameters]:
                 break
         else:
-            kind = "mass" if parameter in ROD_MASSES else "free"
+            kind = "mass" if parameter in ROD_MASSES + DRIVE[:1] else "free"
         blocks.append(kind)
         k += BLOCK_SIZES[kind]
     return tuple(blocks)
@@ -175,7 +180,10 @@ def prior_scale(prior: np.ndarray) -> np.ndarray:
 
 def estimate(triangle: np.ndarray, target: np.ndarray, names: Sequence[str], prior: np.ndarray) -> ConsistentEstimate:
     """The consistent estimate of the module docstring from the triangular factor ``triangle`` (P x P) and
-    ``target`` (z) of the weighted standard regressor and the prior (the model's pi); the blocks from ``names``."""
+    ``target`` (z) of the weighted standard regressor and the prior (the model's pi); the blocks from ``names``.
+    Parameters a model file holds instead, pi = fixed + T x (:class:`symkin.analysis.implied_parameters.Held`),
+    are estimated from ``triangle`` R T and ``target`` z - R fixed, named as x (a rotor shared by several joints:
+    ``rotor.Ia``, their friction apart)."""
     from scipy.optimize import least_squares
 
     count = len(names)
@@ -186,8 +194,8 @@ def estimate(triangle: np.ndarray, target: np.ndarray, names: Sequence[str], pri
         if kind == "body":
             size = max(float(np.max(np.abs(prior[span]))), 1e-9)
             starts.append(_log_cholesky(_regularized(pseudo_inertia(prior[span]), size)))
-        elif kind == "drive":
-            starts.append(np.maximum(np.linalg.solve(DRIVE_OF_LEVELS, prior[span]), 0.0))
+        elif kind in LEVELS:
+            starts.append(np.maximum(np.linalg.solve(LEVELS[kind], prior[span]), 0.0))
         else:
             starts.append(np.maximum(prior[span], 0.0) if kind == "mass" else prior[span])
     theta0 = np.concatenate(starts) if starts else np.zeros(0)
@@ -204,7 +212,7 @@ def estimate(triangle: np.ndarray, target: np.ndarray, names: Sequence[str], pri
                 U = _factor(theta[span])
                 out[span] = _standard_of(U @ U.T)
             else:
-                out[span] = DRIVE_OF_LEVELS @ theta[span] if kind == "drive" else theta[span]
+                out[span] = LEVELS[kind] @ theta[span] if kind in LEVELS else theta[span]
         return out
 
     def residual(theta: np.ndarray) -> np.ndarray:
@@ -215,13 +223,13 @@ def estimate(triangle: np.ndarray, target: np.ndarray, names: Sequence[str], pri
 
     def jacobian(theta: np.ndarray) -> np.ndarray:
         """[R; w D^-1] d pi / d theta: block diagonal over the bodies (:func:`_standard_derivatives`), the drives
-        (:data:`DRIVE_OF_LEVELS`) and the masses and free parameters (1)."""
+        and joints' friction (:data:`LEVELS`) and the masses and free parameters (1)."""
         d_pi = np.zeros((len(theta), len(theta)))
         for kind, span in zip(blocks, spans):
             if kind == "body":
                 d_pi[span, span] = _standard_derivatives(theta[span])
             else:
-                d_pi[span, span] = DRIVE_OF_LEVELS if kind == "drive" else 1.0
+                d_pi[span, span] = LEVELS[kind] if kind in LEVELS else 1.0
         return rows @ d_pi
 
     result = least_squares(residual, theta0, jac=jacobian, bounds=(lower, np.full(len(theta0), np.inf)),

@@ -364,7 +364,7 @@ def energy_least_squares(run: Measurements, Y: np.ndarray, Y_e: np.ndarray, Y_b:
     Args:
         Y, Y_e, Y_b: the regressor (N, n, P), the energy regressor (N, P) and the base regressor (N, n, b) at the
             run's samples.
-        K: the base parameters' combinations (b, P), Y = Y_b K (:func:`symkin.analysis.identified_model.combinations`).
+        K: the base parameters' combinations (b, P), Y = Y_b K (:func:`symkin.analysis.implied_parameters.combinations`).
         standard, names: the standard (P) and the base (b) parameters' names.
         window: the windows' length (s).
 

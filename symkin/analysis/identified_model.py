@@ -15,12 +15,13 @@ and rewrites the model file's data: what the run identifies is replaced, the res
 model reader (:func:`symkin.model.model_from_text`), whose checks (positive masses, the triangle inequality of
 the principal moments, non-negative friction) decide whether it is a model at all.
 
-Least squares identifies only the base parameters pi_b = K pi.  :func:`nearest_standard` gives the standard
-parameters those data imply and that stay closest to the model's own values (Gautier and Khalil's regrouping
-keeps the non-identifiable parameters at their a priori values; here "closest" is in the scaled norm of
-:func:`symkin.analysis.consistent.prior_scale`):
+A parallel model's file declares its bodies once for every leg (the platform, the actuated link, a spherical
+leg's distal link about their frames' origins, as the regressor's columns are), the rods as a mass, the part of
+it at the platform joints and an inertia across them, and one rotor for all actuators:
 
-    pi = argmin |D^-1 (pi - pi_prior)|  subject to  K pi = pi_b,   D = diag(prior_scale(pi_prior)).
+    mass = m_B + m_C,   platform_fraction = m_B / (m_B + m_C),   inertia = dI + m_B m_C / (m_B + m_C) L^2,
+
+the standard parameters given in what the file holds (:func:`symkin.analysis.implied_parameters.nearest_held`).
 """
 
 from __future__ import annotations
@@ -33,15 +34,9 @@ from typing import Any
 import numpy as np
 import yaml
 
-from symkin.analysis.consistent import prior_scale
-from symkin.dynamics.parameter_names import DRIVE, INERTIAL
+from symkin.dynamics.parameter_names import DRIVE, INERTIAL, ROD
 from symkin.errors import ModelError
-from symkin.model.schema import Model
-
-#: A column of K smaller than this fraction of K's largest entry holds no identifiable part of its parameter
-#: (K from the regressors by least squares carries rounding of about eps cond(Y_b); sqrt(eps) is far above it).
-IDENTIFIABLE_TOLERANCE = float(np.sqrt(np.finfo(np.float64).eps))
-
+from symkin.model.schema import Actuator, Joint, Model, PlatformMotion
 
 class NotUpdated(Exception):
     """The model file cannot carry this estimate (the message says why and what would)."""
@@ -65,45 +60,6 @@ class UpdatedModel:
     urdf: str | None = None
 
 
-#: States of a run that :func:`combinations` solves Y = Y_b K over (evenly spread; all of a shorter run).
-COMBINATION_STATES = 512
-
-
-def combinations(Y: np.ndarray, Y_b: np.ndarray) -> np.ndarray:
-    """K with Y = Y_b K: the base parameters' combinations of the standard ones, from both regressors at the
-    same states (N, n, P) and (N, n, b); exact up to rounding where Y_b has full column rank.
-
-    The identity holds at every state, so :data:`COMBINATION_STATES` of them spread over the run suffice
-    (benchmarks/bench_identification.py times both on 10^5 states of the UR10e); all are taken if those leave
-    Y_b rank-deficient.
-    """
-    count = len(Y_b)
-    chosen = np.unique(np.linspace(0, count - 1, min(count, COMBINATION_STATES)).astype(int))
-    K, rank = _least_squares(Y[chosen], Y_b[chosen])
-    if rank < Y_b.shape[-1] and len(chosen) < count:  # the spread states do not excite every base parameter
-        K, _ = _least_squares(Y, Y_b)
-    return K
-
-
-def _least_squares(Y: np.ndarray, Y_b: np.ndarray) -> tuple[np.ndarray, int]:
-    """(K, rank of the stacked Y_b) of the least-squares solution of Y = Y_b K over the given states."""
-    K, _, rank, _ = np.linalg.lstsq(Y_b.reshape(-1, Y_b.shape[-1]), Y.reshape(-1, Y.shape[-1]), rcond=None)
-    return K, int(rank)
-
-
-def identifiable(K: np.ndarray) -> np.ndarray:
-    """Which standard parameters enter some base parameter (a boolean per column of K)."""
-    largest = float(np.max(np.abs(K))) if K.size else 0.0
-    return np.max(np.abs(K), axis=0) > IDENTIFIABLE_TOLERANCE * largest
-
-
-def nearest_standard(K: np.ndarray, base_values: np.ndarray, prior: np.ndarray) -> np.ndarray:
-    """The standard parameters nearest ``prior`` whose base parameters are ``base_values`` (module docstring)."""
-    D = prior_scale(prior)
-    correction = np.linalg.lstsq(K * D, base_values - K @ prior, rcond=None)[0]  # the minimum-norm solution
-    return prior + D * correction
-
-
 def updated_model(path: str | Path, model: Model, names: Sequence[str], values: np.ndarray,
                   identified: np.ndarray, record: Mapping[str, Any],
                   parameter_values: Mapping[str, float] | None = None) -> UpdatedModel:
@@ -111,19 +67,21 @@ def updated_model(path: str | Path, model: Model, names: Sequence[str], values: 
     regressor's columns, ``identified`` marking those the run identifies).
 
     A link's bodies are replaced by one body when any of its ten parameters is identified, a joint's actuator
-    rotor inertia and friction when its I_a or friction parameters are; ``record`` (method, data, samples) goes
-    into the ``identified:`` section with the replaced parameters' names.  ``parameter_values`` are the
-    parameter values the run was identified at (written into the file).
+    rotor inertia and friction when its I_a or friction parameters are (of a parallel model: its bodies, rods
+    and rotor as the module docstring maps them, ``values`` held by its file (:mod:`implied_parameters`); a hybrid
+    device's wrist as a serial chain); ``record`` (method, data, samples) goes into the ``identified:`` section
+    with the replaced parameters' names.  ``parameter_values`` are the parameter values the run was identified
+    at (written into the file).
 
     Raises:
         NotUpdated: the file is not a YAML model, the model has gyroscopic rotors (their bodies are not the
             file's), or the estimate is no model (the model reader's problems).
     """
-    from symkin.dynamics.newton_euler import link_frame
     from symkin.model import model_from_text
     from symkin.model.source_kind import URDF, XACRO, YAML, source_kind
 
-    if any(a.gyroscopic for a in model.actuators):
+    wrist = None if model.parallel is None else model.parallel.wrist
+    if any(a.gyroscopic for a in model.actuators + (wrist.actuators if wrist is not None else ())):
         raise NotUpdated("the model's rotors are bodies of their own (gyroscopic: true), which the link bodies "
                          "identified here include; their values are in estimate.json")
     kind = source_kind(path)
@@ -131,18 +89,11 @@ def updated_model(path: str | Path, model: Model, names: Sequence[str], values: 
     given = dict(parameter_values or {})
     numbers = {p.symbol: given.get(p.name, p.value) for p in model.parameters}
     _set_parameters(data, given)
-    index = {name: k for k, name in enumerate(names)}
-    links, joints = [], []
-    for joint in model.joints:
-        columns = [index[f"{joint.link}.{p}"] for p in INERTIAL]
-        if identified[columns].any():
-            R, p = (np.array(m.xreplace(numbers).evalf(), dtype=float) for m in link_frame(joint))
-            _replace_bodies(data, joint.link, _body(values[columns], R, p.ravel()))
-            links.append(joint.link)
-        drive = [index[f"{joint.name}.{p}"] for p in DRIVE]
-        if identified[drive].any():
-            _replace_drive(data, joint.name, values[drive], identified[drive], model, numbers)
-            joints.append(joint.name)
+    estimate = _Estimate({name: k for k, name in enumerate(names)}, values, identified, numbers)
+    if model.parallel is None:
+        links, joints = _update_chain(data, model.joints, model.actuators, estimate)
+    else:
+        links, joints = _update_parallel(data, model, estimate)
     replaced = tuple(name for name, known in zip(names, identified) if known)
     data["identified"] = {**record, **({} if kind == YAML else {"robot_file": Path(path).name}),
                           "parameters": list(replaced)}
@@ -159,6 +110,109 @@ def updated_model(path: str | Path, model: Model, names: Sequence[str], values: 
                          "body and the drives' inertia and friction non-negative") from None
     urdf = identified_urdf(written, links, joints) if kind in (URDF, XACRO) else None
     return UpdatedModel(text, replaced, tuple(links), tuple(joints), urdf)
+
+
+@dataclass(frozen=True)
+class _Estimate:
+    """The standard parameters' values by name (``index``), which the run identifies, and the model's numbers."""
+
+    index: Mapping[str, int]
+    values: np.ndarray
+    identified: np.ndarray
+    numbers: Mapping[Any, Any]
+
+    def of(self, names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
+        """(values, identified) of the named columns."""
+        columns = [self.index[name] for name in names]
+        return self.values[columns], self.identified[columns]
+
+
+def _update_chain(section: dict[str, Any], joints: Sequence[Joint], actuators: Sequence[Actuator],
+                  estimate: _Estimate) -> tuple[list[str], list[str]]:
+    """A serial chain's links' bodies and joints' drives in ``section`` (a serial model's data, a wrist's section):
+    the links and joints replaced."""
+    from symkin.dynamics.newton_euler import link_frame
+
+    links, replaced = [], []
+    for joint in joints:
+        body, known = estimate.of([f"{joint.link}.{p}" for p in INERTIAL])
+        if known.any():
+            R, p = (np.array(m.xreplace(estimate.numbers).evalf(), dtype=float) for m in link_frame(joint))
+            _replace_bodies(section, joint.link, _body(body, R, p.ravel()))
+            links.append(joint.link)
+        drive, known = estimate.of([f"{joint.name}.{p}" for p in DRIVE])
+        if known.any():
+            _replace_drive(section, joint.name, drive, known, actuators, estimate.numbers)
+            replaced.append(joint.name)
+    return links, replaced
+
+
+def _update_parallel(data: dict[str, Any], model: Model, estimate: _Estimate) -> tuple[list[str], list[str]]:
+    """A parallel model's ``bodies:`` (platform, actuated and distal links, rods, the rotor), its actuators'
+    friction and a hybrid device's wrist: the bodies and joints replaced."""
+    from symkin.model.schema import ParallelBodies
+    from symkin.parallel import hybrid
+
+    assert model.parallel is not None
+    declared = model.parallel.bodies or ParallelBodies()
+    bodies = data.setdefault("bodies", {}) or {}
+    data["bodies"] = bodies
+    links, joints = [], []
+    for key in ("platform", "actuated_link", "distal_link"):
+        if f"{key}.{INERTIAL[0]}" not in estimate.index:
+            continue
+        values, known = estimate.of([f"{key}.{p}" for p in INERTIAL])
+        if known.any():
+            body = _body(values, np.eye(3), np.zeros(3))
+            if isinstance(body, str):
+                raise NotUpdated(f"the estimate gives the {key} a {body}; --method consistent keeps every body rigid")
+            bodies[key] = body
+            links.append(key)
+    rod = [f"rod.{p}" for p in ROD if f"rod.{p}" in estimate.index]
+    if model.parallel.motion is not PlatformMotion.SPHERICAL and estimate.of(rod)[1].any():
+        bodies["rod"] = {**(bodies.get("rod") or {}), **_rod(estimate.of(rod)[0], _rod_length_squared(model,
+                                                                                                     estimate))}
+        links.append("rod")
+    rotor = [f"{c.name}.{DRIVE[0]}" for c in model.coordinates]
+    inertia, known = estimate.of(rotor)
+    if known.any():
+        gear = float(declared.gear_ratio.xreplace(estimate.numbers))
+        bodies["rotor"] = {**(bodies.get("rotor") or {}), "inertia": float(np.mean(inertia)) / gear ** 2}
+    for c in model.coordinates:
+        drive, known = estimate.of([f"{c.name}.{p}" for p in DRIVE])
+        if known[1:].any():
+            _replace_friction(data, c.name, drive)
+        if known.any():
+            joints.append(c.name)
+    wrist = model.parallel.wrist
+    if wrist is not None:
+        chain = hybrid.device_chain(model).joints[len(hybrid.platform_joints(model)):]
+        wrist_links, wrist_joints = _update_chain(data["wrist"], chain, wrist.actuators, estimate)
+        links, joints = links + wrist_links, joints + wrist_joints
+    return links, joints
+
+
+def _rod(ends: np.ndarray, length_squared: float | None) -> dict[str, Any]:
+    """``rod: {mass, platform_fraction[, inertia]}`` from the end masses m_B, m_C [and dI] (module docstring)."""
+    mB, mC = map(float, ends[:2])
+    if mB < 0 or mC < 0:
+        raise NotUpdated(f"the estimate gives the rods end masses {mB:.6g} kg (platform) and {mC:.6g} kg (proximal), "
+                         "one negative; --method consistent keeps them non-negative")
+    mass = mB + mC
+    rod: dict[str, Any] = {"mass": mass, "platform_fraction": mB / mass if mass > 0 else 0.0}
+    if len(ends) == len(ROD) and length_squared is not None:
+        rod["inertia"] = float(ends[2]) + (mB * mC / mass if mass > 0 else 0.0) * length_squared
+    return rod
+
+
+def _rod_length_squared(model: Model, estimate: _Estimate) -> float | None:
+    """L^2 of the rods (every leg's the same where the regressor has rod.dI), at the model's numbers."""
+    if f"rod.{ROD[2]}" not in estimate.index:
+        return None
+    from symkin.derivation import Derivation
+    from symkin.parallel.quantities import reduced_legs
+
+    return float(Derivation(model)[reduced_legs][0].L2.xreplace(estimate.numbers))
 
 
 def _source_data(path: str | Path, kind: str) -> dict[str, Any]:
@@ -222,25 +276,30 @@ def _replace_bodies(data: dict[str, Any], link: str, body: dict[str, Any] | str)
     data["bodies"] = kept
 
 
-def _replace_drive(data: dict[str, Any], joint: str, drive: np.ndarray, known: np.ndarray, model: Model,
-                   numbers: Mapping[Any, Any]) -> None:
+def _replace_drive(data: dict[str, Any], joint: str, drive: np.ndarray, known: np.ndarray,
+                   actuators: Sequence[Actuator], numbers: Mapping[Any, Any]) -> None:
     """The joint's rotor inertia (I_a / N^2) and friction levels from I_a, f_v, f_c, f_o."""
-    inertia, viscous, coulomb, offset = map(float, drive)
     if known[0]:
-        actuator = next((a for a in model.actuators if a.joint == joint), None)
+        actuator = next((a for a in actuators if a.joint == joint), None)
         ratio = 1.0 if actuator is None else float(actuator.gear_ratio.xreplace(numbers))
-        actuators = data.setdefault("actuators", {}) or {}
-        data["actuators"] = actuators
-        actuators[joint] = {**(actuators.get(joint) or {}), "rotor_inertia": inertia / ratio ** 2}
+        section = data.setdefault("actuators", {}) or {}
+        data["actuators"] = section
+        section[joint] = {**(section.get(joint) or {}), "rotor_inertia": float(drive[0]) / ratio ** 2}
     if known[1:].any():
-        sections = data.setdefault("friction", {}) or {}
-        data["friction"] = sections
-        old = sections.get(joint) or {}
-        entry: dict[str, Any] = {"viscous": viscous}
-        entry["coulomb"] = coulomb if offset == 0 else {"positive": coulomb + offset, "negative": coulomb - offset}
-        if "smoothing_velocity" in old:
-            entry["smoothing_velocity"] = old["smoothing_velocity"]
-        sections[joint] = entry
+        _replace_friction(data, joint, drive)
+
+
+def _replace_friction(data: dict[str, Any], joint: str, drive: np.ndarray) -> None:
+    """The joint's friction levels from f_v, f_c, f_o (``drive``'s last three)."""
+    _, viscous, coulomb, offset = map(float, drive)
+    sections = data.setdefault("friction", {}) or {}
+    data["friction"] = sections
+    old = sections.get(joint) or {}
+    entry: dict[str, Any] = {"viscous": viscous}
+    entry["coulomb"] = coulomb if offset == 0 else {"positive": coulomb + offset, "negative": coulomb - offset}
+    if "smoothing_velocity" in old:
+        entry["smoothing_velocity"] = old["smoothing_velocity"]
+    sections[joint] = entry
 
 
 def _set_parameters(data: dict[str, Any], given: Mapping[str, float]) -> None:

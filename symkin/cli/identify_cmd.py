@@ -31,10 +31,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "q_<name>, tau_<name> and optionally qd_<name>, qdd_<name> (without them, --cutoff derives the "
                     "rates from q by a zero-phase low-pass filter). Writes estimate.json, estimate.csv, "
                     "summary.txt and validation.png (measured and predicted efforts) into the output directory "
-                    "(replaced as a whole), and given a serial model file identified.yaml, the model with the "
-                    "identified values (given a URDF or xacro file also identified.urdf). A parallel model's run "
-                    "records its actuators (and a hybrid device's wrist joints): each sample's platform pose is "
-                    "fk(q). Bad data are refused with the file, row and column, and nothing is written.",
+                    "(replaced as a whole), and given a model file identified.yaml, the model with the identified "
+                    "values (given a URDF or xacro file also identified.urdf; of a parallel model, the values its "
+                    "file holds: one rotor for all actuators). A parallel model's run records its actuators (and a "
+                    "hybrid device's wrist joints): each sample's platform pose is fk(q). Bad data are refused with the file, row and column, and nothing is written.",
         epilog="e.g. symkin identify models/planar_2r.yaml run.csv --method wls -o out/identify/planar_2r")
     analysis_args.add_model_arguments(p)
     p.add_argument("data", metavar="DATA.csv", help="the measured run")
@@ -83,7 +83,7 @@ def run(args: argparse.Namespace) -> int:
         with Progress(model.name) as progress:
             progress(f"estimating {len(names)} base parameters from {len(fit.time)} samples")
             Y_b, pi_model = model.base_regressor(fit.q, fit.qd, fit.qdd)
-            writes_model = model_files.is_model_file(args.model) and not parallel
+            writes_model = model_files.is_model_file(args.model)
             # the standard regressor over the fit, evaluated once: for the consistent and energy estimates and the
             # model file
             needs_Y = args.method in ("consistent", "energy") or writes_model
@@ -105,11 +105,10 @@ def run(args: argparse.Namespace) -> int:
                     predict = model.regressor(held.q, held.qd, held.qdd)[0] @ standard.values
             check = None if predict is None else identification.validation_of(predict, held.tau)
             updated, line = None, None
-            if parallel and model_files.is_model_file(args.model):
-                line = "no identified.yaml: a parallel model's bodies are not rewritten into its file yet"
             if writes_model:
                 progress("writing the model file with the identified values")
-                updated, line = _updated_model(args, source, model, K, pi, found, standard, values)
+                file_values = _file_values(source, model, Y, K, pi, fit, found, standard)
+                updated, line = _updated_model(args, source, model, file_values, found, standard, values)
             files = _report(args, model, data, found, pi_model[0], check, standard, line)
             if updated is not None:
                 files["identified.yaml"] = updated.text
@@ -128,8 +127,8 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _model_file(path: str):
-    """The :class:`~symkin.model.schema.Model` of MODEL when it is a model file (read once: a serial one is
-    rewritten into identified.yaml), None for a generated directory."""
+    """The :class:`~symkin.model.schema.Model` of MODEL when it is a model file (read once: it is rewritten into
+    identified.yaml), None for a generated directory."""
     if not model_files.is_model_file(path):
         return None
     from symkin.model import load_model
@@ -162,9 +161,9 @@ def _regressor(model, fit, method: str) -> tuple[np.ndarray, np.ndarray]:
 
 def _combinations(Y, Y_b):
     """K with Y = Y_b K over the fit (fitted once: the energy estimate and identified.yaml both use it)."""
-    from symkin.analysis import identified_model
+    from symkin.analysis import implied_parameters
 
-    return identified_model.combinations(Y, Y_b)
+    return implied_parameters.combinations(Y, Y_b)
 
 
 def _energy(model, fit, Y, Y_b, K, names, window: float):
@@ -178,38 +177,67 @@ def _energy(model, fit, Y, Y_b, K, names, window: float):
                                                model.info.functions["regressor"].outputs["pi"], names, window)
 
 
-def _consistent(model, Y, pi, fit, found):
-    """The consistent standard parameters from the fit part of the run, weighted as the WLS estimate."""
+def _consistent(model, Y, pi, fit, found, held=None):
+    """The consistent standard parameters from the fit part of the run, weighted as the WLS estimate; given
+    ``held`` (:class:`~symkin.analysis.implied_parameters.Held`), the consistent values a model file holds."""
     from symkin.analysis import consistent, identification
 
     weights = 1.0 / np.where(found.joint_std > 0, found.joint_std, 1.0)
     triangle, target = identification.weighted_triangle(Y, fit.tau, weights)
-    return consistent.estimate(triangle, target, model.info.functions["regressor"].outputs["pi"], pi[0])
+    if held is None:
+        return consistent.estimate(triangle, target, model.info.functions["regressor"].outputs["pi"], pi[0])
+    return consistent.estimate(triangle @ held.T, target - triangle @ held.fixed, held.names, held.values_of(pi[0]))
 
 
-def _updated_model(args: argparse.Namespace, source, model, K, pi, found, standard, values: dict[str, float]):
-    """identified.yaml: the model file with what the run identifies replaced (the consistent standard parameters,
-    or the least-squares base parameters' nearest standard ones; of a URDF or xacro file its chain as a symkin
-    model, and identified.urdf), and the summary's line on it (or why not).
+def _file_values(source, model, Y, K, pi, fit, found, standard) -> tuple[np.ndarray, np.ndarray, str]:
+    """The standard parameters identified.yaml is written from (the consistent ones, or the least-squares base
+    parameters' nearest standard ones; of a parallel model the values its file holds), which of them the run
+    identifies, and a parallel model's note on what its file could not hold."""
+    from symkin.analysis import implied_parameters
+
+    identified = implied_parameters.identifiable(K)
+    if source.parallel is None:
+        return (standard.values if standard is not None else
+                implied_parameters.nearest_standard(K, found.values, pi[0])), identified, ""
+    names = model.info.functions["regressor"].outputs["pi"]
+    held = implied_parameters.parallel_held(source, names, pi[0])
+    base = found.values if standard is None else K @ standard.values
+    estimate = (implied_parameters.nearest_held(K, base, pi[0], held) if standard is None else
+                held.fixed + held.T @ _consistent(model, Y, pi, fit, found, held).values)
+    return estimate, identified & held.columns, _held_note(found, K @ estimate, base)
+
+
+def _updated_model(args: argparse.Namespace, source, model, file_values, found, standard, values: dict[str, float]):
+    """identified.yaml: the model file with what the run identifies replaced (``file_values``: :func:`_file_values`;
+    of a URDF or xacro file its chain as a symkin model, and identified.urdf), and the summary's line on it (or
+    why not).
 
     Returns:
         (the :class:`~symkin.analysis.identified_model.UpdatedModel` or None, the summary's line).
     """
     from symkin.analysis import identified_model
 
+    estimate, identified, held_note = file_values
     names = model.info.functions["regressor"].outputs["pi"]
-    estimate = standard.values if standard is not None else identified_model.nearest_standard(K, found.values, pi[0])
     record = {"method": found.method if standard is None else "consistent", "data": Path(args.data).name,
               "samples": found.samples}
     try:
-        updated = identified_model.updated_model(args.model, source, names, estimate,
-                                                 identified_model.identifiable(K), record, values)
+        updated = identified_model.updated_model(args.model, source, names, estimate, identified, record, values)
     except identified_model.NotUpdated as why:
         return None, f"no identified.yaml: {why}"
     also = "" if updated.urdf is None else "; identified.urdf: the same as a URDF"
     return updated, (f"identified.yaml: {args.model} with the bodies of {', '.join(updated.links) or 'no link'} "
                      f"and the drives of {', '.join(updated.joints) or 'no joint'} identified "
-                     f"({len(updated.identified)} standard parameters){also}")
+                     f"({len(updated.identified)} standard parameters){also}{held_note}")
+
+
+def _held_note(found, written: np.ndarray, base: np.ndarray) -> str:
+    """How far the base parameters of what a parallel model's file holds lie from the estimate's, in standard
+    deviations (the file has one rotor for all actuators: their estimated differences are not in it)."""
+    deviation = np.abs(written - base) / np.where(found.std > 0, found.std, np.inf)
+    worst = int(np.argmax(deviation))
+    return (f"; its base parameters within {deviation[worst]:.2g} standard deviations of the estimate's (most: "
+            f"{found.names[worst]}; the file holds one rotor for all actuators)")
 
 
 def _report(args, model, data, found, pi_model, check, standard=None, model_line=None) -> dict[str, str | bytes]:

@@ -1,0 +1,135 @@
+"""The standard parameters an estimate implies: K from the regressors, which parameters are identifiable, and the
+standard parameters nearest a prior that a model file can hold.
+
+Least squares identifies only the base parameters pi_b = K pi.  :func:`nearest_standard` gives the standard
+parameters those data imply and that stay closest to the model's own values (Gautier and Khalil's regrouping
+keeps the non-identifiable parameters at their a priori values; here "closest" is in the scaled norm of
+:func:`symkin.analysis.consistent.prior_scale`):
+
+    pi = argmin |D^-1 (pi - pi_prior)|  subject to  K pi = pi_b,   D = diag(prior_scale(pi_prior)).
+
+A parallel model's file holds fewer standard parameters than its regressor has columns (one rotor for all the
+actuators' I_a; a spherical model declares no rods): :func:`nearest_held` takes an estimate into what the file
+holds, pi = fixed + T z (:class:`Held`, :func:`parallel_held`), its base parameters as close to the estimate's as
+the file allows (least squares), then the standard parameters nearest the estimate's in the same scaled norm.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from symkin.analysis.consistent import prior_scale
+from symkin.dynamics.parameter_names import DRIVE, ROD
+from symkin.model.schema import Model, PlatformMotion
+
+#: A column of K smaller than this fraction of K's largest entry holds no identifiable part of its parameter
+#: (K from the regressors by least squares carries rounding of about eps cond(Y_b); sqrt(eps) is far above it).
+IDENTIFIABLE_TOLERANCE = float(np.sqrt(np.finfo(np.float64).eps))
+
+
+#: States of a run that :func:`combinations` solves Y = Y_b K over (evenly spread; all of a shorter run).
+COMBINATION_STATES = 512
+
+
+def combinations(Y: np.ndarray, Y_b: np.ndarray) -> np.ndarray:
+    """K with Y = Y_b K: the base parameters' combinations of the standard ones, from both regressors at the
+    same states (N, n, P) and (N, n, b); exact up to rounding where Y_b has full column rank.
+
+    The identity holds at every state, so :data:`COMBINATION_STATES` of them spread over the run suffice
+    (benchmarks/bench_identification.py times both on 10^5 states of the UR10e); all are taken if those leave
+    Y_b rank-deficient.
+    """
+    count = len(Y_b)
+    chosen = np.unique(np.linspace(0, count - 1, min(count, COMBINATION_STATES)).astype(int))
+    K, rank = _least_squares(Y[chosen], Y_b[chosen])
+    if rank < Y_b.shape[-1] and len(chosen) < count:  # the spread states do not excite every base parameter
+        K, _ = _least_squares(Y, Y_b)
+    return K
+
+
+def _least_squares(Y: np.ndarray, Y_b: np.ndarray) -> tuple[np.ndarray, int]:
+    """(K, rank of the stacked Y_b) of the least-squares solution of Y = Y_b K over the given states."""
+    K, _, rank, _ = np.linalg.lstsq(Y_b.reshape(-1, Y_b.shape[-1]), Y.reshape(-1, Y.shape[-1]), rcond=None)
+    return K, int(rank)
+
+
+def identifiable(K: np.ndarray) -> np.ndarray:
+    """Which standard parameters enter some base parameter (a boolean per column of K)."""
+    largest = float(np.max(np.abs(K))) if K.size else 0.0
+    return np.max(np.abs(K), axis=0) > IDENTIFIABLE_TOLERANCE * largest
+
+
+def nearest_standard(K: np.ndarray, base_values: np.ndarray, prior: np.ndarray) -> np.ndarray:
+    """The standard parameters nearest ``prior`` whose base parameters are ``base_values`` (module docstring)."""
+    D = prior_scale(prior)
+    correction = np.linalg.lstsq(K * D, base_values - K @ prior, rcond=None)[0]  # the minimum-norm solution
+    return prior + D * correction
+
+
+#: The name of a parallel model's one rotor inertia (reflected, I_a), shared by its actuators.
+SHARED_ROTOR = f"rotor.{DRIVE[0]}"
+
+
+@dataclass(frozen=True)
+class Held:
+    """The standard parameters a model file holds: pi = fixed + T z, a column of T per value the file declares.
+
+    Attributes:
+        T: (P, V), each standard parameter's part of the file's values (0/1: a value shared by several columns).
+        fixed: (P,), the columns the file cannot declare, at the model's values (0 elsewhere).
+        names: (V,), the file's values named as standard parameters (a shared rotor: :data:`SHARED_ROTOR`).
+    """
+
+    T: np.ndarray
+    fixed: np.ndarray
+    names: tuple[str, ...]
+
+    @property
+    def columns(self) -> np.ndarray:
+        """Which standard parameters the file declares (a boolean per column)."""
+        return np.any(self.T != 0, axis=1)
+
+    def values_of(self, pi: np.ndarray) -> np.ndarray:
+        """z of the standard parameters ``pi`` the file holds (of others: the least-squares z)."""
+        return np.linalg.lstsq(self.T, pi - self.fixed, rcond=None)[0]
+
+
+def parallel_held(model: Model, names: Sequence[str], prior: np.ndarray) -> Held:
+    """What a parallel model's file holds of the regressor's columns ``names`` (module docstring): each column its
+    own value but the actuators' rotor inertias I_a, one for all, and a spherical model's rods, fixed at
+    ``prior`` (the model's pi: its file declares none)."""
+    actuators = {f"{c.name}.{DRIVE[0]}" for c in model.coordinates}
+    spherical = model.parallel is not None and model.parallel.motion is PlatformMotion.SPHERICAL
+    fixed_names = {f"rod.{p}" for p in ROD} if spherical else set()
+    values: list[list[int]] = []
+    rotor: list[int] = []
+    for k, name in enumerate(names):
+        if name in actuators:
+            rotor.append(k)
+        elif name not in fixed_names:
+            values.append([k])
+    groups = values + ([rotor] if rotor else [])
+    T = np.zeros((len(names), len(groups)))
+    for column, group in enumerate(groups):
+        T[group, column] = 1.0
+    fixed = np.where(np.array([name in fixed_names for name in names], dtype=bool), prior, 0.0)
+    return Held(T, fixed, tuple(names[k] for k, in values) + ((SHARED_ROTOR,) if rotor else ()))
+
+
+def nearest_held(K: np.ndarray, base_values: np.ndarray, near: np.ndarray, held: Held) -> np.ndarray:
+    """The standard parameters pi = fixed + T z whose base parameters K pi are nearest ``base_values`` (least
+    squares) and, among those, nearest ``near`` in the scaled norm |D^-1 (pi - near)|, D = diag(prior_scale(near)):
+    z = z_0 + N y with z_0 the least-squares solution of K T z = base_values - K fixed and N the null space of K T."""
+    A = K @ held.T
+    z0 = np.linalg.lstsq(A, base_values - K @ held.fixed, rcond=None)[0]
+    _, singular, Vt = np.linalg.svd(A)
+    rank = int(np.sum(singular > max(A.shape) * np.finfo(float).eps * singular.max(initial=0.0)))
+    N = Vt[rank:].T
+    D = prior_scale(near)
+    y = np.linalg.lstsq((held.T @ N) / D[:, None], (near - held.fixed - held.T @ z0) / D, rcond=None)[0]
+    return held.fixed + held.T @ (z0 + N @ y)
+
+
