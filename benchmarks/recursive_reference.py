@@ -19,7 +19,7 @@ ones of the +-90 deg twists exploited as a hand-written implementation would):
   momentum rate of composite i under a unit acceleration of joint i, carried to every
   joint j < i by rotation and a moment shift: M_ji = z_j . n_j.
 
-Both are checked against the tests' independent numeric Newton-Euler (tests/test_recursive_reference.py),
+Both are checked against the tests' independent numeric Newton-Euler (tests/derivation/test_recursive_reference.py),
 so the counts belong to algorithms that compute the right thing.
 
 Frame conventions (classic DH, ^{i-1}T_i = Rz(q_i) Tz(d_i) Tx(a_i) Rx(alpha_i)), in frame i:

@@ -2,7 +2,7 @@
 (:func:`symkin.manifest.build_manifest` builds these and serializes them with ``to_record``) is what every reader
 parses (``from_record``, :class:`symkin.runtime.info.ModelInfo`).  A record's keys appear here only; a key is left
 out where the model declares nothing (no limits, no friction), as the records have always been written, so
-``from_record(r).to_record() == r`` for every manifest (tests/test_manifest_schema.py).
+``from_record(r).to_record() == r`` for every manifest (tests/backends/test_manifest_schema.py).
 """
 
 from __future__ import annotations

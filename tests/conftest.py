@@ -25,7 +25,7 @@ from symkin.model import Model, load_model
 #: backend built with ``-O2 -march=native -ffp-contract=fast`` (FMA contraction where the CPU has
 #: it), so that no tolerance rests on the rounding of one code path.
 FOREIGN_ARITHMETIC = os.environ.get("SYMKIN_TEST_ARITHMETIC") == "foreign"
-#: tests/test_golden.py is not among them: what symkin derive writes is exact symbolic work printed by
+#: tests/backends/test_golden.py is not among them: what symkin derive writes is exact symbolic work printed by
 #: repr; the floating point in a derivation (symkin.dynamics.feasibility's eigenvalues, model/body_build's
 #: inertia check) only decides whether a model is refused, so the foreign pass would derive every model
 #: again (a minute and a half on a slow machine) to compare the same bytes.
@@ -46,7 +46,7 @@ BACKENDS = ("numpy", "c", "casadi")
 
 def reference_group(name: str):
     """``name`` as a parameter whose tests share one xdist worker (and so the lambdified references of its
-    model's generated functions, :func:`lambdified`): tests/test_numpy_backend.py, tests/test_backends_agree.py."""
+    model's generated functions, :func:`lambdified`): tests/backends/test_numpy_backend.py, tests/backends/test_backends_agree.py."""
     return pytest.param(name, marks=pytest.mark.xdist_group(f"reference-{name}"))
 SYMKIN_CLI = [sys.executable, "-m", "symkin"]
 
@@ -66,8 +66,8 @@ def shared_derivation(model: Model) -> Derivation:
 @functools.lru_cache(maxsize=None)
 def stability_run(name: str):
     """``symkin bench stability models/<name>.yaml`` at its defaults, once per worker: the run that
-    docs/numerical-stability.md quotes (tests/test_stability_table.py) and, on native arithmetic, the one
-    tests/test_stability.py judges (both modules share the xdist group ``stability``)."""
+    docs/numerical-stability.md quotes (tests/analysis/test_stability_table.py) and, on native arithmetic, the one
+    tests/analysis/test_stability.py judges (both modules share the xdist group ``stability``)."""
     from symkin.stability import run_stability
 
     return run_stability(load_model(MODELS_DIR / f"{name}.yaml"))
@@ -273,7 +273,7 @@ def compile_cache(tmp_path_factory, worker_id) -> Path:
     os.environ.setdefault("SYMKIN_CFLAGS", "-O0")
     # The C backend's functions are its ctypes ones here: the compiled CPython entry points over them (an
     # extension module per library: half a second of numpy's headers per build) are checked against them for
-    # every example model and function by tests/test_c_entry_points.py, which turns them on.
+    # every example model and function by tests/backends/test_c_entry_points.py, which turns them on.
     os.environ.setdefault("SYMKIN_C_ENTRY", "ctypes")
     yield path
     for name, value in previous.items():
@@ -298,7 +298,7 @@ def loaded(generated_dir):
 
 @pytest.fixture(scope="session")
 def generated_dir() -> Path:
-    """The committed generated/: every example model derived with its scene.  tests/test_golden.py checks
+    """The committed generated/: every example model derived with its scene.  tests/backends/test_golden.py checks
     that it is byte for byte what `symkin derive` gives now, so the tests read it instead of deriving every
     model again in each worker (and no test writes into it: copy it first)."""
     return GENERATED_DIR
@@ -329,7 +329,7 @@ def _tag_xdist_groups(config, items) -> None:
     """In an xdist worker under ``--dist loadgroup``, end the node id of each test marked ``xdist_group`` with
     ``@<group>``, as pytest-xdist does: xdist 3.8 writes it to ``Item._nodeid``, which pytest 9 no longer reads
     (a node id is ``Item._id``), so every group was spread over the workers and each session fixture of a
-    group (tests/test_stability.py's runs) was computed once per worker."""
+    group (tests/analysis/test_stability.py's runs) was computed once per worker."""
     if not getattr(config.option, "loadgroup", False):
         return
     try:

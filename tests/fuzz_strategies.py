@@ -1,6 +1,6 @@
 """Hypothesis strategies that turn a valid model file into hostile variants.
 
-Used by tests/test_hostile_corpus.py (bounded fuzzing in the suite) and by
+Used by tests/model/test_hostile_corpus.py (bounded fuzzing in the suite) and by
 tests/corpus/make_hostile_corpus.py (mutants kept in the corpus).
 """
 

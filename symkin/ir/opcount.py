@@ -22,7 +22,7 @@ term's cost as it was or lowers it (a constant sum term or product factor joins 
 literal, a whole constant subexpression becomes free).  The exception would be a symbolic
 exponent becoming a large integer, which the model language rules out (exponents are
 constants); the passes never let sympy's re-evaluation of a node raise its cost
-(:mod:`symkin.optimize.passes`), and ``tests/test_optimize.py`` checks the property on
+(:mod:`symkin.optimize.passes`), and ``tests/derivation/test_optimize.py`` checks the property on
 random expressions.
 """
 

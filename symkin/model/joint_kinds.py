@@ -5,7 +5,7 @@ freedom, each a rotation about or a translation along a unit axis of the moved f
 motion subspace of a one-coordinate joint about the unit axis z is the pair (angular, linear)
 of 3-vectors with twist = (angular, linear) qd (Featherstone's S, Pinocchio's ``S``):
 R gives (z, 0), P gives (0, z).  Chains, Jacobians, coordinates and the dynamics ask this module
-instead of branching on the kind (issue 30; tests/test_joint_kinds.py holds the ratchet on the
+instead of branching on the kind (issue 30; tests/model/test_joint_kinds.py holds the ratchet on the
 branches not yet moved here).
 """
 

@@ -1,7 +1,7 @@
 """Write the hostile model corpus: tests/corpus/hostile/NN-name.yaml and manifest.json.
 
 Run ``python tests/corpus/make_hostile_corpus.py`` after changing a case; the files are
-committed and tests/test_hostile_corpus.py checks every one of them (exit code 2, located
+committed and tests/model/test_hostile_corpus.py checks every one of them (exit code 2, located
 message with the recorded fragment, nothing written, nothing executed).
 
 Two sources:

@@ -1,5 +1,5 @@
 """Record Robotics Toolbox for Python's own dynamics of its Puma 560 and Stanford arm, and the kinematics of its
-Kinova Jaco (a flipped joint), for tests/test_rtb_reference.py.
+Kinova Jaco (a flipped joint), for tests/references/test_rtb_reference.py.
 
 RTB is not a test dependency (it pins its own stack): its numbers are recorded here, with the script that
 produced them. Run it in a virtual environment of its own:

@@ -106,7 +106,7 @@ def test_an_old_manifest_is_refused_by_every_reader_with_a_rederive_message(tmp_
 def test_a_written_manifest_is_its_type_serialized(directory):
     """The writer serializes the schema's types and the reader parses them: every manifest of the example models
     is ``Manifest.from_record(manifest).to_record()``, key order included (the bytes of generated/ are checked by
-    tests/test_golden.py), and so is each record alone."""
+    tests/backends/test_golden.py), and so is each record alone."""
     from symkin.manifest import dumps
     from symkin.manifest_schema import Coordinate, Function, Manifest
 

@@ -237,7 +237,7 @@ def test_the_command_estimates_from_the_energy_balance_and_refuses_too_few_windo
 def test_a_generated_parallel_model_without_its_base_regressor_is_refused_before_any_work(tmp_path):
     """generated/delta holds the scene's functions, not the base regressor a parallel model's identification needs:
     exit 2, nothing written, and the message says how to derive it (a model file derives it on the fly:
-    tests/test_parallel_base_parameters.py)."""
+    tests/parallel/test_parallel_base_parameters.py)."""
     data = tmp_path / "run.csv"
     data.write_text("t,theta1,theta2,theta3\n0,0,0,0\n")
     result = subprocess.run(SYMKIN_CLI + ["identify", str(ROOT / "generated/delta"), str(data),

@@ -2,7 +2,7 @@
 shows what numpy computes; the workspace cloud toggles; screenshots are not blank.
 
 The page evaluates the generated JavaScript, so its TCP position matches numpy's to the backends'
-agreement (relative 1e-12, tests/test_js_backend.py); its 1/kappa comes from its own Jacobi SVD,
+agreement (relative 1e-12, tests/backends/test_js_backend.py); its 1/kappa comes from its own Jacobi SVD,
 within the rounding of two backward-stable SVDs (tests/tolerances.py: svd) of LAPACK's.  No browser
 is a failure, not a skip: .ci/run installs Debian's chromium.
 """

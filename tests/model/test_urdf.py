@@ -354,7 +354,7 @@ def test_vendor_names_derive_unedited_and_keep_their_names(tmp_path, capsys):
 
 def test_robot_files_are_told_by_their_content(tmp_path, capsys):
     """Issue 29: a URDF named .xml is read as a URDF; a xacro file (a .urdf that still holds xacro: macros)
-    is expanded (tests/test_xacro.py); an MJCF file is read by MuJoCo's compiler (tests/test_mjcf.py); they
+    is expanded (tests/model/test_xacro.py); an MJCF file is read by MuJoCo's compiler (tests/model/test_mjcf.py); they
     were parsed as YAML and got YAML keys suggested. Their errors are the URDF reader's: exit code 2,
     located, nothing written."""
     from importlib.metadata import distribution

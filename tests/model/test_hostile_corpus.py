@@ -18,7 +18,7 @@ from symkin.errors import ModelError
 from symkin.model import model_from_text
 from symkin.model.yaml_source import MAX_FILE_BYTES
 
-CORPUS = Path(__file__).resolve().parent / "corpus" / "hostile"
+CORPUS = Path(__file__).resolve().parents[1] / "corpus" / "hostile"
 MANIFEST = json.loads((CORPUS / "manifest.json").read_text())
 
 

@@ -3,7 +3,7 @@
 Acceptance: for every example model and every generated function, the JavaScript module
 evaluated under Node.js at random states agrees with the numpy module to a relative 1e-12
 (plus, for the functions that solve with a matrix, the rounding the solve amplifies near
-singular matrices: the same bound as numpy against C, tests/test_backends_agree.py).  Node.js is
+singular matrices: the same bound as numpy against C, tests/backends/test_backends_agree.py).  Node.js is
 part of the test environment: a machine without it fails here instead of skipping.
 """
 
@@ -21,7 +21,7 @@ from conftest import EXAMPLE_MODELS, function_spec, random_inputs, relative_erro
 from checks import agreement_bound
 
 POINTS = 200
-EVALUATOR = Path(__file__).parent / "js" / "evaluate.js"
+EVALUATOR = Path(__file__).resolve().parents[1] / "js" / "evaluate.js"
 
 
 def node() -> str:

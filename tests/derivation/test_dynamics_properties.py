@@ -45,7 +45,7 @@ def _declares_bodies(name: str) -> bool:
 
 
 #: The serial example models with bodies, chosen at collection, plus the friction arm (the parallel
-#: models' dynamics, in actuated coordinates on a constraint manifold, are tests/test_parallel_dynamics.py's).
+#: models' dynamics, in actuated coordinates on a constraint manifold, are tests/parallel/test_parallel_dynamics.py's).
 CASE_NAMES = [name for name in EXAMPLE_MODELS if _declares_bodies(name)] + ["friction_arm"]
 
 

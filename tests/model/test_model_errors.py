@@ -12,7 +12,7 @@ from symkin.errors import ModelError
 from symkin.model import load_model
 
 #: The valid model the bad ones are made from (shared with the hostile corpus and the fuzz strategies).
-VALID = (Path(__file__).resolve().parent / "corpus" / "base_model.yaml").read_text()
+VALID = (Path(__file__).resolve().parents[1] / "corpus" / "base_model.yaml").read_text()
 
 # (case id, text to replace, replacement, expected line, expected key fragment, expected message fragment)
 CASES = [
@@ -149,7 +149,7 @@ def test_missing_file_is_a_clean_error(tmp_path):
 
 
 def test_one_bad_model_among_good_ones_writes_nothing(tmp_path):
-    good = Path(__file__).resolve().parent.parent / "models" / "planar_2r.yaml"
+    good = Path(__file__).resolve().parents[2] / "models" / "planar_2r.yaml"
     bad = _write(tmp_path, "bad", "a: l2,", "a: l3,")
     out = tmp_path / "out"
     result = subprocess.run(SYMKIN_CLI + ["derive", str(good), str(bad), "-o", str(out)], capture_output=True,

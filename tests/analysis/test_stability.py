@@ -32,7 +32,7 @@ QUICK = dict(samples=12, scale_samples=3, float32_samples=6, steps=(1e-2, 1e-6, 
 #: Left out on foreign arithmetic. The Stewart platform's J = J_x^-1 J_q (a symbolic 6x6 inverse) takes a
 #: minute to derive and lambdify for mpmath: that pass checks every other quantity (the first, all).
 #: Its dynamics (large expressions at 50 digits) are checked at the bench's full defaults by
-#: tests/test_stability_table.py, and against Pinocchio by tests/test_parallel_dynamics.py.
+#: tests/analysis/test_stability_table.py, and against Pinocchio by tests/parallel/test_parallel_dynamics.py.
 #: delta_wrist's platform is delta's, leg for leg: its kinematics are the same code (the golden files show it),
 #: checked on delta; delta_wrist is checked where the wrist enters (the device functions and the dynamics).
 #: The regressors of the UR10e (in both DH conventions) and of the PHANToM are checked at the full defaults in the
@@ -51,7 +51,7 @@ CHECKED = {"serial": {"fk", "frames", "jacobian", "jacobian_geometric", "mass_ma
 
 @pytest.fixture(scope="session")  # not "module": xdist may interleave other modules' tests, which would recompute it
 def runs(models):
-    """On native arithmetic the full runs the results table quotes (tests/test_stability_table.py runs them in
+    """On native arithmetic the full runs the results table quotes (tests/analysis/test_stability_table.py runs them in
     this worker anyway: every quantity, the bench's defaults); on foreign arithmetic, where the table is not
     rerun, quick runs without :data:`LEFT_OUT`."""
     if not FOREIGN_ARITHMETIC:

@@ -2,7 +2,7 @@
 names never become code in what symkin writes.  Each case of tests/hostile_text.py goes into every
 free-text field of a model file; the derived numpy module imports, the JavaScript module loads
 under Node.js and the C compiles warning-free, none runs a payload, and the text still reads in
-their documentation.  The pages of ``symkin view``: tests/test_viewer_hostile.py."""
+their documentation.  The pages of ``symkin view``: tests/viewer/test_viewer_hostile.py."""
 
 from __future__ import annotations
 

@@ -23,7 +23,7 @@ def imported_test_modules(source: str) -> set[str]:
 
 
 def test_no_test_module_imports_another():
-    found = {(path.stem, imported) for path in sorted((ROOT / "tests").glob("*.py"))
+    found = {(path.stem, imported) for path in sorted((ROOT / "tests").rglob("*.py"))
              for imported in imported_test_modules(path.read_text())}
     assert found == set(), "put a shared model in tests/sample_models.py, a shared check in tests/checks.py"
 

@@ -29,7 +29,7 @@ STATES = 6
 @pytest.fixture(scope="module")
 def cases(models, derivations):
     # the Lagrangian reference walks a chain (a body moves with every joint before it): trees, such as the
-    # PHANToM's parallelogram branch, are checked against Pinocchio (tests/test_crosscheck.py)
+    # PHANToM's parallelogram branch, are checked against Pinocchio (tests/references/test_crosscheck.py)
     out = {name: (models[name], derivations[name]) for name in EXAMPLE_MODELS
            if models[name].parallel is None and models[name].bodies and tree.is_chain(models[name])}
     for key, model in (("ur10e_urdf", load_model(MODELS_DIR / "ur10e.urdf")), ("friction_arm", model_from_text(FRICTION_ARM)),

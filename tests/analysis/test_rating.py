@@ -181,7 +181,7 @@ def test_the_delta_feels_the_mass_pinocchio_accelerates_with_a_push_at_the_handl
     """The DELTA of models/delta.yaml as Pinocchio's tree closed by three point constraints
     (benchmarks/competitors.pinocchio_delta): pushed from rest at the platform by a unit force along each
     axis, without gravity and with the motors off, its acceleration is the mobility J M^-1 J^T, the
-    inverse of the apparent mass.  Both are solves with kappa <= 1e4 (tests/test_parallel_dynamics.py):
+    inverse of the apparent mass.  Both are solves with kappa <= 1e4 (tests/parallel/test_parallel_dynamics.py):
     1e-9 relative leaves room for two algorithms."""
     pin = pytest.importorskip("pinocchio")
     from benchmarks.competitors import constraint_dynamics_of, delta_tree_state, pinocchio_delta

@@ -19,7 +19,7 @@ import ast
 from collections import defaultdict
 from pathlib import Path
 
-PACKAGE = Path(__file__).resolve().parent.parent / "symkin"
+PACKAGE = Path(__file__).resolve().parents[2] / "symkin"
 
 #: Lowest first.  Each entry: the layer's name and its top-level modules or packages of symkin.
 LAYERS = (

@@ -17,7 +17,7 @@ import pytest
 from conftest import FOREIGN_ARITHMETIC
 from symkin.backends.c.build import compiler_command
 
-TESTS = Path(__file__).resolve().parent
+TESTS = Path(__file__).resolve().parents[1]
 TOLERANCE_KEYWORDS = {"atol", "rtol", "abs", "rel"}
 CHECKS = {"assert_allclose", "allclose", "isclose", "approx", "assert_array_almost_equal_nulp"}
 SMALLEST_BARE = 1e-12
@@ -67,7 +67,7 @@ def test_the_scanner_finds_bare_tolerances_and_passes_derived_ones():
 
 
 def test_no_test_asserts_a_bare_tolerance_below_1e_12():
-    offenders = [f"{path.name}:{line}: {value:g}" for path in sorted(TESTS.glob("*.py"))
+    offenders = [f"{path.name}:{line}: {value:g}" for path in sorted(TESTS.rglob("*.py"))
                  for line, value in bare_tolerances(path.read_text())]
     assert not offenders, ("tolerances below 1e-12 must be derived (tests/tolerances.py):\n" + "\n".join(offenders))
 

@@ -428,7 +428,7 @@ def test_the_simulation_says_what_analyses_legs_without_closed_forms(scara_dir):
 
 def test_symkin_view_of_the_model_file_needs_the_lifts_stroke(tmp_path, capsys):
     """`symkin view` derives the dual SCARA's model file with what its page evaluates (the closure, its Jacobians,
-    leg_joints; the browser's side: tests/test_viewer_browser.py); its unlimited lift is refused with the option
+    leg_joints; the browser's side: tests/viewer/test_viewer_browser.py); its unlimited lift is refused with the option
     that bounds it, and nothing is written."""
     from symkin.cli import main
 

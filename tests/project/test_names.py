@@ -58,14 +58,14 @@ def test_a_public_name_is_defined_in_one_module_or_says_why_not():
     repeated = {name: modules for name, modules in defined_names().items() if len(modules) > 1}
     unexplained = {name: modules for name, modules in repeated.items()
                    if name not in CONVENTIONS | SAME_MEANING | TO_RENAME}
-    assert not unexplained, f"rename these or say why one name serves (tests/test_names.py): {unexplained}"
+    assert not unexplained, f"rename these or say why one name serves (tests/project/test_names.py): {unexplained}"
 
 
 def test_the_lists_name_only_names_defined_twice():
     """A renamed name leaves the lists (the ratchet only shrinks)."""
     repeated = {name for name, modules in defined_names().items() if len(modules) > 1}
     stale = (set(CONVENTIONS) | set(SAME_MEANING) | set(TO_RENAME)) - repeated
-    assert not stale, f"no longer defined twice: remove them from tests/test_names.py: {sorted(stale)}"
+    assert not stale, f"no longer defined twice: remove them from tests/project/test_names.py: {sorted(stale)}"
 
 
 def test_the_names_the_review_found_with_two_meanings_have_one():
