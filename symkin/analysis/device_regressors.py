@@ -26,7 +26,7 @@ class DeviceRegressors:
         self.model, self.source = model, source
         info = model.info
         self.legs = len(info.coordinates)
-        self.info = dataclasses.replace(info, coordinates=info.coordinates + info.wrist, wrist=())
+        self.info = dataclasses.replace(info, coordinates=info.device_coordinates, wrist=())
         self._last_pose: tuple[np.ndarray, np.ndarray] | None = None  # (q, fk(q)) of the last part of a run
 
     def __getattr__(self, name: str) -> Any:

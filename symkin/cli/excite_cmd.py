@@ -59,8 +59,9 @@ def run(args: argparse.Namespace) -> int:
             for kind in MechanismKind})
         values = analysis_args.parse_assignments(args.assignments)
         model = model.bind(**values) if values else model
+        joints = model.info.device_coordinates   # a hybrid device's wrist joints after the legs' actuators
         with Progress(model.name) as progress:
-            progress(f"optimizing {len(model.info.coordinates) * (2 * args.harmonics + 1)} coefficients with IPOPT")
+            progress(f"optimizing {len(joints) * (2 * args.harmonics + 1)} coefficients with IPOPT")
             found = excitation.optimize_excitation(model, period=args.period, harmonics=args.harmonics, samples=args.samples,
                                         max_velocity=args.max_velocity, max_acceleration=args.max_acceleration,
                                         seed=args.seed, limits=analysis_args.parse_limits(args.limits),
@@ -69,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
             if not args.no_figure:
                 progress("drawing the trajectory")
                 files["excitation.png"] = excitation.figure_png(
-                    found, list(model.info.coordinate_names), [c.revolute for c in model.info.coordinates],
+                    found, [c.name for c in joints], [c.revolute for c in joints],
                     f"{model.name}: excitation, cond {found.condition_start:.3g} -> {found.condition:.3g}")
     except (ValueError, KeyError) as err:
         analysis_args.fail_on_bad_input(args, err)
@@ -78,7 +79,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _files(args: argparse.Namespace, model, found) -> dict[str, str | bytes]:
-    names = model.info.coordinate_names
+    names = [c.name for c in model.info.device_coordinates]
     t = np.arange(int(round(args.periods * found.period * args.rate))) / args.rate
     q, qd, qdd = found.states(t)
     header = ",".join(["t", *(f"{g}_{n}" for g in ("q", "qd", "qdd") for n in names)])

@@ -21,7 +21,8 @@ each within a factor of the number of parameters), subject to the joint position
 velocity and acceleration limits at every sample (and checked on a grid ten times as dense).  The columns
 of the Coulomb friction (sign(qd)) are piecewise constant: they count in W but give no gradient.  A parallel
 model's base regressor takes the platform's pose: p = fk(q) along the motion (its CasADi fk composed), whose
-legs must assemble at every constraint point (fk's margin >= 0).
+legs must assemble at every constraint point (fk's margin >= 0); a hybrid device's wrist joints follow series of
+their own after the legs' actuators (the device's joints, as a run records them).
 """
 
 from __future__ import annotations
@@ -94,7 +95,7 @@ def _limits(model: GeneratedModel, velocity: float | None, acceleration: float |
         ValueError: a joint without position limits, or no velocity or acceleration bound.
     """
     lower, upper, speeds = [], [], []
-    for c in model.info.coordinates:
+    for c in model.info.device_coordinates:
         limits = overrides.get(c.name, c.limits)
         if limits is None:
             raise ValueError(f"{model.name}: joint {c.name} has no limits; declare them (or give --limit)")
@@ -116,11 +117,8 @@ def optimize_excitation(model: GeneratedModel, *, period: float = 10.0, harmonic
     ``base_regressor``).
 
     Raises:
-        ValueError: missing limits, a hybrid device, or a start IPOPT cannot leave (see the message).
+        ValueError: missing limits, or a start IPOPT cannot leave (see the message).
     """
-    if model.info.wrist:
-        raise ValueError(f"{model.name}: the excitation of a hybrid device is not designed yet (its wrist joints "
-                         "are not in the Fourier series); design the legs' and the wrist's motions apart")
     function = casadi_function(model, "base_regressor")
     lower, upper, speeds, accelerations = _limits(model, max_velocity, max_acceleration, limits or {})
     n = len(lower)
@@ -141,8 +139,7 @@ def optimize_excitation(model: GeneratedModel, *, period: float = 10.0, harmonic
     q_c, qd_c, qdd_c = _series(casadi, offsets, a, b, period, dense)
     mapped = function.map(samples, "serial")
     pose = _pose_function(model, samples) if model.info.is_parallel else None
-    states = {"q": q.T, "qd": qd.T, "qdd": qdd.T, **({} if pose is None else {"p": pose(q.T)[0]})}
-    Y = mapped(*_arguments(function, model, states, samples))[0]  # (n, count * samples), column-major
+    Y = mapped(*_arguments(function, model, _states(model, q.T, qd.T, qdd.T, pose), samples))[0]  # (n, count * samples)
     x0 = np.concatenate([middle, a0.ravel(), b0.ravel()])  # each joint's L coefficients in a row
     regressor_at = casadi.Function("W", [x], [Y])
     W0 = _stacked(regressor_at(x0).full(), n, count, samples)
@@ -159,7 +156,7 @@ def optimize_excitation(model: GeneratedModel, *, period: float = 10.0, harmonic
     ubg = np.concatenate([np.repeat(upper, points), np.repeat(speeds, points), np.repeat(accelerations, points),
                           np.zeros(2 * n)])
     if pose is not None:  # a parallel model's legs assemble along the motion: fk's margin >= 0 at the points
-        margin = _pose_function(model, points)(q_c.T)[1]
+        margin = _pose_function(model, points)(q_c.T[:len(model.info.coordinates), :])[1]
         g = casadi.vertcat(g, casadi.vec(margin))
         lbg, ubg = np.concatenate([lbg, np.zeros(points)]), np.concatenate([ubg, np.full(points, np.inf)])
     solver = casadi.nlpsol("excitation", "ipopt", {"x": x, "f": objective, "g": g},
@@ -217,6 +214,20 @@ def _pose_function(model: GeneratedModel, samples: int) -> casadi.Function:
     q = casadi.MX.sym("q", fk.size1_in(0), samples)
     outputs = fk.map(samples, "serial")(*_arguments(fk, model, {"q": q}, samples))
     return casadi.Function("pose", [q], list(outputs[:2]))
+
+
+def _states(model: GeneratedModel, q: Any, qd: Any, qdd: Any, pose: casadi.Function | None) -> dict[str, Any]:
+    """The base regressor's state inputs by name from the device's joints (rows: the coordinates, then a hybrid
+    device's wrist joints ``qw``), and a parallel model's pose p = fk(q)."""
+    legs = len(model.info.coordinates)
+    states = {}
+    for name, value in (("q", q), ("qd", qd), ("qdd", qdd)):
+        states[name] = value[:legs, :]
+        if model.info.wrist:
+            states[name.replace("q", "qw", 1)] = value[legs:, :]
+    if pose is not None:
+        states["p"] = pose(states["q"])[0]
+    return states
 
 
 def _arguments(function: casadi.Function, model: GeneratedModel, states: dict[str, Any], samples: int) -> list[Any]:

@@ -63,6 +63,11 @@ class ModelInfo:
     def coordinate_names(self) -> tuple[str, ...]:
         return tuple(c.name for c in self.coordinates)
 
+    @property
+    def device_coordinates(self) -> tuple[Coordinate, ...]:
+        """The joints a run of the device records: the coordinates, then a hybrid device's wrist joints."""
+        return self.coordinates + self.wrist
+
 
     @property
     def units(self) -> dict[str, str]:

@@ -111,10 +111,3 @@ def test_limits_given_for_the_run_replace_the_models(arm):
     q = found.states(np.linspace(0.0, PERIOD, 20001))[0]
     assert np.min(q[:, 0]) >= 0.2
     assert np.max(q[:, 0]) <= 0.8
-
-
-def test_a_hybrid_device_is_refused_with_what_to_do():
-    """The DELTA carrying a wrist: its wrist joints are not in the series, so the design is refused (a parallel model
-    without a wrist: tests/parallel/test_parallel_base_parameters.py)."""
-    with pytest.raises(ValueError, match="delta_wrist: the excitation of a hybrid device is not designed yet"):
-        excitation.optimize_excitation(load(GENERATED_DIR / "delta_wrist", backend="casadi"), max_acceleration=10.0)

@@ -251,24 +251,56 @@ def test_what_a_parallel_models_file_holds_is_the_nearest_it_can(derived):
                                      DYNAMICS * np.abs(estimate).max())
 
 
+def _excite(name, iterations, tmp_path):
+    """`symkin excite` on models/<name>.yaml (3 rad/s, 20 rad/s^2, 4 s, 2 harmonics) into tmp_path/out, which it
+    returns, after checking that IPOPT lowered cond(W)."""
+    out = tmp_path / "out"
+    result = subprocess.run(SYMKIN_CLI + ["excite", str(MODELS_DIR / f"{name}.yaml"), "--max-velocity", "3",
+                                          "--max-acceleration", "20", "--period", "4", "--harmonics", "2",
+                                          "--max-iterations", str(iterations), "--no-figure", "-o", str(out)],
+                            capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    record = json.loads((out / "excitation.json").read_text())
+    assert record["condition"] < record["condition_start"]
+    return out
+
+
 @pytest.mark.parametrize("derived", ["delta"], indirect=True)
 def test_symkin_excite_designs_a_run_the_deltas_legs_follow(derived, tmp_path):
     """symkin excite on the DELTA: its base regressor is taken at the poses fk(q) of the trajectory (CasADi), whose
     legs must assemble (fk's margin >= 0) within the actuators' limits; a few IPOPT iterations lower cond(W)."""
     name, found, generated = derived
-    out = tmp_path / "out"
-    result = subprocess.run(SYMKIN_CLI + ["excite", str(MODELS_DIR / "delta.yaml"), "--max-velocity", "3",
-                                          "--max-acceleration", "20", "--period", "4", "--harmonics", "2",
-                                          "--max-iterations", "15", "--no-figure", "-o", str(out)],
-                            capture_output=True, text=True)
-    assert result.returncode == 0, result.stderr
-    record = json.loads((out / "excitation.json").read_text())
-    assert record["condition"] < record["condition_start"]
+    out = _excite("delta", 15, tmp_path)
     table = np.loadtxt(out / "excitation.csv", delimiter=",", skiprows=1)
     q = table[:, 1:4]
     lower, upper = np.array(generated.info.coordinates[0].limits)
     assert np.all((q >= lower) & (q <= upper)), (q.min(), q.max(), lower, upper)
     assert np.all(generated.fk(q).margin >= 0)
+
+
+@pytest.mark.parametrize("derived", ["delta_wrist"], indirect=True)
+def test_symkin_excite_moves_a_hybrid_devices_legs_and_wrist(derived, tmp_path):
+    """symkin excite on the DELTA carrying a wrist: a series per device joint (the legs' actuators, then the wrist's
+    joints, as a run records them), each within its limits, the legs assembled (fk's margin >= 0); the base
+    regressor stacked over the run's states has full column rank (every base parameter excited), and IPOPT lowers
+    cond(W)."""
+    name, found, generated = derived
+    out = _excite("delta_wrist", 10, tmp_path)
+    joints = [c.name for c in generated.info.device_coordinates]
+    with open(out / "excitation.csv") as table_file:
+        header = table_file.readline().strip().split(",")
+    assert header == ["t"] + [f"{g}_{n}" for g in ("q", "qd", "qdd") for n in joints]
+    table = np.loadtxt(out / "excitation.csv", delimiter=",", skiprows=1)
+    q, qd, qdd = (table[:, 1 + k * 6:1 + (k + 1) * 6] for k in range(3))
+    limits = np.array([c.limits for c in generated.info.device_coordinates])
+    assert np.all(q >= limits[:, 0])
+    assert np.all(q <= limits[:, 1])
+    pose = generated.fk(q[:, :3])
+    assert np.all(pose.margin >= 0)
+    Y_b = generated.base_regressor(q[:, :3], pose.position, q[:, 3:], qd[:, :3], qd[:, 3:], qdd[:, :3], qdd[:, 3:]).Y_b
+    W = Y_b.reshape(-1, Y_b.shape[-1])
+    singular = np.linalg.svd(W / np.linalg.norm(W, axis=0), compute_uv=False)
+    assert singular[-1] > 1e3 * EPS * singular[0] * np.sqrt(W.shape[0])   # far above rounding: rank len(pi_b)
 
 
 @pytest.mark.parametrize("derived", ["delta_wrist"], indirect=True)
