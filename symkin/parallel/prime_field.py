@@ -1,7 +1,8 @@
 """A derived formula evaluated exactly in a prime field GF(P): the arithmetic of the exact elimination of
 parallel models' base parameters (:mod:`symkin.parallel.base_parameters`, whose docstring has why).
 
-P is a random prime of about 61 bits in which every radicand of the formula's constants has a square root;
+P is a random prime of about 61 bits, P = 3 mod 4 (a square root is then one power, x^((P+1)/4), and -1 has
+none, so 1 + t^2 never vanishes), in which every radicand of the formula's constants has a square root;
 each square root is sent to one of its roots mod P (both signs are embeddings: :meth:`PrimeField.embeddings`),
 a sine and cosine of an angle to a point of the unit circle mod P ((1 - t^2, 2t) / (1 + t^2), integer
 multiples by de Moivre), a Coulomb shape and every other input to random residues.  Every step is a ring
@@ -16,10 +17,11 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import sympy
-from sympy.ntheory import factorint, nextprime, sqrt_mod
+from sympy.ntheory import factorint, nextprime
 
 from symkin.errors import DerivationError
 from symkin.ir.spec import FunctionSpec
+from symkin.parallel.modular_program import ModularProgram
 
 #: Bits of the random primes: residues fit a machine word, and a chance dependency has probability ~ 2^-50.
 PRIME_BITS = 61
@@ -36,21 +38,21 @@ class PrimeField:
     def __init__(self, P: int, radicands: Sequence[int], signs: Sequence[int]):
         self.P = P
         self.radicands = tuple(radicands)
-        self.roots = {r: sqrt_mod(r, P) * s % P for r, s in zip(radicands, signs)}
+        self.roots = {r: square_root_mod(r, P) * s % P for r, s in zip(radicands, signs)}
 
     @staticmethod
     def embeddings(rng: random.Random, radicands: Sequence[int]) -> list[PrimeField]:
-        """A random prime in which every radicand has a square root, with each choice of the roots' signs
-        (itertools.product order: the first keeps every root sympy's sqrt_mod finds)."""
+        """A random prime P = 3 mod 4 in which every radicand has a square root, with each choice of the roots'
+        signs (itertools.product order: the first keeps every root :func:`square_root_mod` finds)."""
         prime = nextprime(rng.getrandbits(PRIME_BITS) | (1 << (PRIME_BITS - 1)))
-        while any(pow(r, (prime - 1) // 2, prime) != 1 for r in radicands):
+        while prime % 4 != 3 or any(pow(r, (prime - 1) // 2, prime) != 1 for r in radicands):
             prime = nextprime(prime)
         return [PrimeField(prime, radicands, signs) for signs in itertools.product((1, -1), repeat=len(radicands))]
 
     def inverse(self, x: int) -> int:
         if x % self.P == 0:
             raise ZeroDivisionError
-        return pow(x, self.P - 2, self.P)
+        return pow(x, -1, self.P)
 
     def rational(self, value: sympy.Rational) -> int:
         return int(value.p) * self.inverse(int(value.q)) % self.P
@@ -213,6 +215,11 @@ class FormulaEvaluator:
         self.radicands = sorted(set().union(*(_radicands(e) for e in expressions),
                                             *(_radicands(sympy.cos(c)) | _radicands(sympy.sin(c))
                                               for _, c in self.angles.values())))
+        #: The definitions and Y's entries as one straight-line program, each closure's coefficients as one, and
+        #: each program's constants in the last field.
+        self.program = ModularProgram(self.definitions, self.entries, set(self.functions), where)
+        self.closure_programs = [ModularProgram((), c.coefficients, set(c.atoms), where) for c in self.closures]
+        self._field_constants: dict[ModularProgram, tuple[PrimeField, list[int]]] = {}
 
     def _linear(self, argument: sympy.Expr, variables: set[sympy.Symbol], atom: sympy.Expr
                 ) -> tuple[dict[sympy.Symbol, int], sympy.Expr]:
@@ -237,18 +244,23 @@ class FormulaEvaluator:
             points = {x: field.circle_point(rng) for x in self.variables}
             points.update({g: field.circle(geometry[g]) for g in self.angle_parameters})
             values.update({x: field.residue(rng) for x in self.variables})
-            memo: dict[sympy.Expr, int] = {}
             try:
-                for closure in self.closures:
-                    self._close(field, rng, closure, values, points)
+                for closure, program in zip(self.closures, self.closure_programs):
+                    self._close(field, rng, closure, program, values, points)
                 values.update(self._atoms(field, rng, self.functions, points))
-                for symbol, expr in self.definitions:
-                    values[symbol] = self._value(field, expr, values, memo)
-                return [self._value(field, e, values, memo) for e in self.entries]
+                return self._run(self.program, field, values)
             except _NoPoint:
                 continue
         raise DerivationError(f"{self.where}: no pose of {CLOSURE_DRAWS} drawn closes every leg over a prime field "
                               "(please report it)")
+
+    def _run(self, program: ModularProgram, field: PrimeField, values: dict[sympy.Expr, int]) -> list[int]:
+        """``program``'s outputs in ``field`` at ``values`` (its constants computed once per field)."""
+        cached = self._field_constants.get(program)
+        if cached is None or cached[0] is not field:
+            cached = (field, program.constants(lambda n: self._value(field, n, {}, {})))
+            self._field_constants[program] = cached
+        return program.run(values, cached[1], field.P, field.inverse, lambda x: _state_root(field.P, x))
 
     def _atoms(self, field: PrimeField, rng: random.Random, atoms: Sequence[sympy.Expr],
                points: dict[sympy.Symbol, tuple[int, int]]) -> dict[sympy.Expr, int]:
@@ -268,12 +280,12 @@ class FormulaEvaluator:
                 out[atom] = field.residue(rng)
         return out
 
-    def _close(self, field: PrimeField, rng: random.Random, closure: _Split, values: dict[sympy.Expr, int],
-               points: dict[sympy.Symbol, tuple[int, int]]) -> None:
-        """Solve a leg's closure for its q at the drawn pose, into ``points`` (a rotation) or ``values``."""
+    def _close(self, field: PrimeField, rng: random.Random, closure: _Split, program: ModularProgram,
+               values: dict[sympy.Expr, int], points: dict[sympy.Symbol, tuple[int, int]]) -> None:
+        """Solve a leg's closure for its q at the drawn pose (its coefficients: ``program``), into ``points`` (a
+        rotation) or ``values``."""
         P = field.P
-        at = {**values, **self._atoms(field, rng, closure.atoms, points)}
-        A, B, C = (self._value(field, e, at, {}) for e in closure.coefficients)
+        A, B, C = self._run(program, field, {**values, **self._atoms(field, rng, closure.atoms, points)})
         if closure.rotation:  # A cos q + B sin q + C = 0: (C - A) t^2 + 2 B t + (A + C) = 0, t = tan(q/2)
             a, b, c = (C - A) % P, 2 * B % P, (A + C) % P
         else:  # A q^2 + B q + C = 0
@@ -281,7 +293,7 @@ class FormulaEvaluator:
         discriminant = (b * b - 4 * a * c) % P
         if a == 0 or (discriminant and pow(discriminant, (P - 1) // 2, P) != 1):
             raise _NoPoint
-        t = (-b + sqrt_mod(discriminant, P) * rng.choice((1, -1))) * field.inverse(2 * a) % P
+        t = (-b + square_root_mod(discriminant, P) * rng.choice((1, -1))) * field.inverse(2 * a) % P
         if not closure.rotation:
             values[closure.q] = t
         elif (1 + t * t) % P:
@@ -320,15 +332,27 @@ class FormulaEvaluator:
         elif expr.is_Pow and expr.args[1].is_Rational and expr.args[1].q == 2:
             base, k = expr.args[0], int(expr.args[1].p)
             whole, half = self._value(field, base, values, memo), (k - 1) // 2  # base^(k/2) = base^((k-1)/2) sqrt(base)
-            if base.is_Rational and base > 0:
-                root = field.square_root(base)
-            elif whole and pow(whole, (P - 1) // 2, P) != 1:
-                raise _NoPoint  # a square root of the state (a leg's length): a point of y^2 = x needs a residue
-            else:
-                root = sqrt_mod(whole, P)
+            root = field.square_root(base) if base.is_Rational and base > 0 else _state_root(P, whole)
             out = pow(whole if half >= 0 else field.inverse(whole), abs(half), P) * root % P
         else:
             raise DerivationError(f"{self.where}: the regressor holds {expr}, which the exact elimination cannot "
                                   "evaluate (a transcendental constant, or a root other than a square root)")
         memo[expr] = out
         return out
+
+
+def _state_root(P: int, x: int) -> int:
+    """A square root of the state's residue x (a leg's length): a point of y^2 = x exists only for a residue.
+
+    Raises:
+        _NoPoint: x is not a square mod P (the state is redrawn).
+    """
+    if x and pow(x, (P - 1) // 2, P) != 1:
+        raise _NoPoint
+    return square_root_mod(x, P)
+
+
+def square_root_mod(x: int, P: int) -> int:
+    """A square root of the residue x modulo a prime P = 3 mod 4: x^((P + 1) / 4) (its square is x^((P + 1) / 2)
+    = x x^((P - 1) / 2) = x by Euler's criterion)."""
+    return pow(x, (P + 1) // 4, P)
