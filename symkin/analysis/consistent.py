@@ -178,26 +178,29 @@ def prior_scale(prior: np.ndarray) -> np.ndarray:
     return np.maximum(np.abs(prior), 1e-3 * float(np.max(np.abs(prior))) if np.any(prior) else 1.0)
 
 
-def estimate(triangle: np.ndarray, target: np.ndarray, names: Sequence[str], prior: np.ndarray) -> ConsistentEstimate:
+def estimate(triangle: np.ndarray, target: np.ndarray, names: Sequence[str], prior: np.ndarray,
+             start: np.ndarray | None = None) -> ConsistentEstimate:
     """The consistent estimate of the module docstring from the triangular factor ``triangle`` (P x P) and
     ``target`` (z) of the weighted standard regressor and the prior (the model's pi); the blocks from ``names``.
     Parameters a model file holds instead, pi = fixed + T x (:class:`symkin.analysis.implied_parameters.Held`),
     are estimated from ``triangle`` R T and ``target`` z - R fixed, named as x (a rotor shared by several joints:
-    ``rotor.Ia``, their friction apart)."""
+    ``rotor.Ia``, their friction apart).  ``start``: where the solver starts (default: the prior; a nearby
+    estimate saves iterations)."""
     from scipy.optimize import least_squares
 
     count = len(names)
     blocks = layout(names)
     spans = [slice(start, start + BLOCK_SIZES[kind]) for kind, start in zip(blocks, _starts(blocks))]
+    first = prior if start is None else start
     starts = []
-    for kind, span in zip(blocks, spans):  # theta of the prior: each block's own parameterization
+    for kind, span in zip(blocks, spans):  # theta of the start: each block's own parameterization
         if kind == "body":
-            size = max(float(np.max(np.abs(prior[span]))), 1e-9)
-            starts.append(_log_cholesky(_regularized(pseudo_inertia(prior[span]), size)))
+            size = max(float(np.max(np.abs(first[span]))), 1e-9)
+            starts.append(_log_cholesky(_regularized(pseudo_inertia(first[span]), size)))
         elif kind in LEVELS:
-            starts.append(np.maximum(np.linalg.solve(LEVELS[kind], prior[span]), 0.0))
+            starts.append(np.maximum(np.linalg.solve(LEVELS[kind], first[span]), 0.0))
         else:
-            starts.append(np.maximum(prior[span], 0.0) if kind == "mass" else prior[span])
+            starts.append(np.maximum(first[span], 0.0) if kind == "mass" else first[span])
     theta0 = np.concatenate(starts) if starts else np.zeros(0)
     lower = np.concatenate([np.full(BLOCK_SIZES[kind], -np.inf if kind in ("body", "free") else 0.0)
                             for kind in blocks]) if blocks else np.zeros(0)

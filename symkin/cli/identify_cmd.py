@@ -177,16 +177,19 @@ def _energy(model, fit, Y, Y_b, K, names, window: float):
                                                model.info.functions["regressor"].outputs["pi"], names, window)
 
 
-def _consistent(model, Y, pi, fit, found, held=None):
+def _consistent(model, Y, pi, fit, found, in_file=None):
     """The consistent standard parameters from the fit part of the run, weighted as the WLS estimate; given
-    ``held`` (:class:`~symkin.analysis.implied_parameters.Held`), the consistent values a model file holds."""
+    ``in_file`` (a :class:`~symkin.analysis.implied_parameters.Held` and the consistent estimate), the consistent
+    values a model file holds, started from those nearest the estimate."""
     from symkin.analysis import consistent, identification
 
     weights = 1.0 / np.where(found.joint_std > 0, found.joint_std, 1.0)
     triangle, target = identification.weighted_triangle(Y, fit.tau, weights)
-    if held is None:
+    if in_file is None:
         return consistent.estimate(triangle, target, model.info.functions["regressor"].outputs["pi"], pi[0])
-    return consistent.estimate(triangle @ held.T, target - triangle @ held.fixed, held.names, held.values_of(pi[0]))
+    held, standard = in_file
+    return consistent.estimate(triangle @ held.T, target - triangle @ held.fixed, held.names, held.values_of(pi[0]),
+                               start=held.values_of(standard.values))
 
 
 def _file_values(source, model, Y, K, pi, fit, found, standard) -> tuple[np.ndarray, np.ndarray, str]:
@@ -203,7 +206,7 @@ def _file_values(source, model, Y, K, pi, fit, found, standard) -> tuple[np.ndar
     held = implied_parameters.parallel_held(source, names, pi[0])
     base = found.values if standard is None else K @ standard.values
     estimate = (implied_parameters.nearest_held(K, base, pi[0], held) if standard is None else
-                held.fixed + held.T @ _consistent(model, Y, pi, fit, found, held).values)
+                held.fixed + held.T @ _consistent(model, Y, pi, fit, found, (held, standard)).values)
     return estimate, identified & held.columns, _held_note(found, K @ estimate, base)
 
 

@@ -1,6 +1,6 @@
 /*
  * Calls the generated C of the example models without Python (compiled and run by
- * tests/test_c_backend.py together with generated planar_2r.c and ur10e.c).
+ * tests/backends/test_c_backend.py together with generated planar_2r.c and ur10e.c).
  *
  * Independent checks:
  *   - planar_2r against the seed's closed forms: x = l1 c1 + l2 c12, y = l1 s1 + l2 s12,

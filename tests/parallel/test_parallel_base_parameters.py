@@ -117,7 +117,7 @@ def test_symkin_identify_gives_back_the_deltas_base_parameters(derived, tmp_path
     --method consistent` (poses from fk per sample) recovers the model's pi_b within 5 standard deviations (its
     weighted least squares), and standard parameters whose platform and arm are rigid bodies (pseudo-inertias
     positive semidefinite to rounding) and whose rods' end masses are not negative, fitting the run as well as
-    the true parameters do; no identified.yaml."""
+    the true parameters do; and identified.yaml (:func:`_check_identified_model`)."""
     name, found, generated = derived
     t, q, qd, qdd = excitation(3, seed=3)
     home = generated.ik(np.array(generated.info.home)).joints
@@ -125,14 +125,7 @@ def test_symkin_identify_gives_back_the_deltas_base_parameters(derived, tmp_path
     p = generated.fk(q).position
     tau = generated.inverse_dynamics(q, p, qd, qdd) + np.random.default_rng(3).normal(0, NOISE, q.shape)
     run = write_run(tmp_path / "run.csv", generated.info.coordinate_names, t, q, tau, qd, qdd)
-    out = tmp_path / "out"
-    result = subprocess.run(SYMKIN_CLI + ["identify", str(MODELS_DIR / "delta.yaml"), str(run), "--method",
-                                          "consistent", "--no-figure", "-o", str(out)], capture_output=True, text=True)
-    assert result.returncode == 0, result.stderr
-    record = json.loads((out / "estimate.json").read_text())
-    assert [row["name"] for row in record["parameters"]] == list(found.base_names)
-    error = {row["name"]: abs(row["value"] - row["model"]) / row["std"] for row in record["parameters"]}
-    assert max(error.values()) < 5, error                          # 5 standard deviations: 1 in 1.7 million
+    out, record = _identify("delta", run, found, tmp_path)
     standard = record["standard"]
     assert len(standard["smallest_pseudo_inertia_eigenvalue"]) == 2               # the platform and the arm
     largest = max(abs(v) for v in standard["parameters"].values())
@@ -142,6 +135,21 @@ def test_symkin_identify_gives_back_the_deltas_base_parameters(derived, tmp_path
     # least squares (mean 16, beyond 64 with a probability below 1e-7): the consistent estimate may cost no more
     assert standard["data_cost"] - standard["least_squares_cost"] < 4 * len(found.base)
     _check_identified_model(out, found, record)
+
+
+def _identify(name, run, found, tmp_path):
+    """`symkin identify models/<name>.yaml RUN --method consistent` into tmp_path/out: (out, estimate.json's record),
+    after checking every base parameter's estimate within 5 of its standard deviations of the model's value (the
+    weighted least squares; 1 in 1.7 million to fail by chance)."""
+    out = tmp_path / "out"
+    result = subprocess.run(SYMKIN_CLI + ["identify", str(MODELS_DIR / f"{name}.yaml"), str(run), "--method",
+                                          "consistent", "--no-figure", "-o", str(out)], capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    record = json.loads((out / "estimate.json").read_text())
+    assert [row["name"] for row in record["parameters"]] == list(found.base_names)
+    error = {row["name"]: abs(row["value"] - row["model"]) / row["std"] for row in record["parameters"]}
+    assert max(error.values()) < 5, error
+    return out, record
 
 
 def _check_identified_model(out, found, record):
@@ -301,6 +309,29 @@ def test_symkin_excite_moves_a_hybrid_devices_legs_and_wrist(derived, tmp_path):
     W = Y_b.reshape(-1, Y_b.shape[-1])
     singular = np.linalg.svd(W / np.linalg.norm(W, axis=0), compute_uv=False)
     assert singular[-1] > 1e3 * EPS * singular[0] * np.sqrt(W.shape[0])   # far above rounding: rank len(pi_b)
+
+
+@pytest.mark.parametrize("derived", ["delta_wrist"], indirect=True)
+def test_symkin_identify_gives_back_a_hybrid_devices_base_parameters(derived, tmp_path):
+    """A run of the DELTA carrying its wrist simulated with its own regressor (tau = Y pi at p = fk(q), the legs
+    swinging about home and the wrist's joints within their limits, noise on the efforts): `symkin identify
+    models/delta_wrist.yaml --method consistent` recovers the 43 base parameters within 5 standard deviations
+    (weighted least squares), and writes an identified.yaml with the legs' bodies and the wrist's links (the
+    consistent estimate among what the file holds) that the model reader takes."""
+    name, found, generated = derived
+    t, q, qd, qdd = excitation(6, seed=4)
+    home = generated.ik(np.array(generated.info.home)).joints
+    scale = np.array([0.25, 0.25, 0.25, 1.0, 1.0, 1.0])                  # the wrist's joints swing wider
+    centre = np.concatenate([home, np.zeros(3)])
+    q, qd, qdd = centre + scale * (q - 0.7), scale * qd, scale * qdd      # excitation() swings about 0.7 rad
+    p = generated.fk(q[:, :3]).position
+    Y, pi = generated.regressor(q[:, :3], p, q[:, 3:], qd[:, :3], qd[:, 3:], qdd[:, :3], qdd[:, 3:])
+    tau = np.einsum("kij,kj->ki", Y, pi) + np.random.default_rng(4).normal(0, NOISE, q.shape)
+    run = write_run(tmp_path / "run.csv", [c.name for c in generated.info.device_coordinates], t, q, tau, qd, qdd)
+    out, _ = _identify("delta_wrist", run, found, tmp_path)
+    model = load_model(out / "identified.yaml")
+    assert {b.link for b in model.parallel.wrist.bodies} == {"fork1", "fork2", "handle"}
+    assert "with the bodies of platform, actuated_link, rod, fork1, fork2, handle" in (out / "summary.txt").read_text()
 
 
 @pytest.mark.parametrize("derived", ["delta_wrist"], indirect=True)
