@@ -207,7 +207,8 @@ def _file_values(source, model, Y, K, pi, fit, found, standard) -> tuple[np.ndar
     base = found.values if standard is None else K @ standard.values
     estimate = (implied_parameters.nearest_held(K, base, pi[0], held) if standard is None else
                 held.fixed + held.T @ _consistent(model, Y, pi, fit, found, (held, standard)).values)
-    return estimate, identified & held.columns, _held_note(found, K @ estimate, base)
+    unheld = [name for name, held_here in zip(names, held.columns) if not held_here]
+    return estimate, identified & held.columns, _held_note(found, K @ estimate, base, unheld)
 
 
 def _updated_model(args: argparse.Namespace, source, model, file_values, found, standard, values: dict[str, float]):
@@ -234,13 +235,15 @@ def _updated_model(args: argparse.Namespace, source, model, file_values, found, 
                      f"({len(updated.identified)} standard parameters){also}{held_note}")
 
 
-def _held_note(found, written: np.ndarray, base: np.ndarray) -> str:
+def _held_note(found, written: np.ndarray, base: np.ndarray, unheld: list[str]) -> str:
     """How far the base parameters of what a parallel model's file holds lie from the estimate's, in standard
-    deviations (the file has one rotor for all actuators: their estimated differences are not in it)."""
+    deviations, and why (one rotor for all actuators: their estimated differences are not in it; ``unheld``: the
+    standard parameters the file does not declare, kept at the model's values)."""
     deviation = np.abs(written - base) / np.where(found.std > 0, found.std, np.inf)
     worst = int(np.argmax(deviation))
+    kept = f", and not {', '.join(unheld)} (kept at the model's values)" if unheld else ""
     return (f"; its base parameters within {deviation[worst]:.2g} standard deviations of the estimate's (most: "
-            f"{found.names[worst]}; the file holds one rotor for all actuators)")
+            f"{found.names[worst]}; the file holds one rotor for all actuators{kept})")
 
 
 def _report(args, model, data, found, pi_model, check, standard=None, model_line=None) -> dict[str, str | bytes]:

@@ -230,6 +230,18 @@ def test_a_parallel_models_file_takes_the_standard_parameters_it_holds(name, tmp
     np.testing.assert_array_less(np.abs(written - values), DYNAMICS * np.abs(values).max())
 
 
+def test_a_spherical_models_file_holds_no_rods():
+    """The Agile Eye's file declares no rods (its legs' last joints turn about axes through the centre): the rods'
+    columns are held at the model's values, which symkin identify's summary names."""
+    from symkin.analysis import implied_parameters
+
+    model = load_model(MODELS_DIR / "agile_eye.yaml")
+    names, pi = _standard_parameters(model)
+    held = implied_parameters.parallel_held(model, names, pi)
+    assert [name for name, declared in zip(names, held.columns) if not declared] == ["rod.mB", "rod.mC", "rod.dI"]
+    np.testing.assert_array_equal(held.fixed[~held.columns], pi[~held.columns])
+
+
 @pytest.mark.parametrize("derived", ["delta"], indirect=True)
 def test_what_a_parallel_models_file_holds_is_the_nearest_it_can(derived):
     """implied_parameters.nearest_held on the DELTA's file (one rotor for the actuators): base parameters it can
