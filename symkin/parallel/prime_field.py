@@ -202,8 +202,10 @@ class FormulaEvaluator:
         self.variables = sorted(used - parameters, key=str)
         #: Parameters in an angle (the Stewart platform's joint spacing): their value t stands for the angle
         #: 2 atan(t) in sines and cosines, and for itself elsewhere (an identity for every angle holds there too).
-        self.angle_parameters = sorted({x for coefficients, _ in self.angles.values() for x in coefficients}
-                                       & parameters, key=str)
+        in_angles = {x for coefficients, _ in self.angles.values() for x in coefficients}
+        self.angle_parameters = sorted(in_angles & parameters, key=str)
+        #: The variables inside some sine or cosine: each gets a point of the unit circle at a draw.
+        self.angle_variables = sorted(in_angles & set(self.variables), key=str)
         self.geometry = sorted((used & parameters) | set(self.angle_parameters), key=str)
         roots = {x for e in expressions for x in e.atoms(sympy.Pow)
                  if x.args[1].is_Rational and x.args[1].q == 2 and not x.args[0].is_number}
@@ -241,7 +243,7 @@ class FormulaEvaluator:
         has a point, half of the draws per leg) or with every input drawn."""
         for _ in range(CLOSURE_DRAWS):
             values: dict[sympy.Expr, int] = dict(geometry)
-            points = {x: field.circle_point(rng) for x in self.variables}
+            points = {x: field.circle_point(rng) for x in self.angle_variables}
             points.update({g: field.circle(geometry[g]) for g in self.angle_parameters})
             values.update({x: field.residue(rng) for x in self.variables})
             try:
@@ -331,9 +333,10 @@ class FormulaEvaluator:
             out = pow(base if n >= 0 else field.inverse(base), abs(n), P)
         elif expr.is_Pow and expr.args[1].is_Rational and expr.args[1].q == 2:
             base, k = expr.args[0], int(expr.args[1].p)
-            whole, half = self._value(field, base, values, memo), (k - 1) // 2  # base^(k/2) = base^((k-1)/2) sqrt(base)
-            root = field.square_root(base) if base.is_Rational and base > 0 else _state_root(P, whole)
-            out = pow(whole if half >= 0 else field.inverse(whole), abs(half), P) * root % P
+            if not (base.is_Rational and base > 0):  # a root of the state is the compiled programs' (ModularProgram)
+                raise DerivationError(f"{self.where}: {expr} is not a square root of a positive rational")
+            whole, half = field.rational(base), (k - 1) // 2  # base^(k/2) = base^((k-1)/2) sqrt(base)
+            out = pow(whole if half >= 0 else field.inverse(whole), abs(half), P) * field.square_root(base) % P
         else:
             raise DerivationError(f"{self.where}: the regressor holds {expr}, which the exact elimination cannot "
                                   "evaluate (a transcendental constant, or a root other than a square root)")
