@@ -27,7 +27,7 @@ from symkin.parallel.base_regressor import closure_rank  # noqa: E402
 from symkin.parallel.regressor import reduced_regressor  # noqa: E402
 from symkin.text_table import format_table  # noqa: E402
 
-MODELS = ("delta", "delta_wrist", "agile_eye", "pantograph")
+MODELS = ("delta", "delta_wrist", "agile_eye", "pantograph", "stewart")
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -381,7 +381,7 @@ void stewart_gravity_vector_batch(size_t n, const double *q, const double *p, co
  *   STEWART_DEFAULT_lead = 0.005.
  * Outputs:
  *   M[36]: 6 x 6, row-major; symmetric positive definite mass matrix.
- * Cost: 2234 operations.
+ * Cost: 2222 operations.
  */
 void stewart_mass_matrix(const double *q, const double *p, double r_b, double r_p, double gamma_b, double gamma_p, double m_platform, double r_disc, double t_disc, double m_strut, double J_rotor, double lead, double *M);
 
@@ -418,7 +418,7 @@ void stewart_mass_matrix_batch(size_t n, const double *q, const double *p, const
  *   STEWART_DEFAULT_m_strut = 0.5.
  * Outputs:
  *   V[6]: 6; Coriolis and centrifugal efforts [N*m (revolute), N (prismatic)].
- * Cost: 3252 operations.
+ * Cost: 3251 operations.
  */
 void stewart_coriolis_vector(const double *q, const double *p, const double *qd, double r_b, double r_p, double gamma_b, double gamma_p, double m_platform, double r_disc, double t_disc, double m_strut, double *V);
 
@@ -461,7 +461,7 @@ void stewart_coriolis_vector_batch(size_t n, const double *q, const double *p, c
  *   STEWART_DEFAULT_lead = 0.005.
  * Outputs:
  *   tau[6]: 6; actuator efforts [N*m (revolute), N (prismatic)].
- * Cost: 3355 operations.
+ * Cost: 3362 operations.
  */
 void stewart_inverse_dynamics(const double *q, const double *p, const double *qd, const double *qdd, double r_b, double r_p, double gamma_b, double gamma_p, double m_platform, double r_disc, double t_disc, double m_strut, double J_rotor, double lead, double *tau);
 
@@ -503,7 +503,7 @@ void stewart_inverse_dynamics_batch(size_t n, const double *q, const double *p, 
  *   STEWART_DEFAULT_lead = 0.005.
  * Outputs:
  *   qdd[6]: 6; actuator accelerations [rad/s^2 (revolute), m/s^2 (prismatic)].
- * Cost: 3905 operations.
+ * Cost: 3889 operations.
  */
 void stewart_forward_dynamics(const double *q, const double *p, const double *qd, const double *tau, double r_b, double r_p, double gamma_b, double gamma_p, double m_platform, double r_disc, double t_disc, double m_strut, double J_rotor, double lead, double *qdd);
 
@@ -549,7 +549,7 @@ void stewart_forward_dynamics_batch(size_t n, const double *q, const double *p, 
  *   Vx[6]: 6; task-space Coriolis and centrifugal force [N (position rows), N*m (angle
  *   rows)].
  *   Gx[6]: 6; task-space gravity force J^-T G [N (position rows), N*m (angle rows)].
- * Cost: 3537 operations.
+ * Cost: 3515 operations.
  */
 void stewart_operational_space(const double *q, const double *p, const double *qd, double r_b, double r_p, double gamma_b, double gamma_p, double m_platform, double r_disc, double t_disc, double m_strut, double J_rotor, double lead, double *Mx, double *Vx, double *Gx);
 
@@ -588,7 +588,7 @@ void stewart_operational_space_batch(size_t n, const double *q, const double *p,
  *   STEWART_DEFAULT_lead = 0.005.
  * Outputs:
  *   k[1]: scalar; kinetic energy of all bodies [J].
- * Cost: 1903 operations.
+ * Cost: 1891 operations.
  */
 void stewart_kinetic_energy(const double *q, const double *p, const double *qd, double r_b, double r_p, double gamma_b, double gamma_p, double m_platform, double r_disc, double t_disc, double m_strut, double J_rotor, double lead, double *k);
 

@@ -387,7 +387,7 @@ void ur10e_forward_dynamics_batch(size_t n, const double *q, const double *qd, c
  *   g: gravitational acceleration [m/s^2]; default UR10E_DEFAULT_g = 9.81.
  * Outputs:
  *   F[6]: 6; TCP force components [x, y, z, wx, wy, wz] [N, N*m].
- * Cost: 1242 operations.
+ * Cost: 1218 operations.
  */
 void ur10e_tcp_force(const double *q, const double *qd, const double *qdd, double a2, double a3, double d4, double d5, double d6, double m1, double m2, double m3, double m4, double m5, double m6, double g, double *F);
 
@@ -424,7 +424,7 @@ void ur10e_tcp_force_batch(size_t n, const double *q, const double *qd, const do
  *   Mx[36]: 6 x 6, row-major; operational-space mass matrix J^-T M J^-1.
  *   Vx[6]: 6; operational-space Coriolis and centrifugal force J^-T (V - M J^-1 dJ/dt qd).
  *   Gx[6]: 6; operational-space gravity force J^-T G.
- * Cost: 3717 operations.
+ * Cost: 3708 operations.
  */
 void ur10e_operational_space(const double *q, const double *qd, double a2, double a3, double d4, double d5, double d6, double m1, double m2, double m3, double m4, double m5, double m6, double g, double *Mx, double *Vx, double *Gx);
 

@@ -16,10 +16,16 @@ for their (large) expressions once, every factor is computed once, and CSE share
   - m <= 3: the adjugate, J^-T = cof(J) / det(J) - exact closed forms (the seed writes J^-T
     of the planar arm this way, sec. 4.4.1) that fail only where det J = 0, i.e. at the
     singularities where no J^-T exists;
-  - m > 3: QR of J^T by modified Gram-Schmidt with the right-hand sides carried along as
-    extra columns (Bjorck, *Numerical Methods for Least Squares Problems*, sec. 2.4.3):
-    the diagonal r_kk are the norms of the successive orthogonal residuals, nonzero for
-    every nonsingular J, and the augmented form is backward stable for the solution.
+  - m > 3: J^T = U T by modified Gram-Schmidt with the right-hand sides carried along as
+    extra columns (Bjorck, *Numerical Methods for Least Squares Problems*, sec. 2.4.3), in
+    its square-root-free form: the columns u_k of U are the successive orthogonal residuals
+    themselves, not normalized, and T is unit upper triangular with t_kj = u_k . a_j / d_k,
+    d_k = |u_k|^2 (the QR factors are Q = U D^-1/2, R = D^1/2 T).  d_k > 0 for every
+    nonsingular J, the augmented form is backward stable for the solution as the normalized
+    one is (normalizing scales each residual, which rounding sees only as relative errors of
+    the same order), and the formula stays rational in J's entries: no square roots for the
+    generated code to take and none for the exact elimination of the base parameters to
+    carry (:mod:`symkin.parallel.base_parameters`).
 
 All functions take and return SymEngine expressions.
 """
@@ -101,25 +107,23 @@ def _adjugate_transpose_solve(program: Program, J: Matrix, B: Matrix) -> Matrix:
 
 
 def _gram_schmidt_transpose_solve(program: Program, J: Matrix, B: Matrix) -> Matrix:
-    """Augmented modified Gram-Schmidt: J^T = Q R, then R X = Q^T B by back substitution."""
+    """Augmented square-root-free modified Gram-Schmidt: J^T = U T, then T X = D^-1 U^T B by back substitution
+    (T unit upper triangular, D = diag(|u_k|^2))."""
     m = len(J)
     a = [[J[j][i] for i in range(m)] for j in range(m)]  # a[k] = column k of J^T = row k of J
     b = [[B[i][c] for i in range(m)] for c in range(len(B[0]))]
-    R: Matrix = [[se.Integer(0)] * m for _ in range(m)]
-    qtb: Matrix = [[se.Integer(0)] * len(b) for _ in range(m)]
+    T: Matrix = [[se.Integer(0)] * m for _ in range(m)]
+    y: Matrix = [[se.Integer(0)] * len(b) for _ in range(m)]
     for k in range(m):
-        R[k][k] = program.let(se.sqrt(dot(a[k], a[k])))
-        inverse = program.let(1 / R[k][k])
-        unit = [program.let(v * inverse) for v in a[k]]
+        inverse = program.let(1 / program.let(dot(a[k], a[k])))
         for j in range(k + 1, m):
-            R[k][j] = program.let(dot(unit, a[j]))
-            a[j] = [program.let(a[j][i] - R[k][j] * unit[i]) for i in range(m)]
+            T[k][j] = program.let(dot(a[k], a[j]) * inverse)
+            a[j] = [program.let(a[j][i] - T[k][j] * a[k][i]) for i in range(m)]
         for c in range(len(b)):
-            qtb[k][c] = program.let(dot(unit, b[c]))
-            b[c] = [program.let(b[c][i] - qtb[k][c] * unit[i]) for i in range(m)]
+            y[k][c] = program.let(dot(a[k], b[c]) * inverse)
+            b[c] = [program.let(b[c][i] - y[k][c] * a[k][i]) for i in range(m)]
     X: Matrix = [[se.Integer(0)] * len(b) for _ in range(m)]
     for c in range(len(b)):
         for i in reversed(range(m)):
-            rest = sum((R[i][k] * X[k][c] for k in range(i + 1, m)), se.Integer(0))
-            X[i][c] = program.let((qtb[i][c] - rest) / R[i][i])
+            X[i][c] = program.let(y[i][c] - sum((T[i][k] * X[k][c] for k in range(i + 1, m)), se.Integer(0)))
     return X

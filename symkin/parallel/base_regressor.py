@@ -16,7 +16,7 @@ import sympy
 
 from symkin.dynamics.base_parameters import BaseParameters
 from symkin.errors import DerivationError
-from symkin.ir.evaluate import symengine_entries
+from symkin.ir.evaluate import lambdify_spec
 from symkin.ir.quantity import Deriving, quantity
 from symkin.ir.spec import FunctionSpec, OutputSpec
 from symkin.parallel.assembly import assembler
@@ -65,7 +65,9 @@ def closure_rank(d: Deriving, base: int) -> int:
     rows, columns = spec.outputs[0].shape
     rng = np.random.default_rng(0)
     centre = np.array([float(sympy.sympify(e).xreplace(values)) for e in home])
-    function = symengine_entries(spec, [s for i in spec.inputs if i.kind != "parameter" for s in i.symbols], values)
+    # lambdify keeps the definitions as temporaries; SymEngine's substitution into the entries would write out the
+    # Stewart platform's Gram-Schmidt solve (1 157 definitions) as trees too deep to evaluate
+    function = lambdify_spec(spec, [list(i.symbols) for i in spec.vector_inputs], "numpy", values)
     assemble = assembler(d)
     stacked = []
     for _ in range(CLOSURE_SAMPLES * columns // max(rows, 1) + 1):
@@ -74,9 +76,8 @@ def closure_rank(d: Deriving, base: int) -> int:
         if assembled is None:
             continue
         state = {"q": assembled[0], "p": p}
-        arguments = np.concatenate([state[i.name] if i.name in state else rng.normal(size=len(i.symbols))
-                                    for i in spec.inputs if i.kind != "parameter"])
-        stacked.append(function(arguments).reshape(rows, columns))
+        arguments = [state[i.name] if i.name in state else rng.normal(size=len(i.symbols)) for i in spec.vector_inputs]
+        stacked.append(np.asarray(function(*arguments), dtype=float).reshape(rows, columns))
     Y = np.concatenate(stacked) if stacked else np.zeros((0, columns))
     norms = np.linalg.norm(Y, axis=0)
     singular = np.linalg.svd(Y[:, norms > 0] / norms[norms > 0], compute_uv=False) if Y.size else np.zeros(0)

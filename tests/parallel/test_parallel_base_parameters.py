@@ -31,7 +31,7 @@ from tolerances import DYNAMICS, EPS
 TINY = np.finfo(float).tiny
 #: name: (task-space box half-width about home, wrist joints, further outputs)
 CASES = {"delta": (0.03, 0, ",fk,inverse_dynamics"), "delta_wrist": (0.03, 3, ",fk"), "agile_eye": (0.2, 0, ""),
-         "pantograph": (0.01, 0, "")}
+         "pantograph": (0.01, 0, ""), "stewart": (0.01, 0, "")}
 #: Noise on the simulated efforts (N m): large against rounding, small against the DELTA's (~0.05 N m).
 NOISE = 1e-4
 
@@ -419,9 +419,25 @@ def test_a_parallel_model_without_bodies_has_no_regressor_and_says_what_to_add()
             Derivation(model)[quantity]
 
 
-def test_what_the_exact_elimination_cannot_do_is_refused_with_the_reason():
-    """The Stewart platform's state over a prime field needs twelve square roots (six legs' lengths in the closure,
-    six in the formula), a point at 1 in 4096 draws: refused with the count instead of searching."""
-    with pytest.raises(DerivationError, match=r"stewart: base parameters: .* needs 6 square roots for the legs' "
-                                              r"closures and 6 in the formula"):
-        Derivation(load_model(MODELS_DIR / "stewart.yaml"))["base_parameters"]
+@pytest.mark.parametrize("derived", ["stewart"], indirect=True)
+def test_the_stewart_platforms_regrouping_is_its_mechanics(derived):
+    """The struts' platform ends (rod.mB) are six point masses fixed on the platform at the radius r_p, 3-fold
+    symmetric: they add 6 rod.mB to its mass, nothing to its first moment or products of inertia, and
+    6 r_p^2 rod.mB about its axis, 3 r_p^2 rod.mB about each axis in its plane (sum of sin^2 over the six angles: 3);
+    their base ends (rod.mC) sit on the fixed U joints and leave no column.  The formula's J_x^-T is rational
+    (square-root-free Gram-Schmidt), so only the legs' closures take square roots over the prime field."""
+    name, found, generated = derived
+    assert len(found.base) == 34
+    assert "rod.mC" not in found.base_names
+    assert found.equations()[:10] == (
+        "platform.mR = platform.m + 6 rod.mB", "platform.mx = platform.mx", "platform.my = platform.my",
+        "platform.mz = platform.mz", "platform.IxxR = platform.Ixx + 3*r_p**2 rod.mB", "platform.Ixy = platform.Ixy",
+        "platform.IyyR = platform.Iyy + 3*r_p**2 rod.mB", "platform.Ixz = platform.Ixz",
+        "platform.Iyz = platform.Iyz", "platform.IzzR = platform.Izz + 6*r_p**2 rod.mB")
+    assert found.geometry == ("r_p",)
+    moved = {"r_p": 0.08}
+    inputs = _inputs(generated, name, 8, 63, **moved)
+    full, base = generated.regressor(*inputs, **moved), generated.base_regressor(*inputs, **moved)
+    K = found.evaluate(moved)
+    scale = np.abs(base.Y_b) @ np.abs(K) + np.abs(full.Y).max(axis=-1, keepdims=True)  # as in the test above
+    np.testing.assert_array_less(np.abs(base.Y_b @ K - full.Y), DYNAMICS * scale + TINY)
