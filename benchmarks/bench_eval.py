@@ -56,7 +56,7 @@ from symkin.text_table import format_table  # noqa: E402
 from symkin.derivation import Derivation, emitted_quantities  # noqa: E402
 from symkin.errors import DerivationError  # noqa: E402
 from symkin.model import load_model  # noqa: E402
-from symkin.runtime.c_extension import ENTRY_VARIABLE  # noqa: E402
+from symkin.backends.c.loader_entry_points import ENTRY_VARIABLE  # noqa: E402
 
 MODEL = ROOT.parent / "models" / "ur10e.yaml"
 RING = 1024  # configurations cycled through by the single-call timings

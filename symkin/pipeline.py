@@ -135,6 +135,7 @@ def resolve_request(model: Model, only: str | Sequence[str] | None = None,
     else:  # "all", or neither the command line nor the scene names any
         fused = chosen_outputs
     if not problems:
+        problems += _reserved_word_problems(model, chosen_backends or model.scene.backends)
         problems += mass_matrix_problems(model, chosen_outputs)
     if problems:
         raise ModelError(problems)
@@ -153,6 +154,15 @@ def _describe_outputs(spec: FunctionSpec) -> str:
 
 def _quiet(_stage: str) -> None:
     pass
+
+
+def _reserved_word_problems(model: Model, backends: Sequence[str]) -> list[Problem]:
+    """The model's names that a backend's code cannot take (its reserved words), located in the model file.  The
+    reader refuses the shipped languages' words already; this covers every registered backend."""
+    return [model.problem(path, f"'{name}' is a reserved word of the {backend} backend's code",
+                          "rename it, e.g. 'theta1', 'l1' or 'link2'")
+            for backend in backends for words in [get_backend(backend).reserved_words()]
+            for name, path in model.declared_names.items() if name in words]
 
 
 def generate(model: Model, request: Request, progress: Progress = _quiet,

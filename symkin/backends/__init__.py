@@ -1,5 +1,5 @@
-"""Code generators, registered by name.  Adding a backend touches this dict (and, to load what it
-wrote, :data:`symkin.runtime.loader.LOADERS`)."""
+"""Code generators, registered by name.  Adding a backend is a folder ``symkin/backends/<name>/`` (its emitter,
+printer and loader, :class:`~symkin.backends.base.Backend`) and one line of this dict."""
 
 from __future__ import annotations
 

@@ -1,8 +1,10 @@
-"""Rendering of the jinja2 templates shipped as the package ``symkin.templates``.
+"""Rendering of the jinja2 templates shipped as the package ``symkin.templates``, or of another package's.
 
-The templates live in the repository's top-level ``templates/`` directory, which the
-wheel installs as ``symkin.templates``; they are read through importlib.resources, so
-symkin finds them whether it runs from a checkout, an editable install or a wheel.
+The shipped backends' templates live in the repository's top-level ``templates/`` directory
+(``templates/<backend>/``), which the wheel installs as ``symkin.templates``; they are read
+through importlib.resources, so symkin finds them whether it runs from a checkout, an editable
+install or a wheel.  A backend added outside symkin keeps its templates in its own folder and
+names that package (``render_from("my_backend.templates", template, ...)``).
 """
 
 from __future__ import annotations
@@ -16,17 +18,24 @@ from symkin._version import __version__
 from symkin.backends.comments import docstring_lines
 
 
-def _load(name: str) -> str:
-    try:
-        return resources.files("symkin.templates").joinpath(name).read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise jinja2.TemplateNotFound(name) from None
+#: The package of the shipped templates (the repository's templates/).
+SHIPPED = "symkin.templates"
 
 
-def _environment(autoescape: bool) -> jinja2.Environment:
-    """A jinja2 environment over the shipped templates: strict about undefined names, blocks trimmed."""
+def _loader(package: str) -> jinja2.FunctionLoader:
+    def load(name: str) -> str:
+        try:
+            return resources.files(package).joinpath(name).read_text(encoding="utf-8")
+        except FileNotFoundError:
+            raise jinja2.TemplateNotFound(name) from None
+
+    return jinja2.FunctionLoader(load)
+
+
+def _environment(autoescape: bool, package: str = SHIPPED) -> jinja2.Environment:
+    """A jinja2 environment over the templates of ``package``: strict about undefined names, blocks trimmed."""
     return jinja2.Environment(
-        loader=jinja2.FunctionLoader(_load),
+        loader=_loader(package),
         undefined=jinja2.StrictUndefined,
         trim_blocks=True,
         lstrip_blocks=True,
@@ -35,11 +44,11 @@ def _environment(autoescape: bool) -> jinja2.Environment:
     )
 
 
-@lru_cache(maxsize=1)
-def environment() -> jinja2.Environment:
-    """The jinja2 environment of code generation: no autoescaping (code, not HTML: free text is made
-    inert by :mod:`symkin.backends.comments`, also as the filter ``docstring_lines``)."""
-    env = _environment(autoescape=False)
+@lru_cache(maxsize=None)
+def environment(package: str = SHIPPED) -> jinja2.Environment:
+    """The jinja2 environment of code generation over ``package``'s templates: no autoescaping (code, not HTML:
+    free text is made inert by :mod:`symkin.backends.comments`, also as the filter ``docstring_lines``)."""
+    env = _environment(autoescape=False, package=package)
     env.filters["docstring_lines"] = docstring_lines
     return env
 
@@ -62,8 +71,13 @@ def provenance(template: str, model_name: str, model_hash: str) -> list[str]:
 
 
 def render(template: str, **context: object) -> str:
-    """Render ``template`` (a path under templates/) with ``context``."""
-    return environment().get_template(template).render(**context)
+    """Render ``template`` (a path under the shipped templates/) with ``context``."""
+    return render_from(SHIPPED, template, **context)
+
+
+def render_from(package: str, template: str, **context: object) -> str:
+    """Render ``template`` (a path under the package ``package``: a backend's own folder) with ``context``."""
+    return environment(package).get_template(template).render(**context)
 
 
 def render_html(template: str, **context: object) -> str:

@@ -132,6 +132,7 @@ def build_model(doc: Document, stem: str, allow_nonphysical: bool = False) -> Mo
         scene=scene,
         parallel=parallel,
         locations=dict(doc.marks),
+        declared_names=dict(r.declared),
     )
 
 

@@ -4,6 +4,12 @@ Names become Python and C identifiers in generated code, keys of manifests and p
 output names such as ``base_T_link3``; so they are plain identifiers that start with a
 letter (leading underscores are kept for generated temporaries) and are none of the
 keywords and reserved words of the emitted languages.
+
+The words of the languages symkin ships backends for are here, below the backends: the reader
+refuses them with the file and line before any backend is chosen, and robot files' names are
+renamed around them (:func:`code_names`).  Each backend declares the words its code cannot take
+(:class:`symkin.backends.base.Backend`; the shipped ones these sets), which ``symkin derive``
+checks for a backend added later.
 """
 
 from __future__ import annotations
@@ -16,14 +22,16 @@ from symkin.model.expressions import RESERVED_NAMES
 
 IDENTIFIER = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,63}$")
 
-_C_KEYWORDS = frozenset(
+PYTHON_KEYWORDS = frozenset(keyword.kwlist) | frozenset(keyword.softkwlist)
+
+C_KEYWORDS = frozenset(
     "auto break case char const continue default do double else enum extern float for goto if "
     "inline int long register restrict return short signed sizeof static struct switch typedef "
     "union unsigned void volatile while _Bool _Complex _Imaginary bool true false NULL".split()
 )
 
 #: ECMAScript 2023 reserved words, strict-mode ones and the globals the JavaScript backend uses.
-_JS_KEYWORDS = frozenset(
+JS_KEYWORDS = frozenset(
     "await break case catch class const continue debugger default delete do else enum export extends "
     "false finally for function if import in instanceof new null return super switch this throw true try "
     "typeof var void while with yield let static implements interface package private protected public "
@@ -37,7 +45,7 @@ _GENERATED_CODE_WORDS = frozenset(
 )
 
 RESERVED_IDENTIFIERS = (
-    frozenset(keyword.kwlist) | frozenset(keyword.softkwlist) | _C_KEYWORDS | _JS_KEYWORDS | _GENERATED_CODE_WORDS | RESERVED_NAMES
+    PYTHON_KEYWORDS | C_KEYWORDS | JS_KEYWORDS | _GENERATED_CODE_WORDS | RESERVED_NAMES
 )
 
 

@@ -57,6 +57,8 @@ class Reader:
         self.allow_nonphysical = False
         #: Located notes on what the reading decided (Model.notes).
         self.notes: list[str] = []
+        #: Every name the file gives (a parameter, joint, link, leg...) -> where, the first time (Model.declared_names).
+        self.declared: dict[str, KeyPath] = {}
 
     def note(self, path: KeyPath, message: str) -> None:
         """Record ``message`` about the element at ``path``, located by line and key but not by the file's
@@ -107,6 +109,7 @@ class Reader:
         if problem:
             self.fail(path, problem, "rename it, e.g. 'theta1', 'l1' or 'link2'")
             return None
+        self.declared.setdefault(value, path)
         return value
 
     def expr(self, path: KeyPath, value: Any, names: dict[str, sympy.Expr] | None = None) -> sympy.Expr | None:

@@ -596,6 +596,9 @@ class Model:
     source_names: dict = field(default_factory=dict, compare=False)  # a dict: out of eq and hash
     #: key path -> (line, column) in the model file, for located messages of later stages.
     locations: dict = field(default_factory=dict, compare=False, repr=False)
+    #: every name the file gives (parameters, joints, links, legs...) -> its key path, for a backend's reserved
+    #: words (:func:`symkin.pipeline.resolve_request`): they become identifiers of the generated code.
+    declared_names: dict = field(default_factory=dict, compare=False, repr=False)
 
     def problem(self, path: tuple, message: str, fix: str) -> Problem:
         """A located :class:`~symkin.errors.Problem` about the element at key ``path``."""

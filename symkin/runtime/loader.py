@@ -7,40 +7,15 @@ generated code pays for numpy (and the backend it picks) alone.
 from __future__ import annotations
 
 import functools
+import importlib
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any, TypeVar, overload
 
+from symkin.backends import BACKENDS
 from symkin.errors import GeneratedCodeError
 from symkin.manifest import MANIFEST_NAME, read_manifest
 from symkin.runtime.info import ModelInfo
-
-
-def _numpy(directory: Path, info: ModelInfo) -> dict[str, Callable[..., Any]]:
-    from symkin.runtime.numpy_module import import_module
-
-    return import_module(directory, info)
-
-
-def _c(directory: Path, info: ModelInfo) -> dict[str, Callable[..., Any]]:
-    from symkin.runtime.c_library import bind_library
-
-    return bind_library(directory, info)
-
-
-def _casadi(directory: Path, info: ModelInfo) -> dict[str, Callable[..., Any]]:
-    from symkin.runtime.casadi_functions import bind_functions  # imports casadi: only when asked for
-
-    return bind_functions(directory, info)
-
-
-#: How the code of each backend (:data:`symkin.backends.BACKENDS`) is loaded: loader(model directory, the model's
-#: ModelInfo, whose ``functions`` are the typed records of the manifest) -> {function name: Python function}.
-LOADERS: dict[str, Callable[[Path, ModelInfo], dict[str, Callable[..., Any]]]] = {
-    "numpy": _numpy,
-    "c": _c,
-    "casadi": _casadi,
-}
 
 
 class LoadedModel:
@@ -137,7 +112,9 @@ def load(path: str | Path, backend: str = "numpy", *, model_class: type[LoadedMo
     if backend not in emitted:
         raise GeneratedCodeError(f"{directory}: no '{backend}' code was emitted (emitted: {', '.join(emitted)}); "
                                  f"derive again with --backend {backend}")
-    if backend not in LOADERS:
-        raise GeneratedCodeError(f"this symkin cannot load '{backend}' code (known: {', '.join(LOADERS)})")
-    functions = LOADERS[backend](directory, info)
+    loaders = {name: b.loader for name, b in BACKENDS.items() if b.loader is not None}
+    if backend not in loaders:
+        raise GeneratedCodeError(f"this symkin cannot load '{backend}' code (known: {', '.join(loaders)})")
+    # the backend names its loader, a module of the runtime layer (casadi, a compiler), imported only now
+    functions = importlib.import_module(loaders[backend]).load(directory, info)
     return model_class(directory, manifest, backend, functions, info=info)

@@ -1,4 +1,4 @@
-"""Issue 34: the compiled CPython entry points of the C backend (symkin.runtime.c_extension).
+"""Issue 34: the compiled CPython entry points of the C backend (symkin.backends.c.loader_entry_points).
 
 References: the ctypes binding of the same library (SYMKIN_C_ENTRY=ctypes), whose values the other tests
 check against the numpy backend and the references: the compiled functions return the same bits for every
@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from conftest import GENERATED_DIR
-from symkin.runtime import c_extension
+from symkin.backends.c import loader_entry_points
 from symkin.runtime.loader import load
 
 EXAMPLES = sorted(p.name for p in GENERATED_DIR.iterdir() if (p / "manifest.json").exists())
@@ -27,16 +27,16 @@ EXAMPLES = sorted(p.name for p in GENERATED_DIR.iterdir() if (p / "manifest.json
 @pytest.fixture(autouse=True)
 def compiled_entry_points(monkeypatch):
     """The suite loads the ctypes functions (conftest: test time); here the C backend's own default."""
-    monkeypatch.delenv(c_extension.ENTRY_VARIABLE, raising=False)
+    monkeypatch.delenv(loader_entry_points.ENTRY_VARIABLE, raising=False)
 
 
 @pytest.fixture(scope="module", params=EXAMPLES)
 def pair(request):
     """(compiled, ctypes) bindings of one example model."""
     with pytest.MonkeyPatch.context() as patch:
-        patch.setenv(c_extension.ENTRY_VARIABLE, "ctypes")
+        patch.setenv(loader_entry_points.ENTRY_VARIABLE, "ctypes")
         plain = load(GENERATED_DIR / request.param, "c")
-        patch.delenv(c_extension.ENTRY_VARIABLE)
+        patch.delenv(loader_entry_points.ENTRY_VARIABLE)
         compiled = load(GENERATED_DIR / request.param, "c")
     return compiled, plain
 
@@ -99,7 +99,7 @@ def _same_outcome(a, b) -> bool:
 def test_any_other_call_behaves_as_the_ctypes_function_and_never_crashes(model):
     compiled = load(GENERATED_DIR / model, "c")
     with pytest.MonkeyPatch.context() as patch:
-        patch.setenv(c_extension.ENTRY_VARIABLE, "ctypes")
+        patch.setenv(loader_entry_points.ENTRY_VARIABLE, "ctypes")
         plain = load(GENERATED_DIR / model, "c")
     rng = np.random.default_rng(7)
     q = rng.uniform(-1, 1, 6)
@@ -154,12 +154,12 @@ def test_calls_hold_no_references():
 
 def test_text_from_the_model_cannot_leave_the_c_string():
     hostile = 'a"b\\c??=d\n*/ #include <stdio.h>\x00é'
-    literal = c_extension.c_string(hostile)
+    literal = loader_entry_points.c_string(hostile)
     body = literal[1:-1]
     assert '"' not in body.replace('\\042', '')
     assert all(32 <= ord(c) < 127 for c in literal)
     assert "??" not in literal
-    assert c_extension.c_double(0.1) == "0x1.999999999999ap-4"
+    assert loader_entry_points.c_double(0.1) == "0x1.999999999999ap-4"
 
 
 def test_a_cached_extension_loads_without_sympy_or_jinja2_and_cache_list_names_its_model(tmp_path):

@@ -7,7 +7,9 @@ symkin module it loads, including the parent packages whose ``__init__`` runs fi
 (the api layer; only as a parent package run first it does not count).  A module may import from its
 own layer or from a lower one, never from a higher one; and no set of modules may import each
 other in a circle, however indirectly.  The layers, lowest first, are LAYERS below, which
-docs/architecture.md renders.
+docs/architecture.md renders.  A part is a top-level module or package of symkin, or a pattern of dotted
+names: a backend's folder holds its loader (``backends/*/loader*``), which belongs to the runtime layer, above
+the emitter beside it; the backend names it by a string that the runtime imports.
 
 ``KNOWN_UPWARD`` and ``KNOWN_CYCLES`` list the exceptions that exist today (a ratchet): the test
 fails on any new one, and on a listed one that has gone, so that each fix shortens the list.
@@ -16,6 +18,7 @@ fails on any new one, and on a listed one that has gone, so that each fix shorte
 from __future__ import annotations
 
 import ast
+import fnmatch
 from collections import defaultdict
 from pathlib import Path
 
@@ -30,12 +33,14 @@ LAYERS = (
     ("derivation", {"derivation", "kinematics", "dynamics", "parallel"}),
     ("optimize", {"optimize"}),
     ("backends", {"backends", "manifest", "manifest_schema", "pipeline", "pipeline_cache"}),
-    ("runtime", {"runtime"}),
+    ("runtime", {"runtime", "backends.*.loader*"}),
     ("analyses", {"ik", "analysis", "design", "simulation", "stability", "viewer"}),
     ("api", {"api"}),
     ("cli", {"cli", "__main__"}),
 )
-RANK = {part: rank for rank, (_name, parts) in enumerate(LAYERS) for part in parts}
+RANK = {part: rank for rank, (_name, parts) in enumerate(LAYERS) for part in parts if "*" not in part}
+#: The parts that are patterns of dotted names below symkin (a backend's loader), before the top-level parts.
+PATTERNS = {part: rank for rank, (_name, parts) in enumerate(LAYERS) for part in parts if "*" in part}
 #: What each layer holds, for the table docs/architecture.md renders from LAYERS (checked below).
 ROLES = {
     "foundation": "errors, atomic writes, the version, expression graphs, the SymEngine bridge, text tables, "
@@ -46,7 +51,7 @@ ROLES = {
     "derivation": "the derivation graph and its catalog; serial kinematics and dynamics; parallel mechanisms",
     "optimize": "expression optimization",
     "backends": "the emitters, the manifest and its schema, the pipeline and its derivation cache",
-    "runtime": "loaders, bindings, Newton solvers for parallel mechanisms",
+    "runtime": "each backend's loader, the bindings they share, Newton solvers for parallel mechanisms",
     "analyses": "inverse kinematics, analyses, design, simulation, numerical stability, the viewer",
     "api": "the public functions, and the `symkin` package facade",
     "cli": "the commands",
@@ -57,6 +62,8 @@ ARCHITECTURE = PACKAGE.parent / "docs" / "architecture.md"
 def layer_table() -> list[str]:
     """The rows of docs/architecture.md's layer table, rendered from LAYERS (packages as `name/`)."""
     def shown(part: str) -> str:
+        if "*" in part:
+            return f"`{part.replace('.', '/')}`"
         return f"`{part}/`" if (PACKAGE / part).is_dir() else f"`{part}`"
     rows = ["| layer | packages and modules | what it holds |", "|---|---|---|"]
     for name, parts in LAYERS:
@@ -148,6 +155,10 @@ def import_graph(package: Path = PACKAGE, *, annotations: bool = True) -> dict[s
 def layer_of(module: str) -> int:
     """The layer of a module; the root package (the public facade: load, derive) is the api's."""
     parts = module.split(".")
+    inner = ".".join(parts[1:])
+    for pattern, rank in PATTERNS.items():
+        if fnmatch.fnmatchcase(inner, pattern):
+            return rank
     return RANK[parts[1] if len(parts) > 1 else "api"]
 
 

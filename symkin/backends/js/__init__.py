@@ -16,8 +16,15 @@ class JavascriptBackend:
     """Emits ``<model>.js``: one function per generated function, single configuration, in doubles."""
 
     name = "js"
+    loader: str | None = None  # the script runs in a browser (symkin view) or Node.js, not in Python
 
     def emit(self, code: ModelCode) -> dict[str, str | bytes]:
         from symkin.backends.js.emit import emit_script
 
         return emit_script(code)
+
+    def reserved_words(self) -> frozenset[str]:
+        """ECMAScript's reserved words (the model reader refuses them already: :mod:`symkin.model.names`)."""
+        from symkin.model.names import JS_KEYWORDS
+
+        return JS_KEYWORDS

@@ -113,7 +113,7 @@ def _kernels(function: casadi.Function, record: Function) -> tuple[Kernel, Singl
     return kernel, one
 
 
-def bind_functions(directory: Path, info: ModelInfo) -> dict[str, Any]:
+def load(directory: Path, info: ModelInfo) -> dict[str, Any]:
     """Load every function of the manifest from its ``.casadi`` file and wrap it.
 
     Raises:

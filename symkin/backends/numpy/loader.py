@@ -12,7 +12,7 @@ from symkin.errors import GeneratedCodeError
 from symkin.runtime.info import ModelInfo
 
 
-def import_module(directory: Path, info: ModelInfo) -> dict[str, Callable[..., Any]]:
+def load(directory: Path, info: ModelInfo) -> dict[str, Callable[..., Any]]:
     """The model's functions from ``<model>.py``, imported under a name unique to the module's bytes.
 
     The model hash names the mechanism, not what was emitted from it (two scenes of one model give

@@ -23,7 +23,7 @@ from symkin.backends.c.build import shared_library
 from symkin.backends.naming import c_symbol
 from symkin.errors import GeneratedCodeError
 from symkin.runtime.info import Function, ModelInfo
-from symkin.runtime.c_extension import entry_points
+from symkin.backends.c.loader_entry_points import entry_points
 from symkin.runtime.packed import single_kernel
 from symkin.runtime.wrappers import Kernel, SingleKernel, wrap_function
 
@@ -110,9 +110,9 @@ def _kernels(library: ctypes.CDLL, model: str, record: Function) -> tuple[Kernel
     return kernel, one
 
 
-def bind_library(directory: Path, info: ModelInfo) -> dict[str, Any]:
+def load(directory: Path, info: ModelInfo) -> dict[str, Any]:
     """Compile (or find in the cache) the model's C code and bind every function of the manifest: the compiled
-    CPython entry points (:mod:`symkin.runtime.c_extension`) over the ctypes functions, or those alone."""
+    CPython entry points (:mod:`symkin.backends.c.loader_entry_points`) over the ctypes functions, or those alone."""
     source, header = _files(directory, info.backend_files.get("c", ()))
     path = shared_library(source, header)
     library = ctypes.CDLL(str(path))
