@@ -2,9 +2,11 @@
 
 A run on a parallel device records its actuators' angles (and a hybrid device's wrist joints), while the
 parallel regressors take the platform's pose as well, tau = Y(q, p, qd, qdd) pi (the consistent pair of
-:mod:`symkin.parallel.regressor`).  Each sample's pose is the forward kinematics of its actuators, p = fk(q)
-(the generated closed form; the same assembly the model's home pose is in); a sample where the legs do not
-assemble is refused with its row.  The device's coordinates are the legs' actuators, then a hybrid device's
+:mod:`symkin.parallel.regressor`).  Each sample's pose is the forward kinematics of its actuators, p = fk(q):
+the generated closed form (the same assembly the model's home pose is in), or for a platform without one (the
+Stewart-Gough platform) Newton's method on the generated leg equations (:func:`symkin.runtime.parallel.solve_fk`)
+from the home pose, a sample that does not converge from there continued from the previous sample's pose (the
+run is continuous); a sample where the legs do not assemble is refused with its row.  The device's coordinates are the legs' actuators, then a hybrid device's
 wrist joints, as the regressors' rows.
 """
 
@@ -42,7 +44,10 @@ class DeviceRegressors:
         if self._last_pose is not None and self._last_pose[0] is q:
             return self._last_pose[1]
         with np.errstate(invalid="ignore"):  # NaN where the legs do not assemble: refused below with the row
-            p = np.asarray(self.model.fk(q[..., :self.legs])[0], dtype=float)
+            if "fk" in self.model.info.functions:
+                p = np.asarray(self.model.fk(q[..., :self.legs])[0], dtype=float)
+            else:
+                p = self._solved_poses(q[..., :self.legs])
         bad = ~np.all(np.isfinite(p), axis=-1)
         if np.any(bad):
             row = int(np.argmax(bad))
@@ -51,6 +56,22 @@ class DeviceRegressors:
                             "angles' zero and sign against the model's")
         self._last_pose = (q, p)
         return p
+
+    def _solved_poses(self, q: np.ndarray) -> np.ndarray:
+        """p with f(q, p) = 0 for every sample (N, task) by Newton from the home pose; the samples that do not
+        converge from there start again from the previous sample's pose, pass after pass while some do (NaN
+        where none does)."""
+        from symkin.runtime.parallel import solve_fk
+
+        p = np.array(solve_fk(self.model, q).solution)
+        while True:
+            failed = np.flatnonzero(~np.all(np.isfinite(p), axis=-1))
+            failed = failed[(failed > 0) & np.all(np.isfinite(p[failed - 1]), axis=-1)]
+            if not failed.size:
+                return p
+            p[failed] = solve_fk(self.model, q[failed], p[failed - 1]).solution
+            if not np.any(np.all(np.isfinite(p[failed]), axis=-1)):
+                return p
 
     def _arguments(self, function: str, q: np.ndarray, *rates: np.ndarray) -> list[np.ndarray]:
         """The vector inputs of ``function`` in its order: q, p, qw and the rates of legs and wrist."""

@@ -9,7 +9,6 @@ from pathlib import Path
 
 import numpy as np
 
-from symkin.analysis.mechanism import MechanismKind
 from symkin.cli import analysis_args, model_files
 from symkin.cli.progress import Progress
 
@@ -23,7 +22,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "condition number of the stacked base regressor over one period (CasADi and IPOPT). Writes "
                     "excitation.csv (t, q_, qd_, qdd_ of --periods periods at --rate), excitation.json (the "
                     "coefficients and the condition numbers of the start and of the result), summary.txt and "
-                    "excitation.png into the output directory (replaced as a whole).",
+                    "excitation.png into the output directory (replaced as a whole). A parallel platform without a "
+                    "closed-form fk (the Stewart-Gough) moves its pose in such series instead, its actuators "
+                    "following q = ik(p).",
         epilog="e.g. symkin excite models/planar_2r.yaml --max-velocity 2 --max-acceleration 10 --period 4")
     analysis_args.add_model_arguments(p, backend=False)
     p.add_argument("--period", type=float, default=10.0, metavar="T", help="period in s (default: %(default)s)")
@@ -54,9 +55,8 @@ def run(args: argparse.Namespace) -> int:
                 raise ValueError(f"--{name.replace('_', '-')} must be positive")
         if args.harmonics < 1 or args.periods < 1:
             raise ValueError("--harmonics and --periods must be at least 1")
-        model = model_files.generated_model(args.model, "casadi", {
-            kind: ("base_regressor",) if kind is MechanismKind.SERIAL else ("base_regressor", "fk")
-            for kind in MechanismKind})
+        # a parallel model's run: its actuators' series through fk, or its pose's through ik without a closed-form fk
+        model = model_files.generated_model(args.model, "casadi", ("base_regressor",), optional=("fk", "ik"))
         values = analysis_args.parse_assignments(args.assignments)
         model = model.bind(**values) if values else model
         joints = model.info.device_coordinates   # a hybrid device's wrist joints after the legs' actuators
@@ -80,18 +80,21 @@ def run(args: argparse.Namespace) -> int:
 
 def _files(args: argparse.Namespace, model, found) -> dict[str, str | bytes]:
     names = [c.name for c in model.info.device_coordinates]
+    series = list(found.coordinates)      # the joints', or a platform's task coordinates' without a closed-form fk
     t = np.arange(int(round(args.periods * found.period * args.rate))) / args.rate
     q, qd, qdd = found.states(t)
     header = ",".join(["t", *(f"{g}_{n}" for g in ("q", "qd", "qdd") for n in names)])
     rows = [",".join(repr(float(v)) for v in row) for row in np.column_stack([t, q, qd, qdd])]
     record = {"model": model.name, "period": found.period, "harmonics": found.harmonics,
-              "offsets": dict(zip(names, map(float, found.offsets))),
-              "a": {n: list(map(float, row)) for n, row in zip(names, found.a)},
-              "b": {n: list(map(float, row)) for n, row in zip(names, found.b)},
+              "series_of": "joints" if found.joints is None else "task coordinates (the joints: q = ik(p))",
+              "offsets": dict(zip(series, map(float, found.offsets))),
+              "a": {n: list(map(float, row)) for n, row in zip(series, found.a)},
+              "b": {n: list(map(float, row)) for n, row in zip(series, found.b)},
               "condition_start": _finite(found.condition_start), "condition": _finite(found.condition),
               "samples": found.samples,
               "ipopt_status": found.status}
-    summary = (f"{model.name}: excitation of period {found.period:g} s, {found.harmonics} harmonics per joint: "
+    per = "joint" if found.joints is None else "task coordinate"
+    summary = (f"{model.name}: excitation of period {found.period:g} s, {found.harmonics} harmonics per {per}: "
                f"cond(W) {found.condition_start:.4g} at the start -> {found.condition:.4g} (columns scaled, "
                f"{found.samples} samples; IPOPT: {found.status})\n"
                f"  run it on the device at {args.rate:g} Hz ({len(t)} samples in excitation.csv), record tau_<joint>, "

@@ -10,7 +10,6 @@ from pathlib import Path
 
 import numpy as np
 
-from symkin.analysis.mechanism import MechanismKind
 from symkin.cli import analysis_args, model_files
 from symkin.cli.progress import Progress
 
@@ -18,6 +17,8 @@ from symkin.cli.progress import Progress
 #: file), and with --method energy (the energy regressor too).
 IDENTIFY_OUTPUTS = ("base_regressor", "regressor")
 ENERGY_OUTPUTS = (*IDENTIFY_OUTPUTS, "energy_regressor")
+#: What a parallel model's poses come from: its closed-form fk where it has one, else Newton on its leg equations.
+POSE_OUTPUTS = ("fk", "constraints", "constraint_jacobians")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -34,7 +35,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "(replaced as a whole), and given a model file identified.yaml, the model with the identified "
                     "values (given a URDF or xacro file also identified.urdf; of a parallel model, the values its "
                     "file holds: one rotor for all actuators). A parallel model's run records its actuators (and a "
-                    "hybrid device's wrist joints): each sample's platform pose is fk(q). Bad data are refused with the file, row and column, and nothing is written.",
+                    "hybrid device's wrist joints): each sample's platform pose is fk(q) (without a closed form, as the "
+                    "Stewart-Gough platform's, by Newton's method from the home pose). Bad data are refused with the file, row and column, and nothing is written.",
         epilog="e.g. symkin identify models/planar_2r.yaml run.csv --method wls -o out/identify/planar_2r")
     analysis_args.add_model_arguments(p)
     p.add_argument("data", metavar="DATA.csv", help="the measured run")
@@ -69,8 +71,7 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError(f"--window must be a positive number of seconds, got {args.window:g}")
         source = _model_file(args.model)
         outputs = ENERGY_OUTPUTS if args.method == "energy" else IDENTIFY_OUTPUTS
-        model = model_files.generated_model(args.model, args.backend, {
-            kind: outputs if kind is MechanismKind.SERIAL else (*outputs, "fk") for kind in MechanismKind})
+        model = model_files.generated_model(args.model, args.backend, outputs, optional=POSE_OUTPUTS)
         values = analysis_args.parse_assignments(args.assignments)
         model = model.bind(**values) if values else model
         parallel = model.info.is_parallel
@@ -137,14 +138,18 @@ def _model_file(path: str):
 
 
 def _device_regressors(args: argparse.Namespace, model):
-    """A parallel model's regressors taking the device's joints (the platform's pose from fk per sample).
+    """A parallel model's regressors taking the device's joints (the platform's pose from fk per sample, or from
+    Newton's method on the leg equations).
 
     Raises:
-        ValueError: a generated directory without the base regressor or fk.
+        ValueError: a generated directory without the base regressor, or without both fk and the leg equations.
     """
     from symkin.analysis.device_regressors import DeviceRegressors
 
-    missing = [f for f in ("base_regressor", "fk") if f not in model.info.functions]
+    functions = model.info.functions
+    missing = [f for f in ("base_regressor",) if f not in functions]
+    if "fk" not in functions and not {"constraints", "constraint_jacobians"} <= set(functions):
+        missing.append("fk (or constraints and constraint_jacobians, for Newton's method)")
     if missing:
         raise ValueError(f"{args.model}: a parallel model's identification needs {' and '.join(missing)}; derive "
                          "them (symkin derive --only base_regressor,regressor,fk) or give the model file")

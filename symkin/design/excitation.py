@@ -22,11 +22,15 @@ velocity and acceleration limits at every sample (and checked on a grid ten time
 of the Coulomb friction (sign(qd)) are piecewise constant: they count in W but give no gradient.  A parallel
 model's base regressor takes the platform's pose: p = fk(q) along the motion (its CasADi fk composed), whose
 legs must assemble at every constraint point (fk's margin >= 0); a hybrid device's wrist joints follow series of
-their own after the legs' actuators (the device's joints, as a run records them).
+their own after the legs' actuators (the device's joints, as a run records them).  A platform without a closed-form
+fk (the Stewart-Gough platform) moves its pose p instead: the series are the task coordinates', the actuators
+follow q = ik(p) with qd = (dq/dp) pd and qdd = (dqd/dp) pd + (dqd/dpd) pdd (CasADi's forward derivatives of the
+generated ik), and the actuators' limits and the legs' assembly (ik's margin >= 0) hold at the constraint points.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -47,16 +51,19 @@ CHECK_DENSITY = 10
 
 @dataclass(frozen=True)
 class Excitation:
-    """A finite Fourier series per joint and how well it excites the base parameters.
+    """A finite Fourier series per joint (or per task coordinate) and how well it excites the base parameters.
 
     Attributes:
         period: T (s).
         harmonics: L.
-        offsets: q0 (n,).
+        offsets: q0 (n,), of the series' coordinates.
         a, b: the coefficients (n, L).
         condition_start, condition: cond(W S) of the start and of the optimum, at the samples.
         samples: K, the samples of one period the criterion was evaluated at.
         status: IPOPT's return status.
+        coordinates: the series' coordinates: the device's joints, or a platform's task coordinates.
+        joints: None when the series are the joints', else the map (p, pd, pdd) -> (q, qd, qdd) of the actuators
+            (rows: samples).
     """
 
     period: float
@@ -68,10 +75,20 @@ class Excitation:
     condition: float
     samples: int
     status: str
+    coordinates: tuple[str, ...] = ()
+    joints: Callable[..., tuple[np.ndarray, ...]] | None = None
+
+    def series(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The series' values and first two derivatives (len(t), n) at the times ``t``."""
+        return _series(np, self.offsets, self.a, self.b, self.period, np.asarray(t, dtype=np.float64))
 
     def states(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """q, qd, qdd (len(t), n) at the times ``t``."""
-        return _series(np, self.offsets, self.a, self.b, self.period, np.asarray(t, dtype=np.float64))
+        """The device's joints q, qd, qdd (len(t), joints) at the times ``t``."""
+        series = self.series(t)
+        if self.joints is None:
+            return series
+        q, qd, qdd, _margin = self.joints(*series)
+        return q, qd, qdd
 
 
 def _series(lib: Any, offsets: Any, a: Any, b: Any, period: float, t: np.ndarray) -> tuple[Any, Any, Any]:
@@ -114,38 +131,49 @@ def optimize_excitation(model: GeneratedModel, *, period: float = 10.0, harmonic
              max_velocity: float | None = None, max_acceleration: float | None = None, seed: int = 0,
              limits: dict[str, tuple[float, float]] | None = None, max_iterations: int = 200) -> Excitation:
     """The excitation trajectory of the module docstring for ``model`` (loaded with ``backend="casadi"``, with
-    ``base_regressor``).
+    ``base_regressor``; a parallel model with ``fk``, or without a closed form with ``ik``).
 
     Raises:
         ValueError: missing limits, or a start IPOPT cannot leave (see the message).
     """
     function = casadi_function(model, "base_regressor")
     lower, upper, speeds, accelerations = _limits(model, max_velocity, max_acceleration, limits or {})
-    n = len(lower)
+    joints = _task_to_joints(model) if model.info.is_parallel and "fk" not in model.info.functions else None
+    names = model.info.task_space if joints is not None else tuple(c.name for c in model.info.device_coordinates)
+    n, n_q = len(names), len(lower)
     count = len(model.info.functions["base_regressor"].outputs["pi_b"])
-    samples = samples or max(4 * -(-count // n), 50)
+    samples = samples or max(4 * -(-count // n_q), 50)
     t = np.arange(samples) * period / samples
     rng = np.random.default_rng(seed)
-    middle, half = (lower + upper) / 2, (upper - lower) / 2
     omega = 2 * np.pi / period * np.arange(1, harmonics + 1)
     # a start that moves every joint by ~START_AMPLITUDE of its range, within the velocity bound
+    half = (upper - lower) / 2
     scale = np.minimum(START_AMPLITUDE * half[:, None] * omega / harmonics, 0.5 * speeds[:, None] / harmonics)
+    if joints is None:
+        middle = (lower + upper) / 2
+    else:  # about home, each task coordinate moving no joint by more than that (dq = J^-1 dp at home)
+        middle = np.array(model.info.home, dtype=float)
+        rates = np.abs(joints(np.tile(middle, (n, 1)), np.eye(n), np.zeros((n, n)))[1])   # row j: |J^-1 e_j|
+        scale = np.min(scale[None, :, :] / np.maximum(rates, 1e-300)[:, :, None], axis=1)
     a0, b0 = rng.uniform(-1, 1, (2, n, harmonics)) * scale
     x = casadi.MX.sym("x", n + 2 * n * harmonics)
     offsets, a, b = x[:n], casadi.reshape(x[n:n + n * harmonics], harmonics, n).T, \
         casadi.reshape(x[n + n * harmonics:], harmonics, n).T
-    q, qd, qdd = _series(casadi, offsets, a, b, period, t)
     dense = np.arange(CONSTRAINT_DENSITY * samples) * period / (CONSTRAINT_DENSITY * samples)
-    q_c, qd_c, qdd_c = _series(casadi, offsets, a, b, period, dense)
-    mapped = function.map(samples, "serial")
-    pose = _pose_function(model, samples) if model.info.is_parallel else None
-    Y = mapped(*_arguments(function, model, _states(model, q.T, qd.T, qdd.T, pose), samples))[0]  # (n, count * samples)
-    x0 = np.concatenate([middle, a0.ravel(), b0.ravel()])  # each joint's L coefficients in a row
+    pose = _pose_function(model, samples) if model.info.is_parallel and joints is None else None
+    sampled = _series(casadi, offsets, a, b, period, t)
+    (q, qd, qdd), _ = _joint_motion(sampled, joints)
+    states = _states(model, q.T, qd.T, qdd.T, pose)
+    if joints is not None:
+        states["p"] = sampled[0].T
+    (q_c, qd_c, qdd_c), margin = _joint_motion(_series(casadi, offsets, a, b, period, dense), joints)
+    Y = function.map(samples, "serial")(*_arguments(function, model, states, samples))[0]  # (n_q, count * samples)
+    x0 = np.concatenate([middle, a0.ravel(), b0.ravel()])  # each coordinate's L coefficients in a row
     regressor_at = casadi.Function("W", [x], [Y])
-    W0 = _stacked(regressor_at(x0).full(), n, count, samples)
+    W0 = _stacked(regressor_at(x0).full(), n_q, count, samples)
     column = np.linalg.norm(W0, axis=0)
     column[column == 0] = 1.0
-    W = casadi.mtimes(_stacked_mx(Y, n, count, samples), casadi.diag(casadi.DM(1.0 / column)))
+    W = casadi.mtimes(_stacked_mx(Y, n_q, count, samples), casadi.diag(casadi.DM(1.0 / column)))
     F = W.T @ W / samples
     objective = casadi.log(casadi.sumsqr(F)) / 2 + casadi.log(casadi.trace(casadi.solve(F, casadi.DM.eye(count))))
     at_rest = casadi.vertcat(casadi.sum2(a), casadi.mtimes(b, casadi.DM(omega)))  # qd(0) and qdd(0)
@@ -157,8 +185,9 @@ def optimize_excitation(model: GeneratedModel, *, period: float = 10.0, harmonic
                           np.zeros(2 * n)])
     if pose is not None:  # a parallel model's legs assemble along the motion: fk's margin >= 0 at the points
         margin = _pose_function(model, points)(q_c.T[:len(model.info.coordinates), :])[1]
+    if margin is not None:  # ... or ik's, of a platform moved in its task coordinates
         g = casadi.vertcat(g, casadi.vec(margin))
-        lbg, ubg = np.concatenate([lbg, np.zeros(points)]), np.concatenate([ubg, np.full(points, np.inf)])
+        lbg, ubg = np.concatenate([lbg, np.zeros(margin.numel())]), np.concatenate([ubg, np.full(margin.numel(), np.inf)])
     solver = casadi.nlpsol("excitation", "ipopt", {"x": x, "f": objective, "g": g},
                            {**IPOPT_OPTIONS, "ipopt.tol": 1e-6, "ipopt.constr_viol_tol": 1e-9,
                             "ipopt.max_iter": max_iterations, "ipopt.hessian_approximation": "limited-memory"})
@@ -169,13 +198,43 @@ def optimize_excitation(model: GeneratedModel, *, period: float = 10.0, harmonic
     # between the constraint points the motion may overshoot by O(dt^2 qdd): shrink it about q0 to fit a grid
     # ten times as dense (a common factor keeps the start at rest and the period)
     check = np.arange(CHECK_DENSITY * len(dense)) * period / (CHECK_DENSITY * len(dense))
-    spacing = period / len(check)
-    shrink = _fitting_factor(_series(np, offsets_best, a_best, b_best, period, check), offsets_best,
-                             _between_points(a_best, b_best, omega, spacing), (lower, upper, speeds, accelerations))
+    bounds = (lower, upper, speeds, accelerations)
+    if joints is None:
+        spacing = period / len(check)
+        shrink = _fitting_factor(_series(np, offsets_best, a_best, b_best, period, check), offsets_best,
+                                 _between_points(a_best, b_best, omega, spacing), bounds)
+    else:
+        shrink = _task_fitting_factor(joints, offsets_best, a_best, b_best, period, check, bounds)
     best = np.concatenate([offsets_best, shrink * best[n:]])
-    W_best = _stacked(regressor_at(best).full(), n, count, samples)
+    W_best = _stacked(regressor_at(best).full(), n_q, count, samples)
     return Excitation(period, harmonics, offsets_best, shrink * a_best, shrink * b_best, _condition(W0 / column),
-                      _condition(W_best / column), samples, solver.stats()["return_status"])
+                      _condition(W_best / column), samples, solver.stats()["return_status"], tuple(names), joints)
+
+
+def _task_to_joints(model: GeneratedModel) -> Callable[..., tuple[Any, ...]]:
+    """(p, pd, pdd) -> (q, qd, qdd, margin) of a platform's actuators through its ik (rows: samples; numpy or
+    CasADi matrices; the module docstring)."""
+    ik = casadi_function(model, "ik")
+    p, pd, pdd = (casadi.MX.sym(name, ik.size1_in(0)) for name in ("p", "pd", "pdd"))
+    q, margin = ik(*_arguments(ik, model, {"p": p}, 1))[:2]
+    qd = casadi.jtimes(q, p, pd)
+    qdd = casadi.jtimes(qd, p, pd) + casadi.jtimes(qd, pd, pdd)
+    single = casadi.Function("joints", [p, pd, pdd], [q, qd, qdd, margin])
+
+    def joints(p: Any, pd: Any, pdd: Any) -> Any:
+        outputs = single.map(p.shape[0], "serial")(p.T, pd.T, pdd.T)
+        return tuple(o.T if isinstance(p, casadi.MX) else np.asarray(o.full()).T for o in outputs)
+
+    return joints
+
+
+def _joint_motion(series: tuple[Any, Any, Any], joints: Callable[..., Any] | None) -> tuple[tuple[Any, Any, Any], Any]:
+    """The joints' (q, qd, qdd) along the series' values (rows: samples), and ik's margin there (None for a joint
+    series)."""
+    if joints is None:
+        return series, None
+    q, qd, qdd, margin = joints(*series)
+    return (q, qd, qdd), margin
 
 
 def _between_points(a: np.ndarray, b: np.ndarray, omega: np.ndarray, spacing: float) -> tuple[np.ndarray, ...]:
@@ -205,6 +264,35 @@ def _fitting_factor(states: tuple[np.ndarray, np.ndarray, np.ndarray], offsets: 
               speeds / (np.max(np.abs(qd), axis=0) + margins[1]),
               accelerations / (np.max(np.abs(qdd), axis=0) + margins[2])]
     return float(min(1.0, *(float(np.min(r)) for r in ratios)))
+
+
+#: Bisection steps of the shrink factor of a task-space series (its joints' motion is not linear in it).
+SHRINK_STEPS = 20
+
+
+def _task_fitting_factor(joints: Callable[..., Any], offsets: np.ndarray, a: np.ndarray, b: np.ndarray,
+                         period: float, t: np.ndarray, bounds: tuple[np.ndarray, ...]) -> float:
+    """The largest s <= 1 (to 2^-SHRINK_STEPS) with the joints of the series p0 + s (p - p0) within the bounds and
+    the legs assembled at the times ``t`` (a grid ten times as dense as the constraints').
+
+    Raises:
+        ValueError: not even the series' offsets, the platform at rest, within them (IPOPT found no motion).
+    """
+    lower, upper, speeds, accelerations = bounds
+
+    def fits(s: float) -> bool:
+        q, qd, qdd, margin = joints(*_series(np, offsets, s * a, s * b, period, t))
+        return bool(np.all(q >= lower) and np.all(q <= upper) and np.all(np.abs(qd) <= speeds)
+                    and np.all(np.abs(qdd) <= accelerations) and np.all(np.asarray(margin) >= 0))
+
+    if fits(1.0):
+        return 1.0
+    if not fits(0.0):
+        raise ValueError("IPOPT found no motion within the joint limits; check the limits and bounds")
+    low, high = 0.0, 1.0
+    for _ in range(SHRINK_STEPS):
+        low, high = ((low + high) / 2, high) if fits((low + high) / 2) else (low, (low + high) / 2)
+    return low
 
 
 def _pose_function(model: GeneratedModel, samples: int) -> casadi.Function:

@@ -346,6 +346,37 @@ def test_symkin_identify_gives_back_a_hybrid_devices_base_parameters(derived, tm
     assert "with the bodies of platform, actuated_link, rod, fork1, fork2, handle" in (out / "summary.txt").read_text()
 
 
+@pytest.mark.parametrize("derived", ["stewart"], indirect=True)
+def test_the_stewart_platform_is_excited_in_its_pose_and_identified_from_its_struts(derived, tmp_path):
+    """The Stewart platform has no closed-form fk.  symkin excite moves its pose in Fourier series (excitation.json)
+    with the struts following q = ik(p) (excitation.csv: their q, qd, qdd within the strokes, which ik of the
+    series reproduces), and the stacked base regressor along the run has full column rank.  A run along it with
+    the efforts of its own regressor (tau = Y pi; Y pi = inverse_dynamics is tests/parallel/test_parallel_regressor.py's)
+    and noise: symkin identify, given the struts alone, solves each pose by Newton's method on the leg equations
+    and recovers the 34 base parameters within 5 standard deviations; identified.yaml is read back."""
+    name, found, generated = derived
+    out = _excite("stewart", 5, tmp_path)
+    record = json.loads((out / "excitation.json").read_text())
+    assert record["series_of"].startswith("task coordinates")
+    table = np.loadtxt(out / "excitation.csv", delimiter=",", skiprows=1)
+    t, q, qd, qdd = table[:, 0], table[:, 1:7], table[:, 7:13], table[:, 13:19]
+    lower, upper = np.array(generated.info.coordinates[0].limits)
+    assert np.all((q >= lower) & (q <= upper)), (q.min(), q.max(), lower, upper)
+    omega = 2 * np.pi / record["period"] * np.arange(1, record["harmonics"] + 1)
+    p = np.column_stack([record["offsets"][c] + np.sin(np.outer(t, omega)) @ (np.array(record["a"][c]) / omega)
+                         - np.cos(np.outer(t, omega)) @ (np.array(record["b"][c]) / omega)
+                         for c in generated.info.task_space])          # the series of the module docstring
+    np.testing.assert_allclose(generated.ik(p).joints, q, rtol=0, atol=1e3 * EPS)
+    Y, pi = generated.regressor(q, p, qd, qdd)
+    W = generated.base_regressor(q, p, qd, qdd).Y_b.reshape(-1, len(found.base))
+    singular = np.linalg.svd(W / np.linalg.norm(W, axis=0), compute_uv=False)
+    assert singular[-1] > 1e3 * EPS * singular[0] * np.sqrt(W.shape[0])   # far above rounding: rank len(pi_b)
+    tau = np.einsum("kij,kj->ki", Y, pi) + np.random.default_rng(5).normal(0, NOISE, q.shape)
+    run = write_run(tmp_path / "run.csv", generated.info.coordinate_names, t, q, tau, qd, qdd)
+    identified, _ = _identify("stewart", run, found, tmp_path)
+    assert load_model(identified / "identified.yaml").parallel.bodies is not None
+
+
 @pytest.mark.parametrize("derived", ["delta_wrist"], indirect=True)
 def test_a_hybrid_devices_run_is_its_legs_then_its_wrist(derived):
     """symkin identify's view of a hybrid device (analysis.device_regressors): the run's coordinates are the legs'
