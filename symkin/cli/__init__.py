@@ -27,7 +27,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="symkin",
         description="Exact symbolic kinematics and dynamics of mechanisms declared in YAML, "
-                    "emitted as fast numpy/C/CasADi code.",
+                    "emitted as fast numpy, C, CasADi and JavaScript code.",
         epilog="Run 'symkin COMMAND --help' for the options of a command.",
     )
     parser.add_argument("--version", action="version", version=f"symkin {__version__}")

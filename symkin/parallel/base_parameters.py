@@ -40,6 +40,7 @@ import sympy
 from symkin.dynamics.base_parameters import EXTRA_SAMPLES, BaseParameters
 from symkin.errors import DerivationError
 from symkin.ir.spec import FunctionSpec
+from symkin.parallel.modular_program import ModularProgram
 from symkin.parallel.prime_field import Closure, FormulaEvaluator, PrimeField
 
 #: The highest total degree in the geometry tried for an entry of K before giving up.
@@ -222,10 +223,11 @@ def _verify(evaluator: FormulaEvaluator, found: BaseParameters, rng: random.Rand
     """Y_j = Y_b K_j for every column at fresh states and geometry, with an independent prime and either sign of
     each square root."""
     rows, columns = evaluator.shape
+    entries = ModularProgram((), [k for row in found.combinations for k in row], set(), where)  # polynomials in G
     for embedding in PrimeField.embeddings(rng, evaluator.radicands):
         geometry = {g: embedding.residue(rng) for g in evaluator.geometry}
-        values = {sympy.Symbol(str(g)): v for g, v in geometry.items()}
-        K = [[evaluator.evaluate(embedding, k, values) for k in row] for row in found.combinations]
+        flat = evaluator.run(entries, embedding, {sympy.Symbol(str(g)): v for g, v in geometry.items()})
+        K = [flat[r * columns:(r + 1) * columns] for r in range(len(found.combinations))]
         for _ in range(EXTRA_SAMPLES):
             Y = evaluator.rows(embedding, rng, geometry)
             for i in range(rows):

@@ -1,11 +1,14 @@
 """A formula over GF(P) compiled once into straight-line Python: the prime-field evaluation of a regressor at many
-states (:mod:`symkin.parallel.prime_field`) without walking its sympy trees at each one.
+states (:mod:`symkin.parallel.prime_field`) without walking its sympy trees at each one, and the one evaluator of
+that arithmetic (each leg's closure coefficients, the angles' constant sines and cosines and the entries of K at
+the verification draws are programs too).
 
 The definitions (in order) and the outputs form one DAG, each distinct subexpression a node; the program computes
 the nodes in order with integer arithmetic mod P and returns the outputs' residues.  Its inputs are the leaves'
 residues (symbols and function atoms: the state, the geometry, the angles' sines and cosines), the field's
-constants (rationals and square roots of rationals, whose residues depend on the prime and on the roots chosen:
-:meth:`ModularProgram.constants`) and two field operations: the inverse and a square root of the state (which may
+constants (rationals and a rational's powers k/2, whose residues depend on the prime and on the roots chosen:
+:meth:`ModularProgram.constants`; a composite number such as sqrt(3)/2 is computed from them like any node) and
+two field operations: the inverse and a square root of the state (which may
 not exist: the caller's exception).  The Python source holds only node numbers, small exponents and the operators
 ``+ * % pow``, built from the trees' structure: no name or text of a model enters it.
 """
@@ -25,7 +28,8 @@ class ModularProgram:
 
     Attributes:
         leaves: the symbols and function atoms the program reads, in the order of :meth:`run`'s values.
-        numbers: the constant subexpressions, whose residues :meth:`run` takes per field.
+        numbers: the constant leaves (a rational, or a rational to a power k/2), whose residues :meth:`run` takes per
+            field.
     """
 
     def __init__(self, definitions: Sequence[tuple[sympy.Symbol, sympy.Expr]], outputs: Sequence[sympy.Expr],
@@ -52,7 +56,8 @@ class ModularProgram:
         if expr in self.atoms or isinstance(expr, sympy.Symbol):
             name = f"v[{len(self.leaves)}]"
             self.leaves.append(expr)
-        elif expr.is_number:
+        elif expr.is_Rational or (expr.is_Pow and expr.args[0].is_Rational and expr.args[0] > 0
+                                  and expr.args[1].is_Rational and expr.args[1].q == 2):
             name = f"c[{len(self.numbers)}]"
             self.numbers.append(expr)
         else:
@@ -72,12 +77,13 @@ class ModularProgram:
         if expr.is_Pow and expr.args[1].is_Integer:
             base, n = self._node(expr.args[0]), int(expr.args[1])
             return f"pow({base}, {n}, P)" if n >= 0 else f"pow(inv({base}), {-n}, P)"
-        if expr.is_Pow and expr.args[1].is_Rational and expr.args[1].q == 2:
+        if expr.is_Pow and expr.args[1].is_Rational and expr.args[1].q == 2 and not expr.args[0].is_number:
             base, half = self._node(expr.args[0]), (int(expr.args[1].p) - 1) // 2  # b^(k/2) = b^((k-1)/2) sqrt(b)
             power = f"pow({base}, {half}, P)" if half >= 0 else f"pow(inv({base}), {-half}, P)"
             return f"{power} * root({base}) % P"
         raise DerivationError(f"{self.where}: the regressor holds {expr}, which the exact elimination cannot "
-                              "evaluate (a transcendental constant, or a root other than a square root)")
+                              "evaluate (a transcendental constant, a root other than a square root, or a square "
+                              "root of a constant other than a positive rational)")
 
     def constants(self, residue: Callable[[sympy.Expr], int]) -> list[int]:
         """The residues of :attr:`numbers` in one field (``residue``: the field's value of a constant)."""

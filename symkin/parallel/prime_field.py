@@ -67,6 +67,15 @@ class PrimeField:
             roots.append(root)
         return roots[0] * self.inverse(roots[1]) % self.P
 
+    def constant(self, number: sympy.Expr) -> int:
+        """A compiled formula's constant leaf (:attr:`ModularProgram.numbers`): a rational r, or r^(k/2), k odd,
+        r > 0, as r^((k-1)/2) sqrt(r)."""
+        if number.is_Rational:
+            return self.rational(number)
+        base, exponent = number.args
+        whole, half = self.rational(base), (int(exponent.p) - 1) // 2
+        return pow(whole if half >= 0 else self.inverse(whole), abs(half), self.P) * self.square_root(base) % self.P
+
     def residue(self, rng: random.Random) -> int:
         return rng.randrange(1, self.P)
 
@@ -220,8 +229,14 @@ class FormulaEvaluator:
         #: The definitions and Y's entries as one straight-line program, each closure's coefficients as one, and
         #: each program's constants in the last field.
         self.program = ModularProgram(self.definitions, self.entries, set(self.functions), where)
+        #: The constant parts of the angles: cos c and sin c of each angle atom's constant c, in self.angles' order.
+        self.angle_constants = ModularProgram(
+            (), [f(self._constant_angle(c)) for _, c in self.angles.values() for f in (sympy.cos, sympy.sin)], set(),
+            where)
         self.closure_programs = [ModularProgram((), c.coefficients, set(c.atoms), where) for c in self.closures]
         self._field_constants: dict[ModularProgram, tuple[PrimeField, list[int]]] = {}
+        self._angle_values: tuple[PrimeField, list[int]] | None = None
+        self._angle_index = {atom: k for k, atom in enumerate(self.angles)}
 
     def _linear(self, argument: sympy.Expr, variables: set[sympy.Symbol], atom: sympy.Expr
                 ) -> tuple[dict[sympy.Symbol, int], sympy.Expr]:
@@ -250,17 +265,18 @@ class FormulaEvaluator:
                 for closure, program in zip(self.closures, self.closure_programs):
                     self._close(field, rng, closure, program, values, points)
                 values.update(self._atoms(field, rng, self.functions, points))
-                return self._run(self.program, field, values)
+                return self.run(self.program, field, values)
             except _NoPoint:
                 continue
         raise DerivationError(f"{self.where}: no pose of {CLOSURE_DRAWS} drawn closes every leg over a prime field "
                               "(please report it)")
 
-    def _run(self, program: ModularProgram, field: PrimeField, values: dict[sympy.Expr, int]) -> list[int]:
-        """``program``'s outputs in ``field`` at ``values`` (its constants computed once per field)."""
+    def run(self, program: ModularProgram, field: PrimeField, values: dict[sympy.Expr, int]) -> list[int]:
+        """``program``'s outputs in ``field`` at ``values`` of its leaves (its constants computed once per field;
+        a square root of the state that does not exist raises :class:`_NoPoint`)."""
         cached = self._field_constants.get(program)
         if cached is None or cached[0] is not field:
-            cached = (field, program.constants(lambda n: self._value(field, n, {}, {})))
+            cached = (field, program.constants(field.constant))
             self._field_constants[program] = cached
         return program.run(values, cached[1], field.P, field.inverse, lambda x: _state_root(field.P, x))
 
@@ -268,11 +284,14 @@ class FormulaEvaluator:
                points: dict[sympy.Symbol, tuple[int, int]]) -> dict[sympy.Expr, int]:
         """The sines and cosines among ``atoms`` at the angles' ``points`` (de Moivre), the Coulomb shapes drawn."""
         P = field.P
+        if self._angle_values is None or self._angle_values[0] is not field:
+            self._angle_values = (field, self.run(self.angle_constants, field, {}))
+        constants = self._angle_values[1]
         out = {}
         for atom in atoms:
             if atom in self.angles:
-                coefficients, constant = self.angles[atom]
-                c, s = (self._constant(field, sympy.cos(constant)), self._constant(field, sympy.sin(constant)))
+                coefficients, _ = self.angles[atom]
+                c, s = constants[2 * self._angle_index[atom]], constants[2 * self._angle_index[atom] + 1]
                 for x, n in coefficients.items():
                     cx, sx = points[x] if n >= 0 else (points[x][0], -points[x][1] % P)
                     for _ in range(abs(n)):
@@ -287,7 +306,7 @@ class FormulaEvaluator:
         """Solve a leg's closure for its q at the drawn pose (its coefficients: ``program``), into ``points`` (a
         rotation) or ``values``."""
         P = field.P
-        A, B, C = self._run(program, field, {**values, **self._atoms(field, rng, closure.atoms, points)})
+        A, B, C = self.run(program, field, {**values, **self._atoms(field, rng, closure.atoms, points)})
         if closure.rotation:  # A cos q + B sin q + C = 0: (C - A) t^2 + 2 B t + (A + C) = 0, t = tan(q/2)
             a, b, c = (C - A) % P, 2 * B % P, (A + C) % P
         else:  # A q^2 + B q + C = 0
@@ -303,45 +322,16 @@ class FormulaEvaluator:
         else:
             raise _NoPoint
 
-    def evaluate(self, field: PrimeField, expr: sympy.Expr, values: dict[sympy.Expr, int]) -> int:
-        """A polynomial ``expr`` over the number field (K's entries) mod P at ``values`` of its symbols."""
-        return self._value(field, expr, values, {})
-
-    def _constant(self, field: PrimeField, number: sympy.Expr) -> int:
-        if number.free_symbols or number.has(sympy.pi, sympy.sin, sympy.cos):
-            raise DerivationError(f"{self.where}: the constant {number} is not a sum of products of rationals and "
-                                  "square roots of rationals, which the exact elimination needs; give the model's "
-                                  "constant angles as multiples of 15 deg where the design has them")
-        return self._value(field, number, {}, {})
-
-    def _value(self, field: PrimeField, expr: sympy.Expr, values: dict, memo: dict) -> int:
-        if expr in values:
-            return values[expr]
-        if expr in memo:
-            return memo[expr]
-        P = field.P
-        if expr.is_Rational:
-            out = field.rational(expr)
-        elif expr.is_Add:
-            out = sum(self._value(field, a, values, memo) for a in expr.args) % P
-        elif expr.is_Mul:
-            out = 1
-            for a in expr.args:
-                out = out * self._value(field, a, values, memo) % P
-        elif expr.is_Pow and expr.args[1].is_Integer:
-            base, n = self._value(field, expr.args[0], values, memo), int(expr.args[1])
-            out = pow(base if n >= 0 else field.inverse(base), abs(n), P)
-        elif expr.is_Pow and expr.args[1].is_Rational and expr.args[1].q == 2:
-            base, k = expr.args[0], int(expr.args[1].p)
-            if not (base.is_Rational and base > 0):  # a root of the state is the compiled programs' (ModularProgram)
-                raise DerivationError(f"{self.where}: {expr} is not a square root of a positive rational")
-            whole, half = field.rational(base), (k - 1) // 2  # base^(k/2) = base^((k-1)/2) sqrt(base)
-            out = pow(whole if half >= 0 else field.inverse(whole), abs(half), P) * field.square_root(base) % P
-        else:
-            raise DerivationError(f"{self.where}: the regressor holds {expr}, which the exact elimination cannot "
-                                  "evaluate (a transcendental constant, or a root other than a square root)")
-        memo[expr] = out
-        return out
+    def _constant_angle(self, number: sympy.Expr) -> sympy.Expr:
+        """A constant part of an angle, refused unless its sine and cosine are in a field Q(sqrt r_1, ...)."""
+        cosine, sine = sympy.cos(number), sympy.sin(number)
+        if number.free_symbols or cosine.has(sympy.pi, sympy.sin, sympy.cos) or sine.has(sympy.pi, sympy.sin,
+                                                                                          sympy.cos):
+            raise DerivationError(f"{self.where}: the constant {number} is not an angle whose sine and cosine are "
+                                  "sums of products of rationals and square roots of rationals, which the exact "
+                                  "elimination needs; give the model's constant angles as multiples of 15 deg where "
+                                  "the design has them")
+        return number
 
 
 def _state_root(P: int, x: int) -> int:

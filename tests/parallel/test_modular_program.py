@@ -5,8 +5,10 @@ residue of its exact rational value."""
 
 from __future__ import annotations
 
+import pytest
 import sympy
 
+from symkin.errors import DerivationError
 from symkin.parallel.modular_program import ModularProgram
 
 P = 2 ** 60 + 91   # a prime, 3 mod 4, in which 3 has square roots
@@ -39,3 +41,13 @@ def test_a_program_gives_the_residues_of_the_exact_values():
     expected = [_residue(sympy.nsimplify(e)) if not e.has(sympy.sqrt(3)) else
                 (_residue(e.coeff(sympy.sqrt(3))) * roots[3] + _residue(e.subs(sympy.sqrt(3), 0))) % P for e in exact]
     assert residues == expected
+    assert all(n.is_Rational or (n.is_Pow and n.args[0].is_Rational) for n in program.numbers)  # sqrt(3)/2: 2 leaves
+
+
+def test_a_constant_outside_the_fields_of_square_roots_of_rationals_is_refused():
+    """The leaves' residues are a rational's and a rational's root's; a nested root or a transcendental constant
+    has no place in Q(sqrt r_1, ...) and is refused with the reason, not given a root of the state."""
+    x = sympy.Symbol("x")
+    for constant in (sympy.sqrt(2 + sympy.sqrt(3)), sympy.pi, sympy.cos(1)):
+        with pytest.raises(DerivationError, match="which the exact elimination cannot evaluate"):
+            ModularProgram((), [x * constant], set(), "test")
