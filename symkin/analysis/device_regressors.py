@@ -6,8 +6,8 @@ parallel regressors take the platform's pose as well, tau = Y(q, p, qd, qdd) pi 
 the generated closed form (the same assembly the model's home pose is in), or for a platform without one (the
 Stewart-Gough platform) Newton's method on the generated leg equations (:func:`symkin.runtime.parallel.solve_fk`)
 from the home pose, a sample that does not converge from there continued from the previous sample's pose (the
-run is continuous); a sample where the legs do not assemble is refused with its row.  The device's coordinates are the legs' actuators, then a hybrid device's
-wrist joints, as the regressors' rows.
+run is continuous); a sample where the legs do not assemble is refused with its row.  The device's coordinates
+are the legs' actuators, then a hybrid device's wrist joints, as the regressors' rows.
 """
 
 from __future__ import annotations

@@ -35,8 +35,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "(replaced as a whole), and given a model file identified.yaml, the model with the identified "
                     "values (given a URDF or xacro file also identified.urdf; of a parallel model, the values its "
                     "file holds: one rotor for all actuators). A parallel model's run records its actuators (and a "
-                    "hybrid device's wrist joints): each sample's platform pose is fk(q) (without a closed form, as the "
-                    "Stewart-Gough platform's, by Newton's method from the home pose). Bad data are refused with the file, row and column, and nothing is written.",
+                    "hybrid device's wrist joints): each sample's platform pose is fk(q) (without a closed form, as "
+                    "the Stewart-Gough platform's, by Newton's method from the home pose). Bad data are refused "
+                    "with the file, row and column, and nothing is written.",
         epilog="e.g. symkin identify models/planar_2r.yaml run.csv --method wls -o out/identify/planar_2r")
     analysis_args.add_model_arguments(p)
     p.add_argument("data", metavar="DATA.csv", help="the measured run")

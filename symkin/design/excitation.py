@@ -187,7 +187,8 @@ def optimize_excitation(model: GeneratedModel, *, period: float = 10.0, harmonic
         margin = _pose_function(model, points)(q_c.T[:len(model.info.coordinates), :])[1]
     if margin is not None:  # ... or ik's, of a platform moved in its task coordinates
         g = casadi.vertcat(g, casadi.vec(margin))
-        lbg, ubg = np.concatenate([lbg, np.zeros(margin.numel())]), np.concatenate([ubg, np.full(margin.numel(), np.inf)])
+        assembly = margin.numel()  # one margin per leg and constraint point
+        lbg, ubg = np.concatenate([lbg, np.zeros(assembly)]), np.concatenate([ubg, np.full(assembly, np.inf)])
     solver = casadi.nlpsol("excitation", "ipopt", {"x": x, "f": objective, "g": g},
                            {**IPOPT_OPTIONS, "ipopt.tol": 1e-6, "ipopt.constr_viol_tol": 1e-9,
                             "ipopt.max_iter": max_iterations, "ipopt.hessian_approximation": "limited-memory"})
