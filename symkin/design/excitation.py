@@ -193,23 +193,30 @@ def optimize_excitation(model: GeneratedModel, *, period: float = 10.0, harmonic
                            {**IPOPT_OPTIONS, "ipopt.tol": 1e-6, "ipopt.constr_viol_tol": 1e-9,
                             "ipopt.max_iter": max_iterations, "ipopt.hessian_approximation": "limited-memory"})
     result = solver(x0=x0, lbg=lbg, ubg=ubg)
-    best = np.asarray(result["x"]).ravel()
-    offsets_best = best[:n]
-    a_best, b_best = (best[n + k * n * harmonics:n + (k + 1) * n * harmonics].reshape(n, harmonics) for k in (0, 1))
     # between the constraint points the motion may overshoot by O(dt^2 qdd): shrink it about q0 to fit a grid
     # ten times as dense (a common factor keeps the start at rest and the period)
     check = np.arange(CHECK_DENSITY * len(dense)) * period / (CHECK_DENSITY * len(dense))
     bounds = (lower, upper, speeds, accelerations)
-    if joints is None:
-        spacing = period / len(check)
-        shrink = _fitting_factor(_series(np, offsets_best, a_best, b_best, period, check), offsets_best,
-                                 _between_points(a_best, b_best, omega, spacing), bounds)
-    else:
-        shrink = _task_fitting_factor(joints, offsets_best, a_best, b_best, period, check, bounds)
-    best = np.concatenate([offsets_best, shrink * best[n:]])
-    W_best = _stacked(regressor_at(best).full(), n_q, count, samples)
-    return Excitation(period, harmonics, offsets_best, shrink * a_best, shrink * b_best, _condition(W0 / column),
-                      _condition(W_best / column), samples, solver.stats()["return_status"], tuple(names), joints)
+
+    def fitted(vector: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+        """q0, a, b of the coefficient vector shrunk to fit the check grid, and cond(W S) of that motion."""
+        offsets_v = vector[:n]
+        a_v, b_v = (vector[n + k * n * harmonics:n + (k + 1) * n * harmonics].reshape(n, harmonics) for k in (0, 1))
+        if joints is None:
+            shrink = _fitting_factor(_series(np, offsets_v, a_v, b_v, period, check), offsets_v,
+                                     _between_points(a_v, b_v, omega, period / len(check)), bounds)
+        else:
+            shrink = _task_fitting_factor(joints, offsets_v, a_v, b_v, period, check, bounds)
+        W_v = _stacked(regressor_at(np.concatenate([offsets_v, shrink * vector[n:]])).full(), n_q, count, samples)
+        return offsets_v, shrink * a_v, shrink * b_v, _condition(W_v / column)
+
+    status, start = solver.stats()["return_status"], _condition(W0 / column)
+    offsets_best, a_best, b_best, condition = fitted(np.asarray(result["x"]).ravel())
+    if condition > start:  # IPOPT stopped (at its iteration limit) where the motion excites less than the start
+        offsets_best, a_best, b_best, condition = fitted(x0)
+        status += "; its last iterate excited less than the start, which is kept"
+    return Excitation(period, harmonics, offsets_best, a_best, b_best, start, condition, samples, status,
+                      tuple(names), joints)
 
 
 def _task_to_joints(model: GeneratedModel) -> Callable[..., tuple[Any, ...]]:
@@ -260,11 +267,12 @@ def _fitting_factor(states: tuple[np.ndarray, np.ndarray, np.ndarray], offsets: 
     if np.any(offsets < lower) or np.any(offsets > upper):
         raise ValueError("IPOPT found no motion within the joint limits; check the limits and bounds")
     motion = q - offsets
-    ratios = [(upper - offsets) / (np.max(motion, axis=0) + margins[0]),
-              (offsets - lower) / (np.max(-motion, axis=0) + margins[0]),
-              speeds / (np.max(np.abs(qd), axis=0) + margins[1]),
-              accelerations / (np.max(np.abs(qdd), axis=0) + margins[2])]
-    return float(min(1.0, *(float(np.min(r)) for r in ratios)))
+    with np.errstate(divide="ignore", invalid="ignore"):  # a joint at rest bounds nothing: inf (or 0/0 at a limit)
+        ratios = [(upper - offsets) / (np.max(motion, axis=0) + margins[0]),
+                  (offsets - lower) / (np.max(-motion, axis=0) + margins[0]),
+                  speeds / (np.max(np.abs(qd), axis=0) + margins[1]),
+                  accelerations / (np.max(np.abs(qdd), axis=0) + margins[2])]
+    return float(min(1.0, *(float(np.fmin.reduce(r)) for r in ratios)))  # fmin: NaN (0/0) bounds nothing either
 
 
 #: Bisection steps of the shrink factor of a task-space series (its joints' motion is not linear in it).

@@ -111,3 +111,33 @@ def test_limits_given_for_the_run_replace_the_models(arm):
     q = found.states(np.linspace(0.0, PERIOD, 20001))[0]
     assert np.min(q[:, 0]) >= 0.2
     assert np.max(q[:, 0]) <= 0.8
+
+
+def test_a_last_iterate_that_excites_less_than_the_start_is_not_returned(arm, monkeypatch):
+    """IPOPT stopped at its iteration limit may sit where the motion excites less than the start (restoring
+    feasibility first, as 3 iterations on the Stewart platform do).  Here its last iterate is the start's offsets
+    at rest (no column of velocity or acceleration excited: cond(W S) infinite): the start is kept, and the status
+    says so; the start needs no shrinking (it moves every joint by a tenth of its range)."""
+    real = excitation.casadi.nlpsol
+
+    def stopped_at_rest(*args, **kwargs):
+        solver = real(*args, **kwargs)
+
+        class Stopped:
+            def __call__(self, x0, lbg, ubg):
+                x = np.zeros_like(x0)
+                x[:2] = x0[:2]                                   # the offsets of the two joints, no motion
+                return {"x": x}
+
+            def stats(self):
+                return {"return_status": "Maximum_Iterations_Exceeded"}
+
+        assert solver is not None
+        return Stopped()
+
+    monkeypatch.setattr(excitation.casadi, "nlpsol", stopped_at_rest)
+    found = excitation.optimize_excitation(arm[1], period=PERIOD, harmonics=HARMONICS, max_velocity=SPEED,
+                                           max_acceleration=ACCELERATION, max_iterations=1)
+    assert found.status == "Maximum_Iterations_Exceeded; its last iterate excited less than the start, which is kept"
+    assert found.condition == found.condition_start
+    assert np.abs(found.a).max() > 0
