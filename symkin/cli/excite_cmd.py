@@ -56,7 +56,8 @@ def run(args: argparse.Namespace) -> int:
         if args.harmonics < 1 or args.periods < 1:
             raise ValueError("--harmonics and --periods must be at least 1")
         # a parallel model's run: its actuators' series through fk, or its pose's through ik without a closed-form fk
-        model = model_files.generated_model(args.model, "casadi", ("base_regressor",), optional=("fk", "ik"))
+        model = model_files.generated_model(args.model, "casadi", ("base_regressor",),
+                                            optional=model_files.parallel_only(("fk", "ik")))
         values = analysis_args.parse_assignments(args.assignments)
         model = model.bind(**values) if values else model
         joints = model.info.device_coordinates   # a hybrid device's wrist joints after the legs' actuators

@@ -72,7 +72,8 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError(f"--window must be a positive number of seconds, got {args.window:g}")
         source = _model_file(args.model)
         outputs = ENERGY_OUTPUTS if args.method == "energy" else IDENTIFY_OUTPUTS
-        model = model_files.generated_model(args.model, args.backend, outputs, optional=POSE_OUTPUTS)
+        model = model_files.generated_model(args.model, args.backend, outputs,
+                                            optional=model_files.parallel_only(POSE_OUTPUTS))
         values = analysis_args.parse_assignments(args.assignments)
         model = model.bind(**values) if values else model
         parallel = model.info.is_parallel

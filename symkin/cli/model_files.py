@@ -46,17 +46,24 @@ def is_model_file(path: str | Path) -> bool:
     return Path(path).suffix.lower() in MODEL_FILE_SUFFIXES
 
 
+def parallel_only(names: Sequence[str]) -> dict[MechanismKind, tuple[str, ...]]:
+    """``names`` for every kind of parallel mechanism, none for a serial one (an ``optional`` of
+    :func:`generated_model`: a parallel model's poses from fk or from its leg equations, which a serial arm does
+    not need)."""
+    return {kind: () if kind is MechanismKind.SERIAL else tuple(names) for kind in MechanismKind}
+
+
 def generated_model(path: str, backend: str = "numpy",
                outputs: Sequence[str] | Mapping[MechanismKind, Sequence[str]] = ANALYSIS_OUTPUTS,
-               optional: Sequence[str] = ()) -> Any:
+               optional: Sequence[str] | Mapping[MechanismKind, Sequence[str]] = ()) -> Any:
     """The loaded model of MODEL: a generated directory, or a model file derived on the fly.
 
     Args:
         path: generated directory (or its manifest.json), or a model file (YAML, or URDF with its default tip).
         backend: the backend to load (and, for a model file, to emit).
         outputs: the quantities to derive from a model file.
-        optional: quantities also derived where the model has them (e.g. ``friction``,
-            ``gravity_vector``); skipped silently where it does not.
+        optional: quantities also derived where the model has them (e.g. ``friction``, ``gravity_vector``),
+            skipped silently where it does not; or by kind of mechanism, as ``outputs`` (:func:`parallel_only`).
 
     Raises:
         ModelError: a model file is invalid.
@@ -67,7 +74,7 @@ def generated_model(path: str, backend: str = "numpy",
 
 def load_models(path: str, backends: Sequence[str],
                 outputs: Sequence[str] | Mapping[MechanismKind, Sequence[str]] = ANALYSIS_OUTPUTS,
-                optional: Sequence[str] = ()) -> list[Any]:
+                optional: Sequence[str] | Mapping[MechanismKind, Sequence[str]] = ()) -> list[Any]:
     """MODEL loaded once per backend (as :func:`generated_model`); a model file is derived once, for all of them.
 
     ``outputs`` may map the kind of mechanism ("serial", "parallel") to the quantities
@@ -83,7 +90,7 @@ def load_models(path: str, backends: Sequence[str],
 @contextlib.contextmanager
 def generated_directory(path: str, backends: Sequence[str],
                         outputs: Sequence[str] | Mapping[MechanismKind, Sequence[str]] = ANALYSIS_OUTPUTS,
-                        optional: Sequence[str] = ()) -> Iterator[Path]:
+                        optional: Sequence[str] | Mapping[MechanismKind, Sequence[str]] = ()) -> Iterator[Path]:
     """The generated directory of MODEL while the block runs: MODEL itself, or for a model file
     a scratch directory it is derived into (``outputs`` and ``optional`` as :func:`load_models`)."""
     source = Path(path)
@@ -93,8 +100,9 @@ def generated_directory(path: str, backends: Sequence[str],
     from symkin import pipeline_cache
     from symkin.atomic import replace_directory
 
+    extra = optional if isinstance(optional, Mapping) else list(optional)
     key = pipeline_cache.request_key(source, {"command": "analysis", "backends": list(backends), "outputs": outputs,
-                                              "optional": list(optional)}) if pipeline_cache.enabled() else None
+                                              "optional": extra}) if pipeline_cache.enabled() else None
     entry = None if key is None else pipeline_cache.lookup(key)
     with tempfile.TemporaryDirectory(prefix="symkin-analysis-") as scratch:
         if entry is not None:
@@ -106,7 +114,7 @@ def generated_directory(path: str, backends: Sequence[str],
 
 
 def _derived(source: Path, backends: Sequence[str], outputs: Sequence[str] | Mapping[MechanismKind, Sequence[str]],
-             optional: Sequence[str], scratch: str, key: str | None) -> Path:
+             optional: Sequence[str] | Mapping[MechanismKind, Sequence[str]], scratch: str, key: str | None) -> Path:
     """The model file derived into ``scratch`` (and kept in the derivation cache under ``key``)."""
     from symkin import pipeline, pipeline_cache
     from symkin.cli.progress import Progress
@@ -120,7 +128,8 @@ def _derived(source: Path, backends: Sequence[str], outputs: Sequence[str] | Map
         wanted = CLOSURE_OUTPUTS
     if isinstance(outputs, Mapping) and _limits_passive_joints(model):
         wanted = (*wanted, *PASSIVE_LIMIT_OUTPUTS)
-    names = dict.fromkeys([*wanted, *derivation.available(optional)[0]])  # in order, each once
+    extra = optional.get(analysis_kind(model), ()) if isinstance(optional, Mapping) else optional
+    names = dict.fromkeys([*wanted, *derivation.available(extra)[0]])  # in order, each once
     request = pipeline.resolve_request(model, ",".join(names),
                                        ",".join(backends), None)
     with Progress(model.name) as progress:

@@ -118,24 +118,18 @@ def test_a_last_iterate_that_excites_less_than_the_start_is_not_returned(arm, mo
     feasibility first, as 3 iterations on the Stewart platform do).  Here its last iterate is the start's offsets
     at rest (no column of velocity or acceleration excited: cond(W S) infinite): the start is kept, and the status
     says so; the start needs no shrinking (it moves every joint by a tenth of its range)."""
-    real = excitation.casadi.nlpsol
+    class StoppedAtRest:
+        """IPOPT's stand-in: called as the solver, it returns the start's offsets with no motion."""
 
-    def stopped_at_rest(*args, **kwargs):
-        solver = real(*args, **kwargs)
+        def __call__(self, x0, lbg, ubg):
+            x = np.zeros_like(x0)
+            x[:2] = x0[:2]                                       # the offsets of the two joints
+            return {"x": x}
 
-        class Stopped:
-            def __call__(self, x0, lbg, ubg):
-                x = np.zeros_like(x0)
-                x[:2] = x0[:2]                                   # the offsets of the two joints, no motion
-                return {"x": x}
+        def stats(self):
+            return {"return_status": "Maximum_Iterations_Exceeded"}
 
-            def stats(self):
-                return {"return_status": "Maximum_Iterations_Exceeded"}
-
-        assert solver is not None
-        return Stopped()
-
-    monkeypatch.setattr(excitation.casadi, "nlpsol", stopped_at_rest)
+    monkeypatch.setattr(excitation.casadi, "nlpsol", lambda *args, **kwargs: StoppedAtRest())
     found = excitation.optimize_excitation(arm[1], period=PERIOD, harmonics=HARMONICS, max_velocity=SPEED,
                                            max_acceleration=ACCELERATION, max_iterations=1)
     assert found.status == "Maximum_Iterations_Exceeded; its last iterate excited less than the start, which is kept"
