@@ -69,10 +69,12 @@ def shared_derivation(model: Model) -> Derivation:
 def stability_run(name: str):
     """``symkin bench stability models/<name>.yaml`` at its defaults, once per worker: the run that
     docs/numerical-stability.md quotes (tests/analysis/test_stability_table.py) and, on native arithmetic, the one
-    tests/analysis/test_stability.py judges (both modules share the xdist group ``stability``)."""
+    tests/analysis/test_stability.py judges (both modules share the xdist group ``stability``), on the worker's
+    shared derivation of the model (:func:`shared_derivation`)."""
     from symkin.stability import run_stability
 
-    return run_stability(load_model(MODELS_DIR / f"{name}.yaml"))
+    model = load_model(MODELS_DIR / f"{name}.yaml")
+    return run_stability(model, derivation=shared_derivation(model))
 
 
 @pytest.fixture(scope="session")

@@ -170,10 +170,11 @@ def reduced_legs(d: Deriving) -> tuple[distance.DistanceLeg, ...]:
     surface = {PlatformMotion.PLANAR: "plane", PlatformMotion.SPHERICAL: "sphere"}.get(motion, "space")
     legs = distance.distance_legs(structure.chains, structure.platform, surface)
     if isinstance(legs, str):
-        raise DerivationError(f"model '{d.model.name}': {legs}; use the generic outputs closure and "
-                              "closure_jacobians for this topology, and symkin.runtime.parallel on them: "
-                              "solve_closure for its ik and fk, closure_velocities for its Jacobian and "
-                              "singularities (docs/model-format.md, 'Legs of any topology')")
+        raise DerivationError(f"model '{d.model.name}': {legs}; use the generic outputs closure and closure_jacobians "
+                              "with symkin.runtime.parallel (solve_closure for its ik and fk, closure_velocities for "
+                              "its Jacobian and singularities), closure_dynamics and closure_regressor for its dynamics "
+                              "(docs/model-format.md, 'Legs of any topology'); base parameters, symkin identify and "
+                              "symkin excite need legs in distance form (docs/identification.md, 'Parallel mechanisms')")
     return legs
 
 

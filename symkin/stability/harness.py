@@ -207,7 +207,8 @@ def _constant(value: float, _index: int) -> float:
 def run_stability(model: Model, *, samples: int = 32, float32_samples: int = 16, scale_samples: int = 6,
                   scales: Sequence[float] = SCALES, steps: Sequence[float] = PATH_STEPS,
                   quantities: Sequence[str] | None = None, max_paths: int = 8, seed: int = 0,
-                  progress: Callable[[str], None] = lambda _stage: None) -> StabilityRun:
+                  progress: Callable[[str], None] = lambda _stage: None,
+                  derivation: Derivation | None = None) -> StabilityRun:
     """Check every generated quantity of ``model`` against the 50-digit reference (see the module docstring).
 
     Args:
@@ -221,9 +222,10 @@ def run_stability(model: Model, *, samples: int = 32, float32_samples: int = 16,
         max_paths: at most this many singular paths.
         seed: random seed (the run is deterministic).
         progress: called with a description of each stage.
+        derivation: ``model``'s derivation graph, whose quantities the run reuses and adds to (default: a new one).
     """
     rng = np.random.default_rng(seed)
-    derivation = Derivation(model)
+    derivation = Derivation(model) if derivation is None else derivation
     names, skipped = derivation.available(quantities or emitted_quantities(model.mechanism))
     task_matrix = conditioning_matrix(model)
     has_jacobian = bool(derivation.available([task_matrix])[0])

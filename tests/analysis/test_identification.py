@@ -19,7 +19,7 @@ from symkin.analysis import identification
 from symkin.dynamics.parameter_names import DISSIPATIVE
 from symkin.model import model_from_text
 from identification_runs import NOISE, RATE, arm, excitation, simulated_run, write_run  # noqa: F401 (the fixture arm)
-from sample_models import DRIVEN
+from sample_models import DRIVEN, dual_scara_dynamics_text
 from tolerances import EPS
 
 @pytest.mark.parametrize("method", ["ols", "wls"])
@@ -245,6 +245,23 @@ def test_a_generated_parallel_model_without_its_base_regressor_is_refused_before
     assert result.returncode == 2
     assert "a parallel model's identification needs base_regressor; derive them" in result.stderr
     assert not (tmp_path / "out").exists()
+
+
+def test_legs_without_the_distance_form_are_refused_with_what_they_have(tmp_path):
+    """The dual SCARA (legs R-R-P-R, docs/model-format.md): its base parameters need the distance form, so symkin
+    identify and symkin excite stop before any work, naming the leg and the outputs that model's dynamics do have
+    (closure_dynamics, closure_regressor); nothing written."""
+    model = tmp_path / "dual_scara.yaml"
+    model.write_text(dual_scara_dynamics_text())
+    data = tmp_path / "run.csv"
+    data.write_text("t,q_leg1_q,q_leg2_q\n0,0,0\n")
+    for command in (["identify", str(model), str(data)], ["excite", str(model), "--max-acceleration", "10"]):
+        result = subprocess.run(SYMKIN_CLI + command + ["-o", str(tmp_path / "out")], capture_output=True, text=True)
+        assert result.returncode == 1, result.stderr
+        assert "leg 'leg1' has no distance form" in result.stderr
+        assert "closure_dynamics and closure_regressor for its dynamics" in result.stderr
+        assert "base parameters, symkin identify and symkin excite need legs in distance form" in result.stderr
+        assert not (tmp_path / "out").exists()
 
 
 def test_the_consistent_estimates_jacobian_is_the_derivative_of_its_parameterization():

@@ -18,7 +18,7 @@ import pytest
 import sympy
 import yaml
 
-from conftest import MODELS_DIR, SYMKIN_CLI
+from conftest import MODELS_DIR, SYMKIN_CLI, shared_derivation
 from identification_runs import excitation, write_run
 from symkin import load, pipeline
 from symkin.derivation.graph import Derivation
@@ -41,7 +41,7 @@ def derived(request, tmp_path_factory):
     name = request.param
     model = load_model(MODELS_DIR / f"{name}.yaml")
     request_ = pipeline.resolve_request(model, only="regressor,base_regressor,ik" + CASES[name][2], backends="numpy")
-    derivation = Derivation(model)
+    derivation = shared_derivation(model)  # shared with the worker's other tests (its stability run: base parameters)
     generated = load(pipeline.write(pipeline.generate(model, request_, derivation=derivation),
                                     tmp_path_factory.mktemp(name)))
     return name, derivation["base_parameters"], generated
