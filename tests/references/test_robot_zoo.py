@@ -88,6 +88,43 @@ def test_a_stock_robot_file_derives_and_agrees_with_pinocchio(file, tip, dof):
         assert _normwise(V(q, qd)[0] + G(q)[0], pin.nonLinearEffects(full, data, q_full, v_full)[columns]) < DYNAMICS
 
 
+#: The zoo's arms whose files hold no joint off the chain (Pinocchio's model is the chain itself, fixed joints
+#: merged into their parents as symkin lumps them): their bodies are the same, parameter for parameter.
+WHOLE_CHAINS = [entry for entry in ZOO if Path(entry[0]).stem in ("ur3_robot", "ur5_robot", "ur10_robot", "kinova",
+                                                                    "so100", "so101", "xarm7")]
+
+
+@pytest.mark.parametrize("file, tip, dof", WHOLE_CHAINS, ids=[Path(f).stem for f, _, _ in WHOLE_CHAINS])
+def test_the_regressor_of_a_stock_arm_is_pinocchios(file, tip, dof):
+    """Issue 33's reference on files nobody here wrote: symkin's regressor Y (its 10 inertial columns per link,
+    Pinocchio's order) is computeJointTorqueRegressor's, joint for joint, and pi's inertial entries are each body's
+    toDynamicParameters (a URDF's joint frame is its child link's: the same origin and axes), to DYNAMICS of the
+    torques' scale (a chain of <= 7 joints, tests/tolerances.py)."""
+    path = ROBOTS_DIR / file
+    model = load_model(path, tip=tip)
+    full = pin.buildModelFromUrdf(str(path))
+    assert full.nv == model.dof == dof, file
+    data = full.createData()
+    chain = [full.joints[full.getJointId(j.name)] for j in model.joints]
+    rows = [joint.idx_v for joint in chain]
+    columns = [10 * (full.getJointId(j.name) - 1) + k for j in model.joints for k in range(10)]
+    Y_pi = reference_function(model, Derivation(model)["regressor"])
+    rng = np.random.default_rng(33)
+    for _ in range(3):
+        q, qd, qdd = rng.uniform(-1.5, 1.5, dof), rng.uniform(-1, 1, dof), rng.uniform(-3, 3, dof)
+        q_full, v_full, a_full = pin.neutral(full), np.zeros(full.nv), np.zeros(full.nv)
+        for joint, angle, rate, acceleration in zip(chain, q, qd, qdd):
+            q_full[joint.idx_q:joint.idx_q + joint.nq] = [np.cos(angle), np.sin(angle)] if joint.nq == 2 else [angle]
+            v_full[joint.idx_v], a_full[joint.idx_v] = rate, acceleration
+        want = pin.computeJointTorqueRegressor(full, data, q_full, v_full, a_full)[np.ix_(rows, columns)]
+        Y, pi = Y_pi(q, qd, qdd)
+        scale = float(np.max(np.abs(want)))
+        np.testing.assert_allclose(Y[:, :10 * dof], want, rtol=0, atol=DYNAMICS * scale, err_msg=file)
+    bodies = np.concatenate([full.inertias[full.getJointId(j.name)].toDynamicParameters() for j in model.joints])
+    np.testing.assert_allclose(pi[:10 * dof], bodies, rtol=0, atol=DYNAMICS * float(np.max(np.abs(bodies))),
+                               err_msg=file)
+
+
 def test_the_zoo_reads_every_serial_arm_the_package_ships():
     """The issue's list: panda, z1, ur3/5/10, kinova, talos arm, baxter arm, so-arm, xarm."""
     shipped = {p.relative_to(ROBOTS_DIR).as_posix() for p in ROBOTS_DIR.rglob("*.urdf")}
