@@ -1,7 +1,8 @@
 """Identification (issue 33): derive time of the UR10e's regressor and base regressor, and `symkin identify`'s
 estimate from 10^5 samples of the UR10e, against Pinocchio's joint-torque regressor stacked over the same samples
 (the competitor's route to the same least-squares problem; it has no base parameters, so its 60 standard columns
-are solved by a minimum-norm lstsq); `symkin excite` and `symkin identify --method consistent` end to end.
+are solved by a minimum-norm lstsq); `symkin identify --method consistent` end to end (`symkin excite`:
+benchmarks/bench_excitation.py).
 
 Run with `make bench` or `python benchmarks/bench_identification.py [--samples N]`.  Targets (issue 33): derive
 <= 10 s, identify 10^5 samples <= 10 s on 2 cores.
@@ -73,12 +74,6 @@ def main(argv: list[str] | None = None) -> int:
             np.linalg.lstsq(W, tau.reshape(-1), rcond=None)
             rows.append([f"Pinocchio: stacked joint-torque regressors + lstsq, {args.samples} samples",
                          f"{time.perf_counter() - start:.2f} s", "(no base parameters)"])
-        start = time.perf_counter()
-        subprocess.run([sys.executable, "-m", "symkin", "excite", str(directory), "--max-velocity", "1",
-                        "--max-acceleration", "3", "--period", "10", "--harmonics", "5", "--max-iterations", "100",
-                        "--no-figure", "-o", str(Path(scratch) / "excite")], check=True, capture_output=True)
-        rows.append(["symkin excite (IPOPT, 100 iterations, 5 harmonics)", f"{time.perf_counter() - start:.2f} s",
-                     "-"])
         arm = load(directory, "numpy")
         sample = slice(0, 6000)                                   # the size of a 30 s run at 200 Hz
         np.savetxt(Path(scratch) / "run.csv", np.column_stack([np.arange(6000) / 200.0, q[sample], qd[sample],

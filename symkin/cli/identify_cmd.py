@@ -154,7 +154,8 @@ def _device_regressors(args: argparse.Namespace, model):
         missing.append("fk (or constraints and constraint_jacobians, for Newton's method)")
     if missing:
         raise ValueError(f"{args.model}: a parallel model's identification needs {' and '.join(missing)}; derive "
-                         "them (symkin derive --only base_regressor,regressor,fk) or give the model file")
+                         "them (symkin derive --only base_regressor,regressor,fk, or without a closed-form fk "
+                         "--only base_regressor,regressor,constraints,constraint_jacobians) or give the model file")
     return DeviceRegressors(model, args.data)
 
 

@@ -231,8 +231,7 @@ class FormulaEvaluator:
         self.program = ModularProgram(self.definitions, self.entries, set(self.functions), where)
         #: The constant parts of the angles: cos c and sin c of each angle atom's constant c, in self.angles' order.
         self.angle_constants = ModularProgram(
-            (), [f(self._constant_angle(c)) for _, c in self.angles.values() for f in (sympy.cos, sympy.sin)], set(),
-            where)
+            (), [v for _, c in self.angles.values() for v in self._cosine_and_sine(c)], set(), where)
         self.closure_programs = [ModularProgram((), c.coefficients, set(c.atoms), where) for c in self.closures]
         self._field_constants: dict[ModularProgram, tuple[PrimeField, list[int]]] = {}
         self._angle_values: tuple[PrimeField, list[int]] | None = None
@@ -322,8 +321,8 @@ class FormulaEvaluator:
         else:
             raise _NoPoint
 
-    def _constant_angle(self, number: sympy.Expr) -> sympy.Expr:
-        """A constant part of an angle, refused unless its sine and cosine are in a field Q(sqrt r_1, ...)."""
+    def _cosine_and_sine(self, number: sympy.Expr) -> tuple[sympy.Expr, sympy.Expr]:
+        """(cos c, sin c) of a constant part c of an angle, refused unless both are in a field Q(sqrt r_1, ...)."""
         cosine, sine = sympy.cos(number), sympy.sin(number)
         if number.free_symbols or cosine.has(sympy.pi, sympy.sin, sympy.cos) or sine.has(sympy.pi, sympy.sin,
                                                                                           sympy.cos):
@@ -331,7 +330,7 @@ class FormulaEvaluator:
                                   "sums of products of rationals and square roots of rationals, which the exact "
                                   "elimination needs; give the model's constant angles as multiples of 15 deg where "
                                   "the design has them")
-        return number
+        return cosine, sine
 
 
 def _state_root(P: int, x: int) -> int:

@@ -21,6 +21,7 @@ import sympy
 
 from symkin.derivation import Derivation
 from symkin.dynamics.base_parameters import base_parameters
+from symkin.dynamics.parameter_names import DISSIPATIVE
 from symkin.dynamics.regressor import parameter_names
 from symkin.model import model_from_text
 
@@ -100,8 +101,6 @@ def _symoro_base_parameters() -> list[sympy.Expr]:
 
 def _inertial_base_parameters(text: str):
     """symkin's base parameters of the model's inertial parameters and rotor inertias (friction left out)."""
-    from symkin.dynamics.parameter_names import DISSIPATIVE
-
     model = model_from_text(text, "rx90")
     names = parameter_names(model)
     kept = [k for k, name in enumerate(names) if name.rsplit(".", 1)[1] not in DISSIPATIVE]
