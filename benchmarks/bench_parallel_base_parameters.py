@@ -6,7 +6,9 @@ straight-line program; K's entries as polynomials in the geometry, verified with
 route SymPyBotics takes for serial arms, run in the same process on the same formula: the regressor in floating
 point at random assembled states, stacked, and its numerical rank by SVD with a threshold (the count only: no
 regrouping, no geometry kept symbolic).  The derivation includes that numerical check too (the counts must agree),
-so the exact column's time covers both.
+so the exact column's time covers both.  The dual SCARA of docs/model-format.md (legs without the distance form,
+taken from the document) runs the elimination of symkin.parallel.closure_base: points of the closure over the
+prime field by resultants, Y = W^T Y_z there; its numerical rank is that of W^T Y_z at assembled states.
 
 Run with `make bench` or `python benchmarks/bench_parallel_base_parameters.py [MODEL ...]`.
 """
@@ -14,6 +16,7 @@ Run with `make bench` or `python benchmarks/bench_parallel_base_parameters.py [M
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 import time
 from pathlib import Path
@@ -22,12 +25,23 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from symkin.derivation.graph import Derivation  # noqa: E402
-from symkin.model import load_model  # noqa: E402
+from symkin.model import load_model, model_from_text  # noqa: E402
 from symkin.parallel.base_regressor import closure_rank  # noqa: E402
+from symkin.parallel.closure_base import assembled_rank  # noqa: E402
 from symkin.parallel.regressor import reduced_regressor  # noqa: E402
 from symkin.text_table import format_table  # noqa: E402
 
-MODELS = ("delta", "delta_wrist", "agile_eye", "pantograph", "stewart")
+MODELS = ("delta", "delta_wrist", "agile_eye", "pantograph", "stewart", "dual_scara")
+#: Models that docs/model-format.md declares (its heredocs, the bodies appended to the model as the document does).
+DOCUMENTED = {"dual_scara": ("EOF_MODEL", "EOF_BODIES")}
+
+
+def _model(name: str):
+    if name not in DOCUMENTED:
+        return load_model(ROOT / "models" / f"{name}.yaml")
+    document = (ROOT / "docs" / "model-format.md").read_text()
+    parts = [re.search(rf"<<'{end}'\n(.*?)^{end}$", document, re.S | re.M) for end in DOCUMENTED[name]]
+    return model_from_text("".join(part.group(1) for part in parts if part), file=f"docs/model-format.md ({name})")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -36,16 +50,17 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     rows = []
     for name in args.models:
-        model = load_model(ROOT / "models" / f"{name}.yaml")
+        model = _model(name)
         derivation = Derivation(model)
+        closure = name in DOCUMENTED
         start = time.perf_counter()
-        columns = derivation[reduced_regressor].outputs[0].shape[1]
+        columns = derivation["closure_regressor" if closure else reduced_regressor].outputs[0].shape[1]
         formula = time.perf_counter() - start
         start = time.perf_counter()
-        found = derivation["base_parameters"]
+        found = derivation["closure_base_parameters" if closure else "base_parameters"]
         exact = time.perf_counter() - start
         start = time.perf_counter()
-        rank = closure_rank(derivation, columns)
+        rank = assembled_rank(derivation) if closure else closure_rank(derivation, columns)
         numeric = time.perf_counter() - start
         rows.append([name, str(columns), str(len(found.base)), str(rank), f"{formula:.2f} s", f"{exact:.2f} s",
                      f"{numeric:.2f} s", f"{exact / numeric:.1f}x"])

@@ -21,7 +21,10 @@ The base columns are the pivots of the reduced row echelon form of the stacked s
 columns preferred, as in the serial method); its rows are K(G) mod P at the geometry G drawn.  K depends on
 G (the DELTA's elbow masses regroup as a m_C and a^2 m_C): each entry is taken as a polynomial in the
 parameters it depends on (those whose change moves it), of the least total degree that fits, interpolated
-from the echelon forms at as many values of G as it has monomials and checked at two more; each coefficient,
+from the echelon forms at as many values of G as it has monomials and checked at two more - or, where none of
+that degree fits, as a ratio N/D of polynomials (the dual SCARA's bar regroups hand inertia with 1/e), the
+coefficients of N and D the null space of the linearized conditions N(G_k) = K(G_k) D(G_k) (multivariate
+rational interpolation, e.g. Cuyt and Lee 2011), D's first nonzero coefficient scaled to 1; each coefficient,
 an element of the number field, is recovered from its images under the 2^m choices of the roots' signs
 (their signed sums give its coordinates on the products of square roots) by rational reconstruction.  The
 result is verified with an independent prime: Y_j = Y_b K_j at fresh states and geometry.
@@ -33,6 +36,7 @@ import itertools
 import random
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import Protocol
 
 import flint
 import sympy
@@ -43,10 +47,25 @@ from symkin.ir.spec import FunctionSpec
 from symkin.parallel.modular_program import ModularProgram
 from symkin.parallel.prime_field import Closure, FormulaEvaluator, PrimeField
 
-#: The highest total degree in the geometry tried for an entry of K before giving up.
+#: The highest total degree (of N plus D where an entry of K is N/D) in the geometry tried before giving up.
 MAX_DEGREE = 6
 #: Values of the geometry at which a fitted entry of K is checked beyond those it was fitted to.
 CHECK_POINTS = 2
+
+
+class RegressorField(Protocol):
+    """A regressor evaluated mod P at random states on the closure (:class:`FormulaEvaluator`, or
+    :class:`symkin.parallel.closure_base.ClosureRegressorField` for legs without the distance form)."""
+
+    shape: tuple[int, ...]
+    geometry: list[sympy.Symbol]
+    radicands: list[int]
+
+    def rows(self, field: PrimeField, rng: random.Random, geometry: dict[sympy.Symbol, int]) -> list[int]:
+        """Y's entries, row-major, at a random state and ``geometry``."""
+
+    def run(self, program: ModularProgram, field: PrimeField, values: dict[sympy.Expr, int]) -> list[int]:
+        """``program``'s outputs at ``values`` of its leaves."""
 
 
 @dataclass
@@ -57,7 +76,7 @@ class _Echelon:
     K: list[list[int]]
 
 
-def _echelon(evaluator: FormulaEvaluator, field: PrimeField, geometry: dict[sympy.Symbol, int], seed: int) -> _Echelon:
+def _echelon(evaluator: RegressorField, field: PrimeField, geometry: dict[sympy.Symbol, int], seed: int) -> _Echelon:
     rows, columns = evaluator.shape
     samples = -(-columns // max(rows, 1)) + EXTRA_SAMPLES
     rng = random.Random(seed)
@@ -89,9 +108,14 @@ def modular_base_parameters(spec: FunctionSpec, names: Sequence[str], where: str
 
     Raises:
         DerivationError: an atom or constant the modular evaluation cannot take, or a dependency of K on the
-            geometry that is not a polynomial of degree <= MAX_DEGREE, with the fix.
+            geometry that is not a ratio of polynomials of total degree <= MAX_DEGREE, with the fix.
     """
-    evaluator = FormulaEvaluator(spec, where, closures)
+    return field_base_parameters(FormulaEvaluator(spec, where, closures), names, where, seed)
+
+
+def field_base_parameters(evaluator: RegressorField, names: Sequence[str], where: str, seed: int = 0
+                          ) -> BaseParameters:
+    """The base parameters of the regressor that ``evaluator`` evaluates mod P (columns ``names``)."""
     rng = random.Random(seed)
     embeddings = PrimeField.embeddings(rng, evaluator.radicands)
     field = embeddings[0]
@@ -126,7 +150,7 @@ class _Samples:
     """The echelon forms at the k-th value of the geometry (the first given, the others drawn when first asked for),
     one per embedding."""
 
-    def __init__(self, evaluator: FormulaEvaluator, embeddings: list[PrimeField], seed: int,
+    def __init__(self, evaluator: RegressorField, embeddings: list[PrimeField], seed: int,
                  draw: Callable[[], dict[sympy.Symbol, int]], first_point: dict[sympy.Symbol, int], first: _Echelon,
                  where: str):
         self.evaluator, self.embeddings, self.seed, self.draw, self.where = evaluator, embeddings, seed, draw, where
@@ -152,41 +176,95 @@ class _Samples:
 
 
 def _fitted(samples: _Samples, entry: tuple[int, int], variables: Sequence[sympy.Symbol], where: str) -> sympy.Expr:
-    """An entry of K as a polynomial in ``variables``: the least total degree whose interpolation at the first
-    points also fits the next CHECK_POINTS, its coefficients taken from the embeddings' images to the number
-    field."""
+    """An entry of K as a rational function N/D of ``variables`` (a polynomial where D = 1): the least total degree
+    deg N + deg D, the polynomials first, whose interpolation at the first points also fits the next CHECK_POINTS,
+    its coefficients taken from the embeddings' images to the number field."""
     field, radicands = samples.embeddings[0], samples.evaluator.radicands
-    P = field.P
-    checks = CHECK_POINTS if variables else 0  # without geometry every draw is the first: nothing to check
-    for degree in range((MAX_DEGREE if variables else 0) + 1):
-        monomials = [m for m in itertools.product(range(degree + 1), repeat=len(variables)) if sum(m) <= degree]
-
-        def row(k: int) -> list[int]:
-            return [_monomial(samples.point(k), variables, m, P) for m in monomials]
-
-        count = len(monomials)
-        system = flint.nmod_mat([row(k) for k in range(count)], P)
-        try:
-            inverse = system.inv()
-        except ZeroDivisionError:
-            continue
-        per_embedding = []
-        for s in range(2 ** len(radicands)):
-            coefficients = inverse * flint.nmod_mat([[samples.value(k, s, entry)] for k in range(count)], P)
-            fits = all(sum(int(c) * x for c, x in zip((coefficients[i, 0] for i in range(count)), row(k))) % P
-                       == samples.value(k, s, entry) for k in range(count, count + checks))
-            if not fits:
-                break
-            per_embedding.append([int(coefficients[i, 0]) for i in range(count)])
-        else:
-            plain = [sympy.Symbol(str(v)) for v in variables]  # as the serial K's: BaseParameters.evaluate's keys
-            return sum((_number(field, radicands, [c[i] for c in per_embedding], where)
-                        * sympy.Mul(*(v ** e for v, e in zip(plain, m))) for i, m in enumerate(monomials)),
-                       sympy.Integer(0))
+    plain = [sympy.Symbol(str(v)) for v in variables]  # as the serial K's: BaseParameters.evaluate's keys
+    for total in range((MAX_DEGREE if variables else 0) + 1):
+        for denominator_degree in range(total + 1):
+            numerator = _monomials(len(variables), total - denominator_degree)
+            denominator = _monomials(len(variables), denominator_degree)
+            fit = (_polynomial_fit(samples, entry, variables, numerator) if not denominator_degree else
+                   _rational_fit(samples, entry, variables, numerator, denominator))
+            if fit is None:
+                continue
+            monomials = numerator + (denominator if denominator_degree else [])
+            terms = [sympy.Mul(*(v ** e for v, e in zip(plain, m))) for m in monomials]
+            value = [_number(field, radicands, [c[i] for c in fit], where) * t for i, t in enumerate(terms)]
+            if not denominator_degree:
+                return sum(value, sympy.Integer(0))
+            return sum(value[:len(numerator)], sympy.Integer(0)) / sum(value[len(numerator):], sympy.Integer(0))
     raise DerivationError(f"{where}: depends on the geometry ({', '.join(map(str, variables))}) otherwise than as a "
-                          f"polynomial of degree <= {MAX_DEGREE} (a ratio, or a sine of an angle), which the exact "
-                          "regrouping does not represent yet; write those parameters' values into the model file "
-                          "in their place")
+                          f"ratio of polynomials of total degree <= {MAX_DEGREE} (a sine of an angle), which the "
+                          "exact regrouping does not represent yet; write those parameters' values into the model "
+                          "file in their place")
+
+
+def _monomials(count: int, degree: int) -> list[tuple[int, ...]]:
+    return [m for m in itertools.product(range(degree + 1), repeat=count) if sum(m) <= degree]
+
+
+def _polynomial_fit(samples: _Samples, entry: tuple[int, int], variables: Sequence[sympy.Symbol],
+                    monomials: list[tuple[int, ...]]) -> list[list[int]] | None:
+    """Per embedding, the coefficients of the polynomial on ``monomials`` through the entry's values at the first
+    points, if it also fits the next CHECK_POINTS (None otherwise)."""
+    P = samples.embeddings[0].P
+    checks = CHECK_POINTS if variables else 0  # without geometry every draw is the first: nothing to check
+
+    def row(k: int) -> list[int]:
+        return [_monomial(samples.point(k), variables, m, P) for m in monomials]
+
+    count = len(monomials)
+    try:
+        inverse = flint.nmod_mat([row(k) for k in range(count)], P).inv()
+    except ZeroDivisionError:
+        return None
+    per_embedding = []
+    for s in range(len(samples.embeddings)):
+        coefficients = inverse * flint.nmod_mat([[samples.value(k, s, entry)] for k in range(count)], P)
+        fits = all(sum(int(c) * x for c, x in zip((coefficients[i, 0] for i in range(count)), row(k))) % P
+                   == samples.value(k, s, entry) for k in range(count, count + checks))
+        if not fits:
+            return None
+        per_embedding.append([int(coefficients[i, 0]) for i in range(count)])
+    return per_embedding
+
+
+def _rational_fit(samples: _Samples, entry: tuple[int, int], variables: Sequence[sympy.Symbol],
+                  numerator: list[tuple[int, ...]], denominator: list[tuple[int, ...]]) -> list[list[int]] | None:
+    """Per embedding, the coefficients (N's, then D's) of N/D through the entry's values v at the first points -
+    the one-dimensional null space of N(G_k) - v_k D(G_k) = 0, scaled so that D's first coefficient that is not
+    zero is 1 - if it also fits the next CHECK_POINTS (D not zero there; None otherwise)."""
+    P = samples.embeddings[0].P
+    count = len(numerator) + len(denominator)
+
+    def row(k: int, s: int) -> list[int]:
+        value = samples.value(k, s, entry)
+        return ([_monomial(samples.point(k), variables, m, P) for m in numerator]
+                + [-value * _monomial(samples.point(k), variables, m, P) % P for m in denominator])
+
+    per_embedding: list[list[int]] = []
+    pivot = None
+    for s in range(len(samples.embeddings)):
+        null, nullity = flint.nmod_mat([row(k, s) for k in range(count - 1)], P).nullspace()
+        if nullity != 1:
+            return None
+        vector = [int(null[i, 0]) for i in range(count)]
+        if pivot is None:
+            pivot = next((i for i in range(len(numerator), count) if vector[i]), None)
+        if pivot is None or not vector[pivot]:
+            return None
+        scale = pow(vector[pivot], -1, P)
+        vector = [v * scale % P for v in vector]
+        for k in range(count - 1, count - 1 + CHECK_POINTS):
+            point = samples.point(k)
+            N, D = (sum(c * _monomial(point, variables, m, P) for c, m in zip(part, monomials)) % P
+                    for part, monomials in ((vector[:len(numerator)], numerator), (vector[len(numerator):], denominator)))
+            if not D or N != samples.value(k, s, entry) * D % P:
+                return None
+        per_embedding.append(vector)
+    return per_embedding
 
 
 def _monomial(point: dict[sympy.Symbol, int], variables: Sequence[sympy.Symbol], powers: Sequence[int], P: int) -> int:
@@ -219,7 +297,7 @@ def _number(field: PrimeField, radicands: Sequence[int], images: Sequence[int], 
     return total
 
 
-def _verify(evaluator: FormulaEvaluator, found: BaseParameters, rng: random.Random, where: str) -> None:
+def _verify(evaluator: RegressorField, found: BaseParameters, rng: random.Random, where: str) -> None:
     """Y_j = Y_b K_j for every column at fresh states and geometry, with an independent prime and either sign of
     each square root."""
     rows, columns = evaluator.shape

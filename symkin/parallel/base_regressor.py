@@ -78,10 +78,29 @@ def closure_rank(d: Deriving, base: int) -> int:
         state = {"q": assembled[0], "p": p}
         arguments = [state[i.name] if i.name in state else rng.normal(size=len(i.symbols)) for i in spec.vector_inputs]
         stacked.append(np.asarray(function(*arguments), dtype=float).reshape(rows, columns))
+    return stacked_rank(stacked, columns)
+
+
+def stacked_rank(stacked: list[np.ndarray], columns: int) -> int:
+    """The numerical rank of the regressors ``stacked`` (one per state) on top of each other, each column scaled to
+    unit norm (a zero column dropped); a singular value counts above :data:`CLOSURE_RANK_TOLERANCE` of the largest."""
     Y = np.concatenate(stacked) if stacked else np.zeros((0, columns))
     norms = np.linalg.norm(Y, axis=0)
     singular = np.linalg.svd(Y[:, norms > 0] / norms[norms > 0], compute_uv=False) if Y.size else np.zeros(0)
     return int(np.sum(singular > CLOSURE_RANK_TOLERANCE * singular.max(initial=0.0)))
+
+
+def base_outputs(Y: OutputSpec, pi: OutputSpec, found: BaseParameters, symbols: dict[sympy.Symbol, sympy.Symbol],
+                 doc: str) -> list[OutputSpec]:
+    """[Y_b, pi_b]: the base columns of the regressor ``Y`` (``doc`` says what they are) and pi_b = K pi, K's
+    geometry (plain symbols) replaced by the model's (``symbols``)."""
+    rows, columns = Y.shape
+    Y_b = sympy.ImmutableMatrix(rows, len(found.base), [Y.expr[i * columns + b] for i in range(rows) for b in found.base])
+    pi_b = sympy.ImmutableMatrix([sum((k.xreplace(symbols) * pi.expr[c] for c, k in enumerate(row) if k != 0),
+                                      sympy.Integer(0)) for row in found.combinations])
+    return [OutputSpec("Y_b", Y_b, doc, shape=(rows, len(found.base)), elements=found.base_names),
+            OutputSpec("pi_b", pi_b, "the model's base parameters (the identifiable combinations)",
+                       shape=(len(found.base),), elements=found.base_names)]
 
 
 @quantity("base_regressor", "base regressor Y_b(q, p, qd, qdd) (full column rank) with tau = Y_b pi_b, and the "
@@ -90,12 +109,7 @@ def _base_regressor(d: Deriving) -> FunctionSpec:
     """Y_b, the regressor's base columns, and the model's pi_b, named by the base parameters' names; K's rows are
     the equations in the function's doc (as the serial base regressor's)."""
     full, found = d[reduced_regressor], d[_base_parameters]
-    Y, pi = full.outputs
-    rows, columns = Y.shape
-    Y_b = sympy.ImmutableMatrix(rows, len(found.base), [Y.expr[i * columns + b] for i in range(rows) for b in found.base])
     symbols = {sympy.Symbol(str(s)): s for i in full.inputs for s in i.symbols}  # K's geometry: plain symbols
-    pi_b = sympy.ImmutableMatrix([sum((k.xreplace(symbols) * pi.expr[c] for c, k in enumerate(row) if k != 0),
-                                      sympy.Integer(0)) for row in found.combinations])
     return dataclasses.replace(
         full, name="base_regressor", summary="Base regressor: tau = Y_b(q, p, qd, qdd) pi_b, Y_b of full column rank.",
         doc="The regressor's linearly independent columns (Khalil and Dombre 2002, sec. 14.4), found by a modular "
@@ -103,7 +117,4 @@ def _base_regressor(d: Deriving) -> FunctionSpec:
             "(symkin.parallel.base_parameters): Y = Y_b K and "
             "pi_b = K pi with K exact for every value of the model's parameters: " + "; ".join(found.equations())
             + ". Evaluate at a consistent pair q, p (p = fk(q) or q = ik(p)).",
-        outputs=(OutputSpec("Y_b", Y_b, "base regressor: full column rank", shape=(rows, len(found.base)),
-                            elements=found.base_names),
-                 OutputSpec("pi_b", pi_b, "the model's base parameters (the identifiable combinations)",
-                            shape=(len(found.base),), elements=found.base_names)))
+        outputs=tuple(base_outputs(full.outputs[0], full.outputs[1], found, symbols, "base regressor: full column rank")))

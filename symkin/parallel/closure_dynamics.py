@@ -55,7 +55,7 @@ def rate_symbols(symbols: tuple[sympy.Symbol, ...], group: str = "qd") -> tuple[
     return tuple(sympy.Symbol(coordinates.symbol_name(group, s.name), real=True) for s in symbols)
 
 
-def _rate_inputs(model: Model, group: str = "qd") -> tuple[InputSpec, InputSpec, InputSpec]:
+def rate_inputs(model: Model, group: str = "qd") -> tuple[InputSpec, InputSpec, InputSpec]:
     """The inputs qd, sd, pd (``group`` "qd") or qdd, sdd, pdd ("qdd")."""
     passive_name, platform_name, per_time, word = _RATE_GROUPS[group]
     passive = passive_variables(model)
@@ -154,19 +154,28 @@ def _check_bodies(d: Deriving) -> None:
                               "'bodies:' with 'links:' (the link each leg joint moves) and the 'platform'")
 
 
+def closure_terms(d: Deriving) -> tuple[sympy.Matrix, sympy.Matrix]:
+    """(Phi_z, gamma): the closure's Jacobian over z = (q, s, p), [Phi_q Phi_s Phi_p], and gamma = d(Phi_z)/dt zd
+    at the rates zd = (qd, sd, pd) (:func:`rate_inputs`), so that Phi_z zd = 0 and Phi_z zdd + gamma = 0 along
+    every assembled motion."""
+    z = _variables(d.model)
+    zd = sympy.Matrix([s for spec in rate_inputs(d.model) for s in spec.symbols])
+    Phi_p, Phi_q, Phi_s = closure_jacobian_matrices(d)
+    Phi = sympy.Matrix.hstack(Phi_q, Phi_s, Phi_p)
+    return Phi, jacobian(Phi * zd, z) * zd
+
+
 @quantity("closure_dynamics", "M_z, h_z = V_z + G_z and the closure's acceleration term gamma over z = (q, s, p), for "
           "legs without the distance form", mechanism=PARALLEL)
 def _closure_dynamics(d: Deriving) -> FunctionSpec:
     _check_bodies(d)
     model = d.model
     z = _variables(model)
-    qd, sd, pd = _rate_inputs(model)
+    qd, sd, pd = rate_inputs(model)
     zd = sympy.Matrix(qd.symbols + sd.symbols + pd.symbols)
     M, u = _mass_and_potential(d)
     V, G = _lagrange_terms(M, u, z, zd)
-    Phi_p, Phi_q, Phi_s = closure_jacobian_matrices(d)
-    Phi = sympy.Matrix.hstack(Phi_q, Phi_s, Phi_p)
-    gamma = jacobian(Phi * zd, z) * zd
+    Phi_z, gamma = closure_terms(d)
     inputs = [actuated_input(d), passive_input(model), task_input(model), qd, sd, pd]
     rows = ", ".join(f"{leg.name}: x, y, z, rx, ry, rz" for leg in model.parallel.legs)  # type: ignore[union-attr]
     return make_function(
@@ -188,14 +197,14 @@ def _closure_dynamics(d: Deriving) -> FunctionSpec:
 
 @quantity("closure_regressor", "regressor Y_z(z, zd, zdd) over z = (q, s, p) with M_z zdd + h_z + F_f = Y_z pi, and the "
           "model's standard parameters pi, for legs without the distance form", mechanism=PARALLEL)
-def _closure_regressor(d: Deriving) -> FunctionSpec:
+def closure_regressor_spec(d: Deriving) -> FunctionSpec:
     """Column k of Y_z is the Lagrangian's M_z zdd + V_z + G_z (and friction) with pi = e_k: each leg link's body
     (bodies.links) and the platform's as ten standard parameters about their frames' origins, and per actuator
     the drive's I_a, f_v, f_c, f_o (as the serial regressor's, symkin.dynamics.regressor)."""
     _check_bodies(d)
     model = d.model
     bodies, structure, z, index = _setting(d)
-    rates, accelerations = _rate_inputs(model), _rate_inputs(model, "qdd")
+    rates, accelerations = rate_inputs(model), rate_inputs(model, "qdd")
     zd = sympy.Matrix([s for spec in rates for s in spec.symbols])
     zdd = sympy.Matrix([s for spec in accelerations for s in spec.symbols])
     g = sympy.Matrix(model.gravity)

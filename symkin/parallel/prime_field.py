@@ -161,7 +161,7 @@ def _outside_angles(expr: sympy.Expr) -> set[sympy.Symbol]:
     return expr.xreplace({a: sympy.Integer(1) for a in angles}).free_symbols if angles else expr.free_symbols
 
 
-class _NoPoint(Exception):
+class NoPoint(Exception):
     """The drawn state has no point over GF(P): a leg's closure or a square root in the formula needs the square
     root of a non-residue (about half the draws each)."""
 
@@ -263,23 +263,23 @@ class FormulaEvaluator:
             try:
                 for closure, program in zip(self.closures, self.closure_programs):
                     self._close(field, rng, closure, program, values, points)
-                values.update(self._atoms(field, rng, self.functions, points))
+                values.update(self.atom_values(field, rng, self.functions, points))
                 return self.run(self.program, field, values)
-            except _NoPoint:
+            except NoPoint:
                 continue
         raise DerivationError(f"{self.where}: no pose of {CLOSURE_DRAWS} drawn closes every leg over a prime field "
                               "(please report it)")
 
     def run(self, program: ModularProgram, field: PrimeField, values: dict[sympy.Expr, int]) -> list[int]:
         """``program``'s outputs in ``field`` at ``values`` of its leaves (its constants computed once per field;
-        a square root of the state that does not exist raises :class:`_NoPoint`)."""
+        a square root of the state that does not exist raises :class:`NoPoint`)."""
         cached = self._field_constants.get(program)
         if cached is None or cached[0] is not field:
             cached = (field, program.constants(field.constant))
             self._field_constants[program] = cached
         return program.run(values, cached[1], field.P, field.inverse, lambda x: _state_root(field.P, x))
 
-    def _atoms(self, field: PrimeField, rng: random.Random, atoms: Sequence[sympy.Expr],
+    def atom_values(self, field: PrimeField, rng: random.Random, atoms: Sequence[sympy.Expr],
                points: dict[sympy.Symbol, tuple[int, int]]) -> dict[sympy.Expr, int]:
         """The sines and cosines among ``atoms`` at the angles' ``points`` (de Moivre), the Coulomb shapes drawn."""
         P = field.P
@@ -305,21 +305,21 @@ class FormulaEvaluator:
         """Solve a leg's closure for its q at the drawn pose (its coefficients: ``program``), into ``points`` (a
         rotation) or ``values``."""
         P = field.P
-        A, B, C = self.run(program, field, {**values, **self._atoms(field, rng, closure.atoms, points)})
+        A, B, C = self.run(program, field, {**values, **self.atom_values(field, rng, closure.atoms, points)})
         if closure.rotation:  # A cos q + B sin q + C = 0: (C - A) t^2 + 2 B t + (A + C) = 0, t = tan(q/2)
             a, b, c = (C - A) % P, 2 * B % P, (A + C) % P
         else:  # A q^2 + B q + C = 0
             a, b, c = A, B, C
         discriminant = (b * b - 4 * a * c) % P
         if a == 0 or (discriminant and pow(discriminant, (P - 1) // 2, P) != 1):
-            raise _NoPoint
+            raise NoPoint
         t = (-b + square_root_mod(discriminant, P) * rng.choice((1, -1))) * field.inverse(2 * a) % P
         if not closure.rotation:
             values[closure.q] = t
         elif (1 + t * t) % P:
             points[closure.q] = field.circle(t)
         else:
-            raise _NoPoint
+            raise NoPoint
 
     def _cosine_and_sine(self, number: sympy.Expr) -> tuple[sympy.Expr, sympy.Expr]:
         """(cos c, sin c) of a constant part c of an angle, refused unless both are in a field Q(sqrt r_1, ...)."""
@@ -337,10 +337,10 @@ def _state_root(P: int, x: int) -> int:
     """A square root of the state's residue x (a leg's length): a point of y^2 = x exists only for a residue.
 
     Raises:
-        _NoPoint: x is not a square mod P (the state is redrawn).
+        NoPoint: x is not a square mod P (the state is redrawn).
     """
     if x and pow(x, (P - 1) // 2, P) != 1:
-        raise _NoPoint
+        raise NoPoint
     return square_root_mod(x, P)
 
 

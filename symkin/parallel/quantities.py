@@ -101,7 +101,7 @@ def _closure_rows(d: Deriving) -> str:
 
 @quantity("closure", "loop-closure residual Phi(q, s, p), 6 rows per leg (zero when the legs close)",
           mechanism=PARALLEL, residual=True)
-def _closure(d: Deriving) -> FunctionSpec:
+def closure_spec(d: Deriving) -> FunctionSpec:
     phi = d[_closure_residual]
     return make_function(
         d.model, "closure", "Loop-closure residual of every leg.",
@@ -171,10 +171,10 @@ def reduced_legs(d: Deriving) -> tuple[distance.DistanceLeg, ...]:
     legs = distance.distance_legs(structure.chains, structure.platform, surface)
     if isinstance(legs, str):
         raise DerivationError(f"model '{d.model.name}': {legs}; use the generic outputs closure and closure_jacobians "
-                              "with symkin.runtime.parallel (solve_closure for its ik and fk, closure_velocities for "
-                              "its Jacobian and singularities), closure_dynamics and closure_regressor for its dynamics "
-                              "(docs/model-format.md, 'Legs of any topology'); base parameters, symkin identify and "
-                              "symkin excite need legs in distance form (docs/identification.md, 'Parallel mechanisms')")
+                              "with symkin.runtime.parallel (solve_closure for its ik and fk, closure_velocities for its "
+                              "Jacobian and singularities), closure_dynamics and closure_regressor for its dynamics, "
+                              "closure_base_regressor for its base parameters (docs/model-format.md, 'Legs of any "
+                              "topology'); symkin identify and symkin excite need legs in distance form yet")
     return legs
 
 

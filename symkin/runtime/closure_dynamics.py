@@ -116,22 +116,24 @@ def closure_forward_dynamics(model: GeneratedModel, q, s, p, qd, tau) -> np.ndar
     return actuated_dynamics(model, q, s, p, qd).accelerations(tau)
 
 
-def closure_regressor(model: GeneratedModel, q, s, p, qd, qdd) -> tuple[np.ndarray, np.ndarray]:
+def closure_regressor(model: GeneratedModel, q, s, p, qd, qdd, base: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """(Y, pi) with tau = Y pi (..., n) the actuator efforts that move the assembled mechanism with qdd, friction
     included: Y = W^T Y_z(z, zd, zdd) (..., n, P) at zd = W qd and zdd = W qdd + c, and the model's standard
-    parameters pi (..., P), named by the generated ``closure_regressor``'s output elements.  The model needs
-    ``closure_jacobians``, ``closure_dynamics`` (for c) and ``closure_regressor``.
+    parameters pi (..., P), named by the generated ``closure_regressor``'s output elements; with ``base``, the
+    base regressor W^T Y_z,b and pi_b of the generated ``closure_base_regressor`` (full column rank).  The model
+    needs ``closure_jacobians``, ``closure_dynamics`` (for c) and the regressor.
     """
-    if "closure_regressor" not in model.functions:
+    name = "closure_base_regressor" if base else "closure_regressor"
+    if name not in model.functions:
         raise ValueError(f"{model.name}: the regressor of legs without the distance form needs the generated "
-                         "'closure_regressor' (derive with --only closure_jacobians,closure_dynamics,closure_regressor)")
+                         f"'{name}' (derive with --only closure_jacobians,closure_dynamics,{name})")
     motion = actuated_dynamics(model, q, s, p, qd)
     batch = motion.zd.shape[:-1]
     q, s, p, qdd = (np.broadcast_to(np.asarray(v, dtype=float), batch + np.shape(v)[-1:]) for v in (q, s, p, qdd))
     n, ns = motion.W.shape[-1], s.shape[-1]
     zdd = np.einsum("...ij,...j->...i", motion.W, qdd) + motion.drift
     zd = motion.zd
-    terms = model.closure_regressor(q, s, p, zd[..., :n], zd[..., n:n + ns], zd[..., n + ns:],
-                                    zdd[..., :n], zdd[..., n:n + ns], zdd[..., n + ns:])
-    Y_z = np.broadcast_to(np.asarray(terms.Y_z, dtype=float), batch + np.shape(terms.Y_z)[-2:])
-    return np.einsum("...ki,...kj->...ij", motion.W, Y_z), np.broadcast_to(terms.pi, batch + np.shape(terms.pi)[-1:])
+    Y_z, pi = getattr(model, name)(q, s, p, zd[..., :n], zd[..., n:n + ns], zd[..., n + ns:],
+                                   zdd[..., :n], zdd[..., n:n + ns], zdd[..., n + ns:])
+    Y_z = np.broadcast_to(np.asarray(Y_z, dtype=float), batch + np.shape(Y_z)[-2:])
+    return np.einsum("...ki,...kj->...ij", motion.W, Y_z), np.broadcast_to(pi, batch + np.shape(pi)[-1:])

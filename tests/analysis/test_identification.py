@@ -248,9 +248,9 @@ def test_a_generated_parallel_model_without_its_base_regressor_is_refused_before
 
 
 def test_legs_without_the_distance_form_are_refused_with_what_they_have(tmp_path):
-    """The dual SCARA (legs R-R-P-R, docs/model-format.md): its base parameters need the distance form, so symkin
-    identify and symkin excite stop before any work, naming the leg and the outputs that model's dynamics do have
-    (closure_dynamics, closure_regressor); nothing written."""
+    """The dual SCARA (legs R-R-P-R, docs/model-format.md): symkin identify and symkin excite need the distance form
+    yet, so they stop before any work, naming the leg and the outputs that model's dynamics do have
+    (closure_dynamics, closure_regressor, closure_base_regressor); nothing written."""
     model = tmp_path / "dual_scara.yaml"
     model.write_text(dual_scara_dynamics_text())
     data = tmp_path / "run.csv"
@@ -260,7 +260,8 @@ def test_legs_without_the_distance_form_are_refused_with_what_they_have(tmp_path
         assert result.returncode == 1, result.stderr
         assert "leg 'leg1' has no distance form" in result.stderr
         assert "closure_dynamics and closure_regressor for its dynamics" in result.stderr
-        assert "base parameters, symkin identify and symkin excite need legs in distance form" in result.stderr
+        assert "closure_base_regressor for its base parameters" in result.stderr
+        assert "symkin identify and symkin excite need legs in distance form yet" in result.stderr
         assert not (tmp_path / "out").exists()
 
 

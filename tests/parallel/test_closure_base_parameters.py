@@ -1,0 +1,138 @@
+"""Base parameters of legs without the distance form (issue 33): the dual SCARA of docs/model-format.md, its points
+on the closure over a prime field found by elimination (symkin/parallel/closure_points.py), its regressor's base
+parameters exact with the geometry symbolic (symkin/parallel/closure_base.py).
+
+References: a planted point of a planar 2R leg (both elbow branches found); the count against the numerical rank
+of Y = W^T Y_z stacked over states assembled in floating point; Y = Y_b K and tau = Y_b pi_b on the generated
+code at assembled states (Gauss-Newton of the runtime, not the prime field); K with the geometry symbolic against
+a second elimination with the geometry written into the file as numbers.
+"""
+
+from __future__ import annotations
+
+import random
+import re
+
+import numpy as np
+import pytest
+import sympy
+
+from conftest import shared_derivation
+from sample_models import dual_scara_dynamics_text
+from symkin import load, pipeline
+from symkin.model import model_from_text
+from symkin.parallel.closure_base import assembled_rank
+from symkin.parallel.closure_points import LegSystem, leg_point
+from symkin.parallel.prime_field import NoPoint, PrimeField
+from symkin.runtime.closure_dynamics import closure_inverse_dynamics, closure_regressor
+from symkin.runtime.parallel import solve_closure
+from tolerances import DYNAMICS
+
+HOME = np.array([0.0, 0.3, 0.1, 0.0])
+#: The geometry of the document's dual SCARA (d, l1, l2, e) written as numbers: the second elimination's model.
+NUMBERS = {"d": sympy.Rational(3, 10), "l1": sympy.Rational(1, 4), "l2": sympy.Rational(1, 4),
+           "e": sympy.Rational(1, 10)}
+
+
+@pytest.fixture(scope="module")
+def model():
+    return model_from_text(dual_scara_dynamics_text(), file="dual_scara_dynamics.yaml")
+
+
+@pytest.fixture(scope="module")
+def found(model):
+    return shared_derivation(model)["closure_base_parameters"]
+
+
+def test_a_planted_point_of_a_planar_2r_leg_is_found_on_either_branch():
+    """l1 (C1, S1) + l2 (C1 C2 - S1 S2, S1 C2 + C1 S2) = (X, Y) with (X, Y) from joint angles drawn on the unit
+    circle mod P: every draw is solved (the point exists), each solution satisfies the equations and the circles,
+    and both elbow branches come out (S2 and -S2)."""
+    rng = random.Random(3)
+    field = PrimeField.embeddings(rng, [])[0]
+    P = field.P
+    # generators (C1, S1, C2, S2); x-row: l1 C1 + l2 C1 C2 - l2 S1 S2 - X, y-row: l1 S1 + l2 S1 C2 + l2 C1 S2 - Y
+    monomials = (((1, 0, 0, 0), (1, 0, 1, 0), (0, 1, 0, 1), (0, 0, 0, 0)),
+                 ((0, 1, 0, 0), (0, 1, 1, 0), (1, 0, 0, 1), (0, 0, 0, 0)))
+    leg = LegSystem((sympy.Symbol("a1"), sympy.Symbol("a2")), (True, True), monomials, (0, 4, 8), 2)
+    branches = set()
+    for _ in range(40):
+        (C1, S1), (C2, S2) = field.circle_point(rng), field.circle_point(rng)
+        l1, l2 = field.residue(rng), field.residue(rng)
+        X = (l1 * C1 + l2 * (C1 * C2 - S1 * S2)) % P
+        Y = (l1 * S1 + l2 * (S1 * C2 + C1 * S2)) % P
+        c1, s1, c2, s2 = leg_point(leg, [l1, l2, -l2 % P, -X % P, l1, l2, l2, -Y % P], P, rng, "planted")
+        assert (l1 * c1 + l2 * (c1 * c2 - s1 * s2) - X) % P == 0
+        assert (l1 * s1 + l2 * (s1 * c2 + c1 * s2) - Y) % P == 0
+        assert (c1 * c1 + s1 * s1 - 1) % P == 0
+        assert (c2 * c2 + s2 * s2 - 1) % P == 0
+        assert c2 == C2  # the elbow's cosine is fixed by |(X, Y)|, its sine by the branch
+        assert s2 in (S2, P - S2)
+        branches.add(s2 == S2)
+    assert branches == {True, False}
+    with pytest.raises(NoPoint):  # beyond reach: |(X, Y)| = l1 + l2 + 1 has no point over the reals' image either
+        leg_point(leg, [1, 1, P - 1, P - 3, 1, 1, 1, 0], P, rng, "planted")
+
+
+def test_the_dual_scara_has_24_base_parameters_with_the_geometry_symbolic(model, found):
+    """96 columns (8 bodies x 10, 4 drives x 4) give 24 on the closure: the count equals the numerical rank of
+    Y = W^T Y_z stacked over states assembled in floating point, and K depends on the link lengths and the bar's
+    half length e (rationally: the bar and the hand form one rigid body, its inertia regroups with 1/e), not on
+    the legs' spacing d."""
+    assert len(found.base) == 24
+    assert assembled_rank(shared_derivation(model)) == 24
+    assert set(found.geometry) == {"e", "l1", "l2"}
+    equations = found.equations()
+    assert "elbow1.myR = elbow1.my + lift1.my" in equations
+    assert "hand2.mxR = hand2.mx + 1/(2*e) hand2.Izz - e/2 platform.m + 1/(2*e) platform.Izz" in equations
+    assert any(re.match(r"lift1\.mR = lift1\.m \+ slide2\.m \+ hand2\.m \+ platform\.m", e) for e in equations)
+
+
+def test_the_regrouping_with_the_geometry_symbolic_is_the_one_at_the_geometrys_numbers(found):
+    """The elimination on the model with d, l1, l2, e written as numbers gives K at those numbers, entry for entry
+    (an independent run: other primes' residues, no interpolation in the geometry)."""
+    numeric = model_from_text(_numbers_written_in(dual_scara_dynamics_text()), file="dual_scara_numbers.yaml")
+    folded = shared_derivation(numeric)["closure_base_parameters"]
+    assert folded.base == found.base
+    assert folded.geometry == ()
+    values = {sympy.Symbol(k): v for k, v in NUMBERS.items()}
+    for row_symbolic, row_numbers in zip(found.combinations, folded.combinations):
+        assert [k.xreplace(values) for k in row_symbolic] == list(row_numbers)
+
+
+def _numbers_written_in(text: str) -> str:
+    """The model with its geometry parameters' values in place of their names in the leg origins and attachments."""
+    head, legs = text.split("\nparallel:\n")
+    for name, value in NUMBERS.items():
+        legs = re.sub(rf"(?<![\w.]){name}(?=[/,\]])", str(value), legs)
+    assert not re.search(r"xyz: \[[^\]]*[a-z]", legs.split("\ngravity:")[0]), legs
+    return head + "\nparallel:\n" + legs
+
+
+def test_the_generated_base_regressor_gives_the_efforts_and_every_column(model, found, tmp_path):
+    """At states assembled by the runtime's Gauss-Newton: W^T Y_z,b pi_b equals closure_inverse_dynamics, and every
+    column of the full Y equals Y_b K (K at the model's geometry); Y_b stacked has full column rank."""
+    request = pipeline.resolve_request(model, "closure,closure_jacobians,closure_dynamics,closure_regressor,"
+                                              "closure_base_regressor", "numpy", fixed="all", combine="none")
+    generated = load(pipeline.write(pipeline.generate(model, request, derivation=shared_derivation(model)), tmp_path))
+    K = found.evaluate({p.name: float(p.value) for p in model.parameters})
+    rng = np.random.default_rng(5)
+    ik = solve_closure(generated, [1.0, 0.1, 1.6, 0.0], np.zeros(4), HOME, unknowns=("q", "s"), max_step=0.2)
+    stacked = []
+    while len(stacked) < 8:
+        q = ik.solution["q"] + rng.uniform(-0.03, 0.03, 4)
+        fk = solve_closure(generated, q, ik.solution["s"], HOME, unknowns=("p", "s"))
+        if not fk.all_converged:
+            continue
+        state = (q, fk.solution["s"], fk.solution["p"], rng.normal(size=4), rng.normal(size=4))
+        Y, pi = closure_regressor(generated, *state)
+        Y_b, pi_b = closure_regressor(generated, *state, base=True)
+        tau = closure_inverse_dynamics(generated, *state)
+        np.testing.assert_array_less(np.abs(Y_b @ pi_b - tau), DYNAMICS * np.abs(Y_b * pi_b).sum(axis=-1))
+        np.testing.assert_allclose(Y_b @ K, Y, rtol=0, atol=DYNAMICS * np.abs(Y_b).sum(axis=-1).max()
+                                   * np.abs(K).max())
+        np.testing.assert_allclose(K @ pi, pi_b, rtol=DYNAMICS)
+        stacked.append(Y_b)
+    singular = np.linalg.svd(np.concatenate(stacked) / np.linalg.norm(np.concatenate(stacked), axis=0),
+                             compute_uv=False)
+    assert singular.min() > 1e-6 * singular.max()
