@@ -8,6 +8,11 @@ Stewart-Gough platform) Newton's method on the generated leg equations (:func:`s
 from the home pose, a sample that does not converge from there continued from the previous sample's pose (the
 run is continuous); a sample where the legs do not assemble is refused with its row.  The device's coordinates
 are the legs' actuators, then a hybrid device's wrist joints, as the regressors' rows.
+
+Legs without the distance form (:class:`ClosureDeviceRegressors`) have neither: each sample's passive joints and
+pose (s, p) are continued from the home assembly along the run (:class:`symkin.simulation.closure_functions.
+ClosureAssembly`), and the regressors are the generated ``closure_regressor`` and ``closure_base_regressor``
+taken to the actuators there (:func:`symkin.runtime.closure_dynamics.closure_regressor`: Y = W^T Y_z).
 """
 
 from __future__ import annotations
@@ -18,6 +23,8 @@ from typing import Any
 import numpy as np
 
 from symkin.analysis.identification import DataError
+from symkin.runtime.closure_dynamics import closure_regressor
+from symkin.simulation.closure_functions import ClosureAssembly
 
 
 class DeviceRegressors:
@@ -48,12 +55,7 @@ class DeviceRegressors:
                 p = np.asarray(self.model.fk(q[..., :self.legs])[0], dtype=float)
             else:
                 p = self._solved_poses(q[..., :self.legs])
-        bad = ~np.all(np.isfinite(p), axis=-1)
-        if np.any(bad):
-            row = int(np.argmax(bad))
-            raise DataError(f"{self.source}: sample {row + 1} (row {row + 2}): the legs do not assemble at q = "
-                            f"{np.array2string(q[row, :self.legs], precision=6)} (fk has no solution); check the "
-                            "angles' zero and sign against the model's")
+        _refuse_unassembled(self.source, q[..., :self.legs], p, "fk has no solution")
         self._last_pose = (q, p)
         return p
 
@@ -89,3 +91,53 @@ class DeviceRegressors:
 
     def energy_regressor(self, q: np.ndarray, qd: np.ndarray) -> Any:
         return self.model.energy_regressor(*self._arguments("energy_regressor", q, qd))
+
+
+def _refuse_unassembled(source: str, q: np.ndarray, solved: np.ndarray, why: str) -> None:
+    """Raises DataError naming the first sample (its CSV row) whose ``solved`` assembly is not finite."""
+    bad = ~np.all(np.isfinite(solved), axis=-1)
+    if np.any(bad):
+        row = int(np.argmax(bad))
+        raise DataError(f"{source}: sample {row + 1} (row {row + 2}): the legs do not assemble at q = "
+                        f"{np.array2string(q[row], precision=6)} ({why}); check the angles' zero and sign against "
+                        "the model's")
+
+
+class ClosureDeviceRegressors:
+    """The regressors of a loaded model of legs without the distance form taking (q, qd, qdd) of its actuators:
+    ``regressor`` and ``base_regressor`` are the generated ``closure_regressor`` and ``closure_base_regressor``
+    taken to the actuators at each sample's assembly (module docstring), and ``info`` names them so; every other
+    attribute is the model's."""
+
+    def __init__(self, model: Any, source: str):
+        self.model, self.source = model, source
+        functions = dict(model.info.functions)
+        functions["regressor"], functions["base_regressor"] = (functions["closure_regressor"],
+                                                               functions["closure_base_regressor"])
+        self.info = dataclasses.replace(model.info, functions=functions)
+        self._assembly = ClosureAssembly(model)
+        self._last: tuple[np.ndarray, tuple[np.ndarray, np.ndarray]] | None = None
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self.model, name)
+
+    def assembly(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(s, p) of every sample (N, ns), (N, m), continued along the run from the home assembly; of the same array
+        as the last call, that call's.
+
+        Raises:
+            DataError: naming the first sample (its CSV row) where the legs stop closing.
+        """
+        if self._last is not None and self._last[0] is q:
+            return self._last[1]
+        s, p = self._assembly(q)
+        _refuse_unassembled(self.source, q, np.concatenate([s, p], axis=-1),
+                            "the closure has no solution continued from the previous sample")
+        self._last = (q, (s, p))
+        return s, p
+
+    def regressor(self, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return closure_regressor(self.model, q, *self.assembly(q), qd, qdd)
+
+    def base_regressor(self, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return closure_regressor(self.model, q, *self.assembly(q), qd, qdd, base=True)

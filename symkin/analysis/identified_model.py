@@ -148,7 +148,7 @@ def _update_chain(section: dict[str, Any], joints: Sequence[Joint], actuators: S
 
 
 def _update_parallel(data: dict[str, Any], model: Model, estimate: _Estimate) -> tuple[list[str], list[str]]:
-    """A parallel model's ``bodies:`` (platform, actuated and distal links, rods, the rotor), its actuators'
+    """A parallel model's ``bodies:`` (platform, actuated and distal links, rods, legs' links, the rotor), its actuators'
     friction and a hybrid device's wrist: the bodies and joints replaced."""
     from symkin.model.schema import ParallelBodies
     from symkin.parallel import hybrid
@@ -158,7 +158,10 @@ def _update_parallel(data: dict[str, Any], model: Model, estimate: _Estimate) ->
     bodies = data.setdefault("bodies", {}) or {}
     data["bodies"] = bodies
     links, joints = [], []
-    for key in ("platform", "actuated_link", "distal_link"):
+    # the bodies of legs without the distance form are in their joints' frames (bodies.links), as the others in theirs
+    leg_links = bodies.setdefault("links", {}) if declared.links else {}
+    for key, place in [(k, bodies) for k in ("platform", "actuated_link", "distal_link")] + [
+            (body.link, leg_links) for body in declared.links]:
         if f"{key}.{INERTIAL[0]}" not in estimate.index:
             continue
         values, known = estimate.of([f"{key}.{p}" for p in INERTIAL])
@@ -166,7 +169,7 @@ def _update_parallel(data: dict[str, Any], model: Model, estimate: _Estimate) ->
             body = _body(values, np.eye(3), np.zeros(3))
             if isinstance(body, str):
                 raise NotUpdated(f"the estimate gives the {key} a {body}; --method consistent keeps every body rigid")
-            bodies[key] = body
+            place[key] = body
             links.append(key)
     rod = [f"rod.{p}" for p in ROD if f"rod.{p}" in estimate.index]
     if model.parallel.motion is not PlatformMotion.SPHERICAL and estimate.of(rod)[1].any():

@@ -19,6 +19,9 @@ IDENTIFY_OUTPUTS = ("base_regressor", "regressor")
 ENERGY_OUTPUTS = (*IDENTIFY_OUTPUTS, "energy_regressor")
 #: What a parallel model's poses come from: its closed-form fk where it has one, else Newton on its leg equations.
 POSE_OUTPUTS = ("fk", "constraints", "constraint_jacobians")
+#: What legs without the distance form are derived with instead: the closure (each sample's assembly), its dynamics
+#: (the velocities and accelerations it allows) and the regressors over all its variables.
+CLOSURE_OUTPUTS = ("closure", "closure_jacobians", "closure_dynamics", "closure_regressor", "closure_base_regressor")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -73,7 +76,7 @@ def run(args: argparse.Namespace) -> int:
         source = _model_file(args.model)
         outputs = ENERGY_OUTPUTS if args.method == "energy" else IDENTIFY_OUTPUTS
         model = model_files.generated_model(args.model, args.backend, outputs,
-                                            optional=model_files.parallel_only(POSE_OUTPUTS))
+                                            optional=model_files.parallel_only(POSE_OUTPUTS), closure=CLOSURE_OUTPUTS)
         values = analysis_args.parse_assignments(args.assignments)
         model = model.bind(**values) if values else model
         parallel = model.info.is_parallel
@@ -141,14 +144,26 @@ def _model_file(path: str):
 
 def _device_regressors(args: argparse.Namespace, model):
     """A parallel model's regressors taking the device's joints (the platform's pose from fk per sample, or from
-    Newton's method on the leg equations).
+    Newton's method on the leg equations; legs without the distance form: each sample's assembly continued along
+    the run, and the closure's regressors).
 
     Raises:
-        ValueError: a generated directory without the base regressor, or without both fk and the leg equations.
+        ValueError: a generated directory without the base regressor, or without both fk and the leg equations (of
+            legs without the distance form: without CLOSURE_OUTPUTS); --method energy on such legs.
     """
-    from symkin.analysis.device_regressors import DeviceRegressors
+    from symkin.analysis.device_regressors import ClosureDeviceRegressors, DeviceRegressors
 
     functions = model.info.functions
+    if "closure_regressor" in functions:  # legs without the distance form
+        missing = [f for f in CLOSURE_OUTPUTS if f not in functions]
+        if missing:
+            raise ValueError(f"{args.model}: the identification of legs without the distance form needs "
+                             f"{', '.join(missing)}; derive them (symkin derive --only {','.join(CLOSURE_OUTPUTS)}) or "
+                             "give the model file")
+        if args.method == "energy":
+            raise ValueError(f"{args.model}: --method energy needs the energy regressor, which legs without the "
+                             "distance form do not have yet; use ols, wls or consistent")
+        return ClosureDeviceRegressors(model, args.data)
     missing = [f for f in ("base_regressor",) if f not in functions]
     if "fk" not in functions and not {"constraints", "constraint_jacobians"} <= set(functions):
         missing.append("fk (or constraints and constraint_jacobians, for Newton's method)")

@@ -55,7 +55,8 @@ def parallel_only(names: Sequence[str]) -> dict[MechanismKind, tuple[str, ...]]:
 
 def generated_model(path: str, backend: str = "numpy",
                outputs: Sequence[str] | Mapping[MechanismKind, Sequence[str]] = ANALYSIS_OUTPUTS,
-               optional: Sequence[str] | Mapping[MechanismKind, Sequence[str]] = ()) -> Any:
+               optional: Sequence[str] | Mapping[MechanismKind, Sequence[str]] = (),
+               closure: Sequence[str] | None = None) -> Any:
     """The loaded model of MODEL: a generated directory, or a model file derived on the fly.
 
     Args:
@@ -64,17 +65,20 @@ def generated_model(path: str, backend: str = "numpy",
         outputs: the quantities to derive from a model file.
         optional: quantities also derived where the model has them (e.g. ``friction``, ``gravity_vector``),
             skipped silently where it does not; or by kind of mechanism, as ``outputs`` (:func:`parallel_only`).
+        closure: the quantities to derive instead of ``outputs`` where the model's legs have no distance form
+            (default: :data:`CLOSURE_OUTPUTS` where ``outputs`` is by kind, else ``outputs``).
 
     Raises:
         ModelError: a model file is invalid.
         GeneratedCodeError: a directory holds no usable generated code.
     """
-    return load_models(path, (backend,), outputs, optional)[0]
+    return load_models(path, (backend,), outputs, optional, closure)[0]
 
 
 def load_models(path: str, backends: Sequence[str],
                 outputs: Sequence[str] | Mapping[MechanismKind, Sequence[str]] = ANALYSIS_OUTPUTS,
-                optional: Sequence[str] | Mapping[MechanismKind, Sequence[str]] = ()) -> list[Any]:
+                optional: Sequence[str] | Mapping[MechanismKind, Sequence[str]] = (),
+                closure: Sequence[str] | None = None) -> list[Any]:
     """MODEL loaded once per backend (as :func:`generated_model`); a model file is derived once, for all of them.
 
     ``outputs`` may map the kind of mechanism ("serial", "parallel") to the quantities
@@ -83,16 +87,17 @@ def load_models(path: str, backends: Sequence[str],
     from symkin import load
 
     # The generated module is imported (numpy) or read (C, CasADi) by load(): the files may go afterwards.
-    with generated_directory(path, backends, outputs, optional) as directory:
+    with generated_directory(path, backends, outputs, optional, closure) as directory:
         return [load(directory, backend) for backend in backends]
 
 
 @contextlib.contextmanager
 def generated_directory(path: str, backends: Sequence[str],
                         outputs: Sequence[str] | Mapping[MechanismKind, Sequence[str]] = ANALYSIS_OUTPUTS,
-                        optional: Sequence[str] | Mapping[MechanismKind, Sequence[str]] = ()) -> Iterator[Path]:
+                        optional: Sequence[str] | Mapping[MechanismKind, Sequence[str]] = (),
+                        closure: Sequence[str] | None = None) -> Iterator[Path]:
     """The generated directory of MODEL while the block runs: MODEL itself, or for a model file
-    a scratch directory it is derived into (``outputs`` and ``optional`` as :func:`load_models`)."""
+    a scratch directory it is derived into (``outputs``, ``optional`` and ``closure`` as :func:`generated_model`)."""
     source = Path(path)
     if not is_model_file(path):
         yield source.parent if source.name == "manifest.json" else source
@@ -101,20 +106,23 @@ def generated_directory(path: str, backends: Sequence[str],
     from symkin.atomic import replace_directory
 
     extra = optional if isinstance(optional, Mapping) else list(optional)
-    key = pipeline_cache.request_key(source, {"command": "analysis", "backends": list(backends), "outputs": outputs,
-                                              "optional": extra}) if pipeline_cache.enabled() else None
+    request = {"command": "analysis", "backends": list(backends), "outputs": outputs, "optional": extra}
+    if closure is not None:
+        request["closure"] = list(closure)
+    key = pipeline_cache.request_key(source, request) if pipeline_cache.enabled() else None
     entry = None if key is None else pipeline_cache.lookup(key)
     with tempfile.TemporaryDirectory(prefix="symkin-analysis-") as scratch:
         if entry is not None:
             directory = Path(scratch) / entry.model
             replace_directory(directory, entry.files)
         else:
-            directory = _derived(source, backends, outputs, optional, scratch, key)
+            directory = _derived(source, backends, outputs, optional, closure, scratch, key)
         yield directory
 
 
 def _derived(source: Path, backends: Sequence[str], outputs: Sequence[str] | Mapping[MechanismKind, Sequence[str]],
-             optional: Sequence[str] | Mapping[MechanismKind, Sequence[str]], scratch: str, key: str | None) -> Path:
+             optional: Sequence[str] | Mapping[MechanismKind, Sequence[str]], closure: Sequence[str] | None,
+             scratch: str, key: str | None) -> Path:
     """The model file derived into ``scratch`` (and kept in the derivation cache under ``key``)."""
     from symkin import pipeline, pipeline_cache
     from symkin.cli.progress import Progress
@@ -124,14 +132,15 @@ def _derived(source: Path, backends: Sequence[str], outputs: Sequence[str] | Map
     model = load_model_file(source)
     derivation = Derivation(model)
     wanted = outputs.get(analysis_kind(model), ANALYSIS_OUTPUTS) if isinstance(outputs, Mapping) else outputs
-    if isinstance(outputs, Mapping) and model.parallel is not None and not derivation.available(["distance_legs"])[0]:
-        wanted = CLOSURE_OUTPUTS
+    if ((closure is not None or isinstance(outputs, Mapping)) and model.parallel is not None
+            and not derivation.available(["distance_legs"])[0]):
+        wanted = CLOSURE_OUTPUTS if closure is None else closure
     if isinstance(outputs, Mapping) and _limits_passive_joints(model):
         wanted = (*wanted, *PASSIVE_LIMIT_OUTPUTS)
     extra = optional.get(analysis_kind(model), ()) if isinstance(optional, Mapping) else optional
     names = dict.fromkeys([*wanted, *derivation.available(extra)[0]])  # in order, each once
-    request = pipeline.resolve_request(model, ",".join(names),
-                                       ",".join(backends), None)
+    # no function 'combined' (the scene's fusion of every output): the analyses call the outputs one by one
+    request = pipeline.resolve_request(model, ",".join(names), ",".join(backends), None, None, "none")
     with Progress(model.name) as progress:
         generation = pipeline.generate(model, request, progress, derivation=derivation)
     if key is not None:

@@ -32,23 +32,15 @@ PLANT_FUNCTIONS = ("forward_dynamics", "inverse_dynamics", "mass_matrix", "kinet
 NEEDED = ("closure", "closure_jacobians", "closure_dynamics")
 
 
-class ClosureFunctions:
-    """The dynamics of legs without closed forms as functions of the actuated joints (see the module docstring).
+class ClosureAssembly:
+    """(s, p) of a generated model of legs without closed forms at its actuated joints q, continued from its home
+    assembly (the module docstring); ``assembly(q)``.
 
     Raises:
-        GeneratedCodeError: the model lacks ``closure_dynamics`` (no bodies declared), or ``friction`` where its
-            joints declare friction, or its legs do not close at the home pose.
+        GeneratedCodeError: its legs do not close at the home pose.
     """
 
     def __init__(self, model: GeneratedModel):
-        missing = [name for name in NEEDED if name not in model.functions]
-        if "friction" not in model.functions and any(c.viscous is not None for c in model.info.coordinates):
-            missing.append("friction")  # it would silently read as zero
-        if missing:
-            outputs = ",".join(NEEDED + (("friction",) if "friction" in missing else ()))
-            raise GeneratedCodeError(f"{model.name}: its legs have no closed forms; simulating them needs the generated "
-                                     f"{', '.join(missing)} (declare bodies: links: and platform:, and derive with "
-                                     f"--only {outputs})")
         self.model = model
         try:
             q, s = assemble_at_home(model)
@@ -57,7 +49,6 @@ class ClosureFunctions:
         self.home = q
         self._home = (q, s, np.asarray(model.info.home, dtype=float))
         self._last = self._home
-        self._last_dynamics: tuple[np.ndarray, np.ndarray, ActuatedDynamics] | None = None
 
     def _solve(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
         """(q, s, p) at q, continued from the nearer (in the actuators) of the last assembly and the home assembly
@@ -78,7 +69,7 @@ class ClosureFunctions:
             s, p = solution["s"], solution["p"]
         return q.copy(), s, p
 
-    def assembly(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def __call__(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(s, p) (..., ns), (..., m) at the actuated joints q, each row continued from the last assembly or the home
         assembly, whichever is nearer (row by row for a batch: a recorded trajectory from its start); NaN where the
         legs do not close."""
@@ -95,6 +86,29 @@ class ClosureFunctions:
                 s.append(solved[1])
                 p.append(solved[2])
         return np.reshape(s, q.shape[:-1] + (-1,)), np.reshape(p, q.shape[:-1] + (-1,))
+
+
+class ClosureFunctions:
+    """The dynamics of legs without closed forms as functions of the actuated joints (see the module docstring).
+
+    Raises:
+        GeneratedCodeError: the model lacks ``closure_dynamics`` (no bodies declared), or ``friction`` where its
+            joints declare friction, or its legs do not close at the home pose.
+    """
+
+    def __init__(self, model: GeneratedModel):
+        missing = [name for name in NEEDED if name not in model.functions]
+        if "friction" not in model.functions and any(c.viscous is not None for c in model.info.coordinates):
+            missing.append("friction")  # it would silently read as zero
+        if missing:
+            outputs = ",".join(NEEDED + (("friction",) if "friction" in missing else ()))
+            raise GeneratedCodeError(f"{model.name}: its legs have no closed forms; simulating them needs the generated "
+                                     f"{', '.join(missing)} (declare bodies: links: and platform:, and derive with "
+                                     f"--only {outputs})")
+        self.model = model
+        self.assembly = ClosureAssembly(model)
+        self.home = self.assembly.home
+        self._last_dynamics: tuple[np.ndarray, np.ndarray, ActuatedDynamics] | None = None
 
     def pose(self, q: np.ndarray) -> np.ndarray:
         """The platform pose p (..., m) at q."""

@@ -247,22 +247,21 @@ def test_a_generated_parallel_model_without_its_base_regressor_is_refused_before
     assert not (tmp_path / "out").exists()
 
 
-def test_legs_without_the_distance_form_are_refused_with_what_they_have(tmp_path):
-    """The dual SCARA (legs R-R-P-R, docs/model-format.md): symkin identify and symkin excite need the distance form
-    yet, so they stop before any work, naming the leg and the outputs that model's dynamics do have
-    (closure_dynamics, closure_regressor, closure_base_regressor); nothing written."""
+def test_legs_without_the_distance_form_are_refused_by_excite_with_what_they_have(tmp_path):
+    """The dual SCARA (legs R-R-P-R, docs/model-format.md): symkin excite needs the distance form yet, so it stops
+    before any work, naming the leg and the outputs that model's dynamics do have (closure_dynamics,
+    closure_regressor, closure_base_regressor); nothing written.  symkin identify takes it
+    (tests/parallel/test_closure_base_parameters.py)."""
     model = tmp_path / "dual_scara.yaml"
     model.write_text(dual_scara_dynamics_text())
-    data = tmp_path / "run.csv"
-    data.write_text("t,q_leg1_q,q_leg2_q\n0,0,0\n")
-    for command in (["identify", str(model), str(data)], ["excite", str(model), "--max-acceleration", "10"]):
-        result = subprocess.run(SYMKIN_CLI + command + ["-o", str(tmp_path / "out")], capture_output=True, text=True)
-        assert result.returncode == 1, result.stderr
-        assert "leg 'leg1' has no distance form" in result.stderr
-        assert "closure_dynamics and closure_regressor for its dynamics" in result.stderr
-        assert "closure_base_regressor for its base parameters" in result.stderr
-        assert "symkin identify and symkin excite need legs in distance form yet" in result.stderr
-        assert not (tmp_path / "out").exists()
+    result = subprocess.run(SYMKIN_CLI + ["excite", str(model), "--max-acceleration", "10", "-o", str(tmp_path / "out")],
+                            capture_output=True, text=True)
+    assert result.returncode == 1, result.stderr
+    assert "leg 'leg1' has no distance form" in result.stderr
+    assert "closure_dynamics and closure_regressor for its dynamics" in result.stderr
+    assert "closure_base_regressor for its base parameters" in result.stderr
+    assert "symkin excite needs legs in distance form yet" in result.stderr
+    assert not (tmp_path / "out").exists()
 
 
 def test_the_consistent_estimates_jacobian_is_the_derivative_of_its_parameterization():
