@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from symkin.analysis.identification import DataError
-from symkin.runtime.closure_dynamics import closure_regressor
+from symkin.runtime.closure_dynamics import closure_energy_regressor, closure_regressor
 from symkin.simulation.closure_functions import ClosureAssembly
 
 
@@ -105,15 +105,16 @@ def _refuse_unassembled(source: str, q: np.ndarray, solved: np.ndarray, why: str
 
 class ClosureDeviceRegressors:
     """The regressors of a loaded model of legs without the distance form taking (q, qd, qdd) of its actuators:
-    ``regressor`` and ``base_regressor`` are the generated ``closure_regressor`` and ``closure_base_regressor``
-    taken to the actuators at each sample's assembly (module docstring), and ``info`` names them so; every other
-    attribute is the model's."""
+    ``regressor``, ``base_regressor`` and ``energy_regressor`` are the generated ``closure_regressor``,
+    ``closure_base_regressor`` and ``closure_energy_regressor`` taken to the actuators at each sample's assembly
+    (module docstring), and ``info`` names them so; every other attribute is the model's."""
 
     def __init__(self, model: Any, source: str):
         self.model, self.source = model, source
         functions = dict(model.info.functions)
-        functions["regressor"], functions["base_regressor"] = (functions["closure_regressor"],
-                                                               functions["closure_base_regressor"])
+        for name in ("regressor", "base_regressor", "energy_regressor"):
+            if f"closure_{name}" in functions:
+                functions[name] = functions[f"closure_{name}"]
         self.info = dataclasses.replace(model.info, functions=functions)
         self._assembly = ClosureAssembly(model)
         self._last: tuple[np.ndarray, tuple[np.ndarray, np.ndarray]] | None = None
@@ -141,3 +142,6 @@ class ClosureDeviceRegressors:
 
     def base_regressor(self, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         return closure_regressor(self.model, q, *self.assembly(q), qd, qdd, base=True)
+
+    def energy_regressor(self, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return closure_energy_regressor(self.model, q, *self.assembly(q), qd)

@@ -22,6 +22,7 @@ POSE_OUTPUTS = ("fk", "constraints", "constraint_jacobians")
 #: What legs without the distance form are derived with instead: the closure (each sample's assembly), its dynamics
 #: (the velocities and accelerations it allows) and the regressors over all its variables.
 CLOSURE_OUTPUTS = ("closure", "closure_jacobians", "closure_dynamics", "closure_regressor", "closure_base_regressor")
+CLOSURE_ENERGY_OUTPUTS = (*CLOSURE_OUTPUTS, "closure_energy_regressor")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -76,7 +77,9 @@ def run(args: argparse.Namespace) -> int:
         source = _model_file(args.model)
         outputs = ENERGY_OUTPUTS if args.method == "energy" else IDENTIFY_OUTPUTS
         model = model_files.generated_model(args.model, args.backend, outputs,
-                                            optional=model_files.parallel_only(POSE_OUTPUTS), closure=CLOSURE_OUTPUTS)
+                                            optional=model_files.parallel_only(POSE_OUTPUTS),
+                                            closure=CLOSURE_ENERGY_OUTPUTS if args.method == "energy" else
+                                            CLOSURE_OUTPUTS)
         values = analysis_args.parse_assignments(args.assignments)
         model = model.bind(**values) if values else model
         parallel = model.info.is_parallel
@@ -149,7 +152,7 @@ def _device_regressors(args: argparse.Namespace, model):
 
     Raises:
         ValueError: a generated directory without the base regressor, or without both fk and the leg equations (of
-            legs without the distance form: without CLOSURE_OUTPUTS); --method energy on such legs.
+            legs without the distance form: without CLOSURE_OUTPUTS).
     """
     from symkin.analysis.device_regressors import ClosureDeviceRegressors, DeviceRegressors
 
@@ -158,11 +161,8 @@ def _device_regressors(args: argparse.Namespace, model):
         missing = [f for f in CLOSURE_OUTPUTS if f not in functions]
         if missing:
             raise ValueError(f"{args.model}: the identification of legs without the distance form needs "
-                             f"{', '.join(missing)}; derive them (symkin derive --only {','.join(CLOSURE_OUTPUTS)}) or "
-                             "give the model file")
-        if args.method == "energy":
-            raise ValueError(f"{args.model}: --method energy needs the energy regressor, which legs without the "
-                             "distance form do not have yet; use ols, wls or consistent")
+                             f"{', '.join(missing)}; derive them (symkin derive --only {','.join(CLOSURE_OUTPUTS)}, "
+                             "and closure_energy_regressor for --method energy) or give the model file")
         return ClosureDeviceRegressors(model, args.data)
     missing = [f for f in ("base_regressor",) if f not in functions]
     if "fk" not in functions and not {"constraints", "constraint_jacobians"} <= set(functions):
@@ -194,8 +194,9 @@ def _energy(model, fit, Y, Y_b, K, names, window: float):
     from symkin.analysis import identification
 
     if "energy_regressor" not in model.info.functions:
-        raise ValueError(f"{model.name}: --method energy needs the energy regressor; derive it (--only regressor,"
-                         "base_regressor,energy_regressor) or give the model file")
+        outputs = ",".join(CLOSURE_ENERGY_OUTPUTS if "closure_regressor" in model.info.functions else ENERGY_OUTPUTS)
+        raise ValueError(f"{model.name}: --method energy needs the energy regressor; derive it (--only {outputs}) or "
+                         "give the model file")
     return identification.energy_least_squares(fit, Y, model.energy_regressor(fit.q, fit.qd)[0], Y_b, K,
                                                model.info.functions["regressor"].outputs["pi"], names, window)
 

@@ -27,6 +27,8 @@ with W from the closure's Jacobians by a linear solve, as the DELTA's J_x^-1 (no
 
 from __future__ import annotations
 
+import dataclasses
+
 import symengine as se
 import sympy
 
@@ -195,27 +197,27 @@ def _closure_dynamics(d: Deriving) -> FunctionSpec:
     )
 
 
-@quantity("closure_regressor", "regressor Y_z(z, zd, zdd) over z = (q, s, p) with M_z zdd + h_z + F_f = Y_z pi, and the "
-          "model's standard parameters pi, for legs without the distance form", mechanism=PARALLEL)
-def closure_regressor_spec(d: Deriving) -> FunctionSpec:
-    """Column k of Y_z is the Lagrangian's M_z zdd + V_z + G_z (and friction) with pi = e_k: each leg link's body
-    (bodies.links) and the platform's as ten standard parameters about their frames' origins, and per actuator
-    the drive's I_a, f_v, f_c, f_o (as the serial regressor's, symkin.dynamics.regressor)."""
+@dataclasses.dataclass(frozen=True)
+class UnitBodies:
+    """What both closure regressors are formed from: per inertial column (each leg link's body, then the
+    platform's, ten standard parameters each), M_z and u of the unit body pi = e_k; the names and the model's
+    values of every column (the inertial ones, then per actuator the drive's I_a, f_v, f_c, f_o)."""
+
+    inertial: tuple[tuple[sympy.Matrix, sympy.Expr], ...]
+    names: tuple[str, ...]
+    values: tuple[sympy.Expr, ...]
+
+
+@quantity("closure_unit_bodies", "M_z and u of each unit body of the closure regressors, their names and pi",
+          emitted=False, mechanism=PARALLEL)
+def unit_bodies(d: Deriving) -> UnitBodies:
     _check_bodies(d)
     model = d.model
     bodies, structure, z, index = _setting(d)
-    rates, accelerations = rate_inputs(model), rate_inputs(model, "qdd")
-    zd = sympy.Matrix([s for spec in rates for s in spec.symbols])
-    zdd = sympy.Matrix([s for spec in accelerations for s in spec.symbols])
     g = sympy.Matrix(model.gravity)
-    columns: list[sympy.Matrix] = []
+    inertial: list[tuple[sympy.Matrix, sympy.Expr]] = []
     names: list[str] = []
     values: list[sympy.Expr] = []
-
-    def add(M: sympy.Matrix, u: sympy.Expr) -> None:
-        V, G = _lagrange_terms(M, u, z, zd)
-        columns.append(M * zdd + V + G)
-
     for body in bodies.links:
         places = [(chain, k) for chain in structure.chains for k, joint in enumerate(chain.leg.joints)
                   if joint.name == body.link]
@@ -224,7 +226,7 @@ def closure_regressor_spec(d: Deriving) -> FunctionSpec:
             for chain, k in places:
                 term, first_moment = _link_mass_matrix(triple, chain, k, index, len(z))
                 M, moment = M + term, moment + first_moment
-            add(M, -g.dot(moment))
+            inertial.append((M, -g.dot(moment)))
         names += [f"{body.link}.{p}" for p in INERTIAL]
         values += standard_values(about_origin(body))
     m = len(model.task_space)
@@ -232,20 +234,48 @@ def closure_regressor_spec(d: Deriving) -> FunctionSpec:
         M_p, u_p = platform_side(model, [triple], structure.platform)
         M = sympy.zeros(len(z), len(z))
         M[len(z) - m:, len(z) - m:] = M_p
-        add(M, u_p)
+        inertial.append((M, u_p))
     names += [f"platform.{p}" for p in INERTIAL]
     values += (standard_values(about_origin(bodies.platform)) if bodies.platform is not None
                else [sympy.Integer(0)] * len(INERTIAL))
     friction = {f.joint: f for f in model.friction}
     armature = bodies.gear_ratio ** 2 * bodies.rotor_inertia
+    for coordinate in model.coordinates:
+        names += [f"{coordinate.name}.{p}" for p in DRIVE]
+        values += [sympy.sympify(v) for v in drive_values(friction.get(coordinate.name), se.sympify(armature))]
+    return UnitBodies(tuple(inertial), tuple(names), tuple(values))
+
+
+def _standard_outputs(first: OutputSpec, units: UnitBodies) -> list[OutputSpec]:
+    """``first`` (a regressor, its last axis the columns) and pi, both named by the columns."""
+    return [dataclasses.replace(first, elements=units.names),
+            OutputSpec("pi", sympy.ImmutableMatrix(units.values), "the model's standard parameters",
+                       shape=(len(units.values),), elements=units.names)]
+
+
+@quantity("closure_regressor", "regressor Y_z(z, zd, zdd) over z = (q, s, p) with M_z zdd + h_z + F_f = Y_z pi, and the "
+          "model's standard parameters pi, for legs without the distance form", mechanism=PARALLEL)
+def closure_regressor_spec(d: Deriving) -> FunctionSpec:
+    """Column k of Y_z is the Lagrangian's M_z zdd + V_z + G_z (and friction) with pi = e_k: each leg link's body
+    (bodies.links) and the platform's as ten standard parameters about their frames' origins, and per actuator
+    the drive's I_a, f_v, f_c, f_o (as the serial regressor's, symkin.dynamics.regressor)."""
+    model = d.model
+    units = d[unit_bodies]
+    z = _variables(model)
+    rates, accelerations = rate_inputs(model), rate_inputs(model, "qdd")
+    zd = sympy.Matrix([s for spec in rates for s in spec.symbols])
+    zdd = sympy.Matrix([s for spec in accelerations for s in spec.symbols])
+    columns: list[sympy.Matrix] = []
+    for M, u in units.inertial:
+        V, G = _lagrange_terms(M, u, z, zd)
+        columns.append(M * zdd + V + G)
+    friction = {f.joint: f for f in model.friction}
     qd, qdd = rates[0].symbols, accelerations[0].symbols
     real = {sympy.Symbol(symbol.name): symbol for symbol in qd + qdd}  # SymEngine's symbols come back plain
     for j, coordinate in enumerate(model.coordinates):
         for term in drive_columns(friction.get(coordinate.name), se.sympify(qd[j]), se.sympify(qdd[j])):
             entry = sympy.sympify(term).xreplace(real)
             columns.append(sympy.Matrix([entry if row == j else 0 for row in range(len(z))]))
-        names += [f"{coordinate.name}.{p}" for p in DRIVE]
-        values += [sympy.sympify(v) for v in drive_values(friction.get(coordinate.name), se.sympify(armature))]
     Y = sympy.Matrix.hstack(*columns)
     inputs = [actuated_input(d), passive_input(model), task_input(model), *rates, *accelerations]
     return make_function(
@@ -255,9 +285,28 @@ def closure_regressor_spec(d: Deriving) -> FunctionSpec:
         "m c, I_o about their frames' origins (Pinocchio's order), per actuator I_a, f_v, f_c, f_o. With zd = W qd "
         "and zdd = W qdd + c the motion the closure allows, tau = W^T Y_z pi (symkin.runtime.closure_dynamics."
         "closure_regressor). The names of pi are the outputs' elements in the manifest.",
-        inputs,
-        [OutputSpec("Y_z", sympy.ImmutableMatrix(Y), "regressor over z: column k is the effort per unit of "
-                    "parameter k", elements=tuple(names)),
-         OutputSpec("pi", sympy.ImmutableMatrix(values), "the model's standard parameters", shape=(len(values),),
-                    elements=tuple(names))],
-    )
+        inputs, _standard_outputs(OutputSpec("Y_z", sympy.ImmutableMatrix(Y), "regressor over z: column k is the "
+                                             "effort per unit of parameter k"), units))
+
+
+@quantity("closure_energy_regressor", "energy regressor Y_e(z, zd) with k + u = Y_e pi, and the model's standard "
+          "parameters pi, for legs without the distance form", mechanism=PARALLEL)
+def _closure_energy_regressor(d: Deriving) -> FunctionSpec:
+    """Column k of Y_e is the energy 1/2 zd^T M_z zd + u of the unit body pi = e_k; a drive's reflected inertia
+    1/2 qd_j^2, its friction 0 (as the serial energy regressor's, symkin.dynamics.regressor)."""
+    model = d.model
+    units = d[unit_bodies]
+    rates = rate_inputs(model)
+    zd = sympy.Matrix([s for spec in rates for s in spec.symbols])
+    row = [(zd.T * M * zd)[0] / 2 + u for M, u in units.inertial]
+    for rate in rates[0].symbols:
+        row += [rate ** 2 / 2, sympy.Integer(0), sympy.Integer(0), sympy.Integer(0)]
+    inputs = [actuated_input(d), passive_input(model), task_input(model), *rates]
+    return make_function(
+        model, "closure_energy_regressor", "Energy regressor of legs without the distance form: k + u = Y_e pi.",
+        "The kinetic and potential energy 1/2 zd^T M_z zd + u of each unit body over z = (q, s, p) (the columns of "
+        "closure_regressor; a drive's reflected inertia 1/2 qd_j^2, friction 0). At the velocities the closure "
+        "allows, zd = W qd, Y_e pi is the mechanism's energy and d(Y_e pi)/dt = qd . (tau - F_f) along a motion "
+        "(symkin.runtime.closure_dynamics.closure_energy_regressor).",
+        inputs, _standard_outputs(OutputSpec("Y_e", sympy.ImmutableMatrix(row), "energy per unit of each standard "
+                                             "parameter", shape=(len(row),)), units))

@@ -137,3 +137,20 @@ def closure_regressor(model: GeneratedModel, q, s, p, qd, qdd, base: bool = Fals
                                    zdd[..., :n], zdd[..., n:n + ns], zdd[..., n + ns:])
     Y_z = np.broadcast_to(np.asarray(Y_z, dtype=float), batch + np.shape(Y_z)[-2:])
     return np.einsum("...ki,...kj->...ij", motion.W, Y_z), np.broadcast_to(pi, batch + np.shape(pi)[-1:])
+
+
+def closure_energy_regressor(model: GeneratedModel, q, s, p, qd) -> tuple[np.ndarray, np.ndarray]:
+    """(Y_e, pi) with k + u = Y_e pi (...,) the energy of the assembled mechanism moving with qd: the generated
+    ``closure_energy_regressor`` at zd = W qd (..., P), and the model's standard parameters pi (..., P).  The model
+    needs ``closure_jacobians``, ``closure_dynamics`` (for W) and ``closure_energy_regressor``."""
+    if "closure_energy_regressor" not in model.functions:
+        raise ValueError(f"{model.name}: the energy regressor of legs without the distance form needs the generated "
+                         "'closure_energy_regressor' (derive with --only closure_jacobians,closure_dynamics,"
+                         "closure_energy_regressor)")
+    zd = actuated_dynamics(model, q, s, p, qd).zd
+    batch = zd.shape[:-1]
+    q, s, p = (np.broadcast_to(np.asarray(v, dtype=float), batch + np.shape(v)[-1:]) for v in (q, s, p))
+    n, ns = q.shape[-1], s.shape[-1]
+    Y_e, pi = model.closure_energy_regressor(q, s, p, zd[..., :n], zd[..., n:n + ns], zd[..., n + ns:])
+    return (np.broadcast_to(np.asarray(Y_e, dtype=float), batch + np.shape(Y_e)[-1:]),
+            np.broadcast_to(pi, batch + np.shape(pi)[-1:]))
