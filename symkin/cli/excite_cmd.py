@@ -24,7 +24,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "coefficients and the condition numbers of the start and of the result), summary.txt and "
                     "excitation.png into the output directory (replaced as a whole). A parallel platform without a "
                     "closed-form fk (the Stewart-Gough) moves its pose in such series instead, its actuators "
-                    "following q = ik(p).",
+                    "following q = ik(p); legs without the distance form move their actuators about the home "
+                    "assembly (give --limit for each), each sample assembled by a rootfinder.",
         epilog="e.g. symkin excite models/planar_2r.yaml --max-velocity 2 --max-acceleration 10 --period 4")
     analysis_args.add_model_arguments(p, backend=False)
     p.add_argument("--period", type=float, default=10.0, metavar="T", help="period in s (default: %(default)s)")
@@ -46,7 +47,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from symkin.design import excitation
+    from symkin.design import closure_excitation, excitation
 
     start = time.perf_counter()
     try:
@@ -55,9 +56,11 @@ def run(args: argparse.Namespace) -> int:
                 raise ValueError(f"--{name.replace('_', '-')} must be positive")
         if args.harmonics < 1 or args.periods < 1:
             raise ValueError("--harmonics and --periods must be at least 1")
-        # a parallel model's run: its actuators' series through fk, or its pose's through ik without a closed-form fk
+        # a parallel model's run: its actuators' series through fk, or its pose's through ik without a closed-form fk;
+        # legs without the distance form: the actuators' series, each sample assembled by a rootfinder
         model = model_files.generated_model(args.model, "casadi", ("base_regressor",),
-                                            optional=model_files.parallel_only(("fk", "ik")))
+                                            optional=model_files.parallel_only(("fk", "ik")),
+                                            closure=closure_excitation.CLOSURE_EXCITATION)
         values = analysis_args.parse_assignments(args.assignments)
         model = model.bind(**values) if values else model
         joints = model.info.device_coordinates   # a hybrid device's wrist joints after the legs' actuators

@@ -26,6 +26,9 @@ their own after the legs' actuators (the device's joints, as a run records them)
 fk (the Stewart-Gough platform) moves its pose p instead: the series are the task coordinates', the actuators
 follow q = ik(p) with qd = (dq/dp) pd and qdd = (dqd/dp) pd + (dqd/dpd) pdd (CasADi's forward derivatives of the
 generated ik), and the actuators' limits and the legs' assembly (ik's margin >= 0) hold at the constraint points.
+Legs without the distance form (no fk, no ik) move their actuators about the home assembly, each sample's
+assembly found by a rootfinder (:mod:`symkin.design.closure_excitation`), and the result is shrunk until the legs
+close along the whole period.
 """
 
 from __future__ import annotations
@@ -37,9 +40,11 @@ from typing import Any
 import casadi
 import numpy as np
 
+from symkin.design import closure_excitation
 from symkin.design.formulation import casadi_function
 from symkin.design.solving import IPOPT_OPTIONS
 from symkin.runtime.info import GeneratedModel
+from symkin.simulation.closure_functions import ClosureAssembly
 
 #: How much of each joint range the start's motion uses (a small motion about the middle of the limits).
 START_AMPLITUDE = 0.1
@@ -136,12 +141,14 @@ def optimize_excitation(model: GeneratedModel, *, period: float = 10.0, harmonic
     Raises:
         ValueError: missing limits, or a start IPOPT cannot leave (see the message).
     """
-    function = casadi_function(model, "base_regressor")
+    closure = ClosureAssembly(model) if "closure_base_regressor" in model.info.functions else None
     lower, upper, speeds, accelerations = _limits(model, max_velocity, max_acceleration, limits or {})
-    joints = _task_to_joints(model) if model.info.is_parallel and "fk" not in model.info.functions else None
+    joints = (_task_to_joints(model) if model.info.is_parallel and "fk" not in model.info.functions
+              and closure is None else None)
     names = model.info.task_space if joints is not None else tuple(c.name for c in model.info.device_coordinates)
     n, n_q = len(names), len(lower)
-    count = len(model.info.functions["base_regressor"].outputs["pi_b"])
+    base = "base_regressor" if closure is None else "closure_base_regressor"
+    count = len(model.info.functions[base].outputs["pi_b"])
     samples = samples or max(4 * -(-count // n_q), 50)
     t = np.arange(samples) * period / samples
     rng = np.random.default_rng(seed)
@@ -149,7 +156,9 @@ def optimize_excitation(model: GeneratedModel, *, period: float = 10.0, harmonic
     # a start that moves every joint by ~START_AMPLITUDE of its range, within the velocity bound
     half = (upper - lower) / 2
     scale = np.minimum(START_AMPLITUDE * half[:, None] * omega / harmonics, 0.5 * speeds[:, None] / harmonics)
-    if joints is None:
+    if closure is not None:  # legs without the distance form move about their home assembly
+        middle = closure.home
+    elif joints is None:
         middle = (lower + upper) / 2
     else:  # about home, each task coordinate moving no joint by more than that (dq = J^-1 dp at home)
         middle = np.array(model.info.home, dtype=float)
@@ -160,17 +169,26 @@ def optimize_excitation(model: GeneratedModel, *, period: float = 10.0, harmonic
     offsets, a, b = x[:n], casadi.reshape(x[n:n + n * harmonics], harmonics, n).T, \
         casadi.reshape(x[n + n * harmonics:], harmonics, n).T
     dense = np.arange(CONSTRAINT_DENSITY * samples) * period / (CONSTRAINT_DENSITY * samples)
-    pose = _pose_function(model, samples) if model.info.is_parallel and joints is None else None
+    pose = _pose_function(model, samples) if model.info.is_parallel and joints is None and closure is None else None
     sampled = _series(casadi, offsets, a, b, period, t)
     (q, qd, qdd), _ = _joint_motion(sampled, joints)
     states = _states(model, q.T, qd.T, qdd.T, pose)
     if joints is not None:
         states["p"] = sampled[0].T
+    x0 = np.concatenate([middle, a0.ravel(), b0.ravel()])  # each coordinate's L coefficients in a row
+    # legs without the distance form: each sample's assembly by a rootfinder from a guess, the start's assembly
+    guess = casadi.MX.sym("guess", *((0, samples) if closure is None else closure_excitation.guess_shape(closure,
+                                                                                                        samples)))
+    if closure is None:
+        function, guess0 = casadi_function(model, base), np.zeros((0, samples))
+    else:
+        function = closure_excitation.regressor_function(model, closure_excitation.independent_rows(closure))
+        states["guess"] = guess
+        guess0 = closure_excitation.guesses(closure, _series(np, middle, a0, b0, period, t)[0])
     (q_c, qd_c, qdd_c), margin = _joint_motion(_series(casadi, offsets, a, b, period, dense), joints)
     Y = function.map(samples, "serial")(*_arguments(function, model, states, samples))[0]  # (n_q, count * samples)
-    x0 = np.concatenate([middle, a0.ravel(), b0.ravel()])  # each coordinate's L coefficients in a row
-    regressor_at = casadi.Function("W", [x], [Y])
-    W0 = _stacked(regressor_at(x0).full(), n_q, count, samples)
+    regressor_at = casadi.Function("W", [x, guess], [Y])
+    W0 = _stacked(regressor_at(x0, guess0).full(), n_q, count, samples)
     column = np.linalg.norm(W0, axis=0)
     column[column == 0] = 1.0
     W = casadi.mtimes(_stacked_mx(Y, n_q, count, samples), casadi.diag(casadi.DM(1.0 / column)))
@@ -189,10 +207,13 @@ def optimize_excitation(model: GeneratedModel, *, period: float = 10.0, harmonic
         g = casadi.vertcat(g, casadi.vec(margin))
         assembly = margin.numel()  # one margin per leg and constraint point
         lbg, ubg = np.concatenate([lbg, np.zeros(assembly)]), np.concatenate([ubg, np.full(assembly, np.inf)])
-    solver = casadi.nlpsol("excitation", "ipopt", {"x": x, "f": objective, "g": g},
+    problem, given = {"x": x, "f": objective, "g": g}, {}
+    if closure is not None:  # the guesses are the problem's parameters
+        problem["p"], given["p"] = casadi.vec(guess), guess0.ravel(order="F")
+    solver = casadi.nlpsol("excitation", "ipopt", problem,
                            {**IPOPT_OPTIONS, "ipopt.tol": 1e-6, "ipopt.constr_viol_tol": 1e-9,
                             "ipopt.max_iter": max_iterations, "ipopt.hessian_approximation": "limited-memory"})
-    result = solver(x0=x0, lbg=lbg, ubg=ubg)
+    result = solver(x0=x0, lbg=lbg, ubg=ubg, **given)
     # between the constraint points the motion may overshoot by O(dt^2 qdd): shrink it about q0 to fit a grid
     # ten times as dense (a common factor keeps the start at rest and the period)
     check = np.arange(CHECK_DENSITY * len(dense)) * period / (CHECK_DENSITY * len(dense))
@@ -207,7 +228,14 @@ def optimize_excitation(model: GeneratedModel, *, period: float = 10.0, harmonic
                                      _between_points(a_v, b_v, omega, period / len(check)), bounds)
         else:
             shrink = _task_fitting_factor(joints, offsets_v, a_v, b_v, period, check, bounds)
-        W_v = _stacked(regressor_at(np.concatenate([offsets_v, shrink * vector[n:]])).full(), n_q, count, samples)
+        fitted_guess = guess0
+        if closure is not None:  # the legs close along the whole motion (else it shrinks more), assembled anew
+            shrink = closure_excitation.assembled_factor(closure, lambda f: _series(np, offsets_v, f * a_v, f * b_v,
+                                                                                    period, check)[0], shrink)
+            fitted_guess = closure_excitation.guesses(closure, _series(np, offsets_v, shrink * a_v, shrink * b_v,
+                                                                       period, t)[0])
+        W_v = _stacked(regressor_at(np.concatenate([offsets_v, shrink * vector[n:]]), fitted_guess).full(), n_q,
+                       count, samples)
         return offsets_v, shrink * a_v, shrink * b_v, _condition(W_v / column)
 
     status, start = solver.stats()["return_status"], _condition(W0 / column)

@@ -174,7 +174,7 @@ def reduced_legs(d: Deriving) -> tuple[distance.DistanceLeg, ...]:
                               "with symkin.runtime.parallel (solve_closure for its ik and fk, closure_velocities for its "
                               "Jacobian and singularities), closure_dynamics and closure_regressor for its dynamics, "
                               "closure_base_regressor for its base parameters (docs/model-format.md, 'Legs of any "
-                              "topology'); symkin excite needs legs in distance form yet")
+                              "topology')")
     return legs
 
 

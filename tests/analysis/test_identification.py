@@ -19,7 +19,7 @@ from symkin.analysis import identification
 from symkin.dynamics.parameter_names import DISSIPATIVE
 from symkin.model import model_from_text
 from identification_runs import NOISE, RATE, arm, excitation, simulated_run, write_run  # noqa: F401 (the fixture arm)
-from sample_models import DRIVEN, dual_scara_dynamics_text
+from sample_models import DRIVEN
 from tolerances import EPS
 
 @pytest.mark.parametrize("method", ["ols", "wls"])
@@ -244,23 +244,6 @@ def test_a_generated_parallel_model_without_its_base_regressor_is_refused_before
                                           "-o", str(tmp_path / "out")], capture_output=True, text=True)
     assert result.returncode == 2
     assert "a parallel model's identification needs base_regressor; derive them" in result.stderr
-    assert not (tmp_path / "out").exists()
-
-
-def test_legs_without_the_distance_form_are_refused_by_excite_with_what_they_have(tmp_path):
-    """The dual SCARA (legs R-R-P-R, docs/model-format.md): symkin excite needs the distance form yet, so it stops
-    before any work, naming the leg and the outputs that model's dynamics do have (closure_dynamics,
-    closure_regressor, closure_base_regressor); nothing written.  symkin identify takes it
-    (tests/parallel/test_closure_base_parameters.py)."""
-    model = tmp_path / "dual_scara.yaml"
-    model.write_text(dual_scara_dynamics_text())
-    result = subprocess.run(SYMKIN_CLI + ["excite", str(model), "--max-acceleration", "10", "-o", str(tmp_path / "out")],
-                            capture_output=True, text=True)
-    assert result.returncode == 1, result.stderr
-    assert "leg 'leg1' has no distance form" in result.stderr
-    assert "closure_dynamics and closure_regressor for its dynamics" in result.stderr
-    assert "closure_base_regressor for its base parameters" in result.stderr
-    assert "symkin excite needs legs in distance form yet" in result.stderr
     assert not (tmp_path / "out").exists()
 
 

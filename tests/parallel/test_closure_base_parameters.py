@@ -20,7 +20,7 @@ import pytest
 import sympy
 
 from conftest import SYMKIN_CLI, shared_derivation
-from identification_runs import excitation, write_run
+from identification_runs import write_run
 from sample_models import dual_scara_dynamics_text
 from symkin import load, pipeline
 from symkin.model import model_from_text
@@ -54,10 +54,11 @@ def found(model):
 
 @pytest.fixture(scope="module")
 def generated_dir(model, tmp_path_factory):
-    """The model derived with what symkin identify --method energy derives legs without the distance form with."""
+    """The model derived with what symkin identify --method energy and symkin excite derive legs without the
+    distance form with (numpy and CasADi)."""
     request = pipeline.resolve_request(model, "closure,closure_jacobians,closure_dynamics,closure_regressor,"
-                                              "closure_base_regressor,closure_energy_regressor", "numpy", fixed="all",
-                                       combine="none")
+                                              "closure_base_regressor,closure_energy_regressor", "numpy,casadi",
+                                       fixed="all", combine="none")
     generation = pipeline.generate(model, request, derivation=shared_derivation(model))
     return pipeline.write(generation, tmp_path_factory.mktemp("dual-scara"))
 
@@ -166,13 +167,15 @@ def test_the_generated_base_regressor_gives_the_efforts_and_every_column(model, 
 #: Noise on the efforts (N m, N): large against rounding and the energy balance's quadrature, small against the
 #: lift's 4.4 N and the arms' torques (~0.1 N m).
 NOISE = 1e-3
-#: The excitation's swing per actuator about the home assembly (rad, m, rad, rad) per unit of identification_runs'.
+#: The excitation's range per actuator about the home assembly (rad, m, rad, rad): limits given to symkin excite.
 SWING = np.array([0.3, 0.05, 0.3, 0.3])
 
 
-def test_symkin_identify_recovers_the_base_parameters_from_the_actuators(model, generated, generated_dir, tmp_path):
-    """A run recorded on the four actuators alone: a periodic excitation about the home assembly, the efforts from
-    the model's inverse dynamics (checked against Pinocchio in test_closure_dynamics.py) with noise.  symkin
+def test_an_excitation_of_the_actuators_identifies_the_dual_scara(model, generated, generated_dir, tmp_path):
+    """symkin excite moves the four actuators in Fourier series within limits about the home assembly, each sample
+    assembled by CasADi's rootfinder (the start's assembly its guess): cond(W S) falls by far, excitation.csv stays
+    within the limits and the legs close along it.  A run along it, the efforts from the model's inverse dynamics
+    (checked against Pinocchio in test_closure_dynamics.py) with noise, recorded on the actuators alone: symkin
     identify --method consistent, given the model file, continues each sample's assembly along the run, gives every
     one of the 24 base parameters within 5 of its standard deviations (weighted least squares) and writes an
     identified.yaml that the model reader takes back, every leg link's body replaced, its base parameters within
@@ -180,9 +183,22 @@ def test_symkin_identify_recovers_the_base_parameters_from_the_actuators(model, 
     windows, without the accelerations) too."""
     names = generated.info.coordinate_names
     home = ClosureAssembly(generated).home
-    t, q, qd, qdd = excitation(len(names), seed=4, rate=100.0)  # 1 000 samples
-    q, qd, qdd = home + SWING * (q - 0.7), SWING * qd, SWING * qdd
+    limits = [f"--limit={name}={float(h - w)!r}:{float(h + w)!r}" for name, h, w in zip(names, home, SWING)]
+    excited = tmp_path / "excite"
+    result = subprocess.run(SYMKIN_CLI + ["excite", str(generated_dir), *limits, "--max-velocity", "1",
+                                          "--max-acceleration", "10", "--period", "4", "--harmonics", "3",
+                                          "--periods", "2", "--rate", "125", "--max-iterations", "30", "--no-figure",
+                                          "-o", str(excited)], capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    record = json.loads((excited / "excitation.json").read_text())
+    assert record["condition"] < record["condition_start"] / 10, record
+    table = np.loadtxt(excited / "excitation.csv", delimiter=",", skiprows=1)
+    t, q, qd, qdd = table[:, 0], table[:, 1:5], table[:, 5:9], table[:, 9:13]
+    assert len(t) == 1000
+    assert np.all(np.abs(q - home) <= SWING * (1 + 1e-12))
     s, p = ClosureAssembly(generated)(q)
+    assert np.all(np.isfinite(s))
+    assert np.all(np.isfinite(p))
     tau = closure_inverse_dynamics(generated, q, s, p, qd, qdd) + np.random.default_rng(4).normal(0, NOISE, q.shape)
     run = write_run(tmp_path / "run.csv", names, t, q, tau, qd, qdd)
     model_file = tmp_path / "dual_scara.yaml"
