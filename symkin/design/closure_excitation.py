@@ -54,12 +54,6 @@ def independent_rows(closure: ClosureAssembly) -> list[int]:
     return rows
 
 
-def guess_shape(closure: ClosureAssembly, samples: int) -> tuple[int, int]:
-    """(size of u = (s, p), samples): the guesses' matrix, a column per sample."""
-    s, p = closure(closure.home)
-    return len(s) + len(p), samples
-
-
 def guesses(closure: ClosureAssembly, q: np.ndarray) -> np.ndarray:
     """u = (s, p) (size, samples) along the motion q (samples, n), continued from the home assembly.
 

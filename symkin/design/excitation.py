@@ -177,14 +177,12 @@ def optimize_excitation(model: GeneratedModel, *, period: float = 10.0, harmonic
         states["p"] = sampled[0].T
     x0 = np.concatenate([middle, a0.ravel(), b0.ravel()])  # each coordinate's L coefficients in a row
     # legs without the distance form: each sample's assembly by a rootfinder from a guess, the start's assembly
-    guess = casadi.MX.sym("guess", *((0, samples) if closure is None else closure_excitation.guess_shape(closure,
-                                                                                                        samples)))
     if closure is None:
         function, guess0 = casadi_function(model, base), np.zeros((0, samples))
     else:
         function = closure_excitation.regressor_function(model, closure_excitation.independent_rows(closure))
-        states["guess"] = guess
         guess0 = closure_excitation.guesses(closure, _series(np, middle, a0, b0, period, t)[0])
+    guess = states["guess"] = casadi.MX.sym("guess", *guess0.shape)
     (q_c, qd_c, qdd_c), margin = _joint_motion(_series(casadi, offsets, a, b, period, dense), joints)
     Y = function.map(samples, "serial")(*_arguments(function, model, states, samples))[0]  # (n_q, count * samples)
     regressor_at = casadi.Function("W", [x, guess], [Y])

@@ -77,12 +77,20 @@ class _Echelon:
 
 
 def _echelon(evaluator: RegressorField, field: PrimeField, geometry: dict[sympy.Symbol, int], seed: int) -> _Echelon:
+    """The samples stacked until EXTRA_SAMPLES states in a row add no rank (a random state's rows fall in the span
+    of the others' short of the rank with a probability of order degree / P), in reduced row echelon form: far
+    fewer states than columns / rows where many columns depend on the others (the dual SCARA's 96 columns, rank 24
+    from 4 rows a state), at most that many plus EXTRA_SAMPLES."""
     rows, columns = evaluator.shape
-    samples = -(-columns // max(rows, 1)) + EXTRA_SAMPLES
+    limit = -(-columns // max(rows, 1)) + EXTRA_SAMPLES
     rng = random.Random(seed)
     stacked: list[int] = []
-    for _ in range(samples):
+    rank = unchanged = samples = 0
+    while unchanged < EXTRA_SAMPLES and samples < limit:
         stacked += evaluator.rows(field, rng, geometry)
+        samples += 1
+        grown = flint.nmod_mat(samples * rows, columns, stacked, field.P).rank()
+        unchanged, rank = (unchanged + 1 if grown == rank else 0), grown
     echelon, rank = flint.nmod_mat(samples * rows, columns, stacked, field.P).rref()
     K = [[int(echelon[r, c]) for c in range(columns)] for r in range(rank)]
     return _Echelon(tuple(next(c for c, v in enumerate(row) if v) for row in K), K)

@@ -146,7 +146,6 @@ class ClosurePoints:
         self.coefficients = FormulaEvaluator(entries_spec(closure, coefficients), where)
         self.check = FormulaEvaluator(entries_spec(closure, numerators + denominators), where)
         self._numerators = len(numerators)
-        self.pose = [x for x in self.coefficients.variables]
 
     def draw(self, field: PrimeField, rng: random.Random, geometry: dict[sympy.Symbol, int]
              ) -> tuple[dict[sympy.Expr, int], dict[sympy.Symbol, tuple[int, int]]]:
