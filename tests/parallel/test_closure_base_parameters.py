@@ -31,7 +31,7 @@ from symkin.runtime.closure_dynamics import (actuated_dynamics, closure_energy_r
                                              closure_regressor)
 from symkin.runtime.parallel import solve_closure
 from symkin.simulation.closure_functions import ClosureAssembly
-from tolerances import DYNAMICS
+from tolerances import DYNAMICS, NEWTON
 
 #: One worker for the module: its tests share the derivation of the model (shared_derivation) and its generation.
 pytestmark = pytest.mark.xdist_group("dual_scara_base_parameters")
@@ -226,3 +226,22 @@ def test_an_excitation_of_the_actuators_identifies_the_dual_scara(model, generat
     assert (record["method"], len(record["parameters"])) == ("energy", 24)
     error = {row["name"]: abs(row["value"] - row["model"]) / row["std"] for row in record["parameters"]}
     assert max(error.values()) < 5, error
+
+
+def test_a_sample_where_the_legs_do_not_close_is_refused_with_its_row(generated):
+    """symkin identify's view of legs without the distance form (analysis.device_regressors): each sample's assembly
+    continued along the run; a sample the legs cannot reach (the planar leg stretched straight along +x puts the
+    bar's left end 0.6 m from the lifting leg's axis, beyond its l1 + l2 = 0.5 m) is refused with its CSV row, the
+    samples before it assembled."""
+    from symkin.analysis.device_regressors import ClosureDeviceRegressors
+    from symkin.analysis.identification import DataError
+
+    device = ClosureDeviceRegressors(generated, "run.csv")
+    home = ClosureAssembly(generated).home
+    q = home + np.outer(np.linspace(0.0, 0.02, 3), [1.0, 0.1, 1.0, 1.0])
+    s, p = device.assembly(q)
+    assert device.info.functions["base_regressor"] is generated.info.functions["closure_base_regressor"]
+    assert np.abs(generated.closure(q, s, p)).max() <= NEWTON  # scale: links of 0.25 m, angles < 1 rad
+    wild = np.vstack([q, [q[-1, 0], q[-1, 1], 0.0, 0.0]])                  # phi2 = knee2 = 0
+    with pytest.raises(DataError, match=r"run.csv: sample 4 \(row 5\): the legs do not assemble"):
+        device.base_regressor(wild, np.zeros_like(wild), np.zeros_like(wild))
