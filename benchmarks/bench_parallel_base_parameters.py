@@ -16,13 +16,14 @@ Run with `make bench` or `python benchmarks/bench_parallel_base_parameters.py [M
 from __future__ import annotations
 
 import argparse
-import re
 import sys
 import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
+
+from documented_models import DOCUMENTED, model_text  # noqa: E402
 
 from symkin.derivation.graph import Derivation  # noqa: E402
 from symkin.model import load_model, model_from_text  # noqa: E402
@@ -32,16 +33,12 @@ from symkin.parallel.regressor import reduced_regressor  # noqa: E402
 from symkin.text_table import format_table  # noqa: E402
 
 MODELS = ("delta", "delta_wrist", "agile_eye", "pantograph", "stewart", "dual_scara")
-#: Models that docs/model-format.md declares (its heredocs, the bodies appended to the model as the document does).
-DOCUMENTED = {"dual_scara": ("EOF_MODEL", "EOF_BODIES")}
 
 
 def _model(name: str):
     if name not in DOCUMENTED:
         return load_model(ROOT / "models" / f"{name}.yaml")
-    document = (ROOT / "docs" / "model-format.md").read_text()
-    parts = [re.search(rf"<<'{end}'\n(.*?)^{end}$", document, re.S | re.M) for end in DOCUMENTED[name]]
-    return model_from_text("".join(part.group(1) for part in parts if part), file=f"docs/model-format.md ({name})")
+    return model_from_text(model_text(name), file=f"docs/model-format.md ({name})")
 
 
 def main(argv: list[str] | None = None) -> int:
