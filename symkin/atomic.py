@@ -17,6 +17,8 @@ import threading
 from collections.abc import Iterator, Mapping
 from pathlib import Path, PurePosixPath
 
+from symkin.errors import ModelError, Problem
+
 _HELD_SIGNALS = {signal.SIGINT, signal.SIGTERM}
 
 
@@ -65,8 +67,16 @@ def replace_directory(target: Path, files: Mapping[str, str | bytes]) -> None:
 
     Text is written as UTF-8 with '\\n' line ends.  The previous content of ``target``
     stays untouched until every new file has been written and flushed.
+
+    Raises:
+        ModelError: ``target`` is a symbolic link or not a directory (it is not silently replaced: a link may
+            lead anywhere, and a file is not an earlier output).
     """
     target = Path(target)
+    if target.is_symlink() or (target.exists() and not target.is_dir()):
+        kind = "a symbolic link" if target.is_symlink() else "not a directory"
+        raise ModelError([Problem(str(target), None, None, "", f"the output {target} is {kind}: symkin replaces only "
+                                  "a directory it wrote", "remove it, or write elsewhere with -o")])
     parent = target.parent
     parent.mkdir(parents=True, exist_ok=True)
     staging = Path(tempfile.mkdtemp(prefix=f".{target.name}.tmp-", dir=parent))

@@ -8,7 +8,19 @@ offending line.  The CLI turns a ``ModelError`` into exit code 2.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
+
+
+#: Names a message lists before it says how many more there are (a hostile file can have thousands of links).
+LISTED_NAMES = 20
+
+
+def name_list(names: Iterable[str], limit: int = LISTED_NAMES) -> str:
+    """``names`` joined by commas, the first ``limit`` of them and "... and N more" beyond."""
+    names = list(names)
+    shown = ", ".join(str(name)[:80] for name in names[:limit])
+    return shown + (f", ... and {len(names) - limit} more" if len(names) > limit else "")
 
 
 class SymkinError(Exception):
@@ -74,6 +86,10 @@ class NotApplicable(ValueError):
 
 class DerivationError(SymkinError):
     """A requested quantity cannot be derived for this model (e.g. FK of a model without joints)."""
+
+
+class CacheTrustError(SymkinError):
+    """The cache folder or its secret cannot be trusted (another user's, writable by others): refused with the fix."""
 
 
 class GeneratedCodeError(SymkinError):

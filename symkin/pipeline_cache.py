@@ -11,7 +11,11 @@ Each entry is a directory ``<cache>/derivations/<model>-<key>/`` (``<cache>``: t
 name, the reader's notes, every file's SHA-256) and the files under ``files/``.  An entry is written under a
 temporary name and renamed into place, so a reader never sees half of one and two concurrent derives of a model
 both succeed (the later rename finds the entry and drops its copy); it is used only when every file's hash
-matches, and a corrupted or partial one is removed and derived again.  A hit touches ``entry.json``, so that
+matches, and a corrupted or partial one is removed and derived again.  An entry is code (its numpy module is
+imported by the next analysis), so it is sealed (:mod:`symkin.cache_trust`): ``entry.json`` carries an HMAC
+of its key, model name, notes and file hashes under a per-user secret kept outside the cache, the folder must
+be this user's and writable by nobody else, and the model name must be a model name (it names the folder an
+entry is copied to under ``-o``).  A planted or copied entry fails the seal and is derived again.  A hit touches ``entry.json``, so that
 ``symkin cache list`` shows when an entry was last used and ``symkin cache clear --older-than`` evicts by it.
 
 Robot files that name other files (xacro includes, MJCF ``<include>``) are not cached: their inputs are not all
@@ -24,7 +28,9 @@ import contextlib
 import hashlib
 import json
 import os
+import re
 import shutil
+import stat
 import sys
 import tempfile
 import time
@@ -34,6 +40,7 @@ from functools import lru_cache
 from pathlib import Path, PurePosixPath
 from typing import Any
 
+from symkin import cache_trust
 from symkin._version import __version__
 
 #: Version of the entry format (part of the key).
@@ -43,6 +50,11 @@ DERIVING_LIBRARIES = ("sympy", "symengine", "jinja2")
 #: Markers of robot files that pull in other files (not cached).
 INCLUDING_MARKERS = (b"xacro", b"<include", b"<mujoco")
 ENTRY_FILE = "entry.json"
+#: Bytes an entry.json may have (symkin writes a few kB).
+MAX_ENTRY_RECORD = 1 << 20
+#: A model name as :data:`symkin.model.names.IDENTIFIER` admits it (not imported: the CLI imports this module and
+#: starts fast): an entry naming anything else was not written by symkin.
+MODEL_NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,63}$")
 FILES = "files"
 #: How many :func:`bypassed` blocks are running (``--no-cache``).
 _bypassing = 0
@@ -64,11 +76,13 @@ def bypassed() -> Iterator[None]:
         _bypassing -= 1
 
 
-def directory() -> Path:
-    """Where the entries live."""
+def directory(create: bool = True) -> Path:
+    """Where the entries live (checked: this user's, writable by nobody else; created mode 0700 with
+    ``create``)."""
     from symkin.backends.c.build import cache_directory
 
-    return cache_directory() / "derivations"
+    root = cache_trust.private_directory(cache_directory(), create)
+    return cache_trust.private_directory(root / "derivations", create)
 
 
 @lru_cache(maxsize=1)
@@ -104,11 +118,24 @@ def request_key(path: str | Path, request: Mapping[str, Any]) -> str | None:
         content = Path(path).read_bytes()
     except OSError:
         return None
-    if content.lstrip().startswith(b"<") and any(marker in content for marker in INCLUDING_MARKERS):
+    if _may_include(content):
         return None
     text = json.dumps({"format": FORMAT, "file": Path(path).name, "sha256": hashlib.sha256(content).hexdigest(),
                        "request": request, "code": code_digest()}, sort_keys=True)
     return hashlib.sha256(text.encode()).hexdigest()[:32]
+
+
+def _may_include(content: bytes) -> bool:
+    """Whether a model file may pull in other files: any mention of a marker, wherever it stands (a byte-order
+    mark or a comment before the root element must not hide a xacro's includes), or text that is not UTF-8
+    (UTF-16 XML hides the markers from a byte search)."""
+    if any(marker in content.lower() for marker in INCLUDING_MARKERS):
+        return True
+    try:
+        content.decode("utf-8")
+    except UnicodeDecodeError:
+        return True
+    return False
 
 
 @dataclass(frozen=True)
@@ -123,8 +150,12 @@ class Entry:
 
 def lookup(key: str) -> Entry | None:
     """The entry of ``key`` if it is whole (every file present with its recorded hash); a damaged one is removed."""
-    for candidate in directory().glob(f"*-{key}"):
-        entry = _read(candidate)
+    try:
+        candidates = list(directory().glob(f"*-{key}"))
+    except OSError:  # no cache folder can be made (a read-only home): derive
+        return None
+    for candidate in candidates:
+        entry = _read(candidate, key)
         if entry is None:
             _remove(candidate)
             continue
@@ -133,18 +164,33 @@ def lookup(key: str) -> Entry | None:
     return None
 
 
-def _read(place: Path) -> Entry | None:
+def _read(place: Path, key: str) -> Entry | None:
+    """The entry in ``place`` if symkin sealed it there under ``key`` and every file has its recorded hash."""
     try:
+        info = (place / ENTRY_FILE).lstat()
+        if not stat.S_ISREG(info.st_mode) or info.st_size > MAX_ENTRY_RECORD:
+            return None  # a FIFO would block, a huge file exhaust memory: symkin writes neither
         record = json.loads((place / ENTRY_FILE).read_text(encoding="utf-8"))
+        model, notes, hashes = record["model"], record["notes"], record["files"]
+        if not (isinstance(model, str) and MODEL_NAME.match(model) and place.name == f"{model}-{key}"
+                and isinstance(record["mac"], str)
+                and cache_trust.verified(f"derivation {key}", _content_digest(model, notes, hashes), record["mac"])):
+            return None
         files = {}
-        for name, sha in record["files"].items():
+        for name, sha in hashes.items():
             data = (place / FILES / _relative(name)).read_bytes()
             if hashlib.sha256(data).hexdigest() != sha:
                 return None
             files[name] = data
-        return Entry(place, str(record["model"]), tuple(map(str, record["notes"])), files)
+        return Entry(place, model, tuple(map(str, notes)), files)
     except (OSError, ValueError, KeyError, TypeError, AttributeError):
         return None
+
+
+def _content_digest(model: str, notes: Any, hashes: Any) -> str:
+    """SHA-256 of what an entry records (the sealed content)."""
+    text = json.dumps({"model": model, "notes": notes, "files": hashes}, sort_keys=True)
+    return hashlib.sha256(text.encode()).hexdigest()
 
 
 def _relative(name: str) -> PurePosixPath:
@@ -156,10 +202,11 @@ def _relative(name: str) -> PurePosixPath:
 
 def store(key: str, model: str, notes: tuple[str, ...], files: Mapping[str, str | bytes]) -> None:
     """Keep a derivation's files under ``key`` (best effort: a cache that cannot be written is no error)."""
-    root = directory()
-    target = root / f"{model}-{key}"
+    if not MODEL_NAME.match(model):
+        return
     try:
-        root.mkdir(parents=True, exist_ok=True)
+        root = directory()
+        target = root / f"{model}-{key}"
         staging = Path(tempfile.mkdtemp(prefix=f".{target.name}.", dir=root))
     except OSError:
         return
@@ -171,8 +218,9 @@ def store(key: str, model: str, notes: tuple[str, ...], files: Mapping[str, str 
             path.parent.mkdir(parents=True, exist_ok=True)
             path.write_bytes(data)
             hashes[name] = hashlib.sha256(data).hexdigest()
-        (staging / ENTRY_FILE).write_text(json.dumps({"model": model, "notes": list(notes), "files": hashes},
-                                                     indent=1), encoding="utf-8")
+        mac = cache_trust.seal(f"derivation {key}", _content_digest(model, list(notes), hashes))
+        (staging / ENTRY_FILE).write_text(json.dumps({"model": model, "notes": list(notes), "files": hashes,
+                                                      "mac": mac}, indent=1), encoding="utf-8")
         os.rename(staging, target)  # atomic; fails if a concurrent derive stored the entry first
     except OSError:
         pass
@@ -202,7 +250,7 @@ class CachedDerivation:
 
 def cached_derivations() -> list[CachedDerivation]:
     """The entries, least recently used first."""
-    root = directory()
+    root = directory(create=False)
     found = []
     for place in root.iterdir() if root.is_dir() else ():
         if place.name.startswith(".") or not (place / ENTRY_FILE).is_file():
@@ -225,7 +273,7 @@ def clear(*, model: str | None = None, older_than: float | None = None, now: flo
             continue
         _remove(entry.path)
         removed.append(entry)
-    root = directory()
+    root = directory(create=False)
     for leftover in root.glob(".*") if root.is_dir() and model is None and older_than is None else ():
         shutil.rmtree(leftover, ignore_errors=True)
     return removed

@@ -267,9 +267,12 @@ def compile_cache(tmp_path_factory, worker_id) -> Path:
     """
     base = tmp_path_factory.getbasetemp()
     path = (base.parent if worker_id != "master" else base) / "symkin-cache"
-    path.mkdir(exist_ok=True)
-    previous = {name: os.environ.get(name) for name in ("SYMKIN_CACHE_DIR", "SYMKIN_CFLAGS", "SYMKIN_C_ENTRY")}
+    path.mkdir(mode=0o700, exist_ok=True)  # the cache must be private (symkin.cache_trust)
+    previous = {name: os.environ.get(name) for name in ("SYMKIN_CACHE_DIR", "SYMKIN_CFLAGS", "SYMKIN_C_ENTRY",
+                                                        "SYMKIN_CACHE_SECRET")}
     os.environ["SYMKIN_CACHE_DIR"] = str(path)
+    # the secret that seals cache entries, beside the cache (never the user's ~/.config)
+    os.environ["SYMKIN_CACHE_SECRET"] = str(path.parent / "symkin-cache-secret")
     # The suite checks values and interfaces, which do not depend on the optimization level
     # (IEEE arithmetic, -std=c99: no contraction into FMAs, no fast-math); -O3 takes a minute on
     # the UR10e's dynamics and several on the Stewart platform's closure Jacobians.  The

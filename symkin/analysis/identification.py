@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import csv
 import difflib
+import io
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -48,12 +49,16 @@ from pathlib import Path
 import numpy as np
 
 from symkin.dynamics.parameter_names import DISSIPATIVE
+from symkin.model.confined_read import ReadRefused, read_bounded
 
 #: A singular value of the equilibrated observation matrix below this fraction of the largest one means
 #: the run does not excite that combination of parameters (sqrt(eps): the estimate would carry no digit).
 RANK_TOLERANCE = float(np.sqrt(np.finfo(np.float64).eps))
 #: Butterworth order of the filter that differentiates q (4: -80 dB per decade past the cutoff).
 FILTER_ORDER = 4
+#: Bytes of a run's CSV (an hour at 1 kHz of a 7-joint arm is 0.5 GB); the magnitude beyond which a value is no
+#: measurement in SI units (unix time in ms is 2e12; the least squares' products of 1e308 values overflow).
+MAX_CSV_BYTES, MAX_MAGNITUDE = 1 << 30, 1e15
 
 
 class DataError(ValueError):
@@ -98,10 +103,9 @@ def read_measurements(path: str | Path, coordinates: Sequence[str], cutoff: floa
     """
     source = str(path)
     try:
-        with open(path, newline="") as stream:
-            rows = list(csv.reader(stream))
-    except OSError as err:
-        raise DataError(f"{source}: cannot read it ({err.strerror})") from None
+        rows = list(csv.reader(io.StringIO(read_bounded(path, MAX_CSV_BYTES).decode("utf-8-sig"), newline="")))
+    except ReadRefused as err:
+        raise DataError(f"{source}: {err.message}; {err.fix}") from None
     except (csv.Error, UnicodeDecodeError) as err:
         raise DataError(f"{source}: not a CSV file ({err})") from None
     if not rows:
@@ -115,6 +119,10 @@ def read_measurements(path: str | Path, coordinates: Sequence[str], cutoff: floa
             near = difflib.get_close_matches(name, sorted(known), n=1)
             hint = f"did you mean '{near[0]}'?" if near else f"the columns are {', '.join(required + rates)}"
             raise DataError(f"{source}, row 1, column {column}: unknown column '{name}'; {hint}")
+    for column, name in enumerate(header, start=1):
+        if header.index(name) + 1 != column:
+            raise DataError(f"{source}, row 1, column {column}: the column '{name}' repeats column "
+                            f"{header.index(name) + 1}; keep one of them")
     missing = [name for name in required if name not in header]
     if missing:
         raise DataError(f"{source}, row 1: missing column{'s' if len(missing) > 1 else ''} {', '.join(missing)} "
@@ -134,8 +142,12 @@ def read_measurements(path: str | Path, coordinates: Sequence[str], cutoff: floa
             except ValueError:
                 value = math.nan
             if not math.isfinite(value):
-                raise DataError(f"{source}, row {r}, column {c + 1} ({header[c]}): '{text.strip()}' is not a finite "
-                                "number; drop the sample or fill the gap")
+                raise DataError(f"{source}, row {r}, column {c + 1} ({header[c]}): '{text.strip()[:40]}' is not a "
+                                "finite number; drop the sample or fill the gap")
+            if abs(value) > MAX_MAGNITUDE:
+                raise DataError(f"{source}, row {r}, column {c + 1} ({header[c]}): {value:g} is beyond "
+                                f"{MAX_MAGNITUDE:g}, no measurement in SI units (its square would overflow the "
+                                "least squares); check the units and the sample")
             data[r - 2, c] = value
     columns = {name: data[:, k] for k, name in enumerate(header)}
     time = columns["t"]

@@ -15,7 +15,8 @@ from collections.abc import Sequence
 
 from symkin._version import __version__
 from symkin.cli import commands
-from symkin.errors import GeneratedCodeError, ModelError, SymkinError
+from symkin.cli.watchdog import terminate_within
+from symkin.errors import CacheTrustError, GeneratedCodeError, ModelError, SymkinError
 
 
 #: What a command line reads as a negative value, not an option: -60, -0.5, -1e-3 and -60deg
@@ -61,7 +62,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     previous = signal.signal(signal.SIGTERM, _terminate)
     try:
-        with _cache_choice(args):
+        with terminate_within(), _cache_choice(args):
             code = int(args.run(args) or 0)
         sys.stdout.flush()  # here, where a closed pipe is caught below, not at the interpreter's exit
         return code
@@ -73,7 +74,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except ModelError as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
-    except GeneratedCodeError as err:
+    except (GeneratedCodeError, CacheTrustError) as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
     except SymkinError as err:

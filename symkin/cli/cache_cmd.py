@@ -65,7 +65,7 @@ def run_list(args: argparse.Namespace) -> int:
 
     now = time.time()
     derivations = pipeline_cache.cached_derivations()
-    print(f"derivations: {pipeline_cache.directory()}")
+    print(f"derivations: {pipeline_cache.directory(create=False)}")
     if derivations:
         print(format_table(["entry", "model", "size", "last used"],
                            [[d.path.name, d.model, _size(d.size), _age(now - d.last_used)] for d in derivations]))
@@ -88,7 +88,7 @@ def run_clear(args: argparse.Namespace) -> int:
     if args.kind in ("all", "derivations"):
         removed = pipeline_cache.clear(model=args.model, older_than=older)
         print(f"removed {_count(len(removed), 'derivation', 'derivations')} ({_size(sum(d.size for d in removed))}) "
-              f"from {pipeline_cache.directory()}")
+              f"from {pipeline_cache.directory(create=False)}")
     if args.kind in ("all", "libraries"):
         eviction = clear(model=args.model, older_than=older)
         print(f"removed {_count(len(eviction.removed), 'library', 'libraries')} ({_size(eviction.freed)}) "

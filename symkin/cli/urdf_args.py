@@ -19,7 +19,7 @@ from symkin.errors import ModelError, Problem
 
 
 #: The options of robot files (argparse destinations).
-ROBOT_FILE_OPTIONS = ("tip", "base", "branch", "lock", "snap_angles", "xacro_arg", "xacro_package")
+ROBOT_FILE_OPTIONS = ("tip", "base", "branch", "lock", "snap_angles", "xacro_arg", "xacro_package", "allow_read")
 
 
 def add_urdf_arguments(p: argparse.ArgumentParser) -> None:
@@ -41,7 +41,10 @@ def add_urdf_arguments(p: argparse.ArgumentParser) -> None:
                        help="the value of a <xacro:arg> of a xacro file (repeatable; default: the file's default)")
     group.add_argument("--xacro-package", action="append", default=[], metavar="NAME=DIR",
                        help="the directory of the ROS package NAME for $(find NAME) (repeatable; default: the "
-                            "nearest directory so named, or with a package.xml naming it, around the file)")
+                            "nearest directory with a package.xml naming it, around the file)")
+    group.add_argument("--allow-read", action="append", default=[], metavar="DIR",
+                       help="a folder a xacro or MJCF file may also read from (repeatable; default: only its own "
+                            "folder tree, the ROS package holding it and the packages it finds)")
     p.add_argument("--allow-nonphysical", action="store_true",
                    help="accept inertia tensors that violate the triangle inequality, with a note, as simulators "
                         "do (default: refuse them; the model key 'allow_nonphysical: true' does the same)")
@@ -59,7 +62,8 @@ def urdf_options(args: argparse.Namespace, path: str) -> dict[str, Any]:
     # (options, the file kinds they apply to, those kinds in words, a suffix of such a file)
     option_kinds = ((("--tip", "--base", "--lock", "--snap-angles", "--branch"), {URDF, XACRO, MJCF},
                      "robot files (URDF, xacro, MJCF)", ".urdf"),
-                    (("--xacro-arg", "--xacro-package"), {XACRO}, "xacro files", ".xacro"))
+                    (("--xacro-arg", "--xacro-package"), {XACRO}, "xacro files", ".xacro"),
+                    (("--allow-read",), {XACRO, MJCF}, "xacro and MJCF files", ".xacro"))
     kinds = {source_kind(model) for model in args.models}
     for names, accepting, what, suffix in option_kinds:
         given = [option for option in names if getattr(args, option[2:].replace("-", "_"))]
@@ -79,6 +83,8 @@ def urdf_options(args: argparse.Namespace, path: str) -> dict[str, Any]:
                                       "write e.g. --lock finger_joint1=0.02 or --lock head_pan=30deg")]) from None
     options = {"tip": args.tip, "base": args.base, "locks": locks, "snap_angles": args.snap_angles,
                "allow_nonphysical": args.allow_nonphysical, "branches": tuple(args.branch)}
+    if kind in (XACRO, MJCF):
+        options["allow_read"] = tuple(args.allow_read)
     if kind == XACRO:
         options["xacro_args"] = _pairs(args.xacro_arg, ":=", "--xacro-arg", "robot_name:=arm")
         options["xacro_packages"] = _pairs(args.xacro_package, "=", "--xacro-package", "kuka_kr6_support=./kuka_kr6")

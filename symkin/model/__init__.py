@@ -22,7 +22,8 @@ __all__ = ["Body", "Friction", "Joint", "JointType", "Model", "Parameter", "Rota
 def load_model(path: str | Path, tip: str | None = None, *, base: str | None = None,
                locks: Mapping[str, float] | None = None, snap_angles: bool = False,
                allow_nonphysical: bool = False, xacro_args: Mapping[str, str] | None = None,
-               xacro_packages: Mapping[str, str | Path] | None = None, branches: Sequence[str] = ()) -> Model:
+               xacro_packages: Mapping[str, str | Path] | None = None, branches: Sequence[str] = (),
+               allow_read: Sequence[str | Path] = ()) -> Model:
     """Read, validate and build the model in the file ``path``: YAML, URDF, xacro or MJCF, told by its
     content (root element ``<robot>``, with ``<xacro:...>`` elements or a ``.xacro`` name for xacro;
     ``<mujoco>`` for MJCF, read through MuJoCo's compiler).
@@ -41,6 +42,8 @@ def load_model(path: str | Path, tip: str | None = None, *, base: str | None = N
         xacro_packages: xacro only: {package: directory} for ``$(find package)`` (``--xacro-package``).
         branches: URDF, xacro and MJCF only: more links whose joints from the base stay moving (the model is
             the tree of the paths to the tip and to them; ``--branch LINK``).
+        allow_read: xacro and MJCF only: more folders the file may read from (``--allow-read DIR``; by default
+            its own folder tree and the ROS packages it names, see :mod:`symkin.model.confined_read`).
 
     Raises:
         symkin.errors.ModelError: with every problem found, each located in the file.
@@ -51,13 +54,16 @@ def load_model(path: str | Path, tip: str | None = None, *, base: str | None = N
             raise ModelError([Problem(str(path), None, None, "", "xacro arguments and packages apply to xacro "
                                       "files only", "drop them, or pass a .xacro file")])
         document, _ = read_mjcf_document(path, tip=tip, base=base, locks=locks, snap_angles=snap_angles,
-                                          branches=branches)
+                                          branches=branches, allow_read=allow_read)
         return build_model(document, _stem(path), allow_nonphysical)
     xacro = {"xacro_args": xacro_args, "xacro_packages": xacro_packages}
     if kind == XACRO:
-        document, _ = read_xacro_document(path, xacro_args, xacro_packages, tip=tip, base=base, locks=locks,
-                                          snap_angles=snap_angles, branches=branches)
+        document, _ = read_xacro_document(path, xacro_args, xacro_packages, allow_read, tip=tip, base=base,
+                                          locks=locks, snap_angles=snap_angles, branches=branches)
         return build_model(document, _stem(path), allow_nonphysical)
+    if allow_read:
+        raise ModelError([Problem(str(path), None, None, "", "--allow-read applies to xacro and MJCF files only (a "
+                                  "URDF or YAML file reads no other file)", "drop it")])
     if any(xacro.values()):
         raise ModelError([Problem(str(path), None, None, "", "xacro arguments and packages apply to xacro files only",
                                   "drop them, or pass a .xacro file")])

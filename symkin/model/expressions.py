@@ -168,6 +168,7 @@ class _Parser:
                 value = value / rhs
             else:
                 value = value * rhs
+            _check_finite(value, op.pos)  # 1e300*1e300*1e300 is exact here, but no double holds it
         return value
 
     def unary(self) -> sympy.Expr:
@@ -284,6 +285,13 @@ def _check_finite(value: sympy.Expr, pos: int) -> None:
         raise ExpressionError("the value is not a real number", pos, "fix the arguments (e.g. acos of a value outside [-1, 1])")
     if value.is_number and value.is_Rational and abs(value) > MAX_MAGNITUDE:
         raise ExpressionError("the value is too large", pos, "use a number of a physical size")
+    if value.is_number and value.is_Rational and value != 0 and abs(value) < 1 / MAX_MAGNITUDE:
+        raise ExpressionError("the value is too small (a double would round it to zero)", pos,
+                              "use a number of a physical size")
+    if not value.is_number and any(abs(c) > MAX_MAGNITUDE or (c != 0 and abs(c) < 1 / MAX_MAGNITUDE)
+                                   for c in value.atoms(sympy.Rational)):
+        raise ExpressionError("a coefficient is beyond what a double holds (|c| > 1e300 or < 1e-300)", pos,
+                              "use numbers of a physical size")
     if value.is_number and not value.is_Rational and abs(value.evalf(15)) > MAX_MAGNITUDE:
         # exp(1000), exp(exp(10)): finite symbolically, but no double can hold them
         raise ExpressionError("the value is too large", pos, "use a number of a physical size")

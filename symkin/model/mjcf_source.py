@@ -31,6 +31,7 @@ The line of every message is the line of the body or joint element of that name 
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 from xml.parsers import expat
@@ -38,7 +39,9 @@ from xml.parsers import expat
 import numpy as np
 
 from symkin.errors import ModelError, Problem
+from symkin.model.confined_read import ReadableFolders, ReadRefused, read_bounded
 from symkin.model.generated_urdf import GeneratedUrdf, read_generated_urdf
+from symkin.model.mjcf_compile import compile_confined
 from symkin.model.urdf_export import urdf_rpy
 from symkin.model.yaml_source import MAX_FILE_BYTES, Document
 
@@ -47,16 +50,17 @@ FREE, BALL, SLIDE, HINGE = 0, 1, 2, 3
 _TYPES = {SLIDE: "prismatic", HINGE: "revolute"}
 
 
-def read_mjcf_document(path: str | Path, **urdf: Any) -> tuple[Document, str]:
+def read_mjcf_document(path: str | Path, allow_read: Sequence[str | Path] = (), **urdf: Any) -> tuple[Document, str]:
     """(model document, URDF text of the compiled model) of the MJCF file ``path``; ``urdf``: the URDF
-    reader's tip, base, locks and snap_angles (with body names for links, joint names for joints).
+    reader's tip, base, locks and snap_angles (with body names for links, joint names for joints);
+    ``allow_read``: more folders the file may read from (:mod:`symkin.model.mjcf_compile`).
 
     Raises:
         ModelError: MuJoCo missing, a file MuJoCo's compiler refuses (its message), free or ball
             joints on the way, and every problem the URDF reader finds, located.
     """
     file = str(path)
-    model = _compile(Path(path))
+    model = _compile(Path(path), allow_read)
     lines = _element_lines(Path(path))
     couplings = _joint_couplings(model)
     generated, unmoving = _urdf(model, file, lines, couplings)
@@ -68,26 +72,14 @@ def read_mjcf_document(path: str | Path, **urdf: Any) -> tuple[Document, str]:
     return document, generated.text
 
 
-def _compile(path: Path) -> Any:
+def _compile(path: Path, allow_read: Sequence[str | Path]) -> Any:
+    """MuJoCo's compiled model of the file, its reads confined and the compiler bounded in a subprocess."""
     try:
-        import mujoco
+        import mujoco  # noqa: F401 - the child process needs it too
     except ImportError:
         raise ModelError([Problem(str(path), None, None, "", "reading an MJCF file needs MuJoCo's compiler",
                                   "pip install mujoco")]) from None
-    try:
-        size = path.stat().st_size
-    except OSError as exc:
-        raise ModelError([Problem(str(path), None, None, "", f"cannot read the file: {exc.strerror}",
-                                  "check the path and the file permissions")]) from None
-    if size > MAX_FILE_BYTES:
-        raise ModelError([Problem(str(path), None, None, "", f"the file has {size} bytes, more than the limit of "
-                                                             f"{MAX_FILE_BYTES}", "remove generated content")])
-    try:
-        return mujoco.MjModel.from_xml_path(str(path))
-    except ValueError as exc:  # MuJoCo's compiler errors name the element and its line
-        message = " ".join(str(exc).split())
-        raise ModelError([Problem(str(path), None, None, "", f"MuJoCo's compiler refuses the file: {message}",
-                                  "fix the MJCF file (it must load in MuJoCo)")]) from None
+    return compile_confined(path, ReadableFolders.of(path, allow_read))
 
 
 def _element_lines(path: Path) -> dict[tuple[str, str], tuple[int, int]]:
@@ -106,8 +98,8 @@ def _element_lines(path: Path) -> dict[tuple[str, str], tuple[int, int]]:
     parser.StartDoctypeDeclHandler = refuse
     parser.EntityDeclHandler = refuse
     try:
-        parser.Parse(path.read_bytes(), True)
-    except (expat.ExpatError, ValueError):
+        parser.Parse(read_bounded(path, MAX_FILE_BYTES), True)
+    except (expat.ExpatError, ValueError, ReadRefused):
         pass  # MuJoCo compiled it: the lines are a courtesy
     return found
 

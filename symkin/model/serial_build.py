@@ -19,6 +19,7 @@ from symkin.model.reader import (
     positive_limit,
     unit_axis,
 )
+from symkin.errors import name_list
 from symkin.model import joint_kinds, tree
 from symkin.model.schema import Coupling, Joint, JointType, Op, Rotation, Translation
 from symkin.model.yaml_source import Document, KeyPath
@@ -174,7 +175,7 @@ def _check_leaders(r: Reader, path: KeyPath, joints: list[Joint]) -> None:
                     "a joint that mimics another" if leader in names else "no joint of the chain")
             r.fail(path + (i, "mimic", "joint") if mimic else path + (i, "coupling"),
                    f"joint '{joint.name}' {'mimics' if mimic else 'moves with'} '{leader}', {what}",
-                   f"name joints with a coordinate of their own: {', '.join(sorted(own - {joint.name})) or '(none)'}")
+                   f"name joints with a coordinate of their own: {name_list(sorted(own - {joint.name})) or '(none)'}")
 
 
 def check_unique(r: Reader, items: list[tuple[KeyPath, str]], what: str) -> None:

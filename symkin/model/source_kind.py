@@ -34,6 +34,8 @@ def source_kind(path: str | Path) -> str:
     YAML reader then reports it)."""
     path = Path(path)
     try:
+        if not path.is_file():  # a FIFO would block the sniffing open: the reader refuses what is no file
+            raise FileNotFoundError(path)
         with open(path, "rb") as handle:
             head = handle.read(SNIFF_BYTES)
     except OSError:

@@ -63,16 +63,18 @@ from xml.parsers import expat
 
 import numpy as np
 
-from symkin.errors import ModelError, Problem
+from symkin.errors import ModelError, Problem, name_list
 from symkin.model.names import code_names, name_problem
 from symkin.model.source_kind import XACRO_FIX, XACRO_MESSAGE
 from symkin.model.urdf_export import rotation_about, urdf_rpy
-from symkin.model.yaml_source import MAX_FILE_BYTES, Document, KeyPath
+from symkin.model.yaml_source import Document, KeyPath, model_file_bytes
 
 MAX_ELEMENTS = 100_000
 #: Characters of text kept per element (URDF keeps numbers in attributes; a transmission's reduction is text).
 MAX_TEXT = 256
-_NUMBER = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?")
+#: A decimal number of at most 64 digits before and after the point and a two-digit exponent (|x| < 1e100):
+#: ``1e999999999`` or a megabyte of digits is no measurement, and reading it exactly would hang (issue 59).
+_NUMBER = re.compile(r"[+-]?(\d{1,64}\.?\d{0,64}|\.\d{1,64})([eE][+-]?\d{1,2})?")
 #: With ``snap_angles``, angles this close to a multiple of pi/2 are read as that multiple.
 ANGLE_SNAP = 1e-12
 
@@ -183,8 +185,10 @@ class _UrdfReader:
         text = element.attrib.get(attribute, default)
         parts = text.split()
         if len(parts) != count or not all(_NUMBER.fullmatch(p) for p in parts):
-            self.fail(element, key, f"{attribute}=\"{text}\" is not {count} number(s)",
-                      f"write {count} decimal number(s) separated by spaces")
+            shown = text if len(text) <= 80 else text[:80] + "..."
+            self.fail(element, key, f"{attribute}=\"{shown}\" is not {count} number(s)",
+                      f"write {count} decimal number(s) separated by spaces (at most 64 digits and an exponent below "
+                      "100 each)")
             return ["0"] * count
         return [_snap_angle(p) if angles and self.snap_angles else p for p in parts]
 
@@ -246,14 +250,7 @@ def read_urdf_document(path: str | Path, tip: str | None = None, *, base: str | 
         ModelError: unreadable or malformed file, unsupported content, unknown tip.
     """
     name = str(path)
-    try:
-        raw = Path(path).read_bytes()
-    except OSError as exc:
-        raise ModelError([Problem(name, None, None, "", f"cannot read the file: {exc.strerror}",
-                                  "check the path and the file permissions")]) from None
-    if len(raw) > MAX_FILE_BYTES:
-        raise ModelError([Problem(name, None, None, "", f"the file has {len(raw)} bytes, more than the limit of "
-                                                        f"{MAX_FILE_BYTES}", "remove meshes or generated content")])
+    raw = model_file_bytes(path)
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
@@ -291,14 +288,14 @@ def urdf_document(text: str, file: str = "<string>", tip: str | None = None, *, 
     if base is not None:
         if base not in links:
             r.fail(robot, "base", f"the base link '{base}' is not a link of the robot",
-                   f"choose one of: {', '.join(links)}")
+                   f"choose one of: {name_list(links)}")
             r.stop()
         root = base
     tip = _tip(r, robot, root, children, parent_of, tip)
     for branch in branches:
         if branch not in links:
             r.fail(robot, "branch", f"the branch link '{branch}' is not a link of the robot",
-                   f"choose one of: {', '.join(_subtree(root, children))}")
+                   f"choose one of: {name_list(_subtree(root, children))}")
             r.stop()
     kept = {j.name for end in (tip, *branches) for j in _path(r, robot, parent_of, root, end)}
     path = [j for j in _preorder(root, children) if j.name in kept]  # the tree's joints, parents first
@@ -408,6 +405,7 @@ def _transmissions(r: _UrdfReader, robot: Element, chain: set[str]) -> dict[str,
     format) is not 1. URDF gives no rotor inertia: the ratio is the drive's, for its resolution and
     effort through the gear (``actuators:``)."""
     drives: dict[str, dict[str, str]] = {}
+    seen: dict[str, Element] = {}
     for transmission in robot.findall("transmission"):
         joints, actuators = transmission.findall("joint"), transmission.findall("actuator")
         if len(joints) != 1 or len(actuators) > 1:
@@ -417,6 +415,13 @@ def _transmissions(r: _UrdfReader, robot: Element, chain: set[str]) -> dict[str,
             transmission.find("mechanicalReduction")
         if joint not in chain or reduction is None:
             continue
+        if joint in seen:  # two gears of one joint: which one is meant is not ours to guess
+            first = seen[joint]
+            r.fail(transmission, f"transmission[{transmission.attrib.get('name', '')}]",
+                   f"a second transmission of joint '{joints[0].attrib.get('name', '')}' (the first, "
+                   f"'{first.attrib.get('name', '')}', is at line {first.line})", "keep one transmission per joint")
+            continue
+        seen[joint] = transmission
         text = reduction.text.strip()
         if not _NUMBER.fullmatch(text) or Fraction(text) == 0:
             r.fail(reduction, f"transmission[{transmission.attrib.get('name', '')}]",
@@ -511,7 +516,7 @@ def _root(r: _UrdfReader, robot: Element, links: dict[str, Element], parent_of: 
             r.fail(robot, "", "every link has a parent joint: the joints form a closed loop",
                    "symkin reads tree-shaped URDFs; remove the joint that closes the loop")
         else:
-            r.fail(robot, "", f"the robot has {len(roots)} root links ({', '.join(roots)}): they are not connected",
+            r.fail(robot, "", f"the robot has {len(roots)} root links ({name_list(roots)}): they are not connected",
                    "connect every link to one root link by joints")
         r.stop()
     root = roots[0]
@@ -569,7 +574,7 @@ def _tip(r: _UrdfReader, robot: Element, root: str, children: dict[str, list[_Jo
     if tip is not None:
         if tip not in children:
             r.fail(robot, "tip", f"the tip link '{tip}' is not a link of the robot",
-                   f"choose one of: {', '.join(subtree)}")
+                   f"choose one of: {name_list(subtree)}")
             r.stop()
         return tip
     leaves = [name for name in subtree if not children[name]]
@@ -577,8 +582,8 @@ def _tip(r: _UrdfReader, robot: Element, root: str, children: dict[str, list[_Jo
     deepest = [leaf for leaf in leaves if moving[leaf] == max(moving.values())]
     if len(deepest) != 1:
         r.fail(robot, "tip", f"no tip was named and {len(deepest)} leaf links end chains with the most moving joints "
-                             f"({', '.join(deepest)})",
-               f"name the tip link (one of: {', '.join(deepest)}): symkin derive robot.urdf --tip LINK, or "
+                             f"({name_list(deepest)})",
+               f"name the tip link (one of: {name_list(deepest)}): symkin derive robot.urdf --tip LINK, or "
                "load_model(path, tip='LINK')")
         r.stop()
     return deepest[0]
@@ -617,7 +622,7 @@ def _locked_values(r: _UrdfReader, robot: Element, joints: dict[str, _Joint], ch
     for name in locks:
         if name not in joints:
             r.fail(robot, "lock", f"--lock names the unknown joint '{name}'",
-                   f"lock one of the joints off the chain: {', '.join(j for j in joints if j not in chain_joints)}")
+                   f"lock one of the joints off the chain: {name_list(j for j in joints if j not in chain_joints)}")
         elif name in chain_joints:
             r.fail(joints[name].element, f"joint[{name}]", f"--lock names '{name}', a joint of the chain to the tip",
                    "lock only joints off the chain; to remove a chain joint, choose a nearer tip (--tip)")

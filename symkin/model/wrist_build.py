@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from symkin.errors import name_list
 from symkin.model import coordinates
 from symkin.model.body_build import read_actuators, read_bodies, read_friction, with_motor_effort_limits
 from symkin.model.reader import Reader
@@ -66,4 +67,4 @@ def _check_names(r: Reader, path: KeyPath, joints: tuple, parallel: Parallel) ->
                    "give the wrist's joints names of their own (psi1, psi2, ...)")
         if joint.link in links:
             r.fail(path, f"the wrist link '{joint.link}' is a name the platform's motion takes",
-                   f"rename the link; taken: {', '.join(sorted(links))}")
+                   f"rename the link; taken: {name_list(sorted(links))}")

@@ -9,8 +9,14 @@ numbers, strings, booleans, names of properties, arithmetic (``+ - * / // % **``
 literals, attributes of namespaces (``math.pi``, an included file's ``ns.name``, loaded YAML) and
 calls with positional arguments of the functions of :data:`FUNCTIONS` (the math module's and a
 few builtins such as ``min``, ``str``, ``radians``). Anything else (attributes of other values,
-methods, lambdas, comprehensions, keyword arguments) is a located :class:`XacroFail`, as are
-results beyond :data:`MAX_TEXT` characters and exponents beyond :data:`MAX_EXPONENT`.
+methods, lambdas, comprehensions, keyword arguments) is a located :class:`XacroFail`.
+
+Every operation is bounded by the size of its result *before* it is built (issue 59): an integer of more than
+:data:`MAX_INTEGER_BITS` bits (``2**1024**1024``, ``round(1, -10**9)``), a text, list or nested value whose
+:func:`weight` exceeds :data:`MAX_TEXT` (``[[0]*10**6]*10**6`` shares one list a million times: its weight, like
+its text, is 10^12), a value nested deeper than :data:`MAX_NESTING`, a ``%`` format with a width or precision
+beyond :data:`MAX_TEXT` - each is a located :class:`XacroFail`, and so is an expression nested too deeply for
+the parser.
 
 Texts follow xacro 2: ``$${`` and ``$$(`` are literal; a text that is one ``${...}`` keeps its
 value's type, any other is the concatenation of the pieces' texts (Python's ``str``, as xacro
@@ -30,6 +36,12 @@ from typing import Any, Protocol, runtime_checkable
 #: Characters of one evaluated text, and the largest exponent.
 MAX_TEXT = 1_000_000
 MAX_EXPONENT = 1024
+#: Bits of an integer (1233 decimal digits: far beyond any robot's number, far below Python's int-to-str limit).
+MAX_INTEGER_BITS = 4096
+#: Nesting of lists, tuples and mappings in a value.
+MAX_NESTING = 100
+#: The widths and precisions of a ``%`` format (``'%01000000000d' % 0``).
+_FORMAT_NUMBERS = re.compile(r"%[-+ #0]*(\d*)(?:\.(\d+))?")
 
 
 class XacroFail(Exception):
@@ -97,10 +109,18 @@ class Evaluator:
             return self._eval(e)
         except XacroFail:
             raise
+        except RecursionError:
+            raise XacroFail("the expression nests too deeply", "split it into properties", self.node) from None
         except (ArithmeticError, TypeError, ValueError, IndexError, KeyError) as exc:
             raise XacroFail(f"the expression fails: {type(exc).__name__}: {exc}", "fix the expression", self.node) from None
 
     def _eval(self, e: ast.expr) -> Any:
+        value = self._evaluated(e)
+        if weight(value, self.node) > MAX_TEXT:
+            raise XacroFail(f"a value grows beyond {MAX_TEXT} characters or items", "shorten it", self.node)
+        return value
+
+    def _evaluated(self, e: ast.expr) -> Any:
         if isinstance(e, ast.Constant):
             if isinstance(e.value, (int, float, str, bool)) or e.value is None:
                 return e.value
@@ -175,12 +195,29 @@ class Evaluator:
         if function in (list, tuple, sorted, sum, any, all, max, min) and any(isinstance(a, str) and len(a) > 10_000
                                                                               for a in args):
             raise self.fail("this call on a long text")
+        if function is round and len(args) == 2 and isinstance(args[1], int) and abs(args[1]) > 400:
+            raise XacroFail(f"round to {args[1]} digits", "round to at most 400 digits", self.node)
+        if function is sum and len(args) == 2 and not isinstance(args[1], (int, float)):
+            raise self.fail("sum with a start value other than a number")
+        if function in (float, int) and args and isinstance(args[0], str) and len(args[0]) > 400:
+            raise XacroFail("a number written with more than 400 characters", "write the number shorter", self.node)
         return function(*args)
 
     def binary(self, op: ast.operator, left: Any, right: Any) -> Any:
         if isinstance(op, ast.Pow) and isinstance(left, (int, float)) and isinstance(right, (int, float)):
             if abs(right) > MAX_EXPONENT:
                 raise XacroFail(f"the exponent {right} exceeds {MAX_EXPONENT}", "use a smaller exponent", self.node)
+            if isinstance(left, int) and isinstance(right, int) and right > 0 and \
+                    abs(left).bit_length() * right > MAX_INTEGER_BITS:
+                raise XacroFail(f"a power with more than {MAX_INTEGER_BITS} bits", "use smaller numbers", self.node)
+        if isinstance(op, ast.Mult) and isinstance(left, int) and isinstance(right, int) and \
+                abs(left).bit_length() + abs(right).bit_length() > MAX_INTEGER_BITS + 1:
+            raise XacroFail(f"a product with more than {MAX_INTEGER_BITS} bits", "use smaller numbers", self.node)
+        if isinstance(op, ast.Mod) and isinstance(left, str):
+            for width, precision in _FORMAT_NUMBERS.findall(left):
+                if len(width) > 6 or len(precision) > 6 or int(width or 0) + int(precision or 0) > MAX_TEXT:
+                    raise XacroFail(f"a format grows beyond {MAX_TEXT} characters", "use a smaller width",
+                                    self.node)
         if isinstance(op, ast.Mult) and (isinstance(left, (str, list, tuple)) or isinstance(right, (str, list, tuple))):
             count = right if isinstance(left, (str, list, tuple)) else left
             sized = left if isinstance(left, (str, list, tuple)) else right
@@ -190,6 +227,45 @@ class Evaluator:
         if isinstance(result, (str, list, tuple)) and len(result) > MAX_TEXT:
             raise XacroFail(f"a text grows beyond {MAX_TEXT} characters", "shorten it", self.node)
         return result
+
+
+def weight(value: Any, node: Any = None) -> int:
+    """A bound on the size of ``value`` as text and in memory: characters of a text, a hundredth of the bits of an
+    integer, one per number, and for a list, tuple or mapping one plus its items' weights, a shared item counted at
+    every use (its text repeats it), computed once per object.
+
+    Raises:
+        XacroFail: an integer beyond :data:`MAX_INTEGER_BITS` bits, or a value nested deeper than
+            :data:`MAX_NESTING` (iterative: no recursion, however deep the value).
+    """
+    known: dict[int, int] = {}
+    stack: list[tuple[Any, int, bool]] = [(value, 0, False)]
+    while stack:
+        item, depth, expanded = stack.pop()
+        if isinstance(item, (list, tuple, dict)):
+            if id(item) in known:
+                continue
+            if depth > MAX_NESTING:
+                raise XacroFail(f"a value nests deeper than {MAX_NESTING} levels", "flatten it", node)
+            children = [*item.keys(), *item.values()] if isinstance(item, dict) else item
+            if not expanded:
+                stack.append((item, depth, True))
+                stack.extend((child, depth + 1, False) for child in children)
+                continue
+            known[id(item)] = min(1 + sum(_weight_of(child, known) for child in children), MAX_TEXT + 1)
+        elif isinstance(item, int) and not isinstance(item, bool) and item.bit_length() > MAX_INTEGER_BITS:
+            raise XacroFail(f"an integer of more than {MAX_INTEGER_BITS} bits", "use smaller numbers", node)
+    return _weight_of(value, known)
+
+
+def _weight_of(item: Any, known: dict[int, int]) -> int:
+    if isinstance(item, (list, tuple, dict)):
+        return known[id(item)]
+    if isinstance(item, str):
+        return len(item)
+    if isinstance(item, int) and not isinstance(item, bool):
+        return 1 + item.bit_length() // 100
+    return 1
 
 
 def _load_yaml_marker() -> None:  # pragma: no cover - a marker, never called

@@ -19,14 +19,19 @@ Semantics follow xacro 2 (in-order processing, the ROS wiki's "xacro" page):
   element); the body is expanded in a scope under the caller's (xacro's dynamic scoping);
   ``<xacro:call macro="...">`` calls a macro by computed name;
 * ``$(find PACKAGE)`` is the directory given by ``packages`` (``--xacro-package NAME=DIR``), or
-  else the nearest directory named PACKAGE, or holding a ``package.xml`` whose ``<name>`` is
-  PACKAGE, among the file's ancestor directories and their children; ``$(arg NAME)`` the value
+  else the nearest ROS package PACKAGE (a directory holding a ``package.xml`` whose ``<name>`` is
+  PACKAGE) among the file's ancestor directories and their children - never a directory merely so
+  named (``$(find etc)`` is not ``/etc``); ``$(arg NAME)`` the value
   given by ``args`` (``--xacro-arg NAME:=VALUE``) or the ``<xacro:arg default>``; ``$(dirname)``
   the directory of the file; ``$(eval EXPR)`` an expression; ``$(env ...)``/``$(optenv ...)``
   are refused (a model must not depend on the environment: pass the value as an argument);
 * includes (``<xacro:include filename ns>``) read ``.xacro``, ``.urdf`` and ``.xml`` files only,
   each bounded in size like a model file; ``xacro.load_yaml``/``load_yaml`` reads ``.yaml``
-  files with the safe loader.
+  files with the safe loader, aliases refused (a few lines of aliases expand to billions of nodes);
+* every file read lies inside the folders the robot file may read
+  (:class:`~symkin.model.confined_read.ReadableFolders`: its own folder tree, the ROS package
+  holding it, the packages ``$(find)`` resolves to, and ``--allow-read`` folders), is a regular
+  file, and is bounded in size before it is read.
 
 The output is URDF text with one element per line, and its line map
 (:class:`~symkin.model.generated_urdf.GeneratedUrdf`) leads each output line back to the element
@@ -40,7 +45,7 @@ from __future__ import annotations
 
 import ast
 import re
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -49,7 +54,8 @@ from xml.sax.saxutils import escape, quoteattr
 
 import yaml
 
-from symkin.errors import ModelError, Problem
+from symkin.errors import ModelError, Problem, name_list
+from symkin.model.confined_read import ReadableFolders, ReadRefused, read_bounded
 from symkin.model.generated_urdf import GeneratedUrdf, read_generated_urdf
 from symkin.model.xacro_expressions import (MAX_TEXT, Evaluator, XacroFail, as_text, boolean, literal, namespaced,
                                            pieces)
@@ -61,11 +67,18 @@ MAX_ELEMENTS = 100_000
 MAX_OUTPUT = 10 * MAX_FILE_BYTES
 MAX_DEPTH = 100
 MAX_INCLUDES = 500
+#: Macro calls of one expansion (a macro that calls itself twice, 60 deep, is 2^60 calls), nesting of XML elements.
+MAX_CALLS = 100_000
+MAX_XML_DEPTH = 200
+#: An XML name (element or attribute): what a computed name must be, so that it cannot write markup.
+_XML_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_.:-]{0,127}$")
 #: Characters of an element's text kept (URDF holds numbers in attributes; a transmission's reduction is text).
 MAX_TEXT_KEPT = 256
 #: Directories above the file, and children of each, searched for a package (``$(find NAME)``).
 PACKAGE_SEARCH_LEVELS = 6
 PACKAGE_SEARCH_CHILDREN = 1000
+#: Bytes of a package.xml read for its <name>.
+MAX_PACKAGE_XML = 65536
 INCLUDE_SUFFIXES = (".xacro", ".urdf", ".xml")
 YAML_SUFFIXES = (".yaml", ".yml")
 
@@ -88,6 +101,8 @@ class _Node:
     expanded: bool = False
     #: its character data, stripped (a transmission's ``<mechanicalReduction>${ratio}</...>``), bounded.
     text: str = ""
+    #: elements in its subtree once expanded (itself included).
+    size: int = 1
 
 
 @dataclass
@@ -138,17 +153,22 @@ class _Scope:
 
 
 def expand_xacro(path: str | Path, args: Mapping[str, str] | None = None,
-                 packages: Mapping[str, str | Path] | None = None) -> GeneratedUrdf:
+                 packages: Mapping[str, str | Path] | None = None,
+                 allow_read: Sequence[str | Path] = ()) -> GeneratedUrdf:
     """Expand the xacro file ``path`` (see the module docstring).
 
     Args:
         args: values of ``<xacro:arg>`` (``--xacro-arg NAME:=VALUE``).
         packages: {package: directory} for ``$(find package)`` (``--xacro-package NAME=DIR``).
+        allow_read: more folders the file may read from (``--allow-read DIR``).
 
     Raises:
-        ModelError: unreadable, malformed or unsupported xacro, located in the file that has it.
+        ModelError: unreadable, malformed or unsupported xacro, or a file named outside the folders it may read,
+            located in the file that has it.
     """
-    expander = _Expander(Path(path), dict(args or {}), {k: Path(v).resolve() for k, v in (packages or {}).items()})
+    named = {k: Path(v).resolve() for k, v in (packages or {}).items()}
+    expander = _Expander(Path(path), dict(args or {}), named,
+                         ReadableFolders.of(path, [*named.values(), *allow_read]))
     try:
         root = expander.parse(Path(path), str(path))
         scope = _Scope()
@@ -156,16 +176,19 @@ def expand_xacro(path: str | Path, args: Mapping[str, str] | None = None,
         unused = sorted(set(expander.args) - expander.declared_args)
         if unused:
             raise XacroFail(f"--xacro-arg {unused[0]} names no <xacro:arg> of the file",
-                        f"declared arguments: {', '.join(sorted(expander.declared_args)) or 'none'}", root)
+                        f"declared arguments: {name_list(sorted(expander.declared_args)) or 'none'}", root)
+        out_root = _Node(root.tag, {k: v for k, v in root.attrib.items() if not k.startswith("xmlns:xacro")},
+                         root.file, root.line, root.column, children)
+        lines: list[str] = ['<?xml version="1.0"?>']
+        where: list[tuple[str, int, int]] = [(root.file, root.line, root.column)]
+        _write(out_root, 0, lines, where)
+    except RecursionError:  # elements nested by macros beyond Python's stack
+        raise ModelError([Problem(str(path), None, None, "", "the expansion nests elements too deeply",
+                                  "flatten the macros that wrap elements in elements")]) from None
     except XacroFail as exc:
         node = exc.node
         raise ModelError([Problem(node.file if node else str(path), node.line if node else None,
                                   node.column if node else None, "", exc.message, exc.fix)]) from None
-    out_root = _Node(root.tag, {k: v for k, v in root.attrib.items() if not k.startswith("xmlns:xacro")},
-                     root.file, root.line, root.column, children)
-    lines: list[str] = ['<?xml version="1.0"?>']
-    where: list[tuple[str, int, int]] = [(root.file, root.line, root.column)]
-    _write(out_root, 0, lines, where)
     return GeneratedUrdf("\n".join(lines) + "\n", tuple(where))
 
 
@@ -189,27 +212,25 @@ def _write(node: _Node, depth: int, lines: list[str], where: list[tuple[str, int
 class _Expander:
     """One expansion: the files read, the arguments, the element count."""
 
-    def __init__(self, main: Path, args: dict[str, str], packages: dict[str, Path]):
-        self.main, self.args, self.packages = main, args, packages
+    def __init__(self, main: Path, args: dict[str, str], packages: dict[str, Path], readable: ReadableFolders):
+        self.main, self.args, self.packages, self.readable = main, args, packages, readable
         self.declared_args: set[str] = set()
         self.arg_values: dict[str, str] = {}
         self.elements = 0
         self.characters = 0
         self.includes = 0
+        self.calls = 0
         self.depth = 0
 
     # ------------------------------------------------------------------ reading
 
     def parse(self, path: Path, name: str, at: _Node | None = None) -> _Node:
-        """The element tree of the XML file ``path`` (DTDs refused, size bounded)."""
+        """The element tree of the XML file ``path`` (inside the readable folders, DTDs refused, size bounded)."""
         try:
-            raw = path.read_bytes()
-        except OSError as exc:
-            raise XacroFail(f"cannot read {name}: {exc.strerror}", "check the path and the --xacro-package "
-                                                                "directories", at) from None
-        if len(raw) > MAX_FILE_BYTES:
-            raise XacroFail(f"{name} has {len(raw)} bytes, more than the limit of {MAX_FILE_BYTES}",
-                        "include smaller files", at)
+            raw = self.readable.read(path, "the included file", MAX_FILE_BYTES) if at is not None else \
+                read_bounded(path, MAX_FILE_BYTES)
+        except ReadRefused as exc:
+            raise XacroFail(exc.message, exc.fix, at) from None
         parser = expat.ParserCreate()
         stack: list[_Node] = []
         roots: list[_Node] = []
@@ -220,6 +241,8 @@ class _Expander:
 
         def start(tag: str, attrib: dict[str, str]) -> None:
             node = _Node(tag, dict(attrib), name, parser.CurrentLineNumber, parser.CurrentColumnNumber + 1)
+            if len(stack) >= MAX_XML_DEPTH:
+                raise XacroFail(f"the XML nests deeper than {MAX_XML_DEPTH} elements", "flatten the file", node)
             (stack[-1].children if stack else roots).append(node)
             stack.append(node)
 
@@ -234,6 +257,8 @@ class _Expander:
         parser.EndElementHandler = lambda _tag: stack.pop()
         try:
             parser.Parse(raw, True)
+        except RecursionError:
+            raise XacroFail("the XML nests too deeply", "flatten the file", _Node("", {}, name, 1, 1)) from None
         except expat.ExpatError as exc:
             raise XacroFail(f"malformed XML: {expat.ErrorString(exc.code)}", "fix the XML syntax",
                         _Node("", {}, name, exc.lineno, exc.offset + 1)) from None
@@ -249,12 +274,14 @@ class _Expander:
 
     def expand(self, node: _Node, scope: _Scope, file: Path, parent: _Node) -> list[_Node]:
         """The elements ``node`` becomes in ``scope`` (``parent`` takes xacro:attribute)."""
-        if node.expanded:
+        if node.expanded:  # a block inserted again: its elements are written again
+            self.count(node, node.size)
             return [node]
         if not node.tag.startswith(_XACRO):
-            self.elements += 1
-            if self.elements > MAX_ELEMENTS:
-                raise XacroFail(f"the expansion has more than {MAX_ELEMENTS} elements", "check for runaway macros", node)
+            if not _XML_NAME.match(node.tag):
+                raise XacroFail(f"'{node.tag[:60]}' is not an XML element name", "name elements with letters, digits, "
+                                "_ . - and :", node)
+            self.count(node, 1)
             attrib = {k: self.text(v, scope, file, node) for k, v in node.attrib.items()
                       if not k.startswith("xmlns:xacro")}
             self.characters += sum(len(v) for v in attrib.values())
@@ -266,8 +293,12 @@ class _Expander:
             result.children = self.expand_children(node, scope, file)
             for child in node.children:  # <xacro:attribute> of this element
                 if child.tag == _XACRO + "attribute":
-                    result.attrib[self.text(self.need(child, "name"), scope, file, child)] = self.text(
-                        self.need(child, "value"), scope, file, child)
+                    name = self.text(self.need(child, "name"), scope, file, child)
+                    if not _XML_NAME.match(name):
+                        raise XacroFail(f"'{name[:60]}' is not an XML attribute name", "name attributes with letters, "
+                                        "digits, _ . - and :", child)
+                    result.attrib[name] = self.text(self.need(child, "value"), scope, file, child)
+            result.size = 1 + sum(child.size for child in result.children)
             return [result]
         kind = node.tag[len(_XACRO):]
         if kind == "property":
@@ -309,6 +340,12 @@ class _Expander:
         else:
             return self.call(kind, node, scope, file, parent, skip=set())
         return []
+
+    def count(self, node: _Node, elements: int) -> None:
+        """Count ``elements`` more elements written (bounded by :data:`MAX_ELEMENTS`)."""
+        self.elements += elements
+        if self.elements > MAX_ELEMENTS:
+            raise XacroFail(f"the expansion has more than {MAX_ELEMENTS} elements", "check for runaway macros", node)
 
     def need(self, node: _Node, attribute: str) -> str:
         if attribute not in node.attrib:
@@ -388,6 +425,9 @@ class _Expander:
         if macro is None:
             raise XacroFail(f"no macro named '{name}' is defined here", "define it with <xacro:macro name=\"" + name +
                         "\"> before this call, or include the file that does", node)
+        self.calls += 1
+        if self.calls > MAX_CALLS:
+            raise XacroFail(f"more than {MAX_CALLS} macro calls", "check for macros that call themselves", node)
         inner = _Scope(scope)
         given = {k: v for k, v in node.attrib.items() if k not in skip}
         blocks = [child for child in node.children]
@@ -395,7 +435,7 @@ class _Expander:
         unknown = sorted(set(given) - names)
         if unknown:
             raise XacroFail(f"macro '{name}' has no parameter '{unknown[0]}'",
-                        f"its parameters: {', '.join(sorted(names)) or 'none'}", node)
+                        f"its parameters: {name_list(sorted(names)) or 'none'}", node)
         for param, default in macro.params:
             if param.startswith("*"):
                 if not blocks:
@@ -452,6 +492,8 @@ class _Expander:
             return self.substitution(body, scope, file, node)
         try:
             tree = ast.parse(body.strip(), mode="eval")
+        except (RecursionError, MemoryError):
+            raise XacroFail("the expression nests too deeply", "split it into properties", node) from None
         except SyntaxError:
             raise XacroFail(f"'${{{body}}}' is not an expression", "write a Python-style arithmetic expression",
                         node) from None
@@ -493,27 +535,30 @@ class _Expander:
                                                               "$(eval EXPR)", node)
 
     def find(self, package: str, file: Path, node: _Node | None) -> Path:
+        """The folder of the ROS package ``package``: named by the user, or a folder with a package.xml naming it
+        around the file (then readable too)."""
         if package in self.packages:
             return self.packages[package]
         for start in (file.parent.resolve(), self.main.parent.resolve()):
             for ancestor in [start, *start.parents][:PACKAGE_SEARCH_LEVELS]:
                 for candidate in _package_candidates(ancestor):
-                    if candidate.name == package or _package_name(candidate) == package:
+                    if candidate.parent != candidate and _package_name(candidate) == package:
                         self.packages[package] = candidate
+                        self.readable = self.readable.with_folder(candidate)
                         return candidate
-        raise XacroFail(f"cannot find the ROS package '{package}' near the file", f"pass --xacro-package "
-                                                                               f"{package}=DIRECTORY", node)
+        raise XacroFail(f"cannot find the ROS package '{package}' near the file (a folder with a package.xml naming "
+                        "it)", f"pass --xacro-package {package}=DIRECTORY", node)
 
     def load_yaml(self, name: Any, file: Path, node: _Node | None) -> Any:
         target = self.path(str(name), file, node or _Node("", {}, str(file), 0, 0), YAML_SUFFIXES)
         try:
-            raw = target.read_bytes()
-        except OSError as exc:
-            raise XacroFail(f"cannot read {target}: {exc.strerror}", "check the path", node) from None
-        if len(raw) > MAX_FILE_BYTES:
-            raise XacroFail(f"{target} is larger than {MAX_FILE_BYTES} bytes", "load a smaller file", node)
+            raw = self.readable.read(target, "the YAML file", MAX_FILE_BYTES)
+        except ReadRefused as exc:
+            raise XacroFail(exc.message, exc.fix, node) from None
         try:
-            return namespaced(yaml.safe_load(raw))
+            return namespaced(yaml.load(raw, Loader=_AliasFreeLoader))
+        except RecursionError:
+            raise XacroFail(f"{target} nests too deeply", "flatten the YAML file", node) from None
         except yaml.YAMLError as exc:
             raise XacroFail(f"{target} is not valid YAML: {exc}", "fix the YAML file", node) from None
 
@@ -558,17 +603,31 @@ _PACKAGE_NAME = re.compile(r"<name>\s*([^<\s]+)\s*</name>")
 
 
 def _package_name(directory: Path) -> str | None:
+    """The <name> in the directory's package.xml (None without one, or if it is no small regular file)."""
+    if not (directory / "package.xml").is_file():
+        return None
     try:
-        text = (directory / "package.xml").read_text(errors="replace")[:65536]
-    except OSError:
+        text = read_bounded(directory / "package.xml", MAX_PACKAGE_XML).decode("utf-8", errors="replace")
+    except ReadRefused:
         return None
     found = _PACKAGE_NAME.search(text)
     return found.group(1) if found else None
 
 
+class _AliasFreeLoader(yaml.SafeLoader):
+    """PyYAML's safe loader that refuses aliases (``*name``): a few lines of them expand to billions of nodes."""
+
+    def compose_node(self, parent: Any, index: Any) -> Any:
+        if self.check_event(yaml.AliasEvent):
+            raise yaml.composer.ComposerError(None, None, "aliases (*name) are not allowed here",
+                                              self.peek_event().start_mark)
+        return super().compose_node(parent, index)
+
+
 def read_xacro_document(path: str | Path, args: Mapping[str, str] | None = None,
-                        packages: Mapping[str, str | Path] | None = None, **urdf: Any) -> tuple[Document, str]:
+                        packages: Mapping[str, str | Path] | None = None, allow_read: Sequence[str | Path] = (),
+                        **urdf: Any) -> tuple[Document, str]:
     """(model document, expanded URDF text) of the xacro file ``path``: :func:`expand_xacro`, then the URDF
     reader (``urdf``: its tip, base, locks and snap_angles), whose messages point into the xacro files."""
-    expansion = expand_xacro(path, args, packages)
+    expansion = expand_xacro(path, args, packages, allow_read)
     return read_generated_urdf(expansion, str(path), **urdf), expansion.text

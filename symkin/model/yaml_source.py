@@ -110,21 +110,28 @@ def read_document(path: str | Path) -> Document:
         ModelError: unreadable file, YAML syntax error, or forbidden YAML construct.
     """
     name = str(path)
-    try:
-        raw_bytes = Path(path).read_bytes()
-    except OSError as exc:
-        raise ModelError([Problem(name, None, None, "", f"cannot read the file: {exc.strerror}",
-                                  "check the path and the file permissions")]) from None
-    if len(raw_bytes) > MAX_FILE_BYTES:
-        raise ModelError([Problem(name, None, None, "",
-                                  f"the file has {len(raw_bytes)} bytes, more than the limit of {MAX_FILE_BYTES}",
-                                  "a model file describes one mechanism; split it or remove generated content")])
+    raw_bytes = model_file_bytes(path)
     try:
         text = raw_bytes.decode("utf-8")
     except UnicodeDecodeError as exc:
         raise ModelError([Problem(name, None, None, "", f"the file is not UTF-8 text ({exc.reason} at byte {exc.start})",
                                   "save the model as UTF-8 text")]) from None
     return parse_document(text, name)
+
+
+def model_file_bytes(path: str | Path) -> bytes:
+    """The bytes of the model file ``path``: a regular file of at most :data:`MAX_FILE_BYTES` bytes, refused before
+    it is read if larger (a 5 GB file must not exhaust memory, a FIFO must not block).
+
+    Raises:
+        ModelError: unreadable, not a regular file, or too large.
+    """
+    from symkin.model.confined_read import ReadRefused, read_bounded
+
+    try:
+        return read_bounded(path, MAX_FILE_BYTES)
+    except ReadRefused as exc:
+        raise ModelError([Problem(str(path), None, None, "", exc.message, exc.fix)]) from None
 
 
 def parse_document(text: str, file: str = "<string>") -> Document:

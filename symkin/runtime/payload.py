@@ -5,7 +5,8 @@ the numpy module, a few tens of kB) instead of a path, so the workers of a clust
 installed but no shared file system.  :meth:`ModelPayload.load` writes it once per machine into
 ``<symkin cache>/payloads/<digest>`` (the directory of the compiled C libraries,
 :func:`symkin.backends.c.build.cache_directory`; the first complete copy renamed into place
-wins, so concurrent workers never see half of one) and loads it once per process.
+wins, so concurrent workers never see half of one) and loads it once per process.  Before a copy is imported its
+files are compared with the payload's bytes: a folder planted under the payload's name is replaced.
 """
 
 from __future__ import annotations
@@ -60,19 +61,38 @@ class ModelPayload:
         if digest not in _LOADED:
             from symkin.runtime.loader import load  # the plain model: workers show no viewer
             from symkin.backends.c.build import cache_directory
+            from symkin.cache_trust import private_directory
 
-            target = cache_directory() / "payloads" / digest[:24]
-            if not (target / MANIFEST_NAME).exists():
-                target.parent.mkdir(parents=True, exist_ok=True)
-                staging = Path(tempfile.mkdtemp(prefix=f".{target.name}.", dir=target.parent))
+            parent = private_directory(private_directory(cache_directory()) / "payloads")
+            target = parent / digest[:24]
+            if not self._held_by(target):
+                staging = Path(tempfile.mkdtemp(prefix=f".{target.name}.", dir=parent))
                 for name, content in self.files:
                     (staging / name).write_bytes(content)
+                aside = parent / f".{target.name}.removed-{os.getpid()}"
                 try:
+                    if target.exists() or target.is_symlink():  # not this payload's files: planted or damaged
+                        os.rename(target, aside)
                     os.rename(staging, target)
                 except OSError:  # another process put its complete copy there first
                     shutil.rmtree(staging, ignore_errors=True)
+                shutil.rmtree(aside, ignore_errors=True)
+                if not self._held_by(target):
+                    raise OSError(f"{target}: the payload's files could not be written to the cache")
             _LOADED[digest] = load(target, "numpy")
         return _LOADED[digest]
+
+
+    def _held_by(self, folder: Path) -> bool:
+        """Whether ``folder`` holds exactly this payload's files, byte for byte: the module imported from there is
+        the one the payload carries, whoever wrote the folder (a content check, not a name)."""
+        try:
+            if folder.is_symlink() or not folder.is_dir() or \
+                    sorted(p.name for p in folder.iterdir()) != sorted(name for name, _ in self.files):
+                return False
+            return all((folder / name).read_bytes() == content for name, content in self.files)
+        except OSError:
+            return False
 
 
 #: worker-side cache: payload digest -> loaded model

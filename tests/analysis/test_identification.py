@@ -9,6 +9,7 @@ nothing written).
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 
 import numpy as np
@@ -79,6 +80,35 @@ def test_bad_data_are_refused_with_file_row_and_column_and_nothing_is_written(ar
     assert f"{data}, " in result.stderr
     assert message in result.stderr.replace("\n", " ")
     assert not (tmp_path / "out").exists()
+
+
+def test_hostile_csv_files_are_refused_or_read_right(arm, tmp_path):
+    """Issue 59: a repeated column is refused (it silently won), a UTF-8 byte-order mark (Excel's) is read, a
+    value whose square overflows is refused at its row and column, a FIFO is refused without blocking."""
+    t, q, qd, qdd, tau = simulated_run(arm)
+    data = write_run(tmp_path / "run.csv", ["theta1", "theta2"], t, q, tau, qd, qdd)
+    text = data.read_text()
+    coordinates = ["theta1", "theta2"]
+    bom = tmp_path / "bom.csv"
+    bom.write_bytes(b"\xef\xbb\xbf" + text.encode())
+    assert np.array_equal(identification.read_measurements(bom, coordinates).tau,
+                          identification.read_measurements(data, coordinates).tau)
+    header = text.splitlines()[0]
+    repeated = tmp_path / "repeated.csv"
+    repeated.write_text("\n".join(line + "," + line.split(",")[1] for line in text.splitlines()) + "\n")
+    with pytest.raises(identification.DataError, match=rf"row 1, column {header.count(',') + 2}: the column "
+                                                       "'q_theta1' repeats column 2"):
+        identification.read_measurements(repeated, coordinates)
+    huge = tmp_path / "huge.csv"
+    lines = text.splitlines()
+    lines[4] = ",".join(lines[4].split(",")[:2] + ["1e308"] + lines[4].split(",")[3:])
+    huge.write_text("\n".join(lines) + "\n")
+    with pytest.raises(identification.DataError, match=r"row 5, column 3 \(q_theta2\): 1e\+308 is beyond 1e\+15"):
+        identification.read_measurements(huge, coordinates)
+    fifo = tmp_path / "fifo.csv"
+    os.mkfifo(fifo)
+    with pytest.raises(identification.DataError, match="is not a regular file"):
+        identification.read_measurements(fifo, coordinates)
 
 
 def test_a_run_that_does_not_excite_a_parameter_or_a_combination_names_them(arm):

@@ -118,7 +118,7 @@ def test_libraries_are_cached_by_content(generated_dir, tmp_path, monkeypatch, c
     monkeypatch.setenv("SYMKIN_CFLAGS", "-O1")
     assert build.shared_library(source, header) not in (first, second)
     assert not list((tmp_path / "cache").glob("*.partial"))
-    assert {p.suffix for p in (tmp_path / "cache").iterdir()} == {".so", ".lock"}
+    assert {p.suffix for p in (tmp_path / "cache").iterdir()} == {".so", ".lock", ".seal"}
 
 
 def test_compiler_problems_are_clear_errors(generated_dir, tmp_path, monkeypatch):
@@ -266,4 +266,4 @@ def test_an_interrupted_compile_leaves_nothing_in_the_cache(generated_dir, tmp_p
     assert "KeyboardInterrupt" in err
     assert [p.name for p in cache.iterdir() if not p.name.endswith(".lock")] == []
     subprocess.run([sys.executable, "-c", load_c], env=env, check=True, capture_output=True)
-    assert [p.suffix for p in cache.iterdir() if not p.name.endswith(".lock")] == [".so"]
+    assert sorted(p.suffix for p in cache.iterdir() if not p.name.endswith(".lock")) == [".seal", ".so"]

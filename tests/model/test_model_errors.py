@@ -34,6 +34,8 @@ CASES = [
     ("unknown link in a body", "{link: link2,", "{link: link9,", 14, "bodies[0].link", "unknown link"),
     ("limits reversed", "limits: [-pi, pi]", "limits: [pi, -pi]", 11, "rows[1].limits", "not below"),
     ("huge exponent", "l2: 0.2", "l2: 9**9**9", 4, "parameters.l2", "too large"),
+    ("huge literal product (issue 59)", "m2: 0.5", "m2: 1e300*1e300*1e300", 5, "parameters.m2", "too large"),
+    ("tiny literal quotient (issue 59)", "l2: 0.2", "l2: 1e-300/1e300", 4, "parameters.l2", "too small"),
     ("negative mass", "m2: 0.5", "m2: -0.5", 14, "bodies[0].mass", "negative mass m2 (-0.5 at the default values)"),
     ("name clash with a joint symbol", "  m2: 0.5\n", "  m2: 0.5\n  theta1_d: 1\n", 6, "parameters.theta1_d",
      "clashes with the symbol 'theta1_d' of joint 'theta1'"),

@@ -17,10 +17,15 @@ from symkin.model.xacro_source import expand_xacro
 
 RTB = Path(distribution("rtb-data").locate_file("rtbdata"))
 KUKA = RTB / "xacro/kuka_description"
-#: ROS packages whose directory is not named after them (ROS finds them by its package index).
+#: The ROS packages the files find, named as a user names them (--xacro-package): rtb-data ships them without
+#: their package.xml, and $(find) resolves only named packages or folders with a package.xml (issue 59).
 PACKAGES = {f"kuka_{m}_support": KUKA / f"kuka_{m}" for m in
             ("kr3", "kr5", "kr6", "kr10", "kr16", "kr120", "kr150", "kr210", "lbr_iiwa")}
 PACKAGES["abb_irb140"] = RTB / "xacro/abb_irb140_description"
+PACKAGES.update({name: folder for folder in sorted(RTB.glob("xacro/**/")) if folder.is_dir()
+                 for name in [folder.name] if name in ("kuka_resources", "qut_frankie_description",
+                                                       "interbotix_gazebo", "trossen_gazebo", "lms1xx",
+                                                       "ridgeback_description")})
 
 
 def _elements(document: xml.dom.minidom.Node) -> list[tuple[str, tuple[tuple[str, str], ...]]]:
@@ -42,9 +47,10 @@ def _reference(path: Path, monkeypatch: pytest.MonkeyPatch) -> list:
     def find(package: str) -> str:
         if package in PACKAGES:
             return str(PACKAGES[package])
-        for directory in [path.parent, *path.parents][:6]:
+        for directory in [path.parent, *path.parents][:6]:  # ROS's package index: folders with a package.xml
             for candidate in [directory, *(p for p in directory.iterdir() if p.is_dir())]:
-                if candidate.name == package:
+                manifest = candidate / "package.xml"
+                if manifest.is_file() and f"<name>{package}</name>" in manifest.read_text():
                     return str(candidate)
         raise LookupError(package)
 
@@ -106,12 +112,13 @@ def test_a_xacro_arm_derives_and_crosschecks(tmp_path, capsys):
     err = capsys.readouterr().err
     assert f"{kr6}:4:3: cannot find the ROS package 'kuka_kr6_support'" in err
     assert "fix: pass --xacro-package kuka_kr6_support=DIRECTORY" in err
-    assert main(["check", str(kr6), "--xacro-package", f"kuka_kr6_support={KUKA / 'kuka_kr6'}"]) == 0
+    assert main(["check", str(kr6), "--xacro-package", f"kuka_kr6_support={KUKA / 'kuka_kr6'}",
+                 "--xacro-package", f"kuka_resources={KUKA / 'kuka_resources'}"]) == 0
     capsys.readouterr()
     # the URDF reader's messages land on the xacro element (here in the included hand.xacro)
     panda = RTB / "xacro/qut_frankie_description/robots/panda_arm_hand.urdf.xacro"
     with pytest.raises(ModelError, match=r"robots/hand\.xacro:\d+:\d+: at 'joint\[panda_finger_joint2\]\.mimic'"):
-        load_model(panda)
+        load_model(panda, xacro_packages={"qut_frankie_description": PACKAGES["qut_frankie_description"]})
 
 
 ARM = """<?xml version="1.0"?>
@@ -174,6 +181,17 @@ HOSTILE = [
     ("${undefined_name}", "'undefined_name' is not a defined property"),
     ("${1 +}", "is not an expression"),
     ("${1", "has no closing"),
+    # issue 59: every operation bounded by the size of its result before it is built
+    ("${round(1, -10**9)}", "round to -1000000000 digits"),
+    ("${(2 ** 1000) ** 1000}", "a power with more than 4096 bits"),
+    ("${(7 ** 1000) * (7 ** 1000) * (7 ** 1000) * (7 ** 1000)}", "a product with more than 4096 bits"),
+    ("${'%01000000000d' % 0}", "a format grows beyond"),
+    ("${[[0] * 1000000] * 1000000}", "a value grows beyond 1000000 characters or items"),
+    ("${str([[0] * 1000] * 100000)}", "a value grows beyond 1000000 characters or items"),
+    ("${sum([[0] * 100] * 100, [])}", "sum with a start value other than a number"),
+    ("${[1] * 999999 == [1] * 999999 and [[1] * 999] * 1002}", "grows beyond"),
+    ("${" + "-" * 100000 + "1}", "nests too deeply"),
+    ("${float('1' * 5000)}", "more than 400 characters"),
 ]
 
 
@@ -193,6 +211,15 @@ def test_hostile_expressions_are_refused_located_and_never_run(tmp_path, monkeyp
     ('<xacro:property name="a" value="${b}"/><xacro:property name="b" value="${a}"/><link name="${a}"/>',
      "circular property definition"),
     ('<xacro:include filename="/etc/passwd"/>', "is not a .xacro/.urdf/.xml file"),
+    # issue 59: element counts, macro fan-out and computed names
+    ('<xacro:macro name="f" params="n"><xacro:if value="${n > 0}"><xacro:f n="${n-1}"/><xacro:f n="${n-1}"/>'
+     '</xacro:if></xacro:macro><xacro:f n="60"/>', "more than 100000 macro calls"),
+    ('<xacro:macro name="twice" params="*b"><xacro:insert_block name="b"/><xacro:insert_block name="b"/>'
+     '</xacro:macro>' + '<xacro:twice>' * 20 + '<link name="x"/>' + '</xacro:twice>' * 20,
+     "the expansion has more than 100000 elements"),
+    ('<xacro:element xacro:name="link name=\'evil\'/&gt;&lt;link"/>', "is not an XML element name"),
+    ('<link name="a"><xacro:attribute name="x=\'1\' y" value="2"/></link>', "is not an XML attribute name"),
+    ('<a>' * 300 + '</a>' * 300, "the XML nests deeper than 200 elements"),
     ('<xacro:include filename="missing.xacro"/>', "cannot read"),
     ('<xacro:nothing/>', "no macro named 'nothing'"),
     ('<xacro:link name="x" colour="red"><origin/></xacro:link>', "macro 'link' has no parameter 'colour'"),

@@ -138,3 +138,28 @@ def test_interrupting_the_first_derive_leaves_nothing_half_written(tmp_path):
             if entries:
                 manifest = json.loads((out / "ur10e" / "manifest.json").read_text())
                 assert sorted(p.name for p in (out / "ur10e").iterdir()) == _files_of(manifest)
+
+
+@pytest.mark.parametrize("kind", ["symlink", "file"])
+def test_an_output_that_is_a_link_or_a_file_is_refused_untouched(tmp_path, kind):
+    """Issue 59: ``-o`` naming a symbolic link or a file is refused (exit 2), not replaced by a directory, and
+    nothing (no hidden ``.NAME.old-*``) is left beside it."""
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    (elsewhere / "precious.txt").write_text("keep")
+    target = tmp_path / "out" / "planar_2r"
+    target.parent.mkdir()
+    if kind == "symlink":
+        target.symlink_to(elsewhere, target_is_directory=True)
+    else:
+        target.write_text("a file")
+    result = subprocess.run(SYMKIN_CLI + ["derive", str(MODELS_DIR / "planar_2r.yaml"), "-o", str(tmp_path / "out"),
+                                          "--only", "fk", "--backend", "numpy", "--no-cache"],
+                            capture_output=True, text=True)
+    assert result.returncode == 2, result.stderr
+    assert f"the output {target} is {'a symbolic link' if kind == 'symlink' else 'not a directory'}" in result.stderr
+    assert sorted(p.name for p in target.parent.iterdir()) == ["planar_2r"]
+    assert sorted(elsewhere.iterdir()) == [elsewhere / "precious.txt"]
+    assert (elsewhere / "precious.txt").read_text() == "keep"
+    with pytest.raises(Exception, match="symkin replaces only a directory it wrote"):
+        atomic.replace_directory(target, {"a.txt": "x"})

@@ -26,7 +26,7 @@ PACKAGE = Path(__file__).resolve().parents[2] / "symkin"
 
 #: Lowest first.  Each entry: the layer's name and its top-level modules or packages of symkin.
 LAYERS = (
-    ("foundation", {"_version", "errors", "atomic", "expression_dag", "symengine_bridge", "text_table", "lazy"}),
+    ("foundation", {"_version", "errors", "atomic", "cache_trust", "expression_dag", "symengine_bridge", "text_table", "lazy"}),
     ("model", {"model", "geometry"}),
     ("structure", {"structure"}),
     ("ir", {"ir"}),
@@ -43,7 +43,7 @@ RANK = {part: rank for rank, (_name, parts) in enumerate(LAYERS) for part in par
 PATTERNS = {part: rank for rank, (_name, parts) in enumerate(LAYERS) for part in parts if "*" in part}
 #: What each layer holds, for the table docs/architecture.md renders from LAYERS (checked below).
 ROLES = {
-    "foundation": "errors, atomic writes, the version, expression graphs, the SymEngine bridge, text tables, "
+    "foundation": "errors, atomic writes, trust in the cache folder, the version, expression graphs, the SymEngine bridge, text tables, "
                   "packages imported lazily",
     "model": "the model format: reading, validating, the schema; geometry",
     "structure": "mobility and topology synthesis",

@@ -13,7 +13,10 @@ compiler's version text, so editing any of them (or regenerating the model) buil
 while loading the same model again costs a hash and a ``dlopen``.  Libraries are written
 under a temporary name and renamed into place, under a lock file, so concurrent loaders
 (pytest-xdist workers, several processes of a control application) compile a library once
-and never see a half-written file.  Nothing here removes a library: ``symkin cache list|clear``
+and never see a half-written file.  A library is code that runs when loaded, so the cache folder must be this
+user's and writable by nobody else, and each library carries a seal ``<library>.seal``, an HMAC of its name and
+bytes under the per-user secret (:mod:`symkin.cache_trust`): a library without a valid seal (planted, copied
+from another machine's cache, or left by a build that died before sealing it) is built again.  Nothing here removes a library: ``symkin cache list|clear``
 (:mod:`symkin.backends.c.cache`) shows and evicts them.
 
 Environment:
@@ -42,6 +45,8 @@ from contextlib import contextmanager
 from functools import lru_cache
 from pathlib import Path
 
+from symkin import cache_trust
+from symkin.atomic import replace_file
 from symkin.errors import GeneratedCodeError
 
 DEFAULT_CFLAGS = "-O3"
@@ -51,6 +56,8 @@ BASE_FLAGS = ("-std=c99", "-fPIC", "-Wall", "-Wextra")
 EXTENSION_FLAGS = ("-std=c11", "-fPIC", "-Wall")
 #: Infix of an extension module's file name in the cache, ``lib<model>-py-<key>.so``.
 EXTENSION_TAG = "-py"
+#: Suffix of a library's seal (see the module docstring).
+SEAL_SUFFIX = ".seal"
 #: The generated source's statement of its translation units (see :func:`parts_line`).
 _PARTS_PATTERN = re.compile(r"^/\* symkin: translation units (\w+)=0\.\.(\d+) \*/$", re.MULTILINE)
 
@@ -120,7 +127,7 @@ def shared_library(source: Path, header: Path) -> Path:
     command = compiler_command()
     key = _key(source.read_bytes(), header.read_bytes(), "\0".join(command + list(BASE_FLAGS)).encode(),
                _compiler_version(command[0]).encode())
-    directory = cache_directory()
+    directory = cache_trust.private_directory(cache_directory())
 
     def build(target: Path) -> None:
         units = translation_units(source.read_text())
@@ -143,18 +150,33 @@ def _key(*parts: bytes) -> str:
 
 
 def _cached(target: Path, build: Callable[[Path], None], what: str) -> Path:
-    """``target`` from the cache (its use recorded), or made by ``build(target)`` under its build lock, once
-    however many processes ask at the same time; the time it took goes to stderr."""
-    if target.exists():
+    """``target`` from the cache (its use recorded) if its seal holds, or made by ``build(target)`` and sealed under
+    its build lock, once however many processes ask at the same time; the time it took goes to stderr."""
+    if _sealed(target):
         _touch(target)
         return target
-    target.parent.mkdir(parents=True, exist_ok=True)
     with locked(target.parent / f"{target.name}.lock"):
-        if not target.exists():  # another process may have built it while we waited
+        if not _sealed(target):  # another process may have built it while we waited
             start = time.perf_counter()
             build(target)
+            replace_file(_seal_path(target), cache_trust.seal(f"library {target.name}", cache_trust.file_digest(target)))
             progress(f"symkin: compiled {what} in {time.perf_counter() - start:.1f} s")
     return target
+
+
+def _seal_path(library: Path) -> Path:
+    return library.with_name(library.name + SEAL_SUFFIX)
+
+
+def _sealed(library: Path) -> bool:
+    """Whether ``library`` is a regular file that symkin built and sealed (see the module docstring)."""
+    try:
+        if not library.is_file() or library.is_symlink():
+            return False
+        mac = _seal_path(library).read_text(encoding="ascii")[:128]
+        return cache_trust.verified(f"library {library.name}", cache_trust.file_digest(library), mac)
+    except (OSError, UnicodeDecodeError):
+        return False
 
 
 def python_include_directories() -> tuple[str, str] | None:
@@ -194,7 +216,7 @@ def extension_module(source: Callable[[], str], what: bytes, model: str, header:
                  f'-DSYMKIN_MODULE_NAME="{name}"', f"-DSYMKIN_MODULE_INIT=PyInit_{name}"]
         _compile(command, [(flags, source())], target, 1, [str(library), "-lm"])
 
-    target = cache_directory() / f"lib{model}{EXTENSION_TAG}-{digest}{_library_suffix()}"
+    target = cache_trust.private_directory(cache_directory()) / f"lib{model}{EXTENSION_TAG}-{digest}{_library_suffix()}"
     return _cached(target, build, f"the entry points of {model}"), name
 
 

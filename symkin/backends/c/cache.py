@@ -1,8 +1,8 @@
 """The C build cache: what it holds, and its eviction (``symkin cache list|clear``).
 
 :func:`symkin.backends.c.build.shared_library` keeps every library it compiles, named
-``lib<model>-<key>.so`` after the hash of its source, header, compiler and flags, beside a lock
-file ``<library>.lock`` and, while a build runs, a scratch directory ``<library>.<pid>-<thread>.build``.
+``lib<model>-<key>.so`` after the hash of its source, header, compiler and flags, beside its seal
+``<library>.seal`` and a lock file ``<library>.lock`` and, while a build runs, a scratch directory ``<library>.<pid>-<thread>.build``.
 Regenerating a model or changing a flag adds a library; nothing removes the old ones, so the
 cache grows until it is cleared.  A load touches its library's modification time, so that
 "last used" is the time since a program last loaded it.
@@ -20,7 +20,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from symkin.backends.c.build import cache_directory, locked
+from symkin.backends.c.build import SEAL_SUFFIX, cache_directory, locked
 
 #: ``lib<model>-<key>.so``, or ``lib<model>-py-<key>.so`` for the model's CPython entry points.
 _LIBRARY = re.compile(r"^lib(?P<model>.+?)(-py)?-(?P<key>[0-9a-f]{24})\.(so|dylib|dll)$")
@@ -74,6 +74,7 @@ def clear(directory: Path | None = None, *, model: str | None = None, older_than
                 busy.append(library)
                 continue
             library.path.unlink(missing_ok=True)
+            library.path.with_name(library.path.name + SEAL_SUFFIX).unlink(missing_ok=True)
             for scratch in directory.glob(library.path.name + ".*"):
                 if scratch.is_dir():
                     shutil.rmtree(scratch, ignore_errors=True)
