@@ -60,13 +60,14 @@ MARKER_PREFIX = "pwned"
 
 
 def model_text(text: str, parameter: str = "l1") -> str:
-    """A 2-DoF planar arm whose description, references, parameter unit and doc all hold ``text``
-    (and whose first link length is named ``parameter``), as YAML (JSON is YAML)."""
+    """A 2-DoF planar arm whose description, references and parameter docs all hold ``text`` (and whose first
+    link length is named ``parameter``), as YAML (JSON is YAML).  A unit is no free text (issue 60: it is
+    converted, an unknown one refused): tests/model/test_units.py."""
     model = {
         "name": "arm",
         "description": text,
         "references": [text, "a manufacturer's datasheet"],
-        "parameters": {parameter: {"value": 0.1, "unit": text, "doc": text},
+        "parameters": {parameter: {"value": 0.1, "unit": "m", "doc": text},
                        "l2": {"value": 0.2, "unit": "m", "doc": text}, "m2": 0.5},
         "serial": {"dh": {"convention": "classic", "rows": [
             ["theta1", "R", 0, 0, parameter, 0],

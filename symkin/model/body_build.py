@@ -15,6 +15,7 @@ from symkin.model.reader import X_AXIS, Y_AXIS, Z_AXIS, ZERO, Reader, describe, 
 from symkin.model.schema import (Actuator, Body, Friction, Joint, Parallel, ParallelBodies, PlatformMotion, Vec3,
                                  fixed_pose)
 from symkin.model.yaml_source import KeyPath
+from symkin.model.units import MASS
 
 _INERTIA_KEYS = ("xx", "yy", "zz", "xy", "xz", "yz")
 
@@ -46,7 +47,7 @@ def read_bodies(r: Reader, value: Any, links: tuple[str, ...], path: KeyPath = (
 
 def _mass_properties(r: Reader, path: KeyPath, item: dict[str, Any], link: str) -> Body | None:
     """The Body of a mapping with ``mass`` and optional ``com``, ``inertia``, ``inertia_rpy``, ``origin``."""
-    mass = r.expr(path + ("mass",), item["mass"])
+    mass = r.expr(path + ("mass",), item["mass"], dimension=MASS)
     com = r.vector3(path + ("com",), item["com"]) if "com" in item else (ZERO, ZERO, ZERO)
     inertia = _inertia(r, path + ("inertia",), item["inertia"]) if "inertia" in item else sympy.zeros(3, 3)
     if "inertia_rpy" in item and inertia is not None:

@@ -52,6 +52,7 @@ from symkin.model.schema import (
     Vec3,
 )
 from symkin.model.yaml_source import KeyPath
+from symkin.model.units import ANGLE, LENGTH
 
 PARALLEL_KEYS = ("delta", "motion", "chains", "legs", "fk_branch", "mobility", "home")
 LEG_KEYS = ("name", "chain", "joints", "base", "platform", "ik_branch")
@@ -242,9 +243,9 @@ def attachment(r: Reader, path: KeyPath, value: Any) -> tuple[Op, ...] | None:
         section = r.mapping(path, value, required=("radius", "angle"), optional=("z",))
         if section is None or "radius" not in section or "angle" not in section:
             return None
-        radius = r.expr(path + ("radius",), section["radius"])
-        angle = r.expr(path + ("angle",), section["angle"])
-        height = r.expr(path + ("z",), section["z"]) if "z" in section else ZERO
+        radius = r.expr(path + ("radius",), section["radius"], dimension=LENGTH)
+        angle = r.expr(path + ("angle",), section["angle"], dimension=ANGLE)
+        height = r.expr(path + ("z",), section["z"], dimension=LENGTH) if "z" in section else ZERO
         if radius is None or angle is None or height is None:
             return None
         return ops(Rotation(Z_AXIS, angle), Translation((radius, ZERO, height)))

@@ -10,6 +10,7 @@ from symkin.model import coordinates
 from symkin.model.expressions import ExpressionError, parse_expression
 from symkin.model.reader import Reader, raw_text
 from symkin.model.schema import DerivedParameter, Joint, Parameter
+from symkin.model.units import suggestion, unit_of
 from symkin.model.yaml_source import KeyPath
 
 
@@ -46,6 +47,11 @@ def read_parameters(r: Reader, section: Any) -> tuple[tuple[Parameter, ...], tup
             vpath = ppath + (value_key,)
         else:
             raw, vpath = spec, ppath
+        converted = _si_unit(r, ppath, unit, derived=value_key == "expr")
+        if converted is None:
+            r.invalid.add(pname)
+            continue
+        unit, factor = converted
         if value_key == "expr":
             pending[pname] = (vpath, raw, unit, doc)
             continue
@@ -53,12 +59,34 @@ def read_parameters(r: Reader, section: Any) -> tuple[tuple[Parameter, ...], tup
         if value is None:
             r.invalid.add(pname)
             continue
+        value = value * factor
         symbol = sympy.Symbol(pname, real=True)
+        if unit:
+            r.dimensions[symbol] = (unit_of(unit).dimension, unit)  # type: ignore[union-attr]
         free.append(Parameter(pname, symbol, value, unit, doc))
         r.names[pname] = symbol
         r.defaults[symbol] = value
     derived = _resolve_derived(r, pending)
     return tuple(free), derived
+
+
+def _si_unit(r: Reader, path: KeyPath, text: str, derived: bool) -> tuple[str, sympy.Expr] | None:
+    """(the unit the parameter carries, the exact factor of its value to SI) for the written ``unit:``
+    (:mod:`symkin.model.units`); None, with a located problem, for an unknown unit or a non-SI unit on a
+    derived parameter (its formula computes in SI from the other parameters)."""
+    if not text:
+        return "", sympy.Integer(1)
+    known = unit_of(text)
+    if known is None:
+        r.fail(path + ("unit",), f"unknown unit '{text[:40]}'", suggestion(text))
+        return None
+    if known.factor == 1:
+        return text, sympy.Integer(1)  # SI: the text as written (kg*m^2 or kg m^2)
+    if derived:
+        r.fail(path + ("unit",), f"a derived parameter's formula computes in SI units from the other parameters, "
+               f"so its unit cannot be '{text}'", f"write unit: {known.si}, and the formula's result in {known.si}")
+        return None
+    return known.si, known.factor
 
 
 def _resolve_derived(r: Reader, pending: dict[str, tuple[KeyPath, Any, str, str]]) -> tuple[DerivedParameter, ...]:

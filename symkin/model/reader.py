@@ -59,6 +59,9 @@ class Reader:
         self.notes: list[str] = []
         #: Every name the file gives (a parameter, joint, link, leg...) -> where, the first time (Model.declared_names).
         self.declared: dict[str, KeyPath] = {}
+        #: The dimension of each parameter whose ``unit:`` names one (symkin.model.units), for the checks of
+        #: :meth:`expr` where a value has a dimension (a length used as an angle is refused).
+        self.dimensions: dict[sympy.Symbol, tuple[str, str]] = {}
 
     def note(self, path: KeyPath, message: str) -> None:
         """Record ``message`` about the element at ``path``, located by line and key but not by the file's
@@ -112,8 +115,23 @@ class Reader:
         self.declared.setdefault(value, path)
         return value
 
-    def expr(self, path: KeyPath, value: Any, names: dict[str, sympy.Expr] | None = None) -> sympy.Expr | None:
-        """Parse the expression at ``path``; numbers are read from their raw text (exact decimals)."""
+    def expr(self, path: KeyPath, value: Any, names: dict[str, sympy.Expr] | None = None,
+             dimension: str | None = None) -> sympy.Expr | None:
+        """Parse the expression at ``path``; numbers are read from their raw text (exact decimals).  With a
+        ``dimension``, a term that is a number times a parameter of another dimension is refused."""
+        parsed = self._parsed(path, value, names)
+        if parsed is not None and dimension is not None:
+            for term in sympy.Add.make_args(parsed):
+                _, symbol = term.as_coeff_Mul()
+                if symbol in self.dimensions and self.dimensions[symbol][0] != dimension:
+                    found, unit = self.dimensions[symbol]
+                    self.fail(path, f"'{symbol}' is {'an' if found[0] in 'aeiou' else 'a'} {found} (unit: {unit}) "
+                              f"but is used here as {'an' if dimension[0] in 'aeiou' else 'a'} {dimension}",
+                              f"use a parameter in a unit of {dimension}, or fix the unit of '{symbol}'")
+                    return None
+        return parsed
+
+    def _parsed(self, path: KeyPath, value: Any, names: dict[str, sympy.Expr] | None) -> sympy.Expr | None:
         text = value
         if isinstance(value, (int, float)) and not isinstance(value, bool) and not (
                 isinstance(value, float) and not math.isfinite(value)):

@@ -20,6 +20,7 @@ from symkin.model.reader import (
     unit_axis,
 )
 from symkin.errors import name_list
+from symkin.model.units import ANGLE, LENGTH
 from symkin.model import joint_kinds, tree
 from symkin.model.schema import Coupling, Joint, JointType, Op, Rotation, Translation
 from symkin.model.yaml_source import Document, KeyPath
@@ -231,7 +232,8 @@ def _dh_table(r: Reader, path: KeyPath, section: Any) -> list[Joint]:
             continue  # the missing keys are reported
         jname = r.name(rpath + ("name",), fields["name"])
         jtype = _joint_type(r, rpath + ("type",), fields.get("type", "R"))
-        values = {k: r.expr(rpath + (k,), fields[k]) for k in ("theta", "d", "a", "alpha")}
+        values = {k: r.expr(rpath + (k,), fields[k], dimension=ANGLE if k in ("theta", "alpha") else LENGTH)
+                  for k in ("theta", "d", "a", "alpha")}
         extras = _joint_extras(r, rpath, fields, default_link=f"link{i + 1}")
         if jname is None or jtype is None or any(v is None for v in values.values()) or extras is None:
             r.invalid_links.add(_declared_link(fields, i))

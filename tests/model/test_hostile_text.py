@@ -1,4 +1,4 @@
-"""Hostile free text (issue 28): a model file's description, references, units, parameter docs and
+"""Hostile free text (issue 28): a model file's description, references, parameter docs and
 names never become code in what symkin writes.  Each case of tests/hostile_text.py goes into every
 free-text field of a model file; the derived numpy module imports, the JavaScript module loads
 under Node.js and the C compiles warning-free, none runs a payload, and the text still reads in
