@@ -303,6 +303,10 @@ def _axes(r: Reader, path: KeyPath, item: dict[str, Any], jtype: LegJointType) -
     if other in item:
         r.fail(path + (other,), f"a {jtype.value} joint takes '{key}', not '{other}'", f"write '{key}:'")
         return None
+    if key not in item and single:  # no convention fixes it (URDF's default is x, a DH table's z): say it
+        r.fail(path, f"the {jtype.value} joint '{item.get('name', '')}' has no axis",
+               "add 'axis: [0, 0, 1]' (or the axis it turns about or slides along, in its frame)")
+        return None
     if key not in item:
         axes = joint_kinds.kind(jtype).default_axes(Z_AXIS, Y_AXIS, X_AXIS)
     elif single:

@@ -300,7 +300,10 @@ def _chain(r: Reader, path: KeyPath, section: Any) -> list[Joint]:
             continue
         jname = r.name(jpath + ("name",), item["name"])
         jtype = _joint_type(r, jpath + ("type",), item.get("type", "R"))
-        axis = unit_axis(r, jpath + ("axis",), item["axis"]) if "axis" in item else Z_AXIS
+        if "axis" not in item:  # no convention fixes it (URDF's default is x, a DH table's z): say it
+            r.fail(jpath, f"the joint '{item['name']}' has no axis",
+                   "add 'axis: [0, 0, 1]' (or the axis it turns about or slides along, in its frame)")
+        axis = unit_axis(r, jpath + ("axis",), item["axis"]) if "axis" in item else None
         before = frame_ops(r, jpath + ("origin",), item["origin"]) if "origin" in item else ()
         offset = r.expr(jpath + ("offset",), item["offset"]) if "offset" in item else ZERO
         extras = _joint_extras(r, jpath, item, default_link=f"link{i + 1}")

@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 import sympy
 
-from conftest import random_q, reference_function
+from conftest import MODELS_DIR, random_q, reference_function
 from symkin.derivation import Derivation
+from symkin.errors import ModelError
 from symkin.model import coordinates, model_from_text
 from tolerances import CLOSED_FORM, KINEMATICS, UR10E_SCALE
 
@@ -18,12 +20,12 @@ name: ur10e_chain
 parameters: {d1: 0.1807, a2: -0.6127, a3: -0.57155, d4: 0.17415, d5: 0.11985, d6: 0.11655}
 serial:
   chain:
-    - {name: q1, origin: {xyz: [0, 0, d1]}}
-    - {name: q2, origin: {rpy: [pi/2, 0, 0]}}
-    - {name: q3, origin: {xyz: [a2, 0, 0]}}
-    - {name: q4, origin: {xyz: [a3, 0, d4]}}
-    - {name: q5, origin: {xyz: [0, -d5, 0], rpy: [pi/2, 0, 0]}}
-    - {name: q6, origin: {xyz: [0, d6, 0], rpy: [pi/2, pi, pi]}}
+    - {axis: [0, 0, 1], name: q1, origin: {xyz: [0, 0, d1]}}
+    - {axis: [0, 0, 1], name: q2, origin: {rpy: [pi/2, 0, 0]}}
+    - {axis: [0, 0, 1], name: q3, origin: {xyz: [a2, 0, 0]}}
+    - {axis: [0, 0, 1], name: q4, origin: {xyz: [a3, 0, d4]}}
+    - {axis: [0, 0, 1], name: q5, origin: {xyz: [0, -d5, 0], rpy: [pi/2, 0, 0]}}
+    - {axis: [0, 0, 1], name: q6, origin: {xyz: [0, d6, 0], rpy: [pi/2, pi, pi]}}
 task_space: pose
 """
 
@@ -99,9 +101,9 @@ task_space: position
 parameters: {a: 0.1, th: 0.3}
 serial:
   chain:
-    - {name: q1}
-    - {name: q2, type: P, origin: {xyz: [a, 0, 0], rpy: [pi/2, 0, 0]}, offset: 0.05}
-    - {name: q3, origin: {xyz: [0.2*cos(th), 0.2*sin(th), 0], rpy: [-pi/3, 0, th]}}
+    - {axis: [0, 0, 1], name: q1}
+    - {axis: [0, 0, 1], name: q2, type: P, origin: {xyz: [a, 0, 0], rpy: [pi/2, 0, 0]}, offset: 0.05}
+    - {axis: [0, 0, 1], name: q3, origin: {xyz: [0.2*cos(th), 0.2*sin(th), 0], rpy: [-pi/3, 0, th]}}
 task_space: position
 """)
 
@@ -121,8 +123,8 @@ task_space: position
 parameters: {a: 0.1, th: 0.3}
 serial:
   chain:
-    - {name: q1, type: P, origin: {rpy: [0, 0, th]}, offset: 0.05}
-    - {name: q2, origin: {xyz: [a, 0, 0], rpy: [pi/2, 0, 0]}}
+    - {axis: [0, 0, 1], name: q1, type: P, origin: {rpy: [0, 0, th]}, offset: 0.05}
+    - {axis: [0, 0, 1], name: q2, origin: {xyz: [a, 0, 0], rpy: [pi/2, 0, 0]}}
 task_space: position
 """)
 
@@ -144,3 +146,19 @@ def test_rotation_about_a_general_axis():
         assert abs((np.trace(Rv) - 1) / 2 - np.cos(value)) <= CLOSED_FORM
         vee = np.array([Rv[2, 1] - Rv[1, 2], Rv[0, 2] - Rv[2, 0], Rv[1, 0] - Rv[0, 1]]) / (2 * np.sin(value))
         np.testing.assert_allclose(vee, np.array(axis, dtype=float).ravel(), rtol=0, atol=2 * CLOSED_FORM / 0.47)
+
+
+@pytest.mark.parametrize("text, line, message", [
+    ("serial:\n  chain:\n    - {name: q1, axis: [1, 0, 0]}\n    - {name: q2, type: P}\ntask_space: position\n",
+     4, "the joint 'q2' has no axis"),
+    ((MODELS_DIR / "pantograph.yaml").read_text().replace("{name: elbow, type: R, axis: [0, 0, 1], ",
+                                                          "{name: elbow, type: R, "), 56, "the R joint 'elbow' has no axis"),
+])
+def test_a_joint_without_an_axis_is_refused_where_no_convention_fixes_it(text, line, message):
+    """Issue 60, point 2: a chain or leg joint without 'axis' silently turned about z (URDF's default is x); it is
+    refused at its line with the fix. A DH row keeps z: that is the convention."""
+    with pytest.raises(ModelError) as raised:
+        model_from_text(text)
+    first = raised.value.problems[0]
+    assert (first.line, message in first.message, "add 'axis: [0, 0, 1]'" in first.fix) == (line, True, True), \
+        str(raised.value)

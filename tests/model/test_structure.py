@@ -71,11 +71,11 @@ def test_declared_identical_conditions_and_constraints_enter_eq_8_2():
           motion: translation
           mobility: {identical: 1, constraints: 2}
           legs:
-            - {joints: [{name: a, type: R, active: true}, {name: b, type: U}, {name: c, type: U}],
+            - {joints: [{name: a, type: R, axis: [0, 0, 1], active: true}, {name: b, type: U}, {name: c, type: U}],
                base: {radius: 1, angle: 0}, platform: {radius: 0.1, angle: 0}}
-            - {joints: [{name: a, type: R, active: true}, {name: b, type: U}, {name: c, type: U}],
+            - {joints: [{name: a, type: R, axis: [0, 0, 1], active: true}, {name: b, type: U}, {name: c, type: U}],
                base: {radius: 1, angle: 2}, platform: {radius: 0.1, angle: 2}}
-            - {joints: [{name: a, type: R, active: true}, {name: b, type: U}, {name: c, type: U}],
+            - {joints: [{name: a, type: R, axis: [0, 0, 1], active: true}, {name: b, type: U}, {name: c, type: U}],
                base: {radius: 1, angle: 4}, platform: {radius: 0.1, angle: 4}}
         """)
     report = model_mobility(model_from_text(text, name="m"))

@@ -161,7 +161,7 @@ def test_bad_delta_models_give_located_errors(case, old, new, key, message):
 BAD_LEGS = [
     ("active spherical joint", "- {name: up, type: U}", "- {name: up, type: S, active: true}", "chains.upu[2].active",
      "cannot be actuated"),
-    ("too many actuators", "- {name: ub, type: U}", "- {name: ub, type: R, active: true}", "parallel",
+    ("too many actuators", "- {name: ub, type: U}", "- {name: ub, type: R, axis: [0, 0, 1], active: true}", "parallel",
      "have 6 active joints"),
     ("unknown joint type", "- {name: up, type: U}", "- {name: up, type: Q}", "chains.upu[2].type",
      "unknown joint type 'Q'"),
