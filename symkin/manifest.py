@@ -44,6 +44,8 @@ def _coordinate(model: Model, coordinate, joints: tuple | None = None, actuators
 
     drive = drive_of(coordinate.name, model.joints if joints is None else joints,
                      model.actuators if actuators is None else actuators)
+    # an actuated leg joint of a parallel mechanism: the legs' rotor (parallel.rotor), the same for every leg
+    rotor = model.parallel.bodies if joints is None and model.parallel is not None else None
     friction = next((f for f in model.friction if f.joint == coordinate.name), None)
     coulomb = None if friction is None else [friction.coulomb] + (
         [friction.coulomb_negative] if friction.coulomb_negative is not None else [])
@@ -65,7 +67,8 @@ def _coordinate(model: Model, coordinate, joints: tuple | None = None, actuators
         None if friction is None else number(friction.viscous),
         None if coulomb is None else max(abs(float(c.xreplace(values))) for c in coulomb),
         # motor turns per turn of the coordinate, s N (an encoder on the motor: symkin rate)
-        None if drive is None else number(drive[1] * drive[0].gear_ratio),
+        number(drive[1] * drive[0].gear_ratio) if drive is not None else
+        number(rotor.gear_ratio) if rotor is not None else None,
     )
 
 

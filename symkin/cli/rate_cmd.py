@@ -60,7 +60,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "travel (prismatic): the position resolution")
     p.add_argument("--gear", metavar="N[,...]",
                    help="motor turns per joint turn between encoder and revolute joint (default: the gear ratios of "
-                        "the model's actuators, else 1)")
+                        "the model's actuators, or of a parallel model's rotor: 'rotor: {gear_ratio: ...}', else 1)")
     p.add_argument("--rate", type=float, default=1000.0, metavar="HZ",
                    help="servo rate of the haptic loop, for the renderable stiffness (default: 1000)")
     analysis_args.add_device_argument(p)
@@ -70,20 +70,56 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(run=run, parser=p)
 
 
-def _joint_steps(args: argparse.Namespace, model) -> list[float] | None:
-    """Encoder steps at the joints: 2 pi / (counts N) rad (revolute), 1 / counts m (prismatic)."""
+def _encoders(args: argparse.Namespace, model) -> tuple[list[float], list[float], str] | None:
+    """(counts per turn or metre, gear ratios, where the gears come from) of ``--encoder`` (None without it)."""
     if args.encoder is None:
         if args.gear is not None:
             raise ValueError("--gear: give --encoder too (the gear scales the encoder's counts)")
         return None
     count = len(model.info.coordinates)
     counts = analysis_args.per_joint("--encoder", args.encoder, count)
-    declared = [c.gear_ratio or 1.0 for c in model.info.coordinates]  # the model's drives, else direct
+    declared = [c.gear_ratio or 1.0 for c in model.info.coordinates]  # the model's drives (serial or legs' rotor)
     gears = analysis_args.per_joint("--gear", args.gear, count) if args.gear else declared
     if not all(c > 0 and math.isfinite(c) for c in counts + gears):
         raise ValueError("--encoder and --gear must be positive numbers")
+    source = "--gear" if args.gear else "the model's drives" if any(
+        c.gear_ratio is not None for c in model.info.coordinates) else "direct drive (the model declares no gear)"
+    return counts, gears, source
+
+
+def _joint_steps(model, encoders: tuple[list[float], list[float], str] | None) -> list[float] | None:
+    """Encoder steps at the joints: 2 pi / (counts N) rad (revolute), 1 / counts m (prismatic)."""
+    if encoders is None:
+        return None
+    counts, gears, _ = encoders
     return [2 * math.pi / (c * n) if coordinate.revolute else 1.0 / c
             for c, n, coordinate in zip(counts, gears, model.info.coordinates)]
+
+
+def _inputs(args: argparse.Namespace, model, actuation, encoders) -> dict[str, object]:
+    """Every input the rating used, per actuated coordinate, and where it came from (datasheet.json, summary)."""
+    def listed(values) -> list[float | None]:
+        return [None] * len(model.info.coordinates) if values is None else [float(v) for v in values]
+
+    counts, gears, source = encoders if encoders is not None else (listed(None), listed(None), "no --encoder")
+    efforts = listed(actuation.effort_limits)
+    return {"servo_period_s": actuation.period, "effort_limits_from": "--effort-limit" if args.effort_limit else
+            "the model", "gears_from": source,
+            "coordinates": [{"name": c.name, "encoder_counts": n, "gear_ratio": g, "effort_limit": e,
+                             "continuous_effort_limit": ce, "coulomb": cf, "viscous": v}
+                            for c, n, g, e, ce, cf, v in zip(model.info.coordinates, counts, gears, efforts,
+                                                             listed(actuation.continuous_limits),
+                                                             listed(actuation.coulomb), listed(actuation.viscous))]}
+
+
+def _input_lines(inputs: dict[str, object]) -> list[str]:
+    lines = [f"inputs: servo period {inputs['servo_period_s']:g} s; effort limits from {inputs['effort_limits_from']};"
+             f" gears from {inputs['gears_from']}"]
+    for c in inputs["coordinates"]:  # type: ignore[attr-defined]
+        shown = ", ".join(f"{key.replace('_', ' ')} {value:g}" for key, value in c.items()
+                          if key != "name" and value is not None)
+        lines.append(f"  {c['name']}: {shown or 'no drive data'}")
+    return lines
 
 
 def run(args: argparse.Namespace) -> int:
@@ -102,9 +138,11 @@ def run(args: argparse.Namespace) -> int:
                                          ("gravity_vector", "closure_dynamics", *device))
         values = analysis_args.parse_assignments(args.assignments)
         model = analysis_args.device_view(args, models[0].bind(**values) if values else models[0])
+        encoders = _encoders(args, model)
         actuation = datasheet.Actuation.of_model(model, effort_limits=analysis_args.effort_limits(args.effort_limit,
                                                                                                   model),
-                                                 joint_steps=_joint_steps(args, model), period=1.0 / args.rate)
+                                                 joint_steps=_joint_steps(model, encoders), period=1.0 / args.rate)
+        inputs = _inputs(args, model, actuation, encoders)
         with Progress(model.name) as progress:
             progress(f"rating {args.samples} poses")
             sheet = datasheet.rate(model, actuation, samples=args.samples, seed=args.seed, box=box,
@@ -112,10 +150,12 @@ def run(args: argparse.Namespace) -> int:
                                    orientation=analysis_args.parse_orientation(args.orientation))
             summary = [f"{model.name}: {len(sheet.q) - 1} poses of the usable workspace (1/kappa >= {conditioning:g}"
                        + (f", TCP in {args.box[0] if len(args.box) == 1 else args.box}" if box else "")
-                       + ") and the home pose", *("  " + line for line in sheet.summary())]
+                       + ") and the home pose", *("  " + line for line in sheet.summary()),
+                       *("  " + line for line in _input_lines(inputs))]
             files: dict[str, str | bytes] = {
                 "datasheet.json": json.dumps(sheet.to_json() | {"servo_rate_hz": args.rate,
-                                                                "usable_conditioning": conditioning},
+                                                                "usable_conditioning": conditioning,
+                                                                "inputs": inputs},
                                              indent=2, allow_nan=False) + "\n",
                 "datasheet.csv": datasheet_files.csv_text(sheet, model.info.coordinate_names),
                 "summary.txt": "\n".join(summary) + "\n"}

@@ -208,8 +208,10 @@ def test_the_delta_feels_the_mass_pinocchio_accelerates_with_a_push_at_the_handl
 
 def test_cli_rates_the_delta_and_writes_its_datasheet(generated_dir, tmp_path):
     out = tmp_path / "rate"
+    # no --gear: the DELTA's rotor (models/delta.yaml: rotor: {gear_ratio: gear}, gear = 10) is the default
+    # (issue 60: a parallel model's gear was ignored, its resolution 10 times too coarse)
     assert main(["rate", str(generated_dir / "delta"), "-n", "1000", "--effort-limit", "0.3", "--encoder", "4096",
-                 "--gear", "10", "-o", str(out)]) == 0
+                 "-o", str(out)]) == 0
     assert sorted(p.name for p in out.iterdir()) == ["datasheet.csv", "datasheet.json", "datasheet.png", "summary.txt"]
     sheet = json.loads((out / "datasheet.json").read_text())
     assert sheet["not_rated"] == {"friction": "no joint friction declared (friction: in the model file)"}
@@ -228,6 +230,13 @@ def test_cli_rates_the_delta_and_writes_its_datasheet(generated_dir, tmp_path):
     assert sheet["measures"]["resolution"]["home"] == pytest.approx(float(rating.position_resolution(J, step)),
                                                                      rel=1e-8)
     assert (out / "datasheet.png").read_bytes()[:4] == b"\x89PNG"
+    # every input the rating used is recorded, with where it came from
+    inputs = sheet["inputs"]
+    assert (inputs["gears_from"], inputs["effort_limits_from"], inputs["servo_period_s"]) == \
+        ("the model's drives", "--effort-limit", 0.001)
+    assert [(c["encoder_counts"], c["gear_ratio"], c["effort_limit"]) for c in inputs["coordinates"]] == \
+        [(4096, 10, 0.3)] * 3
+    assert "theta1: encoder counts 4096, gear ratio 10, effort limit 0.3" in (out / "summary.txt").read_text()
 
 
 def test_cli_lists_what_it_cannot_rate_and_refuses_what_it_does_not_rate(generated_dir, tmp_path, capsys):
