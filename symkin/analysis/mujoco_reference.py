@@ -26,7 +26,14 @@ def mujoco_errors(path: Path, model: Any, locked: Mapping[str, float], values: M
 
     from symkin.model.coordinates import coupling_matrix
 
-    reference = mujoco.MjModel.from_xml_path(str(path))
+    # compiled here again (the model reading compiled it confined, in a child: symkin.model.mjcf_compile); its
+    # warnings are already the model's notes, and must not land in a MUJOCO_LOG.TXT in the working folder
+    previous = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(lambda _text: None)
+    try:
+        reference = mujoco.MjModel.from_xml_path(str(path))
+    finally:
+        mujoco.set_mju_user_warning(previous)
     data = mujoco.MjData(reference)
     joints = [mujoco.mj_name2id(reference, mujoco.mjtObj.mjOBJ_JOINT, model.source_name("joints", j.name))
               for j in model.joints]

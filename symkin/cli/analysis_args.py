@@ -194,10 +194,11 @@ def effort_limits(text: str | None, model: GeneratedModel) -> list[float] | None
 
 
 def fail_on_bad_input(args: argparse.Namespace, err: Exception) -> NoReturn:
-    """Report a bad argument or an analysis that does not apply to the model; exit code 2."""
+    """Report a bad argument or an analysis that does not apply to the model; exit code 2.  The message alone,
+    with a pointer to --help: the whole usage text before it hid the one line that says what is wrong."""
     message = err.args[0] if isinstance(err, KeyError) and err.args else str(err)
     parser: argparse.ArgumentParser = args.parser
-    parser.error(message)
+    parser.exit(2, f"{parser.prog}: error: {message}\n  (see '{parser.prog} --help')\n")
 
 
 #: The image formats matplotlib writes without extra packages, by file suffix.

@@ -15,7 +15,8 @@ exhaust memory.  So (issue 59):
 2. :func:`compile_confined` runs MuJoCo's compiler in a child process (``python -m symkin.model.mjcf_compile``)
    with an address-space limit of :data:`MEMORY_BYTES` and a time limit of :data:`SECONDS`, which writes the
    compiled model as MJB; a crash, a hang or the memory limit becomes a located refusal, and the parent loads
-   the MJB, which MuJoCo itself wrote.
+   the MJB, which MuJoCo itself wrote.  MuJoCo's warnings (which it would append to a ``MUJOCO_LOG.TXT`` in the
+   working directory) come back with it, for the model's notes.
 """
 
 from __future__ import annotations
@@ -180,8 +181,8 @@ def _check_reference(scan: _Scan, attribute: str, value: str, file: Path, line: 
                           "keep the files the MJCF file names beside it, or allow a folder with --allow-read DIR")
 
 
-def compile_confined(path: Path, readable: ReadableFolders) -> Any:
-    """The compiled ``mujoco.MjModel`` of ``path`` (see the module docstring).
+def compile_confined(path: Path, readable: ReadableFolders) -> tuple[Any, list[str]]:
+    """The compiled ``mujoco.MjModel`` of ``path`` and MuJoCo's warnings (see the module docstring).
 
     Raises:
         ModelError: a refused file (:func:`prescan`), MuJoCo's compiler refusing the file (its message), or the
@@ -200,7 +201,11 @@ def compile_confined(path: Path, readable: ReadableFolders) -> Any:
             raise _refuse(str(path), None, None, f"MuJoCo's compiler ran longer than {SECONDS} s on the file",
                           "check the file's sizes (replicate, flexcomp, hfield, size) and its meshes") from None
         if result.returncode == 0:
-            return mujoco.MjModel.from_binary_path(str(binary))
+            try:
+                warnings = [str(w) for w in json.loads(result.stdout.strip().splitlines()[-1])["warnings"]]
+            except (IndexError, ValueError, KeyError, TypeError):
+                warnings = []
+            return mujoco.MjModel.from_binary_path(str(binary)), warnings
         try:
             refusal = json.loads(result.stdout.strip().splitlines()[-1])["refused"]
         except (IndexError, ValueError, KeyError, TypeError):
@@ -229,12 +234,15 @@ def _main(argv: list[str]) -> int:
     _limits()
     import mujoco
 
+    warnings: list[str] = []
+    mujoco.set_mju_user_warning(lambda text: warnings.append(" ".join(str(text).split())[:500]))
     try:
         model = mujoco.MjModel.from_xml_path(argv[0])
     except ValueError as exc:  # MuJoCo's compiler errors name the element and its line
         print(json.dumps({"refused": " ".join(str(exc).split())[:2000]}))
         return 3
     mujoco.mj_saveModel(model, argv[1], None)
+    print(json.dumps({"warnings": list(dict.fromkeys(warnings))[:20]}))
     return 0
 
 

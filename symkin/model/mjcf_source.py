@@ -60,7 +60,7 @@ def read_mjcf_document(path: str | Path, allow_read: Sequence[str | Path] = (), 
             joints on the way, and every problem the URDF reader finds, located.
     """
     file = str(path)
-    model = _compile(Path(path), allow_read)
+    model, warnings = _compile(Path(path), allow_read)
     lines = _element_lines(Path(path))
     couplings = _joint_couplings(model)
     generated, unmoving = _urdf(model, file, lines, couplings)
@@ -68,11 +68,14 @@ def read_mjcf_document(path: str | Path, allow_read: Sequence[str | Path] = (), 
     _refuse_unmoving_on_chain(document, model, unmoving, file)
     _drives(document, model, lines, couplings)
     _gravity(document, model)
+    if warnings:  # MuJoCo's compiler warnings, in the model's notes (not a MUJOCO_LOG.TXT in the working folder)
+        document.data["notes"] = [*document.data.get("notes", []),
+                                  *(f"MuJoCo's compiler warns: {warning}" for warning in warnings)]
     document.data["description"] = document.data["description"].replace("from the URDF", "from the MJCF", 1)
     return document, generated.text
 
 
-def _compile(path: Path, allow_read: Sequence[str | Path]) -> Any:
+def _compile(path: Path, allow_read: Sequence[str | Path]) -> tuple[Any, list[str]]:
     """MuJoCo's compiled model of the file, its reads confined and the compiler bounded in a subprocess."""
     try:
         import mujoco  # noqa: F401 - the child process needs it too

@@ -20,6 +20,7 @@ is documented in ``docs/model-format.md`` ("Parallel mechanisms").
 
 from __future__ import annotations
 
+import difflib
 from typing import Any
 
 import sympy
@@ -117,6 +118,8 @@ def _checked(r: Reader, path: KeyPath, parallel: Parallel) -> Parallel:
                 seen.setdefault(name, joint.name)
     if len({leg.name for leg in parallel.legs}) != len(parallel.legs):
         r.fail(path + ("legs",), "two legs have the same name", "give every leg its own name")
+    if r.reported_under(".".join(str(k) for k in path)):
+        return parallel  # the counts below follow from the legs' reported mistakes: not a mistake of their own
     active = sum(1 for leg in parallel.legs for joint in leg.joints if joint.active is not None)
     if active != parallel.task_dof:
         r.fail(path, f"the platform has {parallel.task_dof} degrees of freedom ({', '.join(parallel.coordinates)}) "
@@ -212,7 +215,9 @@ def _legs(r: Reader, path: KeyPath, value: Any, chains: dict[str, tuple[KeyPath,
         if "chain" in item:
             if item["chain"] not in chains:
                 known = ", ".join(chains) or "none declared"
-                r.fail(lpath + ("chain",), f"unknown chain {describe(item['chain'])}", f"chains: {known}")
+                close = difflib.get_close_matches(str(item["chain"]), list(chains), n=1)
+                hint = f"did you mean '{close[0]}'? " if close else ""
+                r.fail(lpath + ("chain",), f"unknown chain {describe(item['chain'])}", f"{hint}chains: {known}")
                 continue
             jpath, entries = chains[item["chain"]]
         else:

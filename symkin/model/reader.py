@@ -62,6 +62,8 @@ class Reader:
         #: The dimension of each parameter whose ``unit:`` names one (symkin.model.units), for the checks of
         #: :meth:`expr` where a value has a dimension (a length used as an angle is refused).
         self.dimensions: dict[sympy.Symbol, tuple[str, str]] = {}
+        #: Names used but never declared: reported at their first use only.
+        self.undeclared: set[str] = set()
 
     def note(self, path: KeyPath, message: str) -> None:
         """Record ``message`` about the element at ``path``, located by line and key but not by the file's
@@ -71,7 +73,15 @@ class Reader:
         self.notes.append(f"{where}at '{problem.key}': {message}" if problem.key else f"{where}{message}")
 
     def fail(self, path: KeyPath, message: str, fix: str) -> None:
-        self.problems.append(self.doc.problem(path, message, fix))
+        """Record a problem once: a mistake in a chain shared by several legs is read once per leg, but is one
+        mistake at one line."""
+        problem = self.doc.problem(path, message, fix)
+        if problem not in self.problems:
+            self.problems.append(problem)
+
+    def reported_under(self, key: str) -> bool:
+        """Whether a problem was recorded at ``key`` or inside it (what follows from it is then not reported)."""
+        return any(p.key == key or p.key.startswith(key + ".") or p.key.startswith(key + "[") for p in self.problems)
 
     def mapping(self, path: KeyPath, value: Any, required: Iterable[str] = (),
                 optional: Iterable[str] = ()) -> dict[str, Any] | None:
@@ -81,7 +91,7 @@ class Reader:
             self.fail(path, f"expected a mapping, got {describe(value)}",
                       f"write a mapping with the keys {', '.join(required + optional)}")
             return None
-        allowed = required + optional
+        allowed = tuple(dict.fromkeys(required + optional))
         for key in value:
             if key not in allowed:
                 close = difflib.get_close_matches(key, allowed, n=1)
@@ -139,6 +149,10 @@ class Reader:
         try:
             return parse_expression(text, self.names if names is None else names)
         except ExpressionError as err:
+            if err.undefined_name is not None and err.undefined_name in self.undeclared:
+                return None  # one missing parameter is one mistake: reported at its first use
+            if err.undefined_name is not None and names is None and err.undefined_name not in self.invalid:
+                self.undeclared.add(err.undefined_name)
             if err.undefined_name is not None and err.undefined_name in self.invalid:
                 return None  # the parameter's own definition is already reported
             problem = self.doc.problem(path, f"invalid expression '{shorten(text)}': {err}", err.fix)

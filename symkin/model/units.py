@@ -86,8 +86,8 @@ _WORDS = {"meter": "m", "metre": "m", "millimeter": "mm", "millimetre": "mm", "c
 def suggestion(text: str) -> str:
     """A fix for the unknown unit ``text``: the closest known units, and the list by dimension."""
     word = normalized(text).lower().rstrip("s") if len(text) > 2 else ""
-    near = [_WORDS[word]] if word in _WORDS else \
-        difflib.get_close_matches(normalized(text), list(UNITS), n=2, cutoff=0.5)
+    words = difflib.get_close_matches(word, list(_WORDS), n=1, cutoff=0.75) if word else []
+    near = [_WORDS[words[0]]] if words else difflib.get_close_matches(normalized(text), list(UNITS), n=2, cutoff=0.5)
     hint = f"did you mean {' or '.join(repr(n) for n in near)}? " if near else ""
     return (f"{hint}known units: " + "; ".join(
         f"{dimension}: {', '.join(n for n, u in UNITS.items() if u.dimension == dimension)}"

@@ -250,6 +250,9 @@ def test_cli_lists_what_it_cannot_rate_and_refuses_what_it_does_not_rate(generat
             main(["rate", str(generated_dir / arguments[0]), *arguments[1:], "-o", str(tmp_path / "b")])
         assert exit.value.code == 2
         assert not (tmp_path / "b").exists()
+        err = capsys.readouterr().err   # the one line that says what is wrong, not the usage text before it
+        assert "usage:" not in err
+        assert err.endswith("(see 'symkin rate --help')\n")
 
 
 def test_friction_declared_in_the_model_is_felt_at_the_handle(tmp_path):

@@ -191,3 +191,31 @@ def test_urdf_numbers_gears_and_sizes_are_bounded(tmp_path):
         handle.truncate(5 << 30)
     with pytest.raises(ModelError, match="has 5368709120 bytes, more than the limit"):
         load_model(huge)
+
+
+def test_mujocos_warnings_become_notes_and_no_log_file(tmp_path, monkeypatch):
+    """Issue 60, point 9: MuJoCo appends its compiler warnings to a MUJOCO_LOG.TXT in the working folder (one was
+    committed at the root); they are the model's notes instead."""
+    pytest.importorskip("mujoco")
+    monkeypatch.chdir(tmp_path)
+    path = tmp_path / "warn.xml"
+    path.write_text(MJCF.format(head='<compiler settotalmass="2"/>',
+                                inside='<body name="tool" pos="0.2 0 0"><joint name="j2" type="hinge"/>'
+                                       '<geom size="0.05" mass="0.5"/></body>'))
+    model = load_model(path, tip="tool")
+    assert any("MuJoCo's compiler warns: compiler attribute 'settotalmass' is deprecated" in n for n in model.notes)
+    assert list(tmp_path.iterdir()) == [path]
+
+
+def test_a_message_lists_at_most_twenty_names(tmp_path):
+    """A URDF with 4 500 leaves made the 'name the tip' message 62 kB long; it names 20 and counts the rest."""
+    leaves = "".join(f'<link name="leaf{k}"/><joint name="j{k}" type="revolute"><parent link="base"/>'
+                     f'<child link="leaf{k}"/><axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/>'
+                     "</joint>" for k in range(4500))
+    path = tmp_path / "bush.urdf"
+    path.write_text(f'<?xml version="1.0"?>\n<robot name="bush"><link name="base"/>{leaves}</robot>\n')
+    with pytest.raises(ModelError) as raised:
+        load_model(path, tip=None)
+    text = str(raised.value)
+    assert "... and 4480 more" in text, text[:2000]
+    assert len(text) < 4000
