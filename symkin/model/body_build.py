@@ -136,7 +136,8 @@ def check_leg_bodies(r: Reader, parallel: Parallel) -> None:
     if bodies is None:
         return
     joints = [joint.name for leg in parallel.legs for joint in leg.joints]
-    for body in bodies.links if not r.reported_under("parallel") else ():  # joints of broken legs are missing
+    broken = r.reported_under("parallel.legs") or r.reported_under("parallel.chains")
+    for body in bodies.links if not broken else ():  # the joints of legs with reported mistakes are missing
         if body.link not in joints:
             close = difflib.get_close_matches(body.link, joints, n=1)
             hint = f"did you mean '{close[0]}'? " if close else ""

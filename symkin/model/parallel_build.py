@@ -118,7 +118,7 @@ def _checked(r: Reader, path: KeyPath, parallel: Parallel) -> Parallel:
                 seen.setdefault(name, joint.name)
     if len({leg.name for leg in parallel.legs}) != len(parallel.legs):
         r.fail(path + ("legs",), "two legs have the same name", "give every leg its own name")
-    if r.reported_under(".".join(str(k) for k in path)):
+    if legs_reported(r):
         return parallel  # the counts below follow from the legs' reported mistakes: not a mistake of their own
     active = sum(1 for leg in parallel.legs for joint in leg.joints if joint.active is not None)
     if active != parallel.task_dof:
@@ -129,6 +129,11 @@ def _checked(r: Reader, path: KeyPath, parallel: Parallel) -> Parallel:
         r.fail(path + ("legs",), "a parallel mechanism has at least two legs (seed sec. 1.3)",
                "add legs, or describe a single chain under 'serial:'")
     return parallel
+
+
+def legs_reported(r: Reader) -> bool:
+    """Whether a mistake in the legs or their chains was reported (their joints and counts are then incomplete)."""
+    return r.reported_under("parallel.legs") or r.reported_under("parallel.chains")
 
 
 def _home(r: Reader, path: KeyPath, value: Any, names: tuple[str, ...]) -> tuple[sympy.Expr, ...] | None:

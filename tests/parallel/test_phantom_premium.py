@@ -184,12 +184,12 @@ def test_symkin_rate_reads_the_encoders_gear_ratios_from_the_model():
     lever), and --gear still overrides them."""
     import argparse
 
-    from symkin.cli.rate_cmd import _joint_steps
+    from symkin.cli.rate_cmd import _encoders, _joint_steps
 
     arm = load(GENERATED_DIR / "phantom_premium")
-    steps = _joint_steps(argparse.Namespace(encoder="4096", gear=None), arm)
+    steps = _joint_steps(arm, _encoders(argparse.Namespace(encoder="4096", gear=None), arm))
     assert steps == pytest.approx([2 * np.pi / (4096 * n) for n in (13.3, 11.2, 11.2)], rel=CLOSED_FORM)
-    direct = _joint_steps(argparse.Namespace(encoder="4096", gear="1"), arm)
+    direct = _joint_steps(arm, _encoders(argparse.Namespace(encoder="4096", gear="1"), arm))
     assert direct == pytest.approx([2 * np.pi / 4096] * 3, rel=CLOSED_FORM)
 
 
