@@ -50,6 +50,9 @@ DERIVING_LIBRARIES = ("sympy", "symengine", "jinja2")
 #: Markers of robot files that pull in other files (not cached).
 INCLUDING_MARKERS = (b"xacro", b"<include", b"<mujoco")
 ENTRY_FILE = "entry.json"
+#: Bytes of a model file beyond which no key is made (the readers refuse files over 1 MB; not imported from
+#: symkin.model, which imports sympy, so that a hit does not).
+MAX_CACHED_MODEL = 1 << 24
 #: Bytes an entry.json may have (symkin writes a few kB).
 MAX_ENTRY_RECORD = 1 << 20
 #: A model name as :data:`symkin.model.names.IDENTIFIER` admits it (not imported: the CLI imports this module and
@@ -114,7 +117,10 @@ def _digest_tree(digest: Any, node: Any, name: str) -> None:
 def request_key(path: str | Path, request: Mapping[str, Any]) -> str | None:
     """The key of deriving the model file ``path`` with ``request`` (JSON-able options), or None when the file
     cannot be cached (unreadable: the reader reports it; a robot file that includes others)."""
-    try:
+    try:  # a FIFO or a 5 GB file is not read here: the reader refuses it, located
+        info = os.stat(path)
+        if not stat.S_ISREG(info.st_mode) or info.st_size > MAX_CACHED_MODEL:
+            return None
         content = Path(path).read_bytes()
     except OSError:
         return None

@@ -278,9 +278,6 @@ class _Expander:
             self.count(node, node.size)
             return [node]
         if not node.tag.startswith(_XACRO):
-            if not _XML_NAME.match(node.tag):
-                raise XacroFail(f"'{node.tag[:60]}' is not an XML element name", "name elements with letters, digits, "
-                                "_ . - and :", node)
             self.count(node, 1)
             attrib = {k: self.text(v, scope, file, node) for k, v in node.attrib.items()
                       if not k.startswith("xmlns:xacro")}
@@ -329,6 +326,9 @@ class _Expander:
             return [n for block in found[1].raw for n in self.expand(block, scope, file, parent)]
         elif kind == "element":
             name = self.text(self.need(node, "xacro:name"), scope, file, node)
+            if not _XML_NAME.match(name):  # a computed name: it must not write markup (a parsed tag is a name)
+                raise XacroFail(f"'{name[:60]}' is not an XML element name", "name elements with letters, digits, "
+                                "_ . - and :", node)
             renamed = _Node(name, {k: v for k, v in node.attrib.items() if k != "xacro:name"}, node.file, node.line,
                             node.column, node.children)
             return self.expand(renamed, scope, file, parent)

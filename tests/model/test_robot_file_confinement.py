@@ -15,6 +15,7 @@ from pathlib import Path
 
 import pytest
 
+from symkin import pipeline_cache
 from symkin.cli import main
 from symkin.errors import ModelError
 from symkin.model import load_model
@@ -191,6 +192,7 @@ def test_urdf_numbers_gears_and_sizes_are_bounded(tmp_path):
         handle.truncate(5 << 30)
     with pytest.raises(ModelError, match="has 5368709120 bytes, more than the limit"):
         load_model(huge)
+    assert pipeline_cache.request_key(huge, {"command": "derive"}) is None   # the cache key does not read it either
 
 
 def test_mujocos_warnings_become_notes_and_no_log_file(tmp_path, monkeypatch):
