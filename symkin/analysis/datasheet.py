@@ -14,15 +14,17 @@ and the datasheet says why.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from symkin.analysis import mechanism, workspace
 from symkin.analysis.conditioning import inverse_condition_number
-from symkin.analysis.handle_measures import (ROTATIONAL_FRICTION, Actuation, Measure, dynamics_at, friction_measures,
-                                             gravity_share_measure, rotation_measures, translation_measures)
+from symkin.analysis.handle_measures import (NO_EFFORT_LIMITS, NO_GRAVITY, PUSHED_GROUPS, ROTATIONAL_FRICTION,
+                                             SPHERICAL_GROUPS, TURNED_GROUPS, Actuation, Measure, dynamics_at,
+                                             friction_measures, gravity_share_measure, rotation_measures,
+                                             translation_measures)
 from symkin.analysis.orientations import ANGLES
 from symkin.runtime.info import GeneratedModel
 
@@ -30,7 +32,12 @@ from symkin.runtime.info import GeneratedModel
 @dataclass(frozen=True)
 class Datasheet:
     """The rated samples: joint configurations q (N, n), TCP points (N, d) with their axes, the measures,
-    the index of the home pose among the samples, and {measure: why it is not rated}."""
+    the index of the home pose among the samples, {group: why it is not rated} and the groups of measures the
+    device's handle has ({group: its measures}, e.g. :data:`~symkin.analysis.handle_measures.PUSHED_GROUPS`).
+
+    Every group is rated whole or listed as not rated (a measure is never dropped silently): raises ValueError
+    otherwise.
+    """
 
     model: str
     q: np.ndarray
@@ -38,7 +45,20 @@ class Datasheet:
     axes: tuple[str, ...]
     measures: tuple[Measure, ...]
     home: int
-    skipped: dict[str, str] = field(default_factory=dict)
+    skipped: dict[str, str]
+    groups: Mapping[str, tuple[str, ...]]
+
+    def __post_init__(self) -> None:
+        rated = [m.name for m in self.measures]
+        listed = {name for names in self.groups.values() for name in names}
+        stray = [name for name in rated if name not in listed] + [g for g in self.skipped if g not in self.groups]
+        partial = [group for group, names in self.groups.items()
+                   if (group in self.skipped) == any(name in rated for name in names)
+                   or (group not in self.skipped and not all(name in rated for name in names))]
+        if stray or partial or len(set(rated)) != len(rated):
+            raise ValueError(f"{self.model}: the datasheet's measures {rated} and not rated groups "
+                             f"{sorted(self.skipped)} do not cover the groups {dict(self.groups)} once each "
+                             f"(stray: {stray}, partial: {partial})")
 
     def extremes(self, measure: Measure) -> dict[str, Any]:
         """min, max, mean and the worst value of a measure, each extreme with its pose (q, TCP)."""
@@ -175,13 +195,12 @@ def rate(model: GeneratedModel, actuation: Actuation, *, samples: int = 4096, se
                          f"{conditioning:g}")
     M = dynamics_at(model, "mass_matrix", q, points)
     measures, skipped = translation_measures(model, J, M, q, points, actuation)
-    return Datasheet(model.name, q, points, cloud.axes, measures, len(q) - 1, skipped)
+    return Datasheet(model.name, q, points, cloud.axes, measures, len(q) - 1, skipped, PUSHED_GROUPS)
 
 
-#: Why a platform on legs without closed forms has no apparent mass (nor a gravity budget) in its datasheet.
-NO_CLOSURE_DYNAMICS = ("no mass properties: legs without closed forms (any topology) rate their apparent mass from the "
-                       "generated closure_dynamics (declare bodies: links: and platform:); symkin rates their "
-                       "kinematics (forces, resolution, friction)")
+#: Why a platform on legs without closed forms has no apparent mass, inertia or gravity share in its datasheet.
+NO_CLOSURE_DYNAMICS = ("no mass properties: legs without closed forms (any topology) rate their apparent mass, inertia "
+                       "and gravity share from the generated closure_dynamics (declare bodies: links: and platform:)")
 
 
 def rate_closure_platform(model: GeneratedModel, actuation: Actuation, *, samples: int = 4096,
@@ -237,12 +256,17 @@ def rate_closure_platform(model: GeneratedModel, actuation: Actuation, *, sample
     if len(q) < 2:
         raise ValueError(f"{model.name}: no reached cell lies in the box {dict(box or {})} with 1/kappa >= "
                          f"{conditioning:g}")
-    M = (actuated_dynamics(model, q, s, poses, np.zeros_like(q)).M if "closure_dynamics" in model.functions
-         else None)
-    measures, skipped = translation_measures(model, J_v, M, q, poses, actuation, no_mass=NO_CLOSURE_DYNAMICS)
+    M: np.ndarray | None = None
+    G: np.ndarray | str = NO_CLOSURE_DYNAMICS
+    if "closure_dynamics" in model.functions:
+        at_rest = actuated_dynamics(model, q, s, poses, np.zeros_like(q))  # bias at rest: the gravity efforts
+        M, G = at_rest.M, at_rest.bias if np.any(at_rest.potential != 0) else NO_GRAVITY
+    measures, skipped = translation_measures(model, J_v, M, q, poses, actuation, no_mass=NO_CLOSURE_DYNAMICS, G=G)
     if angles:
-        measures += rotation_measures(J_w, M, actuation)
-    return Datasheet(model.name, q, points, found.axes, measures, len(q) - 1, skipped)
+        turned, not_turned = rotation_measures(J_w, M, actuation, no_mass=NO_CLOSURE_DYNAMICS)
+        measures, skipped = measures + turned, skipped | not_turned
+    return Datasheet(model.name, q, points, found.axes, measures, len(q) - 1, skipped,
+                     PUSHED_GROUPS | TURNED_GROUPS if angles else PUSHED_GROUPS)
 
 
 def rate_pose_platform(model: GeneratedModel, actuation: Actuation, *, samples: int = 4096, seed: int = 0,
@@ -288,8 +312,9 @@ def rate_pose_platform(model: GeneratedModel, actuation: Actuation, *, samples: 
     poses = view.poses(points)
     M = dynamics_at(model, "mass_matrix", q, poses)
     measures, skipped = translation_measures(model, J_v, M, q, poses, actuation)
-    return Datasheet(model.name, q, points, mechanism.POSITION_COMPONENTS,
-                     measures + rotation_measures(J_w, M, actuation), len(q) - 1, skipped)
+    turned, not_turned = rotation_measures(J_w, M, actuation)
+    return Datasheet(model.name, q, points, mechanism.POSITION_COMPONENTS, measures + turned, len(q) - 1,
+                     skipped | not_turned, PUSHED_GROUPS | TURNED_GROUPS)
 
 
 def rate_orientation_platform(model: GeneratedModel, actuation: Actuation, *, samples: int = 4096, seed: int = 0,
@@ -328,16 +353,17 @@ def rate_orientation_platform(model: GeneratedModel, actuation: Actuation, *, sa
         raise ValueError(f"{model.name}: no reachable orientation in the box {dict(box or {})} has 1/kappa >= "
                          f"{conditioning:g}")
     M = dynamics_at(model, "mass_matrix", q, points)
-    measures, skipped = list(rotation_measures(J_w, M, actuation)), {}
-    if actuation.effort_limits is None:
-        skipped["torque"] = "no effort limits: declare effort_limit per joint or give --effort-limit"
+    turned, skipped = rotation_measures(J_w, M, actuation)
+    measures = list(turned)
+    share = (NO_EFFORT_LIMITS if actuation.effort_limits is None
+             else gravity_share_measure(model, q, points, actuation.effort_limits))
+    if isinstance(share, str):
+        skipped["gravity_share"] = share
     else:
-        measures += gravity_share_measure(model, q, points, actuation.effort_limits)
-    if actuation.joint_steps is None:
-        skipped["angular_resolution"] = "no encoder data: give --encoder COUNTS[,...] (and --gear)"
+        measures += share
     friction = friction_measures(J_w, actuation, ROTATIONAL_FRICTION)
     if isinstance(friction, str):
         skipped["friction"] = friction
     else:
         measures += friction
-    return Datasheet(model.name, q, points, ANGLES, tuple(measures), len(q) - 1, skipped)
+    return Datasheet(model.name, q, points, ANGLES, tuple(measures), len(q) - 1, skipped, SPHERICAL_GROUPS)

@@ -70,34 +70,47 @@ def dynamics_at(model: GeneratedModel, name: str, q: np.ndarray, poses: np.ndarr
     return function(q, poses) if mechanism.is_parallel(model) else function(q)
 
 
-def rotation_measures(J_w: np.ndarray, M: np.ndarray | None, actuation: Actuation) -> tuple[Measure, ...]:
-    """A rotating handle's inertia felt with its position free (where M is given), torque capability and angular
-    resolution."""
-    out = []
-    if M is not None:
+def rotation_measures(J_w: np.ndarray, M: np.ndarray | None, actuation: Actuation, *, no_mass: str = ""
+                      ) -> tuple[tuple[Measure, ...], dict[str, str]]:
+    """A rotating handle's inertia felt with its position free (where M is given, else not rated with the reason
+    ``no_mass``), torque capability and angular resolution (:data:`TURNED_GROUPS`), and {group: why not rated}."""
+    out: list[Measure] = []
+    skipped = {}
+    if M is None:
+        skipped["apparent_inertia"] = no_mass
+    else:
         inertias = rating.principal_masses(M, J_w)
         out += [Measure("apparent_inertia_min", "kg m^2", inertias[:, 0], False,
                         "smallest principal inertia felt turning the handle (its position free)"),
                 Measure("apparent_inertia_max", "kg m^2", inertias[:, -1], False,
                         "largest principal inertia felt turning the handle (its position free)")]
-    if actuation.effort_limits is not None:
+    if actuation.effort_limits is None:
+        skipped["torque"] = NO_EFFORT_LIMITS
+    else:
         out += [Measure("isotropic_torque", "N m", forces.isotropic_force(J_w, actuation.effort_limits), True,
                         "largest torque rendered about every axis, with no force (peak efforts)"),
                 Measure("peak_torque", "N m", rating.peak_force(J_w, actuation.effort_limits), True,
                         "largest torque rendered about the best axis, with no force (peak efforts)")]
-    if actuation.continuous_limits is not None:
+    if actuation.continuous_limits is None:
+        skipped["continuous_torque"] = NO_CONTINUOUS_LIMITS
+    else:
         out.append(Measure("continuous_torque", "N m", forces.isotropic_force(J_w, actuation.continuous_limits), True,
                            "largest torque held for long about every axis (continuous efforts)"))
-    if actuation.joint_steps is not None:
+    if actuation.joint_steps is None:
+        skipped["angular_resolution"] = NO_ENCODERS
+    else:
         out.append(Measure("angular_resolution", "rad", rating.position_resolution(J_w, actuation.joint_steps), False,
                            "largest handle rotation between neighbouring encoder readings"))
-    return tuple(out)
+    return tuple(out), skipped
 
 
 def translation_measures(model: GeneratedModel, J: np.ndarray, M: np.ndarray | None, q: np.ndarray, poses: np.ndarray,
-                         actuation: Actuation, *, no_mass: str = "") -> tuple[tuple[Measure, ...], dict[str, str]]:
-    """The handle's measures from J (its translational rows), M and the generated functions at (q, poses); where M
-    is None, the apparent mass is listed as skipped with the reason ``no_mass``."""
+                         actuation: Actuation, *, no_mass: str = "", G: np.ndarray | str | None = None
+                         ) -> tuple[tuple[Measure, ...], dict[str, str]]:
+    """The handle's measures (:data:`PUSHED_GROUPS`) from J (its translational rows), M and the generated functions at
+    (q, poses), and {group: why not rated}; where M is None, the apparent mass is not rated with the reason
+    ``no_mass``.  ``G``: the efforts that hold the device (N, n), or why there are none (default: the generated
+    ``gravity_vector``)."""
     out: list[Measure] = []
     skipped = {}
     if M is None:
@@ -110,18 +123,25 @@ def translation_measures(model: GeneratedModel, J: np.ndarray, M: np.ndarray | N
                         "largest over smallest principal mass (1: the same mass in every direction)")]
     efforts = actuation.effort_limits
     if efforts is None:
-        skipped["force"] = "no effort limits: declare effort_limit per joint or give --effort-limit"
+        skipped["force"] = skipped["gravity_share"] = NO_EFFORT_LIMITS
     else:
         out += [Measure("isotropic_force", "N", forces.isotropic_force(J, efforts), True,
                         "largest force rendered in every direction (peak efforts)"),
                 Measure("peak_force", "N", rating.peak_force(J, efforts), True,
                         "largest force rendered in the best direction (peak efforts)")]
-        out += gravity_share_measure(model, q, poses, efforts)
-    if actuation.continuous_limits is not None:
+        share = (gravity_share_measure(model, q, poses, efforts) if G is None
+                 else G if isinstance(G, str) else [held_against_gravity(G, efforts)])
+        if isinstance(share, str):
+            skipped["gravity_share"] = share
+        else:
+            out += share
+    if actuation.continuous_limits is None:
+        skipped["continuous_force"] = NO_CONTINUOUS_LIMITS
+    else:
         out.append(Measure("continuous_force", "N", forces.isotropic_force(J, actuation.continuous_limits), True,
                            "largest force held for long in every direction (continuous efforts)"))
     if actuation.joint_steps is None:
-        skipped["resolution"] = "no encoder data: give --encoder COUNTS[,...] (and --gear)"
+        skipped["resolution"] = NO_ENCODERS
     else:
         out.append(Measure("resolution", "m", rating.position_resolution(J, actuation.joint_steps), False,
                            "largest handle step between neighbouring encoder readings"))
@@ -134,13 +154,22 @@ def translation_measures(model: GeneratedModel, J: np.ndarray, M: np.ndarray | N
     return tuple(out), skipped
 
 
+#: Why a datasheet has no gravity share: the model declares no gravity (its gravity terms are identically zero).
+NO_GRAVITY = "no gravity acts on the device: declare 'gravity: [0, 0, -9.81]' (the direction of g in the base frame)"
+
+
 def gravity_share_measure(model: GeneratedModel, q: np.ndarray, poses: np.ndarray, efforts: np.ndarray
-                          ) -> list[Measure]:
-    """The share of the effort limits spent holding the device against gravity, where ``gravity_vector`` exists."""
+                          ) -> list[Measure] | str:
+    """The share of the effort limits spent holding the device against gravity (``gravity_vector``), or why not."""
     if "gravity_vector" not in model.functions:
-        return []
-    return [Measure("gravity_share", "", rating.gravity_share(dynamics_at(model, "gravity_vector", q, poses), efforts),
-                    False, "largest share of an effort limit spent holding the device against gravity")]
+        return NO_GRAVITY
+    return [held_against_gravity(dynamics_at(model, "gravity_vector", q, poses), efforts)]
+
+
+def held_against_gravity(G: np.ndarray, efforts: np.ndarray) -> Measure:
+    """The gravity share of the efforts G (N, n) that hold the device still."""
+    return Measure("gravity_share", "", rating.gravity_share(G, efforts), False,
+                   "largest share of an effort limit spent holding the device against gravity")
 
 
 #: (name, unit, doc) of the friction measures of a handle pushed (J: translational rows) and of one turned (J_w).
@@ -152,6 +181,32 @@ ROTATIONAL_FRICTION = (("coulomb_torque", "N m", "largest Coulomb friction torqu
                                                  "axes of rotation"),
                        ("handle_damping", "N m s/rad", "least viscous damping turning the handle"),
                        ("renderable_stiffness", "N m/rad", "stiffest passive rotational virtual wall"))
+
+
+#: Every measure of a handle pushed, by group (:class:`symkin.analysis.datasheet.Datasheet` checks that each group
+#: is rated whole, or listed as not rated with what to give).
+PUSHED_GROUPS: dict[str, tuple[str, ...]] = {
+    "apparent_mass": ("apparent_mass_min", "apparent_mass_max", "inertia_isotropy"),
+    "force": ("isotropic_force", "peak_force"),
+    "continuous_force": ("continuous_force",),
+    "gravity_share": ("gravity_share",),
+    "resolution": ("resolution",),
+    "friction": tuple(name for name, _, _ in TRANSLATIONAL_FRICTION)}
+#: Every measure of a handle turned with its position free (a rotating platform's), by group.
+TURNED_GROUPS: dict[str, tuple[str, ...]] = {
+    "apparent_inertia": ("apparent_inertia_min", "apparent_inertia_max"),
+    "torque": ("isotropic_torque", "peak_torque"),
+    "continuous_torque": ("continuous_torque",),
+    "angular_resolution": ("angular_resolution",)}
+#: Every measure of a spherical platform's handle (turned only): its torques, gravity share and rotational friction.
+SPHERICAL_GROUPS: dict[str, tuple[str, ...]] = {**TURNED_GROUPS, "gravity_share": ("gravity_share",),
+                                                 "friction": tuple(name for name, _, _ in ROTATIONAL_FRICTION)}
+
+#: Why a measure is not rated, for the data it needs.
+NO_EFFORT_LIMITS = "no effort limits: declare effort_limit per joint or give --effort-limit"
+NO_CONTINUOUS_LIMITS = ("no continuous efforts: declare each drive's continuous current and torque constant "
+                        "(actuators: {JOINT: {continuous_current: ..., torque_constant: ...}})")
+NO_ENCODERS = "no encoder data: give --encoder COUNTS[,...] (and --gear)"
 
 
 def friction_measures(J: np.ndarray, actuation: Actuation, labels: tuple[tuple[str, str, str], ...]

@@ -19,6 +19,14 @@ RATE_OUTPUTS = {MechanismKind.SERIAL: ("fk", "jacobian", "mass_matrix"),
                 MechanismKind.PARALLEL_ORIENTATION: ("ik", "inverse_jacobian", "jacobian", "mass_matrix")}
 
 
+def _measure_names() -> str:
+    """The datasheet's measures, as --help lists them (from the groups the rating checks it covers)."""
+    from symkin.analysis.handle_measures import PUSHED_GROUPS, SPHERICAL_GROUPS
+
+    names = [name for groups in (PUSHED_GROUPS, SPHERICAL_GROUPS) for names in groups.values() for name in names]
+    return ", ".join(dict.fromkeys(names))
+
+
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "rate", help="rate a haptic device as its datasheet does: apparent mass, forces, resolution, stiffness",
@@ -36,9 +44,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "join the table; a spherical platform (the Agile Eye) is rated over its orientations, its "
                     "handle twisted about the centre (--box in rad of roll, pitch, yaw). Legs without closed forms "
                     "(any topology) are rated over the working mode continued from the home pose at a constant "
-                    "--orientation (-n N: about N^(1/3) cells a side), by their kinematics only (no apparent mass). "
-                    "A measure whose data the model lacks is listed as not rated, "
-                    "with what to give. Writes datasheet.json (every number with its unit and the pose of each "
+                    "--orientation (-n N: about N^(1/3) cells a side); their apparent mass, inertia and gravity "
+                    "share come from the generated closure_dynamics where the model declares bodies (else they "
+                    "are not rated). Every measure (" + _measure_names() + ") appears with its value or as not "
+                    "rated with the reason and what to give. Writes datasheet.json (every number with its unit and the pose of each "
                     "extreme), datasheet.csv (every rated pose), datasheet.png (a map per measure) and "
                     "summary.txt into the output directory (replaced as a whole).",
         epilog="e.g. symkin rate generated/delta --effort-limit 0.3 --encoder 4096 --gear 10 -o out/rate/delta")

@@ -17,7 +17,7 @@ import json
 
 from conftest import MODELS_DIR
 from symkin import load
-from symkin.analysis import forces, rating
+from symkin.analysis import forces, handle_measures, rating
 from symkin.cli import main
 from tolerances import CLOSED_FORM, DYNAMICS, EPS
 
@@ -214,7 +214,8 @@ def test_cli_rates_the_delta_and_writes_its_datasheet(generated_dir, tmp_path):
                  "-o", str(out)]) == 0
     assert sorted(p.name for p in out.iterdir()) == ["datasheet.csv", "datasheet.json", "datasheet.png", "summary.txt"]
     sheet = json.loads((out / "datasheet.json").read_text())
-    assert sheet["not_rated"] == {"friction": "no joint friction declared (friction: in the model file)"}
+    assert sheet["not_rated"] == {"friction": "no joint friction declared (friction: in the model file)",
+                                  "continuous_force": handle_measures.NO_CONTINUOUS_LIMITS}
     rows = np.loadtxt(out / "datasheet.csv", delimiter=",", skiprows=2)
     header = (out / "datasheet.csv").read_text().splitlines()[1].split(",")
     for name, measure in sheet["measures"].items():
@@ -253,6 +254,45 @@ def test_cli_lists_what_it_cannot_rate_and_refuses_what_it_does_not_rate(generat
         err = capsys.readouterr().err   # the one line that says what is wrong, not the usage text before it
         assert "usage:" not in err
         assert err.endswith("(see 'symkin rate --help')\n")
+
+
+def test_every_measure_is_rated_or_listed_as_not_rated(arm):
+    """Issue 60: a datasheet whose measures and not-rated groups do not cover its groups once each is refused,
+    so no measure can drop out silently (the rating of every kind of device builds one)."""
+    from symkin.analysis.datasheet import Datasheet
+    from symkin.analysis.handle_measures import PUSHED_GROUPS, Measure
+
+    q, points = np.zeros((2, 2)), np.zeros((2, 2))
+    force = [Measure(name, "N", np.ones(2), True, "") for name in PUSHED_GROUPS["force"]]
+    rest = {group: "why" for group in PUSHED_GROUPS if group != "force"}
+    Datasheet("arm", q, points, ("x", "y"), tuple(force), 1, rest, PUSHED_GROUPS)       # complete: accepted
+    for measures, skipped in ((force, {g: w for g, w in rest.items() if g != "gravity_share"}),  # one dropped
+                              (force[:1], rest),                                                 # half a group
+                              (force, rest | {"force": "why"}),                                  # rated and not
+                              (force + force[:1], rest)):                                        # twice
+        with pytest.raises(ValueError, match="do not cover"):
+            Datasheet("arm", q, points, ("x", "y"), tuple(measures), 1, skipped, PUSHED_GROUPS)
+
+
+def test_help_and_docs_name_every_measure_the_rating_lists(capsys):
+    """Issue 60: --help and docs/analysis.md name every measure of the groups the datasheet is checked against,
+    and --help no longer says that legs without closed forms get no apparent mass (they do, from
+    closure_dynamics: tests/parallel/test_closure_dynamics.py)."""
+    from pathlib import Path
+
+    from symkin.analysis.handle_measures import PUSHED_GROUPS, SPHERICAL_GROUPS
+
+    with pytest.raises(SystemExit):
+        main(["rate", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    docs = (Path(__file__).parents[2] / "docs" / "analysis.md").read_text()
+    section = docs.split("## Rating a haptic device")[1].split("\n## ")[0]
+    for groups in (PUSHED_GROUPS, SPHERICAL_GROUPS):
+        for name in (name for names in groups.values() for name in names):
+            assert name in text, name
+            stem = name.rsplit("_", 1)[0] + "_" if name.endswith(("_min", "_max")) else name
+            assert f"`{stem}" in section, name
+    assert "no apparent mass" not in text and "from the generated closure_dynamics" in text
 
 
 def test_friction_declared_in_the_model_is_felt_at_the_handle(tmp_path):
