@@ -21,6 +21,15 @@ def dual_scara_text() -> str:
     return match.group(1)
 
 
+def closure_delta_text() -> str:
+    """The DELTA with its parallelograms written as revolute pairs (docs/model-format.md, "A parallelogram in a
+    leg"): legs without the distance form, analysed through their loop closure."""
+    match = re.search(r"cat > closure_delta.yaml <<'EOF_MODEL'\n(.*?)^EOF_MODEL$", MODEL_FORMAT.read_text(),
+                      re.S | re.M)
+    assert match, "docs/model-format.md lost the closure DELTA"
+    return match.group(1)
+
+
 def dual_scara_dynamics_text() -> str:
     """The dual SCARA with its link bodies, bar and rotors (docs/model-format.md, after "Legs of any topology"): the
     model above with the gravity and bodies the document appends to it."""

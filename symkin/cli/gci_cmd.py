@@ -213,7 +213,7 @@ def _closure(args: argparse.Namespace, model: GeneratedModel, limits: dict) -> i
     """Legs without closed forms: the GCI over the working mode of the home assembly at a constant orientation, on
     the grid the loop closure is continued over (:func:`symkin.analysis.closure_workspace.closure_gci`)."""
     from symkin.analysis import closure_workspace, plots
-    from symkin.cli.workspace_cmd import closure_options, held_text
+    from symkin.cli.workspace_cmd import MEASURE_NOTE, closure_options, held_text
 
     try:
         for given, option in ((args.index != "inverse-condition", "--index"), (args.domain == "joint", "--domain"),
@@ -238,8 +238,8 @@ def _closure(args: argparse.Namespace, model: GeneratedModel, limits: dict) -> i
     d = space.occupancy.occupied.ndim
     scaled = f", position rows over the characteristic length {space.length:.4g} m" if space.length is not None else ""
     print(f"{model.name}: GCI = {found.value} (error estimate: the change from a grid of half as many cells a side)")
-    print(f"  workspace measure int dW = {found.measure} m^{d} (between the interior and all reached cells)")
-    print(f"  the working mode of the home assembly at {held_text(model, space)}, continued from the home pose over a "
+    print(f"  workspace measure int dW = {found.measure} m^{d} ({MEASURE_NOTE})")
+    print(f"  the working mode of the home assembly{held_text(model, space)}, continued from the home pose over a "
           f"grid of {space.occupancy.cell[0]:.3g} m cells; 1/kappa of J = dp/dq{scaled}; "
           f"{time.perf_counter() - start:.2f} s")
     if path is not None:

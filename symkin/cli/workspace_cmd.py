@@ -146,11 +146,18 @@ def closure_options(args: argparse.Namespace, model) -> dict:
 
 
 def held_text(model, found) -> str:
-    """'yaw = 20 deg': the angles a closure workspace holds (``found.pose`` outside its gridded ``found.axes``)."""
+    """' at yaw = 20 deg': the angles a closure workspace holds (``found.pose`` outside its gridded ``found.axes``);
+    '' for a platform that only translates."""
     import numpy as np
 
-    return ", ".join(f"{name} = {np.degrees(found.pose[i]):g} deg" for i, name in enumerate(model.info.task_space)
-                     if name not in found.axes) or "no angles"
+    held = ", ".join(f"{name} = {np.degrees(found.pose[i]):g} deg" for i, name in enumerate(model.info.task_space)
+                     if name not in found.axes)
+    return f" at {held}" if held else ""
+
+
+#: How the working mode's area or volume is estimated (:func:`symkin.analysis.closure_workspace.working_mode_measure`).
+MEASURE_NOTE = ("95 % confidence: the cells whose neighbours are all reached, and the boundary cells' shares "
+                "that random points in them reach")
 
 
 def _closure(args: argparse.Namespace, model, limits: dict) -> int:
@@ -171,17 +178,18 @@ def _closure(args: argparse.Namespace, model, limits: dict) -> int:
         with Progress(model.name) as progress:
             progress(f"continuing the loop closure over a grid of {options['cells']} cells a side")
             found = closure_workspace.closure_workspace(model, limits=limits, **options)
+            progress("sampling the boundary cells for the " + ("area" if len(found.axes) == 2 else "volume"))
+            measure = closure_workspace.working_mode_measure(model, found, limits=limits)
     except (ValueError, KeyError) as err:
         analysis_args.fail_on_bad_input(args, err)
     occupancy, values = found.occupancy, found.inv_kappa
     reached = occupancy.occupied
     label = held_text(model, found)
     kind = "area" if reached.ndim == 2 else "volume"
-    print(f"{model.name}: working mode of the home assembly at {label}, continued from the home pose over a "
+    print(f"{model.name}: working mode of the home assembly{label}, continued from the home pose over a "
           f"Cartesian grid of {occupancy.cell[0]:.3g} m cells ({', '.join(found.axes)}; cells joined through a "
           "singularity or beyond a limit are not reached)")
-    print(f"  {int(reached.sum())} reached cells; {kind}: {occupancy.measure()} m^{reached.ndim} (between the "
-          "interior and all reached cells)")
+    print(f"  {int(reached.sum())} reached cells; {kind}: {measure} m^{reached.ndim} ({MEASURE_NOTE})")
     scaled = f" (characteristic length {found.length:.4g} m)" if found.length is not None else ""
     print(f"  1/kappa{scaled}: min {np.min(values[reached]):.4g}, max {np.max(values[reached]):.4g}; "
           f"mean over the workspace (GCI) {found.gci:.4g}")
@@ -189,13 +197,13 @@ def _closure(args: argparse.Namespace, model, limits: dict) -> int:
     if not args.no_figure:
         points = occupancy.centers()[occupancy.boundary()]
         cloud = workspace.WorkspaceCloud(found.q[occupancy.boundary()], points, found.axes)
-        path = plots.plot_workspaces([plots.WorkspaceLayer(label, cloud)], args.out or f"{model.name}-workspace.png",
+        path = plots.plot_workspaces([plots.WorkspaceLayer(f"working mode{label}", cloud)], args.out or f"{model.name}-workspace.png",
                                      title=args.title or f"Workspace of {model.name} (boundary cells)", scale=scale,
                                      unit=args.unit)
         print(f"figure: {path}")
     if args.map:
         path = plots.plot_index_slices(occupancy, values, args.map, axes=found.axes, scale=scale, unit=args.unit,
-                                       title=f"1/kappa over the workspace of {model.name} at {label}")
+                                       title=f"1/kappa over the workspace of {model.name}{label}")
         print(f"1/kappa map: {path}")
     print(f"done in {time.perf_counter() - start:.2f} s")
     return 0
