@@ -131,7 +131,9 @@ def parallel_record(model: Model) -> ParallelRecord:
     wrist = () if parallel.wrist is None else tuple(_coordinate(model, joint, parallel.wrist.joints,
                                                                 parallel.wrist.actuators)
                                                     for joint in parallel.wrist.coordinates)
-    return ParallelRecord(parallel.motion.value, tuple(legs), home, wrist)
+    assembly = (None if parallel.home_assembly is None else
+                {name: float(value.xreplace(model.parameter_values)) for name, value in parallel.home_assembly})
+    return ParallelRecord(parallel.motion.value, tuple(legs), home, wrist, assembly)
 
 
 def dumps(manifest: dict) -> str:

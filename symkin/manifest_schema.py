@@ -255,26 +255,31 @@ class LegRecord:
 @dataclass(frozen=True)
 class ParallelRecord:
     """A parallel mechanism's platform motion, legs and home pose (task coordinates at the default parameters,
-    None where undeclared), and a hybrid device's wrist coordinates (the functions' ``qw``)."""
+    None where undeclared), a hybrid device's wrist coordinates (the functions' ``qw``) and the declared start of
+    its home assembly ({leg joint variable: value at the default parameters}; written only where declared)."""
 
     motion: str
     legs: tuple[LegRecord, ...]
     home: tuple[float, ...] | None
     wrist: tuple[Coordinate, ...] = ()
+    home_assembly: dict[str, float] | None = None
 
     def to_record(self) -> dict[str, Any]:
         record: dict[str, Any] = {"motion": self.motion, "legs": [leg.to_record() for leg in self.legs],
                                   "home": None if self.home is None else list(self.home)}
         if self.wrist:
             record["wrist"] = [c.to_record() for c in self.wrist]
+        if self.home_assembly is not None:
+            record["home_assembly"] = dict(self.home_assembly)
         return record
 
     @classmethod
     def from_record(cls, record: dict[str, Any]) -> ParallelRecord:
-        home = record.get("home")
+        home, assembly = record.get("home"), record.get("home_assembly")
         return cls(record["motion"], tuple(LegRecord.from_record(leg) for leg in record["legs"]),
                    None if home is None else tuple(float(v) for v in home),
-                   tuple(Coordinate.from_record(c) for c in record.get("wrist", ())))
+                   tuple(Coordinate.from_record(c) for c in record.get("wrist", ())),
+                   None if assembly is None else {str(k): float(v) for k, v in assembly.items()})
 
 
 @dataclass(frozen=True)

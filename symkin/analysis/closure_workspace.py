@@ -104,25 +104,69 @@ def _sizes(model: GeneratedModel) -> tuple[int, int]:
     return int(inputs[0].shape[0]), int(inputs[1].shape[0])
 
 
-def assemble_at_home(model: GeneratedModel) -> tuple[np.ndarray, np.ndarray]:
-    """(q, s) closing the legs at the home pose ``parallel.home``: the first of q = s = 0 and
-    :data:`HOME_STARTS` fixed random starts from which Gauss-Newton converges (deterministic).
+@dataclass(frozen=True)
+class HomeAssembly:
+    """The assembly the analyses continue the closure from: (q, s) closing the legs at the home pose, and the
+    start of the Gauss-Newton solve that reached it (:func:`home_assembly`)."""
+
+    q: np.ndarray
+    s: np.ndarray
+    start: str
+
+    def describe(self, model: GeneratedModel) -> str:
+        """'home assembly (... from q = s = 0): theta1 = 12.3 deg, ...; passive: knee1 = -60 deg, ...', in deg
+        (to 0.01) or mm (to 0.001) as the closure's inputs are rad or m."""
+        inputs = model.info.functions["closure"].inputs
+
+        def values(spec, vector: np.ndarray) -> str:
+            return ", ".join(f"{name} = {round(np.degrees(v), 2) + 0.0:g} deg" if unit == "rad"   # + 0.0: no -0
+                             else f"{name} = {round(1000 * v, 3) + 0.0:g} mm"
+                             for name, unit, v in zip(spec.elements, spec.units, vector))
+
+        return (f"home assembly (Gauss-Newton at the home pose from {self.start}): {values(inputs[0], self.q)}; "
+                f"passive: {values(inputs[1], self.s)}")
+
+
+def home_assembly(model: GeneratedModel) -> HomeAssembly:
+    """(q, s) closing the legs at the home pose ``parallel.home``: Gauss-Newton from the model's declared
+    ``parallel.home_assembly`` (its named variables, 0 for the others) where it has one; else from the first of
+    q = s = 0 and :data:`HOME_STARTS` fixed random starts that closes them (deterministic).
 
     Raises:
-        ValueError: no start closes the legs (the home pose is out of reach).
+        ValueError: no start closes the legs (the home pose is out of reach, or the declared start leads nowhere).
     """
     home = mechanism.home_pose(model)
     n, ns = _sizes(model)
-    starts = np.vstack([np.zeros(n + ns), np.random.default_rng(0).uniform(-np.pi / 2, np.pi / 2, (HOME_STARTS, n + ns))])
+    declared = model.info.home_assembly
+    if declared is not None:
+        inputs = model.info.functions["closure"].inputs
+        names = list(inputs[0].elements) + list(inputs[1].elements)
+        starts = np.zeros((1, n + ns))
+        for name, value in declared.items():
+            starts[0, names.index(name)] = value
+        described = ["the declared parallel.home_assembly"]
+    else:
+        starts = np.vstack([np.zeros(n + ns),
+                            np.random.default_rng(0).uniform(-np.pi / 2, np.pi / 2, (HOME_STARTS, n + ns))])
+        described = ["q = s = 0"] + [f"random start {k} of {HOME_STARTS} (q = s = 0 did not close the legs)"
+                                     for k in range(1, HOME_STARTS + 1)]
     report = solve_closure(model, starts[:, :n], starts[:, n:], home, unknowns=("q", "s"), max_step=MAX_STEP,
                            max_iterations=100)
     closed = np.flatnonzero(_closes(report, home))
     if not len(closed):
-        raise ValueError(f"{model.name}: the legs do not close at the home pose {home.tolist()} (parallel.home) from "
-                         f"{len(starts)} starts: declare a home pose inside the workspace")
+        where = ("from the declared parallel.home_assembly: change its values" if declared is not None
+                 else f"from {len(starts)} starts: declare a home pose inside the workspace, or parallel.home_assembly")
+        raise ValueError(f"{model.name}: the legs do not close at the home pose {home.tolist()} (parallel.home) "
+                         f"{where}")
     solution = report.solution
     assert isinstance(solution, dict), "solve_closure names its vectors"
-    return solution["q"][closed[0]], solution["s"][closed[0]]
+    return HomeAssembly(solution["q"][closed[0]], solution["s"][closed[0]], described[closed[0]])
+
+
+def assemble_at_home(model: GeneratedModel) -> tuple[np.ndarray, np.ndarray]:
+    """(q, s) of the home assembly (:func:`home_assembly`)."""
+    found = home_assembly(model)
+    return found.q, found.s
 
 
 def _closes(report, p: np.ndarray) -> np.ndarray:
@@ -600,11 +644,13 @@ class ClosureIndex:
             cells a side.
         measure: the area or volume (m^d), its error the 95 % confidence half-width (:func:`working_mode_measure`).
         workspace: the grid it was averaged over.
+        assembly: the home assembly the grids were continued from.
     """
 
     value: Estimate
     measure: Estimate
     workspace: ClosureWorkspace
+    assembly: HomeAssembly
 
 
 def closure_gci(model: GeneratedModel, *, orientation: dict[str, float] | None = None, limits: Limits | None = None,
@@ -616,10 +662,11 @@ def closure_gci(model: GeneratedModel, *, orientation: dict[str, float] | None =
     share halves with the cell size, so the change bounds the fine grid's error where the grids resolve the
     workspace.  The coarse grid is laid over the fine grid's box.  Arguments as :func:`closure_workspace`.
     """
-    start = assemble_at_home(model)
+    assembly = home_assembly(model)
+    start = (assembly.q, assembly.s)
     fine = closure_workspace(model, orientation=orientation, limits=limits, length=length, cells=cells, start=start)
     coarse = closure_workspace(model, orientation=orientation, limits=limits, length=fine.length,
                                cells=max(cells // 2, 2), start=start, box=fine.box)
     evaluations = int(fine.occupancy.occupied.size + coarse.occupancy.occupied.size)
     value = Estimate(fine.gci, abs(fine.gci - coarse.gci), evaluations, "grid", False)
-    return ClosureIndex(value, working_mode_measure(model, fine, limits=limits), fine)
+    return ClosureIndex(value, working_mode_measure(model, fine, limits=limits), fine, assembly)

@@ -33,7 +33,8 @@ from symkin.runtime.info import GeneratedModel
 class Datasheet:
     """The rated samples: joint configurations q (N, n), TCP points (N, d) with their axes, the measures,
     the index of the home pose among the samples, {group: why it is not rated} and the groups of measures the
-    device's handle has ({group: its measures}, e.g. :data:`~symkin.analysis.handle_measures.PUSHED_GROUPS`).
+    device's handle has ({group: its measures}, e.g. :data:`~symkin.analysis.handle_measures.PUSHED_GROUPS`), and
+    notes on how it was rated (the home assembly of legs solved through their closure).
 
     Every group is rated whole or listed as not rated (a measure is never dropped silently): raises ValueError
     otherwise.
@@ -47,6 +48,7 @@ class Datasheet:
     home: int
     skipped: dict[str, str]
     groups: Mapping[str, tuple[str, ...]]
+    notes: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         rated = [m.name for m in self.measures]
@@ -76,7 +78,8 @@ class Datasheet:
     def to_json(self) -> dict[str, Any]:
         return {"model": self.model, "samples": len(self.q), "axes": list(self.axes),
                 "home": {"q": self.q[self.home].tolist(), "tcp": self.points[self.home].tolist()},
-                "measures": {m.name: self.extremes(m) for m in self.measures}, "not_rated": dict(self.skipped)}
+                "measures": {m.name: self.extremes(m) for m in self.measures}, "not_rated": dict(self.skipped),
+                "notes": list(self.notes)}
 
     def summary(self) -> list[str]:
         """One line per measure: its worst value over the workspace, its range and its value at home."""
@@ -89,7 +92,7 @@ class Datasheet:
                          f"{_point(worst['tcp'], self.axes)}); range {e['min']['value']:.4g} .. {e['max']['value']:.4g}, "
                          f"at home {'-' if e['home'] is None else format(e['home'], '.4g')}")
         lines += [f"{name}: not rated ({why})" for name, why in self.skipped.items()]
-        return lines
+        return lines + list(self.notes)
 
 
 def axis_scale(axes: Sequence[str]) -> tuple[float, str, str]:
@@ -224,7 +227,8 @@ def rate_closure_platform(model: GeneratedModel, actuation: Actuation, *, sample
     from symkin.runtime.parallel import closure_velocities
 
     held = closure_workspace.held_orientation(model, orientation)
-    home_q, home_s = closure_workspace.assemble_at_home(model)
+    assembly = closure_workspace.home_assembly(model)
+    home_q, home_s = assembly.q, assembly.s
     found = closure_workspace.closure_workspace(model, orientation=held, limits=limits,
                                                 cells=max(8, int(round(samples ** (1 / 3)))), start=(home_q, home_s))
     reached = found.occupancy.occupied
@@ -266,7 +270,7 @@ def rate_closure_platform(model: GeneratedModel, actuation: Actuation, *, sample
         turned, not_turned = rotation_measures(J_w, M, actuation, no_mass=NO_CLOSURE_DYNAMICS)
         measures, skipped = measures + turned, skipped | not_turned
     return Datasheet(model.name, q, points, found.axes, measures, len(q) - 1, skipped,
-                     PUSHED_GROUPS | TURNED_GROUPS if angles else PUSHED_GROUPS)
+                     PUSHED_GROUPS | TURNED_GROUPS if angles else PUSHED_GROUPS, (assembly.describe(model),))
 
 
 def rate_pose_platform(model: GeneratedModel, actuation: Actuation, *, samples: int = 4096, seed: int = 0,

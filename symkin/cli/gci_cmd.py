@@ -242,6 +242,7 @@ def _closure(args: argparse.Namespace, model: GeneratedModel, limits: dict) -> i
     print(f"  the working mode of the home assembly{held_text(model, space)}, continued from the home pose over a "
           f"grid of {space.occupancy.cell[0]:.3g} m cells; 1/kappa of J = dp/dq{scaled}; "
           f"{time.perf_counter() - start:.2f} s")
+    print(f"  {found.assembly.describe(model)}")
     if path is not None:
         print(f"  map: {path}")
     return 0

@@ -177,7 +177,9 @@ def _closure(args: argparse.Namespace, model, limits: dict) -> int:
         options = closure_options(args, model)
         with Progress(model.name) as progress:
             progress(f"continuing the loop closure over a grid of {options['cells']} cells a side")
-            found = closure_workspace.closure_workspace(model, limits=limits, **options)
+            assembly = closure_workspace.home_assembly(model)
+            found = closure_workspace.closure_workspace(model, limits=limits, start=(assembly.q, assembly.s),
+                                                        **options)
             progress("sampling the boundary cells for the " + ("area" if len(found.axes) == 2 else "volume"))
             measure = closure_workspace.working_mode_measure(model, found, limits=limits)
     except (ValueError, KeyError) as err:
@@ -189,6 +191,7 @@ def _closure(args: argparse.Namespace, model, limits: dict) -> int:
     print(f"{model.name}: working mode of the home assembly{label}, continued from the home pose over a "
           f"Cartesian grid of {occupancy.cell[0]:.3g} m cells ({', '.join(found.axes)}; cells joined through a "
           "singularity or beyond a limit are not reached)")
+    print(f"  {assembly.describe(model)}")
     print(f"  {int(reached.sum())} reached cells; {kind}: {measure} m^{reached.ndim} ({MEASURE_NOTE})")
     scaled = f" (characteristic length {found.length:.4g} m)" if found.length is not None else ""
     print(f"  1/kappa{scaled}: min {np.min(values[reached]):.4g}, max {np.max(values[reached]):.4g}; "

@@ -517,6 +517,8 @@ class Parallel:
             solvers and the centre of sampled workspaces; None if not declared.
         bodies: mass properties of the legs and the platform; None for a kinematic model.
         wrist: the serial chain the platform carries (a hybrid device), None for a plain parallel mechanism.
+        home_assembly: (variable, value) pairs where the solve of the legs' closure at ``home`` starts (the
+            analyses that continue the closure start from the assembly it reaches); None if not declared.
     """
 
     coordinates: tuple[str, ...]
@@ -528,6 +530,7 @@ class Parallel:
     home: tuple[sympy.Expr, ...] | None = None
     bodies: ParallelBodies | None = None
     wrist: Wrist | None = None
+    home_assembly: tuple[tuple[str, sympy.Expr], ...] | None = None
 
     @property
     def motion(self) -> PlatformMotion:

@@ -38,6 +38,8 @@ class ModelInfo:
         description: the model file's description ("" without one).
         backend_files: the files each backend emitted, by backend (its keys: the emitted backends).
         tree: a branched serial model's links, each with its parent (the viewer draws them), else None.
+        home_assembly: a parallel model's declared start of its home assembly, {leg joint variable: value}
+            (``parallel.home_assembly``), else None.
     """
 
     name: str
@@ -54,6 +56,7 @@ class ModelInfo:
     description: str = ""
     backend_files: dict[str, tuple[str, ...]] = dataclasses.field(default_factory=dict)
     tree: Any = None
+    home_assembly: dict[str, float] | None = None
 
     @property
     def is_parallel(self) -> bool:
@@ -88,7 +91,8 @@ class ModelInfo:
                    None if parallel is None else parallel.home,
                    () if parallel is None else tuple(leg.passive_limits for leg in parallel.legs),
                    () if parallel is None else parallel.wrist, model.home_configuration, model.hash,
-                   model.description, dict(record.backends), model.tree)
+                   model.description, dict(record.backends), model.tree,
+                   None if parallel is None else parallel.home_assembly)
 
 
 class GeneratedModel(Protocol):
