@@ -16,7 +16,7 @@ MODEL_FORMAT = ROOT / "docs" / "model-format.md"
 def dual_scara_text() -> str:
     """The dual SCARA of docs/model-format.md ("Legs of any topology"): two SCARA legs R-R-P-R carrying a bar, a
     Schoenflies platform (x, y, z, yaw) whose legs have no distance form; its lifts declare no limits."""
-    match = re.search(r"cat > dual_scara.yaml <<'EOF_MODEL'\n(.*?)^EOF_MODEL$", MODEL_FORMAT.read_text(), re.S | re.M)
+    match = re.search(r"cat > out/dual_scara.yaml <<'EOF_MODEL'\n(.*?)^EOF_MODEL$", MODEL_FORMAT.read_text(), re.S | re.M)
     assert match, "docs/model-format.md lost the dual SCARA"
     return match.group(1)
 
@@ -24,7 +24,7 @@ def dual_scara_text() -> str:
 def closure_delta_text() -> str:
     """The DELTA with its parallelograms written as revolute pairs (docs/model-format.md, "A parallelogram in a
     leg"): legs without the distance form, analysed through their loop closure."""
-    match = re.search(r"cat > closure_delta.yaml <<'EOF_MODEL'\n(.*?)^EOF_MODEL$", MODEL_FORMAT.read_text(),
+    match = re.search(r"cat > out/closure_delta.yaml <<'EOF_MODEL'\n(.*?)^EOF_MODEL$", MODEL_FORMAT.read_text(),
                       re.S | re.M)
     assert match, "docs/model-format.md lost the closure DELTA"
     return match.group(1)

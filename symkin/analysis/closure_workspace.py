@@ -474,11 +474,12 @@ def working_mode_measure(model: GeneratedModel, found: ClosureWorkspace, *, limi
     """The area or volume of the working mode on ``found``'s grid, without the bias of counting cells.
 
     Counting the cells whose centres are reached, or bracketing between the interior and all reached cells (whose
-    midpoint was 20 % low on a DELTA), leaves the cells the boundary cuts to chance.  Here the grid's cells split
-    into the *core* (reached, with all 3^d - 1 neighbours reached: counted whole) and the *band* (cells that differ
-    from a neighbour, on both sides of the boundary: :func:`_band`).  In each band cell ``samples`` uniform random points are
-    continued from the cell's own solution in one step, or from the nearest reached neighbour's in three
-    (:func:`_advance`: the legs close, within the limits, no singularity crossed), and the cell counts with the share f_c that is reached:
+    midpoint was 30 % low on a DELTA at 16 cells a side), leaves the cells the boundary cuts to chance.  Here the
+    grid's cells split into the *core* (reached, with all 3^d - 1 neighbours reached: counted whole) and the *band*
+    (cells that differ from a neighbour, on both sides of the boundary: :func:`_band`).  In each band cell
+    ``samples`` uniform random points are continued from the cell's own solution in one step, or from the nearest
+    reached neighbour's in three (:func:`_advance`: the legs close, within the limits, no singularity crossed), and
+    the cell counts with the share f_c that is reached:
 
         V = h^d (core + sum_c f_c),   var V = h^2d sum_c s_c^2 / k,
 

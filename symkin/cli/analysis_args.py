@@ -35,11 +35,12 @@ def add_model_arguments(p: argparse.ArgumentParser, *, backend: bool = True) -> 
 
 
 def design_label(model: GeneratedModel, values: dict[str, float], unit: str) -> str:
-    """'l1 = 10 cm, l2 = 10 cm': a design's parameter values, lengths (unit m in the manifest) in ``unit``."""
+    """'l1 = 10 cm, l2 = 10 cm': a design's parameter values, lengths (unit m in the manifest) in ``unit``;
+    'as declared' for the model's own values."""
     units = model.info.units
     parts = [f"{name} = {value * LENGTH_UNITS[unit]:g} {unit}" if units.get(name) == "m" else f"{name} = {value:g}"
              for name, value in values.items()]
-    return ", ".join(parts) or "model parameters"
+    return ", ".join(parts) or "as declared"
 
 
 def add_length_argument(p: argparse.ArgumentParser) -> None:

@@ -27,7 +27,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("model", metavar="MODEL", help="generated directory (with its JavaScript: --backend js), "
                                                   "or a model file (YAML or URDF), derived on the fly")
-    p.add_argument("-o", "--out", metavar="HTML", help="the page to write (default: <model>-view.html)")
+    p.add_argument("-o", "--out", metavar="HTML", help="the page to write (default: out/view/<model>-view.html)")
     p.add_argument("--design", action="append", default=[], metavar="NAME=VALUE[,...]",
                    help="parameter values of the design shown (and of its workspace cloud); repeatable")
     p.add_argument("--workspace", type=lambda text: 0 if text == "0" else sample_count(text),
@@ -61,7 +61,7 @@ def run(args: argparse.Namespace) -> int:
                 html, cloud = page.page_of(model, args.workspace, args.seed, progress, limits)
         except (ValueError, KeyError) as err:  # a ViewUnavailable too
             analysis_args.fail_on_bad_input(args, err)
-    out = Path(args.out or f"{model.name}-view.html")
+    out = Path(args.out or f"out/view/{model.name}-view.html")
     replace_file(out, html)
     print(f"{model.name}: {out} ({len(html) / 1e6:.1f} MB; {cloud.note})")
     if args.open:

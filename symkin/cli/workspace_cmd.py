@@ -41,7 +41,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="joint-space sampling (default: grid up to 3 joints, else sobol)")
     p.add_argument("--seed", type=int, default=0, help="seed of random/sobol sampling (default: %(default)s)")
     p.add_argument("-o", "--out", metavar="FIGURE", type=analysis_args.figure_path,
-                   help="workspace figure (default: MODEL_NAME-workspace.png)")
+                   help="workspace figure (default: out/workspace/MODEL_NAME-workspace.png)")
     p.add_argument("--map", metavar="FIGURE", type=analysis_args.figure_path,
                    help="also draw 1/kappa over the workspace into FIGURE (first design); a platform at a constant "
                         "orientation also gets FIGURE-sections (x-y, x-z, y-z through the home position)")
@@ -124,7 +124,7 @@ def _orientations(args: argparse.Namespace, model, limits: dict) -> int:
             if not args.no_figure:
                 progress("drawing")
                 cloud = workspace.WorkspaceCloud(points, points, orientations.ANGLES)
-                path = plots.plot_index_map(cloud, values, args.out or f"{model.name}-workspace.png",
+                path = plots.plot_index_map(cloud, values, args.out or f"out/workspace/{model.name}-workspace.png",
                                             scale=180 / np.pi, unit="deg", title=args.title or
                                             f"Orientation workspace of {model.name}: 1/kappa of J_w")
                 print(f"figure: {path}")
@@ -200,7 +200,8 @@ def _closure(args: argparse.Namespace, model, limits: dict) -> int:
     if not args.no_figure:
         points = occupancy.centers()[occupancy.boundary()]
         cloud = workspace.WorkspaceCloud(found.q[occupancy.boundary()], points, found.axes)
-        path = plots.plot_workspaces([plots.WorkspaceLayer(f"working mode{label}", cloud)], args.out or f"{model.name}-workspace.png",
+        path = plots.plot_workspaces([plots.WorkspaceLayer(f"working mode{label}", cloud)],
+                                     args.out or f"out/workspace/{model.name}-workspace.png",
                                      title=args.title or f"Workspace of {model.name} (boundary cells)", scale=scale,
                                      unit=args.unit)
         print(f"figure: {path}")
@@ -258,8 +259,9 @@ def run(args: argparse.Namespace) -> int:
         if not args.no_figure:
             progress("drawing")
             title = args.title or f"Workspace of {base.name}"
-            path = plots.plot_workspaces([layer for layer, _ in layers], args.out or f"{base.name}-workspace.png",
-                                         title=title, scale=scale, unit=args.unit)
+            path = plots.plot_workspaces([layer for layer, _ in layers],
+                                         args.out or f"out/workspace/{base.name}-workspace.png", title=title,
+                                         scale=scale, unit=args.unit)
             print(f"figure: {path}")
         if args.map:
             layer, inv_kappa = layers[0]

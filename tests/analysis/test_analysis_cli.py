@@ -46,7 +46,7 @@ def test_fig_8_19_is_reproduced_by_the_documented_command(tmp_path, capsys):
 
 def test_workspace_of_a_model_file_derives_it_on_the_fly(tmp_path, capsys):
     assert main(["workspace", str(MODELS_DIR / "planar_2r.yaml"), "-n", "400", "--no-figure"]) == 0
-    assert "planar_2r (model parameters): 400 configurations (grid)" in capsys.readouterr().out
+    assert "planar_2r (as declared): 400 configurations (grid)" in capsys.readouterr().out
     assert list(tmp_path.iterdir()) == []
 
 

@@ -99,7 +99,7 @@ def test_parallel_surrogate_matches_the_numpy_code(delta):
 
 
 #: The spherical 3-RRR with free link angles that docs/design-optimization.md declares (its heredoc).
-SPHERICAL_MODEL = re.search(r"^cat > spherical_3rrr\.yaml <<'EOF'\n(.*?)^EOF$",
+SPHERICAL_MODEL = re.search(r"^cat > out/spherical_3rrr\.yaml <<'EOF'\n(.*?)^EOF$",
                             (ROOT / "docs" / "design-optimization.md").read_text(), re.S | re.M)
 #: A box of orientations symmetric about the home orientation.
 SPHERICAL_BOX = {axis: (-np.radians(30), np.radians(30)) for axis in ("roll", "pitch", "yaw")}

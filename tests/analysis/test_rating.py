@@ -292,7 +292,8 @@ def test_help_and_docs_name_every_measure_the_rating_lists(capsys):
             assert name in text, name
             stem = name.rsplit("_", 1)[0] + "_" if name.endswith(("_min", "_max")) else name
             assert f"`{stem}" in section, name
-    assert "no apparent mass" not in text and "from the generated closure_dynamics" in text
+    assert "no apparent mass" not in text
+    assert "from the generated closure_dynamics" in text
 
 
 def test_friction_declared_in_the_model_is_felt_at_the_handle(tmp_path):

@@ -97,6 +97,8 @@ def _recording(code: str) -> ast.Module:
     return ast.fix_missing_locations(tree)
 
 
+#: What the scratch directory holds besides what the documents write under out/.
+CHECKOUT_ENTRIES = {"models", "generated", ".venv", "out"}
 RUN_DOCUMENTS = [path for path in DOCUMENTS if any(runnable for _, _, _, runnable in blocks(path))]
 
 
@@ -108,6 +110,7 @@ def test_a_document_runs_as_written(workspace, path, monkeypatch):
     monkeypatch.delenv("SYMKIN_C_ENTRY", raising=False)  # the C backend as a user gets it (conftest: ctypes)
     monkeypatch.setenv("MPLBACKEND", "Agg")
     namespace: dict[str, object] = {"__name__": "__docs__"}
+    before = {entry.name for entry in workspace.iterdir()}
     for language, line, code, runnable in blocks(path):
         where = f"{path.relative_to(ROOT)}:{line}"
         if not runnable:
@@ -126,6 +129,9 @@ def test_a_document_runs_as_written(workspace, path, monkeypatch):
         for number, quoted, value in quote_mismatches(code, values):
             pytest.fail(f"{path.relative_to(ROOT)}:{line + number}: the document quotes {quoted} but the code "
                         f"gives {value}")
+    # issue 60: what a reader runs in the checkout writes under out/ (or generated/, what `make demo` refreshes)
+    stray = sorted({entry.name for entry in workspace.iterdir()} - before - CHECKOUT_ENTRIES)
+    assert not stray, f"{path.relative_to(ROOT)} writes {stray} into the checkout's root: write under out/"
 
 
 def test_blocks_that_are_not_run_say_why():
@@ -135,6 +141,37 @@ def test_blocks_that_are_not_run_say_why():
         reason = next(text for text in reversed(before) if text.strip())
         assert len(reason.strip()) > len(NOT_RUN) + 10, f"{path}:{line}: say why the block is not run"
     assert len(skipped) <= 2, skipped
+
+
+def borrowed_imports(code: str, imported: set[str]) -> set[str]:
+    """The names of ``imported`` (bound by earlier blocks' imports) that ``code`` uses without importing or
+    assigning them."""
+    own, bound, used = set(), set(), set()
+    for node in ast.walk(ast.parse(code)):
+        if isinstance(node, (ast.Import, ast.ImportFrom)):
+            own |= {alias.asname or alias.name.split(".")[0] for alias in node.names}
+        elif isinstance(node, ast.Name):
+            (bound if isinstance(node.ctx, ast.Store) else used).add(node.id)
+        elif isinstance(node, (ast.FunctionDef, ast.ClassDef)):
+            bound.add(node.name)
+    return (used & imported) - own - bound
+
+
+def test_each_python_block_imports_what_it_uses():
+    """Issue 60: a reader copies one snippet, not the document - no block leans on an earlier block's imports."""
+    borrowing = []
+    for path in DOCUMENTS:
+        imported: set[str] = set()
+        for language, line, code, _ in blocks(path):
+            if language != "python":
+                continue
+            missing = borrowed_imports(code, imported)
+            if missing:
+                borrowing.append(f"{path.relative_to(ROOT)}:{line}: imports {sorted(missing)} in an earlier block")
+            imported |= {alias.asname or alias.name.split(".")[0] for node in ast.walk(ast.parse(code))
+                         if isinstance(node, (ast.Import, ast.ImportFrom)) for alias in node.names}
+    assert not borrowing, "\n".join(borrowing)
+    assert borrowed_imports("x = np.zeros(3)\nimport math\nmath.pi", {"np", "math"}) == {"np"}  # the check bites
 
 
 def test_a_quoted_result_that_the_code_does_not_give_is_caught():

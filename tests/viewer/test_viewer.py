@@ -51,6 +51,8 @@ def test_every_example_model_gets_a_self_contained_page(name, generated_dir):
     assert data["name"] == name
     assert data["kind"] == ("parallel" if model.info.is_parallel else "serial")
     assert f'globalThis.symkin[{json.dumps(name)}]' in html  # the generated module, inlined
+    # the sliders' heading says how the page solves (issue 60: not 'closed-form' over a Gauss-Newton page)
+    assert ("<h2>Platform (closed-form inverse kinematics)</h2>" in html) == model.info.is_parallel
     cloud = data["cloud"]
     assert [c["name"] for c in data["coordinates"]] == [c.name for c in model.info.coordinates]
     if mechanism.kind_of(model) is mechanism.MechanismKind.PARALLEL_ORIENTATION:  # a spherical platform: no cloud
@@ -79,7 +81,7 @@ def test_the_cloud_is_rated_as_the_analyses_rate_it(generated_dir):
 def test_model_files_and_stock_urdfs_are_derived_on_the_fly(source, tmp_path):
     run = view(str(source), "--workspace", "512", cwd=tmp_path)
     assert run.returncode == 0, run.stderr
-    (written,) = tmp_path.glob("*-view.html")
+    (written,) = (tmp_path / "out" / "view").glob("*-view.html")   # under out/, not beside the user's files
     html = written.read_text()
     assert_self_contained(html)
     data, _ = page_parts(html)
