@@ -24,7 +24,9 @@ from symkin.ir.spec import FunctionSpec, OptimizedFunction, combine_functions
 from symkin.model.schema import Model
 from symkin.optimize import optimize
 
-Progress = Callable[[str], None]
+#: Reports a stage, and how far it is where counted: ``progress(stage, done=k, total=n)``
+#: (:class:`symkin.cli.progress.Progress`).
+Progress = Callable[..., None]
 
 #: Name of the function that computes every output of a scene together (one shared CSE).
 COMBINED_FUNCTION = "combined"
@@ -152,7 +154,7 @@ def _describe_outputs(spec: FunctionSpec) -> str:
     return ", ".join(shown) + (f" (+{more} more)" if more else "")
 
 
-def _quiet(_stage: str) -> None:
+def _quiet(_stage: str, done: int | None = None, total: int | None = None) -> None:
     pass
 
 
@@ -173,12 +175,13 @@ def generate(model: Model, request: Request, progress: Progress = _quiet,
     functions: list[OptimizedFunction] = []
     specs: list[FunctionSpec] = []
     reports = []
-    for name in request.outputs:
-        progress(f"deriving {name}")
+    count = len(request.outputs) + bool(request.combine)
+    for k, name in enumerate(request.outputs):
+        progress(f"deriving {name}", done=k, total=count)
         start = time.perf_counter()
         (spec,) = derivation.functions([name])
         derived_at = time.perf_counter()
-        progress(f"optimizing {name}")
+        progress(f"optimizing {name}", done=k, total=count)
         optimized = optimize(spec, request.fixed)
         done = time.perf_counter()
         specs.append(spec)
@@ -189,7 +192,7 @@ def generate(model: Model, request: Request, progress: Progress = _quiet,
         if COMBINED_FUNCTION in request.outputs:
             raise DerivationError(f"a quantity may not be called '{COMBINED_FUNCTION}': that is the name of "
                                   "the combined function of a scene")
-        progress(f"optimizing {COMBINED_FUNCTION}")
+        progress(f"optimizing {COMBINED_FUNCTION}", done=count - 1, total=count)
         start = time.perf_counter()
         combined = combine_functions(model, COMBINED_FUNCTION,
                                      [spec for name, spec in zip(request.outputs, specs) if name in request.combine])
@@ -212,7 +215,8 @@ def generate(model: Model, request: Request, progress: Progress = _quiet,
     backend_files: dict[str, list[str]] = {}
     start = time.perf_counter()
     for backend_name in request.backends:
-        progress(f"emitting {backend_name} code")
+        progress(f"emitting {backend_name} code", done=request.backends.index(backend_name),
+                 total=len(request.backends))
         emitted = get_backend(backend_name).emit(code)
         overlap = set(emitted) & set(files)
         if overlap:

@@ -164,7 +164,8 @@ def _cell(lower: np.ndarray, upper: np.ndarray, configurations: int) -> float:
 
 def chunked_workspace(payload: ModelPayload, spec: CloudSpec, *, chunk: int = CHUNK, keep: int = KEEP,
                       scheduler: str = "local", workers: int | None = None, client: Any = None,
-                      progress: Callable[[str], None] = lambda _line: None) -> ChunkedWorkspace:
+                      progress: Callable[..., None] = lambda _stage, done=None, total=None: None
+                      ) -> ChunkedWorkspace:
     """Sample, measure and score the workspace of a serial mechanism in chunks (see the module docstring).
 
     Raises:
@@ -187,7 +188,7 @@ def chunked_workspace(payload: ModelPayload, spec: CloudSpec, *, chunk: int = CH
             return chunked_workspace(payload, spec, chunk=chunk, keep=keep, client=active, progress=progress)
     extents: dict[int, tuple[np.ndarray, np.ndarray]] = {}
     _run(_extent_chunk, [(spec, *r) for r in ranges], payload, f"{name}-extent", extents, scheduler, client,
-         lambda done: progress(f"extent: {done}/{len(ranges)} chunks"))
+         lambda done: progress("extent (chunks)", done=done, total=len(ranges)))
     lower = np.min([extents[i][0] for i in range(len(ranges))], axis=0)
     upper = np.max([extents[i][1] for i in range(len(ranges))], axis=0)
     cell = _cell(lower, upper, total)
@@ -196,7 +197,8 @@ def chunked_workspace(payload: ModelPayload, spec: CloudSpec, *, chunk: int = CH
     per_chunk = -(-keep // len(ranges))
     summaries: dict[int, ChunkSummary] = {}
     _run(_summary_chunk, [(spec, *r, grid, per_chunk) for r in ranges], payload, f"{name}-summary", summaries,
-         scheduler, client, lambda done: progress(f"occupancy and 1/kappa: {done}/{len(ranges)} chunks"))
+         scheduler, client, lambda done: progress("occupancy and 1/kappa (chunks)", done=done,
+                                                         total=len(ranges)))
     ordered = [summaries[i] for i in range(len(ranges))]
     occupied = np.zeros(grid.occupied.size, dtype=bool)
     for s in ordered:

@@ -25,10 +25,9 @@ from typing import Any
 
 import sympy
 
-from symkin.errors import name_list
 from symkin.model import coordinates, joint_kinds
 from symkin.model.delta import delta_legs
-from symkin.model.leg_joints import leg_joint_limits, variable_names
+from symkin.model.leg_joints import home_assembly, leg_joint_limits, variable_names
 from symkin.model.reader import (
     X_AXIS,
     Y_AXIS,
@@ -105,40 +104,10 @@ def build_parallel(r: Reader, section: Any) -> Parallel | None:
     if motion is None or fk_branch is None or legs is None:
         return None
     home = _home(r, path + ("home",), section.get("home"), motion)
-    assembly = _home_assembly(r, path, section, legs)
+    assembly = home_assembly(r, path, section, legs)
     return _checked(r, path, Parallel(motion, legs, fk_branch, identical, constraints, home=home,
                                       home_assembly=assembly))
 
-
-def _home_assembly(r: Reader, path: KeyPath, section: dict[str, Any], legs: tuple[Leg, ...]
-                   ) -> tuple[tuple[str, sympy.Expr], ...] | None:
-    """``home_assembly: {variable: value}``: where Gauss-Newton starts the legs' joint variables (active or passive,
-    named as in the closure's q and s) to close them at ``home``; the assembly it reaches is the home assembly of
-    the analyses that continue the closure.  Unnamed variables start at 0."""
-    apath = path + ("home_assembly",)
-    if "home_assembly" not in section:
-        return None
-    if "home" not in section:
-        r.fail(apath, "a home assembly needs the home pose it closes at", "add parallel.home: [...] (task coordinates)")
-    value = section["home_assembly"]
-    if not isinstance(value, dict):
-        r.fail(apath, f"expected a mapping of leg joint variables to values, got {describe(value)}",
-               "write e.g. home_assembly: {knee1: deg(-60), knee2: deg(-60)}")
-        return None
-    kinds = {variable: rotation for leg in legs for joint in leg.joints for variable, _, rotation in joint.motions}
-    out = []
-    for name, item in value.items():
-        if name not in kinds:
-            close = difflib.get_close_matches(str(name), list(kinds), n=1)
-            hint = f"did you mean '{close[0]}'? " if close else ""
-            r.fail(apath + (name,), f"no leg joint variable named {describe(name)}",
-                   f"{hint}name the legs' joint variables (a U joint's are <name>_1, <name>_2): "
-                   f"{name_list(list(kinds))}")
-            continue
-        expr = r.expr(apath + (name,), item, dimension=ANGLE if kinds[name] else LENGTH)
-        if expr is not None:
-            out.append((str(name), expr))
-    return tuple(out)
 
 
 def _checked(r: Reader, path: KeyPath, parallel: Parallel) -> Parallel:
