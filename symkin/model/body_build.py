@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -15,7 +15,8 @@ from symkin.model.reader import X_AXIS, Y_AXIS, Z_AXIS, ZERO, Reader, describe, 
 from symkin.model.schema import (Actuator, Body, Friction, Joint, Parallel, ParallelBodies, PlatformMotion, Vec3,
                                  fixed_pose)
 from symkin.model.yaml_source import KeyPath
-from symkin.model.units import MASS
+from symkin.model.units import (ANGLE, ANGULAR_DAMPING, ANGULAR_SPEED, CURRENT, FORCE, INERTIA, LENGTH,
+                                LINEAR_DAMPING, MASS, RATIO, SPEED, TORQUE, TORQUE_CONSTANT)
 
 _INERTIA_KEYS = ("xx", "yy", "zz", "xy", "xz", "yz")
 
@@ -48,7 +49,7 @@ def read_bodies(r: Reader, value: Any, links: tuple[str, ...], path: KeyPath = (
 def _mass_properties(r: Reader, path: KeyPath, item: dict[str, Any], link: str) -> Body | None:
     """The Body of a mapping with ``mass`` and optional ``com``, ``inertia``, ``inertia_rpy``, ``origin``."""
     mass = r.expr(path + ("mass",), item["mass"], dimension=MASS)
-    com = r.vector3(path + ("com",), item["com"]) if "com" in item else (ZERO, ZERO, ZERO)
+    com = r.vector3(path + ("com",), item["com"], LENGTH) if "com" in item else (ZERO, ZERO, ZERO)
     inertia = _inertia(r, path + ("inertia",), item["inertia"]) if "inertia" in item else sympy.zeros(3, 3)
     if "inertia_rpy" in item and inertia is not None:
         inertia = _rotate_inertia(r, path + ("inertia_rpy",), item["inertia_rpy"], inertia)
@@ -92,6 +93,7 @@ def read_parallel_bodies(r: Reader, value: Any) -> ParallelBodies | None:
                 fields[key] = _mass_properties(r, path + (key,), item, key)
     scalars = {"rod": {"mass": "rod_mass", "platform_fraction": "rod_platform_fraction", "inertia": "rod_inertia"},
                "rotor": {"inertia": "rotor_inertia", "gear_ratio": "gear_ratio"}}
+    dimensions = {"mass": MASS, "platform_fraction": RATIO, "inertia": INERTIA, "gear_ratio": RATIO}
     for key, names in scalars.items():
         if key not in section:
             continue
@@ -99,7 +101,7 @@ def read_parallel_bodies(r: Reader, value: Any) -> ParallelBodies | None:
         for name, field_name in names.items():
             if item is None or name not in item:
                 continue
-            amount = r.expr(path + (key, name), item[name])
+            amount = r.expr(path + (key, name), item[name], dimension=dimensions[name], bare=name == "inertia")
             if amount is not None and not _negative(r, path + (key, name), amount, name.replace("_", " ")):
                 fields[field_name] = amount
     if "links" in section:
@@ -178,7 +180,8 @@ def _inertia(r: Reader, path: KeyPath, value: Any) -> sympy.Matrix | None:
         section = r.mapping(path, value, optional=_INERTIA_KEYS)
         if section is None:
             return None
-        parts = {k: r.expr(path + (k,), section[k]) if k in section else ZERO for k in _INERTIA_KEYS}
+        parts = {k: r.expr(path + (k,), section[k], dimension=INERTIA, bare=True) if k in section else ZERO
+                 for k in _INERTIA_KEYS}
         if any(v is None for v in parts.values()):
             return None
         tensor = sympy.Matrix([[parts["xx"], parts["xy"], parts["xz"]],
@@ -193,7 +196,7 @@ def _inertia(r: Reader, path: KeyPath, value: Any) -> sympy.Matrix | None:
             cols = r.sequence(path + (i,), row, 3, "entries")
             if cols is None:
                 return None
-            entries.append([r.expr(path + (i, j), v) for j, v in enumerate(cols)])
+            entries.append([r.expr(path + (i, j), v, dimension=INERTIA, bare=True) for j, v in enumerate(cols)])
         if any(v is None for row in entries for v in row):
             return None
         tensor = sympy.Matrix(entries)
@@ -206,7 +209,7 @@ def _inertia(r: Reader, path: KeyPath, value: Any) -> sympy.Matrix | None:
 def _rotate_inertia(r: Reader, path: KeyPath, value: Any, inertia: sympy.Matrix) -> sympy.Matrix | None:
     """Inertia given in axes rotated by rpy from the link frame (URDF <inertial><origin rpy>):
     I_link = R I R^T with R = Rz(yaw) Ry(pitch) Rx(roll)."""
-    rpy = r.vector3(path, value)
+    rpy = r.vector3(path, value, ANGLE)
     if rpy is None:
         return None
     roll, pitch, yaw = rpy
@@ -245,35 +248,40 @@ def _check_inertia_physical(r: Reader, path: KeyPath, tensor: sympy.Matrix, mass
 def _per_joint(r: Reader, path: KeyPath, value: Any, joint_names: tuple[str, ...]
                ) -> Iterator[tuple[str, KeyPath, Any]]:
     """(joint, key path, entry) of a section keyed by joint names (``friction:``, ``actuators:``); unknown
-    joints are reported by the mapping check and skipped."""
-    section = r.mapping(path, value, optional=joint_names)
+    joints are reported by the mapping check and skipped, and so are joints whose own mistake is reported."""
+    section = r.mapping(path, value, optional=joint_names + tuple(sorted(r.invalid_joints)))
     for jname, spec in (section or {}).items():
         if jname in joint_names:
             yield jname, path + (jname,), spec
 
 
-def read_friction(r: Reader, value: Any, joint_names: tuple[str, ...], path: KeyPath = ("friction",)
-                  ) -> tuple[Friction, ...]:
-    """Per-joint friction (``friction:``, or a hybrid device's ``wrist.friction``)."""
+def read_friction(r: Reader, value: Any, joint_names: tuple[str, ...], path: KeyPath = ("friction",),
+                  revolute: Mapping[str, bool] | None = None) -> tuple[Friction, ...]:
+    """Per-joint friction (``friction:``, or a hybrid device's ``wrist.friction``); with ``revolute`` (by joint
+    name) the coefficients' dimensions are checked: N m s/rad and N m for a revolute joint, N s/m and N for a
+    prismatic one."""
     out = []
     for jname, fpath, spec in _per_joint(r, path, value, joint_names):
         spec = r.mapping(fpath, spec, optional=("viscous", "coulomb", "smoothing_velocity"))
         if spec is None:
             continue
-        viscous = r.expr(fpath + ("viscous",), spec["viscous"]) if "viscous" in spec else ZERO
+        turns = None if revolute is None else revolute.get(jname)
+        damping, level, speed = ((None, None, None) if turns is None else (ANGULAR_DAMPING, TORQUE, ANGULAR_SPEED)
+                                 if turns else (LINEAR_DAMPING, FORCE, SPEED))
+        viscous = r.expr(fpath + ("viscous",), spec["viscous"], dimension=damping) if "viscous" in spec else ZERO
         coulomb_negative = None
         if isinstance(spec.get("coulomb"), dict):  # {positive: c+, negative: c-}: a level per direction
             levels = r.mapping(fpath + ("coulomb",), spec["coulomb"], required=("positive", "negative"))
             if levels is None or "positive" not in levels or "negative" not in levels:
                 continue
-            coulomb = r.expr(fpath + ("coulomb", "positive"), levels["positive"])
-            coulomb_negative = r.expr(fpath + ("coulomb", "negative"), levels["negative"])
+            coulomb = r.expr(fpath + ("coulomb", "positive"), levels["positive"], dimension=level)
+            coulomb_negative = r.expr(fpath + ("coulomb", "negative"), levels["negative"], dimension=level)
             if coulomb_negative is None:
                 continue
             _negative(r, fpath + ("coulomb", "negative"), coulomb_negative, "Coulomb friction level (a magnitude)")
         else:
-            coulomb = r.expr(fpath + ("coulomb",), spec["coulomb"]) if "coulomb" in spec else ZERO
-        smoothing = r.expr(fpath + ("smoothing_velocity",), spec["smoothing_velocity"]) \
+            coulomb = r.expr(fpath + ("coulomb",), spec["coulomb"], dimension=level) if "coulomb" in spec else ZERO
+        smoothing = r.expr(fpath + ("smoothing_velocity",), spec["smoothing_velocity"], dimension=speed) \
             if "smoothing_velocity" in spec else None
         if viscous is None or coulomb is None or ("smoothing_velocity" in spec and smoothing is None):
             continue
@@ -305,7 +313,9 @@ def read_actuators(r: Reader, value: Any, joint_names: tuple[str, ...], path: Ke
             r.fail(apath + ("gyroscopic",), f"'gyroscopic' must be true or false, got {describe(gyroscopic)}",
                    "write true (the rotor as a body spinning on the link before) or false (reflected inertia)")
             continue
-        values = {key: r.expr(apath + (key,), spec[key]) for key in ACTUATOR_KEYS if key in spec}
+        values = {key: r.expr(apath + (key,), spec[key], dimension=ACTUATOR_DIMENSIONS[key],
+                              bare=key == "rotor_inertia")
+                  for key in ACTUATOR_KEYS if key in spec}
         if any(v is None for v in values.values()):
             continue
         inertia = values.get("rotor_inertia", sympy.Integer(0))
@@ -327,6 +337,9 @@ def read_actuators(r: Reader, value: Any, joint_names: tuple[str, ...], path: Ke
 
 #: Keys of one joint's entry of ``actuators:``.
 ACTUATOR_KEYS = ("rotor_inertia", "gear_ratio", "torque_constant", "peak_current", "continuous_current")
+#: ... and the dimension of each.
+ACTUATOR_DIMENSIONS = {"rotor_inertia": INERTIA, "gear_ratio": RATIO, "torque_constant": TORQUE_CONSTANT,
+                       "peak_current": CURRENT, "continuous_current": CURRENT}
 
 
 def drive_of(name: str, joints: Sequence[Joint], actuators: Sequence[Actuator]) -> tuple[Actuator, sympy.Expr] | None:

@@ -9,17 +9,20 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+from collections.abc import Sequence
 from typing import Any
 
 from symkin.errors import ModelError
 from symkin.model.body_build import (check_leg_bodies, read_actuators, read_bodies, read_friction, read_parallel_bodies,
                                      with_motor_effort_limits)
+from symkin.model import joint_kinds
 from symkin.model.names import name_problem
 from symkin.model.parallel_build import build_parallel, check_parallel_names, parallel_task_space
 from symkin.model.parameter_build import check_name_clashes, read_parameters
 from symkin.model.reader import ZERO, Reader, describe
 from symkin.model.scene_build import read_scene
-from symkin.model.schema import Model
+from symkin.model.schema import Joint, Model, Parallel
+from symkin.model.units import ACCELERATION
 from symkin.model.rotors import with_rotors
 from symkin.model.serial_build import read_home, read_serial, read_tip
 from symkin.model.task_space_build import read_task_space
@@ -85,8 +88,8 @@ def build_model(doc: Document, stem: str, allow_nonphysical: bool = False) -> Mo
     if parallel is not None and "bodies" in data:
         parallel = dataclasses.replace(parallel, bodies=read_parallel_bodies(r, data["bodies"]))
         check_leg_bodies(r, parallel)
-    gravity = r.vector3(("gravity",), data["gravity"]) if "gravity" in data else (ZERO, ZERO, ZERO)
-    friction = read_friction(r, data.get("friction", {}), coordinate_names)
+    gravity = r.vector3(("gravity",), data["gravity"], ACCELERATION) if "gravity" in data else (ZERO, ZERO, ZERO)
+    friction = read_friction(r, data.get("friction", {}), coordinate_names, revolute=_revolute(joints, parallel))
     if "wrist" in data and parallel is None:
         r.fail(("wrist",), "a wrist is carried by a parallel platform; a serial chain goes on in 'serial:'",
                "append the wrist's joints to the serial chain, or declare the mechanism under 'parallel:'")
@@ -201,3 +204,11 @@ def _flag(r: Reader, data: dict[str, Any], key: str) -> bool:
         r.fail((key,), f"expected true or false, got {value!r:.40}", f"write '{key}: true' or leave it out")
         return False
     return value
+
+
+def _revolute(joints: Sequence[Joint], parallel: Parallel | None) -> dict[str, bool]:
+    """{coordinate: whether it turns} (a serial joint's type, a leg's actuated motion), for the units of friction."""
+    if parallel is None:
+        return {j.name: joint_kinds.is_rotation(j.type) for j in joints}
+    return {j.variables[j.active]: j.motions[j.active][2] for leg in parallel.legs for j in leg.joints
+            if j.active is not None}

@@ -106,7 +106,7 @@ def delta_legs(r: Reader, path: KeyPath, value: Any) -> tuple[tuple[Leg, ...], i
     prefix = r.name(path + ("actuator",), section["actuator"]) if "actuator" in section else "theta"
     limits: tuple[tuple[sympy.Expr, sympy.Expr], ...] = ()
     if "actuator_limits" in section:
-        bounds = position_limits(r, path + ("actuator_limits",), section["actuator_limits"])
+        bounds = position_limits(r, path + ("actuator_limits",), section["actuator_limits"], revolute=True)
         if bounds is None:
             return None
         limits = (bounds,)
@@ -115,7 +115,7 @@ def delta_legs(r: Reader, path: KeyPath, value: Any) -> tuple[tuple[Leg, ...], i
     actuator = {}
     for key in ("velocity_limit", "effort_limit"):
         if f"actuator_{key}" in section:
-            actuator[key] = positive_limit(r, path + (f"actuator_{key}",), section[f"actuator_{key}"])
+            actuator[key] = positive_limit(r, path + (f"actuator_{key}",), section[f"actuator_{key}"], revolute=True)
             if actuator[key] is None:
                 return None
     if r_base is None or r_platform is None or None in lengths or angles is None or prefix is None \

@@ -28,14 +28,16 @@ def leg_joint_limits(r: Reader, path: KeyPath, value: Any,
 
     A motion of a multi-DoF joint may be left free with ``null``; None when invalid.
     """
+    rotations = joint_kinds.kind(jtype).rotations
     if jtype.dof == 1:
-        bounds = position_limits(r, path, value)
+        bounds = position_limits(r, path, value, rotations[0])
         return None if bounds is None else (bounds,)
     items = r.sequence(path, value, jtype.dof, f"limits, one [lower, upper] (or null) per motion of the "
                                                f"{jtype.value} joint")
     if items is None:
         return None
-    limits = tuple(None if item is None else position_limits(r, path + (k,), item) for k, item in enumerate(items))
+    limits = tuple(None if item is None else position_limits(r, path + (k,), item, rotations[k])
+                   for k, item in enumerate(items))
     return None if any(b is None and item is not None for b, item in zip(limits, items)) else limits
 
 

@@ -292,7 +292,9 @@ def _joint(r: Reader, path: KeyPath, item: Any, number: int) -> LegJoint | None:
             r.fail(path + ("offset",), "an offset applies to the actuated variable of an active joint",
                    "remove 'offset' or mark the joint 'active: true'")
             return None
-        offset = r.expr(path + ("offset",), item["offset"])
+        kind = joint_kinds.kind(jtype)
+        offset = r.expr(path + ("offset",), item["offset"],
+                        dimension=ANGLE if kind.rotations[kind.actuable or 0] else LENGTH)
     limits = leg_joint_limits(r, path + ("limits",), item["limits"], jtype) if "limits" in item else ()
     actuator = {}
     for key in ("velocity_limit", "effort_limit"):
@@ -301,7 +303,8 @@ def _joint(r: Reader, path: KeyPath, item: Any, number: int) -> LegJoint | None:
                 r.fail(path + (key,), f"'{key}' is the actuator's: it applies to an active joint",
                        f"remove '{key}' or mark the joint 'active: true'")
                 return None
-            actuator[key] = positive_limit(r, path + (key,), item[key])
+            kind = joint_kinds.kind(jtype)
+            actuator[key] = positive_limit(r, path + (key,), item[key], kind.rotations[kind.actuable or 0])
             if actuator[key] is None:
                 return None
     if base_name is None or axes is None or origin is None or offset is None or limits is None:

@@ -18,6 +18,7 @@ from symkin.errors import Problem
 from symkin.model.expressions import ExpressionError, parse_expression
 from symkin.model.names import name_problem
 from symkin.model.schema import Op, Rotation, Translation, Vec3
+from symkin.model.units import ANGLE, ANGULAR_SPEED, FORCE, LENGTH, SPEED, TORQUE
 from symkin.model.yaml_source import Document, KeyPath, shorten
 
 ZERO = sympy.Integer(0)
@@ -53,6 +54,8 @@ class Reader:
         self.invalid: set[str] = set()
         #: Links of joints whose definition failed: bodies on them are not reported as unknown.
         self.invalid_links: set[str] = set()
+        #: joints declared but not built (their mistake is reported): sections naming them are not checked again
+        self.invalid_joints: set[str] = set()
         #: Accept non-physical inertias with a note instead of refusing them (``allow_nonphysical:``).
         self.allow_nonphysical = False
         #: Located notes on what the reading decided (Model.notes).
@@ -126,13 +129,17 @@ class Reader:
         return value
 
     def expr(self, path: KeyPath, value: Any, names: dict[str, sympy.Expr] | None = None,
-             dimension: str | None = None) -> sympy.Expr | None:
+             dimension: str | None = None, bare: bool = False) -> sympy.Expr | None:
         """Parse the expression at ``path``; numbers are read from their raw text (exact decimals).  With a
-        ``dimension``, a term that is a number times a parameter of another dimension is refused."""
+        ``dimension``, a term that is a number times a parameter of another dimension is refused; with ``bare``, only
+        a parameter standing alone (+- itself: where a number may carry a dimension, as the 0.04^2 of
+        m * 0.04^2 / 12 for an inertia)."""
         parsed = self._parsed(path, value, names)
         if parsed is not None and dimension is not None:
             for term in sympy.Add.make_args(parsed):
-                _, symbol = term.as_coeff_Mul()
+                coefficient, symbol = term.as_coeff_Mul()
+                if bare and abs(coefficient) != 1:
+                    continue
                 if symbol in self.dimensions and self.dimensions[symbol][0] != dimension:
                     found, unit = self.dimensions[symbol]
                     self.fail(path, f"'{symbol}' is {'an' if found[0] in 'aeiou' else 'a'} {found} (unit: {unit}) "
@@ -162,11 +169,12 @@ class Reader:
             self.problems.append(problem)
             return None
 
-    def vector3(self, path: KeyPath, value: Any) -> Vec3 | None:
+    def vector3(self, path: KeyPath, value: Any, dimension: str | None = None) -> Vec3 | None:
+        """Three expressions (of ``dimension``, where given: :meth:`expr`)."""
         items = self.sequence(path, value, 3, "components")
         if items is None:
             return None
-        parts = [self.expr(path + (i,), v) for i, v in enumerate(items)]
+        parts = [self.expr(path + (i,), v, dimension=dimension) for i, v in enumerate(items)]
         if any(p is None for p in parts):
             return None
         return (parts[0], parts[1], parts[2])
@@ -227,21 +235,24 @@ def frame_ops(r: Reader, path: KeyPath, value: Any) -> tuple[Op, ...] | None:
     section = r.mapping(path, value, optional=("xyz", "rpy"))
     if section is None:
         return None
-    xyz = r.vector3(path + ("xyz",), section["xyz"]) if "xyz" in section else (ZERO, ZERO, ZERO)
-    rpy = r.vector3(path + ("rpy",), section["rpy"]) if "rpy" in section else (ZERO, ZERO, ZERO)
+    xyz = r.vector3(path + ("xyz",), section["xyz"], LENGTH) if "xyz" in section else (ZERO, ZERO, ZERO)
+    rpy = r.vector3(path + ("rpy",), section["rpy"], ANGLE) if "rpy" in section else (ZERO, ZERO, ZERO)
     if xyz is None or rpy is None:
         return None
     roll, pitch, yaw = rpy
     return ops(Translation(xyz), Rotation(Z_AXIS, yaw), Rotation(Y_AXIS, pitch), Rotation(X_AXIS, roll))
 
 
-def position_limits(r: Reader, path: KeyPath, value: Any) -> tuple[sympy.Expr, sympy.Expr] | None:
-    """Position limits ``[lower, upper]`` (expressions, lower < upper at the default values), or None."""
+def position_limits(r: Reader, path: KeyPath, value: Any, revolute: bool | None = None
+                    ) -> tuple[sympy.Expr, sympy.Expr] | None:
+    """Position limits ``[lower, upper]`` (expressions, lower < upper at the default values), or None; angles of a
+    ``revolute`` motion, lengths of a sliding one (None: unchecked)."""
     bounds = r.sequence(path, value, 2, "bounds [lower, upper]")
     if bounds is None:
         return None
-    lower = r.expr(path + (0,), bounds[0])
-    upper = r.expr(path + (1,), bounds[1])
+    dimension = None if revolute is None else ANGLE if revolute else LENGTH
+    lower = r.expr(path + (0,), bounds[0], dimension=dimension)
+    upper = r.expr(path + (1,), bounds[1], dimension=dimension)
     if lower is None or upper is None:
         return None
     lo, hi = r.default_value(lower), r.default_value(upper)
@@ -252,9 +263,13 @@ def position_limits(r: Reader, path: KeyPath, value: Any) -> tuple[sympy.Expr, s
     return lower, upper
 
 
-def positive_limit(r: Reader, path: KeyPath, value: Any) -> sympy.Expr | None:
-    """A velocity or effort limit: an expression whose default value is positive (None, reported, if not)."""
-    expr = r.expr(path, value)
+def positive_limit(r: Reader, path: KeyPath, value: Any, revolute: bool | None = None) -> sympy.Expr | None:
+    """A velocity or effort limit (``path`` ends in velocity_limit or effort_limit): an expression whose default
+    value is positive (None, reported, if not), of the dimension the joint's motion gives (None: unchecked)."""
+    kinds = {"velocity_limit": (ANGULAR_SPEED, SPEED), "effort_limit": (TORQUE, FORCE)}
+    name = str(path[-1]).replace("actuator_", "")
+    dimension = None if revolute is None or name not in kinds else kinds[name][0 if revolute else 1]
+    expr = r.expr(path, value, dimension=dimension)
     numeric = r.default_value(expr) if expr is not None else None
     if expr is not None and numeric is not None and numeric <= 0:
         r.fail(path, f"{path[-1]} must be positive, got {expr}", "write a positive number")

@@ -229,14 +229,17 @@ def _dh_table(r: Reader, path: KeyPath, section: Any) -> list[Joint]:
         fields = _dh_row_fields(r, rpath, row)
         if fields is None or any(k not in fields for k in ("name", "theta", "d", "a", "alpha")):
             r.invalid_links.add(_declared_link(fields, i))
+            r.invalid_joints.add(str(fields.get("name")) if isinstance(fields, dict) else "")
             continue  # the missing keys are reported
         jname = r.name(rpath + ("name",), fields["name"])
         jtype = _joint_type(r, rpath + ("type",), fields.get("type", "R"))
         values = {k: r.expr(rpath + (k,), fields[k], dimension=ANGLE if k in ("theta", "alpha") else LENGTH)
                   for k in ("theta", "d", "a", "alpha")}
-        extras = _joint_extras(r, rpath, fields, default_link=f"link{i + 1}")
+        extras = _joint_extras(r, rpath, fields, default_link=f"link{i + 1}",
+                               revolute=None if jtype is None else joint_kinds.is_rotation(jtype))
         if jname is None or jtype is None or any(v is None for v in values.values()) or extras is None:
             r.invalid_links.add(_declared_link(fields, i))
+            r.invalid_joints.add(str(fields["name"]))
             continue
         theta, d, a, alpha = values["theta"], values["d"], values["a"], values["alpha"]
         revolute = joint_kinds.is_rotation(jtype)
@@ -305,30 +308,35 @@ def _chain(r: Reader, path: KeyPath, section: Any) -> list[Joint]:
                    "add 'axis: [0, 0, 1]' (or the axis it turns about or slides along, in its frame)")
         axis = unit_axis(r, jpath + ("axis",), item["axis"]) if "axis" in item else None
         before = frame_ops(r, jpath + ("origin",), item["origin"]) if "origin" in item else ()
-        offset = r.expr(jpath + ("offset",), item["offset"]) if "offset" in item else ZERO
-        extras = _joint_extras(r, jpath, item, default_link=f"link{i + 1}")
+        revolute = None if jtype is None else joint_kinds.is_rotation(jtype)
+        offset = (r.expr(jpath + ("offset",), item["offset"], dimension=None if revolute is None else ANGLE if revolute
+                         else LENGTH) if "offset" in item else ZERO)
+        extras = _joint_extras(r, jpath, item, default_link=f"link{i + 1}", revolute=revolute)
         parent = None if "parent" not in item else tree.BASE if item["parent"] == tree.BASE else \
             r.name(jpath + ("parent",), item["parent"])
         if jname is None or jtype is None or axis is None or before is None or offset is None or extras is None \
                 or ("parent" in item and parent is None):
             r.invalid_links.add(_declared_link(item, i))
+            r.invalid_joints.add(str(item.get("name")))
             continue
         joints.append(Joint(name=jname, type=jtype, axis=axis, offset=offset, before=before, after=(),
                             parent=parent, **extras))
     return joints
 
 
-def _joint_extras(r: Reader, path: KeyPath, item: dict[str, Any], default_link: str) -> dict[str, Any] | None:
-    """Link name, limits and activity of a joint (keys shared by DH rows and chain joints)."""
+def _joint_extras(r: Reader, path: KeyPath, item: dict[str, Any], default_link: str,
+                  revolute: bool | None = None) -> dict[str, Any] | None:
+    """Link name, limits and activity of a joint (keys shared by DH rows and chain joints); the limits are angles
+    of a ``revolute`` joint, lengths of a prismatic one (and the velocity and effort limits in kind)."""
     link = r.name(path + ("link",), item["link"]) if "link" in item else default_link
     limits = None
     ok = link is not None
     if "limits" in item:
-        limits = position_limits(r, path + ("limits",), item["limits"])
+        limits = position_limits(r, path + ("limits",), item["limits"], revolute)
         ok = ok and limits is not None
     extras: dict[str, Any] = {"link": link, "limits": limits}
     for key in ("velocity_limit", "effort_limit"):
-        extras[key] = positive_limit(r, path + (key,), item[key]) if key in item else None
+        extras[key] = positive_limit(r, path + (key,), item[key], revolute) if key in item else None
         ok = ok and (key not in item or extras[key] is not None)
     active = item.get("active", True)
     if not isinstance(active, bool):

@@ -61,3 +61,40 @@ def test_a_wrong_unit_is_one_located_error(tmp_path, old, new, line, message, fi
     assert len(raised.value.problems) == 1, str(raised.value)
     problem = raised.value.problems[0]
     assert (problem.line, message in problem.message, fix in problem.fix) == (line, True, True), str(problem)
+
+
+#: The 2R arm with a drive, friction, limits and bodies written with parameters (issue 60: each use site knows the
+#: dimension it takes).
+PARAMETERIZED = SI.replace("  g: {value: 9.81", "  tilt: {value: 30, unit: deg}\n  K_t: {value: 23.4, unit: mN m/A}\n"
+                                               "  I_r: {value: 13, unit: g cm^2}\n  b: {value: 2, unit: mN m s/rad}\n"
+                                               "  g: {value: 9.81") + """actuators:
+  theta1: {rotor_inertia: I_r, torque_constant: K_t, peak_current: 2}
+friction:
+  theta1: {viscous: b, coulomb: 0.01}
+"""
+
+
+@pytest.mark.parametrize("old, new, message", [
+    ("rotor_inertia: I_r,", "rotor_inertia: m1,", "'m1' is a mass (unit: kg) but is used here as an inertia"),
+    ("torque_constant: K_t,", "torque_constant: b,", "used here as a torque constant"),
+    ("viscous: b,", "viscous: K_t,", "used here as an angular damping"),
+    ("coulomb: 0.01}", "coulomb: l1}", "'l1' is a length (unit: m) but is used here as a torque"),
+    ("[0, deg(90)]]\n      - [theta2", "[0, l1]]\n      - [theta2", "'l1' is a length (unit: m) but is used here as an "
+                                                                     "angle"),
+    ("  - {link: link1, mass: m1}", "  - {link: link1, mass: m1, com: [tilt, 0, 0]}", "used here as a length"),
+    ("  - {link: link1, mass: m1}", "  - {link: link1, mass: m1, inertia: {zz: m1}}", "used here as an inertia"),
+    ("gravity: [0, -g, 0]", "gravity: [0, -l1, 0]", "'l1' is a length (unit: m) but is used here as an acceleration"),
+])
+def test_each_use_site_refuses_a_parameter_of_another_dimension(old, new, message):
+    assert old in PARAMETERIZED
+    model_from_text(PARAMETERIZED, "planar_2r")                                     # as written: accepted
+    with pytest.raises(ModelError) as raised:
+        model_from_text(PARAMETERIZED.replace(old, new, 1), "planar_2r")
+    assert len(raised.value.problems) == 1, str(raised.value)
+    assert message in raised.value.problems[0].message
+
+
+def test_a_number_may_carry_the_dimension_an_inertia_formula_needs():
+    """m * 0.04^2 / 12 is an inertia (the number is a length squared): only a parameter standing alone is judged."""
+    text = PARAMETERIZED.replace("  - {link: link1, mass: m1}", "  - {link: link1, mass: m1, inertia: {yy: m1*0.04^2/12, zz: m1*0.04^2/12}}")
+    model_from_text(text, "planar_2r")
