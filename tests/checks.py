@@ -1,5 +1,6 @@
 """Checks shared by test modules (issue 35: not defined in one test module and imported by another): the strict C
-compile, the agreement bound of two evaluations of one function, and the haptic wall's equilibrium."""
+compile, the agreement bound of two evaluations of one function, the haptic wall's equilibrium and the layout of a
+figure."""
 
 from __future__ import annotations
 
@@ -63,3 +64,35 @@ def assert_wall_equilibrium(plant: Plant, q0: np.ndarray, steps: int, offset: fl
     desired, felt = WallRenderer(system, wall).desired_and_sensed(run.t[-1], run.x[-1])
     np.testing.assert_allclose(felt, desired, atol=1e-3 * np.abs(desired[0]))
     np.testing.assert_allclose(desired[0], -k_w * expected, rtol=1e-3)
+
+
+def check_figure_layout(figure) -> None:
+    """Render ``figure`` (Agg): every legend's box outside every axes box, every title and axis label inside the
+    figure and clear of every other axes box (the colour bars are axes too)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    FigureCanvasAgg(figure).draw()
+    renderer = figure.canvas.get_renderer()
+    boxes = [ax.get_window_extent(renderer) for ax in figure.axes]
+    frame = figure.bbox
+    legends = [ax.get_legend() for ax in figure.axes if ax.get_legend() is not None] + list(figure.legends)
+    for legend in legends:
+        box = legend.get_window_extent(renderer)
+        assert not any(box.overlaps(axes_box) for axes_box in boxes), "a legend covers a panel"
+    titles = [(figure._suptitle, None)] if figure._suptitle is not None else []
+    titles += [(ax.title, ax) for ax in figure.axes if ax.get_title()]
+    for title, owner in titles:
+        box = title.get_window_extent(renderer)
+        assert frame.x0 - 1 <= box.x0, "a title is cut"
+        assert box.x1 <= frame.x1 + 1, "a title is cut"
+        assert box.y1 <= frame.y1 + 1, "a title is cut"
+        others = [b for ax, b in zip(figure.axes, boxes) if ax is not owner]
+        assert not any(box.overlaps(other) for other in others), "a title runs into a panel or the colour bar"
+    for owner in figure.axes:  # axis labels stay clear of the other panels and colour bars (issue 60)
+        for label in (owner.xaxis.label, owner.yaxis.label):
+            if not label.get_text() or not label.get_visible():
+                continue
+            box = label.get_window_extent(renderer)
+            others = [b for ax, b in zip(figure.axes, boxes) if ax is not owner]
+            assert not any(box.overlaps(other) for other in others), \
+                f"the axis label {label.get_text()!r} runs into a panel or a colour bar"

@@ -103,7 +103,7 @@ def axis_scale(axes: Sequence[str]) -> tuple[float, str, str]:
 
 def _point(tcp: Sequence[float], axes: Sequence[str]) -> str:
     scale, unit, _ = axis_scale(axes)
-    return "(" + ", ".join(f"{scale * v:.1f}" for v in tcp) + f") {unit}"
+    return "(" + ", ".join(f"{round(scale * v, 1) + 0.0:.1f}" for v in tcp) + f") {unit}"   # + 0.0: no -0.0
 
 
 def home_configuration(model: GeneratedModel, limits: np.ndarray) -> np.ndarray:

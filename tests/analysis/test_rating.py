@@ -554,3 +554,34 @@ def test_a_device_carrying_a_wrist_feels_the_friction_of_its_cheapest_joint_moti
     assert measures["coulomb_friction"]["home"] == pytest.approx(float(rating.coulomb_friction_felt(J, coulomb)),
                                                                  rel=1e-7)
     assert measures["handle_damping"]["home"] == pytest.approx(float(rating.handle_damping(J, viscous)), rel=1e-7)
+
+
+def test_a_clipped_colour_scale_says_so_and_the_map_shows_the_worst_over_height():
+    """Issue 60: a map whose bar ended at 11 kg while the summary said 69 kg - a scale that clips has extend arrows
+    and the true range in its label; a spatial device's map shows, per x-y cell, the worst value over z."""
+    from symkin.analysis.datasheet_files import colour_range, worst_map
+
+    values = np.concatenate([np.linspace(1.0, 2.0, 200), [69.0]])
+    low, high, extend, note = colour_range(values, values)
+    assert (extend, note) == ("both", "colours clipped; values 1 .. 69")
+    assert high < 69.0
+    assert colour_range(np.ones(5), np.ones(5))[2:] == ("neither", "")
+    points = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 1.0], [1.0, 1.0, 0.0], [1.0, 1.0, 1.0]])
+    masses, forces_ = np.array([1.0, 5.0, 2.0, 3.0]), np.array([4.0, 0.5, 2.0, 3.0])
+    _, _, heaviest = worst_map(points, masses, worst_is_min=False, cells=2)
+    _, _, weakest = worst_map(points, forces_, worst_is_min=True, cells=2)
+    assert (heaviest[0, 0], heaviest[1, 1]) == (5.0, 3.0)      # the worst of the two heights in each corner cell
+    assert (weakest[0, 0], weakest[1, 1]) == (0.5, 2.0)
+    assert np.isnan(heaviest[0, 1])
+
+
+def test_the_datasheet_figure_keeps_titles_clear_and_prints_no_negative_zero(generated_dir):
+    from checks import check_figure_layout
+
+    from symkin.analysis import datasheet, datasheet_files
+    from symkin.analysis.handle_measures import Actuation
+
+    delta = load(generated_dir / "delta")
+    sheet = datasheet.rate(delta, Actuation.of_model(delta, effort_limits=[0.3] * 3), samples=500)
+    check_figure_layout(datasheet_files.figure_of(sheet, "delta"))   # titles clear of the colour bars
+    assert datasheet._point([-1e-17, 0.0, -0.15], ("x", "y", "z")) == "(0.0, 0.0, -150.0) mm"

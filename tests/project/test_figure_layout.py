@@ -10,33 +10,13 @@ figure and clear of every axes box.
 from __future__ import annotations
 
 import numpy as np
-from matplotlib.backends.backend_agg import FigureCanvasAgg
 
+from checks import check_figure_layout as _check_layout
 from conftest import GENERATED_DIR
 from symkin import analysis, load
 from symkin.analysis import plots
 from symkin.simulation import Plant, scenarios
 from symkin.simulation.output import figure_of
-
-
-def _check_layout(figure) -> None:
-    FigureCanvasAgg(figure).draw()
-    renderer = figure.canvas.get_renderer()
-    boxes = [ax.get_window_extent(renderer) for ax in figure.axes]
-    frame = figure.bbox
-    legends = [ax.get_legend() for ax in figure.axes if ax.get_legend() is not None] + list(figure.legends)
-    for legend in legends:
-        box = legend.get_window_extent(renderer)
-        assert not any(box.overlaps(axes_box) for axes_box in boxes), "a legend covers a panel"
-    titles = [(figure._suptitle, None)] if figure._suptitle is not None else []
-    titles += [(ax.title, ax) for ax in figure.axes if ax.get_title()]
-    for title, owner in titles:
-        box = title.get_window_extent(renderer)
-        assert frame.x0 - 1 <= box.x0, "a title is cut"
-        assert box.x1 <= frame.x1 + 1, "a title is cut"
-        assert box.y1 <= frame.y1 + 1, "a title is cut"
-        others = [b for ax, b in zip(figure.axes, boxes) if ax is not owner]
-        assert not any(box.overlaps(other) for other in others), "a title runs into a panel or the colour bar"
 
 
 def test_simulation_figures_keep_legends_off_the_curves():
