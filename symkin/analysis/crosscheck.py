@@ -247,7 +247,8 @@ def crosscheck(path: str | Path, *, reference_urdf: str | Path | None = None, sa
             for row, link in frame_links.items():
                 frame = _link_frame(pin, reference, link_names[link])
                 want[row] = ((to_base * data.oMf[frame]).homogeneous,)
-            jacobian = pin.computeFrameJacobian(reference, data, q, tip, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+            jacobian = np.reshape(pin.computeFrameJacobian(reference, data, q, tip,  # 1-D where nv = 1
+                                                           pin.ReferenceFrame.LOCAL_WORLD_ALIGNED), (6, reference.nv))
             want["jacobian_geometric"] = (rotate @ jacobian[:, columns] @ coupling,)
             if model.bodies:
                 want |= _dynamics_references(pin, reference, data, weightless, weightless_data, q, v, a, columns,
@@ -316,7 +317,7 @@ def _dynamics_references(pin: Any, reference: Any, data: Any, weightless: Any, w
     qd = 0 is exactly 0 in symkin, 1e-27 in Pinocchio's recursion): ||M|| |qd|^2 for V, ||M|| |qd| for
     C, g sqrt(||M|| m) (about m g L) for G, their sum with ||M|| |qdd| and the friction for tau.
     """
-    mass = pin.crba(reference, data, q)
+    mass = np.reshape(pin.crba(reference, data, q), (reference.nv, reference.nv))  # a scalar where nv = 1
     mass = np.triu(mass) + np.triu(mass, 1).T
     M, M_terms = _reduced(coupling, mass[np.ix_(columns, columns)])
     size = float(np.linalg.norm(M_terms))
@@ -324,8 +325,8 @@ def _dynamics_references(pin: Any, reference: Any, data: Any, weightless: Any, w
     damping, dry = reference.damping[columns], reference.friction[columns]
     friction_joint = damping * v[columns] + dry * np.sign(v[columns])
     friction_size = float(np.linalg.norm(np.abs(damping * v[columns]) + np.abs(dry)))
-    G, G_terms = _reduced(coupling, pin.computeGeneralizedGravity(reference, data, q)[columns])
-    V, V_terms = _reduced(coupling, pin.nonLinearEffects(weightless, weightless_data, q, v)[columns])
+    G, G_terms = _reduced(coupling, np.atleast_1d(pin.computeGeneralizedGravity(reference, data, q))[columns])
+    V, V_terms = _reduced(coupling, np.atleast_1d(pin.nonLinearEffects(weightless, weightless_data, q, v))[columns])
     g_size = gravity * math.sqrt(size * total_mass)
     rows: dict[str, tuple[Any, ...]] = {
         "mass_matrix": (M, M_terms),
@@ -333,14 +334,15 @@ def _dynamics_references(pin: Any, reference: Any, data: Any, weightless: Any, w
         "coriolis_vector": (V, V_terms, size * qd ** 2),
     }
     if with_c:
-        coriolis = pin.computeCoriolisMatrix(weightless, weightless_data, q, v)[np.ix_(columns, columns)]
+        coriolis = np.reshape(pin.computeCoriolisMatrix(weightless, weightless_data, q, v),
+                              (reference.nv, reference.nv))[np.ix_(columns, columns)]
         Mdot, Mdot_terms = _reduced(coupling, coriolis + coriolis.T)
         rows["coriolis_matrix C qd"] = (V, V_terms, size * qd ** 2)
         rows["coriolis_matrix Mdot - 2C skew"] = (Mdot, Mdot_terms, size * qd)
     if (np.any(damping) or np.any(dry)) and not beyond_urdf:
         rows["friction"] = (*_reduced(coupling, friction_joint), friction_size)
     if not beyond_urdf:
-        tau = pin.rnea(reference, data, q, v, a)[columns] + friction_joint
+        tau = np.atleast_1d(pin.rnea(reference, data, q, v, a))[columns] + friction_joint
         rows["inverse_dynamics"] = (*_reduced(coupling, tau), size * (qdd + qd ** 2) + g_size + friction_size)
     return rows
 
