@@ -23,7 +23,9 @@ locking and lumping of everything off it, the tip rule and the messages are thos
   URDF ``<mimic>`` (q1 = c1 q2 + c0 + ref1 - c1 ref2); other equalities and tendons are noted as not
   modelled;
 * gravity is ``option/gravity``: ``[0, 0, -g]`` with the parameter ``g`` its magnitude when it
-  points down z, else the vector as given.
+  points down z, else the vector as given;
+* ``<option><flag .../>`` disabling gravity, damping, frictionloss, springs or equality constraints is
+  honoured (the model has none of them), disabling joint limits or actuation is noted (:data:`NOTED_FLAGS`).
 
 The line of every message is the line of the body or joint element of that name in the file
 (elements of included files are named by the file only).
@@ -68,6 +70,7 @@ def read_mjcf_document(path: str | Path, allow_read: Sequence[str | Path] = (), 
     _refuse_unmoving_on_chain(document, model, unmoving, file)
     _drives(document, model, lines, couplings)
     _gravity(document, model)
+    _option_notes(document, model)
     if warnings:  # MuJoCo's compiler warnings, in the model's notes (not a MUJOCO_LOG.TXT in the working folder)
         document.data["notes"] = [*document.data.get("notes", []),
                                   *(f"MuJoCo's compiler warns: {warning}" for warning in warnings)]
@@ -187,8 +190,9 @@ def _urdf(model: Any, file: str, lines: dict[tuple[str, str], tuple[int, int]], 
                  f"<axis xyz=\"{' '.join(repr(float(a)) for a in axis)}\"/>", jplace)
             if j in couplings:
                 emit(f"  {couplings[j]}", jplace)
-            emit(f"  {_limit(model, j)}<dynamics damping=\"{float(model.dof_damping[model.jnt_dofadr[j]])!r}\" "
-                 f"friction=\"{float(model.dof_frictionloss[model.jnt_dofadr[j]])!r}\"/>", jplace)
+            damping = 0.0 if disabled(model, "DAMPER") else float(model.dof_damping[model.jnt_dofadr[j]])
+            dry = 0.0 if disabled(model, "FRICTIONLOSS") else float(model.dof_frictionloss[model.jnt_dofadr[j]])
+            emit(f"  {_limit(model, j)}<dynamics damping=\"{damping!r}\" friction=\"{dry!r}\"/>", jplace)
             emit("</joint>", jplace)
             previous, anchor, before = link, pos, np.eye(4)
         if not joints:
@@ -252,7 +256,9 @@ def _joint_couplings(model: Any) -> dict[int, str]:
     import mujoco
     from xml.sax.saxutils import quoteattr
 
-    out = {}
+    out: dict[int, str] = {}
+    if disabled(model, "CONSTRAINT") or disabled(model, "EQUALITY"):
+        return out  # MuJoCo enforces no equality: the joints move freely
     for e in range(model.neq):
         if model.eq_type[e] != mujoco.mjtEq.mjEQ_JOINT or not model.eq_active0[e] or model.eq_obj2id[e] < 0:
             continue
@@ -318,10 +324,10 @@ def _drives(document: Document, model: Any, lines: dict[tuple[str, str], tuple[i
             place = lines.get(("joint", source))
             if place:
                 document.marks[("actuators", code)] = place
-        if float(model.jnt_stiffness[j]):
+        if float(model.jnt_stiffness[j]) and not disabled(model, "SPRING"):
             notes.append(f"joint '{source}' has a spring (stiffness {float(model.jnt_stiffness[j])!r}), which "
                          "symkin does not model: its force is not in the dynamics")
-    for e in range(model.neq):
+    for e in range(0 if disabled(model, "CONSTRAINT") or disabled(model, "EQUALITY") else model.neq):
         if not model.eq_active0[e] or (model.eq_type[e] == mujoco.mjtEq.mjEQ_JOINT
                                        and int(model.eq_obj1id[e]) in couplings):
             continue
@@ -336,8 +342,41 @@ def _drives(document: Document, model: Any, lines: dict[tuple[str, str], tuple[i
         document.data["notes"] = notes
 
 
+def disabled(model: Any, flag: str) -> bool:
+    """Whether ``<option><flag NAME="disable"/>`` switched off MuJoCo's ``mjDSBL_<flag>`` in the compiled model."""
+    import mujoco
+
+    return bool(int(model.opt.disableflags) & int(getattr(mujoco.mjtDisableBit, f"mjDSBL_{flag}")))
+
+
+#: Disable flags that change what the model is and how symkin takes them (the others - contact, warm start,
+#: sensors, ... - concern simulation only).
+HONOURED_FLAGS = {"GRAVITY": "no gravity", "DAMPER": "no joint damping", "FRICTIONLOSS": "no joint frictionloss",
+                  "SPRING": "no joint springs", "CONSTRAINT": "no equality couplings",
+                  "EQUALITY": "no equality couplings"}
+#: ... and those symkin cannot follow, noted: its model keeps the joint ranges and the actuators' effort limits.
+NOTED_FLAGS = {"LIMIT": "MuJoCo does not enforce the joint ranges (symkin keeps them as the joints' limits)",
+               "ACTUATION": "MuJoCo applies no actuator forces (symkin keeps the actuators' effort limits)"}
+
+
+def _option_notes(document: Document, model: Any) -> None:
+    """A note for each disable flag of ``<option>`` that changes the model: what symkin made of it."""
+    notes = [f"MJCF <option><flag {flag.lower()}=\"disable\"/>: {meaning}" for flag, meaning in HONOURED_FLAGS.items()
+             if disabled(model, flag)]
+    notes += [f"MJCF <option><flag {flag.lower()}=\"disable\"/>: {meaning}" for flag, meaning in NOTED_FLAGS.items()
+              if disabled(model, flag)]
+    if notes:
+        document.data["notes"] = [*document.data.get("notes", []), *notes]
+
+
 def _gravity(document: Document, model: Any) -> None:
-    gx, gy, gz = (float(v) for v in model.opt.gravity)
+    """``option/gravity`` (none where the gravity flag is disabled): ``[0, 0, -g]`` with the parameter ``g`` its
+    magnitude when it points down z, else the vector as given."""
+    gx, gy, gz = (0.0, 0.0, 0.0) if disabled(model, "GRAVITY") else (float(v) for v in model.opt.gravity)
+    if gx == gy == gz == 0.0:
+        del document.data["parameters"]["g"]
+        document.data.pop("gravity", None)
+        return
     if gx == 0 and gy == 0 and gz < 0:
         document.data["parameters"]["g"]["value"] = repr(-gz)
     else:

@@ -128,3 +128,20 @@ def test_a_joint_equality_is_a_coupling_and_other_constraints_are_noted(tmp_path
     assert float(model.joints[2].coupling.offset) == pytest.approx(0.1 + 0.2, rel=CLOSED_FORM)
     assert any("tendon" in note for note in model.notes)
     _passes_both(crosscheck(path, samples=3, backends=("numpy",)))
+
+
+def test_option_flags_that_change_the_model_are_honoured_or_noted(tmp_path):
+    """Issue 61: <flag gravity="disable"/> was read with gravity on (V + G 0.76 off MuJoCo's): gravity, damping and
+    frictionloss switched off are absent from the model and it agrees with MuJoCo (its bias V + G has no gravity);
+    a disabled joint limit is noted, each flag once."""
+    path = tmp_path / "flagged.xml"
+    path.write_text(ODD.replace('<option gravity="0.5 -1 -9"/>', '<option gravity="0.5 -1 -9"><flag gravity="disable" '
+                                'damper="disable" frictionloss="disable" limit="disable"/></option>'))
+    model = load_model(path)
+    assert model.gravity == (0, 0, 0)
+    assert all(f.viscous == 0 and f.coulomb == 0 for f in model.friction)
+    flags = [note for note in model.notes if note.startswith("MJCF <option><flag")]
+    assert [note.split("<flag ")[1].split("=")[0] for note in flags] == ["gravity", "damper", "frictionloss", "limit"]
+    report = crosscheck(path, samples=3, backends=("numpy",), coriolis_matrix=False)
+    assert "coriolis_vector + gravity_vector (MuJoCo)" in {c.quantity for c in report.comparisons}
+    assert not report.failures, report.comparisons
