@@ -113,14 +113,14 @@ def _sources(path: Path, reference_urdf: Path | None, urdf: Mapping[str, Any]) -
         document = read_urdf_document(path, **options)
         model = build_model(document, path.stem, allow_nonphysical)
         reduction = document.reduction
-        text = (reference_urdf or path).read_text()
+        text = reference_urdf.read_text() if reference_urdf else reduction.reference_text(path.read_text())
     elif kind in (XACRO, MJCF):  # the reference reads symkin's URDF text: the check is of its reading and derivation
         document, expanded = read_xacro_document(path, options.pop("xacro_args", None),
                                                  options.pop("xacro_packages", None), **options) if kind == XACRO \
             else read_mjcf_document(path, **options)
         model = build_model(document, path.stem, allow_nonphysical)
         reduction = document.reduction
-        text = reference_urdf.read_text() if reference_urdf else expanded
+        text = reference_urdf.read_text() if reference_urdf else reduction.reference_text(expanded)
     else:
         model = load_model(path, allow_nonphysical=allow_nonphysical)
         reduction = UrdfReduction(ROOT_LINK, TCP_LINK, {})

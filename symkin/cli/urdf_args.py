@@ -2,8 +2,8 @@
 
 The chain runs from the root link (or ``--base``) to ``--tip``; every joint off it is locked
 (``--lock JOINT=VALUE``, default 0) and what it carries is lumped into the chain link it hangs
-on (:mod:`symkin.model.urdf_source`); ``--snap-angles`` reads angles within 1e-12 of a
-multiple of pi/2 as that multiple.  The options apply to URDF and xacro files only;
+on (:mod:`symkin.model.urdf_source`); ``--snap-angles`` reads an angle that is a multiple of
+pi/2, pi/4, pi/3 or pi/6 rounded to the digits written (1.5708, 3.14159) as that multiple.  The options apply to URDF and xacro files only;
 ``--xacro-arg NAME:=VALUE`` and ``--xacro-package NAME=DIR`` to xacro files
 (:mod:`symkin.model.xacro_source`).
 """
@@ -35,8 +35,9 @@ def add_urdf_arguments(p: argparse.ArgumentParser) -> None:
                        help="the value of a joint off the chain, in rad or m, or degrees with 'deg' (repeatable; "
                             "default 0, a mimic joint follows its leader)")
     group.add_argument("--snap-angles", action="store_true",
-                       help="read angles within 1e-12 rad of a multiple of pi/2 as that multiple (default: as "
-                            "written)")
+                       help="read an angle that is a multiple of pi/2, pi/4, pi/3 or pi/6 rounded to the digits "
+                            "written (1.57079632679, 1.5708, 3.14159) as that multiple, noted; crosscheck feeds its "
+                            "reference the same angles (default: as written)")
     group.add_argument("--xacro-arg", action="append", default=[], metavar="NAME:=VALUE",
                        help="the value of a <xacro:arg> of a xacro file (repeatable; default: the file's default)")
     group.add_argument("--xacro-package", action="append", default=[], metavar="NAME=DIR",

@@ -35,7 +35,8 @@ def load_model(path: str | Path, tip: str | None = None, *, base: str | None = N
         base: URDF only: the link the chain starts from (default: the root link).
         locks: URDF only: {joint: value} of joints off the chain (default 0; see
             :mod:`symkin.model.urdf_source`).
-        snap_angles: URDF only: read angles within 1e-12 of a multiple of pi/2 as that multiple.
+        snap_angles: URDF only: read an angle that is a multiple of pi/2, pi/4, pi/3 or pi/6 rounded to the digits
+            written as that multiple (:func:`symkin.model.urdf_source.snap_angle`).
         allow_nonphysical: accept inertia tensors that violate the triangle inequality (or have a
             negative principal moment) with a note in ``Model.notes`` instead of refusing them.
         xacro_args: xacro only: values of its ``<xacro:arg>`` (``--xacro-arg NAME:=VALUE``).

@@ -17,10 +17,11 @@ it), so M and G are those of the arm holding them.
 * ``<inertial>``: mass, centre of mass and inertia tensor (``<origin>`` rotates its axes);
   links fixed to a moving link add their inertials to it; links fixed to the root do not
   move and are ignored;
-* numbers are read as exact decimals, taken as written; with ``snap_angles`` an angle within
-  1e-12 rad of a multiple of pi/2 is read as that exact multiple (URDF files print pi/2 as
-  1.5707963267948966), so a URDF and the YAML model of the same robot derive the same
-  expressions; the model's description says which reading was used;
+* numbers are read as exact decimals, taken as written; with ``snap_angles`` an angle that is a multiple
+  of pi/2, pi/4, pi/3 or pi/6 rounded to the digits written (1.5707963267948966, 1.57079632679, 1.5708,
+  3.14159; at least :data:`SNAP_DIGITS` significant digits) is read as that exact multiple, so a URDF and the
+  YAML model of the same robot derive the same expressions; the model's description says which reading was
+  used and a note names each snapped angle;
 * ``<mimic joint multiplier offset>``: a follower off the chain is locked at
   multiplier * (its leader's locked value) + offset; a follower on the chain whose leader is
   a moving joint of the chain becomes the coupling q = multiplier * q_leader + offset
@@ -75,8 +76,11 @@ MAX_TEXT = 256
 #: A decimal number of at most 64 digits before and after the point and a two-digit exponent (|x| < 1e100):
 #: ``1e999999999`` or a megabyte of digits is no measurement, and reading it exactly would hang (issue 59).
 _NUMBER = re.compile(r"[+-]?(\d{1,64}\.?\d{0,64}|\.\d{1,64})([eE][+-]?\d{1,2})?")
-#: With ``snap_angles``, angles this close to a multiple of pi/2 are read as that multiple.
-ANGLE_SNAP = 1e-12
+#: With ``snap_angles``, an angle is read as k pi / d (d in this order: the smallest denominator first) where it is
+#: that multiple rounded to the digits written ...
+SNAP_DENOMINATORS = (2, 4, 3, 6)
+#: ... written with at least this many significant digits (2 is not pi/2 rounded, 1.571 is).
+SNAP_DIGITS = 4
 
 SUPPORTED_JOINTS = ("revolute", "continuous", "prismatic", "fixed")
 
@@ -116,6 +120,9 @@ class _UrdfReader:
         self.joint_ids: dict[str, str] = {}
         self.link_ids: dict[str, str] = {}
         self.snap_angles = snap_angles
+        #: the angles snapped: 'joint[j1].origin.rpy 1.5708 as pi/2 (line 7)' (the model's notes), and where
+        self.snapped: list[str] = []
+        self.snap_edits: list[tuple[int, str, str, str]] = []
         self.problems: list[Problem] = []
         self.marks: dict[KeyPath, tuple[int, int]] = {}
 
@@ -190,7 +197,12 @@ class _UrdfReader:
                       f"write {count} decimal number(s) separated by spaces (at most 64 digits and an exponent below "
                       "100 each)")
             return ["0"] * count
-        return [_snap_angle(p) if angles and self.snap_angles else p for p in parts]
+        if not (angles and self.snap_angles):
+            return parts
+        snapped = [snap_angle(p) for p in parts]
+        self.snapped += [f"{key} {p} as {q} (line {element.line})" for p, q in zip(parts, snapped) if q != p]
+        self.snap_edits += [(element.line, attribute, p, q) for p, q in zip(parts, snapped) if q != p]
+        return snapped
 
     def number(self, element: Element, attribute: str, key: str, default: str | None = None,
                angle: bool = False) -> str | None:
@@ -207,17 +219,34 @@ class _UrdfReader:
                 "rpy": self.numbers(element, "rpy", 3, "0 0 0", key + ".rpy", angles=True)}
 
 
-def _snap_angle(text: str) -> str:
-    value = float(Fraction(text))
-    k = round(value / (math.pi / 2))
-    if k != 0 and abs(value - k * math.pi / 2) <= ANGLE_SNAP:
-        return f"{k}*pi/2"
+def snap_angle(text: str) -> str:
+    """``text`` (a decimal angle in rad) as 'pi/2', '-pi', '2*pi/3'... where it is that multiple rounded to the digits
+    written (:data:`SNAP_DENOMINATORS`, :data:`SNAP_DIGITS`), else ``text``: |value - k pi / d| <= half a unit of
+    its last digit, decided with 40 digits of pi."""
+    import mpmath
+
+    match = re.fullmatch(r"[+-]?(\d*)(?:\.(\d*))?(?:[eE]([+-]?\d+))?", text)
+    value = Fraction(text)
+    if match is None or value == 0:
+        return text
+    digits = (match.group(1) + (match.group(2) or "")).lstrip("0")
+    if len(digits) < SNAP_DIGITS:
+        return text
+    half_unit = Fraction(1, 2) * Fraction(10) ** (int(match.group(3) or 0) - len(match.group(2) or ""))
+    with mpmath.workdps(40):
+        exact = mpmath.mpf(value.numerator) / value.denominator
+        for d in SNAP_DENOMINATORS:
+            k = int(mpmath.nint(exact * d / mpmath.pi))
+            if k and abs(exact - k * mpmath.pi / d) <= mpmath.mpf(half_unit.numerator) / half_unit.denominator:
+                whole = Fraction(k, d)
+                factor = {1: "", -1: "-"}.get(whole.numerator, f"{whole.numerator}*")
+                return f"{factor}pi" + (f"/{whole.denominator}" if whole.denominator != 1 else "")
     return text
 
 
 def _is_identity(frame: dict[str, list[str]]) -> bool:
-    return all(Fraction(v) == 0 for v in frame["xyz"]) and all(v == "0" or (not v.endswith("pi/2") and
-                                                                          Fraction(v) == 0) for v in frame["rpy"])
+    return all(Fraction(v) == 0 for v in frame["xyz"]) and all(v == "0" or ("pi" not in v and Fraction(v) == 0)
+                                                                 for v in frame["rpy"])
 
 
 @dataclass(frozen=True)
@@ -228,6 +257,25 @@ class UrdfReduction:
     base: str
     tip: str
     locked: dict[str, float]
+    #: the angles --snap-angles read as multiples of pi: (line, attribute, as written, as read)
+    snapped: tuple[tuple[int, str, str, str], ...] = ()
+
+    def reference_text(self, text: str) -> str:
+        """``text`` (the URDF read) with each snapped angle written as the double nearest its multiple of pi, so a
+        reference reads the geometry symkin derives (the attribute on its line, token by token)."""
+        lines = text.split("\n")
+        for line, attribute, written, read in self.snapped:
+            for number in range(line - 1, min(line + 20, len(lines))):  # the element's start tag, maybe on lines
+                row = lines[number]
+                start = row.find(f'{attribute}="')
+                if start < 0 or written not in row[start:].split('"')[1].split():
+                    continue
+                start += len(attribute) + 2
+                end = row.index('"', start)
+                tokens = [repr(float(_plain(read))) if t == written else t for t in row[start:end].split()]
+                lines[number] = row[:start] + " ".join(tokens) + row[end:]
+                break
+        return "\n".join(lines)
 
 
 @dataclass
@@ -272,7 +320,8 @@ def urdf_document(text: str, file: str = "<string>", tip: str | None = None, *, 
             are ignored (they do not move relative to it once their joints are locked).
         locks: {joint: value} for joints off the chain (rad or m; default 0, mimic followers from
             their leader).
-        snap_angles: read angles within 1e-12 of a multiple of pi/2 as that multiple.
+        snap_angles: read an angle that is a multiple of pi/2, pi/4, pi/3 or pi/6 rounded to the digits written as that
+            multiple (:func:`snap_angle`).
     """
     r = _UrdfReader(file, snap_angles)
     robot = r.parse(text)
@@ -320,7 +369,8 @@ def urdf_document(text: str, file: str = "<string>", tip: str | None = None, *, 
     locked_text = ", ".join(f"{name} = {_decimal(value)}" for name, value in locked.items())
     data["description"] = (f"{robot_name or 'robot'} from the URDF {Path(file).name}, chain {root} -> {tip}"
                            + (f"; locked: {locked_text}" if locked else "")
-                           + ("; angles within 1e-12 of multiples of pi/2 snapped to them" if snap_angles
+                           + ("; angles snapped to the multiples of pi/2, pi/4, pi/3 or pi/6 they are rounded to "
+                              "the digits written" if snap_angles
                               else "; angles as written") + ".")
     data["parameters"] = {"g": {"value": "9.81", "unit": "m/s^2", "doc": "gravitational acceleration"}}
     serial: dict[str, Any] = {}
@@ -394,9 +444,13 @@ def urdf_document(text: str, file: str = "<string>", tip: str | None = None, *, 
         data["actuators"] = drives
     data["gravity"] = ["0", "0", "-g"]
     data["task_space"] = "pose"
+    if r.snapped:
+        data["notes"] = [*data.get("notes", []), f"--snap-angles read {len(r.snapped)} angle(s) as multiples of pi: "
+                         + name_list(r.snapped)]
     r.stop()
     return Document(file=file, data=data, marks=r.marks,
-                    reduction=UrdfReduction(root, tip, {name: float(value) for name, value in locked.items()}))
+                    reduction=UrdfReduction(root, tip, {name: float(value) for name, value in locked.items()},
+                                            tuple(r.snap_edits)))
 
 
 def _transmissions(r: _UrdfReader, robot: Element, chain: set[str]) -> dict[str, dict[str, str]]:
@@ -764,9 +818,11 @@ def _friction(r: _UrdfReader, j: _Joint, dynamics: Element) -> dict[str, str]:
 
 
 def _plain(text: str) -> str:
-    """A snapped angle k*pi/2 as a number text (for comparisons only)."""
-    if text.endswith("*pi/2"):
-        return repr(int(text[:-5]) * math.pi / 2)
+    """A snapped angle (pi/2, -pi, 2*pi/3) as a number text (for comparisons only)."""
+    multiple = re.fullmatch(r"(-?)(\d*)\*?pi(?:/(\d+))?", text)
+    if multiple:
+        sign, k, d = multiple.groups()
+        return repr((-1 if sign else 1) * int(k or 1) * math.pi / int(d or 1))
     return text
 
 

@@ -285,6 +285,29 @@ def test_the_number_of_base_inertial_parameters_is_the_rank_of_pinocchios_regres
     assert len(inertial.base) == np.linalg.matrix_rank(stacked) == 36
 
 
+def test_the_stock_ur10_gets_its_base_parameters_with_its_angles_snapped():
+    """Issue 61: example-robot-data's UR10 writes pi/2 as 1.57079632679 (4.9e-12 off): as written its geometry is not
+    rational and the base parameters refuse it with the fix (--snap-angles); snapped as the digits written allow,
+    it gets them, as many as the numeric rank of Pinocchio's stacked regressors of the file (36 of 60)."""
+    from sample_models import ROBOTS_DIR
+    from symkin.dynamics.base_parameters import base_parameters
+    from symkin.errors import DerivationError
+
+    path = ROBOTS_DIR / "ur_description/urdf/ur10_robot.urdf"
+    with pytest.raises(DerivationError, match="--snap-angles"):
+        Derivation(load_model(path, tip="tool0"))["base_parameters"]
+    model = load_model(path, tip="tool0", snap_angles=True)
+    assert "1.57079632679 as pi/2" in model.notes[-1]
+    d = Derivation(model)
+    inertial = base_parameters(model, [row[:60] for row in d["regressor_graph"]], parameter_names(model)[:60])
+    pmodel = pin.buildModelFromUrdf(str(path))
+    pdata = pmodel.createData()
+    rng = np.random.default_rng(39)
+    stacked = np.vstack([pin.computeJointTorqueRegressor(pmodel, pdata, *state).copy()
+                         for state in _stacked(lambda *state: state, model, rng, 40)])
+    assert len(inertial.base) == np.linalg.matrix_rank(stacked) == 36
+
+
 def test_what_rational_arithmetic_cannot_evaluate_is_refused_with_the_fix():
     from symkin.errors import DerivationError
 

@@ -389,3 +389,17 @@ def test_robot_files_are_told_by_their_content(tmp_path, capsys):
     assert "fix: name the file .xacro" in str(raised.value)
     # an expanded URDF keeps its xmlns:xacro declaration and macros in comments: it is a URDF (the TALOS arm)
     assert load_model(robots / "talos_data/robots/talos_left_arm.urdf", tip="arm_left_7_link").dof == 6
+
+
+@pytest.mark.parametrize("written, read", [
+    ("1.5707963267948966", "pi/2"), ("1.57079632679", "pi/2"), ("1.5708", "pi/2"), ("1.571", "pi/2"),
+    ("3.14159", "pi"), ("-3.1416", "-pi"), ("6.28318530718", "2*pi"), ("4.71239", "3*pi/2"), ("0.7854", "pi/4"),
+    ("1.0472", "pi/3"), ("0.5236", "pi/6"), ("2.0944", "2*pi/3"),
+    ("2", "2"), ("1.57", "1.57"), ("1.5709", "1.5709"), ("0.1", "0.1"), ("0", "0"),   # not a rounding of one
+])
+def test_an_angle_is_snapped_where_it_is_a_multiple_of_pi_rounded_to_the_digits_written(written, read):
+    """Issue 61: the stock UR10's 1.57079632679 is 4.9e-12 from pi/2, beyond the old 1e-12: snapping follows the
+    digits written (at least four significant ones), for multiples of pi/2, pi/4, pi/3 and pi/6."""
+    from symkin.model.urdf_source import snap_angle
+
+    assert snap_angle(written) == read
