@@ -88,6 +88,15 @@ class DerivationError(SymkinError):
     """A requested quantity cannot be derived for this model (e.g. FK of a model without joints)."""
 
 
+class ModelDataError(DerivationError):
+    """A requested quantity cannot be derived because of located data in the model file (a non-physical inertia
+    that the kinematics do not use): bad input, exit 2, with the problems' places and fixes."""
+
+    def __init__(self, problems: list[Problem] | tuple[Problem, ...]):
+        self.problems = tuple(problems)
+        super().__init__("\n".join(str(p) for p in self.problems[:ModelError.MAX_SHOWN]))
+
+
 class CacheTrustError(SymkinError):
     """The cache folder or its secret cannot be trusted (another user's, writable by others): refused with the fix."""
 

@@ -104,6 +104,8 @@ def updated_model(path: str | Path, model: Model, names: Sequence[str], values: 
     text = header + yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=110, allow_unicode=True)
     try:
         written = model_from_text(text, model.name, file="identified.yaml")
+        if written.nonphysical:  # the reader lets the kinematics through; an identified model is its dynamics
+            raise ModelError(list(written.nonphysical))
     except ModelError as err:
         found = "; ".join(f"{p.key}: {p.message}" for p in err.problems)
         raise NotUpdated(f"the estimate is not a physical model ({found}); --method consistent keeps every link a "

@@ -16,7 +16,7 @@ from collections.abc import Sequence
 from symkin._version import __version__
 from symkin.cli import commands
 from symkin.cli.watchdog import terminate_within
-from symkin.errors import CacheTrustError, GeneratedCodeError, ModelError, SymkinError
+from symkin.errors import CacheTrustError, GeneratedCodeError, ModelDataError, ModelError, SymkinError
 
 
 #: What a command line reads as a negative value, not an option: -60, -0.5, -1e-3 and -60deg
@@ -74,7 +74,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except ModelError as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
-    except (GeneratedCodeError, CacheTrustError) as err:
+    except (GeneratedCodeError, CacheTrustError, ModelDataError) as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
     except SymkinError as err:

@@ -225,7 +225,9 @@ def _check_inertia_physical(r: Reader, path: KeyPath, tensor: sympy.Matrix, mass
     triangle inequality) is rounding in the file (iCub's head: a lone product of inertia of 2.4e-35
     on a 1.3 kg body), invisible to any double computed from it.  A real violation is refused, or
     with ``allow_nonphysical`` (``--allow-nonphysical``) noted: every simulator loads such files, and
-    M may then be indefinite, which forward dynamics and the analyses report as for a singular M.
+    M may then be indefinite, which forward dynamics and the analyses report as for a singular M.  Where the reader
+    defers it (a serial model's bodies: ``defer_nonphysical``) it blocks only the outputs that use the inertias
+    (:func:`symkin.dynamics.quantities.require_physical`), and the kinematics derive.
     """
     given = [r.default_value(v) for v in (*tensor, mass, *com)]
     values = [v for v in given if v is not None]
@@ -238,11 +240,15 @@ def _check_inertia_physical(r: Reader, path: KeyPath, tensor: sympy.Matrix, mass
     if a >= -1e-12 * scale and a + b >= largest - 1e-9 * scale:
         return
     message = f"the inertia tensor is not physical (principal moments {a:.6g}, {b:.6g}, {largest:.6g})"
+    fix = ("principal moments must be >= 0 and each at most the sum of the other two; to proceed as simulators do, "
+           "pass --allow-nonphysical (or 'allow_nonphysical: true')")
     if r.allow_nonphysical:
         r.note(path, message + "; accepted (allow_nonphysical): M may be indefinite")
+    elif r.defer_nonphysical:  # the kinematics do not use it: only the outputs that do are refused
+        r.nonphysical.append(r.doc.problem(path, message, fix))
+        r.note(path, message + ": the outputs that use the inertias (M, V, G, tau, regressors) are refused")
     else:
-        r.fail(path, message, "principal moments must be >= 0 and each at most the sum of the other two; to "
-                              "proceed as simulators do, pass --allow-nonphysical (or 'allow_nonphysical: true')")
+        r.fail(path, message, fix)
 
 
 def _per_joint(r: Reader, path: KeyPath, value: Any, joint_names: tuple[str, ...]

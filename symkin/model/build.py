@@ -84,7 +84,9 @@ def build_model(doc: Document, stem: str, allow_nonphysical: bool = False) -> Mo
         coordinate_names = tuple(j.variables[j.active] for leg in parallel.legs for j in leg.joints
                                  if j.active is not None)
     links = tuple(j.link for j in joints)
+    r.defer_nonphysical = parallel is None  # a serial model's kinematics do not use the inertias
     bodies = read_bodies(r, data.get("bodies", []), links) if parallel is None else ()
+    r.defer_nonphysical = False
     if parallel is not None and "bodies" in data:
         parallel = dataclasses.replace(parallel, bodies=read_parallel_bodies(r, data["bodies"]))
         check_leg_bodies(r, parallel)
@@ -117,6 +119,7 @@ def build_model(doc: Document, stem: str, allow_nonphysical: bool = False) -> Mo
         description=description.strip(),
         references=references,
         notes=tuple(r.notes),
+        nonphysical=tuple(r.nonphysical),
         source_names=_source_names(r, data),
         source=doc.file,
         hash=f"sha256:{digest}",

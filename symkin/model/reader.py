@@ -58,6 +58,10 @@ class Reader:
         self.invalid_joints: set[str] = set()
         #: Accept non-physical inertias with a note instead of refusing them (``allow_nonphysical:``).
         self.allow_nonphysical = False
+        #: A serial model's non-physical inertias block only the outputs that use them (Model.nonphysical): the
+        #: problems are kept here instead of failing the reading.
+        self.defer_nonphysical = False
+        self.nonphysical: list[Problem] = []
         #: Located notes on what the reading decided (Model.notes).
         self.notes: list[str] = []
         #: Every name the file gives (a parameter, joint, link, leg...) -> where, the first time (Model.declared_names).

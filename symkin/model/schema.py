@@ -594,6 +594,9 @@ class Model:
     #: what the reading decided that the file leaves open (a joint locked at a value clipped into its
     #: limits, a non-physical inertia accepted): printed by symkin check and derive, kept in the manifest.
     notes: tuple[str, ...] = ()
+    #: located problems that block only the outputs that use the inertias (a serial model's non-physical inertia
+    #: tensor, without allow_nonphysical): symkin.dynamics.quantities.require_physical refuses those outputs.
+    nonphysical: tuple[Problem, ...] = field(default=(), compare=False)
     #: the names in the source file of joints and links renamed to identifiers (a URDF's ``joint_0.0``):
     #: {"joints": {model name: source name}, "links": {...}}; see :meth:`source_name`.
     source_names: dict = field(default_factory=dict, compare=False)  # a dict: out of eq and hash

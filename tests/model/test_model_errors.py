@@ -106,11 +106,36 @@ def test_derived_parameters_are_inlined(tmp_path):
     assert any(op.vector[0] == l1 / 2 for op in model.joints[1].after)
 
 
-def test_unphysical_inertia_is_refused(tmp_path):
+def test_unphysical_inertia_blocks_only_the_outputs_that_use_it(tmp_path):
+    """Issue 61: the Allegro hand's inertias break the triangle inequality and symkin refused even fk and J. The
+    model loads with a note; every emitted quantity is derived: the kinematics are, and exactly INERTIA_OUTPUTS are
+    refused with the located message and the fix (symkin check refuses a scene asking for one)."""
+    from symkin.derivation import Derivation, catalog
+    from symkin.dynamics.quantities import INERTIA_OUTPUTS
+    from symkin.errors import DerivationError
+
     path = tmp_path / "arm.yaml"
-    path.write_text(VALID.replace("{link: link2, mass: m2}", "{link: link2, mass: m2, inertia: {xx: 0, yy: 4, zz: 3}}"))
-    with pytest.raises(ModelError, match="not physical"):
-        load_model(path)
+    path.write_text(VALID.replace("{link: link2, mass: m2}", "{link: link2, mass: m2, inertia: {xx: 0, yy: 4, zz: 3}}")
+                    + "gravity: [0, -9.81, 0]\n")
+    model = load_model(path)
+    assert "the outputs that use the inertias (M, V, G, tau, regressors) are refused" in model.notes[-1]
+    d = Derivation(model)
+    blocked = set()
+    for name in catalog.emitted_quantities("serial"):
+        try:
+            d[name]
+        except DerivationError as err:
+            if "not physical" in str(err):
+                assert f"{path}:14:" in str(err)
+                assert "--allow-nonphysical" in str(err)
+                blocked.add(name)
+    assert {"fk", "jacobian", "frames"} <= set(d.computed)
+    assert blocked == set(INERTIA_OUTPUTS)
+    from symkin.cli import main
+
+    assert main(["check", str(path)]) == 0                             # its scene: fk and J
+    path.write_text(path.read_text() + "scene:\n  outputs: [fk, mass_matrix]\n")
+    assert main(["check", str(path)]) == 2                             # what derive would refuse
 
 
 def test_unphysical_inertia_is_accepted_with_a_note_when_allowed(tmp_path):

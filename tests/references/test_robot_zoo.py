@@ -163,16 +163,21 @@ def test_off_chain_joints_whose_limits_exclude_0_lock_at_the_nearest_limit():
 
 
 def test_non_physical_inertias_are_refused_or_accepted_with_a_note(tmp_path, capsys):
-    """Issue 29: romeo_small's wrist inertias violate the triangle inequality by up to 340 %: refused with a
-    located message that names --allow-nonphysical; with it, the arm derives, the notes are printed and kept
-    in the manifest, and Pinocchio (which loads the file as it is) agrees."""
+    """Issue 29: romeo_small's wrist inertias violate the triangle inequality by up to 340 %: the outputs that use
+    them are refused with a located message that names --allow-nonphysical (issue 61: only those - its kinematics
+    derive, noted); with it, the arm's dynamics derive, the notes are printed and kept in the manifest, and Pinocchio
+    (which loads the file as it is) agrees."""
     import json
 
     from symkin.analysis.crosscheck import crosscheck
     from symkin.cli import main
 
     path = str(ROBOTS_DIR / "romeo_description/urdf/romeo_small.urdf")
-    assert main(["check", path, "--tip", "l_gripper"]) == 2
+    assert main(["check", path, "--tip", "l_gripper"]) == 0                   # the scene: fk and J
+    assert main(["derive", path, "--tip", "l_gripper", "--only", "fk,jacobian", "-o", str(tmp_path / "kin")]) == 0
+    assert "not physical" in capsys.readouterr().out                           # noted
+    assert main(["derive", path, "--tip", "l_gripper", "--only", "mass_matrix", "-o", str(tmp_path / "m")]) == 2
+    assert not (tmp_path / "m").exists()
     err = capsys.readouterr().err
     assert f"{path}:547:" in err
     assert "not physical" in err
