@@ -25,8 +25,8 @@ ROBOT_FILE_OPTIONS = ("tip", "base", "branch", "lock", "snap_angles", "xacro_arg
 def add_urdf_arguments(p: argparse.ArgumentParser) -> None:
     group = p.add_argument_group("URDF, xacro and MJCF files (MJCF: bodies are links)")
     group.add_argument("--tip", metavar="LINK",
-                       help="the link that ends the chain (default: the leaf behind the most moving joints, if "
-                            "unique)")
+                       help="the link that ends the chain: the model is the chain to it, not the whole tree "
+                            "(default: the whole tree, its TCP on the leaf behind the most moving joints)")
     group.add_argument("--base", metavar="LINK", help="the link the chain starts from (default: the root link)")
     group.add_argument("--branch", action="append", default=[], metavar="LINK",
                        help="another link whose joints from the base stay moving: the model is the tree of the "

@@ -15,8 +15,8 @@ from symkin.model.reader import X_AXIS, Y_AXIS, Z_AXIS, ZERO, Reader, describe, 
 from symkin.model.schema import (Actuator, Body, Friction, Joint, Parallel, ParallelBodies, PlatformMotion, Vec3,
                                  fixed_pose)
 from symkin.model.yaml_source import KeyPath
-from symkin.model.units import (ANGLE, ANGULAR_DAMPING, ANGULAR_SPEED, CURRENT, FORCE, INERTIA, LENGTH,
-                                LINEAR_DAMPING, MASS, RATIO, SPEED, TORQUE, TORQUE_CONSTANT)
+from symkin.model.units import (ANGLE, ANGULAR_DAMPING, CURRENT, FORCE, INERTIA, LENGTH, LINEAR_DAMPING, MASS, RATIO,
+                                TORQUE, TORQUE_CONSTANT)
 
 _INERTIA_KEYS = ("xx", "yy", "zz", "xy", "xz", "yz")
 
@@ -272,8 +272,8 @@ def read_friction(r: Reader, value: Any, joint_names: tuple[str, ...], path: Key
         if spec is None:
             continue
         turns = None if revolute is None else revolute.get(jname)
-        damping, level, speed = ((None, None, None) if turns is None else (ANGULAR_DAMPING, TORQUE, ANGULAR_SPEED)
-                                 if turns else (LINEAR_DAMPING, FORCE, SPEED))
+        damping, level = ((None, None) if turns is None else (ANGULAR_DAMPING, TORQUE) if turns
+                          else (LINEAR_DAMPING, FORCE))  # a smoothing velocity may be shared by both kinds
         viscous = r.expr(fpath + ("viscous",), spec["viscous"], dimension=damping) if "viscous" in spec else ZERO
         coulomb_negative = None
         if isinstance(spec.get("coulomb"), dict):  # {positive: c+, negative: c-}: a level per direction
@@ -287,7 +287,7 @@ def read_friction(r: Reader, value: Any, joint_names: tuple[str, ...], path: Key
             _negative(r, fpath + ("coulomb", "negative"), coulomb_negative, "Coulomb friction level (a magnitude)")
         else:
             coulomb = r.expr(fpath + ("coulomb",), spec["coulomb"], dimension=level) if "coulomb" in spec else ZERO
-        smoothing = r.expr(fpath + ("smoothing_velocity",), spec["smoothing_velocity"], dimension=speed) \
+        smoothing = r.expr(fpath + ("smoothing_velocity",), spec["smoothing_velocity"]) \
             if "smoothing_velocity" in spec else None
         if viscous is None or coulomb is None or ("smoothing_velocity" in spec and smoothing is None):
             continue

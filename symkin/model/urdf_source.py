@@ -35,10 +35,11 @@ With ``branches`` (``--branch LINK``) the joints from the base to each branch li
 well: the model is the tree of those paths (``parent:`` of the joints that start a branch), the TCP
 on the tip.
 
-The tip is the link named by the caller (``symkin derive --tip LINK``,
-``load_model(path, tip=...)``), or else the leaf link behind the most moving joints (so
-sensor frames fixed to the base or to a link do not count, nor do mimic followers), if that
-leaf is unique; else the error lists the candidates.  Closed loops (a link with two parent
+Without a tip and branches the model is the whole tree below the root: every leaf behind a moving joint is
+a branch, and the TCP is on the leaf link behind the most moving joints (so sensor frames fixed to the base
+or to a link do not count, nor do mimic followers; the first in the file's order among equals).  A tip named
+by the caller (``symkin derive --tip LINK``, ``load_model(path, tip=...)``) makes the model the chain to it
+(and to the ``branches``).  Closed loops (a link with two parent
 joints), floating and planar joints, followers on the chain of a joint off it, and
 off-chain followers of a chain joint (the links they move cannot be lumped into a chain
 link) are refused with a located error.
@@ -340,7 +341,11 @@ def urdf_document(text: str, file: str = "<string>", tip: str | None = None, *, 
                    f"choose one of: {name_list(links)}")
             r.stop()
         root = base
+    named = tip
     tip = _tip(r, robot, root, children, parent_of, tip)
+    if named is None and not branches:  # the whole tree: every leaf behind a moving joint is a branch
+        branches = [leaf for leaf in _subtree(root, children) if not children[leaf] and leaf != tip
+                    and _moving_count(leaf, root, parent_of) > 0]
     for branch in branches:
         if branch not in links:
             r.fail(robot, "branch", f"the branch link '{branch}' is not a link of the robot",
@@ -623,7 +628,8 @@ def _subtree(root: str, children: dict[str, list[_Joint]]) -> list[str]:
 
 def _tip(r: _UrdfReader, robot: Element, root: str, children: dict[str, list[_Joint]],
          parent_of: dict[str, _Joint], tip: str | None) -> str:
-    """The named tip, or the leaf of the root's subtree behind the most moving joints (if unique)."""
+    """The named tip, or the leaf of the root's subtree behind the most moving joints (the first in the file's
+    order among equals): the task frame of a whole tree."""
     subtree = _subtree(root, children)
     if tip is not None:
         if tip not in children:
@@ -634,13 +640,7 @@ def _tip(r: _UrdfReader, robot: Element, root: str, children: dict[str, list[_Jo
     leaves = [name for name in subtree if not children[name]]
     moving = {leaf: _moving_count(leaf, root, parent_of) for leaf in leaves}
     deepest = [leaf for leaf in leaves if moving[leaf] == max(moving.values())]
-    if len(deepest) != 1:
-        r.fail(robot, "tip", f"no tip was named and {len(deepest)} leaf links end chains with the most moving joints "
-                             f"({name_list(deepest)})",
-               f"name the tip link (one of: {name_list(deepest)}): symkin derive robot.urdf --tip LINK, or "
-               "load_model(path, tip='LINK')")
-        r.stop()
-    return deepest[0]
+    return deepest[0]  # the first in the file's order where several end equally long chains
 
 
 def _moving_count(link: str, root: str, parent_of: dict[str, _Joint]) -> int:

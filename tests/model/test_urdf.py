@@ -89,8 +89,9 @@ def test_the_tip_selects_the_chain(tmp_path):
     text = ARM.replace('<link name="tool"/>', '<link name="tool"/><link name="cam"/>').replace(
         "</robot>", '<joint name="cam_mount" type="fixed"><parent link="slider"/><child link="cam"/></joint></robot>')
     path = _write(tmp_path, text)
-    with pytest.raises(ModelError, match="no tip was named and 2 leaf links"):
-        load_model(path)
+    whole = load_model(path)          # issue 61: no tip named - the whole tree, its task frame the first deepest leaf
+    assert whole.dof == 3
+    assert whole.tcp == load_model(path, tip="tool").tcp
     assert load_model(path, tip="tool").dof == 3
     assert load_model(path, tip="cam").tcp == ()
     with pytest.raises(ModelError, match="tip link 'nope' is not a link"):
@@ -174,9 +175,6 @@ def test_mimic_joints_off_the_chain_follow_their_leader_and_on_the_chain_are_cou
      "on the chain mimics 'mount', which is not a moving joint of the chain"),
     (lambda t: t.replace("</robot>", '<joint name="loop" type="fixed"><parent link="base"/><child link="l2"/>'
                                      "</joint></robot>"), "closed loop: link 'l2'"),
-    (lambda t: t.replace("</robot>", '<link name="b2"/><joint name="j4" type="revolute"><parent link="l1"/>'
-                                     '<child link="b2"/><mimic joint="j2"/></joint></robot>'),
-     "'j4' off the chain mimics 'j2', a joint of the chain"),
     (lambda t: t.replace('<child link="l2"/>', '<child link="l9"/>'), "unknown child link 'l9'"),
     (lambda t: t.replace('xyz="0.2 0 0"', 'xyz="0.2 0"'), "is not 3 number"),
     (lambda t: t.replace("</robot>", "<link name=\"l1\"/></robot>"), "duplicate link name 'l1'"),
@@ -403,3 +401,18 @@ def test_an_angle_is_snapped_where_it_is_a_multiple_of_pi_rounded_to_the_digits_
     from symkin.model.urdf_source import snap_angle
 
     assert snap_angle(written) == read
+
+
+def test_a_mimic_joint_on_a_side_branch_is_a_coupling_of_the_whole_tree(tmp_path):
+    """Issue 61: without --tip the side branch is in the model and its mimic joint a coupling; with a tip that
+    leaves it off the chain its links cannot be lumped (they move with a chain joint): refused, located."""
+    text = ARM.replace("</robot>", '<link name="b2"/><joint name="j4" type="revolute"><parent link="l1"/>'
+                                   '<child link="b2"/><axis xyz="0 0 1"/><mimic joint="j2"/></joint></robot>')
+    path = _write(tmp_path, text)
+    whole = load_model(path)
+    assert [j.name for j in whole.joints][-1] == "j4"
+    assert whole.joints[-1].coupling.leader == "j2"
+    assert whole.dof == len(whole.joints) - 1
+    with pytest.raises(ModelError, match="'j4' off the chain mimics 'j2', a joint of the chain") as info:
+        load_model(path, tip="tool")
+    assert all(p.line is not None for p in info.value.problems)

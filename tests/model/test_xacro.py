@@ -118,7 +118,8 @@ def test_a_xacro_arm_derives_and_crosschecks(tmp_path, capsys):
     # the URDF reader's messages land on the xacro element (here in the included hand.xacro)
     panda = RTB / "xacro/qut_frankie_description/robots/panda_arm_hand.urdf.xacro"
     with pytest.raises(ModelError, match=r"robots/hand\.xacro:\d+:\d+: at 'joint\[panda_finger_joint2\]\.mimic'"):
-        load_model(panda, xacro_packages={"qut_frankie_description": PACKAGES["qut_frankie_description"]})
+        load_model(panda, tip="panda_leftfinger",  # the chain to one finger: the other mimics it from off the chain
+                   xacro_packages={"qut_frankie_description": PACKAGES["qut_frankie_description"]})
 
 
 ARM = """<?xml version="1.0"?>

@@ -181,3 +181,17 @@ def test_crosscheck_feeds_pinocchio_the_snapped_geometry():
                         urdf={"tip": "tool0", "snap_angles": True})
     assert not report.failures, report
     assert max(c.error for c in report.comparisons) < 1e-14
+
+
+@pytest.mark.parametrize("file, joints, dof", [
+    ("panda_description/urdf/panda.urdf", 9, 8),            # the arm and its fingers, the second mimicking the first
+    ("baxter_description/urdf/baxter.urdf", 19, 17),        # head, two arms, two grippers with mimic fingers
+])
+def test_a_stock_whole_tree_with_mimic_joints_passes_with_no_flags(file, joints, dof):
+    """Issue 61: 'symkin crosscheck baxter.urdf' stopped at 'name the tip' and, with --tip and --branch, at the
+    grippers' mimic joints; without --tip a robot file is the whole tree, its mimic joints couplings, and it agrees
+    with Pinocchio's model of the whole file."""
+    model = load_model(ROBOTS_DIR / file)
+    assert (len(model.joints), model.dof) == (joints, dof)
+    report = crosscheck(ROBOTS_DIR / file, samples=2, backends=("numpy",), coriolis_matrix=False)
+    assert not report.failures, report
