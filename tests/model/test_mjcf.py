@@ -53,10 +53,12 @@ def _passes_both(report) -> None:
 
 
 @pytest.mark.parametrize("file, tip", [("reacher.xml", "fingertip"), ("pusher.xml", "tips_arm"),
-                                       ("inverted_double_pendulum.xml", None), ("hopper.xml", "foot")])
+                                       ("inverted_double_pendulum.xml", None), ("hopper.xml", "foot"),
+                                       ("walker2d_v5.xml", None)])
 def test_gymnasium_models_agree_with_mujoco_and_pinocchio(file, tip):
     """As shipped: reacher and pusher carry armature (the drives' reflected inertia), the hopper's chain
-    starts with two slides and a hinge at the root; the objects and targets beside them are locked."""
+    starts with two slides and a hinge at the root; the objects and targets beside them are locked.  The planar
+    walker is read with no flag (issue 61: the whole tree, a slide-slide-hinge root carrying two legs)."""
     report = crosscheck(ASSETS / file, samples=3, backends=("numpy",), coriolis_matrix=False,
                         urdf={"tip": tip} if tip else {})
     _passes_both(report)
