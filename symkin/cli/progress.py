@@ -18,7 +18,7 @@ import sys
 import threading
 import time
 from types import TracebackType
-from typing import TextIO
+from typing import Any, TextIO
 
 #: Seconds between the lines a long stage writes into a log.
 LOG_INTERVAL = 10.0
@@ -62,8 +62,8 @@ class Progress:
         self._lock = threading.Lock()
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
-        self._display = None  # the rich display, started once the work outlasts ``delay``
-        self._task = None
+        self._display: Any = None  # the rich display (rich.progress.Progress), started once the work outlasts ``delay``
+        self._task: Any = None
 
     def __enter__(self) -> Progress:
         if self.enabled:
