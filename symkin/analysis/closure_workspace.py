@@ -107,7 +107,7 @@ def _sizes(model: GeneratedModel) -> tuple[int, int]:
 @dataclass(frozen=True)
 class HomeAssembly:
     """The assembly the analyses continue the closure from: (q, s) closing the legs at the home pose, and the
-    start of the Gauss-Newton solve that reached it (:func:`home_assembly`)."""
+    start of the Gauss-Newton solve that reached it (:func:`solve_home_assembly`)."""
 
     q: np.ndarray
     s: np.ndarray
@@ -127,7 +127,7 @@ class HomeAssembly:
                 f"passive: {values(inputs[1], self.s)}")
 
 
-def home_assembly(model: GeneratedModel) -> HomeAssembly:
+def solve_home_assembly(model: GeneratedModel) -> HomeAssembly:
     """(q, s) closing the legs at the home pose ``parallel.home``: Gauss-Newton from the model's declared
     ``parallel.home_assembly`` (its named variables, 0 for the others) where it has one; else from the first of
     q = s = 0 and :data:`HOME_STARTS` fixed random starts that closes them (deterministic).
@@ -164,8 +164,8 @@ def home_assembly(model: GeneratedModel) -> HomeAssembly:
 
 
 def assemble_at_home(model: GeneratedModel) -> tuple[np.ndarray, np.ndarray]:
-    """(q, s) of the home assembly (:func:`home_assembly`)."""
-    found = home_assembly(model)
+    """(q, s) of the home assembly (:func:`solve_home_assembly`)."""
+    found = solve_home_assembly(model)
     return found.q, found.s
 
 
@@ -663,7 +663,7 @@ def closure_gci(model: GeneratedModel, *, orientation: dict[str, float] | None =
     share halves with the cell size, so the change bounds the fine grid's error where the grids resolve the
     workspace.  The coarse grid is laid over the fine grid's box.  Arguments as :func:`closure_workspace`.
     """
-    assembly = home_assembly(model)
+    assembly = solve_home_assembly(model)
     start = (assembly.q, assembly.s)
     fine = closure_workspace(model, orientation=orientation, limits=limits, length=length, cells=cells, start=start)
     coarse = closure_workspace(model, orientation=orientation, limits=limits, length=fine.length,

@@ -227,7 +227,7 @@ def rate_closure_platform(model: GeneratedModel, actuation: Actuation, *, sample
     from symkin.runtime.parallel import closure_velocities
 
     held = closure_workspace.held_orientation(model, orientation)
-    assembly = closure_workspace.home_assembly(model)
+    assembly = closure_workspace.solve_home_assembly(model)
     home_q, home_s = assembly.q, assembly.s
     found = closure_workspace.closure_workspace(model, orientation=held, limits=limits,
                                                 cells=max(8, int(round(samples ** (1 / 3)))), start=(home_q, home_s))

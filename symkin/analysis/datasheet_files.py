@@ -61,15 +61,15 @@ def worst_map(points: np.ndarray, values: np.ndarray, worst_is_min: bool, cells:
 
 
 def figure_png(sheet: Datasheet, title: str) -> bytes:
-    """The datasheet figure (:func:`figure_of`) as PNG bytes."""
+    """The datasheet figure (:func:`datasheet_figure`) as PNG bytes."""
     import io
 
     buffer = io.BytesIO()
-    figure_of(sheet, title).savefig(buffer, format="png", dpi=110)
+    datasheet_figure(sheet, title).savefig(buffer, format="png", dpi=110)
     return buffer.getvalue()
 
 
-def figure_of(sheet: Datasheet, title: str) -> Any:
+def datasheet_figure(sheet: Datasheet, title: str) -> Any:
     """The datasheet figure: one map per measure over the rated poses, the home pose starred.  A planar device's
     poses are coloured by their value; a spatial device's are seen from above, each x-y cell showing the worst value
     over the heights sampled there (:func:`worst_map`).  A colour scale that clips (:func:`colour_range`) has extend

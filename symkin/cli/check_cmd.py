@@ -23,7 +23,7 @@ def register_check(sub: argparse._SubParsersAction) -> None:
 
 def run_check(args: argparse.Namespace) -> int:
     from symkin import pipeline
-    from symkin.dynamics.quantities import INERTIA_OUTPUTS
+    from symkin.dynamics.physical import INERTIA_OUTPUTS
     from symkin.errors import ModelError
     from symkin.model import load_model
     from symkin.parallel.motion_check import require_declared_motion

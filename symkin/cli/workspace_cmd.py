@@ -177,7 +177,7 @@ def _closure(args: argparse.Namespace, model, limits: dict) -> int:
         options = closure_options(args, model)
         with Progress(model.name) as progress:
             progress(f"continuing the loop closure over a grid of {options['cells']} cells a side")
-            assembly = closure_workspace.home_assembly(model)
+            assembly = closure_workspace.solve_home_assembly(model)
             found = closure_workspace.closure_workspace(model, limits=limits, start=(assembly.q, assembly.s),
                                                         **options)
             progress("sampling the boundary cells for the " + ("area" if len(found.axes) == 2 else "volume"))

@@ -36,7 +36,8 @@ from symkin.dynamics.coupling import forces_on_coordinates, joint_rates, matrix_
 from symkin.dynamics.bodies import BodyJacobians, body_jacobians
 from symkin.dynamics.linsolve import ldl_solve, transpose_solve
 from symkin.dynamics.program import Program, se_matrix, se_vector
-from symkin.errors import DerivationError, ModelDataError
+from symkin.errors import DerivationError
+from symkin.dynamics.physical import require_physical
 from symkin.ir.inputs import coordinate_input
 from symkin.ir.quantity import Deriving, quantity
 from symkin.ir.spec import FunctionSpec, InputSpec, OutputSpec, make_function
@@ -93,29 +94,15 @@ def _sympy_converter(d: Deriving) -> SympyConverter:
     return SympyConverter({s.name: s for s in symbols})
 
 
-#: The serial outputs that use the bodies' inertias, which a non-physical inertia blocks (symkin check refuses a scene
-#: asking for one; tests/model/test_model_errors.py derives every emitted quantity to keep this list exact).
-INERTIA_OUTPUTS = frozenset({"mass_matrix", "coriolis_matrix", "coriolis_vector", "gravity_vector", "inverse_dynamics",
-                             "forward_dynamics", "tcp_force", "operational_space", "kinetic_energy", "potential_energy",
-                             "regressor", "energy_regressor", "base_regressor"})
-
-
-def require_physical(d: Deriving) -> None:
-    """Refuse what uses the bodies' inertias where the model holds a non-physical one (``Model.nonphysical``, with
-    its place and the fix): the kinematics of the same model derive."""
-    if d.model.nonphysical:
-        raise ModelDataError(d.model.nonphysical)
-
-
 @quantity("body_jacobians", "velocity Jacobians of the bodies at their centres of mass", emitted=False)
 def body_jacobians_of(d: Deriving) -> tuple[BodyJacobians, ...]:
-    require_physical(d)
+    require_physical(d.model)
     return body_jacobians(d.model, d[chain_frames])
 
 
 @quantity("newton_euler_links", "links in their joint frames with spatial inertias (Newton-Euler)", emitted=False)
 def newton_euler_links(d: Deriving) -> tuple[newton_euler.Link, ...]:
-    require_physical(d)
+    require_physical(d.model)
     return newton_euler.chain_links(d.model)
 
 

@@ -227,7 +227,7 @@ def _check_inertia_physical(r: Reader, path: KeyPath, tensor: sympy.Matrix, mass
     with ``allow_nonphysical`` (``--allow-nonphysical``) noted: every simulator loads such files, and
     M may then be indefinite, which forward dynamics and the analyses report as for a singular M.  Where the reader
     defers it (a serial model's bodies: ``defer_nonphysical``) it blocks only the outputs that use the inertias
-    (:func:`symkin.dynamics.quantities.require_physical`), and the kinematics derive.
+    (:func:`symkin.dynamics.physical.require_physical`), and the kinematics derive.
     """
     given = [r.default_value(v) for v in (*tensor, mass, *com)]
     values = [v for v in given if v is not None]

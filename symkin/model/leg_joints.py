@@ -41,7 +41,7 @@ def leg_joint_limits(r: Reader, path: KeyPath, value: Any,
     return None if any(b is None and item is not None for b, item in zip(limits, items)) else limits
 
 
-def home_assembly(r: Reader, path: KeyPath, section: dict[str, Any], legs: tuple[Leg, ...]
+def read_home_assembly(r: Reader, path: KeyPath, section: dict[str, Any], legs: tuple[Leg, ...]
                    ) -> tuple[tuple[str, sympy.Expr], ...] | None:
     """``home_assembly: {variable: value}``: where Gauss-Newton starts the legs' joint variables (active or passive,
     named as in the closure's q and s) to close them at ``home``; the assembly it reaches is the home assembly of

@@ -27,7 +27,7 @@ import sympy
 
 from symkin.model import coordinates, joint_kinds
 from symkin.model.delta import delta_legs
-from symkin.model.leg_joints import home_assembly, leg_joint_limits, variable_names
+from symkin.model.leg_joints import leg_joint_limits, read_home_assembly, variable_names
 from symkin.model.reader import (
     X_AXIS,
     Y_AXIS,
@@ -104,7 +104,7 @@ def build_parallel(r: Reader, section: Any) -> Parallel | None:
     if motion is None or fk_branch is None or legs is None:
         return None
     home = _home(r, path + ("home",), section.get("home"), motion)
-    assembly = home_assembly(r, path, section, legs)
+    assembly = read_home_assembly(r, path, section, legs)
     return _checked(r, path, Parallel(motion, legs, fk_branch, identical, constraints, home=home,
                                       home_assembly=assembly))
 

@@ -595,7 +595,7 @@ class Model:
     #: limits, a non-physical inertia accepted): printed by symkin check and derive, kept in the manifest.
     notes: tuple[str, ...] = ()
     #: located problems that block only the outputs that use the inertias (a serial model's non-physical inertia
-    #: tensor, without allow_nonphysical): symkin.dynamics.quantities.require_physical refuses those outputs.
+    #: tensor, without allow_nonphysical): symkin.dynamics.physical.require_physical refuses those outputs.
     nonphysical: tuple[Problem, ...] = field(default=(), compare=False)
     #: the names in the source file of joints and links renamed to identifiers (a URDF's ``joint_0.0``):
     #: {"joints": {model name: source name}, "links": {...}}; see :meth:`source_name`.

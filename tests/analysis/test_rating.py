@@ -583,5 +583,5 @@ def test_the_datasheet_figure_keeps_titles_clear_and_prints_no_negative_zero(gen
 
     delta = load(generated_dir / "delta")
     sheet = datasheet.rate(delta, Actuation.of_model(delta, effort_limits=[0.3] * 3), samples=500)
-    check_figure_layout(datasheet_files.figure_of(sheet, "delta"))   # titles clear of the colour bars
+    check_figure_layout(datasheet_files.datasheet_figure(sheet, "delta"))   # titles clear of the colour bars
     assert datasheet._point([-1e-17, 0.0, -0.15], ("x", "y", "z")) == "(0.0, 0.0, -150.0) mm"

@@ -111,7 +111,7 @@ def test_unphysical_inertia_blocks_only_the_outputs_that_use_it(tmp_path):
     model loads with a note; every emitted quantity is derived: the kinematics are, and exactly INERTIA_OUTPUTS are
     refused with the located message and the fix (symkin check refuses a scene asking for one)."""
     from symkin.derivation import Derivation, catalog
-    from symkin.dynamics.quantities import INERTIA_OUTPUTS
+    from symkin.dynamics.physical import INERTIA_OUTPUTS
     from symkin.errors import DerivationError
 
     path = tmp_path / "arm.yaml"

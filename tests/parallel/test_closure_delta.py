@@ -73,15 +73,15 @@ FLIPPED = "  home_assembly: {swing1: deg(170), sway1: deg(170)}\n"
 def test_the_home_assembly_is_reported_and_the_declared_one_is_used(closure_delta, tmp_path, capsys):
     """symkin workspace reports the home assembly with the start that reached it and every joint's value; a
     declared parallel.home_assembly is where the solve starts (its values in the manifest), and the report says so."""
-    from symkin.analysis.closure_workspace import home_assembly
+    from symkin.analysis.closure_workspace import solve_home_assembly
 
-    default = home_assembly(closure_delta)
+    default = solve_home_assembly(closure_delta)
     assert default.start == "q = s = 0"
     np.testing.assert_allclose(np.degrees(default.q), -39.28, atol=0.01)   # models/delta.yaml: 39 deg down at home
     text = closure_delta_text().replace("  home: [0, 0, -0.15]\n", "  home: [0, 0, -0.15]\n" + FLIPPED)
     flipped = derived(text, tmp_path / "flipped")
     assert flipped.info.home_assembly == pytest.approx({"swing1": np.radians(170), "sway1": np.radians(170)})
-    declared = home_assembly(flipped)
+    declared = solve_home_assembly(flipped)
     assert declared.start == "the declared parallel.home_assembly"
     np.testing.assert_allclose(declared.q, default.q, atol=1e-9)             # the same arms ...
     names = list(flipped.info.functions["closure"].inputs[1].elements)

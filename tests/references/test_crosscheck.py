@@ -22,7 +22,7 @@ from symkin.errors import ModelError
 from symkin.model import load_model
 from symkin.model.urdf_export import export_urdf
 from sample_models import ROBOTS_DIR
-from tolerances import DYNAMICS
+from tolerances import DYNAMICS, EPS
 
 
 @pytest.mark.parametrize("name", ["planar_2r.yaml", "ur10e.yaml", "ur10e_classic.yaml", "ur10e.urdf", "phantom_premium.yaml"])
@@ -180,7 +180,7 @@ def test_crosscheck_feeds_pinocchio_the_snapped_geometry():
     report = crosscheck(path, samples=3, backends=("numpy",), coriolis_matrix=False,
                         urdf={"tip": "tool0", "snap_angles": True})
     assert not report.failures, report
-    assert max(c.error for c in report.comparisons) < 1e-14
+    assert max(c.error for c in report.comparisons) < 64 * EPS      # rounding, not the 4.9e-12 of the file
 
 
 @pytest.mark.parametrize("file, joints, dof", [
