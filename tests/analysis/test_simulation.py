@@ -233,7 +233,7 @@ def test_cli_derives_a_model_file_on_the_fly(tmp_path, capsys):
     out = tmp_path / "swing"
     assert main(["simulate", str(MODELS_DIR / "planar_2r.yaml"), "--scenario", "free-swing", "--duration", "0.2",
                  "--rate", "100", "--no-figure", "-o", str(out)]) == 0
-    assert sorted(p.name for p in out.iterdir()) == ["free-swing-1-modelparameters.csv", "summary.txt"]
+    assert sorted(p.name for p in out.iterdir()) == ["free-swing-1-asdeclared.csv", "summary.txt"]
 
 
 @pytest.mark.parametrize("arguments, message", [

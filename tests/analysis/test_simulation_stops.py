@@ -216,14 +216,14 @@ def test_cli_reports_stops_and_warns_before_an_unstable_loop(tmp_path, capsys):
     printed = capsys.readouterr().out
     assert "joint stops: linear spring-damper" in printed
     assert re.search(r"theta1: in contact \d+ x lower [0-9.]+ s; max penetration", printed)
-    header = (out / "free-swing-1-modelparameters.csv").read_text().splitlines()[1]
+    header = (out / "free-swing-1-asdeclared.csv").read_text().splitlines()[1]
     assert "penetration theta1 [rad]" in header
     assert "stop energy dissipated [J]" in header
     assert (out / "free-swing.png").read_bytes()[:4] == b"\x89PNG"
     off = tmp_path / "off"
     assert main(["simulate", str(GENERATED_DIR / "planar_2r"), "--scenario", "free-swing", "--duration", "0.1",
                  "--rate", "200", "--joint-stops", "off", "--no-figure", "-o", str(off)]) == 0
-    assert "penetration" not in (off / "free-swing-1-modelparameters.csv").read_text()
+    assert "penetration" not in (off / "free-swing-1-asdeclared.csv").read_text()
     assert main(["simulate", str(GENERATED_DIR / "planar_2r"), "--scenario", "free-swing", "--duration", "0.01",
                  "--integrator", "rk4", "--stop-time-constant", "0.0003", "--no-figure", "-o", str(off)]) == 0
     captured = capsys.readouterr()

@@ -127,4 +127,4 @@ def test_the_agile_eye_swings_with_its_energy_balanced_and_refuses_a_tcp_circle(
     summary = (out / "summary.txt").read_text()
     assert "wall at roll = 0.1 rad (k_w = 2 N m/rad, b_w = 0.01 N m s/rad)" in summary
     assert float(summary.split("energy balance drift ")[1].split()[0].rstrip(",")) <= 1e-8, summary
-    assert "F_felt_roll [N m]" in (out / "haptic-wall-1-modelparameters.csv").read_text()
+    assert "F_felt_roll [N m]" in (out / "haptic-wall-1-asdeclared.csv").read_text()

@@ -213,7 +213,8 @@ def test_legs_of_any_topology_follow_the_platform_by_newton_on_their_closure(bro
     JavaScript: the legs close where numpy's Gauss-Newton from the home assembly closes them (the same working
     mode), the joints drawn are leg_joints there, and 1/kappa is that of numpy's closure_velocities."""
     model, html, _ = scara_page
-    assert "<h2>Platform (legs solved by Gauss-Newton on the loop closure, from the home assembly)</h2>" in html
+    assert "<h2>Platform (legs solved by Gauss-Newton on the loop closure, from the home assembly)</h2>" in \
+        html.read_text()
     page = open_page(browser, html)
     q0, s0 = (np.array(page.evaluate(f"window.symkinView.state.{v}")) for v in "qs")
     press(page, "task-x", "ArrowRight", 20)     # 2 mm
