@@ -216,20 +216,18 @@ def _advance(model: GeneratedModel, q: np.ndarray, s: np.ndarray, frames: Closur
 def _march(model: GeneratedModel, start: tuple[np.ndarray, np.ndarray, np.ndarray], targets: np.ndarray,
            cell: float, limits: _Limits) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(q, s, taken) at the poses ``targets`` (K, m) continued along straight paths from the assembly
-    start = (q, s, p) in steps of at most a cell (positions) and :data:`ANGLE_STEP` (angles); taken is False
-    where a path leaves the working mode (a limit, a singularity, legs that do not close)."""
+    start = (q, s, p) (one assembly, or one per target: (K, n), (K, ns), (K, m)) in steps of at most a cell
+    (positions) and :data:`ANGLE_STEP` (angles); taken is False where a path leaves the working mode (a limit, a
+    singularity, legs that do not close)."""
     positions = np.array([c in mechanism.POSITION_COMPONENTS for c in mechanism.task_space(model)])
-    change = np.abs(targets - start[2]).max(axis=0)
+    q, s, p0 = (np.array(np.broadcast_to(v, (len(targets), np.shape(v)[-1]))) for v in start)
+    change = np.abs(targets - p0).max(axis=0, initial=0.0)
     steps = int(max(np.ceil(change[positions].max(initial=0.0) / cell),
                     np.ceil(change[~positions].max(initial=0.0) / ANGLE_STEP), 1))
-    q = np.repeat(start[0][None], len(targets), axis=0)
-    s = np.repeat(start[1][None], len(targets), axis=0)
-    p = np.repeat(start[2][None], len(targets), axis=0)
     taken = np.ones(len(targets), dtype=bool)
-    frames = closure_frames(model, q, s, p)
+    frames = closure_frames(model, q, s, p0)
     for t in np.linspace(0.0, 1.0, steps + 1)[1:]:
-        p = start[2] + t * (targets - start[2])
-        q, s, frames, step_taken = _advance(model, q, s, frames, p, limits)
+        q, s, frames, step_taken = _advance(model, q, s, frames, p0 + t * (targets - p0), limits)
         taken &= step_taken
     return q, s, taken
 
@@ -477,9 +475,9 @@ def working_mode_measure(model: GeneratedModel, found: ClosureWorkspace, *, limi
     midpoint was 30 % low on a DELTA at 16 cells a side), leaves the cells the boundary cuts to chance.  Here the
     grid's cells split into the *core* (reached, with all 3^d - 1 neighbours reached: counted whole) and the *band*
     (cells that differ from a neighbour, on both sides of the boundary: :func:`_band`).  In each band cell
-    ``samples`` uniform random points are continued from the cell's own solution in one step, or from the nearest
-    reached neighbour's in three (:func:`_advance`: the legs close, within the limits, no singularity crossed), and
-    the cell counts with the share f_c that is reached:
+    ``samples`` uniform random points are continued from the cell's own solution, or from the nearest reached
+    neighbour's, as the flood continues its cells (:func:`_march`: steps of at most a cell, the legs close, within the
+    limits, no singularity crossed), and the cell counts with the share f_c that is reached:
 
         V = h^d (core + sum_c f_c),   var V = h^2d sum_c s_c^2 / k,
 
@@ -517,22 +515,15 @@ def working_mode_measure(model: GeneratedModel, found: ClosureWorkspace, *, limi
     corners = np.repeat(occupancy.lower + index * occupancy.cell, samples, axis=0)
     targets[:, positions] = corners + rng.random((len(corners), d)) * occupancy.cell
     starts = np.repeat(source, samples)
-    q, s = flat_q[starts], flat_s[starts]
     p = np.repeat(found.pose[None], len(starts), axis=0)
     p[:, positions] = centres[starts]
     bounds = _Limits(mechanism.joint_limits(model, limits), mechanism.revolute_mask(model),
                      passive.declared_limits(model))
-    frames = closure_frames(model, q, s, p)
-    taken = np.ones(len(starts), dtype=bool)
-    far = starts != np.repeat(cells, samples)  # from a neighbour's centre, up to 2.6 cells: in three steps
-    if far.any():
-        q_far, s_far, frames_far = q[far], s[far], ClosureFrames(frames.task[far], frames.actuated[far])
-        for t in (1 / 3, 2 / 3):
-            q_far, s_far, frames_far, step = _advance(model, q_far, s_far, frames_far,
-                                                      (p + t * (targets - p))[far], bounds)
-            taken[far] &= step
-        q[far], s[far], frames.task[far], frames.actuated[far] = q_far, s_far, frames_far.task, frames_far.actuated
-    taken &= _advance(model, q, s, frames, targets, bounds)[3]
+    taken = np.zeros(len(starts), dtype=bool)
+    for group in (starts == np.repeat(cells, samples), starts != np.repeat(cells, samples)):  # own, neighbour's
+        if group.any():  # marched apart: the points within their own cell take one step, not the neighbours' two
+            taken[group] = _march(model, (flat_q[starts[group]], flat_s[starts[group]], p[group]), targets[group],
+                                  float(occupancy.cell.min()), bounds)[2]
     shares = taken.reshape(len(cells), samples).mean(axis=1)
     volume = occupancy.cell_volume
     core = int(np.count_nonzero(reached & ~band))

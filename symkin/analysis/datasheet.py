@@ -21,7 +21,7 @@ import numpy as np
 
 from symkin.analysis import mechanism, workspace
 from symkin.analysis.conditioning import inverse_condition_number
-from symkin.analysis.handle_measures import (NO_EFFORT_LIMITS, NO_GRAVITY, PUSHED_GROUPS, ROTATIONAL_FRICTION,
+from symkin.analysis.handle_measures import (NO_GRAVITY, PUSHED_GROUPS, ROTATIONAL_FRICTION,
                                              SPHERICAL_GROUPS, TURNED_GROUPS, Actuation, Measure, dynamics_at,
                                              friction_measures, gravity_share_measure, rotation_measures,
                                              translation_measures)
@@ -54,9 +54,9 @@ class Datasheet:
         rated = [m.name for m in self.measures]
         listed = {name for names in self.groups.values() for name in names}
         stray = [name for name in rated if name not in listed] + [g for g in self.skipped if g not in self.groups]
+        # a group is listed as not rated with none of its measures, or rated with all of them
         partial = [group for group, names in self.groups.items()
-                   if (group in self.skipped) == any(name in rated for name in names)
-                   or (group not in self.skipped and not all(name in rated for name in names))]
+                   if sum(name in rated for name in names) != (0 if group in self.skipped else len(names))]
         if stray or partial or len(set(rated)) != len(rated):
             raise ValueError(f"{self.model}: the datasheet's measures {rated} and not rated groups "
                              f"{sorted(self.skipped)} do not cover the groups {dict(self.groups)} once each "
@@ -359,8 +359,7 @@ def rate_orientation_platform(model: GeneratedModel, actuation: Actuation, *, sa
     M = dynamics_at(model, "mass_matrix", q, points)
     turned, skipped = rotation_measures(J_w, M, actuation)
     measures = list(turned)
-    share = (NO_EFFORT_LIMITS if actuation.effort_limits is None
-             else gravity_share_measure(model, q, points, actuation.effort_limits))
+    share = gravity_share_measure(model, q, points, actuation.effort_limits)
     if isinstance(share, str):
         skipped["gravity_share"] = share
     else:

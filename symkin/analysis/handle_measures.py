@@ -158,9 +158,11 @@ def translation_measures(model: GeneratedModel, J: np.ndarray, M: np.ndarray | N
 NO_GRAVITY = "no gravity acts on the device: declare 'gravity: [0, 0, -9.81]' (the direction of g in the base frame)"
 
 
-def gravity_share_measure(model: GeneratedModel, q: np.ndarray, poses: np.ndarray, efforts: np.ndarray
+def gravity_share_measure(model: GeneratedModel, q: np.ndarray, poses: np.ndarray, efforts: np.ndarray | None
                           ) -> list[Measure] | str:
     """The share of the effort limits spent holding the device against gravity (``gravity_vector``), or why not."""
+    if efforts is None:
+        return NO_EFFORT_LIMITS
     if "gravity_vector" not in model.functions:
         return NO_GRAVITY
     return [held_against_gravity(dynamics_at(model, "gravity_vector", q, poses), efforts)]

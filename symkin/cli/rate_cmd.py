@@ -47,9 +47,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "--orientation (-n N: about N^(1/3) cells a side); their apparent mass, inertia and gravity "
                     "share come from the generated closure_dynamics where the model declares bodies (else they "
                     "are not rated). Every measure (" + _measure_names() + ") appears with its value or as not "
-                    "rated with the reason and what to give. Writes datasheet.json (every number with its unit and the pose of each "
-                    "extreme), datasheet.csv (every rated pose), datasheet.png (a map per measure) and "
-                    "summary.txt into the output directory (replaced as a whole).",
+                    "rated with the reason and what to give. Writes datasheet.json (every number with its unit and "
+                    "the pose of each extreme), datasheet.csv (every rated pose), datasheet.png (a map per measure) "
+                    "and summary.txt into the output directory (replaced as a whole).",
         epilog="e.g. symkin rate generated/delta --effort-limit 0.3 --encoder 4096 --gear 10 -o out/rate/delta")
     analysis_args.add_model_arguments(p)
     p.add_argument("-n", "--samples", type=analysis_args.sample_count, default=4096, metavar="N",

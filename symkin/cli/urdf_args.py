@@ -3,7 +3,8 @@
 The chain runs from the root link (or ``--base``) to ``--tip``; every joint off it is locked
 (``--lock JOINT=VALUE``, default 0) and what it carries is lumped into the chain link it hangs
 on (:mod:`symkin.model.urdf_source`); ``--snap-angles`` reads an angle that is a multiple of
-pi/2, pi/4, pi/3 or pi/6 rounded to the digits written (1.5708, 3.14159) as that multiple.  The options apply to URDF and xacro files only;
+pi/2, pi/4, pi/3 or pi/6 rounded to the digits written (1.5708, 3.14159) as that multiple.  The
+options apply to URDF and xacro files only;
 ``--xacro-arg NAME:=VALUE`` and ``--xacro-package NAME=DIR`` to xacro files
 (:mod:`symkin.model.xacro_source`).
 """

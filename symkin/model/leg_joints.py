@@ -42,7 +42,7 @@ def leg_joint_limits(r: Reader, path: KeyPath, value: Any,
 
 
 def read_home_assembly(r: Reader, path: KeyPath, section: dict[str, Any], legs: tuple[Leg, ...]
-                   ) -> tuple[tuple[str, sympy.Expr], ...] | None:
+                       ) -> tuple[tuple[str, sympy.Expr], ...] | None:
     """``home_assembly: {variable: value}``: where Gauss-Newton starts the legs' joint variables (active or passive,
     named as in the closure's q and s) to close them at ``home``; the assembly it reaches is the home assembly of
     the analyses that continue the closure.  Unnamed variables start at 0."""

@@ -96,5 +96,7 @@ def test_each_use_site_refuses_a_parameter_of_another_dimension(old, new, messag
 
 def test_a_number_may_carry_the_dimension_an_inertia_formula_needs():
     """m * 0.04^2 / 12 is an inertia (the number is a length squared): only a parameter standing alone is judged."""
-    text = PARAMETERIZED.replace("  - {link: link1, mass: m1}", "  - {link: link1, mass: m1, inertia: {yy: m1*0.04^2/12, zz: m1*0.04^2/12}}")
-    model_from_text(text, "planar_2r")
+    text = PARAMETERIZED.replace("  - {link: link1, mass: m1}",
+                                 "  - {link: link1, mass: m1, inertia: {yy: m1*0.04^2/12, zz: m1*0.04^2/12}}")
+    model = model_from_text(text, "planar_2r")
+    assert model.bodies[0].inertia[2, 2] == model.parameter("m1").symbol * sympy.Rational(4, 100) ** 2 / 12
