@@ -39,6 +39,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from symkin import reporting
 from symkin.analysis import conditioning, mechanism, passive
 from symkin.analysis.estimates import CONFIDENCE, Estimate
 from symkin.analysis.limits import within_limits
@@ -226,7 +227,8 @@ def _march(model: GeneratedModel, start: tuple[np.ndarray, np.ndarray, np.ndarra
                     np.ceil(change[~positions].max(initial=0.0) / ANGLE_STEP), 1))
     taken = np.ones(len(targets), dtype=bool)
     frames = closure_frames(model, q, s, p0)
-    for t in np.linspace(0.0, 1.0, steps + 1)[1:]:
+    for done, t in enumerate(np.linspace(0.0, 1.0, steps + 1)[1:]):
+        reporting.report_progress("continuing the closure (steps)", done=done, total=steps)
         q, s, frames, step_taken = _advance(model, q, s, frames, p0 + t * (targets - p0), limits)
         taken &= step_taken
     return q, s, taken
@@ -253,6 +255,7 @@ def _flood(model: GeneratedModel, poses: np.ndarray, shape: tuple[int, ...], see
     frontier = np.array([seed])  # sorted, as np.unique leaves each layer's cells
     frontier_frames = closure_frames(model, q[frontier], s[frontier], poses[frontier])
     while len(frontier):
+        reporting.report_progress(f"flooding a grid of {len(poses)} cells (cells reached)", done=int(reached.sum()))
         index = np.array(np.unravel_index(frontier, shape)).T
         candidates, parents = [], []
         for axis in range(len(shape)):

@@ -7,7 +7,9 @@ pipes), a stage that has run ``delay`` seconds is announced by a plain line, fol
 by its count and estimate, and closed by a line with its time.
 
 A stage is counted when the caller says how far it is: ``progress("deriving fk", done=3, total=12)``.  The estimate
-is the time per item so far times the items left, from the first report of that total.
+is the time per item so far times the items left, from the first report of that total; a count without a total
+(cells a flood has reached) is shown as it is.  While the display is open it is the installed reporter of
+:mod:`symkin.reporting`, so the loops of the library (floods, continuations, simulations) report into it.
 """
 
 from __future__ import annotations
@@ -15,10 +17,13 @@ from __future__ import annotations
 import io
 import os
 import sys
+import contextlib
 import threading
 import time
 from types import TracebackType
 from typing import Any, TextIO
+
+from symkin import reporting
 
 #: Seconds between the lines a long stage writes into a log.
 LOG_INTERVAL = 10.0
@@ -64,8 +69,10 @@ class Progress:
         self._thread: threading.Thread | None = None
         self._display: Any = None  # the rich display (rich.progress.Progress), started once the work outlasts ``delay``
         self._task: Any = None
+        self._reporting = contextlib.ExitStack()
 
     def __enter__(self) -> Progress:
+        self._reporting.enter_context(reporting.reporting_to(self))
         if self.enabled:
             self._thread = threading.Thread(target=self._watch, daemon=True)
             self._thread.start()
@@ -83,8 +90,10 @@ class Progress:
     def status(self) -> str:
         """'[model] stage: 3/12, about 20 s left' (the count and estimate where the stage is counted)."""
         text = f"[{self.title}] {self.stage}"
-        if self.total is None or self.done is None:
+        if self.done is None:
             return text
+        if self.total is None:
+            return f"{text}: {self.done}"
         text += f": {self.done}/{self.total}"
         left = self.remaining()
         return text if left is None else f"{text}, about {_duration(left)} left"
@@ -137,6 +146,7 @@ class Progress:
 
     def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
                  tb: TracebackType | None) -> None:
+        self._reporting.close()
         self._stop.set()
         if self._thread is not None:
             self._thread.join()

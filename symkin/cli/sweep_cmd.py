@@ -110,7 +110,7 @@ def _terminate(signum, _frame) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from symkin.design import sweep_plots
-    from symkin.design.sweeps import chunk_designs, evaluate_missing, summary_rows
+    from symkin.design.sweeps import evaluate_missing, summary_rows
     from symkin.design.sweep_store import SweepStore
     from symkin.runtime.cluster import check_scheduler
     from symkin.runtime.payload import ModelPayload
@@ -136,11 +136,8 @@ def run(args: argparse.Namespace) -> int:
     previous = signal.signal(signal.SIGTERM, _terminate)
     try:
         with Progress(f"{payload.name} sweep") as progress:
-            first = definition.size - chunk_designs(definition, set(range(definition.chunks)) - store.completed())
-
             def report(done: int, total: int) -> None:
-                rate = (done - first) / max(time.perf_counter() - start, 1e-9)
-                progress(f"{done}/{total} designs ({rate:.0f}/s)")
+                progress("evaluating designs", done=done, total=total)
 
             progress("starting" if args.scheduler == "serial" else "starting the Dask cluster")
 

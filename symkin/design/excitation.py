@@ -42,7 +42,7 @@ import numpy as np
 
 from symkin.design import closure_excitation
 from symkin.design.formulation import casadi_function
-from symkin.design.solving import IPOPT_OPTIONS
+from symkin.design.solving import IPOPT_OPTIONS, IterationReport
 from symkin.runtime.info import GeneratedModel
 from symkin.simulation.closure_functions import ClosureAssembly
 
@@ -208,9 +208,11 @@ def optimize_excitation(model: GeneratedModel, *, period: float = 10.0, harmonic
     problem, given = {"x": x, "f": objective, "g": g}, {}
     if closure is not None:  # the guesses are the problem's parameters
         problem["p"], given["p"] = casadi.vec(guess), guess0.ravel(order="F")
+    iterations = IterationReport("optimizing the excitation (IPOPT iterations)", problem, max_iterations)
     solver = casadi.nlpsol("excitation", "ipopt", problem,
                            {**IPOPT_OPTIONS, "ipopt.tol": 1e-6, "ipopt.constr_viol_tol": 1e-9,
-                            "ipopt.max_iter": max_iterations, "ipopt.hessian_approximation": "limited-memory"})
+                            "ipopt.max_iter": max_iterations, "ipopt.hessian_approximation": "limited-memory",
+                            **iterations.options()})
     result = solver(x0=x0, lbg=lbg, ubg=ubg, **given)
     # between the constraint points the motion may overshoot by O(dt^2 qdd): shrink it about q0 to fit a grid
     # ten times as dense (a common factor keeps the start at rest and the period)

@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 import casadi
 import numpy as np
 
+from symkin import reporting
 from symkin.design.formulation import DesignProgram
 from symkin.design.problem import DesignProblem
 
@@ -22,6 +23,43 @@ IPOPT_OPTIONS: dict[str, Any] = {
     "ipopt.max_iter": 300,
     "print_time": False,
 }
+
+
+class IterationReport(casadi.Callback):
+    """IPOPT's iteration callback: reports each iteration to :mod:`symkin.reporting` (``stage``, k of at most
+    ``max_iter``).  Keep a reference to it until the solve returns (CasADi holds none on the Python side)."""
+
+    def __init__(self, stage: str, problem: dict[str, Any], max_iter: int):
+        casadi.Callback.__init__(self)
+        self.stage, self.max_iter, self.iterations = stage, max_iter, 0
+        sizes = {"x": problem["x"].numel(), "g": problem["g"].numel(), "p": problem["p"].numel() if "p" in problem
+                 else 0}
+        self.sizes = {"f": 1, **sizes, **{f"lam_{k}": v for k, v in sizes.items()}}
+        self.construct("iteration_report", {})
+
+    def get_n_in(self) -> int:
+        return casadi.nlpsol_n_out()
+
+    def get_n_out(self) -> int:
+        return 1
+
+    def get_name_in(self, i: int) -> str:
+        return casadi.nlpsol_out(i)
+
+    def get_name_out(self, i: int) -> str:
+        return "ret"
+
+    def get_sparsity_in(self, i: int) -> casadi.Sparsity:
+        return casadi.Sparsity.dense(self.sizes[casadi.nlpsol_out(i)], 1)
+
+    def eval(self, arg: Any) -> list:
+        reporting.report_progress(self.stage, done=self.iterations, total=self.max_iter)
+        self.iterations += 1
+        return [0]
+
+    def options(self) -> dict[str, Any]:
+        """The solver options that install it."""
+        return {"iteration_callback": self}
 
 
 @dataclass(frozen=True)
@@ -63,7 +101,9 @@ def solve(problem: DesignProblem, program: DesignProgram, *, build_seconds: floa
     """Run IPOPT on the program and read the design off its solution."""
     start = time.perf_counter()
     nlp: dict[str, Any] = {"x": program.x, "f": program.f, "g": program.g}  # MX expressions
-    solver = casadi.nlpsol("design", "ipopt", nlp, {**IPOPT_OPTIONS, **(options or {})})
+    chosen = {**IPOPT_OPTIONS, **(options or {})}
+    iterations = IterationReport("optimizing the design (IPOPT iterations)", nlp, int(chosen["ipopt.max_iter"]))
+    solver = casadi.nlpsol("design", "ipopt", nlp, chosen | iterations.options())
     build_seconds += time.perf_counter() - start
     start = time.perf_counter()
     result = solver(x0=program.x0, lbx=program.lbx, ubx=program.ubx, lbg=program.lbg, ubg=program.ubg)

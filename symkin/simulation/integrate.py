@@ -30,6 +30,8 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from symkin import reporting
+
 #: dx/dt = rhs(t, x, u)
 Rhs = Callable[[float, np.ndarray, np.ndarray], np.ndarray]
 #: u = control(t, x)
@@ -38,6 +40,8 @@ Control = Callable[[float, np.ndarray], np.ndarray]
 
 #: a switching run gives up after this many mode switches (chattering)
 MAX_SWITCHES = 10_000
+#: a sampled run reports its count every this many control periods
+REPORT_PERIODS = 64
 
 
 class Modes(Protocol):
@@ -129,6 +133,24 @@ def _check(x: np.ndarray, t: float) -> None:
                               "step is too large for the stiffness of the loop: raise --rate or --substeps)")
 
 
+class _SimulatedTime:
+    """Reports how far an adaptive run has come, in milliseconds of simulated time (at most once a millisecond)."""
+
+    def __init__(self, end: float):
+        self.total = int(np.ceil(end * 1e3))
+        self.shown = -1
+
+    def wrap(self, derivative: Callable[[float, np.ndarray], np.ndarray]) -> Callable[[float, np.ndarray], np.ndarray]:
+        """``derivative``, reporting the time it is evaluated at."""
+        def reported(t: float, x: np.ndarray) -> np.ndarray:
+            done = int(t * 1e3)
+            if done > self.shown:
+                self.shown = done
+                reporting.report_progress("simulating (ms of simulated time)", done=done, total=self.total)
+            return derivative(t, x)
+        return reported
+
+
 def run_sampled(rhs: Rhs, control: Control, x0: np.ndarray, period: float, steps: int,
                 substeps: int = 1) -> Run:
     """Sampled-data loop: u_k = control(t_k, x_k), held while RK4 advances the plant.
@@ -151,6 +173,8 @@ def run_sampled(rhs: Rhs, control: Control, x0: np.ndarray, period: float, steps
     u = np.asarray(control(0.0, x), dtype=float)
     us = np.empty((steps + 1, u.size))
     for k in range(steps):
+        if k % REPORT_PERIODS == 0:
+            reporting.report_progress("simulating (control periods)", done=k, total=steps)
         us[k] = u
         t = k * period
         for s in range(substeps):
@@ -181,13 +205,14 @@ def run_adaptive(rhs: Rhs, control: Control, x0: np.ndarray, t_eval: np.ndarray,
     parts: list[np.ndarray] = []
     switches: list[Switch] = []
     evaluations = 0
+    clock = _SimulatedTime(end)
     while True:
         argument = () if modes is None else (modes.argument(mode),)
         guards = list(modes.guards(mode)) if modes is not None else []
         events: list[Any] = [ArmedGuard(g, t0) for g in guards] if guards and switches else list(guards)
         times = t_eval[(t_eval >= t0) if not parts else (t_eval > t0)]
-        solution = solve_ivp(lambda t, y: rhs(t, y, control(t, y), *argument), (t0, end), x, method="DOP853",
-                             t_eval=times, rtol=rtol, atol=atol, events=events or None)
+        solution = solve_ivp(clock.wrap(lambda t, y: rhs(t, y, control(t, y), *argument)), (t0, end), x,
+                             method="DOP853", t_eval=times, rtol=rtol, atol=atol, events=events or None)
         evaluations += int(solution.nfev)
         if not solution.success:
             raise SimulationError(f"DOP853 failed at t = {solution.t[-1] if solution.t.size else t0:.6g} s: "

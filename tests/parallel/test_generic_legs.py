@@ -23,6 +23,7 @@ from sample_models import dual_scara_text
 from symkin import load, pipeline
 from symkin.analysis.closure_workspace import assemble_at_home, closure_workspace
 from symkin.model import model_from_text
+from symkin.reporting import reporting_to
 from symkin.parallel.motion_check import check_platform_motion
 from symkin.runtime.parallel import closure_velocities, solve_closure
 from symkin.structure.mobility import SCHOENFLIES, SPATIAL, model_mobility
@@ -284,8 +285,33 @@ def _inverse_in_mode(poses, elbow_sign, knee_sign):
 
 
 @pytest.fixture(scope="module")
-def scara_workspace(scara):
-    return closure_workspace(scara, limits={"lift1": STROKE}, cells=20)
+def scara_flood(scara):
+    """The continued workspace, and what it reported while it ran (symkin.reporting)."""
+    reports: list[tuple[str, int | None, int | None]] = []
+    with reporting_to(lambda stage, done=None, total=None: reports.append((stage, done, total))):
+        found = closure_workspace(scara, limits={"lift1": STROKE}, cells=20)
+    return found, reports
+
+
+@pytest.fixture(scope="module")
+def scara_workspace(scara_flood):
+    return scara_flood[0]
+
+
+def test_the_flood_reports_the_cells_it_has_reached(scara_flood):
+    """Issue 60 (10): the flood's count grows layer by layer up to the cells it reaches (no total: the workspace is
+    what it finds); the grid's size is in the stage."""
+    found, reports = scara_flood
+    floods = [(stage, done) for stage, done, total in reports if stage.startswith("flooding a grid")]
+    assert floods
+    assert all(total is None for stage, _, total in reports if stage.startswith("flooding a grid"))
+    runs: list[list[int]] = []
+    for _stage, done in floods:
+        if done == 1:                                        # a flood starts from its seed cell
+            runs.append([])
+        runs[-1].append(done)
+    assert all(run == sorted(run) for run in runs)
+    assert 1 < runs[-1][-1] <= np.count_nonzero(found.occupancy.occupied)   # the last layer is reported before
 
 
 def test_the_home_assembly_closes_the_legs(scara):

@@ -26,7 +26,8 @@ PACKAGE = Path(__file__).resolve().parents[2] / "symkin"
 
 #: Lowest first.  Each entry: the layer's name and its top-level modules or packages of symkin.
 LAYERS = (
-    ("foundation", {"_version", "errors", "atomic", "cache_trust", "expression_dag", "symengine_bridge", "text_table", "lazy"}),
+    ("foundation", {"_version", "errors", "atomic", "cache_trust", "expression_dag", "symengine_bridge", "text_table", "lazy",
+                    "reporting"}),
     ("model", {"model", "geometry"}),
     ("structure", {"structure"}),
     ("ir", {"ir"}),
@@ -44,7 +45,7 @@ PATTERNS = {part: rank for rank, (_name, parts) in enumerate(LAYERS) for part in
 #: What each layer holds, for the table docs/architecture.md renders from LAYERS (checked below).
 ROLES = {
     "foundation": "errors, atomic writes, trust in the cache folder, the version, expression graphs, the SymEngine bridge, text tables, "
-                  "packages imported lazily",
+                  "packages imported lazily, progress reports of long work",
     "model": "the model format: reading, validating, the schema; geometry",
     "structure": "mobility and topology synthesis",
     "ir": "`FunctionSpec`, `OptimizedFunction`, inputs, op counts, `QuantityDef`",

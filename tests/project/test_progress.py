@@ -110,3 +110,66 @@ def test_the_derivation_reports_each_function_with_its_count():
     assert calls[:4] == [("deriving fk", 0, n), ("optimizing fk", 0, n), ("deriving jacobian", 1, n),
                          ("optimizing jacobian", 1, n)]
     assert calls[-2:] == [("emitting numpy code", 0, 2), ("emitting js code", 1, 2)]
+
+
+def test_a_count_without_a_total_is_shown_as_it_is():
+    progress = Progress("model", stream=io.StringIO())
+    progress("flooding (cells reached)", done=12)
+    assert progress.status() == "[model] flooding (cells reached): 12"
+
+
+def test_the_open_display_is_the_librarys_reporter_and_the_previous_one_comes_back():
+    from symkin.reporting import report_progress, reporting_to
+
+    report_progress("nobody listens", done=1, total=2)       # no reporter installed: nothing happens
+    outer: list[tuple] = []
+    with reporting_to(lambda stage, done=None, total=None: outer.append((stage, done, total))):
+        with Progress("model", stream=io.StringIO(), enabled=False) as progress:
+            report_progress("inner loop", done=3, total=7)
+        assert progress.status().startswith("[model] inner loop: 3/7")
+        report_progress("after", done=1)
+    assert outer == [("after", 1, None)]
+
+
+def _recorded(run) -> list[tuple]:
+    from symkin.reporting import reporting_to
+
+    calls: list[tuple] = []
+    with reporting_to(lambda stage, done=None, total=None: calls.append((stage, done, total))):
+        run()
+    return calls
+
+
+def test_a_simulation_reports_its_periods_and_its_simulated_time():
+    import numpy as np
+
+    from symkin.simulation.integrate import REPORT_PERIODS, run_adaptive, run_sampled
+
+    def rhs(t, x, u):
+        return np.array([x[1], -x[0] + u[0]])
+
+    def control(t, x):
+        return np.array([0.0])
+
+    sampled = _recorded(lambda: run_sampled(rhs, control, np.array([1.0, 0.0]), 1e-3, 200))
+    assert sampled == [("simulating (control periods)", k, 200) for k in range(0, 200, REPORT_PERIODS)]
+    adaptive = _recorded(lambda: run_adaptive(rhs, control, np.array([1.0, 0.0]), np.linspace(0.0, 0.05, 11)))
+    done = [d for _stage, d, _total in adaptive]
+    assert {(stage, total) for stage, _d, total in adaptive} == {("simulating (ms of simulated time)", 50)}
+    assert done == sorted(set(done))                         # at most once a millisecond, forward
+    assert done[-1] == 50
+
+
+def test_ipopt_reports_each_iteration_of_at_most_max_iter():
+    import casadi
+
+    from symkin.design.solving import IPOPT_OPTIONS, IterationReport
+
+    x = casadi.MX.sym("x", 2)
+    problem = {"x": x, "f": (x[0] - 1) ** 2 + 10 * (x[1] - x[0] ** 2) ** 2, "g": x[0] + x[1]}
+    iterations = IterationReport("solving (IPOPT iterations)", problem, 50)
+    solver = casadi.nlpsol("rosenbrock", "ipopt", problem, IPOPT_OPTIONS | {"ipopt.max_iter": 50}
+                           | iterations.options())
+    calls = _recorded(lambda: solver(x0=[-1.0, 1.0], lbg=-10, ubg=10))
+    count = solver.stats()["iter_count"]
+    assert calls == [("solving (IPOPT iterations)", k, 50) for k in range(count + 1)]   # iteration 0 is the start
