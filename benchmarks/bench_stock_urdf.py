@@ -26,7 +26,7 @@ from symkin.text_table import format_table  # noqa: E402
 
 ROBOTS = Path(distribution("example-robot-data").locate_file("cmeel.prefix/share/example-robot-data/robots"))
 
-#: (name, file under robots/, tip link or None for symkin's default, joints locked off the chain).
+#: (name, file under robots/, the tip of the chain (--chain) or None for the whole tree, joints locked off the chain).
 STOCK = [
     ("panda", "panda_description/urdf/panda.urdf", "panda_link8", {}),
     ("z1", "z1_description/urdf/z1.urdf", "link06", {}),
@@ -51,7 +51,7 @@ DYNAMICS = KINEMATICS + ("mass_matrix", "coriolis_vector", "gravity_vector", "in
 
 def _derive(path: Path, tip: str | None, locks: dict[str, float], outputs: tuple[str, ...]) -> tuple[float, int]:
     """(seconds, operations after CSE) to derive and optimize ``outputs`` from a freshly read model."""
-    model = load_model(path, tip=tip, locks=locks)
+    model = load_model(path, tip=tip, locks=locks, chain=tip is not None)
     start = time.perf_counter()
     result = pipeline.generate(model, pipeline.resolve_request(model, only=outputs, backends="numpy", combine="none"))
     return time.perf_counter() - start, sum(r.op_counts["cse"] for r in result.reports)
@@ -59,7 +59,7 @@ def _derive(path: Path, tip: str | None, locks: dict[str, float], outputs: tuple
 
 def measure(path: Path, tip: str | None, locks: dict[str, float]) -> list[str]:
     start = time.perf_counter()
-    model = load_model(path, tip=tip, locks=locks)
+    model = load_model(path, tip=tip, locks=locks, chain=tip is not None)
     load = time.perf_counter() - start
     kinematics, kinematics_ops = _derive(path, tip, locks, KINEMATICS)
     dynamics, dynamics_ops = _derive(path, tip, locks, DYNAMICS)

@@ -1,8 +1,9 @@
 """Options that choose what of a URDF becomes the model (``symkin check`` and ``symkin derive``).
 
-The chain runs from the root link (or ``--base``) to ``--tip``; every joint off it is locked
-(``--lock JOINT=VALUE``, default 0) and what it carries is lumped into the chain link it hangs
-on (:mod:`symkin.model.urdf_source`); ``--snap-angles`` reads an angle that is a multiple of
+The model is the whole tree below the root link (or ``--base``), its TCP on ``--tip`` (``--frame``); with
+``--chain`` it is the chain to the tip alone (with ``--branch`` the paths to the tip and the branches): every
+joint off it is locked (``--lock JOINT=VALUE``, default 0) and what it carries is lumped into the chain link it
+hangs on (:mod:`symkin.model.urdf_source`); ``--snap-angles`` reads an angle that is a multiple of
 pi/2, pi/4, pi/3 or pi/6 rounded to the digits written (1.5708, 3.14159) as that multiple.  The
 options apply to URDF and xacro files only;
 ``--xacro-arg NAME:=VALUE`` and ``--xacro-package NAME=DIR`` to xacro files
@@ -20,21 +21,26 @@ from symkin.errors import ModelError, Problem
 
 
 #: The options of robot files (argparse destinations).
-ROBOT_FILE_OPTIONS = ("tip", "base", "branch", "lock", "snap_angles", "xacro_arg", "xacro_package", "allow_read")
+ROBOT_FILE_OPTIONS = ("tip", "chain", "base", "branch", "lock", "snap_angles", "xacro_arg", "xacro_package", "allow_read")
 
 
 def add_urdf_arguments(p: argparse.ArgumentParser) -> None:
     group = p.add_argument_group("URDF, xacro and MJCF files (MJCF: bodies are links)")
-    group.add_argument("--tip", metavar="LINK",
-                       help="the link that ends the chain: the model is the chain to it, not the whole tree "
-                            "(default: the whole tree, its TCP on the leaf behind the most moving joints)")
+    group.add_argument("--tip", "--frame", dest="tip", metavar="LINK",
+                       help="the link that carries the TCP, the task frame of fk, the Jacobians and the "
+                            "operational-space quantities; the model stays the whole tree (default: the leaf "
+                            "behind the most moving joints)")
+    group.add_argument("--chain", action="store_true",
+                       help="a smaller model: the chain from the base to --tip alone, every joint off it locked "
+                            "(--lock) and what it carries lumped into the chain link it hangs on (default: the "
+                            "whole tree)")
     group.add_argument("--base", metavar="LINK", help="the link the chain starts from (default: the root link)")
     group.add_argument("--branch", action="append", default=[], metavar="LINK",
-                       help="another link whose joints from the base stay moving: the model is the tree of the "
-                            "paths to --tip (which carries the TCP) and to each --branch (repeatable)")
+                       help="a smaller model: the tree of the paths to --tip (which carries the TCP) and to each "
+                            "--branch link, the rest locked and lumped as for --chain (repeatable)")
     group.add_argument("--lock", action="append", default=[], metavar="JOINT=VALUE",
-                       help="the value of a joint off the chain, in rad or m, or degrees with 'deg' (repeatable; "
-                            "default 0, a mimic joint follows its leader)")
+                       help="with --chain or --branch: the value of a joint off the model, in rad or m, or "
+                            "degrees with 'deg' (repeatable; default 0, a mimic joint follows its leader)")
     group.add_argument("--snap-angles", action="store_true",
                        help="read an angle that is a multiple of pi/2, pi/4, pi/3 or pi/6 rounded to the digits "
                             "written (1.57079632679, 1.5708, 3.14159) as that multiple, noted; crosscheck feeds its "
@@ -62,11 +68,11 @@ def urdf_options(args: argparse.Namespace, path: str) -> dict[str, Any]:
     from symkin.model.source_kind import MJCF, URDF, XACRO, source_kind  # the model package imports sympy
 
     # (options, the file kinds they apply to, those kinds in words, a suffix of such a file)
-    option_kinds = ((("--tip", "--base", "--lock", "--snap-angles", "--branch"), {URDF, XACRO, MJCF},
+    option_kinds = ((("--tip", "--chain", "--base", "--lock", "--snap-angles", "--branch"), {URDF, XACRO, MJCF},
                      "robot files (URDF, xacro, MJCF)", ".urdf"),
                     (("--xacro-arg", "--xacro-package"), {XACRO}, "xacro files", ".xacro"),
                     (("--allow-read",), {XACRO, MJCF}, "xacro and MJCF files", ".xacro"))
-    kinds = {source_kind(model) for model in args.models}
+    kinds = {source_kind(model) for model in getattr(args, "models", None) or [path]}
     for names, accepting, what, suffix in option_kinds:
         given = [option for option in names if getattr(args, option[2:].replace("-", "_"))]
         if given and not kinds & accepting:
@@ -84,7 +90,8 @@ def urdf_options(args: argparse.Namespace, path: str) -> dict[str, Any]:
             raise ModelError([Problem("<command line>", None, None, "--lock", f"--lock '{item}' is not JOINT=VALUE",
                                       "write e.g. --lock finger_joint1=0.02 or --lock head_pan=30deg")]) from None
     options = {"tip": args.tip, "base": args.base, "locks": locks, "snap_angles": args.snap_angles,
-               "allow_nonphysical": args.allow_nonphysical, "branches": tuple(args.branch)}
+               "allow_nonphysical": args.allow_nonphysical, "branches": tuple(args.branch),
+               "chain": args.chain}
     if kind in (XACRO, MJCF):
         options["allow_read"] = tuple(args.allow_read)
     if kind == XACRO:

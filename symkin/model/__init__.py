@@ -23,17 +23,19 @@ def load_model(path: str | Path, tip: str | None = None, *, base: str | None = N
                locks: Mapping[str, float] | None = None, snap_angles: bool = False,
                allow_nonphysical: bool = False, xacro_args: Mapping[str, str] | None = None,
                xacro_packages: Mapping[str, str | Path] | None = None, branches: Sequence[str] = (),
-               allow_read: Sequence[str | Path] = ()) -> Model:
+               allow_read: Sequence[str | Path] = (), chain: bool = False) -> Model:
     """Read, validate and build the model in the file ``path``: YAML, URDF, xacro or MJCF, told by its
     content (root element ``<robot>``, with ``<xacro:...>`` elements or a ``.xacro`` name for xacro;
     ``<mujoco>`` for MJCF, read through MuJoCo's compiler).
 
     Args:
         path: the model file.
-        tip: URDF, xacro and MJCF (a body) only: the link that ends the chain (default: the leaf behind
-            the most moving joints).
+        tip: URDF, xacro and MJCF (a body) only: the link that carries the TCP, the task frame; it does not cut
+            the tree (default: the leaf behind the most moving joints).
+        chain: URDF, xacro and MJCF only: the model is the chain from the base to ``tip`` alone, every joint off
+            it locked and what it carries lumped (``--chain``; default: the whole tree).
         base: URDF only: the link the chain starts from (default: the root link).
-        locks: URDF only: {joint: value} of joints off the chain (default 0; see
+        locks: URDF only: {joint: value} of joints off the chain (with ``chain`` or ``branches``; default 0; see
             :mod:`symkin.model.urdf_source`).
         snap_angles: URDF only: read an angle that is a multiple of pi/2, pi/4, pi/3 or pi/6 rounded to the digits
             written as that multiple (:func:`symkin.model.urdf_source.snap_angle`).
@@ -55,12 +57,12 @@ def load_model(path: str | Path, tip: str | None = None, *, base: str | None = N
             raise ModelError([Problem(str(path), None, None, "", "xacro arguments and packages apply to xacro "
                                       "files only", "drop them, or pass a .xacro file")])
         document, _ = read_mjcf_document(path, tip=tip, base=base, locks=locks, snap_angles=snap_angles,
-                                          branches=branches, allow_read=allow_read)
+                                          branches=branches, allow_read=allow_read, chain=chain)
         return build_model(document, _stem(path), allow_nonphysical)
     xacro = {"xacro_args": xacro_args, "xacro_packages": xacro_packages}
     if kind == XACRO:
         document, _ = read_xacro_document(path, xacro_args, xacro_packages, allow_read, tip=tip, base=base,
-                                          locks=locks, snap_angles=snap_angles, branches=branches)
+                                          locks=locks, snap_angles=snap_angles, branches=branches, chain=chain)
         return build_model(document, _stem(path), allow_nonphysical)
     if allow_read:
         raise ModelError([Problem(str(path), None, None, "", "--allow-read applies to xacro and MJCF files only (a "
@@ -70,9 +72,9 @@ def load_model(path: str | Path, tip: str | None = None, *, base: str | None = N
                                   "drop them, or pass a .xacro file")])
     if kind == URDF:
         return build_model(read_urdf_document(path, tip, base=base, locks=locks, snap_angles=snap_angles,
-                                              branches=branches), Path(path).stem, allow_nonphysical)
+                                              branches=branches, chain=chain), Path(path).stem, allow_nonphysical)
     given = [name for name, value in (("tip", tip), ("base", base), ("locks", locks), ("snap_angles", snap_angles),
-                                      ("branches", branches)) if value]
+                                      ("branches", branches), ("chain", chain)) if value]
     if given:
         raise ModelError([Problem(str(path), None, None, "", f"{given[0]} applies to robot files (URDF, xacro, "
                                   "MJCF) only", f"drop {given[0]}, or pass a .urdf file")])

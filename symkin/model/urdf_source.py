@@ -35,11 +35,12 @@ With ``branches`` (``--branch LINK``) the joints from the base to each branch li
 well: the model is the tree of those paths (``parent:`` of the joints that start a branch), the TCP
 on the tip.
 
-Without a tip and branches the model is the whole tree below the root: every leaf behind a moving joint is
-a branch, and the TCP is on the leaf link behind the most moving joints (so sensor frames fixed to the base
-or to a link do not count, nor do mimic followers; the first in the file's order among equals).  A tip named
-by the caller (``symkin derive --tip LINK``, ``load_model(path, tip=...)``) makes the model the chain to it
-(and to the ``branches``).  Closed loops (a link with two parent
+Without ``chain`` and branches the model is the whole tree below the root: every leaf behind a moving joint is
+a branch, and the TCP is on the ``tip`` the caller names (``symkin derive --tip LINK``, ``load_model(path,
+tip=...)``: the task frame, it does not cut the tree), else on the leaf link behind the most moving joints (so
+sensor frames fixed to the base or to a link do not count, nor do mimic followers; the first in the file's order
+among equals).  With ``chain`` (``--chain``) the model is the chain to the tip alone (and with ``branches`` the
+tree of the paths to it and to them).  Closed loops (a link with two parent
 joints), floating and planar joints, followers on the chain of a joint off it, and
 off-chain followers of a chain joint (the links they move cannot be lumped into a chain
 link) are refused with a located error.
@@ -292,7 +293,7 @@ class _Joint:
 
 def read_urdf_document(path: str | Path, tip: str | None = None, *, base: str | None = None,
                        locks: Mapping[str, float] | None = None, snap_angles: bool = False,
-                       branches: Sequence[str] = ()) -> Document:
+                       branches: Sequence[str] = (), chain: bool = False) -> Document:
     """Read the URDF at ``path`` as a model document (see the module docstring).
 
     Raises:
@@ -305,16 +306,18 @@ def read_urdf_document(path: str | Path, tip: str | None = None, *, base: str | 
     except UnicodeDecodeError as exc:
         raise ModelError([Problem(name, None, None, "", f"the file is not UTF-8 text ({exc.reason})",
                                   "save the URDF as UTF-8 text")]) from None
-    return urdf_document(text, name, tip, base=base, locks=locks, snap_angles=snap_angles, branches=branches)
+    return urdf_document(text, name, tip, base=base, locks=locks, snap_angles=snap_angles, branches=branches,
+                         chain=chain)
 
 
 def urdf_document(text: str, file: str = "<string>", tip: str | None = None, *, base: str | None = None,
                   locks: Mapping[str, float] | None = None, snap_angles: bool = False,
-                  branches: Sequence[str] = ()) -> Document:
+                  branches: Sequence[str] = (), chain: bool = False) -> Document:
     """The model document of URDF ``text`` (see :func:`read_urdf_document`).
 
     Args:
-        tip: the link that ends the chain and carries the TCP (default: see the module docstring).
+        tip: the link that carries the TCP, the task frame (default: see the module docstring).
+        chain: the model is the chain to the tip only (everything off it locked and lumped), not the whole tree.
         branches: more links whose joints from the base stay moving: the model is then the tree of the
             paths to the tip and to each of them (a torso's two arms; :mod:`symkin.model.tree`).
         base: the link the chain starts from (default: the root link); links outside its subtree
@@ -341,9 +344,13 @@ def urdf_document(text: str, file: str = "<string>", tip: str | None = None, *, 
                    f"choose one of: {name_list(links)}")
             r.stop()
         root = base
-    named = tip
     tip = _tip(r, robot, root, children, parent_of, tip)
-    if named is None and not branches:  # the whole tree: every leaf behind a moving joint is a branch
+    whole = not chain and not branches
+    if whole and locks:
+        r.fail(robot, "lock", f"--lock {next(iter(locks))}: the model is the whole tree, where every joint moves",
+               "add --chain (the chain to --tip; joints off it are locked) or --branch LINK to lock joints off them")
+        r.stop()
+    if whole:  # every leaf behind a moving joint is a branch
         branches = [leaf for leaf in _subtree(root, children) if not children[leaf] and leaf != tip
                     and _moving_count(leaf, root, parent_of) > 0]
     for branch in branches:
@@ -372,14 +379,15 @@ def urdf_document(text: str, file: str = "<string>", tip: str | None = None, *, 
     if any(renamed.values()):
         data["source_names"] = {kind: names for kind, names in renamed.items() if names}
     locked_text = ", ".join(f"{name} = {_decimal(value)}" for name, value in locked.items())
-    data["description"] = (f"{robot_name or 'robot'} from the URDF {Path(file).name}, chain {root} -> {tip}"
+    shape = f"tree below {root}, TCP on {tip}" if whole and branches else f"chain {root} -> {tip}"
+    data["description"] = (f"{robot_name or 'robot'} from the URDF {Path(file).name}, {shape}"
                            + (f"; locked: {locked_text}" if locked else "")
                            + ("; angles snapped to the multiples of pi/2, pi/4, pi/3 or pi/6 they are rounded to "
                               "the digits written" if snap_angles
                               else "; angles as written") + ".")
     data["parameters"] = {"g": {"value": "9.81", "unit": "m/s^2", "doc": "gravitational acceleration"}}
     serial: dict[str, Any] = {}
-    chain: list[dict[str, Any]] = []
+    rows: list[dict[str, Any]] = []
     # Each link of the tree: (the model link it moves with, None for the base; fixed frames from there).
     state: dict[str, tuple[str | None, list[dict[str, list[str]]]]] = {root: (None, [])}
     # Links that move: (model link carrying them, frames from that link's frame to theirs).
@@ -399,10 +407,10 @@ def urdf_document(text: str, file: str = "<string>", tip: str | None = None, *, 
                     serial["base"] = _nontrivial(pending)
             else:
                 joint = _moving_joint(r, j, _nontrivial(pending + [origin]))
-            if chain and moving != chain[-1]["link"]:  # a branch: it hangs on an earlier link or the base
+            if rows and moving != rows[-1]["link"]:  # a branch: it hangs on an earlier link or the base
                 joint["parent"] = moving if moving is not None else "base"
-            r.marks[("serial", "chain", len(chain))] = (j.element.line, j.element.column)
-            chain.append(joint)
+            r.marks[("serial", "chain", len(rows))] = (j.element.line, j.element.column)
+            rows.append(joint)
             state[j.child] = (joint["link"], [])
             dynamics = j.element.find("dynamics")
             if dynamics is not None:
@@ -413,15 +421,15 @@ def urdf_document(text: str, file: str = "<string>", tip: str | None = None, *, 
         carrier, frames = state[j.child]
         if carrier is not None:
             carried[j.child] = (carrier, list(frames))
-    if not chain:
+    if not rows:
         r.fail(robot, "", f"the chain {root} -> {tip} has no moving joint", "choose another tip link (--tip)")
         r.stop()
     carrier, pending = state[tip]
     if _nontrivial(pending):
         serial["tcp"] = _nontrivial(pending)
-    if carrier != chain[-1]["link"]:
+    if carrier != rows[-1]["link"]:
         serial["tip"] = carrier
-    serial["chain"] = chain
+    serial["chain"] = rows
     data["serial"] = serial
     # Links fixed to a moving link off the chain (sensors, flanges) move with it.
     stack = [j for link in list(carried) for j in children[link] if j.child not in on_path]

@@ -189,7 +189,7 @@ def test_a_robot_files_identified_values_come_back_as_a_symkin_model_and_a_urdf(
     assert any("(the chain of the robot file finger_edu.urdf)" in note for note in as_yaml.notes)
     assert updated.urdf is not None
     (tmp_path / "identified.urdf").write_text(updated.urdf)
-    as_urdf = load_model(tmp_path / "identified.urdf", tip="tcp")
+    as_urdf = load_model(tmp_path / "identified.urdf", tip="tcp", chain=True)
     assert parameter_names(as_urdf) == names
     difference = standard_values(as_urdf) - target
     assert np.all(np.abs(np.delete(difference, rotor)) <= tolerance)
@@ -213,7 +213,7 @@ def test_identify_on_a_urdf_writes_identified_yaml_and_urdf(tmp_path):
                                           "--no-figure", "-o", str(tmp_path / "out")], capture_output=True, text=True)
     assert result.returncode == 0, result.stderr
     assert "identified.urdf: the same as a URDF" in (tmp_path / "out" / "summary.txt").read_text()
-    written = load_model(tmp_path / "out" / "identified.urdf", tip="tcp")
+    written = load_model(tmp_path / "out" / "identified.urdf", tip="tcp", chain=True)
     record = json.loads((tmp_path / "out" / "estimate.json").read_text())["standard"]["parameters"]
     estimate = np.array([record[name] for name in parameter_names(written)])
     # what a URDF carries: the inertials and the viscous friction; the estimate's Coulomb offset makes the levels

@@ -295,8 +295,8 @@ def test_the_stock_ur10_gets_its_base_parameters_with_its_angles_snapped():
 
     path = ROBOTS_DIR / "ur_description/urdf/ur10_robot.urdf"
     with pytest.raises(DerivationError, match="--snap-angles"):
-        Derivation(load_model(path, tip="tool0"))["base_parameters"]
-    model = load_model(path, tip="tool0", snap_angles=True)
+        Derivation(load_model(path, tip="tool0", chain=True))["base_parameters"]
+    model = load_model(path, tip="tool0", chain=True, snap_angles=True)
     assert "1.57079632679 as pi/2" in model.notes[-1]
     d = Derivation(model)
     inertial = base_parameters(model, [row[:60] for row in d["regressor_graph"]], parameter_names(model)[:60])

@@ -139,7 +139,7 @@ def test_urdf_transmissions_give_the_chain_s_gear_ratios():
     from symkin.model import load_model
     from sample_models import ROBOTS_DIR
 
-    model = load_model(ROBOTS_DIR / "pr2_description/urdf/pr2.urdf", base="torso_lift_link", tip="l_gripper_palm_link")
+    model = load_model(ROBOTS_DIR / "pr2_description/urdf/pr2.urdf", base="torso_lift_link", tip="l_gripper_palm_link", chain=True)
     ratios = {a.joint: float(a.gear_ratio) for a in model.actuators}
     # the decimals of the file, read exactly and rounded once: equal to the literals
     assert ratios["l_shoulder_pan_joint"] == 63.1552452977

@@ -79,9 +79,9 @@ def test_bad_mjcf_gets_located_errors(tmp_path, capsys):
     ant = ASSETS / "ant.xml"
     with pytest.raises(ModelError, match=r"ant\.xml:\d+:\d+: at 'joint\[root\]' joint 'root' on the chain world -> "
                                          r"body4 is a free joint"):
-        load_model(ant, tip="body4")
+        load_model(ant, tip="body4", chain=True)
     # below the free joint, a leg is a chain (the other legs' joints locked)
-    assert load_model(ant, base="torso", tip="body4").dof == 2
+    assert load_model(ant, base="torso", tip="body4", chain=True).dof == 2
     bad = tmp_path / "bad.xml"
     bad.write_text('<mujoco><worldbody><body name="b"><joint type="hinge" bogus="1"/></body></worldbody></mujoco>')
     out = tmp_path / "out"
@@ -90,7 +90,7 @@ def test_bad_mjcf_gets_located_errors(tmp_path, capsys):
     assert f"{bad}: MuJoCo's compiler refuses the file: XML Error: Schema violation: unrecognized attribute: " \
            "'bogus'" in err
     assert not out.exists()
-    assert main(["derive", str(ASSETS / "reacher.xml"), "--tip", "fingertip", "--only", "fk,mass_matrix",
+    assert main(["derive", str(ASSETS / "reacher.xml"), "--tip", "fingertip", "--chain", "--only", "fk,mass_matrix",
                  "-o", str(out), "-q"]) == 0
     assert (out / "reacher" / "manifest.json").exists()
 

@@ -56,7 +56,7 @@ class _Result:
 def _check(capsys: pytest.CaptureFixture[str], path: Path, *options: str) -> _Result:
     """``symkin check PATH --tip tool`` in this process (the MJCF compiler runs in a child of its own)."""
     start = time.monotonic()
-    code = main(["check", str(path), "--tip", "tool", *options])
+    code = main(["check", str(path), "--tip", "tool", "--chain", *options])
     assert time.monotonic() - start < 60
     out, err = capsys.readouterr()
     return _Result(code, out, err)
@@ -204,7 +204,7 @@ def test_mujocos_warnings_become_notes_and_no_log_file(tmp_path, monkeypatch):
     path.write_text(MJCF.format(head='<compiler settotalmass="2"/>',
                                 inside='<body name="tool" pos="0.2 0 0"><joint name="j2" type="hinge"/>'
                                        '<geom size="0.05" mass="0.5"/></body>'))
-    model = load_model(path, tip="tool")
+    model = load_model(path, tip="tool", chain=True)
     assert any("MuJoCo's compiler warns: compiler attribute 'settotalmass' is deprecated" in n for n in model.notes)
     assert list(tmp_path.iterdir()) == [path]
 
@@ -218,7 +218,7 @@ def test_a_message_lists_at_most_twenty_names(tmp_path):
     path = tmp_path / "bush.urdf"
     path.write_text(f'<?xml version="1.0"?>\n<robot name="bush"><link name="base"/>{leaves}</robot>\n')
     with pytest.raises(ModelError) as raised:
-        load_model(path, tip="nope")
+        load_model(path, tip="nope", chain=True)
     text = str(raised.value)
     assert "... and 4481 more" in text, text[:2000]
     assert len(text) < 4000

@@ -91,38 +91,38 @@ def test_the_tip_selects_the_chain(tmp_path):
     path = _write(tmp_path, text)
     whole = load_model(path)          # issue 61: no tip named - the whole tree, its task frame the first deepest leaf
     assert whole.dof == 3
-    assert whole.tcp == load_model(path, tip="tool").tcp
-    assert load_model(path, tip="tool").dof == 3
-    assert load_model(path, tip="cam").tcp == ()
+    assert whole.tcp == load_model(path, tip="tool", chain=True).tcp
+    assert load_model(path, tip="tool", chain=True).dof == 3
+    assert load_model(path, tip="cam", chain=True).tcp == ()
     with pytest.raises(ModelError, match="tip link 'nope' is not a link"):
-        load_model(path, tip="nope")
+        load_model(path, tip="nope", chain=True)
 
 
 def test_joints_off_the_chain_are_locked_and_their_links_lumped_into_the_chain(tmp_path):
     """Beyond the tip l2, the prismatic j3 is locked (at 0, or at --lock's value): the slider and the
     tool it carries become rigid parts of l2, as in Pinocchio's buildReducedModel."""
     path = _write(tmp_path, ARM)
-    at_zero = load_model(path, tip="l2")
+    at_zero = load_model(path, tip="l2", chain=True)
     assert [j.name for j in at_zero.joints] == ["j1", "j2"]
     assert "locked: j3 = 0" in at_zero.description
     slider = next(b for b in at_zero.bodies if float(b.mass) == 0.25)
     assert slider.link == "l2"
     assert [float(c) for c in slider.com] == [0.1, 0.0, 0.0]
-    moved = load_model(path, tip="l2", locks={"j3": 0.15})
+    moved = load_model(path, tip="l2", chain=True, locks={"j3": 0.15})
     slider = next(b for b in moved.bodies if float(b.mass) == 0.25)
     assert [float(c) for c in slider.com] == [0.25, 0.0, 0.0]  # 0.1 + 0.15 along the axis x
     with pytest.raises(ModelError, match="locked at 0.3, outside its limits"):
-        load_model(path, tip="l2", locks={"j3": 0.3})
+        load_model(path, tip="l2", chain=True, locks={"j3": 0.3})
     with pytest.raises(ModelError, match="--lock names 'j2', a joint of the chain"):
-        load_model(path, tip="l2", locks={"j2": 0.1})
+        load_model(path, tip="l2", chain=True, locks={"j2": 0.1})
     with pytest.raises(ModelError, match="unknown joint 'j9'"):
-        load_model(path, tip="l2", locks={"j9": 0.1})
+        load_model(path, tip="l2", chain=True, locks={"j9": 0.1})
     # A revolute joint off the chain, locked about a general axis: its body sits where the rotation puts it.
     text = ARM.replace("</robot>", '<link name="arm2"><inertial><origin xyz="0.1 0 0"/><mass value="0.3"/>'
                                    '</inertial></link><joint name="j4" type="revolute"><parent link="l1"/>'
                                    '<child link="arm2"/><axis xyz="0 0.6 0.8"/><limit lower="-2" upper="2"/>'
                                    '</joint></robot>')
-    locked = load_model(_write(tmp_path, text, "branch.urdf"), tip="tool", locks={"j4": 1.0})
+    locked = load_model(_write(tmp_path, text, "branch.urdf"), tip="tool", chain=True, locks={"j4": 1.0})
     body = next(b for b in locked.bodies if float(b.mass) == 0.3)
     x, y, z, c, s = 0.0, 0.6, 0.8, np.cos(1.0), np.sin(1.0)  # Rodrigues: R e_x for the unit axis (0, 0.6, 0.8)
     expected = 0.1 * np.array([c + x * x * (1 - c), y * x * (1 - c) + z * s, z * x * (1 - c) - y * s])
@@ -150,7 +150,7 @@ def test_mimic_joints_off_the_chain_follow_their_leader_and_on_the_chain_are_cou
                                       '<axis xyz="0 -1 0"/><limit lower="0" upper="0.08"/>'
                                       '<mimic joint="finger1" multiplier="2" offset="0.001"/></joint></robot>')
     path = _write(tmp_path, fingers, "hand.urdf")
-    model = load_model(path, tip="tool", locks={"finger1": 0.02})
+    model = load_model(path, tip="tool", chain=True, locks={"finger1": 0.02})
     assert "finger1 = 0.02, finger2 = 0.041" in model.description
     f1, f2 = [b for b in model.bodies if float(b.mass) == 0.1]  # bodies in link order: f1, f2
     assert f1.link == f2.link == "slider"
@@ -192,7 +192,7 @@ def test_unsupported_or_malformed_urdfs_get_located_errors(tmp_path, edit, messa
 def test_cli_derives_a_urdf_with_a_tip(tmp_path):
     path = _write(tmp_path, ARM)
     out = tmp_path / "out"
-    run = subprocess.run(SYMKIN_CLI + ["derive", str(path), "--tip", "slider", "-o", str(out), "--only",
+    run = subprocess.run(SYMKIN_CLI + ["derive", str(path), "--tip", "slider", "--chain", "-o", str(out), "--only",
                                        "fk,mass_matrix", "-q"], capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
     from symkin import load
@@ -230,7 +230,7 @@ def test_the_base_link_starts_the_chain(tmp_path):
     assert [j.name for j in model.joints] == ["j2", "j3"]
     assert sorted(float(b.mass) for b in model.bodies) == [0.25, 0.5]  # l1 and its sensor no longer move
     with pytest.raises(ModelError, match="tip link 'l1' is not below the base link 'l2'"):
-        load_model(path, base="l2", tip="l1")
+        load_model(path, base="l2", tip="l1", chain=True)
     with pytest.raises(ModelError, match="base link 'nope' is not a link"):
         load_model(path, base="nope")
 
@@ -263,10 +263,10 @@ def test_odd_constant_frames_compose_to_numbers_and_agree_with_pinocchio(tmp_pat
     n = 3
     path = _write(tmp_path, odd_frames_urdf(n), "odd_frames.urdf")
     dh = _write(tmp_path, chain_yaml(n), "chain.yaml")
-    model = load_model(path, tip="tool")
+    model = load_model(path, tip="tool", chain=True)
     assert all(sympy.sympify(v).is_Number for body in model.bodies for v in (*body.com, *body.inertia))
     out = tmp_path / "out"
-    for source in ([str(path), "--tip", "tool"], [str(dh)]):
+    for source in ([str(path), "--tip", "tool", "--chain"], [str(dh)]):
         assert main(["derive", *source, "--only", "fk,jacobian,mass_matrix,inverse_dynamics", "--backend", "numpy",
                      "-o", str(out), "-q"]) == 0
     code = (out / f"odd_frames{n}" / f"odd_frames{n}.py").read_text()
@@ -275,7 +275,7 @@ def test_odd_constant_frames_compose_to_numbers_and_agree_with_pinocchio(tmp_pat
     # rotations cost more terms (2.5 times the text at n = 3), products of trig of constants grow without bound
     assert len(code) < 4 * len((out / f"chain{n}" / f"chain{n}.py").read_text())
     capsys.readouterr()
-    assert main(["crosscheck", str(path), "--tip", "tool", "--samples", "5", "--backend", "numpy"]) == 0, \
+    assert main(["crosscheck", str(path), "--tip", "tool", "--chain", "--samples", "5", "--backend", "numpy"]) == 0, \
         capsys.readouterr().out
 
 
@@ -287,13 +287,13 @@ def test_an_off_chain_joint_locks_at_0_clipped_into_its_limits_or_where_asked_wi
                                    '<child link="b2"/><axis xyz="0 0 1"/><limit lower="0.5" upper="1"/></joint>'
                                    "</robot>")
     path = _write(tmp_path, text, "clipped.urdf")
-    (note,) = load_model(path, tip="tool").notes
+    (note,) = load_model(path, tip="tool", chain=True).notes
     line = text[:text.index('<joint name="j4"')].count("\n") + 1
     assert note == (f"line {line}: joint 'j4' off the chain locked at 0.5, 0 clipped into its limits [0.5, 1] "
                     "(--lock j4=VALUE to choose)")
-    assert load_model(path, tip="tool", locks={"j4": 0.75}).notes == ()
+    assert load_model(path, tip="tool", chain=True, locks={"j4": 0.75}).notes == ()
     with pytest.raises(ModelError, match="'j4' is locked at 2, outside its limits"):
-        load_model(path, tip="tool", locks={"j4": 2.0})
+        load_model(path, tip="tool", chain=True, locks={"j4": 2.0})
 
 
 VENDOR = """<?xml version="1.0"?>
@@ -360,13 +360,13 @@ def test_robot_files_are_told_by_their_content(tmp_path, capsys):
     from symkin.cli import main
 
     xml = _write(tmp_path, ARM, "arm.xml")
-    arm_joints = [j.name for j in load_model(_write(tmp_path, ARM), tip="tool").joints]
-    assert [j.name for j in load_model(xml, tip="tool").joints] == arm_joints
+    arm_joints = [j.name for j in load_model(_write(tmp_path, ARM), tip="tool", chain=True).joints]
+    assert [j.name for j in load_model(xml, tip="tool", chain=True).joints] == arm_joints
     robots = Path(distribution("example-robot-data").locate_file("cmeel.prefix/share/example-robot-data/robots"))
     macros = _write(tmp_path, ARM.replace('<robot name="arm">', '<robot name="arm" xmlns:xacro="http://ros.org/wiki/'
                                                                  'xacro"><xacro:property name="l" value="0.2"/>'),
                     "macros.urdf")
-    assert [j.name for j in load_model(macros, tip="tool").joints] == arm_joints
+    assert [j.name for j in load_model(macros, tip="tool", chain=True).joints] == arm_joints
     mjcf = _write(tmp_path, '<mujoco model="arm"><worldbody><body name="b"/></worldbody></mujoco>', "arm_mjcf.xml")
     # the package's hector quadrotor: its macro is never called, so it expands to an empty robot (as xacro's does)
     for path, what in ((robots / "hector_description/robots/quadrotor_base.urdf.xacro", ":3:1: the robot has no links"),
@@ -386,7 +386,7 @@ def test_robot_files_are_told_by_their_content(tmp_path, capsys):
                       "macros.xml")
     assert "fix: name the file .xacro" in str(raised.value)
     # an expanded URDF keeps its xmlns:xacro declaration and macros in comments: it is a URDF (the TALOS arm)
-    assert load_model(robots / "talos_data/robots/talos_left_arm.urdf", tip="arm_left_7_link").dof == 6
+    assert load_model(robots / "talos_data/robots/talos_left_arm.urdf", tip="arm_left_7_link", chain=True).dof == 6
 
 
 @pytest.mark.parametrize("written, read", [
@@ -404,8 +404,9 @@ def test_an_angle_is_snapped_where_it_is_a_multiple_of_pi_rounded_to_the_digits_
 
 
 def test_a_mimic_joint_on_a_side_branch_is_a_coupling_of_the_whole_tree(tmp_path):
-    """Issue 61: without --tip the side branch is in the model and its mimic joint a coupling; with a tip that
-    leaves it off the chain its links cannot be lumped (they move with a chain joint): refused, located."""
+    """Issue 61: the whole tree by default, also with a tip (the task frame: it does not cut the tree): the side
+    branch is in the model and its mimic joint a coupling; with --chain to a tip that leaves it off the chain its
+    links cannot be lumped (they move with a chain joint): refused, located."""
     text = ARM.replace("</robot>", '<link name="b2"/><joint name="j4" type="revolute"><parent link="l1"/>'
                                    '<child link="b2"/><axis xyz="0 0 1"/><mimic joint="j2"/></joint></robot>')
     path = _write(tmp_path, text)
@@ -413,6 +414,12 @@ def test_a_mimic_joint_on_a_side_branch_is_a_coupling_of_the_whole_tree(tmp_path
     assert [j.name for j in whole.joints][-1] == "j4"
     assert whole.joints[-1].coupling.leader == "j2"
     assert whole.dof == len(whole.joints) - 1
+    framed = load_model(path, tip="l1")                      # the TCP on l1; j3 and j4 still move
+    assert [j.name for j in framed.joints] == [j.name for j in whole.joints]
+    assert framed.tip == "l1"
+    whole_tree = r"arm\.urdf:2:1: at .lock. --lock j4: the model is the whole tree, where every joint moves\n *fix: add --chain"
+    with pytest.raises(ModelError, match=whole_tree):
+        load_model(path, tip="tool", locks={"j4": 0.1})
     with pytest.raises(ModelError, match="'j4' off the chain mimics 'j2', a joint of the chain") as info:
-        load_model(path, tip="tool")
+        load_model(path, tip="tool", chain=True)
     assert all(p.line is not None for p in info.value.problems)

@@ -92,13 +92,13 @@ def test_a_xacro_arm_derives_and_crosschecks(tmp_path, capsys):
                         urdf={"tip": "/gripper_prop_link"})
     assert not report.failures, report.comparisons
     assert {"mass_matrix", "gravity_vector", "inverse_dynamics"} <= {c.quantity for c in report.comparisons}
-    assert main(["check", str(px100), "--tip", "px/gripper_prop_link", "--xacro-arg", "robot_name:=px"]) == 0
+    assert main(["check", str(px100), "--tip", "px/gripper_prop_link", "--chain", "--xacro-arg", "robot_name:=px"]) == 0
     out = capsys.readouterr().out
     assert "ok - model 'px100', 5 joints (waist:R," in out
     # the note on the clipped finger names the line of the xacro file that declares the joint, not of the expansion
     line = int(re.search(r"px100\.urdf\.xacro, line (\d+): joint 'left_finger' off the chain", out).group(1))
     assert '<joint name="left_finger"' in px100.read_text().splitlines()[line - 1]
-    model = load_model(px100, tip="px/gripper_prop_link", xacro_args={"robot_name": "px"})
+    model = load_model(px100, tip="px/gripper_prop_link", chain=True, xacro_args={"robot_name": "px"})
     assert model.dof == 5
     assert model.source_names["links"]["px_gripper_prop_link"] == "px/gripper_prop_link"
     # an option of the wrong file kind, an undeclared argument, a missing package: exit 2, located
@@ -118,7 +118,7 @@ def test_a_xacro_arm_derives_and_crosschecks(tmp_path, capsys):
     # the URDF reader's messages land on the xacro element (here in the included hand.xacro)
     panda = RTB / "xacro/qut_frankie_description/robots/panda_arm_hand.urdf.xacro"
     with pytest.raises(ModelError, match=r"robots/hand\.xacro:\d+:\d+: at 'joint\[panda_finger_joint2\]\.mimic'"):
-        load_model(panda, tip="panda_leftfinger",  # the chain to one finger: the other mimics it from off the chain
+        load_model(panda, tip="panda_leftfinger", chain=True,  # the chain to one finger: the other mimics it from off the chain
                    xacro_packages={"qut_frankie_description": PACKAGES["qut_frankie_description"]})
 
 

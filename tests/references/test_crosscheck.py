@@ -45,7 +45,7 @@ def test_vanishing_quantities_are_judged_by_their_natural_size():
     assert _normwise(np.zeros(1), np.array([1e-27]), None, 2.5) == pytest.approx(4e-28)
     assert _normwise(np.zeros(1), np.array([0.3]), None, 2.5) == pytest.approx(0.12)  # a real difference stays
     report = crosscheck(ROBOTS_DIR / "double_pendulum_description/urdf/double_pendulum.urdf", samples=3,
-                        urdf={"tip": "link1"}, backends=("numpy",))
+                        urdf={"tip": "link1", "chain": True}, backends=("numpy",))
     assert not report.failures, report.comparisons
 
 
@@ -54,7 +54,7 @@ def test_friction_the_coriolis_matrix_and_the_c_code_are_checked():
     friction row; C is checked through C qd = V and Mdot - 2C skew (Mdot = C_ref + C_ref^T); and the C
     library is checked as the numpy module is."""
     report = crosscheck(ROBOTS_DIR / "double_pendulum_description/urdf/double_pendulum.urdf", samples=3,
-                        urdf={"tip": "link2"})
+                        urdf={"tip": "link2", "chain": True})
     rows = {c.quantity: c for c in report.comparisons}
     for row in ("friction", "inverse_dynamics", "coriolis_matrix C qd", "coriolis_matrix Mdot - 2C skew"):
         assert row in rows, row
@@ -65,7 +65,7 @@ def test_friction_the_coriolis_matrix_and_the_c_code_are_checked():
 
 def test_a_stock_robot_with_locked_fingers_passes_on_the_command_line():
     run = subprocess.run(SYMKIN_CLI + ["crosscheck", str(ROBOTS_DIR / "panda_description/urdf/panda.urdf"), "--tip",
-                                       "panda_link8", "--lock", "panda_finger_joint1=0.03", "--samples", "4"],
+                                       "panda_link8", "--chain", "--lock", "panda_finger_joint1=0.03", "--samples", "4"],
                          capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
     assert "mass_matrix" in run.stdout
@@ -80,7 +80,7 @@ def test_a_stock_arm_with_a_mimic_joint_on_the_chain_passes():
     others = ["l_gripper_r_finger_joint", "l_gripper_l_parallel_root_joint", "l_gripper_r_parallel_root_joint",
               "l_gripper_r_finger_tip_joint"]
     report = crosscheck(ROBOTS_DIR / "pr2_description/urdf/pr2.urdf", samples=4,
-                        urdf={"base": "torso_lift_link", "tip": "l_gripper_l_finger_tip_link",
+                        urdf={"base": "torso_lift_link", "tip": "l_gripper_l_finger_tip_link", "chain": True,
                               "locks": {name: 0.2 for name in others}})
     assert not report.failures, report.comparisons
     assert {"mass_matrix", "coriolis_vector", "gravity_vector", "frame l_gripper_l_finger_tip_link"} <= \
@@ -108,7 +108,7 @@ def test_the_exported_urdf_reads_back_as_the_same_robot(tmp_path):
     yaml = load_model(MODELS_DIR / "ur10e.yaml")
     path = tmp_path / "ur10e.urdf"
     path.write_text(export_urdf(yaml))
-    urdf = load_model(path, tip="tcp")
+    urdf = load_model(path, tip="tcp", chain=True)
     assert [j.name for j in urdf.joints] == [j.name for j in yaml.joints]
     rng = np.random.default_rng(3)
     for _ in range(4):
@@ -126,7 +126,7 @@ def test_a_model_file_named_with_dashes_exports_a_well_formed_urdf(tmp_path):
     path.write_text((MODELS_DIR / "planar_2r.yaml").read_text())
     exported = tmp_path / "arm.urdf"
     exported.write_text(export_urdf(load_model(path)))
-    assert [j.name for j in load_model(exported, tip="tcp").joints] == ["theta1", "theta2"]
+    assert [j.name for j in load_model(exported, tip="tcp", chain=True).joints] == ["theta1", "theta2"]
 
 
 def test_export_refuses_a_parallel_model_and_crosscheck_says_when_pinocchio_is_missing(tmp_path, monkeypatch):

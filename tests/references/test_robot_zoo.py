@@ -55,7 +55,7 @@ def _normwise(got: np.ndarray, want: np.ndarray) -> float:
 @pytest.mark.parametrize("file, tip, dof", ZOO, ids=[Path(f).stem for f, _, _ in ZOO])
 def test_a_stock_robot_file_derives_and_agrees_with_pinocchio(file, tip, dof):
     path = ROBOTS_DIR / file
-    model = load_model(path, tip=tip)
+    model = load_model(path, tip=tip, chain=True)
     assert model.dof == dof
     d = Derivation(model)
     fk, J = reference_function(model, d["fk"]), reference_function(model, d["jacobian_geometric"])
@@ -101,7 +101,7 @@ def test_the_regressor_of_a_stock_arm_is_pinocchios(file, tip, dof):
     toDynamicParameters (a URDF's joint frame is its child link's: the same origin and axes), to DYNAMICS of the
     torques' scale (a chain of <= 7 joints, tests/tolerances.py)."""
     path = ROBOTS_DIR / file
-    model = load_model(path, tip=tip)
+    model = load_model(path, tip=tip, chain=True)
     full = pin.buildModelFromUrdf(str(path))
     assert full.nv == model.dof == dof, file
     data = full.createData()
@@ -140,7 +140,7 @@ def test_symkin_crosscheck_passes_on_every_zoo_robot(file, tip, dof):
     from symkin.analysis.crosscheck import crosscheck
 
     # the C library and the Coriolis matrix: test_crosscheck (deriving C for every zoo arm costs a minute)
-    report = crosscheck(ROBOTS_DIR / file, samples=3, urdf={"tip": tip}, backends=("numpy",), coriolis_matrix=False)
+    report = crosscheck(ROBOTS_DIR / file, samples=3, urdf={"tip": tip, "chain": True}, backends=("numpy",), coriolis_matrix=False)
     assert not report.failures, report.comparisons
     assert {"fk", "jacobian_geometric", "mass_matrix", "coriolis_vector", "gravity_vector"} <= \
         {c.quantity for c in report.comparisons}
@@ -153,12 +153,12 @@ def test_off_chain_joints_whose_limits_exclude_0_lock_at_the_nearest_limit():
     from symkin.analysis.crosscheck import crosscheck
 
     path = ROBOTS_DIR / "icub_description/robots/icub_reduced.urdf"
-    model = load_model(path, tip="l_hand_dh_frame")
+    model = load_model(path, tip="l_hand_dh_frame", chain=True)
     clipped = [note for note in model.notes if "'r_elbow'" in note]
     assert len(clipped) == 1
     assert "locked at 0.0959931" in clipped[0]
     assert "--lock r_elbow=VALUE" in clipped[0]
-    report = crosscheck(path, samples=3, urdf={"tip": "l_hand_dh_frame"}, backends=("numpy",))
+    report = crosscheck(path, samples=3, urdf={"tip": "l_hand_dh_frame", "chain": True}, backends=("numpy",))
     assert not report.failures, report.comparisons
 
 
@@ -173,20 +173,20 @@ def test_non_physical_inertias_are_refused_or_accepted_with_a_note(tmp_path, cap
     from symkin.cli import main
 
     path = str(ROBOTS_DIR / "romeo_description/urdf/romeo_small.urdf")
-    assert main(["check", path, "--tip", "l_gripper"]) == 0                   # the scene: fk and J
-    assert main(["derive", path, "--tip", "l_gripper", "--only", "fk,jacobian", "-o", str(tmp_path / "kin")]) == 0
+    assert main(["check", path, "--tip", "l_gripper", "--chain"]) == 0                   # the scene: fk and J
+    assert main(["derive", path, "--tip", "l_gripper", "--chain", "--only", "fk,jacobian", "-o", str(tmp_path / "kin")]) == 0
     assert "not physical" in capsys.readouterr().out                           # noted
-    assert main(["derive", path, "--tip", "l_gripper", "--only", "mass_matrix", "-o", str(tmp_path / "m")]) == 2
+    assert main(["derive", path, "--tip", "l_gripper", "--chain", "--only", "mass_matrix", "-o", str(tmp_path / "m")]) == 2
     assert not (tmp_path / "m").exists()
     err = capsys.readouterr().err
     assert f"{path}:547:" in err
     assert "not physical" in err
     assert "--allow-nonphysical" in err
     out = tmp_path / "out"
-    assert main(["derive", path, "--tip", "l_gripper", "--allow-nonphysical", "--only", "fk", "-o", str(out)]) == 0
+    assert main(["derive", path, "--tip", "l_gripper", "--chain", "--allow-nonphysical", "--only", "fk", "-o", str(out)]) == 0
     printed = [line for line in capsys.readouterr().out.splitlines() if line.startswith("  note:")]
     manifest = json.loads((out / "romeo" / "manifest.json").read_text())
     assert len(printed) == len(manifest["model"]["notes"]) == 2
     assert all("not physical" in note and "line " in note and path not in note for note in manifest["model"]["notes"])
-    report = crosscheck(path, samples=3, urdf={"tip": "l_gripper", "allow_nonphysical": True}, backends=("numpy",))
+    report = crosscheck(path, samples=3, urdf={"tip": "l_gripper", "chain": True, "allow_nonphysical": True}, backends=("numpy",))
     assert not report.failures, report.comparisons
