@@ -30,4 +30,5 @@ def derive(model: str | Path | Model, out_dir: str | Path = "generated", *,
     if not isinstance(model, Model):
         model = load_model(model)
     request = pipeline.resolve_request(model, outputs, backends, fixed, float32, combine)
+    pipeline.require_derivable(model, request)
     return pipeline.write(pipeline.generate(model, request), out_dir)

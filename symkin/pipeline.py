@@ -84,6 +84,24 @@ def _split(value: str | Sequence[str] | None) -> tuple[str, ...] | None:
     return tuple(value)
 
 
+def require_derivable(model: Model, request: Request) -> None:
+    """What a derivation checks before any work, so that ``symkin check``, ``symkin derive`` and
+    :func:`symkin.derive` refuse the same models: the inertias the request needs are physical
+    (:data:`symkin.dynamics.physical.INERTIA_OUTPUTS`), and a parallel model's legs move its platform as
+    ``parallel.motion`` declares at the home pose (:func:`symkin.parallel.motion_check.require_declared_motion`).
+
+    Raises:
+        ModelError: the problems, each located in the model file, with the fix.
+    """
+    from symkin.dynamics.physical import INERTIA_OUTPUTS
+    from symkin.parallel.motion_check import require_declared_motion
+
+    if model.nonphysical and INERTIA_OUTPUTS & set(request.outputs):
+        raise ModelError(list(model.nonphysical))
+    if model.parallel is not None:
+        require_declared_motion(model)
+
+
 def resolve_request(model: Model, only: str | Sequence[str] | None = None,
                     backends: str | Sequence[str] | None = None,
                     fixed: str | Sequence[str] | None = None,

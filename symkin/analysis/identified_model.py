@@ -62,7 +62,8 @@ class UpdatedModel:
 
 def updated_model(path: str | Path, model: Model, names: Sequence[str], values: np.ndarray,
                   identified: np.ndarray, record: Mapping[str, Any],
-                  parameter_values: Mapping[str, float] | None = None) -> UpdatedModel:
+                  parameter_values: Mapping[str, float] | None = None,
+                  reading: Mapping[str, Any] | None = None) -> UpdatedModel:
     """The model file ``path`` (of ``model``) with the identified standard parameters ``values`` (named as the
     regressor's columns, ``identified`` marking those the run identifies).
 
@@ -71,7 +72,8 @@ def updated_model(path: str | Path, model: Model, names: Sequence[str], values: 
     and rotor as the module docstring maps them, ``values`` held by its file (:mod:`implied_parameters`); a hybrid
     device's wrist as a serial chain); ``record`` (method, data, samples) goes into the ``identified:`` section
     with the replaced parameters' names.  ``parameter_values`` are the parameter values the run was identified
-    at (written into the file).
+    at (written into the file); ``reading``: the options a robot file was read with (:func:`symkin.model.load_model`'s
+    tip, chain, snap_angles, ...), so the file is rewritten from the model the run identified.
 
     Raises:
         NotUpdated: the file is not a YAML model, the model has gyroscopic rotors (their bodies are not the
@@ -85,7 +87,7 @@ def updated_model(path: str | Path, model: Model, names: Sequence[str], values: 
         raise NotUpdated("the model's rotors are bodies of their own (gyroscopic: true), which the link bodies "
                          "identified here include; their values are in estimate.json")
     kind = source_kind(path)
-    data = _source_data(path, kind)
+    data = _source_data(path, kind, reading or {})
     given = dict(parameter_values or {})
     numbers = {p.symbol: given.get(p.name, p.value) for p in model.parameters}
     _set_parameters(data, given)
@@ -220,21 +222,23 @@ def _rod_length_squared(model: Model, estimate: _Estimate) -> float | None:
     return float(Derivation(model)[reduced_legs][0].L2.xreplace(estimate.numbers))
 
 
-def _source_data(path: str | Path, kind: str) -> dict[str, Any]:
-    """The model document's data of ``path``: a YAML model file's, or a robot file's chain as the readers build
-    it (read with their defaults, as ``symkin identify`` reads it)."""
+def _source_data(path: str | Path, kind: str, reading: Mapping[str, Any]) -> dict[str, Any]:
+    """The model document's data of ``path``: a YAML model file's, or a robot file's model as the readers build
+    it with the options ``reading`` (those ``symkin identify`` read it with; allow_nonphysical is the builder's)."""
     from symkin.model.mjcf_source import read_mjcf_document
     from symkin.model.source_kind import MJCF, URDF, XACRO
     from symkin.model.urdf_source import read_urdf_document
     from symkin.model.xacro_source import read_xacro_document
     from symkin.model.yaml_source import read_document
 
+    options = {key: value for key, value in reading.items() if key != "allow_nonphysical"}
     if kind == URDF:
-        return read_urdf_document(path).data
+        return read_urdf_document(path, **options).data
+    xacro = {key: options.pop(key) for key in ("xacro_args", "xacro_packages") if key in options}
     if kind == XACRO:
-        return read_xacro_document(path)[0].data
+        return read_xacro_document(path, xacro.get("xacro_args"), xacro.get("xacro_packages"), **options)[0].data
     if kind == MJCF:
-        return read_mjcf_document(path)[0].data
+        return read_mjcf_document(path, **options)[0].data
     return read_document(path).data
 
 

@@ -10,7 +10,8 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any, NoReturn
 
-from symkin.cli.model_files import ANALYSIS_OUTPUTS_BY_KIND, load_models
+from symkin.analysis.needs import NEEDS
+from symkin.cli.model_files import load_models
 from symkin.runtime.info import GeneratedModel
 
 #: Length units of figures and design labels: metres per unit.
@@ -162,7 +163,7 @@ def models_from_args(args: argparse.Namespace,
                      backends: Sequence[str]) -> tuple[list[Any], dict[str, tuple[float, float]]]:
     """MODEL loaded once per backend (a model file derived once), with --set applied, and the
     --limit overrides (see :func:`model_from_args`)."""
-    models = load_models(args.model, backends, ANALYSIS_OUTPUTS_BY_KIND,
+    models = load_models(args.model, backends, NEEDS["kinematics"],
                          DEVICE_OUTPUTS if getattr(args, "device", False) else ())
     values = parse_assignments(args.assignments)
     if values:

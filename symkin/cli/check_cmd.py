@@ -23,18 +23,12 @@ def register_check(sub: argparse._SubParsersAction) -> None:
 
 def run_check(args: argparse.Namespace) -> int:
     from symkin import pipeline
-    from symkin.dynamics.physical import INERTIA_OUTPUTS
-    from symkin.errors import ModelError
     from symkin.model import load_model
-    from symkin.parallel.motion_check import require_declared_motion
 
     for path in args.models:
         model = load_model(path, **urdf_options(args, path))
         request = pipeline.resolve_request(model)
-        if model.nonphysical and INERTIA_OUTPUTS & set(request.outputs):  # what derive would refuse
-            raise ModelError(list(model.nonphysical))
-        if model.parallel is not None:
-            require_declared_motion(model)
+        pipeline.require_derivable(model, request)  # what derive would refuse
         if model.parallel is None:
             structure = f"{len(model.joints)} joints ({', '.join(f'{j.name}:{j.type.value}' for j in model.joints)})"
             if model.dof != len(model.joints):  # couplings: fewer coordinates than joints

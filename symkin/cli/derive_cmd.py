@@ -86,12 +86,10 @@ def _validated(args: argparse.Namespace, path: str):
     ``parallel.motion`` at the home pose, as ``symkin check``)."""
     from symkin import pipeline
     from symkin.model import load_model
-    from symkin.parallel.motion_check import require_declared_motion
 
     model = load_model(path, **urdf_options(args, path))
     request = pipeline.resolve_request(model, args.only, args.backend, args.fixed, args.float32, args.combine)
-    if model.parallel is not None:
-        require_declared_motion(model)
+    pipeline.require_derivable(model, request)
     return model, request
 
 

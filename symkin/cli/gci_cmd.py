@@ -7,6 +7,7 @@ import importlib
 import time
 
 from symkin.analysis.mechanism import POSITION_COMPONENTS
+from symkin.analysis.needs import NEEDS
 from symkin.cli import analysis_args, model_files
 from symkin.cli.progress import Progress
 from symkin.runtime.info import GeneratedModel
@@ -76,7 +77,7 @@ def _chunked(args: argparse.Namespace) -> int:
         check_scheduler(args.scheduler, args.workers)
         if args.method not in ("mc", "qmc") or args.map:
             raise ValueError("--scheduler integrates by mc or qmc (no --map)")
-        with model_files.generated_directory(args.model, ("numpy",), model_files.ANALYSIS_OUTPUTS_BY_KIND) as d:
+        with model_files.generated_directory(args.model, ("numpy",), NEEDS["kinematics"]) as d:
             payload = ModelPayload.from_directory(d)
         values = analysis_args.parse_assignments(args.assignments)
         model = payload.load().bind(**values) if values else payload.load()

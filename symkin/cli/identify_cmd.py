@@ -12,6 +12,7 @@ import numpy as np
 
 from symkin.cli import analysis_args, model_files
 from symkin.cli.progress import Progress
+from symkin.cli.urdf_args import add_urdf_arguments, urdf_options
 
 #: What a model file is derived with on the fly (the full regressor for the consistent estimate and the model
 #: file), and with --method energy (the energy regressor too).
@@ -62,6 +63,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="low-pass cutoff that derives qd and qdd from q when the file has no rate columns")
     p.add_argument("-o", "--out", metavar="DIR", help="output directory (default: out/identify/MODEL)")
     p.add_argument("--no-figure", action="store_true", help="write the numbers only")
+    add_urdf_arguments(p)
     p.set_defaults(run=run, parser=p)
 
 
@@ -74,12 +76,13 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError(f"--holdout must lie in [0, 1), got {args.holdout:g}")
         if not args.window > 0:
             raise ValueError(f"--window must be a positive number of seconds, got {args.window:g}")
-        source = _model_file(args.model)
+        reading = urdf_options(args, args.model) if model_files.is_model_file(args.model) else {}
+        source = _model_file(args.model, reading)
         outputs = ENERGY_OUTPUTS if args.method == "energy" else IDENTIFY_OUTPUTS
         model = model_files.generated_model(args.model, args.backend, outputs,
                                             optional=model_files.parallel_only(POSE_OUTPUTS),
                                             closure=CLOSURE_ENERGY_OUTPUTS if args.method == "energy" else
-                                            CLOSURE_OUTPUTS)
+                                            CLOSURE_OUTPUTS, reading=reading)
         values = analysis_args.parse_assignments(args.assignments)
         model = model.bind(**values) if values else model
         parallel = model.info.is_parallel
@@ -135,14 +138,14 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _model_file(path: str):
-    """The :class:`~symkin.model.schema.Model` of MODEL when it is a model file (read once: it is rewritten into
-    identified.yaml), None for a generated directory."""
+def _model_file(path: str, reading: dict):
+    """The :class:`~symkin.model.schema.Model` of MODEL when it is a model file (read once, with the robot-file
+    options ``reading``: it is rewritten into identified.yaml), None for a generated directory."""
     if not model_files.is_model_file(path):
         return None
     from symkin.model import load_model
 
-    return load_model(path)
+    return load_model(path, **reading)
 
 
 def _device_regressors(args: argparse.Namespace, model):
@@ -250,7 +253,8 @@ def _updated_model(args: argparse.Namespace, source, model, file_values, found, 
     record = {"method": found.method if standard is None else "consistent", "data": Path(args.data).name,
               "samples": found.samples}
     try:
-        updated = identified_model.updated_model(args.model, source, names, estimate, identified, record, values)
+        updated = identified_model.updated_model(args.model, source, names, estimate, identified, record, values,
+                                                 urdf_options(args, args.model))
     except identified_model.NotUpdated as why:
         return None, f"no identified.yaml: {why}"
     also = "" if updated.urdf is None else "; identified.urdf: the same as a URDF"

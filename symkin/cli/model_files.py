@@ -2,9 +2,9 @@
 
 An analysis command's MODEL is a generated model directory (the output of ``symkin derive``) or a model file,
 which is derived into a temporary directory: fk and jacobian; ik as well for a translational parallel
-mechanism; ik and the inverse Jacobian for a platform that also rotates (:data:`ANALYSIS_OUTPUTS_BY_KIND`);
-the loop closure and its Jacobians for legs without the distance form, whose analyses continue the closure
-(:data:`CLOSURE_OUTPUTS`).
+mechanism; ik and the inverse Jacobian for a platform that also rotates (``NEEDS["kinematics"]`` of
+:mod:`symkin.analysis.needs`); the loop closure and its Jacobians for legs without the distance form, whose
+analyses continue the closure (:data:`CLOSURE_OUTPUTS`).
 A derivation is kept in the derivation cache (:mod:`symkin.pipeline_cache`), so that the next command given
 the unchanged file copies it.
 """
@@ -18,19 +18,14 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from symkin.analysis.mechanism import MechanismKind, parallel_kind
+from symkin.analysis.needs import NEEDS
 
 if TYPE_CHECKING:
     from symkin.model.schema import Model
 
-#: Quantities an analysis needs from a model file derived on the fly ...
-ANALYSIS_OUTPUTS = ("fk", "jacobian")
-#: ... by kind of mechanism (:func:`analysis_kind`): a translational parallel one also needs
-#: its closed-form ik (reachability, working mode); a platform that also rotates (Stewart-Gough)
-#: has no closed-form fk, and its analyses at a constant orientation use ik and J^-1; so does a
-#: spherical platform (orientations only).
-ANALYSIS_OUTPUTS_BY_KIND = {MechanismKind.SERIAL: ANALYSIS_OUTPUTS, MechanismKind.PARALLEL: ("ik", "fk", "jacobian"),
-                            MechanismKind.PARALLEL_POSE: ("ik", "inverse_jacobian"),
-                            MechanismKind.PARALLEL_ORIENTATION: ("ik", "inverse_jacobian")}
+#: Quantities an analysis needs from a model file derived on the fly, where it says none (a serial arm's
+#: kinematics; by kind of mechanism: symkin.analysis.needs.NEEDS).
+ANALYSIS_OUTPUTS = NEEDS["kinematics"][MechanismKind.SERIAL]
 #: Suffixes of model files (derived on the fly); anything else is a generated directory.
 MODEL_FILE_SUFFIXES = (".yaml", ".yml", ".urdf", ".xml", ".xacro")
 #: Also derived for a parallel model file that limits passive joints: the analyses find the
@@ -56,7 +51,7 @@ def parallel_only(names: Sequence[str]) -> dict[MechanismKind, tuple[str, ...]]:
 def generated_model(path: str, backend: str = "numpy",
                outputs: Sequence[str] | Mapping[MechanismKind, Sequence[str]] = ANALYSIS_OUTPUTS,
                optional: Sequence[str] | Mapping[MechanismKind, Sequence[str]] = (),
-               closure: Sequence[str] | None = None) -> Any:
+               closure: Sequence[str] | None = None, reading: Mapping[str, Any] | None = None) -> Any:
     """The loaded model of MODEL: a generated directory, or a model file derived on the fly.
 
     Args:
@@ -67,18 +62,20 @@ def generated_model(path: str, backend: str = "numpy",
             skipped silently where it does not; or by kind of mechanism, as ``outputs`` (:func:`parallel_only`).
         closure: the quantities to derive instead of ``outputs`` where the model's legs have no distance form
             (default: :data:`CLOSURE_OUTPUTS` where ``outputs`` is by kind, else ``outputs``).
+        reading: the keyword arguments of :func:`symkin.model.load_model` a robot file is read with (tip, chain,
+            snap_angles, ...: :func:`symkin.cli.urdf_args.urdf_options`); part of the derivation cache's key.
 
     Raises:
         ModelError: a model file is invalid.
         GeneratedCodeError: a directory holds no usable generated code.
     """
-    return load_models(path, (backend,), outputs, optional, closure)[0]
+    return load_models(path, (backend,), outputs, optional, closure, reading)[0]
 
 
 def load_models(path: str, backends: Sequence[str],
                 outputs: Sequence[str] | Mapping[MechanismKind, Sequence[str]] = ANALYSIS_OUTPUTS,
                 optional: Sequence[str] | Mapping[MechanismKind, Sequence[str]] = (),
-                closure: Sequence[str] | None = None) -> list[Any]:
+                closure: Sequence[str] | None = None, reading: Mapping[str, Any] | None = None) -> list[Any]:
     """MODEL loaded once per backend (as :func:`generated_model`); a model file is derived once, for all of them.
 
     ``outputs`` may map the kind of mechanism ("serial", "parallel") to the quantities
@@ -87,7 +84,7 @@ def load_models(path: str, backends: Sequence[str],
     from symkin import load
 
     # The generated module is imported (numpy) or read (C, CasADi) by load(): the files may go afterwards.
-    with generated_directory(path, backends, outputs, optional, closure) as directory:
+    with generated_directory(path, backends, outputs, optional, closure, reading) as directory:
         return [load(directory, backend) for backend in backends]
 
 
@@ -95,9 +92,11 @@ def load_models(path: str, backends: Sequence[str],
 def generated_directory(path: str, backends: Sequence[str],
                         outputs: Sequence[str] | Mapping[MechanismKind, Sequence[str]] = ANALYSIS_OUTPUTS,
                         optional: Sequence[str] | Mapping[MechanismKind, Sequence[str]] = (),
-                        closure: Sequence[str] | None = None) -> Iterator[Path]:
+                        closure: Sequence[str] | None = None,
+                        reading: Mapping[str, Any] | None = None) -> Iterator[Path]:
     """The generated directory of MODEL while the block runs: MODEL itself, or for a model file
-    a scratch directory it is derived into (``outputs``, ``optional`` and ``closure`` as :func:`generated_model`)."""
+    a scratch directory it is derived into (``outputs``, ``optional``, ``closure`` and ``reading`` as
+    :func:`generated_model`)."""
     source = Path(path)
     if not is_model_file(path):
         yield source.parent if source.name == "manifest.json" else source
@@ -106,9 +105,11 @@ def generated_directory(path: str, backends: Sequence[str],
     from symkin.atomic import replace_directory
 
     extra = optional if isinstance(optional, Mapping) else list(optional)
-    request = {"command": "analysis", "backends": list(backends), "outputs": outputs, "optional": extra}
+    request: dict[str, Any] = {"command": "analysis", "backends": list(backends), "outputs": outputs, "optional": extra}
     if closure is not None:
         request["closure"] = list(closure)
+    if reading:
+        request["reading"] = {name: reading[name] for name in sorted(reading)}
     key = pipeline_cache.request_key(source, request) if pipeline_cache.enabled() else None
     entry = None if key is None else pipeline_cache.lookup(key)
     with tempfile.TemporaryDirectory(prefix="symkin-analysis-") as scratch:
@@ -116,20 +117,20 @@ def generated_directory(path: str, backends: Sequence[str],
             directory = Path(scratch) / entry.model
             replace_directory(directory, entry.files)
         else:
-            directory = _derived(source, backends, outputs, optional, closure, scratch, key)
+            directory = _derived(source, backends, outputs, optional, closure, scratch, key, reading or {})
         yield directory
 
 
 def _derived(source: Path, backends: Sequence[str], outputs: Sequence[str] | Mapping[MechanismKind, Sequence[str]],
              optional: Sequence[str] | Mapping[MechanismKind, Sequence[str]], closure: Sequence[str] | None,
-             scratch: str, key: str | None) -> Path:
+             scratch: str, key: str | None, reading: Mapping[str, Any]) -> Path:
     """The model file derived into ``scratch`` (and kept in the derivation cache under ``key``)."""
     from symkin import pipeline, pipeline_cache
     from symkin.cli.progress import Progress
     from symkin.derivation import Derivation
     from symkin.model import load_model as load_model_file
 
-    model = load_model_file(source)
+    model = load_model_file(source, **reading)
     derivation = Derivation(model)
     wanted = outputs.get(analysis_kind(model), ANALYSIS_OUTPUTS) if isinstance(outputs, Mapping) else outputs
     if ((closure is not None or isinstance(outputs, Mapping)) and model.parallel is not None
@@ -150,7 +151,7 @@ def _derived(source: Path, backends: Sequence[str], outputs: Sequence[str] | Map
 
 def analysis_kind(model: Model) -> MechanismKind:
     """The kind of a model file (:class:`symkin.analysis.mechanism.MechanismKind`, the keys of
-    :data:`ANALYSIS_OUTPUTS_BY_KIND`)."""
+    ``symkin.analysis.needs.NEEDS``)."""
     return MechanismKind.SERIAL if model.parallel is None else parallel_kind(model.task_space)
 
 

@@ -8,15 +8,9 @@ import math
 import time
 from pathlib import Path
 
-from symkin.analysis.mechanism import MechanismKind
+from symkin.analysis.needs import NEEDS
 from symkin.cli import analysis_args, model_files
 from symkin.cli.progress import Progress
-
-#: What a model file is derived with on the fly (gravity_vector where the model has gravity).
-RATE_OUTPUTS = {MechanismKind.SERIAL: ("fk", "jacobian", "mass_matrix"),
-                MechanismKind.PARALLEL: ("ik", "fk", "jacobian", "mass_matrix"),
-                MechanismKind.PARALLEL_POSE: ("ik", "inverse_jacobian"),
-                MechanismKind.PARALLEL_ORIENTATION: ("ik", "inverse_jacobian", "jacobian", "mass_matrix")}
 
 
 def _measure_names() -> str:
@@ -143,7 +137,7 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError(f"--conditioning must lie in [0, 1], got {conditioning:g}")
         box = analysis_args.parse_ranges(args.box, "--box", "AXIS")
         device = analysis_args.DEVICE_OUTPUTS if args.device else ()
-        models = model_files.load_models(args.model, (args.backend,), RATE_OUTPUTS,
+        models = model_files.load_models(args.model, (args.backend,), NEEDS["rate"],
                                          ("gravity_vector", "closure_dynamics", *device))
         values = analysis_args.parse_assignments(args.assignments)
         model = analysis_args.device_view(args, models[0].bind(**values) if values else models[0])

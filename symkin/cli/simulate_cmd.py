@@ -9,17 +9,12 @@ import time
 import warnings
 from pathlib import Path
 
-from symkin.analysis.mechanism import MechanismKind
+from symkin.analysis.needs import NEEDS
 from symkin.cli import analysis_args, model_files
 from symkin.cli.progress import Progress
 
-#: What a model file is derived with on the fly; the optional ones where the model has them.
-DYNAMICS_OUTPUTS = ("forward_dynamics", "inverse_dynamics", "mass_matrix", "kinetic_energy", "coriolis_vector")
-SIMULATION_OUTPUTS = {MechanismKind.SERIAL: ("fk", "jacobian", "jacobian_geometric") + DYNAMICS_OUTPUTS,
-                      MechanismKind.PARALLEL: ("ik", "fk", "jacobian") + DYNAMICS_OUTPUTS,
-                      MechanismKind.PARALLEL_POSE: ("ik", "inverse_jacobian") + DYNAMICS_OUTPUTS,
-                      MechanismKind.PARALLEL_ORIENTATION: ("ik", "fk", "jacobian") + DYNAMICS_OUTPUTS}
-#: ... and a hybrid device's TCP (device_fk, device_actuator_jacobian), derived where the model has a wrist
+#: What a model file is also derived with where the model has it (NEEDS["simulate"] always): gravity, friction,
+#: a hybrid device's TCP (device_fk, device_actuator_jacobian) where it has a wrist, the closure's dynamics.
 OPTIONAL_OUTPUTS = ("gravity_vector", "potential_energy", "friction", "device_fk", "device_actuator_jacobian",
                     "closure_dynamics")
 SCENARIOS = ("sine", "tracking", "haptic-wall", "gravity-compensation", "free-swing")
@@ -173,7 +168,7 @@ def run(args: argparse.Namespace) -> int:
     from symkin.simulation.output import scenario_files
 
     try:
-        base = model_files.generated_model(args.model, args.backend, SIMULATION_OUTPUTS, OPTIONAL_OUTPUTS)
+        base = model_files.generated_model(args.model, args.backend, NEEDS["simulate"], OPTIONAL_OUTPUTS)
         values = analysis_args.parse_assignments(args.assignments)
         if values:
             base = base.bind(**values)

@@ -53,7 +53,7 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as err:
         analysis_args.fail_on_bad_input(args, err)
     with model_files.generated_directory(args.model, ("numpy", "js"), page.VIEW_OUTPUTS,
-                                           page.WRIST_VIEW_OUTPUTS + ("leg_joints",)) as directory:
+                                           page.OPTIONAL_VIEW_OUTPUTS) as directory:
         model = load(directory)
         try:
             model = model.bind(**design) if design else model

@@ -7,6 +7,7 @@ import contextlib
 import time
 from typing import TYPE_CHECKING
 
+from symkin.analysis.needs import NEEDS
 from symkin.cli import analysis_args, model_files
 from symkin.cli.progress import Progress
 
@@ -74,7 +75,7 @@ def _chunked_study(args: argparse.Namespace, models: list, designs: list[dict[st
     check_scheduler(args.scheduler, args.workers)
     if args.orientation:
         raise ValueError("--scheduler samples a serial mechanism's joint space (no --orientation)")
-    with model_files.generated_directory(args.model, ("numpy",), model_files.ANALYSIS_OUTPUTS_BY_KIND) as d:
+    with model_files.generated_directory(args.model, ("numpy",), NEEDS["kinematics"]) as d:
         payload = ModelPayload.from_directory(d)
     where = {"serial": "in this process", "local": "on a LocalCluster"}.get(args.scheduler, f"on {args.scheduler}")
     found = []

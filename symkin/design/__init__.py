@@ -26,7 +26,7 @@ if TYPE_CHECKING:  # the names as the type checker sees them
     from symkin.design.evaluation import Evaluation, evaluate
     from symkin.design.formulation import DesignProgram, formulate
     from symkin.design.problem import (APPARENT_MASS_FUNCTIONS, OBJECTIVES, DesignProblem, FreeParameter,
-                                      design_problem, needed_functions)
+                                      design_problem, functions_by_kind, needed_functions)
     from symkin.design.solving import Solution, solve
     from symkin.design.sweep_run import sweep
 
@@ -35,6 +35,7 @@ if TYPE_CHECKING:  # the names as the type checker sees them
 _EXPORTS = {
     "APPARENT_MASS_FUNCTIONS": "problem", "OBJECTIVES": "problem", "DesignProblem": "problem",
     "FreeParameter": "problem", "design_problem": "problem", "needed_functions": "problem",
+    "functions_by_kind": "problem",
     "Evaluation": "evaluation", "evaluate": "evaluation",
     "DesignProgram": "formulation", "formulate": "formulation",
     "Solution": "solving", "solve": "solving",

@@ -125,6 +125,12 @@ def needed_functions(kind: mechanism.MechanismKind) -> tuple[str, ...]:
     return ("ik", "jacobian")
 
 
+def functions_by_kind() -> dict[mechanism.MechanismKind, tuple[str, ...]]:
+    """:func:`needed_functions` of every kind of mechanism: what a model file is derived with for a dimensioning
+    problem, whatever its kind (``symkin optimize``)."""
+    return {kind: needed_functions(kind) for kind in mechanism.MechanismKind}
+
+
 def _parameter_inputs(model: GeneratedModel, functions: Sequence[str]) -> set[str]:
     generated = model.info.functions
     missing = [name for name in functions if name not in generated]

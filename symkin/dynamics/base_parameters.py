@@ -49,7 +49,7 @@ import sympy
 from sympy.polys.matrices import DomainMatrix
 from sympy.polys.rings import ring as sympy_ring
 
-from symkin.errors import DerivationError
+from symkin.errors import DerivationError, ModelDataError, Problem
 from symkin.model import coordinates, joint_kinds
 from symkin.model.schema import Model
 
@@ -201,17 +201,18 @@ def require_exact_constants(model: Model, constants: Sequence[se.Basic]) -> None
     defaults) are not all rational, before any work: the exact elimination cannot use them.
 
     Raises:
-        DerivationError: naming the fix.
+        ModelDataError: the model file's data is the cause (bad input, exit 2), naming the fix.
     """
     defaults = {se.sympify(p.symbol): se.sympify(p.value) for p in model.parameters}
     defaults.update({se.sympify(q): se.Integer(0) for q in coordinates.symbols(model, "q")})  # the constant part
     for constant in constants:
         value = constant.xreplace(defaults)
         if not isinstance(value, (se.Integer, se.Rational)):
-            raise DerivationError(
-                f"{model.name}: base parameters: the constant {value} of the chain's geometry is not a rational "
-                "number, which the exact elimination needs (a URDF's angles: read it with --snap-angles; a model "
-                "file: exact lengths such as 0.1807 and angles of a multiple of 90 deg, such as deg(90))")
+            raise ModelDataError([Problem(
+                model.source, None, None, "", f"{model.name}: base parameters: the constant {value} of the chain's "
+                "geometry is not a rational number, which the exact elimination needs",
+                "a URDF's angles: read it with --snap-angles; a model file: exact lengths such as 0.1807 and "
+                "angles of a multiple of 90 deg, such as deg(90)")])
 
 
 def base_parameters(model: Model, Y: Sequence[Sequence[se.Basic]], names: Sequence[str],

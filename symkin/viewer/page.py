@@ -96,6 +96,8 @@ WRIST_VIEW_OUTPUTS = ("device_fk", "device_frames", "device_jacobian")
 #: Legs without closed forms (:func:`symkin.analysis.closure_workspace.uses_closure`): the page solves the closure
 #: for (q, s) from the last assembly, J = dp/dq from its Jacobians, and draws every joint of every leg.
 CLOSURE_VIEW_OUTPUTS = ("closure", "closure_jacobians", "leg_joints")
+#: What a model file is also derived with for the page where the model has it: a wrist's functions, every leg joint.
+OPTIONAL_VIEW_OUTPUTS = (*WRIST_VIEW_OUTPUTS, "leg_joints")
 
 
 def view_outputs(model: GeneratedModel) -> tuple[str, ...]:

@@ -234,3 +234,43 @@ def test_an_xml_comment_stays_one_comment_whatever_it_holds(text):
     root = ElementTree.fromstring(f"<robot>{xml_comment(text)}</robot>", parser=parser)
     (comment,) = list(root)
     assert comment.text.strip().replace("- -", "--").replace("- -", "--") == text.strip()
+
+
+#: Two links whose second joint's frame is turned by pi/2 written to five digits (1.5708), as stock files write it.
+ROUNDED_ANGLE_ARM = """<?xml version="1.0"?>
+<robot name="rounded">
+  <link name="base"/>
+  <link name="upper"><inertial><origin xyz="0.15 0 0"/><mass value="1.2"/>
+    <inertia ixx="0.002" iyy="0.01" izz="0.011" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="fore"><inertial><origin xyz="0.1 0.01 0"/><mass value="0.6"/>
+    <inertia ixx="0.001" iyy="0.004" izz="0.0045" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="shoulder" type="revolute"><parent link="base"/><child link="upper"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="20" velocity="3"/></joint>
+  <joint name="elbow" type="revolute"><parent link="upper"/><child link="fore"/>
+    <origin xyz="0.3 0 0" rpy="1.5708 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="10" velocity="3"/></joint>
+</robot>
+"""
+
+
+def test_identify_on_a_urdf_with_rounded_angles_suggests_snapping_them_and_then_works(tmp_path):
+    """Issue 61: a URDF whose angles are multiples of pi/2 rounded to the digits written has no exact base
+    parameters as written; `symkin identify` says to read it with --snap-angles (exit 2, nothing written), and
+    with the option identifies the run the snapped model's own dynamics made."""
+    from symkin import derive, load
+
+    path = tmp_path / "rounded.urdf"
+    path.write_text(ROUNDED_ANGLE_ARM)
+    arm = load(derive(load_model(path, snap_angles=True), str(tmp_path / "generated"), outputs=["inverse_dynamics"]))
+    names = list(arm.info.coordinate_names)
+    t, q, qd, qdd = excitation(len(names), 3)
+    data = write_run(tmp_path / "run.csv", names, t, q, arm.inverse_dynamics(q, qd, qdd), qd, qdd)
+    command = SYMKIN_CLI + ["identify", str(path), str(data), "--method", "ols", "--no-figure", "--no-cache"]
+    refused = subprocess.run(command + ["-o", str(tmp_path / "as-written")], capture_output=True, text=True)
+    assert refused.returncode == 2, refused.stderr
+    assert "--snap-angles" in refused.stderr
+    assert not (tmp_path / "as-written").exists()
+    snapped = subprocess.run(command + ["--snap-angles", "-o", str(tmp_path / "snapped")], capture_output=True,
+                             text=True)
+    assert snapped.returncode == 0, snapped.stderr
+    assert (tmp_path / "snapped" / "estimate.json").exists()

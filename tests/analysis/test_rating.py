@@ -322,13 +322,14 @@ def test_friction_declared_in_the_model_is_felt_at_the_handle(tmp_path):
 @pytest.fixture(scope="module")
 def damped_delta(tmp_path_factory):
     """The DELTA of models/delta.yaml with viscous friction 0.01 N m s/rad at its motors, as a plant."""
+    from symkin.analysis.needs import NEEDS
     from symkin.cli import model_files, simulate_cmd
     from symkin.simulation import Plant
 
     path = tmp_path_factory.mktemp("damped") / "delta.yaml"
     path.write_text((MODELS_DIR / "delta.yaml").read_text() + "\nfriction:\n"
                     + "".join(f"  theta{i}: {{viscous: 0.01}}\n" for i in (1, 2, 3)))
-    return Plant(model_files.generated_model(str(path), "numpy", simulate_cmd.SIMULATION_OUTPUTS,
+    return Plant(model_files.generated_model(str(path), "numpy", NEEDS["simulate"],
                                           simulate_cmd.OPTIONAL_OUTPUTS))
 
 

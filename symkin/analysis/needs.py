@@ -1,0 +1,38 @@
+"""What each analysis evaluates of a model's generated code, by kind of mechanism: the one declared table a model
+file is derived from on the fly (issue 62: it replaces the tables each command kept).
+
+A kind's tuple is what the analysis calls for every model of that kind: a serial arm's fk and J; a translational
+platform's closed-form ik (reachability, working mode) with its fk and J; a platform that also rotates
+(Stewart-Gough: no closed-form fk) and a spherical one (the Agile Eye) through ik and J^-1.  Legs without the
+distance form are derived with the closure's functions instead (``symkin.cli.model_files.CLOSURE_OUTPUTS`` and
+each command's own closure list); what a model has only sometimes (gravity, a wrist) is asked for as optional.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+from symkin.analysis.mechanism import MechanismKind
+
+#: The dynamics a simulation integrates and checks (its energy balance).
+SIMULATED_DYNAMICS = ("forward_dynamics", "inverse_dynamics", "mass_matrix", "kinetic_energy", "coriolis_vector")
+
+#: {analysis: {kind of mechanism: the generated functions it evaluates}}.
+NEEDS: Mapping[str, Mapping[MechanismKind, tuple[str, ...]]] = {
+    # workspace, gci, sweep and the other kinematic analyses
+    "kinematics": {MechanismKind.SERIAL: ("fk", "jacobian"),
+                   MechanismKind.PARALLEL: ("ik", "fk", "jacobian"),
+                   MechanismKind.PARALLEL_POSE: ("ik", "inverse_jacobian"),
+                   MechanismKind.PARALLEL_ORIENTATION: ("ik", "inverse_jacobian")},
+    # the haptic datasheet (symkin.analysis.datasheet): also the mass matrix (apparent mass)
+    "rate": {MechanismKind.SERIAL: ("fk", "jacobian", "mass_matrix"),
+             MechanismKind.PARALLEL: ("ik", "fk", "jacobian", "mass_matrix"),
+             MechanismKind.PARALLEL_POSE: ("ik", "inverse_jacobian"),
+             MechanismKind.PARALLEL_ORIENTATION: ("ik", "inverse_jacobian", "jacobian", "mass_matrix")},
+    # the scenarios of symkin.simulation: the kinematics of the handle and the dynamics
+    "simulate": {MechanismKind.SERIAL: ("fk", "jacobian", "jacobian_geometric") + SIMULATED_DYNAMICS,
+                 MechanismKind.PARALLEL: ("ik", "fk", "jacobian") + SIMULATED_DYNAMICS,
+                 MechanismKind.PARALLEL_POSE: ("ik", "inverse_jacobian") + SIMULATED_DYNAMICS,
+                 MechanismKind.PARALLEL_ORIENTATION: ("ik", "fk", "jacobian") + SIMULATED_DYNAMICS},
+}
+
