@@ -87,7 +87,7 @@ def updated_model(path: str | Path, model: Model, names: Sequence[str], values: 
         raise NotUpdated("the model's rotors are bodies of their own (gyroscopic: true), which the link bodies "
                          "identified here include; their values are in estimate.json")
     kind = source_kind(path)
-    data = _source_data(path, kind, reading or {})
+    data = _source_data(path, reading or {})
     given = dict(parameter_values or {})
     numbers = {p.symbol: given.get(p.name, p.value) for p in model.parameters}
     _set_parameters(data, given)
@@ -222,24 +222,13 @@ def _rod_length_squared(model: Model, estimate: _Estimate) -> float | None:
     return float(Derivation(model)[reduced_legs][0].L2.xreplace(estimate.numbers))
 
 
-def _source_data(path: str | Path, kind: str, reading: Mapping[str, Any]) -> dict[str, Any]:
-    """The model document's data of ``path``: a YAML model file's, or a robot file's model as the readers build
-    it with the options ``reading`` (those ``symkin identify`` read it with; allow_nonphysical is the builder's)."""
-    from symkin.model.mjcf_source import read_mjcf_document
-    from symkin.model.source_kind import MJCF, URDF, XACRO
-    from symkin.model.urdf_source import read_urdf_document
-    from symkin.model.xacro_source import read_xacro_document
-    from symkin.model.yaml_source import read_document
+def _source_data(path: str | Path, reading: Mapping[str, Any]) -> dict[str, Any]:
+    """The model document's data of ``path`` as :func:`symkin.model.read_model_document` reads it with the options
+    ``reading`` (those ``symkin identify`` read it with; allow_nonphysical is the builder's, not the reader's)."""
+    from symkin.model import read_model_document
 
-    options = {key: value for key, value in reading.items() if key != "allow_nonphysical"}
-    if kind == URDF:
-        return read_urdf_document(path, **options).data
-    xacro = {key: options.pop(key) for key in ("xacro_args", "xacro_packages") if key in options}
-    if kind == XACRO:
-        return read_xacro_document(path, xacro.get("xacro_args"), xacro.get("xacro_packages"), **options)[0].data
-    if kind == MJCF:
-        return read_mjcf_document(path, **options)[0].data
-    return read_document(path).data
+    return read_model_document(path, **{key: value for key, value in reading.items()
+                                        if key != "allow_nonphysical"}).data
 
 
 def identified_urdf(model: Model, links: Sequence[str], joints: Sequence[str]) -> str:

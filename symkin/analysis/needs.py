@@ -29,6 +29,12 @@ NEEDS: Mapping[str, Mapping[MechanismKind, tuple[str, ...]]] = {
              MechanismKind.PARALLEL: ("ik", "fk", "jacobian", "mass_matrix"),
              MechanismKind.PARALLEL_POSE: ("ik", "inverse_jacobian"),
              MechanismKind.PARALLEL_ORIENTATION: ("ik", "inverse_jacobian", "jacobian", "mass_matrix")},
+    # a dimensioning program (symkin.design; a spherical platform's rating also takes J^-1:
+    # symkin.analysis.orientations)
+    "design": {MechanismKind.SERIAL: ("fk", "jacobian"),
+               MechanismKind.PARALLEL: ("ik", "jacobian"),
+               MechanismKind.PARALLEL_POSE: ("ik", "jacobian"),
+               MechanismKind.PARALLEL_ORIENTATION: ("ik", "jacobian", "inverse_jacobian")},
     # the scenarios of symkin.simulation: the kinematics of the handle and the dynamics
     "simulate": {MechanismKind.SERIAL: ("fk", "jacobian", "jacobian_geometric") + SIMULATED_DYNAMICS,
                  MechanismKind.PARALLEL: ("ik", "fk", "jacobian") + SIMULATED_DYNAMICS,

@@ -98,7 +98,8 @@ def _chunked(args: argparse.Namespace) -> int:
         with Progress(model.name) as progress:
             result = integrate_chunked(payload, spec, args.method, args.samples, seed=args.seed or 0,
                                        chunk=args.chunk, scheduler=args.scheduler, workers=args.workers,
-                                       progress=lambda done, total: progress(f"{args.method} points", done=done, total=total))
+                                       progress=lambda done, total: progress(f"{args.method} points", done=done,
+                                                                             total=total))
     except (ValueError, KeyError) as err:
         analysis_args.fail_on_bad_input(args, err)
     seconds = time.perf_counter() - start

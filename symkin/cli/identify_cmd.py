@@ -120,7 +120,8 @@ def run(args: argparse.Namespace) -> int:
             if writes_model:
                 progress("writing the model file with the identified values")
                 file_values = _file_values(source, model, Y, K, pi, fit, found, standard)
-                updated, line = _updated_model(args, source, model, file_values, found, standard, values)
+                updated, line = _updated_model(args, source, model, file_values, found, standard, values,
+                                               reading)
             files = _report(args, model, data, found, pi_model[0], check, standard, line)
             if updated is not None:
                 files["identified.yaml"] = updated.text
@@ -238,10 +239,11 @@ def _file_values(source, model, Y, K, pi, fit, found, standard) -> tuple[np.ndar
     return estimate, identified & held.columns, _held_note(found, K @ estimate, base, unheld)
 
 
-def _updated_model(args: argparse.Namespace, source, model, file_values, found, standard, values: dict[str, float]):
+def _updated_model(args: argparse.Namespace, source, model, file_values, found, standard, values: dict[str, float],
+                   reading: dict):
     """identified.yaml: the model file with what the run identifies replaced (``file_values``: :func:`_file_values`;
     of a URDF or xacro file its chain as a symkin model, and identified.urdf), and the summary's line on it (or
-    why not).
+    why not); ``reading``: the robot-file options the model file was read with.
 
     Returns:
         (the :class:`~symkin.analysis.identified_model.UpdatedModel` or None, the summary's line).
@@ -254,7 +256,7 @@ def _updated_model(args: argparse.Namespace, source, model, file_values, found, 
               "samples": found.samples}
     try:
         updated = identified_model.updated_model(args.model, source, names, estimate, identified, record, values,
-                                                 urdf_options(args, args.model))
+                                                 reading)
     except identified_model.NotUpdated as why:
         return None, f"no identified.yaml: {why}"
     also = "" if updated.urdf is None else "; identified.urdf: the same as a URDF"

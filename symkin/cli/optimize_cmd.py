@@ -8,6 +8,7 @@ import sys
 import time
 from pathlib import Path
 
+from symkin.analysis.needs import NEEDS
 from symkin.cli import analysis_args, model_files
 from symkin.cli.progress import Progress
 
@@ -82,10 +83,9 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError(f"--samples must be at least 16, got {args.samples}")
         with Progress(Path(args.model).stem) as progress:
             progress("loading the generated code")
-            outputs = design.functions_by_kind()
             # a parallel model's rating checks the working mode by its closed-form fk, where it has one
             masses = design.APPARENT_MASS_FUNCTIONS if args.max_apparent_mass is not None else ()
-            numpy_model, casadi_model = model_files.load_models(args.model, ("numpy", "casadi"), outputs,
+            numpy_model, casadi_model = model_files.load_models(args.model, ("numpy", "casadi"), NEEDS["design"],
                                                                 ("fk", *masses))
             efforts = (analysis_args.per_joint("--effort-limit", args.effort_limit, len(numpy_model.info.coordinates))
                        if args.effort_limit else None)

@@ -14,10 +14,10 @@ is the time per item so far times the items left, from the first report of that 
 
 from __future__ import annotations
 
+import contextlib
 import io
 import os
 import sys
-import contextlib
 import threading
 import time
 from types import TracebackType

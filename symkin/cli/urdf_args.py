@@ -21,7 +21,8 @@ from symkin.errors import ModelError, Problem
 
 
 #: The options of robot files (argparse destinations).
-ROBOT_FILE_OPTIONS = ("tip", "chain", "base", "branch", "lock", "snap_angles", "xacro_arg", "xacro_package", "allow_read")
+ROBOT_FILE_OPTIONS = ("tip", "chain", "base", "branch", "lock", "snap_angles", "xacro_arg", "xacro_package",
+                      "allow_read")
 
 
 def add_urdf_arguments(p: argparse.ArgumentParser) -> None:

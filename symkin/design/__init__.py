@@ -26,7 +26,7 @@ if TYPE_CHECKING:  # the names as the type checker sees them
     from symkin.design.evaluation import Evaluation, evaluate
     from symkin.design.formulation import DesignProgram, formulate
     from symkin.design.problem import (APPARENT_MASS_FUNCTIONS, OBJECTIVES, DesignProblem, FreeParameter,
-                                      design_problem, functions_by_kind, needed_functions)
+                                      design_problem)
     from symkin.design.solving import Solution, solve
     from symkin.design.sweep_run import sweep
 
@@ -34,8 +34,7 @@ if TYPE_CHECKING:  # the names as the type checker sees them
 #: line parser reading :mod:`~symkin.design.sweep_metrics` does not import CasADi and the analyses.
 _EXPORTS = {
     "APPARENT_MASS_FUNCTIONS": "problem", "OBJECTIVES": "problem", "DesignProblem": "problem",
-    "FreeParameter": "problem", "design_problem": "problem", "needed_functions": "problem",
-    "functions_by_kind": "problem",
+    "FreeParameter": "problem", "design_problem": "problem",
     "Evaluation": "evaluation", "evaluate": "evaluation",
     "DesignProgram": "formulation", "formulate": "formulation",
     "Solution": "solving", "solve": "solving",

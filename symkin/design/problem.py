@@ -15,6 +15,7 @@ import numpy as np
 
 from symkin.analysis import closure_workspace, mechanism, orientations
 from symkin.analysis.handle_measures import Actuation
+from symkin.analysis.needs import NEEDS
 from symkin.runtime.info import GeneratedModel
 
 #: What can be maximized: the GCI, the workspace measure, the isotropic force at the worst point of the box.
@@ -111,24 +112,9 @@ class DesignProblem:
         return self.box[0] - self.margin, self.box[1] + self.margin
 
 
-#: The generated functions of a dimensioning problem on legs without closed forms (:func:`needed_functions`).
+#: The generated functions of a dimensioning problem on legs without closed forms (instead of
+#: ``NEEDS["design"]``).
 CLOSURE_FUNCTIONS = ("closure", "closure_jacobians")
-
-
-def needed_functions(kind: mechanism.MechanismKind) -> tuple[str, ...]:
-    """The generated functions a dimensioning problem of a kind of mechanism evaluates (a spherical
-    platform's rating also takes J^-1: :mod:`symkin.analysis.orientations`)."""
-    if kind is mechanism.MechanismKind.SERIAL:
-        return ("fk", "jacobian")
-    if kind is mechanism.MechanismKind.PARALLEL_ORIENTATION:
-        return ("ik", "jacobian", "inverse_jacobian")
-    return ("ik", "jacobian")
-
-
-def functions_by_kind() -> dict[mechanism.MechanismKind, tuple[str, ...]]:
-    """:func:`needed_functions` of every kind of mechanism: what a model file is derived with for a dimensioning
-    problem, whatever its kind (``symkin optimize``)."""
-    return {kind: needed_functions(kind) for kind in mechanism.MechanismKind}
 
 
 def _parameter_inputs(model: GeneratedModel, functions: Sequence[str]) -> set[str]:
@@ -200,7 +186,7 @@ def _box(model: GeneratedModel, box: Mapping[str, tuple[float, float]] | None) -
     return lower, upper
 
 
-#: The generated function an apparent-mass constraint evaluates besides :func:`needed_functions`.
+#: The generated function an apparent-mass constraint evaluates besides ``NEEDS["design"]``.
 APPARENT_MASS_FUNCTIONS = ("mass_matrix",)
 
 
@@ -287,7 +273,7 @@ def design_problem(model: GeneratedModel, objective: str, free: Sequence[str], *
                          "maximizes the GCI over the required box (--maximize gci), without force objectives or "
                          "apparent-mass bounds (their dynamics are not part of the dimensioning yet)")
     bound = _apparent_mass(model, max_apparent_mass)  # before asking for mass_matrix: a serial model is told why
-    needed = CLOSURE_FUNCTIONS if closure else needed_functions(mechanism.kind_of(model))
+    needed = CLOSURE_FUNCTIONS if closure else NEEDS["design"][mechanism.kind_of(model)]
     used = _parameter_inputs(model, needed + (APPARENT_MASS_FUNCTIONS if bound is not None else ()))
     free_parameters = _free_parameters(model, list(free), dict(bounds or {}), values, used)
     required = _box(model, box)

@@ -24,6 +24,7 @@ from conftest import GENERATED_DIR, MODELS_DIR, ROOT
 from symkin import design
 from symkin.analysis import conditioning, forces, rating
 from symkin.analysis.mechanism import MechanismKind
+from symkin.analysis.needs import NEEDS
 from symkin.analysis.parallel import angular_velocity_matrix
 from symkin.cli import main
 from symkin.design import formulation
@@ -111,7 +112,7 @@ def spherical(tmp_path_factory):
     assert SPHERICAL_MODEL, "docs/design-optimization.md no longer declares spherical_3rrr.yaml"
     path = tmp_path_factory.mktemp("spherical") / "spherical_3rrr.yaml"
     path.write_text(SPHERICAL_MODEL.group(1))
-    directory = symkin.derive(path, path.parent, outputs=design.needed_functions(MechanismKind.PARALLEL_ORIENTATION),
+    directory = symkin.derive(path, path.parent, outputs=NEEDS["design"][MechanismKind.PARALLEL_ORIENTATION],
                               backends=["numpy", "casadi"])
     return symkin.load(directory), symkin.load(directory, "casadi")
 
