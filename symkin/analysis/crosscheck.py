@@ -11,8 +11,10 @@ generated numpy code, derived into a temporary directory, so what is checked is 
 
 At ``samples`` random states within the joint limits (q; qd and qdd in [-1, 1]) it compares
 every quantity both have: fk and the frame of every link (base_T_<link>), the geometric
-Jacobian of the TCP in base axes, M (CRBA), G, V (nonLinearEffects without gravity) and the
-inverse dynamics tau (RNEA) of the chain, the locked joints at rest.  Each row is the largest
+Jacobian of the TCP and of every link frame (base_J_<link>) in base axes, M (CRBA), G, V (nonLinearEffects without gravity) and the
+inverse dynamics tau (RNEA) of the chain, the locked joints at rest; joint springs (``springs:``, which a URDF
+cannot hold) add the model's k (theta - theta_0) to the reference's G and tau (MuJoCo checks them
+independently on an MJCF file).  Each row is the largest
 normwise relative error ||symkin - reference||_F / ||reference||_F over the states (the
 absolute error where the reference is zero).  Two exact methods differ by rounding only, so
 the default tolerance is 1e-12; an edited file or a wrong convention shows as errors of
@@ -35,7 +37,7 @@ from symkin.model.coordinates import coordinate_range, coupling_matrix
 
 #: Largest normwise relative error accepted by default (two exact methods differ by rounding).
 DEFAULT_TOLERANCE = 1e-12
-KINEMATICS_OUTPUTS = ("fk", "frames", "jacobian_geometric")
+KINEMATICS_OUTPUTS = ("fk", "frames", "jacobian_geometric", "frame_jacobians")
 DYNAMICS_OUTPUTS = ("mass_matrix", "coriolis_vector", "gravity_vector", "inverse_dynamics")
 #: The generated code checked by default: what users run in Python and in their control loops.
 BACKENDS = ("numpy", "c")
@@ -181,7 +183,8 @@ def crosscheck(path: str | Path, *, reference_urdf: str | Path | None = None, sa
     model, text, reduction, mjcf = _sources(path, reference_path, urdf or {})
     with_c = bool(model.bodies) and (len(model.joints) <= CORIOLIS_MATRIX_JOINTS if coriolis_matrix is None
                                      else coriolis_matrix)
-    weighted = any(g != 0 for g in model.gravity)  # without gravity G is identically zero and not emitted
+    # without gravity and springs G is identically zero and not emitted
+    weighted = any(g != 0 for g in model.gravity) or bool(model.springs)
     dynamics = tuple(name for name in DYNAMICS_OUTPUTS if weighted or name != "gravity_vector")
     outputs = KINEMATICS_OUTPUTS + (dynamics + (("coriolis_matrix",) if with_c else ())
                                     + (("friction",) if model.friction else ()) if model.bodies else ())
@@ -230,6 +233,7 @@ def crosscheck(path: str | Path, *, reference_urdf: str | Path | None = None, sa
         total_mass = float(sum(float(b.mass.xreplace(model.parameter_values)) for b in model.bodies))
         # the reference's friction is URDF's: one sign(qd) level per joint
         beyond_urdf = any(f.smoothing_velocity is not None or f.asymmetric for f in model.friction)
+        springs = _SpringTorques(model)  # a URDF has no springs: the reference's are the model's, k (theta - theta_0)
         Q, QD, QDD = _states(model, samples, seed)
         say(f"comparing at {samples} states with Pinocchio {pin.__version__}")
         values = {backend: _evaluate(ours, outputs, Q, QD, QDD) for backend, ours in generated.items()}
@@ -250,9 +254,15 @@ def crosscheck(path: str | Path, *, reference_urdf: str | Path | None = None, sa
             jacobian = np.reshape(pin.computeFrameJacobian(reference, data, q, tip,  # 1-D where nv = 1
                                                            pin.ReferenceFrame.LOCAL_WORLD_ALIGNED), (6, reference.nv))
             want["jacobian_geometric"] = (rotate @ jacobian[:, columns] @ coupling,)
+            for row, link in frame_links.items():
+                frame = _link_frame(pin, reference, link_names[link])
+                jacobian = np.reshape(pin.computeFrameJacobian(reference, data, q, frame,
+                                                               pin.ReferenceFrame.LOCAL_WORLD_ALIGNED), (6, reference.nv))
+                want["frame_jacobians " + row[len("frame "):]] = (rotate @ jacobian[:, columns] @ coupling,)
             if model.bodies:
                 want |= _dynamics_references(pin, reference, data, weightless, weightless_data, q, v, a, columns,
-                                             coupling, total_mass, float(np.linalg.norm(gravity)), beyond_urdf, with_c)
+                                             coupling, total_mass, float(np.linalg.norm(gravity)), beyond_urdf, with_c,
+                                             springs(coupling @ Q[k] + shift))
                 if not weighted:
                     del want["gravity_vector"]
             for backend, got in values.items():
@@ -299,6 +309,10 @@ def _ours(values: dict[str, Any], row: str, k: int, frame_links: dict[str, str],
     if row in frame_links:
         frames = values["frames"]  # a one-joint chain's frames function returns its one frame as an array
         return frames[k] if isinstance(frames, np.ndarray) else getattr(frames, f"base_T_{frame_links[row]}")[k]
+    if row.startswith("frame_jacobians "):
+        jacobians = values["frame_jacobians"]  # (one array for a one-joint chain, as frames)
+        link = frame_links["frame " + row[len("frame_jacobians "):]]
+        return jacobians[k] if isinstance(jacobians, np.ndarray) else getattr(jacobians, f"base_J_{link}")[k]
     if row == "coriolis_matrix C qd":
         return values["coriolis_matrix"][k] @ qd
     if row == "coriolis_matrix Mdot - 2C skew":
@@ -309,13 +323,14 @@ def _ours(values: dict[str, Any], row: str, k: int, frame_links: dict[str, str],
 
 def _dynamics_references(pin: Any, reference: Any, data: Any, weightless: Any, weightless_data: Any,
                          q: np.ndarray, v: np.ndarray, a: np.ndarray, columns: list[int], coupling: np.ndarray,
-                         total_mass: float, gravity: float, beyond_urdf: bool, with_c: bool
-                         ) -> dict[str, tuple[Any, ...]]:
+                         total_mass: float, gravity: float, beyond_urdf: bool, with_c: bool,
+                         spring: np.ndarray) -> dict[str, tuple[Any, ...]]:
     """{row: (reference value, the magnitudes summed into it, natural size)} of the dynamics at one state.
 
     The natural size is the scale the quantity's terms have even where they cancel or vanish (V at
     qd = 0 is exactly 0 in symkin, 1e-27 in Pinocchio's recursion): ||M|| |qd|^2 for V, ||M|| |qd| for
-    C, g sqrt(||M|| m) (about m g L) for G, their sum with ||M|| |qdd| and the friction for tau.
+    C, g sqrt(||M|| m) (about m g L) plus the springs' |k (theta - theta_0)| for G, their sum with ||M|| |qdd| and
+    the friction for tau.  ``spring``: the joints' spring torques, added to G and tau (a URDF has none).
     """
     mass = np.reshape(pin.crba(reference, data, q), (reference.nv, reference.nv))  # a scalar where nv = 1
     mass = np.triu(mass) + np.triu(mass, 1).T
@@ -325,9 +340,9 @@ def _dynamics_references(pin: Any, reference: Any, data: Any, weightless: Any, w
     damping, dry = reference.damping[columns], reference.friction[columns]
     friction_joint = damping * v[columns] + dry * np.sign(v[columns])
     friction_size = float(np.linalg.norm(np.abs(damping * v[columns]) + np.abs(dry)))
-    G, G_terms = _reduced(coupling, np.atleast_1d(pin.computeGeneralizedGravity(reference, data, q))[columns])
+    G, G_terms = _reduced(coupling, np.atleast_1d(pin.computeGeneralizedGravity(reference, data, q))[columns] + spring)
     V, V_terms = _reduced(coupling, np.atleast_1d(pin.nonLinearEffects(weightless, weightless_data, q, v))[columns])
-    g_size = gravity * math.sqrt(size * total_mass)
+    g_size = gravity * math.sqrt(size * total_mass) + float(np.linalg.norm(spring))
     rows: dict[str, tuple[Any, ...]] = {
         "mass_matrix": (M, M_terms),
         "gravity_vector": (G, G_terms, g_size),
@@ -342,9 +357,24 @@ def _dynamics_references(pin: Any, reference: Any, data: Any, weightless: Any, w
     if (np.any(damping) or np.any(dry)) and not beyond_urdf:
         rows["friction"] = (*_reduced(coupling, friction_joint), friction_size)
     if not beyond_urdf:
-        tau = np.atleast_1d(pin.rnea(reference, data, q, v, a))[columns] + friction_joint
+        tau = np.atleast_1d(pin.rnea(reference, data, q, v, a))[columns] + friction_joint + spring
         rows["inverse_dynamics"] = (*_reduced(coupling, tau), size * (qdd + qd ** 2) + g_size + friction_size)
     return rows
+
+
+class _SpringTorques:
+    """k_j (theta_j - theta_0,j) of the model's joint springs at the joint values theta (0 on joints without)."""
+
+    def __init__(self, model: Any):
+        springs = {s.joint: s for s in model.springs}
+        values = model.parameter_values
+        self.stiffness = np.array([float(springs[j.name].stiffness.xreplace(values)) if j.name in springs else 0.0
+                                   for j in model.joints])
+        self.relaxed = np.array([float(springs[j.name].reference.xreplace(values)) if j.name in springs else 0.0
+                                 for j in model.joints])
+
+    def __call__(self, theta: np.ndarray) -> np.ndarray:
+        return self.stiffness * (theta - self.relaxed)
 
 
 def _set(q: np.ndarray, joint: Any, value: float) -> None:

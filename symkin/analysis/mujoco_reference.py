@@ -3,8 +3,8 @@
 Pinocchio checks symkin's reading of the URDF text that symkin writes from the compiled MJCF model
 (:mod:`symkin.model.mjcf_source`); this module checks that text itself against MuJoCo on the file as
 MuJoCo reads it: at the same states, the joints off the chain at their locked values and at rest,
-M against ``mj_fullM`` (armature included) and V + G against ``qfrc_bias`` (MuJoCo's Coriolis,
-centrifugal and gravity forces), restricted to the chain's degrees of freedom (and projected on the
+M against ``mj_fullM`` (armature included) and V + G against ``qfrc_bias - qfrc_spring`` (MuJoCo's Coriolis,
+centrifugal and gravity forces, and the joint springs' forces, which symkin's G holds), restricted to the chain's degrees of freedom (and projected on the
 coordinates, A^T M A and A^T bias, where joint equalities couple joints: MuJoCo's M is the open tree's).
 """
 
@@ -61,9 +61,10 @@ def mujoco_errors(path: Path, model: Any, locked: Mapping[str, float], values: M
         M = A.T @ full[np.ix_(dofs, dofs)] @ A
         size = float(np.linalg.norm(M))
         bias = values["coriolis_vector"][k] + (values["gravity_vector"][k] if "gravity_vector" in values else 0.0)
-        natural = size * float(np.linalg.norm(QD[k])) ** 2 + gravity * math.sqrt(size * total_mass)
+        natural = (size * float(np.linalg.norm(QD[k])) ** 2 + gravity * math.sqrt(size * total_mass)
+                   + float(np.linalg.norm(data.qfrc_spring[dofs])))
         for row, got, want, scale in (("mass_matrix (MuJoCo)", values["mass_matrix"][k], M, 0.0),
                                       ("coriolis_vector + gravity_vector (MuJoCo)", bias,
-                                       A.T @ data.qfrc_bias[dofs], natural)):
+                                       A.T @ (data.qfrc_bias - data.qfrc_spring)[dofs], natural)):
             errors[row] = max(errors[row], normwise(got, want, None, scale))
     return errors

@@ -38,12 +38,12 @@ from symkin.dynamics.linsolve import ldl_solve, transpose_solve
 from symkin.dynamics.program import Program, se_matrix, se_vector
 from symkin.errors import DerivationError
 from symkin.dynamics.physical import require_physical
+from symkin.dynamics.joint_forces import SPRINGS_IN_G, SPRINGS_IN_U, friction_graph, spring_energy, spring_torques
 from symkin.ir.inputs import coordinate_input
 from symkin.ir.quantity import Deriving, quantity
 from symkin.ir.spec import FunctionSpec, InputSpec, OutputSpec, make_function
 from symkin.kinematics.quantities import chain_frames, task_jacobian
 from symkin.model import coordinates
-from symkin.model.schema import Friction
 from symkin.symengine_bridge import SympyConverter
 
 
@@ -123,32 +123,6 @@ def gravity_graph(d: Deriving) -> list[se.Basic] | None:
     return se_vector(d.model.gravity)
 
 
-@quantity("friction_graph", "F_f(qd) as SymEngine expressions, or None without friction", emitted=False)
-def _friction_graph(d: Deriving) -> list[se.Basic] | None:
-    """F_f,j = viscous_j qd_j + coulomb_j sign(qd_j), or coulomb_j tanh(qd_j / v_s,j) when smoothed."""
-    if not d.model.friction:
-        return None
-    qd = dict(zip((j.name for j in d.model.joints), joint_rates(d.model, "qd")))
-    F = {name: se.Integer(0) for name in qd}
-    for f in d.model.friction:
-        F[f.joint] = joint_friction(f, qd[f.joint])
-    return forces_on_coordinates(d.model, list(F.values()))
-
-
-def joint_friction(f: Friction, v: se.Basic) -> se.Basic:
-    """viscous v + coulomb sign(v), or coulomb tanh(v / v_s) with a smoothing velocity v_s (seed eq. 8.34).
-
-    Levels c+ (positive motion) and c- (negative motion) give (c+ + c-)/2 s + (c+ - c-)/2 s^2 with
-    s = sign(v) or tanh(v / v_s): c+ for v > 0, -c- for v < 0, 0 at rest.
-    """
-    s = se.sign(v) if f.smoothing_velocity is None else se.tanh(v / se.sympify(f.smoothing_velocity))
-    viscous = se.sympify(f.viscous) * v
-    if not f.asymmetric:
-        return viscous + se.sympify(f.coulomb) * s
-    positive, negative = se.sympify(f.coulomb), se.sympify(f.coulomb_negative)
-    return viscous + (positive + negative) / 2 * s + (positive - negative) / 2 * s ** 2
-
-
 @quantity("task_jacobian_graph", "task Jacobian J (square) as SymEngine expressions", emitted=False)
 def _task_jacobian_graph(d: Deriving) -> Matrix:
     J = d[task_jacobian].outputs[0].expr
@@ -161,8 +135,8 @@ def _task_jacobian_graph(d: Deriving) -> Matrix:
 
 
 def require_gravity(d: Deriving, name: str) -> None:
-    """Refuse ``name`` (a gravity term) for a model without gravity, where it is identically zero."""
-    if all(c == 0 for c in d.model.gravity):
+    """Refuse ``name`` (gravity's and the springs' term) for a model without both, where it is identically zero."""
+    if all(c == 0 for c in d.model.gravity) and not d.model.springs:
         raise DerivationError(f"{d.model.name}: the model has no gravity, so {name} is identically zero and is "
                               f"not emitted; declare 'gravity:' in the model or remove '{name}' from the outputs")
 
@@ -190,23 +164,30 @@ class _BoundTerms:
         return [[values[k * n * n + i * n:k * n * n + (i + 1) * n] for i in range(n)] for k in range(n)]
 
     def newton_euler(self, velocity: bool, acceleration: bool, gravity: bool) -> list[se.Basic]:
-        """The Newton-Euler torques of the chosen terms (M qdd, V, G), bound."""
+        """The Newton-Euler torques of the chosen terms (M qdd, V, G: gravity and the springs), bound."""
         d = self.d
         qd, qdd = (joint_rates(d.model, g) if use else None for g, use in (("qd", velocity), ("qdd", acceleration)))
-        return self.program.bind(forces_on_coordinates(d.model, newton_euler.inverse_dynamics(
-            d[newton_euler_links], qd, qdd, d[gravity_graph] if gravity else None)))
+        torques = forces_on_coordinates(d.model, newton_euler.inverse_dynamics(
+            d[newton_euler_links], qd, qdd, d[gravity_graph] if gravity else None))
+        return self._plus_springs(torques) if gravity else self.program.bind(torques)
 
     def coriolis_vector(self) -> list[se.Basic]:
         return self.newton_euler(velocity=True, acceleration=False, gravity=False)
 
     def gravity_vector(self) -> list[se.Basic] | None:
-        if self.d[gravity_graph] is None:
+        """G(q): gravity's torques plus the springs', None where both are absent."""
+        if (weight := self.d[gravity_graph]) is None and not self.d.model.springs:
             return None
-        return self.program.bind(forces_on_coordinates(
-            self.d.model, newton_euler.gravity_torques(self.d[newton_euler_links], self.d[gravity_graph])))
+        return self._plus_springs([se.Integer(0)] * self.n if weight is None else forces_on_coordinates(
+            self.d.model, newton_euler.gravity_torques(self.d[newton_euler_links], weight)))
+
+    def _plus_springs(self, torques: list[se.Basic]) -> list[se.Basic]:
+        """``torques`` + the springs' forces, bound (derived only where there are springs: the manifest lists them)."""
+        springs = self.d[spring_torques] if self.d.model.springs else None
+        return self.program.bind(torques if springs is None else [t + s for t, s in zip(torques, springs)])
 
     def friction(self) -> list[se.Basic] | None:
-        return self.d[_friction_graph]
+        return self.d[friction_graph]
 
     def torques(self, acceleration: bool, with_friction: bool) -> list[se.Basic]:
         """M qdd (if ``acceleration``) + V + G (+ F_f): eq. 8.34, in one Newton-Euler pass."""
@@ -261,13 +242,13 @@ def _gravity_vector(d: Deriving) -> FunctionSpec:
     return function_spec(
         d, "gravity_vector", "Gravity torques.",
         "G(q) = du/dq with u = -sum m g . c over the bodies (seed eq. 8.31; 2-DoF example eq. 8.54), "
-        "evaluated by a recursive Newton-Euler pass at rest (seed sec. 4.4).",
+        "evaluated by a recursive Newton-Euler pass at rest (seed sec. 4.4)." + SPRINGS_IN_G * bool(d.model.springs),
         ["q"], program, [("G", G, (d.model.dof,), "joint torques that hold the arm against gravity", EFFORT_UNIT)])
 
 
 @quantity("friction", "joint friction F_f(qd): viscous + Coulomb (n)")
 def _friction(d: Deriving) -> FunctionSpec:
-    F = d[_friction_graph]
+    F = d[friction_graph]
     if F is None:
         raise DerivationError(f"{d.model.name}: the model declares no friction; add a 'friction:' section "
                               "or remove 'friction' from the outputs")
@@ -387,8 +368,11 @@ def _kinetic_energy(d: Deriving) -> FunctionSpec:
 def _potential_energy(d: Deriving) -> FunctionSpec:
     require_gravity(d, "potential_energy")
     program = Program()
-    (u,) = program.bind([lagrange.potential_energy(d[body_jacobians_of], d[gravity_graph])])
+    weight = d[gravity_graph]
+    (u,) = program.bind([(lagrange.potential_energy(d[body_jacobians_of], weight) if weight is not None
+                          else se.Integer(0)) + spring_energy(d)])
     return function_spec(
         d, "potential_energy", "Gravitational potential energy.",
-        "u = -sum m g . c over the bodies, zero with every centre of mass at the base origin (seed eq. 8.32).",
+        "u = -sum m g . c over the bodies, zero with every centre of mass at the base origin (seed eq. 8.32)."
+        + SPRINGS_IN_U * bool(d.model.springs),
         ["q"], program, [("u", [u], (), "potential energy", "J")])

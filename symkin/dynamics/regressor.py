@@ -49,6 +49,7 @@ from symkin.dynamics.quantities import gravity_graph, newton_euler_links
 from symkin.dynamics.quantities import function_spec
 from symkin.ir.quantity import Deriving, quantity
 from symkin.ir.spec import FunctionSpec
+from symkin.errors import DerivationError
 from symkin.model.schema import Friction, Model
 
 
@@ -169,7 +170,18 @@ def standard_parameters(model: Model, links: Sequence[newton_euler.Link]) -> lis
 
 @quantity("regressor_graph", "the regressor Y as SymEngine rows (coordinates x standard parameters)", emitted=False)
 def regressor_graph(d: Deriving) -> list[list[se.Basic]]:
+    require_no_springs(d.model)
     return regressor_rows(d.model, d[newton_euler_links], d[gravity_graph])
+
+
+def require_no_springs(model: Model) -> None:
+    """Refuse the regressors of a model with joint springs: their forces k (theta - theta_0) are not among the
+    standard parameters' columns, so Y pi would not be the model's tau."""
+    if model.springs:
+        joints = ", ".join(s.joint for s in model.springs)
+        raise DerivationError(f"{model.name}: the joints {joints} carry springs ('springs:'), whose forces are not "
+                              "in the dynamic parameters' regressors; identify the model without its springs, or "
+                              "subtract their torques k (theta - theta_0) from the measured ones first")
 
 
 @quantity("base_parameters", "the base parameters pi_b = K pi and the columns of Y_b, exact", emitted=False)
@@ -205,6 +217,7 @@ def regressor(d: Deriving) -> FunctionSpec:
 def energy_regressor(d: Deriving) -> FunctionSpec:
     """Y_e and the model's pi, named as :func:`regressor`'s (the module docstring has the columns)."""
     program = Program()
+    require_no_springs(d.model)
     Y_e = program.bind(energy_row(d.model, d[newton_euler_links], d[gravity_graph]))
     return _with_standard_parameters(
         d, "energy_regressor", "Energy regressor: k + u = Y_e(q, qd) pi, linear in the standard parameters.",

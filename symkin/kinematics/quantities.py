@@ -6,6 +6,7 @@
 ``frames``             base_T_<link> for every link, 4x4 each
 ``task_coordinates``   task-space coordinates p = f(q), m (seed eq. 8.5)
 ``jacobian_geometric`` 6 x n, linear rows over angular rows, base frame
+``frame_jacobians``    base_J_<link>, 6 x n, the geometric Jacobian of every link frame
 ``jacobian``           task Jacobian J = dp/dq, m x n (seed sec. 4 "Jacobian Matrix")
 =====================  =========================================================
 """
@@ -68,19 +69,39 @@ def geometric_jacobian_matrix(d: Deriving) -> sympy.ImmutableMatrix:
     """Columns [z_i x (p_tcp - p_i); z_i] for revolute and [z_i; 0] for prismatic joints, times the
     coupling matrix A when joints mimic others (one column per coordinate)."""
     chain: ChainFrames = d[chain_frames]
-    p_tcp = sympy.Matrix(chain.tcp.p)
-    moving = set(tree.path_to(tree.parent_indices(d.model), tree.tip_index(d.model)))  # joints that move the TCP
+    return _point_jacobian(d, chain, sympy.Matrix(chain.tcp.p), tree.tip_index(d.model))
+
+
+def _point_jacobian(d: Deriving, chain: ChainFrames, point: sympy.Matrix, link: int) -> sympy.ImmutableMatrix:
+    """The geometric Jacobian (6 x coordinates) of a frame at ``point`` carried by joint ``link``'s link: the
+    joints from the base to that link move it, those on other branches give zero columns."""
+    moving = set(tree.path_to(tree.parent_indices(d.model), link))
     columns = []
     for k, axis in enumerate(chain.axes):
         if k not in moving:  # a joint on another branch
             columns.append(sympy.zeros(6, 1))
             continue
         angular, linear = joint_kinds.motion_subspace(axis.type, sympy.Matrix(axis.direction))
-        # the joint's twist moved from a point on its axis to the TCP: v = w x (p_tcp - p_axis) + v_axis
-        columns.append((angular.cross(p_tcp - sympy.Matrix(axis.point)) + linear).col_join(angular))
+        # the joint's twist moved from a point on its axis to the frame: v = w x (p - p_axis) + v_axis
+        columns.append((angular.cross(point - sympy.Matrix(axis.point)) + linear).col_join(angular))
     J = sympy.Matrix.hstack(*columns)
     coupling = coordinates.coupling_matrix(d.model)
     return sympy.ImmutableMatrix(J if coupling is None else J * coupling)
+
+
+@quantity("frame_jacobians", "geometric Jacobian base_J_<link> (6 x n) of every link frame")
+def _frame_jacobians(d: Deriving) -> FunctionSpec:
+    chain: ChainFrames = d[chain_frames]
+    return make_function(
+        d.model, "frame_jacobians", "Geometric Jacobian of every link frame in the base frame.",
+        "[v; w] = base_J_<link> qd with v the velocity of the link frame's origin and w the link's angular velocity, "
+        "both in the base frame (jacobian_geometric's columns for each link, Pinocchio's LOCAL_WORLD_ALIGNED frame "
+        "Jacobian); joints on other branches of a tree give zero columns.",
+        [coordinate_input(d.model, "q")],
+        [OutputSpec(f"base_J_{name}", _point_jacobian(d, chain, sympy.Matrix(frame.p), k),
+                    f"rows vx, vy, vz, wx, wy, wz of frame '{name}'; one column per coordinate")
+         for k, (name, frame) in enumerate(chain.links)],
+    )
 
 
 @quantity("jacobian_geometric", "geometric Jacobian of the TCP, [v; w] = J qd (6 x n, base frame)")

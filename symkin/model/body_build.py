@@ -12,11 +12,12 @@ import sympy
 
 from symkin.geometry import rotation_matrix
 from symkin.model.reader import X_AXIS, Y_AXIS, Z_AXIS, ZERO, Reader, describe, frame_ops
-from symkin.model.schema import (Actuator, Body, Friction, Joint, Parallel, ParallelBodies, PlatformMotion, Vec3,
-                                 fixed_pose)
+from symkin.model import joint_kinds
+from symkin.model.schema import (Actuator, Body, Friction, Joint, Parallel, ParallelBodies, PlatformMotion, Spring,
+                                 Vec3, fixed_pose)
 from symkin.model.yaml_source import KeyPath
-from symkin.model.units import (ANGLE, ANGULAR_DAMPING, CURRENT, FORCE, INERTIA, LENGTH, LINEAR_DAMPING, MASS, RATIO,
-                                TORQUE, TORQUE_CONSTANT)
+from symkin.model.units import (ANGLE, ANGULAR_DAMPING, ANGULAR_STIFFNESS, CURRENT, FORCE, INERTIA, LENGTH,
+                                LINEAR_DAMPING, MASS, RATIO, STIFFNESS, TORQUE, TORQUE_CONSTANT)
 
 _INERTIA_KEYS = ("xx", "yy", "zz", "xy", "xz", "yz")
 
@@ -302,6 +303,27 @@ def read_friction(r: Reader, value: Any, joint_names: tuple[str, ...], path: Key
                 r.fail(fpath + ("smoothing_velocity",), f"the smoothing velocity must be positive, got {smoothing}",
                        "give the speed below which Coulomb friction fades out, e.g. a parameter v_s: 0.01")
         out.append(Friction(jname, viscous, coulomb, smoothing, coulomb_negative))
+    return tuple(out)
+
+
+def read_springs(r: Reader, value: Any, joints: Sequence[Joint], path: KeyPath = ("springs",)) -> tuple[Spring, ...]:
+    """``springs:`` of a serial model: {joint: {stiffness: k, reference: theta_0}}, k >= 0 in N m/rad (revolute)
+    or N/m (prismatic), theta_0 (default 0) in rad or m; any joint of the chain or tree, followers included."""
+    out = []
+    kinds = {j.name: j for j in joints}
+    for jname, spath, spec in _per_joint(r, path, value, tuple(kinds)):
+        spec = r.mapping(spath, spec, required=("stiffness",), optional=("reference",))
+        if spec is None or "stiffness" not in spec:
+            continue
+        turns = joint_kinds.is_rotation(kinds[jname].type)
+        stiffness = r.expr(spath + ("stiffness",), spec["stiffness"],
+                           dimension=ANGULAR_STIFFNESS if turns else STIFFNESS)
+        reference = (r.expr(spath + ("reference",), spec["reference"], dimension=ANGLE if turns else LENGTH)
+                     if "reference" in spec else ZERO)
+        if stiffness is None or reference is None:
+            continue
+        _negative(r, spath + ("stiffness",), stiffness, "spring stiffness")
+        out.append(Spring(jname, stiffness, reference))
     return tuple(out)
 
 

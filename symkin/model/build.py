@@ -14,7 +14,7 @@ from typing import Any
 
 from symkin.errors import ModelError
 from symkin.model.body_build import (check_leg_bodies, read_actuators, read_bodies, read_friction, read_parallel_bodies,
-                                     with_motor_effort_limits)
+                                     read_springs, with_motor_effort_limits)
 from symkin.model import joint_kinds
 from symkin.model.names import name_problem
 from symkin.model.parallel_build import build_parallel, check_parallel_names, parallel_task_space
@@ -35,8 +35,8 @@ FORMAT_VERSION = 1
 #: so that choosing other outputs, backends or folded parameters keeps the mechanism's identity.
 EMISSION_KEYS = ("scene",)
 TOP_LEVEL_KEYS = ("name", "description", "references", "notes", "allow_nonphysical", "source_names", "parameters",
-                  "serial", "parallel", "wrist", "task_space", "bodies", "gravity", "friction", "actuators", "scene",
-                  "identified")
+                  "serial", "parallel", "wrist", "task_space", "bodies", "gravity", "friction", "springs", "actuators",
+                  "scene", "identified")
 
 
 def build_model(doc: Document, stem: str, allow_nonphysical: bool = False) -> Model:
@@ -101,6 +101,10 @@ def build_model(doc: Document, stem: str, allow_nonphysical: bool = False) -> Mo
             check_name_clashes(r, parameters, derived, wrist.joints)
         parallel = dataclasses.replace(parallel, wrist=wrist)
         friction += wrist_friction
+    springs = read_springs(r, data.get("springs", {}), joints)
+    if parallel is not None and "springs" in data:
+        r.fail(("springs",), "joint springs are modelled on serial chains and trees, not on a parallel model's legs",
+               "remove 'springs:' (or model the device as a serial tree to give its joints springs)")
     actuators = read_actuators(r, data.get("actuators", {}), tuple(j.name for j in joints))
     joints = with_motor_effort_limits(joints, actuators)
     joints, bodies = with_rotors(r, joints, actuators, bodies)
@@ -132,6 +136,7 @@ def build_model(doc: Document, stem: str, allow_nonphysical: bool = False) -> Mo
         bodies=bodies,
         gravity=gravity or (ZERO, ZERO, ZERO),
         friction=friction,
+        springs=springs,
         actuators=actuators,
         tip=tip,
         home_configuration=home,

@@ -18,7 +18,7 @@ locking and lumping of everything off it, the tip rule and the messages are thos
   gives the effort limit gear * max|forcerange| (or gear * gain * max|ctrlrange| for a motor);
 * ``damping`` is viscous and ``frictionloss`` Coulomb friction; ``armature`` is the reflected
   rotor inertia of the joint's drive (``actuators:`` with gear ratio 1, see docs/model-format.md);
-  joint stiffness (a spring) is not modelled and is noted;
+  joint ``stiffness`` is a spring about ``springref`` (``springs:``, its force part of G);
 * an active joint equality that is affine (``polycoef`` with only c0, c1) couples its joints as a
   URDF ``<mimic>`` (q1 = c1 q2 + c0 + ref1 - c1 ref2); other equalities and tendons are noted as not
   modelled;
@@ -306,12 +306,14 @@ def _effort(model: Any, j: int) -> float:
 
 def _drives(document: Document, model: Any, lines: dict[tuple[str, str], tuple[int, int]],
             couplings: dict[int, str]) -> None:
-    """Armature of the chain's joints as their drives' reflected inertia; stiffness noted."""
+    """Armature of the chain's joints as their drives' reflected inertia, stiffness as their springs (about
+    ``springref``, MuJoCo's ``qpos_spring``)."""
     import mujoco
 
     renamed = {source: code for code, source in document.data.get("source_names", {}).get("joints", {}).items()}
     chain = {joint["name"] for joint in document.data["serial"]["chain"]}
     actuators: dict[str, dict[str, str]] = {}
+    springs: dict[str, dict[str, str]] = {}
     notes = list(document.data.get("notes", []))
     for j in range(model.njnt):
         source = _name(model, mujoco.mjtObj.mjOBJ_JOINT, j, "joint")
@@ -325,8 +327,11 @@ def _drives(document: Document, model: Any, lines: dict[tuple[str, str], tuple[i
             if place:
                 document.marks[("actuators", code)] = place
         if float(model.jnt_stiffness[j]) and not disabled(model, "SPRING"):
-            notes.append(f"joint '{source}' has a spring (stiffness {float(model.jnt_stiffness[j])!r}), which "
-                         "symkin does not model: its force is not in the dynamics")
+            springs[code] = {"stiffness": repr(float(model.jnt_stiffness[j])),
+                             "reference": repr(float(model.qpos_spring[model.jnt_qposadr[j]]))}
+            place = lines.get(("joint", source))
+            if place:
+                document.marks[("springs", code)] = place
     for e in range(0 if disabled(model, "CONSTRAINT") or disabled(model, "EQUALITY") else model.neq):
         if not model.eq_active0[e] or (model.eq_type[e] == mujoco.mjtEq.mjEQ_JOINT
                                        and int(model.eq_obj1id[e]) in couplings):
@@ -338,6 +343,8 @@ def _drives(document: Document, model: Any, lines: dict[tuple[str, str], tuple[i
         notes.append(f"{model.ntendon} tendon(s) not modelled (their forces and couplings are not in the dynamics)")
     if actuators:
         document.data["actuators"] = actuators
+    if springs:
+        document.data["springs"] = springs
     if notes:
         document.data["notes"] = notes
 

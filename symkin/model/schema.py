@@ -222,6 +222,23 @@ class Friction:
 
 
 @dataclass(frozen=True)
+class Spring:
+    """A spring on a joint (a torsion spring on a revolute joint, a linear one on a prismatic joint): the
+    potential 1/2 k (theta - theta_0)^2 of the joint's value theta, whose generalized force k (theta - theta_0)
+    is part of G (MuJoCo's joint ``stiffness`` about ``springref``; a gravity-balancing spring).
+
+    Attributes:
+        joint: the joint it acts on.
+        stiffness: k >= 0 (N m/rad on a revolute joint, N/m on a prismatic one).
+        reference: theta_0, the joint value where the spring is relaxed (rad or m).
+    """
+
+    joint: str
+    stiffness: sympy.Expr
+    reference: sympy.Expr
+
+
+@dataclass(frozen=True)
 class Actuator:
     """The drive of one serial joint: a motor whose rotor turns ``gear_ratio`` times per joint turn.
 
@@ -563,6 +580,7 @@ class Model:
         bodies: mass properties.
         gravity: gravity acceleration vector in the base frame.
         friction: per-joint friction.
+        springs: joint springs (their forces are part of G) of a serial chain or tree.
         actuators: per-joint drives (rotor inertia and gear ratio) of a serial chain.
         scene: default request.
         parallel: legs and platform of a parallel mechanism, None for a serial chain.
@@ -582,6 +600,7 @@ class Model:
     bodies: tuple[Body, ...] = ()
     gravity: Vec3 = (sympy.Integer(0), sympy.Integer(0), sympy.Integer(0))
     friction: tuple[Friction, ...] = ()
+    springs: tuple[Spring, ...] = ()
     #: the drives of serial joints (rotor inertia, gear ratio); a parallel model's rotors are in its bodies.
     actuators: tuple[Actuator, ...] = ()
     #: the link that carries the TCP (``serial.tip``), None for the last joint's link.

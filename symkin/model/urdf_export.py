@@ -14,7 +14,8 @@ frame placement of ``<link>`` in any URDF reader are the same transform:
   readers merge fixed links into their parent, so a link may carry several bodies;
 * revolute joints without limits are ``continuous``; limits, velocity and effort limits are
   written where the model declares them (``effort="0" velocity="0"`` otherwise, as the
-  URDF requires the attributes); friction becomes ``<dynamics damping friction>``.
+  URDF requires the attributes); friction becomes ``<dynamics damping friction>``; joint springs,
+  which URDF cannot express, are listed in a comment.
 
 Every number is the model's expression at the parameters' default values, printed with
 ``repr`` (the shortest decimal that reads back as the same double); rotations are written as
@@ -112,6 +113,10 @@ def export_urdf(model: Model) -> str:
              xml_comment(f"{model.name}: exported by symkin from {model.source} (model {model.hash}); numbers at "
                          "the parameters' default values"),
              f"<robot name={quoteattr(model.name)}>", f'  <link name="{ROOT_LINK}"/>']
+    if model.springs:  # URDF has no element for them: said in the file, not dropped unseen
+        springs = ", ".join(f"{s.joint} (k = {_number(s.stiffness, values)!r}, theta_0 = {_number(s.reference, values)!r})"
+                            for s in model.springs)
+        lines.insert(2, xml_comment(f"joint springs of the model, which URDF cannot hold: {springs}"))
     base = _transform(model.base, values)
     for joint, p in zip(model.joints, tree.parent_indices(model)):
         parent, pending = (ROOT_LINK, base) if p < 0 else (model.joints[p].link, np.eye(4))

@@ -58,8 +58,9 @@ import sympy
 from symkin.dynamics import lagrange
 from symkin.dynamics.linsolve import ldl_solve, transpose_solve
 from symkin.dynamics.program import Program, dot, mat_vec, se_matrix, se_vector
-from symkin.dynamics.quantities import (EFFORT_UNIT, coordinate_symbols, function_spec, joint_friction,
-                                       require_gravity, task_space_dynamics)
+from symkin.dynamics.joint_forces import joint_friction
+from symkin.dynamics.quantities import (EFFORT_UNIT, coordinate_symbols, function_spec, require_gravity,
+                                       task_space_dynamics)
 from symkin.errors import DerivationError
 from symkin.ir.quantity import Deriving, quantity
 from symkin.ir.spec import FunctionSpec

@@ -308,6 +308,51 @@ def test_the_stock_ur10_gets_its_base_parameters_with_its_angles_snapped():
     assert len(inertial.base) == np.linalg.matrix_rank(stacked) == 36
 
 
+def _tree_urdf(rng) -> str:
+    """A branched robot nobody tuned: a turning torso carrying two 2-joint arms, random link offsets (3 decimals,
+    exact as written) and random physical inertias, one arm's shoulder axis turned by rpy 1.5708 (snapped)."""
+    def inertial(mass: float) -> str:
+        a, b = rng.uniform(0.01, 0.05, 2)
+        xx, yy, zz = a, b, rng.uniform(abs(a - b) + 0.005, a + b)  # the triangle inequality with room
+        com = " ".join(f"{v:.3f}" for v in rng.uniform(-0.1, 0.1, 3))
+        return (f'<inertial><origin xyz="{com}"/><mass value="{mass:.3f}"/>'
+                f'<inertia ixx="{xx:.4f}" iyy="{yy:.4f}" izz="{zz:.4f}" ixy="0" ixz="0" iyz="0"/></inertial>')
+
+    links = ["base", "torso", "l_upper", "l_fore", "r_upper", "r_fore"]
+    joints = [("waist", "base", "torso", "0 0 1", "0 0 0"), ("l_shoulder", "torso", "l_upper", "0 1 0", "0 0 0"),
+              ("l_elbow", "l_upper", "l_fore", "0 1 0", "0 0 0"), ("r_shoulder", "torso", "r_upper", "1 0 0",
+                                                                   "1.5708 0 0"),
+              ("r_elbow", "r_upper", "r_fore", "0 0 1", "0 0 0")]
+    text = ['<robot name="two_arms">']
+    text += [f'<link name="{name}">{inertial(rng.uniform(0.5, 3)) if name != "base" else ""}</link>' for name in links]
+    for name, parent, child, axis, rpy in joints:
+        xyz = " ".join(f"{v:.3f}" for v in rng.uniform(-0.3, 0.3, 3))
+        text.append(f'<joint name="{name}" type="revolute"><parent link="{parent}"/><child link="{child}"/>'
+                    f'<origin xyz="{xyz}" rpy="{rpy}"/><axis xyz="{axis}"/>'
+                    '<limit lower="-3" upper="3" effort="10" velocity="2"/></joint>')
+    return "\n".join(text + ["</robot>"])
+
+
+def test_a_branched_tree_s_base_parameters_are_as_many_as_pinocchios_regressor_rank(tmp_path):
+    """Issue 61: the whole tree of a robot file (two arms on a turning torso, read with no tip) gets its base
+    parameters, as many as the numeric rank of Pinocchio's stacked joint-torque regressors of the same file (the
+    exact count of an algorithm that walks the tree against an independent numeric one)."""
+    from symkin.dynamics.base_parameters import base_parameters
+
+    rng = np.random.default_rng(61)
+    path = tmp_path / "two_arms.urdf"
+    path.write_text(_tree_urdf(rng))
+    model = load_model(path, snap_angles=True)
+    assert model.dof == 5
+    inertial = base_parameters(model, [row[:50] for row in Derivation(model)["regressor_graph"]],
+                               parameter_names(model)[:50])
+    pmodel = pin.buildModelFromUrdf(str(path))
+    pdata = pmodel.createData()
+    stacked = np.vstack([pin.computeJointTorqueRegressor(pmodel, pdata, *state).copy()
+                         for state in _stacked(lambda *state: state, model, rng, 40)])
+    assert len(inertial.base) == np.linalg.matrix_rank(stacked)
+
+
 def test_what_rational_arithmetic_cannot_evaluate_is_refused_with_the_fix():
     from symkin.errors import DerivationError
 

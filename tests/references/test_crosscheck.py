@@ -190,8 +190,11 @@ def test_crosscheck_feeds_pinocchio_the_snapped_geometry():
 def test_a_stock_whole_tree_with_mimic_joints_passes_with_no_flags(file, joints, dof):
     """Issue 61: 'symkin crosscheck baxter.urdf' stopped at 'name the tip' and, with --tip and --branch, at the
     grippers' mimic joints; without --tip a robot file is the whole tree, its mimic joints couplings, and it agrees
-    with Pinocchio's model of the whole file."""
+    with Pinocchio's model of the whole file, every link's pose and Jacobian included."""
     model = load_model(ROBOTS_DIR / file)
     assert (len(model.joints), model.dof) == (joints, dof)
     report = crosscheck(ROBOTS_DIR / file, samples=2, backends=("numpy",), coriolis_matrix=False)
     assert not report.failures, report
+    # every link's Jacobian (frame_jacobians), not only the TCP's, against Pinocchio's frame Jacobian
+    checked = {c.quantity for c in report.comparisons if c.quantity.startswith("frame_jacobians ")}
+    assert len(checked) == joints, checked
