@@ -5,7 +5,7 @@ Run with `make bench` or `python benchmarks/bench_passive.py [--samples N]`.
 The example DELTA (models/delta.yaml) is derived with and without
 ``elbow_limits: [null, [-w, w]]`` (numpy backend, the scene the analyses need).  With
 limits, every assembled pose also needs its passive joint variables, found by damped
-Gauss-Newton on the generated loop closure (symkin.analysis.passive); without, the closed
+Gauss-Newton on the generated loop closure (symkin.mechanism.passive); without, the closed
 forms alone decide.  Printed: the time of the working-mode test per pose and of a GCI
 (joint-domain grid) with each limit, and the workspace volume, side by side in this process.
 The per-pose figure and the table of docs/analysis.md ("Passive-joint limits") come from here.
@@ -25,7 +25,8 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 import symkin  # noqa: E402
-from symkin.analysis import global_indices, mechanism, parallel, sampling, workspace  # noqa: E402
+from symkin.analysis import global_indices, parallel, sampling, workspace  # noqa: E402
+from symkin import mechanism
 from symkin.text_table import format_table  # noqa: E402
 
 WIDTHS_DEG = (None, 40, 30, 20, 10)

@@ -50,7 +50,7 @@ if TYPE_CHECKING:  # the names as the type checker sees them
                                            sample_workspace)
 
 #: Each public name and the module that defines it: imported when first asked for (PEP 562), so that importing one
-#: light module of the package (:mod:`~symkin.analysis.mechanism` for a command line parser) imports no other.
+#: light module of the package (:mod:`~symkin.mechanism` for a command line parser) imports no other.
 _EXPORTS = {name: module for module, names in (
     ("conditioning", ("characteristic_length", "condition_number", "frobenius_condition_number", "homogenize",
                       "inverse_condition_number", "inverse_frobenius_condition_number", "manipulability",

@@ -32,7 +32,8 @@ from typing import Any
 
 import numpy as np
 
-from symkin.analysis import global_indices, mechanism, sampling, workspace
+from symkin.analysis import global_indices, sampling, workspace
+from symkin import mechanism
 from symkin.analysis.chunked import IntegrandSpec, integrate_chunked
 from symkin.runtime.cluster import dask_client, run_tasks
 from symkin.runtime.payload import ModelPayload

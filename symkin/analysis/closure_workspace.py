@@ -40,10 +40,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from symkin import reporting
-from symkin.analysis import conditioning, mechanism, passive
+from symkin.analysis import conditioning
+from symkin import mechanism
+from symkin.mechanism import passive
 from symkin.analysis.estimates import CONFIDENCE, Estimate
-from symkin.analysis.limits import within_limits
-from symkin.analysis.mechanism import Limits
+from symkin.mechanism.limits import within_limits
+from symkin.mechanism import Limits
 from symkin.analysis.workspace import Occupancy, grid_geometry
 from symkin.runtime.info import GeneratedModel
 from symkin.runtime.parallel import ClosureFrames, closure_frames, closure_velocities, solve_closure
@@ -403,7 +405,7 @@ def closure_workspace(model: GeneratedModel, *, orientation: dict[str, float] | 
     Args:
         model: a parallel model analysed through its closure (:func:`uses_closure`).
         orientation: the held angles by name (e.g. {"yaw": 0.3}); the home pose's for the others.
-        limits: the actuators' limit overrides (:func:`symkin.analysis.mechanism.joint_limits`).
+        limits: the actuators' limit overrides (:func:`symkin.mechanism.joint_limits`).
         length: the characteristic length (m); default: computed over the reached cells.
         cells: cells along the longest side of the grid.
         start: (q, s) of the home assembly; default :func:`assemble_at_home`.

@@ -19,7 +19,8 @@ from typing import Any
 
 import numpy as np
 
-from symkin.analysis import mechanism, workspace
+from symkin.analysis import workspace
+from symkin import mechanism
 from symkin.analysis.conditioning import inverse_condition_number
 from symkin.analysis.handle_measures import (NO_GRAVITY, PUSHED_GROUPS, ROTATIONAL_FRICTION,
                                              SPHERICAL_GROUPS, TURNED_GROUPS, Actuation, Measure, dynamics_at,

@@ -16,7 +16,7 @@ from typing import Protocol
 
 import numpy as np
 
-from symkin.analysis.limits import within_limits
+from symkin.mechanism.limits import within_limits
 
 
 class InverseKinematics(Protocol):
@@ -24,7 +24,7 @@ class InverseKinematics(Protocol):
 
     Attributes:
         dimension: d, the number of TCP coordinates of a point (the workspace dimension,
-            in the order of :func:`symkin.analysis.mechanism.position_axes`).
+            in the order of :func:`symkin.mechanism.position_axes`).
         branches: B, the number of solution branches returned per point.
     """
 

@@ -15,7 +15,7 @@ f_iso vanishes where a column of J blows up (an interior singularity of a parall
 mechanism, det J_x = 0) and grows where J loses rank (a boundary singularity: the
 structure carries the load), so its map shows the seed's isotropy of force beside the
 1/kappa maps.  Only translational task spaces are rated (a force in N); J is the task
-Jacobian of :func:`symkin.analysis.mechanism.jacobian`.
+Jacobian of :func:`symkin.mechanism.jacobian`.
 """
 
 from __future__ import annotations

@@ -34,12 +34,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from symkin.analysis import conditioning, mechanism, parallel, sampling
+from symkin.analysis import conditioning, parallel, sampling
+from symkin import mechanism
 from symkin.analysis.estimates import Estimate, IntegralEstimate
 from symkin.analysis.feasibility import InverseKinematics, feasible_configurations
 from symkin.analysis.integrand import Integrand
 from symkin.analysis.integrators import integrate
-from symkin.analysis.mechanism import Limits
+from symkin.mechanism import Limits
 from symkin.analysis.workspace import bounding_box
 from symkin.runtime.info import GeneratedModel
 
@@ -108,7 +109,7 @@ def joint_space_integrand(model: GeneratedModel, *, index: Index | None = condit
         model: a loaded model (numpy or C backend).
         index: function of Jacobians (..., m, n) -> (...); None for the measure alone.
         measure: ``cartesian`` or ``joint`` (see module docstring).
-        limits: joint-limit overrides (see :func:`symkin.analysis.mechanism.joint_limits`).
+        limits: joint-limit overrides (see :func:`symkin.mechanism.joint_limits`).
         length: characteristic length for mixed task spaces (m, or ``"auto"``).
         jacobian: the Jacobian function q -> J; default ``model.jacobian``.  For a parallel
             mechanism the default is J(q, fk(q)) restricted to the working mode

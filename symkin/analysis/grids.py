@@ -13,7 +13,7 @@ import numpy as np
 
 from symkin.analysis import conditioning, global_indices
 from symkin.analysis.feasibility import InverseKinematics
-from symkin.analysis.mechanism import Limits
+from symkin.mechanism import Limits
 from symkin.analysis.workspace import Occupancy, grid_cells
 from symkin.runtime.info import GeneratedModel
 

@@ -13,7 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from symkin.analysis import forces, mechanism, rating
+from symkin.analysis import forces, rating
+from symkin import mechanism
 from symkin.runtime.info import GeneratedModel
 
 

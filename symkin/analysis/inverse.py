@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from symkin.analysis import mechanism
+from symkin import mechanism
 from symkin.analysis.feasibility import InverseKinematics
 from symkin.analysis.parallel import parallel_inverse
 from symkin.errors import NotApplicable
@@ -39,7 +39,7 @@ class ClosedFormInverse:
 
     Attributes:
         solver: the :class:`~symkin.ik.closed_form.ClosedFormIK` (task-space targets).
-        order: indices that reorder a point (in :func:`~symkin.analysis.mechanism.position_axes`
+        order: indices that reorder a point (in :func:`~symkin.mechanism.position_axes`
             order) into the solver's target (the model's task-space order).
     """
 

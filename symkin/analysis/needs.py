@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-from symkin.analysis.mechanism import MechanismKind
+from symkin.mechanism import MechanismKind
 
 #: The dynamics a simulation integrates and checks (its energy balance).
 SIMULATED_DYNAMICS = ("forward_dynamics", "inverse_dynamics", "mass_matrix", "kinetic_energy", "coriolis_vector")

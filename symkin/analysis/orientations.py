@@ -23,13 +23,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from symkin.analysis import conditioning, mechanism
+from symkin.analysis import conditioning
+from symkin import mechanism
 from symkin.analysis.global_indices import GlobalIndex
 from symkin.analysis.integrand import Integrand
 from symkin.analysis.integrators import integrate
-from symkin.analysis.limits import within_limits
+from symkin.mechanism.limits import within_limits
 from symkin.analysis.sobol import Sobol
-from symkin.analysis.mechanism import Limits
+from symkin.mechanism import Limits
 from symkin.analysis.parallel import angular_velocity_matrix
 from symkin.runtime.info import GeneratedModel
 

@@ -21,7 +21,7 @@ actuator angles through a leg singularity det J_q = 0) are outside; at that boun
 **Passive-joint limits** (``limits`` on leg joints, recorded in the manifest) are part of
 the working mode: a configuration or point counts only if its passive joint variables,
 found from the generated loop closure on the home assembly's branch, are within them
-(:mod:`symkin.analysis.passive`; unresolved poses count as unreachable, with a warning).
+(:mod:`symkin.mechanism.passive`; unresolved poses count as unreachable, with a warning).
 
 **Pose platforms** (task space x, y, z, roll, pitch, yaw: the Stewart-Gough platform) have
 no closed-form fk and no ``jacobian``, only ``inverse_jacobian``.  They are analysed at a
@@ -33,7 +33,7 @@ the Cartesian domain only.
 
 Length: the two adapters of parallel mechanisms to the analyses (working mode, constant
 orientation) share their Jacobian and reachability helpers; the passive-joint closure is already
-its own module (:mod:`symkin.analysis.passive`).
+its own module (:mod:`symkin.mechanism.passive`).
 """
 
 from __future__ import annotations
@@ -43,7 +43,9 @@ from typing import Any
 
 import numpy as np
 
-from symkin.analysis import conditioning, mechanism, passive, sampling
+from symkin.analysis import conditioning, sampling
+from symkin import mechanism
+from symkin.mechanism import passive
 from symkin.analysis.feasibility import feasible_configurations
 from symkin.errors import NotApplicable
 from symkin.ik.rotations import wrap_angle

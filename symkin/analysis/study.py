@@ -19,9 +19,10 @@ from typing import Any
 
 import numpy as np
 
-from symkin.analysis import feasibility, global_indices, inverse, mechanism, parallel, workspace
+from symkin.analysis import feasibility, global_indices, inverse, parallel, workspace
+from symkin import mechanism
 from symkin.analysis.grids import index_grid
-from symkin.analysis.mechanism import Limits
+from symkin.mechanism import Limits
 from symkin.analysis.workspace import Occupancy, WorkspaceCloud
 from symkin.runtime.info import GeneratedModel
 

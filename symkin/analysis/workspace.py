@@ -20,9 +20,10 @@ from itertools import product
 
 import numpy as np
 
-from symkin.analysis import mechanism, parallel, sampling
+from symkin.analysis import parallel, sampling
+from symkin import mechanism
 from symkin.analysis.estimates import Estimate
-from symkin.analysis.mechanism import Limits
+from symkin.mechanism import Limits
 from symkin.runtime.info import GeneratedModel
 
 SAMPLING_METHODS = ("grid", "random", "sobol")

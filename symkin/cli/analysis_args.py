@@ -73,7 +73,8 @@ def resolve_length(model: GeneratedModel, text: str, limits: dict) -> float | No
 
     With "auto" the length is computed here, once, and printed.
     """
-    from symkin.analysis import global_indices, mechanism
+    from symkin.analysis import global_indices
+    from symkin import mechanism
 
     length = parse_length(text)
     if not mechanism.mixes_translations_and_rotations(model):

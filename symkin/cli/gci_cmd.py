@@ -6,7 +6,7 @@ import argparse
 import importlib
 import time
 
-from symkin.analysis.mechanism import POSITION_COMPONENTS
+from symkin.mechanism import POSITION_COMPONENTS
 from symkin.analysis.needs import NEEDS
 from symkin.cli import analysis_args, model_files
 from symkin.cli.progress import Progress
@@ -137,8 +137,9 @@ def _domain(args: argparse.Namespace, model: GeneratedModel) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-    from symkin.analysis import (closure_workspace, conditioning, global_indices, inverse, mechanism, orientations, plots,
-                                 study, workspace)
+    from symkin.analysis import (closure_workspace, conditioning, global_indices, inverse, orientations, plots, study,
+                                 workspace)
+    from symkin import mechanism
     from symkin.analysis.integrators import STATISTICAL
 
     if args.scheduler is not None:

@@ -17,7 +17,7 @@ from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from symkin.analysis.mechanism import MechanismKind, parallel_kind
+from symkin.mechanism import MechanismKind, parallel_kind
 from symkin.analysis.needs import NEEDS
 
 if TYPE_CHECKING:
@@ -29,7 +29,7 @@ ANALYSIS_OUTPUTS = NEEDS["kinematics"][MechanismKind.SERIAL]
 #: Suffixes of model files (derived on the fly); anything else is a generated directory.
 MODEL_FILE_SUFFIXES = (".yaml", ".yml", ".urdf", ".xml", ".xacro")
 #: Also derived for a parallel model file that limits passive joints: the analyses find the
-#: passive joint variables from the loop closure (symkin.analysis.passive).
+#: passive joint variables from the loop closure (symkin.mechanism.passive).
 PASSIVE_LIMIT_OUTPUTS = ("closure", "closure_jacobians")
 #: What the analyses of legs of any topology (no distance form, so no closed-form ik) use instead of the kind's
 #: outputs (symkin.analysis.closure_workspace).
@@ -150,7 +150,7 @@ def _derived(source: Path, backends: Sequence[str], outputs: Sequence[str] | Map
 
 
 def analysis_kind(model: Model) -> MechanismKind:
-    """The kind of a model file (:class:`symkin.analysis.mechanism.MechanismKind`, the keys of
+    """The kind of a model file (:class:`symkin.mechanism.MechanismKind`, the keys of
     ``symkin.analysis.needs.NEEDS``)."""
     return MechanismKind.SERIAL if model.parallel is None else parallel_kind(model.task_space)
 

@@ -68,7 +68,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 def _chunked_study(args: argparse.Namespace, models: list, designs: list[dict[str, float]], method: str, limits,
                    length: float | None, progress: Progress) -> list:
     """--scheduler: every design sampled in chunks on one Dask client (symkin.analysis.chunked_workspace)."""
-    from symkin.analysis import chunked_workspace, mechanism, study, workspace
+    from symkin.analysis import chunked_workspace, study, workspace
+    from symkin import mechanism
     from symkin.runtime.cluster import check_scheduler, dask_client
     from symkin.runtime.payload import ModelPayload
 
@@ -298,7 +299,8 @@ def _force_map(args: argparse.Namespace, model, layer, limits, scale: float):
     """(figure path, summary) of the isotropic force over the workspace (symkin.analysis.forces)."""
     import numpy as np
 
-    from symkin.analysis import forces, mechanism, plots, study, workspace
+    from symkin.analysis import forces, plots, study, workspace
+    from symkin import mechanism
 
     if not mechanism.is_positional(model):
         raise ValueError(f"--force-map: the task space of {model.name} ({', '.join(mechanism.task_space(model))}) "

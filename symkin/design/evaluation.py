@@ -21,10 +21,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from symkin.analysis import (closure_workspace, conditioning, feasibility, forces, global_indices, inverse, mechanism,
+from symkin.analysis import (closure_workspace, conditioning, feasibility, forces, global_indices, inverse,
                              orientations, parallel, rating, sampling)
+from symkin import mechanism
 from symkin.analysis.estimates import Estimate
-from symkin.analysis.limits import within_limits
+from symkin.mechanism.limits import within_limits
 from symkin.design.problem import DesignProblem
 from symkin.runtime.info import GeneratedModel
 

@@ -72,8 +72,10 @@ from typing import Any, NamedTuple
 import casadi
 import numpy as np
 
-from symkin.analysis import closure_workspace, forces, mechanism, passive, sampling
-from symkin.analysis.limits import within_limits
+from symkin.analysis import closure_workspace, forces, sampling
+from symkin import mechanism
+from symkin.mechanism import passive
+from symkin.mechanism.limits import within_limits
 from symkin.design import smooth
 from symkin.design.problem import DesignProblem
 from symkin.runtime.info import GeneratedModel

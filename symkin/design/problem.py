@@ -13,7 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from symkin.analysis import closure_workspace, mechanism, orientations
+from symkin.analysis import closure_workspace, orientations
+from symkin import mechanism
 from symkin.analysis.handle_measures import Actuation
 from symkin.analysis.needs import NEEDS
 from symkin.runtime.info import GeneratedModel

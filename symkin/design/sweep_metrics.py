@@ -78,7 +78,8 @@ def evaluate_design(model: Any, values: dict[str, float], definition: Any) -> di
 def torque_peak(model: Any, lower: np.ndarray, upper: np.ndarray, samples: int, seed: int) -> float:
     """max over Sobol configurations in [lower, upper] (in the working mode, for a parallel
     mechanism) of the largest column norm of J_p: the peak effort per unit TCP force (see above)."""
-    from symkin.analysis import mechanism, parallel, sampling
+    from symkin.analysis import parallel, sampling
+    from symkin import mechanism
 
     q = sampling.sobol(lower, upper, max(4, int(math.log2(samples))), np.random.default_rng(seed))
     with np.errstate(all="ignore"):

@@ -273,7 +273,7 @@ def joint_torques(links: Sequence[Link], wrenches: Sequence[Spatial], qdd: Seque
     for i in reversed(range(len(links))):
         link = links[i]
         total = (_add(wrenches[i][0], carried[i][0]), _add(wrenches[i][1], carried[i][1]))
-        tau[i] = dot(link.axis, total[0] if joint_kinds.is_rotation(link.type) else total[1])
+        tau[i] = dot(link.axis, joint_kinds.worked_part(link.type, total))
         if qdd is not None and link.armature != 0:
             tau[i] += link.armature * qdd[i]
         if link.parent >= 0 and not _is_zero(total):
@@ -348,10 +348,9 @@ def gravity_torques(links: Sequence[Link], gravity: Sequence[se.Basic]) -> list[
         accelerations.append(acc)
         if body is None:
             G.append(se.Integer(0))
-        elif joint_kinds.is_rotation(link.type):
-            G.append(dot(link.axis, cross(body.moment, acc)))
-        else:
-            G.append(dot(link.axis, [body.mass * a for a in acc]))
+        else:  # the composite's weight wrench (moment h^c x a, force m^c a) against the joint's motion
+            G.append(dot(link.axis, joint_kinds.worked_part(link.type, (cross(body.moment, acc),
+                                                                        [body.mass * a for a in acc]))))
     return G
 
 
@@ -368,7 +367,7 @@ def mass_matrix(links: Sequence[Link]) -> list[list[se.Basic]]:
         j = i
         while j >= 0:  # i and its ancestors; M_ij = 0 for a j on another branch
             link = links[j]
-            M[i][j] = M[j][i] = dot(link.axis, f[0] if joint_kinds.is_rotation(link.type) else f[1])
+            M[i][j] = M[j][i] = dot(link.axis, joint_kinds.worked_part(link.type, f))
             if link.parent >= 0:
                 f = _force_transform(link, f)
             j = link.parent

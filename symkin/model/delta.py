@@ -31,7 +31,7 @@ swing of the rod out of the leg plane; the wrist undoes both so that the platfor
 orientation, ``wrist<i>_1 = -elbow<i>_2`` and ``wrist<i>_2 = -(theta_i + elbow<i>_1)`` (minus
 the rod's elevation in the leg plane).  The U joints and ball joints of haptic DELTAs reach
 some +/-30 to 60 deg; the workspace analyses drop the poses beyond the declared ranges
-(:mod:`symkin.analysis.passive`).
+(:mod:`symkin.mechanism.passive`).
 
 Actuators: ``actuator_limits`` bound every actuated angle, ``actuator_effort_limit`` and
 ``actuator_velocity_limit`` are every actuator's largest torque and speed (the coordinates'

@@ -94,6 +94,13 @@ def is_rotation(joint_type: str | Enum) -> bool:
     return rotation
 
 
+def worked_part(joint_type: str | Enum, pair: tuple[Any, Any]) -> Any:
+    """The part of an (angular, linear) pair - a wrench's (moment, force) - that a one-coordinate joint's motion
+    works against: tau = S^T f is the moment about a rotation's axis and the force along a translation's axis
+    (``dot(axis, worked_part(type, wrench))``, Featherstone 2008 eq. 5.13)."""
+    return pair[0] if is_rotation(joint_type) else pair[1]
+
+
 def motion_subspace(joint_type: str | Enum, axis: Any, zero: Any = None) -> tuple[Any, Any]:
     """(angular, linear) 3-vectors of a one-coordinate joint about or along the unit ``axis``: its
     twist per unit coordinate rate, taken at a point on the axis.  ``zero`` is the zero vector of the

@@ -25,7 +25,9 @@ locking and lumping of everything off it, the tip rule and the messages are thos
 * gravity is ``option/gravity``: ``[0, 0, -g]`` with the parameter ``g`` its magnitude when it
   points down z, else the vector as given;
 * ``<option><flag .../>`` disabling gravity, damping, frictionloss, springs or equality constraints is
-  honoured (the model has none of them), disabling joint limits or actuation is noted (:data:`NOTED_FLAGS`).
+  honoured (the model has none of them), disabling joint limits or actuation is noted
+  (:data:`~symkin.model.mjcf_options.NOTED_FLAGS`); so are the fluid forces of a medium (``density``, ``viscosity``, ``wind``) and bodies' ``gravcomp``, which
+  symkin does not model.
 
 The line of every message is the line of the body or joint element of that name in the file
 (elements of included files are named by the file only).
@@ -44,6 +46,7 @@ from symkin.errors import ModelError, Problem
 from symkin.model.confined_read import ReadableFolders, ReadRefused, read_bounded
 from symkin.model.generated_urdf import GeneratedUrdf, read_generated_urdf
 from symkin.model.mjcf_compile import compile_confined
+from symkin.model.mjcf_options import disabled, option_notes
 from symkin.model.urdf_export import urdf_rpy
 from symkin.model.yaml_source import MAX_FILE_BYTES, Document
 
@@ -70,7 +73,7 @@ def read_mjcf_document(path: str | Path, allow_read: Sequence[str | Path] = (), 
     _refuse_unmoving_on_chain(document, model, unmoving, file)
     _drives(document, model, lines, couplings)
     _gravity(document, model)
-    _option_notes(document, model)
+    option_notes(document, model)
     if warnings:  # MuJoCo's compiler warnings, in the model's notes (not a MUJOCO_LOG.TXT in the working folder)
         document.data["notes"] = [*document.data.get("notes", []),
                                   *(f"MuJoCo's compiler warns: {warning}" for warning in warnings)]
@@ -347,33 +350,6 @@ def _drives(document: Document, model: Any, lines: dict[tuple[str, str], tuple[i
         document.data["springs"] = springs
     if notes:
         document.data["notes"] = notes
-
-
-def disabled(model: Any, flag: str) -> bool:
-    """Whether ``<option><flag NAME="disable"/>`` switched off MuJoCo's ``mjDSBL_<flag>`` in the compiled model."""
-    import mujoco
-
-    return bool(int(model.opt.disableflags) & int(getattr(mujoco.mjtDisableBit, f"mjDSBL_{flag}")))
-
-
-#: Disable flags that change what the model is and how symkin takes them (the others - contact, warm start,
-#: sensors, ... - concern simulation only).
-HONOURED_FLAGS = {"GRAVITY": "no gravity", "DAMPER": "no joint damping", "FRICTIONLOSS": "no joint frictionloss",
-                  "SPRING": "no joint springs", "CONSTRAINT": "no equality couplings",
-                  "EQUALITY": "no equality couplings"}
-#: ... and those symkin cannot follow, noted: its model keeps the joint ranges and the actuators' effort limits.
-NOTED_FLAGS = {"LIMIT": "MuJoCo does not enforce the joint ranges (symkin keeps them as the joints' limits)",
-               "ACTUATION": "MuJoCo applies no actuator forces (symkin keeps the actuators' effort limits)"}
-
-
-def _option_notes(document: Document, model: Any) -> None:
-    """A note for each disable flag of ``<option>`` that changes the model: what symkin made of it."""
-    notes = [f"MJCF <option><flag {flag.lower()}=\"disable\"/>: {meaning}" for flag, meaning in HONOURED_FLAGS.items()
-             if disabled(model, flag)]
-    notes += [f"MJCF <option><flag {flag.lower()}=\"disable\"/>: {meaning}" for flag, meaning in NOTED_FLAGS.items()
-              if disabled(model, flag)]
-    if notes:
-        document.data["notes"] = [*document.data.get("notes", []), *notes]
 
 
 def _gravity(document: Document, model: Any) -> None:

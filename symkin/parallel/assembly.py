@@ -1,7 +1,8 @@
 """Assembling a parallel mechanism numerically: the actuated and passive joints that close every leg at a pose.
 
-Damped Gauss-Newton on the generated closure rows (:mod:`symkin.parallel.closure`), for the checks that need the
-mechanism assembled at a few poses (the platform-motion check at home, the base parameters' rank on the closure).
+Damped Gauss-Newton (:func:`symkin.newton.newton_iterate`, the one solver) on the generated closure rows
+(:mod:`symkin.parallel.closure`), for the checks that need the mechanism assembled at a few poses (the
+platform-motion check at home, the base parameters' rank on the closure).
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ import numpy as np
 from symkin.ir.evaluate import symengine_entries
 from symkin.ir.quantity import Deriving
 from symkin.model import coordinates
+from symkin.newton import newton_iterate
 from symkin.parallel.inputs import passive_symbols, task_symbols
 
 #: Gauss-Newton on the closure at the home pose: steps and the largest step (rad or m) from the start.
@@ -41,26 +43,22 @@ def assembler(d: Deriving) -> Callable[[np.ndarray], tuple[np.ndarray, np.ndarra
 
 def _gauss_newton(function: Callable[[np.ndarray], np.ndarray], n: int, k: int, p: np.ndarray
                   ) -> tuple[np.ndarray, np.ndarray] | None:
+    """(q, s) of the first start, in order, whose damped Gauss-Newton solve (:func:`symkin.newton.newton_iterate`,
+    all starts as one batch) closes the legs at p; None if none does."""
     def residuals(X: np.ndarray) -> np.ndarray:  # rows of X: states; one call for the batch
         return function(np.concatenate([X, np.broadcast_to(p, (len(X), len(p)))], axis=1))
 
-    def residual(x: np.ndarray) -> np.ndarray:
-        return residuals(x[None, :])[0]
-
-    def jacobian(x: np.ndarray) -> np.ndarray:
+    def equations(X: np.ndarray, _rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         steps = DIFFERENCE * np.eye(n + k)
-        values = residuals(np.concatenate([x + steps, x - steps]))
-        return ((values[:n + k] - values[n + k:]) / (2 * DIFFERENCE)).T
+        shifted = residuals(np.concatenate([X[:, None, :] + steps, X[:, None, :] - steps], axis=1).reshape(-1, n + k))
+        shifted = shifted.reshape(len(X), 2, n + k, -1)
+        return residuals(X), np.swapaxes((shifted[:, 0] - shifted[:, 1]) / (2 * DIFFERENCE), 1, 2)
 
     scale = max(float(np.max(np.abs(p), initial=0.0)), 1.0)
     rng = np.random.default_rng(0)
-    for start in [np.zeros(n + k)] + [rng.uniform(-np.pi / 2, np.pi / 2, n + k) for _ in range(STARTS)]:
-        x = start
-        for _ in range(ITERATIONS):
-            step = -np.linalg.lstsq(jacobian(x), residual(x), rcond=None)[0]
-            x = x + step * min(1.0, MAX_STEP / max(float(np.max(np.abs(step), initial=0.0)), MAX_STEP))
-            if not np.all(np.isfinite(x)) or np.max(np.abs(step), initial=0.0) <= TOLERANCE:
-                break
-        if np.all(np.isfinite(x)) and np.max(np.abs(residual(x))) <= CLOSED * scale:
+    starts = np.stack([np.zeros(n + k)] + [rng.uniform(-np.pi / 2, np.pi / 2, n + k) for _ in range(STARTS)])
+    report = newton_iterate(starts, equations, TOLERANCE, ITERATIONS, MAX_STEP)
+    for x, residual in zip(report.solution, report.residual):
+        if np.all(np.isfinite(x)) and residual <= CLOSED * scale:
             return x[:n], x[n:]
     return None

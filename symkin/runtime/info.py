@@ -30,7 +30,7 @@ class ModelInfo:
         functions: the generated functions, by name.
         home: a parallel mechanism's declared home pose (task coordinates), else None.
         passive_limits: per leg of a parallel mechanism, {passive variable: [lower, upper]} as recorded
-            (validated where they are used, :func:`symkin.analysis.passive.declared_limits`, with the
+            (validated where they are used, :func:`symkin.mechanism.passive.declared_limits`, with the
             manifest's place in the message).
         wrist: a hybrid device's wrist coordinates, in the order of the functions' ``qw``; () otherwise.
         home_configuration: a serial device's declared rest configuration (``serial.home``), else None.

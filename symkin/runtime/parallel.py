@@ -1,10 +1,10 @@
 """Numerical kinematics of parallel mechanisms on top of their generated code (numpy only).
 
-Where no closed form exists (the forward kinematics of a Stewart-Gough platform, the
-loop closure of an arbitrary leg topology), Newton's method on the *generated* equations
-and Jacobians solves it.  Every solver is vectorized over a batch and reports, per sample,
-whether it converged, how many iterations it took and the final residual; where it did
-not converge the solution is NaN, never a plausible but wrong pose.
+Where no closed form exists (the forward kinematics of a Stewart-Gough platform, the loop closure of an
+arbitrary leg topology), Newton's method (:func:`symkin.newton.newton_iterate`, the one solver) on the
+*generated* equations and Jacobians solves it, vectorized over a batch, reporting per sample whether it
+converged, how many iterations it took and the final residual; where it did not converge the solution is
+NaN, never a plausible but wrong pose.
 
 Like :mod:`symkin.runtime.loader`, this module imports neither sympy nor jinja2.
 """
@@ -18,34 +18,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from symkin.errors import GeneratedCodeError
+from symkin.newton import NewtonReport, newton_iterate
 from symkin.runtime.info import GeneratedModel
-
-
-@dataclass(frozen=True)
-class NewtonReport:
-    """The outcome of a vectorized Newton solve.
-
-    Attributes:
-        solution: the solution, NaN where ``converged`` is False; for :func:`solve_closure`
-            a dict of the solved vectors by name.
-        converged: per sample, True when the last Newton step was below the tolerance and
-            the residual is finite.
-        iterations: per sample, Newton steps taken.
-        residual: per sample, max-norm of the equations at the returned point (the leg
-            equations f for :func:`solve_fk`, the closure residual phi for :func:`solve_closure`).
-        step: per sample, max-norm of the last Newton step (an estimate of the error of the
-            solution before that step).
-    """
-
-    solution: np.ndarray | dict[str, np.ndarray]
-    converged: np.ndarray
-    iterations: np.ndarray
-    residual: np.ndarray
-    step: np.ndarray
-
-    @property
-    def all_converged(self) -> bool:
-        return bool(np.all(self.converged))
 
 
 def _function(model: GeneratedModel, name: str, purpose: str) -> Callable[..., Any]:
@@ -54,103 +28,6 @@ def _function(model: GeneratedModel, name: str, purpose: str) -> Callable[..., A
         raise GeneratedCodeError(f"{purpose} needs the generated function '{name}' of model '{model.name}'; "
                                  f"derive it (scene outputs or --only {name})")
     return getattr(model, name)
-
-
-#: A tall Jacobian counts as of full column rank when its smallest pivot |R_ii| (A = QR) is
-#: above this fraction of its largest.
-_FULL_RANK = 1e-10
-
-
-def _pinv_steps(A: np.ndarray, r: np.ndarray) -> np.ndarray:
-    """Minimum-norm least-squares steps -A^+ r of a flat batch (k, rows, cols)."""
-    return -np.einsum("kij,kj->ki", np.linalg.pinv(A), r)
-
-
-def _least_squares_steps(A: np.ndarray, r: np.ndarray) -> np.ndarray:
-    """Least-squares steps -A^+ r of a flat batch of tall A (k, rows, cols).
-
-    Where A has full column rank - judged per matrix by the diagonal of R in A = QR - from
-    that factorization, R x = -Q^T r (several times faster than the SVD behind pinv, and
-    without squaring the condition number as the normal equations would); elsewhere the
-    minimum-norm step of pinv.
-    """
-    if A.shape[1] < A.shape[2]:
-        return _pinv_steps(A, r)
-    Q, R = np.linalg.qr(A)
-    pivots = np.abs(np.diagonal(R, axis1=1, axis2=2))
-    regular = pivots.min(axis=1) > _FULL_RANK * pivots.max(axis=1)
-    steps = np.empty(A.shape[:1] + A.shape[2:])
-    steps[regular] = -np.linalg.solve(R[regular], np.einsum("kji,kj->ki", Q[regular], r[regular])[..., None])[..., 0]
-    steps[~regular] = _pinv_steps(A[~regular], r[~regular])
-    return steps
-
-
-def _newton_steps(A: np.ndarray, r: np.ndarray) -> np.ndarray:
-    """Newton steps -A^-1 r for a flat batch (k, rows, cols); least squares -A^+ r when A is not
-    square; NaN where A or r is not finite or A is singular."""
-    steps = np.full(A.shape[:1] + A.shape[2:], np.nan)
-    finite = np.all(np.isfinite(A), axis=(1, 2)) & np.all(np.isfinite(r), axis=1)
-    if A.shape[1] != A.shape[2]:
-        steps[finite] = _least_squares_steps(A[finite], r[finite])
-        return steps
-    try:
-        steps[finite] = -np.linalg.solve(A[finite], r[finite][..., None])[..., 0]
-    except np.linalg.LinAlgError:  # some matrix is singular: solve one by one, leave those NaN
-        for k in np.nonzero(finite)[0]:
-            try:
-                steps[k] = -np.linalg.solve(A[k], r[k])
-            except np.linalg.LinAlgError:
-                pass  # the sample stops and is reported as not converged
-    return steps
-
-
-def _iterate(start: np.ndarray, equations: Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]],
-             tol: float, max_iterations: int, max_step: float | None = None) -> NewtonReport:
-    """Newton iteration x <- x - A(x)^-1 r(x) on a batch (..., k) of unknowns.
-
-    ``equations(x, rows)`` gives r and A of the samples ``rows`` (indices into the flattened
-    batch) at their unknowns x (len(rows), k); only the samples still iterating are evaluated.
-    With ``max_step`` the iteration is damped: a step longer than that (max-norm) is scaled
-    down to it, so a start near one solution does not jump to another far away.
-    """
-    batch = start.shape[:-1]
-    x = np.array(start, dtype=float, copy=True).reshape(-1, start.shape[-1])
-
-    def flat_equations(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        r, A = equations(x[rows], rows)
-        r = np.asarray(r, dtype=float)
-        A = np.asarray(A, dtype=float)
-        return r.reshape(len(rows), -1), A.reshape((len(rows),) + A.shape[-2:])
-
-    count = x.shape[0]
-    converged = np.zeros(count, dtype=bool)
-    iterations = np.zeros(count, dtype=int)
-    step_norm = np.full(count, np.inf)
-    active = np.ones(count, dtype=bool)
-    for _ in range(max_iterations):
-        rows = np.flatnonzero(active)
-        if not len(rows):
-            break
-        r, A = flat_equations(rows)
-        step = _newton_steps(A, r)
-        with np.errstate(invalid="ignore"):
-            norm = np.max(np.abs(step), axis=-1)
-        moved = np.isfinite(norm)
-        if max_step is not None:
-            with np.errstate(invalid="ignore"):
-                step *= (max_step / np.maximum(norm, max_step))[:, None]
-        x[rows[moved]] += step[moved]
-        iterations[rows] += 1
-        step_norm[rows] = norm
-        done = moved & (norm <= tol)
-        converged[rows[done]] = True
-        active[rows[~moved | done]] = False
-    r, _ = flat_equations(np.arange(count))
-    residual = np.max(np.abs(r), axis=-1) if count else np.zeros(0)
-    converged &= np.isfinite(residual)
-    x[~converged] = np.nan
-    return NewtonReport(x.reshape(start.shape), converged.reshape(batch), iterations.reshape(batch),
-                        residual.reshape(batch), step_norm.reshape(batch))
 
 
 def _declared_home(model: GeneratedModel) -> np.ndarray:
@@ -198,7 +75,7 @@ def solve_fk(model: GeneratedModel, q, p0=None, *, tol: float = 1e-12, max_itera
     def equations(p: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         return np.asarray(constraints(q_flat[rows], p)), np.asarray(jacobians(q_flat[rows], p).J_x)
 
-    return _iterate(start, equations, tol, max_iterations)
+    return newton_iterate(start, equations, tol, max_iterations)
 
 
 def solve_closure(model: GeneratedModel, q, s, p, *, unknowns: tuple[str, ...] = ("p", "s"), tol: float = 1e-12,
@@ -249,7 +126,7 @@ def solve_closure(model: GeneratedModel, q, s, p, *, unknowns: tuple[str, ...] =
         return phi, np.concatenate([np.asarray(blocks[name]) for name in order], axis=-1)
 
     start = np.concatenate([values[name] for name in order], axis=-1)
-    report = _iterate(start, equations, tol, max_iterations, max_step)
+    report = newton_iterate(start, equations, tol, max_iterations, max_step)
     return NewtonReport(unpack(np.asarray(report.solution)), report.converged, report.iterations, report.residual, report.step)
 
 

@@ -12,7 +12,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from symkin.analysis import mechanism
+from symkin import mechanism
 from symkin.simulation.plant import Plant
 
 

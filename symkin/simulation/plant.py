@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from symkin.analysis import mechanism
+from symkin import mechanism
 from symkin.analysis.closure_workspace import uses_closure
 from symkin.analysis.conditioning import inverse_condition_number
 from symkin.analysis.device import DEVICE_TASK_SPACE

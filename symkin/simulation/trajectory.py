@@ -18,7 +18,7 @@ import numpy as np
 
 from symkin.simulation.integrate import SimulationError
 from symkin.errors import NotApplicable
-from symkin.analysis.mechanism import POSITION_COMPONENTS
+from symkin.mechanism import POSITION_COMPONENTS
 
 
 @dataclass(frozen=True)

@@ -35,8 +35,9 @@ from jinja2.utils import htmlsafe_json_dumps
 from markupsafe import Markup
 
 from symkin._version import __version__
-from symkin.analysis import closure_workspace, conditioning, global_indices, mechanism, parallel, sampling, workspace
-from symkin.analysis.mechanism import Limits, MechanismKind
+from symkin.analysis import closure_workspace, conditioning, global_indices, parallel, sampling, workspace
+from symkin import mechanism
+from symkin.mechanism import Limits, MechanismKind
 from symkin.backends.templating import render_html
 from symkin.runtime.info import GeneratedModel
 from symkin.runtime.loader import LoadedModel
@@ -59,7 +60,7 @@ REFINED_CELLS_LIMIT = 4
 VIRIDIS = ("#440154", "#3b528b", "#21918c", "#5ec962", "#fde725")
 
 #: The generated functions the page evaluates, by kind of mechanism (the keys of
-#: symkin.analysis.mechanism.MechanismKind): a translational platform is driven through its
+#: symkin.mechanism.MechanismKind): a translational platform is driven through its
 #: closed-form ik and rated by J (its cloud comes from the closed-form fk); a pose platform
 #: (no closed-form fk) by the twist Jacobian from J^-1, at the home orientation for the cloud.
 VIEW_OUTPUTS = {
@@ -137,7 +138,7 @@ def _length(model: GeneratedModel, limits: np.ndarray) -> float | None:
 
 def workspace_cloud(model: GeneratedModel, samples: int, seed: int = 0, limits: Limits | None = None) -> Cloud:
     """The workspace cloud with 1/kappa, as ``symkin workspace`` and ``symkin gci`` sample it (``limits``: the
-    actuators' limit overrides, :func:`symkin.analysis.mechanism.joint_limits`)."""
+    actuators' limit overrides, :func:`symkin.mechanism.joint_limits`)."""
     if _solved_through_closure(model):
         return _closure_cloud(model, samples, limits)
     if mechanism.kind_of(model) is MechanismKind.PARALLEL_ORIENTATION:

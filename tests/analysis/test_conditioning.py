@@ -13,7 +13,8 @@ import sympy
 
 import symkin
 from symkin.analysis import conditioning as C
-from symkin.analysis import global_indices, mechanism
+from symkin.analysis import global_indices
+from symkin import mechanism
 from symkin.model import coordinates
 
 from conftest import GENERATED_DIR

@@ -17,7 +17,8 @@ import pytest
 
 import symkin
 from symkin.analysis import conditioning as C
-from symkin.analysis import convergence, feasibility, global_indices, grids, inverse, mechanism, parallel, workspace
+from symkin.analysis import convergence, feasibility, global_indices, grids, inverse, parallel, workspace
+from symkin import mechanism
 from symkin.cli import main
 from symkin.model import load_model
 

@@ -23,7 +23,7 @@ import symkin
 from conftest import GENERATED_DIR, MODELS_DIR, ROOT
 from symkin import design
 from symkin.analysis import conditioning, forces, rating
-from symkin.analysis.mechanism import MechanismKind
+from symkin.mechanism import MechanismKind
 from symkin.analysis.needs import NEEDS
 from symkin.analysis.parallel import angular_velocity_matrix
 from symkin.cli import main

@@ -8,9 +8,10 @@ import numpy as np
 import pytest
 
 import symkin
-from symkin.analysis import feasibility, global_indices, grids, inverse, mechanism, workspace
+from symkin.analysis import feasibility, global_indices, grids, inverse, workspace
+from symkin import mechanism
 from symkin.analysis.inverse import closed_form_inverse
-from symkin.analysis.limits import within_limits
+from symkin.mechanism.limits import within_limits
 from symkin.errors import NotApplicable
 from symkin.runtime import LoadedModel
 

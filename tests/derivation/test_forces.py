@@ -13,7 +13,8 @@ import pytest
 
 from conftest import GENERATED_DIR, ROOT
 from symkin import load
-from symkin.analysis import forces, mechanism
+from symkin.analysis import forces
+from symkin import mechanism
 from symkin.cli import main
 from symkin.errors import ModelError
 from symkin.model import model_from_text

@@ -147,3 +147,13 @@ def test_option_flags_that_change_the_model_are_honoured_or_noted(tmp_path):
     report = crosscheck(path, samples=3, backends=("numpy",), coriolis_matrix=False)
     assert "coriolis_vector + gravity_vector (MuJoCo)" in {c.quantity for c in report.comparisons}
     assert not report.failures, report.comparisons
+
+
+def test_forces_symkin_does_not_model_are_named_in_the_notes(tmp_path):
+    """Issue 61: what MuJoCo applies beyond the rigid bodies - fluid forces of a medium (gymnasium's swimmer swims in
+    one), gravity compensation of bodies - is said in the model's notes, named, not left out unseen."""
+    swimmer = load_model(ASSETS / "swimmer.xml")
+    assert any("density=4000.0, viscosity=0.1" in note and "fluid forces" in note for note in swimmer.notes)
+    path = tmp_path / "compensated.xml"
+    path.write_text(ODD.replace('<body name="hand"', '<body name="hand" gravcomp="1"'))
+    assert any(note.startswith("bodies hand have gravcomp") for note in load_model(path).notes)

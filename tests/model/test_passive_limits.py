@@ -19,9 +19,10 @@ import numpy as np
 import pytest
 
 import symkin
-from symkin.analysis import feasibility, global_indices, mechanism, parallel, passive, sampling, workspace
+from symkin.analysis import feasibility, global_indices, parallel, sampling, workspace
+from symkin import mechanism
+from symkin.mechanism import passive
 from symkin.ik.rotations import wrap_angle
-from symkin.runtime import parallel as runtime_parallel
 from symkin.runtime.loader import LoadedModel
 
 from conftest import GENERATED_DIR, MODELS_DIR
@@ -210,7 +211,7 @@ def test_a_model_file_with_passive_limits_is_analysed_on_the_fly(tmp_path, capsy
 
 
 def test_least_squares_steps_agree_with_pinv_also_where_rank_deficient():
-    from symkin.runtime.parallel import _least_squares_steps
+    from symkin import newton
 
     rng = np.random.default_rng(3)
     A = rng.normal(size=(6, 18, 12))
@@ -219,11 +220,11 @@ def test_least_squares_steps_agree_with_pinv_also_where_rank_deficient():
     r = rng.normal(size=(6, 18))
     expected = -np.einsum("kij,kj->ki", np.linalg.pinv(A), r)
     # one batch mixes both paths: QR for the full-rank matrices, pinv for the others
-    with mock.patch("symkin.runtime.parallel._pinv_steps", wraps=runtime_parallel._pinv_steps) as pinv:
-        np.testing.assert_allclose(_least_squares_steps(A, r), expected, rtol=1e-9, atol=1e-12)
+    with mock.patch("symkin.newton._pinv_steps", wraps=newton._pinv_steps) as pinv:
+        np.testing.assert_allclose(newton.least_squares_steps(A, r), expected, rtol=1e-9, atol=1e-12)
     (call,) = pinv.call_args_list
     assert len(call.args[0]) == 2
-    np.testing.assert_allclose(_least_squares_steps(A[[0, 1, 3]], r[[0, 1, 3]]), expected[[0, 1, 3]], rtol=1e-9)
+    np.testing.assert_allclose(newton.least_squares_steps(A[[0, 1, 3]], r[[0, 1, 3]]), expected[[0, 1, 3]], rtol=1e-9)
 
 
 def test_joint_and_cartesian_domains_agree_under_passive_limits(limited):

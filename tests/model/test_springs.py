@@ -25,8 +25,8 @@ springs:
   theta1: {stiffness: k1, reference: rest1}
   theta2: {stiffness: k2}
 """
-SPRING_PARAMETERS = ("  g: {value: 9.81, unit: m/s^2, doc: gravitational acceleration}\n  k1: {value: 0.5, unit: N*m/rad}\n"
-                     "  rest1: {value: 30, unit: deg}\n  k2: 0.2\n")
+SPRING_PARAMETERS = ("  g: {value: 9.81, unit: m/s^2, doc: gravitational acceleration}\n"
+                     "  k1: {value: 0.5, unit: N*m/rad}\n  rest1: {value: 30, unit: deg}\n  k2: 0.2\n")
 
 
 def _output(d: Derivation, name: str) -> sympy.Matrix:
@@ -61,8 +61,8 @@ def test_springs_alone_give_a_weightless_arm_its_g():
     text = text.replace("  g: {value: 9.81, unit: m/s^2, doc: gravitational acceleration}\n", "")
     model = model_from_text(text + "springs:\n  theta2: {stiffness: 3, reference: 0.1}\n", "weightless")
     theta2 = coordinates.symbols(model, "q")[1]
-    assert sympy.simplify(_output(Derivation(model), "gravity_vector") - sympy.Matrix([0, 3 * (theta2 - sympy.Rational(1, 10))])) \
-        == sympy.zeros(2, 1)
+    want = sympy.Matrix([0, 3 * (theta2 - sympy.Rational(1, 10))])
+    assert sympy.simplify(_output(Derivation(model), "gravity_vector") - want) == sympy.zeros(2, 1)
 
 
 @pytest.mark.parametrize("springs, message", [

@@ -18,7 +18,8 @@ import pytest
 
 from sample_models import dual_scara_text
 from symkin import design, load, pipeline
-from symkin.analysis import conditioning, mechanism
+from symkin.analysis import conditioning
+from symkin import mechanism
 from symkin.analysis.closure_workspace import angular_rates, continue_from
 from symkin.cli import main
 from symkin.design.evaluation import closure_home

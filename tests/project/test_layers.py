@@ -27,7 +27,7 @@ PACKAGE = Path(__file__).resolve().parents[2] / "symkin"
 #: Lowest first.  Each entry: the layer's name and its top-level modules or packages of symkin.
 LAYERS = (
     ("foundation", {"_version", "errors", "atomic", "cache_trust", "expression_dag", "symengine_bridge", "text_table", "lazy",
-                    "reporting"}),
+                    "reporting", "newton"}),
     ("model", {"model", "geometry"}),
     ("structure", {"structure"}),
     ("ir", {"ir"}),
@@ -35,6 +35,7 @@ LAYERS = (
     ("optimize", {"optimize"}),
     ("backends", {"backends", "manifest", "manifest_schema", "pipeline", "pipeline_cache"}),
     ("runtime", {"runtime", "backends.*.loader*"}),
+    ("mechanism", {"mechanism"}),
     ("analyses", {"ik", "analysis", "design", "simulation", "stability", "viewer"}),
     ("api", {"api"}),
     ("cli", {"cli", "__main__"}),
@@ -45,14 +46,15 @@ PATTERNS = {part: rank for rank, (_name, parts) in enumerate(LAYERS) for part in
 #: What each layer holds, for the table docs/architecture.md renders from LAYERS (checked below).
 ROLES = {
     "foundation": "errors, atomic writes, trust in the cache folder, the version, expression graphs, the SymEngine bridge, text tables, "
-                  "packages imported lazily, progress reports of long work",
+                  "packages imported lazily, progress reports of long work, the batched Newton solver of every closure",
     "model": "the model format: reading, validating, the schema; geometry",
     "structure": "mobility and topology synthesis",
     "ir": "`FunctionSpec`, `OptimizedFunction`, inputs, op counts, `QuantityDef`",
     "derivation": "the derivation graph and its catalog; serial kinematics and dynamics; parallel mechanisms",
     "optimize": "expression optimization",
     "backends": "the emitters, the manifest and its schema, the pipeline and its derivation cache",
-    "runtime": "each backend's loader, the bindings they share, Newton solvers for parallel mechanisms",
+    "runtime": "each backend's loader, the bindings they share, the numerical kinematics of parallel mechanisms",
+    "mechanism": "the run-time mechanism every analysis asks: coordinates, limits, kinds, the passive joints' closure",
     "analyses": "inverse kinematics, analyses, design, simulation, numerical stability, the viewer",
     "api": "the public functions, and the `symkin` package facade",
     "cli": "the commands",

@@ -34,8 +34,8 @@ KNOWN = {
     "analysis/chunked_workspace.py", "analysis/closure_workspace.py", "analysis/crosscheck.py",
     "analysis/datasheet.py", "analysis/device.py", "analysis/device_regressors.py", "analysis/global_indices.py",
     "analysis/handle_measures.py", "analysis/identified_model.py", "analysis/implied_parameters.py",
-    "analysis/inverse.py", "analysis/mechanism.py", "analysis/needs.py", "analysis/orientations.py", "analysis/parallel.py",
-    "analysis/passive.py", "analysis/study.py", "analysis/workspace.py",
+    "analysis/inverse.py", "analysis/needs.py", "analysis/orientations.py", "analysis/parallel.py",
+    "analysis/study.py", "analysis/workspace.py",
     "cli/check_cmd.py", "cli/excite_cmd.py", "cli/gci_cmd.py", "cli/identify_cmd.py",
     "cli/model_files.py", "cli/structure_cmd.py",
     "cli/workspace_cmd.py",
@@ -94,7 +94,7 @@ def test_no_new_module_tells_mechanisms_apart_and_the_list_only_shrinks():
 
 def test_the_words_find_what_they_should():
     """The detector itself: identifiers count, strings and comments do not, and the serial IK's wrist is no kind."""
-    assert kind_names("from symkin.analysis.mechanism import MechanismKind\n") >= {"MechanismKind"}
+    assert kind_names("from symkin.mechanism import MechanismKind\n") >= {"MechanismKind"}
     assert kind_names("def f(model):\n    return model.info.is_parallel\n") == {"is_parallel"}
     assert kind_names("x = closure_workspace(model, legs=2)\n") == {"closure_workspace", "legs"}
     assert kind_names("text = 'parallel legs'  # a closure\n") == set()

@@ -14,7 +14,8 @@ import pytest
 
 from conftest import EXAMPLE_MODELS, MODELS_DIR, SYMKIN_CLI
 from symkin import load
-from symkin.analysis import global_indices, mechanism
+from symkin.analysis import global_indices
+from symkin import mechanism
 from symkin.viewer import page
 from tolerances import KINEMATICS
 from sample_models import ROBOTS_DIR

@@ -15,7 +15,7 @@ model file; every pose then starts from s_home, and the steps are capped at
 :data:`MAX_STEP` (rad or m) so the iteration stays on that branch instead of jumping to one
 a half turn away (for the DELTA this is the closed-form branch |elbow_2| < pi/2, tested).
 Angles are reported wrapped to their declared limit interval (the first representative at
-or above the lower limit; :func:`symkin.analysis.limits.within_limits`).
+or above the lower limit; :func:`symkin.mechanism.limits.within_limits`).
 
 **Unresolved poses.**  Where the iteration does not converge (step above :data:`STEP_TOLERANCE`
 after :data:`MAX_ITERATIONS`, or closure residual above :data:`CLOSURE_TOLERANCE`) the passive
@@ -31,8 +31,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from symkin.analysis import mechanism
-from symkin.analysis.limits import within_limits
+from symkin import mechanism
+from symkin.mechanism.limits import within_limits
 from symkin.manifest_schema import VectorInput
 from symkin.runtime.info import GeneratedModel
 from symkin.runtime.parallel import solve_closure
