@@ -26,6 +26,7 @@ sys.path.insert(0, str(ROOT))
 
 import symkin  # noqa: E402
 from symkin.analysis import global_indices, parallel, sampling, workspace  # noqa: E402
+from symkin.mechanism.working_mode import working_mode
 from symkin import mechanism
 from symkin.text_table import format_table  # noqa: E402
 
@@ -60,7 +61,7 @@ def main(argv: list[str] | None = None) -> int:
             model = delta_with_elbow_limits(width, Path(scratch))
             box = mechanism.joint_limits(model)
             q = sampling.grid(box[:, 0], box[:, 1], 16)  # 16^3 configurations
-            mode_time, (_, inside) = seconds(lambda: parallel.working_mode(model, q))
+            mode_time, (_, inside) = seconds(lambda: working_mode(model, q))
             gci_time, joint = seconds(lambda: global_indices.gci(model, method="grid", samples=args.samples))
             cartesian = global_indices.gci(model, method="grid", samples=args.samples, domain="cartesian",
                                            box=workspace.bounding_box(model), inverse=parallel.parallel_inverse(model))

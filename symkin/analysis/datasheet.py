@@ -165,7 +165,7 @@ def rate(model: GeneratedModel, actuation: Actuation, *, samples: int = 4096, se
     kind = mechanism.kind_of(model)
     if model.info.wrist:
         raise ValueError(f"{model.name}: a platform carrying a wrist: rate the whole device at its grip point "
-                         "(symkin rate --device, symkin.analysis.device.WholeDevice)")
+                         "(symkin rate --device, symkin.mechanism.device.WholeDevice)")
     if kind is mechanism.MechanismKind.PARALLEL_POSE:
         return rate_pose_platform(model, actuation, samples=samples, seed=seed, box=box, limits=limits,
                                   conditioning=conditioning, orientation=orientation)

@@ -35,6 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from symkin.analysis import conditioning, parallel, sampling
+from symkin.mechanism.working_mode import jacobian_in_working_mode
 from symkin import mechanism
 from symkin.analysis.estimates import Estimate, IntegralEstimate
 from symkin.analysis.feasibility import InverseKinematics, feasible_configurations
@@ -113,14 +114,14 @@ def joint_space_integrand(model: GeneratedModel, *, index: Index | None = condit
         length: characteristic length for mixed task spaces (m, or ``"auto"``).
         jacobian: the Jacobian function q -> J; default ``model.jacobian``.  For a parallel
             mechanism the default is J(q, fk(q)) restricted to the working mode
-            (:func:`symkin.analysis.parallel.jacobian_in_working_mode`): w = 0 outside it.
+            (:func:`symkin.mechanism.working_mode.jacobian_in_working_mode`): w = 0 outside it.
     """
     if measure not in MEASURES:
         raise ValueError(f"unknown measure '{measure}'; choose one of {', '.join(MEASURES)}")
     box = mechanism.joint_limits(model, limits)
     if jacobian is None and mechanism.is_parallel(model):
         def evaluate(q: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:  # (J, working-mode mask)
-            return parallel.jacobian_in_working_mode(model, q)
+            return jacobian_in_working_mode(model, q)
     else:
         serial_jacobian = jacobian or model.jacobian
 

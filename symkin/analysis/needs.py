@@ -4,7 +4,7 @@ file is derived from on the fly (issue 62: it replaces the tables each command k
 A kind's tuple is what the analysis calls for every model of that kind: a serial arm's fk and J; a translational
 platform's closed-form ik (reachability, working mode) with its fk and J; a platform that also rotates
 (Stewart-Gough: no closed-form fk) and a spherical one (the Agile Eye) through ik and J^-1.  Legs without the
-distance form are derived with the closure's functions instead (``symkin.cli.model_files.CLOSURE_OUTPUTS`` and
+distance form are derived with the closure's functions instead (``symkin.analysis.model_files.CLOSURE_OUTPUTS`` and
 each command's own closure list); what a model has only sometimes (gravity, a wrist) is asked for as optional.
 """
 

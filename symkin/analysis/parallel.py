@@ -6,7 +6,8 @@ A parallel mechanism's generated functions differ from a serial arm's (see READM
 velocity functions take both ``q`` and ``p``: ``jacobian(q, p)`` is J = J_x^-1 J_q
 (seed eq. 8.29).
 
-**Working mode.**  Both closed forms choose one of two roots: ``ik`` the branch of each
+**Working mode** (:mod:`symkin.mechanism.working_mode` tells it for configurations).  Both closed forms choose
+one of two roots: ``ik`` the branch of each
 leg (the DELTA's knee outwards), ``fk`` the assembly (the DELTA's TCP below its elbows).
 The workspace analysed here is the set of TCP positions reachable *in the model's
 declared working mode* (``ik_branch`` and ``fk_branch`` of the model file): p with
@@ -48,49 +49,11 @@ from symkin import mechanism
 from symkin.mechanism import passive
 from symkin.analysis.feasibility import feasible_configurations
 from symkin.errors import NotApplicable
-from symkin.ik.rotations import wrap_angle
+from symkin.mechanism.working_mode import require_functions
 from symkin.runtime.info import GeneratedModel
 
-#: Largest |ik(fk(q)) - q| (rad or m) of a configuration in the working mode.  The two
-#: roots of a leg differ by far more except next to the leg singularity where they
-#: meet, and there the integrand vanishes.
-JOINT_ROUND_TRIP_TOLERANCE = 1e-6
 #: Largest |fk(ik(p)) - p| relative to the size of the mechanism (metres).
 POSITION_ROUND_TRIP_TOLERANCE = 1e-6
-
-
-def _require(model: GeneratedModel, names: tuple[str, ...]) -> None:
-    for name in names:
-        mechanism.parallel_function(model, name)
-
-
-def working_mode(model: GeneratedModel, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """TCP positions of configurations q (..., n) and whether each is in the working mode.
-
-    Returns:
-        (p, inside): p = fk(q) (..., 3), NaN where the legs cannot be assembled; inside:
-        boolean (...), fk assembles, ik(fk(q)) = q and the declared passive-joint limits hold
-        (the actuators' joint limits are not checked here).
-    """
-    _require(model, ("fk", "ik"))
-    q = np.asarray(q, dtype=np.float64)
-    with np.errstate(invalid="ignore"):  # the closed forms take sqrt of negative margins: NaN, as documented
-        p = model.fk(q).position
-        back = model.ik(np.where(np.isfinite(p), p, 0.0)).joints
-        error = np.abs(np.where(mechanism.revolute_mask(model), wrap_angle(back - q), back - q))
-        inside = np.isfinite(p).all(axis=-1) & np.all(error <= JOINT_ROUND_TRIP_TOLERANCE, axis=-1)
-    limits = passive.declared_limits(model)
-    if limits is not None:
-        batch = inside.shape
-        inside = passive.admissible(model, limits, q.reshape(-1, q.shape[-1]), p.reshape(-1, p.shape[-1]),
-                                    inside.reshape(-1)).reshape(batch)
-    return p, inside
-
-
-def jacobian_in_working_mode(model: GeneratedModel, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """J(q, fk(q)) (..., 3, n) and the working-mode mask (...) of configurations q (see :func:`working_mode`)."""
-    p, inside = working_mode(model, q)
-    return model.jacobian(q, np.where(np.isfinite(p), p, 0.0)), inside
 
 
 class _GeneratedInverse:
@@ -182,7 +145,7 @@ def parallel_inverse(model: GeneratedModel) -> ParallelInverse | ConstantOrienta
         raise NotApplicable(f"{model.name}: the platform also rotates (task space {task}): "
                             "its Cartesian workspace is analysed at a constant orientation "
                             "(symkin.analysis.parallel.constant_orientation(model, (roll, pitch, yaw)))")
-    _require(model, ("ik", "fk", "jacobian"))
+    require_functions(model, ("ik", "fk", "jacobian"))
     size = max(float(np.linalg.norm(mechanism.home_pose(model))), 1e-3)
     return ParallelInverse(model, size, passive.declared_limits(model), len(mechanism.task_space(model)))
 

@@ -21,6 +21,7 @@ from itertools import product
 import numpy as np
 
 from symkin.analysis import parallel, sampling
+from symkin.mechanism.working_mode import working_mode
 from symkin import mechanism
 from symkin.analysis.estimates import Estimate
 from symkin.mechanism import Limits
@@ -86,7 +87,7 @@ def sample_workspace(model: GeneratedModel, samples: int = 2**14, *, method: str
     axes = tuple("xyz"[a] for a in mechanism.position_axes(model))
     if mechanism.is_parallel(model):
         # Only configurations that assemble in the working mode belong to the workspace.
-        points, inside = parallel.working_mode(model, q)
+        points, inside = working_mode(model, q)
         if not inside.all():
             return WorkspaceCloud(q[inside], points[inside], axes, None)
         return WorkspaceCloud(q, points, axes, grid_shape)
@@ -131,7 +132,7 @@ def _parallel_bounding_box(model: GeneratedModel, q: np.ndarray, per_axis: int) 
     padding is not a Jacobian bound but twice the largest distance between the TCP
     positions of neighbouring grid nodes that both lie in the working mode.
     """
-    points, inside = parallel.working_mode(model, q)
+    points, inside = working_mode(model, q)
     if not inside.any():
         raise ValueError(f"{model.name}: no configuration within the joint limits assembles in the working mode")
     shape = (per_axis,) * q.shape[1]

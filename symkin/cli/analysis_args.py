@@ -1,5 +1,5 @@
 """Arguments shared by the analysis commands (``symkin workspace``, ``symkin gci``, ``symkin bench gci``...):
-MODEL (a generated directory or a model file, :mod:`symkin.cli.model_files`), --set, --limit, outputs."""
+MODEL (a generated directory or a model file, :mod:`symkin.analysis.model_files`), --set, --limit, outputs."""
 
 from __future__ import annotations
 
@@ -11,7 +11,8 @@ from pathlib import Path
 from typing import Any, NoReturn
 
 from symkin.analysis.needs import NEEDS
-from symkin.cli.model_files import load_models
+from symkin.analysis.model_files import load_models
+from symkin.cli.progress import Progress
 from symkin.runtime.info import GeneratedModel
 
 #: Length units of figures and design labels: metres per unit.
@@ -165,7 +166,7 @@ def models_from_args(args: argparse.Namespace,
     """MODEL loaded once per backend (a model file derived once), with --set applied, and the
     --limit overrides (see :func:`model_from_args`)."""
     models = load_models(args.model, backends, NEEDS["kinematics"],
-                         DEVICE_OUTPUTS if getattr(args, "device", False) else ())
+                         DEVICE_OUTPUTS if getattr(args, "device", False) else (), display=Progress)
     values = parse_assignments(args.assignments)
     if values:
         models = [model.bind(**values) for model in models]
@@ -243,7 +244,7 @@ DEVICE_OUTPUTS = ("device_fk", "device_actuator_jacobian")
 
 
 def add_device_argument(p: argparse.ArgumentParser) -> None:
-    """--device: analyse a hybrid device as a whole (symkin.analysis.device.WholeDevice)."""
+    """--device: analyse a hybrid device as a whole (symkin.mechanism.device.WholeDevice)."""
     p.add_argument("--device", action="store_true",
                    help="a parallel platform carrying a wrist (a hybrid device): analyse the whole device in its "
                         "actuated joints (legs, then wrist), the wrist's TCP and its actuator Jacobian, with a "
@@ -251,10 +252,10 @@ def add_device_argument(p: argparse.ArgumentParser) -> None:
 
 
 def device_view(args: argparse.Namespace, model: Any) -> Any:
-    """The model, or with --device the whole device (:class:`symkin.analysis.device.WholeDevice`)."""
+    """The model, or with --device the whole device (:class:`symkin.mechanism.device.WholeDevice`)."""
     if not getattr(args, "device", False):
         return model
-    from symkin.analysis.device import WholeDevice
+    from symkin.mechanism.device import WholeDevice
 
     return WholeDevice(model)
 

@@ -9,7 +9,8 @@ from pathlib import Path
 
 import numpy as np
 
-from symkin.cli import analysis_args, model_files
+from symkin.cli import analysis_args
+from symkin.analysis import model_files
 from symkin.cli.progress import Progress
 
 
@@ -60,7 +61,7 @@ def run(args: argparse.Namespace) -> int:
         # legs without the distance form: the actuators' series, each sample assembled by a rootfinder
         model = model_files.generated_model(args.model, "casadi", ("base_regressor",),
                                             optional=model_files.parallel_only(("fk", "ik")),
-                                            closure=closure_excitation.CLOSURE_EXCITATION)
+                                            closure=closure_excitation.CLOSURE_EXCITATION, display=Progress)
         values = analysis_args.parse_assignments(args.assignments)
         model = model.bind(**values) if values else model
         joints = model.info.device_coordinates   # a hybrid device's wrist joints after the legs' actuators

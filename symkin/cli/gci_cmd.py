@@ -8,7 +8,8 @@ import time
 
 from symkin.mechanism import POSITION_COMPONENTS
 from symkin.analysis.needs import NEEDS
-from symkin.cli import analysis_args, model_files
+from symkin.cli import analysis_args
+from symkin.analysis import model_files
 from symkin.cli.progress import Progress
 from symkin.runtime.info import GeneratedModel
 
@@ -77,7 +78,7 @@ def _chunked(args: argparse.Namespace) -> int:
         check_scheduler(args.scheduler, args.workers)
         if args.method not in ("mc", "qmc") or args.map:
             raise ValueError("--scheduler integrates by mc or qmc (no --map)")
-        with model_files.generated_directory(args.model, ("numpy",), NEEDS["kinematics"]) as d:
+        with model_files.generated_directory(args.model, ("numpy",), NEEDS["kinematics"], display=Progress) as d:
             payload = ModelPayload.from_directory(d)
         values = analysis_args.parse_assignments(args.assignments)
         model = payload.load().bind(**values) if values else payload.load()

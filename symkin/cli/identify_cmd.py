@@ -10,7 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
-from symkin.cli import analysis_args, model_files
+from symkin.cli import analysis_args
+from symkin.analysis import model_files
 from symkin.cli.progress import Progress
 from symkin.cli.urdf_args import add_urdf_arguments, urdf_options
 
@@ -82,7 +83,7 @@ def run(args: argparse.Namespace) -> int:
         model = model_files.generated_model(args.model, args.backend, outputs,
                                             optional=model_files.parallel_only(POSE_OUTPUTS),
                                             closure=CLOSURE_ENERGY_OUTPUTS if args.method == "energy" else
-                                            CLOSURE_OUTPUTS, reading=reading)
+                                            CLOSURE_OUTPUTS, reading=reading, display=Progress)
         values = analysis_args.parse_assignments(args.assignments)
         model = model.bind(**values) if values else model
         parallel = model.info.is_parallel

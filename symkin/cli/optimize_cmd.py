@@ -9,7 +9,8 @@ import time
 from pathlib import Path
 
 from symkin.analysis.needs import NEEDS
-from symkin.cli import analysis_args, model_files
+from symkin.cli import analysis_args
+from symkin.analysis import model_files
 from symkin.cli.progress import Progress
 
 #: Largest --nodes: 2^16 Sobol nodes, or 16^3 grid points of a parallel model's box.
@@ -86,7 +87,7 @@ def run(args: argparse.Namespace) -> int:
             # a parallel model's rating checks the working mode by its closed-form fk, where it has one
             masses = design.APPARENT_MASS_FUNCTIONS if args.max_apparent_mass is not None else ()
             numpy_model, casadi_model = model_files.load_models(args.model, ("numpy", "casadi"), NEEDS["design"],
-                                                                ("fk", *masses))
+                                                                ("fk", *masses), display=Progress)
             efforts = (analysis_args.per_joint("--effort-limit", args.effort_limit, len(numpy_model.info.coordinates))
                        if args.effort_limit else None)
             problem = design.design_problem(numpy_model, args.maximize, free, bounds=bounds, values=values, box=box,

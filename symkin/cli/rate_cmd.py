@@ -9,7 +9,8 @@ import time
 from pathlib import Path
 
 from symkin.analysis.needs import NEEDS
-from symkin.cli import analysis_args, model_files
+from symkin.cli import analysis_args
+from symkin.analysis import model_files
 from symkin.cli.progress import Progress
 
 
@@ -138,7 +139,7 @@ def run(args: argparse.Namespace) -> int:
         box = analysis_args.parse_ranges(args.box, "--box", "AXIS")
         device = analysis_args.DEVICE_OUTPUTS if args.device else ()
         models = model_files.load_models(args.model, (args.backend,), NEEDS["rate"],
-                                         ("gravity_vector", "closure_dynamics", *device))
+                                         ("gravity_vector", "closure_dynamics", *device), display=Progress)
         values = analysis_args.parse_assignments(args.assignments)
         model = analysis_args.device_view(args, models[0].bind(**values) if values else models[0])
         encoders = _encoders(args, model)

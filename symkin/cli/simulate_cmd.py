@@ -10,7 +10,8 @@ import warnings
 from pathlib import Path
 
 from symkin.analysis.needs import NEEDS
-from symkin.cli import analysis_args, model_files
+from symkin.cli import analysis_args
+from symkin.analysis import model_files
 from symkin.cli.progress import Progress
 
 #: What a model file is also derived with where the model has it (NEEDS["simulate"] always): gravity, friction,
@@ -168,7 +169,8 @@ def run(args: argparse.Namespace) -> int:
     from symkin.simulation.output import scenario_files
 
     try:
-        base = model_files.generated_model(args.model, args.backend, NEEDS["simulate"], OPTIONAL_OUTPUTS)
+        base = model_files.generated_model(args.model, args.backend, NEEDS["simulate"], OPTIONAL_OUTPUTS,
+                                           display=Progress)
         values = analysis_args.parse_assignments(args.assignments)
         if values:
             base = base.bind(**values)

@@ -10,7 +10,8 @@ import time
 from pathlib import Path
 
 from symkin.analysis.needs import NEEDS
-from symkin.cli import analysis_args, model_files
+from symkin.cli import analysis_args
+from symkin.analysis import model_files
 from symkin.cli.progress import Progress
 
 
@@ -120,7 +121,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         definition = _definition(args)
         check_scheduler(args.scheduler, args.workers)
-        with model_files.generated_directory(args.model, ("numpy",), NEEDS["kinematics"]) as d:
+        with model_files.generated_directory(args.model, ("numpy",), NEEDS["kinematics"], display=Progress) as d:
             payload = ModelPayload.from_directory(d)
         _check_names(definition, payload)
         out = Path(args.out or Path("out") / "sweeps" / f"{payload.name}.parquet")

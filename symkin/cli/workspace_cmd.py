@@ -8,7 +8,8 @@ import time
 from typing import TYPE_CHECKING
 
 from symkin.analysis.needs import NEEDS
-from symkin.cli import analysis_args, model_files
+from symkin.cli import analysis_args
+from symkin.analysis import model_files
 from symkin.cli.progress import Progress
 
 if TYPE_CHECKING:
@@ -76,7 +77,7 @@ def _chunked_study(args: argparse.Namespace, models: list, designs: list[dict[st
     check_scheduler(args.scheduler, args.workers)
     if args.orientation:
         raise ValueError("--scheduler samples a serial mechanism's joint space (no --orientation)")
-    with model_files.generated_directory(args.model, ("numpy",), NEEDS["kinematics"]) as d:
+    with model_files.generated_directory(args.model, ("numpy",), NEEDS["kinematics"], display=Progress) as d:
         payload = ModelPayload.from_directory(d)
     where = {"serial": "in this process", "local": "on a LocalCluster"}.get(args.scheduler, f"on {args.scheduler}")
     found = []

@@ -78,13 +78,14 @@ def evaluate_design(model: Any, values: dict[str, float], definition: Any) -> di
 def torque_peak(model: Any, lower: np.ndarray, upper: np.ndarray, samples: int, seed: int) -> float:
     """max over Sobol configurations in [lower, upper] (in the working mode, for a parallel
     mechanism) of the largest column norm of J_p: the peak effort per unit TCP force (see above)."""
-    from symkin.analysis import parallel, sampling
+    from symkin.analysis import sampling
+    from symkin.mechanism.working_mode import jacobian_in_working_mode
     from symkin import mechanism
 
     q = sampling.sobol(lower, upper, max(4, int(math.log2(samples))), np.random.default_rng(seed))
     with np.errstate(all="ignore"):
         if mechanism.is_parallel(model):
-            J, inside = parallel.jacobian_in_working_mode(model, q)
+            J, inside = jacobian_in_working_mode(model, q)
         else:
             J, inside = mechanism.jacobian(model, q), np.ones(len(q), dtype=bool)
     levers = np.linalg.norm(J[:, list(mechanism.position_rows(model)), :], axis=1)    # (N, n): ||J_p[:, i]||

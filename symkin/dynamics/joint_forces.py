@@ -7,26 +7,38 @@ are coupled."""
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
+from typing import Any
+
 import symengine as se
 
 from symkin.dynamics.coupling import forces_on_coordinates, joint_rates
 from symkin.ir.quantity import Deriving, quantity
-from symkin.model.schema import Friction
+from symkin.model.schema import Friction, Spring
 
 #: what the documentation of G and of the potential energy add for a model with joint springs
 SPRINGS_IN_G = (" The joint springs' forces k (theta - theta_0) are part of G: u includes their potential "
                 "1/2 k (theta - theta_0)^2.")
 SPRINGS_IN_U = " The joint springs add 1/2 k (theta - theta_0)^2 each."
 
+
 @quantity("spring_torques", "joint springs' forces K (theta - theta_0) on the coordinates, or None", emitted=False)
 def spring_torques(d: Deriving) -> list[se.Basic] | None:
     """A^T (k_j (theta_j - theta_0,j)) per joint: the generalized force of the springs' potential."""
     if not d.model.springs:
         return None
-    theta = dict(zip((j.name for j in d.model.joints), joint_rates(d.model, "q")))
-    forces = {name: se.Integer(0) for name in theta}
-    for spring in d.model.springs:
-        forces[spring.joint] = se.sympify(spring.stiffness) * (theta[spring.joint] - se.sympify(spring.reference))
+    return _on_coordinates(d, "q", d.model.springs,
+                           lambda s, theta: se.sympify(s.stiffness) * (theta - se.sympify(s.reference)))
+
+
+def _on_coordinates(d: Deriving, group: str, entries: Sequence[Friction | Spring],
+                    force: Callable[[Any, se.Basic], se.Basic]) -> list[se.Basic]:
+    """A^T f of the joints' forces f_j = force(entry, value of joint j in ``group``) of ``entries`` (one per joint,
+    by ``entry.joint``; 0 at the other joints)."""
+    values = dict(zip((j.name for j in d.model.joints), joint_rates(d.model, group)))
+    forces = {name: se.Integer(0) for name in values}
+    for entry in entries:
+        forces[entry.joint] = force(entry, values[entry.joint])
     return forces_on_coordinates(d.model, list(forces.values()))
 
 
@@ -42,11 +54,7 @@ def friction_graph(d: Deriving) -> list[se.Basic] | None:
     """F_f,j = viscous_j qd_j + coulomb_j sign(qd_j), or coulomb_j tanh(qd_j / v_s,j) when smoothed."""
     if not d.model.friction:
         return None
-    qd = dict(zip((j.name for j in d.model.joints), joint_rates(d.model, "qd")))
-    F = {name: se.Integer(0) for name in qd}
-    for f in d.model.friction:
-        F[f.joint] = joint_friction(f, qd[f.joint])
-    return forces_on_coordinates(d.model, list(F.values()))
+    return _on_coordinates(d, "qd", d.model.friction, joint_friction)
 
 
 def joint_friction(f: Friction, v: se.Basic) -> se.Basic:

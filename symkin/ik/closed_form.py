@@ -27,7 +27,7 @@ import numpy as np
 
 from symkin.errors import GeneratedCodeError
 from symkin.ik.problem import ModelKinematics, Residual, as_target, residual_for
-from symkin.ik.rotations import wrap_angle
+from symkin.mechanism.limits import wrap_angle
 from symkin.ik.screws import HomeScrews, home_screws
 from symkin.runtime.info import GeneratedModel
 
@@ -211,7 +211,7 @@ def closed_form_solver(model: GeneratedModel | ModelKinematics,
                        limits: Sequence[tuple[float, float]] | None = None) -> ClosedFormIK | None:
     """The closed-form solver of ``model``'s structure, or None if no known structure matches
     (or it is no serial chain: a parallel mechanism, whose IK is generated code of its own, or a view of a
-    hybrid device as a whole, symkin.analysis.device)."""
+    hybrid device as a whole, symkin.mechanism.device)."""
     if not isinstance(model, ModelKinematics) and model.info.mechanism != "serial":
         return None
     kin = model if isinstance(model, ModelKinematics) else ModelKinematics(model, limits)

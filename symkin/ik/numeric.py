@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from symkin.ik.problem import ModelKinematics, Residual, as_target, residual_for
-from symkin.ik.rotations import wrap_angle
+from symkin.mechanism.limits import wrap_angle
 from symkin.runtime import LoadedModel
 
 CONVERGED = "converged"

@@ -29,7 +29,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from symkin.errors import GeneratedCodeError
-from symkin.ik.rotations import log_so3, pose_error, right_jacobian_inverse, wrap_angle
+from symkin.ik.rotations import log_so3, pose_error, right_jacobian_inverse
+from symkin.mechanism.limits import wrap_angle
 from symkin.runtime.info import GeneratedModel
 
 POSE_TASK_SPACE = ("x", "y", "z", "wx", "wy", "wz")

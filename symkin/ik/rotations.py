@@ -119,9 +119,3 @@ def pose_from_vector(vector: np.ndarray) -> np.ndarray:
     T[..., :3, 3] = vector[..., :3]
     T[..., 3, 3] = 1.0
     return T
-
-
-def wrap_angle(angle: np.ndarray) -> np.ndarray:
-    """Angles mapped to (-pi, pi]."""
-    wrapped = np.remainder(np.asarray(angle) + np.pi, 2.0 * np.pi) - np.pi
-    return np.where(wrapped == -np.pi, np.pi, wrapped)

@@ -4,9 +4,11 @@ A numpy-only layer between the loaded generated code (:mod:`symkin.runtime`) and
 design and viewer: they ask it instead of telling mechanisms apart themselves.  This module reads the manifest
 (coordinates, joint limits, the kind of mechanism and its task space); :mod:`symkin.mechanism.limits` tests
 joint limits, :mod:`symkin.mechanism.passive` closes a parallel mechanism's passive joints (the general closure
-solve, :func:`symkin.runtime.parallel.solve_closure`) and checks their limits.  The adapters of parallel
-mechanisms and hybrid devices to the analyses (:mod:`symkin.analysis.parallel`, :mod:`symkin.analysis.device`)
-move here next, towards one object that assembles any mechanism and gives fk, J, M, h of its actuated joints.
+solve, :func:`symkin.runtime.parallel.solve_closure`) and checks their limits,
+:mod:`symkin.mechanism.working_mode` assembles a mechanism with closed forms in its declared branches, and
+:mod:`symkin.mechanism.device` views a hybrid device as one mechanism in all its actuated joints.  The adapters
+of pose and orientation platforms (:mod:`symkin.analysis.parallel`) move here next, towards one object that
+assembles any mechanism and gives fk, J, M, h of its actuated joints.
 
 The analyses take a :class:`symkin.LoadedModel` (``symkin.load(directory, backend)``):
 its generated functions do the arithmetic, its manifest tells the joint types, limits and

@@ -29,3 +29,9 @@ def within_limits(q: np.ndarray, limits: np.ndarray, revolute: np.ndarray,
     q = np.where(revolute, wrapped, q)
     inside = np.all((q >= lower - tolerance) & (q <= upper + tolerance), axis=-1)
     return q, inside
+
+
+def wrap_angle(angle: np.ndarray) -> np.ndarray:
+    """Angles mapped to (-pi, pi]."""
+    wrapped = np.remainder(np.asarray(angle) + np.pi, 2.0 * np.pi) - np.pi
+    return np.where(wrapped == -np.pi, np.pi, wrapped)

@@ -23,7 +23,7 @@ class ModelInfo:
     Attributes:
         name: model name.
         mechanism: ``serial`` or ``parallel`` (``hybrid`` for the view of a hybrid device as a whole,
-            :class:`symkin.analysis.device.WholeDevice`).
+            :class:`symkin.mechanism.device.WholeDevice`).
         coordinates: the joint coordinates, in the order of ``q``.
         task_space: the task-space components (rows of ``jacobian``), e.g. ``("x", "y")``.
         parameters: every parameter, fixed or free.

@@ -33,7 +33,7 @@ import numpy as np
 from symkin import mechanism
 from symkin.analysis.closure_workspace import uses_closure
 from symkin.analysis.conditioning import inverse_condition_number
-from symkin.analysis.device import DEVICE_TASK_SPACE
+from symkin.mechanism.device import DEVICE_TASK_SPACE
 from symkin.errors import GeneratedCodeError
 from symkin.runtime.info import GeneratedModel
 from symkin.simulation.closure_functions import PLANT_FUNCTIONS, ClosureFunctions

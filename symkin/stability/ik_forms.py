@@ -24,7 +24,8 @@ import numpy as np
 
 from symkin.ik import ClosedFormIK, closed_form_solver
 from symkin.ik.planar import Planar2R
-from symkin.ik.rotations import rotate, wrap_angle
+from symkin.ik.rotations import rotate
+from symkin.mechanism.limits import wrap_angle
 from symkin.ik.ur import URFamily
 from symkin.runtime import LoadedModel
 

@@ -17,7 +17,8 @@ import pytest
 
 import symkin
 from symkin.analysis import conditioning as C
-from symkin.analysis import convergence, feasibility, global_indices, grids, inverse, parallel, workspace
+from symkin.analysis import convergence, feasibility, global_indices, grids, inverse, workspace
+from symkin.mechanism.working_mode import working_mode
 from symkin import mechanism
 from symkin.cli import main
 from symkin.model import load_model
@@ -178,11 +179,11 @@ def test_lowest_conditioning_lies_on_the_boundary_within_the_actuator_limits(ik)
 
 def test_working_mode_excludes_other_branches():
     q = workspace.sample_workspace(DELTA, 8000, method="sobol", seed=2).q
-    p, inside = parallel.working_mode(DELTA, q)
+    p, inside = working_mode(DELTA, q)
     assert inside.all()
     assert np.allclose(DELTA.ik(p).joints, q, atol=1e-9)
     box_q = np.random.default_rng(4).uniform(*np.radians([-90, 60]), (8000, 3))
-    _, inside = parallel.working_mode(DELTA, box_q)
+    _, inside = working_mode(DELTA, box_q)
     assert 0.5 < inside.mean() < 0.99  # some actuator angles put a knee inwards
 
 

@@ -323,7 +323,8 @@ def test_friction_declared_in_the_model_is_felt_at_the_handle(tmp_path):
 def damped_delta(tmp_path_factory):
     """The DELTA of models/delta.yaml with viscous friction 0.01 N m s/rad at its motors, as a plant."""
     from symkin.analysis.needs import NEEDS
-    from symkin.cli import model_files, simulate_cmd
+    from symkin.cli import simulate_cmd
+    from symkin.analysis import model_files
     from symkin.simulation import Plant
 
     path = tmp_path_factory.mktemp("damped") / "delta.yaml"

@@ -15,7 +15,8 @@ from symkin import load
 from symkin.errors import GeneratedCodeError
 from symkin.ik import (BranchFlag, ModelKinematics, closed_form_solver, distinct_solutions, numeric_branches,
                        solve_numeric)
-from symkin.ik.rotations import log_so3, pose_from_vector, right_jacobian_inverse, rotation_matrix, wrap_angle
+from symkin.ik.rotations import log_so3, pose_from_vector, right_jacobian_inverse, rotation_matrix
+from symkin.mechanism.limits import wrap_angle
 from tolerances import CLOSED_FORM, KINEMATICS, UR10E_SCALE
 
 UR_MODELS = ["ur10e", "ur10e_classic"]

@@ -20,9 +20,10 @@ import pytest
 
 import symkin
 from symkin.analysis import feasibility, global_indices, parallel, sampling, workspace
+from symkin.mechanism.working_mode import working_mode
 from symkin import mechanism
 from symkin.mechanism import passive
-from symkin.ik.rotations import wrap_angle
+from symkin.mechanism.limits import wrap_angle
 from symkin.runtime.loader import LoadedModel
 
 from conftest import GENERATED_DIR, MODELS_DIR
@@ -107,7 +108,7 @@ def poses():
     workspace, edges included), their TCP positions and closed-form passive angles."""
     box = mechanism.joint_limits(DELTA)
     q = sampling.grid(box[:, 0], box[:, 1], 12, midpoints=False)
-    p, inside = parallel.working_mode(DELTA, q)
+    p, inside = working_mode(DELTA, q)
     return q[inside], p[inside], _closed_form(q[inside], p[inside])
 
 
@@ -133,7 +134,7 @@ def test_a_pose_beyond_a_passive_limit_is_excluded_one_inside_kept(limited, pose
     points = p[[inside, beyond]]
     _, valid = ik.solve(points)
     assert valid[:, 0].tolist() == [True, False]
-    _, in_mode = parallel.working_mode(limited, q[[inside, beyond]])
+    _, in_mode = working_mode(limited, q[[inside, beyond]])
     assert in_mode.tolist() == [True, False]
     # without the limits both are in the workspace
     assert parallel.parallel_inverse(_variant(limited, None)).solve(points)[1][:, 0].all()
@@ -254,8 +255,8 @@ def test_the_delta_shorthand_declares_the_same_passive_limits(limited, tmp_path)
     assert records[0] == {"elbow1_2": pytest.approx([-np.radians(20), np.radians(20)], rel=CLOSED_FORM)}
     box = mechanism.joint_limits(DELTA)
     q = sampling.grid(box[:, 0], box[:, 1], 8, midpoints=False)
-    assert np.array_equal(parallel.working_mode(shorthand, q)[1], parallel.working_mode(limited, q)[1])
-    assert not parallel.working_mode(shorthand, q)[1].all()
+    assert np.array_equal(working_mode(shorthand, q)[1], working_mode(limited, q)[1])
+    assert not working_mode(shorthand, q)[1].all()
 
 
 @pytest.mark.parametrize("value, message", [

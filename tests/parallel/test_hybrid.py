@@ -20,7 +20,7 @@ from symkin import load, load_model
 from symkin.derivation import Derivation
 from symkin.errors import DerivationError, ModelError
 from symkin.analysis import global_indices, rating
-from symkin.analysis.device import WholeDevice
+from symkin.mechanism.device import WholeDevice
 from symkin.cli import main
 from symkin.simulation import Plant, scenarios
 from checks import assert_wall_equilibrium

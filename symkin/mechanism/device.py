@@ -8,7 +8,7 @@ is of a pose platform): its joints are z within the legs' and the wrist's limits
 (``symkin workspace``, ``symkin gci``, ``symkin rate``) cover the combined workspace: the grip point's reachable positions,
 and 1/kappa of J_a homogenized by a characteristic length (its rows mix m/rad and rad/rad), weighted by
 |det J_a| (the pose workspace's measure) where the device is square.  Where the legs do not assemble or
-leave the working mode of the platform (:func:`symkin.analysis.parallel.working_mode`) the TCP is NaN and
+leave the working mode of the platform (:func:`symkin.mechanism.working_mode.working_mode`) the TCP is NaN and
 J_a zero: such configurations weigh nothing and are no workspace.
 """
 
@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from symkin.analysis import parallel
+from symkin.mechanism.working_mode import working_mode
 from symkin.runtime.info import GeneratedModel
 
 #: The device's task coordinates: the TCP's velocity and angular velocity (rows of device_actuator_jacobian).
@@ -82,7 +82,7 @@ class WholeDevice:
         wrist's joints and the working-mode mask."""
         z = np.asarray(z, dtype=np.float64)
         q, qw = z[..., :self.legs], z[..., self.legs:]
-        p, inside = parallel.working_mode(self.model, q)
+        p, inside = working_mode(self.model, q)
         return q, np.where(np.isfinite(p), p, 0.0), qw, inside
 
     def fk(self, z: np.ndarray) -> np.ndarray:

@@ -1,6 +1,7 @@
 """MODEL as a model file: derived on the fly into a scratch directory, through the derivation cache.
 
-An analysis command's MODEL is a generated model directory (the output of ``symkin derive``) or a model file,
+The library's loading of a model for an analysis (the commands call it; it imports no CLI).  An analysis's MODEL
+is a generated model directory (the output of ``symkin derive``) or a model file,
 which is derived into a temporary directory: fk and jacobian; ik as well for a translational parallel
 mechanism; ik and the inverse Jacobian for a platform that also rotates (``NEEDS["kinematics"]`` of
 :mod:`symkin.analysis.needs`); the loop closure and its Jacobians for legs without the distance form, whose
@@ -13,7 +14,8 @@ from __future__ import annotations
 
 import contextlib
 import tempfile
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from contextlib import AbstractContextManager
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -26,6 +28,9 @@ if TYPE_CHECKING:
 #: Quantities an analysis needs from a model file derived on the fly, where it says none (a serial arm's
 #: kinematics; by kind of mechanism: symkin.analysis.needs.NEEDS).
 ANALYSIS_OUTPUTS = NEEDS["kinematics"][MechanismKind.SERIAL]
+#: A progress display opened while a model file derives, given the model's name (the CLI's
+#: symkin.cli.progress.Progress, which installs itself as the reporter of symkin.reporting); none by default.
+Display = Callable[[str], AbstractContextManager[Any]]
 #: Suffixes of model files (derived on the fly); anything else is a generated directory.
 MODEL_FILE_SUFFIXES = (".yaml", ".yml", ".urdf", ".xml", ".xacro")
 #: Also derived for a parallel model file that limits passive joints: the analyses find the
@@ -51,7 +56,8 @@ def parallel_only(names: Sequence[str]) -> dict[MechanismKind, tuple[str, ...]]:
 def generated_model(path: str, backend: str = "numpy",
                outputs: Sequence[str] | Mapping[MechanismKind, Sequence[str]] = ANALYSIS_OUTPUTS,
                optional: Sequence[str] | Mapping[MechanismKind, Sequence[str]] = (),
-               closure: Sequence[str] | None = None, reading: Mapping[str, Any] | None = None) -> Any:
+               closure: Sequence[str] | None = None, reading: Mapping[str, Any] | None = None,
+               display: Display | None = None) -> Any:
     """The loaded model of MODEL: a generated directory, or a model file derived on the fly.
 
     Args:
@@ -64,27 +70,29 @@ def generated_model(path: str, backend: str = "numpy",
             (default: :data:`CLOSURE_OUTPUTS` where ``outputs`` is by kind, else ``outputs``).
         reading: the keyword arguments of :func:`symkin.model.load_model` a robot file is read with (tip, chain,
             snap_angles, ...: :func:`symkin.cli.urdf_args.urdf_options`); part of the derivation cache's key.
+        display: the progress display shown while a model file derives (:data:`Display`).
 
     Raises:
         ModelError: a model file is invalid.
         GeneratedCodeError: a directory holds no usable generated code.
     """
-    return load_models(path, (backend,), outputs, optional, closure, reading)[0]
+    return load_models(path, (backend,), outputs, optional, closure, reading, display)[0]
 
 
 def load_models(path: str, backends: Sequence[str],
                 outputs: Sequence[str] | Mapping[MechanismKind, Sequence[str]] = ANALYSIS_OUTPUTS,
                 optional: Sequence[str] | Mapping[MechanismKind, Sequence[str]] = (),
-                closure: Sequence[str] | None = None, reading: Mapping[str, Any] | None = None) -> list[Any]:
+                closure: Sequence[str] | None = None, reading: Mapping[str, Any] | None = None,
+                display: Display | None = None) -> list[Any]:
     """MODEL loaded once per backend (as :func:`generated_model`); a model file is derived once, for all of them.
 
     ``outputs`` may map the kind of mechanism ("serial", "parallel") to the quantities
     to derive (e.g. fk for a serial arm, the closed-form ik for a parallel one).
     """
-    from symkin import load
+    from symkin.viewer.notebook import load
 
     # The generated module is imported (numpy) or read (C, CasADi) by load(): the files may go afterwards.
-    with generated_directory(path, backends, outputs, optional, closure, reading) as directory:
+    with generated_directory(path, backends, outputs, optional, closure, reading, display) as directory:
         return [load(directory, backend) for backend in backends]
 
 
@@ -93,9 +101,9 @@ def generated_directory(path: str, backends: Sequence[str],
                         outputs: Sequence[str] | Mapping[MechanismKind, Sequence[str]] = ANALYSIS_OUTPUTS,
                         optional: Sequence[str] | Mapping[MechanismKind, Sequence[str]] = (),
                         closure: Sequence[str] | None = None,
-                        reading: Mapping[str, Any] | None = None) -> Iterator[Path]:
+                        reading: Mapping[str, Any] | None = None, display: Display | None = None) -> Iterator[Path]:
     """The generated directory of MODEL while the block runs: MODEL itself, or for a model file
-    a scratch directory it is derived into (``outputs``, ``optional``, ``closure`` and ``reading`` as
+    a scratch directory it is derived into (``outputs``, ``optional``, ``closure``, ``reading`` and ``display`` as
     :func:`generated_model`)."""
     source = Path(path)
     if not is_model_file(path):
@@ -117,17 +125,19 @@ def generated_directory(path: str, backends: Sequence[str],
             directory = Path(scratch) / entry.model
             replace_directory(directory, entry.files)
         else:
-            directory = _derived(source, backends, outputs, optional, closure, scratch, key, reading or {})
+            directory = _derived(source, backends, outputs, optional, closure, scratch, key, reading or {},
+                                 display or _no_display)
         yield directory
 
 
 def _derived(source: Path, backends: Sequence[str], outputs: Sequence[str] | Mapping[MechanismKind, Sequence[str]],
              optional: Sequence[str] | Mapping[MechanismKind, Sequence[str]], closure: Sequence[str] | None,
-             scratch: str, key: str | None, reading: Mapping[str, Any]) -> Path:
-    """The model file derived into ``scratch`` (and kept in the derivation cache under ``key``)."""
+             scratch: str, key: str | None, reading: Mapping[str, Any], display: Display) -> Path:
+    """The model file derived into ``scratch`` (and kept in the derivation cache under ``key``), its stages reported
+    (:func:`symkin.reporting.report_progress`) to the ``display`` opened meanwhile."""
     from symkin import pipeline, pipeline_cache
-    from symkin.cli.progress import Progress
     from symkin.derivation import Derivation
+    from symkin.reporting import report_progress
     from symkin.model import load_model as load_model_file
 
     model = load_model_file(source, **reading)
@@ -142,11 +152,15 @@ def _derived(source: Path, backends: Sequence[str], outputs: Sequence[str] | Map
     names = dict.fromkeys([*wanted, *derivation.available(extra)[0]])  # in order, each once
     # no function 'combined' (the scene's fusion of every output): the analyses call the outputs one by one
     request = pipeline.resolve_request(model, ",".join(names), ",".join(backends), None, None, "none")
-    with Progress(model.name) as progress:
-        generation = pipeline.generate(model, request, progress, derivation=derivation)
+    with display(model.name):
+        generation = pipeline.generate(model, request, report_progress, derivation=derivation)
     if key is not None:
         pipeline_cache.store(key, model.name, model.notes, generation.files)
     return pipeline.write(generation, scratch)
+
+
+def _no_display(_title: str) -> AbstractContextManager[Any]:
+    return contextlib.nullcontext()
 
 
 def analysis_kind(model: Model) -> MechanismKind:

@@ -1,0 +1,56 @@
+"""The working mode of a parallel mechanism with closed forms: where its actuated joints assemble it in the model's
+declared branches (``ik_branch``, ``fk_branch``), as the run-time mechanism answers it for every analysis.
+
+A configuration q is in the working mode where fk(q) assembles, ik(fk(q)) = q (the same leg branches, not the
+other root of a leg reached through a leg singularity) and the declared passive-joint limits hold
+(:mod:`symkin.mechanism.passive`); on that set q <-> p is one-to-one (see :mod:`symkin.analysis.parallel` for
+what the analyses build on it).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from symkin import mechanism
+from symkin.mechanism import passive
+from symkin.mechanism.limits import wrap_angle
+from symkin.runtime.info import GeneratedModel
+
+#: Largest |ik(fk(q)) - q| (rad or m) of a configuration in the working mode.  The two
+#: roots of a leg differ by far more except next to the leg singularity where they
+#: meet, and there the integrand vanishes.
+JOINT_ROUND_TRIP_TOLERANCE = 1e-6
+
+def require_functions(model: GeneratedModel, names: tuple[str, ...]) -> None:
+    """Refuse a model without the generated parallel functions ``names`` (the message names the fix)."""
+    for name in names:
+        mechanism.parallel_function(model, name)
+
+
+def working_mode(model: GeneratedModel, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """TCP positions of configurations q (..., n) and whether each is in the working mode.
+
+    Returns:
+        (p, inside): p = fk(q) (..., 3), NaN where the legs cannot be assembled; inside:
+        boolean (...), fk assembles, ik(fk(q)) = q and the declared passive-joint limits hold
+        (the actuators' joint limits are not checked here).
+    """
+    require_functions(model, ("fk", "ik"))
+    q = np.asarray(q, dtype=np.float64)
+    with np.errstate(invalid="ignore"):  # the closed forms take sqrt of negative margins: NaN, as documented
+        p = model.fk(q).position
+        back = model.ik(np.where(np.isfinite(p), p, 0.0)).joints
+        error = np.abs(np.where(mechanism.revolute_mask(model), wrap_angle(back - q), back - q))
+        inside = np.isfinite(p).all(axis=-1) & np.all(error <= JOINT_ROUND_TRIP_TOLERANCE, axis=-1)
+    limits = passive.declared_limits(model)
+    if limits is not None:
+        batch = inside.shape
+        inside = passive.admissible(model, limits, q.reshape(-1, q.shape[-1]), p.reshape(-1, p.shape[-1]),
+                                    inside.reshape(-1)).reshape(batch)
+    return p, inside
+
+
+def jacobian_in_working_mode(model: GeneratedModel, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """J(q, fk(q)) (..., 3, n) and the working-mode mask (...) of configurations q (see :func:`working_mode`)."""
+    p, inside = working_mode(model, q)
+    return model.jacobian(q, np.where(np.isfinite(p), p, 0.0)), inside
