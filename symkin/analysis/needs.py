@@ -40,5 +40,12 @@ NEEDS: Mapping[str, Mapping[MechanismKind, tuple[str, ...]]] = {
                  MechanismKind.PARALLEL: ("ik", "fk", "jacobian") + SIMULATED_DYNAMICS,
                  MechanismKind.PARALLEL_POSE: ("ik", "inverse_jacobian") + SIMULATED_DYNAMICS,
                  MechanismKind.PARALLEL_ORIENTATION: ("ik", "fk", "jacobian") + SIMULATED_DYNAMICS},
+    # symkin view (symkin.viewer.page): a translational platform driven through its closed-form ik and rated by J
+    # (its cloud from the closed-form fk); a pose platform (no closed-form fk) by the twist Jacobian from J^-1, at
+    # the home orientation for the cloud; the legs drawn from leg_points
+    "view": {MechanismKind.SERIAL: ("fk", "frames", "jacobian"),
+             MechanismKind.PARALLEL: ("ik", "fk", "leg_points", "jacobian", "singularities"),
+             MechanismKind.PARALLEL_POSE: ("ik", "leg_points", "inverse_jacobian", "singularities"),
+             MechanismKind.PARALLEL_ORIENTATION: ("ik", "leg_points", "inverse_jacobian", "singularities")},
 }
 

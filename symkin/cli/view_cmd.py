@@ -8,6 +8,7 @@ from pathlib import Path
 
 from symkin.cli import analysis_args
 from symkin.analysis import model_files
+from symkin.analysis.needs import NEEDS
 from symkin.cli.analysis_args import sample_count
 
 #: Workspace points of the cloud by default: enough to see its shape and where 1/kappa falls off.
@@ -53,7 +54,7 @@ def run(args: argparse.Namespace) -> int:
         limits = analysis_args.parse_limits(args.limits)
     except ValueError as err:
         analysis_args.fail_on_bad_input(args, err)
-    with model_files.generated_directory(args.model, ("numpy", "js"), page.VIEW_OUTPUTS,
+    with model_files.generated_directory(args.model, ("numpy", "js"), NEEDS["view"],
                                            page.OPTIONAL_VIEW_OUTPUTS, display=Progress) as directory:
         model = load(directory)
         try:

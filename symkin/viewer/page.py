@@ -36,6 +36,7 @@ from markupsafe import Markup
 
 from symkin._version import __version__
 from symkin.analysis import closure_workspace, conditioning, global_indices, parallel, sampling, workspace
+from symkin.analysis.needs import NEEDS
 from symkin import mechanism
 from symkin.mechanism import Limits, MechanismKind
 from symkin.backends.templating import render_html
@@ -58,17 +59,6 @@ MIN_CLOSURE_CELLS = 8
 REFINED_CELLS_LIMIT = 4
 #: Viridis at 5 stops (matplotlib's table): the cloud's colours and the colour bar.
 VIRIDIS = ("#440154", "#3b528b", "#21918c", "#5ec962", "#fde725")
-
-#: The generated functions the page evaluates, by kind of mechanism (the keys of
-#: symkin.mechanism.MechanismKind): a translational platform is driven through its
-#: closed-form ik and rated by J (its cloud comes from the closed-form fk); a pose platform
-#: (no closed-form fk) by the twist Jacobian from J^-1, at the home orientation for the cloud.
-VIEW_OUTPUTS = {
-    MechanismKind.SERIAL: ("fk", "frames", "jacobian"),
-    MechanismKind.PARALLEL: ("ik", "fk", "leg_points", "jacobian", "singularities"),
-    MechanismKind.PARALLEL_POSE: ("ik", "leg_points", "inverse_jacobian", "singularities"),
-    MechanismKind.PARALLEL_ORIENTATION: ("ik", "leg_points", "inverse_jacobian", "singularities"),
-}
 
 
 @dataclass(frozen=True)
@@ -105,7 +95,7 @@ def view_outputs(model: GeneratedModel) -> tuple[str, ...]:
     """The generated functions the page evaluates for ``model``."""
     if _solved_through_closure(model):
         return CLOSURE_VIEW_OUTPUTS
-    return VIEW_OUTPUTS[mechanism.kind_of(model)] + (WRIST_VIEW_OUTPUTS if model.info.wrist else ())
+    return NEEDS["view"][mechanism.kind_of(model)] + (WRIST_VIEW_OUTPUTS if model.info.wrist else ())
 
 
 def _solved_through_closure(model: GeneratedModel) -> bool:
