@@ -126,7 +126,7 @@ def generated_directory(path: str, backends: Sequence[str],
             replace_directory(directory, entry.files)
         else:
             directory = _derived(source, backends, outputs, optional, closure, scratch, key, reading or {},
-                                 display or _no_display)
+                                 display or contextlib.nullcontext)
         yield directory
 
 
@@ -157,10 +157,6 @@ def _derived(source: Path, backends: Sequence[str], outputs: Sequence[str] | Map
     if key is not None:
         pipeline_cache.store(key, model.name, model.notes, generation.files)
     return pipeline.write(generation, scratch)
-
-
-def _no_display(_title: str) -> AbstractContextManager[Any]:
-    return contextlib.nullcontext()
 
 
 def analysis_kind(model: Model) -> MechanismKind:

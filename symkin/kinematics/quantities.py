@@ -69,12 +69,15 @@ def geometric_jacobian_matrix(d: Deriving) -> sympy.ImmutableMatrix:
     """Columns [z_i x (p_tcp - p_i); z_i] for revolute and [z_i; 0] for prismatic joints, times the
     coupling matrix A when joints mimic others (one column per coordinate)."""
     chain: ChainFrames = d[chain_frames]
-    return _point_jacobian(d, chain, sympy.Matrix(chain.tcp.p), tree.tip_index(d.model))
+    return _point_jacobian(d, chain, coordinates.coupling_matrix(d.model), sympy.Matrix(chain.tcp.p),
+                           tree.tip_index(d.model))
 
 
-def _point_jacobian(d: Deriving, chain: ChainFrames, point: sympy.Matrix, link: int) -> sympy.ImmutableMatrix:
+def _point_jacobian(d: Deriving, chain: ChainFrames, coupling: sympy.Matrix | None, point: sympy.Matrix,
+                    link: int) -> sympy.ImmutableMatrix:
     """The geometric Jacobian (6 x coordinates) of a frame at ``point`` carried by joint ``link``'s link: the
-    joints from the base to that link move it, those on other branches give zero columns."""
+    joints from the base to that link move it, those on other branches give zero columns; times the coupling
+    matrix A where joints mimic others."""
     moving = set(tree.path_to(tree.parent_indices(d.model), link))
     columns = []
     for k, axis in enumerate(chain.axes):
@@ -85,20 +88,20 @@ def _point_jacobian(d: Deriving, chain: ChainFrames, point: sympy.Matrix, link: 
         # the joint's twist moved from a point on its axis to the frame: v = w x (p - p_axis) + v_axis
         columns.append((angular.cross(point - sympy.Matrix(axis.point)) + linear).col_join(angular))
     J = sympy.Matrix.hstack(*columns)
-    coupling = coordinates.coupling_matrix(d.model)
     return sympy.ImmutableMatrix(J if coupling is None else J * coupling)
 
 
 @quantity("frame_jacobians", "geometric Jacobian base_J_<link> (6 x n) of every link frame")
 def _frame_jacobians(d: Deriving) -> FunctionSpec:
     chain: ChainFrames = d[chain_frames]
+    coupling = coordinates.coupling_matrix(d.model)
     return make_function(
         d.model, "frame_jacobians", "Geometric Jacobian of every link frame in the base frame.",
         "[v; w] = base_J_<link> qd with v the velocity of the link frame's origin and w the link's angular velocity, "
         "both in the base frame (jacobian_geometric's columns for each link, Pinocchio's LOCAL_WORLD_ALIGNED frame "
         "Jacobian); joints on other branches of a tree give zero columns.",
         [coordinate_input(d.model, "q")],
-        [OutputSpec(f"base_J_{name}", _point_jacobian(d, chain, sympy.Matrix(frame.p), k),
+        [OutputSpec(f"base_J_{name}", _point_jacobian(d, chain, coupling, sympy.Matrix(frame.p), k),
                     f"rows vx, vy, vz, wx, wy, wz of frame '{name}'; one column per coordinate")
          for k, (name, frame) in enumerate(chain.links)],
     )

@@ -43,8 +43,9 @@ def assembler(d: Deriving) -> Callable[[np.ndarray], tuple[np.ndarray, np.ndarra
 
 def _gauss_newton(function: Callable[[np.ndarray], np.ndarray], n: int, k: int, p: np.ndarray
                   ) -> tuple[np.ndarray, np.ndarray] | None:
-    """(q, s) of the first start, in order, whose damped Gauss-Newton solve (:func:`symkin.newton.newton_iterate`,
-    all starts as one batch) closes the legs at p; None if none does."""
+    """(q, s) of the first start, in order, whose damped Gauss-Newton solve (:func:`symkin.newton.newton_iterate`)
+    closes the legs at p; None if none does.  The zero start alone first (it usually closes them), then the random
+    ones as one batch."""
     def residuals(X: np.ndarray) -> np.ndarray:  # rows of X: states; one call for the batch
         return function(np.concatenate([X, np.broadcast_to(p, (len(X), len(p)))], axis=1))
 
@@ -57,8 +58,9 @@ def _gauss_newton(function: Callable[[np.ndarray], np.ndarray], n: int, k: int, 
     scale = max(float(np.max(np.abs(p), initial=0.0)), 1.0)
     rng = np.random.default_rng(0)
     starts = np.stack([np.zeros(n + k)] + [rng.uniform(-np.pi / 2, np.pi / 2, n + k) for _ in range(STARTS)])
-    report = newton_iterate(starts, equations, TOLERANCE, ITERATIONS, MAX_STEP)
-    for x, residual in zip(report.solution, report.residual):
-        if np.all(np.isfinite(x)) and residual <= CLOSED * scale:
-            return x[:n], x[n:]
+    for batch in (starts[:1], starts[1:]):
+        report = newton_iterate(batch, equations, TOLERANCE, ITERATIONS, MAX_STEP)
+        for x, residual in zip(report.solution, report.residual):
+            if np.all(np.isfinite(x)) and residual <= CLOSED * scale:
+                return x[:n], x[n:]
     return None

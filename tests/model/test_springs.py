@@ -67,9 +67,9 @@ def test_springs_alone_give_a_weightless_arm_its_g():
 
 @pytest.mark.parametrize("springs, message", [
     ("springs:\n  theta3: {stiffness: 1}\n", "theta3"),
-    ("springs:\n  theta1: {reference: 1}\n", "stiffness"),
+    ("springs:\n  theta1: {reference: 1}\n", "missing required key 'stiffness'"),
     ("springs:\n  theta1: {stiffness: -1}\n", "negative spring stiffness"),
-    ("springs:\n  theta1: {stiffness: l1}\n", "stiffness"),
+    ("springs:\n  theta1: {stiffness: l1}\n", "'l1' is a length .* used here as an angular stiffness"),
 ])
 def test_bad_springs_get_located_errors(springs, message):
     with pytest.raises(ModelError, match=message) as raised:
