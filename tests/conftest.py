@@ -69,8 +69,8 @@ def shared_derivation(model: Model) -> Derivation:
 def stability_run(name: str):
     """``symkin bench stability models/<name>.yaml`` at its defaults, once per worker: the run that
     docs/numerical-stability.md quotes (tests/analysis/test_stability_table.py) and, on native arithmetic, the one
-    tests/analysis/test_stability.py judges (both modules share the xdist group ``stability``), on the worker's
-    shared derivation of the model (:func:`shared_derivation`)."""
+    tests/analysis/test_stability.py judges (both modules' tests of a model share the xdist group
+    ``stability-<name>``), on the worker's shared derivation of the model (:func:`shared_derivation`)."""
     from symkin.stability import run_stability
 
     model = load_model(MODELS_DIR / f"{name}.yaml")

@@ -174,7 +174,7 @@ def chunked_workspace(payload: ModelPayload, spec: CloudSpec, *, chunk: int = CH
             method or chunk size.
     """
     model = spec.model(payload)
-    if mechanism.is_parallel(model):
+    if mechanism.sampled_in_task_space(model):
         raise ValueError(f"{model.name}: a parallel mechanism's workspace is measured on a Cartesian grid, bounded "
                          "by its cells; sample its joint space without --scheduler")
     if chunk < 1:

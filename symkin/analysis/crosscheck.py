@@ -127,11 +127,9 @@ def _sources(path: Path, reference_urdf: Path | None, urdf: Mapping[str, Any]) -
         model = load_model(path, allow_nonphysical=allow_nonphysical)
         reduction = UrdfReduction(ROOT_LINK, TCP_LINK, {})
         text = reference_urdf.read_text() if reference_urdf else export_urdf(model)
-    if model.parallel is not None:
-        raise ModelError([model.problem(("parallel",), "crosscheck compares serial chains with a URDF reference; "
-                                                       "a parallel mechanism has closed loops",
-                                        "cross-check a serial model (the parallel models' tests use their own "
-                                        "closed-loop references)")])
+    model.refuse_closed_loops("crosscheck compares serial chains with a URDF reference",
+                              "cross-check a serial model (the parallel models' tests use their own closed-loop "
+                              "references)")
     return model, text, reduction, kind == MJCF
 
 

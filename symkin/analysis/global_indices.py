@@ -119,14 +119,8 @@ def joint_space_integrand(model: GeneratedModel, *, index: Index | None = condit
     if measure not in MEASURES:
         raise ValueError(f"unknown measure '{measure}'; choose one of {', '.join(MEASURES)}")
     box = mechanism.joint_limits(model, limits)
-    if jacobian is None and mechanism.is_parallel(model):
-        def evaluate(q: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:  # (J, working-mode mask)
-            return jacobian_in_working_mode(model, q)
-    else:
-        serial_jacobian = jacobian or model.jacobian
-
-        def evaluate(q: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
-            return serial_jacobian(q), None
+    def evaluate(q: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:  # (J, working-mode mask or None)
+        return jacobian_in_working_mode(model, q) if jacobian is None else (jacobian(q), None)
     n = box.shape[0]
     if measure == "cartesian":
         m = len(mechanism.task_space(model))

@@ -66,9 +66,8 @@ class Actuation:
 
 
 def dynamics_at(model: GeneratedModel, name: str, q: np.ndarray, poses: np.ndarray) -> np.ndarray:
-    """A generated dynamics function at the samples: of q (a serial arm), of (q, p) (a parallel platform)."""
-    function = getattr(model, name)
-    return function(q, poses) if mechanism.is_parallel(model) else function(q)
+    """A generated dynamics function at the samples (q, p), fed the inputs it declares (:func:`symkin.mechanism.call`)."""
+    return mechanism.call(model, name, q=q, p=poses)
 
 
 def rotation_measures(J_w: np.ndarray, M: np.ndarray | None, actuation: Actuation, *, no_mass: str = ""

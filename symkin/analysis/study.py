@@ -93,7 +93,7 @@ def study_workspace(model: GeneratedModel, *, samples: int, method: str, seed: i
         ValueError: the model cannot be analysed so (e.g. no reachable cell).
     """
     inv_kappa, box, grid = None, None, None
-    if mechanism.is_parallel(model):  # 1/kappa and the volume come from a Cartesian grid
+    if mechanism.sampled_in_task_space(model):  # 1/kappa and the volume come from a Cartesian grid
         box = workspace.bounding_box(model, limits=limits)
         progress("Cartesian grid")
         grid = cartesian_index_grid(model, box, limits, length)
@@ -155,7 +155,7 @@ def _report(model: GeneratedModel, cloud: WorkspaceCloud, inv_kappa: np.ndarray 
         measure = global_indices.workspace_measure(model, method="qmc", samples=2**16, seed=0, limits=limits,
                                                    domain="cartesian", inverse=ik, box=box)
         lines.append(f"{kind}: {measure} {unit} (qmc over a Cartesian box, reachability by inverse kinematics)")
-    if mechanism.is_parallel(model) or inv_kappa is None:
+    if mechanism.sampled_in_task_space(model) or inv_kappa is None:
         return lines  # the Cartesian grid (_cartesian_report) gives the volume, boundary and singularities
     occupancy = workspace.occupancy_from_cloud(cloud)
     boundary = occupancy.boundary()

@@ -21,7 +21,7 @@ from itertools import product
 import numpy as np
 
 from symkin.analysis import parallel, sampling
-from symkin.mechanism.working_mode import working_mode
+from symkin.mechanism.working_mode import assemble, working_mode
 from symkin import mechanism
 from symkin.analysis.estimates import Estimate
 from symkin.mechanism import Limits
@@ -85,16 +85,9 @@ def sample_workspace(model: GeneratedModel, samples: int = 2**14, *, method: str
     else:
         raise ValueError(f"unknown sampling method '{method}'; choose one of {', '.join(SAMPLING_METHODS)}")
     axes = tuple("xyz"[a] for a in mechanism.position_axes(model))
-    if mechanism.is_parallel(model):
-        # Only configurations that assemble in the working mode belong to the workspace.
-        points, inside = working_mode(model, q)
-        if not inside.all():
-            return WorkspaceCloud(q[inside], points[inside], axes, None)
-        return WorkspaceCloud(q, points, axes, grid_shape)
-    points = mechanism.tcp_positions(model, q)
-    placed = np.isfinite(points).all(axis=-1)  # a view's configurations that do not assemble (a hybrid device's)
-    if not placed.all():
-        return WorkspaceCloud(q[placed], points[placed], axes, None)
+    points, inside = assemble(model, q)  # only configurations that assemble in the working mode belong to it
+    if not inside.all():
+        return WorkspaceCloud(q[inside], points[inside], axes, None)
     return WorkspaceCloud(q, points, axes, grid_shape)
 
 

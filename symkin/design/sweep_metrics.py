@@ -84,10 +84,8 @@ def torque_peak(model: Any, lower: np.ndarray, upper: np.ndarray, samples: int, 
 
     q = sampling.sobol(lower, upper, max(4, int(math.log2(samples))), np.random.default_rng(seed))
     with np.errstate(all="ignore"):
-        if mechanism.is_parallel(model):
-            J, inside = jacobian_in_working_mode(model, q)
-        else:
-            J, inside = mechanism.jacobian(model, q), np.ones(len(q), dtype=bool)
+        J, in_mode = jacobian_in_working_mode(model, q)
+    inside = np.ones(len(q), dtype=bool) if in_mode is None else in_mode
     levers = np.linalg.norm(J[:, list(mechanism.position_rows(model)), :], axis=1)    # (N, n): ||J_p[:, i]||
     levers = levers[inside & np.isfinite(levers).all(axis=1)]
     if not len(levers):

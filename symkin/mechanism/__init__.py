@@ -19,6 +19,7 @@ task space.  The C backend plugs in by being loaded instead of the numpy one: on
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from typing import Any
 from enum import Enum
 
 import numpy as np
@@ -140,6 +141,31 @@ def kind_of(model: GeneratedModel) -> MechanismKind:
 def is_parallel(model: GeneratedModel) -> bool:
     """Whether the loaded model is a parallel mechanism."""
     return model.info.is_parallel
+
+
+def call(model: GeneratedModel, name: str, **state: np.ndarray) -> Any:
+    """The generated function ``name`` at a state of the device, fed the vector inputs its manifest record
+    declares, in its order, from ``state`` by name (``q``, ``p``, ``qw``, ``qd``, ...): the one binder, so that an
+    analysis passes what it knows (q and the poses) whatever the function of this kind of mechanism takes (an
+    open chain's dynamics take q, a platform's q and p).
+
+    Raises:
+        ValueError: the function was not generated, or takes an input ``state`` does not hold.
+    """
+    record = model.info.functions.get(name)
+    if record is None:
+        raise ValueError(f"{model.name}: the analysis needs the generated '{name}'; derive it (--only {name})")
+    missing = [i.name for i in record.vector_inputs if i.name not in state]
+    if missing:
+        raise ValueError(f"{model.name}: '{name}' takes {', '.join(missing)}, which this analysis does not know")
+    return getattr(model, name)(*(state[i.name] for i in record.vector_inputs))
+
+
+def sampled_in_task_space(model: GeneratedModel) -> bool:
+    """Whether the workspace analyses sample the handle's space (a Cartesian grid, reached through inverse
+    kinematics) instead of the joint box: so for a mechanism that closes loops, whose joint box also holds
+    configurations of other working modes and ones that do not assemble (:mod:`symkin.analysis.study`)."""
+    return is_parallel(model)
 
 
 def home_pose(model: GeneratedModel) -> np.ndarray:

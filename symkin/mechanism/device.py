@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from symkin.manifest_schema import Coordinate, Function, Input
 from symkin.mechanism.working_mode import working_mode
 from symkin.runtime.info import GeneratedModel
 
@@ -28,6 +29,14 @@ DEVICE_TASK_SPACE = ("x", "y", "z", "wx", "wy", "wz")
 DEVICE_FUNCTIONS = ("fk", "ik", "device_fk", "device_actuator_jacobian")
 #: The device's dynamics in (q, p, qw), offered in z where generated.
 DEVICE_DYNAMICS = ("mass_matrix", "gravity_vector")
+
+
+def _in_device_coordinates(record: Function, coordinates: tuple[Coordinate, ...]) -> Function:
+    """The manifest record of a function the view evaluates: one vector input q, the device's joints z = (q, qw)
+    (what :func:`symkin.mechanism.call` feeds it), then the model function's parameters."""
+    z = Input("q", "vector", (len(coordinates),), tuple(c.name for c in coordinates),
+              tuple("rad" if c.type == "R" else "m" for c in coordinates), "the device's joints z = (q, qw)")
+    return dataclasses.replace(record, inputs=(z,) + record.parameter_inputs)
 
 
 class WholeDevice:
@@ -55,11 +64,15 @@ class WholeDevice:
                              "(add them to the scene outputs and derive again)")
         self.model = model
         self.legs = len(model.info.coordinates)
-        self.info = dataclasses.replace(model.info, mechanism="hybrid", coordinates=model.info.coordinates
-                                        + model.info.wrist, task_space=DEVICE_TASK_SPACE, wrist=(), home=None,
-                                        passive_limits=())
         #: the dynamics the view evaluates in z where the model has them (symkin rate's apparent mass at the grip)
         self.functions = ("fk", "jacobian") + tuple(f for f in DEVICE_DYNAMICS if f in model.functions)
+        coordinates = model.info.coordinates + model.info.wrist
+        self.info = dataclasses.replace(model.info, mechanism="hybrid", coordinates=coordinates,
+                                        task_space=DEVICE_TASK_SPACE, wrist=(), home=None, passive_limits=(),
+                                        functions={**model.info.functions,
+                                                   **{name: _in_device_coordinates(model.info.functions[name],
+                                                                                   coordinates)
+                                                      for name in self.functions if name in model.info.functions}})
 
     def __getattr__(self, name: str) -> Any:  # the model's name, parameters, generated functions
         if name == "model":  # not yet set (copy, pickle): no recursion

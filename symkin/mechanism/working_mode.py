@@ -50,7 +50,22 @@ def working_mode(model: GeneratedModel, q: np.ndarray) -> tuple[np.ndarray, np.n
     return p, inside
 
 
-def jacobian_in_working_mode(model: GeneratedModel, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """J(q, fk(q)) (..., 3, n) and the working-mode mask (...) of configurations q (see :func:`working_mode`)."""
+def assemble(model: GeneratedModel, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The assembly question of every analysis: the handle's positions (..., d) at configurations q (..., n) and
+    whether each configuration belongs to the workspace (...).  A mechanism that closes loops: fk(q) in the
+    working mode (:func:`working_mode`); an open chain: its TCP (every configuration belongs, but where the view
+    of a device yields no position: a hybrid device's configurations whose legs do not assemble)."""
+    if mechanism.is_parallel(model):
+        return working_mode(model, q)
+    points = mechanism.tcp_positions(model, q)
+    return points, np.isfinite(points).all(axis=-1)
+
+
+def jacobian_in_working_mode(model: GeneratedModel, q: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+    """The task Jacobian at configurations q and the working-mode mask (...) of a mechanism that closes loops:
+    J(q, fk(q)) (..., 3, n) and :func:`working_mode`'s mask; an open chain's J(q) and None (every configuration
+    counts)."""
+    if not mechanism.is_parallel(model):
+        return mechanism.jacobian(model, q), None
     p, inside = working_mode(model, q)
     return model.jacobian(q, np.where(np.isfinite(p), p, 0.0)), inside

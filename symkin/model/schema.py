@@ -20,7 +20,7 @@ from enum import Enum
 
 import sympy
 
-from symkin.errors import Problem
+from symkin.errors import ModelError, Problem
 from symkin.geometry import Vec3, rotation_matrix
 from symkin.model import joint_kinds
 from symkin.model.joint_kinds import kind as joint_kind
@@ -633,6 +633,16 @@ class Model:
         while probe and probe not in self.locations:
             probe = probe[:-1]
         return located_problem(self.source, self.locations.get(probe), format_path(path), message, fix)
+
+    def refuse_closed_loops(self, work: str, fix: str) -> None:
+        """Refuse, located at ``parallel``, a model whose legs close loops for ``work`` that follows open chains
+        (a reference library's serial trees); ``fix`` says what to do instead.
+
+        Raises:
+            ModelError: the model has legs.
+        """
+        if self.parallel is not None:
+            raise ModelError([self.problem(("parallel",), f"{work}; a parallel mechanism has closed loops", fix)])
 
     def source_name(self, kind: str, name: str) -> str:
         """The name in the source file of the joint (``kind`` "joints") or link ("links") ``name``."""

@@ -23,9 +23,16 @@ from symkin.stability.ir_eval import compile_ir, flatten_outputs
 from symkin.stability.reference import BallReference, normwise_error
 from symkin.stability.states import parameter_values
 
-#: One xdist worker runs this module (`make test` uses --dist loadgroup), so the session-scoped
-#: runs are computed once, not once per worker.
-pytestmark = pytest.mark.xdist_group("stability")
+def on_the_runs_worker(*names: str):
+    """The tests of a model's run share one xdist worker (`make test` uses --dist loadgroup): the group
+    ``stability-<name>``, which tests/analysis/test_stability_table.py's test of the model joins, so that each run
+    is computed once and the models' runs spread over the workers."""
+    return [pytest.mark.xdist_group(f"stability-{name}") for name in names]
+
+
+def each_model():
+    """The example models as parameters, each on its run's worker (:func:`on_the_runs_worker`)."""
+    return [pytest.param(name, marks=on_the_runs_worker(name)) for name in EXAMPLE_MODELS]
 
 #: The runs on foreign arithmetic (`make test`'s second pass): fewer states, and not every quantity (below).
 QUICK = dict(samples=12, scale_samples=3, float32_samples=6, steps=(1e-2, 1e-6, 1e-10))
@@ -49,22 +56,34 @@ CHECKED = {"serial": {"fk", "frames", "jacobian", "jacobian_geometric", "mass_ma
            "parallel": {"ik", "inverse_jacobian", "constraints", "constraint_jacobians", "closure", "singularities"}}
 
 
+class _Runs(dict):
+    """The runs by model name, each made when a test first asks for it (on the worker of its group)."""
+
+    def __init__(self, make):
+        super().__init__()
+        self._make = make
+
+    def __missing__(self, name):
+        self[name] = run = self._make(name)
+        return run
+
+
 @pytest.fixture(scope="session")  # not "module": xdist may interleave other modules' tests, which would recompute it
 def runs(models):
-    """On native arithmetic the full runs the results table quotes (tests/analysis/test_stability_table.py runs them in
-    this worker anyway: every quantity, the bench's defaults); on foreign arithmetic, where the table is not
+    """On native arithmetic the full runs the results table quotes (tests/analysis/test_stability_table.py runs them on
+    the same workers anyway: every quantity, the bench's defaults); on foreign arithmetic, where the table is not
     rerun, quick runs without :data:`LEFT_OUT`."""
     if not FOREIGN_ARITHMETIC:
-        return {name: stability_run(name) for name in EXAMPLE_MODELS}
-    out = {}
-    for name in EXAMPLE_MODELS:
-        mechanism = models[name].mechanism
-        quantities = [q for q in emitted_quantities(mechanism) if q not in LEFT_OUT.get(name, ())]
-        out[name] = run_stability(models[name], quantities=quantities, **QUICK)
-    return out
+        return _Runs(stability_run)
+
+    def quick(name):
+        quantities = [q for q in emitted_quantities(models[name].mechanism) if q not in LEFT_OUT.get(name, ())]
+        return run_stability(models[name], quantities=quantities, **QUICK)
+
+    return _Runs(quick)
 
 
-@pytest.mark.parametrize("name", EXAMPLE_MODELS)
+@pytest.mark.parametrize("name", each_model())
 def test_error_below_1e_13_where_kappa_below_1e3(runs, models, name):
     run = runs[name]
     passed, worst = run.acceptance()
@@ -86,16 +105,25 @@ def _kappas_along(run, path):
     return [r.kappa for r in run.select("singular") if r.label == path.label]
 
 
-def test_singular_paths_are_found_generically(runs):
-    assert {p.label for p in runs["planar_2r"].paths} == {"theta2 -> 0", "theta2 -> -3.14159"}
-    ur = {p.label for p in runs["ur10e"].paths}
+@pytest.mark.parametrize("name", [pytest.param("planar_2r", marks=on_the_runs_worker("planar_2r"))])
+def test_the_planar_arms_singular_paths_are_found_generically(runs, name):
+    assert {p.label for p in runs[name].paths} == {"theta2 -> 0", "theta2 -> -3.14159"}
+
+
+@pytest.mark.parametrize("name", [pytest.param("ur10e", marks=on_the_runs_worker("ur10e"))])
+def test_the_ur10es_singular_paths_are_found_generically(runs, name):
+    ur = {p.label for p in runs[name].paths}
     assert {"q5 -> 0", "q3 -> 0"} <= ur
-    for path in runs["ur10e"].paths:
-        kappas = _kappas_along(runs["ur10e"], path)
+    for path in runs[name].paths:
+        kappas = _kappas_along(runs[name], path)
         assert max(kappas) > 1e9
         assert min(kappas) < 1e4
+
+
+@pytest.mark.parametrize("name", [pytest.param("stewart", marks=on_the_runs_worker("stewart"))])
+def test_the_stewart_platforms_singular_paths_are_found_generically(runs, name):
     # Stewart-Gough: interior singular poses (kappa ~ 1/t) in position and in every orientation angle
-    stewart = runs["stewart"]
+    stewart = runs[name]
     assert {p.name for p in stewart.paths} >= {"roll", "pitch", "yaw"}
     for path in stewart.paths:
         kappas = [k for k in _kappas_along(stewart, path) if math.isfinite(k)]
@@ -103,13 +131,14 @@ def test_singular_paths_are_found_generically(runs):
         assert min(kappas) < 1e5
 
 
-def test_delta_paths_end_in_its_singularities_and_on_its_workspace_boundary(runs, models):
+@pytest.mark.parametrize("name", [pytest.param("delta", marks=on_the_runs_worker("delta"))])
+def test_delta_paths_end_in_its_singularities_and_on_its_workspace_boundary(runs, models, name):
     """DELTA: every path the sweep finds ends where det J_q = 0 (a leg stretched or folded: the
     IK's two knee branches merge, the workspace boundary - the IK margin vanishes there and
     just beyond it the mechanism does not assemble) or where det J_x = 0 (a parallel singularity
     inside the workspace); kappa grows without bound along each path."""
-    delta = runs["delta"]
-    loaded = load(GENERATED_DIR / "delta")
+    delta = runs[name]
+    loaded = load(GENERATED_DIR / name)
     home = np.array([0.0, 0.0, -0.15])
     typical = loaded.singularities(loaded.ik(home).joints, home)
     boundaries = 0
@@ -128,36 +157,39 @@ def test_delta_paths_end_in_its_singularities_and_on_its_workspace_boundary(runs
     assert boundaries >= 2
 
 
-def test_forward_quantities_stay_accurate_into_the_ur_singularities(runs):
+@pytest.mark.parametrize("name", [pytest.param("ur10e", marks=on_the_runs_worker("ur10e"))])
+def test_forward_quantities_stay_accurate_into_the_ur_singularities(runs, name):
     """No division in the UR's kinematics and dynamics: even at kappa = 1e10 the code is accurate to
     rounding (quantities that invert J, the TCP force and operational space, are excluded)."""
-    singular = [r for r in runs["ur10e"].select("singular") if registry("serial")[r.quantity].solves_with is None]
+    singular = [r for r in runs[name].select("singular") if registry("serial")[r.quantity].solves_with is None]
     assert max(r.kappa for r in singular) > 1e9
     worst = max(singular, key=lambda r: r.error)
     assert worst.error <= FORWARD_AT_SINGULARITIES, f"bound {FORWARD_AT_SINGULARITIES:.3g} exceeded by {worst}"
 
 
-def test_folded_planar_arm_error_grows_with_kappa_as_its_conditioning_allows(runs):
+@pytest.mark.parametrize("name", [pytest.param("planar_2r", marks=on_the_runs_worker("planar_2r"))])
+def test_folded_planar_arm_error_grows_with_kappa_as_its_conditioning_allows(runs, name):
     """theta2 -> pi with l1 = l2 puts the TCP at the base: x = l1 c1 + l2 c12 cancels, and the
     task coordinates' relative error grows like kappa * eps - never beyond it."""
-    rs = [r for r in runs["planar_2r"].select("singular", "task_coordinates") if r.label == "theta2 -> -3.14159"]
+    rs = [r for r in runs[name].select("singular", "task_coordinates") if r.label == "theta2 -> -3.14159"]
     assert max(r.error for r in rs) > 1e-10
     assert all(r.error <= 16 * np.finfo(float).eps * r.kappa for r in rs)
 
 
-def test_length_scales_and_float32(runs):
+@pytest.mark.parametrize("name", each_model())
+def test_length_scales_and_float32(runs, name):
     eps = float(np.finfo(float).eps)
-    for run in runs.values():
-        for r in run.select("scale"):
-            # Scaling lengths but not the published inertias makes M ill-conditioned: forward
-            # dynamics then meets the bound only where its own kappa = cond(M) is moderate,
-            # and stays within a small multiple of kappa * eps everywhere (backward stable).
-            assert r.error < BOUND or r.kappa >= KAPPA_LIMIT, r
-            assert r.error <= 64 * eps * max(r.kappa, 1.0), r
-        errors = [r.error for r in run.select("float32")]
-        eps32 = float(np.finfo(np.float32).eps)
-        assert max(errors) < 50 * eps32
-        assert max(errors) > 1e-3 * eps32  # really computed in single precision
+    run = runs[name]
+    for r in run.select("scale"):
+        # Scaling lengths but not the published inertias makes M ill-conditioned: forward
+        # dynamics then meets the bound only where its own kappa = cond(M) is moderate,
+        # and stays within a small multiple of kappa * eps everywhere (backward stable).
+        assert r.error < BOUND or r.kappa >= KAPPA_LIMIT, r
+        assert r.error <= 64 * eps * max(r.kappa, 1.0), r
+    errors = [r.error for r in run.select("float32")]
+    eps32 = float(np.finfo(np.float32).eps)
+    assert max(errors) < 50 * eps32
+    assert max(errors) > 1e-3 * eps32  # really computed in single precision
 
 
 def test_ir_evaluator_in_float64_is_bit_identical_to_the_generated_module(models, tmp_path):
@@ -225,8 +257,9 @@ def test_new_quantities_are_covered_automatically(models, monkeypatch):
     assert run.acceptance()[0]
 
 
-def test_ik_wrist_formula_error_drop(runs):
-    (wrist,) = runs["ur10e"].formulas
+@pytest.mark.parametrize("name", [pytest.param("ur10e", marks=on_the_runs_worker("ur10e"))])
+def test_ik_wrist_formula_error_drop(runs, name):
+    (wrist,) = runs[name].formulas
     at = {t: (a, b) for t, a, b in zip(wrist.steps, wrist.textbook, wrist.symkin)}
     textbook, ours = at[1e-6]
     # symkin's wrist angle is an atan2 of two computed components: a closed form (CLOSED_FORM);
@@ -234,7 +267,11 @@ def test_ik_wrist_formula_error_drop(runs):
     assert textbook > 1e-12
     assert ours <= CLOSED_FORM
     assert np.all(wrist.symkin <= CLOSED_FORM), (wrist.steps, wrist.symkin, CLOSED_FORM)
-    (elbow,) = runs["planar_2r"].formulas
+
+
+@pytest.mark.parametrize("name", [pytest.param("planar_2r", marks=on_the_runs_worker("planar_2r"))])
+def test_ik_elbow_formula_within_its_bound(runs, name):
+    (elbow,) = runs[name].formulas
     finite = np.isfinite(elbow.bound)
     assert np.all(elbow.symkin[finite] <= 4 * elbow.bound[finite])
 

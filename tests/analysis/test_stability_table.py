@@ -49,8 +49,9 @@ def test_the_table_has_a_row_per_example_model():
     assert sorted(quoted_rows()) == EXAMPLE_MODELS
 
 
-@pytest.mark.xdist_group("stability")  # the runs are tests/analysis/test_stability.py's too (conftest.stability_run)
-@pytest.mark.parametrize("name", EXAMPLE_MODELS)
+# the runs are tests/analysis/test_stability.py's too (conftest.stability_run): the same worker, a group per model
+@pytest.mark.parametrize("name", [pytest.param(name, marks=pytest.mark.xdist_group(f"stability-{name}"))
+                                  for name in EXAMPLE_MODELS])
 def test_quoted_figures_are_what_the_bench_measures(name):
     quoted = quoted_rows()[name]
     run = stability_run(name)                           # the defaults of `symkin bench stability`
