@@ -11,6 +11,7 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from symkin import manifest as manifest_io
 from symkin._version import __version__
@@ -23,6 +24,9 @@ from symkin.ir.bundle import ModelCode, ParameterInfo
 from symkin.ir.spec import FunctionSpec, OptimizedFunction, combine_functions
 from symkin.model.schema import Model
 from symkin.optimize import optimize
+
+if TYPE_CHECKING:  # imported where it is used: the motion check pulls the parallel derivations in
+    from symkin.parallel.motion_check import MotionCheck
 
 #: Reports a stage, and how far it is where counted: ``progress(stage, done=k, total=n)``
 #: (:class:`symkin.cli.progress.Progress`).
@@ -100,6 +104,27 @@ def require_derivable(model: Model, request: Request) -> None:
         raise ModelError(list(model.nonphysical))
     if model.parallel is not None:
         require_declared_motion(model)
+
+
+def derivable_quantities() -> list[tuple[str, str, str]]:
+    """(output, kind of model, summary) of every quantity a scene or ``--only`` may request, serial chains' first
+    (``symkin quantities``)."""
+    from symkin.derivation import registry
+
+    defs = {(q.name, q.mechanism): q for mechanism in ("serial", "parallel")
+            for q in registry(mechanism).values() if q.emitted}
+    return [(q.name, q.mechanism, q.summary) for q in defs.values()]
+
+
+def platform_motion(model: Model) -> MotionCheck | None:
+    """How a parallel model's legs move its platform at the home pose
+    (:func:`symkin.parallel.motion_check.check_platform_motion`: free and locked motions, the problems against
+    ``parallel.motion``), None for a model without legs: what ``symkin mobility`` reports beside the count."""
+    if model.parallel is None:
+        return None
+    from symkin.parallel.motion_check import check_platform_motion
+
+    return check_platform_motion(model)
 
 
 def resolve_request(model: Model, only: str | Sequence[str] | None = None,

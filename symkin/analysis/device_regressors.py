@@ -22,6 +22,7 @@ from typing import Any
 
 import numpy as np
 
+from symkin import mechanism
 from symkin.analysis.identification import DataError
 from symkin.runtime.closure_dynamics import closure_energy_regressor, closure_regressor
 from symkin.simulation.closure_functions import ClosureAssembly
@@ -75,22 +76,14 @@ class DeviceRegressors:
             if not np.any(np.all(np.isfinite(p[failed]), axis=-1)):
                 return p
 
-    def _arguments(self, function: str, q: np.ndarray, *rates: np.ndarray) -> list[np.ndarray]:
-        """The vector inputs of ``function`` in its order: q, p, qw and the rates of legs and wrist."""
-        legs = self.legs
-        values = {"q": q[..., :legs], "p": self.pose(q), "qw": q[..., legs:]}
-        for rate, name in zip(rates, ("qd", "qdd")):
-            values[name], values[name.replace("q", "qw", 1)] = rate[..., :legs], rate[..., legs:]
-        return [values[i.name] for i in self.model.info.functions[function].inputs if i.kind != "parameter"]
-
     def regressor(self, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> Any:
-        return self.model.regressor(*self._arguments("regressor", q, qd, qdd))
+        return mechanism.of_device_joints(self.model, "regressor", self.pose)(q, qd, qdd)
 
     def base_regressor(self, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> Any:
-        return self.model.base_regressor(*self._arguments("base_regressor", q, qd, qdd))
+        return mechanism.of_device_joints(self.model, "base_regressor", self.pose)(q, qd, qdd)
 
     def energy_regressor(self, q: np.ndarray, qd: np.ndarray) -> Any:
-        return self.model.energy_regressor(*self._arguments("energy_regressor", q, qd))
+        return mechanism.of_device_joints(self.model, "energy_regressor", self.pose)(q, qd)
 
 
 def _refuse_unassembled(source: str, q: np.ndarray, solved: np.ndarray, why: str) -> None:

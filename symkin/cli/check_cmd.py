@@ -69,10 +69,8 @@ def register_quantities(sub: argparse._SubParsersAction) -> None:
 
 
 def run_quantities(_args: argparse.Namespace) -> int:
-    from symkin.derivation import registry
+    from symkin import pipeline
 
-    defs = {(q.name, q.mechanism): q for mechanism in ("serial", "parallel")
-            for q in registry(mechanism).values() if q.emitted}
-    rows = [[q.name, q.mechanism, q.summary] for q in defs.values()]
+    rows = [list(row) for row in pipeline.derivable_quantities()]
     print(format_table(["output", "models", "meaning"], rows, indent=""))
     return 0

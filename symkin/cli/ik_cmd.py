@@ -3,12 +3,8 @@
 from __future__ import annotations
 
 import argparse
-import contextlib
 import json
 import math
-import tempfile
-from collections.abc import Iterator
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from symkin.cli.progress import Progress
@@ -55,25 +51,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(run=run)
 
 
-@contextlib.contextmanager
-def _loaded(path: str) -> Iterator[LoadedModel]:
-    """The generated code of ``path``: a derived directory as is, a model file derived to a temporary one."""
-    from symkin import load
+def _loaded(path: str) -> LoadedModel:
+    """The generated code of ``path``: a derived directory as is, a model file derived on the fly (the outputs of
+    :data:`IK_OUTPUTS` it has, through the derivation cache)."""
+    from symkin.analysis import model_files
 
-    source = Path(path)
-    if source.is_dir() or source.name == "manifest.json":
-        yield load(source)
-        return
-    from symkin import pipeline
-    from symkin.derivation import Derivation
-    from symkin.model import load_model
-
-    model = load_model(source)
-    outputs = Derivation(model).available(IK_OUTPUTS)[0]
-    request = pipeline.resolve_request(model, outputs, "numpy", ())
-    with tempfile.TemporaryDirectory(prefix="symkin-ik-") as tmp, Progress(model.name) as progress:
-        result = pipeline.generate(model, request, progress)
-        yield load(pipeline.write(result, tmp))
+    return model_files.generated_model(path, "numpy", outputs=(), optional=IK_OUTPUTS, display=Progress)
 
 
 def _bad_argument(option: str, message: str, fix: str) -> ModelError:
@@ -109,58 +92,58 @@ def run(args: argparse.Namespace) -> int:
     from symkin.ik import ModelKinematics, closed_form_solver, numeric_branches, solve_numeric
     from symkin.ik.closed_form import BranchFlag
 
-    with _loaded(args.model) as model:
-        kin = ModelKinematics(model)
-        kind = args.kind or kin.default_kind
-        solver = closed_form_solver(kin) if args.method != "numeric" else None
-        if solver is not None and solver.kind != kind:
-            solver = None
-        if args.method == "closed-form" and solver is None:
-            raise _bad_argument("--method", f"no closed form is known for the structure of {kin.name} with "
-                                           f"{kind} targets", "use --method numeric (or auto)")
-        if args.q0 is not None and len(args.q0) != kin.dof:
-            raise _bad_argument("--q0", f"{kin.name} has {kin.dof} joints, got {len(args.q0)} values",
-                                f"give {kin.dof} values: {' '.join(kin.coordinates)}")
-        unit = "deg" if args.degrees else "rad"
-        targets: list[dict[str, Any]] = []
-        report: dict[str, Any] = {"model": kin.name, "kind": kind, "coordinates": list(kin.coordinates), "angle_unit": unit,
-                  "targets": targets}
-        for values in args.target:
-            target = _target(values, kind, kin)
-            entry: dict = {"target": values, "solutions": []}
-            if solver is not None:
-                found = solver.solve(target)
-                entry["method"] = f"closed form ({solver.name})"
-                for k, branch in enumerate(found.branches):
-                    entry["solutions"].append({
-                        "branch": branch, "valid": bool(found.valid[k]),
-                        "within_limits": bool(found.within_limits[k]),
-                        "flags": BranchFlag.describe(int(found.flags[k])),
-                        "q": _angles(found.q[k], kin, args.degrees) if found.valid[k] else None,
-                        "position_error": float(found.position_error[k]) if found.valid[k] else None,
-                        "orientation_error": float(found.orientation_error[k]) if found.valid[k] else None})
-                entry["solved"] = bool(found.reachable)
-            elif args.starts > 0:
-                distinct, result = numeric_branches(kin, target, starts=args.starts, kind=kind,
-                                                    tolerance=args.tolerance, max_iterations=args.max_iterations)
-                entry["method"] = f"damped least squares from {args.starts} random starts"
-                entry["converged_starts"] = int(result.converged.sum())
-                for q in distinct:
-                    entry["solutions"].append({"q": _angles(q, kin, args.degrees), "valid": True,
-                                               "within_limits": True})
-                entry["solved"] = len(distinct) > 0
-            else:
-                q0 = np.zeros(kin.dof) if args.q0 is None else np.array(args.q0)
-                result = solve_numeric(kin, target, q0, kind=kind, tolerance=args.tolerance,
-                                       max_iterations=args.max_iterations)
-                entry["method"] = "damped least squares"
+    model = _loaded(args.model)
+    kin = ModelKinematics(model)
+    kind = args.kind or kin.default_kind
+    solver = closed_form_solver(kin) if args.method != "numeric" else None
+    if solver is not None and solver.kind != kind:
+        solver = None
+    if args.method == "closed-form" and solver is None:
+        raise _bad_argument("--method", f"no closed form is known for the structure of {kin.name} with "
+                                       f"{kind} targets", "use --method numeric (or auto)")
+    if args.q0 is not None and len(args.q0) != kin.dof:
+        raise _bad_argument("--q0", f"{kin.name} has {kin.dof} joints, got {len(args.q0)} values",
+                            f"give {kin.dof} values: {' '.join(kin.coordinates)}")
+    unit = "deg" if args.degrees else "rad"
+    targets: list[dict[str, Any]] = []
+    report: dict[str, Any] = {"model": kin.name, "kind": kind, "coordinates": list(kin.coordinates), "angle_unit": unit,
+              "targets": targets}
+    for values in args.target:
+        target = _target(values, kind, kin)
+        entry: dict = {"target": values, "solutions": []}
+        if solver is not None:
+            found = solver.solve(target)
+            entry["method"] = f"closed form ({solver.name})"
+            for k, branch in enumerate(found.branches):
                 entry["solutions"].append({
-                    "q": _angles(result.q, kin, args.degrees), "valid": bool(result.converged),
-                    "within_limits": True, "reason": str(result.reason), "iterations": int(result.iterations),
-                    "position_error": float(result.position_error),
-                    "orientation_error": float(result.orientation_error)})
-                entry["solved"] = bool(result.converged)
-            targets.append(entry)
+                    "branch": branch, "valid": bool(found.valid[k]),
+                    "within_limits": bool(found.within_limits[k]),
+                    "flags": BranchFlag.describe(int(found.flags[k])),
+                    "q": _angles(found.q[k], kin, args.degrees) if found.valid[k] else None,
+                    "position_error": float(found.position_error[k]) if found.valid[k] else None,
+                    "orientation_error": float(found.orientation_error[k]) if found.valid[k] else None})
+            entry["solved"] = bool(found.reachable)
+        elif args.starts > 0:
+            distinct, result = numeric_branches(kin, target, starts=args.starts, kind=kind,
+                                                tolerance=args.tolerance, max_iterations=args.max_iterations)
+            entry["method"] = f"damped least squares from {args.starts} random starts"
+            entry["converged_starts"] = int(result.converged.sum())
+            for q in distinct:
+                entry["solutions"].append({"q": _angles(q, kin, args.degrees), "valid": True,
+                                           "within_limits": True})
+            entry["solved"] = len(distinct) > 0
+        else:
+            q0 = np.zeros(kin.dof) if args.q0 is None else np.array(args.q0)
+            result = solve_numeric(kin, target, q0, kind=kind, tolerance=args.tolerance,
+                                   max_iterations=args.max_iterations)
+            entry["method"] = "damped least squares"
+            entry["solutions"].append({
+                "q": _angles(result.q, kin, args.degrees), "valid": bool(result.converged),
+                "within_limits": True, "reason": str(result.reason), "iterations": int(result.iterations),
+                "position_error": float(result.position_error),
+                "orientation_error": float(result.orientation_error)})
+            entry["solved"] = bool(result.converged)
+        targets.append(entry)
     if args.json:
         print(json.dumps(report, indent=2))
     else:

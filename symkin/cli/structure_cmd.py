@@ -25,8 +25,8 @@ def register_mobility(sub: argparse._SubParsersAction) -> None:
 
 
 def run_mobility(args: argparse.Namespace) -> int:
+    from symkin import pipeline
     from symkin.model import load_model
-    from symkin.parallel.motion_check import check_platform_motion
     from symkin.structure.mobility import model_mobility, parallelism_class
 
     status = 0
@@ -35,7 +35,7 @@ def run_mobility(args: argparse.Namespace) -> int:
         r = model_mobility(model)
         if r.mobility != r.intended:
             status = max(status, 1)
-        motion = check_platform_motion(model) if model.parallel is not None else None
+        motion = pipeline.platform_motion(model)
         if motion is not None and motion.problems:
             status = 2
             for problem in motion.problems:

@@ -18,7 +18,7 @@ task space.  The C backend plugs in by being loaded instead of the numpy one: on
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 from enum import Enum
 
@@ -159,6 +159,41 @@ def call(model: GeneratedModel, name: str, **state: np.ndarray) -> Any:
     if missing:
         raise ValueError(f"{model.name}: '{name}' takes {', '.join(missing)}, which this analysis does not know")
     return getattr(model, name)(*(state[i.name] for i in record.vector_inputs))
+
+
+#: The wrist's part of each of a device's joint vectors, by the input that takes the legs' part: a hybrid device's
+#: generated functions take ``qw`` after ``q``, ``qwd`` after ``qd``... (:mod:`symkin.parallel.dynamics`).
+WRIST_INPUTS = {"q": "qw", "qd": "qwd", "qdd": "qwdd", "tau": "tauw"}
+
+
+def of_device_joints(model: GeneratedModel, name: str, pose: Callable[[np.ndarray], np.ndarray]
+                     ) -> Callable[..., Any]:
+    """The generated function ``name`` as a function of the device's joint vectors (q, then qd, qdd or tau as the
+    function takes them; each the actuated joints', then a hybrid device's wrist joints'), the one binder of what a
+    device records to what a generated function takes: each vector is split into the legs' part and the wrist's
+    (:data:`WRIST_INPUTS`), and a function that takes the platform's pose gets ``pose(q)`` of the device's q.  A
+    function that takes the joint vectors as they are (an open chain's, a platform's friction) is returned as is.
+
+    Raises:
+        ValueError: the function takes the pose but not q.
+    """
+    function = getattr(model, name)
+    inputs = tuple(i.name for i in model.info.functions[name].vector_inputs)
+    joint_inputs = [i for i in inputs if i != "p" and i not in WRIST_INPUTS.values()]
+    if list(inputs) == joint_inputs and not model.info.wrist:
+        return function
+    if "p" in inputs and "q" not in joint_inputs:
+        raise ValueError(f"{model.name}: '{name}' takes the pose p without q: no joint vector gives it")
+    legs = len(model.info.coordinates)
+
+    def of_joints(*vectors: np.ndarray) -> Any:
+        values = {}
+        for input_name, vector in zip(joint_inputs, vectors, strict=True):
+            values[input_name], values[WRIST_INPUTS[input_name]] = vector[..., :legs], vector[..., legs:]
+        if "p" in inputs:
+            values["p"] = pose(vectors[joint_inputs.index("q")])
+        return function(*(values[i] for i in inputs))
+    return of_joints
 
 
 def sampled_in_task_space(model: GeneratedModel) -> bool:

@@ -42,8 +42,6 @@ from symkin.simulation.closure_functions import PLANT_FUNCTIONS, ClosureFunction
 REQUIRED = ("forward_dynamics", "inverse_dynamics", "mass_matrix", "kinetic_energy")
 #: ... and a parallel mechanism's: its platform pose p = fk(q) (closed form).
 REQUIRED_PARALLEL = REQUIRED + ("fk",)
-#: The wrist's input of a hybrid device's generated function beside each of the legs' (symkin.parallel.dynamics).
-WRIST_INPUTS = {"q": "qw", "qd": "qwd", "qdd": "qwdd", "tau": "tauw"}
 
 
 class Plant:
@@ -125,21 +123,7 @@ class Plant:
         the inputs."""
         if self._closure is not None:
             return self._closure.function(name)
-        function = getattr(self.model, name)
-        if not self.parallel:
-            return function
-        inputs = tuple(self.model.info.functions[name].vectors)
-        joint_inputs = [i for i in inputs if i != "p" and i not in WRIST_INPUTS.values()]
-        legs = self.legs
-
-        def of_joints(*vectors):
-            values = {}
-            for input_name, vector in zip(joint_inputs, vectors, strict=True):
-                values[input_name], values[WRIST_INPUTS[input_name]] = vector[..., :legs], vector[..., legs:]
-            if "p" in inputs:
-                values["p"] = self.pose(values["q"])
-            return function(*(values[i] for i in inputs))
-        return of_joints
+        return mechanism.of_device_joints(self.model, name, self.pose)
 
     def pose(self, q: np.ndarray) -> np.ndarray:
         """A parallel mechanism's platform pose p = fk(q) (..., task dof) of the legs' joints q (a hybrid

@@ -105,12 +105,9 @@ def test_the_words_find_what_they_should():
 #: The packages of the derivation layer, which a thin CLI reaches through the library (issue 62: "cli/ no longer
 #: imports derivation or parallel").
 DERIVING = ("symkin.derivation", "symkin.parallel", "symkin.kinematics", "symkin.dynamics")
-#: The CLI modules that import them today (the ratchet: this list only shrinks).
-KNOWN_DERIVING_CLI = {
-    "cli/check_cmd.py": {"symkin.derivation"},
-    "cli/ik_cmd.py": {"symkin.derivation"},
-    "cli/structure_cmd.py": {"symkin.parallel"},
-}
+#: The CLI modules that import them (the ratchet reached empty: a command that needs a derivation calls
+#: symkin.pipeline, symkin.api or symkin.analysis.model_files).
+KNOWN_DERIVING_CLI: dict[str, set[str]] = {}
 
 
 def deriving_imports(text: str) -> set[str]:
