@@ -36,6 +36,7 @@ from symkin.analysis.conditioning import inverse_condition_number
 from symkin.mechanism.device import DEVICE_TASK_SPACE
 from symkin.errors import GeneratedCodeError
 from symkin.runtime.info import GeneratedModel
+from symkin.simulation.integrate import SimulationError
 from symkin.simulation.closure_functions import PLANT_FUNCTIONS, ClosureFunctions
 
 #: Functions a plant cannot do without, and how to get them.
@@ -124,6 +125,25 @@ class Plant:
         if self._closure is not None:
             return self._closure.function(name)
         return mechanism.of_device_joints(self.model, name, self.pose)
+
+    @property
+    def inverse_in_closed_form(self) -> bool:
+        """Whether the plant's joints follow from task targets in closed form (:meth:`joints_at`: a platform's
+        generated ik) rather than by a numerical solve along a path (an open chain's)."""
+        return self.parallel
+
+    def joints_at(self, targets: np.ndarray, q_start: np.ndarray) -> np.ndarray:
+        """The plant's joints (N, n) at task targets (N, task dof) by the generated ik (a hybrid device's wrist held
+        at ``q_start``'s), NaN rows where ik has no solution.
+
+        Raises:
+            SimulationError: ik was not generated.
+        """
+        if "ik" not in self.model.functions:
+            raise SimulationError(f"{self.name}: a task-space circle of a parallel mechanism needs the generated 'ik'")
+        legs = np.asarray(self.model.ik(targets).joints, dtype=float)
+        return np.concatenate([legs, np.tile(np.asarray(q_start, dtype=float)[self.legs:], (len(targets), 1))],
+                              axis=-1)
 
     def pose(self, q: np.ndarray) -> np.ndarray:
         """A parallel mechanism's platform pose p = fk(q) (..., task dof) of the legs' joints q (a hybrid

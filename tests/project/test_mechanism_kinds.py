@@ -39,7 +39,7 @@ KNOWN = {
     "cli/check_cmd.py", "cli/excite_cmd.py", "cli/gci_cmd.py", "cli/identify_cmd.py",
     "cli/structure_cmd.py",
     "cli/workspace_cmd.py",
-    "simulation/closure_functions.py", "simulation/plant.py", "simulation/trajectory.py",
+    "simulation/closure_functions.py", "simulation/plant.py",
     "design/closure_excitation.py", "design/evaluation.py", "design/excitation.py", "design/formulation.py",
     "design/plots.py", "design/problem.py",
     "viewer/page.py",
