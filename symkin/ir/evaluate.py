@@ -58,19 +58,20 @@ def lambdify_spec(spec: FunctionSpec, args: Sequence[object], modules: str | Seq
 
 
 def symengine_entries(spec: FunctionSpec, args: Sequence[sympy.Symbol],
-                      values: Mapping[sympy.Symbol, sympy.Expr] | None = None) -> Callable[[np.ndarray], np.ndarray]:
+                      values: Mapping[sympy.Symbol, sympy.Expr] | None = None,
+                      backend: str = SYMENGINE_BACKEND) -> Callable[[np.ndarray], np.ndarray]:
     """f(X): every output entry of ``spec`` (row-major, outputs in order), (..., entries), at the rows X (...,
     len(args)) of argument values, through SymEngine's Lambdify with common subexpressions (its definitions
     substituted in order, ``values`` first).  Built in a fraction of :func:`lambdify_spec`'s time (the Stewart
     platform's closure: 0.2 s against 12 s); lambdify_spec stays the backends' reference.  Compiled by SymEngine's
-    LLVM backend where its build has one (:data:`SYMENGINE_BACKEND`): a batch of the Stewart platform's closure
-    rows 40 times faster than its tree-walking ``lambda`` backend, which Newton's iterations call thousands of
-    times."""
+    LLVM backend where its build has one (``backend``, default :data:`SYMENGINE_BACKEND`): a batch of the Stewart
+    platform's closure rows about 30 times faster than its tree-walking ``lambda`` backend, which Newton's
+    iterations call thousands of times (benchmarks/bench_closure_assembly.py)."""
     values = dict(values or {})
     memo: dict[sympy.Basic, se.Basic] = {}
     definitions: dict[se.Basic, se.Basic] = {}
     for symbol, expr in spec.definitions:
         definitions[to_symengine(symbol)] = to_symengine(expr.xreplace(values), memo).subs(definitions)
     entries = [to_symengine(e.xreplace(values), memo).subs(definitions) for out in spec.outputs for e in out.entries]
-    function = se.Lambdify([to_symengine(a) for a in args], entries, backend=SYMENGINE_BACKEND, cse=True)
+    function = se.Lambdify([to_symengine(a) for a in args], entries, backend=backend, cse=True)
     return lambda X: np.asarray(function(np.asarray(X, dtype=float)), dtype=float)

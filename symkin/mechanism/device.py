@@ -35,7 +35,7 @@ def _in_device_coordinates(record: Function, coordinates: tuple[Coordinate, ...]
     """The manifest record of a function the view evaluates: one vector input q, the device's joints z = (q, qw)
     (what :func:`symkin.mechanism.call` feeds it), then the model function's parameters."""
     z = Input("q", "vector", (len(coordinates),), tuple(c.name for c in coordinates),
-              tuple("rad" if c.type == "R" else "m" for c in coordinates), "the device's joints z = (q, qw)")
+              tuple("rad" if c.revolute else "m" for c in coordinates), "the device's joints z = (q, qw)")
     return dataclasses.replace(record, inputs=(z,) + record.parameter_inputs)
 
 

@@ -11,7 +11,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from symkin.ir.evaluate import symengine_entries
+from symkin.ir.evaluate import SYMENGINE_BACKEND, symengine_entries
 from symkin.ir.quantity import Deriving
 from symkin.model import coordinates
 from symkin.newton import newton_iterate
@@ -29,14 +29,17 @@ STARTS = 8
 CLOSED = 1e-9
 
 
-def assembler(d: Deriving) -> Callable[[np.ndarray], tuple[np.ndarray, np.ndarray] | None]:
+def assembler(d: Deriving, backend: str = SYMENGINE_BACKEND
+              ) -> Callable[[np.ndarray], tuple[np.ndarray, np.ndarray] | None]:
     """assemble(p): (q, s) closing every leg at p (the closure's rows below :data:`CLOSED` of the pose's scale), by
     damped Gauss-Newton on the generated closure (its Jacobian by central differences: the assembly needs no more
     than the rows' zero, and the closure alone derives in a fraction of the time of its Jacobians) from q = s = 0
-    and then from :data:`STARTS` fixed random starts; None if none closes.  The closure is compiled once."""
+    and then from :data:`STARTS` fixed random starts; None if none closes.  The closure is compiled once, by
+    SymEngine's ``backend`` (:func:`symkin.ir.evaluate.symengine_entries`)."""
     model = d.model
     q_symbols, s_symbols = coordinates.symbols(model, "q"), passive_symbols(model)
-    function = symengine_entries(d["closure"], q_symbols + s_symbols + task_symbols(model), model.parameter_values)
+    function = symengine_entries(d["closure"], q_symbols + s_symbols + task_symbols(model), model.parameter_values,
+                                 backend)
     n, k = len(q_symbols), len(s_symbols)
     return lambda p: _gauss_newton(function, n, k, p)
 
