@@ -25,7 +25,9 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 import symkin  # noqa: E402
-from symkin.analysis import global_indices, parallel, sampling, workspace  # noqa: E402
+from symkin.numerics import sampling  # noqa: E402
+from symkin.analysis import global_indices  # noqa: E402
+from symkin.mechanism import reach  # noqa: E402
 from symkin.mechanism.working_mode import working_mode
 from symkin import mechanism
 from symkin.text_table import format_table  # noqa: E402
@@ -64,7 +66,7 @@ def main(argv: list[str] | None = None) -> int:
             mode_time, (_, inside) = seconds(lambda: working_mode(model, q))
             gci_time, joint = seconds(lambda: global_indices.gci(model, method="grid", samples=args.samples))
             cartesian = global_indices.gci(model, method="grid", samples=args.samples, domain="cartesian",
-                                           box=workspace.bounding_box(model), inverse=parallel.parallel_inverse(model))
+                                           box=reach.bounding_box(model), inverse=reach.generated_inverse(model))
             rows.append(["none" if width is None else f"+-{width} deg", f"{1e6 * mode_time / len(q):.1f}",
                          f"{int(inside.sum())}/{len(q)}", f"{gci_time:.2f}", f"{joint.measure.value:.6f}",
                          f"{cartesian.measure.value:.6f}", f"{joint.value.value:.4f}"])

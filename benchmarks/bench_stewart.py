@@ -20,7 +20,8 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 import symkin  # noqa: E402
-from symkin.analysis import global_indices, parallel, workspace  # noqa: E402
+from symkin.analysis import global_indices  # noqa: E402
+from symkin.mechanism import reach  # noqa: E402
 
 ORIENTATIONS = {"home (0, 0, 0 deg)": (0.0, 0.0, 0.0), "tilted (5, -8, 20 deg)": tuple(np.radians([5, -8, 20]))}
 BUDGETS = (2**12, 2**14, 2**16, 2**18)
@@ -39,12 +40,12 @@ def main() -> None:
     for backend in ("numpy", "c"):
         model = symkin.load(ROOT / "generated" / "stewart", backend)
         for label, orientation in ORIENTATIONS.items():
-            held = parallel.constant_orientation(model, orientation)
-            ik = parallel.parallel_inverse(held)
-            seconds, box = best_of(3, lambda: workspace.bounding_box(held))
+            held = reach.constant_orientation(model, orientation)
+            ik = reach.generated_inverse(held)
+            seconds, box = best_of(3, lambda: reach.bounding_box(held))
             print(f"stewart ({backend}) at {label}: box {np.round(box[0], 4)} .. {np.round(box[1], 4)} m "
                   f"in {seconds * 1e3:.1f} ms")
-            seconds, length = best_of(1, lambda: global_indices.characteristic_length_of(held))
+            seconds, length = best_of(1, lambda: reach.characteristic_length_of(held))
             print(f"  characteristic length (auto) L = {length:.6g} m in {seconds * 1e3:.0f} ms")
             for method in ("qmc", "grid"):
                 for samples in BUDGETS:

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from symkin import design, load, pipeline
-from symkin.analysis import conditioning
+from symkin.numerics import conditioning
 from symkin.design import plots
 from symkin.model import load_model
 

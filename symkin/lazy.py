@@ -8,6 +8,7 @@ its names instead and takes ``__getattr__`` and ``__dir__`` from :func:`lazy_exp
     __all__ = sorted(_EXPORTS)
     __getattr__, __dir__ = lazy_exports(__name__, globals(), _EXPORTS)
 
+A name may also come from a module elsewhere in symkin, given by its full name (``"symkin.numerics.conditioning"``).
 A public name must not also be a module of the package: importing that module would bind the package attribute to
 the module before the name was asked for.
 """
@@ -27,7 +28,9 @@ def lazy_exports(package: str, namespace: dict[str, Any], exports: dict[str, str
     def __getattr__(name: str) -> Any:
         if name not in exports:
             raise AttributeError(f"module {package!r} has no attribute {name!r}")
-        value = getattr(importlib.import_module(f"{package}.{exports[name]}"), name)
+        module = exports[name]
+        value = getattr(importlib.import_module(module if module.startswith("symkin.") else f"{package}.{module}"),
+                        name)
         namespace[name] = value
         return value
 

@@ -10,16 +10,17 @@ hot paths call the generated functions on whole batches and never touch sympy::
     result = analysis.gci(arm, method="qmc", samples=2**14, seed=0)
     print(result.value, result.measure)          # GCI +- error, area +- error
 
-Modules: :mod:`~symkin.analysis.conditioning` (singular values, 1/kappa, Table 8.5
-criteria, characteristic length), :mod:`~symkin.analysis.workspace` (point clouds,
+Modules: :mod:`~symkin.analysis.workspace` (point clouds,
 occupancy, boundary), :mod:`~symkin.analysis.global_indices` (GCI eq. 8.28 and workspace measure
 over joint or Cartesian domains), :mod:`~symkin.analysis.grids` (reachability and 1/kappa maps on
 Cartesian grids), :mod:`~symkin.analysis.integrators` (grid, Monte Carlo, quasi-Monte Carlo,
-adaptive), :mod:`~symkin.analysis.feasibility` (the reachability interface and joint limits),
-:mod:`~symkin.analysis.inverse` (which inverse kinematics a model gets: planar 2R closed form,
+adaptive), :mod:`~symkin.analysis.inverse` (which inverse kinematics a model gets: planar 2R closed form,
 parallel closed forms), :mod:`~symkin.analysis.orientations` (a spherical platform's orientation
 workspace and GCI, with the invariant measure of SO(3)), :mod:`~symkin.analysis.plots` (figures),
-:mod:`~symkin.analysis.convergence` (run time against error).
+:mod:`~symkin.analysis.convergence` (run time against error).  The conditioning of Jacobians
+(:mod:`symkin.numerics.conditioning`: singular values, 1/kappa, Table 8.5 criteria, characteristic length) and
+the reachability interface (:mod:`symkin.mechanism.feasibility`) live below the analyses; their public names are
+exported here too.
 """
 
 from __future__ import annotations
@@ -29,7 +30,7 @@ from typing import TYPE_CHECKING
 from symkin.lazy import lazy_exports
 
 if TYPE_CHECKING:  # the names as the type checker sees them
-    from symkin.analysis.conditioning import (
+    from symkin.numerics.conditioning import (
         characteristic_length,
         condition_number,
         frobenius_condition_number,
@@ -41,27 +42,28 @@ if TYPE_CHECKING:  # the names as the type checker sees them
         transmission_indices,
     )
     from symkin.analysis.estimates import Estimate, IntegralEstimate
-    from symkin.analysis.feasibility import InverseKinematics, feasible_configurations, reachable
+    from symkin.mechanism.feasibility import InverseKinematics, feasible_configurations, reachable
     from symkin.analysis.global_indices import GlobalIndex, gci, global_index, workspace_measure
     from symkin.analysis.grids import index_grid, reachability_grid
     from symkin.analysis.integrators import INTEGRATORS, integrate
     from symkin.analysis.inverse import closed_form_inverse
-    from symkin.analysis.workspace import (Occupancy, WorkspaceCloud, bounding_box, occupancy_from_cloud,
-                                           sample_workspace)
+    from symkin.analysis.workspace import Occupancy, WorkspaceCloud, occupancy_from_cloud, sample_workspace
+    from symkin.mechanism.reach import bounding_box
 
 #: Each public name and the module that defines it: imported when first asked for (PEP 562), so that importing one
 #: light module of the package (:mod:`~symkin.mechanism` for a command line parser) imports no other.
 _EXPORTS = {name: module for module, names in (
-    ("conditioning", ("characteristic_length", "condition_number", "frobenius_condition_number", "homogenize",
+    ("symkin.numerics.conditioning", ("characteristic_length", "condition_number", "frobenius_condition_number", "homogenize",
                       "inverse_condition_number", "inverse_frobenius_condition_number", "manipulability",
                       "singular_values", "transmission_indices",)),
     ("estimates", ("Estimate", "IntegralEstimate",)),
-    ("feasibility", ("InverseKinematics", "feasible_configurations", "reachable",)),
+    ("symkin.mechanism.feasibility", ("InverseKinematics", "feasible_configurations", "reachable",)),
     ("global_indices", ("GlobalIndex", "gci", "global_index", "workspace_measure",)),
     ("grids", ("index_grid", "reachability_grid",)),
     ("integrators", ("INTEGRATORS", "integrate",)),
     ("inverse", ("closed_form_inverse",)),
-    ("workspace", ("Occupancy", "WorkspaceCloud", "bounding_box", "occupancy_from_cloud", "sample_workspace",)),
+    ("workspace", ("Occupancy", "WorkspaceCloud", "occupancy_from_cloud", "sample_workspace",)),
+    ("symkin.mechanism.reach", ("bounding_box",)),
 ) for name in names}
 
 __all__ = sorted(_EXPORTS)

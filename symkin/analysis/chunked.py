@@ -10,8 +10,8 @@ there from the model's :class:`~symkin.runtime.payload.ModelPayload` and an
 machine:
 
 * ``qmc``: replicate r is the scrambled Sobol sequence of 2^m points whose scrambling comes
-  from the seed sequence (seed, r) (:class:`~symkin.analysis.sobol.Sobol`, its points k0 ... k1
-  drawn alone); as in :func:`~symkin.analysis.sampling.sobol`, the digits below its 30 bits
+  from the seed sequence (seed, r) (:class:`~symkin.numerics.sobol.Sobol`, its points k0 ... k1
+  drawn alone); as in :func:`~symkin.numerics.sampling.sobol`, the digits below its 30 bits
   are uniform random, here from the generator (seed, r, k0) of the chunk.  A task
   returns sum f over its points; the replicate means and the Student-t half-width of their
   spread are those of the in-memory integrator (Owen, "Monte Carlo theory, methods and
@@ -37,7 +37,7 @@ import numpy as np
 
 from symkin.analysis.estimates import IntegralEstimate
 from symkin.analysis.integrators import QMC_REPLICATES, monte_carlo_estimate, quasi_monte_carlo_estimate
-from symkin.analysis.sampling import sobol_range
+from symkin.numerics.sampling import sobol_range
 from symkin.runtime.cluster import run_tasks
 from symkin.runtime.payload import ModelPayload
 
@@ -55,7 +55,7 @@ class IntegrandSpec:
 
     Attributes:
         parameters: parameter values the model is bound to ((name, value) pairs).
-        index: name of a :mod:`symkin.analysis.conditioning` function (None: the measure alone).
+        index: name of a :mod:`symkin.numerics.conditioning` function (None: the measure alone).
         measure: ``cartesian`` (dW = |det J| dq) or ``joint`` (joint domain only).
         limits: joint-limit overrides ((joint, (lower, upper)) pairs).
         length: characteristic length for a task space that mixes translations and rotations.
@@ -74,15 +74,17 @@ class IntegrandSpec:
     orientation: tuple[float, float, float] | None = None
 
     def build(self, model: Any) -> Any:
-        from symkin.analysis import conditioning, inverse, study
+        from symkin.numerics import conditioning
+        from symkin.analysis import inverse
         from symkin.analysis.global_indices import cartesian_integrand, joint_space_integrand
+        from symkin.mechanism import reach
 
         bound = model.bind(**dict(self.parameters)) if self.parameters else model
         index = getattr(conditioning, self.index) if self.index is not None else None
         limits = dict(self.limits) or None
         if self.domain == "joint":
             return joint_space_integrand(bound, index=index, measure=self.measure, limits=limits, length=self.length)
-        held = study.at_orientation(bound, self.orientation)
+        held = reach.held_at(bound, self.orientation)
         ik = inverse.inverse_kinematics_for(held)
         if ik is None or self.box is None:
             raise ValueError(f"{model.name}: the Cartesian domain needs an inverse kinematics and a box")

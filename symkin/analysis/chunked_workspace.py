@@ -32,7 +32,8 @@ from typing import Any
 
 import numpy as np
 
-from symkin.analysis import global_indices, sampling, workspace
+from symkin.numerics import sampling
+from symkin.analysis import global_indices, workspace
 from symkin import mechanism
 from symkin.analysis.chunked import IntegrandSpec, integrate_chunked
 from symkin.runtime.cluster import dask_client, run_tasks

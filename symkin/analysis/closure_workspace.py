@@ -24,7 +24,7 @@ growths is reported unbounded (a prismatic actuator with limits far beyond the r
 
 Conditioning: 1/kappa of J = dp/dq (:func:`symkin.runtime.parallel.closure_velocities`), its position rows
 divided by a characteristic length L where the task space also has angles (given, or the L minimizing the
-mean kappa_F^2 over the reached cells: :func:`symkin.analysis.conditioning.characteristic_length`); the GCI is
+mean kappa_F^2 over the reached cells: :func:`symkin.numerics.conditioning.characteristic_length`); the GCI is
 the mean of 1/kappa over the reached cells (the midpoint rule on the grid).
 
 Length: one analysis - the flood, the search for its box and the conditioning over the cells it reaches - whose
@@ -40,13 +40,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from symkin import reporting
-from symkin.analysis import conditioning
+from symkin.numerics import conditioning
 from symkin import mechanism
 from symkin.mechanism import passive
 from symkin.analysis.estimates import CONFIDENCE, Estimate
 from symkin.mechanism.limits import within_limits
 from symkin.mechanism import Limits
 from symkin.analysis.workspace import Occupancy, grid_geometry
+from symkin.mechanism.closure import (MAX_STEP, SOLVE_ITERATIONS, SOLVE_TOLERANCE, HomeAssembly, assemble_at_home, closes,
+                                     closure_sizes, solve_home_assembly, uses_closure)
 from symkin.runtime.info import GeneratedModel
 from symkin.runtime.parallel import ClosureFrames, closure_frames, closure_velocities, solve_closure
 
@@ -59,13 +61,6 @@ BOX_CELLS = 12
 BOX_DOUBLINGS = 4
 #: the fine grid grows by half its width on a side its reached cells touch, at most this many times.
 BOX_GROWTHS = 3
-#: Random starts (besides q = s = 0) of the home assembly, uniform in [-pi/2, pi/2] per variable.
-HOME_STARTS = 16
-#: Gauss-Newton from a neighbouring cell: iterations, the longest step (rad or m) and the step that converges.
-SOLVE_ITERATIONS, MAX_STEP, SOLVE_TOLERANCE = 30, 0.2, 1e-12
-#: The legs close where every closure row is below this times the pose's scale (m): a converged solve leaves
-#: rounding, ~1e-15; Gauss-Newton can also stop at a least-squares minimum of the closure, which misses by a link.
-CLOSED = 1e-9
 #: The flood starts from the nearest of the SEEDS ** d cells around the home pose that it reaches.
 SEEDS = 3
 #: Largest change of a held angle (rad) per step of the path from the home pose to the first cell.
@@ -81,7 +76,7 @@ def held_orientation(model: GeneratedModel, angles: Sequence[float] | None) -> d
     Raises:
         ValueError: a nonzero angle the task space does not have.
     """
-    from symkin.analysis.parallel import ORIENTATION_COMPONENTS
+    from symkin.mechanism.reach import ORIENTATION_COMPONENTS
 
     if angles is None:
         return {}
@@ -92,90 +87,6 @@ def held_orientation(model: GeneratedModel, angles: Sequence[float] | None) -> d
         raise ValueError(f"--orientation: {model.name}'s task space {list(task)} holds {', '.join(extra)} at 0 "
                          "(parallel.motion); give 0 there")
     return {name: float(value) for name, value in zip(ORIENTATION_COMPONENTS, angles) if name in task}
-
-
-def uses_closure(model: GeneratedModel) -> bool:
-    """Whether a parallel model is analysed through its loop closure: it has the generated ``closure`` and
-    ``closure_jacobians`` but no closed-form ``ik`` (legs without the distance form)."""
-    return (mechanism.is_parallel(model) and "ik" not in model.functions
-            and {"closure", "closure_jacobians"} <= set(model.functions))
-
-
-def _sizes(model: GeneratedModel) -> tuple[int, int]:
-    """(n, ns): the actuated and passive joint counts, from the generated closure's inputs."""
-    inputs = model.info.functions["closure"].inputs
-    return int(inputs[0].shape[0]), int(inputs[1].shape[0])
-
-
-@dataclass(frozen=True)
-class HomeAssembly:
-    """The assembly the analyses continue the closure from: (q, s) closing the legs at the home pose, and the
-    start of the Gauss-Newton solve that reached it (:func:`solve_home_assembly`)."""
-
-    q: np.ndarray
-    s: np.ndarray
-    start: str
-
-    def describe(self, model: GeneratedModel) -> str:
-        """'home assembly (... from q = s = 0): theta1 = 12.3 deg, ...; passive: knee1 = -60 deg, ...', in deg
-        (to 0.01) or mm (to 0.001) as the closure's inputs are rad or m."""
-        inputs = model.info.functions["closure"].inputs
-
-        def values(spec, vector: np.ndarray) -> str:
-            return ", ".join(f"{name} = {round(np.degrees(v), 2) + 0.0:g} deg" if unit == "rad"   # + 0.0: no -0
-                             else f"{name} = {round(1000 * v, 3) + 0.0:g} mm"
-                             for name, unit, v in zip(spec.elements, spec.units, vector))
-
-        return (f"home assembly (Gauss-Newton at the home pose from {self.start}): {values(inputs[0], self.q)}; "
-                f"passive: {values(inputs[1], self.s)}")
-
-
-def solve_home_assembly(model: GeneratedModel) -> HomeAssembly:
-    """(q, s) closing the legs at the home pose ``parallel.home``: Gauss-Newton from the model's declared
-    ``parallel.home_assembly`` (its named variables, 0 for the others) where it has one; else from the first of
-    q = s = 0 and :data:`HOME_STARTS` fixed random starts that closes them (deterministic).
-
-    Raises:
-        ValueError: no start closes the legs (the home pose is out of reach, or the declared start leads nowhere).
-    """
-    home = mechanism.home_pose(model)
-    n, ns = _sizes(model)
-    declared = model.info.home_assembly
-    if declared is not None:
-        inputs = model.info.functions["closure"].inputs
-        names = list(inputs[0].elements) + list(inputs[1].elements)
-        starts = np.zeros((1, n + ns))
-        for name, value in declared.items():
-            starts[0, names.index(name)] = value
-        described = ["the declared parallel.home_assembly"]
-    else:
-        starts = np.vstack([np.zeros(n + ns),
-                            np.random.default_rng(0).uniform(-np.pi / 2, np.pi / 2, (HOME_STARTS, n + ns))])
-        described = ["q = s = 0"] + [f"random start {k} of {HOME_STARTS} (q = s = 0 did not close the legs)"
-                                     for k in range(1, HOME_STARTS + 1)]
-    report = solve_closure(model, starts[:, :n], starts[:, n:], home, unknowns=("q", "s"), max_step=MAX_STEP,
-                           max_iterations=100)
-    closed = np.flatnonzero(_closes(report, home))
-    if not len(closed):
-        where = ("from the declared parallel.home_assembly: change its values" if declared is not None
-                 else f"from {len(starts)} starts: declare a home pose inside the workspace, or parallel.home_assembly")
-        raise ValueError(f"{model.name}: the legs do not close at the home pose {home.tolist()} (parallel.home) "
-                         f"{where}")
-    solution = report.solution
-    assert isinstance(solution, dict), "solve_closure names its vectors"
-    return HomeAssembly(solution["q"][closed[0]], solution["s"][closed[0]], described[closed[0]])
-
-
-def assemble_at_home(model: GeneratedModel) -> tuple[np.ndarray, np.ndarray]:
-    """(q, s) of the home assembly (:func:`solve_home_assembly`)."""
-    found = solve_home_assembly(model)
-    return found.q, found.s
-
-
-def _closes(report, p: np.ndarray) -> np.ndarray:
-    """Boolean (K,): the solve converged to a pose that closes the legs (not a least-squares minimum)."""
-    scale = np.maximum(np.max(np.abs(p), axis=-1), 1.0)
-    return report.converged & (report.residual <= CLOSED * scale)
 
 
 def _same_side(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -211,7 +122,7 @@ def _advance(model: GeneratedModel, q: np.ndarray, s: np.ndarray, frames: Closur
     assert isinstance(solution, dict), "solve_closure names its vectors"
     q1, s1 = solution["q"], solution["s"]
     after = closure_frames(model, q1, s1, p)
-    taken = (_closes(report, p) & _same_side(frames.task, after.task) & _same_side(frames.actuated, after.actuated))
+    taken = (closes(report, p) & _same_side(frames.task, after.task) & _same_side(frames.actuated, after.actuated))
     taken[taken] &= limits.hold(q1[taken], s1[taken])
     return q1, s1, after, taken
 
@@ -250,7 +161,7 @@ def _flood(model: GeneratedModel, poses: np.ndarray, shape: tuple[int, ...], see
     """Breadth-first over the face neighbours of a grid of poses (prod(shape), m) from the reached cell
     ``seed``: each layer solves every unreached neighbour of the last layer from one of its reached
     neighbours in one batch (:func:`_advance`)."""
-    n, ns = _sizes(model)
+    n, ns = closure_sizes(model)
     reached = np.zeros(len(poses), dtype=bool)
     q, s = np.full((len(poses), n), np.nan), np.full((len(poses), ns), np.nan)
     reached[seed], q[seed], s[seed] = True, seed_solution[0], seed_solution[1]
@@ -383,9 +294,9 @@ class ClosureWorkspace:
 
 def angular_rates(model: GeneratedModel, J: np.ndarray, poses: np.ndarray) -> np.ndarray:
     """J (..., m, n) at the task poses (..., m) with its roll-pitch-yaw rows turned into angular velocity (base frame,
-    E of each pose: :func:`symkin.analysis.parallel.angular_velocity_matrix`) where the task space has all three (so
+    E of each pose: :func:`symkin.mechanism.reach.angular_velocity_matrix`) where the task space has all three (so
     kappa does not depend on the angles' parametrization); a single angle (planar yaw) is a rate already."""
-    from symkin.analysis.parallel import ORIENTATION_COMPONENTS, angular_velocity_matrix
+    from symkin.mechanism.reach import ORIENTATION_COMPONENTS, angular_velocity_matrix
 
     task = mechanism.task_space(model)
     if not set(ORIENTATION_COMPONENTS) <= set(task):
@@ -449,7 +360,7 @@ def closure_workspace(model: GeneratedModel, *, orientation: dict[str, float] | 
     else:
         raise _unbounded(model, lower, upper)
     reached = flood.reached
-    n, ns = _sizes(model)
+    n, ns = closure_sizes(model)
     inv_kappa = np.full(len(reached), np.nan)
     rates = np.full((len(reached), len(task), n), np.nan)
     local = closure_conditioning(model, flood.q[reached], flood.s[reached], grid.poses[reached], length)
@@ -557,7 +468,7 @@ def closure_conditioning(model: GeneratedModel, q: np.ndarray, s: np.ndarray, po
                          length: float | None = None) -> ClosureConditioning:
     """1/kappa of J = dp/dq (:func:`symkin.runtime.parallel.closure_velocities`) at the assembled (q, s, p) (K, .):
     where the task space also has angles, its position rows divided by the characteristic length (given, or the
-    one minimizing the mean kappa_F^2 over these poses, :func:`symkin.analysis.conditioning.characteristic_length`)."""
+    one minimizing the mean kappa_F^2 over these poses, :func:`symkin.numerics.conditioning.characteristic_length`)."""
     task = mechanism.task_space(model)
     rows = mechanism.position_rows(model)
     J = angular_rates(model, closure_velocities(model, q, s, poses).J, poses)
@@ -616,7 +527,7 @@ def flood_box(model: GeneratedModel, lower: np.ndarray, upper: np.ndarray, count
         flood = _flood_grid(model, grid, positions, (np.asarray(start[0], float), np.asarray(start[1], float),
                                                      home_pose), bounds)
     except ValueError:  # no path from the home pose into the grid
-        n, ns = _sizes(model)
+        n, ns = closure_sizes(model)
         flood = _Flood(np.zeros(len(grid.poses), bool), np.full((len(grid.poses), n), np.nan),
                        np.full((len(grid.poses), ns), np.nan))
     return BoxFlood(grid.poses, flood.reached, flood.q, flood.s, shape)

@@ -91,7 +91,7 @@ def time_against_error(model: GeneratedModel, reference: Estimate, *, methods: S
     """
     if "cartesian" in domains and kwargs.get("box") is None:
         # The Cartesian box is found once (joint grid through fk), not timed in every run.
-        from symkin.analysis.workspace import bounding_box
+        from symkin.mechanism.reach import bounding_box
 
         kwargs["box"] = bounding_box(model, limits=kwargs.get("limits"))
     _warm_up(model, methods, domains, seed, kwargs)

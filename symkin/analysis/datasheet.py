@@ -19,14 +19,15 @@ from typing import Any
 
 import numpy as np
 
+from symkin.mechanism.closure import solve_home_assembly, uses_closure
 from symkin.analysis import workspace
 from symkin import mechanism
-from symkin.analysis.conditioning import inverse_condition_number
+from symkin.numerics.conditioning import inverse_condition_number
 from symkin.analysis.handle_measures import (NO_GRAVITY, PUSHED_GROUPS, ROTATIONAL_FRICTION,
                                              SPHERICAL_GROUPS, TURNED_GROUPS, Actuation, Measure, dynamics_at,
                                              friction_measures, gravity_share_measure, rotation_measures,
                                              translation_measures)
-from symkin.analysis.orientations import ANGLES
+from symkin.mechanism import ANGLES
 from symkin.runtime.info import GeneratedModel
 
 
@@ -159,7 +160,7 @@ def rate(model: GeneratedModel, actuation: Actuation, *, samples: int = 4096, se
     """
     from symkin.analysis import closure_workspace
 
-    if closure_workspace.uses_closure(model):
+    if uses_closure(model):
         return rate_closure_platform(model, actuation, samples=samples, box=box, limits=limits,
                                      conditioning=conditioning, orientation=orientation)
     kind = mechanism.kind_of(model)
@@ -228,7 +229,7 @@ def rate_closure_platform(model: GeneratedModel, actuation: Actuation, *, sample
     from symkin.runtime.parallel import closure_velocities
 
     held = closure_workspace.held_orientation(model, orientation)
-    assembly = closure_workspace.solve_home_assembly(model)
+    assembly = solve_home_assembly(model)
     home_q, home_s = assembly.q, assembly.s
     found = closure_workspace.closure_workspace(model, orientation=held, limits=limits,
                                                 cells=max(8, int(round(samples ** (1 / 3)))), start=(home_q, home_s))
@@ -281,27 +282,28 @@ def rate_pose_platform(model: GeneratedModel, actuation: Actuation, *, samples: 
     """The datasheet of a platform that translates and rotates, over its workspace at a constant orientation.
 
     Platform centres are sampled (Sobol) in the box around the constant-orientation workspace
-    (:func:`symkin.analysis.parallel.constant_orientation_box`) and kept where reachable; the twist Jacobian
-    t = (v, omega) = J_t qd (:class:`symkin.analysis.parallel.ConstantOrientation`) splits into J_v and J_w.
+    (:func:`symkin.mechanism.reach.constant_orientation_box`) and kept where reachable; the twist Jacobian
+    t = (v, omega) = J_t qd (:class:`symkin.mechanism.reach.ConstantOrientation`) splits into J_v and J_w.
     The handle's measures are those of a device whose hand pushes and twists it: the apparent mass
     (J_v M^-1 J_v^T)^-1 with the orientation free, forces with no moment (tau = J_v^T f), the translation's
     resolution; then the apparent rotational inertia (J_w M^-1 J_w^T)^-1 with the position free, torques with
     no force (tau = J_w^T m) and the angular resolution.  A sample is usable where 1/kappa of J_v and of J_w
     are both at least ``conditioning``.
     """
-    from symkin.analysis import parallel, sampling
+    from symkin.numerics import sampling
+    from symkin.mechanism import reach
 
-    view = parallel.constant_orientation(model, orientation)
+    view = reach.constant_orientation(model, orientation)
     box_limits = mechanism.joint_limits(model, limits)
-    lower, upper = parallel.constant_orientation_box(view, box_limits)
+    lower, upper = reach.constant_orientation_box(view, box_limits)
     points = sampling.sobol(lower, upper, max(1, int(np.ceil(np.log2(samples)))), np.random.default_rng(seed))
-    q, reachable = parallel.reachable_points(view, points, box_limits)
+    q, reachable = reach.reachable_points(view, points, box_limits)
     q, points = q[reachable], points[reachable]
-    home = parallel.home_position(model)[None]
-    home_q, home_reachable = parallel.reachable_points(view, home, box_limits)
+    home = reach.home_position(model)[None]
+    home_q, home_reachable = reach.reachable_points(view, home, box_limits)
     if not home_reachable[0]:
         raise ValueError(f"{model.name}: the home position is not reachable at the orientation "
-                         f"{parallel.orientation_text(view)}; rate it at the home pose's orientation")
+                         f"{reach.orientation_text(view)}; rate it at the home pose's orientation")
     q, points = np.concatenate([q, home_q]), np.concatenate([points, home])
     keep = np.ones(len(q), dtype=bool)
     if box:
@@ -312,7 +314,7 @@ def rate_pose_platform(model: GeneratedModel, actuation: Actuation, *, samples: 
     q, points, J_v, J_w = q[keep], points[keep], J_v[keep], J_w[keep]
     if len(q) < 2:
         raise ValueError(f"{model.name}: no reachable platform centre at the orientation "
-                         f"{parallel.orientation_text(view)} lies in the box {dict(box or {})} with 1/kappa >= "
+                         f"{reach.orientation_text(view)} lies in the box {dict(box or {})} with 1/kappa >= "
                          f"{conditioning:g}")
     poses = view.poses(points)
     M = dynamics_at(model, "mass_matrix", q, poses)
@@ -337,7 +339,7 @@ def rate_orientation_platform(model: GeneratedModel, actuation: Actuation, *, sa
     1/kappa(J_w) >= ``conditioning``.
     """
     from symkin.analysis import orientations
-    from symkin.analysis.parallel import angular_velocity_matrix
+    from symkin.mechanism.reach import angular_velocity_matrix
 
     for name in ("ik", "jacobian", "mass_matrix"):
         mechanism.parallel_function(model, name)

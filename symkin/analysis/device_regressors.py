@@ -10,7 +10,7 @@ run is continuous); a sample where the legs do not assemble is refused with its 
 are the legs' actuators, then a hybrid device's wrist joints, as the regressors' rows.
 
 Legs without the distance form (:class:`ClosureDeviceRegressors`) have neither: each sample's passive joints and
-pose (s, p) are continued from the home assembly along the run (:class:`symkin.simulation.closure_functions.
+pose (s, p) are continued from the home assembly along the run (:class:`symkin.mechanism.closure.
 ClosureAssembly`), and the regressors are the generated ``closure_regressor`` and ``closure_base_regressor``
 taken to the actuators there (:func:`symkin.runtime.closure_dynamics.closure_regressor`: Y = W^T Y_z).
 """
@@ -25,7 +25,7 @@ import numpy as np
 from symkin import mechanism
 from symkin.analysis.identification import DataError
 from symkin.runtime.closure_dynamics import closure_energy_regressor, closure_regressor
-from symkin.simulation.closure_functions import ClosureAssembly
+from symkin.mechanism.closure import ClosureAssembly
 
 
 class DeviceRegressors:

@@ -18,11 +18,11 @@ domains of integration and two measures are offered:
     literature, but it rates configurations, not places of the workspace);
 * ``domain="cartesian"`` integrates over a Cartesian box containing the workspace with
   the indicator of reachability from an inverse kinematics
-  (:class:`~symkin.analysis.feasibility.InverseKinematics`): dW = 1_W(x) dx, each reachable
+  (:class:`~symkin.mechanism.feasibility.InverseKinematics`): dW = 1_W(x) dx, each reachable
   point counted once, 1/kappa at the first feasible solution branch.  This is the
   formulation of parallel mechanisms, whose inverse kinematics is closed-form.
 
-The index is 1/kappa by default (:func:`~symkin.analysis.conditioning.inverse_condition_number`);
+The index is 1/kappa by default (:func:`~symkin.numerics.conditioning.inverse_condition_number`);
 any function of the Jacobians (..., m, n) -> (...) can replace it (e.g. the smooth
 1/kappa_F, or a Table 8.5 criterion for a global force or speed index).
 """
@@ -34,15 +34,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from symkin.analysis import conditioning, parallel, sampling
+from symkin.numerics import conditioning
+from symkin.mechanism import reach
 from symkin.mechanism.working_mode import jacobian_in_working_mode
 from symkin import mechanism
 from symkin.analysis.estimates import Estimate, IntegralEstimate
-from symkin.analysis.feasibility import InverseKinematics, feasible_configurations
+from symkin.mechanism.feasibility import InverseKinematics, feasible_configurations
 from symkin.analysis.integrand import Integrand
 from symkin.analysis.integrators import integrate
 from symkin.mechanism import Limits
-from symkin.analysis.workspace import bounding_box
+from symkin.mechanism.reach import bounding_box
 from symkin.runtime.info import GeneratedModel
 
 DOMAINS = ("joint", "cartesian")
@@ -50,8 +51,6 @@ MEASURES = ("cartesian", "joint")
 
 Index = Callable[[np.ndarray], np.ndarray]
 
-#: Configurations sampled to choose the characteristic length (``length="auto"``).
-LENGTH_SAMPLES_LOG2 = 10
 
 
 def scaled_index(model: GeneratedModel, index: Index, length: float | str | None, limits: np.ndarray) -> Index:
@@ -62,7 +61,7 @@ def scaled_index(model: GeneratedModel, index: Index, length: float | str | None
             raise ValueError(f"{model.name}: the task space {list(mechanism.task_space(model))} mixes translations "
                              "and rotations: give a characteristic length (length=L in m, or 'auto')")
         if length == "auto":
-            length = characteristic_length_of(model, limits)
+            length = reach.characteristic_length_of(model, limits)
         L = float(length)
         return lambda J: index(conditioning.homogenize(J, L, rows))
     return index
@@ -83,19 +82,6 @@ def singular(model: GeneratedModel, q: np.ndarray, *, threshold: float = 0.0, le
              limits: Limits | None = None) -> np.ndarray:
     """Boolean (...): configurations whose 1/kappa is at most ``threshold`` (0: numerically singular)."""
     return local_index(model, q, length=length, limits=limits) <= threshold
-
-
-def characteristic_length_of(model: GeneratedModel, limits: np.ndarray | None = None, seed: int = 0) -> float:
-    """Characteristic length of a model with a mixed task space, from a Sobol sample of its joint space.
-
-    See :func:`symkin.analysis.conditioning.characteristic_length`; a platform at a constant
-    orientation is sampled over its Cartesian workspace (:func:`symkin.analysis.parallel.platform_characteristic_length`).
-    """
-    limits = mechanism.joint_limits(model) if limits is None else limits
-    if isinstance(model, parallel.ConstantOrientation):  # no fk: sampled over its Cartesian workspace
-        return parallel.platform_characteristic_length(model, limits, seed)
-    q = sampling.sobol(limits[:, 0], limits[:, 1], LENGTH_SAMPLES_LOG2, np.random.default_rng(seed))
-    return conditioning.characteristic_length(mechanism.jacobian(model, q), mechanism.position_rows(model))
 
 
 def joint_space_integrand(model: GeneratedModel, *, index: Index | None = conditioning.inverse_condition_number,
@@ -195,33 +181,15 @@ def _integrand(model: GeneratedModel, *, domain: str, measure: str, index: Index
                box: tuple[np.ndarray, np.ndarray] | None) -> tuple[Integrand, str]:
     if domain == "joint":
         integrand = joint_space_integrand(model, index=index, measure=measure, limits=limits, length=length)
-        return integrand, domain_description(model, domain, measure)
+        return integrand, reach.domain_description(model, domain, measure)
     if domain == "cartesian":
         if inverse is None:
             raise ValueError("the Cartesian domain needs an inverse kinematics (inverse=...)")
         if box is None:
             box = bounding_box(model, limits=limits)
         integrand = cartesian_integrand(model, inverse, box, index=index, limits=limits, length=length)
-        return integrand, domain_description(model, domain, measure)
+        return integrand, reach.domain_description(model, domain, measure)
     raise ValueError(f"unknown domain '{domain}'; choose one of {', '.join(DOMAINS)}")
-
-
-def domain_description(model: GeneratedModel, domain: str, measure: str) -> str:
-    """The integration domain and measure of a global index, in words (for reports)."""
-    if domain == "joint":
-        if mechanism.is_parallel(model):
-            return ("joint space, dW = |det J| dq over the configurations in the working mode "
-                    "(ik(fk(q)) = q, one-to-one): the Cartesian measure" if measure == "cartesian" else
-                    "joint space, dW = dq over the configurations in the working mode (joint measure)")
-        return ("joint space, dW = |det J| dq (Cartesian measure, with multiplicity where the map is "
-                "not one-to-one)" if measure == "cartesian" else "joint space, dW = dq (joint measure)")
-    description = "Cartesian box with reachability from inverse kinematics, dW = 1_W(x) dx"
-    if isinstance(model, parallel.ConstantOrientation):
-        description += (f" (platform centres at roll, pitch, yaw = {parallel.orientation_text(model)}; "
-                        "in the assembly mode of the home pose: sign of det J^-1)")
-    elif mechanism.is_parallel(model):
-        description += " (in the working mode: fk(ik(x)) = x)"
-    return description
 
 
 def global_index(model: GeneratedModel, *, method: str = "qmc", samples: int = 2**16, seed: int | None = None,
@@ -245,7 +213,7 @@ def global_index(model: GeneratedModel, *, method: str = "qmc", samples: int = 2
             translations and rotations.
         inverse: inverse kinematics (Cartesian domain).
         box: Cartesian box (lower, upper) of the Cartesian domain; default: the
-            workspace's :func:`~symkin.analysis.workspace.bounding_box`.
+            workspace's :func:`~symkin.analysis.reach.bounding_box`.
         options: integrator options (``replicates``, ``rtol``).
     """
     integrand, description = _integrand(model, domain=domain, measure=measure, index=index, limits=limits,

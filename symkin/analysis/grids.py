@@ -11,8 +11,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from symkin.analysis import conditioning, global_indices
-from symkin.analysis.feasibility import InverseKinematics
+from symkin.numerics import conditioning
+from symkin.analysis import global_indices
+from symkin.mechanism.feasibility import InverseKinematics
 from symkin.mechanism import Limits
 from symkin.analysis.workspace import Occupancy, grid_cells
 from symkin.runtime.info import GeneratedModel
@@ -23,7 +24,7 @@ def reachability_grid(model: GeneratedModel, inverse: InverseKinematics, box: tu
     """Cells whose centre the inverse kinematics reaches within the joint limits.
 
     This is the Cartesian grid with IK feasibility of parallel mechanisms; any
-    :class:`~symkin.analysis.feasibility.InverseKinematics` plugs in.  The cells are evaluated
+    :class:`~symkin.mechanism.feasibility.InverseKinematics` plugs in.  The cells are evaluated
     with the Cartesian integrand of the GCI (:func:`~symkin.analysis.global_indices.cartesian_integrand`).
     """
     start, size, counts, centers = grid_cells(box, cell)

@@ -14,7 +14,7 @@ number of integrand evaluations to spend, approximately for the grid) and return
 * ``mc``: plain Monte Carlo with uniform points; standard error from the sample
   covariance, 95 % normal confidence half-width;
 * ``qmc``: randomized quasi-Monte Carlo: ``replicates`` independently scrambled Sobol
-  point sets of 2^m points each (:func:`symkin.analysis.sampling.sobol`), evaluated in
+  point sets of 2^m points each (:func:`symkin.numerics.sampling.sobol`), evaluated in
   one batch; the estimate is their mean and the error the 95 % Student-t half-width
   from their spread (Owen, "Monte Carlo theory, methods and examples", ch. 17);
 * ``adaptive``: batched adaptive Genz-Malik cubature (:mod:`symkin.analysis.adaptive`).
@@ -26,7 +26,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from symkin.analysis import sampling
+from symkin.numerics import sampling
 from symkin.analysis.adaptive import adaptive
 from symkin.analysis.estimates import CONFIDENCE, IntegralEstimate
 from symkin.analysis.integrand import Integrand

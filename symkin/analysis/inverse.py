@@ -3,9 +3,9 @@
 Serial arms: the closed forms of :mod:`symkin.ik` whose target is a TCP position (the planar
 2R; :class:`ClosedFormInverse`); parallel mechanisms: their closed-form inverse kinematics
 (DELTA: one quadratic per leg, 2^3 branches or the chosen working mode;
-:func:`symkin.analysis.parallel.parallel_inverse`).  Each is an
-:class:`~symkin.analysis.feasibility.InverseKinematics`; joint limits are applied by
-:func:`~symkin.analysis.feasibility.feasible_configurations`.
+:func:`symkin.mechanism.reach.generated_inverse`).  Each is an
+:class:`~symkin.mechanism.feasibility.InverseKinematics`; joint limits are applied by
+:func:`~symkin.mechanism.feasibility.feasible_configurations`.
 """
 
 from __future__ import annotations
@@ -15,8 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from symkin import mechanism
-from symkin.analysis.feasibility import InverseKinematics
-from symkin.analysis.parallel import parallel_inverse
+from symkin.mechanism.feasibility import InverseKinematics
+from symkin.mechanism.reach import generated_inverse
 from symkin.errors import NotApplicable
 from symkin.ik import ClosedFormIK, closed_form_solver
 from symkin.runtime.info import GeneratedModel
@@ -26,7 +26,7 @@ from symkin.runtime.info import GeneratedModel
 
 @dataclass(frozen=True)
 class ClosedFormInverse:
-    """A closed-form solver of :mod:`symkin.ik` seen as an :class:`~symkin.analysis.feasibility.InverseKinematics`.
+    """A closed-form solver of :mod:`symkin.ik` seen as an :class:`~symkin.mechanism.feasibility.InverseKinematics`.
 
     The solver recognises the structure from the joint screws (e.g. the planar 2R: two
     parallel revolute axes, both elbow branches from the half-angle law of cosines, seed
@@ -35,7 +35,7 @@ class ClosedFormInverse:
     :data:`symkin.ik.closed_form.VALID_TOLERANCE`).  A point on the workspace boundary
     (|cos theta2| = 1 up to rounding) is clamped onto it and stays reachable.  The solver's
     own joint limits are not used (its angles are not shifted into them):
-    :func:`~symkin.analysis.feasibility.feasible_configurations` applies the analysis' limits.
+    :func:`~symkin.mechanism.feasibility.feasible_configurations` applies the analysis' limits.
 
     Attributes:
         solver: the :class:`~symkin.ik.closed_form.ClosedFormIK` (task-space targets).
@@ -58,15 +58,13 @@ def closed_form_inverse(model: GeneratedModel) -> ClosedFormInverse:
 
     Raises:
         NotApplicable: :func:`symkin.ik.closed_form.closed_form_solver` recognises no structure
-            (or the model is parallel), or its solver takes poses (the UR family): the
+            (as for a mechanism that closes loops, or a view of one), or its solver takes poses (the UR family): the
             Cartesian analyses work on positions, the solver's target must be the model's
             positional task space.
     """
-    if mechanism.is_parallel(model):  # also views of one, e.g. a platform held at a constant orientation
-        raise NotApplicable(f"{model.name}: a parallel mechanism; its inverse kinematics is its generated 'ik'")
-    solver = closed_form_solver(model)
+    solver = closed_form_solver(model)  # None for a mechanism that closes loops: its IK is generated code
     if solver is None:
-        raise NotApplicable(f"{model.name}: no closed-form inverse kinematics recognised (symkin.ik)")
+        raise NotApplicable(f"{model.name}: no closed-form inverse kinematics of an open chain recognised (symkin.ik)")
     task = mechanism.task_space(model)
     if solver.kind != "task" or not all(c in mechanism.POSITION_COMPONENTS for c in task):
         raise NotApplicable(f"{model.name}: the closed-form inverse kinematics ({solver.name}) takes "
@@ -80,7 +78,7 @@ def closed_form_inverse(model: GeneratedModel) -> ClosedFormInverse:
 #: Factories tried in order by :func:`inverse_kinematics_for`; each returns an
 #: InverseKinematics for the model or raises NotApplicable: serial closed forms of symkin.ik,
 #: then parallel mechanisms' generated ``ik``.
-INVERSE_FACTORIES: list = [closed_form_inverse, parallel_inverse]
+INVERSE_FACTORIES: list = [closed_form_inverse, generated_inverse]
 
 
 def inverse_kinematics_for(model: GeneratedModel) -> InverseKinematics | None:

@@ -6,7 +6,7 @@ p = (roll, pitch, yaw), R = Rz(yaw) Ry(pitch) Rx(roll), that measure is
 
     dW = |cos(pitch)| d(roll) d(pitch) d(yaw)            (rad^3; all of SO(3): 8 pi^2 = 78.96 rad^3),
 
-|det E| with omega = E d(roll, pitch, yaw)/dt (:func:`symkin.analysis.parallel.angular_velocity_matrix`),
+|det E| with omega = E d(roll, pitch, yaw)/dt (:func:`symkin.mechanism.reach.angular_velocity_matrix`),
 the volume element that does not depend on how the orientations are parametrized (Chirikjian and Kyatkin,
 Engineering Applications of Noncommutative Harmonic Analysis, 2001, sec. 9.2).  Its conditioning is that
 of the angular-velocity Jacobian J_w = E (J^-1)^-1 (omega = J_w qdot), whose condition number does not
@@ -23,27 +23,22 @@ from __future__ import annotations
 
 import numpy as np
 
-from symkin.analysis import conditioning
+from symkin.numerics import conditioning
 from symkin import mechanism
 from symkin.analysis.global_indices import GlobalIndex
 from symkin.analysis.integrand import Integrand
 from symkin.analysis.integrators import integrate
 from symkin.mechanism.limits import within_limits
-from symkin.analysis.sobol import Sobol
+from symkin.numerics.sobol import Sobol
 from symkin.mechanism import Limits
-from symkin.analysis.parallel import angular_velocity_matrix
+from symkin.mechanism.reach import angular_velocity_matrix
+from symkin.mechanism.working_mode import require_functions
 from symkin.runtime.info import GeneratedModel
 
 #: The roll-pitch-yaw chart of SO(3): each orientation once (up to the measure-zero gimbal-lock set).
 FULL_CHART = (np.array([-np.pi, -np.pi / 2, -np.pi]), np.array([np.pi, np.pi / 2, np.pi]))
 #: The measure of all of SO(3) in rad^3.
 SO3_MEASURE = 8 * np.pi**2
-ANGLES = ("roll", "pitch", "yaw")
-
-
-def is_spherical(model: GeneratedModel) -> bool:
-    """Whether ``model`` is a parallel mechanism whose task coordinates are roll, pitch, yaw."""
-    return mechanism.is_parallel(model) and tuple(mechanism.task_space(model)) == ANGLES
 
 
 def inverse_condition(model: GeneratedModel, q: np.ndarray, p: np.ndarray) -> np.ndarray:
@@ -90,11 +85,10 @@ def orientation_integrand(model: GeneratedModel, box: tuple[np.ndarray, np.ndarr
     Raises:
         ValueError: the model is not a spherical platform with generated ``ik`` and ``inverse_jacobian``.
     """
-    if not is_spherical(model):
+    if not mechanism.turns_only(model):
         raise ValueError(f"{model.name}: the orientation workspace is that of a spherical platform (task coordinates "
                          f"roll, pitch, yaw), not of {list(mechanism.task_space(model))}")
-    for name in ("ik", "inverse_jacobian") if index else ("ik",):
-        mechanism.parallel_function(model, name)
+    require_functions(model, ("ik", "inverse_jacobian") if index else ("ik",))
     joint_box = mechanism.joint_limits(model, limits)
     revolute = mechanism.revolute_mask(model)
     lower, upper = (np.asarray(b, dtype=np.float64) for b in box)
@@ -107,7 +101,7 @@ def orientation_integrand(model: GeneratedModel, box: tuple[np.ndarray, np.ndarr
         return np.stack([weight * values, weight], axis=-1)
 
     components = ("index dW", "dW") if index else ("dW",)
-    return Integrand(lower, upper, function, components, ANGLES, indicator=len(components) - 1)
+    return Integrand(lower, upper, function, components, mechanism.ANGLES, indicator=len(components) - 1)
 
 
 def orientation_cloud(model: GeneratedModel, samples: int = 2**14, *, seed: int = 0,

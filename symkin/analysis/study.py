@@ -7,19 +7,20 @@ from a Cartesian box; its boundary and singular configurations from the occupanc
 point cloud (seed sec. 4.1, 4.2).  A parallel mechanism also gets a Cartesian grid with
 reachability by its closed-form IK and 1/kappa at the cell centres
 (:func:`cartesian_index_grid`), which gives its volume, boundary and near-singular cells; a
-platform held at a constant orientation (:func:`at_orientation`) has no fk, and the grid's
+platform held at a constant orientation (:func:`symkin.mechanism.reach.held_at`) has no fk, and the grid's
 boundary cells are its point cloud.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 
-from symkin.analysis import feasibility, global_indices, inverse, parallel, workspace
+from symkin.mechanism import feasibility
+from symkin.analysis import global_indices, inverse, workspace
+from symkin.mechanism import reach
 from symkin import mechanism
 from symkin.analysis.grids import index_grid
 from symkin.mechanism import Limits
@@ -32,34 +33,18 @@ CARTESIAN_CELLS = 64
 LOWEST_FRACTION = 0.01
 
 
-def at_orientation(model: GeneratedModel, angles: Sequence[float] | None) -> Any:
-    """``model`` held at the constant orientation ``angles`` (roll, pitch, yaw in rad) if its platform
-    rotates (:func:`symkin.analysis.parallel.constant_orientation`; None: the home orientation), else ``model``.
-
-    Raises:
-        ValueError: angles are given for a mechanism whose platform does not rotate.
-    """
-    rotates = mechanism.is_parallel(model) and mechanism.mixes_translations_and_rotations(model)
-    if angles is None:
-        return parallel.constant_orientation(model) if rotates else model
-    if not rotates:
-        raise ValueError(f"--orientation: {model.name} is not a parallel platform that rotates "
-                         f"(task space {list(mechanism.task_space(model))}); leave the option out")
-    return parallel.constant_orientation(model, list(angles))
-
-
 def cartesian_index_grid(model: GeneratedModel, box: tuple[np.ndarray, np.ndarray], limits: Limits | None,
                          length: float | None, index=None) -> tuple[Occupancy, np.ndarray]:
     """Reachability grid of a parallel mechanism over ``box`` (:data:`CARTESIAN_CELLS` along its longest
     side) with a local index (1/kappa by default) at its cell centres (:func:`symkin.analysis.grids.index_grid`)."""
     cell = float(max(box[1] - box[0])) / CARTESIAN_CELLS
-    return index_grid(model, parallel.parallel_inverse(model), box, cell, index=index, limits=limits, length=length)
+    return index_grid(model, reach.generated_inverse(model), box, cell, index=index, limits=limits, length=length)
 
 
 def boundary_cloud(model: GeneratedModel, occupancy: Occupancy, limits: Limits | None) -> WorkspaceCloud:
     """The centres of the boundary cells of a Cartesian grid and their joint coordinates, as a point cloud."""
     points = occupancy.centers()[occupancy.boundary()]
-    q, _ = feasibility.feasible_configurations(parallel.parallel_inverse(model), points,
+    q, _ = feasibility.feasible_configurations(reach.generated_inverse(model), points,
                                                mechanism.joint_limits(model, limits), mechanism.revolute_mask(model))
     return WorkspaceCloud(q, points, ("x", "y", "z"))
 
@@ -94,14 +79,14 @@ def study_workspace(model: GeneratedModel, *, samples: int, method: str, seed: i
     """
     inv_kappa, box, grid = None, None, None
     if mechanism.sampled_in_task_space(model):  # 1/kappa and the volume come from a Cartesian grid
-        box = workspace.bounding_box(model, limits=limits)
+        box = reach.bounding_box(model, limits=limits)
         progress("Cartesian grid")
         grid = cartesian_index_grid(model, box, limits, length)
-    if isinstance(model, parallel.ConstantOrientation):  # no fk: the grid's surface is the cloud
+    if isinstance(model, reach.ConstantOrientation):  # no fk: the grid's surface is the cloud
         assert grid is not None, "a platform held at a constant orientation is parallel: it has its grid"
         cloud = boundary_cloud(model, grid[0], limits)
         sampled = (f"{int(grid[0].occupied.sum())} reachable cells of a Cartesian grid at roll, pitch, "
-                   f"yaw = {parallel.orientation_text(model)}")
+                   f"yaw = {reach.orientation_text(model)}")
     else:
         cloud = workspace.sample_workspace(model, samples, method=method, limits=limits, seed=seed)
         if grid is None:

@@ -20,18 +20,14 @@ from itertools import product
 
 import numpy as np
 
-from symkin.analysis import parallel, sampling
-from symkin.mechanism.working_mode import assemble, working_mode
+from symkin.numerics import sampling
+from symkin.mechanism.working_mode import assemble
 from symkin import mechanism
 from symkin.analysis.estimates import Estimate
 from symkin.mechanism import Limits
 from symkin.runtime.info import GeneratedModel
 
 SAMPLING_METHODS = ("grid", "random", "sobol")
-
-#: Joint-space points evaluated for :func:`bounding_box` (split evenly over the axes).
-BOX_SAMPLES = 2**16
-
 
 @dataclass(frozen=True)
 class WorkspaceCloud:
@@ -89,51 +85,6 @@ def sample_workspace(model: GeneratedModel, samples: int = 2**14, *, method: str
     if not inside.all():
         return WorkspaceCloud(q[inside], points[inside], axes, None)
     return WorkspaceCloud(q, points, axes, grid_shape)
-
-
-def bounding_box(model: GeneratedModel, *, limits: Limits | None = None, samples: int = BOX_SAMPLES) -> tuple[np.ndarray, np.ndarray]:
-    """A Cartesian box that contains the workspace.
-
-    The TCP positions of a joint grid (limits included) are padded by a first-order bound
-    of how far the TCP can move inside one grid cell: twice the largest Frobenius norm of
-    the positional Jacobian rows at the grid nodes times the half diagonal of a cell.  A
-    platform at a constant orientation has no fk: its box is bounded by the legs' reach
-    (:func:`symkin.analysis.parallel.constant_orientation_box`).
-
-    Returns:
-        (lower, upper), arrays of shape (d,).
-    """
-    box = mechanism.joint_limits(model, limits)
-    if isinstance(model, parallel.ConstantOrientation):  # no fk: the legs' reach bounds the workspace
-        return parallel.constant_orientation_box(model, box)
-    n = box.shape[0]
-    per_axis = max(3, int(samples ** (1.0 / n)))
-    q = sampling.grid(box[:, 0], box[:, 1], per_axis, midpoints=False)
-    if mechanism.is_parallel(model):
-        return _parallel_bounding_box(model, q, per_axis)
-    points = mechanism.tcp_positions(model, q)
-    J = model.jacobian(q)[:, list(mechanism.position_rows(model)), :]
-    half_diagonal = 0.5 * np.linalg.norm((box[:, 1] - box[:, 0]) / (per_axis - 1))
-    margin = 2.0 * np.max(np.linalg.norm(J, axis=(-2, -1))) * half_diagonal
-    return points.min(axis=0) - margin, points.max(axis=0) + margin
-
-
-def _parallel_bounding_box(model: GeneratedModel, q: np.ndarray, per_axis: int) -> tuple[np.ndarray, np.ndarray]:
-    """Box of a parallel mechanism: the working-mode TCP positions of a joint grid, padded.
-
-    The Jacobian grows without bound next to the assembly limit (det J_x -> 0), so the
-    padding is not a Jacobian bound but twice the largest distance between the TCP
-    positions of neighbouring grid nodes that both lie in the working mode.
-    """
-    points, inside = working_mode(model, q)
-    if not inside.any():
-        raise ValueError(f"{model.name}: no configuration within the joint limits assembles in the working mode")
-    shape = (per_axis,) * q.shape[1]
-    grid_points = np.where(inside[:, None], points, np.nan).reshape(*shape, -1)
-    gaps = [np.nanmax(np.linalg.norm(np.diff(grid_points, axis=axis), axis=-1), initial=0.0)
-            for axis in range(len(shape))]
-    margin = 2.0 * max(gaps)
-    return points[inside].min(axis=0) - margin, points[inside].max(axis=0) + margin
 
 
 @dataclass(frozen=True)

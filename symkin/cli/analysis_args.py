@@ -74,15 +74,15 @@ def resolve_length(model: GeneratedModel, text: str, limits: dict) -> float | No
 
     With "auto" the length is computed here, once, and printed.
     """
-    from symkin.analysis import global_indices
     from symkin import mechanism
+    from symkin.mechanism import reach
 
     length = parse_length(text)
     if not mechanism.mixes_translations_and_rotations(model):
         return None
     if length != "auto":
         return float(length)
-    computed = global_indices.characteristic_length_of(model, mechanism.joint_limits(model, limits))
+    computed = reach.characteristic_length_of(model, mechanism.joint_limits(model, limits))
     print(f"{model.name}: characteristic length L = {computed:.6g} m (minimizes the mean kappa_F^2; "
           "set with --length)")
     return computed

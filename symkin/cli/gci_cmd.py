@@ -15,7 +15,7 @@ from symkin.runtime.info import GeneratedModel
 
 #: Configurations drawn for --map (serial mechanisms).
 MAP_SAMPLES = 40_000
-#: Local indices that ``--index`` can average (names of symkin.analysis.conditioning functions).
+#: Local indices that ``--index`` can average (names of symkin.numerics.conditioning functions).
 INDICES = {
     "inverse-condition": "inverse_condition_number",
     "inverse-frobenius": "inverse_frobenius_condition_number",
@@ -68,9 +68,11 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def _chunked(args: argparse.Namespace) -> int:
     """--scheduler: the integral in chunks on Dask (:mod:`symkin.analysis.chunked`)."""
-    from symkin.analysis import inverse, study, workspace
+    from symkin.analysis import inverse
     from symkin.analysis.chunked import IntegrandSpec, integrate_chunked
-    from symkin.analysis.global_indices import GlobalIndex, domain_description
+    from symkin.analysis.global_indices import GlobalIndex
+    from symkin.mechanism import reach
+    from symkin.mechanism.reach import bounding_box, domain_description
     from symkin.runtime.cluster import check_scheduler
     from symkin.runtime.payload import ModelPayload
 
@@ -84,13 +86,13 @@ def _chunked(args: argparse.Namespace) -> int:
         model = payload.load().bind(**values) if values else payload.load()
         limits = analysis_args.parse_limits(args.limits)
         orientation = analysis_args.parse_orientation(args.orientation)
-        held = study.at_orientation(model, orientation)
+        held = reach.held_at(model, orientation)
         domain = _domain(args, held)
         box = None
         if domain == "cartesian":
             if inverse.inverse_kinematics_for(held) is None:
                 raise ValueError(f"{model.name}: no inverse kinematics is available for the Cartesian domain")
-            lower, upper = workspace.bounding_box(held, limits=limits)
+            lower, upper = bounding_box(held, limits=limits)
             box = (tuple(float(v) for v in lower), tuple(float(v) for v in upper))
         spec = IntegrandSpec(tuple(sorted(values.items())), INDICES[args.index], args.measure,
                              tuple(sorted(limits.items())), analysis_args.resolve_length(held, args.length, limits),
@@ -128,9 +130,9 @@ def _print(args: argparse.Namespace, model: GeneratedModel, result, seconds: flo
 
 def _domain(args: argparse.Namespace, model: GeneratedModel) -> str:
     """--domain, by default joint, or cartesian for a platform that also rotates (its only domain)."""
-    from symkin.analysis import parallel
+    from symkin.mechanism import reach
 
-    held = isinstance(model, parallel.ConstantOrientation)
+    held = isinstance(model, reach.ConstantOrientation)
     if held and args.domain == "joint":
         raise ValueError(f"{model.name}: a platform that also rotates has no closed-form fk: its GCI is "
                          "integrated over the constant-orientation workspace only (--domain cartesian)")
@@ -138,9 +140,11 @@ def _domain(args: argparse.Namespace, model: GeneratedModel) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-    from symkin.analysis import (closure_workspace, conditioning, global_indices, inverse, orientations, plots, study,
-                                 workspace)
+    from symkin.numerics import conditioning
+    from symkin.analysis import closure_workspace, global_indices, inverse, orientations, plots, study, workspace
     from symkin import mechanism
+    from symkin.mechanism import reach
+    from symkin.mechanism.closure import uses_closure
     from symkin.analysis.integrators import STATISTICAL
 
     if args.scheduler is not None:
@@ -150,11 +154,11 @@ def run(args: argparse.Namespace) -> int:
     try:
         model, limits = analysis_args.model_from_args(args)
         model = analysis_args.device_view(args, model)
-        if orientations.is_spherical(model):
+        if mechanism.turns_only(model):
             return _orientations(args, model, limits)
-        if closure_workspace.uses_closure(model):
+        if uses_closure(model):
             return _closure(args, model, limits)
-        model = study.at_orientation(model, analysis_args.parse_orientation(args.orientation))
+        model = reach.held_at(model, analysis_args.parse_orientation(args.orientation))
         args.domain = _domain(args, model)
         length = analysis_args.resolve_length(model, args.length, limits)
         ik = inverse.inverse_kinematics_for(model) if args.domain == "cartesian" else None
@@ -173,7 +177,7 @@ def run(args: argparse.Namespace) -> int:
             seconds = time.perf_counter() - start
             if args.map and mechanism.is_parallel(model):
                 progress("drawing")
-                box = workspace.bounding_box(model, limits=limits)
+                box = reach.bounding_box(model, limits=limits)
                 occupancy, values = study.cartesian_index_grid(model, box, limits, length, index)
                 path = plots.plot_index_slices(occupancy, values, args.map, label=args.index,
                                                title=f"{args.index} over the workspace of {model.name}")

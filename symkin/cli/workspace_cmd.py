@@ -102,6 +102,7 @@ def _orientations(args: argparse.Namespace, model, limits: dict) -> int:
     orientations in the roll-pitch-yaw chart, coloured by 1/kappa of the angular-velocity Jacobian."""
     import numpy as np
 
+    from symkin import mechanism
     from symkin.analysis import orientations, plots, workspace
 
     start = time.perf_counter()
@@ -126,7 +127,7 @@ def _orientations(args: argparse.Namespace, model, limits: dict) -> int:
                   "reachable")
             if not args.no_figure:
                 progress("drawing")
-                cloud = workspace.WorkspaceCloud(points, points, orientations.ANGLES)
+                cloud = workspace.WorkspaceCloud(points, points, mechanism.ANGLES)
                 path = plots.plot_index_map(cloud, values, args.out or f"out/workspace/{model.name}-workspace.png",
                                             scale=180 / np.pi, unit="deg", title=args.title or
                                             f"Orientation workspace of {model.name}: 1/kappa of J_w")
@@ -169,6 +170,7 @@ def _closure(args: argparse.Namespace, model, limits: dict) -> int:
     import numpy as np
 
     from symkin.analysis import closure_workspace, plots, workspace
+    from symkin.mechanism.closure import solve_home_assembly
 
     start = time.perf_counter()
     try:
@@ -180,7 +182,7 @@ def _closure(args: argparse.Namespace, model, limits: dict) -> int:
         options = closure_options(args, model)
         with Progress(model.name) as progress:
             progress(f"continuing the loop closure over a grid of {options['cells']} cells a side")
-            assembly = closure_workspace.solve_home_assembly(model)
+            assembly = solve_home_assembly(model)
             found = closure_workspace.closure_workspace(model, limits=limits, start=(assembly.q, assembly.s),
                                                         **options)
             progress("sampling the boundary cells for the " + ("area" if len(found.axes) == 2 else "volume"))
@@ -217,16 +219,19 @@ def _closure(args: argparse.Namespace, model, limits: dict) -> int:
 
 
 def run(args: argparse.Namespace) -> int:
-    from symkin.analysis import closure_workspace, orientations, parallel, plots, study, workspace
+    from symkin import mechanism
+    from symkin.analysis import closure_workspace, orientations, plots, study, workspace
+    from symkin.mechanism import reach
+    from symkin.mechanism.closure import uses_closure
 
     try:
         base, limits = analysis_args.model_from_args(args)
         base = analysis_args.device_view(args, base)
-        if orientations.is_spherical(base):
+        if mechanism.turns_only(base):
             return _orientations(args, base, limits)
-        if closure_workspace.uses_closure(base):
+        if uses_closure(base):
             return _closure(args, base, limits)
-        base = study.at_orientation(base, analysis_args.parse_orientation(args.orientation))
+        base = reach.held_at(base, analysis_args.parse_orientation(args.orientation))
         designs = [analysis_args.parse_assignments([text]) for text in args.design] or [{}]
         models = [base.bind(**values) if values else base for values in designs]
         length = analysis_args.resolve_length(base, args.length, limits)  # of the base design, for all designs
@@ -273,11 +278,11 @@ def run(args: argparse.Namespace) -> int:
                 occupancy, cell_values = grids[0]
                 path = plots.plot_index_slices(occupancy, cell_values, args.map, scale=scale, unit=args.unit,
                                                title=f"{title}: Cartesian grid, reachability by ik")
-                if isinstance(models[0], parallel.ConstantOrientation):
+                if isinstance(models[0], reach.ConstantOrientation):
                     sections = plots.plot_index_sections(
-                        occupancy, cell_values, sections_path(args.map), parallel.home_position(models[0]), scale=scale,
+                        occupancy, cell_values, sections_path(args.map), reach.home_position(models[0]), scale=scale,
                         unit=args.unit, title=f"{title}: sections through the home position at roll, pitch, yaw "
-                                              f"= {parallel.orientation_text(models[0])}")
+                                              f"= {reach.orientation_text(models[0])}")
                     print(f"1/kappa sections: {sections}")
             else:
                 assert inv_kappa is not None, "a joint-space cloud carries its 1/kappa"
@@ -302,6 +307,7 @@ def _force_map(args: argparse.Namespace, model, layer, limits, scale: float):
 
     from symkin.analysis import forces, plots, study, workspace
     from symkin import mechanism
+    from symkin.mechanism import reach
 
     if not mechanism.is_positional(model):
         raise ValueError(f"--force-map: the task space of {model.name} ({', '.join(mechanism.task_space(model))}) "
@@ -311,7 +317,7 @@ def _force_map(args: argparse.Namespace, model, layer, limits, scale: float):
         raise ValueError(f"{model.name} declares no effort limit for every actuator: give --effort-limit T[,T...]")
     title = f"isotropic force over the workspace of {model.name} (effort limits {', '.join(f'{e:g}' for e in efforts)})"
     if mechanism.is_parallel(model):
-        grid, values = study.cartesian_index_grid(model, workspace.bounding_box(model, limits=limits), limits, None,
+        grid, values = study.cartesian_index_grid(model, reach.bounding_box(model, limits=limits), limits, None,
                                                   lambda J: forces.isotropic_force(J, efforts))
         path = plots.plot_index_slices(grid, values, args.force_map, label="isotropic force [N]", title=title,
                                        scale=scale, unit=args.unit)

@@ -23,7 +23,7 @@ import numpy as np
 
 from symkin.design.formulation import casadi_function
 from symkin.runtime.info import GeneratedModel
-from symkin.simulation.closure_functions import ClosureAssembly
+from symkin.mechanism.closure import ClosureAssembly
 
 #: The functions the excitation of legs without the distance form needs.
 CLOSURE_EXCITATION = ("closure", "closure_jacobians", "closure_dynamics", "closure_base_regressor")

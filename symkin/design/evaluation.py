@@ -21,8 +21,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from symkin.analysis import (closure_workspace, conditioning, feasibility, forces, global_indices, inverse,
-                             orientations, parallel, rating, sampling)
+from symkin.mechanism.closure import MAX_STEP, assemble_at_home
+from symkin.mechanism import feasibility
+from symkin.numerics import conditioning, sampling
+from symkin.analysis import closure_workspace, forces, global_indices, inverse, orientations, rating
+from symkin.mechanism import reach
 from symkin import mechanism
 from symkin.analysis.estimates import Estimate
 from symkin.mechanism.limits import within_limits
@@ -123,13 +126,13 @@ def _serial_box(problem: DesignProblem, model: GeneratedModel, points: np.ndarra
 
 def parallel_index(model: GeneratedModel, points: np.ndarray, limits: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
     """1/kappa of J at each point (0 where unreachable), and whether it is reachable: by the
-    analyses' own test (:func:`symkin.analysis.parallel.parallel_inverse`: IK margin, fk round
+    analyses' own test (:func:`symkin.mechanism.reach.generated_inverse`: IK margin, fk round
     trip, declared passive-joint limits) within the actuated-joint ``limits``; a spherical
     platform's orientations by :func:`symkin.analysis.orientations.orientation_integrand` (1/kappa
     of J_w)."""
-    if orientations.is_spherical(model):
+    if mechanism.turns_only(model):
         return orientations.reachable_index(model, points, limits)
-    ik = parallel.parallel_inverse(model)
+    ik = reach.generated_inverse(model)
     q, inside = feasibility.feasible_configurations(ik, points, mechanism.joint_limits(model, limits),
                                                 mechanism.revolute_mask(model))
     values = np.zeros(len(points))
@@ -150,7 +153,7 @@ def _spherical(problem: DesignProblem, model: GeneratedModel, samples: int, seed
 def _parallel(problem: DesignProblem, model: GeneratedModel, samples: int, seed: int) -> Evaluation:
     if problem.spherical:
         return _spherical(problem, model, samples, seed)
-    ik = parallel.parallel_inverse(model)
+    ik = reach.generated_inverse(model)
     result = global_indices.gci(model, method="qmc", samples=samples, seed=seed, domain="cartesian", inverse=ik,
                                 box=problem.box, limits=problem.limits)
     points = box_check_points(problem)
@@ -169,7 +172,7 @@ def _parallel(problem: DesignProblem, model: GeneratedModel, samples: int, seed:
 
 def closure_home(problem: DesignProblem, model: GeneratedModel, design: dict[str, float]) -> tuple[np.ndarray, np.ndarray]:
     """(q, s) of the home assembly of ``design`` (all parameter values; ``model`` unbound): the start design's
-    (:func:`symkin.analysis.closure_workspace.assemble_at_home`) continued along the straight line of designs in
+    (:func:`symkin.mechanism.closure.assemble_at_home`) continued along the straight line of designs in
     :data:`DESIGN_STEPS` steps, Gauss-Newton at the home pose from the last step's, so that every design is rated in
     the assembly mode the optimizer started in (a fresh multi-start assembly may pick another).
 
@@ -179,11 +182,11 @@ def closure_home(problem: DesignProblem, model: GeneratedModel, design: dict[str
     from symkin.runtime.parallel import solve_closure
 
     start, home = problem.start, mechanism.home_pose(model)
-    q, s = closure_workspace.assemble_at_home(model.bind(**start))
+    q, s = assemble_at_home(model.bind(**start))
     for t in np.linspace(0.0, 1.0, DESIGN_STEPS + 1)[1:]:
         values = {name: (1 - t) * start[name] + t * design[name] for name in design}
         report = solve_closure(model.bind(**values), q, s, home, unknowns=("q", "s"),
-                               max_step=closure_workspace.MAX_STEP)
+                               max_step=MAX_STEP)
         if not report.all_converged:
             raise ValueError(f"{model.name}: the legs do not close at the home pose {home.tolist()} for the design "
                              f"{ {k: round(v, 9) for k, v in values.items()} }, on the way from the start design")

@@ -44,7 +44,7 @@ from symkin.design import closure_excitation
 from symkin.design.formulation import casadi_function
 from symkin.design.solving import IPOPT_OPTIONS, IterationReport
 from symkin.runtime.info import GeneratedModel
-from symkin.simulation.closure_functions import ClosureAssembly
+from symkin.mechanism.closure import ClosureAssembly
 
 #: How much of each joint range the start's motion uses (a small motion about the middle of the limits).
 START_AMPLITUDE = 0.1

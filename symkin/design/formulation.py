@@ -72,7 +72,9 @@ from typing import Any, NamedTuple
 import casadi
 import numpy as np
 
-from symkin.analysis import closure_workspace, forces, sampling
+from symkin.mechanism.closure import assemble_at_home
+from symkin.numerics import sampling
+from symkin.analysis import closure_workspace, forces
 from symkin import mechanism
 from symkin.mechanism import passive
 from symkin.mechanism.limits import within_limits
@@ -101,7 +103,7 @@ def casadi_function(model: GeneratedModel, name: str) -> casadi.Function:
 
 
 def angular_velocity_matrix(orientation: casadi.SX) -> casadi.SX:
-    """E with omega = E d(roll, pitch, yaw)/dt: :func:`symkin.analysis.parallel.angular_velocity_matrix` in CasADi."""
+    """E with omega = E d(roll, pitch, yaw)/dt: :func:`symkin.mechanism.reach.angular_velocity_matrix` in CasADi."""
     pitch, yaw = orientation[1], orientation[2]
     cp, sp, cy, sy = casadi.cos(pitch), casadi.sin(pitch), casadi.cos(yaw), casadi.sin(yaw)
     return casadi.vertcat(casadi.horzcat(cy * cp, -sy, 0), casadi.horzcat(sy * cp, cy, 0), casadi.horzcat(-sp, 0, 1))
@@ -478,7 +480,7 @@ def _closure_starts(problem: DesignProblem, model: GeneratedModel, poses: np.nda
         ValueError: a pose is not reached that way (the start design does not serve the box).
     """
     bound = model.bind(**problem.start)
-    home = closure_workspace.assemble_at_home(bound)
+    home = assemble_at_home(bound)
     step = float(np.max(problem.inflated_box[1] - problem.inflated_box[0])) / 64
     q, s, taken = closure_workspace.continue_from(bound, (*home, mechanism.home_pose(bound)), poses, step=step,
                                                   limits=problem.limits)

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from symkin.analysis import closure_workspace, orientations
+from symkin.mechanism.closure import uses_closure
 from symkin import mechanism
 from symkin.analysis.handle_measures import Actuation
 from symkin.analysis.needs import NEEDS
@@ -63,7 +63,7 @@ class DesignProblem:
             (J M^-1 J^T)^-1 at every point of the required box at most this (a parallel model whose handle
             translates), else None.
         closure: whether the model is a parallel one analysed through its loop closure (legs without closed forms,
-            :func:`symkin.analysis.closure_workspace.uses_closure`): its box is one of positions at the home pose's
+            :func:`symkin.mechanism.closure.uses_closure`): its box is one of positions at the home pose's
             angles, each point with its assembly (q, s) as variables of the program.
     """
 
@@ -162,8 +162,8 @@ def _free_parameters(model: GeneratedModel, free: Sequence[str], bounds: Mapping
 
 def box_axes(model: GeneratedModel) -> tuple[str, ...]:
     """The axes of the required box: the task's position axes, or a spherical platform's roll, pitch, yaw."""
-    if orientations.is_spherical(model):
-        return orientations.ANGLES
+    if mechanism.turns_only(model):
+        return mechanism.ANGLES
     return tuple("xyz"[a] for a in mechanism.position_axes(model))
 
 
@@ -181,7 +181,7 @@ def _box(model: GeneratedModel, box: Mapping[str, tuple[float, float]] | None) -
     upper = np.array([box[a][1] for a in axes], dtype=np.float64)
     if not np.all(np.isfinite(lower) & np.isfinite(upper) & (lower < upper)):
         raise ValueError(f"{model.name}: every side of the required box needs finite LOWER < UPPER")
-    if axes == orientations.ANGLES and not (-np.pi / 2 < lower[1] and upper[1] < np.pi / 2):
+    if axes == mechanism.ANGLES and not (-np.pi / 2 < lower[1] and upper[1] < np.pi / 2):
         raise ValueError(f"{model.name}: the pitch of the required box must lie within (-90 deg, 90 deg), the chart "
                          "of the roll-pitch-yaw angles (at +-90 deg roll and yaw turn about one axis)")
     return lower, upper
@@ -268,7 +268,7 @@ def design_problem(model: GeneratedModel, objective: str, free: Sequence[str], *
     if unknown:
         raise ValueError(f"{model.name}: not parameters of the model: {', '.join(unknown)}; "
                          f"parameters: {', '.join(sorted(model.parameters))}")
-    closure = closure_workspace.uses_closure(model)
+    closure = uses_closure(model)
     if closure and (objective == "force" or max_apparent_mass is not None):
         raise ValueError(f"{model.name}: its legs have no closed-form inverse kinematics; their dimensioning "
                          "maximizes the GCI over the required box (--maximize gci), without force objectives or "
@@ -298,7 +298,7 @@ def design_problem(model: GeneratedModel, objective: str, free: Sequence[str], *
             raise ValueError(f"{model.name}: maximizing the workspace of a parallel mechanism is not supported "
                              "(its workspace has no joint-space parametrization here); maximize the GCI over a "
                              "required box instead (--maximize gci --require-box ...)")
-        spherical = orientations.is_spherical(model)
+        spherical = mechanism.turns_only(model)
         if required is None:
             axes = box_axes(model)
             unit = "in rad, or with 'deg'" if spherical else "in m"
@@ -316,5 +316,5 @@ def design_problem(model: GeneratedModel, objective: str, free: Sequence[str], *
     fixed = {k: float(v) for k, v in {**model.parameters, **values}.items()
              if k in used and k not in {p.name for p in free_parameters}}
     return DesignProblem(objective, free_parameters, fixed, parallel, joint_box, required, float(margin), length,
-                         parallel and orientations.is_spherical(model),
+                         parallel and mechanism.turns_only(model),
                          _effort_limits(model, objective, effort_limits, required), bound, closure)

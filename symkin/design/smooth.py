@@ -14,7 +14,7 @@ which equals 1 exactly at isotropy and is smooth elsewhere.  With ||J^-1||_F =
 finite (0) at singular configurations instead of a division by zero, and the term
 |det J| / kappa_F of a GCI averaged with the Cartesian measure dW = |det J| dq is the
 polynomial-over-norms n det(J)^2 / (||J||_F ||adj J||_F), smooth through singularities.
-The numpy counterpart is :func:`symkin.analysis.conditioning.inverse_frobenius_condition_number`.
+The numpy counterpart is :func:`symkin.numerics.conditioning.inverse_frobenius_condition_number`.
 """
 
 from __future__ import annotations
@@ -41,7 +41,7 @@ def adjugate(J: casadi.SX) -> casadi.SX:
 def homogenized(J: casadi.SX, length: float | None, position_rows: Sequence[int]) -> casadi.SX:
     """J with its translational rows divided by the characteristic length L (None: unchanged).
 
-    As :func:`symkin.analysis.conditioning.homogenize`.
+    As :func:`symkin.numerics.conditioning.homogenize`.
     """
     if length is None:
         return J

@@ -78,7 +78,7 @@ def evaluate_design(model: Any, values: dict[str, float], definition: Any) -> di
 def torque_peak(model: Any, lower: np.ndarray, upper: np.ndarray, samples: int, seed: int) -> float:
     """max over Sobol configurations in [lower, upper] (in the working mode, for a parallel
     mechanism) of the largest column norm of J_p: the peak effort per unit TCP force (see above)."""
-    from symkin.analysis import sampling
+    from symkin.numerics import sampling
     from symkin.mechanism.working_mode import jacobian_in_working_mode
     from symkin import mechanism
 

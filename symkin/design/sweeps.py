@@ -38,7 +38,7 @@ from typing import Any
 
 import numpy as np
 
-from symkin.analysis.sobol import Sobol
+from symkin.numerics.sobol import Sobol
 from symkin.design.sweep_metrics import DEFAULT_METRICS, EMPTY, ESTIMATED, METRICS, OK, evaluate_design
 from symkin.runtime.cluster import run_tasks
 from symkin.runtime.payload import ModelPayload

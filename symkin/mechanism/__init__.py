@@ -5,10 +5,13 @@ design and viewer: they ask it instead of telling mechanisms apart themselves.  
 (coordinates, joint limits, the kind of mechanism and its task space); :mod:`symkin.mechanism.limits` tests
 joint limits, :mod:`symkin.mechanism.passive` closes a parallel mechanism's passive joints (the general closure
 solve, :func:`symkin.runtime.parallel.solve_closure`) and checks their limits,
-:mod:`symkin.mechanism.working_mode` assembles a mechanism with closed forms in its declared branches, and
-:mod:`symkin.mechanism.device` views a hybrid device as one mechanism in all its actuated joints.  The adapters
-of pose and orientation platforms (:mod:`symkin.analysis.parallel`) move here next, towards one object that
-assembles any mechanism and gives fk, J, M, h of its actuated joints.
+:mod:`symkin.mechanism.working_mode` assembles a mechanism with closed forms in its declared branches,
+:mod:`symkin.mechanism.closure` one of any leg topology from its generated closure alone (home assembly,
+continuation along the actuators, the dynamics of the actuated joints), :mod:`symkin.mechanism.reach` answers the
+Cartesian analyses' questions for every kind (the box around the workspace, reachability through inverse
+kinematics, :mod:`symkin.mechanism.feasibility`, a pose platform held at one orientation, the characteristic
+length), and :mod:`symkin.mechanism.device` views a hybrid device as one mechanism in all its actuated joints.
+Next: one object that assembles any mechanism and gives fk, J, M, h of its actuated joints.
 
 The analyses take a :class:`symkin.LoadedModel` (``symkin.load(directory, backend)``):
 its generated functions do the arithmetic, its manifest tells the joint types, limits and
@@ -138,6 +141,17 @@ def kind_of(model: GeneratedModel) -> MechanismKind:
     return parallel_kind(task_space(model)) if is_parallel(model) else MechanismKind.SERIAL
 
 
+#: The task coordinates of a handle that only turns: roll, pitch, yaw (R = Rz(yaw) Ry(pitch) Rx(roll)).
+ANGLES = ("roll", "pitch", "yaw")
+
+
+def turns_only(model: GeneratedModel) -> bool:
+    """Whether the handle only turns: a mechanism closing loops whose task coordinates are roll, pitch, yaw (a
+    spherical platform such as the Agile Eye), whose workspace is a set of orientations
+    (:mod:`symkin.analysis.orientations`) reached through its generated ``ik``."""
+    return is_parallel(model) and tuple(task_space(model)) == ANGLES
+
+
 def is_parallel(model: GeneratedModel) -> bool:
     """Whether the loaded model is a parallel mechanism."""
     return model.info.is_parallel
@@ -233,7 +247,7 @@ def parallel_function(model: GeneratedModel, name: str):
     Raises:
         ValueError: it was not generated (e.g. a Stewart-Gough platform has no closed-form fk
             and no ``jacobian``, only ``inverse_jacobian``: it is analysed at a constant
-            orientation, over the Cartesian domain, see :mod:`symkin.analysis.parallel`).
+            orientation, over the Cartesian domain, see :mod:`symkin.mechanism.reach`).
     """
     if name not in model.functions:
         raise ValueError(f"{model.name}: the workspace and GCI analyses of a parallel mechanism need its generated "
@@ -268,6 +282,6 @@ def mixes_translations_and_rotations(model: GeneratedModel) -> bool:
     """Whether the task Jacobian has both translational rows (m/rad) and rotational rows (rad/rad).
 
     Its singular values then mix units, and conditioning indices need a characteristic
-    length (:func:`symkin.analysis.conditioning.homogenize`).
+    length (:func:`symkin.numerics.conditioning.homogenize`).
     """
     return 0 < len(position_rows(model)) < len(task_space(model))

@@ -1,7 +1,7 @@
 """A hybrid device (a parallel platform carrying a wrist) seen by the analyses as one mechanism in all its
 actuated coordinates z = (q, qw): the legs' actuators, then the wrist's joints.
 
-:class:`WholeDevice` is a view of the loaded model (as :class:`symkin.analysis.parallel.ConstantOrientation`
+:class:`WholeDevice` is a view of the loaded model (as :class:`symkin.mechanism.reach.ConstantOrientation`
 is of a pose platform): its joints are z within the legs' and the wrist's limits, its TCP the wrist's
 (``device_fk(fk(q), qw)``), its task Jacobian the actuator Jacobian J_a = [J_c,p J, J_c,w]
 (``device_actuator_jacobian``: the TCP's velocity and angular velocity, 6 x n).  So the serial analyses

@@ -3,7 +3,7 @@ declared branches (``ik_branch``, ``fk_branch``), as the run-time mechanism answ
 
 A configuration q is in the working mode where fk(q) assembles, ik(fk(q)) = q (the same leg branches, not the
 other root of a leg reached through a leg singularity) and the declared passive-joint limits hold
-(:mod:`symkin.mechanism.passive`); on that set q <-> p is one-to-one (see :mod:`symkin.analysis.parallel` for
+(:mod:`symkin.mechanism.passive`); on that set q <-> p is one-to-one (see :mod:`symkin.mechanism.reach` for
 what the analyses build on it).
 """
 

@@ -358,7 +358,7 @@ class LegJoint:
         limits: position limits (lower, upper) of each motion (one per variable), None for
             a motion without limits; () when the joint declares none.  The actuated
             motion's limits are its coordinate's; the passive ones restrict the workspace
-            (:mod:`symkin.analysis.parallel`).
+            (:mod:`symkin.mechanism.reach`).
     """
 
     name: str

@@ -17,7 +17,7 @@ A parallel mechanism (a DELTA, a pantograph, the Agile Eye) is a plant in its ac
 too: its generated dynamics take the platform pose p with q (symkin.parallel.dynamics), which the plant
 supplies from the closed-form forward kinematics, p = fk(q) (a spherical platform's orientation), so the
 state stays (q, qd).  Legs without closed forms (the dual SCARA) take their dynamics reduced through the loop
-closure and their pose solved from the last one (:mod:`symkin.simulation.closure_functions`).
+closure and their pose solved from the last one (:mod:`symkin.mechanism.closure`).
 
 A hybrid device (a DELTA carrying a wrist, symkin.parallel.hybrid) is a plant in its actuated
 coordinates z = (q, qw): the legs' then the wrist's joints, as its generated dynamics return
@@ -31,13 +31,13 @@ from __future__ import annotations
 import numpy as np
 
 from symkin import mechanism
-from symkin.analysis.closure_workspace import uses_closure
-from symkin.analysis.conditioning import inverse_condition_number
+from symkin.mechanism.closure import uses_closure
+from symkin.numerics.conditioning import inverse_condition_number
 from symkin.mechanism.device import DEVICE_TASK_SPACE
 from symkin.errors import GeneratedCodeError
 from symkin.runtime.info import GeneratedModel
 from symkin.simulation.integrate import SimulationError
-from symkin.simulation.closure_functions import PLANT_FUNCTIONS, ClosureFunctions
+from symkin.mechanism.closure import PLANT_FUNCTIONS, ClosureFunctions
 
 #: Functions a plant cannot do without, and how to get them.
 REQUIRED = ("forward_dynamics", "inverse_dynamics", "mass_matrix", "kinetic_energy")

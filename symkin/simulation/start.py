@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from symkin.analysis.sobol import Sobol
+from symkin.numerics.sobol import Sobol
 from symkin.simulation.plant import Plant
 
 #: 1/kappa of the task Jacobian above which the middle of the limits is kept.

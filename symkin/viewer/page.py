@@ -15,18 +15,16 @@ few lines, with the one rendering and safety path (escaping, CSP hashes) they al
 The conditioning the page shows is that of the analyses (:func:`symkin.analysis.global_indices.local_index`):
 the same task Jacobian, homogenized by the same characteristic length when the task space mixes
 lengths and angles, and for a pose platform the twist Jacobian of
-:class:`symkin.analysis.parallel.ConstantOrientation`.
+:class:`symkin.mechanism.reach.ConstantOrientation`.
 """
 
 from __future__ import annotations
 
 import base64
 import hashlib
-import json
 import math
 from dataclasses import dataclass
 from importlib import resources
-from pathlib import Path
 from collections.abc import Callable
 from typing import Any
 
@@ -34,8 +32,11 @@ import numpy as np
 from jinja2.utils import htmlsafe_json_dumps
 from markupsafe import Markup
 
+from symkin.mechanism.closure import CLOSED, MAX_STEP, SOLVE_ITERATIONS, SOLVE_TOLERANCE, assemble_at_home
 from symkin._version import __version__
-from symkin.analysis import closure_workspace, conditioning, global_indices, parallel, sampling, workspace
+from symkin.numerics import conditioning, sampling
+from symkin.analysis import closure_workspace, global_indices, workspace
+from symkin.mechanism import reach
 from symkin.analysis.needs import NEEDS
 from symkin import mechanism
 from symkin.mechanism import Limits, MechanismKind
@@ -84,7 +85,7 @@ class ViewUnavailable(ValueError):
 
 #: ... and a hybrid device's wrist on the platform: its links' frames, the TCP and the wrist's angular Jacobian.
 WRIST_VIEW_OUTPUTS = ("device_fk", "device_frames", "device_jacobian")
-#: Legs without closed forms (:func:`symkin.analysis.closure_workspace.uses_closure`): the page solves the closure
+#: Legs without closed forms (:func:`symkin.mechanism.closure.uses_closure`): the page solves the closure
 #: for (q, s) from the last assembly, J = dp/dq from its Jacobians, and draws every joint of every leg.
 CLOSURE_VIEW_OUTPUTS = ("closure", "closure_jacobians", "leg_joints")
 #: What a model file is also derived with for the page where the model has it: a wrist's functions, every leg joint.
@@ -121,8 +122,8 @@ def _length(model: GeneratedModel, limits: np.ndarray) -> float | None:
     """The characteristic length that homogenizes J where the rated task space mixes lengths and angles
     (a pose platform's twist, at its home orientation), as the analyses compute it; else None."""
     if mechanism.kind_of(model) is MechanismKind.PARALLEL_POSE:
-        return global_indices.characteristic_length_of(parallel.constant_orientation(model), limits)
-    return global_indices.characteristic_length_of(model, limits) if mechanism.mixes_translations_and_rotations(model) \
+        return reach.characteristic_length_of(reach.constant_orientation(model), limits)
+    return reach.characteristic_length_of(model, limits) if mechanism.mixes_translations_and_rotations(model) \
         else None
 
 
@@ -139,12 +140,12 @@ def workspace_cloud(model: GeneratedModel, samples: int, seed: int = 0, limits: 
     length = _length(model, bounds)
     homogenized = f"; J homogenized with L = {1000 * length:.1f} mm." if length is not None else "."
     if mechanism.kind_of(model) is MechanismKind.PARALLEL_POSE:
-        held = parallel.constant_orientation(model)
-        lower, upper = parallel.constant_orientation_box(held, bounds)
+        held = reach.constant_orientation(model)
+        lower, upper = reach.constant_orientation_box(held, bounds)
         log2 = max(1, math.ceil(math.log2(samples)))
         while True:  # about ``samples`` reachable points: the box holds the workspace loosely
             points = sampling.sobol(lower, upper, log2, np.random.default_rng(seed))
-            q, reachable = parallel.reachable_points(held, points, bounds)
+            q, reachable = reach.reachable_points(held, points, bounds)
             found = max(int(reachable.sum()), 1)
             if found >= samples / 2 or log2 >= MAX_SOBOL_LOG2:
                 break
@@ -152,7 +153,7 @@ def workspace_cloud(model: GeneratedModel, samples: int, seed: int = 0, limits: 
         index = global_indices.scaled_index(held, conditioning.inverse_condition_number, length, bounds)
         values = index(held.jacobian(q[reachable], points[reachable]))
         note = (f"{int(reachable.sum())} reachable platform centres of {len(points)} Sobol points, platform held at "
-                f"roll, pitch, yaw = {parallel.orientation_text(held)}{homogenized}")
+                f"roll, pitch, yaw = {reach.orientation_text(held)}{homogenized}")
         return Cloud(points[reachable], values, q[reachable], length, note)
     cloud = workspace.sample_workspace(model, samples, limits=limits, seed=seed)
     values = global_indices.local_index(model, cloud.q, length=length)
@@ -165,7 +166,7 @@ def _closure_cloud(model: GeneratedModel, samples: int, limits: Limits | None) -
     orientation, with 1/kappa (:func:`symkin.analysis.closure_workspace.closure_workspace`)."""
     task = mechanism.task_space(model)
     axes = tuple(c for c in task if c in mechanism.POSITION_COMPONENTS)
-    start = closure_workspace.assemble_at_home(model)
+    start = assemble_at_home(model)
     if not axes:
         return Cloud(np.zeros((0, 3)), np.zeros(0), np.zeros((0, len(model.info.coordinates))), None,
                      "no workspace cloud: the platform's workspace is a set of orientations, not of points.",
@@ -196,7 +197,7 @@ def no_cloud(model: GeneratedModel, limits: Limits | None = None) -> Cloud:
     if _solved_through_closure(model):
         return Cloud(np.zeros((0, 3)), np.zeros(0), np.zeros((0, n)), None,
                      "no workspace cloud (--workspace 0); 1/kappa of J unhomogenized (no characteristic length).",
-                     home_assembly=closure_workspace.assemble_at_home(model))
+                     home_assembly=assemble_at_home(model))
     return Cloud(np.zeros((0, 3)), np.zeros(0), np.zeros((0, n)), _length(model, mechanism.joint_limits(model, limits)),
                  "no workspace cloud (--workspace 0).")
 
@@ -319,8 +320,8 @@ def page_data(model: GeneratedModel, cloud: Cloud, limits: Limits | None = None)
     if kind == "parallel":
         data["task"] = _task(model, cloud, np.array(home["p"]))
     if cloud.home_assembly is not None:  # the page's Gauss-Newton takes the analyses' settings
-        data["closure"] = {"max_step": closure_workspace.MAX_STEP, "tolerance": closure_workspace.SOLVE_TOLERANCE,
-                           "closed": closure_workspace.CLOSED, "iterations": closure_workspace.SOLVE_ITERATIONS}
+        data["closure"] = {"max_step": MAX_STEP, "tolerance": SOLVE_TOLERANCE,
+                           "closed": CLOSED, "iterations": SOLVE_ITERATIONS}
     if "qw" in home:
         data["wrist"] = wrist
     return data

@@ -16,10 +16,12 @@ import numpy as np
 import pytest
 
 import symkin
-from symkin.analysis import conditioning as C
-from symkin.analysis import convergence, feasibility, global_indices, grids, inverse, workspace
+from symkin.numerics import conditioning as C
+from symkin.mechanism import feasibility
+from symkin.analysis import convergence, global_indices, grids, inverse, workspace
 from symkin.mechanism.working_mode import working_mode
 from symkin import mechanism
+from symkin.mechanism import reach
 from symkin.cli import main
 from symkin.model import load_model
 
@@ -129,7 +131,7 @@ def test_singular_and_unassembled_configurations_give_zero_never_nan():
 def test_ik_reachability_respects_the_actuator_limits(ik):
     limits = mechanism.joint_limits(DELTA)
     assert np.allclose(limits, np.radians([[-90, 60]] * 3))
-    points = workspace.bounding_box(DELTA)
+    points = reach.bounding_box(DELTA)
     grid = np.random.default_rng(3).uniform(points[0], points[1], (20000, 3))
     q, inside = feasibility.feasible_configurations(ik, grid, limits, mechanism.revolute_mask(DELTA))
     assert inside.mean() > 0.1
@@ -158,7 +160,7 @@ def test_boundary_singularities_lie_on_the_workspace_boundary(ik):
     step = 1e-5
     assert not feasibility.reachable(ik, p + step * direction, limits, revolute).any()
     assert feasibility.reachable(ik, p - step * direction, limits, revolute).all()
-    box = workspace.bounding_box(DELTA, limits=FULL_TURN, samples=2**15)
+    box = reach.bounding_box(DELTA, limits=FULL_TURN, samples=2**15)
     occupancy = grids.reachability_grid(DELTA, ik, box, 0.006, limits=FULL_TURN)
     boundary_centres = occupancy.centers()[occupancy.boundary()]
     distance = np.linalg.norm(p[:, None, :] - boundary_centres[None], axis=-1).min(axis=1)
@@ -168,7 +170,7 @@ def test_boundary_singularities_lie_on_the_workspace_boundary(ik):
 
 def test_lowest_conditioning_lies_on_the_boundary_within_the_actuator_limits(ik):
     """In the model's limits the working mode ends at leg singularities: the worst cells are boundary cells."""
-    box = workspace.bounding_box(DELTA)
+    box = reach.bounding_box(DELTA)
     occupancy, values = grids.index_grid(DELTA, ik, box, 0.006)
     assert np.array_equal(np.isfinite(values), occupancy.occupied)
     reachable = values[occupancy.occupied]

@@ -1,7 +1,7 @@
 """Dimensioning optimization (``symkin.design``, ``symkin optimize``): seed sec. 4 steps 1-3, GCI eq. 8.28.
 
 Oracles independent of the CasADi surrogate: the numpy backend with
-``symkin.analysis.conditioning`` at the same nodes (value and gradient by central
+``symkin.numerics.conditioning`` at the same nodes (value and gradient by central
 differences), the true GCI by ``symkin.analysis.gci`` (1/kappa from singular values,
 randomized QMC), the closed forms of the 2R arm (isotropy at l1 = sqrt(2) l2,
 theta2 = 135 deg; the pointwise optimum of 1/kappa_F(theta2; l1/l2) is l1/l2 = sqrt(2) for
@@ -22,10 +22,11 @@ import pytest
 import symkin
 from conftest import GENERATED_DIR, MODELS_DIR, ROOT
 from symkin import design
-from symkin.analysis import conditioning, forces, rating
+from symkin.numerics import conditioning
+from symkin.analysis import forces, rating
 from symkin.mechanism import MechanismKind
 from symkin.analysis.needs import NEEDS
-from symkin.analysis.parallel import angular_velocity_matrix
+from symkin.mechanism.reach import angular_velocity_matrix
 from symkin.cli import main
 from symkin.design import formulation
 from tolerances import CLOSED_FORM, KINEMATICS, svd

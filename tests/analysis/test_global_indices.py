@@ -27,7 +27,7 @@ from symkin.analysis.adaptive import adaptive, genz_malik_rule
 from symkin.analysis.integrand import Integrand
 from symkin.analysis.integrators import INTEGRATORS, integrate
 from symkin.analysis.inverse import closed_form_inverse
-from symkin.analysis.workspace import bounding_box
+from symkin.mechanism.reach import bounding_box
 from symkin.model import coordinates
 from symkin.manifest_schema import Coordinate
 from symkin.runtime.info import ModelInfo
@@ -263,7 +263,7 @@ def test_gci_is_dimensionless_and_area_scales_with_length_squared():
 
 
 def test_global_index_accepts_other_local_indices():
-    from symkin.analysis import conditioning
+    from symkin.numerics import conditioning
 
     gci = G.gci(ARM, method="adaptive", samples=2**12).value.value
     smooth = G.global_index(ARM, method="adaptive", samples=2**12,

@@ -380,7 +380,7 @@ def test_a_rotating_platform_is_rated_pushed_with_its_orientation_free_and_twist
     of the generated operational-space mass matrix Mx (task coordinates p, roll-pitch-yaw rates): the mobility
     J_t M^-1 J_t^T of the twist t = (v, omega) = diag(I, E) pd is diag(I, E) Mx^-1 diag(I, E)^T, so the apparent
     mass is the inverse of its translational block and the apparent inertia of its rotational one."""
-    from symkin.analysis.parallel import angular_velocity_matrix
+    from symkin.mechanism.reach import angular_velocity_matrix
 
     stewart, sheet, _ = stewart_sheet
     measures = {m.name: m.values for m in sheet.measures}
@@ -403,11 +403,11 @@ def test_a_rotating_platform_is_rated_pushed_with_its_orientation_free_and_twist
 def test_a_rotating_platforms_isotropic_torque_is_its_weakest_axis_and_loads_a_leg_to_its_limit(stewart_sheet):
     """About the weakest of a dense scan of axes the legs render the isotropic torque (no force), and the torque
     tau = J_w^T m of that size about the axis that sets it loads one leg exactly to its limit."""
-    from symkin.analysis import parallel
+    from symkin.mechanism import reach
 
     stewart, sheet, limits = stewart_sheet
     torque = {m.name: m.values for m in sheet.measures}["isotropic_torque"]
-    view = parallel.constant_orientation(stewart)
+    view = reach.constant_orientation(stewart)
     rng = np.random.default_rng(3)
     axes = rng.normal(size=(20000, 3))
     axes /= np.linalg.norm(axes, axis=-1, keepdims=True)
@@ -470,7 +470,7 @@ def test_a_spherical_platform_is_rated_by_the_inertia_and_torques_felt_turning_i
     weakest of 20000 axes through a J_w taken from differences of the closed-form fk; at the home pose, where the
     Agile Eye is isotropic (J_w orthogonal), the inertia is the same about every axis and the isotropic torque is
     the effort limit."""
-    from symkin.analysis.parallel import angular_velocity_matrix
+    from symkin.mechanism.reach import angular_velocity_matrix
 
     eye, sheet, limits = eye_sheet
     measures = {m.name: m.values for m in sheet.measures}

@@ -16,8 +16,10 @@ import numpy as np
 import pytest
 
 import symkin
-from symkin.analysis import conditioning as C
-from symkin.analysis import feasibility, global_indices, grids, inverse, parallel, workspace
+from symkin.numerics import conditioning as C
+from symkin.mechanism import feasibility
+from symkin.analysis import global_indices, grids, inverse, workspace
+from symkin.mechanism import reach
 from symkin import mechanism
 from symkin.cli import main
 
@@ -25,7 +27,7 @@ from conftest import GENERATED_DIR, MODELS_DIR
 
 STEWART_DIR = str(GENERATED_DIR / "stewart")
 STEWART = symkin.load(STEWART_DIR)
-HELD = parallel.constant_orientation(STEWART)
+HELD = reach.constant_orientation(STEWART)
 TILTED = np.radians([5.0, -8.0, 20.0])
 #: Characteristic length of the tests (m): fixed, so no test depends on the 'auto' search.
 LENGTH = 0.1
@@ -110,24 +112,24 @@ def ik():
 
 
 def test_the_held_platform_is_a_positional_parallel_mechanism_with_the_leg_limits(ik):
-    assert isinstance(ik, parallel.ConstantOrientationInverse)
+    assert isinstance(ik, reach.ConstantOrientationInverse)
     assert ik.dimension == 3
     assert mechanism.position_axes(HELD) == (0, 1, 2)
     assert mechanism.mixes_translations_and_rotations(HELD)
     np.testing.assert_array_equal(mechanism.joint_limits(HELD), [STROKE] * 6)
     np.testing.assert_allclose(HELD.orientation, 0.0)
     # the sphere centres c_i = a_i - R b_i, read off the generated ik
-    tilted = parallel.constant_orientation(STEWART, TILTED)
-    np.testing.assert_allclose(parallel.leg_sphere_centres(tilted), A - B @ _rotation(*TILTED).T, atol=1e-12)
+    tilted = reach.constant_orientation(STEWART, TILTED)
+    np.testing.assert_allclose(reach.leg_sphere_centres(tilted), A - B @ _rotation(*TILTED).T, atol=1e-12)
 
 
 def test_raw_pose_platform_and_translational_models_are_refused_with_a_message():
     with pytest.raises(ValueError, match="constant orientation"):
-        parallel.parallel_inverse(STEWART)
+        reach.generated_inverse(STEWART)
     with pytest.raises(ValueError, match="task space x, y, z, roll, pitch, yaw"):
-        parallel.constant_orientation(symkin.load(GENERATED_DIR / "delta"), (0, 0, 0))
+        reach.constant_orientation(symkin.load(GENERATED_DIR / "delta"), (0, 0, 0))
     with pytest.raises(ValueError, match="singularity of the roll-pitch-yaw angles"):
-        parallel.constant_orientation(STEWART, (0, np.pi / 2, 0))
+        reach.constant_orientation(STEWART, (0, np.pi / 2, 0))
 
 
 def test_reachability_is_the_stroke_in_the_assembly_mode_of_home(ik):
@@ -142,15 +144,15 @@ def test_reachability_is_the_stroke_in_the_assembly_mode_of_home(ik):
 @pytest.mark.parametrize("orientation", [(0.0, 0.0, 0.0), tuple(TILTED)])
 def test_volume_agrees_with_an_independent_monte_carlo(oracle, orientation):
     volume, error, _ = oracle if orientation == (0.0, 0.0, 0.0) else _monte_carlo(orientation, 600_000, seed=3)
-    held = parallel.constant_orientation(STEWART, orientation)
-    measured = global_indices.workspace_measure(held, domain="cartesian", inverse=parallel.parallel_inverse(held),
+    held = reach.constant_orientation(STEWART, orientation)
+    measured = global_indices.workspace_measure(held, domain="cartesian", inverse=reach.generated_inverse(held),
                                                 method="qmc", samples=2**15, seed=0)
     assert abs(measured.value - volume) <= 4.0 * np.hypot(error, measured.error / 2.0)
     assert measured.error < 0.02 * measured.value
 
 
 def test_reachable_cells_approach_the_volume_and_the_boundary_holds_the_lowest_conditioning(oracle, ik):
-    box = workspace.bounding_box(HELD)
+    box = reach.bounding_box(HELD)
     occupancy, values = grids.index_grid(HELD, ik, box, 0.008, length=LENGTH)
     # cells whose centre is reachable: a midpoint rule for the volume (thin spikes of the
     # workspace fall between centres, so the interior/occupied bracket is not guaranteed)
@@ -167,7 +169,7 @@ def test_reachable_cells_approach_the_volume_and_the_boundary_holds_the_lowest_c
 
 @pytest.mark.parametrize("orientation", [(0.0, 0.0, 0.0), tuple(TILTED)])
 def test_inverse_condition_matches_the_textbook_inverse_jacobian(oracle, orientation):
-    held = parallel.constant_orientation(STEWART, orientation)
+    held = reach.constant_orientation(STEWART, orientation)
     points = oracle[2][:400]
     q = held.ik(points).joints
     scored = global_indices.scaled_index(held, C.inverse_condition_number, LENGTH, mechanism.joint_limits(held))
@@ -213,8 +215,8 @@ def test_gci_estimators_converge_to_the_independent_value(oracle_gci, ik, method
 
 
 def test_automatic_length_minimizes_the_mean_kappa_f_squared(ik):
-    length = global_indices.characteristic_length_of(HELD)
-    points = grids.reachability_grid(HELD, ik, workspace.bounding_box(HELD), 0.01)
+    length = reach.characteristic_length_of(HELD)
+    points = grids.reachability_grid(HELD, ik, reach.bounding_box(HELD), 0.01)
     points = points.centers()[points.occupied]
     J = HELD.jacobian(HELD.ik(points).joints, points)
 
@@ -293,14 +295,14 @@ def test_passive_limits_of_the_base_joints_bound_the_legs_elevation(tmp_path):
     path.write_text(text.replace(plain, plain[:-1] + ", limits: [null, [deg(-75), deg(-50)]]}"))
     assert main(["derive", str(path), "-o", str(tmp_path), "--only", "ik,inverse_jacobian,closure,closure_jacobians",
                  "--backend", "numpy"]) == 0
-    held = parallel.constant_orientation(symkin.load(tmp_path / "stewart"))
+    held = reach.constant_orientation(symkin.load(tmp_path / "stewart"))
     points = np.random.default_rng(5).uniform([-0.16, -0.16, 0.15], [0.16, 0.16, 0.3], (3000, 3))
     legs = _legs(points)
     lengths = np.linalg.norm(legs, axis=-1)
     elevation = np.degrees(np.arcsin(legs[..., 2] / lengths))
     stroke = np.all((lengths >= STROKE[0]) & (lengths <= STROKE[1]), axis=-1)
     expected = stroke & np.all((elevation >= 50) & (elevation <= 75), axis=-1)
-    got = feasibility.reachable(parallel.parallel_inverse(held), points, mechanism.joint_limits(held),
+    got = feasibility.reachable(reach.generated_inverse(held), points, mechanism.joint_limits(held),
                             mechanism.revolute_mask(held))
     assert 100 < expected.sum() < 0.8 * stroke.sum()  # the limits cut the workspace
     np.testing.assert_array_equal(got, expected)

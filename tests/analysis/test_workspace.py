@@ -8,8 +8,10 @@ import numpy as np
 import pytest
 
 import symkin
-from symkin.analysis import feasibility, global_indices, grids, inverse, workspace
+from symkin.mechanism import feasibility
+from symkin.analysis import global_indices, grids, inverse, workspace
 from symkin import mechanism
+from symkin.mechanism import reach
 from symkin.analysis.inverse import closed_form_inverse
 from symkin.mechanism.limits import within_limits
 from symkin.errors import NotApplicable
@@ -81,16 +83,16 @@ def test_ur10e_cloud_is_three_dimensional_within_reach():
     cloud = workspace.sample_workspace(ur, 4096, seed=0)
     assert cloud.axes == ("x", "y", "z")
     assert cloud.grid_shape is None  # 6 joints: Sobol by default
-    reach = 0.6127 + 0.57155 + 0.17415 + 0.11985 + 0.11655 + 0.1807
-    assert np.all(np.linalg.norm(cloud.points, axis=1) <= reach)
+    longest = 0.6127 + 0.57155 + 0.17415 + 0.11985 + 0.11655 + 0.1807
+    assert np.all(np.linalg.norm(cloud.points, axis=1) <= longest)
 
 
 def test_bounding_box_contains_the_workspace():
     for arm in (ARM, ARM.bind(l1=0.3, l2=0.05)):
         points = workspace.sample_workspace(arm, 200_000, method="random", seed=2).points
         extent = points.max(axis=0) - points.min(axis=0)
-        for samples, slack in ((64, 2.0), (workspace.BOX_SAMPLES, 1.05)):  # coarse joint grids pad more
-            lower, upper = workspace.bounding_box(arm, samples=samples)
+        for samples, slack in ((64, 2.0), (reach.BOX_SAMPLES, 1.05)):  # coarse joint grids pad more
+            lower, upper = reach.bounding_box(arm, samples=samples)
             assert np.all(points >= lower)
             assert np.all(points <= upper)
             assert np.all(upper - lower < slack * extent)
@@ -205,7 +207,7 @@ def test_boundary_singularities_lie_on_the_workspace_boundary():
 
 def test_reachability_grid_finds_the_same_workspace_and_boundary():
     ik = closed_form_inverse(ARM)
-    grid = grids.reachability_grid(ARM, ik, workspace.bounding_box(ARM), 0.002)
+    grid = grids.reachability_grid(ARM, ik, reach.bounding_box(ARM), 0.002)
     area = grid.occupied.sum() * grid.cell_volume
     assert area == pytest.approx(np.pi / 2 * 0.01, rel=0.02)
     # The stretched arm away from the two cusps (where the workspace is thinner than a cell).

@@ -91,16 +91,17 @@ def test_cli_chunked_gci(capsys):
 def test_the_cartesian_domain_in_chunks(payload):
     """Reachability by inverse kinematics over a Cartesian box: the planar arm's area within its error bar, and
     the rotating Stewart platform (at its home orientation) against the in-memory integrator within both bars."""
-    from symkin.analysis import inverse, study, workspace
+    from symkin.analysis import inverse
+    from symkin.mechanism import reach
 
     model = payload.load()
-    box = tuple(tuple(float(v) for v in b) for b in workspace.bounding_box(model))
+    box = tuple(tuple(float(v) for v in b) for b in reach.bounding_box(model))
     area = integrate_chunked(payload, IntegrandSpec(domain="cartesian", box=box), "qmc", 2**15, seed=5, chunk=5000,
                              scheduler="serial").component(1)
     assert abs(area.value - AREA) <= 3 * area.error
     stewart_payload = ModelPayload.from_directory(GENERATED_DIR / "stewart")
-    held = study.at_orientation(stewart_payload.load(), None)
-    box = tuple(tuple(float(v) for v in b) for b in workspace.bounding_box(held))
+    held = reach.held_at(stewart_payload.load(), None)
+    box = tuple(tuple(float(v) for v in b) for b in reach.bounding_box(held))
     chunked_gci = integrate_chunked(stewart_payload, IntegrandSpec(length=0.1, domain="cartesian", box=box), "qmc", 2**15,
                                     seed=6,
                                     chunk=5000, scheduler="serial").ratio(0, 1)

@@ -36,7 +36,7 @@ NUMERIC_COMMANDS = (["--help"], ["gci", "--help"], ["gci", str(GENERATED_DIR / "
 #: What the parser of every command may not import (issue 34: ``symkin --help`` at most 0.15 s more than importing
 #: numpy, benchmarks/bench_startup.py): the libraries a command imports when it runs.
 HEAVY_MODULES = ("sympy", "symengine", "casadi", "scipy", "matplotlib", "jinja2", "yaml", "dask", "mpmath",
-                 "symkin.analysis.conditioning", "symkin.design.formulation", "symkin.model")
+                 "symkin.numerics.conditioning", "symkin.design.formulation", "symkin.model")
 
 
 def test_the_parser_imports_no_heavy_library():

@@ -8,7 +8,7 @@ import numpy as np
 
 from conftest import GENERATED_DIR, MODELS_DIR
 from symkin import derive, load
-from symkin.analysis import parallel
+from symkin.mechanism import reach
 from symkin.model import load_model
 from tolerances import KINEMATICS
 
@@ -38,9 +38,9 @@ def test_a_parallel_view_and_a_platform_held_at_a_constant_orientation():
     assert delta.info.home == (0.0, 0.0, -0.15)
     assert len(delta.info.passive_limits) == 3
     stewart = load(GENERATED_DIR / "stewart")
-    held = parallel.constant_orientation(stewart, np.zeros(3))
+    held = reach.constant_orientation(stewart, np.zeros(3))
     assert stewart.info.task_space == ("x", "y", "z", "roll", "pitch", "yaw")
-    assert held.info.task_space == parallel.TWIST_COMPONENTS  # a view, the loaded model is untouched
+    assert held.info.task_space == reach.TWIST_COMPONENTS  # a view, the loaded model is untouched
     assert held.info.coordinates == stewart.info.coordinates
     assert held.manifest is stewart.manifest
 

@@ -19,7 +19,10 @@ import numpy as np
 import pytest
 
 import symkin
-from symkin.analysis import feasibility, global_indices, parallel, sampling, workspace
+from symkin.mechanism import feasibility
+from symkin.numerics import sampling
+from symkin.analysis import global_indices
+from symkin.mechanism import reach
 from symkin.mechanism.working_mode import working_mode
 from symkin import mechanism
 from symkin.mechanism import passive
@@ -130,18 +133,18 @@ def test_a_pose_beyond_a_passive_limit_is_excluded_one_inside_kept(limited, pose
     inside, beyond = np.argmin(np.abs(swing - 15)), np.argmin(np.abs(swing - 25))
     assert abs(swing[inside] - 15) < 2
     assert abs(swing[beyond] - 25) < 2
-    ik = parallel.parallel_inverse(limited)  # +-20 deg
+    ik = reach.generated_inverse(limited)  # +-20 deg
     points = p[[inside, beyond]]
     _, valid = ik.solve(points)
     assert valid[:, 0].tolist() == [True, False]
     _, in_mode = working_mode(limited, q[[inside, beyond]])
     assert in_mode.tolist() == [True, False]
     # without the limits both are in the workspace
-    assert parallel.parallel_inverse(_variant(limited, None)).solve(points)[1][:, 0].all()
+    assert reach.generated_inverse(_variant(limited, None)).solve(points)[1][:, 0].all()
 
 
 def test_tighter_passive_limits_shrink_the_workspace(limited):
-    ik = parallel.parallel_inverse(DELTA)
+    ik = reach.generated_inverse(DELTA)
     lower, upper = np.array([-0.13, -0.13, -0.27]), np.array([0.13, 0.13, -0.05])
     axes = [np.linspace(lo, hi, 14) for lo, hi in zip(lower, upper)]
     points = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
@@ -151,7 +154,7 @@ def test_tighter_passive_limits_shrink_the_workspace(limited):
     counts = [int(previous.sum())]
     for width in (90, 30, 20, 10):
         model = _variant(limited, _elbow(width))
-        current = feasibility.reachable(parallel.parallel_inverse(model), points, box, revolute)
+        current = feasibility.reachable(reach.generated_inverse(model), points, box, revolute)
         assert not np.any(current & ~previous)  # a subset of the looser limits' workspace
         counts.append(int(current.sum()))
         previous = current
@@ -166,12 +169,12 @@ def test_wide_passive_limits_reproduce_the_unlimited_analyses_exactly(limited):
                               "wrist#_1": [-4.0, 4.0], "wrist#_2": [-np.pi, np.pi]})
     with warnings.catch_warnings():
         warnings.simplefilter("error", passive.PassiveJointWarning)
-        box = workspace.bounding_box(DELTA)
+        box = reach.bounding_box(DELTA)
         for domain in ("joint", "cartesian"):
             expected = global_indices.gci(DELTA, method="grid", samples=1500, domain=domain, box=box,
-                                          inverse=parallel.parallel_inverse(DELTA))
+                                          inverse=reach.generated_inverse(DELTA))
             result = global_indices.gci(wide, method="grid", samples=1500, domain=domain, box=box,
-                                        inverse=parallel.parallel_inverse(wide))
+                                        inverse=reach.generated_inverse(wide))
             assert (result.value.value, result.measure.value) == (expected.value.value, expected.measure.value)
             assert (result.value.error, result.measure.error) == (expected.value.error, expected.measure.error)
 
@@ -194,7 +197,7 @@ def test_unresolved_passive_variables_are_unreachable_and_reported(limited, pose
 def test_malformed_passive_limits_are_refused_with_their_place(limited, limits, message):
     model = _variant(limited, limits)
     with pytest.raises(ValueError, match=message):
-        parallel.parallel_inverse(model)
+        reach.generated_inverse(model)
     with pytest.raises(ValueError, match=message):
         global_indices.gci(model, method="grid", samples=200)
 
@@ -233,8 +236,8 @@ def test_joint_and_cartesian_domains_agree_under_passive_limits(limited):
     passive limits (fk, then s) and the reachability indicator over a box (ik, then s)."""
     joint = global_indices.workspace_measure(limited, method="grid", samples=8000)
     cartesian = global_indices.workspace_measure(limited, method="grid", samples=8000, domain="cartesian",
-                                                 box=workspace.bounding_box(DELTA),
-                                                 inverse=parallel.parallel_inverse(limited))
+                                                 box=reach.bounding_box(DELTA),
+                                                 inverse=reach.generated_inverse(limited))
     assert abs(joint.value - cartesian.value) <= min(joint.error + cartesian.error, 0.05 * cartesian.value)
     assert cartesian.value < 0.5 * global_indices.workspace_measure(DELTA, method="grid", samples=8000).value
 

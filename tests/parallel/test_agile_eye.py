@@ -87,7 +87,7 @@ def test_inverse_jacobian_matches_finite_differences_of_the_closed_form(eye):
 def test_the_closed_form_fk_inverts_the_ik_over_the_workspace(eye):
     """FK(IK(R)) = R to rounding (kappa(J^-1) times a few eps) at every sampled orientation whose actuators lie
     within their limits; a configuration outside the home pose's working mode is not claimed (ik(fk(q)) = q
-    is the working-mode test of symkin.analysis.parallel)."""
+    is the working-mode test of symkin.mechanism.reach)."""
     p = random_orientations(7, 4000, spread=1.2)
     q = eye.ik(p).joints
     inside = np.all(np.abs(q) <= np.deg2rad(60), axis=-1)

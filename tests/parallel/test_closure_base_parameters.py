@@ -30,7 +30,7 @@ from symkin.parallel.prime_field import NoPoint, PrimeField
 from symkin.runtime.closure_dynamics import (actuated_dynamics, closure_energy_regressor, closure_inverse_dynamics,
                                              closure_regressor)
 from symkin.runtime.parallel import solve_closure
-from symkin.simulation.closure_functions import ClosureAssembly
+from symkin.mechanism.closure import ClosureAssembly
 from tolerances import DYNAMICS, EPS, NEWTON
 
 #: One worker for the module: its tests share the derivation of the model (shared_derivation) and its generation.

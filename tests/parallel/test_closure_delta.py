@@ -73,7 +73,7 @@ FLIPPED = "  home_assembly: {swing1: deg(170), sway1: deg(170)}\n"
 def test_the_home_assembly_is_reported_and_the_declared_one_is_used(closure_delta, tmp_path, capsys):
     """symkin workspace reports the home assembly with the start that reached it and every joint's value; a
     declared parallel.home_assembly is where the solve starts (its values in the manifest), and the report says so."""
-    from symkin.analysis.closure_workspace import solve_home_assembly
+    from symkin.mechanism.closure import solve_home_assembly
 
     default = solve_home_assembly(closure_delta)
     assert default.start == "q = s = 0"

@@ -3,7 +3,7 @@ platform has only its generated loop closure.
 
 Oracles independent of the CasADi program: the numpy runtime's ``closure_velocities`` (J from the orthogonal
 complement of range(Phi_s) and an SVD, where the program takes least squares on [Phi_p Phi_s]) with
-``symkin.analysis.conditioning`` at the program's points; central differences of that numpy surrogate at the
+``symkin.numerics.conditioning`` at the program's points; central differences of that numpy surrogate at the
 optimum (stationary: its free lengths end inside their bounds); Gauss-Newton continuation of the optimum's home
 assembly to every point (the optimizer's assemblies stay in the working mode it started in); the independent
 evaluation over a denser grid of the box.
@@ -18,7 +18,7 @@ import pytest
 
 from sample_models import dual_scara_text
 from symkin import design, load, pipeline
-from symkin.analysis import conditioning
+from symkin.numerics import conditioning
 from symkin import mechanism
 from symkin.analysis.closure_workspace import angular_rates, continue_from
 from symkin.cli import main

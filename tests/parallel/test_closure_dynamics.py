@@ -169,7 +169,7 @@ def test_the_plant_continues_the_home_assembly_to_a_far_configuration(scara):
     """The plant's assembly at actuator positions 0.4 rad away is the home assembly continued (in steps of at most
     0.2 rad: two here) and equals a continuation written here in 40 steps; a batch read after the plant moved
     there gives the home pose back at the home configuration (solved from the home assembly, the nearer one)."""
-    from symkin.simulation.closure_functions import ClosureFunctions
+    from symkin.mechanism.closure import ClosureFunctions
 
     functions = ClosureFunctions(scara)
     home_q, home_s = functions.home, functions.assembly(functions.home)[0]
@@ -314,7 +314,7 @@ def test_a_plant_of_rubbing_legs_needs_their_friction(rubbing_dir):
     plant = Plant(rubbing)
     # near its home assembly, the plant's acceleration is the reduced dynamics with friction (checked against
     # Pinocchio above) at the assembly solved here: its own assembly and friction are wired in
-    from symkin.analysis.closure_workspace import assemble_at_home
+    from symkin.mechanism.closure import assemble_at_home
 
     home_q, home_s = assemble_at_home(rubbing)
     q = home_q + np.array([0.05, 0.01, -0.04, 0.03])

@@ -21,7 +21,8 @@ import pytest
 from conftest import SYMKIN_CLI
 from sample_models import dual_scara_text
 from symkin import load, pipeline
-from symkin.analysis.closure_workspace import assemble_at_home, closure_workspace
+from symkin.analysis.closure_workspace import closure_workspace
+from symkin.mechanism.closure import assemble_at_home
 from symkin.model import model_from_text
 from symkin.reporting import reporting_to
 from symkin.parallel.motion_check import check_platform_motion
@@ -349,7 +350,7 @@ def test_the_continued_workspace_is_the_working_mode_written_from_the_geometry(s
 def test_the_workspace_conditioning_is_that_of_the_closure_jacobian(scara, scara_workspace):
     """1/kappa at a cell: the singular values of J = dp/dq written from the geometry (central differences of
     the inverse kinematics, inverted) with the position rows divided by the characteristic length."""
-    from symkin.analysis.conditioning import homogenize, inverse_condition_number
+    from symkin.numerics.conditioning import homogenize, inverse_condition_number
 
     q0, s0 = assemble_at_home(scara)
     found = scara_workspace
@@ -503,7 +504,7 @@ def test_angle_rows_become_angular_velocity_at_each_pose():
     from types import SimpleNamespace
 
     from symkin.analysis.closure_workspace import angular_rates
-    from symkin.analysis.parallel import angular_velocity_matrix
+    from symkin.mechanism.reach import angular_velocity_matrix
 
     rng = np.random.default_rng(8)
     J, poses = rng.normal(size=(5, 6, 6)), rng.uniform(-1, 1, (5, 6))

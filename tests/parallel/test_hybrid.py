@@ -21,6 +21,7 @@ from symkin.derivation import Derivation
 from symkin.errors import DerivationError, ModelError
 from symkin.analysis import global_indices, rating
 from symkin.mechanism.device import WholeDevice
+from symkin.mechanism import reach
 from symkin.cli import main
 from symkin.simulation import Plant, scenarios
 from checks import assert_wall_equilibrium
@@ -377,7 +378,7 @@ def test_the_whole_devices_gci_is_a_monte_carlo_of_its_homogenized_actuator_jaco
     errors of their difference."""
     view = WholeDevice(device)
     limits = np.array(view.joint_limits)
-    length = global_indices.characteristic_length_of(view, limits)
+    length = reach.characteristic_length_of(view, limits)
     ours = global_indices.global_index(view, method="qmc", samples=2**14, seed=0, length=length)
     rng = np.random.default_rng(31)
     z = rng.uniform(limits[:, 0], limits[:, 1], (2**15, 6))

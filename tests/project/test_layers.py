@@ -27,7 +27,7 @@ PACKAGE = Path(__file__).resolve().parents[2] / "symkin"
 #: Lowest first.  Each entry: the layer's name and its top-level modules or packages of symkin.
 LAYERS = (
     ("foundation", {"_version", "errors", "atomic", "cache_trust", "expression_dag", "symengine_bridge", "text_table", "lazy",
-                    "reporting", "newton"}),
+                    "reporting", "newton", "numerics"}),
     ("model", {"model", "geometry"}),
     ("structure", {"structure"}),
     ("ir", {"ir"}),
@@ -46,7 +46,8 @@ PATTERNS = {part: rank for rank, (_name, parts) in enumerate(LAYERS) for part in
 #: What each layer holds, for the table docs/architecture.md renders from LAYERS (checked below).
 ROLES = {
     "foundation": "errors, atomic writes, trust in the cache folder, the version, expression graphs, the SymEngine bridge, text tables, "
-                  "packages imported lazily, progress reports of long work, the batched Newton solver of every closure",
+                  "packages imported lazily, progress reports of long work, the batched Newton solver of every closure, "
+                  "numerics: sampling, Sobol points and the conditioning of Jacobians",
     "model": "the model format: reading, validating, the schema; geometry",
     "structure": "mobility and topology synthesis",
     "ir": "`FunctionSpec`, `OptimizedFunction`, inputs, op counts, `QuantityDef`",
@@ -54,7 +55,8 @@ ROLES = {
     "optimize": "expression optimization",
     "backends": "the emitters, the manifest and its schema, the pipeline and its derivation cache",
     "runtime": "each backend's loader, the bindings they share, the numerical kinematics of parallel mechanisms",
-    "mechanism": "the run-time mechanism every analysis asks: coordinates, limits, kinds, the passive joints' closure",
+    "mechanism": "the run-time mechanism every analysis asks: coordinates, limits, kinds, the passive joints' closure, "
+                 "reachability through inverse kinematics",
     "analyses": "inverse kinematics, analyses, design, simulation, numerical stability, the viewer",
     "api": "the public functions, and the `symkin` package facade",
     "cli": "the commands",

@@ -16,6 +16,7 @@ from conftest import EXAMPLE_MODELS, MODELS_DIR, SYMKIN_CLI
 from symkin import load
 from symkin.analysis import global_indices
 from symkin import mechanism
+from symkin.mechanism import reach
 from symkin.viewer import page
 from tolerances import KINEMATICS
 from sample_models import ROBOTS_DIR
@@ -70,11 +71,11 @@ def test_the_cloud_is_rated_as_the_analyses_rate_it(generated_dir):
     """Points are the workspace sample's TCP positions; 1/kappa is local_index's (homogenized for the UR10e)."""
     model = load(generated_dir / "ur10e")
     cloud = page.workspace_cloud(model, 256)
-    assert cloud.length == pytest.approx(global_indices.characteristic_length_of(model))
+    assert cloud.length == pytest.approx(reach.characteristic_length_of(model))
     np.testing.assert_array_equal(cloud.inverse_kappa, global_indices.local_index(model, cloud.q, length=cloud.length))
-    reach = 2.0  # m: the UR10e's TCP stays within 1.4 m of the base
+    extent = 2.0  # m: the UR10e's TCP stays within 1.4 m of the base
     np.testing.assert_allclose(cloud.points, np.stack([model.fk(q)[:3, 3] for q in cloud.q]), rtol=0,
-                               atol=KINEMATICS * reach)
+                               atol=KINEMATICS * extent)
 
 
 @pytest.mark.parametrize("source", [MODELS_DIR / "delta.yaml", MODELS_DIR / "ur10e.urdf",
@@ -95,8 +96,8 @@ def test_a_design_is_shown_and_sampled_with_its_parameters(generated_dir, tmp_pa
     assert view(str(generated_dir / "planar_2r"), "-o", str(out), "--design", "l1=0.2", "--workspace", "400").returncode == 0
     data, _ = page_parts(out.read_text())
     assert {p["name"]: p["value"] for p in data["parameters"]} == {"l1": 0.2, "l2": 0.1}
-    reach = np.linalg.norm(np.array(data["cloud"]["points"]), axis=1).max()
-    assert 0.29 < reach <= 0.3 + 1e-6  # l1 + l2 with the longer first link
+    farthest = np.linalg.norm(np.array(data["cloud"]["points"]), axis=1).max()
+    assert 0.29 < farthest <= 0.3 + 1e-6  # l1 + l2 with the longer first link
 
 
 def test_bad_input_exits_2_and_writes_nothing(generated_dir, tmp_path):

@@ -17,7 +17,9 @@ import pytest
 from browser import chromium, drawn, open_page, pixels
 from sample_models import dual_scara_text
 from symkin import load, pipeline
-from symkin.analysis import conditioning, global_indices, parallel
+from symkin.numerics import conditioning
+from symkin.analysis import global_indices
+from symkin.mechanism import reach
 from symkin.model import model_from_text
 from symkin.runtime.parallel import closure_velocities, solve_closure
 from symkin.viewer import page as viewer_page
@@ -106,7 +108,7 @@ def test_the_stewart_platform_is_rated_by_its_twist_jacobian(browser, pages, gen
     p = np.array(page.evaluate("window.symkinView.state.p"))
     q = np.array(page.evaluate("window.symkinView.state.q"))
     np.testing.assert_allclose(q, model.ik(p).joints, rtol=0, atol=AGREEMENT * np.abs(q).max())
-    held = parallel.ConstantOrientation(model, p[3:])
+    held = reach.ConstantOrientation(model, p[3:])
     length = page.evaluate("JSON.parse(document.getElementById('symkin-data').textContent).conditioning.length")
     J = conditioning.homogenize(held.jacobian(q, p[:3]), length, (0, 1, 2))
     expected = float(conditioning.inverse_condition_number(J))

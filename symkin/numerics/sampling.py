@@ -10,7 +10,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from symkin.analysis.sobol import BITS, Sobol
+from symkin.numerics.sobol import BITS, Sobol
 
 
 def _box(lower: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -61,7 +61,7 @@ def sobol(lower: np.ndarray, upper: np.ndarray, log2_count: int, rng: np.random.
     """Scrambled Sobol points in the box: 2**log2_count points, or ``replicates`` independent sets of them.
 
     Each set is an independent scramble of the Sobol sequence (random linear matrix scramble
-    and digital shift, :class:`symkin.analysis.sobol.Sobol`, drawn from a child of ``rng`` as
+    and digital shift, :class:`symkin.numerics.sobol.Sobol`, drawn from a child of ``rng`` as
     scipy.stats.qmc.Sobol does: the same points).  It has 30 digits, so every point
     would sit on the lower corner of its 2^-30 cell, a bias of about 1e-10 that randomized
     QMC reaches at 2^18 points; the remaining digits are therefore drawn uniformly at
@@ -83,7 +83,7 @@ def sobol(lower: np.ndarray, upper: np.ndarray, log2_count: int, rng: np.random.
 def sobol_range(dimension: int, key: Sequence[int], start: int, stop: int) -> np.ndarray:
     """Points start ... stop - 1 (in the unit cube) of one scrambled Sobol sequence, drawn without the others.
 
-    The scramble comes from the seed sequence ``key``, the digits beyond :data:`~symkin.analysis.sobol.BITS`
+    The scramble comes from the seed sequence ``key``, the digits beyond :data:`~symkin.numerics.sobol.BITS`
     from the generator (``*key``, start), as in :func:`sobol`: a chunk of a sequence can be
     drawn by any process from its definition alone (the chunked integrators and workspace).
     """

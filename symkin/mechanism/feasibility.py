@@ -5,7 +5,7 @@ batch of TCP points, the joint coordinates of every solution branch and whether 
 branch is real.  Any object with this interface plugs in (:class:`InverseKinematics`):
 the closed forms of serial arms recognised by :mod:`symkin.ik` whose target is a TCP
 position (:class:`symkin.analysis.inverse.ClosedFormInverse`) and a parallel mechanism's
-closed-form inverse kinematics (:func:`symkin.analysis.parallel.parallel_inverse`: DELTA, one
+closed-form inverse kinematics (:func:`symkin.mechanism.reach.generated_inverse`: DELTA, one
 quadratic per leg, with its passive-joint limits folded into ``valid``).  Joint limits are
 applied here, once, for all of them (:func:`feasible_configurations`).
 """

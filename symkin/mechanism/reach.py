@@ -1,7 +1,10 @@
-"""Parallel mechanisms in the analyses: working mode, reachability by closed-form IK, Jacobians at (q, p).
+"""What a mechanism's handle reaches, as every Cartesian analysis asks it: the box around the workspace
+(:func:`bounding_box`), reachability through closed-form inverse kinematics, the characteristic length
+(:func:`characteristic_length_of`) and the integration domain in words (:func:`domain_description`), each answered
+here for every kind of mechanism so that the analyses do not tell kinds apart (issue 62).
 
-A parallel mechanism's generated functions differ from a serial arm's (see README):
-``fk(q)`` returns ``position`` and ``margin`` (NaN where the legs cannot be assembled),
+An open chain's box is the TCP positions of a joint grid padded by a Jacobian bound.  A parallel mechanism's
+generated functions differ from a serial arm's (see README): ``fk(q)`` returns ``position`` and ``margin`` (NaN where the legs cannot be assembled),
 ``ik(p)`` returns ``joints`` and per-leg ``margin`` (NaN where p is out of reach) and the
 velocity functions take both ``q`` and ``p``: ``jacobian(q, p)`` is J = J_x^-1 J_q
 (seed eq. 8.29).
@@ -33,23 +36,26 @@ conditioning (homogenized by a characteristic length, :func:`platform_characteri
 the Cartesian domain only.
 
 Length: the two adapters of parallel mechanisms to the analyses (working mode, constant
-orientation) share their Jacobian and reachability helpers; the passive-joint closure is already
+orientation) share their Jacobian and reachability helpers, and the three questions every analysis asks of a
+mechanism (its box, its characteristic length, its domain) branch on them; the passive-joint closure is already
 its own module (:mod:`symkin.mechanism.passive`).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
-from symkin.analysis import conditioning, sampling
+from symkin.numerics import conditioning, sampling
 from symkin import mechanism
 from symkin.mechanism import passive
-from symkin.analysis.feasibility import feasible_configurations
+from symkin.mechanism.feasibility import feasible_configurations
 from symkin.errors import NotApplicable
-from symkin.mechanism.working_mode import require_functions
+from symkin.mechanism import Limits
+from symkin.mechanism.working_mode import require_functions, working_mode
 from symkin.runtime.info import GeneratedModel
 
 #: Largest |fk(ik(p)) - p| relative to the size of the mechanism (metres).
@@ -57,7 +63,7 @@ POSITION_ROUND_TRIP_TOLERANCE = 1e-6
 
 
 class _GeneratedInverse:
-    """The generated closed-form ``ik`` as an :class:`~symkin.analysis.feasibility.InverseKinematics`, one branch.
+    """The generated closed-form ``ik`` as an :class:`~symkin.mechanism.feasibility.InverseKinematics`, one branch.
 
     A point is valid where every leg reaches it (finite ``ik``), the solution is in the
     working mode (:meth:`in_mode`, on the finite solutions) and the declared passive-joint
@@ -92,8 +98,8 @@ class _GeneratedInverse:
 
 
 @dataclass(frozen=True)
-class ParallelInverse(_GeneratedInverse):
-    """The generated closed-form ``ik`` as an :class:`~symkin.analysis.feasibility.InverseKinematics`.
+class WorkingModeInverse(_GeneratedInverse):
+    """The generated closed-form ``ik`` as an :class:`~symkin.mechanism.feasibility.InverseKinematics`.
 
     One branch (the model's working mode): a point is valid where every leg reaches it
     (margin >= 0), the forward kinematics of the solution returns to it and the passive
@@ -119,10 +125,10 @@ class ParallelInverse(_GeneratedInverse):
         return np.all(np.abs(p - points) <= POSITION_ROUND_TRIP_TOLERANCE * self.size, axis=-1)
 
 
-def parallel_inverse(model: GeneratedModel) -> ParallelInverse | ConstantOrientationInverse:
+def generated_inverse(model: GeneratedModel) -> WorkingModeInverse | ConstantOrientationInverse:
     """The closed-form inverse kinematics of a parallel mechanism, as the Cartesian analyses see it.
 
-    A translational platform (DELTA) gives a :class:`ParallelInverse`; a pose platform held at
+    A translational platform (DELTA) gives a :class:`WorkingModeInverse`; a pose platform held at
     one orientation (:class:`ConstantOrientation`) a :class:`ConstantOrientationInverse`.
 
     Raises:
@@ -144,10 +150,10 @@ def parallel_inverse(model: GeneratedModel) -> ParallelInverse | ConstantOrienta
         task = list(mechanism.task_space(model))
         raise NotApplicable(f"{model.name}: the platform also rotates (task space {task}): "
                             "its Cartesian workspace is analysed at a constant orientation "
-                            "(symkin.analysis.parallel.constant_orientation(model, (roll, pitch, yaw)))")
+                            "(symkin.mechanism.reach.constant_orientation(model, (roll, pitch, yaw)))")
     require_functions(model, ("ik", "fk", "jacobian"))
     size = max(float(np.linalg.norm(mechanism.home_pose(model))), 1e-3)
-    return ParallelInverse(model, size, passive.declared_limits(model), len(mechanism.task_space(model)))
+    return WorkingModeInverse(model, size, passive.declared_limits(model), len(mechanism.task_space(model)))
 
 
 # --- pose platforms (Stewart-Gough) at a constant orientation --------------------------------
@@ -193,7 +199,7 @@ class ConstantOrientation:
       base frame.  From the generated J^-1 (dq = J^-1 dp, p with roll-pitch-yaw rates):
       J = diag(I, E) (J^-1)^-1 (:func:`angular_velocity_matrix`), so kappa does not depend
       on the angle parametrization; singular J^-1 give J = 0 (1/kappa = 0,
-      :func:`~symkin.analysis.conditioning.from_inverse`).  Its rows mix m/s and rad/s: the
+      :func:`~symkin.numerics.conditioning.from_inverse`).  Its rows mix m/s and rad/s: the
       conditioning indices homogenize them with a characteristic length (task space
       ``TWIST_COMPONENTS``).
 
@@ -278,6 +284,22 @@ def constant_orientation(model: GeneratedModel, orientation=None) -> ConstantOri
     return ConstantOrientation(model, orientation)
 
 
+def held_at(model: GeneratedModel, angles: Sequence[float] | None) -> Any:
+    """``model`` held at the constant orientation ``angles`` (roll, pitch, yaw in rad) if its platform
+    rotates (:func:`symkin.mechanism.constant_orientation`; None: the home orientation), else ``model``.
+
+    Raises:
+        ValueError: angles are given for a mechanism whose platform does not rotate.
+    """
+    rotates = mechanism.is_parallel(model) and mechanism.mixes_translations_and_rotations(model)
+    if angles is None:
+        return constant_orientation(model) if rotates else model
+    if not rotates:
+        raise ValueError(f"--orientation: {model.name} is not a parallel platform that rotates "
+                         f"(task space {list(mechanism.task_space(model))}); leave the option out")
+    return constant_orientation(model, list(angles))
+
+
 def home_sign(model: GeneratedModel) -> float:
     """The sign of det J^-1 at the home pose ``parallel.home``: the assembly mode analysed.
 
@@ -304,7 +326,7 @@ class ConstantOrientationInverse(_GeneratedInverse):
     without crossing a singularity det J^-1 = 0, e.g. the plane of the base joints, below
     which lies the mirror image of the workspace), and the declared passive-joint limits
     hold.  The actuators' limits are applied by the analyses
-    (:func:`symkin.analysis.feasibility.feasible_configurations`).
+    (:func:`symkin.mechanism.feasibility.feasible_configurations`).
 
     Attributes:
         model: the :class:`ConstantOrientation`.
@@ -410,7 +432,7 @@ LENGTH_SAMPLES_LOG2 = 12
 def platform_characteristic_length(model: ConstantOrientation, limits: np.ndarray, seed: int = 0) -> float:
     """The characteristic length of a platform at a constant orientation: the L minimizing the
     mean kappa_F^2 of the homogenized twist Jacobian over the reachable points of a Sobol
-    sample of its workspace box (:func:`symkin.analysis.conditioning.characteristic_length`).
+    sample of its workspace box (:func:`symkin.numerics.conditioning.characteristic_length`).
 
     Raises:
         ValueError: no sampled point is reachable.
@@ -423,3 +445,87 @@ def platform_characteristic_length(model: ConstantOrientation, limits: np.ndarra
                          "no characteristic length; give one (--length)")
     return conditioning.characteristic_length(model.jacobian(q[reachable], points[reachable]),
                                               mechanism.position_rows(model))
+
+
+# --- what every mechanism reaches: the box around its workspace, its characteristic length, the domain in words ---
+
+#: Joint-space points evaluated for :func:`bounding_box` (split evenly over the axes).
+BOX_SAMPLES = 2**16
+#: Configurations sampled to choose the characteristic length of a mechanism with fk (``length="auto"``).
+JOINT_LENGTH_SAMPLES_LOG2 = 10
+
+
+def bounding_box(model: GeneratedModel, *, limits: Limits | None = None, samples: int = BOX_SAMPLES) -> tuple[np.ndarray, np.ndarray]:
+    """A Cartesian box that contains the workspace.
+
+    The TCP positions of a joint grid (limits included) are padded by a first-order bound
+    of how far the TCP can move inside one grid cell: twice the largest Frobenius norm of
+    the positional Jacobian rows at the grid nodes times the half diagonal of a cell.  A
+    platform at a constant orientation has no fk: its box is bounded by the legs' reach
+    (:func:`symkin.mechanism.constant_orientation_box`).
+
+    Returns:
+        (lower, upper), arrays of shape (d,).
+    """
+    box = mechanism.joint_limits(model, limits)
+    if isinstance(model, ConstantOrientation):  # no fk: the legs' reach bounds the workspace
+        return constant_orientation_box(model, box)
+    n = box.shape[0]
+    per_axis = max(3, int(samples ** (1.0 / n)))
+    q = sampling.grid(box[:, 0], box[:, 1], per_axis, midpoints=False)
+    if mechanism.is_parallel(model):
+        return _parallel_bounding_box(model, q, per_axis)
+    points = mechanism.tcp_positions(model, q)
+    J = model.jacobian(q)[:, list(mechanism.position_rows(model)), :]
+    half_diagonal = 0.5 * np.linalg.norm((box[:, 1] - box[:, 0]) / (per_axis - 1))
+    margin = 2.0 * np.max(np.linalg.norm(J, axis=(-2, -1))) * half_diagonal
+    return points.min(axis=0) - margin, points.max(axis=0) + margin
+
+
+def _parallel_bounding_box(model: GeneratedModel, q: np.ndarray, per_axis: int) -> tuple[np.ndarray, np.ndarray]:
+    """Box of a parallel mechanism: the working-mode TCP positions of a joint grid, padded.
+
+    The Jacobian grows without bound next to the assembly limit (det J_x -> 0), so the
+    padding is not a Jacobian bound but twice the largest distance between the TCP
+    positions of neighbouring grid nodes that both lie in the working mode.
+    """
+    points, inside = working_mode(model, q)
+    if not inside.any():
+        raise ValueError(f"{model.name}: no configuration within the joint limits assembles in the working mode")
+    shape = (per_axis,) * q.shape[1]
+    grid_points = np.where(inside[:, None], points, np.nan).reshape(*shape, -1)
+    gaps = [np.nanmax(np.linalg.norm(np.diff(grid_points, axis=axis), axis=-1), initial=0.0)
+            for axis in range(len(shape))]
+    margin = 2.0 * max(gaps)
+    return points[inside].min(axis=0) - margin, points[inside].max(axis=0) + margin
+
+
+def characteristic_length_of(model: GeneratedModel, limits: np.ndarray | None = None, seed: int = 0) -> float:
+    """Characteristic length of a model with a mixed task space, from a Sobol sample of its joint space.
+
+    See :func:`symkin.numerics.conditioning.characteristic_length`; a platform at a constant
+    orientation is sampled over its Cartesian workspace (:func:`symkin.mechanism.platform_characteristic_length`).
+    """
+    limits = mechanism.joint_limits(model) if limits is None else limits
+    if isinstance(model, ConstantOrientation):  # no fk: sampled over its Cartesian workspace
+        return platform_characteristic_length(model, limits, seed)
+    q = sampling.sobol(limits[:, 0], limits[:, 1], JOINT_LENGTH_SAMPLES_LOG2, np.random.default_rng(seed))
+    return conditioning.characteristic_length(mechanism.jacobian(model, q), mechanism.position_rows(model))
+
+
+def domain_description(model: GeneratedModel, domain: str, measure: str) -> str:
+    """The integration domain and measure of a global index, in words (for reports)."""
+    if domain == "joint":
+        if mechanism.is_parallel(model):
+            return ("joint space, dW = |det J| dq over the configurations in the working mode "
+                    "(ik(fk(q)) = q, one-to-one): the Cartesian measure" if measure == "cartesian" else
+                    "joint space, dW = dq over the configurations in the working mode (joint measure)")
+        return ("joint space, dW = |det J| dq (Cartesian measure, with multiplicity where the map is "
+                "not one-to-one)" if measure == "cartesian" else "joint space, dW = dq (joint measure)")
+    description = "Cartesian box with reachability from inverse kinematics, dW = 1_W(x) dx"
+    if isinstance(model, ConstantOrientation):
+        description += (f" (platform centres at roll, pitch, yaw = {orientation_text(model)}; "
+                        "in the assembly mode of the home pose: sign of det J^-1)")
+    elif mechanism.is_parallel(model):
+        description += " (in the working mode: fk(ik(x)) = x)"
+    return description

@@ -1,4 +1,4 @@
-"""Direction numbers of Sobol' sequences in the first 128 dimensions (data of :mod:`symkin.analysis.sobol`).
+"""Direction numbers of Sobol' sequences in the first 128 dimensions (data of :mod:`symkin.numerics.sobol`).
 
 S. Joe and F. Y. Kuo, "Constructing Sobol sequences with better two-dimensional projections", SIAM J. Sci.
 Comput. 30 (2008) 2635-2654; the table new-joe-kuo-6.21201, https://web.maths.unsw.edu.au/~fkuo/sobol/ (the

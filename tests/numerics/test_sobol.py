@@ -1,4 +1,4 @@
-"""Sobol' points drawn without scipy.stats (symkin.analysis.sobol): scipy.stats.qmc.Sobol is the reference, bit for
+"""Sobol' points drawn without scipy.stats (symkin.numerics.sobol): scipy.stats.qmc.Sobol is the reference, bit for
 bit, so that every quantity estimated from them (GCI, workspace measures, the quoted figures of the docs) is what
 it was when scipy drew them, and the command line stops importing scipy.stats for its sample points."""
 
@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from conftest import SYMKIN_CLI
-from symkin.analysis import sampling
-from symkin.analysis.sobol import MAX_DIMENSION, Sobol
+from symkin.numerics import sampling
+from symkin.numerics.sobol import MAX_DIMENSION, Sobol
 
 qmc = pytest.importorskip("scipy.stats").qmc
 
@@ -56,7 +56,7 @@ def test_more_dimensions_than_the_table_are_refused():
 def test_a_qmc_estimate_imports_no_scipy_stats():
     script = ("import sys\n"
               "import numpy as np\n"
-              "from symkin.analysis import sampling\n"
+              "from symkin.numerics import sampling\n"
               "from symkin.analysis.integrators import quasi_monte_carlo_estimate\n"
               "sampling.sobol(np.zeros(2), np.ones(2), 4, np.random.default_rng(0), replicates=4)\n"
               "quasi_monte_carlo_estimate(np.ones((4, 1)), 64)\n"

@@ -12,7 +12,7 @@ import pytest
 import sympy
 
 import symkin
-from symkin.analysis import conditioning as C
+from symkin.numerics import conditioning as C
 from symkin.analysis import global_indices
 from symkin import mechanism
 from symkin.model import coordinates

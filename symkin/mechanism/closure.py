@@ -1,28 +1,129 @@
-"""The plant's functions of the joints for legs without closed forms (issue 31): the generated ``closure_dynamics``
-reduced at each state (:mod:`symkin.runtime.closure_dynamics`), the passive joints and the platform pose solved from
-the actuated joints by Gauss-Newton on the generated closure.
+"""The closure as the general method of assembly (issue 62): a parallel mechanism of any leg topology assembled from
+its generated loop closure phi(q, s, p) = 0 alone, as every analysis, the simulation, the identification and the
+excitation design ask it.
 
-A :class:`symkin.simulation.plant.Plant` asks for functions of the actuated joints q only (a parallel mechanism
-with a closed-form fk takes p = fk(q)).  Legs without closed forms have no fk: the assembly (s, p) at q is solved
-from the last one (:func:`symkin.runtime.parallel.solve_closure`, unknowns p and s), which a simulation's steps keep
-near, so the mechanism stays in the assembly mode it starts in (the home assembly,
-:func:`symkin.analysis.closure_workspace.assemble_at_home`).  A batch of configurations (a recorded trajectory) is
-solved row by row, each from the previous row's assembly or the home assembly, whichever is nearer, continued
-along the straight line of actuator positions in steps of at most MAX_STEP (a trajectory's first row, read after
-the run ended far from it, is not solved from the run's end).
+* **Home assembly** (:func:`solve_home_assembly`): (q, s) closing the legs at the home pose ``parallel.home``, by
+  Gauss-Newton (:func:`symkin.runtime.parallel.solve_closure`) from the declared ``parallel.home_assembly`` or from
+  fixed starts; the assembly mode every other solve stays in.
+* **Continuation along the actuators** (:class:`ClosureAssembly`): (s, p) at actuated joints q, solved from the
+  last assembly or the home assembly, whichever is nearer, along the straight line of actuator positions in steps
+  of at most :data:`MAX_STEP` (unknowns p and s); a batch (a recorded trajectory) row by row, each from the
+  previous row's (a trajectory's first row, read after the run ended far from it, is not solved from the run's
+  end); NaN where the legs stop closing.
+* **Dynamics of the actuated joints** (:class:`ClosureFunctions`): the generated ``closure_dynamics`` reduced at
+  each state (:mod:`symkin.runtime.closure_dynamics`) as functions of q alone - the functions a
+  :class:`symkin.simulation.plant.Plant` asks of a mechanism without closed forms (one with a closed-form fk takes
+  p = fk(q)).
+
+The workspace of such legs (a flood of the closure over a grid of poses) builds on these:
+:mod:`symkin.analysis.closure_workspace`.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 
-from symkin.analysis.closure_workspace import MAX_STEP, assemble_at_home
 from symkin.errors import GeneratedCodeError
 from symkin.runtime.closure_dynamics import ActuatedDynamics, actuated_dynamics
 from symkin.runtime.info import GeneratedModel
+from symkin import mechanism
 from symkin.runtime.parallel import solve_closure
+
+
+#: Random starts (besides q = s = 0) of the home assembly, uniform in [-pi/2, pi/2] per variable.
+HOME_STARTS = 16
+#: Gauss-Newton from a neighbouring cell: iterations, the longest step (rad or m) and the step that converges.
+SOLVE_ITERATIONS, MAX_STEP, SOLVE_TOLERANCE = 30, 0.2, 1e-12
+#: The legs close where every closure row is below this times the pose's scale (m): a converged solve leaves
+#: rounding, ~1e-15; Gauss-Newton can also stop at a least-squares minimum of the closure, which misses by a link.
+CLOSED = 1e-9
+
+
+def uses_closure(model: GeneratedModel) -> bool:
+    """Whether a parallel model is analysed through its loop closure: it has the generated ``closure`` and
+    ``closure_jacobians`` but no closed-form ``ik`` (legs without the distance form)."""
+    return (mechanism.is_parallel(model) and "ik" not in model.functions
+            and {"closure", "closure_jacobians"} <= set(model.functions))
+
+
+def closure_sizes(model: GeneratedModel) -> tuple[int, int]:
+    """(n, ns): the actuated and passive joint counts, from the generated closure's inputs."""
+    inputs = model.info.functions["closure"].inputs
+    return int(inputs[0].shape[0]), int(inputs[1].shape[0])
+
+
+@dataclass(frozen=True)
+class HomeAssembly:
+    """The assembly the analyses continue the closure from: (q, s) closing the legs at the home pose, and the
+    start of the Gauss-Newton solve that reached it (:func:`solve_home_assembly`)."""
+
+    q: np.ndarray
+    s: np.ndarray
+    start: str
+
+    def describe(self, model: GeneratedModel) -> str:
+        """'home assembly (... from q = s = 0): theta1 = 12.3 deg, ...; passive: knee1 = -60 deg, ...', in deg
+        (to 0.01) or mm (to 0.001) as the closure's inputs are rad or m."""
+        inputs = model.info.functions["closure"].inputs
+
+        def values(spec, vector: np.ndarray) -> str:
+            return ", ".join(f"{name} = {round(np.degrees(v), 2) + 0.0:g} deg" if unit == "rad"   # + 0.0: no -0
+                             else f"{name} = {round(1000 * v, 3) + 0.0:g} mm"
+                             for name, unit, v in zip(spec.elements, spec.units, vector))
+
+        return (f"home assembly (Gauss-Newton at the home pose from {self.start}): {values(inputs[0], self.q)}; "
+                f"passive: {values(inputs[1], self.s)}")
+
+
+def solve_home_assembly(model: GeneratedModel) -> HomeAssembly:
+    """(q, s) closing the legs at the home pose ``parallel.home``: Gauss-Newton from the model's declared
+    ``parallel.home_assembly`` (its named variables, 0 for the others) where it has one; else from the first of
+    q = s = 0 and :data:`HOME_STARTS` fixed random starts that closes them (deterministic).
+
+    Raises:
+        ValueError: no start closes the legs (the home pose is out of reach, or the declared start leads nowhere).
+    """
+    home = mechanism.home_pose(model)
+    n, ns = closure_sizes(model)
+    declared = model.info.home_assembly
+    if declared is not None:
+        inputs = model.info.functions["closure"].inputs
+        names = list(inputs[0].elements) + list(inputs[1].elements)
+        starts = np.zeros((1, n + ns))
+        for name, value in declared.items():
+            starts[0, names.index(name)] = value
+        described = ["the declared parallel.home_assembly"]
+    else:
+        starts = np.vstack([np.zeros(n + ns),
+                            np.random.default_rng(0).uniform(-np.pi / 2, np.pi / 2, (HOME_STARTS, n + ns))])
+        described = ["q = s = 0"] + [f"random start {k} of {HOME_STARTS} (q = s = 0 did not close the legs)"
+                                     for k in range(1, HOME_STARTS + 1)]
+    report = solve_closure(model, starts[:, :n], starts[:, n:], home, unknowns=("q", "s"), max_step=MAX_STEP,
+                           max_iterations=100)
+    closed = np.flatnonzero(closes(report, home))
+    if not len(closed):
+        where = ("from the declared parallel.home_assembly: change its values" if declared is not None
+                 else f"from {len(starts)} starts: declare a home pose inside the workspace, or parallel.home_assembly")
+        raise ValueError(f"{model.name}: the legs do not close at the home pose {home.tolist()} (parallel.home) "
+                         f"{where}")
+    solution = report.solution
+    assert isinstance(solution, dict), "solve_closure names its vectors"
+    return HomeAssembly(solution["q"][closed[0]], solution["s"][closed[0]], described[closed[0]])
+
+
+def assemble_at_home(model: GeneratedModel) -> tuple[np.ndarray, np.ndarray]:
+    """(q, s) of the home assembly (:func:`solve_home_assembly`)."""
+    found = solve_home_assembly(model)
+    return found.q, found.s
+
+
+def closes(report, p: np.ndarray) -> np.ndarray:
+    """Boolean (K,): the solve converged to a pose that closes the legs (not a least-squares minimum)."""
+    scale = np.maximum(np.max(np.abs(p), axis=-1), 1.0)
+    return report.converged & (report.residual <= CLOSED * scale)
 
 
 #: The generated functions a plant asks for, which :class:`ClosureFunctions` provides for legs without closed forms.

@@ -3,10 +3,10 @@
 scipy's engine lives in scipy.stats, whose import (all its distributions, about a second) every analysis command
 paid for its sample points.  This module draws the same points (the same direction numbers, the same random
 linear matrix scramble and digital shift from the same generator draws, the same order), so every figure quoted
-from a scrambled QMC estimate stays as it was (tests/analysis/test_sobol.py compares them with scipy's).
+from a scrambled QMC estimate stays as it was (tests/numerics/test_sobol.py compares them with scipy's).
 
 The sequence (Bratley and Fox, ACM TOMS 14 (1988) 88-100, Algorithm 659, with the direction numbers of Joe and
-Kuo 2008, :mod:`symkin.analysis.sobol_directions`): in dimension j the direction integers v_jk (k = 0 ... b-1,
+Kuo 2008, :mod:`symkin.numerics.sobol_directions`): in dimension j the direction integers v_jk (k = 0 ... b-1,
 b = :data:`BITS` digits) follow from the primitive polynomial x^s + a_1 x^(s-1) + ... + a_(s-1) x + 1 and the
 initial m_1 ... m_s by
 
@@ -24,7 +24,7 @@ import functools
 
 import numpy as np
 
-from symkin.analysis.sobol_directions import DIRECTIONS
+from symkin.numerics.sobol_directions import DIRECTIONS
 
 #: Digits of every point (scipy's default): points are multiples of 2^-BITS.
 BITS = 30
