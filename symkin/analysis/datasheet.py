@@ -1,10 +1,12 @@
 """A haptic device's datasheet: the measures of :mod:`symkin.analysis.rating` over its workspace and at its
 home pose, with the pose where each extreme occurs (``symkin rate``).
 
-The workspace is sampled in the joint space within the limits (:func:`symkin.analysis.workspace.sample_workspace`,
-a parallel mechanism through its closed-form fk), cut to its usable part (1/kappa of the translational
-Jacobian at least :data:`USABLE_CONDITIONING`: near a singularity the apparent mass and the forces
-diverge) and optionally to a required box of TCP positions.  At
+The workspace is sampled as the mechanism allows (in the joint space within the limits,
+:func:`symkin.analysis.workspace.sample_workspace`, a parallel mechanism through its closed-form fk; a platform
+without one over its centres or orientations; legs without closed forms over the cells of their continued
+closure), cut to its usable part (1/kappa of the handle's Jacobians at least :data:`USABLE_CONDITIONING`: near a
+singularity the apparent mass and the forces diverge) and optionally to a required box of the handle's
+coordinates; one rating then takes every kind's usable samples (:func:`rate`).  At
 every sample the generated functions give M (``mass_matrix``), J (``jacobian``: its translational rows) and
 G (``gravity_vector``); the actuators' data come from the manifest (effort limits, continuous effort,
 friction) or from the caller (encoders, servo rate).  A measure whose data the model lacks is not rated,
@@ -144,41 +146,99 @@ def _usable(keep: np.ndarray, conditioning: float, *jacobians: np.ndarray) -> np
 USABLE_CONDITIONING = 0.05
 
 
+@dataclass(frozen=True)
+class _Usable:
+    """The usable samples of a device's workspace, the home pose last, as every kind of mechanism gives them to the one
+    rating (:func:`rate`): the joints q, the poses p the generated functions take (an open chain's: its TCP points),
+    the handle's points in ``axes``, the Jacobians of the handle pushed (J_v: its translational rows, None for a
+    handle that only turns) and turned (J_w: as angular velocity, None for one that only translates), the mass matrix
+    (None: why in ``no_mass``), the efforts that hold the device (None: the generated ``gravity_vector``) and notes."""
+
+    q: np.ndarray
+    poses: np.ndarray
+    points: np.ndarray
+    axes: tuple[str, ...]
+    J_v: np.ndarray | None
+    J_w: np.ndarray | None
+    M: np.ndarray | None
+    G: np.ndarray | str | None = None
+    no_mass: str = ""
+    notes: tuple[str, ...] = ()
+
+
 def rate(model: GeneratedModel, actuation: Actuation, *, samples: int = 4096, seed: int = 0,
          box: Mapping[str, tuple[float, float]] | None = None, limits: mechanism.Limits | None = None,
          conditioning: float = USABLE_CONDITIONING, orientation: Sequence[float] | None = None) -> Datasheet:
-    """The datasheet of a device whose handle translates (its task space has x, y or z), over the sampled
-    poses in ``box`` (TCP coordinates, m) where 1/kappa >= ``conditioning``, and at its home pose.
+    """The datasheet of a device over the usable samples of its workspace in ``box`` (the handle's coordinates, m or
+    rad) where 1/kappa >= ``conditioning``, and at its home pose: the handle pushed (apparent mass, force
+    capability, resolution, gravity share, friction: :func:`~symkin.analysis.handle_measures.translation_measures`)
+    where it translates, turned (apparent inertia, torque, angular resolution:
+    :func:`~symkin.analysis.handle_measures.rotation_measures`) where it also rotates, and the gravity share and
+    the rotational friction where it only turns.
 
-    A platform that also rotates (Stewart-Gough) is rated over its workspace at the constant ``orientation``
-    (roll, pitch, yaw in rad; default: its home pose's) by :func:`rate_pose_platform`, a spherical platform (the
-    Agile Eye) over its orientations by :func:`rate_orientation_platform`.
+    The samples come from the mechanism: a serial arm's or a closed-form platform's joint space
+    (:func:`_usable_joint_samples`); a platform on legs without closed forms, the cells of its continued closure at
+    a constant ``orientation`` (:func:`_usable_closure_cells`); a platform that also rotates (Stewart-Gough), its
+    centres at the constant ``orientation`` (roll, pitch, yaw in rad; default: its home pose's,
+    :func:`_usable_centres`); a spherical platform (the Agile Eye), its orientations (:func:`_usable_orientations`).
 
     Raises:
         ValueError: the model cannot be rated (no task coordinate it rates, a wrist on the platform, no mass
             matrix), or the box holds no sample.
     """
-    from symkin.analysis import closure_workspace
-
     if uses_closure(model):
-        return rate_closure_platform(model, actuation, samples=samples, box=box, limits=limits,
-                                     conditioning=conditioning, orientation=orientation)
-    kind = mechanism.kind_of(model)
-    if model.info.wrist:
-        raise ValueError(f"{model.name}: a platform carrying a wrist: rate the whole device at its grip point "
-                         "(symkin rate --device, symkin.mechanism.device.WholeDevice)")
-    if kind is mechanism.MechanismKind.PARALLEL_POSE:
-        return rate_pose_platform(model, actuation, samples=samples, seed=seed, box=box, limits=limits,
-                                  conditioning=conditioning, orientation=orientation)
-    if kind is mechanism.MechanismKind.PARALLEL_ORIENTATION and orientation is None:
-        return rate_orientation_platform(model, actuation, samples=samples, seed=seed, box=box, limits=limits,
-                                         conditioning=conditioning)
-    if orientation is not None:
-        raise ValueError(f"{model.name}: --orientation applies to platforms that also rotate (Stewart-Gough); "
-                         f"this is a {kind.value} mechanism")
-    if kind not in (mechanism.MechanismKind.SERIAL, mechanism.MechanismKind.PARALLEL):
-        raise ValueError(f"{model.name}: symkin rate rates devices whose handle translates with the platform or is "
-                         f"a serial arm's TCP; this is a {kind.value} mechanism")
+        usable = _usable_closure_cells(model, samples, box, limits, conditioning, orientation)
+    else:
+        kind = mechanism.kind_of(model)
+        if model.info.wrist:
+            raise ValueError(f"{model.name}: a platform carrying a wrist: rate the whole device at its grip point "
+                             "(symkin rate --device, symkin.mechanism.device.WholeDevice)")
+        if kind is mechanism.MechanismKind.PARALLEL_POSE:
+            usable = _usable_centres(model, samples, seed, box, limits, conditioning, orientation)
+        elif kind is mechanism.MechanismKind.PARALLEL_ORIENTATION and orientation is None:
+            usable = _usable_orientations(model, samples, seed, box, limits, conditioning)
+        elif orientation is not None:
+            raise ValueError(f"{model.name}: --orientation applies to platforms that also rotate (Stewart-Gough); "
+                             f"this is a {kind.value} mechanism")
+        elif kind not in (mechanism.MechanismKind.SERIAL, mechanism.MechanismKind.PARALLEL):
+            raise ValueError(f"{model.name}: symkin rate rates devices whose handle translates with the platform or "
+                             f"is a serial arm's TCP; this is a {kind.value} mechanism")
+        else:
+            usable = _usable_joint_samples(model, samples, seed, box, limits, conditioning)
+    return _datasheet(model, usable, actuation)
+
+
+def _datasheet(model: GeneratedModel, usable: _Usable, actuation: Actuation) -> Datasheet:
+    """The measures of the handle over the usable samples (see :func:`rate`)."""
+    measures: tuple[Measure, ...] = ()
+    skipped: dict[str, str] = {}
+    if usable.J_v is not None:
+        measures, skipped = translation_measures(model, usable.J_v, usable.M, usable.q, usable.poses, actuation,
+                                                 no_mass=usable.no_mass, G=usable.G)
+    if usable.J_w is not None:
+        turned, not_turned = rotation_measures(usable.J_w, usable.M, actuation, no_mass=usable.no_mass)
+        measures, skipped = measures + turned, skipped | not_turned
+    if usable.J_v is None:  # a handle that only turns: what the pushed measures would have said of it
+        assert usable.J_w is not None, "a handle that neither translates nor turns is refused before"
+        share = gravity_share_measure(model, usable.q, usable.poses, actuation.effort_limits)
+        if isinstance(share, str):
+            skipped["gravity_share"] = share
+        else:
+            measures += tuple(share)
+        friction = friction_measures(usable.J_w, actuation, ROTATIONAL_FRICTION)
+        if isinstance(friction, str):
+            skipped["friction"] = friction
+        else:
+            measures += tuple(friction)
+    groups = SPHERICAL_GROUPS if usable.J_v is None else \
+        PUSHED_GROUPS | TURNED_GROUPS if usable.J_w is not None else PUSHED_GROUPS
+    return Datasheet(model.name, usable.q, usable.points, usable.axes, measures, len(usable.q) - 1, skipped, groups,
+                     usable.notes)
+
+
+def _usable_joint_samples(model: GeneratedModel, samples: int, seed: int, box: Mapping[str, tuple[float, float]] | None,
+                          limits: mechanism.Limits | None, conditioning: float) -> _Usable:
+    """A serial arm's or a closed-form platform's joint space sampled within the limits (TCP points by fk)."""
     rows = list(mechanism.position_rows(model))
     if not rows:
         raise ValueError(f"{model.name}: the task space ({', '.join(mechanism.task_space(model))}) has no translation")
@@ -198,9 +258,7 @@ def rate(model: GeneratedModel, actuation: Actuation, *, samples: int = 4096, se
     if len(q) < 2:
         raise ValueError(f"{model.name}: no sampled pose lies in the box {dict(box or {})} with 1/kappa >= "
                          f"{conditioning:g}")
-    M = dynamics_at(model, "mass_matrix", q, points)
-    measures, skipped = translation_measures(model, J, M, q, points, actuation)
-    return Datasheet(model.name, q, points, cloud.axes, measures, len(q) - 1, skipped, PUSHED_GROUPS)
+    return _Usable(q, points, points, cloud.axes, J, None, dynamics_at(model, "mass_matrix", q, points))
 
 
 #: Why a platform on legs without closed forms has no apparent mass, inertia or gravity share in its datasheet.
@@ -208,21 +266,19 @@ NO_CLOSURE_DYNAMICS = ("no mass properties: legs without closed forms (any topol
                        "and gravity share from the generated closure_dynamics (declare bodies: links: and platform:)")
 
 
-def rate_closure_platform(model: GeneratedModel, actuation: Actuation, *, samples: int = 4096,
-                          box: Mapping[str, tuple[float, float]] | None = None, limits: mechanism.Limits | None = None,
-                          conditioning: float = USABLE_CONDITIONING,
-                          orientation: Sequence[float] | None = None) -> Datasheet:
-    """The kinematic datasheet of a platform whose legs have no closed forms, over the working mode of its home
-    assembly at a constant ``orientation`` (roll, pitch, yaw in rad; default the home pose's), on the grid of
+def _usable_closure_cells(model: GeneratedModel, samples: int, box: Mapping[str, tuple[float, float]] | None,
+                          limits: mechanism.Limits | None, conditioning: float,
+                          orientation: Sequence[float] | None) -> _Usable:
+    """A platform whose legs have no closed forms, over the working mode of its home assembly at a constant
+    ``orientation`` (roll, pitch, yaw in rad; default the home pose's), on the grid of
     :func:`symkin.analysis.closure_workspace.closure_workspace` (about ``samples`` cells).
 
     J = dp/dq at each reached cell from :func:`symkin.runtime.parallel.closure_velocities`: its position rows J_v
     rate the handle pushed with its angles free (forces with no moment, tau = J_v^T f, the translation's
     resolution and friction), its angle rows J_w (as angular velocity) the handle turned with its position free.
-    The home pose is the last sample.  With the generated ``closure_dynamics`` (bodies declared), M = W^T M_z W
-    (:func:`symkin.runtime.closure_dynamics.actuated_dynamics`) gives the apparent mass (J_v M^-1 J_v^T)^-1 with the
-    angles free and the apparent inertia (J_w M^-1 J_w^T)^-1 with the position free; without it the apparent mass
-    is listed as not rated (:data:`NO_CLOSURE_DYNAMICS`).
+    With the generated ``closure_dynamics`` (bodies declared), M = W^T M_z W
+    (:func:`symkin.runtime.closure_dynamics.actuated_dynamics`); without it the apparent mass and inertia are not
+    rated (:data:`NO_CLOSURE_DYNAMICS`).
     """
     from symkin.analysis import closure_workspace
     from symkin.runtime.closure_dynamics import actuated_dynamics
@@ -267,29 +323,18 @@ def rate_closure_platform(model: GeneratedModel, actuation: Actuation, *, sample
     if "closure_dynamics" in model.functions:
         at_rest = actuated_dynamics(model, q, s, poses, np.zeros_like(q))  # bias at rest: the gravity efforts
         M, G = at_rest.M, at_rest.bias if np.any(at_rest.potential != 0) else NO_GRAVITY
-    measures, skipped = translation_measures(model, J_v, M, q, poses, actuation, no_mass=NO_CLOSURE_DYNAMICS, G=G)
-    if angles:
-        turned, not_turned = rotation_measures(J_w, M, actuation, no_mass=NO_CLOSURE_DYNAMICS)
-        measures, skipped = measures + turned, skipped | not_turned
-    return Datasheet(model.name, q, points, found.axes, measures, len(q) - 1, skipped,
-                     PUSHED_GROUPS | TURNED_GROUPS if angles else PUSHED_GROUPS, (assembly.describe(model),))
+    return _Usable(q, poses, points, found.axes, J_v, J_w if angles else None, M, G, NO_CLOSURE_DYNAMICS,
+                   (assembly.describe(model),))
 
 
-def rate_pose_platform(model: GeneratedModel, actuation: Actuation, *, samples: int = 4096, seed: int = 0,
-                       box: Mapping[str, tuple[float, float]] | None = None, limits: mechanism.Limits | None = None,
-                       conditioning: float = USABLE_CONDITIONING,
-                       orientation: Sequence[float] | None = None) -> Datasheet:
-    """The datasheet of a platform that translates and rotates, over its workspace at a constant orientation.
-
-    Platform centres are sampled (Sobol) in the box around the constant-orientation workspace
-    (:func:`symkin.mechanism.reach.constant_orientation_box`) and kept where reachable; the twist Jacobian
-    t = (v, omega) = J_t qd (:class:`symkin.mechanism.reach.ConstantOrientation`) splits into J_v and J_w.
-    The handle's measures are those of a device whose hand pushes and twists it: the apparent mass
-    (J_v M^-1 J_v^T)^-1 with the orientation free, forces with no moment (tau = J_v^T f), the translation's
-    resolution; then the apparent rotational inertia (J_w M^-1 J_w^T)^-1 with the position free, torques with
-    no force (tau = J_w^T m) and the angular resolution.  A sample is usable where 1/kappa of J_v and of J_w
-    are both at least ``conditioning``.
-    """
+def _usable_centres(model: GeneratedModel, samples: int, seed: int, box: Mapping[str, tuple[float, float]] | None,
+                    limits: mechanism.Limits | None, conditioning: float,
+                    orientation: Sequence[float] | None) -> _Usable:
+    """A platform that translates and rotates, over its workspace at a constant orientation: platform centres
+    sampled (Sobol) in the box around it (:func:`symkin.mechanism.reach.constant_orientation_box`), kept where
+    reachable; the twist Jacobian t = (v, omega) = J_t qd (:class:`symkin.mechanism.reach.ConstantOrientation`)
+    splits into J_v and J_w: the handle pushed with the orientation free and turned with the position free.  A
+    sample is usable where 1/kappa of J_v and of J_w are both at least ``conditioning``."""
     from symkin.numerics import sampling
     from symkin.mechanism import reach
 
@@ -318,25 +363,17 @@ def rate_pose_platform(model: GeneratedModel, actuation: Actuation, *, samples: 
                          f"{conditioning:g}")
     poses = view.poses(points)
     M = dynamics_at(model, "mass_matrix", q, poses)
-    measures, skipped = translation_measures(model, J_v, M, q, poses, actuation)
-    turned, not_turned = rotation_measures(J_w, M, actuation)
-    return Datasheet(model.name, q, points, mechanism.POSITION_COMPONENTS, measures + turned, len(q) - 1,
-                     skipped | not_turned, PUSHED_GROUPS | TURNED_GROUPS)
+    return _Usable(q, poses, points, mechanism.POSITION_COMPONENTS, J_v, J_w, M)
 
 
-def rate_orientation_platform(model: GeneratedModel, actuation: Actuation, *, samples: int = 4096, seed: int = 0,
-                              box: Mapping[str, tuple[float, float]] | None = None,
-                              limits: mechanism.Limits | None = None,
-                              conditioning: float = USABLE_CONDITIONING) -> Datasheet:
-    """The datasheet of a spherical platform (the Agile Eye): its handle twisted about the centre of rotation.
+def _usable_orientations(model: GeneratedModel, samples: int, seed: int, box: Mapping[str, tuple[float, float]] | None,
+                         limits: mechanism.Limits | None, conditioning: float) -> _Usable:
+    """A spherical platform (the Agile Eye): its handle twisted about the centre of rotation.
 
     Orientations are sampled (scrambled Sobol) over the roll-pitch-yaw chart, or the ``box`` of angles (rad), and
     kept where every leg reaches them within the joint limits (:func:`symkin.analysis.orientations.orientation_cloud`).
     The angular-velocity Jacobian J_w = E(p) J (omega = J_w qd; E maps the roll-pitch-yaw rates to omega, J is the
-    generated ``jacobian``) rates the handle: the apparent rotational inertia (J_w M^-1 J_w^T)^-1, the isotropic and
-    peak torque, the angular resolution, the gravity share, and with joint friction the Coulomb torque felt, the
-    least rotational damping and the stiffest passive rotational wall at the servo rate.  A sample is usable where
-    1/kappa(J_w) >= ``conditioning``.
+    generated ``jacobian``) rates the handle.  A sample is usable where 1/kappa(J_w) >= ``conditioning``.
     """
     from symkin.analysis import orientations
     from symkin.mechanism.reach import angular_velocity_matrix
@@ -359,17 +396,4 @@ def rate_orientation_platform(model: GeneratedModel, actuation: Actuation, *, sa
     if len(q) < 2:
         raise ValueError(f"{model.name}: no reachable orientation in the box {dict(box or {})} has 1/kappa >= "
                          f"{conditioning:g}")
-    M = dynamics_at(model, "mass_matrix", q, points)
-    turned, skipped = rotation_measures(J_w, M, actuation)
-    measures = list(turned)
-    share = gravity_share_measure(model, q, points, actuation.effort_limits)
-    if isinstance(share, str):
-        skipped["gravity_share"] = share
-    else:
-        measures += share
-    friction = friction_measures(J_w, actuation, ROTATIONAL_FRICTION)
-    if isinstance(friction, str):
-        skipped["friction"] = friction
-    else:
-        measures += friction
-    return Datasheet(model.name, q, points, ANGLES, tuple(measures), len(q) - 1, skipped, SPHERICAL_GROUPS)
+    return _Usable(q, points, points, ANGLES, None, J_w, dynamics_at(model, "mass_matrix", q, points))

@@ -46,13 +46,6 @@ def is_model_file(path: str | Path) -> bool:
     return Path(path).suffix.lower() in MODEL_FILE_SUFFIXES
 
 
-def parallel_only(names: Sequence[str]) -> dict[MechanismKind, tuple[str, ...]]:
-    """``names`` for every kind of parallel mechanism, none for a serial one (an ``optional`` of
-    :func:`generated_model`: a parallel model's poses from fk or from its leg equations, which a serial arm does
-    not need)."""
-    return {kind: () if kind is MechanismKind.SERIAL else tuple(names) for kind in MechanismKind}
-
-
 def generated_model(path: str, backend: str = "numpy",
                outputs: Sequence[str] | Mapping[MechanismKind, Sequence[str]] = ANALYSIS_OUTPUTS,
                optional: Sequence[str] | Mapping[MechanismKind, Sequence[str]] = (),
@@ -65,7 +58,8 @@ def generated_model(path: str, backend: str = "numpy",
         backend: the backend to load (and, for a model file, to emit).
         outputs: the quantities to derive from a model file.
         optional: quantities also derived where the model has them (e.g. ``friction``, ``gravity_vector``),
-            skipped silently where it does not; or by kind of mechanism, as ``outputs`` (:func:`parallel_only`).
+            skipped silently where it does not; or by kind of mechanism, as ``outputs``
+            (``symkin.analysis.needs.DERIVED``).
         closure: the quantities to derive instead of ``outputs`` where the model's legs have no distance form
             (default: :data:`CLOSURE_OUTPUTS` where ``outputs`` is by kind, else ``outputs``).
         reading: the keyword arguments of :func:`symkin.model.load_model` a robot file is read with (tip, chain,

@@ -4,13 +4,16 @@ file is derived from on the fly (issue 62: it replaces the tables each command k
 A kind's tuple is what the analysis calls for every model of that kind: a serial arm's fk and J; a translational
 platform's closed-form ik (reachability, working mode) with its fk and J; a platform that also rotates
 (Stewart-Gough: no closed-form fk) and a spherical one (the Agile Eye) through ik and J^-1.  Legs without the
-distance form are derived with the closure's functions instead (``symkin.analysis.model_files.CLOSURE_OUTPUTS`` and
-each command's own closure list); what a model has only sometimes (gravity, a wrist) is asked for as optional.
+distance form are derived with the closure's functions instead (``symkin.analysis.model_files.CLOSURE_OUTPUTS``);
+what a model has only sometimes (gravity, a wrist) is asked for as optional.  :data:`DERIVED` holds what the
+commands that derive more than a tuple by kind (identify, excite) derive a model file with, legs without the
+distance form included.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
+from typing import NamedTuple
 
 from symkin.mechanism import MechanismKind
 
@@ -49,3 +52,42 @@ NEEDS: Mapping[str, Mapping[MechanismKind, tuple[str, ...]]] = {
              MechanismKind.PARALLEL_ORIENTATION: ("ik", "leg_points", "inverse_jacobian", "singularities")},
 }
 
+
+class Derived(NamedTuple):
+    """What a command derives a model file with when its needs are not one tuple by kind (the ``outputs``,
+    ``optional`` and ``closure`` of :func:`symkin.analysis.model_files.generated_model`, in that order)."""
+
+    #: derived for every model
+    outputs: tuple[str, ...]
+    #: also derived where the model has them, by kind of mechanism
+    optional: Mapping[MechanismKind, tuple[str, ...]]
+    #: derived instead of ``outputs`` where the legs have no distance form (the closure's functions)
+    closure: tuple[str, ...]
+
+
+def _besides_open_chains(names: Sequence[str]) -> dict[MechanismKind, tuple[str, ...]]:
+    """``names`` for every kind of mechanism that closes loops, none for an open chain."""
+    return {kind: () if kind is MechanismKind.SERIAL else tuple(names) for kind in MechanismKind}
+
+
+#: What a run's regressors need: the base regressor (the estimate), the standard one (the consistent estimate and the
+#: model file), and a parallel model's poses from its closed-form fk or by Newton on its leg equations; legs without
+#: the distance form take the closure (each sample's assembly), its dynamics (the velocities and accelerations it
+#: allows) and the regressors over all its variables.
+_IDENTIFIED = ("base_regressor", "regressor")
+_POSES = ("fk", "constraints", "constraint_jacobians")
+_CLOSURE_IDENTIFIED = ("closure", "closure_jacobians", "closure_dynamics", "closure_regressor",
+                       "closure_base_regressor")
+
+#: {command: what it derives a model file with}.
+DERIVED: Mapping[str, Derived] = {
+    # symkin identify (symkin.analysis.device_regressors), and with --method energy
+    "identify": Derived(_IDENTIFIED, _besides_open_chains(_POSES), _CLOSURE_IDENTIFIED),
+    "identify energy": Derived((*_IDENTIFIED, "energy_regressor"), _besides_open_chains(_POSES),
+                               (*_CLOSURE_IDENTIFIED, "closure_energy_regressor")),
+    # symkin excite (symkin.design.excitation): the base regressor along a parallel model's motion through fk, or its
+    # pose's through ik without a closed-form fk; legs without the distance form: the actuators' series, each sample
+    # assembled by a rootfinder (symkin.design.closure_excitation)
+    "excite": Derived(("base_regressor",), _besides_open_chains(("fk", "ik")),
+                      ("closure", "closure_jacobians", "closure_dynamics", "closure_base_regressor")),
+}

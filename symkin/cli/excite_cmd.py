@@ -48,7 +48,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from symkin.design import closure_excitation, excitation
+    from symkin.analysis.needs import DERIVED
+    from symkin.design import excitation
 
     start = time.perf_counter()
     try:
@@ -57,11 +58,7 @@ def run(args: argparse.Namespace) -> int:
                 raise ValueError(f"--{name.replace('_', '-')} must be positive")
         if args.harmonics < 1 or args.periods < 1:
             raise ValueError("--harmonics and --periods must be at least 1")
-        # a parallel model's run: its actuators' series through fk, or its pose's through ik without a closed-form fk;
-        # legs without the distance form: the actuators' series, each sample assembled by a rootfinder
-        model = model_files.generated_model(args.model, "casadi", ("base_regressor",),
-                                            optional=model_files.parallel_only(("fk", "ik")),
-                                            closure=closure_excitation.CLOSURE_EXCITATION, display=Progress)
+        model = model_files.generated_model(args.model, "casadi", *DERIVED["excite"], display=Progress)
         values = analysis_args.parse_assignments(args.assignments)
         model = model.bind(**values) if values else model
         joints = model.info.device_coordinates   # a hybrid device's wrist joints after the legs' actuators

@@ -12,20 +12,9 @@ import numpy as np
 
 from symkin.cli import analysis_args
 from symkin.analysis import model_files
+from symkin.analysis.needs import DERIVED
 from symkin.cli.progress import Progress
 from symkin.cli.urdf_args import add_urdf_arguments, urdf_options
-
-#: What a model file is derived with on the fly (the full regressor for the consistent estimate and the model
-#: file), and with --method energy (the energy regressor too).
-IDENTIFY_OUTPUTS = ("base_regressor", "regressor")
-ENERGY_OUTPUTS = (*IDENTIFY_OUTPUTS, "energy_regressor")
-#: What a parallel model's poses come from: its closed-form fk where it has one, else Newton on its leg equations.
-POSE_OUTPUTS = ("fk", "constraints", "constraint_jacobians")
-#: What legs without the distance form are derived with instead: the closure (each sample's assembly), its dynamics
-#: (the velocities and accelerations it allows) and the regressors over all its variables.
-CLOSURE_OUTPUTS = ("closure", "closure_jacobians", "closure_dynamics", "closure_regressor", "closure_base_regressor")
-CLOSURE_ENERGY_OUTPUTS = (*CLOSURE_OUTPUTS, "closure_energy_regressor")
-
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
@@ -79,11 +68,8 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError(f"--window must be a positive number of seconds, got {args.window:g}")
         reading = urdf_options(args, args.model) if model_files.is_model_file(args.model) else {}
         source = _model_file(args.model, reading)
-        outputs = ENERGY_OUTPUTS if args.method == "energy" else IDENTIFY_OUTPUTS
-        model = model_files.generated_model(args.model, args.backend, outputs,
-                                            optional=model_files.parallel_only(POSE_OUTPUTS),
-                                            closure=CLOSURE_ENERGY_OUTPUTS if args.method == "energy" else
-                                            CLOSURE_OUTPUTS, reading=reading, display=Progress)
+        needed = DERIVED["identify energy" if args.method == "energy" else "identify"]
+        model = model_files.generated_model(args.model, args.backend, *needed, reading=reading, display=Progress)
         values = analysis_args.parse_assignments(args.assignments)
         model = model.bind(**values) if values else model
         parallel = model.info.is_parallel
@@ -157,18 +143,19 @@ def _device_regressors(args: argparse.Namespace, model):
 
     Raises:
         ValueError: a generated directory without the base regressor, or without both fk and the leg equations (of
-            legs without the distance form: without CLOSURE_OUTPUTS).
+            legs without the distance form: without what ``DERIVED["identify"]`` derives them with).
     """
-    from symkin.analysis.device_regressors import ClosureDeviceRegressors, DeviceRegressors
+    from symkin.analysis.device_regressors import DeviceRegressors
 
     functions = model.info.functions
     if "closure_regressor" in functions:  # legs without the distance form
-        missing = [f for f in CLOSURE_OUTPUTS if f not in functions]
+        needed = DERIVED["identify"].closure
+        missing = [f for f in needed if f not in functions]
         if missing:
             raise ValueError(f"{args.model}: the identification of legs without the distance form needs "
-                             f"{', '.join(missing)}; derive them (symkin derive --only {','.join(CLOSURE_OUTPUTS)}, "
+                             f"{', '.join(missing)}; derive them (symkin derive --only {','.join(needed)}, "
                              "and closure_energy_regressor for --method energy) or give the model file")
-        return ClosureDeviceRegressors(model, args.data)
+        return DeviceRegressors(model, args.data)
     missing = [f for f in ("base_regressor",) if f not in functions]
     if "fk" not in functions and not {"constraints", "constraint_jacobians"} <= set(functions):
         missing.append("fk (or constraints and constraint_jacobians, for Newton's method)")
@@ -199,7 +186,8 @@ def _energy(model, fit, Y, Y_b, K, names, window: float):
     from symkin.analysis import identification
 
     if "energy_regressor" not in model.info.functions:
-        outputs = ",".join(CLOSURE_ENERGY_OUTPUTS if "closure_regressor" in model.info.functions else ENERGY_OUTPUTS)
+        needed = DERIVED["identify energy"]
+        outputs = ",".join(needed.closure if "closure_regressor" in model.info.functions else needed.outputs)
         raise ValueError(f"{model.name}: --method energy needs the energy regressor; derive it (--only {outputs}) or "
                          "give the model file")
     return identification.energy_least_squares(fit, Y, model.energy_regressor(fit.q, fit.qd)[0], Y_b, K,

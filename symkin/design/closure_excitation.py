@@ -25,10 +25,6 @@ from symkin.design.formulation import casadi_function
 from symkin.runtime.info import GeneratedModel
 from symkin.mechanism.closure import ClosureAssembly
 
-#: The functions the excitation of legs without the distance form needs.
-CLOSURE_EXCITATION = ("closure", "closure_jacobians", "closure_dynamics", "closure_base_regressor")
-
-
 #: Bisection steps of the factor that keeps the legs assembled along a shrunk motion.
 ASSEMBLY_STEPS = 20
 

@@ -71,20 +71,17 @@ def body_jacobians(model: Model, chain: ChainFrames) -> tuple[BodyJacobians, ...
         linear, angular = [], []
         moving = set(tree.path_to(parents, k))
         for j, (jtype, z, point) in enumerate(axes[:k + 1]):
-            revolute = joint_kinds.is_rotation(jtype)
             if j not in moving:  # a joint on another branch does not move the body
                 linear.append(ZERO3)
                 angular.append(ZERO3)
                 continue
-            if massless:
-                linear.append(ZERO3)
-            elif revolute:
-                linear.append(tuple(cross(z, [com[r] - point[r] for r in range(3)])))
-            else:
-                linear.append(tuple(z))
-            # R^T z: the joint axis in the body's link axes.
-            angular.append(tuple(sum((R[s][r] * z[s] for s in range(3)), se.Integer(0)) for r in range(3))
-                           if revolute else ZERO3)
+            # the joint's twist per unit rate (w, v) at a point of its axis, moved to the centre of mass:
+            # v + w x (com - point) (the motion subspace of its kind: w = z, v = 0 turning; w = 0, v = z sliding)
+            w, v = joint_kinds.motion_subspace(jtype, z, ZERO3)
+            linear.append(ZERO3 if massless else
+                          tuple(a + b for a, b in zip(v, cross(w, [com[r] - point[r] for r in range(3)]))))
+            # R^T w: the joint's angular velocity in the body's link axes.
+            angular.append(tuple(sum((R[s][r] * w[s] for s in range(3)), se.Integer(0)) for r in range(3)))
         inertia = None if body.is_point_mass else tuple(tuple(row) for row in se_matrix(body.inertia))
         out.append(BodyJacobians(body.link, k + 1, se.sympify(body.mass), com, tuple(linear), tuple(angular),
                                  inertia))

@@ -24,7 +24,7 @@ from collections.abc import Sequence
 
 import symengine as se
 
-from symkin.dynamics.bodies import BodyJacobians
+from symkin.dynamics.bodies import ZERO3, BodyJacobians
 from symkin.dynamics.program import cross, dot, mat_vec, se_vector
 from symkin.kinematics.chain import JointAxis
 from symkin.model import joint_kinds
@@ -67,13 +67,11 @@ def gravity_vector(bodies: Sequence[BodyJacobians], axes: Sequence[JointAxis], g
     for j, axis in enumerate(axes):
         moved = [b for b in bodies if b.joints > j and b.mass != 0]
         mass = sum((b.mass for b in moved), se.Integer(0))
-        z = se_vector(axis.direction)
-        if joint_kinds.is_rotation(axis.type):
-            moment = [sum((b.mass * b.com[r] for b in moved), se.Integer(0)) for r in range(3)]
-            point = se_vector(axis.point)
-            column = cross(z, [moment[r] - mass * point[r] for r in range(3)])
-        else:
-            column = [mass * c for c in z]
+        # sum_b m_b (v + w x (c_b - a)) = m v + w x (S - m a) for the joint's twist (w, v) per unit rate
+        w, v = joint_kinds.motion_subspace(axis.type, se_vector(axis.direction), ZERO3)
+        moment = [sum((b.mass * b.com[r] for b in moved), se.Integer(0)) for r in range(3)]
+        point = se_vector(axis.point)
+        column = [mass * a + b for a, b in zip(v, cross(w, [moment[r] - mass * point[r] for r in range(3)]))]
         G.append(-dot(gravity, column))
     return G
 

@@ -236,20 +236,16 @@ def link_motions(links: Sequence[Link], qd: Sequence[se.Basic] | None, qdd: Sequ
         # The origin of F_i is a point of the parent link at r (moved along the axis if prismatic).
         acc = mat_vec(E, _add(acc, _add(cross(dw, r), cross(w, cross(w, r)))))
         w, dw = mat_vec(E, w), mat_vec(E, dw)
-        revolute = joint_kinds.is_rotation(link.type)
-        if qd is not None:
-            zqd = [c * qd[i] for c in link.axis]
-            if revolute:
-                dw = _add(dw, cross(w, zqd))
-                w = _add(w, zqd)
-            else:
-                acc = _add(acc, [2 * c for c in cross(w, zqd)])
+        # the joint's twist per unit rate (its kind's motion subspace): (z, 0) turning, (0, z) sliding
+        turning, sliding = joint_kinds.motion_subspace(link.type, link.axis, zero)
+        if qd is not None:  # dw += w x (w_j qd), a += 2 w x (v_j qd) (Coriolis), w += w_j qd
+            turned, slid = [c * qd[i] for c in turning], [c * qd[i] for c in sliding]
+            dw = _add(dw, cross(w, turned))
+            acc = _add(acc, [2 * c for c in cross(w, slid)])
+            w = _add(w, turned)
         if qdd is not None:
-            zqdd = [c * qdd[i] for c in link.axis]
-            if revolute:
-                dw = _add(dw, zqdd)
-            else:
-                acc = _add(acc, zqdd)
+            dw = _add(dw, [c * qdd[i] for c in turning])
+            acc = _add(acc, [c * qdd[i] for c in sliding])
         motion.append((w, dw, acc))
     return motion
 

@@ -40,6 +40,7 @@ from collections.abc import Sequence
 import symengine as se
 
 from symkin.dynamics import newton_euler
+from symkin.dynamics.bodies import ZERO3
 from symkin.model import joint_kinds
 from symkin.dynamics.base_parameters import BaseParameters, base_parameters, require_exact_constants
 from symkin.dynamics.coupling import forces_on_coordinates, joint_rates
@@ -136,13 +137,9 @@ def energy_row(model: Model, links: Sequence[newton_euler.Link], gravity: Sequen
     for i, link in enumerate(links):
         g_p, height_p, w_p, v_p = (g, se.Integer(0), zero, zero) if link.parent < 0 else frames[link.parent]
         E, r = link.rotation, link.origin  # F_p -> F_i coordinates; the origin of F_i in F_p
-        rate = [c * qd[i] for c in link.axis]
-        w = mat_vec(E, w_p)
-        v = mat_vec(E, [a + b for a, b in zip(v_p, cross(w_p, r))])
-        if joint_kinds.is_rotation(link.type):
-            w = [a + b for a, b in zip(w, rate)]
-        else:
-            v = [a + b for a, b in zip(v, rate)]
+        turning, sliding = joint_kinds.motion_subspace(link.type, link.axis, ZERO3)  # the joint's (w, v) per rate
+        w = [a + c * qd[i] for a, c in zip(mat_vec(E, w_p), turning)]
+        v = [a + c * qd[i] for a, c in zip(mat_vec(E, [a + b for a, b in zip(v_p, cross(w_p, r))]), sliding)]
         g_i, height = mat_vec(E, g_p), height_p + dot(g_p, r)  # R^T g and g . p
         frames.append((g_i, height, w, v))
         row += [half * dot(v, v) - height] + [m - gl for m, gl in zip(cross(v, w), g_i)]

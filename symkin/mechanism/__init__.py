@@ -10,8 +10,9 @@ solve, :func:`symkin.runtime.parallel.solve_closure`) and checks their limits,
 continuation along the actuators, the dynamics of the actuated joints), :mod:`symkin.mechanism.reach` answers the
 Cartesian analyses' questions for every kind (the box around the workspace, reachability through inverse
 kinematics, :mod:`symkin.mechanism.feasibility`, a pose platform held at one orientation, the characteristic
-length), and :mod:`symkin.mechanism.device` views a hybrid device as one mechanism in all its actuated joints.
-Next: one object that assembles any mechanism and gives fk, J, M, h of its actuated joints.
+length), :mod:`symkin.mechanism.device` views a hybrid device as one mechanism in all its actuated joints, and
+:class:`symkin.mechanism.actuated.Mechanism` is the one object of a loaded model in its actuated joints (assembly,
+handle, the generated functions bound to them) that the simulation and the identification ask.
 
 The analyses take a :class:`symkin.LoadedModel` (``symkin.load(directory, backend)``):
 its generated functions do the arithmetic, its manifest tells the joint types, limits and

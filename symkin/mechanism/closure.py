@@ -11,7 +11,8 @@ excitation design ask it.
   previous row's (a trajectory's first row, read after the run ended far from it, is not solved from the run's
   end); NaN where the legs stop closing.
 * **Dynamics of the actuated joints** (:class:`ClosureFunctions`): the generated ``closure_dynamics`` reduced at
-  each state (:mod:`symkin.runtime.closure_dynamics`) as functions of q alone - the functions a
+  each state (:mod:`symkin.runtime.closure_dynamics`) and the regressors over all the closure's variables taken to
+  the actuators (Y = W^T Y_z, the identification's) as functions of q alone - the functions a
   :class:`symkin.simulation.plant.Plant` asks of a mechanism without closed forms (one with a closed-form fk takes
   p = fk(q)).
 
@@ -27,7 +28,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from symkin.errors import GeneratedCodeError
-from symkin.runtime.closure_dynamics import ActuatedDynamics, actuated_dynamics
+from symkin.runtime.closure_dynamics import (ActuatedDynamics, actuated_dynamics, closure_energy_regressor,
+                                             closure_regressor)
 from symkin.runtime.info import GeneratedModel
 from symkin import mechanism
 from symkin.runtime.parallel import solve_closure
@@ -131,6 +133,12 @@ PLANT_FUNCTIONS = ("forward_dynamics", "inverse_dynamics", "mass_matrix", "kinet
                    "potential_energy", "jacobian", "fk")
 #: The generated closure functions the plant needs.
 NEEDED = ("closure", "closure_jacobians", "closure_dynamics")
+#: The regressors of the actuators :class:`ClosureFunctions` gives, each from the generated regressor over all the
+#: closure's variables (:func:`symkin.runtime.closure_dynamics.closure_regressor`: Y = W^T Y_z).
+REGRESSORS = {"regressor": "closure_regressor", "base_regressor": "closure_base_regressor",
+              "energy_regressor": "closure_energy_regressor"}
+#: The functions whose values hold the friction efforts (the generated ``friction`` must not be missing there).
+WITH_FRICTION = ("forward_dynamics", "inverse_dynamics")
 
 
 class ClosureAssembly:
@@ -193,27 +201,48 @@ class ClosureFunctions:
     """The dynamics of legs without closed forms as functions of the actuated joints (see the module docstring).
 
     Raises:
-        GeneratedCodeError: the model lacks ``closure_dynamics`` (no bodies declared), or ``friction`` where its
-            joints declare friction, or its legs do not close at the home pose.
+        GeneratedCodeError: the model lacks ``closure_dynamics`` (no bodies declared), or its legs do not close at
+            the home pose; :meth:`function` of the dynamics: ``friction`` is missing where the joints declare it.
     """
 
     def __init__(self, model: GeneratedModel):
         missing = [name for name in NEEDED if name not in model.functions]
-        if "friction" not in model.functions and any(c.viscous is not None for c in model.info.coordinates):
-            missing.append("friction")  # it would silently read as zero
         if missing:
-            outputs = ",".join(NEEDED + (("friction",) if "friction" in missing else ()))
-            raise GeneratedCodeError(f"{model.name}: its legs have no closed forms; simulating them needs the generated "
-                                     f"{', '.join(missing)} (declare bodies: links: and platform:, and derive with "
-                                     f"--only {outputs})")
+            self._refuse(model, missing + (["friction"] if self._lacks_friction(model) else []))
         self.model = model
         self.assembly = ClosureAssembly(model)
         self.home = self.assembly.home
+        #: the names :meth:`function` gives: the plant's, and the actuators' regressors whose closure regressor exists
+        self.names = PLANT_FUNCTIONS + tuple(name for name, closure in REGRESSORS.items() if closure in model.functions)
         self._last_dynamics: tuple[np.ndarray, np.ndarray, ActuatedDynamics] | None = None
+        self._last_assembly: tuple[np.ndarray, tuple[np.ndarray, np.ndarray]] | None = None
+
+    @staticmethod
+    def _lacks_friction(model: GeneratedModel) -> bool:
+        """Whether the joints declare friction the model has no generated ``friction`` for."""
+        return "friction" not in model.functions and any(c.viscous is not None for c in model.info.coordinates)
+
+    @staticmethod
+    def _refuse(model: GeneratedModel, missing: list[str]) -> None:
+        outputs = ",".join(NEEDED + (("friction",) if "friction" in missing else ()))
+        raise GeneratedCodeError(f"{model.name}: its legs have no closed forms; simulating them needs the generated "
+                                 f"{', '.join(missing)} (declare bodies: links: and platform:, and derive with "
+                                 f"--only {outputs})")
+
+    def assembled(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(s, p) at q (:class:`ClosureAssembly`); of the same q as the last call, that call's (a part of a run
+        goes through several regressors: its assemblies are solved once)."""
+        q = np.asarray(q, dtype=float)
+        last = self._last_assembly
+        if last is not None and q.shape == last[0].shape and np.array_equal(q, last[0]):
+            return last[1]
+        solved = self.assembly(q)
+        self._last_assembly = (q.copy(), solved)
+        return solved
 
     def pose(self, q: np.ndarray) -> np.ndarray:
         """The platform pose p (..., m) at q."""
-        return self.assembly(q)[1]
+        return self.assembled(q)[1]
 
     def dynamics(self, q: np.ndarray, qd: np.ndarray) -> ActuatedDynamics:
         """M, the bias efforts, W and the energies at (q, qd); the last state's are kept (a step of the loop asks
@@ -223,7 +252,7 @@ class ClosureFunctions:
             last_q, last_qd, terms = self._last_dynamics
             if q.shape == last_q.shape and np.array_equal(q, last_q) and np.array_equal(qd, last_qd):
                 return terms
-        s, p = self.assembly(q)
+        s, p = self.assembled(q)
         terms = actuated_dynamics(self.model, q, s, p, qd)
         self._last_dynamics = (q.copy(), qd.copy(), terms)
         return terms
@@ -238,9 +267,25 @@ class ClosureFunctions:
         return self.dynamics(q, np.zeros(np.shape(q)))
 
     def function(self, name: str) -> Callable[..., np.ndarray]:
-        """The plant's function ``name`` (one of :data:`PLANT_FUNCTIONS` but fk: a generated function's name and
-        signature, in the joints only)."""
+        """The function ``name`` (one of :attr:`names` but fk: a generated function's name and signature, in the
+        joints only).
+
+        Raises:
+            GeneratedCodeError: the dynamics asked for lack the generated ``friction`` the joints declare (it
+                would silently read as zero).
+        """
+        if name in WITH_FRICTION and self._lacks_friction(self.model):
+            self._refuse(self.model, ["friction"])
         return getattr(self, f"_{name}")
+
+    def _regressor(self, q, qd, qdd):
+        return closure_regressor(self.model, q, *self.assembled(q), qd, qdd)
+
+    def _base_regressor(self, q, qd, qdd):
+        return closure_regressor(self.model, q, *self.assembled(q), qd, qdd, base=True)
+
+    def _energy_regressor(self, q, qd):
+        return closure_energy_regressor(self.model, q, *self.assembled(q), qd)
 
     def _forward_dynamics(self, q, qd, tau):
         return self.dynamics(q, qd).accelerations(tau)

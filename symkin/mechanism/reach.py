@@ -4,7 +4,8 @@
 here for every kind of mechanism so that the analyses do not tell kinds apart (issue 62).
 
 An open chain's box is the TCP positions of a joint grid padded by a Jacobian bound.  A parallel mechanism's
-generated functions differ from a serial arm's (see README): ``fk(q)`` returns ``position`` and ``margin`` (NaN where the legs cannot be assembled),
+generated functions differ from a serial arm's (see README): ``fk(q)`` returns ``position`` and ``margin`` (NaN
+where the legs cannot be assembled),
 ``ik(p)`` returns ``joints`` and per-leg ``margin`` (NaN where p is out of reach) and the
 velocity functions take both ``q`` and ``p``: ``jacobian(q, p)`` is J = J_x^-1 J_q
 (seed eq. 8.29).

@@ -22,7 +22,7 @@ START_CANDIDATES = 256
 
 def start_pose(plant: Plant) -> tuple[np.ndarray, str]:
     """(q0, how it was chosen, for the output)."""
-    declared = plant.home_configuration
+    declared = plant.mechanism.home_configuration
     if declared is not None:
         return declared, f"the model's home configuration (1/kappa = {float(plant.dexterity(declared)):.3g})"
     limits = plant.joint_limits

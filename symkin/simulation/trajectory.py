@@ -96,7 +96,7 @@ def task_circle(plant, q_start: np.ndarray, radius: float, duration: float, samp
         raise NotApplicable(f"{plant.name}: tracking follows a TCP circle, and this device's handle only turns "
                             f"({', '.join(plant.point_axes)}): simulate haptic-wall, gravity-compensation, sine or "
                             "free-swing")
-    if plant.inverse_in_closed_form:
+    if plant.mechanism.inverse_in_closed_form:
         return _circle_in_closed_form(plant, q_start, radius, duration, samples)
     from symkin.ik import ModelKinematics, solve_numeric
 
@@ -128,16 +128,16 @@ def task_circle(plant, q_start: np.ndarray, radius: float, duration: float, samp
 def _circle_in_closed_form(plant, q_start: np.ndarray, radius: float, duration: float, samples: int
                            ) -> SplineReference:
     """:func:`task_circle` of a plant whose joints follow from task targets in closed form
-    (:meth:`~symkin.simulation.plant.Plant.joints_at`) at every sample of the circle (a hybrid device's wrist held
+    (:meth:`~symkin.mechanism.actuated.Mechanism.joints_at`) at every sample of the circle (a hybrid device's wrist held
     at its start: the platform translates, so the TCP follows the platform's circle)."""
     q_start = np.asarray(q_start, dtype=float)
     times = np.linspace(0.0, duration, samples)
     phi = 2.0 * np.pi * rest_to_rest(times, duration)
-    targets = np.tile(plant.pose(q_start), (samples, 1))
+    targets = np.tile(plant.mechanism.pose(q_start), (samples, 1))
     first, second = (plant.model.info.task_space.index(axis) for axis in plant.point_axes[:2])
     targets[:, first] += radius * (np.cos(phi) - 1.0)
     targets[:, second] += radius * np.sin(phi)
-    q = plant.joints_at(targets, q_start)
+    q = plant.mechanism.joints_at(targets, q_start)
     lost = np.flatnonzero(~np.all(np.isfinite(q), axis=-1))
     if lost.size:
         raise SimulationError(f"{plant.name}: the circle leaves the reachable workspace at t = {times[lost[0]]:.4g} s; "

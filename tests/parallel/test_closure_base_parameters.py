@@ -233,13 +233,13 @@ def test_a_sample_where_the_legs_do_not_close_is_refused_with_its_row(generated)
     continued along the run; a sample the legs cannot reach (the planar leg stretched straight along +x puts the
     bar's left end 0.6 m from the lifting leg's axis, beyond its l1 + l2 = 0.5 m) is refused with its CSV row, the
     samples before it assembled."""
-    from symkin.analysis.device_regressors import ClosureDeviceRegressors
+    from symkin.analysis.device_regressors import DeviceRegressors
     from symkin.analysis.identification import DataError
 
-    device = ClosureDeviceRegressors(generated, "run.csv")
+    device = DeviceRegressors(generated, "run.csv")
     home = ClosureAssembly(generated).home
     q = home + np.outer(np.linspace(0.0, 0.02, 3), [1.0, 0.1, 1.0, 1.0])
-    s, p = device.assembly(q)
+    s, p = device.mechanism.assembly(q)
     assert device.info.functions["base_regressor"] is generated.info.functions["closure_base_regressor"]
     assert np.abs(generated.closure(q, s, p)).max() <= NEWTON  # scale: links of 0.25 m, angles < 1 rad
     wild = np.vstack([q, [q[-1, 0], q[-1, 1], 0.0, 0.0]])                  # phi2 = knee2 = 0

@@ -156,7 +156,7 @@ def test_a_free_motion_keeps_its_energy(scara):
     not follow from M_z, a missing closure acceleration c or a wrong W would change it by > 1e-4 J within 0.2 s."""
     plant = Plant(scara)
     system = ArmSystem(plant)
-    x0 = system.initial(plant.home_configuration, np.array([0.8, 0.05, -0.6, 0.7]))
+    x0 = system.initial(plant.mechanism.home_configuration, np.array([0.8, 0.05, -0.6, 0.7]))
     run = run_adaptive(system.derivative, lambda t, x: np.zeros(4), x0, np.linspace(0.0, 0.2, 21))
     state = system.split(run.x)
     energy = plant.energy(state.q, state.qd)
@@ -207,8 +207,8 @@ def test_the_datasheet_rates_the_apparent_mass_from_the_closure_dynamics(scara):
     from symkin.analysis import datasheet
     from symkin.analysis.handle_measures import Actuation
 
-    sheet = datasheet.rate_closure_platform(scara, Actuation.of_model(scara, effort_limits=[1.0] * 4), samples=216,
-                                            limits={"lift1": (0.0, 0.2)})
+    sheet = datasheet.rate(scara, Actuation.of_model(scara, effort_limits=[1.0] * 4), samples=216,
+                           limits={"lift1": (0.0, 0.2)})
     measures = {measure.name: measure.values for measure in sheet.measures}
     assert "apparent_mass" not in sheet.skipped
     assert np.max(np.abs(measures["apparent_mass_min"] - (0.45 + ROTOR))) <= 1e3 * 64 * np.finfo(float).eps

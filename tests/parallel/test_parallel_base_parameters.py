@@ -400,8 +400,8 @@ def test_a_hybrid_devices_run_is_its_legs_then_its_wrist(derived):
 
 @pytest.mark.parametrize("derived", ["delta"], indirect=True)
 def test_a_parts_poses_are_computed_once_for_all_its_regressors(derived):
-    """symkin identify passes one part of a run (one array) to the base regressor and the regressor: fk runs once
-    for it, and again for another array."""
+    """symkin identify passes one part of a run to the base regressor and the regressor: fk runs once for it (also
+    for a copy of it), and again for other joint values."""
     from symkin.analysis.device_regressors import DeviceRegressors
 
     name, found, generated = derived
@@ -423,6 +423,8 @@ def test_a_parts_poses_are_computed_once_for_all_its_regressors(derived):
     device.regressor(q, qd, qdd)
     assert solved == [8]
     np.testing.assert_array_equal(device.base_regressor(q.copy(), qd, qdd).Y_b, first)
+    assert solved == [8]
+    device.base_regressor(q + 1e-3, qd, qdd)
     assert solved == [8, 8]
 
 
