@@ -99,7 +99,7 @@ function determinant(A) {
   return det;
 }
 
-/** omega = E d(roll, pitch, yaw)/dt for R = Rz(yaw) Ry(pitch) Rx(roll) (symkin.analysis.parallel). */
+/** omega = E d(roll, pitch, yaw)/dt for R = Rz(yaw) Ry(pitch) Rx(roll) (symkin.mechanism.reach). */
 function angularVelocityMatrix(pitch, yaw) {
   const cp = Math.cos(pitch), sp = Math.sin(pitch), cy = Math.cos(yaw), sy = Math.sin(yaw);
   return [[cy * cp, -sy, 0], [sy * cp, cy, 0], [-sp, 0, 1]];

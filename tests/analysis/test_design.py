@@ -8,7 +8,7 @@ theta2 = 135 deg; the pointwise optimum of 1/kappa_F(theta2; l1/l2) is l1/l2 = s
 every theta2; the smallest reach sqrt(l1^2 + l2^2) at theta2 = 90 deg) and the DELTA's
 closed-form ik on a grid denser than the optimizer's constraint points; for a spherical platform
 (the spherical 3-RRR of docs/design-optimization.md) the numpy code with E(p) of
-``analysis.parallel`` and central differences of its surrogate.
+``mechanism.reach`` and central differences of its surrogate.
 """
 
 from __future__ import annotations
@@ -119,7 +119,7 @@ def spherical(tmp_path_factory):
 
 
 def _spherical_surrogate(model, points, alpha1, alpha2):
-    """sum cos(pitch) / kappa_F(E J) / sum cos(pitch) by the numpy code (E from analysis.parallel)."""
+    """sum cos(pitch) / kappa_F(E J) / sum cos(pitch) by the numpy code (E from mechanism.reach)."""
     bound = model.bind(alpha1=alpha1, alpha2=alpha2)
     J_w = angular_velocity_matrix(points) @ bound.jacobian(bound.ik(points).joints, points)
     weights = np.cos(points[:, 1])

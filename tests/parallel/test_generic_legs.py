@@ -499,7 +499,7 @@ def test_legs_with_the_distance_form_are_drawn_by_leg_points(derivations):
 
 def test_angle_rows_become_angular_velocity_at_each_pose():
     """A task space with roll, pitch and yaw: each sample's angle rows are turned into angular velocity by E of its
-    own pose (omega = E d(roll, pitch, yaw)/dt, analysis.parallel.angular_velocity_matrix), not of the home pose;
+    own pose (omega = E d(roll, pitch, yaw)/dt, mechanism.reach.angular_velocity_matrix), not of the home pose;
     a task space with yaw alone keeps its rows."""
     from types import SimpleNamespace
 

@@ -31,7 +31,7 @@ SAME_MEANING = {
     "Coordinate": "a coordinate in the schema and as the manifest records it (runtime.info)",
     "determinant": "the determinant in sympy (parallel.determinant) and in CasADi (design.smooth)",
     "adjugate": "the adjugate in sympy (parallel.determinant) and in CasADi (design.smooth)",
-    "angular_velocity_matrix": "E with omega = E d(roll, pitch, yaw)/dt in numpy (analysis.parallel) and in CasADi "
+    "angular_velocity_matrix": "E with omega = E d(roll, pitch, yaw)/dt in numpy (mechanism.reach) and in CasADi "
                                "(design.formulation)",
     "jacobian": "J of a parallel mechanism: the derived quantity (parallel.quantities) and its evaluation on a "
                 "loaded model (analysis.mechanism)",
