@@ -76,17 +76,15 @@ def held_orientation(model: GeneratedModel, angles: Sequence[float] | None) -> d
     Raises:
         ValueError: a nonzero angle the task space does not have.
     """
-    from symkin.mechanism.reach import ORIENTATION_COMPONENTS
-
     if angles is None:
         return {}
     task = mechanism.task_space(model)
-    extra = [f"{name} = {value:g}" for name, value in zip(ORIENTATION_COMPONENTS, angles)
+    extra = [f"{name} = {value:g}" for name, value in zip(mechanism.ANGLES, angles)
              if name not in task and value != 0.0]
     if extra:
         raise ValueError(f"--orientation: {model.name}'s task space {list(task)} holds {', '.join(extra)} at 0 "
                          "(parallel.motion); give 0 there")
-    return {name: float(value) for name, value in zip(ORIENTATION_COMPONENTS, angles) if name in task}
+    return {name: float(value) for name, value in zip(mechanism.ANGLES, angles) if name in task}
 
 
 def _same_side(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -296,12 +294,12 @@ def angular_rates(model: GeneratedModel, J: np.ndarray, poses: np.ndarray) -> np
     """J (..., m, n) at the task poses (..., m) with its roll-pitch-yaw rows turned into angular velocity (base frame,
     E of each pose: :func:`symkin.mechanism.reach.angular_velocity_matrix`) where the task space has all three (so
     kappa does not depend on the angles' parametrization); a single angle (planar yaw) is a rate already."""
-    from symkin.mechanism.reach import ORIENTATION_COMPONENTS, angular_velocity_matrix
+    from symkin.mechanism.reach import angular_velocity_matrix
 
     task = mechanism.task_space(model)
-    if not set(ORIENTATION_COMPONENTS) <= set(task):
+    if not set(mechanism.ANGLES) <= set(task):
         return J
-    rows = np.array([task.index(c) for c in ORIENTATION_COMPONENTS])
+    rows = np.array([task.index(c) for c in mechanism.ANGLES])
     rates = np.broadcast_to(np.eye(len(task)), J.shape[:-2] + (len(task), len(task))).copy()
     rates[..., rows[:, None], rows[None, :]] = angular_velocity_matrix(np.asarray(poses)[..., rows])
     return rates @ J

@@ -70,6 +70,7 @@ class Mechanism:
             records |= {name: records[closure] for name, closure in REGRESSORS.items() if closure in records}
         self.info = dataclasses.replace(info, coordinates=self.coordinates, wrist=(), functions=records)
         self._last_pose: tuple[np.ndarray | None, np.ndarray] = (None, np.empty(0))
+        self._bound: dict[str, Callable[..., Any]] = {}
         self.task_space = DEVICE_TASK_SPACE if self._wrist else mechanism.task_space(model)
         self.turns_only = not self._wrist and mechanism.turns_only(model)
 
@@ -94,9 +95,10 @@ class Mechanism:
         function takes them): the platform pose p = pose(z) added after q where it takes it, a hybrid device's
         vectors split into the legs' and the wrist's parts (``qw`` after ``q``...) as its manifest names the inputs,
         legs without closed forms' dynamics reduced through their closure."""
-        if self._closure is not None:
-            return self._closure.function(name)
-        return mechanism.of_device_joints(self.model, name, self.pose)
+        if name not in self._bound:  # bound once: the loops and the dexterity ask again at every step
+            self._bound[name] = (self._closure.function(name) if self._closure is not None else
+                                 mechanism.of_device_joints(self.model, name, self.pose))
+        return self._bound[name]
 
     def pose(self, z: np.ndarray) -> np.ndarray:
         """The platform pose p (..., task dof) of the legs' joints q (the first joints of z); NaN where it does not

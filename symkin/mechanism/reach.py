@@ -159,8 +159,6 @@ def generated_inverse(model: GeneratedModel) -> WorkingModeInverse | ConstantOri
 
 # --- pose platforms (Stewart-Gough) at a constant orientation --------------------------------
 
-#: Orientation coordinates of a pose task space: R = Rz(yaw) Ry(pitch) Rx(roll).
-ORIENTATION_COMPONENTS = ("roll", "pitch", "yaw")
 #: Rows of the Jacobian of a platform held at a constant orientation: linear and angular
 #: velocity of the platform frame, in the base frame.
 TWIST_COMPONENTS = ("x", "y", "z", "wx", "wy", "wz")
@@ -218,7 +216,7 @@ class ConstantOrientation:
         if isinstance(model, ConstantOrientation):
             model = model.model
         if not mechanism.is_parallel(model) or tuple(mechanism.task_space(model)) != (
-                *mechanism.POSITION_COMPONENTS, *ORIENTATION_COMPONENTS):
+                *mechanism.POSITION_COMPONENTS, *mechanism.ANGLES):
             raise ValueError(f"{model.name}: a constant orientation applies to a parallel platform with the task "
                              f"space x, y, z, roll, pitch, yaw, not {list(mechanism.task_space(model))}")
         for name in ("ik", "inverse_jacobian"):
