@@ -69,24 +69,6 @@ ANGLE_STEP = 0.05
 BAND_SAMPLES = 4
 
 
-def held_orientation(model: GeneratedModel, angles: Sequence[float] | None) -> dict[str, float]:
-    """The angles (roll, pitch, yaw in rad, or None: the home pose's) as the held angles of the model's task space;
-    an angle outside its task space must be 0 (the legs hold it there).
-
-    Raises:
-        ValueError: a nonzero angle the task space does not have.
-    """
-    if angles is None:
-        return {}
-    task = mechanism.task_space(model)
-    extra = [f"{name} = {value:g}" for name, value in zip(mechanism.ANGLES, angles)
-             if name not in task and value != 0.0]
-    if extra:
-        raise ValueError(f"--orientation: {model.name}'s task space {list(task)} holds {', '.join(extra)} at 0 "
-                         "(parallel.motion); give 0 there")
-    return {name: float(value) for name, value in zip(mechanism.ANGLES, angles) if name in task}
-
-
 def _same_side(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Boolean (K,): det(a^T b) > 0 for stacks a, b (K, rows, c); False where either is NaN."""
     with np.errstate(invalid="ignore"):

@@ -281,10 +281,11 @@ def _usable_closure_cells(model: GeneratedModel, samples: int, box: Mapping[str,
     rated (:data:`NO_CLOSURE_DYNAMICS`).
     """
     from symkin.analysis import closure_workspace
+    from symkin.mechanism import reach
     from symkin.runtime.closure_dynamics import actuated_dynamics
     from symkin.runtime.parallel import closure_velocities
 
-    held = closure_workspace.held_orientation(model, orientation)
+    held = reach.held_orientation(model, orientation)
     assembly = solve_home_assembly(model)
     home_q, home_s = assembly.q, assembly.s
     found = closure_workspace.closure_workspace(model, orientation=held, limits=limits,

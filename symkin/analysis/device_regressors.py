@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from symkin.analysis.identification import DataError
+from symkin.analysis.needs import DERIVED
 from symkin.mechanism.actuated import Mechanism
 
 
@@ -69,3 +70,37 @@ class DeviceRegressors:
     def energy_regressor(self, q: np.ndarray, qd: np.ndarray) -> Any:
         self.pose(q)
         return self.mechanism.function("energy_regressor")(q, qd)
+
+
+def run_regressors(model: Any, source: str, where: str) -> DeviceRegressors:
+    """The regressors of a run in ``source`` (:class:`DeviceRegressors`) of a generated directory that holds what
+    they need (``where`` names it in the refusal): the base regressor; where the device's joints carry a pose, fk
+    (or the leg equations constraints and constraint_jacobians, for Newton's method); legs without the distance
+    form, what ``DERIVED["identify"]`` derives them with.
+
+    Raises:
+        ValueError: naming what is missing and the ``symkin derive --only`` that gives it.
+    """
+    functions = model.info.functions
+    needed = DERIVED["identify"].required_of(functions)
+    if needed != DERIVED["identify"].outputs:  # legs without the distance form: the closure's functions
+        missing = [f for f in needed if f not in functions]
+        if missing:
+            raise ValueError(f"{where}: the identification of legs without the distance form needs "
+                             f"{', '.join(missing)}; derive them (symkin derive --only {','.join(needed)}, "
+                             "and closure_energy_regressor for --method energy) or give the model file")
+        return DeviceRegressors(model, source)
+    regressors = DeviceRegressors(model, source)
+    missing = [f for f in ("base_regressor",) if f not in functions]
+    if not regressors.mechanism.has_pose:
+        if missing:
+            raise ValueError(f"{where}: the identification needs base_regressor; derive it (symkin derive --only "
+                             "base_regressor,regressor) or give the model file")
+        return regressors
+    if "fk" not in functions and not {"constraints", "constraint_jacobians"} <= set(functions):
+        missing.append("fk (or constraints and constraint_jacobians, for Newton's method)")
+    if missing:
+        raise ValueError(f"{where}: a parallel model's identification needs {' and '.join(missing)}; derive "
+                         "them (symkin derive --only base_regressor,regressor,fk, or without a closed-form fk "
+                         "--only base_regressor,regressor,constraints,constraint_jacobians) or give the model file")
+    return regressors

@@ -16,8 +16,9 @@ the file allows (least squares), then the standard parameters nearest the estima
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -133,3 +134,41 @@ def nearest_held(K: np.ndarray, base_values: np.ndarray, near: np.ndarray, held:
     return held.fixed + held.T @ (z0 + N @ y)
 
 
+
+
+def file_values(source: Model, names: Sequence[str], K: np.ndarray, prior: np.ndarray, found: Any,
+                standard: Any | None, consistent_held: Callable[[Held], np.ndarray]) -> tuple[np.ndarray, np.ndarray, str]:
+    """What a model file is rewritten with after an identification: (the standard parameters, which of them the run
+    identifies, a note on what the file could not hold).
+
+    A file that holds every standard parameter gets the consistent estimate ``standard`` or, from the base
+    parameters ``found.values``, the standard parameters nearest the model's ``prior`` (:func:`nearest_standard`).
+    A parallel model's file holds fewer (:func:`parallel_held`): the least-squares estimate is taken into it by
+    :func:`nearest_held`, the consistent one refitted over what it holds (``consistent_held(held)``: the file's
+    values z), and the note says how far the base parameters it can hold lie from the estimate's.
+
+    Args:
+        names: the standard parameters, the regressor's columns.
+        K: the base parameters' combinations of them (:func:`combinations`).
+        found: the least-squares estimate of the base parameters (values, std, names).
+        standard: the consistent estimate of the standard parameters (its ``values``), or None.
+    """
+    identified = identifiable(K)
+    if source.parallel is None:
+        return (standard.values if standard is not None else nearest_standard(K, found.values, prior)), identified, ""
+    held = parallel_held(source, names, prior)
+    base = found.values if standard is None else K @ standard.values
+    estimate = nearest_held(K, base, prior, held) if standard is None else held.fixed + held.T @ consistent_held(held)
+    unheld = [name for name, held_here in zip(names, held.columns) if not held_here]
+    return estimate, identified & held.columns, _held_note(found, K @ estimate, base, unheld)
+
+
+def _held_note(found: Any, written: np.ndarray, base: np.ndarray, unheld: list[str]) -> str:
+    """How far the base parameters of what a parallel model's file holds lie from the estimate's, in standard
+    deviations, and why (one rotor for all actuators: their estimated differences are not in it; ``unheld``: the
+    standard parameters the file does not declare, kept at the model's values)."""
+    deviation = np.abs(written - base) / np.where(found.std > 0, found.std, np.inf)
+    worst = int(np.argmax(deviation))
+    kept = f", and not {', '.join(unheld)} (kept at the model's values)" if unheld else ""
+    return (f"; its base parameters within {deviation[worst]:.2g} standard deviations of the estimate's (most: "
+            f"{found.names[worst]}; the file holds one rotor for all actuators{kept})")

@@ -64,6 +64,11 @@ class Derived(NamedTuple):
     #: derived instead of ``outputs`` where the legs have no distance form (the closure's functions)
     closure: tuple[str, ...]
 
+    def required_of(self, functions: Sequence[str]) -> tuple[str, ...]:
+        """What a generated directory with ``functions`` needs of these: the closure's functions where it has the
+        closure's regressors (legs without the distance form), else ``outputs``."""
+        return self.closure if "closure_regressor" in functions else self.outputs
+
 
 def _besides_open_chains(names: Sequence[str]) -> dict[MechanismKind, tuple[str, ...]]:
     """``names`` for every kind of mechanism that closes loops, none for an open chain."""

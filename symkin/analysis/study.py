@@ -8,7 +8,10 @@ point cloud (seed sec. 4.1, 4.2).  A parallel mechanism also gets a Cartesian gr
 reachability by its closed-form IK and 1/kappa at the cell centres
 (:func:`cartesian_index_grid`), which gives its volume, boundary and near-singular cells; a
 platform held at a constant orientation (:func:`symkin.mechanism.reach.held_at`) has no fk, and the grid's
-boundary cells are its point cloud.
+boundary cells are its point cloud.  A mechanism without closed forms (sampled by continuation,
+:attr:`symkin.mechanism.Sampling.CONTINUATION`) gets the working mode of its home assembly continued over a
+Cartesian grid (:func:`continued_workspace`, :func:`continued_gci`): the commands ask the mechanism how it is
+sampled and this module for what to report, never its kind.
 """
 
 from __future__ import annotations
@@ -22,6 +25,7 @@ from symkin.mechanism import feasibility
 from symkin.analysis import global_indices, inverse, workspace
 from symkin.mechanism import reach
 from symkin import mechanism
+from symkin.analysis.estimates import Estimate
 from symkin.analysis.grids import index_grid
 from symkin.mechanism import Limits
 from symkin.analysis.workspace import Occupancy, WorkspaceCloud
@@ -60,6 +64,8 @@ class WorkspaceStudy:
         grid: (occupancy, 1/kappa at the cell centres) of a parallel mechanism, else None.
         report: the findings, one line each (extent, area/volume, boundary, singularities).
         outline: the images of the joint-limit edges of a 2-DoF mechanism (for figures).
+        grid_axes: the task coordinates along the grid's axes.
+        reached_by: how the grid's cells are reached, in words (for figures).
     """
 
     cloud: WorkspaceCloud
@@ -68,6 +74,8 @@ class WorkspaceStudy:
     grid: tuple[Occupancy, np.ndarray] | None
     report: list[str]
     outline: list = field(default_factory=list)
+    grid_axes: tuple[str, ...] = ("x", "y", "z")
+    reached_by: str = "reachability by ik"
 
 
 def study_workspace(model: GeneratedModel, *, samples: int, method: str, seed: int, limits: Limits | None,
@@ -98,6 +106,91 @@ def study_workspace(model: GeneratedModel, *, samples: int, method: str, seed: i
     joints = mechanism.joint_limits(model, limits).shape[0]
     outline = workspace.limit_curves(model, limits=limits) if joints == 2 else []
     return WorkspaceStudy(cloud, sampled, inv_kappa, grid, report, outline)
+
+
+#: How the area or volume of a workspace continued over a grid is estimated
+#: (:func:`symkin.analysis.closure_workspace.working_mode_measure`).
+MEASURE_NOTE = ("95 % confidence: the cells whose neighbours are all reached, and the boundary cells' shares "
+                "that random points in them reach")
+
+
+def held_text(model: GeneratedModel, found) -> str:
+    """' at yaw = 20 deg': the angles a workspace continued over a grid holds (``found.pose`` outside its gridded
+    ``found.axes``); '' for a platform that only translates."""
+    held = ", ".join(f"{name} = {np.degrees(found.pose[i]):g} deg" for i, name in enumerate(mechanism.task_space(model))
+                     if name not in found.axes)
+    return f" at {held}" if held else ""
+
+
+def continued_workspace(model: GeneratedModel, *, cells: int, orientation: dict[str, float], limits: Limits | None,
+                        length: float | None, progress: Callable[[str], None] = lambda _stage: None) -> WorkspaceStudy:
+    """The workspace of a mechanism sampled by continuation (:attr:`symkin.mechanism.Sampling.CONTINUATION`): the
+    working mode of its home assembly at the held angles ``orientation``, continued from the home pose over a
+    Cartesian grid of ``cells`` cells along its longest side (:mod:`symkin.analysis.closure_workspace`); the
+    cloud is its boundary cells, the grid carries 1/kappa, and the area or volume is the grid's core and the
+    boundary cells' reached shares (:func:`symkin.analysis.closure_workspace.working_mode_measure`).
+
+    Raises:
+        ValueError: the home pose is out of reach, or the workspace is unbounded within the limits.
+    """
+    from symkin.analysis import closure_workspace
+    from symkin.mechanism.closure import solve_home_assembly
+
+    progress(f"continuing the loop closure over a grid of {cells} cells a side")
+    assembly = solve_home_assembly(model)
+    found = closure_workspace.closure_workspace(model, orientation=orientation, limits=limits, length=length,
+                                                cells=cells, start=(assembly.q, assembly.s))
+    occupancy, values = found.occupancy, found.inv_kappa
+    reached = occupancy.occupied
+    progress("sampling the boundary cells for the " + ("area" if reached.ndim == 2 else "volume"))
+    measure = closure_workspace.working_mode_measure(model, found, limits=limits)
+    scaled = f" (characteristic length {found.length:.4g} m)" if found.length is not None else ""
+    report = [assembly.describe(model),
+              f"{int(reached.sum())} reached cells; {'area' if reached.ndim == 2 else 'volume'}: {measure} "
+              f"m^{reached.ndim} ({MEASURE_NOTE})",
+              f"1/kappa{scaled}: min {np.min(values[reached]):.4g}, max {np.max(values[reached]):.4g}; "
+              f"mean over the workspace (GCI) {found.gci:.4g}"]
+    sampled = (f"working mode of the home assembly{held_text(model, found)}, continued from the home pose over a "
+               f"Cartesian grid of {occupancy.cell[0]:.3g} m cells (cells joined through a singularity or beyond a "
+               "limit are not reached)")
+    boundary = occupancy.boundary()
+    cloud = WorkspaceCloud(found.q[boundary], occupancy.centers()[boundary], found.axes)
+    return WorkspaceStudy(cloud, sampled, None, (occupancy, values), report, grid_axes=found.axes,
+                          reached_by="continued from the home pose")
+
+
+@dataclass(frozen=True)
+class ContinuedIndex:
+    """The GCI over a workspace continued over a grid (:func:`continued_gci`).
+
+    Attributes:
+        value: the mean of 1/kappa over the reached cells, its error the change from a grid of half as many cells.
+        grid: (occupancy, 1/kappa at the cell centres) of the finer grid, and its axes.
+        axes: the task coordinates along the grid's axes.
+        report: what was averaged over, one line each (the measure, the grid, the home assembly).
+    """
+
+    value: Estimate
+    grid: tuple[Occupancy, np.ndarray]
+    axes: tuple[str, ...]
+    report: list[str]
+
+
+def continued_gci(model: GeneratedModel, *, cells: int, orientation: dict[str, float], limits: Limits | None,
+                  length: float | None) -> ContinuedIndex:
+    """The GCI (seed eq. 8.28) over the working mode of the home assembly continued over grids of ``cells`` and half
+    as many cells a side (:func:`symkin.analysis.closure_workspace.closure_gci`), with what it was averaged over."""
+    from symkin.analysis import closure_workspace
+
+    found = closure_workspace.closure_gci(model, orientation=orientation, limits=limits, length=length, cells=cells)
+    space = found.workspace
+    d = space.occupancy.occupied.ndim
+    scaled = f", position rows over the characteristic length {space.length:.4g} m" if space.length is not None else ""
+    report = [f"workspace measure int dW = {found.measure} m^{d} ({MEASURE_NOTE})",
+              f"the working mode of the home assembly{held_text(model, space)}, continued from the home pose over a "
+              f"grid of {space.occupancy.cell[0]:.3g} m cells; 1/kappa of J = dp/dq{scaled}",
+              found.assembly.describe(model)]
+    return ContinuedIndex(found.value, (space.occupancy, space.inv_kappa), space.axes, report)
 
 
 def _cartesian_report(occupancy: Occupancy, values: np.ndarray) -> list[str]:

@@ -24,42 +24,16 @@ def register_check(sub: argparse._SubParsersAction) -> None:
 def run_check(args: argparse.Namespace) -> int:
     from symkin import pipeline
     from symkin.model import load_model
+    from symkin.model.summary import structure_summary
 
     for path in args.models:
         model = load_model(path, **urdf_options(args, path))
         request = pipeline.resolve_request(model)
         pipeline.require_derivable(model, request)  # what derive would refuse
-        if model.parallel is None:
-            structure = f"{len(model.joints)} joints ({', '.join(f'{j.name}:{j.type.value}' for j in model.joints)})"
-            if model.dof != len(model.joints):  # couplings: fewer coordinates than joints
-                structure += f", {model.dof} coordinates"
-        else:
-            legs = ", ".join(f"{leg.name}:{''.join(j.type.value for j in leg.joints)}" for leg in model.parallel.legs)
-            structure = (f"parallel, {len(model.parallel.legs)} legs ({legs}), {model.dof} actuated "
-                         f"({', '.join(f'{j.name}:{j.type.value}' for j in model.coordinates)})")
-            wrist = model.parallel.wrist
-            if wrist is not None:
-                structure += (f", a wrist of {len(wrist.joints)} joints on the platform "
-                              f"({', '.join(f'{j.name}:{j.type.value}' for j in wrist.joints)})")
-        print(f"{path}: ok - model '{model.name}', {structure}, "
-              f"{len(model.parameters)} parameters, {_bodies(model)}, "
-              f"task space [{', '.join(model.task_space)}]; "
+        print(f"{path}: ok - model '{model.name}', {structure_summary(model)}; "
               f"scene: {', '.join(request.outputs)} via {', '.join(request.backends)}")
         print_notes(model.source, model.notes)
     return 0
-
-
-def _bodies(model) -> str:
-    """The bodies a model declares: a serial model's count; a parallel model's kinds (and its wrist's count)."""
-    if model.parallel is None:
-        return f"{len(model.bodies)} bodies"
-    declared = model.parallel.bodies
-    kinds = [] if declared is None else [name for name, present in (
-        ("platform", declared.platform is not None), ("actuated links", declared.actuated_link is not None),
-        ("rods", declared.rod_mass != 0), ("rotors", declared.rotor_inertia != 0)) if present]
-    text = f"bodies: {', '.join(kinds)}" if kinds else "no bodies"
-    wrist = model.parallel.wrist
-    return text if wrist is None else f"{text} (+ {len(wrist.bodies)} on the wrist)"
 
 
 def register_quantities(sub: argparse._SubParsersAction) -> None:

@@ -141,10 +141,9 @@ def _domain(args: argparse.Namespace, model: GeneratedModel) -> str:
 
 def run(args: argparse.Namespace) -> int:
     from symkin.numerics import conditioning
-    from symkin.analysis import closure_workspace, global_indices, inverse, orientations, plots, study, workspace
+    from symkin.analysis import global_indices, inverse, orientations, plots, study, workspace
     from symkin import mechanism
     from symkin.mechanism import reach
-    from symkin.mechanism.closure import uses_closure
     from symkin.analysis.integrators import STATISTICAL
 
     if args.scheduler is not None:
@@ -154,10 +153,11 @@ def run(args: argparse.Namespace) -> int:
     try:
         model, limits = analysis_args.model_from_args(args)
         model = analysis_args.device_view(args, model)
-        if mechanism.turns_only(model):
+        sampled = mechanism.sampling(model)
+        if sampled is mechanism.Sampling.ORIENTATIONS:
             return _orientations(args, model, limits)
-        if uses_closure(model):
-            return _closure(args, model, limits)
+        if sampled is mechanism.Sampling.CONTINUATION:
+            return _continued(args, model, limits)
         model = reach.held_at(model, analysis_args.parse_orientation(args.orientation))
         args.domain = _domain(args, model)
         length = analysis_args.resolve_length(model, args.length, limits)
@@ -175,7 +175,7 @@ def run(args: argparse.Namespace) -> int:
                 model, method=args.method, samples=args.samples, seed=args.seed, domain=args.domain,
                 measure=args.measure, index=index, limits=limits, length=length, inverse=ik, **options)
             seconds = time.perf_counter() - start
-            if args.map and mechanism.is_parallel(model):
+            if args.map and mechanism.sampled_in_task_space(model):
                 progress("drawing")
                 box = reach.bounding_box(model, limits=limits)
                 occupancy, values = study.cartesian_index_grid(model, box, limits, length, index)
@@ -217,11 +217,11 @@ def _orientations(args: argparse.Namespace, model: GeneratedModel, limits: dict)
     return 0
 
 
-def _closure(args: argparse.Namespace, model: GeneratedModel, limits: dict) -> int:
-    """Legs without closed forms: the GCI over the working mode of the home assembly at a constant orientation, on
-    the grid the loop closure is continued over (:func:`symkin.analysis.closure_workspace.closure_gci`)."""
-    from symkin.analysis import closure_workspace, plots
-    from symkin.cli.workspace_cmd import MEASURE_NOTE, closure_options, held_text
+def _continued(args: argparse.Namespace, model: GeneratedModel, limits: dict) -> int:
+    """A mechanism sampled by continuation (no closed forms): the GCI over the working mode of the home assembly at
+    a constant orientation, on the grid it is continued over (:func:`symkin.analysis.study.continued_gci`)."""
+    from symkin.analysis import plots, study
+    from symkin.cli.workspace_cmd import continuation_options
 
     try:
         for given, option in ((args.index != "inverse-condition", "--index"), (args.domain == "joint", "--domain"),
@@ -229,28 +229,23 @@ def _closure(args: argparse.Namespace, model: GeneratedModel, limits: dict) -> i
             if given:
                 raise ValueError(f"{option}: {model.name}'s legs have no closed forms: its GCI is the mean of 1/kappa "
                                  "over a grid the loop closure is continued over (--method grid; leave the option out)")
-        options = closure_options(args, model)
+        options = continuation_options(args, model)
         start = time.perf_counter()
         with Progress(model.name) as progress:
             progress(f"continuing the loop closure over grids of {options['cells']} and {options['cells'] // 2} "
                      "cells a side")
-            found = closure_workspace.closure_gci(model, limits=limits, **options)
+            found = study.continued_gci(model, limits=limits, **options)
             path = None
             if args.map:
                 progress("drawing")
-                path = plots.plot_index_slices(found.workspace.occupancy, found.workspace.inv_kappa, args.map,
-                                               axes=found.workspace.axes, title=f"1/kappa over the workspace of {model.name}")
+                path = plots.plot_index_slices(*found.grid, args.map, axes=found.axes,
+                                               title=f"1/kappa over the workspace of {model.name}")
     except (ValueError, KeyError) as err:
         analysis_args.fail_on_bad_input(args, err)
-    space = found.workspace
-    d = space.occupancy.occupied.ndim
-    scaled = f", position rows over the characteristic length {space.length:.4g} m" if space.length is not None else ""
     print(f"{model.name}: GCI = {found.value} (error estimate: the change from a grid of half as many cells a side)")
-    print(f"  workspace measure int dW = {found.measure} m^{d} ({MEASURE_NOTE})")
-    print(f"  the working mode of the home assembly{held_text(model, space)}, continued from the home pose over a "
-          f"grid of {space.occupancy.cell[0]:.3g} m cells; 1/kappa of J = dp/dq{scaled}; "
-          f"{time.perf_counter() - start:.2f} s")
-    print(f"  {found.assembly.describe(model)}")
+    for line in found.report:
+        print(f"  {line}")
+    print(f"  {time.perf_counter() - start:.2f} s")
     if path is not None:
         print(f"  map: {path}")
     return 0

@@ -59,6 +59,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from symkin.analysis import identification
+    from symkin.analysis.device_regressors import run_regressors
 
     start = time.perf_counter()
     try:
@@ -72,9 +73,7 @@ def run(args: argparse.Namespace) -> int:
         model = model_files.generated_model(args.model, args.backend, *needed, reading=reading, display=Progress)
         values = analysis_args.parse_assignments(args.assignments)
         model = model.bind(**values) if values else model
-        parallel = model.info.is_parallel
-        if parallel:
-            model = _device_regressors(args, model)
+        model = run_regressors(model, args.data, args.model)
         coordinates = model.info.coordinate_names
         data = identification.read_measurements(args.data, coordinates, args.cutoff)
         fit, held = data.split(args.holdout)
@@ -136,36 +135,6 @@ def _model_file(path: str, reading: dict):
     return load_model(path, **reading)
 
 
-def _device_regressors(args: argparse.Namespace, model):
-    """A parallel model's regressors taking the device's joints (the platform's pose from fk per sample, or from
-    Newton's method on the leg equations; legs without the distance form: each sample's assembly continued along
-    the run, and the closure's regressors).
-
-    Raises:
-        ValueError: a generated directory without the base regressor, or without both fk and the leg equations (of
-            legs without the distance form: without what ``DERIVED["identify"]`` derives them with).
-    """
-    from symkin.analysis.device_regressors import DeviceRegressors
-
-    functions = model.info.functions
-    if "closure_regressor" in functions:  # legs without the distance form
-        needed = DERIVED["identify"].closure
-        missing = [f for f in needed if f not in functions]
-        if missing:
-            raise ValueError(f"{args.model}: the identification of legs without the distance form needs "
-                             f"{', '.join(missing)}; derive them (symkin derive --only {','.join(needed)}, "
-                             "and closure_energy_regressor for --method energy) or give the model file")
-        return DeviceRegressors(model, args.data)
-    missing = [f for f in ("base_regressor",) if f not in functions]
-    if "fk" not in functions and not {"constraints", "constraint_jacobians"} <= set(functions):
-        missing.append("fk (or constraints and constraint_jacobians, for Newton's method)")
-    if missing:
-        raise ValueError(f"{args.model}: a parallel model's identification needs {' and '.join(missing)}; derive "
-                         "them (symkin derive --only base_regressor,regressor,fk, or without a closed-form fk "
-                         "--only base_regressor,regressor,constraints,constraint_jacobians) or give the model file")
-    return DeviceRegressors(model, args.data)
-
-
 def _regressor(model, fit, method: str) -> tuple[np.ndarray, np.ndarray]:
     """Y and the model's pi over the fit part of the run (the standard parameters' regressor)."""
     if "regressor" not in model.info.functions:
@@ -186,8 +155,7 @@ def _energy(model, fit, Y, Y_b, K, names, window: float):
     from symkin.analysis import identification
 
     if "energy_regressor" not in model.info.functions:
-        needed = DERIVED["identify energy"]
-        outputs = ",".join(needed.closure if "closure_regressor" in model.info.functions else needed.outputs)
+        outputs = ",".join(DERIVED["identify energy"].required_of(model.info.functions))
         raise ValueError(f"{model.name}: --method energy needs the energy regressor; derive it (--only {outputs}) or "
                          "give the model file")
     return identification.energy_least_squares(fit, Y, model.energy_regressor(fit.q, fit.qd)[0], Y_b, K,
@@ -210,22 +178,15 @@ def _consistent(model, Y, pi, fit, found, in_file=None):
 
 
 def _file_values(source, model, Y, K, pi, fit, found, standard) -> tuple[np.ndarray, np.ndarray, str]:
-    """The standard parameters identified.yaml is written from (the consistent ones, or the least-squares base
-    parameters' nearest standard ones; of a parallel model the values its file holds), which of them the run
-    identifies, and a parallel model's note on what its file could not hold."""
+    """What identified.yaml is written from (:func:`symkin.analysis.implied_parameters.file_values`), the values a
+    model file holds refitted by the consistent estimate where the run asked for it."""
     from symkin.analysis import implied_parameters
 
-    identified = implied_parameters.identifiable(K)
-    if source.parallel is None:
-        return (standard.values if standard is not None else
-                implied_parameters.nearest_standard(K, found.values, pi[0])), identified, ""
-    names = model.info.functions["regressor"].outputs["pi"]
-    held = implied_parameters.parallel_held(source, names, pi[0])
-    base = found.values if standard is None else K @ standard.values
-    estimate = (implied_parameters.nearest_held(K, base, pi[0], held) if standard is None else
-                held.fixed + held.T @ _consistent(model, Y, pi, fit, found, (held, standard)).values)
-    unheld = [name for name, held_here in zip(names, held.columns) if not held_here]
-    return estimate, identified & held.columns, _held_note(found, K @ estimate, base, unheld)
+    def consistent_held(held):
+        return _consistent(model, Y, pi, fit, found, (held, standard)).values
+
+    return implied_parameters.file_values(source, model.info.functions["regressor"].outputs["pi"], K, pi[0], found,
+                                          standard, consistent_held)
 
 
 def _updated_model(args: argparse.Namespace, source, model, file_values, found, standard, values: dict[str, float],
@@ -252,17 +213,6 @@ def _updated_model(args: argparse.Namespace, source, model, file_values, found, 
     return updated, (f"identified.yaml: {args.model} with the bodies of {', '.join(updated.links) or 'no link'} "
                      f"and the drives of {', '.join(updated.joints) or 'no joint'} identified "
                      f"({len(updated.identified)} standard parameters){also}{held_note}")
-
-
-def _held_note(found, written: np.ndarray, base: np.ndarray, unheld: list[str]) -> str:
-    """How far the base parameters of what a parallel model's file holds lie from the estimate's, in standard
-    deviations, and why (one rotor for all actuators: their estimated differences are not in it; ``unheld``: the
-    standard parameters the file does not declare, kept at the model's values)."""
-    deviation = np.abs(written - base) / np.where(found.std > 0, found.std, np.inf)
-    worst = int(np.argmax(deviation))
-    kept = f", and not {', '.join(unheld)} (kept at the model's values)" if unheld else ""
-    return (f"; its base parameters within {deviation[worst]:.2g} standard deviations of the estimate's (most: "
-            f"{found.names[worst]}; the file holds one rotor for all actuators{kept})")
 
 
 def _report(args, model, data, found, pi_model, check, standard=None, model_line=None) -> dict[str, str | bytes]:

@@ -138,39 +138,21 @@ def _orientations(args: argparse.Namespace, model, limits: dict) -> int:
     return 0
 
 
-def closure_options(args: argparse.Namespace, model) -> dict:
+def continuation_options(args: argparse.Namespace, model) -> dict:
     """The held angles (--orientation), the characteristic length (--length) and the cells a side (-n N: about
-    N^(1/3)) of a workspace continued over a grid (:mod:`symkin.analysis.closure_workspace`)."""
-    length = analysis_args.parse_length(args.length)
-    from symkin.analysis.closure_workspace import held_orientation
+    N^(1/3)) of a workspace continued over a grid (:func:`symkin.analysis.study.continued_workspace`)."""
+    from symkin.mechanism import reach
 
-    orientation = held_orientation(model, analysis_args.parse_orientation(args.orientation))
+    length = analysis_args.parse_length(args.length)
+    orientation = reach.held_orientation(model, analysis_args.parse_orientation(args.orientation))
     return {"orientation": orientation, "length": None if length == "auto" else float(length),
             "cells": max(8, int(round(args.samples ** (1 / 3))))}
 
 
-def held_text(model, found) -> str:
-    """' at yaw = 20 deg': the angles a closure workspace holds (``found.pose`` outside its gridded ``found.axes``);
-    '' for a platform that only translates."""
-    import numpy as np
-
-    held = ", ".join(f"{name} = {np.degrees(found.pose[i]):g} deg" for i, name in enumerate(model.info.task_space)
-                     if name not in found.axes)
-    return f" at {held}" if held else ""
-
-
-#: How the working mode's area or volume is estimated (:func:`symkin.analysis.closure_workspace.working_mode_measure`).
-MEASURE_NOTE = ("95 % confidence: the cells whose neighbours are all reached, and the boundary cells' shares "
-                "that random points in them reach")
-
-
-def _closure(args: argparse.Namespace, model, limits: dict) -> int:
-    """Legs without closed forms (any topology): the working mode of the home assembly at a constant orientation,
-    continued over a Cartesian grid from the home pose (:mod:`symkin.analysis.closure_workspace`)."""
-    import numpy as np
-
-    from symkin.analysis import closure_workspace, plots, workspace
-    from symkin.mechanism.closure import solve_home_assembly
+def _continued(args: argparse.Namespace, model, limits: dict) -> int:
+    """A mechanism sampled by continuation (no closed forms): the working mode of the home assembly at a constant
+    orientation, continued over a Cartesian grid from the home pose (:func:`symkin.analysis.study.continued_workspace`)."""
+    from symkin.analysis import study
 
     start = time.perf_counter()
     try:
@@ -179,58 +161,50 @@ def _closure(args: argparse.Namespace, model, limits: dict) -> int:
             if given:
                 raise ValueError(f"{option}: {model.name}'s legs have no closed forms; its workspace is continued from "
                                  "the home pose over one Cartesian grid (no designs, chunks or force map)")
-        options = closure_options(args, model)
+        options = continuation_options(args, model)
         with Progress(model.name) as progress:
-            progress(f"continuing the loop closure over a grid of {options['cells']} cells a side")
-            assembly = solve_home_assembly(model)
-            found = closure_workspace.closure_workspace(model, limits=limits, start=(assembly.q, assembly.s),
-                                                        **options)
-            progress("sampling the boundary cells for the " + ("area" if len(found.axes) == 2 else "volume"))
-            measure = closure_workspace.working_mode_measure(model, found, limits=limits)
+            found = study.continued_workspace(model, limits=limits, progress=progress, **options)
     except (ValueError, KeyError) as err:
         analysis_args.fail_on_bad_input(args, err)
-    occupancy, values = found.occupancy, found.inv_kappa
-    reached = occupancy.occupied
-    label = held_text(model, found)
-    kind = "area" if reached.ndim == 2 else "volume"
-    print(f"{model.name}: working mode of the home assembly{label}, continued from the home pose over a "
-          f"Cartesian grid of {occupancy.cell[0]:.3g} m cells ({', '.join(found.axes)}; cells joined through a "
-          "singularity or beyond a limit are not reached)")
-    print(f"  {assembly.describe(model)}")
-    print(f"  {int(reached.sum())} reached cells; {kind}: {measure} m^{reached.ndim} ({MEASURE_NOTE})")
-    scaled = f" (characteristic length {found.length:.4g} m)" if found.length is not None else ""
-    print(f"  1/kappa{scaled}: min {np.min(values[reached]):.4g}, max {np.max(values[reached]):.4g}; "
-          f"mean over the workspace (GCI) {found.gci:.4g}")
-    scale = analysis_args.LENGTH_UNITS[args.unit]
-    if not args.no_figure:
-        points = occupancy.centers()[occupancy.boundary()]
-        cloud = workspace.WorkspaceCloud(found.q[occupancy.boundary()], points, found.axes)
-        path = plots.plot_workspaces([plots.WorkspaceLayer(f"working mode{label}", cloud)],
-                                     args.out or f"out/workspace/{model.name}-workspace.png",
-                                     title=args.title or f"Workspace of {model.name} (boundary cells)", scale=scale,
-                                     unit=args.unit)
-        print(f"figure: {path}")
-    if args.map:
-        path = plots.plot_index_slices(occupancy, values, args.map, axes=found.axes, scale=scale, unit=args.unit,
-                                       title=f"1/kappa over the workspace of {model.name}{label}")
-        print(f"1/kappa map: {path}")
+    _print_study(args, model.name, found)
     print(f"done in {time.perf_counter() - start:.2f} s")
     return 0
 
 
+def _print_study(args: argparse.Namespace, name: str, found) -> None:
+    """A workspace study's findings; with --map, 1/kappa over its Cartesian grid (the figures of one design)."""
+    from symkin.analysis import plots
+
+    print(f"{name}: {found.sampled}, workspace in {', '.join(found.cloud.axes)}")
+    for line in found.report:
+        print(f"  {line}")
+    scale = analysis_args.LENGTH_UNITS[args.unit]
+    if not args.no_figure:
+        path = plots.plot_workspaces([plots.WorkspaceLayer(name, found.cloud, found.outline)],
+                                     args.out or f"out/workspace/{name}-workspace.png",
+                                     title=args.title or f"Workspace of {name}", scale=scale, unit=args.unit)
+        print(f"figure: {path}")
+    if args.map and found.grid is not None:
+        occupancy, values = found.grid
+        path = plots.plot_index_slices(occupancy, values, args.map, axes=found.grid_axes, scale=scale, unit=args.unit,
+                                       title=f"1/kappa over the workspace of {name}: Cartesian grid, "
+                                             f"{found.reached_by}")
+        print(f"1/kappa map: {path}")
+
+
 def run(args: argparse.Namespace) -> int:
     from symkin import mechanism
-    from symkin.analysis import closure_workspace, orientations, plots, study, workspace
+    from symkin.analysis import orientations, plots, study, workspace
     from symkin.mechanism import reach
-    from symkin.mechanism.closure import uses_closure
 
     try:
         base, limits = analysis_args.model_from_args(args)
         base = analysis_args.device_view(args, base)
-        if mechanism.turns_only(base):
+        sampled = mechanism.sampling(base)
+        if sampled is mechanism.Sampling.ORIENTATIONS:
             return _orientations(args, base, limits)
-        if uses_closure(base):
-            return _closure(args, base, limits)
+        if sampled is mechanism.Sampling.CONTINUATION:
+            return _continued(args, base, limits)
         base = reach.held_at(base, analysis_args.parse_orientation(args.orientation))
         designs = [analysis_args.parse_assignments([text]) for text in args.design] or [{}]
         models = [base.bind(**values) if values else base for values in designs]
@@ -316,7 +290,7 @@ def _force_map(args: argparse.Namespace, model, layer, limits, scale: float):
     if efforts is None:
         raise ValueError(f"{model.name} declares no effort limit for every actuator: give --effort-limit T[,T...]")
     title = f"isotropic force over the workspace of {model.name} (effort limits {', '.join(f'{e:g}' for e in efforts)})"
-    if mechanism.is_parallel(model):
+    if mechanism.sampled_in_task_space(model):
         grid, values = study.cartesian_index_grid(model, reach.bounding_box(model, limits=limits), limits, None,
                                                   lambda J: forces.isotropic_force(J, efforts))
         path = plots.plot_index_slices(grid, values, args.force_map, label="isotropic force [N]", title=title,

@@ -218,6 +218,32 @@ def sampled_in_task_space(model: GeneratedModel) -> bool:
     return is_parallel(model)
 
 
+class Sampling(str, Enum):
+    """How the workspace analyses sample a mechanism (:func:`sampling`): the question they ask instead of its kind."""
+
+    #: the joint box mapped through fk (a mechanism that closes no loops, or a spherical platform's ik aside)
+    JOINTS = "joints"
+    #: a Cartesian grid of the handle's positions reached through the closed-form inverse kinematics
+    INVERSE = "inverse"
+    #: a Cartesian grid reached by continuing the assembly from the home pose (no closed forms: the general method)
+    CONTINUATION = "continuation"
+    #: the orientations of a handle that only turns, reached through its inverse kinematics
+    ORIENTATIONS = "orientations"
+
+
+def sampling(model: GeneratedModel) -> Sampling:
+    """How the workspace analyses sample ``model`` (:class:`Sampling`): the orientations of a handle that only
+    turns; the joint box of a mechanism that closes no loops; a Cartesian grid reached through the inverse
+    kinematics where it has a closed form, else by continuing its generated loop closure from the home pose."""
+    from symkin.mechanism.closure import uses_closure  # a module of this package, which imports this one
+
+    if turns_only(model):
+        return Sampling.ORIENTATIONS
+    if not is_parallel(model):
+        return Sampling.JOINTS
+    return Sampling.CONTINUATION if uses_closure(model) else Sampling.INVERSE
+
+
 def home_pose(model: GeneratedModel) -> np.ndarray:
     """The home pose ``parallel.home`` of a parallel mechanism (task coordinates p).
 

@@ -299,6 +299,25 @@ def held_at(model: GeneratedModel, angles: Sequence[float] | None) -> Any:
     return constant_orientation(model, list(angles))
 
 
+def held_orientation(model: GeneratedModel, angles: Sequence[float] | None) -> dict[str, float]:
+    """The angles (roll, pitch, yaw in rad, or None: the home pose's) as the held angles, by name, of a grid over
+    the handle's positions reached by continuation (:attr:`symkin.mechanism.Sampling.CONTINUATION`); an angle
+    outside its task space must be 0 (the legs hold it there).
+
+    Raises:
+        ValueError: a nonzero angle the task space does not have.
+    """
+    if angles is None:
+        return {}
+    task = mechanism.task_space(model)
+    extra = [f"{name} = {value:g}" for name, value in zip(mechanism.ANGLES, angles)
+             if name not in task and value != 0.0]
+    if extra:
+        raise ValueError(f"--orientation: {model.name}'s task space {list(task)} holds {', '.join(extra)} at 0 "
+                         "(parallel.motion); give 0 there")
+    return {name: float(value) for name, value in zip(mechanism.ANGLES, angles) if name in task}
+
+
 def home_sign(model: GeneratedModel) -> float:
     """The sign of det J^-1 at the home pose ``parallel.home``: the assembly mode analysed.
 

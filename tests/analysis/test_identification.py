@@ -277,6 +277,18 @@ def test_a_generated_parallel_model_without_its_base_regressor_is_refused_before
     assert not (tmp_path / "out").exists()
 
 
+def test_a_generated_open_chain_without_its_base_regressor_is_refused_with_the_derive_that_gives_it(tmp_path):
+    """generated/planar_2r holds no regressors: the open chain's refusal names them (before, a bare KeyError)."""
+    data = tmp_path / "run.csv"
+    data.write_text("t,theta1,theta2\n0,0,0\n")
+    result = subprocess.run(SYMKIN_CLI + ["identify", str(ROOT / "generated/planar_2r"), str(data),
+                                          "-o", str(tmp_path / "out")], capture_output=True, text=True)
+    assert result.returncode == 2
+    assert "the identification needs base_regressor; derive it (symkin derive --only base_regressor,regressor)" in \
+        result.stderr
+    assert not (tmp_path / "out").exists()
+
+
 def test_the_consistent_estimates_jacobian_is_the_derivative_of_its_parameterization():
     """d pi / d theta of one link's log-Cholesky parameters, analytic (consistent._standard_derivatives), against
     central differences at random theta: truncation h^2 |pi'''| ~ 1e-12 and rounding EPS |pi| / h ~ 1e-10."""

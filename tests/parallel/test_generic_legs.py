@@ -372,6 +372,13 @@ def test_the_workspace_conditioning_is_that_of_the_closure_jacobian(scara, scara
     assert found.gci == pytest.approx(np.mean(found.inv_kappa[reached]))
 
 
+def test_legs_without_closed_forms_are_sampled_by_continuation(scara):
+    from symkin import mechanism
+
+    assert mechanism.sampling(scara) is mechanism.Sampling.CONTINUATION
+    assert mechanism.sampled_in_task_space(scara)
+
+
 def test_the_workspace_command_continues_the_closure_and_refuses_an_unbounded_stroke(scara_dir, tmp_path):
     result = subprocess.run(SYMKIN_CLI + ["workspace", str(scara_dir), "--limit", "lift1=0:0.2", "-n", "8000",
                                           "--map", str(tmp_path / "map.png"), "-o", str(tmp_path / "ws.png")],
