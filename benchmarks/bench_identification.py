@@ -23,7 +23,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from symkin import pipeline  # noqa: E402
-from symkin.analysis import identification, implied_parameters  # noqa: E402
+from symkin.identification import estimation, implied_parameters  # noqa: E402
 from symkin.model import load_model  # noqa: E402
 from symkin.runtime.loader import load  # noqa: E402
 from symkin.text_table import format_table  # noqa: E402
@@ -50,7 +50,7 @@ def main(argv: list[str] | None = None) -> int:
             names = arm.info.functions["base_regressor"].outputs["pi_b"]
             start = time.perf_counter()
             Y_b = arm.base_regressor(q, qd, qdd)[0]
-            found = identification.least_squares(Y_b, tau, names, "wls")
+            found = estimation.least_squares(Y_b, tau, names, "wls")
             rows.append([f"identify {args.samples} samples, WLS ({backend} base regressor)",
                          f"{time.perf_counter() - start:.2f} s", "<= 10 s"])
         Y = arm.regressor(q, qd, qdd)[0]  # K of Y = Y_b K for identified.yaml: spread states against all of them

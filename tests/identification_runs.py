@@ -1,5 +1,5 @@
-"""Simulated runs of the driven 2R arm for the identification tests (tests/analysis/test_identification.py and
-tests/analysis/test_identified_model.py): the model's own generated inverse dynamics along a periodic excitation (a finite
+"""Simulated runs of the driven 2R arm for the identification tests (tests/identification/test_identification.py and
+tests/identification/test_identified_model.py): the model's own generated inverse dynamics along a periodic excitation (a finite
 Fourier series, Swevers et al. 1997) with Gaussian noise on the efforts."""
 
 from __future__ import annotations

@@ -86,13 +86,13 @@ _CLOSURE_IDENTIFIED = ("closure", "closure_jacobians", "closure_dynamics", "clos
 
 #: {command: what it derives a model file with}.
 DERIVED: Mapping[str, Derived] = {
-    # symkin identify (symkin.analysis.device_regressors), and with --method energy
+    # symkin identify (symkin.identification.device_regressors), and with --method energy
     "identify": Derived(_IDENTIFIED, _besides_open_chains(_POSES), _CLOSURE_IDENTIFIED),
     "identify energy": Derived((*_IDENTIFIED, "energy_regressor"), _besides_open_chains(_POSES),
                                (*_CLOSURE_IDENTIFIED, "closure_energy_regressor")),
-    # symkin excite (symkin.design.excitation): the base regressor along a parallel model's motion through fk, or its
+    # symkin excite (symkin.identification.excitation): the base regressor along a parallel model's motion through fk, or its
     # pose's through ik without a closed-form fk; legs without the distance form: the actuators' series, each sample
-    # assembled by a rootfinder (symkin.design.closure_excitation)
+    # assembled by a rootfinder (symkin.identification.closure_excitation)
     "excite": Derived(("base_regressor",), _besides_open_chains(("fk", "ik")),
                       ("closure", "closure_jacobians", "closure_dynamics", "closure_base_regressor")),
 }

@@ -1,4 +1,4 @@
-"""``symkin excite MODEL``: an excitation trajectory for identification (symkin.design.excitation)."""
+"""``symkin excite MODEL``: an excitation trajectory for identification (symkin.identification.excitation)."""
 
 from __future__ import annotations
 
@@ -49,7 +49,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from symkin.analysis.needs import DERIVED
-    from symkin.design import excitation
+    from symkin.identification import excitation
 
     start = time.perf_counter()
     try:

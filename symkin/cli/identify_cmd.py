@@ -1,4 +1,4 @@
-"""``symkin identify MODEL DATA.csv``: a device's base parameters from a run (symkin.analysis.identification)."""
+"""``symkin identify MODEL DATA.csv``: a device's base parameters from a run (symkin.identification.estimation)."""
 
 from __future__ import annotations
 
@@ -58,8 +58,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from symkin.analysis import identification
-    from symkin.analysis.device_regressors import run_regressors
+    from symkin.identification import estimation
+    from symkin.identification.device_regressors import run_regressors
 
     start = time.perf_counter()
     try:
@@ -75,7 +75,7 @@ def run(args: argparse.Namespace) -> int:
         model = model.bind(**values) if values else model
         model = run_regressors(model, args.data, args.model)
         coordinates = model.info.coordinate_names
-        data = identification.read_measurements(args.data, coordinates, args.cutoff)
+        data = estimation.read_measurements(args.data, coordinates, args.cutoff)
         fit, held = data.split(args.holdout)
         names = model.info.functions["base_regressor"].outputs["pi_b"]
         with Progress(model.name) as progress:
@@ -90,7 +90,7 @@ def run(args: argparse.Namespace) -> int:
             if args.method == "energy":
                 found = _energy(model, fit, Y, Y_b, K, names, args.window)
             else:
-                found = identification.least_squares(Y_b, fit.tau, names, "ols" if args.method == "ols" else "wls")
+                found = estimation.least_squares(Y_b, fit.tau, names, "ols" if args.method == "ols" else "wls")
             predict = None
             if len(held.time):
                 Y_held = model.base_regressor(held.q, held.qd, held.qdd)[0]
@@ -101,7 +101,7 @@ def run(args: argparse.Namespace) -> int:
                 standard = _consistent(model, Y, pi, fit, found)
                 if len(held.time):
                     predict = model.regressor(held.q, held.qd, held.qdd)[0] @ standard.values
-            check = None if predict is None else identification.validation_of(predict, held.tau)
+            check = None if predict is None else estimation.validation_of(predict, held.tau)
             updated, line = None, None
             if writes_model:
                 progress("writing the model file with the identified values")
@@ -115,7 +115,7 @@ def run(args: argparse.Namespace) -> int:
                     files["identified.urdf"] = updated.urdf
             if check is not None and predict is not None and not args.no_figure:
                 progress("drawing the validation")
-                files["validation.png"] = identification.validation_figure_png(
+                files["validation.png"] = estimation.validation_figure_png(
                     held.time, held.tau, predict, coordinates,
                     ["N*m" if c.revolute else "N" for c in model.info.coordinates],
                     f"{model.name}: held-out efforts, measured and predicted ({args.method})")
@@ -145,31 +145,31 @@ def _regressor(model, fit, method: str) -> tuple[np.ndarray, np.ndarray]:
 
 def _combinations(Y, Y_b):
     """K with Y = Y_b K over the fit (fitted once: the energy estimate and identified.yaml both use it)."""
-    from symkin.analysis import implied_parameters
+    from symkin.identification import implied_parameters
 
     return implied_parameters.combinations(Y, Y_b)
 
 
 def _energy(model, fit, Y, Y_b, K, names, window: float):
     """The base parameters from the energy balance over windows of the fit part of the run (Gautier 1997)."""
-    from symkin.analysis import identification
+    from symkin.identification import estimation
 
     if "energy_regressor" not in model.info.functions:
         outputs = ",".join(DERIVED["identify energy"].required_of(model.info.functions))
         raise ValueError(f"{model.name}: --method energy needs the energy regressor; derive it (--only {outputs}) or "
                          "give the model file")
-    return identification.energy_least_squares(fit, Y, model.energy_regressor(fit.q, fit.qd)[0], Y_b, K,
+    return estimation.energy_least_squares(fit, Y, model.energy_regressor(fit.q, fit.qd)[0], Y_b, K,
                                                model.info.functions["regressor"].outputs["pi"], names, window)
 
 
 def _consistent(model, Y, pi, fit, found, in_file=None):
     """The consistent standard parameters from the fit part of the run, weighted as the WLS estimate; given
-    ``in_file`` (a :class:`~symkin.analysis.implied_parameters.Held` and the consistent estimate), the consistent
+    ``in_file`` (a :class:`~symkin.identification.implied_parameters.Held` and the consistent estimate), the consistent
     values a model file holds, started from those nearest the estimate."""
-    from symkin.analysis import consistent, identification
+    from symkin.identification import consistent, estimation
 
     weights = 1.0 / np.where(found.joint_std > 0, found.joint_std, 1.0)
-    triangle, target = identification.weighted_triangle(Y, fit.tau, weights)
+    triangle, target = estimation.weighted_triangle(Y, fit.tau, weights)
     if in_file is None:
         return consistent.estimate(triangle, target, model.info.functions["regressor"].outputs["pi"], pi[0])
     held, standard = in_file
@@ -178,9 +178,9 @@ def _consistent(model, Y, pi, fit, found, in_file=None):
 
 
 def _file_values(source, model, Y, K, pi, fit, found, standard) -> tuple[np.ndarray, np.ndarray, str]:
-    """What identified.yaml is written from (:func:`symkin.analysis.implied_parameters.file_values`), the values a
+    """What identified.yaml is written from (:func:`symkin.identification.implied_parameters.file_values`), the values a
     model file holds refitted by the consistent estimate where the run asked for it."""
-    from symkin.analysis import implied_parameters
+    from symkin.identification import implied_parameters
 
     def consistent_held(held):
         return _consistent(model, Y, pi, fit, found, (held, standard)).values
@@ -196,9 +196,9 @@ def _updated_model(args: argparse.Namespace, source, model, file_values, found, 
     why not); ``reading``: the robot-file options the model file was read with.
 
     Returns:
-        (the :class:`~symkin.analysis.identified_model.UpdatedModel` or None, the summary's line).
+        (the :class:`~symkin.identification.identified_model.UpdatedModel` or None, the summary's line).
     """
-    from symkin.analysis import identified_model
+    from symkin.identification import identified_model
 
     estimate, identified, held_note = file_values
     names = model.info.functions["regressor"].outputs["pi"]

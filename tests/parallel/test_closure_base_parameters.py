@@ -233,8 +233,8 @@ def test_a_sample_where_the_legs_do_not_close_is_refused_with_its_row(generated)
     continued along the run; a sample the legs cannot reach (the planar leg stretched straight along +x puts the
     bar's left end 0.6 m from the lifting leg's axis, beyond its l1 + l2 = 0.5 m) is refused with its CSV row, the
     samples before it assembled."""
-    from symkin.analysis.device_regressors import DeviceRegressors
-    from symkin.analysis.identification import DataError
+    from symkin.identification.device_regressors import DeviceRegressors
+    from symkin.identification.estimation import DataError
 
     device = DeviceRegressors(generated, "run.csv")
     home = ClosureAssembly(generated).home

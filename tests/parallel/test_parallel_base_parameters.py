@@ -197,7 +197,7 @@ def test_a_parallel_models_file_takes_the_standard_parameters_it_holds(name, tmp
     friction levels per actuator, a hybrid device's wrist as a serial chain (links in their joint frames, rotor
     inertias, friction), a spherical model without rods; read back and derived, the file has those parameters to
     rounding."""
-    from symkin.analysis import identified_model
+    from symkin.identification import identified_model
 
     path = MODELS_DIR / f"{name}.yaml"
     model = load_model(path)
@@ -233,7 +233,7 @@ def test_a_parallel_models_file_takes_the_standard_parameters_it_holds(name, tmp
 def test_a_spherical_models_file_holds_no_rods():
     """The Agile Eye's file declares no rods (its legs' last joints turn about axes through the centre): the rods'
     columns are held at the model's values, which symkin identify's summary names."""
-    from symkin.analysis import implied_parameters
+    from symkin.identification import implied_parameters
 
     model = load_model(MODELS_DIR / "agile_eye.yaml")
     names, pi = _standard_parameters(model)
@@ -247,7 +247,7 @@ def test_what_a_parallel_models_file_holds_is_the_nearest_it_can(derived):
     """implied_parameters.nearest_held on the DELTA's file (one rotor for the actuators): base parameters it can
     hold are met to rounding with the three I_a equal; the rotors' differences (theta1.IaR, theta2.IaR), which it
     cannot, are left out (0) and the rest still met."""
-    from symkin.analysis import implied_parameters
+    from symkin.identification import implied_parameters
 
     name, found, generated = derived
     model = load_model(MODELS_DIR / "delta.yaml")
@@ -382,8 +382,8 @@ def test_a_hybrid_devices_run_is_its_legs_then_its_wrist(derived):
     """symkin identify's view of a hybrid device (analysis.device_regressors): the run's coordinates are the legs'
     actuators then the wrist's joints, each sample's pose fk(q): the same base regressor as given the assembled
     pose; a sample where the legs cannot assemble (rods too short for the arms' spread) is refused with its row."""
-    from symkin.analysis.device_regressors import DeviceRegressors
-    from symkin.analysis.identification import DataError
+    from symkin.identification.device_regressors import DeviceRegressors
+    from symkin.identification.estimation import DataError
 
     name, found, generated = derived
     q, p, qw, qd, qwd, qdd, qwdd = _inputs(generated, name, 16, 63)
@@ -402,7 +402,7 @@ def test_a_hybrid_devices_run_is_its_legs_then_its_wrist(derived):
 def test_a_parts_poses_are_computed_once_for_all_its_regressors(derived):
     """symkin identify passes one part of a run to the base regressor and the regressor: fk runs once for it (also
     for a copy of it), and again for other joint values."""
-    from symkin.analysis.device_regressors import DeviceRegressors
+    from symkin.identification.device_regressors import DeviceRegressors
 
     name, found, generated = derived
     solved = []

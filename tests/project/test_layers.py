@@ -36,7 +36,7 @@ LAYERS = (
     ("backends", {"backends", "manifest", "manifest_schema", "pipeline", "pipeline_cache"}),
     ("runtime", {"runtime", "backends.*.loader*"}),
     ("mechanism", {"mechanism"}),
-    ("analyses", {"ik", "analysis", "design", "simulation", "stability", "viewer"}),
+    ("analyses", {"ik", "analysis", "design", "identification", "simulation", "stability", "viewer"}),
     ("api", {"api"}),
     ("cli", {"cli", "__main__"}),
 )
@@ -57,7 +57,7 @@ ROLES = {
     "runtime": "each backend's loader, the bindings they share, the numerical kinematics of parallel mechanisms",
     "mechanism": "the run-time mechanism every analysis asks: coordinates, limits, kinds, the passive joints' closure, "
                  "reachability through inverse kinematics",
-    "analyses": "inverse kinematics, analyses, design, simulation, numerical stability, the viewer",
+    "analyses": "inverse kinematics, analyses, design, identification, simulation, numerical stability, the viewer",
     "api": "the public functions, and the `symkin` package facade",
     "cli": "the commands",
 }

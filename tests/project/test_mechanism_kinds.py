@@ -20,7 +20,7 @@ from collections.abc import Iterator
 from conftest import ROOT
 
 #: The folders above the run-time layer whose modules should not tell mechanisms apart.
-FOLDERS = ("analysis", "cli", "simulation", "design", "viewer", "stability")
+FOLDERS = ("analysis", "cli", "simulation", "design", "identification", "viewer", "stability")
 #: Words of an identifier (case-insensitive) that name a kind of mechanism or its machinery.
 KIND_WORDS = re.compile(r"parallel|closure|wrist|(^|_)legs?($|_)|mechanismkind|kind_of|is_serial|(^|_)serial($|_)"
                         r"|hybrid|platform")
@@ -33,10 +33,10 @@ TARGET = 10
 KNOWN = {
     "analysis/closure_workspace.py",
     "analysis/datasheet.py", "analysis/study.py",
-    "analysis/identified_model.py", "analysis/implied_parameters.py",
+    "identification/identified_model.py", "identification/implied_parameters.py",
     "analysis/model_files.py", "analysis/needs.py",
     "cli/structure_cmd.py",
-    "design/closure_excitation.py", "design/evaluation.py", "design/excitation.py", "design/formulation.py",
+    "identification/closure_excitation.py", "design/evaluation.py", "identification/excitation.py", "design/formulation.py",
     "design/plots.py", "design/problem.py",
     "viewer/page.py",
     "stability/harness.py", "stability/states.py",

@@ -327,7 +327,7 @@ def validation_figure_png(time: np.ndarray, tau: np.ndarray, predicted: np.ndarr
 def weighted_triangle(Y: np.ndarray, tau: np.ndarray, weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """R and z of [W y] = Q [R z; 0 r] (Householder QR) for a regressor Y (N, n, P) and efforts (N, n) with each
     joint's rows weighted: |W pi - y|^2 = |R pi - z|^2 + r^2, the data of an estimate in P numbers (for the
-    consistent estimate, :mod:`symkin.analysis.consistent`)."""
+    consistent estimate, :mod:`symkin.identification.consistent`)."""
     count = Y.shape[-1]
     rows = (Y * weights[None, :, None]).reshape(-1, count)
     triangle = np.asarray(np.linalg.qr(np.column_stack([rows, (tau * weights).reshape(-1)]), mode="r"))
@@ -376,7 +376,7 @@ def energy_least_squares(run: Measurements, Y: np.ndarray, Y_e: np.ndarray, Y_b:
     Args:
         Y, Y_e, Y_b: the regressor (N, n, P), the energy regressor (N, P) and the base regressor (N, n, b) at the
             run's samples.
-        K: the base parameters' combinations (b, P), Y = Y_b K (:func:`symkin.analysis.implied_parameters.combinations`).
+        K: the base parameters' combinations (b, P), Y = Y_b K (:func:`symkin.identification.implied_parameters.combinations`).
         standard, names: the standard (P) and the base (b) parameters' names.
         window: the windows' length (s).
 

@@ -21,7 +21,7 @@ it at the platform joints and an inertia across them, and one rotor for all actu
 
     mass = m_B + m_C,   platform_fraction = m_B / (m_B + m_C),   inertia = dI + m_B m_C / (m_B + m_C) L^2,
 
-the standard parameters given in what the file holds (:func:`symkin.analysis.implied_parameters.nearest_held`).
+the standard parameters given in what the file holds (:func:`symkin.identification.implied_parameters.nearest_held`).
 """
 
 from __future__ import annotations

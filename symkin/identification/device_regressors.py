@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from symkin.analysis.identification import DataError
+from symkin.identification.estimation import DataError
 from symkin.analysis.needs import DERIVED
 from symkin.mechanism.actuated import Mechanism
 

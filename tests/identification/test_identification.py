@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from conftest import ROOT, SYMKIN_CLI
-from symkin.analysis import identification
+from symkin.identification import estimation
 from symkin.dynamics.parameter_names import DISSIPATIVE
 from symkin.model import model_from_text
 from identification_runs import NOISE, RATE, arm, excitation, simulated_run, write_run  # noqa: F401 (the fixture arm)
@@ -28,7 +28,7 @@ def test_a_simulated_run_gives_back_the_models_base_parameters(arm, method):
     t, q, qd, qdd, tau = simulated_run(arm)
     Y_b, pi_b = arm.base_regressor(q, qd, qdd)
     names = arm.info.functions["base_regressor"].outputs["pi_b"]
-    found = identification.least_squares(Y_b, tau, names, method)
+    found = estimation.least_squares(Y_b, tau, names, method)
     error = np.abs(found.values - pi_b[0]) / found.std
     assert np.all(error < 5), dict(zip(names, error))           # 5 standard deviations: 1 in 1.7 million
     assert np.median(error) < 1.5                                 # and distributed as standard deviations are
@@ -39,7 +39,7 @@ def test_rates_derived_from_q_by_the_stated_filter(arm, tmp_path):
     """Without qd and qdd columns, a zero-phase low-pass at --cutoff and central differences: at 200 Hz and a 5 Hz
     cutoff the derived accelerations of the 2 s excitation (4 harmonics, up to 2 Hz) are close to the exact ones."""
     t, q, qd, qdd, tau = simulated_run(arm)
-    run = identification.read_measurements(write_run(tmp_path / "run.csv", ["theta1", "theta2"], t, q, tau),
+    run = estimation.read_measurements(write_run(tmp_path / "run.csv", ["theta1", "theta2"], t, q, tau),
                                            ["theta1", "theta2"], cutoff=5.0)
     inner = slice(100, -100)                                      # away from the filter's edge transients
     assert np.max(np.abs(run.qdd[inner] - qdd[inner])) < 0.02 * np.max(np.abs(qdd))
@@ -91,24 +91,24 @@ def test_hostile_csv_files_are_refused_or_read_right(arm, tmp_path):
     coordinates = ["theta1", "theta2"]
     bom = tmp_path / "bom.csv"
     bom.write_bytes(b"\xef\xbb\xbf" + text.encode())
-    assert np.array_equal(identification.read_measurements(bom, coordinates).tau,
-                          identification.read_measurements(data, coordinates).tau)
+    assert np.array_equal(estimation.read_measurements(bom, coordinates).tau,
+                          estimation.read_measurements(data, coordinates).tau)
     header = text.splitlines()[0]
     repeated = tmp_path / "repeated.csv"
     repeated.write_text("\n".join(line + "," + line.split(",")[1] for line in text.splitlines()) + "\n")
-    with pytest.raises(identification.DataError, match=rf"row 1, column {header.count(',') + 2}: the column "
+    with pytest.raises(estimation.DataError, match=rf"row 1, column {header.count(',') + 2}: the column "
                                                        "'q_theta1' repeats column 2"):
-        identification.read_measurements(repeated, coordinates)
+        estimation.read_measurements(repeated, coordinates)
     huge = tmp_path / "huge.csv"
     lines = text.splitlines()
     lines[4] = ",".join(lines[4].split(",")[:2] + ["1e308"] + lines[4].split(",")[3:])
     huge.write_text("\n".join(lines) + "\n")
-    with pytest.raises(identification.DataError, match=r"row 5, column 3 \(q_theta2\): 1e\+308 is beyond 1e\+15"):
-        identification.read_measurements(huge, coordinates)
+    with pytest.raises(estimation.DataError, match=r"row 5, column 3 \(q_theta2\): 1e\+308 is beyond 1e\+15"):
+        estimation.read_measurements(huge, coordinates)
     fifo = tmp_path / "fifo.csv"
     os.mkfifo(fifo)
-    with pytest.raises(identification.DataError, match="is not a regular file"):
-        identification.read_measurements(fifo, coordinates)
+    with pytest.raises(estimation.DataError, match="is not a regular file"):
+        estimation.read_measurements(fifo, coordinates)
 
 
 def test_a_run_that_does_not_excite_a_parameter_or_a_combination_names_them(arm):
@@ -119,21 +119,21 @@ def test_a_run_that_does_not_excite_a_parameter_or_a_combination_names_them(arm)
     names = arm.info.functions["base_regressor"].outputs["pi_b"]
     still = q.copy(), qd.copy(), qdd.copy()
     still[0][:, 1], still[1][:, 1], still[2][:, 1] = 0.3, 0.0, 0.0
-    with pytest.raises(identification.DataError, match="does not excite theta2.Ia, theta2.fv, theta2.fc"):
-        identification.least_squares(arm.base_regressor(*still)[0], arm.inverse_dynamics(*still), names)
+    with pytest.raises(estimation.DataError, match="does not excite theta2.Ia, theta2.fv, theta2.fc"):
+        estimation.least_squares(arm.base_regressor(*still)[0], arm.inverse_dynamics(*still), names)
     still = q.copy(), qd.copy(), qdd.copy()
     still[0][:, 0], still[1][:, 0], still[2][:, 0] = 0.3, 0.0, 0.0
     inertial = [k for k, name in enumerate(names) if name.startswith("link") and name != "link1.IzzR"]
-    with pytest.raises(identification.DataError, match="does not identify the combination of link1.m"):
-        identification.least_squares(arm.base_regressor(*still)[0][..., inertial], arm.inverse_dynamics(*still),
+    with pytest.raises(estimation.DataError, match="does not identify the combination of link1.m"):
+        estimation.least_squares(arm.base_regressor(*still)[0][..., inertial], arm.inverse_dynamics(*still),
                                 [names[k] for k in inertial])
 
 
 def test_too_few_samples_for_the_base_parameters_are_refused(arm):
     t, q, qd, qdd, tau = simulated_run(arm)
     Y_b, _ = arm.base_regressor(q[:5], qd[:5], qdd[:5])
-    with pytest.raises(identification.DataError, match="5 samples give 10 equations for 13 base parameters"):
-        identification.least_squares(Y_b, tau[:5], arm.info.functions["base_regressor"].outputs["pi_b"])
+    with pytest.raises(estimation.DataError, match="5 samples give 10 equations for 13 base parameters"):
+        estimation.least_squares(Y_b, tau[:5], arm.info.functions["base_regressor"].outputs["pi_b"])
 
 
 def test_the_consistent_estimate_is_physical_and_fits_the_run(arm):
@@ -141,15 +141,15 @@ def test_the_consistent_estimate_is_physical_and_fits_the_run(arm):
     body (pseudo-inertia positive semidefinite to rounding) and the drives non-negative, fits the run to the
     noise, and its identifiable combinations K pi are the true base parameters within a few standard deviations
     of the least-squares estimate."""
-    from symkin.analysis import consistent
+    from symkin.identification import consistent
     from symkin.derivation import Derivation
 
     t, q, qd, qdd, tau = simulated_run(arm)
     Y, pi = arm.regressor(q, qd, qdd)
     Y_b, pi_b = arm.base_regressor(q, qd, qdd)
     base_names = arm.info.functions["base_regressor"].outputs["pi_b"]
-    wls = identification.least_squares(Y_b, tau, base_names, "wls")
-    triangle, target = identification.weighted_triangle(Y, tau, 1.0 / wls.joint_std)
+    wls = estimation.least_squares(Y_b, tau, base_names, "wls")
+    triangle, target = estimation.weighted_triangle(Y, tau, 1.0 / wls.joint_std)
     prior = pi[0].copy()
     prior[:20] *= 1.3
     found = consistent.estimate(triangle, target, arm.info.functions["regressor"].outputs["pi"], prior)
@@ -167,7 +167,7 @@ def test_an_offset_beyond_the_coulomb_friction_keeps_both_levels_of_the_consiste
     squares puts the push into the offset, f_o > f_c, a level f_c - f_o < 0 that would push the joint along its
     motion; the consistent estimate keeps both Coulomb levels f_c + f_o and f_c - f_o non-negative (to the rounding
     of their sum and difference), as the model file needs them (friction: {coulomb: {positive, negative}})."""
-    from symkin.analysis import consistent
+    from symkin.identification import consistent
 
     rng = np.random.default_rng(4)
     qd, qdd = np.sin(np.linspace(0, 20, 400)), np.cos(np.linspace(0, 20, 400))
@@ -194,11 +194,11 @@ def test_the_command_estimates_consistent_standard_parameters(arm, tmp_path):
 
 
 def _energy_estimate(arm, t, q, qd, qdd, tau, window=0.05):
-    from symkin.analysis.implied_parameters import combinations
+    from symkin.identification.implied_parameters import combinations
 
-    run = identification.Measurements("run", t, q, qd, qdd, tau, "measured")
+    run = estimation.Measurements("run", t, q, qd, qdd, tau, "measured")
     Y, Y_b = arm.regressor(q, qd, qdd)[0], arm.base_regressor(q, qd, qdd)[0]
-    return identification.energy_least_squares(
+    return estimation.energy_least_squares(
         run, Y, arm.energy_regressor(q, qd)[0], Y_b, combinations(Y, Y_b),
         arm.info.functions["regressor"].outputs["pi"], arm.info.functions["base_regressor"].outputs["pi_b"], window)
 
@@ -213,7 +213,7 @@ def test_the_energy_balance_holds_for_the_true_parameters_to_the_quadrature_erro
         Y, pi = arm.regressor(q, qd, qdd)
         dissipative = np.array([n.rsplit(".", 1)[-1] in DISSIPATIVE
                                 for n in arm.info.functions["regressor"].outputs["pi"]])
-        W, work = identification.energy_balance(t, qd, arm.inverse_dynamics(q, qd, qdd),
+        W, work = estimation.energy_balance(t, qd, arm.inverse_dynamics(q, qd, qdd),
                                                 arm.energy_regressor(q, qd)[0], np.where(dissipative, Y, 0.0), 0.05)
         assert len(work) == 199
         assert np.all(np.isfinite(W))
@@ -234,7 +234,7 @@ def test_the_energy_estimate_gives_back_the_models_base_parameters(arm):
     assert np.all(error < 5), dict(zip(found.names, error))
     assert np.median(error) < 1.5
     assert np.all(found.joint_std < 2 * NOISE)
-    ols = identification.least_squares(arm.base_regressor(q, qd, qdd)[0], tau, found.names, "ols")
+    ols = estimation.least_squares(arm.base_regressor(q, qd, qdd)[0], tau, found.names, "ols")
     assert np.all(found.std > ols.std)
 
 
@@ -292,7 +292,7 @@ def test_a_generated_open_chain_without_its_base_regressor_is_refused_with_the_d
 def test_the_consistent_estimates_jacobian_is_the_derivative_of_its_parameterization():
     """d pi / d theta of one link's log-Cholesky parameters, analytic (consistent._standard_derivatives), against
     central differences at random theta: truncation h^2 |pi'''| ~ 1e-12 and rounding EPS |pi| / h ~ 1e-10."""
-    from symkin.analysis import consistent
+    from symkin.identification import consistent
 
     rng = np.random.default_rng(61)
     h = 1e-6

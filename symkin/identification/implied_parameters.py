@@ -4,7 +4,7 @@ standard parameters nearest a prior that a model file can hold.
 Least squares identifies only the base parameters pi_b = K pi.  :func:`nearest_standard` gives the standard
 parameters those data imply and that stay closest to the model's own values (Gautier and Khalil's regrouping
 keeps the non-identifiable parameters at their a priori values; here "closest" is in the scaled norm of
-:func:`symkin.analysis.consistent.prior_scale`):
+:func:`symkin.identification.consistent.prior_scale`):
 
     pi = argmin |D^-1 (pi - pi_prior)|  subject to  K pi = pi_b,   D = diag(prior_scale(pi_prior)).
 
@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from symkin.analysis.consistent import prior_scale
+from symkin.identification.consistent import prior_scale
 from symkin.dynamics.parameter_names import DRIVE, ROD
 from symkin.model.schema import Model, PlatformMotion
 

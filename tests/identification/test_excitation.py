@@ -16,8 +16,8 @@ import pytest
 
 from conftest import GENERATED_DIR, MODELS_DIR, SYMKIN_CLI
 from symkin import pipeline
-from symkin.analysis import identification
-from symkin.design import excitation
+from symkin.identification import estimation
+from symkin.identification import excitation
 from symkin.model import model_from_text
 from symkin.runtime.loader import load
 from sample_models import DRIVEN
@@ -72,7 +72,7 @@ def test_a_run_along_the_optimum_identifies_the_arm(arm, optimum):
     tau = numpy_arm.inverse_dynamics(q, qd, qdd) + np.random.default_rng(5).normal(0.0, noise, q.shape)
     Y_b, pi_b = numpy_arm.base_regressor(q, qd, qdd)
     names = numpy_arm.info.functions["base_regressor"].outputs["pi_b"]
-    found = identification.least_squares(Y_b, tau, names, "wls")
+    found = estimation.least_squares(Y_b, tau, names, "wls")
     assert np.all(np.abs(found.values - pi_b[0]) < 5 * found.std)
 
 
@@ -94,7 +94,7 @@ def test_the_command_writes_a_trajectory_symkin_identify_reads(tmp_path):
     data = tmp_path / "run.csv"
     np.savetxt(data, np.column_stack([table, tau]), delimiter=",", comments="",
                header=text.splitlines()[0] + ",tau_theta1,tau_theta2")
-    run = identification.read_measurements(data, ["theta1", "theta2"])
+    run = estimation.read_measurements(data, ["theta1", "theta2"])
     assert run.rates == "measured"
     np.testing.assert_array_equal(run.tau, tau)
 

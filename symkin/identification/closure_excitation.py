@@ -1,5 +1,5 @@
 """The base regressor of legs without the distance form as a CasADi function of the actuators, for the excitation
-optimizer (:mod:`symkin.design.excitation`).
+optimizer (:mod:`symkin.identification.excitation`).
 
 Such legs have no fk: at each sample the passive joints and the pose u = (s, p) solve the closure
 Phi_R(q, u) = 0 (R: as many of its rows as u has entries, independent at the home assembly; the others vanish

@@ -1,6 +1,6 @@
 """Physically consistent identification: standard parameters whose every body is a real rigid body.
 
-Least squares on the base parameters (:mod:`symkin.analysis.identification`) fits the torques but can return
+Least squares on the base parameters (:mod:`symkin.identification.estimation`) fits the torques but can return
 combinations no set of bodies has (a negative mass hidden in a regrouped parameter), which a simulation or
 an inertia-cancelling controller then meets as a mass matrix that is not positive definite.  Here the
 standard parameters pi themselves are estimated, each link's ten as a pseudo-inertia
@@ -182,7 +182,7 @@ def estimate(triangle: np.ndarray, target: np.ndarray, names: Sequence[str], pri
              start: np.ndarray | None = None) -> ConsistentEstimate:
     """The consistent estimate of the module docstring from the triangular factor ``triangle`` (P x P) and
     ``target`` (z) of the weighted standard regressor and the prior (the model's pi); the blocks from ``names``.
-    Parameters a model file holds instead, pi = fixed + T x (:class:`symkin.analysis.implied_parameters.Held`),
+    Parameters a model file holds instead, pi = fixed + T x (:class:`symkin.identification.implied_parameters.Held`),
     are estimated from ``triangle`` R T and ``target`` z - R fixed, named as x (a rotor shared by several joints:
     ``rotor.Ia``, their friction apart).  ``start``: where the solver starts (default: the prior; a nearby
     estimate saves iterations)."""

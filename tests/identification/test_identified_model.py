@@ -1,4 +1,4 @@
-"""Issue 33: the model file with identified values (symkin.analysis.identified_model, `symkin identify` writes it).
+"""Issue 33: the model file with identified values (symkin.identification.identified_model, `symkin identify` writes it).
 
 References: the rewritten file, read back by the model reader and derived, has exactly the standard parameters it
 was written from (bodies moved from the joint frames F_i into rotated and shifted link frames, rotor inertia
@@ -19,7 +19,7 @@ import sympy
 import yaml
 
 from conftest import SYMKIN_CLI
-from symkin.analysis import identified_model, implied_parameters
+from symkin.identification import identified_model, implied_parameters
 from symkin.derivation import Derivation
 from symkin.dynamics.quantities import newton_euler_links
 from symkin.dynamics.parameter_names import INERTIAL

@@ -1,7 +1,7 @@
 """Excitation trajectories for identification: a periodic motion that makes the base regressor well conditioned.
 
 The estimate's accuracy is bounded by the conditioning of the stacked base regressor W = [Y_b(t_1); ...;
-Y_b(t_K)] over the run (:mod:`symkin.analysis.identification`): each joint follows a finite Fourier series
+Y_b(t_K)] over the run (:mod:`symkin.identification.estimation`): each joint follows a finite Fourier series
 (Swevers, Ganseman, Tukel, De Schutter and Van Brussel, "Optimal robot excitation and identification", IEEE
 Trans. Robot. Autom. 13(5), 1997)
 
@@ -27,7 +27,7 @@ fk (the Stewart-Gough platform) moves its pose p instead: the series are the tas
 follow q = ik(p) with qd = (dq/dp) pd and qdd = (dqd/dp) pd + (dqd/dpd) pdd (CasADi's forward derivatives of the
 generated ik), and the actuators' limits and the legs' assembly (ik's margin >= 0) hold at the constraint points.
 Legs without the distance form (no fk, no ik) move their actuators about the home assembly, each sample's
-assembly found by a rootfinder (:mod:`symkin.design.closure_excitation`), and the result is shrunk until the legs
+assembly found by a rootfinder (:mod:`symkin.identification.closure_excitation`), and the result is shrunk until the legs
 close along the whole period.
 """
 
@@ -40,7 +40,7 @@ from typing import Any
 import casadi
 import numpy as np
 
-from symkin.design import closure_excitation
+from symkin.identification import closure_excitation
 from symkin.design.formulation import casadi_function
 from symkin.design.solving import IPOPT_OPTIONS, IterationReport
 from symkin.runtime.info import GeneratedModel
