@@ -194,7 +194,7 @@ def chunked_workspace(payload: ModelPayload, spec: CloudSpec, *, chunk: int = CH
     lower = np.min([extents[i][0] for i in range(len(ranges))], axis=0)
     upper = np.max([extents[i][1] for i in range(len(ranges))], axis=0)
     cell = _cell(lower, upper, total)
-    start, size, counts = workspace.grid_geometry(lower, upper + 1e-12 * cell, cell)
+    start, size, counts = sampling.grid_geometry(lower, upper + 1e-12 * cell, cell)
     grid = workspace.Occupancy(start, size, np.zeros(counts, dtype=bool))
     per_chunk = -(-keep // len(ranges))
     summaries: dict[int, ChunkSummary] = {}

@@ -1,12 +1,10 @@
 """A haptic device's datasheet: the measures of :mod:`symkin.analysis.rating` over its workspace and at its
 home pose, with the pose where each extreme occurs (``symkin rate``).
 
-The workspace is sampled as the mechanism allows (in the joint space within the limits,
-:func:`symkin.analysis.workspace.sample_workspace`, a parallel mechanism through its closed-form fk; a platform
-without one over its centres or orientations; legs without closed forms over the cells of their continued
-closure), cut to its usable part (1/kappa of the handle's Jacobians at least :data:`USABLE_CONDITIONING`: near a
-singularity the apparent mass and the forces diverge) and optionally to a required box of the handle's
-coordinates; one rating then takes every kind's usable samples (:func:`rate`).  At
+The workspace is sampled as the mechanism is (:func:`symkin.mechanism.sampling`: its joint space, centres,
+orientations or continued cells), cut to its usable part (1/kappa of the handle's Jacobians at least
+:data:`USABLE_CONDITIONING`: near a singularity the apparent mass and the forces diverge) and optionally to a
+required box of the handle's coordinates; one rating takes every kind's usable samples (:func:`rate`).  At
 every sample the generated functions give M (``mass_matrix``), J (``jacobian``: its translational rows) and
 G (``gravity_vector``); the actuators' data come from the manifest (effort limits, continuous effort,
 friction) or from the caller (encoders, servo rate).  A measure whose data the model lacks is not rated,
@@ -21,7 +19,6 @@ from typing import Any
 
 import numpy as np
 
-from symkin.mechanism.closure import solve_home_assembly, uses_closure
 from symkin.analysis import workspace
 from symkin import mechanism
 from symkin.numerics.conditioning import inverse_condition_number
@@ -29,7 +26,8 @@ from symkin.analysis.handle_measures import (NO_GRAVITY, PUSHED_GROUPS, ROTATION
                                              SPHERICAL_GROUPS, TURNED_GROUPS, Actuation, Measure, dynamics_at,
                                              friction_measures, gravity_share_measure, rotation_measures,
                                              translation_measures)
-from symkin.mechanism import ANGLES
+from symkin.analysis.needs import kind_text
+from symkin.mechanism import ANGLES, Sampling, continuation
 from symkin.runtime.info import GeneratedModel
 
 
@@ -113,7 +111,7 @@ def _point(tcp: Sequence[float], axes: Sequence[str]) -> str:
 def home_configuration(model: GeneratedModel, limits: np.ndarray) -> np.ndarray:
     """The pose a datasheet quotes besides the workspace: a parallel mechanism's declared home (q = ik(home)),
     a serial device's declared rest configuration (``serial.home``), else the middle of the joint limits."""
-    if mechanism.is_parallel(model) and model.info.home is not None:
+    if mechanism.sampled_in_task_space(model) and model.info.home is not None:
         return np.asarray(model.ik(np.array(model.info.home)).joints, dtype=float)
     if model.info.home_configuration is not None:
         return np.array(model.info.home_configuration, dtype=float)
@@ -176,36 +174,38 @@ def rate(model: GeneratedModel, actuation: Actuation, *, samples: int = 4096, se
     :func:`~symkin.analysis.handle_measures.rotation_measures`) where it also rotates, and the gravity share and
     the rotational friction where it only turns.
 
-    The samples come from the mechanism: a serial arm's or a closed-form platform's joint space
-    (:func:`_usable_joint_samples`); a platform on legs without closed forms, the cells of its continued closure at
-    a constant ``orientation`` (:func:`_usable_closure_cells`); a platform that also rotates (Stewart-Gough), its
-    centres at the constant ``orientation`` (roll, pitch, yaw in rad; default: its home pose's,
-    :func:`_usable_centres`); a spherical platform (the Agile Eye), its orientations (:func:`_usable_orientations`).
+    The samples come from the mechanism, as it is sampled (:func:`symkin.mechanism.sampling`): a serial arm's or a
+    closed-form platform's joint space (:func:`_usable_joint_samples`); a platform reached by continuation (legs
+    without closed forms), the cells of its continued assembly at a constant ``orientation``
+    (:func:`_usable_continued_cells`); a platform that also rotates (Stewart-Gough), its centres at the constant
+    ``orientation`` (roll, pitch, yaw in rad; default: its home pose's, :func:`_usable_centres`); a spherical platform
+    (the Agile Eye), its orientations (:func:`_usable_orientations`).
 
     Raises:
         ValueError: the model cannot be rated (no task coordinate it rates, a wrist on the platform, no mass
             matrix), or the box holds no sample.
     """
-    if uses_closure(model):
-        usable = _usable_closure_cells(model, samples, box, limits, conditioning, orientation)
+    sampled = mechanism.sampling(model)
+    if sampled is Sampling.CONTINUATION:
+        usable = _usable_continued_cells(model, samples, box, limits, conditioning, orientation)
     else:
-        kind = mechanism.kind_of(model)
-        if model.info.wrist:
+        if mechanism.handle_on_further_joints(model):
             raise ValueError(f"{model.name}: a platform carrying a wrist: rate the whole device at its grip point "
                              "(symkin rate --device, symkin.mechanism.device.WholeDevice)")
-        if kind is mechanism.MechanismKind.PARALLEL_POSE:
+        if sampled is Sampling.INVERSE and mechanism.mixes_translations_and_rotations(model):  # Stewart-Gough
             usable = _usable_centres(model, samples, seed, box, limits, conditioning, orientation)
-        elif kind is mechanism.MechanismKind.PARALLEL_ORIENTATION and orientation is None:
+        elif sampled is Sampling.ORIENTATIONS and orientation is None:
             usable = _usable_orientations(model, samples, seed, box, limits, conditioning)
         elif orientation is not None:
             raise ValueError(f"{model.name}: --orientation applies to platforms that also rotate (Stewart-Gough); "
-                             f"this is a {kind.value} mechanism")
-        elif kind not in (mechanism.MechanismKind.SERIAL, mechanism.MechanismKind.PARALLEL):
+                             f"this is a {kind_text(model)} mechanism")
+        elif sampled is Sampling.INVERSE and not mechanism.is_positional(model):
             raise ValueError(f"{model.name}: symkin rate rates devices whose handle translates with the platform or "
-                             f"is a serial arm's TCP; this is a {kind.value} mechanism")
+                             f"is a serial arm's TCP; this is a {kind_text(model)} mechanism")
         else:
             usable = _usable_joint_samples(model, samples, seed, box, limits, conditioning)
     return _datasheet(model, usable, actuation)
+
 
 
 def _datasheet(model: GeneratedModel, usable: _Usable, actuation: Actuation) -> Datasheet:
@@ -252,7 +252,7 @@ def _usable_joint_samples(model: GeneratedModel, samples: int, seed: int, box: M
     keep = np.all(np.isfinite(points), axis=-1)
     if box:
         keep &= _within(points, cloud.axes, box)  # the home pose (last) is quoted anyway: _usable keeps it
-    J = mechanism.jacobian(model, q, points if mechanism.is_parallel(model) else None)[..., rows, :]
+    J = mechanism.jacobian(model, q, points if mechanism.sampled_in_task_space(model) else None)[..., rows, :]
     keep = _usable(keep, conditioning, J)
     q, points, J = q[keep], points[keep], J[keep]
     if len(q) < 2:
@@ -261,46 +261,44 @@ def _usable_joint_samples(model: GeneratedModel, samples: int, seed: int, box: M
     return _Usable(q, points, points, cloud.axes, J, None, dynamics_at(model, "mass_matrix", q, points))
 
 
-#: Why a platform on legs without closed forms has no apparent mass, inertia or gravity share in its datasheet.
-NO_CLOSURE_DYNAMICS = ("no mass properties: legs without closed forms (any topology) rate their apparent mass, inertia "
+#: Why a platform reached by continuation (legs without closed forms) has no apparent mass, inertia or gravity share
+#: in its datasheet.
+NO_CONTINUED_DYNAMICS = ("no mass properties: legs without closed forms (any topology) rate their apparent mass, inertia "
                        "and gravity share from the generated closure_dynamics (declare bodies: links: and platform:)")
 
 
-def _usable_closure_cells(model: GeneratedModel, samples: int, box: Mapping[str, tuple[float, float]] | None,
+def _usable_continued_cells(model: GeneratedModel, samples: int, box: Mapping[str, tuple[float, float]] | None,
                           limits: mechanism.Limits | None, conditioning: float,
                           orientation: Sequence[float] | None) -> _Usable:
     """A platform whose legs have no closed forms, over the working mode of its home assembly at a constant
     ``orientation`` (roll, pitch, yaw in rad; default the home pose's), on the grid of
-    :func:`symkin.analysis.closure_workspace.closure_workspace` (about ``samples`` cells).
+    :func:`symkin.mechanism.continuation.continued_grid` (about ``samples`` cells).
 
-    J = dp/dq at each reached cell from :func:`symkin.runtime.parallel.closure_velocities`: its position rows J_v
+    J = dp/dq at each reached cell (:func:`symkin.mechanism.continuation.handle_jacobian`): its position rows J_v
     rate the handle pushed with its angles free (forces with no moment, tau = J_v^T f, the translation's
     resolution and friction), its angle rows J_w (as angular velocity) the handle turned with its position free.
     With the generated ``closure_dynamics`` (bodies declared), M = W^T M_z W
-    (:func:`symkin.runtime.closure_dynamics.actuated_dynamics`); without it the apparent mass and inertia are not
-    rated (:data:`NO_CLOSURE_DYNAMICS`).
+    (:func:`symkin.mechanism.continuation.dynamics_at_rest`); without it the apparent mass and inertia are not
+    rated (:data:`NO_CONTINUED_DYNAMICS`).
     """
-    from symkin.analysis import closure_workspace
     from symkin.mechanism import reach
-    from symkin.runtime.closure_dynamics import actuated_dynamics
-    from symkin.runtime.parallel import closure_velocities
 
     held = reach.held_orientation(model, orientation)
-    assembly = solve_home_assembly(model)
+    found = continuation.continued_grid(model, orientation=held, limits=limits,
+                                        cells=max(8, int(round(samples ** (1 / 3)))))
+    assembly = found.home
+    assert assembly is not None, "a grid continued without a start solves its home assembly"
     home_q, home_s = assembly.q, assembly.s
-    found = closure_workspace.closure_workspace(model, orientation=held, limits=limits,
-                                                cells=max(8, int(round(samples ** (1 / 3)))), start=(home_q, home_s))
-    reached = found.occupancy.occupied
+    reached = found.reached
     task = mechanism.task_space(model)
     positions = [k for k, c in enumerate(task) if c in mechanism.POSITION_COMPONENTS]
     angles = [k for k in range(len(task)) if k not in positions]
-    points = found.occupancy.centers()[reached]
+    points = found.centres()[reached]
     poses = np.repeat(found.pose[None], len(points), axis=0)
     poses[:, positions] = points
     home_pose = mechanism.home_pose(model)
     if np.allclose(home_pose[angles], found.pose[angles]):
-        home_J = closure_workspace.angular_rates(
-            model, closure_velocities(model, home_q[None], home_s[None], home_pose[None]).J, home_pose[None])[0]
+        home_J = continuation.handle_jacobian(model, home_q[None], home_s[None], home_pose[None])[0]
     else:
         nearest = int(np.argmin(np.linalg.norm(points - home_pose[positions], axis=-1)))
         home_q, home_s = found.q[reached][nearest], found.s[reached][nearest]
@@ -320,11 +318,11 @@ def _usable_closure_cells(model: GeneratedModel, samples: int, box: Mapping[str,
         raise ValueError(f"{model.name}: no reached cell lies in the box {dict(box or {})} with 1/kappa >= "
                          f"{conditioning:g}")
     M: np.ndarray | None = None
-    G: np.ndarray | str = NO_CLOSURE_DYNAMICS
+    G: np.ndarray | str = NO_CONTINUED_DYNAMICS
     if "closure_dynamics" in model.functions:
-        at_rest = actuated_dynamics(model, q, s, poses, np.zeros_like(q))  # bias at rest: the gravity efforts
+        at_rest = continuation.dynamics_at_rest(model, q, s, poses)  # bias at rest: the gravity efforts
         M, G = at_rest.M, at_rest.bias if np.any(at_rest.potential != 0) else NO_GRAVITY
-    return _Usable(q, poses, points, found.axes, J_v, J_w if angles else None, M, G, NO_CLOSURE_DYNAMICS,
+    return _Usable(q, poses, points, found.axes, J_v, J_w if angles else None, M, G, NO_CONTINUED_DYNAMICS,
                    (assembly.describe(model),))
 
 
@@ -379,8 +377,10 @@ def _usable_orientations(model: GeneratedModel, samples: int, seed: int, box: Ma
     from symkin.analysis import orientations
     from symkin.mechanism.reach import angular_velocity_matrix
 
-    for name in ("ik", "jacobian", "mass_matrix"):
-        mechanism.parallel_function(model, name)
+    missing = [name for name in ("ik", "jacobian", "mass_matrix") if name not in model.functions]
+    if missing:
+        raise ValueError(f"{model.name}: rating a spherical platform needs its generated {', '.join(missing)} "
+                         "(derive it, e.g. --only ik,jacobian,mass_matrix)")
     unknown = set(box or {}) - set(ANGLES)
     if unknown:
         raise ValueError(f"--box: no task axes {sorted(unknown)}; the platform turns in {', '.join(ANGLES)} (rad)")

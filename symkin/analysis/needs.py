@@ -53,6 +53,32 @@ NEEDS: Mapping[str, Mapping[MechanismKind, tuple[str, ...]]] = {
 }
 
 
+#: {analysis: what it evaluates of a model sampled by continuation (legs without closed forms: the closure alone)}, where
+#: it differs from ``symkin.analysis.model_files.CLOSURE_OUTPUTS``.
+CONTINUED_NEEDS: Mapping[str, tuple[str, ...]] = {
+    # a dimensioning program: each point of the required box with its assembly (q, s) as variables
+    "design": ("closure", "closure_jacobians"),
+}
+
+
+def needs_of(analysis: str, model) -> tuple[str, ...]:
+    """The generated functions ``analysis`` evaluates of the loaded ``model``: its row of :data:`NEEDS` for the
+    model's kind, or :data:`CONTINUED_NEEDS` for a model sampled by continuation."""
+    from symkin import mechanism
+
+    if mechanism.sampling(model) is mechanism.Sampling.CONTINUATION:
+        return CONTINUED_NEEDS[analysis]
+    return NEEDS[analysis][mechanism.kind_of(model)]
+
+
+def kind_text(model) -> str:
+    """The kind of the loaded ``model`` in words, as refusals name it: "serial", "parallel", "parallel pose",
+    "parallel orientation" (:class:`symkin.mechanism.MechanismKind`)."""
+    from symkin import mechanism
+
+    return mechanism.kind_of(model).value
+
+
 class Derived(NamedTuple):
     """What a command derives a model file with when its needs are not one tuple by kind (the ``outputs``,
     ``optional`` and ``closure`` of :func:`symkin.analysis.model_files.generated_model`, in that order)."""

@@ -107,8 +107,7 @@ class Occupancy:
 
     def centers(self) -> np.ndarray:
         """Cell centres, shape (c_1, ..., c_d, d)."""
-        axes = [self.lower[i] + (np.arange(c) + 0.5) * self.cell[i] for i, c in enumerate(self.occupied.shape)]
-        return np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1)
+        return sampling.cell_centres(self.lower, self.cell, self.occupied.shape)
 
     def boundary(self) -> np.ndarray:
         """Occupied cells with at least one empty neighbour (of the 3^d - 1 around it) or at the grid's edge.
@@ -149,13 +148,6 @@ class Occupancy:
         return Estimate((inner + outer) / 2, (outer - inner) / 2, int(self.occupied.size), "occupancy", False)
 
 
-def grid_geometry(lower: np.ndarray, upper: np.ndarray, cell: float) -> tuple[np.ndarray, np.ndarray, tuple[int, ...]]:
-    counts = np.maximum(np.ceil((upper - lower) / cell).astype(int), 1)
-    centre = (lower + upper) / 2
-    start = centre - counts * cell / 2
-    return start, np.full(lower.shape, float(cell)), tuple(int(c) for c in counts)
-
-
 def cloud_spacing(cloud: WorkspaceCloud) -> float:
     """Largest distance between the TCP points of neighbouring grid configurations.
 
@@ -194,7 +186,7 @@ def occupancy_from_cloud(cloud: WorkspaceCloud, cell: float | None = None) -> Oc
     """
     cell = default_cell(cloud) if cell is None else float(cell)
     lower, upper = cloud.points.min(axis=0), cloud.points.max(axis=0)
-    start, size, counts = grid_geometry(lower, upper + 1e-12 * cell, cell)
+    start, size, counts = sampling.grid_geometry(lower, upper + 1e-12 * cell, cell)
     index = np.minimum(np.floor((cloud.points - start) / size).astype(int), np.array(counts) - 1)
     occupied = np.zeros(counts, dtype=bool)
     occupied[tuple(index.T)] = True
@@ -203,7 +195,7 @@ def occupancy_from_cloud(cloud: WorkspaceCloud, cell: float | None = None) -> Oc
 
 def grid_cells(box: tuple[np.ndarray, np.ndarray], cell: float) -> tuple[np.ndarray, np.ndarray, tuple, np.ndarray]:
     """(start, cell sizes, counts, cell centres (N, d)) of the Cartesian grid of ``box``."""
-    start, size, counts = grid_geometry(np.asarray(box[0], float), np.asarray(box[1], float), cell)
+    start, size, counts = sampling.grid_geometry(np.asarray(box[0], float), np.asarray(box[1], float), cell)
     return start, size, counts, Occupancy(start, size, np.zeros(counts, dtype=bool)).centers().reshape(-1, len(counts))
 
 

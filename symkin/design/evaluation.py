@@ -8,9 +8,9 @@ analyses' reachability test of its closed-form ``ik`` (dW = 1_W(x) dx); a spheri
 :func:`symkin.analysis.orientations.orientation_gci` over the box of orientations (1/kappa of the
 angular-velocity Jacobian, the invariant measure of SO(3)); legs without closed forms by the mean of 1/kappa
 over the cells of a midpoint grid of the box that the working mode reaches, flooded from the home assembly
-(:func:`symkin.analysis.closure_workspace.flood_box`; the error is the change from a grid of half as many cells
+(:func:`symkin.mechanism.continuation.flood_box`; the error is the change from a grid of half as many cells
 a side, as :func:`symkin.analysis.closure_workspace.closure_gci`), the home assembly of each design continued
-from the start design's (:func:`closure_home`).  The box is
+from the start design's (:func:`continued_home`).  The box is
 checked on a vertex grid denser than the optimizer's constraint points: by the closed-form
 inverse of :mod:`symkin.analysis.inverse` where one exists, else by the ``ik`` margin.
 """
@@ -21,12 +21,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from symkin.mechanism.closure import MAX_STEP, assemble_at_home
 from symkin.mechanism import feasibility
 from symkin.numerics import conditioning, sampling
-from symkin.analysis import closure_workspace, forces, global_indices, inverse, orientations, rating
-from symkin.mechanism import reach
+from symkin.analysis import forces, global_indices, inverse, orientations, rating
+from symkin.mechanism import continuation, reach
 from symkin import mechanism
+from symkin.mechanism import Sampling
 from symkin.analysis.estimates import Estimate
 from symkin.mechanism.limits import within_limits
 from symkin.design.problem import DesignProblem
@@ -36,9 +36,9 @@ from symkin.runtime.info import GeneratedModel
 EVALUATION_SAMPLES = 2**14
 #: Points per axis of the box reachability check.
 CHECK_POINTS_PER_AXIS = 11
-#: Cells per axis of the grid over the box a closure model's GCI is the mean over (its error: half as many).
-CLOSURE_CELLS_PER_AXIS = 16
-#: Steps of the design from the start design's home assembly to another design's (:func:`closure_home`).
+#: Cells per axis of the grid over the box a continued model's GCI is the mean over (its error: half as many).
+CONTINUED_CELLS_PER_AXIS = 16
+#: Steps of the design from the start design's home assembly to another design's (:func:`continued_home`).
 DESIGN_STEPS = 16
 
 
@@ -79,13 +79,13 @@ def evaluate(problem: DesignProblem, model: GeneratedModel, design: dict[str, fl
     kinematics when no closed-form inverse applies.
     """
     bound = model.bind(**design)
-    if problem.closure:
-        return _closure(problem, bound, closure_home(problem, model, design))
-    if problem.parallel:
-        return _parallel(problem, bound, samples, seed)
+    if problem.sampling is Sampling.CONTINUATION:
+        return _continued(problem, bound, continued_home(problem, model, design))
+    if problem.sampling is not Sampling.JOINTS:
+        return _task_box(problem, bound, samples, seed)
     result = global_indices.gci(bound, method="qmc", samples=samples, seed=seed, limits=problem.limits,
                                 length=problem.length)
-    fraction, check, reached = _serial_box(problem, bound, box_points, box_configurations)
+    fraction, check, reached = _joint_box(problem, bound, box_points, box_configurations)
     force = None
     if problem.effort_limits is not None and reached is not None and len(reached):
         force = float(np.min(forces.isotropic_force(bound.jacobian(reached), problem.effort_limits)))
@@ -101,7 +101,7 @@ def box_check_points(problem: DesignProblem) -> np.ndarray:
 POSITION_TOLERANCE = 1e-9
 
 
-def _serial_box(problem: DesignProblem, model: GeneratedModel, points: np.ndarray | None,
+def _joint_box(problem: DesignProblem, model: GeneratedModel, points: np.ndarray | None,
                 configurations: np.ndarray | None) -> tuple[float | None, str, np.ndarray | None]:
     """The fraction of the box reached, how it was checked, and the configurations (k, n) that reach its
     checked points (those of the force rating; None where nothing was checked)."""
@@ -124,7 +124,7 @@ def _serial_box(problem: DesignProblem, model: GeneratedModel, points: np.ndarra
             "(the first feasible branch)", q[inside])
 
 
-def parallel_index(model: GeneratedModel, points: np.ndarray, limits: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+def inverse_index(model: GeneratedModel, points: np.ndarray, limits: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
     """1/kappa of J at each point (0 where unreachable), and whether it is reachable: by the
     analyses' own test (:func:`symkin.mechanism.reach.generated_inverse`: IK margin, fk round
     trip, declared passive-joint limits) within the actuated-joint ``limits``; a spherical
@@ -145,13 +145,13 @@ def _spherical(problem: DesignProblem, model: GeneratedModel, samples: int, seed
     result = orientations.orientation_gci(model, method="qmc", samples=samples, seed=seed, box=problem.required_box,
                                           limits=problem.limits)
     points = box_check_points(problem)
-    inside = parallel_index(model, points, problem.limits)[1]
+    inside = inverse_index(model, points, problem.limits)[1]
     return Evaluation(result.value, result.measure, f"qmc over the required box, {result.description}",
                       float(np.mean(inside)), f"closed-form ik within the joint limits at {len(points)} orientations")
 
 
-def _parallel(problem: DesignProblem, model: GeneratedModel, samples: int, seed: int) -> Evaluation:
-    if problem.spherical:
+def _task_box(problem: DesignProblem, model: GeneratedModel, samples: int, seed: int) -> Evaluation:
+    if problem.sampling is Sampling.ORIENTATIONS:
         return _spherical(problem, model, samples, seed)
     ik = reach.generated_inverse(model)
     result = global_indices.gci(model, method="qmc", samples=samples, seed=seed, domain="cartesian", inverse=ik,
@@ -170,54 +170,40 @@ def _parallel(problem: DesignProblem, model: GeneratedModel, samples: int, seed:
                       "points", force, mass)
 
 
-def closure_home(problem: DesignProblem, model: GeneratedModel, design: dict[str, float]) -> tuple[np.ndarray, np.ndarray]:
-    """(q, s) of the home assembly of ``design`` (all parameter values; ``model`` unbound): the start design's
-    (:func:`symkin.mechanism.closure.assemble_at_home`) continued along the straight line of designs in
-    :data:`DESIGN_STEPS` steps, Gauss-Newton at the home pose from the last step's, so that every design is rated in
-    the assembly mode the optimizer started in (a fresh multi-start assembly may pick another).
+def continued_home(problem: DesignProblem, model: GeneratedModel, design: dict[str, float]) -> tuple[np.ndarray, np.ndarray]:
+    """(q, s) of the home assembly of ``design`` (all parameter values; ``model`` unbound), continued from the
+    start design's along the straight line of designs (:func:`symkin.mechanism.continuation.home_along_designs`), so
+    that every design is rated in the assembly mode the optimizer started in (a fresh multi-start assembly may pick
+    another).
 
     Raises:
         ValueError: the legs stop closing at the home pose on the way (a design that does not reach it).
     """
-    from symkin.runtime.parallel import solve_closure
-
-    start, home = problem.start, mechanism.home_pose(model)
-    q, s = assemble_at_home(model.bind(**start))
-    for t in np.linspace(0.0, 1.0, DESIGN_STEPS + 1)[1:]:
-        values = {name: (1 - t) * start[name] + t * design[name] for name in design}
-        report = solve_closure(model.bind(**values), q, s, home, unknowns=("q", "s"),
-                               max_step=MAX_STEP)
-        if not report.all_converged:
-            raise ValueError(f"{model.name}: the legs do not close at the home pose {home.tolist()} for the design "
-                             f"{ {k: round(v, 9) for k, v in values.items()} }, on the way from the start design")
-        solution = report.solution
-        assert isinstance(solution, dict), "solve_closure names its vectors"
-        q, s = solution["q"], solution["s"]
-    return q, s
+    return continuation.home_along_designs(model, problem.start, design, DESIGN_STEPS)
 
 
-def _closure(problem: DesignProblem, model: GeneratedModel, home: tuple[np.ndarray, np.ndarray]) -> Evaluation:
-    """A closure model's GCI over the working mode's cells in the box, and the reachable share of the box."""
+def _continued(problem: DesignProblem, model: GeneratedModel, home: tuple[np.ndarray, np.ndarray]) -> Evaluation:
+    """A continued model's GCI over the working mode's cells in the box, and the reachable share of the box."""
     lower, upper = problem.required_box
     rated = []
-    for per_axis in (CLOSURE_CELLS_PER_AXIS, CLOSURE_CELLS_PER_AXIS // 2):
-        flood = closure_workspace.flood_box(model, lower, upper, (per_axis,) * len(lower), start=home,
-                                            limits=problem.limits)
+    for per_axis in (CONTINUED_CELLS_PER_AXIS, CONTINUED_CELLS_PER_AXIS // 2):
+        flood = continuation.flood_box(model, lower, upper, (per_axis,) * len(lower), start=home,
+                                       limits=problem.limits)
         reached = flood.reached
-        local = closure_workspace.closure_conditioning(model, flood.q[reached], flood.s[reached], flood.poses[reached],
-                                                       problem.length)
+        local = continuation.conditioning_at(model, flood.q[reached], flood.s[reached], flood.poses[reached],
+                                             problem.length)
         rated.append((float(np.mean(local.inv_kappa)) if reached.any() else 0.0, float(np.mean(reached)),
                       len(reached)))
     (gci, share, cells), (coarse_gci, coarse_share, coarse_cells) = rated
     volume = float(np.prod(upper - lower))
-    check = closure_workspace.flood_box(model, lower, upper, (CHECK_POINTS_PER_AXIS,) * len(lower), start=home,
-                                        vertices=True, limits=problem.limits)
+    check = continuation.flood_box(model, lower, upper, (CHECK_POINTS_PER_AXIS,) * len(lower), start=home,
+                                   vertices=True, limits=problem.limits)
     held = "" if problem.length is None else f", position rows divided by L = {problem.length:g} m"
     return Evaluation(Estimate(gci, abs(gci - coarse_gci), cells + coarse_cells, "grid", False),
                       Estimate(share * volume, abs(share - coarse_share) * volume, cells + coarse_cells, "grid", False),
-                      f"mean 1/kappa over the working mode's cells of a {CLOSURE_CELLS_PER_AXIS}^{len(lower)} grid of "
+                      f"mean 1/kappa over the working mode's cells of a {CONTINUED_CELLS_PER_AXIS}^{len(lower)} grid of "
                       f"the required box (flooded from the home assembly; error: the change from "
-                      f"{CLOSURE_CELLS_PER_AXIS // 2}^{len(lower)} cells{held})",
+                      f"{CONTINUED_CELLS_PER_AXIS // 2}^{len(lower)} cells{held})",
                       float(np.mean(check.reached)),
                       f"the working mode flooded over a {CHECK_POINTS_PER_AXIS}^{len(lower)} vertex grid of the box "
                       "from the home assembly (closure solved from a neighbour, within the limits, no singularity "

@@ -51,7 +51,7 @@ Constraints (the required box, inflated by the margin, sampled on a vertex grid 
 corners): a serial model's box configurations q_b satisfy fk(q_b) = p_b within the joint
 limits (bounds of the variables); a closure model's (q_b, s_b) close the legs within the actuators' limits
 and the declared passive-joint limits (bounds), their start continued from the home assembly in the working
-mode (:func:`symkin.analysis.closure_workspace.continue_from`); a parallel model's ``ik`` margin (the radicand of each
+mode (:func:`symkin.mechanism.continuation.continue_from`); a parallel model's ``ik`` margin (the radicand of each
 leg's solution) is >= 0 at every box point and objective node, and its actuated joints stay
 within their limits (declared or overridden), if any.  A bound m_max on the apparent mass at
 the handle (every eigenvalue of Lambda = (J M^-1 J^T)^-1, :func:`symkin.analysis.rating.apparent_mass`,
@@ -74,8 +74,9 @@ import numpy as np
 
 from symkin.mechanism.closure import assemble_at_home
 from symkin.numerics import sampling
-from symkin.analysis import closure_workspace, forces
+from symkin.analysis import forces
 from symkin import mechanism
+from symkin.mechanism import Sampling, continuation
 from symkin.mechanism import passive
 from symkin.mechanism.limits import within_limits
 from symkin.design import smooth
@@ -216,7 +217,7 @@ def formulate(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model:
     values: dict[str, Any] = dict(problem.values)
     values.update({p.name: free[k] for k, p in enumerate(problem.free)})
     z = casadi.MX.sym("z", len(problem.free))
-    build = _closure if problem.closure else _parallel if problem.parallel else _serial
+    build = {Sampling.CONTINUATION: _closure, Sampling.JOINTS: _serial}.get(problem.sampling, _parallel)
     terms = build(problem, casadi_model, numpy_model, free, values, z * scales, nodes, box_points, seed)
     free_values = casadi.MX.sym("free", len(problem.free))
     others = casadi.MX.sym("variables", terms.variables.numel())
@@ -359,7 +360,7 @@ def _parallel(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model:
     masses = _apparent_mass_rows(problem, casadi_model, node, joints, J, values)
     if problem.objective == "force":
         return _force(problem, numpy_model, node, free, J, margin, joints, masses, design, per_axis, box_points)
-    if problem.spherical:
+    if problem.sampling is Sampling.ORIENTATIONS:
         weights = np.cos(p[:, 1])
         J = angular_velocity_matrix(node) @ J
         measure = "the invariant measure of SO(3), cos(pitch) droll dpitch dyaw, for J_w = E(p) J"
@@ -482,7 +483,7 @@ def _closure_starts(problem: DesignProblem, model: GeneratedModel, poses: np.nda
     bound = model.bind(**problem.start)
     home = assemble_at_home(bound)
     step = float(np.max(problem.inflated_box[1] - problem.inflated_box[0])) / 64
-    q, s, taken = closure_workspace.continue_from(bound, (*home, mechanism.home_pose(bound)), poses, step=step,
+    q, s, taken = continuation.continue_from(bound, (*home, mechanism.home_pose(bound)), poses, step=step,
                                                   limits=problem.limits)
     if not taken.all():
         missed = poses[~taken][0]

@@ -12,10 +12,11 @@ from typing import Any
 
 import numpy as np
 
-from symkin.analysis import closure_workspace, global_indices, workspace
-from symkin.design.evaluation import Evaluation, closure_home, parallel_index
+from symkin.analysis import global_indices, workspace
+from symkin.design.evaluation import Evaluation, continued_home, inverse_index
 from symkin.design.problem import DesignProblem, box_axes
 from symkin.design.solving import Solution
+from symkin.mechanism import Sampling, continuation
 from symkin.runtime.info import GeneratedModel
 
 DPI = 150
@@ -23,7 +24,7 @@ DPI = 150
 CLOUD_SAMPLES = 20_000
 SLICE_POINTS = 121
 #: Points per axis of the slice of legs without closed forms (flooded cell by cell from the home assembly).
-CLOSURE_SLICE_POINTS = 61
+CONTINUED_SLICE_POINTS = 61
 #: A parallel slice shows the required box grown by this fraction of its size on each side.
 SLICE_BORDER = 0.5
 
@@ -84,7 +85,7 @@ def _box_outline(ax: Any, problem: DesignProblem, axes: Sequence[int], scale: fl
     ax.legend(loc="lower left", fontsize=7)
 
 
-def _serial_panel(ax: Any, problem: DesignProblem, model: GeneratedModel, design: dict[str, float]) -> Any:
+def _joint_space_panel(ax: Any, problem: DesignProblem, model: GeneratedModel, design: dict[str, float]) -> Any:
     model = model.bind(**design)
     cloud = workspace.sample_workspace(model, CLOUD_SAMPLES, method="sobol", limits=problem.limits, seed=0)
     values = global_indices.local_index(model, cloud.q, length=problem.length, limits=problem.limits)
@@ -109,27 +110,27 @@ def _slice(problem: DesignProblem, points: int) -> tuple[np.ndarray, np.ndarray,
     return U, V, lo, hi
 
 
-def _parallel_panel(ax: Any, problem: DesignProblem, model: GeneratedModel, design: dict[str, float]) -> Any:
+def _box_panel(ax: Any, problem: DesignProblem, model: GeneratedModel, design: dict[str, float]) -> Any:
     """1/kappa on the vertical slice through the box centre (first and last axis): by the closed-form ik, or for
     legs without closed forms on the working mode's cells of the slice flooded from the design's home assembly."""
-    points_per_axis = CLOSURE_SLICE_POINTS if problem.closure else SLICE_POINTS
+    points_per_axis = CONTINUED_SLICE_POINTS if problem.sampling is Sampling.CONTINUATION else SLICE_POINTS
     U, V, lo, hi = _slice(problem, points_per_axis)
     first, last = 0, len(lo) - 1
-    if problem.closure:
+    if problem.sampling is Sampling.CONTINUATION:
         bound = model.bind(**design)
         counts = [points_per_axis if axis in (first, last) else 1 for axis in range(len(lo))]
-        flood = closure_workspace.flood_box(bound, lo, hi, counts, start=closure_home(problem, model, design),
-                                            vertices=True, limits=problem.limits)
+        flood = continuation.flood_box(bound, lo, hi, counts, start=continued_home(problem, model, design),
+                                       vertices=True, limits=problem.limits)
         reached = flood.reached
         cells = np.zeros(len(reached))
-        cells[reached] = closure_workspace.closure_conditioning(bound, flood.q[reached], flood.s[reached],
-                                                                flood.poses[reached], problem.length).inv_kappa
+        cells[reached] = continuation.conditioning_at(bound, flood.q[reached], flood.s[reached],
+                                                      flood.poses[reached], problem.length).inv_kappa
         values: np.ndarray = cells.reshape(points_per_axis, points_per_axis).T  # the grid's (u, v) -> the meshgrid's (v, u)
     else:
         points = np.tile(lo, (U.size, 1))
         points[:, first], points[:, last] = U.ravel(), V.ravel()
-        values = parallel_index(model.bind(**design), points, problem.limits)[0].reshape(U.shape)
-    scale, unit = (np.degrees(1.0), "deg") if problem.spherical else (1.0, "m")
+        values = inverse_index(model.bind(**design), points, problem.limits)[0].reshape(U.shape)
+    scale, unit = (np.degrees(1.0), "deg") if problem.sampling is Sampling.ORIENTATIONS else (1.0, "m")
     mesh = ax.pcolormesh(scale * U, scale * V, np.ma.masked_equal(values, 0.0), shading="auto", cmap="viridis",
                          vmin=0.0, vmax=1.0, rasterized=True)
     axes = box_axes(model)
@@ -145,7 +146,7 @@ def design_figure(problem: DesignProblem, model: GeneratedModel, solution: Solut
     from matplotlib.figure import Figure
 
     figure = Figure(figsize=(11.0, 4.8), layout="constrained")
-    panel = _parallel_panel if problem.parallel else _serial_panel
+    panel = _box_panel if problem.sampling is not Sampling.JOINTS else _joint_space_panel
     mesh = None
     first = None
     for k, (design, evaluation, which) in enumerate(zip((solution.start, solution.optimum), evaluations,

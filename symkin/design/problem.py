@@ -13,10 +13,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from symkin.mechanism.closure import uses_closure
 from symkin import mechanism
 from symkin.analysis.handle_measures import Actuation
-from symkin.analysis.needs import NEEDS
+from symkin.analysis.needs import needs_of
+from symkin.mechanism import Sampling
 from symkin.runtime.info import GeneratedModel
 
 #: What can be maximized: the GCI, the workspace measure, the isotropic force at the worst point of the box.
@@ -49,36 +49,33 @@ class DesignProblem:
         objective: ``gci`` (the smooth surrogate of seed eq. 8.28) or ``workspace``.
         free: the free parameters.
         values: values of every other parameter of the model (defaults, or --set).
-        parallel: whether the model is a parallel mechanism (integration over the box).
+        sampling: how the model is sampled (:func:`symkin.mechanism.sampling`): its joint box (the GCI's domain),
+            or the required box of task coordinates, each point reached through the closed-form ik
+            (``INVERSE``), with its assembly (q, s) as variables of the program (``CONTINUATION``: no closed forms;
+            its box is one of positions at the home pose's angles), or a spherical platform's orientations
+            (``ORIENTATIONS``: the GCI with the invariant measure of SO(3), :mod:`symkin.analysis.orientations`).
         limits: joint limits (n, 2): of a serial model the GCI's integration domain; of a
             parallel model the range of its actuated joints (None: unlimited).
         box: the required workspace box (lower, upper) over the task's position axes [m], or a
             spherical platform's roll, pitch and yaw [rad]; or None.
         margin: the box is required with this clearance on every side (in the box's unit).
         length: characteristic length of a mixed translation/rotation task [m], or None.
-        spherical: whether the box is one of orientations (a spherical platform, whose GCI is
-            taken with the invariant measure of SO(3), :mod:`symkin.analysis.orientations`).
         effort_limits: the actuators' effort limits tau_max (N m or N) of the ``force`` objective, else None.
         max_apparent_mass: the largest apparent mass the handle may have (kg): every eigenvalue of
             (J M^-1 J^T)^-1 at every point of the required box at most this (a parallel model whose handle
             translates), else None.
-        closure: whether the model is a parallel one analysed through its loop closure (legs without closed forms,
-            :func:`symkin.mechanism.closure.uses_closure`): its box is one of positions at the home pose's
-            angles, each point with its assembly (q, s) as variables of the program.
     """
 
     objective: str
     free: tuple[FreeParameter, ...]
     values: Mapping[str, float]
-    parallel: bool
+    sampling: Sampling
     limits: np.ndarray | None
     box: tuple[np.ndarray, np.ndarray] | None
     margin: float
     length: float | None
-    spherical: bool = False
     effort_limits: np.ndarray | None = None
     max_apparent_mass: float | None = None
-    closure: bool = False
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -90,7 +87,8 @@ class DesignProblem:
 
     @property
     def joint_limits(self) -> np.ndarray:
-        """The joint limits (n, 2); a serial model always has them (ValueError for an unlimited parallel one)."""
+        """The joint limits (n, 2); a model sampled in its joint box always has them (ValueError for an unlimited
+        one sampled in its task space)."""
         if self.limits is None:
             raise ValueError("this design problem has no joint limits (a parallel model's unlimited actuators)")
         return self.limits
@@ -111,11 +109,6 @@ class DesignProblem:
         """The required box grown by the margin on every side."""
         assert self.box is not None
         return self.box[0] - self.margin, self.box[1] + self.margin
-
-
-#: The generated functions of a dimensioning problem on legs without closed forms (instead of
-#: ``NEEDS["design"]``).
-CLOSURE_FUNCTIONS = ("closure", "closure_jacobians")
 
 
 def _parameter_inputs(model: GeneratedModel, functions: Sequence[str]) -> set[str]:
@@ -196,7 +189,7 @@ def _apparent_mass(model: GeneratedModel, max_apparent_mass: float | None) -> fl
     is checked with its objective)."""
     if max_apparent_mass is None:
         return None
-    if not mechanism.is_parallel(model) or not mechanism.is_positional(model):
+    if mechanism.sampling(model) is Sampling.JOINTS or not mechanism.is_positional(model):
         raise ValueError(f"{model.name}: the apparent-mass bound is a constraint at the points of the required box of "
                          "a parallel mechanism whose handle translates (the masses felt at the handle, in kg); rate a "
                          "serial arm's apparent mass with 'symkin rate'")
@@ -262,19 +255,18 @@ def design_problem(model: GeneratedModel, objective: str, free: Sequence[str], *
     """
     if objective not in OBJECTIVES:
         raise ValueError(f"unknown objective '{objective}'; choose one of {', '.join(OBJECTIVES)}")
-    parallel = mechanism.is_parallel(model)
+    sampled = mechanism.sampling(model)
     values = dict(values or {})
     unknown = sorted(set(values) - set(model.parameters))
     if unknown:
         raise ValueError(f"{model.name}: not parameters of the model: {', '.join(unknown)}; "
                          f"parameters: {', '.join(sorted(model.parameters))}")
-    closure = uses_closure(model)
-    if closure and (objective == "force" or max_apparent_mass is not None):
+    if sampled is Sampling.CONTINUATION and (objective == "force" or max_apparent_mass is not None):
         raise ValueError(f"{model.name}: its legs have no closed-form inverse kinematics; their dimensioning "
                          "maximizes the GCI over the required box (--maximize gci), without force objectives or "
                          "apparent-mass bounds (their dynamics are not part of the dimensioning yet)")
     bound = _apparent_mass(model, max_apparent_mass)  # before asking for mass_matrix: a serial model is told why
-    needed = CLOSURE_FUNCTIONS if closure else NEEDS["design"][mechanism.kind_of(model)]
+    needed = needs_of("design", model)
     used = _parameter_inputs(model, needed + (APPARENT_MASS_FUNCTIONS if bound is not None else ()))
     free_parameters = _free_parameters(model, list(free), dict(bounds or {}), values, used)
     required = _box(model, box)
@@ -293,19 +285,19 @@ def design_problem(model: GeneratedModel, objective: str, free: Sequence[str], *
     if len(task) != n:
         raise ValueError(f"{model.name}: the task Jacobian is {len(task)} x {n}; dimensioning needs a square one "
                          "(the Cartesian measure |det J| dq and kappa_F of J^-1)")
-    if parallel:
+    if sampled is not Sampling.JOINTS:
         if objective == "workspace":
             raise ValueError(f"{model.name}: maximizing the workspace of a parallel mechanism is not supported "
                              "(its workspace has no joint-space parametrization here); maximize the GCI over a "
                              "required box instead (--maximize gci --require-box ...)")
-        spherical = mechanism.turns_only(model)
+        spherical = sampled is Sampling.ORIENTATIONS
         if required is None:
             axes = box_axes(model)
             unit = "in rad, or with 'deg'" if spherical else "in m"
             what = {"gci": "GCI", "force": "worst-case force"}.get(objective, objective)
             raise ValueError(f"{model.name}: the {what} of a parallel mechanism is taken over the required workspace "
                              f"box: give --require-box {','.join(f'{a}=LOWER:UPPER' for a in axes)} ({unit})")
-        if not spherical and not closure and len(mechanism.position_rows(model)) != len(task):
+        if sampled is Sampling.INVERSE and len(mechanism.position_rows(model)) != len(task):
             raise ValueError(f"{model.name}: the task space {list(task)} mixes positions and orientations; the GCI "
                              "of a parallel mechanism is taken over a box of TCP positions (such as the DELTA's) or "
                              "of a spherical platform's orientations (roll, pitch, yaw), not over both")
@@ -315,6 +307,5 @@ def design_problem(model: GeneratedModel, objective: str, free: Sequence[str], *
         joint_box = mechanism.joint_limits(model, limits)
     fixed = {k: float(v) for k, v in {**model.parameters, **values}.items()
              if k in used and k not in {p.name for p in free_parameters}}
-    return DesignProblem(objective, free_parameters, fixed, parallel, joint_box, required, float(margin), length,
-                         parallel and mechanism.turns_only(model),
-                         _effort_limits(model, objective, effort_limits, required), bound, closure)
+    return DesignProblem(objective, free_parameters, fixed, sampled, joint_box, required, float(margin), length,
+                         _effort_limits(model, objective, effort_limits, required), bound)

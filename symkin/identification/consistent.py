@@ -182,7 +182,7 @@ def estimate(triangle: np.ndarray, target: np.ndarray, names: Sequence[str], pri
              start: np.ndarray | None = None) -> ConsistentEstimate:
     """The consistent estimate of the module docstring from the triangular factor ``triangle`` (P x P) and
     ``target`` (z) of the weighted standard regressor and the prior (the model's pi); the blocks from ``names``.
-    Parameters a model file holds instead, pi = fixed + T x (:class:`symkin.identification.implied_parameters.Held`),
+    Parameters a model file holds instead, pi = fixed + T x (:class:`symkin.identification.identified_model.Held`),
     are estimated from ``triangle`` R T and ``target`` z - R fixed, named as x (a rotor shared by several joints:
     ``rotor.Ia``, their friction apart).  ``start``: where the solver starts (default: the prior; a nearby
     estimate saves iterations)."""

@@ -38,6 +38,70 @@ from symkin.dynamics.parameter_names import DRIVE, INERTIAL, ROD
 from symkin.errors import ModelError
 from symkin.model.schema import Actuator, Joint, Model, PlatformMotion
 
+#: The name of a parallel model's one rotor inertia (reflected, I_a), shared by its actuators.
+SHARED_ROTOR = f"rotor.{DRIVE[0]}"
+
+
+@dataclass(frozen=True)
+class Held:
+    """The standard parameters a model file holds: pi = fixed + T z, a column of T per value the file declares.
+
+    Attributes:
+        T: (P, V), each standard parameter's part of the file's values (0/1: a value shared by several columns).
+        fixed: (P,), the columns the file cannot declare, at the model's values (0 elsewhere).
+        names: (V,), the file's values named as standard parameters (a shared rotor: :data:`SHARED_ROTOR`).
+    """
+
+    T: np.ndarray
+    fixed: np.ndarray
+    names: tuple[str, ...]
+
+    @property
+    def every_column(self) -> bool:
+        """Whether the file declares every standard parameter as a value of its own (T = 1, nothing fixed)."""
+        return self.T.shape[0] == self.T.shape[1] and np.array_equal(self.T, np.eye(len(self.T))) and \
+            not np.any(self.fixed)
+
+    @property
+    def columns(self) -> np.ndarray:
+        """Which standard parameters the file declares (a boolean per column)."""
+        return np.any(self.T != 0, axis=1)
+
+    def values_of(self, pi: np.ndarray) -> np.ndarray:
+        """z of the standard parameters ``pi`` the file holds (of others: the least-squares z)."""
+        return np.linalg.lstsq(self.T, pi - self.fixed, rcond=None)[0]
+
+
+def file_held(model: Model, names: Sequence[str], prior: np.ndarray) -> Held:
+    """What ``model``'s file holds of the regressor's columns ``names``: an open chain's file every column as a
+    value of its own; a parallel model's fewer (:func:`parallel_held`)."""
+    if model.parallel is None:
+        return Held(np.eye(len(names)), np.zeros(len(names)), tuple(names))
+    return parallel_held(model, names, prior)
+
+
+def parallel_held(model: Model, names: Sequence[str], prior: np.ndarray) -> Held:
+    """What a parallel model's file holds of the regressor's columns ``names`` (module docstring): each column its
+    own value but the actuators' rotor inertias I_a, one for all, and a spherical model's rods, fixed at
+    ``prior`` (the model's pi: its file declares none)."""
+    actuators = {f"{c.name}.{DRIVE[0]}" for c in model.coordinates}
+    spherical = model.parallel is not None and model.parallel.motion is PlatformMotion.SPHERICAL
+    fixed_names = {f"rod.{p}" for p in ROD} if spherical else set()
+    values: list[list[int]] = []
+    rotor: list[int] = []
+    for k, name in enumerate(names):
+        if name in actuators:
+            rotor.append(k)
+        elif name not in fixed_names:
+            values.append([k])
+    groups = values + ([rotor] if rotor else [])
+    T = np.zeros((len(names), len(groups)))
+    for column, group in enumerate(groups):
+        T[group, column] = 1.0
+    fixed = np.where(np.array([name in fixed_names for name in names], dtype=bool), prior, 0.0)
+    return Held(T, fixed, tuple(names[k] for k, in values) + ((SHARED_ROTOR,) if rotor else ()))
+
+
 class NotUpdated(Exception):
     """The model file cannot carry this estimate (the message says why and what would)."""
 

@@ -10,21 +10,20 @@ keeps the non-identifiable parameters at their a priori values; here "closest" i
 
 A parallel model's file holds fewer standard parameters than its regressor has columns (one rotor for all the
 actuators' I_a; a spherical model declares no rods): :func:`nearest_held` takes an estimate into what the file
-holds, pi = fixed + T z (:class:`Held`, :func:`parallel_held`), its base parameters as close to the estimate's as
+holds, pi = fixed + T z (:class:`~symkin.identification.identified_model.Held`), its base parameters as close to the estimate's as
 the file allows (least squares), then the standard parameters nearest the estimate's in the same scaled norm.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from symkin.identification.consistent import prior_scale
-from symkin.dynamics.parameter_names import DRIVE, ROD
-from symkin.model.schema import Model, PlatformMotion
+from symkin.identification.identified_model import Held, file_held
+from symkin.model.schema import Model
 
 #: A column of K smaller than this fraction of K's largest entry holds no identifiable part of its parameter
 #: (K from the regressors by least squares carries rounding of about eps cond(Y_b); sqrt(eps) is far above it).
@@ -70,56 +69,6 @@ def nearest_standard(K: np.ndarray, base_values: np.ndarray, prior: np.ndarray) 
     return prior + D * correction
 
 
-#: The name of a parallel model's one rotor inertia (reflected, I_a), shared by its actuators.
-SHARED_ROTOR = f"rotor.{DRIVE[0]}"
-
-
-@dataclass(frozen=True)
-class Held:
-    """The standard parameters a model file holds: pi = fixed + T z, a column of T per value the file declares.
-
-    Attributes:
-        T: (P, V), each standard parameter's part of the file's values (0/1: a value shared by several columns).
-        fixed: (P,), the columns the file cannot declare, at the model's values (0 elsewhere).
-        names: (V,), the file's values named as standard parameters (a shared rotor: :data:`SHARED_ROTOR`).
-    """
-
-    T: np.ndarray
-    fixed: np.ndarray
-    names: tuple[str, ...]
-
-    @property
-    def columns(self) -> np.ndarray:
-        """Which standard parameters the file declares (a boolean per column)."""
-        return np.any(self.T != 0, axis=1)
-
-    def values_of(self, pi: np.ndarray) -> np.ndarray:
-        """z of the standard parameters ``pi`` the file holds (of others: the least-squares z)."""
-        return np.linalg.lstsq(self.T, pi - self.fixed, rcond=None)[0]
-
-
-def parallel_held(model: Model, names: Sequence[str], prior: np.ndarray) -> Held:
-    """What a parallel model's file holds of the regressor's columns ``names`` (module docstring): each column its
-    own value but the actuators' rotor inertias I_a, one for all, and a spherical model's rods, fixed at
-    ``prior`` (the model's pi: its file declares none)."""
-    actuators = {f"{c.name}.{DRIVE[0]}" for c in model.coordinates}
-    spherical = model.parallel is not None and model.parallel.motion is PlatformMotion.SPHERICAL
-    fixed_names = {f"rod.{p}" for p in ROD} if spherical else set()
-    values: list[list[int]] = []
-    rotor: list[int] = []
-    for k, name in enumerate(names):
-        if name in actuators:
-            rotor.append(k)
-        elif name not in fixed_names:
-            values.append([k])
-    groups = values + ([rotor] if rotor else [])
-    T = np.zeros((len(names), len(groups)))
-    for column, group in enumerate(groups):
-        T[group, column] = 1.0
-    fixed = np.where(np.array([name in fixed_names for name in names], dtype=bool), prior, 0.0)
-    return Held(T, fixed, tuple(names[k] for k, in values) + ((SHARED_ROTOR,) if rotor else ()))
-
-
 def nearest_held(K: np.ndarray, base_values: np.ndarray, near: np.ndarray, held: Held) -> np.ndarray:
     """The standard parameters pi = fixed + T z whose base parameters K pi are nearest ``base_values`` (least
     squares) and, among those, nearest ``near`` in the scaled norm |D^-1 (pi - near)|, D = diag(prior_scale(near)):
@@ -141,9 +90,10 @@ def file_values(source: Model, names: Sequence[str], K: np.ndarray, prior: np.nd
     """What a model file is rewritten with after an identification: (the standard parameters, which of them the run
     identifies, a note on what the file could not hold).
 
-    A file that holds every standard parameter gets the consistent estimate ``standard`` or, from the base
-    parameters ``found.values``, the standard parameters nearest the model's ``prior`` (:func:`nearest_standard`).
-    A parallel model's file holds fewer (:func:`parallel_held`): the least-squares estimate is taken into it by
+    A file that holds every standard parameter (:func:`symkin.identification.identified_model.file_held`) gets the
+    consistent estimate ``standard`` or, from the base parameters ``found.values``, the standard parameters nearest
+    the model's ``prior`` (:func:`nearest_standard`).  A file that holds fewer (a parallel model's) gets the
+    least-squares estimate taken into what it holds by
     :func:`nearest_held`, the consistent one refitted over what it holds (``consistent_held(held)``: the file's
     values z), and the note says how far the base parameters it can hold lie from the estimate's.
 
@@ -154,9 +104,9 @@ def file_values(source: Model, names: Sequence[str], K: np.ndarray, prior: np.nd
         standard: the consistent estimate of the standard parameters (its ``values``), or None.
     """
     identified = identifiable(K)
-    if source.parallel is None:
+    held = file_held(source, names, prior)
+    if held.every_column:
         return (standard.values if standard is not None else nearest_standard(K, found.values, prior)), identified, ""
-    held = parallel_held(source, names, prior)
     base = found.values if standard is None else K @ standard.values
     estimate = nearest_held(K, base, prior, held) if standard is None else held.fixed + held.T @ consistent_held(held)
     unheld = [name for name, held_here in zip(names, held.columns) if not held_here]

@@ -244,6 +244,12 @@ def sampling(model: GeneratedModel) -> Sampling:
     return Sampling.CONTINUATION if uses_closure(model) else Sampling.INVERSE
 
 
+def handle_on_further_joints(model: GeneratedModel) -> bool:
+    """Whether joints on the platform carry the handle beyond it (a hybrid device's wrist): the platform's own task
+    space is then not the handle's, and the device is rated as a whole (:class:`symkin.mechanism.device.WholeDevice`)."""
+    return bool(model.info.wrist)
+
+
 def home_pose(model: GeneratedModel) -> np.ndarray:
     """The home pose ``parallel.home`` of a parallel mechanism (task coordinates p).
 

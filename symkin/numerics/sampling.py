@@ -90,3 +90,18 @@ def sobol_range(dimension: int, key: Sequence[int], start: int, stop: int) -> np
     sequence = Sobol(dimension, np.random.default_rng(np.random.SeedSequence(list(key))).spawn(1)[0])
     unit = sequence.points(start, stop)
     return unit + np.random.default_rng([*key, start]).random(unit.shape) * 2.0**-BITS
+
+
+def grid_geometry(lower: np.ndarray, upper: np.ndarray, cell: float) -> tuple[np.ndarray, np.ndarray, tuple[int, ...]]:
+    """(corner, cell sizes, cells per axis) of a grid of cubic cells of side ``cell`` centred on the box
+    [lower, upper] and covering it."""
+    counts = np.maximum(np.ceil((upper - lower) / cell).astype(int), 1)
+    centre = (lower + upper) / 2
+    start = centre - counts * cell / 2
+    return start, np.full(lower.shape, float(cell)), tuple(int(c) for c in counts)
+
+
+def cell_centres(lower: np.ndarray, cell: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
+    """The centres of a grid's cells, shape (*shape, d), from its corner ``lower`` and cell sizes ``cell``."""
+    axes = [lower[i] + (np.arange(c) + 0.5) * cell[i] for i, c in enumerate(shape)]
+    return np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1)

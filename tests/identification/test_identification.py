@@ -60,6 +60,23 @@ def test_the_command_writes_the_estimate_and_its_validation(arm, tmp_path):
     assert "link1.mxR" in result.stdout
 
 
+def test_the_library_identifies_as_the_command_does(arm, tmp_path):
+    """symkin.identification.workflow.identify is the command's workflow (issue 62: the CLI parses and writes): the
+    same run gives the same estimate, and without a figure no validation.png."""
+    from symkin.identification.workflow import IdentifyRequest, identify
+
+    t, q, qd, qdd, tau = simulated_run(arm)
+    data = write_run(tmp_path / "run.csv", ["theta1", "theta2"], t, q, tau, qd, qdd)
+    found = identify(IdentifyRequest(str(arm.directory), str(data), method="ols", figure=False))
+    assert sorted(found.files) == ["estimate.csv", "estimate.json", "summary.txt"]
+    record = json.loads(found.files["estimate.json"])
+    fit, _ = estimation.read_measurements(data, ["theta1", "theta2"]).split(0.25)  # the default holdout
+    Y_b, _ = arm.base_regressor(fit.q, fit.qd, fit.qdd)
+    direct = estimation.least_squares(Y_b, fit.tau, arm.info.functions["base_regressor"].outputs["pi_b"], "ols")
+    assert [p["value"] for p in record["parameters"]] == direct.values.tolist()  # the same arithmetic
+    assert record["method"] == "ols"
+
+
 @pytest.mark.parametrize("change, message", [
     (lambda text: text.replace("tau_theta2", "tau_theta3", 1), "row 1, column 5: unknown column 'tau_theta3'; did "
                                                                  "you mean 'tau_theta2'"),

@@ -21,3 +21,9 @@ def test_each_example_is_sampled_as_its_closed_forms_allow(loaded, name):
     model = loaded(name, "numpy")
     assert mechanism.sampling(model) is EXPECTED[name]
     assert mechanism.sampled_in_task_space(model) == (EXPECTED[name] is not Sampling.JOINTS)
+
+
+@pytest.mark.parametrize("name", sorted(EXPECTED))
+def test_only_a_hybrid_devices_handle_is_on_further_joints(loaded, name):
+    """The DELTA with a wrist carries its handle on joints beyond the platform (rated as a whole device)."""
+    assert mechanism.handle_on_further_joints(loaded(name, "numpy")) == (name == "delta_wrist")

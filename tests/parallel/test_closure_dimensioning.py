@@ -20,9 +20,9 @@ from sample_models import dual_scara_text
 from symkin import design, load, pipeline
 from symkin.numerics import conditioning
 from symkin import mechanism
-from symkin.analysis.closure_workspace import angular_rates, continue_from
+from symkin.mechanism.continuation import angular_rates, continue_from
 from symkin.cli import main
-from symkin.design.evaluation import closure_home
+from symkin.design.evaluation import continued_home
 from symkin.model import model_from_text
 from symkin.runtime.parallel import closure_velocities, solve_closure
 from tolerances import NEWTON, svd
@@ -131,7 +131,7 @@ def test_the_optimum_is_stationary_and_improves_the_independent_gci(models, prob
     # gradient is below 1e-6 of the start's (~0.7 per metre).
     assert np.max(np.abs(at_optimum)) <= 1e-6 * np.max(np.abs(at_start))
     bound = numpy_model.bind(**solution.optimum)
-    home = closure_home(problem, numpy_model, solution.optimum)
+    home = continued_home(problem, numpy_model, solution.optimum)
     poses = _poses(bound, program.box_points)
     q, s, taken = continue_from(bound, (*home, mechanism.home_pose(bound)), poses, step=0.005, limits=problem.limits)
     assert taken.all()

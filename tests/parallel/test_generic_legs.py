@@ -321,6 +321,16 @@ def test_the_home_assembly_closes_the_legs(scara):
     assert np.min(np.max(np.abs(p - HOME), axis=-1)) <= SOLVE_TOL
 
 
+def test_a_design_continued_to_itself_keeps_its_home_assembly(scara):
+    """symkin.mechanism.continuation.home_along_designs: along the line from a design to itself each step's
+    Gauss-Newton starts at the solution, so the home assembly comes back as solve_home_assembly gives it."""
+    from symkin.mechanism.continuation import home_along_designs
+
+    q0, s0 = assemble_at_home(scara)
+    q, s = home_along_designs(scara, dict(scara.parameters), dict(scara.parameters), 4)
+    np.testing.assert_allclose(np.concatenate([q, s]), np.concatenate([q0, s0]), rtol=0, atol=SOLVE_TOL)
+
+
 def test_the_continued_workspace_is_the_working_mode_written_from_the_geometry(scara, scara_workspace):
     """The reached cells are those where both legs reach the bar's ends in the home assembly's branches, the
     distal link of leg 1 stays on the home side of the bar (sin(wrist1) keeps its sign: the interior
@@ -510,7 +520,7 @@ def test_angle_rows_become_angular_velocity_at_each_pose():
     a task space with yaw alone keeps its rows."""
     from types import SimpleNamespace
 
-    from symkin.analysis.closure_workspace import angular_rates
+    from symkin.mechanism.continuation import angular_rates
     from symkin.mechanism.reach import angular_velocity_matrix
 
     rng = np.random.default_rng(8)

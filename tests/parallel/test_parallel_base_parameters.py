@@ -233,11 +233,11 @@ def test_a_parallel_models_file_takes_the_standard_parameters_it_holds(name, tmp
 def test_a_spherical_models_file_holds_no_rods():
     """The Agile Eye's file declares no rods (its legs' last joints turn about axes through the centre): the rods'
     columns are held at the model's values, which symkin identify's summary names."""
-    from symkin.identification import implied_parameters
+    from symkin.identification import identified_model
 
     model = load_model(MODELS_DIR / "agile_eye.yaml")
     names, pi = _standard_parameters(model)
-    held = implied_parameters.parallel_held(model, names, pi)
+    held = identified_model.parallel_held(model, names, pi)
     assert [name for name, declared in zip(names, held.columns) if not declared] == ["rod.mB", "rod.mC", "rod.dI"]
     np.testing.assert_array_equal(held.fixed[~held.columns], pi[~held.columns])
 
@@ -247,13 +247,13 @@ def test_what_a_parallel_models_file_holds_is_the_nearest_it_can(derived):
     """implied_parameters.nearest_held on the DELTA's file (one rotor for the actuators): base parameters it can
     hold are met to rounding with the three I_a equal; the rotors' differences (theta1.IaR, theta2.IaR), which it
     cannot, are left out (0) and the rest still met."""
-    from symkin.identification import implied_parameters
+    from symkin.identification import identified_model, implied_parameters
 
     name, found, generated = derived
     model = load_model(MODELS_DIR / "delta.yaml")
     names, pi = _standard_parameters(model)
     K = found.evaluate({"a": 0.1})
-    held = implied_parameters.parallel_held(model, names, pi)
+    held = identified_model.parallel_held(model, names, pi)
     assert held.names[-1] == "rotor.Ia"
     assert held.T.shape == (len(names), len(names) - 2)
     assert held.columns.all()
