@@ -37,7 +37,7 @@ MODEL_FILE_SUFFIXES = (".yaml", ".yml", ".urdf", ".xml", ".xacro")
 #: passive joint variables from the loop closure (symkin.mechanism.passive).
 PASSIVE_LIMIT_OUTPUTS = ("closure", "closure_jacobians")
 #: What the analyses of legs of any topology (no distance form, so no closed-form ik) use instead of the kind's
-#: outputs (symkin.analysis.closure_workspace).
+#: outputs (symkin.analysis.continued_workspace).
 CLOSURE_OUTPUTS = ("closure", "closure_jacobians")
 
 

@@ -10,7 +10,7 @@ reachability by its closed-form IK and 1/kappa at the cell centres
 platform held at a constant orientation (:func:`symkin.mechanism.reach.held_at`) has no fk, and the grid's
 boundary cells are its point cloud.  A mechanism without closed forms (sampled by continuation,
 :attr:`symkin.mechanism.Sampling.CONTINUATION`) gets the working mode of its home assembly continued over a
-Cartesian grid (:func:`continued_workspace`, :func:`continued_gci`): the commands ask the mechanism how it is
+Cartesian grid (:func:`continued_study`, :func:`continued_gci_study`): the commands ask the mechanism how it is
 sampled and this module for what to report, never its kind.
 """
 
@@ -109,7 +109,7 @@ def study_workspace(model: GeneratedModel, *, samples: int, method: str, seed: i
 
 
 #: How the area or volume of a workspace continued over a grid is estimated
-#: (:func:`symkin.analysis.closure_workspace.working_mode_measure`).
+#: (:func:`symkin.analysis.continued_workspace.working_mode_measure`).
 MEASURE_NOTE = ("95 % confidence: the cells whose neighbours are all reached, and the boundary cells' shares "
                 "that random points in them reach")
 
@@ -122,28 +122,28 @@ def held_text(model: GeneratedModel, found) -> str:
     return f" at {held}" if held else ""
 
 
-def continued_workspace(model: GeneratedModel, *, cells: int, orientation: dict[str, float], limits: Limits | None,
+def continued_study(model: GeneratedModel, *, cells: int, orientation: dict[str, float], limits: Limits | None,
                         length: float | None, progress: Callable[[str], None] = lambda _stage: None) -> WorkspaceStudy:
     """The workspace of a mechanism sampled by continuation (:attr:`symkin.mechanism.Sampling.CONTINUATION`): the
     working mode of its home assembly at the held angles ``orientation``, continued from the home pose over a
-    Cartesian grid of ``cells`` cells along its longest side (:mod:`symkin.analysis.closure_workspace`); the
+    Cartesian grid of ``cells`` cells along its longest side (:mod:`symkin.analysis.continued_workspace`); the
     cloud is its boundary cells, the grid carries 1/kappa, and the area or volume is the grid's core and the
-    boundary cells' reached shares (:func:`symkin.analysis.closure_workspace.working_mode_measure`).
+    boundary cells' reached shares (:func:`symkin.analysis.continued_workspace.working_mode_measure`).
 
     Raises:
         ValueError: the home pose is out of reach, or the workspace is unbounded within the limits.
     """
-    from symkin.analysis import closure_workspace
-    from symkin.mechanism.closure import solve_home_assembly
+    from symkin.analysis import continued_workspace
 
     progress(f"continuing the loop closure over a grid of {cells} cells a side")
-    assembly = solve_home_assembly(model)
-    found = closure_workspace.closure_workspace(model, orientation=orientation, limits=limits, length=length,
-                                                cells=cells, start=(assembly.q, assembly.s))
+    found = continued_workspace.continued_workspace(model, orientation=orientation, limits=limits, length=length,
+                                                    cells=cells)
+    assembly = found.home
+    assert assembly is not None, "a grid continued without a start solves its home assembly"
     occupancy, values = found.occupancy, found.inv_kappa
     reached = occupancy.occupied
     progress("sampling the boundary cells for the " + ("area" if reached.ndim == 2 else "volume"))
-    measure = closure_workspace.working_mode_measure(model, found, limits=limits)
+    measure = continued_workspace.working_mode_measure(model, found, limits=limits)
     scaled = f" (characteristic length {found.length:.4g} m)" if found.length is not None else ""
     report = [assembly.describe(model),
               f"{int(reached.sum())} reached cells; {'area' if reached.ndim == 2 else 'volume'}: {measure} "
@@ -160,8 +160,8 @@ def continued_workspace(model: GeneratedModel, *, cells: int, orientation: dict[
 
 
 @dataclass(frozen=True)
-class ContinuedIndex:
-    """The GCI over a workspace continued over a grid (:func:`continued_gci`).
+class ContinuedGCIStudy:
+    """The GCI over a workspace continued over a grid (:func:`continued_gci_study`).
 
     Attributes:
         value: the mean of 1/kappa over the reached cells, its error the change from a grid of half as many cells.
@@ -176,13 +176,13 @@ class ContinuedIndex:
     report: list[str]
 
 
-def continued_gci(model: GeneratedModel, *, cells: int, orientation: dict[str, float], limits: Limits | None,
-                  length: float | None) -> ContinuedIndex:
+def continued_gci_study(model: GeneratedModel, *, cells: int, orientation: dict[str, float], limits: Limits | None,
+                        length: float | None) -> ContinuedGCIStudy:
     """The GCI (seed eq. 8.28) over the working mode of the home assembly continued over grids of ``cells`` and half
-    as many cells a side (:func:`symkin.analysis.closure_workspace.closure_gci`), with what it was averaged over."""
-    from symkin.analysis import closure_workspace
+    as many cells a side (:func:`symkin.analysis.continued_workspace.continued_gci`), with what it was averaged over."""
+    from symkin.analysis import continued_workspace
 
-    found = closure_workspace.closure_gci(model, orientation=orientation, limits=limits, length=length, cells=cells)
+    found = continued_workspace.continued_gci(model, orientation=orientation, limits=limits, length=length, cells=cells)
     space = found.workspace
     d = space.occupancy.occupied.ndim
     scaled = f", position rows over the characteristic length {space.length:.4g} m" if space.length is not None else ""
@@ -190,7 +190,7 @@ def continued_gci(model: GeneratedModel, *, cells: int, orientation: dict[str, f
               f"the working mode of the home assembly{held_text(model, space)}, continued from the home pose over a "
               f"grid of {space.occupancy.cell[0]:.3g} m cells; 1/kappa of J = dp/dq{scaled}",
               found.assembly.describe(model)]
-    return ContinuedIndex(found.value, (space.occupancy, space.inv_kappa), space.axes, report)
+    return ContinuedGCIStudy(found.value, (space.occupancy, space.inv_kappa), space.axes, report)
 
 
 def _cartesian_report(occupancy: Occupancy, values: np.ndarray) -> list[str]:

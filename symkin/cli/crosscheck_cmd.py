@@ -40,7 +40,7 @@ def register_crosscheck(sub: argparse._SubParsersAction) -> None:
 
 
 def run_crosscheck(args: argparse.Namespace) -> int:
-    from symkin.analysis.crosscheck import DEFAULT_TOLERANCE, crosscheck
+    from symkin.references.crosscheck import DEFAULT_TOLERANCE, crosscheck
     from symkin.errors import ModelError, Problem
 
     if args.samples < 1:

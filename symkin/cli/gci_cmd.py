@@ -219,7 +219,7 @@ def _orientations(args: argparse.Namespace, model: GeneratedModel, limits: dict)
 
 def _continued(args: argparse.Namespace, model: GeneratedModel, limits: dict) -> int:
     """A mechanism sampled by continuation (no closed forms): the GCI over the working mode of the home assembly at
-    a constant orientation, on the grid it is continued over (:func:`symkin.analysis.study.continued_gci`)."""
+    a constant orientation, on the grid it is continued over (:func:`symkin.analysis.study.continued_gci_study`)."""
     from symkin.analysis import plots, study
     from symkin.cli.workspace_cmd import continuation_options
 
@@ -234,7 +234,7 @@ def _continued(args: argparse.Namespace, model: GeneratedModel, limits: dict) ->
         with Progress(model.name) as progress:
             progress(f"continuing the loop closure over grids of {options['cells']} and {options['cells'] // 2} "
                      "cells a side")
-            found = study.continued_gci(model, limits=limits, **options)
+            found = study.continued_gci_study(model, limits=limits, **options)
             path = None
             if args.map:
                 progress("drawing")

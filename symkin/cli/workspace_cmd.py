@@ -140,7 +140,7 @@ def _orientations(args: argparse.Namespace, model, limits: dict) -> int:
 
 def continuation_options(args: argparse.Namespace, model) -> dict:
     """The held angles (--orientation), the characteristic length (--length) and the cells a side (-n N: about
-    N^(1/3)) of a workspace continued over a grid (:func:`symkin.analysis.study.continued_workspace`)."""
+    N^(1/3)) of a workspace continued over a grid (:func:`symkin.analysis.study.continued_study`)."""
     from symkin.mechanism import reach
 
     length = analysis_args.parse_length(args.length)
@@ -151,7 +151,7 @@ def continuation_options(args: argparse.Namespace, model) -> dict:
 
 def _continued(args: argparse.Namespace, model, limits: dict) -> int:
     """A mechanism sampled by continuation (no closed forms): the working mode of the home assembly at a constant
-    orientation, continued over a Cartesian grid from the home pose (:func:`symkin.analysis.study.continued_workspace`)."""
+    orientation, continued over a Cartesian grid from the home pose (:func:`symkin.analysis.study.continued_study`)."""
     from symkin.analysis import study
 
     start = time.perf_counter()
@@ -163,7 +163,7 @@ def _continued(args: argparse.Namespace, model, limits: dict) -> int:
                                  "the home pose over one Cartesian grid (no designs, chunks or force map)")
         options = continuation_options(args, model)
         with Progress(model.name) as progress:
-            found = study.continued_workspace(model, limits=limits, progress=progress, **options)
+            found = study.continued_study(model, limits=limits, progress=progress, **options)
     except (ValueError, KeyError) as err:
         analysis_args.fail_on_bad_input(args, err)
     _print_study(args, model.name, found)

@@ -9,7 +9,7 @@ analyses' reachability test of its closed-form ``ik`` (dW = 1_W(x) dx); a spheri
 angular-velocity Jacobian, the invariant measure of SO(3)); legs without closed forms by the mean of 1/kappa
 over the cells of a midpoint grid of the box that the working mode reaches, flooded from the home assembly
 (:func:`symkin.mechanism.continuation.flood_box`; the error is the change from a grid of half as many cells
-a side, as :func:`symkin.analysis.closure_workspace.closure_gci`), the home assembly of each design continued
+a side, as :func:`symkin.analysis.continued_workspace.continued_gci`), the home assembly of each design continued
 from the start design's (:func:`continued_home`).  The box is
 checked on a vertex grid denser than the optimizer's constraint points: by the closed-form
 inverse of :mod:`symkin.analysis.inverse` where one exists, else by the ``ik`` margin.

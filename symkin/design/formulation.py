@@ -38,7 +38,7 @@ over fixed sample points, so the objective is a smooth function of the design:
   serial one.
 
 * ``gci`` of a parallel model without closed forms (legs analysed through their loop closure,
-  :mod:`symkin.analysis.closure_workspace`): the same mean of 1/kappa_F over a midpoint grid of the
+  :mod:`symkin.analysis.continued_workspace`): the same mean of 1/kappa_F over a midpoint grid of the
   required box of positions, the angles held at the home pose's; each point p_j has its assembly
   (q_j, s_j) as decision variables, constrained by the generated closure phi(q_j, s_j, p_j) = 0 (the rows
   that are identically zero, e.g. a Schoenflies platform's roll and pitch rows, dropped: IPOPT needs

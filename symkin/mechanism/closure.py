@@ -17,7 +17,7 @@ excitation design ask it.
   p = fk(q)).
 
 The workspace of such legs (a flood of the closure over a grid of poses) builds on these:
-:mod:`symkin.analysis.closure_workspace`.
+:mod:`symkin.analysis.continued_workspace`.
 """
 
 from __future__ import annotations

@@ -28,7 +28,7 @@ Conditioning (:func:`conditioning_at`): 1/kappa of J = dp/dq (:func:`symkin.runt
 its angle rows as angular velocity (:func:`angular_rates`), its position rows divided by a characteristic length
 L where the task space also has angles (given, or the L minimizing the mean kappa_F^2 over the poses:
 :func:`symkin.numerics.conditioning.characteristic_length`).  The analyses of such a workspace (its measure, its
-GCI) are :mod:`symkin.analysis.closure_workspace`.
+GCI) are :mod:`symkin.analysis.continued_workspace`.
 
 Length: one method - the flood, the search for its box, the paths and the conditioning at the cells it reaches -
 whose parts only make sense together.

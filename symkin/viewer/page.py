@@ -35,7 +35,7 @@ from markupsafe import Markup
 from symkin.mechanism.closure import CLOSED, MAX_STEP, SOLVE_ITERATIONS, SOLVE_TOLERANCE, assemble_at_home
 from symkin._version import __version__
 from symkin.numerics import conditioning, sampling
-from symkin.analysis import closure_workspace, global_indices, workspace
+from symkin.analysis import continued_workspace, global_indices, workspace
 from symkin.mechanism import reach
 from symkin.analysis.needs import NEEDS
 from symkin import mechanism
@@ -163,7 +163,7 @@ def workspace_cloud(model: GeneratedModel, samples: int, seed: int = 0, limits: 
 
 def _closure_cloud(model: GeneratedModel, samples: int, limits: Limits | None) -> Cloud:
     """The cell centres of the working mode of the home assembly on a grid of about ``samples`` cells, at the home
-    orientation, with 1/kappa (:func:`symkin.analysis.closure_workspace.closure_workspace`)."""
+    orientation, with 1/kappa (:func:`symkin.analysis.continued_workspace.continued_workspace`)."""
     task = mechanism.task_space(model)
     axes = tuple(c for c in task if c in mechanism.POSITION_COMPONENTS)
     start = assemble_at_home(model)
@@ -172,11 +172,11 @@ def _closure_cloud(model: GeneratedModel, samples: int, limits: Limits | None) -
                      "no workspace cloud: the platform's workspace is a set of orientations, not of points.",
                      home_assembly=start)
     cells = max(MIN_CLOSURE_CELLS, round(samples ** (1 / len(axes))))
-    found = closure_workspace.closure_workspace(model, limits=limits, cells=cells, start=start)
+    found = continued_workspace.continued_workspace(model, limits=limits, cells=cells, start=start)
     count = int(found.occupancy.occupied.sum())
     if count < samples / 2:  # the grid's box holds the workspace loosely: refine to about ``samples`` cells
         cells = min(round(cells * (samples / max(count, 1)) ** (1 / len(axes))), REFINED_CELLS_LIMIT * cells)
-        found = closure_workspace.closure_workspace(model, limits=limits, cells=cells, start=start, box=found.box)
+        found = continued_workspace.continued_workspace(model, limits=limits, cells=cells, start=start, box=found.box)
     reached = found.occupancy.occupied
     poses = np.repeat(found.pose[None], int(reached.sum()), axis=0)
     poses[:, list(mechanism.position_rows(model))] = found.occupancy.centers()[reached]

@@ -8,7 +8,7 @@ import pytest
 import sympy
 
 from conftest import MODELS_DIR
-from symkin.analysis.crosscheck import crosscheck
+from symkin.references.crosscheck import crosscheck
 from symkin.derivation import Derivation
 from symkin.errors import ModelError
 from symkin.model import coordinates, model_from_text

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from symkin.analysis.crosscheck import crosscheck
+from symkin.references.crosscheck import crosscheck
 from symkin.cli import main
 from symkin.errors import ModelError
 from symkin.model import load_model

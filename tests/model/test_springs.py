@@ -12,7 +12,7 @@ import pytest
 import sympy
 
 from conftest import MODELS_DIR
-from symkin.analysis.crosscheck import crosscheck
+from symkin.references.crosscheck import crosscheck
 from symkin.derivation import Derivation
 from symkin.errors import DerivationError, ModelError
 from symkin.model import coordinates, load_model, model_from_text

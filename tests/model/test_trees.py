@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import sympy
 
-from symkin.analysis.crosscheck import crosscheck
+from symkin.references.crosscheck import crosscheck
 from symkin.derivation import Derivation
 from symkin.errors import ModelError
 from symkin.model import model_from_text

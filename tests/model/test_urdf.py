@@ -323,7 +323,7 @@ def test_vendor_names_derive_unedited_and_keep_their_names(tmp_path, capsys):
     Pinocchio, which reads the file's names, agrees."""
     import json
 
-    from symkin.analysis.crosscheck import crosscheck
+    from symkin.references.crosscheck import crosscheck
     from symkin.cli import main
     from symkin.model.names import code_names
 

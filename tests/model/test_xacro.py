@@ -84,7 +84,7 @@ def test_a_xacro_arm_derives_and_crosschecks(tmp_path, capsys):
     """The Trossen PincherX 100 (rtb-data) derives unedited from its xacro, with its inertials, and agrees
     with Pinocchio reading the same expansion; --xacro-arg sets an argument (robot_name prefixes every
     link), and messages from the URDF reader point into the xacro file that wrote the element."""
-    from symkin.analysis.crosscheck import crosscheck
+    from symkin.references.crosscheck import crosscheck
     from symkin.cli import main
 
     px100 = RTB / "xacro/trossen_descriptions/urdf/px100.urdf.xacro"

@@ -3,7 +3,7 @@ and can be declared (issue 60).
 
 The device: the DELTA of models/delta.yaml with its parallelograms written as revolute pairs (docs/model-format.md,
 "A parallelogram in a leg"), so that its legs have no distance form and its workspace is the flood of
-symkin.analysis.closure_workspace.  The independent reference: a Monte Carlo of the same device's closed-form
+symkin.analysis.continued_workspace.  The independent reference: a Monte Carlo of the same device's closed-form
 inverse kinematics (the distance form of generated/delta: the knee outwards, the arms within their limits) over
 the flood's box.  Counting cells, or bracketing between the interior and all reached cells, was 30 % low on this
 grid; the printed volume and its 95 % error bar must cover the reference.  The home assembly: the rule (q = s = 0,
@@ -19,7 +19,7 @@ import pytest
 
 from sample_models import closure_delta_text
 from symkin import load, pipeline
-from symkin.analysis.closure_workspace import closure_workspace, working_mode_measure
+from symkin.analysis.continued_workspace import continued_workspace, working_mode_measure
 from symkin.cli import main
 from symkin.model import ModelError, model_from_text
 
@@ -54,7 +54,7 @@ def reference_volume(delta, lower: np.ndarray, upper: np.ndarray) -> tuple[float
 
 
 def test_the_working_modes_volume_covers_a_monte_carlo_of_the_closed_form(closure_delta, generated_dir):
-    found = closure_workspace(closure_delta, cells=CELLS)
+    found = continued_workspace(closure_delta, cells=CELLS)
     estimate = working_mode_measure(closure_delta, found)
     reference, reference_error = reference_volume(load(generated_dir / "delta"), *found.box)
     assert reference > 0.004        # the DELTA's 5 litres, not a few cells

@@ -21,7 +21,7 @@ import pytest
 from conftest import SYMKIN_CLI
 from sample_models import dual_scara_text
 from symkin import load, pipeline
-from symkin.analysis.closure_workspace import closure_workspace
+from symkin.analysis.continued_workspace import continued_workspace
 from symkin.mechanism.closure import assemble_at_home
 from symkin.model import model_from_text
 from symkin.reporting import reporting_to
@@ -290,7 +290,7 @@ def scara_flood(scara):
     """The continued workspace, and what it reported while it ran (symkin.reporting)."""
     reports: list[tuple[str, int | None, int | None]] = []
     with reporting_to(lambda stage, done=None, total=None: reports.append((stage, done, total))):
-        found = closure_workspace(scara, limits={"lift1": STROKE}, cells=20)
+        found = continued_workspace(scara, limits={"lift1": STROKE}, cells=20)
     return found, reports
 
 
@@ -410,7 +410,7 @@ def test_the_workspace_command_continues_the_closure_and_refuses_an_unbounded_st
 
 
 def test_the_gci_command_averages_over_the_continued_workspace(scara_dir, scara_workspace):
-    """`symkin gci` of legs without closed forms: the mean 1/kappa of the same grid as closure_workspace (-n 8000:
+    """`symkin gci` of legs without closed forms: the mean 1/kappa of the same grid as continued_workspace (-n 8000:
     20 cells a side), printed to the digits its error estimate supports, and the options that do not apply refused."""
     result = subprocess.run(SYMKIN_CLI + ["gci", str(scara_dir), "--limit", "lift1=0:0.2", "-n", "8000"],
                             capture_output=True, text=True)

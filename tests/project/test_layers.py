@@ -36,7 +36,7 @@ LAYERS = (
     ("backends", {"backends", "manifest", "manifest_schema", "pipeline", "pipeline_cache"}),
     ("runtime", {"runtime", "backends.*.loader*"}),
     ("mechanism", {"mechanism"}),
-    ("analyses", {"ik", "analysis", "design", "identification", "simulation", "stability", "viewer"}),
+    ("analyses", {"ik", "analysis", "design", "identification", "references", "simulation", "stability", "viewer"}),
     ("api", {"api"}),
     ("cli", {"cli", "__main__"}),
 )
@@ -56,8 +56,9 @@ ROLES = {
     "backends": "the emitters, the manifest and its schema, the pipeline and its derivation cache",
     "runtime": "each backend's loader, the bindings they share, the numerical kinematics of parallel mechanisms",
     "mechanism": "the run-time mechanism every analysis asks: coordinates, limits, kinds, the passive joints' closure, "
-                 "reachability through inverse kinematics",
-    "analyses": "inverse kinematics, analyses, design, identification, simulation, numerical stability, the viewer",
+                 "reachability through inverse kinematics and by continuation",
+    "analyses": "inverse kinematics, analyses, design, identification, references (the cross-checks), simulation, numerical "
+                "stability, the viewer",
     "api": "the public functions, and the `symkin` package facade",
     "cli": "the commands",
 }

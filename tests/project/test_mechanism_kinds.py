@@ -20,7 +20,7 @@ from collections.abc import Iterator
 from conftest import ROOT
 
 #: The folders above the run-time layer whose modules should not tell mechanisms apart.
-FOLDERS = ("analysis", "cli", "simulation", "design", "identification", "viewer", "stability")
+FOLDERS = ("analysis", "cli", "simulation", "design", "identification", "references", "viewer", "stability")
 #: Words of an identifier (case-insensitive) that name a kind of mechanism or its machinery.
 KIND_WORDS = re.compile(r"parallel|closure|wrist|(^|_)legs?($|_)|mechanismkind|kind_of|is_serial|(^|_)serial($|_)"
                         r"|hybrid|platform")
@@ -31,7 +31,7 @@ NOT_A_KIND = {"_ur_wrist"}
 TARGET = 10
 #: The modules that name a mechanism's kind today (the ratchet: this list only shrinks).
 KNOWN = {
-    "analysis/closure_workspace.py", "analysis/model_files.py", "analysis/needs.py", "analysis/study.py",
+    "analysis/model_files.py", "analysis/needs.py",
     "cli/structure_cmd.py",
     "design/formulation.py",
     "identification/closure_excitation.py", "identification/excitation.py", "identification/identified_model.py",
@@ -83,6 +83,11 @@ def test_no_new_module_tells_mechanisms_apart_and_the_list_only_shrinks():
     assert not new, f"write these against the run-time mechanism instead of naming its kind (issue 62): {new}"
     gone = sorted(KNOWN - set(found))
     assert not gone, f"these no longer name a mechanism's kind: take them off KNOWN in this test: {gone}"
+
+
+def test_the_goal_is_held():
+    """Issue 62's goal, reached: no more than TARGET modules above the run-time layer name a mechanism's kind."""
+    assert len(KNOWN) <= TARGET
 
 
 def test_the_words_find_what_they_should():

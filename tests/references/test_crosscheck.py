@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from conftest import MODELS_DIR, SYMKIN_CLI, reference_function
-from symkin.analysis.crosscheck import crosscheck
+from symkin.references.crosscheck import crosscheck
 from symkin.derivation import Derivation
 from symkin.errors import ModelError
 from symkin.model import load_model
@@ -39,7 +39,7 @@ def test_vanishing_quantities_are_judged_by_their_natural_size():
     """Issue 29: where a quantity vanishes (V of one joint, of a leg at rest) symkin's is exactly 0 and the
     reference's recursion leaves rounding (1e-27): relative to that noise the error was 1.0, a false failure.
     The double pendulum held at its first link, as shipped: every row passes."""
-    from symkin.analysis.crosscheck import _normwise
+    from symkin.references.crosscheck import _normwise
 
     assert _normwise(np.zeros(1), np.array([1e-27])) == 1.0  # relative to the noise: the old false alarm
     assert _normwise(np.zeros(1), np.array([1e-27]), None, 2.5) == pytest.approx(4e-28)

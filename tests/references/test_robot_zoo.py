@@ -137,7 +137,7 @@ def test_the_zoo_reads_every_serial_arm_the_package_ships():
 def test_symkin_crosscheck_passes_on_every_zoo_robot(file, tip, dof):
     """Issue 13's acceptance, through the command's own code: its table for every zoo robot passes
     (frames of every link, J, M, V, G, and tau where the file declares no joint friction)."""
-    from symkin.analysis.crosscheck import crosscheck
+    from symkin.references.crosscheck import crosscheck
 
     # the C library and the Coriolis matrix: test_crosscheck (deriving C for every zoo arm costs a minute)
     report = crosscheck(ROBOTS_DIR / file, samples=3, urdf={"tip": tip, "chain": True}, backends=("numpy",), coriolis_matrix=False)
@@ -150,7 +150,7 @@ def test_off_chain_joints_whose_limits_exclude_0_lock_at_the_nearest_limit():
     """Issue 29: iCub's right elbow (limits [0.0959931, 1.85005]) is locked, unasked, at its lower limit and
     the reading says so; its head's lone product of inertia of 2.4e-35 is rounding, not a refusal.  The
     left arm, as shipped, agrees with Pinocchio reduced at the same locks."""
-    from symkin.analysis.crosscheck import crosscheck
+    from symkin.references.crosscheck import crosscheck
 
     path = ROBOTS_DIR / "icub_description/robots/icub_reduced.urdf"
     model = load_model(path, tip="l_hand_dh_frame", chain=True)
@@ -169,7 +169,7 @@ def test_non_physical_inertias_are_refused_or_accepted_with_a_note(tmp_path, cap
     (which loads the file as it is) agrees."""
     import json
 
-    from symkin.analysis.crosscheck import crosscheck
+    from symkin.references.crosscheck import crosscheck
     from symkin.cli import main
 
     path = str(ROBOTS_DIR / "romeo_description/urdf/romeo_small.urdf")

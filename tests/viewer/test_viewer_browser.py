@@ -243,7 +243,7 @@ def test_legs_of_any_topology_follow_the_platform_by_newton_on_their_closure(bro
 
 
 def test_the_cloud_of_legs_of_any_topology_is_solved_again_for_a_moved_design(browser, scara_page):
-    """The page's cloud is the working mode's cells (symkin.analysis.closure_workspace); for a moved design each
+    """The page's cloud is the working mode's cells (symkin.analysis.continued_workspace); for a moved design each
     cell is solved again from its (q, s) at load, and its 1/kappa is numpy's at the new design's assembly."""
     model, html, cloud = scara_page
     page = open_page(browser, html)

@@ -1,5 +1,5 @@
 """symkin against an independent reference on the same robot: ``symkin crosscheck`` (Pinocchio; MuJoCo
-as well for an MJCF file, :mod:`symkin.analysis.mujoco_reference`).
+as well for an MJCF file, :mod:`symkin.references.mujoco_reference`).
 
 The reference reads the robot from a URDF and shares no code with symkin's derivation: a
 URDF model file is given to Pinocchio as it is (with symkin's choice of chain: the joints
@@ -269,7 +269,7 @@ def crosscheck(path: str | Path, *, reference_urdf: str | Path | None = None, sa
                     error = _normwise(_ours(got, name, k, frame_links, QD[k]), expected, *scales)
                     errors[name + suffix] = max(errors.get(name + suffix, 0.0), error)
     if model.bodies and mjcf:
-        from symkin.analysis.mujoco_reference import mujoco_errors
+        from symkin.references.mujoco_reference import mujoco_errors
 
         say("comparing M and V + G with MuJoCo on the MJCF file")
         for backend, got in values.items():

@@ -3,10 +3,10 @@ area or volume and its GCI.
 
 The working mode of the home assembly, continued over a grid of the handle's positions at a constant orientation,
 with 1/kappa of J = dp/dq at its cells, comes from the run-time mechanism
-(:func:`symkin.mechanism.continuation.continued_grid`); here it becomes an occupancy (:func:`closure_workspace`),
+(:func:`symkin.mechanism.continuation.continued_grid`); here it becomes an occupancy (:func:`continued_workspace`),
 its area or volume is measured without the bias of counting cells (:func:`working_mode_measure`: the grid's core
 and a stratified Monte Carlo over its boundary cells), and its GCI is the mean of 1/kappa over the reached cells
-(the midpoint rule) with the change from a grid of half as many cells as its error (:func:`closure_gci`).
+(the midpoint rule) with the change from a grid of half as many cells as its error (:func:`continued_gci`).
 """
 
 from __future__ import annotations
@@ -20,7 +20,6 @@ from symkin import mechanism
 from symkin.analysis.estimates import CONFIDENCE, Estimate
 from symkin.analysis.workspace import Occupancy
 from symkin.mechanism import Limits, continuation
-from symkin.mechanism.closure import HomeAssembly, solve_home_assembly
 from symkin.runtime.info import GeneratedModel
 
 #: Uniform random points per boundary cell of the working mode's area or volume (:func:`working_mode_measure`).
@@ -28,8 +27,8 @@ BAND_SAMPLES = 4
 
 
 @dataclass(frozen=True)
-class ClosureWorkspace:
-    """The working mode of the home assembly at a constant orientation, on a grid (:func:`closure_workspace`).
+class ContinuedWorkspace:
+    """The working mode of the home assembly at a constant orientation, on a grid (:func:`continued_workspace`).
 
     Attributes:
         occupancy: the reached cells (their centres' positions in the axes ``axes``).
@@ -43,7 +42,8 @@ class ClosureWorkspace:
         axes: the gridded task coordinates, e.g. ("x", "y", "z").
         length: the characteristic length of the conditioning (None: the task space has no angles).
         box: (lower, upper) of the positions the grid was laid over (another grid over the same box:
-            ``closure_workspace(..., box=found.box)``).
+            ``continued_workspace(..., box=found.box)``).
+        home: the home assembly solved for the grid, or None where it was continued from a given ``start``.
     """
 
     occupancy: Occupancy
@@ -55,6 +55,7 @@ class ClosureWorkspace:
     axes: tuple[str, ...]
     length: float | None
     box: tuple[np.ndarray, np.ndarray]
+    home: continuation.HomeAssembly | None = None
 
     @property
     def gci(self) -> float:
@@ -62,10 +63,10 @@ class ClosureWorkspace:
         return float(np.mean(self.inv_kappa[self.occupancy.occupied]))
 
 
-def closure_workspace(model: GeneratedModel, *, orientation: dict[str, float] | None = None,
-                      limits: Limits | None = None, length: float | None = None, cells: int = continuation.CELLS,
-                      start: tuple[np.ndarray, np.ndarray] | None = None,
-                      box: tuple[np.ndarray, np.ndarray] | None = None) -> ClosureWorkspace:
+def continued_workspace(model: GeneratedModel, *, orientation: dict[str, float] | None = None,
+                        limits: Limits | None = None, length: float | None = None, cells: int = continuation.CELLS,
+                        start: tuple[np.ndarray, np.ndarray] | None = None,
+                        box: tuple[np.ndarray, np.ndarray] | None = None) -> ContinuedWorkspace:
     """The working mode of the home assembly at a constant orientation, on a grid
     (:func:`symkin.mechanism.continuation.continued_grid`, whose arguments these are), as an occupancy.
 
@@ -75,8 +76,8 @@ def closure_workspace(model: GeneratedModel, *, orientation: dict[str, float] | 
     """
     grid = continuation.continued_grid(model, orientation=orientation, limits=limits, length=length, cells=cells,
                                        start=start, box=box)
-    return ClosureWorkspace(Occupancy(grid.lower, grid.cell, grid.reached), grid.inv_kappa, grid.J, grid.q, grid.s,
-                            grid.pose, grid.axes, grid.length, grid.box)
+    return ContinuedWorkspace(Occupancy(grid.lower, grid.cell, grid.reached), grid.inv_kappa, grid.J, grid.q, grid.s,
+                              grid.pose, grid.axes, grid.length, grid.box, grid.home)
 
 
 def _band(reached: np.ndarray) -> np.ndarray:
@@ -90,7 +91,7 @@ def _band(reached: np.ndarray) -> np.ndarray:
     return band
 
 
-def working_mode_measure(model: GeneratedModel, found: ClosureWorkspace, *, limits: Limits | None = None,
+def working_mode_measure(model: GeneratedModel, found: ContinuedWorkspace, *, limits: Limits | None = None,
                          samples: int = BAND_SAMPLES, seed: int = 0) -> Estimate:
     """The area or volume of the working mode on ``found``'s grid, without the bias of counting cells.
 
@@ -156,8 +157,8 @@ def working_mode_measure(model: GeneratedModel, found: ClosureWorkspace, *, limi
 
 
 @dataclass(frozen=True)
-class ClosureIndex:
-    """The GCI over the working mode of a model analysed through its closure (:func:`closure_gci`).
+class ContinuedIndex:
+    """The GCI over the working mode of a model reached by continuation (:func:`continued_gci`).
 
     Attributes:
         value: the mean of 1/kappa over the reached cells, its error the change from a grid of half as many
@@ -169,24 +170,24 @@ class ClosureIndex:
 
     value: Estimate
     measure: Estimate
-    workspace: ClosureWorkspace
-    assembly: HomeAssembly
+    workspace: ContinuedWorkspace
+    assembly: continuation.HomeAssembly
 
 
-def closure_gci(model: GeneratedModel, *, orientation: dict[str, float] | None = None, limits: Limits | None = None,
-                length: float | None = None, cells: int = continuation.CELLS) -> ClosureIndex:
+def continued_gci(model: GeneratedModel, *, orientation: dict[str, float] | None = None, limits: Limits | None = None,
+                  length: float | None = None, cells: int = continuation.CELLS) -> ContinuedIndex:
     """The GCI (seed eq. 8.28, midpoint rule over the reached cells) of the working mode at a constant orientation.
 
     The error estimate is the change of the mean from a grid of half as many cells a side (with the fine grid's
     characteristic length): the mean's error comes mostly from the cells along the workspace's boundary, whose
     share halves with the cell size, so the change bounds the fine grid's error where the grids resolve the
-    workspace.  The coarse grid is laid over the fine grid's box.  Arguments as :func:`closure_workspace`.
+    workspace.  The coarse grid is laid over the fine grid's box.  Arguments as :func:`continued_workspace`.
     """
-    assembly = solve_home_assembly(model)
-    start = (assembly.q, assembly.s)
-    fine = closure_workspace(model, orientation=orientation, limits=limits, length=length, cells=cells, start=start)
-    coarse = closure_workspace(model, orientation=orientation, limits=limits, length=fine.length,
-                               cells=max(cells // 2, 2), start=start, box=fine.box)
+    fine = continued_workspace(model, orientation=orientation, limits=limits, length=length, cells=cells)
+    assembly = fine.home
+    assert assembly is not None, "a grid continued without a start solves its home assembly"
+    coarse = continued_workspace(model, orientation=orientation, limits=limits, length=fine.length,
+                                 cells=max(cells // 2, 2), start=(assembly.q, assembly.s), box=fine.box)
     evaluations = int(fine.occupancy.occupied.size + coarse.occupancy.occupied.size)
     value = Estimate(fine.gci, abs(fine.gci - coarse.gci), evaluations, "grid", False)
-    return ClosureIndex(value, working_mode_measure(model, fine, limits=limits), fine, assembly)
+    return ContinuedIndex(value, working_mode_measure(model, fine, limits=limits), fine, assembly)
