@@ -12,7 +12,7 @@ and a stratified Monte Carlo over its boundary cells), and its GCI is the mean o
 from __future__ import annotations
 
 import itertools
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -27,40 +27,19 @@ BAND_SAMPLES = 4
 
 
 @dataclass(frozen=True)
-class ContinuedWorkspace:
-    """The working mode of the home assembly at a constant orientation, on a grid (:func:`continued_workspace`).
+class ContinuedWorkspace(continuation.ContinuedGrid):
+    """The working mode of the home assembly at a constant orientation, on a grid (:func:`continued_workspace`):
+    the grid of :class:`symkin.mechanism.continuation.ContinuedGrid` as an occupancy, with its GCI."""
 
-    Attributes:
-        occupancy: the reached cells (their centres' positions in the axes ``axes``).
-        inv_kappa: 1/kappa at the cell centres, the grid's shape, NaN outside the workspace (0 at a cell whose
-            J is not determined, an interior singularity to rounding).
-        J: dp/dq at the cell centres, (*shape, m, n), its angle rows as angular velocity
-            (:func:`angular_rates`), not homogenized; NaN outside the workspace.
-        q: the actuators' coordinates at the cell centres, (*shape, n), NaN outside.
-        s: the passive joints' variables there, (*shape, ns), NaN outside.
-        pose: the task pose held (the held angles; the positions are the cells').
-        axes: the gridded task coordinates, e.g. ("x", "y", "z").
-        length: the characteristic length of the conditioning (None: the task space has no angles).
-        box: (lower, upper) of the positions the grid was laid over (another grid over the same box:
-            ``continued_workspace(..., box=found.box)``).
-        home: the home assembly solved for the grid, or None where it was continued from a given ``start``.
-    """
-
-    occupancy: Occupancy
-    inv_kappa: np.ndarray
-    J: np.ndarray
-    q: np.ndarray
-    s: np.ndarray
-    pose: np.ndarray
-    axes: tuple[str, ...]
-    length: float | None
-    box: tuple[np.ndarray, np.ndarray]
-    home: continuation.HomeAssembly | None = None
+    @property
+    def occupancy(self) -> Occupancy:
+        """The reached cells (their centres' positions in the axes ``axes``)."""
+        return Occupancy(self.lower, self.cell, self.reached)
 
     @property
     def gci(self) -> float:
         """The mean of 1/kappa over the reached cells (the global conditioning index)."""
-        return float(np.mean(self.inv_kappa[self.occupancy.occupied]))
+        return float(np.mean(self.inv_kappa[self.reached]))
 
 
 def continued_workspace(model: GeneratedModel, *, orientation: dict[str, float] | None = None,
@@ -76,8 +55,7 @@ def continued_workspace(model: GeneratedModel, *, orientation: dict[str, float] 
     """
     grid = continuation.continued_grid(model, orientation=orientation, limits=limits, length=length, cells=cells,
                                        start=start, box=box)
-    return ContinuedWorkspace(Occupancy(grid.lower, grid.cell, grid.reached), grid.inv_kappa, grid.J, grid.q, grid.s,
-                              grid.pose, grid.axes, grid.length, grid.box, grid.home)
+    return ContinuedWorkspace(**{field.name: getattr(grid, field.name) for field in fields(grid)})
 
 
 def _band(reached: np.ndarray) -> np.ndarray:
