@@ -26,7 +26,6 @@ from symkin.analysis.handle_measures import (NO_GRAVITY, PUSHED_GROUPS, ROTATION
                                              SPHERICAL_GROUPS, TURNED_GROUPS, Actuation, Measure, dynamics_at,
                                              friction_measures, gravity_share_measure, rotation_measures,
                                              translation_measures)
-from symkin.analysis.needs import kind_text
 from symkin.mechanism import ANGLES, Sampling, continuation
 from symkin.runtime.info import GeneratedModel
 
@@ -198,14 +197,13 @@ def rate(model: GeneratedModel, actuation: Actuation, *, samples: int = 4096, se
             usable = _usable_orientations(model, samples, seed, box, limits, conditioning)
         elif orientation is not None:
             raise ValueError(f"{model.name}: --orientation applies to platforms that also rotate (Stewart-Gough); "
-                             f"this is a {kind_text(model)} mechanism")
+                             f"its task space is {list(mechanism.task_space(model))}")
         elif sampled is Sampling.INVERSE and not mechanism.is_positional(model):
             raise ValueError(f"{model.name}: symkin rate rates devices whose handle translates with the platform or "
-                             f"is a serial arm's TCP; this is a {kind_text(model)} mechanism")
+                             f"is a serial arm's TCP; its task space is {list(mechanism.task_space(model))}")
         else:
             usable = _usable_joint_samples(model, samples, seed, box, limits, conditioning)
     return _datasheet(model, usable, actuation)
-
 
 
 def _datasheet(model: GeneratedModel, usable: _Usable, actuation: Actuation) -> Datasheet:
@@ -263,13 +261,14 @@ def _usable_joint_samples(model: GeneratedModel, samples: int, seed: int, box: M
 
 #: Why a platform reached by continuation (legs without closed forms) has no apparent mass, inertia or gravity share
 #: in its datasheet.
-NO_CONTINUED_DYNAMICS = ("no mass properties: legs without closed forms (any topology) rate their apparent mass, inertia "
-                       "and gravity share from the generated closure_dynamics (declare bodies: links: and platform:)")
+NO_CONTINUED_DYNAMICS = ("no mass properties: legs without closed forms (any topology) rate their apparent mass, "
+                         "inertia and gravity share from the generated closure_dynamics (declare bodies: links: and "
+                         "platform:)")
 
 
 def _usable_continued_cells(model: GeneratedModel, samples: int, box: Mapping[str, tuple[float, float]] | None,
-                          limits: mechanism.Limits | None, conditioning: float,
-                          orientation: Sequence[float] | None) -> _Usable:
+                            limits: mechanism.Limits | None, conditioning: float,
+                            orientation: Sequence[float] | None) -> _Usable:
     """A platform whose legs have no closed forms, over the working mode of its home assembly at a constant
     ``orientation`` (roll, pitch, yaw in rad; default the home pose's), on the grid of
     :func:`symkin.mechanism.continuation.continued_grid` (about ``samples`` cells).

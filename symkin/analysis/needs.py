@@ -15,6 +15,7 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import NamedTuple
 
+from symkin import mechanism
 from symkin.mechanism import MechanismKind
 
 #: The dynamics a simulation integrates and checks (its energy balance).
@@ -64,19 +65,9 @@ CONTINUED_NEEDS: Mapping[str, tuple[str, ...]] = {
 def needs_of(analysis: str, model) -> tuple[str, ...]:
     """The generated functions ``analysis`` evaluates of the loaded ``model``: its row of :data:`NEEDS` for the
     model's kind, or :data:`CONTINUED_NEEDS` for a model sampled by continuation."""
-    from symkin import mechanism
-
     if mechanism.sampling(model) is mechanism.Sampling.CONTINUATION:
         return CONTINUED_NEEDS[analysis]
     return NEEDS[analysis][mechanism.kind_of(model)]
-
-
-def kind_text(model) -> str:
-    """The kind of the loaded ``model`` in words, as refusals name it: "serial", "parallel", "parallel pose",
-    "parallel orientation" (:class:`symkin.mechanism.MechanismKind`)."""
-    from symkin import mechanism
-
-    return mechanism.kind_of(model).value
 
 
 class Derived(NamedTuple):

@@ -123,7 +123,7 @@ def held_text(model: GeneratedModel, found) -> str:
 
 
 def continued_study(model: GeneratedModel, *, cells: int, orientation: dict[str, float], limits: Limits | None,
-                        length: float | None, progress: Callable[[str], None] = lambda _stage: None) -> WorkspaceStudy:
+                    length: float | None, progress: Callable[[str], None] = lambda _stage: None) -> WorkspaceStudy:
     """The workspace of a mechanism sampled by continuation (:attr:`symkin.mechanism.Sampling.CONTINUATION`): the
     working mode of its home assembly at the held angles ``orientation``, continued from the home pose over a
     Cartesian grid of ``cells`` cells along its longest side (:mod:`symkin.analysis.continued_workspace`); the
@@ -165,7 +165,7 @@ class ContinuedGCIStudy:
 
     Attributes:
         value: the mean of 1/kappa over the reached cells, its error the change from a grid of half as many cells.
-        grid: (occupancy, 1/kappa at the cell centres) of the finer grid, and its axes.
+        grid: (occupancy, 1/kappa at the cell centres) of the finer grid.
         axes: the task coordinates along the grid's axes.
         report: what was averaged over, one line each (the measure, the grid, the home assembly).
     """

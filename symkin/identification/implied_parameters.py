@@ -10,8 +10,9 @@ keeps the non-identifiable parameters at their a priori values; here "closest" i
 
 A parallel model's file holds fewer standard parameters than its regressor has columns (one rotor for all the
 actuators' I_a; a spherical model declares no rods): :func:`nearest_held` takes an estimate into what the file
-holds, pi = fixed + T z (:class:`~symkin.identification.identified_model.Held`), its base parameters as close to the estimate's as
-the file allows (least squares), then the standard parameters nearest the estimate's in the same scaled norm.
+holds, pi = fixed + T z (:class:`~symkin.identification.identified_model.Held`), its base parameters as close to
+the estimate's as the file allows (least squares), then the standard parameters nearest the estimate's in the same
+scaled norm.
 """
 
 from __future__ import annotations
@@ -83,19 +84,18 @@ def nearest_held(K: np.ndarray, base_values: np.ndarray, near: np.ndarray, held:
     return held.fixed + held.T @ (z0 + N @ y)
 
 
-
-
 def file_values(source: Model, names: Sequence[str], K: np.ndarray, prior: np.ndarray, found: Any,
-                standard: Any | None, consistent_held: Callable[[Held], np.ndarray]) -> tuple[np.ndarray, np.ndarray, str]:
+                standard: Any | None,
+                consistent_held: Callable[[Held], np.ndarray]) -> tuple[np.ndarray, np.ndarray, str]:
     """What a model file is rewritten with after an identification: (the standard parameters, which of them the run
     identifies, a note on what the file could not hold).
 
     A file that holds every standard parameter (:func:`symkin.identification.identified_model.file_held`) gets the
     consistent estimate ``standard`` or, from the base parameters ``found.values``, the standard parameters nearest
     the model's ``prior`` (:func:`nearest_standard`).  A file that holds fewer (a parallel model's) gets the
-    least-squares estimate taken into what it holds by
-    :func:`nearest_held`, the consistent one refitted over what it holds (``consistent_held(held)``: the file's
-    values z), and the note says how far the base parameters it can hold lie from the estimate's.
+    least-squares estimate taken into what it holds by :func:`nearest_held`, the consistent one refitted over what
+    it holds (``consistent_held(held)``: the file's values z), and the note says how far the base parameters it can
+    hold lie from the estimate's.
 
     Args:
         names: the standard parameters, the regressor's columns.

@@ -215,13 +215,13 @@ def sampled_in_task_space(model: GeneratedModel) -> bool:
     """Whether the workspace analyses sample the handle's space (a Cartesian grid, reached through inverse
     kinematics) instead of the joint box: so for a mechanism that closes loops, whose joint box also holds
     configurations of other working modes and ones that do not assemble (:mod:`symkin.analysis.study`)."""
-    return is_parallel(model)
+    return sampling(model) is not Sampling.JOINTS
 
 
 class Sampling(str, Enum):
     """How the workspace analyses sample a mechanism (:func:`sampling`): the question they ask instead of its kind."""
 
-    #: the joint box mapped through fk (a mechanism that closes no loops, or a spherical platform's ik aside)
+    #: the joint box mapped through fk (a mechanism that closes no loops)
     JOINTS = "joints"
     #: a Cartesian grid of the handle's positions reached through the closed-form inverse kinematics
     INVERSE = "inverse"

@@ -321,16 +321,6 @@ def test_the_home_assembly_closes_the_legs(scara):
     assert np.min(np.max(np.abs(p - HOME), axis=-1)) <= SOLVE_TOL
 
 
-def test_a_design_continued_to_itself_keeps_its_home_assembly(scara):
-    """symkin.mechanism.continuation.home_along_designs: along the line from a design to itself each step's
-    Gauss-Newton starts at the solution, so the home assembly comes back as solve_home_assembly gives it."""
-    from symkin.mechanism.continuation import home_along_designs
-
-    q0, s0 = assemble_at_home(scara)
-    q, s = home_along_designs(scara, dict(scara.parameters), dict(scara.parameters), 4)
-    np.testing.assert_allclose(np.concatenate([q, s]), np.concatenate([q0, s0]), rtol=0, atol=SOLVE_TOL)
-
-
 def test_the_continued_workspace_is_the_working_mode_written_from_the_geometry(scara, scara_workspace):
     """The reached cells are those where both legs reach the bar's ends in the home assembly's branches, the
     distal link of leg 1 stays on the home side of the bar (sin(wrist1) keeps its sign: the interior
