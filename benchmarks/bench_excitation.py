@@ -4,7 +4,7 @@ cond(W S) of the stacked, column-scaled base regressor at the start and at the e
 time of the command (start-up and derivation of the model file included, the derivation cache empty: what a user
 waits for the first time).
 
-The start is the series of :mod:`symkin.analysis.excitation` at its seed, so the figures are reproducible; the
+The start is the series of :mod:`symkin.identification.excitation` at its seed, so the figures are reproducible; the
 end depends on IPOPT's path (its iterations' floating point), so the documented figures are rounded ("about").
 Run with `make bench` or `python benchmarks/bench_excitation.py [--models planar_2r,stewart]`.
 """

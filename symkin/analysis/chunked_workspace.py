@@ -6,7 +6,7 @@ configurations (:func:`symkin.runtime.cluster.run_tasks`: a LocalCluster, a clus
 process, one client for every pass); each task draws its own configurations from the
 definition alone (``grid``: its range of the row-major grid index; ``random``: the generator
 (seed, chunk); ``sobol``: points k0 ... k1 of the scrambled Sobol sequence of 2^m points, with
-low digits from the generator (seed, k0), as :mod:`symkin.analysis.chunked`) and returns
+low digits from the generator (seed, k0), as :mod:`symkin.integration.chunked`) and returns
 summaries whose size does not grow with the chunk:
 
 1. extent: the per-chunk minima and maxima of the TCP positions, hence the samples' extent;
@@ -17,7 +17,7 @@ summaries whose size does not grow with the chunk:
 
 The chunks are reduced in chunk order (occupancy is a union), so the result does not depend
 on where the chunks ran.  The area/volume over the joint domain (|det J| dq) is the chunked
-quasi-Monte Carlo integral of the same budget (:func:`symkin.analysis.chunked.integrate_chunked`).
+quasi-Monte Carlo integral of the same budget (:func:`symkin.integration.chunked.integrate_chunked`).
 The default cell is that of scattered samples (:func:`symkin.analysis.workspace.default_cell`:
 twice the mean spacing), but never finer than the extent over ``MAX_CELLS_PER_AXIS``, which
 bounds the grid held by the client.
@@ -35,7 +35,7 @@ import numpy as np
 from symkin.numerics import sampling
 from symkin.analysis import global_indices, workspace
 from symkin import mechanism
-from symkin.analysis.chunked import IntegrandSpec, integrate_chunked
+from symkin.integration.chunked import IntegrandSpec, integrate_chunked
 from symkin.runtime.cluster import dask_client, run_tasks
 from symkin.runtime.payload import ModelPayload
 

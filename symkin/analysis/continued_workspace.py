@@ -17,7 +17,7 @@ from dataclasses import dataclass, fields
 import numpy as np
 
 from symkin import mechanism
-from symkin.analysis.estimates import CONFIDENCE, Estimate
+from symkin.integration.estimates import CONFIDENCE, Estimate
 from symkin.analysis.workspace import Occupancy
 from symkin.mechanism import Limits, continuation
 from symkin.runtime.info import GeneratedModel

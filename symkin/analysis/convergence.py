@@ -13,7 +13,7 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
-from symkin.analysis.estimates import Estimate
+from symkin.integration.estimates import Estimate
 from symkin.analysis.global_indices import gci
 from symkin.runtime.info import GeneratedModel
 

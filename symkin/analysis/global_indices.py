@@ -38,10 +38,10 @@ from symkin.numerics import conditioning
 from symkin.mechanism import reach
 from symkin.mechanism.working_mode import jacobian_in_working_mode
 from symkin import mechanism
-from symkin.analysis.estimates import Estimate, IntegralEstimate
+from symkin.integration.estimates import Estimate, IntegralEstimate
 from symkin.mechanism.feasibility import InverseKinematics, feasible_configurations
-from symkin.analysis.integrand import Integrand
-from symkin.analysis.integrators import integrate
+from symkin.integration.integrand import Integrand
+from symkin.integration.integrators import integrate
 from symkin.mechanism import Limits
 from symkin.mechanism.reach import bounding_box
 from symkin.runtime.info import GeneratedModel

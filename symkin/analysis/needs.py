@@ -28,7 +28,7 @@ NEEDS: Mapping[str, Mapping[MechanismKind, tuple[str, ...]]] = {
                    MechanismKind.PARALLEL: ("ik", "fk", "jacobian"),
                    MechanismKind.PARALLEL_POSE: ("ik", "inverse_jacobian"),
                    MechanismKind.PARALLEL_ORIENTATION: ("ik", "inverse_jacobian")},
-    # the haptic datasheet (symkin.analysis.datasheet): also the mass matrix (apparent mass)
+    # the haptic datasheet (symkin.rating.datasheet): also the mass matrix (apparent mass)
     "rate": {MechanismKind.SERIAL: ("fk", "jacobian", "mass_matrix"),
              MechanismKind.PARALLEL: ("ik", "fk", "jacobian", "mass_matrix"),
              MechanismKind.PARALLEL_POSE: ("ik", "inverse_jacobian"),

@@ -26,8 +26,8 @@ import numpy as np
 from symkin.numerics import conditioning
 from symkin import mechanism
 from symkin.analysis.global_indices import GlobalIndex
-from symkin.analysis.integrand import Integrand
-from symkin.analysis.integrators import integrate
+from symkin.integration.integrand import Integrand
+from symkin.integration.integrators import integrate
 from symkin.mechanism.limits import within_limits
 from symkin.numerics.sobol import Sobol
 from symkin.mechanism import Limits

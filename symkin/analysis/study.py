@@ -25,7 +25,7 @@ from symkin.mechanism import feasibility
 from symkin.analysis import global_indices, inverse, workspace
 from symkin.mechanism import reach
 from symkin import mechanism
-from symkin.analysis.estimates import Estimate
+from symkin.integration.estimates import Estimate
 from symkin.analysis.grids import index_grid
 from symkin.mechanism import Limits
 from symkin.analysis.workspace import Occupancy, WorkspaceCloud

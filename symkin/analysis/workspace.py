@@ -23,7 +23,7 @@ import numpy as np
 from symkin.numerics import sampling
 from symkin.mechanism.working_mode import assemble
 from symkin import mechanism
-from symkin.analysis.estimates import Estimate
+from symkin.integration.estimates import Estimate
 from symkin.mechanism import Limits
 from symkin.runtime.info import GeneratedModel
 

@@ -53,7 +53,7 @@ def _fastest_text(trial: Trial | None) -> str:
 
 def run(args: argparse.Namespace) -> int:
     from symkin.analysis import convergence, inverse, plots
-    from symkin.analysis.integrators import INTEGRATORS
+    from symkin.integration.integrators import INTEGRATORS
 
     try:
         backends = _backends(args)

@@ -67,9 +67,9 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _chunked(args: argparse.Namespace) -> int:
-    """--scheduler: the integral in chunks on Dask (:mod:`symkin.analysis.chunked`)."""
+    """--scheduler: the integral in chunks on Dask (:mod:`symkin.integration.chunked`)."""
     from symkin.analysis import inverse
-    from symkin.analysis.chunked import IntegrandSpec, integrate_chunked
+    from symkin.integration.chunked import IntegrandSpec, integrate_chunked
     from symkin.analysis.global_indices import GlobalIndex
     from symkin.mechanism import reach
     from symkin.mechanism.reach import bounding_box, domain_description
@@ -144,7 +144,7 @@ def run(args: argparse.Namespace) -> int:
     from symkin.analysis import global_indices, inverse, orientations, plots, study, workspace
     from symkin import mechanism
     from symkin.mechanism import reach
-    from symkin.analysis.integrators import STATISTICAL
+    from symkin.integration.integrators import STATISTICAL
 
     if args.scheduler is not None:
         return _chunked(args)

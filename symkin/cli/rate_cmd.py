@@ -1,4 +1,4 @@
-"""``symkin rate``: a haptic device's datasheet over its usable workspace (symkin.analysis.datasheet)."""
+"""``symkin rate``: a haptic device's datasheet over its usable workspace (symkin.rating.datasheet)."""
 
 from __future__ import annotations
 
@@ -16,7 +16,7 @@ from symkin.cli.progress import Progress
 
 def _measure_names() -> str:
     """The datasheet's measures, as --help lists them (from the groups the rating checks it covers)."""
-    from symkin.analysis.handle_measures import PUSHED_GROUPS, SPHERICAL_GROUPS
+    from symkin.rating.handle_measures import PUSHED_GROUPS, SPHERICAL_GROUPS
 
     names = [name for groups in (PUSHED_GROUPS, SPHERICAL_GROUPS) for names in groups.values() for name in names]
     return ", ".join(dict.fromkeys(names))
@@ -127,7 +127,7 @@ def _input_lines(inputs: dict[str, object]) -> list[str]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from symkin.analysis import datasheet, datasheet_files
+    from symkin.rating import datasheet, datasheet_files
 
     start = time.perf_counter()
     try:

@@ -276,10 +276,11 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _force_map(args: argparse.Namespace, model, layer, limits, scale: float):
-    """(figure path, summary) of the isotropic force over the workspace (symkin.analysis.forces)."""
+    """(figure path, summary) of the isotropic force over the workspace (symkin.rating.forces)."""
     import numpy as np
 
-    from symkin.analysis import forces, plots, study, workspace
+    from symkin.analysis import plots, study, workspace
+    from symkin.rating import forces
     from symkin import mechanism
     from symkin.mechanism import reach
 

@@ -23,11 +23,12 @@ import numpy as np
 
 from symkin.mechanism import feasibility
 from symkin.numerics import conditioning, sampling
-from symkin.analysis import forces, global_indices, inverse, orientations, rating
+from symkin.analysis import global_indices, inverse, orientations
+from symkin.rating import forces, formulas
 from symkin.mechanism import continuation, reach
 from symkin import mechanism
 from symkin.mechanism import Sampling
-from symkin.analysis.estimates import Estimate
+from symkin.integration.estimates import Estimate
 from symkin.mechanism.limits import within_limits
 from symkin.design.problem import DesignProblem
 from symkin.runtime.info import GeneratedModel
@@ -53,10 +54,10 @@ class Evaluation:
         box_reachable: fraction of the box check points that are reachable (None without a box).
         box_check: how the box was checked, in words.
         force: the force objective's isotropic force at the worst reachable check point of the box (N;
-            :func:`symkin.analysis.forces.isotropic_force`; a serial model's in the first feasible branch of its
+            :func:`symkin.rating.forces.isotropic_force`; a serial model's in the first feasible branch of its
             closed-form inverse, else at the optimizer's configurations), else None.
         apparent_mass: under an apparent-mass bound, the largest apparent mass at the handle (the largest
-            eigenvalue of (J M^-1 J^T)^-1, kg; :func:`symkin.analysis.rating.principal_masses`) over the reachable
+            eigenvalue of (J M^-1 J^T)^-1, kg; :func:`symkin.rating.formulas.principal_masses`) over the reachable
             check points of the box, else None.
     """
 
@@ -164,7 +165,7 @@ def _task_box(problem: DesignProblem, model: GeneratedModel, samples: int, seed:
     if problem.effort_limits is not None and J is not None:
         force = float(np.min(forces.isotropic_force(J, problem.effort_limits)))
     if problem.max_apparent_mass is not None and J is not None:
-        mass = float(np.max(rating.principal_masses(model.mass_matrix(q[inside], points[inside]), J)))
+        mass = float(np.max(formulas.principal_masses(model.mass_matrix(q[inside], points[inside]), J)))
     return Evaluation(result.value, result.measure, f"qmc over the required box, {result.description}",
                       float(np.mean(inside)), f"closed-form ik (margin, fk round trip, joint limits) at {len(points)} "
                       "points", force, mass)

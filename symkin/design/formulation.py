@@ -26,7 +26,7 @@ over fixed sample points, so the objective is a smooth function of the design:
       v_F = sum_j cos(pitch_j) / kappa_F(E_j J_j)  /  sum_j cos(pitch_j);
 * ``workspace`` of a serial model: int |det J| dq over the joint limits (area/volume in
   m^d), estimated at the same nodes (with the same smoothed |det J|);
-* ``force``: the isotropic force f_iso = min_i tau_max,i / |J_i| (:mod:`symkin.analysis.forces`,
+* ``force``: the isotropic force f_iso = min_i tau_max,i / |J_i| (:mod:`symkin.rating.forces`,
   J_i the i-th column of J) at the worst point of the required box, in epigraph form: maximize a
   bound t subject to t |J_i(p_j)| <= tau_max,i at every point p_j and every actuator i, written
   (t |J_i| / tau_max,i)^2 <= 1 (smooth; the minimum over points and actuators has kinks where the
@@ -54,7 +54,7 @@ and the declared passive-joint limits (bounds), their start continued from the h
 mode (:func:`symkin.mechanism.continuation.continue_from`); a parallel model's ``ik`` margin (the radicand of each
 leg's solution) is >= 0 at every box point and objective node, and its actuated joints stay
 within their limits (declared or overridden), if any.  A bound m_max on the apparent mass at
-the handle (every eigenvalue of Lambda = (J M^-1 J^T)^-1, :func:`symkin.analysis.rating.apparent_mass`,
+the handle (every eigenvalue of Lambda = (J M^-1 J^T)^-1, :func:`symkin.rating.formulas.apparent_mass`,
 at most m_max) holds at the same points as B = m_max J M^-1 J^T - 1 positive semidefinite:
 every principal minor of B >= 0 (smooth in the design, where an eigenvalue is not).
 
@@ -74,7 +74,7 @@ import numpy as np
 
 from symkin.mechanism.closure import assemble_at_home
 from symkin.numerics import sampling
-from symkin.analysis import forces
+from symkin.rating import forces
 from symkin import mechanism
 from symkin.mechanism import Sampling, continuation
 from symkin.mechanism import passive

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from symkin import mechanism
-from symkin.analysis.handle_measures import Actuation
+from symkin.rating.handle_measures import Actuation
 from symkin.analysis.needs import needs_of
 from symkin.mechanism import Sampling
 from symkin.runtime.info import GeneratedModel
@@ -235,7 +235,7 @@ def design_problem(model: GeneratedModel, objective: str, free: Sequence[str], *
     Args:
         model: the loaded model (any backend; only its manifest is read).
         objective: ``gci``, ``workspace`` or ``force`` (the isotropic force of
-            :func:`symkin.analysis.forces.isotropic_force` at the worst point of the required box).
+            :func:`symkin.rating.forces.isotropic_force` at the worst point of the required box).
         free: names of the parameters to optimize.
         bounds: {name: (lower, upper)}; default from start / 2 to 2 start (a start of 0 needs bounds).
         values: parameter values instead of the defaults (also the start of free ones).

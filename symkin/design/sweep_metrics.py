@@ -37,7 +37,7 @@ def evaluate_design(model: Any, values: dict[str, float], definition: Any) -> di
     """The metrics of one design ({column: value} and ``status``): ``model`` bound to the sweep's
     fixed values and then ``values``; ``definition`` a :class:`~symkin.design.sweeps.SweepDefinition`."""
     from symkin.analysis.global_indices import joint_space_integrand
-    from symkin.analysis.integrators import integrate
+    from symkin.integration.integrators import integrate
 
     row: dict[str, Any] = {c: math.nan for c in definition.columns()[1 + len(definition.axes):-1]}
     try:

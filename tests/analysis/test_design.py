@@ -23,7 +23,7 @@ import symkin
 from conftest import GENERATED_DIR, MODELS_DIR, ROOT
 from symkin import design
 from symkin.numerics import conditioning
-from symkin.analysis import forces, rating
+from symkin.rating import forces, formulas
 from symkin.mechanism import MechanismKind
 from symkin.analysis.needs import NEEDS
 from symkin.mechanism.reach import angular_velocity_matrix
@@ -314,7 +314,7 @@ def _heaviest(model, design_values, points):
     the numpy code (analysis.rating), the joints from the closed-form ik."""
     bound = model.bind(**design_values)
     q = np.asarray(bound.ik(points).joints)
-    return float(np.max(rating.principal_masses(bound.mass_matrix(q, points), bound.jacobian(q, points))))
+    return float(np.max(formulas.principal_masses(bound.mass_matrix(q, points), bound.jacobian(q, points))))
 
 
 def test_the_strongest_delta_whose_handle_feels_at_most_200_grams(delta):

@@ -23,9 +23,9 @@ from tolerances import EPS
 
 import symkin
 from symkin.analysis import global_indices as G
-from symkin.analysis.adaptive import adaptive, genz_malik_rule
-from symkin.analysis.integrand import Integrand
-from symkin.analysis.integrators import INTEGRATORS, integrate
+from symkin.integration.adaptive import adaptive, genz_malik_rule
+from symkin.integration.integrand import Integrand
+from symkin.integration.integrators import INTEGRATORS, integrate
 from symkin.analysis.inverse import closed_form_inverse
 from symkin.mechanism.reach import bounding_box
 from symkin.model import coordinates

@@ -1,4 +1,4 @@
-"""The isotropic force of symkin.analysis.forces (issue 14, seed sec. 4.2 / Table 8.5).
+"""The isotropic force of symkin.rating.forces (issue 14, seed sec. 4.2 / Table 8.5).
 
 Oracles: the planar arm's closed form (J's columns have lengths |p| and l2, so
 f_iso = min(tau1 / |p|, tau2 / l2)); the direction that attains it, along which the binding
@@ -13,7 +13,7 @@ import pytest
 
 from conftest import GENERATED_DIR, ROOT
 from symkin import load
-from symkin.analysis import forces
+from symkin.rating import forces
 from symkin import mechanism
 from symkin.cli import main
 from symkin.errors import ModelError

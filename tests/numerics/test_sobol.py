@@ -57,7 +57,7 @@ def test_a_qmc_estimate_imports_no_scipy_stats():
     script = ("import sys\n"
               "import numpy as np\n"
               "from symkin.numerics import sampling\n"
-              "from symkin.analysis.integrators import quasi_monte_carlo_estimate\n"
+              "from symkin.integration.integrators import quasi_monte_carlo_estimate\n"
               "sampling.sobol(np.zeros(2), np.ones(2), 4, np.random.default_rng(0), replicates=4)\n"
               "quasi_monte_carlo_estimate(np.ones((4, 1)), 64)\n"
               "print('scipy.stats' in sys.modules)\n")

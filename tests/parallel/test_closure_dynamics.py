@@ -204,8 +204,8 @@ def test_the_datasheet_rates_the_apparent_mass_from_the_closure_dynamics(scara):
     handle moves with the lift alone and nothing else moves with z, so the smallest principal mass at every cell is
     what rides on the lift, 0.45 kg, plus its rotor (closed form; the solves' rounding, kappa(M) <= 1e3, times
     64 eps); the horizontal ones are heavier (the arms and their geared rotors)."""
-    from symkin.analysis import datasheet
-    from symkin.analysis.handle_measures import Actuation
+    from symkin.rating import datasheet
+    from symkin.rating.handle_measures import Actuation
 
     sheet = datasheet.rate(scara, Actuation.of_model(scara, effort_limits=[1.0] * 4), samples=216,
                            limits={"lift1": (0.0, 0.2)})

@@ -433,7 +433,7 @@ def test_the_rating_of_legs_without_closed_forms_is_that_of_the_geometrys_jacobi
     those of J = dp/dq written from the geometry (its x, y, z rows: the handle pushed with its yaw free), the torque
     about z that of its yaw row; without bodies the apparent mass is not rated, and the
     datasheet says why; the home pose is the last sample."""
-    from symkin.analysis import datasheet, forces, rating
+    from symkin.rating import datasheet, forces, formulas
 
     efforts, steps = np.array([1.0, 2.0, 1.0, 0.5]), np.array([1e-3, 1e-5, 1e-3, 2e-3])
     actuation = datasheet.Actuation.of_model(scara, effort_limits=efforts, joint_steps=steps)
@@ -447,7 +447,7 @@ def test_the_rating_of_legs_without_closed_forms_is_that_of_the_geometrys_jacobi
     measures = {m.name: m.values for m in sheet.measures}
     # central differences: truncation h^2 ~ 1e-12, rounding eps / h ~ 1e-10 in dq/dp, amplified by J's conditioning
     np.testing.assert_allclose(measures["isotropic_force"], forces.isotropic_force(J[:, :3], efforts), rtol=1e-6)
-    np.testing.assert_allclose(measures["resolution"], rating.position_resolution(J[:, :3], steps), rtol=1e-6)
+    np.testing.assert_allclose(measures["resolution"], formulas.position_resolution(J[:, :3], steps), rtol=1e-6)
     np.testing.assert_allclose(measures["isotropic_torque"], forces.isotropic_force(J[:, 3:], efforts), rtol=1e-6)
 
 

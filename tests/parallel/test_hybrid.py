@@ -19,7 +19,8 @@ from conftest import MODELS_DIR, SYMKIN_CLI
 from symkin import load, load_model
 from symkin.derivation import Derivation
 from symkin.errors import DerivationError, ModelError
-from symkin.analysis import global_indices, rating
+from symkin.analysis import global_indices
+from symkin.rating import formulas
 from symkin.mechanism.device import WholeDevice
 from symkin.mechanism import reach
 from symkin.cli import main
@@ -426,7 +427,7 @@ def test_the_grip_feels_the_mass_the_forward_dynamics_accelerates_with_a_push(de
     still = np.zeros(6)
     falling = J @ plant.acceleration(Z0, still, still)
     mobility = np.array([J @ plant.acceleration(Z0, still, J.T @ force) - falling for force in np.eye(3)]).T
-    Lambda = rating.apparent_mass(view.mass_matrix(Z0), J)
+    Lambda = formulas.apparent_mass(view.mass_matrix(Z0), J)
     np.testing.assert_allclose(Lambda @ mobility, np.eye(3), rtol=0, atol=1e-9)
 
 
@@ -459,7 +460,7 @@ def test_the_operational_space_at_the_tcp_gives_the_device_efforts_and_the_grips
         Mx, Vx, _ = device.operational_space(*args, ud[:3], ud[3:])
         V = device.coriolis_vector(*args, ud[:3], ud[3:])
         assert np.abs(J_a.T @ (Mx @ Jdot_ud + Vx) - V).max() <= finite_difference * kappa ** 2 * np.abs(V).max()
-        Lambda = rating.apparent_mass(M, J_a[:3])
+        Lambda = formulas.apparent_mass(M, J_a[:3])
         grip = np.linalg.inv(np.linalg.inv(Mx)[:3, :3])
         assert np.abs(Lambda - grip).max() <= DYNAMICS * np.linalg.cond(M) * kappa ** 2 * np.abs(Lambda).max()
 
@@ -484,7 +485,7 @@ def test_cli_rates_the_whole_device_at_its_grip(generated_dir, tmp_path):
     sheet = json.loads((out / "datasheet.json").read_text())
     view = WholeDevice(load(generated_dir / "delta_wrist"))
     home = np.array(sheet["home"]["q"])
-    masses = rating.principal_masses(view.mass_matrix(home), view.jacobian(home)[:3])
+    masses = formulas.principal_masses(view.mass_matrix(home), view.jacobian(home)[:3])
     assert sheet["measures"]["apparent_mass_min"]["home"] == pytest.approx(masses[0], rel=1e-9)
     assert sheet["measures"]["apparent_mass_max"]["home"] == pytest.approx(masses[-1], rel=1e-9)
     with pytest.raises(SystemExit) as exit:

@@ -196,7 +196,7 @@ def test_symkin_rate_reads_the_encoders_gear_ratios_from_the_model():
 def test_the_declared_home_is_where_the_datasheet_and_the_simulation_start(models):
     """serial.home (the PHANToM's reset pose q = 0, where the middle of its limits is the stretched, singular arm):
     in the model, the manifest, the datasheet's home pose and the simulation's default start."""
-    from symkin.analysis import datasheet
+    from symkin.rating import datasheet
     from symkin import mechanism
     from symkin.simulation import Plant
     from symkin.simulation.start import start_pose

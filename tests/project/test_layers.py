@@ -36,7 +36,8 @@ LAYERS = (
     ("backends", {"backends", "manifest", "manifest_schema", "pipeline", "pipeline_cache"}),
     ("runtime", {"runtime", "backends.*.loader*"}),
     ("mechanism", {"mechanism"}),
-    ("analyses", {"ik", "analysis", "design", "identification", "references", "simulation", "stability", "viewer"}),
+    ("analyses", {"ik", "integration", "analysis", "rating", "design", "identification", "references", "simulation", "stability",
+                  "viewer"}),
     ("api", {"api"}),
     ("cli", {"cli", "__main__"}),
 )
@@ -57,8 +58,8 @@ ROLES = {
     "runtime": "each backend's loader, the bindings they share, the numerical kinematics of parallel mechanisms",
     "mechanism": "the run-time mechanism every analysis asks: coordinates, limits, kinds, the passive joints' closure, "
                  "reachability through inverse kinematics and by continuation",
-    "analyses": "inverse kinematics, analyses, design, identification, references (the cross-checks), simulation, numerical "
-                "stability, the viewer",
+    "analyses": "inverse kinematics, integration (GCI integrators), analyses (workspace, GCI), rating, design, identification, "
+                "references (the cross-checks), simulation, numerical stability, the viewer",
     "api": "the public functions, and the `symkin` package facade",
     "cli": "the commands",
 }

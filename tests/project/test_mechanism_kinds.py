@@ -20,7 +20,8 @@ from collections.abc import Iterator
 from conftest import ROOT
 
 #: The folders above the run-time layer whose modules should not tell mechanisms apart.
-FOLDERS = ("analysis", "cli", "simulation", "design", "identification", "references", "viewer", "stability")
+FOLDERS = ("analysis", "integration", "rating", "cli", "simulation", "design", "identification", "references", "viewer",
+           "stability")
 #: Words of an identifier (case-insensitive) that name a kind of mechanism or its machinery.
 KIND_WORDS = re.compile(r"parallel|closure|wrist|(^|_)legs?($|_)|mechanismkind|kind_of|is_serial|(^|_)serial($|_)"
                         r"|hybrid|platform")

@@ -17,8 +17,8 @@ import pytest
 from conftest import GENERATED_DIR
 
 from symkin import load
-from symkin.analysis import chunked
-from symkin.analysis.chunked import IntegrandSpec, integrate_chunked
+from symkin.integration import chunked
+from symkin.integration.chunked import IntegrandSpec, integrate_chunked
 from symkin.analysis.global_indices import gci
 from symkin.cli import main
 from symkin.runtime.payload import ModelPayload

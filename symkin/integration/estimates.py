@@ -11,7 +11,7 @@ depends on the method, and so does the error of a ratio I_i / I_j such as the GC
   quantile times the standard error);
 * levels (regular grid): the same rule on grids 2 and 4 times coarser; for any result
   g (an integral or a ratio) the error is max(|g_1 - g_2|, |g_2 - g_4| / 2) with g_1 the
-  fine, g_2 and g_4 the coarser results (see :mod:`symkin.analysis.integrators`);
+  fine, g_2 and g_4 the coarser results (see :mod:`symkin.integration.integrators`);
 * bounds (adaptive cubature): per-component error estimates e; the ratio's error is
   propagated to first order, (e_i + |R| e_j) / |I_j|.
 

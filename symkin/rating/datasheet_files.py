@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from symkin.analysis.datasheet import Datasheet, axis_scale
+from symkin.rating.datasheet import Datasheet, axis_scale
 
 
 def csv_text(sheet: Datasheet, coordinates: Sequence[str]) -> str:

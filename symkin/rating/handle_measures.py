@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from symkin.analysis import forces, rating
+from symkin.rating import forces, formulas
 from symkin import mechanism
 from symkin.runtime.info import GeneratedModel
 
@@ -79,7 +79,7 @@ def rotation_measures(J_w: np.ndarray, M: np.ndarray | None, actuation: Actuatio
     if M is None:
         skipped["apparent_inertia"] = no_mass
     else:
-        inertias = rating.principal_masses(M, J_w)
+        inertias = formulas.principal_masses(M, J_w)
         out += [Measure("apparent_inertia_min", "kg m^2", inertias[:, 0], False,
                         "smallest principal inertia felt turning the handle (its position free)"),
                 Measure("apparent_inertia_max", "kg m^2", inertias[:, -1], False,
@@ -89,7 +89,7 @@ def rotation_measures(J_w: np.ndarray, M: np.ndarray | None, actuation: Actuatio
     else:
         out += [Measure("isotropic_torque", "N m", forces.isotropic_force(J_w, actuation.effort_limits), True,
                         "largest torque rendered about every axis, with no force (peak efforts)"),
-                Measure("peak_torque", "N m", rating.peak_force(J_w, actuation.effort_limits), True,
+                Measure("peak_torque", "N m", formulas.peak_force(J_w, actuation.effort_limits), True,
                         "largest torque rendered about the best axis, with no force (peak efforts)")]
     if actuation.continuous_limits is None:
         skipped["continuous_torque"] = NO_CONTINUOUS_LIMITS
@@ -99,7 +99,7 @@ def rotation_measures(J_w: np.ndarray, M: np.ndarray | None, actuation: Actuatio
     if actuation.joint_steps is None:
         skipped["angular_resolution"] = NO_ENCODERS
     else:
-        out.append(Measure("angular_resolution", "rad", rating.position_resolution(J_w, actuation.joint_steps), False,
+        out.append(Measure("angular_resolution", "rad", formulas.position_resolution(J_w, actuation.joint_steps), False,
                            "largest handle rotation between neighbouring encoder readings"))
     return tuple(out), skipped
 
@@ -116,7 +116,7 @@ def translation_measures(model: GeneratedModel, J: np.ndarray, M: np.ndarray | N
     if M is None:
         skipped["apparent_mass"] = no_mass
     else:
-        masses = rating.principal_masses(M, J)
+        masses = formulas.principal_masses(M, J)
         out += [Measure("apparent_mass_min", "kg", masses[:, 0], False, "smallest principal mass felt at the handle"),
                 Measure("apparent_mass_max", "kg", masses[:, -1], False, "largest principal mass felt at the handle"),
                 Measure("inertia_isotropy", "", masses[:, -1] / masses[:, 0], False,
@@ -127,7 +127,7 @@ def translation_measures(model: GeneratedModel, J: np.ndarray, M: np.ndarray | N
     else:
         out += [Measure("isotropic_force", "N", forces.isotropic_force(J, efforts), True,
                         "largest force rendered in every direction (peak efforts)"),
-                Measure("peak_force", "N", rating.peak_force(J, efforts), True,
+                Measure("peak_force", "N", formulas.peak_force(J, efforts), True,
                         "largest force rendered in the best direction (peak efforts)")]
         share = (gravity_share_measure(model, q, poses, efforts) if G is None
                  else G if isinstance(G, str) else [held_against_gravity(G, efforts)])
@@ -143,7 +143,7 @@ def translation_measures(model: GeneratedModel, J: np.ndarray, M: np.ndarray | N
     if actuation.joint_steps is None:
         skipped["resolution"] = NO_ENCODERS
     else:
-        out.append(Measure("resolution", "m", rating.position_resolution(J, actuation.joint_steps), False,
+        out.append(Measure("resolution", "m", formulas.position_resolution(J, actuation.joint_steps), False,
                            "largest handle step between neighbouring encoder readings"))
     friction = (friction_measures(J, actuation, TRANSLATIONAL_FRICTION) if J.shape[-2] <= J.shape[-1]
                 else "friction and damping at the handle need at least as many joints as task translations")
@@ -170,7 +170,7 @@ def gravity_share_measure(model: GeneratedModel, q: np.ndarray, poses: np.ndarra
 
 def held_against_gravity(G: np.ndarray, efforts: np.ndarray) -> Measure:
     """The gravity share of the efforts G (N, n) that hold the device still."""
-    return Measure("gravity_share", "", rating.gravity_share(G, efforts), False,
+    return Measure("gravity_share", "", formulas.gravity_share(G, efforts), False,
                    "largest share of an effort limit spent holding the device against gravity")
 
 
@@ -185,7 +185,7 @@ ROTATIONAL_FRICTION = (("coulomb_torque", "N m", "largest Coulomb friction torqu
                        ("renderable_stiffness", "N m/rad", "stiffest passive rotational virtual wall"))
 
 
-#: Every measure of a handle pushed, by group (:class:`symkin.analysis.datasheet.Datasheet` checks that each group
+#: Every measure of a handle pushed, by group (:class:`symkin.rating.datasheet.Datasheet` checks that each group
 #: is rated whole, or listed as not rated with what to give).
 PUSHED_GROUPS: dict[str, tuple[str, ...]] = {
     "apparent_mass": ("apparent_mass_min", "apparent_mass_max", "inertia_isotropy"),
@@ -214,13 +214,13 @@ NO_ENCODERS = "no encoder data: give --encoder COUNTS[,...] (and --gear)"
 def friction_measures(J: np.ndarray, actuation: Actuation, labels: tuple[tuple[str, str, str], ...]
                        ) -> list[Measure] | str:
     """The Coulomb friction felt, the least damping and the stiffest passive wall at the servo rate (Colgate-Brown)
-    through J (square, or with more joints than rows: :mod:`symkin.analysis.rating`), labelled by ``labels``; or
+    through J (square, or with more joints than rows: :mod:`symkin.rating.formulas`), labelled by ``labels``; or
     why not (no joint friction declared)."""
     if actuation.coulomb is None or actuation.viscous is None:
         return "no joint friction declared (friction: in the model file)"
     (coulomb, coulomb_unit, coulomb_doc), (damped, damping_unit, damping_doc), (wall, wall_unit, wall_doc) = labels
-    damping = rating.handle_damping(J, actuation.viscous)
-    return [Measure(coulomb, coulomb_unit, rating.coulomb_friction_felt(J, actuation.coulomb), False, coulomb_doc),
+    damping = formulas.handle_damping(J, actuation.viscous)
+    return [Measure(coulomb, coulomb_unit, formulas.coulomb_friction_felt(J, actuation.coulomb), False, coulomb_doc),
             Measure(damped, damping_unit, damping, True, damping_doc),
-            Measure(wall, wall_unit, rating.renderable_stiffness(damping, actuation.period), True,
+            Measure(wall, wall_unit, formulas.renderable_stiffness(damping, actuation.period), True,
                     f"{wall_doc} at {1 / actuation.period:g} Hz (Colgate-Brown, K < 2 b / T)")]

@@ -10,7 +10,7 @@ planar arm; m < n for a redundant device, e.g. a DELTA carrying a wrist pushed a
   ratio its isotropy (Salcudean and Stocco 2000; the inertia conditioning of Cammarata 2010).
 * **force capability**: with |tau_i| <= tau_max,i the renderable forces F = J^-T tau fill a
   parallelepiped.  The isotropic force (in every direction) is min_i tau_max,i / |J_i|
-  (:func:`symkin.analysis.forces.isotropic_force`), the peak force (in the best direction) its
+  (:func:`symkin.rating.forces.isotropic_force`), the peak force (in the best direction) its
   farthest vertex, max over s in {-1, 1}^n of |J^-T (s * tau_max)| (with more joints than task
   coordinates, J the translational rows of an arm pushed at its TCP: the farthest vertex of the
   polytope |J^T F| <= tau_max, tried at every choice of m joints at their limits).

@@ -37,8 +37,8 @@ from itertools import combinations, product
 
 import numpy as np
 
-from symkin.analysis.estimates import IntegralEstimate
-from symkin.analysis.integrand import Integrand
+from symkin.integration.estimates import IntegralEstimate
+from symkin.integration.integrand import Integrand
 
 _LAMBDA2 = np.sqrt(9.0 / 70.0)
 _LAMBDA3 = np.sqrt(9.0 / 10.0)  # also lambda_4 of the paper

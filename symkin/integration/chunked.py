@@ -1,7 +1,7 @@
 """The GCI integrators in chunks of points, on Dask: budgets beyond memory (10^9 points and more).
 
-:func:`~symkin.analysis.integrators.quasi_monte_carlo` and
-:func:`~symkin.analysis.integrators.monte_carlo` draw every point at once.  Here the budget is
+:func:`~symkin.integration.integrators.quasi_monte_carlo` and
+:func:`~symkin.integration.integrators.monte_carlo` draw every point at once.  Here the budget is
 cut into chunks of at most ``chunk`` points; each chunk is a task
 (:func:`symkin.runtime.cluster.run_tasks`: a LocalCluster, a cluster, or this process) that
 draws its own points from the definition alone, evaluates the integrand on the worker (rebuilt
@@ -35,8 +35,8 @@ from typing import Any
 
 import numpy as np
 
-from symkin.analysis.estimates import IntegralEstimate
-from symkin.analysis.integrators import QMC_REPLICATES, monte_carlo_estimate, quasi_monte_carlo_estimate
+from symkin.integration.estimates import IntegralEstimate
+from symkin.integration.integrators import QMC_REPLICATES, monte_carlo_estimate, quasi_monte_carlo_estimate
 from symkin.numerics.sampling import sobol_range
 from symkin.runtime.cluster import run_tasks
 from symkin.runtime.payload import ModelPayload

@@ -1,4 +1,4 @@
-"""The datasheet measures of symkin.analysis.rating (issue 32) on the seed's planar 2R arm with point masses.
+"""The datasheet measures of symkin.rating.formulas (issue 32) on the seed's planar 2R arm with point masses.
 
 Oracles written here from the seed's J (eq. 8.56) and the point masses m1 at the elbow, m2 at the tip:
 the apparent mass in closed form, Lambda = m2 I + m1 / sin^2(theta2) u u^T with u the forearm's direction
@@ -17,7 +17,7 @@ import json
 
 from conftest import MODELS_DIR
 from symkin import load
-from symkin.analysis import forces, handle_measures, rating
+from symkin.rating import forces, formulas, handle_measures
 from symkin.cli import main
 from tolerances import CLOSED_FORM, DYNAMICS, EPS
 
@@ -46,20 +46,20 @@ def test_the_apparent_mass_is_m2_across_the_forearm_and_grows_as_1_over_sin2_alo
     M, J = arm.mass_matrix(q), seed_jacobian(q)
     forearm = np.array([np.cos(q.sum()), np.sin(q.sum())])
     expected = M2 * np.eye(2) + M1 / np.sin(q[1]) ** 2 * np.outer(forearm, forearm)
-    Lambda = rating.apparent_mass(M, J)
+    Lambda = formulas.apparent_mass(M, J)
     # two solves with J's conditioning, each backward stable: relative error ~ kappa(J)^2 kappa(M) eps
     bound = 16 * np.linalg.cond(J) ** 2 * np.linalg.cond(M) * EPS
     np.testing.assert_allclose(Lambda, expected, rtol=0, atol=bound * np.abs(expected).max())
     np.testing.assert_allclose(arm.operational_space(q, np.zeros(2)).Mx, Lambda, rtol=0,  # the derived Mx
                                atol=bound * np.abs(expected).max())
-    masses = rating.principal_masses(M, J)
+    masses = formulas.principal_masses(M, J)
     np.testing.assert_allclose(masses, [M2, M2 + M1 / np.sin(q[1]) ** 2], rtol=bound)
 
 
 @pytest.mark.parametrize("q", POSES)
 def test_the_peak_force_is_the_best_direction_of_a_dense_scan(arm, q):
     J, limits = seed_jacobian(q), np.array([0.3, 0.2])
-    peak = float(rating.peak_force(J, limits))
+    peak = float(formulas.peak_force(J, limits))
     scanned = forces.directional_force(J, limits, directions(200_000))
     assert np.max(scanned) <= peak * (1 + 1e-12)
     assert np.max(scanned) >= peak * (1 - 1e-3)          # the scan's angular step, 3e-5 rad, near a kink
@@ -72,7 +72,7 @@ def test_the_coulomb_friction_felt_is_the_worst_direction_of_motion(arm, q):
     u = directions(200_000)
     qd = np.linalg.solve(J, u.T).T                          # moving the handle with unit speed along u
     felt = np.abs(qd) @ coulomb                             # u . J^-T (tau_c sign(qd)) = sum tau_c |qd_i|
-    worst = float(rating.coulomb_friction_felt(J, coulomb))
+    worst = float(formulas.coulomb_friction_felt(J, coulomb))
     assert np.max(felt) <= worst * (1 + 1e-12)
     assert np.max(felt) >= worst * (1 - 1e-3)
 
@@ -83,13 +83,13 @@ def test_the_damping_at_the_handle_is_its_least_damped_direction(arm, q):
     count = 200_000
     qd = np.linalg.solve(J, directions(count).T).T
     along = np.sum(viscous * qd ** 2, axis=-1)              # u . J^-T diag(b) J^-1 u
-    least = float(rating.handle_damping(J, viscous))
+    least = float(formulas.handle_damping(J, viscous))
     # the scan misses the least direction by at most half its angular step h: u . B u exceeds the least
     # eigenvalue by at most (h / 2)^2 (largest - least)
     spread = np.max(along) - least
     assert least <= np.min(along) * (1 + 1e-12)
     assert np.min(along) - least <= (np.pi / count) ** 2 * spread
-    assert float(rating.renderable_stiffness(least, 1e-3)) == pytest.approx(2 * least / 1e-3, rel=CLOSED_FORM)
+    assert float(formulas.renderable_stiffness(least, 1e-3)) == pytest.approx(2 * least / 1e-3, rel=CLOSED_FORM)
 
 
 @pytest.mark.parametrize("q", POSES)
@@ -100,7 +100,7 @@ def test_the_position_resolution_is_the_largest_step_between_neighbouring_encode
     neighbours = read + np.array([[a, b] for a in (-1, 0, 1) for b in (-1, 0, 1)]) * step
     tcp = arm.fk(neighbours)[:, :2, 3]
     simulated = np.max(np.linalg.norm(tcp - arm.fk(read)[:2, 3], axis=-1))
-    first_order = float(rating.position_resolution(arm.jacobian(read), step))
+    first_order = float(formulas.position_resolution(arm.jacobian(read), step))
     # fk - its linearization is at most 1/2 |dq|^2 max|fk''| <= (l1 + l2) |dq|^2 (two joints)
     assert abs(simulated - first_order) <= (L1 + L2) * float(np.sum(step ** 2))
 
@@ -108,13 +108,13 @@ def test_the_position_resolution_is_the_largest_step_between_neighbouring_encode
 def test_the_gravity_budget_is_the_largest_share_of_an_effort_limit(arm):
     q = POSES[0]
     G = arm.gravity_vector(q)
-    assert float(rating.gravity_share(G, [0.5, 0.1])) == pytest.approx(max(abs(G[0]) / 0.5, abs(G[1]) / 0.1),
+    assert float(formulas.gravity_share(G, [0.5, 0.1])) == pytest.approx(max(abs(G[0]) / 0.5, abs(G[1]) / 0.1),
                                                                       rel=CLOSED_FORM)
 
 
 def test_forces_at_the_handle_need_as_many_joints_as_task_coordinates():
     with pytest.raises(ValueError, match="at least as many joints as task coordinates"):
-        rating.coulomb_friction_felt(np.ones((3, 2)), [1.0, 1.0])
+        formulas.coulomb_friction_felt(np.ones((3, 2)), [1.0, 1.0])
 
 
 #: A redundant device: three joints move a handle in the plane (v = J qd).
@@ -127,7 +127,7 @@ def test_a_redundant_device_slips_in_its_cheapest_joint_motion():
     from scipy.optimize import linprog
 
     coulomb = np.array([0.01, 0.004, 0.002])
-    felt = float(rating.coulomb_friction_felt(REDUNDANT, coulomb))
+    felt = float(formulas.coulomb_friction_felt(REDUNDANT, coulomb))
     values = []
     for u in directions(720):
         # w = w+ - w-, both >= 0: min c . (w+ + w-) s.t. J (w+ - w-) = u
@@ -138,8 +138,8 @@ def test_a_redundant_device_slips_in_its_cheapest_joint_motion():
     assert max(values) <= felt * (1 + 1e-9)
     assert max(values) >= felt * (1 - 1e-4)
     square = REDUNDANT[:, :2]
-    assert float(rating.coulomb_friction_felt(square, coulomb[:2])) == pytest.approx(
-        float(rating.farthest_vertex(np.linalg.inv(square).T, coulomb[:2])), rel=CLOSED_FORM)
+    assert float(formulas.coulomb_friction_felt(square, coulomb[:2])) == pytest.approx(
+        float(formulas.farthest_vertex(np.linalg.inv(square).T, coulomb[:2])), rel=CLOSED_FORM)
 
 
 def test_a_redundant_devices_damping_is_its_least_dissipating_joint_motion():
@@ -163,15 +163,15 @@ def test_a_redundant_devices_damping_is_its_least_dissipating_joint_motion():
                    for j in range(2)] for i in range(2)])
     expected = np.linalg.eigvalsh(D)[0]
     # two solves, each within a few ulps times kappa(J B^-1 J^T) = 92: 1e3 EPS
-    assert float(rating.handle_damping(REDUNDANT, viscous)) == pytest.approx(expected, rel=1e3 * EPS)
-    assert float(rating.handle_damping(REDUNDANT, [0.002, 0.0, 0.0005])) == 0.0
+    assert float(formulas.handle_damping(REDUNDANT, viscous)) == pytest.approx(expected, rel=1e3 * EPS)
+    assert float(formulas.handle_damping(REDUNDANT, [0.002, 0.0, 0.0005])) == 0.0
 
 
 def test_the_peak_force_of_a_redundant_arm_is_the_farthest_point_its_efforts_allow():
     """Three joints, two task coordinates: the polytope |J^T F| <= tau_max against a dense scan of f(u)."""
     J = np.array([[-0.12, -0.07, -0.02], [0.15, 0.09, 0.05]])
     limits = np.array([0.4, 0.25, 0.1])
-    peak = float(rating.peak_force(J, limits))
+    peak = float(formulas.peak_force(J, limits))
     scanned = forces.directional_force(J, limits, directions(200_000))
     assert np.max(scanned) <= peak * (1 + 1e-9)
     assert np.max(scanned) >= peak * (1 - 1e-3)
@@ -202,7 +202,7 @@ def test_the_delta_feels_the_mass_pinocchio_accelerates_with_a_push_at_the_handl
             acceleration = pin.constraintDynamics(tree, data, q, velocity, efforts, constraints, datas, settings)
             pushed.append(acceleration[platform:platform + 3])
         mobility = np.array(pushed).T
-        Lambda = rating.apparent_mass(delta.mass_matrix(theta, P), delta.jacobian(theta, P))
+        Lambda = formulas.apparent_mass(delta.mass_matrix(theta, P), delta.jacobian(theta, P))
         np.testing.assert_allclose(Lambda @ mobility, np.eye(3), rtol=0, atol=1e-9)
 
 
@@ -228,7 +228,7 @@ def test_cli_rates_the_delta_and_writes_its_datasheet(generated_dir, tmp_path):
     delta = load(generated_dir / "delta")
     J = delta.jacobian(home, delta.fk(home).position)
     step = 2 * np.pi / (4096 * 10)
-    assert sheet["measures"]["resolution"]["home"] == pytest.approx(float(rating.position_resolution(J, step)),
+    assert sheet["measures"]["resolution"]["home"] == pytest.approx(float(formulas.position_resolution(J, step)),
                                                                      rel=1e-8)
     assert (out / "datasheet.png").read_bytes()[:4] == b"\x89PNG"
     # every input the rating used is recorded, with where it came from
@@ -259,8 +259,8 @@ def test_cli_lists_what_it_cannot_rate_and_refuses_what_it_does_not_rate(generat
 def test_every_measure_is_rated_or_listed_as_not_rated(arm):
     """Issue 60: a datasheet whose measures and not-rated groups do not cover its groups once each is refused,
     so no measure can drop out silently (the rating of every kind of device builds one)."""
-    from symkin.analysis.datasheet import Datasheet
-    from symkin.analysis.handle_measures import PUSHED_GROUPS, Measure
+    from symkin.rating.datasheet import Datasheet
+    from symkin.rating.handle_measures import PUSHED_GROUPS, Measure
 
     q, points = np.zeros((2, 2)), np.zeros((2, 2))
     force = [Measure(name, "N", np.ones(2), True, "") for name in PUSHED_GROUPS["force"]]
@@ -280,7 +280,7 @@ def test_help_and_docs_name_every_measure_the_rating_lists(capsys):
     closure_dynamics: tests/parallel/test_closure_dynamics.py)."""
     from pathlib import Path
 
-    from symkin.analysis.handle_measures import PUSHED_GROUPS, SPHERICAL_GROUPS
+    from symkin.rating.handle_measures import PUSHED_GROUPS, SPHERICAL_GROUPS
 
     with pytest.raises(SystemExit):
         main(["rate", "--help"])
@@ -313,8 +313,8 @@ def test_friction_declared_in_the_model_is_felt_at_the_handle(tmp_path):
     J = seed_jacobian(home)
     measures = sheet["measures"]
     assert measures["coulomb_friction"]["home"] == pytest.approx(
-        float(rating.coulomb_friction_felt(J, [0.004, 0.0025])), rel=1e-9)
-    damping = float(rating.handle_damping(J, [0.002, 0.001]))
+        float(formulas.coulomb_friction_felt(J, [0.004, 0.0025])), rel=1e-9)
+    damping = float(formulas.handle_damping(J, [0.002, 0.001]))
     assert measures["handle_damping"]["home"] == pytest.approx(damping, rel=1e-9)
     assert measures["renderable_stiffness"]["home"] == pytest.approx(2 * damping / 1e-3, rel=1e-9)
 
@@ -349,7 +349,7 @@ def test_a_virtual_spring_beyond_the_colgate_brown_stiffness_makes_the_loop_unst
     home = np.array(plant.model.info.home)
     q0 = plant.model.ik(home).joints
     J = plant.point_jacobian(q0)
-    K = factor * float(rating.renderable_stiffness(rating.handle_damping(J, [0.01, 0.01, 0.01]), 1e-3))
+    K = factor * float(formulas.renderable_stiffness(formulas.handle_damping(J, [0.01, 0.01, 0.01]), 1e-3))
 
     def spring(t, x):
         q = x[:3]
@@ -365,7 +365,7 @@ def test_a_virtual_spring_beyond_the_colgate_brown_stiffness_makes_the_loop_unst
 
 @pytest.fixture(scope="module")
 def stewart_sheet(generated_dir):
-    from symkin.analysis import datasheet
+    from symkin.rating import datasheet
 
     stewart = load(generated_dir / "stewart")
     limits = np.full(6, 300.0)  # N per leg: an assumed actuator, the model declares none
@@ -438,7 +438,7 @@ def test_cli_rates_a_rotating_platform_at_a_constant_orientation(generated_dir, 
 
 @pytest.fixture(scope="module")
 def eye_sheet(generated_dir):
-    from symkin.analysis import datasheet
+    from symkin.rating import datasheet
 
     eye = load(generated_dir / "agile_eye")
     limits = np.full(3, 1.0)  # N m per actuator: an assumed drive, the model declares none
@@ -553,15 +553,15 @@ def test_a_device_carrying_a_wrist_feels_the_friction_of_its_cheapest_joint_moti
     coulomb, viscous = [0.02] * 3 + [0.001] * 3, [0.01] * 3 + [0.0002] * 3
     measures = sheet["measures"]
     # central differences: truncation h^2 |grip'''| ~ 1e-12 and rounding EPS / h ~ 1e-10, relative to entries ~ 0.1
-    assert measures["coulomb_friction"]["home"] == pytest.approx(float(rating.coulomb_friction_felt(J, coulomb)),
+    assert measures["coulomb_friction"]["home"] == pytest.approx(float(formulas.coulomb_friction_felt(J, coulomb)),
                                                                  rel=1e-7)
-    assert measures["handle_damping"]["home"] == pytest.approx(float(rating.handle_damping(J, viscous)), rel=1e-7)
+    assert measures["handle_damping"]["home"] == pytest.approx(float(formulas.handle_damping(J, viscous)), rel=1e-7)
 
 
 def test_a_clipped_colour_scale_says_so_and_the_map_shows_the_worst_over_height():
     """Issue 60: a map whose bar ended at 11 kg while the summary said 69 kg - a scale that clips has extend arrows
     and the true range in its label; a spatial device's map shows, per x-y cell, the worst value over z."""
-    from symkin.analysis.datasheet_files import colour_range, worst_map
+    from symkin.rating.datasheet_files import colour_range, worst_map
 
     values = np.concatenate([np.linspace(1.0, 2.0, 200), [69.0]])
     low, high, extend, note = colour_range(values, values)
@@ -580,8 +580,8 @@ def test_a_clipped_colour_scale_says_so_and_the_map_shows_the_worst_over_height(
 def test_the_datasheet_figure_keeps_titles_clear_and_prints_no_negative_zero(generated_dir):
     from checks import check_figure_layout
 
-    from symkin.analysis import datasheet, datasheet_files
-    from symkin.analysis.handle_measures import Actuation
+    from symkin.rating import datasheet, datasheet_files
+    from symkin.rating.handle_measures import Actuation
 
     delta = load(generated_dir / "delta")
     sheet = datasheet.rate(delta, Actuation.of_model(delta, effort_limits=[0.3] * 3), samples=500)

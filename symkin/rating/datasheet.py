@@ -1,4 +1,4 @@
-"""A haptic device's datasheet: the measures of :mod:`symkin.analysis.rating` over its workspace and at its
+"""A haptic device's datasheet: the measures of :mod:`symkin.rating.formulas` over its workspace and at its
 home pose, with the pose where each extreme occurs (``symkin rate``).
 
 The workspace is sampled as the mechanism is (:func:`symkin.mechanism.sampling`: its joint space, centres,
@@ -22,7 +22,7 @@ import numpy as np
 from symkin.analysis import workspace
 from symkin import mechanism
 from symkin.numerics.conditioning import inverse_condition_number
-from symkin.analysis.handle_measures import (NO_GRAVITY, PUSHED_GROUPS, ROTATIONAL_FRICTION,
+from symkin.rating.handle_measures import (NO_GRAVITY, PUSHED_GROUPS, ROTATIONAL_FRICTION,
                                              SPHERICAL_GROUPS, TURNED_GROUPS, Actuation, Measure, dynamics_at,
                                              friction_measures, gravity_share_measure, rotation_measures,
                                              translation_measures)
@@ -34,7 +34,7 @@ from symkin.runtime.info import GeneratedModel
 class Datasheet:
     """The rated samples: joint configurations q (N, n), TCP points (N, d) with their axes, the measures,
     the index of the home pose among the samples, {group: why it is not rated} and the groups of measures the
-    device's handle has ({group: its measures}, e.g. :data:`~symkin.analysis.handle_measures.PUSHED_GROUPS`), and
+    device's handle has ({group: its measures}, e.g. :data:`~symkin.rating.handle_measures.PUSHED_GROUPS`), and
     notes on how it was rated (the home assembly of legs solved through their closure).
 
     Every group is rated whole or listed as not rated (a measure is never dropped silently): raises ValueError
@@ -168,9 +168,9 @@ def rate(model: GeneratedModel, actuation: Actuation, *, samples: int = 4096, se
          conditioning: float = USABLE_CONDITIONING, orientation: Sequence[float] | None = None) -> Datasheet:
     """The datasheet of a device over the usable samples of its workspace in ``box`` (the handle's coordinates, m or
     rad) where 1/kappa >= ``conditioning``, and at its home pose: the handle pushed (apparent mass, force
-    capability, resolution, gravity share, friction: :func:`~symkin.analysis.handle_measures.translation_measures`)
+    capability, resolution, gravity share, friction: :func:`~symkin.rating.handle_measures.translation_measures`)
     where it translates, turned (apparent inertia, torque, angular resolution:
-    :func:`~symkin.analysis.handle_measures.rotation_measures`) where it also rotates, and the gravity share and
+    :func:`~symkin.rating.handle_measures.rotation_measures`) where it also rotates, and the gravity share and
     the rotational friction where it only turns.
 
     The samples come from the mechanism, as it is sampled (:func:`symkin.mechanism.sampling`): a serial arm's or a

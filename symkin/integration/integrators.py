@@ -1,8 +1,8 @@
 """Integrators of a vector integrand over a box, each with an error estimate.
 
-All take an :class:`~symkin.analysis.integrand.Integrand` and a budget ``samples`` (the
+All take an :class:`~symkin.integration.integrand.Integrand` and a budget ``samples`` (the
 number of integrand evaluations to spend, approximately for the grid) and return an
-:class:`~symkin.analysis.estimates.IntegralEstimate`:
+:class:`~symkin.integration.estimates.IntegralEstimate`:
 
 * ``grid``: the tensor midpoint rule on n^d cells (n divisible by 4); for the error also
   on (n/2)^d and (n/4)^d cells (a quarter and a sixteenth more work in 2-D).  The error
@@ -17,7 +17,7 @@ number of integrand evaluations to spend, approximately for the grid) and return
   point sets of 2^m points each (:func:`symkin.numerics.sampling.sobol`), evaluated in
   one batch; the estimate is their mean and the error the 95 % Student-t half-width
   from their spread (Owen, "Monte Carlo theory, methods and examples", ch. 17);
-* ``adaptive``: batched adaptive Genz-Malik cubature (:mod:`symkin.analysis.adaptive`).
+* ``adaptive``: batched adaptive Genz-Malik cubature (:mod:`symkin.integration.adaptive`).
 """
 
 from __future__ import annotations
@@ -27,9 +27,9 @@ from collections.abc import Callable
 import numpy as np
 
 from symkin.numerics import sampling
-from symkin.analysis.adaptive import adaptive
-from symkin.analysis.estimates import CONFIDENCE, IntegralEstimate
-from symkin.analysis.integrand import Integrand
+from symkin.integration.adaptive import adaptive
+from symkin.integration.estimates import CONFIDENCE, IntegralEstimate
+from symkin.integration.integrand import Integrand
 
 #: Independent scramblings of the quasi-Monte Carlo integrator.
 QMC_REPLICATES = 16
@@ -97,7 +97,7 @@ def quasi_monte_carlo_estimate(means: np.ndarray, evaluations: int) -> IntegralE
 
 def adaptive_integrator(integrand: Integrand, samples: int, *, rng: np.random.Generator | None = None,
                         rtol: float = 0.0) -> IntegralEstimate:
-    """Batched adaptive Genz-Malik cubature (see :func:`symkin.analysis.adaptive.adaptive`; ``rng`` is unused)."""
+    """Batched adaptive Genz-Malik cubature (see :func:`symkin.integration.adaptive.adaptive`; ``rng`` is unused)."""
     return adaptive(integrand, samples, rtol=rtol)
 
 

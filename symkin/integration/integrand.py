@@ -1,4 +1,4 @@
-"""A vectorized integrand over a box: what every integrator of :mod:`symkin.analysis.integrators` integrates."""
+"""A vectorized integrand over a box: what every integrator of :mod:`symkin.integration.integrators` integrates."""
 
 from __future__ import annotations
 
@@ -25,7 +25,7 @@ class Integrand:
         indicator: index of a component that is the 0/1 indicator of the integration
             domain inside the box (a reachability test), or None for an integrand that is
             continuous on the box; where it jumps, every component may jump, which the
-            adaptive integrator must know (see :mod:`symkin.analysis.adaptive`).
+            adaptive integrator must know (see :mod:`symkin.integration.adaptive`).
     """
 
     lower: np.ndarray
