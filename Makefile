@@ -46,10 +46,14 @@ demo: setup
 FOREIGN_SIMD := $(if $(filter x86_64,$(shell uname -m)),NPY_DISABLE_CPU_FEATURES="X86_V3 X86_V4 AVX512_ICL AVX512_SPR")
 FOREIGN_ARITHMETIC := SYMKIN_TEST_ARITHMETIC=foreign $(FOREIGN_SIMD) SYMKIN_CFLAGS="-O2 -march=native -ffp-contract=fast"
 
+# One BLAS thread per test worker: the workers already take every core, and on symkin's small matrices OpenBLAS's
+# threads cost more than they win (tests/identification ran in 78 s with them, 48 s without, on 2 cores).
+ONE_BLAS_THREAD := OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 MKL_NUM_THREADS=1
+
 ## test: run the whole test suite, then its numerics-sensitive part again on foreign arithmetic
 test: setup
-	$(BIN)/python -m pytest -n $(PYTEST_WORKERS) --dist loadgroup -q --durations=25
-	$(FOREIGN_ARITHMETIC) $(BIN)/python -m pytest -n $(PYTEST_WORKERS) --dist loadgroup -q -m numerics
+	$(ONE_BLAS_THREAD) $(BIN)/python -m pytest -n $(PYTEST_WORKERS) --dist loadgroup -q --durations=25
+	$(ONE_BLAS_THREAD) $(FOREIGN_ARITHMETIC) $(BIN)/python -m pytest -n $(PYTEST_WORKERS) --dist loadgroup -q -m numerics
 
 ## generate: rewrite generated/ from the example models (the "update" switch of the golden tests)
 generate: demo

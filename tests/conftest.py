@@ -11,7 +11,12 @@ import os
 import sys
 from pathlib import Path
 
-import numpy as np
+# One BLAS thread per worker, as make test runs the suite (Makefile: ONE_BLAS_THREAD) and the symkin command runs
+# (symkin.cli.BLAS_THREADS): the workers take the cores; set before numpy is first imported, for a bare pytest run.
+for _variable in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_variable, "1")
+
+import numpy as np  # after the BLAS threads are set
 import pytest
 
 from symkin import load

@@ -13,7 +13,16 @@ import signal
 import sys
 from collections.abc import Sequence
 
-from symkin._version import __version__
+#: One BLAS thread per command unless the user says otherwise: symkin's linear algebra is many small matrices (stacks
+#: of 3 x 3 to 100 x 100 solved one LAPACK call each, least squares of a few hundred columns), where OpenBLAS's
+#: threads cost more than they win (``symkin identify --method consistent`` of the PHANToM: 10 s on one thread, 32 s
+#: on two, on a 2-core machine); what runs in parallel is Dask's worker processes, which inherit this.  Set before
+#: numpy is first imported (below), which reads it once.
+BLAS_THREADS = {"OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+for _variable, _value in BLAS_THREADS.items():
+    os.environ.setdefault(_variable, _value)
+
+from symkin._version import __version__  # the imports from here on come after the BLAS threads are set
 from symkin.cli import commands
 from symkin.cli.watchdog import terminate_within
 from symkin.errors import CacheTrustError, GeneratedCodeError, ModelDataError, ModelError, SymkinError

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import os
 import subprocess
+import sys
 
 import pytest
 
@@ -120,3 +122,15 @@ def test_negative_values_with_units_are_values_not_options():
     assert args.scenario == "sine"
     with pytest.raises(SystemExit):  # an unknown option is still an error
         build_parser().parse_args(["simulate", "generated/ur10e", "--q0", "0", "-x"])
+
+
+def test_the_command_runs_blas_on_one_thread_unless_the_user_says_otherwise():
+    """symkin.cli.BLAS_THREADS: set before numpy is imported (importing the package imports no numpy), kept where the
+    user set it."""
+    probe = ("import sys, os, symkin; assert 'numpy' not in sys.modules; import symkin.cli, numpy; "
+             "print(os.environ['OPENBLAS_NUM_THREADS'], os.environ['MKL_NUM_THREADS'])")
+    bare = {k: v for k, v in os.environ.items() if k not in ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")}
+    for given, printed in (({}, "1 1"), ({"OPENBLAS_NUM_THREADS": "4"}, "4 1")):
+        result = subprocess.run([sys.executable, "-c", probe], env={**bare, **given}, capture_output=True, text=True)
+        assert result.returncode == 0, result.stderr
+        assert result.stdout.split() == printed.split()
