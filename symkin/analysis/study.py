@@ -212,10 +212,29 @@ def _cartesian_report(occupancy: Occupancy, values: np.ndarray) -> list[str]:
     return lines
 
 
+def _multiplicity_lines(joint_measure: Estimate | None, occupied: Estimate, kind: str, unit: str, cartesian: bool
+                        ) -> list[str]:
+    """What the two figures measure, where they prove q -> TCP many-to-one: the joint domain's integral of |det J|
+    counts each point of the workspace once per configuration that reaches it, the occupancy each point once, at
+    most every occupied cell's volume.  A joint-domain figure beyond that bound (both with their errors) is a
+    covering: on average every point is reached at least their ratio of times (the elbow up and down of an arm
+    whose joint limits allow both).  ``cartesian``: a figure over a Cartesian box (by inverse kinematics) was
+    reported, which measures the set as well."""
+    most = occupied.value + occupied.error
+    if joint_measure is None or not joint_measure.value - joint_measure.error > most:
+        return []
+    measured_by = "the Cartesian box's and the occupancy's" if cartesian else "the occupancy's"
+    return [f"the {kind}s measure different sets: q -> TCP reaches the workspace more than once (on average at "
+            f"least {(joint_measure.value - joint_measure.error) / most:.3g} times: more than every occupied cell's "
+            f"{most:.4g} {unit}), which the joint domain's figure counts with multiplicity; the workspace's own "
+            f"{kind} is {measured_by}"]
+
+
 def _report(model: GeneratedModel, cloud: WorkspaceCloud, inv_kappa: np.ndarray | None, limits: Limits | None,
             progress: Callable[[str], None], box=None) -> list[str]:
     """Extent, area/volume (joint and Cartesian domains) and, for a serial mechanism, boundary and singularities."""
     lines = []
+    joint_measure = None
     lower, upper = cloud.points.min(axis=0), cloud.points.max(axis=0)
     lines.append("extent of the samples: " + ", ".join(f"{a} [{lo:.6g}, {hi:.6g}] m"
                                                        for a, lo, hi in zip(cloud.axes, lower, upper)))
@@ -224,8 +243,8 @@ def _report(model: GeneratedModel, cloud: WorkspaceCloud, inv_kappa: np.ndarray 
     kind = "area" if d == 2 else "volume"
     if mechanism.is_positional(model):
         progress(f"{kind} (joint domain)")
-        measure = global_indices.workspace_measure(model, method="qmc", samples=2**16, seed=0, limits=limits)
-        lines.append(f"{kind}: {measure} {unit} (qmc, |det J| dq over the joint limits: exact where q -> TCP "
+        joint_measure = global_indices.workspace_measure(model, method="qmc", samples=2**16, seed=0, limits=limits)
+        lines.append(f"{kind}: {joint_measure} {unit} (qmc, |det J| dq over the joint limits: exact where q -> TCP "
                      "is one-to-one, else with multiplicity)")
     ik = inverse.inverse_kinematics_for(model)
     if ik is not None:
@@ -237,8 +256,10 @@ def _report(model: GeneratedModel, cloud: WorkspaceCloud, inv_kappa: np.ndarray 
         return lines  # the Cartesian grid (_cartesian_report) gives the volume, boundary and singularities
     occupancy = workspace.occupancy_from_cloud(cloud)
     boundary = occupancy.boundary()
-    lines.append(f"{kind}: {occupancy.measure()} {unit} (occupancy of {occupancy.cell[0]:.3g} m cells: "
+    occupied = occupancy.measure()
+    lines.append(f"{kind}: {occupied} {unit} (occupancy of {occupancy.cell[0]:.3g} m cells: "
                  f"between interior and all occupied cells); {int(boundary.sum())} boundary cells")
+    lines += _multiplicity_lines(joint_measure, occupied, kind, unit, ik is not None)
     singular = np.asarray(inv_kappa <= 0.0)
     on_boundary = int(occupancy.lookup(cloud.points[singular], boundary).sum())
     lines.append(f"1/kappa: min {inv_kappa.min():.4g}, mean {inv_kappa.mean():.4g}, max {inv_kappa.max():.4g}; "

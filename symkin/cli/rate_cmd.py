@@ -71,6 +71,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     analysis_args.add_orientation_argument(p)
     p.add_argument("-o", "--out", metavar="DIR", help="output directory (default: out/rate/MODEL)")
     p.add_argument("--no-figure", action="store_true", help="write the numbers only")
+    p.add_argument("--datasheet", metavar="SPEC.yaml",
+                   help="a maker's published figures (device, source, figures: {MEASURE: {value, unit, at: "
+                        "home|worst, quote}}), printed beside symkin's values with their ratio "
+                        "(models/datasheets/ holds the shipped devices')")
     p.set_defaults(run=run, parser=p)
 
 
@@ -130,6 +134,11 @@ def run(args: argparse.Namespace) -> int:
     from symkin.rating import datasheet, datasheet_files
 
     start = time.perf_counter()
+    maker = None
+    if args.datasheet is not None:  # read before any work; the model layer's YAML reader imports sympy, so only here
+        from symkin.rating import maker_figures
+
+        maker = maker_figures.read_maker_sheet(args.datasheet)
     try:
         if not args.rate > 0:
             raise ValueError(f"--rate must be positive, got {args.rate:g}")
@@ -152,14 +161,22 @@ def run(args: argparse.Namespace) -> int:
             sheet = datasheet.rate(model, actuation, samples=args.samples, seed=args.seed, box=box,
                                    limits=analysis_args.parse_limits(args.limits), conditioning=conditioning,
                                    orientation=analysis_args.parse_orientation(args.orientation))
+            record = sheet.to_json()
+            beside = () if maker is None else maker_figures.compare(maker, record["measures"], sheet.skipped,
+                                                                    dict(sheet.groups))
             summary = [f"{model.name}: {len(sheet.q) - 1} poses of the usable workspace (1/kappa >= {conditioning:g}"
                        + (f", TCP in {args.box[0] if len(args.box) == 1 else args.box}" if box else "")
                        + ") and the home pose", *("  " + line for line in sheet.summary()),
                        *("  " + line for line in _input_lines(inputs))]
+            if maker is not None:
+                summary += [f"  beside the maker's figures ({maker.device}; {maker.source}):",
+                            *("    " + comparison.line() for comparison in beside)]
+                record["maker"] = {"file": maker.file, "device": maker.device, "source": maker.source,
+                                   "figures": [comparison.to_json() for comparison in beside]}
             files: dict[str, str | bytes] = {
-                "datasheet.json": json.dumps(sheet.to_json() | {"servo_rate_hz": args.rate,
-                                                                "usable_conditioning": conditioning,
-                                                                "inputs": inputs},
+                "datasheet.json": json.dumps(record | {"servo_rate_hz": args.rate,
+                                                       "usable_conditioning": conditioning,
+                                                       "inputs": inputs},
                                              indent=2, allow_nan=False) + "\n",
                 "datasheet.csv": datasheet_files.csv_text(sheet, model.info.coordinate_names),
                 "summary.txt": "\n".join(summary) + "\n"}

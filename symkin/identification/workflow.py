@@ -256,9 +256,12 @@ def _report(request: IdentifyRequest, model, data, found, pi_model, check, stand
         record["standard"] = {"parameters": dict(zip(standard.names, map(float, standard.values))),
                               "smallest_pseudo_inertia_eigenvalue": [float(np.linalg.eigvalsh(J)[0])
                                                                      for J in standard.pseudo_inertias()],
-                              "data_cost": standard.cost, "least_squares_cost": standard.best_cost}
+                              "data_cost": standard.cost, "least_squares_cost": standard.best_cost,
+                              "solver": {"converged": standard.converged, "evaluations": standard.evaluations,
+                                         "optimality": standard.optimality}}
         lines.append(f"  physically consistent standard parameters (every link's pseudo-inertia positive definite): "
-                     f"weighted data cost {standard.cost:.4g} against {standard.best_cost:.4g} unconstrained")
+                     f"weighted data cost {standard.cost:.4g} against {standard.best_cost:.4g} unconstrained; "
+                     f"solver {standard.solver_text()}")
     if model_line is not None:
         lines.append(f"  {model_line}")
     csv_lines = ["name,value,std,relative_std,model"] + [

@@ -98,13 +98,14 @@ def home_screws(kinematics: ModelKinematics, rng: np.random.Generator | None = N
     """
     M = np.asarray(kinematics.fk(np.zeros(kinematics.dof)), dtype=float)
     axes = _axes_from_jacobian if kinematics.has_pose_jacobian else _axes_from_fk
-    directions, points = axes(kinematics, M)
+    with np.errstate(invalid="ignore", divide="ignore"):  # a joint that moves about no axis of its own: NaN, refused below
+        directions, points = axes(kinematics, M)
     scale = float(max(1e-300, np.max(np.linalg.norm(points - M[:3, 3], axis=-1))))
     screws = HomeScrews(directions, points, kinematics.revolute.copy(), M, scale)
     rng = rng or np.random.default_rng(0)
     q = rng.uniform(-np.pi, np.pi, size=(8, kinematics.dof))
     deviation = np.max(np.abs(screws.fk(q) - kinematics.fk(q)))
-    if deviation > CHECK_TOLERANCE * max(1.0, scale):
+    if not deviation <= CHECK_TOLERANCE * max(1.0, scale):  # NaN too: a coupled joint (the PHANToM's parallelogram)
         raise GeneratedCodeError(f"{kinematics.name}: the generated fk is not a product of exponentials of its "
                                  f"joint axes (deviation {deviation:.3g}); derive the model again")
     return screws

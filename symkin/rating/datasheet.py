@@ -22,9 +22,9 @@ import numpy as np
 from symkin.analysis import workspace
 from symkin import mechanism
 from symkin.numerics.conditioning import inverse_condition_number
-from symkin.rating.handle_measures import (NO_GRAVITY, PUSHED_GROUPS, ROTATIONAL_FRICTION,
+from symkin.rating.handle_measures import (NO_GRAVITY, ROTATIONAL_FRICTION,
                                              SPHERICAL_GROUPS, TURNED_GROUPS, Actuation, Measure, dynamics_at,
-                                             friction_measures, gravity_share_measure, rotation_measures,
+                                             friction_measures, gravity_share_measure, pushed_groups, rotation_measures,
                                              translation_measures)
 from symkin.mechanism import ANGLES, Sampling, continuation
 from symkin.runtime.info import GeneratedModel
@@ -34,7 +34,7 @@ from symkin.runtime.info import GeneratedModel
 class Datasheet:
     """The rated samples: joint configurations q (N, n), TCP points (N, d) with their axes, the measures,
     the index of the home pose among the samples, {group: why it is not rated} and the groups of measures the
-    device's handle has ({group: its measures}, e.g. :data:`~symkin.rating.handle_measures.PUSHED_GROUPS`), and
+    device's handle has ({group: its measures}, e.g. :func:`~symkin.rating.handle_measures.pushed_groups`), and
     notes on how it was rated (the home assembly of legs solved through their closure).
 
     Every group is rated whole or listed as not rated (a measure is never dropped silently): raises ValueError
@@ -212,7 +212,7 @@ def _datasheet(model: GeneratedModel, usable: _Usable, actuation: Actuation) -> 
     skipped: dict[str, str] = {}
     if usable.J_v is not None:
         measures, skipped = translation_measures(model, usable.J_v, usable.M, usable.q, usable.poses, actuation,
-                                                 no_mass=usable.no_mass, G=usable.G)
+                                                 usable.axes, no_mass=usable.no_mass, G=usable.G)
     if usable.J_w is not None:
         turned, not_turned = rotation_measures(usable.J_w, usable.M, actuation, no_mass=usable.no_mass)
         measures, skipped = measures + turned, skipped | not_turned
@@ -229,7 +229,7 @@ def _datasheet(model: GeneratedModel, usable: _Usable, actuation: Actuation) -> 
         else:
             measures += tuple(friction)
     groups = SPHERICAL_GROUPS if usable.J_v is None else \
-        PUSHED_GROUPS | TURNED_GROUPS if usable.J_w is not None else PUSHED_GROUPS
+        pushed_groups(usable.axes) | TURNED_GROUPS if usable.J_w is not None else pushed_groups(usable.axes)
     return Datasheet(model.name, usable.q, usable.points, usable.axes, measures, len(usable.q) - 1, skipped, groups,
                      usable.notes)
 

@@ -70,13 +70,15 @@ def figure_png(sheet: Datasheet, title: str) -> bytes:
 
 
 def datasheet_figure(sheet: Datasheet, title: str) -> Any:
-    """The datasheet figure: one map per measure over the rated poses, the home pose starred.  A planar device's
+    """The datasheet figure: one map per measure over every direction (those along one axis are in the table only)
+    over the rated poses, the home pose starred.  A planar device's
     poses are coloured by their value; a spatial device's are seen from above, each x-y cell showing the worst value
     over the heights sampled there (:func:`worst_map`).  A colour scale that clips (:func:`colour_range`) has extend
     arrows and the true range in its label."""
     from matplotlib.figure import Figure
 
-    count = len(sheet.measures)
+    drawn = [measure for measure in sheet.measures if measure.axis is None]
+    count = len(drawn)
     columns = min(3, count)
     rows = -(-count // columns)
     spatial = sheet.points.shape[1] == 3
@@ -84,7 +86,7 @@ def datasheet_figure(sheet: Datasheet, title: str) -> Any:
     scale, unit, _ = axis_scale(sheet.axes)
     points = scale * sheet.points
     home = points[sheet.home]
-    for k, measure in enumerate(sheet.measures):
+    for k, measure in enumerate(drawn):
         ax: Any = figure.add_subplot(rows, columns, k + 1)
         if spatial:
             x_edges, y_edges, grid = worst_map(points, measure.values, measure.worst_is_min)

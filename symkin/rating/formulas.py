@@ -128,6 +128,31 @@ def position_resolution(J: np.ndarray, joint_steps: Sequence[float] | np.ndarray
     return farthest_vertex(J, joint_steps)
 
 
+def axis_mass(M: np.ndarray, J: np.ndarray) -> np.ndarray:
+    """The mass felt pushing along each task axis e_a from rest, the handle free in the others (..., m):
+    1 / (e_a^T Lambda^-1 e_a), the force along e_a per unit acceleration along it (Khatib 1995's effective mass
+    along a direction; a vendor's "apparent mass at the tip" along an axis); inf along an axis the handle cannot
+    move along."""
+    with np.errstate(divide="ignore"):
+        return 1.0 / np.diagonal(mobility(M, J), axis1=-2, axis2=-1)
+
+
+def axis_step(J: np.ndarray, joint_steps: Sequence[float] | np.ndarray) -> np.ndarray:
+    """The handle's step along each task axis for one encoder count of the joint that moves it most there (..., m):
+    max_i |J_ai| dq_i, a vendor's "nominal position resolution" per axis (one count at a time, against
+    :func:`position_resolution`'s every joint stepping at once)."""
+    J = np.asarray(J, dtype=float)
+    return np.max(np.abs(J) * np.abs(np.asarray(joint_steps, dtype=float)), axis=-1)
+
+
+def axis_friction(J: np.ndarray, coulomb: Sequence[float] | np.ndarray) -> np.ndarray:
+    """The Coulomb friction felt moving the handle along each task axis e_a (..., m), J square: the joints turn at
+    w = J^-1 e_a per unit speed and resist with power sum_i tau_c,i |w_i| (a vendor's "backdrive friction" along
+    an axis; :func:`coulomb_friction_felt` is its largest over all directions); NaN where J is singular."""
+    rates = np.swapaxes(_inverse_transpose(J), -1, -2)                  # column a: J^-1 e_a
+    return np.einsum("i,...ia->...a", np.abs(np.asarray(coulomb, dtype=float)), np.abs(rates))
+
+
 def coulomb_friction_felt(J: np.ndarray, coulomb: Sequence[float] | np.ndarray) -> np.ndarray:
     """The largest Coulomb friction force the hand feels, over all directions of motion (...,): the farthest
     point of the polytope |J_i . F| <= tau_c,i, max_s |J^-T (s * tau_c)| for a square J.

@@ -21,13 +21,15 @@ from symkin.runtime.info import GeneratedModel
 @dataclass(frozen=True)
 class Measure:
     """One row of the datasheet: a name, its unit, its value at every sample and whether its worst value
-    is its smallest (a force) or its largest (a mass, a resolution step)."""
+    is its smallest (a force) or its largest (a mass, a resolution step); ``axis``: the task axis a figure along one
+    axis is taken along (a vendor's per-axis figure), None for one over every direction."""
 
     name: str
     unit: str
     values: np.ndarray
     worst_is_min: bool
     doc: str
+    axis: str | None = None
 
 
 @dataclass(frozen=True)
@@ -105,14 +107,22 @@ def rotation_measures(J_w: np.ndarray, M: np.ndarray | None, actuation: Actuatio
 
 
 def translation_measures(model: GeneratedModel, J: np.ndarray, M: np.ndarray | None, q: np.ndarray, poses: np.ndarray,
-                         actuation: Actuation, *, no_mass: str = "", G: np.ndarray | str | None = None
-                         ) -> tuple[tuple[Measure, ...], dict[str, str]]:
-    """The handle's measures (:data:`PUSHED_GROUPS`) from J (its translational rows), M and the generated functions at
-    (q, poses), and {group: why not rated}; where M is None, the apparent mass is not rated with the reason
-    ``no_mass``.  ``G``: the efforts that hold the device (N, n), or why there are none (default: the generated
-    ``gravity_vector``)."""
+                         actuation: Actuation, axes: Sequence[str], *, no_mass: str = "",
+                         G: np.ndarray | str | None = None) -> tuple[tuple[Measure, ...], dict[str, str]]:
+    """The handle's measures (:func:`pushed_groups` of ``axes``, J's rows) from J (its translational rows), M and the
+    generated functions at (q, poses), and {group: why not rated}; where M is None, the apparent mass is not rated
+    with the reason ``no_mass``.  ``G``: the efforts that hold the device (N, n), or why there are none (default:
+    the generated ``gravity_vector``).  Besides the measures over every direction, each group holds its figure
+    along each task axis, as a vendor's datasheet quotes it (issue 64)."""
+    if len(axes) != J.shape[-2]:
+        raise ValueError(f"{model.name}: {len(axes)} task axes {list(axes)} for the {J.shape[-2]} rows of J")
     out: list[Measure] = []
     skipped = {}
+
+    def per_axis(name: str, unit: str, values: np.ndarray, worst_is_min: bool, doc: str) -> list[Measure]:
+        return [Measure(f"{name}_{axis}", unit, values[:, k], worst_is_min, doc.replace("<axis>", axis), axis)
+                for k, axis in enumerate(axes)]
+
     if M is None:
         skipped["apparent_mass"] = no_mass
     else:
@@ -121,6 +131,9 @@ def translation_measures(model: GeneratedModel, J: np.ndarray, M: np.ndarray | N
                 Measure("apparent_mass_max", "kg", masses[:, -1], False, "largest principal mass felt at the handle"),
                 Measure("inertia_isotropy", "", masses[:, -1] / masses[:, 0], False,
                         "largest over smallest principal mass (1: the same mass in every direction)")]
+        out += per_axis("apparent_mass", "kg", formulas.axis_mass(M, J), False,
+                        "mass felt pushing along <axis> from rest, the handle free in the other directions: "
+                        "1 / (e^T J M^-1 J^T e)")
     efforts = actuation.effort_limits
     if efforts is None:
         skipped["force"] = skipped["gravity_share"] = NO_EFFORT_LIMITS
@@ -129,6 +142,8 @@ def translation_measures(model: GeneratedModel, J: np.ndarray, M: np.ndarray | N
                         "largest force rendered in every direction (peak efforts)"),
                 Measure("peak_force", "N", formulas.peak_force(J, efforts), True,
                         "largest force rendered in the best direction (peak efforts)")]
+        out += per_axis("force", "N", _along_axes(J, efforts), True,
+                        "largest force rendered along +-<axis> (peak efforts): min_i tau_max,i / |J_i . e|")
         share = (gravity_share_measure(model, q, poses, efforts) if G is None
                  else G if isinstance(G, str) else [held_against_gravity(G, efforts)])
         if isinstance(share, str):
@@ -140,18 +155,37 @@ def translation_measures(model: GeneratedModel, J: np.ndarray, M: np.ndarray | N
     else:
         out.append(Measure("continuous_force", "N", forces.isotropic_force(J, actuation.continuous_limits), True,
                            "largest force held for long in every direction (continuous efforts)"))
+        out += per_axis("continuous_force", "N", _along_axes(J, actuation.continuous_limits), True,
+                        "largest force held for long along +-<axis> (continuous efforts)")
     if actuation.joint_steps is None:
         skipped["resolution"] = NO_ENCODERS
     else:
         out.append(Measure("resolution", "m", formulas.position_resolution(J, actuation.joint_steps), False,
                            "largest handle step between neighbouring encoder readings"))
+        out += per_axis("resolution", "m", formulas.axis_step(J, actuation.joint_steps), False,
+                        "handle step along <axis> for one encoder count of the joint that moves it most there")
     friction = (friction_measures(J, actuation, TRANSLATIONAL_FRICTION) if J.shape[-2] <= J.shape[-1]
                 else "friction and damping at the handle need at least as many joints as task translations")
     if isinstance(friction, str):
         skipped["friction"] = friction
     else:
         out += friction
+    if actuation.coulomb is None:
+        skipped["backdrive_friction"] = "no joint friction declared (friction: in the model file)"
+    elif J.shape[-2] != J.shape[-1]:
+        skipped["backdrive_friction"] = (f"the friction along each axis needs as many joints as task translations "
+                                         f"({J.shape[-1]} joints, {J.shape[-2]} translations)")
+    else:
+        out += per_axis("backdrive_friction", "N", formulas.axis_friction(J, actuation.coulomb), False,
+                        "Coulomb friction felt moving the handle along <axis>: sum_i tau_c,i |(J^-1 e)_i|")
     return tuple(out), skipped
+
+
+def _along_axes(J: np.ndarray, efforts: np.ndarray) -> np.ndarray:
+    """The largest force along each task axis (..., m) from the efforts
+    (:func:`symkin.rating.forces.directional_force`)."""
+    return np.stack([forces.directional_force(J, efforts, np.eye(J.shape[-2])[k]) for k in range(J.shape[-2])],
+                    axis=-1)
 
 
 #: Why a datasheet has no gravity share: the model declares no gravity (its gravity terms are identically zero).
@@ -185,15 +219,23 @@ ROTATIONAL_FRICTION = (("coulomb_torque", "N m", "largest Coulomb friction torqu
                        ("renderable_stiffness", "N m/rad", "stiffest passive rotational virtual wall"))
 
 
-#: Every measure of a handle pushed, by group (:class:`symkin.rating.datasheet.Datasheet` checks that each group
-#: is rated whole, or listed as not rated with what to give).
-PUSHED_GROUPS: dict[str, tuple[str, ...]] = {
-    "apparent_mass": ("apparent_mass_min", "apparent_mass_max", "inertia_isotropy"),
-    "force": ("isotropic_force", "peak_force"),
-    "continuous_force": ("continuous_force",),
-    "gravity_share": ("gravity_share",),
-    "resolution": ("resolution",),
-    "friction": tuple(name for name, _, _ in TRANSLATIONAL_FRICTION)}
+def pushed_groups(axes: Sequence[str]) -> dict[str, tuple[str, ...]]:
+    """Every measure of a handle pushed along ``axes``, by group (:class:`symkin.rating.datasheet.Datasheet` checks
+    that each group is rated whole, or listed as not rated with what to give)."""
+    def along(name: str) -> tuple[str, ...]:
+        return tuple(f"{name}_{axis}" for axis in axes)
+
+    return {"apparent_mass": ("apparent_mass_min", "apparent_mass_max", "inertia_isotropy") + along("apparent_mass"),
+            "force": ("isotropic_force", "peak_force") + along("force"),
+            "continuous_force": ("continuous_force",) + along("continuous_force"),
+            "gravity_share": ("gravity_share",),
+            "resolution": ("resolution",) + along("resolution"),
+            "friction": tuple(name for name, _, _ in TRANSLATIONAL_FRICTION),
+            "backdrive_friction": along("backdrive_friction")}
+
+
+#: The groups of a handle pushed, an axis written <axis> (``symkin rate --help``).
+PUSHED_GROUPS = pushed_groups(("<axis>",))
 #: Every measure of a handle turned with its position free (a rotating platform's), by group.
 TURNED_GROUPS: dict[str, tuple[str, ...]] = {
     "apparent_inertia": ("apparent_inertia_min", "apparent_inertia_max"),

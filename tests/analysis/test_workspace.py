@@ -240,3 +240,24 @@ def test_analyses_do_not_import_sympy():
             "print('sympy' in sys.modules, 'jinja2' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.split() == ["False", "False"]
+
+
+def test_the_volumes_say_which_sets_they_measure_where_the_joints_cover_the_workspace_twice(capsys):
+    """Issue 64 ("one workspace, one volume"): the joint domain's figure integrates |det J| over the joint limits, so
+    a point reached by two configurations counts twice.  The 2R arm with its elbow free over a full turn reaches
+    its workspace elbow up and elbow down: that figure (2 pi l1 l2, exactly) exceeds every occupied
+    cell, and the report says the figures measure different sets; at its declared limits (one branch) it does not.
+    The PHANToM's joint limits reach parts of its workspace twice as well."""
+    from symkin.cli import main
+
+    said = {}
+    for name, extra in (("planar_2r", []), ("planar_2r", ["--limit", "theta2=-180deg:180deg"]),
+                        ("phantom_premium", [])):
+        assert main(["workspace", str(GENERATED_DIR / name), "--no-figure", *extra]) == 0
+        said[name, bool(extra)] = capsys.readouterr().out
+    assert "measure different sets" not in said["planar_2r", False]
+    covered = said["planar_2r", True]
+    assert "area: 0.0628318" in covered        # l1 l2 (pi/2) int of |sin theta2| over a turn = 2 pi l1 l2
+    assert "the areas measure different sets" in covered
+    assert "is the Cartesian box's and the occupancy's" in covered
+    assert "the volumes measure different sets" in said["phantom_premium", False]

@@ -483,3 +483,21 @@ def test_solve_without_shifting_keeps_the_solver_angles(ur):
     assert np.all(_angle_distance(shifted.q, raw.q)[shifted.valid] < 1e-12)
     assert shifted.within_limits[shifted.valid].all()
     assert not raw.within_limits[raw.valid].all()
+
+
+def test_a_coupled_chain_is_no_product_of_exponentials_and_says_so_without_warnings():
+    """The PHANToM's elbow is driven through a parallelogram from the base (q3 turns the distal link about an axis
+    that moves with q2): fk(pi/2 e_3) is no screw motion of its own, the axis read from it is NaN.  That is refused
+    as not a plain serial chain (before: NaN passed the fk check, which compared with '>'), with no RuntimeWarning
+    for the user, and no closed form is offered."""
+    import warnings
+
+    from conftest import GENERATED_DIR
+    from symkin.ik.screws import home_screws
+
+    phantom = load(GENERATED_DIR / "phantom_premium")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(GeneratedCodeError, match="not a product of exponentials"):
+            home_screws(ModelKinematics(phantom))
+        assert closed_form_solver(phantom) is None

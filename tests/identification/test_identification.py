@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from conftest import ROOT, SYMKIN_CLI
-from symkin.identification import estimation
+from symkin.identification import consistent, estimation
 from symkin.dynamics.parameter_names import DISSIPATIVE
 from symkin.model import model_from_text
 from identification_runs import NOISE, RATE, arm, excitation, simulated_run, write_run  # noqa: F401 (the fixture arm)
@@ -158,7 +158,6 @@ def test_the_consistent_estimate_is_physical_and_fits_the_run(arm):
     body (pseudo-inertia positive semidefinite to rounding) and the drives non-negative, fits the run to the
     noise, and its identifiable combinations K pi are the true base parameters within a few standard deviations
     of the least-squares estimate."""
-    from symkin.identification import consistent
     from symkin.derivation import Derivation
 
     t, q, qd, qdd, tau = simulated_run(arm)
@@ -177,6 +176,15 @@ def test_the_consistent_estimate_is_physical_and_fits_the_run(arm):
     driven = model_from_text(DRIVEN, "driven")
     K = Derivation(driven)["base_parameters"].evaluate({p.name: float(p.value) for p in driven.parameters})
     assert np.all(np.abs(K @ found.values - pi_b[0]) < 5 * wls.std)
+    assert found.converged
+    assert found.solver_text().startswith("converged in ")
+    stopped = consistent.estimate(triangle, target, arm.info.functions["regressor"].outputs["pi"], prior, budget=3)
+    assert not stopped.converged
+    assert stopped.evaluations <= 3
+    assert stopped.optimality > found.optimality
+    assert stopped.solver_text().startswith("not converged: stopped at its budget of ")     # said, never silent
+    for J in stopped.pseudo_inertias():                                                    # consistent all the same
+        assert np.linalg.eigvalsh(J)[0] >= -1e3 * EPS * np.max(np.abs(J))
 
 
 def test_an_offset_beyond_the_coulomb_friction_keeps_both_levels_of_the_consistent_estimate():
@@ -184,8 +192,6 @@ def test_an_offset_beyond_the_coulomb_friction_keeps_both_levels_of_the_consiste
     squares puts the push into the offset, f_o > f_c, a level f_c - f_o < 0 that would push the joint along its
     motion; the consistent estimate keeps both Coulomb levels f_c + f_o and f_c - f_o non-negative (to the rounding
     of their sum and difference), as the model file needs them (friction: {coulomb: {positive, negative}})."""
-    from symkin.identification import consistent
-
     rng = np.random.default_rng(4)
     qd, qdd = np.sin(np.linspace(0, 20, 400)), np.cos(np.linspace(0, 20, 400))
     Y = np.column_stack([qdd, qd, np.sign(qd), np.ones_like(qd)])     # I_a, f_v, f_c, f_o
@@ -208,6 +214,11 @@ def test_the_command_estimates_consistent_standard_parameters(arm, tmp_path):
     record = json.loads((tmp_path / "out" / "estimate.json").read_text())
     assert set(record["standard"]["parameters"]) >= {"link1.m", "link2.Izz", "theta2.fc"}
     assert record["standard"]["parameters"]["link2.m"] > 0
+    solver = record["standard"]["solver"]                         # how the solver ended, in the record and summary
+    assert 0 < solver["evaluations"] <= consistent.EVALUATIONS
+    said = (f"solver converged in {solver['evaluations']} evaluations" if solver["converged"] else
+            f"solver not converged: stopped at its budget of {solver['evaluations']} evaluations")
+    assert said in (tmp_path / "out" / "summary.txt").read_text()
 
 
 def _energy_estimate(arm, t, q, qd, qdd, tau, window=0.05):
@@ -309,8 +320,6 @@ def test_a_generated_open_chain_without_its_base_regressor_is_refused_with_the_d
 def test_the_consistent_estimates_jacobian_is_the_derivative_of_its_parameterization():
     """d pi / d theta of one link's log-Cholesky parameters, analytic (consistent._standard_derivatives), against
     central differences at random theta: truncation h^2 |pi'''| ~ 1e-12 and rounding EPS |pi| / h ~ 1e-10."""
-    from symkin.identification import consistent
-
     rng = np.random.default_rng(61)
     h = 1e-6
 

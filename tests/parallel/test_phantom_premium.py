@@ -193,6 +193,31 @@ def test_symkin_rate_reads_the_encoders_gear_ratios_from_the_model():
     assert direct == pytest.approx([2 * np.pi / 4096] * 3, rel=CLOSED_FORM)
 
 
+def test_the_datasheets_figures_along_each_axis_at_home_are_the_vendors_by_hand(tmp_path):
+    """Issue 64: at the home pose (q = 0, orthogonal arms) the model file's fk p = (cos q1 (l1 cos q2 + l2 sin q3),
+    sin q1 (...), l1 sin q2 - l2 cos q3) moves x with q3 alone (dp/dq3 = (l2, 0, 0)), y with q1 (l1) and z with q2
+    (l1); each drive renders tau_i = K_t I_stall N_i (Maxon RE 25: 23.4 mN m/A, 5.5 A; capstans 13.3, 11.2, 11.2).
+    So the force along x is tau_3 / l2 = 8.479 N (SensAble quotes 8.5 N "at the nominal position"), and one encoder
+    count (4096 per motor turn) steps x by l2 2 pi / (4096 N_3) = 23 um (quoted: about 0.03 mm)."""
+    import json
+
+    from symkin.cli import main
+
+    l1, l2, K_t, I_stall, I_continuous = 0.215, 0.170, 0.0234, 5.5, 1.24
+    gears = np.array([13.3, 11.2, 11.2])
+    moved_by = {"x": (2, l2), "y": (0, l1), "z": (1, l1)}         # the joint that moves each axis at home, its lever
+    assert main(["rate", str(GENERATED_DIR / "phantom_premium"), "--encoder", "4096", "-n", "64", "--no-figure",
+                 "-o", str(tmp_path / "rate")]) == 0
+    home = {name: m["home"] for name, m in json.loads((tmp_path / "rate" / "datasheet.json").read_text())[
+        "measures"].items()}
+    for axis, (joint, lever) in moved_by.items():
+        assert home[f"force_{axis}"] == pytest.approx(K_t * I_stall * gears[joint] / lever, rel=CLOSED_FORM)
+        assert home[f"continuous_force_{axis}"] == pytest.approx(K_t * I_continuous * gears[joint] / lever,
+                                                                 rel=CLOSED_FORM)
+        assert home[f"resolution_{axis}"] == pytest.approx(lever * 2 * np.pi / (4096 * gears[joint]), rel=CLOSED_FORM)
+    assert home["force_x"] == pytest.approx(8.5, abs=0.05)      # the vendor's figure, to its printed digits
+
+
 def test_the_declared_home_is_where_the_datasheet_and_the_simulation_start(models):
     """serial.home (the PHANToM's reset pose q = 0, where the middle of its limits is the stretched, singular arm):
     in the model, the manifest, the datasheet's home pose and the simulation's default start."""

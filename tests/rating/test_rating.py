@@ -57,6 +57,38 @@ def test_the_apparent_mass_is_m2_across_the_forearm_and_grows_as_1_over_sin2_alo
 
 
 @pytest.mark.parametrize("q", POSES)
+def test_the_figures_along_each_axis_are_the_closed_forms_of_the_2r_arm(arm, q):
+    """Issue 64, a maker's figures along x and y: the mass felt pushing along e, 1 / (e^T Lambda^-1 e) with the
+    closed-form Lambda above ((m2 I + a u u^T)^-1 = (I - a / (m2 + a) u u^T) / m2, a = m1 / sin^2 theta2); the force
+    along e from the seed's J, min_i tau_i / |J_i . e|; the step along e of one encoder count of one joint, through
+    the closed-form fk (first order in the count); the friction felt moving along e, the farthest vertex
+    J^-T (s tau_c) of the friction polytope in the direction e (every sign vector s)."""
+    import itertools
+
+    M, J = arm.mass_matrix(q), seed_jacobian(q)
+    forearm = np.array([np.cos(q.sum()), np.sin(q.sum())])
+    a = M1 / np.sin(q[1]) ** 2
+    bound = 16 * np.linalg.cond(J) ** 2 * np.linalg.cond(M) * EPS
+    expected_mass = M2 / (1.0 - a / (M2 + a) * forearm ** 2)
+    np.testing.assert_allclose(formulas.axis_mass(M, J), expected_mass, rtol=bound)
+    efforts = np.array([0.7, 0.4])
+    along = handle_measures._along_axes(J, efforts)
+    np.testing.assert_allclose(along, [min(efforts / np.abs(J[k])) for k in range(2)], rtol=CLOSED_FORM)
+
+    def tip(angles):
+        return np.array([L1 * np.cos(angles[0]) + L2 * np.cos(angles.sum()),
+                         L1 * np.sin(angles[0]) + L2 * np.sin(angles.sum())])
+
+    steps = 2 * np.pi / np.array([4096 * 10.0, 4096 * 8.0])
+    moved = np.array([np.abs(tip(q + steps[i] * np.eye(2)[i]) - tip(q)) for i in range(2)])  # (joint, axis)
+    np.testing.assert_allclose(formulas.axis_step(J, steps), moved.max(axis=0), rtol=4 * steps.max())
+    coulomb = np.array([0.02, 0.05])
+    vertices = np.array([np.linalg.solve(J.T, np.array(s) * coulomb) for s in itertools.product((-1, 1), repeat=2)])
+    np.testing.assert_allclose(formulas.axis_friction(J, coulomb), vertices.max(axis=0),
+                               rtol=16 * np.linalg.cond(J) * EPS)
+
+
+@pytest.mark.parametrize("q", POSES)
 def test_the_peak_force_is_the_best_direction_of_a_dense_scan(arm, q):
     J, limits = seed_jacobian(q), np.array([0.3, 0.2])
     peak = float(formulas.peak_force(J, limits))
@@ -214,7 +246,8 @@ def test_cli_rates_the_delta_and_writes_its_datasheet(generated_dir, tmp_path):
                  "-o", str(out)]) == 0
     assert sorted(p.name for p in out.iterdir()) == ["datasheet.csv", "datasheet.json", "datasheet.png", "summary.txt"]
     sheet = json.loads((out / "datasheet.json").read_text())
-    assert sheet["not_rated"] == {"friction": "no joint friction declared (friction: in the model file)",
+    no_friction = "no joint friction declared (friction: in the model file)"
+    assert sheet["not_rated"] == {"friction": no_friction, "backdrive_friction": no_friction,
                                   "continuous_force": handle_measures.NO_CONTINUOUS_LIMITS}
     rows = np.loadtxt(out / "datasheet.csv", delimiter=",", skiprows=2)
     header = (out / "datasheet.csv").read_text().splitlines()[1].split(",")

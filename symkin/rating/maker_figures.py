@@ -1,0 +1,179 @@
+"""A maker's published figures beside symkin's (``symkin rate --datasheet SPEC.yaml``, issue 64).
+
+A spec file is data from a stranger, read as a model file is (:func:`symkin.model.yaml_source.read_document`: no
+tag runs, size and depth bounded, every value located)::
+
+    device: PHANToM Premium 1.5
+    source: SensAble Technologies, product specifications
+    figures:
+      force_x: {value: 8.5, unit: N, at: home, quote: "maximum exertable force at nominal position"}
+      resolution_x: {value: 3.0e-5, unit: m, at: home, quote: "nominal position resolution > 860 dpi"}
+
+Each figure names a measure of the datasheet (as ``symkin rate`` prints it: ``force_x``, ``renderable_stiffness``),
+its value in that measure's unit (SI, as the datasheet prints it: a figure in mm is refused with its value in m),
+where the maker takes it (``at``: ``home``, the nominal pose, by default; ``worst``, over the workspace) and,
+optionally, the maker's words.  The comparison gives symkin's value there and the ratio symkin / maker.  A figure
+whose measure the datasheet lists as not rated says why; one that names no measure of the device is an error.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from symkin.errors import ModelError, Problem
+from symkin.model.yaml_source import Document, read_document, shorten
+
+#: Where a maker takes a figure: at the nominal (home) pose, or its worst over the workspace.
+PLACES = ("home", "worst")
+TOP_KEYS = ("device", "source", "figures")
+FIGURE_KEYS = ("value", "unit", "at", "quote")
+#: Longest maker's text kept (a device name, a source, a quote).
+MAX_TEXT = 120
+
+
+@dataclass(frozen=True)
+class MakerFigure:
+    """One published figure: the measure, the maker's value and unit, where it is taken and the maker's words."""
+
+    measure: str
+    value: float
+    unit: str
+    at: str
+    quote: str
+
+
+@dataclass(frozen=True)
+class MakerSheet:
+    """A spec file: the device, where its figures come from, and the figures in file order."""
+
+    file: str
+    device: str
+    source: str
+    figures: tuple[MakerFigure, ...]
+
+
+def _text(value: Any) -> str:
+    """A maker's text as one printable line (control characters, line breaks and the like dropped), shortened."""
+    return shorten("".join(c for c in str(value) if c.isprintable()), MAX_TEXT)
+
+
+def read_maker_sheet(path: str | Path) -> MakerSheet:
+    """Read and check a spec file (see the module docstring).
+
+    Raises:
+        ModelError: the file is unreadable or not of that form; every problem located, with its fix.
+    """
+    document = read_document(path)
+    problems: list[Problem] = []
+    data = document.data
+    if not isinstance(data, dict):
+        raise ModelError([document.problem((), "a spec file is a mapping with device, source and figures",
+                                           "write 'device: ...', 'source: ...' and 'figures: {MEASURE: {value: ..., "
+                                           "unit: ...}}'")])
+    problems += [document.problem((key,), f"unknown key '{shorten(key)}'", f"use only {', '.join(TOP_KEYS)}")
+                 for key in data if key not in TOP_KEYS]
+    for key in ("device", "source"):
+        if not isinstance(data.get(key), str) or not data[key].strip():
+            what = "the device" if key == "device" else "the datasheet the figures come from"
+            problems.append(document.problem((key,), f"'{key}' must be a non-empty text", f"name {what}"))
+    figures = data.get("figures")
+    found: list[MakerFigure] = []
+    if not isinstance(figures, dict) or not figures:
+        problems.append(document.problem(("figures",), "'figures' must be a non-empty mapping of measures",
+                                         "write 'figures: {force_x: {value: 8.5, unit: N, at: home}}'"))
+    else:
+        for name, figure in figures.items():
+            checked = _figure(document, str(name), figure, problems)
+            if checked is not None:
+                found.append(checked)
+    if problems:
+        raise ModelError(problems)
+    return MakerSheet(document.file, _text(data["device"]), _text(data["source"]), tuple(found))
+
+
+def _figure(document: Document, name: str, figure: Any, problems: list[Problem]) -> MakerFigure | None:
+    """One entry of ``figures`` checked (its problems appended), or None."""
+    at = ("figures", name)
+    if not isinstance(figure, dict):
+        problems.append(document.problem(at, "a figure is a mapping", "write {value: NUMBER, unit: UNIT, at: home}"))
+        return None
+    before = len(problems)
+    problems += [document.problem(at + (key,), f"unknown key '{shorten(key)}'", f"use only {', '.join(FIGURE_KEYS)}")
+                 for key in figure if key not in FIGURE_KEYS]
+    value = figure.get("value")
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        problems.append(document.problem(at + ("value",), f"the value must be a finite number, got "
+                                         f"'{shorten(value)}'", "write the maker's number in the measure's SI unit"))
+    if not isinstance(figure.get("unit"), str):
+        problems.append(document.problem(at + ("unit",), "the unit must be a text (the measure's unit as symkin rate "
+                                         "prints it)", "write e.g. 'unit: N'"))
+    place = figure.get("at", "home")
+    if place not in PLACES:
+        problems.append(document.problem(at + ("at",), f"'at' must be one of {', '.join(PLACES)}, got "
+                                         f"'{shorten(place)}'", "home: the nominal pose; worst: over the workspace"))
+    if len(problems) > before:
+        return None
+    assert isinstance(value, (int, float))  # checked above
+    return MakerFigure(name, float(value), figure["unit"], place, _text(figure.get("quote", "")))
+
+
+@dataclass(frozen=True)
+class FigureBeside:
+    """A maker's figure beside symkin's value where the maker takes it (None, with ``why``, where not rated)."""
+
+    figure: MakerFigure
+    symkin: float | None
+    why: str = ""
+
+    @property
+    def ratio(self) -> float | None:
+        """symkin's value over the maker's (None where either is missing or the maker's is zero)."""
+        if self.symkin is None or self.figure.value == 0:
+            return None
+        return self.symkin / self.figure.value
+
+    def line(self) -> str:
+        f = self.figure
+        head = f"{f.measure} at {f.at}: "
+        said = f" ({f.quote})" if f.quote else ""
+        if self.symkin is None:
+            return f"{head}maker {f.value:.4g} {f.unit}, symkin not rated ({self.why}){said}"
+        ratio = "-" if self.ratio is None else f"{self.ratio:.3g}"
+        return f"{head}symkin {self.symkin:.4g} {f.unit}, maker {f.value:.4g} {f.unit}, ratio {ratio}{said}"
+
+    def to_json(self) -> dict[str, Any]:
+        f = self.figure
+        return {"measure": f.measure, "at": f.at, "unit": f.unit, "maker": f.value, "symkin": self.symkin,
+                "ratio": self.ratio, "quote": f.quote, **({"not_rated": self.why} if self.symkin is None else {})}
+
+
+def compare(sheet: MakerSheet, measures: dict[str, dict[str, Any]], not_rated: dict[str, str],
+            groups: dict[str, tuple[str, ...]]) -> tuple[FigureBeside, ...]:
+    """Each figure of ``sheet`` beside the datasheet's (``measures``: :meth:`Datasheet.to_json`'s, ``not_rated``
+    and ``groups``: the datasheet's).
+
+    Raises:
+        ValueError: a figure names no measure of the device, or gives it in another unit (naming the file and the
+            measures there are).
+    """
+    rated_or_not = {name: group for group, names in groups.items() for name in names}
+    out = []
+    for figure in sheet.figures:
+        if figure.measure not in rated_or_not:
+            raise ValueError(f"{sheet.file}: figures.{shorten(figure.measure)}: no such measure of this device; "
+                             f"use one of {', '.join(sorted(rated_or_not))}")
+        group = rated_or_not[figure.measure]
+        if group in not_rated:
+            out.append(FigureBeside(figure, None, not_rated[group]))
+            continue
+        measure = measures[figure.measure]
+        if figure.unit != measure["unit"]:
+            raise ValueError(f"{sheet.file}: figures.{figure.measure}.unit: '{shorten(figure.unit)}' where the "
+                             f"datasheet gives {figure.measure} in '{measure['unit']}'; write the maker's value in "
+                             f"{measure['unit'] or 'its unit (none)'}")
+        value = measure["home"] if figure.at == "home" else measure[measure["worst"]]["value"]
+        out.append(FigureBeside(figure, value, "" if value is not None else "not finite at the home pose"))
+    return tuple(out)
