@@ -74,7 +74,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--datasheet", metavar="SPEC.yaml",
                    help="a maker's published figures (device, source, figures: {MEASURE: {value, unit, at: "
                         "home|worst, quote}}), printed beside symkin's values with their ratio "
-                        "(models/datasheets/ holds the shipped devices')")
+                        "(models/datasheets/ holds the shipped devices' figures)")
     p.set_defaults(run=run, parser=p)
 
 
@@ -162,8 +162,7 @@ def run(args: argparse.Namespace) -> int:
                                    limits=analysis_args.parse_limits(args.limits), conditioning=conditioning,
                                    orientation=analysis_args.parse_orientation(args.orientation))
             record = sheet.to_json()
-            beside = () if maker is None else maker_figures.compare(maker, record["measures"], sheet.skipped,
-                                                                    dict(sheet.groups))
+            beside = () if maker is None else maker_figures.compare(maker, sheet)
             summary = [f"{model.name}: {len(sheet.q) - 1} poses of the usable workspace (1/kappa >= {conditioning:g}"
                        + (f", TCP in {args.box[0] if len(args.box) == 1 else args.box}" if box else "")
                        + ") and the home pose", *("  " + line for line in sheet.summary()),

@@ -71,9 +71,8 @@ def figure_png(sheet: Datasheet, title: str) -> bytes:
 
 def datasheet_figure(sheet: Datasheet, title: str) -> Any:
     """The datasheet figure: one map per measure over every direction (those along one axis are in the table only)
-    over the rated poses, the home pose starred.  A planar device's
-    poses are coloured by their value; a spatial device's are seen from above, each x-y cell showing the worst value
-    over the heights sampled there (:func:`worst_map`).  A colour scale that clips (:func:`colour_range`) has extend
+    over the rated poses, the home pose starred.  A planar device's poses are coloured by their value; a spatial
+    device's are seen from above, each x-y cell showing the worst value over the heights sampled there (:func:`worst_map`).  A colour scale that clips (:func:`colour_range`) has extend
     arrows and the true range in its label."""
     from matplotlib.figure import Figure
 

@@ -35,6 +35,13 @@ def isotropic_force(J: np.ndarray, effort_limits: Sequence[float] | np.ndarray) 
         return np.min(limits / np.linalg.norm(J, axis=-2), axis=-1)
 
 
+def axis_force(J: np.ndarray, effort_limits: Sequence[float] | np.ndarray) -> np.ndarray:
+    """The largest force along each task axis e_a (..., m): :func:`directional_force` along e_1 .. e_m (a maker's
+    force "along x" at a pose)."""
+    J = np.asarray(J, dtype=float)
+    return np.stack([directional_force(J, effort_limits, axis) for axis in np.eye(J.shape[-2])], axis=-1)
+
+
 def directional_force(J: np.ndarray, effort_limits: Sequence[float] | np.ndarray, u: np.ndarray) -> np.ndarray:
     """f(u) = min_i tau_max,i / |J_i . u|: the largest force along the unit directions u (..., m)."""
     J = np.asarray(J, dtype=float)

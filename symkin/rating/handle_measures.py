@@ -142,7 +142,7 @@ def translation_measures(model: GeneratedModel, J: np.ndarray, M: np.ndarray | N
                         "largest force rendered in every direction (peak efforts)"),
                 Measure("peak_force", "N", formulas.peak_force(J, efforts), True,
                         "largest force rendered in the best direction (peak efforts)")]
-        out += per_axis("force", "N", _along_axes(J, efforts), True,
+        out += per_axis("force", "N", forces.axis_force(J, efforts), True,
                         "largest force rendered along +-<axis> (peak efforts): min_i tau_max,i / |J_i . e|")
         share = (gravity_share_measure(model, q, poses, efforts) if G is None
                  else G if isinstance(G, str) else [held_against_gravity(G, efforts)])
@@ -155,7 +155,7 @@ def translation_measures(model: GeneratedModel, J: np.ndarray, M: np.ndarray | N
     else:
         out.append(Measure("continuous_force", "N", forces.isotropic_force(J, actuation.continuous_limits), True,
                            "largest force held for long in every direction (continuous efforts)"))
-        out += per_axis("continuous_force", "N", _along_axes(J, actuation.continuous_limits), True,
+        out += per_axis("continuous_force", "N", forces.axis_force(J, actuation.continuous_limits), True,
                         "largest force held for long along +-<axis> (continuous efforts)")
     if actuation.joint_steps is None:
         skipped["resolution"] = NO_ENCODERS
@@ -179,13 +179,6 @@ def translation_measures(model: GeneratedModel, J: np.ndarray, M: np.ndarray | N
         out += per_axis("backdrive_friction", "N", formulas.axis_friction(J, actuation.coulomb), False,
                         "Coulomb friction felt moving the handle along <axis>: sum_i tau_c,i |(J^-1 e)_i|")
     return tuple(out), skipped
-
-
-def _along_axes(J: np.ndarray, efforts: np.ndarray) -> np.ndarray:
-    """The largest force along each task axis (..., m) from the efforts
-    (:func:`symkin.rating.forces.directional_force`)."""
-    return np.stack([forces.directional_force(J, efforts, np.eye(J.shape[-2])[k]) for k in range(J.shape[-2])],
-                    axis=-1)
 
 
 #: Why a datasheet has no gravity share: the model declares no gravity (its gravity terms are identically zero).

@@ -25,6 +25,7 @@ from typing import Any
 
 from symkin.errors import ModelError, Problem
 from symkin.model.yaml_source import Document, read_document, shorten
+from symkin.rating.datasheet import Datasheet
 
 #: Where a maker takes a figure: at the nominal (home) pose, or its worst over the workspace.
 PLACES = ("home", "worst")
@@ -150,26 +151,25 @@ class FigureBeside:
                 "ratio": self.ratio, "quote": f.quote, **({"not_rated": self.why} if self.symkin is None else {})}
 
 
-def compare(sheet: MakerSheet, measures: dict[str, dict[str, Any]], not_rated: dict[str, str],
-            groups: dict[str, tuple[str, ...]]) -> tuple[FigureBeside, ...]:
-    """Each figure of ``sheet`` beside the datasheet's (``measures``: :meth:`Datasheet.to_json`'s, ``not_rated``
-    and ``groups``: the datasheet's).
+def compare(sheet: MakerSheet, rated: Datasheet) -> tuple[FigureBeside, ...]:
+    """Each figure of ``sheet`` beside the datasheet ``rated``'s value where the maker takes it.
 
     Raises:
         ValueError: a figure names no measure of the device, or gives it in another unit (naming the file and the
             measures there are).
     """
-    rated_or_not = {name: group for group, names in groups.items() for name in names}
+    rated_or_not = {name: group for group, names in rated.groups.items() for name in names}
+    measures = {measure.name: measure for measure in rated.measures}
     out = []
     for figure in sheet.figures:
         if figure.measure not in rated_or_not:
             raise ValueError(f"{sheet.file}: figures.{shorten(figure.measure)}: no such measure of this device; "
                              f"use one of {', '.join(sorted(rated_or_not))}")
         group = rated_or_not[figure.measure]
-        if group in not_rated:
-            out.append(FigureBeside(figure, None, not_rated[group]))
+        if group in rated.skipped:
+            out.append(FigureBeside(figure, None, rated.skipped[group]))
             continue
-        measure = measures[figure.measure]
+        measure = rated.extremes(measures[figure.measure])
         if figure.unit != measure["unit"]:
             raise ValueError(f"{sheet.file}: figures.{figure.measure}.unit: '{shorten(figure.unit)}' where the "
                              f"datasheet gives {figure.measure} in '{measure['unit']}'; write the maker's value in "

@@ -34,6 +34,8 @@ def test_the_phantoms_figures_stand_beside_its_makers(tmp_path, capsys):
     for name, text in quoted.items():
         decimals = len(text.split(".")[1])
         assert round(figures[name]["ratio"], decimals) == float(text), (name, figures[name]["ratio"])
+    masses = [round(1e3 * record["measures"][f"apparent_mass_{axis}"]["home"]) for axis in "xyz"]
+    assert masses == [37, 81, 55]                                   # g, as docs/analysis.md quotes them
     summary = (out / "summary.txt").read_text()
     assert "beside the maker's figures (PHANToM Premium 1.5 (SensAble Technologies);" in summary
     assert "force_x at home: symkin 8.479 N, maker 8.5 N, ratio 0.998" in summary

@@ -72,7 +72,7 @@ def test_the_figures_along_each_axis_are_the_closed_forms_of_the_2r_arm(arm, q):
     expected_mass = M2 / (1.0 - a / (M2 + a) * forearm ** 2)
     np.testing.assert_allclose(formulas.axis_mass(M, J), expected_mass, rtol=bound)
     efforts = np.array([0.7, 0.4])
-    along = handle_measures._along_axes(J, efforts)
+    along = forces.axis_force(J, efforts)
     np.testing.assert_allclose(along, [min(efforts / np.abs(J[k])) for k in range(2)], rtol=CLOSED_FORM)
 
     def tip(angles):
