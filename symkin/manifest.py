@@ -16,8 +16,8 @@ from typing import TYPE_CHECKING
 
 from symkin._version import __version__
 from symkin.errors import GeneratedCodeError
-from symkin.manifest_schema import (MANIFEST_NAME, MANIFEST_VERSION, Coordinate, Function, Input, LegRecord, Manifest,
-                                    ModelRecord, Output, ParallelRecord, Parameter)
+from symkin.manifest_schema import (MANIFEST_NAME, MANIFEST_VERSION, Coordinate, Function, Input, JointStopRecord,
+                                    LegRecord, Manifest, ModelRecord, Output, ParallelRecord, Parameter)
 
 if TYPE_CHECKING:  # reading a manifest must not import sympy
     from symkin.ir.bundle import ModelCode
@@ -95,7 +95,11 @@ def build_manifest(model: Model, code: ModelCode, derived: list[str], backend_fi
         {"parents": list(tree.parent_indices(model)), "tip": tree.tip_index(model)}
         if model.parallel is None and not tree.is_chain(model) else None,
         None if model.home_configuration is None else tuple(float(v.xreplace(values))
-                                                             for v in model.home_configuration))
+                                                             for v in model.home_configuration),
+        tuple(JointStopRecord(stop.expression, {name: float(a.xreplace(values)) for name, a in stop.terms},
+                              float(stop.offset.xreplace(values)),
+                              (float(stop.lower.xreplace(values)), float(stop.upper.xreplace(values))))
+              for stop in model.joint_stops))
     functions = tuple(
         Function(f.name, f.spec.summary, tuple(_input(i) for i in f.spec.inputs),
                  tuple(Output(o.name, tuple(o.shape), o.unit, o.doc, tuple(o.elements or ())) for o in f.spec.outputs),

@@ -283,6 +283,27 @@ class ParallelRecord:
 
 
 @dataclass(frozen=True)
+class JointStopRecord:
+    """A stop lower <= sum_k a_k q_k + b <= upper (:class:`symkin.model.schema.JointStop`) at the parameters'
+    defaults: the ``expression`` as the model file writes it, {coordinate: a_k} ``coefficients``, b, (lower, upper)."""
+
+    expression: str
+    coefficients: dict[str, float]
+    offset: float
+    limits: tuple[float, float]
+
+    def to_record(self) -> dict[str, Any]:
+        return {"expression": self.expression, "coefficients": dict(self.coefficients), "offset": self.offset,
+                "limits": list(self.limits)}
+
+    @classmethod
+    def from_record(cls, record: dict[str, Any]) -> JointStopRecord:
+        lower, upper = record["limits"]
+        return cls(str(record["expression"]), {str(k): float(v) for k, v in record["coefficients"].items()},
+                   float(record.get("offset", 0.0)), (float(lower), float(upper)))
+
+
+@dataclass(frozen=True)
 class ModelRecord:
     """The model a manifest was derived from.
 
@@ -297,6 +318,7 @@ class ModelRecord:
         parallel: a parallel mechanism's record, else None.
         tree: a branched serial model's ``parents`` (-1: the base) and ``tip`` link, else None.
         home_configuration: a serial device's declared rest configuration, else None.
+        joint_stops: stops on combinations of the coordinates (written only where declared).
     """
 
     name: str
@@ -311,6 +333,7 @@ class ModelRecord:
     parallel: ParallelRecord | None = None
     tree: dict[str, Any] | None = None
     home_configuration: tuple[float, ...] | None = None
+    joint_stops: tuple[JointStopRecord, ...] = ()
 
     def to_record(self) -> dict[str, Any]:
         record: dict[str, Any] = {"name": self.name, "hash": self.hash, "source": self.source,
@@ -327,6 +350,8 @@ class ModelRecord:
             record["tree"] = dict(self.tree)
         if self.home_configuration is not None:
             record["home_configuration"] = list(self.home_configuration)
+        if self.joint_stops:
+            record["joint_stops"] = [stop.to_record() for stop in self.joint_stops]
         return record
 
     @classmethod
@@ -337,7 +362,8 @@ class ModelRecord:
                    tuple(Coordinate.from_record(c) for c in record["coordinates"]), tuple(record["task_space"]),
                    dict(record.get("source_names") or {}), tuple(record.get("notes", ())),
                    None if parallel is None else ParallelRecord.from_record(parallel), record.get("tree"),
-                   None if rest is None else tuple(float(v) for v in rest))
+                   None if rest is None else tuple(float(v) for v in rest),
+                   tuple(JointStopRecord.from_record(stop) for stop in record.get("joint_stops", ())))
 
 
 @dataclass(frozen=True)

@@ -40,6 +40,7 @@ from symkin.mechanism.working_mode import jacobian_in_working_mode
 from symkin import mechanism
 from symkin.integration.estimates import Estimate, IntegralEstimate
 from symkin.mechanism.feasibility import InverseKinematics, feasible_configurations
+from symkin.mechanism.stops import StopInequalities
 from symkin.integration.integrand import Integrand
 from symkin.integration.integrators import integrate
 from symkin.mechanism import Limits
@@ -137,13 +138,14 @@ def cartesian_integrand(model: GeneratedModel, inverse: InverseKinematics, box: 
     """
     joint_box = mechanism.joint_limits(model, limits)
     revolute = mechanism.revolute_mask(model)
+    stops = StopInequalities.of_model(model)
     lower, upper = (np.asarray(b, dtype=np.float64) for b in box)
     if lower.shape != (inverse.dimension,):
         raise ValueError(f"the Cartesian box must have {inverse.dimension} coordinates, got {lower.shape}")
     scored = scaled_index(model, index, length, joint_box) if index is not None else None
 
     def function(points: np.ndarray) -> np.ndarray:
-        q, inside = feasible_configurations(inverse, points, joint_box, revolute)
+        q, inside = feasible_configurations(inverse, points, joint_box, revolute, stops)
         indicator = inside.astype(np.float64)
         if scored is None:
             return indicator[:, None]

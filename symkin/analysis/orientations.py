@@ -29,6 +29,7 @@ from symkin.analysis.global_indices import GlobalIndex
 from symkin.integration.integrand import Integrand
 from symkin.integration.integrators import integrate
 from symkin.mechanism.limits import within_limits
+from symkin.mechanism import stops
 from symkin.numerics.sobol import Sobol
 from symkin.mechanism import Limits
 from symkin.mechanism.reach import angular_velocity_matrix
@@ -58,7 +59,7 @@ def _reachable(model: GeneratedModel, p: np.ndarray, joint_box: np.ndarray, revo
     with np.errstate(invalid="ignore"):  # NaN where a leg cannot reach: unreachable
         q = np.asarray(model.ik(p).joints)
     inside = np.isfinite(q).all(axis=-1)
-    inside[inside] = within_limits(q[inside], joint_box, revolute)[1]
+    inside[inside] = within_limits(q[inside], joint_box, revolute)[1] & stops.respected(model, q[inside])
     return q, inside
 
 

@@ -24,6 +24,7 @@ import numpy as np
 from symkin.mechanism import feasibility
 from symkin.analysis import global_indices, inverse, workspace
 from symkin.mechanism import reach
+from symkin.mechanism.stops import StopInequalities
 from symkin import mechanism
 from symkin.integration.estimates import Estimate
 from symkin.analysis.grids import index_grid
@@ -49,7 +50,8 @@ def boundary_cloud(model: GeneratedModel, occupancy: Occupancy, limits: Limits |
     """The centres of the boundary cells of a Cartesian grid and their joint coordinates, as a point cloud."""
     points = occupancy.centers()[occupancy.boundary()]
     q, _ = feasibility.feasible_configurations(reach.generated_inverse(model), points,
-                                               mechanism.joint_limits(model, limits), mechanism.revolute_mask(model))
+                                               mechanism.joint_limits(model, limits), mechanism.revolute_mask(model),
+                                               StopInequalities.of_model(model))
     return WorkspaceCloud(q, points, ("x", "y", "z"))
 
 

@@ -103,7 +103,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="stops: damping ratio, c_i = 2 zeta m_i / T_c; restitution exp(-zeta pi / sqrt(1 - "
                         "zeta^2)) (default: 0.5)")
     p.add_argument("--stop-stiffness", action="append", default=[], metavar="JOINT=K[,...]",
-                   help="stops: stiffness of a joint's stops [N m/rad or N/m] instead of the default (repeatable)")
+                   help="stops: stiffness of a joint's stops [N m/rad or N/m] instead of the default, or of a "
+                        "stop on a combination of joints by its expression (\"q3 - q2=K\") (repeatable)")
     p.add_argument("--stop-damping", action="append", default=[], metavar="JOINT=C[,...]",
                    help="stops: damping of a joint's stops [N m s/rad or N s/m] instead of the default (repeatable)")
     p.add_argument("-o", "--out", metavar="DIR", help="output directory (default: out/simulation/MODEL-SCENARIO)")

@@ -25,7 +25,7 @@ from symkin.mechanism import feasibility
 from symkin.numerics import conditioning, sampling
 from symkin.analysis import global_indices, inverse, orientations
 from symkin.rating import forces, formulas
-from symkin.mechanism import continuation, reach
+from symkin.mechanism import continuation, reach, stops
 from symkin import mechanism
 from symkin.mechanism import Sampling
 from symkin.integration.estimates import Estimate
@@ -115,12 +115,13 @@ def _joint_box(problem: DesignProblem, model: GeneratedModel, points: np.ndarray
         error = np.linalg.norm(mechanism.tcp_positions(model, configurations) - points, axis=-1)
         # within the limits up to the analyses' tolerance (IPOPT meets bounds to about 1e-8 relative)
         _, in_limits = within_limits(configurations, problem.joint_limits, mechanism.revolute_mask(model))
-        inside = (error < POSITION_TOLERANCE) & in_limits
+        inside = (error < POSITION_TOLERANCE) & in_limits & stops.respected(model, configurations)
         return float(np.mean(inside)), (f"the optimizer's configurations at {len(points)} box points, by the "
                                         "generated fk (no closed-form inverse kinematics for this model)"), \
             configurations[inside]
     points = box_check_points(problem)
-    q, inside = feasibility.feasible_configurations(ik, points, problem.joint_limits, mechanism.revolute_mask(model))
+    q, inside = feasibility.feasible_configurations(ik, points, problem.joint_limits, mechanism.revolute_mask(model),
+                                                    stops.StopInequalities.of_model(model))
     return (float(np.mean(inside)), f"closed-form inverse kinematics within the joint limits at {len(points)} points "
             "(the first feasible branch)", q[inside])
 
@@ -135,7 +136,7 @@ def inverse_index(model: GeneratedModel, points: np.ndarray, limits: np.ndarray 
         return orientations.reachable_index(model, points, limits)
     ik = reach.generated_inverse(model)
     q, inside = feasibility.feasible_configurations(ik, points, mechanism.joint_limits(model, limits),
-                                                mechanism.revolute_mask(model))
+                                                    mechanism.revolute_mask(model), stops.StopInequalities.of_model(model))
     values = np.zeros(len(points))
     if inside.any():
         values[inside] = conditioning.inverse_condition_number(model.jacobian(q[inside], points[inside]))
@@ -159,7 +160,7 @@ def _task_box(problem: DesignProblem, model: GeneratedModel, samples: int, seed:
                                 box=problem.box, limits=problem.limits)
     points = box_check_points(problem)
     q, inside = feasibility.feasible_configurations(ik, points, mechanism.joint_limits(model, problem.limits),
-                                                    mechanism.revolute_mask(model))
+                                                    mechanism.revolute_mask(model), stops.StopInequalities.of_model(model))
     force = mass = None
     J = model.jacobian(q[inside], points[inside]) if inside.any() else None
     if problem.effort_limits is not None and J is not None:

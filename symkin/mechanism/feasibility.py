@@ -17,6 +17,7 @@ from typing import Protocol
 import numpy as np
 
 from symkin.mechanism.limits import within_limits
+from symkin.mechanism.stops import StopInequalities
 
 
 class InverseKinematics(Protocol):
@@ -44,8 +45,8 @@ class InverseKinematics(Protocol):
 
 
 def feasible_configurations(inverse: InverseKinematics, points: np.ndarray, limits: np.ndarray,
-                            revolute: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """For each point, the first solution branch within the joint limits.
+                            revolute: np.ndarray, stops: StopInequalities | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """For each point, the first solution branch within the joint limits (and the model's joint ``stops``).
 
     Returns:
         (q, reachable): joint coordinates (N, n) (meaningless where unreachable) and a
@@ -57,10 +58,13 @@ def feasible_configurations(inverse: InverseKinematics, points: np.ndarray, limi
     q, valid = inverse.solve(np.asarray(points, dtype=np.float64))
     q, inside = within_limits(q, limits, revolute)
     feasible = valid & inside
+    if stops is not None and len(stops):
+        feasible &= stops.respected(q)
     first = np.argmax(feasible, axis=1)
     return q[np.arange(len(q)), first], feasible.any(axis=1)
 
 
-def reachable(inverse: InverseKinematics, points: np.ndarray, limits: np.ndarray, revolute: np.ndarray) -> np.ndarray:
-    """Boolean (N,): whether each point has an inverse-kinematics solution within the limits."""
-    return feasible_configurations(inverse, points, limits, revolute)[1]
+def reachable(inverse: InverseKinematics, points: np.ndarray, limits: np.ndarray, revolute: np.ndarray,
+              stops: StopInequalities | None = None) -> np.ndarray:
+    """Boolean (N,): whether each point has an inverse-kinematics solution within the limits (and ``stops``)."""
+    return feasible_configurations(inverse, points, limits, revolute, stops)[1]

@@ -54,6 +54,7 @@ from symkin.numerics import conditioning, sampling
 from symkin import mechanism
 from symkin.mechanism import passive
 from symkin.mechanism.feasibility import feasible_configurations
+from symkin.mechanism.stops import StopInequalities
 from symkin.errors import NotApplicable
 from symkin.mechanism import Limits
 from symkin.mechanism.working_mode import require_functions, working_mode
@@ -407,7 +408,8 @@ def reachable_points(model: ConstantOrientation, points: np.ndarray, limits: np.
     Reachable: in the assembly mode of the home pose (:class:`ConstantOrientationInverse`) with
     the actuators within ``limits`` (n, 2).
     """
-    return feasible_configurations(constant_orientation_inverse(model), points, limits, mechanism.revolute_mask(model))
+    return feasible_configurations(constant_orientation_inverse(model), points, limits, mechanism.revolute_mask(model),
+                                   StopInequalities.of_model(model))
 
 
 def constant_orientation_box(model: ConstantOrientation, limits: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from symkin import mechanism
-from symkin.mechanism import passive
+from symkin.mechanism import passive, stops
 from symkin.mechanism.limits import wrap_angle
 from symkin.runtime.info import GeneratedModel
 
@@ -54,18 +54,21 @@ def assemble(model: GeneratedModel, q: np.ndarray) -> tuple[np.ndarray, np.ndarr
     """The assembly question of every analysis: the handle's positions (..., d) at configurations q (..., n) and
     whether each configuration belongs to the workspace (...).  A mechanism that closes loops: fk(q) in the
     working mode (:func:`working_mode`); an open chain: its TCP (every configuration belongs, but where the view
-    of a device yields no position: a hybrid device's configurations whose legs do not assemble)."""
+    of a device yields no position: a hybrid device's configurations whose legs do not assemble).  Either way only
+    the configurations within the model's joint stops belong (:mod:`symkin.mechanism.stops`)."""
     if mechanism.is_parallel(model):
-        return working_mode(model, q)
-    points = mechanism.tcp_positions(model, q)
-    return points, np.isfinite(points).all(axis=-1)
+        points, inside = working_mode(model, q)
+    else:
+        points = mechanism.tcp_positions(model, q)
+        inside = np.isfinite(points).all(axis=-1)
+    return points, inside & stops.respected(model, q)
 
 
 def jacobian_in_working_mode(model: GeneratedModel, q: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
     """The task Jacobian at configurations q and the working-mode mask (...) of a mechanism that closes loops:
     J(q, fk(q)) (..., 3, n) and :func:`working_mode`'s mask; an open chain's J(q) and None (every configuration
-    counts)."""
+    counts) or, where the model declares joint stops, the configurations within them."""
     if not mechanism.is_parallel(model):
-        return mechanism.jacobian(model, q), None
+        return mechanism.jacobian(model, q), stops.respected(model, q) if model.info.joint_stops else None
     p, inside = working_mode(model, q)
-    return model.jacobian(q, np.where(np.isfinite(p), p, 0.0)), inside
+    return model.jacobian(q, np.where(np.isfinite(p), p, 0.0)), inside & stops.respected(model, q)

@@ -17,6 +17,7 @@ from symkin.model.body_build import (check_leg_bodies, read_actuators, read_bodi
                                      read_springs, with_motor_effort_limits)
 from symkin.model import joint_kinds
 from symkin.model.names import name_problem
+from symkin.model.joint_stops_build import read_joint_stops
 from symkin.model.parallel_build import build_parallel, check_parallel_names, parallel_task_space
 from symkin.model.parameter_build import check_name_clashes, read_parameters
 from symkin.model.reader import ZERO, Reader, describe
@@ -36,7 +37,7 @@ FORMAT_VERSION = 1
 EMISSION_KEYS = ("scene",)
 TOP_LEVEL_KEYS = ("name", "description", "references", "notes", "allow_nonphysical", "source_names", "parameters",
                   "serial", "parallel", "wrist", "task_space", "bodies", "gravity", "friction", "springs", "actuators",
-                  "scene", "identified")
+                  "joint_stops", "scene", "identified")
 
 
 def build_model(doc: Document, stem: str, allow_nonphysical: bool = False) -> Model:
@@ -111,6 +112,8 @@ def build_model(doc: Document, stem: str, allow_nonphysical: bool = False) -> Mo
     if parallel is not None and "actuators" in data:
         r.fail(("actuators",), "a parallel model's actuator rotors are declared among its bodies",
                "write bodies: {rotor: {inertia: J_m, gear_ratio: N}} (docs/model-format.md)")
+    coordinates = tuple(j for j in joints if not j.follower) if parallel is None else parallel.actuated_coordinates
+    joint_stops = read_joint_stops(r, data["joint_stops"], coordinates, home) if "joint_stops" in data else ()
     scene = read_scene(r, data.get("scene", {}), parameters,
                    ("fk", "jacobian") if parallel is None else ("closure", "closure_jacobians"))
 
@@ -138,6 +141,7 @@ def build_model(doc: Document, stem: str, allow_nonphysical: bool = False) -> Mo
         friction=friction,
         springs=springs,
         actuators=actuators,
+        joint_stops=joint_stops,
         tip=tip,
         home_configuration=home,
         scene=scene,

@@ -222,6 +222,27 @@ class Friction:
 
 
 @dataclass(frozen=True)
+class JointStop:
+    """A stop on a combination of joint coordinates: lower <= sum_k a_k q_k + b <= upper (``joint_stops:``), e.g.
+    the PHANToM's parallelogram, whose links collide at -65 deg <= q3 - q2 <= 55 deg whatever q2 and q3 are
+    separately.  The box of the coordinates' own limits cannot hold such a stop; the analyses keep the
+    configurations that respect every stop (:mod:`symkin.mechanism.stops`).
+
+    Attributes:
+        terms: (coordinate, multiplier a_k) pairs, every multiplier nonzero.
+        offset: b.
+        lower, upper: the bounds (rad for angles, m for lengths).
+        expression: the combination as the model file writes it (for messages).
+    """
+
+    terms: tuple[tuple[str, sympy.Expr], ...]
+    offset: sympy.Expr
+    lower: sympy.Expr
+    upper: sympy.Expr
+    expression: str
+
+
+@dataclass(frozen=True)
 class Spring:
     """A spring on a joint (a torsion spring on a revolute joint, a linear one on a prismatic joint): the
     potential 1/2 k (theta - theta_0)^2 of the joint's value theta, whose generalized force k (theta - theta_0)
@@ -555,6 +576,19 @@ class Parallel:
         return PlatformMotion.of(self.coordinates)
 
     @property
+    def actuated_coordinates(self) -> tuple[Coordinate, ...]:
+        """The actuated joint variables, leg by leg: the model's generalized coordinates q."""
+        out = []
+        for leg in self.legs:
+            for joint in leg.joints:
+                if joint.active is not None:
+                    _, _, rotation = joint.motions[joint.active]
+                    out.append(Coordinate(joint.variables[joint.active],
+                                          JointType.REVOLUTE if rotation else JointType.PRISMATIC,
+                                          joint.limits_of(joint.active), joint.velocity_limit, joint.effort_limit))
+        return tuple(out)
+
+    @property
     def task_dof(self) -> int:
         return len(self.coordinates)
 
@@ -582,6 +616,7 @@ class Model:
         friction: per-joint friction.
         springs: joint springs (their forces are part of G) of a serial chain or tree.
         actuators: per-joint drives (rotor inertia and gear ratio) of a serial chain.
+        joint_stops: stops on affine combinations of the coordinates (a parallelogram's links meeting).
         scene: default request.
         parallel: legs and platform of a parallel mechanism, None for a serial chain.
     """
@@ -603,6 +638,8 @@ class Model:
     springs: tuple[Spring, ...] = ()
     #: the drives of serial joints (rotor inertia, gear ratio); a parallel model's rotors are in its bodies.
     actuators: tuple[Actuator, ...] = ()
+    #: stops on combinations of the coordinates (``joint_stops:``), beside each coordinate's own limits.
+    joint_stops: tuple[JointStop, ...] = ()
     #: the link that carries the TCP (``serial.tip``), None for the last joint's link.
     tip: str | None = None
     #: a serial device's rest configuration (``serial.home``), one expression per coordinate, or None.
@@ -663,15 +700,7 @@ class Model:
         """
         if self.parallel is None:
             return tuple(j for j in self.joints if not j.follower)
-        out = []
-        for leg in self.parallel.legs:
-            for joint in leg.joints:
-                if joint.active is not None:
-                    _, _, rotation = joint.motions[joint.active]
-                    out.append(Coordinate(joint.variables[joint.active],
-                                          JointType.REVOLUTE if rotation else JointType.PRISMATIC,
-                                          joint.limits_of(joint.active), joint.velocity_limit, joint.effort_limit))
-        return tuple(out)
+        return self.parallel.actuated_coordinates
 
     @property
     def dof(self) -> int:

@@ -140,6 +140,18 @@ def _couplings(r: Reader, path: KeyPath, rows: list[Any], joints: list[Joint]) -
 
 def _coupling(r: Reader, path: KeyPath, value: Any, symbols: dict[str, sympy.Dummy]) -> Coupling | None:
     """``coupling: q3 - q2 + pi/2``: an affine expression in the chain's joints (coordinates) and parameters."""
+    combination = read_affine(r, path, value, symbols,
+                              "write a constant combination such as 'q3 - q2 + pi/2': a coupling is a gear, belt or "
+                              "linkage ratio", "the joint would be fixed",
+                              "name the coordinates the joint moves with, or replace the joint by a fixed transform")
+    return None if combination is None else Coupling(*combination)
+
+
+def read_affine(r: Reader, path: KeyPath, value: Any, symbols: dict[str, sympy.Dummy], nonlinear_fix: str,
+                constant: str, constant_fix: str) -> tuple[tuple[tuple[str, sympy.Expr], ...], sympy.Expr] | None:
+    """(terms, offset) of an affine expression sum_k a_k q_k + b in the coordinates ``symbols`` and the parameters
+    (a coupling, a joint stop), or None with a located problem: not affine (``nonlinear_fix``), or naming no
+    coordinate (what it would be, ``constant``, and ``constant_fix``)."""
     expr = r.expr(path, value, {**r.names, **symbols})
     if expr is None:
         return None
@@ -147,18 +159,15 @@ def _coupling(r: Reader, path: KeyPath, value: Any, symbols: dict[str, sympy.Dum
     for name, symbol in symbols.items():
         a = sympy.diff(expr, symbol)
         if a.free_symbols & set(symbols.values()):
-            r.fail(path, f"'{value}' is not affine in the coordinates ({name} enters nonlinearly)",
-                   "write a constant combination such as 'q3 - q2 + pi/2': a coupling is a gear, belt or linkage "
-                   "ratio")
+            r.fail(path, f"'{value}' is not affine in the coordinates ({name} enters nonlinearly)", nonlinear_fix)
             return None
         if a != 0:
             terms.append((name, a))
     if not terms:
-        r.fail(path, f"'{value}' names no coordinate: the joint would be fixed",
-               "name the coordinates the joint moves with, or replace the joint by a fixed transform")
+        r.fail(path, f"'{value}' names no coordinate: {constant}", constant_fix)
         return None
     offset = expr.xreplace({symbol: sympy.S.Zero for symbol in symbols.values()})  # an Expr, also for 'q3'
-    return Coupling(tuple(terms), offset)
+    return tuple(terms), offset
 
 
 def _check_leaders(r: Reader, path: KeyPath, joints: list[Joint]) -> None:

@@ -29,14 +29,22 @@ def _joints(model: Model) -> str:
     actuated coordinates and the wrist on its platform."""
     if model.parallel is None:
         text = f"{len(model.joints)} joints ({_typed(model.joints)})"
-        return text if model.dof == len(model.joints) else f"{text}, {model.dof} coordinates"
+        text = text if model.dof == len(model.joints) else f"{text}, {model.dof} coordinates"
+        return text + _stops(model)
     legs = ", ".join(f"{leg.name}:{''.join(j.type.value for j in leg.joints)}" for leg in model.parallel.legs)
     text = (f"parallel, {len(model.parallel.legs)} legs ({legs}), {model.dof} actuated "
             f"({_typed(model.coordinates)})")
     wrist = model.parallel.wrist
     if wrist is None:
-        return text
-    return f"{text}, a wrist of {len(wrist.joints)} joints on the platform ({_typed(wrist.joints)})"
+        return text + _stops(model)
+    return f"{text}, a wrist of {len(wrist.joints)} joints on the platform ({_typed(wrist.joints)})" + _stops(model)
+
+
+def _stops(model: Model) -> str:
+    """', stops on q3 - q2': the combinations of coordinates the model stops (nothing without)."""
+    if not model.joint_stops:
+        return ""
+    return f", stops on {', '.join(stop.expression for stop in model.joint_stops)}"
 
 
 def _bodies(model: Model) -> str:

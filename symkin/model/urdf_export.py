@@ -14,8 +14,8 @@ frame placement of ``<link>`` in any URDF reader are the same transform:
   readers merge fixed links into their parent, so a link may carry several bodies;
 * revolute joints without limits are ``continuous``; limits, velocity and effort limits are
   written where the model declares them (``effort="0" velocity="0"`` otherwise, as the
-  URDF requires the attributes); friction becomes ``<dynamics damping friction>``; joint springs,
-  which URDF cannot express, are listed in a comment.
+  URDF requires the attributes); friction becomes ``<dynamics damping friction>``; joint springs and stops on
+  combinations of joints, which URDF cannot express, are listed in a comment.
 
 Every number is the model's expression at the parameters' default values, printed with
 ``repr`` (the shortest decimal that reads back as the same double); rotations are written as
@@ -117,6 +117,10 @@ def export_urdf(model: Model) -> str:
         springs = ", ".join(f"{s.joint} (k = {_number(s.stiffness, values)!r}, theta_0 = {_number(s.reference, values)!r})"
                             for s in model.springs)
         lines.insert(2, xml_comment(f"joint springs of the model, which URDF cannot hold: {springs}"))
+    if model.joint_stops:  # nor stops on combinations of joints
+        stops = ", ".join(f"{_number(s.lower, values)!r} <= {s.expression} <= {_number(s.upper, values)!r}"
+                          for s in model.joint_stops)
+        lines.insert(2, xml_comment(f"joint stops of the model, which URDF cannot hold: {stops}"))
     base = _transform(model.base, values)
     for joint, p in zip(model.joints, tree.parent_indices(model)):
         parent, pending = (ROOT_LINK, base) if p < 0 else (model.joints[p].link, np.eye(4))

@@ -30,6 +30,18 @@ planar arm; m < n for a redundant device, e.g. a DELTA carrying a wrist pushed a
   after Colgate and Brown 1994), so K_max = 2 (b - |B|) / T and |B| < b.  At the handle b is the
   smallest eigenvalue of the joints' viscous damping seen there, J^-T diag(b_j) J^-1 ((J B^-1 J^T)^-1 for a
   redundant device, :func:`handle_damping`): the direction in which the device is least damped limits the wall.
+* **passive wall along an axis** (issue 64): a wall normal to the task axis e, F = -K q(x_e) e with q the encoders'
+  quantization, held for one period.  For one joint (a mass with viscous b and Coulomb f_c, encoder step Delta)
+  Abbott and Okamura (IEEE T-RO 21(5), 2005) show it passive if and only if K < 2 b / T and K < 2 f_c / Delta: two
+  decoupled modes, a growing oscillation (b, T; Colgate and Brown 1994) and a limit cycle one count wide (f_c,
+  Delta).  Both follow from the wall's work over a closed cycle of sampled positions x_k,
+  -sum K q(x_k) dx_k = K sum dx_k^2 / 2 + K sum (x_k - q(x_k)) dx_k <= K sum dx_k^2 / 2 + K Delta U (U the motion
+  towards the wall), against the dissipation b sum dx_k^2 / T + 2 f_c U.  At the handle the hand may move sideways
+  as it pushes, so each input is the worst over the motions whose component along e is one: the least damping
+  b_e = 1 / (e^T J B^-1 J^T e) (:func:`axis_damping`), the least Coulomb force f_e = min_i tau_c,i / |J_ei|
+  (:func:`axis_slip_friction`), and the widest quantization error along e, Delta_e = sum_i |J_ei| dq_i
+  (:func:`axis_quantization`); K_e = min(2 b_e / T, 2 f_e / Delta_e) is then sufficient, and for one joint
+  (J = 1) it is Abbott and Okamura's bound.
 """
 
 from __future__ import annotations
@@ -194,6 +206,45 @@ def handle_damping(J: np.ndarray, viscous: Sequence[float] | np.ndarray) -> np.n
     largest = np.linalg.eigvalsh(mobility)[..., -1]
     with np.errstate(divide="ignore"):
         return np.where(free_motion, 0.0, 1.0 / largest)
+
+
+def axis_damping(J: np.ndarray, viscous: Sequence[float] | np.ndarray) -> np.ndarray:
+    """The least viscous damping of a handle motion whose component along each task axis e_a is one (..., m):
+    b_e = 1 / (e^T J B^-1 J^T e), B = diag(b_j) (min over J w = v, e . v = 1 of w^T B w, the hand free to move
+    sideways); 0 where an undamped joint moves the handle along e, inf where no joint does."""
+    J = np.asarray(J, dtype=float)
+    b = np.broadcast_to(np.asarray(viscous, dtype=float), J.shape[-1:])
+    moves = np.abs(J) > 0.0
+    undamped = np.any(moves & (b == 0.0), axis=-1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        compliance = np.sum(np.where(moves, J ** 2 / np.where(b > 0.0, b, 1.0), 0.0), axis=-1)
+        return np.where(undamped, 0.0, 1.0 / compliance)
+
+
+def axis_slip_friction(J: np.ndarray, coulomb: Sequence[float] | np.ndarray) -> np.ndarray:
+    """The least Coulomb friction force of a handle motion whose component along each task axis e_a is one
+    (..., m): f_e = min over J w = v, e . v = 1 of sum_i tau_c,i |w_i| = min_i tau_c,i / |J_ei| (a weighted l1
+    minimum sits on one joint: the hand slips in the joint that resists least per unit motion along e); inf where no
+    joint moves the handle along e."""
+    J = np.abs(np.asarray(J, dtype=float))
+    tau = np.broadcast_to(np.abs(np.asarray(coulomb, dtype=float)), J.shape[-1:])
+    with np.errstate(divide="ignore"):
+        return np.min(np.where(J > 0.0, tau / np.where(J > 0.0, J, 1.0), np.inf), axis=-1)
+
+
+def axis_quantization(J: np.ndarray, joint_steps: Sequence[float] | np.ndarray) -> np.ndarray:
+    """The width of the quantization error along each task axis (..., m): every encoder reads its joint up to one
+    count dq_i below its position, so the handle's reading along e is off by up to Delta_e = sum_i |J_ei| dq_i."""
+    J = np.abs(np.asarray(J, dtype=float))
+    return np.sum(J * np.abs(np.asarray(joint_steps, dtype=float)), axis=-1)
+
+
+def quantization_stiffness(friction: np.ndarray | float, quantization: np.ndarray | float) -> np.ndarray:
+    """K < 2 f_c / Delta (N/m): the stiffest wall whose one-count limit cycle the device's Coulomb friction f_c
+    dissipates, with encoder quantization Delta (Abbott and Okamura 2005; :func:`renderable_stiffness` is the other
+    half of their condition)."""
+    with np.errstate(divide="ignore"):
+        return 2.0 * np.asarray(friction, dtype=float) / np.asarray(quantization, dtype=float)
 
 
 def renderable_stiffness(damping: np.ndarray | float, period: float, virtual_damping: float = 0.0) -> np.ndarray:

@@ -2,7 +2,8 @@
 
 A handle pushed (J: the translational rows) is rated by the principal masses of (J M^-1 J^T)^-1, the isotropic and
 peak force, the position resolution and, with joint friction, the Coulomb friction felt, the least damping and the
-stiffest passive wall (Colgate-Brown); a handle turned (J_w) by the same in inertias, torques and angles.  The
+stiffest passive wall (Colgate-Brown; along each axis also with the encoders' quantization, Abbott-Okamura); a
+handle turned (J_w) by the same in inertias, torques and angles.  The
 actuators' data (:class:`Actuation`) come from the manifest or the caller.
 """
 
@@ -166,10 +167,26 @@ def translation_measures(model: GeneratedModel, J: np.ndarray, M: np.ndarray | N
                         "handle step along <axis> for one encoder count of the joint that moves it most there")
     friction = (friction_measures(J, actuation, TRANSLATIONAL_FRICTION) if J.shape[-2] <= J.shape[-1]
                 else "friction and damping at the handle need at least as many joints as task translations")
-    if isinstance(friction, str):
-        skipped["friction"] = friction
+    viscous, coulomb = actuation.viscous, actuation.coulomb
+    if isinstance(friction, str) or viscous is None or coulomb is None:
+        skipped["friction"] = skipped["passive_stiffness"] = str(friction)
     else:
-        out += friction
+        rate = f"{1 / actuation.period:g} Hz"
+        sampled = formulas.renderable_stiffness(formulas.axis_damping(J, viscous), actuation.period)
+        out += friction + per_axis("renderable_stiffness", "N/m", sampled, True,
+                                   f"stiffest passive wall normal to <axis> at {rate} (Colgate-Brown): 2 b_e / T, "
+                                   "b_e = 1 / (e^T J B^-1 J^T e) the least damping of a motion along <axis>")
+        if actuation.joint_steps is None:
+            skipped["passive_stiffness"] = NO_ENCODERS
+        else:
+            quantized = formulas.quantization_stiffness(formulas.axis_slip_friction(J, coulomb),
+                                                        formulas.axis_quantization(J, actuation.joint_steps))
+            out += per_axis("quantization_stiffness", "N/m", quantized, True,
+                            "stiffest wall normal to <axis> whose one-count limit cycle Coulomb friction dissipates: "
+                            "2 f_e / Delta_e, f_e = min_i tau_c,i / |J_ei|, Delta_e = sum_i |J_ei| dq_i")
+            out += per_axis("passive_stiffness", "N/m", np.minimum(sampled, quantized), True,
+                            f"stiffest passive wall normal to <axis> at {rate} with its encoders (Abbott and Okamura "
+                            "2005): min(2 b_e / T, 2 f_e / Delta_e)")
     if actuation.coulomb is None:
         skipped["backdrive_friction"] = "no joint friction declared (friction: in the model file)"
     elif J.shape[-2] != J.shape[-1]:
@@ -223,7 +240,8 @@ def pushed_groups(axes: Sequence[str]) -> dict[str, tuple[str, ...]]:
             "continuous_force": ("continuous_force",) + along("continuous_force"),
             "gravity_share": ("gravity_share",),
             "resolution": ("resolution",) + along("resolution"),
-            "friction": tuple(name for name, _, _ in TRANSLATIONAL_FRICTION),
+            "friction": tuple(name for name, _, _ in TRANSLATIONAL_FRICTION) + along("renderable_stiffness"),
+            "passive_stiffness": along("quantization_stiffness") + along("passive_stiffness"),
             "backdrive_friction": along("backdrive_friction")}
 
 

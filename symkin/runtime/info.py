@@ -13,7 +13,7 @@ import dataclasses
 from dataclasses import dataclass
 from typing import Any, Protocol
 
-from symkin.manifest_schema import Coordinate, Function, Manifest, Parameter
+from symkin.manifest_schema import Coordinate, Function, JointStopRecord, Manifest, Parameter
 
 
 @dataclass(frozen=True)
@@ -40,6 +40,7 @@ class ModelInfo:
         tree: a branched serial model's links, each with its parent (the viewer draws them), else None.
         home_assembly: a parallel model's declared start of its home assembly, {leg joint variable: value}
             (``parallel.home_assembly``), else None.
+        joint_stops: stops on combinations of the coordinates (``joint_stops:``), beside their own limits.
     """
 
     name: str
@@ -57,6 +58,7 @@ class ModelInfo:
     backend_files: dict[str, tuple[str, ...]] = dataclasses.field(default_factory=dict)
     tree: Any = None
     home_assembly: dict[str, float] | None = None
+    joint_stops: tuple[JointStopRecord, ...] = ()
 
     @property
     def is_parallel(self) -> bool:
@@ -92,7 +94,7 @@ class ModelInfo:
                    () if parallel is None else tuple(leg.passive_limits for leg in parallel.legs),
                    () if parallel is None else parallel.wrist, model.home_configuration, model.hash,
                    model.description, dict(record.backends), model.tree,
-                   None if parallel is None else parallel.home_assembly)
+                   None if parallel is None else parallel.home_assembly, model.joint_stops)
 
 
 class GeneratedModel(Protocol):

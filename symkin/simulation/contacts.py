@@ -34,7 +34,7 @@ def intervals(stops: JointStops, run: Run) -> list[Contact]:
     if run.switches:
         return _from_switches(stops, run)
     t = run.t
-    penetration = dict(zip((-1, 1), stops.penetration(run.x[:, :len(stops.names)])))
+    penetration = dict(zip((-1, 1), stops.penetration(run.x[:, :stops.dof])))
     found = []
     for j, name in enumerate(stops.names):
         for side, label in SIDES.items():
@@ -51,7 +51,7 @@ def intervals(stops: JointStops, run: Run) -> list[Contact]:
 
 
 def _from_switches(stops: JointStops, run: Run) -> list[Contact]:
-    q0 = run.x[0, :len(stops.names)]
+    q0 = run.x[0, :stops.dof]
     open_ = {(j, int(s)): float(run.t[0]) for j, s in enumerate(stops.contact(q0)) if s}
     found = []
     for switch in run.switches:
@@ -80,16 +80,18 @@ def _dissipated(dissipated: np.ndarray | None) -> np.ndarray:
 
 
 def columns(system: ArmSystem, run: Run, units: tuple[Sequence[str], Sequence[str]]) -> dict[str, np.ndarray]:
-    """Per-sample columns: penetration and stop torque per stopped joint, stored and dissipated energy."""
+    """Per-sample columns: penetration per stop and stop torque per stopped joint, stored and dissipated energy."""
     stops = _stopped(system)
     s = system.split(run.x)
     depth = stops.depth(s.q)
     tau, _ = stops.torque_and_dissipation(s.q, s.qd)
+    positions = stops.stop_units(units)[0]
     out = {}
     for j, name in enumerate(stops.names):
         if stops.stiffness[j] > 0.0:
-            out[f"penetration {name} [{units[0][j]}]"] = depth[:, j]
-            out[f"tau_stop_{name} [{units[1][j]}]"] = tau[:, j]
+            out[f"penetration {name} [{positions[j]}]"] = depth[:, j]
+            if j < stops.dof:
+                out[f"tau_stop_{name} [{units[1][j]}]"] = tau[:, j]
     out["stop energy stored [J]"] = stops.stored_energy(s.q)
     out["stop energy dissipated [J]"] = _dissipated(s.dissipated)
     return out
@@ -97,9 +99,10 @@ def columns(system: ArmSystem, run: Run, units: tuple[Sequence[str], Sequence[st
 
 def summary(system: ArmSystem, run: Run, contacts: list[Contact], units: tuple[Sequence[str], Sequence[str]]
             ) -> list[str]:
-    """Lines: per stopped joint the number of contacts, time in contact and peak penetration."""
+    """Lines: per stop the number of contacts, time in contact and peak penetration."""
     stops = _stopped(system)
     depth = stops.depth(system.split(run.x).q)
+    positions = stops.stop_units(units)[0]
     lines, free = [], []
     for j, name in enumerate(stops.names):
         if stops.stiffness[j] <= 0.0:
@@ -111,7 +114,7 @@ def summary(system: ArmSystem, run: Run, contacts: list[Contact], units: tuple[S
         parts = [f"{sum(c.side == side for c in mine)} x {side} {sum(c.end - c.start for c in mine if c.side == side):.4g} s"
                  for side in SIDES.values() if any(c.side == side for c in mine)]
         lines.append(f"  {name}: in contact {', '.join(parts)}; max penetration {np.max(depth[:, j]):.3g} "
-                     f"{units[0][j]} (at the samples)")
+                     f"{positions[j]} (at the samples)")
     if free:
         lines.append(f"  {', '.join(free)}: no contact with {'its' if len(free) == 1 else 'their'} stops")
     s = system.split(run.x[-1])

@@ -69,20 +69,31 @@ def peak_penetration(velocity: float, omega: float, damping_ratio: float) -> flo
     return velocity / omega * math.exp(-damping_ratio / root * math.atan2(root, damping_ratio))
 
 
-def effective_inertia(mass: np.ndarray) -> np.ndarray:
-    """m_i = 1 / (M^-1)_ii (n,): the inertia at joint i with the other joints free."""
-    return 1.0 / np.diag(np.linalg.inv(mass))
+def effective_inertia(mass: np.ndarray, rows: np.ndarray | None = None) -> np.ndarray:
+    """m_i = 1 / (M^-1)_ii (n,): the inertia at joint i with the other joints free; with ``rows`` (s, n), the inertia
+    1 / (a^T M^-1 a) each combination a . q meets (Khatib's effective mass along a)."""
+    inverse = np.linalg.inv(mass)
+    if rows is None:
+        return 1.0 / np.diag(inverse)
+    return 1.0 / np.einsum("ri,ij,rj->r", rows, inverse, rows)
 
 
 @dataclass(frozen=True)
 class JointStops:
-    """Unilateral spring-dampers at the joint limits (see the module docstring).
+    """Unilateral spring-dampers at the joint limits and at the model's stops on combinations of joints
+    (``joint_stops:``, e.g. the PHANToM's -65 deg <= q3 - q2 <= 55 deg), see the module docstring.
+
+    Each stop r acts on its value v_r = a_r . q + b_r: the first n are the joints themselves (a_r = e_r,
+    b_r = 0; -inf / inf limits and k = c = 0 where a joint declares none), the others the model's combinations.
+    A stop's force along its value, f_r = -side (k d + c d'), reaches the joints as a_r f_r (virtual work).
 
     Attributes:
-        names: the joint names (n,).
-        lower, upper: (n,) limits; -inf / inf where a joint has no stop on that side.
-        stiffness: (n,) k [N m/rad or N/m].
-        damping: (n,) c [N m s/rad or N s/m].
+        names: each stop's name (n + s,): the joint's, or the combination as the model file writes it.
+        lower, upper: (n + s,) limits of each stop's value; -inf / inf where a joint has no stop on that side.
+        stiffness: (n + s,) k [N m/rad or N/m].
+        damping: (n + s,) c [N m s/rad or N s/m].
+        rows: (n + s, n) a_r; None: the identity (the joints' own stops only).
+        offsets: (n + s,) b_r; None: zero.
     """
 
     names: tuple[str, ...]
@@ -92,61 +103,79 @@ class JointStops:
     damping: np.ndarray
     time_constant: float = field(default=TIME_CONSTANT, compare=False)
     damping_ratio: float = field(default=DAMPING_RATIO, compare=False)
+    rows: np.ndarray | None = None
+    offsets: np.ndarray | None = None
 
     @classmethod
     def from_plant(cls, plant, q: np.ndarray, *, time_constant: float = TIME_CONSTANT,
                    damping_ratio: float = DAMPING_RATIO, stiffness: dict[str, float] | None = None,
                    damping: dict[str, float] | None = None) -> JointStops | None:
-        """Stops at the limits the model declares, parameters from M(q) (None: no limits declared).
+        """Stops at the limits and the stops the model declares, parameters from M(q) (None: none declared).
 
         Args:
             plant: the :class:`~symkin.simulation.plant.Plant`.
-            q: the configuration whose effective inertias 1 / (M^-1)_ii set the defaults.
+            q: the configuration whose effective inertias 1 / (a^T M^-1 a) set the defaults.
             time_constant: T_c = 1 / omega_n [s].
             damping_ratio: zeta.
-            stiffness, damping: per-joint values (by name) instead of the defaults.
+            stiffness, damping: per-stop values (by joint name, or a combination's text) instead of the defaults.
 
         Raises:
-            ValueError: a parameter is not positive (zeta, c: not negative), or names a joint
-                that does not exist or has no limits.
+            ValueError: a parameter is not positive (zeta, c: not negative), or names a stop
+                that does not exist.
         """
         if not time_constant > 0.0:
             raise ValueError(f"stop time constant must be positive, got {time_constant:g} s")
         if not damping_ratio >= 0.0:
             raise ValueError(f"stop damping ratio must not be negative, got {damping_ratio:g}")
-        limits = plant.joint_limits
+        names = tuple(plant.coordinates)
+        coupled = plant.model.info.joint_stops
+        limits = np.vstack([plant.joint_limits, np.array([stop.limits for stop in coupled]).reshape(-1, 2)])
+        rows = np.vstack([np.eye(len(names)), _combination_rows(coupled, names)])
+        offsets = np.concatenate([np.zeros(len(names)), [stop.offset for stop in coupled]])
+        labels = names + tuple(stop.expression for stop in coupled)
         limited = np.isfinite(limits).any(axis=1)
         if not limited.any():
             return None
-        names = tuple(plant.coordinates)
-        inertia = effective_inertia(plant.mass_matrix(np.asarray(q, dtype=float)))
+        inertia = effective_inertia(plant.mass_matrix(np.asarray(q, dtype=float)), rows)
         omega = 1.0 / time_constant
         k = np.where(limited, inertia * omega ** 2, 0.0)
         c = np.where(limited, 2.0 * damping_ratio * inertia * omega, 0.0)
         for label, values, target, strict in (("stiffness", stiffness, k, True), ("damping", damping, c, False)):
             for name, value in (values or {}).items():
-                if name not in names:
-                    raise ValueError(f"stop {label}: no joint '{name}'; joints: {', '.join(names)}")
-                i = names.index(name)
+                if name not in labels:
+                    raise ValueError(f"stop {label}: no joint or stop '{name}'; stops: {', '.join(labels)}")
+                i = labels.index(name)
                 if not limited[i]:
                     raise ValueError(f"stop {label}: joint '{name}' declares no limits, so it has no stop")
                 if not (value > 0.0 if strict else value >= 0.0):
                     raise ValueError(f"stop {label} of '{name}' must be {'positive' if strict else 'non-negative'}, "
                                      f"got {value:g}")
                 target[i] = value
-        return cls(names, limits[:, 0], limits[:, 1], k, c, time_constant, damping_ratio)
+        if not coupled:
+            return cls(names, limits[:, 0], limits[:, 1], k, c, time_constant, damping_ratio)
+        return cls(labels, limits[:, 0], limits[:, 1], k, c, time_constant, damping_ratio, rows, offsets)
+
+    @property
+    def dof(self) -> int:
+        """n, the joints the stops act on."""
+        return len(self.names) if self.rows is None else self.rows.shape[1]
+
+    def values(self, q: np.ndarray) -> np.ndarray:
+        """Each stop's value a_r . q + b_r (..., n + s): q itself without stops on combinations."""
+        return q if self.rows is None else q @ self.rows.T + self.offsets
 
     def penetration(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(d_lower, d_upper) = (q_lo - q, q - q_hi), (..., n): positive beyond the stop."""
-        return self.lower - q, q - self.upper
+        """(d_lower, d_upper) = (lo - v, v - hi) of every stop's value v, (..., n + s): positive beyond the stop."""
+        v = self.values(q)
+        return self.lower - v, v - self.upper
 
     def contact(self, q: np.ndarray) -> np.ndarray:
-        """Engaged stop per joint (..., n): -1 lower, +1 upper, 0 free."""
+        """Engaged side per stop (..., n + s): -1 lower, +1 upper, 0 free."""
         d_lo, d_hi = self.penetration(q)
         return np.where(d_lo > 0.0, -1, np.where(d_hi > 0.0, 1, 0))
 
     def depth(self, q: np.ndarray) -> np.ndarray:
-        """max(0, d) per joint (..., n): how far beyond its limit each joint is."""
+        """max(0, d) per stop (..., n + s): how far beyond its limit each stop's value is."""
         d_lo, d_hi = self.penetration(q)
         return np.maximum(0.0, np.maximum(d_lo, d_hi))
 
@@ -154,36 +183,52 @@ class JointStops:
                                contact: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """(tau_stop (..., n), D' = sum c d'^2 (...,)) at states (..., n).
 
-        ``contact``: the engaged stops (-1, 0, +1 per joint) of a hybrid mode; the spring-damper
-        then acts on the engaged joints whatever the sign of d (the smooth continuation the
+        ``contact``: the engaged stops (-1, 0, +1 per stop) of a hybrid mode; the spring-damper
+        then acts on the engaged stops whatever the sign of d (the smooth continuation the
         event-located integrator needs).  None: engaged where d > 0.
         """
         side = self.contact(q) if contact is None else contact
         if not np.any(side):
             return np.zeros_like(q), np.zeros(np.shape(q)[:-1])
-        # d = side (q - limit), d' = side qd; tau = -side (k d + c d')
+        # d = side (v - limit), d' = side a . qd; f = -side (k d + c d') along v, a f at the joints
         limit = np.where(side < 0, self.lower, np.where(side > 0, self.upper, 0.0))
-        d = side * (q - limit)
-        rate = side * qd
-        tau = -side * (self.stiffness * d + self.damping * rate)
-        return tau, np.sum(self.damping * rate * rate, axis=-1)
+        d = side * (self.values(q) - limit)
+        rate = side * (qd if self.rows is None else qd @ self.rows.T)
+        force = -side * (self.stiffness * d + self.damping * rate)
+        return force if self.rows is None else force @ self.rows, np.sum(self.damping * rate * rate, axis=-1)
 
     def stored_energy(self, q: np.ndarray) -> np.ndarray:
         """U = sum 1/2 k max(0, d)^2 (...,)."""
         return 0.5 * np.sum(self.stiffness * self.depth(q) ** 2, axis=-1)
 
+    def stop_units(self, units: tuple[Sequence[str], Sequence[str]]) -> tuple[list[str], list[str]]:
+        """(position unit, effort unit) per stop from the joints' ``units``: a combination's are its first joint's
+        (a stop's joints are all angles or all lengths)."""
+        first = range(self.dof) if self.rows is None else np.argmax(self.rows != 0.0, axis=1)
+        return [units[0][j] for j in first], [units[1][j] for j in first]
+
     def describe(self, units: tuple[Sequence[str], Sequence[str]]) -> list[str]:
-        """Summary lines: the parameters per stopped joint (``units``: position and effort unit per joint)."""
+        """Summary lines: the parameters per stop (``units``: position and effort unit per joint)."""
         lines = [f"joint stops: linear spring-damper beyond the limits, T_c = {self.time_constant * 1e3:g} ms, "
                  f"zeta = {self.damping_ratio:g} (e = {restitution(self.damping_ratio):.3g} at the start configuration, "
                  "other joints free)"]
+        positions, efforts = self.stop_units(units)
         for i, name in enumerate(self.names):
             if self.stiffness[i] > 0.0:
-                position, effort = units[0][i], units[1][i]
+                position, effort = positions[i], efforts[i]
                 lines.append(f"  {name}: [{self.lower[i]:.4g}, {self.upper[i]:.4g}] {position}, k = "
                              f"{self.stiffness[i]:.4g} {effort}/{position}, c = {self.damping[i]:.4g} "
                              f"{effort} s/{position}")
         return lines
+
+
+def _combination_rows(coupled: Sequence, names: tuple[str, ...]) -> np.ndarray:
+    """(s, n): the multipliers of the model's stops on combinations over the joints ``names``."""
+    rows = np.zeros((len(coupled), len(names)))
+    for r, stop in enumerate(coupled):
+        for name, a in stop.coefficients.items():
+            rows[r, names.index(name)] = a
+    return rows
 
 
 def rk4_amplification(z: np.ndarray) -> np.ndarray:
@@ -223,8 +268,8 @@ def stop_configurations(stops: JointStops, q: np.ndarray) -> np.ndarray:
     """(m, n): ``q`` and every corner of the limits (joints without stops keep their value in q),
     where the stops engage: the configurations :func:`rk4_stability` is checked at."""
     q = np.asarray(q, dtype=float)
-    choices = [(lo, hi) if np.isfinite(lo) and np.isfinite(hi) else (qi,)
-               for qi, lo, hi in zip(q, stops.lower, stops.upper)]
+    choices = [(lo, hi) if np.isfinite(lo) and np.isfinite(hi) else (qi,)                 # the joints' own stops
+               for qi, lo, hi in zip(q, stops.lower[:stops.dof], stops.upper[:stops.dof])]
     corners = np.array(np.meshgrid(*choices, indexing="ij")).reshape(len(q), -1).T
     return np.vstack([q, corners])
 
@@ -233,17 +278,22 @@ def rk4_stability(stops: JointStops, masses: np.ndarray, period: float, substeps
     """Is RK4 with h = period / substeps stable in contact with every stop at once?
 
     The contact dynamics linearized at a configuration with mass matrix M, all stops engaged
-    (K, C diagonal), are x' = A x with A = [[0, I], [-M^-1 K, -M^-1 C]]; RK4 is stable iff
+    (K, C diagonal over the stops' values, R^T K R and R^T C R at the joints for the stops' rows R), are
+    x' = A x with A = [[0, I], [-M^-1 R^T K R, -M^-1 R^T C R]]; RK4 is stable iff
     |R(h lambda)| <= 1 for every eigenvalue lambda of A, here for every M of ``masses``
     ((n, n) or (m, n, n), e.g. at :func:`stop_configurations`).  For light damping this is
     omega_max h <= 2 sqrt(2), i.e. k <= 8 m_eff / h^2.
     """
-    n = len(stops.names)
+    n = stops.dof
     inverse = np.linalg.inv(np.reshape(masses, (-1, n, n)))
     A = np.zeros((len(inverse), 2 * n, 2 * n))
     A[:, :n, n:] = np.eye(n)
-    A[:, n:, :n] = -inverse * stops.stiffness                     # M^-1 diag(k): columns scaled
-    A[:, n:, n:] = -inverse * stops.damping
+    if stops.rows is None:
+        A[:, n:, :n] = -inverse * stops.stiffness                     # M^-1 diag(k): columns scaled
+        A[:, n:, n:] = -inverse * stops.damping
+    else:
+        A[:, n:, :n] = -inverse @ (stops.rows.T * stops.stiffness @ stops.rows)
+        A[:, n:, n:] = -inverse @ (stops.rows.T * stops.damping @ stops.rows)
     lam = np.linalg.eigvals(A).ravel()
     h = period / substeps
 
@@ -264,11 +314,11 @@ def rk4_stability(stops: JointStops, masses: np.ndarray, period: float, substeps
 
 @dataclass(frozen=True)
 class Guard:
-    """An event function of :class:`ContactModes`: the penetration d of one stop of one joint.
+    """An event function of :class:`ContactModes`: the penetration d of one side of one stop.
 
     Attributes:
         stops: the stops.
-        joint: the joint index.
+        joint: the stop's index (a joint's own stop, or after the n joints a stop on a combination).
         side: -1 lower stop, +1 upper stop.
         entering: True: d rises through 0 (contact); False: d falls through 0 (release).
     """
@@ -284,16 +334,17 @@ class Guard:
         return 1.0 if self.entering else -1.0
 
     def __call__(self, t: float, x: np.ndarray) -> float:
-        q = x[self.joint]
-        return float(self.stops.lower[self.joint] - q if self.side < 0 else q - self.stops.upper[self.joint])
+        stops = self.stops
+        v = stops.values(x[:stops.dof])[self.joint]
+        return float(stops.lower[self.joint] - v if self.side < 0 else v - stops.upper[self.joint])
 
 
 class ContactModes:
     """The hybrid modes of the stops for :func:`~symkin.simulation.integrate.run_adaptive`.
 
-    A mode is the engaged stop per joint (tuple of -1, 0, +1).  In a mode the spring-dampers
-    of the engaged stops act whatever the sign of d (smooth right-hand side); a free joint's
-    guards are its penetrations rising through zero, an engaged joint's guard is its
+    A mode is the engaged side per stop (tuple of -1, 0, +1).  In a mode the spring-dampers
+    of the engaged stops act whatever the sign of d (smooth right-hand side); a free stop's
+    guards are its penetrations rising through zero, an engaged stop's guard is its
     penetration falling through zero.
     """
 
@@ -301,7 +352,7 @@ class ContactModes:
         self.stops = stops
 
     def initial(self, x: np.ndarray) -> tuple[int, ...]:
-        return tuple(int(c) for c in self.stops.contact(x[:len(self.stops.names)]))
+        return tuple(int(c) for c in self.stops.contact(x[:self.stops.dof]))
 
     def argument(self, mode: tuple[int, ...]) -> np.ndarray:
         return np.array(mode, dtype=float)

@@ -156,6 +156,8 @@ def workspace_cloud(model: GeneratedModel, samples: int, seed: int = 0, limits: 
                 f"roll, pitch, yaw = {reach.orientation_text(held)}{homogenized}")
         return Cloud(points[reachable], values, q[reachable], length, note)
     cloud = workspace.sample_workspace(model, samples, limits=limits, seed=seed)
+    if 0 < len(cloud.q) < samples / 2:  # the joint stops keep part of the limits' box (the PHANToM's a quarter)
+        cloud = workspace.sample_workspace(model, math.ceil(samples ** 2 / len(cloud.q)), limits=limits, seed=seed)
     values = global_indices.local_index(model, cloud.q, length=length)
     note = f"{len(cloud.q)} joint configurations sampled within the limits{homogenized}"
     return Cloud(_pad3(cloud.points, cloud.axes), values, cloud.q, length, note)

@@ -245,7 +245,7 @@ def test_cli_derives_a_model_file_on_the_fly(tmp_path, capsys):
     (["--joint-stops", "off", "--stop-time-constant", "0.01"], "the joint stops are off"),
     (["--stop-time-constant", "0"], "time constant must be positive"),
     (["--stop-damping-ratio", "-0.1"], "must not be negative"),
-    (["--stop-stiffness", "theta9=100"], "no joint 'theta9'"),
+    (["--stop-stiffness", "theta9=100"], "no joint or stop 'theta9'"),
     (["--stop-stiffness", "theta1=-1"], "must be positive"),
     (["--stop-damping", "theta1"], "is not NAME=VALUE"),
     (["--joint-stops", "maybe"], "invalid choice"),

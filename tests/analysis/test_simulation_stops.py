@@ -21,6 +21,7 @@ from symkin.simulation import ArmSystem, ComputedTorque, JointSine, Plant, run_a
 from symkin.simulation.contacts import intervals
 from symkin.simulation.stops import ContactModes, JointStops, effective_inertia, rk4_stability, stop_configurations
 from tests.conftest import GENERATED_DIR, MODELS_DIR
+from tolerances import CLOSED_FORM
 
 START = np.radians([45.0, 45.0])
 ZERO = np.zeros(2)
@@ -290,3 +291,69 @@ def test_a_joint_pushed_back_onto_its_stop_right_after_leaving_it_does_not_chatt
     assert stops.contact(run.x[-1, :6])[3] == -1
     s = system.split(run.x)
     assert np.ptp(system.balance(run.x)) < 1e-9 * np.max(np.abs(plant.energy(s.q, s.qd)))
+
+
+#: A table moving in x and y (two prismatic joints: M = diag(m1 + m2, m2), constant), whose carriage and slider
+#: meet where x + y reaches 0.05 m: a stop on a combination of joints (issue 64), not on either joint.
+XY_TABLE = """
+name: xy_table
+parameters:
+  m1: {value: 2.0, unit: kg, doc: carriage}
+  m2: {value: 1.0, unit: kg, doc: slider}
+serial:
+  chain:
+    - {name: x, type: P, axis: [1, 0, 0], link: carriage, limits: [-1, 1]}
+    - {name: y, type: P, axis: [0, 1, 0], link: slider, limits: [-1, 1]}
+task_space: [x, y]
+bodies:
+  - {link: carriage, mass: m1}
+  - {link: slider, mass: m2}
+joint_stops:
+  - {expression: "x + y", limits: [-1, 0.05], doc: the carriage meets the slider}
+"""
+
+
+@pytest.fixture(scope="module")
+def table(tmp_path_factory):
+    from symkin.analysis.model_files import generated_model
+
+    path = tmp_path_factory.mktemp("table") / "xy_table.yaml"
+    path.write_text(XY_TABLE)
+    return Plant(generated_model(str(path), outputs=("fk", "jacobian", "mass_matrix", "forward_dynamics",
+                                                      "inverse_dynamics", "kinetic_energy")))
+
+
+def test_a_stop_on_a_combination_of_joints_bounces_as_its_oscillator_along_it(table):
+    """Thrown at the stop x + y = 0.05 m, the table meets it with the effective mass m_a = 1 / (a^T M^-1 a),
+    a = (1, 1) (3/4 kg with M = diag(3, 1) kg): the contact lasts pi / omega_d and the speed along a comes back
+    times the restitution of (omega, zeta) = (sqrt(k / m_a), c / (2 sqrt(k m_a))); the stop pushes the joints by
+    a f, so the momentum b . M qd along b = (1, -1), b . a = 0, is untouched; the balance holds and the joints'
+    own stops never engage."""
+    q0, qd0 = np.array([0.0, 0.0]), np.array([0.3, 0.1])
+    stops = JointStops.from_plant(table, q0)
+    assert stops.names == ("x", "y", "x + y")
+    M = table.mass_matrix(q0)
+    a = np.array([1.0, 1.0])
+    m = 1.0 / (a @ np.linalg.solve(M, a))
+    assert m == pytest.approx(0.75, rel=CLOSED_FORM)
+    np.testing.assert_allclose(stops.stiffness[2], m / 3e-3 ** 2, rtol=CLOSED_FORM)
+    system = ArmSystem(table, stops=stops)
+    run = run_adaptive(system.derivative, lambda t, x: ZERO, system.initial(q0, qd0), np.linspace(0.0, 0.5, 2001),
+                       modes=ContactModes(stops))
+    assert [(s.guard.joint, s.guard.side, s.guard.entering) for s in run.switches] == [(2, 1, True), (2, 1, False)]
+    enter, leave = run.switches
+    assert abs(enter.x[0] + enter.x[1] - 0.05) < 1e-12                     # located on the stop
+    k, c = stops.stiffness[2], stops.damping[2]
+    omega, zeta = math.sqrt(k / m), c / (2 * math.sqrt(k * m))
+    v_in, v_out = a @ enter.x[2:4], a @ leave.x[2:4]
+    np.testing.assert_allclose(leave.t - enter.t, math.pi / (omega * math.sqrt(1 - zeta ** 2)), rtol=1e-6)
+    np.testing.assert_allclose(-v_out / v_in, restitution(v_in, omega, zeta), rtol=1e-6)
+    # the stop's force is a f: it changes M qd only along a, so the momentum along any b with b . a = 0 stays
+    b = np.array([1.0, -1.0])
+    np.testing.assert_allclose(b @ M @ leave.x[2:4], b @ M @ qd0, rtol=1e-9)
+    s = system.split(run.x)
+    energy = table.energy(s.q, s.qd)
+    assert np.ptp(system.balance(run.x)) < 1e-9 * energy[0]
+    np.testing.assert_allclose(s.dissipated[-1], energy[0] - energy[-1], rtol=1e-9)
+    found = intervals(stops, run)
+    assert [(c.joint, c.side) for c in found] == [("x + y", "upper")]

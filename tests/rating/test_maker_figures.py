@@ -30,12 +30,15 @@ def test_the_phantoms_figures_stand_beside_its_makers(tmp_path, capsys):
     assert abs(figures["force_x"]["ratio"] - 1) < 0.05 / 8.5
     # the ratios docs/analysis.md quotes and explains, to their printed digits
     quoted = {"force_x": "0.998", "continuous_force_x": "1.37", "resolution_x": "0.78", "backdrive_friction_x": "1.47",
-              "apparent_mass_x": "0.49", "renderable_stiffness": "0.006"}
+              "apparent_mass_x": "0.49", "quantization_stiffness_x": "1.44"}
     for name, text in quoted.items():
         decimals = len(text.split(".")[1])
         assert round(figures[name]["ratio"], decimals) == float(text), (name, figures[name]["ratio"])
     masses = [round(1e3 * record["measures"][f"apparent_mass_{axis}"]["home"]) for axis in "xyz"]
     assert masses == [37, 81, 55]                                   # g, as docs/analysis.md quotes them
+    walls = [round(1e-3 * record["measures"][f"quantization_stiffness_{axis}"]["home"], 1) for axis in "xyz"]
+    assert walls == [5.1, 3.8, 3.2]                                 # N/mm, as docs/analysis.md quotes them
+    assert round(record["measures"]["passive_stiffness_x"]["home"]) == 35       # N/m
     summary = (out / "summary.txt").read_text()
     assert "beside the maker's figures (PHANToM Premium 1.5 (SensAble Technologies);" in summary
     assert "force_x at home: symkin 8.479 N, maker 8.5 N, ratio 0.998" in summary

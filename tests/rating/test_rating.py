@@ -89,6 +89,40 @@ def test_the_figures_along_each_axis_are_the_closed_forms_of_the_2r_arm(arm, q):
 
 
 @pytest.mark.parametrize("q", POSES)
+def test_a_walls_inputs_along_each_axis_are_the_worst_motions_the_hand_can_make(q):
+    """Issue 64, the passive wall normal to an axis e: the hand moves v = e + t n (n normal to e) as it pushes, and a
+    scan of t finds the least damping v^T J^-T B J^-1 v and the least Coulomb force sum_i tau_c,i |(J^-1 v)_i| the
+    formulas give; the quantization error along e, encoders read one count below the joints, reaches
+    sum_i |J_ei| dq_i (to first order in the counts) at the reading of the worst corner."""
+    J = seed_jacobian(q)
+    viscous, coulomb = np.array([0.002, 0.001]), np.array([0.02, 0.05])
+    sideways = np.linspace(-50.0, 50.0, 400_001)                   # t, in steps of 2.5e-4
+    for axis in range(2):
+        e, n = np.eye(2)[axis], np.eye(2)[1 - axis]
+        ahead, aside = np.linalg.solve(J, e), np.linalg.solve(J, n)  # the joints' rates for e and for n
+        w = ahead[None, :] + sideways[:, None] * aside[None, :]
+        damping = np.sum(viscous * w ** 2, axis=-1)
+        friction = np.sum(coulomb * np.abs(w), axis=-1)
+        least_damping = float(formulas.axis_damping(J, viscous)[axis])
+        least_friction = float(formulas.axis_slip_friction(J, coulomb)[axis])
+        # the exact minima are no larger than any scanned motion, and the scan comes within its step of them: a
+        # quadratic in t within (step / 2)^2 times its curvature, a piecewise-linear function within step / 2 times
+        # its largest slope
+        curvature, slope = 2 * np.sum(viscous * aside ** 2), np.sum(coulomb * np.abs(aside))
+        assert least_damping <= damping.min() * (1 + 1e-12)
+        assert damping.min() - least_damping <= (2.5e-4 / 2) ** 2 * curvature / 2 + 1e-12 * least_damping
+        assert least_friction <= friction.min() * (1 + 1e-12)
+        assert friction.min() - least_friction <= 2.5e-4 / 2 * slope + 1e-12 * least_friction
+    steps = 2 * np.pi / np.array([4096 * 10.0, 4096 * 8.0])
+    corners = np.array([[0, 0], [0, 1], [1, 0], [1, 1]]) * steps                    # the joints above their readings
+    tip = np.stack([L1 * np.cos(q[0] + corners[:, 0]) + L2 * np.cos(q.sum() + corners.sum(axis=1)),
+                    L1 * np.sin(q[0] + corners[:, 0]) + L2 * np.sin(q.sum() + corners.sum(axis=1))], axis=-1)
+    widest = np.ptp(tip, axis=0)                                                       # per task axis
+    # fk's second-order terms at a corner are at most the reach times (dq_1 + dq_2)^2 / 2, twice that in a width
+    np.testing.assert_allclose(formulas.axis_quantization(J, steps), widest, rtol=0, atol=(L1 + L2) * steps.sum() ** 2)
+
+
+@pytest.mark.parametrize("q", POSES)
 def test_the_peak_force_is_the_best_direction_of_a_dense_scan(arm, q):
     J, limits = seed_jacobian(q), np.array([0.3, 0.2])
     peak = float(formulas.peak_force(J, limits))
@@ -248,7 +282,7 @@ def test_cli_rates_the_delta_and_writes_its_datasheet(generated_dir, tmp_path):
     sheet = json.loads((out / "datasheet.json").read_text())
     no_friction = "no joint friction declared (friction: in the model file)"
     assert sheet["not_rated"] == {"friction": no_friction, "backdrive_friction": no_friction,
-                                  "continuous_force": handle_measures.NO_CONTINUOUS_LIMITS}
+                                  "passive_stiffness": no_friction, "continuous_force": handle_measures.NO_CONTINUOUS_LIMITS}
     rows = np.loadtxt(out / "datasheet.csv", delimiter=",", skiprows=2)
     header = (out / "datasheet.csv").read_text().splitlines()[1].split(",")
     for name, measure in sheet["measures"].items():
@@ -339,9 +373,11 @@ def test_friction_declared_in_the_model_is_felt_at_the_handle(tmp_path):
     path = tmp_path / "planar_2r.yaml"
     path.write_text(text)
     out = tmp_path / "rate"
-    assert main(["rate", str(path), "-n", "400", "--effort-limit", "0.5,0.3", "--no-figure", "-o", str(out)]) == 0
+    assert main(["rate", str(path), "-n", "400", "--effort-limit", "0.5,0.3", "--encoder", "4096", "--no-figure",
+                 "-o", str(out)]) == 0
     sheet = json.loads((out / "datasheet.json").read_text())
     assert "friction" not in sheet["not_rated"]
+    assert "passive_stiffness" not in sheet["not_rated"]
     home = np.array(sheet["home"]["q"])
     J = seed_jacobian(home)
     measures = sheet["measures"]
@@ -350,6 +386,15 @@ def test_friction_declared_in_the_model_is_felt_at_the_handle(tmp_path):
     damping = float(formulas.handle_damping(J, [0.002, 0.001]))
     assert measures["handle_damping"]["home"] == pytest.approx(damping, rel=1e-9)
     assert measures["renderable_stiffness"]["home"] == pytest.approx(2 * damping / 1e-3, rel=1e-9)
+    # along each axis e (a row of J): the least damping 1 / sum_i J_ei^2 / b_i, the least Coulomb force
+    # min_i tau_c,i / |J_ei| and the quantization width sum_i |J_ei| dq_i, one count of 4096 at each joint
+    step = 2 * np.pi / 4096
+    for axis, row in zip("xy", J):
+        sampled = 2 / (1e-3 * np.sum(row ** 2 / [0.002, 0.001]))
+        quantized = 2 * min(0.004 / abs(row[0]), 0.0025 / abs(row[1])) / (step * np.sum(np.abs(row)))
+        assert measures[f"renderable_stiffness_{axis}"]["home"] == pytest.approx(sampled, rel=1e-9)
+        assert measures[f"quantization_stiffness_{axis}"]["home"] == pytest.approx(quantized, rel=1e-9)
+        assert measures[f"passive_stiffness_{axis}"]["home"] == pytest.approx(min(sampled, quantized), rel=1e-9)
 
 
 @pytest.fixture(scope="module")
