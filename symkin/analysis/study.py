@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from symkin.mechanism import feasibility
-from symkin.analysis import global_indices, inverse, workspace
+from symkin.analysis import global_indices, inscribed, inverse, workspace
 from symkin.mechanism import reach
 from symkin.mechanism.stops import StopInequalities
 from symkin import mechanism
@@ -232,6 +232,24 @@ def _multiplicity_lines(joint_measure: Estimate | None, occupied: Estimate, kind
             f"{kind} is {measured_by}"]
 
 
+def _inscribed_lines(occupancy: Occupancy) -> list[str]:
+    """The largest box (and, in 3-d, upright cylinder) inside the interior cells, as a maker quotes a workspace."""
+    interior = occupancy.interior()
+    box = inscribed.largest_box(interior, occupancy.lower, occupancy.cell)
+    if box is None:
+        return ["largest box inside: none (no interior cells: sample more configurations, -n)"]
+    size = " x ".join(f"{1e3 * s:.0f}" for s in box.size)
+    centre = ", ".join(f"{1e3 * c:.0f}" for c in (box.lower + box.upper) / 2)
+    lines = [f"largest box inside (interior cells, axis-aligned): {size} mm, centre ({centre}) mm"]
+    if interior.ndim == 3:
+        cylinder = inscribed.largest_cylinder(interior, occupancy.lower, occupancy.cell)
+        if cylinder is not None:
+            lines.append(f"largest upright cylinder inside: diameter {2e3 * cylinder.radius:.0f} mm x height "
+                         f"{1e3 * (cylinder.top - cylinder.bottom):.0f} mm, axis at ("
+                         f"{', '.join(f'{1e3 * c:.0f}' for c in cylinder.centre)}) mm")
+    return lines
+
+
 def _report(model: GeneratedModel, cloud: WorkspaceCloud, inv_kappa: np.ndarray | None, limits: Limits | None,
             progress: Callable[[str], None], box=None) -> list[str]:
     """Extent, area/volume (joint and Cartesian domains) and, for a serial mechanism, boundary and singularities."""
@@ -262,6 +280,7 @@ def _report(model: GeneratedModel, cloud: WorkspaceCloud, inv_kappa: np.ndarray 
     lines.append(f"{kind}: {occupied} {unit} (occupancy of {occupancy.cell[0]:.3g} m cells: "
                  f"between interior and all occupied cells); {int(boundary.sum())} boundary cells")
     lines += _multiplicity_lines(joint_measure, occupied, kind, unit, ik is not None)
+    lines += _inscribed_lines(occupancy)
     singular = np.asarray(inv_kappa <= 0.0)
     on_boundary = int(occupancy.lookup(cloud.points[singular], boundary).sum())
     lines.append(f"1/kappa: min {inv_kappa.min():.4g}, mean {inv_kappa.mean():.4g}, max {inv_kappa.max():.4g}; "

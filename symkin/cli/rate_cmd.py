@@ -66,6 +66,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--gear", metavar="N[,...]",
                    help="motor turns per joint turn between encoder and revolute joint (default: the gear ratios of "
                         "the model's actuators, or of a parallel model's rotor: 'rotor: {gear_ratio: ...}', else 1)")
+    p.add_argument("--shape-samples", type=int, default=None, metavar="N",
+                   help="samples of the grid the largest box and upright cylinder inside the usable workspace are "
+                        "found on (default: 2^18 joint configurations of an arm, 2^15 Cartesian cells of a platform; "
+                        "0: not rated)")
     p.add_argument("--rate", type=float, default=1000.0, metavar="HZ",
                    help="servo rate of the haptic loop, for the renderable stiffness (default: 1000)")
     analysis_args.add_device_argument(p)
@@ -131,6 +135,18 @@ def _input_lines(inputs: dict[str, object]) -> list[str]:
     return lines
 
 
+def _shapes(args: argparse.Namespace, model, conditioning: float):
+    """The largest box and cylinder inside the usable workspace (:mod:`symkin.rating.workspace_shapes`), or why not."""
+    from symkin.rating import workspace_shapes
+
+    if args.shape_samples is not None and args.shape_samples < 0:
+        raise ValueError(f"--shape-samples must not be negative, got {args.shape_samples}")
+    if args.shape_samples == 0:
+        return workspace_shapes.WorkspaceShapes(None, None, 0.0, 0, "--shape-samples 0")
+    return workspace_shapes.usable_shapes(model, conditioning, analysis_args.parse_limits(args.limits),
+                                          args.shape_samples)
+
+
 def run(args: argparse.Namespace) -> int:
     from symkin.rating import datasheet, datasheet_files
 
@@ -164,9 +180,12 @@ def run(args: argparse.Namespace) -> int:
                                    orientation=analysis_args.parse_orientation(args.orientation))
             record = sheet.to_json()
             beside = () if maker is None else maker_figures.compare(maker, sheet)
+            shapes = _shapes(args, model, conditioning)
+            record["workspace_shapes"] = shapes.to_json()
             summary = [f"{model.name}: {len(sheet.q) - 1} poses of the usable workspace (1/kappa >= {conditioning:g}"
                        + (f", TCP in {args.box[0] if len(args.box) == 1 else args.box}" if box else "")
                        + ") and the home pose", *("  " + line for line in sheet.summary()),
+                       *("  " + line for line in shapes.lines()),
                        *("  " + line for line in _input_lines(inputs))]
             if maker is not None:
                 summary += [f"  beside the maker's figures ({maker.device}; {maker.source}):",

@@ -17,8 +17,9 @@ the parameters' units):
     log ||F||_F + log trace(F^-1) >= log cond(F),   F = (W S)^T (W S) / K,
 
 both terms differentiable where cond(W S) is finite (||F||_F >= lambda_max, trace(F^-1) >= 1 / lambda_min,
-each within a factor of the number of parameters), subject to the joint position limits and the given
-velocity and acceleration limits at every sample (and checked on a grid ten times as dense).  The columns
+each within a factor of the number of parameters), subject to the joint position limits, the model's stops on
+combinations of joints (``joint_stops:``, as linear constraints on the series) and the given velocity and
+acceleration limits at every sample (and checked on a grid ten times as dense).  The columns
 of the Coulomb friction (sign(qd)) are piecewise constant: they count in W but give no gradient.  A parallel
 model's base regressor takes the platform's pose: p = fk(q) along the motion (its CasADi fk composed), whose
 legs must assemble at every constraint point (fk's margin >= 0); a hybrid device's wrist joints follow series of
@@ -40,7 +41,7 @@ from typing import Any
 import casadi
 import numpy as np
 
-from symkin.identification import closure_excitation
+from symkin.identification import closure_excitation, excitation_bounds
 from symkin.design.formulation import casadi_function
 from symkin.design.solving import IPOPT_OPTIONS, IterationReport
 from symkin.runtime.info import GeneratedModel
@@ -85,7 +86,7 @@ class Excitation:
 
     def series(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The series' values and first two derivatives (len(t), n) at the times ``t``."""
-        return _series(np, self.offsets, self.a, self.b, self.period, np.asarray(t, dtype=np.float64))
+        return excitation_bounds.series(np, self.offsets, self.a, self.b, self.period, np.asarray(t, dtype=np.float64))
 
     def states(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The device's joints q, qd, qdd (len(t), joints) at the times ``t``."""
@@ -94,18 +95,6 @@ class Excitation:
             return series
         q, qd, qdd, _margin = self.joints(*series)
         return q, qd, qdd
-
-
-def _series(lib: Any, offsets: Any, a: Any, b: Any, period: float, t: np.ndarray) -> tuple[Any, Any, Any]:
-    """q, qd, qdd of the Fourier series at the times t, with numpy or CasADi (``lib``) coefficients."""
-    harmonics = a.shape[1]
-    omega = 2 * np.pi / period * np.arange(1, harmonics + 1)       # (L,)
-    sine, cosine = np.sin(np.outer(t, omega)), np.cos(np.outer(t, omega))  # (K, L)
-    q = lib.repmat(offsets.T, len(t), 1) if lib is casadi else np.tile(offsets, (len(t), 1))
-    q = q + (sine / omega) @ a.T - (cosine / omega) @ b.T
-    qd = cosine @ a.T + sine @ b.T
-    qdd = -(sine * omega) @ a.T + (cosine * omega) @ b.T
-    return q, qd, qdd
 
 
 def _limits(model: GeneratedModel, velocity: float | None, acceleration: float | None,
@@ -147,6 +136,7 @@ def optimize_excitation(model: GeneratedModel, *, period: float = 10.0, harmonic
               and closure is None else None)
     names = model.info.task_space if joints is not None else tuple(c.name for c in model.info.device_coordinates)
     n, n_q = len(names), len(lower)
+    stops = excitation_bounds.stops_of_series(model, n) if joints is None and closure is None else None
     base = "base_regressor" if closure is None else "closure_base_regressor"
     count = len(model.info.functions[base].outputs["pi_b"])
     samples = samples or max(4 * -(-count // n_q), 50)
@@ -159,7 +149,7 @@ def optimize_excitation(model: GeneratedModel, *, period: float = 10.0, harmonic
     if closure is not None:  # legs without the distance form move about their home assembly
         middle = closure.home
     elif joints is None:
-        middle = (lower + upper) / 2
+        middle = excitation_bounds.start_within_stops(model, (lower + upper) / 2, stops)
     else:  # about home, each task coordinate moving no joint by more than that (dq = J^-1 dp at home)
         middle = np.array(model.info.home, dtype=float)
         rates = np.abs(joints(np.tile(middle, (n, 1)), np.eye(n), np.zeros((n, n)))[1])   # row j: |J^-1 e_j|
@@ -170,7 +160,7 @@ def optimize_excitation(model: GeneratedModel, *, period: float = 10.0, harmonic
         casadi.reshape(x[n + n * harmonics:], harmonics, n).T
     dense = np.arange(CONSTRAINT_DENSITY * samples) * period / (CONSTRAINT_DENSITY * samples)
     pose = _pose_function(model, samples) if model.info.is_parallel and joints is None and closure is None else None
-    sampled = _series(casadi, offsets, a, b, period, t)
+    sampled = excitation_bounds.series(casadi, offsets, a, b, period, t)
     (q, qd, qdd), _ = _joint_motion(sampled, joints)
     states = _states(model, q.T, qd.T, qdd.T, pose)
     if joints is not None:
@@ -181,9 +171,9 @@ def optimize_excitation(model: GeneratedModel, *, period: float = 10.0, harmonic
         function, guess0 = casadi_function(model, base), np.zeros((0, samples))
     else:
         function = closure_excitation.regressor_function(model, closure_excitation.independent_rows(closure))
-        guess0 = closure_excitation.guesses(closure, _series(np, middle, a0, b0, period, t)[0])
+        guess0 = closure_excitation.guesses(closure, excitation_bounds.series(np, middle, a0, b0, period, t)[0])
     guess = states["guess"] = casadi.MX.sym("guess", *guess0.shape)
-    (q_c, qd_c, qdd_c), margin = _joint_motion(_series(casadi, offsets, a, b, period, dense), joints)
+    (q_c, qd_c, qdd_c), margin = _joint_motion(excitation_bounds.series(casadi, offsets, a, b, period, dense), joints)
     Y = function.map(samples, "serial")(*_arguments(function, model, states, samples))[0]  # (n_q, count * samples)
     regressor_at = casadi.Function("W", [x, guess], [Y])
     W0 = _stacked(regressor_at(x0, guess0).full(), n_q, count, samples)
@@ -199,6 +189,11 @@ def optimize_excitation(model: GeneratedModel, *, period: float = 10.0, harmonic
                           np.zeros(2 * n)])
     ubg = np.concatenate([np.repeat(upper, points), np.repeat(speeds, points), np.repeat(accelerations, points),
                           np.zeros(2 * n)])
+    if stops is not None:  # lower <= a . q + b <= upper at the points, for each stop on a combination of joints
+        values = casadi.mtimes(q_c, casadi.DM(stops.rows.T)) + casadi.repmat(casadi.DM(stops.offsets).T, points, 1)
+        g = casadi.vertcat(g, casadi.vec(values))
+        lbg = np.concatenate([lbg, np.repeat(stops.lower, points)])
+        ubg = np.concatenate([ubg, np.repeat(stops.upper, points)])
     if pose is not None:  # a parallel model's legs assemble along the motion: fk's margin >= 0 at the points
         margin = _pose_function(model, points)(q_c.T[:len(model.info.coordinates), :])[1]
     if margin is not None:  # ... or ik's, of a platform moved in its task coordinates
@@ -224,15 +219,15 @@ def optimize_excitation(model: GeneratedModel, *, period: float = 10.0, harmonic
         offsets_v = vector[:n]
         a_v, b_v = (vector[n + k * n * harmonics:n + (k + 1) * n * harmonics].reshape(n, harmonics) for k in (0, 1))
         if joints is None:
-            shrink = _fitting_factor(_series(np, offsets_v, a_v, b_v, period, check), offsets_v,
-                                     _between_points(a_v, b_v, omega, period / len(check)), bounds)
+            shrink = excitation_bounds.fitting_factor(excitation_bounds.series(np, offsets_v, a_v, b_v, period, check), offsets_v,
+                                     excitation_bounds.between_points(a_v, b_v, omega, period / len(check)), bounds, stops)
         else:
-            shrink = _task_fitting_factor(joints, offsets_v, a_v, b_v, period, check, bounds)
+            shrink = excitation_bounds.task_fitting_factor(joints, offsets_v, a_v, b_v, period, check, bounds)
         fitted_guess = guess0
         if closure is not None:  # the legs close along the whole motion (else it shrinks more), assembled anew
-            shrink = closure_excitation.assembled_factor(closure, lambda f: _series(np, offsets_v, f * a_v, f * b_v,
+            shrink = closure_excitation.assembled_factor(closure, lambda f: excitation_bounds.series(np, offsets_v, f * a_v, f * b_v,
                                                                                     period, check)[0], shrink)
-            fitted_guess = closure_excitation.guesses(closure, _series(np, offsets_v, shrink * a_v, shrink * b_v,
+            fitted_guess = closure_excitation.guesses(closure, excitation_bounds.series(np, offsets_v, shrink * a_v, shrink * b_v,
                                                                        period, t)[0])
         W_v = _stacked(regressor_at(np.concatenate([offsets_v, shrink * vector[n:]]), fitted_guess).full(), n_q,
                        count, samples)
@@ -271,65 +266,6 @@ def _joint_motion(series: tuple[Any, Any, Any], joints: Callable[..., Any] | Non
         return series, None
     q, qd, qdd, margin = joints(*series)
     return (q, qd, qdd), margin
-
-
-def _between_points(a: np.ndarray, b: np.ndarray, omega: np.ndarray, spacing: float) -> tuple[np.ndarray, ...]:
-    """Per joint, how far q, qd and qdd can stray between two grid points ``spacing`` apart beyond the larger of
-    their values there: h^2 / 8 max |f''| for each (the error of linear interpolation), with max |q''| <=
-    sum_l (|a| + |b|) l w and each further derivative one more factor l w."""
-    size = np.abs(a) + np.abs(b)
-    return tuple(spacing ** 2 / 8 * size @ omega ** k for k in (1, 2, 3))
-
-
-def _fitting_factor(states: tuple[np.ndarray, np.ndarray, np.ndarray], offsets: np.ndarray,
-                    margins: tuple[np.ndarray, ...], bounds: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
-                    ) -> float:
-    """The largest s <= 1 with q0 + s (q - q0), s qd and s qdd within the bounds at every time, not only at the
-    checked ones (``margins``: what each may add between them, proportional to the motion as s is).
-
-    Raises:
-        ValueError: the offsets themselves outside the limits (IPOPT did not find a feasible motion).
-    """
-    q, qd, qdd = states
-    lower, upper, speeds, accelerations = bounds
-    if np.any(offsets < lower) or np.any(offsets > upper):
-        raise ValueError("IPOPT found no motion within the joint limits; check the limits and bounds")
-    motion = q - offsets
-    with np.errstate(divide="ignore", invalid="ignore"):  # a joint at rest bounds nothing: inf (or 0/0 at a limit)
-        ratios = [(upper - offsets) / (np.max(motion, axis=0) + margins[0]),
-                  (offsets - lower) / (np.max(-motion, axis=0) + margins[0]),
-                  speeds / (np.max(np.abs(qd), axis=0) + margins[1]),
-                  accelerations / (np.max(np.abs(qdd), axis=0) + margins[2])]
-    return float(min(1.0, *(float(np.fmin.reduce(r)) for r in ratios)))  # fmin: NaN (0/0) bounds nothing either
-
-
-#: Bisection steps of the shrink factor of a task-space series (its joints' motion is not linear in it).
-SHRINK_STEPS = 20
-
-
-def _task_fitting_factor(joints: Callable[..., Any], offsets: np.ndarray, a: np.ndarray, b: np.ndarray,
-                         period: float, t: np.ndarray, bounds: tuple[np.ndarray, ...]) -> float:
-    """The largest s <= 1 (to 2^-SHRINK_STEPS) with the joints of the series p0 + s (p - p0) within the bounds and
-    the legs assembled at the times ``t`` (a grid ten times as dense as the constraints').
-
-    Raises:
-        ValueError: not even the series' offsets, the platform at rest, within them (IPOPT found no motion).
-    """
-    lower, upper, speeds, accelerations = bounds
-
-    def fits(s: float) -> bool:
-        q, qd, qdd, margin = joints(*_series(np, offsets, s * a, s * b, period, t))
-        return bool(np.all(q >= lower) and np.all(q <= upper) and np.all(np.abs(qd) <= speeds)
-                    and np.all(np.abs(qdd) <= accelerations) and np.all(np.asarray(margin) >= 0))
-
-    if fits(1.0):
-        return 1.0
-    if not fits(0.0):
-        raise ValueError("IPOPT found no motion within the joint limits; check the limits and bounds")
-    low, high = 0.0, 1.0
-    for _ in range(SHRINK_STEPS):
-        low, high = ((low + high) / 2, high) if fits((low + high) / 2) else (low, (low + high) / 2)
-    return low
 
 
 def _pose_function(model: GeneratedModel, samples: int) -> casadi.Function:

@@ -270,3 +270,14 @@ def test_the_volumes_say_which_sets_they_measure_where_the_joints_cover_the_work
     assert round(joint, 4) == 0.0958
     assert abs(joint - occupied) <= error + half_width
     assert (round(occupied, 3), round(half_width, 3)) == (0.088, 0.048)
+
+
+def test_the_phantoms_largest_box_and_cylinder_are_the_ones_the_docs_quote(capsys):
+    """Issue 64: symkin workspace prints the largest box and upright cylinder inside the interior cells; on the
+    PHANToM with a million samples, the figures of docs/analysis.md (mm)."""
+    from symkin.cli import main
+
+    assert main(["workspace", str(GENERATED_DIR / "phantom_premium"), "--no-figure", "-n", "1000000"]) == 0
+    said = capsys.readouterr().out
+    assert "largest box inside (interior cells, axis-aligned): 113 x 357 x 357 mm" in said
+    assert "largest upright cylinder inside: diameter 161 mm x height 357 mm" in said

@@ -135,3 +135,37 @@ def test_a_last_iterate_that_excites_less_than_the_start_is_not_returned(arm, mo
     assert found.status == "Maximum_Iterations_Exceeded; its last iterate excited less than the start, which is kept"
     assert found.condition == found.condition_start
     assert np.abs(found.a).max() > 0
+
+
+def _stopped_arm(tmp_path_factory, stop: str, home: str = ""):
+    """The driven arm with a stop on a combination of its joints (and a home configuration), derived for CasADi."""
+    text = DRIVEN.replace("      - [theta2, R, 0, 0, l2, 0, [0, deg(90)]]",
+                          "      - [theta2, R, 0, 0, l2, 0, [0, deg(90)]]" + (f"\n  home: {home}" if home else ""))
+    model = model_from_text(text + f"joint_stops:\n  - {stop}\n", "stopped")
+    request = pipeline.resolve_request(model, ("base_regressor",), "casadi", None, False, "none")
+    return load(pipeline.write(pipeline.generate(model, request), tmp_path_factory.mktemp("stopped")), "casadi")
+
+
+def test_the_motion_keeps_the_stops_on_combinations_of_joints(tmp_path_factory):
+    """Issue 64: a stop 60 deg <= theta1 + theta2 <= 110 deg (inside the box 0..90 deg each) holds along the whole
+    period, on a grid 200 times as dense as the criterion's samples, and the motion reaches towards it."""
+    arm = _stopped_arm(tmp_path_factory, '{expression: "theta1 + theta2", limits: [deg(60), deg(110)]}')
+    found = excitation.optimize_excitation(arm, period=PERIOD, harmonics=2, max_velocity=SPEED,
+                                           max_acceleration=ACCELERATION, max_iterations=20)
+    total = found.states(np.linspace(0.0, PERIOD, 200 * found.samples + 1))[0].sum(axis=1)
+    assert np.min(total) >= np.radians(60)
+    assert np.max(total) <= np.radians(110)
+    assert np.ptp(total) > np.radians(10)
+
+
+def test_a_start_that_breaks_a_stop_moves_to_the_home_configuration_or_is_refused(tmp_path_factory):
+    """The middle of the limits (45, 45 deg) breaks theta1 + theta2 <= 60 deg: the motion starts about the declared
+    home configuration; without one the excitation says what to declare."""
+    stop = '{expression: "theta1 + theta2", limits: [0, deg(60)]}'
+    arm = _stopped_arm(tmp_path_factory, stop, home="[0.2, 0.3]")
+    found = excitation.optimize_excitation(arm, period=PERIOD, harmonics=2, max_velocity=SPEED,
+                                           max_acceleration=ACCELERATION, max_iterations=20)
+    assert np.max(found.states(np.linspace(0.0, PERIOD, 20001))[0].sum(axis=1)) <= np.radians(60)
+    with pytest.raises(ValueError, match="breaks the stop on theta1 \\+ theta2: declare serial.home within the stops"):
+        excitation.optimize_excitation(_stopped_arm(tmp_path_factory, stop), period=PERIOD, harmonics=2,
+                                       max_velocity=SPEED, max_acceleration=ACCELERATION, max_iterations=5)

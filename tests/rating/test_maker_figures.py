@@ -39,6 +39,10 @@ def test_the_phantoms_figures_stand_beside_its_makers(tmp_path, capsys):
     walls = [round(1e-3 * record["measures"][f"quantization_stiffness_{axis}"]["home"], 1) for axis in "xyz"]
     assert walls == [5.1, 3.8, 3.2]                                 # N/mm, as docs/analysis.md quotes them
     assert round(record["measures"]["passive_stiffness_x"]["home"]) == 35       # N/m
+    shapes = record["workspace_shapes"]                             # mm, as docs/analysis.md quotes them
+    assert [round(1e3 * size) for size in shapes["box"]["size_m"]] == [109, 473, 218]
+    cylinder = shapes["cylinder"]
+    assert (round(2e3 * cylinder["radius_m"]), round(1e3 * (cylinder["top_m"] - cylinder["bottom_m"]))) == (167, 218)
     summary = (out / "summary.txt").read_text()
     assert "beside the maker's figures (PHANToM Premium 1.5 (SensAble Technologies);" in summary
     assert "force_x at home: symkin 8.479 N, maker 8.5 N, ratio 0.998" in summary

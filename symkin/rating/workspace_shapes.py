@@ -1,0 +1,139 @@
+"""A device's usable workspace as a maker quotes it: the largest box and upright cylinder inside it (issue 64).
+
+The usable workspace is the datasheet's (:mod:`symkin.rating.datasheet`): the configurations within the joint limits
+and stops whose handle Jacobian has 1/kappa at least the rating's ``conditioning``.  Its handle positions, sampled
+on a joint grid far denser than the rating's poses, fill the cells of an occupancy
+(:func:`symkin.analysis.workspace.occupancy_from_cloud`: cells twice the grid's spacing); the box and the cylinder
+are the largest among its interior cells (:mod:`symkin.analysis.inscribed`), so they lie inside the usable set up to
+the sampling, and the summary states the cell size they are quantized by.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from symkin import mechanism
+from symkin.analysis import inscribed, workspace
+from symkin.mechanism import Sampling, feasibility, reach
+from symkin.mechanism.stops import StopInequalities
+from symkin.mechanism.working_mode import assemble
+from symkin.numerics import sampling
+from symkin.numerics.conditioning import inverse_condition_number
+from symkin.runtime.info import GeneratedModel
+
+#: Samples of the shapes' grid: joint configurations of a serial arm (a joint grid: its cells map to cells of
+#: the handle's space far apart at full reach), cells of a platform's Cartesian grid; about 1/15 of the box's
+#: size each, both under a second for the example devices.
+JOINT_SAMPLES, CARTESIAN_SAMPLES = 2 ** 18, 2 ** 15
+
+
+@dataclass(frozen=True)
+class WorkspaceShapes:
+    """The largest box and upright cylinder inside the usable workspace (None: none fits a cell), the cell size
+    they are quantized by (m) and the configurations sampled; ``not_rated``: why there are none (else "")."""
+
+    box: inscribed.Box | None
+    cylinder: inscribed.Cylinder | None
+    cell: float
+    samples: int
+    not_rated: str = ""
+
+    def lines(self) -> list[str]:
+        """summary.txt's lines, each with its definition."""
+        if self.not_rated:
+            return [f"workspace box and cylinder: not rated ({self.not_rated})"]
+        where = (f"inside the usable workspace (interior cells of {1e3 * self.cell:.3g} mm, from {self.samples} "
+                 "samples)")
+        if self.box is None:
+            return [f"workspace box: none fits {where}"]
+        lines = [f"workspace box: {' x '.join(f'{1e3 * s:.0f}' for s in self.box.size)} mm (x, y, z), "
+                 f"{self.box.volume:.4g} m^3, the largest axis-aligned box {where}"]
+        if self.cylinder is not None:
+            lines.append(f"workspace cylinder: diameter {2e3 * self.cylinder.radius:.0f} mm x height "
+                         f"{1e3 * (self.cylinder.top - self.cylinder.bottom):.0f} mm, {self.cylinder.volume:.4g} m^3, "
+                         f"the largest upright cylinder (axis along z) {where}")
+        return lines
+
+    def to_json(self) -> dict[str, Any]:
+        if self.not_rated:
+            return {"not_rated": self.not_rated}
+        record: dict[str, Any] = {"cell_m": self.cell, "samples": self.samples,
+                                  "definition": "largest axis-aligned box and upright cylinder among the interior "
+                                                "cells of the usable workspace's occupancy"}
+        if self.box is not None:
+            record["box"] = {"lower_m": self.box.lower.tolist(), "upper_m": self.box.upper.tolist(),
+                             "size_m": self.box.size.tolist(), "volume_m3": self.box.volume}
+        if self.cylinder is not None:
+            c = self.cylinder
+            record["cylinder"] = {"axis_xy_m": c.centre.tolist(), "radius_m": c.radius, "bottom_m": c.bottom,
+                                  "top_m": c.top, "volume_m3": c.volume}
+        return record
+
+
+def usable_shapes(model: GeneratedModel, conditioning: float, limits: mechanism.Limits | None = None,
+                  samples: int | None = None) -> WorkspaceShapes:
+    """The largest box and cylinder inside the usable workspace of a device whose handle translates in x, y and z
+    (a serial arm on a joint grid, a closed-form translational platform on a Cartesian grid: ``samples`` of it,
+    default :data:`JOINT_SAMPLES` or :data:`CARTESIAN_SAMPLES`); otherwise why not."""
+    sampled = mechanism.sampling(model)
+    rows = list(mechanism.position_rows(model))
+    if sampled not in (Sampling.JOINTS, Sampling.INVERSE) or mechanism.handle_on_further_joints(model) or (
+            sampled is Sampling.INVERSE and not mechanism.is_positional(model)):
+        return WorkspaceShapes(None, None, 0.0, 0, "the box and cylinder are found for a handle that translates, of "
+                                                    "a serial arm or a closed-form translational platform")
+    if len(rows) != 3:
+        return WorkspaceShapes(None, None, 0.0, 0, f"the handle moves in {len(rows)} directions, not in x, y and z")
+    if sampled is Sampling.INVERSE:
+        return _cartesian_shapes(model, conditioning, limits, samples or CARTESIAN_SAMPLES)
+    samples = samples or JOINT_SAMPLES
+    box = mechanism.joint_limits(model, limits)
+    per_axis = max(2, int(round(samples ** (1.0 / len(box)))))
+    q = sampling.grid(box[:, 0], box[:, 1], per_axis, midpoints=False)
+    points, inside = assemble(model, q)
+    J = mechanism.jacobian(model, q, points if mechanism.sampled_in_task_space(model) else None)[..., rows, :]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        usable = inside & (inverse_condition_number(J) >= conditioning)
+    if not usable.any():
+        return WorkspaceShapes(None, None, 0.0, len(q), "no sampled configuration is usable")
+    kept = workspace.WorkspaceCloud(q[usable], points[usable], ("x", "y", "z"), None)
+    occupancy = workspace.occupancy_from_cloud(kept, 2.0 * _grid_spacing(points, inside, (per_axis,) * len(box)))
+    interior = occupancy.interior()
+    return WorkspaceShapes(inscribed.largest_box(interior, occupancy.lower, occupancy.cell),
+                           inscribed.largest_cylinder(interior, occupancy.lower, occupancy.cell),
+                           float(occupancy.cell[0]), len(q))
+
+
+def _cartesian_shapes(model: GeneratedModel, conditioning: float, limits: mechanism.Limits | None, samples: int
+                      ) -> WorkspaceShapes:
+    """A translational platform's shapes on a Cartesian grid of about ``samples`` cells over its bounding box: a cell
+    is usable where its centre is reached in the working mode (the generated ik, the joint limits and stops) with
+    1/kappa of J >= ``conditioning``."""
+    lower, upper = reach.bounding_box(model, limits=limits)
+    cell = float(np.max(upper - lower)) / round(samples ** (1.0 / 3.0))
+    start, size, counts, centres = workspace.grid_cells((lower, upper), cell)
+    q, usable = feasibility.feasible_configurations(reach.generated_inverse(model), centres,
+                                                    mechanism.joint_limits(model, limits),
+                                                    mechanism.revolute_mask(model), StopInequalities.of_model(model))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        usable[usable] = inverse_condition_number(model.jacobian(q[usable], centres[usable])) >= conditioning
+    occupancy = workspace.Occupancy(start, size, usable.reshape(counts))
+    interior = occupancy.interior()
+    return WorkspaceShapes(inscribed.largest_box(interior, occupancy.lower, occupancy.cell),
+                           inscribed.largest_cylinder(interior, occupancy.lower, occupancy.cell),
+                           float(occupancy.cell[0]), len(centres))
+
+
+def _grid_spacing(points: np.ndarray, inside: np.ndarray, shape: tuple[int, ...]) -> float:
+    """The largest distance between the handle positions of neighbouring grid configurations both inside
+    (:func:`symkin.analysis.workspace.cloud_spacing` over the configurations that belong): cells of twice that
+    leave no hole inside the workspace."""
+    grid, kept = points.reshape(*shape, -1), inside.reshape(shape)
+    gaps = []
+    for axis in range(len(shape)):
+        step = np.linalg.norm(np.diff(grid, axis=axis), axis=-1)
+        both = np.take(kept, range(shape[axis] - 1), axis=axis) & np.take(kept, range(1, shape[axis]), axis=axis)
+        gaps.append(float(np.max(step[both], initial=0.0)))
+    return max(gaps)
