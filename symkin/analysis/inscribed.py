@@ -8,7 +8,8 @@ occupied in all of them form a mask, and over every range of rows of that mask t
 in all of them is the widest box there (prefix counts per column; O(c_z^2 c_x^2 c_y) with numpy over the rows).
 The cylinder stands along the last axis (z, the vertical of a desk device): over every range of layers its
 radius is the largest distance from an occupied cell's centre to the nearest empty cell's centre, less half a cell's
-diagonal (so every point within it lies in an occupied cell), by the Euclidean distance transform.
+diagonal (so every point within it lies in an occupied cell), by the Euclidean distance transform.  Whether a box of
+given sizes fits (a maker's) is a window sum over the mask's summed-volume table at every placement.
 """
 
 from __future__ import annotations
@@ -119,3 +120,27 @@ def largest_cylinder(mask: np.ndarray, lower: np.ndarray, cell: np.ndarray) -> C
                 found = Cylinder(centre, radius, float(lower[2] + cell[2] * bottom),
                                  float(lower[2] + cell[2] * (top + 1)))
     return found
+
+
+def placed_box(mask: np.ndarray, lower: np.ndarray, cell: np.ndarray, size: np.ndarray) -> Box | None:
+    """Where an axis-aligned box of ``size`` (d,) m fits among the True cells of ``mask``: the placement of a box of
+    whole cells (each size rounded up) nearest the centre of the True cells, or None where it fits nowhere.  Every
+    placement is tried at once: the count of True cells in each window from the summed-volume table, the window
+    fitting where it is full."""
+    mask = np.asarray(mask, dtype=bool)
+    cells = np.maximum(np.ceil(np.asarray(size, dtype=float) / cell - 1e-9).astype(int), 1)
+    if np.any(cells > mask.shape):
+        return None
+    table = np.pad(mask.astype(np.int64), [(1, 0)] * mask.ndim)
+    for axis in range(mask.ndim):
+        table = np.cumsum(table, axis=axis)
+    counts = np.zeros(tuple(n - k + 1 for n, k in zip(mask.shape, cells)), dtype=np.int64)
+    for corner in np.ndindex(*(2,) * mask.ndim):   # inclusion-exclusion over the window's 2^d corners
+        window = tuple(slice(k * c, k * c + m) for k, c, m in zip(cells, corner, counts.shape))
+        counts += (-1) ** (mask.ndim - sum(corner)) * table[window]
+    fits = np.argwhere(counts == np.prod(cells))
+    if len(fits) == 0:
+        return None
+    middle = np.argwhere(mask).mean(axis=0) - (cells - 1) / 2
+    first = fits[int(np.argmin(np.linalg.norm(fits - middle, axis=1)))]
+    return Box(lower + cell * first, lower + cell * (first + cells))

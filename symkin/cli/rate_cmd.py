@@ -43,7 +43,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "--orientation (-n N: about N^(1/3) cells a side); their apparent mass, inertia and gravity "
                     "share come from the generated closure_dynamics where the model declares bodies (else they "
                     "are not rated). Every measure (" + _measure_names() + ") appears with its value or as not "
-                    "rated with the reason and what to give. Writes datasheet.json (every number with its unit and "
+                    "rated with the reason and what to give, and the largest box and upright cylinder inside the "
+                    "usable workspace (--shape-samples); --datasheet sets a maker's figures (and workspace box) "
+                    "beside them. Writes datasheet.json (every number with its unit and "
                     "the pose of each extreme), datasheet.csv (every rated pose), datasheet.png (a map per measure) "
                     "and summary.txt into the output directory (replaced as a whole).",
         epilog="e.g. symkin rate generated/delta --effort-limit 0.3 --encoder 4096 --gear 10 -o out/rate/delta")
@@ -192,6 +194,9 @@ def run(args: argparse.Namespace) -> int:
                             *("    " + comparison.line() for comparison in beside)]
                 record["maker"] = {"file": maker.file, "device": maker.device, "source": maker.source,
                                    "figures": [comparison.to_json() for comparison in beside]}
+                if maker.box is not None:
+                    box_lines, record["maker"]["workspace_box"] = maker_figures.box_lines_and_record(maker.box, shapes)
+                    summary += ["    " + line for line in box_lines]
             files: dict[str, str | bytes] = {
                 "datasheet.json": json.dumps(record | {"servo_rate_hz": args.rate,
                                                        "usable_conditioning": conditioning,

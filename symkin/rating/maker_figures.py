@@ -14,6 +14,14 @@ its value in that measure's unit (SI, as the datasheet prints it: a figure in mm
 where the maker takes it (``at``: ``home``, the nominal pose, by default; ``worst``, over the workspace) and,
 optionally, the maker's words.  The comparison gives symkin's value there and the ratio symkin / maker.  A figure
 whose measure the datasheet lists as not rated says why; one that names no measure of the device is an error.
+
+A maker's workspace box may be given beside the figures, its sizes along symkin's x, y and z in m (a datasheet's
+width, height and depth set on the device's axes)::
+
+    workspace: {box: [0.191, 0.381, 0.267], unit: m, quote: "381 W x 267 H x 191 D mm"}
+
+and is set beside the usable workspace's shapes (:mod:`symkin.rating.workspace_shapes`): whether it fits inside
+(where), the largest box there and the ratio of their volumes.
 """
 
 from __future__ import annotations
@@ -23,13 +31,17 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from symkin.errors import ModelError, Problem
 from symkin.model.yaml_source import Document, read_document, shorten
 from symkin.rating.datasheet import Datasheet
+from symkin.rating.workspace_shapes import WorkspaceShapes
 
 #: Where a maker takes a figure: at the nominal (home) pose, or its worst over the workspace.
 PLACES = ("home", "worst")
-TOP_KEYS = ("device", "source", "figures")
+TOP_KEYS = ("device", "source", "figures", "workspace")
+WORKSPACE_KEYS = ("box", "unit", "quote")
 FIGURE_KEYS = ("value", "unit", "at", "quote")
 #: Longest maker's text kept (a device name, a source, a quote).
 MAX_TEXT = 120
@@ -47,13 +59,22 @@ class MakerFigure:
 
 
 @dataclass(frozen=True)
+class MakerBox:
+    """A maker's workspace box: its sizes along x, y and z (m) and the maker's words."""
+
+    size: tuple[float, float, float]
+    quote: str
+
+
+@dataclass(frozen=True)
 class MakerSheet:
-    """A spec file: the device, where its figures come from, and the figures in file order."""
+    """A spec file: the device, where its figures come from, the figures in file order and the workspace box."""
 
     file: str
     device: str
     source: str
     figures: tuple[MakerFigure, ...]
+    box: MakerBox | None = None
 
 
 def _text(value: Any) -> str:
@@ -90,9 +111,33 @@ def read_maker_sheet(path: str | Path) -> MakerSheet:
             checked = _figure(document, str(name), figure, problems)
             if checked is not None:
                 found.append(checked)
+    box = _workspace_box(document, data["workspace"], problems) if "workspace" in data else None
     if problems:
         raise ModelError(problems)
-    return MakerSheet(document.file, _text(data["device"]), _text(data["source"]), tuple(found))
+    return MakerSheet(document.file, _text(data["device"]), _text(data["source"]), tuple(found), box)
+
+
+def _workspace_box(document: Document, workspace: Any, problems: list[Problem]) -> MakerBox | None:
+    """``workspace: {box: [x, y, z], unit: m, quote: ...}`` checked (its problems appended), or None."""
+    at = ("workspace",)
+    fix = "write 'workspace: {box: [0.191, 0.381, 0.267], unit: m}' (sizes along x, y, z in m)"
+    if not isinstance(workspace, dict):
+        problems.append(document.problem(at, "the workspace is a mapping", fix))
+        return None
+    before = len(problems)
+    problems += [document.problem(at + (key,), f"unknown key '{shorten(key)}'", f"use only {', '.join(WORKSPACE_KEYS)}")
+                 for key in workspace if key not in WORKSPACE_KEYS]
+    size = workspace.get("box")
+    if not (isinstance(size, list) and len(size) == 3 and all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v > 0 for v in size)):
+        problems.append(document.problem(at + ("box",), f"the box must be three positive sizes, got '{shorten(size)}'",
+                                         fix))
+    if workspace.get("unit") != "m":
+        problems.append(document.problem(at + ("unit",), f"the box's unit must be m, got "
+                                         f"'{shorten(workspace.get('unit'))}'", fix))
+    if len(problems) > before or not isinstance(size, list):
+        return None
+    return MakerBox((float(size[0]), float(size[1]), float(size[2])), _text(workspace.get("quote", "")))
 
 
 def _figure(document: Document, name: str, figure: Any, problems: list[Problem]) -> MakerFigure | None:
@@ -177,3 +222,27 @@ def compare(sheet: MakerSheet, rated: Datasheet) -> tuple[FigureBeside, ...]:
         value = measure["home"] if figure.at == "home" else measure[measure["worst"]]["value"]
         out.append(FigureBeside(figure, value, "" if value is not None else "not finite at the home pose"))
     return tuple(out)
+
+
+def box_lines_and_record(box: MakerBox, shapes: WorkspaceShapes) -> tuple[list[str], dict[str, Any]]:
+    """The maker's workspace box beside the usable workspace's shapes: whether (and where) it fits, symkin's largest
+    box and the ratio of their volumes; summary lines and datasheet.json's record."""
+    size = np.array(box.size)
+    shown = " x ".join(f"{1e3 * v:.0f}" for v in size)
+    said = f" ({box.quote})" if box.quote else ""
+    if shapes.not_rated:
+        return ([f"workspace box (x, y, z): maker {shown} mm, symkin not rated ({shapes.not_rated}){said}"],
+                {"maker_m": list(box.size), "not_rated": shapes.not_rated, "quote": box.quote})
+    placed = shapes.place(size)
+    largest = shapes.box
+    ratio = None if largest is None else largest.volume / float(np.prod(size))
+    where = ("no" if placed is None else
+             f"yes, at ({', '.join(f'{1e3 * c:.0f}' for c in (placed.lower + placed.upper) / 2)}) mm")
+    lines = [f"workspace box (x, y, z): maker {shown} mm{said}; fits inside the usable workspace: {where}",
+             "  symkin's largest: " + ("none" if largest is None else
+                                       f"{' x '.join(f'{1e3 * v:.0f}' for v in largest.size)} mm, volume ratio "
+                                       f"symkin / maker {ratio:.3g}")]
+    record = {"maker_m": list(box.size), "quote": box.quote, "fits": placed is not None,
+              "placed_centre_m": None if placed is None else ((placed.lower + placed.upper) / 2).tolist(),
+              "largest_m": None if largest is None else largest.size.tolist(), "volume_ratio": ratio}
+    return lines, record

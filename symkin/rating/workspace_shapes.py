@@ -10,7 +10,7 @@ the sampling, and the summary states the cell size they are quantized by.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -40,6 +40,17 @@ class WorkspaceShapes:
     cell: float
     samples: int
     not_rated: str = ""
+    #: the interior cells the shapes were found among (their grid's corner and cell sizes), for :meth:`place`
+    interior: np.ndarray | None = field(default=None, compare=False, repr=False)
+    corner: np.ndarray | None = field(default=None, compare=False, repr=False)
+    cells: np.ndarray | None = field(default=None, compare=False, repr=False)
+
+    def place(self, size: np.ndarray) -> inscribed.Box | None:
+        """Where a box of ``size`` (x, y, z in m: a maker's) fits inside the usable workspace, None where nowhere
+        (:func:`symkin.analysis.inscribed.placed_box` on the same interior cells)."""
+        if self.interior is None or self.corner is None or self.cells is None:
+            return None
+        return inscribed.placed_box(self.interior, self.corner, self.cells, size)
 
     def lines(self) -> list[str]:
         """summary.txt's lines, each with its definition."""
@@ -100,10 +111,7 @@ def usable_shapes(model: GeneratedModel, conditioning: float, limits: mechanism.
         return WorkspaceShapes(None, None, 0.0, len(q), "no sampled configuration is usable")
     kept = workspace.WorkspaceCloud(q[usable], points[usable], ("x", "y", "z"), None)
     occupancy = workspace.occupancy_from_cloud(kept, 2.0 * _grid_spacing(points, inside, (per_axis,) * len(box)))
-    interior = occupancy.interior()
-    return WorkspaceShapes(inscribed.largest_box(interior, occupancy.lower, occupancy.cell),
-                           inscribed.largest_cylinder(interior, occupancy.lower, occupancy.cell),
-                           float(occupancy.cell[0]), len(q))
+    return _shapes_of(occupancy, len(q))
 
 
 def _cartesian_shapes(model: GeneratedModel, conditioning: float, limits: mechanism.Limits | None, samples: int
@@ -119,11 +127,15 @@ def _cartesian_shapes(model: GeneratedModel, conditioning: float, limits: mechan
                                                     mechanism.revolute_mask(model), StopInequalities.of_model(model))
     with np.errstate(invalid="ignore", divide="ignore"):
         usable[usable] = inverse_condition_number(model.jacobian(q[usable], centres[usable])) >= conditioning
-    occupancy = workspace.Occupancy(start, size, usable.reshape(counts))
+    return _shapes_of(workspace.Occupancy(start, size, usable.reshape(counts)), len(centres))
+
+
+def _shapes_of(occupancy: workspace.Occupancy, samples: int) -> WorkspaceShapes:
+    """The largest box and cylinder among the occupancy's interior cells, which it keeps for :meth:`place`."""
     interior = occupancy.interior()
     return WorkspaceShapes(inscribed.largest_box(interior, occupancy.lower, occupancy.cell),
                            inscribed.largest_cylinder(interior, occupancy.lower, occupancy.cell),
-                           float(occupancy.cell[0]), len(centres))
+                           float(occupancy.cell[0]), samples, "", interior, occupancy.lower, occupancy.cell)
 
 
 def _grid_spacing(points: np.ndarray, inside: np.ndarray, shape: tuple[int, ...]) -> float:

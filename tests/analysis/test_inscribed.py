@@ -64,3 +64,20 @@ def test_the_cylinder_found_lies_in_the_cells_of_a_known_cylinder_and_nearly_fil
                               rng.uniform(found.bottom, found.top, 20000)])
     index = np.floor((points - lower) / cell).astype(int)
     assert mask[tuple(index.T)].all()
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_a_box_of_given_sizes_fits_where_a_brute_force_finds_a_full_window(seed):
+    rng = np.random.default_rng(seed)
+    mask = rng.random((7, 6, 5)) < 0.85
+    cell = np.array([0.01, 0.02, 0.03])
+    for cells in itertools.product(range(1, 4), repeat=3):
+        size = np.array(cells) * cell * 0.9                      # rounded up to whole cells
+        placements = [start for start in itertools.product(*(range(n - k + 1) for n, k in zip(mask.shape, cells)))
+                      if mask[tuple(slice(s, s + k) for s, k in zip(start, cells))].all()]
+        found = inscribed.placed_box(mask, np.zeros(3), cell, size)
+        assert (found is None) == (not placements)
+        if found is not None:
+            start = tuple(np.round(found.lower / cell).astype(int))
+            assert start in placements
+            np.testing.assert_allclose(found.size, np.array(cells) * cell, rtol=CLOSED_FORM)

@@ -39,6 +39,11 @@ def test_the_phantoms_figures_stand_beside_its_makers(tmp_path, capsys):
     walls = [round(1e-3 * record["measures"][f"quantization_stiffness_{axis}"]["home"], 1) for axis in "xyz"]
     assert walls == [5.1, 3.8, 3.2]                                 # N/mm, as docs/analysis.md quotes them
     assert round(record["measures"]["passive_stiffness_x"]["home"]) == 35       # N/m
+    box = record["maker"]["workspace_box"]                          # SensAble's box does not fit (docs/analysis.md)
+    assert box["maker_m"] == [0.191, 0.381, 0.267]
+    assert box["fits"] is False
+    assert round(box["volume_ratio"], 2) == 0.58
+    assert "fits inside the usable workspace: no" in (out / "summary.txt").read_text()
     shapes = record["workspace_shapes"]                             # mm, as docs/analysis.md quotes them
     assert [round(1e3 * size) for size in shapes["box"]["size_m"]] == [109, 473, 218]
     cylinder = shapes["cylinder"]
@@ -75,6 +80,12 @@ HOSTILE = {
                           "the value must be a finite number"),
     "a bad place": ("device: d\nsource: s\nfigures: {force_x: {value: 1, unit: N, at: everywhere}}\n",
                     "'at' must be one of home, worst"),
+    "a flat workspace box": ("device: d\nsource: s\nfigures: {force_x: {value: 1, unit: N}}\n"
+                             "workspace: {box: [0.1, 0.2], unit: m}\n", "the box must be three positive sizes"),
+    "a workspace box in mm": ("device: d\nsource: s\nfigures: {force_x: {value: 1, unit: N}}\n"
+                              "workspace: {box: [191, 381, 267], unit: mm}\n", "the box's unit must be m"),
+    "a workspace list": ("device: d\nsource: s\nfigures: {force_x: {value: 1, unit: N}}\nworkspace: [1, 2]\n",
+                         "the workspace is a mapping"),
 }
 
 
