@@ -6,7 +6,6 @@ assembly) on a grid denser than the constraints'.
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Callable
 from typing import Any
 
@@ -70,11 +69,7 @@ def stops_of_series(model: GeneratedModel, n: int) -> StopInequalities | None:
     """The model's stops on combinations of joints over the n joints a series moves (a hybrid device's wrist
     joints after the model's coordinates), or None without any."""
     stops = StopInequalities.of_model(model)
-    if not len(stops):
-        return None
-    rows = np.zeros((len(stops), n))
-    rows[:, :stops.rows.shape[1]] = stops.rows
-    return dataclasses.replace(stops, rows=rows)
+    return stops.over(n) if len(stops) else None
 
 
 def start_within_stops(model: GeneratedModel, middle: np.ndarray, stops: StopInequalities | None) -> np.ndarray:

@@ -9,6 +9,7 @@ sample the same set.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -56,6 +57,13 @@ class StopInequalities:
 
     def __len__(self) -> int:
         return len(self.expressions)
+
+    def over(self, n: int) -> StopInequalities:
+        """The same stops over n >= the model's coordinates (a hybrid device's wrist joints after them, which no
+        stop names)."""
+        rows = np.zeros((len(self), n))
+        rows[:, :self.rows.shape[1]] = self.rows
+        return dataclasses.replace(self, rows=rows)
 
     def values(self, q: np.ndarray) -> np.ndarray:
         """a . q + b of every stop (..., k) at configurations q (..., n)."""

@@ -19,10 +19,9 @@ import sympy
 
 from symkin.errors import name_list
 from symkin.model import joint_kinds
-from symkin.model.reader import Reader, describe
+from symkin.model.reader import Reader, describe, position_limits
 from symkin.model.schema import Coordinate, Joint, JointStop
 from symkin.model.serial_build import read_affine
-from symkin.model.units import ANGLE, LENGTH
 from symkin.model.yaml_source import KeyPath
 
 #: The keys of one stop.
@@ -60,7 +59,7 @@ def read_joint_stops(r: Reader, value: Any, coordinates: Sequence[Joint | Coordi
             r.fail(spath + ("expression",), f"'{spec['expression']}' adds angles and lengths",
                    "bound revolute coordinates and prismatic ones in separate stops")
             continue
-        bounds = _limits(r, spath + ("limits",), spec["limits"], ANGLE if kinds == {True} else LENGTH)
+        bounds = position_limits(r, spath + ("limits",), spec["limits"], revolute=kinds == {True})
         if bounds is None:
             continue
         # the text as messages and the manifest show it: the parser took only names, numbers and operators,
@@ -70,22 +69,6 @@ def read_joint_stops(r: Reader, value: Any, coordinates: Sequence[Joint | Coordi
             _check_home(r, spath, stop, dict(zip(symbols, home)))
         stops.append(stop)
     return tuple(stops)
-
-
-def _limits(r: Reader, path: KeyPath, value: Any, dimension: str) -> tuple[sympy.Expr, sympy.Expr] | None:
-    """[lower, upper] of a stop, lower < upper at the parameters' defaults."""
-    items = r.sequence(path, value, 2, "bounds [lower, upper]")
-    if items is None:
-        return None
-    lower, upper = (r.expr(path + (k,), v, dimension=dimension) for k, v in enumerate(items))
-    if lower is None or upper is None:
-        return None
-    low, high = r.default_value(lower), r.default_value(upper)
-    if low is not None and high is not None and not low < high:
-        r.fail(path, f"the lower bound {low:g} is not below the upper bound {high:g}",
-               "write [lower, upper] with lower < upper")
-        return None
-    return lower, upper
 
 
 def _check_home(r: Reader, path: KeyPath, stop: JointStop, home: dict[str, sympy.Expr]) -> None:

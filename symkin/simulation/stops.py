@@ -45,6 +45,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from symkin.mechanism.stops import StopInequalities
+
 #: default contact time constant T_c = 1 / omega_n [s] and damping ratio zeta
 TIME_CONSTANT = 3e-3
 DAMPING_RATIO = 0.5
@@ -128,11 +130,11 @@ class JointStops:
         if not damping_ratio >= 0.0:
             raise ValueError(f"stop damping ratio must not be negative, got {damping_ratio:g}")
         names = tuple(plant.coordinates)
-        coupled = plant.model.info.joint_stops
-        limits = np.vstack([plant.joint_limits, np.array([stop.limits for stop in coupled]).reshape(-1, 2)])
-        rows = np.vstack([np.eye(len(names)), _combination_rows(coupled, names)])
-        offsets = np.concatenate([np.zeros(len(names)), [stop.offset for stop in coupled]])
-        labels = names + tuple(stop.expression for stop in coupled)
+        coupled = StopInequalities.of_model(plant.model).over(len(names))
+        limits = np.vstack([plant.joint_limits, np.column_stack([coupled.lower, coupled.upper])])
+        rows = np.vstack([np.eye(len(names)), coupled.rows])
+        offsets = np.concatenate([np.zeros(len(names)), coupled.offsets])
+        labels = names + coupled.expressions
         limited = np.isfinite(limits).any(axis=1)
         if not limited.any():
             return None
@@ -151,7 +153,7 @@ class JointStops:
                     raise ValueError(f"stop {label} of '{name}' must be {'positive' if strict else 'non-negative'}, "
                                      f"got {value:g}")
                 target[i] = value
-        if not coupled:
+        if not len(coupled):
             return cls(names, limits[:, 0], limits[:, 1], k, c, time_constant, damping_ratio)
         return cls(labels, limits[:, 0], limits[:, 1], k, c, time_constant, damping_ratio, rows, offsets)
 
@@ -220,15 +222,6 @@ class JointStops:
                              f"{self.stiffness[i]:.4g} {effort}/{position}, c = {self.damping[i]:.4g} "
                              f"{effort} s/{position}")
         return lines
-
-
-def _combination_rows(coupled: Sequence, names: tuple[str, ...]) -> np.ndarray:
-    """(s, n): the multipliers of the model's stops on combinations over the joints ``names``."""
-    rows = np.zeros((len(coupled), len(names)))
-    for r, stop in enumerate(coupled):
-        for name, a in stop.coefficients.items():
-            rows[r, names.index(name)] = a
-    return rows
 
 
 def rk4_amplification(z: np.ndarray) -> np.ndarray:

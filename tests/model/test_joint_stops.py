@@ -46,7 +46,7 @@ def test_a_stop_is_read_with_its_terms_and_bounds():
     ('{expression: "sin(theta1)", limits: [0, 1]}', "is not affine in the coordinates"),
     ('{expression: "theta9 - theta1", limits: [0, 1]}', "theta9"),
     ('{expression: "0.3", limits: [0, 1]}', "names no coordinate: it would bound nothing"),
-    ('{expression: "theta1", limits: [1, 0]}', "the lower bound 1 is not below the upper bound 0"),
+    ('{expression: "theta1", limits: [1, 0]}', "the lower limit 1 is not below the upper limit 0"),
     ('{expression: "theta1", limits: [0, l1]}', "used here as an angle"),
     ('{expression: "theta1 - theta2", limits: [0.5, 1]}', "at the home configuration theta1 - theta2 = 0"),
     ('{expression: 3, limits: [0, 1]}', "a stop's expression is text"),
