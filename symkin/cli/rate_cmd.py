@@ -146,7 +146,7 @@ def _shapes(args: argparse.Namespace, model, conditioning: float):
     if args.shape_samples == 0:
         return workspace_shapes.WorkspaceShapes(None, None, 0.0, 0, "--shape-samples 0")
     return workspace_shapes.usable_shapes(model, conditioning, analysis_args.parse_limits(args.limits),
-                                          args.shape_samples)
+                                          args.shape_samples, analysis_args.parse_orientation(args.orientation))
 
 
 def run(args: argparse.Namespace) -> int:

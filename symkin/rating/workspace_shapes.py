@@ -5,19 +5,22 @@ and stops whose handle Jacobian has 1/kappa at least the rating's ``conditioning
 on a joint grid far denser than the rating's poses, fill the cells of an occupancy
 (:func:`symkin.analysis.workspace.occupancy_from_cloud`: cells twice the grid's spacing); the box and the cylinder
 are the largest among its interior cells (:mod:`symkin.analysis.inscribed`), so they lie inside the usable set up to
-the sampling, and the summary states the cell size they are quantized by.
+the sampling, and the summary states the cell size they are quantized by.  A platform with a closed-form inverse
+kinematics is gridded in Cartesian space directly; legs without closed forms (any topology) take the cells of the
+home assembly's working mode continued over a Cartesian grid at the rating's orientation
+(:func:`symkin.mechanism.continuation.continued_grid`), as their rating does.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Sequence
 
 import numpy as np
 
 from symkin import mechanism
 from symkin.analysis import inscribed, workspace
-from symkin.mechanism import Sampling, feasibility, reach
+from symkin.mechanism import Sampling, continuation, feasibility, reach
 from symkin.mechanism.stops import StopInequalities
 from symkin.mechanism.working_mode import assemble
 from symkin.numerics import sampling
@@ -85,20 +88,25 @@ class WorkspaceShapes:
 
 
 def usable_shapes(model: GeneratedModel, conditioning: float, limits: mechanism.Limits | None = None,
-                  samples: int | None = None) -> WorkspaceShapes:
+                  samples: int | None = None, orientation: Sequence[float] | None = None) -> WorkspaceShapes:
     """The largest box and cylinder inside the usable workspace of a device whose handle translates in x, y and z
-    (a serial arm on a joint grid, a closed-form translational platform on a Cartesian grid: ``samples`` of it,
-    default :data:`JOINT_SAMPLES` or :data:`CARTESIAN_SAMPLES`); otherwise why not."""
+    (a serial arm on a joint grid, a translational platform on a Cartesian grid - legs without closed forms at the
+    ``orientation`` (roll, pitch, yaw in rad; default the home pose's) where their platform also turns: ``samples`` of it, default :data:`JOINT_SAMPLES` or
+    :data:`CARTESIAN_SAMPLES`); otherwise why not."""
     sampled = mechanism.sampling(model)
     rows = list(mechanism.position_rows(model))
-    if sampled not in (Sampling.JOINTS, Sampling.INVERSE) or mechanism.handle_on_further_joints(model) or (
+    if sampled is Sampling.ORIENTATIONS or mechanism.handle_on_further_joints(model) or (
             sampled is Sampling.INVERSE and not mechanism.is_positional(model)):
         return WorkspaceShapes(None, None, 0.0, 0, "the box and cylinder are found for a handle that translates, of "
-                                                    "a serial arm or a closed-form translational platform")
+                                                    "a serial arm or a platform that translates (held at an "
+                                                    "orientation where it also turns, legs without closed forms)")
     if len(rows) != 3:
         return WorkspaceShapes(None, None, 0.0, 0, f"the handle moves in {len(rows)} directions, not in x, y and z")
     if sampled is Sampling.INVERSE:
         return _cartesian_shapes(model, conditioning, limits, samples or CARTESIAN_SAMPLES)
+    if sampled is Sampling.CONTINUATION:
+        return _continued_shapes(model, conditioning, limits, samples or CARTESIAN_SAMPLES,
+                                 reach.held_orientation(model, orientation), rows)
     samples = samples or JOINT_SAMPLES
     box = mechanism.joint_limits(model, limits)
     per_axis = max(2, int(round(samples ** (1.0 / len(box)))))
@@ -128,6 +136,19 @@ def _cartesian_shapes(model: GeneratedModel, conditioning: float, limits: mechan
     with np.errstate(invalid="ignore", divide="ignore"):
         usable[usable] = inverse_condition_number(model.jacobian(q[usable], centres[usable])) >= conditioning
     return _shapes_of(workspace.Occupancy(start, size, usable.reshape(counts)), len(centres))
+
+
+def _continued_shapes(model: GeneratedModel, conditioning: float, limits: mechanism.Limits | None, samples: int,
+                      orientation: dict[str, float] | None, rows: list[int]) -> WorkspaceShapes:
+    """Legs without closed forms: the cells of the home assembly's working mode, continued over a Cartesian grid of
+    about ``samples`` cells (its longest side ``samples^(1/3)`` cells) at the held ``orientation``, where 1/kappa of
+    J's position rows is at least ``conditioning``."""
+    grid = continuation.continued_grid(model, orientation=orientation, limits=limits,
+                                       cells=max(2, round(samples ** (1.0 / 3.0))))
+    usable = grid.reached.copy()
+    with np.errstate(invalid="ignore", divide="ignore"):
+        usable[usable] = inverse_condition_number(grid.J[usable][:, rows, :]) >= conditioning
+    return _shapes_of(workspace.Occupancy(grid.lower, grid.cell, usable), int(grid.reached.size))
 
 
 def _shapes_of(occupancy: workspace.Occupancy, samples: int) -> WorkspaceShapes:
