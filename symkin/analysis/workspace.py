@@ -148,8 +148,9 @@ class Occupancy:
         return Estimate((inner + outer) / 2, (outer - inner) / 2, int(self.occupied.size), "occupancy", False)
 
 
-def cloud_spacing(cloud: WorkspaceCloud) -> float:
-    """Largest distance between the TCP points of neighbouring grid configurations.
+def cloud_spacing(cloud: WorkspaceCloud, inside: np.ndarray | None = None) -> float:
+    """Largest distance between the TCP points of neighbouring grid configurations (both ``inside``, a mask over
+    the grid's configurations, where given: those that belong, e.g. within stops).
 
     Every point of the workspace lies within about this distance of a cloud point.
 
@@ -158,9 +159,15 @@ def cloud_spacing(cloud: WorkspaceCloud) -> float:
     """
     if cloud.grid_shape is None:
         raise ValueError("the spacing of a cloud is known only for grid sampling")
-    points = cloud.points.reshape(*cloud.grid_shape, -1)
-    gaps = [np.linalg.norm(np.diff(points, axis=axis), axis=-1).max() for axis in range(len(cloud.grid_shape))]
-    return float(max(gaps))
+    shape = cloud.grid_shape
+    points = cloud.points.reshape(*shape, -1)
+    kept = np.ones(shape, dtype=bool) if inside is None else np.asarray(inside, dtype=bool).reshape(shape)
+    gaps = []
+    for axis in range(len(shape)):
+        step = np.linalg.norm(np.diff(points, axis=axis), axis=-1)
+        both = np.take(kept, range(shape[axis] - 1), axis=axis) & np.take(kept, range(1, shape[axis]), axis=axis)
+        gaps.append(float(np.max(step[both], initial=0.0)))
+    return max(gaps)
 
 
 def default_cell(cloud: WorkspaceCloud) -> float:

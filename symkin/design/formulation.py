@@ -77,7 +77,7 @@ from symkin.numerics import sampling
 from symkin.rating import forces
 from symkin import mechanism
 from symkin.mechanism import Sampling, continuation
-from symkin.mechanism import passive
+from symkin.mechanism import passive, stops
 from symkin.mechanism.limits import within_limits
 from symkin.design import smooth
 from symkin.design.problem import DesignProblem
@@ -260,7 +260,13 @@ def _serial(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model: G
         return _serial_force(problem, casadi_model, numpy_model, node, free, J, values, design, box_points, seed)
     q = sampling.sobol(limits[:, 0], limits[:, 1], SERIAL_NODES_LOG2 if nodes is None else nodes,
                        np.random.default_rng(seed))
+    sampled = len(q)  # the measure's nodes: those outside the joint stops count as outside the workspace
+    q = q[stops.respected(numpy_model, q)]
     count = len(q)
+    if not count:
+        raise ValueError(f"{numpy_model.name}: no sampled configuration lies within the joint stops; widen the joint "
+                         "limits or the stops")
+    within = " within the joint stops" if len(stops.StopInequalities.of_model(numpy_model)) else ""
     rows = mechanism.position_rows(numpy_model)
     term = smooth.measure_weighted_inverse_frobenius(J, smooth.homogenized(J, problem.length, rows))
     per_node = _node_function("gci_terms", node, free, casadi.vertcat(term, smooth.determinant(J)))
@@ -271,23 +277,24 @@ def _serial(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model: G
     if problem.objective == "gci":
         objective = casadi.sum2(terms[0, :]) / weights
         description = (f"Frobenius GCI surrogate: sum |det J| / kappa_F / sum |det J| at {count} fixed Sobol "
-                       "nodes over the joint limits (Cartesian measure dW = |det J| dq, |det J| smoothed by "
+                       f"nodes over the joint limits{within} (Cartesian measure dW = |det J| dq, |det J| smoothed by "
                        f"{DETERMINANT_SMOOTHING:g} rms det J)")
     else:
-        objective = weights * float(np.prod(limits[:, 1] - limits[:, 0])) / count
-        description = f"workspace measure int |det J| dq over the joint limits, at {count} fixed Sobol nodes"
+        objective = weights * float(np.prod(limits[:, 1] - limits[:, 0])) / sampled
+        description = (f"workspace measure int |det J| dq over the joint limits{within}, at {count} of {sampled} "
+                       "fixed Sobol nodes")
     if problem.box is None:
         return _Terms(objective, casadi.MX(0, 1), np.empty(0), np.empty(0), *NO_VARIABLES, q, np.empty((0, 0)),
                       description)
     box = _box_configurations(problem, casadi_model, numpy_model, node, free, values, design, box_points, seed)
-    zeros = np.zeros(box.residuals.numel())
-    description += f"; the box is required at {len(box.points)} points (fk(q_b) = p_b within the joint limits)"
-    return _Terms(objective, box.residuals, zeros, zeros, casadi.vec(box.qb), box.start.ravel(), box.lower,
+    description += f"; the box is required at {len(box.points)} points (fk(q_b) = p_b within the joint limits{within})"
+    return _Terms(objective, box.g, box.lbg, box.ubg, casadi.vec(box.qb), box.start.ravel(), box.lower,
                   box.upper, q, box.points, description, symbols=(box.qb,), configuration_count=box.qb.numel())
 
 
 class _BoxConfigurations(NamedTuple):
-    """A serial model's joint configurations q_b (n, P) at the box points p_b, with fk(q_b) = p_b required."""
+    """A serial model's joint configurations q_b (n, P) at the box points p_b, with fk(q_b) = p_b and the joint
+    stops (lower <= a . q_b + b <= upper, linear rows) required."""
 
     points: np.ndarray  # p_b (P, d)
     qb: casadi.MX  # the configurations, decision variables
@@ -295,6 +302,24 @@ class _BoxConfigurations(NamedTuple):
     start: np.ndarray  # (P, n) start values
     lower: np.ndarray  # bounds of vec(q_b): the joint limits
     upper: np.ndarray
+    joint_stops: stops.StopInequalities  # the model's joint stops (k = 0: none)
+
+    @property
+    def g(self) -> casadi.MX:
+        """The constraints: the residuals, then vec(A q_b) of the stops (k rows per box point)."""
+        return casadi.vertcat(self.residuals, casadi.vec(casadi.mtimes(casadi.DM(self.joint_stops.rows), self.qb)))
+
+    @property
+    def lbg(self) -> np.ndarray:
+        points = self.qb.shape[1]
+        return np.concatenate([np.zeros(self.residuals.numel()),
+                               np.tile(self.joint_stops.lower - self.joint_stops.offsets, points)])
+
+    @property
+    def ubg(self) -> np.ndarray:
+        points = self.qb.shape[1]
+        return np.concatenate([np.zeros(self.residuals.numel()),
+                               np.tile(self.joint_stops.upper - self.joint_stops.offsets, points)])
 
 
 def _box_configurations(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model: GeneratedModel,
@@ -312,7 +337,7 @@ def _box_configurations(problem: DesignProblem, casadi_model: GeneratedModel, nu
     residuals = (_mapped(position, qb, design) - casadi.DM(points.T)) / size
     start = _nearest_configurations(numpy_model.bind(**problem.start), limits, points, axes, seed)
     return _BoxConfigurations(points, qb, casadi.vec(residuals), start, np.tile(limits[:, 0], len(points)),
-                              np.tile(limits[:, 1], len(points)))
+                              np.tile(limits[:, 1], len(points)), stops.StopInequalities.of_model(numpy_model))
 
 
 def _serial_force(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model: GeneratedModel, node: casadi.SX,
@@ -329,13 +354,12 @@ def _serial_force(problem: DesignProblem, casadi_model: GeneratedModel, numpy_mo
     if not start > 0:
         raise ValueError(f"{numpy_model.name}: the isotropic force vanishes in the box at the start design")
     bound = casadi.MX.sym("force_bound")  # t / (the start's worst force, at the start configurations)
-    zeros = np.zeros(box.residuals.numel())
-    g = casadi.vertcat(box.residuals, casadi.vec((bound * start) ** 2 * squared))
+    g = casadi.vertcat(box.g, casadi.vec((bound * start) ** 2 * squared))
     description = (f"isotropic force min_i tau_max,i / |J_i| at the worst of the box's {box_points}^{box.points.shape[1]} "
                    f"vertex grid (epigraph form), effort limits {', '.join(f'{v:g}' for v in limits)}, at the box "
-                   "configurations q_b with fk(q_b) = p_b within the joint limits")
-    return _Terms(bound * start, g, np.concatenate([zeros, np.full(squared.numel(), -np.inf)]),
-                  np.concatenate([zeros, np.ones(squared.numel())]), casadi.vertcat(casadi.vec(box.qb), bound),
+                   "configurations q_b with fk(q_b) = p_b within the joint limits and stops")
+    return _Terms(bound * start, g, np.concatenate([box.lbg, np.full(squared.numel(), -np.inf)]),
+                  np.concatenate([box.ubg, np.ones(squared.numel())]), casadi.vertcat(casadi.vec(box.qb), bound),
                   np.concatenate([box.start.ravel(), [1.0]]), np.concatenate([box.lower, [0.0]]),
                   np.concatenate([box.upper, [np.inf]]), box.points, box.points, description,
                   casadi.mmin(1 / casadi.sqrt(squared)), (box.qb, bound), box.qb.numel())
@@ -343,8 +367,10 @@ def _serial_force(problem: DesignProblem, casadi_model: GeneratedModel, numpy_mo
 
 def _nearest_configurations(model: GeneratedModel, limits: np.ndarray, points: np.ndarray, axes: list[int],
                             seed: int) -> np.ndarray:
-    """For each point, the sampled configuration (within the limits) whose TCP is nearest: a start for IPOPT."""
+    """For each point, the sampled configuration (within the limits and stops) whose TCP is nearest: a start for
+    IPOPT."""
     q = sampling.sobol(limits[:, 0], limits[:, 1], START_SAMPLES_LOG2, np.random.default_rng(seed + 1))
+    q = q[stops.respected(model, q)]
     tcp = model.fk(q)[:, axes, 3]
     nearest = np.argmin(((points[:, None, :] - tcp[None, :, :]) ** 2).sum(axis=-1), axis=1)
     return q[nearest]

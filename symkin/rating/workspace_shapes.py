@@ -118,7 +118,8 @@ def usable_shapes(model: GeneratedModel, conditioning: float, limits: mechanism.
     if not usable.any():
         return WorkspaceShapes(None, None, 0.0, len(q), "no sampled configuration is usable")
     kept = workspace.WorkspaceCloud(q[usable], points[usable], ("x", "y", "z"), None)
-    occupancy = workspace.occupancy_from_cloud(kept, 2.0 * _grid_spacing(points, inside, (per_axis,) * len(box)))
+    grid = workspace.WorkspaceCloud(q, points, ("x", "y", "z"), (per_axis,) * len(box))
+    occupancy = workspace.occupancy_from_cloud(kept, 2.0 * workspace.cloud_spacing(grid, inside))
     return _shapes_of(occupancy, len(q))
 
 
@@ -157,16 +158,3 @@ def _shapes_of(occupancy: workspace.Occupancy, samples: int) -> WorkspaceShapes:
     return WorkspaceShapes(inscribed.largest_box(interior, occupancy.lower, occupancy.cell),
                            inscribed.largest_cylinder(interior, occupancy.lower, occupancy.cell),
                            float(occupancy.cell[0]), samples, "", interior, occupancy.lower, occupancy.cell)
-
-
-def _grid_spacing(points: np.ndarray, inside: np.ndarray, shape: tuple[int, ...]) -> float:
-    """The largest distance between the handle positions of neighbouring grid configurations both inside
-    (:func:`symkin.analysis.workspace.cloud_spacing` over the configurations that belong): cells of twice that
-    leave no hole inside the workspace."""
-    grid, kept = points.reshape(*shape, -1), inside.reshape(shape)
-    gaps = []
-    for axis in range(len(shape)):
-        step = np.linalg.norm(np.diff(grid, axis=axis), axis=-1)
-        both = np.take(kept, range(shape[axis] - 1), axis=axis) & np.take(kept, range(1, shape[axis]), axis=axis)
-        gaps.append(float(np.max(step[both], initial=0.0)))
-    return max(gaps)

@@ -219,6 +219,58 @@ def test_workspace_maximization_of_the_2r_reaches_the_length_bound(arm):
     assert solution.surrogate_optimum == pytest.approx(area, rel=1e-3)
 
 
+#: The 2R arm whose forearm's direction theta1 + theta2 stays within [0, 90 deg] (a coupled joint stop).
+STOPPED_ARM = ((MODELS_DIR / "planar_2r.yaml").read_text()
+               + '\njoint_stops:\n  - {expression: "theta1 + theta2", limits: [0, deg(90)], doc: forearm}\n')
+
+
+@pytest.fixture(scope="module")
+def stopped_arm(tmp_path_factory):
+    path = tmp_path_factory.mktemp("stopped_arm") / "planar_2r.yaml"
+    path.write_text(STOPPED_ARM)
+    out = symkin.derive(path, path.parent, outputs=["fk", "jacobian"], backends=["numpy", "casadi"], fixed=[])
+    return symkin.load(out), symkin.load(out, "casadi")
+
+
+def test_the_workspace_measure_counts_only_the_nodes_within_the_joint_stops(stopped_arm):
+    """int |det J| dq over the joint box cut by theta1 + theta2 <= 90 deg: l1 l2 int_0^pi/2 sin(t) (pi/2 - t) dt =
+    l1 l2 (pi/2 - 1).  The surrogate is the smoothed sum over the Sobol nodes within the stop, times the box's
+    area over all the nodes (the others lie outside the workspace); the independent rating's estimate covers the
+    closed form."""
+    numpy_model, _ = stopped_arm
+    problem, program, solution = _optimize(stopped_arm, "workspace", ["l1"], bounds={"l1": (0.05, 0.2)})
+    assert solution.optimum["l1"] == pytest.approx(0.2, rel=1e-7)
+    nodes = program.nodes
+    assert len(nodes) < 2 ** formulation.SERIAL_NODES_LOG2
+    assert bool(np.all(nodes.sum(axis=1) <= np.pi / 2))
+    det = np.linalg.det(numpy_model.bind(**solution.optimum).jacobian(nodes))
+    smoothed = np.sqrt(det ** 2 + formulation.DETERMINANT_SMOOTHING ** 2 * np.mean(det ** 2))
+    surrogate = smoothed.sum() * (np.pi / 2) ** 2 / 2 ** formulation.SERIAL_NODES_LOG2
+    assert solution.surrogate_optimum == pytest.approx(surrogate, rel=KINEMATICS)
+    area = 0.2 * 0.1 * (np.pi / 2 - 1)
+    rating = design.evaluate(problem, numpy_model, solution.optimum, samples=2 ** 12)
+    assert abs(rating.measure.value - area) <= rating.measure.error
+    assert "within the joint stops" in program.description
+
+
+def test_the_box_configurations_keep_the_joint_stops(stopped_arm):
+    """The GCI of the 2R arm over the box (0.11..0.14)^2: without the stop its optimum (l1 = 0.1192 m) reaches the
+    corner (0.11, 0.11) with theta2 = 90 deg and theta1 = 5 deg, the forearm at 95 deg; with it every box
+    configuration keeps theta1 + theta2 <= 90 deg, the stop binds, and the optimum moves."""
+    numpy_model, _ = stopped_arm
+    box = {"x": (0.11, 0.14), "y": (0.11, 0.14)}
+    _, program, solution = _optimize(stopped_arm, "gci", ["l1"], bounds={"l1": (0.05, 0.3)}, box=box)
+    assert solution.success
+    assert solution.constraint_violation < 1e-9
+    q = solution.box_configurations
+    forearm = q.sum(axis=1)
+    assert bool(np.all(forearm <= np.pi / 2 + 1e-9))
+    assert forearm.max() == pytest.approx(np.pi / 2, abs=1e-8)
+    assert abs(solution.optimum["l1"] - np.sqrt(2 * 0.11 ** 2 - 0.1 ** 2)) > 1e-3
+    tcp = numpy_model.bind(**solution.optimum).fk(q)[:, :2, 3]
+    np.testing.assert_allclose(tcp, program.box_points, rtol=0, atol=1e-9)
+
+
 def test_delta_optimization_improves_the_gci_and_keeps_the_box_reachable(delta):
     numpy_model, _ = delta
     problem, program, solution = _optimize(delta, "gci", ["r_base", "r_tcp", "a", "b"], box=DELTA_BOX,
