@@ -294,32 +294,27 @@ def _serial(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model: G
 
 class _BoxConfigurations(NamedTuple):
     """A serial model's joint configurations q_b (n, P) at the box points p_b, with fk(q_b) = p_b and the joint
-    stops (lower <= a . q_b + b <= upper, linear rows) required."""
+    stops required: lbg <= g <= ubg."""
 
     points: np.ndarray  # p_b (P, d)
     qb: casadi.MX  # the configurations, decision variables
-    residuals: casadi.MX  # vec((fk(q_b) - p_b) / box size), to be 0
+    g: casadi.MX  # vec((fk(q_b) - p_b) / box size), to be 0, then the stops at each q_b (:func:`_within_stops`)
+    lbg: np.ndarray
+    ubg: np.ndarray
     start: np.ndarray  # (P, n) start values
     lower: np.ndarray  # bounds of vec(q_b): the joint limits
     upper: np.ndarray
-    joint_stops: stops.StopInequalities  # the model's joint stops (k = 0: none)
 
-    @property
-    def g(self) -> casadi.MX:
-        """The constraints: the residuals, then vec(A q_b) of the stops (k rows per box point)."""
-        return casadi.vertcat(self.residuals, casadi.vec(casadi.mtimes(casadi.DM(self.joint_stops.rows), self.qb)))
 
-    @property
-    def lbg(self) -> np.ndarray:
-        points = self.qb.shape[1]
-        return np.concatenate([np.zeros(self.residuals.numel()),
-                               np.tile(self.joint_stops.lower - self.joint_stops.offsets, points)])
-
-    @property
-    def ubg(self) -> np.ndarray:
-        points = self.qb.shape[1]
-        return np.concatenate([np.zeros(self.residuals.numel()),
-                               np.tile(self.joint_stops.upper - self.joint_stops.offsets, points)])
+def _within_stops(model: GeneratedModel, q: casadi.MX) -> tuple[casadi.MX, np.ndarray, np.ndarray]:
+    """The model's joint stops (``joint_stops:``, :class:`symkin.mechanism.stops.StopInequalities`) at the
+    configurations q (n, P), a column each, as linear constraints lbg <= g <= ubg: (vec(A q), lower - b, upper - b),
+    k rows per configuration (none without stops)."""
+    inequalities = stops.StopInequalities.of_model(model)
+    points = q.shape[1]
+    return (casadi.vec(casadi.mtimes(casadi.DM(inequalities.rows), q)),
+            np.tile(inequalities.lower - inequalities.offsets, points),
+            np.tile(inequalities.upper - inequalities.offsets, points))
 
 
 def _box_configurations(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model: GeneratedModel,
@@ -336,8 +331,11 @@ def _box_configurations(problem: DesignProblem, casadi_model: GeneratedModel, nu
     size = float(np.max(upper - lower))
     residuals = (_mapped(position, qb, design) - casadi.DM(points.T)) / size
     start = _nearest_configurations(numpy_model.bind(**problem.start), limits, points, axes, seed)
-    return _BoxConfigurations(points, qb, casadi.vec(residuals), start, np.tile(limits[:, 0], len(points)),
-                              np.tile(limits[:, 1], len(points)), stops.StopInequalities.of_model(numpy_model))
+    stop_rows, stop_lower, stop_upper = _within_stops(numpy_model, qb)
+    zeros = np.zeros(residuals.numel())
+    return _BoxConfigurations(points, qb, casadi.vertcat(casadi.vec(residuals), stop_rows),
+                              np.concatenate([zeros, stop_lower]), np.concatenate([zeros, stop_upper]), start,
+                              np.tile(limits[:, 0], len(points)), np.tile(limits[:, 1], len(points)))
 
 
 def _serial_force(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model: GeneratedModel, node: casadi.SX,
@@ -425,6 +423,10 @@ def _reach(problem: DesignProblem, numpy_model: GeneratedModel, node: casadi.SX,
             g.append(reached[legs + k, :].T)
             lbg.append(np.full(len(points), lo))
             ubg.append(np.full(len(points), hi))
+    stop_rows, stop_lower, stop_upper = _within_stops(numpy_model, reached[legs:legs + joints.numel(), :])
+    g.append(stop_rows)
+    lbg.append(stop_lower)
+    ubg.append(stop_upper)
     return reached[legs + joints.numel():, :], g, lbg, ubg
 
 
@@ -566,6 +568,7 @@ def _closure(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model: 
     objective = casadi.sum2(_mapped(index, columns[:, len(corners):], design)) / len(p)  # the midpoints only
     lower, upper = _closure_bounds(problem, numpy_model, n, ns)
     start = _closure_starts(problem, numpy_model, targets, lower, upper)
+    stop_rows, stop_lower, stop_upper = _within_stops(numpy_model, assemblies[:n, :])
     zeros = np.zeros(len(rows) * len(targets))
     held = ", ".join(f"{c} = {template[k]:g}" for k, c in enumerate(task) if not positions[k])
     description = (f"Frobenius GCI surrogate: mean 1/kappa_F over a {per_axis}^{p.shape[1]} midpoint grid of the "
@@ -575,8 +578,9 @@ def _closure(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model: 
                    "required box")
     description += (f", J by least squares from the closure at each point's assembly (q, s), a decision variable; "
                     f"the box is required at {len(targets)} points (the {len(rows)} closure rows that are not "
-                    "identically zero = 0, the joints within their limits, started in the home assembly's working "
-                    "mode)")
-    return _Terms(objective, casadi.vec(residuals), zeros, zeros, casadi.vec(assemblies), start.ravel(),
+                    "identically zero = 0, the joints within their limits and stops, started in the home "
+                    "assembly's working mode)")
+    return _Terms(objective, casadi.vertcat(casadi.vec(residuals), stop_rows), np.concatenate([zeros, stop_lower]),
+                  np.concatenate([zeros, stop_upper]), casadi.vec(assemblies), start.ravel(),
                   np.tile(lower, len(targets)), np.tile(upper, len(targets)), p, targets[:, positions], description,
                   symbols=(assemblies,), configuration_count=assemblies.numel())

@@ -315,10 +315,11 @@ def read_springs(r: Reader, value: Any, joints: Sequence[Joint], path: KeyPath =
         spec = r.mapping(spath, spec, required=("stiffness",), optional=("reference",))
         if spec is None or "stiffness" not in spec:
             continue
-        turns = joint_kinds.is_rotation(kinds[jname].type)
+        jtype = kinds[jname].type
         stiffness = r.expr(spath + ("stiffness",), spec["stiffness"],
-                           dimension=ANGULAR_STIFFNESS if turns else STIFFNESS)
-        reference = (r.expr(spath + ("reference",), spec["reference"], dimension=ANGLE if turns else LENGTH)
+                           dimension=joint_kinds.per_coordinate(jtype, ANGULAR_STIFFNESS, STIFFNESS))
+        reference = (r.expr(spath + ("reference",), spec["reference"],
+                            dimension=joint_kinds.per_coordinate(jtype, ANGLE, LENGTH))
                      if "reference" in spec else ZERO)
         if stiffness is None or reference is None:
             continue

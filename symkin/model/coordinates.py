@@ -64,7 +64,7 @@ def units(model: Model, group: str) -> tuple[str, ...]:
 def units_of(joints: Sequence[Joint | Coordinate], group: str) -> tuple[str, ...]:
     """Per-joint units of one coordinate group of ``joints``."""
     g = GROUPS[group]
-    return tuple(g.revolute_unit if joint_kinds.is_rotation(j.type) else g.prismatic_unit for j in joints)
+    return tuple(joint_kinds.per_coordinate(j.type, g.revolute_unit, g.prismatic_unit) for j in joints)
 
 
 def joint_values(model: Model, group: str) -> tuple[sympy.Expr, ...]:
@@ -116,7 +116,7 @@ def coordinate_range(model: Model) -> tuple[np.ndarray, np.ndarray]:
     lower, upper = [], []
     defaults = model.parameter_values
     for joint in model.coordinates:
-        span = np.pi if joint_kinds.is_rotation(joint.type) else 0.5
+        span = joint_kinds.per_coordinate(joint.type, np.pi, 0.5)
         if joint.limits is not None:
             lo, hi = (float(b.xreplace(defaults)) for b in joint.limits)
             lower.append(max(lo, -4 * np.pi))

@@ -94,11 +94,17 @@ def is_rotation(joint_type: str | Enum) -> bool:
     return rotation
 
 
+def per_coordinate(joint_type: str | Enum, angular: Any, linear: Any) -> Any:
+    """What a one-coordinate joint's coordinate is measured by: ``angular`` where it is an angle (R), ``linear``
+    where it is a length (P) - a unit, a dimension, a typical span, a file format's joint type."""
+    return angular if is_rotation(joint_type) else linear
+
+
 def worked_part(joint_type: str | Enum, pair: tuple[Any, Any]) -> Any:
     """The part of an (angular, linear) pair - a wrench's (moment, force) - that a one-coordinate joint's motion
     works against: tau = S^T f is the moment about a rotation's axis and the force along a translation's axis
     (``dot(axis, worked_part(type, wrench))``, Featherstone 2008 eq. 5.13)."""
-    return pair[0] if is_rotation(joint_type) else pair[1]
+    return per_coordinate(joint_type, *pair)
 
 
 def motion_subspace(joint_type: str | Enum, axis: Any, zero: Any = None) -> tuple[Any, Any]:

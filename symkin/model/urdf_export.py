@@ -134,19 +134,18 @@ def export_urdf(model: Model) -> str:
         origin = pending @ _transform(joint.before, values) @ motion
         after = _transform(joint.after, values)
         child = joint.link if _is_identity(after) else f"{joint.link}__joint"
-        kind = "prismatic" if not joint_kinds.is_rotation(joint.type) else (
-            "revolute" if joint.limits is not None else "continuous")
+        kind = joint_kinds.per_coordinate(joint.type, "revolute" if joint.limits is not None else "continuous",
+                                          "prismatic")
         lines.append(f"  <link name={quoteattr(child)}/>")
         lines.append(f"  <joint name={quoteattr(joint.name)} type=\"{kind}\">")
         lines.append(f"    <parent link={quoteattr(parent)}/><child link={quoteattr(child)}/>")
         lines.append(f"    {_origin(origin)}")
         lines.append(f'    <axis xyz="{" ".join(repr(float(a)) for a in axis / np.linalg.norm(axis))}"/>')
-        limit = ""
+        # URDF's continuous joint needs no bounds; a prismatic one without limits gets wide ones
+        limit = joint_kinds.per_coordinate(joint.type, "", 'lower="-1e9" upper="1e9" ')
         if joint.limits is not None:
             lower, upper = (_number(b, values) for b in joint.limits)
             limit = f'lower="{lower!r}" upper="{upper!r}" '
-        elif not joint_kinds.is_rotation(joint.type):
-            limit = 'lower="-1e9" upper="1e9" '
         effort = _number(joint.effort_limit, values) if joint.effort_limit is not None else 0.0
         velocity = _number(joint.velocity_limit, values) if joint.velocity_limit is not None else 0.0
         lines.append(f'    <limit {limit}effort="{effort!r}" velocity="{velocity!r}"/>')

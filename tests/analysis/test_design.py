@@ -271,6 +271,26 @@ def test_the_box_configurations_keep_the_joint_stops(stopped_arm):
     np.testing.assert_allclose(tcp, program.box_points, rtol=0, atol=1e-9)
 
 
+def test_a_delta_s_design_keeps_its_joint_stops_at_every_box_point(delta, tmp_path):
+    """The DELTA with its first two arms kept within 45 deg of each other: the GCI's optimum over the box without
+    the stop (a = 0.101 m) breaks it at the box's corners (60 deg apart); with it, every required point's arms (the
+    closed-form ik at the optimum) keep it."""
+    path = tmp_path / "delta.yaml"
+    path.write_text((MODELS_DIR / "delta.yaml").read_text()
+                    + '\njoint_stops:\n  - {expression: "theta1 - theta2", limits: [deg(-45), deg(45)]}\n')
+    out = symkin.derive(path, tmp_path, outputs=["ik", "jacobian"], backends=["numpy", "casadi"], fixed=[])
+    stopped = symkin.load(out), symkin.load(out, "casadi")
+    apart = {}
+    for name, models in (("free", delta), ("stopped", stopped)):
+        _, program, solution = _optimize(models, "gci", ["a"], bounds={"a": (0.05, 0.3)}, box=DELTA_BOX)
+        assert solution.success
+        assert solution.constraint_violation < 1e-9
+        q = np.asarray(models[0].bind(**solution.optimum).ik(program.box_points).joints)
+        apart[name] = np.abs(q[:, 0] - q[:, 1]).max()
+    assert apart["free"] > np.radians(50)
+    assert apart["stopped"] <= np.radians(45) + 1e-9
+
+
 def test_delta_optimization_improves_the_gci_and_keeps_the_box_reachable(delta):
     numpy_model, _ = delta
     problem, program, solution = _optimize(delta, "gci", ["r_base", "r_tcp", "a", "b"], box=DELTA_BOX,

@@ -38,12 +38,13 @@ def test_joint_type_branches_only_shrink():
 
 
 #: module -> questions ``is_rotation(`` left outside joint_kinds (issue 62, "finish the joint unit": a joint kind
-#: answers with its motion subspace or the part of a wrench its motion works against; shrink as they move).
+#: answers with its motion subspace, the part of a wrench its motion works against or what its coordinate is
+#: measured by (``per_coordinate``); shrink as they move).
 ROTATION_QUESTIONS = {
     "dynamics/base_parameters.py": 1,
     "dynamics/newton_euler.py": 1, "kinematics/chain.py": 1,
-    "model/body_build.py": 1, "model/build.py": 1, "model/coordinates.py": 2, "model/rotors.py": 1,
-    "model/serial_build.py": 3, "model/urdf_export.py": 3, "stability/states.py": 1,
+    "model/build.py": 1, "model/rotors.py": 1,
+    "model/serial_build.py": 3, "model/urdf_export.py": 1, "stability/states.py": 1,
 }
 
 

@@ -166,3 +166,21 @@ def test_the_command_dimensions_the_model_file_and_refuses_what_does_not_apply(t
         assert exit_info.value.code == 2
         assert message in capsys.readouterr().err
         assert not (tmp_path / "refused").exists()
+
+
+def test_every_points_assembly_keeps_the_joint_stops(solution, tmp_path):
+    """A stop on the lifting leg's first joint, 0.05 rad inside the largest theta1 the unstopped optimum's assemblies
+    use (their columns: theta1, lift1, phi2, knee2, then the passive joints): the stopped program's assemblies keep it
+    at every point, and touch it."""
+    bound = float(solution.box_configurations[:, 0].max()) - 0.05
+    text = dual_scara_text() + f'\njoint_stops:\n  - {{expression: "theta1", limits: [-1, {bound!r}]}}\n'
+    model = model_from_text(text, file="dual_scara.yaml")
+    request = pipeline.resolve_request(model, "closure,closure_jacobians", "numpy,casadi")
+    directory = pipeline.write(pipeline.generate(model, request), tmp_path)
+    stopped = load(directory), load(directory, "casadi")
+    problem = design.design_problem(stopped[0], "gci", ["l1", "l2"], box=BOX, limits=STROKE, length=LENGTH)
+    stopped_solution = design.solve(problem, design.formulate(problem, stopped[1], stopped[0]))
+    assert stopped_solution.success
+    theta1 = stopped_solution.box_configurations[:, 0]
+    assert theta1.max() <= bound + 1e-9
+    assert theta1.max() == pytest.approx(bound, abs=1e-6)
