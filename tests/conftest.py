@@ -73,8 +73,8 @@ def shared_derivation(model: Model) -> Derivation:
 @functools.lru_cache(maxsize=None)
 def stability_run(name: str):
     """``symkin bench stability models/<name>.yaml`` at its defaults, once per worker: the run that
-    docs/numerical-stability.md quotes (tests/analysis/test_stability_table.py) and, on native arithmetic, the one
-    tests/analysis/test_stability.py judges (both modules' tests of a model share the xdist group
+    docs/numerical-stability.md quotes (tests/stability/test_stability_table.py) and, on native arithmetic, the one
+    tests/stability/test_stability.py judges (both modules' tests of a model share the xdist group
     ``stability-<name>``), on the worker's shared derivation of the model (:func:`shared_derivation`)."""
     from symkin.stability import run_stability
 
@@ -341,7 +341,7 @@ def _tag_xdist_groups(config, items) -> None:
     """In an xdist worker under ``--dist loadgroup``, end the node id of each test marked ``xdist_group`` with
     ``@<group>``, as pytest-xdist does: xdist 3.8 writes it to ``Item._nodeid``, which pytest 9 no longer reads
     (a node id is ``Item._id``), so every group was spread over the workers and each session fixture of a
-    group (tests/analysis/test_stability.py's runs) was computed once per worker."""
+    group (tests/stability/test_stability.py's runs) was computed once per worker."""
     if not getattr(config.option, "loadgroup", False):
         return
     try:

@@ -648,6 +648,21 @@ void agile_eye_combined_packed(const double *in, double *out);
  * Calls agile_eye_combined once per configuration. */
 void agile_eye_combined_batch(size_t n, const double *p, const double *q, const double *s, const double *qd, const double *qdd, const double *tau, const double *params, size_t params_stride, double *joints, double *ik_margin, double *orientation, double *fk_margin, double *points, double *f, double *J_x, double *J_q, double *J, double *J_inv, double *det_Jq, double *det_Jx, double *phi, double *Phi_p, double *Phi_q, double *Phi_s, double *G, double *M, double *V, double *inverse_dynamics_tau, double *forward_dynamics_qdd, double *Mx, double *Vx, double *Gx, double *k, double *u);
 
+/* agile_eye_assemble: the forward kinematics of any leg topology, for a servo loop: Gauss-Newton on the generated
+ * closure phi(q, s, p) = 0 for the passive joints s[6] and the platform pose p[3] at the actuated joints
+ * q[3], started from the given s and p (the previous sample's) and written back into them.  A step is the
+ * least-squares solution of [Phi_s Phi_p] (ds, dp) = -phi (Householder QR with column pivoting); converged when a
+ * step's largest entry is at most tolerance (1e-12 as symkin.runtime.parallel.solve_closure).  Returns the steps
+ * taken, or 0 with s and p set to NaN where it did not converge within max_iterations or stopped where the legs do
+ * not close (max |phi| above 1e-09 max(1, |p|): a least-squares minimum); *residual = max |phi| at the result.
+ * Allocates nothing. */
+int agile_eye_assemble(const double *q, double *s, double *p, int max_iterations, double tolerance, double *residual);
+
+/* agile_eye_assembly_jacobian: J[3 x 3] = dp/dq, row-major, at an assembled (q, s, p) (from agile_eye_assemble): the p-part
+ * of the least-squares solution of [Phi_s Phi_p] (ds, dp) = -Phi_q dq.  Returns 1, or 0 with J set to NaN where the
+ * actuators do not determine the platform (a column of Phi_p past the numerical rank: an interior singularity). */
+int agile_eye_assembly_jacobian(const double *q, const double *s, const double *p, double *J);
+
 #ifdef __cplusplus
 }
 #endif

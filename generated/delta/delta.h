@@ -666,6 +666,21 @@ void delta_combined_packed(const double *in, double *out);
  * Uses 2432 bytes of stack for its blocks of 8 configurations. */
 void delta_combined_batch(size_t n, const double *q, const double *p, const double *params, size_t params_stride, double *J, double *J_inv, double *det_Jq, double *det_Jx);
 
+/* delta_assemble: the forward kinematics of any leg topology, for a servo loop: Gauss-Newton on the generated
+ * closure phi(q, s, p) = 0 for the passive joints s[12] and the platform pose p[3] at the actuated joints
+ * q[3], started from the given s and p (the previous sample's) and written back into them.  A step is the
+ * least-squares solution of [Phi_s Phi_p] (ds, dp) = -phi (Householder QR with column pivoting); converged when a
+ * step's largest entry is at most tolerance (1e-12 as symkin.runtime.parallel.solve_closure).  Returns the steps
+ * taken, or 0 with s and p set to NaN where it did not converge within max_iterations or stopped where the legs do
+ * not close (max |phi| above 1e-09 max(1, |p|): a least-squares minimum); *residual = max |phi| at the result.
+ * Allocates nothing. */
+int delta_assemble(const double *q, double *s, double *p, double r_base, double r_tcp, double a, double b, int max_iterations, double tolerance, double *residual);
+
+/* delta_assembly_jacobian: J[3 x 3] = dp/dq, row-major, at an assembled (q, s, p) (from delta_assemble): the p-part
+ * of the least-squares solution of [Phi_s Phi_p] (ds, dp) = -Phi_q dq.  Returns 1, or 0 with J set to NaN where the
+ * actuators do not determine the platform (a column of Phi_p past the numerical rank: an interior singularity). */
+int delta_assembly_jacobian(const double *q, const double *s, const double *p, double r_base, double r_tcp, double a, double b, double *J);
+
 #ifdef __cplusplus
 }
 #endif

@@ -16,6 +16,7 @@
 #include "pantograph.h"
 
 #include <math.h>
+#include <float.h>
 
 /* Configurations per block of the batch functions. */
 #define PANTOGRAPH_BLOCK 8
@@ -3587,5 +3588,173 @@ void pantograph_combined_batch(size_t n, const double *restrict p, const double 
             u[(_i + _l) * 1 + 0] = 0.0;
         }
     }
+}
+#endif
+
+#if !defined(PANTOGRAPH_PART) || PANTOGRAPH_PART == 0
+
+/* Rows of the closure, its unknowns s and p, and the actuated joints (symkin/backends/c/assembly.py). */
+#define PANTOGRAPH_CLOSURE_ROWS 12
+#define PANTOGRAPH_UNKNOWNS 6
+
+/* Householder QR with column pivoting of the 12 x 6 row-major matrix m, in place (Golub and Van Loan,
+ * Matrix Computations, 4th ed., alg. 5.4.1): R on and above the diagonal, each reflection's vector below it (its
+ * first entry 1 implied) with its factor in tau, the columns' order in order.  Returns the numerical rank: the
+ * steps before a remaining column's norm falls to rows * eps times the first pivot's. */
+static int pantograph_qr(double *m, double *tau, int *order)
+{
+    const int rows = PANTOGRAPH_CLOSURE_ROWS, cols = PANTOGRAPH_UNKNOWNS;
+    const int steps = rows < cols ? rows : cols;
+    double first = 0.0;
+    for (int j = 0; j < cols; ++j)
+        order[j] = j;
+    for (int j = 0; j < steps; ++j) {
+        int best = j;
+        double largest = -1.0;
+        for (int c = j; c < cols; ++c) {
+            double norm2 = 0.0;
+            for (int i = j; i < rows; ++i)
+                norm2 += m[i * cols + c] * m[i * cols + c];
+            if (norm2 > largest) {
+                largest = norm2;
+                best = c;
+            }
+        }
+        const double norm = sqrt(largest);
+        if (j == 0)
+            first = norm;
+        if (!(norm > rows * DBL_EPSILON * first) || norm == 0.0)
+            return j;
+        if (best != j) {
+            for (int i = 0; i < rows; ++i) {
+                const double t = m[i * cols + j];
+                m[i * cols + j] = m[i * cols + best];
+                m[i * cols + best] = t;
+            }
+            const int t = order[j];
+            order[j] = order[best];
+            order[best] = t;
+        }
+        const double x0 = m[j * cols + j];
+        const double beta = x0 >= 0.0 ? -norm : norm;
+        tau[j] = (beta - x0) / beta;
+        const double scale = 1.0 / (x0 - beta);
+        for (int i = j + 1; i < rows; ++i)
+            m[i * cols + j] *= scale;
+        m[j * cols + j] = beta;
+        for (int c = j + 1; c < cols; ++c) {
+            double w = m[j * cols + c];
+            for (int i = j + 1; i < rows; ++i)
+                w += m[i * cols + j] * m[i * cols + c];
+            w *= tau[j];
+            m[j * cols + c] -= w;
+            for (int i = j + 1; i < rows; ++i)
+                m[i * cols + c] -= w * m[i * cols + j];
+        }
+    }
+    return steps;
+}
+
+/* The basic least-squares solution x of m x = b from pantograph_qr's factors (b is overwritten): 0 in the columns past
+ * the rank. */
+static void pantograph_qr_solve(const double *m, const double *tau, const int *order, int rank, double *b, double *x)
+{
+    const int rows = PANTOGRAPH_CLOSURE_ROWS, cols = PANTOGRAPH_UNKNOWNS;
+    for (int j = 0; j < rank; ++j) {
+        double w = b[j];
+        for (int i = j + 1; i < rows; ++i)
+            w += m[i * cols + j] * b[i];
+        w *= tau[j];
+        b[j] -= w;
+        for (int i = j + 1; i < rows; ++i)
+            b[i] -= w * m[i * cols + j];
+    }
+    for (int j = 0; j < cols; ++j)
+        x[order[j]] = 0.0;
+    for (int j = rank - 1; j >= 0; --j) {
+        double sum = b[j];
+        for (int c = j + 1; c < rank; ++c)
+            sum -= m[j * cols + c] * x[order[c]];
+        x[order[j]] = sum / m[j * cols + j];
+    }
+}
+
+/* [Phi_s Phi_p] at (q, s, p) into _m, row-major 12 x 6, and Phi_q (12 x 2) into _Phi_q.  Locals
+ * start with '_': a model's parameters may take any other name. */
+static void pantograph_closure_matrix(const double *q, const double *s, const double *p, double l, double L, double *_m, double *_Phi_q)
+{
+    double _Phi_p[24], _Phi_s[48];
+    pantograph_closure_jacobians(q, s, p, l, L, _Phi_p, _Phi_q, _Phi_s);
+    for (int _i = 0; _i < 12; ++_i) {
+        for (int _j = 0; _j < 4; ++_j)
+            _m[_i * 6 + _j] = _Phi_s[_i * 4 + _j];
+        for (int _j = 0; _j < 2; ++_j)
+            _m[_i * 6 + 4 + _j] = _Phi_p[_i * 2 + _j];
+    }
+}
+
+int pantograph_assemble(const double *q, double *s, double *p, double d, double l, double L, int max_iterations, double tolerance, double *residual)
+{
+    double _phi[12], _m[12 * 6], _Phi_q[24], _tau[6], _step[6];
+    int _order[6];
+    int _taken = 0;
+    for (int _k = 1; _k <= max_iterations && !_taken; ++_k) {
+        pantograph_closure(q, s, p, d, l, L, _phi);
+        pantograph_closure_matrix(q, s, p, l, L, _m, _Phi_q);
+        for (int _i = 0; _i < 12; ++_i)
+            _phi[_i] = -_phi[_i];
+        const int _rank = pantograph_qr(_m, _tau, _order);
+        pantograph_qr_solve(_m, _tau, _order, _rank, _phi, _step);
+        double _largest = 0.0;
+        for (int _j = 0; _j < 6; ++_j) {
+            const double _size = fabs(_step[_j]);
+            _largest = _size > _largest || _size != _size ? _size : _largest;
+        }
+        for (int _j = 0; _j < 4; ++_j)
+            s[_j] += _step[_j];
+        for (int _j = 0; _j < 2; ++_j)
+            p[_j] += _step[4 + _j];
+        if (_largest <= tolerance)
+            _taken = _k;
+        else if (_largest != _largest)
+            break;
+    }
+    pantograph_closure(q, s, p, d, l, L, _phi);
+    double _worst = 0.0;
+    for (int _i = 0; _i < 12; ++_i)
+        _worst = fabs(_phi[_i]) > _worst || _phi[_i] != _phi[_i] ? fabs(_phi[_i]) : _worst;
+    *residual = _worst;
+    double _scale = 1.0;
+    for (int _j = 0; _j < 2; ++_j)
+        _scale = fabs(p[_j]) > _scale ? fabs(p[_j]) : _scale;
+    /* a least-squares minimum of |phi| also stops the steps: the legs close only where phi is rounding */
+    if (!_taken || !(_worst <= 1e-09 * _scale)) {
+        for (int _j = 0; _j < 4; ++_j)
+            s[_j] = (double)NAN;
+        for (int _j = 0; _j < 2; ++_j)
+            p[_j] = (double)NAN;
+        return 0;
+    }
+    return _taken;
+}
+
+int pantograph_assembly_jacobian(const double *q, const double *s, const double *p, double d, double l, double L, double *J)
+{
+    double _m[12 * 6], _Phi_q[24], _tau[6], _column[12], _x[6];
+    int _order[6];
+    (void)d;
+    pantograph_closure_matrix(q, s, p, l, L, _m, _Phi_q);
+    const int _rank = pantograph_qr(_m, _tau, _order);
+    int _determined = 1;
+    for (int _j = _rank; _j < 6; ++_j)
+        _determined &= _order[_j] < 4;
+    for (int _c = 0; _c < 2; ++_c) {
+        for (int _i = 0; _i < 12; ++_i)
+            _column[_i] = -_Phi_q[_i * 2 + _c];
+        pantograph_qr_solve(_m, _tau, _order, _rank, _column, _x);
+        for (int _r = 0; _r < 2; ++_r)
+            J[_r * 2 + _c] = _determined ? _x[4 + _r] : (double)NAN;
+    }
+    return _determined;
 }
 #endif

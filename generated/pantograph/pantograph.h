@@ -654,6 +654,21 @@ void pantograph_combined_packed(const double *in, double *out);
  * Uses 7104 bytes of stack for its blocks of 8 configurations. */
 void pantograph_combined_batch(size_t n, const double *p, const double *q, const double *s, const double *qd, const double *qdd, const double *tau, const double *params, size_t params_stride, double *joints, double *ik_margin, double *position, double *fk_margin, double *points, double *f, double *J_x, double *J_q, double *J, double *J_inv, double *det_Jq, double *det_Jx, double *phi, double *Phi_p, double *Phi_q, double *Phi_s, double *G, double *M, double *V, double *inverse_dynamics_tau, double *forward_dynamics_qdd, double *Mx, double *Vx, double *Gx, double *k, double *u);
 
+/* pantograph_assemble: the forward kinematics of any leg topology, for a servo loop: Gauss-Newton on the generated
+ * closure phi(q, s, p) = 0 for the passive joints s[4] and the platform pose p[2] at the actuated joints
+ * q[2], started from the given s and p (the previous sample's) and written back into them.  A step is the
+ * least-squares solution of [Phi_s Phi_p] (ds, dp) = -phi (Householder QR with column pivoting); converged when a
+ * step's largest entry is at most tolerance (1e-12 as symkin.runtime.parallel.solve_closure).  Returns the steps
+ * taken, or 0 with s and p set to NaN where it did not converge within max_iterations or stopped where the legs do
+ * not close (max |phi| above 1e-09 max(1, |p|): a least-squares minimum); *residual = max |phi| at the result.
+ * Allocates nothing. */
+int pantograph_assemble(const double *q, double *s, double *p, double d, double l, double L, int max_iterations, double tolerance, double *residual);
+
+/* pantograph_assembly_jacobian: J[2 x 2] = dp/dq, row-major, at an assembled (q, s, p) (from pantograph_assemble): the p-part
+ * of the least-squares solution of [Phi_s Phi_p] (ds, dp) = -Phi_q dq.  Returns 1, or 0 with J set to NaN where the
+ * actuators do not determine the platform (a column of Phi_p past the numerical rank: an interior singularity). */
+int pantograph_assembly_jacobian(const double *q, const double *s, const double *p, double d, double l, double L, double *J);
+
 #ifdef __cplusplus
 }
 #endif

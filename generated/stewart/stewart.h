@@ -660,6 +660,21 @@ void stewart_combined_packed(const double *in, double *out);
  * Uses 5056 bytes of stack for its blocks of 8 configurations. */
 void stewart_combined_batch(size_t n, const double *p, const double *q, const double *params, size_t params_stride, double *joints, double *margin, double *J_inv);
 
+/* stewart_assemble: the forward kinematics of any leg topology, for a servo loop: Gauss-Newton on the generated
+ * closure phi(q, s, p) = 0 for the passive joints s[30] and the platform pose p[6] at the actuated joints
+ * q[6], started from the given s and p (the previous sample's) and written back into them.  A step is the
+ * least-squares solution of [Phi_s Phi_p] (ds, dp) = -phi (Householder QR with column pivoting); converged when a
+ * step's largest entry is at most tolerance (1e-12 as symkin.runtime.parallel.solve_closure).  Returns the steps
+ * taken, or 0 with s and p set to NaN where it did not converge within max_iterations or stopped where the legs do
+ * not close (max |phi| above 1e-09 max(1, |p|): a least-squares minimum); *residual = max |phi| at the result.
+ * Allocates nothing. */
+int stewart_assemble(const double *q, double *s, double *p, double r_b, double r_p, double gamma_b, double gamma_p, int max_iterations, double tolerance, double *residual);
+
+/* stewart_assembly_jacobian: J[6 x 6] = dp/dq, row-major, at an assembled (q, s, p) (from stewart_assemble): the p-part
+ * of the least-squares solution of [Phi_s Phi_p] (ds, dp) = -Phi_q dq.  Returns 1, or 0 with J set to NaN where the
+ * actuators do not determine the platform (a column of Phi_p past the numerical rank: an interior singularity). */
+int stewart_assembly_jacobian(const double *q, const double *s, const double *p, double r_b, double r_p, double gamma_b, double gamma_p, double *J);
+
 #ifdef __cplusplus
 }
 #endif

@@ -58,9 +58,10 @@ the handle (every eigenvalue of Lambda = (J M^-1 J^T)^-1, :func:`symkin.rating.f
 at most m_max) holds at the same points as B = m_max J M^-1 J^T - 1 positive semidefinite:
 every principal minor of B >= 0 (smooth in the design, where an eigenvalue is not).
 
-Length: one program builder per kind of mechanism (serial, parallel, parallel through its closure) with its objectives and constraints; they
-share the mapping of per-point functions over the points and the box configurations, which would otherwise be
-passed between modules as private parts.
+Length: one program builder per way the mechanism is sampled (:class:`symkin.mechanism.Sampling`: Sobol nodes of a
+joint box, a Cartesian grid through the closed-form ik, each point's assembly a variable) with its objectives and
+constraints; they share the mapping of per-point functions over the points and the box configurations, which would
+otherwise be passed between modules as private parts.
 """
 
 from __future__ import annotations
@@ -72,7 +73,6 @@ from typing import Any, NamedTuple
 import casadi
 import numpy as np
 
-from symkin.mechanism.closure import assemble_at_home
 from symkin.numerics import sampling
 from symkin.rating import forces
 from symkin import mechanism
@@ -83,9 +83,9 @@ from symkin.design import smooth
 from symkin.design.problem import DesignProblem
 from symkin.runtime.info import GeneratedModel
 
-#: Nodes of the serial objective (2**LOG2, Sobol, fixed seed) and per axis of the parallel one.
-SERIAL_NODES_LOG2 = 8
-PARALLEL_NODES_PER_AXIS = 5
+#: Nodes of an objective over a joint box (2**LOG2, Sobol, fixed seed) and per axis of one over a Cartesian grid.
+JOINT_NODES_LOG2 = 8
+GRID_POINTS_PER_AXIS = 5
 #: |det J| of the measure is smoothed as sqrt(det^2 + eps^2), eps = this times the rms of det J over the nodes.
 DETERMINANT_SMOOTHING = 1e-3
 #: Constraint points per axis of the required box (a vertex grid: corners, edges, faces).
@@ -217,7 +217,7 @@ def formulate(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model:
     values: dict[str, Any] = dict(problem.values)
     values.update({p.name: free[k] for k, p in enumerate(problem.free)})
     z = casadi.MX.sym("z", len(problem.free))
-    build = {Sampling.CONTINUATION: _closure, Sampling.JOINTS: _serial}.get(problem.sampling, _parallel)
+    build = {Sampling.CONTINUATION: _assembly_terms, Sampling.JOINTS: _joint_box_terms}.get(problem.sampling, _inverse_grid_terms)
     terms = build(problem, casadi_model, numpy_model, free, values, z * scales, nodes, box_points, seed)
     free_values = casadi.MX.sym("free", len(problem.free))
     others = casadi.MX.sym("variables", terms.variables.numel())
@@ -250,15 +250,15 @@ def _split(vector: casadi.MX, symbols: tuple[casadi.MX, ...]) -> list[casadi.MX]
     return parts
 
 
-def _serial(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model: GeneratedModel, free: casadi.SX, values: dict[str, Any],
+def _joint_box_terms(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model: GeneratedModel, free: casadi.SX, values: dict[str, Any],
             design: casadi.MX, nodes: int | None, box_points: int, seed: int) -> _Terms:
     limits = problem.joint_limits
     n = limits.shape[0]
     node = casadi.SX.sym("q", n)
     J = _call(casadi_function(casadi_model, "jacobian"), {"q": node, **values})[0]
     if problem.objective == "force":
-        return _serial_force(problem, casadi_model, numpy_model, node, free, J, values, design, box_points, seed)
-    q = sampling.sobol(limits[:, 0], limits[:, 1], SERIAL_NODES_LOG2 if nodes is None else nodes,
+        return _box_force_terms(problem, casadi_model, numpy_model, node, free, J, values, design, box_points, seed)
+    q = sampling.sobol(limits[:, 0], limits[:, 1], JOINT_NODES_LOG2 if nodes is None else nodes,
                        np.random.default_rng(seed))
     sampled = len(q)  # the measure's nodes: those outside the joint stops count as outside the workspace
     q = q[stops.respected(numpy_model, q)]
@@ -338,7 +338,7 @@ def _box_configurations(problem: DesignProblem, casadi_model: GeneratedModel, nu
                               np.tile(limits[:, 0], len(points)), np.tile(limits[:, 1], len(points)))
 
 
-def _serial_force(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model: GeneratedModel, node: casadi.SX,
+def _box_force_terms(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model: GeneratedModel, node: casadi.SX,
                   free: casadi.SX, J: casadi.SX, values: dict[str, Any], design: casadi.MX, box_points: int,
                   seed: int) -> _Terms:
     """A serial model's isotropic force at the worst box point, at its box configurations (epigraph form)."""
@@ -374,9 +374,9 @@ def _nearest_configurations(model: GeneratedModel, limits: np.ndarray, points: n
     return q[nearest]
 
 
-def _parallel(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model: GeneratedModel, free: casadi.SX, values: dict[str, Any],
+def _inverse_grid_terms(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model: GeneratedModel, free: casadi.SX, values: dict[str, Any],
               design: casadi.MX, nodes: int | None, box_points: int, seed: int) -> _Terms:
-    per_axis = PARALLEL_NODES_PER_AXIS if nodes is None else nodes
+    per_axis = GRID_POINTS_PER_AXIS if nodes is None else nodes
     p = sampling.grid(*problem.required_box, per_axis)
     node = casadi.SX.sym("p", p.shape[1])
     joints, margin = _call(casadi_function(casadi_model, "ik"), {"p": node, **values})
@@ -413,21 +413,21 @@ def _reach(problem: DesignProblem, numpy_model: GeneratedModel, node: casadi.SX,
     if not np.all(np.isfinite(start_margin)):
         raise ValueError(f"{numpy_model.name}: the inverse kinematics fails at the start design")
     reference = float(np.median(np.abs(start_margin))) or 1.0
-    legs = margin.numel()
+    margins = margin.numel()
     reached = _mapped(_node_function("reach", node, free, casadi.vertcat(margin / reference, joints, extra)),
                       casadi.DM(points.T), design)
-    g = [casadi.vec(reached[:legs, :])]
-    lbg, ubg = [np.zeros(legs * len(points))], [np.full(legs * len(points), np.inf)]
+    g = [casadi.vec(reached[:margins, :])]
+    lbg, ubg = [np.zeros(margins * len(points))], [np.full(margins * len(points), np.inf)]
     if problem.limits is not None:
         for k, (lo, hi) in enumerate(problem.limits):
-            g.append(reached[legs + k, :].T)
+            g.append(reached[margins + k, :].T)
             lbg.append(np.full(len(points), lo))
             ubg.append(np.full(len(points), hi))
-    stop_rows, stop_lower, stop_upper = _within_stops(numpy_model, reached[legs:legs + joints.numel(), :])
+    stop_rows, stop_lower, stop_upper = _within_stops(numpy_model, reached[margins:margins + joints.numel(), :])
     g.append(stop_rows)
     lbg.append(stop_lower)
     ubg.append(stop_upper)
-    return reached[legs + joints.numel():, :], g, lbg, ubg
+    return reached[margins + joints.numel():, :], g, lbg, ubg
 
 
 def _apparent_mass_rows(problem: DesignProblem, casadi_model: GeneratedModel, node: casadi.SX, joints: casadi.SX,
@@ -485,7 +485,7 @@ def _force(problem: DesignProblem, numpy_model: GeneratedModel, node: casadi.SX,
                   np.zeros(1), np.full(1, np.inf), p, points, description, worst, (bound,))
 
 
-def _closure_bounds(problem: DesignProblem, model: GeneratedModel, n: int, ns: int) -> tuple[np.ndarray, np.ndarray]:
+def _assembly_bounds(problem: DesignProblem, model: GeneratedModel, n: int, ns: int) -> tuple[np.ndarray, np.ndarray]:
     """(lower, upper), each (n + ns,): the bounds of one point's (q, s), the actuators' limits (problem.limits) and
     the declared passive-joint limits; an angle whose limits span a full turn (a revolute joint without declared
     limits) is unbounded (a bound at +-pi would stop it turning through pi as the design changes)."""
@@ -500,7 +500,7 @@ def _closure_bounds(problem: DesignProblem, model: GeneratedModel, n: int, ns: i
     return lower, upper
 
 
-def _closure_starts(problem: DesignProblem, model: GeneratedModel, poses: np.ndarray, lower: np.ndarray,
+def _assembly_starts(problem: DesignProblem, model: GeneratedModel, poses: np.ndarray, lower: np.ndarray,
                     upper: np.ndarray) -> np.ndarray:
     """(P, n + ns): the start design's assembly at each pose, continued from its home assembly in the working mode
     (straight paths in steps of 1/64 of the box), revolute joints shifted by 2 pi into their bounds.
@@ -509,10 +509,8 @@ def _closure_starts(problem: DesignProblem, model: GeneratedModel, poses: np.nda
         ValueError: a pose is not reached that way (the start design does not serve the box).
     """
     bound = model.bind(**problem.start)
-    home = assemble_at_home(bound)
     step = float(np.max(problem.inflated_box[1] - problem.inflated_box[0])) / 64
-    q, s, taken = continuation.continue_from(bound, (*home, mechanism.home_pose(bound)), poses, step=step,
-                                                  limits=problem.limits)
+    q, s, taken = continuation.continue_from_home(bound, poses, step=step, limits=problem.limits)
     if not taken.all():
         missed = poses[~taken][0]
         raise ValueError(f"{model.name}: the start design does not reach the required box from its home pose in the "
@@ -527,11 +525,11 @@ def _closure_starts(problem: DesignProblem, model: GeneratedModel, poses: np.nda
     return values
 
 
-def _closure(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model: GeneratedModel, free: casadi.SX,
+def _assembly_terms(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model: GeneratedModel, free: casadi.SX,
              values: dict[str, Any], design: casadi.MX, nodes: int | None, box_points: int, seed: int) -> _Terms:
     """The GCI over the required box of legs without closed forms, each point's assembly a decision variable (see
     the module docstring)."""
-    per_axis = PARALLEL_NODES_PER_AXIS if nodes is None else nodes
+    per_axis = GRID_POINTS_PER_AXIS if nodes is None else nodes
     task = mechanism.task_space(numpy_model)
     positions = np.array([c in mechanism.POSITION_COMPONENTS for c in task])
     template = mechanism.home_pose(numpy_model)
@@ -566,8 +564,8 @@ def _closure(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model: 
     residuals = _mapped(_node_function("closure_rows", node, free, phi[rows]), columns, design)
     index = _node_function("inverse_frobenius", node, free, smooth.inverse_frobenius(J))
     objective = casadi.sum2(_mapped(index, columns[:, len(corners):], design)) / len(p)  # the midpoints only
-    lower, upper = _closure_bounds(problem, numpy_model, n, ns)
-    start = _closure_starts(problem, numpy_model, targets, lower, upper)
+    lower, upper = _assembly_bounds(problem, numpy_model, n, ns)
+    start = _assembly_starts(problem, numpy_model, targets, lower, upper)
     stop_rows, stop_lower, stop_upper = _within_stops(numpy_model, assemblies[:n, :])
     zeros = np.zeros(len(rows) * len(targets))
     held = ", ".join(f"{c} = {template[k]:g}" for k, c in enumerate(task) if not positions[k])

@@ -469,6 +469,17 @@ def continue_from(model: GeneratedModel, start: tuple[np.ndarray, np.ndarray, np
     return _march(model, start, np.asarray(targets, dtype=float), step, bounds)
 
 
+def continue_from_home(model: GeneratedModel, targets: np.ndarray, *, step: float, limits: Limits | None = None
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`continue_from` the home assembly at the home pose (:func:`symkin.mechanism.closure.solve_home_assembly`).
+
+    Raises:
+        ValueError: the legs do not close at the home pose.
+    """
+    home = solve_home_assembly(model)
+    return continue_from(model, (home.q, home.s, mechanism.home_pose(model)), targets, step=step, limits=limits)
+
+
 def home_along_designs(model: GeneratedModel, start: dict[str, float], design: dict[str, float],
                        steps: int) -> tuple[np.ndarray, np.ndarray]:
     """(q, s) of the home assembly of ``design`` (all parameter values; ``model`` unbound): the ``start`` design's

@@ -34,7 +34,6 @@ TARGET = 10
 KNOWN = {
     "analysis/model_files.py", "analysis/needs.py",
     "cli/structure_cmd.py",
-    "design/formulation.py",
     "identification/closure_excitation.py", "identification/excitation.py", "identification/identified_model.py",
     "viewer/page.py",
     "stability/harness.py", "stability/states.py",

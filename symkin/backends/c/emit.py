@@ -38,6 +38,7 @@ from typing import Any
 
 import sympy
 
+from symkin.backends.c.assembly import assembly_context
 from symkin.backends.c.build import part_macro, parts_line
 from symkin.backends.c.printer import C_TYPES, CPrinter
 from symkin.backends.c.trig import constants
@@ -238,7 +239,8 @@ def emit_sources(code: ModelCode) -> dict[str, str | bytes]:
                "fixed_parameters": _comment_lines(", ".join(fixed)) if fixed else [],
                "header_name": header_name, "float32": code.float32, "block": BLOCK,
                "part_macro": part_macro(code.name), "parts": parts,
-               "parts_line": parts_line(code.name, parts), "sincos": sincos}
+               "parts_line": parts_line(code.name, parts), "sincos": sincos,
+               "assembly": assembly_context(functions, code.name)}
     return {
         header_name: render(HEADER_TEMPLATE, provenance=provenance(HEADER_TEMPLATE, code.name, code.hash), **context),
         f"{code.name}.c": render(SOURCE_TEMPLATE, provenance=provenance(SOURCE_TEMPLATE, code.name, code.hash),

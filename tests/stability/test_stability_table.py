@@ -2,7 +2,7 @@
 
 Each row quotes ``symkin bench stability models/NAME.yaml`` with the default options.  The
 run is deterministic in its states, so the record counts must match exactly.  A non-finite value
-comes out only where kappa eps >= 1 (tests/analysis/test_stability.py checks that on native arithmetic):
+comes out only where kappa eps >= 1 (tests/stability/test_stability.py checks that on native arithmetic):
 there no digit of a double is certain, and whether a tiny pivot rounds to zero, so that a value
 overflows, is up to the CPU's rounding (this count was 24 on one x86-64 machine and 25 on another
 for the Stewart platform).  So the quoted non-finite count is checked against what the states allow:
@@ -49,7 +49,7 @@ def test_the_table_has_a_row_per_example_model():
     assert sorted(quoted_rows()) == EXAMPLE_MODELS
 
 
-# the runs are tests/analysis/test_stability.py's too (conftest.stability_run): the same worker, a group per model
+# the runs are tests/stability/test_stability.py's too (conftest.stability_run): the same worker, a group per model
 @pytest.mark.parametrize("name", [pytest.param(name, marks=pytest.mark.xdist_group(f"stability-{name}"))
                                   for name in EXAMPLE_MODELS])
 def test_quoted_figures_are_what_the_bench_measures(name):

@@ -46,7 +46,7 @@ def test_the_figure_leaves_the_callers_matplotlib_backend_and_pyplot_alone(tmp_p
 import sys, matplotlib
 sys.path.insert(0, {str(ROOT)!r})
 matplotlib.use("svg")
-from tests.analysis.test_stability_report import small_run
+from tests.stability.test_stability_report import small_run
 from symkin.stability.report import write_figure
 write_figure(small_run(), {str(tmp_path / 'fig.png')!r})
 print(matplotlib.get_backend(), "matplotlib.pyplot" in sys.modules)

@@ -241,11 +241,11 @@ def test_the_workspace_measure_counts_only_the_nodes_within_the_joint_stops(stop
     problem, program, solution = _optimize(stopped_arm, "workspace", ["l1"], bounds={"l1": (0.05, 0.2)})
     assert solution.optimum["l1"] == pytest.approx(0.2, rel=1e-7)
     nodes = program.nodes
-    assert len(nodes) < 2 ** formulation.SERIAL_NODES_LOG2
+    assert len(nodes) < 2 ** formulation.JOINT_NODES_LOG2
     assert bool(np.all(nodes.sum(axis=1) <= np.pi / 2))
     det = np.linalg.det(numpy_model.bind(**solution.optimum).jacobian(nodes))
     smoothed = np.sqrt(det ** 2 + formulation.DETERMINANT_SMOOTHING ** 2 * np.mean(det ** 2))
-    surrogate = smoothed.sum() * (np.pi / 2) ** 2 / 2 ** formulation.SERIAL_NODES_LOG2
+    surrogate = smoothed.sum() * (np.pi / 2) ** 2 / 2 ** formulation.JOINT_NODES_LOG2
     assert solution.surrogate_optimum == pytest.approx(surrogate, rel=KINEMATICS)
     area = 0.2 * 0.1 * (np.pi / 2 - 1)
     rating = design.evaluate(problem, numpy_model, solution.optimum, samples=2 ** 12)

@@ -25,7 +25,7 @@ from symkin.stability.states import parameter_values
 
 def on_the_runs_worker(*names: str):
     """The tests of a model's run share one xdist worker (`make test` uses --dist loadgroup): the group
-    ``stability-<name>``, which tests/analysis/test_stability_table.py's test of the model joins, so that each run
+    ``stability-<name>``, which tests/stability/test_stability_table.py's test of the model joins, so that each run
     is computed once and the models' runs spread over the workers."""
     return [pytest.mark.xdist_group(f"stability-{name}") for name in names]
 
@@ -39,7 +39,7 @@ QUICK = dict(samples=12, scale_samples=3, float32_samples=6, steps=(1e-2, 1e-6, 
 #: Left out on foreign arithmetic. The Stewart platform's J = J_x^-1 J_q (a symbolic 6x6 inverse) takes a
 #: minute to derive and lambdify for mpmath: that pass checks every other quantity (the first, all).
 #: Its dynamics (large expressions at 50 digits) are checked at the bench's full defaults by
-#: tests/analysis/test_stability_table.py, and against Pinocchio by tests/parallel/test_parallel_dynamics.py.
+#: tests/stability/test_stability_table.py, and against Pinocchio by tests/parallel/test_parallel_dynamics.py.
 #: delta_wrist's platform is delta's, leg for leg: its kinematics are the same code (the golden files show it),
 #: checked on delta; delta_wrist is checked where the wrist enters (the device functions and the dynamics).
 #: The regressors of the UR10e (in both DH conventions) and of the PHANToM are checked at the full defaults in the
@@ -70,7 +70,7 @@ class _Runs(dict):
 
 @pytest.fixture(scope="session")  # not "module": xdist may interleave other modules' tests, which would recompute it
 def runs(models):
-    """On native arithmetic the full runs the results table quotes (tests/analysis/test_stability_table.py runs them on
+    """On native arithmetic the full runs the results table quotes (tests/stability/test_stability_table.py runs them on
     the same workers anyway: every quantity, the bench's defaults); on foreign arithmetic, where the table is not
     rerun, quick runs without :data:`LEFT_OUT`."""
     if not FOREIGN_ARITHMETIC:

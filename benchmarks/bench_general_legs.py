@@ -1,0 +1,170 @@
+"""Legs without the distance form at servo rate (issue 63's baseline): the Novint Falcon of
+models/devices/novint_falcon.yaml beside the closed-form DELTA of models/delta.yaml, in the same process.
+
+For each backend (numpy, C) and device, one haptic-loop step at a time along a slow path of the arms (a
+circle of 5 deg in each arm, 1000 samples): the forward kinematics warm-started from the previous sample and
+the Jacobian J = dp/dq there.  The Falcon runs the run-time Gauss-Newton on its generated closure
+(``solve_closure``, unknowns p and s) and ``closure_velocities``, and the generated assembly of its C library
+(``novint_falcon_assemble`` and ``novint_falcon_assembly_jacobian``) called through ctypes and from a C loop
+(compiled here with the library's source); the DELTA its generated closed forms ``fk`` and ``jacobian``.  Issue
+63's targets: the Falcon's fk + J warm-started <= 5 us per call in C and <= 10 us from Python.
+
+Run with `make bench` or `python benchmarks/bench_general_legs.py [--samples N]`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import ctypes
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+import symkin  # noqa: E402
+from symkin.backends.c.build import shared_library  # noqa: E402
+from symkin.runtime.parallel import closure_velocities, solve_closure  # noqa: E402
+from symkin.text_table import format_table  # noqa: E402
+
+#: The Falcon's home assembly (models/devices/novint_falcon.yaml): every arm at theta = 26.3 deg, its passive
+#: joints (knee, swing, sway, ankle per leg), at the handle's home (0, 0, 0.125) m; refined below by Gauss-Newton.
+FALCON_ARM, FALCON_PASSIVE = np.radians(26.3), np.radians([101.75, 1.3, -1.3, -128.05])
+
+
+def _path(centre: np.ndarray, samples: int) -> np.ndarray:
+    """Arm angles along a circle of 5 deg about ``centre`` in each arm, phase-shifted (samples, 3)."""
+    t = np.linspace(0.0, 2 * np.pi, samples)
+    return centre + np.radians(5.0) * np.sin(t[:, None] + np.array([0.0, 2.1, 4.2]))
+
+
+def _per_call(step, path: np.ndarray, repeat: int) -> float:
+    """Median over ``repeat`` runs of the time per sample (s) of ``step`` along ``path``."""
+    times = []
+    for _ in range(repeat):
+        start = time.perf_counter()
+        for q in path:
+            step(q)
+        times.append((time.perf_counter() - start) / len(path))
+    return statistics.median(times)
+
+
+def _falcon_step(model):
+    """One warm-started forward kinematics and Jacobian of the Falcon, from the last sample's (s, p)."""
+    home = np.array([0.0, 0.0, 0.125])
+    s0 = np.tile(FALCON_PASSIVE, 3)
+    solved = solve_closure(model, np.full(3, FALCON_ARM), s0, home, unknowns=("q", "s"))
+    state = {"s": solved.solution["s"], "p": home}
+
+    def step(q: np.ndarray) -> None:
+        report = solve_closure(model, q, state["s"], state["p"], unknowns=("p", "s"))
+        state["s"], state["p"] = report.solution["s"], report.solution["p"]
+        closure_velocities(model, q, state["s"], state["p"])
+
+    return step, solved.solution["q"]
+
+
+def _generated_step(model, directory: Path):
+    """The same step by the generated assembly of the Falcon's C library (every parameter folded), through ctypes."""
+    lib = ctypes.CDLL(str(shared_library(directory / "novint_falcon.c", directory / "novint_falcon.h")))
+    doubles = np.ctypeslib.ndpointer(dtype=np.float64, flags="C_CONTIGUOUS")
+    assemble, jacobian = lib.novint_falcon_assemble, lib.novint_falcon_assembly_jacobian
+    assemble.argtypes = [doubles, doubles, doubles, ctypes.c_int, ctypes.c_double, ctypes.POINTER(ctypes.c_double)]
+    jacobian.argtypes = [doubles, doubles, doubles, doubles]
+    home = np.array([0.0, 0.0, 0.125])
+    solved = solve_closure(model, np.full(3, FALCON_ARM), np.tile(FALCON_PASSIVE, 3), home, unknowns=("q", "s"))
+    s, p, J, residual = solved.solution["s"].copy(), home.copy(), np.empty((3, 3)), ctypes.c_double()
+
+    def step(q: np.ndarray) -> None:
+        if not assemble(q, s, p, 50, 1e-12, ctypes.byref(residual)):
+            raise RuntimeError("the generated assembly lost the path")
+        jacobian(q, s, p, J)
+
+    return step, solved.solution["q"], s
+
+
+C_LOOP = r"""#define _POSIX_C_SOURCE 199309L
+#include <stdio.h>
+#include <math.h>
+#include <time.h>
+#include "novint_falcon.h"
+int main(void) {
+    double s[12] = {%(s)s}, p[3] = {0.0, 0.0, 0.125}, q[3], J[9], residual;
+    const int samples = %(samples)d, repeat = %(repeat)d;
+    double best = 1e300;
+    for (int r = 0; r < repeat; ++r) {
+        struct timespec t0, t1;
+        clock_gettime(CLOCK_MONOTONIC, &t0);
+        for (int k = 0; k < samples; ++k) {
+            const double t = 6.283185307179586 * k / (samples - 1);
+            for (int i = 0; i < 3; ++i)
+                q[i] = %(arm)r + 0.08726646259971647 * sin(t + 2.1 * i);
+            if (!novint_falcon_assemble(q, s, p, 50, 1e-12, &residual)) return 1;
+            novint_falcon_assembly_jacobian(q, s, p, J);
+        }
+        clock_gettime(CLOCK_MONOTONIC, &t1);
+        const double seconds = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
+        if (seconds < best) best = seconds;
+    }
+    printf("%%.3f\n", 1e6 * best / samples);
+    return 0;
+}
+"""
+
+
+def _c_loop(directory: Path, s: np.ndarray, arm: float, samples: int, repeat: int) -> float:
+    """us per step of the generated assembly called from a C loop (cc -O3), the same path."""
+    source = directory / "loop.c"
+    source.write_text(C_LOOP % {"s": ", ".join(repr(float(v)) for v in s), "samples": samples, "repeat": repeat,
+                                "arm": float(arm)})
+    binary = directory / "loop"
+    subprocess.run(["cc", "-std=c99", "-O3", "-o", str(binary), str(source), str(directory / "novint_falcon.c"),
+                    "-lm"], check=True)
+    return float(subprocess.run([str(binary)], check=True, capture_output=True, text=True).stdout)
+
+
+def _delta_step(model):
+    def step(q: np.ndarray) -> None:
+        p = model.fk(q).position
+        model.jacobian(q, p)
+
+    return step, np.radians([39.0, 39.0, 39.0])
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--samples", type=int, default=1000, help="samples of the path (default: %(default)s)")
+    parser.add_argument("--repeat", type=int, default=3)
+    args = parser.parse_args(argv)
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        falcon_dir = symkin.derive(ROOT / "models" / "devices" / "novint_falcon.yaml", tmp,
+                                   outputs=["closure", "closure_jacobians"], backends=["numpy", "c"])
+        delta_dir = symkin.derive(ROOT / "models" / "delta.yaml", tmp, outputs=["fk", "jacobian"],
+                                  backends=["numpy", "c"])
+        folded = symkin.derive(ROOT / "models" / "devices" / "novint_falcon.yaml", Path(tmp) / "folded",
+                               outputs=["closure", "closure_jacobians"], backends=["numpy", "c"], fixed=["all"])
+        for backend in ("numpy", "c"):
+            for device, directory, make in (("Novint Falcon (general legs)", falcon_dir, _falcon_step),
+                                            ("DELTA (closed forms)", delta_dir, _delta_step)):
+                step, centre = make(symkin.load(directory, backend))
+                seconds = _per_call(step, _path(centre, args.samples), args.repeat)
+                rows.append([device, backend, f"{1e6 * seconds:.1f}"])
+        model = symkin.load(folded)
+        step, centre, s = _generated_step(model, folded)
+        seconds = _per_call(step, _path(centre, args.samples), args.repeat)
+        rows.append(["Novint Falcon, generated assembly", "c, ctypes", f"{1e6 * seconds:.2f}"])
+        rows.append(["Novint Falcon, generated assembly", "c, from C", f"{_c_loop(folded, s, centre[0], args.samples, args.repeat):.2f}"])
+    print(format_table(["device", "backend", "fk + J per call, warm (us)"], rows))
+    print("issue 63's targets for the Falcon: <= 5 us per call in C, <= 10 us from Python")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

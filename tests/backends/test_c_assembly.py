@@ -1,0 +1,142 @@
+"""The generated assembly in C (issue 63, first step): ``<model>_assemble`` (Gauss-Newton on the generated closure,
+warm-started) and ``<model>_assembly_jacobian`` (J = dp/dq from the closure's Jacobians), called through ctypes.
+
+References: the run-time solver of the same closure (``symkin.runtime.parallel.solve_closure`` and
+``closure_velocities``, numpy linear algebra) on the Novint Falcon's legs without the distance form, and the DELTA's
+generated closed forms (``fk``, ``jacobian``) against its own generated assembly - the DELTA modelled both ways.
+The solvers agree to the Newton tolerance times the condition number of [Phi_s Phi_p]; an unreachable pose gives
+0 steps and NaN, never a silently wrong branch.
+"""
+
+from __future__ import annotations
+
+import ctypes
+
+import numpy as np
+import pytest
+
+from conftest import GENERATED_DIR, ROOT
+from symkin import load, pipeline
+from symkin.backends.c import assembly
+from symkin.backends.c.build import shared_library
+from symkin.mechanism import closure
+from symkin.model import model_from_text
+from symkin.runtime.parallel import closure_velocities, solve_closure
+from tolerances import EPS
+
+DOUBLES = np.ctypeslib.ndpointer(dtype=np.float64, flags="C_CONTIGUOUS")
+#: The Falcon's home assembly (models/devices/novint_falcon.yaml): every arm at 26.3 deg; knee, swing, sway, ankle.
+FALCON_ARM, FALCON_PASSIVE = np.radians(26.3), np.radians([101.75, 1.3, -1.3, -128.05])
+#: Gauss-Newton's step tolerance (the runtime's default) and its bound on the steps.
+TOLERANCE, ITERATIONS = 1e-12, 50
+
+
+def library(directory, name: str) -> ctypes.CDLL:
+    """The model's compiled C library (the C backend's cache)."""
+    return ctypes.CDLL(str(shared_library(directory / f"{name}.c", directory / f"{name}.h")))
+
+
+def bind(lib: ctypes.CDLL, name: str, params: int):
+    """(assemble, assembly_jacobian) of the library with ``params`` free parameters (as doubles)."""
+    assemble = getattr(lib, f"{name}_assemble")
+    assemble.argtypes = [DOUBLES, DOUBLES, DOUBLES] + [ctypes.c_double] * params + [
+        ctypes.c_int, ctypes.c_double, ctypes.POINTER(ctypes.c_double)]
+    assemble.restype = ctypes.c_int
+    jacobian = getattr(lib, f"{name}_assembly_jacobian")
+    jacobian.argtypes = [DOUBLES, DOUBLES, DOUBLES] + [ctypes.c_double] * params + [DOUBLES]
+    jacobian.restype = ctypes.c_int
+    return assemble, jacobian
+
+
+def assembly_parameters(model) -> list[float]:
+    """The default values of the assembly's parameters: closure's, then closure_jacobians' others (its header)."""
+    names: dict[str, float] = {}
+    for function in ("closure", "closure_jacobians"):
+        for i in model.info.functions[function].inputs:
+            if i.is_parameter:
+                names.setdefault(i.name, i.default)
+    return list(names.values())
+
+
+@pytest.fixture(scope="module")
+def falcon(tmp_path_factory):
+    """The Falcon with every parameter folded: (numpy model, assemble, assembly_jacobian)."""
+    text = (ROOT / "models" / "devices" / "novint_falcon.yaml").read_text()
+    model = model_from_text(text, file="novint_falcon.yaml")
+    request = pipeline.resolve_request(model, "closure,closure_jacobians", "numpy,c", fixed="all")
+    directory = pipeline.write(pipeline.generate(model, request), tmp_path_factory.mktemp("falcon"))
+    return (load(directory), *bind(library(directory, "novint_falcon"), "novint_falcon", 0))
+
+
+def test_a_warm_started_path_follows_the_runtime_solver(falcon):
+    model, assemble, jacobian = falcon
+    home = solve_closure(model, np.full(3, FALCON_ARM), np.tile(FALCON_PASSIVE, 3), np.array([0.0, 0.0, 0.125]),
+                         unknowns=("q", "s"))
+    q0, s, p = home.solution["q"], home.solution["s"].copy(), np.array([0.0, 0.0, 0.125])
+    residual = ctypes.c_double()
+    angles = np.linspace(0.0, 2 * np.pi, 60)
+    for t in angles:
+        q = q0 + np.radians(5.0) * np.sin(t + np.array([0.0, 2.1, 4.2]))
+        steps = assemble(q, s, p, ITERATIONS, TOLERANCE, ctypes.byref(residual))
+        assert 1 <= steps <= 6                                  # warm: a few steps from the last sample
+        reference = solve_closure(model, q, s, p, unknowns=("p", "s"))
+        velocities = closure_velocities(model, q, s, p)
+        A = np.hstack([model.closure_jacobians(q, s, p)[k] for k in (2, 0)])      # [Phi_s Phi_p]
+        singular = np.linalg.svd(A, compute_uv=False)
+        condition = singular[0] / singular[singular > singular[0] * A.shape[0] * EPS][-1]
+        np.testing.assert_allclose(p, reference.solution["p"], rtol=0, atol=condition * TOLERANCE)
+        assert residual.value <= 64 * EPS
+        J = np.empty((3, 3))
+        assert jacobian(q, s, p, J) == 1
+        np.testing.assert_allclose(J, velocities.J, rtol=0, atol=condition * 64 * EPS * np.abs(velocities.J).max())
+
+
+def test_no_convergence_within_the_bound_gives_nan_and_no_steps(falcon):
+    """Arms 60 deg from the start's: not closed within two steps, so no pose is returned (the residual says how far)."""
+    _, assemble, _ = falcon
+    s, p = np.tile(FALCON_PASSIVE, 3), np.array([0.0, 0.0, 0.125])
+    residual = ctypes.c_double()
+    assert assemble(np.full(3, FALCON_ARM + np.radians(60.0)), s, p, 2, TOLERANCE, ctypes.byref(residual)) == 0
+    assert np.isnan(s).all()
+    assert np.isnan(p).all()
+    assert residual.value > 1e-6
+
+
+def test_a_delta_pose_the_legs_cannot_reach_gives_nan(generated_dir):
+    """generated/delta's arms where its closed-form fk's spheres do not meet (margin < 0): no assembly exists."""
+    delta = load(generated_dir / "delta")
+    values = assembly_parameters(delta)
+    assemble, _ = bind(library(generated_dir / "delta", "delta"), "delta", len(values))
+    q = np.radians([0.0, 0.0, 180.0])
+    with np.errstate(invalid="ignore"):
+        assert float(delta.fk(q).margin) < 0
+    ns = delta.info.functions["closure"].inputs[1].shape[0]
+    s, p = np.zeros(ns), np.array([0.0, 0.0, -0.15])
+    residual = ctypes.c_double()
+    assert assemble(q, s, p, *values, ITERATIONS, TOLERANCE, ctypes.byref(residual)) == 0
+    assert np.isnan(p).all()
+    assert residual.value > 1e-3                    # a least-squares minimum: the steps vanished there
+
+
+def test_the_generated_solver_closes_the_legs_by_the_runtimes_rule():
+    assert assembly.CLOSED == closure.CLOSED
+
+
+def test_the_delta_s_generated_assembly_is_its_closed_form(generated_dir):
+    """generated/delta: fk and jacobian in closed form; its closure (distance-form legs, every parameter free) solved
+    by the generated assembly from a start 10 mm and a few degrees away."""
+    delta = load(generated_dir / "delta")
+    values = assembly_parameters(delta)
+    assemble, jacobian = bind(library(generated_dir / "delta", "delta"), "delta", len(values))
+    rng = np.random.default_rng(63)
+    residual = ctypes.c_double()
+    for q in rng.uniform(np.radians(-20.0), np.radians(40.0), (20, 3)):
+        exact = np.asarray(delta.fk(q).position)
+        s_exact = solve_closure(delta, q, np.zeros(delta.info.functions["closure"].inputs[1].shape[0]), exact,
+                                unknowns=("s",)).solution["s"]
+        s, p = s_exact + rng.uniform(-0.05, 0.05, s_exact.shape), exact + rng.uniform(-0.01, 0.01, 3)
+        assert assemble(q, s, p, *values, ITERATIONS, TOLERANCE, ctypes.byref(residual)) >= 1
+        np.testing.assert_allclose(p, exact, rtol=0, atol=1e-12)
+        J = np.empty((3, 3))
+        assert jacobian(q, s, p, *values, J) == 1
+        np.testing.assert_allclose(J, delta.jacobian(q, exact), rtol=0, atol=1e-10 * np.abs(J).max())
