@@ -8814,59 +8814,76 @@ void agile_eye_combined_batch(size_t n, const double *restrict p, const double *
 #define AGILE_EYE_CLOSURE_ROWS 18
 #define AGILE_EYE_UNKNOWNS 9
 
-/* Householder QR with column pivoting of the 18 x 9 row-major matrix m, in place (Golub and Van Loan,
+/* Householder QR with column pivoting of the 18 x 9 column-major matrix m (element (i, j) at m[j * rows + i]: the reflections run down contiguous columns), in place (Golub and Van Loan,
  * Matrix Computations, 4th ed., alg. 5.4.1): R on and above the diagonal, each reflection's vector below it (its
  * first entry 1 implied) with its factor in tau, the columns' order in order.  Returns the numerical rank: the
- * steps before a remaining column's norm falls to rows * eps times the first pivot's. */
-static int agile_eye_qr(double *m, double *tau, int *order)
+ * steps before a remaining column's norm falls to rows * eps times the largest column's.  Without pivot the columns
+ * keep their order (half the work) and a column that falls so returns -1: pivot then. */
+static int agile_eye_qr(double *m, double *tau, int *order, int pivot)
 {
     const int rows = AGILE_EYE_CLOSURE_ROWS, cols = AGILE_EYE_UNKNOWNS;
     const int steps = rows < cols ? rows : cols;
+    /* each column's squared norm below row j, downdated by the row j leaves (LAPACK's xLAQP2), and recomputed
+       where the downdate cancelled most of it */
+    double norm2[AGILE_EYE_UNKNOWNS], exact2[AGILE_EYE_UNKNOWNS];
     double first = 0.0;
-    for (int j = 0; j < cols; ++j)
-        order[j] = j;
+    for (int c = 0; c < cols; ++c) {
+        order[c] = c;
+        double sum = 0.0;
+        for (int i = 0; i < rows; ++i)
+            sum += m[c * rows + i] * m[c * rows + i];
+        norm2[c] = exact2[c] = sum;
+        first = sum > first ? sum : first;
+    }
+    first = sqrt(first);    /* the largest column's norm: the scale of the rank test */
     for (int j = 0; j < steps; ++j) {
         int best = j;
-        double largest = -1.0;
-        for (int c = j; c < cols; ++c) {
-            double norm2 = 0.0;
-            for (int i = j; i < rows; ++i)
-                norm2 += m[i * cols + c] * m[i * cols + c];
-            if (norm2 > largest) {
-                largest = norm2;
+        for (int c = j + 1; c < cols && pivot; ++c)
+            if (norm2[c] > norm2[best])
                 best = c;
-            }
-        }
-        const double norm = sqrt(largest);
-        if (j == 0)
-            first = norm;
-        if (!(norm > rows * DBL_EPSILON * first) || norm == 0.0)
-            return j;
         if (best != j) {
             for (int i = 0; i < rows; ++i) {
-                const double t = m[i * cols + j];
-                m[i * cols + j] = m[i * cols + best];
-                m[i * cols + best] = t;
+                const double t = m[j * rows + i];
+                m[j * rows + i] = m[best * rows + i];
+                m[best * rows + i] = t;
             }
             const int t = order[j];
             order[j] = order[best];
             order[best] = t;
+            const double n2 = norm2[j], e2 = exact2[j];
+            norm2[j] = norm2[best];
+            exact2[j] = exact2[best];
+            norm2[best] = n2;
+            exact2[best] = e2;
         }
-        const double x0 = m[j * cols + j];
+        double sigma = 0.0;
+        for (int i = j; i < rows; ++i)
+            sigma += m[j * rows + i] * m[j * rows + i];
+        const double norm = sqrt(sigma);
+        if (!(norm > rows * DBL_EPSILON * first) || norm == 0.0)
+            return pivot ? j : -1;
+        const double x0 = m[j * rows + j];
         const double beta = x0 >= 0.0 ? -norm : norm;
         tau[j] = (beta - x0) / beta;
         const double scale = 1.0 / (x0 - beta);
         for (int i = j + 1; i < rows; ++i)
-            m[i * cols + j] *= scale;
-        m[j * cols + j] = beta;
+            m[j * rows + i] *= scale;
+        m[j * rows + j] = beta;
         for (int c = j + 1; c < cols; ++c) {
-            double w = m[j * cols + c];
+            double w = m[c * rows + j];
             for (int i = j + 1; i < rows; ++i)
-                w += m[i * cols + j] * m[i * cols + c];
+                w += m[j * rows + i] * m[c * rows + i];
             w *= tau[j];
-            m[j * cols + c] -= w;
+            m[c * rows + j] -= w;
             for (int i = j + 1; i < rows; ++i)
-                m[i * cols + c] -= w * m[i * cols + j];
+                m[c * rows + i] -= w * m[j * rows + i];
+            norm2[c] -= m[c * rows + j] * m[c * rows + j];
+            if (pivot && !(norm2[c] > 0.05 * exact2[c])) {
+                double sum = 0.0;
+                for (int i = j + 1; i < rows; ++i)
+                    sum += m[c * rows + i] * m[c * rows + i];
+                norm2[c] = exact2[c] = sum;
+            }
         }
     }
     return steps;
@@ -8880,23 +8897,75 @@ static void agile_eye_qr_solve(const double *m, const double *tau, const int *or
     for (int j = 0; j < rank; ++j) {
         double w = b[j];
         for (int i = j + 1; i < rows; ++i)
-            w += m[i * cols + j] * b[i];
+            w += m[j * rows + i] * b[i];
         w *= tau[j];
         b[j] -= w;
         for (int i = j + 1; i < rows; ++i)
-            b[i] -= w * m[i * cols + j];
+            b[i] -= w * m[j * rows + i];
     }
     for (int j = 0; j < cols; ++j)
         x[order[j]] = 0.0;
     for (int j = rank - 1; j >= 0; --j) {
         double sum = b[j];
         for (int c = j + 1; c < rank; ++c)
-            sum -= m[j * cols + c] * x[order[c]];
-        x[order[j]] = sum / m[j * cols + j];
+            sum -= m[c * rows + j] * x[order[c]];
+        x[order[j]] = sum / m[j * rows + j];
     }
 }
 
-/* [Phi_s Phi_p] at (q, s, p) into _m, row-major 18 x 9, and Phi_q (18 x 3) into _Phi_q.  Locals
+/* The Gauss-Newton step x of m x = b (m column-major as above) by the normal equations m^T m x = m^T b and their
+ * Cholesky factor: a third of the QR's work, and accurate enough for a step (its error, about kappa^2 eps of the
+ * step, only slows the convergence where kappa^2 eps nears 1).  Returns 0, x untouched, where a pivot falls below
+ * rows * eps times the largest diagonal entry (a column dependent on the others: the QR takes the step). */
+static int agile_eye_normal_step(const double *m, const double *b, double *x)
+{
+    const int rows = AGILE_EYE_CLOSURE_ROWS, cols = AGILE_EYE_UNKNOWNS;
+    double g[AGILE_EYE_UNKNOWNS * AGILE_EYE_UNKNOWNS], y[AGILE_EYE_UNKNOWNS];
+    double largest = 0.0;
+    for (int c = 0; c < cols; ++c) {
+        for (int d = 0; d <= c; ++d) {
+            double sum = 0.0;
+            for (int i = 0; i < rows; ++i)
+                sum += m[c * rows + i] * m[d * rows + i];
+            g[c * cols + d] = sum;
+        }
+        largest = g[c * cols + c] > largest ? g[c * cols + c] : largest;
+        double sum = 0.0;
+        for (int i = 0; i < rows; ++i)
+            sum += m[c * rows + i] * b[i];
+        y[c] = sum;
+    }
+    for (int c = 0; c < cols; ++c) {
+        double pivot = g[c * cols + c];
+        for (int k = 0; k < c; ++k)
+            pivot -= g[c * cols + k] * g[c * cols + k];
+        if (!(pivot > rows * DBL_EPSILON * largest))
+            return 0;
+        const double root = sqrt(pivot);
+        g[c * cols + c] = root;
+        for (int d = c + 1; d < cols; ++d) {
+            double sum = g[d * cols + c];
+            for (int k = 0; k < c; ++k)
+                sum -= g[d * cols + k] * g[c * cols + k];
+            g[d * cols + c] = sum / root;
+        }
+    }
+    for (int c = 0; c < cols; ++c) {
+        double sum = y[c];
+        for (int k = 0; k < c; ++k)
+            sum -= g[c * cols + k] * y[k];
+        y[c] = sum / g[c * cols + c];
+    }
+    for (int c = cols - 1; c >= 0; --c) {
+        double sum = y[c];
+        for (int k = c + 1; k < cols; ++k)
+            sum -= g[k * cols + c] * x[k];
+        x[c] = sum / g[c * cols + c];
+    }
+    return 1;
+}
+
+/* [Phi_s Phi_p] at (q, s, p) into _m, column-major 18 x 9, and Phi_q (18 x 3, row-major) into _Phi_q.  Locals
  * start with '_': a model's parameters may take any other name. */
 static void agile_eye_closure_matrix(const double *q, const double *s, const double *p, double *_m, double *_Phi_q)
 {
@@ -8904,10 +8973,21 @@ static void agile_eye_closure_matrix(const double *q, const double *s, const dou
     agile_eye_closure_jacobians(q, s, p, _Phi_p, _Phi_q, _Phi_s);
     for (int _i = 0; _i < 18; ++_i) {
         for (int _j = 0; _j < 6; ++_j)
-            _m[_i * 9 + _j] = _Phi_s[_i * 6 + _j];
+            _m[_j * 18 + _i] = _Phi_s[_i * 6 + _j];
         for (int _j = 0; _j < 3; ++_j)
-            _m[_i * 9 + 6 + _j] = _Phi_p[_i * 3 + _j];
+            _m[(6 + _j) * 18 + _i] = _Phi_p[_i * 3 + _j];
     }
+}
+
+/* Whether every closure row is at rounding level, 64 eps max(1, |p|): the legs are closed to the last digits. */
+static int agile_eye_at_rounding(const double *_phi, const double *p)
+{
+    double _scale = 1.0, _worst = 0.0;
+    for (int _j = 0; _j < 3; ++_j)
+        _scale = fabs(p[_j]) > _scale ? fabs(p[_j]) : _scale;
+    for (int _i = 0; _i < 18; ++_i)
+        _worst = fabs(_phi[_i]) > _worst ? fabs(_phi[_i]) : _worst;
+    return _worst <= 64.0 * DBL_EPSILON * _scale;
 }
 
 int agile_eye_assemble(const double *q, double *s, double *p, int max_iterations, double tolerance, double *residual)
@@ -8917,11 +8997,17 @@ int agile_eye_assemble(const double *q, double *s, double *p, int max_iterations
     int _taken = 0;
     for (int _k = 1; _k <= max_iterations && !_taken; ++_k) {
         agile_eye_closure(q, s, p, _phi);
+        if (_k > 1 && agile_eye_at_rounding(_phi, p)) {
+            _taken = _k - 1;    /* the last step left rounding only: another would be below it */
+            break;
+        }
         agile_eye_closure_matrix(q, s, p, _m, _Phi_q);
         for (int _i = 0; _i < 18; ++_i)
             _phi[_i] = -_phi[_i];
-        const int _rank = agile_eye_qr(_m, _tau, _order);
-        agile_eye_qr_solve(_m, _tau, _order, _rank, _phi, _step);
+        if (!agile_eye_normal_step(_m, _phi, _step)) {
+            const int _rank = agile_eye_qr(_m, _tau, _order, 1);
+            agile_eye_qr_solve(_m, _tau, _order, _rank, _phi, _step);
+        }
         double _largest = 0.0;
         for (int _j = 0; _j < 9; ++_j) {
             const double _size = fabs(_step[_j]);
@@ -8960,7 +9046,15 @@ int agile_eye_assembly_jacobian(const double *q, const double *s, const double *
     double _m[18 * 9], _Phi_q[54], _tau[9], _column[18], _x[9];
     int _order[9];
     agile_eye_closure_matrix(q, s, p, _m, _Phi_q);
-    const int _rank = agile_eye_qr(_m, _tau, _order);
+    double _copy[18 * 9];
+    for (int _i = 0; _i < 18 * 9; ++_i)
+        _copy[_i] = _m[_i];
+    int _rank = agile_eye_qr(_m, _tau, _order, 0);
+    if (_rank < 0) {    /* a dependent column: factor again with pivoting, the rank and the idle motions revealed */
+        for (int _i = 0; _i < 18 * 9; ++_i)
+            _m[_i] = _copy[_i];
+        _rank = agile_eye_qr(_m, _tau, _order, 1);
+    }
     int _determined = 1;
     for (int _j = _rank; _j < 9; ++_j)
         _determined &= _order[_j] < 6;

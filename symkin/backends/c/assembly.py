@@ -7,7 +7,9 @@ Where a model's C code holds ``closure`` and ``closure_jacobians`` (double preci
   for the passive joints s and the platform pose p at the actuated joints q, started from the given (s, p) - a
   control loop's previous sample - and written back into them: each step the least-squares solution of
   [Phi_s Phi_p] (ds, dp) = -phi, converged when a step's max-norm is at most ``tolerance`` (the run-time
-  :func:`symkin.runtime.parallel.solve_closure`'s rule); returns the steps taken, or 0 with s and p set to NaN where
+  :func:`symkin.runtime.parallel.solve_closure`'s rule) or a step left every row of phi at rounding level
+  (64 eps max(1, |p|): another step would be below rounding, and forming the Jacobians for it is the cost of a
+  warm-started servo sample); returns the steps taken, or 0 with s and p set to NaN where
   it did not converge within ``max_iterations`` or stopped where the legs do not close (max |phi| above
   :data:`CLOSED` max(1, |p|): Gauss-Newton's steps also vanish at a least-squares minimum) - never a silent wrong
   answer; ``residual`` gets max |phi| there;
@@ -16,9 +18,12 @@ Where a model's C code holds ``closure`` and ``closure_jacobians`` (double preci
   set to NaN where the platform is not determined by the actuators (a column of Phi_p past the numerical rank of
   [Phi_s Phi_p]: a singularity of the interior kind).
 
-Both solve with Householder QR with column pivoting (Golub and Van Loan, Matrix Computations, 4th ed., alg.
-5.4.1), numerical rank at |R_jj| <= m eps |R_00|; columns past the rank (a passive motion the closure leaves idle, as
-a rod spinning between two spherical joints) get 0, the basic solution.  No allocation; the arrays have the model's
+A step solves the normal equations by Cholesky (a third of the work; the step's error, about kappa^2 eps of it,
+only slows the convergence), and Householder QR with column pivoting where a Cholesky pivot falls to rounding
+(Golub and Van Loan, Matrix Computations, 4th ed., alg. 5.4.1; the column norms downdated as LAPACK's xLAQP2
+does); J takes the QR (its error eps kappa), unpivoted unless a column is dependent.  The numerical rank ends at a
+remaining column's norm of m eps times the largest column's; columns past it (a passive motion the closure leaves
+idle, as a rod spinning between two spherical joints) get 0, the basic solution.  No allocation; the arrays have the model's
 sizes.  Parameters: the union of the two functions' free parameters, in the model's order.
 """
 
