@@ -5,7 +5,7 @@ For each backend (numpy, C) and device, one haptic-loop step at a time along a s
 circle of 5 deg in each arm, 1000 samples): the forward kinematics warm-started from the previous sample and
 the Jacobian J = dp/dq there.  The Falcon runs the run-time Gauss-Newton on its generated closure
 (``solve_closure``, unknowns p and s) and ``closure_velocities``, and the generated assembly of its C library
-(``novint_falcon_assemble`` and ``novint_falcon_assembly_jacobian``) called through ctypes and from a C loop
+(``novint_falcon_assemble`` and ``novint_falcon_assembly_jacobian``) from Python (``GeneratedAssembly``) and from a C loop
 (compiled here with the library's source); the DELTA its generated closed forms ``fk`` and ``jacobian``.  Issue
 63's targets: the Falcon's fk + J warm-started <= 5 us per call in C and <= 10 us from Python.
 
@@ -15,7 +15,6 @@ Run with `make bench` or `python benchmarks/bench_general_legs.py [--samples N]`
 from __future__ import annotations
 
 import argparse
-import ctypes
 import statistics
 import subprocess
 import sys
@@ -29,7 +28,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 import symkin  # noqa: E402
-from symkin.backends.c.build import shared_library  # noqa: E402
+from symkin.runtime.assembly import GeneratedAssembly  # noqa: E402
 from symkin.runtime.parallel import closure_velocities, solve_closure  # noqa: E402
 from symkin.text_table import format_table  # noqa: E402
 
@@ -70,21 +69,18 @@ def _falcon_step(model):
     return step, solved.solution["q"]
 
 
-def _generated_step(model, directory: Path):
-    """The same step by the generated assembly of the Falcon's C library (every parameter folded), through ctypes."""
-    lib = ctypes.CDLL(str(shared_library(directory / "novint_falcon.c", directory / "novint_falcon.h")))
-    doubles = np.ctypeslib.ndpointer(dtype=np.float64, flags="C_CONTIGUOUS")
-    assemble, jacobian = lib.novint_falcon_assemble, lib.novint_falcon_assembly_jacobian
-    assemble.argtypes = [doubles, doubles, doubles, ctypes.c_int, ctypes.c_double, ctypes.POINTER(ctypes.c_double)]
-    jacobian.argtypes = [doubles, doubles, doubles, doubles]
+def _generated_step(model):
+    """The same step by the generated assembly of the Falcon's C library (every parameter folded), from Python
+    (:class:`symkin.runtime.assembly.GeneratedAssembly`)."""
+    assembly = GeneratedAssembly(model)
     home = np.array([0.0, 0.0, 0.125])
     solved = solve_closure(model, np.full(3, FALCON_ARM), np.tile(FALCON_PASSIVE, 3), home, unknowns=("q", "s"))
-    s, p, J, residual = solved.solution["s"].copy(), home.copy(), np.empty((3, 3)), ctypes.c_double()
+    s, p, J = solved.solution["s"].copy(), home.copy(), np.empty((3, 3))
 
     def step(q: np.ndarray) -> None:
-        if not assemble(q, s, p, 50, 1e-12, ctypes.byref(residual)):
+        if not assembly.assemble(q, s, p)[0]:
             raise RuntimeError("the generated assembly lost the path")
-        jacobian(q, s, p, J)
+        assembly.jacobian(q, s, p, J)
 
     return step, solved.solution["q"], s
 
@@ -156,10 +152,9 @@ def main(argv: list[str] | None = None) -> int:
                 step, centre = make(symkin.load(directory, backend))
                 seconds = _per_call(step, _path(centre, args.samples), args.repeat)
                 rows.append([device, backend, f"{1e6 * seconds:.1f}"])
-        model = symkin.load(folded)
-        step, centre, s = _generated_step(model, folded)
+        step, centre, s = _generated_step(symkin.load(folded, "c"))
         seconds = _per_call(step, _path(centre, args.samples), args.repeat)
-        rows.append(["Novint Falcon, generated assembly", "c, ctypes", f"{1e6 * seconds:.2f}"])
+        rows.append(["Novint Falcon, generated assembly", "c, from Python", f"{1e6 * seconds:.2f}"])
         rows.append(["Novint Falcon, generated assembly", "c, from C", f"{_c_loop(folded, s, centre[0], args.samples, args.repeat):.2f}"])
     print(format_table(["device", "backend", "fk + J per call, warm (us)"], rows))
     print("issue 63's targets for the Falcon: <= 5 us per call in C, <= 10 us from Python")

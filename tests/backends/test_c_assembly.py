@@ -21,6 +21,8 @@ from symkin.backends.c import assembly
 from symkin.backends.c.build import shared_library
 from symkin.mechanism import closure
 from symkin.model import model_from_text
+from symkin.errors import GeneratedCodeError
+from symkin.runtime.assembly import GeneratedAssembly
 from symkin.runtime.parallel import closure_velocities, solve_closure
 from tolerances import EPS
 
@@ -65,7 +67,7 @@ def falcon(tmp_path_factory):
     model = model_from_text(text, file="novint_falcon.yaml")
     request = pipeline.resolve_request(model, "closure,closure_jacobians", "numpy,c", fixed="all")
     directory = pipeline.write(pipeline.generate(model, request), tmp_path_factory.mktemp("falcon"))
-    return (load(directory), *bind(library(directory, "novint_falcon"), "novint_falcon", 0))
+    return (load(directory), *bind(library(directory, "novint_falcon"), "novint_falcon", 0))  # numpy: the runtime's
 
 
 def test_a_warm_started_path_follows_the_runtime_solver(falcon):
@@ -140,3 +142,33 @@ def test_the_delta_s_generated_assembly_is_its_closed_form(generated_dir):
         J = np.empty((3, 3))
         assert jacobian(q, s, p, *values, J) == 1
         np.testing.assert_allclose(J, delta.jacobian(q, exact), rtol=0, atol=1e-10 * np.abs(J).max())
+
+
+def test_the_python_binding_gives_the_c_functions_results_with_the_models_design(falcon, generated_dir):
+    """symkin.runtime.assembly.GeneratedAssembly: the same steps, pose and J as the raw C functions on the Falcon;
+    a bound design of the DELTA (a = 0.12 m) assembles at that design's closed-form fk; bad arrays and a model
+    without the C assembly are refused with the fix."""
+    model, assemble, jacobian = falcon
+    q, s0, p0 = np.full(3, FALCON_ARM), np.tile(FALCON_PASSIVE, 3), np.array([0.0, 0.0, 0.12])
+    s, p, residual = s0.copy(), p0.copy(), ctypes.c_double()
+    steps = assemble(q, s, p, ITERATIONS, TOLERANCE, ctypes.byref(residual))
+    raw_J = np.empty((3, 3))
+    jacobian(q, s, p, raw_J)
+    directory = model.directory
+    bound = GeneratedAssembly(load(directory, "c"))
+    s1, p1 = s0.copy(), p0.copy()
+    assert bound.assemble(q, s1, p1) == (steps, residual.value)
+    np.testing.assert_array_equal(p1, p)
+    np.testing.assert_array_equal(bound.jacobian(q, s1, p1), raw_J)
+    delta = load(generated_dir / "delta", "c").bind(a=0.12)
+    assembly = GeneratedAssembly(delta)
+    q = np.radians([30.0, 35.0, 40.0])
+    exact = np.asarray(delta.fk(q).position)
+    s = solve_closure(delta, q, np.zeros(assembly.sizes["s"]), exact, unknowns=("s",)).solution["s"]
+    p = exact + 0.005
+    assert assembly.assemble(q, s, p)[0] >= 1
+    np.testing.assert_allclose(p, exact, rtol=0, atol=1e-12)
+    with pytest.raises(ValueError, match="'s' must be a writable float64 C-contiguous array of shape"):
+        assembly.assemble(q, s.astype(np.float32), p)
+    with pytest.raises(GeneratedCodeError, match="load the model with backend=\"c\""):
+        GeneratedAssembly(load(generated_dir / "delta"))

@@ -1,0 +1,89 @@
+"""The generated assembly of a parallel model from Python (issue 63): ``<model>_assemble`` and
+``<model>_assembly_jacobian`` of its C library (:mod:`symkin.backends.c.assembly`), bound once for a control loop.
+
+``GeneratedAssembly(load(directory, "c"))`` finds the model's compiled library (the C backend's cache), binds the two
+functions through ctypes with plain pointers (the arrays' checks done here, once per call, on their attributes) and
+the model's parameter values (its defaults, or a bound design's); :meth:`GeneratedAssembly.assemble` updates a
+warm start (s, p) in place - the previous sample's - and :meth:`GeneratedAssembly.jacobian` gives J = dp/dq.  A call
+that does not close the legs leaves NaN and says so (its return value), never a wrong branch.
+"""
+
+from __future__ import annotations
+
+import ctypes
+
+import numpy as np
+
+from symkin.backends.c.build import shared_library
+from symkin.errors import GeneratedCodeError
+from symkin.runtime.loader import LoadedModel
+
+#: The assembly's defaults: the steps allowed and the step that converges (the run-time solver's).
+MAX_ITERATIONS, TOLERANCE = 50, 1e-12
+
+
+class GeneratedAssembly:
+    """The generated forward kinematics and J of a model loaded with the C backend (see the module docstring).
+
+    Raises:
+        GeneratedCodeError: the model was not loaded with ``backend="c"``, or its C code has no assembly (derive it
+            with ``closure`` and ``closure_jacobians`` in the C backend).
+    """
+
+    def __init__(self, model: LoadedModel):
+        if model.backend != "c":
+            raise GeneratedCodeError(f"{model.name}: the generated assembly is C code; load the model with "
+                                     f"backend=\"c\" (loaded: {model.backend})")
+        if not {"closure", "closure_jacobians"} <= set(model.info.functions):
+            raise GeneratedCodeError(f"{model.name}: no generated assembly; derive the model with closure and "
+                                     "closure_jacobians in the C backend")
+        files = model.info.backend_files["c"]
+        source = next(model.directory / f for f in files if f.endswith(".c"))
+        header = next(model.directory / f for f in files if f.endswith(".h"))
+        library = ctypes.CDLL(str(shared_library(source, header)))
+        names: list[str] = []
+        for function in ("closure", "closure_jacobians"):   # the header's order: closure's, then the others
+            names += [i.name for i in model.info.functions[function].inputs
+                      if i.is_parameter and i.name not in names]
+        self._parameters = [float(model.parameters[name]) for name in names]
+        inputs = model.info.functions["closure"].inputs
+        self.sizes = {v.name: int(v.shape[0]) for v in inputs[:3]}
+        doubles = [ctypes.c_double] * len(names)
+        self._assemble = library[f"{model.name}_assemble"]
+        self._assemble.argtypes = [ctypes.c_void_p] * 3 + doubles + [ctypes.c_int, ctypes.c_double, ctypes.c_void_p]
+        self._assemble.restype = ctypes.c_int
+        self._jacobian = library[f"{model.name}_assembly_jacobian"]
+        self._jacobian.argtypes = [ctypes.c_void_p] * 3 + doubles + [ctypes.c_void_p]
+        self._jacobian.restype = ctypes.c_int
+        self._residual = np.zeros(1)
+        self._residual_address = self._residual.ctypes.data
+        self.name = model.name
+
+    def _pointer(self, array: np.ndarray, name: str, writable: bool = False) -> int:
+        """The address of a float64 C-contiguous vector of the assembly's size for ``name``, or a clear error."""
+        if not (isinstance(array, np.ndarray) and array.dtype == np.float64 and array.flags.c_contiguous
+                and array.shape == (self.sizes[name],) and (array.flags.writeable or not writable)):
+            raise ValueError(f"{self.name} assembly: '{name}' must be a{' writable' if writable else ''} float64 "
+                             f"C-contiguous array of shape ({self.sizes[name]},), got "
+                             f"{getattr(array, 'dtype', type(array).__name__)} {np.shape(array)}")
+        return array.ctypes.data
+
+    def assemble(self, q: np.ndarray, s: np.ndarray, p: np.ndarray, *, max_iterations: int = MAX_ITERATIONS,
+                 tolerance: float = TOLERANCE) -> tuple[int, float]:
+        """Gauss-Newton from the warm start (s, p), written back into them: (steps taken, max |phi|); 0 steps and
+        s, p NaN where it did not converge or the legs do not close there."""
+        steps = self._assemble(self._pointer(q, "q"), self._pointer(s, "s", True), self._pointer(p, "p", True),
+                               *self._parameters, max_iterations, tolerance, self._residual_address)
+        return steps, float(self._residual[0])
+
+    def jacobian(self, q: np.ndarray, s: np.ndarray, p: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+        """J = dp/dq (task x actuated) at an assembled (q, s, p); NaN where the actuators do not determine the
+        platform.  ``out``: a float64 C-contiguous array of that shape to write into."""
+        shape = (self.sizes["p"], self.sizes["q"])
+        J = np.empty(shape) if out is None else out
+        if not (J.dtype == np.float64 and J.flags.c_contiguous and J.shape == shape and J.flags.writeable):
+            raise ValueError(f"{self.name} assembly: out= must be a writable float64 C-contiguous array of shape "
+                             f"{shape}, got {J.dtype} {J.shape}")
+        self._jacobian(self._pointer(q, "q"), self._pointer(s, "s"), self._pointer(p, "p"), *self._parameters,
+                       J.ctypes.data)
+        return J
