@@ -8979,26 +8979,31 @@ static void agile_eye_closure_matrix(const double *q, const double *s, const dou
     }
 }
 
-/* Whether every closure row is at rounding level, 64 eps max(1, |p|): the legs are closed to the last digits. */
-static int agile_eye_at_rounding(const double *_phi, const double *p)
+/* max |phi| over the closure's rows (NaN where a row is NaN), and in *scale max(1, |p|): the pose's scale, which the
+ * rounding and closing tests measure the residual against. */
+static double agile_eye_residual(const double *_phi, const double *p, double *_scale)
 {
-    double _scale = 1.0, _worst = 0.0;
+    double _worst = 0.0;
+    *_scale = 1.0;
     for (int _j = 0; _j < 3; ++_j)
-        _scale = fabs(p[_j]) > _scale ? fabs(p[_j]) : _scale;
+        *_scale = fabs(p[_j]) > *_scale ? fabs(p[_j]) : *_scale;
     for (int _i = 0; _i < 18; ++_i)
-        _worst = fabs(_phi[_i]) > _worst ? fabs(_phi[_i]) : _worst;
-    return _worst <= 64.0 * DBL_EPSILON * _scale;
+        _worst = fabs(_phi[_i]) > _worst || _phi[_i] != _phi[_i] ? fabs(_phi[_i]) : _worst;
+    return _worst;
 }
 
 int agile_eye_assemble(const double *q, double *s, double *p, int max_iterations, double tolerance, double *residual)
 {
     double _phi[18], _m[18 * 9], _Phi_q[54], _tau[9], _step[9];
     int _order[9];
-    int _taken = 0;
+    int _taken = 0, _current = 0;   /* _current: _phi is the closure at the final (s, p) */
+    double _worst = 0.0, _scale = 1.0;
     for (int _k = 1; _k <= max_iterations && !_taken; ++_k) {
         agile_eye_closure(q, s, p, _phi);
-        if (_k > 1 && agile_eye_at_rounding(_phi, p)) {
+        _worst = agile_eye_residual(_phi, p, &_scale);
+        if (_k > 1 && _worst <= 64.0 * DBL_EPSILON * _scale) {
             _taken = _k - 1;    /* the last step left rounding only: another would be below it */
+            _current = 1;
             break;
         }
         agile_eye_closure_matrix(q, s, p, _m, _Phi_q);
@@ -9022,14 +9027,11 @@ int agile_eye_assemble(const double *q, double *s, double *p, int max_iterations
         else if (_largest != _largest)
             break;
     }
-    agile_eye_closure(q, s, p, _phi);
-    double _worst = 0.0;
-    for (int _i = 0; _i < 18; ++_i)
-        _worst = fabs(_phi[_i]) > _worst || _phi[_i] != _phi[_i] ? fabs(_phi[_i]) : _worst;
+    if (!_current) {
+        agile_eye_closure(q, s, p, _phi);
+        _worst = agile_eye_residual(_phi, p, &_scale);
+    }
     *residual = _worst;
-    double _scale = 1.0;
-    for (int _j = 0; _j < 3; ++_j)
-        _scale = fabs(p[_j]) > _scale ? fabs(p[_j]) : _scale;
     /* a least-squares minimum of |phi| also stops the steps: the legs close only where phi is rounding */
     if (!_taken || !(_worst <= 1e-09 * _scale)) {
         for (int _j = 0; _j < 6; ++_j)

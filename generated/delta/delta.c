@@ -5249,26 +5249,31 @@ static void delta_closure_matrix(const double *q, const double *s, const double 
     }
 }
 
-/* Whether every closure row is at rounding level, 64 eps max(1, |p|): the legs are closed to the last digits. */
-static int delta_at_rounding(const double *_phi, const double *p)
+/* max |phi| over the closure's rows (NaN where a row is NaN), and in *scale max(1, |p|): the pose's scale, which the
+ * rounding and closing tests measure the residual against. */
+static double delta_residual(const double *_phi, const double *p, double *_scale)
 {
-    double _scale = 1.0, _worst = 0.0;
+    double _worst = 0.0;
+    *_scale = 1.0;
     for (int _j = 0; _j < 3; ++_j)
-        _scale = fabs(p[_j]) > _scale ? fabs(p[_j]) : _scale;
+        *_scale = fabs(p[_j]) > *_scale ? fabs(p[_j]) : *_scale;
     for (int _i = 0; _i < 18; ++_i)
-        _worst = fabs(_phi[_i]) > _worst ? fabs(_phi[_i]) : _worst;
-    return _worst <= 64.0 * DBL_EPSILON * _scale;
+        _worst = fabs(_phi[_i]) > _worst || _phi[_i] != _phi[_i] ? fabs(_phi[_i]) : _worst;
+    return _worst;
 }
 
 int delta_assemble(const double *q, double *s, double *p, double r_base, double r_tcp, double a, double b, int max_iterations, double tolerance, double *residual)
 {
     double _phi[18], _m[18 * 15], _Phi_q[54], _tau[15], _step[15];
     int _order[15];
-    int _taken = 0;
+    int _taken = 0, _current = 0;   /* _current: _phi is the closure at the final (s, p) */
+    double _worst = 0.0, _scale = 1.0;
     for (int _k = 1; _k <= max_iterations && !_taken; ++_k) {
         delta_closure(q, s, p, r_base, r_tcp, a, b, _phi);
-        if (_k > 1 && delta_at_rounding(_phi, p)) {
+        _worst = delta_residual(_phi, p, &_scale);
+        if (_k > 1 && _worst <= 64.0 * DBL_EPSILON * _scale) {
             _taken = _k - 1;    /* the last step left rounding only: another would be below it */
+            _current = 1;
             break;
         }
         delta_closure_matrix(q, s, p, a, b, _m, _Phi_q);
@@ -5292,14 +5297,11 @@ int delta_assemble(const double *q, double *s, double *p, double r_base, double 
         else if (_largest != _largest)
             break;
     }
-    delta_closure(q, s, p, r_base, r_tcp, a, b, _phi);
-    double _worst = 0.0;
-    for (int _i = 0; _i < 18; ++_i)
-        _worst = fabs(_phi[_i]) > _worst || _phi[_i] != _phi[_i] ? fabs(_phi[_i]) : _worst;
+    if (!_current) {
+        delta_closure(q, s, p, r_base, r_tcp, a, b, _phi);
+        _worst = delta_residual(_phi, p, &_scale);
+    }
     *residual = _worst;
-    double _scale = 1.0;
-    for (int _j = 0; _j < 3; ++_j)
-        _scale = fabs(p[_j]) > _scale ? fabs(p[_j]) : _scale;
     /* a least-squares minimum of |phi| also stops the steps: the legs close only where phi is rounding */
     if (!_taken || !(_worst <= 1e-09 * _scale)) {
         for (int _j = 0; _j < 12; ++_j)

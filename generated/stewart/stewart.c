@@ -21267,26 +21267,31 @@ static void stewart_closure_matrix(const double *q, const double *s, const doubl
     }
 }
 
-/* Whether every closure row is at rounding level, 64 eps max(1, |p|): the legs are closed to the last digits. */
-static int stewart_at_rounding(const double *_phi, const double *p)
+/* max |phi| over the closure's rows (NaN where a row is NaN), and in *scale max(1, |p|): the pose's scale, which the
+ * rounding and closing tests measure the residual against. */
+static double stewart_residual(const double *_phi, const double *p, double *_scale)
 {
-    double _scale = 1.0, _worst = 0.0;
+    double _worst = 0.0;
+    *_scale = 1.0;
     for (int _j = 0; _j < 6; ++_j)
-        _scale = fabs(p[_j]) > _scale ? fabs(p[_j]) : _scale;
+        *_scale = fabs(p[_j]) > *_scale ? fabs(p[_j]) : *_scale;
     for (int _i = 0; _i < 36; ++_i)
-        _worst = fabs(_phi[_i]) > _worst ? fabs(_phi[_i]) : _worst;
-    return _worst <= 64.0 * DBL_EPSILON * _scale;
+        _worst = fabs(_phi[_i]) > _worst || _phi[_i] != _phi[_i] ? fabs(_phi[_i]) : _worst;
+    return _worst;
 }
 
 int stewart_assemble(const double *q, double *s, double *p, double r_b, double r_p, double gamma_b, double gamma_p, int max_iterations, double tolerance, double *residual)
 {
     double _phi[36], _m[36 * 36], _Phi_q[216], _tau[36], _step[36];
     int _order[36];
-    int _taken = 0;
+    int _taken = 0, _current = 0;   /* _current: _phi is the closure at the final (s, p) */
+    double _worst = 0.0, _scale = 1.0;
     for (int _k = 1; _k <= max_iterations && !_taken; ++_k) {
         stewart_closure(q, s, p, r_b, r_p, gamma_b, gamma_p, _phi);
-        if (_k > 1 && stewart_at_rounding(_phi, p)) {
+        _worst = stewart_residual(_phi, p, &_scale);
+        if (_k > 1 && _worst <= 64.0 * DBL_EPSILON * _scale) {
             _taken = _k - 1;    /* the last step left rounding only: another would be below it */
+            _current = 1;
             break;
         }
         stewart_closure_matrix(q, s, p, r_p, gamma_b, gamma_p, _m, _Phi_q);
@@ -21310,14 +21315,11 @@ int stewart_assemble(const double *q, double *s, double *p, double r_b, double r
         else if (_largest != _largest)
             break;
     }
-    stewart_closure(q, s, p, r_b, r_p, gamma_b, gamma_p, _phi);
-    double _worst = 0.0;
-    for (int _i = 0; _i < 36; ++_i)
-        _worst = fabs(_phi[_i]) > _worst || _phi[_i] != _phi[_i] ? fabs(_phi[_i]) : _worst;
+    if (!_current) {
+        stewart_closure(q, s, p, r_b, r_p, gamma_b, gamma_p, _phi);
+        _worst = stewart_residual(_phi, p, &_scale);
+    }
     *residual = _worst;
-    double _scale = 1.0;
-    for (int _j = 0; _j < 6; ++_j)
-        _scale = fabs(p[_j]) > _scale ? fabs(p[_j]) : _scale;
     /* a least-squares minimum of |phi| also stops the steps: the legs close only where phi is rounding */
     if (!_taken || !(_worst <= 1e-09 * _scale)) {
         for (int _j = 0; _j < 30; ++_j)

@@ -261,12 +261,13 @@ def _joint_box_terms(problem: DesignProblem, casadi_model: GeneratedModel, numpy
     q = sampling.sobol(limits[:, 0], limits[:, 1], JOINT_NODES_LOG2 if nodes is None else nodes,
                        np.random.default_rng(seed))
     sampled = len(q)  # the measure's nodes: those outside the joint stops count as outside the workspace
-    q = q[stops.respected(numpy_model, q)]
+    joint_stops = stops.StopInequalities.of_model(numpy_model)
+    q = q[joint_stops.respected(q)]
     count = len(q)
     if not count:
         raise ValueError(f"{numpy_model.name}: no sampled configuration lies within the joint stops; widen the joint "
                          "limits or the stops")
-    within = " within the joint stops" if len(stops.StopInequalities.of_model(numpy_model)) else ""
+    within = " within the joint stops" if len(joint_stops) else ""
     rows = mechanism.position_rows(numpy_model)
     term = smooth.measure_weighted_inverse_frobenius(J, smooth.homogenized(J, problem.length, rows))
     per_node = _node_function("gci_terms", node, free, casadi.vertcat(term, smooth.determinant(J)))

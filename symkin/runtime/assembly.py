@@ -15,11 +15,22 @@ import ctypes
 import numpy as np
 
 from symkin.backends.c.build import shared_library
+from symkin.backends.c.loader import source_and_header
 from symkin.errors import GeneratedCodeError
+from symkin.runtime.info import ModelInfo
 from symkin.runtime.loader import LoadedModel
 
 #: The assembly's defaults: the steps allowed and the step that converges (the run-time solver's).
 MAX_ITERATIONS, TOLERANCE = 50, 1e-12
+
+
+def assembly_parameter_names(info: ModelInfo) -> list[str]:
+    """The free parameters the generated assembly takes, in its header's order: closure's, then closure_jacobians'
+    others (:func:`symkin.backends.c.assembly.assembly_context` orders them so from the same functions)."""
+    names: list[str] = []
+    for function in ("closure", "closure_jacobians"):
+        names += [i.name for i in info.functions[function].inputs if i.is_parameter and i.name not in names]
+    return names
 
 
 class GeneratedAssembly:
@@ -37,14 +48,8 @@ class GeneratedAssembly:
         if not {"closure", "closure_jacobians"} <= set(model.info.functions):
             raise GeneratedCodeError(f"{model.name}: no generated assembly; derive the model with closure and "
                                      "closure_jacobians in the C backend")
-        files = model.info.backend_files["c"]
-        source = next(model.directory / f for f in files if f.endswith(".c"))
-        header = next(model.directory / f for f in files if f.endswith(".h"))
-        library = ctypes.CDLL(str(shared_library(source, header)))
-        names: list[str] = []
-        for function in ("closure", "closure_jacobians"):   # the header's order: closure's, then the others
-            names += [i.name for i in model.info.functions[function].inputs
-                      if i.is_parameter and i.name not in names]
+        library = ctypes.CDLL(str(shared_library(*source_and_header(model.directory, model.info.backend_files["c"]))))
+        names = assembly_parameter_names(model.info)
         self._parameters = [float(model.parameters[name]) for name in names]
         inputs = model.info.functions["closure"].inputs
         self.sizes = {v.name: int(v.shape[0]) for v in inputs[:3]}

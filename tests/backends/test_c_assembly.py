@@ -23,7 +23,7 @@ from symkin.mechanism import closure
 from symkin.mechanism.closure import solve_home_assembly
 from symkin.model import model_from_text
 from symkin.errors import GeneratedCodeError
-from symkin.runtime.assembly import GeneratedAssembly
+from symkin.runtime.assembly import GeneratedAssembly, assembly_parameter_names
 from symkin.runtime.parallel import closure_velocities, solve_closure
 from tolerances import EPS
 
@@ -39,6 +39,11 @@ def library(directory, name: str) -> ctypes.CDLL:
     return ctypes.CDLL(str(shared_library(directory / f"{name}.c", directory / f"{name}.h")))
 
 
+def assembly_parameters(model) -> list[float]:
+    """The default values of the assembly's parameters, in its header's order."""
+    return [model.parameters[name] for name in assembly_parameter_names(model.info)]
+
+
 def bind(lib: ctypes.CDLL, name: str, params: int):
     """(assemble, assembly_jacobian) of the library with ``params`` free parameters (as doubles)."""
     assemble = getattr(lib, f"{name}_assemble")
@@ -49,16 +54,6 @@ def bind(lib: ctypes.CDLL, name: str, params: int):
     jacobian.argtypes = [DOUBLES, DOUBLES, DOUBLES] + [ctypes.c_double] * params + [DOUBLES]
     jacobian.restype = ctypes.c_int
     return assemble, jacobian
-
-
-def assembly_parameters(model) -> list[float]:
-    """The default values of the assembly's parameters: closure's, then closure_jacobians' others (its header)."""
-    names: dict[str, float] = {}
-    for function in ("closure", "closure_jacobians"):
-        for i in model.info.functions[function].inputs:
-            if i.is_parameter:
-                names.setdefault(i.name, i.default)
-    return list(names.values())
 
 
 @pytest.fixture(scope="module")

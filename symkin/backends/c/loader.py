@@ -30,7 +30,7 @@ from symkin.runtime.wrappers import Kernel, SingleKernel, wrap_function
 DOUBLE_SIZE = 8
 
 
-def _files(directory: Path, files: tuple[str, ...]) -> tuple[Path, Path]:
+def source_and_header(directory: Path, files: tuple[str, ...]) -> tuple[Path, Path]:
     """The C source and header among the files the C backend emitted."""
     sources = [directory / f for f in files if f.endswith(".c")]
     headers = [directory / f for f in files if f.endswith(".h")]
@@ -113,7 +113,7 @@ def _kernels(library: ctypes.CDLL, model: str, record: Function) -> tuple[Kernel
 def load(directory: Path, info: ModelInfo) -> dict[str, Any]:
     """Compile (or find in the cache) the model's C code and bind every function of the manifest: the compiled
     CPython entry points (:mod:`symkin.backends.c.loader_entry_points`) over the ctypes functions, or those alone."""
-    source, header = _files(directory, info.backend_files.get("c", ()))
+    source, header = source_and_header(directory, info.backend_files.get("c", ()))
     path = shared_library(source, header)
     library = ctypes.CDLL(str(path))
     model = info.name
