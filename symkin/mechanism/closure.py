@@ -2,9 +2,10 @@
 its generated loop closure phi(q, s, p) = 0 alone, as every analysis, the simulation, the identification and the
 excitation design ask it.
 
-* **Home assembly** (:func:`solve_home_assembly`): (q, s) closing the legs at the home pose ``parallel.home``, by
-  Gauss-Newton (:func:`symkin.runtime.parallel.solve_closure`) from the declared ``parallel.home_assembly`` or from
-  fixed starts; the assembly mode every other solve stays in.
+* **Home assembly** (:func:`solve_home_assembly`): (q, s) closing the legs at the home pose ``parallel.home``
+  within the declared limits of the actuators and passive joints, by Gauss-Newton
+  (:func:`symkin.runtime.parallel.solve_closure`) from the declared ``parallel.home_assembly`` or from fixed starts;
+  the assembly mode every other solve stays in.
 * **Continuation along the actuators** (:class:`ClosureAssembly`): (s, p) at actuated joints q, solved from the
   last assembly or the home assembly, whichever is nearer, along the straight line of actuator positions in steps
   of at most :data:`MAX_STEP` (unknowns p and s); a batch (a recorded trajectory) row by row, each from the
@@ -32,10 +33,12 @@ from symkin.runtime.closure_dynamics import (ActuatedDynamics, actuated_dynamics
                                              closure_regressor)
 from symkin.runtime.info import GeneratedModel
 from symkin import mechanism
+from symkin.mechanism.limits import within_limits
+from symkin.mechanism.passive import declared_limits
 from symkin.runtime.parallel import solve_closure
 
 
-#: Random starts (besides q = s = 0) of the home assembly, uniform in [-pi/2, pi/2] per variable.
+#: Random starts (besides q = s = 0 and the middle of the limits) of the home assembly, uniform in [-pi/2, pi/2] per variable.
 HOME_STARTS = 16
 #: Gauss-Newton from a neighbouring cell: iterations, the longest step (rad or m) and the step that converges.
 SOLVE_ITERATIONS, MAX_STEP, SOLVE_TOLERANCE = 30, 0.2, 1e-12
@@ -80,13 +83,28 @@ class HomeAssembly:
                 f"passive: {values(inputs[1], self.s)}")
 
 
+def within_declared_limits(model: GeneratedModel, q: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """Boolean (K,): the actuators q (K, n) within their declared limits (a coordinate without limits is free) and
+    the passive joints s (K, ns) within theirs (``passive_limits``); angles are taken modulo 2 pi."""
+    bounds = np.array(model.joint_limits, dtype=np.float64).reshape(-1, 2)
+    limited = np.all(np.isfinite(bounds), axis=1)
+    inside = within_limits(q[:, limited], bounds[limited], mechanism.revolute_mask(model)[limited])[1]
+    passive = declared_limits(model)
+    if passive is not None:
+        inside &= within_limits(s[:, passive.columns], passive.bounds, passive.revolute[passive.columns])[1]
+    return inside
+
+
 def solve_home_assembly(model: GeneratedModel) -> HomeAssembly:
-    """(q, s) closing the legs at the home pose ``parallel.home``: Gauss-Newton from the model's declared
-    ``parallel.home_assembly`` (its named variables, 0 for the others) where it has one; else from the first of
-    q = s = 0 and :data:`HOME_STARTS` fixed random starts that closes them (deterministic).
+    """(q, s) closing the legs at the home pose ``parallel.home`` within the declared joint limits
+    (:func:`within_declared_limits`): Gauss-Newton from the model's declared ``parallel.home_assembly`` (its named
+    variables, 0 for the others) where it has one; else the first of q = s = 0, the middle of the actuators' limits
+    (s = 0) and :data:`HOME_STARTS` fixed random starts that closes them there (deterministic).  An assembly outside
+    the limits is another the device cannot take (an S-P-S strut of negative length: the rod turned around).
 
     Raises:
-        ValueError: no start closes the legs (the home pose is out of reach, or the declared start leads nowhere).
+        ValueError: no start closes the legs within the limits (the home pose is out of reach, or the declared start
+            leads nowhere or outside the limits).
     """
     home = mechanism.home_pose(model)
     n, ns = closure_sizes(model)
@@ -99,21 +117,27 @@ def solve_home_assembly(model: GeneratedModel) -> HomeAssembly:
             starts[0, names.index(name)] = value
         described = ["the declared parallel.home_assembly"]
     else:
-        starts = np.vstack([np.zeros(n + ns),
+        bounds = np.array(model.joint_limits, dtype=np.float64).reshape(-1, 2)
+        middle = np.concatenate([np.where(np.all(np.isfinite(bounds), axis=1), bounds.mean(axis=1), 0.0),
+                                 np.zeros(ns)])
+        starts = np.vstack([np.zeros(n + ns), middle,
                             np.random.default_rng(0).uniform(-np.pi / 2, np.pi / 2, (HOME_STARTS, n + ns))])
-        described = ["q = s = 0"] + [f"random start {k} of {HOME_STARTS} (q = s = 0 did not close the legs)"
-                                     for k in range(1, HOME_STARTS + 1)]
+        described = ["q = s = 0", "the middle of the actuators' limits, s = 0"] + [
+            f"random start {k} of {HOME_STARTS} (q = s = 0 did not close the legs within the limits)"
+            for k in range(1, HOME_STARTS + 1)]
     report = solve_closure(model, starts[:, :n], starts[:, n:], home, unknowns=("q", "s"), max_step=MAX_STEP,
                            max_iterations=100)
-    closed = np.flatnonzero(closes(report, home))
-    if not len(closed):
-        where = ("from the declared parallel.home_assembly: change its values" if declared is not None
-                 else f"from {len(starts)} starts: declare a home pose inside the workspace, or parallel.home_assembly")
-        raise ValueError(f"{model.name}: the legs do not close at the home pose {home.tolist()} (parallel.home) "
-                         f"{where}")
     solution = report.solution
     assert isinstance(solution, dict), "solve_closure names its vectors"
-    return HomeAssembly(solution["q"][closed[0]], solution["s"][closed[0]], described[closed[0]])
+    closing = closes(report, home)
+    accepted = np.flatnonzero(closing & within_declared_limits(model, solution["q"], solution["s"]))
+    if not len(accepted):
+        where = ("from the declared parallel.home_assembly: change its values" if declared is not None
+                 else f"from {len(starts)} starts: declare a home pose inside the workspace, or parallel.home_assembly")
+        outside = " (they close only outside the declared joint limits)" if closing.any() else ""
+        raise ValueError(f"{model.name}: the legs do not close at the home pose {home.tolist()} (parallel.home)"
+                         f"{outside} {where}")
+    return HomeAssembly(solution["q"][accepted[0]], solution["s"][accepted[0]], described[accepted[0]])
 
 
 def assemble_at_home(model: GeneratedModel) -> tuple[np.ndarray, np.ndarray]:

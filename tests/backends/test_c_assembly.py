@@ -195,9 +195,9 @@ def test_idle_passive_motions_take_the_pivoted_steps_and_agree_with_the_runtime(
     """An S-P-S Stewart-Gough platform (models/stewart.yaml with its base U joints made spherical: each rod free to
     spin about itself, 42 passive and pose unknowns in 36 closure rows, rank 36): Cholesky refuses the normal
     equations, the pivoted QR gives the basic steps (the spins 0), and the generated assembly lands where the
-    run-time solver does from the same start, its J as closure_velocities' (the minimum-norm passive rates).
-    Both land on the mirror pose below the base here, the same lengths: an assembly mode jump that converges and
-    closes the legs, which warm starts do not detect yet (issue 63)."""
+    run-time solver does from the same start - on the pose whose closed-form ik gave the lengths - its J as
+    closure_velocities' (the minimum-norm passive rates).  The home assembly has the struts within their limits
+    (q = s = 0 closes the legs with the rods turned around, lengths -0.26 m: refused)."""
     text = (ROOT / "models" / "stewart.yaml").read_text().replace(
         "- {name: ub, type: U, axes: [[0, 0, 1], [0, 1, 0]]}", "- {name: ub, type: S}")
     model = model_from_text(text, file="sps.yaml")
@@ -206,6 +206,7 @@ def test_idle_passive_motions_take_the_pivoted_steps_and_agree_with_the_runtime(
     assembly = GeneratedAssembly(loaded)
     home = np.asarray(loaded.info.home, dtype=float)
     start = solve_home_assembly(loaded)
+    np.testing.assert_allclose(start.q, loaded.ik(home).joints, rtol=0, atol=1e-12)
     Phi_p, _, Phi_s = loaded.closure_jacobians(start.q, start.s, home)
     assert np.linalg.matrix_rank(np.hstack([Phi_s, Phi_p])) < Phi_s.shape[1] + Phi_p.shape[1]
     target = home + np.array([0.005, -0.004, 0.003, 0.02, -0.01, 0.03])
@@ -214,7 +215,8 @@ def test_idle_passive_motions_take_the_pivoted_steps_and_agree_with_the_runtime(
     steps, residual = assembly.assemble(q, s, p)
     assert steps >= 1
     reference = solve_closure(loaded, q, start.s.copy(), home.copy(), unknowns=("p", "s"))
-    np.testing.assert_allclose(p, reference.solution["p"], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(p, target, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(reference.solution["p"], target, rtol=0, atol=1e-12)
     J = assembly.jacobian(q, s, p)
     velocities = closure_velocities(loaded, q, s, p)
     np.testing.assert_allclose(J, velocities.J, rtol=0, atol=1e-12 * np.abs(J).max())

@@ -22,7 +22,7 @@ from conftest import SYMKIN_CLI
 from sample_models import dual_scara_text
 from symkin import load, pipeline
 from symkin.analysis.continued_workspace import continued_workspace
-from symkin.mechanism.closure import assemble_at_home
+from symkin.mechanism.closure import assemble_at_home, solve_home_assembly
 from symkin.model import model_from_text
 from symkin.reporting import reporting_to
 from symkin.parallel.motion_check import check_platform_motion
@@ -319,6 +319,29 @@ def test_the_home_assembly_closes_the_legs(scara):
     q, s = assemble_at_home(scara)
     p = np.array([closed_form(q, side)[0] for side in (1.0, -1.0)])
     assert np.min(np.max(np.abs(p - HOME), axis=-1)) <= SOLVE_TOL
+
+
+class _StrokeOf:
+    """A loaded model seen with other actuator limits (everything else its own)."""
+
+    def __init__(self, model, limits):
+        self._model, self.joint_limits = model, limits
+
+    def __getattr__(self, name):
+        return getattr(self._model, name)
+
+
+def test_the_home_assembly_keeps_the_struts_within_their_stroke(generated_dir):
+    """generated/stewart: q = s = 0 closes the legs with four struts turned around (lengths -0.26 m, outside the
+    stroke [0.20, 0.32] m): refused; the middle of the stroke gives the assembly of the closed-form ik's lengths.
+    A stroke the home pose cannot take is refused with the reason."""
+    stewart = load(generated_dir / "stewart")
+    found = solve_home_assembly(stewart)
+    home = np.asarray(stewart.info.home, dtype=float)
+    np.testing.assert_allclose(found.q, stewart.ik(home).joints, rtol=0, atol=KINEMATICS)
+    assert found.start == "the middle of the actuators' limits, s = 0"
+    with pytest.raises(ValueError, match=r"close only outside the declared joint limits"):
+        solve_home_assembly(_StrokeOf(stewart, ((0.40, 0.50),) * 6))
 
 
 def test_the_continued_workspace_is_the_working_mode_written_from_the_geometry(scara, scara_workspace):
