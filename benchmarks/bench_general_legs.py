@@ -78,8 +78,8 @@ def _generated_step(model):
     s, p, J = solved.solution["s"].copy(), home.copy(), np.empty((3, 3))
 
     def step(q: np.ndarray) -> None:
-        if not assembly.assemble(q, s, p)[0]:
-            raise RuntimeError("the generated assembly lost the path")
+        if assembly.assemble(q, s, p)[0] <= 0:
+            raise RuntimeError("the generated assembly lost the path or its assembly mode")
         assembly.jacobian(q, s, p, J)
 
     return step, solved.solution["q"], s
@@ -101,7 +101,7 @@ int main(void) {
             const double t = 6.283185307179586 * k / (samples - 1);
             for (int i = 0; i < 3; ++i)
                 q[i] = %(arm)r + 0.08726646259971647 * sin(t + 2.1 * i);
-            if (!novint_falcon_assemble(q, s, p, 50, 1e-12, &residual)) return 1;
+            if (novint_falcon_assemble(q, s, p, 50, 1e-12, &residual) <= 0) return 1;
             novint_falcon_assembly_jacobian(q, s, p, J);
         }
         clock_gettime(CLOCK_MONOTONIC, &t1);

@@ -8997,7 +8997,8 @@ int agile_eye_assemble(const double *q, double *s, double *p, int max_iterations
     double _phi[18], _m[18 * 9], _Phi_q[54], _tau[9], _step[9];
     int _order[9];
     int _taken = 0, _current = 0;   /* _current: _phi is the closure at the final (s, p) */
-    double _worst = 0.0, _scale = 1.0;
+    int _left = 0;                  /* a correction above the tolerance failed to halve the one before */
+    double _worst = 0.0, _scale = 1.0, _previous = HUGE_VAL;
     for (int _k = 1; _k <= max_iterations && !_taken; ++_k) {
         agile_eye_closure(q, s, p, _phi);
         _worst = agile_eye_residual(_phi, p, &_scale);
@@ -9018,6 +9019,8 @@ int agile_eye_assemble(const double *q, double *s, double *p, int max_iterations
             const double _size = fabs(_step[_j]);
             _largest = _size > _largest || _size != _size ? _size : _largest;
         }
+        _left |= _largest > tolerance && _largest > 0.5 * _previous;
+        _previous = _largest;
         for (int _j = 0; _j < 6; ++_j)
             s[_j] += _step[_j];
         for (int _j = 0; _j < 3; ++_j)
@@ -9040,7 +9043,7 @@ int agile_eye_assemble(const double *q, double *s, double *p, int max_iterations
             p[_j] = (double)NAN;
         return 0;
     }
-    return _taken;
+    return _left ? -_taken : _taken;
 }
 
 int agile_eye_assembly_jacobian(const double *q, const double *s, const double *p, double *J)

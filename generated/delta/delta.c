@@ -5267,7 +5267,8 @@ int delta_assemble(const double *q, double *s, double *p, double r_base, double 
     double _phi[18], _m[18 * 15], _Phi_q[54], _tau[15], _step[15];
     int _order[15];
     int _taken = 0, _current = 0;   /* _current: _phi is the closure at the final (s, p) */
-    double _worst = 0.0, _scale = 1.0;
+    int _left = 0;                  /* a correction above the tolerance failed to halve the one before */
+    double _worst = 0.0, _scale = 1.0, _previous = HUGE_VAL;
     for (int _k = 1; _k <= max_iterations && !_taken; ++_k) {
         delta_closure(q, s, p, r_base, r_tcp, a, b, _phi);
         _worst = delta_residual(_phi, p, &_scale);
@@ -5288,6 +5289,8 @@ int delta_assemble(const double *q, double *s, double *p, double r_base, double 
             const double _size = fabs(_step[_j]);
             _largest = _size > _largest || _size != _size ? _size : _largest;
         }
+        _left |= _largest > tolerance && _largest > 0.5 * _previous;
+        _previous = _largest;
         for (int _j = 0; _j < 12; ++_j)
             s[_j] += _step[_j];
         for (int _j = 0; _j < 3; ++_j)
@@ -5310,7 +5313,7 @@ int delta_assemble(const double *q, double *s, double *p, double r_base, double 
             p[_j] = (double)NAN;
         return 0;
     }
-    return _taken;
+    return _left ? -_taken : _taken;
 }
 
 int delta_assembly_jacobian(const double *q, const double *s, const double *p, double r_base, double r_tcp, double a, double b, double *J)

@@ -675,7 +675,10 @@ void delta_combined_batch(size_t n, const double *q, const double *p, const doub
  * row of phi at rounding level (64 eps max(1, |p|)).  Returns the steps
  * taken, or 0 with s and p set to NaN where it did not converge within max_iterations or stopped where the legs do
  * not close (max |phi| above 1e-09 max(1, |p|): a least-squares minimum); *residual = max |phi| at the result.
- * Allocates nothing. */
+ * A negative count -k flags a possible jump of assembly mode: the legs closed in k steps, but a correction above the
+ * tolerance failed to halve the one before - the iterates left the start's Newton-Kantorovich region, where the
+ * corrections at least halve and the solution is the one the start's mode continues to; s and p hold the assembly
+ * reached, which may be another mode (do not servo on it).  Allocates nothing. */
 int delta_assemble(const double *q, double *s, double *p, double r_base, double r_tcp, double a, double b, int max_iterations, double tolerance, double *residual);
 
 /* delta_assembly_jacobian: J[3 x 3] = dp/dq, row-major, at an assembled (q, s, p) (from delta_assemble): the p-part

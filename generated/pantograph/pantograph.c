@@ -3780,7 +3780,8 @@ int pantograph_assemble(const double *q, double *s, double *p, double d, double 
     double _phi[12], _m[12 * 6], _Phi_q[24], _tau[6], _step[6];
     int _order[6];
     int _taken = 0, _current = 0;   /* _current: _phi is the closure at the final (s, p) */
-    double _worst = 0.0, _scale = 1.0;
+    int _left = 0;                  /* a correction above the tolerance failed to halve the one before */
+    double _worst = 0.0, _scale = 1.0, _previous = HUGE_VAL;
     for (int _k = 1; _k <= max_iterations && !_taken; ++_k) {
         pantograph_closure(q, s, p, d, l, L, _phi);
         _worst = pantograph_residual(_phi, p, &_scale);
@@ -3801,6 +3802,8 @@ int pantograph_assemble(const double *q, double *s, double *p, double d, double 
             const double _size = fabs(_step[_j]);
             _largest = _size > _largest || _size != _size ? _size : _largest;
         }
+        _left |= _largest > tolerance && _largest > 0.5 * _previous;
+        _previous = _largest;
         for (int _j = 0; _j < 4; ++_j)
             s[_j] += _step[_j];
         for (int _j = 0; _j < 2; ++_j)
@@ -3823,7 +3826,7 @@ int pantograph_assemble(const double *q, double *s, double *p, double d, double 
             p[_j] = (double)NAN;
         return 0;
     }
-    return _taken;
+    return _left ? -_taken : _taken;
 }
 
 int pantograph_assembly_jacobian(const double *q, const double *s, const double *p, double d, double l, double L, double *J)

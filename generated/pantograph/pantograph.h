@@ -663,7 +663,10 @@ void pantograph_combined_batch(size_t n, const double *p, const double *q, const
  * row of phi at rounding level (64 eps max(1, |p|)).  Returns the steps
  * taken, or 0 with s and p set to NaN where it did not converge within max_iterations or stopped where the legs do
  * not close (max |phi| above 1e-09 max(1, |p|): a least-squares minimum); *residual = max |phi| at the result.
- * Allocates nothing. */
+ * A negative count -k flags a possible jump of assembly mode: the legs closed in k steps, but a correction above the
+ * tolerance failed to halve the one before - the iterates left the start's Newton-Kantorovich region, where the
+ * corrections at least halve and the solution is the one the start's mode continues to; s and p hold the assembly
+ * reached, which may be another mode (do not servo on it).  Allocates nothing. */
 int pantograph_assemble(const double *q, double *s, double *p, double d, double l, double L, int max_iterations, double tolerance, double *residual);
 
 /* pantograph_assembly_jacobian: J[2 x 2] = dp/dq, row-major, at an assembled (q, s, p) (from pantograph_assemble): the p-part

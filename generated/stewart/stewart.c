@@ -21285,7 +21285,8 @@ int stewart_assemble(const double *q, double *s, double *p, double r_b, double r
     double _phi[36], _m[36 * 36], _Phi_q[216], _tau[36], _step[36];
     int _order[36];
     int _taken = 0, _current = 0;   /* _current: _phi is the closure at the final (s, p) */
-    double _worst = 0.0, _scale = 1.0;
+    int _left = 0;                  /* a correction above the tolerance failed to halve the one before */
+    double _worst = 0.0, _scale = 1.0, _previous = HUGE_VAL;
     for (int _k = 1; _k <= max_iterations && !_taken; ++_k) {
         stewart_closure(q, s, p, r_b, r_p, gamma_b, gamma_p, _phi);
         _worst = stewart_residual(_phi, p, &_scale);
@@ -21306,6 +21307,8 @@ int stewart_assemble(const double *q, double *s, double *p, double r_b, double r
             const double _size = fabs(_step[_j]);
             _largest = _size > _largest || _size != _size ? _size : _largest;
         }
+        _left |= _largest > tolerance && _largest > 0.5 * _previous;
+        _previous = _largest;
         for (int _j = 0; _j < 30; ++_j)
             s[_j] += _step[_j];
         for (int _j = 0; _j < 6; ++_j)
@@ -21328,7 +21331,7 @@ int stewart_assemble(const double *q, double *s, double *p, double r_b, double r
             p[_j] = (double)NAN;
         return 0;
     }
-    return _taken;
+    return _left ? -_taken : _taken;
 }
 
 int stewart_assembly_jacobian(const double *q, const double *s, const double *p, double r_b, double r_p, double gamma_b, double gamma_p, double *J)

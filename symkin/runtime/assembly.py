@@ -5,7 +5,8 @@
 functions through ctypes with plain pointers (the arrays' checks done here, once per call, on their attributes) and
 the model's parameter values (its defaults, or a bound design's); :meth:`GeneratedAssembly.assemble` updates a
 warm start (s, p) in place - the previous sample's - and :meth:`GeneratedAssembly.jacobian` gives J = dp/dq.  A call
-that does not close the legs leaves NaN and says so (its return value), never a wrong branch.
+that does not close the legs leaves NaN and says so (its return value), and a possible jump of assembly mode is
+flagged (a negative count), never a silent wrong branch.
 """
 
 from __future__ import annotations
@@ -76,7 +77,9 @@ class GeneratedAssembly:
     def assemble(self, q: np.ndarray, s: np.ndarray, p: np.ndarray, *, max_iterations: int = MAX_ITERATIONS,
                  tolerance: float = TOLERANCE) -> tuple[int, float]:
         """Gauss-Newton from the warm start (s, p), written back into them: (steps taken, max |phi|); 0 steps and
-        s, p NaN where it did not converge or the legs do not close there."""
+        s, p NaN where it did not converge or the legs do not close there; -steps where the legs closed but the
+        start was outside its Newton-Kantorovich region (a possible jump of assembly mode: s, p hold the assembly
+        reached; :mod:`symkin.backends.c.assembly`)."""
         steps = self._assemble(self._pointer(q, "q"), self._pointer(s, "s", True), self._pointer(p, "p", True),
                                *self._parameters, max_iterations, tolerance, self._residual_address)
         return steps, float(self._residual[0])

@@ -89,6 +89,32 @@ def test_a_warm_started_path_follows_the_runtime_solver(falcon):
         np.testing.assert_allclose(J, velocities.J, rtol=0, atol=condition * 64 * EPS * np.abs(velocities.J).max())
 
 
+def test_a_jump_of_assembly_mode_is_flagged(falcon):
+    """Cold starts from the home assembly to arms up to 60 deg away: where the generated assembly returns a positive
+    count, its assembly is the one the run-time solver reaches by continuing the home assembly in 2-deg steps (the
+    same mode); every start that lands elsewhere is flagged (a negative count: a correction failed to halve) or
+    refused (0, NaN).  Some starts are flagged (the check is not idle here)."""
+    model, assemble, _ = falcon
+    home = solve_home_assembly(model)
+    p_home = np.asarray(model.info.home, dtype=float)
+    offsets = np.random.default_rng(63).uniform(-1.0, 1.0, (40, 3)) * np.radians(60.0)
+    s_ref, p_ref = np.tile(home.s, (len(offsets), 1)), np.tile(p_home, (len(offsets), 1))
+    followed = np.ones(len(offsets), dtype=bool)
+    for fraction in np.linspace(0.0, 1.0, 31)[1:]:
+        report = solve_closure(model, home.q + fraction * offsets, s_ref, p_ref, unknowns=("p", "s"))
+        followed &= closure.closes(report, p_ref)
+        s_ref, p_ref = report.solution["s"], report.solution["p"]
+    residual, counts = ctypes.c_double(), []
+    for k, offset in enumerate(offsets):
+        s, p = home.s.copy(), p_home.copy()
+        counts.append(assemble(home.q + offset, s, p, ITERATIONS, TOLERANCE, ctypes.byref(residual)))
+        if counts[-1] > 0:
+            assert followed[k]
+            np.testing.assert_allclose(p, p_ref[k], rtol=0, atol=1e-9)
+            np.testing.assert_allclose(np.angle(np.exp(1j * (s - s_ref[k]))), 0.0, rtol=0, atol=1e-6)
+    assert min(counts) < 0 < max(counts)
+
+
 def test_no_convergence_within_the_bound_gives_nan_and_no_steps(falcon):
     """Arms 60 deg from the start's: not closed within two steps, so no pose is returned (the residual says how far)."""
     _, assemble, _ = falcon

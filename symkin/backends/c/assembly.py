@@ -12,7 +12,13 @@ Where a model's C code holds ``closure`` and ``closure_jacobians`` (double preci
   warm-started servo sample); returns the steps taken, or 0 with s and p set to NaN where
   it did not converge within ``max_iterations`` or stopped where the legs do not close (max |phi| above
   :data:`CLOSED` max(1, |p|): Gauss-Newton's steps also vanish at a least-squares minimum) - never a silent wrong
-  answer; ``residual`` gets max |phi| there;
+  answer; ``residual`` gets max |phi| there.  A jump of assembly mode is flagged by a negative count -k (the legs
+  closed in k steps, s and p hold that assembly): a correction above the tolerance failed to halve the one before.
+  Inside the Newton-Kantorovich region of the start (h <= 1/2; Ortega and Rheinboldt, Iterative Solution of
+  Nonlinear Equations in Several Variables, 12.6.2) the corrections are bounded by the majorant's, which at least
+  halve, and the iterates converge to the unique solution within 2 |first correction| of the start, the one its
+  assembly mode continues to; a correction that does not halve says the start was outside that region, and the
+  solution may belong to another mode;
 * ``<model>_assembly_jacobian(q, s, p, params..., J)``: J = dp/dq (row-major, task x actuated) at an assembled
   (q, s, p), the p-part of the least-squares solution of [Phi_s Phi_p] (ds, dp) = -Phi_q dq; returns 1, or 0 with J
   set to NaN where the platform is not determined by the actuators (a column of Phi_p past the numerical rank of
