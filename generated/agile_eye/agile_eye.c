@@ -8913,70 +8913,242 @@ static void agile_eye_qr_solve(const double *m, const double *tau, const int *or
     }
 }
 
-/* The Gauss-Newton step x of m x = b (m column-major as above) by the normal equations m^T m x = m^T b and their
- * Cholesky factor: a third of the QR's work, and accurate enough for a step (its error, about kappa^2 eps of the
- * step, only slows the convergence where kappa^2 eps nears 1).  Returns 0, x untouched, where a pivot falls below
- * rows * eps times the largest diagonal entry (a column dependent on the others: the QR takes the step). */
-static int agile_eye_normal_step(const double *m, const double *b, double *x)
+/* [Phi_s Phi_p] from the row-major blocks of agile_eye_closure_jacobians into m, column-major 18 x 9: the dense
+ * QR's layout. */
+static void agile_eye_column_major(const double *Phi_s, const double *Phi_p, double *m)
 {
-    const int rows = AGILE_EYE_CLOSURE_ROWS, cols = AGILE_EYE_UNKNOWNS;
-    double g[AGILE_EYE_UNKNOWNS * AGILE_EYE_UNKNOWNS], y[AGILE_EYE_UNKNOWNS];
-    double largest = 0.0;
-    for (int c = 0; c < cols; ++c) {
-        for (int d = 0; d <= c; ++d) {
-            double sum = 0.0;
-            for (int i = 0; i < rows; ++i)
-                sum += m[c * rows + i] * m[d * rows + i];
-            g[c * cols + d] = sum;
-        }
-        largest = g[c * cols + c] > largest ? g[c * cols + c] : largest;
-        double sum = 0.0;
-        for (int i = 0; i < rows; ++i)
-            sum += m[c * rows + i] * b[i];
-        y[c] = sum;
+    for (int i = 0; i < 18; ++i) {
+        for (int j = 0; j < 6; ++j)
+            m[j * 18 + i] = Phi_s[i * 6 + j];
+        for (int j = 0; j < 3; ++j)
+            m[(6 + j) * 18 + i] = Phi_p[i * 3 + j];
     }
-    for (int c = 0; c < cols; ++c) {
-        double pivot = g[c * cols + c];
-        for (int k = 0; k < c; ++k)
-            pivot -= g[c * cols + k] * g[c * cols + k];
-        if (!(pivot > rows * DBL_EPSILON * largest))
+}
+/* The legs: the connected blocks of Phi_s's structural non-zeros, each leg's closure rows and passive joints, and the
+ * rows no passive joint enters (symkin/backends/c/assembly.py, leg_blocks). */
+#define AGILE_EYE_REDUCED_ROWS 12
+#define AGILE_EYE_RIGHT_SIDES 3
+static const int agile_eye_leg1_rows[3] = { 3, 4, 5 };
+static const int agile_eye_leg1_columns[2] = { 0, 1 };
+static const int agile_eye_leg2_rows[3] = { 9, 10, 11 };
+static const int agile_eye_leg2_columns[2] = { 2, 3 };
+static const int agile_eye_leg3_rows[3] = { 15, 16, 17 };
+static const int agile_eye_leg3_columns[2] = { 4, 5 };
+static const int agile_eye_free_rows[9] = { 0, 1, 2, 6, 7, 8, 12, 13, 14 };
+
+/* Householder QR without pivoting of the first `cols` columns of the rows x width column-major w, the reflections
+ * applied to all its columns: R on and above the diagonal of the first cols columns, Q^T times the others below
+ * and beside it.  Returns 0 where a column's remaining norm is at most `floor` (a dependent column).  Inlined
+ * where the sizes are constants. */
+static inline int agile_eye_reduce(double *w, const int rows, const int cols, const int width, double floor)
+{
+    for (int j = 0; j < cols; ++j) {
+        double sigma = 0.0;
+        for (int i = j; i < rows; ++i)
+            sigma += w[j * rows + i] * w[j * rows + i];
+        const double norm = sqrt(sigma);
+        if (!(norm > floor))
             return 0;
-        const double root = sqrt(pivot);
-        g[c * cols + c] = root;
-        for (int d = c + 1; d < cols; ++d) {
-            double sum = g[d * cols + c];
-            for (int k = 0; k < c; ++k)
-                sum -= g[d * cols + k] * g[c * cols + k];
-            g[d * cols + c] = sum / root;
+        const double x0 = w[j * rows + j];
+        const double beta = x0 >= 0.0 ? -norm : norm;
+        const double tau = (beta - x0) / beta;
+        const double scale = 1.0 / (x0 - beta);
+        for (int i = j + 1; i < rows; ++i)
+            w[j * rows + i] *= scale;
+        w[j * rows + j] = beta;
+        for (int c = j + 1; c < width; ++c) {
+            double v = w[c * rows + j];
+            for (int i = j + 1; i < rows; ++i)
+                v += w[j * rows + i] * w[c * rows + i];
+            v *= tau;
+            w[c * rows + j] -= v;
+            for (int i = j + 1; i < rows; ++i)
+                w[c * rows + i] -= v * w[j * rows + i];
         }
-    }
-    for (int c = 0; c < cols; ++c) {
-        double sum = y[c];
-        for (int k = 0; k < c; ++k)
-            sum -= g[c * cols + k] * y[k];
-        y[c] = sum / g[c * cols + c];
-    }
-    for (int c = cols - 1; c >= 0; --c) {
-        double sum = y[c];
-        for (int k = c + 1; k < cols; ++k)
-            sum -= g[k * cols + c] * x[k];
-        x[c] = sum / g[c * cols + c];
     }
     return 1;
 }
 
-/* [Phi_s Phi_p] at (q, s, p) into _m, column-major 18 x 9, and Phi_q (18 x 3, row-major) into _Phi_q.  Locals
- * start with '_': a model's parameters may take any other name. */
-static void agile_eye_closure_matrix(const double *q, const double *s, const double *p, double *_m, double *_Phi_q)
+/* y := R^-1 y for the cols x cols upper triangle R of the column-major w (leading dimension rows). */
+static inline void agile_eye_back_substitute(const double *w, const int rows, const int cols, double *y)
 {
-    double _Phi_p[54], _Phi_s[108];
-    agile_eye_closure_jacobians(q, s, p, _Phi_p, _Phi_q, _Phi_s);
-    for (int _i = 0; _i < 18; ++_i) {
-        for (int _j = 0; _j < 6; ++_j)
-            _m[_j * 18 + _i] = _Phi_s[_i * 6 + _j];
-        for (int _j = 0; _j < 3; ++_j)
-            _m[(6 + _j) * 18 + _i] = _Phi_p[_i * 3 + _j];
+    for (int j = cols - 1; j >= 0; --j) {
+        double sum = y[j];
+        for (int c = j + 1; c < cols; ++c)
+            sum -= w[c * rows + j] * y[c];
+        y[j] = sum / w[j * rows + j];
     }
+}
+
+/* The least-squares solutions x (unknowns x k, row-major: s then p) of [Phi_s Phi_p] x = rhs (rows x k, row-major)
+ * leg by leg: each leg's rows are turned by the Householder QR of its block of Phi_s, whose first rows then give
+ * its passive joints once p is known and whose others, with the free rows, are the reduced rows [B d] of p alone:
+ * B p = d, by QR.  The transformation is orthogonal, so this is the QR solution of the whole system (error eps
+ * kappa) at the cost of the legs' small blocks.  Returns 0 where a leg's block or B has a dependent column (rank
+ * test: rows eps times the largest column's norm, the dense QR's): the pivoted dense QR takes the system.  The legs
+ * are written out, their sizes constants, and the function inlined where k is one. */
+static inline int agile_eye_leg_solve(const double *Phi_s, const double *Phi_p, const double *rhs, const int k, double *x)
+{
+    const int ns = 6, np = 3, reduced = AGILE_EYE_REDUCED_ROWS;
+    double largest = 0.0;    /* the largest squared column norm of [Phi_s Phi_p]: Phi_s's columns are in their legs' rows */
+    for (int j = 0; j < 2; ++j) {
+        double sum = 0.0;
+        for (int i = 0; i < 3; ++i) {
+            const double e = Phi_s[agile_eye_leg1_rows[i] * ns + agile_eye_leg1_columns[j]];
+            sum += e * e;
+        }
+        largest = sum > largest || sum != sum ? sum : largest;
+    }
+    for (int j = 0; j < 2; ++j) {
+        double sum = 0.0;
+        for (int i = 0; i < 3; ++i) {
+            const double e = Phi_s[agile_eye_leg2_rows[i] * ns + agile_eye_leg2_columns[j]];
+            sum += e * e;
+        }
+        largest = sum > largest || sum != sum ? sum : largest;
+    }
+    for (int j = 0; j < 2; ++j) {
+        double sum = 0.0;
+        for (int i = 0; i < 3; ++i) {
+            const double e = Phi_s[agile_eye_leg3_rows[i] * ns + agile_eye_leg3_columns[j]];
+            sum += e * e;
+        }
+        largest = sum > largest || sum != sum ? sum : largest;
+    }
+    for (int j = 0; j < np; ++j) {
+        double sum = 0.0;
+        for (int i = 0; i < 18; ++i)
+            sum += Phi_p[i * np + j] * Phi_p[i * np + j];
+        largest = sum > largest || sum != sum ? sum : largest;
+    }
+    const double floor = 18 * DBL_EPSILON * sqrt(largest);
+    double w[72];     /* each leg's rows of [its Phi_s columns, Phi_p, rhs], column-major, in turn */
+    double b[AGILE_EYE_REDUCED_ROWS * (3 + AGILE_EYE_RIGHT_SIDES)];    /* [B d], column-major */
+    {   /* leg 1: closure rows 3, 4, 5; passive joints 0, 1 */
+        const int *r = agile_eye_leg1_rows, *cols = agile_eye_leg1_columns;
+        double *v = w + 0 + 0 * (np + k);
+        for (int i = 0; i < 3; ++i) {
+            for (int j = 0; j < 2; ++j)
+                v[j * 3 + i] = Phi_s[r[i] * ns + cols[j]];
+            for (int j = 0; j < np; ++j)
+                v[(2 + j) * 3 + i] = Phi_p[r[i] * np + j];
+            for (int j = 0; j < k; ++j)
+                v[(2 + np + j) * 3 + i] = rhs[r[i] * k + j];
+        }
+        if (!agile_eye_reduce(v, 3, 2, 2 + np + k, floor))
+            return 0;
+        for (int i = 2; i < 3; ++i)
+            for (int j = 0; j < np + k; ++j)
+                b[j * reduced + -2 + i] = v[(2 + j) * 3 + i];
+    }
+    {   /* leg 2: closure rows 9, 10, 11; passive joints 2, 3 */
+        const int *r = agile_eye_leg2_rows, *cols = agile_eye_leg2_columns;
+        double *v = w + 6 + 3 * (np + k);
+        for (int i = 0; i < 3; ++i) {
+            for (int j = 0; j < 2; ++j)
+                v[j * 3 + i] = Phi_s[r[i] * ns + cols[j]];
+            for (int j = 0; j < np; ++j)
+                v[(2 + j) * 3 + i] = Phi_p[r[i] * np + j];
+            for (int j = 0; j < k; ++j)
+                v[(2 + np + j) * 3 + i] = rhs[r[i] * k + j];
+        }
+        if (!agile_eye_reduce(v, 3, 2, 2 + np + k, floor))
+            return 0;
+        for (int i = 2; i < 3; ++i)
+            for (int j = 0; j < np + k; ++j)
+                b[j * reduced + -1 + i] = v[(2 + j) * 3 + i];
+    }
+    {   /* leg 3: closure rows 15, 16, 17; passive joints 4, 5 */
+        const int *r = agile_eye_leg3_rows, *cols = agile_eye_leg3_columns;
+        double *v = w + 12 + 6 * (np + k);
+        for (int i = 0; i < 3; ++i) {
+            for (int j = 0; j < 2; ++j)
+                v[j * 3 + i] = Phi_s[r[i] * ns + cols[j]];
+            for (int j = 0; j < np; ++j)
+                v[(2 + j) * 3 + i] = Phi_p[r[i] * np + j];
+            for (int j = 0; j < k; ++j)
+                v[(2 + np + j) * 3 + i] = rhs[r[i] * k + j];
+        }
+        if (!agile_eye_reduce(v, 3, 2, 2 + np + k, floor))
+            return 0;
+        for (int i = 2; i < 3; ++i)
+            for (int j = 0; j < np + k; ++j)
+                b[j * reduced + 0 + i] = v[(2 + j) * 3 + i];
+    }
+    for (int i = 0; i < 9; ++i) {
+        for (int j = 0; j < np; ++j)
+            b[j * reduced + 3 + i] = Phi_p[agile_eye_free_rows[i] * np + j];
+        for (int j = 0; j < k; ++j)
+            b[(np + j) * reduced + 3 + i] = rhs[agile_eye_free_rows[i] * k + j];
+    }
+    if (!agile_eye_reduce(b, reduced, np, np + k, floor))
+        return 0;
+    for (int j = 0; j < k; ++j) {
+        double *y = b + (np + j) * reduced;
+        agile_eye_back_substitute(b, reduced, np, y);
+        for (int c = 0; c < np; ++c)
+            x[(ns + c) * k + j] = y[c];
+    }
+    {   /* leg 1's passive joints */
+        const double *v = w + 0 + 0 * (np + k);
+        double y[2];
+        for (int j = 0; j < k; ++j) {
+            for (int i = 0; i < 2; ++i) {
+                double sum = v[(2 + np + j) * 3 + i];
+                for (int c = 0; c < np; ++c)
+                    sum -= v[(2 + c) * 3 + i] * x[(ns + c) * k + j];
+                y[i] = sum;
+            }
+            agile_eye_back_substitute(v, 3, 2, y);
+            for (int i = 0; i < 2; ++i)
+                x[agile_eye_leg1_columns[i] * k + j] = y[i];
+        }
+    }
+    {   /* leg 2's passive joints */
+        const double *v = w + 6 + 3 * (np + k);
+        double y[2];
+        for (int j = 0; j < k; ++j) {
+            for (int i = 0; i < 2; ++i) {
+                double sum = v[(2 + np + j) * 3 + i];
+                for (int c = 0; c < np; ++c)
+                    sum -= v[(2 + c) * 3 + i] * x[(ns + c) * k + j];
+                y[i] = sum;
+            }
+            agile_eye_back_substitute(v, 3, 2, y);
+            for (int i = 0; i < 2; ++i)
+                x[agile_eye_leg2_columns[i] * k + j] = y[i];
+        }
+    }
+    {   /* leg 3's passive joints */
+        const double *v = w + 12 + 6 * (np + k);
+        double y[2];
+        for (int j = 0; j < k; ++j) {
+            for (int i = 0; i < 2; ++i) {
+                double sum = v[(2 + np + j) * 3 + i];
+                for (int c = 0; c < np; ++c)
+                    sum -= v[(2 + c) * 3 + i] * x[(ns + c) * k + j];
+                y[i] = sum;
+            }
+            agile_eye_back_substitute(v, 3, 2, y);
+            for (int i = 0; i < 2; ++i)
+                x[agile_eye_leg3_columns[i] * k + j] = y[i];
+        }
+    }
+    return 1;
+}
+
+/* The Gauss-Newton step x, the basic least-squares solution of [Phi_s Phi_p] x = b (b is overwritten): leg by leg
+ * where the legs' blocks and the reduced rows have full rank, else by the dense QR with column pivoting (a passive
+ * motion the closure leaves idle gets 0). */
+static void agile_eye_step(const double *Phi_s, const double *Phi_p, double *b, double *x)
+{
+    if (agile_eye_leg_solve(Phi_s, Phi_p, b, 1, x))
+        return;
+    double m[18 * 9], tau[9];
+    int order[9];
+    agile_eye_column_major(Phi_s, Phi_p, m);
+    const int rank = agile_eye_qr(m, tau, order, 1);
+    agile_eye_qr_solve(m, tau, order, rank, b, x);
 }
 
 /* max |phi| over the closure's rows (NaN where a row is NaN), and in *scale max(1, |p|): the pose's scale, which the
@@ -8994,8 +9166,7 @@ static double agile_eye_residual(const double *_phi, const double *p, double *_s
 
 int agile_eye_assemble(const double *q, double *s, double *p, int max_iterations, double tolerance, double *residual)
 {
-    double _phi[18], _m[18 * 9], _Phi_q[54], _tau[9], _step[9];
-    int _order[9];
+    double _phi[18], _Phi_p[54], _Phi_q[54], _Phi_s[108], _step[9];
     int _taken = 0, _current = 0;   /* _current: _phi is the closure at the final (s, p) */
     int _left = 0;                  /* a correction above the tolerance failed to halve the one before */
     double _worst = 0.0, _scale = 1.0, _previous = HUGE_VAL;
@@ -9007,13 +9178,10 @@ int agile_eye_assemble(const double *q, double *s, double *p, int max_iterations
             _current = 1;
             break;
         }
-        agile_eye_closure_matrix(q, s, p, _m, _Phi_q);
+        agile_eye_closure_jacobians(q, s, p, _Phi_p, _Phi_q, _Phi_s);
         for (int _i = 0; _i < 18; ++_i)
             _phi[_i] = -_phi[_i];
-        if (!agile_eye_normal_step(_m, _phi, _step)) {
-            const int _rank = agile_eye_qr(_m, _tau, _order, 1);
-            agile_eye_qr_solve(_m, _tau, _order, _rank, _phi, _step);
-        }
+        agile_eye_step(_Phi_s, _Phi_p, _phi, _step);
         double _largest = 0.0;
         for (int _j = 0; _j < 9; ++_j) {
             const double _size = fabs(_step[_j]);
@@ -9048,9 +9216,22 @@ int agile_eye_assemble(const double *q, double *s, double *p, int max_iterations
 
 int agile_eye_assembly_jacobian(const double *q, const double *s, const double *p, double *J)
 {
-    double _m[18 * 9], _Phi_q[54], _tau[9], _column[18], _x[9];
+    double _Phi_p[54], _Phi_q[54], _Phi_s[108];
+    agile_eye_closure_jacobians(q, s, p, _Phi_p, _Phi_q, _Phi_s);
+    {
+        double _rhs[18 * 3], _solution[9 * 3];
+        for (int _i = 0; _i < 18 * 3; ++_i)
+            _rhs[_i] = -_Phi_q[_i];
+        if (agile_eye_leg_solve(_Phi_s, _Phi_p, _rhs, 3, _solution)) {
+            for (int _i = 0; _i < 3 * 3; ++_i)
+                J[_i] = _solution[6 * 3 + _i];
+            return 1;
+        }
+    }
+    /* a leg's block or the reduced rows have a dependent column: the dense QR, pivoted where needed */
+    double _m[18 * 9], _tau[9], _column[18], _x[9];
     int _order[9];
-    agile_eye_closure_matrix(q, s, p, _m, _Phi_q);
+    agile_eye_column_major(_Phi_s, _Phi_p, _m);
     double _copy[18 * 9];
     for (int _i = 0; _i < 18 * 9; ++_i)
         _copy[_i] = _m[_i];

@@ -651,8 +651,8 @@ void agile_eye_combined_batch(size_t n, const double *p, const double *q, const 
 /* agile_eye_assemble: the forward kinematics of any leg topology, for a servo loop: Gauss-Newton on the generated
  * closure phi(q, s, p) = 0 for the passive joints s[6] and the platform pose p[3] at the actuated joints
  * q[3], started from the given s and p (the previous sample's) and written back into them.  A step is the
- * least-squares solution of [Phi_s Phi_p] (ds, dp) = -phi (normal equations, or Householder QR with column
- * pivoting where a column is dependent); converged when a
+ * least-squares solution of [Phi_s Phi_p] (ds, dp) = -phi (Householder QR leg by leg, or of the whole system with
+ * column pivoting where a column is dependent); converged when a
  * step's largest entry is at most tolerance (1e-12 as symkin.runtime.parallel.solve_closure) or a step left every
  * row of phi at rounding level (64 eps max(1, |p|)).  Returns the steps
  * taken, or 0 with s and p set to NaN where it did not converge within max_iterations or stopped where the legs do

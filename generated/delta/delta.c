@@ -5183,70 +5183,235 @@ static void delta_qr_solve(const double *m, const double *tau, const int *order,
     }
 }
 
-/* The Gauss-Newton step x of m x = b (m column-major as above) by the normal equations m^T m x = m^T b and their
- * Cholesky factor: a third of the QR's work, and accurate enough for a step (its error, about kappa^2 eps of the
- * step, only slows the convergence where kappa^2 eps nears 1).  Returns 0, x untouched, where a pivot falls below
- * rows * eps times the largest diagonal entry (a column dependent on the others: the QR takes the step). */
-static int delta_normal_step(const double *m, const double *b, double *x)
+/* [Phi_s Phi_p] from the row-major blocks of delta_closure_jacobians into m, column-major 18 x 15: the dense
+ * QR's layout. */
+static void delta_column_major(const double *Phi_s, const double *Phi_p, double *m)
 {
-    const int rows = DELTA_CLOSURE_ROWS, cols = DELTA_UNKNOWNS;
-    double g[DELTA_UNKNOWNS * DELTA_UNKNOWNS], y[DELTA_UNKNOWNS];
-    double largest = 0.0;
-    for (int c = 0; c < cols; ++c) {
-        for (int d = 0; d <= c; ++d) {
-            double sum = 0.0;
-            for (int i = 0; i < rows; ++i)
-                sum += m[c * rows + i] * m[d * rows + i];
-            g[c * cols + d] = sum;
-        }
-        largest = g[c * cols + c] > largest ? g[c * cols + c] : largest;
-        double sum = 0.0;
-        for (int i = 0; i < rows; ++i)
-            sum += m[c * rows + i] * b[i];
-        y[c] = sum;
+    for (int i = 0; i < 18; ++i) {
+        for (int j = 0; j < 12; ++j)
+            m[j * 18 + i] = Phi_s[i * 12 + j];
+        for (int j = 0; j < 3; ++j)
+            m[(12 + j) * 18 + i] = Phi_p[i * 3 + j];
     }
-    for (int c = 0; c < cols; ++c) {
-        double pivot = g[c * cols + c];
-        for (int k = 0; k < c; ++k)
-            pivot -= g[c * cols + k] * g[c * cols + k];
-        if (!(pivot > rows * DBL_EPSILON * largest))
+}
+/* The legs: the connected blocks of Phi_s's structural non-zeros, each leg's closure rows and passive joints, and the
+ * rows no passive joint enters (symkin/backends/c/assembly.py, leg_blocks). */
+#define DELTA_REDUCED_ROWS 6
+#define DELTA_RIGHT_SIDES 3
+static const int delta_leg1_rows[6] = { 0, 1, 2, 3, 4, 5 };
+static const int delta_leg1_columns[4] = { 0, 1, 2, 3 };
+static const int delta_leg2_rows[6] = { 6, 7, 8, 9, 10, 11 };
+static const int delta_leg2_columns[4] = { 4, 5, 6, 7 };
+static const int delta_leg3_rows[6] = { 12, 13, 14, 15, 16, 17 };
+static const int delta_leg3_columns[4] = { 8, 9, 10, 11 };
+
+/* Householder QR without pivoting of the first `cols` columns of the rows x width column-major w, the reflections
+ * applied to all its columns: R on and above the diagonal of the first cols columns, Q^T times the others below
+ * and beside it.  Returns 0 where a column's remaining norm is at most `floor` (a dependent column).  Inlined
+ * where the sizes are constants. */
+static inline int delta_reduce(double *w, const int rows, const int cols, const int width, double floor)
+{
+    for (int j = 0; j < cols; ++j) {
+        double sigma = 0.0;
+        for (int i = j; i < rows; ++i)
+            sigma += w[j * rows + i] * w[j * rows + i];
+        const double norm = sqrt(sigma);
+        if (!(norm > floor))
             return 0;
-        const double root = sqrt(pivot);
-        g[c * cols + c] = root;
-        for (int d = c + 1; d < cols; ++d) {
-            double sum = g[d * cols + c];
-            for (int k = 0; k < c; ++k)
-                sum -= g[d * cols + k] * g[c * cols + k];
-            g[d * cols + c] = sum / root;
+        const double x0 = w[j * rows + j];
+        const double beta = x0 >= 0.0 ? -norm : norm;
+        const double tau = (beta - x0) / beta;
+        const double scale = 1.0 / (x0 - beta);
+        for (int i = j + 1; i < rows; ++i)
+            w[j * rows + i] *= scale;
+        w[j * rows + j] = beta;
+        for (int c = j + 1; c < width; ++c) {
+            double v = w[c * rows + j];
+            for (int i = j + 1; i < rows; ++i)
+                v += w[j * rows + i] * w[c * rows + i];
+            v *= tau;
+            w[c * rows + j] -= v;
+            for (int i = j + 1; i < rows; ++i)
+                w[c * rows + i] -= v * w[j * rows + i];
         }
-    }
-    for (int c = 0; c < cols; ++c) {
-        double sum = y[c];
-        for (int k = 0; k < c; ++k)
-            sum -= g[c * cols + k] * y[k];
-        y[c] = sum / g[c * cols + c];
-    }
-    for (int c = cols - 1; c >= 0; --c) {
-        double sum = y[c];
-        for (int k = c + 1; k < cols; ++k)
-            sum -= g[k * cols + c] * x[k];
-        x[c] = sum / g[c * cols + c];
     }
     return 1;
 }
 
-/* [Phi_s Phi_p] at (q, s, p) into _m, column-major 18 x 15, and Phi_q (18 x 3, row-major) into _Phi_q.  Locals
- * start with '_': a model's parameters may take any other name. */
-static void delta_closure_matrix(const double *q, const double *s, const double *p, double a, double b, double *_m, double *_Phi_q)
+/* y := R^-1 y for the cols x cols upper triangle R of the column-major w (leading dimension rows). */
+static inline void delta_back_substitute(const double *w, const int rows, const int cols, double *y)
 {
-    double _Phi_p[54], _Phi_s[216];
-    delta_closure_jacobians(q, s, p, a, b, _Phi_p, _Phi_q, _Phi_s);
-    for (int _i = 0; _i < 18; ++_i) {
-        for (int _j = 0; _j < 12; ++_j)
-            _m[_j * 18 + _i] = _Phi_s[_i * 12 + _j];
-        for (int _j = 0; _j < 3; ++_j)
-            _m[(12 + _j) * 18 + _i] = _Phi_p[_i * 3 + _j];
+    for (int j = cols - 1; j >= 0; --j) {
+        double sum = y[j];
+        for (int c = j + 1; c < cols; ++c)
+            sum -= w[c * rows + j] * y[c];
+        y[j] = sum / w[j * rows + j];
     }
+}
+
+/* The least-squares solutions x (unknowns x k, row-major: s then p) of [Phi_s Phi_p] x = rhs (rows x k, row-major)
+ * leg by leg: each leg's rows are turned by the Householder QR of its block of Phi_s, whose first rows then give
+ * its passive joints once p is known and whose others, with the free rows, are the reduced rows [B d] of p alone:
+ * B p = d, by QR.  The transformation is orthogonal, so this is the QR solution of the whole system (error eps
+ * kappa) at the cost of the legs' small blocks.  Returns 0 where a leg's block or B has a dependent column (rank
+ * test: rows eps times the largest column's norm, the dense QR's): the pivoted dense QR takes the system.  The legs
+ * are written out, their sizes constants, and the function inlined where k is one. */
+static inline int delta_leg_solve(const double *Phi_s, const double *Phi_p, const double *rhs, const int k, double *x)
+{
+    const int ns = 12, np = 3, reduced = DELTA_REDUCED_ROWS;
+    double largest = 0.0;    /* the largest squared column norm of [Phi_s Phi_p]: Phi_s's columns are in their legs' rows */
+    for (int j = 0; j < 4; ++j) {
+        double sum = 0.0;
+        for (int i = 0; i < 6; ++i) {
+            const double e = Phi_s[delta_leg1_rows[i] * ns + delta_leg1_columns[j]];
+            sum += e * e;
+        }
+        largest = sum > largest || sum != sum ? sum : largest;
+    }
+    for (int j = 0; j < 4; ++j) {
+        double sum = 0.0;
+        for (int i = 0; i < 6; ++i) {
+            const double e = Phi_s[delta_leg2_rows[i] * ns + delta_leg2_columns[j]];
+            sum += e * e;
+        }
+        largest = sum > largest || sum != sum ? sum : largest;
+    }
+    for (int j = 0; j < 4; ++j) {
+        double sum = 0.0;
+        for (int i = 0; i < 6; ++i) {
+            const double e = Phi_s[delta_leg3_rows[i] * ns + delta_leg3_columns[j]];
+            sum += e * e;
+        }
+        largest = sum > largest || sum != sum ? sum : largest;
+    }
+    for (int j = 0; j < np; ++j) {
+        double sum = 0.0;
+        for (int i = 0; i < 18; ++i)
+            sum += Phi_p[i * np + j] * Phi_p[i * np + j];
+        largest = sum > largest || sum != sum ? sum : largest;
+    }
+    const double floor = 18 * DBL_EPSILON * sqrt(largest);
+    double w[180];     /* each leg's rows of [its Phi_s columns, Phi_p, rhs], column-major, in turn */
+    double b[DELTA_REDUCED_ROWS * (3 + DELTA_RIGHT_SIDES)];    /* [B d], column-major */
+    {   /* leg 1: closure rows 0, 1, 2, 3, 4, 5; passive joints 0, 1, 2, 3 */
+        const int *r = delta_leg1_rows, *cols = delta_leg1_columns;
+        double *v = w + 0 + 0 * (np + k);
+        for (int i = 0; i < 6; ++i) {
+            for (int j = 0; j < 4; ++j)
+                v[j * 6 + i] = Phi_s[r[i] * ns + cols[j]];
+            for (int j = 0; j < np; ++j)
+                v[(4 + j) * 6 + i] = Phi_p[r[i] * np + j];
+            for (int j = 0; j < k; ++j)
+                v[(4 + np + j) * 6 + i] = rhs[r[i] * k + j];
+        }
+        if (!delta_reduce(v, 6, 4, 4 + np + k, floor))
+            return 0;
+        for (int i = 4; i < 6; ++i)
+            for (int j = 0; j < np + k; ++j)
+                b[j * reduced + -4 + i] = v[(4 + j) * 6 + i];
+    }
+    {   /* leg 2: closure rows 6, 7, 8, 9, 10, 11; passive joints 4, 5, 6, 7 */
+        const int *r = delta_leg2_rows, *cols = delta_leg2_columns;
+        double *v = w + 24 + 6 * (np + k);
+        for (int i = 0; i < 6; ++i) {
+            for (int j = 0; j < 4; ++j)
+                v[j * 6 + i] = Phi_s[r[i] * ns + cols[j]];
+            for (int j = 0; j < np; ++j)
+                v[(4 + j) * 6 + i] = Phi_p[r[i] * np + j];
+            for (int j = 0; j < k; ++j)
+                v[(4 + np + j) * 6 + i] = rhs[r[i] * k + j];
+        }
+        if (!delta_reduce(v, 6, 4, 4 + np + k, floor))
+            return 0;
+        for (int i = 4; i < 6; ++i)
+            for (int j = 0; j < np + k; ++j)
+                b[j * reduced + -2 + i] = v[(4 + j) * 6 + i];
+    }
+    {   /* leg 3: closure rows 12, 13, 14, 15, 16, 17; passive joints 8, 9, 10, 11 */
+        const int *r = delta_leg3_rows, *cols = delta_leg3_columns;
+        double *v = w + 48 + 12 * (np + k);
+        for (int i = 0; i < 6; ++i) {
+            for (int j = 0; j < 4; ++j)
+                v[j * 6 + i] = Phi_s[r[i] * ns + cols[j]];
+            for (int j = 0; j < np; ++j)
+                v[(4 + j) * 6 + i] = Phi_p[r[i] * np + j];
+            for (int j = 0; j < k; ++j)
+                v[(4 + np + j) * 6 + i] = rhs[r[i] * k + j];
+        }
+        if (!delta_reduce(v, 6, 4, 4 + np + k, floor))
+            return 0;
+        for (int i = 4; i < 6; ++i)
+            for (int j = 0; j < np + k; ++j)
+                b[j * reduced + 0 + i] = v[(4 + j) * 6 + i];
+    }
+    if (!delta_reduce(b, reduced, np, np + k, floor))
+        return 0;
+    for (int j = 0; j < k; ++j) {
+        double *y = b + (np + j) * reduced;
+        delta_back_substitute(b, reduced, np, y);
+        for (int c = 0; c < np; ++c)
+            x[(ns + c) * k + j] = y[c];
+    }
+    {   /* leg 1's passive joints */
+        const double *v = w + 0 + 0 * (np + k);
+        double y[4];
+        for (int j = 0; j < k; ++j) {
+            for (int i = 0; i < 4; ++i) {
+                double sum = v[(4 + np + j) * 6 + i];
+                for (int c = 0; c < np; ++c)
+                    sum -= v[(4 + c) * 6 + i] * x[(ns + c) * k + j];
+                y[i] = sum;
+            }
+            delta_back_substitute(v, 6, 4, y);
+            for (int i = 0; i < 4; ++i)
+                x[delta_leg1_columns[i] * k + j] = y[i];
+        }
+    }
+    {   /* leg 2's passive joints */
+        const double *v = w + 24 + 6 * (np + k);
+        double y[4];
+        for (int j = 0; j < k; ++j) {
+            for (int i = 0; i < 4; ++i) {
+                double sum = v[(4 + np + j) * 6 + i];
+                for (int c = 0; c < np; ++c)
+                    sum -= v[(4 + c) * 6 + i] * x[(ns + c) * k + j];
+                y[i] = sum;
+            }
+            delta_back_substitute(v, 6, 4, y);
+            for (int i = 0; i < 4; ++i)
+                x[delta_leg2_columns[i] * k + j] = y[i];
+        }
+    }
+    {   /* leg 3's passive joints */
+        const double *v = w + 48 + 12 * (np + k);
+        double y[4];
+        for (int j = 0; j < k; ++j) {
+            for (int i = 0; i < 4; ++i) {
+                double sum = v[(4 + np + j) * 6 + i];
+                for (int c = 0; c < np; ++c)
+                    sum -= v[(4 + c) * 6 + i] * x[(ns + c) * k + j];
+                y[i] = sum;
+            }
+            delta_back_substitute(v, 6, 4, y);
+            for (int i = 0; i < 4; ++i)
+                x[delta_leg3_columns[i] * k + j] = y[i];
+        }
+    }
+    return 1;
+}
+
+/* The Gauss-Newton step x, the basic least-squares solution of [Phi_s Phi_p] x = b (b is overwritten): leg by leg
+ * where the legs' blocks and the reduced rows have full rank, else by the dense QR with column pivoting (a passive
+ * motion the closure leaves idle gets 0). */
+static void delta_step(const double *Phi_s, const double *Phi_p, double *b, double *x)
+{
+    if (delta_leg_solve(Phi_s, Phi_p, b, 1, x))
+        return;
+    double m[18 * 15], tau[15];
+    int order[15];
+    delta_column_major(Phi_s, Phi_p, m);
+    const int rank = delta_qr(m, tau, order, 1);
+    delta_qr_solve(m, tau, order, rank, b, x);
 }
 
 /* max |phi| over the closure's rows (NaN where a row is NaN), and in *scale max(1, |p|): the pose's scale, which the
@@ -5264,8 +5429,7 @@ static double delta_residual(const double *_phi, const double *p, double *_scale
 
 int delta_assemble(const double *q, double *s, double *p, double r_base, double r_tcp, double a, double b, int max_iterations, double tolerance, double *residual)
 {
-    double _phi[18], _m[18 * 15], _Phi_q[54], _tau[15], _step[15];
-    int _order[15];
+    double _phi[18], _Phi_p[54], _Phi_q[54], _Phi_s[216], _step[15];
     int _taken = 0, _current = 0;   /* _current: _phi is the closure at the final (s, p) */
     int _left = 0;                  /* a correction above the tolerance failed to halve the one before */
     double _worst = 0.0, _scale = 1.0, _previous = HUGE_VAL;
@@ -5277,13 +5441,10 @@ int delta_assemble(const double *q, double *s, double *p, double r_base, double 
             _current = 1;
             break;
         }
-        delta_closure_matrix(q, s, p, a, b, _m, _Phi_q);
+        delta_closure_jacobians(q, s, p, a, b, _Phi_p, _Phi_q, _Phi_s);
         for (int _i = 0; _i < 18; ++_i)
             _phi[_i] = -_phi[_i];
-        if (!delta_normal_step(_m, _phi, _step)) {
-            const int _rank = delta_qr(_m, _tau, _order, 1);
-            delta_qr_solve(_m, _tau, _order, _rank, _phi, _step);
-        }
+        delta_step(_Phi_s, _Phi_p, _phi, _step);
         double _largest = 0.0;
         for (int _j = 0; _j < 15; ++_j) {
             const double _size = fabs(_step[_j]);
@@ -5318,11 +5479,24 @@ int delta_assemble(const double *q, double *s, double *p, double r_base, double 
 
 int delta_assembly_jacobian(const double *q, const double *s, const double *p, double r_base, double r_tcp, double a, double b, double *J)
 {
-    double _m[18 * 15], _Phi_q[54], _tau[15], _column[18], _x[15];
-    int _order[15];
+    double _Phi_p[54], _Phi_q[54], _Phi_s[216];
     (void)r_base;
     (void)r_tcp;
-    delta_closure_matrix(q, s, p, a, b, _m, _Phi_q);
+    delta_closure_jacobians(q, s, p, a, b, _Phi_p, _Phi_q, _Phi_s);
+    {
+        double _rhs[18 * 3], _solution[15 * 3];
+        for (int _i = 0; _i < 18 * 3; ++_i)
+            _rhs[_i] = -_Phi_q[_i];
+        if (delta_leg_solve(_Phi_s, _Phi_p, _rhs, 3, _solution)) {
+            for (int _i = 0; _i < 3 * 3; ++_i)
+                J[_i] = _solution[12 * 3 + _i];
+            return 1;
+        }
+    }
+    /* a leg's block or the reduced rows have a dependent column: the dense QR, pivoted where needed */
+    double _m[18 * 15], _tau[15], _column[18], _x[15];
+    int _order[15];
+    delta_column_major(_Phi_s, _Phi_p, _m);
     double _copy[18 * 15];
     for (int _i = 0; _i < 18 * 15; ++_i)
         _copy[_i] = _m[_i];

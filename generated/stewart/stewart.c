@@ -21201,70 +21201,361 @@ static void stewart_qr_solve(const double *m, const double *tau, const int *orde
     }
 }
 
-/* The Gauss-Newton step x of m x = b (m column-major as above) by the normal equations m^T m x = m^T b and their
- * Cholesky factor: a third of the QR's work, and accurate enough for a step (its error, about kappa^2 eps of the
- * step, only slows the convergence where kappa^2 eps nears 1).  Returns 0, x untouched, where a pivot falls below
- * rows * eps times the largest diagonal entry (a column dependent on the others: the QR takes the step). */
-static int stewart_normal_step(const double *m, const double *b, double *x)
+/* [Phi_s Phi_p] from the row-major blocks of stewart_closure_jacobians into m, column-major 36 x 36: the dense
+ * QR's layout. */
+static void stewart_column_major(const double *Phi_s, const double *Phi_p, double *m)
 {
-    const int rows = STEWART_CLOSURE_ROWS, cols = STEWART_UNKNOWNS;
-    double g[STEWART_UNKNOWNS * STEWART_UNKNOWNS], y[STEWART_UNKNOWNS];
-    double largest = 0.0;
-    for (int c = 0; c < cols; ++c) {
-        for (int d = 0; d <= c; ++d) {
-            double sum = 0.0;
-            for (int i = 0; i < rows; ++i)
-                sum += m[c * rows + i] * m[d * rows + i];
-            g[c * cols + d] = sum;
-        }
-        largest = g[c * cols + c] > largest ? g[c * cols + c] : largest;
-        double sum = 0.0;
-        for (int i = 0; i < rows; ++i)
-            sum += m[c * rows + i] * b[i];
-        y[c] = sum;
+    for (int i = 0; i < 36; ++i) {
+        for (int j = 0; j < 30; ++j)
+            m[j * 36 + i] = Phi_s[i * 30 + j];
+        for (int j = 0; j < 6; ++j)
+            m[(30 + j) * 36 + i] = Phi_p[i * 6 + j];
     }
-    for (int c = 0; c < cols; ++c) {
-        double pivot = g[c * cols + c];
-        for (int k = 0; k < c; ++k)
-            pivot -= g[c * cols + k] * g[c * cols + k];
-        if (!(pivot > rows * DBL_EPSILON * largest))
+}
+/* The legs: the connected blocks of Phi_s's structural non-zeros, each leg's closure rows and passive joints, and the
+ * rows no passive joint enters (symkin/backends/c/assembly.py, leg_blocks). */
+#define STEWART_REDUCED_ROWS 6
+#define STEWART_RIGHT_SIDES 6
+static const int stewart_leg1_rows[6] = { 0, 1, 2, 3, 4, 5 };
+static const int stewart_leg1_columns[5] = { 0, 1, 2, 3, 4 };
+static const int stewart_leg2_rows[6] = { 6, 7, 8, 9, 10, 11 };
+static const int stewart_leg2_columns[5] = { 5, 6, 7, 8, 9 };
+static const int stewart_leg3_rows[6] = { 12, 13, 14, 15, 16, 17 };
+static const int stewart_leg3_columns[5] = { 10, 11, 12, 13, 14 };
+static const int stewart_leg4_rows[6] = { 18, 19, 20, 21, 22, 23 };
+static const int stewart_leg4_columns[5] = { 15, 16, 17, 18, 19 };
+static const int stewart_leg5_rows[6] = { 24, 25, 26, 27, 28, 29 };
+static const int stewart_leg5_columns[5] = { 20, 21, 22, 23, 24 };
+static const int stewart_leg6_rows[6] = { 30, 31, 32, 33, 34, 35 };
+static const int stewart_leg6_columns[5] = { 25, 26, 27, 28, 29 };
+
+/* Householder QR without pivoting of the first `cols` columns of the rows x width column-major w, the reflections
+ * applied to all its columns: R on and above the diagonal of the first cols columns, Q^T times the others below
+ * and beside it.  Returns 0 where a column's remaining norm is at most `floor` (a dependent column).  Inlined
+ * where the sizes are constants. */
+static inline int stewart_reduce(double *w, const int rows, const int cols, const int width, double floor)
+{
+    for (int j = 0; j < cols; ++j) {
+        double sigma = 0.0;
+        for (int i = j; i < rows; ++i)
+            sigma += w[j * rows + i] * w[j * rows + i];
+        const double norm = sqrt(sigma);
+        if (!(norm > floor))
             return 0;
-        const double root = sqrt(pivot);
-        g[c * cols + c] = root;
-        for (int d = c + 1; d < cols; ++d) {
-            double sum = g[d * cols + c];
-            for (int k = 0; k < c; ++k)
-                sum -= g[d * cols + k] * g[c * cols + k];
-            g[d * cols + c] = sum / root;
+        const double x0 = w[j * rows + j];
+        const double beta = x0 >= 0.0 ? -norm : norm;
+        const double tau = (beta - x0) / beta;
+        const double scale = 1.0 / (x0 - beta);
+        for (int i = j + 1; i < rows; ++i)
+            w[j * rows + i] *= scale;
+        w[j * rows + j] = beta;
+        for (int c = j + 1; c < width; ++c) {
+            double v = w[c * rows + j];
+            for (int i = j + 1; i < rows; ++i)
+                v += w[j * rows + i] * w[c * rows + i];
+            v *= tau;
+            w[c * rows + j] -= v;
+            for (int i = j + 1; i < rows; ++i)
+                w[c * rows + i] -= v * w[j * rows + i];
         }
-    }
-    for (int c = 0; c < cols; ++c) {
-        double sum = y[c];
-        for (int k = 0; k < c; ++k)
-            sum -= g[c * cols + k] * y[k];
-        y[c] = sum / g[c * cols + c];
-    }
-    for (int c = cols - 1; c >= 0; --c) {
-        double sum = y[c];
-        for (int k = c + 1; k < cols; ++k)
-            sum -= g[k * cols + c] * x[k];
-        x[c] = sum / g[c * cols + c];
     }
     return 1;
 }
 
-/* [Phi_s Phi_p] at (q, s, p) into _m, column-major 36 x 36, and Phi_q (36 x 6, row-major) into _Phi_q.  Locals
- * start with '_': a model's parameters may take any other name. */
-static void stewart_closure_matrix(const double *q, const double *s, const double *p, double r_p, double gamma_b, double gamma_p, double *_m, double *_Phi_q)
+/* y := R^-1 y for the cols x cols upper triangle R of the column-major w (leading dimension rows). */
+static inline void stewart_back_substitute(const double *w, const int rows, const int cols, double *y)
 {
-    double _Phi_p[216], _Phi_s[1080];
-    stewart_closure_jacobians(q, s, p, r_p, gamma_b, gamma_p, _Phi_p, _Phi_q, _Phi_s);
-    for (int _i = 0; _i < 36; ++_i) {
-        for (int _j = 0; _j < 30; ++_j)
-            _m[_j * 36 + _i] = _Phi_s[_i * 30 + _j];
-        for (int _j = 0; _j < 6; ++_j)
-            _m[(30 + _j) * 36 + _i] = _Phi_p[_i * 6 + _j];
+    for (int j = cols - 1; j >= 0; --j) {
+        double sum = y[j];
+        for (int c = j + 1; c < cols; ++c)
+            sum -= w[c * rows + j] * y[c];
+        y[j] = sum / w[j * rows + j];
     }
+}
+
+/* The least-squares solutions x (unknowns x k, row-major: s then p) of [Phi_s Phi_p] x = rhs (rows x k, row-major)
+ * leg by leg: each leg's rows are turned by the Householder QR of its block of Phi_s, whose first rows then give
+ * its passive joints once p is known and whose others, with the free rows, are the reduced rows [B d] of p alone:
+ * B p = d, by QR.  The transformation is orthogonal, so this is the QR solution of the whole system (error eps
+ * kappa) at the cost of the legs' small blocks.  Returns 0 where a leg's block or B has a dependent column (rank
+ * test: rows eps times the largest column's norm, the dense QR's): the pivoted dense QR takes the system.  The legs
+ * are written out, their sizes constants, and the function inlined where k is one. */
+static inline int stewart_leg_solve(const double *Phi_s, const double *Phi_p, const double *rhs, const int k, double *x)
+{
+    const int ns = 30, np = 6, reduced = STEWART_REDUCED_ROWS;
+    double largest = 0.0;    /* the largest squared column norm of [Phi_s Phi_p]: Phi_s's columns are in their legs' rows */
+    for (int j = 0; j < 5; ++j) {
+        double sum = 0.0;
+        for (int i = 0; i < 6; ++i) {
+            const double e = Phi_s[stewart_leg1_rows[i] * ns + stewart_leg1_columns[j]];
+            sum += e * e;
+        }
+        largest = sum > largest || sum != sum ? sum : largest;
+    }
+    for (int j = 0; j < 5; ++j) {
+        double sum = 0.0;
+        for (int i = 0; i < 6; ++i) {
+            const double e = Phi_s[stewart_leg2_rows[i] * ns + stewart_leg2_columns[j]];
+            sum += e * e;
+        }
+        largest = sum > largest || sum != sum ? sum : largest;
+    }
+    for (int j = 0; j < 5; ++j) {
+        double sum = 0.0;
+        for (int i = 0; i < 6; ++i) {
+            const double e = Phi_s[stewart_leg3_rows[i] * ns + stewart_leg3_columns[j]];
+            sum += e * e;
+        }
+        largest = sum > largest || sum != sum ? sum : largest;
+    }
+    for (int j = 0; j < 5; ++j) {
+        double sum = 0.0;
+        for (int i = 0; i < 6; ++i) {
+            const double e = Phi_s[stewart_leg4_rows[i] * ns + stewart_leg4_columns[j]];
+            sum += e * e;
+        }
+        largest = sum > largest || sum != sum ? sum : largest;
+    }
+    for (int j = 0; j < 5; ++j) {
+        double sum = 0.0;
+        for (int i = 0; i < 6; ++i) {
+            const double e = Phi_s[stewart_leg5_rows[i] * ns + stewart_leg5_columns[j]];
+            sum += e * e;
+        }
+        largest = sum > largest || sum != sum ? sum : largest;
+    }
+    for (int j = 0; j < 5; ++j) {
+        double sum = 0.0;
+        for (int i = 0; i < 6; ++i) {
+            const double e = Phi_s[stewart_leg6_rows[i] * ns + stewart_leg6_columns[j]];
+            sum += e * e;
+        }
+        largest = sum > largest || sum != sum ? sum : largest;
+    }
+    for (int j = 0; j < np; ++j) {
+        double sum = 0.0;
+        for (int i = 0; i < 36; ++i)
+            sum += Phi_p[i * np + j] * Phi_p[i * np + j];
+        largest = sum > largest || sum != sum ? sum : largest;
+    }
+    const double floor = 36 * DBL_EPSILON * sqrt(largest);
+    double w[612];     /* each leg's rows of [its Phi_s columns, Phi_p, rhs], column-major, in turn */
+    double b[STEWART_REDUCED_ROWS * (6 + STEWART_RIGHT_SIDES)];    /* [B d], column-major */
+    {   /* leg 1: closure rows 0, 1, 2, 3, 4, 5; passive joints 0, 1, 2, 3, 4 */
+        const int *r = stewart_leg1_rows, *cols = stewart_leg1_columns;
+        double *v = w + 0 + 0 * (np + k);
+        for (int i = 0; i < 6; ++i) {
+            for (int j = 0; j < 5; ++j)
+                v[j * 6 + i] = Phi_s[r[i] * ns + cols[j]];
+            for (int j = 0; j < np; ++j)
+                v[(5 + j) * 6 + i] = Phi_p[r[i] * np + j];
+            for (int j = 0; j < k; ++j)
+                v[(5 + np + j) * 6 + i] = rhs[r[i] * k + j];
+        }
+        if (!stewart_reduce(v, 6, 5, 5 + np + k, floor))
+            return 0;
+        for (int i = 5; i < 6; ++i)
+            for (int j = 0; j < np + k; ++j)
+                b[j * reduced + -5 + i] = v[(5 + j) * 6 + i];
+    }
+    {   /* leg 2: closure rows 6, 7, 8, 9, 10, 11; passive joints 5, 6, 7, 8, 9 */
+        const int *r = stewart_leg2_rows, *cols = stewart_leg2_columns;
+        double *v = w + 30 + 6 * (np + k);
+        for (int i = 0; i < 6; ++i) {
+            for (int j = 0; j < 5; ++j)
+                v[j * 6 + i] = Phi_s[r[i] * ns + cols[j]];
+            for (int j = 0; j < np; ++j)
+                v[(5 + j) * 6 + i] = Phi_p[r[i] * np + j];
+            for (int j = 0; j < k; ++j)
+                v[(5 + np + j) * 6 + i] = rhs[r[i] * k + j];
+        }
+        if (!stewart_reduce(v, 6, 5, 5 + np + k, floor))
+            return 0;
+        for (int i = 5; i < 6; ++i)
+            for (int j = 0; j < np + k; ++j)
+                b[j * reduced + -4 + i] = v[(5 + j) * 6 + i];
+    }
+    {   /* leg 3: closure rows 12, 13, 14, 15, 16, 17; passive joints 10, 11, 12, 13, 14 */
+        const int *r = stewart_leg3_rows, *cols = stewart_leg3_columns;
+        double *v = w + 60 + 12 * (np + k);
+        for (int i = 0; i < 6; ++i) {
+            for (int j = 0; j < 5; ++j)
+                v[j * 6 + i] = Phi_s[r[i] * ns + cols[j]];
+            for (int j = 0; j < np; ++j)
+                v[(5 + j) * 6 + i] = Phi_p[r[i] * np + j];
+            for (int j = 0; j < k; ++j)
+                v[(5 + np + j) * 6 + i] = rhs[r[i] * k + j];
+        }
+        if (!stewart_reduce(v, 6, 5, 5 + np + k, floor))
+            return 0;
+        for (int i = 5; i < 6; ++i)
+            for (int j = 0; j < np + k; ++j)
+                b[j * reduced + -3 + i] = v[(5 + j) * 6 + i];
+    }
+    {   /* leg 4: closure rows 18, 19, 20, 21, 22, 23; passive joints 15, 16, 17, 18, 19 */
+        const int *r = stewart_leg4_rows, *cols = stewart_leg4_columns;
+        double *v = w + 90 + 18 * (np + k);
+        for (int i = 0; i < 6; ++i) {
+            for (int j = 0; j < 5; ++j)
+                v[j * 6 + i] = Phi_s[r[i] * ns + cols[j]];
+            for (int j = 0; j < np; ++j)
+                v[(5 + j) * 6 + i] = Phi_p[r[i] * np + j];
+            for (int j = 0; j < k; ++j)
+                v[(5 + np + j) * 6 + i] = rhs[r[i] * k + j];
+        }
+        if (!stewart_reduce(v, 6, 5, 5 + np + k, floor))
+            return 0;
+        for (int i = 5; i < 6; ++i)
+            for (int j = 0; j < np + k; ++j)
+                b[j * reduced + -2 + i] = v[(5 + j) * 6 + i];
+    }
+    {   /* leg 5: closure rows 24, 25, 26, 27, 28, 29; passive joints 20, 21, 22, 23, 24 */
+        const int *r = stewart_leg5_rows, *cols = stewart_leg5_columns;
+        double *v = w + 120 + 24 * (np + k);
+        for (int i = 0; i < 6; ++i) {
+            for (int j = 0; j < 5; ++j)
+                v[j * 6 + i] = Phi_s[r[i] * ns + cols[j]];
+            for (int j = 0; j < np; ++j)
+                v[(5 + j) * 6 + i] = Phi_p[r[i] * np + j];
+            for (int j = 0; j < k; ++j)
+                v[(5 + np + j) * 6 + i] = rhs[r[i] * k + j];
+        }
+        if (!stewart_reduce(v, 6, 5, 5 + np + k, floor))
+            return 0;
+        for (int i = 5; i < 6; ++i)
+            for (int j = 0; j < np + k; ++j)
+                b[j * reduced + -1 + i] = v[(5 + j) * 6 + i];
+    }
+    {   /* leg 6: closure rows 30, 31, 32, 33, 34, 35; passive joints 25, 26, 27, 28, 29 */
+        const int *r = stewart_leg6_rows, *cols = stewart_leg6_columns;
+        double *v = w + 150 + 30 * (np + k);
+        for (int i = 0; i < 6; ++i) {
+            for (int j = 0; j < 5; ++j)
+                v[j * 6 + i] = Phi_s[r[i] * ns + cols[j]];
+            for (int j = 0; j < np; ++j)
+                v[(5 + j) * 6 + i] = Phi_p[r[i] * np + j];
+            for (int j = 0; j < k; ++j)
+                v[(5 + np + j) * 6 + i] = rhs[r[i] * k + j];
+        }
+        if (!stewart_reduce(v, 6, 5, 5 + np + k, floor))
+            return 0;
+        for (int i = 5; i < 6; ++i)
+            for (int j = 0; j < np + k; ++j)
+                b[j * reduced + 0 + i] = v[(5 + j) * 6 + i];
+    }
+    if (!stewart_reduce(b, reduced, np, np + k, floor))
+        return 0;
+    for (int j = 0; j < k; ++j) {
+        double *y = b + (np + j) * reduced;
+        stewart_back_substitute(b, reduced, np, y);
+        for (int c = 0; c < np; ++c)
+            x[(ns + c) * k + j] = y[c];
+    }
+    {   /* leg 1's passive joints */
+        const double *v = w + 0 + 0 * (np + k);
+        double y[5];
+        for (int j = 0; j < k; ++j) {
+            for (int i = 0; i < 5; ++i) {
+                double sum = v[(5 + np + j) * 6 + i];
+                for (int c = 0; c < np; ++c)
+                    sum -= v[(5 + c) * 6 + i] * x[(ns + c) * k + j];
+                y[i] = sum;
+            }
+            stewart_back_substitute(v, 6, 5, y);
+            for (int i = 0; i < 5; ++i)
+                x[stewart_leg1_columns[i] * k + j] = y[i];
+        }
+    }
+    {   /* leg 2's passive joints */
+        const double *v = w + 30 + 6 * (np + k);
+        double y[5];
+        for (int j = 0; j < k; ++j) {
+            for (int i = 0; i < 5; ++i) {
+                double sum = v[(5 + np + j) * 6 + i];
+                for (int c = 0; c < np; ++c)
+                    sum -= v[(5 + c) * 6 + i] * x[(ns + c) * k + j];
+                y[i] = sum;
+            }
+            stewart_back_substitute(v, 6, 5, y);
+            for (int i = 0; i < 5; ++i)
+                x[stewart_leg2_columns[i] * k + j] = y[i];
+        }
+    }
+    {   /* leg 3's passive joints */
+        const double *v = w + 60 + 12 * (np + k);
+        double y[5];
+        for (int j = 0; j < k; ++j) {
+            for (int i = 0; i < 5; ++i) {
+                double sum = v[(5 + np + j) * 6 + i];
+                for (int c = 0; c < np; ++c)
+                    sum -= v[(5 + c) * 6 + i] * x[(ns + c) * k + j];
+                y[i] = sum;
+            }
+            stewart_back_substitute(v, 6, 5, y);
+            for (int i = 0; i < 5; ++i)
+                x[stewart_leg3_columns[i] * k + j] = y[i];
+        }
+    }
+    {   /* leg 4's passive joints */
+        const double *v = w + 90 + 18 * (np + k);
+        double y[5];
+        for (int j = 0; j < k; ++j) {
+            for (int i = 0; i < 5; ++i) {
+                double sum = v[(5 + np + j) * 6 + i];
+                for (int c = 0; c < np; ++c)
+                    sum -= v[(5 + c) * 6 + i] * x[(ns + c) * k + j];
+                y[i] = sum;
+            }
+            stewart_back_substitute(v, 6, 5, y);
+            for (int i = 0; i < 5; ++i)
+                x[stewart_leg4_columns[i] * k + j] = y[i];
+        }
+    }
+    {   /* leg 5's passive joints */
+        const double *v = w + 120 + 24 * (np + k);
+        double y[5];
+        for (int j = 0; j < k; ++j) {
+            for (int i = 0; i < 5; ++i) {
+                double sum = v[(5 + np + j) * 6 + i];
+                for (int c = 0; c < np; ++c)
+                    sum -= v[(5 + c) * 6 + i] * x[(ns + c) * k + j];
+                y[i] = sum;
+            }
+            stewart_back_substitute(v, 6, 5, y);
+            for (int i = 0; i < 5; ++i)
+                x[stewart_leg5_columns[i] * k + j] = y[i];
+        }
+    }
+    {   /* leg 6's passive joints */
+        const double *v = w + 150 + 30 * (np + k);
+        double y[5];
+        for (int j = 0; j < k; ++j) {
+            for (int i = 0; i < 5; ++i) {
+                double sum = v[(5 + np + j) * 6 + i];
+                for (int c = 0; c < np; ++c)
+                    sum -= v[(5 + c) * 6 + i] * x[(ns + c) * k + j];
+                y[i] = sum;
+            }
+            stewart_back_substitute(v, 6, 5, y);
+            for (int i = 0; i < 5; ++i)
+                x[stewart_leg6_columns[i] * k + j] = y[i];
+        }
+    }
+    return 1;
+}
+
+/* The Gauss-Newton step x, the basic least-squares solution of [Phi_s Phi_p] x = b (b is overwritten): leg by leg
+ * where the legs' blocks and the reduced rows have full rank, else by the dense QR with column pivoting (a passive
+ * motion the closure leaves idle gets 0). */
+static void stewart_step(const double *Phi_s, const double *Phi_p, double *b, double *x)
+{
+    if (stewart_leg_solve(Phi_s, Phi_p, b, 1, x))
+        return;
+    double m[36 * 36], tau[36];
+    int order[36];
+    stewart_column_major(Phi_s, Phi_p, m);
+    const int rank = stewart_qr(m, tau, order, 1);
+    stewart_qr_solve(m, tau, order, rank, b, x);
 }
 
 /* max |phi| over the closure's rows (NaN where a row is NaN), and in *scale max(1, |p|): the pose's scale, which the
@@ -21282,8 +21573,7 @@ static double stewart_residual(const double *_phi, const double *p, double *_sca
 
 int stewart_assemble(const double *q, double *s, double *p, double r_b, double r_p, double gamma_b, double gamma_p, int max_iterations, double tolerance, double *residual)
 {
-    double _phi[36], _m[36 * 36], _Phi_q[216], _tau[36], _step[36];
-    int _order[36];
+    double _phi[36], _Phi_p[216], _Phi_q[216], _Phi_s[1080], _step[36];
     int _taken = 0, _current = 0;   /* _current: _phi is the closure at the final (s, p) */
     int _left = 0;                  /* a correction above the tolerance failed to halve the one before */
     double _worst = 0.0, _scale = 1.0, _previous = HUGE_VAL;
@@ -21295,13 +21585,10 @@ int stewart_assemble(const double *q, double *s, double *p, double r_b, double r
             _current = 1;
             break;
         }
-        stewart_closure_matrix(q, s, p, r_p, gamma_b, gamma_p, _m, _Phi_q);
+        stewart_closure_jacobians(q, s, p, r_p, gamma_b, gamma_p, _Phi_p, _Phi_q, _Phi_s);
         for (int _i = 0; _i < 36; ++_i)
             _phi[_i] = -_phi[_i];
-        if (!stewart_normal_step(_m, _phi, _step)) {
-            const int _rank = stewart_qr(_m, _tau, _order, 1);
-            stewart_qr_solve(_m, _tau, _order, _rank, _phi, _step);
-        }
+        stewart_step(_Phi_s, _Phi_p, _phi, _step);
         double _largest = 0.0;
         for (int _j = 0; _j < 36; ++_j) {
             const double _size = fabs(_step[_j]);
@@ -21336,10 +21623,23 @@ int stewart_assemble(const double *q, double *s, double *p, double r_b, double r
 
 int stewart_assembly_jacobian(const double *q, const double *s, const double *p, double r_b, double r_p, double gamma_b, double gamma_p, double *J)
 {
-    double _m[36 * 36], _Phi_q[216], _tau[36], _column[36], _x[36];
-    int _order[36];
+    double _Phi_p[216], _Phi_q[216], _Phi_s[1080];
     (void)r_b;
-    stewart_closure_matrix(q, s, p, r_p, gamma_b, gamma_p, _m, _Phi_q);
+    stewart_closure_jacobians(q, s, p, r_p, gamma_b, gamma_p, _Phi_p, _Phi_q, _Phi_s);
+    {
+        double _rhs[36 * 6], _solution[36 * 6];
+        for (int _i = 0; _i < 36 * 6; ++_i)
+            _rhs[_i] = -_Phi_q[_i];
+        if (stewart_leg_solve(_Phi_s, _Phi_p, _rhs, 6, _solution)) {
+            for (int _i = 0; _i < 6 * 6; ++_i)
+                J[_i] = _solution[30 * 6 + _i];
+            return 1;
+        }
+    }
+    /* a leg's block or the reduced rows have a dependent column: the dense QR, pivoted where needed */
+    double _m[36 * 36], _tau[36], _column[36], _x[36];
+    int _order[36];
+    stewart_column_major(_Phi_s, _Phi_p, _m);
     double _copy[36 * 36];
     for (int _i = 0; _i < 36 * 36; ++_i)
         _copy[_i] = _m[_i];

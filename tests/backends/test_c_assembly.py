@@ -142,6 +142,20 @@ def test_a_delta_pose_the_legs_cannot_reach_gives_nan(generated_dir):
     assert residual.value > 1e-3                    # a least-squares minimum: the steps vanished there
 
 
+def test_the_legs_are_the_blocks_of_the_passive_joints_structural_non_zeros():
+    """Legs are the connected blocks (rows joined through a shared passive joint), the rows no passive joint enters
+    are free; a leg with more joints than rows, or a joint in no row, leaves the system to the dense QR (None)."""
+    pattern = ["x.x", "xx.", ".x.", "..x", ".x.", "..."]           # rows 0 and 1 join joints 0, 1 and 2: one leg
+    zero = [c == "." for row in pattern for c in row]
+    assert assembly.leg_blocks(zero, 6, 3) == ([{"rows": [0, 1, 2, 3, 4], "columns": [0, 1, 2]}], [5])
+    pattern = ["x..", "x..", ".x.", "..x", ".x.", "..."]
+    zero = [c == "." for row in pattern for c in row]
+    assert assembly.leg_blocks(zero, 6, 3) == ([{"rows": [0, 1], "columns": [0]}, {"rows": [2, 4], "columns": [1]},
+                                                {"rows": [3], "columns": [2]}], [5])
+    assert assembly.leg_blocks([c == "." for c in "xx" ".." ".."], 3, 2) is None          # 1 row, 2 joints
+    assert assembly.leg_blocks([c == "." for c in "x." "x." ".."], 3, 2) is None          # joint 1 in no row
+
+
 def test_the_generated_solver_closes_the_legs_by_the_runtimes_rule():
     assert assembly.CLOSED == closure.CLOSED
 

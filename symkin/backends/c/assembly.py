@@ -24,13 +24,18 @@ Where a model's C code holds ``closure`` and ``closure_jacobians`` (double preci
   set to NaN where the platform is not determined by the actuators (a column of Phi_p past the numerical rank of
   [Phi_s Phi_p]: a singularity of the interior kind).
 
-A step solves the normal equations by Cholesky (a third of the work; the step's error, about kappa^2 eps of it,
-only slows the convergence), and Householder QR with column pivoting where a Cholesky pivot falls to rounding
-(Golub and Van Loan, Matrix Computations, 4th ed., alg. 5.4.1; the column norms downdated as LAPACK's xLAQP2
-does); J takes the QR (its error eps kappa), unpivoted unless a column is dependent.  The numerical rank ends at a
-remaining column's norm of m eps times the largest column's; columns past it (a passive motion the closure leaves
-idle, as a rod spinning between two spherical joints) get 0, the basic solution.  No allocation; the arrays have the model's
-sizes.  Parameters: the union of the two functions' free parameters, in the model's order.
+The legs make the system sparse: Phi_s is block diagonal over the legs (each leg's closure rows hold only its own
+passive joints; :func:`leg_blocks` finds the blocks from the structural zeros of the generated ``closure_jacobians``).
+A step and J solve it leg by leg: each leg's rows are turned by the Householder QR of its block of Phi_s, which
+leaves the leg's passive joints to a triangle and a few reduced rows in p alone; those of every leg, with the rows
+no passive joint enters, give p by a small QR (the orthogonal transformation keeps the QR's error, eps kappa, at
+the cost of the legs' small blocks).  Where a leg's block or the reduced rows have a dependent column, or the model
+has no such blocks, the dense system takes Householder QR with column pivoting (Golub and Van Loan, Matrix
+Computations, 4th ed., alg. 5.4.1; the column norms downdated as LAPACK's xLAQP2 does), unpivoted for J unless a
+column is dependent.  The numerical rank ends at a remaining column's norm of m eps times the largest column's;
+columns past it (a passive motion the closure leaves idle, as a rod spinning between two spherical joints) get 0,
+the basic solution.  No allocation; the arrays have the model's sizes.  Parameters: the union of the two
+functions' free parameters, in the model's order.
 """
 
 from __future__ import annotations
@@ -40,6 +45,34 @@ from typing import Any
 #: The legs close where every closure row is below this times the pose's scale (m): the run-time's rule,
 #: :data:`symkin.mechanism.closure.CLOSED`.
 CLOSED = 1e-9
+
+
+def leg_blocks(zero: list[bool], rows: int, ns: int) -> tuple[list[dict[str, list[int]]], list[int]] | None:
+    """The closure's rows and passive joints split into legs: the connected blocks of Phi_s's structural non-zeros
+    (``zero``: its row-major entries that are 0 whatever the inputs), each rows x columns with at least as many rows
+    as columns, and the rows no passive joint enters (the platform's own constraints).  None where a block has fewer
+    rows than columns (its passive joints are not determined by its rows alone: the dense solve takes it)."""
+    parent = list(range(rows + ns))
+
+    def root(k: int) -> int:
+        while parent[k] != k:
+            parent[k] = parent[parent[k]]
+            k = parent[k]
+        return k
+
+    for i in range(rows):
+        for j in range(ns):
+            if not zero[i * ns + j]:
+                parent[root(i)] = root(rows + j)
+    members: dict[int, dict[str, list[int]]] = {}
+    for k in range(rows + ns):
+        block = members.setdefault(root(k), {"rows": [], "columns": []})
+        block["rows" if k < rows else "columns"].append(k if k < rows else k - rows)
+    legs = sorted((b for b in members.values() if b["columns"]), key=lambda b: b["columns"][0])
+    free = sorted(r for b in members.values() if not b["columns"] for r in b["rows"])
+    if any(len(b["rows"]) < len(b["columns"]) for b in legs):
+        return None
+    return legs, free
 
 
 def assembly_context(functions: list[dict[str, Any]], model_name: str) -> dict[str, Any] | None:
@@ -53,7 +86,22 @@ def assembly_context(functions: list[dict[str, Any]], model_name: str) -> dict[s
     rows = closure["outputs"][0]["size"]
     order = [p["name"] for p in closure["params"]] + [p["name"] for p in jacobians["params"]
                                                      if p["name"] not in {c["name"] for c in closure["params"]}]
+    n, ns, np_ = sizes["q"], sizes["s"], sizes["p"]
+    split = leg_blocks([a["zero"] for a in blocks["Phi_s"]["assignments"]], rows, ns)
+    legs, free = split if split is not None else ([], [])
+    reduced = sum(len(b["rows"]) - len(b["columns"]) for b in legs) + len(free)
+    if reduced < np_:   # the legs' reduced rows cannot determine the pose: the dense QR takes every step
+        legs, free = [], []
+    right_sides = max(1, n)     # a step's one, J's n
+    placed, cells, rows_before, reduced_before = [], 0, 0, 0
+    for block in legs:      # where each leg's rows go: its storage (cells and rows before it) and its reduced rows
+        m, nc = len(block["rows"]), len(block["columns"])
+        placed.append(block | {"cells_before": cells, "rows_before": rows_before, "reduced_before": reduced_before})
+        cells, rows_before, reduced_before = cells + m * nc, rows_before + m, reduced_before + m - nc
     return {
+        "legs": placed, "free_rows": free, "reduced_rows": reduced, "right_sides": right_sides,
+        "free_before": reduced_before,
+        "leg_storage": cells + rows_before * (np_ + right_sides),
         "prefix": model_name,
         "closed": repr(CLOSED),
         "assemble": f"{model_name}_assemble",
@@ -64,7 +112,6 @@ def assembly_context(functions: list[dict[str, Any]], model_name: str) -> dict[s
         "jacobian_params": [p["name"] for p in jacobians["params"]],
         "jacobian_outputs": [o["name"] for o in jacobians["outputs"]],
         "params": order,
-        "rows": rows, "n": sizes["q"], "ns": sizes["s"], "np": sizes["p"],
-        "unknowns": sizes["s"] + sizes["p"],
+        "rows": rows, "n": n, "ns": ns, "np": np_, "unknowns": ns + np_,
         "blocks": {name: blocks[name]["size"] for name in ("Phi_p", "Phi_q", "Phi_s")},
     }

@@ -135,7 +135,7 @@ def _outputs(spec: FunctionSpec, f: OptimizedFunction, text: Callable[[sympy.Exp
         assignments = []
         for k, e in enumerate(entries):
             constant = not e.free_symbols
-            assignments.append({"index": k, "code": text(e), "constant": constant,
+            assignments.append({"index": k, "code": text(e), "constant": constant, "zero": e == 0,
                                 "slot": None if constant else slots})
             slots += 0 if constant else 1
         outputs.append({
