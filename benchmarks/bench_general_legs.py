@@ -5,7 +5,8 @@ For each backend (numpy, C) and device, one haptic-loop step at a time along a s
 circle of 5 deg in each arm, 1000 samples): the forward kinematics warm-started from the previous sample and
 the Jacobian J = dp/dq there.  The Falcon runs the run-time Gauss-Newton on its generated closure
 (``solve_closure``, unknowns p and s) and ``closure_velocities``, and the generated assembly of its C library
-(``novint_falcon_assemble`` and ``novint_falcon_assembly_jacobian``) from Python (``GeneratedAssembly``) and from a C loop
+(``novint_falcon_assemble`` and ``novint_falcon_assembly_jacobian``) from Python (``GeneratedAssembly``, its compiled
+entry points unless ``SYMKIN_C_ENTRY=ctypes``) and from a C loop
 (compiled here with the library's source); the DELTA its generated closed forms ``fk`` and ``jacobian``.  Issue
 63's targets: the Falcon's fk + J warm-started <= 5 us per call in C and <= 10 us from Python.
 

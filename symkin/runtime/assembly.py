@@ -1,9 +1,10 @@
 """The generated assembly of a parallel model from Python (issue 63): ``<model>_assemble`` and
 ``<model>_assembly_jacobian`` of its C library (:mod:`symkin.backends.c.assembly`), bound once for a control loop.
 
-``GeneratedAssembly(load(directory, "c"))`` finds the model's compiled library (the C backend's cache), binds the two
-functions through ctypes with plain pointers (the arrays' checks done here, once per call, on their attributes) and
-the model's parameter values (its defaults, or a bound design's); :meth:`GeneratedAssembly.assemble` updates a
+``GeneratedAssembly(load(directory, "c"))`` finds the model's compiled library (the C backend's cache) and binds the
+two functions with the model's parameter values (its defaults, or a bound design's): through compiled CPython entry
+points (:func:`symkin.backends.c.loader_entry_points.assembly_entry_points`, for exact float64 C-contiguous arrays)
+and otherwise through ctypes with plain pointers (the arrays' checks done here, on their attributes); :meth:`GeneratedAssembly.assemble` updates a
 warm start (s, p) in place - the previous sample's - and :meth:`GeneratedAssembly.jacobian` gives J = dp/dq.  A call
 that does not close the legs leaves NaN and says so (its return value), and a possible jump of assembly mode is
 flagged (a negative count), never a silent wrong branch.
@@ -17,6 +18,7 @@ import numpy as np
 
 from symkin.backends.c.build import shared_library
 from symkin.backends.c.loader import source_and_header
+from symkin.backends.c.loader_entry_points import assembly_entry_points
 from symkin.errors import GeneratedCodeError
 from symkin.runtime.info import ModelInfo
 from symkin.runtime.loader import LoadedModel
@@ -49,11 +51,16 @@ class GeneratedAssembly:
         if not {"closure", "closure_jacobians"} <= set(model.info.functions):
             raise GeneratedCodeError(f"{model.name}: no generated assembly; derive the model with closure and "
                                      "closure_jacobians in the C backend")
-        library = ctypes.CDLL(str(shared_library(*source_and_header(model.directory, model.info.backend_files["c"]))))
+        source, header = source_and_header(model.directory, model.info.backend_files["c"])
+        path = shared_library(source, header)
+        library = ctypes.CDLL(str(path))
         names = assembly_parameter_names(model.info)
         self._parameters = [float(model.parameters[name]) for name in names]
+        self._parameter_array = np.array(self._parameters, dtype=np.float64)
         inputs = model.info.functions["closure"].inputs
         self.sizes = {v.name: int(v.shape[0]) for v in inputs[:3]}
+        #: the compiled CPython entry points (None: ctypes only); they take exact arrays, the rest goes to ctypes
+        self._entry = assembly_entry_points(path, header, model.name, self.sizes, names)
         doubles = [ctypes.c_double] * len(names)
         self._assemble = library[f"{model.name}_assemble"]
         self._assemble.argtypes = [ctypes.c_void_p] * 3 + doubles + [ctypes.c_int, ctypes.c_double, ctypes.c_void_p]
@@ -64,6 +71,12 @@ class GeneratedAssembly:
         self._residual = np.zeros(1)
         self._residual_address = self._residual.ctypes.data
         self.name = model.name
+
+    @property
+    def compiled(self) -> bool:
+        """Whether compiled CPython entry points serve the calls with exact arrays (else ctypes serves every call:
+        ``SYMKIN_C_ENTRY=ctypes``, or no Python headers or compiler for the extension)."""
+        return self._entry is not None
 
     def _pointer(self, array: np.ndarray, name: str, writable: bool = False) -> int:
         """The address of a float64 C-contiguous vector of the assembly's size for ``name``, or a clear error."""
@@ -80,6 +93,10 @@ class GeneratedAssembly:
         s, p NaN where it did not converge or the legs do not close there; -steps where the legs closed but the
         start was outside its Newton-Kantorovich region (a possible jump of assembly mode: s, p hold the assembly
         reached; :mod:`symkin.backends.c.assembly`)."""
+        if self._entry is not None:
+            taken = self._entry.assemble(q, s, p, self._parameter_array, max_iterations, tolerance, self._residual)
+            if taken is not None:
+                return taken, float(self._residual[0])
         steps = self._assemble(self._pointer(q, "q"), self._pointer(s, "s", True), self._pointer(p, "p", True),
                                *self._parameters, max_iterations, tolerance, self._residual_address)
         return steps, float(self._residual[0])
@@ -92,6 +109,8 @@ class GeneratedAssembly:
         if not (J.dtype == np.float64 and J.flags.c_contiguous and J.shape == shape and J.flags.writeable):
             raise ValueError(f"{self.name} assembly: out= must be a writable float64 C-contiguous array of shape "
                              f"{shape}, got {J.dtype} {J.shape}")
+        if self._entry is not None and self._entry.jacobian(q, s, p, self._parameter_array, J) is not None:
+            return J
         self._jacobian(self._pointer(q, "q"), self._pointer(s, "s"), self._pointer(p, "p"), *self._parameters,
                        J.ctypes.data)
         return J

@@ -210,6 +210,33 @@ def test_the_python_binding_gives_the_c_functions_results_with_the_models_design
         GeneratedAssembly(load(generated_dir / "delta"))
 
 
+def test_the_compiled_entry_points_give_the_ctypes_results(falcon, monkeypatch):
+    """GeneratedAssembly's compiled CPython entry points (exact float64 arrays) and its ctypes binding
+    (SYMKIN_C_ENTRY=ctypes) call the same C functions: the same steps, residual, pose and J, bit for bit; arguments
+    the entry points do not take (a list, a float32 array) go to the ctypes side, which converts or refuses them."""
+    model = falcon[0]
+    monkeypatch.delenv("SYMKIN_C_ENTRY", raising=False)      # the suite's default is ctypes (tests/conftest.py)
+    compiled = GeneratedAssembly(load(model.directory, "c"))
+    monkeypatch.setenv("SYMKIN_C_ENTRY", "ctypes")
+    plain = GeneratedAssembly(load(model.directory, "c"))
+    assert compiled.compiled
+    assert not plain.compiled
+    q = np.full(3, FALCON_ARM + 0.01)
+    results = []
+    for assembly in (compiled, plain):
+        s, p = np.tile(FALCON_PASSIVE, 3), np.array([0.0, 0.0, 0.12])
+        steps, residual = assembly.assemble(q, s, p)
+        results.append((steps, residual, p, assembly.jacobian(q, s, p)))
+    assert results[0][:2] == results[1][:2]
+    np.testing.assert_array_equal(results[0][2], results[1][2])
+    np.testing.assert_array_equal(results[0][3], results[1][3])
+    s, p = np.tile(FALCON_PASSIVE, 3), np.array([0.0, 0.0, 0.12])
+    with pytest.raises(ValueError, match="'q' must be a float64 C-contiguous array of shape"):
+        compiled.assemble(list(q), s, p)
+    with pytest.raises(ValueError, match="'p' must be a float64 C-contiguous array of shape"):
+        compiled.jacobian(q, s, p.astype(np.float32))
+
+
 def test_the_stewart_platform_gets_its_forward_kinematics_from_the_generated_assembly(generated_dir):
     """generated/stewart (six U-P-S legs: 36 closure rows in 30 passive joints and the 6 pose coordinates): from the
     home pose to poses 10 mm and 3 deg away, the generated assembly lands on the pose whose closed-form ik gave the

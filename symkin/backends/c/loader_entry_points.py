@@ -37,6 +37,8 @@ from symkin.runtime.wrappers import signature_text
 ENTRY_VARIABLE = "SYMKIN_C_ENTRY"
 #: The extension module's template (under templates/).
 TEMPLATE = "c/python_module.c.j2"
+#: The template of the generated assembly's extension module (:func:`assembly_entry_points`).
+ASSEMBLY_TEMPLATE = "c/assembly_module.c.j2"
 
 
 def c_string(text: str) -> str:
@@ -125,12 +127,54 @@ def entry_points(library: Path, header: Path, model: str, records: Sequence[Func
     except GeneratedCodeError as err:
         progress(f"symkin: the compiled entry points of {model} did not build; its Python calls go through ctypes:\n{err}")
         return None
+    module = _import(path, name)
+    if module is None:
+        return None
+    python = tuple(functions[r.name] for r in records)
+    module._bind(python, tuple(getattr(f, "result_type", None) for f in python))
+    return {record.name: getattr(module, record.name) for record in records}
+
+
+def _import(path: Path, name: str) -> Any:
+    """The extension module ``name`` built at ``path``, imported (None where Python finds no loader for it)."""
     loader = importlib.machinery.ExtensionFileLoader(name, str(path))
     spec = importlib.util.spec_from_file_location(name, str(path), loader=loader)
     if spec is None:
         return None
     module = importlib.util.module_from_spec(spec)
     loader.exec_module(module)
-    python = tuple(functions[r.name] for r in records)
-    module._bind(python, tuple(getattr(f, "result_type", None) for f in python))
-    return {record.name: getattr(module, record.name) for record in records}
+    return module
+
+
+def assembly_entry_points(library: Path, header: Path, model: str, sizes: dict[str, int],
+                          parameters: Sequence[str]) -> Any:
+    """The extension module of the generated assembly of ``model`` (:mod:`symkin.backends.c.assembly`): its
+    ``assemble(q, s, p, parameters, max_iterations, tolerance, residual)`` and ``jacobian(q, s, p, parameters, J)``
+    call the C functions without ctypes and return None for an argument they do not take (the caller's checks then
+    say what is wrong).  ``sizes``: the closure's n, ns and np (keys q, s, p); ``parameters``: the assembly's
+    free parameters in its order.  None where there is no extension (chosen off, no headers, a failed build: said on
+    stderr)."""
+    if os.environ.get(ENTRY_VARIABLE, "") == "ctypes" or python_include_directories() is None:
+        return None
+    for name in [model, *parameters]:
+        if not name.isidentifier() or not name.isascii():
+            raise GeneratedCodeError(f"the manifest names {name!r}, which is no identifier")
+    context = {"model": model, "header": header.name, "version": __version__, "assemble": f"{model}_assemble",
+               "jacobian": f"{model}_assembly_jacobian", "n": sizes["q"], "ns": sizes["s"], "np": sizes["p"],
+               "parameters": list(parameters)}
+
+    def source() -> str:
+        from symkin.backends.templating import render  # jinja2: only when the extension is built
+
+        return render(ASSEMBLY_TEMPLATE, **context)
+
+    what = b"\0".join([Path(__file__).read_bytes(),
+                       resources.files("symkin.templates").joinpath(ASSEMBLY_TEMPLATE).read_bytes(),
+                       json.dumps(context, sort_keys=True).encode()])
+    try:
+        path, name = extension_module(source, what, f"{model}_assembly", header, library)
+    except GeneratedCodeError as err:
+        progress(f"symkin: the compiled assembly entry points of {model} did not build; its calls go through "
+                 f"ctypes:\n{err}")
+        return None
+    return _import(path, name)
