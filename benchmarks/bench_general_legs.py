@@ -3,7 +3,7 @@ models/devices/novint_falcon.yaml beside the closed-form DELTA of models/delta.y
 
 For each backend (numpy, C) and device, one haptic-loop step at a time along a slow path of the arms (a
 circle of 5 deg in each arm, 1000 samples): the forward kinematics warm-started from the previous sample and
-the Jacobian J = dp/dq there.  The Falcon runs the run-time Gauss-Newton on its generated closure
+the Jacobian J = dp/dq there (the run-time mechanism's ClosureAssembly: the forward kinematics only).  The Falcon runs the run-time Gauss-Newton on its generated closure
 (``solve_closure``, unknowns p and s) and ``closure_velocities``, and the generated assembly of its C library
 (``novint_falcon_assemble`` and ``novint_falcon_assembly_jacobian``) from Python (``GeneratedAssembly``, its compiled
 entry points unless ``SYMKIN_C_ENTRY=ctypes``) and from a C loop
@@ -29,14 +29,10 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 import symkin  # noqa: E402
+from symkin.mechanism.closure import ClosureAssembly, solve_home_assembly  # noqa: E402
 from symkin.runtime.assembly import GeneratedAssembly  # noqa: E402
 from symkin.runtime.parallel import closure_velocities, solve_closure  # noqa: E402
 from symkin.text_table import format_table  # noqa: E402
-
-#: The Falcon's home assembly (models/devices/novint_falcon.yaml): every arm at theta = 26.3 deg, its passive
-#: joints (knee, swing, sway, ankle per leg), at the handle's home (0, 0, 0.125) m; refined below by Gauss-Newton.
-FALCON_ARM, FALCON_PASSIVE = np.radians(26.3), np.radians([101.75, 1.3, -1.3, -128.05])
-
 
 def _path(centre: np.ndarray, samples: int) -> np.ndarray:
     """Arm angles along a circle of 5 deg about ``centre`` in each arm, phase-shifted (samples, 3)."""
@@ -57,33 +53,30 @@ def _per_call(step, path: np.ndarray, repeat: int) -> float:
 
 def _falcon_step(model):
     """One warm-started forward kinematics and Jacobian of the Falcon, from the last sample's (s, p)."""
-    home = np.array([0.0, 0.0, 0.125])
-    s0 = np.tile(FALCON_PASSIVE, 3)
-    solved = solve_closure(model, np.full(3, FALCON_ARM), s0, home, unknowns=("q", "s"))
-    state = {"s": solved.solution["s"], "p": home}
+    home = solve_home_assembly(model)
+    state = {"s": home.s, "p": np.asarray(model.info.home, dtype=float)}
 
     def step(q: np.ndarray) -> None:
         report = solve_closure(model, q, state["s"], state["p"], unknowns=("p", "s"))
         state["s"], state["p"] = report.solution["s"], report.solution["p"]
         closure_velocities(model, q, state["s"], state["p"])
 
-    return step, solved.solution["q"]
+    return step, home.q
 
 
 def _generated_step(model):
     """The same step by the generated assembly of the Falcon's C library (every parameter folded), from Python
     (:class:`symkin.runtime.assembly.GeneratedAssembly`)."""
     assembly = GeneratedAssembly(model)
-    home = np.array([0.0, 0.0, 0.125])
-    solved = solve_closure(model, np.full(3, FALCON_ARM), np.tile(FALCON_PASSIVE, 3), home, unknowns=("q", "s"))
-    s, p, J = solved.solution["s"].copy(), home.copy(), np.empty((3, 3))
+    home = solve_home_assembly(model)       # the model file's declared home assembly, refined
+    s, p, J = home.s.copy(), np.asarray(model.info.home, dtype=float), np.empty((3, 3))
 
     def step(q: np.ndarray) -> None:
         if assembly.assemble(q, s, p)[0] <= 0:
             raise RuntimeError("the generated assembly lost the path or its assembly mode")
         assembly.jacobian(q, s, p, J)
 
-    return step, solved.solution["q"], s
+    return step, home.q, s, p
 
 
 C_LOOP = r"""#define _POSIX_C_SOURCE 199309L
@@ -92,7 +85,7 @@ C_LOOP = r"""#define _POSIX_C_SOURCE 199309L
 #include <time.h>
 #include "novint_falcon.h"
 int main(void) {
-    double s[12] = {%(s)s}, p[3] = {0.0, 0.0, 0.125}, q[3], J[9], residual;
+    double s[12] = {%(s)s}, p[3] = {%(p)s}, q[3], J[9], residual;
     const int samples = %(samples)d, repeat = %(repeat)d;
     double best = 1e300;
     for (int r = 0; r < repeat; ++r) {
@@ -115,11 +108,11 @@ int main(void) {
 """
 
 
-def _c_loop(directory: Path, s: np.ndarray, arm: float, samples: int, repeat: int) -> float:
-    """us per step of the generated assembly called from a C loop (cc -O3), the same path."""
+def _c_loop(directory: Path, s: np.ndarray, p: np.ndarray, arm: float, samples: int, repeat: int) -> float:
+    """us per step of the generated assembly called from a C loop (cc -O3), the same path from (s, p)."""
     source = directory / "loop.c"
-    source.write_text(C_LOOP % {"s": ", ".join(repr(float(v)) for v in s), "samples": samples, "repeat": repeat,
-                                "arm": float(arm)})
+    source.write_text(C_LOOP % {"s": ", ".join(repr(float(v)) for v in s), "p": ", ".join(repr(float(v)) for v in p),
+                                "samples": samples, "repeat": repeat, "arm": float(arm)})
     binary = directory / "loop"
     subprocess.run(["cc", "-std=c99", "-O3", "-o", str(binary), str(source), str(directory / "novint_falcon.c"),
                     "-lm"], check=True)
@@ -153,10 +146,15 @@ def main(argv: list[str] | None = None) -> int:
                 step, centre = make(symkin.load(directory, backend))
                 seconds = _per_call(step, _path(centre, args.samples), args.repeat)
                 rows.append([device, backend, f"{1e6 * seconds:.1f}"])
-        step, centre, s = _generated_step(symkin.load(folded, "c"))
+        for backend in ("numpy", "c"):    # the run-time mechanism's continuation: fk only
+            mechanism = ClosureAssembly(symkin.load(folded, backend))
+            seconds = _per_call(mechanism, _path(mechanism.home, args.samples), args.repeat)
+            rows.append(["Novint Falcon, ClosureAssembly (fk only)",
+                         "c, generated assembly" if mechanism.generated else backend, f"{1e6 * seconds:.1f}"])
+        step, centre, s, p = _generated_step(symkin.load(folded, "c"))
         seconds = _per_call(step, _path(centre, args.samples), args.repeat)
         rows.append(["Novint Falcon, generated assembly", "c, from Python", f"{1e6 * seconds:.2f}"])
-        rows.append(["Novint Falcon, generated assembly", "c, from C", f"{_c_loop(folded, s, centre[0], args.samples, args.repeat):.2f}"])
+        rows.append(["Novint Falcon, generated assembly", "c, from C", f"{_c_loop(folded, s, p, centre[0], args.samples, args.repeat):.2f}"])
     print(format_table(["device", "backend", "fk + J per call, warm (us)"], rows))
     print("issue 63's targets for the Falcon: <= 5 us per call in C, <= 10 us from Python")
     return 0

@@ -10,7 +10,9 @@ excitation design ask it.
   last assembly or the home assembly, whichever is nearer, along the straight line of actuator positions in steps
   of at most :data:`MAX_STEP` (unknowns p and s); a batch (a recorded trajectory) row by row, each from the
   previous row's (a trajectory's first row, read after the run ended far from it, is not solved from the run's
-  end); NaN where the legs stop closing.
+  end); NaN where the legs stop closing.  A model loaded with the C backend takes each step by its generated
+  assembly (:class:`symkin.runtime.assembly.GeneratedAssembly`, microseconds), and the run-time Gauss-Newton
+  where that one refuses or flags a jump of assembly mode.
 * **Dynamics of the actuated joints** (:class:`ClosureFunctions`): the generated ``closure_dynamics`` reduced at
   each state (:mod:`symkin.runtime.closure_dynamics`) and the regressors over all the closure's variables taken to
   the actuators (Y = W^T Y_z, the identification's) as functions of q alone - the functions a
@@ -35,6 +37,8 @@ from symkin.runtime.info import GeneratedModel
 from symkin import mechanism
 from symkin.mechanism.limits import within_limits
 from symkin.mechanism.passive import declared_limits
+from symkin.runtime.assembly import GeneratedAssembly
+from symkin.runtime.loader import LoadedModel
 from symkin.runtime.parallel import solve_closure
 
 
@@ -182,6 +186,20 @@ class ClosureAssembly:
         self.home = q
         self._home = (q, s, np.asarray(model.info.home, dtype=float))
         self._last = self._home
+        #: the generated assembly of a model loaded with the C backend, else None (the run-time solver only)
+        self.generated = _generated_assembly(model)
+
+    def _step(self, q: np.ndarray, s: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        """(s, p) at q from the neighbouring assembly (s, p): the generated assembly's where it converged in the
+        start's mode, else the run-time Gauss-Newton's; None where the legs do not close."""
+        if self.generated is not None:
+            s1, p1 = s.copy(), p.copy()
+            if self.generated.assemble(q, s1, p1)[0] > 0:
+                return s1, p1
+        report = solve_closure(self.model, q, s, p, unknowns=("p", "s"), max_step=MAX_STEP)
+        solution = report.solution
+        assert isinstance(solution, dict), "solve_closure names its vectors"
+        return (solution["s"], solution["p"]) if report.all_converged else None
 
     def _solve(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
         """(q, s, p) at q, continued from the nearer (in the actuators) of the last assembly and the home assembly
@@ -193,13 +211,10 @@ class ClosureAssembly:
         steps = max(1, int(np.ceil(np.max(np.abs(q - start[0])) / MAX_STEP)))
         s, p = start[1], start[2]
         for fraction in np.linspace(0.0, 1.0, steps + 1)[1:]:
-            report = solve_closure(self.model, start[0] + fraction * (q - start[0]), s, p, unknowns=("p", "s"),
-                                   max_step=MAX_STEP)
-            solution = report.solution
-            assert isinstance(solution, dict), "solve_closure names its vectors"
-            if not report.all_converged:
+            solved = self._step(start[0] + fraction * (q - start[0]), s, p)
+            if solved is None:
                 return None
-            s, p = solution["s"], solution["p"]
+            s, p = solved
         return q.copy(), s, p
 
     def __call__(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -219,6 +234,16 @@ class ClosureAssembly:
                 s.append(solved[1])
                 p.append(solved[2])
         return np.reshape(s, q.shape[:-1] + (-1,)), np.reshape(p, q.shape[:-1] + (-1,))
+
+
+def _generated_assembly(model: GeneratedModel) -> GeneratedAssembly | None:
+    """The generated assembly of a model loaded with the C backend whose C code has one, else None."""
+    if not isinstance(model, LoadedModel) or model.backend != "c":
+        return None
+    try:
+        return GeneratedAssembly(model)
+    except GeneratedCodeError:
+        return None
 
 
 class ClosureFunctions:

@@ -62,6 +62,11 @@ class GeneratedAssembly:
         #: the compiled CPython entry points (None: ctypes only); they take exact arrays, the rest goes to ctypes
         self._entry = assembly_entry_points(path, header, model.name, self.sizes, names)
         doubles = [ctypes.c_double] * len(names)
+        try:
+            library[f"{model.name}_assemble"]
+        except AttributeError:
+            raise GeneratedCodeError(f"{model.name}: its C code predates the generated assembly; derive the model "
+                                     "again") from None
         self._assemble = library[f"{model.name}_assemble"]
         self._assemble.argtypes = [ctypes.c_void_p] * 3 + doubles + [ctypes.c_int, ctypes.c_double, ctypes.c_void_p]
         self._assemble.restype = ctypes.c_int

@@ -20,7 +20,7 @@ from symkin import load, pipeline
 from symkin.backends.c import assembly
 from symkin.backends.c.build import shared_library
 from symkin.mechanism import closure
-from symkin.mechanism.closure import solve_home_assembly
+from symkin.mechanism.closure import ClosureAssembly, solve_home_assembly
 from symkin.model import model_from_text
 from symkin.errors import GeneratedCodeError
 from symkin.runtime.assembly import GeneratedAssembly, assembly_parameter_names
@@ -113,6 +113,33 @@ def test_a_jump_of_assembly_mode_is_flagged(falcon):
             np.testing.assert_allclose(p, p_ref[k], rtol=0, atol=1e-9)
             np.testing.assert_allclose(np.angle(np.exp(1j * (s - s_ref[k]))), 0.0, rtol=0, atol=1e-6)
     assert min(counts) < 0 < max(counts)
+
+
+def test_the_run_time_mechanism_steps_by_the_generated_assembly(falcon, monkeypatch):
+    """symkin.mechanism.closure.ClosureAssembly of the Falcon loaded with the C backend takes every step by the
+    generated assembly (the run-time solver is not called); along a slow path and a jump of 30 deg (continued in
+    steps of MAX_STEP) it gives the run-time solver's assembly (the numpy-loaded model's ClosureAssembly) to the
+    Newton tolerance times the condition number."""
+    model = falcon[0]
+    runtime = ClosureAssembly(model)
+    path = runtime.home + np.radians(np.vstack([np.linspace(0.0, 4.0, 5)[:, None] * [1.0, -0.5, 0.3],
+                                                 [[30.0, -10.0, 5.0]]]))
+    references = [runtime(q) for q in path]
+    generated = ClosureAssembly(load(model.directory, "c"))
+    assert generated.generated is not None
+    assert runtime.generated is None
+
+    def refused(*args, **kwargs):
+        raise AssertionError("the run-time solver was called")
+
+    monkeypatch.setattr(closure, "solve_closure", refused)
+    for q, (s_ref, p_ref) in zip(path, references):
+        s, p = generated(q)
+        A = np.hstack([model.closure_jacobians(q, s, p)[k] for k in (2, 0)])      # [Phi_s Phi_p]
+        singular = np.linalg.svd(A, compute_uv=False)
+        condition = singular[0] / singular[singular > singular[0] * A.shape[0] * EPS][-1]
+        np.testing.assert_allclose(p, p_ref, rtol=0, atol=condition * TOLERANCE)
+        np.testing.assert_allclose(s, s_ref, rtol=0, atol=condition * TOLERANCE)
 
 
 def test_no_convergence_within_the_bound_gives_nan_and_no_steps(falcon):
