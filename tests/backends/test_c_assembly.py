@@ -28,8 +28,6 @@ from symkin.runtime.parallel import closure_velocities, solve_closure
 from tolerances import EPS
 
 DOUBLES = np.ctypeslib.ndpointer(dtype=np.float64, flags="C_CONTIGUOUS")
-#: The Falcon's home assembly (models/devices/novint_falcon.yaml): every arm at 26.3 deg; knee, swing, sway, ankle.
-FALCON_ARM, FALCON_PASSIVE = np.radians(26.3), np.radians([101.75, 1.3, -1.3, -128.05])
 #: Gauss-Newton's step tolerance (the runtime's default) and its bound on the steps.
 TOLERANCE, ITERATIONS = 1e-12, 50
 
@@ -66,11 +64,17 @@ def falcon(tmp_path_factory):
     return (load(directory), *bind(library(directory, "novint_falcon"), "novint_falcon", 0))  # numpy: the runtime's
 
 
-def test_a_warm_started_path_follows_the_runtime_solver(falcon):
+@pytest.fixture(scope="module")
+def falcon_home(falcon):
+    """The Falcon's home assembly (its model file's declared one, refined by Gauss-Newton) and home pose."""
+    model = falcon[0]
+    return solve_home_assembly(model), np.asarray(model.info.home, dtype=float)
+
+
+def test_a_warm_started_path_follows_the_runtime_solver(falcon, falcon_home):
     model, assemble, jacobian = falcon
-    home = solve_closure(model, np.full(3, FALCON_ARM), np.tile(FALCON_PASSIVE, 3), np.array([0.0, 0.0, 0.125]),
-                         unknowns=("q", "s"))
-    q0, s, p = home.solution["q"], home.solution["s"].copy(), np.array([0.0, 0.0, 0.125])
+    home, p_home = falcon_home
+    q0, s, p = home.q, home.s.copy(), p_home.copy()
     residual = ctypes.c_double()
     angles = np.linspace(0.0, 2 * np.pi, 60)
     for t in angles:
@@ -89,14 +93,13 @@ def test_a_warm_started_path_follows_the_runtime_solver(falcon):
         np.testing.assert_allclose(J, velocities.J, rtol=0, atol=condition * 64 * EPS * np.abs(velocities.J).max())
 
 
-def test_a_jump_of_assembly_mode_is_flagged(falcon):
+def test_a_jump_of_assembly_mode_is_flagged(falcon, falcon_home):
     """Cold starts from the home assembly to arms up to 60 deg away: where the generated assembly returns a positive
     count, its assembly is the one the run-time solver reaches by continuing the home assembly in 2-deg steps (the
     same mode); every start that lands elsewhere is flagged (a negative count: a correction failed to halve) or
     refused (0, NaN).  Some starts are flagged (the check is not idle here)."""
     model, assemble, _ = falcon
-    home = solve_home_assembly(model)
-    p_home = np.asarray(model.info.home, dtype=float)
+    home, p_home = falcon_home
     offsets = np.random.default_rng(63).uniform(-1.0, 1.0, (40, 3)) * np.radians(60.0)
     s_ref, p_ref = np.tile(home.s, (len(offsets), 1)), np.tile(p_home, (len(offsets), 1))
     followed = np.ones(len(offsets), dtype=bool)
@@ -142,12 +145,13 @@ def test_the_run_time_mechanism_steps_by_the_generated_assembly(falcon, monkeypa
         np.testing.assert_allclose(s, s_ref, rtol=0, atol=condition * TOLERANCE)
 
 
-def test_no_convergence_within_the_bound_gives_nan_and_no_steps(falcon):
+def test_no_convergence_within_the_bound_gives_nan_and_no_steps(falcon, falcon_home):
     """Arms 60 deg from the start's: not closed within two steps, so no pose is returned (the residual says how far)."""
     _, assemble, _ = falcon
-    s, p = np.tile(FALCON_PASSIVE, 3), np.array([0.0, 0.0, 0.125])
+    home, p_home = falcon_home
+    s, p = home.s.copy(), p_home.copy()
     residual = ctypes.c_double()
-    assert assemble(np.full(3, FALCON_ARM + np.radians(60.0)), s, p, 2, TOLERANCE, ctypes.byref(residual)) == 0
+    assert assemble(home.q + np.radians(60.0), s, p, 2, TOLERANCE, ctypes.byref(residual)) == 0
     assert np.isnan(s).all()
     assert np.isnan(p).all()
     assert residual.value > 1e-6
@@ -207,12 +211,13 @@ def test_the_delta_s_generated_assembly_is_its_closed_form(generated_dir):
         np.testing.assert_allclose(J, delta.jacobian(q, exact), rtol=0, atol=1e-10 * np.abs(J).max())
 
 
-def test_the_python_binding_gives_the_c_functions_results_with_the_models_design(falcon, generated_dir):
+def test_the_python_binding_gives_the_c_functions_results_with_the_models_design(falcon, falcon_home, generated_dir):
     """symkin.runtime.assembly.GeneratedAssembly: the same steps, pose and J as the raw C functions on the Falcon;
     a bound design of the DELTA (a = 0.12 m) assembles at that design's closed-form fk; bad arrays and a model
     without the C assembly are refused with the fix."""
     model, assemble, jacobian = falcon
-    q, s0, p0 = np.full(3, FALCON_ARM), np.tile(FALCON_PASSIVE, 3), np.array([0.0, 0.0, 0.12])
+    home, p_home = falcon_home
+    q, s0, p0 = home.q, home.s + 0.02, p_home - [0.0, 0.0, 0.005]       # a start 5 mm and 1 deg off
     s, p, residual = s0.copy(), p0.copy(), ctypes.c_double()
     steps = assemble(q, s, p, ITERATIONS, TOLERANCE, ctypes.byref(residual))
     raw_J = np.empty((3, 3))
@@ -237,7 +242,7 @@ def test_the_python_binding_gives_the_c_functions_results_with_the_models_design
         GeneratedAssembly(load(generated_dir / "delta"))
 
 
-def test_the_compiled_entry_points_give_the_ctypes_results(falcon, monkeypatch):
+def test_the_compiled_entry_points_give_the_ctypes_results(falcon, falcon_home, monkeypatch):
     """GeneratedAssembly's compiled CPython entry points (exact float64 arrays) and its ctypes binding
     (SYMKIN_C_ENTRY=ctypes) call the same C functions: the same steps, residual, pose and J, bit for bit; arguments
     the entry points do not take (a list, a float32 array) go to the ctypes side, which converts or refuses them."""
@@ -248,16 +253,17 @@ def test_the_compiled_entry_points_give_the_ctypes_results(falcon, monkeypatch):
     plain = GeneratedAssembly(load(model.directory, "c"))
     assert compiled.compiled
     assert not plain.compiled
-    q = np.full(3, FALCON_ARM + 0.01)
+    home, p_home = falcon_home
+    q = home.q + 0.01
     results = []
     for assembly in (compiled, plain):
-        s, p = np.tile(FALCON_PASSIVE, 3), np.array([0.0, 0.0, 0.12])
+        s, p = home.s + 0.02, p_home - [0.0, 0.0, 0.005]
         steps, residual = assembly.assemble(q, s, p)
         results.append((steps, residual, p, assembly.jacobian(q, s, p)))
     assert results[0][:2] == results[1][:2]
     np.testing.assert_array_equal(results[0][2], results[1][2])
     np.testing.assert_array_equal(results[0][3], results[1][3])
-    s, p = np.tile(FALCON_PASSIVE, 3), np.array([0.0, 0.0, 0.12])
+    s, p = home.s.copy(), p_home.copy()
     with pytest.raises(ValueError, match="'q' must be a float64 C-contiguous array of shape"):
         compiled.assemble(list(q), s, p)
     with pytest.raises(ValueError, match="'p' must be a float64 C-contiguous array of shape"):
