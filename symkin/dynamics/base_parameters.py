@@ -50,7 +50,7 @@ from sympy.polys.matrices import DomainMatrix
 from sympy.polys.rings import ring as sympy_ring
 
 from symkin.errors import DerivationError, ModelDataError, Problem
-from symkin.model import coordinates, joint_kinds
+from symkin.model import coordinates
 from symkin.model.schema import Model
 
 #: Samples stacked beyond the fewest that could reveal every parameter (rows = samples x coordinates).
@@ -144,7 +144,7 @@ class _ExactSample:
         for group in ("qd", "qdd"):
             self.values.update({se.sympify(s): _rational(rational()) for s in coordinates.symbols(model, group)})
         revolute = {se.sympify(s) for s, c in zip(coordinates.symbols(model, "q"), model.coordinates)
-                    if joint_kinds.is_rotation(c.type)}
+                    if c.turns}
         self.values.update({s: _rational(v) for s, v in self.q.items() if s not in revolute})
         self._rational = rational
 

@@ -170,7 +170,7 @@ def chain_links(model: Model) -> tuple[Link, ...]:
         C_R, C_p = _compose(joint.before, R_prev, p_prev)
         amount = q + joint.offset
         axis = sympy.Matrix(joint.axis)
-        if joint_kinds.is_rotation(joint.type):
+        if joint.turns:
             R, origin = C_R * rotation_matrix(joint.axis, amount), C_p
         else:
             R, origin = C_R, C_p + C_R * axis * amount

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import sympy
 
 from symkin.geometry import homogeneous, principal_axis, rotation_matrix
-from symkin.model import coordinates, joint_kinds, tree
+from symkin.model import coordinates, tree
 from symkin.model.schema import JointType, Model, Op, Rotation, Translation, Vec3
 
 
@@ -136,7 +136,7 @@ def compose_chain(model: Model) -> ChainFrames:
         axes.append(JointAxis(joint.name, joint.type, sympy.ImmutableMatrix(moving.direction(joint.axis)),
                               sympy.ImmutableMatrix(moving.p)))
         amount = q + joint.offset
-        if joint_kinds.is_rotation(joint.type):
+        if joint.turns:
             moving.rotate(joint.axis, amount)
         else:
             moving.translate(tuple(c * amount for c in joint.axis))

@@ -15,7 +15,6 @@ from typing import Any
 from symkin.errors import ModelError
 from symkin.model.body_build import (check_leg_bodies, read_actuators, read_bodies, read_friction, read_parallel_bodies,
                                      read_springs, with_motor_effort_limits)
-from symkin.model import joint_kinds
 from symkin.model.names import name_problem
 from symkin.model.joint_stops_build import read_joint_stops
 from symkin.model.parallel_build import build_parallel, check_parallel_names, parallel_task_space
@@ -221,6 +220,6 @@ def _flag(r: Reader, data: dict[str, Any], key: str) -> bool:
 def _revolute(joints: Sequence[Joint], parallel: Parallel | None) -> dict[str, bool]:
     """{coordinate: whether it turns} (a serial joint's type, a leg's actuated motion), for the units of friction."""
     if parallel is None:
-        return {j.name: joint_kinds.is_rotation(j.type) for j in joints}
+        return {j.name: j.turns for j in joints}
     return {j.variables[j.active]: j.motions[j.active][2] for leg in parallel.legs for j in leg.joints
             if j.active is not None}

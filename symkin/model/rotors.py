@@ -20,7 +20,7 @@ import dataclasses
 
 import sympy
 
-from symkin.model import joint_kinds, tree
+from symkin.model import tree
 from symkin.model.reader import Reader
 from symkin.model.schema import Actuator, Body, Coupling, Joint
 from symkin.model.yaml_source import KeyPath
@@ -47,7 +47,7 @@ def with_rotors(r: Reader, joints: tuple[Joint, ...], actuators: tuple[Actuator,
             out.append(dataclasses.replace(joint, parent=carrier))
             continue
         where = path + (joint.name, "gyroscopic")
-        if not joint_kinds.is_rotation(joint.type) or joint.coupling is not None:
+        if not joint.turns or joint.coupling is not None:
             r.fail(where, f"joint '{joint.name}' is {'coupled' if joint.coupling is not None else 'prismatic'}: "
                          "a gyroscopic rotor turns N times a revolute joint's own coordinate",
                    "drop 'gyroscopic' (the reflected inertia N^2 J_m stays)")

@@ -172,6 +172,11 @@ class Joint:
     parent: str | None = None
 
     @property
+    def turns(self) -> bool:
+        """Whether the joint's motion is a rotation about its axis (its coordinate an angle), not a translation."""
+        return joint_kinds.is_rotation(self.type)
+
+    @property
     def follower(self) -> bool:
         """True if the joint has no coordinate of its own (it moves by others')."""
         return self.coupling is not None and self.coupling.follows_others(self.name)
@@ -341,6 +346,11 @@ class Coordinate:
     limits: tuple[sympy.Expr, sympy.Expr] | None = None
     velocity_limit: sympy.Expr | None = None
     effort_limit: sympy.Expr | None = None
+
+    @property
+    def turns(self) -> bool:
+        """Whether the coordinate is an angle (an actuated rotation), not a length."""
+        return joint_kinds.is_rotation(self.type)
 
 
 class LegJointType(str, Enum):

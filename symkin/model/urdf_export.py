@@ -127,7 +127,7 @@ def export_urdf(model: Model) -> str:
         axis = np.array([_number(a, values) for a in joint.axis])
         offset = _number(joint.offset, values)
         motion = np.eye(4)
-        if joint_kinds.is_rotation(joint.type):
+        if joint.turns:
             motion[:3, :3] = rotation_about(axis, offset)
         else:
             motion[:3, 3] = offset * axis / np.linalg.norm(axis)

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from symkin.model import coordinates, joint_kinds
+from symkin.model import coordinates
 from symkin.model.coordinates import coordinate_range
 from symkin.model.schema import Model
 from symkin.parallel.inputs import TASK_UNITS
@@ -180,7 +180,7 @@ class _Sweep:
 
 def _serial_sweep(model: Model, rng: np.random.Generator) -> _Sweep:
     lower, upper = coordinate_range(model)
-    revolute = np.array([joint_kinds.is_rotation(j.type) for j in model.coordinates])
+    revolute = np.array([j.turns for j in model.coordinates])
     return _Sweep(tuple(j.name for j in model.coordinates), np.where(revolute, np.pi, 1.0), np.ones(model.dof), revolute,
                   lambda q: {"q": q}, rng.uniform(np.maximum(lower, -np.pi), np.minimum(upper, np.pi)))
 
