@@ -33,6 +33,11 @@ class JointType(str, Enum):
     REVOLUTE = "R"
     PRISMATIC = "P"
 
+    @property
+    def turns(self) -> bool:
+        """Whether a joint of this type rotates about its axis (its coordinate an angle), not translates."""
+        return joint_kinds.is_rotation(self)
+
 
 @dataclass(frozen=True)
 class Rotation:
@@ -174,7 +179,7 @@ class Joint:
     @property
     def turns(self) -> bool:
         """Whether the joint's motion is a rotation about its axis (its coordinate an angle), not a translation."""
-        return joint_kinds.is_rotation(self.type)
+        return self.type.turns
 
     @property
     def follower(self) -> bool:
@@ -350,7 +355,7 @@ class Coordinate:
     @property
     def turns(self) -> bool:
         """Whether the coordinate is an angle (an actuated rotation), not a length."""
-        return joint_kinds.is_rotation(self.type)
+        return self.type.turns
 
 
 class LegJointType(str, Enum):

@@ -21,7 +21,7 @@ from symkin.model.reader import (
 )
 from symkin.errors import name_list
 from symkin.model.units import ANGLE, LENGTH
-from symkin.model import joint_kinds, tree
+from symkin.model import tree
 from symkin.model.schema import Coupling, Joint, JointType, Op, Rotation, Translation
 from symkin.model.yaml_source import Document, KeyPath
 
@@ -245,13 +245,13 @@ def _dh_table(r: Reader, path: KeyPath, section: Any) -> list[Joint]:
         values = {k: r.expr(rpath + (k,), fields[k], dimension=ANGLE if k in ("theta", "alpha") else LENGTH)
                   for k in ("theta", "d", "a", "alpha")}
         extras = _joint_extras(r, rpath, fields, default_link=f"link{i + 1}",
-                               revolute=None if jtype is None else joint_kinds.is_rotation(jtype))
+                               revolute=None if jtype is None else jtype.turns)
         if jname is None or jtype is None or any(v is None for v in values.values()) or extras is None:
             r.invalid_links.add(_declared_link(fields, i))
             r.invalid_joints.add(str(fields["name"]))
             continue
         theta, d, a, alpha = values["theta"], values["d"], values["a"], values["alpha"]
-        revolute = joint_kinds.is_rotation(jtype)
+        revolute = jtype.turns
         if convention == "classic":
             before = () if revolute else ops(Rotation(Z_AXIS, theta))
             after = ops(*((Translation((ZERO, ZERO, d)),) if revolute else ()),
@@ -317,7 +317,7 @@ def _chain(r: Reader, path: KeyPath, section: Any) -> list[Joint]:
                    "add 'axis: [0, 0, 1]' (or the axis it turns about or slides along, in its frame)")
         axis = unit_axis(r, jpath + ("axis",), item["axis"]) if "axis" in item else None
         before = frame_ops(r, jpath + ("origin",), item["origin"]) if "origin" in item else ()
-        revolute = None if jtype is None else joint_kinds.is_rotation(jtype)
+        revolute = None if jtype is None else jtype.turns
         offset = (r.expr(jpath + ("offset",), item["offset"], dimension=None if revolute is None else ANGLE if revolute
                          else LENGTH) if "offset" in item else ZERO)
         extras = _joint_extras(r, jpath, item, default_link=f"link{i + 1}", revolute=revolute)

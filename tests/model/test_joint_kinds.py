@@ -41,8 +41,7 @@ def test_joint_type_branches_only_shrink():
 #: answers with its motion subspace, the part of a wrench its motion works against or what its coordinate is
 #: measured by (``per_coordinate``); shrink as they move).
 ROTATION_QUESTIONS = {
-    "model/schema.py": 2,           # Joint.turns, Coordinate.turns: a joint answers for itself
-    "model/serial_build.py": 3,
+    "model/schema.py": 1,           # JointType.turns: a joint (Joint.turns, Coordinate.turns) answers for itself
 }
 
 
