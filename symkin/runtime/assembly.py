@@ -54,6 +54,11 @@ class GeneratedAssembly:
         source, header = source_and_header(model.directory, model.info.backend_files["c"])
         path = shared_library(source, header)
         library = ctypes.CDLL(str(path))
+        try:
+            self._assemble = library[f"{model.name}_assemble"]
+        except AttributeError:
+            raise GeneratedCodeError(f"{model.name}: its C code predates the generated assembly; derive the model "
+                                     "again") from None
         names = assembly_parameter_names(model.info)
         self._parameters = [float(model.parameters[name]) for name in names]
         self._parameter_array = np.array(self._parameters, dtype=np.float64)
@@ -62,12 +67,6 @@ class GeneratedAssembly:
         #: the compiled CPython entry points (None: ctypes only); they take exact arrays, the rest goes to ctypes
         self._entry = assembly_entry_points(path, header, model.name, self.sizes, names)
         doubles = [ctypes.c_double] * len(names)
-        try:
-            library[f"{model.name}_assemble"]
-        except AttributeError:
-            raise GeneratedCodeError(f"{model.name}: its C code predates the generated assembly; derive the model "
-                                     "again") from None
-        self._assemble = library[f"{model.name}_assemble"]
         self._assemble.argtypes = [ctypes.c_void_p] * 3 + doubles + [ctypes.c_int, ctypes.c_double, ctypes.c_void_p]
         self._assemble.restype = ctypes.c_int
         self._jacobian = library[f"{model.name}_assembly_jacobian"]

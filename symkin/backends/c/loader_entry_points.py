@@ -60,12 +60,17 @@ def c_double(value: float) -> str:
     return value.hex()
 
 
+def _identifiers(names: Sequence[str]) -> None:
+    """Refuse a manifest name that is no ASCII identifier: it is written into C source."""
+    for name in names:
+        if not name.isidentifier() or not name.isascii():
+            raise GeneratedCodeError(f"the manifest names {name!r}, which is no identifier")
+
+
 def _function(index: int, model: str, record: Function, docstring: str) -> dict[str, Any]:
     """What the template needs of one manifest function."""
     vectors = [i.size for i in record.vector_inputs]
-    for name in [i.name for i in record.inputs] + [record.name]:
-        if not name.isidentifier() or not name.isascii():
-            raise GeneratedCodeError(f"the manifest names {name!r}, which is no identifier")
+    _identifiers([i.name for i in record.inputs] + [record.name])
     arguments, vector, parameter = [], 0, 0
     for i in record.inputs:
         if i.is_parameter:
@@ -156,9 +161,7 @@ def assembly_entry_points(library: Path, header: Path, model: str, sizes: dict[s
     stderr)."""
     if os.environ.get(ENTRY_VARIABLE, "") == "ctypes" or python_include_directories() is None:
         return None
-    for name in [model, *parameters]:
-        if not name.isidentifier() or not name.isascii():
-            raise GeneratedCodeError(f"the manifest names {name!r}, which is no identifier")
+    _identifiers([model, *parameters])
     context = {"model": model, "header": header.name, "version": __version__, "assemble": f"{model}_assemble",
                "jacobian": f"{model}_assembly_jacobian", "n": sizes["q"], "ns": sizes["s"], "np": sizes["p"],
                "parameters": list(parameters)}
