@@ -54,7 +54,6 @@ import symengine as se
 import sympy
 
 from symkin.dynamics.program import cross, dot, mat_vec, se_matrix, se_vector
-from symkin.geometry import rotation_matrix
 from symkin.model import coordinates
 from symkin.kinematics.chain import MovingFrame
 from symkin.model import joint_kinds, tree
@@ -168,12 +167,8 @@ def chain_links(model: Model) -> tuple[Link, ...]:
     for joint, q, parent in zip(model.joints, coordinates.joint_values(model, "q"), parents):
         R_prev, p_prev = base if parent < 0 else afters[parent]
         C_R, C_p = _compose(joint.before, R_prev, p_prev)
-        amount = q + joint.offset
+        R, origin = _compose((joint.motion(q + joint.offset),), C_R, C_p)
         axis = sympy.Matrix(joint.axis)
-        if joint.turns:
-            R, origin = C_R * rotation_matrix(joint.axis, amount), C_p
-        else:
-            R, origin = C_R, C_p + C_R * axis * amount
         after_R, after_p = link_frame(joint)
         links.append(Link(joint.type, se_vector(axis), se_matrix(R.T), se_vector(origin),
                           _link_inertia(model, joint.link, after_R, after_p),

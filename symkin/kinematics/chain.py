@@ -135,11 +135,7 @@ def compose_chain(model: Model) -> ChainFrames:
         moving.apply(joint.before)
         axes.append(JointAxis(joint.name, joint.type, sympy.ImmutableMatrix(moving.direction(joint.axis)),
                               sympy.ImmutableMatrix(moving.p)))
-        amount = q + joint.offset
-        if joint.turns:
-            moving.rotate(joint.axis, amount)
-        else:
-            moving.translate(tuple(c * amount for c in joint.axis))
+        moving.apply((joint.motion(q + joint.offset),))
         moving.apply(joint.after)
         links.append((joint.link, moving.frame()))
         moved.append(moving)

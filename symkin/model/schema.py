@@ -181,6 +181,15 @@ class Joint:
         """Whether the joint's motion is a rotation about its axis (its coordinate an angle), not a translation."""
         return self.type.turns
 
+    def motion(self, amount: sympy.Expr) -> Op:
+        """The joint's motion by ``amount`` (its coordinate plus its offset) as a moving-frame operation: a rotation
+        about its axis by that angle (R) or a translation along it by that length (P).  Every frame walker (the
+        chain, Newton-Euler's link frames, the URDF export) moves a frame by it as by any fixed operation, so the
+        joint's kind decides the motion here only."""
+        if self.turns:
+            return Rotation(self.axis, amount)
+        return Translation(tuple(c * amount for c in self.axis))
+
     @property
     def follower(self) -> bool:
         """True if the joint has no coordinate of its own (it moves by others')."""

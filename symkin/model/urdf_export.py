@@ -125,13 +125,8 @@ def export_urdf(model: Model) -> str:
     for joint, p in zip(model.joints, tree.parent_indices(model)):
         parent, pending = (ROOT_LINK, base) if p < 0 else (model.joints[p].link, np.eye(4))
         axis = np.array([_number(a, values) for a in joint.axis])
-        offset = _number(joint.offset, values)
-        motion = np.eye(4)
-        if joint.turns:
-            motion[:3, :3] = rotation_about(axis, offset)
-        else:
-            motion[:3, 3] = offset * axis / np.linalg.norm(axis)
-        origin = pending @ _transform(joint.before, values) @ motion
+        # the joint frame at the coordinate 0: moved by the joint's offset
+        origin = pending @ _transform(joint.before + (joint.motion(joint.offset),), values)
         after = _transform(joint.after, values)
         child = joint.link if _is_identity(after) else f"{joint.link}__joint"
         kind = joint_kinds.per_coordinate(joint.type, "revolute" if joint.limits is not None else "continuous",

@@ -11,7 +11,7 @@ import pytest
 import sympy
 
 from symkin.model import joint_kinds
-from symkin.model.schema import JointType, LegJointType
+from symkin.model.schema import Joint, JointType, LegJointType, Rotation, Translation
 
 PACKAGE = Path(joint_kinds.__file__).resolve().parents[1]
 #: Where the kinds are defined (the enums) and owned (their behaviour).
@@ -91,3 +91,22 @@ def test_every_leg_joint_kind_names_declares_and_actuates_as_documented(letter):
     assert kind.default_axes("z", "y", "x") == ("z", "y", "x")[:axes]
     assert kind.sliding == (letter == "P")
     assert kind.ball == (letter == "S")
+
+
+def test_a_joint_moves_a_frame_by_its_own_motion():
+    """Joint.motion: a revolute joint turns about its axis by the amount, a prismatic one slides along it."""
+    q, axis = sympy.Symbol("q"), (sympy.Integer(0), sympy.Integer(1), sympy.Integer(0))
+    joints = {t: Joint("j", t, axis, sympy.Integer(0), (), (), "l") for t in JointType}
+    assert joints[JointType.REVOLUTE].motion(q) == Rotation(axis, q)
+    assert joints[JointType.PRISMATIC].motion(q) == Translation((0, q, 0))
+
+
+#: The frame walkers that move a frame by a joint's motion: they ask Joint.motion, not the joint's kind.
+WALKERS = ("kinematics/chain.py", "dynamics/newton_euler.py", "model/urdf_export.py")
+
+
+@pytest.mark.parametrize("module", WALKERS)
+def test_frame_walkers_leave_the_motion_to_the_joint(module):
+    text = (PACKAGE / module).read_text(encoding="utf-8")
+    assert ".motion(" in text
+    assert ".turns" not in text, f"{module} branches on the joint's kind: move the frame by joint.motion(amount)"
