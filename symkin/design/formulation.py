@@ -81,6 +81,7 @@ from symkin.mechanism import passive, stops
 from symkin.mechanism.limits import within_limits
 from symkin.design import smooth
 from symkin.design.problem import DesignProblem
+from symkin.backends.casadi.loader import casadi_function
 from symkin.runtime.info import GeneratedModel
 
 #: Nodes of an objective over a joint box (2**LOG2, Sobol, fixed seed) and per axis of one over a Cartesian grid.
@@ -92,15 +93,6 @@ DETERMINANT_SMOOTHING = 1e-3
 BOX_POINTS_PER_AXIS = 4
 #: Configurations sampled to start the box configurations of a serial model near a solution.
 START_SAMPLES_LOG2 = 12
-
-
-def casadi_function(model: GeneratedModel, name: str) -> casadi.Function:
-    """The ``casadi.Function`` behind a function of a model loaded with ``backend="casadi"``."""
-    function = getattr(model, name, None)
-    function = getattr(function, "func", function)  # a bound model wraps it in functools.partial
-    if function is None or not hasattr(function, "casadi"):
-        raise ValueError(f"{model.name}: no CasADi function '{name}'; derive the model with --backend numpy,casadi")
-    return function.casadi
 
 
 def angular_velocity_matrix(orientation: casadi.SX) -> casadi.SX:

@@ -42,9 +42,10 @@ import casadi
 import numpy as np
 
 from symkin.identification import closure_excitation, excitation_bounds
-from symkin.design.formulation import casadi_function
+from symkin.backends.casadi.loader import casadi_function
 from symkin.design.solving import IPOPT_OPTIONS, IterationReport
 from symkin.runtime.info import GeneratedModel
+from symkin.mechanism.casadi_closure import independent_rows
 from symkin.mechanism.closure import ClosureAssembly
 
 #: How much of each joint range the start's motion uses (a small motion about the middle of the limits).
@@ -170,7 +171,7 @@ def optimize_excitation(model: GeneratedModel, *, period: float = 10.0, harmonic
     if closure is None:
         function, guess0 = casadi_function(model, base), np.zeros((0, samples))
     else:
-        function = closure_excitation.regressor_function(model, closure_excitation.independent_rows(closure))
+        function = closure_excitation.regressor_function(model, independent_rows(closure))
         guess0 = closure_excitation.guesses(closure, excitation_bounds.series(np, middle, a0, b0, period, t)[0])
     guess = states["guess"] = casadi.MX.sym("guess", *guess0.shape)
     (q_c, qd_c, qdd_c), margin = _joint_motion(excitation_bounds.series(casadi, offsets, a, b, period, dense), joints)

@@ -81,7 +81,8 @@ def quote_mismatches(code: str, values: dict[int, object]) -> list[tuple[int, fl
     mismatches = []
     for number, (quoted, digits, error_bar) in quoted_values(code).items():
         value = getattr(values[number], "value", values[number])
-        allowed = 0.5 * 10.0 ** (math.floor(math.log10(abs(quoted))) - digits + 1) + error_bar
+        # a quoted 0 has no digits to round to: it is exact, up to its error bar
+        allowed = (0.5 * 10.0 ** (math.floor(math.log10(abs(quoted))) - digits + 1) if quoted else 0.0) + error_bar
         if not abs(float(value) - quoted) <= allowed:
             mismatches.append((number, quoted, value))
     return mismatches
@@ -181,6 +182,14 @@ def test_a_quoted_result_that_the_code_does_not_give_is_caught():
     exec(compile(_recording(code), "<doc>", "exec"), namespace)
     assert sorted(quoted_values(code)) == [2, 3]
     assert [(line, quoted) for line, quoted, _ in quote_mismatches(code, values)] == [(3, 0.95)]  # 0.9 is not 0.95 +- 0.01
+
+
+def test_a_quoted_zero_is_exact():
+    code = "x = 0.1 + 0.2 - 0.3\nx  # 0\nx - x  # 0\n"
+    values: dict[int, object] = {}
+    namespace = {"__record__": lambda number, value: values.__setitem__(number, value) or value}
+    exec(compile(_recording(code), "<doc>", "exec"), namespace)
+    assert [(line, quoted) for line, quoted, _ in quote_mismatches(code, values)] == [(2, 0.0)]  # 5.6e-17 is not 0
 
 
 def test_the_documents_quote_results_that_are_checked():

@@ -135,3 +135,17 @@ def load(directory: Path, info: ModelInfo) -> dict[str, Any]:
         setattr(wrapper, "casadi", function)  # the raw casadi.Function, for AD and codegen
         functions[record.name] = wrapper
     return functions
+
+
+def casadi_function(model: Any, name: str) -> casadi.Function:
+    """The ``casadi.Function`` behind the generated function ``name`` of a model loaded with ``backend="casadi"``
+    (bound or not: a bound model wraps it in ``functools.partial``).
+
+    Raises:
+        ValueError: the model has no such CasADi function (not derived, or loaded with another backend).
+    """
+    function = getattr(model, name, None)
+    function = getattr(function, "func", function)
+    if function is None or not hasattr(function, "casadi"):
+        raise ValueError(f"{model.name}: no CasADi function '{name}'; derive the model with --backend numpy,casadi")
+    return function.casadi
