@@ -128,3 +128,40 @@ friction:
 
 #: The stock robot files of the example-robot-data package (its URDFs and meshes).
 ROBOTS_DIR = Path(distribution("example-robot-data").locate_file("cmeel.prefix/share/example-robot-data/robots"))
+
+
+#: A torso carrying two arms and a head (a tree with a prismatic joint, friction and a drive): tests/model/test_trees.py,
+#: tests/derivation/test_dynamics_derivatives.py.
+TORSO = """
+name: torso
+parameters:
+  g: 9.81
+serial:
+  base: {xyz: [0, 0, 0.8]}
+  chain:
+    - {name: waist, axis: [0, 0, 1], link: chest}
+    - {name: l_shoulder, parent: chest, origin: {xyz: [0, 0.2, 0.3], rpy: [-0.3, 0, 0]}, axis: [0, 1, 0],
+       link: l_upper}
+    - {name: l_elbow, axis: [0, 1, 0], origin: {xyz: [0.3, 0, 0]}, link: l_fore}
+    - {name: l_slide, type: P, axis: [1, 0, 0], limits: [0, 0.1], origin: {xyz: [0.25, 0, 0], rpy: [0.2, 0.1, 0]}, link: l_hand}
+    - {name: r_shoulder, parent: chest, origin: {xyz: [0, -0.2, 0.3], rpy: [0.3, 0, 0]}, axis: [0, 1, 0],
+       link: r_upper}
+    - {name: r_elbow, axis: [0.3, 1, 0], origin: {xyz: [0.3, 0, 0.02]}, link: r_fore}
+    - {name: head, parent: chest, origin: {xyz: [0, 0, 0.45]}, axis: [0, 0, 1], link: head}
+  tip: l_hand
+  tcp: {xyz: [0.05, 0, 0]}
+task_space: pose
+bodies:
+  - {link: chest, mass: 8, com: [0, 0, 0.2], inertia: {xx: 0.2, yy: 0.18, zz: 0.1}}
+  - {link: l_upper, mass: 1.5, com: [0.15, 0.01, 0], inertia: {xx: 0.002, yy: 0.012, zz: 0.012, xy: 0.0004}}
+  - {link: l_fore, mass: 1.1, com: [0.12, 0, 0.01], inertia: {xx: 0.0015, yy: 0.008, zz: 0.008}}
+  - {link: l_hand, mass: 0.4, com: [0.03, 0, 0]}
+  - {link: r_upper, mass: 1.5, com: [0.15, -0.01, 0], inertia: {xx: 0.002, yy: 0.012, zz: 0.012}}
+  - {link: r_fore, mass: 1.3, com: [0.13, 0, -0.01], inertia: {xx: 0.0016, yy: 0.009, zz: 0.009, yz: 0.0002}}
+  - {link: head, mass: 2.0, com: [0.02, 0, 0.1], inertia: {xx: 0.01, yy: 0.01, zz: 0.008}}
+gravity: [0, 0, -g]
+friction:
+  r_elbow: {viscous: 0.2, coulomb: 0.1}
+actuators:
+  waist: {rotor_inertia: 1e-4, gear_ratio: 100}
+"""

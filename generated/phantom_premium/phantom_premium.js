@@ -25,12 +25,13 @@
  *   gravity_vector(q, params) -> number[]
  *   friction(qd) -> number[]
  *   inverse_dynamics(q, qd, qdd, params) -> number[]
+ *   inverse_dynamics_derivatives(q, qd, qdd, params) -> {dtau_dq: number[][], dtau_dqd: number[][], dtau_dqdd: number[][]}
  *   forward_dynamics(q, qd, tau, params) -> number[]
  *   tcp_force(q, qd, qdd, params) -> number[]
  *   operational_space(q, qd, params) -> {Mx: number[][], Vx: number[], Gx: number[]}
  *   kinetic_energy(q, qd, params) -> number
  *   potential_energy(q, params) -> number
- *   combined(q, qd, qdd, tau, params) -> {base_T_tcp: number[][], base_T_turret: number[][], base_T_upper_arm: number[][], base_T_distal: number[][], base_T_lever: number[][], base_T_link_c: number[][], J: number[][], M: number[][], C: number[][], V: number[], G: number[], F_f: number[], inverse_dynamics_tau: number[], forward_dynamics_qdd: number[], F: number[], Mx: number[][], Vx: number[], Gx: number[], k: number, u: number}
+ *   combined(q, qd, qdd, tau, params) -> {base_T_tcp: number[][], base_T_turret: number[][], base_T_upper_arm: number[][], base_T_distal: number[][], base_T_lever: number[][], base_T_link_c: number[][], J: number[][], M: number[][], C: number[][], V: number[], G: number[], F_f: number[], inverse_dynamics_tau: number[], dtau_dq: number[][], dtau_dqd: number[][], dtau_dqdd: number[][], forward_dynamics_qdd: number[], F: number[], Mx: number[][], Vx: number[], Gx: number[], k: number, u: number}
  */
 (function (root, factory) {
   "use strict";
@@ -767,6 +768,382 @@
     const _x73 = _x27*_x16 + _x22*_x71 - _x12*_x68 - _x69*I_ayy;
     const _x74 = _x51*_x55;
     return [_x0*(_x17*I_bexx - _x28*_x14 + _x18*I_bezz + _x7*_x25 - _x17*I_beyy) + _x3*(-_x34*I_dfxx + _x34*I_dfzz + _x35*I_dfyy + _x7*_x49 - _x14*_x43) + 0.01*Math.tanh(10.0*q1_d) + _x2*(-_x9*I_bexx + _x9*I_bezz + _x10*I_beyy + l1*(_x29*_x19 - _x24*_x29 + _x11) + _x7*_x28 + _x25*_x14) + _x1*(-_x36*I_dfyy + _x36*I_dfxx + l3*(_x50*_x47 + _x50*_x48 + _x44) + _x37*I_dfzz + _x14*_x49 + _x7*_x43) + 0.0005*q1_d + q1_dd*I_baseyy + 176.89*J_m*q1_dd, _x73 - (_x73 + _x72*I_bezz - _x72*I_beyy - q2_dd*I_bexx - l5*m_be*_x63 - l1*(_x14*(-_x29*_x71 - _x29*_x69 + _x68) + _x7*(_x26*_x26*_x29 + _x23*_x23*_x29 + m_a*(-_x14*_x67 + _x7*_x66)))) + _x62*q2_dd - _x61 - _x6 + 0.01*Math.tanh(10.0*q2_d) + 0.0005*q2_d, _x61 + _x6 + _x62*q3_dd - (_x61 + _x74*I_dfzz - q3_dd*I_dfxx - _x74*I_dfyy + l6*m_df*_x54 - l3*(_x7*(-_x50*_x40*_x40 - _x50*_x32*_x32 + m_c*(_x7*_x56 - _x53*_x14)) + _x14*(-_x50*_x59 + _x50*_x60 + _x57))) - _x73];
+  }
+
+  /**
+   * Derivatives of the inverse dynamics: the linearization of tau at a motion.
+   *
+   * tau(q + dq, qd + dqd, qdd + dqdd) = tau + dtau_dq dq + dtau_dqd dqd + dtau_dqdd dqdd
+   * to first order, tau = M qdd + V + G + F_f (seed eq. 8.34); dtau_dqdd = M.  Forward-
+   * mode derivative of the recursive Newton-Euler program (Carpentier and Mansard, RSS
+   * 2018); a sign(qd) Coulomb term counts with derivative 0.
+   *
+   * @param {number[]} q joint coordinates, 3 numbers: q1 [rad], q2 [rad], q3 [rad].
+   * @param {number[]} qd joint velocities, 3 numbers: q1 [rad/s], q2 [rad/s], q3 [rad/s].
+   * @param {number[]} qdd joint accelerations, 3 numbers: q1 [rad/s^2], q2 [rad/s^2], q3
+   *     [rad/s^2].
+   * @param {Object} [params] parameter values (defaults in PARAMETERS):
+   *     l1: upper arm: shoulder axis to elbow axis (Cavusoglu 2002) [m]; default 0.215.
+   *     l2: distal link: elbow axis to the gimbal (Cavusoglu 2002) [m]; default 0.17.
+   *     l3: lever of the parallelogram, along the distal link's direction (Cavusoglu 2002) [m]; default 0.0325.
+   *     l5: centre of mass of the upper arm body be along the arm (behind the shoulder) (Cavusoglu 2002) [m]; default -0.0368.
+   *     l6: centre of mass of the lever body df, opposite the lever (Cavusoglu 2002) [m]; default 0.0527.
+   *     m_a: distal link a (Cavusoglu 2002) [kg]; default 0.0202.
+   *     I_axx: about its centre of mass, pitch axis (Cavusoglu 2002) [kg*m^2]; default 4.864e-05.
+   *     I_ayy: about its centre of mass, along the link (Cavusoglu 2002) [kg*m^2]; default 1.843e-07.
+   *     I_azz: about its centre of mass, across the link (Cavusoglu 2002) [kg*m^2]; default 4.864e-05.
+   *     m_c: parallelogram link c (Cavusoglu 2002) [kg]; default 0.0249.
+   *     I_cxx: about its centre of mass, pitch axis (Cavusoglu 2002) [kg*m^2]; default 9.59e-05.
+   *     I_cyy: about its centre of mass, across the link (Cavusoglu 2002) [kg*m^2]; default 9.59e-05.
+   *     I_czz: about its centre of mass, along the link (Cavusoglu 2002) [kg*m^2]; default 5.1e-07.
+   *     m_be: upper arm with its motor-side parts, body be (Cavusoglu 2002) [kg]; default 0.2359.
+   *     I_bexx: about the shoulder, pitch axis (Cavusoglu 2002) [kg*m^2]; default 0.001109.
+   *     I_beyy: about the shoulder, across the arm (Cavusoglu 2002) [kg*m^2]; default 0.001006.
+   *     I_bezz: about the shoulder, along the arm (Cavusoglu 2002) [kg*m^2]; default 5.91e-05.
+   *     m_df: lever with the third capstan, body df (Cavusoglu 2002) [kg]; default 0.1906.
+   *     I_dfxx: about the shoulder, pitch axis (Cavusoglu 2002) [kg*m^2]; default 0.000711.
+   *     I_dfyy: about the shoulder, along the lever (Cavusoglu 2002) [kg*m^2]; default 6.29e-05.
+   *     I_dfzz: about the shoulder, across the lever (Cavusoglu 2002) [kg*m^2]; default 0.0006246.
+   *     I_baseyy: base turret about the yaw axis (Cavusoglu 2002) [kg*m^2]; default 0.001187.
+   *     J_m: rotor inertia of each motor (Maxon RE 25, 118743: 10.3 g cm^2) [kg*m^2]; default 1.03e-06.
+   *     g: standard gravity [m/s^2]; default 9.80665.
+   * @returns {{dtau_dq: number[][], dtau_dqd: number[][], dtau_dqdd: number[][]}}
+   *     dtau_dq: shape (3, 3); d tau / dq: row i, column j is d tau_i / d q_j.
+   *     dtau_dqd: shape (3, 3); d tau / dqd: the damping of the motion (Coriolis and
+   *     friction).
+   *     dtau_dqdd: shape (3, 3); d tau / dqdd = M(q), the mass matrix.
+   */
+  function inverse_dynamics_derivatives(q, qd, qdd, params) {
+    _vector(q, 3, "q", "inverse_dynamics_derivatives");
+    _vector(qd, 3, "qd", "inverse_dynamics_derivatives");
+    _vector(qdd, 3, "qdd", "inverse_dynamics_derivatives");
+    const _p = _params(params, ["l1", "l2", "l3", "l5", "l6", "m_a", "I_axx", "I_ayy", "I_azz", "m_c", "I_cxx", "I_cyy", "I_czz", "m_be", "I_bexx", "I_beyy", "I_bezz", "m_df", "I_dfxx", "I_dfyy", "I_dfzz", "I_baseyy", "J_m", "g"], "inverse_dynamics_derivatives");
+    const l1 = _p.l1 ?? 0.215;
+    const l2 = _p.l2 ?? 0.17;
+    const l3 = _p.l3 ?? 0.0325;
+    const l5 = _p.l5 ?? -0.0368;
+    const l6 = _p.l6 ?? 0.0527;
+    const m_a = _p.m_a ?? 0.0202;
+    const I_axx = _p.I_axx ?? 4.864e-05;
+    const I_ayy = _p.I_ayy ?? 1.843e-07;
+    const I_azz = _p.I_azz ?? 4.864e-05;
+    const m_c = _p.m_c ?? 0.0249;
+    const I_cxx = _p.I_cxx ?? 9.59e-05;
+    const I_cyy = _p.I_cyy ?? 9.59e-05;
+    const I_czz = _p.I_czz ?? 5.1e-07;
+    const m_be = _p.m_be ?? 0.2359;
+    const I_bexx = _p.I_bexx ?? 0.001109;
+    const I_beyy = _p.I_beyy ?? 0.001006;
+    const I_bezz = _p.I_bezz ?? 5.91e-05;
+    const m_df = _p.m_df ?? 0.1906;
+    const I_dfxx = _p.I_dfxx ?? 0.000711;
+    const I_dfyy = _p.I_dfyy ?? 6.29e-05;
+    const I_dfzz = _p.I_dfzz ?? 0.0006246;
+    const I_baseyy = _p.I_baseyy ?? 0.001187;
+    const J_m = _p.J_m ?? 1.03e-06;
+    const g = _p.g ?? 9.80665;
+    const q2 = q[1];
+    const q3 = q[2];
+    const q1_d = qd[0];
+    const q2_d = qd[1];
+    const q3_d = qd[2];
+    const q1_dd = qdd[0];
+    const q2_dd = qdd[1];
+    const q3_dd = qdd[2];
+    const _x0 = Math.sin(q2);
+    const _x1 = Math.sin(q3);
+    const _x2 = _x0*_x1;
+    const _x3 = Math.cos(q2);
+    const _x4 = Math.cos(q3);
+    const _x5 = _x4*_x3;
+    const _x6 = _x5 + _x2;
+    const _x7 = -q2_d;
+    const _x8 = _x0*_x4;
+    const _x9 = _x1*_x3;
+    const _x10 = _x9 - _x8;
+    const _x11 = 0.25*l2*l2*m_a;
+    const _x12 = _x11 + I_axx;
+    const _x13 = q3_d + _x7;
+    const _x14 = _x7 - _x13;
+    const _x15 = _x14*_x12;
+    const _x16 = l1*l1;
+    const _x17 = _x1*_x1;
+    const _x18 = _x3*_x3;
+    const _x19 = l1*m_a;
+    const _x20 = l1*_x3;
+    const _x21 = _x3*_x6;
+    const _x22 = _x0*_x10;
+    const _x23 = -_x22 + _x21;
+    const _x24 = _x6*q1_d;
+    const _x25 = _x10*q1_d;
+    const _x26 = -_x0*_x25 + _x3*_x24;
+    const _x27 = -_x26;
+    const _x28 = _x3*_x10 + _x0*_x6;
+    const _x29 = -_x12;
+    const _x30 = I_ayy + _x29;
+    const _x31 = q2_d*q1_d;
+    const _x32 = _x0*_x31;
+    const _x33 = _x3*q1_dd - _x32;
+    const _x34 = _x33*I_ayy;
+    const _x35 = _x6*I_ayy;
+    const _x36 = _x3*_x31;
+    const _x37 = _x0*q1_dd + _x36;
+    const _x38 = _x37*I_ayy;
+    const _x39 = _x10*I_ayy;
+    const _x40 = _x15 - _x13*I_ayy;
+    const _x41 = _x0*_x24 + _x3*_x25;
+    const _x42 = _x41*I_ayy;
+    const _x43 = _x4*_x6 + _x1*_x10;
+    const _x44 = q1_d*q3_d;
+    const _x45 = _x4*_x44;
+    const _x46 = _x1*q1_dd + _x45;
+    const _x47 = _x46*I_czz;
+    const _x48 = _x1*_x44;
+    const _x49 = _x4*q1_dd - _x48;
+    const _x50 = _x49*I_czz;
+    const _x51 = -q3_d;
+    const _x52 = _x51 + q2_d;
+    const _x53 = _x52*I_czz;
+    const _x54 = 0.25*_x16*m_c;
+    const _x55 = _x54 + I_cxx;
+    const _x56 = -_x55;
+    const _x57 = _x54 + I_cyy;
+    const _x58 = _x57 + _x56;
+    const _x59 = _x6*I_czz;
+    const _x60 = _x10*I_czz;
+    const _x61 = _x1*_x25 + _x4*_x24;
+    const _x62 = _x61*I_czz;
+    const _x63 = _x4*_x10;
+    const _x64 = _x1*_x6;
+    const _x65 = l3*m_c;
+    const _x66 = 2.0*_x65;
+    const _x67 = l3*_x1;
+    const _x68 = -_x63 + _x64;
+    const _x69 = _x1*_x24 - _x4*_x25;
+    const _x70 = -_x69;
+    const _x71 = _x55 - I_czz;
+    const _x72 = q1_d*q1_d;
+    const _x73 = l3*_x72;
+    const _x74 = _x17*_x73 + l3*q3_d*q3_d + g*_x4;
+    const _x75 = m_c*_x74;
+    const _x76 = g*_x1;
+    const _x77 = _x1*_x4;
+    const _x78 = _x76 - _x77*_x73 + l3*q3_dd;
+    const _x79 = m_c*_x78;
+    const _x80 = _x6*m_c;
+    const _x81 = _x10*m_c;
+    const _x82 = l3*_x10;
+    const _x83 = I_czz - _x57;
+    const _x84 = l1*_x72;
+    const _x85 = -l1*q2_d*q2_d - _x18*_x84 + g*_x0;
+    const _x86 = m_a*_x85;
+    const _x87 = g*_x3;
+    const _x88 = _x0*_x3;
+    const _x89 = _x87 + _x84*_x88 + l1*q2_dd;
+    const _x90 = m_a*_x89;
+    const _x91 = _x10*m_a;
+    const _x92 = _x6*m_a;
+    const _x93 = l1*_x10;
+    const _x94 = (-l1*_x32 + l1*_x33)*m_a;
+    const _x95 = 0.5*l2;
+    const _x96 = _x6*_x37 + _x10*_x33 + _x26*_x13;
+    const _x97 = _x11 + I_azz;
+    const _x98 = _x14*_x26;
+    const _x99 = _x95*_x94 + _x96*_x97 - _x98*_x12 + _x98*I_ayy;
+    const _x100 = _x41*_x97;
+    const _x101 = _x15*_x41 - _x14*_x100 + I_ayy*(-_x10*_x37 + _x6*_x33 - _x41*_x13);
+    const _x102 = _x95*m_a;
+    const _x103 = -_x52 + _x51;
+    const _x104 = _x61*_x103;
+    const _x105 = _x104*_x57 - _x55*_x104 + I_czz*(_x6*_x46 - _x10*_x49 + _x61*_x52);
+    const _x106 = (l3*_x45 + l3*_x46)*m_c;
+    const _x107 = 0.5*l1;
+    const _x108 = _x10*_x46 - _x52*_x69 + _x6*_x49;
+    const _x109 = _x103*_x69;
+    const _x110 = _x106*_x107 + _x108*_x57 - _x109*I_czz + _x55*_x109;
+    const _x111 = m_c*_x107;
+    const _x112 = m_c*(_x10*_x78 + _x6*_x74);
+    const _x113 = -q3_dd;
+    const _x114 = -(_x113 + q2_dd) + _x113;
+    const _x115 = _x61*_x69;
+    const _x116 = 125.44*J_m;
+    const _x117 = m_a*(_x6*_x85 + _x10*_x89);
+    const _x118 = _x41*_x26;
+    const _x119 = -q2_dd;
+    const _x120 = -(_x119 + q3_dd) + _x119;
+    const _x121 = _x8 - _x9;
+    const _x122 = _x0*q2_d;
+    const _x123 = _x0*q1_d;
+    const _x124 = -_x0;
+    const _x125 = -_x36 + _x124*q1_dd;
+    const _x126 = -_x122;
+    const _x127 = -_x123;
+    const _x128 = -_x19*_x36 + _x19*_x125;
+    const _x129 = _x19*_x126 - _x19*_x122;
+    const _x130 = _x19*_x127 - _x19*_x123;
+    const _x131 = _x20*m_a;
+    const _x132 = q1_d*_x121;
+    const _x133 = -_x5 - _x2;
+    const _x134 = q1_d*_x133;
+    const _x135 = _x24*_x124 - _x0*_x134;
+    const _x136 = _x3*_x132 - _x0*_x24;
+    const _x137 = _x31*_x124;
+    const _x138 = _x3*q2_d;
+    const _x139 = _x3*q1_d;
+    const _x140 = _x3*q1_dd + _x137;
+    const _x141 = _x10*_x37 + _x33*_x133 + _x13*_x135 + _x10*_x125 + _x6*_x140;
+    const _x142 = _x37*_x121 + _x6*_x33 + _x13*_x136;
+    const _x143 = _x10*_x126 + _x23*_x13 + _x6*_x138;
+    const _x144 = _x10*_x127 + _x27 + _x6*_x139;
+    const _x145 = _x14*_x135;
+    const _x146 = _x14*_x136;
+    const _x147 = _x23*_x14;
+    const _x148 = _x30*_x145 + _x97*_x141 + _x95*_x128;
+    const _x149 = _x30*_x146 + _x97*_x142;
+    const _x150 = _x97*_x143 + _x30*_x147 + _x95*_x129;
+    const _x151 = _x97*_x144 + _x95*_x130;
+    const _x152 = _x26*_x97 + _x30*_x27;
+    const _x153 = _x95*_x131 + _x28*_x97;
+    const _x154 = _x3*_x24 + _x25*_x124 + _x0*_x25 + _x3*_x134;
+    const _x155 = _x0*_x132 + _x3*_x24;
+    const _x156 = _x97*_x154;
+    const _x157 = _x97*_x155;
+    const _x158 = _x28*_x97;
+    const _x159 = _x34*_x10 + _x35*_x125 - _x38*_x133 - _x39*_x140 + _x40*_x154 - _x14*_x156;
+    const _x160 = _x34*_x121 - _x6*_x38 + _x40*_x155 - _x14*_x157;
+    const _x161 = _x35*_x126 - _x14*_x158 - _x39*_x138 + _x28*_x40;
+    const _x162 = -_x39*_x139 + _x42 + _x35*_x127;
+    const _x163 = -(_x41*_x12 - _x100) - _x42;
+    const _x164 = -_x22*I_ayy + _x21*I_ayy;
+    const _x165 = -_x1;
+    const _x166 = _x4*_x25 + _x1*_x134;
+    const _x167 = _x4*_x132 + _x1*_x24 + _x24*_x165 + _x4*_x25;
+    const _x168 = _x1*q3_d;
+    const _x169 = _x1*q1_d;
+    const _x170 = q1_dd*_x165 - _x45;
+    const _x171 = -_x168;
+    const _x172 = -_x169;
+    const _x173 = _x44*_x165;
+    const _x174 = _x4*q3_d;
+    const _x175 = _x4*q1_d;
+    const _x176 = _x4*q1_dd + _x173;
+    const _x177 = _x103*_x166;
+    const _x178 = _x103*_x167;
+    const _x179 = _x43*_x103;
+    const _x180 = -_x61;
+    const _x181 = _x47*_x10 + _x53*_x166 - _x50*_x133 + _x58*_x177;
+    const _x182 = _x47*_x121 + _x53*_x167 + _x58*_x178 + _x59*_x176 - _x6*_x50 - _x60*_x170;
+    const _x183 = -_x60*_x171 + _x43*_x53 + _x59*_x174 + _x58*_x179;
+    const _x184 = _x58*_x180 + _x62;
+    const _x185 = _x59*_x175 - _x60*_x172 - _x62;
+    const _x186 = _x64*I_czz - _x63*I_czz;
+    const _x187 = _x65*_x176 + _x65*_x173;
+    const _x188 = _x66*_x174;
+    const _x189 = _x66*_x175;
+    const _x190 = _x67*m_c;
+    const _x191 = _x1*_x25 - _x4*_x134;
+    const _x192 = _x1*_x132 - _x25*_x165;
+    const _x193 = _x10*_x49 + _x46*_x133 - _x52*_x191;
+    const _x194 = _x49*_x121 + _x6*_x46 + _x6*_x170 + _x10*_x176 - _x52*_x192;
+    const _x195 = _x6*_x171 + _x10*_x174 - _x68*_x52;
+    const _x196 = _x69 + _x6*_x172 + _x10*_x175;
+    const _x197 = _x103*_x191;
+    const _x198 = _x103*_x192;
+    const _x199 = _x68*_x103;
+    const _x200 = _x71*_x197 + _x57*_x193;
+    const _x201 = _x57*_x194 + _x71*_x198 + _x107*_x187;
+    const _x202 = _x57*_x195 + _x71*_x199 + _x107*_x188;
+    const _x203 = _x70*_x57 + _x70*_x71;
+    const _x204 = _x57*_x196 + _x107*_x189;
+    const _x205 = _x107*_x190 + _x43*_x57;
+    const _x206 = 2.0*q1_d;
+    const _x207 = l3*_x206;
+    const _x208 = g*_x165 + 2.0*_x1*_x4*_x73;
+    const _x209 = _x17*_x207;
+    const _x210 = 2.0*l3*q3_d;
+    const _x211 = g*_x4;
+    const _x212 = _x1*_x165 + _x4*_x4;
+    const _x213 = -_x73*_x212 + _x211;
+    const _x214 = -_x77*_x207;
+    const _x215 = _x75*_x10 + _x79*_x133;
+    const _x216 = _x75*_x121 + _x6*_x79 + _x80*_x208 + _x81*_x213;
+    const _x217 = _x81*_x214 + _x80*_x209;
+    const _x218 = _x80*_x210;
+    const _x219 = _x82*m_c;
+    const _x220 = _x61*_x191 + _x69*_x166;
+    const _x221 = _x61*_x192 + _x69*_x167;
+    const _x222 = _x43*_x69 + _x68*_x61;
+    const _x223 = _x83*_x220 - _x107*_x215;
+    const _x224 = _x83*_x221 - _x107*_x216;
+    const _x225 = _x83*_x222 - _x107*_x217;
+    const _x226 = -_x107*_x218;
+    const _x227 = -_x107*_x219;
+    const _x228 = g*_x124;
+    const _x229 = l1*_x206;
+    const _x230 = _x3*_x3 + _x0*_x124;
+    const _x231 = _x84*_x230 + _x228;
+    const _x232 = _x88*_x229;
+    const _x233 = g*_x3 - 2.0*_x3*_x124*_x84;
+    const _x234 = -_x18*_x229;
+    const _x235 = -2.0*l1*q2_d;
+    const _x236 = _x86*_x10 + _x92*_x233 + _x90*_x133 + _x91*_x231;
+    const _x237 = _x86*_x121 + _x6*_x90;
+    const _x238 = _x92*_x234 + _x91*_x232;
+    const _x239 = _x92*_x235;
+    const _x240 = _x93*m_a;
+    const _x241 = _x26*_x154 + _x41*_x135;
+    const _x242 = _x26*_x155 + _x41*_x136;
+    const _x243 = _x23*_x41 + _x28*_x26;
+    const _x244 = _x72*_x230;
+    const _x245 = _x88*_x206;
+    const _x246 = -_x241*I_ayy - _x95*_x236 + _x26*_x156 + _x100*_x135;
+    const _x247 = -_x95*_x237 + _x26*_x157 - _x242*I_ayy + _x100*_x136;
+    const _x248 = _x23*_x100 + _x26*_x158 - _x95*_x238 - _x243*I_ayy;
+    const _x249 = -_x95*_x239;
+    const _x250 = -_x95*_x240;
+    const _x251 = _x72*_x212;
+    const _x252 = _x77*_x206;
+    const _x253 = _x67*_x111;
+    const _x254 = _x3*I_beyy;
+    const _x255 = _x20*_x102;
+    const _x256 = _x1*_x105 + _x0*_x99 + _x4*_x110 + _x3*_x101;
+    const _x257 = (-I_bexx + I_bezz)*_x3;
+    const _x258 = _x0*I_bezz;
+    const _x259 = -_x0*_x101 + _x1*_x110 - _x4*_x105 + _x3*_x99;
+    const _x260 = (I_bexx - I_beyy)*_x0;
+    const _x261 = _x4*I_dfyy;
+    const _x262 = (-I_dfxx + I_dfzz)*_x4;
+    const _x263 = (-I_dfyy + I_dfxx)*_x1;
+    const _x264 = _x1*I_dfzz;
+    const _x265 = -I_bezz + I_beyy;
+    const _x266 = _x93*_x102;
+    const _x267 = _x6*_x6;
+    const _x268 = m_a*_x267;
+    const _x269 = l1*_x268;
+    const _x270 = _x93*_x92;
+    const _x271 = 2.0*_x6;
+    const _x272 = l1*_x102*_x271;
+    const _x273 = _x41*_x272;
+    const _x274 = l1*(-_x102*_x120 - _x92*_x85 - _x102*_x118 + _x117);
+    const _x275 = _x6*_x89;
+    const _x276 = l1*(m_a*_x275 + _x41*_x41*_x102 + _x14*_x14*_x102 + m_a*(-_x10*_x85 + _x275));
+    const _x277 = 0.1*(1.0 - Math.tanh(10.0*(q3_d + _x7))*Math.tanh(10.0*(q3_d + _x7)));
+    const _x278 = -0.0005 - _x277;
+    const _x279 = _x82*_x111;
+    const _x280 = l3*_x111*_x271;
+    const _x281 = _x61*_x280;
+    const _x282 = l3*(-_x111*_x114 + _x112 + _x111*_x115 - _x80*_x74);
+    const _x283 = _x6*_x78;
+    const _x284 = l3*(-_x111*_x103*_x103 + m_c*_x283 - _x111*_x61*_x61 + m_c*(_x283 - _x10*_x74));
+    const _x285 = -I_dfzz + I_dfyy;
+    const _x286 = m_c*_x267;
+    const _x287 = l3*_x286;
+    const _x288 = _x82*_x80;
+    return {
+      dtau_dq: [[0.0, _x43*_x200 + _x253*_x197 + _x20*_x128 + _x68*_x181 + _x125*_x254 + _x3*(_x36*I_bexx - _x10*_x101 + _x37*I_bezz + _x6*_x99 - _x36*I_beyy) + _x137*_x260 + _x255*_x141 - _x255*_x145 + _x133*_x259 + _x253*_x193 + _x36*_x257 + _x124*(-_x32*I_bexx + _x32*I_bezz + _x33*I_beyy + l1*(_x102*_x96 - _x98*_x102 + _x94) + _x6*_x101 + _x10*_x99) + _x23*_x159 + _x10*_x256 + _x258*_x140 + _x28*_x148, _x264*_x176 + _x253*_x198 + _x6*_x259 + _x263*_x173 + _x121*_x256 + _x4*(-_x45*I_dfyy + _x45*I_dfxx + l3*(_x111*_x108 + _x111*_x109 + _x106) + _x46*I_dfzz + _x10*_x110 + _x6*_x105) + _x45*_x262 + _x255*_x142 + _x28*_x149 + _x67*_x187 + _x23*_x160 + _x165*(-_x48*I_dfxx + _x48*I_dfzz + _x49*I_dfyy + _x6*_x110 - _x10*_x105) + _x261*_x170 - _x255*_x146 + _x43*_x201 + _x253*_x194 + _x68*_x182], [0.0, _x10*_x276 + _x273*_x154 + _x133*_x274 - _x223 - _x241*_x266 - _x270*_x233 + _x269*_x231 + _x93*_x236 + l5*m_be*_x228 + _x244*_x265, _x121*_x276 + _x6*_x274 + _x93*_x237 + _x273*_x155 - _x224 - _x242*_x266], [0.0, _x10*_x284 - _x281*_x166 + _x279*_x220 + _x82*_x215 + _x133*_x282 - _x246, -_x247 - _x281*_x167 + _x121*_x284 + _x287*_x213 + _x6*_x282 - l6*m_df*_x211 - _x288*_x208 + _x82*_x216 + _x279*_x221 + _x251*_x285]],
+      dtau_dqd: [[0.0005 + 0.1*(1.0 - Math.tanh(10.0*q1_d)*Math.tanh(10.0*q1_d)) + _x255*_x143 - _x255*_x147 + _x20*_x129 + _x126*_x254 + _x263*_x174 + _x68*_x183 + _x262*_x168 + _x261*_x171 + _x253*_x195 + _x67*_x188 + _x23*_x161 + _x28*_x150 + _x253*_x199 + _x264*_x174 + _x138*_x258 + _x43*_x202 + _x122*_x257 + _x138*_x260, _x123*_x257 + _x28*_x151 + _x23*_x162 + _x127*_x254 + _x255*_x144 + _x20*_x130 + _x68*_x184 + _x43*_x203 + _x260*_x139 + 2.0*_x70*_x253 + _x258*_x139, _x23*_x163 + _x262*_x169 + _x261*_x172 + _x264*_x175 + _x67*_x189 + _x28*_x152 + _x263*_x175 - _x27*_x255 + _x26*_x255 + _x68*_x185 + _x253*_x196 + _x43*_x204], [_x28*_x273 + _x93*_x238 - _x270*_x234 - _x225 + _x269*_x232 - _x243*_x266 + _x245*_x265, 0.001 - _x270*_x235 + _x93*_x239 + 0.1*(1.0 - Math.tanh(10.0*q2_d)*Math.tanh(10.0*q2_d)) + _x277, _x278 - _x14*_x272 - _x226], [-_x288*_x209 + _x287*_x214 + _x82*_x217 - _x43*_x281 + _x279*_x222 - _x248 + _x252*_x285, _x278 + _x103*_x280 - _x249, 0.0005 + _x277 - _x288*_x210 + _x82*_x218]],
+      dtau_dqdd: [[_x23*_x164 + _x43*_x253 + _x17*I_dfzz + _x20*_x131 + 176.89*J_m + _x67*_x190 + _x4*_x4*I_dfyy + _x28*_x153 + I_baseyy + _x43*_x205 + _x28*_x255 + _x0*_x0*I_bezz + _x68*_x186 + _x18*I_beyy, 0.0, 0.0], [0.0, -_x56 + _x16*_x268 + _x116 + _x93*_x240 + I_bexx, -_x227 + _x266], [0.0, _x279 - _x250, l3*l3*_x286 + _x82*_x219 - _x29 + _x116 + I_dfxx]],
+    };
   }
 
   /**
@@ -1547,12 +1924,13 @@
   }
 
   /**
-   * fk, frames, jacobian, mass_matrix, coriolis_matrix, coriolis_vector, gravity_vector, friction, inverse_dynamics, forward_dynamics, tcp_force, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions.
+   * fk, frames, jacobian, mass_matrix, coriolis_matrix, coriolis_vector, gravity_vector, friction, inverse_dynamics, inverse_dynamics_derivatives, forward_dynamics, tcp_force, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions.
    *
    * Computes the outputs of fk, frames, jacobian, mass_matrix, coriolis_matrix,
-   * coriolis_vector, gravity_vector, friction, inverse_dynamics, forward_dynamics,
-   * tcp_force, operational_space, kinetic_energy, potential_energy in one call;
-   * subexpressions common to several of them are evaluated once.
+   * coriolis_vector, gravity_vector, friction, inverse_dynamics,
+   * inverse_dynamics_derivatives, forward_dynamics, tcp_force, operational_space,
+   * kinetic_energy, potential_energy in one call; subexpressions common to several of
+   * them are evaluated once.
    *
    * @param {number[]} q joint coordinates, 3 numbers: q1 [rad], q2 [rad], q3 [rad].
    * @param {number[]} qd joint velocities, 3 numbers: q1 [rad/s], q2 [rad/s], q3 [rad/s].
@@ -1585,7 +1963,7 @@
    *     I_baseyy: base turret about the yaw axis (Cavusoglu 2002) [kg*m^2]; default 0.001187.
    *     J_m: rotor inertia of each motor (Maxon RE 25, 118743: 10.3 g cm^2) [kg*m^2]; default 1.03e-06.
    *     g: standard gravity [m/s^2]; default 9.80665.
-   * @returns {{base_T_tcp: number[][], base_T_turret: number[][], base_T_upper_arm: number[][], base_T_distal: number[][], base_T_lever: number[][], base_T_link_c: number[][], J: number[][], M: number[][], C: number[][], V: number[], G: number[], F_f: number[], inverse_dynamics_tau: number[], forward_dynamics_qdd: number[], F: number[], Mx: number[][], Vx: number[], Gx: number[], k: number, u: number}}
+   * @returns {{base_T_tcp: number[][], base_T_turret: number[][], base_T_upper_arm: number[][], base_T_distal: number[][], base_T_lever: number[][], base_T_link_c: number[][], J: number[][], M: number[][], C: number[][], V: number[], G: number[], F_f: number[], inverse_dynamics_tau: number[], dtau_dq: number[][], dtau_dqd: number[][], dtau_dqdd: number[][], forward_dynamics_qdd: number[], F: number[], Mx: number[][], Vx: number[], Gx: number[], k: number, u: number}}
    *     base_T_tcp: shape (4, 4); homogeneous transform of the TCP frame in the base
    *     frame (fk) [m].
    *     base_T_turret: shape (4, 4); homogeneous transform of frame 'turret' in the
@@ -1609,6 +1987,12 @@
    *     (revolute), N (prismatic)].
    *     inverse_dynamics_tau: shape (3,); joint torques (revolute) or forces
    *     (prismatic) (inverse_dynamics) [N*m (revolute), N (prismatic)].
+   *     dtau_dq: shape (3, 3); d tau / dq: row i, column j is d tau_i / d q_j
+   *     (inverse_dynamics_derivatives).
+   *     dtau_dqd: shape (3, 3); d tau / dqd: the damping of the motion (Coriolis and
+   *     friction) (inverse_dynamics_derivatives).
+   *     dtau_dqdd: shape (3, 3); d tau / dqdd = M(q), the mass matrix
+   *     (inverse_dynamics_derivatives).
    *     forward_dynamics_qdd: shape (3,); joint accelerations (forward_dynamics)
    *     [rad/s^2 (revolute), m/s^2 (prismatic)].
    *     F: shape (3,); TCP force components [x, y, z] (tcp_force) [N, N*m].
@@ -1666,384 +2050,608 @@
     const _x1 = Math.cos(q2);
     const _x2 = l2*m_a;
     const _x3 = Math.sin(q3);
-    const _x4 = Math.cos(q3);
-    const _x5 = _x1*_x4 + _x0*_x3;
-    const _x6 = 0.5*l1;
-    const _x7 = _x1*_x3 - _x0*_x4;
-    const _x8 = 0.25*l2*l2*m_a;
-    const _x9 = l1*l1;
-    const _x10 = 0.25*m_c;
-    const _x11 = l3*m_c;
-    const _x12 = l3*l3*m_c;
-    const _x13 = 125.44*J_m;
-    const _x14 = q2_d*q1_d;
-    const _x15 = l1*m_a;
-    const _x16 = -q2_d;
-    const _x17 = 0.5*l2;
-    const _x18 = -q3_d;
-    const _x19 = _x10*_x9;
-    const _x20 = q1_d*q3_d;
-    const _x21 = q1_d*q1_d;
-    const _x22 = q3_d*q3_d;
-    const _x23 = l3*_x22;
-    const _x24 = q2_d*q2_d;
-    const _x25 = -l1*_x24;
-    const _x26 = g*_x5;
-    const _x27 = g*_x3;
-    const _x28 = _x6*m_c;
-    const _x29 = g*_x1;
-    const _x30 = _x17*m_a;
-    const _x31 = l3*q3_dd;
-    const _x32 = -q3_dd;
-    const _x33 = -q2_dd;
-    const _x34 = l1*q2_dd;
-    const _x35 = 176.89*J_m;
-    const _x36 = I_baseyy + _x35;
-    const _x37 = _x9*m_a;
-    const _x38 = _x8 + I_axx;
-    const _x39 = -_x38;
-    const _x40 = l1*_x7;
-    const _x41 = _x2*_x40;
-    const _x42 = 0.5*_x41;
-    const _x43 = _x19 + I_cxx;
-    const _x44 = _x38 + _x43 + _x13;
-    const _x45 = _x44 + _x39 + _x37 + I_bexx;
-    const _x46 = 1.0/_x45;
-    const _x47 = 0.0005*q1_d;
-    const _x48 = 0.01*Math.tanh(10.0*q1_d);
-    const _x49 = l5*m_be;
-    const _x50 = 0.0005*q2_d;
-    const _x51 = 0.01*Math.tanh(10.0*q2_d);
-    const _x52 = _x16 + q3_d;
-    const _x53 = 0.0005*_x52;
-    const _x54 = 0.01*Math.tanh(10.0*_x52);
-    const _x55 = _x54 + _x53;
-    const _x56 = l6*m_df;
-    const _x57 = Math.sin(q1);
-    const _x58 = l2*_x3;
-    const _x59 = l1*_x1;
-    const _x60 = Math.cos(q1);
-    const _x61 = l2*_x4;
-    const _x62 = l1*_x0;
-    const _x63 = q1_dd*I_baseyy + _x35*q1_dd;
-    const _x64 = q2_dd*I_bexx;
-    const _x65 = q3_dd*I_dfxx;
-    const _x66 = _x61*_x57;
-    const _x67 = -_x61 + _x62;
-    const _x68 = _x57*_x67;
-    const _x69 = -_x66 - _x68;
-    const _x70 = _x58*_x60;
-    const _x71 = _x60*_x59;
-    const _x72 = _x70 + _x71;
-    const _x73 = _x57*_x57;
-    const _x74 = _x58*_x73;
-    const _x75 = _x60*_x60;
-    const _x76 = _x58*_x75;
-    const _x77 = _x58*_x57;
-    const _x78 = _x59*_x57;
-    const _x79 = _x77 + _x78;
-    const _x80 = _x57*_x79 - _x76 + _x60*_x72 - _x74;
-    const _x81 = _x74 + _x76;
-    const _x82 = _x15 + _x49;
-    const _x83 = _x56 - _x11;
-    const _x84 = _x61*_x60;
-    const _x85 = -_x60*_x67 - _x84;
-    const _x86 = _x66*_x85;
-    const _x87 = -_x77 - _x78;
-    const _x88 = _x72*_x84 - _x66*_x87;
-    const _x89 = -_x72*_x85;
-    const _x90 = _x8 + I_azz;
-    const _x91 = _x5*_x6;
-    const _x92 = _x5*_x7;
-    const _x93 = -_x92*I_ayy + _x90*_x92 + _x2*_x91;
-    const _x94 = _x7*_x7;
-    const _x95 = _x5*_x5;
-    const _x96 = _x19 + I_cyy;
-    const _x97 = -_x92*I_czz + _x96*_x92 + _x11*_x91;
-    const _x98 = _x11*_x40;
-    const _x99 = _x0*(_x1*_x93 + _x0*(_x90*_x95 + _x94*I_ayy + I_bezz)) + _x4*(_x3*_x97 + _x4*(_x96*_x95 + _x94*I_czz + I_dfyy)) + _x3*(_x3*(_x96*_x94 + _x95*I_czz + _x98 + _x12 + I_dfzz) + _x4*_x97) + _x1*(_x1*(_x90*_x94 + _x95*I_ayy + _x41 + _x37 + I_beyy) + _x0*_x93) + _x36;
-    const _x100 = -_x80*_x66 + _x81*_x69;
-    const _x101 = -_x81*_x72;
-    const _x102 = _x80*_x72;
-    const _x103 = _x87*_x100 + _x84*_x102 + _x85*_x101;
-    const _x104 = 1.0/_x103;
-    const _x105 = _x104*_x99;
-    const _x106 = _x4*_x60;
-    const _x107 = -_x57;
-    const _x108 = _x3*_x60;
-    const _x109 = -_x108;
-    const _x110 = _x58*_x60 + _x71;
-    const _x111 = _x4*_x57;
-    const _x112 = _x3*_x57;
-    const _x113 = -_x112;
-    const _x114 = _x1*_x60;
-    const _x115 = -_x0*_x60;
-    const _x116 = _x1*_x57;
-    const _x117 = -_x0*_x57;
-    const _x118 = _x58*_x57*_x57;
-    const _x119 = _x58*_x60*_x60;
-    const _x120 = _x92*I_czz;
-    const _x121 = 2.0*_x120;
-    const _x122 = _x10*_x9 + I_cyy;
-    const _x123 = _x122*_x92;
-    const _x124 = 2.0*_x123;
-    const _x125 = _x124 - _x121;
-    const _x126 = l1*_x5;
-    const _x127 = _x2*_x126;
-    const _x128 = _x90*_x92;
-    const _x129 = 2.0*_x128;
-    const _x130 = _x92*I_ayy;
-    const _x131 = 2.0*_x130;
-    const _x132 = _x131 - _x129;
-    const _x133 = _x11*_x126;
-    const _x134 = _x121 - _x124;
-    const _x135 = _x129 - _x131;
-    const _x136 = 0.5*_x133;
-    const _x137 = _x123 + _x136 - _x120;
-    const _x138 = _x4*_x137;
-    const _x139 = _x122*_x94;
-    const _x140 = _x95*I_czz;
-    const _x141 = _x139 + _x140;
-    const _x142 = _x12 + _x98 + _x141 + I_dfzz;
-    const _x143 = _x3*_x137;
-    const _x144 = 0.5*_x98;
-    const _x145 = _x94*I_czz;
-    const _x146 = _x122*_x95;
-    const _x147 = _x145 + _x146;
-    const _x148 = _x147 - _x144 - _x139 - _x140;
-    const _x149 = I_dfyy + _x147;
-    const _x150 = _x95*I_ayy;
-    const _x151 = _x90*_x94;
-    const _x152 = _x90*_x95;
-    const _x153 = _x94*I_ayy;
-    const _x154 = _x152 + _x153;
-    const _x155 = -_x42 - _x151 - _x150 + _x154;
-    const _x156 = 0.5*(_x1*((_x135 + _x127)*_x1 + _x0*_x155) + _x3*((_x133 + _x125)*_x3 + _x4*_x148 + _x4*_x142 - _x143) + _x4*(-_x3*_x149 + _x3*_x148 + _x4*_x134 + _x138) - _x3*(_x4*_x149 + _x143) + (_x1*_x155 + _x0*_x132)*_x0 + _x4*(_x3*_x142 + _x138));
-    const _x157 = _x144 + _x141 - _x145 - _x146;
-    const _x158 = _x150 + _x151;
-    const _x159 = _x9*m_a + _x158 + _x41 + I_beyy;
-    const _x160 = 0.5*_x127;
-    const _x161 = _x160 + _x128 - _x130;
-    const _x162 = _x0*_x161;
-    const _x163 = _x1*_x161;
-    const _x164 = -_x153 - _x152 + _x42 + _x158;
-    const _x165 = I_bezz + _x154;
-    const _x166 = 0.5*(-_x0*(_x1*_x159 + _x162) + _x1*((-_x127 + _x132)*_x1 + _x0*_x164 - _x0*_x159 + _x163) + _x1*(_x0*_x165 + _x163) + _x0*(_x1*_x164 + _x0*_x135 + _x1*_x165 - _x162) + _x3*((-_x133 + _x134)*_x3 + _x4*_x157) + (_x3*_x157 + _x4*_x125)*_x4);
-    const _x167 = _x166*q1_d;
-    const _x168 = _x156*q1_d;
-    const _x169 = _x48 + _x47;
-    const _x170 = -_x55 + _x51 + _x50;
-    const _x171 = (_x60*_x79 + _x60*_x87)*_x14 + (-_x62*_x75 - _x62*_x73)*_x24 + (_x61*_x75 + _x61*_x73)*_x22;
-    const _x172 = 2.0*_x20;
-    const _x173 = _x62*_x14;
-    const _x174 = -_x24*_x78 - _x22*_x77 + _x14*_x85 + _x84*_x172 - _x60*_x173 + _x21*_x87;
-    const _x175 = -_x22*_x70 + (_x68 + _x66)*_x14 - _x66*_x172 - _x24*_x71 + (-_x71 - _x70)*_x21 + _x57*_x173;
-    const _x176 = -_x43;
-    const _x177 = _x144 + _x42;
-    const _x178 = -_x160 - _x136;
-    const _x179 = _x160 + _x136;
-    const _x180 = _x0*_x14;
-    const _x181 = _x15*_x180;
-    const _x182 = _x5*q1_d;
-    const _x183 = _x1*_x182;
-    const _x184 = _x7*q1_d;
-    const _x185 = _x0*_x184;
-    const _x186 = _x183 - _x185;
-    const _x187 = -q2_d*_x185 + q2_d*_x183 + _x52*_x186;
-    const _x188 = -_x52 + _x16;
-    const _x189 = _x186*_x188;
-    const _x190 = -l2*_x181 - _x38*_x189 + _x90*_x187 + _x189*I_ayy;
-    const _x191 = _x1*_x184;
-    const _x192 = _x0*_x182;
-    const _x193 = _x191 + _x192;
-    const _x194 = _x193*_x188;
-    const _x195 = _x38*_x194 - _x90*_x194 + I_ayy*(-q2_d*_x192 - q2_d*_x191 - _x52*_x193);
-    const _x196 = _x1*I_bezz;
-    const _x197 = _x14*I_bexx;
-    const _x198 = _x1*I_beyy;
-    const _x199 = q2_d + _x18;
-    const _x200 = _x4*_x182;
-    const _x201 = _x3*q1_d;
-    const _x202 = _x7*_x201;
-    const _x203 = _x200 + _x202;
-    const _x204 = -_x199 + _x18;
-    const _x205 = _x204*(_x19 + I_cxx);
-    const _x206 = _x96*_x203;
-    const _x207 = I_czz*(_x199*_x203 + q3_d*_x200 + q3_d*_x202) + _x204*_x206 - _x205*_x203;
-    const _x208 = q3_d*_x201;
-    const _x209 = _x4*_x20;
-    const _x210 = _x11*_x209;
-    const _x211 = _x4*_x184;
-    const _x212 = _x5*_x201;
-    const _x213 = _x212 - _x211;
-    const _x214 = q3_d*_x211 - _x213*_x199 - q3_d*_x212;
-    const _x215 = _x213*I_czz;
-    const _x216 = -_x215*_x204 + l1*_x210 + _x96*_x214 + _x213*_x205;
-    const _x217 = _x28*_x213;
-    const _x218 = _x4*I_dfzz;
-    const _x219 = l3*_x21;
-    const _x220 = _x23 + _x3*_x3*_x219;
-    const _x221 = _x3*_x4*_x219;
-    const _x222 = (-_x7*_x221 + _x5*_x220)*m_c;
-    const _x223 = -_x6*_x222 - _x213*_x206 + _x215*_x203;
-    const _x224 = l1*_x21;
-    const _x225 = _x0*_x1*_x224;
-    const _x226 = _x25 - _x1*_x1*_x224;
-    const _x227 = _x193*_x186;
-    const _x228 = (_x7*_x225 + _x5*_x226)*m_a;
-    const _x229 = _x0*_x21;
-    const _x230 = -_x227*I_ayy - _x17*_x228 + _x90*_x227;
-    const _x231 = _x3*_x21;
-    const _x232 = _x4*_x26;
-    const _x233 = _x28*(_x7*_x27 + _x232);
-    const _x234 = _x0*_x26;
-    const _x235 = _x30*(_x7*_x29 + _x234);
-    const _x236 = _x1*q1_dd - _x180;
-    const _x237 = (-l1*_x180 + l1*_x236)*m_a;
-    const _x238 = -_x0*_x184 + _x1*_x182;
-    const _x239 = _x1*_x14;
-    const _x240 = _x0*q1_dd + _x239;
-    const _x241 = _x52*_x238 + _x7*_x236 + _x5*_x240;
-    const _x242 = _x188*_x238;
-    const _x243 = _x90*_x241 + _x17*_x237 - _x38*_x242 + _x242*I_ayy;
-    const _x244 = _x1*_x184 + _x0*_x182;
-    const _x245 = _x90*_x244;
-    const _x246 = _x38*_x244*_x188 - _x245*_x188 + I_ayy*(-_x7*_x240 - _x52*_x244 + _x5*_x236);
-    const _x247 = _x3*_x184 + _x4*_x182;
-    const _x248 = _x3*_x20;
-    const _x249 = _x4*q1_dd - _x248;
-    const _x250 = _x3*q1_dd + _x209;
-    const _x251 = _x247*_x204;
-    const _x252 = _x96*_x251 - _x251*_x43 + I_czz*(-_x7*_x249 + _x247*_x199 + _x5*_x250);
-    const _x253 = (l3*_x250 + l3*_x209)*m_c;
-    const _x254 = -_x4*_x184 + _x3*_x182;
-    const _x255 = -_x254*_x199 + _x7*_x250 + _x5*_x249;
-    const _x256 = _x254*_x204;
-    const _x257 = -_x256*I_czz + _x96*_x255 + _x6*_x253 + _x256*_x43;
-    const _x258 = _x23 + _x3*_x3*_x219 + g*_x4;
-    const _x259 = _x3*_x4;
-    const _x260 = -_x259*_x219 + _x31 + _x27;
-    const _x261 = (_x7*_x260 + _x5*_x258)*m_c;
-    const _x262 = _x254*_x247;
-    const _x263 = -_x6*_x261 - _x96*_x262 + _x33*_x43 + _x262*I_czz;
-    const _x264 = _x0*_x1;
-    const _x265 = _x34 + _x264*_x224 + _x29;
-    const _x266 = _x25 - _x1*_x1*_x224 + g*_x0;
-    const _x267 = (_x7*_x265 + _x5*_x266)*m_a;
-    const _x268 = _x244*_x238;
-    const _x269 = _x21*_x264;
-    const _x270 = -_x268*I_ayy + _x32*_x38 - _x17*_x267 + _x245*_x238;
-    const _x271 = _x21*_x259;
-    const _x272 = _x188*(_x8 + I_axx);
-    const _x273 = _x186*I_ayy;
-    const _x274 = -l2*_x181 - _x272*_x186 + _x273*_x188 + _x90*_x187;
-    const _x275 = _x90*_x193;
-    const _x276 = -_x275*_x188 + _x272*_x193 + I_ayy*(-q2_d*_x192 - q2_d*_x191 - _x52*_x193);
-    const _x277 = _x14*I_beyy;
-    const _x278 = _x30*_x186;
-    const _x279 = _x4*q1_d;
-    const _x280 = _x5*_x279;
-    const _x281 = _x3*_x184;
-    const _x282 = _x280 + _x281;
-    const _x283 = _x96*_x282;
-    const _x284 = -_x282*_x205 + _x283*_x204 + I_czz*(q3_d*_x281 + q3_d*_x280 + _x282*_x199);
-    const _x285 = q3_d*_x279;
-    const _x286 = _x11*_x285;
-    const _x287 = _x7*_x279;
-    const _x288 = _x3*_x182;
-    const _x289 = _x288 - _x287;
-    const _x290 = -q3_d*_x288 - _x289*_x199 + q3_d*_x287;
-    const _x291 = _x289*I_czz;
-    const _x292 = _x96*_x290 - _x291*_x204 + l1*_x286 + _x289*_x205;
-    const _x293 = _x28*_x289;
-    const _x294 = _x264*_x224 + _x29;
-    const _x295 = (_x7*_x294 + _x5*_x266)*m_a;
-    const _x296 = -_x17*_x295 - _x273*_x193 + _x275*_x186;
-    const _x297 = -_x259*_x219 + _x27;
-    const _x298 = (_x7*_x297 + _x5*_x258)*m_c;
-    const _x299 = -_x6*_x298 - _x289*_x283 + _x291*_x282;
-    const _x300 = _x176 + _x44 + _x12 + I_dfxx;
-    const _x301 = _x46*_x177;
-    const _x302 = -_x177*_x301 + _x300;
-    const _x303 = -_x3*(-_x285*I_dfyy + l3*(_x293*_x204 + _x28*_x290 + 2.0*_x286) + _x7*_x292 + _x5*_x284 + _x285*I_dfzz + _x285*I_dfxx) - _x4*(-_x7*_x284 - _x248*I_dfyy - _x248*I_dfxx + _x5*_x292 + _x248*I_dfzz) - _x0*(-_x1*_x277 - _x7*_x276 + _x5*_x274 + _x239*I_bezz + _x239*I_bexx) - _x47 - _x1*(-_x0*_x277 - _x180*I_bexx + l1*(-_x278*_x188 + _x30*_x187 - 2.0*_x181) + _x7*_x274 + _x5*_x276 + _x180*I_bezz) - _x48 + tau_q1;
-    const _x304 = -_x49*_x29 - l1*(_x7*(-_x278*_x193 + _x295) + _x5*(_x30*_x193*_x193 + (-_x7*_x266 + _x5*_x294)*m_a + _x30*_x188*_x188)) - _x50 + _x299 - _x51 - _x269*I_beyy + tau_q2 + _x269*I_bezz + _x55;
-    const _x305 = -l3*(_x7*(_x282*_x293 + _x298) + _x5*(-_x28*_x204*_x204 - _x28*_x282*_x282 + (-_x7*_x258 + _x5*_x297)*m_c)) - _x54 - _x301*_x304 - _x53 + _x271*I_dfzz + _x296 + _x56*_x27 - _x271*I_dfyy + tau_q3;
-    const _x306 = _x305/_x302;
-    const _x307 = _x46*_x304 - _x301*_x306;
-    const _x308 = _x303/_x99;
-    const _x309 = _x60*_x59 + _x58*_x60;
-    const _x310 = -_x57*_x67 - _x66;
-    const _x311 = _x60*_x309 + (_x77 + _x78)*_x57 - _x119 - _x118;
-    const _x312 = _x119 + _x118;
-    const _x313 = _x3*(l3*(_x28*_x256 + _x28*_x255 + _x253) + _x7*_x257 + _x5*_x252 - _x209*I_dfyy + _x250*I_dfzz + _x209*I_dfxx) + _x4*(-_x248*I_dfxx + _x5*_x257 + _x248*I_dfzz - _x7*_x252 + _x249*I_dfyy) + _x1*(-_x180*I_bexx + l1*(-_x30*_x242 + _x30*_x241 + _x237) + _x5*_x246 + _x180*I_bezz + _x7*_x243 + _x236*I_beyy) + _x0*(-_x239*I_beyy + _x5*_x243 - _x7*_x246 + _x240*I_bezz + _x239*I_bexx) + _x63;
-    const _x314 = _x49*_x29 - _x269*I_bezz + l1*(_x7*(-_x30*_x32 - _x30*_x268 + _x267) + _x5*((-_x7*_x266 + _x5*_x265)*m_a + _x30*_x244*_x244 + _x30*_x188*_x188)) + _x64 + _x13*q2_dd + _x269*I_beyy - _x263;
-    const _x315 = -_x271*I_dfzz + _x65 + _x13*q3_dd + l3*(_x7*(-_x33*_x28 + _x28*_x262 + _x261) + _x5*(-_x28*_x204*_x204 - _x28*_x247*_x247 + (-_x7*_x258 + _x5*_x260)*m_c)) - _x56*_x27 + _x271*I_dfyy - _x270;
-    const _x316 = -_x66*_x311 + _x312*_x310;
-    const _x317 = -_x312*_x309;
-    const _x318 = _x311*_x309;
-    const _x319 = -_x85*_x312 + _x84*_x311;
-    const _x320 = _x87*_x312;
-    const _x321 = -_x87*_x311;
-    const _x322 = -_x84*_x310 + _x66*_x85;
-    const _x323 = -_x66*_x87 + _x84*_x309;
-    const _x324 = -_x85*_x309 + _x87*_x310;
-    const _x325 = _x85*_x317 + _x87*_x316 + _x84*_x318;
-    const _x326 = 1.0/_x325;
-    const _x327 = _x326*(_x316*_x313 + _x315*_x318 + _x314*_x317);
-    const _x328 = _x326*(_x313*_x319 + _x314*_x320 + _x315*_x321);
-    const _x329 = _x326*(_x313*_x322 + _x314*_x323 + _x315*_x324);
-    const _x330 = _x3*(l3*(_x28*_x214 + _x217*_x204 + 2.0*_x210) + _x7*_x216 - _x209*I_dfyy + _x20*_x218 + _x5*_x207 + _x209*I_dfxx) + _x4*(-_x7*_x207 - _x208*I_dfyy - _x208*I_dfxx + _x5*_x216 + _x208*I_dfzz) + _x1*(-_x0*_x197 - _x180*I_beyy + l1*(-_x30*_x189 + _x30*_x187 - 2.0*_x181) + _x5*_x195 + _x7*_x190 + _x180*I_bezz) + _x0*(_x1*_x197 - _x7*_x195 + _x14*_x196 - _x14*_x198 + _x5*_x190);
-    const _x331 = -_x229*_x196 + _x229*_x198 + l1*(_x7*(-_x30*_x227 + _x228) + _x5*(_x30*_x193*_x193 + (-_x7*_x226 + _x5*_x225)*m_a + _x30*_x188*_x188)) - _x223;
-    const _x332 = _x30*_x234 + _x29*(_x7*_x30 + _x82) - _x235 + _x233;
-    const _x333 = _x4*_x231*I_dfyy - _x231*_x218 + l3*(_x7*(_x217*_x203 + _x222) + _x5*(-_x28*_x204*_x204 - _x28*_x203*_x203 + (-_x7*_x220 - _x5*_x221)*m_c)) - _x230;
-    const _x334 = -_x27*(-_x7*_x28 + _x83) + _x28*_x232 - _x233 + _x235;
-    const _x335 = -_x81*_x85 + _x80*_x84;
-    const _x336 = _x81*_x87;
-    const _x337 = -_x80*_x87;
-    const _x338 = -_x69*_x84 + _x86;
-    const _x339 = _x89 + _x69*_x87;
-    const _x340 = _x105*_x100;
-    const _x341 = _x104*(_x45*_x101 + _x177*_x102);
-    const _x342 = _x104*(_x300*_x102 + _x177*_x101);
-    const _x343 = _x104*(_x330*_x100 + _x333*_x102 + _x331*_x101);
-    const _x344 = (_x332*_x101 + _x102*_x334)*_x104;
-    const _x345 = _x105*_x335;
-    const _x346 = _x104*(_x45*_x336 + _x177*_x337);
-    const _x347 = _x104*(_x300*_x337 + _x177*_x336);
-    const _x348 = _x104*(_x330*_x335 + _x331*_x336 + _x333*_x337);
-    const _x349 = (_x332*_x336 + _x334*_x337)*_x104;
-    const _x350 = _x105*_x338;
-    const _x351 = _x104*(_x88*_x45 + _x177*_x339);
-    const _x352 = _x104*(_x300*_x339 + _x88*_x177);
-    const _x353 = _x104*(_x333*_x339 + _x88*_x331 + _x330*_x338);
-    const _x354 = _x104*(_x334*_x339 + _x88*_x332);
-    const _x355 = _x104*(_x342*_x102 + _x341*_x101 + _x340*_x100);
-    const _x356 = _x104*(_x342*_x337 + _x341*_x336 + _x340*_x335);
-    const _x357 = _x104*(_x347*_x337 + _x346*_x336 + _x345*_x335);
-    const _x358 = _x104*(_x88*_x341 + _x342*_x339 + _x340*_x338);
-    const _x359 = _x104*(_x347*_x339 + _x88*_x346 + _x345*_x338);
-    const _x360 = _x104*(_x352*_x339 + _x88*_x351 + _x350*_x338);
+    const _x4 = _x0*_x3;
+    const _x5 = Math.cos(q3);
+    const _x6 = _x1*_x5;
+    const _x7 = _x6 + _x4;
+    const _x8 = 0.5*l1;
+    const _x9 = _x0*_x5;
+    const _x10 = _x1*_x3;
+    const _x11 = _x10 - _x9;
+    const _x12 = 0.25*l2*l2*m_a;
+    const _x13 = l1*l1;
+    const _x14 = 0.25*m_c;
+    const _x15 = l3*m_c;
+    const _x16 = l3*l3;
+    const _x17 = _x16*m_c;
+    const _x18 = 125.44*J_m;
+    const _x19 = q2_d*q1_d;
+    const _x20 = l1*m_a;
+    const _x21 = -q2_d;
+    const _x22 = 0.5*l2;
+    const _x23 = -q3_d;
+    const _x24 = _x14*_x13;
+    const _x25 = q1_d*q3_d;
+    const _x26 = q1_d*q1_d;
+    const _x27 = q3_d*q3_d;
+    const _x28 = l3*_x27;
+    const _x29 = q2_d*q2_d;
+    const _x30 = -l1*_x29;
+    const _x31 = g*_x7;
+    const _x32 = g*_x3;
+    const _x33 = _x8*m_c;
+    const _x34 = g*_x1;
+    const _x35 = 0.5*_x2;
+    const _x36 = l3*q3_dd;
+    const _x37 = -q3_dd;
+    const _x38 = -q2_dd;
+    const _x39 = l1*q2_dd;
+    const _x40 = _x12 + I_axx;
+    const _x41 = _x7*q1_d;
+    const _x42 = _x11*q1_d;
+    const _x43 = _x1*_x42 + _x0*_x41;
+    const _x44 = _x43*_x40;
+    const _x45 = _x3*_x3;
+    const _x46 = _x1*_x1;
+    const _x47 = l1*_x1;
+    const _x48 = _x0*_x11;
+    const _x49 = _x1*_x7;
+    const _x50 = _x49 - _x48;
+    const _x51 = -_x0*_x42 + _x1*_x41;
+    const _x52 = -_x51;
+    const _x53 = _x1*_x11 + _x0*_x7;
+    const _x54 = -_x40;
+    const _x55 = I_ayy + _x54;
+    const _x56 = _x1*_x19;
+    const _x57 = _x0*q1_dd + _x56;
+    const _x58 = _x57*I_ayy;
+    const _x59 = _x11*I_ayy;
+    const _x60 = _x7*I_ayy;
+    const _x61 = _x0*_x19;
+    const _x62 = _x1*q1_dd - _x61;
+    const _x63 = _x62*I_ayy;
+    const _x64 = q3_d + _x21;
+    const _x65 = -_x64 + _x21;
+    const _x66 = _x65*_x40 - _x64*I_ayy;
+    const _x67 = _x43*I_ayy;
+    const _x68 = _x3*_x11 + _x5*_x7;
+    const _x69 = _x5*_x25;
+    const _x70 = _x3*q1_dd + _x69;
+    const _x71 = _x70*I_czz;
+    const _x72 = _x3*_x25;
+    const _x73 = _x5*q1_dd - _x72;
+    const _x74 = _x73*I_czz;
+    const _x75 = q2_d + _x23;
+    const _x76 = _x75*I_czz;
+    const _x77 = _x24 + I_cxx;
+    const _x78 = -_x77;
+    const _x79 = _x24 + I_cyy;
+    const _x80 = _x79 + _x78;
+    const _x81 = _x11*I_czz;
+    const _x82 = _x7*I_czz;
+    const _x83 = _x3*_x42 + _x5*_x41;
+    const _x84 = _x83*I_czz;
+    const _x85 = _x5*_x11;
+    const _x86 = _x3*_x7;
+    const _x87 = 2.0*_x15;
+    const _x88 = l3*_x3;
+    const _x89 = _x86 - _x85;
+    const _x90 = -_x5*_x42 + _x3*_x41;
+    const _x91 = -_x90;
+    const _x92 = _x77 - I_czz;
+    const _x93 = l3*_x26;
+    const _x94 = _x3*_x5;
+    const _x95 = -_x93*_x94 + _x36 + _x32;
+    const _x96 = m_c*_x95;
+    const _x97 = _x28 + _x45*_x93 + g*_x5;
+    const _x98 = m_c*_x97;
+    const _x99 = _x11*m_c;
+    const _x100 = _x7*m_c;
+    const _x101 = l3*_x11;
+    const _x102 = I_czz - _x79;
+    const _x103 = l1*_x26;
+    const _x104 = _x30 - _x46*_x103 + g*_x0;
+    const _x105 = m_a*_x104;
+    const _x106 = _x0*_x1;
+    const _x107 = _x39 + _x103*_x106 + _x34;
+    const _x108 = m_a*_x107;
+    const _x109 = _x11*m_a;
+    const _x110 = _x7*m_a;
+    const _x111 = l1*_x11;
+    const _x112 = Math.tanh(10.0*_x64);
+    const _x113 = 176.89*J_m;
+    const _x114 = I_baseyy + _x113;
+    const _x115 = _x13*m_a;
+    const _x116 = _x2*_x111;
+    const _x117 = 0.5*_x116;
+    const _x118 = _x18 + _x77 + _x40;
+    const _x119 = _x118 + _x54 + _x115 + I_bexx;
+    const _x120 = 1.0/_x119;
+    const _x121 = 0.0005*q1_d;
+    const _x122 = Math.tanh(10.0*q1_d);
+    const _x123 = 0.01*_x122;
+    const _x124 = l5*m_be;
+    const _x125 = 0.0005*q2_d;
+    const _x126 = Math.tanh(10.0*q2_d);
+    const _x127 = 0.01*_x126;
+    const _x128 = 0.0005*_x64;
+    const _x129 = 0.01*_x112;
+    const _x130 = _x129 + _x128;
+    const _x131 = l6*m_df;
+    const _x132 = Math.sin(q1);
+    const _x133 = l2*_x3;
+    const _x134 = Math.cos(q1);
+    const _x135 = l2*_x5;
+    const _x136 = l1*_x0;
+    const _x137 = q1_dd*I_baseyy + _x113*q1_dd;
+    const _x138 = q2_dd*I_bexx;
+    const _x139 = q3_dd*I_dfxx;
+    const _x140 = _x132*_x135;
+    const _x141 = -_x135 + _x136;
+    const _x142 = _x132*_x141;
+    const _x143 = -_x140 - _x142;
+    const _x144 = _x133*_x134;
+    const _x145 = _x47*_x134;
+    const _x146 = _x144 + _x145;
+    const _x147 = _x132*_x132;
+    const _x148 = _x133*_x147;
+    const _x149 = _x134*_x134;
+    const _x150 = _x133*_x149;
+    const _x151 = _x132*_x133;
+    const _x152 = _x47*_x132;
+    const _x153 = _x151 + _x152;
+    const _x154 = _x132*_x153 - _x150 + _x134*_x146 - _x148;
+    const _x155 = _x148 + _x150;
+    const _x156 = _x20 + _x124;
+    const _x157 = _x131 - _x15;
+    const _x158 = _x135*_x134;
+    const _x159 = -_x134*_x141 - _x158;
+    const _x160 = _x159*_x140;
+    const _x161 = -_x151 - _x152;
+    const _x162 = _x146*_x158 - _x140*_x161;
+    const _x163 = -_x159*_x146;
+    const _x164 = _x12 + I_azz;
+    const _x165 = _x7*_x8;
+    const _x166 = _x7*_x11;
+    const _x167 = _x166*_x164 - _x166*I_ayy + _x2*_x165;
+    const _x168 = _x11*_x11;
+    const _x169 = _x7*_x7;
+    const _x170 = -_x166*I_czz + _x79*_x166 + _x15*_x165;
+    const _x171 = _x111*_x15;
+    const _x172 = _x3*(_x3*(_x79*_x168 + _x169*I_czz + _x171 + _x17 + I_dfzz) + _x5*_x170) + _x5*(_x3*_x170 + _x5*(_x79*_x169 + _x168*I_czz + I_dfyy)) + _x1*(_x1*(_x164*_x168 + _x169*I_ayy + _x116 + _x115 + I_beyy) + _x0*_x167) + _x0*(_x1*_x167 + _x0*(_x164*_x169 + _x168*I_ayy + I_bezz)) + _x114;
+    const _x173 = -_x154*_x140 + _x143*_x155;
+    const _x174 = -_x155*_x146;
+    const _x175 = _x154*_x146;
+    const _x176 = _x173*_x161 + _x175*_x158 + _x159*_x174;
+    const _x177 = 1.0/_x176;
+    const _x178 = _x177*_x172;
+    const _x179 = _x5*_x134;
+    const _x180 = -_x132;
+    const _x181 = _x3*_x134;
+    const _x182 = -_x181;
+    const _x183 = _x133*_x134 + _x145;
+    const _x184 = _x5*_x132;
+    const _x185 = _x3*_x132;
+    const _x186 = -_x185;
+    const _x187 = _x1*_x134;
+    const _x188 = -_x0*_x134;
+    const _x189 = _x1*_x132;
+    const _x190 = -_x0*_x132;
+    const _x191 = _x132*_x132*_x133;
+    const _x192 = _x133*_x134*_x134;
+    const _x193 = _x166*I_czz;
+    const _x194 = 2.0*_x193;
+    const _x195 = _x14*_x13 + I_cyy;
+    const _x196 = _x195*_x166;
+    const _x197 = 2.0*_x196;
+    const _x198 = _x197 - _x194;
+    const _x199 = l1*_x7;
+    const _x200 = _x2*_x199;
+    const _x201 = _x166*_x164;
+    const _x202 = 2.0*_x201;
+    const _x203 = _x166*I_ayy;
+    const _x204 = 2.0*_x203;
+    const _x205 = _x204 - _x202;
+    const _x206 = _x15*_x199;
+    const _x207 = _x194 - _x197;
+    const _x208 = _x202 - _x204;
+    const _x209 = 0.5*_x206;
+    const _x210 = _x196 + _x209 - _x193;
+    const _x211 = _x5*_x210;
+    const _x212 = _x195*_x168;
+    const _x213 = _x169*I_czz;
+    const _x214 = _x212 + _x213;
+    const _x215 = _x17 + _x214 + _x171 + I_dfzz;
+    const _x216 = _x3*_x210;
+    const _x217 = 0.5*_x171;
+    const _x218 = _x168*I_czz;
+    const _x219 = _x195*_x169;
+    const _x220 = _x218 + _x219;
+    const _x221 = _x220 - _x217 - _x212 - _x213;
+    const _x222 = I_dfyy + _x220;
+    const _x223 = _x169*I_ayy;
+    const _x224 = _x164*_x168;
+    const _x225 = _x164*_x169;
+    const _x226 = _x168*I_ayy;
+    const _x227 = _x225 + _x226;
+    const _x228 = -_x117 - _x224 - _x223 + _x227;
+    const _x229 = _x5*(-_x3*_x222 + _x3*_x221 + _x5*_x207 + _x211) + _x3*((_x206 + _x198)*_x3 + _x5*_x221 + _x5*_x215 - _x216) - _x3*(_x5*_x222 + _x216) + (_x1*_x228 + _x0*_x205)*_x0 + _x1*((_x208 + _x200)*_x1 + _x0*_x228) + _x5*(_x3*_x215 + _x211);
+    const _x230 = 0.5*q3_d;
+    const _x231 = _x217 + _x214 - _x218 - _x219;
+    const _x232 = _x223 + _x224;
+    const _x233 = _x13*m_a + _x232 + _x116 + I_beyy;
+    const _x234 = 0.5*_x200;
+    const _x235 = _x234 + _x201 - _x203;
+    const _x236 = _x0*_x235;
+    const _x237 = _x1*_x235;
+    const _x238 = -_x225 - _x226 + _x117 + _x232;
+    const _x239 = I_bezz + _x227;
+    const _x240 = -_x0*(_x1*_x233 + _x236) + _x1*((-_x200 + _x205)*_x1 + _x0*_x238 - _x0*_x233 + _x237) + _x1*(_x0*_x239 + _x237) + _x0*(_x1*_x238 + _x0*_x208 + _x1*_x239 - _x236) + _x3*((-_x206 + _x207)*_x3 + _x5*_x231) + (_x3*_x231 + _x5*_x198)*_x5;
+    const _x241 = 0.5*q2_d;
+    const _x242 = 0.5*q1_d;
+    const _x243 = _x240*_x242;
+    const _x244 = _x229*_x242;
+    const _x245 = _x123 + _x121;
+    const _x246 = -_x130 + _x127 + _x125;
+    const _x247 = (_x134*_x153 + _x134*_x161)*_x19 + (-_x136*_x149 - _x136*_x147)*_x29 + (_x135*_x149 + _x135*_x147)*_x27;
+    const _x248 = 2.0*_x25;
+    const _x249 = _x19*_x136;
+    const _x250 = -_x27*_x151 + _x19*_x159 - _x134*_x249 - _x29*_x152 + _x248*_x158 + _x26*_x161;
+    const _x251 = -_x140*_x248 - _x27*_x144 + (-_x145 - _x144)*_x26 - _x29*_x145 + (_x142 + _x140)*_x19 + _x132*_x249;
+    const _x252 = _x217 + _x117;
+    const _x253 = -_x234 - _x209;
+    const _x254 = _x234 + _x209;
+    const _x255 = _x20*_x61;
+    const _x256 = _x1*_x41;
+    const _x257 = _x0*_x42;
+    const _x258 = _x256 - _x257;
+    const _x259 = -q2_d*_x257 + q2_d*_x256 + _x64*_x258;
+    const _x260 = _x65*_x258;
+    const _x261 = -l2*_x255 + _x259*_x164 - _x40*_x260 + _x260*I_ayy;
+    const _x262 = _x1*_x42;
+    const _x263 = _x0*_x41;
+    const _x264 = _x262 + _x263;
+    const _x265 = _x65*_x264;
+    const _x266 = -_x265*_x164 + _x40*_x265 + I_ayy*(-q2_d*_x263 - q2_d*_x262 - _x64*_x264);
+    const _x267 = _x1*I_bezz;
+    const _x268 = _x19*I_bexx;
+    const _x269 = _x1*I_beyy;
+    const _x270 = _x22*m_a;
+    const _x271 = _x5*_x41;
+    const _x272 = _x3*q1_d;
+    const _x273 = _x11*_x272;
+    const _x274 = _x271 + _x273;
+    const _x275 = -_x75 + _x23;
+    const _x276 = _x275*(_x24 + I_cxx);
+    const _x277 = _x79*_x274;
+    const _x278 = -_x276*_x274 + _x275*_x277 + I_czz*(q3_d*_x273 + q3_d*_x271 + _x75*_x274);
+    const _x279 = q3_d*_x272;
+    const _x280 = _x15*_x69;
+    const _x281 = _x5*_x42;
+    const _x282 = _x7*_x272;
+    const _x283 = _x282 - _x281;
+    const _x284 = -q3_d*_x282 - _x75*_x283 + q3_d*_x281;
+    const _x285 = _x283*I_czz;
+    const _x286 = -_x285*_x275 + l1*_x280 + _x79*_x284 + _x283*_x276;
+    const _x287 = _x33*_x283;
+    const _x288 = _x5*I_dfzz;
+    const _x289 = _x28 + _x3*_x3*_x93;
+    const _x290 = _x3*_x5*_x93;
+    const _x291 = m_c*(-_x11*_x290 + _x7*_x289);
+    const _x292 = -_x8*_x291 - _x283*_x277 + _x285*_x274;
+    const _x293 = _x0*_x1*_x103;
+    const _x294 = _x30 - _x1*_x1*_x103;
+    const _x295 = _x264*_x258;
+    const _x296 = m_a*(_x11*_x293 + _x7*_x294);
+    const _x297 = _x0*_x26;
+    const _x298 = -_x295*I_ayy - _x22*_x296 + _x295*_x164;
+    const _x299 = _x3*_x26;
+    const _x300 = _x5*_x31;
+    const _x301 = _x33*(_x32*_x11 + _x300);
+    const _x302 = _x0*_x31;
+    const _x303 = _x35*(_x34*_x11 + _x302);
+    const _x304 = (-l1*_x61 + l1*_x62)*m_a;
+    const _x305 = _x51*_x64 + _x11*_x62 + _x7*_x57;
+    const _x306 = _x51*_x65;
+    const _x307 = -_x40*_x306 + _x305*_x164 + _x22*_x304 + _x306*I_ayy;
+    const _x308 = _x43*_x164;
+    const _x309 = _x43*_x65*_x40 - _x308*_x65 + I_ayy*(-_x11*_x57 - _x64*_x43 + _x7*_x62);
+    const _x310 = _x83*_x275;
+    const _x311 = -_x310*_x77 + _x310*_x79 + I_czz*(-_x11*_x73 + _x83*_x75 + _x7*_x70);
+    const _x312 = (l3*_x70 + l3*_x69)*m_c;
+    const _x313 = -_x90*_x75 + _x11*_x70 + _x7*_x73;
+    const _x314 = _x90*_x275;
+    const _x315 = -_x314*I_czz + _x313*_x79 + _x8*_x312 + _x314*_x77;
+    const _x316 = _x28 + _x3*_x3*_x93 + g*_x5;
+    const _x317 = m_c*(_x11*_x95 + _x7*_x316);
+    const _x318 = _x90*_x83;
+    const _x319 = -_x8*_x317 - _x318*_x79 + _x38*_x77 + _x318*I_czz;
+    const _x320 = _x30 - _x1*_x1*_x103 + g*_x0;
+    const _x321 = m_a*(_x11*_x107 + _x7*_x320);
+    const _x322 = _x51*_x43;
+    const _x323 = _x26*_x106;
+    const _x324 = -_x322*I_ayy + _x37*_x40 - _x22*_x321 + _x308*_x51;
+    const _x325 = _x26*_x94;
+    const _x326 = -_x308*_x65 + _x44*_x65 + I_ayy*(-_x11*_x57 - _x64*_x43 + _x7*_x62);
+    const _x327 = m_c*(_x11*_x95 + _x7*_x97);
+    const _x328 = m_a*(_x11*_x107 + _x7*_x104);
+    const _x329 = _x9 - _x10;
+    const _x330 = _x0*q2_d;
+    const _x331 = _x0*q1_d;
+    const _x332 = -_x0;
+    const _x333 = q1_dd*_x332 - _x56;
+    const _x334 = -_x330;
+    const _x335 = -_x331;
+    const _x336 = -_x20*_x56 + _x20*_x333;
+    const _x337 = _x20*_x334 - _x20*_x330;
+    const _x338 = _x20*_x335 - _x20*_x331;
+    const _x339 = _x47*m_a;
+    const _x340 = q1_d*_x329;
+    const _x341 = -_x6 - _x4;
+    const _x342 = q1_d*_x341;
+    const _x343 = -_x0*_x342 + _x41*_x332;
+    const _x344 = -_x0*_x41 + _x1*_x340;
+    const _x345 = _x19*_x332;
+    const _x346 = _x1*q2_d;
+    const _x347 = _x1*q1_d;
+    const _x348 = _x1*q1_dd + _x345;
+    const _x349 = _x11*_x333 + _x64*_x343 + _x11*_x57 + _x62*_x341 + _x7*_x348;
+    const _x350 = _x57*_x329 + _x64*_x344 + _x7*_x62;
+    const _x351 = _x11*_x334 + _x50*_x64 + _x7*_x346;
+    const _x352 = _x7*_x347 + _x11*_x335 + _x52;
+    const _x353 = _x65*_x343;
+    const _x354 = _x65*_x344;
+    const _x355 = _x50*_x65;
+    const _x356 = _x55*_x353 + _x349*_x164 + _x22*_x336;
+    const _x357 = _x55*_x354 + _x350*_x164;
+    const _x358 = _x55*_x355 + _x351*_x164 + _x22*_x337;
+    const _x359 = _x352*_x164 + _x22*_x338;
+    const _x360 = _x55*_x52 + _x51*_x164;
+    const _x361 = _x53*_x164 + _x22*_x339;
+    const _x362 = _x42*_x332 + _x1*_x41 + _x1*_x342 + _x0*_x42;
+    const _x363 = _x1*_x41 + _x0*_x340;
+    const _x364 = _x362*_x164;
+    const _x365 = _x363*_x164;
+    const _x366 = _x53*_x164;
+    const _x367 = -_x58*_x341 - _x65*_x364 - _x59*_x348 + _x60*_x333 + _x63*_x11 + _x66*_x362;
+    const _x368 = _x63*_x329 - _x65*_x365 - _x7*_x58 + _x66*_x363;
+    const _x369 = -_x59*_x346 + _x60*_x334 - _x65*_x366 + _x66*_x53;
+    const _x370 = _x67 + _x60*_x335 - _x59*_x347;
+    const _x371 = -_x44 - _x67 + _x308;
+    const _x372 = _x49*I_ayy - _x48*I_ayy;
+    const _x373 = -_x3;
+    const _x374 = _x3*_x342 + _x5*_x42;
+    const _x375 = _x5*_x340 + _x3*_x41 + _x5*_x42 + _x41*_x373;
+    const _x376 = _x3*q3_d;
+    const _x377 = q1_dd*_x373 - _x69;
+    const _x378 = -_x376;
+    const _x379 = -_x272;
+    const _x380 = _x25*_x373;
+    const _x381 = _x5*q3_d;
+    const _x382 = _x5*q1_d;
+    const _x383 = _x5*q1_dd + _x380;
+    const _x384 = _x374*_x275;
+    const _x385 = _x375*_x275;
+    const _x386 = _x68*_x275;
+    const _x387 = -_x83;
+    const _x388 = _x71*_x11 + _x80*_x384 - _x74*_x341 + _x76*_x374;
+    const _x389 = -_x7*_x74 + _x71*_x329 - _x81*_x377 + _x76*_x375 + _x82*_x383 + _x80*_x385;
+    const _x390 = _x82*_x381 - _x81*_x378 + _x76*_x68 + _x80*_x386;
+    const _x391 = _x84 + _x80*_x387;
+    const _x392 = -_x84 + _x82*_x382 - _x81*_x379;
+    const _x393 = _x86*I_czz - _x85*I_czz;
+    const _x394 = _x15*_x380 + _x15*_x383;
+    const _x395 = _x87*_x381;
+    const _x396 = _x87*_x382;
+    const _x397 = _x88*m_c;
+    const _x398 = -_x5*_x342 + _x3*_x42;
+    const _x399 = -_x42*_x373 + _x3*_x340;
+    const _x400 = -_x75*_x398 + _x341*_x70 + _x11*_x73;
+    const _x401 = _x7*_x70 + _x329*_x73 - _x75*_x399 + _x11*_x383 + _x7*_x377;
+    const _x402 = -_x89*_x75 + _x11*_x381 + _x7*_x378;
+    const _x403 = _x11*_x382 + _x7*_x379 + _x90;
+    const _x404 = _x275*_x398;
+    const _x405 = _x275*_x399;
+    const _x406 = _x89*_x275;
+    const _x407 = _x79*_x400 + _x92*_x404;
+    const _x408 = _x8*_x394 + _x92*_x405 + _x79*_x401;
+    const _x409 = _x92*_x406 + _x8*_x395 + _x79*_x402;
+    const _x410 = _x92*_x91 + _x91*_x79;
+    const _x411 = _x8*_x396 + _x79*_x403;
+    const _x412 = _x8*_x397 + _x68*_x79;
+    const _x413 = 2.0*q1_d;
+    const _x414 = l3*_x413;
+    const _x415 = 2.0*_x3*_x5*_x93 + g*_x373;
+    const _x416 = _x45*_x414;
+    const _x417 = 2.0*l3*q3_d;
+    const _x418 = g*_x5;
+    const _x419 = _x3*_x373 + _x5*_x5;
+    const _x420 = _x418 - _x93*_x419;
+    const _x421 = -_x94*_x414;
+    const _x422 = _x96*_x341 + _x98*_x11;
+    const _x423 = _x7*_x96 + _x99*_x420 + _x98*_x329 + _x100*_x415;
+    const _x424 = _x100*_x416 + _x99*_x421;
+    const _x425 = _x100*_x417;
+    const _x426 = _x101*m_c;
+    const _x427 = _x83*_x398 + _x374*_x90;
+    const _x428 = _x83*_x399 + _x375*_x90;
+    const _x429 = _x68*_x90 + _x89*_x83;
+    const _x430 = -_x8*_x422 + _x102*_x427;
+    const _x431 = -_x8*_x423 + _x102*_x428;
+    const _x432 = -_x8*_x424 + _x102*_x429;
+    const _x433 = -_x8*_x425;
+    const _x434 = -_x8*_x426;
+    const _x435 = g*_x332;
+    const _x436 = l1*_x413;
+    const _x437 = _x1*_x1 + _x0*_x332;
+    const _x438 = _x435 + _x103*_x437;
+    const _x439 = _x106*_x436;
+    const _x440 = -2.0*_x1*_x332*_x103 + g*_x1;
+    const _x441 = -_x46*_x436;
+    const _x442 = -2.0*l1*q2_d;
+    const _x443 = _x105*_x11 + _x108*_x341 + _x109*_x438 + _x110*_x440;
+    const _x444 = _x105*_x329 + _x7*_x108;
+    const _x445 = _x110*_x441 + _x109*_x439;
+    const _x446 = _x110*_x442;
+    const _x447 = _x111*m_a;
+    const _x448 = _x51*_x362 + _x43*_x343;
+    const _x449 = _x51*_x363 + _x43*_x344;
+    const _x450 = _x50*_x43 + _x53*_x51;
+    const _x451 = _x26*_x437;
+    const _x452 = _x106*_x413;
+    const _x453 = -_x448*I_ayy - _x22*_x443 + _x308*_x343 + _x51*_x364;
+    const _x454 = _x308*_x344 - _x22*_x444 - _x449*I_ayy + _x51*_x365;
+    const _x455 = -_x22*_x445 - _x450*I_ayy + _x50*_x308 + _x51*_x366;
+    const _x456 = -_x22*_x446;
+    const _x457 = -_x22*_x447;
+    const _x458 = _x26*_x419;
+    const _x459 = _x94*_x413;
+    const _x460 = _x88*_x33;
+    const _x461 = _x47*_x270;
+    const _x462 = _x3*_x311 + _x5*_x315 + _x1*_x326 + _x0*_x307;
+    const _x463 = (-I_bexx + I_bezz)*_x1;
+    const _x464 = _x0*I_bezz;
+    const _x465 = -_x5*_x311 - _x0*_x326 + _x3*_x315 + _x1*_x307;
+    const _x466 = (I_bexx - I_beyy)*_x0;
+    const _x467 = _x5*I_dfyy;
+    const _x468 = (-I_dfxx + I_dfzz)*_x5;
+    const _x469 = (-I_dfyy + I_dfxx)*_x3;
+    const _x470 = _x3*I_dfzz;
+    const _x471 = -I_bezz + I_beyy;
+    const _x472 = _x111*_x270;
+    const _x473 = m_a*_x169;
+    const _x474 = l1*_x473;
+    const _x475 = _x110*_x111;
+    const _x476 = 2.0*_x7;
+    const _x477 = l1*_x476*_x270;
+    const _x478 = _x477*_x43;
+    const _x479 = l1*(-_x110*_x104 - _x322*_x270 - _x37*_x270 + _x328);
+    const _x480 = _x7*_x107;
+    const _x481 = l1*(m_a*(-_x11*_x104 + _x480) + m_a*_x480 + _x43*_x43*_x270 + _x65*_x65*_x270);
+    const _x482 = 0.1*(1.0 - _x112*_x112);
+    const _x483 = -0.0005 - _x482;
+    const _x484 = _x101*_x33;
+    const _x485 = l3*_x33*_x476;
+    const _x486 = _x485*_x83;
+    const _x487 = l3*(-_x100*_x97 - _x33*_x38 + _x33*_x318 + _x327);
+    const _x488 = _x7*_x95;
+    const _x489 = l3*(-_x33*_x83*_x83 - _x33*_x275*_x275 + m_c*(-_x11*_x97 + _x488) + m_c*_x488);
+    const _x490 = -I_dfzz + I_dfyy;
+    const _x491 = m_c*_x169;
+    const _x492 = l3*_x491;
+    const _x493 = _x101*_x100;
+    const _x494 = _x65*(_x12 + I_axx);
+    const _x495 = _x258*I_ayy;
+    const _x496 = -l2*_x255 - _x494*_x258 + _x495*_x65 + _x259*_x164;
+    const _x497 = _x264*_x164;
+    const _x498 = -_x497*_x65 + _x494*_x264 + I_ayy*(-q2_d*_x263 - q2_d*_x262 - _x64*_x264);
+    const _x499 = _x19*I_beyy;
+    const _x500 = _x270*_x258;
+    const _x501 = _x7*_x382;
+    const _x502 = _x3*_x42;
+    const _x503 = _x501 + _x502;
+    const _x504 = _x79*_x503;
+    const _x505 = -_x276*_x503 + _x275*_x504 + I_czz*(q3_d*_x502 + q3_d*_x501 + _x75*_x503);
+    const _x506 = q3_d*_x382;
+    const _x507 = _x15*_x506;
+    const _x508 = _x11*_x382;
+    const _x509 = _x3*_x41;
+    const _x510 = _x509 - _x508;
+    const _x511 = -q3_d*_x509 - _x75*_x510 + q3_d*_x508;
+    const _x512 = _x510*I_czz;
+    const _x513 = l1*_x507 + _x79*_x511 - _x275*_x512 + _x276*_x510;
+    const _x514 = _x33*_x510;
+    const _x515 = _x103*_x106 + _x34;
+    const _x516 = m_a*(_x11*_x515 + _x7*_x320);
+    const _x517 = -_x22*_x516 - _x495*_x264 + _x497*_x258;
+    const _x518 = -_x93*_x94 + _x32;
+    const _x519 = m_c*(_x11*_x518 + _x7*_x316);
+    const _x520 = -_x8*_x519 - _x504*_x510 + _x512*_x503;
+    const _x521 = _x78 + _x118 + _x17 + I_dfxx;
+    const _x522 = _x120*_x252;
+    const _x523 = -_x252*_x522 + _x521;
+    const _x524 = -_x3*(-_x506*I_dfyy + _x11*_x513 + l3*(_x33*_x511 + _x275*_x514 + 2.0*_x507) + _x7*_x505 + _x506*I_dfzz + _x506*I_dfxx) - _x0*(_x7*_x496 - _x11*_x498 + _x56*I_bezz - _x1*_x499 + _x56*I_bexx) - _x123 - _x5*(-_x72*I_dfyy - _x11*_x505 - _x72*I_dfxx + _x7*_x513 + _x72*I_dfzz) - _x121 - _x1*(_x11*_x496 - _x0*_x499 - _x61*I_bexx + l1*(-_x500*_x65 + _x270*_x259 - 2.0*_x255) + _x7*_x498 + _x61*I_bezz) + tau_q1;
+    const _x525 = -l1*(_x11*(-_x500*_x264 + _x516) + _x7*(m_a*(-_x11*_x320 + _x7*_x515) + _x270*_x264*_x264 + _x65*_x65*_x270)) + _x130 - _x323*I_beyy - _x124*_x34 - _x125 + _x323*I_bezz - _x127 + tau_q2 + _x520;
+    const _x526 = -_x525*_x522 + _x325*I_dfzz + _x32*_x131 - _x128 - _x325*I_dfyy + tau_q3 - l3*(_x11*(_x514*_x503 + _x519) + _x7*(-_x33*_x275*_x275 - _x33*_x503*_x503 + m_c*(-_x11*_x316 + _x7*_x518))) + _x517 - _x129;
+    const _x527 = _x526/_x523;
+    const _x528 = _x120*_x525 - _x527*_x522;
+    const _x529 = _x524/_x172;
+    const _x530 = _x47*_x134 + _x133*_x134;
+    const _x531 = -_x132*_x141 - _x140;
+    const _x532 = _x134*_x530 + (_x151 + _x152)*_x132 - _x192 - _x191;
+    const _x533 = _x192 + _x191;
+    const _x534 = _x3*(_x11*_x315 - _x69*I_dfyy + _x7*_x311 + _x70*I_dfzz + l3*(_x33*_x314 + _x33*_x313 + _x312) + _x69*I_dfxx) + _x5*(-_x11*_x311 - _x72*I_dfxx + _x72*I_dfzz + _x7*_x315 + _x73*I_dfyy) + _x1*(-_x61*I_bexx + l1*(_x305*_x270 - _x306*_x270 + _x304) + _x11*_x307 + _x61*I_bezz + _x7*_x309 + _x62*I_beyy) + _x0*(-_x56*I_beyy - _x11*_x309 + _x7*_x307 + _x57*I_bezz + _x56*I_bexx) + _x137;
+    const _x535 = _x124*_x34 + l1*(_x11*(-_x322*_x270 - _x37*_x270 + _x321) + _x7*(m_a*(-_x11*_x320 + _x7*_x107) + _x43*_x43*_x270 + _x65*_x65*_x270)) + _x138 - _x323*I_bezz + _x18*q2_dd + _x323*I_beyy - _x319;
+    const _x536 = -_x32*_x131 + _x139 - _x325*I_dfzz + _x18*q3_dd + l3*(_x11*(-_x33*_x38 + _x33*_x318 + _x317) + _x7*(-_x33*_x83*_x83 - _x33*_x275*_x275 + m_c*(-_x11*_x316 + _x7*_x95))) + _x325*I_dfyy - _x324;
+    const _x537 = -_x140*_x532 + _x533*_x531;
+    const _x538 = -_x530*_x533;
+    const _x539 = _x530*_x532;
+    const _x540 = -_x159*_x533 + _x158*_x532;
+    const _x541 = _x161*_x533;
+    const _x542 = -_x161*_x532;
+    const _x543 = -_x158*_x531 + _x159*_x140;
+    const _x544 = -_x140*_x161 + _x158*_x530;
+    const _x545 = -_x159*_x530 + _x161*_x531;
+    const _x546 = _x161*_x537 + _x159*_x538 + _x158*_x539;
+    const _x547 = 1.0/_x546;
+    const _x548 = _x547*(_x534*_x537 + _x538*_x535 + _x539*_x536);
+    const _x549 = _x547*(_x534*_x540 + _x535*_x541 + _x536*_x542);
+    const _x550 = _x547*(_x534*_x543 + _x535*_x544 + _x536*_x545);
+    const _x551 = _x3*(-_x69*I_dfyy + l3*(_x33*_x284 + _x287*_x275 + 2.0*_x280) + _x25*_x288 + _x11*_x286 + _x7*_x278 + _x69*I_dfxx) + _x5*(-_x279*I_dfyy + _x7*_x286 - _x11*_x278 - _x279*I_dfxx + _x279*I_dfzz) + _x1*(l1*(_x270*_x259 - _x270*_x260 - 2.0*_x255) + _x11*_x261 - _x61*I_beyy + _x7*_x266 - _x0*_x268 + _x61*I_bezz) + _x0*(_x1*_x268 - _x11*_x266 - _x19*_x269 + _x19*_x267 + _x7*_x261);
+    const _x552 = -_x297*_x267 + l1*(_x11*(-_x295*_x270 + _x296) + _x7*(m_a*(-_x11*_x294 + _x7*_x293) + _x270*_x264*_x264 + _x65*_x65*_x270)) + _x297*_x269 - _x292;
+    const _x553 = _x34*(_x35*_x11 + _x156) + _x35*_x302 + _x301 - _x303;
+    const _x554 = _x5*_x299*I_dfyy - _x299*_x288 + l3*(_x11*(_x287*_x274 + _x291) + _x7*(-_x33*_x275*_x275 - _x33*_x274*_x274 + m_c*(-_x11*_x289 - _x7*_x290))) - _x298;
+    const _x555 = -_x32*(-_x33*_x11 + _x157) + _x33*_x300 - _x301 + _x303;
+    const _x556 = -_x155*_x159 + _x154*_x158;
+    const _x557 = _x155*_x161;
+    const _x558 = -_x154*_x161;
+    const _x559 = -_x143*_x158 + _x160;
+    const _x560 = _x163 + _x143*_x161;
+    const _x561 = _x178*_x173;
+    const _x562 = _x177*(_x174*_x119 + _x252*_x175);
+    const _x563 = _x177*(_x175*_x521 + _x252*_x174);
+    const _x564 = _x177*(_x551*_x173 + _x175*_x554 + _x174*_x552);
+    const _x565 = (_x174*_x553 + _x175*_x555)*_x177;
+    const _x566 = _x178*_x556;
+    const _x567 = _x177*(_x557*_x119 + _x252*_x558);
+    const _x568 = _x177*(_x558*_x521 + _x252*_x557);
+    const _x569 = _x177*(_x556*_x551 + _x557*_x552 + _x558*_x554);
+    const _x570 = (_x557*_x553 + _x558*_x555)*_x177;
+    const _x571 = _x178*_x559;
+    const _x572 = (_x162*_x119 + _x252*_x560)*_x177;
+    const _x573 = _x177*(_x560*_x521 + _x162*_x252);
+    const _x574 = _x177*(_x560*_x554 + _x162*_x552 + _x559*_x551);
+    const _x575 = _x177*(_x560*_x555 + _x162*_x553);
+    const _x576 = _x177*(_x562*_x174 + _x563*_x175 + _x561*_x173);
+    const _x577 = _x177*(_x563*_x558 + _x562*_x557 + _x561*_x556);
+    const _x578 = _x177*(_x568*_x558 + _x567*_x557 + _x566*_x556);
+    const _x579 = _x177*(_x563*_x560 + _x162*_x562 + _x561*_x559);
+    const _x580 = _x177*(_x162*_x567 + _x568*_x560 + _x566*_x559);
+    const _x581 = _x177*(_x573*_x560 + _x162*_x572 + _x571*_x559);
     return {
-      base_T_tcp: [[_x106, _x107, _x109, _x110], [_x111, _x60, _x113, _x79], [_x3, 0.0, _x4, _x67], [0.0, 0.0, 0.0, 1.0]],
-      base_T_turret: [[_x60, _x107, 0.0, 0.0], [_x57, _x60, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]],
-      base_T_upper_arm: [[_x114, _x107, _x115, 0.0], [_x116, _x60, _x117, 0.0], [_x0, 0.0, _x1, 0.0], [0.0, 0.0, 0.0, 1.0]],
-      base_T_distal: [[_x106, _x107, _x109, _x71], [_x111, _x60, _x113, _x78], [_x3, 0.0, _x4, _x62], [0.0, 0.0, 0.0, 1.0]],
-      base_T_lever: [[_x106, _x107, _x109, 0.0], [_x111, _x60, _x113, 0.0], [_x3, 0.0, _x4, 0.0], [0.0, 0.0, 0.0, 1.0]],
-      base_T_link_c: [[_x114, _x107, _x115, l3*_x108], [_x116, _x60, _x117, l3*_x112], [_x0, 0.0, _x1, -l3*_x4], [0.0, 0.0, 0.0, 1.0]],
-      J: [[-_x77 - _x78, -_x60*_x67 - _x84, _x84], [_x110, -_x57*_x67 - _x66, _x66], [0.0, -_x118 - _x119 + _x57*_x79 + _x110*_x60, _x119 + _x118]],
-      M: [[_x0*(_x1*_x93 + _x0*(_x90*_x95 + _x94*I_ayy + I_bezz)) + _x4*(_x3*_x97 + _x4*(_x96*_x95 + _x94*I_czz + I_dfyy)) + _x3*(_x3*(_x96*_x94 + _x95*I_czz + _x98 + _x12 + I_dfzz) + _x4*_x97) + _x1*(_x1*(_x90*_x94 + _x95*I_ayy + _x41 + _x37 + I_beyy) + _x0*_x93) + _x36, 0.0, 0.0], [0.0, _x44 + _x39 + _x37 + I_bexx, _x177], [0.0, _x177, _x176 + _x44 + _x12 + I_dfxx]],
-      C: [[_x156*q3_d + _x166*q2_d, _x167, _x168], [-_x167, 0.0, q3_d*_x179], [-_x168, q2_d*_x178, 0.0]],
-      V: [_x3*(l3*(_x28*_x214 + _x217*_x204 + 2.0*_x210) + _x7*_x216 - _x209*I_dfyy + _x20*_x218 + _x5*_x207 + _x209*I_dfxx) + _x4*(-_x7*_x207 - _x208*I_dfyy - _x208*I_dfxx + _x5*_x216 + _x208*I_dfzz) + _x1*(-_x0*_x197 - _x180*I_beyy + l1*(-_x30*_x189 + _x30*_x187 - 2.0*_x181) + _x5*_x195 + _x7*_x190 + _x180*I_bezz) + _x0*(_x1*_x197 - _x7*_x195 + _x14*_x196 - _x14*_x198 + _x5*_x190), -_x229*_x196 + _x229*_x198 + l1*(_x7*(-_x30*_x227 + _x228) + _x5*(_x30*_x193*_x193 + (-_x7*_x226 + _x5*_x225)*m_a + _x30*_x188*_x188)) - _x223, _x4*_x231*I_dfyy - _x231*_x218 + l3*(_x7*(_x217*_x203 + _x222) + _x5*(-_x28*_x204*_x204 - _x28*_x203*_x203 + (-_x7*_x220 - _x5*_x221)*m_c)) - _x230],
-      G: [0.0, _x30*_x234 + _x29*(_x7*_x30 + _x82) - _x235 + _x233, -_x27*(-_x7*_x28 + _x83) + _x28*_x232 - _x233 + _x235],
-      F_f: [_x169, _x170, _x55],
-      inverse_dynamics_tau: [_x3*(l3*(_x28*_x256 + _x28*_x255 + _x253) + _x7*_x257 + _x5*_x252 - _x209*I_dfyy + _x250*I_dfzz + _x209*I_dfxx) + _x4*(-_x248*I_dfxx + _x5*_x257 + _x248*I_dfzz - _x7*_x252 + _x249*I_dfyy) + _x0*(-_x239*I_beyy + _x5*_x243 - _x7*_x246 + _x240*I_bezz + _x239*I_bexx) + _x1*(-_x180*I_bexx + l1*(-_x30*_x242 + _x30*_x241 + _x237) + _x5*_x246 + _x180*I_bezz + _x7*_x243 + _x236*I_beyy) + _x169 + _x63, _x49*_x29 - _x269*I_bezz + _x64 + _x13*q2_dd + _x269*I_beyy - _x263 + l1*(_x7*(-_x30*_x32 - _x30*_x268 + _x267) + _x5*((-_x7*_x266 + _x5*_x265)*m_a + _x30*_x244*_x244 + _x30*_x188*_x188)) + _x170, _x65 - _x56*_x27 + _x271*I_dfyy - _x271*I_dfzz + _x13*q3_dd - _x270 + l3*(_x7*(-_x33*_x28 + _x28*_x262 + _x261) + _x5*(-_x28*_x204*_x204 - _x28*_x247*_x247 + (-_x7*_x258 + _x5*_x260)*m_c)) + _x55],
-      forward_dynamics_qdd: [_x308, _x307, _x306],
-      F: [_x327, _x328, _x329],
-      Mx: [[_x355, _x356, _x358], [_x356, _x357, _x359], [_x358, _x359, _x360]],
-      Vx: [-_x171*_x358 - _x175*_x355 + _x343 - _x174*_x356, -_x171*_x359 - _x175*_x356 - _x174*_x357 + _x348, -_x174*_x359 - _x171*_x360 + _x353 - _x175*_x358],
-      Gx: [_x344, _x349, _x354],
-      k: 0.5*_x21*(_x0*(_x1*_x93 + _x0*(_x90*_x95 + _x94*I_ayy + I_bezz)) + _x4*(_x3*_x97 + _x4*(_x96*_x95 + _x94*I_czz + I_dfyy)) + _x3*(_x3*(_x96*_x94 + _x95*I_czz + _x98 + _x12 + I_dfzz) + _x4*_x97) + _x1*(_x1*(_x90*_x94 + _x95*I_ayy + _x41 + _x37 + I_beyy) + _x0*_x93) + _x36) + 0.5*q3_d*(q3_d*(_x176 + _x44 + _x12 + I_dfxx) + q2_d*_x177) + 0.5*q2_d*(q2_d*(_x44 + _x39 + _x37 + I_bexx) + q3_d*_x177),
-      u: g*_x4*_x56 + g*_x0*_x49 + g*m_c*(-l3*_x4 + 0.5*_x62) + g*m_a*(-_x4*_x17 + _x62),
+      base_T_tcp: [[_x179, _x180, _x182, _x183], [_x184, _x134, _x186, _x153], [_x3, 0.0, _x5, _x141], [0.0, 0.0, 0.0, 1.0]],
+      base_T_turret: [[_x134, _x180, 0.0, 0.0], [_x132, _x134, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]],
+      base_T_upper_arm: [[_x187, _x180, _x188, 0.0], [_x189, _x134, _x190, 0.0], [_x0, 0.0, _x1, 0.0], [0.0, 0.0, 0.0, 1.0]],
+      base_T_distal: [[_x179, _x180, _x182, _x145], [_x184, _x134, _x186, _x152], [_x3, 0.0, _x5, _x136], [0.0, 0.0, 0.0, 1.0]],
+      base_T_lever: [[_x179, _x180, _x182, 0.0], [_x184, _x134, _x186, 0.0], [_x3, 0.0, _x5, 0.0], [0.0, 0.0, 0.0, 1.0]],
+      base_T_link_c: [[_x187, _x180, _x188, l3*_x181], [_x189, _x134, _x190, l3*_x185], [_x0, 0.0, _x1, -l3*_x5], [0.0, 0.0, 0.0, 1.0]],
+      J: [[-_x151 - _x152, -_x134*_x141 - _x158, _x158], [_x183, -_x132*_x141 - _x140, _x140], [0.0, -_x191 + _x134*_x183 - _x192 + _x132*_x153, _x192 + _x191]],
+      M: [[_x3*(_x3*(_x79*_x168 + _x169*I_czz + _x171 + _x17 + I_dfzz) + _x5*_x170) + _x5*(_x3*_x170 + _x5*(_x79*_x169 + _x168*I_czz + I_dfyy)) + _x1*(_x1*(_x164*_x168 + _x169*I_ayy + _x116 + _x115 + I_beyy) + _x0*_x167) + _x0*(_x1*_x167 + _x0*(_x164*_x169 + _x168*I_ayy + I_bezz)) + _x114, 0.0, 0.0], [0.0, _x118 + _x54 + _x115 + I_bexx, _x252], [0.0, _x252, _x78 + _x118 + _x17 + I_dfxx]],
+      C: [[_x229*_x230 + _x240*_x241, _x243, _x244], [-_x243, 0.0, q3_d*_x254], [-_x244, q2_d*_x253, 0.0]],
+      V: [_x3*(-_x69*I_dfyy + l3*(_x33*_x284 + _x287*_x275 + 2.0*_x280) + _x25*_x288 + _x11*_x286 + _x7*_x278 + _x69*I_dfxx) + _x5*(-_x279*I_dfyy + _x7*_x286 - _x11*_x278 - _x279*I_dfxx + _x279*I_dfzz) + _x1*(l1*(_x270*_x259 - _x270*_x260 - 2.0*_x255) + _x11*_x261 - _x61*I_beyy + _x7*_x266 - _x0*_x268 + _x61*I_bezz) + _x0*(_x1*_x268 - _x11*_x266 - _x19*_x269 + _x19*_x267 + _x7*_x261), -_x297*_x267 + l1*(_x11*(-_x295*_x270 + _x296) + _x7*(m_a*(-_x11*_x294 + _x7*_x293) + _x270*_x264*_x264 + _x65*_x65*_x270)) + _x297*_x269 - _x292, _x5*_x299*I_dfyy - _x299*_x288 + l3*(_x11*(_x287*_x274 + _x291) + _x7*(-_x33*_x275*_x275 - _x33*_x274*_x274 + m_c*(-_x11*_x289 - _x7*_x290))) - _x298],
+      G: [0.0, _x34*(_x35*_x11 + _x156) + _x35*_x302 + _x301 - _x303, -_x32*(-_x33*_x11 + _x157) + _x33*_x300 - _x301 + _x303],
+      F_f: [_x245, _x246, _x130],
+      inverse_dynamics_tau: [_x5*(-_x11*_x311 - _x72*I_dfxx + _x72*I_dfzz + _x7*_x315 + _x73*I_dfyy) + _x137 + _x0*(-_x56*I_beyy - _x11*_x309 + _x7*_x307 + _x57*I_bezz + _x56*I_bexx) + _x1*(-_x61*I_bexx + l1*(_x305*_x270 - _x306*_x270 + _x304) + _x11*_x307 + _x61*I_bezz + _x7*_x309 + _x62*I_beyy) + _x3*(_x11*_x315 - _x69*I_dfyy + _x7*_x311 + _x70*I_dfzz + l3*(_x33*_x314 + _x33*_x313 + _x312) + _x69*I_dfxx) + _x245, _x138 + _x124*_x34 - _x323*I_bezz + _x18*q2_dd + _x323*I_beyy + l1*(_x11*(-_x322*_x270 - _x37*_x270 + _x321) + _x7*(m_a*(-_x11*_x320 + _x7*_x107) + _x43*_x43*_x270 + _x65*_x65*_x270)) - _x319 + _x246, _x139 - _x32*_x131 - _x325*I_dfzz + _x18*q3_dd + l3*(_x11*(-_x33*_x38 + _x33*_x318 + _x317) + _x7*(-_x33*_x83*_x83 - _x33*_x275*_x275 + m_c*(-_x11*_x316 + _x7*_x95))) + _x325*I_dfyy - _x324 + _x130],
+      dtau_dq: [[0.0, _x47*_x336 + _x11*_x462 - _x353*_x461 + _x333*_x269 + _x53*_x356 + _x89*_x388 + _x349*_x461 + _x50*_x367 + _x68*_x407 + _x460*_x404 + _x460*_x400 + _x341*_x465 + _x348*_x464 + _x56*_x463 + _x1*(-_x11*_x326 - _x56*I_beyy + _x7*_x307 + _x57*I_bezz + _x56*I_bexx) + _x345*_x466 + _x332*(-_x61*I_bexx + l1*(_x305*_x270 - _x306*_x270 + _x304) + _x11*_x307 + _x61*I_bezz + _x7*_x326 + _x62*I_beyy), _x373*(-_x11*_x311 - _x72*I_dfxx + _x72*I_dfzz + _x7*_x315 + _x73*I_dfyy) + _x7*_x465 + _x50*_x368 + _x53*_x357 + _x89*_x389 + _x377*_x467 + _x383*_x470 + _x460*_x401 + _x5*(_x11*_x315 - _x69*I_dfyy + _x7*_x311 + _x70*I_dfzz + l3*(_x33*_x314 + _x33*_x313 + _x312) + _x69*I_dfxx) + _x88*_x394 - _x354*_x461 + _x380*_x469 + _x68*_x408 + _x460*_x405 + _x350*_x461 + _x329*_x462 + _x69*_x468], [0.0, _x124*_x435 - _x475*_x440 + _x111*_x443 + _x471*_x451 - _x472*_x448 + _x474*_x438 + _x478*_x362 + _x11*_x481 + _x479*_x341 - _x430, -_x472*_x449 + _x111*_x444 + _x478*_x363 + _x481*_x329 + _x7*_x479 - _x431], [0.0, -_x486*_x374 + _x487*_x341 + _x484*_x427 + _x101*_x422 + _x11*_x489 - _x453, -_x486*_x375 + _x484*_x428 + _x490*_x458 + _x101*_x423 - _x493*_x415 + _x492*_x420 - _x131*_x418 + _x489*_x329 + _x7*_x487 - _x454]],
+      dtau_dqd: [[0.0005 + _x346*_x466 + _x378*_x467 + _x47*_x337 + _x88*_x395 + _x381*_x470 - _x355*_x461 + _x381*_x469 + _x460*_x402 + _x50*_x369 + _x376*_x468 + _x68*_x409 + _x53*_x358 + _x460*_x406 + 0.1*(1.0 - _x122*_x122) + _x351*_x461 + _x89*_x390 + _x330*_x463 + _x346*_x464 + _x334*_x269, _x89*_x391 + _x53*_x359 + _x352*_x461 + _x68*_x410 + _x347*_x466 + _x347*_x464 + 2.0*_x91*_x460 + _x47*_x338 + _x335*_x269 + _x50*_x370 + _x331*_x463, _x460*_x403 + _x89*_x392 + _x88*_x396 + _x382*_x469 + _x272*_x468 + _x68*_x411 + _x50*_x371 + _x382*_x470 + _x53*_x360 - _x52*_x461 + _x379*_x467 + _x51*_x461], [-_x475*_x441 + _x471*_x452 - _x472*_x450 + _x111*_x445 + _x474*_x439 + _x53*_x478 - _x432, 0.001 - _x475*_x442 + _x111*_x446 + 0.1*(1.0 - _x126*_x126) + _x482, -_x477*_x65 - _x433 + _x483], [-_x493*_x416 - _x68*_x486 + _x484*_x429 + _x101*_x424 + _x492*_x421 + _x490*_x459 - _x455, _x485*_x275 - _x456 + _x483, 0.0005 - _x493*_x417 + _x101*_x425 + _x482]],
+      dtau_dqdd: [[_x68*_x412 + _x53*_x361 + _x47*_x339 + _x68*_x460 + _x0*_x0*I_bezz + _x114 + _x5*_x5*I_dfyy + _x45*I_dfzz + _x50*_x372 + _x53*_x461 + _x89*_x393 + _x46*I_beyy + _x88*_x397, 0.0, 0.0], [0.0, _x13*_x473 + _x111*_x447 - _x78 + _x18 + I_bexx, -_x434 + _x472], [0.0, -_x457 + _x484, _x16*_x491 + _x101*_x426 + _x18 - _x54 + I_dfxx]],
+      forward_dynamics_qdd: [_x529, _x528, _x527],
+      F: [_x548, _x549, _x550],
+      Mx: [[_x576, _x577, _x579], [_x577, _x578, _x580], [_x579, _x580, _x581]],
+      Vx: [-_x247*_x579 - _x250*_x577 - _x251*_x576 + _x564, -_x247*_x580 - _x250*_x578 - _x251*_x577 + _x569, -_x247*_x581 - _x251*_x579 - _x250*_x580 + _x574],
+      Gx: [_x565, _x570, _x575],
+      k: 0.5*_x26*(_x3*(_x3*(_x79*_x168 + _x169*I_czz + _x171 + _x17 + I_dfzz) + _x5*_x170) + _x5*(_x3*_x170 + _x5*(_x79*_x169 + _x168*I_czz + I_dfyy)) + _x1*(_x1*(_x164*_x168 + _x169*I_ayy + _x116 + _x115 + I_beyy) + _x0*_x167) + _x0*(_x1*_x167 + _x0*(_x164*_x169 + _x168*I_ayy + I_bezz)) + _x114) + _x230*(q3_d*(_x78 + _x118 + _x17 + I_dfxx) + q2_d*_x252) + _x241*(q2_d*(_x118 + _x54 + _x115 + I_bexx) + q3_d*_x252),
+      u: g*_x5*_x131 + g*_x0*_x124 + g*m_c*(-l3*_x5 + 0.5*_x136) + g*m_a*(-_x5*_x22 + _x136),
     };
   }
 
@@ -2093,12 +2701,13 @@
       gravity_vector: {"inputs": ["q"], "parameters": ["l1", "l2", "l3", "l5", "l6", "m_a", "m_c", "m_be", "m_df", "g"], "outputs": {"G": [3]}},
       friction: {"inputs": ["qd"], "parameters": [], "outputs": {"F_f": [3]}},
       inverse_dynamics: {"inputs": ["q", "qd", "qdd"], "parameters": ["l1", "l2", "l3", "l5", "l6", "m_a", "I_axx", "I_ayy", "I_azz", "m_c", "I_cxx", "I_cyy", "I_czz", "m_be", "I_bexx", "I_beyy", "I_bezz", "m_df", "I_dfxx", "I_dfyy", "I_dfzz", "I_baseyy", "J_m", "g"], "outputs": {"tau": [3]}},
+      inverse_dynamics_derivatives: {"inputs": ["q", "qd", "qdd"], "parameters": ["l1", "l2", "l3", "l5", "l6", "m_a", "I_axx", "I_ayy", "I_azz", "m_c", "I_cxx", "I_cyy", "I_czz", "m_be", "I_bexx", "I_beyy", "I_bezz", "m_df", "I_dfxx", "I_dfyy", "I_dfzz", "I_baseyy", "J_m", "g"], "outputs": {"dtau_dq": [3, 3], "dtau_dqd": [3, 3], "dtau_dqdd": [3, 3]}},
       forward_dynamics: {"inputs": ["q", "qd", "tau"], "parameters": ["l1", "l2", "l3", "l5", "l6", "m_a", "I_axx", "I_ayy", "I_azz", "m_c", "I_cxx", "I_cyy", "I_czz", "m_be", "I_bexx", "I_beyy", "I_bezz", "m_df", "I_dfxx", "I_dfyy", "I_dfzz", "I_baseyy", "J_m", "g"], "outputs": {"qdd": [3]}},
       tcp_force: {"inputs": ["q", "qd", "qdd"], "parameters": ["l1", "l2", "l3", "l5", "l6", "m_a", "I_axx", "I_ayy", "I_azz", "m_c", "I_cxx", "I_cyy", "I_czz", "m_be", "I_bexx", "I_beyy", "I_bezz", "m_df", "I_dfxx", "I_dfyy", "I_dfzz", "I_baseyy", "J_m", "g"], "outputs": {"F": [3]}},
       operational_space: {"inputs": ["q", "qd"], "parameters": ["l1", "l2", "l3", "l5", "l6", "m_a", "I_axx", "I_ayy", "I_azz", "m_c", "I_cxx", "I_cyy", "I_czz", "m_be", "I_bexx", "I_beyy", "I_bezz", "m_df", "I_dfxx", "I_dfyy", "I_dfzz", "I_baseyy", "J_m", "g"], "outputs": {"Mx": [3, 3], "Vx": [3], "Gx": [3]}},
       kinetic_energy: {"inputs": ["q", "qd"], "parameters": ["l1", "l2", "l3", "m_a", "I_axx", "I_ayy", "I_azz", "m_c", "I_cxx", "I_cyy", "I_czz", "I_bexx", "I_beyy", "I_bezz", "I_dfxx", "I_dfyy", "I_dfzz", "I_baseyy", "J_m"], "outputs": {"k": []}},
       potential_energy: {"inputs": ["q"], "parameters": ["l1", "l2", "l3", "l5", "l6", "m_a", "m_c", "m_be", "m_df", "g"], "outputs": {"u": []}},
-      combined: {"inputs": ["q", "qd", "qdd", "tau"], "parameters": ["l1", "l2", "l3", "l5", "l6", "m_a", "I_axx", "I_ayy", "I_azz", "m_c", "I_cxx", "I_cyy", "I_czz", "m_be", "I_bexx", "I_beyy", "I_bezz", "m_df", "I_dfxx", "I_dfyy", "I_dfzz", "I_baseyy", "J_m", "g"], "outputs": {"base_T_tcp": [4, 4], "base_T_turret": [4, 4], "base_T_upper_arm": [4, 4], "base_T_distal": [4, 4], "base_T_lever": [4, 4], "base_T_link_c": [4, 4], "J": [3, 3], "M": [3, 3], "C": [3, 3], "V": [3], "G": [3], "F_f": [3], "inverse_dynamics_tau": [3], "forward_dynamics_qdd": [3], "F": [3], "Mx": [3, 3], "Vx": [3], "Gx": [3], "k": [], "u": []}},
+      combined: {"inputs": ["q", "qd", "qdd", "tau"], "parameters": ["l1", "l2", "l3", "l5", "l6", "m_a", "I_axx", "I_ayy", "I_azz", "m_c", "I_cxx", "I_cyy", "I_czz", "m_be", "I_bexx", "I_beyy", "I_bezz", "m_df", "I_dfxx", "I_dfyy", "I_dfzz", "I_baseyy", "J_m", "g"], "outputs": {"base_T_tcp": [4, 4], "base_T_turret": [4, 4], "base_T_upper_arm": [4, 4], "base_T_distal": [4, 4], "base_T_lever": [4, 4], "base_T_link_c": [4, 4], "J": [3, 3], "M": [3, 3], "C": [3, 3], "V": [3], "G": [3], "F_f": [3], "inverse_dynamics_tau": [3], "dtau_dq": [3, 3], "dtau_dqd": [3, 3], "dtau_dqdd": [3, 3], "forward_dynamics_qdd": [3], "F": [3], "Mx": [3, 3], "Vx": [3], "Gx": [3], "k": [], "u": []}},
     }),
     fk: fk,
     frames: frames,
@@ -2109,6 +2718,7 @@
     gravity_vector: gravity_vector,
     friction: friction,
     inverse_dynamics: inverse_dynamics,
+    inverse_dynamics_derivatives: inverse_dynamics_derivatives,
     forward_dynamics: forward_dynamics,
     tcp_force: tcp_force,
     operational_space: operational_space,

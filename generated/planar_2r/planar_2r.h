@@ -259,6 +259,38 @@ void planar_2r_inverse_dynamics_packed(const double *in, double *out);
  * Uses 1216 bytes of stack for its blocks of 8 configurations. */
 void planar_2r_inverse_dynamics_batch(size_t n, const double *q, const double *qd, const double *qdd, const double *params, size_t params_stride, double *tau);
 
+/* planar_2r_inverse_dynamics_derivatives: Derivatives of the inverse dynamics: the linearization of tau at a motion.
+ *
+ * tau(q + dq, qd + dqd, qdd + dqdd) = tau + dtau_dq dq + dtau_dqd dqd + dtau_dqdd dqdd
+ * to first order, tau = M qdd + V + G + F_f (seed eq. 8.34); dtau_dqdd = M.  Forward-
+ * mode derivative of the recursive Newton-Euler program (Carpentier and Mansard, RSS
+ * 2018); a sign(qd) Coulomb term counts with derivative 0.
+ *
+ * Inputs:
+ *   q[2]: joint coordinates: theta1 [rad], theta2 [rad].
+ *   qd[2]: joint velocities: theta1 [rad/s], theta2 [rad/s].
+ *   qdd[2]: joint accelerations: theta1 [rad/s^2], theta2 [rad/s^2].
+ *   l1: length of link 1 [m]; default PLANAR_2R_DEFAULT_l1 = 0.1.
+ *   l2: length of link 2 [m]; default PLANAR_2R_DEFAULT_l2 = 0.1.
+ *   m1: point mass at the end of link 1 [kg]; default PLANAR_2R_DEFAULT_m1 = 0.1.
+ *   m2: point mass at the end of link 2 [kg]; default PLANAR_2R_DEFAULT_m2 = 0.1.
+ *   g: gravitational acceleration [m/s^2]; default PLANAR_2R_DEFAULT_g = 9.81.
+ * Outputs:
+ *   dtau_dq[4]: 2 x 2, row-major; d tau / dq: row i, column j is d tau_i / d q_j.
+ *   dtau_dqd[4]: 2 x 2, row-major; d tau / dqd: the damping of the motion (Coriolis and
+ *   friction).
+ *   dtau_dqdd[4]: 2 x 2, row-major; d tau / dqdd = M(q), the mass matrix.
+ * Cost: 91 operations.
+ */
+void planar_2r_inverse_dynamics_derivatives(const double *q, const double *qd, const double *qdd, double l1, double l2, double m1, double m2, double g, double *dtau_dq, double *dtau_dqd, double *dtau_dqdd);
+
+/* planar_2r_inverse_dynamics_derivatives with packed arguments: in = q, qd, qdd, l1, l2, m1, m2, g one after the other; out = dtau_dq, dtau_dqd, dtau_dqdd one after the other. */
+void planar_2r_inverse_dynamics_derivatives_packed(const double *in, double *out);
+
+/* planar_2r_inverse_dynamics_derivatives for n configurations; params: l1, l2, m1, m2, g, stride 0 or 5.
+ * Uses 1792 bytes of stack for its blocks of 8 configurations. */
+void planar_2r_inverse_dynamics_derivatives_batch(size_t n, const double *q, const double *qd, const double *qdd, const double *params, size_t params_stride, double *dtau_dq, double *dtau_dqd, double *dtau_dqdd);
+
 /* planar_2r_forward_dynamics: Forward dynamics: joint accelerations under given torques.
  *
  * qdd = M(q)^-1 (tau - V(q, qd) - G(q) - F_f(qd)) (seed eq. 8.34 solved for qdd), by a
@@ -392,12 +424,13 @@ void planar_2r_potential_energy_packed(const double *in, double *out);
  * Uses 896 bytes of stack for its blocks of 8 configurations. */
 void planar_2r_potential_energy_batch(size_t n, const double *q, const double *params, size_t params_stride, double *u);
 
-/* planar_2r_combined: fk, frames, jacobian, jacobian_geometric, mass_matrix, coriolis_matrix, coriolis_vector, gravity_vector, inverse_dynamics, forward_dynamics, tcp_force, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions.
+/* planar_2r_combined: fk, frames, jacobian, jacobian_geometric, mass_matrix, coriolis_matrix, coriolis_vector, gravity_vector, inverse_dynamics, inverse_dynamics_derivatives, forward_dynamics, tcp_force, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions.
  *
  * Computes the outputs of fk, frames, jacobian, jacobian_geometric, mass_matrix,
- * coriolis_matrix, coriolis_vector, gravity_vector, inverse_dynamics, forward_dynamics,
- * tcp_force, operational_space, kinetic_energy, potential_energy in one call;
- * subexpressions common to several of them are evaluated once.
+ * coriolis_matrix, coriolis_vector, gravity_vector, inverse_dynamics,
+ * inverse_dynamics_derivatives, forward_dynamics, tcp_force, operational_space,
+ * kinetic_energy, potential_energy in one call; subexpressions common to several of them
+ * are evaluated once.
  *
  * Inputs:
  *   q[2]: joint coordinates: theta1 [rad], theta2 [rad].
@@ -427,6 +460,12 @@ void planar_2r_potential_energy_batch(size_t n, const double *q, const double *p
  *   (revolute), N (prismatic)].
  *   inverse_dynamics_tau[2]: 2; joint torques (revolute) or forces (prismatic)
  *   (inverse_dynamics) [N*m (revolute), N (prismatic)].
+ *   dtau_dq[4]: 2 x 2, row-major; d tau / dq: row i, column j is d tau_i / d q_j
+ *   (inverse_dynamics_derivatives).
+ *   dtau_dqd[4]: 2 x 2, row-major; d tau / dqd: the damping of the motion (Coriolis and
+ *   friction) (inverse_dynamics_derivatives).
+ *   dtau_dqdd[4]: 2 x 2, row-major; d tau / dqdd = M(q), the mass matrix
+ *   (inverse_dynamics_derivatives).
  *   forward_dynamics_qdd[2]: 2; joint accelerations (forward_dynamics) [rad/s^2
  *   (revolute), m/s^2 (prismatic)].
  *   F[2]: 2; TCP force components [x, y] (tcp_force) [N, N*m].
@@ -437,16 +476,16 @@ void planar_2r_potential_energy_batch(size_t n, const double *q, const double *p
  *   Gx[2]: 2; operational-space gravity force J^-T G (operational_space).
  *   k[1]: scalar; kinetic energy of all bodies (kinetic_energy) [J].
  *   u[1]: scalar; potential energy (potential_energy) [J].
- * Cost: 266 operations.
+ * Cost: 336 operations.
  */
-void planar_2r_combined(const double *q, const double *qd, const double *qdd, const double *tau, double l1, double l2, double m1, double m2, double g, double *base_T_tcp, double *base_T_link1, double *base_T_link2, double *jacobian_J, double *jacobian_geometric_J, double *M, double *C, double *V, double *G, double *inverse_dynamics_tau, double *forward_dynamics_qdd, double *F, double *Mx, double *Vx, double *Gx, double *k, double *u);
+void planar_2r_combined(const double *q, const double *qd, const double *qdd, const double *tau, double l1, double l2, double m1, double m2, double g, double *base_T_tcp, double *base_T_link1, double *base_T_link2, double *jacobian_J, double *jacobian_geometric_J, double *M, double *C, double *V, double *G, double *inverse_dynamics_tau, double *dtau_dq, double *dtau_dqd, double *dtau_dqdd, double *forward_dynamics_qdd, double *F, double *Mx, double *Vx, double *Gx, double *k, double *u);
 
-/* planar_2r_combined with packed arguments: in = q, qd, qdd, tau, l1, l2, m1, m2, g one after the other; out = base_T_tcp, base_T_link1, base_T_link2, jacobian_J, jacobian_geometric_J, M, C, V, G, inverse_dynamics_tau, forward_dynamics_qdd, F, Mx, Vx, Gx, k, u one after the other. */
+/* planar_2r_combined with packed arguments: in = q, qd, qdd, tau, l1, l2, m1, m2, g one after the other; out = base_T_tcp, base_T_link1, base_T_link2, jacobian_J, jacobian_geometric_J, M, C, V, G, inverse_dynamics_tau, dtau_dq, dtau_dqd, dtau_dqdd, forward_dynamics_qdd, F, Mx, Vx, Gx, k, u one after the other. */
 void planar_2r_combined_packed(const double *in, double *out);
 
 /* planar_2r_combined for n configurations; params: l1, l2, m1, m2, g, stride 0 or 5.
- * Uses 4608 bytes of stack for its blocks of 8 configurations. */
-void planar_2r_combined_batch(size_t n, const double *q, const double *qd, const double *qdd, const double *tau, const double *params, size_t params_stride, double *base_T_tcp, double *base_T_link1, double *base_T_link2, double *jacobian_J, double *jacobian_geometric_J, double *M, double *C, double *V, double *G, double *inverse_dynamics_tau, double *forward_dynamics_qdd, double *F, double *Mx, double *Vx, double *Gx, double *k, double *u);
+ * Uses 5312 bytes of stack for its blocks of 8 configurations. */
+void planar_2r_combined_batch(size_t n, const double *q, const double *qd, const double *qdd, const double *tau, const double *params, size_t params_stride, double *base_T_tcp, double *base_T_link1, double *base_T_link2, double *jacobian_J, double *jacobian_geometric_J, double *M, double *C, double *V, double *G, double *inverse_dynamics_tau, double *dtau_dq, double *dtau_dqd, double *dtau_dqdd, double *forward_dynamics_qdd, double *F, double *Mx, double *Vx, double *Gx, double *k, double *u);
 
 /* planar_2r_fk_f32: Forward kinematics: pose of the TCP in the base frame.
  *
@@ -666,6 +705,38 @@ void planar_2r_inverse_dynamics_packed_f32(const float *in, float *out);
  * Uses 608 bytes of stack for its blocks of 8 configurations. */
 void planar_2r_inverse_dynamics_batch_f32(size_t n, const float *q, const float *qd, const float *qdd, const float *params, size_t params_stride, float *tau);
 
+/* planar_2r_inverse_dynamics_derivatives_f32: Derivatives of the inverse dynamics: the linearization of tau at a motion.
+ *
+ * tau(q + dq, qd + dqd, qdd + dqdd) = tau + dtau_dq dq + dtau_dqd dqd + dtau_dqdd dqdd
+ * to first order, tau = M qdd + V + G + F_f (seed eq. 8.34); dtau_dqdd = M.  Forward-
+ * mode derivative of the recursive Newton-Euler program (Carpentier and Mansard, RSS
+ * 2018); a sign(qd) Coulomb term counts with derivative 0.
+ *
+ * Inputs:
+ *   q[2]: joint coordinates: theta1 [rad], theta2 [rad].
+ *   qd[2]: joint velocities: theta1 [rad/s], theta2 [rad/s].
+ *   qdd[2]: joint accelerations: theta1 [rad/s^2], theta2 [rad/s^2].
+ *   l1: length of link 1 [m]; default PLANAR_2R_DEFAULT_l1 = 0.1.
+ *   l2: length of link 2 [m]; default PLANAR_2R_DEFAULT_l2 = 0.1.
+ *   m1: point mass at the end of link 1 [kg]; default PLANAR_2R_DEFAULT_m1 = 0.1.
+ *   m2: point mass at the end of link 2 [kg]; default PLANAR_2R_DEFAULT_m2 = 0.1.
+ *   g: gravitational acceleration [m/s^2]; default PLANAR_2R_DEFAULT_g = 9.81.
+ * Outputs:
+ *   dtau_dq[4]: 2 x 2, row-major; d tau / dq: row i, column j is d tau_i / d q_j.
+ *   dtau_dqd[4]: 2 x 2, row-major; d tau / dqd: the damping of the motion (Coriolis and
+ *   friction).
+ *   dtau_dqdd[4]: 2 x 2, row-major; d tau / dqdd = M(q), the mass matrix.
+ * Cost: 91 operations.
+ */
+void planar_2r_inverse_dynamics_derivatives_f32(const float *q, const float *qd, const float *qdd, float l1, float l2, float m1, float m2, float g, float *dtau_dq, float *dtau_dqd, float *dtau_dqdd);
+
+/* planar_2r_inverse_dynamics_derivatives_f32 with packed arguments: in = q, qd, qdd, l1, l2, m1, m2, g one after the other; out = dtau_dq, dtau_dqd, dtau_dqdd one after the other. */
+void planar_2r_inverse_dynamics_derivatives_packed_f32(const float *in, float *out);
+
+/* planar_2r_inverse_dynamics_derivatives_f32 for n configurations; params: l1, l2, m1, m2, g, stride 0 or 5.
+ * Uses 896 bytes of stack for its blocks of 8 configurations. */
+void planar_2r_inverse_dynamics_derivatives_batch_f32(size_t n, const float *q, const float *qd, const float *qdd, const float *params, size_t params_stride, float *dtau_dq, float *dtau_dqd, float *dtau_dqdd);
+
 /* planar_2r_forward_dynamics_f32: Forward dynamics: joint accelerations under given torques.
  *
  * qdd = M(q)^-1 (tau - V(q, qd) - G(q) - F_f(qd)) (seed eq. 8.34 solved for qdd), by a
@@ -799,12 +870,13 @@ void planar_2r_potential_energy_packed_f32(const float *in, float *out);
  * Uses 448 bytes of stack for its blocks of 8 configurations. */
 void planar_2r_potential_energy_batch_f32(size_t n, const float *q, const float *params, size_t params_stride, float *u);
 
-/* planar_2r_combined_f32: fk, frames, jacobian, jacobian_geometric, mass_matrix, coriolis_matrix, coriolis_vector, gravity_vector, inverse_dynamics, forward_dynamics, tcp_force, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions.
+/* planar_2r_combined_f32: fk, frames, jacobian, jacobian_geometric, mass_matrix, coriolis_matrix, coriolis_vector, gravity_vector, inverse_dynamics, inverse_dynamics_derivatives, forward_dynamics, tcp_force, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions.
  *
  * Computes the outputs of fk, frames, jacobian, jacobian_geometric, mass_matrix,
- * coriolis_matrix, coriolis_vector, gravity_vector, inverse_dynamics, forward_dynamics,
- * tcp_force, operational_space, kinetic_energy, potential_energy in one call;
- * subexpressions common to several of them are evaluated once.
+ * coriolis_matrix, coriolis_vector, gravity_vector, inverse_dynamics,
+ * inverse_dynamics_derivatives, forward_dynamics, tcp_force, operational_space,
+ * kinetic_energy, potential_energy in one call; subexpressions common to several of them
+ * are evaluated once.
  *
  * Inputs:
  *   q[2]: joint coordinates: theta1 [rad], theta2 [rad].
@@ -834,6 +906,12 @@ void planar_2r_potential_energy_batch_f32(size_t n, const float *q, const float 
  *   (revolute), N (prismatic)].
  *   inverse_dynamics_tau[2]: 2; joint torques (revolute) or forces (prismatic)
  *   (inverse_dynamics) [N*m (revolute), N (prismatic)].
+ *   dtau_dq[4]: 2 x 2, row-major; d tau / dq: row i, column j is d tau_i / d q_j
+ *   (inverse_dynamics_derivatives).
+ *   dtau_dqd[4]: 2 x 2, row-major; d tau / dqd: the damping of the motion (Coriolis and
+ *   friction) (inverse_dynamics_derivatives).
+ *   dtau_dqdd[4]: 2 x 2, row-major; d tau / dqdd = M(q), the mass matrix
+ *   (inverse_dynamics_derivatives).
  *   forward_dynamics_qdd[2]: 2; joint accelerations (forward_dynamics) [rad/s^2
  *   (revolute), m/s^2 (prismatic)].
  *   F[2]: 2; TCP force components [x, y] (tcp_force) [N, N*m].
@@ -844,16 +922,16 @@ void planar_2r_potential_energy_batch_f32(size_t n, const float *q, const float 
  *   Gx[2]: 2; operational-space gravity force J^-T G (operational_space).
  *   k[1]: scalar; kinetic energy of all bodies (kinetic_energy) [J].
  *   u[1]: scalar; potential energy (potential_energy) [J].
- * Cost: 266 operations.
+ * Cost: 336 operations.
  */
-void planar_2r_combined_f32(const float *q, const float *qd, const float *qdd, const float *tau, float l1, float l2, float m1, float m2, float g, float *base_T_tcp, float *base_T_link1, float *base_T_link2, float *jacobian_J, float *jacobian_geometric_J, float *M, float *C, float *V, float *G, float *inverse_dynamics_tau, float *forward_dynamics_qdd, float *F, float *Mx, float *Vx, float *Gx, float *k, float *u);
+void planar_2r_combined_f32(const float *q, const float *qd, const float *qdd, const float *tau, float l1, float l2, float m1, float m2, float g, float *base_T_tcp, float *base_T_link1, float *base_T_link2, float *jacobian_J, float *jacobian_geometric_J, float *M, float *C, float *V, float *G, float *inverse_dynamics_tau, float *dtau_dq, float *dtau_dqd, float *dtau_dqdd, float *forward_dynamics_qdd, float *F, float *Mx, float *Vx, float *Gx, float *k, float *u);
 
-/* planar_2r_combined_f32 with packed arguments: in = q, qd, qdd, tau, l1, l2, m1, m2, g one after the other; out = base_T_tcp, base_T_link1, base_T_link2, jacobian_J, jacobian_geometric_J, M, C, V, G, inverse_dynamics_tau, forward_dynamics_qdd, F, Mx, Vx, Gx, k, u one after the other. */
+/* planar_2r_combined_f32 with packed arguments: in = q, qd, qdd, tau, l1, l2, m1, m2, g one after the other; out = base_T_tcp, base_T_link1, base_T_link2, jacobian_J, jacobian_geometric_J, M, C, V, G, inverse_dynamics_tau, dtau_dq, dtau_dqd, dtau_dqdd, forward_dynamics_qdd, F, Mx, Vx, Gx, k, u one after the other. */
 void planar_2r_combined_packed_f32(const float *in, float *out);
 
 /* planar_2r_combined_f32 for n configurations; params: l1, l2, m1, m2, g, stride 0 or 5.
- * Uses 2304 bytes of stack for its blocks of 8 configurations. */
-void planar_2r_combined_batch_f32(size_t n, const float *q, const float *qd, const float *qdd, const float *tau, const float *params, size_t params_stride, float *base_T_tcp, float *base_T_link1, float *base_T_link2, float *jacobian_J, float *jacobian_geometric_J, float *M, float *C, float *V, float *G, float *inverse_dynamics_tau, float *forward_dynamics_qdd, float *F, float *Mx, float *Vx, float *Gx, float *k, float *u);
+ * Uses 2656 bytes of stack for its blocks of 8 configurations. */
+void planar_2r_combined_batch_f32(size_t n, const float *q, const float *qd, const float *qdd, const float *tau, const float *params, size_t params_stride, float *base_T_tcp, float *base_T_link1, float *base_T_link2, float *jacobian_J, float *jacobian_geometric_J, float *M, float *C, float *V, float *G, float *inverse_dynamics_tau, float *dtau_dq, float *dtau_dqd, float *dtau_dqdd, float *forward_dynamics_qdd, float *F, float *Mx, float *Vx, float *Gx, float *k, float *u);
 
 #ifdef __cplusplus
 }

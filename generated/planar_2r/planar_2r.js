@@ -24,12 +24,13 @@
  *   coriolis_vector(q, qd, params) -> number[]
  *   gravity_vector(q, params) -> number[]
  *   inverse_dynamics(q, qd, qdd, params) -> number[]
+ *   inverse_dynamics_derivatives(q, qd, qdd, params) -> {dtau_dq: number[][], dtau_dqd: number[][], dtau_dqdd: number[][]}
  *   forward_dynamics(q, qd, tau, params) -> number[]
  *   tcp_force(q, qd, qdd, params) -> number[]
  *   operational_space(q, qd, params) -> {Mx: number[][], Vx: number[], Gx: number[]}
  *   kinetic_energy(q, qd, params) -> number
  *   potential_energy(q, params) -> number
- *   combined(q, qd, qdd, tau, params) -> {base_T_tcp: number[][], base_T_link1: number[][], base_T_link2: number[][], jacobian_J: number[][], jacobian_geometric_J: number[][], M: number[][], C: number[][], V: number[], G: number[], inverse_dynamics_tau: number[], forward_dynamics_qdd: number[], F: number[], Mx: number[][], Vx: number[], Gx: number[], k: number, u: number}
+ *   combined(q, qd, qdd, tau, params) -> {base_T_tcp: number[][], base_T_link1: number[][], base_T_link2: number[][], jacobian_J: number[][], jacobian_geometric_J: number[][], M: number[][], C: number[][], V: number[], G: number[], inverse_dynamics_tau: number[], dtau_dq: number[][], dtau_dqd: number[][], dtau_dqdd: number[][], forward_dynamics_qdd: number[], F: number[], Mx: number[][], Vx: number[], Gx: number[], k: number, u: number}
  */
 (function (root, factory) {
   "use strict";
@@ -377,6 +378,85 @@
   }
 
   /**
+   * Derivatives of the inverse dynamics: the linearization of tau at a motion.
+   *
+   * tau(q + dq, qd + dqd, qdd + dqdd) = tau + dtau_dq dq + dtau_dqd dqd + dtau_dqdd dqdd
+   * to first order, tau = M qdd + V + G + F_f (seed eq. 8.34); dtau_dqdd = M.  Forward-
+   * mode derivative of the recursive Newton-Euler program (Carpentier and Mansard, RSS
+   * 2018); a sign(qd) Coulomb term counts with derivative 0.
+   *
+   * @param {number[]} q joint coordinates, 2 numbers: theta1 [rad], theta2 [rad].
+   * @param {number[]} qd joint velocities, 2 numbers: theta1 [rad/s], theta2 [rad/s].
+   * @param {number[]} qdd joint accelerations, 2 numbers: theta1 [rad/s^2], theta2
+   *     [rad/s^2].
+   * @param {Object} [params] parameter values (defaults in PARAMETERS):
+   *     l1: length of link 1 [m]; default 0.1.
+   *     l2: length of link 2 [m]; default 0.1.
+   *     m1: point mass at the end of link 1 [kg]; default 0.1.
+   *     m2: point mass at the end of link 2 [kg]; default 0.1.
+   *     g: gravitational acceleration [m/s^2]; default 9.81.
+   * @returns {{dtau_dq: number[][], dtau_dqd: number[][], dtau_dqdd: number[][]}}
+   *     dtau_dq: shape (2, 2); d tau / dq: row i, column j is d tau_i / d q_j.
+   *     dtau_dqd: shape (2, 2); d tau / dqd: the damping of the motion (Coriolis and
+   *     friction).
+   *     dtau_dqdd: shape (2, 2); d tau / dqdd = M(q), the mass matrix.
+   */
+  function inverse_dynamics_derivatives(q, qd, qdd, params) {
+    _vector(q, 2, "q", "inverse_dynamics_derivatives");
+    _vector(qd, 2, "qd", "inverse_dynamics_derivatives");
+    _vector(qdd, 2, "qdd", "inverse_dynamics_derivatives");
+    const _p = _params(params, ["l1", "l2", "m1", "m2", "g"], "inverse_dynamics_derivatives");
+    const l1 = _p.l1 ?? 0.1;
+    const l2 = _p.l2 ?? 0.1;
+    const m1 = _p.m1 ?? 0.1;
+    const m2 = _p.m2 ?? 0.1;
+    const g = _p.g ?? 9.81;
+    const theta1 = q[0];
+    const theta2 = q[1];
+    const theta1_d = qd[0];
+    const theta2_d = qd[1];
+    const theta1_dd = qdd[0];
+    const theta2_dd = qdd[1];
+    const _x0 = Math.cos(theta2);
+    const _x1 = g*Math.cos(theta1);
+    const _x2 = g*Math.sin(theta1);
+    const _x3 = Math.sin(theta2);
+    const _x4 = 2.0*l1;
+    const _x5 = m2*_x3;
+    const _x6 = l1*_x0;
+    const _x7 = l2*l2*m2;
+    const _x8 = theta1_dd + theta2_dd;
+    const _x9 = l2*m2;
+    const _x10 = _x1 + l1*theta1_dd;
+    const _x11 = _x2 - l1*theta1_d*theta1_d;
+    const _x12 = (-_x3*_x11 + _x0*_x10)*m2;
+    const _x13 = -_x3;
+    const _x14 = -_x2;
+    const _x15 = -_x4*theta1_d;
+    const _x16 = m2*_x0*_x14 - _x1*_x5;
+    const _x17 = m2*_x13*_x10 - m2*_x0*_x11;
+    const _x18 = -_x5*_x15;
+    const _x19 = m2*_x6;
+    const _x20 = l2*_x16;
+    const _x21 = l2*_x17;
+    const _x22 = l2*_x18;
+    const _x23 = l2*_x19 + _x7;
+    const _x24 = m2*_x3*_x3;
+    const _x25 = l1*_x14;
+    const _x26 = _x6*_x5;
+    const _x27 = theta2_d + theta1_d;
+    const _x28 = _x3*_x10;
+    const _x29 = -_x4*_x3*_x9*_x27;
+    const _x30 = l1*l1;
+    const _x31 = _x6*_x9;
+    return {
+      dtau_dq: [[m1*_x25 + _x24*_x25 + _x1*_x26 + _x6*_x16 + _x20, l1*_x0*(m2*_x28 - _x9*_x27*_x27 + m2*(_x0*_x11 + _x28)) + _x6*_x17 + l1*_x13*(_x12 + _x9*_x8 + _x5*_x11) + _x21], [_x20, _x21]],
+      dtau_dqd: [[_x26*_x15 + _x22 + _x6*_x18 + _x29, _x29], [_x22, 0.0]],
+      dtau_dqdd: [[_x31 + _x24*_x30 + _x6*_x19 + m1*_x30 + _x23, _x31 + _x7], [_x23, _x7]],
+    };
+  }
+
+  /**
    * Forward dynamics: joint accelerations under given torques.
    *
    * qdd = M(q)^-1 (tau - V(q, qd) - G(q) - F_f(qd)) (seed eq. 8.34 solved for qdd), by a
@@ -646,12 +726,13 @@
   }
 
   /**
-   * fk, frames, jacobian, jacobian_geometric, mass_matrix, coriolis_matrix, coriolis_vector, gravity_vector, inverse_dynamics, forward_dynamics, tcp_force, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions.
+   * fk, frames, jacobian, jacobian_geometric, mass_matrix, coriolis_matrix, coriolis_vector, gravity_vector, inverse_dynamics, inverse_dynamics_derivatives, forward_dynamics, tcp_force, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions.
    *
    * Computes the outputs of fk, frames, jacobian, jacobian_geometric, mass_matrix,
-   * coriolis_matrix, coriolis_vector, gravity_vector, inverse_dynamics, forward_dynamics,
-   * tcp_force, operational_space, kinetic_energy, potential_energy in one call;
-   * subexpressions common to several of them are evaluated once.
+   * coriolis_matrix, coriolis_vector, gravity_vector, inverse_dynamics,
+   * inverse_dynamics_derivatives, forward_dynamics, tcp_force, operational_space,
+   * kinetic_energy, potential_energy in one call; subexpressions common to several of
+   * them are evaluated once.
    *
    * @param {number[]} q joint coordinates, 2 numbers: theta1 [rad], theta2 [rad].
    * @param {number[]} qd joint velocities, 2 numbers: theta1 [rad/s], theta2 [rad/s].
@@ -665,7 +746,7 @@
    *     m1: point mass at the end of link 1 [kg]; default 0.1.
    *     m2: point mass at the end of link 2 [kg]; default 0.1.
    *     g: gravitational acceleration [m/s^2]; default 9.81.
-   * @returns {{base_T_tcp: number[][], base_T_link1: number[][], base_T_link2: number[][], jacobian_J: number[][], jacobian_geometric_J: number[][], M: number[][], C: number[][], V: number[], G: number[], inverse_dynamics_tau: number[], forward_dynamics_qdd: number[], F: number[], Mx: number[][], Vx: number[], Gx: number[], k: number, u: number}}
+   * @returns {{base_T_tcp: number[][], base_T_link1: number[][], base_T_link2: number[][], jacobian_J: number[][], jacobian_geometric_J: number[][], M: number[][], C: number[][], V: number[], G: number[], inverse_dynamics_tau: number[], dtau_dq: number[][], dtau_dqd: number[][], dtau_dqdd: number[][], forward_dynamics_qdd: number[], F: number[], Mx: number[][], Vx: number[], Gx: number[], k: number, u: number}}
    *     base_T_tcp: shape (4, 4); homogeneous transform of the TCP frame in the base
    *     frame (fk) [m].
    *     base_T_link1: shape (4, 4); homogeneous transform of frame 'link1' in the base
@@ -683,6 +764,12 @@
    *     (gravity_vector) [N*m (revolute), N (prismatic)].
    *     inverse_dynamics_tau: shape (2,); joint torques (revolute) or forces
    *     (prismatic) (inverse_dynamics) [N*m (revolute), N (prismatic)].
+   *     dtau_dq: shape (2, 2); d tau / dq: row i, column j is d tau_i / d q_j
+   *     (inverse_dynamics_derivatives).
+   *     dtau_dqd: shape (2, 2); d tau / dqd: the damping of the motion (Coriolis and
+   *     friction) (inverse_dynamics_derivatives).
+   *     dtau_dqdd: shape (2, 2); d tau / dqdd = M(q), the mass matrix
+   *     (inverse_dynamics_derivatives).
    *     forward_dynamics_qdd: shape (2,); joint accelerations (forward_dynamics)
    *     [rad/s^2 (revolute), m/s^2 (prismatic)].
    *     F: shape (2,); TCP force components [x, y] (tcp_force) [N, N*m].
@@ -715,106 +802,131 @@
     const tau_theta2 = tau[1];
     const _x0 = l1*l1;
     const _x1 = Math.cos(theta2);
-    const _x2 = l2*m2;
-    const _x3 = l1*_x2;
+    const _x2 = l1*m2;
+    const _x3 = l2*_x2;
     const _x4 = _x1*_x3;
     const _x5 = l2*l2*m2;
     const _x6 = Math.sin(theta2);
     const _x7 = theta1_d*theta1_d;
     const _x8 = l1*_x7;
     const _x9 = m2*_x1;
-    const _x10 = Math.sin(theta1);
-    const _x11 = _x6*_x10;
+    const _x10 = l2*m2;
+    const _x11 = Math.sin(theta1);
     const _x12 = g*_x11;
-    const _x13 = Math.cos(theta1);
-    const _x14 = g*_x13;
-    const _x15 = theta1_dd + theta2_dd;
-    const _x16 = l1*theta1_dd;
-    const _x17 = g*_x10 - _x8;
-    const _x18 = m1*_x0 + 2.0*_x4 + m2*_x0 + _x5;
-    const _x19 = 1.0/_x18;
-    const _x20 = l1*m1;
-    const _x21 = (theta2_d + theta1_d)*(theta2_d + theta1_d);
-    const _x22 = -_x6*_x17 + _x1*_x14;
-    const _x23 = _x2*_x22;
-    const _x24 = -_x23;
-    const _x25 = _x1*_x10;
-    const _x26 = _x6*_x13;
-    const _x27 = _x26 + _x25;
-    const _x28 = l2*_x27;
-    const _x29 = -_x28;
-    const _x30 = _x1*_x13 - _x11;
-    const _x31 = l2*_x30;
-    const _x32 = l1*_x10;
+    const _x13 = _x6*_x12;
+    const _x14 = Math.cos(theta1);
+    const _x15 = g*_x14;
+    const _x16 = theta1_dd + theta2_dd;
+    const _x17 = l1*theta1_dd;
+    const _x18 = _x12 - _x8;
+    const _x19 = 2.0*theta1_d;
+    const _x20 = m2*_x6;
+    const _x21 = theta2_d + theta1_d;
+    const _x22 = 2.0*_x4 + m1*_x0 + m2*_x0 + _x5;
+    const _x23 = 1.0/_x22;
+    const _x24 = l1*m1;
+    const _x25 = _x21*_x21;
+    const _x26 = -_x6*_x18 + _x1*_x15;
+    const _x27 = _x10*_x26;
+    const _x28 = -_x27;
+    const _x29 = _x1*_x11;
+    const _x30 = _x6*_x14;
+    const _x31 = _x30 + _x29;
+    const _x32 = l2*_x31;
     const _x33 = -_x32;
-    const _x34 = l1*_x13;
-    const _x35 = m1*_x0*theta1_dd;
-    const _x36 = _x34 + _x31;
-    const _x37 = _x20 + l1*m2;
-    const _x38 = -_x29;
-    const _x39 = _x33 + _x29;
-    const _x40 = _x31*_x39;
-    const _x41 = -_x26 - _x25;
-    const _x42 = _x32 + _x28;
-    const _x43 = _x3*_x6;
-    const _x44 = _x43*theta1_d;
-    const _x45 = theta2_d*theta2_d;
-    const _x46 = 2.0*theta1_d*theta2_d;
-    const _x47 = -_x28*_x46 - _x28*_x45 + _x7*_x39;
-    const _x48 = -_x31*_x46 - _x31*_x45 + (-_x34 - _x31)*_x7;
-    const _x49 = _x5 + _x4;
-    const _x50 = -_x43;
-    const _x51 = _x8*_x9;
-    const _x52 = _x2*_x6*_x8;
-    const _x53 = _x16 + _x14;
-    const _x54 = m2*(-_x6*_x17 + _x1*_x53);
-    const _x55 = _x5*_x15 + l2*_x54;
-    const _x56 = _x19*_x49;
-    const _x57 = -_x49*_x56 + _x5;
-    const _x58 = -_x14*_x20 + _x24 - l1*(m2*_x1*_x22 + _x6*(-_x2*_x21 + (_x1*_x17 + _x6*_x14)*m2)) + tau_theta1;
-    const _x59 = tau_theta2 + _x24 - _x56*_x58;
-    const _x60 = _x59/_x57;
-    const _x61 = _x19*_x58 - _x56*_x60;
-    const _x62 = _x35 + _x14*_x20 + l1*(_x6*(-_x2*_x21 + m2*(_x6*_x53 + _x1*_x17)) + _x1*(_x2*_x15 + _x54)) + _x55;
-    const _x63 = -_x36;
-    const _x64 = _x31*_x39 + _x29*_x63;
-    const _x65 = 1.0/_x64;
-    const _x66 = _x65*(_x31*_x62 + _x63*_x55);
-    const _x67 = _x65*(_x38*_x62 + _x55*_x39);
-    const _x68 = l1*(_x6*(-_x2*_x21 - _x51) + _x6*_x51) + _x52;
-    const _x69 = -_x2*_x12 + _x14*(_x2*_x1 + _x37);
-    const _x70 = _x2*(_x1*_x14 - _x12);
-    const _x71 = _x40 + _x29*_x63;
-    const _x72 = 1.0/_x71;
-    const _x73 = (_x31*_x18 + _x49*_x63)*_x72;
-    const _x74 = _x72*(_x31*_x49 + _x5*_x63);
-    const _x75 = _x72*(_x31*_x68 + _x63*_x52);
-    const _x76 = _x72*(_x63*_x70 + _x31*_x69);
-    const _x77 = (_x38*_x18 + _x49*_x39)*_x72;
-    const _x78 = _x72*(_x38*_x49 + _x5*_x39);
-    const _x79 = _x72*(_x38*_x68 + _x52*_x39);
-    const _x80 = _x72*(_x38*_x69 + _x39*_x70);
-    const _x81 = _x72*(_x31*_x73 + _x63*_x74);
-    const _x82 = _x72*(_x39*_x74 + _x38*_x73);
-    const _x83 = _x72*(_x38*_x77 + _x39*_x78);
+    const _x34 = _x1*_x14 - _x6*_x11;
+    const _x35 = l2*_x34;
+    const _x36 = l1*_x11;
+    const _x37 = -_x36;
+    const _x38 = l1*_x14;
+    const _x39 = m1*_x0*theta1_dd;
+    const _x40 = _x38 + _x35;
+    const _x41 = _x24 + _x2;
+    const _x42 = -_x33;
+    const _x43 = _x37 + _x33;
+    const _x44 = _x35*_x43;
+    const _x45 = -_x30 - _x29;
+    const _x46 = _x36 + _x32;
+    const _x47 = _x3*_x6;
+    const _x48 = _x47*theta1_d;
+    const _x49 = theta2_d*theta2_d;
+    const _x50 = _x19*theta2_d;
+    const _x51 = -_x32*_x50 - _x32*_x49 + _x7*_x43;
+    const _x52 = -_x35*_x50 - _x35*_x49 + (-_x38 - _x35)*_x7;
+    const _x53 = _x5 + _x4;
+    const _x54 = -_x47;
+    const _x55 = _x8*_x9;
+    const _x56 = _x6*_x8*_x10;
+    const _x57 = _x17 + _x15;
+    const _x58 = m2*(-_x6*_x18 + _x1*_x57);
+    const _x59 = _x5*_x16 + l2*_x58;
+    const _x60 = -_x6;
+    const _x61 = -_x12;
+    const _x62 = -l1*_x19;
+    const _x63 = -_x20*_x15 + m2*_x1*_x61;
+    const _x64 = -m2*_x1*_x18 + m2*_x60*_x57;
+    const _x65 = -_x20*_x62;
+    const _x66 = _x2*_x1;
+    const _x67 = l2*_x63;
+    const _x68 = l2*_x64;
+    const _x69 = l2*_x65;
+    const _x70 = l2*_x66 + _x5;
+    const _x71 = l1*_x1;
+    const _x72 = m2*_x6*_x6;
+    const _x73 = l1*_x61;
+    const _x74 = _x20*_x71;
+    const _x75 = _x6*_x57;
+    const _x76 = -2.0*l1*_x6*_x21*_x10;
+    const _x77 = _x10*_x71;
+    const _x78 = _x23*_x53;
+    const _x79 = -_x53*_x78 + _x5;
+    const _x80 = _x28 - _x24*_x15 - l1*(m2*_x1*_x26 + _x6*(-_x25*_x10 + (_x1*_x18 + _x6*_x15)*m2)) + tau_theta1;
+    const _x81 = tau_theta2 + _x28 - _x78*_x80;
+    const _x82 = _x81/_x79;
+    const _x83 = _x23*_x80 - _x78*_x82;
+    const _x84 = _x39 + _x59 + _x24*_x15 + l1*(_x6*(-_x25*_x10 + m2*(_x6*_x57 + _x1*_x18)) + _x1*(_x10*_x16 + _x58));
+    const _x85 = -_x40;
+    const _x86 = _x35*_x43 + _x33*_x85;
+    const _x87 = 1.0/_x86;
+    const _x88 = _x87*(_x35*_x84 + _x59*_x85);
+    const _x89 = _x87*(_x42*_x84 + _x59*_x43);
+    const _x90 = l1*(_x6*(-_x25*_x10 - _x55) + _x6*_x55) + _x56;
+    const _x91 = -_x13*_x10 + _x15*(_x1*_x10 + _x41);
+    const _x92 = _x10*(_x1*_x15 - _x13);
+    const _x93 = _x44 + _x33*_x85;
+    const _x94 = 1.0/_x93;
+    const _x95 = (_x53*_x85 + _x35*_x22)*_x94;
+    const _x96 = _x94*(_x5*_x85 + _x35*_x53);
+    const _x97 = _x94*(_x35*_x90 + _x56*_x85);
+    const _x98 = _x94*(_x85*_x92 + _x35*_x91);
+    const _x99 = _x94*(_x42*_x22 + _x53*_x43);
+    const _x100 = _x94*(_x42*_x53 + _x5*_x43);
+    const _x101 = _x94*(_x42*_x90 + _x56*_x43);
+    const _x102 = _x94*(_x42*_x91 + _x92*_x43);
+    const _x103 = _x94*(_x85*_x96 + _x35*_x95);
+    const _x104 = _x94*(_x42*_x95 + _x96*_x43);
+    const _x105 = _x94*(_x42*_x99 + _x100*_x43);
     return {
-      base_T_tcp: [[_x30, _x41, 0.0, _x36], [_x27, _x30, 0.0, _x42], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]],
-      base_T_link1: [[_x13, -_x10, 0.0, _x34], [_x10, _x13, 0.0, _x32], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]],
-      base_T_link2: [[_x30, _x41, 0.0, _x36], [_x27, _x30, 0.0, _x42], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]],
-      jacobian_J: [[_x39, _x29], [_x36, _x31]],
-      jacobian_geometric_J: [[_x39, _x29], [_x36, _x31], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0], [1.0, 1.0]],
-      M: [[m1*_x0 + 2.0*_x4 + m2*_x0 + _x5, _x49], [_x49, _x5]],
-      C: [[-_x43*theta2_d, -_x44 + _x50*theta2_d], [_x44, 0.0]],
-      V: [l1*(_x6*(-_x2*_x21 - _x51) + _x6*_x51) + _x52, _x52],
-      G: [-_x2*_x12 + _x14*(_x2*_x1 + _x37), _x2*(_x1*_x14 - _x12)],
-      inverse_dynamics_tau: [_x35 + _x14*_x20 + l1*(_x6*(-_x2*_x21 + m2*(_x6*_x53 + _x1*_x17)) + _x1*(_x2*_x15 + _x54)) + _x55, _x55],
-      forward_dynamics_qdd: [_x61, _x60],
-      F: [_x66, _x67],
-      Mx: [[_x81, _x82], [_x82, _x83]],
-      Vx: [-_x47*_x82 - _x48*_x81 + _x75, -_x47*_x83 - _x48*_x82 + _x79],
-      Gx: [_x76, _x80],
-      k: 0.5*(_x49*theta1_d + _x5*theta2_d)*theta2_d + 0.5*((m1*_x0 + 2.0*_x4 + m2*_x0 + _x5)*theta1_d + _x49*theta2_d)*theta1_d,
-      u: (_x32 + _x28)*g*m2 + g*m1*_x32,
+      base_T_tcp: [[_x34, _x45, 0.0, _x40], [_x31, _x34, 0.0, _x46], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]],
+      base_T_link1: [[_x14, -_x11, 0.0, _x38], [_x11, _x14, 0.0, _x36], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]],
+      base_T_link2: [[_x34, _x45, 0.0, _x40], [_x31, _x34, 0.0, _x46], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]],
+      jacobian_J: [[_x43, _x33], [_x40, _x35]],
+      jacobian_geometric_J: [[_x43, _x33], [_x40, _x35], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0], [1.0, 1.0]],
+      M: [[2.0*_x4 + m1*_x0 + m2*_x0 + _x5, _x53], [_x53, _x5]],
+      C: [[-_x47*theta2_d, -_x48 + _x54*theta2_d], [_x48, 0.0]],
+      V: [l1*(_x6*(-_x25*_x10 - _x55) + _x6*_x55) + _x56, _x56],
+      G: [-_x13*_x10 + _x15*(_x1*_x10 + _x41), _x10*(_x1*_x15 - _x13)],
+      inverse_dynamics_tau: [_x39 + _x59 + _x24*_x15 + l1*(_x6*(-_x25*_x10 + m2*(_x6*_x57 + _x1*_x18)) + _x1*(_x10*_x16 + _x58)), _x59],
+      dtau_dq: [[m1*_x73 + _x73*_x72 + _x63*_x71 + _x15*_x74 + _x67, l1*_x1*(-_x21*_x21*_x10 + m2*(_x1*_x18 + _x75) + m2*_x75) + l1*_x60*(_x20*_x18 + _x10*_x16 + _x58) + _x64*_x71 + _x68], [_x67, _x68]],
+      dtau_dqd: [[_x74*_x62 + _x76 + _x65*_x71 + _x69, _x76], [_x69, 0.0]],
+      dtau_dqdd: [[m1*_x0 + _x0*_x72 + _x66*_x71 + _x77 + _x70, _x77 + _x5], [_x70, _x5]],
+      forward_dynamics_qdd: [_x83, _x82],
+      F: [_x88, _x89],
+      Mx: [[_x103, _x104], [_x104, _x105]],
+      Vx: [-_x51*_x104 - _x52*_x103 + _x97, -_x51*_x105 - _x52*_x104 + _x101],
+      Gx: [_x98, _x102],
+      k: 0.5*(_x53*theta1_d + _x5*theta2_d)*theta2_d + 0.5*((2.0*_x4 + m1*_x0 + m2*_x0 + _x5)*theta1_d + _x53*theta2_d)*theta1_d,
+      u: g*(_x36 + _x32)*m2 + g*m1*_x36,
     };
   }
 
@@ -842,12 +954,13 @@
       coriolis_vector: {"inputs": ["q", "qd"], "parameters": ["l1", "l2", "m2"], "outputs": {"V": [2]}},
       gravity_vector: {"inputs": ["q"], "parameters": ["l1", "l2", "m1", "m2", "g"], "outputs": {"G": [2]}},
       inverse_dynamics: {"inputs": ["q", "qd", "qdd"], "parameters": ["l1", "l2", "m1", "m2", "g"], "outputs": {"tau": [2]}},
+      inverse_dynamics_derivatives: {"inputs": ["q", "qd", "qdd"], "parameters": ["l1", "l2", "m1", "m2", "g"], "outputs": {"dtau_dq": [2, 2], "dtau_dqd": [2, 2], "dtau_dqdd": [2, 2]}},
       forward_dynamics: {"inputs": ["q", "qd", "tau"], "parameters": ["l1", "l2", "m1", "m2", "g"], "outputs": {"qdd": [2]}},
       tcp_force: {"inputs": ["q", "qd", "qdd"], "parameters": ["l1", "l2", "m1", "m2", "g"], "outputs": {"F": [2]}},
       operational_space: {"inputs": ["q", "qd"], "parameters": ["l1", "l2", "m1", "m2", "g"], "outputs": {"Mx": [2, 2], "Vx": [2], "Gx": [2]}},
       kinetic_energy: {"inputs": ["q", "qd"], "parameters": ["l1", "l2", "m1", "m2"], "outputs": {"k": []}},
       potential_energy: {"inputs": ["q"], "parameters": ["l1", "l2", "m1", "m2", "g"], "outputs": {"u": []}},
-      combined: {"inputs": ["q", "qd", "qdd", "tau"], "parameters": ["l1", "l2", "m1", "m2", "g"], "outputs": {"base_T_tcp": [4, 4], "base_T_link1": [4, 4], "base_T_link2": [4, 4], "jacobian_J": [2, 2], "jacobian_geometric_J": [6, 2], "M": [2, 2], "C": [2, 2], "V": [2], "G": [2], "inverse_dynamics_tau": [2], "forward_dynamics_qdd": [2], "F": [2], "Mx": [2, 2], "Vx": [2], "Gx": [2], "k": [], "u": []}},
+      combined: {"inputs": ["q", "qd", "qdd", "tau"], "parameters": ["l1", "l2", "m1", "m2", "g"], "outputs": {"base_T_tcp": [4, 4], "base_T_link1": [4, 4], "base_T_link2": [4, 4], "jacobian_J": [2, 2], "jacobian_geometric_J": [6, 2], "M": [2, 2], "C": [2, 2], "V": [2], "G": [2], "inverse_dynamics_tau": [2], "dtau_dq": [2, 2], "dtau_dqd": [2, 2], "dtau_dqdd": [2, 2], "forward_dynamics_qdd": [2], "F": [2], "Mx": [2, 2], "Vx": [2], "Gx": [2], "k": [], "u": []}},
     }),
     fk: fk,
     frames: frames,
@@ -858,6 +971,7 @@
     coriolis_vector: coriolis_vector,
     gravity_vector: gravity_vector,
     inverse_dynamics: inverse_dynamics,
+    inverse_dynamics_derivatives: inverse_dynamics_derivatives,
     forward_dynamics: forward_dynamics,
     tcp_force: tcp_force,
     operational_space: operational_space,

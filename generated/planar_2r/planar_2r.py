@@ -20,12 +20,13 @@ Functions:
     coriolis_vector(q, qd, **params) -> V (..., 2)
     gravity_vector(q, **params) -> G (..., 2)
     inverse_dynamics(q, qd, qdd, **params) -> tau (..., 2)
+    inverse_dynamics_derivatives(q, qd, qdd, **params) -> InverseDynamicsDerivativesResult(dtau_dq, dtau_dqd, dtau_dqdd)
     forward_dynamics(q, qd, tau, **params) -> qdd (..., 2)
     tcp_force(q, qd, qdd, **params) -> F (..., 2)
     operational_space(q, qd, **params) -> OperationalSpaceResult(Mx, Vx, Gx)
     kinetic_energy(q, qd, **params) -> k (...)
     potential_energy(q, **params) -> u (...)
-    combined(q, qd, qdd, tau, **params) -> CombinedResult(base_T_tcp, base_T_link1, base_T_link2, jacobian_J, jacobian_geometric_J, M, C, V, G, inverse_dynamics_tau, forward_dynamics_qdd, F, Mx, Vx, Gx, k, u)
+    combined(q, qd, qdd, tau, **params) -> CombinedResult(base_T_tcp, base_T_link1, base_T_link2, jacobian_J, jacobian_geometric_J, M, C, V, G, inverse_dynamics_tau, dtau_dq, dtau_dqd, dtau_dqdd, forward_dynamics_qdd, F, Mx, Vx, Gx, k, u)
 """
 
 import collections
@@ -48,9 +49,11 @@ PARAMETERS = {
 
 FramesResult = collections.namedtuple("FramesResult", ["base_T_link1", "base_T_link2"])
 
+InverseDynamicsDerivativesResult = collections.namedtuple("InverseDynamicsDerivativesResult", ["dtau_dq", "dtau_dqd", "dtau_dqdd"])
+
 OperationalSpaceResult = collections.namedtuple("OperationalSpaceResult", ["Mx", "Vx", "Gx"])
 
-CombinedResult = collections.namedtuple("CombinedResult", ["base_T_tcp", "base_T_link1", "base_T_link2", "jacobian_J", "jacobian_geometric_J", "M", "C", "V", "G", "inverse_dynamics_tau", "forward_dynamics_qdd", "F", "Mx", "Vx", "Gx", "k", "u"])
+CombinedResult = collections.namedtuple("CombinedResult", ["base_T_tcp", "base_T_link1", "base_T_link2", "jacobian_J", "jacobian_geometric_J", "M", "C", "V", "G", "inverse_dynamics_tau", "dtau_dq", "dtau_dqd", "dtau_dqdd", "forward_dynamics_qdd", "F", "Mx", "Vx", "Gx", "k", "u"])
 
 
 def _vector(value, size, name, function):
@@ -471,6 +474,97 @@ def inverse_dynamics(q, qd, qdd, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
     return _out_tau
 
 
+def inverse_dynamics_derivatives(q, qd, qdd, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
+    """Derivatives of the inverse dynamics: the linearization of tau at a motion.
+
+    tau(q + dq, qd + dqd, qdd + dqdd) = tau + dtau_dq dq + dtau_dqd dqd + dtau_dqdd dqdd
+    to first order, tau = M qdd + V + G + F_f (seed eq. 8.34); dtau_dqdd = M.  Forward-
+    mode derivative of the recursive Newton-Euler program (Carpentier and Mansard, RSS
+    2018); a sign(qd) Coulomb term counts with derivative 0.
+
+    Args:
+        q: joint coordinates, shape (..., 2): theta1 [rad], theta2 [rad].
+        qd: joint velocities, shape (..., 2): theta1 [rad/s], theta2 [rad/s].
+        qdd: joint accelerations, shape (..., 2): theta1 [rad/s^2], theta2 [rad/s^2].
+        l1: length of link 1 [m]; default 0.1; a scalar or an array broadcastable to the
+            batch shape.
+        l2: length of link 2 [m]; default 0.1; a scalar or an array broadcastable to the
+            batch shape.
+        m1: point mass at the end of link 1 [kg]; default 0.1; a scalar or an array
+            broadcastable to the batch shape.
+        m2: point mass at the end of link 2 [kg]; default 0.1; a scalar or an array
+            broadcastable to the batch shape.
+        g: gravitational acceleration [m/s^2]; default 9.81; a scalar or an array
+            broadcastable to the batch shape.
+
+    Returns:
+        InverseDynamicsDerivativesResult with the fields:
+        dtau_dq: shape (..., 2, 2); d tau / dq: row i, column j is d tau_i / d q_j.
+        dtau_dqd: shape (..., 2, 2); d tau / dqd: the damping of the motion (Coriolis and
+            friction).
+        dtau_dqdd: shape (..., 2, 2); d tau / dqdd = M(q), the mass matrix.
+    """
+    q = _vector(q, 2, "q", "inverse_dynamics_derivatives")
+    qd = _vector(qd, 2, "qd", "inverse_dynamics_derivatives")
+    qdd = _vector(qdd, 2, "qdd", "inverse_dynamics_derivatives")
+    batch = _batch_shape("inverse_dynamics_derivatives", q.shape[:-1], qd.shape[:-1], qdd.shape[:-1], numpy.shape(l1), numpy.shape(l2), numpy.shape(m1), numpy.shape(m2), numpy.shape(g))
+    if math.prod(batch) > CHUNK:
+        return _in_chunks(inverse_dynamics_derivatives, batch, (q, qd, qdd, ), {"l1": l1, "l2": l2, "m1": m1, "m2": m2, "g": g})
+    theta1 = q[..., 0]
+    theta2 = q[..., 1]
+    theta1_d = qd[..., 0]
+    theta2_d = qd[..., 1]
+    theta1_dd = qdd[..., 0]
+    theta2_dd = qdd[..., 1]
+    _x0 = numpy.cos(theta2)
+    _x1 = g*numpy.cos(theta1)
+    _x2 = g*numpy.sin(theta1)
+    _x3 = numpy.sin(theta2)
+    _x4 = 2.0*l1
+    _x5 = m2*_x3
+    _x6 = l1*_x0
+    _x7 = l2*l2*m2
+    _x8 = theta1_dd + theta2_dd
+    _x9 = l2*m2
+    _x10 = _x1 + l1*theta1_dd
+    _x11 = _x2 - l1*theta1_d*theta1_d
+    _x12 = (-_x3*_x11 + _x0*_x10)*m2
+    _x13 = -_x3
+    _x14 = -_x2
+    _x15 = -_x4*theta1_d
+    _x16 = m2*_x0*_x14 - _x1*_x5
+    _x17 = m2*_x13*_x10 - m2*_x0*_x11
+    _x18 = -_x5*_x15
+    _x19 = m2*_x6
+    _x20 = l2*_x16
+    _x21 = l2*_x17
+    _x22 = l2*_x18
+    _x23 = l2*_x19 + _x7
+    _x24 = m2*_x3*_x3
+    _x25 = l1*_x14
+    _x26 = _x6*_x5
+    _x27 = theta2_d + theta1_d
+    _x28 = _x3*_x10
+    _x29 = -_x4*_x3*_x9*_x27
+    _x30 = l1*l1
+    _x31 = _x6*_x9
+    _out_dtau_dq = numpy.zeros(batch + (2, 2))
+    _out_dtau_dq[..., 0, 0] = m1*_x25 + _x24*_x25 + _x1*_x26 + _x6*_x16 + _x20
+    _out_dtau_dq[..., 0, 1] = l1*_x0*(m2*_x28 - _x9*_x27*_x27 + m2*(_x0*_x11 + _x28)) + _x6*_x17 + l1*_x13*(_x12 + _x9*_x8 + _x5*_x11) + _x21
+    _out_dtau_dq[..., 1, 0] = _x20
+    _out_dtau_dq[..., 1, 1] = _x21
+    _out_dtau_dqd = numpy.zeros(batch + (2, 2))
+    _out_dtau_dqd[..., 0, 0] = _x26*_x15 + _x22 + _x6*_x18 + _x29
+    _out_dtau_dqd[..., 0, 1] = _x29
+    _out_dtau_dqd[..., 1, 0] = _x22
+    _out_dtau_dqdd = numpy.zeros(batch + (2, 2))
+    _out_dtau_dqdd[..., 0, 0] = _x31 + _x24*_x30 + _x6*_x19 + m1*_x30 + _x23
+    _out_dtau_dqdd[..., 0, 1] = _x31 + _x7
+    _out_dtau_dqdd[..., 1, 0] = _x23
+    _out_dtau_dqdd[..., 1, 1] = _x7
+    return InverseDynamicsDerivativesResult(_out_dtau_dq, _out_dtau_dqd, _out_dtau_dqdd)
+
+
 def forward_dynamics(q, qd, tau, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
     """Forward dynamics: joint accelerations under given torques.
 
@@ -769,12 +863,13 @@ def potential_energy(q, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
 
 
 def combined(q, qd, qdd, tau, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
-    """fk, frames, jacobian, jacobian_geometric, mass_matrix, coriolis_matrix, coriolis_vector, gravity_vector, inverse_dynamics, forward_dynamics, tcp_force, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions.
+    """fk, frames, jacobian, jacobian_geometric, mass_matrix, coriolis_matrix, coriolis_vector, gravity_vector, inverse_dynamics, inverse_dynamics_derivatives, forward_dynamics, tcp_force, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions.
 
     Computes the outputs of fk, frames, jacobian, jacobian_geometric, mass_matrix,
     coriolis_matrix, coriolis_vector, gravity_vector, inverse_dynamics,
-    forward_dynamics, tcp_force, operational_space, kinetic_energy, potential_energy in
-    one call; subexpressions common to several of them are evaluated once.
+    inverse_dynamics_derivatives, forward_dynamics, tcp_force, operational_space,
+    kinetic_energy, potential_energy in one call; subexpressions common to several of
+    them are evaluated once.
 
     Args:
         q: joint coordinates, shape (..., 2): theta1 [rad], theta2 [rad].
@@ -812,6 +907,12 @@ def combined(q, qd, qdd, tau, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
             [N*m (revolute), N (prismatic)].
         inverse_dynamics_tau: shape (..., 2); joint torques (revolute) or forces (prismatic)
             (inverse_dynamics) [N*m (revolute), N (prismatic)].
+        dtau_dq: shape (..., 2, 2); d tau / dq: row i, column j is d tau_i / d q_j
+            (inverse_dynamics_derivatives).
+        dtau_dqd: shape (..., 2, 2); d tau / dqd: the damping of the motion (Coriolis and
+            friction) (inverse_dynamics_derivatives).
+        dtau_dqdd: shape (..., 2, 2); d tau / dqdd = M(q), the mass matrix
+            (inverse_dynamics_derivatives).
         forward_dynamics_qdd: shape (..., 2); joint accelerations (forward_dynamics)
             [rad/s^2 (revolute), m/s^2 (prismatic)].
         F: shape (..., 2); TCP force components [x, y] (tcp_force) [N, N*m].
@@ -840,164 +941,200 @@ def combined(q, qd, qdd, tau, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
     tau_theta2 = tau[..., 1]
     _x0 = l1*l1
     _x1 = numpy.cos(theta2)
-    _x2 = l2*m2
-    _x3 = l1*_x2
+    _x2 = l1*m2
+    _x3 = l2*_x2
     _x4 = _x1*_x3
     _x5 = l2*l2*m2
     _x6 = numpy.sin(theta2)
     _x7 = theta1_d*theta1_d
     _x8 = l1*_x7
     _x9 = m2*_x1
-    _x10 = numpy.sin(theta1)
-    _x11 = _x6*_x10
+    _x10 = l2*m2
+    _x11 = numpy.sin(theta1)
     _x12 = g*_x11
-    _x13 = numpy.cos(theta1)
-    _x14 = g*_x13
-    _x15 = theta1_dd + theta2_dd
-    _x16 = l1*theta1_dd
-    _x17 = g*_x10 - _x8
-    _x18 = m1*_x0 + 2.0*_x4 + m2*_x0 + _x5
-    _x19 = 1.0/_x18
-    _x20 = l1*m1
-    _x21 = (theta2_d + theta1_d)**2
-    _x22 = -_x6*_x17 + _x1*_x14
-    _x23 = _x2*_x22
-    _x24 = -_x23
-    _x25 = _x1*_x10
-    _x26 = _x6*_x13
-    _x27 = _x26 + _x25
-    _x28 = l2*_x27
-    _x29 = -_x28
-    _x30 = _x1*_x13 - _x11
-    _x31 = l2*_x30
-    _x32 = l1*_x10
+    _x13 = _x6*_x12
+    _x14 = numpy.cos(theta1)
+    _x15 = g*_x14
+    _x16 = theta1_dd + theta2_dd
+    _x17 = l1*theta1_dd
+    _x18 = _x12 - _x8
+    _x19 = 2.0*theta1_d
+    _x20 = m2*_x6
+    _x21 = theta2_d + theta1_d
+    _x22 = 2.0*_x4 + m1*_x0 + m2*_x0 + _x5
+    _x23 = 1.0/_x22
+    _x24 = l1*m1
+    _x25 = _x21*_x21
+    _x26 = -_x6*_x18 + _x1*_x15
+    _x27 = _x10*_x26
+    _x28 = -_x27
+    _x29 = _x1*_x11
+    _x30 = _x6*_x14
+    _x31 = _x30 + _x29
+    _x32 = l2*_x31
     _x33 = -_x32
-    _x34 = l1*_x13
-    _x35 = m1*_x0*theta1_dd
-    _x36 = _x34 + _x31
-    _x37 = _x20 + l1*m2
-    _x38 = -_x29
-    _x39 = _x33 + _x29
-    _x40 = _x31*_x39
-    _x41 = -_x26 - _x25
-    _x42 = _x32 + _x28
-    _x43 = _x3*_x6
-    _x44 = _x43*theta1_d
-    _x45 = theta2_d*theta2_d
-    _x46 = 2.0*theta1_d*theta2_d
-    _x47 = -_x28*_x46 - _x28*_x45 + _x7*_x39
-    _x48 = -_x31*_x46 - _x31*_x45 + (-_x34 - _x31)*_x7
-    _x49 = _x5 + _x4
-    _x50 = -_x43
-    _x51 = _x8*_x9
-    _x52 = _x2*_x6*_x8
-    _x53 = _x16 + _x14
-    _x54 = m2*(-_x6*_x17 + _x1*_x53)
-    _x55 = _x5*_x15 + l2*_x54
-    _x56 = _x19*_x49
-    _x57 = -_x49*_x56 + _x5
-    _x58 = -_x14*_x20 + _x24 - l1*(m2*_x1*_x22 + _x6*(-_x2*_x21 + (_x1*_x17 + _x6*_x14)*m2)) + tau_theta1
-    _x59 = tau_theta2 + _x24 - _x56*_x58
-    _x60 = _x59/_x57
-    _x61 = _x19*_x58 - _x56*_x60
-    _x62 = _x35 + _x14*_x20 + l1*(_x6*(-_x2*_x21 + m2*(_x6*_x53 + _x1*_x17)) + _x1*(_x2*_x15 + _x54)) + _x55
-    _x63 = -_x36
-    _x64 = _x31*_x39 + _x29*_x63
-    _x65 = 1.0/_x64
-    _x66 = _x65*(_x31*_x62 + _x63*_x55)
-    _x67 = _x65*(_x38*_x62 + _x55*_x39)
-    _x68 = l1*(_x6*(-_x2*_x21 - _x51) + _x6*_x51) + _x52
-    _x69 = -_x2*_x12 + _x14*(_x2*_x1 + _x37)
-    _x70 = _x2*(_x1*_x14 - _x12)
-    _x71 = _x40 + _x29*_x63
-    _x72 = 1.0/_x71
-    _x73 = (_x31*_x18 + _x49*_x63)*_x72
-    _x74 = _x72*(_x31*_x49 + _x5*_x63)
-    _x75 = _x72*(_x31*_x68 + _x63*_x52)
-    _x76 = _x72*(_x63*_x70 + _x31*_x69)
-    _x77 = (_x38*_x18 + _x49*_x39)*_x72
-    _x78 = _x72*(_x38*_x49 + _x5*_x39)
-    _x79 = _x72*(_x38*_x68 + _x52*_x39)
-    _x80 = _x72*(_x38*_x69 + _x39*_x70)
-    _x81 = _x72*(_x31*_x73 + _x63*_x74)
-    _x82 = _x72*(_x39*_x74 + _x38*_x73)
-    _x83 = _x72*(_x38*_x77 + _x39*_x78)
+    _x34 = _x1*_x14 - _x6*_x11
+    _x35 = l2*_x34
+    _x36 = l1*_x11
+    _x37 = -_x36
+    _x38 = l1*_x14
+    _x39 = m1*_x0*theta1_dd
+    _x40 = _x38 + _x35
+    _x41 = _x24 + _x2
+    _x42 = -_x33
+    _x43 = _x37 + _x33
+    _x44 = _x35*_x43
+    _x45 = -_x30 - _x29
+    _x46 = _x36 + _x32
+    _x47 = _x3*_x6
+    _x48 = _x47*theta1_d
+    _x49 = theta2_d*theta2_d
+    _x50 = _x19*theta2_d
+    _x51 = -_x32*_x50 - _x32*_x49 + _x7*_x43
+    _x52 = -_x35*_x50 - _x35*_x49 + (-_x38 - _x35)*_x7
+    _x53 = _x5 + _x4
+    _x54 = -_x47
+    _x55 = _x8*_x9
+    _x56 = _x6*_x8*_x10
+    _x57 = _x17 + _x15
+    _x58 = m2*(-_x6*_x18 + _x1*_x57)
+    _x59 = _x5*_x16 + l2*_x58
+    _x60 = -_x6
+    _x61 = -_x12
+    _x62 = -l1*_x19
+    _x63 = -_x20*_x15 + m2*_x1*_x61
+    _x64 = -m2*_x1*_x18 + m2*_x60*_x57
+    _x65 = -_x20*_x62
+    _x66 = _x2*_x1
+    _x67 = l2*_x63
+    _x68 = l2*_x64
+    _x69 = l2*_x65
+    _x70 = l2*_x66 + _x5
+    _x71 = l1*_x1
+    _x72 = m2*_x6*_x6
+    _x73 = l1*_x61
+    _x74 = _x20*_x71
+    _x75 = _x6*_x57
+    _x76 = -2.0*l1*_x6*_x21*_x10
+    _x77 = _x10*_x71
+    _x78 = _x23*_x53
+    _x79 = -_x53*_x78 + _x5
+    _x80 = _x28 - _x24*_x15 - l1*(m2*_x1*_x26 + _x6*(-_x25*_x10 + (_x1*_x18 + _x6*_x15)*m2)) + tau_theta1
+    _x81 = tau_theta2 + _x28 - _x78*_x80
+    _x82 = _x81/_x79
+    _x83 = _x23*_x80 - _x78*_x82
+    _x84 = _x39 + _x59 + _x24*_x15 + l1*(_x6*(-_x25*_x10 + m2*(_x6*_x57 + _x1*_x18)) + _x1*(_x10*_x16 + _x58))
+    _x85 = -_x40
+    _x86 = _x35*_x43 + _x33*_x85
+    _x87 = 1.0/_x86
+    _x88 = _x87*(_x35*_x84 + _x59*_x85)
+    _x89 = _x87*(_x42*_x84 + _x59*_x43)
+    _x90 = l1*(_x6*(-_x25*_x10 - _x55) + _x6*_x55) + _x56
+    _x91 = -_x13*_x10 + _x15*(_x1*_x10 + _x41)
+    _x92 = _x10*(_x1*_x15 - _x13)
+    _x93 = _x44 + _x33*_x85
+    _x94 = 1.0/_x93
+    _x95 = (_x53*_x85 + _x35*_x22)*_x94
+    _x96 = _x94*(_x5*_x85 + _x35*_x53)
+    _x97 = _x94*(_x35*_x90 + _x56*_x85)
+    _x98 = _x94*(_x85*_x92 + _x35*_x91)
+    _x99 = _x94*(_x42*_x22 + _x53*_x43)
+    _x100 = _x94*(_x42*_x53 + _x5*_x43)
+    _x101 = _x94*(_x42*_x90 + _x56*_x43)
+    _x102 = _x94*(_x42*_x91 + _x92*_x43)
+    _x103 = _x94*(_x85*_x96 + _x35*_x95)
+    _x104 = _x94*(_x42*_x95 + _x96*_x43)
+    _x105 = _x94*(_x42*_x99 + _x100*_x43)
     _out_base_T_tcp = numpy.zeros(batch + (4, 4))
-    _out_base_T_tcp[..., 0, 0] = _x30
-    _out_base_T_tcp[..., 0, 1] = _x41
-    _out_base_T_tcp[..., 0, 3] = _x36
-    _out_base_T_tcp[..., 1, 0] = _x27
-    _out_base_T_tcp[..., 1, 1] = _x30
-    _out_base_T_tcp[..., 1, 3] = _x42
+    _out_base_T_tcp[..., 0, 0] = _x34
+    _out_base_T_tcp[..., 0, 1] = _x45
+    _out_base_T_tcp[..., 0, 3] = _x40
+    _out_base_T_tcp[..., 1, 0] = _x31
+    _out_base_T_tcp[..., 1, 1] = _x34
+    _out_base_T_tcp[..., 1, 3] = _x46
     _out_base_T_tcp[..., 2, 2] = 1.0
     _out_base_T_tcp[..., 3, 3] = 1.0
     _out_base_T_link1 = numpy.zeros(batch + (4, 4))
-    _out_base_T_link1[..., 0, 0] = _x13
-    _out_base_T_link1[..., 0, 1] = -_x10
-    _out_base_T_link1[..., 0, 3] = _x34
-    _out_base_T_link1[..., 1, 0] = _x10
-    _out_base_T_link1[..., 1, 1] = _x13
-    _out_base_T_link1[..., 1, 3] = _x32
+    _out_base_T_link1[..., 0, 0] = _x14
+    _out_base_T_link1[..., 0, 1] = -_x11
+    _out_base_T_link1[..., 0, 3] = _x38
+    _out_base_T_link1[..., 1, 0] = _x11
+    _out_base_T_link1[..., 1, 1] = _x14
+    _out_base_T_link1[..., 1, 3] = _x36
     _out_base_T_link1[..., 2, 2] = 1.0
     _out_base_T_link1[..., 3, 3] = 1.0
     _out_base_T_link2 = numpy.zeros(batch + (4, 4))
-    _out_base_T_link2[..., 0, 0] = _x30
-    _out_base_T_link2[..., 0, 1] = _x41
-    _out_base_T_link2[..., 0, 3] = _x36
-    _out_base_T_link2[..., 1, 0] = _x27
-    _out_base_T_link2[..., 1, 1] = _x30
-    _out_base_T_link2[..., 1, 3] = _x42
+    _out_base_T_link2[..., 0, 0] = _x34
+    _out_base_T_link2[..., 0, 1] = _x45
+    _out_base_T_link2[..., 0, 3] = _x40
+    _out_base_T_link2[..., 1, 0] = _x31
+    _out_base_T_link2[..., 1, 1] = _x34
+    _out_base_T_link2[..., 1, 3] = _x46
     _out_base_T_link2[..., 2, 2] = 1.0
     _out_base_T_link2[..., 3, 3] = 1.0
     _out_jacobian_J = numpy.zeros(batch + (2, 2))
-    _out_jacobian_J[..., 0, 0] = _x39
-    _out_jacobian_J[..., 0, 1] = _x29
-    _out_jacobian_J[..., 1, 0] = _x36
-    _out_jacobian_J[..., 1, 1] = _x31
+    _out_jacobian_J[..., 0, 0] = _x43
+    _out_jacobian_J[..., 0, 1] = _x33
+    _out_jacobian_J[..., 1, 0] = _x40
+    _out_jacobian_J[..., 1, 1] = _x35
     _out_jacobian_geometric_J = numpy.zeros(batch + (6, 2))
-    _out_jacobian_geometric_J[..., 0, 0] = _x39
-    _out_jacobian_geometric_J[..., 0, 1] = _x29
-    _out_jacobian_geometric_J[..., 1, 0] = _x36
-    _out_jacobian_geometric_J[..., 1, 1] = _x31
+    _out_jacobian_geometric_J[..., 0, 0] = _x43
+    _out_jacobian_geometric_J[..., 0, 1] = _x33
+    _out_jacobian_geometric_J[..., 1, 0] = _x40
+    _out_jacobian_geometric_J[..., 1, 1] = _x35
     _out_jacobian_geometric_J[..., 5, 0] = 1.0
     _out_jacobian_geometric_J[..., 5, 1] = 1.0
     _out_M = numpy.zeros(batch + (2, 2))
-    _out_M[..., 0, 0] = m1*_x0 + 2.0*_x4 + m2*_x0 + _x5
-    _out_M[..., 0, 1] = _x49
-    _out_M[..., 1, 0] = _x49
+    _out_M[..., 0, 0] = 2.0*_x4 + m1*_x0 + m2*_x0 + _x5
+    _out_M[..., 0, 1] = _x53
+    _out_M[..., 1, 0] = _x53
     _out_M[..., 1, 1] = _x5
     _out_C = numpy.zeros(batch + (2, 2))
-    _out_C[..., 0, 0] = -_x43*theta2_d
-    _out_C[..., 0, 1] = -_x44 + _x50*theta2_d
-    _out_C[..., 1, 0] = _x44
+    _out_C[..., 0, 0] = -_x47*theta2_d
+    _out_C[..., 0, 1] = -_x48 + _x54*theta2_d
+    _out_C[..., 1, 0] = _x48
     _out_V = numpy.zeros(batch + (2,))
-    _out_V[..., 0] = l1*(_x6*(-_x2*_x21 - _x51) + _x6*_x51) + _x52
-    _out_V[..., 1] = _x52
+    _out_V[..., 0] = l1*(_x6*(-_x25*_x10 - _x55) + _x6*_x55) + _x56
+    _out_V[..., 1] = _x56
     _out_G = numpy.zeros(batch + (2,))
-    _out_G[..., 0] = -_x2*_x12 + _x14*(_x2*_x1 + _x37)
-    _out_G[..., 1] = _x2*(_x1*_x14 - _x12)
+    _out_G[..., 0] = -_x13*_x10 + _x15*(_x1*_x10 + _x41)
+    _out_G[..., 1] = _x10*(_x1*_x15 - _x13)
     _out_inverse_dynamics_tau = numpy.zeros(batch + (2,))
-    _out_inverse_dynamics_tau[..., 0] = _x35 + _x14*_x20 + l1*(_x6*(-_x2*_x21 + m2*(_x6*_x53 + _x1*_x17)) + _x1*(_x2*_x15 + _x54)) + _x55
-    _out_inverse_dynamics_tau[..., 1] = _x55
+    _out_inverse_dynamics_tau[..., 0] = _x39 + _x59 + _x24*_x15 + l1*(_x6*(-_x25*_x10 + m2*(_x6*_x57 + _x1*_x18)) + _x1*(_x10*_x16 + _x58))
+    _out_inverse_dynamics_tau[..., 1] = _x59
+    _out_dtau_dq = numpy.zeros(batch + (2, 2))
+    _out_dtau_dq[..., 0, 0] = m1*_x73 + _x73*_x72 + _x63*_x71 + _x15*_x74 + _x67
+    _out_dtau_dq[..., 0, 1] = l1*_x1*(-_x21*_x21*_x10 + m2*(_x1*_x18 + _x75) + m2*_x75) + l1*_x60*(_x20*_x18 + _x10*_x16 + _x58) + _x64*_x71 + _x68
+    _out_dtau_dq[..., 1, 0] = _x67
+    _out_dtau_dq[..., 1, 1] = _x68
+    _out_dtau_dqd = numpy.zeros(batch + (2, 2))
+    _out_dtau_dqd[..., 0, 0] = _x74*_x62 + _x76 + _x65*_x71 + _x69
+    _out_dtau_dqd[..., 0, 1] = _x76
+    _out_dtau_dqd[..., 1, 0] = _x69
+    _out_dtau_dqdd = numpy.zeros(batch + (2, 2))
+    _out_dtau_dqdd[..., 0, 0] = m1*_x0 + _x0*_x72 + _x66*_x71 + _x77 + _x70
+    _out_dtau_dqdd[..., 0, 1] = _x77 + _x5
+    _out_dtau_dqdd[..., 1, 0] = _x70
+    _out_dtau_dqdd[..., 1, 1] = _x5
     _out_forward_dynamics_qdd = numpy.zeros(batch + (2,))
-    _out_forward_dynamics_qdd[..., 0] = _x61
-    _out_forward_dynamics_qdd[..., 1] = _x60
+    _out_forward_dynamics_qdd[..., 0] = _x83
+    _out_forward_dynamics_qdd[..., 1] = _x82
     _out_F = numpy.zeros(batch + (2,))
-    _out_F[..., 0] = _x66
-    _out_F[..., 1] = _x67
+    _out_F[..., 0] = _x88
+    _out_F[..., 1] = _x89
     _out_Mx = numpy.zeros(batch + (2, 2))
-    _out_Mx[..., 0, 0] = _x81
-    _out_Mx[..., 0, 1] = _x82
-    _out_Mx[..., 1, 0] = _x82
-    _out_Mx[..., 1, 1] = _x83
+    _out_Mx[..., 0, 0] = _x103
+    _out_Mx[..., 0, 1] = _x104
+    _out_Mx[..., 1, 0] = _x104
+    _out_Mx[..., 1, 1] = _x105
     _out_Vx = numpy.zeros(batch + (2,))
-    _out_Vx[..., 0] = -_x47*_x82 - _x48*_x81 + _x75
-    _out_Vx[..., 1] = -_x47*_x83 - _x48*_x82 + _x79
+    _out_Vx[..., 0] = -_x51*_x104 - _x52*_x103 + _x97
+    _out_Vx[..., 1] = -_x51*_x105 - _x52*_x104 + _x101
     _out_Gx = numpy.zeros(batch + (2,))
-    _out_Gx[..., 0] = _x76
-    _out_Gx[..., 1] = _x80
+    _out_Gx[..., 0] = _x98
+    _out_Gx[..., 1] = _x102
     _out_k = numpy.zeros(batch + ())
-    _out_k[...] = 0.5*(_x49*theta1_d + _x5*theta2_d)*theta2_d + 0.5*((m1*_x0 + 2.0*_x4 + m2*_x0 + _x5)*theta1_d + _x49*theta2_d)*theta1_d
+    _out_k[...] = 0.5*(_x53*theta1_d + _x5*theta2_d)*theta2_d + 0.5*((2.0*_x4 + m1*_x0 + m2*_x0 + _x5)*theta1_d + _x53*theta2_d)*theta1_d
     _out_u = numpy.zeros(batch + ())
-    _out_u[...] = (_x32 + _x28)*g*m2 + g*m1*_x32
-    return CombinedResult(_out_base_T_tcp, _out_base_T_link1, _out_base_T_link2, _out_jacobian_J, _out_jacobian_geometric_J, _out_M, _out_C, _out_V, _out_G, _out_inverse_dynamics_tau, _out_forward_dynamics_qdd, _out_F, _out_Mx, _out_Vx, _out_Gx, _out_k, _out_u)
+    _out_u[...] = g*(_x36 + _x32)*m2 + g*m1*_x36
+    return CombinedResult(_out_base_T_tcp, _out_base_T_link1, _out_base_T_link2, _out_jacobian_J, _out_jacobian_geometric_J, _out_M, _out_C, _out_V, _out_G, _out_inverse_dynamics_tau, _out_dtau_dq, _out_dtau_dqd, _out_dtau_dqdd, _out_forward_dynamics_qdd, _out_F, _out_Mx, _out_Vx, _out_Gx, _out_k, _out_u)

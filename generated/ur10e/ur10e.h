@@ -325,6 +325,47 @@ void ur10e_inverse_dynamics_packed(const double *in, double *out);
  * Uses 3200 bytes of stack for its blocks of 8 configurations. */
 void ur10e_inverse_dynamics_batch(size_t n, const double *q, const double *qd, const double *qdd, const double *params, size_t params_stride, double *tau);
 
+/* ur10e_inverse_dynamics_derivatives: Derivatives of the inverse dynamics: the linearization of tau at a motion.
+ *
+ * tau(q + dq, qd + dqd, qdd + dqdd) = tau + dtau_dq dq + dtau_dqd dqd + dtau_dqdd dqdd
+ * to first order, tau = M qdd + V + G + F_f (seed eq. 8.34); dtau_dqdd = M.  Forward-
+ * mode derivative of the recursive Newton-Euler program (Carpentier and Mansard, RSS
+ * 2018); a sign(qd) Coulomb term counts with derivative 0.
+ *
+ * Inputs:
+ *   q[6]: joint coordinates: q1 [rad], q2 [rad], q3 [rad], q4 [rad], q5 [rad], q6 [rad].
+ *   qd[6]: joint velocities: q1 [rad/s], q2 [rad/s], q3 [rad/s], q4 [rad/s], q5 [rad/s],
+ *   q6 [rad/s].
+ *   qdd[6]: joint accelerations: q1 [rad/s^2], q2 [rad/s^2], q3 [rad/s^2], q4 [rad/s^2],
+ *   q5 [rad/s^2], q6 [rad/s^2].
+ *   a2: upper arm length (UR sign convention) [m]; default UR10E_DEFAULT_a2 = -0.6127.
+ *   a3: forearm length (UR sign convention) [m]; default UR10E_DEFAULT_a3 = -0.57155.
+ *   d4: wrist 1 offset [m]; default UR10E_DEFAULT_d4 = 0.17415.
+ *   d5: wrist 2 offset [m]; default UR10E_DEFAULT_d5 = 0.11985.
+ *   d6: wrist 3 offset (flange) [m]; default UR10E_DEFAULT_d6 = 0.11655.
+ *   m1: mass of link 1 (shoulder) [kg]; default UR10E_DEFAULT_m1 = 7.369.
+ *   m2: mass of link 2 (upper arm) [kg]; default UR10E_DEFAULT_m2 = 13.051.
+ *   m3: mass of link 3 (forearm) [kg]; default UR10E_DEFAULT_m3 = 3.989.
+ *   m4: mass of link 4 (wrist 1) [kg]; default UR10E_DEFAULT_m4 = 2.1.
+ *   m5: mass of link 5 (wrist 2) [kg]; default UR10E_DEFAULT_m5 = 1.98.
+ *   m6: mass of link 6 (wrist 3), without tool [kg]; default UR10E_DEFAULT_m6 = 0.615.
+ *   g: gravitational acceleration [m/s^2]; default UR10E_DEFAULT_g = 9.81.
+ * Outputs:
+ *   dtau_dq[36]: 6 x 6, row-major; d tau / dq: row i, column j is d tau_i / d q_j.
+ *   dtau_dqd[36]: 6 x 6, row-major; d tau / dqd: the damping of the motion (Coriolis and
+ *   friction).
+ *   dtau_dqdd[36]: 6 x 6, row-major; d tau / dqdd = M(q), the mass matrix.
+ * Cost: 4464 operations.
+ */
+void ur10e_inverse_dynamics_derivatives(const double *q, const double *qd, const double *qdd, double a2, double a3, double d4, double d5, double d6, double m1, double m2, double m3, double m4, double m5, double m6, double g, double *dtau_dq, double *dtau_dqd, double *dtau_dqdd);
+
+/* ur10e_inverse_dynamics_derivatives with packed arguments: in = q, qd, qdd, a2, a3, d4, d5, d6, m1, m2, m3, m4, m5, m6, g one after the other; out = dtau_dq, dtau_dqd, dtau_dqdd one after the other. */
+void ur10e_inverse_dynamics_derivatives_packed(const double *in, double *out);
+
+/* ur10e_inverse_dynamics_derivatives for n configurations; params: a2, a3, d4, d5, d6, m1, m2, m3, m4, m5, m6, g, stride 0 or 12.
+ * Uses 9088 bytes of stack for its blocks of 8 configurations. */
+void ur10e_inverse_dynamics_derivatives_batch(size_t n, const double *q, const double *qd, const double *qdd, const double *params, size_t params_stride, double *dtau_dq, double *dtau_dqd, double *dtau_dqdd);
+
 /* ur10e_forward_dynamics: Forward dynamics: joint accelerations under given torques.
  *
  * qdd = M(q)^-1 (tau - V(q, qd) - G(q) - F_f(qd)) (seed eq. 8.34 solved for qdd), by a

@@ -11,7 +11,7 @@ from __future__ import annotations
 from types import ModuleType
 
 from symkin.dynamics import quantities as dynamics_quantities
-from symkin.dynamics import joint_forces, regressor
+from symkin.dynamics import derivatives, joint_forces, regressor
 from symkin.ir.quantity import MECHANISMS, QuantityDef
 from symkin.kinematics import quantities as kinematics_quantities
 from symkin.parallel import base_regressor as parallel_base_regressor
@@ -22,7 +22,7 @@ from symkin.parallel import hybrid
 from symkin.parallel import quantities as parallel_quantities
 from symkin.parallel import regressor as parallel_regressor
 
-QUANTITY_MODULES: tuple[ModuleType, ...] = (kinematics_quantities, joint_forces, dynamics_quantities, regressor,
+QUANTITY_MODULES: tuple[ModuleType, ...] = (kinematics_quantities, joint_forces, dynamics_quantities, derivatives, regressor,
                                             parallel_quantities, parallel_forces, parallel_dynamics, parallel_regressor,
                                             parallel_base_regressor, hybrid, closure_dynamics,
                                             closure_base)

@@ -79,6 +79,32 @@ class Program:
             rename[symbol] = self._append(renamed(expr))
         return [renamed(e) for e in reduced]
 
+    def jacobian(self, outputs: Sequence[se.Basic], variables: Sequence[se.Symbol]) -> list[se.Basic]:
+        """Row-major d outputs_i / d variables_j by forward-mode differentiation of the program (Griewank and
+        Walther, Evaluating Derivatives, 2nd ed., sec. 3.1): each assignment's gradient is formed once from its
+        operands' gradients by the chain rule and named, so every later use shares it - the derivative program of
+        the straight-line program, O(len(variables)) times its length.  ``outputs``: expressions of the inputs
+        and assignments (e.g. what :meth:`bind` returned)."""
+        index = {x: k for k, x in enumerate(variables)}
+        position = {symbol: k for k, (symbol, _) in enumerate(self.assignments)}
+        gradients: dict[se.Basic, dict[int, se.Basic]] = {}
+
+        def gradient(expr: se.Basic) -> dict[int, se.Basic]:
+            found: dict[int, se.Basic] = {}
+            for symbol in sorted(expr.free_symbols, key=lambda s: (index.get(s, -1), position.get(s, -1))):
+                if symbol in index:
+                    found[index[symbol]] = found.get(index[symbol], se.Integer(0)) + se.diff(expr, symbol)
+                elif gradients.get(symbol):
+                    partial = se.diff(expr, symbol)
+                    for k, through in gradients[symbol].items():
+                        found[k] = found.get(k, se.Integer(0)) + partial * through
+            return {k: found[k] for k in sorted(found) if found[k] != 0}
+
+        for symbol, expr in list(self.assignments):
+            gradients[symbol] = {k: self.let(value) for k, value in gradient(expr).items()}
+        rows = [gradient(se.sympify(output)) for output in outputs]
+        return [row.get(k, se.Integer(0)) for row in rows for k in range(len(variables))]
+
     def to_sympy(self, outputs: Sequence[se.Basic], convert: SympyConverter) -> tuple[
             tuple[tuple[sympy.Symbol, sympy.Expr], ...], list[sympy.Expr]]:
         """The definitions the ``outputs`` need and the outputs, as sympy expressions.
