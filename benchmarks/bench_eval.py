@@ -8,7 +8,8 @@ Cases (functions generated with every parameter folded, as in a fixed-geometry s
 * ``FK+J``   base_T_tcp and the geometric Jacobian, the combined function of one shared CSE;
 * ``M``, ``M+V+G`` when the dynamics quantities are registered (found by their output
   names M, V, G), likewise;
-* ``dtau``   d tau/dq, d tau/dqd and d tau/dqdd = M (``inverse_dynamics_derivatives``, issue 65).
+* ``dtau``   d tau/dq, d tau/dqd and d tau/dqdd = M (``inverse_dynamics_derivatives``, issue 65);
+* ``dqdd``   d qdd/dq, d qdd/dqd and d qdd/dtau = M^-1 (``forward_dynamics_derivatives``).
 
 Columns:
 
@@ -27,12 +28,13 @@ Columns:
 Pinocchio: ``computeFrameJacobian`` (which also updates the TCP placement) for FK+J,
 ``forwardKinematics`` + ``updateFramePlacement`` for FK, ``crba`` for M, ``crba`` + ``rnea``
 (zero acceleration: V + G) + ``computeGeneralizedGravity`` for M+V+G, ``computeRNEADerivatives`` (its analytical
-derivatives, Carpentier and Mansard 2018, which give M as d tau/dqdd too) for dtau.  SymForce (when it
+derivatives, Carpentier and Mansard 2018, which give M as d tau/dqdd too) for dtau, ``computeABADerivatives`` (M^-1
+too) for dqdd.  SymForce (when it
 and the Eigen headers are installed): C++ generated from sf.Pose3 compositions of the same
 joints and ``pose.jacobian(q)`` (FK+J only), timed in C++ by the same harness loop.
 Targets of issue 4: C call M <= 250 ns, FK+J <= 150 ns; C batch M+V+G <= 150 ns/config;
 numpy batch <= 1 us/config; of issue 65: dtau from Python <= 0.6 us and >= 6x faster than Pinocchio's binding,
-C batch <= 150 ns/config.
+C batch <= 150 ns/config, dqdd from Python <= 1.0 us.
 """
 
 from __future__ import annotations
@@ -84,6 +86,7 @@ def find_cases(model) -> dict[str, list[str]]:
             cases["M+V+G"] = [by_output["M"], by_output["V"], by_output["G"]]
     if "inverse_dynamics_derivatives" in emitted_quantities():
         cases["dtau"] = ["inverse_dynamics_derivatives"]
+        cases["dqdd"] = ["forward_dynamics_derivatives"]
     return cases
 
 
@@ -409,6 +412,9 @@ def pinocchio_call(label, pm, tcp):
     elif label == "dtau":
         def call(q, qd, qdd):
             return pin.computeRNEADerivatives(pm, data, q, qd, qdd)
+    elif label == "dqdd":
+        def call(q, qd, tau):
+            return pin.computeABADerivatives(pm, data, q, qd, tau)
     else:
         def call(q, qd):
             M = pin.crba(pm, data, q).copy()

@@ -345,6 +345,46 @@ void phantom_premium_gravity_vector_packed(const double *in, double *out);
  * Uses 1280 bytes of stack for its blocks of 8 configurations. */
 void phantom_premium_gravity_vector_batch(size_t n, const double *q, const double *params, size_t params_stride, double *G);
 
+/* phantom_premium_gravity_derivatives: Derivative of the gravity vector: the stiffness gravity (and the springs) add.
+ *
+ * G(q + dq) = G(q) + dG_dq dq to first order (seed eq. 8.31's G = du/dq, so dG_dq =
+ * d^2u/dq^2 is symmetric for gravity and springs alike); forward-mode derivative of the
+ * Newton-Euler program at rest.
+ *
+ * Inputs:
+ *   q[3]: joint coordinates: q1 [rad], q2 [rad], q3 [rad].
+ *   l1: upper arm: shoulder axis to elbow axis (Cavusoglu 2002) [m]; default
+ *   PHANTOM_PREMIUM_DEFAULT_l1 = 0.215.
+ *   l2: distal link: elbow axis to the gimbal (Cavusoglu 2002) [m]; default
+ *   PHANTOM_PREMIUM_DEFAULT_l2 = 0.17.
+ *   l3: lever of the parallelogram, along the distal link's direction (Cavusoglu 2002)
+ *   [m]; default PHANTOM_PREMIUM_DEFAULT_l3 = 0.0325.
+ *   l5: centre of mass of the upper arm body be along the arm (behind the shoulder)
+ *   (Cavusoglu 2002) [m]; default PHANTOM_PREMIUM_DEFAULT_l5 = -0.0368.
+ *   l6: centre of mass of the lever body df, opposite the lever (Cavusoglu 2002) [m];
+ *   default PHANTOM_PREMIUM_DEFAULT_l6 = 0.0527.
+ *   m_a: distal link a (Cavusoglu 2002) [kg]; default PHANTOM_PREMIUM_DEFAULT_m_a =
+ *   0.0202.
+ *   m_c: parallelogram link c (Cavusoglu 2002) [kg]; default PHANTOM_PREMIUM_DEFAULT_m_c =
+ *   0.0249.
+ *   m_be: upper arm with its motor-side parts, body be (Cavusoglu 2002) [kg]; default
+ *   PHANTOM_PREMIUM_DEFAULT_m_be = 0.2359.
+ *   m_df: lever with the third capstan, body df (Cavusoglu 2002) [kg]; default
+ *   PHANTOM_PREMIUM_DEFAULT_m_df = 0.1906.
+ *   g: standard gravity [m/s^2]; default PHANTOM_PREMIUM_DEFAULT_g = 9.80665.
+ * Outputs:
+ *   dG_dq[9]: 3 x 3, row-major; d G / dq: row i, column j is d G_i / d q_j.
+ * Cost: 77 operations.
+ */
+void phantom_premium_gravity_derivatives(const double *q, double l1, double l2, double l3, double l5, double l6, double m_a, double m_c, double m_be, double m_df, double g, double *dG_dq);
+
+/* phantom_premium_gravity_derivatives with packed arguments: in = q, l1, l2, l3, l5, l6, m_a, m_c, m_be, m_df, g one after the other; out = dG_dq one after the other. */
+void phantom_premium_gravity_derivatives_packed(const double *in, double *out);
+
+/* phantom_premium_gravity_derivatives for n configurations; params: l1, l2, l3, l5, l6, m_a, m_c, m_be, m_df, g, stride 0 or 10.
+ * Uses 1408 bytes of stack for its blocks of 8 configurations. */
+void phantom_premium_gravity_derivatives_batch(size_t n, const double *q, const double *params, size_t params_stride, double *dG_dq);
+
 /* phantom_premium_friction: Joint friction torques.
  *
  * F_f = viscous qd + coulomb sign(qd) per joint (seed eq. 8.34), or coulomb tanh(qd /
@@ -441,7 +481,8 @@ void phantom_premium_inverse_dynamics_batch(size_t n, const double *q, const dou
  * tau(q + dq, qd + dqd, qdd + dqdd) = tau + dtau_dq dq + dtau_dqd dqd + dtau_dqdd dqdd
  * to first order, tau = M qdd + V + G + F_f (seed eq. 8.34); dtau_dqdd = M.  Forward-
  * mode derivative of the recursive Newton-Euler program (Carpentier and Mansard, RSS
- * 2018); a sign(qd) Coulomb term counts with derivative 0.
+ * 2018), dtau_dqdd by the composite-rigid-body algorithm; a sign(qd) Coulomb term counts
+ * with derivative 0.
  *
  * Inputs:
  *   q[3]: joint coordinates: q1 [rad], q2 [rad], q3 [rad].
@@ -499,7 +540,7 @@ void phantom_premium_inverse_dynamics_batch(size_t n, const double *q, const dou
  *   dtau_dqd[9]: 3 x 3, row-major; d tau / dqd: the damping of the motion (Coriolis and
  *   friction).
  *   dtau_dqdd[9]: 3 x 3, row-major; d tau / dqdd = M(q), the mass matrix.
- * Cost: 1002 operations.
+ * Cost: 1019 operations.
  */
 void phantom_premium_inverse_dynamics_derivatives(const double *q, const double *qd, const double *qdd, double l1, double l2, double l3, double l5, double l6, double m_a, double I_axx, double I_ayy, double I_azz, double m_c, double I_cxx, double I_cyy, double I_czz, double m_be, double I_bexx, double I_beyy, double I_bezz, double m_df, double I_dfxx, double I_dfyy, double I_dfzz, double I_baseyy, double J_m, double g, double *dtau_dq, double *dtau_dqd, double *dtau_dqdd);
 
@@ -578,6 +619,80 @@ void phantom_premium_forward_dynamics_packed(const double *in, double *out);
 /* phantom_premium_forward_dynamics for n configurations; params: l1, l2, l3, l5, l6, m_a, I_axx, I_ayy, I_azz, m_c, I_cxx, I_cyy, I_czz, m_be, I_bexx, I_beyy, I_bezz, m_df, I_dfxx, I_dfyy, I_dfzz, I_baseyy, J_m, g, stride 0 or 24.
  * Uses 2624 bytes of stack for its blocks of 8 configurations. */
 void phantom_premium_forward_dynamics_batch(size_t n, const double *q, const double *qd, const double *tau, const double *params, size_t params_stride, double *qdd);
+
+/* phantom_premium_forward_dynamics_derivatives: Derivatives of the forward dynamics: the linearization of the plant.
+ *
+ * qdd(q + dq, qd + dqd, tau + dtau) = qdd + dqdd_dq dq + dqdd_dqd dqd + dqdd_dtau dtau
+ * to first order, qdd = M^-1 (tau - V - G - F_f) (seed eq. 8.34); by the implicit-
+ * function theorem dqdd_dq = -M^-1 dtau_dq, dqdd_dqd = -M^-1 dtau_dqd at qdd and
+ * dqdd_dtau = M^-1, by LDL^T solves (Carpentier and Mansard, RSS 2018); a state-space
+ * model x = (q, qd) has A = [[0, I], [dqdd_dq, dqdd_dqd]] and B = [[0], [dqdd_dtau]].
+ *
+ * Inputs:
+ *   q[3]: joint coordinates: q1 [rad], q2 [rad], q3 [rad].
+ *   qd[3]: joint velocities: q1 [rad/s], q2 [rad/s], q3 [rad/s].
+ *   tau[3]: joint torques (revolute) or forces (prismatic): q1 [N*m], q2 [N*m], q3 [N*m].
+ *   l1: upper arm: shoulder axis to elbow axis (Cavusoglu 2002) [m]; default
+ *   PHANTOM_PREMIUM_DEFAULT_l1 = 0.215.
+ *   l2: distal link: elbow axis to the gimbal (Cavusoglu 2002) [m]; default
+ *   PHANTOM_PREMIUM_DEFAULT_l2 = 0.17.
+ *   l3: lever of the parallelogram, along the distal link's direction (Cavusoglu 2002)
+ *   [m]; default PHANTOM_PREMIUM_DEFAULT_l3 = 0.0325.
+ *   l5: centre of mass of the upper arm body be along the arm (behind the shoulder)
+ *   (Cavusoglu 2002) [m]; default PHANTOM_PREMIUM_DEFAULT_l5 = -0.0368.
+ *   l6: centre of mass of the lever body df, opposite the lever (Cavusoglu 2002) [m];
+ *   default PHANTOM_PREMIUM_DEFAULT_l6 = 0.0527.
+ *   m_a: distal link a (Cavusoglu 2002) [kg]; default PHANTOM_PREMIUM_DEFAULT_m_a =
+ *   0.0202.
+ *   I_axx: about its centre of mass, pitch axis (Cavusoglu 2002) [kg*m^2]; default
+ *   PHANTOM_PREMIUM_DEFAULT_I_axx = 4.864e-05.
+ *   I_ayy: about its centre of mass, along the link (Cavusoglu 2002) [kg*m^2]; default
+ *   PHANTOM_PREMIUM_DEFAULT_I_ayy = 1.843e-07.
+ *   I_azz: about its centre of mass, across the link (Cavusoglu 2002) [kg*m^2]; default
+ *   PHANTOM_PREMIUM_DEFAULT_I_azz = 4.864e-05.
+ *   m_c: parallelogram link c (Cavusoglu 2002) [kg]; default PHANTOM_PREMIUM_DEFAULT_m_c =
+ *   0.0249.
+ *   I_cxx: about its centre of mass, pitch axis (Cavusoglu 2002) [kg*m^2]; default
+ *   PHANTOM_PREMIUM_DEFAULT_I_cxx = 9.59e-05.
+ *   I_cyy: about its centre of mass, across the link (Cavusoglu 2002) [kg*m^2]; default
+ *   PHANTOM_PREMIUM_DEFAULT_I_cyy = 9.59e-05.
+ *   I_czz: about its centre of mass, along the link (Cavusoglu 2002) [kg*m^2]; default
+ *   PHANTOM_PREMIUM_DEFAULT_I_czz = 5.1e-07.
+ *   m_be: upper arm with its motor-side parts, body be (Cavusoglu 2002) [kg]; default
+ *   PHANTOM_PREMIUM_DEFAULT_m_be = 0.2359.
+ *   I_bexx: about the shoulder, pitch axis (Cavusoglu 2002) [kg*m^2]; default
+ *   PHANTOM_PREMIUM_DEFAULT_I_bexx = 0.001109.
+ *   I_beyy: about the shoulder, across the arm (Cavusoglu 2002) [kg*m^2]; default
+ *   PHANTOM_PREMIUM_DEFAULT_I_beyy = 0.001006.
+ *   I_bezz: about the shoulder, along the arm (Cavusoglu 2002) [kg*m^2]; default
+ *   PHANTOM_PREMIUM_DEFAULT_I_bezz = 5.91e-05.
+ *   m_df: lever with the third capstan, body df (Cavusoglu 2002) [kg]; default
+ *   PHANTOM_PREMIUM_DEFAULT_m_df = 0.1906.
+ *   I_dfxx: about the shoulder, pitch axis (Cavusoglu 2002) [kg*m^2]; default
+ *   PHANTOM_PREMIUM_DEFAULT_I_dfxx = 0.000711.
+ *   I_dfyy: about the shoulder, along the lever (Cavusoglu 2002) [kg*m^2]; default
+ *   PHANTOM_PREMIUM_DEFAULT_I_dfyy = 6.29e-05.
+ *   I_dfzz: about the shoulder, across the lever (Cavusoglu 2002) [kg*m^2]; default
+ *   PHANTOM_PREMIUM_DEFAULT_I_dfzz = 0.0006246.
+ *   I_baseyy: base turret about the yaw axis (Cavusoglu 2002) [kg*m^2]; default
+ *   PHANTOM_PREMIUM_DEFAULT_I_baseyy = 0.001187.
+ *   J_m: rotor inertia of each motor (Maxon RE 25, 118743: 10.3 g cm^2) [kg*m^2]; default
+ *   PHANTOM_PREMIUM_DEFAULT_J_m = 1.03e-06.
+ *   g: standard gravity [m/s^2]; default PHANTOM_PREMIUM_DEFAULT_g = 9.80665.
+ * Outputs:
+ *   dqdd_dq[9]: 3 x 3, row-major; d qdd / dq: row i, column j is d qdd_i / d q_j.
+ *   dqdd_dqd[9]: 3 x 3, row-major; d qdd / dqd.
+ *   dqdd_dtau[9]: 3 x 3, row-major; d qdd / dtau = M(q)^-1.
+ * Cost: 1296 operations.
+ */
+void phantom_premium_forward_dynamics_derivatives(const double *q, const double *qd, const double *tau, double l1, double l2, double l3, double l5, double l6, double m_a, double I_axx, double I_ayy, double I_azz, double m_c, double I_cxx, double I_cyy, double I_czz, double m_be, double I_bexx, double I_beyy, double I_bezz, double m_df, double I_dfxx, double I_dfyy, double I_dfzz, double I_baseyy, double J_m, double g, double *dqdd_dq, double *dqdd_dqd, double *dqdd_dtau);
+
+/* phantom_premium_forward_dynamics_derivatives with packed arguments: in = q, qd, tau, l1, l2, l3, l5, l6, m_a, I_axx, I_ayy, I_azz, m_c, I_cxx, I_cyy, I_czz, m_be, I_bexx, I_beyy, I_bezz, m_df, I_dfxx, I_dfyy, I_dfzz, I_baseyy, J_m, g one after the other; out = dqdd_dq, dqdd_dqd, dqdd_dtau one after the other. */
+void phantom_premium_forward_dynamics_derivatives_packed(const double *in, double *out);
+
+/* phantom_premium_forward_dynamics_derivatives for n configurations; params: l1, l2, l3, l5, l6, m_a, I_axx, I_ayy, I_azz, m_c, I_cxx, I_cyy, I_czz, m_be, I_bexx, I_beyy, I_bezz, m_df, I_dfxx, I_dfyy, I_dfzz, I_baseyy, J_m, g, stride 0 or 24.
+ * Uses 3712 bytes of stack for its blocks of 8 configurations. */
+void phantom_premium_forward_dynamics_derivatives_batch(size_t n, const double *q, const double *qd, const double *tau, const double *params, size_t params_stride, double *dqdd_dq, double *dqdd_dqd, double *dqdd_dtau);
 
 /* phantom_premium_tcp_force: Force (wrench) at the TCP that produces a joint motion.
  *
@@ -817,13 +932,13 @@ void phantom_premium_potential_energy_packed(const double *in, double *out);
  * Uses 1216 bytes of stack for its blocks of 8 configurations. */
 void phantom_premium_potential_energy_batch(size_t n, const double *q, const double *params, size_t params_stride, double *u);
 
-/* phantom_premium_combined: fk, frames, jacobian, mass_matrix, coriolis_matrix, coriolis_vector, gravity_vector, friction, inverse_dynamics, inverse_dynamics_derivatives, forward_dynamics, tcp_force, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions.
+/* phantom_premium_combined: fk, frames, jacobian, mass_matrix, coriolis_matrix, coriolis_vector, gravity_vector, gravity_derivatives, friction, inverse_dynamics, inverse_dynamics_derivatives, forward_dynamics, forward_dynamics_derivatives, tcp_force, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions.
  *
  * Computes the outputs of fk, frames, jacobian, mass_matrix, coriolis_matrix,
- * coriolis_vector, gravity_vector, friction, inverse_dynamics,
- * inverse_dynamics_derivatives, forward_dynamics, tcp_force, operational_space,
- * kinetic_energy, potential_energy in one call; subexpressions common to several of them
- * are evaluated once.
+ * coriolis_vector, gravity_vector, gravity_derivatives, friction, inverse_dynamics,
+ * inverse_dynamics_derivatives, forward_dynamics, forward_dynamics_derivatives,
+ * tcp_force, operational_space, kinetic_energy, potential_energy in one call;
+ * subexpressions common to several of them are evaluated once.
  *
  * Inputs:
  *   q[3]: joint coordinates: q1 [rad], q2 [rad], q3 [rad].
@@ -897,6 +1012,8 @@ void phantom_premium_potential_energy_batch(size_t n, const double *q, const dou
  *   (prismatic)].
  *   G[3]: 3; joint torques that hold the arm against gravity (gravity_vector) [N*m
  *   (revolute), N (prismatic)].
+ *   dG_dq[9]: 3 x 3, row-major; d G / dq: row i, column j is d G_i / d q_j
+ *   (gravity_derivatives).
  *   F_f[3]: 3; friction torques opposing the motion (friction) [N*m (revolute), N
  *   (prismatic)].
  *   inverse_dynamics_tau[3]: 3; joint torques (revolute) or forces (prismatic)
@@ -909,6 +1026,10 @@ void phantom_premium_potential_energy_batch(size_t n, const double *q, const dou
  *   (inverse_dynamics_derivatives).
  *   forward_dynamics_qdd[3]: 3; joint accelerations (forward_dynamics) [rad/s^2
  *   (revolute), m/s^2 (prismatic)].
+ *   dqdd_dq[9]: 3 x 3, row-major; d qdd / dq: row i, column j is d qdd_i / d q_j
+ *   (forward_dynamics_derivatives).
+ *   dqdd_dqd[9]: 3 x 3, row-major; d qdd / dqd (forward_dynamics_derivatives).
+ *   dqdd_dtau[9]: 3 x 3, row-major; d qdd / dtau = M(q)^-1 (forward_dynamics_derivatives).
  *   F[3]: 3; TCP force components [x, y, z] (tcp_force) [N, N*m].
  *   Mx[9]: 3 x 3, row-major; operational-space mass matrix J^-T M J^-1
  *   (operational_space).
@@ -917,16 +1038,16 @@ void phantom_premium_potential_energy_batch(size_t n, const double *q, const dou
  *   Gx[3]: 3; operational-space gravity force J^-T G (operational_space).
  *   k[1]: scalar; kinetic energy of all bodies (kinetic_energy) [J].
  *   u[1]: scalar; potential energy (potential_energy) [J].
- * Cost: 2446 operations.
+ * Cost: 3104 operations.
  */
-void phantom_premium_combined(const double *q, const double *qd, const double *qdd, const double *tau, double l1, double l2, double l3, double l5, double l6, double m_a, double I_axx, double I_ayy, double I_azz, double m_c, double I_cxx, double I_cyy, double I_czz, double m_be, double I_bexx, double I_beyy, double I_bezz, double m_df, double I_dfxx, double I_dfyy, double I_dfzz, double I_baseyy, double J_m, double g, double *base_T_tcp, double *base_T_turret, double *base_T_upper_arm, double *base_T_distal, double *base_T_lever, double *base_T_link_c, double *J, double *M, double *C, double *V, double *G, double *F_f, double *inverse_dynamics_tau, double *dtau_dq, double *dtau_dqd, double *dtau_dqdd, double *forward_dynamics_qdd, double *F, double *Mx, double *Vx, double *Gx, double *k, double *u);
+void phantom_premium_combined(const double *q, const double *qd, const double *qdd, const double *tau, double l1, double l2, double l3, double l5, double l6, double m_a, double I_axx, double I_ayy, double I_azz, double m_c, double I_cxx, double I_cyy, double I_czz, double m_be, double I_bexx, double I_beyy, double I_bezz, double m_df, double I_dfxx, double I_dfyy, double I_dfzz, double I_baseyy, double J_m, double g, double *base_T_tcp, double *base_T_turret, double *base_T_upper_arm, double *base_T_distal, double *base_T_lever, double *base_T_link_c, double *J, double *M, double *C, double *V, double *G, double *dG_dq, double *F_f, double *inverse_dynamics_tau, double *dtau_dq, double *dtau_dqd, double *dtau_dqdd, double *forward_dynamics_qdd, double *dqdd_dq, double *dqdd_dqd, double *dqdd_dtau, double *F, double *Mx, double *Vx, double *Gx, double *k, double *u);
 
-/* phantom_premium_combined with packed arguments: in = q, qd, qdd, tau, l1, l2, l3, l5, l6, m_a, I_axx, I_ayy, I_azz, m_c, I_cxx, I_cyy, I_czz, m_be, I_bexx, I_beyy, I_bezz, m_df, I_dfxx, I_dfyy, I_dfzz, I_baseyy, J_m, g one after the other; out = base_T_tcp, base_T_turret, base_T_upper_arm, base_T_distal, base_T_lever, base_T_link_c, J, M, C, V, G, F_f, inverse_dynamics_tau, dtau_dq, dtau_dqd, dtau_dqdd, forward_dynamics_qdd, F, Mx, Vx, Gx, k, u one after the other. */
+/* phantom_premium_combined with packed arguments: in = q, qd, qdd, tau, l1, l2, l3, l5, l6, m_a, I_axx, I_ayy, I_azz, m_c, I_cxx, I_cyy, I_czz, m_be, I_bexx, I_beyy, I_bezz, m_df, I_dfxx, I_dfyy, I_dfzz, I_baseyy, J_m, g one after the other; out = base_T_tcp, base_T_turret, base_T_upper_arm, base_T_distal, base_T_lever, base_T_link_c, J, M, C, V, G, dG_dq, F_f, inverse_dynamics_tau, dtau_dq, dtau_dqd, dtau_dqdd, forward_dynamics_qdd, dqdd_dq, dqdd_dqd, dqdd_dtau, F, Mx, Vx, Gx, k, u one after the other. */
 void phantom_premium_combined_packed(const double *in, double *out);
 
 /* phantom_premium_combined for n configurations; params: l1, l2, l3, l5, l6, m_a, I_axx, I_ayy, I_azz, m_c, I_cxx, I_cyy, I_czz, m_be, I_bexx, I_beyy, I_bezz, m_df, I_dfxx, I_dfyy, I_dfzz, I_baseyy, J_m, g, stride 0 or 24.
- * Uses 11008 bytes of stack for its blocks of 8 configurations. */
-void phantom_premium_combined_batch(size_t n, const double *q, const double *qd, const double *qdd, const double *tau, const double *params, size_t params_stride, double *base_T_tcp, double *base_T_turret, double *base_T_upper_arm, double *base_T_distal, double *base_T_lever, double *base_T_link_c, double *J, double *M, double *C, double *V, double *G, double *F_f, double *inverse_dynamics_tau, double *dtau_dq, double *dtau_dqd, double *dtau_dqdd, double *forward_dynamics_qdd, double *F, double *Mx, double *Vx, double *Gx, double *k, double *u);
+ * Calls phantom_premium_combined once per configuration. */
+void phantom_premium_combined_batch(size_t n, const double *q, const double *qd, const double *qdd, const double *tau, const double *params, size_t params_stride, double *base_T_tcp, double *base_T_turret, double *base_T_upper_arm, double *base_T_distal, double *base_T_lever, double *base_T_link_c, double *J, double *M, double *C, double *V, double *G, double *dG_dq, double *F_f, double *inverse_dynamics_tau, double *dtau_dq, double *dtau_dqd, double *dtau_dqdd, double *forward_dynamics_qdd, double *dqdd_dq, double *dqdd_dqd, double *dqdd_dtau, double *F, double *Mx, double *Vx, double *Gx, double *k, double *u);
 
 #ifdef __cplusplus
 }

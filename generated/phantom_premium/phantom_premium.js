@@ -23,15 +23,17 @@
  *   coriolis_matrix(q, qd, params) -> number[][]
  *   coriolis_vector(q, qd, params) -> number[]
  *   gravity_vector(q, params) -> number[]
+ *   gravity_derivatives(q, params) -> number[][]
  *   friction(qd) -> number[]
  *   inverse_dynamics(q, qd, qdd, params) -> number[]
  *   inverse_dynamics_derivatives(q, qd, qdd, params) -> {dtau_dq: number[][], dtau_dqd: number[][], dtau_dqdd: number[][]}
  *   forward_dynamics(q, qd, tau, params) -> number[]
+ *   forward_dynamics_derivatives(q, qd, tau, params) -> {dqdd_dq: number[][], dqdd_dqd: number[][], dqdd_dtau: number[][]}
  *   tcp_force(q, qd, qdd, params) -> number[]
  *   operational_space(q, qd, params) -> {Mx: number[][], Vx: number[], Gx: number[]}
  *   kinetic_energy(q, qd, params) -> number
  *   potential_energy(q, params) -> number
- *   combined(q, qd, qdd, tau, params) -> {base_T_tcp: number[][], base_T_turret: number[][], base_T_upper_arm: number[][], base_T_distal: number[][], base_T_lever: number[][], base_T_link_c: number[][], J: number[][], M: number[][], C: number[][], V: number[], G: number[], F_f: number[], inverse_dynamics_tau: number[], dtau_dq: number[][], dtau_dqd: number[][], dtau_dqdd: number[][], forward_dynamics_qdd: number[], F: number[], Mx: number[][], Vx: number[], Gx: number[], k: number, u: number}
+ *   combined(q, qd, qdd, tau, params) -> {base_T_tcp: number[][], base_T_turret: number[][], base_T_upper_arm: number[][], base_T_distal: number[][], base_T_lever: number[][], base_T_link_c: number[][], J: number[][], M: number[][], C: number[][], V: number[], G: number[], dG_dq: number[][], F_f: number[], inverse_dynamics_tau: number[], dtau_dq: number[][], dtau_dqd: number[][], dtau_dqdd: number[][], forward_dynamics_qdd: number[], dqdd_dq: number[][], dqdd_dqd: number[][], dqdd_dtau: number[][], F: number[], Mx: number[][], Vx: number[], Gx: number[], k: number, u: number}
  */
 (function (root, factory) {
   "use strict";
@@ -595,6 +597,80 @@
   }
 
   /**
+   * Derivative of the gravity vector: the stiffness gravity (and the springs) add.
+   *
+   * G(q + dq) = G(q) + dG_dq dq to first order (seed eq. 8.31's G = du/dq, so dG_dq =
+   * d^2u/dq^2 is symmetric for gravity and springs alike); forward-mode derivative of the
+   * Newton-Euler program at rest.
+   *
+   * @param {number[]} q joint coordinates, 3 numbers: q1 [rad], q2 [rad], q3 [rad].
+   * @param {Object} [params] parameter values (defaults in PARAMETERS):
+   *     l1: upper arm: shoulder axis to elbow axis (Cavusoglu 2002) [m]; default 0.215.
+   *     l2: distal link: elbow axis to the gimbal (Cavusoglu 2002) [m]; default 0.17.
+   *     l3: lever of the parallelogram, along the distal link's direction (Cavusoglu 2002) [m]; default 0.0325.
+   *     l5: centre of mass of the upper arm body be along the arm (behind the shoulder) (Cavusoglu 2002) [m]; default -0.0368.
+   *     l6: centre of mass of the lever body df, opposite the lever (Cavusoglu 2002) [m]; default 0.0527.
+   *     m_a: distal link a (Cavusoglu 2002) [kg]; default 0.0202.
+   *     m_c: parallelogram link c (Cavusoglu 2002) [kg]; default 0.0249.
+   *     m_be: upper arm with its motor-side parts, body be (Cavusoglu 2002) [kg]; default 0.2359.
+   *     m_df: lever with the third capstan, body df (Cavusoglu 2002) [kg]; default 0.1906.
+   *     g: standard gravity [m/s^2]; default 9.80665.
+   * @returns {number[][]}
+   *     dG_dq: shape (3, 3); d G / dq: row i, column j is d G_i / d q_j.
+   */
+  function gravity_derivatives(q, params) {
+    _vector(q, 3, "q", "gravity_derivatives");
+    const _p = _params(params, ["l1", "l2", "l3", "l5", "l6", "m_a", "m_c", "m_be", "m_df", "g"], "gravity_derivatives");
+    const l1 = _p.l1 ?? 0.215;
+    const l2 = _p.l2 ?? 0.17;
+    const l3 = _p.l3 ?? 0.0325;
+    const l5 = _p.l5 ?? -0.0368;
+    const l6 = _p.l6 ?? 0.0527;
+    const m_a = _p.m_a ?? 0.0202;
+    const m_c = _p.m_c ?? 0.0249;
+    const m_be = _p.m_be ?? 0.2359;
+    const m_df = _p.m_df ?? 0.1906;
+    const g = _p.g ?? 9.80665;
+    const q2 = q[1];
+    const q3 = q[2];
+    const _x0 = Math.sin(q2);
+    const _x1 = Math.sin(q3);
+    const _x2 = _x0*_x1;
+    const _x3 = Math.cos(q2);
+    const _x4 = Math.cos(q3);
+    const _x5 = _x4*_x3;
+    const _x6 = _x5 + _x2;
+    const _x7 = _x1*_x3 - _x0*_x4;
+    const _x8 = g*_x7;
+    const _x9 = 0.5*l1*m_c;
+    const _x10 = _x4*_x8;
+    const _x11 = _x9*_x10;
+    const _x12 = g*_x1;
+    const _x13 = _x12*_x9;
+    const _x14 = g*_x6;
+    const _x15 = -_x8;
+    const _x16 = -_x1*_x14 + _x4*_x15;
+    const _x17 = _x9*_x16;
+    const _x18 = _x7*_x9;
+    const _x19 = g*_x3;
+    const _x20 = 0.5*l2*m_a;
+    const _x21 = _x20*_x19;
+    const _x22 = _x7*_x20;
+    const _x23 = _x0*_x8 + _x3*_x14;
+    const _x24 = _x20*_x23;
+    const _x25 = _x0*_x15;
+    const _x26 = _x20*_x25;
+    const _x27 = -_x5 - _x2;
+    const _x28 = g*_x4;
+    const _x29 = _x13*_x27 + _x11;
+    const _x30 = _x17 + _x6*_x13 + _x18*_x28;
+    const _x31 = -g*_x0;
+    const _x32 = _x24 + _x22*_x31 + _x21*_x27;
+    const _x33 = _x6*_x21 + _x26;
+    return [[0.0, 0.0, 0.0], [0.0, _x29 + _x31*(_x22 + l1*m_a + l5*m_be) + _x24 + _x21*_x27 - _x32, _x6*_x21 + _x30 - _x33 + _x26], [0.0, _x11 + _x13*_x27 + _x32 - _x29, _x17 + _x6*_x13 - _x30 + _x33 + _x28*(-l6*m_df + l3*m_c + _x18)]];
+  }
+
+  /**
    * Joint friction torques.
    *
    * F_f = viscous qd + coulomb sign(qd) per joint (seed eq. 8.34), or coulomb tanh(qd /
@@ -776,7 +852,8 @@
    * tau(q + dq, qd + dqd, qdd + dqdd) = tau + dtau_dq dq + dtau_dqd dqd + dtau_dqdd dqdd
    * to first order, tau = M qdd + V + G + F_f (seed eq. 8.34); dtau_dqdd = M.  Forward-
    * mode derivative of the recursive Newton-Euler program (Carpentier and Mansard, RSS
-   * 2018); a sign(qd) Coulomb term counts with derivative 0.
+   * 2018), dtau_dqdd by the composite-rigid-body algorithm; a sign(qd) Coulomb term
+   * counts with derivative 0.
    *
    * @param {number[]} q joint coordinates, 3 numbers: q1 [rad], q2 [rad], q3 [rad].
    * @param {number[]} qd joint velocities, 3 numbers: q1 [rad/s], q2 [rad/s], q3 [rad/s].
@@ -851,298 +928,298 @@
     const q2_dd = qdd[1];
     const q3_dd = qdd[2];
     const _x0 = Math.sin(q2);
-    const _x1 = Math.sin(q3);
-    const _x2 = _x0*_x1;
-    const _x3 = Math.cos(q2);
+    const _x1 = Math.cos(q2);
+    const _x2 = Math.sin(q3);
+    const _x3 = _x0*_x2;
     const _x4 = Math.cos(q3);
-    const _x5 = _x4*_x3;
-    const _x6 = _x5 + _x2;
-    const _x7 = -q2_d;
+    const _x5 = _x1*_x4;
+    const _x6 = _x5 + _x3;
+    const _x7 = 0.5*l1;
     const _x8 = _x0*_x4;
-    const _x9 = _x1*_x3;
+    const _x9 = _x1*_x2;
     const _x10 = _x9 - _x8;
     const _x11 = 0.25*l2*l2*m_a;
-    const _x12 = _x11 + I_axx;
-    const _x13 = q3_d + _x7;
-    const _x14 = _x7 - _x13;
-    const _x15 = _x14*_x12;
-    const _x16 = l1*l1;
-    const _x17 = _x1*_x1;
-    const _x18 = _x3*_x3;
-    const _x19 = l1*m_a;
-    const _x20 = l1*_x3;
-    const _x21 = _x3*_x6;
-    const _x22 = _x0*_x10;
-    const _x23 = -_x22 + _x21;
-    const _x24 = _x6*q1_d;
-    const _x25 = _x10*q1_d;
-    const _x26 = -_x0*_x25 + _x3*_x24;
-    const _x27 = -_x26;
-    const _x28 = _x3*_x10 + _x0*_x6;
-    const _x29 = -_x12;
-    const _x30 = I_ayy + _x29;
-    const _x31 = q2_d*q1_d;
-    const _x32 = _x0*_x31;
-    const _x33 = _x3*q1_dd - _x32;
-    const _x34 = _x33*I_ayy;
-    const _x35 = _x6*I_ayy;
-    const _x36 = _x3*_x31;
-    const _x37 = _x0*q1_dd + _x36;
-    const _x38 = _x37*I_ayy;
-    const _x39 = _x10*I_ayy;
-    const _x40 = _x15 - _x13*I_ayy;
-    const _x41 = _x0*_x24 + _x3*_x25;
-    const _x42 = _x41*I_ayy;
-    const _x43 = _x4*_x6 + _x1*_x10;
-    const _x44 = q1_d*q3_d;
-    const _x45 = _x4*_x44;
-    const _x46 = _x1*q1_dd + _x45;
-    const _x47 = _x46*I_czz;
-    const _x48 = _x1*_x44;
-    const _x49 = _x4*q1_dd - _x48;
-    const _x50 = _x49*I_czz;
-    const _x51 = -q3_d;
-    const _x52 = _x51 + q2_d;
-    const _x53 = _x52*I_czz;
-    const _x54 = 0.25*_x16*m_c;
-    const _x55 = _x54 + I_cxx;
-    const _x56 = -_x55;
-    const _x57 = _x54 + I_cyy;
-    const _x58 = _x57 + _x56;
-    const _x59 = _x6*I_czz;
-    const _x60 = _x10*I_czz;
-    const _x61 = _x1*_x25 + _x4*_x24;
-    const _x62 = _x61*I_czz;
-    const _x63 = _x4*_x10;
-    const _x64 = _x1*_x6;
-    const _x65 = l3*m_c;
-    const _x66 = 2.0*_x65;
-    const _x67 = l3*_x1;
-    const _x68 = -_x63 + _x64;
-    const _x69 = _x1*_x24 - _x4*_x25;
-    const _x70 = -_x69;
-    const _x71 = _x55 - I_czz;
-    const _x72 = q1_d*q1_d;
-    const _x73 = l3*_x72;
-    const _x74 = _x17*_x73 + l3*q3_d*q3_d + g*_x4;
-    const _x75 = m_c*_x74;
-    const _x76 = g*_x1;
-    const _x77 = _x1*_x4;
-    const _x78 = _x76 - _x77*_x73 + l3*q3_dd;
-    const _x79 = m_c*_x78;
-    const _x80 = _x6*m_c;
-    const _x81 = _x10*m_c;
-    const _x82 = l3*_x10;
-    const _x83 = I_czz - _x57;
-    const _x84 = l1*_x72;
-    const _x85 = -l1*q2_d*q2_d - _x18*_x84 + g*_x0;
-    const _x86 = m_a*_x85;
-    const _x87 = g*_x3;
-    const _x88 = _x0*_x3;
-    const _x89 = _x87 + _x84*_x88 + l1*q2_dd;
-    const _x90 = m_a*_x89;
-    const _x91 = _x10*m_a;
-    const _x92 = _x6*m_a;
-    const _x93 = l1*_x10;
-    const _x94 = (-l1*_x32 + l1*_x33)*m_a;
-    const _x95 = 0.5*l2;
-    const _x96 = _x6*_x37 + _x10*_x33 + _x26*_x13;
-    const _x97 = _x11 + I_azz;
-    const _x98 = _x14*_x26;
-    const _x99 = _x95*_x94 + _x96*_x97 - _x98*_x12 + _x98*I_ayy;
-    const _x100 = _x41*_x97;
-    const _x101 = _x15*_x41 - _x14*_x100 + I_ayy*(-_x10*_x37 + _x6*_x33 - _x41*_x13);
-    const _x102 = _x95*m_a;
-    const _x103 = -_x52 + _x51;
-    const _x104 = _x61*_x103;
-    const _x105 = _x104*_x57 - _x55*_x104 + I_czz*(_x6*_x46 - _x10*_x49 + _x61*_x52);
-    const _x106 = (l3*_x45 + l3*_x46)*m_c;
-    const _x107 = 0.5*l1;
-    const _x108 = _x10*_x46 - _x52*_x69 + _x6*_x49;
-    const _x109 = _x103*_x69;
-    const _x110 = _x106*_x107 + _x108*_x57 - _x109*I_czz + _x55*_x109;
-    const _x111 = m_c*_x107;
-    const _x112 = m_c*(_x10*_x78 + _x6*_x74);
-    const _x113 = -q3_dd;
-    const _x114 = -(_x113 + q2_dd) + _x113;
-    const _x115 = _x61*_x69;
-    const _x116 = 125.44*J_m;
-    const _x117 = m_a*(_x6*_x85 + _x10*_x89);
-    const _x118 = _x41*_x26;
-    const _x119 = -q2_dd;
-    const _x120 = -(_x119 + q3_dd) + _x119;
-    const _x121 = _x8 - _x9;
-    const _x122 = _x0*q2_d;
-    const _x123 = _x0*q1_d;
-    const _x124 = -_x0;
-    const _x125 = -_x36 + _x124*q1_dd;
-    const _x126 = -_x122;
-    const _x127 = -_x123;
-    const _x128 = -_x19*_x36 + _x19*_x125;
-    const _x129 = _x19*_x126 - _x19*_x122;
-    const _x130 = _x19*_x127 - _x19*_x123;
-    const _x131 = _x20*m_a;
-    const _x132 = q1_d*_x121;
-    const _x133 = -_x5 - _x2;
-    const _x134 = q1_d*_x133;
-    const _x135 = _x24*_x124 - _x0*_x134;
-    const _x136 = _x3*_x132 - _x0*_x24;
-    const _x137 = _x31*_x124;
-    const _x138 = _x3*q2_d;
-    const _x139 = _x3*q1_d;
-    const _x140 = _x3*q1_dd + _x137;
-    const _x141 = _x10*_x37 + _x33*_x133 + _x13*_x135 + _x10*_x125 + _x6*_x140;
-    const _x142 = _x37*_x121 + _x6*_x33 + _x13*_x136;
-    const _x143 = _x10*_x126 + _x23*_x13 + _x6*_x138;
-    const _x144 = _x10*_x127 + _x27 + _x6*_x139;
-    const _x145 = _x14*_x135;
-    const _x146 = _x14*_x136;
-    const _x147 = _x23*_x14;
-    const _x148 = _x30*_x145 + _x97*_x141 + _x95*_x128;
-    const _x149 = _x30*_x146 + _x97*_x142;
-    const _x150 = _x97*_x143 + _x30*_x147 + _x95*_x129;
-    const _x151 = _x97*_x144 + _x95*_x130;
-    const _x152 = _x26*_x97 + _x30*_x27;
-    const _x153 = _x95*_x131 + _x28*_x97;
-    const _x154 = _x3*_x24 + _x25*_x124 + _x0*_x25 + _x3*_x134;
-    const _x155 = _x0*_x132 + _x3*_x24;
-    const _x156 = _x97*_x154;
-    const _x157 = _x97*_x155;
-    const _x158 = _x28*_x97;
-    const _x159 = _x34*_x10 + _x35*_x125 - _x38*_x133 - _x39*_x140 + _x40*_x154 - _x14*_x156;
-    const _x160 = _x34*_x121 - _x6*_x38 + _x40*_x155 - _x14*_x157;
-    const _x161 = _x35*_x126 - _x14*_x158 - _x39*_x138 + _x28*_x40;
-    const _x162 = -_x39*_x139 + _x42 + _x35*_x127;
-    const _x163 = -(_x41*_x12 - _x100) - _x42;
-    const _x164 = -_x22*I_ayy + _x21*I_ayy;
-    const _x165 = -_x1;
-    const _x166 = _x4*_x25 + _x1*_x134;
-    const _x167 = _x4*_x132 + _x1*_x24 + _x24*_x165 + _x4*_x25;
-    const _x168 = _x1*q3_d;
-    const _x169 = _x1*q1_d;
-    const _x170 = q1_dd*_x165 - _x45;
-    const _x171 = -_x168;
-    const _x172 = -_x169;
-    const _x173 = _x44*_x165;
-    const _x174 = _x4*q3_d;
-    const _x175 = _x4*q1_d;
-    const _x176 = _x4*q1_dd + _x173;
-    const _x177 = _x103*_x166;
-    const _x178 = _x103*_x167;
-    const _x179 = _x43*_x103;
-    const _x180 = -_x61;
-    const _x181 = _x47*_x10 + _x53*_x166 - _x50*_x133 + _x58*_x177;
-    const _x182 = _x47*_x121 + _x53*_x167 + _x58*_x178 + _x59*_x176 - _x6*_x50 - _x60*_x170;
-    const _x183 = -_x60*_x171 + _x43*_x53 + _x59*_x174 + _x58*_x179;
-    const _x184 = _x58*_x180 + _x62;
-    const _x185 = _x59*_x175 - _x60*_x172 - _x62;
-    const _x186 = _x64*I_czz - _x63*I_czz;
-    const _x187 = _x65*_x176 + _x65*_x173;
-    const _x188 = _x66*_x174;
-    const _x189 = _x66*_x175;
-    const _x190 = _x67*m_c;
-    const _x191 = _x1*_x25 - _x4*_x134;
-    const _x192 = _x1*_x132 - _x25*_x165;
-    const _x193 = _x10*_x49 + _x46*_x133 - _x52*_x191;
-    const _x194 = _x49*_x121 + _x6*_x46 + _x6*_x170 + _x10*_x176 - _x52*_x192;
-    const _x195 = _x6*_x171 + _x10*_x174 - _x68*_x52;
-    const _x196 = _x69 + _x6*_x172 + _x10*_x175;
-    const _x197 = _x103*_x191;
-    const _x198 = _x103*_x192;
-    const _x199 = _x68*_x103;
-    const _x200 = _x71*_x197 + _x57*_x193;
-    const _x201 = _x57*_x194 + _x71*_x198 + _x107*_x187;
-    const _x202 = _x57*_x195 + _x71*_x199 + _x107*_x188;
-    const _x203 = _x70*_x57 + _x70*_x71;
-    const _x204 = _x57*_x196 + _x107*_x189;
-    const _x205 = _x107*_x190 + _x43*_x57;
-    const _x206 = 2.0*q1_d;
-    const _x207 = l3*_x206;
-    const _x208 = g*_x165 + 2.0*_x1*_x4*_x73;
-    const _x209 = _x17*_x207;
-    const _x210 = 2.0*l3*q3_d;
-    const _x211 = g*_x4;
-    const _x212 = _x1*_x165 + _x4*_x4;
-    const _x213 = -_x73*_x212 + _x211;
-    const _x214 = -_x77*_x207;
-    const _x215 = _x75*_x10 + _x79*_x133;
-    const _x216 = _x75*_x121 + _x6*_x79 + _x80*_x208 + _x81*_x213;
-    const _x217 = _x81*_x214 + _x80*_x209;
-    const _x218 = _x80*_x210;
-    const _x219 = _x82*m_c;
-    const _x220 = _x61*_x191 + _x69*_x166;
-    const _x221 = _x61*_x192 + _x69*_x167;
-    const _x222 = _x43*_x69 + _x68*_x61;
-    const _x223 = _x83*_x220 - _x107*_x215;
-    const _x224 = _x83*_x221 - _x107*_x216;
-    const _x225 = _x83*_x222 - _x107*_x217;
-    const _x226 = -_x107*_x218;
-    const _x227 = -_x107*_x219;
-    const _x228 = g*_x124;
-    const _x229 = l1*_x206;
-    const _x230 = _x3*_x3 + _x0*_x124;
-    const _x231 = _x84*_x230 + _x228;
-    const _x232 = _x88*_x229;
-    const _x233 = g*_x3 - 2.0*_x3*_x124*_x84;
-    const _x234 = -_x18*_x229;
-    const _x235 = -2.0*l1*q2_d;
-    const _x236 = _x86*_x10 + _x92*_x233 + _x90*_x133 + _x91*_x231;
-    const _x237 = _x86*_x121 + _x6*_x90;
-    const _x238 = _x92*_x234 + _x91*_x232;
-    const _x239 = _x92*_x235;
-    const _x240 = _x93*m_a;
-    const _x241 = _x26*_x154 + _x41*_x135;
-    const _x242 = _x26*_x155 + _x41*_x136;
-    const _x243 = _x23*_x41 + _x28*_x26;
-    const _x244 = _x72*_x230;
-    const _x245 = _x88*_x206;
-    const _x246 = -_x241*I_ayy - _x95*_x236 + _x26*_x156 + _x100*_x135;
-    const _x247 = -_x95*_x237 + _x26*_x157 - _x242*I_ayy + _x100*_x136;
-    const _x248 = _x23*_x100 + _x26*_x158 - _x95*_x238 - _x243*I_ayy;
-    const _x249 = -_x95*_x239;
-    const _x250 = -_x95*_x240;
-    const _x251 = _x72*_x212;
-    const _x252 = _x77*_x206;
-    const _x253 = _x67*_x111;
-    const _x254 = _x3*I_beyy;
-    const _x255 = _x20*_x102;
-    const _x256 = _x1*_x105 + _x0*_x99 + _x4*_x110 + _x3*_x101;
-    const _x257 = (-I_bexx + I_bezz)*_x3;
-    const _x258 = _x0*I_bezz;
-    const _x259 = -_x0*_x101 + _x1*_x110 - _x4*_x105 + _x3*_x99;
-    const _x260 = (I_bexx - I_beyy)*_x0;
-    const _x261 = _x4*I_dfyy;
-    const _x262 = (-I_dfxx + I_dfzz)*_x4;
-    const _x263 = (-I_dfyy + I_dfxx)*_x1;
-    const _x264 = _x1*I_dfzz;
-    const _x265 = -I_bezz + I_beyy;
-    const _x266 = _x93*_x102;
-    const _x267 = _x6*_x6;
-    const _x268 = m_a*_x267;
-    const _x269 = l1*_x268;
-    const _x270 = _x93*_x92;
+    const _x12 = l1*l1;
+    const _x13 = 0.25*m_c;
+    const _x14 = l3*m_c;
+    const _x15 = -q2_d;
+    const _x16 = I_axx + _x11;
+    const _x17 = _x6*q1_d;
+    const _x18 = _x10*q1_d;
+    const _x19 = _x0*_x17 + _x1*_x18;
+    const _x20 = _x19*_x16;
+    const _x21 = _x2*_x2;
+    const _x22 = _x1*_x1;
+    const _x23 = l1*m_a;
+    const _x24 = _x1*_x6 - _x0*_x10;
+    const _x25 = -_x0*_x18 + _x1*_x17;
+    const _x26 = -_x25;
+    const _x27 = I_ayy - _x16;
+    const _x28 = _x0*_x6 + _x1*_x10;
+    const _x29 = q2_d*q1_d;
+    const _x30 = _x0*_x29;
+    const _x31 = _x1*q1_dd - _x30;
+    const _x32 = _x31*I_ayy;
+    const _x33 = _x10*I_ayy;
+    const _x34 = _x6*I_ayy;
+    const _x35 = q3_d + _x15;
+    const _x36 = _x15 - _x35;
+    const _x37 = _x36*_x16 - _x35*I_ayy;
+    const _x38 = _x1*_x29;
+    const _x39 = _x0*q1_dd + _x38;
+    const _x40 = _x39*I_ayy;
+    const _x41 = _x19*I_ayy;
+    const _x42 = _x4*_x6 + _x2*_x10;
+    const _x43 = q1_d*q3_d;
+    const _x44 = _x4*_x43;
+    const _x45 = _x2*q1_dd + _x44;
+    const _x46 = _x45*I_czz;
+    const _x47 = _x2*_x43;
+    const _x48 = _x4*q1_dd - _x47;
+    const _x49 = _x48*I_czz;
+    const _x50 = _x13*_x12;
+    const _x51 = _x50 + I_cxx;
+    const _x52 = _x50 + I_cyy;
+    const _x53 = _x52 - _x51;
+    const _x54 = -q3_d;
+    const _x55 = _x54 + q2_d;
+    const _x56 = _x55*I_czz;
+    const _x57 = _x10*I_czz;
+    const _x58 = _x6*I_czz;
+    const _x59 = _x2*_x18 + _x4*_x17;
+    const _x60 = _x59*I_czz;
+    const _x61 = 2.0*_x14;
+    const _x62 = _x2*_x6 - _x4*_x10;
+    const _x63 = _x2*_x17 - _x4*_x18;
+    const _x64 = -_x63;
+    const _x65 = _x51 - I_czz;
+    const _x66 = q1_d*q1_d;
+    const _x67 = l3*_x66;
+    const _x68 = _x21*_x67 + l3*q3_d*q3_d + g*_x4;
+    const _x69 = m_c*_x68;
+    const _x70 = g*_x2;
+    const _x71 = _x2*_x4;
+    const _x72 = _x70 - _x67*_x71 + l3*q3_dd;
+    const _x73 = m_c*_x72;
+    const _x74 = _x6*m_c;
+    const _x75 = _x10*m_c;
+    const _x76 = I_czz - _x52;
+    const _x77 = l1*_x66;
+    const _x78 = -l1*q2_d*q2_d - _x22*_x77 + g*_x0;
+    const _x79 = m_a*_x78;
+    const _x80 = g*_x1;
+    const _x81 = _x0*_x1;
+    const _x82 = _x80 + _x77*_x81 + l1*q2_dd;
+    const _x83 = m_a*_x82;
+    const _x84 = _x10*m_a;
+    const _x85 = _x6*m_a;
+    const _x86 = l2*m_a;
+    const _x87 = _x7*_x6;
+    const _x88 = _x6*_x10;
+    const _x89 = I_azz + _x11;
+    const _x90 = -_x88*I_ayy + _x87*_x86 + _x89*_x88;
+    const _x91 = _x10*_x10;
+    const _x92 = _x6*_x6;
+    const _x93 = _x12*m_a;
+    const _x94 = l1*_x10;
+    const _x95 = _x86*_x94;
+    const _x96 = _x88*_x52 - _x88*I_czz + _x14*_x87;
+    const _x97 = l3*l3*m_c;
+    const _x98 = _x14*_x94;
+    const _x99 = -_x16;
+    const _x100 = 0.5*_x95;
+    const _x101 = _x99 - (-_x100 + _x99);
+    const _x102 = _x16 + _x51 + 125.44*J_m;
+    const _x103 = -_x51;
+    const _x104 = 0.5*_x98;
+    const _x105 = _x103 - (-_x104 + _x103);
+    const _x106 = _x101 + _x105;
+    const _x107 = (-l1*_x30 + l1*_x31)*m_a;
+    const _x108 = 0.5*l2;
+    const _x109 = _x6*_x39 + _x25*_x35 + _x10*_x31;
+    const _x110 = _x36*_x25;
+    const _x111 = _x110*I_ayy - _x110*_x16 + _x89*_x109 + _x107*_x108;
+    const _x112 = _x89*_x19;
+    const _x113 = _x20*_x36 - _x36*_x112 + I_ayy*(-_x10*_x39 + _x6*_x31 - _x19*_x35);
+    const _x114 = m_a*_x108;
+    const _x115 = -_x55 + _x54;
+    const _x116 = _x59*_x115;
+    const _x117 = _x52*_x116 + I_czz*(_x6*_x45 - _x10*_x48 + _x59*_x55) - _x116*_x51;
+    const _x118 = (l3*_x44 + l3*_x45)*m_c;
+    const _x119 = _x10*_x45 + _x6*_x48 - _x63*_x55;
+    const _x120 = _x63*_x115;
+    const _x121 = _x120*_x51 - _x120*I_czz + _x119*_x52 + _x7*_x118;
+    const _x122 = _x7*m_c;
+    const _x123 = m_c*(_x10*_x72 + _x6*_x68);
+    const _x124 = -q3_dd;
+    const _x125 = -(_x124 + q2_dd) + _x124;
+    const _x126 = _x63*_x59;
+    const _x127 = m_a*(_x6*_x78 + _x10*_x82);
+    const _x128 = _x19*_x25;
+    const _x129 = -q2_dd;
+    const _x130 = -(_x129 + q3_dd) + _x129;
+    const _x131 = _x8 - _x9;
+    const _x132 = _x0*q2_d;
+    const _x133 = _x0*q1_d;
+    const _x134 = -_x0;
+    const _x135 = -_x38 + q1_dd*_x134;
+    const _x136 = -_x132;
+    const _x137 = -_x133;
+    const _x138 = -_x23*_x38 + _x23*_x135;
+    const _x139 = _x23*_x136 - _x23*_x132;
+    const _x140 = _x23*_x137 - _x23*_x133;
+    const _x141 = q1_d*_x131;
+    const _x142 = -_x5 - _x3;
+    const _x143 = q1_d*_x142;
+    const _x144 = _x17*_x134 - _x0*_x143;
+    const _x145 = _x1*_x141 - _x0*_x17;
+    const _x146 = _x29*_x134;
+    const _x147 = _x1*q2_d;
+    const _x148 = _x1*q1_d;
+    const _x149 = _x1*q1_dd + _x146;
+    const _x150 = _x10*_x39 + _x10*_x135 + _x35*_x144 + _x31*_x142 + _x6*_x149;
+    const _x151 = _x39*_x131 + _x6*_x31 + _x35*_x145;
+    const _x152 = _x10*_x136 + _x24*_x35 + _x6*_x147;
+    const _x153 = _x10*_x137 + _x26 + _x6*_x148;
+    const _x154 = _x36*_x144;
+    const _x155 = _x36*_x145;
+    const _x156 = _x24*_x36;
+    const _x157 = _x108*_x138 + _x89*_x150 + _x27*_x154;
+    const _x158 = _x89*_x151 + _x27*_x155;
+    const _x159 = _x108*_x139 + _x89*_x152 + _x27*_x156;
+    const _x160 = _x108*_x140 + _x89*_x153;
+    const _x161 = _x89*_x25 + _x26*_x27;
+    const _x162 = _x1*_x17 + _x18*_x134 + _x0*_x18 + _x1*_x143;
+    const _x163 = _x0*_x141 + _x1*_x17;
+    const _x164 = _x89*_x162;
+    const _x165 = _x89*_x163;
+    const _x166 = _x28*_x89;
+    const _x167 = _x32*_x10 - _x33*_x149 + _x37*_x162 + _x34*_x135 - _x40*_x142 - _x36*_x164;
+    const _x168 = _x32*_x131 + _x37*_x163 - _x6*_x40 - _x36*_x165;
+    const _x169 = _x34*_x136 - _x33*_x147 + _x28*_x37 - _x36*_x166;
+    const _x170 = -_x33*_x148 + _x41 + _x34*_x137;
+    const _x171 = -(_x20 - _x112) - _x41;
+    const _x172 = -_x2;
+    const _x173 = _x4*_x18 + _x2*_x143;
+    const _x174 = _x17*_x172 + _x2*_x17 + _x4*_x141 + _x4*_x18;
+    const _x175 = _x2*q3_d;
+    const _x176 = _x2*q1_d;
+    const _x177 = q1_dd*_x172 - _x44;
+    const _x178 = -_x175;
+    const _x179 = -_x176;
+    const _x180 = _x43*_x172;
+    const _x181 = _x4*q3_d;
+    const _x182 = _x4*q1_d;
+    const _x183 = _x4*q1_dd + _x180;
+    const _x184 = _x115*_x173;
+    const _x185 = _x115*_x174;
+    const _x186 = _x42*_x115;
+    const _x187 = -_x59;
+    const _x188 = -_x49*_x142 + _x53*_x184 + _x46*_x10 + _x56*_x173;
+    const _x189 = _x46*_x131 - _x6*_x49 + _x56*_x174 - _x57*_x177 + _x58*_x183 + _x53*_x185;
+    const _x190 = _x42*_x56 - _x57*_x178 + _x58*_x181 + _x53*_x186;
+    const _x191 = _x53*_x187 + _x60;
+    const _x192 = _x58*_x182 - _x57*_x179 - _x60;
+    const _x193 = _x14*_x183 + _x14*_x180;
+    const _x194 = _x61*_x181;
+    const _x195 = _x61*_x182;
+    const _x196 = _x2*_x18 - _x4*_x143;
+    const _x197 = _x2*_x141 - _x18*_x172;
+    const _x198 = _x45*_x142 + _x10*_x48 - _x55*_x196;
+    const _x199 = _x48*_x131 + _x6*_x45 + _x6*_x177 + _x10*_x183 - _x55*_x197;
+    const _x200 = _x6*_x178 + _x10*_x181 - _x62*_x55;
+    const _x201 = _x63 + _x10*_x182 + _x6*_x179;
+    const _x202 = _x115*_x196;
+    const _x203 = _x115*_x197;
+    const _x204 = _x62*_x115;
+    const _x205 = _x65*_x202 + _x52*_x198;
+    const _x206 = _x7*_x193 + _x52*_x199 + _x65*_x203;
+    const _x207 = _x7*_x194 + _x52*_x200 + _x65*_x204;
+    const _x208 = _x64*_x52 + _x64*_x65;
+    const _x209 = _x7*_x195 + _x52*_x201;
+    const _x210 = 2.0*q1_d;
+    const _x211 = l3*_x210;
+    const _x212 = g*_x172 + 2.0*_x2*_x4*_x67;
+    const _x213 = _x21*_x211;
+    const _x214 = 2.0*l3*q3_d;
+    const _x215 = g*_x4;
+    const _x216 = _x2*_x172 + _x4*_x4;
+    const _x217 = -_x67*_x216 + _x215;
+    const _x218 = -_x71*_x211;
+    const _x219 = _x69*_x10 + _x73*_x142;
+    const _x220 = _x69*_x131 + _x6*_x73 + _x74*_x212 + _x75*_x217;
+    const _x221 = _x75*_x218 + _x74*_x213;
+    const _x222 = _x74*_x214;
+    const _x223 = _x59*_x196 + _x63*_x173;
+    const _x224 = _x59*_x197 + _x63*_x174;
+    const _x225 = _x42*_x63 + _x62*_x59;
+    const _x226 = -_x7*_x219 + _x76*_x223;
+    const _x227 = -_x7*_x220 + _x76*_x224;
+    const _x228 = -_x7*_x221 + _x76*_x225;
+    const _x229 = -_x7*_x222;
+    const _x230 = g*_x134;
+    const _x231 = l1*_x210;
+    const _x232 = _x1*_x1 + _x0*_x134;
+    const _x233 = _x77*_x232 + _x230;
+    const _x234 = _x231*_x81;
+    const _x235 = g*_x1 - 2.0*_x1*_x77*_x134;
+    const _x236 = -_x22*_x231;
+    const _x237 = -2.0*l1*q2_d;
+    const _x238 = _x79*_x10 + _x83*_x142 + _x84*_x233 + _x85*_x235;
+    const _x239 = _x79*_x131 + _x6*_x83;
+    const _x240 = _x85*_x236 + _x84*_x234;
+    const _x241 = _x85*_x237;
+    const _x242 = _x25*_x162 + _x19*_x144;
+    const _x243 = _x25*_x163 + _x19*_x145;
+    const _x244 = _x24*_x19 + _x28*_x25;
+    const _x245 = _x66*_x232;
+    const _x246 = _x210*_x81;
+    const _x247 = -_x242*I_ayy - _x108*_x238 + _x25*_x164 + _x112*_x144;
+    const _x248 = -_x108*_x239 - _x243*I_ayy + _x25*_x165 + _x112*_x145;
+    const _x249 = _x24*_x112 + _x25*_x166 - _x108*_x240 - _x244*I_ayy;
+    const _x250 = -_x108*_x241;
+    const _x251 = _x66*_x216;
+    const _x252 = _x71*_x210;
+    const _x253 = l3*_x2;
+    const _x254 = _x122*_x253;
+    const _x255 = _x0*_x111 + _x2*_x117 + _x4*_x121 + _x1*_x113;
+    const _x256 = (-I_bexx + I_bezz)*_x1;
+    const _x257 = (I_bexx - I_beyy)*_x0;
+    const _x258 = l1*_x1;
+    const _x259 = _x114*_x258;
+    const _x260 = _x1*I_beyy;
+    const _x261 = -_x0*_x113 - _x4*_x117 + _x2*_x121 + _x1*_x111;
+    const _x262 = _x0*I_bezz;
+    const _x263 = (-I_dfxx + I_dfzz)*_x4;
+    const _x264 = (-I_dfyy + I_dfxx)*_x2;
+    const _x265 = _x2*I_dfzz;
+    const _x266 = _x4*I_dfyy;
+    const _x267 = _x94*_x114;
+    const _x268 = -I_bezz + I_beyy;
+    const _x269 = _x85*_x94;
+    const _x270 = _x23*_x92;
     const _x271 = 2.0*_x6;
-    const _x272 = l1*_x102*_x271;
-    const _x273 = _x41*_x272;
-    const _x274 = l1*(-_x102*_x120 - _x92*_x85 - _x102*_x118 + _x117);
-    const _x275 = _x6*_x89;
-    const _x276 = l1*(m_a*_x275 + _x41*_x41*_x102 + _x14*_x14*_x102 + m_a*(-_x10*_x85 + _x275));
-    const _x277 = 0.1*(1.0 - Math.tanh(10.0*(q3_d + _x7))*Math.tanh(10.0*(q3_d + _x7)));
+    const _x272 = l1*_x114*_x271;
+    const _x273 = _x19*_x272;
+    const _x274 = l1*(-_x85*_x78 - _x114*_x130 - _x114*_x128 + _x127);
+    const _x275 = _x6*_x82;
+    const _x276 = l1*(m_a*_x275 + _x19*_x19*_x114 + _x36*_x36*_x114 + m_a*(-_x10*_x78 + _x275));
+    const _x277 = 0.1*(1.0 - Math.tanh(10.0*(q3_d + _x15))*Math.tanh(10.0*(q3_d + _x15)));
     const _x278 = -0.0005 - _x277;
-    const _x279 = _x82*_x111;
-    const _x280 = l3*_x111*_x271;
-    const _x281 = _x61*_x280;
-    const _x282 = l3*(-_x111*_x114 + _x112 + _x111*_x115 - _x80*_x74);
-    const _x283 = _x6*_x78;
-    const _x284 = l3*(-_x111*_x103*_x103 + m_c*_x283 - _x111*_x61*_x61 + m_c*(_x283 - _x10*_x74));
-    const _x285 = -I_dfzz + I_dfyy;
-    const _x286 = m_c*_x267;
-    const _x287 = l3*_x286;
-    const _x288 = _x82*_x80;
+    const _x279 = l3*_x10;
+    const _x280 = _x122*_x279;
+    const _x281 = l3*_x122*_x271;
+    const _x282 = _x59*_x281;
+    const _x283 = l3*(-_x122*_x125 + _x122*_x126 + _x123 - _x74*_x68);
+    const _x284 = _x6*_x72;
+    const _x285 = l3*(m_c*_x284 - _x122*_x115*_x115 - _x122*_x59*_x59 + m_c*(_x284 - _x10*_x68));
+    const _x286 = -I_dfzz + I_dfyy;
+    const _x287 = _x14*_x92;
+    const _x288 = _x74*_x279;
     return {
-      dtau_dq: [[0.0, _x43*_x200 + _x253*_x197 + _x20*_x128 + _x68*_x181 + _x125*_x254 + _x3*(_x36*I_bexx - _x10*_x101 + _x37*I_bezz + _x6*_x99 - _x36*I_beyy) + _x137*_x260 + _x255*_x141 - _x255*_x145 + _x133*_x259 + _x253*_x193 + _x36*_x257 + _x124*(-_x32*I_bexx + _x32*I_bezz + _x33*I_beyy + l1*(_x102*_x96 - _x98*_x102 + _x94) + _x6*_x101 + _x10*_x99) + _x23*_x159 + _x10*_x256 + _x258*_x140 + _x28*_x148, _x264*_x176 + _x253*_x198 + _x6*_x259 + _x263*_x173 + _x121*_x256 + _x4*(-_x45*I_dfyy + _x45*I_dfxx + l3*(_x111*_x108 + _x111*_x109 + _x106) + _x46*I_dfzz + _x10*_x110 + _x6*_x105) + _x45*_x262 + _x255*_x142 + _x28*_x149 + _x67*_x187 + _x23*_x160 + _x165*(-_x48*I_dfxx + _x48*I_dfzz + _x49*I_dfyy + _x6*_x110 - _x10*_x105) + _x261*_x170 - _x255*_x146 + _x43*_x201 + _x253*_x194 + _x68*_x182], [0.0, _x10*_x276 + _x273*_x154 + _x133*_x274 - _x223 - _x241*_x266 - _x270*_x233 + _x269*_x231 + _x93*_x236 + l5*m_be*_x228 + _x244*_x265, _x121*_x276 + _x6*_x274 + _x93*_x237 + _x273*_x155 - _x224 - _x242*_x266], [0.0, _x10*_x284 - _x281*_x166 + _x279*_x220 + _x82*_x215 + _x133*_x282 - _x246, -_x247 - _x281*_x167 + _x121*_x284 + _x287*_x213 + _x6*_x282 - l6*m_df*_x211 - _x288*_x208 + _x82*_x216 + _x279*_x221 + _x251*_x285]],
-      dtau_dqd: [[0.0005 + 0.1*(1.0 - Math.tanh(10.0*q1_d)*Math.tanh(10.0*q1_d)) + _x255*_x143 - _x255*_x147 + _x20*_x129 + _x126*_x254 + _x263*_x174 + _x68*_x183 + _x262*_x168 + _x261*_x171 + _x253*_x195 + _x67*_x188 + _x23*_x161 + _x28*_x150 + _x253*_x199 + _x264*_x174 + _x138*_x258 + _x43*_x202 + _x122*_x257 + _x138*_x260, _x123*_x257 + _x28*_x151 + _x23*_x162 + _x127*_x254 + _x255*_x144 + _x20*_x130 + _x68*_x184 + _x43*_x203 + _x260*_x139 + 2.0*_x70*_x253 + _x258*_x139, _x23*_x163 + _x262*_x169 + _x261*_x172 + _x264*_x175 + _x67*_x189 + _x28*_x152 + _x263*_x175 - _x27*_x255 + _x26*_x255 + _x68*_x185 + _x253*_x196 + _x43*_x204], [_x28*_x273 + _x93*_x238 - _x270*_x234 - _x225 + _x269*_x232 - _x243*_x266 + _x245*_x265, 0.001 - _x270*_x235 + _x93*_x239 + 0.1*(1.0 - Math.tanh(10.0*q2_d)*Math.tanh(10.0*q2_d)) + _x277, _x278 - _x14*_x272 - _x226], [-_x288*_x209 + _x287*_x214 + _x82*_x217 - _x43*_x281 + _x279*_x222 - _x248 + _x252*_x285, _x278 + _x103*_x280 - _x249, 0.0005 + _x277 - _x288*_x210 + _x82*_x218]],
-      dtau_dqdd: [[_x23*_x164 + _x43*_x253 + _x17*I_dfzz + _x20*_x131 + 176.89*J_m + _x67*_x190 + _x4*_x4*I_dfyy + _x28*_x153 + I_baseyy + _x43*_x205 + _x28*_x255 + _x0*_x0*I_bezz + _x68*_x186 + _x18*I_beyy, 0.0, 0.0], [0.0, -_x56 + _x16*_x268 + _x116 + _x93*_x240 + I_bexx, -_x227 + _x266], [0.0, _x279 - _x250, l3*l3*_x286 + _x82*_x219 - _x29 + _x116 + I_dfxx]],
+      dtau_dq: [[0.0, _x134*(_x6*_x113 + _x30*I_bezz + _x31*I_beyy + l1*(_x109*_x114 - _x110*_x114 + _x107) - _x30*I_bexx + _x10*_x111) + _x261*_x142 + _x62*_x188 + _x257*_x146 + _x24*_x167 + _x202*_x254 + _x10*_x255 + _x38*_x256 + _x260*_x135 + _x42*_x205 + _x198*_x254 - _x259*_x154 + _x259*_x150 + _x1*(_x38*I_bexx - _x10*_x113 + _x39*I_bezz - _x38*I_beyy + _x6*_x111) + _x28*_x157 + _x258*_x138 + _x262*_x149, _x203*_x254 + _x177*_x266 + _x4*(_x44*I_dfxx + _x45*I_dfzz + _x10*_x121 + l3*(_x119*_x122 + _x122*_x120 + _x118) - _x44*I_dfyy + _x6*_x117) + _x28*_x158 + _x199*_x254 + _x42*_x206 + _x193*_x253 + _x62*_x189 + _x44*_x263 + _x259*_x151 + _x6*_x261 - _x259*_x155 + _x24*_x168 + _x180*_x264 + _x255*_x131 + _x172*(-_x47*I_dfxx + _x47*I_dfzz + _x6*_x121 + _x48*I_dfyy - _x10*_x117) + _x183*_x265], [0.0, _x10*_x276 + _x274*_x142 - _x242*_x267 + _x273*_x162 + l5*m_be*_x230 - _x226 - _x235*_x269 + _x245*_x268 + _x94*_x238 + _x233*_x270, _x276*_x131 - _x227 + _x6*_x274 + _x273*_x163 + _x94*_x239 - _x243*_x267], [0.0, _x283*_x142 - _x282*_x173 + _x219*_x279 + _x223*_x280 + _x10*_x285 - _x247, _x285*_x131 - _x282*_x174 - _x248 + _x6*_x283 - _x212*_x288 + _x217*_x287 + _x220*_x279 - l6*m_df*_x215 + _x251*_x286 + _x224*_x280]],
+      dtau_dqd: [[0.0005 + _x256*_x132 + _x24*_x169 + _x200*_x254 + _x28*_x159 + _x260*_x136 + _x257*_x147 + _x194*_x253 + 0.1*(1.0 - Math.tanh(10.0*q1_d)*Math.tanh(10.0*q1_d)) + _x204*_x254 + _x62*_x190 + _x258*_x139 + _x181*_x264 + _x259*_x152 - _x259*_x156 + _x263*_x175 + _x178*_x266 + _x262*_x147 + _x42*_x207 + _x181*_x265, _x260*_x137 + _x259*_x153 + _x28*_x160 + _x258*_x140 + _x256*_x133 + _x257*_x148 + _x262*_x148 + _x24*_x170 + _x62*_x191 + _x42*_x208 + 2.0*_x64*_x254, _x263*_x176 + _x25*_x259 + _x28*_x161 + _x195*_x253 + _x179*_x266 - _x26*_x259 + _x182*_x264 + _x24*_x171 + _x182*_x265 + _x42*_x209 + _x62*_x192 + _x201*_x254], [_x28*_x273 + _x234*_x270 + _x94*_x240 - _x228 - _x236*_x269 + _x246*_x268 - _x244*_x267, 0.001 - _x237*_x269 + _x94*_x241 + 0.1*(1.0 - Math.tanh(10.0*q2_d)*Math.tanh(10.0*q2_d)) + _x277, _x278 - _x36*_x272 - _x229], [-_x213*_x288 - _x249 - _x42*_x282 + _x225*_x280 + _x221*_x279 + _x218*_x287 + _x252*_x286, _x278 + _x115*_x281 - _x250, 0.0005 - _x214*_x288 + _x222*_x279 + _x277]],
+      dtau_dqdd: [[176.89*J_m + _x4*(_x2*_x96 + _x4*(_x91*I_czz + _x92*_x52 + I_dfyy)) + I_baseyy + _x1*(_x0*_x90 + _x1*(_x89*_x91 + _x95 + _x93 + _x92*I_ayy + I_beyy)) + _x2*(_x2*(_x92*I_czz + _x91*_x52 + _x97 + _x98 + I_dfzz) + _x4*_x96) + _x0*(_x0*(_x89*_x92 + _x91*I_ayy + I_bezz) + _x1*_x90), 0.0, 0.0], [0.0, _x102 + _x100 - _x101 + I_bexx + _x93 + _x99, _x106], [0.0, _x106, _x102 + _x103 + _x104 + I_dfxx - _x105 + _x97]],
     };
   }
 
@@ -1334,6 +1411,481 @@
     const _x110 = -_x109*_x104 + _x24*_x107;
     const _x111 = _x106/_x102;
     return [_x111, _x110, _x109];
+  }
+
+  /**
+   * Derivatives of the forward dynamics: the linearization of the plant.
+   *
+   * qdd(q + dq, qd + dqd, tau + dtau) = qdd + dqdd_dq dq + dqdd_dqd dqd + dqdd_dtau dtau
+   * to first order, qdd = M^-1 (tau - V - G - F_f) (seed eq. 8.34); by the implicit-
+   * function theorem dqdd_dq = -M^-1 dtau_dq, dqdd_dqd = -M^-1 dtau_dqd at qdd and
+   * dqdd_dtau = M^-1, by LDL^T solves (Carpentier and Mansard, RSS 2018); a state-space
+   * model x = (q, qd) has A = [[0, I], [dqdd_dq, dqdd_dqd]] and B = [[0], [dqdd_dtau]].
+   *
+   * @param {number[]} q joint coordinates, 3 numbers: q1 [rad], q2 [rad], q3 [rad].
+   * @param {number[]} qd joint velocities, 3 numbers: q1 [rad/s], q2 [rad/s], q3 [rad/s].
+   * @param {number[]} tau joint torques (revolute) or forces (prismatic), 3 numbers: q1
+   *     [N*m], q2 [N*m], q3 [N*m].
+   * @param {Object} [params] parameter values (defaults in PARAMETERS):
+   *     l1: upper arm: shoulder axis to elbow axis (Cavusoglu 2002) [m]; default 0.215.
+   *     l2: distal link: elbow axis to the gimbal (Cavusoglu 2002) [m]; default 0.17.
+   *     l3: lever of the parallelogram, along the distal link's direction (Cavusoglu 2002) [m]; default 0.0325.
+   *     l5: centre of mass of the upper arm body be along the arm (behind the shoulder) (Cavusoglu 2002) [m]; default -0.0368.
+   *     l6: centre of mass of the lever body df, opposite the lever (Cavusoglu 2002) [m]; default 0.0527.
+   *     m_a: distal link a (Cavusoglu 2002) [kg]; default 0.0202.
+   *     I_axx: about its centre of mass, pitch axis (Cavusoglu 2002) [kg*m^2]; default 4.864e-05.
+   *     I_ayy: about its centre of mass, along the link (Cavusoglu 2002) [kg*m^2]; default 1.843e-07.
+   *     I_azz: about its centre of mass, across the link (Cavusoglu 2002) [kg*m^2]; default 4.864e-05.
+   *     m_c: parallelogram link c (Cavusoglu 2002) [kg]; default 0.0249.
+   *     I_cxx: about its centre of mass, pitch axis (Cavusoglu 2002) [kg*m^2]; default 9.59e-05.
+   *     I_cyy: about its centre of mass, across the link (Cavusoglu 2002) [kg*m^2]; default 9.59e-05.
+   *     I_czz: about its centre of mass, along the link (Cavusoglu 2002) [kg*m^2]; default 5.1e-07.
+   *     m_be: upper arm with its motor-side parts, body be (Cavusoglu 2002) [kg]; default 0.2359.
+   *     I_bexx: about the shoulder, pitch axis (Cavusoglu 2002) [kg*m^2]; default 0.001109.
+   *     I_beyy: about the shoulder, across the arm (Cavusoglu 2002) [kg*m^2]; default 0.001006.
+   *     I_bezz: about the shoulder, along the arm (Cavusoglu 2002) [kg*m^2]; default 5.91e-05.
+   *     m_df: lever with the third capstan, body df (Cavusoglu 2002) [kg]; default 0.1906.
+   *     I_dfxx: about the shoulder, pitch axis (Cavusoglu 2002) [kg*m^2]; default 0.000711.
+   *     I_dfyy: about the shoulder, along the lever (Cavusoglu 2002) [kg*m^2]; default 6.29e-05.
+   *     I_dfzz: about the shoulder, across the lever (Cavusoglu 2002) [kg*m^2]; default 0.0006246.
+   *     I_baseyy: base turret about the yaw axis (Cavusoglu 2002) [kg*m^2]; default 0.001187.
+   *     J_m: rotor inertia of each motor (Maxon RE 25, 118743: 10.3 g cm^2) [kg*m^2]; default 1.03e-06.
+   *     g: standard gravity [m/s^2]; default 9.80665.
+   * @returns {{dqdd_dq: number[][], dqdd_dqd: number[][], dqdd_dtau: number[][]}}
+   *     dqdd_dq: shape (3, 3); d qdd / dq: row i, column j is d qdd_i / d q_j.
+   *     dqdd_dqd: shape (3, 3); d qdd / dqd.
+   *     dqdd_dtau: shape (3, 3); d qdd / dtau = M(q)^-1.
+   */
+  function forward_dynamics_derivatives(q, qd, tau, params) {
+    _vector(q, 3, "q", "forward_dynamics_derivatives");
+    _vector(qd, 3, "qd", "forward_dynamics_derivatives");
+    _vector(tau, 3, "tau", "forward_dynamics_derivatives");
+    const _p = _params(params, ["l1", "l2", "l3", "l5", "l6", "m_a", "I_axx", "I_ayy", "I_azz", "m_c", "I_cxx", "I_cyy", "I_czz", "m_be", "I_bexx", "I_beyy", "I_bezz", "m_df", "I_dfxx", "I_dfyy", "I_dfzz", "I_baseyy", "J_m", "g"], "forward_dynamics_derivatives");
+    const l1 = _p.l1 ?? 0.215;
+    const l2 = _p.l2 ?? 0.17;
+    const l3 = _p.l3 ?? 0.0325;
+    const l5 = _p.l5 ?? -0.0368;
+    const l6 = _p.l6 ?? 0.0527;
+    const m_a = _p.m_a ?? 0.0202;
+    const I_axx = _p.I_axx ?? 4.864e-05;
+    const I_ayy = _p.I_ayy ?? 1.843e-07;
+    const I_azz = _p.I_azz ?? 4.864e-05;
+    const m_c = _p.m_c ?? 0.0249;
+    const I_cxx = _p.I_cxx ?? 9.59e-05;
+    const I_cyy = _p.I_cyy ?? 9.59e-05;
+    const I_czz = _p.I_czz ?? 5.1e-07;
+    const m_be = _p.m_be ?? 0.2359;
+    const I_bexx = _p.I_bexx ?? 0.001109;
+    const I_beyy = _p.I_beyy ?? 0.001006;
+    const I_bezz = _p.I_bezz ?? 5.91e-05;
+    const m_df = _p.m_df ?? 0.1906;
+    const I_dfxx = _p.I_dfxx ?? 0.000711;
+    const I_dfyy = _p.I_dfyy ?? 6.29e-05;
+    const I_dfzz = _p.I_dfzz ?? 0.0006246;
+    const I_baseyy = _p.I_baseyy ?? 0.001187;
+    const J_m = _p.J_m ?? 1.03e-06;
+    const g = _p.g ?? 9.80665;
+    const q2 = q[1];
+    const q3 = q[2];
+    const q1_d = qd[0];
+    const q2_d = qd[1];
+    const q3_d = qd[2];
+    const tau_q1 = tau[0];
+    const tau_q2 = tau[1];
+    const tau_q3 = tau[2];
+    const _x0 = Math.sin(q2);
+    const _x1 = Math.cos(q2);
+    const _x2 = Math.sin(q3);
+    const _x3 = _x0*_x2;
+    const _x4 = Math.cos(q3);
+    const _x5 = _x1*_x4;
+    const _x6 = _x5 + _x3;
+    const _x7 = 0.5*l1;
+    const _x8 = _x0*_x4;
+    const _x9 = _x1*_x2;
+    const _x10 = _x9 - _x8;
+    const _x11 = 0.25*l2*l2*m_a;
+    const _x12 = l1*l1;
+    const _x13 = 0.25*m_c;
+    const _x14 = l3*m_c;
+    const _x15 = q2_d*q1_d;
+    const _x16 = l1*m_a;
+    const _x17 = -q2_d;
+    const _x18 = 0.5*l2;
+    const _x19 = -q3_d;
+    const _x20 = _x13*_x12;
+    const _x21 = q1_d*q3_d;
+    const _x22 = q1_d*q1_d;
+    const _x23 = -l1*q2_d*q2_d;
+    const _x24 = l3*q3_d*q3_d;
+    const _x25 = I_azz + _x11;
+    const _x26 = l2*m_a;
+    const _x27 = _x7*_x6;
+    const _x28 = _x6*_x10;
+    const _x29 = -_x28*I_ayy + _x27*_x26 + _x25*_x28;
+    const _x30 = _x10*_x10;
+    const _x31 = _x6*_x6;
+    const _x32 = _x12*m_a;
+    const _x33 = l1*_x10;
+    const _x34 = _x26*_x33;
+    const _x35 = I_cyy + _x20;
+    const _x36 = _x28*_x35 - _x28*I_czz + _x14*_x27;
+    const _x37 = l3*l3*m_c;
+    const _x38 = _x14*_x33;
+    const _x39 = 176.89*J_m + _x4*(_x2*_x36 + _x4*(_x30*I_czz + _x31*_x35 + I_dfyy)) + I_baseyy + _x1*(_x0*_x29 + _x1*(_x25*_x30 + _x34 + _x32 + _x31*I_ayy + I_beyy)) + _x2*(_x2*(_x31*I_czz + _x30*_x35 + _x37 + _x38 + I_dfzz) + _x4*_x36) + _x0*(_x0*(_x25*_x31 + _x30*I_ayy + I_bezz) + _x1*_x29);
+    const _x40 = I_axx + _x11;
+    const _x41 = -_x40;
+    const _x42 = 0.5*_x34;
+    const _x43 = _x41 - (-_x42 + _x41);
+    const _x44 = I_cxx + _x20;
+    const _x45 = 125.44*J_m + _x44 + _x40;
+    const _x46 = _x41 + _x32 + I_bexx - _x43 + _x42 + _x45;
+    const _x47 = -_x44;
+    const _x48 = 0.5*_x38;
+    const _x49 = _x47 - (-_x48 + _x47);
+    const _x50 = _x37 - _x49 + I_dfxx + _x48 + _x47 + _x45;
+    const _x51 = 1.0/_x46;
+    const _x52 = Math.tanh(10.0*q1_d);
+    const _x53 = l5*m_be;
+    const _x54 = _x17 + q3_d;
+    const _x55 = Math.tanh(10.0*_x54);
+    const _x56 = 0.01*_x55 + 0.0005*_x54;
+    const _x57 = Math.tanh(10.0*q2_d);
+    const _x58 = l6*m_df;
+    const _x59 = -_x54 + _x17;
+    const _x60 = _x40*_x59;
+    const _x61 = _x2*_x2;
+    const _x62 = l3*_x22;
+    const _x63 = g*_x4 + _x24 + _x61*_x62;
+    const _x64 = _x6*_x63;
+    const _x65 = _x1*_x1;
+    const _x66 = l1*_x22;
+    const _x67 = g*_x0 - _x65*_x66 + _x23;
+    const _x68 = _x6*_x67;
+    const _x69 = -_x0*_x10 + _x1*_x6;
+    const _x70 = _x6*q1_d;
+    const _x71 = _x10*q1_d;
+    const _x72 = _x1*_x70 - _x0*_x71;
+    const _x73 = -_x72;
+    const _x74 = I_ayy - _x40;
+    const _x75 = _x1*_x10 + _x0*_x6;
+    const _x76 = _x10*I_ayy;
+    const _x77 = _x0*_x15;
+    const _x78 = _x16*_x77;
+    const _x79 = _x1*_x70;
+    const _x80 = _x0*_x71;
+    const _x81 = _x79 - _x80;
+    const _x82 = -q2_d*_x80 + q2_d*_x79 + _x54*_x81;
+    const _x83 = _x59*(I_axx + _x11);
+    const _x84 = _x81*I_ayy;
+    const _x85 = _x84*_x59 - _x83*_x81 + _x25*_x82 - l2*_x78;
+    const _x86 = _x1*_x71;
+    const _x87 = _x0*_x70;
+    const _x88 = _x86 + _x87;
+    const _x89 = _x25*_x88;
+    const _x90 = _x88*_x83 - _x89*_x59 + I_ayy*(-q2_d*_x86 - q2_d*_x87 - _x54*_x88);
+    const _x91 = _x1*_x15;
+    const _x92 = _x15*I_beyy;
+    const _x93 = _x18*m_a;
+    const _x94 = _x93*_x81;
+    const _x95 = q2_d + _x19;
+    const _x96 = _x19 - _x95;
+    const _x97 = _x4*q1_d;
+    const _x98 = _x6*_x97;
+    const _x99 = _x2*_x71;
+    const _x100 = _x98 + _x99;
+    const _x101 = _x96*(I_cxx + _x20);
+    const _x102 = _x35*_x100;
+    const _x103 = I_czz*(_x95*_x100 + q3_d*_x99 + q3_d*_x98) - _x101*_x100 + _x102*_x96;
+    const _x104 = _x2*_x21;
+    const _x105 = q3_d*_x97;
+    const _x106 = _x14*_x105;
+    const _x107 = _x10*_x97;
+    const _x108 = _x2*_x70;
+    const _x109 = -_x107 + _x108;
+    const _x110 = -_x109*_x95 - q3_d*_x108 + q3_d*_x107;
+    const _x111 = _x109*I_czz;
+    const _x112 = _x109*_x101 - _x111*_x96 + _x35*_x110 + l1*_x106;
+    const _x113 = _x7*m_c;
+    const _x114 = _x109*_x113;
+    const _x115 = tau_q1 - (0.0005*q1_d + _x4*(-_x104*I_dfxx + _x104*I_dfzz + _x6*_x112 - _x104*I_dfyy - _x10*_x103) + _x2*(_x105*I_dfxx - _x105*I_dfyy + _x6*_x103 + _x105*I_dfzz + l3*(_x110*_x113 + _x114*_x96 + 2.0*_x106) + _x10*_x112) + _x1*(-_x77*I_bexx + _x6*_x90 + _x77*I_bezz + _x10*_x85 - _x0*_x92 + l1*(_x82*_x93 - _x94*_x59 - 2.0*_x78)) + _x0*(_x91*I_bezz - _x1*_x92 - _x10*_x90 + _x91*I_bexx + _x6*_x85) + 0.01*_x52);
+    const _x116 = _x115/_x39;
+    const _x117 = _x91 + _x0*_x116;
+    const _x118 = _x117*I_ayy;
+    const _x119 = _x6*I_ayy;
+    const _x120 = _x60 - _x54*I_ayy;
+    const _x121 = -_x77 + _x1*_x116;
+    const _x122 = _x121*I_ayy;
+    const _x123 = _x1*_x71 + _x0*_x70;
+    const _x124 = _x123*I_ayy;
+    const _x125 = _x2*_x10 + _x4*_x6;
+    const _x126 = _x95*I_czz;
+    const _x127 = -_x104 + _x4*_x116;
+    const _x128 = _x127*I_czz;
+    const _x129 = _x35 - _x44;
+    const _x130 = _x4*_x21;
+    const _x131 = _x130 + _x2*_x116;
+    const _x132 = _x131*I_czz;
+    const _x133 = _x10*I_czz;
+    const _x134 = _x6*I_czz;
+    const _x135 = _x4*_x70 + _x2*_x71;
+    const _x136 = _x135*I_czz;
+    const _x137 = 2.0*_x14;
+    const _x138 = -_x4*_x10 + _x2*_x6;
+    const _x139 = -_x4*_x71 + _x2*_x70;
+    const _x140 = -_x139;
+    const _x141 = _x44 - I_czz;
+    const _x142 = 2.0*l3;
+    const _x143 = _x43 + _x49;
+    const _x144 = _x51*_x143;
+    const _x145 = _x50 - _x143*_x144;
+    const _x146 = _x0*_x1;
+    const _x147 = g*_x1;
+    const _x148 = _x147 + _x146*_x66;
+    const _x149 = _x23 - _x1*_x1*_x66 + g*_x0;
+    const _x150 = m_a*(_x6*_x149 + _x10*_x148);
+    const _x151 = _x89*_x81 - _x88*_x84 - _x18*_x150;
+    const _x152 = _x2*_x2*_x62 + _x24 + g*_x4;
+    const _x153 = g*_x2;
+    const _x154 = _x2*_x4;
+    const _x155 = _x153 - _x62*_x154;
+    const _x156 = m_c*(_x10*_x155 + _x6*_x152);
+    const _x157 = _x111*_x100 - _x7*_x156 - _x109*_x102;
+    const _x158 = _x22*_x154;
+    const _x159 = _x22*_x146;
+    const _x160 = tau_q2 - (_x151 - _x157 + 0.01*_x57 - (_x151 - _x159*I_beyy - _x53*_x147 + _x159*I_bezz - l1*(_x10*(_x150 - _x88*_x94) + _x6*(_x88*_x88*_x93 + _x93*_x59*_x59 + m_a*(-_x10*_x149 + _x6*_x148)))) - _x56 + 0.0005*q2_d);
+    const _x161 = tau_q3 - (_x157 - _x151 - (_x157 - _x158*I_dfyy + _x158*I_dfzz - l3*(_x6*(-_x113*_x96*_x96 + m_c*(_x6*_x155 - _x10*_x152) - _x113*_x100*_x100) + _x10*(_x156 + _x114*_x100)) + _x58*_x153) + _x56) - _x144*_x160;
+    const _x162 = _x161/_x145;
+    const _x163 = _x153 - _x62*_x154 + l3*_x162;
+    const _x164 = m_c*_x163;
+    const _x165 = m_c*_x63;
+    const _x166 = _x10*m_c;
+    const _x167 = _x6*m_c;
+    const _x168 = I_czz - _x35;
+    const _x169 = 2.0*l1;
+    const _x170 = _x6*m_a;
+    const _x171 = _x10*m_a;
+    const _x172 = -_x162*_x144 + _x51*_x160;
+    const _x173 = _x147 + _x146*_x66 + l1*_x172;
+    const _x174 = m_a*_x173;
+    const _x175 = m_a*_x67;
+    const _x176 = m_a*(-l1*_x77 + l1*_x121);
+    const _x177 = _x54*_x72 + _x10*_x121 + _x6*_x117;
+    const _x178 = _x59*_x72;
+    const _x179 = _x25*_x177 - _x40*_x178 + _x18*_x176 + _x178*I_ayy;
+    const _x180 = _x25*_x123;
+    const _x181 = -_x59*_x180 + I_ayy*(-_x54*_x123 + _x6*_x121 - _x10*_x117) + _x60*_x123;
+    const _x182 = _x96*_x135;
+    const _x183 = I_czz*(_x95*_x135 - _x10*_x127 + _x6*_x131) - _x44*_x182 + _x35*_x182;
+    const _x184 = (l3*_x131 + l3*_x130)*m_c;
+    const _x185 = -_x95*_x139 + _x6*_x127 + _x10*_x131;
+    const _x186 = _x96*_x139;
+    const _x187 = _x7*_x184 - _x186*I_czz + _x35*_x185 + _x44*_x186;
+    const _x188 = _x2*_x187 - _x0*_x181 + _x1*_x179 - _x4*_x183;
+    const _x189 = _x1*I_beyy;
+    const _x190 = (I_bexx - I_beyy)*_x0;
+    const _x191 = l1*_x1;
+    const _x192 = _x191*_x93;
+    const _x193 = l3*_x2;
+    const _x194 = _x193*_x113;
+    const _x195 = _x0*I_bezz;
+    const _x196 = _x2*_x183 + _x1*_x181 + _x0*_x179 + _x4*_x187;
+    const _x197 = (-I_bexx + I_bezz)*_x1;
+    const _x198 = _x33*_x93;
+    const _x199 = -I_bezz + I_beyy;
+    const _x200 = _x16*_x28;
+    const _x201 = _x16*_x31;
+    const _x202 = _x6*_x169*_x93;
+    const _x203 = _x202*_x123;
+    const _x204 = m_a*(_x10*_x173 + _x68);
+    const _x205 = _x123*_x72;
+    const _x206 = -_x172;
+    const _x207 = _x206 - (_x162 + _x206);
+    const _x208 = l1*(_x204 - _x93*_x205 - _x93*_x207 - _x68*m_a);
+    const _x209 = _x6*_x173;
+    const _x210 = l1*(_x209*m_a + m_a*(_x209 - _x10*_x67) + _x93*_x59*_x59 + _x93*_x123*_x123);
+    const _x211 = l3*_x10;
+    const _x212 = _x211*_x113;
+    const _x213 = _x6*_x142*_x113;
+    const _x214 = _x213*_x135;
+    const _x215 = m_c*(_x64 + _x10*_x163);
+    const _x216 = -_x162;
+    const _x217 = _x216 - (_x172 + _x216);
+    const _x218 = _x139*_x135;
+    const _x219 = l3*(-_x64*m_c + _x215 + _x113*_x218 - _x113*_x217);
+    const _x220 = _x6*_x163;
+    const _x221 = l3*(m_c*(-_x10*_x63 + _x220) + m_c*_x220 - _x113*_x135*_x135 - _x113*_x96*_x96);
+    const _x222 = 1.0/_x145;
+    const _x223 = 1.0/_x39;
+    const _x224 = _x2*I_dfzz;
+    const _x225 = (-I_dfxx + I_dfzz)*_x4;
+    const _x226 = _x4*I_dfyy;
+    const _x227 = (-I_dfyy + I_dfxx)*_x2;
+    const _x228 = -I_dfzz + I_dfyy;
+    const _x229 = _x14*_x31;
+    const _x230 = _x14*_x28;
+    const _x231 = 0.1*(1.0 - _x55*_x55);
+    const _x232 = -0.0005 - _x231;
+    const _x233 = _x8 - _x9;
+    const _x234 = _x0*q2_d;
+    const _x235 = _x0*q1_d;
+    const _x236 = -_x0;
+    const _x237 = _x116*_x236 - _x91;
+    const _x238 = -_x234;
+    const _x239 = -_x235;
+    const _x240 = _x16*_x237 - _x16*_x91;
+    const _x241 = -_x16*_x234 + _x16*_x238;
+    const _x242 = -_x16*_x235 + _x16*_x239;
+    const _x243 = q1_d*_x233;
+    const _x244 = -_x5 - _x3;
+    const _x245 = q1_d*_x244;
+    const _x246 = -_x0*_x245 + _x70*_x236;
+    const _x247 = -_x0*_x70 + _x1*_x243;
+    const _x248 = _x15*_x236;
+    const _x249 = _x1*q2_d;
+    const _x250 = _x1*q1_d;
+    const _x251 = _x248 + _x1*_x116;
+    const _x252 = _x6*_x251 + _x54*_x246 + _x121*_x244 + _x10*_x237 + _x10*_x117;
+    const _x253 = _x6*_x121 + _x54*_x247 + _x117*_x233;
+    const _x254 = _x6*_x249 + _x69*_x54 + _x10*_x238;
+    const _x255 = _x73 + _x6*_x250 + _x10*_x239;
+    const _x256 = _x59*_x246;
+    const _x257 = _x59*_x247;
+    const _x258 = _x69*_x59;
+    const _x259 = _x74*_x256 + _x25*_x252 + _x18*_x240;
+    const _x260 = _x74*_x257 + _x25*_x253;
+    const _x261 = _x74*_x258 + _x25*_x254 + _x18*_x241;
+    const _x262 = _x25*_x255 + _x18*_x242;
+    const _x263 = _x73*_x74 + _x25*_x72;
+    const _x264 = _x0*_x71 + _x71*_x236 + _x1*_x245 + _x1*_x70;
+    const _x265 = _x1*_x70 + _x0*_x243;
+    const _x266 = _x25*_x264;
+    const _x267 = _x25*_x265;
+    const _x268 = _x75*_x25;
+    const _x269 = -_x59*_x266 + _x120*_x264 - _x76*_x251 + _x122*_x10 - _x118*_x244 + _x119*_x237;
+    const _x270 = -_x59*_x267 - _x6*_x118 + _x120*_x265 + _x122*_x233;
+    const _x271 = -_x59*_x268 + _x75*_x120 - _x76*_x249 + _x119*_x238;
+    const _x272 = _x119*_x239 + _x124 - _x76*_x250;
+    const _x273 = -(_x40*_x123 - _x180) - _x124;
+    const _x274 = -_x2;
+    const _x275 = _x2*_x245 + _x4*_x71;
+    const _x276 = _x70*_x274 + _x2*_x70 + _x4*_x71 + _x4*_x243;
+    const _x277 = _x2*q3_d;
+    const _x278 = _x2*q1_d;
+    const _x279 = -_x130 + _x116*_x274;
+    const _x280 = -_x277;
+    const _x281 = -_x278;
+    const _x282 = _x21*_x274;
+    const _x283 = _x4*q3_d;
+    const _x284 = _x282 + _x4*_x116;
+    const _x285 = _x96*_x275;
+    const _x286 = _x96*_x276;
+    const _x287 = _x125*_x96;
+    const _x288 = -_x135;
+    const _x289 = _x126*_x275 - _x128*_x244 + _x129*_x285 + _x132*_x10;
+    const _x290 = _x129*_x286 - _x133*_x279 + _x134*_x284 - _x6*_x128 + _x126*_x276 + _x132*_x233;
+    const _x291 = _x129*_x287 + _x134*_x283 - _x133*_x280 + _x126*_x125;
+    const _x292 = _x136 + _x129*_x288;
+    const _x293 = _x134*_x97 - _x133*_x281 - _x136;
+    const _x294 = _x14*_x282 + _x14*_x284;
+    const _x295 = _x137*_x283;
+    const _x296 = _x137*_x97;
+    const _x297 = -_x4*_x245 + _x2*_x71;
+    const _x298 = -_x71*_x274 + _x2*_x243;
+    const _x299 = -_x95*_x297 + _x131*_x244 + _x10*_x127;
+    const _x300 = -_x95*_x298 + _x10*_x284 + _x6*_x279 + _x6*_x131 + _x127*_x233;
+    const _x301 = -_x138*_x95 + _x10*_x283 + _x6*_x280;
+    const _x302 = _x10*_x97 + _x6*_x281 + _x139;
+    const _x303 = _x96*_x297;
+    const _x304 = _x96*_x298;
+    const _x305 = _x138*_x96;
+    const _x306 = _x141*_x303 + _x35*_x299;
+    const _x307 = _x141*_x304 + _x35*_x300 + _x7*_x294;
+    const _x308 = _x141*_x305 + _x35*_x301 + _x7*_x295;
+    const _x309 = _x141*_x140 + _x140*_x35;
+    const _x310 = _x35*_x302 + _x7*_x296;
+    const _x311 = 2.0*q1_d;
+    const _x312 = l3*_x311;
+    const _x313 = 2.0*_x2*_x4*_x62 + g*_x274;
+    const _x314 = _x61*_x312;
+    const _x315 = _x142*q3_d;
+    const _x316 = g*_x4;
+    const _x317 = _x4*_x4 + _x2*_x274;
+    const _x318 = _x316 - _x317*_x62;
+    const _x319 = -_x312*_x154;
+    const _x320 = _x164*_x244 + _x165*_x10;
+    const _x321 = _x166*_x318 + _x167*_x313 + _x6*_x164 + _x165*_x233;
+    const _x322 = _x167*_x314 + _x166*_x319;
+    const _x323 = _x167*_x315;
+    const _x324 = _x139*_x275 + _x297*_x135;
+    const _x325 = _x139*_x276 + _x298*_x135;
+    const _x326 = _x138*_x135 + _x125*_x139;
+    const _x327 = _x168*_x324 - _x7*_x320;
+    const _x328 = _x168*_x325 - _x7*_x321;
+    const _x329 = _x168*_x326 - _x7*_x322;
+    const _x330 = -_x7*_x323;
+    const _x331 = g*_x236;
+    const _x332 = l1*_x311;
+    const _x333 = _x0*_x236 + _x1*_x1;
+    const _x334 = _x331 + _x333*_x66;
+    const _x335 = _x146*_x332;
+    const _x336 = -2.0*_x1*_x66*_x236 + g*_x1;
+    const _x337 = -_x65*_x332;
+    const _x338 = -_x169*q2_d;
+    const _x339 = _x170*_x336 + _x171*_x334 + _x174*_x244 + _x175*_x10;
+    const _x340 = _x6*_x174 + _x175*_x233;
+    const _x341 = _x171*_x335 + _x170*_x337;
+    const _x342 = _x170*_x338;
+    const _x343 = _x123*_x246 + _x72*_x264;
+    const _x344 = _x123*_x247 + _x72*_x265;
+    const _x345 = _x75*_x72 + _x69*_x123;
+    const _x346 = _x22*_x333;
+    const _x347 = _x146*_x311;
+    const _x348 = -_x343*I_ayy - _x18*_x339 + _x72*_x266 + _x180*_x246;
+    const _x349 = -_x344*I_ayy + _x72*_x267 - _x18*_x340 + _x180*_x247;
+    const _x350 = -_x18*_x341 - _x345*I_ayy + _x72*_x268 + _x69*_x180;
+    const _x351 = -_x18*_x342;
+    const _x352 = _x22*_x317;
+    const _x353 = _x311*_x154;
+    const _x354 = -(_x194*_x303 + _x125*_x306 + _x236*(_x10*_x179 + _x6*_x181 + l1*(_x176 - _x93*_x178 + _x93*_x177) + _x77*I_bezz + _x121*I_beyy - _x77*I_bexx) + _x194*_x299 + _x138*_x289 + _x192*_x252 + _x195*_x251 + _x197*_x91 + _x188*_x244 + _x189*_x237 + _x69*_x269 + _x196*_x10 + _x190*_x248 + _x191*_x240 + _x1*(_x6*_x179 - _x91*I_beyy + _x117*I_bezz - _x10*_x181 + _x91*I_bexx) - _x192*_x256 + _x75*_x259);
+    const _x355 = -(-_x198*_x343 + _x199*_x346 + _x33*_x339 - _x200*_x336 + _x201*_x334 + _x53*_x331 + _x210*_x10 - _x327 + _x208*_x244 + _x203*_x264);
+    const _x356 = -(-_x348 + _x10*_x221 + _x212*_x324 + _x211*_x320 - _x214*_x275 + _x219*_x244) - _x355*_x144;
+    const _x357 = _x222*_x356;
+    const _x358 = _x51*_x355 - _x357*_x144;
+    const _x359 = _x223*_x354;
+    const _x360 = -(_x226*_x279 + _x194*_x304 + _x225*_x130 + _x4*(_x6*_x183 + l3*(_x184 + _x113*_x186 + _x113*_x185) + _x131*I_dfzz + _x10*_x187 + _x130*I_dfxx - _x130*I_dfyy) - _x192*_x257 + _x192*_x253 + _x138*_x290 + _x196*_x233 + _x194*_x300 + _x274*(-_x10*_x183 + _x6*_x187 + _x127*I_dfyy + _x104*I_dfzz - _x104*I_dfxx) + _x193*_x294 + _x75*_x260 + _x125*_x307 + _x227*_x282 + _x6*_x188 + _x69*_x270 + _x224*_x284);
+    const _x361 = -(-_x198*_x344 + _x33*_x340 + _x6*_x208 - _x328 + _x203*_x265 + _x210*_x233);
+    const _x362 = -(_x228*_x352 + _x6*_x219 - _x349 - _x58*_x316 + _x212*_x325 - _x230*_x313 + _x211*_x321 + _x229*_x318 - _x214*_x276 + _x221*_x233) - _x361*_x144;
+    const _x363 = _x222*_x362;
+    const _x364 = _x51*_x361 - _x363*_x144;
+    const _x365 = _x223*_x360;
+    const _x366 = -(0.0005 + _x189*_x238 + _x194*_x301 + 0.1*(1.0 - _x52*_x52) + _x225*_x277 + _x192*_x254 + _x195*_x249 + _x194*_x305 + _x190*_x249 + _x191*_x241 + _x125*_x308 + _x226*_x280 + _x193*_x295 + _x69*_x271 + _x224*_x283 + _x75*_x261 + _x138*_x291 + _x197*_x234 + _x227*_x283 - _x192*_x258);
+    const _x367 = -(_x199*_x347 + _x33*_x341 + _x201*_x335 - _x200*_x337 - _x198*_x345 + _x203*_x75 - _x329);
+    const _x368 = -(_x228*_x353 - _x125*_x214 + _x212*_x326 + _x229*_x319 - _x350 + _x211*_x322 - _x230*_x314) - _x367*_x144;
+    const _x369 = _x222*_x368;
+    const _x370 = _x51*_x367 - _x369*_x144;
+    const _x371 = _x223*_x366;
+    const _x372 = -(_x138*_x292 + _x125*_x309 + 2.0*_x194*_x140 + _x75*_x262 + _x197*_x235 + _x192*_x255 + _x69*_x272 + _x191*_x242 + _x190*_x250 + _x189*_x239 + _x195*_x250);
+    const _x373 = -(0.001 + 0.1*(1.0 - _x57*_x57) + _x231 + _x33*_x342 - _x200*_x338);
+    const _x374 = -(-_x351 + _x213*_x96 + _x232) - _x373*_x144;
+    const _x375 = _x222*_x374;
+    const _x376 = _x51*_x373 - _x375*_x144;
+    const _x377 = _x223*_x372;
+    const _x378 = -(_x138*_x293 + _x125*_x310 + _x75*_x263 + _x194*_x302 + _x225*_x278 + _x227*_x97 + _x192*_x72 + _x226*_x281 + _x224*_x97 + _x193*_x296 + _x69*_x273 - _x192*_x73);
+    const _x379 = -(_x232 - _x202*_x59 - _x330);
+    const _x380 = -(0.0005 + _x231 + _x211*_x323 - _x230*_x315) - _x379*_x144;
+    const _x381 = _x222*_x380;
+    const _x382 = _x51*_x379 - _x381*_x144;
+    const _x383 = _x223*_x378;
+    const _x384 = -_x144;
+    const _x385 = _x222*_x384;
+    const _x386 = _x51 - _x144*_x385;
+    const _x387 = -_x222*_x144;
+    return {
+      dqdd_dq: [[0.0, _x359, _x365], [0.0, _x358, _x364], [0.0, _x357, _x363]],
+      dqdd_dqd: [[_x371, _x377, _x383], [_x370, _x376, _x382], [_x369, _x375, _x381]],
+      dqdd_dtau: [[_x223, 0.0, 0.0], [0.0, _x386, _x387], [0.0, _x385, _x222]],
+    };
   }
 
   /**
@@ -1924,13 +2476,13 @@
   }
 
   /**
-   * fk, frames, jacobian, mass_matrix, coriolis_matrix, coriolis_vector, gravity_vector, friction, inverse_dynamics, inverse_dynamics_derivatives, forward_dynamics, tcp_force, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions.
+   * fk, frames, jacobian, mass_matrix, coriolis_matrix, coriolis_vector, gravity_vector, gravity_derivatives, friction, inverse_dynamics, inverse_dynamics_derivatives, forward_dynamics, forward_dynamics_derivatives, tcp_force, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions.
    *
    * Computes the outputs of fk, frames, jacobian, mass_matrix, coriolis_matrix,
-   * coriolis_vector, gravity_vector, friction, inverse_dynamics,
-   * inverse_dynamics_derivatives, forward_dynamics, tcp_force, operational_space,
-   * kinetic_energy, potential_energy in one call; subexpressions common to several of
-   * them are evaluated once.
+   * coriolis_vector, gravity_vector, gravity_derivatives, friction, inverse_dynamics,
+   * inverse_dynamics_derivatives, forward_dynamics, forward_dynamics_derivatives,
+   * tcp_force, operational_space, kinetic_energy, potential_energy in one call;
+   * subexpressions common to several of them are evaluated once.
    *
    * @param {number[]} q joint coordinates, 3 numbers: q1 [rad], q2 [rad], q3 [rad].
    * @param {number[]} qd joint velocities, 3 numbers: q1 [rad/s], q2 [rad/s], q3 [rad/s].
@@ -1963,7 +2515,7 @@
    *     I_baseyy: base turret about the yaw axis (Cavusoglu 2002) [kg*m^2]; default 0.001187.
    *     J_m: rotor inertia of each motor (Maxon RE 25, 118743: 10.3 g cm^2) [kg*m^2]; default 1.03e-06.
    *     g: standard gravity [m/s^2]; default 9.80665.
-   * @returns {{base_T_tcp: number[][], base_T_turret: number[][], base_T_upper_arm: number[][], base_T_distal: number[][], base_T_lever: number[][], base_T_link_c: number[][], J: number[][], M: number[][], C: number[][], V: number[], G: number[], F_f: number[], inverse_dynamics_tau: number[], dtau_dq: number[][], dtau_dqd: number[][], dtau_dqdd: number[][], forward_dynamics_qdd: number[], F: number[], Mx: number[][], Vx: number[], Gx: number[], k: number, u: number}}
+   * @returns {{base_T_tcp: number[][], base_T_turret: number[][], base_T_upper_arm: number[][], base_T_distal: number[][], base_T_lever: number[][], base_T_link_c: number[][], J: number[][], M: number[][], C: number[][], V: number[], G: number[], dG_dq: number[][], F_f: number[], inverse_dynamics_tau: number[], dtau_dq: number[][], dtau_dqd: number[][], dtau_dqdd: number[][], forward_dynamics_qdd: number[], dqdd_dq: number[][], dqdd_dqd: number[][], dqdd_dtau: number[][], F: number[], Mx: number[][], Vx: number[], Gx: number[], k: number, u: number}}
    *     base_T_tcp: shape (4, 4); homogeneous transform of the TCP frame in the base
    *     frame (fk) [m].
    *     base_T_turret: shape (4, 4); homogeneous transform of frame 'turret' in the
@@ -1983,6 +2535,8 @@
    *     (revolute), N (prismatic)].
    *     G: shape (3,); joint torques that hold the arm against gravity
    *     (gravity_vector) [N*m (revolute), N (prismatic)].
+   *     dG_dq: shape (3, 3); d G / dq: row i, column j is d G_i / d q_j
+   *     (gravity_derivatives).
    *     F_f: shape (3,); friction torques opposing the motion (friction) [N*m
    *     (revolute), N (prismatic)].
    *     inverse_dynamics_tau: shape (3,); joint torques (revolute) or forces
@@ -1995,6 +2549,11 @@
    *     (inverse_dynamics_derivatives).
    *     forward_dynamics_qdd: shape (3,); joint accelerations (forward_dynamics)
    *     [rad/s^2 (revolute), m/s^2 (prismatic)].
+   *     dqdd_dq: shape (3, 3); d qdd / dq: row i, column j is d qdd_i / d q_j
+   *     (forward_dynamics_derivatives).
+   *     dqdd_dqd: shape (3, 3); d qdd / dqd (forward_dynamics_derivatives).
+   *     dqdd_dtau: shape (3, 3); d qdd / dtau = M(q)^-1
+   *     (forward_dynamics_derivatives).
    *     F: shape (3,); TCP force components [x, y, z] (tcp_force) [N, N*m].
    *     Mx: shape (3, 3); operational-space mass matrix J^-T M J^-1
    *     (operational_space).
@@ -2062,596 +2621,724 @@
     const _x13 = l1*l1;
     const _x14 = 0.25*m_c;
     const _x15 = l3*m_c;
-    const _x16 = l3*l3;
-    const _x17 = _x16*m_c;
-    const _x18 = 125.44*J_m;
-    const _x19 = q2_d*q1_d;
-    const _x20 = l1*m_a;
-    const _x21 = -q2_d;
-    const _x22 = 0.5*l2;
-    const _x23 = -q3_d;
-    const _x24 = _x14*_x13;
-    const _x25 = q1_d*q3_d;
-    const _x26 = q1_d*q1_d;
-    const _x27 = q3_d*q3_d;
-    const _x28 = l3*_x27;
-    const _x29 = q2_d*q2_d;
-    const _x30 = -l1*_x29;
-    const _x31 = g*_x7;
-    const _x32 = g*_x3;
-    const _x33 = _x8*m_c;
-    const _x34 = g*_x1;
-    const _x35 = 0.5*_x2;
-    const _x36 = l3*q3_dd;
-    const _x37 = -q3_dd;
-    const _x38 = -q2_dd;
-    const _x39 = l1*q2_dd;
-    const _x40 = _x12 + I_axx;
-    const _x41 = _x7*q1_d;
-    const _x42 = _x11*q1_d;
-    const _x43 = _x1*_x42 + _x0*_x41;
-    const _x44 = _x43*_x40;
-    const _x45 = _x3*_x3;
-    const _x46 = _x1*_x1;
-    const _x47 = l1*_x1;
-    const _x48 = _x0*_x11;
-    const _x49 = _x1*_x7;
-    const _x50 = _x49 - _x48;
-    const _x51 = -_x0*_x42 + _x1*_x41;
-    const _x52 = -_x51;
-    const _x53 = _x1*_x11 + _x0*_x7;
-    const _x54 = -_x40;
-    const _x55 = I_ayy + _x54;
-    const _x56 = _x1*_x19;
-    const _x57 = _x0*q1_dd + _x56;
-    const _x58 = _x57*I_ayy;
-    const _x59 = _x11*I_ayy;
-    const _x60 = _x7*I_ayy;
-    const _x61 = _x0*_x19;
-    const _x62 = _x1*q1_dd - _x61;
-    const _x63 = _x62*I_ayy;
-    const _x64 = q3_d + _x21;
-    const _x65 = -_x64 + _x21;
-    const _x66 = _x65*_x40 - _x64*I_ayy;
-    const _x67 = _x43*I_ayy;
-    const _x68 = _x3*_x11 + _x5*_x7;
-    const _x69 = _x5*_x25;
-    const _x70 = _x3*q1_dd + _x69;
-    const _x71 = _x70*I_czz;
-    const _x72 = _x3*_x25;
-    const _x73 = _x5*q1_dd - _x72;
-    const _x74 = _x73*I_czz;
-    const _x75 = q2_d + _x23;
-    const _x76 = _x75*I_czz;
-    const _x77 = _x24 + I_cxx;
-    const _x78 = -_x77;
-    const _x79 = _x24 + I_cyy;
-    const _x80 = _x79 + _x78;
-    const _x81 = _x11*I_czz;
-    const _x82 = _x7*I_czz;
-    const _x83 = _x3*_x42 + _x5*_x41;
+    const _x16 = l3*l3*m_c;
+    const _x17 = 125.44*J_m;
+    const _x18 = q2_d*q1_d;
+    const _x19 = l1*m_a;
+    const _x20 = -q2_d;
+    const _x21 = 0.5*l2;
+    const _x22 = -q3_d;
+    const _x23 = _x14*_x13;
+    const _x24 = q1_d*q3_d;
+    const _x25 = q1_d*q1_d;
+    const _x26 = q3_d*q3_d;
+    const _x27 = l3*_x26;
+    const _x28 = q2_d*q2_d;
+    const _x29 = -l1*_x28;
+    const _x30 = g*_x7;
+    const _x31 = g*_x3;
+    const _x32 = _x8*m_c;
+    const _x33 = g*_x1;
+    const _x34 = 0.5*_x2;
+    const _x35 = g*_x11;
+    const _x36 = -_x6 - _x4;
+    const _x37 = _x31*_x32;
+    const _x38 = _x5*_x35;
+    const _x39 = _x32*_x38;
+    const _x40 = _x32*_x11;
+    const _x41 = -_x35;
+    const _x42 = -_x3*_x30 + _x5*_x41;
+    const _x43 = _x32*_x42;
+    const _x44 = _x33*_x34;
+    const _x45 = _x34*_x11;
+    const _x46 = _x0*_x35 + _x1*_x30;
+    const _x47 = _x34*_x46;
+    const _x48 = _x0*_x41;
+    const _x49 = _x34*_x48;
+    const _x50 = l3*q3_dd;
+    const _x51 = -q3_dd;
+    const _x52 = -q2_dd;
+    const _x53 = l1*q2_dd;
+    const _x54 = _x12 + I_axx;
+    const _x55 = q3_d + _x20;
+    const _x56 = -_x55 + _x20;
+    const _x57 = _x56*_x54;
+    const _x58 = _x3*_x3;
+    const _x59 = _x1*_x1;
+    const _x60 = _x9 - _x10;
+    const _x61 = -_x0;
+    const _x62 = -_x0*_x11 + _x1*_x7;
+    const _x63 = _x7*q1_d;
+    const _x64 = _x11*q1_d;
+    const _x65 = -_x0*_x64 + _x1*_x63;
+    const _x66 = -_x65;
+    const _x67 = I_ayy - _x54;
+    const _x68 = _x1*_x11 + _x0*_x7;
+    const _x69 = _x1*_x18;
+    const _x70 = _x0*q1_dd + _x69;
+    const _x71 = _x70*I_ayy;
+    const _x72 = _x11*I_ayy;
+    const _x73 = _x0*_x18;
+    const _x74 = _x1*q1_dd - _x73;
+    const _x75 = _x74*I_ayy;
+    const _x76 = _x7*I_ayy;
+    const _x77 = _x57 - _x55*I_ayy;
+    const _x78 = _x1*_x64 + _x0*_x63;
+    const _x79 = _x78*I_ayy;
+    const _x80 = -_x3;
+    const _x81 = _x3*_x11 + _x5*_x7;
+    const _x82 = _x3*_x24;
+    const _x83 = _x5*q1_dd - _x82;
     const _x84 = _x83*I_czz;
-    const _x85 = _x5*_x11;
-    const _x86 = _x3*_x7;
-    const _x87 = 2.0*_x15;
-    const _x88 = l3*_x3;
-    const _x89 = _x86 - _x85;
-    const _x90 = -_x5*_x42 + _x3*_x41;
-    const _x91 = -_x90;
-    const _x92 = _x77 - I_czz;
-    const _x93 = l3*_x26;
-    const _x94 = _x3*_x5;
-    const _x95 = -_x93*_x94 + _x36 + _x32;
-    const _x96 = m_c*_x95;
-    const _x97 = _x28 + _x45*_x93 + g*_x5;
-    const _x98 = m_c*_x97;
-    const _x99 = _x11*m_c;
-    const _x100 = _x7*m_c;
-    const _x101 = l3*_x11;
-    const _x102 = I_czz - _x79;
-    const _x103 = l1*_x26;
-    const _x104 = _x30 - _x46*_x103 + g*_x0;
-    const _x105 = m_a*_x104;
-    const _x106 = _x0*_x1;
-    const _x107 = _x39 + _x103*_x106 + _x34;
-    const _x108 = m_a*_x107;
-    const _x109 = _x11*m_a;
-    const _x110 = _x7*m_a;
-    const _x111 = l1*_x11;
-    const _x112 = Math.tanh(10.0*_x64);
-    const _x113 = 176.89*J_m;
-    const _x114 = I_baseyy + _x113;
-    const _x115 = _x13*m_a;
-    const _x116 = _x2*_x111;
-    const _x117 = 0.5*_x116;
-    const _x118 = _x18 + _x77 + _x40;
-    const _x119 = _x118 + _x54 + _x115 + I_bexx;
-    const _x120 = 1.0/_x119;
-    const _x121 = 0.0005*q1_d;
-    const _x122 = Math.tanh(10.0*q1_d);
-    const _x123 = 0.01*_x122;
-    const _x124 = l5*m_be;
-    const _x125 = 0.0005*q2_d;
-    const _x126 = Math.tanh(10.0*q2_d);
-    const _x127 = 0.01*_x126;
-    const _x128 = 0.0005*_x64;
-    const _x129 = 0.01*_x112;
-    const _x130 = _x129 + _x128;
-    const _x131 = l6*m_df;
-    const _x132 = Math.sin(q1);
-    const _x133 = l2*_x3;
-    const _x134 = Math.cos(q1);
-    const _x135 = l2*_x5;
-    const _x136 = l1*_x0;
-    const _x137 = q1_dd*I_baseyy + _x113*q1_dd;
-    const _x138 = q2_dd*I_bexx;
-    const _x139 = q3_dd*I_dfxx;
-    const _x140 = _x132*_x135;
-    const _x141 = -_x135 + _x136;
-    const _x142 = _x132*_x141;
-    const _x143 = -_x140 - _x142;
-    const _x144 = _x133*_x134;
-    const _x145 = _x47*_x134;
-    const _x146 = _x144 + _x145;
-    const _x147 = _x132*_x132;
-    const _x148 = _x133*_x147;
-    const _x149 = _x134*_x134;
-    const _x150 = _x133*_x149;
-    const _x151 = _x132*_x133;
-    const _x152 = _x47*_x132;
-    const _x153 = _x151 + _x152;
-    const _x154 = _x132*_x153 - _x150 + _x134*_x146 - _x148;
-    const _x155 = _x148 + _x150;
-    const _x156 = _x20 + _x124;
-    const _x157 = _x131 - _x15;
-    const _x158 = _x135*_x134;
-    const _x159 = -_x134*_x141 - _x158;
-    const _x160 = _x159*_x140;
-    const _x161 = -_x151 - _x152;
-    const _x162 = _x146*_x158 - _x140*_x161;
-    const _x163 = -_x159*_x146;
-    const _x164 = _x12 + I_azz;
-    const _x165 = _x7*_x8;
-    const _x166 = _x7*_x11;
-    const _x167 = _x166*_x164 - _x166*I_ayy + _x2*_x165;
-    const _x168 = _x11*_x11;
-    const _x169 = _x7*_x7;
-    const _x170 = -_x166*I_czz + _x79*_x166 + _x15*_x165;
-    const _x171 = _x111*_x15;
-    const _x172 = _x3*(_x3*(_x79*_x168 + _x169*I_czz + _x171 + _x17 + I_dfzz) + _x5*_x170) + _x5*(_x3*_x170 + _x5*(_x79*_x169 + _x168*I_czz + I_dfyy)) + _x1*(_x1*(_x164*_x168 + _x169*I_ayy + _x116 + _x115 + I_beyy) + _x0*_x167) + _x0*(_x1*_x167 + _x0*(_x164*_x169 + _x168*I_ayy + I_bezz)) + _x114;
-    const _x173 = -_x154*_x140 + _x143*_x155;
-    const _x174 = -_x155*_x146;
-    const _x175 = _x154*_x146;
-    const _x176 = _x173*_x161 + _x175*_x158 + _x159*_x174;
-    const _x177 = 1.0/_x176;
-    const _x178 = _x177*_x172;
-    const _x179 = _x5*_x134;
-    const _x180 = -_x132;
-    const _x181 = _x3*_x134;
-    const _x182 = -_x181;
-    const _x183 = _x133*_x134 + _x145;
-    const _x184 = _x5*_x132;
-    const _x185 = _x3*_x132;
-    const _x186 = -_x185;
-    const _x187 = _x1*_x134;
-    const _x188 = -_x0*_x134;
-    const _x189 = _x1*_x132;
-    const _x190 = -_x0*_x132;
-    const _x191 = _x132*_x132*_x133;
-    const _x192 = _x133*_x134*_x134;
-    const _x193 = _x166*I_czz;
-    const _x194 = 2.0*_x193;
-    const _x195 = _x14*_x13 + I_cyy;
-    const _x196 = _x195*_x166;
-    const _x197 = 2.0*_x196;
-    const _x198 = _x197 - _x194;
-    const _x199 = l1*_x7;
-    const _x200 = _x2*_x199;
-    const _x201 = _x166*_x164;
-    const _x202 = 2.0*_x201;
-    const _x203 = _x166*I_ayy;
-    const _x204 = 2.0*_x203;
-    const _x205 = _x204 - _x202;
-    const _x206 = _x15*_x199;
-    const _x207 = _x194 - _x197;
-    const _x208 = _x202 - _x204;
-    const _x209 = 0.5*_x206;
-    const _x210 = _x196 + _x209 - _x193;
-    const _x211 = _x5*_x210;
-    const _x212 = _x195*_x168;
-    const _x213 = _x169*I_czz;
-    const _x214 = _x212 + _x213;
-    const _x215 = _x17 + _x214 + _x171 + I_dfzz;
-    const _x216 = _x3*_x210;
-    const _x217 = 0.5*_x171;
-    const _x218 = _x168*I_czz;
-    const _x219 = _x195*_x169;
-    const _x220 = _x218 + _x219;
-    const _x221 = _x220 - _x217 - _x212 - _x213;
-    const _x222 = I_dfyy + _x220;
-    const _x223 = _x169*I_ayy;
-    const _x224 = _x164*_x168;
-    const _x225 = _x164*_x169;
-    const _x226 = _x168*I_ayy;
-    const _x227 = _x225 + _x226;
-    const _x228 = -_x117 - _x224 - _x223 + _x227;
-    const _x229 = _x5*(-_x3*_x222 + _x3*_x221 + _x5*_x207 + _x211) + _x3*((_x206 + _x198)*_x3 + _x5*_x221 + _x5*_x215 - _x216) - _x3*(_x5*_x222 + _x216) + (_x1*_x228 + _x0*_x205)*_x0 + _x1*((_x208 + _x200)*_x1 + _x0*_x228) + _x5*(_x3*_x215 + _x211);
-    const _x230 = 0.5*q3_d;
-    const _x231 = _x217 + _x214 - _x218 - _x219;
-    const _x232 = _x223 + _x224;
-    const _x233 = _x13*m_a + _x232 + _x116 + I_beyy;
-    const _x234 = 0.5*_x200;
-    const _x235 = _x234 + _x201 - _x203;
-    const _x236 = _x0*_x235;
-    const _x237 = _x1*_x235;
-    const _x238 = -_x225 - _x226 + _x117 + _x232;
-    const _x239 = I_bezz + _x227;
-    const _x240 = -_x0*(_x1*_x233 + _x236) + _x1*((-_x200 + _x205)*_x1 + _x0*_x238 - _x0*_x233 + _x237) + _x1*(_x0*_x239 + _x237) + _x0*(_x1*_x238 + _x0*_x208 + _x1*_x239 - _x236) + _x3*((-_x206 + _x207)*_x3 + _x5*_x231) + (_x3*_x231 + _x5*_x198)*_x5;
-    const _x241 = 0.5*q2_d;
-    const _x242 = 0.5*q1_d;
-    const _x243 = _x240*_x242;
-    const _x244 = _x229*_x242;
-    const _x245 = _x123 + _x121;
-    const _x246 = -_x130 + _x127 + _x125;
-    const _x247 = (_x134*_x153 + _x134*_x161)*_x19 + (-_x136*_x149 - _x136*_x147)*_x29 + (_x135*_x149 + _x135*_x147)*_x27;
-    const _x248 = 2.0*_x25;
-    const _x249 = _x19*_x136;
-    const _x250 = -_x27*_x151 + _x19*_x159 - _x134*_x249 - _x29*_x152 + _x248*_x158 + _x26*_x161;
-    const _x251 = -_x140*_x248 - _x27*_x144 + (-_x145 - _x144)*_x26 - _x29*_x145 + (_x142 + _x140)*_x19 + _x132*_x249;
-    const _x252 = _x217 + _x117;
-    const _x253 = -_x234 - _x209;
-    const _x254 = _x234 + _x209;
-    const _x255 = _x20*_x61;
-    const _x256 = _x1*_x41;
-    const _x257 = _x0*_x42;
-    const _x258 = _x256 - _x257;
-    const _x259 = -q2_d*_x257 + q2_d*_x256 + _x64*_x258;
-    const _x260 = _x65*_x258;
-    const _x261 = -l2*_x255 + _x259*_x164 - _x40*_x260 + _x260*I_ayy;
-    const _x262 = _x1*_x42;
-    const _x263 = _x0*_x41;
-    const _x264 = _x262 + _x263;
-    const _x265 = _x65*_x264;
-    const _x266 = -_x265*_x164 + _x40*_x265 + I_ayy*(-q2_d*_x263 - q2_d*_x262 - _x64*_x264);
-    const _x267 = _x1*I_bezz;
-    const _x268 = _x19*I_bexx;
-    const _x269 = _x1*I_beyy;
-    const _x270 = _x22*m_a;
-    const _x271 = _x5*_x41;
-    const _x272 = _x3*q1_d;
-    const _x273 = _x11*_x272;
-    const _x274 = _x271 + _x273;
-    const _x275 = -_x75 + _x23;
-    const _x276 = _x275*(_x24 + I_cxx);
-    const _x277 = _x79*_x274;
-    const _x278 = -_x276*_x274 + _x275*_x277 + I_czz*(q3_d*_x273 + q3_d*_x271 + _x75*_x274);
-    const _x279 = q3_d*_x272;
-    const _x280 = _x15*_x69;
-    const _x281 = _x5*_x42;
-    const _x282 = _x7*_x272;
-    const _x283 = _x282 - _x281;
-    const _x284 = -q3_d*_x282 - _x75*_x283 + q3_d*_x281;
-    const _x285 = _x283*I_czz;
-    const _x286 = -_x285*_x275 + l1*_x280 + _x79*_x284 + _x283*_x276;
-    const _x287 = _x33*_x283;
-    const _x288 = _x5*I_dfzz;
-    const _x289 = _x28 + _x3*_x3*_x93;
-    const _x290 = _x3*_x5*_x93;
-    const _x291 = m_c*(-_x11*_x290 + _x7*_x289);
-    const _x292 = -_x8*_x291 - _x283*_x277 + _x285*_x274;
-    const _x293 = _x0*_x1*_x103;
-    const _x294 = _x30 - _x1*_x1*_x103;
-    const _x295 = _x264*_x258;
-    const _x296 = m_a*(_x11*_x293 + _x7*_x294);
-    const _x297 = _x0*_x26;
-    const _x298 = -_x295*I_ayy - _x22*_x296 + _x295*_x164;
-    const _x299 = _x3*_x26;
-    const _x300 = _x5*_x31;
-    const _x301 = _x33*(_x32*_x11 + _x300);
-    const _x302 = _x0*_x31;
-    const _x303 = _x35*(_x34*_x11 + _x302);
-    const _x304 = (-l1*_x61 + l1*_x62)*m_a;
-    const _x305 = _x51*_x64 + _x11*_x62 + _x7*_x57;
-    const _x306 = _x51*_x65;
-    const _x307 = -_x40*_x306 + _x305*_x164 + _x22*_x304 + _x306*I_ayy;
-    const _x308 = _x43*_x164;
-    const _x309 = _x43*_x65*_x40 - _x308*_x65 + I_ayy*(-_x11*_x57 - _x64*_x43 + _x7*_x62);
-    const _x310 = _x83*_x275;
-    const _x311 = -_x310*_x77 + _x310*_x79 + I_czz*(-_x11*_x73 + _x83*_x75 + _x7*_x70);
-    const _x312 = (l3*_x70 + l3*_x69)*m_c;
-    const _x313 = -_x90*_x75 + _x11*_x70 + _x7*_x73;
-    const _x314 = _x90*_x275;
-    const _x315 = -_x314*I_czz + _x313*_x79 + _x8*_x312 + _x314*_x77;
-    const _x316 = _x28 + _x3*_x3*_x93 + g*_x5;
-    const _x317 = m_c*(_x11*_x95 + _x7*_x316);
-    const _x318 = _x90*_x83;
-    const _x319 = -_x8*_x317 - _x318*_x79 + _x38*_x77 + _x318*I_czz;
-    const _x320 = _x30 - _x1*_x1*_x103 + g*_x0;
-    const _x321 = m_a*(_x11*_x107 + _x7*_x320);
-    const _x322 = _x51*_x43;
-    const _x323 = _x26*_x106;
-    const _x324 = -_x322*I_ayy + _x37*_x40 - _x22*_x321 + _x308*_x51;
-    const _x325 = _x26*_x94;
-    const _x326 = -_x308*_x65 + _x44*_x65 + I_ayy*(-_x11*_x57 - _x64*_x43 + _x7*_x62);
-    const _x327 = m_c*(_x11*_x95 + _x7*_x97);
-    const _x328 = m_a*(_x11*_x107 + _x7*_x104);
-    const _x329 = _x9 - _x10;
-    const _x330 = _x0*q2_d;
-    const _x331 = _x0*q1_d;
-    const _x332 = -_x0;
-    const _x333 = q1_dd*_x332 - _x56;
-    const _x334 = -_x330;
-    const _x335 = -_x331;
-    const _x336 = -_x20*_x56 + _x20*_x333;
-    const _x337 = _x20*_x334 - _x20*_x330;
-    const _x338 = _x20*_x335 - _x20*_x331;
-    const _x339 = _x47*m_a;
-    const _x340 = q1_d*_x329;
-    const _x341 = -_x6 - _x4;
-    const _x342 = q1_d*_x341;
-    const _x343 = -_x0*_x342 + _x41*_x332;
-    const _x344 = -_x0*_x41 + _x1*_x340;
-    const _x345 = _x19*_x332;
-    const _x346 = _x1*q2_d;
-    const _x347 = _x1*q1_d;
-    const _x348 = _x1*q1_dd + _x345;
-    const _x349 = _x11*_x333 + _x64*_x343 + _x11*_x57 + _x62*_x341 + _x7*_x348;
-    const _x350 = _x57*_x329 + _x64*_x344 + _x7*_x62;
-    const _x351 = _x11*_x334 + _x50*_x64 + _x7*_x346;
-    const _x352 = _x7*_x347 + _x11*_x335 + _x52;
-    const _x353 = _x65*_x343;
-    const _x354 = _x65*_x344;
-    const _x355 = _x50*_x65;
-    const _x356 = _x55*_x353 + _x349*_x164 + _x22*_x336;
-    const _x357 = _x55*_x354 + _x350*_x164;
-    const _x358 = _x55*_x355 + _x351*_x164 + _x22*_x337;
-    const _x359 = _x352*_x164 + _x22*_x338;
-    const _x360 = _x55*_x52 + _x51*_x164;
-    const _x361 = _x53*_x164 + _x22*_x339;
-    const _x362 = _x42*_x332 + _x1*_x41 + _x1*_x342 + _x0*_x42;
-    const _x363 = _x1*_x41 + _x0*_x340;
-    const _x364 = _x362*_x164;
-    const _x365 = _x363*_x164;
-    const _x366 = _x53*_x164;
-    const _x367 = -_x58*_x341 - _x65*_x364 - _x59*_x348 + _x60*_x333 + _x63*_x11 + _x66*_x362;
-    const _x368 = _x63*_x329 - _x65*_x365 - _x7*_x58 + _x66*_x363;
-    const _x369 = -_x59*_x346 + _x60*_x334 - _x65*_x366 + _x66*_x53;
-    const _x370 = _x67 + _x60*_x335 - _x59*_x347;
-    const _x371 = -_x44 - _x67 + _x308;
-    const _x372 = _x49*I_ayy - _x48*I_ayy;
-    const _x373 = -_x3;
-    const _x374 = _x3*_x342 + _x5*_x42;
-    const _x375 = _x5*_x340 + _x3*_x41 + _x5*_x42 + _x41*_x373;
-    const _x376 = _x3*q3_d;
-    const _x377 = q1_dd*_x373 - _x69;
-    const _x378 = -_x376;
-    const _x379 = -_x272;
-    const _x380 = _x25*_x373;
-    const _x381 = _x5*q3_d;
-    const _x382 = _x5*q1_d;
-    const _x383 = _x5*q1_dd + _x380;
-    const _x384 = _x374*_x275;
-    const _x385 = _x375*_x275;
-    const _x386 = _x68*_x275;
-    const _x387 = -_x83;
-    const _x388 = _x71*_x11 + _x80*_x384 - _x74*_x341 + _x76*_x374;
-    const _x389 = -_x7*_x74 + _x71*_x329 - _x81*_x377 + _x76*_x375 + _x82*_x383 + _x80*_x385;
-    const _x390 = _x82*_x381 - _x81*_x378 + _x76*_x68 + _x80*_x386;
-    const _x391 = _x84 + _x80*_x387;
-    const _x392 = -_x84 + _x82*_x382 - _x81*_x379;
-    const _x393 = _x86*I_czz - _x85*I_czz;
-    const _x394 = _x15*_x380 + _x15*_x383;
-    const _x395 = _x87*_x381;
-    const _x396 = _x87*_x382;
-    const _x397 = _x88*m_c;
-    const _x398 = -_x5*_x342 + _x3*_x42;
-    const _x399 = -_x42*_x373 + _x3*_x340;
-    const _x400 = -_x75*_x398 + _x341*_x70 + _x11*_x73;
-    const _x401 = _x7*_x70 + _x329*_x73 - _x75*_x399 + _x11*_x383 + _x7*_x377;
-    const _x402 = -_x89*_x75 + _x11*_x381 + _x7*_x378;
-    const _x403 = _x11*_x382 + _x7*_x379 + _x90;
-    const _x404 = _x275*_x398;
-    const _x405 = _x275*_x399;
-    const _x406 = _x89*_x275;
-    const _x407 = _x79*_x400 + _x92*_x404;
-    const _x408 = _x8*_x394 + _x92*_x405 + _x79*_x401;
-    const _x409 = _x92*_x406 + _x8*_x395 + _x79*_x402;
-    const _x410 = _x92*_x91 + _x91*_x79;
-    const _x411 = _x8*_x396 + _x79*_x403;
-    const _x412 = _x8*_x397 + _x68*_x79;
-    const _x413 = 2.0*q1_d;
-    const _x414 = l3*_x413;
-    const _x415 = 2.0*_x3*_x5*_x93 + g*_x373;
-    const _x416 = _x45*_x414;
-    const _x417 = 2.0*l3*q3_d;
-    const _x418 = g*_x5;
-    const _x419 = _x3*_x373 + _x5*_x5;
-    const _x420 = _x418 - _x93*_x419;
-    const _x421 = -_x94*_x414;
-    const _x422 = _x96*_x341 + _x98*_x11;
-    const _x423 = _x7*_x96 + _x99*_x420 + _x98*_x329 + _x100*_x415;
-    const _x424 = _x100*_x416 + _x99*_x421;
-    const _x425 = _x100*_x417;
-    const _x426 = _x101*m_c;
-    const _x427 = _x83*_x398 + _x374*_x90;
-    const _x428 = _x83*_x399 + _x375*_x90;
-    const _x429 = _x68*_x90 + _x89*_x83;
-    const _x430 = -_x8*_x422 + _x102*_x427;
-    const _x431 = -_x8*_x423 + _x102*_x428;
-    const _x432 = -_x8*_x424 + _x102*_x429;
-    const _x433 = -_x8*_x425;
-    const _x434 = -_x8*_x426;
-    const _x435 = g*_x332;
-    const _x436 = l1*_x413;
-    const _x437 = _x1*_x1 + _x0*_x332;
-    const _x438 = _x435 + _x103*_x437;
-    const _x439 = _x106*_x436;
-    const _x440 = -2.0*_x1*_x332*_x103 + g*_x1;
-    const _x441 = -_x46*_x436;
-    const _x442 = -2.0*l1*q2_d;
-    const _x443 = _x105*_x11 + _x108*_x341 + _x109*_x438 + _x110*_x440;
-    const _x444 = _x105*_x329 + _x7*_x108;
-    const _x445 = _x110*_x441 + _x109*_x439;
-    const _x446 = _x110*_x442;
-    const _x447 = _x111*m_a;
-    const _x448 = _x51*_x362 + _x43*_x343;
-    const _x449 = _x51*_x363 + _x43*_x344;
-    const _x450 = _x50*_x43 + _x53*_x51;
-    const _x451 = _x26*_x437;
-    const _x452 = _x106*_x413;
-    const _x453 = -_x448*I_ayy - _x22*_x443 + _x308*_x343 + _x51*_x364;
-    const _x454 = _x308*_x344 - _x22*_x444 - _x449*I_ayy + _x51*_x365;
-    const _x455 = -_x22*_x445 - _x450*I_ayy + _x50*_x308 + _x51*_x366;
-    const _x456 = -_x22*_x446;
-    const _x457 = -_x22*_x447;
-    const _x458 = _x26*_x419;
-    const _x459 = _x94*_x413;
-    const _x460 = _x88*_x33;
-    const _x461 = _x47*_x270;
-    const _x462 = _x3*_x311 + _x5*_x315 + _x1*_x326 + _x0*_x307;
-    const _x463 = (-I_bexx + I_bezz)*_x1;
-    const _x464 = _x0*I_bezz;
-    const _x465 = -_x5*_x311 - _x0*_x326 + _x3*_x315 + _x1*_x307;
-    const _x466 = (I_bexx - I_beyy)*_x0;
-    const _x467 = _x5*I_dfyy;
-    const _x468 = (-I_dfxx + I_dfzz)*_x5;
-    const _x469 = (-I_dfyy + I_dfxx)*_x3;
-    const _x470 = _x3*I_dfzz;
-    const _x471 = -I_bezz + I_beyy;
-    const _x472 = _x111*_x270;
-    const _x473 = m_a*_x169;
-    const _x474 = l1*_x473;
-    const _x475 = _x110*_x111;
-    const _x476 = 2.0*_x7;
-    const _x477 = l1*_x476*_x270;
-    const _x478 = _x477*_x43;
-    const _x479 = l1*(-_x110*_x104 - _x322*_x270 - _x37*_x270 + _x328);
-    const _x480 = _x7*_x107;
-    const _x481 = l1*(m_a*(-_x11*_x104 + _x480) + m_a*_x480 + _x43*_x43*_x270 + _x65*_x65*_x270);
-    const _x482 = 0.1*(1.0 - _x112*_x112);
-    const _x483 = -0.0005 - _x482;
-    const _x484 = _x101*_x33;
-    const _x485 = l3*_x33*_x476;
-    const _x486 = _x485*_x83;
-    const _x487 = l3*(-_x100*_x97 - _x33*_x38 + _x33*_x318 + _x327);
-    const _x488 = _x7*_x95;
-    const _x489 = l3*(-_x33*_x83*_x83 - _x33*_x275*_x275 + m_c*(-_x11*_x97 + _x488) + m_c*_x488);
-    const _x490 = -I_dfzz + I_dfyy;
-    const _x491 = m_c*_x169;
-    const _x492 = l3*_x491;
-    const _x493 = _x101*_x100;
-    const _x494 = _x65*(_x12 + I_axx);
-    const _x495 = _x258*I_ayy;
-    const _x496 = -l2*_x255 - _x494*_x258 + _x495*_x65 + _x259*_x164;
-    const _x497 = _x264*_x164;
-    const _x498 = -_x497*_x65 + _x494*_x264 + I_ayy*(-q2_d*_x263 - q2_d*_x262 - _x64*_x264);
-    const _x499 = _x19*I_beyy;
-    const _x500 = _x270*_x258;
-    const _x501 = _x7*_x382;
-    const _x502 = _x3*_x42;
-    const _x503 = _x501 + _x502;
-    const _x504 = _x79*_x503;
-    const _x505 = -_x276*_x503 + _x275*_x504 + I_czz*(q3_d*_x502 + q3_d*_x501 + _x75*_x503);
-    const _x506 = q3_d*_x382;
-    const _x507 = _x15*_x506;
-    const _x508 = _x11*_x382;
-    const _x509 = _x3*_x41;
-    const _x510 = _x509 - _x508;
-    const _x511 = -q3_d*_x509 - _x75*_x510 + q3_d*_x508;
-    const _x512 = _x510*I_czz;
-    const _x513 = l1*_x507 + _x79*_x511 - _x275*_x512 + _x276*_x510;
-    const _x514 = _x33*_x510;
-    const _x515 = _x103*_x106 + _x34;
-    const _x516 = m_a*(_x11*_x515 + _x7*_x320);
-    const _x517 = -_x22*_x516 - _x495*_x264 + _x497*_x258;
-    const _x518 = -_x93*_x94 + _x32;
-    const _x519 = m_c*(_x11*_x518 + _x7*_x316);
-    const _x520 = -_x8*_x519 - _x504*_x510 + _x512*_x503;
-    const _x521 = _x78 + _x118 + _x17 + I_dfxx;
-    const _x522 = _x120*_x252;
-    const _x523 = -_x252*_x522 + _x521;
-    const _x524 = -_x3*(-_x506*I_dfyy + _x11*_x513 + l3*(_x33*_x511 + _x275*_x514 + 2.0*_x507) + _x7*_x505 + _x506*I_dfzz + _x506*I_dfxx) - _x0*(_x7*_x496 - _x11*_x498 + _x56*I_bezz - _x1*_x499 + _x56*I_bexx) - _x123 - _x5*(-_x72*I_dfyy - _x11*_x505 - _x72*I_dfxx + _x7*_x513 + _x72*I_dfzz) - _x121 - _x1*(_x11*_x496 - _x0*_x499 - _x61*I_bexx + l1*(-_x500*_x65 + _x270*_x259 - 2.0*_x255) + _x7*_x498 + _x61*I_bezz) + tau_q1;
-    const _x525 = -l1*(_x11*(-_x500*_x264 + _x516) + _x7*(m_a*(-_x11*_x320 + _x7*_x515) + _x270*_x264*_x264 + _x65*_x65*_x270)) + _x130 - _x323*I_beyy - _x124*_x34 - _x125 + _x323*I_bezz - _x127 + tau_q2 + _x520;
-    const _x526 = -_x525*_x522 + _x325*I_dfzz + _x32*_x131 - _x128 - _x325*I_dfyy + tau_q3 - l3*(_x11*(_x514*_x503 + _x519) + _x7*(-_x33*_x275*_x275 - _x33*_x503*_x503 + m_c*(-_x11*_x316 + _x7*_x518))) + _x517 - _x129;
-    const _x527 = _x526/_x523;
-    const _x528 = _x120*_x525 - _x527*_x522;
-    const _x529 = _x524/_x172;
-    const _x530 = _x47*_x134 + _x133*_x134;
-    const _x531 = -_x132*_x141 - _x140;
-    const _x532 = _x134*_x530 + (_x151 + _x152)*_x132 - _x192 - _x191;
-    const _x533 = _x192 + _x191;
-    const _x534 = _x3*(_x11*_x315 - _x69*I_dfyy + _x7*_x311 + _x70*I_dfzz + l3*(_x33*_x314 + _x33*_x313 + _x312) + _x69*I_dfxx) + _x5*(-_x11*_x311 - _x72*I_dfxx + _x72*I_dfzz + _x7*_x315 + _x73*I_dfyy) + _x1*(-_x61*I_bexx + l1*(_x305*_x270 - _x306*_x270 + _x304) + _x11*_x307 + _x61*I_bezz + _x7*_x309 + _x62*I_beyy) + _x0*(-_x56*I_beyy - _x11*_x309 + _x7*_x307 + _x57*I_bezz + _x56*I_bexx) + _x137;
-    const _x535 = _x124*_x34 + l1*(_x11*(-_x322*_x270 - _x37*_x270 + _x321) + _x7*(m_a*(-_x11*_x320 + _x7*_x107) + _x43*_x43*_x270 + _x65*_x65*_x270)) + _x138 - _x323*I_bezz + _x18*q2_dd + _x323*I_beyy - _x319;
-    const _x536 = -_x32*_x131 + _x139 - _x325*I_dfzz + _x18*q3_dd + l3*(_x11*(-_x33*_x38 + _x33*_x318 + _x317) + _x7*(-_x33*_x83*_x83 - _x33*_x275*_x275 + m_c*(-_x11*_x316 + _x7*_x95))) + _x325*I_dfyy - _x324;
-    const _x537 = -_x140*_x532 + _x533*_x531;
-    const _x538 = -_x530*_x533;
-    const _x539 = _x530*_x532;
-    const _x540 = -_x159*_x533 + _x158*_x532;
-    const _x541 = _x161*_x533;
-    const _x542 = -_x161*_x532;
-    const _x543 = -_x158*_x531 + _x159*_x140;
-    const _x544 = -_x140*_x161 + _x158*_x530;
-    const _x545 = -_x159*_x530 + _x161*_x531;
-    const _x546 = _x161*_x537 + _x159*_x538 + _x158*_x539;
-    const _x547 = 1.0/_x546;
-    const _x548 = _x547*(_x534*_x537 + _x538*_x535 + _x539*_x536);
-    const _x549 = _x547*(_x534*_x540 + _x535*_x541 + _x536*_x542);
-    const _x550 = _x547*(_x534*_x543 + _x535*_x544 + _x536*_x545);
-    const _x551 = _x3*(-_x69*I_dfyy + l3*(_x33*_x284 + _x287*_x275 + 2.0*_x280) + _x25*_x288 + _x11*_x286 + _x7*_x278 + _x69*I_dfxx) + _x5*(-_x279*I_dfyy + _x7*_x286 - _x11*_x278 - _x279*I_dfxx + _x279*I_dfzz) + _x1*(l1*(_x270*_x259 - _x270*_x260 - 2.0*_x255) + _x11*_x261 - _x61*I_beyy + _x7*_x266 - _x0*_x268 + _x61*I_bezz) + _x0*(_x1*_x268 - _x11*_x266 - _x19*_x269 + _x19*_x267 + _x7*_x261);
-    const _x552 = -_x297*_x267 + l1*(_x11*(-_x295*_x270 + _x296) + _x7*(m_a*(-_x11*_x294 + _x7*_x293) + _x270*_x264*_x264 + _x65*_x65*_x270)) + _x297*_x269 - _x292;
-    const _x553 = _x34*(_x35*_x11 + _x156) + _x35*_x302 + _x301 - _x303;
-    const _x554 = _x5*_x299*I_dfyy - _x299*_x288 + l3*(_x11*(_x287*_x274 + _x291) + _x7*(-_x33*_x275*_x275 - _x33*_x274*_x274 + m_c*(-_x11*_x289 - _x7*_x290))) - _x298;
-    const _x555 = -_x32*(-_x33*_x11 + _x157) + _x33*_x300 - _x301 + _x303;
-    const _x556 = -_x155*_x159 + _x154*_x158;
-    const _x557 = _x155*_x161;
-    const _x558 = -_x154*_x161;
-    const _x559 = -_x143*_x158 + _x160;
-    const _x560 = _x163 + _x143*_x161;
-    const _x561 = _x178*_x173;
-    const _x562 = _x177*(_x174*_x119 + _x252*_x175);
-    const _x563 = _x177*(_x175*_x521 + _x252*_x174);
-    const _x564 = _x177*(_x551*_x173 + _x175*_x554 + _x174*_x552);
-    const _x565 = (_x174*_x553 + _x175*_x555)*_x177;
-    const _x566 = _x178*_x556;
-    const _x567 = _x177*(_x557*_x119 + _x252*_x558);
-    const _x568 = _x177*(_x558*_x521 + _x252*_x557);
-    const _x569 = _x177*(_x556*_x551 + _x557*_x552 + _x558*_x554);
-    const _x570 = (_x557*_x553 + _x558*_x555)*_x177;
-    const _x571 = _x178*_x559;
-    const _x572 = (_x162*_x119 + _x252*_x560)*_x177;
-    const _x573 = _x177*(_x560*_x521 + _x162*_x252);
-    const _x574 = _x177*(_x560*_x554 + _x162*_x552 + _x559*_x551);
-    const _x575 = _x177*(_x560*_x555 + _x162*_x553);
-    const _x576 = _x177*(_x562*_x174 + _x563*_x175 + _x561*_x173);
-    const _x577 = _x177*(_x563*_x558 + _x562*_x557 + _x561*_x556);
-    const _x578 = _x177*(_x568*_x558 + _x567*_x557 + _x566*_x556);
-    const _x579 = _x177*(_x563*_x560 + _x162*_x562 + _x561*_x559);
-    const _x580 = _x177*(_x162*_x567 + _x568*_x560 + _x566*_x559);
-    const _x581 = _x177*(_x573*_x560 + _x162*_x572 + _x571*_x559);
+    const _x85 = _x5*_x24;
+    const _x86 = _x3*q1_dd + _x85;
+    const _x87 = _x86*I_czz;
+    const _x88 = q2_d + _x22;
+    const _x89 = _x88*I_czz;
+    const _x90 = _x23 + I_cxx;
+    const _x91 = _x23 + I_cyy;
+    const _x92 = _x91 - _x90;
+    const _x93 = _x11*I_czz;
+    const _x94 = _x7*I_czz;
+    const _x95 = _x3*_x64 + _x5*_x63;
+    const _x96 = _x95*I_czz;
+    const _x97 = 2.0*_x15;
+    const _x98 = -_x5*_x11 + _x3*_x7;
+    const _x99 = -_x5*_x64 + _x3*_x63;
+    const _x100 = -_x99;
+    const _x101 = -I_czz;
+    const _x102 = _x90 + _x101;
+    const _x103 = 2.0*q1_d;
+    const _x104 = 2.0*l3;
+    const _x105 = _x104*q3_d;
+    const _x106 = l3*_x25;
+    const _x107 = _x3*_x5;
+    const _x108 = -_x107*_x106 + _x50 + _x31;
+    const _x109 = m_c*_x108;
+    const _x110 = _x27 + _x58*_x106 + g*_x5;
+    const _x111 = m_c*_x110;
+    const _x112 = _x11*m_c;
+    const _x113 = _x7*m_c;
+    const _x114 = I_czz - _x91;
+    const _x115 = 2.0*l1;
+    const _x116 = -_x115*q2_d;
+    const _x117 = l1*_x25;
+    const _x118 = _x29 - _x59*_x117 + g*_x0;
+    const _x119 = m_a*_x118;
+    const _x120 = _x0*_x1;
+    const _x121 = _x53 + _x117*_x120 + _x33;
+    const _x122 = m_a*_x121;
+    const _x123 = _x11*m_a;
+    const _x124 = _x7*m_a;
+    const _x125 = I_bezz - I_bexx;
+    const _x126 = -I_beyy + I_bexx;
+    const _x127 = I_dfzz - I_dfxx;
+    const _x128 = I_dfxx - I_dfyy;
+    const _x129 = -I_bezz + I_beyy;
+    const _x130 = Math.tanh(10.0*_x55);
+    const _x131 = 0.1*(1.0 - _x130*_x130);
+    const _x132 = -I_dfzz + I_dfyy;
+    const _x133 = 176.89*J_m;
+    const _x134 = I_baseyy + _x133;
+    const _x135 = _x13*m_a;
+    const _x136 = -_x54;
+    const _x137 = l1*_x11;
+    const _x138 = _x2*_x137;
+    const _x139 = 0.5*_x138;
+    const _x140 = _x17 + _x90 + _x54;
+    const _x141 = _x140 + _x136 + _x135 + I_bexx;
+    const _x142 = 1.0/_x141;
+    const _x143 = 0.0005*q1_d;
+    const _x144 = Math.tanh(10.0*q1_d);
+    const _x145 = 0.01*_x144;
+    const _x146 = tau_q1 - _x145 - _x143;
+    const _x147 = l5*m_be;
+    const _x148 = 0.0005*q2_d;
+    const _x149 = Math.tanh(10.0*q2_d);
+    const _x150 = 0.01*_x149;
+    const _x151 = 0.0005*_x55;
+    const _x152 = 0.01*_x130;
+    const _x153 = _x152 + _x151;
+    const _x154 = _x153 + tau_q2 - _x150 - _x148;
+    const _x155 = l6*m_df;
+    const _x156 = tau_q3 - _x152 - _x151;
+    const _x157 = _x12 + I_azz;
+    const _x158 = _x7*_x8;
+    const _x159 = _x7*_x11;
+    const _x160 = _x159*_x157 - _x159*I_ayy + _x2*_x158;
+    const _x161 = _x11*_x11;
+    const _x162 = _x7*_x7;
+    const _x163 = _x91*_x159 - _x159*I_czz + _x15*_x158;
+    const _x164 = _x15*_x137;
+    const _x165 = _x5*(_x3*_x163 + _x5*(_x91*_x162 + _x161*I_czz + I_dfyy)) + _x3*(_x3*(_x91*_x161 + _x162*I_czz + _x164 + _x16 + I_dfzz) + _x5*_x163) + _x1*(_x1*(_x162*I_ayy + _x138 + _x161*_x157 + _x135 + I_beyy) + _x0*_x160) + _x134 + _x0*(_x1*_x160 + _x0*(_x157*_x162 + _x161*I_ayy + I_bezz));
+    const _x166 = -_x90;
+    const _x167 = 0.5*_x164;
+    const _x168 = _x166 + _x140 + _x16 + I_dfxx;
+    const _x169 = _x7*_x110;
+    const _x170 = _x167 + _x139;
+    const _x171 = _x142*_x170;
+    const _x172 = -_x171*_x170 + _x168;
+    const _x173 = _x5*q1_d;
+    const _x174 = _x7*_x173;
+    const _x175 = _x3*_x64;
+    const _x176 = _x174 + _x175;
+    const _x177 = -_x88 + _x22;
+    const _x178 = _x11*_x173;
+    const _x179 = _x3*_x63;
+    const _x180 = _x179 - _x178;
+    const _x181 = _x32*_x180;
+    const _x182 = _x1*_x63;
+    const _x183 = _x0*_x64;
+    const _x184 = _x182 - _x183;
+    const _x185 = _x184*I_ayy;
+    const _x186 = _x1*_x64;
+    const _x187 = _x0*_x63;
+    const _x188 = _x186 + _x187;
+    const _x189 = _x157*_x188;
+    const _x190 = _x117*_x120 + _x33;
+    const _x191 = _x29 - _x1*_x1*_x117 + g*_x0;
+    const _x192 = m_a*(_x11*_x190 + _x7*_x191);
+    const _x193 = -_x21*_x192 - _x185*_x188 + _x184*_x189;
+    const _x194 = _x27 + _x3*_x3*_x106 + g*_x5;
+    const _x195 = -_x107*_x106 + _x31;
+    const _x196 = m_c*(_x11*_x195 + _x7*_x194);
+    const _x197 = _x25*_x107;
+    const _x198 = _x21*m_a;
+    const _x199 = _x184*_x198;
+    const _x200 = _x25*_x120;
+    const _x201 = _x91*_x176;
+    const _x202 = _x180*I_czz;
+    const _x203 = -_x8*_x196 - _x201*_x180 + _x176*_x202;
+    const _x204 = -l1*(_x11*(-_x188*_x199 + _x192) + _x7*(m_a*(-_x11*_x191 + _x7*_x190) + _x188*_x188*_x198 + _x56*_x56*_x198)) - _x33*_x147 - _x200*I_beyy + _x200*I_bezz + _x203 + _x154;
+    const _x205 = -_x171*_x204 + _x31*_x155 - _x197*I_dfyy + _x197*I_dfzz - l3*(_x11*(_x181*_x176 + _x196) + _x7*(-_x32*_x177*_x177 - _x32*_x176*_x176 + m_c*(-_x11*_x194 + _x7*_x195))) + _x193 + _x156;
+    const _x206 = _x205/_x172;
+    const _x207 = -_x206;
+    const _x208 = -_x171*_x206 + _x142*_x204;
+    const _x209 = -_x208;
+    const _x210 = _x7*_x118;
+    const _x211 = _x19*_x73;
+    const _x212 = -q2_d*_x183 + q2_d*_x182 + _x55*_x184;
+    const _x213 = _x56*(_x12 + I_axx);
+    const _x214 = -l2*_x211 + _x56*_x185 - _x184*_x213 + _x157*_x212;
+    const _x215 = -_x56*_x189 + _x213*_x188 + I_ayy*(-q2_d*_x187 - q2_d*_x186 - _x55*_x188);
+    const _x216 = _x18*I_beyy;
+    const _x217 = _x177*(_x23 + I_cxx);
+    const _x218 = -_x176*_x217 + _x177*_x201 + I_czz*(q3_d*_x175 + q3_d*_x174 + _x88*_x176);
+    const _x219 = q3_d*_x173;
+    const _x220 = _x15*_x219;
+    const _x221 = -q3_d*_x179 - _x88*_x180 + q3_d*_x178;
+    const _x222 = -_x177*_x202 + l1*_x220 + _x91*_x221 + _x217*_x180;
+    const _x223 = -_x5*(-_x11*_x218 - _x82*I_dfyy - _x82*I_dfxx + _x7*_x222 + _x82*I_dfzz) - _x1*(-_x0*_x216 + l1*(-_x56*_x199 + _x212*_x198 - 2.0*_x211) + _x11*_x214 - _x73*I_bexx + _x7*_x215 + _x73*I_bezz) - _x3*(-_x219*I_dfyy + _x11*_x222 + l3*(_x32*_x221 + _x181*_x177 + 2.0*_x220) + _x7*_x218 + _x219*I_dfzz + _x219*I_dfxx) - _x0*(-_x1*_x216 - _x11*_x215 + _x69*I_bezz + _x7*_x214 + _x69*I_bexx) + _x146;
+    const _x224 = _x223/_x165;
+    const _x225 = _x0*_x224 + _x69;
+    const _x226 = _x225*I_ayy;
+    const _x227 = _x1*_x224 - _x73;
+    const _x228 = _x227*I_ayy;
+    const _x229 = _x5*_x224 - _x82;
+    const _x230 = _x229*I_czz;
+    const _x231 = _x3*_x224 + _x85;
+    const _x232 = _x231*I_czz;
+    const _x233 = -_x107*_x106 + l3*_x206 + _x31;
+    const _x234 = m_c*_x233;
+    const _x235 = _x117*_x120 + l1*_x208 + _x33;
+    const _x236 = m_a*_x235;
+    const _x237 = l3*_x3;
+    const _x238 = _x32*_x237;
+    const _x239 = l1*_x1;
+    const _x240 = _x239*_x198;
+    const _x241 = _x1*_x125;
+    const _x242 = (-l1*_x73 + l1*_x227)*m_a;
+    const _x243 = _x65*_x55 + _x11*_x227 + _x7*_x225;
+    const _x244 = _x65*_x56;
+    const _x245 = -_x54*_x244 + _x243*_x157 + _x21*_x242 + _x244*I_ayy;
+    const _x246 = _x78*_x157;
+    const _x247 = _x57*_x78 - _x56*_x246 + I_ayy*(-_x11*_x225 - _x78*_x55 + _x7*_x227);
+    const _x248 = _x95*_x177;
+    const _x249 = -_x90*_x248 + _x91*_x248 + I_czz*(-_x11*_x229 + _x88*_x95 + _x7*_x231);
+    const _x250 = (l3*_x231 + l3*_x85)*m_c;
+    const _x251 = -_x88*_x99 + _x11*_x231 + _x7*_x229;
+    const _x252 = _x99*_x177;
+    const _x253 = -_x252*I_czz + _x8*_x250 + _x91*_x251 + _x90*_x252;
+    const _x254 = _x3*_x249 + _x5*_x253 + _x1*_x247 + _x0*_x245;
+    const _x255 = -_x0*_x247 - _x5*_x249 + _x3*_x253 + _x1*_x245;
+    const _x256 = _x1*I_beyy;
+    const _x257 = _x0*_x126;
+    const _x258 = _x0*I_bezz;
+    const _x259 = _x19*_x159;
+    const _x260 = _x7*_x115*_x198;
+    const _x261 = _x260*_x78;
+    const _x262 = _x19*_x162;
+    const _x263 = _x137*_x198;
+    const _x264 = _x7*_x235;
+    const _x265 = l1*(m_a*_x264 + m_a*(-_x11*_x118 + _x264) + _x78*_x78*_x198 + _x56*_x56*_x198);
+    const _x266 = m_a*(_x11*_x235 + _x210);
+    const _x267 = _x78*_x65;
+    const _x268 = l1*(-m_a*_x210 - _x207*_x198 - _x267*_x198 + _x266);
+    const _x269 = l3*_x11;
+    const _x270 = _x32*_x269;
+    const _x271 = m_c*(_x11*_x233 + _x169);
+    const _x272 = _x99*_x95;
+    const _x273 = l3*(-m_c*_x169 - _x32*_x209 + _x32*_x272 + _x271);
+    const _x274 = _x7*_x104*_x32;
+    const _x275 = _x274*_x95;
+    const _x276 = _x7*_x233;
+    const _x277 = l3*(m_c*_x276 - _x32*_x177*_x177 + m_c*(-_x11*_x110 + _x276) - _x32*_x95*_x95);
+    const _x278 = 1.0/_x172;
+    const _x279 = 1.0/_x165;
+    const _x280 = _x3*_x128;
+    const _x281 = _x5*_x127;
+    const _x282 = _x5*I_dfyy;
+    const _x283 = _x3*I_dfzz;
+    const _x284 = _x15*_x159;
+    const _x285 = _x15*_x162;
+    const _x286 = 0.1*(1.0 - _x144*_x144);
+    const _x287 = -_x131;
+    const _x288 = 0.1*(1.0 - _x149*_x149);
+    const _x289 = 0.0005 + _x131;
+    const _x290 = Math.sin(q1);
+    const _x291 = l2*_x3;
+    const _x292 = Math.cos(q1);
+    const _x293 = l2*_x5;
+    const _x294 = l1*_x0;
+    const _x295 = _x133*q1_dd + q1_dd*I_baseyy;
+    const _x296 = q2_dd*I_bexx;
+    const _x297 = q3_dd*I_dfxx;
+    const _x298 = _x290*_x293;
+    const _x299 = -_x293 + _x294;
+    const _x300 = _x290*_x299;
+    const _x301 = -_x298 - _x300;
+    const _x302 = _x291*_x292;
+    const _x303 = _x292*_x239;
+    const _x304 = _x302 + _x303;
+    const _x305 = _x290*_x290;
+    const _x306 = _x291*_x305;
+    const _x307 = _x292*_x292;
+    const _x308 = _x291*_x307;
+    const _x309 = _x290*_x291;
+    const _x310 = _x290*_x239;
+    const _x311 = _x309 + _x310;
+    const _x312 = _x292*_x304 + _x290*_x311 - _x308 - _x306;
+    const _x313 = _x306 + _x308;
+    const _x314 = _x147 + _x19;
+    const _x315 = _x155 - _x15;
+    const _x316 = _x292*_x293;
+    const _x317 = -_x292*_x299 - _x316;
+    const _x318 = _x298*_x317;
+    const _x319 = -_x309 - _x310;
+    const _x320 = _x304*_x316 - _x298*_x319;
+    const _x321 = -_x304*_x317;
+    const _x322 = -_x312*_x298 + _x301*_x313;
+    const _x323 = -_x313*_x304;
+    const _x324 = _x312*_x304;
+    const _x325 = _x322*_x319 + _x316*_x324 + _x317*_x323;
+    const _x326 = 1.0/_x325;
+    const _x327 = _x165*_x326;
+    const _x328 = _x5*_x292;
+    const _x329 = -_x290;
+    const _x330 = _x3*_x292;
+    const _x331 = -_x330;
+    const _x332 = _x1*_x292;
+    const _x333 = l1*_x332;
+    const _x334 = _x333 + l2*_x330;
+    const _x335 = _x5*_x290;
+    const _x336 = _x3*_x290;
+    const _x337 = -_x336;
+    const _x338 = l2*_x336;
+    const _x339 = _x1*_x290;
+    const _x340 = l1*_x339;
+    const _x341 = _x340 + _x338;
+    const _x342 = -_x0*_x292;
+    const _x343 = -_x0*_x290;
+    const _x344 = l2*_x328;
+    const _x345 = l2*_x335;
+    const _x346 = _x290*_x290*_x291;
+    const _x347 = _x291*_x292*_x292;
+    const _x348 = _x159*I_czz;
+    const _x349 = 2.0*_x348;
+    const _x350 = _x14*_x13 + I_cyy;
+    const _x351 = _x350*_x159;
+    const _x352 = 2.0*_x351;
+    const _x353 = _x352 - _x349;
+    const _x354 = l1*_x7;
+    const _x355 = _x2*_x354;
+    const _x356 = _x159*_x157;
+    const _x357 = 2.0*_x356;
+    const _x358 = _x159*I_ayy;
+    const _x359 = 2.0*_x358;
+    const _x360 = _x359 - _x357;
+    const _x361 = _x15*_x354;
+    const _x362 = _x349 - _x352;
+    const _x363 = _x357 - _x359;
+    const _x364 = 0.5*_x361;
+    const _x365 = _x351 + _x364 - _x348;
+    const _x366 = _x5*_x365;
+    const _x367 = _x350*_x161;
+    const _x368 = _x162*I_czz;
+    const _x369 = _x367 + _x368;
+    const _x370 = _x16 + I_dfzz + _x369 + _x164;
+    const _x371 = _x3*_x365;
+    const _x372 = _x161*I_czz;
+    const _x373 = _x350*_x162;
+    const _x374 = _x372 + _x373;
+    const _x375 = -_x368 - _x367 - _x167 + _x374;
+    const _x376 = I_dfyy + _x374;
+    const _x377 = _x162*I_ayy;
+    const _x378 = _x161*_x157;
+    const _x379 = _x157*_x162;
+    const _x380 = _x161*I_ayy;
+    const _x381 = _x379 + _x380;
+    const _x382 = -_x139 - _x378 - _x377 + _x381;
+    const _x383 = _x5*(-_x3*_x376 + _x3*_x375 + _x5*_x362 + _x366) + _x3*((_x361 + _x353)*_x3 + _x5*_x375 + _x5*_x370 - _x371) - _x3*(_x5*_x376 + _x371) + (_x1*_x382 + _x0*_x360)*_x0 + _x1*((_x363 + _x355)*_x1 + _x0*_x382) + _x5*(_x3*_x370 + _x366);
+    const _x384 = 0.5*q3_d;
+    const _x385 = -_x373 - _x372 + _x369 + _x167;
+    const _x386 = _x377 + _x378;
+    const _x387 = _x13*m_a + _x386 + _x138 + I_beyy;
+    const _x388 = 0.5*_x355;
+    const _x389 = _x388 + _x356 - _x358;
+    const _x390 = _x0*_x389;
+    const _x391 = _x1*_x389;
+    const _x392 = -_x379 - _x380 + _x139 + _x386;
+    const _x393 = I_bezz + _x381;
+    const _x394 = -_x0*(_x1*_x387 + _x390) + _x1*((-_x355 + _x360)*_x1 + _x0*_x392 - _x0*_x387 + _x391) + _x1*(_x0*_x393 + _x391) + _x0*(_x1*_x392 + _x0*_x363 + _x1*_x393 - _x390) + _x3*((-_x361 + _x362)*_x3 + _x5*_x385) + (_x3*_x385 + _x5*_x353)*_x5;
+    const _x395 = 0.5*q2_d;
+    const _x396 = 0.5*q1_d;
+    const _x397 = _x394*_x396;
+    const _x398 = _x383*_x396;
+    const _x399 = _x145 + _x143;
+    const _x400 = -_x153 + _x150 + _x148;
+    const _x401 = (_x292*_x311 + _x292*_x319)*_x18 + (-_x294*_x307 - _x294*_x305)*_x28 + (_x293*_x307 + _x293*_x305)*_x26;
+    const _x402 = 2.0*_x24;
+    const _x403 = _x18*_x294;
+    const _x404 = -_x292*_x403 + _x18*_x317 - _x28*_x310 - _x26*_x309 + _x316*_x402 + _x25*_x319;
+    const _x405 = -_x26*_x302 - _x298*_x402 + (-_x303 - _x302)*_x25 + (_x300 + _x298)*_x18 - _x28*_x303 + _x290*_x403;
+    const _x406 = -_x388 - _x364;
+    const _x407 = _x388 + _x364;
+    const _x408 = _x56*_x184;
+    const _x409 = -_x54*_x408 - l2*_x211 + _x157*_x212 + _x408*I_ayy;
+    const _x410 = _x56*_x188;
+    const _x411 = _x54*_x410 - _x410*_x157 + I_ayy*(-q2_d*_x187 - q2_d*_x186 - _x55*_x188);
+    const _x412 = _x1*I_bezz;
+    const _x413 = _x18*I_bexx;
+    const _x414 = _x5*_x63;
+    const _x415 = _x3*q1_d;
+    const _x416 = _x11*_x415;
+    const _x417 = _x414 + _x416;
+    const _x418 = _x91*_x417;
+    const _x419 = -_x417*_x217 + _x418*_x177 + I_czz*(q3_d*_x416 + q3_d*_x414 + _x88*_x417);
+    const _x420 = q3_d*_x415;
+    const _x421 = _x15*_x85;
+    const _x422 = _x5*_x64;
+    const _x423 = _x7*_x415;
+    const _x424 = _x423 - _x422;
+    const _x425 = -q3_d*_x423 - _x88*_x424 + q3_d*_x422;
+    const _x426 = _x424*I_czz;
+    const _x427 = -_x426*_x177 + l1*_x421 + _x91*_x425 + _x424*_x217;
+    const _x428 = _x32*_x424;
+    const _x429 = _x5*I_dfzz;
+    const _x430 = _x27 + _x3*_x3*_x106;
+    const _x431 = _x3*_x5*_x106;
+    const _x432 = m_c*(-_x11*_x431 + _x7*_x430);
+    const _x433 = -_x8*_x432 - _x424*_x418 + _x426*_x417;
+    const _x434 = _x0*_x1*_x117;
+    const _x435 = _x29 - _x1*_x1*_x117;
+    const _x436 = _x184*_x188;
+    const _x437 = m_a*(_x11*_x434 + _x7*_x435);
+    const _x438 = _x0*_x25;
+    const _x439 = -_x436*I_ayy - _x21*_x437 + _x436*_x157;
+    const _x440 = _x3*_x25;
+    const _x441 = _x5*_x30;
+    const _x442 = _x32*(_x31*_x11 + _x441);
+    const _x443 = _x0*_x30;
+    const _x444 = _x34*(_x33*_x11 + _x443);
+    const _x445 = g*_x5;
+    const _x446 = _x37*_x36 + _x39;
+    const _x447 = _x7*_x37 + _x40*_x445 + _x43;
+    const _x448 = -g*_x0;
+    const _x449 = _x44*_x36 + _x45*_x448 + _x47;
+    const _x450 = _x7*_x44 + _x49;
+    const _x451 = (-l1*_x73 + l1*_x74)*m_a;
+    const _x452 = _x65*_x55 + _x11*_x74 + _x7*_x70;
+    const _x453 = -_x54*_x244 + _x452*_x157 + _x21*_x451 + _x244*I_ayy;
+    const _x454 = _x78*_x56*_x54 - _x56*_x246 + I_ayy*(-_x11*_x70 - _x78*_x55 + _x7*_x74);
+    const _x455 = _x91*_x248 - _x90*_x248 + I_czz*(_x88*_x95 - _x11*_x83 + _x7*_x86);
+    const _x456 = (l3*_x86 + l3*_x85)*m_c;
+    const _x457 = -_x88*_x99 + _x11*_x86 + _x7*_x83;
+    const _x458 = -_x252*I_czz + _x8*_x456 + _x457*_x91 + _x90*_x252;
+    const _x459 = m_c*(_x11*_x108 + _x7*_x194);
+    const _x460 = -_x8*_x459 - _x91*_x272 + _x52*_x90 + _x272*I_czz;
+    const _x461 = m_a*(_x11*_x121 + _x7*_x191);
+    const _x462 = -_x21*_x461 - _x267*I_ayy + _x51*_x54 + _x65*_x246;
+    const _x463 = _x57*_x78 - _x56*_x246 + I_ayy*(-_x11*_x70 - _x78*_x55 + _x7*_x74);
+    const _x464 = m_c*(_x11*_x108 + _x7*_x110);
+    const _x465 = m_a*(_x11*_x121 + _x7*_x118);
+    const _x466 = _x0*q2_d;
+    const _x467 = _x0*q1_d;
+    const _x468 = _x61*q1_dd - _x69;
+    const _x469 = -_x466;
+    const _x470 = -_x467;
+    const _x471 = -_x19*_x69 + _x19*_x468;
+    const _x472 = _x19*_x469 - _x19*_x466;
+    const _x473 = _x19*_x470 - _x19*_x467;
+    const _x474 = _x60*q1_d;
+    const _x475 = _x36*q1_d;
+    const _x476 = -_x0*_x475 + _x61*_x63;
+    const _x477 = -_x0*_x63 + _x1*_x474;
+    const _x478 = _x61*_x18;
+    const _x479 = _x1*q2_d;
+    const _x480 = _x1*q1_d;
+    const _x481 = _x1*q1_dd + _x478;
+    const _x482 = _x11*_x70 + _x11*_x468 + _x55*_x476 + _x36*_x74 + _x7*_x481;
+    const _x483 = _x60*_x70 + _x55*_x477 + _x7*_x74;
+    const _x484 = _x11*_x469 + _x62*_x55 + _x7*_x479;
+    const _x485 = _x11*_x470 + _x7*_x480 + _x66;
+    const _x486 = _x56*_x476;
+    const _x487 = _x56*_x477;
+    const _x488 = _x62*_x56;
+    const _x489 = _x67*_x486 + _x157*_x482 + _x21*_x471;
+    const _x490 = _x67*_x487 + _x157*_x483;
+    const _x491 = _x157*_x484 + _x67*_x488 + _x21*_x472;
+    const _x492 = _x157*_x485 + _x21*_x473;
+    const _x493 = _x67*_x66 + _x65*_x157;
+    const _x494 = _x61*_x64 + _x1*_x63 + _x1*_x475 + _x0*_x64;
+    const _x495 = _x1*_x63 + _x0*_x474;
+    const _x496 = _x157*_x494;
+    const _x497 = _x157*_x495;
+    const _x498 = _x68*_x157;
+    const _x499 = -_x71*_x36 - _x72*_x481 + _x75*_x11 + _x76*_x468 - _x56*_x496 + _x77*_x494;
+    const _x500 = -_x7*_x71 + _x75*_x60 - _x56*_x497 + _x77*_x495;
+    const _x501 = -_x72*_x479 + _x76*_x469 - _x56*_x498 + _x77*_x68;
+    const _x502 = _x79 + _x76*_x470 - _x72*_x480;
+    const _x503 = -_x78*_x54 - _x79 + _x246;
+    const _x504 = _x3*_x475 + _x5*_x64;
+    const _x505 = _x5*_x474 + _x3*_x63 + _x5*_x64 + _x80*_x63;
+    const _x506 = _x3*q3_d;
+    const _x507 = _x80*q1_dd - _x85;
+    const _x508 = -_x506;
+    const _x509 = -_x415;
+    const _x510 = _x80*_x24;
+    const _x511 = _x5*q3_d;
+    const _x512 = _x5*q1_dd + _x510;
+    const _x513 = _x177*_x504;
+    const _x514 = _x177*_x505;
+    const _x515 = _x81*_x177;
+    const _x516 = -_x95;
+    const _x517 = -_x84*_x36 + _x87*_x11 + _x89*_x504 + _x92*_x513;
+    const _x518 = -_x7*_x84 + _x94*_x512 - _x93*_x507 + _x87*_x60 + _x89*_x505 + _x92*_x514;
+    const _x519 = -_x93*_x508 + _x94*_x511 + _x81*_x89 + _x92*_x515;
+    const _x520 = _x96 + _x92*_x516;
+    const _x521 = -_x93*_x509 + _x94*_x173 - _x96;
+    const _x522 = _x15*_x510 + _x15*_x512;
+    const _x523 = _x97*_x511;
+    const _x524 = _x97*_x173;
+    const _x525 = -_x5*_x475 + _x3*_x64;
+    const _x526 = _x3*_x474 - _x80*_x64;
+    const _x527 = -_x88*_x525 + _x36*_x86 + _x11*_x83;
+    const _x528 = _x7*_x86 + _x60*_x83 - _x88*_x526 + _x11*_x512 + _x7*_x507;
+    const _x529 = -_x98*_x88 + _x11*_x511 + _x7*_x508;
+    const _x530 = _x11*_x173 + _x7*_x509 + _x99;
+    const _x531 = _x177*_x525;
+    const _x532 = _x177*_x526;
+    const _x533 = _x98*_x177;
+    const _x534 = _x91*_x527 + _x102*_x531;
+    const _x535 = _x102*_x532 + _x8*_x522 + _x91*_x528;
+    const _x536 = _x102*_x533 + _x8*_x523 + _x91*_x529;
+    const _x537 = _x102*_x100 + _x100*_x91;
+    const _x538 = _x8*_x524 + _x91*_x530;
+    const _x539 = l3*_x103;
+    const _x540 = 2.0*_x3*_x5*_x106 + g*_x80;
+    const _x541 = _x58*_x539;
+    const _x542 = _x3*_x80 + _x5*_x5;
+    const _x543 = -_x106*_x542 + _x445;
+    const _x544 = -_x107*_x539;
+    const _x545 = _x109*_x36 + _x111*_x11;
+    const _x546 = _x7*_x109 + _x111*_x60 + _x112*_x543 + _x113*_x540;
+    const _x547 = _x113*_x541 + _x112*_x544;
+    const _x548 = _x105*_x113;
+    const _x549 = _x95*_x525 + _x99*_x504;
+    const _x550 = _x95*_x526 + _x99*_x505;
+    const _x551 = _x81*_x99 + _x98*_x95;
+    const _x552 = -_x8*_x545 + _x114*_x549;
+    const _x553 = -_x8*_x546 + _x114*_x550;
+    const _x554 = -_x8*_x547 + _x114*_x551;
+    const _x555 = -_x8*_x548;
+    const _x556 = g*_x61;
+    const _x557 = l1*_x103;
+    const _x558 = _x1*_x1 + _x0*_x61;
+    const _x559 = _x556 + _x558*_x117;
+    const _x560 = _x557*_x120;
+    const _x561 = -2.0*_x1*_x61*_x117 + g*_x1;
+    const _x562 = -_x59*_x557;
+    const _x563 = _x119*_x11 + _x122*_x36 + _x123*_x559 + _x124*_x561;
+    const _x564 = _x119*_x60 + _x7*_x122;
+    const _x565 = _x124*_x562 + _x123*_x560;
+    const _x566 = _x116*_x124;
+    const _x567 = _x65*_x494 + _x78*_x476;
+    const _x568 = _x65*_x495 + _x78*_x477;
+    const _x569 = _x62*_x78 + _x68*_x65;
+    const _x570 = _x25*_x558;
+    const _x571 = _x103*_x120;
+    const _x572 = -_x21*_x563 - _x567*I_ayy + _x246*_x476 + _x65*_x496;
+    const _x573 = -_x21*_x564 - _x568*I_ayy + _x246*_x477 + _x65*_x497;
+    const _x574 = -_x21*_x565 - _x569*I_ayy + _x62*_x246 + _x65*_x498;
+    const _x575 = -_x21*_x566;
+    const _x576 = _x25*_x542;
+    const _x577 = _x103*_x107;
+    const _x578 = _x3*_x455 + _x5*_x458 + _x1*_x463 + _x0*_x453;
+    const _x579 = -_x5*_x455 + _x3*_x458 - _x0*_x463 + _x1*_x453;
+    const _x580 = _x124*_x137;
+    const _x581 = 2.0*_x7;
+    const _x582 = l1*_x581*_x198;
+    const _x583 = _x582*_x78;
+    const _x584 = l1*(-_x124*_x118 - _x267*_x198 - _x51*_x198 + _x465);
+    const _x585 = _x7*_x121;
+    const _x586 = l1*(m_a*(-_x11*_x118 + _x585) + m_a*_x585 + _x78*_x78*_x198 + _x56*_x56*_x198);
+    const _x587 = -0.0005 - _x131;
+    const _x588 = l3*_x32*_x581;
+    const _x589 = _x588*_x95;
+    const _x590 = l3*(-_x113*_x110 - _x52*_x32 + _x32*_x272 + _x464);
+    const _x591 = _x7*_x108;
+    const _x592 = l3*(-_x32*_x177*_x177 - _x32*_x95*_x95 + m_c*(-_x11*_x110 + _x591) + m_c*_x591);
+    const _x593 = _x113*_x269;
+    const _x594 = _x61*_x224 - _x69;
+    const _x595 = -_x19*_x69 + _x19*_x594;
+    const _x596 = _x1*_x224 + _x478;
+    const _x597 = _x11*_x225 + _x11*_x594 + _x55*_x476 + _x36*_x227 + _x7*_x596;
+    const _x598 = _x60*_x225 + _x55*_x477 + _x7*_x227;
+    const _x599 = _x67*_x486 + _x597*_x157 + _x21*_x595;
+    const _x600 = _x67*_x487 + _x598*_x157;
+    const _x601 = -_x72*_x596 + _x11*_x228 - _x56*_x496 - _x36*_x226 + _x76*_x594 + _x77*_x494;
+    const _x602 = -_x7*_x226 - _x56*_x497 + _x60*_x228 + _x77*_x495;
+    const _x603 = _x80*_x224 - _x85;
+    const _x604 = _x5*_x224 + _x510;
+    const _x605 = -_x36*_x230 + _x11*_x232 + _x89*_x504 + _x92*_x513;
+    const _x606 = _x94*_x604 - _x93*_x603 - _x7*_x230 + _x60*_x232 + _x89*_x505 + _x92*_x514;
+    const _x607 = _x15*_x604 + _x15*_x510;
+    const _x608 = -_x88*_x525 + _x36*_x231 + _x11*_x229;
+    const _x609 = -_x88*_x526 + _x7*_x231 + _x60*_x229 + _x11*_x604 + _x7*_x603;
+    const _x610 = _x102*_x531 + _x91*_x608;
+    const _x611 = _x102*_x532 + _x8*_x607 + _x91*_x609;
+    const _x612 = _x36*_x234 + _x111*_x11;
+    const _x613 = _x112*_x543 + _x111*_x60 + _x7*_x234 + _x113*_x540;
+    const _x614 = -_x8*_x612 + _x114*_x549;
+    const _x615 = -_x8*_x613 + _x114*_x550;
+    const _x616 = _x119*_x11 + _x36*_x236 + _x124*_x561 + _x123*_x559;
+    const _x617 = _x119*_x60 + _x7*_x236;
+    const _x618 = -_x21*_x616 - _x567*I_ayy + _x246*_x476 + _x65*_x496;
+    const _x619 = -_x21*_x617 - _x568*I_ayy + _x246*_x477 + _x65*_x497;
+    const _x620 = -_x256*_x594 - _x81*_x610 - _x62*_x601 - _x36*_x255 - _x257*_x478 - _x61*(l1*(-_x244*_x198 + _x243*_x198 + _x242) + _x11*_x245 - _x73*I_bexx + _x7*_x247 + _x73*I_bezz + _x227*I_beyy) - _x239*_x595 - _x11*_x254 - _x258*_x596 - _x1*(-_x69*I_beyy + _x7*_x245 - _x11*_x247 + _x225*I_bezz + _x69*I_bexx) - _x238*_x531 - _x240*_x597 + _x240*_x486 - _x241*_x69 - _x98*_x605 - _x68*_x599 - _x238*_x608;
+    const _x621 = -_x261*_x494 - _x262*_x559 + _x614 + _x259*_x561 + _x263*_x567 - _x11*_x265 - _x36*_x268 - _x137*_x616 - _x147*_x556 - _x129*_x570;
+    const _x622 = -_x270*_x549 - _x36*_x273 + _x275*_x504 + _x618 - _x11*_x277 - _x269*_x612 - _x171*_x621;
+    const _x623 = _x278*_x622;
+    const _x624 = -_x171*_x623 + _x142*_x621;
+    const _x625 = _x279*_x620;
+    const _x626 = -_x80*(-_x11*_x249 - _x82*I_dfxx + _x7*_x253 + _x82*I_dfzz + _x229*I_dfyy) - _x237*_x607 - _x7*_x255 - _x5*(-_x85*I_dfyy + l3*(_x32*_x252 + _x32*_x251 + _x250) + _x11*_x253 + _x7*_x249 + _x231*I_dfzz + _x85*I_dfxx) - _x62*_x602 - _x68*_x600 - _x238*_x532 - _x240*_x598 - _x280*_x510 + _x240*_x487 - _x283*_x604 - _x60*_x254 - _x282*_x603 - _x238*_x609 - _x81*_x611 - _x98*_x606 - _x281*_x85;
+    const _x627 = -_x261*_x495 + _x263*_x568 - _x7*_x268 - _x60*_x265 - _x137*_x617 + _x615;
+    const _x628 = -_x285*_x543 + _x275*_x505 - _x132*_x576 + _x284*_x540 - _x7*_x273 + _x155*_x445 + _x619 - _x60*_x277 - _x269*_x613 - _x270*_x550 - _x171*_x627;
+    const _x629 = _x278*_x628;
+    const _x630 = -_x171*_x629 + _x142*_x627;
+    const _x631 = _x279*_x626;
+    const _x632 = -0.0005 - _x283*_x511 - _x237*_x523 - _x98*_x519 - _x62*_x501 - _x239*_x472 - _x258*_x479 - _x240*_x484 - _x281*_x506 + _x240*_x488 - _x256*_x469 - _x280*_x511 - _x282*_x508 - _x286 - _x68*_x491 - _x241*_x466 - _x238*_x533 - _x238*_x529 - _x81*_x536 - _x257*_x479;
+    const _x633 = _x263*_x569 - _x68*_x261 - _x565*_x137 - _x262*_x560 - _x129*_x571 + _x259*_x562 + _x554;
+    const _x634 = -_x285*_x544 - _x269*_x547 - _x171*_x633 - _x270*_x551 + _x81*_x275 + _x284*_x541 - _x132*_x577 + _x574;
+    const _x635 = _x278*_x634;
+    const _x636 = -_x171*_x635 + _x142*_x633;
+    const _x637 = _x279*_x632;
+    const _x638 = -_x240*_x485 - _x257*_x480 - _x68*_x492 - _x241*_x467 - _x98*_x520 - _x81*_x537 - _x258*_x480 - _x239*_x473 - _x256*_x470 - 2.0*_x100*_x238 - _x62*_x502;
+    const _x639 = -0.001 + _x116*_x259 - _x566*_x137 + _x287 - _x288;
+    const _x640 = -_x274*_x177 + _x575 - _x171*_x639 + _x289;
+    const _x641 = _x278*_x640;
+    const _x642 = -_x171*_x641 + _x142*_x639;
+    const _x643 = _x279*_x638;
+    const _x644 = -_x238*_x530 - _x62*_x503 - _x240*_x65 - _x280*_x173 - _x98*_x521 - _x281*_x415 - _x283*_x173 - _x81*_x538 - _x68*_x493 + _x66*_x240 - _x237*_x524 - _x282*_x509;
+    const _x645 = _x260*_x56 + _x555 + _x289;
+    const _x646 = -0.0005 + _x105*_x284 - _x269*_x548 + _x287 - _x171*_x645;
+    const _x647 = _x278*_x646;
+    const _x648 = -_x171*_x647 + _x142*_x645;
+    const _x649 = _x279*_x644;
+    const _x650 = -_x171;
+    const _x651 = _x278*_x650;
+    const _x652 = -_x171*_x651 + _x142;
+    const _x653 = -_x278*_x171;
+    const _x654 = _x292*_x239 + _x291*_x292;
+    const _x655 = -_x290*_x299 - _x298;
+    const _x656 = _x292*_x654 + (_x309 + _x310)*_x290 - _x347 - _x346;
+    const _x657 = _x347 + _x346;
+    const _x658 = _x3*(-_x85*I_dfyy + _x7*_x455 + _x11*_x458 + l3*(_x32*_x457 + _x32*_x252 + _x456) + _x86*I_dfzz + _x85*I_dfxx) + _x1*(l1*(-_x244*_x198 + _x452*_x198 + _x451) + _x7*_x454 - _x73*I_bexx + _x11*_x453 + _x73*I_bezz + _x74*I_beyy) + _x5*(-_x11*_x455 - _x82*I_dfxx + _x7*_x458 + _x82*I_dfzz + _x83*I_dfyy) + _x0*(-_x11*_x454 + _x7*_x453 + _x70*I_bezz - _x69*I_beyy + _x69*I_bexx) + _x295;
+    const _x659 = _x33*_x147 - _x200*I_bezz + l1*(_x11*(-_x51*_x198 - _x267*_x198 + _x461) + _x7*(_x78*_x78*_x198 + m_a*(-_x11*_x191 + _x7*_x121) + _x56*_x56*_x198)) + _x296 + _x17*q2_dd + _x200*I_beyy - _x460;
+    const _x660 = -_x197*I_dfzz + _x297 + l3*(_x11*(-_x52*_x32 + _x32*_x272 + _x459) + _x7*(-_x32*_x177*_x177 - _x32*_x95*_x95 + m_c*(-_x11*_x194 + _x7*_x108))) + _x17*q3_dd - _x31*_x155 + _x197*I_dfyy - _x462;
+    const _x661 = -_x298*_x656 + _x657*_x655;
+    const _x662 = -_x654*_x657;
+    const _x663 = _x654*_x656;
+    const _x664 = -_x317*_x657 + _x316*_x656;
+    const _x665 = _x657*_x319;
+    const _x666 = -_x656*_x319;
+    const _x667 = -_x316*_x655 + _x298*_x317;
+    const _x668 = -_x298*_x319 + _x316*_x654;
+    const _x669 = -_x317*_x654 + _x655*_x319;
+    const _x670 = _x661*_x319 + _x317*_x662 + _x316*_x663;
+    const _x671 = 1.0/_x670;
+    const _x672 = _x671*(_x661*_x658 + _x662*_x659 + _x660*_x663);
+    const _x673 = _x671*(_x658*_x664 + _x659*_x665 + _x660*_x666);
+    const _x674 = _x671*(_x658*_x667 + _x659*_x668 + _x660*_x669);
+    const _x675 = _x3*(-_x85*I_dfyy + _x24*_x429 + _x11*_x427 + l3*(_x32*_x425 + _x428*_x177 + 2.0*_x421) + _x7*_x419 + _x85*I_dfxx) + _x5*(-_x420*I_dfyy - _x11*_x419 - _x420*I_dfxx + _x7*_x427 + _x420*I_dfzz) + _x1*(-_x0*_x413 - _x73*I_beyy + l1*(-_x408*_x198 + _x212*_x198 - 2.0*_x211) + _x7*_x411 + _x11*_x409 + _x73*I_bezz) + _x0*(-_x18*_x256 - _x11*_x411 + _x1*_x413 + _x18*_x412 + _x7*_x409);
+    const _x676 = l1*(_x11*(-_x436*_x198 + _x437) + _x7*(m_a*(-_x11*_x435 + _x7*_x434) + _x188*_x188*_x198 + _x56*_x56*_x198)) - _x438*_x412 + _x256*_x438 - _x433;
+    const _x677 = _x34*_x443 + _x33*(_x34*_x11 + _x314) - _x444 + _x442;
+    const _x678 = _x5*_x440*I_dfyy - _x440*_x429 + l3*(_x11*(_x428*_x417 + _x432) + _x7*(-_x32*_x417*_x417 - _x32*_x177*_x177 + m_c*(-_x11*_x430 - _x7*_x431))) - _x439;
+    const _x679 = -_x31*(-_x32*_x11 + _x315) + _x32*_x441 - _x442 + _x444;
+    const _x680 = -_x313*_x317 + _x312*_x316;
+    const _x681 = _x313*_x319;
+    const _x682 = -_x312*_x319;
+    const _x683 = -_x301*_x316 + _x318;
+    const _x684 = _x321 + _x301*_x319;
+    const _x685 = _x327*_x322;
+    const _x686 = (_x141*_x323 + _x170*_x324)*_x326;
+    const _x687 = _x326*(_x168*_x324 + _x170*_x323);
+    const _x688 = _x326*(_x675*_x322 + _x678*_x324 + _x676*_x323);
+    const _x689 = (_x677*_x323 + _x679*_x324)*_x326;
+    const _x690 = _x327*_x680;
+    const _x691 = (_x141*_x681 + _x170*_x682)*_x326;
+    const _x692 = _x326*(_x168*_x682 + _x170*_x681);
+    const _x693 = _x326*(_x675*_x680 + _x678*_x682 + _x676*_x681);
+    const _x694 = (_x677*_x681 + _x682*_x679)*_x326;
+    const _x695 = _x327*_x683;
+    const _x696 = _x326*(_x320*_x141 + _x170*_x684);
+    const _x697 = _x326*(_x168*_x684 + _x320*_x170);
+    const _x698 = _x326*(_x678*_x684 + _x320*_x676 + _x675*_x683);
+    const _x699 = _x326*(_x684*_x679 + _x320*_x677);
+    const _x700 = _x326*(_x687*_x324 + _x686*_x323 + _x685*_x322);
+    const _x701 = _x326*(_x686*_x681 + _x687*_x682 + _x685*_x680);
+    const _x702 = _x326*(_x692*_x682 + _x691*_x681 + _x690*_x680);
+    const _x703 = _x326*(_x687*_x684 + _x320*_x686 + _x685*_x683);
+    const _x704 = _x326*(_x320*_x691 + _x692*_x684 + _x690*_x683);
+    const _x705 = _x326*(_x697*_x684 + _x320*_x696 + _x695*_x683);
     return {
-      base_T_tcp: [[_x179, _x180, _x182, _x183], [_x184, _x134, _x186, _x153], [_x3, 0.0, _x5, _x141], [0.0, 0.0, 0.0, 1.0]],
-      base_T_turret: [[_x134, _x180, 0.0, 0.0], [_x132, _x134, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]],
-      base_T_upper_arm: [[_x187, _x180, _x188, 0.0], [_x189, _x134, _x190, 0.0], [_x0, 0.0, _x1, 0.0], [0.0, 0.0, 0.0, 1.0]],
-      base_T_distal: [[_x179, _x180, _x182, _x145], [_x184, _x134, _x186, _x152], [_x3, 0.0, _x5, _x136], [0.0, 0.0, 0.0, 1.0]],
-      base_T_lever: [[_x179, _x180, _x182, 0.0], [_x184, _x134, _x186, 0.0], [_x3, 0.0, _x5, 0.0], [0.0, 0.0, 0.0, 1.0]],
-      base_T_link_c: [[_x187, _x180, _x188, l3*_x181], [_x189, _x134, _x190, l3*_x185], [_x0, 0.0, _x1, -l3*_x5], [0.0, 0.0, 0.0, 1.0]],
-      J: [[-_x151 - _x152, -_x134*_x141 - _x158, _x158], [_x183, -_x132*_x141 - _x140, _x140], [0.0, -_x191 + _x134*_x183 - _x192 + _x132*_x153, _x192 + _x191]],
-      M: [[_x3*(_x3*(_x79*_x168 + _x169*I_czz + _x171 + _x17 + I_dfzz) + _x5*_x170) + _x5*(_x3*_x170 + _x5*(_x79*_x169 + _x168*I_czz + I_dfyy)) + _x1*(_x1*(_x164*_x168 + _x169*I_ayy + _x116 + _x115 + I_beyy) + _x0*_x167) + _x0*(_x1*_x167 + _x0*(_x164*_x169 + _x168*I_ayy + I_bezz)) + _x114, 0.0, 0.0], [0.0, _x118 + _x54 + _x115 + I_bexx, _x252], [0.0, _x252, _x78 + _x118 + _x17 + I_dfxx]],
-      C: [[_x229*_x230 + _x240*_x241, _x243, _x244], [-_x243, 0.0, q3_d*_x254], [-_x244, q2_d*_x253, 0.0]],
-      V: [_x3*(-_x69*I_dfyy + l3*(_x33*_x284 + _x287*_x275 + 2.0*_x280) + _x25*_x288 + _x11*_x286 + _x7*_x278 + _x69*I_dfxx) + _x5*(-_x279*I_dfyy + _x7*_x286 - _x11*_x278 - _x279*I_dfxx + _x279*I_dfzz) + _x1*(l1*(_x270*_x259 - _x270*_x260 - 2.0*_x255) + _x11*_x261 - _x61*I_beyy + _x7*_x266 - _x0*_x268 + _x61*I_bezz) + _x0*(_x1*_x268 - _x11*_x266 - _x19*_x269 + _x19*_x267 + _x7*_x261), -_x297*_x267 + l1*(_x11*(-_x295*_x270 + _x296) + _x7*(m_a*(-_x11*_x294 + _x7*_x293) + _x270*_x264*_x264 + _x65*_x65*_x270)) + _x297*_x269 - _x292, _x5*_x299*I_dfyy - _x299*_x288 + l3*(_x11*(_x287*_x274 + _x291) + _x7*(-_x33*_x275*_x275 - _x33*_x274*_x274 + m_c*(-_x11*_x289 - _x7*_x290))) - _x298],
-      G: [0.0, _x34*(_x35*_x11 + _x156) + _x35*_x302 + _x301 - _x303, -_x32*(-_x33*_x11 + _x157) + _x33*_x300 - _x301 + _x303],
-      F_f: [_x245, _x246, _x130],
-      inverse_dynamics_tau: [_x5*(-_x11*_x311 - _x72*I_dfxx + _x72*I_dfzz + _x7*_x315 + _x73*I_dfyy) + _x137 + _x0*(-_x56*I_beyy - _x11*_x309 + _x7*_x307 + _x57*I_bezz + _x56*I_bexx) + _x1*(-_x61*I_bexx + l1*(_x305*_x270 - _x306*_x270 + _x304) + _x11*_x307 + _x61*I_bezz + _x7*_x309 + _x62*I_beyy) + _x3*(_x11*_x315 - _x69*I_dfyy + _x7*_x311 + _x70*I_dfzz + l3*(_x33*_x314 + _x33*_x313 + _x312) + _x69*I_dfxx) + _x245, _x138 + _x124*_x34 - _x323*I_bezz + _x18*q2_dd + _x323*I_beyy + l1*(_x11*(-_x322*_x270 - _x37*_x270 + _x321) + _x7*(m_a*(-_x11*_x320 + _x7*_x107) + _x43*_x43*_x270 + _x65*_x65*_x270)) - _x319 + _x246, _x139 - _x32*_x131 - _x325*I_dfzz + _x18*q3_dd + l3*(_x11*(-_x33*_x38 + _x33*_x318 + _x317) + _x7*(-_x33*_x83*_x83 - _x33*_x275*_x275 + m_c*(-_x11*_x316 + _x7*_x95))) + _x325*I_dfyy - _x324 + _x130],
-      dtau_dq: [[0.0, _x47*_x336 + _x11*_x462 - _x353*_x461 + _x333*_x269 + _x53*_x356 + _x89*_x388 + _x349*_x461 + _x50*_x367 + _x68*_x407 + _x460*_x404 + _x460*_x400 + _x341*_x465 + _x348*_x464 + _x56*_x463 + _x1*(-_x11*_x326 - _x56*I_beyy + _x7*_x307 + _x57*I_bezz + _x56*I_bexx) + _x345*_x466 + _x332*(-_x61*I_bexx + l1*(_x305*_x270 - _x306*_x270 + _x304) + _x11*_x307 + _x61*I_bezz + _x7*_x326 + _x62*I_beyy), _x373*(-_x11*_x311 - _x72*I_dfxx + _x72*I_dfzz + _x7*_x315 + _x73*I_dfyy) + _x7*_x465 + _x50*_x368 + _x53*_x357 + _x89*_x389 + _x377*_x467 + _x383*_x470 + _x460*_x401 + _x5*(_x11*_x315 - _x69*I_dfyy + _x7*_x311 + _x70*I_dfzz + l3*(_x33*_x314 + _x33*_x313 + _x312) + _x69*I_dfxx) + _x88*_x394 - _x354*_x461 + _x380*_x469 + _x68*_x408 + _x460*_x405 + _x350*_x461 + _x329*_x462 + _x69*_x468], [0.0, _x124*_x435 - _x475*_x440 + _x111*_x443 + _x471*_x451 - _x472*_x448 + _x474*_x438 + _x478*_x362 + _x11*_x481 + _x479*_x341 - _x430, -_x472*_x449 + _x111*_x444 + _x478*_x363 + _x481*_x329 + _x7*_x479 - _x431], [0.0, -_x486*_x374 + _x487*_x341 + _x484*_x427 + _x101*_x422 + _x11*_x489 - _x453, -_x486*_x375 + _x484*_x428 + _x490*_x458 + _x101*_x423 - _x493*_x415 + _x492*_x420 - _x131*_x418 + _x489*_x329 + _x7*_x487 - _x454]],
-      dtau_dqd: [[0.0005 + _x346*_x466 + _x378*_x467 + _x47*_x337 + _x88*_x395 + _x381*_x470 - _x355*_x461 + _x381*_x469 + _x460*_x402 + _x50*_x369 + _x376*_x468 + _x68*_x409 + _x53*_x358 + _x460*_x406 + 0.1*(1.0 - _x122*_x122) + _x351*_x461 + _x89*_x390 + _x330*_x463 + _x346*_x464 + _x334*_x269, _x89*_x391 + _x53*_x359 + _x352*_x461 + _x68*_x410 + _x347*_x466 + _x347*_x464 + 2.0*_x91*_x460 + _x47*_x338 + _x335*_x269 + _x50*_x370 + _x331*_x463, _x460*_x403 + _x89*_x392 + _x88*_x396 + _x382*_x469 + _x272*_x468 + _x68*_x411 + _x50*_x371 + _x382*_x470 + _x53*_x360 - _x52*_x461 + _x379*_x467 + _x51*_x461], [-_x475*_x441 + _x471*_x452 - _x472*_x450 + _x111*_x445 + _x474*_x439 + _x53*_x478 - _x432, 0.001 - _x475*_x442 + _x111*_x446 + 0.1*(1.0 - _x126*_x126) + _x482, -_x477*_x65 - _x433 + _x483], [-_x493*_x416 - _x68*_x486 + _x484*_x429 + _x101*_x424 + _x492*_x421 + _x490*_x459 - _x455, _x485*_x275 - _x456 + _x483, 0.0005 - _x493*_x417 + _x101*_x425 + _x482]],
-      dtau_dqdd: [[_x68*_x412 + _x53*_x361 + _x47*_x339 + _x68*_x460 + _x0*_x0*I_bezz + _x114 + _x5*_x5*I_dfyy + _x45*I_dfzz + _x50*_x372 + _x53*_x461 + _x89*_x393 + _x46*I_beyy + _x88*_x397, 0.0, 0.0], [0.0, _x13*_x473 + _x111*_x447 - _x78 + _x18 + I_bexx, -_x434 + _x472], [0.0, -_x457 + _x484, _x16*_x491 + _x101*_x426 + _x18 - _x54 + I_dfxx]],
-      forward_dynamics_qdd: [_x529, _x528, _x527],
-      F: [_x548, _x549, _x550],
-      Mx: [[_x576, _x577, _x579], [_x577, _x578, _x580], [_x579, _x580, _x581]],
-      Vx: [-_x247*_x579 - _x250*_x577 - _x251*_x576 + _x564, -_x247*_x580 - _x250*_x578 - _x251*_x577 + _x569, -_x247*_x581 - _x251*_x579 - _x250*_x580 + _x574],
-      Gx: [_x565, _x570, _x575],
-      k: 0.5*_x26*(_x3*(_x3*(_x79*_x168 + _x169*I_czz + _x171 + _x17 + I_dfzz) + _x5*_x170) + _x5*(_x3*_x170 + _x5*(_x79*_x169 + _x168*I_czz + I_dfyy)) + _x1*(_x1*(_x164*_x168 + _x169*I_ayy + _x116 + _x115 + I_beyy) + _x0*_x167) + _x0*(_x1*_x167 + _x0*(_x164*_x169 + _x168*I_ayy + I_bezz)) + _x114) + _x230*(q3_d*(_x78 + _x118 + _x17 + I_dfxx) + q2_d*_x252) + _x241*(q2_d*(_x118 + _x54 + _x115 + I_bexx) + q3_d*_x252),
-      u: g*_x5*_x131 + g*_x0*_x124 + g*m_c*(-l3*_x5 + 0.5*_x136) + g*m_a*(-_x5*_x22 + _x136),
+      base_T_tcp: [[_x328, _x329, _x331, _x334], [_x335, _x292, _x337, _x341], [_x3, 0.0, _x5, _x299], [0.0, 0.0, 0.0, 1.0]],
+      base_T_turret: [[_x292, _x329, 0.0, 0.0], [_x290, _x292, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]],
+      base_T_upper_arm: [[_x332, _x329, _x342, 0.0], [_x339, _x292, _x343, 0.0], [_x0, 0.0, _x1, 0.0], [0.0, 0.0, 0.0, 1.0]],
+      base_T_distal: [[_x328, _x329, _x331, _x333], [_x335, _x292, _x337, _x340], [_x3, 0.0, _x5, _x294], [0.0, 0.0, 0.0, 1.0]],
+      base_T_lever: [[_x328, _x329, _x331, 0.0], [_x335, _x292, _x337, 0.0], [_x3, 0.0, _x5, 0.0], [0.0, 0.0, 0.0, 1.0]],
+      base_T_link_c: [[_x332, _x329, _x342, l3*_x330], [_x339, _x292, _x343, l3*_x336], [_x0, 0.0, _x1, -l3*_x5], [0.0, 0.0, 0.0, 1.0]],
+      J: [[-_x338 - _x340, -_x344 - _x292*_x299, _x344], [_x334, -_x345 - _x290*_x299, _x345], [0.0, -_x346 - _x347 + _x341*_x290 + _x292*_x334, _x347 + _x346]],
+      M: [[_x5*(_x3*_x163 + _x5*(_x91*_x162 + _x161*I_czz + I_dfyy)) + _x3*(_x3*(_x91*_x161 + _x162*I_czz + _x164 + _x16 + I_dfzz) + _x5*_x163) + _x1*(_x1*(_x162*I_ayy + _x138 + _x161*_x157 + _x135 + I_beyy) + _x0*_x160) + _x134 + _x0*(_x1*_x160 + _x0*(_x157*_x162 + _x161*I_ayy + I_bezz)), 0.0, 0.0], [0.0, _x140 + _x136 + _x135 + I_bexx, _x170], [0.0, _x170, _x166 + _x140 + _x16 + I_dfxx]],
+      C: [[_x383*_x384 + _x394*_x395, _x397, _x398], [-_x397, 0.0, q3_d*_x407], [-_x398, q2_d*_x406, 0.0]],
+      V: [_x3*(-_x85*I_dfyy + _x24*_x429 + _x11*_x427 + l3*(_x32*_x425 + _x428*_x177 + 2.0*_x421) + _x7*_x419 + _x85*I_dfxx) + _x5*(-_x420*I_dfyy - _x11*_x419 - _x420*I_dfxx + _x7*_x427 + _x420*I_dfzz) + _x1*(-_x0*_x413 - _x73*I_beyy + l1*(-_x408*_x198 + _x212*_x198 - 2.0*_x211) + _x7*_x411 + _x11*_x409 + _x73*I_bezz) + _x0*(-_x18*_x256 - _x11*_x411 + _x1*_x413 + _x18*_x412 + _x7*_x409), l1*(_x11*(-_x436*_x198 + _x437) + _x7*(m_a*(-_x11*_x435 + _x7*_x434) + _x188*_x188*_x198 + _x56*_x56*_x198)) - _x438*_x412 + _x256*_x438 - _x433, _x5*_x440*I_dfyy - _x440*_x429 + l3*(_x11*(_x428*_x417 + _x432) + _x7*(-_x32*_x417*_x417 - _x32*_x177*_x177 + m_c*(-_x11*_x430 - _x7*_x431))) - _x439],
+      G: [0.0, _x34*_x443 + _x33*(_x34*_x11 + _x314) - _x444 + _x442, -_x31*(-_x32*_x11 + _x315) + _x32*_x441 - _x442 + _x444],
+      dG_dq: [[0.0, 0.0, 0.0], [0.0, (_x45 + _x314)*_x448 + _x44*_x36 + _x47 - _x449 + _x446, _x7*_x44 + _x49 + _x447 - _x450], [0.0, _x37*_x36 + _x39 + _x449 - _x446, (-_x155 + _x15 + _x40)*_x445 + _x43 - _x447 + _x7*_x37 + _x450]],
+      F_f: [_x399, _x400, _x153],
+      inverse_dynamics_tau: [_x3*(-_x85*I_dfyy + _x7*_x455 + _x11*_x458 + l3*(_x32*_x457 + _x32*_x252 + _x456) + _x86*I_dfzz + _x85*I_dfxx) + _x5*(-_x11*_x455 - _x82*I_dfxx + _x7*_x458 + _x82*I_dfzz + _x83*I_dfyy) + _x1*(l1*(-_x244*_x198 + _x452*_x198 + _x451) + _x7*_x454 - _x73*I_bexx + _x11*_x453 + _x73*I_bezz + _x74*I_beyy) + _x0*(-_x11*_x454 + _x7*_x453 + _x70*I_bezz - _x69*I_beyy + _x69*I_bexx) + _x399 + _x295, _x296 + _x33*_x147 - _x200*I_bezz + _x17*q2_dd + _x200*I_beyy + l1*(_x11*(-_x51*_x198 - _x267*_x198 + _x461) + _x7*(_x78*_x78*_x198 + m_a*(-_x11*_x191 + _x7*_x121) + _x56*_x56*_x198)) - _x460 + _x400, _x297 + l3*(_x11*(-_x52*_x32 + _x32*_x272 + _x459) + _x7*(-_x32*_x177*_x177 - _x32*_x95*_x95 + m_c*(-_x11*_x194 + _x7*_x108))) - _x31*_x155 + _x197*I_dfyy + _x17*q3_dd - _x462 - _x197*I_dfzz + _x153],
+      dtau_dq: [[0.0, _x240*_x482 + _x256*_x468 + _x241*_x69 + _x62*_x499 + _x68*_x489 + _x11*_x578 + _x257*_x478 + _x238*_x527 - _x240*_x486 + _x36*_x579 + _x258*_x481 + _x81*_x534 + _x1*(-_x11*_x463 - _x69*I_beyy + _x7*_x453 + _x70*I_bezz + _x69*I_bexx) + _x61*(l1*(-_x244*_x198 + _x452*_x198 + _x451) - _x73*I_bexx + _x11*_x453 + _x7*_x463 + _x73*I_bezz + _x74*I_beyy) + _x238*_x531 + _x239*_x471 + _x98*_x517, _x81*_x535 + _x283*_x512 + _x80*(-_x11*_x455 - _x82*I_dfxx + _x7*_x458 + _x82*I_dfzz + _x83*I_dfyy) - _x240*_x487 + _x280*_x510 + _x238*_x528 + _x238*_x532 + _x237*_x522 + _x68*_x490 + _x60*_x578 + _x5*(-_x85*I_dfyy + _x7*_x455 + _x11*_x458 + l3*(_x32*_x457 + _x32*_x252 + _x456) + _x86*I_dfzz + _x85*I_dfxx) + _x281*_x85 + _x240*_x483 + _x7*_x579 + _x98*_x518 + _x282*_x507 + _x62*_x500], [0.0, _x262*_x559 + _x129*_x570 + _x147*_x556 + _x563*_x137 + _x36*_x584 - _x263*_x567 - _x561*_x580 + _x583*_x494 + _x11*_x586 - _x552, -_x263*_x568 + _x564*_x137 + _x583*_x495 + _x7*_x584 + _x60*_x586 - _x553], [0.0, -_x589*_x504 + _x270*_x549 + _x269*_x545 + _x11*_x592 + _x36*_x590 - _x572, -_x589*_x505 + _x132*_x576 - _x155*_x445 + _x270*_x550 - _x593*_x540 + _x269*_x546 + _x285*_x543 + _x7*_x590 + _x60*_x592 - _x573]],
+      dtau_dqd: [[0.0005 + _x257*_x479 + _x258*_x479 + _x239*_x472 + _x286 + _x282*_x508 + _x62*_x501 + _x280*_x511 + _x98*_x519 + _x256*_x469 + _x68*_x491 + _x240*_x484 - _x240*_x488 + _x281*_x506 + _x241*_x466 + _x81*_x536 + _x238*_x529 + _x238*_x533 + _x283*_x511 + _x237*_x523, _x98*_x520 + _x62*_x502 + _x257*_x480 + _x81*_x537 + _x68*_x492 + _x240*_x485 + _x239*_x473 + _x256*_x470 + 2.0*_x100*_x238 + _x258*_x480 + _x241*_x467, _x98*_x521 + _x280*_x173 + _x283*_x173 + _x281*_x415 + _x62*_x503 + _x238*_x530 - _x66*_x240 + _x282*_x509 + _x237*_x524 + _x81*_x538 + _x68*_x493 + _x240*_x65], [-_x263*_x569 + _x565*_x137 - _x562*_x580 + _x129*_x571 + _x262*_x560 + _x68*_x583 - _x554, 0.001 + _x566*_x137 + _x288 - _x116*_x580 + _x131, -_x582*_x56 - _x555 + _x587], [-_x81*_x589 + _x132*_x577 + _x270*_x551 + _x269*_x547 - _x593*_x541 + _x285*_x544 - _x574, _x588*_x177 - _x575 + _x587, 0.0005 - _x105*_x593 + _x269*_x548 + _x131]],
+      dtau_dqdd: [[_x5*(_x3*_x163 + _x5*(_x91*_x162 + _x161*I_czz + I_dfyy)) + _x3*(_x3*(_x91*_x161 + _x162*I_czz + _x164 + _x16 + I_dfzz) + _x5*_x163) + _x1*(_x1*(_x162*I_ayy + _x138 + _x161*_x157 + _x135 + I_beyy) + _x0*_x160) + _x134 + _x0*(_x1*_x160 + _x0*(_x157*_x162 + _x161*I_ayy + I_bezz)), 0.0, 0.0], [0.0, _x140 + _x136 + _x135 + I_bexx, _x170], [0.0, _x170, _x166 + _x140 + _x16 + I_dfxx]],
+      forward_dynamics_qdd: [_x224, _x208, _x206],
+      dqdd_dq: [[0.0, _x625, _x631], [0.0, _x624, _x630], [0.0, _x623, _x629]],
+      dqdd_dqd: [[_x637, _x643, _x649], [_x636, _x642, _x648], [_x635, _x641, _x647]],
+      dqdd_dtau: [[_x279, 0.0, 0.0], [0.0, _x652, _x653], [0.0, _x651, _x278]],
+      F: [_x672, _x673, _x674],
+      Mx: [[_x700, _x701, _x703], [_x701, _x702, _x704], [_x703, _x704, _x705]],
+      Vx: [-_x401*_x703 - _x404*_x701 - _x405*_x700 + _x688, -_x401*_x704 - _x404*_x702 - _x405*_x701 + _x693, -_x401*_x705 - _x404*_x704 - _x405*_x703 + _x698],
+      Gx: [_x689, _x694, _x699],
+      k: _x384*(q3_d*(_x166 + _x140 + _x16 + I_dfxx) + q2_d*_x170) + _x395*(q2_d*(_x140 + _x136 + _x135 + I_bexx) + q3_d*_x170) + 0.5*_x25*(_x5*(_x3*_x163 + _x5*(_x91*_x162 + _x161*I_czz + I_dfyy)) + _x3*(_x3*(_x91*_x161 + _x162*I_czz + _x164 + _x16 + I_dfzz) + _x5*_x163) + _x1*(_x1*(_x162*I_ayy + _x138 + _x161*_x157 + _x135 + I_beyy) + _x0*_x160) + _x134 + _x0*(_x1*_x160 + _x0*(_x157*_x162 + _x161*I_ayy + I_bezz))),
+      u: g*_x5*_x155 + g*_x0*_x147 + g*m_c*(-l3*_x5 + 0.5*_x294) + g*m_a*(-_x5*_x21 + _x294),
     };
   }
 
@@ -2699,15 +3386,17 @@
       coriolis_matrix: {"inputs": ["q", "qd"], "parameters": ["l1", "l2", "l3", "m_a", "I_ayy", "I_azz", "m_c", "I_cyy", "I_czz", "I_beyy", "I_bezz", "I_dfyy", "I_dfzz"], "outputs": {"C": [3, 3]}},
       coriolis_vector: {"inputs": ["q", "qd"], "parameters": ["l1", "l2", "l3", "m_a", "I_axx", "I_ayy", "I_azz", "m_c", "I_cxx", "I_cyy", "I_czz", "I_bexx", "I_beyy", "I_bezz", "I_dfxx", "I_dfyy", "I_dfzz"], "outputs": {"V": [3]}},
       gravity_vector: {"inputs": ["q"], "parameters": ["l1", "l2", "l3", "l5", "l6", "m_a", "m_c", "m_be", "m_df", "g"], "outputs": {"G": [3]}},
+      gravity_derivatives: {"inputs": ["q"], "parameters": ["l1", "l2", "l3", "l5", "l6", "m_a", "m_c", "m_be", "m_df", "g"], "outputs": {"dG_dq": [3, 3]}},
       friction: {"inputs": ["qd"], "parameters": [], "outputs": {"F_f": [3]}},
       inverse_dynamics: {"inputs": ["q", "qd", "qdd"], "parameters": ["l1", "l2", "l3", "l5", "l6", "m_a", "I_axx", "I_ayy", "I_azz", "m_c", "I_cxx", "I_cyy", "I_czz", "m_be", "I_bexx", "I_beyy", "I_bezz", "m_df", "I_dfxx", "I_dfyy", "I_dfzz", "I_baseyy", "J_m", "g"], "outputs": {"tau": [3]}},
       inverse_dynamics_derivatives: {"inputs": ["q", "qd", "qdd"], "parameters": ["l1", "l2", "l3", "l5", "l6", "m_a", "I_axx", "I_ayy", "I_azz", "m_c", "I_cxx", "I_cyy", "I_czz", "m_be", "I_bexx", "I_beyy", "I_bezz", "m_df", "I_dfxx", "I_dfyy", "I_dfzz", "I_baseyy", "J_m", "g"], "outputs": {"dtau_dq": [3, 3], "dtau_dqd": [3, 3], "dtau_dqdd": [3, 3]}},
       forward_dynamics: {"inputs": ["q", "qd", "tau"], "parameters": ["l1", "l2", "l3", "l5", "l6", "m_a", "I_axx", "I_ayy", "I_azz", "m_c", "I_cxx", "I_cyy", "I_czz", "m_be", "I_bexx", "I_beyy", "I_bezz", "m_df", "I_dfxx", "I_dfyy", "I_dfzz", "I_baseyy", "J_m", "g"], "outputs": {"qdd": [3]}},
+      forward_dynamics_derivatives: {"inputs": ["q", "qd", "tau"], "parameters": ["l1", "l2", "l3", "l5", "l6", "m_a", "I_axx", "I_ayy", "I_azz", "m_c", "I_cxx", "I_cyy", "I_czz", "m_be", "I_bexx", "I_beyy", "I_bezz", "m_df", "I_dfxx", "I_dfyy", "I_dfzz", "I_baseyy", "J_m", "g"], "outputs": {"dqdd_dq": [3, 3], "dqdd_dqd": [3, 3], "dqdd_dtau": [3, 3]}},
       tcp_force: {"inputs": ["q", "qd", "qdd"], "parameters": ["l1", "l2", "l3", "l5", "l6", "m_a", "I_axx", "I_ayy", "I_azz", "m_c", "I_cxx", "I_cyy", "I_czz", "m_be", "I_bexx", "I_beyy", "I_bezz", "m_df", "I_dfxx", "I_dfyy", "I_dfzz", "I_baseyy", "J_m", "g"], "outputs": {"F": [3]}},
       operational_space: {"inputs": ["q", "qd"], "parameters": ["l1", "l2", "l3", "l5", "l6", "m_a", "I_axx", "I_ayy", "I_azz", "m_c", "I_cxx", "I_cyy", "I_czz", "m_be", "I_bexx", "I_beyy", "I_bezz", "m_df", "I_dfxx", "I_dfyy", "I_dfzz", "I_baseyy", "J_m", "g"], "outputs": {"Mx": [3, 3], "Vx": [3], "Gx": [3]}},
       kinetic_energy: {"inputs": ["q", "qd"], "parameters": ["l1", "l2", "l3", "m_a", "I_axx", "I_ayy", "I_azz", "m_c", "I_cxx", "I_cyy", "I_czz", "I_bexx", "I_beyy", "I_bezz", "I_dfxx", "I_dfyy", "I_dfzz", "I_baseyy", "J_m"], "outputs": {"k": []}},
       potential_energy: {"inputs": ["q"], "parameters": ["l1", "l2", "l3", "l5", "l6", "m_a", "m_c", "m_be", "m_df", "g"], "outputs": {"u": []}},
-      combined: {"inputs": ["q", "qd", "qdd", "tau"], "parameters": ["l1", "l2", "l3", "l5", "l6", "m_a", "I_axx", "I_ayy", "I_azz", "m_c", "I_cxx", "I_cyy", "I_czz", "m_be", "I_bexx", "I_beyy", "I_bezz", "m_df", "I_dfxx", "I_dfyy", "I_dfzz", "I_baseyy", "J_m", "g"], "outputs": {"base_T_tcp": [4, 4], "base_T_turret": [4, 4], "base_T_upper_arm": [4, 4], "base_T_distal": [4, 4], "base_T_lever": [4, 4], "base_T_link_c": [4, 4], "J": [3, 3], "M": [3, 3], "C": [3, 3], "V": [3], "G": [3], "F_f": [3], "inverse_dynamics_tau": [3], "dtau_dq": [3, 3], "dtau_dqd": [3, 3], "dtau_dqdd": [3, 3], "forward_dynamics_qdd": [3], "F": [3], "Mx": [3, 3], "Vx": [3], "Gx": [3], "k": [], "u": []}},
+      combined: {"inputs": ["q", "qd", "qdd", "tau"], "parameters": ["l1", "l2", "l3", "l5", "l6", "m_a", "I_axx", "I_ayy", "I_azz", "m_c", "I_cxx", "I_cyy", "I_czz", "m_be", "I_bexx", "I_beyy", "I_bezz", "m_df", "I_dfxx", "I_dfyy", "I_dfzz", "I_baseyy", "J_m", "g"], "outputs": {"base_T_tcp": [4, 4], "base_T_turret": [4, 4], "base_T_upper_arm": [4, 4], "base_T_distal": [4, 4], "base_T_lever": [4, 4], "base_T_link_c": [4, 4], "J": [3, 3], "M": [3, 3], "C": [3, 3], "V": [3], "G": [3], "dG_dq": [3, 3], "F_f": [3], "inverse_dynamics_tau": [3], "dtau_dq": [3, 3], "dtau_dqd": [3, 3], "dtau_dqdd": [3, 3], "forward_dynamics_qdd": [3], "dqdd_dq": [3, 3], "dqdd_dqd": [3, 3], "dqdd_dtau": [3, 3], "F": [3], "Mx": [3, 3], "Vx": [3], "Gx": [3], "k": [], "u": []}},
     }),
     fk: fk,
     frames: frames,
@@ -2716,10 +3405,12 @@
     coriolis_matrix: coriolis_matrix,
     coriolis_vector: coriolis_vector,
     gravity_vector: gravity_vector,
+    gravity_derivatives: gravity_derivatives,
     friction: friction,
     inverse_dynamics: inverse_dynamics,
     inverse_dynamics_derivatives: inverse_dynamics_derivatives,
     forward_dynamics: forward_dynamics,
+    forward_dynamics_derivatives: forward_dynamics_derivatives,
     tcp_force: tcp_force,
     operational_space: operational_space,
     kinetic_energy: kinetic_energy,

@@ -231,6 +231,32 @@ void planar_2r_gravity_vector_packed(const double *in, double *out);
  * Uses 960 bytes of stack for its blocks of 8 configurations. */
 void planar_2r_gravity_vector_batch(size_t n, const double *q, const double *params, size_t params_stride, double *G);
 
+/* planar_2r_gravity_derivatives: Derivative of the gravity vector: the stiffness gravity (and the springs) add.
+ *
+ * G(q + dq) = G(q) + dG_dq dq to first order (seed eq. 8.31's G = du/dq, so dG_dq =
+ * d^2u/dq^2 is symmetric for gravity and springs alike); forward-mode derivative of the
+ * Newton-Euler program at rest.
+ *
+ * Inputs:
+ *   q[2]: joint coordinates: theta1 [rad], theta2 [rad].
+ *   l1: length of link 1 [m]; default PLANAR_2R_DEFAULT_l1 = 0.1.
+ *   l2: length of link 2 [m]; default PLANAR_2R_DEFAULT_l2 = 0.1.
+ *   m1: point mass at the end of link 1 [kg]; default PLANAR_2R_DEFAULT_m1 = 0.1.
+ *   m2: point mass at the end of link 2 [kg]; default PLANAR_2R_DEFAULT_m2 = 0.1.
+ *   g: gravitational acceleration [m/s^2]; default PLANAR_2R_DEFAULT_g = 9.81.
+ * Outputs:
+ *   dG_dq[4]: 2 x 2, row-major; d G / dq: row i, column j is d G_i / d q_j.
+ * Cost: 23 operations.
+ */
+void planar_2r_gravity_derivatives(const double *q, double l1, double l2, double m1, double m2, double g, double *dG_dq);
+
+/* planar_2r_gravity_derivatives with packed arguments: in = q, l1, l2, m1, m2, g one after the other; out = dG_dq one after the other. */
+void planar_2r_gravity_derivatives_packed(const double *in, double *out);
+
+/* planar_2r_gravity_derivatives for n configurations; params: l1, l2, m1, m2, g, stride 0 or 5.
+ * Uses 1088 bytes of stack for its blocks of 8 configurations. */
+void planar_2r_gravity_derivatives_batch(size_t n, const double *q, const double *params, size_t params_stride, double *dG_dq);
+
 /* planar_2r_inverse_dynamics: Inverse dynamics: joint torques for a motion.
  *
  * tau = M(q) qdd + V(q, qd) + G(q) + F_f(qd) (seed eq. 8.34), by the recursive Newton-
@@ -264,7 +290,8 @@ void planar_2r_inverse_dynamics_batch(size_t n, const double *q, const double *q
  * tau(q + dq, qd + dqd, qdd + dqdd) = tau + dtau_dq dq + dtau_dqd dqd + dtau_dqdd dqdd
  * to first order, tau = M qdd + V + G + F_f (seed eq. 8.34); dtau_dqdd = M.  Forward-
  * mode derivative of the recursive Newton-Euler program (Carpentier and Mansard, RSS
- * 2018); a sign(qd) Coulomb term counts with derivative 0.
+ * 2018), dtau_dqdd by the composite-rigid-body algorithm; a sign(qd) Coulomb term counts
+ * with derivative 0.
  *
  * Inputs:
  *   q[2]: joint coordinates: theta1 [rad], theta2 [rad].
@@ -280,7 +307,7 @@ void planar_2r_inverse_dynamics_batch(size_t n, const double *q, const double *q
  *   dtau_dqd[4]: 2 x 2, row-major; d tau / dqd: the damping of the motion (Coriolis and
  *   friction).
  *   dtau_dqdd[4]: 2 x 2, row-major; d tau / dqdd = M(q), the mass matrix.
- * Cost: 91 operations.
+ * Cost: 88 operations.
  */
 void planar_2r_inverse_dynamics_derivatives(const double *q, const double *qd, const double *qdd, double l1, double l2, double m1, double m2, double g, double *dtau_dq, double *dtau_dqd, double *dtau_dqdd);
 
@@ -317,6 +344,38 @@ void planar_2r_forward_dynamics_packed(const double *in, double *out);
 /* planar_2r_forward_dynamics for n configurations; params: l1, l2, m1, m2, g, stride 0 or 5.
  * Uses 1216 bytes of stack for its blocks of 8 configurations. */
 void planar_2r_forward_dynamics_batch(size_t n, const double *q, const double *qd, const double *tau, const double *params, size_t params_stride, double *qdd);
+
+/* planar_2r_forward_dynamics_derivatives: Derivatives of the forward dynamics: the linearization of the plant.
+ *
+ * qdd(q + dq, qd + dqd, tau + dtau) = qdd + dqdd_dq dq + dqdd_dqd dqd + dqdd_dtau dtau
+ * to first order, qdd = M^-1 (tau - V - G - F_f) (seed eq. 8.34); by the implicit-
+ * function theorem dqdd_dq = -M^-1 dtau_dq, dqdd_dqd = -M^-1 dtau_dqd at qdd and
+ * dqdd_dtau = M^-1, by LDL^T solves (Carpentier and Mansard, RSS 2018); a state-space
+ * model x = (q, qd) has A = [[0, I], [dqdd_dq, dqdd_dqd]] and B = [[0], [dqdd_dtau]].
+ *
+ * Inputs:
+ *   q[2]: joint coordinates: theta1 [rad], theta2 [rad].
+ *   qd[2]: joint velocities: theta1 [rad/s], theta2 [rad/s].
+ *   tau[2]: joint torques (revolute) or forces (prismatic): theta1 [N*m], theta2 [N*m].
+ *   l1: length of link 1 [m]; default PLANAR_2R_DEFAULT_l1 = 0.1.
+ *   l2: length of link 2 [m]; default PLANAR_2R_DEFAULT_l2 = 0.1.
+ *   m1: point mass at the end of link 1 [kg]; default PLANAR_2R_DEFAULT_m1 = 0.1.
+ *   m2: point mass at the end of link 2 [kg]; default PLANAR_2R_DEFAULT_m2 = 0.1.
+ *   g: gravitational acceleration [m/s^2]; default PLANAR_2R_DEFAULT_g = 9.81.
+ * Outputs:
+ *   dqdd_dq[4]: 2 x 2, row-major; d qdd / dq: row i, column j is d qdd_i / d q_j.
+ *   dqdd_dqd[4]: 2 x 2, row-major; d qdd / dqd.
+ *   dqdd_dtau[4]: 2 x 2, row-major; d qdd / dtau = M(q)^-1.
+ * Cost: 145 operations.
+ */
+void planar_2r_forward_dynamics_derivatives(const double *q, const double *qd, const double *tau, double l1, double l2, double m1, double m2, double g, double *dqdd_dq, double *dqdd_dqd, double *dqdd_dtau);
+
+/* planar_2r_forward_dynamics_derivatives with packed arguments: in = q, qd, tau, l1, l2, m1, m2, g one after the other; out = dqdd_dq, dqdd_dqd, dqdd_dtau one after the other. */
+void planar_2r_forward_dynamics_derivatives_packed(const double *in, double *out);
+
+/* planar_2r_forward_dynamics_derivatives for n configurations; params: l1, l2, m1, m2, g, stride 0 or 5.
+ * Uses 1856 bytes of stack for its blocks of 8 configurations. */
+void planar_2r_forward_dynamics_derivatives_batch(size_t n, const double *q, const double *qd, const double *tau, const double *params, size_t params_stride, double *dqdd_dq, double *dqdd_dqd, double *dqdd_dtau);
 
 /* planar_2r_tcp_force: Force (wrench) at the TCP that produces a joint motion.
  *
@@ -424,13 +483,14 @@ void planar_2r_potential_energy_packed(const double *in, double *out);
  * Uses 896 bytes of stack for its blocks of 8 configurations. */
 void planar_2r_potential_energy_batch(size_t n, const double *q, const double *params, size_t params_stride, double *u);
 
-/* planar_2r_combined: fk, frames, jacobian, jacobian_geometric, mass_matrix, coriolis_matrix, coriolis_vector, gravity_vector, inverse_dynamics, inverse_dynamics_derivatives, forward_dynamics, tcp_force, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions.
+/* planar_2r_combined: fk, frames, jacobian, jacobian_geometric, mass_matrix, coriolis_matrix, coriolis_vector, gravity_vector, gravity_derivatives, inverse_dynamics, inverse_dynamics_derivatives, forward_dynamics, forward_dynamics_derivatives, tcp_force, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions.
  *
  * Computes the outputs of fk, frames, jacobian, jacobian_geometric, mass_matrix,
- * coriolis_matrix, coriolis_vector, gravity_vector, inverse_dynamics,
- * inverse_dynamics_derivatives, forward_dynamics, tcp_force, operational_space,
- * kinetic_energy, potential_energy in one call; subexpressions common to several of them
- * are evaluated once.
+ * coriolis_matrix, coriolis_vector, gravity_vector, gravity_derivatives,
+ * inverse_dynamics, inverse_dynamics_derivatives, forward_dynamics,
+ * forward_dynamics_derivatives, tcp_force, operational_space, kinetic_energy,
+ * potential_energy in one call; subexpressions common to several of them are evaluated
+ * once.
  *
  * Inputs:
  *   q[2]: joint coordinates: theta1 [rad], theta2 [rad].
@@ -458,6 +518,8 @@ void planar_2r_potential_energy_batch(size_t n, const double *q, const double *p
  *   (prismatic)].
  *   G[2]: 2; joint torques that hold the arm against gravity (gravity_vector) [N*m
  *   (revolute), N (prismatic)].
+ *   dG_dq[4]: 2 x 2, row-major; d G / dq: row i, column j is d G_i / d q_j
+ *   (gravity_derivatives).
  *   inverse_dynamics_tau[2]: 2; joint torques (revolute) or forces (prismatic)
  *   (inverse_dynamics) [N*m (revolute), N (prismatic)].
  *   dtau_dq[4]: 2 x 2, row-major; d tau / dq: row i, column j is d tau_i / d q_j
@@ -468,6 +530,10 @@ void planar_2r_potential_energy_batch(size_t n, const double *q, const double *p
  *   (inverse_dynamics_derivatives).
  *   forward_dynamics_qdd[2]: 2; joint accelerations (forward_dynamics) [rad/s^2
  *   (revolute), m/s^2 (prismatic)].
+ *   dqdd_dq[4]: 2 x 2, row-major; d qdd / dq: row i, column j is d qdd_i / d q_j
+ *   (forward_dynamics_derivatives).
+ *   dqdd_dqd[4]: 2 x 2, row-major; d qdd / dqd (forward_dynamics_derivatives).
+ *   dqdd_dtau[4]: 2 x 2, row-major; d qdd / dtau = M(q)^-1 (forward_dynamics_derivatives).
  *   F[2]: 2; TCP force components [x, y] (tcp_force) [N, N*m].
  *   Mx[4]: 2 x 2, row-major; operational-space mass matrix J^-T M J^-1
  *   (operational_space).
@@ -476,16 +542,16 @@ void planar_2r_potential_energy_batch(size_t n, const double *q, const double *p
  *   Gx[2]: 2; operational-space gravity force J^-T G (operational_space).
  *   k[1]: scalar; kinetic energy of all bodies (kinetic_energy) [J].
  *   u[1]: scalar; potential energy (potential_energy) [J].
- * Cost: 336 operations.
+ * Cost: 424 operations.
  */
-void planar_2r_combined(const double *q, const double *qd, const double *qdd, const double *tau, double l1, double l2, double m1, double m2, double g, double *base_T_tcp, double *base_T_link1, double *base_T_link2, double *jacobian_J, double *jacobian_geometric_J, double *M, double *C, double *V, double *G, double *inverse_dynamics_tau, double *dtau_dq, double *dtau_dqd, double *dtau_dqdd, double *forward_dynamics_qdd, double *F, double *Mx, double *Vx, double *Gx, double *k, double *u);
+void planar_2r_combined(const double *q, const double *qd, const double *qdd, const double *tau, double l1, double l2, double m1, double m2, double g, double *base_T_tcp, double *base_T_link1, double *base_T_link2, double *jacobian_J, double *jacobian_geometric_J, double *M, double *C, double *V, double *G, double *dG_dq, double *inverse_dynamics_tau, double *dtau_dq, double *dtau_dqd, double *dtau_dqdd, double *forward_dynamics_qdd, double *dqdd_dq, double *dqdd_dqd, double *dqdd_dtau, double *F, double *Mx, double *Vx, double *Gx, double *k, double *u);
 
-/* planar_2r_combined with packed arguments: in = q, qd, qdd, tau, l1, l2, m1, m2, g one after the other; out = base_T_tcp, base_T_link1, base_T_link2, jacobian_J, jacobian_geometric_J, M, C, V, G, inverse_dynamics_tau, dtau_dq, dtau_dqd, dtau_dqdd, forward_dynamics_qdd, F, Mx, Vx, Gx, k, u one after the other. */
+/* planar_2r_combined with packed arguments: in = q, qd, qdd, tau, l1, l2, m1, m2, g one after the other; out = base_T_tcp, base_T_link1, base_T_link2, jacobian_J, jacobian_geometric_J, M, C, V, G, dG_dq, inverse_dynamics_tau, dtau_dq, dtau_dqd, dtau_dqdd, forward_dynamics_qdd, dqdd_dq, dqdd_dqd, dqdd_dtau, F, Mx, Vx, Gx, k, u one after the other. */
 void planar_2r_combined_packed(const double *in, double *out);
 
 /* planar_2r_combined for n configurations; params: l1, l2, m1, m2, g, stride 0 or 5.
- * Uses 5312 bytes of stack for its blocks of 8 configurations. */
-void planar_2r_combined_batch(size_t n, const double *q, const double *qd, const double *qdd, const double *tau, const double *params, size_t params_stride, double *base_T_tcp, double *base_T_link1, double *base_T_link2, double *jacobian_J, double *jacobian_geometric_J, double *M, double *C, double *V, double *G, double *inverse_dynamics_tau, double *dtau_dq, double *dtau_dqd, double *dtau_dqdd, double *forward_dynamics_qdd, double *F, double *Mx, double *Vx, double *Gx, double *k, double *u);
+ * Uses 6336 bytes of stack for its blocks of 8 configurations. */
+void planar_2r_combined_batch(size_t n, const double *q, const double *qd, const double *qdd, const double *tau, const double *params, size_t params_stride, double *base_T_tcp, double *base_T_link1, double *base_T_link2, double *jacobian_J, double *jacobian_geometric_J, double *M, double *C, double *V, double *G, double *dG_dq, double *inverse_dynamics_tau, double *dtau_dq, double *dtau_dqd, double *dtau_dqdd, double *forward_dynamics_qdd, double *dqdd_dq, double *dqdd_dqd, double *dqdd_dtau, double *F, double *Mx, double *Vx, double *Gx, double *k, double *u);
 
 /* planar_2r_fk_f32: Forward kinematics: pose of the TCP in the base frame.
  *
@@ -677,6 +743,32 @@ void planar_2r_gravity_vector_packed_f32(const float *in, float *out);
  * Uses 480 bytes of stack for its blocks of 8 configurations. */
 void planar_2r_gravity_vector_batch_f32(size_t n, const float *q, const float *params, size_t params_stride, float *G);
 
+/* planar_2r_gravity_derivatives_f32: Derivative of the gravity vector: the stiffness gravity (and the springs) add.
+ *
+ * G(q + dq) = G(q) + dG_dq dq to first order (seed eq. 8.31's G = du/dq, so dG_dq =
+ * d^2u/dq^2 is symmetric for gravity and springs alike); forward-mode derivative of the
+ * Newton-Euler program at rest.
+ *
+ * Inputs:
+ *   q[2]: joint coordinates: theta1 [rad], theta2 [rad].
+ *   l1: length of link 1 [m]; default PLANAR_2R_DEFAULT_l1 = 0.1.
+ *   l2: length of link 2 [m]; default PLANAR_2R_DEFAULT_l2 = 0.1.
+ *   m1: point mass at the end of link 1 [kg]; default PLANAR_2R_DEFAULT_m1 = 0.1.
+ *   m2: point mass at the end of link 2 [kg]; default PLANAR_2R_DEFAULT_m2 = 0.1.
+ *   g: gravitational acceleration [m/s^2]; default PLANAR_2R_DEFAULT_g = 9.81.
+ * Outputs:
+ *   dG_dq[4]: 2 x 2, row-major; d G / dq: row i, column j is d G_i / d q_j.
+ * Cost: 23 operations.
+ */
+void planar_2r_gravity_derivatives_f32(const float *q, float l1, float l2, float m1, float m2, float g, float *dG_dq);
+
+/* planar_2r_gravity_derivatives_f32 with packed arguments: in = q, l1, l2, m1, m2, g one after the other; out = dG_dq one after the other. */
+void planar_2r_gravity_derivatives_packed_f32(const float *in, float *out);
+
+/* planar_2r_gravity_derivatives_f32 for n configurations; params: l1, l2, m1, m2, g, stride 0 or 5.
+ * Uses 544 bytes of stack for its blocks of 8 configurations. */
+void planar_2r_gravity_derivatives_batch_f32(size_t n, const float *q, const float *params, size_t params_stride, float *dG_dq);
+
 /* planar_2r_inverse_dynamics_f32: Inverse dynamics: joint torques for a motion.
  *
  * tau = M(q) qdd + V(q, qd) + G(q) + F_f(qd) (seed eq. 8.34), by the recursive Newton-
@@ -710,7 +802,8 @@ void planar_2r_inverse_dynamics_batch_f32(size_t n, const float *q, const float 
  * tau(q + dq, qd + dqd, qdd + dqdd) = tau + dtau_dq dq + dtau_dqd dqd + dtau_dqdd dqdd
  * to first order, tau = M qdd + V + G + F_f (seed eq. 8.34); dtau_dqdd = M.  Forward-
  * mode derivative of the recursive Newton-Euler program (Carpentier and Mansard, RSS
- * 2018); a sign(qd) Coulomb term counts with derivative 0.
+ * 2018), dtau_dqdd by the composite-rigid-body algorithm; a sign(qd) Coulomb term counts
+ * with derivative 0.
  *
  * Inputs:
  *   q[2]: joint coordinates: theta1 [rad], theta2 [rad].
@@ -726,7 +819,7 @@ void planar_2r_inverse_dynamics_batch_f32(size_t n, const float *q, const float 
  *   dtau_dqd[4]: 2 x 2, row-major; d tau / dqd: the damping of the motion (Coriolis and
  *   friction).
  *   dtau_dqdd[4]: 2 x 2, row-major; d tau / dqdd = M(q), the mass matrix.
- * Cost: 91 operations.
+ * Cost: 88 operations.
  */
 void planar_2r_inverse_dynamics_derivatives_f32(const float *q, const float *qd, const float *qdd, float l1, float l2, float m1, float m2, float g, float *dtau_dq, float *dtau_dqd, float *dtau_dqdd);
 
@@ -763,6 +856,38 @@ void planar_2r_forward_dynamics_packed_f32(const float *in, float *out);
 /* planar_2r_forward_dynamics_f32 for n configurations; params: l1, l2, m1, m2, g, stride 0 or 5.
  * Uses 608 bytes of stack for its blocks of 8 configurations. */
 void planar_2r_forward_dynamics_batch_f32(size_t n, const float *q, const float *qd, const float *tau, const float *params, size_t params_stride, float *qdd);
+
+/* planar_2r_forward_dynamics_derivatives_f32: Derivatives of the forward dynamics: the linearization of the plant.
+ *
+ * qdd(q + dq, qd + dqd, tau + dtau) = qdd + dqdd_dq dq + dqdd_dqd dqd + dqdd_dtau dtau
+ * to first order, qdd = M^-1 (tau - V - G - F_f) (seed eq. 8.34); by the implicit-
+ * function theorem dqdd_dq = -M^-1 dtau_dq, dqdd_dqd = -M^-1 dtau_dqd at qdd and
+ * dqdd_dtau = M^-1, by LDL^T solves (Carpentier and Mansard, RSS 2018); a state-space
+ * model x = (q, qd) has A = [[0, I], [dqdd_dq, dqdd_dqd]] and B = [[0], [dqdd_dtau]].
+ *
+ * Inputs:
+ *   q[2]: joint coordinates: theta1 [rad], theta2 [rad].
+ *   qd[2]: joint velocities: theta1 [rad/s], theta2 [rad/s].
+ *   tau[2]: joint torques (revolute) or forces (prismatic): theta1 [N*m], theta2 [N*m].
+ *   l1: length of link 1 [m]; default PLANAR_2R_DEFAULT_l1 = 0.1.
+ *   l2: length of link 2 [m]; default PLANAR_2R_DEFAULT_l2 = 0.1.
+ *   m1: point mass at the end of link 1 [kg]; default PLANAR_2R_DEFAULT_m1 = 0.1.
+ *   m2: point mass at the end of link 2 [kg]; default PLANAR_2R_DEFAULT_m2 = 0.1.
+ *   g: gravitational acceleration [m/s^2]; default PLANAR_2R_DEFAULT_g = 9.81.
+ * Outputs:
+ *   dqdd_dq[4]: 2 x 2, row-major; d qdd / dq: row i, column j is d qdd_i / d q_j.
+ *   dqdd_dqd[4]: 2 x 2, row-major; d qdd / dqd.
+ *   dqdd_dtau[4]: 2 x 2, row-major; d qdd / dtau = M(q)^-1.
+ * Cost: 145 operations.
+ */
+void planar_2r_forward_dynamics_derivatives_f32(const float *q, const float *qd, const float *tau, float l1, float l2, float m1, float m2, float g, float *dqdd_dq, float *dqdd_dqd, float *dqdd_dtau);
+
+/* planar_2r_forward_dynamics_derivatives_f32 with packed arguments: in = q, qd, tau, l1, l2, m1, m2, g one after the other; out = dqdd_dq, dqdd_dqd, dqdd_dtau one after the other. */
+void planar_2r_forward_dynamics_derivatives_packed_f32(const float *in, float *out);
+
+/* planar_2r_forward_dynamics_derivatives_f32 for n configurations; params: l1, l2, m1, m2, g, stride 0 or 5.
+ * Uses 928 bytes of stack for its blocks of 8 configurations. */
+void planar_2r_forward_dynamics_derivatives_batch_f32(size_t n, const float *q, const float *qd, const float *tau, const float *params, size_t params_stride, float *dqdd_dq, float *dqdd_dqd, float *dqdd_dtau);
 
 /* planar_2r_tcp_force_f32: Force (wrench) at the TCP that produces a joint motion.
  *
@@ -870,13 +995,14 @@ void planar_2r_potential_energy_packed_f32(const float *in, float *out);
  * Uses 448 bytes of stack for its blocks of 8 configurations. */
 void planar_2r_potential_energy_batch_f32(size_t n, const float *q, const float *params, size_t params_stride, float *u);
 
-/* planar_2r_combined_f32: fk, frames, jacobian, jacobian_geometric, mass_matrix, coriolis_matrix, coriolis_vector, gravity_vector, inverse_dynamics, inverse_dynamics_derivatives, forward_dynamics, tcp_force, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions.
+/* planar_2r_combined_f32: fk, frames, jacobian, jacobian_geometric, mass_matrix, coriolis_matrix, coriolis_vector, gravity_vector, gravity_derivatives, inverse_dynamics, inverse_dynamics_derivatives, forward_dynamics, forward_dynamics_derivatives, tcp_force, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions.
  *
  * Computes the outputs of fk, frames, jacobian, jacobian_geometric, mass_matrix,
- * coriolis_matrix, coriolis_vector, gravity_vector, inverse_dynamics,
- * inverse_dynamics_derivatives, forward_dynamics, tcp_force, operational_space,
- * kinetic_energy, potential_energy in one call; subexpressions common to several of them
- * are evaluated once.
+ * coriolis_matrix, coriolis_vector, gravity_vector, gravity_derivatives,
+ * inverse_dynamics, inverse_dynamics_derivatives, forward_dynamics,
+ * forward_dynamics_derivatives, tcp_force, operational_space, kinetic_energy,
+ * potential_energy in one call; subexpressions common to several of them are evaluated
+ * once.
  *
  * Inputs:
  *   q[2]: joint coordinates: theta1 [rad], theta2 [rad].
@@ -904,6 +1030,8 @@ void planar_2r_potential_energy_batch_f32(size_t n, const float *q, const float 
  *   (prismatic)].
  *   G[2]: 2; joint torques that hold the arm against gravity (gravity_vector) [N*m
  *   (revolute), N (prismatic)].
+ *   dG_dq[4]: 2 x 2, row-major; d G / dq: row i, column j is d G_i / d q_j
+ *   (gravity_derivatives).
  *   inverse_dynamics_tau[2]: 2; joint torques (revolute) or forces (prismatic)
  *   (inverse_dynamics) [N*m (revolute), N (prismatic)].
  *   dtau_dq[4]: 2 x 2, row-major; d tau / dq: row i, column j is d tau_i / d q_j
@@ -914,6 +1042,10 @@ void planar_2r_potential_energy_batch_f32(size_t n, const float *q, const float 
  *   (inverse_dynamics_derivatives).
  *   forward_dynamics_qdd[2]: 2; joint accelerations (forward_dynamics) [rad/s^2
  *   (revolute), m/s^2 (prismatic)].
+ *   dqdd_dq[4]: 2 x 2, row-major; d qdd / dq: row i, column j is d qdd_i / d q_j
+ *   (forward_dynamics_derivatives).
+ *   dqdd_dqd[4]: 2 x 2, row-major; d qdd / dqd (forward_dynamics_derivatives).
+ *   dqdd_dtau[4]: 2 x 2, row-major; d qdd / dtau = M(q)^-1 (forward_dynamics_derivatives).
  *   F[2]: 2; TCP force components [x, y] (tcp_force) [N, N*m].
  *   Mx[4]: 2 x 2, row-major; operational-space mass matrix J^-T M J^-1
  *   (operational_space).
@@ -922,16 +1054,16 @@ void planar_2r_potential_energy_batch_f32(size_t n, const float *q, const float 
  *   Gx[2]: 2; operational-space gravity force J^-T G (operational_space).
  *   k[1]: scalar; kinetic energy of all bodies (kinetic_energy) [J].
  *   u[1]: scalar; potential energy (potential_energy) [J].
- * Cost: 336 operations.
+ * Cost: 424 operations.
  */
-void planar_2r_combined_f32(const float *q, const float *qd, const float *qdd, const float *tau, float l1, float l2, float m1, float m2, float g, float *base_T_tcp, float *base_T_link1, float *base_T_link2, float *jacobian_J, float *jacobian_geometric_J, float *M, float *C, float *V, float *G, float *inverse_dynamics_tau, float *dtau_dq, float *dtau_dqd, float *dtau_dqdd, float *forward_dynamics_qdd, float *F, float *Mx, float *Vx, float *Gx, float *k, float *u);
+void planar_2r_combined_f32(const float *q, const float *qd, const float *qdd, const float *tau, float l1, float l2, float m1, float m2, float g, float *base_T_tcp, float *base_T_link1, float *base_T_link2, float *jacobian_J, float *jacobian_geometric_J, float *M, float *C, float *V, float *G, float *dG_dq, float *inverse_dynamics_tau, float *dtau_dq, float *dtau_dqd, float *dtau_dqdd, float *forward_dynamics_qdd, float *dqdd_dq, float *dqdd_dqd, float *dqdd_dtau, float *F, float *Mx, float *Vx, float *Gx, float *k, float *u);
 
-/* planar_2r_combined_f32 with packed arguments: in = q, qd, qdd, tau, l1, l2, m1, m2, g one after the other; out = base_T_tcp, base_T_link1, base_T_link2, jacobian_J, jacobian_geometric_J, M, C, V, G, inverse_dynamics_tau, dtau_dq, dtau_dqd, dtau_dqdd, forward_dynamics_qdd, F, Mx, Vx, Gx, k, u one after the other. */
+/* planar_2r_combined_f32 with packed arguments: in = q, qd, qdd, tau, l1, l2, m1, m2, g one after the other; out = base_T_tcp, base_T_link1, base_T_link2, jacobian_J, jacobian_geometric_J, M, C, V, G, dG_dq, inverse_dynamics_tau, dtau_dq, dtau_dqd, dtau_dqdd, forward_dynamics_qdd, dqdd_dq, dqdd_dqd, dqdd_dtau, F, Mx, Vx, Gx, k, u one after the other. */
 void planar_2r_combined_packed_f32(const float *in, float *out);
 
 /* planar_2r_combined_f32 for n configurations; params: l1, l2, m1, m2, g, stride 0 or 5.
- * Uses 2656 bytes of stack for its blocks of 8 configurations. */
-void planar_2r_combined_batch_f32(size_t n, const float *q, const float *qd, const float *qdd, const float *tau, const float *params, size_t params_stride, float *base_T_tcp, float *base_T_link1, float *base_T_link2, float *jacobian_J, float *jacobian_geometric_J, float *M, float *C, float *V, float *G, float *inverse_dynamics_tau, float *dtau_dq, float *dtau_dqd, float *dtau_dqdd, float *forward_dynamics_qdd, float *F, float *Mx, float *Vx, float *Gx, float *k, float *u);
+ * Uses 3168 bytes of stack for its blocks of 8 configurations. */
+void planar_2r_combined_batch_f32(size_t n, const float *q, const float *qd, const float *qdd, const float *tau, const float *params, size_t params_stride, float *base_T_tcp, float *base_T_link1, float *base_T_link2, float *jacobian_J, float *jacobian_geometric_J, float *M, float *C, float *V, float *G, float *dG_dq, float *inverse_dynamics_tau, float *dtau_dq, float *dtau_dqd, float *dtau_dqdd, float *forward_dynamics_qdd, float *dqdd_dq, float *dqdd_dqd, float *dqdd_dtau, float *F, float *Mx, float *Vx, float *Gx, float *k, float *u);
 
 #ifdef __cplusplus
 }

@@ -23,14 +23,16 @@
  *   coriolis_matrix(q, qd, params) -> number[][]
  *   coriolis_vector(q, qd, params) -> number[]
  *   gravity_vector(q, params) -> number[]
+ *   gravity_derivatives(q, params) -> number[][]
  *   inverse_dynamics(q, qd, qdd, params) -> number[]
  *   inverse_dynamics_derivatives(q, qd, qdd, params) -> {dtau_dq: number[][], dtau_dqd: number[][], dtau_dqdd: number[][]}
  *   forward_dynamics(q, qd, tau, params) -> number[]
+ *   forward_dynamics_derivatives(q, qd, tau, params) -> {dqdd_dq: number[][], dqdd_dqd: number[][], dqdd_dtau: number[][]}
  *   tcp_force(q, qd, qdd, params) -> number[]
  *   operational_space(q, qd, params) -> {Mx: number[][], Vx: number[], Gx: number[]}
  *   kinetic_energy(q, qd, params) -> number
  *   potential_energy(q, params) -> number
- *   combined(q, qd, qdd, tau, params) -> {base_T_tcp: number[][], base_T_link1: number[][], base_T_link2: number[][], jacobian_J: number[][], jacobian_geometric_J: number[][], M: number[][], C: number[][], V: number[], G: number[], inverse_dynamics_tau: number[], dtau_dq: number[][], dtau_dqd: number[][], dtau_dqdd: number[][], forward_dynamics_qdd: number[], F: number[], Mx: number[][], Vx: number[], Gx: number[], k: number, u: number}
+ *   combined(q, qd, qdd, tau, params) -> {base_T_tcp: number[][], base_T_link1: number[][], base_T_link2: number[][], jacobian_J: number[][], jacobian_geometric_J: number[][], M: number[][], C: number[][], V: number[], G: number[], dG_dq: number[][], inverse_dynamics_tau: number[], dtau_dq: number[][], dtau_dqd: number[][], dtau_dqdd: number[][], forward_dynamics_qdd: number[], dqdd_dq: number[][], dqdd_dqd: number[][], dqdd_dtau: number[][], F: number[], Mx: number[][], Vx: number[], Gx: number[], k: number, u: number}
  */
 (function (root, factory) {
   "use strict";
@@ -330,6 +332,48 @@
   }
 
   /**
+   * Derivative of the gravity vector: the stiffness gravity (and the springs) add.
+   *
+   * G(q + dq) = G(q) + dG_dq dq to first order (seed eq. 8.31's G = du/dq, so dG_dq =
+   * d^2u/dq^2 is symmetric for gravity and springs alike); forward-mode derivative of the
+   * Newton-Euler program at rest.
+   *
+   * @param {number[]} q joint coordinates, 2 numbers: theta1 [rad], theta2 [rad].
+   * @param {Object} [params] parameter values (defaults in PARAMETERS):
+   *     l1: length of link 1 [m]; default 0.1.
+   *     l2: length of link 2 [m]; default 0.1.
+   *     m1: point mass at the end of link 1 [kg]; default 0.1.
+   *     m2: point mass at the end of link 2 [kg]; default 0.1.
+   *     g: gravitational acceleration [m/s^2]; default 9.81.
+   * @returns {number[][]}
+   *     dG_dq: shape (2, 2); d G / dq: row i, column j is d G_i / d q_j.
+   */
+  function gravity_derivatives(q, params) {
+    _vector(q, 2, "q", "gravity_derivatives");
+    const _p = _params(params, ["l1", "l2", "m1", "m2", "g"], "gravity_derivatives");
+    const l1 = _p.l1 ?? 0.1;
+    const l2 = _p.l2 ?? 0.1;
+    const m1 = _p.m1 ?? 0.1;
+    const m2 = _p.m2 ?? 0.1;
+    const g = _p.g ?? 9.81;
+    const theta1 = q[0];
+    const theta2 = q[1];
+    const _x0 = Math.cos(theta2);
+    const _x1 = g*Math.cos(theta1);
+    const _x2 = Math.sin(theta2);
+    const _x3 = g*Math.sin(theta1);
+    const _x4 = l2*m2;
+    const _x5 = _x2*_x1;
+    const _x6 = _x0*_x3;
+    const _x7 = -_x2;
+    const _x8 = -_x3;
+    const _x9 = _x0*_x4;
+    const _x10 = -_x5*_x4;
+    const _x11 = _x1*_x7*_x4 - _x6*_x4;
+    return [[_x10 + _x8*(_x9 + l1*m2 + l1*m1), _x11], [_x10 + _x9*_x8, _x11]];
+  }
+
+  /**
    * Inverse dynamics: joint torques for a motion.
    *
    * tau = M(q) qdd + V(q, qd) + G(q) + F_f(qd) (seed eq. 8.34), by the recursive Newton-
@@ -383,7 +427,8 @@
    * tau(q + dq, qd + dqd, qdd + dqdd) = tau + dtau_dq dq + dtau_dqd dqd + dtau_dqdd dqdd
    * to first order, tau = M qdd + V + G + F_f (seed eq. 8.34); dtau_dqdd = M.  Forward-
    * mode derivative of the recursive Newton-Euler program (Carpentier and Mansard, RSS
-   * 2018); a sign(qd) Coulomb term counts with derivative 0.
+   * 2018), dtau_dqdd by the composite-rigid-body algorithm; a sign(qd) Coulomb term
+   * counts with derivative 0.
    *
    * @param {number[]} q joint coordinates, 2 numbers: theta1 [rad], theta2 [rad].
    * @param {number[]} qd joint velocities, 2 numbers: theta1 [rad/s], theta2 [rad/s].
@@ -418,41 +463,39 @@
     const theta1_dd = qdd[0];
     const theta2_dd = qdd[1];
     const _x0 = Math.cos(theta2);
-    const _x1 = g*Math.cos(theta1);
-    const _x2 = g*Math.sin(theta1);
-    const _x3 = Math.sin(theta2);
-    const _x4 = 2.0*l1;
-    const _x5 = m2*_x3;
-    const _x6 = l1*_x0;
-    const _x7 = l2*l2*m2;
-    const _x8 = theta1_dd + theta2_dd;
-    const _x9 = l2*m2;
-    const _x10 = _x1 + l1*theta1_dd;
-    const _x11 = _x2 - l1*theta1_d*theta1_d;
-    const _x12 = (-_x3*_x11 + _x0*_x10)*m2;
-    const _x13 = -_x3;
-    const _x14 = -_x2;
-    const _x15 = -_x4*theta1_d;
-    const _x16 = m2*_x0*_x14 - _x1*_x5;
-    const _x17 = m2*_x13*_x10 - m2*_x0*_x11;
-    const _x18 = -_x5*_x15;
-    const _x19 = m2*_x6;
-    const _x20 = l2*_x16;
-    const _x21 = l2*_x17;
-    const _x22 = l2*_x18;
-    const _x23 = l2*_x19 + _x7;
-    const _x24 = m2*_x3*_x3;
-    const _x25 = l1*_x14;
-    const _x26 = _x6*_x5;
+    const _x1 = l2*m2;
+    const _x2 = g*Math.cos(theta1);
+    const _x3 = g*Math.sin(theta1);
+    const _x4 = Math.sin(theta2);
+    const _x5 = 2.0*l1;
+    const _x6 = m2*_x4;
+    const _x7 = l1*l1;
+    const _x8 = l1*_x0*_x1;
+    const _x9 = l2*l2*m2;
+    const _x10 = _x8 + _x9;
+    const _x11 = theta1_dd + theta2_dd;
+    const _x12 = _x2 + l1*theta1_dd;
+    const _x13 = _x3 - l1*theta1_d*theta1_d;
+    const _x14 = (-_x4*_x13 + _x0*_x12)*m2;
+    const _x15 = -_x4;
+    const _x16 = -_x3;
+    const _x17 = -_x5*theta1_d;
+    const _x18 = m2*_x0*_x16 - _x2*_x6;
+    const _x19 = m2*_x12*_x15 - m2*_x0*_x13;
+    const _x20 = -_x6*_x17;
+    const _x21 = l2*_x18;
+    const _x22 = l2*_x19;
+    const _x23 = l2*_x20;
+    const _x24 = l1*_x0;
+    const _x25 = _x6*_x24;
+    const _x26 = l1*_x16;
     const _x27 = theta2_d + theta1_d;
-    const _x28 = _x3*_x10;
-    const _x29 = -_x4*_x3*_x9*_x27;
-    const _x30 = l1*l1;
-    const _x31 = _x6*_x9;
+    const _x28 = _x4*_x12;
+    const _x29 = -_x1*_x4*_x5*_x27;
     return {
-      dtau_dq: [[m1*_x25 + _x24*_x25 + _x1*_x26 + _x6*_x16 + _x20, l1*_x0*(m2*_x28 - _x9*_x27*_x27 + m2*(_x0*_x11 + _x28)) + _x6*_x17 + l1*_x13*(_x12 + _x9*_x8 + _x5*_x11) + _x21], [_x20, _x21]],
-      dtau_dqd: [[_x26*_x15 + _x22 + _x6*_x18 + _x29, _x29], [_x22, 0.0]],
-      dtau_dqdd: [[_x31 + _x24*_x30 + _x6*_x19 + m1*_x30 + _x23, _x31 + _x7], [_x23, _x7]],
+      dtau_dq: [[m1*_x26 + m2*_x4*_x4*_x26 + _x2*_x25 + _x21 + _x24*_x18, l1*_x15*(_x14 + _x1*_x11 + _x6*_x13) + l1*_x0*(m2*_x28 + m2*(_x0*_x13 + _x28) - _x1*_x27*_x27) + _x22 + _x24*_x19], [_x21, _x22]],
+      dtau_dqd: [[_x25*_x17 + _x20*_x24 + _x23 + _x29, _x29], [_x23, 0.0]],
+      dtau_dqdd: [[_x9 + 2.0*_x8 + m2*_x7 + m1*_x7, _x10], [_x10, _x9]],
     };
   }
 
@@ -511,6 +554,117 @@
     const _x17 = _x16/_x14;
     const _x18 = -_x13*_x17 + _x6*_x15;
     return [_x18, _x17];
+  }
+
+  /**
+   * Derivatives of the forward dynamics: the linearization of the plant.
+   *
+   * qdd(q + dq, qd + dqd, tau + dtau) = qdd + dqdd_dq dq + dqdd_dqd dqd + dqdd_dtau dtau
+   * to first order, qdd = M^-1 (tau - V - G - F_f) (seed eq. 8.34); by the implicit-
+   * function theorem dqdd_dq = -M^-1 dtau_dq, dqdd_dqd = -M^-1 dtau_dqd at qdd and
+   * dqdd_dtau = M^-1, by LDL^T solves (Carpentier and Mansard, RSS 2018); a state-space
+   * model x = (q, qd) has A = [[0, I], [dqdd_dq, dqdd_dqd]] and B = [[0], [dqdd_dtau]].
+   *
+   * @param {number[]} q joint coordinates, 2 numbers: theta1 [rad], theta2 [rad].
+   * @param {number[]} qd joint velocities, 2 numbers: theta1 [rad/s], theta2 [rad/s].
+   * @param {number[]} tau joint torques (revolute) or forces (prismatic), 2 numbers: theta1
+   *     [N*m], theta2 [N*m].
+   * @param {Object} [params] parameter values (defaults in PARAMETERS):
+   *     l1: length of link 1 [m]; default 0.1.
+   *     l2: length of link 2 [m]; default 0.1.
+   *     m1: point mass at the end of link 1 [kg]; default 0.1.
+   *     m2: point mass at the end of link 2 [kg]; default 0.1.
+   *     g: gravitational acceleration [m/s^2]; default 9.81.
+   * @returns {{dqdd_dq: number[][], dqdd_dqd: number[][], dqdd_dtau: number[][]}}
+   *     dqdd_dq: shape (2, 2); d qdd / dq: row i, column j is d qdd_i / d q_j.
+   *     dqdd_dqd: shape (2, 2); d qdd / dqd.
+   *     dqdd_dtau: shape (2, 2); d qdd / dtau = M(q)^-1.
+   */
+  function forward_dynamics_derivatives(q, qd, tau, params) {
+    _vector(q, 2, "q", "forward_dynamics_derivatives");
+    _vector(qd, 2, "qd", "forward_dynamics_derivatives");
+    _vector(tau, 2, "tau", "forward_dynamics_derivatives");
+    const _p = _params(params, ["l1", "l2", "m1", "m2", "g"], "forward_dynamics_derivatives");
+    const l1 = _p.l1 ?? 0.1;
+    const l2 = _p.l2 ?? 0.1;
+    const m1 = _p.m1 ?? 0.1;
+    const m2 = _p.m2 ?? 0.1;
+    const g = _p.g ?? 9.81;
+    const theta1 = q[0];
+    const theta2 = q[1];
+    const theta1_d = qd[0];
+    const theta2_d = qd[1];
+    const tau_theta1 = tau[0];
+    const tau_theta2 = tau[1];
+    const _x0 = Math.cos(theta2);
+    const _x1 = l2*m2;
+    const _x2 = g*Math.cos(theta1);
+    const _x3 = g*Math.sin(theta1);
+    const _x4 = _x3 - l1*theta1_d*theta1_d;
+    const _x5 = Math.sin(theta2);
+    const _x6 = l1*l1;
+    const _x7 = l1*_x0*_x1;
+    const _x8 = l2*l2*m2;
+    const _x9 = m1*_x6 + m2*_x6 + 2.0*_x7 + _x8;
+    const _x10 = 1.0/_x9;
+    const _x11 = theta2_d + theta1_d;
+    const _x12 = _x11*_x11;
+    const _x13 = l1*m1;
+    const _x14 = _x4*_x5;
+    const _x15 = 2.0*l1;
+    const _x16 = m2*_x5;
+    const _x17 = _x2*_x16;
+    const _x18 = -_x3;
+    const _x19 = m2*_x18;
+    const _x20 = -_x15*theta1_d;
+    const _x21 = _x16*_x20;
+    const _x22 = l1*_x0;
+    const _x23 = _x7 + _x8;
+    const _x24 = _x10*_x23;
+    const _x25 = -_x23*_x24 + _x8;
+    const _x26 = 1.0/_x25;
+    const _x27 = -_x4*_x5 + _x0*_x2;
+    const _x28 = _x1*_x27;
+    const _x29 = tau_theta1 - (_x28 + l1*(_x5*((_x0*_x4 + _x2*_x5)*m2 - _x1*_x12) + m2*_x0*_x27) + _x2*_x13);
+    const _x30 = tau_theta2 - _x28 - _x29*_x24;
+    const _x31 = _x30/_x25;
+    const _x32 = _x10*_x29 - _x31*_x24;
+    const _x33 = l1*_x32 + _x2;
+    const _x34 = _x5*_x33;
+    const _x35 = _x1*_x5*_x11*_x15;
+    const _x36 = _x31 + _x32;
+    const _x37 = m2*(_x0*_x33 - _x14);
+    const _x38 = -_x5;
+    const _x39 = -_x17 + _x0*_x19;
+    const _x40 = -m2*_x0*_x4 + m2*_x33*_x38;
+    const _x41 = -_x21;
+    const _x42 = l2*_x39;
+    const _x43 = l2*_x40;
+    const _x44 = l2*_x41;
+    const _x45 = -(_x42 + _x22*_x39 + _x17*_x22 + l1*_x5*_x5*_x19 + _x13*_x18);
+    const _x46 = -_x45*_x24 - _x42;
+    const _x47 = _x26*_x46;
+    const _x48 = _x10*_x45 - _x47*_x24;
+    const _x49 = -(l1*_x38*(m2*_x14 + _x1*_x36 + _x37) + _x22*_x40 + _x43 + l1*_x0*(-_x1*_x12 + m2*_x34 + m2*(_x34 + _x0*_x4)));
+    const _x50 = -_x49*_x24 - _x43;
+    const _x51 = _x26*_x50;
+    const _x52 = _x10*_x49 - _x51*_x24;
+    const _x53 = -(_x22*_x21 + _x22*_x41 + _x44 - _x35);
+    const _x54 = -_x53*_x24 - _x44;
+    const _x55 = _x26*_x54;
+    const _x56 = _x10*_x53 - _x55*_x24;
+    const _x57 = -_x35*_x24;
+    const _x58 = _x26*_x57;
+    const _x59 = _x10*_x35 - _x58*_x24;
+    const _x60 = -_x24;
+    const _x61 = _x26*_x60;
+    const _x62 = _x10 - _x61*_x24;
+    const _x63 = -_x26*_x24;
+    return {
+      dqdd_dq: [[_x48, _x52], [_x47, _x51]],
+      dqdd_dqd: [[_x56, _x59], [_x55, _x58]],
+      dqdd_dtau: [[_x62, _x63], [_x61, _x26]],
+    };
   }
 
   /**
@@ -726,13 +880,14 @@
   }
 
   /**
-   * fk, frames, jacobian, jacobian_geometric, mass_matrix, coriolis_matrix, coriolis_vector, gravity_vector, inverse_dynamics, inverse_dynamics_derivatives, forward_dynamics, tcp_force, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions.
+   * fk, frames, jacobian, jacobian_geometric, mass_matrix, coriolis_matrix, coriolis_vector, gravity_vector, gravity_derivatives, inverse_dynamics, inverse_dynamics_derivatives, forward_dynamics, forward_dynamics_derivatives, tcp_force, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions.
    *
    * Computes the outputs of fk, frames, jacobian, jacobian_geometric, mass_matrix,
-   * coriolis_matrix, coriolis_vector, gravity_vector, inverse_dynamics,
-   * inverse_dynamics_derivatives, forward_dynamics, tcp_force, operational_space,
-   * kinetic_energy, potential_energy in one call; subexpressions common to several of
-   * them are evaluated once.
+   * coriolis_matrix, coriolis_vector, gravity_vector, gravity_derivatives,
+   * inverse_dynamics, inverse_dynamics_derivatives, forward_dynamics,
+   * forward_dynamics_derivatives, tcp_force, operational_space, kinetic_energy,
+   * potential_energy in one call; subexpressions common to several of them are evaluated
+   * once.
    *
    * @param {number[]} q joint coordinates, 2 numbers: theta1 [rad], theta2 [rad].
    * @param {number[]} qd joint velocities, 2 numbers: theta1 [rad/s], theta2 [rad/s].
@@ -746,7 +901,7 @@
    *     m1: point mass at the end of link 1 [kg]; default 0.1.
    *     m2: point mass at the end of link 2 [kg]; default 0.1.
    *     g: gravitational acceleration [m/s^2]; default 9.81.
-   * @returns {{base_T_tcp: number[][], base_T_link1: number[][], base_T_link2: number[][], jacobian_J: number[][], jacobian_geometric_J: number[][], M: number[][], C: number[][], V: number[], G: number[], inverse_dynamics_tau: number[], dtau_dq: number[][], dtau_dqd: number[][], dtau_dqdd: number[][], forward_dynamics_qdd: number[], F: number[], Mx: number[][], Vx: number[], Gx: number[], k: number, u: number}}
+   * @returns {{base_T_tcp: number[][], base_T_link1: number[][], base_T_link2: number[][], jacobian_J: number[][], jacobian_geometric_J: number[][], M: number[][], C: number[][], V: number[], G: number[], dG_dq: number[][], inverse_dynamics_tau: number[], dtau_dq: number[][], dtau_dqd: number[][], dtau_dqdd: number[][], forward_dynamics_qdd: number[], dqdd_dq: number[][], dqdd_dqd: number[][], dqdd_dtau: number[][], F: number[], Mx: number[][], Vx: number[], Gx: number[], k: number, u: number}}
    *     base_T_tcp: shape (4, 4); homogeneous transform of the TCP frame in the base
    *     frame (fk) [m].
    *     base_T_link1: shape (4, 4); homogeneous transform of frame 'link1' in the base
@@ -762,6 +917,8 @@
    *     (revolute), N (prismatic)].
    *     G: shape (2,); joint torques that hold the arm against gravity
    *     (gravity_vector) [N*m (revolute), N (prismatic)].
+   *     dG_dq: shape (2, 2); d G / dq: row i, column j is d G_i / d q_j
+   *     (gravity_derivatives).
    *     inverse_dynamics_tau: shape (2,); joint torques (revolute) or forces
    *     (prismatic) (inverse_dynamics) [N*m (revolute), N (prismatic)].
    *     dtau_dq: shape (2, 2); d tau / dq: row i, column j is d tau_i / d q_j
@@ -772,6 +929,11 @@
    *     (inverse_dynamics_derivatives).
    *     forward_dynamics_qdd: shape (2,); joint accelerations (forward_dynamics)
    *     [rad/s^2 (revolute), m/s^2 (prismatic)].
+   *     dqdd_dq: shape (2, 2); d qdd / dq: row i, column j is d qdd_i / d q_j
+   *     (forward_dynamics_derivatives).
+   *     dqdd_dqd: shape (2, 2); d qdd / dqd (forward_dynamics_derivatives).
+   *     dqdd_dtau: shape (2, 2); d qdd / dtau = M(q)^-1
+   *     (forward_dynamics_derivatives).
    *     F: shape (2,); TCP force components [x, y] (tcp_force) [N, N*m].
    *     Mx: shape (2, 2); operational-space mass matrix J^-T M J^-1
    *     (operational_space).
@@ -816,117 +978,155 @@
     const _x13 = _x6*_x12;
     const _x14 = Math.cos(theta1);
     const _x15 = g*_x14;
-    const _x16 = theta1_dd + theta2_dd;
-    const _x17 = l1*theta1_dd;
-    const _x18 = _x12 - _x8;
-    const _x19 = 2.0*theta1_d;
-    const _x20 = m2*_x6;
-    const _x21 = theta2_d + theta1_d;
-    const _x22 = 2.0*_x4 + m1*_x0 + m2*_x0 + _x5;
-    const _x23 = 1.0/_x22;
-    const _x24 = l1*m1;
-    const _x25 = _x21*_x21;
-    const _x26 = -_x6*_x18 + _x1*_x15;
-    const _x27 = _x10*_x26;
-    const _x28 = -_x27;
-    const _x29 = _x1*_x11;
-    const _x30 = _x6*_x14;
-    const _x31 = _x30 + _x29;
-    const _x32 = l2*_x31;
-    const _x33 = -_x32;
-    const _x34 = _x1*_x14 - _x6*_x11;
-    const _x35 = l2*_x34;
-    const _x36 = l1*_x11;
-    const _x37 = -_x36;
-    const _x38 = l1*_x14;
-    const _x39 = m1*_x0*theta1_dd;
-    const _x40 = _x38 + _x35;
-    const _x41 = _x24 + _x2;
-    const _x42 = -_x33;
-    const _x43 = _x37 + _x33;
-    const _x44 = _x35*_x43;
-    const _x45 = -_x30 - _x29;
-    const _x46 = _x36 + _x32;
-    const _x47 = _x3*_x6;
-    const _x48 = _x47*theta1_d;
-    const _x49 = theta2_d*theta2_d;
-    const _x50 = _x19*theta2_d;
-    const _x51 = -_x32*_x50 - _x32*_x49 + _x7*_x43;
-    const _x52 = -_x35*_x50 - _x35*_x49 + (-_x38 - _x35)*_x7;
-    const _x53 = _x5 + _x4;
-    const _x54 = -_x47;
-    const _x55 = _x8*_x9;
-    const _x56 = _x6*_x8*_x10;
-    const _x57 = _x17 + _x15;
-    const _x58 = m2*(-_x6*_x18 + _x1*_x57);
-    const _x59 = _x5*_x16 + l2*_x58;
-    const _x60 = -_x6;
-    const _x61 = -_x12;
-    const _x62 = -l1*_x19;
-    const _x63 = -_x20*_x15 + m2*_x1*_x61;
-    const _x64 = -m2*_x1*_x18 + m2*_x60*_x57;
-    const _x65 = -_x20*_x62;
-    const _x66 = _x2*_x1;
-    const _x67 = l2*_x63;
-    const _x68 = l2*_x64;
-    const _x69 = l2*_x65;
-    const _x70 = l2*_x66 + _x5;
-    const _x71 = l1*_x1;
-    const _x72 = m2*_x6*_x6;
-    const _x73 = l1*_x61;
-    const _x74 = _x20*_x71;
-    const _x75 = _x6*_x57;
-    const _x76 = -2.0*l1*_x6*_x21*_x10;
-    const _x77 = _x10*_x71;
-    const _x78 = _x23*_x53;
-    const _x79 = -_x53*_x78 + _x5;
-    const _x80 = _x28 - _x24*_x15 - l1*(m2*_x1*_x26 + _x6*(-_x25*_x10 + (_x1*_x18 + _x6*_x15)*m2)) + tau_theta1;
-    const _x81 = tau_theta2 + _x28 - _x78*_x80;
-    const _x82 = _x81/_x79;
-    const _x83 = _x23*_x80 - _x78*_x82;
-    const _x84 = _x39 + _x59 + _x24*_x15 + l1*(_x6*(-_x25*_x10 + m2*(_x6*_x57 + _x1*_x18)) + _x1*(_x10*_x16 + _x58));
-    const _x85 = -_x40;
-    const _x86 = _x35*_x43 + _x33*_x85;
-    const _x87 = 1.0/_x86;
-    const _x88 = _x87*(_x35*_x84 + _x59*_x85);
-    const _x89 = _x87*(_x42*_x84 + _x59*_x43);
-    const _x90 = l1*(_x6*(-_x25*_x10 - _x55) + _x6*_x55) + _x56;
-    const _x91 = -_x13*_x10 + _x15*(_x1*_x10 + _x41);
-    const _x92 = _x10*(_x1*_x15 - _x13);
-    const _x93 = _x44 + _x33*_x85;
-    const _x94 = 1.0/_x93;
-    const _x95 = (_x53*_x85 + _x35*_x22)*_x94;
-    const _x96 = _x94*(_x5*_x85 + _x35*_x53);
-    const _x97 = _x94*(_x35*_x90 + _x56*_x85);
-    const _x98 = _x94*(_x85*_x92 + _x35*_x91);
-    const _x99 = _x94*(_x42*_x22 + _x53*_x43);
-    const _x100 = _x94*(_x42*_x53 + _x5*_x43);
-    const _x101 = _x94*(_x42*_x90 + _x56*_x43);
-    const _x102 = _x94*(_x42*_x91 + _x92*_x43);
-    const _x103 = _x94*(_x85*_x96 + _x35*_x95);
-    const _x104 = _x94*(_x42*_x95 + _x96*_x43);
-    const _x105 = _x94*(_x42*_x99 + _x100*_x43);
+    const _x16 = -_x6;
+    const _x17 = -_x12;
+    const _x18 = theta1_dd + theta2_dd;
+    const _x19 = l1*theta1_dd;
+    const _x20 = _x12 - _x8;
+    const _x21 = 2.0*theta1_d;
+    const _x22 = -l1*_x21;
+    const _x23 = m2*_x6;
+    const _x24 = theta2_d + theta1_d;
+    const _x25 = 2.0*l1;
+    const _x26 = m1*_x0 + 2.0*_x4 + m2*_x0 + _x5;
+    const _x27 = 1.0/_x26;
+    const _x28 = l1*m1;
+    const _x29 = _x24*_x24;
+    const _x30 = -_x6*_x20 + _x1*_x15;
+    const _x31 = _x10*_x30;
+    const _x32 = -_x31;
+    const _x33 = _x6*_x20;
+    const _x34 = _x2*_x1*_x6;
+    const _x35 = l1*_x1;
+    const _x36 = -_x23*_x15 + m2*_x1*_x17;
+    const _x37 = l2*_x36;
+    const _x38 = -_x37;
+    const _x39 = _x5 + _x4;
+    const _x40 = _x27*_x39;
+    const _x41 = -_x39*_x40 + _x5;
+    const _x42 = 1.0/_x41;
+    const _x43 = -_x28*_x15 - l1*(m2*_x1*_x30 + _x6*(-_x29*_x10 + (_x1*_x20 + _x6*_x15)*m2)) + _x32 + tau_theta1;
+    const _x44 = -_x43*_x40 + _x32 + tau_theta2;
+    const _x45 = _x44/_x41;
+    const _x46 = -_x40*_x45 + _x27*_x43;
+    const _x47 = l1*_x46 + _x15;
+    const _x48 = _x6*_x47;
+    const _x49 = -m2*_x1*_x20 + m2*_x16*_x47;
+    const _x50 = l2*_x49;
+    const _x51 = -_x50;
+    const _x52 = _x6*_x24*_x25*_x10;
+    const _x53 = -_x22*_x23;
+    const _x54 = l2*_x53;
+    const _x55 = -_x54;
+    const _x56 = _x1*_x11;
+    const _x57 = _x6*_x14;
+    const _x58 = _x57 + _x56;
+    const _x59 = l2*_x58;
+    const _x60 = -_x59;
+    const _x61 = _x1*_x14 - _x6*_x11;
+    const _x62 = l2*_x61;
+    const _x63 = l1*_x11;
+    const _x64 = -_x63;
+    const _x65 = l1*_x14;
+    const _x66 = m1*_x0*theta1_dd;
+    const _x67 = _x65 + _x62;
+    const _x68 = _x28 + _x2;
+    const _x69 = -_x60;
+    const _x70 = _x64 + _x60;
+    const _x71 = _x62*_x70;
+    const _x72 = -_x57 - _x56;
+    const _x73 = _x63 + _x59;
+    const _x74 = _x3*_x6;
+    const _x75 = _x74*theta1_d;
+    const _x76 = theta2_d*theta2_d;
+    const _x77 = _x21*theta2_d;
+    const _x78 = -_x59*_x77 - _x59*_x76 + _x7*_x70;
+    const _x79 = -_x62*_x77 - _x62*_x76 + (-_x65 - _x62)*_x7;
+    const _x80 = -_x74;
+    const _x81 = _x8*_x9;
+    const _x82 = _x6*_x8*_x10;
+    const _x83 = _x6*_x15;
+    const _x84 = _x1*_x12;
+    const _x85 = _x1*_x10;
+    const _x86 = -_x10*_x83;
+    const _x87 = _x15*_x10*_x16 - _x10*_x84;
+    const _x88 = _x19 + _x15;
+    const _x89 = m2*(-_x6*_x20 + _x1*_x88);
+    const _x90 = _x5*_x18 + l2*_x89;
+    const _x91 = -m2*_x1*_x20 + m2*_x16*_x88;
+    const _x92 = l2*_x91;
+    const _x93 = _x35*_x23;
+    const _x94 = l1*_x17;
+    const _x95 = _x6*_x88;
+    const _x96 = -_x6*_x24*_x25*_x10;
+    const _x97 = _x45 + _x46;
+    const _x98 = m2*(-_x33 + _x1*_x47);
+    const _x99 = -_x2*_x6*_x6*_x17 - _x28*_x17 - _x35*_x36 - _x34*_x15 + _x38;
+    const _x100 = _x38 - _x99*_x40;
+    const _x101 = _x42*_x100;
+    const _x102 = -_x40*_x101 + _x27*_x99;
+    const _x103 = -l1*_x1*(m2*_x48 - _x29*_x10 + m2*(_x48 + _x1*_x20)) - _x35*_x49 - l1*_x16*(m2*_x33 + _x10*_x97 + _x98) + _x51;
+    const _x104 = _x51 - _x40*_x103;
+    const _x105 = _x42*_x104;
+    const _x106 = -_x105*_x40 + _x27*_x103;
+    const _x107 = -_x34*_x22 + _x52 - _x35*_x53 + _x55;
+    const _x108 = _x55 - _x107*_x40;
+    const _x109 = _x42*_x108;
+    const _x110 = -_x109*_x40 + _x27*_x107;
+    const _x111 = -_x52*_x40;
+    const _x112 = _x42*_x111;
+    const _x113 = -_x112*_x40 + _x52*_x27;
+    const _x114 = -_x40;
+    const _x115 = _x42*_x114;
+    const _x116 = -_x115*_x40 + _x27;
+    const _x117 = -_x42*_x40;
+    const _x118 = _x66 + _x28*_x15 + l1*(_x6*(-_x29*_x10 + m2*(_x6*_x88 + _x1*_x20)) + _x1*(_x10*_x18 + _x89)) + _x90;
+    const _x119 = -_x67;
+    const _x120 = _x62*_x70 + _x60*_x119;
+    const _x121 = 1.0/_x120;
+    const _x122 = _x121*(_x62*_x118 + _x90*_x119);
+    const _x123 = _x121*(_x69*_x118 + _x90*_x70);
+    const _x124 = l1*(_x6*(-_x29*_x10 - _x81) + _x6*_x81) + _x82;
+    const _x125 = -_x13*_x10 + _x15*(_x1*_x10 + _x68);
+    const _x126 = _x10*(_x1*_x15 - _x13);
+    const _x127 = _x71 + _x60*_x119;
+    const _x128 = 1.0/_x127;
+    const _x129 = _x128*(_x62*_x26 + _x39*_x119);
+    const _x130 = _x128*(_x62*_x39 + _x5*_x119);
+    const _x131 = _x128*(_x62*_x124 + _x82*_x119);
+    const _x132 = _x128*(_x119*_x126 + _x62*_x125);
+    const _x133 = _x128*(_x69*_x26 + _x39*_x70);
+    const _x134 = _x128*(_x69*_x39 + _x5*_x70);
+    const _x135 = _x128*(_x69*_x124 + _x82*_x70);
+    const _x136 = _x128*(_x69*_x125 + _x70*_x126);
+    const _x137 = _x128*(_x119*_x130 + _x62*_x129);
+    const _x138 = _x128*(_x69*_x129 + _x70*_x130);
+    const _x139 = _x128*(_x69*_x133 + _x134*_x70);
     return {
-      base_T_tcp: [[_x34, _x45, 0.0, _x40], [_x31, _x34, 0.0, _x46], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]],
-      base_T_link1: [[_x14, -_x11, 0.0, _x38], [_x11, _x14, 0.0, _x36], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]],
-      base_T_link2: [[_x34, _x45, 0.0, _x40], [_x31, _x34, 0.0, _x46], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]],
-      jacobian_J: [[_x43, _x33], [_x40, _x35]],
-      jacobian_geometric_J: [[_x43, _x33], [_x40, _x35], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0], [1.0, 1.0]],
-      M: [[2.0*_x4 + m1*_x0 + m2*_x0 + _x5, _x53], [_x53, _x5]],
-      C: [[-_x47*theta2_d, -_x48 + _x54*theta2_d], [_x48, 0.0]],
-      V: [l1*(_x6*(-_x25*_x10 - _x55) + _x6*_x55) + _x56, _x56],
-      G: [-_x13*_x10 + _x15*(_x1*_x10 + _x41), _x10*(_x1*_x15 - _x13)],
-      inverse_dynamics_tau: [_x39 + _x59 + _x24*_x15 + l1*(_x6*(-_x25*_x10 + m2*(_x6*_x57 + _x1*_x18)) + _x1*(_x10*_x16 + _x58)), _x59],
-      dtau_dq: [[m1*_x73 + _x73*_x72 + _x63*_x71 + _x15*_x74 + _x67, l1*_x1*(-_x21*_x21*_x10 + m2*(_x1*_x18 + _x75) + m2*_x75) + l1*_x60*(_x20*_x18 + _x10*_x16 + _x58) + _x64*_x71 + _x68], [_x67, _x68]],
-      dtau_dqd: [[_x74*_x62 + _x76 + _x65*_x71 + _x69, _x76], [_x69, 0.0]],
-      dtau_dqdd: [[m1*_x0 + _x0*_x72 + _x66*_x71 + _x77 + _x70, _x77 + _x5], [_x70, _x5]],
-      forward_dynamics_qdd: [_x83, _x82],
-      F: [_x88, _x89],
-      Mx: [[_x103, _x104], [_x104, _x105]],
-      Vx: [-_x51*_x104 - _x52*_x103 + _x97, -_x51*_x105 - _x52*_x104 + _x101],
-      Gx: [_x98, _x102],
-      k: 0.5*(_x53*theta1_d + _x5*theta2_d)*theta2_d + 0.5*((2.0*_x4 + m1*_x0 + m2*_x0 + _x5)*theta1_d + _x53*theta2_d)*theta1_d,
-      u: g*(_x36 + _x32)*m2 + g*m1*_x36,
+      base_T_tcp: [[_x61, _x72, 0.0, _x67], [_x58, _x61, 0.0, _x73], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]],
+      base_T_link1: [[_x14, -_x11, 0.0, _x65], [_x11, _x14, 0.0, _x63], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]],
+      base_T_link2: [[_x61, _x72, 0.0, _x67], [_x58, _x61, 0.0, _x73], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]],
+      jacobian_J: [[_x70, _x60], [_x67, _x62]],
+      jacobian_geometric_J: [[_x70, _x60], [_x67, _x62], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0], [1.0, 1.0]],
+      M: [[m1*_x0 + 2.0*_x4 + m2*_x0 + _x5, _x39], [_x39, _x5]],
+      C: [[-_x74*theta2_d, -_x75 + _x80*theta2_d], [_x75, 0.0]],
+      V: [l1*(_x6*(-_x29*_x10 - _x81) + _x6*_x81) + _x82, _x82],
+      G: [-_x13*_x10 + _x15*(_x1*_x10 + _x68), _x10*(_x1*_x15 - _x13)],
+      dG_dq: [[_x17*(_x85 + _x68) + _x86, _x87], [_x17*_x85 + _x86, _x87]],
+      inverse_dynamics_tau: [_x66 + _x28*_x15 + l1*(_x6*(-_x29*_x10 + m2*(_x6*_x88 + _x1*_x20)) + _x1*(_x10*_x18 + _x89)) + _x90, _x90],
+      dtau_dq: [[m1*_x94 + _x35*_x36 + _x15*_x93 + m2*_x6*_x6*_x94 + _x37, l1*_x1*(-_x24*_x24*_x10 + m2*(_x1*_x20 + _x95) + m2*_x95) + _x35*_x91 + l1*_x16*(_x10*_x18 + _x23*_x20 + _x89) + _x92], [_x37, _x92]],
+      dtau_dqd: [[_x35*_x53 + _x22*_x93 + _x96 + _x54, _x96], [_x54, 0.0]],
+      dtau_dqdd: [[m1*_x0 + 2.0*_x4 + m2*_x0 + _x5, _x39], [_x39, _x5]],
+      forward_dynamics_qdd: [_x46, _x45],
+      dqdd_dq: [[_x102, _x106], [_x101, _x105]],
+      dqdd_dqd: [[_x110, _x113], [_x109, _x112]],
+      dqdd_dtau: [[_x116, _x117], [_x115, _x42]],
+      F: [_x122, _x123],
+      Mx: [[_x137, _x138], [_x138, _x139]],
+      Vx: [-_x78*_x138 - _x79*_x137 + _x131, -_x79*_x138 - _x78*_x139 + _x135],
+      Gx: [_x132, _x136],
+      k: 0.5*(_x39*theta1_d + _x5*theta2_d)*theta2_d + 0.5*((m1*_x0 + 2.0*_x4 + m2*_x0 + _x5)*theta1_d + _x39*theta2_d)*theta1_d,
+      u: g*(_x63 + _x59)*m2 + g*m1*_x63,
     };
   }
 
@@ -953,14 +1153,16 @@
       coriolis_matrix: {"inputs": ["q", "qd"], "parameters": ["l1", "l2", "m2"], "outputs": {"C": [2, 2]}},
       coriolis_vector: {"inputs": ["q", "qd"], "parameters": ["l1", "l2", "m2"], "outputs": {"V": [2]}},
       gravity_vector: {"inputs": ["q"], "parameters": ["l1", "l2", "m1", "m2", "g"], "outputs": {"G": [2]}},
+      gravity_derivatives: {"inputs": ["q"], "parameters": ["l1", "l2", "m1", "m2", "g"], "outputs": {"dG_dq": [2, 2]}},
       inverse_dynamics: {"inputs": ["q", "qd", "qdd"], "parameters": ["l1", "l2", "m1", "m2", "g"], "outputs": {"tau": [2]}},
       inverse_dynamics_derivatives: {"inputs": ["q", "qd", "qdd"], "parameters": ["l1", "l2", "m1", "m2", "g"], "outputs": {"dtau_dq": [2, 2], "dtau_dqd": [2, 2], "dtau_dqdd": [2, 2]}},
       forward_dynamics: {"inputs": ["q", "qd", "tau"], "parameters": ["l1", "l2", "m1", "m2", "g"], "outputs": {"qdd": [2]}},
+      forward_dynamics_derivatives: {"inputs": ["q", "qd", "tau"], "parameters": ["l1", "l2", "m1", "m2", "g"], "outputs": {"dqdd_dq": [2, 2], "dqdd_dqd": [2, 2], "dqdd_dtau": [2, 2]}},
       tcp_force: {"inputs": ["q", "qd", "qdd"], "parameters": ["l1", "l2", "m1", "m2", "g"], "outputs": {"F": [2]}},
       operational_space: {"inputs": ["q", "qd"], "parameters": ["l1", "l2", "m1", "m2", "g"], "outputs": {"Mx": [2, 2], "Vx": [2], "Gx": [2]}},
       kinetic_energy: {"inputs": ["q", "qd"], "parameters": ["l1", "l2", "m1", "m2"], "outputs": {"k": []}},
       potential_energy: {"inputs": ["q"], "parameters": ["l1", "l2", "m1", "m2", "g"], "outputs": {"u": []}},
-      combined: {"inputs": ["q", "qd", "qdd", "tau"], "parameters": ["l1", "l2", "m1", "m2", "g"], "outputs": {"base_T_tcp": [4, 4], "base_T_link1": [4, 4], "base_T_link2": [4, 4], "jacobian_J": [2, 2], "jacobian_geometric_J": [6, 2], "M": [2, 2], "C": [2, 2], "V": [2], "G": [2], "inverse_dynamics_tau": [2], "dtau_dq": [2, 2], "dtau_dqd": [2, 2], "dtau_dqdd": [2, 2], "forward_dynamics_qdd": [2], "F": [2], "Mx": [2, 2], "Vx": [2], "Gx": [2], "k": [], "u": []}},
+      combined: {"inputs": ["q", "qd", "qdd", "tau"], "parameters": ["l1", "l2", "m1", "m2", "g"], "outputs": {"base_T_tcp": [4, 4], "base_T_link1": [4, 4], "base_T_link2": [4, 4], "jacobian_J": [2, 2], "jacobian_geometric_J": [6, 2], "M": [2, 2], "C": [2, 2], "V": [2], "G": [2], "dG_dq": [2, 2], "inverse_dynamics_tau": [2], "dtau_dq": [2, 2], "dtau_dqd": [2, 2], "dtau_dqdd": [2, 2], "forward_dynamics_qdd": [2], "dqdd_dq": [2, 2], "dqdd_dqd": [2, 2], "dqdd_dtau": [2, 2], "F": [2], "Mx": [2, 2], "Vx": [2], "Gx": [2], "k": [], "u": []}},
     }),
     fk: fk,
     frames: frames,
@@ -970,9 +1172,11 @@
     coriolis_matrix: coriolis_matrix,
     coriolis_vector: coriolis_vector,
     gravity_vector: gravity_vector,
+    gravity_derivatives: gravity_derivatives,
     inverse_dynamics: inverse_dynamics,
     inverse_dynamics_derivatives: inverse_dynamics_derivatives,
     forward_dynamics: forward_dynamics,
+    forward_dynamics_derivatives: forward_dynamics_derivatives,
     tcp_force: tcp_force,
     operational_space: operational_space,
     kinetic_energy: kinetic_energy,

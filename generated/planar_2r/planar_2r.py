@@ -19,14 +19,16 @@ Functions:
     coriolis_matrix(q, qd, **params) -> C (..., 2, 2)
     coriolis_vector(q, qd, **params) -> V (..., 2)
     gravity_vector(q, **params) -> G (..., 2)
+    gravity_derivatives(q, **params) -> dG_dq (..., 2, 2)
     inverse_dynamics(q, qd, qdd, **params) -> tau (..., 2)
     inverse_dynamics_derivatives(q, qd, qdd, **params) -> InverseDynamicsDerivativesResult(dtau_dq, dtau_dqd, dtau_dqdd)
     forward_dynamics(q, qd, tau, **params) -> qdd (..., 2)
+    forward_dynamics_derivatives(q, qd, tau, **params) -> ForwardDynamicsDerivativesResult(dqdd_dq, dqdd_dqd, dqdd_dtau)
     tcp_force(q, qd, qdd, **params) -> F (..., 2)
     operational_space(q, qd, **params) -> OperationalSpaceResult(Mx, Vx, Gx)
     kinetic_energy(q, qd, **params) -> k (...)
     potential_energy(q, **params) -> u (...)
-    combined(q, qd, qdd, tau, **params) -> CombinedResult(base_T_tcp, base_T_link1, base_T_link2, jacobian_J, jacobian_geometric_J, M, C, V, G, inverse_dynamics_tau, dtau_dq, dtau_dqd, dtau_dqdd, forward_dynamics_qdd, F, Mx, Vx, Gx, k, u)
+    combined(q, qd, qdd, tau, **params) -> CombinedResult(base_T_tcp, base_T_link1, base_T_link2, jacobian_J, jacobian_geometric_J, M, C, V, G, dG_dq, inverse_dynamics_tau, dtau_dq, dtau_dqd, dtau_dqdd, forward_dynamics_qdd, dqdd_dq, dqdd_dqd, dqdd_dtau, F, Mx, Vx, Gx, k, u)
 """
 
 import collections
@@ -51,9 +53,11 @@ FramesResult = collections.namedtuple("FramesResult", ["base_T_link1", "base_T_l
 
 InverseDynamicsDerivativesResult = collections.namedtuple("InverseDynamicsDerivativesResult", ["dtau_dq", "dtau_dqd", "dtau_dqdd"])
 
+ForwardDynamicsDerivativesResult = collections.namedtuple("ForwardDynamicsDerivativesResult", ["dqdd_dq", "dqdd_dqd", "dqdd_dtau"])
+
 OperationalSpaceResult = collections.namedtuple("OperationalSpaceResult", ["Mx", "Vx", "Gx"])
 
-CombinedResult = collections.namedtuple("CombinedResult", ["base_T_tcp", "base_T_link1", "base_T_link2", "jacobian_J", "jacobian_geometric_J", "M", "C", "V", "G", "inverse_dynamics_tau", "dtau_dq", "dtau_dqd", "dtau_dqdd", "forward_dynamics_qdd", "F", "Mx", "Vx", "Gx", "k", "u"])
+CombinedResult = collections.namedtuple("CombinedResult", ["base_T_tcp", "base_T_link1", "base_T_link2", "jacobian_J", "jacobian_geometric_J", "M", "C", "V", "G", "dG_dq", "inverse_dynamics_tau", "dtau_dq", "dtau_dqd", "dtau_dqdd", "forward_dynamics_qdd", "dqdd_dq", "dqdd_dqd", "dqdd_dtau", "F", "Mx", "Vx", "Gx", "k", "u"])
 
 
 def _vector(value, size, name, function):
@@ -422,6 +426,55 @@ def gravity_vector(q, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
     return _out_G
 
 
+def gravity_derivatives(q, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
+    """Derivative of the gravity vector: the stiffness gravity (and the springs) add.
+
+    G(q + dq) = G(q) + dG_dq dq to first order (seed eq. 8.31's G = du/dq, so dG_dq =
+    d^2u/dq^2 is symmetric for gravity and springs alike); forward-mode derivative of
+    the Newton-Euler program at rest.
+
+    Args:
+        q: joint coordinates, shape (..., 2): theta1 [rad], theta2 [rad].
+        l1: length of link 1 [m]; default 0.1; a scalar or an array broadcastable to the
+            batch shape.
+        l2: length of link 2 [m]; default 0.1; a scalar or an array broadcastable to the
+            batch shape.
+        m1: point mass at the end of link 1 [kg]; default 0.1; a scalar or an array
+            broadcastable to the batch shape.
+        m2: point mass at the end of link 2 [kg]; default 0.1; a scalar or an array
+            broadcastable to the batch shape.
+        g: gravitational acceleration [m/s^2]; default 9.81; a scalar or an array
+            broadcastable to the batch shape.
+
+    Returns:
+        dG_dq: shape (..., 2, 2); d G / dq: row i, column j is d G_i / d q_j.
+    """
+    q = _vector(q, 2, "q", "gravity_derivatives")
+    batch = _batch_shape("gravity_derivatives", q.shape[:-1], numpy.shape(l1), numpy.shape(l2), numpy.shape(m1), numpy.shape(m2), numpy.shape(g))
+    if math.prod(batch) > CHUNK:
+        return _in_chunks(gravity_derivatives, batch, (q, ), {"l1": l1, "l2": l2, "m1": m1, "m2": m2, "g": g})
+    theta1 = q[..., 0]
+    theta2 = q[..., 1]
+    _x0 = numpy.cos(theta2)
+    _x1 = g*numpy.cos(theta1)
+    _x2 = numpy.sin(theta2)
+    _x3 = g*numpy.sin(theta1)
+    _x4 = l2*m2
+    _x5 = _x2*_x1
+    _x6 = _x0*_x3
+    _x7 = -_x2
+    _x8 = -_x3
+    _x9 = _x0*_x4
+    _x10 = -_x5*_x4
+    _x11 = _x1*_x7*_x4 - _x6*_x4
+    _out_dG_dq = numpy.zeros(batch + (2, 2))
+    _out_dG_dq[..., 0, 0] = _x10 + _x8*(_x9 + l1*m2 + l1*m1)
+    _out_dG_dq[..., 0, 1] = _x11
+    _out_dG_dq[..., 1, 0] = _x10 + _x9*_x8
+    _out_dG_dq[..., 1, 1] = _x11
+    return _out_dG_dq
+
+
 def inverse_dynamics(q, qd, qdd, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
     """Inverse dynamics: joint torques for a motion.
 
@@ -480,7 +533,8 @@ def inverse_dynamics_derivatives(q, qd, qdd, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, 
     tau(q + dq, qd + dqd, qdd + dqdd) = tau + dtau_dq dq + dtau_dqd dqd + dtau_dqdd dqdd
     to first order, tau = M qdd + V + G + F_f (seed eq. 8.34); dtau_dqdd = M.  Forward-
     mode derivative of the recursive Newton-Euler program (Carpentier and Mansard, RSS
-    2018); a sign(qd) Coulomb term counts with derivative 0.
+    2018), dtau_dqdd by the composite-rigid-body algorithm; a sign(qd) Coulomb term
+    counts with derivative 0.
 
     Args:
         q: joint coordinates, shape (..., 2): theta1 [rad], theta2 [rad].
@@ -517,51 +571,49 @@ def inverse_dynamics_derivatives(q, qd, qdd, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, 
     theta1_dd = qdd[..., 0]
     theta2_dd = qdd[..., 1]
     _x0 = numpy.cos(theta2)
-    _x1 = g*numpy.cos(theta1)
-    _x2 = g*numpy.sin(theta1)
-    _x3 = numpy.sin(theta2)
-    _x4 = 2.0*l1
-    _x5 = m2*_x3
-    _x6 = l1*_x0
-    _x7 = l2*l2*m2
-    _x8 = theta1_dd + theta2_dd
-    _x9 = l2*m2
-    _x10 = _x1 + l1*theta1_dd
-    _x11 = _x2 - l1*theta1_d*theta1_d
-    _x12 = (-_x3*_x11 + _x0*_x10)*m2
-    _x13 = -_x3
-    _x14 = -_x2
-    _x15 = -_x4*theta1_d
-    _x16 = m2*_x0*_x14 - _x1*_x5
-    _x17 = m2*_x13*_x10 - m2*_x0*_x11
-    _x18 = -_x5*_x15
-    _x19 = m2*_x6
-    _x20 = l2*_x16
-    _x21 = l2*_x17
-    _x22 = l2*_x18
-    _x23 = l2*_x19 + _x7
-    _x24 = m2*_x3*_x3
-    _x25 = l1*_x14
-    _x26 = _x6*_x5
+    _x1 = l2*m2
+    _x2 = g*numpy.cos(theta1)
+    _x3 = g*numpy.sin(theta1)
+    _x4 = numpy.sin(theta2)
+    _x5 = 2.0*l1
+    _x6 = m2*_x4
+    _x7 = l1*l1
+    _x8 = l1*_x0*_x1
+    _x9 = l2*l2*m2
+    _x10 = _x8 + _x9
+    _x11 = theta1_dd + theta2_dd
+    _x12 = _x2 + l1*theta1_dd
+    _x13 = _x3 - l1*theta1_d*theta1_d
+    _x14 = (-_x4*_x13 + _x0*_x12)*m2
+    _x15 = -_x4
+    _x16 = -_x3
+    _x17 = -_x5*theta1_d
+    _x18 = m2*_x0*_x16 - _x2*_x6
+    _x19 = m2*_x12*_x15 - m2*_x0*_x13
+    _x20 = -_x6*_x17
+    _x21 = l2*_x18
+    _x22 = l2*_x19
+    _x23 = l2*_x20
+    _x24 = l1*_x0
+    _x25 = _x6*_x24
+    _x26 = l1*_x16
     _x27 = theta2_d + theta1_d
-    _x28 = _x3*_x10
-    _x29 = -_x4*_x3*_x9*_x27
-    _x30 = l1*l1
-    _x31 = _x6*_x9
+    _x28 = _x4*_x12
+    _x29 = -_x1*_x4*_x5*_x27
     _out_dtau_dq = numpy.zeros(batch + (2, 2))
-    _out_dtau_dq[..., 0, 0] = m1*_x25 + _x24*_x25 + _x1*_x26 + _x6*_x16 + _x20
-    _out_dtau_dq[..., 0, 1] = l1*_x0*(m2*_x28 - _x9*_x27*_x27 + m2*(_x0*_x11 + _x28)) + _x6*_x17 + l1*_x13*(_x12 + _x9*_x8 + _x5*_x11) + _x21
-    _out_dtau_dq[..., 1, 0] = _x20
-    _out_dtau_dq[..., 1, 1] = _x21
+    _out_dtau_dq[..., 0, 0] = m1*_x26 + m2*_x4*_x4*_x26 + _x2*_x25 + _x21 + _x24*_x18
+    _out_dtau_dq[..., 0, 1] = l1*_x15*(_x14 + _x1*_x11 + _x6*_x13) + l1*_x0*(m2*_x28 + m2*(_x0*_x13 + _x28) - _x1*_x27*_x27) + _x22 + _x24*_x19
+    _out_dtau_dq[..., 1, 0] = _x21
+    _out_dtau_dq[..., 1, 1] = _x22
     _out_dtau_dqd = numpy.zeros(batch + (2, 2))
-    _out_dtau_dqd[..., 0, 0] = _x26*_x15 + _x22 + _x6*_x18 + _x29
+    _out_dtau_dqd[..., 0, 0] = _x25*_x17 + _x20*_x24 + _x23 + _x29
     _out_dtau_dqd[..., 0, 1] = _x29
-    _out_dtau_dqd[..., 1, 0] = _x22
+    _out_dtau_dqd[..., 1, 0] = _x23
     _out_dtau_dqdd = numpy.zeros(batch + (2, 2))
-    _out_dtau_dqdd[..., 0, 0] = _x31 + _x24*_x30 + _x6*_x19 + m1*_x30 + _x23
-    _out_dtau_dqdd[..., 0, 1] = _x31 + _x7
-    _out_dtau_dqdd[..., 1, 0] = _x23
-    _out_dtau_dqdd[..., 1, 1] = _x7
+    _out_dtau_dqdd[..., 0, 0] = _x9 + 2.0*_x8 + m2*_x7 + m1*_x7
+    _out_dtau_dqdd[..., 0, 1] = _x10
+    _out_dtau_dqdd[..., 1, 0] = _x10
+    _out_dtau_dqdd[..., 1, 1] = _x9
     return InverseDynamicsDerivativesResult(_out_dtau_dq, _out_dtau_dqd, _out_dtau_dqdd)
 
 
@@ -625,6 +677,131 @@ def forward_dynamics(q, qd, tau, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
     _out_qdd[..., 0] = _x18
     _out_qdd[..., 1] = _x17
     return _out_qdd
+
+
+def forward_dynamics_derivatives(q, qd, tau, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
+    """Derivatives of the forward dynamics: the linearization of the plant.
+
+    qdd(q + dq, qd + dqd, tau + dtau) = qdd + dqdd_dq dq + dqdd_dqd dqd + dqdd_dtau dtau
+    to first order, qdd = M^-1 (tau - V - G - F_f) (seed eq. 8.34); by the implicit-
+    function theorem dqdd_dq = -M^-1 dtau_dq, dqdd_dqd = -M^-1 dtau_dqd at qdd and
+    dqdd_dtau = M^-1, by LDL^T solves (Carpentier and Mansard, RSS 2018); a state-space
+    model x = (q, qd) has A = [[0, I], [dqdd_dq, dqdd_dqd]] and B = [[0], [dqdd_dtau]].
+
+    Args:
+        q: joint coordinates, shape (..., 2): theta1 [rad], theta2 [rad].
+        qd: joint velocities, shape (..., 2): theta1 [rad/s], theta2 [rad/s].
+        tau: joint torques (revolute) or forces (prismatic), shape (..., 2): theta1 [N*m],
+            theta2 [N*m].
+        l1: length of link 1 [m]; default 0.1; a scalar or an array broadcastable to the
+            batch shape.
+        l2: length of link 2 [m]; default 0.1; a scalar or an array broadcastable to the
+            batch shape.
+        m1: point mass at the end of link 1 [kg]; default 0.1; a scalar or an array
+            broadcastable to the batch shape.
+        m2: point mass at the end of link 2 [kg]; default 0.1; a scalar or an array
+            broadcastable to the batch shape.
+        g: gravitational acceleration [m/s^2]; default 9.81; a scalar or an array
+            broadcastable to the batch shape.
+
+    Returns:
+        ForwardDynamicsDerivativesResult with the fields:
+        dqdd_dq: shape (..., 2, 2); d qdd / dq: row i, column j is d qdd_i / d q_j.
+        dqdd_dqd: shape (..., 2, 2); d qdd / dqd.
+        dqdd_dtau: shape (..., 2, 2); d qdd / dtau = M(q)^-1.
+    """
+    q = _vector(q, 2, "q", "forward_dynamics_derivatives")
+    qd = _vector(qd, 2, "qd", "forward_dynamics_derivatives")
+    tau = _vector(tau, 2, "tau", "forward_dynamics_derivatives")
+    batch = _batch_shape("forward_dynamics_derivatives", q.shape[:-1], qd.shape[:-1], tau.shape[:-1], numpy.shape(l1), numpy.shape(l2), numpy.shape(m1), numpy.shape(m2), numpy.shape(g))
+    if math.prod(batch) > CHUNK:
+        return _in_chunks(forward_dynamics_derivatives, batch, (q, qd, tau, ), {"l1": l1, "l2": l2, "m1": m1, "m2": m2, "g": g})
+    theta1 = q[..., 0]
+    theta2 = q[..., 1]
+    theta1_d = qd[..., 0]
+    theta2_d = qd[..., 1]
+    tau_theta1 = tau[..., 0]
+    tau_theta2 = tau[..., 1]
+    _x0 = numpy.cos(theta2)
+    _x1 = l2*m2
+    _x2 = g*numpy.cos(theta1)
+    _x3 = g*numpy.sin(theta1)
+    _x4 = _x3 - l1*theta1_d*theta1_d
+    _x5 = numpy.sin(theta2)
+    _x6 = l1*l1
+    _x7 = l1*_x0*_x1
+    _x8 = l2*l2*m2
+    _x9 = m1*_x6 + m2*_x6 + 2.0*_x7 + _x8
+    _x10 = 1.0/_x9
+    _x11 = theta2_d + theta1_d
+    _x12 = _x11*_x11
+    _x13 = l1*m1
+    _x14 = _x4*_x5
+    _x15 = 2.0*l1
+    _x16 = m2*_x5
+    _x17 = _x2*_x16
+    _x18 = -_x3
+    _x19 = m2*_x18
+    _x20 = -_x15*theta1_d
+    _x21 = _x16*_x20
+    _x22 = l1*_x0
+    _x23 = _x7 + _x8
+    _x24 = _x10*_x23
+    _x25 = -_x23*_x24 + _x8
+    _x26 = 1.0/_x25
+    _x27 = -_x4*_x5 + _x0*_x2
+    _x28 = _x1*_x27
+    _x29 = tau_theta1 - (_x28 + l1*(_x5*((_x0*_x4 + _x2*_x5)*m2 - _x1*_x12) + m2*_x0*_x27) + _x2*_x13)
+    _x30 = tau_theta2 - _x28 - _x29*_x24
+    _x31 = _x30/_x25
+    _x32 = _x10*_x29 - _x31*_x24
+    _x33 = l1*_x32 + _x2
+    _x34 = _x5*_x33
+    _x35 = _x1*_x5*_x11*_x15
+    _x36 = _x31 + _x32
+    _x37 = m2*(_x0*_x33 - _x14)
+    _x38 = -_x5
+    _x39 = -_x17 + _x0*_x19
+    _x40 = -m2*_x0*_x4 + m2*_x33*_x38
+    _x41 = -_x21
+    _x42 = l2*_x39
+    _x43 = l2*_x40
+    _x44 = l2*_x41
+    _x45 = -(_x42 + _x22*_x39 + _x17*_x22 + l1*_x5*_x5*_x19 + _x13*_x18)
+    _x46 = -_x45*_x24 - _x42
+    _x47 = _x26*_x46
+    _x48 = _x10*_x45 - _x47*_x24
+    _x49 = -(l1*_x38*(m2*_x14 + _x1*_x36 + _x37) + _x22*_x40 + _x43 + l1*_x0*(-_x1*_x12 + m2*_x34 + m2*(_x34 + _x0*_x4)))
+    _x50 = -_x49*_x24 - _x43
+    _x51 = _x26*_x50
+    _x52 = _x10*_x49 - _x51*_x24
+    _x53 = -(_x22*_x21 + _x22*_x41 + _x44 - _x35)
+    _x54 = -_x53*_x24 - _x44
+    _x55 = _x26*_x54
+    _x56 = _x10*_x53 - _x55*_x24
+    _x57 = -_x35*_x24
+    _x58 = _x26*_x57
+    _x59 = _x10*_x35 - _x58*_x24
+    _x60 = -_x24
+    _x61 = _x26*_x60
+    _x62 = _x10 - _x61*_x24
+    _x63 = -_x26*_x24
+    _out_dqdd_dq = numpy.zeros(batch + (2, 2))
+    _out_dqdd_dq[..., 0, 0] = _x48
+    _out_dqdd_dq[..., 0, 1] = _x52
+    _out_dqdd_dq[..., 1, 0] = _x47
+    _out_dqdd_dq[..., 1, 1] = _x51
+    _out_dqdd_dqd = numpy.zeros(batch + (2, 2))
+    _out_dqdd_dqd[..., 0, 0] = _x56
+    _out_dqdd_dqd[..., 0, 1] = _x59
+    _out_dqdd_dqd[..., 1, 0] = _x55
+    _out_dqdd_dqd[..., 1, 1] = _x58
+    _out_dqdd_dtau = numpy.zeros(batch + (2, 2))
+    _out_dqdd_dtau[..., 0, 0] = _x62
+    _out_dqdd_dtau[..., 0, 1] = _x63
+    _out_dqdd_dtau[..., 1, 0] = _x61
+    _out_dqdd_dtau[..., 1, 1] = _x26
+    return ForwardDynamicsDerivativesResult(_out_dqdd_dq, _out_dqdd_dqd, _out_dqdd_dtau)
 
 
 def tcp_force(q, qd, qdd, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
@@ -863,13 +1040,14 @@ def potential_energy(q, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
 
 
 def combined(q, qd, qdd, tau, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
-    """fk, frames, jacobian, jacobian_geometric, mass_matrix, coriolis_matrix, coriolis_vector, gravity_vector, inverse_dynamics, inverse_dynamics_derivatives, forward_dynamics, tcp_force, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions.
+    """fk, frames, jacobian, jacobian_geometric, mass_matrix, coriolis_matrix, coriolis_vector, gravity_vector, gravity_derivatives, inverse_dynamics, inverse_dynamics_derivatives, forward_dynamics, forward_dynamics_derivatives, tcp_force, operational_space, kinetic_energy, potential_energy together, with one set of shared subexpressions.
 
     Computes the outputs of fk, frames, jacobian, jacobian_geometric, mass_matrix,
-    coriolis_matrix, coriolis_vector, gravity_vector, inverse_dynamics,
-    inverse_dynamics_derivatives, forward_dynamics, tcp_force, operational_space,
-    kinetic_energy, potential_energy in one call; subexpressions common to several of
-    them are evaluated once.
+    coriolis_matrix, coriolis_vector, gravity_vector, gravity_derivatives,
+    inverse_dynamics, inverse_dynamics_derivatives, forward_dynamics,
+    forward_dynamics_derivatives, tcp_force, operational_space, kinetic_energy,
+    potential_energy in one call; subexpressions common to several of them are evaluated
+    once.
 
     Args:
         q: joint coordinates, shape (..., 2): theta1 [rad], theta2 [rad].
@@ -905,6 +1083,8 @@ def combined(q, qd, qdd, tau, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
             (revolute), N (prismatic)].
         G: shape (..., 2); joint torques that hold the arm against gravity (gravity_vector)
             [N*m (revolute), N (prismatic)].
+        dG_dq: shape (..., 2, 2); d G / dq: row i, column j is d G_i / d q_j
+            (gravity_derivatives).
         inverse_dynamics_tau: shape (..., 2); joint torques (revolute) or forces (prismatic)
             (inverse_dynamics) [N*m (revolute), N (prismatic)].
         dtau_dq: shape (..., 2, 2); d tau / dq: row i, column j is d tau_i / d q_j
@@ -915,6 +1095,10 @@ def combined(q, qd, qdd, tau, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
             (inverse_dynamics_derivatives).
         forward_dynamics_qdd: shape (..., 2); joint accelerations (forward_dynamics)
             [rad/s^2 (revolute), m/s^2 (prismatic)].
+        dqdd_dq: shape (..., 2, 2); d qdd / dq: row i, column j is d qdd_i / d q_j
+            (forward_dynamics_derivatives).
+        dqdd_dqd: shape (..., 2, 2); d qdd / dqd (forward_dynamics_derivatives).
+        dqdd_dtau: shape (..., 2, 2); d qdd / dtau = M(q)^-1 (forward_dynamics_derivatives).
         F: shape (..., 2); TCP force components [x, y] (tcp_force) [N, N*m].
         Mx: shape (..., 2, 2); operational-space mass matrix J^-T M J^-1
             (operational_space).
@@ -955,186 +1139,240 @@ def combined(q, qd, qdd, tau, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
     _x13 = _x6*_x12
     _x14 = numpy.cos(theta1)
     _x15 = g*_x14
-    _x16 = theta1_dd + theta2_dd
-    _x17 = l1*theta1_dd
-    _x18 = _x12 - _x8
-    _x19 = 2.0*theta1_d
-    _x20 = m2*_x6
-    _x21 = theta2_d + theta1_d
-    _x22 = 2.0*_x4 + m1*_x0 + m2*_x0 + _x5
-    _x23 = 1.0/_x22
-    _x24 = l1*m1
-    _x25 = _x21*_x21
-    _x26 = -_x6*_x18 + _x1*_x15
-    _x27 = _x10*_x26
-    _x28 = -_x27
-    _x29 = _x1*_x11
-    _x30 = _x6*_x14
-    _x31 = _x30 + _x29
-    _x32 = l2*_x31
-    _x33 = -_x32
-    _x34 = _x1*_x14 - _x6*_x11
-    _x35 = l2*_x34
-    _x36 = l1*_x11
-    _x37 = -_x36
-    _x38 = l1*_x14
-    _x39 = m1*_x0*theta1_dd
-    _x40 = _x38 + _x35
-    _x41 = _x24 + _x2
-    _x42 = -_x33
-    _x43 = _x37 + _x33
-    _x44 = _x35*_x43
-    _x45 = -_x30 - _x29
-    _x46 = _x36 + _x32
-    _x47 = _x3*_x6
-    _x48 = _x47*theta1_d
-    _x49 = theta2_d*theta2_d
-    _x50 = _x19*theta2_d
-    _x51 = -_x32*_x50 - _x32*_x49 + _x7*_x43
-    _x52 = -_x35*_x50 - _x35*_x49 + (-_x38 - _x35)*_x7
-    _x53 = _x5 + _x4
-    _x54 = -_x47
-    _x55 = _x8*_x9
-    _x56 = _x6*_x8*_x10
-    _x57 = _x17 + _x15
-    _x58 = m2*(-_x6*_x18 + _x1*_x57)
-    _x59 = _x5*_x16 + l2*_x58
-    _x60 = -_x6
-    _x61 = -_x12
-    _x62 = -l1*_x19
-    _x63 = -_x20*_x15 + m2*_x1*_x61
-    _x64 = -m2*_x1*_x18 + m2*_x60*_x57
-    _x65 = -_x20*_x62
-    _x66 = _x2*_x1
-    _x67 = l2*_x63
-    _x68 = l2*_x64
-    _x69 = l2*_x65
-    _x70 = l2*_x66 + _x5
-    _x71 = l1*_x1
-    _x72 = m2*_x6*_x6
-    _x73 = l1*_x61
-    _x74 = _x20*_x71
-    _x75 = _x6*_x57
-    _x76 = -2.0*l1*_x6*_x21*_x10
-    _x77 = _x10*_x71
-    _x78 = _x23*_x53
-    _x79 = -_x53*_x78 + _x5
-    _x80 = _x28 - _x24*_x15 - l1*(m2*_x1*_x26 + _x6*(-_x25*_x10 + (_x1*_x18 + _x6*_x15)*m2)) + tau_theta1
-    _x81 = tau_theta2 + _x28 - _x78*_x80
-    _x82 = _x81/_x79
-    _x83 = _x23*_x80 - _x78*_x82
-    _x84 = _x39 + _x59 + _x24*_x15 + l1*(_x6*(-_x25*_x10 + m2*(_x6*_x57 + _x1*_x18)) + _x1*(_x10*_x16 + _x58))
-    _x85 = -_x40
-    _x86 = _x35*_x43 + _x33*_x85
-    _x87 = 1.0/_x86
-    _x88 = _x87*(_x35*_x84 + _x59*_x85)
-    _x89 = _x87*(_x42*_x84 + _x59*_x43)
-    _x90 = l1*(_x6*(-_x25*_x10 - _x55) + _x6*_x55) + _x56
-    _x91 = -_x13*_x10 + _x15*(_x1*_x10 + _x41)
-    _x92 = _x10*(_x1*_x15 - _x13)
-    _x93 = _x44 + _x33*_x85
-    _x94 = 1.0/_x93
-    _x95 = (_x53*_x85 + _x35*_x22)*_x94
-    _x96 = _x94*(_x5*_x85 + _x35*_x53)
-    _x97 = _x94*(_x35*_x90 + _x56*_x85)
-    _x98 = _x94*(_x85*_x92 + _x35*_x91)
-    _x99 = _x94*(_x42*_x22 + _x53*_x43)
-    _x100 = _x94*(_x42*_x53 + _x5*_x43)
-    _x101 = _x94*(_x42*_x90 + _x56*_x43)
-    _x102 = _x94*(_x42*_x91 + _x92*_x43)
-    _x103 = _x94*(_x85*_x96 + _x35*_x95)
-    _x104 = _x94*(_x42*_x95 + _x96*_x43)
-    _x105 = _x94*(_x42*_x99 + _x100*_x43)
+    _x16 = -_x6
+    _x17 = -_x12
+    _x18 = theta1_dd + theta2_dd
+    _x19 = l1*theta1_dd
+    _x20 = _x12 - _x8
+    _x21 = 2.0*theta1_d
+    _x22 = -l1*_x21
+    _x23 = m2*_x6
+    _x24 = theta2_d + theta1_d
+    _x25 = 2.0*l1
+    _x26 = m1*_x0 + 2.0*_x4 + m2*_x0 + _x5
+    _x27 = 1.0/_x26
+    _x28 = l1*m1
+    _x29 = _x24*_x24
+    _x30 = -_x6*_x20 + _x1*_x15
+    _x31 = _x10*_x30
+    _x32 = -_x31
+    _x33 = _x6*_x20
+    _x34 = _x2*_x1*_x6
+    _x35 = l1*_x1
+    _x36 = -_x23*_x15 + m2*_x1*_x17
+    _x37 = l2*_x36
+    _x38 = -_x37
+    _x39 = _x5 + _x4
+    _x40 = _x27*_x39
+    _x41 = -_x39*_x40 + _x5
+    _x42 = 1.0/_x41
+    _x43 = -_x28*_x15 - l1*(m2*_x1*_x30 + _x6*(-_x29*_x10 + (_x1*_x20 + _x6*_x15)*m2)) + _x32 + tau_theta1
+    _x44 = -_x43*_x40 + _x32 + tau_theta2
+    _x45 = _x44/_x41
+    _x46 = -_x40*_x45 + _x27*_x43
+    _x47 = l1*_x46 + _x15
+    _x48 = _x6*_x47
+    _x49 = -m2*_x1*_x20 + m2*_x16*_x47
+    _x50 = l2*_x49
+    _x51 = -_x50
+    _x52 = _x6*_x24*_x25*_x10
+    _x53 = -_x22*_x23
+    _x54 = l2*_x53
+    _x55 = -_x54
+    _x56 = _x1*_x11
+    _x57 = _x6*_x14
+    _x58 = _x57 + _x56
+    _x59 = l2*_x58
+    _x60 = -_x59
+    _x61 = _x1*_x14 - _x6*_x11
+    _x62 = l2*_x61
+    _x63 = l1*_x11
+    _x64 = -_x63
+    _x65 = l1*_x14
+    _x66 = m1*_x0*theta1_dd
+    _x67 = _x65 + _x62
+    _x68 = _x28 + _x2
+    _x69 = -_x60
+    _x70 = _x64 + _x60
+    _x71 = _x62*_x70
+    _x72 = -_x57 - _x56
+    _x73 = _x63 + _x59
+    _x74 = _x3*_x6
+    _x75 = _x74*theta1_d
+    _x76 = theta2_d*theta2_d
+    _x77 = _x21*theta2_d
+    _x78 = -_x59*_x77 - _x59*_x76 + _x7*_x70
+    _x79 = -_x62*_x77 - _x62*_x76 + (-_x65 - _x62)*_x7
+    _x80 = -_x74
+    _x81 = _x8*_x9
+    _x82 = _x6*_x8*_x10
+    _x83 = _x6*_x15
+    _x84 = _x1*_x12
+    _x85 = _x1*_x10
+    _x86 = -_x10*_x83
+    _x87 = _x15*_x10*_x16 - _x10*_x84
+    _x88 = _x19 + _x15
+    _x89 = m2*(-_x6*_x20 + _x1*_x88)
+    _x90 = _x5*_x18 + l2*_x89
+    _x91 = -m2*_x1*_x20 + m2*_x16*_x88
+    _x92 = l2*_x91
+    _x93 = _x35*_x23
+    _x94 = l1*_x17
+    _x95 = _x6*_x88
+    _x96 = -_x6*_x24*_x25*_x10
+    _x97 = _x45 + _x46
+    _x98 = m2*(-_x33 + _x1*_x47)
+    _x99 = -_x2*_x6*_x6*_x17 - _x28*_x17 - _x35*_x36 - _x34*_x15 + _x38
+    _x100 = _x38 - _x99*_x40
+    _x101 = _x42*_x100
+    _x102 = -_x40*_x101 + _x27*_x99
+    _x103 = -l1*_x1*(m2*_x48 - _x29*_x10 + m2*(_x48 + _x1*_x20)) - _x35*_x49 - l1*_x16*(m2*_x33 + _x10*_x97 + _x98) + _x51
+    _x104 = _x51 - _x40*_x103
+    _x105 = _x42*_x104
+    _x106 = -_x105*_x40 + _x27*_x103
+    _x107 = -_x34*_x22 + _x52 - _x35*_x53 + _x55
+    _x108 = _x55 - _x107*_x40
+    _x109 = _x42*_x108
+    _x110 = -_x109*_x40 + _x27*_x107
+    _x111 = -_x52*_x40
+    _x112 = _x42*_x111
+    _x113 = -_x112*_x40 + _x52*_x27
+    _x114 = -_x40
+    _x115 = _x42*_x114
+    _x116 = -_x115*_x40 + _x27
+    _x117 = -_x42*_x40
+    _x118 = _x66 + _x28*_x15 + l1*(_x6*(-_x29*_x10 + m2*(_x6*_x88 + _x1*_x20)) + _x1*(_x10*_x18 + _x89)) + _x90
+    _x119 = -_x67
+    _x120 = _x62*_x70 + _x60*_x119
+    _x121 = 1.0/_x120
+    _x122 = _x121*(_x62*_x118 + _x90*_x119)
+    _x123 = _x121*(_x69*_x118 + _x90*_x70)
+    _x124 = l1*(_x6*(-_x29*_x10 - _x81) + _x6*_x81) + _x82
+    _x125 = -_x13*_x10 + _x15*(_x1*_x10 + _x68)
+    _x126 = _x10*(_x1*_x15 - _x13)
+    _x127 = _x71 + _x60*_x119
+    _x128 = 1.0/_x127
+    _x129 = _x128*(_x62*_x26 + _x39*_x119)
+    _x130 = _x128*(_x62*_x39 + _x5*_x119)
+    _x131 = _x128*(_x62*_x124 + _x82*_x119)
+    _x132 = _x128*(_x119*_x126 + _x62*_x125)
+    _x133 = _x128*(_x69*_x26 + _x39*_x70)
+    _x134 = _x128*(_x69*_x39 + _x5*_x70)
+    _x135 = _x128*(_x69*_x124 + _x82*_x70)
+    _x136 = _x128*(_x69*_x125 + _x70*_x126)
+    _x137 = _x128*(_x119*_x130 + _x62*_x129)
+    _x138 = _x128*(_x69*_x129 + _x70*_x130)
+    _x139 = _x128*(_x69*_x133 + _x134*_x70)
     _out_base_T_tcp = numpy.zeros(batch + (4, 4))
-    _out_base_T_tcp[..., 0, 0] = _x34
-    _out_base_T_tcp[..., 0, 1] = _x45
-    _out_base_T_tcp[..., 0, 3] = _x40
-    _out_base_T_tcp[..., 1, 0] = _x31
-    _out_base_T_tcp[..., 1, 1] = _x34
-    _out_base_T_tcp[..., 1, 3] = _x46
+    _out_base_T_tcp[..., 0, 0] = _x61
+    _out_base_T_tcp[..., 0, 1] = _x72
+    _out_base_T_tcp[..., 0, 3] = _x67
+    _out_base_T_tcp[..., 1, 0] = _x58
+    _out_base_T_tcp[..., 1, 1] = _x61
+    _out_base_T_tcp[..., 1, 3] = _x73
     _out_base_T_tcp[..., 2, 2] = 1.0
     _out_base_T_tcp[..., 3, 3] = 1.0
     _out_base_T_link1 = numpy.zeros(batch + (4, 4))
     _out_base_T_link1[..., 0, 0] = _x14
     _out_base_T_link1[..., 0, 1] = -_x11
-    _out_base_T_link1[..., 0, 3] = _x38
+    _out_base_T_link1[..., 0, 3] = _x65
     _out_base_T_link1[..., 1, 0] = _x11
     _out_base_T_link1[..., 1, 1] = _x14
-    _out_base_T_link1[..., 1, 3] = _x36
+    _out_base_T_link1[..., 1, 3] = _x63
     _out_base_T_link1[..., 2, 2] = 1.0
     _out_base_T_link1[..., 3, 3] = 1.0
     _out_base_T_link2 = numpy.zeros(batch + (4, 4))
-    _out_base_T_link2[..., 0, 0] = _x34
-    _out_base_T_link2[..., 0, 1] = _x45
-    _out_base_T_link2[..., 0, 3] = _x40
-    _out_base_T_link2[..., 1, 0] = _x31
-    _out_base_T_link2[..., 1, 1] = _x34
-    _out_base_T_link2[..., 1, 3] = _x46
+    _out_base_T_link2[..., 0, 0] = _x61
+    _out_base_T_link2[..., 0, 1] = _x72
+    _out_base_T_link2[..., 0, 3] = _x67
+    _out_base_T_link2[..., 1, 0] = _x58
+    _out_base_T_link2[..., 1, 1] = _x61
+    _out_base_T_link2[..., 1, 3] = _x73
     _out_base_T_link2[..., 2, 2] = 1.0
     _out_base_T_link2[..., 3, 3] = 1.0
     _out_jacobian_J = numpy.zeros(batch + (2, 2))
-    _out_jacobian_J[..., 0, 0] = _x43
-    _out_jacobian_J[..., 0, 1] = _x33
-    _out_jacobian_J[..., 1, 0] = _x40
-    _out_jacobian_J[..., 1, 1] = _x35
+    _out_jacobian_J[..., 0, 0] = _x70
+    _out_jacobian_J[..., 0, 1] = _x60
+    _out_jacobian_J[..., 1, 0] = _x67
+    _out_jacobian_J[..., 1, 1] = _x62
     _out_jacobian_geometric_J = numpy.zeros(batch + (6, 2))
-    _out_jacobian_geometric_J[..., 0, 0] = _x43
-    _out_jacobian_geometric_J[..., 0, 1] = _x33
-    _out_jacobian_geometric_J[..., 1, 0] = _x40
-    _out_jacobian_geometric_J[..., 1, 1] = _x35
+    _out_jacobian_geometric_J[..., 0, 0] = _x70
+    _out_jacobian_geometric_J[..., 0, 1] = _x60
+    _out_jacobian_geometric_J[..., 1, 0] = _x67
+    _out_jacobian_geometric_J[..., 1, 1] = _x62
     _out_jacobian_geometric_J[..., 5, 0] = 1.0
     _out_jacobian_geometric_J[..., 5, 1] = 1.0
     _out_M = numpy.zeros(batch + (2, 2))
-    _out_M[..., 0, 0] = 2.0*_x4 + m1*_x0 + m2*_x0 + _x5
-    _out_M[..., 0, 1] = _x53
-    _out_M[..., 1, 0] = _x53
+    _out_M[..., 0, 0] = m1*_x0 + 2.0*_x4 + m2*_x0 + _x5
+    _out_M[..., 0, 1] = _x39
+    _out_M[..., 1, 0] = _x39
     _out_M[..., 1, 1] = _x5
     _out_C = numpy.zeros(batch + (2, 2))
-    _out_C[..., 0, 0] = -_x47*theta2_d
-    _out_C[..., 0, 1] = -_x48 + _x54*theta2_d
-    _out_C[..., 1, 0] = _x48
+    _out_C[..., 0, 0] = -_x74*theta2_d
+    _out_C[..., 0, 1] = -_x75 + _x80*theta2_d
+    _out_C[..., 1, 0] = _x75
     _out_V = numpy.zeros(batch + (2,))
-    _out_V[..., 0] = l1*(_x6*(-_x25*_x10 - _x55) + _x6*_x55) + _x56
-    _out_V[..., 1] = _x56
+    _out_V[..., 0] = l1*(_x6*(-_x29*_x10 - _x81) + _x6*_x81) + _x82
+    _out_V[..., 1] = _x82
     _out_G = numpy.zeros(batch + (2,))
-    _out_G[..., 0] = -_x13*_x10 + _x15*(_x1*_x10 + _x41)
+    _out_G[..., 0] = -_x13*_x10 + _x15*(_x1*_x10 + _x68)
     _out_G[..., 1] = _x10*(_x1*_x15 - _x13)
+    _out_dG_dq = numpy.zeros(batch + (2, 2))
+    _out_dG_dq[..., 0, 0] = _x17*(_x85 + _x68) + _x86
+    _out_dG_dq[..., 0, 1] = _x87
+    _out_dG_dq[..., 1, 0] = _x17*_x85 + _x86
+    _out_dG_dq[..., 1, 1] = _x87
     _out_inverse_dynamics_tau = numpy.zeros(batch + (2,))
-    _out_inverse_dynamics_tau[..., 0] = _x39 + _x59 + _x24*_x15 + l1*(_x6*(-_x25*_x10 + m2*(_x6*_x57 + _x1*_x18)) + _x1*(_x10*_x16 + _x58))
-    _out_inverse_dynamics_tau[..., 1] = _x59
+    _out_inverse_dynamics_tau[..., 0] = _x66 + _x28*_x15 + l1*(_x6*(-_x29*_x10 + m2*(_x6*_x88 + _x1*_x20)) + _x1*(_x10*_x18 + _x89)) + _x90
+    _out_inverse_dynamics_tau[..., 1] = _x90
     _out_dtau_dq = numpy.zeros(batch + (2, 2))
-    _out_dtau_dq[..., 0, 0] = m1*_x73 + _x73*_x72 + _x63*_x71 + _x15*_x74 + _x67
-    _out_dtau_dq[..., 0, 1] = l1*_x1*(-_x21*_x21*_x10 + m2*(_x1*_x18 + _x75) + m2*_x75) + l1*_x60*(_x20*_x18 + _x10*_x16 + _x58) + _x64*_x71 + _x68
-    _out_dtau_dq[..., 1, 0] = _x67
-    _out_dtau_dq[..., 1, 1] = _x68
+    _out_dtau_dq[..., 0, 0] = m1*_x94 + _x35*_x36 + _x15*_x93 + m2*_x6*_x6*_x94 + _x37
+    _out_dtau_dq[..., 0, 1] = l1*_x1*(-_x24*_x24*_x10 + m2*(_x1*_x20 + _x95) + m2*_x95) + _x35*_x91 + l1*_x16*(_x10*_x18 + _x23*_x20 + _x89) + _x92
+    _out_dtau_dq[..., 1, 0] = _x37
+    _out_dtau_dq[..., 1, 1] = _x92
     _out_dtau_dqd = numpy.zeros(batch + (2, 2))
-    _out_dtau_dqd[..., 0, 0] = _x74*_x62 + _x76 + _x65*_x71 + _x69
-    _out_dtau_dqd[..., 0, 1] = _x76
-    _out_dtau_dqd[..., 1, 0] = _x69
+    _out_dtau_dqd[..., 0, 0] = _x35*_x53 + _x22*_x93 + _x96 + _x54
+    _out_dtau_dqd[..., 0, 1] = _x96
+    _out_dtau_dqd[..., 1, 0] = _x54
     _out_dtau_dqdd = numpy.zeros(batch + (2, 2))
-    _out_dtau_dqdd[..., 0, 0] = m1*_x0 + _x0*_x72 + _x66*_x71 + _x77 + _x70
-    _out_dtau_dqdd[..., 0, 1] = _x77 + _x5
-    _out_dtau_dqdd[..., 1, 0] = _x70
+    _out_dtau_dqdd[..., 0, 0] = m1*_x0 + 2.0*_x4 + m2*_x0 + _x5
+    _out_dtau_dqdd[..., 0, 1] = _x39
+    _out_dtau_dqdd[..., 1, 0] = _x39
     _out_dtau_dqdd[..., 1, 1] = _x5
     _out_forward_dynamics_qdd = numpy.zeros(batch + (2,))
-    _out_forward_dynamics_qdd[..., 0] = _x83
-    _out_forward_dynamics_qdd[..., 1] = _x82
+    _out_forward_dynamics_qdd[..., 0] = _x46
+    _out_forward_dynamics_qdd[..., 1] = _x45
+    _out_dqdd_dq = numpy.zeros(batch + (2, 2))
+    _out_dqdd_dq[..., 0, 0] = _x102
+    _out_dqdd_dq[..., 0, 1] = _x106
+    _out_dqdd_dq[..., 1, 0] = _x101
+    _out_dqdd_dq[..., 1, 1] = _x105
+    _out_dqdd_dqd = numpy.zeros(batch + (2, 2))
+    _out_dqdd_dqd[..., 0, 0] = _x110
+    _out_dqdd_dqd[..., 0, 1] = _x113
+    _out_dqdd_dqd[..., 1, 0] = _x109
+    _out_dqdd_dqd[..., 1, 1] = _x112
+    _out_dqdd_dtau = numpy.zeros(batch + (2, 2))
+    _out_dqdd_dtau[..., 0, 0] = _x116
+    _out_dqdd_dtau[..., 0, 1] = _x117
+    _out_dqdd_dtau[..., 1, 0] = _x115
+    _out_dqdd_dtau[..., 1, 1] = _x42
     _out_F = numpy.zeros(batch + (2,))
-    _out_F[..., 0] = _x88
-    _out_F[..., 1] = _x89
+    _out_F[..., 0] = _x122
+    _out_F[..., 1] = _x123
     _out_Mx = numpy.zeros(batch + (2, 2))
-    _out_Mx[..., 0, 0] = _x103
-    _out_Mx[..., 0, 1] = _x104
-    _out_Mx[..., 1, 0] = _x104
-    _out_Mx[..., 1, 1] = _x105
+    _out_Mx[..., 0, 0] = _x137
+    _out_Mx[..., 0, 1] = _x138
+    _out_Mx[..., 1, 0] = _x138
+    _out_Mx[..., 1, 1] = _x139
     _out_Vx = numpy.zeros(batch + (2,))
-    _out_Vx[..., 0] = -_x51*_x104 - _x52*_x103 + _x97
-    _out_Vx[..., 1] = -_x51*_x105 - _x52*_x104 + _x101
+    _out_Vx[..., 0] = -_x78*_x138 - _x79*_x137 + _x131
+    _out_Vx[..., 1] = -_x79*_x138 - _x78*_x139 + _x135
     _out_Gx = numpy.zeros(batch + (2,))
-    _out_Gx[..., 0] = _x98
-    _out_Gx[..., 1] = _x102
+    _out_Gx[..., 0] = _x132
+    _out_Gx[..., 1] = _x136
     _out_k = numpy.zeros(batch + ())
-    _out_k[...] = 0.5*(_x53*theta1_d + _x5*theta2_d)*theta2_d + 0.5*((2.0*_x4 + m1*_x0 + m2*_x0 + _x5)*theta1_d + _x53*theta2_d)*theta1_d
+    _out_k[...] = 0.5*(_x39*theta1_d + _x5*theta2_d)*theta2_d + 0.5*((m1*_x0 + 2.0*_x4 + m2*_x0 + _x5)*theta1_d + _x39*theta2_d)*theta1_d
     _out_u = numpy.zeros(batch + ())
-    _out_u[...] = g*(_x36 + _x32)*m2 + g*m1*_x36
-    return CombinedResult(_out_base_T_tcp, _out_base_T_link1, _out_base_T_link2, _out_jacobian_J, _out_jacobian_geometric_J, _out_M, _out_C, _out_V, _out_G, _out_inverse_dynamics_tau, _out_dtau_dq, _out_dtau_dqd, _out_dtau_dqdd, _out_forward_dynamics_qdd, _out_F, _out_Mx, _out_Vx, _out_Gx, _out_k, _out_u)
+    _out_u[...] = g*(_x63 + _x59)*m2 + g*m1*_x63
+    return CombinedResult(_out_base_T_tcp, _out_base_T_link1, _out_base_T_link2, _out_jacobian_J, _out_jacobian_geometric_J, _out_M, _out_C, _out_V, _out_G, _out_dG_dq, _out_inverse_dynamics_tau, _out_dtau_dq, _out_dtau_dqd, _out_dtau_dqdd, _out_forward_dynamics_qdd, _out_dqdd_dq, _out_dqdd_dqd, _out_dqdd_dtau, _out_F, _out_Mx, _out_Vx, _out_Gx, _out_k, _out_u)

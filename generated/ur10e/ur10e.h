@@ -288,6 +288,37 @@ void ur10e_gravity_vector_packed(const double *in, double *out);
  * Uses 1920 bytes of stack for its blocks of 8 configurations. */
 void ur10e_gravity_vector_batch(size_t n, const double *q, const double *params, size_t params_stride, double *G);
 
+/* ur10e_gravity_derivatives: Derivative of the gravity vector: the stiffness gravity (and the springs) add.
+ *
+ * G(q + dq) = G(q) + dG_dq dq to first order (seed eq. 8.31's G = du/dq, so dG_dq =
+ * d^2u/dq^2 is symmetric for gravity and springs alike); forward-mode derivative of the
+ * Newton-Euler program at rest.
+ *
+ * Inputs:
+ *   q[6]: joint coordinates: q1 [rad], q2 [rad], q3 [rad], q4 [rad], q5 [rad], q6 [rad].
+ *   a2: upper arm length (UR sign convention) [m]; default UR10E_DEFAULT_a2 = -0.6127.
+ *   a3: forearm length (UR sign convention) [m]; default UR10E_DEFAULT_a3 = -0.57155.
+ *   d5: wrist 2 offset [m]; default UR10E_DEFAULT_d5 = 0.11985.
+ *   d6: wrist 3 offset (flange) [m]; default UR10E_DEFAULT_d6 = 0.11655.
+ *   m2: mass of link 2 (upper arm) [kg]; default UR10E_DEFAULT_m2 = 13.051.
+ *   m3: mass of link 3 (forearm) [kg]; default UR10E_DEFAULT_m3 = 3.989.
+ *   m4: mass of link 4 (wrist 1) [kg]; default UR10E_DEFAULT_m4 = 2.1.
+ *   m5: mass of link 5 (wrist 2) [kg]; default UR10E_DEFAULT_m5 = 1.98.
+ *   m6: mass of link 6 (wrist 3), without tool [kg]; default UR10E_DEFAULT_m6 = 0.615.
+ *   g: gravitational acceleration [m/s^2]; default UR10E_DEFAULT_g = 9.81.
+ * Outputs:
+ *   dG_dq[36]: 6 x 6, row-major; d G / dq: row i, column j is d G_i / d q_j.
+ * Cost: 138 operations.
+ */
+void ur10e_gravity_derivatives(const double *q, double a2, double a3, double d5, double d6, double m2, double m3, double m4, double m5, double m6, double g, double *dG_dq);
+
+/* ur10e_gravity_derivatives with packed arguments: in = q, a2, a3, d5, d6, m2, m3, m4, m5, m6, g one after the other; out = dG_dq one after the other. */
+void ur10e_gravity_derivatives_packed(const double *in, double *out);
+
+/* ur10e_gravity_derivatives for n configurations; params: a2, a3, d5, d6, m2, m3, m4, m5, m6, g, stride 0 or 10.
+ * Uses 2688 bytes of stack for its blocks of 8 configurations. */
+void ur10e_gravity_derivatives_batch(size_t n, const double *q, const double *params, size_t params_stride, double *dG_dq);
+
 /* ur10e_inverse_dynamics: Inverse dynamics: joint torques for a motion.
  *
  * tau = M(q) qdd + V(q, qd) + G(q) + F_f(qd) (seed eq. 8.34), by the recursive Newton-
@@ -330,7 +361,8 @@ void ur10e_inverse_dynamics_batch(size_t n, const double *q, const double *qd, c
  * tau(q + dq, qd + dqd, qdd + dqdd) = tau + dtau_dq dq + dtau_dqd dqd + dtau_dqdd dqdd
  * to first order, tau = M qdd + V + G + F_f (seed eq. 8.34); dtau_dqdd = M.  Forward-
  * mode derivative of the recursive Newton-Euler program (Carpentier and Mansard, RSS
- * 2018); a sign(qd) Coulomb term counts with derivative 0.
+ * 2018), dtau_dqdd by the composite-rigid-body algorithm; a sign(qd) Coulomb term counts
+ * with derivative 0.
  *
  * Inputs:
  *   q[6]: joint coordinates: q1 [rad], q2 [rad], q3 [rad], q4 [rad], q5 [rad], q6 [rad].
@@ -355,7 +387,7 @@ void ur10e_inverse_dynamics_batch(size_t n, const double *q, const double *qd, c
  *   dtau_dqd[36]: 6 x 6, row-major; d tau / dqd: the damping of the motion (Coriolis and
  *   friction).
  *   dtau_dqdd[36]: 6 x 6, row-major; d tau / dqdd = M(q), the mass matrix.
- * Cost: 4464 operations.
+ * Cost: 4175 operations.
  */
 void ur10e_inverse_dynamics_derivatives(const double *q, const double *qd, const double *qdd, double a2, double a3, double d4, double d5, double d6, double m1, double m2, double m3, double m4, double m5, double m6, double g, double *dtau_dq, double *dtau_dqd, double *dtau_dqdd);
 
@@ -401,6 +433,47 @@ void ur10e_forward_dynamics_packed(const double *in, double *out);
 /* ur10e_forward_dynamics for n configurations; params: a2, a3, d4, d5, d6, m1, m2, m3, m4, m5, m6, g, stride 0 or 12.
  * Uses 3200 bytes of stack for its blocks of 8 configurations. */
 void ur10e_forward_dynamics_batch(size_t n, const double *q, const double *qd, const double *tau, const double *params, size_t params_stride, double *qdd);
+
+/* ur10e_forward_dynamics_derivatives: Derivatives of the forward dynamics: the linearization of the plant.
+ *
+ * qdd(q + dq, qd + dqd, tau + dtau) = qdd + dqdd_dq dq + dqdd_dqd dqd + dqdd_dtau dtau
+ * to first order, qdd = M^-1 (tau - V - G - F_f) (seed eq. 8.34); by the implicit-
+ * function theorem dqdd_dq = -M^-1 dtau_dq, dqdd_dqd = -M^-1 dtau_dqd at qdd and
+ * dqdd_dtau = M^-1, by LDL^T solves (Carpentier and Mansard, RSS 2018); a state-space
+ * model x = (q, qd) has A = [[0, I], [dqdd_dq, dqdd_dqd]] and B = [[0], [dqdd_dtau]].
+ *
+ * Inputs:
+ *   q[6]: joint coordinates: q1 [rad], q2 [rad], q3 [rad], q4 [rad], q5 [rad], q6 [rad].
+ *   qd[6]: joint velocities: q1 [rad/s], q2 [rad/s], q3 [rad/s], q4 [rad/s], q5 [rad/s],
+ *   q6 [rad/s].
+ *   tau[6]: joint torques (revolute) or forces (prismatic): q1 [N*m], q2 [N*m], q3 [N*m],
+ *   q4 [N*m], q5 [N*m], q6 [N*m].
+ *   a2: upper arm length (UR sign convention) [m]; default UR10E_DEFAULT_a2 = -0.6127.
+ *   a3: forearm length (UR sign convention) [m]; default UR10E_DEFAULT_a3 = -0.57155.
+ *   d4: wrist 1 offset [m]; default UR10E_DEFAULT_d4 = 0.17415.
+ *   d5: wrist 2 offset [m]; default UR10E_DEFAULT_d5 = 0.11985.
+ *   d6: wrist 3 offset (flange) [m]; default UR10E_DEFAULT_d6 = 0.11655.
+ *   m1: mass of link 1 (shoulder) [kg]; default UR10E_DEFAULT_m1 = 7.369.
+ *   m2: mass of link 2 (upper arm) [kg]; default UR10E_DEFAULT_m2 = 13.051.
+ *   m3: mass of link 3 (forearm) [kg]; default UR10E_DEFAULT_m3 = 3.989.
+ *   m4: mass of link 4 (wrist 1) [kg]; default UR10E_DEFAULT_m4 = 2.1.
+ *   m5: mass of link 5 (wrist 2) [kg]; default UR10E_DEFAULT_m5 = 1.98.
+ *   m6: mass of link 6 (wrist 3), without tool [kg]; default UR10E_DEFAULT_m6 = 0.615.
+ *   g: gravitational acceleration [m/s^2]; default UR10E_DEFAULT_g = 9.81.
+ * Outputs:
+ *   dqdd_dq[36]: 6 x 6, row-major; d qdd / dq: row i, column j is d qdd_i / d q_j.
+ *   dqdd_dqd[36]: 6 x 6, row-major; d qdd / dqd.
+ *   dqdd_dtau[36]: 6 x 6, row-major; d qdd / dtau = M(q)^-1.
+ * Cost: 5785 operations.
+ */
+void ur10e_forward_dynamics_derivatives(const double *q, const double *qd, const double *tau, double a2, double a3, double d4, double d5, double d6, double m1, double m2, double m3, double m4, double m5, double m6, double g, double *dqdd_dq, double *dqdd_dqd, double *dqdd_dtau);
+
+/* ur10e_forward_dynamics_derivatives with packed arguments: in = q, qd, tau, a2, a3, d4, d5, d6, m1, m2, m3, m4, m5, m6, g one after the other; out = dqdd_dq, dqdd_dqd, dqdd_dtau one after the other. */
+void ur10e_forward_dynamics_derivatives_packed(const double *in, double *out);
+
+/* ur10e_forward_dynamics_derivatives for n configurations; params: a2, a3, d4, d5, d6, m1, m2, m3, m4, m5, m6, g, stride 0 or 12.
+ * Uses 9344 bytes of stack for its blocks of 8 configurations. */
+void ur10e_forward_dynamics_derivatives_batch(size_t n, const double *q, const double *qd, const double *tau, const double *params, size_t params_stride, double *dqdd_dq, double *dqdd_dqd, double *dqdd_dtau);
 
 /* ur10e_tcp_force: Force (wrench) at the TCP that produces a joint motion.
  *

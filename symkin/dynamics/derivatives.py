@@ -3,6 +3,8 @@ and the linearization of a plant at a state.
 
 =================================  ==================================================================================
 ``inverse_dynamics_derivatives``   d tau/dq, d tau/dqd and d tau/dqdd = M of tau = M qdd + V + G + F_f (n x n each)
+``forward_dynamics_derivatives``   d qdd/dq, d qdd/dqd and d qdd/dtau = M^-1 of the forward dynamics (n x n each)
+``gravity_derivatives``            d G/dq of the gravity vector (springs included; n x n): the static stiffness
 =================================  ==================================================================================
 
 They are derived on the recursive program, not on expanded closed forms: the torques are the straight-line program
@@ -17,6 +19,14 @@ joints' values as functions of the coordinates (the derivatives are with respect
 through their torques in G, rotor inertia through the armature in M, and friction through F_f(qd): viscous terms
 and smoothed Coulomb terms (tanh) differentiate as they are; a sign(qd) Coulomb term has the derivative 0 wherever
 it is defined (qd != 0), as every linearization of a Coulomb model takes it.
+
+The forward dynamics' derivatives follow from the inverse's by the implicit-function theorem on
+tau = ID(q, qd, qdd) at qdd = FD(q, qd, tau) (Carpentier and Mansard's route to the ABA derivatives):
+
+    d qdd/dq = -M^-1 d tau/dq,   d qdd/dqd = -M^-1 d tau/dqd,   d qdd/dtau = M^-1,
+
+the inverse dynamics' derivative program evaluated at the accelerations the LDL^T solve of the forward dynamics
+gives, and one more LDL^T solve with the n + n + n right-hand sides [-d tau/dq | -d tau/dqd | I].
 """
 
 from __future__ import annotations
@@ -26,8 +36,10 @@ import symengine as se
 from symkin.dynamics import newton_euler
 from symkin.dynamics.coupling import forces_on_coordinates, joint_rates
 from symkin.dynamics.joint_forces import friction_graph, spring_torques
+from symkin.dynamics.linsolve import ldl_solve
 from symkin.dynamics.program import Program
-from symkin.dynamics.quantities import coordinate_symbols, function_spec, gravity_graph, newton_euler_links
+from symkin.dynamics.quantities import (BoundTerms, coordinate_symbols, function_spec, gravity_graph,
+                                        newton_euler_links, require_gravity)
 from symkin.ir.quantity import Deriving, quantity
 from symkin.ir.spec import FunctionSpec
 
@@ -65,15 +77,65 @@ def torque_jacobian(d: Deriving, program: Program, variables: list[se.Symbol]) -
 def _inverse_dynamics_derivatives(d: Deriving) -> FunctionSpec:
     n = d.model.dof
     program = Program()
-    variables = [x for group in ("q", "qd", "qdd") for x in coordinate_symbols(d, group)]
+    M = BoundTerms(d, program).mass_matrix()  # d tau/dqdd: the composite-rigid-body M (cheaper than tau's slope)
+    variables = [x for group in ("q", "qd") for x in coordinate_symbols(d, group)]
     entries = program.bind(torque_jacobian(d, program, variables))
-    dq, dqd, dqdd = ([entries[i * 3 * n + k * n + j] for i in range(n) for j in range(n)] for k in range(3))
+    dq, dqd = ([entries[i * 2 * n + k * n + j] for i in range(n) for j in range(n)] for k in range(2))
+    dqdd = [M[i][j] for i in range(n) for j in range(n)]
     return function_spec(
         d, "inverse_dynamics_derivatives", "Derivatives of the inverse dynamics: the linearization of tau at a motion.",
         "tau(q + dq, qd + dqd, qdd + dqdd) = tau + dtau_dq dq + dtau_dqd dqd + dtau_dqdd dqdd to first order, "
         "tau = M qdd + V + G + F_f (seed eq. 8.34); dtau_dqdd = M.  Forward-mode derivative of the recursive "
-        "Newton-Euler program (Carpentier and Mansard, RSS 2018); a sign(qd) Coulomb term counts with derivative 0.",
+        "Newton-Euler program (Carpentier and Mansard, RSS 2018), dtau_dqdd by the composite-rigid-body algorithm; "
+        "a sign(qd) Coulomb term counts with derivative 0.",
         ["q", "qd", "qdd"], program,
         [("dtau_dq", dq, (n, n), "d tau / dq: row i, column j is d tau_i / d q_j", ""),
          ("dtau_dqd", dqd, (n, n), "d tau / dqd: the damping of the motion (Coriolis and friction)", ""),
          ("dtau_dqdd", dqdd, (n, n), "d tau / dqdd = M(q), the mass matrix", "")])
+
+
+@quantity("forward_dynamics_derivatives", "d qdd/dq, d qdd/dqd, d qdd/dtau = M^-1 of the forward dynamics (n x n each)",
+          solves_with="mass_matrix")
+def _forward_dynamics_derivatives(d: Deriving) -> FunctionSpec:
+    n = d.model.dof
+    program = Program()
+    terms = BoundTerms(d, program)
+    M = terms.mass_matrix()
+    tau = coordinate_symbols(d, "tau")
+    h = terms.torques(acceleration=False, with_friction=True)
+    qdd = [row[0] for row in ldl_solve(program, M, [[t - b] for t, b in zip(tau, h)])]
+    start = len(program.assignments)
+    variables = [x for group in ("q", "qd") for x in coordinate_symbols(d, group)]
+    slopes = torque_jacobian(d, program, variables)
+    at_motion = dict(zip(coordinate_symbols(d, "qdd"), qdd))  # the derivative program at qdd = FD(q, qd, tau)
+    program.substitute(start, at_motion)
+    slopes = [entry.xreplace(at_motion) for entry in slopes]
+    right = [[-slopes[i * 2 * n + j] for j in range(2 * n)] + [se.Integer(int(i == j)) for j in range(n)]
+             for i in range(n)]
+    X = ldl_solve(program, M, right)
+    dq, dqd, dtau = ([X[i][k * n + j] for i in range(n) for j in range(n)] for k in range(3))
+    return function_spec(
+        d, "forward_dynamics_derivatives", "Derivatives of the forward dynamics: the linearization of the plant.",
+        "qdd(q + dq, qd + dqd, tau + dtau) = qdd + dqdd_dq dq + dqdd_dqd dqd + dqdd_dtau dtau to first order, "
+        "qdd = M^-1 (tau - V - G - F_f) (seed eq. 8.34); by the implicit-function theorem dqdd_dq = -M^-1 dtau_dq, "
+        "dqdd_dqd = -M^-1 dtau_dqd at qdd and dqdd_dtau = M^-1, by LDL^T solves (Carpentier and Mansard, RSS 2018); "
+        "a state-space model x = (q, qd) has A = [[0, I], [dqdd_dq, dqdd_dqd]] and B = [[0], [dqdd_dtau]].",
+        ["q", "qd", "tau"], program,
+        [("dqdd_dq", dq, (n, n), "d qdd / dq: row i, column j is d qdd_i / d q_j", ""),
+         ("dqdd_dqd", dqd, (n, n), "d qdd / dqd", ""),
+         ("dqdd_dtau", dtau, (n, n), "d qdd / dtau = M(q)^-1", "")])
+
+
+@quantity("gravity_derivatives", "d G/dq of the gravity vector (n x n)")
+def _gravity_derivatives(d: Deriving) -> FunctionSpec:
+    require_gravity(d, "gravity_derivatives")
+    n = d.model.dof
+    program = Program()
+    G = BoundTerms(d, program).gravity_vector()
+    assert G is not None, "require_gravity refuses a model without gravity"
+    dG = program.bind(program.jacobian(G, coordinate_symbols(d, "q")))
+    return function_spec(
+        d, "gravity_derivatives", "Derivative of the gravity vector: the stiffness gravity (and the springs) add.",
+        "G(q + dq) = G(q) + dG_dq dq to first order (seed eq. 8.31's G = du/dq, so dG_dq = d^2u/dq^2 is symmetric "
+        "for gravity and springs alike); forward-mode derivative of the Newton-Euler program at rest.",
+        ["q"], program, [("dG_dq", dG, (n, n), "d G / dq: row i, column j is d G_i / d q_j", "")])

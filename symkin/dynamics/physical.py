@@ -13,9 +13,10 @@ from symkin.model.schema import Model
 
 #: The serial outputs that use the bodies' inertias, which a non-physical inertia blocks (symkin check refuses a scene
 #: asking for one; tests/model/test_model_errors.py derives every emitted quantity to keep this list exact).
-INERTIA_OUTPUTS = frozenset({"mass_matrix", "coriolis_matrix", "coriolis_vector", "gravity_vector", "inverse_dynamics",
-                             "inverse_dynamics_derivatives", "forward_dynamics", "tcp_force", "operational_space",
-                             "kinetic_energy", "potential_energy", "regressor", "energy_regressor", "base_regressor"})
+INERTIA_OUTPUTS = frozenset({"mass_matrix", "coriolis_matrix", "coriolis_vector", "gravity_vector", "gravity_derivatives",
+                             "inverse_dynamics", "inverse_dynamics_derivatives", "forward_dynamics",
+                             "forward_dynamics_derivatives", "tcp_force", "operational_space", "kinetic_energy",
+                             "potential_energy", "regressor", "energy_regressor", "base_regressor"})
 
 
 def require_physical(model: Model) -> None:

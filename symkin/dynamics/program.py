@@ -105,6 +105,11 @@ class Program:
         rows = [gradient(se.sympify(output)) for output in outputs]
         return [row.get(k, se.Integer(0)) for row in rows for k in range(len(variables))]
 
+    def substitute(self, start: int, values: dict[se.Basic, se.Basic]) -> None:
+        """Replace symbols by ``values`` in the assignments from position ``start`` on: evaluate what was built
+        there at given values of those symbols (a derivative program at the accelerations a solve gave)."""
+        self.assignments[start:] = [(symbol, expr.xreplace(values)) for symbol, expr in self.assignments[start:]]
+
     def to_sympy(self, outputs: Sequence[se.Basic], convert: SympyConverter) -> tuple[
             tuple[tuple[sympy.Symbol, sympy.Expr], ...], list[sympy.Expr]]:
         """The definitions the ``outputs`` need and the outputs, as sympy expressions.

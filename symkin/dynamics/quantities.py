@@ -141,7 +141,7 @@ def require_gravity(d: Deriving, name: str) -> None:
                               f"not emitted; declare 'gravity:' in the model or remove '{name}' from the outputs")
 
 
-class _BoundTerms:
+class BoundTerms:
     """The terms of eq. 8.34 bound into one program, always in the same order (M, dM/dq, V, G, F_f),
     so that the programs of different functions start alike and share their conversion.
 
@@ -201,7 +201,7 @@ class _BoundTerms:
 @quantity("mass_matrix", "mass matrix M(q) (n x n, symmetric positive definite)")
 def _mass_matrix(d: Deriving) -> FunctionSpec:
     program = Program()
-    M = _flat(_BoundTerms(d, program).mass_matrix())
+    M = _flat(BoundTerms(d, program).mass_matrix())
     return function_spec(
         d, "mass_matrix", "Joint-space mass matrix.",
         "M(q) = sum over bodies of m Jv^T Jv + Jw^T I Jw with the velocity Jacobians at the centres of mass "
@@ -214,7 +214,7 @@ def _mass_matrix(d: Deriving) -> FunctionSpec:
 def _coriolis_matrix(d: Deriving) -> FunctionSpec:
     n = d.model.dof
     program = Program()
-    C = lagrange.coriolis_matrix(_BoundTerms(d, program).partials(), coordinate_symbols(d, "qd"))
+    C = lagrange.coriolis_matrix(BoundTerms(d, program).partials(), coordinate_symbols(d, "qd"))
     return function_spec(
         d, "coriolis_matrix", "Coriolis matrix from the Christoffel symbols of M.",
         "C_ij = sum_k c_ijk qd_k, c_ijk = 1/2 (dM_ij/dq_k + dM_ik/dq_j - dM_jk/dq_i); V = C qd and "
@@ -225,7 +225,7 @@ def _coriolis_matrix(d: Deriving) -> FunctionSpec:
 @quantity("coriolis_vector", "Coriolis and centrifugal vector V(q, qd) = C qd (n)")
 def _coriolis_vector(d: Deriving) -> FunctionSpec:
     program = Program()
-    V = _BoundTerms(d, program).coriolis_vector()
+    V = BoundTerms(d, program).coriolis_vector()
     return function_spec(
         d, "coriolis_vector", "Coriolis and centrifugal torques.",
         "V(q, qd) = C(q, qd) qd = dM/dt qd - 1/2 d(qd^T M qd)/dq (seed eq. 8.31; 2-DoF example eq. 8.54), "
@@ -237,7 +237,7 @@ def _coriolis_vector(d: Deriving) -> FunctionSpec:
 def _gravity_vector(d: Deriving) -> FunctionSpec:
     require_gravity(d, "gravity_vector")
     program = Program()
-    G = _BoundTerms(d, program).gravity_vector()
+    G = BoundTerms(d, program).gravity_vector()
     assert G is not None, "require_gravity refuses a model without gravity"
     return function_spec(
         d, "gravity_vector", "Gravity torques.",
@@ -265,7 +265,7 @@ def _friction(d: Deriving) -> FunctionSpec:
 def _inverse_dynamics(d: Deriving) -> FunctionSpec:
     n = d.model.dof
     program = Program()
-    tau = _BoundTerms(d, program).torques(acceleration=True, with_friction=True)
+    tau = BoundTerms(d, program).torques(acceleration=True, with_friction=True)
     return function_spec(
         d, "inverse_dynamics", "Inverse dynamics: joint torques for a motion.",
         "tau = M(q) qdd + V(q, qd) + G(q) + F_f(qd) (seed eq. 8.34), by the recursive Newton-Euler algorithm "
@@ -278,7 +278,7 @@ def _inverse_dynamics(d: Deriving) -> FunctionSpec:
 def _forward_dynamics(d: Deriving) -> FunctionSpec:
     n = d.model.dof
     program = Program()
-    terms = _BoundTerms(d, program)
+    terms = BoundTerms(d, program)
     M = terms.mass_matrix()
     rhs = [[t - b] for t, b in zip(coordinate_symbols(d, "tau"), terms.torques(acceleration=False, with_friction=True))]
     qdd = [row[0] for row in ldl_solve(program, M, rhs)]
@@ -295,7 +295,7 @@ def _tcp_force(d: Deriving) -> FunctionSpec:
     n = d.model.dof
     J = d[_task_jacobian_graph]
     program = Program()
-    rhs = [[b] for b in _BoundTerms(d, program).torques(acceleration=True, with_friction=False)]
+    rhs = [[b] for b in BoundTerms(d, program).torques(acceleration=True, with_friction=False)]
     values = program.bind(_flat(J))
     J = [values[i * n:(i + 1) * n] for i in range(n)]
     F = [row[0] for row in transpose_solve(program, J, rhs)]
@@ -337,7 +337,7 @@ def _operational_space(d: Deriving) -> FunctionSpec:
     n = d.model.dof
     J_graph = d[_task_jacobian_graph]  # refuses a task Jacobian that is not square before any dynamics
     program = Program()
-    terms = _BoundTerms(d, program)
+    terms = BoundTerms(d, program)
     M = terms.mass_matrix()
     V = terms.coriolis_vector()
     G = terms.gravity_vector()
@@ -358,7 +358,7 @@ def _operational_space(d: Deriving) -> FunctionSpec:
 @quantity("kinetic_energy", "kinetic energy k(q, qd) = 1/2 qd^T M qd (scalar)")
 def _kinetic_energy(d: Deriving) -> FunctionSpec:
     program = Program()
-    (k,) = program.bind([lagrange.kinetic_energy(_BoundTerms(d, program).mass_matrix(), coordinate_symbols(d, "qd"))])
+    (k,) = program.bind([lagrange.kinetic_energy(BoundTerms(d, program).mass_matrix(), coordinate_symbols(d, "qd"))])
     return function_spec(
         d, "kinetic_energy", "Kinetic energy.", "k = 1/2 qd^T M(q) qd (seed eq. 8.32).",
         ["q", "qd"], program, [("k", [k], (), "kinetic energy of all bodies", "J")])

@@ -1,10 +1,11 @@
-"""Derivatives of the inverse dynamics (issue 65): ``inverse_dynamics_derivatives`` gives d tau/dq, d tau/dqd and
-d tau/dqdd = M, derived on the recursive Newton-Euler program.
+"""Derivatives of the dynamics (issue 65): ``inverse_dynamics_derivatives`` gives d tau/dq, d tau/dqd and
+d tau/dqdd = M, derived on the recursive Newton-Euler program; ``forward_dynamics_derivatives`` d qdd/dq, d qdd/dqd
+and d qdd/dtau = M^-1.
 
-References: Pinocchio's analytical RNEA derivatives (``computeRNEADerivatives``, Carpentier and Mansard 2018) on a
-6-DoF arm (models/ur10e.urdf), a 7-DoF arm as shipped (example-robot-data's Panda, its hand locked) and a tree (a
-torso carrying two arms and a head, through the URDF symkin exports; its drive's armature set in Pinocchio, its
-viscous friction added by hand); central finite differences of the generated tau on the PHANToM Premium (couplings,
+References: Pinocchio's analytical RNEA and ABA derivatives (``computeRNEADerivatives``, ``computeABADerivatives``,
+Carpentier and Mansard 2018) on a 6-DoF arm (models/ur10e.urdf), a 7-DoF arm as shipped (example-robot-data's Panda,
+its hand locked) and a tree (a torso carrying two arms and a head, through the URDF symkin exports; its drive's
+armature set in Pinocchio, its friction added by hand); central finite differences of the generated tau on the PHANToM Premium (couplings,
 rotor inertia, Coulomb and viscous friction).  Both sides of the Pinocchio comparisons are exact methods, so they
 differ by rounding: DYNAMICS (tests/tolerances.py) relative to the entries' scale.
 """
@@ -22,22 +23,37 @@ from symkin.model import load_model, model_from_text
 from symkin.model.urdf_export import export_urdf
 from tolerances import DYNAMICS, EPS
 
-def _agree(got: np.ndarray, want: np.ndarray, state) -> None:
+def _agree(got: np.ndarray, want: np.ndarray, state, kappa: float = 1.0) -> None:
     scale = max(1.0, float(np.abs(want).max()))
     error = float(np.abs(got - want).max())
-    assert error <= DYNAMICS * scale, f"error {error:.3g} > {DYNAMICS * scale:.3g} at {state}"
+    assert error <= DYNAMICS * kappa * scale, f"error {error:.3g} > {DYNAMICS * kappa * scale:.3g} at {state}"
 
 
-def _compare_with_pinocchio(model, reference, names: list[str], seed: int) -> None:
-    """At five random states: symkin's derivatives (plain lambdify of the derivation) against Pinocchio's on the
-    joints ``names`` of ``reference`` (the model's joints in its order; the others at their neutral values, at rest),
-    with the model's viscous friction, which Pinocchio's RNEA leaves out (a URDF's joint damping), added to
-    d tau/dqd."""
-    joints = [reference.joints[reference.getJointId(name)] for name in names]
+def _friction(model, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(F_f(qd), d F_f/dqd diagonal) of the model's friction, viscous + Coulomb sign(qd), which Pinocchio's RNEA and
+    ABA leave out (a URDF's joint damping and friction)."""
+    values = model.parameter_values
+    viscous, coulomb = np.zeros(model.dof), np.zeros(model.dof)
+    names = [j.name for j in model.joints]
+    for f in model.friction:
+        assert f.smoothing_velocity is None, "the test's friction is viscous + sign(qd)"
+        assert not f.asymmetric, "the test's friction is viscous + sign(qd)"
+        viscous[names.index(f.joint)] = float(f.viscous.xreplace(values))
+        coulomb[names.index(f.joint)] = float(f.coulomb.xreplace(values))
+    return viscous * qd + coulomb * np.sign(qd), viscous
+
+
+def _compare_with_pinocchio(model, reference, seed: int) -> None:
+    """At five random states: symkin's derivatives of the inverse and the forward dynamics (plain lambdify of the
+    derivation) against Pinocchio's analytical RNEA and ABA derivatives of ``reference``, a model of the same
+    joints (by the model's names), with the model's friction added to Pinocchio's torques and to d tau/dqd.  The
+    forward dynamics' derivatives pass through M^-1: DYNAMICS kappa(M)."""
+    joints = [reference.joints[reference.getJointId(model.source_name("joints", j.name))] for j in model.joints]
+    assert reference.nv == model.dof
     columns = [joint.idx_v for joint in joints]
-    viscous = {f.joint: float(f.viscous.xreplace(model.parameter_values)) for f in model.friction}
-    friction = np.array([viscous.get(j.name, 0.0) for j in model.joints])
-    derivatives = reference_function(model, Derivation(model)["inverse_dynamics_derivatives"])
+    d = Derivation(model)
+    inverse = reference_function(model, d["inverse_dynamics_derivatives"])
+    forward = reference_function(model, d["forward_dynamics_derivatives"])
     data = reference.createData()
     rng = np.random.default_rng(seed)
     for _ in range(5):
@@ -46,28 +62,40 @@ def _compare_with_pinocchio(model, reference, names: list[str], seed: int) -> No
         for joint, angle in zip(joints, q):  # a continuous joint (no limits) holds cos and sin
             Q[joint.idx_q:joint.idx_q + joint.nq] = [np.cos(angle), np.sin(angle)] if joint.nq == 2 else angle
         V[columns], A[columns] = qd, qdd
-        dq, dv, da = (np.asarray(m)[np.ix_(columns, columns)] for m in pin.computeRNEADerivatives(reference, data, Q, V, A))
+        order = np.ix_(columns, columns)
+        dq, dv, da = (np.asarray(m)[order] for m in pin.computeRNEADerivatives(reference, data, Q, V, A))
         da = np.triu(da) + np.triu(da, 1).T
-        dtau_dq, dtau_dqd, dtau_dqdd = derivatives(q, qd, qdd)
+        friction, slope = _friction(model, qd)
+        dtau_dq, dtau_dqd, dtau_dqdd = inverse(q, qd, qdd)
         _agree(dtau_dq, dq, (q, qd, qdd))
-        _agree(dtau_dqd, dv + np.diag(friction), (q, qd, qdd))
+        _agree(dtau_dqd, dv + np.diag(slope), (q, qd, qdd))
         _agree(dtau_dqdd, da, (q, qd, qdd))
+        tau = np.asarray(pin.rnea(reference, data, Q, V, A))[columns] + friction   # symkin's torques for qdd
+        T = np.zeros(reference.nv)
+        T[columns] = tau - friction
+        pin.computeABADerivatives(reference, data, Q, V, T)
+        M_inv = np.triu(data.Minv) + np.triu(data.Minv, 1).T
+        kappa = float(np.linalg.cond(da))
+        dqdd_dq, dqdd_dqd, dqdd_dtau = forward(q, qd, tau)
+        _agree(dqdd_dq, np.asarray(data.ddq_dq)[order], (q, qd, tau), kappa)
+        _agree(dqdd_dqd, np.asarray(data.ddq_dv)[order] - M_inv[order] @ np.diag(slope), (q, qd, tau), kappa)
+        _agree(dqdd_dtau, M_inv[order], (q, qd, tau), kappa)
 
 
 def test_a_6_dof_arm_agrees_with_pinocchio():
     path = MODELS_DIR / "ur10e.urdf"
-    reference = pin.buildModelFromUrdf(str(path))
-    model = load_model(path)
-    _compare_with_pinocchio(model, reference, [model.source_name("joints", j.name) for j in model.joints], 65)
+    _compare_with_pinocchio(load_model(path), pin.buildModelFromUrdf(str(path)), 65)
 
 
 def test_a_stock_7_dof_arm_agrees_with_pinocchio():
-    """The Panda as shipped: its fingers locked at 0 and lumped into the chain by symkin, free (at rest) in
-    Pinocchio's whole model."""
+    """The Panda as shipped: its fingers locked at 0 and lumped into the chain by symkin, locked at 0 in
+    Pinocchio's reduced model of the whole file."""
     path = ROBOTS_DIR / "panda_description/urdf/panda.urdf"
     model = load_model(path, tip="panda_link8", chain=True)
-    reference = pin.buildModelFromUrdf(str(path))
-    _compare_with_pinocchio(model, reference, [model.source_name("joints", j.name) for j in model.joints], 66)
+    whole = pin.buildModelFromUrdf(str(path))
+    chain = {model.source_name("joints", j.name) for j in model.joints}
+    locked = [whole.getJointId(name) for name in whole.names[1:] if name not in chain]
+    _compare_with_pinocchio(model, pin.buildReducedModel(whole, locked, pin.neutral(whole)), 66)
 
 
 def test_a_tree_agrees_with_pinocchio():
@@ -76,7 +104,7 @@ def test_a_tree_agrees_with_pinocchio():
     for actuator in model.actuators:  # the drive's reflected rotor inertia: Pinocchio's armature
         index = reference.joints[reference.getJointId(actuator.joint)].idx_v
         reference.armature[index] = float(actuator.reflected_inertia.xreplace(model.parameter_values))
-    _compare_with_pinocchio(model, reference, [j.name for j in model.joints], 67)
+    _compare_with_pinocchio(model, reference, 67)
 
 
 def test_finite_differences_of_tau_on_a_coupled_geared_arm_with_friction():
@@ -104,30 +132,22 @@ def test_finite_differences_of_tau_on_a_coupled_geared_arm_with_friction():
             np.testing.assert_allclose(analytic, np.column_stack(columns), rtol=0, atol=1e-8 * scale)
 
 
-@pytest.mark.parametrize("name", ["ur10e", "phantom_premium", "planar_2r"])
-def test_d_tau_d_qdd_is_the_mass_matrix(name, models, derivations):
-    """The derivative by the accelerations is the composite-rigid-body M (two routes, rounding apart)."""
-    model, d = models[name], derivations[name]
-    derivatives = reference_function(model, d["inverse_dynamics_derivatives"])
-    M = reference_function(model, d["mass_matrix"])
-    rng = np.random.default_rng(68)
-    q = random_q(model, rng)
-    _agree(derivatives(q, rng.uniform(-1, 1, model.dof), rng.uniform(-1, 1, model.dof))[2], M(q)[0], q)
-
-
-def test_the_linearization_of_the_plant_is_the_forward_dynamics_slope(generated_dir):
-    """docs/generated-code.md's MPC linearization from generated/ur10e: d qdd/dq = -M^-1 dtau/dq and
-    d qdd/dqd = -M^-1 dtau/dqd at qdd = the forward dynamics' (the implicit-function theorem on M qdd + h = tau),
-    against central differences of the generated forward dynamics (h = EPS^(1/3): error ~EPS^(2/3) kappa(M) of the
-    slopes' scale; 1e-6 leaves a wide margin at kappa(M) ~ 1e3)."""
+def test_the_generated_linearization_of_the_plant_is_the_forward_dynamics_slope(generated_dir):
+    """generated/ur10e's forward_dynamics_derivatives (docs/generated-code.md's MPC linearization) against central
+    differences of its generated forward dynamics (h = EPS^(1/3): error ~EPS^(2/3) kappa(M) of the slopes' scale;
+    1e-6 leaves a wide margin at kappa(M) ~ 1e3), and against -M^-1 times the inverse dynamics' derivatives at the
+    same motion."""
     from symkin import load
 
     arm = load(generated_dir / "ur10e")
     q, qd, tau = np.radians([10.0, -80.0, 70.0, -30.0, 60.0, 5.0]), np.full(6, 0.2), np.full(6, 1.5)
-    d = arm.inverse_dynamics_derivatives(q, qd, arm.forward_dynamics(q, qd, tau))
-    M_inv = np.linalg.inv(d.dtau_dqdd)
+    d = arm.forward_dynamics_derivatives(q, qd, tau)
+    inverse = arm.inverse_dynamics_derivatives(q, qd, arm.forward_dynamics(q, qd, tau))
+    kappa = float(np.linalg.cond(inverse.dtau_dqdd))
+    _agree(d.dqdd_dtau, np.linalg.inv(inverse.dtau_dqdd), q, kappa)
     h = EPS ** (1 / 3)
-    for which, analytic in ((0, -M_inv @ d.dtau_dq), (1, -M_inv @ d.dtau_dqd)):
+    for which, analytic in ((0, d.dqdd_dq), (1, d.dqdd_dqd)):
+        _agree(analytic, -d.dqdd_dtau @ (inverse.dtau_dq, inverse.dtau_dqd)[which], q, kappa)
         columns = []
         for e in np.eye(6):
             plus, minus = [q, qd], [q, qd]
@@ -135,3 +155,23 @@ def test_the_linearization_of_the_plant_is_the_forward_dynamics_slope(generated_
             columns.append((arm.forward_dynamics(*plus, tau) - arm.forward_dynamics(*minus, tau)) / (2 * h))
         slope = np.column_stack(columns)
         np.testing.assert_allclose(analytic, slope, rtol=0, atol=1e-6 * max(1.0, float(np.abs(slope).max())))
+
+
+@pytest.mark.parametrize("path", [MODELS_DIR / "ur10e.urdf", ROBOTS_DIR / "panda_description/urdf/panda.urdf"],
+                         ids=["ur10e", "panda"])
+def test_the_gravity_derivative_agrees_with_pinocchio_and_is_symmetric(path):
+    """computeGeneralizedGravityDerivatives; dG/dq = d^2u/dq^2 is a Hessian, symmetric to rounding."""
+    model = load_model(path, tip="panda_link8", chain=True) if "panda" in path.name else load_model(path)
+    whole = pin.buildModelFromUrdf(str(path))
+    chain = {model.source_name("joints", j.name) for j in model.joints}
+    reference = pin.buildReducedModel(whole, [whole.getJointId(n) for n in whole.names[1:] if n not in chain],
+                                      pin.neutral(whole))
+    dG = reference_function(model, Derivation(model)["gravity_derivatives"])
+    data = reference.createData()
+    rng = np.random.default_rng(69)
+    for _ in range(5):
+        q = random_q(model, rng)
+        want = np.asarray(pin.computeGeneralizedGravityDerivatives(reference, data, q))
+        (got,) = dG(q)
+        _agree(got, want, q)
+        _agree(got, got.T, q)
