@@ -5,6 +5,9 @@ and the linearization of a plant at a state.
 ``inverse_dynamics_derivatives``   d tau/dq, d tau/dqd and d tau/dqdd = M of tau = M qdd + V + G + F_f (n x n each)
 ``forward_dynamics_derivatives``   d qdd/dq, d qdd/dqd and d qdd/dtau = M^-1 of the forward dynamics (n x n each)
 ``gravity_derivatives``            d G/dq of the gravity vector (springs included; n x n): the static stiffness
+``fk_sensitivities``               d base_T_tcp / d p of the free parameters p (lengths, offsets; 16 x P)
+``jacobian_sensitivities``         d J / d p (m n x P): for kinematic calibration and design gradients
+``inverse_dynamics_sensitivities`` d tau / d p (n x P): of lengths, masses, inertias, friction, gear ratios
 =================================  ==================================================================================
 
 They are derived on the recursive program, not on expanded closed forms: the torques are the straight-line program
@@ -39,9 +42,12 @@ from symkin.dynamics.joint_forces import friction_graph, spring_torques
 from symkin.dynamics.linsolve import ldl_solve
 from symkin.dynamics.program import Program
 from symkin.dynamics.quantities import (BoundTerms, coordinate_symbols, function_spec, gravity_graph,
-                                        newton_euler_links, require_gravity)
+                                        inverse_dynamics_spec, newton_euler_links, require_gravity)
+from symkin.errors import DerivationError
 from symkin.ir.quantity import Deriving, quantity
 from symkin.ir.spec import FunctionSpec
+from symkin.kinematics.quantities import forward_kinematics, task_jacobian
+from symkin.symengine_bridge import to_symengine
 
 
 def torque_graph(d: Deriving) -> tuple[list[se.Basic], list[se.Basic] | None]:
@@ -139,3 +145,56 @@ def _gravity_derivatives(d: Deriving) -> FunctionSpec:
         "G(q + dq) = G(q) + dG_dq dq to first order (seed eq. 8.31's G = du/dq, so dG_dq = d^2u/dq^2 is symmetric "
         "for gravity and springs alike); forward-mode derivative of the Newton-Euler program at rest.",
         ["q"], program, [("dG_dq", dG, (n, n), "d G / dq: row i, column j is d G_i / d q_j", "")])
+
+
+def parameter_sensitivities(d: Deriving, spec: FunctionSpec, name: str, summary: str) -> FunctionSpec:
+    """d outputs / d p of a derived function ``spec`` for the free parameters p it takes (its parameter inputs, in
+    its order): its straight-line program (definitions and outputs) moved into a :class:`Program` and differentiated
+    forward with respect to the parameters; one output ``d<output>_dp`` per output, (size, P) with the output's
+    entries in row-major order, row k column j = d output.flat[k] / d p_j.  The inputs are the spec's.
+
+    Raises:
+        DerivationError: ``spec`` takes no free parameter (every one folded or none used): nothing to differentiate.
+    """
+    parameters = [i for i in spec.inputs if i.kind == "parameter"]
+    if not parameters:
+        raise DerivationError(f"{d.model.name}: {spec.name} uses no free parameter, so {name} has nothing to "
+                              "differentiate; declare the lengths, masses or other values as parameters")
+    program = Program()
+    memo: dict = {}
+    renamed: dict[se.Basic, se.Basic] = {}
+    for symbol, expr in spec.definitions:  # the spec's names are replaced by the program's (one substitution each)
+        renamed[to_symengine(symbol)] = program.let(to_symengine(expr, memo).xreplace(renamed))
+    outputs = [[to_symengine(e, memo).xreplace(renamed) for e in out.expr] for out in spec.outputs]
+    symbols = [to_symengine(p.symbols[0]) for p in parameters]
+    entries = program.bind(program.jacobian([e for out in outputs for e in out], symbols))
+    results, start = [], 0
+    for out, values in zip(spec.outputs, outputs):
+        size = len(values) * len(symbols)
+        results.append((f"d{out.name}_dp", entries[start:start + size], (len(values), len(symbols)),
+                        f"d {out.name} / d ({', '.join(p.name for p in parameters)}): row k is entry k of {out.name} "
+                        "(row-major)", ""))
+        start += size
+    return function_spec(d, name, summary,
+                         f"Forward-mode derivative of {spec.name}'s program with respect to its free parameters "
+                         f"({', '.join(p.name for p in parameters)}): {spec.summary}",
+                         list(spec.vector_inputs), program, results)
+
+
+@quantity("fk_sensitivities", "d base_T_tcp / d p of the free parameters (16 x P, row-major pose entries)")
+def _fk_sensitivities(d: Deriving) -> FunctionSpec:
+    return parameter_sensitivities(d, d[forward_kinematics], "fk_sensitivities",
+                                   "Sensitivity of the TCP pose to the model's free parameters (kinematic calibration).")
+
+
+@quantity("jacobian_sensitivities", "d J / d p of the free parameters (m n x P, row-major Jacobian entries)")
+def _jacobian_sensitivities(d: Deriving) -> FunctionSpec:
+    return parameter_sensitivities(d, d[task_jacobian], "jacobian_sensitivities",
+                                   "Sensitivity of the task Jacobian to the model's free parameters (design gradients).")
+
+
+@quantity("inverse_dynamics_sensitivities", "d tau / d p of the free parameters (n x P)")
+def _inverse_dynamics_sensitivities(d: Deriving) -> FunctionSpec:
+    return parameter_sensitivities(d, d[inverse_dynamics_spec], "inverse_dynamics_sensitivities",
+                                   "Sensitivity of the inverse dynamics to the model's free parameters (identification, "
+                                   "design gradients).")

@@ -16,7 +16,8 @@ from symkin.model.schema import Model
 INERTIA_OUTPUTS = frozenset({"mass_matrix", "coriolis_matrix", "coriolis_vector", "gravity_vector", "gravity_derivatives",
                              "inverse_dynamics", "inverse_dynamics_derivatives", "forward_dynamics",
                              "forward_dynamics_derivatives", "tcp_force", "operational_space", "kinetic_energy",
-                             "potential_energy", "regressor", "energy_regressor", "base_regressor"})
+                             "potential_energy", "regressor", "energy_regressor", "base_regressor",
+                             "inverse_dynamics_sensitivities"})
 
 
 def require_physical(model: Model) -> None:

@@ -262,7 +262,7 @@ def _friction(d: Deriving) -> FunctionSpec:
 
 
 @quantity("inverse_dynamics", "inverse dynamics tau = M qdd + V + G + F_f (n)")
-def _inverse_dynamics(d: Deriving) -> FunctionSpec:
+def inverse_dynamics_spec(d: Deriving) -> FunctionSpec:
     n = d.model.dof
     program = Program()
     tau = BoundTerms(d, program).torques(acceleration=True, with_friction=True)

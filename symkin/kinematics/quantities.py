@@ -29,7 +29,7 @@ def chain_frames(d: Deriving) -> ChainFrames:
 
 
 @quantity("fk", "forward kinematics: base_T_tcp (4x4)")
-def _fk(d: Deriving) -> FunctionSpec:
+def forward_kinematics(d: Deriving) -> FunctionSpec:
     chain: ChainFrames = d[chain_frames]
     return make_function(
         d.model, "fk", "Forward kinematics: pose of the TCP in the base frame.",

@@ -175,3 +175,37 @@ def test_the_gravity_derivative_agrees_with_pinocchio_and_is_symmetric(path):
         (got,) = dG(q)
         _agree(got, want, q)
         _agree(got, got.T, q)
+
+
+@pytest.fixture(scope="module")
+def ur10e_sensitivities(tmp_path_factory):
+    """models/ur10e.yaml's fk, J and tau with their parameter sensitivities, numpy, every parameter free, and the
+    parameters each base function takes (the sensitivities' columns)."""
+    from symkin import load, pipeline
+
+    model = load_model(MODELS_DIR / "ur10e.yaml")
+    names = "fk,jacobian,inverse_dynamics,fk_sensitivities,jacobian_sensitivities,inverse_dynamics_sensitivities"
+    request = pipeline.resolve_request(model, names, "numpy", None, False, "none")
+    directory = pipeline.write(pipeline.generate(model, request), tmp_path_factory.mktemp("sensitivities"))
+    d = Derivation(model)
+    columns = {base: [i.name for i in d[base].inputs if i.kind == "parameter"]
+               for base in ("fk", "jacobian", "inverse_dynamics")}
+    return load(directory), columns, model.parameter_values, {p.name: p.symbol for p in model.parameters}
+
+
+@pytest.mark.parametrize("base", ["fk", "jacobian", "inverse_dynamics"])
+def test_parameter_sensitivities_are_central_differences_of_the_function(ur10e_sensitivities, base):
+    """d f/d p of each free parameter (lengths, masses, g) against central differences of the generated f with that
+    parameter moved by h = EPS^(1/3) max(1, |p|) (error ~EPS^(2/3) of f's scale: 1e-8 leaves a factor 100)."""
+    arm, columns, values, symbols = ur10e_sensitivities
+    rng = np.random.default_rng(70)
+    state = [rng.uniform(-3, 3, 6) for _ in range(3 if base == "inverse_dynamics" else 1)]
+    slopes = np.asarray(getattr(arm, f"{base}_sensitivities")(*state))  # one output: the array itself
+    function = getattr(arm, base)
+    scale = max(1.0, float(np.abs(function(*state)).max()))
+    for j, name in enumerate(columns[base]):
+        value = float(values[symbols[name]])
+        h = EPS ** (1 / 3) * max(1.0, abs(value))
+        difference = (np.asarray(function(*state, **{name: value + h})) -
+                      np.asarray(function(*state, **{name: value - h}))) / (2 * h)
+        np.testing.assert_allclose(slopes[:, j], difference.ravel(), rtol=0, atol=1e-8 * scale, err_msg=name)
