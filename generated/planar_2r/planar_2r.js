@@ -335,8 +335,8 @@
    * Derivative of the gravity vector: the stiffness gravity (and the springs) add.
    *
    * G(q + dq) = G(q) + dG_dq dq to first order (seed eq. 8.31's G = du/dq, so dG_dq =
-   * d^2u/dq^2 is symmetric for gravity and springs alike); forward-mode derivative of the
-   * Newton-Euler program at rest.
+   * d^2u/dq^2 is symmetric for gravity and springs alike); derivative of the Newton-Euler
+   * program at rest (automatic differentiation).
    *
    * @param {number[]} q joint coordinates, 2 numbers: theta1 [rad], theta2 [rad].
    * @param {Object} [params] parameter values (defaults in PARAMETERS):
@@ -425,7 +425,7 @@
    * Derivatives of the inverse dynamics: the linearization of tau at a motion.
    *
    * tau(q + dq, qd + dqd, qdd + dqdd) = tau + dtau_dq dq + dtau_dqd dqd + dtau_dqdd dqdd
-   * to first order, tau = M qdd + V + G + F_f (seed eq. 8.34); dtau_dqdd = M.  Forward-
+   * to first order, tau = M qdd + V + G + F_f (seed eq. 8.34); dtau_dqdd = M.  Reverse-
    * mode derivative of the recursive Newton-Euler program (Carpentier and Mansard, RSS
    * 2018), dtau_dqdd by the composite-rigid-body algorithm; a sign(qd) Coulomb term
    * counts with derivative 0.
@@ -467,35 +467,36 @@
     const _x2 = g*Math.cos(theta1);
     const _x3 = g*Math.sin(theta1);
     const _x4 = Math.sin(theta2);
-    const _x5 = 2.0*l1;
-    const _x6 = m2*_x4;
-    const _x7 = l1*l1;
-    const _x8 = l1*_x0*_x1;
-    const _x9 = l2*l2*m2;
-    const _x10 = _x8 + _x9;
-    const _x11 = theta1_dd + theta2_dd;
-    const _x12 = _x2 + l1*theta1_dd;
-    const _x13 = _x3 - l1*theta1_d*theta1_d;
-    const _x14 = (-_x4*_x13 + _x0*_x12)*m2;
-    const _x15 = -_x4;
-    const _x16 = -_x3;
-    const _x17 = -_x5*theta1_d;
-    const _x18 = m2*_x0*_x16 - _x2*_x6;
-    const _x19 = m2*_x12*_x15 - m2*_x0*_x13;
-    const _x20 = -_x6*_x17;
-    const _x21 = l2*_x18;
-    const _x22 = l2*_x19;
-    const _x23 = l2*_x20;
-    const _x24 = l1*_x0;
-    const _x25 = _x6*_x24;
-    const _x26 = l1*_x16;
-    const _x27 = theta2_d + theta1_d;
-    const _x28 = _x4*_x12;
-    const _x29 = -_x1*_x4*_x5*_x27;
+    const _x5 = _x3 - l1*theta1_d*theta1_d;
+    const _x6 = _x4*_x5;
+    const _x7 = l1*_x0;
+    const _x8 = _x2 + l1*theta1_dd;
+    const _x9 = _x4*_x8;
+    const _x10 = theta2_d + theta1_d;
+    const _x11 = l2 + _x7;
+    const _x12 = m2*_x11;
+    const _x13 = l1*l1;
+    const _x14 = l1*_x0*_x1;
+    const _x15 = l2*l2*m2;
+    const _x16 = _x14 + _x15;
+    const _x17 = theta1_dd + theta2_dd;
+    const _x18 = m2*(-_x6 + _x0*_x8);
+    const _x19 = l1*(m2*_x9 + m2*(_x0*_x5 + _x9) - _x1*_x10*_x10) - _x12*_x5;
+    const _x20 = m2*_x4*_x7 - _x4*_x12;
+    const _x21 = l1*m2*_x4*_x4 + _x0*_x12;
+    const _x22 = _x21 + l1*m1;
+    const _x23 = l1*(_x18 + _x1*_x17 + m2*_x6) + _x12*_x8;
+    const _x24 = -_x1*_x5;
+    const _x25 = -_x1*_x4;
+    const _x26 = _x0*_x1;
+    const _x27 = _x1*_x8;
+    const _x28 = 2.0*l1;
+    const _x29 = _x28*theta1_d;
+    const _x30 = -_x1*_x4*_x10*_x28;
     return {
-      dtau_dq: [[m1*_x26 + m2*_x4*_x4*_x26 + _x2*_x25 + _x21 + _x24*_x18, l1*_x15*(_x14 + _x1*_x11 + _x6*_x13) + l1*_x0*(m2*_x28 + m2*(_x0*_x13 + _x28) - _x1*_x27*_x27) + _x22 + _x24*_x19], [_x21, _x22]],
-      dtau_dqd: [[_x25*_x17 + _x20*_x24 + _x23 + _x29, _x29], [_x23, 0.0]],
-      dtau_dqdd: [[_x9 + 2.0*_x8 + m2*_x7 + m1*_x7, _x10], [_x10, _x9]],
+      dtau_dq: [[_x2*_x20 - _x3*_x22, _x0*_x19 - _x4*_x23], [_x2*_x25 - _x3*_x26, _x0*_x24 - _x4*_x27]],
+      dtau_dqd: [[_x30 - _x29*_x20, _x30], [-_x25*_x29, 0.0]],
+      dtau_dqdd: [[_x15 + 2.0*_x14 + m2*_x13 + m1*_x13, _x16], [_x16, _x15]],
     };
   }
 
@@ -611,59 +612,58 @@
     const _x12 = _x11*_x11;
     const _x13 = l1*m1;
     const _x14 = _x4*_x5;
-    const _x15 = 2.0*l1;
-    const _x16 = m2*_x5;
-    const _x17 = _x2*_x16;
-    const _x18 = -_x3;
-    const _x19 = m2*_x18;
-    const _x20 = -_x15*theta1_d;
-    const _x21 = _x16*_x20;
-    const _x22 = l1*_x0;
-    const _x23 = _x7 + _x8;
-    const _x24 = _x10*_x23;
-    const _x25 = -_x23*_x24 + _x8;
-    const _x26 = 1.0/_x25;
-    const _x27 = -_x4*_x5 + _x0*_x2;
-    const _x28 = _x1*_x27;
-    const _x29 = tau_theta1 - (_x28 + l1*(_x5*((_x0*_x4 + _x2*_x5)*m2 - _x1*_x12) + m2*_x0*_x27) + _x2*_x13);
-    const _x30 = tau_theta2 - _x28 - _x29*_x24;
-    const _x31 = _x30/_x25;
-    const _x32 = _x10*_x29 - _x31*_x24;
-    const _x33 = l1*_x32 + _x2;
-    const _x34 = _x5*_x33;
-    const _x35 = _x1*_x5*_x11*_x15;
-    const _x36 = _x31 + _x32;
-    const _x37 = m2*(_x0*_x33 - _x14);
-    const _x38 = -_x5;
-    const _x39 = -_x17 + _x0*_x19;
-    const _x40 = -m2*_x0*_x4 + m2*_x33*_x38;
-    const _x41 = -_x21;
-    const _x42 = l2*_x39;
-    const _x43 = l2*_x40;
-    const _x44 = l2*_x41;
-    const _x45 = -(_x42 + _x22*_x39 + _x17*_x22 + l1*_x5*_x5*_x19 + _x13*_x18);
-    const _x46 = -_x45*_x24 - _x42;
-    const _x47 = _x26*_x46;
-    const _x48 = _x10*_x45 - _x47*_x24;
-    const _x49 = -(l1*_x38*(m2*_x14 + _x1*_x36 + _x37) + _x22*_x40 + _x43 + l1*_x0*(-_x1*_x12 + m2*_x34 + m2*(_x34 + _x0*_x4)));
-    const _x50 = -_x49*_x24 - _x43;
-    const _x51 = _x26*_x50;
-    const _x52 = _x10*_x49 - _x51*_x24;
-    const _x53 = -(_x22*_x21 + _x22*_x41 + _x44 - _x35);
-    const _x54 = -_x53*_x24 - _x44;
-    const _x55 = _x26*_x54;
-    const _x56 = _x10*_x53 - _x55*_x24;
-    const _x57 = -_x35*_x24;
-    const _x58 = _x26*_x57;
-    const _x59 = _x10*_x35 - _x58*_x24;
-    const _x60 = -_x24;
-    const _x61 = _x26*_x60;
-    const _x62 = _x10 - _x61*_x24;
-    const _x63 = -_x26*_x24;
+    const _x15 = l1*_x0;
+    const _x16 = _x15 + l2;
+    const _x17 = m2*_x16;
+    const _x18 = _x7 + _x8;
+    const _x19 = _x10*_x18;
+    const _x20 = -_x4*_x5 + _x0*_x2;
+    const _x21 = _x1*_x20;
+    const _x22 = tau_theta1 - (_x21 + l1*(_x5*((_x0*_x4 + _x2*_x5)*m2 - _x1*_x12) + m2*_x0*_x20) + _x2*_x13);
+    const _x23 = -_x18*_x19 + _x8;
+    const _x24 = -_x19*_x22 - _x21 + tau_theta2;
+    const _x25 = _x24/_x23;
+    const _x26 = -_x19*_x25 + _x10*_x22;
+    const _x27 = l1*_x26 + _x2;
+    const _x28 = _x5*_x27;
+    const _x29 = 1.0/_x23;
+    const _x30 = 2.0*l1;
+    const _x31 = _x30*theta1_d;
+    const _x32 = _x1*_x5*_x11*_x30;
+    const _x33 = _x25 + _x26;
+    const _x34 = m2*(_x0*_x27 - _x14);
+    const _x35 = -_x4*_x17 + l1*(-_x1*_x12 + m2*_x28 + m2*(_x28 + _x0*_x4));
+    const _x36 = -_x5*_x17 + m2*_x5*_x15;
+    const _x37 = _x0*_x17 + l1*m2*_x5*_x5;
+    const _x38 = _x13 + _x37;
+    const _x39 = _x17*_x27 + l1*(m2*_x14 + _x1*_x33 + _x34);
+    const _x40 = -_x1*_x4;
+    const _x41 = -_x1*_x5;
+    const _x42 = _x0*_x1;
+    const _x43 = _x1*_x27;
+    const _x44 = -(_x2*_x36 - _x3*_x38);
+    const _x45 = -(-_x3*_x42 + _x2*_x41) - _x19*_x44;
+    const _x46 = _x29*_x45;
+    const _x47 = _x10*_x44 - _x19*_x46;
+    const _x48 = -(_x0*_x35 - _x5*_x39);
+    const _x49 = -(-_x5*_x43 + _x0*_x40) - _x48*_x19;
+    const _x50 = _x29*_x49;
+    const _x51 = _x10*_x48 - _x50*_x19;
+    const _x52 = -(-_x32 - _x31*_x36);
+    const _x53 = _x31*_x41 - _x52*_x19;
+    const _x54 = _x29*_x53;
+    const _x55 = _x10*_x52 - _x54*_x19;
+    const _x56 = -_x32*_x19;
+    const _x57 = _x29*_x56;
+    const _x58 = _x10*_x32 - _x19*_x57;
+    const _x59 = -_x19;
+    const _x60 = _x29*_x59;
+    const _x61 = _x10 - _x19*_x60;
+    const _x62 = -_x29*_x19;
     return {
-      dqdd_dq: [[_x48, _x52], [_x47, _x51]],
-      dqdd_dqd: [[_x56, _x59], [_x55, _x58]],
-      dqdd_dtau: [[_x62, _x63], [_x61, _x26]],
+      dqdd_dq: [[_x47, _x51], [_x46, _x50]],
+      dqdd_dqd: [[_x55, _x58], [_x54, _x57]],
+      dqdd_dtau: [[_x61, _x62], [_x60, _x29]],
     };
   }
 
@@ -978,155 +978,153 @@
     const _x13 = _x6*_x12;
     const _x14 = Math.cos(theta1);
     const _x15 = g*_x14;
-    const _x16 = -_x6;
-    const _x17 = -_x12;
-    const _x18 = theta1_dd + theta2_dd;
-    const _x19 = l1*theta1_dd;
-    const _x20 = _x12 - _x8;
-    const _x21 = 2.0*theta1_d;
-    const _x22 = -l1*_x21;
-    const _x23 = m2*_x6;
-    const _x24 = theta2_d + theta1_d;
-    const _x25 = 2.0*l1;
-    const _x26 = m1*_x0 + 2.0*_x4 + m2*_x0 + _x5;
-    const _x27 = 1.0/_x26;
-    const _x28 = l1*m1;
-    const _x29 = _x24*_x24;
-    const _x30 = -_x6*_x20 + _x1*_x15;
-    const _x31 = _x10*_x30;
-    const _x32 = -_x31;
-    const _x33 = _x6*_x20;
-    const _x34 = _x2*_x1*_x6;
-    const _x35 = l1*_x1;
-    const _x36 = -_x23*_x15 + m2*_x1*_x17;
-    const _x37 = l2*_x36;
-    const _x38 = -_x37;
-    const _x39 = _x5 + _x4;
-    const _x40 = _x27*_x39;
-    const _x41 = -_x39*_x40 + _x5;
-    const _x42 = 1.0/_x41;
-    const _x43 = -_x28*_x15 - l1*(m2*_x1*_x30 + _x6*(-_x29*_x10 + (_x1*_x20 + _x6*_x15)*m2)) + _x32 + tau_theta1;
-    const _x44 = -_x43*_x40 + _x32 + tau_theta2;
-    const _x45 = _x44/_x41;
-    const _x46 = -_x40*_x45 + _x27*_x43;
-    const _x47 = l1*_x46 + _x15;
-    const _x48 = _x6*_x47;
-    const _x49 = -m2*_x1*_x20 + m2*_x16*_x47;
-    const _x50 = l2*_x49;
-    const _x51 = -_x50;
-    const _x52 = _x6*_x24*_x25*_x10;
-    const _x53 = -_x22*_x23;
-    const _x54 = l2*_x53;
-    const _x55 = -_x54;
-    const _x56 = _x1*_x11;
-    const _x57 = _x6*_x14;
-    const _x58 = _x57 + _x56;
-    const _x59 = l2*_x58;
-    const _x60 = -_x59;
-    const _x61 = _x1*_x14 - _x6*_x11;
-    const _x62 = l2*_x61;
-    const _x63 = l1*_x11;
-    const _x64 = -_x63;
-    const _x65 = l1*_x14;
-    const _x66 = m1*_x0*theta1_dd;
-    const _x67 = _x65 + _x62;
-    const _x68 = _x28 + _x2;
-    const _x69 = -_x60;
-    const _x70 = _x64 + _x60;
-    const _x71 = _x62*_x70;
-    const _x72 = -_x57 - _x56;
-    const _x73 = _x63 + _x59;
-    const _x74 = _x3*_x6;
-    const _x75 = _x74*theta1_d;
-    const _x76 = theta2_d*theta2_d;
-    const _x77 = _x21*theta2_d;
-    const _x78 = -_x59*_x77 - _x59*_x76 + _x7*_x70;
-    const _x79 = -_x62*_x77 - _x62*_x76 + (-_x65 - _x62)*_x7;
-    const _x80 = -_x74;
-    const _x81 = _x8*_x9;
-    const _x82 = _x6*_x8*_x10;
-    const _x83 = _x6*_x15;
-    const _x84 = _x1*_x12;
-    const _x85 = _x1*_x10;
-    const _x86 = -_x10*_x83;
-    const _x87 = _x15*_x10*_x16 - _x10*_x84;
-    const _x88 = _x19 + _x15;
-    const _x89 = m2*(-_x6*_x20 + _x1*_x88);
-    const _x90 = _x5*_x18 + l2*_x89;
-    const _x91 = -m2*_x1*_x20 + m2*_x16*_x88;
-    const _x92 = l2*_x91;
-    const _x93 = _x35*_x23;
-    const _x94 = l1*_x17;
-    const _x95 = _x6*_x88;
-    const _x96 = -_x6*_x24*_x25*_x10;
-    const _x97 = _x45 + _x46;
-    const _x98 = m2*(-_x33 + _x1*_x47);
-    const _x99 = -_x2*_x6*_x6*_x17 - _x28*_x17 - _x35*_x36 - _x34*_x15 + _x38;
-    const _x100 = _x38 - _x99*_x40;
-    const _x101 = _x42*_x100;
-    const _x102 = -_x40*_x101 + _x27*_x99;
-    const _x103 = -l1*_x1*(m2*_x48 - _x29*_x10 + m2*(_x48 + _x1*_x20)) - _x35*_x49 - l1*_x16*(m2*_x33 + _x10*_x97 + _x98) + _x51;
-    const _x104 = _x51 - _x40*_x103;
-    const _x105 = _x42*_x104;
-    const _x106 = -_x105*_x40 + _x27*_x103;
-    const _x107 = -_x34*_x22 + _x52 - _x35*_x53 + _x55;
-    const _x108 = _x55 - _x107*_x40;
-    const _x109 = _x42*_x108;
-    const _x110 = -_x109*_x40 + _x27*_x107;
-    const _x111 = -_x52*_x40;
-    const _x112 = _x42*_x111;
-    const _x113 = -_x112*_x40 + _x52*_x27;
-    const _x114 = -_x40;
-    const _x115 = _x42*_x114;
-    const _x116 = -_x115*_x40 + _x27;
-    const _x117 = -_x42*_x40;
-    const _x118 = _x66 + _x28*_x15 + l1*(_x6*(-_x29*_x10 + m2*(_x6*_x88 + _x1*_x20)) + _x1*(_x10*_x18 + _x89)) + _x90;
-    const _x119 = -_x67;
-    const _x120 = _x62*_x70 + _x60*_x119;
-    const _x121 = 1.0/_x120;
-    const _x122 = _x121*(_x62*_x118 + _x90*_x119);
-    const _x123 = _x121*(_x69*_x118 + _x90*_x70);
-    const _x124 = l1*(_x6*(-_x29*_x10 - _x81) + _x6*_x81) + _x82;
-    const _x125 = -_x13*_x10 + _x15*(_x1*_x10 + _x68);
-    const _x126 = _x10*(_x1*_x15 - _x13);
-    const _x127 = _x71 + _x60*_x119;
-    const _x128 = 1.0/_x127;
-    const _x129 = _x128*(_x62*_x26 + _x39*_x119);
-    const _x130 = _x128*(_x62*_x39 + _x5*_x119);
-    const _x131 = _x128*(_x62*_x124 + _x82*_x119);
-    const _x132 = _x128*(_x119*_x126 + _x62*_x125);
-    const _x133 = _x128*(_x69*_x26 + _x39*_x70);
-    const _x134 = _x128*(_x69*_x39 + _x5*_x70);
-    const _x135 = _x128*(_x69*_x124 + _x82*_x70);
-    const _x136 = _x128*(_x69*_x125 + _x70*_x126);
-    const _x137 = _x128*(_x119*_x130 + _x62*_x129);
-    const _x138 = _x128*(_x69*_x129 + _x70*_x130);
-    const _x139 = _x128*(_x69*_x133 + _x134*_x70);
+    const _x16 = theta1_dd + theta2_dd;
+    const _x17 = l1*theta1_dd;
+    const _x18 = _x12 - _x8;
+    const _x19 = _x6*_x18;
+    const _x20 = l1*_x1;
+    const _x21 = l2 + _x20;
+    const _x22 = m2*_x21;
+    const _x23 = _x17 + _x15;
+    const _x24 = _x6*_x23;
+    const _x25 = theta2_d + theta1_d;
+    const _x26 = _x25*_x25;
+    const _x27 = l1*m1;
+    const _x28 = 2.0*l1;
+    const _x29 = m1*_x0 + 2.0*_x4 + m2*_x0 + _x5;
+    const _x30 = 1.0/_x29;
+    const _x31 = -_x6*_x18 + _x1*_x15;
+    const _x32 = _x10*_x31;
+    const _x33 = -_x32;
+    const _x34 = _x5 + _x4;
+    const _x35 = _x30*_x34;
+    const _x36 = -_x27*_x15 + tau_theta1 - l1*(m2*_x1*_x31 + _x6*(-_x26*_x10 + (_x1*_x18 + _x6*_x15)*m2)) + _x33;
+    const _x37 = -_x34*_x35 + _x5;
+    const _x38 = _x33 - _x35*_x36 + tau_theta2;
+    const _x39 = _x38/_x37;
+    const _x40 = -_x35*_x39 + _x30*_x36;
+    const _x41 = l1*_x40 + _x15;
+    const _x42 = _x6*_x41;
+    const _x43 = 1.0/_x37;
+    const _x44 = _x6*_x25*_x28*_x10;
+    const _x45 = _x28*theta1_d;
+    const _x46 = _x1*_x11;
+    const _x47 = _x6*_x14;
+    const _x48 = _x47 + _x46;
+    const _x49 = l2*_x48;
+    const _x50 = -_x49;
+    const _x51 = _x1*_x14 - _x6*_x11;
+    const _x52 = l2*_x51;
+    const _x53 = l1*_x11;
+    const _x54 = -_x53;
+    const _x55 = l1*_x14;
+    const _x56 = m1*_x0*theta1_dd;
+    const _x57 = _x55 + _x52;
+    const _x58 = _x2 + _x27;
+    const _x59 = -_x50;
+    const _x60 = _x54 + _x50;
+    const _x61 = _x52*_x60;
+    const _x62 = -_x47 - _x46;
+    const _x63 = _x53 + _x49;
+    const _x64 = _x3*_x6;
+    const _x65 = _x64*theta1_d;
+    const _x66 = theta2_d*theta2_d;
+    const _x67 = 2.0*theta1_d*theta2_d;
+    const _x68 = -_x52*_x67 - _x52*_x66 + (-_x55 - _x52)*_x7;
+    const _x69 = -_x49*_x67 - _x49*_x66 + _x7*_x60;
+    const _x70 = -_x64;
+    const _x71 = _x8*_x9;
+    const _x72 = _x6*_x8*_x10;
+    const _x73 = _x6*_x15;
+    const _x74 = _x1*_x12;
+    const _x75 = -_x6;
+    const _x76 = -_x12;
+    const _x77 = _x1*_x10;
+    const _x78 = -_x10*_x73;
+    const _x79 = _x15*_x10*_x75 - _x10*_x74;
+    const _x80 = m2*(-_x6*_x18 + _x1*_x23);
+    const _x81 = _x5*_x16 + l2*_x80;
+    const _x82 = m2*(-_x19 + _x1*_x23);
+    const _x83 = -_x22*_x18 + l1*(-_x26*_x10 + m2*_x24 + m2*(_x24 + _x1*_x18));
+    const _x84 = m2*_x6*_x20 - _x6*_x22;
+    const _x85 = _x2*_x6*_x6 + _x1*_x22;
+    const _x86 = _x85 + _x27;
+    const _x87 = _x22*_x23 + l1*(_x10*_x16 + m2*_x19 + _x82);
+    const _x88 = -_x10*_x18;
+    const _x89 = -_x6*_x10;
+    const _x90 = _x10*_x23;
+    const _x91 = -_x6*_x25*_x28*_x10;
+    const _x92 = _x40 + _x39;
+    const _x93 = m2*(-_x19 + _x1*_x41);
+    const _x94 = -_x22*_x18 + l1*(m2*_x42 - _x26*_x10 + m2*(_x42 + _x1*_x18));
+    const _x95 = _x22*_x41 + l1*(m2*_x19 + _x10*_x92 + _x93);
+    const _x96 = _x10*_x41;
+    const _x97 = -_x15*_x84 + _x12*_x86;
+    const _x98 = _x12*_x77 - _x15*_x89 - _x35*_x97;
+    const _x99 = _x43*_x98;
+    const _x100 = -_x35*_x99 + _x30*_x97;
+    const _x101 = _x6*_x95 - _x1*_x94;
+    const _x102 = -_x1*_x88 - _x35*_x101 + _x6*_x96;
+    const _x103 = _x43*_x102;
+    const _x104 = -_x35*_x103 + _x30*_x101;
+    const _x105 = _x44 + _x45*_x84;
+    const _x106 = _x45*_x89 - _x35*_x105;
+    const _x107 = _x43*_x106;
+    const _x108 = -_x35*_x107 + _x30*_x105;
+    const _x109 = -_x44*_x35;
+    const _x110 = _x43*_x109;
+    const _x111 = -_x35*_x110 + _x44*_x30;
+    const _x112 = -_x35;
+    const _x113 = _x43*_x112;
+    const _x114 = -_x35*_x113 + _x30;
+    const _x115 = -_x43*_x35;
+    const _x116 = _x56 + _x27*_x15 + l1*(_x6*(-_x26*_x10 + m2*(_x6*_x23 + _x1*_x18)) + _x1*(_x10*_x16 + _x80)) + _x81;
+    const _x117 = -_x57;
+    const _x118 = _x52*_x60 + _x50*_x117;
+    const _x119 = 1.0/_x118;
+    const _x120 = _x119*(_x52*_x116 + _x81*_x117);
+    const _x121 = _x119*(_x59*_x116 + _x81*_x60);
+    const _x122 = l1*(_x6*(-_x26*_x10 - _x71) + _x6*_x71) + _x72;
+    const _x123 = -_x13*_x10 + _x15*(_x1*_x10 + _x58);
+    const _x124 = _x10*(_x1*_x15 - _x13);
+    const _x125 = _x61 + _x50*_x117;
+    const _x126 = 1.0/_x125;
+    const _x127 = _x126*(_x52*_x29 + _x34*_x117);
+    const _x128 = _x126*(_x52*_x34 + _x5*_x117);
+    const _x129 = _x126*(_x52*_x122 + _x72*_x117);
+    const _x130 = _x126*(_x117*_x124 + _x52*_x123);
+    const _x131 = _x126*(_x59*_x29 + _x34*_x60);
+    const _x132 = _x126*(_x59*_x34 + _x5*_x60);
+    const _x133 = _x126*(_x59*_x122 + _x72*_x60);
+    const _x134 = _x126*(_x59*_x123 + _x60*_x124);
+    const _x135 = _x126*(_x117*_x128 + _x52*_x127);
+    const _x136 = _x126*(_x59*_x127 + _x60*_x128);
+    const _x137 = _x126*(_x59*_x131 + _x132*_x60);
     return {
-      base_T_tcp: [[_x61, _x72, 0.0, _x67], [_x58, _x61, 0.0, _x73], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]],
-      base_T_link1: [[_x14, -_x11, 0.0, _x65], [_x11, _x14, 0.0, _x63], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]],
-      base_T_link2: [[_x61, _x72, 0.0, _x67], [_x58, _x61, 0.0, _x73], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]],
-      jacobian_J: [[_x70, _x60], [_x67, _x62]],
-      jacobian_geometric_J: [[_x70, _x60], [_x67, _x62], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0], [1.0, 1.0]],
-      M: [[m1*_x0 + 2.0*_x4 + m2*_x0 + _x5, _x39], [_x39, _x5]],
-      C: [[-_x74*theta2_d, -_x75 + _x80*theta2_d], [_x75, 0.0]],
-      V: [l1*(_x6*(-_x29*_x10 - _x81) + _x6*_x81) + _x82, _x82],
-      G: [-_x13*_x10 + _x15*(_x1*_x10 + _x68), _x10*(_x1*_x15 - _x13)],
-      dG_dq: [[_x17*(_x85 + _x68) + _x86, _x87], [_x17*_x85 + _x86, _x87]],
-      inverse_dynamics_tau: [_x66 + _x28*_x15 + l1*(_x6*(-_x29*_x10 + m2*(_x6*_x88 + _x1*_x20)) + _x1*(_x10*_x18 + _x89)) + _x90, _x90],
-      dtau_dq: [[m1*_x94 + _x35*_x36 + _x15*_x93 + m2*_x6*_x6*_x94 + _x37, l1*_x1*(-_x24*_x24*_x10 + m2*(_x1*_x20 + _x95) + m2*_x95) + _x35*_x91 + l1*_x16*(_x10*_x18 + _x23*_x20 + _x89) + _x92], [_x37, _x92]],
-      dtau_dqd: [[_x35*_x53 + _x22*_x93 + _x96 + _x54, _x96], [_x54, 0.0]],
-      dtau_dqdd: [[m1*_x0 + 2.0*_x4 + m2*_x0 + _x5, _x39], [_x39, _x5]],
-      forward_dynamics_qdd: [_x46, _x45],
-      dqdd_dq: [[_x102, _x106], [_x101, _x105]],
-      dqdd_dqd: [[_x110, _x113], [_x109, _x112]],
-      dqdd_dtau: [[_x116, _x117], [_x115, _x42]],
-      F: [_x122, _x123],
-      Mx: [[_x137, _x138], [_x138, _x139]],
-      Vx: [-_x78*_x138 - _x79*_x137 + _x131, -_x79*_x138 - _x78*_x139 + _x135],
-      Gx: [_x132, _x136],
-      k: 0.5*(_x39*theta1_d + _x5*theta2_d)*theta2_d + 0.5*((m1*_x0 + 2.0*_x4 + m2*_x0 + _x5)*theta1_d + _x39*theta2_d)*theta1_d,
-      u: g*(_x63 + _x59)*m2 + g*m1*_x63,
+      base_T_tcp: [[_x51, _x62, 0.0, _x57], [_x48, _x51, 0.0, _x63], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]],
+      base_T_link1: [[_x14, -_x11, 0.0, _x55], [_x11, _x14, 0.0, _x53], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]],
+      base_T_link2: [[_x51, _x62, 0.0, _x57], [_x48, _x51, 0.0, _x63], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]],
+      jacobian_J: [[_x60, _x50], [_x57, _x52]],
+      jacobian_geometric_J: [[_x60, _x50], [_x57, _x52], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0], [1.0, 1.0]],
+      M: [[m1*_x0 + 2.0*_x4 + m2*_x0 + _x5, _x34], [_x34, _x5]],
+      C: [[-_x64*theta2_d, -_x65 + _x70*theta2_d], [_x65, 0.0]],
+      V: [l1*(_x6*(-_x26*_x10 - _x71) + _x6*_x71) + _x72, _x72],
+      G: [-_x13*_x10 + _x15*(_x1*_x10 + _x58), _x10*(_x1*_x15 - _x13)],
+      dG_dq: [[_x76*(_x77 + _x58) + _x78, _x79], [_x76*_x77 + _x78, _x79]],
+      inverse_dynamics_tau: [_x56 + _x27*_x15 + l1*(_x6*(-_x26*_x10 + m2*(_x6*_x23 + _x1*_x18)) + _x1*(_x10*_x16 + _x80)) + _x81, _x81],
+      dtau_dq: [[-_x12*_x86 + _x15*_x84, -_x6*_x87 + _x1*_x83], [-_x12*_x77 + _x15*_x89, -_x6*_x90 + _x1*_x88]],
+      dtau_dqd: [[-_x45*_x84 + _x91, _x91], [-_x45*_x89, 0.0]],
+      dtau_dqdd: [[m1*_x0 + 2.0*_x4 + m2*_x0 + _x5, _x34], [_x34, _x5]],
+      forward_dynamics_qdd: [_x40, _x39],
+      dqdd_dq: [[_x100, _x104], [_x99, _x103]],
+      dqdd_dqd: [[_x108, _x111], [_x107, _x110]],
+      dqdd_dtau: [[_x114, _x115], [_x113, _x43]],
+      F: [_x120, _x121],
+      Mx: [[_x135, _x136], [_x136, _x137]],
+      Vx: [-_x68*_x135 - _x69*_x136 + _x129, -_x69*_x137 + _x133 - _x68*_x136],
+      Gx: [_x130, _x134],
+      k: 0.5*(_x34*theta1_d + _x5*theta2_d)*theta2_d + 0.5*((m1*_x0 + 2.0*_x4 + m2*_x0 + _x5)*theta1_d + _x34*theta2_d)*theta1_d,
+      u: (_x53 + _x49)*g*m2 + g*m1*_x53,
     };
   }
 

@@ -80,11 +80,18 @@ class Program:
         return [renamed(e) for e in reduced]
 
     def jacobian(self, outputs: Sequence[se.Basic], variables: Sequence[se.Symbol]) -> list[se.Basic]:
-        """Row-major d outputs_i / d variables_j by forward-mode differentiation of the program (Griewank and
-        Walther, Evaluating Derivatives, 2nd ed., sec. 3.1): each assignment's gradient is formed once from its
-        operands' gradients by the chain rule and named, so every later use shares it - the derivative program of
-        the straight-line program, O(len(variables)) times its length.  ``outputs``: expressions of the inputs
-        and assignments (e.g. what :meth:`bind` returned)."""
+        """Row-major d outputs_i / d variables_j of the program's outputs (expressions of the inputs and
+        assignments, e.g. what :meth:`bind` returned), by automatic differentiation of the straight-line program
+        (Griewank and Walther, Evaluating Derivatives, 2nd ed., chs. 3-4), its result named in the program so that
+        every later use shares it: forward mode (each assignment's gradient formed once from its operands'
+        gradients, O(len(variables)) times the program) where there are fewer variables than outputs, else
+        reverse mode (one adjoint sweep per output, each assignment's adjoint the sum of its uses' partials times
+        their adjoints, O(len(outputs)) times the program)."""
+        if len(outputs) < len(variables):
+            return self._reverse_jacobian(outputs, variables)
+        return self._forward_jacobian(outputs, variables)
+
+    def _forward_jacobian(self, outputs: Sequence[se.Basic], variables: Sequence[se.Symbol]) -> list[se.Basic]:
         index = {x: k for k, x in enumerate(variables)}
         position = {symbol: k for k, (symbol, _) in enumerate(self.assignments)}
         gradients: dict[se.Basic, dict[int, se.Basic]] = {}
@@ -104,6 +111,28 @@ class Program:
             gradients[symbol] = {k: self.let(value) for k, value in gradient(expr).items()}
         rows = [gradient(se.sympify(output)) for output in outputs]
         return [row.get(k, se.Integer(0)) for row in rows for k in range(len(variables))]
+
+    def _reverse_jacobian(self, outputs: Sequence[se.Basic], variables: Sequence[se.Symbol]) -> list[se.Basic]:
+        program = list(self.assignments)  # the sweeps run over these; the adjoints they name come after
+        position = {symbol: k for k, (symbol, _) in enumerate(program)}
+        wanted = set(variables)
+        rows = []
+        for output in outputs:
+            output = se.sympify(output)
+            adjoint: dict[se.Basic, se.Basic] = {}
+
+            def spread(expr: se.Basic, weight: se.Basic) -> None:
+                for symbol in sorted(expr.free_symbols, key=lambda s: (position.get(s, -1), str(s))):
+                    if symbol in position or symbol in wanted:
+                        adjoint[symbol] = adjoint.get(symbol, se.Integer(0)) + se.diff(expr, symbol) * weight
+
+            spread(output, se.Integer(1))
+            for symbol, expr in reversed(program):
+                weight = adjoint.pop(symbol, None)
+                if weight is not None and weight != 0:
+                    spread(expr, self.let(weight))
+            rows.append([adjoint.get(x, se.Integer(0)) for x in variables])
+        return [entry for row in rows for entry in row]
 
     def substitute(self, start: int, values: dict[se.Basic, se.Basic]) -> None:
         """Replace symbols by ``values`` in the assignments from position ``start`` on: evaluate what was built
