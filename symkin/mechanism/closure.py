@@ -35,8 +35,7 @@ from symkin.runtime.closure_dynamics import (ActuatedDynamics, actuated_dynamics
                                              closure_regressor)
 from symkin.runtime.info import GeneratedModel
 from symkin import mechanism
-from symkin.mechanism.limits import within_limits
-from symkin.mechanism.passive import declared_limits
+from symkin.mechanism.passive import AssemblyLimits, declared_limits
 from symkin.runtime.assembly import GeneratedAssembly
 from symkin.runtime.loader import LoadedModel
 from symkin.runtime.parallel import solve_closure
@@ -91,12 +90,7 @@ def within_declared_limits(model: GeneratedModel, q: np.ndarray, s: np.ndarray) 
     """Boolean (K,): the actuators q (K, n) within their declared limits (a coordinate without limits is free) and
     the passive joints s (K, ns) within theirs (``passive_limits``); angles are taken modulo 2 pi."""
     bounds = np.array(model.joint_limits, dtype=np.float64).reshape(-1, 2)
-    limited = np.all(np.isfinite(bounds), axis=1)
-    inside = within_limits(q[:, limited], bounds[limited], mechanism.revolute_mask(model)[limited])[1]
-    passive = declared_limits(model)
-    if passive is not None:
-        inside &= within_limits(s[:, passive.columns], passive.bounds, passive.revolute[passive.columns])[1]
-    return inside
+    return AssemblyLimits(bounds, mechanism.revolute_mask(model), declared_limits(model)).hold(q, s)
 
 
 def solve_home_assembly(model: GeneratedModel) -> HomeAssembly:

@@ -46,7 +46,6 @@ from symkin import mechanism, reporting
 from symkin.mechanism import Limits, passive
 from symkin.mechanism.closure import (MAX_STEP, SOLVE_ITERATIONS, SOLVE_TOLERANCE, HomeAssembly, closes,
                                       closure_sizes, solve_home_assembly, uses_closure)
-from symkin.mechanism.limits import within_limits
 from symkin.numerics import conditioning, sampling
 from symkin.runtime.info import GeneratedModel
 from symkin.runtime.parallel import ClosureFrames, closure_frames, closure_velocities, solve_closure
@@ -72,24 +71,15 @@ def _same_side(a: np.ndarray, b: np.ndarray) -> np.ndarray:
         return np.linalg.det(np.nan_to_num(np.swapaxes(a, -1, -2) @ b, nan=0.0)) > 0 if len(a) else np.zeros(0, bool)
 
 
-@dataclass(frozen=True)
-class _Limits:
-    """The actuators' limits (n, 2) and revolute mask, and the declared passive-joint limits (or None)."""
-
-    joints: np.ndarray
-    revolute: np.ndarray
-    passive: passive.PassiveLimits | None
-
-    def hold(self, q: np.ndarray, s: np.ndarray) -> np.ndarray:
-        inside = within_limits(q, self.joints, self.revolute)[1]
-        if self.passive is not None:
-            columns = self.passive.columns
-            inside &= within_limits(s[:, columns], self.passive.bounds, self.passive.revolute[columns])[1]
-        return inside
+def _limits(model: GeneratedModel, limits: Limits | None) -> passive.AssemblyLimits:
+    """What a continued assembly keeps: the actuators' limits (given, or the model's with a turn for a revolute joint
+    without any) and the declared passive-joint limits."""
+    return passive.AssemblyLimits(mechanism.joint_limits(model, limits), mechanism.revolute_mask(model),
+                                  passive.declared_limits(model))
 
 
 def _advance(model: GeneratedModel, q: np.ndarray, s: np.ndarray, frames: ClosureFrames, p: np.ndarray,
-             limits: _Limits) -> tuple[np.ndarray, np.ndarray, ClosureFrames, np.ndarray]:
+             limits: passive.AssemblyLimits) -> tuple[np.ndarray, np.ndarray, ClosureFrames, np.ndarray]:
     """(q, s, their closure frames, taken) at the poses p (K, m) solved from the neighbouring solutions (q, s)
     whose closure frames are ``frames``: taken where the solve converged within the limits and crossed no
     singularity.  The frames returned serve the next step from these solutions (computed once per solve)."""
@@ -105,7 +95,7 @@ def _advance(model: GeneratedModel, q: np.ndarray, s: np.ndarray, frames: Closur
 
 
 def _march(model: GeneratedModel, start: tuple[np.ndarray, np.ndarray, np.ndarray], targets: np.ndarray,
-           cell: float, limits: _Limits) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+           cell: float, limits: passive.AssemblyLimits) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(q, s, taken) at the poses ``targets`` (K, m) continued along straight paths from the assembly
     start = (q, s, p) (one assembly, or one per target: (K, n), (K, ns), (K, m)) in steps of at most a cell
     (positions) and :data:`ANGLE_STEP` (angles); taken is False where a path leaves the working mode (a limit, a
@@ -134,7 +124,7 @@ class _Flood:
 
 
 def _flood(model: GeneratedModel, poses: np.ndarray, shape: tuple[int, ...], seed: int, seed_solution: tuple,
-           limits: _Limits) -> _Flood:
+           limits: passive.AssemblyLimits) -> _Flood:
     """Breadth-first over the face neighbours of a grid of poses (prod(shape), m) from the reached cell
     ``seed``: each layer solves every unreached neighbour of the last layer from one of its reached
     neighbours in one batch (:func:`_advance`)."""
@@ -188,7 +178,7 @@ def _grid(template: np.ndarray, positions: np.ndarray, lower: np.ndarray, cell: 
     return _Grid(lower, cell, shape, poses)
 
 
-def _flood_grid(model: GeneratedModel, grid: _Grid, positions: np.ndarray, home: tuple, limits: _Limits) -> _Flood:
+def _flood_grid(model: GeneratedModel, grid: _Grid, positions: np.ndarray, home: tuple, limits: passive.AssemblyLimits) -> _Flood:
     """Flood ``grid`` from the cell nearest the home pose among the :data:`SEEDS` ** d nearest that a straight
     path from the home assembly reaches in the working mode (the nearest may lie beyond a limit the home pose
     is close to)."""
@@ -216,7 +206,7 @@ def _unbounded(model: GeneratedModel, lower: np.ndarray, upper: np.ndarray) -> V
 
 
 def _box(model: GeneratedModel, template: np.ndarray, positions: np.ndarray, home: tuple,
-         limits: _Limits) -> tuple[np.ndarray, np.ndarray]:
+         limits: passive.AssemblyLimits) -> tuple[np.ndarray, np.ndarray]:
     """A first box (lower, upper) around the working mode's positions: coarse floods (:data:`BOX_CELLS` a side)
     from a box around the home pose, doubled on the sides its reached cells touch, then shrunk to them."""
     centre = template[positions]
@@ -378,8 +368,7 @@ def continued_grid(model: GeneratedModel, *, orientation: dict[str, float] | Non
         q0, s0 = home_assembly.q, home_assembly.s
     else:
         q0, s0 = np.asarray(start[0], float), np.asarray(start[1], float)
-    bounds = _Limits(mechanism.joint_limits(model, limits), mechanism.revolute_mask(model),
-                     passive.declared_limits(model))
+    bounds = _limits(model, limits)
     home = (q0, s0, home_pose)
     if box is None:
         lower, upper = _box(model, template, positions, home, bounds)
@@ -447,8 +436,7 @@ def flood_box(model: GeneratedModel, lower: np.ndarray, upper: np.ndarray, count
     shape = tuple(int(c) for c in points)
     home_pose = mechanism.home_pose(model)
     grid = _grid(home_pose, positions, corner, cell, shape)
-    bounds = _Limits(mechanism.joint_limits(model, limits), mechanism.revolute_mask(model),
-                     passive.declared_limits(model))
+    bounds = _limits(model, limits)
     try:
         flood = _flood_grid(model, grid, positions, (np.asarray(start[0], float), np.asarray(start[1], float),
                                                      home_pose), bounds)
@@ -464,8 +452,7 @@ def continue_from(model: GeneratedModel, start: tuple[np.ndarray, np.ndarray, np
     """(q, s, taken) at the task poses ``targets`` (K, m), each continued along a straight path from the
     assembly start = (q, s, p) in steps of at most ``step`` (m; angles :data:`ANGLE_STEP`); taken is False where a
     path leaves the working mode (a limit, a singularity, legs that do not close)."""
-    bounds = _Limits(mechanism.joint_limits(model, limits), mechanism.revolute_mask(model),
-                     passive.declared_limits(model))
+    bounds = _limits(model, limits)
     return _march(model, start, np.asarray(targets, dtype=float), step, bounds)
 
 

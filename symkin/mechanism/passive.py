@@ -67,6 +67,31 @@ class PassiveLimits:
     bounds: np.ndarray
 
 
+@dataclass(frozen=True)
+class AssemblyLimits:
+    """The limits an assembly (q, s) of a parallel mechanism keeps: the actuators' and the declared passive joints'.
+
+    Attributes:
+        joints: (n, 2) the actuators' [lower, upper]; an actuator whose bounds are not finite is free.
+        revolute: (n,) which actuators are angles.
+        passive: the declared passive-joint limits, None where none are declared.
+    """
+
+    joints: np.ndarray
+    revolute: np.ndarray
+    passive: PassiveLimits | None
+
+    def hold(self, q: np.ndarray, s: np.ndarray) -> np.ndarray:
+        """Boolean (K,): the actuators q (K, n) and the passive joints s (K, ns) within their limits (angles taken
+        modulo 2 pi, :func:`~symkin.mechanism.limits.within_limits`)."""
+        limited = np.all(np.isfinite(self.joints), axis=1)
+        inside = within_limits(q[:, limited], self.joints[limited], self.revolute[limited])[1]
+        if self.passive is not None:
+            columns = self.passive.columns
+            inside &= within_limits(s[:, columns], self.passive.bounds, self.passive.revolute[columns])[1]
+        return inside
+
+
 def _passive_input(model: GeneratedModel) -> VectorInput:
     if "closure" in model.info.functions:
         return model.info.functions["closure"].vectors["s"]
