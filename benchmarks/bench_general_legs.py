@@ -10,6 +10,11 @@ entry points unless ``SYMKIN_C_ENTRY=ctypes``) and from a C loop
 (compiled here with the library's source); the DELTA its generated closed forms ``fk`` and ``jacobian``.  Issue
 63's targets: the Falcon's fk + J warm-started <= 5 us per call in C and <= 10 us from Python.
 
+Then the workspace of each device as ``symkin workspace DIR --backend c --no-figure`` computes it (its scene's
+functions, the C backend; the time the command reports, "done in"): the Falcon's home assembly continued over a
+Cartesian grid, the DELTA's joint space sampled through its closed-form fk.  Issue 63's target: the Falcon within
+3x of the DELTA.
+
 Run with `make bench` or `python benchmarks/bench_general_legs.py [--samples N]`.
 """
 
@@ -155,9 +160,23 @@ def main(argv: list[str] | None = None) -> int:
         seconds = _per_call(step, _path(centre, args.samples), args.repeat)
         rows.append(["Novint Falcon, generated assembly", "c, from Python", f"{1e6 * seconds:.2f}"])
         rows.append(["Novint Falcon, generated assembly", "c, from C", f"{_c_loop(folded, s, p, centre[0], args.samples, args.repeat):.2f}"])
+        workspace = [[device, f"{_workspace_seconds(model, Path(tmp) / 'scene'):.2f}"]
+                     for device, model in (("Novint Falcon (general legs, continued)", "devices/novint_falcon.yaml"),
+                                           ("DELTA (closed forms, sampled)", "delta.yaml"))]
     print(format_table(["device", "backend", "fk + J per call, warm (us)"], rows))
     print("issue 63's targets for the Falcon: <= 5 us per call in C, <= 10 us from Python")
+    print(format_table(["device", "symkin workspace --backend c (s)"], workspace))
+    print("issue 63's target: the Falcon's workspace within 3x of the DELTA's time")
     return 0
+
+
+def _workspace_seconds(model: str, out: Path) -> float:
+    """The time ``symkin workspace`` reports for the model file ``model`` (under models/), derived with its scene."""
+    directory = symkin.derive(ROOT / "models" / model, out)
+    run = subprocess.run([sys.executable, "-m", "symkin", "workspace", str(directory), "--backend", "c",
+                          "--no-figure"], capture_output=True, text=True, check=True)
+    done = [line for line in (run.stdout + run.stderr).splitlines() if line.strip().startswith("done in")]
+    return float(done[-1].split()[2])
 
 
 if __name__ == "__main__":

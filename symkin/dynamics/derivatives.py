@@ -37,29 +37,15 @@ from __future__ import annotations
 
 import symengine as se
 
-from symkin.dynamics import newton_euler
-from symkin.dynamics.coupling import forces_on_coordinates, joint_rates
-from symkin.dynamics.joint_forces import friction_graph, spring_torques
 from symkin.dynamics.linsolve import ldl_solve
 from symkin.dynamics.program import Program
-from symkin.dynamics.quantities import (BoundTerms, coordinate_symbols, function_spec, gravity_graph,
-                                        inverse_dynamics_spec, newton_euler_links, require_gravity)
+from symkin.dynamics.quantities import (BoundTerms, coordinate_symbols, function_spec, inverse_dynamics_spec,
+                                        require_gravity)
 from symkin.errors import DerivationError
 from symkin.ir.quantity import Deriving, quantity
 from symkin.ir.spec import FunctionSpec
 from symkin.kinematics.quantities import forward_kinematics, task_jacobian
 from symkin.symengine_bridge import to_symengine
-
-
-def torque_graph(d: Deriving) -> tuple[list[se.Basic], list[se.Basic] | None]:
-    """tau(q, qd, qdd) = M qdd + V + G + F_f on the coordinates as unbound SymEngine graphs: (the Newton-Euler
-    torques, gravity and the springs' included; the friction's F_f(qd), None without friction) (seed eq. 8.34)."""
-    model = d.model
-    tau = forces_on_coordinates(model, newton_euler.inverse_dynamics(
-        d[newton_euler_links], joint_rates(model, "qd"), joint_rates(model, "qdd"), d[gravity_graph]))
-    if model.springs:
-        tau = [a + b for a, b in zip(tau, d[spring_torques])]
-    return tau, d[friction_graph]
 
 
 def _without_sign_derivatives(value: se.Basic) -> se.Basic:
@@ -69,11 +55,13 @@ def _without_sign_derivatives(value: se.Basic) -> se.Basic:
     return value.subs({a: se.Integer(0) for a in derivatives}) if derivatives else value
 
 
-def torque_jacobian(d: Deriving, program: Program, variables: list[se.Symbol]) -> list[se.Basic]:
-    """The row-major entries d tau_i / d variables_j, named in ``program``: the Newton-Euler program bound and
+def torque_jacobian(terms: BoundTerms, variables: list[se.Symbol]) -> list[se.Basic]:
+    """The row-major entries d tau_i / d variables_j of tau = M qdd + V + G + F_f (seed eq. 8.34), named in the
+    terms' program: its Newton-Euler torques (gravity and the springs' included, :meth:`BoundTerms.newton_euler`)
     differentiated (:meth:`~symkin.dynamics.program.Program.jacobian`), plus the friction's derivative."""
-    rigid, friction = torque_graph(d)
-    entries = program.jacobian(program.bind(rigid), variables)
+    rigid = terms.newton_euler(velocity=True, acceleration=True, gravity=True)
+    entries = terms.program.jacobian(rigid, variables)
+    friction = terms.friction()
     if friction is None:
         return entries
     slopes = [_without_sign_derivatives(se.diff(f, x)) for f in friction for x in variables]
@@ -84,9 +72,10 @@ def torque_jacobian(d: Deriving, program: Program, variables: list[se.Symbol]) -
 def _inverse_dynamics_derivatives(d: Deriving) -> FunctionSpec:
     n = d.model.dof
     program = Program()
-    M = BoundTerms(d, program).mass_matrix()  # d tau/dqdd: the composite-rigid-body M (cheaper than tau's slope)
+    terms = BoundTerms(d, program)
+    M = terms.mass_matrix()  # d tau/dqdd: the composite-rigid-body M (cheaper than tau's slope)
     variables = [x for group in ("q", "qd") for x in coordinate_symbols(d, group)]
-    entries = program.bind(torque_jacobian(d, program, variables))
+    entries = program.bind(torque_jacobian(terms, variables))
     dq, dqd = ([entries[i * 2 * n + k * n + j] for i in range(n) for j in range(n)] for k in range(2))
     dqdd = [M[i][j] for i in range(n) for j in range(n)]
     return function_spec(
@@ -113,7 +102,7 @@ def _forward_dynamics_derivatives(d: Deriving) -> FunctionSpec:
     qdd = [row[0] for row in ldl_solve(program, M, [[t - b] for t, b in zip(tau, h)])]
     start = len(program.assignments)
     variables = [x for group in ("q", "qd") for x in coordinate_symbols(d, group)]
-    slopes = torque_jacobian(d, program, variables)
+    slopes = torque_jacobian(terms, variables)
     at_motion = dict(zip(coordinate_symbols(d, "qdd"), qdd))  # the derivative program at qdd = FD(q, qd, tau)
     program.substitute(start, at_motion)
     slopes = [entry.xreplace(at_motion) for entry in slopes]

@@ -84,13 +84,16 @@ class CasadiClosure:
         u = self._rootfinder(guess, q)
         return u[:self.ns], u[self.ns:]
 
+    def _blocks(self, q: Any, s: Any, p: Any) -> tuple[Any, Any]:
+        """(A, Phi_q) on the rows R: A = [Phi_s Phi_p], the closure's Jacobian in the unknowns u = (s, p)."""
+        blocks = self.call(self._jacobians, q=q, s=s, p=p)
+        return casadi.horzcat(blocks["Phi_s"], blocks["Phi_p"])[self.rows, :], blocks["Phi_q"][self.rows, :]
+
     def velocity_map(self, q: Any, s: Any, p: Any) -> tuple[Any, Any]:
         """(W, A) at an assembly: W = [I; -A^-1 Phi_q] ((n + ns + m) x n, zd = W qd) and A = [Phi_s Phi_p] on the
         rows R."""
-        blocks = self.call(self._jacobians, q=q, s=s, p=p)
-        A = casadi.horzcat(blocks["Phi_s"], blocks["Phi_p"])[self.rows, :]
-        W = casadi.vertcat(casadi.DM.eye(self.n), -casadi.solve(A, blocks["Phi_q"][self.rows, :]))
-        return W, A
+        A, Phi_q = self._blocks(q, s, p)
+        return casadi.vertcat(casadi.DM.eye(self.n), -casadi.solve(A, Phi_q)), A
 
     def accelerations(self, q: Any, s: Any, p: Any, qd: Any, qdd: Any) -> tuple[dict[str, Any], dict[str, Any], Any]:
         """(rates, accelerations, W) of the closure's variables at an assembly: {"qd", "sd", "pd"},
@@ -121,7 +124,7 @@ class CasadiClosure:
         residual = casadi.mmax(casadi.fabs(self.call(self._closure, q=q, s=s, p=p)["phi"]))
         closed = residual <= CLOSED * casadi.fmax(1, casadi.mmax(casadi.fabs(p)))
         s0, p0 = guess[:self.ns], guess[self.ns:]
-        _, A0 = self.velocity_map(q, s0, p0)
+        A0, _ = self._blocks(q, s0, p0)
         first = casadi.solve(A0, self.call(self._closure, q=q, s=s0, p=p0)["phi"][self.rows])
         jump = casadi.mmax(casadi.fabs(casadi.vertcat(s, p) - guess)) > 2 * casadi.mmax(casadi.fabs(first))
 
