@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import symengine as se
 
-from symkin.dynamics.program import cross, se_matrix, se_vector
+from symkin.dynamics.program import se_matrix, se_vector
 from symkin.kinematics.chain import ChainFrames
 from symkin.model import joint_kinds, tree
 from symkin.model.schema import Model
@@ -75,11 +75,9 @@ def body_jacobians(model: Model, chain: ChainFrames) -> tuple[BodyJacobians, ...
                 linear.append(ZERO3)
                 angular.append(ZERO3)
                 continue
-            # the joint's twist per unit rate (w, v) at a point of its axis, moved to the centre of mass:
-            # v + w x (com - point) (the motion subspace of its kind: w = z, v = 0 turning; w = 0, v = z sliding)
-            w, v = joint_kinds.motion_subspace(jtype, z, ZERO3)
-            linear.append(ZERO3 if massless else
-                          tuple(a + b for a, b in zip(v, cross(w, [com[r] - point[r] for r in range(3)]))))
+            # the joint's twist per unit rate at the centre of mass
+            velocity, w = joint_kinds.twist_column(jtype.turns, z, point, com)
+            linear.append(ZERO3 if massless else tuple(velocity))
             # R^T w: the joint's angular velocity in the body's link axes.
             angular.append(tuple(sum((R[s][r] * w[s] for s in range(3)), se.Integer(0)) for r in range(3)))
         inertia = None if body.is_point_mass else tuple(tuple(row) for row in se_matrix(body.inertia))

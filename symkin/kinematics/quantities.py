@@ -84,9 +84,8 @@ def _point_jacobian(d: Deriving, chain: ChainFrames, coupling: sympy.Matrix | No
         if k not in moving:  # a joint on another branch
             columns.append(sympy.zeros(6, 1))
             continue
-        angular, linear = joint_kinds.motion_subspace(axis.type, sympy.Matrix(axis.direction))
-        # the joint's twist moved from a point on its axis to the frame: v = w x (p - p_axis) + v_axis
-        columns.append((angular.cross(point - sympy.Matrix(axis.point)) + linear).col_join(angular))
+        linear, angular = joint_kinds.twist_column(axis.type.turns, axis.direction, axis.point, point)
+        columns.append(sympy.Matrix(linear + angular))
     J = sympy.Matrix.hstack(*columns)
     return sympy.ImmutableMatrix(J if coupling is None else J * coupling)
 

@@ -11,6 +11,7 @@ branches not yet moved here).
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 from enum import Enum
 from typing import Any
@@ -113,3 +114,17 @@ def motion_subspace(joint_type: str | Enum, axis: Any, zero: Any = None) -> tupl
     caller's vector type (default a sympy column; SymEngine lists in the dynamics)."""
     zero = sympy.zeros(3, 1) if zero is None else zero
     return (axis, zero) if is_rotation(joint_type) else (zero, axis)
+
+
+def twist_column(rotation: bool, direction: Iterable[Any], axis_point: Iterable[Any], point: Iterable[Any]
+                 ) -> tuple[list[Any], list[Any]]:
+    """(linear, angular) velocity of the frame at ``point`` per unit rate of one elementary joint motion - a rotation
+    about (``rotation``) or a translation along the unit ``direction`` through ``axis_point``: the motion subspace
+    (w, v) = (z, 0) or (0, z) moved from the axis to the point, v + w x (point - axis_point) (Featherstone 2008,
+    eq. 2.21) - one column of a geometric Jacobian, as 3-lists of the callers' scalars (sympy, SymEngine, numpy)."""
+    z = list(direction)
+    zero = [component * 0 for component in z]
+    if not rotation:
+        return z, zero
+    r = [a - b for a, b in zip(point, axis_point)]
+    return [z[1] * r[2] - z[2] * r[1], z[2] * r[0] - z[0] * r[2], z[0] * r[1] - z[1] * r[0]], z

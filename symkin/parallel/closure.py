@@ -36,6 +36,7 @@ import sympy
 
 from symkin.geometry import skew
 from symkin.kinematics.chain import Frame
+from symkin.model import joint_kinds
 from symkin.parallel.legs import LegChain
 
 
@@ -71,13 +72,9 @@ class LegClosure:
         """d residual / d joint variable, for every joint variable of the leg."""
         out = {}
         for motion in self.chain.motions:
-            w = sympy.Matrix(motion.direction)
-            if motion.rotation:
-                d_position = w.cross(self.p_end - sympy.Matrix(motion.point))
-                d_E = self.T.T * skew(w) * self.R_end
-            else:
-                d_position, d_E = w, sympy.zeros(3, 3)
-            out[motion.variable] = self._rows(d_position, d_E)
+            d_position, w = joint_kinds.twist_column(motion.rotation, motion.direction, motion.point, self.p_end)
+            d_E = self.T.T * skew(sympy.Matrix(w)) * self.R_end
+            out[motion.variable] = self._rows(sympy.Matrix(d_position), d_E)
         return out
 
     def task_derivatives(self, task: tuple[sympy.Symbol, ...]) -> dict[sympy.Symbol, list[sympy.Expr]]:

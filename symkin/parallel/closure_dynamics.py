@@ -36,7 +36,7 @@ from symkin.errors import DerivationError
 from symkin.ir.inputs import coordinate_input
 from symkin.ir.quantity import Deriving, quantity
 from symkin.ir.spec import FunctionSpec, InputSpec, OutputSpec, make_function
-from symkin.model import coordinates
+from symkin.model import coordinates, joint_kinds
 from symkin.model.schema import Model, ParallelBodies
 from symkin.dynamics.parameter_names import DRIVE, INERTIAL
 from symkin.dynamics.regressor import drive_columns, drive_values
@@ -82,13 +82,8 @@ def _link_mass_matrix(body: Triple, chain: LegChain, joint: int, index: dict[sym
     moved = sum(len(j.variables) for j in chain.leg.joints[:joint + 1])
     Jv, Jw = sympy.zeros(3, size), sympy.zeros(3, size)
     for motion in chain.motions[:moved]:
-        w = sympy.Matrix(motion.direction)
-        column = index[motion.variable]
-        if motion.rotation:
-            Jv[:, column] = w.cross(origin - sympy.Matrix(motion.point))
-            Jw[:, column] = w
-        else:
-            Jv[:, column] = w
+        linear, angular = joint_kinds.twist_column(motion.rotation, motion.direction, motion.point, origin)
+        Jv[:, index[motion.variable]], Jw[:, index[motion.variable]] = linear, angular
     r = R * first_moment
     A = Jv.T * skew(r).T * Jw
     return mass * Jv.T * Jv + A + A.T + Jw.T * (R * inertia * R.T) * Jw, mass * origin + r

@@ -24,7 +24,7 @@ import sympy
 
 from symkin.derivation import Derivation
 from symkin.errors import ModelError
-from symkin.model import coordinates
+from symkin.model import coordinates, joint_kinds
 from symkin.model.schema import Model
 from symkin.parallel.assembly import STARTS, assembler
 from symkin.parallel.inputs import passive_symbols, task_symbols
@@ -89,7 +89,8 @@ def _joint_twists(structure: ParallelStructure, values: dict[sympy.Symbol, float
         for motion in chain.motions:
             a = np.array(sympy.Matrix(motion.direction).xreplace(values).evalf(), dtype=float).ravel()
             r = np.array(sympy.Matrix(motion.point).xreplace(values).evalf(), dtype=float).ravel()
-            twist = np.concatenate([a, np.cross(r, a)]) if motion.rotation else np.concatenate([np.zeros(3), a])
+            linear, angular = joint_kinds.twist_column(motion.rotation, a, r, np.zeros(3))  # at the base origin
+            twist = np.concatenate([angular, linear])
             twists.append((twist, motion.variable in actuated))
         out.append(twists)
     return out

@@ -7,9 +7,11 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
+import numpy as np
 import pytest
 import sympy
 
+from symkin.geometry import rotation_matrix
 from symkin.model import joint_kinds
 from symkin.model.schema import Joint, JointType, LegJointType, Rotation, Translation
 
@@ -110,3 +112,34 @@ def test_frame_walkers_leave_the_motion_to_the_joint(module):
     text = (PACKAGE / module).read_text(encoding="utf-8")
     assert ".motion(" in text
     assert ".turns" not in text, f"{module} branches on the joint's kind: move the frame by joint.motion(amount)"
+
+
+def test_a_twist_column_is_the_rate_of_a_moved_point():
+    """twist_column: the velocity of a point per unit rate of a rotation about an axis through another point (the
+    derivative of Rodrigues' rotation at zero) or of a translation along it, in sympy and numpy scalars alike."""
+    angle, length = sympy.symbols("angle length")
+    axis = sympy.Matrix([2, -1, 2]) / 3
+    through, point = sympy.Matrix([1, 2, -1]), sympy.Matrix([sympy.Rational(1, 2), 3, 4])
+    turned = rotation_matrix(tuple(axis), angle) * (point - through) + through
+    slid = point + length * axis
+    for rotation, moved, amount in ((True, turned, angle), (False, slid, length)):
+        linear, angular = joint_kinds.twist_column(rotation, axis, through, point)
+        assert sympy.simplify(sympy.Matrix(linear) - moved.diff(amount).subs(amount, 0)) == sympy.zeros(3, 1)
+        assert sympy.Matrix(angular) == (axis if rotation else sympy.zeros(3, 1))
+        numeric = joint_kinds.twist_column(rotation, np.array(axis, dtype=float).ravel(),
+                                           np.array(through, dtype=float).ravel(), np.array(point, dtype=float).ravel())
+        assert np.allclose(np.concatenate(numeric), np.array(sympy.Matrix(linear + angular), dtype=float).ravel(),
+                           rtol=0, atol=8 * np.finfo(float).eps)
+
+
+#: The Jacobian columns of joints (serial chains, legs, bodies, the platform-motion check): each asks
+#: joint_kinds.twist_column instead of transporting a motion subspace itself.
+TWIST_COLUMNS = ("kinematics/quantities.py", "dynamics/bodies.py", "parallel/closure.py",
+                 "parallel/closure_dynamics.py", "parallel/motion_check.py")
+
+
+@pytest.mark.parametrize("module", TWIST_COLUMNS)
+def test_jacobian_columns_come_from_the_joint_kind(module):
+    text = (PACKAGE / module).read_text(encoding="utf-8")
+    assert "joint_kinds.twist_column(" in text
+    assert ".rotation else" not in text, f"{module} branches on a motion's kind: ask joint_kinds.twist_column"
