@@ -45,6 +45,9 @@ class NewtonReport:
         return bool(np.all(self.converged))
 
 
+#: A stalled sample (``stall``): its residual fell by less than this factor over the steps looked back on.
+STALL_DECREASE = 0.9
+
 #: A tall Jacobian counts as of full column rank when its smallest pivot |R_ii| (A = QR) is
 #: above this fraction of its largest.
 _FULL_RANK = 1e-10
@@ -94,7 +97,7 @@ def newton_steps(A: np.ndarray, r: np.ndarray) -> np.ndarray:
 
 
 def newton_iterate(start: np.ndarray, equations: Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]],
-             tol: float, max_iterations: int, max_step: float | None = None) -> NewtonReport:
+             tol: float, max_iterations: int, max_step: float | None = None, stall: int | None = None) -> NewtonReport:
     """Newton iteration x <- x - A(x)^-1 r(x) (Gauss-Newton -A^+ r where A is not square) on a batch (..., k) of
     unknowns, reported per sample (:class:`NewtonReport`).
 
@@ -102,6 +105,13 @@ def newton_iterate(start: np.ndarray, equations: Callable[[np.ndarray, np.ndarra
     batch) at their unknowns x (len(rows), k); only the samples still iterating are evaluated.
     With ``max_step`` the iteration is damped: a step longer than that (max-norm) is scaled
     down to it, so a start near one solution does not jump to another far away.
+
+    With ``stall`` a sample also stops, not converged, once its residual (max-norm) has fallen by less than
+    :data:`STALL_DECREASE` over its last ``stall`` steps: from a start in a solution's basin the (damped) Newton
+    iterates decrease the residual (Deuflhard, Newton Methods for Nonlinear Problems, 2004, sec. 3.3, the
+    monotonicity test), so a residual that stagnates for several steps says the start is outside it - the
+    iteration circles near a singularity or settles on a least-squares minimum - and the steps left would be
+    spent on a sample that does not converge (a continuation's cells beyond the workspace).
     """
     batch = start.shape[:-1]
     x = np.array(start, dtype=float, copy=True).reshape(-1, start.shape[-1])
@@ -117,11 +127,17 @@ def newton_iterate(start: np.ndarray, equations: Callable[[np.ndarray, np.ndarra
     iterations = np.zeros(count, dtype=int)
     step_norm = np.full(count, np.inf)
     active = np.ones(count, dtype=bool)
-    for _ in range(max_iterations):
+    residuals = np.full((count, max_iterations), np.inf) if stall else np.zeros((0, 0))
+    for iteration in range(max_iterations):
         rows = np.flatnonzero(active)
         if not len(rows):
             break
         r, A = flat_equations(rows)
+        stalled = np.zeros(len(rows), dtype=bool)
+        if stall:
+            residuals[rows, iteration] = np.max(np.abs(r), axis=-1, initial=0.0)
+            if iteration >= stall:
+                stalled = residuals[rows, iteration] > STALL_DECREASE * residuals[rows, iteration - stall]
         step = newton_steps(A, r)
         with np.errstate(invalid="ignore"):
             norm = np.max(np.abs(step), axis=-1)
@@ -134,7 +150,7 @@ def newton_iterate(start: np.ndarray, equations: Callable[[np.ndarray, np.ndarra
         step_norm[rows] = norm
         done = moved & (norm <= tol)
         converged[rows[done]] = True
-        active[rows[~moved | done]] = False
+        active[rows[~moved | done | stalled]] = False
     r, _ = flat_equations(np.arange(count))
     residual = np.max(np.abs(r), axis=-1) if count else np.zeros(0)
     converged &= np.isfinite(residual)

@@ -63,6 +63,10 @@ BOX_GROWTHS = 3
 SEEDS = 3
 #: Largest change of a held angle (rad) per step of the path from the home pose to the first cell.
 ANGLE_STEP = 0.05
+#: A solve from a neighbour gives up once its residual stagnates over this many steps (a cell beyond the workspace:
+#: :func:`symkin.newton.newton_iterate`'s ``stall``); from a cell a step away Gauss-Newton's residual falls at every
+#: step.
+STALL = 4
 
 
 def _same_side(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -84,7 +88,7 @@ def _advance(model: GeneratedModel, q: np.ndarray, s: np.ndarray, frames: Closur
     whose closure frames are ``frames``: taken where the solve converged within the limits and crossed no
     singularity.  The frames returned serve the next step from these solutions (computed once per solve)."""
     report = solve_closure(model, q, s, p, unknowns=("q", "s"), tol=SOLVE_TOLERANCE, max_iterations=SOLVE_ITERATIONS,
-                           max_step=MAX_STEP)
+                           max_step=MAX_STEP, stall=STALL)
     solution = report.solution
     assert isinstance(solution, dict), "solve_closure names its vectors"
     q1, s1 = solution["q"], solution["s"]

@@ -79,7 +79,7 @@ def solve_fk(model: GeneratedModel, q, p0=None, *, tol: float = 1e-12, max_itera
 
 
 def solve_closure(model: GeneratedModel, q, s, p, *, unknowns: tuple[str, ...] = ("p", "s"), tol: float = 1e-12,
-                  max_iterations: int = 50, max_step: float | None = None) -> NewtonReport:
+                  max_iterations: int = 50, max_step: float | None = None, stall: int | None = None) -> NewtonReport:
     """Solve the generated loop closure phi(q, s, p) = 0 for some of its vectors (any leg topology).
 
     Gauss-Newton on the generated ``closure`` and ``closure_jacobians``: the unknown
@@ -96,6 +96,7 @@ def solve_closure(model: GeneratedModel, q, s, p, *, unknowns: tuple[str, ...] =
         tol: converged when a step is at most this large (max-norm).
         max_iterations: give up after this many steps.
         max_step: damping: steps longer than this (max-norm) are shortened to it.
+        stall: stop a sample whose residual stagnates over this many steps (:func:`symkin.newton.newton_iterate`).
 
     Returns:
         The report; ``solution`` maps every vector name to its value (unknowns NaN where not
@@ -126,7 +127,7 @@ def solve_closure(model: GeneratedModel, q, s, p, *, unknowns: tuple[str, ...] =
         return phi, np.concatenate([np.asarray(blocks[name]) for name in order], axis=-1)
 
     start = np.concatenate([values[name] for name in order], axis=-1)
-    report = newton_iterate(start, equations, tol, max_iterations, max_step)
+    report = newton_iterate(start, equations, tol, max_iterations, max_step, stall)
     return NewtonReport(unpack(np.asarray(report.solution)), report.converged, report.iterations, report.residual, report.step)
 
 
