@@ -40,12 +40,13 @@ over fixed sample points, so the objective is a smooth function of the design:
 * ``gci`` of a parallel model without closed forms (legs analysed through their loop closure,
   :mod:`symkin.analysis.continued_workspace`): the same mean of 1/kappa_F over a midpoint grid of the
   required box of positions, the angles held at the home pose's; each point p_j has its assembly
-  (q_j, s_j) as decision variables, constrained by the generated closure phi(q_j, s_j, p_j) = 0 (the rows
-  that are identically zero, e.g. a Schoenflies platform's roll and pitch rows, dropped: IPOPT needs
-  independent equality constraints), and J_j = dp/dq from Phi_p dp + Phi_s ds = -Phi_q dq by least
-  squares, [dp; ds] = -(A^T A)^-1 A^T Phi_q dq with A = [Phi_p Phi_s] (exact at an assembled pose where
-  A has full column rank: J is determined); roll-pitch-yaw rows as angular velocity (E(p) J) where the
-  task space has all three, position rows divided by the characteristic length.
+  (q_j, s_j) as decision variables, constrained by the generated closure phi(q_j, s_j, p_j) = 0 on its rows
+  R independent at the start design's home assembly (rows that vanish identically, e.g. a Schoenflies
+  platform's roll and pitch rows, or repeat others are left out: IPOPT needs independent equality
+  constraints), and J_j = dp/dq the p-part of -A^-1 Phi_q, A = [Phi_s Phi_p] on the rows R - the run-time
+  mechanism's CasADi counterpart (:class:`symkin.mechanism.casadi_assembly.CasadiAssembly`, the design's
+  lengths as symbols); roll-pitch-yaw rows as angular velocity (E(p) J) where the task space has all three,
+  position rows divided by the characteristic length.
 
 Constraints (the required box, inflated by the margin, sampled on a vertex grid with its
 corners): a serial model's box configurations q_b satisfy fk(q_b) = p_b within the joint
@@ -78,6 +79,7 @@ from symkin.rating import forces
 from symkin import mechanism
 from symkin.mechanism import Sampling, continuation
 from symkin.mechanism import passive, stops
+from symkin.mechanism.casadi_assembly import CasadiAssembly
 from symkin.mechanism.limits import within_limits
 from symkin.design import smooth
 from symkin.design.problem import DesignProblem
@@ -535,16 +537,10 @@ def _assembly_terms(problem: DesignProblem, casadi_model: GeneratedModel, numpy_
     p = sampling.grid(*problem.required_box, per_axis)
     corners = sampling.grid(*problem.inflated_box, box_points, midpoints=False)
     targets = poses(np.concatenate([corners, p]))
-    inputs = numpy_model.info.functions["closure"].inputs
-    n, ns, m = (int(inputs[k].shape[0]) for k in range(3))
+    assembly = CasadiAssembly.at_home(casadi_model, numpy_model.bind(**problem.start), values)
+    n, ns, m = assembly.n, assembly.ns, assembly.m
     q, s, pose = casadi.SX.sym("q", n), casadi.SX.sym("s", ns), casadi.SX.sym("p", m)
-    arguments = {"q": q, "s": s, "p": pose, **values}
-    phi = _call(casadi_function(casadi_model, "closure"), arguments)[0]
-    rows = [i for i in range(phi.numel()) if not phi[i].is_zero()]
-    Phi_p, Phi_q, Phi_s = (block[rows, :] for block in _call(casadi_function(casadi_model, "closure_jacobians"),
-                                                                arguments))
-    A = casadi.horzcat(Phi_p, Phi_s)
-    J = casadi.solve(casadi.mtimes(A.T, A), -casadi.mtimes(A.T, Phi_q))[:m, :]
+    J = assembly.jacobian(q, s, pose)
     if {"roll", "pitch", "yaw"} <= set(task):
         angles = [task.index(c) for c in ("roll", "pitch", "yaw")]
         rates = casadi.SX.eye(m)
@@ -554,23 +550,22 @@ def _assembly_terms(problem: DesignProblem, casadi_model: GeneratedModel, numpy_
     node = casadi.vertcat(q, s, pose)
     assemblies = casadi.MX.sym("assemblies", n + ns, len(targets))
     columns = casadi.vertcat(assemblies, casadi.DM(targets.T))
-    residuals = _mapped(_node_function("closure_rows", node, free, phi[rows]), columns, design)
+    residuals = _mapped(_node_function("assembly_rows", node, free, assembly.residual(q, s, pose)), columns, design)
     index = _node_function("inverse_frobenius", node, free, smooth.inverse_frobenius(J))
     objective = casadi.sum2(_mapped(index, columns[:, len(corners):], design)) / len(p)  # the midpoints only
     lower, upper = _assembly_bounds(problem, numpy_model, n, ns)
     start = _assembly_starts(problem, numpy_model, targets, lower, upper)
     stop_rows, stop_lower, stop_upper = _within_stops(numpy_model, assemblies[:n, :])
-    zeros = np.zeros(len(rows) * len(targets))
+    zeros = np.zeros(len(assembly.rows) * len(targets))
     held = ", ".join(f"{c} = {template[k]:g}" for k, c in enumerate(task) if not positions[k])
     description = (f"Frobenius GCI surrogate: mean 1/kappa_F over a {per_axis}^{p.shape[1]} midpoint grid of the "
                    f"required box ({held} held; position rows divided by L = {problem.length:g} m)"
                    if problem.length is not None else
                    f"Frobenius GCI surrogate: mean 1/kappa_F over a {per_axis}^{p.shape[1]} midpoint grid of the "
                    "required box")
-    description += (f", J by least squares from the closure at each point's assembly (q, s), a decision variable; "
-                    f"the box is required at {len(targets)} points (the {len(rows)} closure rows that are not "
-                    "identically zero = 0, the joints within their limits and stops, started in the home "
-                    "assembly's working mode)")
+    description += (f", J from the closure at each point's assembly (q, s), a decision variable; the box is "
+                    f"required at {len(targets)} points (the closure's {len(assembly.rows)} independent rows = 0, the "
+                    "joints within their limits and stops, started in the home assembly's working mode)")
     return _Terms(objective, casadi.vertcat(casadi.vec(residuals), stop_rows), np.concatenate([zeros, stop_lower]),
                   np.concatenate([zeros, stop_upper]), casadi.vec(assemblies), start.ravel(),
                   np.tile(lower, len(targets)), np.tile(upper, len(targets)), p, targets[:, positions], description,

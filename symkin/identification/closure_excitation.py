@@ -3,9 +3,9 @@ optimizer (:mod:`symkin.identification.excitation`).
 
 Such legs have no fk: at each sample the passive joints and the pose u = (s, p) solve the closure
 Phi_R(q, u) = 0 (R: as many of its rows as u has entries, independent at the home assembly:
-:func:`symkin.mechanism.casadi_closure.independent_rows`) by CasADi's Newton rootfinder from a guess - the start
+:func:`symkin.mechanism.casadi_assembly.independent_rows`) by CasADi's Newton rootfinder from a guess - the start
 motion's assembly, continued numerically along it - so that IPOPT differentiates through the implicit function
-(du/dq = -A^-1 Phi_q, A = Phi_u; :class:`symkin.mechanism.casadi_closure.CasadiClosure`).  There
+(du/dq = -A^-1 Phi_q, A = Phi_u; :class:`symkin.mechanism.casadi_assembly.CasadiAssembly`).  There
 
     W = [I; -A^-1 Phi_q],   zd = W qd,   zdd = W qdd + [0; -A^-1 gamma(z, zd)],   Y = W^T Y_z,b(z, zd, zdd),
 
@@ -21,7 +21,7 @@ import casadi
 import numpy as np
 
 from symkin.backends.casadi.loader import casadi_function
-from symkin.mechanism.casadi_closure import CasadiClosure
+from symkin.mechanism.casadi_assembly import CasadiAssembly
 from symkin.mechanism.closure import ClosureAssembly
 from symkin.runtime.info import GeneratedModel
 
@@ -61,9 +61,9 @@ def assembled_factor(closure: ClosureAssembly, motion: Callable[[float], np.ndar
 
 def regressor_function(model: GeneratedModel, rows: list[int]) -> casadi.Function:
     """(Y_b, pi_b)(q, qd, qdd, guess): W^T Y_z,b (n x columns) at the assembly u = (s, p) that the rootfinder finds
-    from ``guess`` (the module docstring; :class:`symkin.mechanism.casadi_closure.CasadiClosure`), and pi_b, the
+    from ``guess`` (the module docstring; :class:`symkin.mechanism.casadi_assembly.CasadiAssembly`), and pi_b, the
     model's parameters at their (bound) values (the outputs of a generated base_regressor)."""
-    closure = CasadiClosure(model, rows)
+    closure = CasadiAssembly(model, rows)
     q, qd, qdd = (casadi.MX.sym(name, closure.n) for name in ("q", "qd", "qdd"))
     guess = casadi.MX.sym("guess", closure.ns + closure.m)
     s, p = closure.assembly(q, guess)

@@ -45,7 +45,7 @@ from symkin.identification import closure_excitation, excitation_bounds
 from symkin.backends.casadi.loader import casadi_function
 from symkin.design.solving import IPOPT_OPTIONS, IterationReport
 from symkin.runtime.info import GeneratedModel
-from symkin.mechanism.casadi_closure import independent_rows
+from symkin.mechanism.casadi_assembly import independent_rows
 from symkin.mechanism.closure import ClosureAssembly
 
 #: How much of each joint range the start's motion uses (a small motion about the middle of the limits).

@@ -7,7 +7,7 @@ joint limits, :mod:`symkin.mechanism.passive` closes a parallel mechanism's pass
 solve, :func:`symkin.runtime.parallel.solve_closure`) and checks their limits,
 :mod:`symkin.mechanism.working_mode` assembles a mechanism with closed forms in its declared branches,
 :mod:`symkin.mechanism.closure` one of any leg topology from its generated closure alone (home assembly,
-continuation along the actuators, the dynamics of the actuated joints) and :mod:`symkin.mechanism.casadi_closure`
+continuation along the actuators, the dynamics of the actuated joints) and :mod:`symkin.mechanism.casadi_assembly`
 its CasADi counterpart (the assembly as a differentiable function of the actuators, for the optimization programs;
 the one module here that imports CasADi), :mod:`symkin.mechanism.reach` answers the
 Cartesian analyses' questions for every kind (the box around the workspace, reachability through inverse

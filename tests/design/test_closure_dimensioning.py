@@ -2,7 +2,7 @@
 platform has only its generated loop closure.
 
 Oracles independent of the CasADi program: the numpy runtime's ``closure_velocities`` (J from the orthogonal
-complement of range(Phi_s) and an SVD, where the program takes least squares on [Phi_p Phi_s]) with
+complement of range(Phi_s) and an SVD, where the program solves [Phi_s Phi_p] on the closure's independent rows) with
 ``symkin.numerics.conditioning`` at the program's points; central differences of that numpy surrogate at the
 optimum (stationary: its free lengths end inside their bounds); Gauss-Newton continuation of the optimum's home
 assembly to every point (the optimizer's assemblies stay in the working mode it started in); the independent
@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import json
 
+import casadi
 import numpy as np
 import pytest
 
@@ -22,10 +23,11 @@ from symkin.numerics import conditioning
 from symkin import mechanism
 from symkin.mechanism.continuation import angular_rates, continue_from
 from symkin.cli import main
+from symkin.mechanism.casadi_assembly import CasadiAssembly
 from symkin.design.evaluation import continued_home
 from symkin.model import model_from_text
 from symkin.runtime.parallel import closure_velocities, solve_closure
-from tolerances import NEWTON, svd
+from tolerances import KINEMATICS, NEWTON, svd
 
 BOX = {"x": (-0.1, 0.1), "y": (0.25, 0.35), "z": (0.05, 0.15)}
 STROKE = {"lift1": (0.0, 0.2)}
@@ -87,15 +89,16 @@ def _numpy_surrogate(model, program, assemblies):
 
 def test_the_surrogate_is_the_mean_inverse_frobenius_of_the_closure_jacobian(models, problem, program):
     """At the start design: the program's start assemblies close the legs, and its surrogate is numpy's mean
-    1/kappa_F.  Tolerance: J by the normal equations carries KINEMATICS kappa(A)^2 relative; 1/kappa_F moves by at
-    most 2 kappa(J_h) times J's relative error (||J||_F and ||J^-1||_F each), plus two SVD-free evaluations."""
+    1/kappa_F.  Tolerance: J by a square solve on the closure's independent rows (those of A below) carries
+    KINEMATICS kappa(A) relative; 1/kappa_F moves by at most 2 kappa(J_h) times J's relative error (||J||_F and
+    ||J^-1||_F each), plus two SVD-free evaluations."""
     numpy_model = models[0].bind(**problem.start)
     assemblies = _assemblies(program, program.x0)
     poses = _poses(numpy_model, program.box_points)
     residual = numpy_model.closure(assemblies[:, :4], assemblies[:, 4:], poses)
     assert np.max(np.abs(residual)) <= NEWTON * SCALE
     expected, kappa_A, kappa_J = _numpy_surrogate(numpy_model, program, assemblies)
-    assert abs(program.surrogate(program.x0) - expected) <= 2 * kappa_J * kappa_A**2 * NEWTON + svd(4)
+    assert abs(program.surrogate(program.x0) - expected) <= 2 * kappa_J * kappa_A * NEWTON + svd(4)
 
 
 def _surrogate_at(model, program, assemblies, design_values):
@@ -158,7 +161,7 @@ def test_the_command_dimensions_the_model_file_and_refuses_what_does_not_apply(t
     result = json.loads((out / "result.json").read_text())
     assert result["evaluation"]["optimum"]["gci"] > result["evaluation"]["start"]["gci"]
     assert result["evaluation"]["optimum"]["box_reachable"] == 1.0
-    assert "least squares from the closure" in capsys.readouterr().out
+    assert "J from the closure at each point's assembly" in capsys.readouterr().out
     for extra, message in ((["--maximize", "force", "--length", "0.2"], "without force objectives"),
                            ([], "give a characteristic length")):
         with pytest.raises(SystemExit) as exit_info:
@@ -184,3 +187,30 @@ def test_every_points_assembly_keeps_the_joint_stops(solution, tmp_path):
     theta1 = stopped_solution.box_configurations[:, 0]
     assert theta1.max() <= bound + 1e-9
     assert theta1.max() == pytest.approx(bound, abs=1e-6)
+
+
+def test_the_programs_assembly_is_the_run_time_mechanisms(models, problem):
+    """The program's closure terms come from the run-time mechanism's CasADi counterpart with the free lengths as
+    symbols: its rows are the closure's rows that do not vanish identically, and at the start design its J (a
+    function of the symbols) is numpy's closure_velocities J at the home assembly, to KINEMATICS kappa(A)."""
+    numpy_model, casadi_model = models
+    design_values = problem.design([problem.start[p.name] for p in problem.free])
+    symbols = {p.name: casadi.SX.sym(p.name) for p in problem.free}
+    assembly = CasadiAssembly.at_home(casadi_model, numpy_model.bind(**problem.start), {**design_values, **symbols})
+    assert assembly.rows == CLOSURE_ROWS
+    bound = numpy_model.bind(**design_values)
+    q, s = continued_home(problem, numpy_model, design_values)
+    p = mechanism.home_pose(bound)
+    J = casadi.Function("J", list(symbols.values()), [assembly.jacobian(q, s, p)])
+    J = J(*design_values_of(symbols, design_values)).full()
+    expected = closure_velocities(bound, q, s, p).J
+    blocks = bound.closure_jacobians(q, s, p)
+    kappa = float(np.linalg.cond(np.concatenate([blocks.Phi_s, blocks.Phi_p], axis=-1)[CLOSURE_ROWS]))
+    np.testing.assert_allclose(J, expected, rtol=0, atol=kappa * KINEMATICS * np.abs(expected).max())
+    residual = casadi.Function("phi", list(symbols.values()), [assembly.residual(q, s, p)])
+    assert np.max(np.abs(residual(*design_values_of(symbols, design_values)).full())) <= NEWTON * SCALE
+
+
+def design_values_of(symbols, design_values):
+    """The values of the symbols' parameters, in the symbols' order."""
+    return [design_values[name] for name in symbols]

@@ -1,5 +1,5 @@
 """The closure in CasADi (issue 62's CasADi counterpart of the run-time assembly; issue 63's differentiable fk and J
-of legs of any topology): :class:`symkin.mechanism.casadi_closure.CasadiClosure` on the Novint Falcon's legs
+of legs of any topology): :class:`symkin.mechanism.casadi_assembly.CasadiAssembly` on the Novint Falcon's legs
 without the distance form.
 
 References: the run-time Gauss-Newton of the same generated closure (``solve_closure`` and ``closure_velocities``,
@@ -18,7 +18,7 @@ import pytest
 from conftest import ROOT
 from symkin import load, pipeline
 from symkin.mechanism import closure
-from symkin.mechanism.casadi_closure import CasadiClosure, independent_rows
+from symkin.mechanism.casadi_assembly import CasadiAssembly, independent_rows
 from symkin.mechanism.closure import ClosureAssembly
 from symkin.model import model_from_text
 from symkin.runtime.parallel import closure_velocities, solve_closure
@@ -39,7 +39,7 @@ def falcon(tmp_path_factory):
     numeric = load(directory)
     runtime = ClosureAssembly(numeric)
     symbolic = load(directory, "casadi")
-    return numeric, CasadiClosure(symbolic, independent_rows(runtime)), runtime
+    return numeric, CasadiAssembly(symbolic, independent_rows(runtime)), runtime
 
 
 def condition(model, q, s, p) -> float:

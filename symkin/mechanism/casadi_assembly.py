@@ -14,7 +14,7 @@ differentiates the solution by the implicit function theorem:
 
 so that J = dp/dq is the p-part of it, W = [I; -A^-1 Phi_q] maps qd to the closure's rates zd = (qd, sd, pd), and
 zdd = W qdd - [0; A^-1 gamma(z, zd)] (gamma from the generated ``closure_dynamics``: the closure's second
-derivative at qdd = 0).  :meth:`CasadiClosure.function` checks the result: s, p and J are NaN where the rootfinder
+derivative at qdd = 0).  :meth:`CasadiAssembly.function` checks the result: s, p and J are NaN where the rootfinder
 stopped short of closing every row of the closure (max |phi| above :data:`symkin.mechanism.closure.CLOSED` times
 the pose's scale), and an assembly that may belong to another mode than the guess's is flagged - never a plausible
 but wrong assembly unsaid.
@@ -22,6 +22,8 @@ but wrong assembly unsaid.
 
 from __future__ import annotations
 
+import functools
+from collections.abc import Mapping
 from typing import Any
 
 import casadi
@@ -53,30 +55,55 @@ def independent_rows(closure: ClosureAssembly) -> list[int]:
     return rows
 
 
-class CasadiClosure:
+class CasadiAssembly:
     """The assembly u = (s, p) of a CasADi-loaded model of legs without closed forms, its rates and accelerations,
     as CasADi expressions of the actuators (the module docstring).
 
     Args:
         model: the model loaded with ``backend="casadi"`` (its ``closure`` and ``closure_jacobians``; its
-            ``closure_dynamics`` for :meth:`accelerations`), at its parameters' (bound) values.
-        rows: the closure's rows R the rootfinder solves (:func:`independent_rows`).
+            ``closure_dynamics`` for :meth:`accelerations`).
+        rows: the closure's rows R (:func:`independent_rows`).
+        parameters: the model's parameters by name, numbers or CasADi symbols (a design program's free lengths);
+            default its (bound) values.  The rootfinder (:meth:`assembly`, :meth:`function`) needs numbers.
     """
 
-    def __init__(self, model: GeneratedModel, rows: list[int]):
+    def __init__(self, model: GeneratedModel, rows: list[int], parameters: Mapping[str, Any] | None = None):
         self.model, self.rows = model, list(rows)
+        self.parameters = dict(model.parameters if parameters is None else parameters)
         self._closure = casadi_function(model, "closure")
         self._jacobians = casadi_function(model, "closure_jacobians")
         self.n, self.ns, self.m = (self._closure.size1_in(k) for k in range(3))
+
+    @classmethod
+    def at_home(cls, model: GeneratedModel, runtime: GeneratedModel,
+                parameters: Mapping[str, Any] | None = None) -> CasadiAssembly:
+        """The assembly of the CasADi-loaded ``model`` on the closure's rows independent at the home assembly of
+        ``runtime`` (the same model loaded for the run-time mechanism, at the parameters' values to find it at).
+
+        Raises:
+            GeneratedCodeError: the legs do not close at the home pose.
+            ValueError: the closure's rows do not fix (s, p) there.
+        """
+        return cls(model, independent_rows(ClosureAssembly(runtime)), parameters)
+
+    @functools.cached_property
+    def _rootfinder(self) -> casadi.Function:
         q, u = casadi.MX.sym("q", self.n), casadi.MX.sym("u", self.ns + self.m)
-        residual = casadi.Function("closure_rows", [u, q], [self.call(self._closure, q=q, s=u[:self.ns],
-                                                                      p=u[self.ns:])["phi"][self.rows]])
-        self._rootfinder = casadi.rootfinder("assembly", "newton", residual, {"error_on_fail": False})
+        residual = casadi.Function("closure_rows", [u, q], [self.residual(q, u[:self.ns], u[self.ns:])])
+        return casadi.rootfinder("assembly", "newton", residual, {"error_on_fail": False})
 
     def call(self, function: casadi.Function, **states: Any) -> dict[str, Any]:
-        """A generated function's outputs by name, its states given and its parameters at the model's values."""
-        return function.call({name: states[name] if name in states else casadi.DM(self.model.parameters[name])
+        """A generated function's outputs by name, its states given and its parameters at :attr:`parameters`."""
+        def parameter(name: str) -> Any:
+            value = self.parameters[name]
+            return value if isinstance(value, (casadi.SX, casadi.MX)) else casadi.DM(value)
+
+        return function.call({name: states[name] if name in states else parameter(name)
                               for name in function.name_in()})
+
+    def residual(self, q: Any, s: Any, p: Any) -> Any:
+        """phi(q, s, p) on the rows R: what the rootfinder zeroes, a design program's equality constraints."""
+        return self.call(self._closure, q=q, s=s, p=p)["phi"][self.rows]
 
     def assembly(self, q: Any, guess: Any) -> tuple[Any, Any]:
         """(s, p) closing the rows R at the actuators q, by Newton from ``guess`` = (s, p) stacked (unchecked: the
@@ -94,6 +121,10 @@ class CasadiClosure:
         rows R."""
         A, Phi_q = self._blocks(q, s, p)
         return casadi.vertcat(casadi.DM.eye(self.n), -casadi.solve(A, Phi_q)), A
+
+    def jacobian(self, q: Any, s: Any, p: Any) -> Any:
+        """J = dp/dq (m x n) at an assembly: the p-rows of W."""
+        return self.velocity_map(q, s, p)[0][self.n + self.ns:, :]
 
     def accelerations(self, q: Any, s: Any, p: Any, qd: Any, qdd: Any) -> tuple[dict[str, Any], dict[str, Any], Any]:
         """(rates, accelerations, W) of the closure's variables at an assembly: {"qd", "sd", "pd"},
@@ -120,17 +151,17 @@ class CasadiClosure:
         Differentiable where the legs close (the rootfinder's implicit-function sensitivities)."""
         q, guess = casadi.MX.sym("q", self.n), casadi.MX.sym("guess", self.ns + self.m)
         s, p = self.assembly(q, guess)
-        W, _ = self.velocity_map(q, s, p)
+        J = self.jacobian(q, s, p)
         residual = casadi.mmax(casadi.fabs(self.call(self._closure, q=q, s=s, p=p)["phi"]))
         closed = residual <= CLOSED * casadi.fmax(1, casadi.mmax(casadi.fabs(p)))
         s0, p0 = guess[:self.ns], guess[self.ns:]
         A0, _ = self._blocks(q, s0, p0)
-        first = casadi.solve(A0, self.call(self._closure, q=q, s=s0, p=p0)["phi"][self.rows])
+        first = casadi.solve(A0, self.residual(q, s0, p0))
         jump = casadi.mmax(casadi.fabs(casadi.vertcat(s, p) - guess)) > 2 * casadi.mmax(casadi.fabs(first))
 
         def checked(value: Any) -> Any:
             return casadi.if_else(closed, value, casadi.DM.nan(*value.shape))
 
-        return casadi.Function("assembly", [q, guess], [checked(s), checked(p), checked(W[self.n + self.ns:, :]),
+        return casadi.Function("assembly", [q, guess], [checked(s), checked(p), checked(J),
                                                          residual, jump],
                                ["q", "guess"], ["s", "p", "J", "residual", "jump"])
