@@ -39,6 +39,8 @@ ENTRY_VARIABLE = "SYMKIN_C_ENTRY"
 TEMPLATE = "c/python_module.c.j2"
 #: The template of the generated assembly's extension module (:func:`assembly_entry_points`).
 ASSEMBLY_TEMPLATE = "c/assembly_module.c.j2"
+#: The array checks both templates include.
+ARRAYS_TEMPLATE = "c/float64_arrays.c.j2"
 
 
 def c_string(text: str) -> str:
@@ -108,10 +110,15 @@ def module_source(model: str, header: str, records: Sequence[Function], docstrin
 def _source_inputs(model: str, header: str, records: Sequence[Function], docstrings: list[str]) -> bytes:
     """Everything :func:`module_source` renders from (this module, the template, the functions), so that a cached
     extension is found without rendering its source (loading imports no jinja2)."""
-    template = resources.files("symkin.templates").joinpath(TEMPLATE).read_bytes()
     functions = json.dumps([model, header, __version__, [dataclasses.asdict(r) for r in records], docstrings],
                            sort_keys=True).encode()
-    return b"\0".join([Path(__file__).read_bytes(), template, functions])
+    return b"\0".join([Path(__file__).read_bytes(), *_templates(TEMPLATE), functions])
+
+
+def _templates(name: str) -> list[bytes]:
+    """The bytes of the template ``name`` and of the array checks it includes (a cached extension's key)."""
+    folder = resources.files("symkin.templates")
+    return [folder.joinpath(name).read_bytes(), folder.joinpath(ARRAYS_TEMPLATE).read_bytes()]
 
 
 def entry_points(library: Path, header: Path, model: str, records: Sequence[Function],
@@ -171,8 +178,7 @@ def assembly_entry_points(library: Path, header: Path, model: str, sizes: dict[s
 
         return render(ASSEMBLY_TEMPLATE, **context)
 
-    what = b"\0".join([Path(__file__).read_bytes(),
-                       resources.files("symkin.templates").joinpath(ASSEMBLY_TEMPLATE).read_bytes(),
+    what = b"\0".join([Path(__file__).read_bytes(), *_templates(ASSEMBLY_TEMPLATE),
                        json.dumps(context, sort_keys=True).encode()])
     try:
         path, name = extension_module(source, what, f"{model}_assembly", header, library)
