@@ -6,6 +6,7 @@ from __future__ import annotations
 from symkin.backends.base import Backend
 from symkin.backends.c import CBackend
 from symkin.backends.casadi import CasadiBackend
+from symkin.backends.jax import JaxBackend
 from symkin.backends.js import JavascriptBackend
 from symkin.backends.numpy import NumpyBackend
 from symkin.errors import SymkinError
@@ -15,6 +16,7 @@ BACKENDS: dict[str, Backend] = {
     "c": CBackend(),
     "casadi": CasadiBackend(),
     "js": JavascriptBackend(),
+    "jax": JaxBackend(),
 }
 
 

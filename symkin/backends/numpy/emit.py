@@ -31,7 +31,9 @@ def _input_doc(i: InputSpec) -> list[str]:
     return _wrap(f"{i.name}: {i.doc}, shape (..., {len(i.symbols)}): {element_text(i)}.")
 
 
-def _function_context(f: OptimizedFunction, printer: BatchNumPyPrinter) -> dict[str, Any]:
+def function_context(f: OptimizedFunction, printer: BatchNumPyPrinter) -> dict[str, Any]:
+    """What the module templates (numpy, JAX) say of one function: signature, docstring, inputs, temporaries,
+    outputs (entry by entry), printed by ``printer``."""
     spec = f.spec
     vectors = spec.vector_inputs
     params = spec.parameter_inputs
@@ -62,7 +64,8 @@ def _function_context(f: OptimizedFunction, printer: BatchNumPyPrinter) -> dict[
         "returns_doc": returns if not multi else [f"{type_name(spec.name)} with the fields:"] + returns,
         "vectors": [{"name": v.name, "size": len(v.symbols),
                      "elements": [{"local": str(s), "index": k} for k, s in enumerate(v.symbols)]} for v in vectors],
-        "batch_shapes": [f"{v.name}.shape[:-1]" for v in vectors] + [f"numpy.shape({p.name})" for p in params],
+        "batch_shapes": ([f"{v.name}.shape[:-1]" for v in vectors]
+                         + [f"{printer.array_module}.shape({p.name})" for p in params]),
         "temporaries": [{"name": str(s), "code": printer.doprint(e)} for s, e in f.temporaries],
         "outputs": outputs,
         "result_type": type_name(spec.name) if multi else "",
@@ -70,17 +73,22 @@ def _function_context(f: OptimizedFunction, printer: BatchNumPyPrinter) -> dict[
     }
 
 
+def module_context(code: ModelCode, template: str) -> dict[str, Any]:
+    """What the module templates (numpy, JAX) say of the model: provenance, name, hash, description, coordinates
+    and the free parameters' defaults."""
+    return {
+        "provenance": provenance(template, code.name, code.hash),
+        "model": {"name": code.name, "hash": code.hash,
+                  "description": plain(code.description or code.name, keep_newlines=True),
+                  "symkin_version": code.symkin_version, "coordinates": code.coordinates},
+        "free_parameters": [{"name": p.name, "default_text": repr(p.default)} for p in code.parameters
+                            if not p.fixed],
+    }
+
+
 def emit_module(code: ModelCode) -> dict[str, str | bytes]:
     """{<model>.py: module text} for ``code``."""
     printer = BatchNumPyPrinter()
-    text = render(
-        TEMPLATE,
-        provenance=provenance(TEMPLATE, code.name, code.hash),
-        model={"name": code.name, "hash": code.hash,
-               "description": plain(code.description or code.name, keep_newlines=True),
-               "symkin_version": code.symkin_version, "coordinates": code.coordinates},
-        free_parameters=[{"name": p.name, "default_text": repr(p.default)} for p in code.parameters if not p.fixed],
-        chunk=CHUNK,
-        functions=[_function_context(f, printer) for f in code.functions],
-    )
+    text = render(TEMPLATE, **module_context(code, TEMPLATE), chunk=CHUNK,
+                  functions=[function_context(f, printer) for f in code.functions])
     return {f"{code.name}.py": text}

@@ -13,14 +13,20 @@ from symkin.runtime.info import ModelInfo
 
 
 def load(directory: Path, info: ModelInfo) -> dict[str, Callable[..., Any]]:
-    """The model's functions from ``<model>.py``, imported under a name unique to the module's bytes.
+    """The model's functions from ``<model>.py`` (:func:`import_module`)."""
+    return import_module(Path(directory), info, "numpy")
+
+
+def import_module(directory: Path, info: ModelInfo, backend: str) -> dict[str, Callable[..., Any]]:
+    """The model's functions from the Python module ``backend`` wrote (numpy, JAX), imported under a name unique to
+    the module's bytes.
 
     The model hash names the mechanism, not what was emitted from it (two scenes of one model give
     two modules), so the import name is keyed by the file's content.
     """
-    files = info.backend_files.get("numpy", ())
+    files = info.backend_files.get(backend, ())
     if not files:
-        raise GeneratedCodeError(f"{directory}: the manifest lists no numpy module")
+        raise GeneratedCodeError(f"{directory}: the manifest lists no {backend} module")
     path = Path(directory) / files[0]
     try:
         digest = hashlib.sha256(path.read_bytes()).hexdigest()

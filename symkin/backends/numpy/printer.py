@@ -23,6 +23,8 @@ class BatchNumPyPrinter(ArithmeticPrinterMixin, NumPyPrinter):
     """
 
     sqrt_function = "numpy.sqrt"
+    #: The array module the printed code calls (``numpy.maximum``, ``numpy.shape``).
+    array_module = "numpy"
 
     def __init__(self) -> None:
         super().__init__({"fully_qualified_modules": True, "inline": True, "order": "none"})
@@ -37,7 +39,7 @@ class BatchNumPyPrinter(ArithmeticPrinterMixin, NumPyPrinter):
         return text
 
     def _print_Max(self, expr: sympy.Max) -> str:
-        return self._nested("numpy.maximum", expr.args)
+        return self._nested(f"{self.array_module}.maximum", expr.args)
 
     def _print_Min(self, expr: sympy.Min) -> str:
-        return self._nested("numpy.minimum", expr.args)
+        return self._nested(f"{self.array_module}.minimum", expr.args)

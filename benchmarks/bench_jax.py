@@ -1,0 +1,105 @@
+"""The JAX backend on whatever device JAX sees (issue 66): the UR10e's fk + J + M + V + G and the GCI integrand per
+configuration, beside the numpy and C backends in the same run.
+
+Run with ``make bench`` or ``python benchmarks/bench_jax.py [--batch N] [--repeat N]``.
+
+The UR10e with every parameter folded, its combined function of fk, the geometric Jacobian, M, V and G (one
+shared CSE); nanoseconds per configuration of one call over ``--batch`` configurations (best of ``--repeat``
+calls, after one that compiles):
+
+* ``numpy``, ``C``: the generated batched functions, every output written to host memory;
+* ``JAX, outputs on the device``: the jitted function, every output left on JAX's default device
+  (``block_until_ready``);
+* ``JAX, reduced on the device``: the jitted function and a sum of every output to one number per configuration in
+  one jitted function (only that number comes back): the arithmetic without the memory traffic of the outputs;
+* ``GCI integrand``: 1/kappa(J) of the geometric Jacobian per configuration (its singular values; the position
+  rows divided by L = 1 m) reduced to their mean - numpy's batched SVD of the C backend's J against
+  ``jax.numpy.linalg.svd`` inside the jitted function.
+
+Issue 66's targets: on a GPU of the H200 class <= 1 ns per configuration for fk + J + M + V + G reduced on the
+device, and a 10^6-design x 10^4-configuration GCI sweep of the UR10e projected <= 60 s (the GCI row's time times
+10^10); on a CPU no slower than the numpy backend.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+import jax  # noqa: E402
+import jax.numpy as jnp  # noqa: E402
+
+import symkin  # noqa: E402
+from symkin.text_table import format_table  # noqa: E402
+
+OUTPUTS = ["fk", "jacobian_geometric", "mass_matrix", "coriolis_vector", "gravity_vector"]
+
+
+def best_seconds(call, repeat: int) -> float:
+    """The fastest of ``repeat`` calls of ``call`` (each waits for its result), after one call that compiles."""
+    call()
+    times = []
+    for _ in range(repeat):
+        start = time.perf_counter()
+        call()
+        times.append(time.perf_counter() - start)
+    return min(times)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--batch", type=int, default=100_000, help="configurations per call (default: %(default)s)")
+    parser.add_argument("--repeat", type=int, default=5, help="timed calls per case (default: %(default)s)")
+    args = parser.parse_args(argv)
+    with tempfile.TemporaryDirectory() as tmp:
+        directory = symkin.derive(ROOT / "models" / "ur10e.yaml", tmp, outputs=OUTPUTS, backends=["numpy", "c", "jax"],
+                                  fixed=["all"], combine="all")
+        numpy_model, c_model, jax_model = (symkin.load(directory, backend) for backend in ("numpy", "c", "jax"))
+        rng = np.random.default_rng(0)
+        q, qd = rng.uniform(-np.pi, np.pi, (args.batch, 6)), rng.uniform(-1.0, 1.0, (args.batch, 6))
+        q_device, qd_device = jax.device_put(q), jax.device_put(qd)
+        reduced = jax.jit(lambda x, v: sum(jnp.sum(o.reshape(o.shape[0], -1), axis=-1)
+                                           for o in jax_model.combined(x, v)))
+
+        def inverse_condition(J):
+            J = J[:, [3, 4, 5, 0, 1, 2], :]     # any row order: kappa is invariant (L = 1 m)
+            singular = jnp.linalg.svd(J, compute_uv=False)
+            return jnp.mean(singular[:, -1] / singular[:, 0])
+
+        gci = jax.jit(lambda x: inverse_condition(jax_model.jacobian_geometric(x)))
+
+        def numpy_gci():
+            singular = np.linalg.svd(c_model.jacobian_geometric(q), compute_uv=False)
+            return float(np.mean(singular[:, -1] / singular[:, 0]))
+
+        cases = [
+            ("fk + J + M + V + G", "numpy", lambda: numpy_model.combined(q, qd)),
+            ("fk + J + M + V + G", "C", lambda: c_model.combined(q, qd)),
+            ("fk + J + M + V + G", "JAX, outputs on the device",
+             lambda: jax.block_until_ready(jax_model.combined(q_device, qd_device))),
+            ("fk + J + M + V + G", "JAX, reduced on the device",
+             lambda: jax.block_until_ready(reduced(q_device, qd_device))),
+            ("GCI integrand (1/kappa of J, mean)", "C J + numpy SVD", numpy_gci),
+            ("GCI integrand (1/kappa of J, mean)", "JAX, on the device", lambda: jax.block_until_ready(gci(q_device))),
+        ]
+        rows = [[case, backend, f"{1e9 * best_seconds(call, args.repeat) / args.batch:.2f}"]
+                for case, backend, call in cases]
+        sweep = float(rows[-1][2]) * 1e-9 * 1e10
+    print(f"JAX {jax.__version__} on {jax.devices()[0].device_kind} ({jax.default_backend()}), "
+          f"batch {args.batch}, best of {args.repeat}")
+    print(format_table(["case", "backend", "ns per configuration"], rows))
+    print(f"a 10^6-design x 10^4-configuration GCI sweep at the JAX row's rate: {sweep:.0f} s "
+          "(issue 66's target on an H200-class GPU: <= 60 s; fk + J + M + V + G reduced <= 1 ns)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,102 @@
+"""The JAX backend (issue 66): pure, jit-compiled, float64 jax.numpy functions from the same intermediate
+representation as numpy's, composing with jax.vmap, jax.jacfwd and jax.jit.
+
+References: the numpy module of the same model and request at random states, to the backends' agreement bound
+(tests/checks.py: 1e-12 relative, plus the rounding a solve amplifies); the generated Jacobian against jax.jacfwd
+of the generated forward kinematics (the derivative of the chain's transform against the geometric Jacobian
+derived symbolically: two programs); vmap against the batch.  The models: a serial arm with free parameters (the
+planar 2R), closed-form parallel legs (the DELTA) and legs of any topology (the pantograph's closure), every
+function, and the UR10e's kinematics and dynamics (:data:`UR10E_FUNCTIONS`) - derived here with the JAX backend from
+the shared derivations.
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from checks import agreement_bound
+from conftest import function_spec, random_inputs, relative_errors, worst_state
+from symkin import load, pipeline
+from tolerances import DYNAMICS, KINEMATICS
+
+pytestmark = pytest.mark.xdist_group("jax")  # one worker imports JAX, after its other tests (conftest.LAST)
+POINTS = 64
+#: Every function of these models ...
+MODELS = ("delta", "pantograph", "planar_2r")
+#: ... and these of the UR10e: XLA compiles the rest of its scene in minutes on a CPU (operational_space 25 s,
+#: forward_dynamics_derivatives 15 s, single-threaded), more than the suite has for them.
+UR10E_FUNCTIONS = ("fk", "jacobian", "mass_matrix", "coriolis_vector", "gravity_vector", "inverse_dynamics",
+                   "combined")
+
+
+@pytest.fixture(scope="module")
+def jax_model(models, derivations, tmp_path_factory):
+    """jax_model(name): the example model's scene derived with the JAX backend, loaded (once per module)."""
+    cache = {}
+
+    def get(name: str):
+        if name not in cache:
+            model = models[name]
+            request = pipeline.resolve_request(model, None, "jax")
+            generation = pipeline.generate(model, request, derivation=derivations[name])
+            cache[name] = load(pipeline.write(generation, tmp_path_factory.mktemp(name)), backend="jax")
+        return cache[name]
+
+    return get
+
+
+def _tuple(result):
+    return result if isinstance(result, tuple) else (result,)
+
+
+@pytest.mark.parametrize("name", MODELS + ("ur10e",))
+def test_every_function_equals_numpys(name, models, derivations, loaded, jax_model):
+    model, reference, generated = models[name], loaded(name, "numpy"), jax_model(name)
+    assert generated.functions == reference.functions
+    rng = np.random.default_rng(66)
+    for record in reference.manifest["functions"]:
+        if name == "ur10e" and record["name"] not in UR10E_FUNCTIONS:
+            continue
+        spec = function_spec(model, derivations[name], record)
+        inputs = random_inputs(model, spec, rng, POINTS)
+        want = _tuple(getattr(reference, record["name"])(*inputs))
+        got = _tuple(getattr(generated, record["name"])(*inputs))
+        assert type(got).__name__ == type(want).__name__
+        bound = agreement_bound(model, spec, inputs, reference)
+        for g, w, out in zip(got, want, record["outputs"]):
+            assert g.dtype == jnp.float64
+            g = np.asarray(g)
+            assert g.shape == w.shape
+            error = relative_errors(g, w)
+            worst = int(np.argmax(error / bound))
+            assert error[worst] < bound[worst], (record["name"], out["name"], f"error {error[worst]:.3g} > bound "
+                                                 f"{bound[worst]:.3g}", worst_state(g, w, inputs))
+
+
+def test_vmap_jit_and_jacfwd_compose_with_the_generated_functions(jax_model, loaded, models):
+    """jax.vmap of a single configuration's call is the batched call (to DYNAMICS of M's largest entry: another
+    compiled order); jax.jacfwd of fk's position column is the
+    generated Jacobian's linear rows (to KINEMATICS times the arm's reach, 2 m); jax.jit of a composition runs."""
+    arm, reference = jax_model("ur10e"), loaded("ur10e", "numpy")
+    q = np.random.default_rng(3).uniform(-np.pi, np.pi, (16, 6))
+    qd = np.random.default_rng(4).uniform(-1, 1, (16, 6))
+    M = np.asarray(arm.mass_matrix(q))
+    np.testing.assert_allclose(np.asarray(jax.vmap(arm.mass_matrix)(q)), M, rtol=0, atol=DYNAMICS * np.abs(M).max())
+    position = jax.vmap(jax.jacfwd(lambda x: arm.fk(x)[:3, 3]))(q)
+    np.testing.assert_allclose(np.asarray(position), reference.jacobian_geometric(q)[:, :3], rtol=0,
+                               atol=KINEMATICS * 2.0)
+    energy = jax.jit(lambda x, v: 0.5 * v @ arm.mass_matrix(x) @ v)
+    np.testing.assert_allclose(np.asarray(jax.vmap(energy)(q, qd)), reference.kinetic_energy(q, qd), rtol=1e-12)
+
+
+def test_the_module_is_float64_and_says_what_it_takes(jax_model):
+    arm = jax_model("planar_2r")
+    assert jax.config.jax_enable_x64
+    assert arm.fk(np.zeros(2)).dtype == jnp.float64
+    # x = l1 cos 0 + l2 cos 0 = 0.25 + 0.5: exact in binary
+    assert float(arm.fk([0.0, 0.0], l1=0.25, l2=0.5)[0, 3]) == 0.75
+    with pytest.raises(ValueError, match=r"^fk\(\): 'q' must have shape \(\.\.\., 2\), got \(3,\)"):
+        arm.fk(np.zeros(3))
