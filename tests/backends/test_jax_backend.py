@@ -12,6 +12,8 @@ the shared derivations.
 
 from __future__ import annotations
 
+import re
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -20,6 +22,7 @@ import pytest
 from checks import agreement_bound
 from conftest import function_spec, random_inputs, relative_errors, worst_state
 from symkin import load, pipeline
+from symkin.cli import main
 from tolerances import DYNAMICS, KINEMATICS
 
 pytestmark = pytest.mark.xdist_group("jax")  # one worker imports JAX, after its other tests (conftest.LAST)
@@ -33,8 +36,8 @@ UR10E_FUNCTIONS = ("fk", "jacobian", "mass_matrix", "coriolis_vector", "gravity_
 
 
 @pytest.fixture(scope="module")
-def jax_model(models, derivations, tmp_path_factory):
-    """jax_model(name): the example model's scene derived with the JAX backend, loaded (once per module)."""
+def jax_directory(models, derivations, tmp_path_factory):
+    """jax_directory(name): the example model's scene derived with the JAX backend (once per module)."""
     cache = {}
 
     def get(name: str):
@@ -42,10 +45,16 @@ def jax_model(models, derivations, tmp_path_factory):
             model = models[name]
             request = pipeline.resolve_request(model, None, "jax")
             generation = pipeline.generate(model, request, derivation=derivations[name])
-            cache[name] = load(pipeline.write(generation, tmp_path_factory.mktemp(name)), backend="jax")
+            cache[name] = pipeline.write(generation, tmp_path_factory.mktemp(name))
         return cache[name]
 
     return get
+
+
+@pytest.fixture(scope="module")
+def jax_model(jax_directory):
+    """jax_model(name): the example model's JAX code, loaded."""
+    return lambda name: load(jax_directory(name), backend="jax")
 
 
 def _tuple(result):
@@ -100,3 +109,14 @@ def test_the_module_is_float64_and_says_what_it_takes(jax_model):
     assert float(arm.fk([0.0, 0.0], l1=0.25, l2=0.5)[0, 3]) == 0.75
     with pytest.raises(ValueError, match=r"^fk\(\): 'q' must have shape \(\.\.\., 2\), got \(3,\)"):
         arm.fk(np.zeros(3))
+
+
+def test_the_analyses_take_the_jax_backend(jax_directory, generated_dir, capsys):
+    """symkin gci and workspace evaluate the JAX code (on the host for now) to the numbers of the numpy code: the same
+    Sobol points, the same figures as printed."""
+    for command in (["gci", "-n", "512", "--seed", "0"], ["workspace", "-n", "512", "--no-figure"]):
+        printed = {}
+        for backend, directory in (("jax", jax_directory("planar_2r")), ("numpy", generated_dir / "planar_2r")):
+            assert main([command[0], str(directory), "--backend", backend, *command[1:]]) == 0
+            printed[backend] = re.sub(r"[0-9.]+ (ms|s)\b", "(time)", capsys.readouterr().out)  # run times differ
+        assert printed["jax"] == printed["numpy"]
