@@ -16,6 +16,9 @@ calls, after one that compiles):
   rows divided by L = 1 m) reduced to their mean - numpy's batched SVD of the C backend's J against
   ``jax.numpy.linalg.svd`` inside the jitted function.
 
+With ``--compile``, also the seconds of the first call of every function of the UR10e's scene with the JAX backend
+(XLA's compile, at one configuration): what keeps the JAX backend out of the example scenes so far.
+
 Issue 66's targets: on a GPU of the H200 class <= 1 ns per configuration for fk + J + M + V + G reduced on the
 device, and a 10^6-design x 10^4-configuration GCI sweep of the UR10e projected <= 60 s (the GCI row's time times
 10^10); on a CPU no slower than the numpy backend.
@@ -58,6 +61,8 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--batch", type=int, default=100_000, help="configurations per call (default: %(default)s)")
     parser.add_argument("--repeat", type=int, default=5, help="timed calls per case (default: %(default)s)")
+    parser.add_argument("--compile", action="store_true",
+                        help="also time the first call (the compile) of every function of the UR10e's scene")
     args = parser.parse_args(argv)
     with tempfile.TemporaryDirectory() as tmp:
         directory = symkin.derive(ROOT / "models" / "ur10e.yaml", tmp, outputs=OUTPUTS, backends=["numpy", "c", "jax"],
@@ -98,7 +103,22 @@ def main(argv: list[str] | None = None) -> int:
     print(format_table(["case", "backend", "ns per configuration"], rows))
     print(f"a 10^6-design x 10^4-configuration GCI sweep at the JAX row's rate: {sweep:.0f} s "
           "(issue 66's target on an H200-class GPU: <= 60 s; fk + J + M + V + G reduced <= 1 ns)")
+    if args.compile:
+        print(format_table(["UR10e scene function", "first call, JAX (s)"], _first_calls()))
     return 0
+
+
+def _first_calls() -> list[list[str]]:
+    """Seconds of the first call (trace, XLA compile, run) of each function of the UR10e's scene, one configuration."""
+    with tempfile.TemporaryDirectory() as tmp:
+        model = symkin.load(symkin.derive(ROOT / "models" / "ur10e.yaml", tmp, backends=["jax"]), "jax")
+        rows = []
+        for name, record in model.info.functions.items():
+            arguments = [np.zeros(len(vector.elements)) for vector in record.vectors.values()]
+            start = time.perf_counter()
+            jax.block_until_ready(getattr(model, name)(*arguments))
+            rows.append([name, f"{time.perf_counter() - start:.2f}"])
+    return rows
 
 
 if __name__ == "__main__":

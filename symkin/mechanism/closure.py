@@ -116,9 +116,8 @@ def solve_home_assembly(model: GeneratedModel) -> HomeAssembly:
         described = ["the declared parallel.home_assembly"]
     else:
         bounds = np.array(model.joint_limits, dtype=np.float64).reshape(-1, 2)
-        finite = np.all(np.isfinite(bounds), axis=1)  # an actuator without limits starts at 0
-        middle = np.concatenate([np.where(finite, np.where(finite[:, None], bounds, 0.0).mean(axis=1), 0.0),
-                                 np.zeros(ns)])
+        finite = np.all(np.isfinite(bounds), axis=1, keepdims=True)  # an actuator without limits starts at 0
+        middle = np.concatenate([np.where(finite, bounds, 0.0).mean(axis=1), np.zeros(ns)])
         starts = np.vstack([np.zeros(n + ns), middle,
                             np.random.default_rng(0).uniform(-np.pi / 2, np.pi / 2, (HOME_STARTS, n + ns))])
         described = ["q = s = 0", "the middle of the actuators' limits, s = 0"] + [

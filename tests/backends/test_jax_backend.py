@@ -29,8 +29,9 @@ pytestmark = pytest.mark.xdist_group("jax")  # one worker imports JAX, after its
 POINTS = 64
 #: Every function of these models ...
 MODELS = ("delta", "pantograph", "planar_2r")
-#: ... and these of the UR10e: XLA compiles the rest of its scene in minutes on a CPU (operational_space 25 s,
-#: forward_dynamics_derivatives 15 s, single-threaded), more than the suite has for them.
+#: ... and these of the UR10e: XLA compiles the rest of its scene in about half a minute on a CPU
+#: (forward_dynamics_derivatives 13 s, operational_space 8 s: benchmarks/bench_jax.py --compile), more than the
+#: suite has for them.
 UR10E_FUNCTIONS = ("fk", "jacobian", "mass_matrix", "coriolis_vector", "gravity_vector", "inverse_dynamics",
                    "combined")
 

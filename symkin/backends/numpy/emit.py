@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 from symkin.backends.comments import docstring, plain, wrapped
-from symkin.backends.layout import element_text, nonzero_elements, shape_text, type_name
+from symkin.backends.layout import element_indices, element_text, shape_text, type_name
 from symkin.backends.numpy.printer import BatchNumPyPrinter
 from symkin.backends.templating import provenance, render
 from symkin.ir.bundle import ModelCode
@@ -33,7 +33,7 @@ def _input_doc(i: InputSpec) -> list[str]:
 
 def function_context(f: OptimizedFunction, printer: BatchNumPyPrinter) -> dict[str, Any]:
     """What the module templates (numpy, JAX) say of one function: signature, docstring, inputs, temporaries,
-    outputs (entry by entry), printed by ``printer``."""
+    outputs (entry by entry: assignments of the non-zero ones, and every entry row-major), printed by ``printer``."""
     spec = f.spec
     vectors = spec.vector_inputs
     params = spec.parameter_inputs
@@ -41,12 +41,14 @@ def function_context(f: OptimizedFunction, printer: BatchNumPyPrinter) -> dict[s
                           + [f"{p.name}={p.default_value!r}" for p in params])
     outputs = []
     for out, entries in zip(spec.outputs, f.outputs):
+        printed = [None if e == 0 else printer.doprint(e) for e in entries]  # row-major; None: identically zero
         outputs.append({
             "name": out.name,
             "local": f"_out_{out.name}",
             "shape": repr(tuple(out.shape)),
-            "assignments": [{"index": ", ".join(["..."] + [str(k) for k in index]), "code": printer.doprint(e)}
-                            for index, e in nonzero_elements(out, entries)],
+            "entries": printed,  # the JAX template stacks them
+            "assignments": [{"index": ", ".join(["..."] + [str(k) for k in index]), "code": code}
+                            for index, code in zip(element_indices(out.shape), printed) if code is not None],
         })
     returns = [line for out in spec.outputs
                for line in _wrap(f"{out.name}: shape {shape_text(out.shape)}; {out.doc}"
@@ -89,6 +91,6 @@ def module_context(code: ModelCode, template: str) -> dict[str, Any]:
 def emit_module(code: ModelCode) -> dict[str, str | bytes]:
     """{<model>.py: module text} for ``code``."""
     printer = BatchNumPyPrinter()
-    text = render(TEMPLATE, **module_context(code, TEMPLATE), chunk=CHUNK,
+    text = render(TEMPLATE, **module_context(code, TEMPLATE), array=printer.array_module, chunk=CHUNK,
                   functions=[function_context(f, printer) for f in code.functions])
     return {f"{code.name}.py": text}
