@@ -50,10 +50,14 @@ FOREIGN_ARITHMETIC := SYMKIN_TEST_ARITHMETIC=foreign $(FOREIGN_SIMD) SYMKIN_CFLA
 # threads cost more than they win (tests/identification ran in 78 s with them, 48 s without, on 2 cores).
 ONE_BLAS_THREAD := OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 MKL_NUM_THREADS=1
 
+# Bytecode under the venv, not beside the sources (tests/conftest.py): every test worker and every command the suite
+# runs (a few hundred) would otherwise compile symkin and pytest would rewrite the tests' asserts again in each.
+BYTECODE := env -u PYTHONDONTWRITEBYTECODE PYTHONPYCACHEPREFIX=$(abspath $(VENV))/pycache
+
 ## test: run the whole test suite, then its numerics-sensitive part again on foreign arithmetic
 test: setup
-	$(ONE_BLAS_THREAD) $(BIN)/python -m pytest -n $(PYTEST_WORKERS) --dist loadgroup -q --durations=25
-	$(ONE_BLAS_THREAD) $(FOREIGN_ARITHMETIC) $(BIN)/python -m pytest -n $(PYTEST_WORKERS) --dist loadgroup -q -m numerics
+	$(ONE_BLAS_THREAD) $(BYTECODE) $(BIN)/python -m pytest -n $(PYTEST_WORKERS) --dist loadgroup -q --durations=25
+	$(ONE_BLAS_THREAD) $(BYTECODE) $(FOREIGN_ARITHMETIC) $(BIN)/python -m pytest -n $(PYTEST_WORKERS) --dist loadgroup -q -m numerics
 
 ## generate: rewrite generated/ from the example models (the "update" switch of the golden tests)
 generate: demo

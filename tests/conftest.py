@@ -39,10 +39,13 @@ FOREIGN_ARITHMETIC = os.environ.get("SYMKIN_TEST_ARITHMETIC") == "foreign"
 NUMERICS_MODULES = {"test_stability", "test_backends_agree", "test_pinocchio", "test_dynamics_newton_euler",
                     "test_dynamics_ur10e", "test_numpy_backend", "test_tolerances"}
 
-# Importing a generated numpy module from generated/ must not leave a __pycache__ in it (nor in the
-# commands the tests run: they inherit the environment).
-sys.dont_write_bytecode = True
-os.environ["PYTHONDONTWRITEBYTECODE"] = "1"
+# Nothing the tests run may leave a __pycache__ in the checkout (nor the commands the tests run: they inherit the
+# environment).  `make test` keeps the bytecode under a prefix outside it (PYTHONPYCACHEPREFIX, Makefile): each
+# worker and each command of the suite then compiles symkin and the tests once, not every time.  Without a prefix,
+# no bytecode is written.  (The loader never runs a generated module's bytecode: symkin.backends.numpy.loader.)
+if not sys.pycache_prefix:
+    sys.dont_write_bytecode = True
+    os.environ["PYTHONDONTWRITEBYTECODE"] = "1"
 
 ROOT = Path(__file__).resolve().parent.parent
 MODELS_DIR = ROOT / "models"
@@ -330,6 +333,14 @@ LONG_FIRST = ("test_stability_table", "test_stability", "test_docs")
 #: Modules collected last, in one xdist group: JAX starts threads when imported, and a worker that has imported it
 #: should start no process afterwards (JAX warns that os.fork may then deadlock).
 LAST = ("test_jax_backend",)
+
+
+def pytest_ignore_collect(collection_path: Path, config) -> bool | None:
+    """On foreign arithmetic only the numerics-sensitive modules are imported: the others' tests would be deselected
+    (``-m numerics``) after each worker imported them all (a few seconds per worker)."""
+    if FOREIGN_ARITHMETIC and collection_path.suffix == ".py" and collection_path.name.startswith("test_"):
+        return collection_path.stem not in NUMERICS_MODULES or None
+    return None
 
 
 def pytest_collection_modifyitems(config, items):
