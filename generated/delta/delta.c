@@ -5083,19 +5083,23 @@ void delta_combined_batch(size_t n, const double *restrict q, const double *rest
 /* Rows of the closure, its unknowns s and p, and the actuated joints (symkin/backends/c/assembly.py). */
 #define DELTA_CLOSURE_ROWS 18
 #define DELTA_UNKNOWNS 15
+/* The inverse's unknowns q and s, the most of either, and the longest stall test (steps) the inverse looks back on. */
+#define DELTA_INVERSE_UNKNOWNS 15
+#define DELTA_MOST_UNKNOWNS 15
+#define DELTA_STALL_MOST 32
 
-/* Householder QR with column pivoting of the 18 x 15 column-major matrix m (element (i, j) at m[j * rows + i]: the reflections run down contiguous columns), in place (Golub and Van Loan,
+/* Householder QR with column pivoting of the 18 x cols column-major matrix m (element (i, j) at m[j * rows + i]: the reflections run down contiguous columns), in place (Golub and Van Loan,
  * Matrix Computations, 4th ed., alg. 5.4.1): R on and above the diagonal, each reflection's vector below it (its
  * first entry 1 implied) with its factor in tau, the columns' order in order.  Returns the numerical rank: the
  * steps before a remaining column's norm falls to rows * eps times the largest column's.  Without pivot the columns
  * keep their order (half the work) and a column that falls so returns -1: pivot then. */
-static int delta_qr(double *m, double *tau, int *order, int pivot)
+static int delta_qr(double *m, const int cols, double *tau, int *order, int pivot)
 {
-    const int rows = DELTA_CLOSURE_ROWS, cols = DELTA_UNKNOWNS;
+    const int rows = DELTA_CLOSURE_ROWS;
     const int steps = rows < cols ? rows : cols;
     /* each column's squared norm below row j, downdated by the row j leaves (LAPACK's xLAQP2), and recomputed
        where the downdate cancelled most of it */
-    double norm2[DELTA_UNKNOWNS], exact2[DELTA_UNKNOWNS];
+    double norm2[DELTA_MOST_UNKNOWNS], exact2[DELTA_MOST_UNKNOWNS];
     double first = 0.0;
     for (int c = 0; c < cols; ++c) {
         order[c] = c;
@@ -5161,9 +5165,9 @@ static int delta_qr(double *m, double *tau, int *order, int pivot)
 
 /* The basic least-squares solution x of m x = b from delta_qr's factors (b is overwritten): 0 in the columns past
  * the rank. */
-static void delta_qr_solve(const double *m, const double *tau, const int *order, int rank, double *b, double *x)
+static void delta_qr_solve(const double *m, const int cols, const double *tau, const int *order, int rank, double *b, double *x)
 {
-    const int rows = DELTA_CLOSURE_ROWS, cols = DELTA_UNKNOWNS;
+    const int rows = DELTA_CLOSURE_ROWS;
     for (int j = 0; j < rank; ++j) {
         double w = b[j];
         for (int i = j + 1; i < rows; ++i)
@@ -5410,8 +5414,8 @@ static void delta_step(const double *Phi_s, const double *Phi_p, double *b, doub
     double m[18 * 15], tau[15];
     int order[15];
     delta_column_major(Phi_s, Phi_p, m);
-    const int rank = delta_qr(m, tau, order, 1);
-    delta_qr_solve(m, tau, order, rank, b, x);
+    const int rank = delta_qr(m, DELTA_UNKNOWNS, tau, order, 1);
+    delta_qr_solve(m, DELTA_UNKNOWNS, tau, order, rank, b, x);
 }
 
 /* max |phi| over the closure's rows (NaN where a row is NaN), and in *scale max(1, |p|): the pose's scale, which the
@@ -5500,11 +5504,11 @@ int delta_assembly_jacobian(const double *q, const double *s, const double *p, d
     double _copy[18 * 15];
     for (int _i = 0; _i < 18 * 15; ++_i)
         _copy[_i] = _m[_i];
-    int _rank = delta_qr(_m, _tau, _order, 0);
+    int _rank = delta_qr(_m, DELTA_UNKNOWNS, _tau, _order, 0);
     if (_rank < 0) {    /* a dependent column: factor again with pivoting, the rank and the idle motions revealed */
         for (int _i = 0; _i < 18 * 15; ++_i)
             _m[_i] = _copy[_i];
-        _rank = delta_qr(_m, _tau, _order, 1);
+        _rank = delta_qr(_m, DELTA_UNKNOWNS, _tau, _order, 1);
     }
     int _determined = 1;
     for (int _j = _rank; _j < 15; ++_j)
@@ -5512,10 +5516,196 @@ int delta_assembly_jacobian(const double *q, const double *s, const double *p, d
     for (int _c = 0; _c < 3; ++_c) {
         for (int _i = 0; _i < 18; ++_i)
             _column[_i] = -_Phi_q[_i * 3 + _c];
-        delta_qr_solve(_m, _tau, _order, _rank, _column, _x);
+        delta_qr_solve(_m, DELTA_UNKNOWNS, _tau, _order, _rank, _column, _x);
         for (int _r = 0; _r < 3; ++_r)
             J[_r * 3 + _c] = _determined ? _x[12 + _r] : (double)NAN;
     }
     return _determined;
+}
+/* [Phi_q Phi_s] from the row-major blocks of delta_closure_jacobians into m, column-major 18 x 15: the
+ * inverse's dense QR layout. */
+static void delta_inverse_column_major(const double *Phi_q, const double *Phi_s, double *m)
+{
+    for (int i = 0; i < 18; ++i) {
+        for (int j = 0; j < 3; ++j)
+            m[j * 18 + i] = Phi_q[i * 3 + j];
+        for (int j = 0; j < 12; ++j)
+            m[(3 + j) * 18 + i] = Phi_s[i * 12 + j];
+    }
+}
+
+/* The legs of the inverse: the connected blocks of [Phi_q Phi_s]'s structural non-zeros, each leg's closure rows and
+ * its unknowns (actuated joints 0..2, then passive joints 3..): each leg closes on its own once p is given. */
+static const int delta_inverse_leg1_rows[6] = { 0, 1, 2, 3, 4, 5 };
+static const int delta_inverse_leg1_columns[5] = { 0, 3, 4, 5, 6 };
+static const int delta_inverse_leg2_rows[6] = { 6, 7, 8, 9, 10, 11 };
+static const int delta_inverse_leg2_columns[5] = { 1, 7, 8, 9, 10 };
+static const int delta_inverse_leg3_rows[6] = { 12, 13, 14, 15, 16, 17 };
+static const int delta_inverse_leg3_columns[5] = { 2, 11, 12, 13, 14 };
+
+/* Entry (i, c) of [Phi_q Phi_s]. */
+static inline double delta_inverse_entry(const double *Phi_q, const double *Phi_s, const int i, const int c)
+{
+    return c < 3 ? Phi_q[i * 3 + c] : Phi_s[i * 12 + c - 3];
+}
+
+/* The least-squares solution x (q then s) of [Phi_q Phi_s] x = rhs leg by leg: each leg's block by Householder QR
+ * (the blocks decouple, so this is the QR solution of the whole system at the cost of the small blocks).  Returns 0
+ * where a leg's block has a dependent column (rank test: rows eps times the largest column's norm): the pivoted dense
+ * QR takes the system. */
+static inline int delta_inverse_leg_solve(const double *Phi_q, const double *Phi_s, const double *rhs, double *x)
+{
+    double largest = 0.0;
+    for (int j = 0; j < 5; ++j) {
+        double sum = 0.0;
+        for (int i = 0; i < 6; ++i) {
+            const double e = delta_inverse_entry(Phi_q, Phi_s, delta_inverse_leg1_rows[i], delta_inverse_leg1_columns[j]);
+            sum += e * e;
+        }
+        largest = sum > largest || sum != sum ? sum : largest;
+    }
+    for (int j = 0; j < 5; ++j) {
+        double sum = 0.0;
+        for (int i = 0; i < 6; ++i) {
+            const double e = delta_inverse_entry(Phi_q, Phi_s, delta_inverse_leg2_rows[i], delta_inverse_leg2_columns[j]);
+            sum += e * e;
+        }
+        largest = sum > largest || sum != sum ? sum : largest;
+    }
+    for (int j = 0; j < 5; ++j) {
+        double sum = 0.0;
+        for (int i = 0; i < 6; ++i) {
+            const double e = delta_inverse_entry(Phi_q, Phi_s, delta_inverse_leg3_rows[i], delta_inverse_leg3_columns[j]);
+            sum += e * e;
+        }
+        largest = sum > largest || sum != sum ? sum : largest;
+    }
+    const double floor = 18 * DBL_EPSILON * sqrt(largest);
+    {   /* leg 1: closure rows 0, 1, 2, 3, 4, 5; unknowns 0, 3, 4, 5, 6 */
+        const int *r = delta_inverse_leg1_rows, *cols = delta_inverse_leg1_columns;
+        double v[36], y[5];
+        for (int i = 0; i < 6; ++i) {
+            for (int j = 0; j < 5; ++j)
+                v[j * 6 + i] = delta_inverse_entry(Phi_q, Phi_s, r[i], cols[j]);
+            v[30 + i] = rhs[r[i]];
+        }
+        if (!delta_reduce(v, 6, 5, 6, floor))
+            return 0;
+        for (int i = 0; i < 5; ++i)
+            y[i] = v[30 + i];
+        delta_back_substitute(v, 6, 5, y);
+        for (int i = 0; i < 5; ++i)
+            x[cols[i]] = y[i];
+    }
+    {   /* leg 2: closure rows 6, 7, 8, 9, 10, 11; unknowns 1, 7, 8, 9, 10 */
+        const int *r = delta_inverse_leg2_rows, *cols = delta_inverse_leg2_columns;
+        double v[36], y[5];
+        for (int i = 0; i < 6; ++i) {
+            for (int j = 0; j < 5; ++j)
+                v[j * 6 + i] = delta_inverse_entry(Phi_q, Phi_s, r[i], cols[j]);
+            v[30 + i] = rhs[r[i]];
+        }
+        if (!delta_reduce(v, 6, 5, 6, floor))
+            return 0;
+        for (int i = 0; i < 5; ++i)
+            y[i] = v[30 + i];
+        delta_back_substitute(v, 6, 5, y);
+        for (int i = 0; i < 5; ++i)
+            x[cols[i]] = y[i];
+    }
+    {   /* leg 3: closure rows 12, 13, 14, 15, 16, 17; unknowns 2, 11, 12, 13, 14 */
+        const int *r = delta_inverse_leg3_rows, *cols = delta_inverse_leg3_columns;
+        double v[36], y[5];
+        for (int i = 0; i < 6; ++i) {
+            for (int j = 0; j < 5; ++j)
+                v[j * 6 + i] = delta_inverse_entry(Phi_q, Phi_s, r[i], cols[j]);
+            v[30 + i] = rhs[r[i]];
+        }
+        if (!delta_reduce(v, 6, 5, 6, floor))
+            return 0;
+        for (int i = 0; i < 5; ++i)
+            y[i] = v[30 + i];
+        delta_back_substitute(v, 6, 5, y);
+        for (int i = 0; i < 5; ++i)
+            x[cols[i]] = y[i];
+    }
+    return 1;
+}
+
+/* The Gauss-Newton step x (q then s), the basic least-squares solution of [Phi_q Phi_s] x = b (b is overwritten):
+ * leg by leg where the legs' blocks have full rank, else by the dense QR with column pivoting. */
+static void delta_inverse_step(const double *Phi_q, const double *Phi_s, double *b, double *x)
+{
+    if (delta_inverse_leg_solve(Phi_q, Phi_s, b, x))
+        return;
+    double m[18 * 15], tau[15];
+    int order[15];
+    delta_inverse_column_major(Phi_q, Phi_s, m);
+    const int rank = delta_qr(m, 15, tau, order, 1);
+    delta_qr_solve(m, 15, tau, order, rank, b, x);
+}
+
+int delta_assemble_inverse(const double *p, double *q, double *s, double r_base, double r_tcp, double a, double b, int max_iterations, double tolerance, double max_step, int stall, double *residual)
+{
+    double _phi[18], _Phi_p[54], _Phi_q[54], _Phi_s[216], _step[15];
+    double _history[DELTA_STALL_MOST + 1] = {0.0};  /* max |phi| of the last steps, a ring */
+    int _taken = 0, _converged = 0;
+    const int _stall = stall > DELTA_STALL_MOST ? DELTA_STALL_MOST : stall;
+    for (int _k = 0; _k < max_iterations; ++_k) {
+        delta_closure(q, s, p, r_base, r_tcp, a, b, _phi);
+        double _worst = 0.0, _finite = 0.0;
+        for (int _i = 0; _i < 18; ++_i) {
+            _worst = fabs(_phi[_i]) > _worst || _phi[_i] != _phi[_i] ? fabs(_phi[_i]) : _worst;
+            _phi[_i] = -_phi[_i];
+        }
+        const int _stalled = _stall > 0 && _k >= _stall && _worst > 0.9 * _history[(_k - _stall) % (DELTA_STALL_MOST + 1)];
+        _history[_k % (DELTA_STALL_MOST + 1)] = _worst;
+        delta_closure_jacobians(q, s, p, a, b, _Phi_p, _Phi_q, _Phi_s);
+        for (int _i = 0; _i < 54; ++_i)
+            _finite += 0.0 * _Phi_q[_i];
+        for (int _i = 0; _i < 216; ++_i)
+            _finite += 0.0 * _Phi_s[_i];
+        if (_worst != _worst || _finite != _finite)
+            break;  /* no step from a point where the closure or its Jacobian is not finite */
+        delta_inverse_step(_Phi_q, _Phi_s, _phi, _step);
+        double _largest = 0.0;
+        for (int _j = 0; _j < 15; ++_j) {
+            const double _size = fabs(_step[_j]);
+            _largest = _size > _largest || _size != _size ? _size : _largest;
+        }
+        if (_largest != _largest)
+            break;
+        const double _shorten = max_step > 0.0 && _largest > max_step ? max_step / _largest : 1.0;
+        for (int _j = 0; _j < 3; ++_j)
+            q[_j] += _shorten * _step[_j];
+        for (int _j = 0; _j < 12; ++_j)
+            s[_j] += _shorten * _step[3 + _j];
+        _taken = _k + 1;
+        if (_largest <= tolerance) {
+            _converged = 1;
+            break;
+        }
+        if (_stalled)
+            break;
+    }
+    delta_closure(q, s, p, r_base, r_tcp, a, b, _phi);
+    double _worst = 0.0;
+    for (int _i = 0; _i < 18; ++_i)
+        _worst = fabs(_phi[_i]) > _worst || _phi[_i] != _phi[_i] ? fabs(_phi[_i]) : _worst;
+    *residual = _worst;
+    if (!_converged || _worst != _worst || _worst == HUGE_VAL) {
+        for (int _j = 0; _j < 3; ++_j)
+            q[_j] = (double)NAN;
+        for (int _j = 0; _j < 12; ++_j)
+            s[_j] = (double)NAN;
+        return 0;
+    }
+    return _taken;
+}
+
+void delta_assemble_inverse_batch(size_t count, const double *p, double *q, double *s, double r_base, double r_tcp, double a, double b, int max_iterations, double tolerance, double max_step, int stall, double *residual, int *steps)
+{
+    for (size_t _k = 0; _k < count; ++_k)
+        steps[_k] = delta_assemble_inverse(p + _k * 3, q + _k * 3, s + _k * 12, r_base, r_tcp, a, b, max_iterations, tolerance, max_step, stall, residual + _k);
 }
 #endif

@@ -3596,19 +3596,23 @@ void pantograph_combined_batch(size_t n, const double *restrict p, const double 
 /* Rows of the closure, its unknowns s and p, and the actuated joints (symkin/backends/c/assembly.py). */
 #define PANTOGRAPH_CLOSURE_ROWS 12
 #define PANTOGRAPH_UNKNOWNS 6
+/* The inverse's unknowns q and s, the most of either, and the longest stall test (steps) the inverse looks back on. */
+#define PANTOGRAPH_INVERSE_UNKNOWNS 6
+#define PANTOGRAPH_MOST_UNKNOWNS 6
+#define PANTOGRAPH_STALL_MOST 32
 
-/* Householder QR with column pivoting of the 12 x 6 column-major matrix m (element (i, j) at m[j * rows + i]: the reflections run down contiguous columns), in place (Golub and Van Loan,
+/* Householder QR with column pivoting of the 12 x cols column-major matrix m (element (i, j) at m[j * rows + i]: the reflections run down contiguous columns), in place (Golub and Van Loan,
  * Matrix Computations, 4th ed., alg. 5.4.1): R on and above the diagonal, each reflection's vector below it (its
  * first entry 1 implied) with its factor in tau, the columns' order in order.  Returns the numerical rank: the
  * steps before a remaining column's norm falls to rows * eps times the largest column's.  Without pivot the columns
  * keep their order (half the work) and a column that falls so returns -1: pivot then. */
-static int pantograph_qr(double *m, double *tau, int *order, int pivot)
+static int pantograph_qr(double *m, const int cols, double *tau, int *order, int pivot)
 {
-    const int rows = PANTOGRAPH_CLOSURE_ROWS, cols = PANTOGRAPH_UNKNOWNS;
+    const int rows = PANTOGRAPH_CLOSURE_ROWS;
     const int steps = rows < cols ? rows : cols;
     /* each column's squared norm below row j, downdated by the row j leaves (LAPACK's xLAQP2), and recomputed
        where the downdate cancelled most of it */
-    double norm2[PANTOGRAPH_UNKNOWNS], exact2[PANTOGRAPH_UNKNOWNS];
+    double norm2[PANTOGRAPH_MOST_UNKNOWNS], exact2[PANTOGRAPH_MOST_UNKNOWNS];
     double first = 0.0;
     for (int c = 0; c < cols; ++c) {
         order[c] = c;
@@ -3674,9 +3678,9 @@ static int pantograph_qr(double *m, double *tau, int *order, int pivot)
 
 /* The basic least-squares solution x of m x = b from pantograph_qr's factors (b is overwritten): 0 in the columns past
  * the rank. */
-static void pantograph_qr_solve(const double *m, const double *tau, const int *order, int rank, double *b, double *x)
+static void pantograph_qr_solve(const double *m, const int cols, const double *tau, const int *order, int rank, double *b, double *x)
 {
-    const int rows = PANTOGRAPH_CLOSURE_ROWS, cols = PANTOGRAPH_UNKNOWNS;
+    const int rows = PANTOGRAPH_CLOSURE_ROWS;
     for (int j = 0; j < rank; ++j) {
         double w = b[j];
         for (int i = j + 1; i < rows; ++i)
@@ -3888,8 +3892,8 @@ static void pantograph_step(const double *Phi_s, const double *Phi_p, double *b,
     double m[12 * 6], tau[6];
     int order[6];
     pantograph_column_major(Phi_s, Phi_p, m);
-    const int rank = pantograph_qr(m, tau, order, 1);
-    pantograph_qr_solve(m, tau, order, rank, b, x);
+    const int rank = pantograph_qr(m, PANTOGRAPH_UNKNOWNS, tau, order, 1);
+    pantograph_qr_solve(m, PANTOGRAPH_UNKNOWNS, tau, order, rank, b, x);
 }
 
 /* max |phi| over the closure's rows (NaN where a row is NaN), and in *scale max(1, |p|): the pose's scale, which the
@@ -3977,11 +3981,11 @@ int pantograph_assembly_jacobian(const double *q, const double *s, const double 
     double _copy[12 * 6];
     for (int _i = 0; _i < 12 * 6; ++_i)
         _copy[_i] = _m[_i];
-    int _rank = pantograph_qr(_m, _tau, _order, 0);
+    int _rank = pantograph_qr(_m, PANTOGRAPH_UNKNOWNS, _tau, _order, 0);
     if (_rank < 0) {    /* a dependent column: factor again with pivoting, the rank and the idle motions revealed */
         for (int _i = 0; _i < 12 * 6; ++_i)
             _m[_i] = _copy[_i];
-        _rank = pantograph_qr(_m, _tau, _order, 1);
+        _rank = pantograph_qr(_m, PANTOGRAPH_UNKNOWNS, _tau, _order, 1);
     }
     int _determined = 1;
     for (int _j = _rank; _j < 6; ++_j)
@@ -3989,10 +3993,170 @@ int pantograph_assembly_jacobian(const double *q, const double *s, const double 
     for (int _c = 0; _c < 2; ++_c) {
         for (int _i = 0; _i < 12; ++_i)
             _column[_i] = -_Phi_q[_i * 2 + _c];
-        pantograph_qr_solve(_m, _tau, _order, _rank, _column, _x);
+        pantograph_qr_solve(_m, PANTOGRAPH_UNKNOWNS, _tau, _order, _rank, _column, _x);
         for (int _r = 0; _r < 2; ++_r)
             J[_r * 2 + _c] = _determined ? _x[4 + _r] : (double)NAN;
     }
     return _determined;
+}
+/* [Phi_q Phi_s] from the row-major blocks of pantograph_closure_jacobians into m, column-major 12 x 6: the
+ * inverse's dense QR layout. */
+static void pantograph_inverse_column_major(const double *Phi_q, const double *Phi_s, double *m)
+{
+    for (int i = 0; i < 12; ++i) {
+        for (int j = 0; j < 2; ++j)
+            m[j * 12 + i] = Phi_q[i * 2 + j];
+        for (int j = 0; j < 4; ++j)
+            m[(2 + j) * 12 + i] = Phi_s[i * 4 + j];
+    }
+}
+
+/* The legs of the inverse: the connected blocks of [Phi_q Phi_s]'s structural non-zeros, each leg's closure rows and
+ * its unknowns (actuated joints 0..1, then passive joints 2..): each leg closes on its own once p is given. */
+static const int pantograph_inverse_leg1_rows[3] = { 0, 1, 5 };
+static const int pantograph_inverse_leg1_columns[3] = { 0, 2, 3 };
+static const int pantograph_inverse_leg2_rows[3] = { 6, 7, 11 };
+static const int pantograph_inverse_leg2_columns[3] = { 1, 4, 5 };
+
+/* Entry (i, c) of [Phi_q Phi_s]. */
+static inline double pantograph_inverse_entry(const double *Phi_q, const double *Phi_s, const int i, const int c)
+{
+    return c < 2 ? Phi_q[i * 2 + c] : Phi_s[i * 4 + c - 2];
+}
+
+/* The least-squares solution x (q then s) of [Phi_q Phi_s] x = rhs leg by leg: each leg's block by Householder QR
+ * (the blocks decouple, so this is the QR solution of the whole system at the cost of the small blocks).  Returns 0
+ * where a leg's block has a dependent column (rank test: rows eps times the largest column's norm): the pivoted dense
+ * QR takes the system. */
+static inline int pantograph_inverse_leg_solve(const double *Phi_q, const double *Phi_s, const double *rhs, double *x)
+{
+    double largest = 0.0;
+    for (int j = 0; j < 3; ++j) {
+        double sum = 0.0;
+        for (int i = 0; i < 3; ++i) {
+            const double e = pantograph_inverse_entry(Phi_q, Phi_s, pantograph_inverse_leg1_rows[i], pantograph_inverse_leg1_columns[j]);
+            sum += e * e;
+        }
+        largest = sum > largest || sum != sum ? sum : largest;
+    }
+    for (int j = 0; j < 3; ++j) {
+        double sum = 0.0;
+        for (int i = 0; i < 3; ++i) {
+            const double e = pantograph_inverse_entry(Phi_q, Phi_s, pantograph_inverse_leg2_rows[i], pantograph_inverse_leg2_columns[j]);
+            sum += e * e;
+        }
+        largest = sum > largest || sum != sum ? sum : largest;
+    }
+    const double floor = 12 * DBL_EPSILON * sqrt(largest);
+    {   /* leg 1: closure rows 0, 1, 5; unknowns 0, 2, 3 */
+        const int *r = pantograph_inverse_leg1_rows, *cols = pantograph_inverse_leg1_columns;
+        double v[12], y[3];
+        for (int i = 0; i < 3; ++i) {
+            for (int j = 0; j < 3; ++j)
+                v[j * 3 + i] = pantograph_inverse_entry(Phi_q, Phi_s, r[i], cols[j]);
+            v[9 + i] = rhs[r[i]];
+        }
+        if (!pantograph_reduce(v, 3, 3, 4, floor))
+            return 0;
+        for (int i = 0; i < 3; ++i)
+            y[i] = v[9 + i];
+        pantograph_back_substitute(v, 3, 3, y);
+        for (int i = 0; i < 3; ++i)
+            x[cols[i]] = y[i];
+    }
+    {   /* leg 2: closure rows 6, 7, 11; unknowns 1, 4, 5 */
+        const int *r = pantograph_inverse_leg2_rows, *cols = pantograph_inverse_leg2_columns;
+        double v[12], y[3];
+        for (int i = 0; i < 3; ++i) {
+            for (int j = 0; j < 3; ++j)
+                v[j * 3 + i] = pantograph_inverse_entry(Phi_q, Phi_s, r[i], cols[j]);
+            v[9 + i] = rhs[r[i]];
+        }
+        if (!pantograph_reduce(v, 3, 3, 4, floor))
+            return 0;
+        for (int i = 0; i < 3; ++i)
+            y[i] = v[9 + i];
+        pantograph_back_substitute(v, 3, 3, y);
+        for (int i = 0; i < 3; ++i)
+            x[cols[i]] = y[i];
+    }
+    return 1;
+}
+
+/* The Gauss-Newton step x (q then s), the basic least-squares solution of [Phi_q Phi_s] x = b (b is overwritten):
+ * leg by leg where the legs' blocks have full rank, else by the dense QR with column pivoting. */
+static void pantograph_inverse_step(const double *Phi_q, const double *Phi_s, double *b, double *x)
+{
+    if (pantograph_inverse_leg_solve(Phi_q, Phi_s, b, x))
+        return;
+    double m[12 * 6], tau[6];
+    int order[6];
+    pantograph_inverse_column_major(Phi_q, Phi_s, m);
+    const int rank = pantograph_qr(m, 6, tau, order, 1);
+    pantograph_qr_solve(m, 6, tau, order, rank, b, x);
+}
+
+int pantograph_assemble_inverse(const double *p, double *q, double *s, double d, double l, double L, int max_iterations, double tolerance, double max_step, int stall, double *residual)
+{
+    double _phi[12], _Phi_p[24], _Phi_q[24], _Phi_s[48], _step[6];
+    double _history[PANTOGRAPH_STALL_MOST + 1] = {0.0};  /* max |phi| of the last steps, a ring */
+    int _taken = 0, _converged = 0;
+    const int _stall = stall > PANTOGRAPH_STALL_MOST ? PANTOGRAPH_STALL_MOST : stall;
+    for (int _k = 0; _k < max_iterations; ++_k) {
+        pantograph_closure(q, s, p, d, l, L, _phi);
+        double _worst = 0.0, _finite = 0.0;
+        for (int _i = 0; _i < 12; ++_i) {
+            _worst = fabs(_phi[_i]) > _worst || _phi[_i] != _phi[_i] ? fabs(_phi[_i]) : _worst;
+            _phi[_i] = -_phi[_i];
+        }
+        const int _stalled = _stall > 0 && _k >= _stall && _worst > 0.9 * _history[(_k - _stall) % (PANTOGRAPH_STALL_MOST + 1)];
+        _history[_k % (PANTOGRAPH_STALL_MOST + 1)] = _worst;
+        pantograph_closure_jacobians(q, s, p, l, L, _Phi_p, _Phi_q, _Phi_s);
+        for (int _i = 0; _i < 24; ++_i)
+            _finite += 0.0 * _Phi_q[_i];
+        for (int _i = 0; _i < 48; ++_i)
+            _finite += 0.0 * _Phi_s[_i];
+        if (_worst != _worst || _finite != _finite)
+            break;  /* no step from a point where the closure or its Jacobian is not finite */
+        pantograph_inverse_step(_Phi_q, _Phi_s, _phi, _step);
+        double _largest = 0.0;
+        for (int _j = 0; _j < 6; ++_j) {
+            const double _size = fabs(_step[_j]);
+            _largest = _size > _largest || _size != _size ? _size : _largest;
+        }
+        if (_largest != _largest)
+            break;
+        const double _shorten = max_step > 0.0 && _largest > max_step ? max_step / _largest : 1.0;
+        for (int _j = 0; _j < 2; ++_j)
+            q[_j] += _shorten * _step[_j];
+        for (int _j = 0; _j < 4; ++_j)
+            s[_j] += _shorten * _step[2 + _j];
+        _taken = _k + 1;
+        if (_largest <= tolerance) {
+            _converged = 1;
+            break;
+        }
+        if (_stalled)
+            break;
+    }
+    pantograph_closure(q, s, p, d, l, L, _phi);
+    double _worst = 0.0;
+    for (int _i = 0; _i < 12; ++_i)
+        _worst = fabs(_phi[_i]) > _worst || _phi[_i] != _phi[_i] ? fabs(_phi[_i]) : _worst;
+    *residual = _worst;
+    if (!_converged || _worst != _worst || _worst == HUGE_VAL) {
+        for (int _j = 0; _j < 2; ++_j)
+            q[_j] = (double)NAN;
+        for (int _j = 0; _j < 4; ++_j)
+            s[_j] = (double)NAN;
+        return 0;
+    }
+    return _taken;
+}
+
+void pantograph_assemble_inverse_batch(size_t count, const double *p, double *q, double *s, double d, double l, double L, int max_iterations, double tolerance, double max_step, int stall, double *residual, int *steps)
+{
+    for (size_t _k = 0; _k < count; ++_k)
+        steps[_k] = pantograph_assemble_inverse(p + _k * 2, q + _k * 2, s + _k * 4, d, l, L, max_iterations, tolerance, max_step, stall, residual + _k);
 }
 #endif

@@ -21101,19 +21101,23 @@ void stewart_combined_batch(size_t n, const double *restrict p, const double *re
 /* Rows of the closure, its unknowns s and p, and the actuated joints (symkin/backends/c/assembly.py). */
 #define STEWART_CLOSURE_ROWS 36
 #define STEWART_UNKNOWNS 36
+/* The inverse's unknowns q and s, the most of either, and the longest stall test (steps) the inverse looks back on. */
+#define STEWART_INVERSE_UNKNOWNS 36
+#define STEWART_MOST_UNKNOWNS 36
+#define STEWART_STALL_MOST 32
 
-/* Householder QR with column pivoting of the 36 x 36 column-major matrix m (element (i, j) at m[j * rows + i]: the reflections run down contiguous columns), in place (Golub and Van Loan,
+/* Householder QR with column pivoting of the 36 x cols column-major matrix m (element (i, j) at m[j * rows + i]: the reflections run down contiguous columns), in place (Golub and Van Loan,
  * Matrix Computations, 4th ed., alg. 5.4.1): R on and above the diagonal, each reflection's vector below it (its
  * first entry 1 implied) with its factor in tau, the columns' order in order.  Returns the numerical rank: the
  * steps before a remaining column's norm falls to rows * eps times the largest column's.  Without pivot the columns
  * keep their order (half the work) and a column that falls so returns -1: pivot then. */
-static int stewart_qr(double *m, double *tau, int *order, int pivot)
+static int stewart_qr(double *m, const int cols, double *tau, int *order, int pivot)
 {
-    const int rows = STEWART_CLOSURE_ROWS, cols = STEWART_UNKNOWNS;
+    const int rows = STEWART_CLOSURE_ROWS;
     const int steps = rows < cols ? rows : cols;
     /* each column's squared norm below row j, downdated by the row j leaves (LAPACK's xLAQP2), and recomputed
        where the downdate cancelled most of it */
-    double norm2[STEWART_UNKNOWNS], exact2[STEWART_UNKNOWNS];
+    double norm2[STEWART_MOST_UNKNOWNS], exact2[STEWART_MOST_UNKNOWNS];
     double first = 0.0;
     for (int c = 0; c < cols; ++c) {
         order[c] = c;
@@ -21179,9 +21183,9 @@ static int stewart_qr(double *m, double *tau, int *order, int pivot)
 
 /* The basic least-squares solution x of m x = b from stewart_qr's factors (b is overwritten): 0 in the columns past
  * the rank. */
-static void stewart_qr_solve(const double *m, const double *tau, const int *order, int rank, double *b, double *x)
+static void stewart_qr_solve(const double *m, const int cols, const double *tau, const int *order, int rank, double *b, double *x)
 {
-    const int rows = STEWART_CLOSURE_ROWS, cols = STEWART_UNKNOWNS;
+    const int rows = STEWART_CLOSURE_ROWS;
     for (int j = 0; j < rank; ++j) {
         double w = b[j];
         for (int i = j + 1; i < rows; ++i)
@@ -21554,8 +21558,8 @@ static void stewart_step(const double *Phi_s, const double *Phi_p, double *b, do
     double m[36 * 36], tau[36];
     int order[36];
     stewart_column_major(Phi_s, Phi_p, m);
-    const int rank = stewart_qr(m, tau, order, 1);
-    stewart_qr_solve(m, tau, order, rank, b, x);
+    const int rank = stewart_qr(m, STEWART_UNKNOWNS, tau, order, 1);
+    stewart_qr_solve(m, STEWART_UNKNOWNS, tau, order, rank, b, x);
 }
 
 /* max |phi| over the closure's rows (NaN where a row is NaN), and in *scale max(1, |p|): the pose's scale, which the
@@ -21643,11 +21647,11 @@ int stewart_assembly_jacobian(const double *q, const double *s, const double *p,
     double _copy[36 * 36];
     for (int _i = 0; _i < 36 * 36; ++_i)
         _copy[_i] = _m[_i];
-    int _rank = stewart_qr(_m, _tau, _order, 0);
+    int _rank = stewart_qr(_m, STEWART_UNKNOWNS, _tau, _order, 0);
     if (_rank < 0) {    /* a dependent column: factor again with pivoting, the rank and the idle motions revealed */
         for (int _i = 0; _i < 36 * 36; ++_i)
             _m[_i] = _copy[_i];
-        _rank = stewart_qr(_m, _tau, _order, 1);
+        _rank = stewart_qr(_m, STEWART_UNKNOWNS, _tau, _order, 1);
     }
     int _determined = 1;
     for (int _j = _rank; _j < 36; ++_j)
@@ -21655,10 +21659,274 @@ int stewart_assembly_jacobian(const double *q, const double *s, const double *p,
     for (int _c = 0; _c < 6; ++_c) {
         for (int _i = 0; _i < 36; ++_i)
             _column[_i] = -_Phi_q[_i * 6 + _c];
-        stewart_qr_solve(_m, _tau, _order, _rank, _column, _x);
+        stewart_qr_solve(_m, STEWART_UNKNOWNS, _tau, _order, _rank, _column, _x);
         for (int _r = 0; _r < 6; ++_r)
             J[_r * 6 + _c] = _determined ? _x[30 + _r] : (double)NAN;
     }
     return _determined;
+}
+/* [Phi_q Phi_s] from the row-major blocks of stewart_closure_jacobians into m, column-major 36 x 36: the
+ * inverse's dense QR layout. */
+static void stewart_inverse_column_major(const double *Phi_q, const double *Phi_s, double *m)
+{
+    for (int i = 0; i < 36; ++i) {
+        for (int j = 0; j < 6; ++j)
+            m[j * 36 + i] = Phi_q[i * 6 + j];
+        for (int j = 0; j < 30; ++j)
+            m[(6 + j) * 36 + i] = Phi_s[i * 30 + j];
+    }
+}
+
+/* The legs of the inverse: the connected blocks of [Phi_q Phi_s]'s structural non-zeros, each leg's closure rows and
+ * its unknowns (actuated joints 0..5, then passive joints 6..): each leg closes on its own once p is given. */
+static const int stewart_inverse_leg1_rows[6] = { 0, 1, 2, 3, 4, 5 };
+static const int stewart_inverse_leg1_columns[6] = { 0, 6, 7, 8, 9, 10 };
+static const int stewart_inverse_leg2_rows[6] = { 6, 7, 8, 9, 10, 11 };
+static const int stewart_inverse_leg2_columns[6] = { 1, 11, 12, 13, 14, 15 };
+static const int stewart_inverse_leg3_rows[6] = { 12, 13, 14, 15, 16, 17 };
+static const int stewart_inverse_leg3_columns[6] = { 2, 16, 17, 18, 19, 20 };
+static const int stewart_inverse_leg4_rows[6] = { 18, 19, 20, 21, 22, 23 };
+static const int stewart_inverse_leg4_columns[6] = { 3, 21, 22, 23, 24, 25 };
+static const int stewart_inverse_leg5_rows[6] = { 24, 25, 26, 27, 28, 29 };
+static const int stewart_inverse_leg5_columns[6] = { 4, 26, 27, 28, 29, 30 };
+static const int stewart_inverse_leg6_rows[6] = { 30, 31, 32, 33, 34, 35 };
+static const int stewart_inverse_leg6_columns[6] = { 5, 31, 32, 33, 34, 35 };
+
+/* Entry (i, c) of [Phi_q Phi_s]. */
+static inline double stewart_inverse_entry(const double *Phi_q, const double *Phi_s, const int i, const int c)
+{
+    return c < 6 ? Phi_q[i * 6 + c] : Phi_s[i * 30 + c - 6];
+}
+
+/* The least-squares solution x (q then s) of [Phi_q Phi_s] x = rhs leg by leg: each leg's block by Householder QR
+ * (the blocks decouple, so this is the QR solution of the whole system at the cost of the small blocks).  Returns 0
+ * where a leg's block has a dependent column (rank test: rows eps times the largest column's norm): the pivoted dense
+ * QR takes the system. */
+static inline int stewart_inverse_leg_solve(const double *Phi_q, const double *Phi_s, const double *rhs, double *x)
+{
+    double largest = 0.0;
+    for (int j = 0; j < 6; ++j) {
+        double sum = 0.0;
+        for (int i = 0; i < 6; ++i) {
+            const double e = stewart_inverse_entry(Phi_q, Phi_s, stewart_inverse_leg1_rows[i], stewart_inverse_leg1_columns[j]);
+            sum += e * e;
+        }
+        largest = sum > largest || sum != sum ? sum : largest;
+    }
+    for (int j = 0; j < 6; ++j) {
+        double sum = 0.0;
+        for (int i = 0; i < 6; ++i) {
+            const double e = stewart_inverse_entry(Phi_q, Phi_s, stewart_inverse_leg2_rows[i], stewart_inverse_leg2_columns[j]);
+            sum += e * e;
+        }
+        largest = sum > largest || sum != sum ? sum : largest;
+    }
+    for (int j = 0; j < 6; ++j) {
+        double sum = 0.0;
+        for (int i = 0; i < 6; ++i) {
+            const double e = stewart_inverse_entry(Phi_q, Phi_s, stewart_inverse_leg3_rows[i], stewart_inverse_leg3_columns[j]);
+            sum += e * e;
+        }
+        largest = sum > largest || sum != sum ? sum : largest;
+    }
+    for (int j = 0; j < 6; ++j) {
+        double sum = 0.0;
+        for (int i = 0; i < 6; ++i) {
+            const double e = stewart_inverse_entry(Phi_q, Phi_s, stewart_inverse_leg4_rows[i], stewart_inverse_leg4_columns[j]);
+            sum += e * e;
+        }
+        largest = sum > largest || sum != sum ? sum : largest;
+    }
+    for (int j = 0; j < 6; ++j) {
+        double sum = 0.0;
+        for (int i = 0; i < 6; ++i) {
+            const double e = stewart_inverse_entry(Phi_q, Phi_s, stewart_inverse_leg5_rows[i], stewart_inverse_leg5_columns[j]);
+            sum += e * e;
+        }
+        largest = sum > largest || sum != sum ? sum : largest;
+    }
+    for (int j = 0; j < 6; ++j) {
+        double sum = 0.0;
+        for (int i = 0; i < 6; ++i) {
+            const double e = stewart_inverse_entry(Phi_q, Phi_s, stewart_inverse_leg6_rows[i], stewart_inverse_leg6_columns[j]);
+            sum += e * e;
+        }
+        largest = sum > largest || sum != sum ? sum : largest;
+    }
+    const double floor = 36 * DBL_EPSILON * sqrt(largest);
+    {   /* leg 1: closure rows 0, 1, 2, 3, 4, 5; unknowns 0, 6, 7, 8, 9, 10 */
+        const int *r = stewart_inverse_leg1_rows, *cols = stewart_inverse_leg1_columns;
+        double v[42], y[6];
+        for (int i = 0; i < 6; ++i) {
+            for (int j = 0; j < 6; ++j)
+                v[j * 6 + i] = stewart_inverse_entry(Phi_q, Phi_s, r[i], cols[j]);
+            v[36 + i] = rhs[r[i]];
+        }
+        if (!stewart_reduce(v, 6, 6, 7, floor))
+            return 0;
+        for (int i = 0; i < 6; ++i)
+            y[i] = v[36 + i];
+        stewart_back_substitute(v, 6, 6, y);
+        for (int i = 0; i < 6; ++i)
+            x[cols[i]] = y[i];
+    }
+    {   /* leg 2: closure rows 6, 7, 8, 9, 10, 11; unknowns 1, 11, 12, 13, 14, 15 */
+        const int *r = stewart_inverse_leg2_rows, *cols = stewart_inverse_leg2_columns;
+        double v[42], y[6];
+        for (int i = 0; i < 6; ++i) {
+            for (int j = 0; j < 6; ++j)
+                v[j * 6 + i] = stewart_inverse_entry(Phi_q, Phi_s, r[i], cols[j]);
+            v[36 + i] = rhs[r[i]];
+        }
+        if (!stewart_reduce(v, 6, 6, 7, floor))
+            return 0;
+        for (int i = 0; i < 6; ++i)
+            y[i] = v[36 + i];
+        stewart_back_substitute(v, 6, 6, y);
+        for (int i = 0; i < 6; ++i)
+            x[cols[i]] = y[i];
+    }
+    {   /* leg 3: closure rows 12, 13, 14, 15, 16, 17; unknowns 2, 16, 17, 18, 19, 20 */
+        const int *r = stewart_inverse_leg3_rows, *cols = stewart_inverse_leg3_columns;
+        double v[42], y[6];
+        for (int i = 0; i < 6; ++i) {
+            for (int j = 0; j < 6; ++j)
+                v[j * 6 + i] = stewart_inverse_entry(Phi_q, Phi_s, r[i], cols[j]);
+            v[36 + i] = rhs[r[i]];
+        }
+        if (!stewart_reduce(v, 6, 6, 7, floor))
+            return 0;
+        for (int i = 0; i < 6; ++i)
+            y[i] = v[36 + i];
+        stewart_back_substitute(v, 6, 6, y);
+        for (int i = 0; i < 6; ++i)
+            x[cols[i]] = y[i];
+    }
+    {   /* leg 4: closure rows 18, 19, 20, 21, 22, 23; unknowns 3, 21, 22, 23, 24, 25 */
+        const int *r = stewart_inverse_leg4_rows, *cols = stewart_inverse_leg4_columns;
+        double v[42], y[6];
+        for (int i = 0; i < 6; ++i) {
+            for (int j = 0; j < 6; ++j)
+                v[j * 6 + i] = stewart_inverse_entry(Phi_q, Phi_s, r[i], cols[j]);
+            v[36 + i] = rhs[r[i]];
+        }
+        if (!stewart_reduce(v, 6, 6, 7, floor))
+            return 0;
+        for (int i = 0; i < 6; ++i)
+            y[i] = v[36 + i];
+        stewart_back_substitute(v, 6, 6, y);
+        for (int i = 0; i < 6; ++i)
+            x[cols[i]] = y[i];
+    }
+    {   /* leg 5: closure rows 24, 25, 26, 27, 28, 29; unknowns 4, 26, 27, 28, 29, 30 */
+        const int *r = stewart_inverse_leg5_rows, *cols = stewart_inverse_leg5_columns;
+        double v[42], y[6];
+        for (int i = 0; i < 6; ++i) {
+            for (int j = 0; j < 6; ++j)
+                v[j * 6 + i] = stewart_inverse_entry(Phi_q, Phi_s, r[i], cols[j]);
+            v[36 + i] = rhs[r[i]];
+        }
+        if (!stewart_reduce(v, 6, 6, 7, floor))
+            return 0;
+        for (int i = 0; i < 6; ++i)
+            y[i] = v[36 + i];
+        stewart_back_substitute(v, 6, 6, y);
+        for (int i = 0; i < 6; ++i)
+            x[cols[i]] = y[i];
+    }
+    {   /* leg 6: closure rows 30, 31, 32, 33, 34, 35; unknowns 5, 31, 32, 33, 34, 35 */
+        const int *r = stewart_inverse_leg6_rows, *cols = stewart_inverse_leg6_columns;
+        double v[42], y[6];
+        for (int i = 0; i < 6; ++i) {
+            for (int j = 0; j < 6; ++j)
+                v[j * 6 + i] = stewart_inverse_entry(Phi_q, Phi_s, r[i], cols[j]);
+            v[36 + i] = rhs[r[i]];
+        }
+        if (!stewart_reduce(v, 6, 6, 7, floor))
+            return 0;
+        for (int i = 0; i < 6; ++i)
+            y[i] = v[36 + i];
+        stewart_back_substitute(v, 6, 6, y);
+        for (int i = 0; i < 6; ++i)
+            x[cols[i]] = y[i];
+    }
+    return 1;
+}
+
+/* The Gauss-Newton step x (q then s), the basic least-squares solution of [Phi_q Phi_s] x = b (b is overwritten):
+ * leg by leg where the legs' blocks have full rank, else by the dense QR with column pivoting. */
+static void stewart_inverse_step(const double *Phi_q, const double *Phi_s, double *b, double *x)
+{
+    if (stewart_inverse_leg_solve(Phi_q, Phi_s, b, x))
+        return;
+    double m[36 * 36], tau[36];
+    int order[36];
+    stewart_inverse_column_major(Phi_q, Phi_s, m);
+    const int rank = stewart_qr(m, 36, tau, order, 1);
+    stewart_qr_solve(m, 36, tau, order, rank, b, x);
+}
+
+int stewart_assemble_inverse(const double *p, double *q, double *s, double r_b, double r_p, double gamma_b, double gamma_p, int max_iterations, double tolerance, double max_step, int stall, double *residual)
+{
+    double _phi[36], _Phi_p[216], _Phi_q[216], _Phi_s[1080], _step[36];
+    double _history[STEWART_STALL_MOST + 1] = {0.0};  /* max |phi| of the last steps, a ring */
+    int _taken = 0, _converged = 0;
+    const int _stall = stall > STEWART_STALL_MOST ? STEWART_STALL_MOST : stall;
+    for (int _k = 0; _k < max_iterations; ++_k) {
+        stewart_closure(q, s, p, r_b, r_p, gamma_b, gamma_p, _phi);
+        double _worst = 0.0, _finite = 0.0;
+        for (int _i = 0; _i < 36; ++_i) {
+            _worst = fabs(_phi[_i]) > _worst || _phi[_i] != _phi[_i] ? fabs(_phi[_i]) : _worst;
+            _phi[_i] = -_phi[_i];
+        }
+        const int _stalled = _stall > 0 && _k >= _stall && _worst > 0.9 * _history[(_k - _stall) % (STEWART_STALL_MOST + 1)];
+        _history[_k % (STEWART_STALL_MOST + 1)] = _worst;
+        stewart_closure_jacobians(q, s, p, r_p, gamma_b, gamma_p, _Phi_p, _Phi_q, _Phi_s);
+        for (int _i = 0; _i < 216; ++_i)
+            _finite += 0.0 * _Phi_q[_i];
+        for (int _i = 0; _i < 1080; ++_i)
+            _finite += 0.0 * _Phi_s[_i];
+        if (_worst != _worst || _finite != _finite)
+            break;  /* no step from a point where the closure or its Jacobian is not finite */
+        stewart_inverse_step(_Phi_q, _Phi_s, _phi, _step);
+        double _largest = 0.0;
+        for (int _j = 0; _j < 36; ++_j) {
+            const double _size = fabs(_step[_j]);
+            _largest = _size > _largest || _size != _size ? _size : _largest;
+        }
+        if (_largest != _largest)
+            break;
+        const double _shorten = max_step > 0.0 && _largest > max_step ? max_step / _largest : 1.0;
+        for (int _j = 0; _j < 6; ++_j)
+            q[_j] += _shorten * _step[_j];
+        for (int _j = 0; _j < 30; ++_j)
+            s[_j] += _shorten * _step[6 + _j];
+        _taken = _k + 1;
+        if (_largest <= tolerance) {
+            _converged = 1;
+            break;
+        }
+        if (_stalled)
+            break;
+    }
+    stewart_closure(q, s, p, r_b, r_p, gamma_b, gamma_p, _phi);
+    double _worst = 0.0;
+    for (int _i = 0; _i < 36; ++_i)
+        _worst = fabs(_phi[_i]) > _worst || _phi[_i] != _phi[_i] ? fabs(_phi[_i]) : _worst;
+    *residual = _worst;
+    if (!_converged || _worst != _worst || _worst == HUGE_VAL) {
+        for (int _j = 0; _j < 6; ++_j)
+            q[_j] = (double)NAN;
+        for (int _j = 0; _j < 30; ++_j)
+            s[_j] = (double)NAN;
+        return 0;
+    }
+    return _taken;
+}
+
+void stewart_assemble_inverse_batch(size_t count, const double *p, double *q, double *s, double r_b, double r_p, double gamma_b, double gamma_p, int max_iterations, double tolerance, double max_step, int stall, double *residual, int *steps)
+{
+    for (size_t _k = 0; _k < count; ++_k)
+        steps[_k] = stewart_assemble_inverse(p + _k * 6, q + _k * 6, s + _k * 30, r_b, r_p, gamma_b, gamma_p, max_iterations, tolerance, max_step, stall, residual + _k);
 }
 #endif

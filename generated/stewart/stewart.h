@@ -680,6 +680,19 @@ int stewart_assemble(const double *q, double *s, double *p, double r_b, double r
  * actuators do not determine the platform (a column of Phi_p past the numerical rank: an interior singularity). */
 int stewart_assembly_jacobian(const double *q, const double *s, const double *p, double r_b, double r_p, double gamma_b, double gamma_p, double *J);
 
+/* stewart_assemble_inverse: the inverse kinematics of any leg topology, for a workspace's continuation: Gauss-Newton on the
+ * closure for the actuated joints q[6] and the passive joints s[30] at the platform pose p[6], started from
+ * the given q and s (a neighbouring pose's) and written back into them - symkin.newton.newton_iterate's rules: a
+ * step is the least-squares solution of [Phi_q Phi_s] (dq, ds) = -phi (Householder QR leg by leg, or of the whole system with column pivoting where a column is dependent), shortened to
+ * max_step (max-norm; <= 0: not shortened), converged when a step's largest entry is at most tolerance; with
+ * stall > 0 (at most 32) it gives up once max |phi| has not fallen below 0.9 times its value stall steps
+ * before.  Returns the steps taken, or 0 with q and s set to NaN where it did not converge; *residual = max |phi| at
+ * the result (the caller judges whether the legs close: a least-squares minimum also converges).  Allocates
+ * nothing.  stewart_assemble_inverse_batch solves count poses (p: count x 6, q: count x 6, s: count x 30,
+ * row-major) with the same parameters, each sample's steps into steps[k] and residual into residual[k]. */
+int stewart_assemble_inverse(const double *p, double *q, double *s, double r_b, double r_p, double gamma_b, double gamma_p, int max_iterations, double tolerance, double max_step, int stall, double *residual);
+void stewart_assemble_inverse_batch(size_t count, const double *p, double *q, double *s, double r_b, double r_p, double gamma_b, double gamma_p, int max_iterations, double tolerance, double max_step, int stall, double *residual, int *steps);
+
 #ifdef __cplusplus
 }
 #endif

@@ -181,7 +181,7 @@ class ClosureAssembly:
         self._home = (q, s, np.asarray(model.info.home, dtype=float))
         self._last = self._home
         #: the generated assembly of a model loaded with the C backend, else None (the run-time solver only)
-        self.generated = _generated_assembly(model)
+        self.generated = generated_assembly(model)
 
     def _step(self, q: np.ndarray, s: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
         """(s, p) at q from the neighbouring assembly (s, p): the generated assembly's where it converged in the
@@ -230,7 +230,7 @@ class ClosureAssembly:
         return np.reshape(s, q.shape[:-1] + (-1,)), np.reshape(p, q.shape[:-1] + (-1,))
 
 
-def _generated_assembly(model: GeneratedModel) -> GeneratedAssembly | None:
+def generated_assembly(model: GeneratedModel) -> GeneratedAssembly | None:
     """The generated assembly of a model loaded with the C backend whose C code has one, else None."""
     if not isinstance(model, LoadedModel) or model.backend != "c":
         return None

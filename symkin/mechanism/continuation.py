@@ -45,8 +45,10 @@ import numpy as np
 from symkin import mechanism, reporting
 from symkin.mechanism import Limits, passive
 from symkin.mechanism.closure import (MAX_STEP, SOLVE_ITERATIONS, SOLVE_TOLERANCE, HomeAssembly, closes,
-                                      closure_sizes, solve_home_assembly, uses_closure)
+                                      closure_sizes, generated_assembly, solve_home_assembly, uses_closure)
+from symkin.newton import NewtonReport
 from symkin.numerics import conditioning, sampling
+from symkin.runtime.assembly import GeneratedAssembly
 from symkin.runtime.info import GeneratedModel
 from symkin.runtime.parallel import ClosureFrames, closure_frames, closure_velocities, solve_closure
 
@@ -82,13 +84,35 @@ def _limits(model: GeneratedModel, limits: Limits | None) -> passive.AssemblyLim
                                   passive.declared_limits(model))
 
 
+def _inverse(model: GeneratedModel) -> GeneratedAssembly | None:
+    """The generated inverse of a model loaded with the C backend (``<model>_assemble_inverse``), else None."""
+    generated = generated_assembly(model)
+    return generated if generated is not None and generated.has_inverse else None
+
+
+def _solve(model: GeneratedModel, q: np.ndarray, s: np.ndarray, p: np.ndarray,
+           inverse: GeneratedAssembly | None) -> NewtonReport:
+    """(q, s) at the poses p (K, m) by Gauss-Newton from the neighbouring (q, s): by the generated inverse in one
+    call for the batch where there is one, else by the run-time solver - the same rules
+    (:func:`symkin.newton.newton_iterate`: the step shortened to MAX_STEP, a stagnating residual given up)."""
+    if inverse is None:
+        return solve_closure(model, q, s, p, unknowns=("q", "s"), tol=SOLVE_TOLERANCE,
+                             max_iterations=SOLVE_ITERATIONS, max_step=MAX_STEP, stall=STALL)
+    q, s = np.array(q, dtype=float, order="C"), np.array(s, dtype=float, order="C")
+    p = np.ascontiguousarray(p, dtype=float)
+    steps, residual = inverse.assemble_inverse(p, q, s, max_iterations=SOLVE_ITERATIONS, tolerance=SOLVE_TOLERANCE,
+                                               max_step=MAX_STEP, stall=STALL)
+    return NewtonReport({"q": q, "s": s, "p": p}, steps > 0, steps, residual, np.full(len(p), np.nan))
+
+
 def _advance(model: GeneratedModel, q: np.ndarray, s: np.ndarray, frames: ClosureFrames, p: np.ndarray,
-             limits: passive.AssemblyLimits) -> tuple[np.ndarray, np.ndarray, ClosureFrames, np.ndarray]:
+             limits: passive.AssemblyLimits, inverse: GeneratedAssembly | None
+             ) -> tuple[np.ndarray, np.ndarray, ClosureFrames, np.ndarray]:
     """(q, s, their closure frames, taken) at the poses p (K, m) solved from the neighbouring solutions (q, s)
-    whose closure frames are ``frames``: taken where the solve converged within the limits and crossed no
-    singularity.  The frames returned serve the next step from these solutions (computed once per solve)."""
-    report = solve_closure(model, q, s, p, unknowns=("q", "s"), tol=SOLVE_TOLERANCE, max_iterations=SOLVE_ITERATIONS,
-                           max_step=MAX_STEP, stall=STALL)
+    whose closure frames are ``frames`` (:func:`_solve`): taken where the solve converged within the limits and
+    crossed no singularity.  The frames returned serve the next step from these solutions (computed once per
+    solve)."""
+    report = _solve(model, q, s, p, inverse)
     solution = report.solution
     assert isinstance(solution, dict), "solve_closure names its vectors"
     q1, s1 = solution["q"], solution["s"]
@@ -111,9 +135,10 @@ def _march(model: GeneratedModel, start: tuple[np.ndarray, np.ndarray, np.ndarra
                     np.ceil(change[~positions].max(initial=0.0) / ANGLE_STEP), 1))
     taken = np.ones(len(targets), dtype=bool)
     frames = closure_frames(model, q, s, p0)
+    inverse = _inverse(model)
     for done, t in enumerate(np.linspace(0.0, 1.0, steps + 1)[1:]):
         reporting.report_progress("continuing the closure (steps)", done=done, total=steps)
-        q, s, frames, step_taken = _advance(model, q, s, frames, p0 + t * (targets - p0), limits)
+        q, s, frames, step_taken = _advance(model, q, s, frames, p0 + t * (targets - p0), limits, inverse)
         taken &= step_taken
     return q, s, taken
 
@@ -138,6 +163,7 @@ def _flood(model: GeneratedModel, poses: np.ndarray, shape: tuple[int, ...], see
     reached[seed], q[seed], s[seed] = True, seed_solution[0], seed_solution[1]
     frontier = np.array([seed])  # sorted, as np.unique leaves each layer's cells
     frontier_frames = closure_frames(model, q[frontier], s[frontier], poses[frontier])
+    inverse = _inverse(model)
     while len(frontier):
         reporting.report_progress(f"flooding a grid of {len(poses)} cells (cells reached)", done=int(reached.sum()))
         index = np.array(np.unravel_index(frontier, shape)).T
@@ -157,7 +183,7 @@ def _flood(model: GeneratedModel, poses: np.ndarray, shape: tuple[int, ...], see
             break
         at = np.searchsorted(frontier, parent)  # the parents are cells of the last layer, whose frames are known
         frames = ClosureFrames(frontier_frames.task[at], frontier_frames.actuated[at])
-        q1, s1, after, taken = _advance(model, q[parent], s[parent], frames, poses[cells], limits)
+        q1, s1, after, taken = _advance(model, q[parent], s[parent], frames, poses[cells], limits, inverse)
         frontier = cells[taken]
         frontier_frames = ClosureFrames(after.task[taken], after.actuated[taken])
         reached[frontier], q[frontier], s[frontier] = True, q1[taken], s1[taken]

@@ -13,6 +13,7 @@ flagged (a negative count), never a silent wrong branch.
 from __future__ import annotations
 
 import ctypes
+from typing import Any
 
 import numpy as np
 
@@ -72,6 +73,14 @@ class GeneratedAssembly:
         self._jacobian = library[f"{model.name}_assembly_jacobian"]
         self._jacobian.argtypes = [ctypes.c_void_p] * 3 + doubles + [ctypes.c_void_p]
         self._jacobian.restype = ctypes.c_int
+        try:    # code derived before the inverse has none: the continuation then takes the run-time solver
+            self._inverse: Any = library[f"{model.name}_assemble_inverse_batch"]
+        except AttributeError:
+            self._inverse = None
+        else:
+            self._inverse.argtypes = [ctypes.c_size_t] + [ctypes.c_void_p] * 3 + doubles + [
+                ctypes.c_int, ctypes.c_double, ctypes.c_double, ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p]
+            self._inverse.restype = None
         self._residual = np.zeros(1)
         self._residual_address = self._residual.ctypes.data
         self.name = model.name
@@ -104,6 +113,33 @@ class GeneratedAssembly:
         steps = self._assemble(self._pointer(q, "q"), self._pointer(s, "s", True), self._pointer(p, "p", True),
                                *self._parameters, max_iterations, tolerance, self._residual_address)
         return steps, float(self._residual[0])
+
+    @property
+    def has_inverse(self) -> bool:
+        """Whether the C code holds the generated inverse (``<model>_assemble_inverse``; code derived before it has
+        none)."""
+        return self._inverse is not None
+
+    def assemble_inverse(self, p: np.ndarray, q: np.ndarray, s: np.ndarray, *, max_iterations: int = MAX_ITERATIONS,
+                         tolerance: float = TOLERANCE, max_step: float | None = None, stall: int | None = None
+                         ) -> tuple[np.ndarray, np.ndarray]:
+        """Gauss-Newton for the actuated and passive joints at each pose p (K, m) from the starts q (K, n) and
+        s (K, ns), written back into them (float64 C-contiguous): (steps (K,), max |phi| (K,)), 0 steps and q, s NaN
+        where a sample did not converge - :func:`symkin.newton.newton_iterate`'s rules (``max_step`` shortens a
+        step, ``stall`` gives up on a residual that stagnates) in one call for the batch."""
+        if self._inverse is None:
+            raise GeneratedCodeError(f"{self.name}: its C code predates the generated inverse; derive the model again")
+        count = len(p)
+        for name, array, writable in (("p", p, False), ("q", q, True), ("s", s, True)):
+            if not (isinstance(array, np.ndarray) and array.dtype == np.float64 and array.flags.c_contiguous
+                    and array.shape == (count, self.sizes[name]) and (array.flags.writeable or not writable)):
+                raise ValueError(f"{self.name} assembly: '{name}' must be a{' writable' if writable else ''} float64 "
+                                 f"C-contiguous array of shape ({count}, {self.sizes[name]}), got "
+                                 f"{getattr(array, 'dtype', type(array).__name__)} {np.shape(array)}")
+        steps, residual = np.zeros(count, dtype=np.intc), np.zeros(count)
+        self._inverse(count, p.ctypes.data, q.ctypes.data, s.ctypes.data, *self._parameters, max_iterations, tolerance,
+                      0.0 if max_step is None else max_step, stall or 0, residual.ctypes.data, steps.ctypes.data)
+        return steps, residual
 
     def jacobian(self, q: np.ndarray, s: np.ndarray, p: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
         """J = dp/dq (task x actuated) at an assembled (q, s, p); NaN where the actuators do not determine the

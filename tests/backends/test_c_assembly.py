@@ -19,7 +19,7 @@ from conftest import GENERATED_DIR, ROOT
 from symkin import load, pipeline
 from symkin.backends.c import assembly
 from symkin.backends.c.build import shared_library
-from symkin.mechanism import closure
+from symkin.mechanism import closure, continuation
 from symkin.mechanism.closure import ClosureAssembly, solve_home_assembly
 from symkin.model import model_from_text
 from symkin.errors import GeneratedCodeError
@@ -320,3 +320,46 @@ def test_idle_passive_motions_take_the_pivoted_steps_and_agree_with_the_runtime(
     J = assembly.jacobian(q, s, p)
     velocities = closure_velocities(loaded, q, s, p)
     np.testing.assert_allclose(J, velocities.J, rtol=0, atol=1e-12 * np.abs(J).max())
+
+
+def test_the_generated_inverse_follows_the_runtime_solver(falcon, falcon_home):
+    """``<model>_assemble_inverse_batch``: (q, s) at poses around the home pose from the home assembly, by
+    newton_iterate's rules (damped steps, the stall test), equal the run-time solver's to the Newton tolerance times
+    the condition number of [Phi_q Phi_s]; a pose beyond the workspace converges in neither."""
+    model = falcon[0]
+    home, p_home = falcon_home
+    inverse = GeneratedAssembly(load(model.directory, "c"))
+    assert inverse.has_inverse
+    rng = np.random.default_rng(66)
+    targets = np.vstack([p_home + rng.uniform(-0.02, 0.02, (24, 3)), p_home + [[0.0, 0.0, 0.5], [0.4, 0.0, 0.0]]])
+    q, s = np.tile(home.q, (len(targets), 1)), np.tile(home.s, (len(targets), 1))
+    settings = dict(max_step=closure.MAX_STEP, stall=continuation.STALL)
+    steps, residual = inverse.assemble_inverse(targets, q, s, max_iterations=ITERATIONS, tolerance=TOLERANCE,
+                                               **settings)
+    reference = solve_closure(model, home.q, home.s, targets, unknowns=("q", "s"), tol=TOLERANCE,
+                              max_iterations=ITERATIONS, **settings)
+    np.testing.assert_array_equal(steps > 0, reference.converged)
+    assert reference.converged[:24].all()
+    assert not reference.converged[24:].any()
+    assert np.isnan(q[24:]).all()
+    assert np.isnan(s[24:]).all()
+    assert np.abs(steps[:24] - reference.iterations[:24]).max() <= 1
+    for k in range(24):
+        _, Phi_q, Phi_s = (np.asarray(block) for block in model.closure_jacobians(q[k], s[k], targets[k]))
+        singular = np.linalg.svd(np.hstack([Phi_q, Phi_s]), compute_uv=False)
+        condition = singular[0] / singular[-1]
+        np.testing.assert_allclose(q[k], reference.solution["q"][k], rtol=0, atol=condition * TOLERANCE)
+        np.testing.assert_allclose(s[k], reference.solution["s"][k], rtol=0, atol=condition * TOLERANCE)
+        assert residual[k] <= 64 * EPS
+
+
+def test_the_continued_workspace_takes_its_solves_from_the_generated_inverse(falcon, monkeypatch):
+    """The Falcon's workspace grid continued with the C backend (every solve by the generated inverse: the run-time
+    solver is not called) reaches the cells the numpy backend's run-time solver reaches, with the same joints."""
+    model = falcon[0]
+    runtime = continuation.continued_grid(model, cells=10)
+    monkeypatch.setattr(continuation, "solve_closure", lambda *args, **kwargs: pytest.fail("run-time solver called"))
+    generated = continuation.continued_grid(load(model.directory, "c"), cells=10)
+    np.testing.assert_array_equal(generated.reached, runtime.reached)
+    assert runtime.reached.sum() >= 50
+    np.testing.assert_allclose(generated.q[generated.reached], runtime.q[runtime.reached], rtol=0, atol=1e-9)

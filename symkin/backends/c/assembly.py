@@ -22,7 +22,14 @@ Where a model's C code holds ``closure`` and ``closure_jacobians`` (double preci
 * ``<model>_assembly_jacobian(q, s, p, params..., J)``: J = dp/dq (row-major, task x actuated) at an assembled
   (q, s, p), the p-part of the least-squares solution of [Phi_s Phi_p] (ds, dp) = -Phi_q dq; returns 1, or 0 with J
   set to NaN where the platform is not determined by the actuators (a column of Phi_p past the numerical rank of
-  [Phi_s Phi_p]: a singularity of the interior kind).
+  [Phi_s Phi_p]: a singularity of the interior kind);
+* ``<model>_assemble_inverse(p, q, s, params..., max_iterations, tolerance, max_step, stall, residual)`` and its
+  ``_batch``: Gauss-Newton for the actuated and passive joints (q, s) at a platform pose p, by
+  :func:`symkin.newton.newton_iterate`'s rules (a step longer than ``max_step`` shortened to it, a residual that has
+  not fallen below :data:`symkin.newton.STALL_DECREASE` times its value ``stall`` steps before given up) - the
+  continuation of a workspace (:mod:`symkin.mechanism.continuation`) takes its batches of solves from it.  The legs
+  decouple entirely there ([Phi_q Phi_s] is block diagonal over them): each step is the Householder QR solution of
+  each leg's block, the pivoted dense QR where a block has a dependent column.
 
 The legs make the system sparse: Phi_s is block diagonal over the legs (each leg's closure rows hold only its own
 passive joints; :func:`leg_blocks` finds the blocks from the structural zeros of the generated ``closure_jacobians``).
@@ -42,9 +49,13 @@ from __future__ import annotations
 
 from typing import Any
 
+from symkin.newton import STALL_DECREASE
+
 #: The legs close where every closure row is below this times the pose's scale (m): the run-time's rule,
 #: :data:`symkin.mechanism.closure.CLOSED`.
 CLOSED = 1e-9
+#: The longest stall test (steps looked back on) of the generated inverse: its ring of residuals has this many + 1.
+STALL_MOST = 32
 
 
 def leg_blocks(zero: list[bool], rows: int, ns: int) -> tuple[list[dict[str, list[int]]], list[int]] | None:
@@ -92,6 +103,10 @@ def assembly_context(functions: list[dict[str, Any]], model_name: str) -> dict[s
     reduced = sum(len(b["rows"]) - len(b["columns"]) for b in legs) + len(free)
     if reduced < np_:   # the legs' reduced rows cannot determine the pose: the dense QR takes every step
         legs, free = [], []
+    zero_q = [a["zero"] for a in blocks["Phi_q"]["assignments"]]
+    zero_s = [a["zero"] for a in blocks["Phi_s"]["assignments"]]
+    inverse_split = leg_blocks([flag for i in range(rows) for flag in zero_q[i * n:(i + 1) * n] + zero_s[i * ns:(i + 1) * ns]],
+                               rows, n + ns)
     right_sides = max(1, n)     # a step's one, J's n
     placed, cells, rows_before, reduced_before = [], 0, 0, 0
     for block in legs:      # where each leg's rows go: its storage (cells and rows before it) and its reduced rows
@@ -106,6 +121,10 @@ def assembly_context(functions: list[dict[str, Any]], model_name: str) -> dict[s
         "closed": repr(CLOSED),
         "assemble": f"{model_name}_assemble",
         "jacobian": f"{model_name}_assembly_jacobian",
+        "inverse": f"{model_name}_assemble_inverse",
+        "inverse_legs": inverse_split[0] if inverse_split is not None else [],
+        "inverse_unknowns": n + ns, "most_unknowns": max(n + ns, ns + np_),
+        "stall_most": STALL_MOST, "stall_decrease": repr(STALL_DECREASE),
         "closure": closure["symbol"],
         "closure_jacobians": jacobians["symbol"],
         "closure_params": [p["name"] for p in closure["params"]],
