@@ -9695,6 +9695,126 @@
     };
   }
 
+  /** max |v| of an array (NaN where an entry is NaN). */
+  function _maxAbs(v) {
+    let worst = 0;
+    for (const e of v) {
+      worst = Math.abs(e) > worst || e !== e ? Math.abs(e) : worst;
+    }
+    return worst;
+  }
+
+  /**
+   * The basic least-squares solution x of A x = b (A: rows of numbers, tall) by Householder QR with column
+   * pivoting (Golub and Van Loan, Matrix Computations, 4th ed., alg. 5.4.1), the C backend's dense solve: the
+   * numerical rank ends at a remaining column's norm of rows eps times the largest column's, the columns past it
+   * get 0.
+   */
+  function _leastSquares(A, b) {
+    const rows = A.length, cols = A[0].length, eps = 2.220446049250313e-16;
+    const m = A.map((row) => row.slice()), y = b.slice(), order = [];
+    const remaining = (c, from) => {
+      let sum = 0;
+      for (let i = from; i < rows; i++) sum += m[i][c] * m[i][c];
+      return sum;
+    };
+    let first = 0;
+    for (let c = 0; c < cols; c++) {
+      order.push(c);
+      first = Math.max(first, remaining(c, 0));
+    }
+    first = Math.sqrt(first);
+    let rank = 0;
+    for (let j = 0; j < Math.min(rows, cols); j++) {
+      let best = j, largest = remaining(j, j);
+      for (let c = j + 1; c < cols; c++) {
+        const sum = remaining(c, j);
+        if (sum > largest) {
+          best = c;
+          largest = sum;
+        }
+      }
+      if (best !== j) {
+        for (const row of m) [row[j], row[best]] = [row[best], row[j]];
+        [order[j], order[best]] = [order[best], order[j]];
+      }
+      const norm = Math.sqrt(largest);
+      if (!(norm > rows * eps * first) || norm === 0) break;
+      const x0 = m[j][j], beta = x0 >= 0 ? -norm : norm;
+      const tau = (beta - x0) / beta, scale = 1 / (x0 - beta);
+      for (let i = j + 1; i < rows; i++) m[i][j] *= scale;
+      m[j][j] = beta;
+      const reflect = (get, set) => {
+        let w = get(j);
+        for (let i = j + 1; i < rows; i++) w += m[i][j] * get(i);
+        w *= tau;
+        set(j, get(j) - w);
+        for (let i = j + 1; i < rows; i++) set(i, get(i) - w * m[i][j]);
+      };
+      for (let c = j + 1; c < cols; c++) reflect((i) => m[i][c], (i, v) => { m[i][c] = v; });
+      reflect((i) => y[i], (i, v) => { y[i] = v; });
+      rank = j + 1;
+    }
+    const x = new Array(cols).fill(0);
+    for (let j = rank - 1; j >= 0; j--) {
+      let sum = y[j];
+      for (let c = j + 1; c < rank; c++) sum -= m[j][c] * x[order[c]];
+      x[order[j]] = sum / m[j][j];
+    }
+    return x;
+  }
+
+  /**
+   * The inverse kinematics of legs of any topology: Gauss-Newton on the generated closure for the actuated joints q
+   * and the passive joints s at the platform pose p, started from the given q and s (a nearby assembly), by the
+   * rules of symkin.newton.newton_iterate and of the C backend's stewart_assemble_inverse: each step the
+   * least-squares solution of [Phi_q Phi_s] (dq, ds) = -phi, shortened to options.max_step (max-norm; 0: not
+   * shortened), converged when a step's largest entry is at most options.tolerance; with options.stall > 0 it gives
+   * up once max |phi| has not fallen below 0.9 times its value options.stall steps before.  The
+   * caller judges whether the legs close (a least-squares minimum also converges): residual is max |phi|.
+   *
+   * @param {number[]} p the platform pose; q, s the start
+   * @param {Object} [params] parameter values of closure and closure_jacobians
+   * @param {Object} [options] max_iterations (50), tolerance (1e-12), max_step (0), stall (0)
+   * @returns {{q: number[], s: number[], steps: number, residual: number}} steps 0 and q, s NaN where it did not
+   *     converge
+   */
+  function assemble_inverse(p, q, s, params, options) {
+    const closureNames = ["r_b", "r_p", "gamma_b", "gamma_p"], jacobianNames = ["r_p", "gamma_b", "gamma_p"];
+    const given = _params(params, [...new Set([...closureNames, ...jacobianNames])], "assemble_inverse");
+    const pick = (names) => Object.fromEntries(names.filter((k) => k in given).map((k) => [k, given[k]]));
+    const settings = Object.assign({ max_iterations: 50, tolerance: 1e-12, max_step: 0, stall: 0 }, options || {});
+    const n = q.length, history = [];
+    let x = [...q, ...s], taken = 0, converged = false;
+    for (let k = 0; k < settings.max_iterations; k++) {
+      const [qk, sk] = [x.slice(0, n), x.slice(n)];
+      const phi = closure(qk, sk, p, pick(closureNames));
+      const worst = _maxAbs(phi);
+      const stalled = settings.stall > 0 && k >= settings.stall && worst > 0.9 * history[k - settings.stall];
+      history.push(worst);
+      const blocks = closure_jacobians(qk, sk, p, pick(jacobianNames));
+      const A = blocks.Phi_q.map((row, i) => [...row, ...blocks.Phi_s[i]]);
+      if (!Number.isFinite(worst) || !A.every((row) => row.every(Number.isFinite))) break;
+      const step = _leastSquares(A, phi.map((v) => -v));
+      const largest = _maxAbs(step);
+      if (largest !== largest) break;
+      const shorten = settings.max_step > 0 && largest > settings.max_step ? settings.max_step / largest : 1;
+      x = x.map((v, i) => v + shorten * step[i]);
+      taken = k + 1;
+      if (largest <= settings.tolerance) {
+        converged = true;
+        break;
+      }
+      if (stalled) break;
+    }
+    const [qs, ss] = [x.slice(0, n), x.slice(n)];
+    const residual = _maxAbs(closure(qs, ss, p, pick(closureNames)));
+    if (!converged || !Number.isFinite(residual)) {
+      return { q: qs.map(() => NaN), s: ss.map(() => NaN), steps: 0, residual };
+    }
+    return { q: qs, s: ss, steps: taken, residual };
+  }
+
   return Object.freeze({
     SYMKIN_VERSION: "0.1.0",
     MODEL_NAME: "stewart",
@@ -9750,5 +9870,6 @@
     kinetic_energy: kinetic_energy,
     potential_energy: potential_energy,
     combined: combined,
+    assemble_inverse: assemble_inverse,
   });
 });

@@ -148,28 +148,18 @@ function closureJacobian(state) {
   return rates === null ? null : rates.slice(0, data.task_space.length);
 }
 
-/** Gauss-Newton on the generated closure for (q, s) at the pose p from the assembly (q, s) nearby (steps on
- *  [Phi_q Phi_s] by least squares, each at most max_step long), as symkin.runtime.parallel.solve_closure with the
- *  settings of symkin.analysis.closure_workspace (data.closure): {q, s} where the legs close (every row below
- *  closed times the pose's scale), else null. */
+/** (q, s) at the pose p from the assembly (q, s) nearby by the generated solver of the model's script
+ *  (assemble_inverse: Gauss-Newton on the closure, the C backend's <model>_assemble_inverse and
+ *  symkin.runtime.parallel.solve_closure's rules) with the settings of symkin.analysis.closure_workspace
+ *  (data.closure): {q, s} where the legs close (every row below closed times the pose's scale), else null. */
 function solveClosure(q, s, p) {
   const { max_step: maxStep, tolerance, closed, iterations } = data.closure;
-  let x = [...q, ...s];
-  const n = q.length, scale = Math.max(1, ...p.map(Math.abs));
-  for (let k = 0; k < iterations; k++) {
-    const [qk, sk] = [x.slice(0, n), x.slice(n)];
-    const phi = call("closure", qk, sk, p);
-    const { Phi_q, Phi_s } = call("closure_jacobians", qk, sk, p);
-    const step = leastSquares(Phi_q.map((row, i) => [...row, ...Phi_s[i]]), phi.map((v) => [-v]));
-    if (step === null || !step.every((r) => Number.isFinite(r[0]))) return null;
-    const longest = Math.max(...step.map((r) => Math.abs(r[0])));
-    const shrink = longest > maxStep ? maxStep / longest : 1;
-    x = x.map((v, i) => v + shrink * step[i][0]);
-    if (longest <= tolerance) break;
-  }
-  const [qs, ss] = [x.slice(0, n), x.slice(n)];
-  const residual = Math.max(...call("closure", qs, ss, p).map(Math.abs));
-  return residual <= closed * scale ? { q: qs, s: ss } : null;
+  const names = new Set([...model.FUNCTIONS.closure.parameters, ...model.FUNCTIONS.closure_jacobians.parameters]);
+  const params = Object.fromEntries([...names].filter((name) => state.params[name] !== undefined)
+    .map((name) => [name, state.params[name]]));
+  const solved = model.assemble_inverse(p, q, s, params, { max_iterations: iterations, tolerance, max_step: maxStep });
+  const scale = Math.max(1, ...p.map(Math.abs));
+  return solved.steps > 0 && solved.residual <= closed * scale ? { q: solved.q, s: solved.s } : null;
 }
 
 /** 1/kappa = sigma_min / sigma_max of a rated task Jacobian ({raw, rated}); null where J is missing or not finite. */

@@ -17,6 +17,7 @@ atan2 (each within one ulp).
 from __future__ import annotations
 
 import json
+from collections.abc import Sequence
 from typing import Any
 
 from symkin.backends.comments import block_comment, wrapped
@@ -25,6 +26,7 @@ from symkin.backends.layout import element_text, used_symbols
 from symkin.backends.templating import provenance, render
 from symkin.ir.bundle import ModelCode
 from symkin.ir.spec import InputSpec, OptimizedFunction
+from symkin.newton import STALL_DECREASE
 
 TEMPLATE = "js/module.js.j2"
 DOC_WIDTH = 88
@@ -87,8 +89,20 @@ def _function_context(f: OptimizedFunction, printer: JsPrinter) -> dict[str, Any
     }
 
 
+def _assembly_context(functions: Sequence[OptimizedFunction]) -> dict[str, str] | None:
+    """The template's ``assembly`` (the generated inverse, ``assemble_inverse``): the parameters of ``closure`` and
+    ``closure_jacobians`` (JSON lists), or None where the script has not both."""
+    by_name = {f.spec.name: f.spec for f in functions}
+    if not {"closure", "closure_jacobians"} <= set(by_name):
+        return None
+    return {key: json.dumps([p.name for p in by_name[name].parameter_inputs])
+            for key, name in (("closure_params", "closure"), ("jacobian_params", "closure_jacobians"))}
+
+
 def emit_script(code: ModelCode) -> dict[str, str | bytes]:
-    """{<model>.js: script text} for ``code``."""
+    """{<model>.js: script text} for ``code``; with ``closure`` and ``closure_jacobians`` also ``assemble_inverse``
+    (Gauss-Newton for the joints at a platform pose, the C backend's ``<model>_assemble_inverse``: the viewer's
+    solver)."""
     printer = JsPrinter()
     free = [p for p in code.parameters if not p.fixed]
     text = render(
@@ -102,6 +116,7 @@ def emit_script(code: ModelCode) -> dict[str, str | bytes]:
         functions=[_function_context(f, printer) for f in code.functions],
         name_json=json.dumps(code.name), hash_json=json.dumps(code.hash),
         version_json=json.dumps(code.symkin_version),
+        assembly=_assembly_context(code.functions), stall_decrease=repr(STALL_DECREASE),
     )
     return {f"{code.name}.js": text}
 
