@@ -12,8 +12,8 @@ entry points unless ``SYMKIN_C_ENTRY=ctypes``) and from a C loop
 
 Then the workspace of each device as ``symkin workspace DIR --backend c --no-figure`` computes it (its scene's
 functions, the C backend; the time the command reports, "done in"): the Falcon's home assembly continued over a
-Cartesian grid, the DELTA's joint space sampled through its closed-form fk.  Issue 63's target: the Falcon within
-3x of the DELTA.
+Cartesian grid, the DELTA's joint space sampled through its closed-form fk; and its datasheet as ``symkin rate DIR
+--backend c`` computes it (the time it reports).  Issue 63's target: the Falcon within 3x of the DELTA.
 
 Run with `make bench` or `python benchmarks/bench_general_legs.py [--samples N]`.
 """
@@ -160,23 +160,34 @@ def main(argv: list[str] | None = None) -> int:
         seconds = _per_call(step, _path(centre, args.samples), args.repeat)
         rows.append(["Novint Falcon, generated assembly", "c, from Python", f"{1e6 * seconds:.2f}"])
         rows.append(["Novint Falcon, generated assembly", "c, from C", f"{_c_loop(folded, s, p, centre[0], args.samples, args.repeat):.2f}"])
-        workspace = [[device, f"{_workspace_seconds(model, Path(tmp) / 'scene'):.2f}"]
-                     for device, model in (("Novint Falcon (general legs, continued)", "devices/novint_falcon.yaml"),
-                                           ("DELTA (closed forms, sampled)", "delta.yaml"))]
+        workspace = []
+        for device, model in (("Novint Falcon (general legs, continued)", "devices/novint_falcon.yaml"),
+                              ("DELTA (closed forms, sampled)", "delta.yaml")):
+            directory = symkin.derive(ROOT / "models" / model, Path(tmp) / "scene")
+            workspace.append([device, f"{_workspace_seconds(directory):.2f}", f"{_rate_seconds(directory):.2f}"])
     print(format_table(["device", "backend", "fk + J per call, warm (us)"], rows))
     print("issue 63's targets for the Falcon: <= 5 us per call in C, <= 10 us from Python")
-    print(format_table(["device", "symkin workspace --backend c (s)"], workspace))
-    print("issue 63's target: the Falcon's workspace within 3x of the DELTA's time")
+    print(format_table(["device", "symkin workspace --backend c (s)", "symkin rate --backend c (s)"], workspace))
+    print("issue 63's target: the Falcon's workspace and rating within 3x of the DELTA's time")
     return 0
 
 
-def _workspace_seconds(model: str, out: Path) -> float:
-    """The time ``symkin workspace`` reports for the model file ``model`` (under models/), derived with its scene."""
-    directory = symkin.derive(ROOT / "models" / model, out)
+def _workspace_seconds(directory: Path) -> float:
+    """The time ``symkin workspace`` reports ("done in") for a model derived with its scene into ``directory``."""
     run = subprocess.run([sys.executable, "-m", "symkin", "workspace", str(directory), "--backend", "c",
                           "--no-figure"], capture_output=True, text=True, check=True)
     done = [line for line in (run.stdout + run.stderr).splitlines() if line.strip().startswith("done in")]
     return float(done[-1].split()[2])
+
+
+def _rate_seconds(directory: Path) -> float:
+    """The time ``symkin rate`` reports ("wrote ... in T s") for a model derived into ``directory`` (effort limits
+    of 1 N m: the Falcon's model file declares no drives)."""
+    run = subprocess.run([sys.executable, "-m", "symkin", "rate", str(directory), "--backend", "c", "--effort-limit",
+                          "1", "--no-figure", "-o", str(directory.parent / "rate")], capture_output=True, text=True,
+                         check=True)
+    wrote = [line for line in (run.stdout + run.stderr).splitlines() if line.startswith("wrote ")]
+    return float(wrote[-1].split()[-2])
 
 
 if __name__ == "__main__":
