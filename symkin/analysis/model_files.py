@@ -124,6 +124,14 @@ def generated_directory(path: str, backends: Sequence[str],
         yield directory
 
 
+#: {(model name, model hash): (model, its derivation graph)} of the last model file derived in this process: a
+#: command after another on the same mechanism (symkin identify after symkin excite, in a notebook or a test) reuses
+#: the quantities derived before (the base parameters, the regressor) instead of deriving them again.  The model hash
+#: covers everything the derivation reads (the mechanism, its parameters, bodies and drives; not the scene, which
+#: only says what is emitted).  One entry: the graph of a large model holds many expressions.
+_LAST_DERIVATION: dict[tuple[str, str], tuple[Model, Any]] = {}
+
+
 def _derived(source: Path, backends: Sequence[str], outputs: Sequence[str] | Mapping[MechanismKind, Sequence[str]],
              optional: Sequence[str] | Mapping[MechanismKind, Sequence[str]], closure: Sequence[str] | None,
              scratch: str, key: str | None, reading: Mapping[str, Any], display: Display) -> Path:
@@ -135,7 +143,13 @@ def _derived(source: Path, backends: Sequence[str], outputs: Sequence[str] | Map
     from symkin.model import load_model as load_model_file
 
     model = load_model_file(source, **reading)
-    derivation = Derivation(model)
+    key_of_model = (model.name, model.hash)
+    if key_of_model in _LAST_DERIVATION:    # the same mechanism as the last one derived here: its graph goes on
+        model, derivation = _LAST_DERIVATION[key_of_model]
+    else:
+        derivation = Derivation(model)
+        _LAST_DERIVATION.clear()
+        _LAST_DERIVATION[key_of_model] = (model, derivation)
     wanted = outputs.get(analysis_kind(model), ANALYSIS_OUTPUTS) if isinstance(outputs, Mapping) else outputs
     if ((closure is not None or isinstance(outputs, Mapping)) and model.parallel is not None
             and not derivation.available(["distance_legs"])[0]):
