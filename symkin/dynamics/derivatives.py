@@ -5,6 +5,9 @@ and the linearization of a plant at a state.
 ``inverse_dynamics_derivatives``   d tau/dq, d tau/dqd and d tau/dqdd = M of tau = M qdd + V + G + F_f (n x n each)
 ``forward_dynamics_derivatives``   d qdd/dq, d qdd/dqd and d qdd/dtau = M^-1 of the forward dynamics (n x n each)
 ``gravity_derivatives``            d G/dq of the gravity vector (springs included; n x n): the static stiffness
+``static_torque_derivatives``      d tau_s/dq of the static torques tau_s = G(q) - J(q)^T F that hold the arm still
+                                   under gravity and a wrench F on the TCP (n x n): gravity's stiffness and the
+                                   force's (Pinocchio's computeStaticTorqueDerivatives)
 ``fk_sensitivities``               d base_T_tcp / d p of the free parameters p (lengths, offsets; 16 x P)
 ``jacobian_sensitivities``         d J / d p (m n x P): for kinematic calibration and design gradients
 ``inverse_dynamics_sensitivities`` d tau / d p (n x P): of lengths, masses, inertias, friction, gear ratios
@@ -36,6 +39,7 @@ gives, and one more LDL^T solve with the n + n + n right-hand sides [-d tau/dq |
 from __future__ import annotations
 
 import symengine as se
+import sympy
 
 from symkin.dynamics.linsolve import ldl_solve
 from symkin.dynamics.program import Program
@@ -43,7 +47,7 @@ from symkin.dynamics.quantities import (BoundTerms, coordinate_symbols, function
                                         require_gravity)
 from symkin.errors import DerivationError
 from symkin.ir.quantity import Deriving, quantity
-from symkin.ir.spec import FunctionSpec
+from symkin.ir.spec import FunctionSpec, InputSpec
 from symkin.kinematics.quantities import forward_kinematics, task_jacobian
 from symkin.symengine_bridge import to_symengine
 
@@ -135,6 +139,29 @@ def _gravity_derivatives(d: Deriving) -> FunctionSpec:
         "G(q + dq) = G(q) + dG_dq dq to first order (seed eq. 8.31's G = du/dq, so dG_dq = d^2u/dq^2 is symmetric "
         "for gravity and springs alike); derivative of the Newton-Euler program at rest (automatic differentiation).",
         ["q"], program, [("dG_dq", dG, (n, n), "d G / dq: row i, column j is d G_i / d q_j", "")])
+
+
+@quantity("static_torque_derivatives", "d tau_s/dq of the static torques tau_s = G - J^T F (n x n)")
+def _static_torque_derivatives(d: Deriving) -> FunctionSpec:
+    n, task = d.model.dof, d.model.task_space
+    program = Program()
+    G = BoundTerms(d, program).gravity_vector() or [se.Integer(0)] * n
+    J = program.bind([to_symengine(v) for v in d[task_jacobian].outputs[0].expr])   # row-major, task x joints
+    names = tuple(f"F_{c}" for c in task)
+    wrench = InputSpec("F", "vector", tuple(sympy.Symbol(name, real=True) for name in names), names,
+                       tuple("N" if c in ("x", "y", "z") else "N*m" for c in task),
+                       "wrench the environment exerts on the TCP, one component per task coordinate")
+    F = [to_symengine(f) for f in wrench.symbols]
+    static = [G[i] - sum((J[k * n + i] * F[k] for k in range(len(task))), se.Integer(0)) for i in range(n)]
+    dtau = program.bind(program.jacobian(static, coordinate_symbols(d, "q")))
+    return function_spec(
+        d, "static_torque_derivatives", "Derivative of the static torques: the stiffness gravity and a TCP wrench add.",
+        "tau_s(q + dq, F) = tau_s(q, F) + dtau_dq dq to first order, tau_s = G(q) - J(q)^T F the joint torques that "
+        "hold the arm still under gravity and a wrench F the environment exerts on the TCP (seed eqs. 8.31, 8.36; "
+        "Pinocchio's computeStaticTorqueDerivatives); -d(J^T F)/dq is the stiffness a constant force adds (the "
+        "conservative congruence transformation of Chen and Kao, 2000); derivative of the program (automatic "
+        "differentiation).",
+        ["q", wrench], program, [("dtau_dq", dtau, (n, n), "d tau_s / dq: row i, column j is d tau_s_i / d q_j", "")])
 
 
 def parameter_sensitivities(d: Deriving, spec: FunctionSpec, name: str, summary: str) -> FunctionSpec:

@@ -17,7 +17,7 @@ INERTIA_OUTPUTS = frozenset({"mass_matrix", "coriolis_matrix", "coriolis_vector"
                              "inverse_dynamics", "inverse_dynamics_derivatives", "forward_dynamics",
                              "forward_dynamics_derivatives", "tcp_force", "operational_space", "kinetic_energy",
                              "potential_energy", "regressor", "energy_regressor", "base_regressor",
-                             "inverse_dynamics_sensitivities"})
+                             "inverse_dynamics_sensitivities", "static_torque_derivatives"})
 
 
 def require_physical(model: Model) -> None:

@@ -209,3 +209,30 @@ def test_parameter_sensitivities_are_central_differences_of_the_function(ur10e_s
         difference = (np.asarray(function(*state, **{name: value + h})) -
                       np.asarray(function(*state, **{name: value - h}))) / (2 * h)
         np.testing.assert_allclose(slopes[:, j], difference.ravel(), rtol=0, atol=1e-8 * scale, err_msg=name)
+
+
+def test_the_static_torques_derivative_is_their_central_difference_and_gravitys_at_no_wrench():
+    """static_torque_derivatives of the UR10e (models/ur10e.yaml: its task space x, y, z, wx, wy, wz, so F is a force
+    and a moment at the TCP in the base frame) against central differences of G(q) - J(q)^T F from the generated
+    gravity vector and Jacobian (h = EPS^(1/3): error ~EPS^(2/3) of the scale; 1e-8 leaves a factor of 100), and at
+    F = 0 against gravity_derivatives (the same program: DYNAMICS).  The force's own stiffness is not idle here."""
+    model = load_model(MODELS_DIR / "ur10e.yaml")
+    d = Derivation(model)
+    derivative = reference_function(model, d["static_torque_derivatives"])
+    gravity, jacobian = reference_function(model, d["gravity_vector"]), reference_function(model, d["jacobian"])
+    dG = reference_function(model, d["gravity_derivatives"])
+    rng = np.random.default_rng(65)
+
+    def static(q, F):
+        return gravity(q)[0] - jacobian(q)[0].T @ F
+
+    for _ in range(3):
+        q, F = random_q(model, rng), np.concatenate([rng.uniform(-50, 50, 3), rng.uniform(-5, 5, 3)])
+        (analytic,) = derivative(q, F)
+        h = EPS ** (1 / 3)
+        slope = np.column_stack([(static(q + h * e, F) - static(q - h * e, F)) / (2 * h) for e in np.eye(model.dof)])
+        scale = max(1.0, float(np.abs(slope).max()))
+        np.testing.assert_allclose(analytic, slope, rtol=0, atol=1e-8 * scale)
+        (at_rest,) = derivative(q, np.zeros(6))
+        _agree(at_rest, dG(q)[0], q)
+        assert np.abs(analytic - at_rest).max() > 1e-3 * scale     # the wrench's stiffness is there
