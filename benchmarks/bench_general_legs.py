@@ -12,7 +12,8 @@ entry points unless ``SYMKIN_C_ENTRY=ctypes``) and from a C loop
 
 Then the workspace of each device as ``symkin workspace DIR --backend c --no-figure`` computes it (its scene's
 functions, the C backend; the time the command reports, "done in"): the Falcon's home assembly continued over a
-Cartesian grid, the DELTA's joint space sampled through its closed-form fk; and its datasheet as ``symkin rate DIR
+Cartesian grid, the DELTA's joint space sampled through its closed-form fk (also on the numpy backend: the Falcon's
+continuation by the run-time solver instead of the generated inverse); and its datasheet as ``symkin rate DIR
 --backend c`` computes it (the time it reports).  Issue 63's target: the Falcon within 3x of the DELTA.
 
 Run with `make bench` or `python benchmarks/bench_general_legs.py [--samples N]`.
@@ -164,17 +165,20 @@ def main(argv: list[str] | None = None) -> int:
         for device, model in (("Novint Falcon (general legs, continued)", "devices/novint_falcon.yaml"),
                               ("DELTA (closed forms, sampled)", "delta.yaml")):
             directory = symkin.derive(ROOT / "models" / model, Path(tmp) / "scene")
-            workspace.append([device, f"{_workspace_seconds(directory):.2f}", f"{_rate_seconds(directory):.2f}"])
+            workspace.append([device, f"{_workspace_seconds(directory, 'c'):.2f}",
+                              f"{_workspace_seconds(directory, 'numpy'):.2f}", f"{_rate_seconds(directory):.2f}"])
     print(format_table(["device", "backend", "fk + J per call, warm (us)"], rows))
     print("issue 63's targets for the Falcon: <= 5 us per call in C, <= 10 us from Python")
-    print(format_table(["device", "symkin workspace --backend c (s)", "symkin rate --backend c (s)"], workspace))
+    print(format_table(["device", "symkin workspace --backend c (s)", "--backend numpy (s)",
+                        "symkin rate --backend c (s)"], workspace))
     print("issue 63's target: the Falcon's workspace and rating within 3x of the DELTA's time")
     return 0
 
 
-def _workspace_seconds(directory: Path) -> float:
-    """The time ``symkin workspace`` reports ("done in") for a model derived with its scene into ``directory``."""
-    run = subprocess.run([sys.executable, "-m", "symkin", "workspace", str(directory), "--backend", "c",
+def _workspace_seconds(directory: Path, backend: str) -> float:
+    """The time ``symkin workspace`` reports ("done in") for a model derived with its scene into ``directory``, on
+    ``backend`` (numpy: the run-time solver; C: the generated inverse)."""
+    run = subprocess.run([sys.executable, "-m", "symkin", "workspace", str(directory), "--backend", backend,
                           "--no-figure"], capture_output=True, text=True, check=True)
     done = [line for line in (run.stdout + run.stderr).splitlines() if line.strip().startswith("done in")]
     return float(done[-1].split()[2])
