@@ -54,10 +54,15 @@ ONE_BLAS_THREAD := OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 MKL_NUM_THREADS=1
 # runs (a few hundred) would otherwise compile symkin and pytest would rewrite the tests' asserts again in each.
 BYTECODE := env -u PYTHONDONTWRITEBYTECODE PYTHONPYCACHEPREFIX=$(abspath $(VENV))/pycache
 
+# The two passes share the sampled states and sympy references of tests/backends/test_backends_agree.py
+# (tests/reference_store.py): a folder made for one run, removed after it.
 ## test: run the whole test suite, then its numerics-sensitive part again on foreign arithmetic
 test: setup
-	$(ONE_BLAS_THREAD) $(BYTECODE) $(BIN)/python -m pytest -n $(PYTEST_WORKERS) --dist loadgroup -q --durations=25
-	$(ONE_BLAS_THREAD) $(BYTECODE) $(FOREIGN_ARITHMETIC) $(BIN)/python -m pytest -n $(PYTEST_WORKERS) --dist loadgroup -q -m numerics
+	store=$$(mktemp -d) && trap 'rm -rf "$$store"' EXIT && \
+	$(ONE_BLAS_THREAD) $(BYTECODE) SYMKIN_TEST_REFERENCES=$$store \
+	    $(BIN)/python -m pytest -n $(PYTEST_WORKERS) --dist loadgroup -q --durations=25 && \
+	$(ONE_BLAS_THREAD) $(BYTECODE) SYMKIN_TEST_REFERENCES=$$store $(FOREIGN_ARITHMETIC) \
+	    $(BIN)/python -m pytest -n $(PYTEST_WORKERS) --dist loadgroup -q -m numerics
 
 ## generate: rewrite generated/ from the example models (the "update" switch of the golden tests)
 generate: demo

@@ -29,9 +29,22 @@ def agreement_bound(model, spec, inputs, numpy_model) -> np.ndarray:
     operational_space with J, forward_dynamics with M) the rounding the solve amplifies: svd(n)
     times kappa^2 (the operational-space inertia J^-T M J^-1 solves twice; one solve gives kappa).
     Two evaluation orders of the same exact function then differ by that much near singularities."""
+    return parts_agreement_bound(model, spec.parts or (spec.name,), [v.name for v in spec.vector_inputs], inputs,
+                                 numpy_model)
+
+
+def record_agreement_bound(model, record, inputs, numpy_model) -> np.ndarray:
+    """:func:`agreement_bound` of the generated function a manifest ``record`` describes."""
+    vectors = [i["name"] for i in record["inputs"] if i["kind"] == "vector"]
+    return parts_agreement_bound(model, record.get("combines") or (record["name"],), vectors, inputs, numpy_model)
+
+
+def parts_agreement_bound(model, parts, vector_names, inputs, numpy_model) -> np.ndarray:
+    """:func:`agreement_bound` of a function of ``parts`` (a combined function: the worst of its parts) whose
+    vector inputs ``vector_names`` take ``inputs``."""
     bound = np.full(len(inputs[0]), AGREEMENT)
-    by_name = {v.name: value for v, value in zip(spec.vector_inputs, inputs)}
-    for part in spec.parts or (spec.name,):  # a combined function: the worst of its parts
+    by_name = dict(zip(vector_names, inputs))
+    for part in parts:
         solves_with = catalog.definition(part, model.mechanism).solves_with
         if solves_with is None:
             continue

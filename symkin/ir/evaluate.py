@@ -39,7 +39,7 @@ def lambdify_spec(spec: FunctionSpec, args: Sequence[object], modules: str | Seq
         args: lambdify arguments: symbols, or sequences of symbols for vector arguments.
         modules: ``"numpy"`` or ``"mpmath"``, or a list of namespaces before one of them (as lambdify's).
         values: substitutions applied first (e.g. parameters at their defaults).
-        printer: lambdify's code printer (default: the one of ``modules``).
+        printer: lambdify's code printer (default: :func:`reference_printer` of ``modules``).
     """
     values = dict(values or {})
     definitions = [(s, e.xreplace(values)) for s, e in spec.definitions]
@@ -54,7 +54,27 @@ def lambdify_spec(spec: FunctionSpec, args: Sequence[object], modules: str | Seq
 
     # use_imps=False: no implemented functions occur, and looking for them walks every node of the
     # expanded trees (three quarters of the lambdify time of the Stewart platform's dynamics)
-    return sympy.lambdify(list(args), entries, modules=modules, cse=program, use_imps=False, printer=printer)
+    return sympy.lambdify(list(args), entries, modules=modules, cse=program, use_imps=False,
+                          printer=printer if printer is not None else reference_printer(modules))
+
+
+#: lambdify's settings of its printers (sympy.utilities.lambdify), terms printed in their stored order: sorting the
+#: terms of every sum (sympy's default ``order``) took half of the printing of the Stewart platform's references, and
+#: the order of a sum's terms changes only its rounding, which every comparison with a reference allows for.
+REFERENCE_PRINTER_SETTINGS = {"fully_qualified_modules": False, "inline": True, "allow_unknown_functions": True,
+                              "order": "none"}
+
+
+def reference_printer(modules: str | Sequence[object]) -> object:
+    """The code printer lambdify would choose for ``modules`` (mpmath's where mpmath is among them, else numpy's),
+    with :data:`REFERENCE_PRINTER_SETTINGS` and the names of ``modules``' namespaces as user functions."""
+    from sympy.printing.numpy import NumPyPrinter
+    from sympy.printing.pycode import MpmathPrinter
+
+    listed = [modules] if isinstance(modules, str) else list(modules)
+    printer = MpmathPrinter if "mpmath" in listed else NumPyPrinter
+    user_functions = {name: name for namespace in listed if isinstance(namespace, Mapping) for name in namespace}
+    return printer(dict(REFERENCE_PRINTER_SETTINGS, user_functions=user_functions))
 
 
 def symengine_entries(spec: FunctionSpec, args: Sequence[sympy.Symbol],

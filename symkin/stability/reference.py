@@ -32,7 +32,7 @@ import mpmath
 import numpy as np
 from sympy.printing.pycode import MpmathPrinter
 
-from symkin.ir.evaluate import lambdify_spec
+from symkin.ir.evaluate import REFERENCE_PRINTER_SETTINGS, lambdify_spec
 from symkin.ir.spec import FunctionSpec
 
 #: Digits the reference keeps (and the condition numbers' SVD works at), and its midpoints' bits.
@@ -108,9 +108,7 @@ class BallReference:
         self.parameter_names = tuple(i.name for i in spec.parameter_inputs)
         symbols = [s for i in spec.vector_inputs for s in i.symbols] + [i.symbols[0] for i in spec.parameter_inputs]
         self._function = lambdify_spec(spec, symbols, modules=[NAMESPACE, "mpmath"],
-                                       printer=_BallPrinter({"fully_qualified_modules": False, "inline": True,
-                                                             "allow_unknown_functions": True,
-                                                             "user_functions": {}}))
+                                       printer=_BallPrinter(dict(REFERENCE_PRINTER_SETTINGS, user_functions={})))
         self.size = sum(len(out.entries) for out in spec.outputs)
         self._recent: dict[tuple[float, ...], list[flint.arb]] = {}
 

@@ -9,16 +9,18 @@ see agreement_bound); wrong input shapes raise the same clear errors in every ba
 from __future__ import annotations
 
 import inspect
+import json
 import subprocess
 import sys
 
 import numpy as np
 import pytest
 
-from conftest import (BACKENDS, EXAMPLE_MODELS, batch_reference, function_spec, random_inputs, random_q,
-                      reference_group, relative_errors, worst_state)
+from conftest import (BACKENDS, EXAMPLE_MODELS, GENERATED_DIR, batch_reference, function_spec, random_inputs,
+                      random_q, reference_group, relative_errors, worst_state)
 from tolerances import CLOSED_FORM, DYNAMICS, EPS, KINEMATICS, UR10E_SCALE
-from checks import agreement_bound
+from checks import record_agreement_bound
+from reference_store import manifest_key, stored
 
 POINTS = 1000
 
@@ -29,21 +31,47 @@ def _tuple(result):
     return result if isinstance(result, tuple) else (result,)
 
 
+def sampled(name, seed, points, models, derivations, references=True) -> dict[str, list[list[np.ndarray]]]:
+    """{generated function: [its random inputs, and with ``references`` the sympy reference's outputs]} at
+    ``points`` states drawn from ``seed`` in the manifest's order, shared by make test's two passes
+    (tests/reference_store.py)."""
+    model, records = models[name], loaded_manifest(name)["functions"]
+
+    def compute() -> dict[str, np.ndarray]:
+        rng, arrays = np.random.default_rng(seed), {}
+        for record in records:
+            spec = function_spec(model, derivations[name], record)
+            inputs = random_inputs(model, spec, rng, points)
+            arrays.update({f"{record['name']}/in{k}": value for k, value in enumerate(inputs)})
+            if references:
+                arrays.update({f"{record['name']}/out{k}": value
+                               for k, value in enumerate(batch_reference(model, spec)(*inputs))})
+        return arrays
+
+    arrays = stored(manifest_key(GENERATED_DIR / name, seed, points, references), compute)
+    counts = {"in": lambda r: sum(i["kind"] == "vector" for i in r["inputs"]),
+              "out": lambda r: len(r["outputs"]) if references else 0}
+    return {r["name"]: [[arrays[f"{r['name']}/{kind}{k}"] for k in range(count(r))] for kind, count in counts.items()]
+            for r in records}
+
+
+def loaded_manifest(name):
+    return json.loads((GENERATED_DIR / name / "manifest.json").read_text())
+
+
 @pytest.mark.parametrize("backend", BACKENDS)
 @pytest.mark.parametrize("name", [reference_group(name) for name in EXAMPLE_MODELS])
 def test_every_function_matches_the_sympy_expressions(name, backend, models, derivations, loaded):
     model = models[name]
     generated = loaded(name, backend)
     assert generated.backend == backend
-    rng = np.random.default_rng(11)
+    samples = sampled(name, 11, POINTS, models, derivations)
     checked = []
     for record in generated.manifest["functions"]:
-        spec = function_spec(model, derivations[name], record)
-        inputs = random_inputs(model, spec, rng, POINTS)
-        want = batch_reference(model, spec)(*inputs)
+        inputs, want = samples[record["name"]]
         got = _tuple(getattr(generated, record["name"])(*inputs))
         assert len(got) == len(want)
-        bound = agreement_bound(model, spec, inputs, loaded(name, "numpy"))
+        bound = record_agreement_bound(model, record, inputs, loaded(name, "numpy"))
         for g, w, out in zip(got, want, record["outputs"]):
             assert g.shape == w.shape == (POINTS,) + tuple(out["shape"])
             error = relative_errors(g, w)
@@ -68,13 +96,12 @@ def assert_close_at_scale(got, want):
 def test_same_signatures_and_batch_semantics_as_numpy(name, backend, models, derivations, loaded):
     reference, other = loaded(name, "numpy"), loaded(name, backend)
     assert other.functions == reference.functions
-    rng = np.random.default_rng(5)
+    samples = sampled(name, 5, 12, models, derivations, references=False)
     for record in reference.manifest["functions"]:
         function = record["name"]
         f_ref, f_other = getattr(reference, function), getattr(other, function)
         assert inspect.signature(f_other) == inspect.signature(f_ref)
-        spec = function_spec(models[name], derivations[name], record)
-        full = [v.reshape((3, 4) + v.shape[1:]) for v in random_inputs(models[name], spec, rng, 12)]
+        full = [v.reshape((3, 4) + v.shape[1:]) for v in samples[function][0]]
         for pick in (lambda a: a, lambda a: a[1, 2], lambda a: a[:, :1], lambda a: np.zeros((0, a.shape[-1]))):
             args = [pick(a) for a in full]
             want, got = _tuple(f_ref(*args)), _tuple(f_other(*args))
