@@ -352,6 +352,17 @@ class ClosureFunctions:
         return self._at(q, at_rest=False).potential
 
     def _jacobian(self, q):
-        """J = dp/dq: the p rows of W."""
+        """J = dp/dq: the p rows of W - of the last state's W at q, else of the generated assembly's Jacobian where
+        the model has one (one configuration; a loop step asks for J before the dynamics at the same q), and where
+        that is NaN (the actuators do not determine the platform) or there is none, of W at q."""
+        last = self._last_dynamics
+        generated = self.assembly.generated
+        if (generated is not None and np.ndim(q) == 1
+                and not (last is not None and last[0].shape == np.shape(q) and np.array_equal(q, last[0]))):
+            s, p = self.assembled(q)
+            J = generated.jacobian(np.array(q, dtype=float), np.ascontiguousarray(s, dtype=float),
+                                   np.ascontiguousarray(p, dtype=float))
+            if np.all(np.isfinite(J)):
+                return J
         W = self._at(q, at_rest=False).W
         return W[..., W.shape[-2] - len(self.model.info.task_space):, :]

@@ -1,40 +1,27 @@
 """The generated assembly of a parallel model from Python (issue 63): ``<model>_assemble`` and
 ``<model>_assembly_jacobian`` of its C library (:mod:`symkin.backends.c.assembly`), bound once for a control loop.
 
-``GeneratedAssembly(load(directory, "c"))`` finds the model's compiled library (the C backend's cache) and binds the
-two functions with the model's parameter values (its defaults, or a bound design's): through compiled CPython entry
-points (:func:`symkin.backends.c.loader_entry_points.assembly_entry_points`, for exact float64 C-contiguous arrays)
-and otherwise through ctypes with plain pointers (the arrays' checks done here, on their attributes); :meth:`GeneratedAssembly.assemble` updates a
-warm start (s, p) in place - the previous sample's - and :meth:`GeneratedAssembly.jacobian` gives J = dp/dq.  A call
-that does not close the legs leaves NaN and says so (its return value), and a possible jump of assembly mode is
-flagged (a negative count), never a silent wrong branch.
+``GeneratedAssembly(load(directory, "c"))`` takes the assembly's functions the C loader bound with the model's library
+(:class:`symkin.backends.c.loader_assembly.AssemblyBinding`: through compiled CPython entry points for exact float64
+C-contiguous arrays, and otherwise through ctypes with plain pointers, the arrays' checks done here, on their
+attributes) and the model's parameter values (its defaults, or a bound design's); :meth:`GeneratedAssembly.assemble`
+updates a warm start (s, p) in place - the previous sample's - and :meth:`GeneratedAssembly.jacobian` gives J = dp/dq.
+A call that does not close the legs leaves NaN and says so (its return value), and a possible jump of assembly mode
+is flagged (a negative count), never a silent wrong branch.
 """
 
 from __future__ import annotations
 
-import ctypes
-from typing import Any
-
 import numpy as np
 
+from symkin.backends.c.loader_assembly import ASSEMBLY_FUNCTIONS, AssemblyBinding
 from symkin.backends.c.build import shared_library
 from symkin.backends.c.loader import source_and_header
-from symkin.backends.c.loader_entry_points import assembly_entry_points
 from symkin.errors import GeneratedCodeError
-from symkin.runtime.info import ModelInfo
 from symkin.runtime.loader import LoadedModel
 
 #: The assembly's defaults: the steps allowed and the step that converges (the run-time solver's).
 MAX_ITERATIONS, TOLERANCE = 50, 1e-12
-
-
-def assembly_parameter_names(info: ModelInfo) -> list[str]:
-    """The free parameters the generated assembly takes, in its header's order: closure's, then closure_jacobians'
-    others (:func:`symkin.backends.c.assembly.assembly_context` orders them so from the same functions)."""
-    names: list[str] = []
-    for function in ("closure", "closure_jacobians"):
-        names += [i.name for i in info.functions[function].inputs if i.is_parameter and i.name not in names]
-    return names
 
 
 class GeneratedAssembly:
@@ -49,38 +36,18 @@ class GeneratedAssembly:
         if model.backend != "c":
             raise GeneratedCodeError(f"{model.name}: the generated assembly is C code; load the model with "
                                      f"backend=\"c\" (loaded: {model.backend})")
-        if not {"closure", "closure_jacobians"} <= set(model.info.functions):
+        if not set(ASSEMBLY_FUNCTIONS) <= set(model.info.functions):
             raise GeneratedCodeError(f"{model.name}: no generated assembly; derive the model with closure and "
                                      "closure_jacobians in the C backend")
-        source, header = source_and_header(model.directory, model.info.backend_files["c"])
-        path = shared_library(source, header)
-        library = ctypes.CDLL(str(path))
-        try:
-            self._assemble = library[f"{model.name}_assemble"]
-        except AttributeError:
-            raise GeneratedCodeError(f"{model.name}: its C code predates the generated assembly; derive the model "
-                                     "again") from None
-        names = assembly_parameter_names(model.info)
-        self._parameters = [float(model.parameters[name]) for name in names]
+        binding = model.assembly_binding
+        if binding is None:  # loaded before the loader bound it, or its C code predates it: this raises
+            source, header = source_and_header(model.directory, model.info.backend_files["c"])
+            binding = AssemblyBinding(shared_library(source, header), header, model.info)
+        self._parameters = [float(model.parameters[name]) for name in binding.parameter_names]
         self._parameter_array = np.array(self._parameters, dtype=np.float64)
-        inputs = model.info.functions["closure"].inputs
-        self.sizes = {v.name: int(v.shape[0]) for v in inputs[:3]}
-        #: the compiled CPython entry points (None: ctypes only); they take exact arrays, the rest goes to ctypes
-        self._entry = assembly_entry_points(path, header, model.name, self.sizes, names)
-        doubles = [ctypes.c_double] * len(names)
-        self._assemble.argtypes = [ctypes.c_void_p] * 3 + doubles + [ctypes.c_int, ctypes.c_double, ctypes.c_void_p]
-        self._assemble.restype = ctypes.c_int
-        self._jacobian = library[f"{model.name}_assembly_jacobian"]
-        self._jacobian.argtypes = [ctypes.c_void_p] * 3 + doubles + [ctypes.c_void_p]
-        self._jacobian.restype = ctypes.c_int
-        try:    # code derived before the inverse has none: the continuation then takes the run-time solver
-            self._inverse: Any = library[f"{model.name}_assemble_inverse_batch"]
-        except AttributeError:
-            self._inverse = None
-        else:
-            self._inverse.argtypes = [ctypes.c_size_t] + [ctypes.c_void_p] * 3 + doubles + [
-                ctypes.c_int, ctypes.c_double, ctypes.c_double, ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p]
-            self._inverse.restype = None
+        self.sizes = binding.sizes
+        self._entry = binding.entry
+        self._assemble, self._jacobian, self._inverse = binding.assemble, binding.jacobian, binding.inverse
         self._residual = np.zeros(1)
         self._residual_address = self._residual.ctypes.data
         self.name = model.name

@@ -54,6 +54,12 @@ class LoadedModel:
         (-inf, inf) for a joint without limits."""
         return tuple(c.bounds for c in self.info.coordinates)
 
+    @property
+    def assembly_binding(self) -> Any:
+        """The generated assembly's functions of a model loaded with the C backend, bound when it was loaded
+        (:class:`symkin.backends.c.loader_assembly.AssemblyBinding`), else None."""
+        return getattr(self._raw, "assembly", None)
+
     def __getattr__(self, name: str) -> Any:
         """Only for names that are not attributes: the generated functions are set in __init__."""
         model = self.__dict__.get("name", "this model")

@@ -11,6 +11,7 @@ The solvers agree to the Newton tolerance times the condition number of [Phi_s P
 from __future__ import annotations
 
 import ctypes
+import shutil
 
 import numpy as np
 import pytest
@@ -23,7 +24,8 @@ from symkin.mechanism import closure, continuation
 from symkin.mechanism.closure import ClosureAssembly, solve_home_assembly
 from symkin.model import model_from_text
 from symkin.errors import GeneratedCodeError
-from symkin.runtime.assembly import GeneratedAssembly, assembly_parameter_names
+from symkin.backends.c.loader_assembly import assembly_parameter_names
+from symkin.runtime.assembly import GeneratedAssembly
 from symkin.runtime.parallel import closure_velocities, solve_closure
 from tolerances import EPS
 
@@ -143,6 +145,23 @@ def test_the_run_time_mechanism_steps_by_the_generated_assembly(falcon, monkeypa
         condition = singular[0] / singular[singular > singular[0] * A.shape[0] * EPS][-1]
         np.testing.assert_allclose(p, p_ref, rtol=0, atol=condition * TOLERANCE)
         np.testing.assert_allclose(s, s_ref, rtol=0, atol=condition * TOLERANCE)
+
+
+def test_the_loader_binds_the_assembly_so_that_a_scratch_folder_may_go(falcon, tmp_path, monkeypatch):
+    """A model file an analysis derives on the fly loads from a scratch folder that is gone when the analysis asks for
+    the generated assembly (symkin.analysis.model_files): the C loader binds it with the library, so the run-time
+    mechanism, and a bound design's, still step by it (the run-time solver is not called)."""
+    scratch = tmp_path / "novint_falcon"
+    shutil.copytree(falcon[0].directory, scratch)
+    model = load(scratch, "c")
+    shutil.rmtree(scratch)
+    assert model.assembly_binding is not None
+    assert closure.generated_assembly(model.bind()) is not None
+    mechanism = ClosureAssembly(model)                          # the home assembly by the run-time solver
+    monkeypatch.setattr(closure, "solve_closure", lambda *args, **kwargs: pytest.fail("the run-time solver ran"))
+    s, p = mechanism(mechanism.home + np.radians([2.0, -1.0, 0.5]))
+    assert np.all(np.isfinite(p))
+    assert load(falcon[0].directory).assembly_binding is None   # numpy: none
 
 
 def test_no_convergence_within_the_bound_gives_nan_and_no_steps(falcon, falcon_home):

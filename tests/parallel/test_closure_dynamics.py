@@ -20,6 +20,8 @@ from symkin import load, pipeline
 from symkin.derivation import Derivation
 from symkin.dynamics.parameter_names import DRIVE, INERTIAL
 from symkin.errors import DerivationError, ModelError
+from symkin.mechanism import closure as closure_module
+from symkin.mechanism.closure import ClosureFunctions
 from symkin.model import load_model, model_from_text
 from symkin.runtime.closure_dynamics import (actuated_dynamics, closure_forward_dynamics, closure_inverse_dynamics,
                                              closure_regressor)
@@ -300,6 +302,23 @@ def test_the_c_library_gives_the_numpy_terms(rubbing_dir):
         assert np.max(np.abs(got.reshape(expected.shape) - expected)) <= DYNAMICS * np.max(np.abs(expected)), name
     expected = numpy_model.friction(rates[:4])
     assert np.max(np.abs(c_model.friction(rates[:4]) - expected)) <= DYNAMICS * np.max(np.abs(expected))
+
+
+def test_the_jacobian_of_a_loop_step_comes_from_the_generated_assembly(rubbing_dir, monkeypatch):
+    """The run-time mechanism's J = dp/dq of legs loaded with the C backend (a simulation step asks for it before the
+    dynamics at the same q): the generated assembly's, not W of the dynamics evaluated at rest for it, equal to the
+    p rows of W at the same assembly to rounding amplified by the condition number of [Phi_s Phi_p]."""
+    functions = ClosureFunctions(load(rubbing_dir[0], "c"))
+    assert functions.assembly.generated is not None
+    q = functions.home + [0.05, 0.01, -0.04, 0.02]
+    s, p = functions.assembled(q)                                  # continued from the home assembly
+    with monkeypatch.context() as patch:
+        patch.setattr(closure_module, "actuated_dynamics", lambda *args: pytest.fail("dynamics evaluated for J"))
+        J = functions.function("jacobian")(q)
+    W = actuated_dynamics(load(rubbing_dir[0]), q, s, p, np.zeros(4)).W
+    expected = W[len(W) - len(J):]
+    A = np.hstack([np.asarray(functions.model.closure_jacobians(q, s, p)[k]) for k in (2, 0)])   # [Phi_s Phi_p]
+    assert np.max(np.abs(J - expected)) <= 100 * EPS * np.linalg.cond(A) * np.max(np.abs(expected))
 
 
 def test_a_plant_of_rubbing_legs_needs_their_friction(rubbing_dir):

@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy
 
+from symkin.backends.c.loader_assembly import ASSEMBLY_FUNCTIONS, AssemblyBinding, CompiledFunctions
 from symkin.backends.c.build import shared_library
 from symkin.backends.naming import c_symbol
 from symkin.errors import GeneratedCodeError
@@ -112,7 +113,9 @@ def _kernels(library: ctypes.CDLL, model: str, record: Function) -> tuple[Kernel
 
 def load(directory: Path, info: ModelInfo) -> dict[str, Any]:
     """Compile (or find in the cache) the model's C code and bind every function of the manifest: the compiled
-    CPython entry points (:mod:`symkin.backends.c.loader_entry_points`) over the ctypes functions, or those alone."""
+    CPython entry points (:mod:`symkin.backends.c.loader_entry_points`) over the ctypes functions, or those alone;
+    and the generated assembly's functions where the model has closure and closure_jacobians
+    (:class:`symkin.backends.c.loader_assembly.CompiledFunctions`)."""
     source, header = source_and_header(directory, info.backend_files.get("c", ()))
     path = shared_library(source, header)
     library = ctypes.CDLL(str(path))
@@ -122,4 +125,10 @@ def load(directory: Path, info: ModelInfo) -> dict[str, Any]:
     for record in records:
         kernel, one = _kernels(library, model, record)
         functions[record.name] = wrap_function(record, kernel, "c", single=one)
-    return entry_points(path, header, model, records, functions) or functions
+    bound = CompiledFunctions(entry_points(path, header, model, records, functions) or functions)
+    if set(ASSEMBLY_FUNCTIONS) <= set(info.functions):
+        try:  # bound now: a model file derived on the fly loads from a scratch folder that goes afterwards
+            bound.assembly = AssemblyBinding(path, header, info)
+        except GeneratedCodeError:
+            pass  # C code derived before the generated assembly: GeneratedAssembly says so when asked
+    return bound

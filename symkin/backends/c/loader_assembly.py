@@ -1,0 +1,76 @@
+"""The generated assembly's functions of a compiled model library, bound once per library (issue 63).
+
+:class:`AssemblyBinding` holds ``<model>_assemble``, ``<model>_assembly_jacobian`` and ``<model>_assemble_inverse_batch``
+of a library with their ctypes signatures, and the compiled CPython entry points over the first two
+(:func:`symkin.backends.c.loader_entry_points.assembly_entry_points`).  The C loader binds it while the model's source
+and header are at hand (:func:`symkin.backends.c.loader.load`): a model file an analysis derives on the fly loads from
+a scratch folder that is gone when the analysis asks for the assembly.  :class:`symkin.runtime.assembly.GeneratedAssembly`
+adds a design's parameter values.
+"""
+
+from __future__ import annotations
+
+import ctypes
+from pathlib import Path
+from typing import Any
+
+from symkin.backends.c.loader_entry_points import assembly_entry_points
+from symkin.errors import GeneratedCodeError
+from symkin.runtime.info import ModelInfo
+
+#: The generated functions the assembly is made of.
+ASSEMBLY_FUNCTIONS = ("closure", "closure_jacobians")
+
+
+def assembly_parameter_names(info: ModelInfo) -> list[str]:
+    """The free parameters the generated assembly takes, in its header's order: closure's, then closure_jacobians'
+    others (:func:`symkin.backends.c.assembly.assembly_context` orders them so from the same functions)."""
+    names: list[str] = []
+    for function in ASSEMBLY_FUNCTIONS:
+        names += [i.name for i in info.functions[function].inputs if i.is_parameter and i.name not in names]
+    return names
+
+
+class AssemblyBinding:
+    """The assembly functions of the compiled library ``path`` (its header ``header``) of the model ``info``.
+
+    Raises:
+        GeneratedCodeError: the library has no ``<model>_assemble`` (C code derived before the generated assembly).
+    """
+
+    def __init__(self, path: Path, header: Path, info: ModelInfo):
+        library = ctypes.CDLL(str(path))
+        name = info.name
+        try:
+            self.assemble = library[f"{name}_assemble"]
+        except AttributeError:
+            raise GeneratedCodeError(f"{name}: its C code predates the generated assembly; derive the model "
+                                     "again") from None
+        self.parameter_names = assembly_parameter_names(info)
+        inputs = info.functions["closure"].inputs
+        #: the closure's sizes n, ns and np (keys q, s, p)
+        self.sizes = {v.name: int(v.shape[0]) for v in inputs[:3]}
+        #: the compiled CPython entry points (None: ctypes only); they take exact arrays, the rest goes to ctypes
+        self.entry = assembly_entry_points(path, header, name, self.sizes, self.parameter_names)
+        doubles = [ctypes.c_double] * len(self.parameter_names)
+        self.assemble.argtypes = [ctypes.c_void_p] * 3 + doubles + [ctypes.c_int, ctypes.c_double, ctypes.c_void_p]
+        self.assemble.restype = ctypes.c_int
+        self.jacobian = library[f"{name}_assembly_jacobian"]
+        self.jacobian.argtypes = [ctypes.c_void_p] * 3 + doubles + [ctypes.c_void_p]
+        self.jacobian.restype = ctypes.c_int
+        self.inverse: Any
+        try:    # code derived before the inverse has none: the continuation then takes the run-time solver
+            self.inverse = library[f"{name}_assemble_inverse_batch"]
+        except AttributeError:
+            self.inverse = None
+        else:
+            self.inverse.argtypes = [ctypes.c_size_t] + [ctypes.c_void_p] * 3 + doubles + [
+                ctypes.c_int, ctypes.c_double, ctypes.c_double, ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p]
+            self.inverse.restype = None
+
+
+class CompiledFunctions(dict):
+    """The bound functions of a compiled model library (name -> function), and its assembly's binding where the
+    model has one (:class:`AssemblyBinding`, else None)."""
+
+    assembly: AssemblyBinding | None = None
