@@ -16,12 +16,18 @@ Cartesian grid, the DELTA's joint space sampled through its closed-form fk (also
 continuation by the run-time solver instead of the generated inverse); and its datasheet as ``symkin rate DIR
 --backend c`` computes it (the time it reports).  Issue 63's target: the Falcon within 3x of the DELTA.
 
+Last, ``symkin simulate MODEL.yaml --scenario haptic-wall --duration 1 --backend c`` (the time it reports) of a model
+file derived on the fly: docs/model-format.md's closure DELTA (legs without the distance form) carrying the DELTA's
+bodies (the masses of models/delta.yaml), beside models/delta.yaml itself (closed forms).  Issue 63's target: at least
+real time (1 s of the haptic loop in at most 1 s).
+
 Run with `make bench` or `python benchmarks/bench_general_legs.py [--samples N]`.
 """
 
 from __future__ import annotations
 
 import argparse
+import re
 import statistics
 import subprocess
 import sys
@@ -36,6 +42,7 @@ sys.path.insert(0, str(ROOT))
 
 import symkin  # noqa: E402
 from symkin.mechanism.closure import ClosureAssembly, solve_home_assembly  # noqa: E402
+from symkin.model import load_model  # noqa: E402
 from symkin.runtime.assembly import GeneratedAssembly  # noqa: E402
 from symkin.runtime.parallel import closure_velocities, solve_closure  # noqa: E402
 from symkin.text_table import format_table  # noqa: E402
@@ -172,7 +179,40 @@ def main(argv: list[str] | None = None) -> int:
     print(format_table(["device", "symkin workspace --backend c (s)", "--backend numpy (s)",
                         "symkin rate --backend c (s)"], workspace))
     print("issue 63's target: the Falcon's workspace and rating within 3x of the DELTA's time")
+    with tempfile.TemporaryDirectory() as tmp:
+        simulated = [[device, f"{_simulate_seconds(path, Path(tmp) / 'simulate'):.2f}"]
+                     for device, path in (("closure DELTA (general legs, model file)", _closure_delta_file(Path(tmp))),
+                                          ("DELTA (closed forms, model file)", ROOT / "models" / "delta.yaml"))]
+    print(format_table(["device", "symkin simulate --scenario haptic-wall --duration 1 --backend c (s)"], simulated))
+    print("issue 63's target: at least real time (<= 1 s)")
     return 0
+
+
+def _closure_delta_file(directory: Path) -> Path:
+    """docs/model-format.md's closure DELTA with the bodies of models/delta.yaml (its masses, sourced there): each upper
+    arm (m_arm) on its actuated joint, each parallelogram as one rod (m_rod) on its swing joint, the platform
+    (m_platform) and the rotors (J_rotor, gear), written into ``directory``."""
+    text = (ROOT / "docs" / "model-format.md").read_text()
+    legs = re.search(r"cat > out/closure_delta.yaml <<'EOF_MODEL'\n(.*?)^EOF_MODEL$", text, re.S | re.M).group(1)
+    v = {str(k): float(value) for k, value in load_model(ROOT / "models" / "delta.yaml").parameter_values.items()}
+    arm, rod = v["m_arm"] * v["a"] ** 2 / 12, v["m_rod"] * v["b"] ** 2 / 12
+    links = "".join(f"    theta{k}: {{mass: {v['m_arm']}, com: [{v['a'] / 2}, 0, 0], inertia: {{yy: {arm}, zz: {arm}}}}}\n"
+                    f"    swing{k}: {{mass: {v['m_rod']}, com: [{v['b'] / 2}, 0, 0], inertia: {{yy: {rod}, zz: {rod}}}}}\n"
+                    for k in (1, 2, 3))
+    path = directory / "closure_delta.yaml"
+    path.write_text(legs + f"gravity: [0, 0, -9.81]\nbodies:\n  platform: {{mass: {v['m_platform']}}}\n  links:\n"
+                    + links + f"  rotor: {{inertia: {v['J_rotor']}, gear_ratio: {v['gear']}}}\n")
+    return path
+
+
+def _simulate_seconds(model: Path, out: Path) -> float:
+    """The time ``symkin simulate`` reports ("wrote ... in T s") for 1 s of the haptic wall on the C backend of a model
+    file (derived on the fly, as a user runs it)."""
+    run = subprocess.run([sys.executable, "-m", "symkin", "simulate", str(model), "--scenario", "haptic-wall",
+                          "--duration", "1", "--backend", "c", "--no-figure", "-o", str(out)], capture_output=True,
+                         text=True, check=True)
+    wrote = [line for line in (run.stdout + run.stderr).splitlines() if line.startswith("wrote ")]
+    return float(wrote[-1].split()[-2])
 
 
 def _workspace_seconds(directory: Path, backend: str) -> float:

@@ -300,12 +300,16 @@ class ClosureFunctions:
         self._last_dynamics = (q.copy(), qd.copy(), terms)
         return terms
 
+    def _last_at(self, q: np.ndarray) -> bool:
+        """Whether the last state's terms are at q."""
+        last = self._last_dynamics
+        return last is not None and np.shape(q) == last[0].shape and np.array_equal(q, last[0])
+
     def _at(self, q: np.ndarray, *, at_rest: bool) -> ActuatedDynamics:
         """The terms at q: the last state's when it was at q (M, W and u do not depend on qd) and, ``at_rest``, not
         moving (the bias efforts at qd = 0 are the gravity efforts); else evaluated at qd = 0."""
         last = self._last_dynamics
-        if (last is not None and np.shape(q) == last[0].shape and np.array_equal(q, last[0])
-                and not (at_rest and np.any(last[1]))):
+        if last is not None and self._last_at(q) and not (at_rest and np.any(last[1])):
             return last[2]
         return self.dynamics(q, np.zeros(np.shape(q)))
 
@@ -355,13 +359,10 @@ class ClosureFunctions:
         """J = dp/dq: the p rows of W - of the last state's W at q, else of the generated assembly's Jacobian where
         the model has one (one configuration; a loop step asks for J before the dynamics at the same q), and where
         that is NaN (the actuators do not determine the platform) or there is none, of W at q."""
-        last = self._last_dynamics
         generated = self.assembly.generated
-        if (generated is not None and np.ndim(q) == 1
-                and not (last is not None and last[0].shape == np.shape(q) and np.array_equal(q, last[0]))):
+        if generated is not None and np.ndim(q) == 1 and not self._last_at(q):
             s, p = self.assembled(q)
-            J = generated.jacobian(np.array(q, dtype=float), np.ascontiguousarray(s, dtype=float),
-                                   np.ascontiguousarray(p, dtype=float))
+            J = generated.jacobian(np.array(q, dtype=float), np.ascontiguousarray(s), np.ascontiguousarray(p))
             if np.all(np.isfinite(J)):
                 return J
         W = self._at(q, at_rest=False).W

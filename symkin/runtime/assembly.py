@@ -14,9 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from symkin.backends.c.loader_assembly import ASSEMBLY_FUNCTIONS, AssemblyBinding
-from symkin.backends.c.build import shared_library
-from symkin.backends.c.loader import source_and_header
+from symkin.backends.c.loader_assembly import ASSEMBLY_FUNCTIONS
 from symkin.errors import GeneratedCodeError
 from symkin.runtime.loader import LoadedModel
 
@@ -40,9 +38,9 @@ class GeneratedAssembly:
             raise GeneratedCodeError(f"{model.name}: no generated assembly; derive the model with closure and "
                                      "closure_jacobians in the C backend")
         binding = model.assembly_binding
-        if binding is None:  # loaded before the loader bound it, or its C code predates it: this raises
-            source, header = source_and_header(model.directory, model.info.backend_files["c"])
-            binding = AssemblyBinding(shared_library(source, header), header, model.info)
+        if binding is None:
+            raise GeneratedCodeError(f"{model.name}: its C code predates the generated assembly; derive the model "
+                                     "again")
         self._parameters = [float(model.parameters[name]) for name in binding.parameter_names]
         self._parameter_array = np.array(self._parameters, dtype=np.float64)
         self.sizes = binding.sizes

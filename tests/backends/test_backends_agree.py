@@ -9,7 +9,6 @@ see agreement_bound); wrong input shapes raise the same clear errors in every ba
 from __future__ import annotations
 
 import inspect
-import json
 import subprocess
 import sys
 
@@ -31,11 +30,11 @@ def _tuple(result):
     return result if isinstance(result, tuple) else (result,)
 
 
-def sampled(name, seed, points, models, derivations, references=True) -> dict[str, list[list[np.ndarray]]]:
-    """{generated function: [its random inputs, and with ``references`` the sympy reference's outputs]} at
-    ``points`` states drawn from ``seed`` in the manifest's order, shared by make test's two passes
+def sampled(name, records, seed, points, models, derivations, references=True) -> dict[str, list[list[np.ndarray]]]:
+    """{generated function: [its random inputs, and with ``references`` the sympy reference's outputs]} of the
+    manifest ``records`` at ``points`` states drawn from ``seed`` in their order, shared by make test's two passes
     (tests/reference_store.py)."""
-    model, records = models[name], loaded_manifest(name)["functions"]
+    model = models[name]
 
     def compute() -> dict[str, np.ndarray]:
         rng, arrays = np.random.default_rng(seed), {}
@@ -55,17 +54,13 @@ def sampled(name, seed, points, models, derivations, references=True) -> dict[st
             for r in records}
 
 
-def loaded_manifest(name):
-    return json.loads((GENERATED_DIR / name / "manifest.json").read_text())
-
-
 @pytest.mark.parametrize("backend", BACKENDS)
 @pytest.mark.parametrize("name", [reference_group(name) for name in EXAMPLE_MODELS])
 def test_every_function_matches_the_sympy_expressions(name, backend, models, derivations, loaded):
     model = models[name]
     generated = loaded(name, backend)
     assert generated.backend == backend
-    samples = sampled(name, 11, POINTS, models, derivations)
+    samples = sampled(name, generated.manifest["functions"], 11, POINTS, models, derivations)
     checked = []
     for record in generated.manifest["functions"]:
         inputs, want = samples[record["name"]]
@@ -96,7 +91,7 @@ def assert_close_at_scale(got, want):
 def test_same_signatures_and_batch_semantics_as_numpy(name, backend, models, derivations, loaded):
     reference, other = loaded(name, "numpy"), loaded(name, backend)
     assert other.functions == reference.functions
-    samples = sampled(name, 5, 12, models, derivations, references=False)
+    samples = sampled(name, reference.manifest["functions"], 5, 12, models, derivations, references=False)
     for record in reference.manifest["functions"]:
         function = record["name"]
         f_ref, f_other = getattr(reference, function), getattr(other, function)

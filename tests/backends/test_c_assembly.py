@@ -11,7 +11,9 @@ The solvers agree to the Newton tolerance times the condition number of [Phi_s P
 from __future__ import annotations
 
 import ctypes
+import ctypes.util
 import shutil
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -24,8 +26,9 @@ from symkin.mechanism import closure, continuation
 from symkin.mechanism.closure import ClosureAssembly, solve_home_assembly
 from symkin.model import model_from_text
 from symkin.errors import GeneratedCodeError
-from symkin.backends.c.loader_assembly import assembly_parameter_names
+from symkin.backends.c.loader_assembly import assembly_parameter_names, bind_assembly
 from symkin.runtime.assembly import GeneratedAssembly
+from symkin.runtime.loader import LoadedModel
 from symkin.runtime.parallel import closure_velocities, solve_closure
 from tolerances import EPS
 
@@ -162,6 +165,17 @@ def test_the_loader_binds_the_assembly_so_that_a_scratch_folder_may_go(falcon, t
     s, p = mechanism(mechanism.home + np.radians([2.0, -1.0, 0.5]))
     assert np.all(np.isfinite(p))
     assert load(falcon[0].directory).assembly_binding is None   # numpy: none
+
+
+def test_c_code_without_the_assembly_binds_none_and_is_refused_with_the_fix(falcon):
+    """A library without ``<model>_assemble`` (C code derived before the generated assembly) binds no assembly, and
+    GeneratedAssembly of a model without one says to derive it again."""
+    model = load(falcon[0].directory, "c")
+    libm = ctypes.CDLL(ctypes.util.find_library("m"))
+    assert bind_assembly(libm, Path("libm"), Path("none.h"), model.info) is None
+    unbound = LoadedModel(model.directory, model.manifest, "c", dict(model._raw))   # the functions alone
+    with pytest.raises(GeneratedCodeError, match="predates the generated assembly; derive the model again"):
+        GeneratedAssembly(unbound)
 
 
 def test_no_convergence_within_the_bound_gives_nan_and_no_steps(falcon, falcon_home):

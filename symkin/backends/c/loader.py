@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy
 
-from symkin.backends.c.loader_assembly import ASSEMBLY_FUNCTIONS, AssemblyBinding, CompiledFunctions
+from symkin.backends.c.loader_assembly import CompiledFunctions, bind_assembly
 from symkin.backends.c.build import shared_library
 from symkin.backends.naming import c_symbol
 from symkin.errors import GeneratedCodeError
@@ -126,9 +126,6 @@ def load(directory: Path, info: ModelInfo) -> dict[str, Any]:
         kernel, one = _kernels(library, model, record)
         functions[record.name] = wrap_function(record, kernel, "c", single=one)
     bound = CompiledFunctions(entry_points(path, header, model, records, functions) or functions)
-    if set(ASSEMBLY_FUNCTIONS) <= set(info.functions):
-        try:  # bound now: a model file derived on the fly loads from a scratch folder that goes afterwards
-            bound.assembly = AssemblyBinding(path, header, info)
-        except GeneratedCodeError:
-            pass  # C code derived before the generated assembly: GeneratedAssembly says so when asked
+    # bound now: a model file derived on the fly loads from a scratch folder that is gone when the assembly is asked for
+    bound.assembly = bind_assembly(library, path, header, info)
     return bound

@@ -15,7 +15,6 @@ from pathlib import Path
 from typing import Any
 
 from symkin.backends.c.loader_entry_points import assembly_entry_points
-from symkin.errors import GeneratedCodeError
 from symkin.runtime.info import ModelInfo
 
 #: The generated functions the assembly is made of.
@@ -32,20 +31,12 @@ def assembly_parameter_names(info: ModelInfo) -> list[str]:
 
 
 class AssemblyBinding:
-    """The assembly functions of the compiled library ``path`` (its header ``header``) of the model ``info``.
+    """The assembly functions of the compiled ``library`` (at ``path``, its header ``header``) of the model ``info``,
+    whose ``<model>_assemble`` is ``assemble`` (:func:`bind_assembly`)."""
 
-    Raises:
-        GeneratedCodeError: the library has no ``<model>_assemble`` (C code derived before the generated assembly).
-    """
-
-    def __init__(self, path: Path, header: Path, info: ModelInfo):
-        library = ctypes.CDLL(str(path))
+    def __init__(self, library: ctypes.CDLL, path: Path, header: Path, info: ModelInfo, assemble: Any):
         name = info.name
-        try:
-            self.assemble = library[f"{name}_assemble"]
-        except AttributeError:
-            raise GeneratedCodeError(f"{name}: its C code predates the generated assembly; derive the model "
-                                     "again") from None
+        self.assemble = assemble
         self.parameter_names = assembly_parameter_names(info)
         inputs = info.functions["closure"].inputs
         #: the closure's sizes n, ns and np (keys q, s, p)
@@ -67,6 +58,19 @@ class AssemblyBinding:
             self.inverse.argtypes = [ctypes.c_size_t] + [ctypes.c_void_p] * 3 + doubles + [
                 ctypes.c_int, ctypes.c_double, ctypes.c_double, ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p]
             self.inverse.restype = None
+
+
+def bind_assembly(library: ctypes.CDLL, path: Path, header: Path, info: ModelInfo) -> AssemblyBinding | None:
+    """The assembly functions of the compiled ``library`` (at ``path``, its header ``header``) of the model ``info``,
+    or None where it has none (no ``closure`` and ``closure_jacobians``, or C code derived before the generated
+    assembly)."""
+    if not set(ASSEMBLY_FUNCTIONS) <= set(info.functions):
+        return None
+    try:
+        assemble = library[f"{info.name}_assemble"]
+    except AttributeError:
+        return None
+    return AssemblyBinding(library, path, header, info, assemble)
 
 
 class CompiledFunctions(dict):
