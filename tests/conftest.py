@@ -61,10 +61,18 @@ BACKENDS = tuple(name for name, backend in REGISTERED_BACKENDS.items()
                  if backend.loader is not None and name in SCENE_BACKENDS)
 
 
+def model_group(name: str):
+    """The xdist group of the tests that derive the example model ``name`` symbolically: they share one worker,
+    and so its derivation (:func:`shared_derivation`: the Stewart platform's quantities take seconds), its stability
+    run (:func:`stability_run`) and the lambdified references of its generated functions (:func:`lambdified`)."""
+    return pytest.mark.xdist_group(f"model-{name}")
+
+
 def reference_group(name: str):
-    """``name`` as a parameter whose tests share one xdist worker (and so the lambdified references of its
-    model's generated functions, :func:`lambdified`): tests/backends/test_numpy_backend.py, tests/backends/test_backends_agree.py."""
-    return pytest.param(name, marks=pytest.mark.xdist_group(f"reference-{name}"))
+    """``name`` as a parameter of a test comparing generated code with the model's symbolic references
+    (tests/backends/test_numpy_backend.py, tests/backends/test_backends_agree.py), in the model's group
+    (:func:`model_group`)."""
+    return pytest.param(name, marks=model_group(name))
 SYMKIN_CLI = [sys.executable, "-m", "symkin"]
 
 
@@ -84,8 +92,8 @@ def shared_derivation(model: Model) -> Derivation:
 def stability_run(name: str):
     """``symkin bench stability models/<name>.yaml`` at its defaults, once per worker: the run that
     docs/numerical-stability.md quotes (tests/stability/test_stability_table.py) and, on native arithmetic, the one
-    tests/stability/test_stability.py judges (both modules' tests of a model share the xdist group
-    ``stability-<name>``), on the worker's shared derivation of the model (:func:`shared_derivation`)."""
+    tests/stability/test_stability.py judges (both modules' tests of a model share the model's xdist group,
+    :func:`model_group`), on the worker's shared derivation of the model (:func:`shared_derivation`)."""
     from symkin.stability import run_stability
 
     model = load_model(MODELS_DIR / f"{name}.yaml")

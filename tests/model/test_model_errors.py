@@ -8,6 +8,7 @@ from pathlib import Path
 import pytest
 from conftest import SYMKIN_CLI
 
+from symkin.cli import main
 from symkin.errors import ModelError
 from symkin.model import load_model
 
@@ -66,16 +67,19 @@ def test_the_valid_base_model_loads(tmp_path):
 
 @pytest.mark.parametrize("case,old,new,line,key,message", CASES, ids=[c[0] for c in CASES])
 def test_bad_model_is_reported_with_location_and_fix_and_nothing_is_written(tmp_path, case, old, new, line, key,
-                                                                             message):
+                                                                             message, capsys, monkeypatch):
+    """The CLI in this process (a fresh process's exit code 2: the tests below; planted code in a fresh process:
+    tests/model/test_hostile_corpus.py) - a second apiece instead of a Python start-up per case."""
     path = _write(tmp_path, case, old, new)
     out = tmp_path / "out"
-    result = subprocess.run(SYMKIN_CLI + ["derive", str(path), "-o", str(out)], capture_output=True, text=True,
-                            cwd=tmp_path)
-    assert result.returncode == 2, result.stderr
-    assert f"{path}:{line}" in result.stderr, result.stderr
-    assert key in result.stderr
-    assert message in result.stderr
-    assert "fix:" in result.stderr
+    monkeypatch.chdir(tmp_path)
+    code = main(["derive", str(path), "-o", str(out)])
+    stderr = capsys.readouterr().err
+    assert code == 2, stderr
+    assert f"{path}:{line}" in stderr, stderr
+    assert key in stderr
+    assert message in stderr
+    assert "fix:" in stderr
     assert not out.exists()
     assert not (tmp_path / "pwned").exists()
 

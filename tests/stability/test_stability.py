@@ -8,7 +8,8 @@ import subprocess
 import numpy as np
 import pytest
 import sympy
-from conftest import EXAMPLE_MODELS, FOREIGN_ARITHMETIC, GENERATED_DIR, MODELS_DIR, SYMKIN_CLI, stability_run
+from conftest import (EXAMPLE_MODELS, FOREIGN_ARITHMETIC, GENERATED_DIR, MODELS_DIR, SYMKIN_CLI, model_group,
+                      shared_derivation, stability_run)
 from tolerances import CLOSED_FORM, EPS, FORWARD_AT_SINGULARITIES
 
 from symkin import load, pipeline
@@ -24,10 +25,10 @@ from symkin.stability.reference import BallReference, normwise_error
 from symkin.stability.states import parameter_values
 
 def on_the_runs_worker(*names: str):
-    """The tests of a model's run share one xdist worker (`make test` uses --dist loadgroup): the group
-    ``stability-<name>``, which tests/stability/test_stability_table.py's test of the model joins, so that each run
-    is computed once and the models' runs spread over the workers."""
-    return [pytest.mark.xdist_group(f"stability-{name}") for name in names]
+    """The tests of a model's run share one xdist worker (`make test` uses --dist loadgroup): the model's group
+    (conftest.model_group), which tests/stability/test_stability_table.py's test of the model and the tests of its
+    references join, so that each run and derivation is computed once and the models spread over the workers."""
+    return [model_group(name) for name in names]
 
 
 def each_model():
@@ -43,12 +44,20 @@ QUICK = dict(samples=12, scale_samples=3, float32_samples=6, steps=(1e-2, 1e-6, 
 #: delta_wrist's platform is delta's, leg for leg: its kinematics are the same code (the golden files show it),
 #: checked on delta; delta_wrist is checked where the wrist enters (the device functions and the dynamics).
 #: The regressors of the UR10e (in both DH conventions) and of the PHANToM are checked at the full defaults in the
-#: first pass; on foreign arithmetic the planar arm's stand for them.
-LEFT_OUT = {"ur10e": ("regressor", "base_regressor", "energy_regressor"),
-            "ur10e_classic": ("regressor", "base_regressor", "energy_regressor"),
-            "phantom_premium": ("regressor", "base_regressor", "energy_regressor"),
+#: first pass; on foreign arithmetic the planar arm's stand for them, and the DELTA's, the pantograph's and the Agile
+#: Eye's for the Stewart platform's (whose base parameters alone take 6 s to find). The derivatives and sensitivities
+#: of the dynamics (a program's automatic differentiation, the same for every serial arm) are checked on foreign
+#: arithmetic on the planar arm and the UR10e in its modified DH convention.
+REGRESSORS = ("regressor", "base_regressor", "energy_regressor")
+DERIVATIVES = ("inverse_dynamics_derivatives", "forward_dynamics_derivatives", "gravity_derivatives",
+               "static_torque_derivatives", "fk_sensitivities", "jacobian_sensitivities",
+               "inverse_dynamics_sensitivities")
+LEFT_OUT = {"ur10e": REGRESSORS,
+            "ur10e_classic": REGRESSORS + DERIVATIVES,
+            "phantom_premium": REGRESSORS + DERIVATIVES,
             "stewart": ("jacobian", "mass_matrix", "coriolis_vector", "gravity_vector", "inverse_dynamics",
-                        "forward_dynamics", "operational_space", "kinetic_energy", "potential_energy"),
+                        "forward_dynamics", "operational_space", "kinetic_energy", "potential_energy") + REGRESSORS
+                       + ("closure_regressor", "closure_energy_regressor", "closure_base_regressor"),
             "delta_wrist": ("fk", "jacobian", "ik", "inverse_jacobian", "singularities", "leg_points", "closure",
                             "closure_jacobians", "constraints", "constraint_jacobians", "tcp_force_map",
                             "tcp_force_map_inverse")}
@@ -78,7 +87,7 @@ def runs(models):
 
     def quick(name):
         quantities = [q for q in emitted_quantities(models[name].mechanism) if q not in LEFT_OUT.get(name, ())]
-        return run_stability(models[name], quantities=quantities, **QUICK)
+        return run_stability(models[name], quantities=quantities, derivation=shared_derivation(models[name]), **QUICK)
 
     return _Runs(quick)
 

@@ -20,7 +20,7 @@ import math
 import re
 
 import pytest
-from conftest import EXAMPLE_MODELS, ROOT, stability_run
+from conftest import EXAMPLE_MODELS, ROOT, model_group, stability_run
 
 from tolerances import EPS
 
@@ -49,8 +49,8 @@ def test_the_table_has_a_row_per_example_model():
     assert sorted(quoted_rows()) == EXAMPLE_MODELS
 
 
-# the runs are tests/stability/test_stability.py's too (conftest.stability_run): the same worker, a group per model
-@pytest.mark.parametrize("name", [pytest.param(name, marks=pytest.mark.xdist_group(f"stability-{name}"))
+# the runs are tests/stability/test_stability.py's too (conftest.stability_run): the same worker, the model's group
+@pytest.mark.parametrize("name", [pytest.param(name, marks=model_group(name))
                                   for name in EXAMPLE_MODELS])
 def test_quoted_figures_are_what_the_bench_measures(name):
     quoted = quoted_rows()[name]
