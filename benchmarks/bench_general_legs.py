@@ -19,7 +19,10 @@ continuation by the run-time solver instead of the generated inverse); and its d
 Last, ``symkin simulate MODEL.yaml --scenario haptic-wall --duration 1 --backend c`` (the time it reports) of a model
 file derived on the fly: docs/model-format.md's closure DELTA (legs without the distance form) carrying the DELTA's
 bodies (the masses of models/delta.yaml), beside models/delta.yaml itself (closed forms).  Issue 63's target: at least
-real time (1 s of the haptic loop in at most 1 s).
+real time (1 s of the haptic loop in at most 1 s).  Beside it, what a step of that simulation spends on the dynamics in
+the actuated coordinates at one state (``actuated_dynamics``): the generated ``<model>_actuated_dynamics`` (C,
+through ``GeneratedAssembly``); the C library's terms over z projected at run time, for one state (numpy, QR) and as a
+batch of one (numpy, the pseudo-inverse by the SVD); the numpy backend's terms projected for one state.
 
 Run with `make bench` or `python benchmarks/bench_general_legs.py [--samples N]`.
 """
@@ -44,6 +47,7 @@ import symkin  # noqa: E402
 from symkin.mechanism.closure import ClosureAssembly, solve_home_assembly  # noqa: E402
 from symkin.model import load_model  # noqa: E402
 from symkin.runtime.assembly import GeneratedAssembly  # noqa: E402
+from symkin.runtime.closure_dynamics import actuated_dynamics  # noqa: E402
 from symkin.runtime.parallel import closure_velocities, solve_closure  # noqa: E402
 from symkin.text_table import format_table  # noqa: E402
 
@@ -185,7 +189,40 @@ def main(argv: list[str] | None = None) -> int:
                                           ("DELTA (closed forms, model file)", ROOT / "models" / "delta.yaml"))]
     print(format_table(["device", "symkin simulate --scenario haptic-wall --duration 1 --backend c (s)"], simulated))
     print("issue 63's target: at least real time (<= 1 s)")
+    print(format_table(["closure DELTA with bodies: actuated dynamics of one state", "us per call"],
+                       _projection_rows(args.repeat)))
     return 0
+
+
+def _projection_rows(repeat: int) -> list[list[str]]:
+    """The dynamics in the actuated coordinates of one assembled state of the closure DELTA with bodies: C, numpy
+    (one state), numpy (a batch of one)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        directory = symkin.derive(_closure_delta_file(Path(tmp)), tmp, backends=["numpy", "c"],
+                                  outputs=["closure", "closure_jacobians", "closure_dynamics"], fixed=["all"])
+        c_model, numpy_model = symkin.load(directory, "c"), symkin.load(directory)
+        mechanism = ClosureAssembly(c_model)
+        q = mechanism.home + 0.05
+        s, p = mechanism(q)
+        qd = np.array([0.3, -0.2, 0.1])
+        calls = [("C: <model>_actuated_dynamics", lambda: actuated_dynamics(c_model, q, s, p, qd, mechanism.generated)),
+                 ("C terms, projected in numpy (one state, QR)", lambda: actuated_dynamics(c_model, q, s, p, qd)),
+                 ("C terms, projected in numpy (a batch of one, pseudo-inverse)",
+                  lambda: actuated_dynamics(c_model, q[None], s[None], p[None], qd[None])),
+                 ("numpy terms, projected in numpy (one state, QR)", lambda: actuated_dynamics(numpy_model, q, s, p, qd))]
+        rows = []
+        for label, call in calls:
+            count = 2000
+            best = min(_seconds(call, count) for _ in range(repeat))
+            rows.append([label, f"{1e6 * best / count:.1f}"])
+    return rows
+
+
+def _seconds(call, count: int) -> float:
+    start = time.perf_counter()
+    for _ in range(count):
+        call()
+    return time.perf_counter() - start
 
 
 def _closure_delta_file(directory: Path) -> Path:

@@ -199,10 +199,15 @@ class ClosureAssembly:
         """(q, s, p) at q, continued from the nearer (in the actuators) of the last assembly and the home assembly
         along the straight line of actuator positions, in steps of at most MAX_STEP (one step within a simulation);
         None where the legs stop closing on the way."""
-        start = min((self._last, self._home), key=lambda known: float(np.max(np.abs(q - known[0]))))
-        if np.array_equal(q, start[0]):
+        distances = [float(np.max(np.abs(q - known[0]))) for known in (self._last, self._home)]
+        start = self._last if distances[0] <= distances[1] else self._home
+        distance = min(distances)
+        if distance == 0.0 and np.array_equal(q, start[0]):
             return start
-        steps = max(1, int(np.ceil(np.max(np.abs(q - start[0])) / MAX_STEP)))
+        if distance <= MAX_STEP:    # one step: a simulation's
+            solved = self._step(q, start[1], start[2])
+            return None if solved is None else (q.copy(), *solved)
+        steps = int(np.ceil(distance / MAX_STEP))
         s, p = start[1], start[2]
         for fraction in np.linspace(0.0, 1.0, steps + 1)[1:]:
             solved = self._step(start[0] + fraction * (q - start[0]), s, p)
@@ -296,7 +301,7 @@ class ClosureFunctions:
             if q.shape == last_q.shape and np.array_equal(q, last_q) and np.array_equal(qd, last_qd):
                 return terms
         s, p = self.assembled(q)
-        terms = actuated_dynamics(self.model, q, s, p, qd)
+        terms = actuated_dynamics(self.model, q, s, p, qd, self.assembly.generated)
         self._last_dynamics = (q.copy(), qd.copy(), terms)
         return terms
 

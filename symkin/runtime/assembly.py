@@ -5,7 +5,9 @@
 (:class:`symkin.backends.c.loader_assembly.AssemblyBinding`: through compiled CPython entry points for exact float64
 C-contiguous arrays, and otherwise through ctypes with plain pointers, the arrays' checks done here, on their
 attributes) and the model's parameter values (its defaults, or a bound design's); :meth:`GeneratedAssembly.assemble`
-updates a warm start (s, p) in place - the previous sample's - and :meth:`GeneratedAssembly.jacobian` gives J = dp/dq.
+updates a warm start (s, p) in place - the previous sample's - and :meth:`GeneratedAssembly.jacobian` gives J = dp/dq;
+:meth:`GeneratedAssembly.actuated_dynamics` the dynamics in the actuated coordinates where the C code has
+``closure_dynamics`` (``<model>_actuated_dynamics``: a simulation's step).
 A call that does not close the legs leaves NaN and says so (its return value), and a possible jump of assembly mode
 is flagged (a negative count), never a silent wrong branch.
 """
@@ -49,6 +51,9 @@ class GeneratedAssembly:
         self._residual = np.zeros(1)
         self._residual_address = self._residual.ctypes.data
         self.name = model.name
+        self._dynamics = binding.dynamics
+        self._dynamics_parameters = [float(model.parameters[name]) for name in binding.dynamics_parameter_names]
+        self._dynamics_parameter_array = np.array(self._dynamics_parameters, dtype=np.float64)
 
     @property
     def compiled(self) -> bool:
@@ -119,3 +124,25 @@ class GeneratedAssembly:
         self._jacobian(self._pointer(q, "q"), self._pointer(s, "s"), self._pointer(p, "p"), *self._parameters,
                        J.ctypes.data)
         return J
+
+    @property
+    def has_dynamics(self) -> bool:
+        """Whether the C code holds ``<model>_actuated_dynamics`` (a model with closure_dynamics in C, derived since)."""
+        return self._dynamics is not None
+
+    def actuated_dynamics(self, q: np.ndarray, s: np.ndarray, p: np.ndarray, qd: np.ndarray
+                          ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float] | None:
+        """(M, bias, W, drift, u) at an assembled (q, s, p) moving at qd (float64 C-contiguous vectors):
+        ``<model>_actuated_dynamics`` (:func:`symkin.runtime.closure_dynamics.actuated_dynamics`' terms but the
+        friction); None where the C code has none or [Phi_s Phi_p] has a dependent column (a singularity)."""
+        if self._dynamics is None:
+            return None
+        n, N = self.sizes["q"], sum(self.sizes.values())
+        M, bias, W, drift, u = np.empty((n, n)), np.empty(n), np.empty((N, n)), np.empty(N), np.empty(1)
+        solved = None if self._entry is None else self._entry.dynamics(q, s, p, qd, self._dynamics_parameter_array,
+                                                                        M, bias, W, drift, u)
+        if solved is None:
+            solved = self._dynamics(self._pointer(q, "q"), self._pointer(s, "s"), self._pointer(p, "p"),
+                                    self._pointer(qd, "q"), *self._dynamics_parameters, M.ctypes.data,
+                                    bias.ctypes.data, W.ctypes.data, drift.ctypes.data, u.ctypes.data)
+        return (M, bias, W, drift, float(u[0])) if solved else None

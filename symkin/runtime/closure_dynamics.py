@@ -22,10 +22,14 @@ generated functions only.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from symkin.runtime.info import GeneratedModel
+
+if TYPE_CHECKING:
+    from symkin.runtime.assembly import GeneratedAssembly
 
 
 @dataclass(frozen=True)
@@ -65,10 +69,12 @@ class ActuatedDynamics:
         return 0.5 * np.einsum("...i,...ij,...j->...", qd, self.M, qd)
 
 
-def actuated_dynamics(model: GeneratedModel, q, s, p, qd) -> ActuatedDynamics:
+def actuated_dynamics(model: GeneratedModel, q, s, p, qd, assembly: GeneratedAssembly | None = None
+                      ) -> ActuatedDynamics:
     """M, the bias and the friction efforts in the actuated coordinates at an assembled (q, s, p) moving at qd (see
     the module docstring); inputs broadcast against each other.  The model needs ``closure_jacobians`` and
-    ``closure_dynamics`` (and ``friction`` for the friction efforts).
+    ``closure_dynamics`` (and ``friction`` for the friction efforts).  ``assembly``: the model's generated assembly,
+    whose ``<model>_actuated_dynamics`` (C) then gives one state's terms.
     """
     for name in ("closure_jacobians", "closure_dynamics"):
         if name not in model.functions:
@@ -76,6 +82,10 @@ def actuated_dynamics(model: GeneratedModel, q, s, p, qd) -> ActuatedDynamics:
                              f"'{name}' (derive with --only closure,closure_jacobians,closure_dynamics and declare "
                              "bodies: links: and platform:)")
     q, s, p, qd = (np.asarray(v, dtype=float) for v in (q, s, p, qd))
+    if q.ndim == s.ndim == p.ndim == qd.ndim == 1:
+        one = _one_state(model, q, s, p, qd, assembly)
+        if one is not None:
+            return one
     batch = np.broadcast_shapes(q.shape[:-1], s.shape[:-1], p.shape[:-1], qd.shape[:-1])
     q, s, p, qd = (np.broadcast_to(v, batch + v.shape[-1:]).reshape(-1, v.shape[-1]) for v in (q, s, p, qd))
     n, ns = q.shape[-1], s.shape[-1]
@@ -104,6 +114,42 @@ def actuated_dynamics(model: GeneratedModel, q, s, p, qd) -> ActuatedDynamics:
                             W.reshape(batch + (N, n)),
                             zd.reshape(batch + (N,)), np.asarray(terms.u, dtype=float).reshape(batch),
                             c.reshape(batch + (N,)))
+
+
+def _one_state(model: GeneratedModel, q: np.ndarray, s: np.ndarray, p: np.ndarray, qd: np.ndarray,
+               assembly: GeneratedAssembly | None) -> ActuatedDynamics | None:
+    """:func:`actuated_dynamics` of one state (a simulation's step), or None where A = [Phi_s Phi_p] is not finite or
+    not of full column rank (the batch path's pseudo-inverse decides there).  The generated assembly's
+    ``<model>_actuated_dynamics`` where it has one (a few microseconds); else the generated functions called with
+    one configuration (their compiled entry points, without a batch's buffers) and A^+ = R^-1 Q^T from A = Q R
+    (Householder, backward stable; at full column rank the pseudo-inverse): a third of the batch path's time, of
+    which the SVD of the pseudo-inverse was half."""
+    n = len(q)
+    friction = np.reshape(model.friction(qd), n) if "friction" in model.functions else np.zeros(n)
+    if assembly is not None and assembly.has_dynamics:
+        terms = assembly.actuated_dynamics(*(np.ascontiguousarray(v) for v in (q, s, p, qd)))
+        if terms is None:   # a dependent column, or NaN in the state
+            return None
+        M, bias, W, drift, u = terms
+        return ActuatedDynamics(M, bias, friction, W, W @ qd, np.array(u), drift)
+    blocks = model.closure_jacobians(q, s, p)
+    A = np.hstack((blocks.Phi_s, blocks.Phi_p))
+    if not np.isfinite(A).all():
+        return None
+    Q, R = np.linalg.qr(A)
+    pivots = np.abs(R.diagonal())
+    if not pivots.min() > np.finfo(float).eps * max(A.shape) * pivots.max():
+        return None
+    ns = len(s)
+    inverse = np.linalg.solve(R, Q.T)
+    W = np.vstack((np.eye(n), -inverse @ blocks.Phi_q))
+    zd = W @ qd
+    terms = model.closure_dynamics(q, s, p, qd, zd[n:n + ns], zd[n + ns:])
+    N = len(zd)
+    M_z = np.reshape(terms.M_z, (N, N))
+    c = np.concatenate((np.zeros(n), -inverse @ np.reshape(terms.gamma, -1)))
+    return ActuatedDynamics(W.T @ M_z @ W, W.T @ (M_z @ c + np.reshape(terms.h_z, N)), friction, W, zd,
+                            np.reshape(terms.u, ()), c)
 
 
 def closure_inverse_dynamics(model: GeneratedModel, q, s, p, qd, qdd) -> np.ndarray:

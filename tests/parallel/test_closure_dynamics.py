@@ -30,25 +30,8 @@ from symkin.simulation import ArmSystem, Plant, run_adaptive
 from symkin.cli import main
 from tolerances import DYNAMICS, EPS, NEWTON
 
-D, L1, L2, E = 0.3, 0.25, 0.25, 0.1
-HOME = np.array([0.0, 0.3, 0.1, 0.0])
-GRAVITY = 9.81
-ROTOR = 10**2 * 1e-5
-#: (joint, parent, R or P, origin, mass, com, principal inertia) as the document declares them.
-TREE = [("theta1", None, "R", [-D / 2, 0, 0], 0.3, [0.12, 0, 0], [0.0001, 0.0015, 0.0016]),
-        ("elbow1", "theta1", "R", [L1, 0, 0], 0.25, [0.1, 0.01, 0], [0.0002, 0.0011, 0.0012]),
-        ("lift1", "elbow1", "P", [L2, 0, 0], 0.1, [0, 0, 0.05], [0.0001, 0.0001, 0.00002]),
-        ("wrist1", "lift1", "R", [0, 0, 0], 0.0, [0, 0, 0], [0, 0, 0]),
-        ("phi2", None, "R", [D / 2, 0, 0], 0.3, [0.12, 0, 0], [0.0001, 0.0015, 0.0016]),
-        ("knee2", "phi2", "R", [L1, 0, 0], 0.25, [0.1, 0, 0.01], [0.0002, 0.0011, 0.0012]),
-        ("slide2", "knee2", "P", [L2, 0, 0], 0.1, [0, 0, 0.05], [0.0001, 0.0001, 0.00002]),
-        ("hand2", "slide2", "R", [0, 0, 0], 0.05, [0.01, 0, 0.02], [0.00002, 0.00002, 0.00003])]
-#: The bar on leg 1's wrist, whose frame is the bar's attachment (-e, 0, 0): the bar's frame is e along x.
-BAR = (0.2, [0, 0.01, 0], [0.0001, 0.0003, 0.0004])
-ACTIVE = ("theta1", "lift1", "phi2", "knee2")
-#: The closure's rows that are not identically zero (each leg's x, y, z and yaw; all axes are vertical).
-CLOSURE_ROWS = [0, 1, 2, 5, 6, 7, 8, 11]
-PASSIVE = ("elbow1", "wrist1", "slide2", "hand2")
+from dual_scara_reference import (ACTIVE, BAR, CLOSURE_ROWS, GRAVITY, HOME, PASSIVE, ROTOR, assembled_states,
+                                  pinocchio_tree)
 
 
 @pytest.fixture(scope="module")
@@ -64,43 +47,6 @@ def scara(scara_dir):
     return load(scara_dir)
 
 
-def _pinocchio_tree(pin):
-    """The two legs as a Pinocchio tree, the bar on leg 1's wrist, and the weld of leg 2's hand to the bar."""
-    tree = pin.Model()
-    ids = {}
-    for name, parent, kind, origin, mass, com, inertia in TREE:
-        joint = pin.JointModelRZ() if kind == "R" else pin.JointModelPZ()
-        ids[name] = tree.addJoint(ids.get(parent, 0), joint, pin.SE3(np.eye(3), np.array(origin, float)), name)
-        if mass:
-            tree.appendBodyToJoint(ids[name], pin.Inertia(mass, np.array(com, float), np.diag(inertia)),
-                                   pin.SE3.Identity())
-    mass, com, inertia = BAR
-    tree.appendBodyToJoint(ids["wrist1"], pin.Inertia(mass, np.array(com, float), np.diag(inertia)),
-                           pin.SE3(np.eye(3), np.array([E, 0, 0])))
-    tree.gravity = pin.Motion(np.array([0, 0, -GRAVITY]), np.zeros(3))
-    order = [name for name, *_ in TREE]
-    tree.armature = np.array([ROTOR if name in ACTIVE else 0.0 for name in order])
-    weld = pin.RigidConstraintModel(pin.ContactType.CONTACT_6D, tree, ids["hand2"], pin.SE3.Identity(),
-                                    ids["wrist1"], pin.SE3(np.eye(3), np.array([2 * E, 0, 0])),
-                                    pin.ReferenceFrame.LOCAL)
-    constraints = pin.StdVec_RigidConstraintModel()
-    constraints.append(weld)
-    return tree, constraints, order
-
-
-def _states(scara, count, rng):
-    """Assembled (q, s, p) near the home pose in the home assembly mode, by the closure's Gauss-Newton."""
-    ik = solve_closure(scara, [1.0, 0.1, 1.6, 0.0], np.zeros(4), HOME, unknowns=("q", "s"), max_step=0.2)
-    q0, s0 = ik.solution["q"], ik.solution["s"]
-    states = []
-    while len(states) < count:
-        q = q0 + rng.uniform(-0.03, 0.03, 4) * [1, 1, 1, 1]
-        fk = solve_closure(scara, q, s0, HOME, unknowns=("p", "s"))
-        if fk.all_converged:
-            states.append((q, fk.solution["s"], fk.solution["p"]))
-    return states
-
-
 def test_forward_and_inverse_dynamics_match_pinocchio_constraint_dynamics(scara):
     """At random assembled states, velocities and efforts: the reduced forward dynamics equals Pinocchio's
     accelerations of the actuated joints, and the inverse dynamics at them gives back the efforts.  Both sides
@@ -110,13 +56,13 @@ def test_forward_and_inverse_dynamics_match_pinocchio_constraint_dynamics(scara)
     pin = pytest.importorskip("pinocchio")
     from benchmarks.competitors import constraint_dynamics_of
 
-    tree, constraints, order = _pinocchio_tree(pin)
+    tree, constraints, order = pinocchio_tree(pin)
     data, datas, _ = constraint_dynamics_of(pin, tree, constraints)
     settings = pin.ProximalSettings(1e-14, 1e-6, 100)
     active = [order.index(name) for name in ACTIVE]
     passive = [order.index(name) for name in PASSIVE]
     rng = np.random.default_rng(3107)
-    for q, s, p in _states(scara, 5, rng):
+    for q, s, p in assembled_states(scara, 5, rng):
         qd, tau = rng.uniform(-1, 1, 4), rng.uniform(-0.5, 0.5, 4) + [0, 4.4, 0, 0]
         zd = actuated_dynamics(scara, q, s, p, qd).zd
         x, v, efforts = np.zeros(8), np.zeros(8), np.zeros(8)
@@ -132,7 +78,7 @@ def test_at_rest_the_lift_holds_what_moves_with_the_bar(scara):
     """Closed forms: all revolute axes are vertical, so at rest gravity loads only the lift, with the weight of the
     bar, its own link and the planar leg's slide and hand (0.45 kg); M is symmetric positive definite and its lift
     entry is that mass plus the rotor's gear_ratio^2 J_rotor (the lift's motion moves nothing else)."""
-    (q, s, p), = _states(scara, 1, np.random.default_rng(7))
+    (q, s, p), = assembled_states(scara, 1, np.random.default_rng(7))
     terms = actuated_dynamics(scara, q, s, p, np.zeros(4))
     expected = np.array([0.0, (0.1 + 0.2 + 0.1 + 0.05) * GRAVITY, 0.0, 0.0])
     assert np.max(np.abs(terms.bias - expected)) <= 64 * np.finfo(float).eps * expected[1]
@@ -143,7 +89,7 @@ def test_at_rest_the_lift_holds_what_moves_with_the_bar(scara):
 
 def test_the_casadi_function_gives_the_numpy_terms(scara, scara_dir):
     """The same expressions through CasADi's SX graph: each output within DYNAMICS of its largest entry."""
-    (q, s, p), = _states(scara, 1, np.random.default_rng(11))
+    (q, s, p), = assembled_states(scara, 1, np.random.default_rng(11))
     rates = np.random.default_rng(12).uniform(-1, 1, 12)
     numpy_terms = scara.closure_dynamics(q, s, p, rates[:4], rates[4:8], rates[8:])
     casadi_terms = load(scara_dir, "casadi").closure_dynamics(q, s, p, rates[:4], rates[4:8], rates[8:])
@@ -240,112 +186,6 @@ def test_closure_dynamics_is_for_legs_without_the_distance_form():
     bare = model_from_text(dual_scara_dynamics_text().split("gravity:")[0], file="bare.yaml")
     with pytest.raises(DerivationError, match="needs the mass properties"):
         Derivation(bare)["closure_dynamics"]
-
-
-#: Friction the test declares on the actuators (viscous N m s/rad or N s/m, Coulomb N m or N).
-FRICTION = {"theta1": (0.02, 0.05), "lift1": (3.0, 0.8), "knee2": (0.01, 0.0)}
-
-
-@pytest.fixture(scope="module")
-def rubbing_dir(tmp_path_factory):
-    """The document's dual SCARA with friction on three actuators, derived for numpy and C; beside it the same
-    model derived without ``closure_dynamics`` and ``friction`` (sharing the derivation)."""
-    text = dual_scara_dynamics_text() + "friction:\n" + "".join(
-        f"  {joint}: {{viscous: {viscous}, coulomb: {coulomb}}}\n" for joint, (viscous, coulomb) in FRICTION.items())
-    model = model_from_text(text, file="rubbing.yaml")
-    derivation = Derivation(model)
-    out = tmp_path_factory.mktemp("rubbing")
-    full = pipeline.resolve_request(model, "closure,closure_jacobians,closure_dynamics,friction", "numpy,c",
-                                    fixed="all")
-    bare = pipeline.resolve_request(model, "closure,closure_jacobians", "numpy", fixed="all")
-    return (pipeline.write(pipeline.generate(model, full, derivation=derivation), out / "full"),
-            pipeline.write(pipeline.generate(model, bare, derivation=derivation), out / "bare"))
-
-
-def test_friction_enters_the_dynamics_as_efforts_against_the_motion(rubbing_dir):
-    """F_f = viscous qd + coulomb sign(qd) (written here from the declared coefficients) opposes the actuators:
-    the forward dynamics equals Pinocchio's constraintDynamics under the efforts tau - F_f, and the inverse
-    dynamics gives tau back (1e-9 relative, as without friction)."""
-    pin = pytest.importorskip("pinocchio")
-    from benchmarks.competitors import constraint_dynamics_of
-
-    rubbing = load(rubbing_dir[0])
-    tree, constraints, order = _pinocchio_tree(pin)
-    data, datas, _ = constraint_dynamics_of(pin, tree, constraints)
-    settings = pin.ProximalSettings(1e-14, 1e-6, 100)
-    active = [order.index(name) for name in ACTIVE]
-    passive = [order.index(name) for name in PASSIVE]
-    rng = np.random.default_rng(3108)
-    for q, s, p in _states(rubbing, 3, rng):
-        qd, tau = rng.uniform(-1, 1, 4), rng.uniform(-0.5, 0.5, 4) + [0, 4.4, 0, 0]
-        friction = np.array([FRICTION[name][0] * v + FRICTION[name][1] * np.sign(v) if name in FRICTION else 0.0
-                             for name, v in zip(ACTIVE, qd)])
-        zd = actuated_dynamics(rubbing, q, s, p, qd).zd
-        x, v, efforts = np.zeros(8), np.zeros(8), np.zeros(8)
-        x[active], x[passive], v[active], v[passive], efforts[active] = q, s, zd[:4], zd[4:8], tau - friction
-        reference = pin.constraintDynamics(tree, data, x, v, efforts, constraints, datas, settings)[active]
-        qdd = closure_forward_dynamics(rubbing, q, s, p, qd, tau)
-        assert np.max(np.abs(qdd - reference)) <= 1e-9 * np.max(np.abs(reference)), (qdd, reference)
-        back = closure_inverse_dynamics(rubbing, q, s, p, qd, reference)
-        assert np.max(np.abs(back - tau)) <= 1e-9 * np.max(np.abs(tau)), (back, tau)
-
-
-def test_the_c_library_gives_the_numpy_terms(rubbing_dir):
-    """closure_dynamics and friction compiled in C: each output within DYNAMICS of its largest entry."""
-    numpy_model, c_model = load(rubbing_dir[0]), load(rubbing_dir[0], "c")
-    (q, s, p), = _states(numpy_model, 1, np.random.default_rng(13))
-    rates = np.random.default_rng(14).uniform(-1, 1, 12)
-    numpy_terms = numpy_model.closure_dynamics(q, s, p, rates[:4], rates[4:8], rates[8:])
-    c_terms = c_model.closure_dynamics(q, s, p, rates[:4], rates[4:8], rates[8:])
-    for name in ("M_z", "h_z", "gamma", "u"):
-        expected, got = np.asarray(getattr(numpy_terms, name)), np.asarray(getattr(c_terms, name))
-        assert np.max(np.abs(got.reshape(expected.shape) - expected)) <= DYNAMICS * np.max(np.abs(expected)), name
-    expected = numpy_model.friction(rates[:4])
-    assert np.max(np.abs(c_model.friction(rates[:4]) - expected)) <= DYNAMICS * np.max(np.abs(expected))
-
-
-def test_the_jacobian_of_a_loop_step_comes_from_the_generated_assembly(rubbing_dir, monkeypatch):
-    """The run-time mechanism's J = dp/dq of legs loaded with the C backend (a simulation step asks for it before the
-    dynamics at the same q): the generated assembly's, not W of the dynamics evaluated at rest for it, equal to the
-    p rows of W at the same assembly to rounding amplified by the condition number of [Phi_s Phi_p]."""
-    functions = ClosureFunctions(load(rubbing_dir[0], "c"))
-    assert functions.assembly.generated is not None
-    q = functions.home + [0.05, 0.01, -0.04, 0.02]
-    s, p = functions.assembled(q)                                  # continued from the home assembly
-    with monkeypatch.context() as patch:
-        patch.setattr(closure_module, "actuated_dynamics", lambda *args: pytest.fail("dynamics evaluated for J"))
-        J = functions.function("jacobian")(q)
-    W = actuated_dynamics(load(rubbing_dir[0]), q, s, p, np.zeros(4)).W
-    expected = W[len(W) - len(J):]
-    A = np.hstack([np.asarray(functions.model.closure_jacobians(q, s, p)[k]) for k in (2, 0)])   # [Phi_s Phi_p]
-    assert np.max(np.abs(J - expected)) <= 100 * EPS * np.linalg.cond(A) * np.max(np.abs(expected))
-
-
-def test_a_plant_of_rubbing_legs_needs_their_friction(rubbing_dir):
-    """Without the generated friction its joints declare, the plant would simulate a frictionless device: refused,
-    naming what to derive."""
-    from symkin.errors import GeneratedCodeError
-
-    with pytest.raises(GeneratedCodeError, match="closure_dynamics, friction .*--only closure,closure_jacobians,"
-                                                 "closure_dynamics,friction"):
-        Plant(load(rubbing_dir[1]))
-    rubbing = load(rubbing_dir[0])
-    plant = Plant(rubbing)
-    # near its home assembly, the plant's acceleration is the reduced dynamics with friction (checked against
-    # Pinocchio above) at the assembly solved here: its own assembly and friction are wired in
-    from symkin.mechanism.closure import assemble_at_home
-
-    home_q, home_s = assemble_at_home(rubbing)
-    q = home_q + np.array([0.05, 0.01, -0.04, 0.03])
-    solved = solve_closure(rubbing, q, home_s, HOME, unknowns=("p", "s"))
-    s, p = solved.solution["s"], solved.solution["p"]
-    qd, tau = np.array([0.3, -0.2, 0.05, 0.1]), np.array([0.1, 4.4, -0.1, 0.05])
-    expected = closure_forward_dynamics(rubbing, q, s, p, qd, tau)
-    frictionless = expected - closure_forward_dynamics(rubbing, q, s, p, qd, tau + rubbing.friction(qd))
-    assert np.max(np.abs(frictionless)) > 1e-3 * np.max(np.abs(expected))  # the friction matters here
-    # two Gauss-Newton solves of one assembly agree to rounding, which the solve with M amplifies by kappa(M)
-    kappa = float(np.linalg.cond(actuated_dynamics(rubbing, q, s, p, qd).M))
-    assert np.max(np.abs(plant.acceleration(q, qd, tau) - expected)) <= kappa * DYNAMICS * np.max(np.abs(expected))
 
 
 def _randomized_bodies(text, rng):

@@ -23,6 +23,13 @@ Where a model's C code holds ``closure`` and ``closure_jacobians`` (double preci
   (q, s, p), the p-part of the least-squares solution of [Phi_s Phi_p] (ds, dp) = -Phi_q dq; returns 1, or 0 with J
   set to NaN where the platform is not determined by the actuators (a column of Phi_p past the numerical rank of
   [Phi_s Phi_p]: a singularity of the interior kind);
+* ``<model>_actuated_dynamics(q, s, p, qd, params..., M, bias, W, drift, u)`` where the C code also holds
+  ``closure_dynamics``: the dynamics in the actuated coordinates at an assembled (q, s, p) moving at qd - the
+  projection of :mod:`symkin.runtime.closure_dynamics` (W = [1; -A^+ Phi_q], c = [0; -A^+ gamma], M = W^T M_z W,
+  bias = W^T (M_z c + h_z)) with A^+ applied as the least-squares solution by Householder QR (leg by leg, else of
+  the whole system unpivoted); returns 0 with NaN where a column of A = [Phi_s Phi_p] is dependent (no unique
+  projection: the run-time's pseudo-inverse decides there).  Its parameters: closure_jacobians', then
+  closure_dynamics' others;
 * ``<model>_assemble_inverse(p, q, s, params..., max_iterations, tolerance, max_step, stall, residual)`` and its
   ``_batch``: Gauss-Newton for the actuated and passive joints (q, s) at a platform pose p, by
   :func:`symkin.newton.newton_iterate`'s rules (a step longer than ``max_step`` shortened to it, a residual that has
@@ -114,6 +121,8 @@ def assembly_context(functions: list[dict[str, Any]], model_name: str) -> dict[s
         placed.append(block | {"cells_before": cells, "rows_before": rows_before, "reduced_before": reduced_before})
         cells, rows_before, reduced_before = cells + m * nc, rows_before + m, reduced_before + m - nc
     return {
+        "dynamics": _dynamics_context(by_name.get("closure_dynamics"), [p["name"] for p in jacobians["params"]],
+                                      model_name, rows, n + ns + np_),
         "legs": placed, "free_rows": free, "reduced_rows": reduced, "right_sides": right_sides,
         "free_before": reduced_before,
         "leg_storage": cells + rows_before * (np_ + right_sides),
@@ -134,3 +143,24 @@ def assembly_context(functions: list[dict[str, Any]], model_name: str) -> dict[s
         "rows": rows, "n": n, "ns": ns, "np": np_, "unknowns": ns + np_,
         "blocks": {name: blocks[name]["size"] for name in ("Phi_p", "Phi_q", "Phi_s")},
     }
+
+
+#: closure_dynamics' vector inputs and outputs, in order, as :mod:`symkin.parallel.closure_dynamics` emits them.
+DYNAMICS_INPUTS, DYNAMICS_OUTPUTS = ("q", "s", "p", "qd", "sd", "pd"), ("M_z", "h_z", "gamma", "u")
+
+
+def _dynamics_context(dynamics: dict[str, Any] | None, jacobian_params: list[str], model_name: str, rows: int,
+                      variables: int) -> dict[str, Any] | None:
+    """The template's ``assembly.dynamics``: ``<model>_actuated_dynamics``, the dynamics in the actuated coordinates
+    from the generated closure_jacobians and closure_dynamics (:mod:`symkin.runtime.closure_dynamics`'s projection,
+    in C); None where the C code has no closure_dynamics of the expected form.  Its parameters: closure_jacobians',
+    then closure_dynamics' others."""
+    if dynamics is None or [v["name"] for v in dynamics["vectors"]] != list(DYNAMICS_INPUTS) \
+            or [o["name"] for o in dynamics["outputs"]] != list(DYNAMICS_OUTPUTS):
+        return None
+    sizes = {o["name"]: o["size"] for o in dynamics["outputs"]}
+    if sizes != {"M_z": variables * variables, "h_z": variables, "gamma": rows, "u": 1}:
+        return None
+    own = [p["name"] for p in dynamics["params"]]
+    return {"name": f"{model_name}_actuated_dynamics", "closure_dynamics": dynamics["symbol"], "own_params": own,
+            "params": jacobian_params + [name for name in own if name not in jacobian_params], "variables": variables}

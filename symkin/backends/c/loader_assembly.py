@@ -19,6 +19,8 @@ from symkin.runtime.info import ModelInfo
 
 #: The generated functions the assembly is made of.
 ASSEMBLY_FUNCTIONS = ("closure", "closure_jacobians")
+#: The generated function whose projection onto the actuated coordinates ``<model>_actuated_dynamics`` is.
+DYNAMICS_FUNCTION = "closure_dynamics"
 
 
 def assembly_parameter_names(info: ModelInfo) -> list[str]:
@@ -26,6 +28,15 @@ def assembly_parameter_names(info: ModelInfo) -> list[str]:
     others (:func:`symkin.backends.c.assembly.assembly_context` orders them so from the same functions)."""
     names: list[str] = []
     for function in ASSEMBLY_FUNCTIONS:
+        names += [i.name for i in info.functions[function].inputs if i.is_parameter and i.name not in names]
+    return names
+
+
+def dynamics_parameter_names(info: ModelInfo) -> list[str]:
+    """The free parameters ``<model>_actuated_dynamics`` takes, in its header's order: closure_jacobians', then
+    closure_dynamics' others (:func:`symkin.backends.c.assembly.assembly_context`)."""
+    names: list[str] = []
+    for function in ("closure_jacobians", DYNAMICS_FUNCTION):
         names += [i.name for i in info.functions[function].inputs if i.is_parameter and i.name not in names]
     return names
 
@@ -41,8 +52,23 @@ class AssemblyBinding:
         inputs = info.functions["closure"].inputs
         #: the closure's sizes n, ns and np (keys q, s, p)
         self.sizes = {v.name: int(v.shape[0]) for v in inputs[:3]}
+        #: ``<model>_actuated_dynamics`` (None: the model has no closure_dynamics in C, or its code predates it)
+        self.dynamics: Any = None
+        #: its free parameters, in its order
+        self.dynamics_parameter_names: list[str] = []
+        if DYNAMICS_FUNCTION in info.functions:
+            try:
+                self.dynamics = library[f"{name}_actuated_dynamics"]
+            except AttributeError:
+                pass
+            else:
+                self.dynamics_parameter_names = dynamics_parameter_names(info)
+                self.dynamics.argtypes = [ctypes.c_void_p] * 4 + [ctypes.c_double] * len(
+                    self.dynamics_parameter_names) + [ctypes.c_void_p] * 5
+                self.dynamics.restype = ctypes.c_int
         #: the compiled CPython entry points (None: ctypes only); they take exact arrays, the rest goes to ctypes
-        self.entry = assembly_entry_points(path, header, name, self.sizes, self.parameter_names)
+        self.entry = assembly_entry_points(path, header, name, self.sizes, self.parameter_names,
+                                           self.dynamics_parameter_names if self.dynamics is not None else None)
         doubles = [ctypes.c_double] * len(self.parameter_names)
         self.assemble.argtypes = [ctypes.c_void_p] * 3 + doubles + [ctypes.c_int, ctypes.c_double, ctypes.c_void_p]
         self.assemble.restype = ctypes.c_int

@@ -159,19 +159,22 @@ def _import(path: Path, name: str) -> Any:
 
 
 def assembly_entry_points(library: Path, header: Path, model: str, sizes: dict[str, int],
-                          parameters: Sequence[str]) -> Any:
+                          parameters: Sequence[str], dynamics_parameters: Sequence[str] | None = None) -> Any:
     """The extension module of the generated assembly of ``model`` (:mod:`symkin.backends.c.assembly`): its
     ``assemble(q, s, p, parameters, max_iterations, tolerance, residual)`` and ``jacobian(q, s, p, parameters, J)``
-    call the C functions without ctypes and return None for an argument they do not take (the caller's checks then
-    say what is wrong).  ``sizes``: the closure's n, ns and np (keys q, s, p); ``parameters``: the assembly's
-    free parameters in its order.  None where there is no extension (chosen off, no headers, a failed build: said on
-    stderr)."""
+    (and, with ``dynamics_parameters``, ``dynamics(q, s, p, qd, parameters, M, bias, W, drift, u)``) call the C
+    functions without ctypes and return None for an argument they do not take (the caller's checks then say what is
+    wrong).  ``sizes``: the closure's n, ns and np (keys q, s, p); ``parameters``: the assembly's free parameters in
+    its order; ``dynamics_parameters``: ``<model>_actuated_dynamics``' (None: the library has none).  None where there
+    is no extension (chosen off, no headers, a failed build: said on stderr)."""
     if os.environ.get(ENTRY_VARIABLE, "") == "ctypes" or python_include_directories() is None:
         return None
-    _identifiers([model, *parameters])
+    _identifiers([model, *parameters, *(dynamics_parameters or ())])
     context = {"model": model, "header": header.name, "version": __version__, "assemble": f"{model}_assemble",
                "jacobian": f"{model}_assembly_jacobian", "n": sizes["q"], "ns": sizes["s"], "np": sizes["p"],
-               "parameters": list(parameters)}
+               "parameters": list(parameters),
+               "dynamics": None if dynamics_parameters is None else f"{model}_actuated_dynamics",
+               "dynamics_parameters": list(dynamics_parameters or ())}
 
     def source() -> str:
         from symkin.backends.templating import render  # jinja2: only when the extension is built
