@@ -9443,4 +9443,16 @@ void agile_eye_assemble_inverse_batch(size_t count, const double *p, double *q, 
     for (size_t _k = 0; _k < count; ++_k)
         steps[_k] = agile_eye_assemble_inverse(p + _k * 3, q + _k * 3, s + _k * 6, max_iterations, tolerance, max_step, stall, residual + _k);
 }
+
+void agile_eye_assemble_batch(size_t count, const double *q, double *s, double *p, int max_iterations, double tolerance, double *residual, int *steps)
+{
+    for (size_t _k = 0; _k < count; ++_k)
+        steps[_k] = agile_eye_assemble(q + _k * 3, s + _k * 6, p + _k * 3, max_iterations, tolerance, residual + _k);
+}
+
+void agile_eye_assembly_jacobian_batch(size_t count, const double *q, const double *s, const double *p, double *J, int *determined)
+{
+    for (size_t _k = 0; _k < count; ++_k)
+        determined[_k] = agile_eye_assembly_jacobian(q + _k * 3, s + _k * 6, p + _k * 3, J + _k * 9);
+}
 #endif

@@ -668,6 +668,13 @@ int agile_eye_assemble(const double *q, double *s, double *p, int max_iterations
  * actuators do not determine the platform (a column of Phi_p past the numerical rank: an interior singularity). */
 int agile_eye_assembly_jacobian(const double *q, const double *s, const double *p, double *J);
 
+/* agile_eye_assemble_batch and agile_eye_assembly_jacobian_batch: the same for count samples (q: count x 3, s: count x 6,
+ * p: count x 3, J: count x 3 x 3, row-major) with the same parameters, each sample from its own start
+ * (s[k], p[k]): its steps (or 1/0: the platform determined) into steps[k] (determined[k]) and its residual into
+ * residual[k].  Allocate nothing. */
+void agile_eye_assemble_batch(size_t count, const double *q, double *s, double *p, int max_iterations, double tolerance, double *residual, int *steps);
+void agile_eye_assembly_jacobian_batch(size_t count, const double *q, const double *s, const double *p, double *J, int *determined);
+
 /* agile_eye_assemble_inverse: the inverse kinematics of any leg topology, for a workspace's continuation: Gauss-Newton on the
  * closure for the actuated joints q[3] and the passive joints s[6] at the platform pose p[3], started from
  * the given q and s (a neighbouring pose's) and written back into them - symkin.newton.newton_iterate's rules: a

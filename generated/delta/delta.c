@@ -5708,4 +5708,16 @@ void delta_assemble_inverse_batch(size_t count, const double *p, double *q, doub
     for (size_t _k = 0; _k < count; ++_k)
         steps[_k] = delta_assemble_inverse(p + _k * 3, q + _k * 3, s + _k * 12, r_base, r_tcp, a, b, max_iterations, tolerance, max_step, stall, residual + _k);
 }
+
+void delta_assemble_batch(size_t count, const double *q, double *s, double *p, double r_base, double r_tcp, double a, double b, int max_iterations, double tolerance, double *residual, int *steps)
+{
+    for (size_t _k = 0; _k < count; ++_k)
+        steps[_k] = delta_assemble(q + _k * 3, s + _k * 12, p + _k * 3, r_base, r_tcp, a, b, max_iterations, tolerance, residual + _k);
+}
+
+void delta_assembly_jacobian_batch(size_t count, const double *q, const double *s, const double *p, double r_base, double r_tcp, double a, double b, double *J, int *determined)
+{
+    for (size_t _k = 0; _k < count; ++_k)
+        determined[_k] = delta_assembly_jacobian(q + _k * 3, s + _k * 12, p + _k * 3, r_base, r_tcp, a, b, J + _k * 9);
+}
 #endif

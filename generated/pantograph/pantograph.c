@@ -4159,4 +4159,16 @@ void pantograph_assemble_inverse_batch(size_t count, const double *p, double *q,
     for (size_t _k = 0; _k < count; ++_k)
         steps[_k] = pantograph_assemble_inverse(p + _k * 2, q + _k * 2, s + _k * 4, d, l, L, max_iterations, tolerance, max_step, stall, residual + _k);
 }
+
+void pantograph_assemble_batch(size_t count, const double *q, double *s, double *p, double d, double l, double L, int max_iterations, double tolerance, double *residual, int *steps)
+{
+    for (size_t _k = 0; _k < count; ++_k)
+        steps[_k] = pantograph_assemble(q + _k * 2, s + _k * 4, p + _k * 2, d, l, L, max_iterations, tolerance, residual + _k);
+}
+
+void pantograph_assembly_jacobian_batch(size_t count, const double *q, const double *s, const double *p, double d, double l, double L, double *J, int *determined)
+{
+    for (size_t _k = 0; _k < count; ++_k)
+        determined[_k] = pantograph_assembly_jacobian(q + _k * 2, s + _k * 4, p + _k * 2, d, l, L, J + _k * 4);
+}
 #endif

@@ -674,6 +674,13 @@ int pantograph_assemble(const double *q, double *s, double *p, double d, double 
  * actuators do not determine the platform (a column of Phi_p past the numerical rank: an interior singularity). */
 int pantograph_assembly_jacobian(const double *q, const double *s, const double *p, double d, double l, double L, double *J);
 
+/* pantograph_assemble_batch and pantograph_assembly_jacobian_batch: the same for count samples (q: count x 2, s: count x 4,
+ * p: count x 2, J: count x 2 x 2, row-major) with the same parameters, each sample from its own start
+ * (s[k], p[k]): its steps (or 1/0: the platform determined) into steps[k] (determined[k]) and its residual into
+ * residual[k].  Allocate nothing. */
+void pantograph_assemble_batch(size_t count, const double *q, double *s, double *p, double d, double l, double L, int max_iterations, double tolerance, double *residual, int *steps);
+void pantograph_assembly_jacobian_batch(size_t count, const double *q, const double *s, const double *p, double d, double l, double L, double *J, int *determined);
+
 /* pantograph_assemble_inverse: the inverse kinematics of any leg topology, for a workspace's continuation: Gauss-Newton on the
  * closure for the actuated joints q[2] and the passive joints s[4] at the platform pose p[2], started from
  * the given q and s (a neighbouring pose's) and written back into them - symkin.newton.newton_iterate's rules: a

@@ -21929,4 +21929,16 @@ void stewart_assemble_inverse_batch(size_t count, const double *p, double *q, do
     for (size_t _k = 0; _k < count; ++_k)
         steps[_k] = stewart_assemble_inverse(p + _k * 6, q + _k * 6, s + _k * 30, r_b, r_p, gamma_b, gamma_p, max_iterations, tolerance, max_step, stall, residual + _k);
 }
+
+void stewart_assemble_batch(size_t count, const double *q, double *s, double *p, double r_b, double r_p, double gamma_b, double gamma_p, int max_iterations, double tolerance, double *residual, int *steps)
+{
+    for (size_t _k = 0; _k < count; ++_k)
+        steps[_k] = stewart_assemble(q + _k * 6, s + _k * 30, p + _k * 6, r_b, r_p, gamma_b, gamma_p, max_iterations, tolerance, residual + _k);
+}
+
+void stewart_assembly_jacobian_batch(size_t count, const double *q, const double *s, const double *p, double r_b, double r_p, double gamma_b, double gamma_p, double *J, int *determined)
+{
+    for (size_t _k = 0; _k < count; ++_k)
+        determined[_k] = stewart_assembly_jacobian(q + _k * 6, s + _k * 30, p + _k * 6, r_b, r_p, gamma_b, gamma_p, J + _k * 36);
+}
 #endif

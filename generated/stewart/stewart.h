@@ -680,6 +680,13 @@ int stewart_assemble(const double *q, double *s, double *p, double r_b, double r
  * actuators do not determine the platform (a column of Phi_p past the numerical rank: an interior singularity). */
 int stewart_assembly_jacobian(const double *q, const double *s, const double *p, double r_b, double r_p, double gamma_b, double gamma_p, double *J);
 
+/* stewart_assemble_batch and stewart_assembly_jacobian_batch: the same for count samples (q: count x 6, s: count x 30,
+ * p: count x 6, J: count x 6 x 6, row-major) with the same parameters, each sample from its own start
+ * (s[k], p[k]): its steps (or 1/0: the platform determined) into steps[k] (determined[k]) and its residual into
+ * residual[k].  Allocate nothing. */
+void stewart_assemble_batch(size_t count, const double *q, double *s, double *p, double r_b, double r_p, double gamma_b, double gamma_p, int max_iterations, double tolerance, double *residual, int *steps);
+void stewart_assembly_jacobian_batch(size_t count, const double *q, const double *s, const double *p, double r_b, double r_p, double gamma_b, double gamma_p, double *J, int *determined);
+
 /* stewart_assemble_inverse: the inverse kinematics of any leg topology, for a workspace's continuation: Gauss-Newton on the
  * closure for the actuated joints q[6] and the passive joints s[30] at the platform pose p[6], started from
  * the given q and s (a neighbouring pose's) and written back into them - symkin.newton.newton_iterate's rules: a

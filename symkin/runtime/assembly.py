@@ -5,7 +5,8 @@
 (:class:`symkin.backends.c.loader_assembly.AssemblyBinding`: through compiled CPython entry points for exact float64
 C-contiguous arrays, and otherwise through ctypes with plain pointers, the arrays' checks done here, on their
 attributes) and the model's parameter values (its defaults, or a bound design's); :meth:`GeneratedAssembly.assemble`
-updates a warm start (s, p) in place - the previous sample's - and :meth:`GeneratedAssembly.jacobian` gives J = dp/dq;
+updates a warm start (s, p) in place - the previous sample's - and :meth:`GeneratedAssembly.jacobian` gives J = dp/dq
+(:meth:`GeneratedAssembly.assemble_batch` and :meth:`GeneratedAssembly.jacobian_batch`: K samples in one call);
 :meth:`GeneratedAssembly.actuated_dynamics` the dynamics in the actuated coordinates where the C code has
 ``closure_dynamics`` (``<model>_actuated_dynamics``: a simulation's step).
 A call that does not close the legs leaves NaN and says so (its return value), and a possible jump of assembly mode
@@ -48,6 +49,7 @@ class GeneratedAssembly:
         self.sizes = binding.sizes
         self._entry = binding.entry
         self._assemble, self._jacobian, self._inverse = binding.assemble, binding.jacobian, binding.inverse
+        self._assemble_batch, self._jacobian_batch = binding.assemble_batch, binding.jacobian_batch
         self._residual = np.zeros(1)
         self._residual_address = self._residual.ctypes.data
         self.name = model.name
@@ -69,6 +71,41 @@ class GeneratedAssembly:
                              f"C-contiguous array of shape ({self.sizes[name]},), got "
                              f"{getattr(array, 'dtype', type(array).__name__)} {np.shape(array)}")
         return array.ctypes.data
+
+    def _check_batch(self, count: int, arrays: tuple[tuple[str, np.ndarray, bool], ...]) -> None:
+        """Each (name, array, writable) a float64 C-contiguous (count, size of name) array (writable where asked), or a
+        clear error."""
+        for name, array, writable in arrays:
+            if not (isinstance(array, np.ndarray) and array.dtype == np.float64 and array.flags.c_contiguous
+                    and array.shape == (count, self.sizes[name]) and (array.flags.writeable or not writable)):
+                raise ValueError(f"{self.name} assembly: '{name}' must be a{' writable' if writable else ''} float64 "
+                                 f"C-contiguous array of shape ({count}, {self.sizes[name]}), got "
+                                 f"{getattr(array, 'dtype', type(array).__name__)} {np.shape(array)}")
+
+    def assemble_batch(self, q: np.ndarray, s: np.ndarray, p: np.ndarray, *, max_iterations: int = MAX_ITERATIONS,
+                       tolerance: float = TOLERANCE) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`assemble` of K samples in one call (q (K, n); s (K, ns) and p (K, m) the starts, written back into;
+        float64 C-contiguous), each from its own start: (steps (K,), max |phi| (K,)) by :meth:`assemble`'s rules."""
+        if self._assemble_batch is None:
+            raise GeneratedCodeError(f"{self.name}: its C code predates the batched assembly; derive the model again")
+        count = len(q)
+        self._check_batch(count, (("q", q, False), ("s", s, True), ("p", p, True)))
+        steps, residual = np.zeros(count, dtype=np.intc), np.zeros(count)
+        self._assemble_batch(count, q.ctypes.data, s.ctypes.data, p.ctypes.data, *self._parameters, max_iterations,
+                             tolerance, residual.ctypes.data, steps.ctypes.data)
+        return steps, residual
+
+    def jacobian_batch(self, q: np.ndarray, s: np.ndarray, p: np.ndarray) -> np.ndarray:
+        """:meth:`jacobian` of K assembled samples in one call (q (K, n), s (K, ns), p (K, m), float64
+        C-contiguous): J (K, m, n), NaN where the actuators do not determine the platform."""
+        if self._jacobian_batch is None:
+            raise GeneratedCodeError(f"{self.name}: its C code predates the batched assembly; derive the model again")
+        count = len(q)
+        self._check_batch(count, (("q", q, False), ("s", s, False), ("p", p, False)))
+        J, determined = np.empty((count, self.sizes["p"], self.sizes["q"])), np.zeros(count, dtype=np.intc)
+        self._jacobian_batch(count, q.ctypes.data, s.ctypes.data, p.ctypes.data, *self._parameters, J.ctypes.data,
+                             determined.ctypes.data)
+        return J
 
     def assemble(self, q: np.ndarray, s: np.ndarray, p: np.ndarray, *, max_iterations: int = MAX_ITERATIONS,
                  tolerance: float = TOLERANCE) -> tuple[int, float]:
@@ -100,12 +137,7 @@ class GeneratedAssembly:
         if self._inverse is None:
             raise GeneratedCodeError(f"{self.name}: its C code predates the generated inverse; derive the model again")
         count = len(p)
-        for name, array, writable in (("p", p, False), ("q", q, True), ("s", s, True)):
-            if not (isinstance(array, np.ndarray) and array.dtype == np.float64 and array.flags.c_contiguous
-                    and array.shape == (count, self.sizes[name]) and (array.flags.writeable or not writable)):
-                raise ValueError(f"{self.name} assembly: '{name}' must be a{' writable' if writable else ''} float64 "
-                                 f"C-contiguous array of shape ({count}, {self.sizes[name]}), got "
-                                 f"{getattr(array, 'dtype', type(array).__name__)} {np.shape(array)}")
+        self._check_batch(count, (("p", p, False), ("q", q, True), ("s", s, True)))
         steps, residual = np.zeros(count, dtype=np.intc), np.zeros(count)
         self._inverse(count, p.ctypes.data, q.ctypes.data, s.ctypes.data, *self._parameters, max_iterations, tolerance,
                       0.0 if max_step is None else max_step, stall or 0, residual.ctypes.data, steps.ctypes.data)

@@ -1,7 +1,8 @@
 """The generated assembly's functions of a compiled model library, bound once per library (issue 63).
 
-:class:`AssemblyBinding` holds ``<model>_assemble``, ``<model>_assembly_jacobian`` and ``<model>_assemble_inverse_batch``
-of a library with their ctypes signatures, and the compiled CPython entry points over the first two
+:class:`AssemblyBinding` holds ``<model>_assemble``, ``<model>_assembly_jacobian`` (and their ``_batch``),
+``<model>_actuated_dynamics`` and ``<model>_assemble_inverse_batch`` of a library with their ctypes signatures, and the
+compiled CPython entry points over the first two and the dynamics
 (:func:`symkin.backends.c.loader_entry_points.assembly_entry_points`).  The C loader binds it while the model's source
 and header are at hand (:func:`symkin.backends.c.loader.load`): a model file an analysis derives on the fly loads from
 a scratch folder that is gone when the analysis asks for the assembly.  :class:`symkin.runtime.assembly.GeneratedAssembly`
@@ -75,6 +76,19 @@ class AssemblyBinding:
         self.jacobian = library[f"{name}_assembly_jacobian"]
         self.jacobian.argtypes = [ctypes.c_void_p] * 3 + doubles + [ctypes.c_void_p]
         self.jacobian.restype = ctypes.c_int
+        self.assemble_batch: Any = None
+        self.jacobian_batch: Any = None
+        try:    # code derived before the batched assembly has none
+            self.assemble_batch, self.jacobian_batch = (library[f"{name}_assemble_batch"],
+                                                        library[f"{name}_assembly_jacobian_batch"])
+        except AttributeError:
+            pass
+        else:
+            self.assemble_batch.argtypes = [ctypes.c_size_t] + [ctypes.c_void_p] * 3 + doubles + [
+                ctypes.c_int, ctypes.c_double, ctypes.c_void_p, ctypes.c_void_p]
+            self.assemble_batch.restype = None
+            self.jacobian_batch.argtypes = [ctypes.c_size_t] + [ctypes.c_void_p] * 3 + doubles + [ctypes.c_void_p] * 2
+            self.jacobian_batch.restype = None
         self.inverse: Any
         try:    # code derived before the inverse has none: the continuation then takes the run-time solver
             self.inverse = library[f"{name}_assemble_inverse_batch"]
