@@ -9708,7 +9708,7 @@
    * The basic least-squares solution x of A x = b (A: rows of numbers, tall) by Householder QR with column
    * pivoting (Golub and Van Loan, Matrix Computations, 4th ed., alg. 5.4.1), the C backend's dense solve: the
    * numerical rank ends at a remaining column's norm of rows eps times the largest column's, the columns past it
-   * get 0.
+   * get 0 (x.idle lists them).
    */
   function _leastSquares(A, b) {
     const rows = A.length, cols = A[0].length, eps = 2.220446049250313e-16;
@@ -9761,7 +9761,86 @@
       for (let c = j + 1; c < rank; c++) sum -= m[j][c] * x[order[c]];
       x[order[j]] = sum / m[j][j];
     }
+    x.idle = order.slice(rank);   // the columns past the numerical rank (0 in x)
     return x;
+  }
+
+  /** max(1, max |p|): the pose's scale, which the rounding and closing tests measure the residual against (a NaN
+   * entry leaves it, as in the C backend). */
+  function _scale(p) {
+    let scale = 1;
+    for (const e of p) scale = Math.abs(e) > scale ? Math.abs(e) : scale;
+    return scale;
+  }
+
+  /**
+   * The forward kinematics of legs of any topology, for a control loop: Gauss-Newton on the generated closure for
+   * the passive joints s and the platform pose p at the actuated joints q, started from the given s and p (the last
+   * sample's), by the rules of the C backend's stewart_assemble: each step the least-squares solution of
+   * [Phi_s Phi_p] (ds, dp) = -phi, converged when a step's largest entry is at most options.tolerance or a step left
+   * every row of phi at rounding level (64 eps max(1, |p|)).  steps 0 and s, p NaN where it did not converge within
+   * options.max_iterations or the legs do not close there (max |phi| above 1e-09 max(1, |p|): a least-squares
+   * minimum); a negative count -k flags a possible jump of assembly mode (the legs closed in k steps, but a correction
+   * above the tolerance failed to halve the one before: the start was outside its Newton-Kantorovich region).
+   *
+   * @param {number[]} q the actuated joints; s, p the start
+   * @param {Object} [params] parameter values of closure and closure_jacobians
+   * @param {Object} [options] max_iterations (50), tolerance (1e-12)
+   * @returns {{s: number[], p: number[], steps: number, residual: number}}
+   */
+  function assemble(q, s, p, params, options) {
+    const closureNames = ["r_b", "r_p", "gamma_b", "gamma_p"], jacobianNames = ["r_p", "gamma_b", "gamma_p"];
+    const given = _params(params, [...new Set([...closureNames, ...jacobianNames])], "assemble");
+    const pick = (names) => Object.fromEntries(names.filter((k) => k in given).map((k) => [k, given[k]]));
+    const settings = Object.assign({ max_iterations: 50, tolerance: 1e-12 }, options || {});
+    const ns = s.length, eps = 2.220446049250313e-16;
+    let x = [...s, ...p], taken = 0, left = false, previous = Infinity, worst = 0, current = false;
+    for (let k = 1; k <= settings.max_iterations && !taken; k++) {
+      const [sk, pk] = [x.slice(0, ns), x.slice(ns)];
+      const phi = closure(q, sk, pk, pick(closureNames));
+      worst = _maxAbs(phi);
+      if (k > 1 && worst <= 64 * eps * _scale(pk)) {
+        taken = k - 1;    // the last step left rounding only: another would be below it
+        current = true;
+        break;
+      }
+      const blocks = closure_jacobians(q, sk, pk, pick(jacobianNames));
+      const step = _leastSquares(blocks.Phi_s.map((row, i) => [...row, ...blocks.Phi_p[i]]), phi.map((v) => -v));
+      const largest = _maxAbs(step);
+      left = left || (largest > settings.tolerance && largest > 0.5 * previous);
+      previous = largest;
+      x = x.map((v, i) => v + step[i]);
+      if (largest <= settings.tolerance) taken = k;
+      else if (largest !== largest) break;
+    }
+    const [ss, ps] = [x.slice(0, ns), x.slice(ns)];
+    if (!current) worst = _maxAbs(closure(q, ss, ps, pick(closureNames)));
+    if (!taken || !(worst <= 1e-09 * _scale(ps))) {
+      return { s: ss.map(() => NaN), p: ps.map(() => NaN), steps: 0, residual: worst };
+    }
+    return { s: ss, p: ps, steps: left ? -taken : taken, residual: worst };
+  }
+
+  /**
+   * J = dp/dq (rows: the task coordinates, columns: the actuated joints) at an assembled (q, s, p), the p-part of
+   * the least-squares solution of [Phi_s Phi_p] (ds, dp) = -Phi_q dq - the C backend's
+   * stewart_assembly_jacobian; NaN where the actuators do not determine the platform (a column of Phi_p past
+   * the numerical rank of [Phi_s Phi_p]: an interior singularity).
+   *
+   * @param {Object} [params] parameter values of closure_jacobians
+   * @returns {number[][]}
+   */
+  function assembly_jacobian(q, s, p, params) {
+    const blocks = closure_jacobians(q, s, p, _params(params, ["r_p", "gamma_b", "gamma_p"], "assembly_jacobian"));
+    const A = blocks.Phi_s.map((row, i) => [...row, ...blocks.Phi_p[i]]);
+    const ns = s.length;
+    let determined = true;
+    const columns = q.map((_, c) => {
+      const x = _leastSquares(A, blocks.Phi_q.map((row) => -row[c]));
+      determined = determined && x.idle.every((j) => j < ns);
+      return x.slice(ns);
+    });
+    return p.map((_, r) => columns.map((column) => (determined ? column[r] : NaN)));
   }
 
   /**
@@ -9870,6 +9949,8 @@
     kinetic_energy: kinetic_energy,
     potential_energy: potential_energy,
     combined: combined,
+    assemble: assemble,
+    assembly_jacobian: assembly_jacobian,
     assemble_inverse: assemble_inverse,
   });
 });

@@ -65,18 +65,6 @@ function invert(A) {
   return M.map((r) => r.slice(n));
 }
 
-function transpose(A) {
-  return A[0].map((_, j) => A.map((r) => r[j]));
-}
-
-/** The least-squares solution X of A X = B (A of full column rank; consistent systems are solved exactly) by the
- *  normal equations; null where A^T A is singular. */
-function leastSquares(A, B) {
-  const At = transpose(A);
-  const inverse = invert(matmul(At, A));
-  return inverse === null ? null : matmul(inverse, matmul(At, B));
-}
-
 function matmul(A, B) {
   return A.map((r) => B[0].map((_, j) => r.reduce((s, v, k) => s + v * B[k][j], 0)));
 }
@@ -139,13 +127,18 @@ function angularRates(p) {
   }));
 }
 
-/** J = dp/dq of legs of any topology at an assembled (q, s, p): Phi_p dp + Phi_s ds = -Phi_q dq solved for
- *  (dp, ds) by least squares (exact: the actuators move the assembled mechanism), as
- *  symkin.runtime.parallel.closure_velocities; null at a singularity. */
+/** J = dp/dq of legs of any topology at an assembled (q, s, p) by the generated solver of the model's script
+ *  (assembly_jacobian: the least-squares solution of [Phi_s Phi_p] (ds, dp) = -Phi_q dq by Householder QR, the C
+ *  backend's <model>_assembly_jacobian and symkin.runtime.parallel.closure_velocities); null where the actuators do
+ *  not determine the platform (a singularity). */
 function closureJacobian(state) {
-  const { Phi_p, Phi_q, Phi_s } = call("closure_jacobians", state.q, state.s, state.p);
-  const rates = leastSquares(Phi_p.map((row, i) => [...row, ...Phi_s[i]]), Phi_q.map((row) => row.map((v) => -v)));
-  return rates === null ? null : rates.slice(0, data.task_space.length);
+  const J = model.assembly_jacobian(state.q, state.s, state.p, designParameters(model.FUNCTIONS.closure_jacobians.parameters));
+  return J.every((row) => row.every(Number.isFinite)) ? J : null;
+}
+
+/** The design's values of the parameters named (those the viewer holds). */
+function designParameters(names) {
+  return Object.fromEntries(names.filter((name) => state.params[name] !== undefined).map((name) => [name, state.params[name]]));
 }
 
 /** (q, s) at the pose p from the assembly (q, s) nearby by the generated solver of the model's script
@@ -154,9 +147,8 @@ function closureJacobian(state) {
  *  (data.closure): {q, s} where the legs close (every row below closed times the pose's scale), else null. */
 function solveClosure(q, s, p) {
   const { max_step: maxStep, tolerance, closed, iterations } = data.closure;
-  const names = new Set([...model.FUNCTIONS.closure.parameters, ...model.FUNCTIONS.closure_jacobians.parameters]);
-  const params = Object.fromEntries([...names].filter((name) => state.params[name] !== undefined)
-    .map((name) => [name, state.params[name]]));
+  const params = designParameters([...new Set([...model.FUNCTIONS.closure.parameters,
+    ...model.FUNCTIONS.closure_jacobians.parameters])]);
   const solved = model.assemble_inverse(p, q, s, params, { max_iterations: iterations, tolerance, max_step: maxStep });
   const scale = Math.max(1, ...p.map(Math.abs));
   return solved.steps > 0 && solved.residual <= closed * scale ? { q: solved.q, s: solved.s } : null;

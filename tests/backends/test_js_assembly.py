@@ -58,3 +58,52 @@ def test_the_scripts_inverse_is_the_runtime_solvers_and_the_closed_form(generate
         np.testing.assert_allclose(found[k]["s"], reference.solution["s"][k], rtol=0, atol=condition * TOLERANCE)
         np.testing.assert_allclose(found[k]["q"], delta.ik(targets[k]).joints, rtol=0, atol=condition * TOLERANCE)
         assert abs(found[k]["steps"] - reference.iterations[k]) <= 1
+
+
+def script_forward(module, q: np.ndarray, s: np.ndarray, p: np.ndarray) -> list[dict]:
+    """assemble(q, s, p) and assembly_jacobian at its result of the script ``module`` for each sample, by Node.js."""
+    program = (f"const m = require({json.dumps(str(module))});"
+               f"const [q, s, p] = [{json.dumps(q.tolist())}, {json.dumps(s.tolist())}, {json.dumps(p.tolist())}];"
+               f"process.stdout.write(JSON.stringify(q.map((qk, k) => {{"
+               f"const found = m.assemble(qk, s[k], p[k], {{}}, {{max_iterations: {ITERATIONS}, tolerance: {TOLERANCE}}});"
+               f"return Object.assign(found, {{J: m.assembly_jacobian(qk, found.s, found.p, {{}})}}); }})));")
+    node = shutil.which("node")
+    assert node, "Node.js is needed to test the JavaScript backend: install it (Debian: apt-get install nodejs)"
+    out = subprocess.run([node, "-e", program], capture_output=True, text=True, check=True).stdout
+    return [{key: np.array(value, dtype=float) if isinstance(value, list) else value for key, value in found.items()}
+            for found in json.loads(out.replace("null", "NaN"))]
+
+
+def test_the_scripts_forward_kinematics_and_jacobian_are_the_c_assemblys(generated_dir, loaded):
+    """assemble and assembly_jacobian of generated/delta's script (the viewer's) against the C library's
+    <model>_assemble and <model>_assembly_jacobian (GeneratedAssembly) from the same starts and the closed forms:
+    the pose to the Newton tolerance times cond([Phi_s Phi_p]), J to 64 eps times it, the same refusal (0 steps and
+    NaN) where the arms put the platform out of reach."""
+    from symkin.runtime.assembly import GeneratedAssembly
+
+    delta = loaded("delta", "c")
+    assembly = GeneratedAssembly(delta)
+    rng = np.random.default_rng(6303)
+    q = np.vstack([rng.uniform(np.radians(-20.0), np.radians(40.0), (8, 3)), np.radians([[0.0, 0.0, 180.0]])])
+    exact = np.asarray(delta.fk(q[:-1]).position)
+    s_exact = np.vstack([solve_closure(delta, qk, np.zeros(assembly.sizes["s"]), pk, unknowns=("s",)).solution["s"]
+                         for qk, pk in zip(q[:-1], exact)] + [np.zeros(assembly.sizes["s"])])
+    s0 = s_exact + rng.uniform(-0.05, 0.05, s_exact.shape)
+    p0 = np.vstack([exact, [[0.0, 0.0, -0.15]]]) + rng.uniform(-0.01, 0.01, (len(q), 3))
+    found = script_forward(generated_dir / "delta" / "delta.js", q, s0, p0)
+    s, p = s0.copy(), p0.copy()
+    steps, _ = assembly.assemble_batch(q, s, p)
+    assert [f["steps"] > 0 for f in found] == (steps > 0).tolist()
+    assert steps[-1] == 0
+    assert np.isnan(found[-1]["p"]).all()
+    assert np.isnan(found[-1]["s"]).all()
+    assert np.isnan(found[-1]["J"]).all()
+    for k in range(len(q) - 1):
+        blocks = delta.closure_jacobians(q[k], s[k], p[k])
+        singular = np.linalg.svd(np.hstack([blocks.Phi_s, blocks.Phi_p]), compute_uv=False)
+        condition = singular[0] / singular[singular > singular[0] * 64 * np.finfo(float).eps][-1]
+        np.testing.assert_allclose(found[k]["p"], p[k], rtol=0, atol=condition * TOLERANCE)
+        np.testing.assert_allclose(found[k]["p"], exact[k], rtol=0, atol=condition * TOLERANCE)
+        J = assembly.jacobian(q[k], s[k], p[k])
+        np.testing.assert_allclose(found[k]["J"], J, rtol=0, atol=condition * 64 * np.finfo(float).eps * np.abs(J).max())
+        assert abs(found[k]["steps"] - steps[k]) <= 1

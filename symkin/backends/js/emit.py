@@ -20,6 +20,7 @@ import json
 from collections.abc import Sequence
 from typing import Any
 
+from symkin.backends.c.assembly import CLOSED
 from symkin.backends.comments import block_comment, wrapped
 from symkin.backends.js.printer import JsPrinter
 from symkin.backends.layout import element_text, used_symbols
@@ -90,19 +91,22 @@ def _function_context(f: OptimizedFunction, printer: JsPrinter) -> dict[str, Any
 
 
 def _assembly_context(functions: Sequence[OptimizedFunction]) -> dict[str, str] | None:
-    """The template's ``assembly`` (the generated inverse, ``assemble_inverse``): the parameters of ``closure`` and
-    ``closure_jacobians`` (JSON lists), or None where the script has not both."""
+    """The template's ``assembly`` (the generated solvers ``assemble``, ``assembly_jacobian`` and ``assemble_inverse``,
+    the C backend's): the parameters of ``closure`` and ``closure_jacobians`` (JSON lists) and the closing rule's
+    factor (:data:`symkin.backends.c.assembly.CLOSED`), or None where the script has not both."""
     by_name = {f.spec.name: f.spec for f in functions}
     if not {"closure", "closure_jacobians"} <= set(by_name):
         return None
     return {key: json.dumps([p.name for p in by_name[name].parameter_inputs])
-            for key, name in (("closure_params", "closure"), ("jacobian_params", "closure_jacobians"))}
+            for key, name in (("closure_params", "closure"), ("jacobian_params", "closure_jacobians"))} | {
+        "closed": repr(CLOSED)}
 
 
 def emit_script(code: ModelCode) -> dict[str, str | bytes]:
-    """{<model>.js: script text} for ``code``; with ``closure`` and ``closure_jacobians`` also ``assemble_inverse``
-    (Gauss-Newton for the joints at a platform pose, the C backend's ``<model>_assemble_inverse``: the viewer's
-    solver)."""
+    """{<model>.js: script text} for ``code``; with ``closure`` and ``closure_jacobians`` also ``assemble`` and
+    ``assembly_jacobian`` (the forward kinematics warm-started and J = dp/dq, the C backend's ``<model>_assemble`` and
+    ``<model>_assembly_jacobian``) and ``assemble_inverse`` (Gauss-Newton for the joints at a platform pose, the C
+    backend's ``<model>_assemble_inverse``): the viewer's solvers."""
     printer = JsPrinter()
     free = [p for p in code.parameters if not p.fixed]
     text = render(
