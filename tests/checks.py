@@ -1,6 +1,6 @@
 """Checks shared by test modules (issue 35: not defined in one test module and imported by another): the strict C
-compile, the agreement bound of two evaluations of one function, the haptic wall's equilibrium and the layout of a
-figure."""
+compile, the agreement bound of two evaluations of one function, the haptic wall's equilibrium, the layout of a
+figure and assembled samples of the DELTA."""
 
 from __future__ import annotations
 
@@ -109,3 +109,16 @@ def check_figure_layout(figure) -> None:
             others = [b for ax, b in zip(figure.axes, boxes) if ax is not owner]
             assert not any(box.overlaps(other) for other in others), \
                 f"the axis label {label.get_text()!r} runs into a panel or a colour bar"
+
+
+def delta_assemblies(delta, count: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(q, s, p) of ``count`` assembled samples of generated/delta (arms uniform in -20..40 deg: the closed-form fk's
+    pose and the passive joints that close the legs there, by the run-time solver) and, last, one sample whose arms
+    put the platform out of reach (its fk's spheres do not meet: s zero, p a pose below the base)."""
+    from symkin.runtime.parallel import solve_closure
+
+    ns = delta.info.functions["closure"].inputs[1].shape[0]
+    q = np.vstack([rng.uniform(np.radians(-20.0), np.radians(40.0), (count, 3)), np.radians([[0.0, 0.0, 180.0]])])
+    p = np.asarray(delta.fk(q[:-1]).position)
+    s = [solve_closure(delta, qk, np.zeros(ns), pk, unknowns=("s",)).solution["s"] for qk, pk in zip(q[:-1], p)]
+    return q, np.vstack(s + [np.zeros(ns)]), np.vstack([p, [[0.0, 0.0, -0.15]]])

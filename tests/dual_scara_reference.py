@@ -65,3 +65,24 @@ def assembled_states(scara, count, rng):
         if fk.all_converged:
             states.append((q, fk.solution["s"], fk.solution["p"]))
     return states
+
+
+def constraint_accelerations(pin):
+    """(q, s, zd, efforts) -> the actuated joints' accelerations by Pinocchio's ``constraintDynamics`` of
+    :func:`pinocchio_tree` (proximal, mu = 1e-6 on the weld's two rows that all-vertical axes make redundant) at the
+    assembled (q, s) moving with the mechanism's velocities zd (actuated, then passive joints first) under the
+    actuators' efforts."""
+    from benchmarks.competitors import constraint_dynamics_of
+
+    tree, constraints, order = pinocchio_tree(pin)
+    data, datas, _ = constraint_dynamics_of(pin, tree, constraints)
+    settings = pin.ProximalSettings(1e-14, 1e-6, 100)
+    active = [order.index(name) for name in ACTIVE]
+    passive = [order.index(name) for name in PASSIVE]
+
+    def accelerations(q, s, zd, efforts):
+        x, v, tau = np.zeros(len(order)), np.zeros(len(order)), np.zeros(len(order))
+        x[active], x[passive], v[active], v[passive], tau[active] = q, s, zd[:4], zd[4:8], efforts
+        return pin.constraintDynamics(tree, data, x, v, tau, constraints, datas, settings)[active]
+
+    return accelerations

@@ -12,8 +12,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from checks import delta_assemblies
 from symkin.runtime.assembly import GeneratedAssembly
-from symkin.runtime.parallel import solve_closure
 
 
 @pytest.fixture(scope="module")
@@ -21,13 +21,7 @@ def delta(loaded):
     """generated/delta loaded with the C backend, its generated assembly, and 12 assembled samples (q, s, p) plus one
     whose arms put the platform out of reach (the closed-form fk's spheres do not meet)."""
     model = loaded("delta", "c")
-    assembly = GeneratedAssembly(model)
-    rng = np.random.default_rng(6301)
-    q = np.vstack([rng.uniform(np.radians(-20.0), np.radians(40.0), (12, 3)), np.radians([[0.0, 0.0, 180.0]])])
-    p = np.asarray(model.fk(q[:-1]).position)
-    s = np.vstack([solve_closure(model, qk, np.zeros(assembly.sizes["s"]), pk, unknowns=("s",)).solution["s"]
-                   for qk, pk in zip(q[:-1], p)])
-    return model, assembly, q, np.vstack([s, np.zeros(assembly.sizes["s"])]), np.vstack([p, [0.0, 0.0, -0.15]])
+    return (model, GeneratedAssembly(model), *delta_assemblies(model, 12, np.random.default_rng(6301)))
 
 
 def test_a_batch_assembles_each_sample_from_its_own_start_as_one_call_does(delta):

@@ -12,6 +12,7 @@ import subprocess
 
 import numpy as np
 
+from checks import delta_assemblies
 from symkin import load
 from symkin.mechanism.closure import MAX_STEP
 from symkin.mechanism.continuation import STALL
@@ -19,6 +20,15 @@ from symkin.runtime.parallel import solve_closure
 
 #: Gauss-Newton's step tolerance and its bound on the steps (the runtime's defaults).
 TOLERANCE, ITERATIONS = 1e-12, 50
+
+
+def _node(program: str) -> list[dict]:
+    """The list of objects the Node.js ``program`` writes as JSON, their lists as float arrays (null: NaN)."""
+    node = shutil.which("node")
+    assert node, "Node.js is needed to test the JavaScript backend: install it (Debian: apt-get install nodejs)"
+    out = subprocess.run([node, "-e", program], capture_output=True, text=True, check=True).stdout
+    return [{key: np.array(value, dtype=float) if isinstance(value, list) else value for key, value in found.items()}
+            for found in json.loads(out.replace("null", "NaN"))]
 
 
 def script_inverse(module, targets: np.ndarray, q: np.ndarray, s: np.ndarray) -> list[dict]:
@@ -29,11 +39,7 @@ def script_inverse(module, targets: np.ndarray, q: np.ndarray, s: np.ndarray) ->
                f"stall: {STALL}}};"
                f"process.stdout.write(JSON.stringify(targets.map((p) => m.assemble_inverse(p, "
                f"{json.dumps(q.tolist())}, {json.dumps(s.tolist())}, {{}}, options))));")
-    node = shutil.which("node")
-    assert node, "Node.js is needed to test the JavaScript backend: install it (Debian: apt-get install nodejs)"
-    out = subprocess.run([node, "-e", program], capture_output=True, text=True, check=True).stdout
-    return [{key: np.array(value, dtype=float) if isinstance(value, list) else value for key, value in found.items()}
-            for found in json.loads(out.replace("null", "NaN"))]
+    return _node(program)
 
 
 def test_the_scripts_inverse_is_the_runtime_solvers_and_the_closed_form(generated_dir):
@@ -67,11 +73,7 @@ def script_forward(module, q: np.ndarray, s: np.ndarray, p: np.ndarray) -> list[
                f"process.stdout.write(JSON.stringify(q.map((qk, k) => {{"
                f"const found = m.assemble(qk, s[k], p[k], {{}}, {{max_iterations: {ITERATIONS}, tolerance: {TOLERANCE}}});"
                f"return Object.assign(found, {{J: m.assembly_jacobian(qk, found.s, found.p, {{}})}}); }})));")
-    node = shutil.which("node")
-    assert node, "Node.js is needed to test the JavaScript backend: install it (Debian: apt-get install nodejs)"
-    out = subprocess.run([node, "-e", program], capture_output=True, text=True, check=True).stdout
-    return [{key: np.array(value, dtype=float) if isinstance(value, list) else value for key, value in found.items()}
-            for found in json.loads(out.replace("null", "NaN"))]
+    return _node(program)
 
 
 def test_the_scripts_forward_kinematics_and_jacobian_are_the_c_assemblys(generated_dir, loaded):
@@ -84,12 +86,10 @@ def test_the_scripts_forward_kinematics_and_jacobian_are_the_c_assemblys(generat
     delta = loaded("delta", "c")
     assembly = GeneratedAssembly(delta)
     rng = np.random.default_rng(6303)
-    q = np.vstack([rng.uniform(np.radians(-20.0), np.radians(40.0), (8, 3)), np.radians([[0.0, 0.0, 180.0]])])
-    exact = np.asarray(delta.fk(q[:-1]).position)
-    s_exact = np.vstack([solve_closure(delta, qk, np.zeros(assembly.sizes["s"]), pk, unknowns=("s",)).solution["s"]
-                         for qk, pk in zip(q[:-1], exact)] + [np.zeros(assembly.sizes["s"])])
+    q, s_exact, p_exact = delta_assemblies(delta, 8, rng)
+    exact = p_exact[:-1]
     s0 = s_exact + rng.uniform(-0.05, 0.05, s_exact.shape)
-    p0 = np.vstack([exact, [[0.0, 0.0, -0.15]]]) + rng.uniform(-0.01, 0.01, (len(q), 3))
+    p0 = p_exact + rng.uniform(-0.01, 0.01, p_exact.shape)
     found = script_forward(generated_dir / "delta" / "delta.js", q, s0, p0)
     s, p = s0.copy(), p0.copy()
     steps, _ = assembly.assemble_batch(q, s, p)

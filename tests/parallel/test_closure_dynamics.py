@@ -4,7 +4,8 @@ bodies, bar and rotors (``closure_dynamics`` over z = (q, s, p), reduced at run 
 Reference: Pinocchio's ``constraintDynamics`` of the same two legs as a kinematic tree from the base (leg 1 carries
 the bar on its wrist) closed by a 6-D weld of leg 2's hand to the bar: Pinocchio's own CRBA, RNEA and constraint
 accelerations, with the loop multipliers (proximal, mu = 1e-6 on the weld's two rows that all-vertical axes make
-redundant; it converges to the exact solution).  Every mass property is written again below from the document.
+redundant; it converges to the exact solution).  Every mass property is written again from the document in
+tests/dual_scara_reference.py.
 """
 
 from __future__ import annotations
@@ -20,7 +21,6 @@ from symkin import load, pipeline
 from symkin.derivation import Derivation
 from symkin.dynamics.parameter_names import DRIVE, INERTIAL
 from symkin.errors import DerivationError, ModelError
-from symkin.mechanism import closure as closure_module
 from symkin.mechanism.closure import ClosureFunctions
 from symkin.model import load_model, model_from_text
 from symkin.runtime.closure_dynamics import (actuated_dynamics, closure_forward_dynamics, closure_inverse_dynamics,
@@ -30,8 +30,7 @@ from symkin.simulation import ArmSystem, Plant, run_adaptive
 from symkin.cli import main
 from tolerances import DYNAMICS, EPS, NEWTON
 
-from dual_scara_reference import (ACTIVE, BAR, CLOSURE_ROWS, GRAVITY, HOME, PASSIVE, ROTOR, assembled_states,
-                                  pinocchio_tree)
+from dual_scara_reference import CLOSURE_ROWS, GRAVITY, HOME, ROTOR, assembled_states, constraint_accelerations
 
 
 @pytest.fixture(scope="module")
@@ -53,21 +52,11 @@ def test_forward_and_inverse_dynamics_match_pinocchio_constraint_dynamics(scara)
     solve with matrices of kappa <= ~1e3 here (M, [Phi_s Phi_p]): kappa eps ~ 1e-13; the issue's 1e-9 relative
     leaves room for two different algorithms and is still far below any modelling error (a missing body or rotor
     changes the accelerations by > 1e-3)."""
-    pin = pytest.importorskip("pinocchio")
-    from benchmarks.competitors import constraint_dynamics_of
-
-    tree, constraints, order = pinocchio_tree(pin)
-    data, datas, _ = constraint_dynamics_of(pin, tree, constraints)
-    settings = pin.ProximalSettings(1e-14, 1e-6, 100)
-    active = [order.index(name) for name in ACTIVE]
-    passive = [order.index(name) for name in PASSIVE]
+    accelerations = constraint_accelerations(pytest.importorskip("pinocchio"))
     rng = np.random.default_rng(3107)
     for q, s, p in assembled_states(scara, 5, rng):
         qd, tau = rng.uniform(-1, 1, 4), rng.uniform(-0.5, 0.5, 4) + [0, 4.4, 0, 0]
-        zd = actuated_dynamics(scara, q, s, p, qd).zd
-        x, v, efforts = np.zeros(8), np.zeros(8), np.zeros(8)
-        x[active], x[passive], v[active], v[passive], efforts[active] = q, s, zd[:4], zd[4:8], tau
-        reference = pin.constraintDynamics(tree, data, x, v, efforts, constraints, datas, settings)[active]
+        reference = accelerations(q, s, actuated_dynamics(scara, q, s, p, qd).zd, tau)
         qdd = closure_forward_dynamics(scara, q, s, p, qd, tau)
         assert np.max(np.abs(qdd - reference)) <= 1e-9 * np.max(np.abs(reference)), (qdd, reference)
         back = closure_inverse_dynamics(scara, q, s, p, qd, reference)

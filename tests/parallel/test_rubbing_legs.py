@@ -10,7 +10,7 @@ import subprocess
 import numpy as np
 import pytest
 
-from dual_scara_reference import ACTIVE, CLOSURE_ROWS, HOME, PASSIVE, assembled_states, pinocchio_tree
+from dual_scara_reference import ACTIVE, CLOSURE_ROWS, HOME, assembled_states, constraint_accelerations
 from sample_models import dual_scara_dynamics_text
 from symkin import load, pipeline
 from symkin.derivation import Derivation
@@ -48,24 +48,14 @@ def test_friction_enters_the_dynamics_as_efforts_against_the_motion(rubbing_dir)
     """F_f = viscous qd + coulomb sign(qd) (written here from the declared coefficients) opposes the actuators:
     the forward dynamics equals Pinocchio's constraintDynamics under the efforts tau - F_f, and the inverse
     dynamics gives tau back (1e-9 relative, as without friction)."""
-    pin = pytest.importorskip("pinocchio")
-    from benchmarks.competitors import constraint_dynamics_of
-
+    accelerations = constraint_accelerations(pytest.importorskip("pinocchio"))
     rubbing = load(rubbing_dir[0])
-    tree, constraints, order = pinocchio_tree(pin)
-    data, datas, _ = constraint_dynamics_of(pin, tree, constraints)
-    settings = pin.ProximalSettings(1e-14, 1e-6, 100)
-    active = [order.index(name) for name in ACTIVE]
-    passive = [order.index(name) for name in PASSIVE]
     rng = np.random.default_rng(3108)
     for q, s, p in assembled_states(rubbing, 3, rng):
         qd, tau = rng.uniform(-1, 1, 4), rng.uniform(-0.5, 0.5, 4) + [0, 4.4, 0, 0]
         friction = np.array([FRICTION[name][0] * v + FRICTION[name][1] * np.sign(v) if name in FRICTION else 0.0
                              for name, v in zip(ACTIVE, qd)])
-        zd = actuated_dynamics(rubbing, q, s, p, qd).zd
-        x, v, efforts = np.zeros(8), np.zeros(8), np.zeros(8)
-        x[active], x[passive], v[active], v[passive], efforts[active] = q, s, zd[:4], zd[4:8], tau - friction
-        reference = pin.constraintDynamics(tree, data, x, v, efforts, constraints, datas, settings)[active]
+        reference = accelerations(q, s, actuated_dynamics(rubbing, q, s, p, qd).zd, tau - friction)
         qdd = closure_forward_dynamics(rubbing, q, s, p, qd, tau)
         assert np.max(np.abs(qdd - reference)) <= 1e-9 * np.max(np.abs(reference)), (qdd, reference)
         back = closure_inverse_dynamics(rubbing, q, s, p, qd, reference)
