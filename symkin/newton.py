@@ -32,6 +32,11 @@ class NewtonReport:
             equations f for :func:`solve_fk`, the closure residual phi for :func:`solve_closure`).
         step: per sample, max-norm of the last Newton step (an estimate of the error of the
             solution before that step).
+        left_region: per sample, True where a correction above the tolerance failed to halve the one before: the
+            iterates left the start's Newton-Kantorovich region, inside which the corrections at least halve and
+            the solution is the one the start's branch continues to (Ortega and Rheinboldt, Iterative Solution of
+            Nonlinear Equations in Several Variables, 12.6.2) - a possible jump of branch (assembly mode); None
+            where the solver does not watch it.
     """
 
     solution: np.ndarray | dict[str, np.ndarray]
@@ -39,6 +44,7 @@ class NewtonReport:
     iterations: np.ndarray
     residual: np.ndarray
     step: np.ndarray
+    left_region: np.ndarray | None = None
 
     @property
     def all_converged(self) -> bool:
@@ -126,6 +132,7 @@ def newton_iterate(start: np.ndarray, equations: Callable[[np.ndarray, np.ndarra
     converged = np.zeros(count, dtype=bool)
     iterations = np.zeros(count, dtype=int)
     step_norm = np.full(count, np.inf)
+    left = np.zeros(count, dtype=bool)  # a correction above tol that did not halve the one before
     active = np.ones(count, dtype=bool)
     residuals = np.full((count, max_iterations), np.inf) if stall else np.zeros((0, 0))
     for iteration in range(max_iterations):
@@ -147,6 +154,8 @@ def newton_iterate(start: np.ndarray, equations: Callable[[np.ndarray, np.ndarra
                 step *= (max_step / np.maximum(norm, max_step))[:, None]
         x[rows[moved]] += step[moved]
         iterations[rows] += 1
+        with np.errstate(invalid="ignore"):
+            left[rows] |= moved & (norm > tol) & (norm > 0.5 * step_norm[rows])
         step_norm[rows] = norm
         done = moved & (norm <= tol)
         converged[rows[done]] = True
@@ -156,4 +165,4 @@ def newton_iterate(start: np.ndarray, equations: Callable[[np.ndarray, np.ndarra
     converged &= np.isfinite(residual)
     x[~converged] = np.nan
     return NewtonReport(x.reshape(start.shape), converged.reshape(batch), iterations.reshape(batch),
-                        residual.reshape(batch), step_norm.reshape(batch))
+                        residual.reshape(batch), step_norm.reshape(batch), left.reshape(batch))

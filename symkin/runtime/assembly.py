@@ -7,6 +7,7 @@ C-contiguous arrays, and otherwise through ctypes with plain pointers, the array
 attributes) and the model's parameter values (its defaults, or a bound design's); :meth:`GeneratedAssembly.assemble`
 updates a warm start (s, p) in place - the previous sample's - and :meth:`GeneratedAssembly.jacobian` gives J = dp/dq
 (:meth:`GeneratedAssembly.assemble_batch` and :meth:`GeneratedAssembly.jacobian_batch`: K samples in one call);
+:class:`RuntimeAssembly` gives the same interface on the run-time solver for a model of any backend (numpy);
 :meth:`GeneratedAssembly.actuated_dynamics` the dynamics in the actuated coordinates where the C code has
 ``closure_dynamics`` (``<model>_actuated_dynamics``: a simulation's step).
 A call that does not close the legs leaves NaN and says so (its return value), and a possible jump of assembly mode
@@ -17,9 +18,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from symkin.backends.c.assembly import CLOSED
 from symkin.backends.c.loader_assembly import ASSEMBLY_FUNCTIONS
 from symkin.errors import GeneratedCodeError
+from symkin.runtime.info import GeneratedModel
 from symkin.runtime.loader import LoadedModel
+from symkin.runtime.parallel import solve_closure
 
 #: The assembly's defaults: the steps allowed and the step that converges (the run-time solver's).
 MAX_ITERATIONS, TOLERANCE = 50, 1e-12
@@ -178,3 +182,85 @@ class GeneratedAssembly:
                                     self._pointer(qd, "q"), *self._dynamics_parameters, M.ctypes.data,
                                     bias.ctypes.data, W.ctypes.data, drift.ctypes.data, u.ctypes.data)
         return (M, bias, W, drift, float(u[0])) if solved else None
+
+
+class RuntimeAssembly:
+    """:class:`GeneratedAssembly`'s interface on the run-time solver, for a model loaded with any backend (numpy
+    batched): :meth:`assemble` and :meth:`assemble_batch` by Gauss-Newton on the generated closure
+    (:func:`symkin.runtime.parallel.solve_closure`, unknowns p and s, from the given starts, written back into them)
+    with the C assembly's contract - the steps taken, 0 and NaN where it did not converge or the legs do not close
+    (max |phi| above :data:`symkin.backends.c.assembly.CLOSED` max(1, |p|)), -steps where a correction above the
+    tolerance failed to halve the one before (a possible jump of assembly mode) - and :meth:`jacobian` and
+    :meth:`jacobian_batch`: J = dp/dq, the p-part of the least-squares solution of [Phi_s Phi_p] (ds, dp) = -Phi_q dq,
+    NaN where the actuators do not determine the platform (rank [Phi_s Phi_p] < rank Phi_s + m, numerical ranks by
+    the SVD at rows eps times the largest singular value).  The same answers as the C code's to the solvers'
+    rounding, without a compiler.
+
+    Raises:
+        GeneratedCodeError: the model lacks ``closure`` or ``closure_jacobians``.
+    """
+
+    def __init__(self, model: GeneratedModel):
+        missing = [name for name in ASSEMBLY_FUNCTIONS if name not in model.functions]
+        if missing:
+            raise GeneratedCodeError(f"{model.name}: no closure to assemble; derive the model with "
+                                     f"{', '.join(missing)}")
+        self.model = model
+        self.name = model.name
+        inputs = model.info.functions["closure"].inputs
+        self.sizes = {v.name: int(v.shape[0]) for v in inputs[:3]}
+
+    def assemble(self, q: np.ndarray, s: np.ndarray, p: np.ndarray, *, max_iterations: int = MAX_ITERATIONS,
+                 tolerance: float = TOLERANCE) -> tuple[int, float]:
+        """Gauss-Newton from the warm start (s, p), written back into them: (steps, max |phi|) by
+        :class:`GeneratedAssembly.assemble`'s contract."""
+        s_batch, p_batch = s[None].copy(), p[None].copy()
+        steps, residual = self.assemble_batch(np.asarray(q, dtype=float)[None], s_batch, p_batch,
+                                              max_iterations=max_iterations, tolerance=tolerance)
+        s[...], p[...] = s_batch[0], p_batch[0]
+        return int(steps[0]), float(residual[0])
+
+    def assemble_batch(self, q: np.ndarray, s: np.ndarray, p: np.ndarray, *, max_iterations: int = MAX_ITERATIONS,
+                       tolerance: float = TOLERANCE) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`assemble` of K samples (q (K, n); the starts s (K, ns) and p (K, m), written back into), each from
+        its own start: (steps (K,), max |phi| (K,))."""
+        report = solve_closure(self.model, q, s, p, unknowns=("p", "s"), tol=tolerance, max_iterations=max_iterations)
+        solution = report.solution
+        assert isinstance(solution, dict), "solve_closure names its vectors"
+        scale = np.maximum(1.0, np.max(np.abs(np.nan_to_num(solution["p"], nan=0.0)), axis=-1))
+        closed = report.converged & (report.residual <= CLOSED * scale)
+        s[...] = np.where(closed[:, None], solution["s"], np.nan)
+        p[...] = np.where(closed[:, None], solution["p"], np.nan)
+        assert report.left_region is not None, "newton_iterate watches the corrections"
+        steps = np.where(closed, np.where(report.left_region, -report.iterations, report.iterations), 0)
+        return steps.astype(np.intc), np.asarray(report.residual, dtype=float)
+
+    def jacobian(self, q: np.ndarray, s: np.ndarray, p: np.ndarray) -> np.ndarray:
+        """J = dp/dq (m, n) at an assembled (q, s, p); NaN where the actuators do not determine the platform."""
+        return self.jacobian_batch(np.asarray(q, dtype=float)[None], np.asarray(s, dtype=float)[None],
+                                   np.asarray(p, dtype=float)[None])[0]
+
+    def jacobian_batch(self, q: np.ndarray, s: np.ndarray, p: np.ndarray) -> np.ndarray:
+        """:meth:`jacobian` of K assembled samples: J (K, m, n)."""
+        blocks = self.model.closure_jacobians(q, s, p)
+        Phi_q, Phi_s, Phi_p = (np.asarray(b, dtype=float).reshape(len(q), -1, b.shape[-1])
+                               for b in (blocks.Phi_q, blocks.Phi_s, blocks.Phi_p))
+        A = np.concatenate([Phi_s, Phi_p], axis=-1)
+        J = np.full((len(q), Phi_p.shape[-1], Phi_q.shape[-1]), np.nan)
+        finite = np.all(np.isfinite(A), axis=(-2, -1)) & np.all(np.isfinite(Phi_q), axis=(-2, -1))
+        if np.any(finite):
+            rows = A.shape[-2]
+            rank = _numerical_rank(A[finite], rows)
+            determined = rank == _numerical_rank(Phi_s[finite], rows) + Phi_p.shape[-1]
+            solved = -np.linalg.pinv(A[finite]) @ Phi_q[finite]
+            J[np.flatnonzero(finite)[determined]] = solved[determined][:, Phi_s.shape[-1]:]
+        return J
+
+
+def _numerical_rank(A: np.ndarray, rows: int) -> np.ndarray:
+    """The numerical rank of each matrix of the batch A (k, r, c): its singular values above rows eps times the
+    largest (the C assembly's rank test)."""
+    if A.shape[-1] == 0:
+        return np.zeros(len(A), dtype=int)
+    singular = np.linalg.svd(A, compute_uv=False)
+    return np.count_nonzero(singular > rows * np.finfo(float).eps * singular[:, :1], axis=-1)

@@ -128,7 +128,8 @@ def solve_closure(model: GeneratedModel, q, s, p, *, unknowns: tuple[str, ...] =
 
     start = np.concatenate([values[name] for name in order], axis=-1)
     report = newton_iterate(start, equations, tol, max_iterations, max_step, stall)
-    return NewtonReport(unpack(np.asarray(report.solution)), report.converged, report.iterations, report.residual, report.step)
+    return NewtonReport(unpack(np.asarray(report.solution)), report.converged, report.iterations, report.residual, report.step,
+                        report.left_region)
 
 
 @dataclass(frozen=True)
