@@ -21,8 +21,9 @@ file derived on the fly: docs/model-format.md's closure DELTA (legs without the 
 bodies (the masses of models/delta.yaml), beside models/delta.yaml itself (closed forms).  Issue 63's target: at least
 real time (1 s of the haptic loop in at most 1 s).  Beside it, what a step of that simulation spends on the dynamics in
 the actuated coordinates at one state (``actuated_dynamics``): the generated ``<model>_actuated_dynamics`` (C,
-through ``GeneratedAssembly``); the C library's terms over z projected at run time, for one state (numpy, QR) and as a
-batch of one (numpy, the pseudo-inverse by the SVD); the numpy backend's terms projected for one state.
+through ``GeneratedAssembly``); the C library's terms over z projected at run time (numpy, A^+ by QR), for one state
+(the generated functions' single-state entry points) and as a batch of one (their batch entry points); the numpy
+backend's terms projected for one state.
 
 Run with `make bench` or `python benchmarks/bench_general_legs.py [--samples N]`.
 """
@@ -206,10 +207,10 @@ def _projection_rows(repeat: int) -> list[list[str]]:
         s, p = mechanism(q)
         qd = np.array([0.3, -0.2, 0.1])
         calls = [("C: <model>_actuated_dynamics", lambda: actuated_dynamics(c_model, q, s, p, qd, mechanism.generated)),
-                 ("C terms, projected in numpy (one state, QR)", lambda: actuated_dynamics(c_model, q, s, p, qd)),
-                 ("C terms, projected in numpy (a batch of one, pseudo-inverse)",
+                 ("C terms, projected in numpy (one state)", lambda: actuated_dynamics(c_model, q, s, p, qd)),
+                 ("C terms, projected in numpy (a batch of one)",
                   lambda: actuated_dynamics(c_model, q[None], s[None], p[None], qd[None])),
-                 ("numpy terms, projected in numpy (one state, QR)", lambda: actuated_dynamics(numpy_model, q, s, p, qd))]
+                 ("numpy terms, projected in numpy (one state)", lambda: actuated_dynamics(numpy_model, q, s, p, qd))]
         rows = []
         for label, call in calls:
             count = 2000

@@ -64,6 +64,29 @@ def _pinv_steps(A: np.ndarray, r: np.ndarray) -> np.ndarray:
     return -np.einsum("kij,kj->ki", np.linalg.pinv(A), r)
 
 
+def _factored(A: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(Q, R, regular) of a flat batch of tall A (k, rows, cols) = Q R: ``regular`` where A has full column rank (its
+    smallest pivot |R_ii| above :data:`_FULL_RANK` times its largest)."""
+    Q, R = np.linalg.qr(A)
+    pivots = np.abs(np.diagonal(R, axis1=1, axis2=2))
+    return Q, R, pivots.min(axis=1) > _FULL_RANK * pivots.max(axis=1)
+
+
+def left_inverses(A: np.ndarray) -> np.ndarray:
+    """A^+ (k, cols, rows) of a flat batch of A (k, rows, cols): R^-1 Q^T from A = Q R where A has full column rank
+    (the least-squares solution of A x = b is A^+ b; a fifth of the SVD's time), the SVD's pseudo-inverse
+    elsewhere."""
+    if A.shape[1] < A.shape[2]:
+        return np.linalg.pinv(A)
+    Q, R, regular = _factored(A)
+    inverse = np.empty(A.shape[:1] + A.shape[:0:-1])
+    if regular.any():
+        inverse[regular] = np.linalg.solve(R[regular], np.swapaxes(Q[regular], -1, -2))
+    if not regular.all():
+        inverse[~regular] = np.linalg.pinv(A[~regular])
+    return inverse
+
+
 def least_squares_steps(A: np.ndarray, r: np.ndarray) -> np.ndarray:
     """Least-squares steps -A^+ r of a flat batch of tall A (k, rows, cols).
 
@@ -74,9 +97,7 @@ def least_squares_steps(A: np.ndarray, r: np.ndarray) -> np.ndarray:
     """
     if A.shape[1] < A.shape[2]:
         return _pinv_steps(A, r)
-    Q, R = np.linalg.qr(A)
-    pivots = np.abs(np.diagonal(R, axis1=1, axis2=2))
-    regular = pivots.min(axis=1) > _FULL_RANK * pivots.max(axis=1)
+    Q, R, regular = _factored(A)
     steps = np.empty(A.shape[:1] + A.shape[2:])
     steps[regular] = -np.linalg.solve(R[regular], np.einsum("kji,kj->ki", Q[regular], r[regular])[..., None])[..., 0]
     steps[~regular] = _pinv_steps(A[~regular], r[~regular])

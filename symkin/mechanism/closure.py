@@ -202,7 +202,7 @@ class ClosureAssembly:
         distances = [float(np.max(np.abs(q - known[0]))) for known in (self._last, self._home)]
         start = self._last if distances[0] <= distances[1] else self._home
         distance = min(distances)
-        if distance == 0.0 and np.array_equal(q, start[0]):
+        if distance == 0.0:
             return start
         if distance <= MAX_STEP:    # one step: a simulation's
             solved = self._step(q, start[1], start[2])

@@ -15,8 +15,10 @@ actuator efforts
 
 (M includes the rotors' gear_ratio^2 J_rotor; b the Coriolis, centrifugal and gravity efforts), plus the actuators'
 friction F_f(qd) where the model generates ``friction`` (tau = M qdd + b + F_f, seed eq. 8.34).  Evaluate at an
-assembled (q, s, p) (:func:`symkin.runtime.parallel.solve_closure`); NaN in a state gives NaN.  No sympy: the
-generated functions only.
+assembled (q, s, p) (:func:`symkin.runtime.parallel.solve_closure`); NaN in a state gives NaN.  A^+ applies as
+R^-1 Q^T from A = Q R where A has full column rank, the SVD's pseudo-inverse elsewhere
+(:func:`symkin.newton.left_inverses`); one state of a model whose C code holds ``<model>_actuated_dynamics`` is
+projected by that (the same projection, Householder QR).  No sympy: the generated functions only.
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from symkin.newton import left_inverses
 from symkin.runtime.info import GeneratedModel
 
 if TYPE_CHECKING:
@@ -87,69 +90,47 @@ def actuated_dynamics(model: GeneratedModel, q, s, p, qd, assembly: GeneratedAss
         if one is not None:
             return one
     batch = np.broadcast_shapes(q.shape[:-1], s.shape[:-1], p.shape[:-1], qd.shape[:-1])
-    q, s, p, qd = (np.broadcast_to(v, batch + v.shape[-1:]).reshape(-1, v.shape[-1]) for v in (q, s, p, qd))
+    # the generated functions take the batch as it is: one state's 1-D vectors go to their single-state entry points
+    q, s, p, qd = (np.broadcast_to(v, batch + v.shape[-1:]) for v in (q, s, p, qd))
     n, ns = q.shape[-1], s.shape[-1]
     blocks = model.closure_jacobians(q, s, p)
-    Phi_q, Phi_s, Phi_p = (np.asarray(b, dtype=float).reshape(len(q), -1, b.shape[-1])
+    Phi_q, Phi_s, Phi_p = (np.asarray(b, dtype=float).reshape(batch + np.shape(b)[-2:])
                            for b in (blocks.Phi_q, blocks.Phi_s, blocks.Phi_p))
     A = np.concatenate([Phi_s, Phi_p], axis=-1)
-    assembled = np.all(np.isfinite(A), axis=(-2, -1))  # NaN in, NaN out (an unassembled state)
-    inverse = np.full(np.swapaxes(A, -1, -2).shape, np.nan)
-    inverse[assembled] = np.linalg.pinv(A[assembled])
-    W = np.concatenate([np.broadcast_to(np.eye(n), (len(q), n, n)), -inverse @ Phi_q], axis=1)
-    zd = np.einsum("kij,kj->ki", W, qd)
-    terms = model.closure_dynamics(q, s, p, qd, zd[:, n:n + ns], zd[:, n + ns:])
-    M_z = np.asarray(terms.M_z, dtype=float).reshape(len(q), W.shape[1], W.shape[1])
-    h_z = np.asarray(terms.h_z, dtype=float).reshape(len(q), -1)
-    c = np.concatenate([np.zeros((len(q), n)),
-                        -np.einsum("kij,kj->ki", inverse, np.asarray(terms.gamma, dtype=float).reshape(len(q), -1))],
-                       axis=1)
+    flat = A.reshape((-1,) + A.shape[-2:])
+    assembled = np.all(np.isfinite(flat), axis=(-2, -1))  # NaN in, NaN out (an unassembled state)
+    inverses = np.full(np.swapaxes(flat, -1, -2).shape, np.nan)
+    inverses[assembled] = left_inverses(flat[assembled])
+    inverse = inverses.reshape(batch + inverses.shape[-2:])
+    W = np.concatenate([np.broadcast_to(np.eye(n), batch + (n, n)), -inverse @ Phi_q], axis=-2)
+    zd = np.einsum("...ij,...j->...i", W, qd)
+    terms = model.closure_dynamics(q, s, p, qd, zd[..., n:n + ns], zd[..., n + ns:])
+    N = W.shape[-2]
+    M_z = np.asarray(terms.M_z, dtype=float).reshape(batch + (N, N))
+    h_z = np.asarray(terms.h_z, dtype=float).reshape(batch + (N,))
+    gamma = np.asarray(terms.gamma, dtype=float).reshape(batch + (-1,))
+    c = np.concatenate([np.zeros(batch + (n,)), -np.einsum("...ij,...j->...i", inverse, gamma)], axis=-1)
     WT = np.swapaxes(W, -1, -2)
-    M = WT @ M_z @ W
-    bias = np.einsum("kij,kj->ki", WT, np.einsum("kij,kj->ki", M_z, c) + h_z)
-    friction = (np.asarray(model.friction(qd), dtype=float).reshape(len(q), n) if "friction" in model.functions
-                else np.zeros((len(q), n)))
-    N = W.shape[1]
-    return ActuatedDynamics(M.reshape(batch + (n, n)), bias.reshape(batch + (n,)), friction.reshape(batch + (n,)),
-                            W.reshape(batch + (N, n)),
-                            zd.reshape(batch + (N,)), np.asarray(terms.u, dtype=float).reshape(batch),
-                            c.reshape(batch + (N,)))
+    friction = (np.asarray(model.friction(qd), dtype=float).reshape(batch + (n,)) if "friction" in model.functions
+                else np.zeros(batch + (n,)))
+    return ActuatedDynamics(WT @ M_z @ W, np.einsum("...ij,...j->...i", WT, np.einsum("...ij,...j->...i", M_z, c) + h_z),
+                            friction, W, zd, np.asarray(terms.u, dtype=float).reshape(batch), c)
 
 
 def _one_state(model: GeneratedModel, q: np.ndarray, s: np.ndarray, p: np.ndarray, qd: np.ndarray,
                assembly: GeneratedAssembly | None) -> ActuatedDynamics | None:
-    """:func:`actuated_dynamics` of one state (a simulation's step), or None where A = [Phi_s Phi_p] is not finite or
-    not of full column rank (the batch path's pseudo-inverse decides there).  The generated assembly's
-    ``<model>_actuated_dynamics`` where it has one (a few microseconds); else the generated functions called with
-    one configuration (their compiled entry points, without a batch's buffers) and A^+ = R^-1 Q^T from A = Q R
-    (Householder, backward stable; at full column rank the pseudo-inverse): a third of the batch path's time, of
-    which the SVD of the pseudo-inverse was half."""
+    """:func:`actuated_dynamics` of one state (a simulation's step) by the generated assembly's
+    ``<model>_actuated_dynamics`` (C: the same projection, a few microseconds), or None where the model has none or
+    it refuses the state (a dependent column of [Phi_s Phi_p], NaN in the state): the batch path decides there."""
+    if assembly is None or not assembly.has_dynamics:
+        return None
+    terms = assembly.actuated_dynamics(*(np.ascontiguousarray(v) for v in (q, s, p, qd)))
+    if terms is None:
+        return None
+    M, bias, W, drift, u = terms
     n = len(q)
     friction = np.reshape(model.friction(qd), n) if "friction" in model.functions else np.zeros(n)
-    if assembly is not None and assembly.has_dynamics:
-        terms = assembly.actuated_dynamics(*(np.ascontiguousarray(v) for v in (q, s, p, qd)))
-        if terms is None:   # a dependent column, or NaN in the state
-            return None
-        M, bias, W, drift, u = terms
-        return ActuatedDynamics(M, bias, friction, W, W @ qd, np.array(u), drift)
-    blocks = model.closure_jacobians(q, s, p)
-    A = np.hstack((blocks.Phi_s, blocks.Phi_p))
-    if not np.isfinite(A).all():
-        return None
-    Q, R = np.linalg.qr(A)
-    pivots = np.abs(R.diagonal())
-    if not pivots.min() > np.finfo(float).eps * max(A.shape) * pivots.max():
-        return None
-    ns = len(s)
-    inverse = np.linalg.solve(R, Q.T)
-    W = np.vstack((np.eye(n), -inverse @ blocks.Phi_q))
-    zd = W @ qd
-    terms = model.closure_dynamics(q, s, p, qd, zd[n:n + ns], zd[n + ns:])
-    N = len(zd)
-    M_z = np.reshape(terms.M_z, (N, N))
-    c = np.concatenate((np.zeros(n), -inverse @ np.reshape(terms.gamma, -1)))
-    return ActuatedDynamics(W.T @ M_z @ W, W.T @ (M_z @ c + np.reshape(terms.h_z, N)), friction, W, zd,
-                            np.reshape(terms.u, ()), c)
+    return ActuatedDynamics(M, bias, friction, W, W @ qd, np.array(u), drift)
 
 
 def closure_inverse_dynamics(model: GeneratedModel, q, s, p, qd, qdd) -> np.ndarray:

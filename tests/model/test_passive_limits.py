@@ -231,6 +231,24 @@ def test_least_squares_steps_agree_with_pinv_also_where_rank_deficient():
     np.testing.assert_allclose(newton.least_squares_steps(A[[0, 1, 3]], r[[0, 1, 3]]), expected[[0, 1, 3]], rtol=1e-9)
 
 
+def test_left_inverses_are_the_pseudo_inverses_also_where_rank_deficient():
+    """R^-1 Q^T where A has full column rank, the SVD's pseudo-inverse of the two rank-deficient matrices; a wide
+    batch takes the pseudo-inverse throughout."""
+    from symkin import newton
+
+    rng = np.random.default_rng(4)
+    A = rng.normal(size=(6, 18, 12))
+    A[2, :, 5] = A[2, :, 4]
+    A[4, :, 7] = 0.0
+    expected = np.linalg.pinv(A)
+    got = newton.left_inverses(A)
+    for k in (0, 1, 3, 5):      # QR and the SVD: rounding amplified by cond(A)
+        bound = 64 * np.finfo(float).eps * np.linalg.cond(A[k]) * np.abs(expected[k]).max()
+        np.testing.assert_allclose(got[k], expected[k], rtol=0, atol=bound)
+    np.testing.assert_allclose(got[[2, 4]], expected[[2, 4]], rtol=0, atol=1e-12)   # the SVD's, both ways
+    wide = np.swapaxes(A[:2], 1, 2)
+    np.testing.assert_array_equal(newton.left_inverses(wide), np.linalg.pinv(wide))
+
 def test_joint_and_cartesian_domains_agree_under_passive_limits(limited):
     """Two formulations of the limited workspace: |det J| dq over the configurations within the
     passive limits (fk, then s) and the reachability indicator over a box (ik, then s)."""

@@ -122,7 +122,7 @@ def test_a_plant_of_rubbing_legs_needs_their_friction(rubbing_dir):
 
 def test_the_generated_assembly_gives_the_dynamics_of_a_step(rubbing_dir, monkeypatch):
     """<model>_actuated_dynamics (C: the projection W = [1; -A^+ Phi_q], c = [0; -A^+ gamma], M = W^T M_z W,
-    b = W^T (M_z c + h_z) by Householder QR) gives the run-time batch path's terms (numpy, A^+ by the SVD) at
+    b = W^T (M_z c + h_z) by Householder QR) gives the run-time batch path's terms (numpy, A^+ by LAPACK's QR) at
     assembled states, through the compiled entry points and through ctypes, to rounding amplified by cond(A); the
     run-time mechanism's dynamics of one state take it (the generated closure_jacobians are not called from Python)."""
     monkeypatch.delenv("SYMKIN_C_ENTRY", raising=False)    # the compiled entry points, as a user gets them
@@ -137,7 +137,7 @@ def test_the_generated_assembly_gives_the_dynamics_of_a_step(rubbing_dir, monkey
         qd = rng.uniform(-1, 1, 4)
         blocks = numpy_model.closure_jacobians(q, s, p)
         kappa = float(np.linalg.cond(np.hstack([blocks.Phi_s, blocks.Phi_p])[CLOSURE_ROWS]))
-        batch = actuated_dynamics(numpy_model, q[None], s[None], p[None], qd[None])   # the pseudo-inverse's
+        batch = actuated_dynamics(numpy_model, q[None], s[None], p[None], qd[None])   # numpy's
         compiled = actuated_dynamics(c_model, q, s, p, qd, generated)
         with monkeypatch.context() as patch:
             patch.setattr(generated, "_entry", None)                                  # ctypes
