@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from symkin.backends.c.assembly import CLOSED
-from symkin.backends.c.loader_assembly import ASSEMBLY_FUNCTIONS
+from symkin.backends.c.loader_assembly import ASSEMBLY_FUNCTIONS, closure_vector_sizes
 from symkin.errors import GeneratedCodeError
 from symkin.runtime.info import GeneratedModel
 from symkin.runtime.loader import LoadedModel
@@ -207,8 +207,7 @@ class RuntimeAssembly:
                                      f"{', '.join(missing)}")
         self.model = model
         self.name = model.name
-        inputs = model.info.functions["closure"].inputs
-        self.sizes = {v.name: int(v.shape[0]) for v in inputs[:3]}
+        self.sizes = closure_vector_sizes(model.info)
 
     def assemble(self, q: np.ndarray, s: np.ndarray, p: np.ndarray, *, max_iterations: int = MAX_ITERATIONS,
                  tolerance: float = TOLERANCE) -> tuple[int, float]:

@@ -24,22 +24,41 @@ ASSEMBLY_FUNCTIONS = ("closure", "closure_jacobians")
 DYNAMICS_FUNCTION = "closure_dynamics"
 
 
-def assembly_parameter_names(info: ModelInfo) -> list[str]:
-    """The free parameters the generated assembly takes, in its header's order: closure's, then closure_jacobians'
-    others (:func:`symkin.backends.c.assembly.assembly_context` orders them so from the same functions)."""
+def _parameter_names(info: ModelInfo, functions: tuple[str, ...]) -> list[str]:
+    """The free parameters of ``functions``, the first's, then each next one's others: the order in which
+    :func:`symkin.backends.c.assembly.assembly_context` gives them to the assembly's C functions."""
     names: list[str] = []
-    for function in ASSEMBLY_FUNCTIONS:
+    for function in functions:
         names += [i.name for i in info.functions[function].inputs if i.is_parameter and i.name not in names]
     return names
+
+
+def assembly_parameter_names(info: ModelInfo) -> list[str]:
+    """The free parameters the generated assembly takes, in its header's order: closure's, then closure_jacobians'
+    others."""
+    return _parameter_names(info, ASSEMBLY_FUNCTIONS)
 
 
 def dynamics_parameter_names(info: ModelInfo) -> list[str]:
     """The free parameters ``<model>_actuated_dynamics`` takes, in its header's order: closure_jacobians', then
-    closure_dynamics' others (:func:`symkin.backends.c.assembly.assembly_context`)."""
-    names: list[str] = []
-    for function in ("closure_jacobians", DYNAMICS_FUNCTION):
-        names += [i.name for i in info.functions[function].inputs if i.is_parameter and i.name not in names]
-    return names
+    closure_dynamics' others."""
+    return _parameter_names(info, ("closure_jacobians", DYNAMICS_FUNCTION))
+
+
+def closure_vector_sizes(info: ModelInfo) -> dict[str, int]:
+    """The sizes of the closure's vectors q, s and p (n, ns, np) of the model ``info``, by name."""
+    return {v.name: int(v.shape[0]) for v in info.functions["closure"].inputs[:3]}
+
+
+def _optional(library: ctypes.CDLL, symbol: str, argtypes: list[Any], restype: Any) -> Any:
+    """The function ``symbol`` of ``library`` with its ctypes signature, or None where the library lacks it (C code
+    derived before it was generated)."""
+    try:
+        function = library[symbol]
+    except AttributeError:
+        return None
+    function.argtypes, function.restype = argtypes, restype
+    return function
 
 
 class AssemblyBinding:
@@ -50,54 +69,33 @@ class AssemblyBinding:
         name = info.name
         self.assemble = assemble
         self.parameter_names = assembly_parameter_names(info)
-        inputs = info.functions["closure"].inputs
         #: the closure's sizes n, ns and np (keys q, s, p)
-        self.sizes = {v.name: int(v.shape[0]) for v in inputs[:3]}
-        #: ``<model>_actuated_dynamics`` (None: the model has no closure_dynamics in C, or its code predates it)
-        self.dynamics: Any = None
-        #: its free parameters, in its order
-        self.dynamics_parameter_names: list[str] = []
-        if DYNAMICS_FUNCTION in info.functions:
-            try:
-                self.dynamics = library[f"{name}_actuated_dynamics"]
-            except AttributeError:
-                pass
-            else:
-                self.dynamics_parameter_names = dynamics_parameter_names(info)
-                self.dynamics.argtypes = [ctypes.c_void_p] * 4 + [ctypes.c_double] * len(
-                    self.dynamics_parameter_names) + [ctypes.c_void_p] * 5
-                self.dynamics.restype = ctypes.c_int
-        #: the compiled CPython entry points (None: ctypes only); they take exact arrays, the rest goes to ctypes
-        self.entry = assembly_entry_points(path, header, name, self.sizes, self.parameter_names,
-                                           self.dynamics_parameter_names if self.dynamics is not None else None)
+        self.sizes = closure_vector_sizes(info)
         doubles = [ctypes.c_double] * len(self.parameter_names)
         self.assemble.argtypes = [ctypes.c_void_p] * 3 + doubles + [ctypes.c_int, ctypes.c_double, ctypes.c_void_p]
         self.assemble.restype = ctypes.c_int
         self.jacobian = library[f"{name}_assembly_jacobian"]
         self.jacobian.argtypes = [ctypes.c_void_p] * 3 + doubles + [ctypes.c_void_p]
         self.jacobian.restype = ctypes.c_int
-        self.assemble_batch: Any = None
-        self.jacobian_batch: Any = None
-        try:    # code derived before the batched assembly has none
-            self.assemble_batch, self.jacobian_batch = (library[f"{name}_assemble_batch"],
-                                                        library[f"{name}_assembly_jacobian_batch"])
-        except AttributeError:
-            pass
-        else:
-            self.assemble_batch.argtypes = [ctypes.c_size_t] + [ctypes.c_void_p] * 3 + doubles + [
-                ctypes.c_int, ctypes.c_double, ctypes.c_void_p, ctypes.c_void_p]
-            self.assemble_batch.restype = None
-            self.jacobian_batch.argtypes = [ctypes.c_size_t] + [ctypes.c_void_p] * 3 + doubles + [ctypes.c_void_p] * 2
-            self.jacobian_batch.restype = None
-        self.inverse: Any
-        try:    # code derived before the inverse has none: the continuation then takes the run-time solver
-            self.inverse = library[f"{name}_assemble_inverse_batch"]
-        except AttributeError:
-            self.inverse = None
-        else:
-            self.inverse.argtypes = [ctypes.c_size_t] + [ctypes.c_void_p] * 3 + doubles + [
-                ctypes.c_int, ctypes.c_double, ctypes.c_double, ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p]
-            self.inverse.restype = None
+        #: the batches, the inverse's batch (the continuation's) and the dynamics in the actuated coordinates (where the
+        #: model has closure_dynamics in C): None where the code predates them
+        self.assemble_batch = _optional(library, f"{name}_assemble_batch", [ctypes.c_size_t] + [ctypes.c_void_p] * 3
+                                        + doubles + [ctypes.c_int, ctypes.c_double, ctypes.c_void_p, ctypes.c_void_p],
+                                        None)
+        self.jacobian_batch = _optional(library, f"{name}_assembly_jacobian_batch",
+                                        [ctypes.c_size_t] + [ctypes.c_void_p] * 3 + doubles + [ctypes.c_void_p] * 2, None)
+        self.inverse = _optional(library, f"{name}_assemble_inverse_batch", [ctypes.c_size_t] + [ctypes.c_void_p] * 3
+                                 + doubles + [ctypes.c_int, ctypes.c_double, ctypes.c_double, ctypes.c_int,
+                                              ctypes.c_void_p, ctypes.c_void_p], None)
+        #: the free parameters of the dynamics, in its order
+        self.dynamics_parameter_names = dynamics_parameter_names(info) if DYNAMICS_FUNCTION in info.functions else []
+        self.dynamics = None if DYNAMICS_FUNCTION not in info.functions else _optional(
+            library, f"{name}_actuated_dynamics",
+            [ctypes.c_void_p] * 4 + [ctypes.c_double] * len(self.dynamics_parameter_names) + [ctypes.c_void_p] * 5,
+            ctypes.c_int)
+        #: the compiled CPython entry points (None: ctypes only); they take exact arrays, the rest goes to ctypes
+        self.entry = assembly_entry_points(path, header, name, self.sizes, self.parameter_names,
+                                           self.dynamics_parameter_names if self.dynamics is not None else None)
 
 
 def bind_assembly(library: ctypes.CDLL, path: Path, header: Path, info: ModelInfo) -> AssemblyBinding | None:
