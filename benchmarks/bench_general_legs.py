@@ -17,8 +17,10 @@ continuation by the run-time solver instead of the generated inverse); and its d
 --backend c`` computes it (the time it reports).  Issue 63's target: the Falcon within 3x of the DELTA.
 
 Last, ``symkin simulate MODEL.yaml --scenario haptic-wall --duration 1 --backend c`` (the time it reports) of a model
-file derived on the fly: docs/model-format.md's closure DELTA (legs without the distance form) carrying the DELTA's
-bodies (the masses of models/delta.yaml), beside models/delta.yaml itself (closed forms).  Issue 63's target: at least
+file derived on the fly: the Novint Falcon (three legs with parallelograms and offsets) carrying bodies by
+models/delta.yaml's recipe (none are published for the Falcon: the time depends on the topology, not on the masses),
+docs/model-format.md's closure DELTA (legs without the distance form) carrying the DELTA's bodies (the masses of
+models/delta.yaml), beside models/delta.yaml itself (closed forms).  Issue 63's target: at least
 real time (1 s of the haptic loop in at most 1 s).  Beside it, what a step of that simulation spends on the dynamics in
 the actuated coordinates at one state (``actuated_dynamics``): the generated ``<model>_actuated_dynamics`` (C,
 through ``GeneratedAssembly``); the C library's terms over z projected at run time (numpy, A^+ by QR), for one state
@@ -186,7 +188,8 @@ def main(argv: list[str] | None = None) -> int:
     print("issue 63's target: the Falcon's workspace and rating within 3x of the DELTA's time")
     with tempfile.TemporaryDirectory() as tmp:
         simulated = [[device, f"{_simulate_seconds(path, Path(tmp) / 'simulate'):.2f}"]
-                     for device, path in (("closure DELTA (general legs, model file)", _closure_delta_file(Path(tmp))),
+                     for device, path in (("Novint Falcon with bodies (general legs, offsets)", _falcon_file(Path(tmp))),
+                                          ("closure DELTA (general legs, model file)", _closure_delta_file(Path(tmp))),
                                           ("DELTA (closed forms, model file)", ROOT / "models" / "delta.yaml"))]
     print(format_table(["device", "symkin simulate --scenario haptic-wall --duration 1 --backend c (s)"], simulated))
     print("issue 63's target: at least real time (<= 1 s)")
@@ -226,20 +229,47 @@ def _seconds(call, count: int) -> float:
     return time.perf_counter() - start
 
 
+def _bodies(arm_mass: float, a: float, rod_mass: float, b: float, platform: float, rotor: float, gear: float,
+            gravity: str) -> str:
+    """The gravity and bodies: lines of three legs: each arm (mass, length a) a uniform rod on its actuated joint
+    theta<k>, each parallelogram one uniform rod (length b) on its swing joint swing<k>, the platform's mass and the
+    rotors (inertia, gear ratio)."""
+    arm, rod = arm_mass * a ** 2 / 12, rod_mass * b ** 2 / 12
+    links = "".join(f"    theta{k}: {{mass: {arm_mass}, com: [{a / 2}, 0, 0], inertia: {{yy: {arm}, zz: {arm}}}}}\n"
+                    f"    swing{k}: {{mass: {rod_mass}, com: [{b / 2}, 0, 0], inertia: {{yy: {rod}, zz: {rod}}}}}\n"
+                    for k in (1, 2, 3))
+    return (f"gravity: {gravity}\nbodies:\n  platform: {{mass: {platform}}}\n  links:\n" + links
+            + f"  rotor: {{inertia: {rotor}, gear_ratio: {gear}}}\n")
+
+
+def _delta_values() -> dict[str, float]:
+    return {str(k): float(value) for k, value in load_model(ROOT / "models" / "delta.yaml").parameter_values.items()}
+
+
 def _closure_delta_file(directory: Path) -> Path:
     """docs/model-format.md's closure DELTA with the bodies of models/delta.yaml (its masses, sourced there): each upper
     arm (m_arm) on its actuated joint, each parallelogram as one rod (m_rod) on its swing joint, the platform
     (m_platform) and the rotors (J_rotor, gear), written into ``directory``."""
     text = (ROOT / "docs" / "model-format.md").read_text()
     legs = re.search(r"cat > out/closure_delta.yaml <<'EOF_MODEL'\n(.*?)^EOF_MODEL$", text, re.S | re.M).group(1)
-    v = {str(k): float(value) for k, value in load_model(ROOT / "models" / "delta.yaml").parameter_values.items()}
-    arm, rod = v["m_arm"] * v["a"] ** 2 / 12, v["m_rod"] * v["b"] ** 2 / 12
-    links = "".join(f"    theta{k}: {{mass: {v['m_arm']}, com: [{v['a'] / 2}, 0, 0], inertia: {{yy: {arm}, zz: {arm}}}}}\n"
-                    f"    swing{k}: {{mass: {v['m_rod']}, com: [{v['b'] / 2}, 0, 0], inertia: {{yy: {rod}, zz: {rod}}}}}\n"
-                    for k in (1, 2, 3))
+    v = _delta_values()
     path = directory / "closure_delta.yaml"
-    path.write_text(legs + f"gravity: [0, 0, -9.81]\nbodies:\n  platform: {{mass: {v['m_platform']}}}\n  links:\n"
-                    + links + f"  rotor: {{inertia: {v['J_rotor']}, gear_ratio: {v['gear']}}}\n")
+    path.write_text(legs + _bodies(v["m_arm"], v["a"], v["m_rod"], v["b"], v["m_platform"], v["J_rotor"], v["gear"],
+                                   "[0, 0, -9.81]"))
+    return path
+
+
+def _falcon_file(directory: Path) -> Path:
+    """models/devices/novint_falcon.yaml (its published geometry and capstan ratio; the file declares no bodies, as
+    none are published) carrying bodies by models/delta.yaml's recipe for timing: its arm's and parallelogram's masses
+    per unit length (handbook densities of its tubes) over the Falcon's arm a and rods b, its platform and rotor
+    inertia; gravity along the Falcon's -y (libnifalcon's frame: y up).  Written into ``directory``."""
+    v = _delta_values()
+    a, b = 0.060, 0.1025                              # the Falcon's arm and rods (libnifalcon a and b)
+    path = directory / "novint_falcon.yaml"
+    path.write_text((ROOT / "models" / "devices" / "novint_falcon.yaml").read_text()
+                    + _bodies(v["m_arm"] * a / v["a"], a, v["m_rod"] * b / v["b"], b, v["m_platform"], v["J_rotor"],
+                              7.719, "[0, -9.81, 0]"))
     return path
 
 

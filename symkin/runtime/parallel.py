@@ -258,8 +258,12 @@ def _complement_projections(A: np.ndarray, *blocks: np.ndarray) -> tuple[np.ndar
         Q, R = np.linalg.qr(A)
         pivots = np.abs(np.diagonal(R, axis1=-2, axis2=-1))
         regular = pivots.min(axis=-1) > _FULL_COLUMN_RANK * pivots.max(axis=-1)
+        Q_T = np.swapaxes(Q, -1, -2)
         for B, out in zip(blocks, projected):
-            out[regular] = B[regular] - Q[regular] @ (np.swapaxes(Q[regular], -1, -2) @ B[regular])
+            if regular.all():    # the usual batch: no copies through the mask
+                np.subtract(B, Q @ (Q_T @ B), out=out)
+            else:
+                out[regular] = B[regular] - Q[regular] @ (Q_T[regular] @ B[regular])
     else:
         regular[:] = False
     if not regular.all():

@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 
 from conftest import GENERATED_DIR, ROOT
+from node_scripts import script_forward
 from symkin import load, pipeline
 from symkin.backends.c import assembly
 from symkin.backends.c.build import shared_library
@@ -27,7 +28,7 @@ from symkin.mechanism.closure import ClosureAssembly, solve_home_assembly
 from symkin.model import model_from_text
 from symkin.errors import GeneratedCodeError
 from symkin.backends.c.loader_assembly import assembly_parameter_names, bind_assembly
-from symkin.runtime.assembly import GeneratedAssembly
+from symkin.runtime.assembly import GeneratedAssembly, RuntimeAssembly
 from symkin.runtime.loader import LoadedModel
 from symkin.runtime.parallel import closure_velocities, solve_closure
 from tolerances import EPS
@@ -64,7 +65,7 @@ def falcon(tmp_path_factory):
     """The Falcon with every parameter folded: (numpy model, assemble, assembly_jacobian)."""
     text = (ROOT / "models" / "devices" / "novint_falcon.yaml").read_text()
     model = model_from_text(text, file="novint_falcon.yaml")
-    request = pipeline.resolve_request(model, "closure,closure_jacobians", "numpy,c", fixed="all")
+    request = pipeline.resolve_request(model, "closure,closure_jacobians", "numpy,c,js", fixed="all")
     directory = pipeline.write(pipeline.generate(model, request), tmp_path_factory.mktemp("falcon"))
     return (load(directory), *bind(library(directory, "novint_falcon"), "novint_falcon", 0))  # numpy: the runtime's
 
@@ -98,29 +99,57 @@ def test_a_warm_started_path_follows_the_runtime_solver(falcon, falcon_home):
         np.testing.assert_allclose(J, velocities.J, rtol=0, atol=condition * 64 * EPS * np.abs(velocities.J).max())
 
 
-def test_a_jump_of_assembly_mode_is_flagged(falcon, falcon_home):
-    """Cold starts from the home assembly to arms up to 60 deg away: where the generated assembly returns a positive
-    count, its assembly is the one the run-time solver reaches by continuing the home assembly in 2-deg steps (the
-    same mode); every start that lands elsewhere is flagged (a negative count: a correction failed to halve) or
-    refused (0, NaN).  Some starts are flagged (the check is not idle here)."""
-    model, assemble, _ = falcon
+@pytest.fixture(scope="module")
+def cold_starts(falcon, falcon_home):
+    """40 arm positions up to 60 deg from the home assembly's, and where the run-time solver reaches them by continuing
+    the home assembly in 2-deg steps (the home assembly's mode): (q, s, p, followed - whether the continuation closed
+    every step)."""
+    model = falcon[0]
     home, p_home = falcon_home
-    offsets = np.random.default_rng(63).uniform(-1.0, 1.0, (40, 3)) * np.radians(60.0)
-    s_ref, p_ref = np.tile(home.s, (len(offsets), 1)), np.tile(p_home, (len(offsets), 1))
-    followed = np.ones(len(offsets), dtype=bool)
+    q = home.q + np.random.default_rng(63).uniform(-1.0, 1.0, (40, 3)) * np.radians(60.0)
+    s_ref, p_ref = np.tile(home.s, (len(q), 1)), np.tile(p_home, (len(q), 1))
+    followed = np.ones(len(q), dtype=bool)
     for fraction in np.linspace(0.0, 1.0, 31)[1:]:
-        report = solve_closure(model, home.q + fraction * offsets, s_ref, p_ref, unknowns=("p", "s"))
+        report = solve_closure(model, home.q + fraction * (q - home.q), s_ref, p_ref, unknowns=("p", "s"))
         followed &= closure.closes(report, p_ref)
         s_ref, p_ref = report.solution["s"], report.solution["p"]
-    residual, counts = ctypes.c_double(), []
-    for k, offset in enumerate(offsets):
-        s, p = home.s.copy(), p_home.copy()
-        counts.append(assemble(home.q + offset, s, p, ITERATIONS, TOLERANCE, ctypes.byref(residual)))
-        if counts[-1] > 0:
-            assert followed[k]
-            np.testing.assert_allclose(p, p_ref[k], rtol=0, atol=1e-9)
-            np.testing.assert_allclose(np.angle(np.exp(1j * (s - s_ref[k]))), 0.0, rtol=0, atol=1e-6)
-    assert min(counts) < 0 < max(counts)
+    return q, s_ref, p_ref, followed
+
+
+def _cold_assemblies(backend: str, falcon, directory: Path, q: np.ndarray, s: np.ndarray, p: np.ndarray):
+    """(steps, s, p) of each backend's forward assembly from the starts (s, p): the C library (ctypes), the numpy
+    RuntimeAssembly, the JavaScript script (Node.js)."""
+    model, assemble, _ = falcon
+    s, p = s.copy(), p.copy()
+    if backend == "c":
+        residual = ctypes.c_double()
+        steps = [assemble(qk, sk, pk, ITERATIONS, TOLERANCE, ctypes.byref(residual)) for qk, sk, pk in zip(q, s, p)]
+        return np.array(steps), s, p
+    if backend == "numpy":
+        steps, _ = RuntimeAssembly(model).assemble_batch(q, s, p, max_iterations=ITERATIONS, tolerance=TOLERANCE)
+        return steps, s, p
+    found = script_forward(directory / "novint_falcon.js", q, s, p)
+    return (np.array([f["steps"] for f in found]), np.array([f["s"] for f in found]),
+            np.array([f["p"] for f in found]))
+
+
+@pytest.mark.parametrize("backend", ["c", "numpy", "js"])
+def test_a_jump_of_assembly_mode_is_flagged(backend, falcon, falcon_home, cold_starts):
+    """Cold starts from the home assembly to arms up to 60 deg away, in every backend's forward assembly: where it
+    returns a positive count, its assembly is the one the run-time solver reaches by continuing the home assembly
+    (the same mode); every start that lands elsewhere is flagged (a negative count: a correction failed to halve) or
+    refused (0, NaN).  Some starts are flagged (the check is not idle here)."""
+    home, p_home = falcon_home
+    q, s_ref, p_ref, followed = cold_starts
+    directory = Path(falcon[0].directory)
+    steps, s, p = _cold_assemblies(backend, falcon, directory, q, np.tile(home.s, (len(q), 1)),
+                                   np.tile(p_home, (len(q), 1)))
+    kept = steps > 0
+    assert followed[kept].all()
+    np.testing.assert_allclose(p[kept], p_ref[kept], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(np.angle(np.exp(1j * (s[kept] - s_ref[kept]))), 0.0, rtol=0, atol=1e-6)
+    assert steps.min() < 0 < steps.max()
+    assert np.isnan(p[steps == 0]).all()
 
 
 def test_the_run_time_mechanism_steps_by_the_generated_assembly(falcon, monkeypatch):

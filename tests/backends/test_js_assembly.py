@@ -7,28 +7,15 @@ closed-form ik: the same convergence, the joints to the Newton tolerance times t
 from __future__ import annotations
 
 import json
-import shutil
-import subprocess
 
 import numpy as np
 
 from checks import delta_assemblies
+from node_scripts import ITERATIONS, TOLERANCE, node_json, script_forward
 from symkin import load
 from symkin.mechanism.closure import MAX_STEP
 from symkin.mechanism.continuation import STALL
 from symkin.runtime.parallel import solve_closure
-
-#: Gauss-Newton's step tolerance and its bound on the steps (the runtime's defaults).
-TOLERANCE, ITERATIONS = 1e-12, 50
-
-
-def _node(program: str) -> list[dict]:
-    """The list of objects the Node.js ``program`` writes as JSON, their lists as float arrays (null: NaN)."""
-    node = shutil.which("node")
-    assert node, "Node.js is needed to test the JavaScript backend: install it (Debian: apt-get install nodejs)"
-    out = subprocess.run([node, "-e", program], capture_output=True, text=True, check=True).stdout
-    return [{key: np.array(value, dtype=float) if isinstance(value, list) else value for key, value in found.items()}
-            for found in json.loads(out.replace("null", "NaN"))]
 
 
 def script_inverse(module, targets: np.ndarray, q: np.ndarray, s: np.ndarray) -> list[dict]:
@@ -39,7 +26,7 @@ def script_inverse(module, targets: np.ndarray, q: np.ndarray, s: np.ndarray) ->
                f"stall: {STALL}}};"
                f"process.stdout.write(JSON.stringify(targets.map((p) => m.assemble_inverse(p, "
                f"{json.dumps(q.tolist())}, {json.dumps(s.tolist())}, {{}}, options))));")
-    return _node(program)
+    return node_json(program)
 
 
 def test_the_scripts_inverse_is_the_runtime_solvers_and_the_closed_form(generated_dir):
@@ -64,16 +51,6 @@ def test_the_scripts_inverse_is_the_runtime_solvers_and_the_closed_form(generate
         np.testing.assert_allclose(found[k]["s"], reference.solution["s"][k], rtol=0, atol=condition * TOLERANCE)
         np.testing.assert_allclose(found[k]["q"], delta.ik(targets[k]).joints, rtol=0, atol=condition * TOLERANCE)
         assert abs(found[k]["steps"] - reference.iterations[k]) <= 1
-
-
-def script_forward(module, q: np.ndarray, s: np.ndarray, p: np.ndarray) -> list[dict]:
-    """assemble(q, s, p) and assembly_jacobian at its result of the script ``module`` for each sample, by Node.js."""
-    program = (f"const m = require({json.dumps(str(module))});"
-               f"const [q, s, p] = [{json.dumps(q.tolist())}, {json.dumps(s.tolist())}, {json.dumps(p.tolist())}];"
-               f"process.stdout.write(JSON.stringify(q.map((qk, k) => {{"
-               f"const found = m.assemble(qk, s[k], p[k], {{}}, {{max_iterations: {ITERATIONS}, tolerance: {TOLERANCE}}});"
-               f"return Object.assign(found, {{J: m.assembly_jacobian(qk, found.s, found.p, {{}})}}); }})));")
-    return _node(program)
 
 
 def test_the_scripts_forward_kinematics_and_jacobian_are_the_c_assemblys(generated_dir, loaded):
