@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 from symkin.cli.progress import Progress
@@ -25,6 +26,7 @@ def register(kinds: argparse._SubParsersAction) -> None:
     p.add_argument("--scale-samples", type=int, default=6, help="random states per length scale (default: 6)")
     p.add_argument("--float32-samples", type=int, default=16, help="random states in float32 (default: 16)")
     p.add_argument("--only", metavar="NAMES", help="comma-separated quantities (default: all the model can derive)")
+    p.add_argument("--skip", metavar="NAMES", help="comma-separated quantities to leave out (of --only's, or of all)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
     p.add_argument("--figure", type=Path, metavar="PATH",
                    help="figure file (default: out/figures/MODEL_NAME-stability.png)")
@@ -39,11 +41,17 @@ def run(args: argparse.Namespace) -> int:
     from symkin.stability.harness import run_stability
 
     model = load_model(args.model)
-    only = [n.strip() for n in args.only.split(",") if n.strip()] if args.only else None
-    with Progress(f"{model.name} stability") as progress:
-        result = run_stability(model, samples=args.samples, scale_samples=args.scale_samples,
-                               float32_samples=args.float32_samples, quantities=only, seed=args.seed,
-                               progress=progress)
+    only = _names(args.only) if args.only else None
+    try:
+        with Progress(f"{model.name} stability") as progress:
+            result = run_stability(model, samples=args.samples, scale_samples=args.scale_samples,
+                                   float32_samples=args.float32_samples, quantities=only,
+                                   skip=_names(args.skip or ""), seed=args.seed, progress=progress)
+    except ValueError as err:
+        if not str(err).startswith("skip: "):
+            raise
+        print(f"error: --{err}", file=sys.stderr)
+        return 2
     print(report.report_text(result))
     if args.csv:
         report.write_csv(result, args.csv)
@@ -53,3 +61,7 @@ def run(args: argparse.Namespace) -> int:
         report.write_figure(result, figure)
         print(f"figure written to {figure}")
     return 0
+
+
+def _names(text: str) -> list[str]:
+    return [n.strip() for n in text.split(",") if n.strip()]

@@ -16,6 +16,7 @@ from symkin.ir.quantity import MECHANISMS, QuantityDef
 from symkin.kinematics import quantities as kinematics_quantities
 from symkin.parallel import base_regressor as parallel_base_regressor
 from symkin.parallel import closure_base, closure_dynamics
+from symkin.parallel import derivatives as parallel_derivatives
 from symkin.parallel import dynamics as parallel_dynamics
 from symkin.parallel import forces as parallel_forces
 from symkin.parallel import hybrid
@@ -23,8 +24,8 @@ from symkin.parallel import quantities as parallel_quantities
 from symkin.parallel import regressor as parallel_regressor
 
 QUANTITY_MODULES: tuple[ModuleType, ...] = (kinematics_quantities, joint_forces, dynamics_quantities, derivatives, regressor,
-                                            parallel_quantities, parallel_forces, parallel_dynamics, parallel_regressor,
-                                            parallel_base_regressor, hybrid, closure_dynamics,
+                                            parallel_quantities, parallel_forces, parallel_dynamics, parallel_derivatives,
+                                            parallel_regressor, parallel_base_regressor, hybrid, closure_dynamics,
                                             closure_base)
 
 

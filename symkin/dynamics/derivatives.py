@@ -1,5 +1,5 @@
-"""Derivatives of the dynamics of serial chains (issue 65), for model-predictive control, trajectory optimization
-and the linearization of a plant at a state.
+"""Derivatives of the dynamics of serial chains (issue 65; parallel mechanisms: :mod:`symkin.parallel.derivatives`),
+for model-predictive control, trajectory optimization and the linearization of a plant at a state.
 
 =================================  ==================================================================================
 ``inverse_dynamics_derivatives``   d tau/dq, d tau/dqd and d tau/dqdd = M of tau = M qdd + V + G + F_f (n x n each)
@@ -52,7 +52,7 @@ from symkin.kinematics.quantities import forward_kinematics, task_jacobian
 from symkin.symengine_bridge import to_symengine
 
 
-def _without_sign_derivatives(value: se.Basic) -> se.Basic:
+def without_sign_derivatives(value: se.Basic) -> se.Basic:
     """``value`` with the derivatives of sign(.) set to 0 (their value wherever sign is differentiable); for the
     small friction terms only (a walk over every node of a tree)."""
     derivatives = [a for a in value.atoms(se.Derivative) if isinstance(a.args[0], se.sign)]
@@ -68,7 +68,7 @@ def torque_jacobian(terms: BoundTerms, variables: list[se.Symbol]) -> list[se.Ba
     friction = terms.friction()
     if friction is None:
         return entries
-    slopes = [_without_sign_derivatives(se.diff(f, x)) for f in friction for x in variables]
+    slopes = [without_sign_derivatives(se.diff(f, x)) for f in friction for x in variables]
     return [entry + slope for entry, slope in zip(entries, slopes)]
 
 

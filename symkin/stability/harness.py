@@ -206,8 +206,8 @@ def _constant(value: float, _index: int) -> float:
 
 def run_stability(model: Model, *, samples: int = 32, float32_samples: int = 16, scale_samples: int = 6,
                   scales: Sequence[float] = SCALES, steps: Sequence[float] = PATH_STEPS,
-                  quantities: Sequence[str] | None = None, max_paths: int = 8, seed: int = 0,
-                  progress: Callable[[str], None] = lambda _stage: None,
+                  quantities: Sequence[str] | None = None, skip: Sequence[str] = (), max_paths: int = 8,
+                  seed: int = 0, progress: Callable[[str], None] = lambda _stage: None,
                   derivation: Derivation | None = None) -> StabilityRun:
     """Check every generated quantity of ``model`` against the 50-digit reference (see the module docstring).
 
@@ -219,14 +219,19 @@ def run_stability(model: Model, *, samples: int = 32, float32_samples: int = 16,
         scales: length scales.
         steps: distances t to the singular value along each singular path.
         quantities: the quantities to check (default: every one the model can derive).
+        skip: quantities to leave out of those.
         max_paths: at most this many singular paths.
         seed: random seed (the run is deterministic).
         progress: called with a description of each stage.
         derivation: ``model``'s derivation graph, whose quantities the run reuses and adds to (default: a new one).
     """
+    unknown = sorted(set(skip) - set(emitted_quantities()))
+    if unknown:
+        raise ValueError(f"skip: no quantity {', '.join(unknown)}; choose from {', '.join(emitted_quantities())}")
     rng = np.random.default_rng(seed)
     derivation = Derivation(model) if derivation is None else derivation
-    names, skipped = derivation.available(quantities or emitted_quantities(model.mechanism))
+    names, skipped = derivation.available([name for name in quantities or emitted_quantities(model.mechanism)
+                                           if name not in skip])
     task_matrix = conditioning_matrix(model)
     has_jacobian = bool(derivation.available([task_matrix])[0])
     # also what the run itself evaluates: the conditioning matrix, fk and the geometric Jacobian of a

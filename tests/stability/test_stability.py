@@ -57,7 +57,7 @@ LEFT_OUT = {"ur10e": REGRESSORS,
             "phantom_premium": REGRESSORS + DERIVATIVES,
             "stewart": ("jacobian", "mass_matrix", "coriolis_vector", "gravity_vector", "inverse_dynamics",
                         "forward_dynamics", "operational_space", "kinetic_energy", "potential_energy") + REGRESSORS
-                       + ("closure_regressor", "closure_energy_regressor", "closure_base_regressor"),
+                       + ("closure_regressor", "closure_energy_regressor", "closure_base_regressor") + DERIVATIVES,
             "delta_wrist": ("fk", "jacobian", "ik", "inverse_jacobian", "singularities", "leg_points", "closure",
                             "closure_jacobians", "constraints", "constraint_jacobians", "tcp_force_map",
                             "tcp_force_map_inverse")}

@@ -56,3 +56,15 @@ print(matplotlib.get_backend(), "matplotlib.pyplot" in sys.modules)
     assert (tmp_path / "fig.png").read_bytes()[:4] == b"\x89PNG"
     write_figure(small_run(), tmp_path / "fig.svg")              # the format follows the suffix
     assert b"<svg" in (tmp_path / "fig.svg").read_bytes()[:400]
+
+
+def test_skip_leaves_quantities_out_and_an_unknown_name_is_refused(tmp_path, capsys):
+    from symkin.cli import main
+
+    csv = tmp_path / "records.csv"
+    assert main(["bench", "stability", str(ROOT / "models" / "planar_2r.yaml"), "--only", "fk,jacobian", "--skip",
+                 "jacobian", "--samples", "2", "--scale-samples", "1", "--float32-samples", "1", "--no-figure",
+                 "--csv", str(csv)]) == 0
+    assert {line.split(",")[1] for line in csv.read_text().splitlines()[1:]} == {"fk"}
+    assert main(["bench", "stability", str(ROOT / "models" / "planar_2r.yaml"), "--skip", "jacobain"]) == 2
+    assert "--skip: no quantity jacobain; choose from" in capsys.readouterr().err
