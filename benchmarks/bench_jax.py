@@ -12,9 +12,12 @@ calls, after one that compiles):
   (``block_until_ready``);
 * ``JAX, reduced on the device``: the jitted function and a sum of every output to one number per configuration in
   one jitted function (only that number comes back): the arithmetic without the memory traffic of the outputs;
-* ``GCI integrand``: 1/kappa(J) of the geometric Jacobian per configuration (its singular values; the position
-  rows divided by L = 1 m) reduced to their mean - numpy's batched SVD of the C backend's J against
-  ``jax.numpy.linalg.svd`` inside the jitted function.
+* ``GCI integrand``: what ``symkin gci`` integrates over the joint limits, [1/kappa(J), 1] of the task Jacobian per
+  configuration (its singular values; the position rows divided by L = 1 m) reduced to their mean and covariance
+  (``Integrand.mean_and_covariance``): the host integrand (:func:`symkin.analysis.global_indices.joint_space_integrand`:
+  the C backend's J, numpy's batched SVD and covariance) against the device integrand
+  (:func:`symkin.analysis.device_integrand.device_joint_space_integrand`: one jitted function, the points sent
+  from the host, only the moments back).
 
 With ``--compile``, also the seconds of the first call of every function of the UR10e's scene with the JAX backend
 (XLA's compile, at one configuration): what keeps the JAX backend out of the example scenes so far.
@@ -41,6 +44,8 @@ import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
 
 import symkin  # noqa: E402
+from symkin.analysis.device_integrand import device_joint_space_integrand  # noqa: E402
+from symkin.analysis.global_indices import joint_space_integrand  # noqa: E402
 from symkin.text_table import format_table  # noqa: E402
 
 OUTPUTS = ["fk", "jacobian_geometric", "mass_matrix", "coriolis_vector", "gravity_vector"]
@@ -74,16 +79,11 @@ def main(argv: list[str] | None = None) -> int:
         reduced = jax.jit(lambda x, v: sum(jnp.sum(o.reshape(o.shape[0], -1), axis=-1)
                                            for o in jax_model.combined(x, v)))
 
-        def inverse_condition(J):
-            J = J[:, [3, 4, 5, 0, 1, 2], :]     # any row order: kappa is invariant (L = 1 m)
-            singular = jnp.linalg.svd(J, compute_uv=False)
-            return jnp.mean(singular[:, -1] / singular[:, 0])
-
-        gci = jax.jit(lambda x: inverse_condition(jax_model.jacobian_geometric(x)))
-
-        def numpy_gci():
-            singular = np.linalg.svd(c_model.jacobian_geometric(q), compute_uv=False)
-            return float(np.mean(singular[:, -1] / singular[:, 0]))
+        gci_directory = symkin.derive(ROOT / "models" / "ur10e.yaml", Path(tmp) / "gci", outputs=["jacobian"],
+                                      backends=["c", "jax"], fixed=["all"])
+        host = joint_space_integrand(symkin.load(gci_directory, "c"), measure="joint", length=1.0)
+        device = device_joint_space_integrand(symkin.load(gci_directory, "jax"), measure="joint", length=1.0)
+        device.mean_and_covariance(q)                   # compiles
 
         cases = [
             ("fk + J + M + V + G", "numpy", lambda: numpy_model.combined(q, qd)),
@@ -92,8 +92,10 @@ def main(argv: list[str] | None = None) -> int:
              lambda: jax.block_until_ready(jax_model.combined(q_device, qd_device))),
             ("fk + J + M + V + G", "JAX, reduced on the device",
              lambda: jax.block_until_ready(reduced(q_device, qd_device))),
-            ("GCI integrand (1/kappa of J, mean)", "C J + numpy SVD", numpy_gci),
-            ("GCI integrand (1/kappa of J, mean)", "JAX, on the device", lambda: jax.block_until_ready(gci(q_device))),
+            ("GCI integrand (1/kappa of J and its moments)", "C J + numpy SVD, on the host",
+             lambda: host.mean_and_covariance(q)),
+            ("GCI integrand (1/kappa of J and its moments)", "JAX, reduced on the device",
+             lambda: device.mean_and_covariance(q)),
         ]
         rows = [[case, backend, f"{1e9 * best_seconds(call, args.repeat) / args.batch:.2f}"]
                 for case, backend, call in cases]

@@ -34,6 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from symkin.analysis import device_integrand
 from symkin.numerics import conditioning
 from symkin.mechanism import reach
 from symkin.mechanism.working_mode import jacobian_in_working_mode
@@ -51,6 +52,8 @@ DOMAINS = ("joint", "cartesian")
 MEASURES = ("cartesian", "joint")
 
 Index = Callable[[np.ndarray], np.ndarray]
+#: The index a model loaded with the JAX backend evaluates on its device (:mod:`symkin.analysis.device_integrand`).
+DEFAULT_INDEX = conditioning.inverse_condition_number
 
 
 
@@ -182,7 +185,11 @@ def _integrand(model: GeneratedModel, *, domain: str, measure: str, index: Index
                length: float | str | None, inverse: InverseKinematics | None,
                box: tuple[np.ndarray, np.ndarray] | None) -> tuple[Integrand, str]:
     if domain == "joint":
-        integrand = joint_space_integrand(model, index=index, measure=measure, limits=limits, length=length)
+        if measure in MEASURES and device_integrand.on_device(model) and index in (None, DEFAULT_INDEX):
+            integrand = device_integrand.device_joint_space_integrand(model, with_index=index is not None,
+                                                                      measure=measure, limits=limits, length=length)
+        else:
+            integrand = joint_space_integrand(model, index=index, measure=measure, limits=limits, length=length)
         return integrand, reach.domain_description(model, domain, measure)
     if domain == "cartesian":
         if inverse is None:

@@ -26,6 +26,10 @@ class Integrand:
             domain inside the box (a reachability test), or None for an integrand that is
             continuous on the box; where it jumps, every component may jump, which the
             adaptive integrator must know (see :mod:`symkin.integration.adaptive`).
+        moments: where the values are computed elsewhere (an accelerator), the reduction done there: points
+            (N, d) -> (mean (k,), scatter (k, k) = sum (f - mean)(f - mean)^T) of their values, so that only
+            those come back; the statistics of several batches are combined here (:meth:`mean_and_covariance`).
+            None: the values come back and are reduced here.
     """
 
     lower: np.ndarray
@@ -34,6 +38,7 @@ class Integrand:
     components: tuple[str, ...]
     variables: tuple[str, ...]
     indicator: int | None = None
+    moments: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]] | None = None
 
     @property
     def dimension(self) -> int:
@@ -51,6 +56,31 @@ class Integrand:
             return self._checked(self.function(points), points.shape[0])
         return np.concatenate([self._checked(self.function(points[s:s + CHUNK]), len(points[s:s + CHUNK]))
                                for s in range(0, points.shape[0], CHUNK)])
+
+    def mean(self, points: np.ndarray) -> np.ndarray:
+        """The mean (k,) of the values at points (N, d)."""
+        return self.mean_and_covariance(points)[0] if self.moments is not None else self(points).mean(axis=0)
+
+    def mean_and_covariance(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The mean (k,) and sample covariance (k, k; divisor N - 1) of the values at points (N, d).  With
+        :attr:`moments`, batches of at most :data:`CHUNK` points are reduced where they are evaluated and their
+        statistics combined by Chan, Golub and LeVeque's pairwise update (Am. Stat. 37(3), 1983): n = n_a + n_b,
+        mean = mean_a + (n_b / n) delta, scatter = scatter_a + scatter_b + (n_a n_b / n) delta delta^T with
+        delta = mean_b - mean_a, which keeps the digits a one-pass sum of squares loses."""
+        points = np.asarray(points, dtype=np.float64)
+        if self.moments is None:
+            values = self(points)
+            return values.mean(axis=0), np.atleast_2d(np.cov(values, rowvar=False))
+        count, mean, scatter = 0, np.zeros(len(self.components)), np.zeros((len(self.components),) * 2)
+        for start in range(0, len(points), CHUNK):
+            batch = points[start:start + CHUNK]
+            batch_mean, batch_scatter = (np.asarray(v, dtype=np.float64) for v in self.moments(batch))
+            total = count + len(batch)
+            delta = batch_mean - mean
+            mean = mean + delta * (len(batch) / total)
+            scatter = scatter + batch_scatter + np.outer(delta, delta) * (count * len(batch) / total)
+            count = total
+        return mean, scatter / max(count - 1, 1)
 
     def _checked(self, values: np.ndarray, count: int) -> np.ndarray:
         values = np.asarray(values, dtype=np.float64)

@@ -43,7 +43,7 @@ def midpoint_grid(integrand: Integrand, samples: int, *, rng: np.random.Generato
         n += 4
 
     def rule(count: int) -> np.ndarray:
-        return integrand.volume * integrand(sampling.grid(integrand.lower, integrand.upper, count)).mean(axis=0)
+        return integrand.volume * integrand.mean(sampling.grid(integrand.lower, integrand.upper, count))
 
     coarse = np.array([rule(n // 2), rule(n // 4)])
     return IntegralEstimate(values=rule(n), evaluations=n**d + (n // 2) ** d + (n // 4) ** d, method="grid",
@@ -55,8 +55,8 @@ def monte_carlo(integrand: Integrand, samples: int, *, rng: np.random.Generator 
     if samples < 2:
         raise ValueError("Monte Carlo needs at least 2 samples")
     rng = np.random.default_rng() if rng is None else rng
-    f = integrand(sampling.uniform(integrand.lower, integrand.upper, samples, rng))
-    return monte_carlo_estimate(integrand.volume, f.mean(axis=0), np.atleast_2d(np.cov(f, rowvar=False)), samples)
+    mean, covariance = integrand.mean_and_covariance(sampling.uniform(integrand.lower, integrand.upper, samples, rng))
+    return monte_carlo_estimate(integrand.volume, mean, covariance, samples)
 
 
 def monte_carlo_estimate(volume: float, mean: np.ndarray, covariance: np.ndarray, samples: int) -> IntegralEstimate:
@@ -81,7 +81,10 @@ def quasi_monte_carlo(integrand: Integrand, samples: int, *, rng: np.random.Gene
     rng = np.random.default_rng() if rng is None else rng
     volume = integrand.volume
     points = sampling.sobol(integrand.lower, integrand.upper, m, rng, replicates=replicates)
-    means = volume * integrand(points.reshape(-1, integrand.dimension)).reshape(replicates, 2**m, -1).mean(axis=1)
+    if integrand.moments is None:    # one batch of every replicate's points
+        means = volume * integrand(points.reshape(-1, integrand.dimension)).reshape(replicates, 2**m, -1).mean(axis=1)
+    else:                            # each replicate reduced where it is evaluated
+        means = volume * np.array([integrand.mean(replicate) for replicate in points])
     return quasi_monte_carlo_estimate(means, replicates * 2**m)
 
 

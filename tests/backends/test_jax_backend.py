@@ -113,11 +113,32 @@ def test_the_module_is_float64_and_says_what_it_takes(jax_model):
 
 
 def test_the_analyses_take_the_jax_backend(jax_directory, generated_dir, capsys):
-    """symkin gci and workspace evaluate the JAX code (on the host for now) to the numbers of the numpy code: the same
-    Sobol points, the same figures as printed."""
+    """symkin gci and workspace evaluate the JAX code (the planar 2R's integrand reduced on the device) to the numbers
+    of the numpy code: the same Sobol points, the same figures as printed."""
     for command in (["gci", "-n", "512", "--seed", "0"], ["workspace", "-n", "512", "--no-figure"]):
         printed = {}
         for backend, directory in (("jax", jax_directory("planar_2r")), ("numpy", generated_dir / "planar_2r")):
             assert main([command[0], str(directory), "--backend", backend, *command[1:]]) == 0
             printed[backend] = re.sub(r"[0-9.]+ (ms|s)\b", "(time)", capsys.readouterr().out)  # run times differ
         assert printed["jax"] == printed["numpy"]
+
+
+@pytest.mark.parametrize("name, options", [("planar_2r", {}), ("ur10e", {"measure": "joint", "length": 0.5})])
+def test_the_global_index_is_reduced_on_the_device(name, options, jax_model, loaded, monkeypatch):
+    """gci of a serial model loaded with JAX takes the device's reductions (the integrand's values never come back:
+    calling them fails here) and gives numpy's figures: the same points, the same arithmetic up to rounding (the
+    SVD and the order of the sums): 1e-12 of the index, the error estimates to 1e-6."""
+    from symkin import analysis
+    from symkin.integration.integrand import Integrand
+
+    def values_on_the_host(self, points):
+        raise AssertionError("the device integrand's values came back to the host")
+
+    for method in ("qmc", "mc", "grid"):
+        want = analysis.gci(loaded(name, "numpy"), method=method, samples=2**10, seed=5, **options)
+        with monkeypatch.context() as patch:
+            patch.setattr(Integrand, "__call__", values_on_the_host)
+            got = analysis.gci(jax_model(name), method=method, samples=2**10, seed=5, **options)
+        assert got.value.value == pytest.approx(want.value.value, rel=1e-12)
+        assert got.value.error == pytest.approx(want.value.error, rel=1e-6)
+        assert got.measure.value == pytest.approx(want.measure.value, rel=1e-12)

@@ -1,0 +1,87 @@
+"""The joint-space integrand of the global indices fused on JAX's default device (issue 66).
+
+For a model loaded with the JAX backend, :func:`device_joint_space_integrand` gives the integrand of
+:func:`symkin.analysis.global_indices.joint_space_integrand` - components [w g, w] with w = |det J(q)| (the
+Cartesian measure) or 1 (the joint measure) and g = 1/kappa = sigma_min / sigma_max of the (homogenized) Jacobian
+(seed eqs. 8.25, 8.28), or [w] for the workspace measure - as one jitted function: the generated Jacobian, its
+singular values (batched SVD), the weights and the reduction of a batch to its mean and scatter run on the device,
+and only those k + k^2 numbers come back (:attr:`symkin.integration.integrand.Integrand.moments`).  On a GPU a
+batch of configurations never leaves the device; on a CPU XLA fuses the program.  The rules are
+:mod:`symkin.numerics.conditioning`'s: singular values at most max(m, n) eps sigma_max count as 0, a Jacobian
+with a non-finite entry has 1/kappa = 0.
+
+Serial mechanisms and the default index only: a parallel mechanism's working mode is decided on the host
+(:func:`symkin.mechanism.working_mode.jacobian_in_working_mode`), and another index is a numpy function; those
+take the host integrand.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from symkin import mechanism
+from symkin.integration.integrand import Integrand
+from symkin.mechanism import Limits, reach
+from symkin.runtime.info import GeneratedModel
+
+_EPS = float(np.finfo(np.float64).eps)
+
+
+def on_device(model: GeneratedModel) -> bool:
+    """Whether the model's integrand can run fused on JAX's device: a serial model loaded with the JAX backend."""
+    return getattr(model, "backend", None) == "jax" and model.info.mechanism == "serial"
+
+
+def _row_scale(model: GeneratedModel, box: np.ndarray, length: float | str | None) -> np.ndarray:
+    """1/L on the translational rows of a task space that mixes lengths and angles, else 1
+    (:func:`symkin.numerics.conditioning.homogenize`)."""
+    scale = np.ones(len(mechanism.task_space(model)))
+    if mechanism.mixes_translations_and_rotations(model):
+        if length is None:
+            raise ValueError(f"{model.name}: the task space {list(mechanism.task_space(model))} mixes translations "
+                             "and rotations: give a characteristic length (length=L in m, or 'auto')")
+        L = reach.characteristic_length_of(model, box) if length == "auto" else float(length)
+        if not L > 0:
+            raise ValueError(f"the characteristic length must be positive, got {L}")
+        scale[list(mechanism.position_rows(model))] = 1.0 / L
+    return scale
+
+
+def device_joint_space_integrand(model: GeneratedModel, *, with_index: bool = True, measure: str = "cartesian",
+                                 limits: Limits | None = None, length: float | str | None = None) -> Integrand:
+    """The joint-space integrand [w 1/kappa, w] (``with_index``) or [w] of a serial model loaded with the JAX
+    backend, its batches reduced on the device (see the module docstring)."""
+    import jax
+    import jax.numpy as jnp
+
+    box = mechanism.joint_limits(model, limits)
+    m, n = len(mechanism.task_space(model)), box.shape[0]
+    if measure == "cartesian" and m != n:
+        raise ValueError(f"{model.name}: the Cartesian measure |det J| dq needs a square task Jacobian, "
+                         f"this one is {m} x {n}; use measure='joint' or the Cartesian domain")
+    scale = jnp.asarray(_row_scale(model, box, length) if with_index else np.ones(m))
+    threshold = max(m, n) * _EPS
+
+    def values(q: Any) -> Any:
+        J = model.jacobian(q)
+        weight = jnp.abs(jnp.linalg.det(J)) if measure == "cartesian" else jnp.ones(q.shape[0])
+        if not with_index:
+            return weight[:, None]
+        finite = jnp.all(jnp.isfinite(J), axis=(-2, -1))
+        s = jnp.linalg.svd(jnp.where(finite[:, None, None], J * scale[:, None], 0.0), compute_uv=False)
+        largest, smallest = s[:, 0], jnp.where(s[:, -1] <= threshold * s[:, 0], 0.0, s[:, -1])
+        index = jnp.where(finite & (largest > 0), smallest / jnp.where(largest > 0, largest, 1.0), 0.0)
+        return jnp.stack([weight * index, weight], axis=-1)
+
+    def moments(q: Any) -> tuple[Any, Any]:
+        f = values(q)
+        mean = f.mean(axis=0)
+        centered = f - mean
+        return mean, centered.T @ centered
+
+    evaluate, reduce = jax.jit(values), jax.jit(moments)
+    components = ("index dW", "dW") if with_index else ("dW",)
+    return Integrand(box[:, 0], box[:, 1], lambda q: np.asarray(evaluate(jnp.asarray(q))), components,
+                     mechanism.coordinate_names(model), moments=lambda q: reduce(jnp.asarray(q)))
