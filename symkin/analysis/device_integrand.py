@@ -6,7 +6,9 @@ Cartesian measure) or 1 (the joint measure) and g = 1/kappa = sigma_min / sigma_
 (seed eqs. 8.25, 8.28), or [w] for the workspace measure - as one jitted function: the generated Jacobian, its
 singular values (batched SVD), the weights and the reduction of a batch to its mean and scatter run on the device,
 and only those k + k^2 numbers come back (:attr:`symkin.integration.integrand.Integrand.moments`).  On a GPU a
-batch of configurations never leaves the device; on a CPU XLA fuses the program.  The rules are
+batch of configurations never leaves the device; on a CPU XLA fuses the program.  The program is compiled once per
+generated Jacobian: the model's parameters are its arguments (traced), so every design of a sweep
+(:mod:`symkin.design.sweep_metrics`) runs the same compiled code.  The rules are
 :mod:`symkin.numerics.conditioning`'s: singular values at most max(m, n) eps sigma_max count as 0, a Jacobian
 with a non-finite entry has 1/kappa = 0.
 
@@ -17,6 +19,8 @@ take the host integrand.
 
 from __future__ import annotations
 
+import functools
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -31,7 +35,7 @@ _EPS = float(np.finfo(np.float64).eps)
 
 def on_device(model: GeneratedModel) -> bool:
     """Whether the model's integrand can run fused on JAX's device: a serial model loaded with the JAX backend."""
-    return getattr(model, "backend", None) == "jax" and model.info.mechanism == "serial"
+    return getattr(model, "backend", None) == "jax" and model.info.mechanism == "serial" and hasattr(model, "unbound")
 
 
 def _row_scale(model: GeneratedModel, box: np.ndarray, length: float | str | None) -> np.ndarray:
@@ -49,11 +53,42 @@ def _row_scale(model: GeneratedModel, box: np.ndarray, length: float | str | Non
     return scale
 
 
-def device_joint_space_integrand(model: GeneratedModel, *, with_index: bool = True, measure: str = "cartesian",
-                                 limits: Limits | None = None, length: float | str | None = None) -> Integrand:
-    """The joint-space integrand [w 1/kappa, w] (``with_index``) or [w] of a serial model loaded with the JAX
-    backend, its batches reduced on the device (see the module docstring)."""
+@functools.lru_cache(maxsize=32)
+def _compiled(jacobian: Callable[..., Any], measure: str, with_index: bool, threshold: float) -> tuple[Any, Any]:
+    """(values, reduce) jitted once per generated Jacobian function and options: the parameters (and the rows'
+    scale) are arguments, traced, so that every design of a sweep runs the same compiled program.  reduce gives
+    (mean, scatter, lowest, highest): the moments of the values and the extremes of 1/kappa where w > 0."""
     import jax
+    import jax.numpy as jnp
+
+    def values(q: Any, scale: Any, parameters: dict[str, Any]) -> tuple[Any, Any]:
+        J = jacobian(q, **parameters)
+        weight = jnp.abs(jnp.linalg.det(J)) if measure == "cartesian" else jnp.ones(q.shape[0])
+        if not with_index:
+            return weight[:, None], weight
+        finite = jnp.all(jnp.isfinite(J), axis=(-2, -1))
+        s = jnp.linalg.svd(jnp.where(finite[:, None, None], J * scale[:, None], 0.0), compute_uv=False)
+        largest, smallest = s[:, 0], jnp.where(s[:, -1] <= threshold * s[:, 0], 0.0, s[:, -1])
+        index = jnp.where(finite & (largest > 0), smallest / jnp.where(largest > 0, largest, 1.0), 0.0)
+        return jnp.stack([weight * index, weight], axis=-1), index
+
+    def reduce(q: Any, scale: Any, parameters: dict[str, Any]) -> tuple[Any, Any, Any, Any]:
+        f, index = values(q, scale, parameters)
+        mean = f.mean(axis=0)
+        centered = f - mean
+        inside = f[:, -1] > 0
+        return (mean, centered.T @ centered, jnp.min(jnp.where(inside, index, jnp.inf)),
+                jnp.max(jnp.where(inside, index, -jnp.inf)))
+
+    return jax.jit(lambda q, scale, parameters: values(q, scale, parameters)[0]), jax.jit(reduce)
+
+
+def device_joint_space_integrand(model: GeneratedModel, *, with_index: bool = True, measure: str = "cartesian",
+                                 limits: Limits | None = None, length: float | str | None = None,
+                                 extremes: Callable[[float, float], None] | None = None) -> Integrand:
+    """The joint-space integrand [w 1/kappa, w] (``with_index``) or [w] of a serial model loaded with the JAX
+    backend, its batches reduced on the device (see the module docstring).  ``extremes``: called with the smallest
+    and largest 1/kappa of each batch's points inside the workspace (w > 0; inf and -inf where none is)."""
     import jax.numpy as jnp
 
     box = mechanism.joint_limits(model, limits)
@@ -62,26 +97,15 @@ def device_joint_space_integrand(model: GeneratedModel, *, with_index: bool = Tr
         raise ValueError(f"{model.name}: the Cartesian measure |det J| dq needs a square task Jacobian, "
                          f"this one is {m} x {n}; use measure='joint' or the Cartesian domain")
     scale = jnp.asarray(_row_scale(model, box, length) if with_index else np.ones(m))
-    threshold = max(m, n) * _EPS
+    jacobian, parameters = model.unbound("jacobian")
+    evaluate, reduce = _compiled(jacobian, measure, with_index, max(m, n) * _EPS)
 
-    def values(q: Any) -> Any:
-        J = model.jacobian(q)
-        weight = jnp.abs(jnp.linalg.det(J)) if measure == "cartesian" else jnp.ones(q.shape[0])
-        if not with_index:
-            return weight[:, None]
-        finite = jnp.all(jnp.isfinite(J), axis=(-2, -1))
-        s = jnp.linalg.svd(jnp.where(finite[:, None, None], J * scale[:, None], 0.0), compute_uv=False)
-        largest, smallest = s[:, 0], jnp.where(s[:, -1] <= threshold * s[:, 0], 0.0, s[:, -1])
-        index = jnp.where(finite & (largest > 0), smallest / jnp.where(largest > 0, largest, 1.0), 0.0)
-        return jnp.stack([weight * index, weight], axis=-1)
+    def moments(q: np.ndarray) -> tuple[Any, Any]:
+        mean, scatter, lowest, highest = reduce(jnp.asarray(q), scale, parameters)
+        if extremes is not None:
+            extremes(float(lowest), float(highest))
+        return mean, scatter
 
-    def moments(q: Any) -> tuple[Any, Any]:
-        f = values(q)
-        mean = f.mean(axis=0)
-        centered = f - mean
-        return mean, centered.T @ centered
-
-    evaluate, reduce = jax.jit(values), jax.jit(moments)
     components = ("index dW", "dW") if with_index else ("dW",)
-    return Integrand(box[:, 0], box[:, 1], lambda q: np.asarray(evaluate(jnp.asarray(q))), components,
-                     mechanism.coordinate_names(model), moments=lambda q: reduce(jnp.asarray(q)))
+    return Integrand(box[:, 0], box[:, 1], lambda q: np.asarray(evaluate(jnp.asarray(q), scale, parameters)),
+                     components, mechanism.coordinate_names(model), moments=moments)

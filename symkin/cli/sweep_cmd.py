@@ -46,6 +46,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "effort per newton of TCP force over the workspace, N m/N; default: %(default)s)")
     p.add_argument("--set", dest="assignments", action="append", default=[], metavar="NAME=VALUE[,...]",
                    help="values every design shares instead of the defaults (repeatable)")
+    p.add_argument("--backend", choices=("numpy", "jax"), default="numpy",
+                   help="the code the workers evaluate: numpy (default) or jax (a serial model's integrand fused on "
+                        "JAX's default device, compiled once for every design; workers with a GPU use it)")
     p.add_argument("-n", "--samples", type=int, default=4096, metavar="N",
                    help="integrand evaluations per design (quasi-Monte Carlo; default: %(default)s)")
     p.add_argument("--seed", type=int, default=0, help="seed of the integrator, the same for every design "
@@ -121,8 +124,8 @@ def run(args: argparse.Namespace) -> int:
     try:
         definition = _definition(args)
         check_scheduler(args.scheduler, args.workers)
-        with model_files.generated_directory(args.model, ("numpy",), NEEDS["kinematics"], display=Progress) as d:
-            payload = ModelPayload.from_directory(d)
+        with model_files.generated_directory(args.model, (args.backend,), NEEDS["kinematics"], display=Progress) as d:
+            payload = ModelPayload.from_directory(d, args.backend)
         _check_names(definition, payload)
         out = Path(args.out or Path("out") / "sweeps" / f"{payload.name}.parquet")
         optimum = _optimum(args.optimum, definition, payload)

@@ -36,25 +36,34 @@ OK, EMPTY = "ok", "empty workspace"
 def evaluate_design(model: Any, values: dict[str, float], definition: Any) -> dict[str, Any]:
     """The metrics of one design ({column: value} and ``status``): ``model`` bound to the sweep's
     fixed values and then ``values``; ``definition`` a :class:`~symkin.design.sweeps.SweepDefinition`."""
+    from symkin.analysis import device_integrand
     from symkin.analysis.global_indices import joint_space_integrand
     from symkin.integration.integrators import integrate
 
     row: dict[str, Any] = {c: math.nan for c in definition.columns()[1 + len(definition.axes):-1]}
     try:
         design = model.bind(**{**dict(definition.fixed), **values})
-        integrand = joint_space_integrand(design)
         extremes = [math.inf, -math.inf]
 
-        def recorded(q: np.ndarray) -> np.ndarray:
-            out = integrand.function(q)
-            inside = out[:, 1] > 0.0
-            if inside.any():
-                index = out[inside, 0] / out[inside, 1]
-                extremes[0], extremes[1] = min(extremes[0], float(index.min())), max(extremes[1], float(index.max()))
-            return out
+        def record(lowest: float, highest: float) -> None:
+            extremes[0], extremes[1] = min(extremes[0], lowest), max(extremes[1], highest)
 
+        if device_integrand.on_device(design):    # the extremes come back with each batch's moments
+            integrand = device_integrand.device_joint_space_integrand(design, extremes=record)
+        else:
+            host = joint_space_integrand(design)
+
+            def recorded(q: np.ndarray) -> np.ndarray:
+                out = host.function(q)
+                inside = out[:, 1] > 0.0
+                if inside.any():
+                    index = out[inside, 0] / out[inside, 1]
+                    record(float(index.min()), float(index.max()))
+                return out
+
+            integrand = replace(host, function=recorded)
         with np.errstate(all="ignore"):
-            result = integrate(replace(integrand, function=recorded), "qmc", definition.samples, seed=definition.seed)
+            result = integrate(integrand, "qmc", definition.samples, seed=definition.seed)
         measure = result.component(1)
         if not measure.value > 0.0:
             return {**row, "status": EMPTY}

@@ -19,7 +19,7 @@ from typing import Any
 
 from symkin.design.sweep_store import SweepStore
 from symkin.design.sweeps import DEFAULT_METRICS, SweepAxis, SweepDefinition, evaluate_missing
-from symkin.runtime.payload import ModelPayload
+from symkin.runtime.payload import PAYLOAD_BACKENDS, ModelPayload
 
 
 def _payload(model: Any) -> ModelPayload:
@@ -29,7 +29,8 @@ def _payload(model: Any) -> ModelPayload:
     if not (directory / "manifest.json").exists():
         raise ValueError(f"{directory}: not a generated model directory (derive it with 'symkin derive', or pass "
                          "the directory of symkin.load)")
-    return ModelPayload.from_directory(directory)
+    backend = getattr(model, "backend", "numpy")     # a model loaded with JAX sweeps on JAX
+    return ModelPayload.from_directory(directory, backend if backend in PAYLOAD_BACKENDS else "numpy")
 
 
 def sweep(model: Any, definition: SweepDefinition | None = None, *,

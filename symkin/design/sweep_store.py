@@ -55,7 +55,7 @@ class SweepStore:
         self.output = Path(output)
         self.parts = self.output.with_name(self.output.name + ".parts")
         self.definition = definition
-        self.identity = {"model": payload.name, "model_hash": payload.model_hash,
+        self.identity = {"model": payload.name, "model_hash": payload.model_hash, "backend": payload.backend,
                          "sweep": json.loads(definition.to_json())}
         stamp = self.parts / "sweep.json"
         if resume and stamp.exists():

@@ -81,6 +81,13 @@ class LoadedModel:
         return type(self)(self.directory, self.manifest, self.backend, self._raw, {**self._bound, **parameters},
                           self.info)
 
+    def unbound(self, name: str) -> tuple[Callable[..., Any], dict[str, float]]:
+        """The generated function ``name`` without this view's parameter values, and the values of the free
+        parameters it takes (the defaults and those bound), as floats: for code that passes them as arguments, e.g.
+        a JAX function compiled once for every design of a sweep (its parameters traced)."""
+        takes = self.info.functions[name].parameters
+        return self._raw[name], {k: float(v) for k, v in self.parameters.items() if k in takes}
+
     def __repr__(self) -> str:
         return f"<symkin model {self.name!r} ({self.backend}): {', '.join(self.functions)}>"
 

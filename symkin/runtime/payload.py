@@ -1,7 +1,7 @@
-"""The generated numpy code of a model as bytes: what a worker on any machine needs to evaluate it.
+"""The generated numpy (or JAX) code of a model as bytes: what a worker on any machine needs to evaluate it.
 
 Dask tasks (design sweeps, chunked integrations) carry a :class:`ModelPayload` (the manifest and
-the numpy module, a few tens of kB) instead of a path, so the workers of a cluster need symkin
+the numpy module, a few tens of kB; or the JAX module, for workers with an accelerator) instead of a path, so the workers of a cluster need symkin
 installed but no shared file system.  :meth:`ModelPayload.load` writes it once per machine into
 ``<symkin cache>/payloads/<digest>`` (the directory of the compiled C libraries,
 :func:`symkin.backends.c.build.cache_directory`; the first complete copy renamed into place
@@ -24,28 +24,36 @@ from symkin.manifest import MANIFEST_NAME, read_manifest
 from symkin.runtime.info import ModelInfo
 
 
+#: The backends a payload carries: modules a worker imports without a compiler.
+PAYLOAD_BACKENDS = ("numpy", "jax")
+
+
 @dataclass(frozen=True)
 class ModelPayload:
-    """The generated numpy code of a model as bytes: what a worker needs to evaluate designs.
+    """The generated numpy (or JAX) code of a model as bytes: what a worker needs to evaluate designs.
 
     Attributes:
         name: the model name.
         model_hash: the hash of the model source (manifest ``model.hash``).
-        files: (file name, content) of the manifest and the numpy module.
+        files: (file name, content) of the manifest and the backend's module.
+        backend: ``numpy`` or ``jax``: what the workers load.
     """
 
     name: str
     model_hash: str
     files: tuple[tuple[str, bytes], ...]
+    backend: str = "numpy"
 
     @classmethod
-    def from_directory(cls, directory: str | Path) -> ModelPayload:
+    def from_directory(cls, directory: str | Path, backend: str = "numpy") -> ModelPayload:
         directory = Path(directory)
+        if backend not in PAYLOAD_BACKENDS:
+            raise ValueError(f"a payload carries the {' or the '.join(PAYLOAD_BACKENDS)} code, not {backend!r}")
         info = ModelInfo.from_manifest(read_manifest(directory))
-        if "numpy" not in info.backend_files:
-            raise ValueError(f"{directory}: no numpy code generated (derive with --backend numpy)")
-        names = [MANIFEST_NAME, *info.backend_files["numpy"]]
-        return cls(info.name, info.model_hash, tuple((n, (directory / n).read_bytes()) for n in names))
+        if backend not in info.backend_files:
+            raise ValueError(f"{directory}: no {backend} code generated (derive with --backend {backend})")
+        names = [MANIFEST_NAME, *info.backend_files[backend]]
+        return cls(info.name, info.model_hash, tuple((n, (directory / n).read_bytes()) for n in names), backend)
 
     @functools.cached_property
     def digest(self) -> str:
@@ -56,7 +64,7 @@ class ModelPayload:
         return h.hexdigest()
 
     def load(self) -> Any:
-        """The loaded numpy model (see the module docstring)."""
+        """The loaded model, on the payload's backend (see the module docstring)."""
         digest = self.digest
         if digest not in _LOADED:
             from symkin.runtime.loader import load  # the plain model: workers show no viewer
@@ -79,7 +87,7 @@ class ModelPayload:
                 shutil.rmtree(aside, ignore_errors=True)
                 if not self._held_by(target):
                     raise OSError(f"{target}: the payload's files could not be written to the cache")
-            _LOADED[digest] = load(target, "numpy")
+            _LOADED[digest] = load(target, self.backend)
         return _LOADED[digest]
 
 

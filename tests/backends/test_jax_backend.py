@@ -17,6 +17,7 @@ import re
 import jax
 import jax.numpy as jnp
 import numpy as np
+import pyarrow.parquet as pq
 import pytest
 
 from checks import agreement_bound
@@ -142,3 +143,32 @@ def test_the_global_index_is_reduced_on_the_device(name, options, jax_model, loa
         assert got.value.value == pytest.approx(want.value.value, rel=1e-12)
         assert got.value.error == pytest.approx(want.value.error, rel=1e-6)
         assert got.measure.value == pytest.approx(want.measure.value, rel=1e-12)
+
+
+def test_a_sweep_on_the_jax_backend_compiles_once_and_gives_numpys_rows(jax_directory, generated_dir, tmp_path):
+    """symkin sweep's designs of the planar 2R with the JAX payload (the workers load the JAX module): the GCI, its
+    error, the workspace measure and the kappa extremes of every design equal the numpy payload's (the same points;
+    1e-12 relative, the errors 1e-6), and the four designs ran one compiled program (the parameters are traced)."""
+    from symkin.analysis import device_integrand
+    from symkin.design.sweep_store import SweepStore
+    from symkin.design.sweeps import SweepAxis, SweepDefinition, evaluate_missing
+    from symkin.runtime.payload import ModelPayload
+
+    definition = SweepDefinition((SweepAxis("l1", 0.1, 0.3, 2), SweepAxis("l2", 0.1, 0.3, 2)), chunk=4, samples=1024)
+    rows = {}
+    for backend, directory in (("jax", jax_directory("planar_2r")), ("numpy", generated_dir / "planar_2r")):
+        payload = ModelPayload.from_directory(directory, backend)
+        store = SweepStore(tmp_path / f"{backend}.parquet", definition, payload)
+        evaluate_missing(payload, definition, store, scheduler="serial")
+        rows[backend] = store.finish().to_pydict()
+    assert rows["jax"]["status"] == rows["numpy"]["status"] == ["ok"] * 4
+    for column, rel in (("gci", 1e-12), ("volume", 1e-12), ("kappa_min", 1e-12), ("kappa_max", 1e-12),
+                        ("gci_error", 1e-6), ("volume_error", 1e-6)):
+        assert rows["jax"][column] == pytest.approx(rows["numpy"][column], rel=rel), column
+    jacobian, _ = ModelPayload.from_directory(jax_directory("planar_2r"), "jax").load().unbound("jacobian")
+    reduce = device_integrand._compiled(jacobian, "cartesian", True, 2 * np.finfo(float).eps)[1]
+    assert reduce._cache_size() == 1         # one batch shape (each replicate's 64 points), one compile
+    out = tmp_path / "cli.parquet"
+    assert main(["sweep", str(jax_directory("planar_2r")), "--backend", "jax", "--vary", "l1=0.1:0.3:2", "--vary",
+                 "l2=0.1:0.3:2", "-n", "1024", "--scheduler", "serial", "-o", str(out), "--no-figure"]) == 0
+    assert pq.read_table(out).to_pydict()["gci"] == rows["jax"]["gci"]
