@@ -28,6 +28,7 @@ import numpy as np
 from symkin import mechanism
 from symkin.integration.integrand import Integrand
 from symkin.mechanism import Limits, reach
+from symkin.numerics import conditioning
 from symkin.runtime.info import GeneratedModel
 
 _EPS = float(np.finfo(np.float64).eps)
@@ -41,16 +42,9 @@ def on_device(model: GeneratedModel) -> bool:
 def _row_scale(model: GeneratedModel, box: np.ndarray, length: float | str | None) -> np.ndarray:
     """1/L on the translational rows of a task space that mixes lengths and angles, else 1
     (:func:`symkin.numerics.conditioning.homogenize`)."""
-    scale = np.ones(len(mechanism.task_space(model)))
-    if mechanism.mixes_translations_and_rotations(model):
-        if length is None:
-            raise ValueError(f"{model.name}: the task space {list(mechanism.task_space(model))} mixes translations "
-                             "and rotations: give a characteristic length (length=L in m, or 'auto')")
-        L = reach.characteristic_length_of(model, box) if length == "auto" else float(length)
-        if not L > 0:
-            raise ValueError(f"the characteristic length must be positive, got {L}")
-        scale[list(mechanism.position_rows(model))] = 1.0 / L
-    return scale
+    rows = len(mechanism.task_space(model))
+    L = reach.homogenizing_length(model, length, box)
+    return np.ones(rows) if L is None else conditioning.homogenizing_scale(rows, L, mechanism.position_rows(model))
 
 
 @functools.lru_cache(maxsize=32)

@@ -60,13 +60,8 @@ DEFAULT_INDEX = conditioning.inverse_condition_number
 def scaled_index(model: GeneratedModel, index: Index, length: float | str | None, limits: np.ndarray) -> Index:
     """The index, applied to the homogenized Jacobian when the task space mixes lengths and angles."""
     rows = mechanism.position_rows(model)
-    if mechanism.mixes_translations_and_rotations(model):
-        if length is None:
-            raise ValueError(f"{model.name}: the task space {list(mechanism.task_space(model))} mixes translations "
-                             "and rotations: give a characteristic length (length=L in m, or 'auto')")
-        if length == "auto":
-            length = reach.characteristic_length_of(model, limits)
-        L = float(length)
+    L = reach.homogenizing_length(model, length, limits)
+    if L is not None:
         return lambda J: index(conditioning.homogenize(J, L, rows))
     return index
 

@@ -38,6 +38,8 @@ gives, and one more LDL^T solve with the n + n + n right-hand sides [-d tau/dq |
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import symengine as se
 import sympy
 
@@ -72,6 +74,26 @@ def torque_jacobian(terms: BoundTerms, variables: list[se.Symbol]) -> list[se.Ba
     return [entry + slope for entry, slope in zip(entries, slopes)]
 
 
+def forward_dynamics_slopes(program: Program, M: list[list[se.Basic]], rest: list[se.Basic], tau: list[se.Basic],
+                            qdd: list[se.Basic], slope_rows: Callable[[], list[list[se.Basic]]]
+                            ) -> tuple[list[se.Basic], list[se.Basic], list[se.Basic]]:
+    """(d qdd/dq, d qdd/dqd, d qdd/dtau) row-major by the implicit-function theorem on tau = M qdd + rest: the
+    accelerations qdd = M^-1 (tau - rest) by an LDL^T solve bound into ``program``, then ``slope_rows()`` - row i the
+    2n derivatives d tau_i/dq, d tau_i/dqd of the inverse dynamics at the symbols ``qdd``, bound after the solve - at
+    those accelerations, and M^-1 [-dtau/dq | -dtau/dqd | I] by one more LDL^T solve (n + n + n right-hand sides)."""
+    n = len(tau)
+    accelerations = [row[0] for row in ldl_solve(program, M, [[t - r] for t, r in zip(tau, rest)])]
+    start = len(program.assignments)
+    rows = slope_rows()
+    at_motion = dict(zip(qdd, accelerations))  # the derivative program at qdd = FD(q, qd, tau)
+    program.substitute(start, at_motion)
+    right = [[-entry.xreplace(at_motion) for entry in row] + [se.Integer(int(i == j)) for j in range(n)]
+             for i, row in enumerate(rows)]
+    X = ldl_solve(program, M, right)
+    by_q, by_qd, by_tau = ([X[i][k * n + j] for i in range(n) for j in range(n)] for k in range(3))
+    return by_q, by_qd, by_tau
+
+
 @quantity("inverse_dynamics_derivatives", "d tau/dq, d tau/dqd, d tau/dqdd = M of the inverse dynamics (n x n each)")
 def _inverse_dynamics_derivatives(d: Deriving) -> FunctionSpec:
     n = d.model.dof
@@ -100,20 +122,15 @@ def _forward_dynamics_derivatives(d: Deriving) -> FunctionSpec:
     n = d.model.dof
     program = Program()
     terms = BoundTerms(d, program)
-    M = terms.mass_matrix()
-    tau = coordinate_symbols(d, "tau")
-    h = terms.torques(acceleration=False, with_friction=True)
-    qdd = [row[0] for row in ldl_solve(program, M, [[t - b] for t, b in zip(tau, h)])]
-    start = len(program.assignments)
     variables = [x for group in ("q", "qd") for x in coordinate_symbols(d, group)]
-    slopes = torque_jacobian(terms, variables)
-    at_motion = dict(zip(coordinate_symbols(d, "qdd"), qdd))  # the derivative program at qdd = FD(q, qd, tau)
-    program.substitute(start, at_motion)
-    slopes = [entry.xreplace(at_motion) for entry in slopes]
-    right = [[-slopes[i * 2 * n + j] for j in range(2 * n)] + [se.Integer(int(i == j)) for j in range(n)]
-             for i in range(n)]
-    X = ldl_solve(program, M, right)
-    dq, dqd, dtau = ([X[i][k * n + j] for i in range(n) for j in range(n)] for k in range(3))
+
+    def slope_rows() -> list[list[se.Basic]]:
+        slopes = torque_jacobian(terms, variables)
+        return [slopes[i * 2 * n:(i + 1) * 2 * n] for i in range(n)]
+
+    dq, dqd, dtau = forward_dynamics_slopes(
+        program, terms.mass_matrix(), terms.torques(acceleration=False, with_friction=True),
+        coordinate_symbols(d, "tau"), coordinate_symbols(d, "qdd"), slope_rows)
     return function_spec(
         d, "forward_dynamics_derivatives", "Derivatives of the forward dynamics: the linearization of the plant.",
         "qdd(q + dq, qd + dqd, tau + dtau) = qdd + dqdd_dq dq + dqdd_dqd dqd + dqdd_dtau dtau to first order, "

@@ -520,6 +520,22 @@ def _parallel_bounding_box(model: GeneratedModel, q: np.ndarray, per_axis: int) 
     return points[inside].min(axis=0) - margin, points[inside].max(axis=0) + margin
 
 
+def homogenizing_length(model: GeneratedModel, length: float | str | None, limits: np.ndarray) -> float | None:
+    """The characteristic length L that homogenizes the model's task Jacobian
+    (:func:`symkin.numerics.conditioning.homogenize`): None for a task space of one kind; ``length`` (m) or, for
+    ``"auto"``, :func:`characteristic_length_of` over the joint limits where it mixes translations and rotations.
+
+    Raises:
+        ValueError: a mixed task space and no length.
+    """
+    if not mechanism.mixes_translations_and_rotations(model):
+        return None
+    if length is None:
+        raise ValueError(f"{model.name}: the task space {list(mechanism.task_space(model))} mixes translations "
+                         "and rotations: give a characteristic length (length=L in m, or 'auto')")
+    return characteristic_length_of(model, limits) if length == "auto" else float(length)
+
+
 def characteristic_length_of(model: GeneratedModel, limits: np.ndarray | None = None, seed: int = 0) -> float:
     """Characteristic length of a model with a mixed task space, from a Sobol sample of its joint space.
 

@@ -283,11 +283,16 @@ def homogenize(J: np.ndarray, length: float, position_rows: tuple[int, ...]) -> 
         length: characteristic length L > 0 (same unit as the translational rows' lengths).
         position_rows: indices of the translational rows (x, y, z in the task space).
     """
+    return np.asarray(J, dtype=np.float64) * homogenizing_scale(np.shape(J)[-2], length, position_rows)[:, None]
+
+
+def homogenizing_scale(rows: int, length: float, position_rows: tuple[int, ...]) -> np.ndarray:
+    """The factor of each of the ``rows`` rows that :func:`homogenize` applies: 1/L on ``position_rows``, else 1."""
     if not length > 0:
         raise ValueError(f"the characteristic length must be positive, got {length}")
-    scale = np.ones(np.shape(J)[-2])
+    scale = np.ones(rows)
     scale[list(position_rows)] = 1.0 / length
-    return np.asarray(J, dtype=np.float64) * scale[:, None]
+    return scale
 
 
 def characteristic_length(J: np.ndarray, position_rows: tuple[int, ...],

@@ -25,8 +25,7 @@ from __future__ import annotations
 
 import symengine as se
 
-from symkin.dynamics.derivatives import without_sign_derivatives
-from symkin.dynamics.linsolve import ldl_solve
+from symkin.dynamics.derivatives import forward_dynamics_slopes, without_sign_derivatives
 from symkin.dynamics.program import Program
 from symkin.dynamics.quantities import coordinate_symbols, function_spec, require_gravity
 from symkin.errors import DerivationError
@@ -98,18 +97,14 @@ def _forward_dynamics_derivatives(d: Deriving) -> FunctionSpec:
     n = d.model.dof
     program = Program()
     terms = _terms(d, "forward_dynamics_derivatives", program)
-    M = terms.mass_matrix()
-    rest = terms.torques(coordinate_symbols(d, "qd"), None)
-    qdd = [row[0] for row in ldl_solve(program, M, [[t - r] for t, r in zip(coordinate_symbols(d, "tau"), rest)])]
-    start = len(program.assignments)
-    dq, dqd = _torque_slopes(d, terms)
-    at_motion = dict(zip(coordinate_symbols(d, "qdd"), qdd))    # the derivative program at qdd = FD(q, qd, tau)
-    program.substitute(start, at_motion)
-    right = [[-dq[i * n + j].xreplace(at_motion) for j in range(n)]
-             + [-dqd[i * n + j].xreplace(at_motion) for j in range(n)]
-             + [se.Integer(int(i == j)) for j in range(n)] for i in range(n)]
-    X = ldl_solve(program, M, right)
-    by_q, by_qd, by_tau = ([X[i][k * n + j] for i in range(n) for j in range(n)] for k in range(3))
+
+    def slope_rows() -> list[list[se.Basic]]:
+        dq, dqd = _torque_slopes(d, terms)
+        return [dq[i * n:(i + 1) * n] + dqd[i * n:(i + 1) * n] for i in range(n)]
+
+    by_q, by_qd, by_tau = forward_dynamics_slopes(
+        program, terms.mass_matrix(), terms.torques(coordinate_symbols(d, "qd"), None), coordinate_symbols(d, "tau"),
+        coordinate_symbols(d, "qdd"), slope_rows)
     return function_spec(
         d, "forward_dynamics_derivatives", "Derivatives of the forward dynamics at the actuators: the linearization "
         "of the device's plant.",
