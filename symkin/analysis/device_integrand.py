@@ -103,3 +103,49 @@ def device_joint_space_integrand(model: GeneratedModel, *, with_index: bool = Tr
     components = ("index dW", "dW") if with_index else ("dW",)
     return Integrand(box[:, 0], box[:, 1], lambda q: np.asarray(evaluate(jnp.asarray(q), scale, parameters)),
                      components, mechanism.coordinate_names(model), moments=moments)
+
+
+def smooth_gci_gradient(model: GeneratedModel, points: np.ndarray, *, measure: str = "cartesian",
+                        length: float | None = None) -> tuple[float, dict[str, float]]:
+    """The smooth surrogate of the GCI over fixed configurations and its gradient with respect to the model's free
+    parameters, by ``jax.value_and_grad`` through the generated Jacobian (reverse mode): a design optimizer's objective
+    and gradient (issue 66, "gradients for design").
+
+        v(p) = sum_i w_i g_i / sum_i w_i,   g = 1/kappa_F = k / sqrt(||J||_F^2 trace((J^T J)^-1)),
+
+    w = |det J| (``measure="cartesian"``) or 1, J the (homogenized) task Jacobian at ``points`` (N, n) with the
+    parameters p - the Monte Carlo estimate of the GCI with the Frobenius condition number, which has no kink where
+    singular values cross (:func:`symkin.numerics.conditioning.inverse_frobenius_condition_number`, Gosselin and
+    Angeles 1991).  The points stay fixed as the parameters move (sample the joint limits once, e.g. a Sobol set), so
+    the gradient is that of a smooth function; ``length`` homogenizes a mixed task space and is held fixed.
+    Configurations with a singular J^T J give NaN: keep the points off the singularities (or use the joint measure
+    with limits that avoid them).
+
+    Returns:
+        (v, {parameter: dv/dparameter}) for every free parameter the generated Jacobian takes.
+    """
+    import jax
+    import jax.numpy as jnp
+
+    if not on_device(model):
+        raise ValueError(f"{model.name}: the smooth GCI's gradient needs a serial model loaded with the JAX backend "
+                         "(symkin.load(directory, backend='jax'))")
+    m = len(mechanism.task_space(model))
+    L = reach.homogenizing_length(model, length, mechanism.joint_limits(model))
+    scale = jnp.asarray(np.ones(m) if L is None else conditioning.homogenizing_scale(m, L, mechanism.position_rows(model)))
+    if measure == "cartesian" and m != np.shape(points)[-1]:
+        raise ValueError(f"{model.name}: the Cartesian measure |det J| dq needs a square task Jacobian; use "
+                         "measure='joint'")
+    jacobian, parameters = model.unbound("jacobian")
+    q = jnp.asarray(points, dtype=jnp.float64)
+
+    def surrogate(values: dict[str, Any]) -> Any:
+        raw = jacobian(q, **values)
+        J = raw * scale[:, None]
+        inverse_sum = jnp.trace(jnp.linalg.inv(jnp.swapaxes(J, -1, -2) @ J), axis1=-2, axis2=-1)
+        index = J.shape[-1] / jnp.sqrt(jnp.sum(J * J, axis=(-2, -1)) * inverse_sum)
+        weight = jnp.abs(jnp.linalg.det(raw)) if measure == "cartesian" else jnp.ones(q.shape[0])
+        return jnp.sum(weight * index) / jnp.sum(weight)
+
+    value, gradient = jax.value_and_grad(surrogate)(parameters)
+    return float(value), {name: float(g) for name, g in gradient.items()}
