@@ -131,8 +131,7 @@ def smooth_gci_gradient(model: GeneratedModel, points: np.ndarray, *, measure: s
         raise ValueError(f"{model.name}: the smooth GCI's gradient needs a serial model loaded with the JAX backend "
                          "(symkin.load(directory, backend='jax'))")
     m = len(mechanism.task_space(model))
-    L = reach.homogenizing_length(model, length, mechanism.joint_limits(model))
-    scale = jnp.asarray(np.ones(m) if L is None else conditioning.homogenizing_scale(m, L, mechanism.position_rows(model)))
+    scale = jnp.asarray(_row_scale(model, mechanism.joint_limits(model), length))
     if measure == "cartesian" and m != np.shape(points)[-1]:
         raise ValueError(f"{model.name}: the Cartesian measure |det J| dq needs a square task Jacobian; use "
                          "measure='joint'")
