@@ -124,7 +124,6 @@ def smooth_gci_gradient(model: GeneratedModel, points: np.ndarray, *, measure: s
     Returns:
         (v, {parameter: dv/dparameter}) for every free parameter the generated Jacobian takes.
     """
-    import jax
     import jax.numpy as jnp
 
     if not on_device(model):
@@ -136,15 +135,23 @@ def smooth_gci_gradient(model: GeneratedModel, points: np.ndarray, *, measure: s
         raise ValueError(f"{model.name}: the Cartesian measure |det J| dq needs a square task Jacobian; use "
                          "measure='joint'")
     jacobian, parameters = model.unbound("jacobian")
-    q = jnp.asarray(points, dtype=jnp.float64)
+    value, gradient = _compiled_gradient(jacobian, measure)(jnp.asarray(points, dtype=jnp.float64), scale, parameters)
+    return float(value), {name: float(g) for name, g in gradient.items()}
 
-    def surrogate(values: dict[str, Any]) -> Any:
-        raw = jacobian(q, **values)
+
+@functools.lru_cache(maxsize=32)
+def _compiled_gradient(jacobian: Callable[..., Any], measure: str) -> Any:
+    """jax.value_and_grad of the smooth surrogate (see :func:`smooth_gci_gradient`) by the parameters, jitted once per
+    generated Jacobian and measure (points, scale and parameters traced): an optimizer's later calls reuse it."""
+    import jax
+    import jax.numpy as jnp
+
+    def surrogate(q: Any, scale: Any, parameters: dict[str, Any]) -> Any:
+        raw = jacobian(q, **parameters)
         J = raw * scale[:, None]
         inverse_sum = jnp.trace(jnp.linalg.inv(jnp.swapaxes(J, -1, -2) @ J), axis1=-2, axis2=-1)
         index = J.shape[-1] / jnp.sqrt(jnp.sum(J * J, axis=(-2, -1)) * inverse_sum)
         weight = jnp.abs(jnp.linalg.det(raw)) if measure == "cartesian" else jnp.ones(q.shape[0])
         return jnp.sum(weight * index) / jnp.sum(weight)
 
-    value, gradient = jax.value_and_grad(surrogate)(parameters)
-    return float(value), {name: float(g) for name, g in gradient.items()}
+    return jax.jit(jax.value_and_grad(surrogate, argnums=2))

@@ -179,7 +179,7 @@ def test_the_smooth_gcis_gradient_is_its_central_difference(jax_model, loaded):
     surrogate in numpy (conditioning's 1/kappa_F and |det J| of the numpy backend's J) and its central differences in
     l1 and l2: h = EPS^(1/3) max(1, |p|), truncation and rounding ~EPS^(2/3) of the scale; 1e-8 leaves a wide margin.
     The points keep q2 off the folded and stretched arm (J^T J regular)."""
-    from symkin.analysis.device_integrand import smooth_gci_gradient
+    from symkin.analysis.device_integrand import _compiled_gradient, smooth_gci_gradient
     from symkin.numerics import conditioning
     from tolerances import EPS
 
@@ -192,7 +192,8 @@ def test_the_smooth_gcis_gradient_is_its_central_difference(jax_model, loaded):
         weight = conditioning.absolute_determinant(J)
         return float(np.sum(weight * conditioning.inverse_frobenius_condition_number(J)) / np.sum(weight))
 
-    value, gradient = smooth_gci_gradient(jax_model("planar_2r"), points)
+    arm = jax_model("planar_2r")
+    value, gradient = smooth_gci_gradient(arm, points)
     base = dict(host.parameters)
     assert value == pytest.approx(surrogate(**base), rel=1e-12)
     assert sorted(gradient) == ["l1", "l2"]
@@ -200,9 +201,11 @@ def test_the_smooth_gcis_gradient_is_its_central_difference(jax_model, loaded):
         h = EPS ** (1 / 3) * max(1.0, abs(base[name]))
         difference = (surrogate(**{**base, name: base[name] + h}) - surrogate(**{**base, name: base[name] - h})) / (2 * h)
         assert slope == pytest.approx(difference, rel=1e-8, abs=1e-8 * max(abs(v) for v in gradient.values()))
-    designed = smooth_gci_gradient(jax_model("planar_2r").bind(l1=0.3, l2=0.2), points)
+    designed = smooth_gci_gradient(arm.bind(l1=0.3, l2=0.2), points)
     assert designed[0] == pytest.approx(surrogate(l1=0.3, l2=0.2), rel=1e-12)
     # kappa_F of the 2R is (1/rho + 2 rho + 2 cos q2) / |sin q2| with rho = l2 / l1 (||J^-1||_F = ||J||_F / |det J|
     # for 2 x 2): least at rho = 1/sqrt(2) in every configuration, so there the gradient vanishes to rounding
-    optimal = smooth_gci_gradient(jax_model("planar_2r").bind(l1=0.3, l2=0.3 / np.sqrt(2)), points)[1]
+    optimal = smooth_gci_gradient(arm.bind(l1=0.3, l2=0.3 / np.sqrt(2)), points)[1]
     assert max(abs(v) for v in optimal.values()) <= 64 * EPS * max(abs(v) for v in gradient.values())
+    compiled = _compiled_gradient(arm.unbound("jacobian")[0], "cartesian")
+    assert compiled._cache_size() == 1        # three designs, one compiled program
