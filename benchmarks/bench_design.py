@@ -1,11 +1,16 @@
-"""Run times of dimensioning optimization (symkin.design): program build, IPOPT, independent evaluation.
+"""Run times of dimensioning optimization (symkin.design): program build, IPOPT, independent evaluation; and
+IPOPT on the CasADi program against L-BFGS-B on JAX gradients of the same surrogate (``--gradients jax``).
 
 Run with `make bench` or `python benchmarks/bench_design.py [--repeat N]`.  Each problem is
 built and solved from scratch (median over the repeats), on the committed generated code
 (generated/planar_2r, generated/delta): building the CasADi program (mapping the generated
 functions over the nodes), IPOPT (including CasADi's function and derivative evaluations),
 and the independent rating of the start and the optimum (true GCI by randomized QMC,
-2^14 evaluations each, and the box check).
+2^14 evaluations each, and the box check).  The second table solves the problems both solvers take (a serial
+model's GCI within bounds) both ways in the same process: the CasADi program's build and IPOPT against the JAX
+path's first call (XLA's compile of the surrogate's value and gradient) and a warm solve (what every later design
+or restart costs: the program is compiled once per generated Jacobian); the JAX code is derived into a scratch
+directory (generated/ holds no JAX backend).
 """
 
 from __future__ import annotations
@@ -13,6 +18,7 @@ from __future__ import annotations
 import argparse
 import statistics
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -44,9 +50,65 @@ def _run(numpy_model, casadi_model, options: dict) -> dict[str, float]:
     solution = design.solve(problem, program, build_seconds=time.perf_counter() - wall)
     start = time.perf_counter()
     before, after = (design.evaluate(problem, numpy_model, d) for d in (solution.start, solution.optimum))
-    return {"build": solution.build_seconds, "ipopt": solution.ipopt_seconds, "iterations": solution.iterations,
+    return {"build": solution.build_seconds, "ipopt": solution.solve_seconds, "iterations": solution.iterations,
             "evaluation": time.perf_counter() - start, "wall": time.perf_counter() - wall,
             "before": before.gci, "after": after.gci}
+
+
+#: The problems of the solver comparison: model, free parameters, design_problem's other options.
+GRADIENT_PROBLEMS = {
+    "planar_2r, free l1": ("planar_2r", dict(free=["l1"])),
+    "ur10e, free a2, a3 (L = 0.3 m)": ("ur10e", dict(free=["a2", "a3"], length=0.3)),
+}
+
+
+def _jax_model(name: str, scratch: Path):
+    """The model's fk and jacobian derived with the JAX backend into ``scratch``, loaded."""
+    from symkin import pipeline
+    from symkin.model import load_model
+
+    model = load_model(ROOT / "models" / f"{name}.yaml")
+    generation = pipeline.generate(model, pipeline.resolve_request(model, "fk,jacobian", "jax"))
+    return symkin.load(pipeline.write(generation, scratch / name), "jax")
+
+
+def _timed(solve, *args) -> tuple[float, object]:
+    """(wall seconds, solution) of one solve (build included)."""
+    start = time.perf_counter()
+    solution = solve(*args)
+    return time.perf_counter() - start, solution
+
+
+def _solve_with_casadi(problem, casadi_model, numpy_model):
+    return design.solve(problem, design.formulate(problem, casadi_model, numpy_model))
+
+
+def _solve_with_jax(problem, jax_model, numpy_model):
+    from symkin.design.gradient_solving import solve_with_jax
+
+    return solve_with_jax(problem, jax_model, numpy_model)[0]
+
+
+def _compare_solvers(repeat: int) -> list[list[str]]:
+    """Per problem: IPOPT's median ms (build and solve) and iterations; JAX's first call (compile included), its
+    median warm ms and iterations; their ratio and how far the optima differ."""
+    rows = []
+    with tempfile.TemporaryDirectory() as scratch:
+        for label, (name, options) in GRADIENT_PROBLEMS.items():
+            options = dict(options)
+            free = options.pop("free")
+            numpy_model = symkin.load(ROOT / "generated" / name)
+            casadi_model, jax_model = symkin.load(ROOT / "generated" / name, "casadi"), _jax_model(name, Path(scratch))
+            problem = design.design_problem(numpy_model, "gci", free, **options)
+            first, _ = _timed(_solve_with_jax, problem, jax_model, numpy_model)
+            _solve_with_casadi(problem, casadi_model, numpy_model)  # warm-up: CasADi's plugin loading
+            ipopt = [_timed(_solve_with_casadi, problem, casadi_model, numpy_model) for _ in range(repeat)]
+            warm = [_timed(_solve_with_jax, problem, jax_model, numpy_model) for _ in range(repeat)]
+            ipopt_ms, jax_ms = (statistics.median(t for t, _ in runs) * 1e3 for runs in (ipopt, warm))
+            rows.append([label, f"{ipopt_ms:.1f}", str(ipopt[0][1].iterations), f"{first * 1e3:.0f}", f"{jax_ms:.1f}",
+                         str(warm[0][1].iterations), f"{ipopt_ms / jax_ms:.1f}x",
+                         f"{max(abs(warm[0][1].optimum[k] / ipopt[0][1].optimum[k] - 1) for k in free):.1e}"])
+    return rows
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -64,6 +126,9 @@ def main(argv: list[str] | None = None) -> int:
                      str(runs[0]["before"]), str(runs[0]["after"])])
     print(format_table(["problem", "iter", "build ms", "IPOPT ms", "eval ms", "wall ms", "GCI before", "GCI after"],
                        rows))
+    print()
+    print(format_table(["problem (gci)", "CasADi+IPOPT ms", "iter", "JAX first call ms", "JAX warm ms", "iter",
+                        "IPOPT/JAX", "optima differ (rel)"], _compare_solvers(args.repeat)))
     return 0
 
 

@@ -51,7 +51,7 @@ def main(out: Path) -> None:
     print(f"  GCI over the box {before.gci} -> {after.gci}")
     print(f"  box reachable at {100 * before.box_reachable:.1f} % -> {100 * after.box_reachable:.1f} % "
           f"of the points ({after.box_check})")
-    print(f"  IPOPT {solution.ipopt_seconds * 1e3:.0f} ms, wall {wall:.2f} s (program, IPOPT, evaluation)")
+    print(f"  IPOPT {solution.solve_seconds * 1e3:.0f} ms, wall {wall:.2f} s (program, IPOPT, evaluation)")
     (out / "delta-history.png").write_bytes(plots.png(plots.history_figure(solution, problem, "delta")))
     (out / "delta-design.png").write_bytes(plots.png(plots.design_figure(problem, numpy_model, solution,
                                                                           (before, after))))

@@ -50,7 +50,7 @@ def run(numpy_model, casadi_model, out: Path, label: str, **requirements) -> des
           f"{solution.surrogate_optimum:.6f})")
     if after.box_reachable is not None:
         print(f"  box reachable at {100 * after.box_reachable:.1f} % of the points ({after.box_check})")
-    print(f"  IPOPT {solution.ipopt_seconds * 1e3:.1f} ms ({solution.iterations} iterations), wall {wall:.2f} s")
+    print(f"  IPOPT {solution.solve_seconds * 1e3:.1f} ms ({solution.iterations} iterations), wall {wall:.2f} s")
     history = plots.history_figure(solution, problem, "planar_2r")
     (out / f"planar_2r-{label}-history.png").write_bytes(plots.png(history))
     (out / f"planar_2r-{label}-design.png").write_bytes(

@@ -39,7 +39,7 @@ def on_device(model: GeneratedModel) -> bool:
     return getattr(model, "backend", None) == "jax" and model.info.mechanism == "serial" and hasattr(model, "unbound")
 
 
-def _row_scale(model: GeneratedModel, box: np.ndarray, length: float | str | None) -> np.ndarray:
+def row_scale(model: GeneratedModel, box: np.ndarray, length: float | str | None) -> np.ndarray:
     """1/L on the translational rows of a task space that mixes lengths and angles, else 1
     (:func:`symkin.numerics.conditioning.homogenize`)."""
     rows = len(mechanism.task_space(model))
@@ -90,7 +90,7 @@ def device_joint_space_integrand(model: GeneratedModel, *, with_index: bool = Tr
     if measure == "cartesian" and m != n:
         raise ValueError(f"{model.name}: the Cartesian measure |det J| dq needs a square task Jacobian, "
                          f"this one is {m} x {n}; use measure='joint' or the Cartesian domain")
-    scale = jnp.asarray(_row_scale(model, box, length) if with_index else np.ones(m))
+    scale = jnp.asarray(row_scale(model, box, length) if with_index else np.ones(m))
     jacobian, parameters = model.unbound("jacobian")
     evaluate, reduce = _compiled(jacobian, measure, with_index, max(m, n) * _EPS)
 
@@ -130,28 +130,38 @@ def smooth_gci_gradient(model: GeneratedModel, points: np.ndarray, *, measure: s
         raise ValueError(f"{model.name}: the smooth GCI's gradient needs a serial model loaded with the JAX backend "
                          "(symkin.load(directory, backend='jax'))")
     m = len(mechanism.task_space(model))
-    scale = jnp.asarray(_row_scale(model, mechanism.joint_limits(model), length))
+    scale = jnp.asarray(row_scale(model, mechanism.joint_limits(model), length))
     if measure == "cartesian" and m != np.shape(points)[-1]:
         raise ValueError(f"{model.name}: the Cartesian measure |det J| dq needs a square task Jacobian; use "
                          "measure='joint'")
     jacobian, parameters = model.unbound("jacobian")
-    value, gradient = _compiled_gradient(jacobian, measure)(jnp.asarray(points, dtype=jnp.float64), scale, parameters)
+    value, gradient = compiled_surrogate_gradient(jacobian, measure)(jnp.asarray(points, dtype=jnp.float64), scale, parameters)
     return float(value), {name: float(g) for name, g in gradient.items()}
 
 
 @functools.lru_cache(maxsize=32)
-def _compiled_gradient(jacobian: Callable[..., Any], measure: str) -> Any:
-    """jax.value_and_grad of the smooth surrogate (see :func:`smooth_gci_gradient`) by the parameters, jitted once per
-    generated Jacobian and measure (points, scale and parameters traced): an optimizer's later calls reuse it."""
+def compiled_surrogate_gradient(jacobian: Callable[..., Any], measure: str, objective: str = "gci",
+                                smoothing: float = 0.0) -> Any:
+    """jax.value_and_grad of a smooth design surrogate by the parameters, jitted once per generated Jacobian and
+    options (points, scale and parameters traced: an optimizer's later calls reuse it).  Called as
+    ``f(points, scale, parameters) -> (value, {name: derivative})``.
+
+    ``objective="gci"``: sum_i w_i g_i / sum_i w~_i (see :func:`smooth_gci_gradient`); ``"workspace"``: sum_i w~_i
+    (times the volume per node, the Monte Carlo estimate of int |det J| dq).  w~ = sqrt(w^2 + smoothing^2 mean w^2)
+    smooths the kink of |det J| where a node's det J changes sign as the design varies
+    (:data:`symkin.design.formulation.DETERMINANT_SMOOTHING`; 0: w~ = w)."""
     import jax
     import jax.numpy as jnp
 
     def surrogate(q: Any, scale: Any, parameters: dict[str, Any]) -> Any:
         raw = jacobian(q, **parameters)
+        weight = jnp.abs(jnp.linalg.det(raw)) if measure == "cartesian" else jnp.ones(q.shape[0])
+        smoothed = weight if smoothing == 0 else jnp.sqrt(weight * weight + smoothing**2 * jnp.mean(weight * weight))
+        if objective == "workspace":
+            return jnp.sum(smoothed)
         J = raw * scale[:, None]
         inverse_sum = jnp.trace(jnp.linalg.inv(jnp.swapaxes(J, -1, -2) @ J), axis1=-2, axis2=-1)
         index = J.shape[-1] / jnp.sqrt(jnp.sum(J * J, axis=(-2, -1)) * inverse_sum)
-        weight = jnp.abs(jnp.linalg.det(raw)) if measure == "cartesian" else jnp.ones(q.shape[0])
-        return jnp.sum(weight * index) / jnp.sum(weight)
+        return jnp.sum(weight * index) / jnp.sum(smoothed)
 
     return jax.jit(jax.value_and_grad(surrogate, argnums=2))

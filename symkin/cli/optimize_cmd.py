@@ -1,4 +1,5 @@
-"""``symkin optimize MODEL``: dimensioning with CasADi and IPOPT (seed sec. 4 steps 1-3), rated independently."""
+"""``symkin optimize MODEL``: dimensioning with CasADi and IPOPT or JAX gradients and L-BFGS-B (seed sec. 4 steps
+1-3), rated independently."""
 
 from __future__ import annotations
 
@@ -15,16 +16,19 @@ from symkin.cli.progress import Progress
 
 #: Largest --nodes: 2^16 Sobol nodes, or 16^3 grid points of a parallel model's box.
 MAX_NODES = 16
+#: Where the objective's derivatives come from: the CasADi program (IPOPT) or jax.grad (L-BFGS-B).
+GRADIENTS = ("casadi", "jax")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "optimize",
-        help="dimensioning: maximize the GCI or the workspace over free parameters (CasADi + IPOPT)",
+        help="dimensioning: maximize the GCI or the workspace over free parameters (CasADi + IPOPT, or JAX gradients)",
         description="Dimensioning optimization (seed sec. 4, steps 1-3): maximize a smooth surrogate of the global "
                     "conditioning index (eq. 8.28, with the Frobenius condition number 1/kappa_F at fixed sample "
                     "points) or the workspace measure over the free design parameters, with IPOPT on the "
-                    "generated CasADi functions, subject to parameter bounds and a required workspace box. The "
+                    "generated CasADi functions, subject to parameter bounds and a required workspace box (or, with "
+                    "--gradients jax, with L-BFGS-B on jax.grad of the same surrogate, within the bounds). The "
                     "start and optimized designs are then rated independently on the generated numpy code (the "
                     "true GCI with 1/kappa from singular values, randomized QMC with a 95 % confidence "
                     "half-width; box reachability on a dense grid). Serial models integrate over the joint limits "
@@ -62,6 +66,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("-n", "--samples", type=int, default=2**14, metavar="N",
                    help="integrand evaluations of the independent GCI (default: %(default)s)")
     p.add_argument("--seed", type=int, default=0, help="seed of the nodes and of the evaluation (default: 0)")
+    p.add_argument("--gradients", choices=GRADIENTS, default="casadi",
+                   help="casadi: IPOPT on the CasADi program, its exact derivatives (every objective and constraint); "
+                        "jax: L-BFGS-B on the same surrogate with jax.grad through the generated JAX code (a serial "
+                        "model's gci or workspace within the bounds, no --require-box; MODEL derived with the JAX "
+                        "backend, or a model file; XLA compiles once, ~1-2 s, then each iteration is one call) "
+                        "(default: %(default)s)")
     p.add_argument("-o", "--out", metavar="DIR", help="output directory (default: out/optimize/<model>)")
     p.set_defaults(run=run, parser=p)
 
@@ -86,24 +96,32 @@ def run(args: argparse.Namespace) -> int:
             progress("loading the generated code")
             # a parallel model's rating checks the working mode by its closed-form fk, where it has one
             masses = design.APPARENT_MASS_FUNCTIONS if args.max_apparent_mass is not None else ()
-            numpy_model, casadi_model = model_files.load_models(args.model, ("numpy", "casadi"), NEEDS["design"],
-                                                                ("fk", *masses), display=Progress)
+            numpy_model, other_model = model_files.load_models(args.model, ("numpy", args.gradients),
+                                                               NEEDS["design"], ("fk", *masses), display=Progress)
             efforts = (analysis_args.per_joint("--effort-limit", args.effort_limit, len(numpy_model.info.coordinates))
                        if args.effort_limit else None)
             problem = design.design_problem(numpy_model, args.maximize, free, bounds=bounds, values=values, box=box,
                                             margin=args.margin, limits=limits, length=args.length,
                                             effort_limits=efforts, max_apparent_mass=args.max_apparent_mass)
-            progress("building the CasADi program")
-            start = time.perf_counter()
-            program = design.formulate(problem, casadi_model, numpy_model, nodes=args.nodes, seed=args.seed)
-            build = time.perf_counter() - start
-            progress("IPOPT")
-            solution = design.solve(problem, program, build_seconds=build)
+            if args.gradients == "jax":
+                from symkin.design import gradient_solving
+
+                progress("compiling the JAX surrogate and L-BFGS-B")
+                solution, description = gradient_solving.solve_with_jax(problem, other_model, numpy_model,
+                                                                        nodes=args.nodes, seed=args.seed)
+            else:
+                progress("building the CasADi program")
+                start = time.perf_counter()
+                program = design.formulate(problem, other_model, numpy_model, nodes=args.nodes, seed=args.seed)
+                build = time.perf_counter() - start
+                progress("IPOPT")
+                solution = design.solve(problem, program, build_seconds=build)
+                description = program.description
             if not solution.success:
                 lighter = ("" if args.max_apparent_mass is None else
                            f" (or no design within them feels at most {args.max_apparent_mass:g} kg at the handle: "
                            "raise --max-apparent-mass)")
-                print(f"error: IPOPT did not converge ({solution.status}, {solution.iterations} iterations); "
+                print(f"error: {solution.solver} did not converge ({solution.status}, {solution.iterations} iterations); "
                       f"if the required box cannot be reached within the bounds{lighter}, widen --bounds or shrink "
                       "--require-box; nothing was written", file=sys.stderr, flush=True)
                 return 1
@@ -122,9 +140,9 @@ def run(args: argparse.Namespace) -> int:
     except (ValueError, KeyError) as err:
         analysis_args.fail_on_bad_input(args, err)
     wall = time.perf_counter() - wall
-    seconds = {"build": solution.build_seconds, "ipopt": solution.ipopt_seconds, "evaluation": evaluation,
+    seconds = {"build": solution.build_seconds, "solve": solution.solve_seconds, "evaluation": evaluation,
                "wall": wall}
-    report = _report(args, problem, program, solution, rating, seconds)
+    report = _report(args, problem, description, solution, rating, seconds)
     files["result.json"] = json.dumps(report, indent=2) + "\n"
     out = Path(args.out or Path("out") / "optimize" / numpy_model.name)
     replace_directory(out, files)
@@ -132,16 +150,16 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _report(args, problem, program, solution, rating, seconds: dict[str, float]) -> dict:
+def _report(args, problem, description: str, solution, rating, seconds: dict[str, float]) -> dict:
     before, after = rating
     return {
         "model": args.model,
         "objective": problem.objective,
-        "surrogate": program.description,
+        "surrogate": description,
         "parameters": {p.name: {"start": p.start, "optimum": solution.optimum[p.name], "bounds": [p.lower, p.upper]}
                        for p in problem.free},
         "surrogate_value": {"start": solution.surrogate_start, "optimum": solution.surrogate_optimum},
-        "ipopt": {"status": solution.status, "iterations": solution.iterations,
+        "solver": {"name": solution.solver, "status": solution.status, "iterations": solution.iterations,
                   "constraint_violation": solution.constraint_violation, "history": solution.history.tolist()},
         "evaluation": {"method": before.description, "box_check": after.box_check, **{
             which: {"gci": r.gci.value, "gci_error": r.gci.error, "measure": r.measure.value,
@@ -159,9 +177,9 @@ def _print(report: dict, out: Path) -> None:
     print(f"{report['model']}: maximize {report['objective']}; {report['surrogate']}")
     for name, p in report["parameters"].items():
         print(f"  {name}: {p['start']:.6g} -> {p['optimum']:.10g}   (bounds {p['bounds'][0]:g} .. {p['bounds'][1]:g})")
-    s, ipopt = report["surrogate_value"], report["ipopt"]
-    print(f"  surrogate: {s['start']:.6g} -> {s['optimum']:.6g}   IPOPT: {ipopt['status']}, "
-          f"{ipopt['iterations']} iterations")
+    s, solver = report["surrogate_value"], report["solver"]
+    print(f"  surrogate: {s['start']:.6g} -> {s['optimum']:.6g}   {solver['name']}: {solver['status']}, "
+          f"{solver['iterations']} iterations")
     ev = report["evaluation"]
     for which in ("start", "optimum"):
         r = ev[which]
@@ -172,6 +190,6 @@ def _print(report: dict, out: Path) -> None:
               f"{r['measure_error']:.2g}{box}{force}{mass}")
     print(f"  independent evaluation: {ev['method']}; box: {ev['box_check']}")
     t = report["seconds"]
-    print(f"  time: build {t['build']:.2f} s, IPOPT {t['ipopt']:.3f} s, evaluation {t['evaluation']:.2f} s, "
+    print(f"  time: build {t['build']:.2f} s, {solver['name']} {t['solve']:.3f} s, evaluation {t['evaluation']:.2f} s, "
           f"wall {t['wall']:.2f} s")
     print(f"  wrote {out}/history.png, design.png, result.json")

@@ -252,9 +252,46 @@ def _joint_box_terms(problem: DesignProblem, casadi_model: GeneratedModel, numpy
     J = _call(casadi_function(casadi_model, "jacobian"), {"q": node, **values})[0]
     if problem.objective == "force":
         return _box_force_terms(problem, casadi_model, numpy_model, node, free, J, values, design, box_points, seed)
+    sampled = joint_nodes(problem, numpy_model, nodes, seed)
+    q = sampled.points
+    rows = mechanism.position_rows(numpy_model)
+    term = smooth.measure_weighted_inverse_frobenius(J, smooth.homogenized(J, problem.length, rows))
+    per_node = _node_function("gci_terms", node, free, casadi.vertcat(term, smooth.determinant(J)))
+    terms = _mapped(per_node, casadi.DM(q.T), design)
+    det = terms[1, :]
+    floor = DETERMINANT_SMOOTHING**2 * casadi.sumsqr(det) / len(q)
+    weights = casadi.sum2(casadi.sqrt(det * det + floor))
+    objective = (casadi.sum2(terms[0, :]) / weights if problem.objective == "gci"
+                 else weights * sampled.volume_per_node)
+    description = sampled.description
+    if problem.box is None:
+        return _Terms(objective, casadi.MX(0, 1), np.empty(0), np.empty(0), *NO_VARIABLES, q, np.empty((0, 0)),
+                      description)
+    box = _box_configurations(problem, casadi_model, numpy_model, node, free, values, design, box_points, seed)
+    description += f"; the box is required at {len(box.points)} points (fk(q_b) = p_b within the joint limits{sampled.within})"
+    return _Terms(objective, box.g, box.lbg, box.ubg, casadi.vec(box.qb), box.start.ravel(), box.lower,
+                  box.upper, q, box.points, description, symbols=(box.qb,), configuration_count=box.qb.numel())
+
+
+class JointNodes(NamedTuple):
+    """The fixed nodes of a serial model's surrogate over its joint box."""
+
+    points: np.ndarray  # (N, n) configurations within the joint stops
+    volume_per_node: float  # the box's volume over every sampled node (those outside the stops are outside)
+    description: str  # the surrogate and its domain, in words
+    within: str  # " within the joint stops" where the model declares some, else ""
+
+
+def joint_nodes(problem: DesignProblem, numpy_model: GeneratedModel, nodes: int | None = None,
+                seed: int = 0) -> JointNodes:
+    """The nodes of a serial model's GCI or workspace surrogate: 2**``nodes`` (default 2**JOINT_NODES_LOG2)
+    scrambled Sobol points of the joint limits (seeded by ``seed``), those outside the joint stops dropped.  The
+    CasADi program and the JAX one (:mod:`symkin.design.gradient_solving`) share them, so both optimize one
+    function."""
+    limits = problem.joint_limits
     q = sampling.sobol(limits[:, 0], limits[:, 1], JOINT_NODES_LOG2 if nodes is None else nodes,
                        np.random.default_rng(seed))
-    sampled = len(q)  # the measure's nodes: those outside the joint stops count as outside the workspace
+    sampled = len(q)
     joint_stops = stops.StopInequalities.of_model(numpy_model)
     q = q[joint_stops.respected(q)]
     count = len(q)
@@ -262,29 +299,14 @@ def _joint_box_terms(problem: DesignProblem, casadi_model: GeneratedModel, numpy
         raise ValueError(f"{numpy_model.name}: no sampled configuration lies within the joint stops; widen the joint "
                          "limits or the stops")
     within = " within the joint stops" if len(joint_stops) else ""
-    rows = mechanism.position_rows(numpy_model)
-    term = smooth.measure_weighted_inverse_frobenius(J, smooth.homogenized(J, problem.length, rows))
-    per_node = _node_function("gci_terms", node, free, casadi.vertcat(term, smooth.determinant(J)))
-    terms = _mapped(per_node, casadi.DM(q.T), design)
-    det = terms[1, :]
-    floor = DETERMINANT_SMOOTHING**2 * casadi.sumsqr(det) / count
-    weights = casadi.sum2(casadi.sqrt(det * det + floor))
     if problem.objective == "gci":
-        objective = casadi.sum2(terms[0, :]) / weights
         description = (f"Frobenius GCI surrogate: sum |det J| / kappa_F / sum |det J| at {count} fixed Sobol "
                        f"nodes over the joint limits{within} (Cartesian measure dW = |det J| dq, |det J| smoothed by "
                        f"{DETERMINANT_SMOOTHING:g} rms det J)")
     else:
-        objective = weights * float(np.prod(limits[:, 1] - limits[:, 0])) / sampled
         description = (f"workspace measure int |det J| dq over the joint limits{within}, at {count} of {sampled} "
                        "fixed Sobol nodes")
-    if problem.box is None:
-        return _Terms(objective, casadi.MX(0, 1), np.empty(0), np.empty(0), *NO_VARIABLES, q, np.empty((0, 0)),
-                      description)
-    box = _box_configurations(problem, casadi_model, numpy_model, node, free, values, design, box_points, seed)
-    description += f"; the box is required at {len(box.points)} points (fk(q_b) = p_b within the joint limits{within})"
-    return _Terms(objective, box.g, box.lbg, box.ubg, casadi.vec(box.qb), box.start.ravel(), box.lower,
-                  box.upper, q, box.points, description, symbols=(box.qb,), configuration_count=box.qb.numel())
+    return JointNodes(q, float(np.prod(limits[:, 1] - limits[:, 0])) / sampled, description, within)
 
 
 class _BoxConfigurations(NamedTuple):

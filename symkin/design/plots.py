@@ -42,13 +42,13 @@ def png(figure: Any) -> bytes:
 
 
 def history_figure(solution: Solution, problem: DesignProblem, model_name: str) -> Any:
-    """The surrogate objective at every IPOPT iterate, and the constraint violation where there are constraints."""
+    """The surrogate objective at every iterate of the solver, and the constraint violation where there are constraints."""
     from matplotlib.figure import Figure
 
     figure = Figure(figsize=(6.0, 4.0), layout="constrained")
     ax = figure.add_subplot()
     ax.plot(np.arange(len(solution.history)), solution.history, marker="o", ms=3)
-    ax.set_xlabel("IPOPT iteration")
+    ax.set_xlabel(f"{solution.solver} iteration")
     ax.set_ylabel(HISTORY_LABELS[problem.objective])
     ax.set_title(f"{model_name}: maximize {problem.objective} over {', '.join(problem.names)} "
                  f"({solution.iterations} iterations, {solution.status})", fontsize=9)

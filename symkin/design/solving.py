@@ -70,14 +70,16 @@ class Solution:
         start, optimum: all parameter values of the start and the optimized design.
         surrogate_start, surrogate_optimum: the objective's surrogate at both.
         history: the surrogate at every IPOPT iterate (iteration 0 is the start).
-        infeasibility: IPOPT's primal infeasibility (largest scaled constraint violation) at every iterate.
-        status: IPOPT's return status; ``success`` whether it converged.
-        iterations: IPOPT iterations.
-        ipopt_seconds: wall time of the IPOPT solve (including CasADi's evaluations of f, g and derivatives).
+        infeasibility: IPOPT's primal infeasibility (largest scaled constraint violation) at every iterate (zeros
+            for a program with bounds only).
+        status: the solver's return status; ``success`` whether it converged.
+        iterations: the solver's iterations.
+        solve_seconds: wall time of the solve (IPOPT's including CasADi's evaluations of f, g and derivatives).
         build_seconds: wall time to build the program and the solver.
         box_points, box_configurations: serial models: the required box's constraint points and
             the optimizer's joint configurations at them (empty without a box).
         constraint_violation: largest violation of g at the optimum (0 where met).
+        solver: ``IPOPT`` (:func:`solve`) or ``L-BFGS-B`` (:func:`symkin.design.gradient_solving.solve_with_jax`).
     """
 
     start: dict[str, float]
@@ -89,11 +91,12 @@ class Solution:
     status: str
     success: bool
     iterations: int
-    ipopt_seconds: float
+    solve_seconds: float
     build_seconds: float
     box_points: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))
     box_configurations: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))
     constraint_violation: float = 0.0
+    solver: str = "IPOPT"
 
 
 def solve(problem: DesignProblem, program: DesignProgram, *, build_seconds: float = 0.0,
@@ -107,7 +110,7 @@ def solve(problem: DesignProblem, program: DesignProgram, *, build_seconds: floa
     build_seconds += time.perf_counter() - start
     start = time.perf_counter()
     result = solver(x0=program.x0, lbx=program.lbx, ubx=program.ubx, lbg=program.lbg, ubg=program.ubg)
-    ipopt_seconds = time.perf_counter() - start
+    solve_seconds = time.perf_counter() - start
     stats = solver.stats()
     x = np.asarray(result["x"]).ravel()
     g = np.asarray(result["g"]).ravel()
@@ -123,6 +126,6 @@ def solve(problem: DesignProblem, program: DesignProgram, *, build_seconds: floa
         surrogate_start=program.surrogate(program.x0), surrogate_optimum=program.surrogate(x), history=history,
         infeasibility=np.asarray(stats["iterations"]["inf_pr"], dtype=np.float64),
         status=str(stats["return_status"]), success=bool(stats["success"]), iterations=int(stats["iter_count"]),
-        ipopt_seconds=ipopt_seconds, build_seconds=build_seconds,
+        solve_seconds=solve_seconds, build_seconds=build_seconds,
         box_points=program.box_points if box_q.size else np.empty((0, 0)),
         box_configurations=box_q if box_q.size else np.empty((0, 0)), constraint_violation=violation)

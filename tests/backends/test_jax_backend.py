@@ -179,7 +179,7 @@ def test_the_smooth_gcis_gradient_is_its_central_difference(jax_model, loaded):
     surrogate in numpy (conditioning's 1/kappa_F and |det J| of the numpy backend's J) and its central differences in
     l1 and l2: h = EPS^(1/3) max(1, |p|), truncation and rounding ~EPS^(2/3) of the scale; 1e-8 leaves a wide margin.
     The points keep q2 off the folded and stretched arm (J^T J regular)."""
-    from symkin.analysis.device_integrand import _compiled_gradient, smooth_gci_gradient
+    from symkin.analysis.device_integrand import compiled_surrogate_gradient, smooth_gci_gradient
     from symkin.numerics import conditioning
     from tolerances import EPS
 
@@ -207,5 +207,55 @@ def test_the_smooth_gcis_gradient_is_its_central_difference(jax_model, loaded):
     # for 2 x 2): least at rho = 1/sqrt(2) in every configuration, so there the gradient vanishes to rounding
     optimal = smooth_gci_gradient(arm.bind(l1=0.3, l2=0.3 / np.sqrt(2)), points)[1]
     assert max(abs(v) for v in optimal.values()) <= 64 * EPS * max(abs(v) for v in gradient.values())
-    compiled = _compiled_gradient(arm.unbound("jacobian")[0], "cartesian")
+    compiled = compiled_surrogate_gradient(arm.unbound("jacobian")[0], "cartesian")
     assert compiled._cache_size() == 1        # three designs, one compiled program
+
+
+@pytest.mark.parametrize("name, free, options", [
+    ("planar_2r", ["l1"], {}),
+    ("ur10e", ["a2", "a3"], {"length": 0.3}),
+])
+def test_jax_gradients_optimize_the_casadi_programs_surrogate(name, free, options, jax_model, loaded):
+    """symkin.design.gradient_solving: L-BFGS-B on jax.grad of the surrogate optimizes the function the CasADi program
+    does (the same nodes, the same smoothed |det J|): equal surrogates at the start (two formulas of 1/kappa_F, both
+    rounding to ~1e-15), the same optimum as IPOPT's (both stop on a scaled gradient of ~1e-10; the 2R's is the closed
+    form l1 = sqrt(2) l2 of the Frobenius condition number, tests/numerics/test_conditioning.py), and the
+    workspace objective too (maximal at the upper bound of l1)."""
+    from symkin import design
+    from symkin.design.gradient_solving import solve_with_jax
+    from tolerances import EPS
+
+    numpy_model = loaded(name, "numpy")
+    problem = design.design_problem(numpy_model, "gci", free, **options)
+    ipopt = design.solve(problem, design.formulate(problem, loaded(name, "casadi"), numpy_model, nodes=6))
+    solution, description = solve_with_jax(problem, jax_model(name), numpy_model, nodes=6)
+    assert solution.success
+    assert solution.solver == "L-BFGS-B"
+    assert "64 fixed Sobol nodes" in description
+    assert solution.surrogate_start == pytest.approx(ipopt.surrogate_start, rel=1e-12)
+    assert solution.history[0] == solution.surrogate_start
+    assert solution.history[-1] == solution.surrogate_optimum
+    assert solution.surrogate_optimum >= ipopt.surrogate_optimum * (1 - 1e-12)
+    for parameter in free:
+        assert solution.optimum[parameter] == pytest.approx(ipopt.optimum[parameter], rel=1e-7)
+    if name != "planar_2r":
+        return
+    assert solution.optimum["l1"] == pytest.approx(np.sqrt(2) * numpy_model.parameters["l2"], rel=1e-9)
+    workspace = design.design_problem(numpy_model, "workspace", free)
+    largest, _ = solve_with_jax(workspace, jax_model(name), numpy_model, nodes=6)
+    reference = design.formulate(workspace, loaded(name, "casadi"), numpy_model, nodes=6)
+    assert largest.surrogate_start == pytest.approx(reference.surrogate(reference.x0), rel=1e-12)
+    assert largest.optimum["l1"] == pytest.approx(workspace.free[0].upper, rel=4 * EPS)  # the scaled bound's rounding
+
+
+def test_jax_gradients_refuse_what_they_do_not_solve(jax_model, loaded):
+    """A required box (constraints) or the force objective: a ValueError naming the CasADi path."""
+    from symkin import design
+    from symkin.design.gradient_solving import solve_with_jax
+
+    arm = loaded("planar_2r", "numpy")
+    for problem in (design.design_problem(arm, "gci", ["l1"], box={"x": (0.11, 0.14), "y": (0.11, 0.14)}),
+                    design.design_problem(arm, "force", ["l1"], box={"x": (0.11, 0.14), "y": (0.11, 0.14)},
+                                          effort_limits=np.ones(2))):
+        with pytest.raises(ValueError, match="--gradients casadi"):
+            solve_with_jax(problem, jax_model("planar_2r"), arm)

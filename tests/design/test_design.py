@@ -467,7 +467,8 @@ def test_cli_on_a_model_file_writes_figures_and_result(tmp_path, capsys):
         assert (out / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     result = json.loads((out / "result.json").read_text())
     assert result["evaluation"]["optimum"]["gci"] > result["evaluation"]["start"]["gci"]
-    assert result["ipopt"]["history"][-1] == pytest.approx(result["surrogate_value"]["optimum"])
+    assert result["solver"]["name"] == "IPOPT"
+    assert result["solver"]["history"][-1] == pytest.approx(result["surrogate_value"]["optimum"])
 
 
 def test_cli_dimensions_a_parallel_model_file(tmp_path, capsys):

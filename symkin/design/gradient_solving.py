@@ -1,0 +1,134 @@
+"""Dimensioning with JAX gradients: L-BFGS-B on the smooth surrogate, its gradient by jax.value_and_grad through the
+generated JAX code (issue 66, "gradients for design"; ``symkin optimize --gradients jax``).
+
+The alternative to the CasADi program (:mod:`symkin.design.formulation`, IPOPT with exact Hessians) for the problems
+that have bounds only: a serial model's GCI or workspace over its joint box, no required box.  It optimizes the
+same function - the same fixed Sobol nodes (:func:`symkin.design.formulation.joint_nodes`), the same Frobenius
+surrogate with the same smoothed |det J| in the denominator:
+
+    v_F(p) = sum_j |det J_j| / kappa_F(J_h,j)  /  sum_j sqrt(det_j^2 + eps^2),   eps^2 = 1e-6 mean_j det_j^2
+
+(1/kappa_F = n / (||J_h||_F ||J_h^-1||_F), J_h the homogenized Jacobian), or the workspace estimate
+sum_j sqrt(det_j^2 + eps^2) vol / N - on the free parameters scaled to order one (value / start), with the value
+and its gradient from one compiled XLA program per generated Jacobian
+(:func:`symkin.analysis.device_integrand.compiled_surrogate_gradient`: the nodes and the parameters are its
+arguments).  scipy's L-BFGS-B (Byrd, Lu, Nocedal and Zhu 1995) keeps the parameters within their bounds.  A node
+where J^T J is exactly singular makes the value NaN (1/kappa_F is written with ||J^-1||_F): the solve refuses it
+and names the CasADi path, whose surrogate is written with adj J.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+import numpy as np
+
+from symkin import reporting
+from symkin.analysis import device_integrand
+from symkin.design.formulation import DETERMINANT_SMOOTHING, joint_nodes
+from symkin.design.problem import DesignProblem
+from symkin.design.solving import Solution
+from symkin.mechanism import Sampling
+from symkin.runtime.info import GeneratedModel
+
+#: The objectives the JAX path optimizes (those of a serial model's joint box without a required box).
+OBJECTIVES = ("gci", "workspace")
+#: L-BFGS-B's options: the problems are small and smooth; stop on a relative objective change below ~eps or a
+#: projected gradient below 1e-10 of the (order one) scaled objective.
+LBFGSB_OPTIONS: dict[str, Any] = {"maxiter": 300, "ftol": 1e-15, "gtol": 1e-10}
+
+
+def refusal(problem: DesignProblem, jax_model: GeneratedModel) -> str | None:
+    """Why the JAX path cannot solve the problem (and what to use instead), or None when it can."""
+    fix = "; use the CasADi program (--gradients casadi, the default)"
+    if problem.sampling != Sampling.JOINTS or problem.objective not in OBJECTIVES:
+        return (f"JAX gradients optimize a serial model's {' or '.join(OBJECTIVES)} over its joint limits, not the "
+                f"{problem.objective} of this model{fix}")
+    if problem.box is not None:
+        return f"JAX gradients optimize within the parameters' bounds only, not with a required workspace box{fix}"
+    if not device_integrand.on_device(jax_model):
+        return (f"{jax_model.name}: JAX gradients need the model's JAX code (derive it with --backend numpy,jax, or "
+                "load it with backend='jax')")
+    return None
+
+
+def solve_with_jax(problem: DesignProblem, jax_model: GeneratedModel, numpy_model: GeneratedModel, *,
+                   nodes: int | None = None, seed: int = 0, options: dict[str, Any] | None = None) -> tuple[Solution, str]:
+    """Maximize the problem's surrogate with L-BFGS-B and JAX gradients (see the module docstring).
+
+    Args:
+        problem: from :func:`symkin.design.problem.design_problem` (a serial model's gci or workspace, no box).
+        jax_model: the model loaded with ``backend="jax"``; numpy_model: the same with numpy (its joint stops).
+        nodes: log2 of the Sobol node count (default :data:`symkin.design.formulation.JOINT_NODES_LOG2`).
+        seed: seed of the nodes (the CasADi program's with the same seed are the same).
+        options: overrides of :data:`LBFGSB_OPTIONS`.
+
+    Returns:
+        (the solution, the surrogate and its domain in words).
+
+    Raises:
+        ValueError: a problem the JAX path does not solve (:func:`refusal`), or a surrogate that is not finite and
+            positive at the start.
+    """
+    import jax.numpy as jnp
+    from scipy import optimize
+
+    why = refusal(problem, jax_model)
+    if why is not None:
+        raise ValueError(why)
+    started = time.perf_counter()
+    sampled = joint_nodes(problem, numpy_model, nodes, seed)
+    jacobian, parameters = jax_model.unbound("jacobian")
+    parameters = {**parameters, **{k: float(v) for k, v in problem.values.items() if k in parameters}}
+    missing = [p.name for p in problem.free if p.name not in parameters]
+    if missing:
+        raise ValueError(f"{jax_model.name}: the Jacobian does not depend on {', '.join(missing)}: free only "
+                         f"parameters of the generated jacobian ({', '.join(sorted(parameters))})")
+    scale = jnp.asarray(device_integrand.row_scale(jax_model, problem.joint_limits, problem.length))
+    points = jnp.asarray(sampled.points, dtype=jnp.float64)
+    program = device_integrand.compiled_surrogate_gradient(jacobian, "cartesian", problem.objective,
+                                                           DETERMINANT_SMOOTHING)
+    factor = 1.0 if problem.objective == "gci" else sampled.volume_per_node
+    scales = np.array([p.scale for p in problem.free])
+
+    def surrogate(z: np.ndarray) -> tuple[float, np.ndarray]:
+        values = {**parameters, **{p.name: float(v) for p, v in zip(problem.free, z * scales)}}
+        value, gradient = program(points, scale, values)
+        return factor * float(value), factor * np.array([float(gradient[p.name]) for p in problem.free]) * scales
+
+    z0 = np.array([p.start for p in problem.free]) / scales
+    reference, _ = surrogate(z0)
+    if not (np.isfinite(reference) and reference > 0):
+        raise ValueError(f"the {problem.objective} surrogate is {reference} at the start design {problem.start}: start "
+                         "from a design with a nonsingular workspace, or use the CasADi program (--gradients casadi), "
+                         "whose surrogate stays finite at singular nodes")
+    history = [reference]
+    limit = int({**LBFGSB_OPTIONS, **(options or {})}["maxiter"])
+
+    def objective(z: np.ndarray) -> tuple[float, np.ndarray]:
+        value, gradient = surrogate(z)
+        if not np.isfinite(value):
+            raise ValueError(f"the {problem.objective} surrogate is not finite at {problem.design(list(z * scales))}: a "
+                             "node's J^T J is singular there; use the CasADi program (--gradients casadi)")
+        return -value / reference, -gradient / reference
+
+    def iterate(intermediate_result: optimize.OptimizeResult) -> None:
+        history.append(-float(intermediate_result.fun) * reference)
+        reporting.report_progress("optimizing the design (L-BFGS-B iterations)", done=len(history) - 1, total=limit)
+
+    build_seconds = time.perf_counter() - started
+    started = time.perf_counter()
+    result = optimize.minimize(objective, z0, jac=True, method="L-BFGS-B", callback=iterate,
+                               bounds=[(p.lower / s, p.upper / s) for p, s in zip(problem.free, scales)],
+                               options={**LBFGSB_OPTIONS, **(options or {})})
+    solve_seconds = time.perf_counter() - started
+    # the bounds in the parameters' units (x * scale may round past one)
+    lower, upper = np.array([p.lower for p in problem.free]), np.array([p.upper for p in problem.free])
+    solution = Solution(
+        start=problem.start, optimum=problem.design(list(np.clip(result.x * scales, lower, upper))),
+        surrogate_start=reference,
+        surrogate_optimum=-float(result.fun) * reference, history=np.asarray(history),
+        infeasibility=np.zeros(len(history)), status=str(result.message), success=bool(result.success),
+        iterations=int(result.nit), solve_seconds=solve_seconds, build_seconds=build_seconds, solver="L-BFGS-B")
+    return solution, f"{sampled.description}; L-BFGS-B on JAX gradients"
