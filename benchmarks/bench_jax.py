@@ -17,7 +17,10 @@ calls, after one that compiles):
   (``Integrand.mean_and_covariance``): the host integrand (:func:`symkin.analysis.global_indices.joint_space_integrand`:
   the C backend's J, numpy's batched SVD and covariance) against the device integrand
   (:func:`symkin.analysis.device_integrand.device_joint_space_integrand`: one jitted function, the points sent
-  from the host, only the moments back).
+  from the host, only the moments back);
+* ``DELTA GCI integrand``: the same for models/delta.yaml (folded), a parallel mechanism with closed forms, with
+  the Cartesian measure |det J| dq: the host decides its working mode by the C backend's fk and ik (ik(fk(q)) = q),
+  the device in the same jitted function as J and its moments.
 
 With ``--compile``, also the seconds of the first call of every function of the UR10e's scene with the JAX backend
 (XLA's compile, at one configuration): what keeps the JAX backend out of the example scenes so far.
@@ -84,6 +87,13 @@ def main(argv: list[str] | None = None) -> int:
         host = joint_space_integrand(symkin.load(gci_directory, "c"), measure="joint", length=1.0)
         device = device_joint_space_integrand(symkin.load(gci_directory, "jax"), measure="joint", length=1.0)
         device.mean_and_covariance(q)                   # compiles
+        # a parallel mechanism with closed forms: its working mode (fk assembles, ik(fk(q)) = q) decided per point too
+        delta_directory = symkin.derive(ROOT / "models" / "delta.yaml", Path(tmp) / "delta",
+                                        outputs=["fk", "ik", "jacobian"], backends=["c", "jax"], fixed=["all"])
+        delta_host = joint_space_integrand(symkin.load(delta_directory, "c"))
+        delta_device = device_joint_space_integrand(symkin.load(delta_directory, "jax"))
+        q_delta = rng.uniform(delta_host.lower, delta_host.upper, (args.batch, 3))
+        delta_device.mean_and_covariance(q_delta)       # compiles
 
         cases = [
             ("fk + J + M + V + G", "numpy", lambda: numpy_model.combined(q, qd)),
@@ -96,10 +106,14 @@ def main(argv: list[str] | None = None) -> int:
              lambda: host.mean_and_covariance(q)),
             ("GCI integrand (1/kappa of J and its moments)", "JAX, reduced on the device",
              lambda: device.mean_and_covariance(q)),
+            ("DELTA GCI integrand (working mode, |det J|, 1/kappa)", "C fk, ik, J + numpy, on the host",
+             lambda: delta_host.mean_and_covariance(q_delta)),
+            ("DELTA GCI integrand (working mode, |det J|, 1/kappa)", "JAX, reduced on the device",
+             lambda: delta_device.mean_and_covariance(q_delta)),
         ]
         rows = [[case, backend, f"{1e9 * best_seconds(call, args.repeat) / args.batch:.2f}"]
                 for case, backend, call in cases]
-        sweep = float(rows[-1][2]) * 1e-9 * 1e10
+        sweep = float(rows[5][2]) * 1e-9 * 1e10   # the UR10e's GCI integrand on the device
     print(f"JAX {jax.__version__} on {jax.devices()[0].device_kind} ({jax.default_backend()}), "
           f"batch {args.batch}, best of {args.repeat}")
     print(format_table(["case", "backend", "ns per configuration"], rows))

@@ -12,22 +12,27 @@ generated Jacobian: the model's parameters are its arguments (traced), so every 
 :mod:`symkin.numerics.conditioning`'s: singular values at most max(m, n) eps sigma_max count as 0, a Jacobian
 with a non-finite entry has 1/kappa = 0.
 
-Serial mechanisms and the default index only: a parallel mechanism's working mode is decided on the host
-(:func:`symkin.mechanism.working_mode.jacobian_in_working_mode`), and another index is a numpy function; those
-take the host integrand.
+The configurations that count are the host's (:func:`symkin.mechanism.working_mode.jacobian_in_working_mode`),
+decided on the device too: those within the model's joint stops (:mod:`symkin.mechanism.stops`, their rows passed
+as arguments) and, for a parallel mechanism with closed forms, those in its working mode - fk(q) assembles and
+ik(fk(q)) = q to :data:`~symkin.mechanism.working_mode.JOINT_ROUND_TRIP_TOLERANCE` (the same leg branches), the
+Jacobian J(q, fk(q)).  A parallel mechanism with declared passive-joint limits (checked on the closure, on the
+host), legs without closed forms, and an index other than 1/kappa take the host integrand.
 """
 
 from __future__ import annotations
 
 import functools
 from collections.abc import Callable
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
 from symkin import mechanism
 from symkin.integration.integrand import Integrand
-from symkin.mechanism import Limits, reach
+from symkin.mechanism import Limits, reach, stops, working_mode
+from symkin.mechanism.limits import LIMIT_TOLERANCE
+from symkin.mechanism.working_mode import JOINT_ROUND_TRIP_TOLERANCE
 from symkin.numerics import conditioning
 from symkin.runtime.info import GeneratedModel
 
@@ -35,8 +40,17 @@ _EPS = float(np.finfo(np.float64).eps)
 
 
 def on_device(model: GeneratedModel) -> bool:
-    """Whether the model's integrand can run fused on JAX's device: a serial model loaded with the JAX backend."""
-    return getattr(model, "backend", None) == "jax" and model.info.mechanism == "serial" and hasattr(model, "unbound")
+    """Whether the model's joint-space integrand can run fused on JAX's device: a model loaded with the JAX backend
+    whose working mode its generated functions decide (:func:`symkin.mechanism.working_mode.assembly_functions`:
+    an open chain, or loops closed through closed-form fk and ik without passive-joint limits)."""
+    return (getattr(model, "backend", None) == "jax" and hasattr(model, "unbound")
+            and working_mode.assembly_functions(model) is not None)
+
+
+def jacobian_of_joints_on_device(model: GeneratedModel) -> bool:
+    """Whether the model is loaded with JAX and its task Jacobian is J(q) at every configuration (an open chain: the
+    smooth surrogate's gradient and the design optimizer's JAX path take it)."""
+    return on_device(model) and working_mode.assembly_functions(model) == ()
 
 
 def row_scale(model: GeneratedModel, box: np.ndarray, length: float | str | None) -> np.ndarray:
@@ -47,42 +61,85 @@ def row_scale(model: GeneratedModel, box: np.ndarray, length: float | str | None
     return np.ones(rows) if L is None else conditioning.homogenizing_scale(rows, L, mechanism.position_rows(model))
 
 
+class _Functions(NamedTuple):
+    """The generated functions the device program calls (hashable: the compile cache's key): the Jacobian, and for a
+    mechanism that closes loops its closed-form fk and ik (None for an open chain)."""
+
+    jacobian: Callable[..., Any]
+    fk: Callable[..., Any] | None = None
+    ik: Callable[..., Any] | None = None
+
+
+def _inside_stops(q: Any, stops: tuple[Any, Any, Any, Any]) -> Any:
+    """Whether each configuration lies within the joint stops (rows, offsets, lower, upper) to the tolerance of
+    :meth:`symkin.mechanism.stops.StopInequalities.respected` (True for k = 0 stops)."""
+    import jax.numpy as jnp
+
+    rows, offsets, lower, upper = stops
+    values = q @ rows.T + offsets
+    return jnp.all((values >= lower - LIMIT_TOLERANCE) & (values <= upper + LIMIT_TOLERANCE), axis=-1)
+
+
+def _wrap_angle(angle: Any) -> Any:
+    """:func:`symkin.mechanism.limits.wrap_angle` in jax.numpy: angles mapped to (-pi, pi]."""
+    import jax.numpy as jnp
+
+    wrapped = jnp.remainder(angle + jnp.pi, 2.0 * jnp.pi) - jnp.pi
+    return jnp.where(wrapped == -jnp.pi, jnp.pi, wrapped)
+
+
 @functools.lru_cache(maxsize=32)
-def _compiled(jacobian: Callable[..., Any], measure: str, with_index: bool, threshold: float) -> tuple[Any, Any]:
-    """(values, reduce) jitted once per generated Jacobian function and options: the parameters (and the rows'
-    scale) are arguments, traced, so that every design of a sweep runs the same compiled program.  reduce gives
-    (mean, scatter, lowest, highest): the moments of the values and the extremes of 1/kappa where w > 0."""
+def _compiled(functions: _Functions, measure: str, with_index: bool, threshold: float) -> tuple[Any, Any]:
+    """(values, reduce) jitted once per generated function set and options: the parameters, the rows' scale, the
+    joint stops and the revolute mask are arguments, traced, so that every design of a sweep runs the same compiled
+    program.  reduce gives (mean, scatter, lowest, highest): the moments of the values and the extremes of 1/kappa
+    where w > 0."""
     import jax
     import jax.numpy as jnp
 
-    def values(q: Any, scale: Any, parameters: dict[str, Any]) -> tuple[Any, Any]:
-        J = jacobian(q, **parameters)
+    def jacobian_and_inside(q: Any, stops: Any, revolute: Any, parameters: dict[str, Any]) -> tuple[Any, Any]:
+        inside = _inside_stops(q, stops)
+        if functions.fk is None or functions.ik is None:
+            return functions.jacobian(q, **parameters["jacobian"]), inside
+        # the working mode (symkin.mechanism.working_mode): fk assembles and ik(fk(q)) = q
+        p = functions.fk(q, **parameters["fk"]).position
+        assembled = jnp.all(jnp.isfinite(p), axis=-1)
+        p = jnp.where(assembled[:, None], p, 0.0)
+        back = functions.ik(p, **parameters["ik"]).joints
+        error = jnp.abs(jnp.where(revolute, _wrap_angle(back - q), back - q))
+        same_branch = jnp.all(error <= JOINT_ROUND_TRIP_TOLERANCE, axis=-1)  # NaN compares False: not assembled
+        return functions.jacobian(q, p, **parameters["jacobian"]), inside & assembled & same_branch
+
+    def values(q: Any, scale: Any, stops: Any, revolute: Any, parameters: dict[str, Any]) -> tuple[Any, Any]:
+        J, inside = jacobian_and_inside(q, stops, revolute, parameters)
+        finite = jnp.all(jnp.isfinite(J), axis=(-2, -1))
+        J = jnp.where(finite[:, None, None], J, 0.0)
         weight = jnp.abs(jnp.linalg.det(J)) if measure == "cartesian" else jnp.ones(q.shape[0])
+        weight = jnp.where(inside, weight, 0.0)
         if not with_index:
             return weight[:, None], weight
-        finite = jnp.all(jnp.isfinite(J), axis=(-2, -1))
-        s = jnp.linalg.svd(jnp.where(finite[:, None, None], J * scale[:, None], 0.0), compute_uv=False)
+        s = jnp.linalg.svd(J * scale[:, None], compute_uv=False)
         largest, smallest = s[:, 0], jnp.where(s[:, -1] <= threshold * s[:, 0], 0.0, s[:, -1])
         index = jnp.where(finite & (largest > 0), smallest / jnp.where(largest > 0, largest, 1.0), 0.0)
         return jnp.stack([weight * index, weight], axis=-1), index
 
-    def reduce(q: Any, scale: Any, parameters: dict[str, Any]) -> tuple[Any, Any, Any, Any]:
-        f, index = values(q, scale, parameters)
+    def reduce(q: Any, scale: Any, stops: Any, revolute: Any, parameters: dict[str, Any]) -> tuple[Any, Any, Any, Any]:
+        f, index = values(q, scale, stops, revolute, parameters)
         mean = f.mean(axis=0)
         centered = f - mean
         inside = f[:, -1] > 0
         return (mean, centered.T @ centered, jnp.min(jnp.where(inside, index, jnp.inf)),
                 jnp.max(jnp.where(inside, index, -jnp.inf)))
 
-    return jax.jit(lambda q, scale, parameters: values(q, scale, parameters)[0]), jax.jit(reduce)
+    return jax.jit(lambda *arguments: values(*arguments)[0]), jax.jit(reduce)
 
 
 def device_joint_space_integrand(model: GeneratedModel, *, with_index: bool = True, measure: str = "cartesian",
                                  limits: Limits | None = None, length: float | str | None = None,
                                  extremes: Callable[[float, float], None] | None = None) -> Integrand:
-    """The joint-space integrand [w 1/kappa, w] (``with_index``) or [w] of a serial model loaded with the JAX
-    backend, its batches reduced on the device (see the module docstring).  ``extremes``: called with the smallest
-    and largest 1/kappa of each batch's points inside the workspace (w > 0; inf and -inf where none is)."""
+    """The joint-space integrand [w 1/kappa, w] (``with_index``) or [w] of a model loaded with the JAX backend
+    (:func:`on_device`), its batches reduced on the device (see the module docstring).  ``extremes``: called with the
+    smallest and largest 1/kappa of each batch's points inside the workspace (w > 0; inf and -inf where none is)."""
     import jax.numpy as jnp
 
     box = mechanism.joint_limits(model, limits)
@@ -91,17 +148,26 @@ def device_joint_space_integrand(model: GeneratedModel, *, with_index: bool = Tr
         raise ValueError(f"{model.name}: the Cartesian measure |det J| dq needs a square task Jacobian, "
                          f"this one is {m} x {n}; use measure='joint' or the Cartesian domain")
     scale = jnp.asarray(row_scale(model, box, length) if with_index else np.ones(m))
-    jacobian, parameters = model.unbound("jacobian")
-    evaluate, reduce = _compiled(jacobian, measure, with_index, max(m, n) * _EPS)
+    joint_stops = stops.StopInequalities.of_model(model)
+    stop_arrays = tuple(jnp.asarray(a, dtype=jnp.float64) for a in (joint_stops.rows.reshape(-1, n),
+                                                                      joint_stops.offsets, joint_stops.lower,
+                                                                      joint_stops.upper))
+    revolute = jnp.asarray(mechanism.revolute_mask(model))
+    names = ("jacobian", *(working_mode.assembly_functions(model) or ()))
+    unbound = {name: model.unbound(name) for name in names}
+    functions = _Functions(*(function for function, _ in unbound.values()))
+    parameters = {name: values for name, (_, values) in unbound.items()}
+    evaluate, reduce = _compiled(functions, measure, with_index, max(m, n) * _EPS)
+    arguments = (scale, stop_arrays, revolute, parameters)
 
     def moments(q: np.ndarray) -> tuple[Any, Any]:
-        mean, scatter, lowest, highest = reduce(jnp.asarray(q), scale, parameters)
+        mean, scatter, lowest, highest = reduce(jnp.asarray(q), *arguments)
         if extremes is not None:
             extremes(float(lowest), float(highest))
         return mean, scatter
 
     components = ("index dW", "dW") if with_index else ("dW",)
-    return Integrand(box[:, 0], box[:, 1], lambda q: np.asarray(evaluate(jnp.asarray(q), scale, parameters)),
+    return Integrand(box[:, 0], box[:, 1], lambda q: np.asarray(evaluate(jnp.asarray(q), *arguments)),
                      components, mechanism.coordinate_names(model), moments=moments)
 
 
@@ -126,7 +192,7 @@ def smooth_gci_gradient(model: GeneratedModel, points: np.ndarray, *, measure: s
     """
     import jax.numpy as jnp
 
-    if not on_device(model):
+    if not jacobian_of_joints_on_device(model):
         raise ValueError(f"{model.name}: the smooth GCI's gradient needs a serial model loaded with the JAX backend "
                          "(symkin.load(directory, backend='jax'))")
     m = len(mechanism.task_space(model))

@@ -47,7 +47,7 @@ def refusal(problem: DesignProblem, jax_model: GeneratedModel) -> str | None:
                 f"{problem.objective} of this model{fix}")
     if problem.box is not None:
         return f"JAX gradients optimize within the parameters' bounds only, not with a required workspace box{fix}"
-    if not device_integrand.on_device(jax_model):
+    if not device_integrand.jacobian_of_joints_on_device(jax_model):
         return (f"{jax_model.name}: JAX gradients need the model's JAX code (derive it with --backend numpy,jax, or "
                 "load it with backend='jax')")
     return None

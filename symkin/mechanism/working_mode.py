@@ -50,6 +50,21 @@ def working_mode(model: GeneratedModel, q: np.ndarray) -> tuple[np.ndarray, np.n
     return p, inside
 
 
+def assembly_functions(model: GeneratedModel) -> tuple[str, ...] | None:
+    """The generated functions that decide, wherever they run (a JAX device too), which configurations of ``model``
+    assemble in its working mode: () where every configuration does (an open chain; its joint stops aside),
+    ("fk", "ik") for a mechanism that closes loops through closed forms (fk(q) assembles and ik(fk(q)) = q, as
+    :func:`working_mode` decides), None where the question needs this module's host code: declared passive-joint
+    limits (evaluated on the closure, :mod:`symkin.mechanism.passive`), legs without closed forms (continued),
+    a device carrying a wrist."""
+    if model.info.mechanism == "serial":
+        return ()
+    if (mechanism.is_parallel(model) and {"fk", "ik", "jacobian"} <= set(model.functions)
+            and not any(model.info.passive_limits)):
+        return ("fk", "ik")
+    return None
+
+
 def assemble(model: GeneratedModel, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The assembly question of every analysis: the handle's positions (..., d) at configurations q (..., n) and
     whether each configuration belongs to the workspace (...).  A mechanism that closes loops: fk(q) in the

@@ -33,16 +33,25 @@ def _strict_flags(source):
         "-O1" if flag == "-O3" else flag for flag in STRICT_FLAGS]
 
 
+#: The models whose C is compiled to objects (the optimizers' warnings too) and linked into tests/c/check_generated.c;
+#: the others' sources are checked by the compiler's front end (-fsyntax-only: C99, -pedantic, the conversion,
+#: shadowing and prototype warnings), which is what their generated text could get wrong that these two do not
+#: show - the same templates print every model, and a full optimizing compile of the other seven took 25 s of the
+#: suite.
+LINKED_MODELS = ("planar_2r", "ur10e", "ur10e_classic")
+
+
 def test_generated_c_is_strict_c99_and_a_c_program_uses_it_without_python(generated_dir, tmp_path):
-    """Every model's C compiles warning-free with the strict flags; tests/c/check_generated.c,
-    linked with those objects, runs its checks (one test: each source is compiled once)."""
+    """Every model's C compiles warning-free with the strict flags (the linked models' to objects, the others' by
+    the front end); tests/c/check_generated.c, linked with those objects, runs its checks (one test: each source is
+    compiled once)."""
     objects = {}
-    assert any(_strict_flags(generated_dir / n / f"{n}.c") == STRICT_FLAGS for n in EXAMPLE_MODELS)
+    assert any(_strict_flags(generated_dir / n / f"{n}.c") == STRICT_FLAGS for n in LINKED_MODELS)
     for name in EXAMPLE_MODELS:
         objects[name] = tmp_path / f"{name}.o"
         source = generated_dir / name / f"{name}.c"
-        result = subprocess.run([CC, *_strict_flags(source), "-c", str(source),
-                                 "-o", str(objects[name])], capture_output=True, text=True)
+        output = ["-c", "-o", str(objects[name])] if name in LINKED_MODELS else ["-fsyntax-only"]
+        result = subprocess.run([CC, *_strict_flags(source), *output, str(source)], capture_output=True, text=True)
         assert result.returncode == 0, (name, result.stderr)
         assert not result.stderr, (name, result.stderr)
         # The header alone is valid C: it compiles as a translation unit on its own.

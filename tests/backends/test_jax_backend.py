@@ -21,7 +21,7 @@ import pyarrow.parquet as pq
 import pytest
 
 from checks import agreement_bound
-from conftest import function_spec, random_inputs, relative_errors, worst_state
+from conftest import MODELS_DIR, function_spec, random_inputs, relative_errors, worst_state
 from symkin import load, pipeline
 from symkin.cli import main
 from tolerances import DYNAMICS, KINEMATICS
@@ -124,25 +124,57 @@ def test_the_analyses_take_the_jax_backend(jax_directory, generated_dir, capsys)
         assert printed["jax"] == printed["numpy"]
 
 
-@pytest.mark.parametrize("name, options", [("planar_2r", {}), ("ur10e", {"measure": "joint", "length": 0.5})])
-def test_the_global_index_is_reduced_on_the_device(name, options, jax_model, loaded, monkeypatch):
-    """gci of a serial model loaded with JAX takes the device's reductions (the integrand's values never come back:
-    calling them fails here) and gives numpy's figures: the same points, the same arithmetic up to rounding (the
-    SVD and the order of the sums): 1e-12 of the index, the error estimates to 1e-6."""
+def _values_on_the_host(self, points):
+    raise AssertionError("the device integrand's values came back to the host")
+
+
+@pytest.mark.parametrize("name, options, methods", [
+    ("planar_2r", {}, ("qmc", "mc", "grid")),
+    ("ur10e", {"measure": "joint", "length": 0.5}, ("qmc", "mc", "grid")),
+    ("delta", {}, ("qmc",)),
+])
+def test_the_global_index_is_reduced_on_the_device(name, options, methods, jax_model, loaded, monkeypatch):
+    """gci of a model loaded with JAX takes the device's reductions (the integrand's values never come back: calling
+    them fails here) and gives numpy's figures: the same points, the same arithmetic up to rounding (the SVD and the
+    order of the sums): 1e-12 of the index, the error estimates to 1e-6.  The DELTA's working mode (fk assembles,
+    ik(fk(q)) = q) is decided on the device: a third of its joint box lies outside it."""
     from symkin import analysis
+    from symkin.analysis import device_integrand
     from symkin.integration.integrand import Integrand
 
-    def values_on_the_host(self, points):
-        raise AssertionError("the device integrand's values came back to the host")
-
-    for method in ("qmc", "mc", "grid"):
+    assert device_integrand.on_device(jax_model(name))
+    for method in methods:
         want = analysis.gci(loaded(name, "numpy"), method=method, samples=2**10, seed=5, **options)
         with monkeypatch.context() as patch:
-            patch.setattr(Integrand, "__call__", values_on_the_host)
+            patch.setattr(Integrand, "__call__", _values_on_the_host)
             got = analysis.gci(jax_model(name), method=method, samples=2**10, seed=5, **options)
         assert got.value.value == pytest.approx(want.value.value, rel=1e-12)
         assert got.value.error == pytest.approx(want.value.error, rel=1e-6)
         assert got.measure.value == pytest.approx(want.measure.value, rel=1e-12)
+
+
+def test_the_device_counts_only_the_configurations_within_the_joint_stops(models, tmp_path, monkeypatch):
+    """The planar 2R with the coupled stop 0 <= theta1 + theta2 <= 90 deg (tests/design/test_design.py's arm): the
+    device integrand drops the configurations outside it as the host does - the same GCI and workspace measure
+    (1e-12) - where the stop's rows were once left out (a measure of the whole box, 2.8 times too large)."""
+    from symkin import analysis
+    from symkin.integration.integrand import Integrand
+    from symkin.model import load_model
+
+    path = tmp_path / "planar_2r.yaml"
+    path.write_text((MODELS_DIR / "planar_2r.yaml").read_text()
+                    + '\njoint_stops:\n  - {expression: "theta1 + theta2", limits: [0, deg(90)]}\n')
+    model = load_model(path)
+    directory = pipeline.write(pipeline.generate(model, pipeline.resolve_request(model, "fk,jacobian", "numpy,jax")),
+                               tmp_path / "generated")
+    want = analysis.gci(load(directory), samples=2**10, seed=5)
+    with monkeypatch.context() as patch:
+        patch.setattr(Integrand, "__call__", _values_on_the_host)
+        got = analysis.gci(load(directory, backend="jax"), samples=2**10, seed=5)
+    assert got.value.value == pytest.approx(want.value.value, rel=1e-12)
+    assert got.measure.value == pytest.approx(want.measure.value, rel=1e-12)
+    l1, l2 = (load(directory).parameters[name] for name in ("l1", "l2"))
+    assert abs(got.measure.value - l1 * l2 * (np.pi / 2 - 1)) <= 4 * got.measure.error  # the closed form
 
 
 def test_a_sweep_on_the_jax_backend_compiles_once_and_gives_numpys_rows(jax_directory, generated_dir, tmp_path):
@@ -166,7 +198,8 @@ def test_a_sweep_on_the_jax_backend_compiles_once_and_gives_numpys_rows(jax_dire
                         ("gci_error", 1e-6), ("volume_error", 1e-6)):
         assert rows["jax"][column] == pytest.approx(rows["numpy"][column], rel=rel), column
     jacobian, _ = ModelPayload.from_directory(jax_directory("planar_2r"), "jax").load().unbound("jacobian")
-    reduce = device_integrand._compiled(jacobian, "cartesian", True, 2 * np.finfo(float).eps)[1]
+    reduce = device_integrand._compiled(device_integrand._Functions(jacobian), "cartesian", True,
+                                        2 * np.finfo(float).eps)[1]
     assert reduce._cache_size() == 1         # one batch shape (each replicate's 64 points), one compile
     out = tmp_path / "cli.parquet"
     assert main(["sweep", str(jax_directory("planar_2r")), "--backend", "jax", "--vary", "l1=0.1:0.3:2", "--vary",

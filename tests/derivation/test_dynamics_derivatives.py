@@ -2,8 +2,8 @@
 d tau/dqdd = M, derived on the recursive Newton-Euler program; ``forward_dynamics_derivatives`` d qdd/dq, d qdd/dqd
 and d qdd/dtau = M^-1.
 
-References: Pinocchio's analytical RNEA and ABA derivatives (``computeRNEADerivatives``, ``computeABADerivatives``,
-Carpentier and Mansard 2018) on a 6-DoF arm (models/ur10e.urdf), a 7-DoF arm as shipped (example-robot-data's Panda,
+References: Pinocchio's analytical RNEA, ABA and static-torque derivatives (``computeRNEADerivatives``,
+``computeABADerivatives``, ``computeStaticTorqueDerivatives``; Carpentier and Mansard 2018) on a 6-DoF arm (models/ur10e.urdf), a 7-DoF arm as shipped (example-robot-data's Panda,
 its hand locked) and a tree (a torso carrying two arms and a head, through the URDF symkin exports; its drive's
 armature set in Pinocchio, its friction added by hand); central finite differences of the generated tau on the PHANToM Premium (couplings,
 rotor inertia, Coulomb and viscous friction).  Both sides of the Pinocchio comparisons are exact methods, so they
@@ -236,3 +236,37 @@ def test_the_static_torques_derivative_is_their_central_difference_and_gravitys_
         (at_rest,) = derivative(q, np.zeros(6))
         _agree(at_rest, dG(q)[0], q)
         assert np.abs(analytic - at_rest).max() > 1e-3 * scale     # the wrench's stiffness is there
+
+
+def test_the_static_torques_derivative_is_pinocchios_with_the_wrench_held_in_the_base_frame():
+    """computeStaticTorqueDerivatives on models/ur10e.urdf: Pinocchio holds each external force fixed in its joint's
+    frame, symkin's static_torque_derivatives the wrench F = (f, m) at the TCP fixed in the base frame.  Carried by the
+    last link, F turns with it: dF/dq_k = (w_k x f, w_k x m) with w_k the joint's axis (the angular rows of the
+    TCP's geometric Jacobian J), so symkin's derivative is Pinocchio's plus J^T (w_k x f, w_k x m) in column k - an
+    exact identity, rounding apart (DYNAMICS of the scale); the static torques themselves, G - J^T F, are Pinocchio's
+    computeStaticTorque with the wrench moved to the last joint's origin and frame."""
+    path = MODELS_DIR / "ur10e.urdf"
+    model, reference = load_model(path), pin.buildModelFromUrdf(str(path))
+    last = reference.getJointId(model.source_name("joints", model.joints[-1].name))
+    assert [reference.getJointId(model.source_name("joints", j.name)) for j in model.joints] == list(range(1, 7))
+    d = Derivation(model)
+    derivative, jacobian, fk = (reference_function(model, d[name])
+                                for name in ("static_torque_derivatives", "jacobian", "fk"))
+    data = reference.createData()
+    rng = np.random.default_rng(70)
+    for _ in range(3):
+        q, F = random_q(model, rng), np.concatenate([rng.uniform(-50, 50, 3), rng.uniform(-5, 5, 3)])
+        (J,), (tcp,) = jacobian(q), fk(q)
+        pin.forwardKinematics(reference, data, q)
+        R, t = data.oMi[last].rotation, data.oMi[last].translation
+        f, m = F[:3], F[3:]
+        forces = [pin.Force.Zero() for _ in range(reference.njoints)]
+        forces[last] = pin.Force(R.T @ f, R.T @ (m + np.cross(tcp[:3, 3] - t, f)))
+        static = np.asarray(pin.computeStaticTorque(reference, data, q, forces))
+        _agree(static, np.asarray(pin.computeGeneralizedGravity(reference, data, q)) - J.T @ F, q)
+        carried = np.asarray(pin.computeStaticTorqueDerivatives(reference, data, q, forces))
+        turning = np.column_stack([J.T @ np.concatenate([np.cross(J[3:, k], f), np.cross(J[3:, k], m)])
+                                   for k in range(model.dof)])
+        (got,) = derivative(q, F)
+        _agree(got, carried + turning, q)
+        assert np.abs(turning).max() > 1e-2 * np.abs(got).max()  # the frames' difference is not idle
