@@ -18,7 +18,10 @@ the partial derivatives by automatic differentiation of the reduced dynamics' st
 shared with the efforts.  The forward dynamics' derivatives follow by the implicit-function theorem as for serial
 chains (:mod:`symkin.dynamics.derivatives`): d qdd/dq = -M^-1 d tau/dq and d qdd/dqd = -M^-1 d tau/dqd at
 qdd = FD(q, qd, tau), d qdd/dtau = M^-1, by LDL^T solves.  Friction enters through F_f(qd) (a sign(qd) Coulomb term
-with derivative 0 wherever it is defined).  Hybrid devices (a wrist on the platform) are not covered yet.
+with derivative 0 wherever it is defined).  A hybrid device (a wrist on the platform) has the coordinates (q, qw):
+the wrist's joints are coordinates of their own (p does not move with them), so its columns are the partial
+derivatives by qw, qwd (and qwdd: M's), after the legs' - the efforts (tau, tauw) by (q, qw), (qd, qwd), (qdd, qwdd),
+(n + n_w) x (n + n_w) each.
 """
 
 from __future__ import annotations
@@ -28,20 +31,12 @@ import symengine as se
 from symkin.dynamics.derivatives import forward_dynamics_slopes, without_sign_derivatives
 from symkin.dynamics.program import Program
 from symkin.dynamics.quantities import coordinate_symbols, function_spec, require_gravity
-from symkin.errors import DerivationError
 from symkin.ir.quantity import Deriving, quantity
 from symkin.ir.spec import FunctionSpec
 from symkin.parallel.dynamics import ReducedDynamics, actuator_friction, device_inputs
 from symkin.parallel.quantities import PARALLEL
 
 _PAIR = "Evaluate at a consistent pair q, p (p = fk(q) or q = ik(p)); the derivatives by q move p with it (dp = J dq)."
-
-
-def _terms(d: Deriving, name: str, program: Program) -> ReducedDynamics:
-    if d.model.parallel is not None and d.model.parallel.wrist is not None:
-        raise DerivationError(f"{d.model.name}: {name} is not derived for hybrid devices (a wrist on the platform) "
-                              f"yet; remove {name} from the outputs")
-    return ReducedDynamics(d, program)
 
 
 def _total_by_q(terms: ReducedDynamics, outputs: list[se.Basic], extra: list[se.Symbol]) -> list[list[se.Basic]]:
@@ -57,26 +52,38 @@ def _total_by_q(terms: ReducedDynamics, outputs: list[se.Basic], extra: list[se.
     return [by_q, by_extra]
 
 
+def _by_coordinates(terms: ReducedDynamics, outputs: list[se.Basic], rates: list[se.Basic]
+                    ) -> tuple[list[se.Basic], list[se.Basic]]:
+    """(d outputs/d(q, qw), d outputs/d rates) row-major: by the legs' q the total derivative, by a hybrid device's
+    wrist joints qw (none without a wrist) the partial one."""
+    n, w, k = terms.n, len(terms.qw), len(terms.qw) + len(rates)
+    by_q, by_extra = _total_by_q(terms, outputs, terms.qw + rates)
+    by_coordinates = [v for i in range(len(outputs)) for v in by_q[i * n:(i + 1) * n] + by_extra[i * k:i * k + w]]
+    by_rates = [v for i in range(len(outputs)) for v in by_extra[i * k + w:(i + 1) * k]]
+    return by_coordinates, by_rates
+
+
 def _torque_slopes(d: Deriving, terms: ReducedDynamics) -> tuple[list[se.Basic], list[se.Basic]]:
-    """(d tau/dq, d tau/dqd) row-major of tau = M qdd + V + G + F_f at symbolic qdd: the rigid efforts' program
-    differentiated, plus the friction's derivative."""
+    """(d tau/d(q, qw), d tau/d(qd, qwd)) row-major of tau = M qdd + V + G + F_f at symbolic accelerations: the rigid
+    efforts' program differentiated, plus the friction's derivative."""
     qd, qdd = coordinate_symbols(d, "qd"), coordinate_symbols(d, "qdd")
-    rigid = terms.torques(qd, qdd, with_friction=False)
-    dq, dqd = _total_by_q(terms, rigid, qd)
-    friction = actuator_friction(d.model, qd)
+    rigid = terms.torques(qd, qdd, with_friction=False, wrist=(terms.wrist("qd"), terms.wrist("qdd")))
+    rates = qd + terms.wrist("qd")
+    dq, dqd = _by_coordinates(terms, rigid, rates)
+    friction = actuator_friction(d.model, rates)
     if friction is not None:
-        n = terms.n
-        dqd = [dqd[i * n + j] + without_sign_derivatives(se.diff(friction[i], qd[j]))
-               for i in range(n) for j in range(n)]
+        size = len(rates)
+        dqd = [dqd[i * size + j] + without_sign_derivatives(se.diff(friction[i], rates[j]))
+               for i in range(size) for j in range(size)]
     return dq, dqd
 
 
 @quantity("inverse_dynamics_derivatives", "d tau/dq, d tau/dqd, d tau/dqdd = M at the actuators (n x n each)",
           mechanism=PARALLEL, kappa_degree=5)
 def _inverse_dynamics_derivatives(d: Deriving) -> FunctionSpec:
-    n = d.model.dof
     program = Program()
-    terms = _terms(d, "inverse_dynamics_derivatives", program)
+    terms = ReducedDynamics(d, program)
+    n = terms.n + len(terms.qw)
     M = terms.mass_matrix()
     dq, dqd = (program.bind(v) for v in _torque_slopes(d, terms))
     return function_spec(
@@ -94,17 +101,18 @@ def _inverse_dynamics_derivatives(d: Deriving) -> FunctionSpec:
 @quantity("forward_dynamics_derivatives", "d qdd/dq, d qdd/dqd, d qdd/dtau = M^-1 at the actuators (n x n each)",
           solves_with="mass_matrix", mechanism=PARALLEL, kappa_degree=5)
 def _forward_dynamics_derivatives(d: Deriving) -> FunctionSpec:
-    n = d.model.dof
     program = Program()
-    terms = _terms(d, "forward_dynamics_derivatives", program)
+    terms = ReducedDynamics(d, program)
+    n = terms.n + len(terms.qw)
 
     def slope_rows() -> list[list[se.Basic]]:
         dq, dqd = _torque_slopes(d, terms)
         return [dq[i * n:(i + 1) * n] + dqd[i * n:(i + 1) * n] for i in range(n)]
 
+    rest = terms.torques(coordinate_symbols(d, "qd"), None, wrist=(terms.wrist("qd"), None))
     by_q, by_qd, by_tau = forward_dynamics_slopes(
-        program, terms.mass_matrix(), terms.torques(coordinate_symbols(d, "qd"), None), coordinate_symbols(d, "tau"),
-        coordinate_symbols(d, "qdd"), slope_rows)
+        program, terms.mass_matrix(), rest, coordinate_symbols(d, "tau") + terms.wrist("tau"),
+        coordinate_symbols(d, "qdd") + terms.wrist("qdd"), slope_rows)
     return function_spec(
         d, "forward_dynamics_derivatives", "Derivatives of the forward dynamics at the actuators: the linearization "
         "of the device's plant.",
@@ -121,13 +129,13 @@ def _forward_dynamics_derivatives(d: Deriving) -> FunctionSpec:
           mechanism=PARALLEL, kappa_degree=3)
 def _gravity_derivatives(d: Deriving) -> FunctionSpec:
     require_gravity(d, "gravity_derivatives")
-    n = d.model.dof
     program = Program()
-    terms = _terms(d, "gravity_derivatives", program)
+    terms = ReducedDynamics(d, program)
+    n = terms.n + len(terms.qw)
     gravity = terms.gravity_parts
     assert gravity is not None, "require_gravity refuses a model without gravity"
-    G = [a + b for a, b in zip(gravity[0], terms.B_transpose(gravity[1]))]
-    dG = program.bind(_total_by_q(terms, G, [])[0])
+    G = [a + b for a, b in zip(gravity[0] + [se.Integer(0)] * len(terms.qw), terms.B_transpose(gravity[1]))]
+    dG = program.bind(_by_coordinates(terms, G, [])[0])
     return function_spec(
         d, "gravity_derivatives", "Derivative of the gravity compensation efforts: the stiffness gravity adds at "
         "the actuators.",

@@ -1,7 +1,8 @@
 """Derivatives of the reduced dynamics of parallel mechanisms (issue 65: "parallel models where their reduced dynamics
 are generated"): ``inverse_dynamics_derivatives``, ``forward_dynamics_derivatives`` and ``gravity_derivatives`` of
-the DELTA (models/delta.yaml, with viscous and Coulomb friction added at its actuators), the pantograph and the Agile
-Eye, in the actuated coordinates with the platform pose moving along the closure (p = fk(q)).
+the DELTA (models/delta.yaml, with viscous and Coulomb friction added at its actuators), the DELTA carrying a wrist (a
+hybrid device: its wrist's joints are coordinates of their own), the pantograph and the Agile Eye, in the actuated
+coordinates with the platform pose moving along the closure (p = fk(q)).
 
 Reference: central differences of the derived inverse dynamics, forward dynamics and gravity efforts (plain lambdify
 of the un-optimized derivation) along the closure - each side at q +- h e_j with its own pose fk(q +- h e_j), the
@@ -19,7 +20,6 @@ import pytest
 
 from conftest import MODELS_DIR, home_joints, reference_function
 from symkin.derivation import Derivation
-from symkin.errors import DerivationError
 from symkin.model import load_model, model_from_text
 from tolerances import DYNAMICS, EPS
 
@@ -87,10 +87,59 @@ def test_the_derivatives_are_central_differences_along_the_closure(name):
         np.testing.assert_allclose(gravity, _central(G, [q], 0, fk), rtol=0, atol=1e-8 * kappa * gravity_scale)
 
 
-def test_a_hybrid_device_is_refused_with_the_fix():
+def _hybrid_central(f, x: list[np.ndarray], which: int, fk, legs: int) -> np.ndarray:
+    """Columns (f(x + h e_j) - f(x - h e_j)) / 2h of a hybrid device's function f(q, p, qw, ...) in its state's vector
+    ``which`` of (q, qw) stacked (0: the coordinates, the pose p = fk(q) following the legs' q), (qd, qwd), ...: each
+    vector passed to f split into the legs' part and the wrist's."""
+    columns = []
+    for j in range(len(x[which])):
+        h = EPS ** (1 / 3) * max(1.0, abs(x[which][j]))
+        sides = []
+        for sign in (1.0, -1.0):
+            moved = [v.copy() for v in x]
+            moved[which][j] += sign * h
+            q, qw = moved[0][:legs], moved[0][legs:]
+            rest = [part for v in moved[1:] for part in (v[:legs], v[legs:])]
+            sides.append(f(q, fk(q)[0], qw, *rest)[0])
+        columns.append((sides[0] - sides[1]) / (2 * h))
+    return np.column_stack(columns)
+
+
+def test_a_hybrid_devices_derivatives_are_central_differences_along_the_closure():
+    """models/delta_wrist.yaml (a DELTA carrying a 3-joint wrist): the efforts (tau, tauw) by the coordinates (q, qw)
+    - the legs' q moving the platform with them, the wrist's joints their own coordinates - by (qd, qwd) and (qdd, qwdd)
+    = M, and the forward dynamics' and gravity's, (3 + 3) x (3 + 3) each, against central differences of the derived
+    functions (the tolerance as the module docstring's)."""
     model = load_model(MODELS_DIR / "delta_wrist.yaml")
-    with pytest.raises(DerivationError, match="hybrid devices.*remove inverse_dynamics_derivatives"):
-        Derivation(model)["inverse_dynamics_derivatives"]
+    d = Derivation(model)
+    fk, jacobian, tau, forward, G = (reference_function(model, d[k]) for k in (
+        "fk", "jacobian", "inverse_dynamics", "forward_dynamics", "gravity_vector"))
+    inverse_slopes, forward_slopes, gravity_slope = (reference_function(model, d[k]) for k in (
+        "inverse_dynamics_derivatives", "forward_dynamics_derivatives", "gravity_derivatives"))
+    rng = np.random.default_rng(66)
+    legs = model.dof
+    for _ in range(2):
+        q, qw = home_joints(model) + rng.uniform(-0.15, 0.15, legs), rng.uniform(-0.6, 0.6, 3)
+        p = fk(q)[0]
+        kappa = float(np.linalg.cond(jacobian(q, p)[0]))
+        x, xd, xdd = np.concatenate([q, qw]), rng.uniform(-2, 2, 6), rng.uniform(-5, 5, 6)
+        dq, dqd, M = inverse_slopes(q, p, qw, xd[:3], xd[3:], xdd[:3], xdd[3:])
+        effort = tau(q, p, qw, xd[:3], xd[3:], xdd[:3], xdd[3:])[0]
+        scale = max(float(np.abs(v).max()) for v in (effort, dq, dqd))
+        for which, slope in ((0, dq), (1, dqd), (2, M)):
+            np.testing.assert_allclose(slope, _hybrid_central(tau, [x, xd, xdd], which, fk, legs), rtol=0,
+                                       atol=1e-8 * kappa * scale)
+        assert np.abs(dq[:, legs:]).max() > 1e-3 * scale      # the wrist's own columns are not idle
+        fq, fqd, ftau = forward_slopes(q, p, qw, xd[:3], xd[3:], effort[:3], effort[3:])
+        kappa_M = float(np.linalg.cond(M))
+        np.testing.assert_allclose(ftau @ M, np.eye(6), rtol=0, atol=64 * EPS * kappa_M)
+        np.testing.assert_allclose(fq, _hybrid_central(forward, [x, xd, effort], 0, fk, legs), rtol=0,
+                                   atol=1e-8 * kappa * kappa_M * max(1.0, float(np.abs(xdd).max())))
+        np.testing.assert_allclose(fqd, -ftau @ dqd, rtol=0, atol=64 * EPS * kappa_M * np.abs(ftau @ dqd).max())
+        gravity = gravity_slope(q, p, qw)[0]
+        gravity_scale = max(float(np.abs(G(q, p, qw)[0]).max()), float(np.abs(gravity).max()))
+        np.testing.assert_allclose(gravity, _hybrid_central(G, [x], 0, fk, legs), rtol=0,
+                                   atol=1e-8 * kappa * gravity_scale)
 
 
 def test_the_generated_numpy_and_c_functions_give_the_derivation(tmp_path):
