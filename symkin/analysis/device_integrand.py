@@ -4,7 +4,8 @@ For a model loaded with the JAX backend, :func:`device_joint_space_integrand` gi
 :func:`symkin.analysis.global_indices.joint_space_integrand` - components [w g, w] with w = |det J(q)| (the
 Cartesian measure) or 1 (the joint measure) and g = 1/kappa = sigma_min / sigma_max of the (homogenized) Jacobian
 (seed eqs. 8.25, 8.28), or [w] for the workspace measure - as one jitted function: the generated Jacobian, its
-singular values (batched SVD), the weights and the reduction of a batch to its mean and scatter run on the device,
+extreme singular values (conditioning's closed forms for 2 x 2 and 3 x 3, else a batched SVD), the weights and
+the reduction of a batch to its mean and scatter run on the device,
 and only those k + k^2 numbers come back (:attr:`symkin.integration.integrand.Integrand.moments`).  On a GPU a
 batch of configurations never leaves the device; on a CPU XLA fuses the program.  The program is compiled once per
 generated Jacobian: the model's parameters are its arguments (traced), so every design of a sweep
@@ -88,6 +89,43 @@ def _wrap_angle(angle: Any) -> Any:
     return jnp.where(wrapped == -jnp.pi, jnp.pi, wrapped)
 
 
+#: At most this share of a batch of 3 x 3 Jacobians takes a batched SVD of its own where the closed form does not serve
+#: them (:func:`symkin.numerics.conditioning.closed_form_3x3`'s ``hard`` ones); a batch with more takes one of all.
+HARD_SHARE = 1 / 16
+
+
+def extreme_singular_values(J: Any, threshold: float) -> tuple[Any, Any]:
+    """(sigma_max, sigma_min) of a batch of finite Jacobians (N, m, n) in jax.numpy by
+    :mod:`symkin.numerics.conditioning`'s rules: its closed forms for 2 x 2 and 3 x 3 matrices (the host's formulas,
+    several times faster than a batched SVD), an SVD otherwise and for the 3 x 3 matrices the closed form does not
+    serve - gathered to a static share of the batch (:data:`HARD_SHARE`; more take an SVD of the whole batch); a
+    sigma_min at most ``threshold`` sigma_max is 0 (the numerical rank)."""
+    import jax
+    import jax.numpy as jnp
+
+    m, n = J.shape[-2:]
+    if m == n == 2:
+        largest, smallest = conditioning.extreme_2x2(J, jnp)
+    elif m == n == 3:
+        largest, smallest, hard = conditioning.closed_form_3x3(J, jnp)
+        size = max(1, int(J.shape[0] * HARD_SHARE))
+        index = jnp.nonzero(hard, size=size, fill_value=0)[0]
+        s = jnp.linalg.svd(J[index], compute_uv=False)
+        taken = hard[index]
+        gathered = (largest.at[index].set(jnp.where(taken, s[:, 0], largest[index])),
+                    smallest.at[index].set(jnp.where(taken, s[:, -1], smallest[index])))
+
+        def every_one(_: Any) -> tuple[Any, Any]:
+            s = jnp.linalg.svd(J, compute_uv=False)
+            return jnp.where(hard, s[:, 0], largest), jnp.where(hard, s[:, -1], smallest)
+
+        largest, smallest = jax.lax.cond(jnp.sum(hard) > size, every_one, lambda _: gathered, None)
+    else:
+        s = jnp.linalg.svd(J, compute_uv=False)
+        largest, smallest = s[:, 0], s[:, -1]
+    return largest, jnp.where(smallest <= threshold * largest, 0.0, smallest)
+
+
 @functools.lru_cache(maxsize=32)
 def _compiled(functions: _Functions, measure: str, with_index: bool, threshold: float) -> tuple[Any, Any]:
     """(values, reduce) jitted once per generated function set and options: the parameters, the rows' scale, the
@@ -118,8 +156,7 @@ def _compiled(functions: _Functions, measure: str, with_index: bool, threshold: 
         weight = jnp.where(inside, weight, 0.0)
         if not with_index:
             return weight[:, None], weight
-        s = jnp.linalg.svd(J * scale[:, None], compute_uv=False)
-        largest, smallest = s[:, 0], jnp.where(s[:, -1] <= threshold * s[:, 0], 0.0, s[:, -1])
+        largest, smallest = extreme_singular_values(J * scale[:, None], threshold)
         index = jnp.where(finite & (largest > 0), smallest / jnp.where(largest > 0, largest, 1.0), 0.0)
         return jnp.stack([weight * index, weight], axis=-1), index
 

@@ -17,7 +17,7 @@ never a spurious 1e-17.
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -35,8 +35,9 @@ def _rank_threshold(J: np.ndarray) -> float:
     return max(J.shape[-2:]) * _EPS
 
 
-def _extreme_2x2(J: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(sigma_max, sigma_min) of 2 x 2 matrices J = [[a, b], [c, d]] in closed form.
+def extreme_2x2(J: Any, xp: Any = np) -> tuple[Any, Any]:
+    """(sigma_max, sigma_min) of 2 x 2 matrices J = [[a, b], [c, d]] in closed form, in the array module ``xp``
+    (numpy, or jax.numpy for the device integrand: one formula).
 
     sigma_max = (hypot(a + d, b - c) + hypot(a - d, b + c)) / 2 and sigma_min = |ad - bc| /
     sigma_max.  Neither step subtracts nearly equal numbers (the textbook sqrt(t^2 - 4 det^2)
@@ -45,22 +46,23 @@ def _extreme_2x2(J: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     where det J = 0, 1 to a few eps at isotropy.
     """
     a, b, c, d = J[..., 0, 0], J[..., 0, 1], J[..., 1, 0], J[..., 1, 1]
-    sigma_max = 0.5 * (np.hypot(a + d, b - c) + np.hypot(a - d, b + c))
-    root_det = np.abs(a * d - b * c)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        sigma_min = np.where(sigma_max > 0, root_det / np.where(sigma_max > 0, sigma_max, 1.0), 0.0)
-    return sigma_max, np.minimum(sigma_min, sigma_max)
+    sigma_max = 0.5 * (xp.hypot(a + d, b - c) + xp.hypot(a - d, b + c))
+    root_det = xp.abs(a * d - b * c)
+    sigma_min = xp.where(sigma_max > 0, root_det / xp.where(sigma_max > 0, sigma_max, 1.0), 0.0)
+    return sigma_max, xp.minimum(sigma_min, sigma_max)
 
 
 #: The 3 x 3 closed form hands a matrix to LAPACK's SVD when two eigenvalues of J^T J nearly
-#: coincide (|r| > 1 - this, see :func:`_extreme_3x3`) ...
+#: coincide (|r| > 1 - this, see :func:`closed_form_3x3`) ...
 CLOSED_FORM_3X3_CLUSTER = 1e-4
 #: ... or when sigma_2 / sigma_1 is below this (nearly rank 1).
 CLOSED_FORM_3X3_RATIO = 1e-4
 
 
-def _extreme_3x3(J: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(sigma_max, sigma_min) of 3 x 3 matrices, mostly in closed form (several times faster than an SVD).
+def closed_form_3x3(J: Any, xp: Any = np) -> tuple[Any, Any, Any]:
+    """(sigma_max, sigma_min, hard) of 3 x 3 matrices in closed form, in the array module ``xp``; ``hard`` marks the
+    matrices the closed form does not serve (they take an SVD: :func:`_extreme_3x3` on the host,
+    :mod:`symkin.analysis.device_integrand` on a JAX device).
 
     The eigenvalues lambda_1 >= lambda_2 >= lambda_3 of the Gram matrix A = J^T J come from
     Smith's trigonometric solution of its characteristic cubic (O. K. Smith, "Eigenvalues
@@ -72,8 +74,8 @@ def _extreme_3x3(J: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
     arccos loses half the digits of r near r = +-1, i.e. where two eigenvalues coincide
     (isotropy in a plane or in space); such matrices (|r| > 1 - :data:`CLOSED_FORM_3X3_CLUSTER`)
-    and nearly rank-1 ones (sigma_2 / sigma_1 < :data:`CLOSED_FORM_3X3_RATIO`) go to
-    LAPACK's SVD.  Elsewhere the closed form's error in 1/kappa is at most ~16 eps (the
+    and nearly rank-1 ones (sigma_2 / sigma_1 < :data:`CLOSED_FORM_3X3_RATIO`) are ``hard``.
+    Elsewhere the closed form's error in 1/kappa is at most ~16 eps (the
     rounding of r) times arccos's amplification 1/sqrt(1 - r^2) <= 1/sqrt(CLUSTER) = 100,
     i.e. <= 3.6e-13 (tested against mpmath at 40 digits).
     """
@@ -84,20 +86,26 @@ def _extreme_3x3(J: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     b01, b02, b12 = a * b + d * e + g * h, a * c + d * f + g * i, b * c + e * f + h * i
     q = (g00 + g11 + g22) / 3.0
     b00, b11, b22 = g00 - q, g11 - q, g22 - q
-    p = np.sqrt((b00 * b00 + b11 * b11 + b22 * b22 + 2.0 * (b01 * b01 + b02 * b02 + b12 * b12)) / 6.0)
+    p = xp.sqrt((b00 * b00 + b11 * b11 + b22 * b22 + 2.0 * (b01 * b01 + b02 * b02 + b12 * b12)) / 6.0)
     det_b = b00 * (b11 * b22 - b12 * b12) - b01 * (b01 * b22 - b12 * b02) + b02 * (b01 * b12 - b11 * b02)
+    r = xp.where(p > 0, det_b / (2.0 * xp.where(p > 0, p, 1.0) ** 3), 1.0)
+    phi = xp.arccos(xp.clip(r, -1.0, 1.0)) / 3.0
+    lambda1 = q + 2.0 * p * xp.cos(phi)
+    lambda2 = xp.clip(q + 2.0 * p * xp.cos(phi - 2.0 * np.pi / 3.0), 0.0, lambda1)
+    sigma_max = xp.sqrt(xp.maximum(lambda1, 0.0))
+    determinant = xp.abs(a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g))
+    gram_root = xp.sqrt(lambda1 * lambda2)
+    sigma_min = xp.where(gram_root > 0, determinant / xp.where(gram_root > 0, gram_root, 1.0), 0.0)
+    sigma_min = xp.minimum(sigma_min, xp.sqrt(lambda2))
+    hard = (xp.abs(r) > 1.0 - CLOSED_FORM_3X3_CLUSTER) | (lambda2 < CLOSED_FORM_3X3_RATIO**2 * lambda1)
+    return sigma_max, sigma_min, hard
+
+
+def _extreme_3x3(J: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(sigma_max, sigma_min) of 3 x 3 matrices, mostly in closed form (several times faster than an SVD):
+    :func:`closed_form_3x3`, its hard matrices by LAPACK's SVD."""
     with np.errstate(invalid="ignore", divide="ignore"):
-        r = np.where(p > 0, det_b / (2.0 * np.where(p > 0, p, 1.0) ** 3), 1.0)
-    phi = np.arccos(np.clip(r, -1.0, 1.0)) / 3.0
-    lambda1 = q + 2.0 * p * np.cos(phi)
-    lambda2 = np.clip(q + 2.0 * p * np.cos(phi - 2.0 * np.pi / 3.0), 0.0, lambda1)
-    sigma_max = np.sqrt(np.maximum(lambda1, 0.0))
-    determinant = np.abs(a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g))
-    gram_root = np.sqrt(lambda1 * lambda2)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        sigma_min = np.where(gram_root > 0, determinant / np.where(gram_root > 0, gram_root, 1.0), 0.0)
-    sigma_min = np.minimum(sigma_min, np.sqrt(lambda2))
-    hard = (np.abs(r) > 1.0 - CLOSED_FORM_3X3_CLUSTER) | (lambda2 < CLOSED_FORM_3X3_RATIO**2 * lambda1)
+        sigma_max, sigma_min, hard = closed_form_3x3(J)
     if hard.any():
         flat = hard.reshape(-1)
         sigma_max, sigma_min = np.array(sigma_max).reshape(-1), np.array(sigma_min).reshape(-1)
@@ -120,7 +128,8 @@ def _extreme_singular_values(J: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     if not finite.all():
         J = np.where(finite[..., None, None], J, 0.0)
     if m == n == 2:
-        sigma_max, sigma_min = _extreme_2x2(J)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            sigma_max, sigma_min = extreme_2x2(J)
     elif m == n == 3:
         sigma_max, sigma_min = _extreme_3x3(J)
     else:

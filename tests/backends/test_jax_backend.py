@@ -25,7 +25,7 @@ from checks import agreement_bound
 from conftest import EXAMPLE_MODELS, MODELS_DIR, function_spec, random_inputs, relative_errors, worst_state
 from symkin import load, pipeline
 from symkin.cli import main
-from tolerances import DYNAMICS, KINEMATICS
+from tolerances import DYNAMICS, EPS, KINEMATICS
 
 pytestmark = pytest.mark.xdist_group("jax")  # one worker imports JAX, after its other tests (conftest.LAST)
 POINTS = 64
@@ -154,6 +154,34 @@ def test_the_global_index_is_reduced_on_the_device(name, options, methods, jax_m
         assert got.measure.value == pytest.approx(want.measure.value, rel=1e-12)
 
 
+@pytest.mark.parametrize("hard_share", [0.0, 0.05, 0.5])
+def test_the_devices_extreme_singular_values_are_the_hosts(hard_share):
+    """device_integrand.extreme_singular_values (jitted) against conditioning's host rules on 2 x 2, 3 x 3 and 4 x 4
+    batches: random matrices, and a share of 3 x 3 ones the closed form does not serve (two equal singular values:
+    isotropic in a plane; nearly rank 1) - fewer than the gathered share (their own SVD) and more (an SVD of the
+    whole batch) - and exactly singular ones (sigma_min 0).  Both sides evaluate the same formulas or an SVD: a few
+    eps of sigma_max (DYNAMICS leaves a wide margin)."""
+    from symkin.analysis.device_integrand import extreme_singular_values
+    from symkin.numerics import conditioning
+
+    rng = np.random.default_rng(int(100 * hard_share))
+    for size in (2, 3, 4):
+        J = rng.normal(size=(64, size, size))
+        J[:4, -1] = J[:4, 0]                                      # exactly singular
+        if size == 3:
+            hard = int(hard_share * len(J))
+            U, _, V = np.linalg.svd(rng.normal(size=(hard, 3, 3)))
+            s = np.where(np.arange(hard)[:, None] % 2 == 0, [2.0, 2.0, 0.5], [1.0, 1e-6, 1e-7])
+            J[4:4 + hard] = U @ (s[:, :, None] * V)
+        threshold = size * EPS
+        largest, smallest = jax.jit(extreme_singular_values, static_argnums=1)(jnp.asarray(J), threshold)
+        want = conditioning.singular_values(J)
+        scale = want[:, 0]
+        np.testing.assert_allclose(np.asarray(largest), want[:, 0], rtol=DYNAMICS)
+        np.testing.assert_allclose(np.asarray(smallest), want[:, -1], rtol=0, atol=DYNAMICS * scale.max())
+        assert not np.any(np.asarray(smallest)[:4])               # the numerical rank's 0
+
+
 def test_the_device_counts_only_the_configurations_within_the_joint_stops(models, tmp_path, monkeypatch):
     """The planar 2R with the coupled stop 0 <= theta1 + theta2 <= 90 deg (tests/design/test_design.py's arm): the
     device integrand drops the configurations outside it as the host does - the same GCI and workspace measure
@@ -257,7 +285,6 @@ def test_jax_gradients_optimize_the_casadi_programs_surrogate(name, free, option
     workspace objective too (maximal at the upper bound of l1)."""
     from symkin import design
     from symkin.design.gradient_solving import solve_with_jax
-    from tolerances import EPS
 
     numpy_model = loaded(name, "numpy")
     problem = design.design_problem(numpy_model, "gci", free, **options)
