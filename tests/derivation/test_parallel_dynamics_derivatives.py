@@ -33,9 +33,10 @@ def _model(name: str):
     return model_from_text((MODELS_DIR / "delta.yaml").read_text() + "friction:\n" + DELTA_FRICTION, file="delta.yaml")
 
 
-def _central(f, state: list[np.ndarray], which: int, fk) -> np.ndarray:
+def _central(f, state: list[np.ndarray], which: int, fk, legs: int | None = None) -> np.ndarray:
     """Columns (f(state + h e_j) - f(state - h e_j)) / 2h in the state's vector ``which`` (0: q, the pose p = fk(q)
-    following it)."""
+    following it).  A hybrid device's (``legs``: its legs' coordinates) vectors stack the legs' and the wrist's parts,
+    (q, qw), (qd, qwd), ...: f takes them split, f(q, p, qw, qd, qwd, ...)."""
     columns = []
     for j in range(len(state[which])):
         h = EPS ** (1 / 3) * max(1.0, abs(state[which][j]))
@@ -43,7 +44,11 @@ def _central(f, state: list[np.ndarray], which: int, fk) -> np.ndarray:
         for sign in (1.0, -1.0):
             moved = [v.copy() for v in state]
             moved[which][j] += sign * h
-            sides.append(f(moved[0], fk(moved[0])[0], *moved[1:])[0])
+            if legs is None:
+                sides.append(f(moved[0], fk(moved[0])[0], *moved[1:])[0])
+                continue
+            q, qw = moved[0][:legs], moved[0][legs:]
+            sides.append(f(q, fk(q)[0], qw, *(part for v in moved[1:] for part in (v[:legs], v[legs:])))[0])
         columns.append((sides[0] - sides[1]) / (2 * h))
     return np.column_stack(columns)
 
@@ -87,24 +92,6 @@ def test_the_derivatives_are_central_differences_along_the_closure(name):
         np.testing.assert_allclose(gravity, _central(G, [q], 0, fk), rtol=0, atol=1e-8 * kappa * gravity_scale)
 
 
-def _hybrid_central(f, x: list[np.ndarray], which: int, fk, legs: int) -> np.ndarray:
-    """Columns (f(x + h e_j) - f(x - h e_j)) / 2h of a hybrid device's function f(q, p, qw, ...) in its state's vector
-    ``which`` of (q, qw) stacked (0: the coordinates, the pose p = fk(q) following the legs' q), (qd, qwd), ...: each
-    vector passed to f split into the legs' part and the wrist's."""
-    columns = []
-    for j in range(len(x[which])):
-        h = EPS ** (1 / 3) * max(1.0, abs(x[which][j]))
-        sides = []
-        for sign in (1.0, -1.0):
-            moved = [v.copy() for v in x]
-            moved[which][j] += sign * h
-            q, qw = moved[0][:legs], moved[0][legs:]
-            rest = [part for v in moved[1:] for part in (v[:legs], v[legs:])]
-            sides.append(f(q, fk(q)[0], qw, *rest)[0])
-        columns.append((sides[0] - sides[1]) / (2 * h))
-    return np.column_stack(columns)
-
-
 def test_a_hybrid_devices_derivatives_are_central_differences_along_the_closure():
     """models/delta_wrist.yaml (a DELTA carrying a 3-joint wrist): the efforts (tau, tauw) by the coordinates (q, qw)
     - the legs' q moving the platform with them, the wrist's joints their own coordinates - by (qd, qwd) and (qdd, qwdd)
@@ -127,18 +114,18 @@ def test_a_hybrid_devices_derivatives_are_central_differences_along_the_closure(
         effort = tau(q, p, qw, xd[:3], xd[3:], xdd[:3], xdd[3:])[0]
         scale = max(float(np.abs(v).max()) for v in (effort, dq, dqd))
         for which, slope in ((0, dq), (1, dqd), (2, M)):
-            np.testing.assert_allclose(slope, _hybrid_central(tau, [x, xd, xdd], which, fk, legs), rtol=0,
+            np.testing.assert_allclose(slope, _central(tau, [x, xd, xdd], which, fk, legs), rtol=0,
                                        atol=1e-8 * kappa * scale)
         assert np.abs(dq[:, legs:]).max() > 1e-3 * scale      # the wrist's own columns are not idle
         fq, fqd, ftau = forward_slopes(q, p, qw, xd[:3], xd[3:], effort[:3], effort[3:])
         kappa_M = float(np.linalg.cond(M))
         np.testing.assert_allclose(ftau @ M, np.eye(6), rtol=0, atol=64 * EPS * kappa_M)
-        np.testing.assert_allclose(fq, _hybrid_central(forward, [x, xd, effort], 0, fk, legs), rtol=0,
+        np.testing.assert_allclose(fq, _central(forward, [x, xd, effort], 0, fk, legs), rtol=0,
                                    atol=1e-8 * kappa * kappa_M * max(1.0, float(np.abs(xdd).max())))
         np.testing.assert_allclose(fqd, -ftau @ dqd, rtol=0, atol=64 * EPS * kappa_M * np.abs(ftau @ dqd).max())
         gravity = gravity_slope(q, p, qw)[0]
         gravity_scale = max(float(np.abs(G(q, p, qw)[0]).max()), float(np.abs(gravity).max()))
-        np.testing.assert_allclose(gravity, _hybrid_central(G, [x], 0, fk, legs), rtol=0,
+        np.testing.assert_allclose(gravity, _central(G, [x], 0, fk, legs), rtol=0,
                                    atol=1e-8 * kappa * gravity_scale)
 
 
