@@ -16,8 +16,8 @@ with a non-finite entry has 1/kappa = 0.
 The configurations that count are the host's (:func:`symkin.mechanism.working_mode.jacobian_in_working_mode`),
 decided on the device too: those within the model's joint stops (:mod:`symkin.mechanism.stops`, their rows passed
 as arguments) and, for a parallel mechanism with closed forms, those in its working mode - fk(q) assembles and
-ik(fk(q)) = q to :data:`~symkin.mechanism.working_mode.JOINT_ROUND_TRIP_TOLERANCE` (the same leg branches), the
-Jacobian J(q, fk(q)).  A parallel mechanism with declared passive-joint limits (checked on the closure, on the
+ik(fk(q)) = q (:func:`symkin.mechanism.working_mode.same_branches`, the host's test in jax.numpy), the Jacobian
+J(q, fk(q)).  A parallel mechanism with declared passive-joint limits (checked on the closure, on the
 host), legs without closed forms, and an index other than 1/kappa take the host integrand.
 """
 
@@ -32,8 +32,6 @@ import numpy as np
 from symkin import mechanism
 from symkin.integration.integrand import Integrand
 from symkin.mechanism import Limits, reach, stops, working_mode
-from symkin.mechanism.limits import LIMIT_TOLERANCE
-from symkin.mechanism.working_mode import JOINT_ROUND_TRIP_TOLERANCE
 from symkin.numerics import conditioning
 from symkin.runtime.info import GeneratedModel
 
@@ -69,24 +67,6 @@ class _Functions(NamedTuple):
     jacobian: Callable[..., Any]
     fk: Callable[..., Any] | None = None
     ik: Callable[..., Any] | None = None
-
-
-def _inside_stops(q: Any, stops: tuple[Any, Any, Any, Any]) -> Any:
-    """Whether each configuration lies within the joint stops (rows, offsets, lower, upper) to the tolerance of
-    :meth:`symkin.mechanism.stops.StopInequalities.respected` (True for k = 0 stops)."""
-    import jax.numpy as jnp
-
-    rows, offsets, lower, upper = stops
-    values = q @ rows.T + offsets
-    return jnp.all((values >= lower - LIMIT_TOLERANCE) & (values <= upper + LIMIT_TOLERANCE), axis=-1)
-
-
-def _wrap_angle(angle: Any) -> Any:
-    """:func:`symkin.mechanism.limits.wrap_angle` in jax.numpy: angles mapped to (-pi, pi]."""
-    import jax.numpy as jnp
-
-    wrapped = jnp.remainder(angle + jnp.pi, 2.0 * jnp.pi) - jnp.pi
-    return jnp.where(wrapped == -jnp.pi, jnp.pi, wrapped)
 
 
 #: At most this share of a batch of 3 x 3 Jacobians takes a batched SVD of its own where the closed form does not serve
@@ -135,21 +115,20 @@ def _compiled(functions: _Functions, measure: str, with_index: bool, threshold: 
     import jax
     import jax.numpy as jnp
 
-    def jacobian_and_inside(q: Any, stops: Any, revolute: Any, parameters: dict[str, Any]) -> tuple[Any, Any]:
-        inside = _inside_stops(q, stops)
+    def jacobian_and_inside(q: Any, joint_stops: Any, revolute: Any, parameters: dict[str, Any]) -> tuple[Any, Any]:
+        rows, offsets, lower, upper = joint_stops
+        inside = stops.within_stops(q, rows, offsets, lower, upper, xp=jnp)
         if functions.fk is None or functions.ik is None:
             return functions.jacobian(q, **parameters["jacobian"]), inside
         # the working mode (symkin.mechanism.working_mode): fk assembles and ik(fk(q)) = q
         p = functions.fk(q, **parameters["fk"]).position
-        assembled = jnp.all(jnp.isfinite(p), axis=-1)
-        p = jnp.where(assembled[:, None], p, 0.0)
-        back = functions.ik(p, **parameters["ik"]).joints
-        error = jnp.abs(jnp.where(revolute, _wrap_angle(back - q), back - q))
-        same_branch = jnp.all(error <= JOINT_ROUND_TRIP_TOLERANCE, axis=-1)  # NaN compares False: not assembled
-        return functions.jacobian(q, p, **parameters["jacobian"]), inside & assembled & same_branch
+        assembled = jnp.where(jnp.isfinite(p), p, 0.0)
+        back = functions.ik(assembled, **parameters["ik"]).joints
+        inside = inside & working_mode.same_branches(q, p, back, revolute, jnp)
+        return functions.jacobian(q, assembled, **parameters["jacobian"]), inside
 
-    def values(q: Any, scale: Any, stops: Any, revolute: Any, parameters: dict[str, Any]) -> tuple[Any, Any]:
-        J, inside = jacobian_and_inside(q, stops, revolute, parameters)
+    def values(q: Any, scale: Any, joint_stops: Any, revolute: Any, parameters: dict[str, Any]) -> tuple[Any, Any]:
+        J, inside = jacobian_and_inside(q, joint_stops, revolute, parameters)
         finite = jnp.all(jnp.isfinite(J), axis=(-2, -1))
         J = jnp.where(finite[:, None, None], J, 0.0)
         weight = jnp.abs(jnp.linalg.det(J)) if measure == "cartesian" else jnp.ones(q.shape[0])
@@ -160,8 +139,9 @@ def _compiled(functions: _Functions, measure: str, with_index: bool, threshold: 
         index = jnp.where(finite & (largest > 0), smallest / jnp.where(largest > 0, largest, 1.0), 0.0)
         return jnp.stack([weight * index, weight], axis=-1), index
 
-    def reduce(q: Any, scale: Any, stops: Any, revolute: Any, parameters: dict[str, Any]) -> tuple[Any, Any, Any, Any]:
-        f, index = values(q, scale, stops, revolute, parameters)
+    def reduce(q: Any, scale: Any, joint_stops: Any, revolute: Any, parameters: dict[str, Any]
+               ) -> tuple[Any, Any, Any, Any]:
+        f, index = values(q, scale, joint_stops, revolute, parameters)
         mean = f.mean(axis=0)
         centered = f - mean
         inside = f[:, -1] > 0

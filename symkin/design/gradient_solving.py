@@ -104,7 +104,7 @@ def solve_with_jax(problem: DesignProblem, jax_model: GeneratedModel, numpy_mode
                          "from a design with a nonsingular workspace, or use the CasADi program (--gradients casadi), "
                          "whose surrogate stays finite at singular nodes")
     history = [reference]
-    limit = int({**LBFGSB_OPTIONS, **(options or {})}["maxiter"])
+    chosen = {**LBFGSB_OPTIONS, **(options or {})}
 
     def objective(z: np.ndarray) -> tuple[float, np.ndarray]:
         value, gradient = surrogate(z)
@@ -115,20 +115,20 @@ def solve_with_jax(problem: DesignProblem, jax_model: GeneratedModel, numpy_mode
 
     def iterate(intermediate_result: optimize.OptimizeResult) -> None:
         history.append(-float(intermediate_result.fun) * reference)
-        reporting.report_progress("optimizing the design (L-BFGS-B iterations)", done=len(history) - 1, total=limit)
+        reporting.report_progress("optimizing the design (L-BFGS-B iterations)", done=len(history) - 1,
+                                   total=int(chosen["maxiter"]))
 
     build_seconds = time.perf_counter() - started
     started = time.perf_counter()
     result = optimize.minimize(objective, z0, jac=True, method="L-BFGS-B", callback=iterate,
                                bounds=[(p.lower / s, p.upper / s) for p, s in zip(problem.free, scales)],
-                               options={**LBFGSB_OPTIONS, **(options or {})})
+                               options=chosen)
     solve_seconds = time.perf_counter() - started
     # the bounds in the parameters' units (x * scale may round past one)
     lower, upper = np.array([p.lower for p in problem.free]), np.array([p.upper for p in problem.free])
     solution = Solution(
         start=problem.start, optimum=problem.design(list(np.clip(result.x * scales, lower, upper))),
-        surrogate_start=reference,
-        surrogate_optimum=-float(result.fun) * reference, history=np.asarray(history),
+        surrogate_start=reference, surrogate_optimum=-float(result.fun) * reference, history=np.asarray(history),
         infeasibility=np.zeros(len(history)), status=str(result.message), success=bool(result.success),
         iterations=int(result.nit), solve_seconds=solve_seconds, build_seconds=build_seconds, solver="L-BFGS-B")
     return solution, f"{sampled.description}; L-BFGS-B on JAX gradients"

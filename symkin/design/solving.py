@@ -69,7 +69,7 @@ class Solution:
     Attributes:
         start, optimum: all parameter values of the start and the optimized design.
         surrogate_start, surrogate_optimum: the objective's surrogate at both.
-        history: the surrogate at every IPOPT iterate (iteration 0 is the start).
+        history: the surrogate at every iterate of the solver (iteration 0 is the start).
         infeasibility: IPOPT's primal infeasibility (largest scaled constraint violation) at every iterate (zeros
             for a program with bounds only).
         status: the solver's return status; ``success`` whether it converged.

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 #: Tolerance on joint limits and on the reach of a closed form (rounding of points that lie
@@ -31,7 +33,7 @@ def within_limits(q: np.ndarray, limits: np.ndarray, revolute: np.ndarray,
     return q, inside
 
 
-def wrap_angle(angle: np.ndarray) -> np.ndarray:
-    """Angles mapped to (-pi, pi]."""
-    wrapped = np.remainder(np.asarray(angle) + np.pi, 2.0 * np.pi) - np.pi
-    return np.where(wrapped == -np.pi, np.pi, wrapped)
+def wrap_angle(angle: Any, xp: Any = np) -> Any:
+    """Angles mapped to (-pi, pi], in the array module ``xp`` (numpy, or jax.numpy on a JAX device)."""
+    wrapped = xp.remainder(xp.asarray(angle) + np.pi, 2.0 * np.pi) - np.pi
+    return xp.where(wrapped == -np.pi, np.pi, wrapped)

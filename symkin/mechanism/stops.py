@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -71,8 +72,16 @@ class StopInequalities:
 
     def respected(self, q: np.ndarray, tolerance: float = LIMIT_TOLERANCE) -> np.ndarray:
         """Whether configurations q (..., n) lie within every stop (...)."""
-        values = self.values(q)
-        return np.all((values >= self.lower - tolerance) & (values <= self.upper + tolerance), axis=-1)
+        return within_stops(np.asarray(q, dtype=float), self.rows, self.offsets, self.lower, self.upper, tolerance)
+
+
+def within_stops(q: Any, rows: Any, offsets: Any, lower: Any, upper: Any, tolerance: float = LIMIT_TOLERANCE,
+                 xp: Any = np) -> Any:
+    """Whether configurations q (..., n) lie within every stop lower <= rows . q + offsets <= upper (...), in the
+    array module ``xp`` (numpy, or jax.numpy on a JAX device, the arrays passed as traced arguments); True without
+    stops."""
+    values = q @ rows.T + offsets
+    return xp.all((values >= lower - tolerance) & (values <= upper + tolerance), axis=-1)
 
 
 def respected(model: GeneratedModel, q: np.ndarray) -> np.ndarray:

@@ -9,6 +9,8 @@ what the analyses build on it).
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from symkin import mechanism
@@ -40,14 +42,21 @@ def working_mode(model: GeneratedModel, q: np.ndarray) -> tuple[np.ndarray, np.n
     with np.errstate(invalid="ignore"):  # the closed forms take sqrt of negative margins: NaN, as documented
         p = model.fk(q).position
         back = model.ik(np.where(np.isfinite(p), p, 0.0)).joints
-        error = np.abs(np.where(mechanism.revolute_mask(model), wrap_angle(back - q), back - q))
-        inside = np.isfinite(p).all(axis=-1) & np.all(error <= JOINT_ROUND_TRIP_TOLERANCE, axis=-1)
+        inside = same_branches(q, p, back, mechanism.revolute_mask(model))
     limits = passive.declared_limits(model)
     if limits is not None:
         batch = inside.shape
         inside = passive.admissible(model, limits, q.reshape(-1, q.shape[-1]), p.reshape(-1, p.shape[-1]),
                                     inside.reshape(-1)).reshape(batch)
     return p, inside
+
+
+def same_branches(q: Any, p: Any, back: Any, revolute: Any, xp: Any = np) -> Any:
+    """Whether each configuration q (..., n) assembles in the working mode: fk(q) = p is finite and ik(p) = ``back``
+    returns q to :data:`JOINT_ROUND_TRIP_TOLERANCE` (angles, ``revolute`` (n,), compared modulo 2 pi), in the array
+    module ``xp`` (numpy, or jax.numpy on a JAX device)."""
+    error = xp.abs(xp.where(revolute, wrap_angle(back - q, xp), back - q))
+    return xp.isfinite(p).all(axis=-1) & xp.all(error <= JOINT_ROUND_TRIP_TOLERANCE, axis=-1)
 
 
 def assembly_functions(model: GeneratedModel) -> tuple[str, ...] | None:

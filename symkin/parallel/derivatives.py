@@ -33,7 +33,7 @@ from symkin.dynamics.program import Program
 from symkin.dynamics.quantities import coordinate_symbols, function_spec, require_gravity
 from symkin.ir.quantity import Deriving, quantity
 from symkin.ir.spec import FunctionSpec
-from symkin.parallel.dynamics import ReducedDynamics, actuator_friction, device_inputs
+from symkin.parallel.dynamics import ReducedDynamics, actuator_friction, device_inputs, device_size
 from symkin.parallel.quantities import PARALLEL
 
 _PAIR = "Evaluate at a consistent pair q, p (p = fk(q) or q = ik(p)); the derivatives by q move p with it (dp = J dq)."
@@ -83,7 +83,7 @@ def _torque_slopes(d: Deriving, terms: ReducedDynamics) -> tuple[list[se.Basic],
 def _inverse_dynamics_derivatives(d: Deriving) -> FunctionSpec:
     program = Program()
     terms = ReducedDynamics(d, program)
-    n = terms.n + len(terms.qw)
+    n = device_size(d)
     M = terms.mass_matrix()
     dq, dqd = (program.bind(v) for v in _torque_slopes(d, terms))
     return function_spec(
@@ -103,7 +103,7 @@ def _inverse_dynamics_derivatives(d: Deriving) -> FunctionSpec:
 def _forward_dynamics_derivatives(d: Deriving) -> FunctionSpec:
     program = Program()
     terms = ReducedDynamics(d, program)
-    n = terms.n + len(terms.qw)
+    n = device_size(d)
 
     def slope_rows() -> list[list[se.Basic]]:
         dq, dqd = _torque_slopes(d, terms)
@@ -131,7 +131,7 @@ def _gravity_derivatives(d: Deriving) -> FunctionSpec:
     require_gravity(d, "gravity_derivatives")
     program = Program()
     terms = ReducedDynamics(d, program)
-    n = terms.n + len(terms.qw)
+    n = device_size(d)
     gravity = terms.gravity_parts
     assert gravity is not None, "require_gravity refuses a model without gravity"
     G = [a + b for a, b in zip(gravity[0] + [se.Integer(0)] * len(terms.qw), terms.B_transpose(gravity[1]))]

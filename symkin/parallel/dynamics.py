@@ -386,7 +386,7 @@ def actuator_friction(model: Model, qd: list[se.Basic]) -> list[se.Basic] | None
     return list(forces.values())
 
 
-def _size(d: Deriving) -> int:
+def device_size(d: Deriving) -> int:
     """The device's coordinates: the legs' actuated joints, then a hybrid device's wrist joints."""
     return d.model.dof + len(hybrid.wrist_symbols(d.model, "q"))
 
@@ -399,7 +399,7 @@ _PAIR = "Evaluate at a consistent pair q, p (p = fk(q) or q = ik(p))."
 def _mass_matrix(d: Deriving) -> FunctionSpec:
     program = Program()
     M = ReducedDynamics(d, program).mass_matrix()
-    n = _size(d)
+    n = device_size(d)
     return function_spec(
         d, "mass_matrix", "Mass matrix in the actuated coordinates.",
         "M = M_a + J^T M_p J: the actuator side (arms, rod shares at the elbows, rotors times the gear ratio "
@@ -421,7 +421,7 @@ def _coriolis_vector(d: Deriving) -> FunctionSpec:
         "V = V_a + J^T (M_p b + V_p(p, pd)) with pd = J qd and b = dJ/dt qd = -J_x^-1 (zd^T H_i zd)_i (the "
         "second derivative of the leg equations along the motion); V_a and V_p from the Christoffel symbols of "
         f"M_a(q) and M_p(p). {_PAIR}",
-        device_inputs(d, "qd"), program, [("V", V, (_size(d),), "Coriolis and centrifugal efforts", EFFORT_UNIT)])
+        device_inputs(d, "qd"), program, [("V", V, (device_size(d),), "Coriolis and centrifugal efforts", EFFORT_UNIT)])
 
 
 @quantity("gravity_vector", "actuator efforts G = du_a/dq + J^T du_p/dp that hold the device against gravity",
@@ -431,12 +431,12 @@ def _gravity_vector(d: Deriving) -> FunctionSpec:
     program = Program()
     terms = ReducedDynamics(d, program)
     G_a, G_p = terms.gravity_parts  # type: ignore[misc]
-    G = [a + b for a, b in zip(G_a + [se.Integer(0)] * (_size(d) - d.model.dof), terms.B_transpose(G_p))]
+    G = [a + b for a, b in zip(G_a + [se.Integer(0)] * (device_size(d) - d.model.dof), terms.B_transpose(G_p))]
     return function_spec(
         d, "gravity_vector", "Gravity compensation efforts.",
         "G = du_a/dq + J^T du_p/dp with u = -g . (sum of mass times centre of mass): the actuator efforts that "
         f"hold the device still at the pose (gravity compensation of a haptic device). {_PAIR}",
-        device_inputs(d), program, [("G", G, (_size(d),), "actuator efforts that hold the device against gravity",
+        device_inputs(d), program, [("G", G, (device_size(d),), "actuator efforts that hold the device against gravity",
                                EFFORT_UNIT)])
 
 
@@ -453,7 +453,7 @@ def _friction(d: Deriving) -> FunctionSpec:
         "F_f = viscous qd + coulomb sign(qd) per actuator (seed eq. 8.34), or coulomb tanh(qd / v_s) where the "
         "model gives a smoothing velocity v_s.",
         ["qd"] + ([hybrid.wrist_input(d.model, "qd")] if wrist_rates else []), program,
-        [("F_f", F, (_size(d),), "friction efforts opposing the motion", EFFORT_UNIT)])
+        [("F_f", F, (device_size(d),), "friction efforts opposing the motion", EFFORT_UNIT)])
 
 
 @quantity("inverse_dynamics", "inverse dynamics tau = M qdd + V + G + F_f at the actuators (n)", mechanism=PARALLEL,
@@ -468,7 +468,7 @@ def _inverse_dynamics(d: Deriving) -> FunctionSpec:
         "tau = M_a qdd + V_a + G_a + F_f + J^T (M_p pdd + V_p + G_p) with pdd = J qdd + b (d'Alembert: the loop "
         "constraint forces do no work on motions pd = J qd), equal to M qdd + V + G + F_f without forming M. "
         f"{_PAIR}",
-        device_inputs(d, "qd", "qdd"), program, [("tau", tau, (_size(d),), "actuator efforts", EFFORT_UNIT)])
+        device_inputs(d, "qd", "qdd"), program, [("tau", tau, (device_size(d),), "actuator efforts", EFFORT_UNIT)])
 
 
 @quantity("forward_dynamics", "forward dynamics qdd = M^-1 (tau - V - G - F_f) (n)", solves_with="mass_matrix",
@@ -485,7 +485,7 @@ def _forward_dynamics(d: Deriving) -> FunctionSpec:
         "qdd = M^-1 (tau - V - G - F_f) by a straight-line LDL^T factorization of the symmetric positive "
         f"definite M = M_a + J^T M_p J; the platform then accelerates with pdd = J qdd + b. {_PAIR}",
         device_inputs(d, "qd", "tau"), program,
-        [("qdd", qdd, (_size(d),), "actuator accelerations", "rad/s^2 (revolute), m/s^2 (prismatic)")])
+        [("qdd", qdd, (device_size(d),), "actuator accelerations", "rad/s^2 (revolute), m/s^2 (prismatic)")])
 
 
 @quantity("operational_space", "task-space dynamics F = Mx pdd + Vx + Gx of the platform", mechanism=PARALLEL,
