@@ -9,12 +9,15 @@ every sample the generated functions give M (``mass_matrix``), J (``jacobian``: 
 G (``gravity_vector``); the actuators' data come from the manifest (effort limits, continuous effort,
 friction) or from the caller (encoders, servo rate).  A measure whose data the model lacks is not rated,
 and the datasheet says why.
+
+Length: one rating (its samples by kind of sampling, the measures over them on the host or JAX's device, the
+datasheet), each sampling a function of its own.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -22,6 +25,7 @@ import numpy as np
 from symkin.analysis import workspace
 from symkin import mechanism
 from symkin.numerics.conditioning import inverse_condition_number
+from symkin.rating import on_device
 from symkin.rating.handle_measures import (NO_GRAVITY, ROTATIONAL_FRICTION,
                                              SPHERICAL_GROUPS, TURNED_GROUPS, Actuation, Measure, dynamics_at,
                                              friction_measures, gravity_share_measure, pushed_groups, rotation_measures,
@@ -207,31 +211,44 @@ def rate(model: GeneratedModel, actuation: Actuation, *, samples: int = 4096, se
 
 
 def _datasheet(model: GeneratedModel, usable: _Usable, actuation: Actuation) -> Datasheet:
-    """The measures of the handle over the usable samples (see :func:`rate`)."""
-    measures: tuple[Measure, ...] = ()
-    skipped: dict[str, str] = {}
-    if usable.J_v is not None:
-        measures, skipped = translation_measures(model, usable.J_v, usable.M, usable.q, usable.poses, actuation,
-                                                 usable.axes, no_mass=usable.no_mass, G=usable.G)
-    if usable.J_w is not None:
-        turned, not_turned = rotation_measures(usable.J_w, usable.M, actuation, no_mass=usable.no_mass)
-        measures, skipped = measures + turned, skipped | not_turned
-    if usable.J_v is None:  # a handle that only turns: what the pushed measures would have said of it
-        assert usable.J_w is not None, "a handle that neither translates nor turns is refused before"
-        share = gravity_share_measure(model, usable.q, usable.poses, actuation.effort_limits)
-        if isinstance(share, str):
-            skipped["gravity_share"] = share
-        else:
-            measures += tuple(share)
-        friction = friction_measures(usable.J_w, actuation, ROTATIONAL_FRICTION)
-        if isinstance(friction, str):
-            skipped["friction"] = friction
-        else:
-            measures += tuple(friction)
+    """The measures of the handle over the usable samples (see :func:`rate`): on JAX's device in one compiled
+    program for a model loaded with the JAX backend (:mod:`symkin.rating.on_device`), else with numpy."""
+    if on_device.rates_on_device(model):
+        arrays = {name: getattr(usable, name) for name in on_device.SAMPLED}
+        measures, skipped = on_device.rated_on_device(
+            lambda sampled, xp: _measures(model, replace(usable, **sampled), actuation, xp), arrays)
+    else:
+        measures, skipped = _measures(model, usable, actuation, np)
     groups = SPHERICAL_GROUPS if usable.J_v is None else \
         pushed_groups(usable.axes) | TURNED_GROUPS if usable.J_w is not None else pushed_groups(usable.axes)
     return Datasheet(model.name, usable.q, usable.points, usable.axes, measures, len(usable.q) - 1, skipped, groups,
                      usable.notes)
+
+
+def _measures(model: GeneratedModel, usable: _Usable, actuation: Actuation, xp: Any
+              ) -> tuple[tuple[Measure, ...], dict[str, str]]:
+    """The handle's measures over the usable samples and {group: why not rated}, in the array module ``xp``."""
+    measures: tuple[Measure, ...] = ()
+    skipped: dict[str, str] = {}
+    if usable.J_v is not None:
+        measures, skipped = translation_measures(model, usable.J_v, usable.M, usable.q, usable.poses, actuation,
+                                                 usable.axes, no_mass=usable.no_mass, G=usable.G, xp=xp)
+    if usable.J_w is not None:
+        turned, not_turned = rotation_measures(usable.J_w, usable.M, actuation, no_mass=usable.no_mass, xp=xp)
+        measures, skipped = measures + turned, skipped | not_turned
+    if usable.J_v is None:  # a handle that only turns: what the pushed measures would have said of it
+        assert usable.J_w is not None, "a handle that neither translates nor turns is refused before"
+        share = gravity_share_measure(model, usable.q, usable.poses, actuation.effort_limits, xp)
+        if isinstance(share, str):
+            skipped["gravity_share"] = share
+        else:
+            measures += tuple(share)
+        friction = friction_measures(usable.J_w, actuation, ROTATIONAL_FRICTION, xp)
+        if isinstance(friction, str):
+            skipped["friction"] = friction
+        else:
+            measures += tuple(friction)
+    return measures, skipped
 
 
 def _usable_joint_samples(model: GeneratedModel, samples: int, seed: int, box: Mapping[str, tuple[float, float]] | None,

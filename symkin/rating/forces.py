@@ -21,30 +21,33 @@ Jacobian of :func:`symkin.mechanism.jacobian`.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
 
-def isotropic_force(J: np.ndarray, effort_limits: Sequence[float] | np.ndarray) -> np.ndarray:
-    """f_iso = min_i tau_max,i / |J_i| over a stack of task Jacobians J (..., m, n), in N (NaN where J is)."""
-    J = np.asarray(J, dtype=float)
+def isotropic_force(J: np.ndarray, effort_limits: Sequence[float] | np.ndarray, xp: Any = np) -> np.ndarray:
+    """f_iso = min_i tau_max,i / |J_i| over a stack of task Jacobians J (..., m, n), in N (NaN where J is); in the
+    array module ``xp`` (numpy, or jax.numpy on JAX's device: :mod:`symkin.rating.on_device`)."""
+    J = xp.asarray(J, dtype=float)
     limits = np.broadcast_to(np.asarray(effort_limits, dtype=float), J.shape[-1:])
     if np.any(limits <= 0):
         raise ValueError(f"effort limits must be positive, got {list(limits)}")
     with np.errstate(divide="ignore", invalid="ignore"):
-        return np.min(limits / np.linalg.norm(J, axis=-2), axis=-1)
+        return xp.min(limits / xp.linalg.norm(J, axis=-2), axis=-1)
 
 
-def axis_force(J: np.ndarray, effort_limits: Sequence[float] | np.ndarray) -> np.ndarray:
+def axis_force(J: np.ndarray, effort_limits: Sequence[float] | np.ndarray, xp: Any = np) -> np.ndarray:
     """The largest force along each task axis e_a (..., m): :func:`directional_force` along e_1 .. e_m (a maker's
     force "along x" at a pose)."""
-    J = np.asarray(J, dtype=float)
-    return np.stack([directional_force(J, effort_limits, axis) for axis in np.eye(J.shape[-2])], axis=-1)
+    J = xp.asarray(J, dtype=float)
+    return xp.stack([directional_force(J, effort_limits, axis, xp) for axis in np.eye(J.shape[-2])], axis=-1)
 
 
-def directional_force(J: np.ndarray, effort_limits: Sequence[float] | np.ndarray, u: np.ndarray) -> np.ndarray:
+def directional_force(J: np.ndarray, effort_limits: Sequence[float] | np.ndarray, u: np.ndarray, xp: Any = np
+                      ) -> np.ndarray:
     """f(u) = min_i tau_max,i / |J_i . u|: the largest force along the unit directions u (..., m)."""
-    J = np.asarray(J, dtype=float)
+    J = xp.asarray(J, dtype=float)
     limits = np.broadcast_to(np.asarray(effort_limits, dtype=float), J.shape[-1:])
     with np.errstate(divide="ignore"):
-        return np.min(limits / np.abs(np.einsum("...mn,...m->...n", J, u)), axis=-1)
+        return xp.min(limits / xp.abs(xp.einsum("...mn,...m->...n", J, u)), axis=-1)

@@ -1,7 +1,9 @@
 """A haptic device rated as its datasheet rates it: what the hand feels and what the device can render
 at the handle, from the joint-space M, the task Jacobian J (v = J qd), G and the actuators' data.
 
-At one pose (every function takes stacks, ``...``), with n joints and J the m x n translational rows
+Every function takes stacks (``...``) of J, M and G in the array module ``xp``: numpy, or jax.numpy inside the
+datasheet's program on JAX's device (:mod:`symkin.rating.on_device`); the actuators' data stay numpy.  At one pose,
+with n joints and J the m x n translational rows
 of the task Jacobian (square for a translational device: 3 x 3 for a DELTA, 2 x 2 for a pantograph or a
 planar arm; m < n for a redundant device, e.g. a DELTA carrying a wrist pushed at its grip):
 
@@ -48,62 +50,63 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
 
-def apparent_mass(M: np.ndarray, J: np.ndarray) -> np.ndarray:
+def apparent_mass(M: np.ndarray, J: np.ndarray, xp: Any = np) -> np.ndarray:
     """Lambda = (J M^-1 J^T)^-1 (..., m, m): the inertia the hand feels at the handle, F = Lambda a from rest.
 
     Args:
         M: joint-space mass matrices (..., n, n).
         J: task Jacobians (..., m, n), v = J qd, of full row rank m <= n.
     """
-    return np.linalg.inv(mobility(M, J))
+    return xp.linalg.inv(mobility(M, J, xp))
 
 
-def mobility(M: np.ndarray, J: np.ndarray) -> np.ndarray:
+def mobility(M: np.ndarray, J: np.ndarray, xp: Any = np) -> np.ndarray:
     """J M^-1 J^T (..., m, m): the handle's acceleration per unit force from rest, the inverse apparent mass."""
-    M, J = np.asarray(M, dtype=float), np.asarray(J, dtype=float)
-    return J @ np.linalg.solve(M, np.swapaxes(J, -1, -2))
+    M, J = xp.asarray(M, dtype=float), xp.asarray(J, dtype=float)
+    return J @ xp.linalg.solve(M, xp.swapaxes(J, -1, -2))
 
 
-def principal_masses(M: np.ndarray, J: np.ndarray) -> np.ndarray:
+def principal_masses(M: np.ndarray, J: np.ndarray, xp: Any = np) -> np.ndarray:
     """The eigenvalues of the apparent mass (..., m), ascending: the masses felt along its principal axes, the
     reciprocals of the eigenvalues of the mobility J M^-1 J^T (inf along a direction a singular J cannot move)."""
-    eigenvalues = np.linalg.eigvalsh(mobility(M, J))[..., ::-1]
-    return np.where(eigenvalues > 0.0, 1.0 / np.where(eigenvalues > 0.0, eigenvalues, 1.0), np.inf)
+    eigenvalues = xp.linalg.eigvalsh(mobility(M, J, xp))[..., ::-1]
+    return xp.where(eigenvalues > 0.0, 1.0 / xp.where(eigenvalues > 0.0, eigenvalues, 1.0), np.inf)
 
 
-def farthest_vertex(A: np.ndarray, half_widths: Sequence[float] | np.ndarray) -> np.ndarray:
+def farthest_vertex(A: np.ndarray, half_widths: Sequence[float] | np.ndarray, xp: Any = np) -> np.ndarray:
     """max over s in {-1, 1}^n of |A (s * h)| (...,): the largest image under A (..., m, n) of the box
     |x_i| <= h_i, reached at a vertex as |A x| is convex.  s and -s give the same length, so 2^(n-1)
     sign vectors are tried."""
-    A = np.asarray(A, dtype=float)
+    A = xp.asarray(A, dtype=float)
     h = np.broadcast_to(np.asarray(half_widths, dtype=float), A.shape[-1:])
     n = A.shape[-1]
     signs = np.array([(1.0,) + rest for rest in itertools.product((1.0, -1.0), repeat=n - 1)])  # (2^(n-1), n)
-    images = np.einsum("...mn,kn->...km", A, signs * h)
-    return np.max(np.linalg.norm(images, axis=-1), axis=-1)
+    images = xp.einsum("...mn,kn->...km", A, signs * h)
+    return xp.max(xp.linalg.norm(images, axis=-1), axis=-1)
 
 
 #: Above this condition number J is taken as singular: the forces at the handle are NaN there.
 SINGULAR_CONDITION = 1e12
 
 
-def _inverse_transpose(J: np.ndarray) -> np.ndarray:
+def _inverse_transpose(J: np.ndarray, xp: Any = np) -> np.ndarray:
     """J^-T (..., m, m), NaN where J is singular (kappa > :data:`SINGULAR_CONDITION`)."""
-    J = np.asarray(J, dtype=float)
+    J = xp.asarray(J, dtype=float)
     if J.shape[-1] != J.shape[-2]:
         raise ValueError(f"the handle's forces need a square task Jacobian (F = J^-T tau), got "
                          f"{J.shape[-2]} x {J.shape[-1]}")
     with np.errstate(invalid="ignore"):
-        regular = np.linalg.cond(J) < SINGULAR_CONDITION
-    safe = np.where(regular[..., None, None], J, np.eye(J.shape[-1]))
-    return np.where(regular[..., None, None], np.swapaxes(np.linalg.inv(safe), -1, -2), np.nan)
+        regular = xp.linalg.cond(J) < SINGULAR_CONDITION
+    safe = xp.where(regular[..., None, None], J, np.eye(J.shape[-1]))
+    return xp.where(regular[..., None, None], xp.swapaxes(xp.linalg.inv(safe), -1, -2), np.nan)
 
 
-def peak_force(J: np.ndarray, effort_limits: Sequence[float] | np.ndarray) -> np.ndarray:
+def peak_force(J: np.ndarray, effort_limits: Sequence[float] | np.ndarray, xp: Any = np) -> np.ndarray:
     """The largest force the actuators render in the best direction (...,): max |F| over the polytope
     |J_i . F| <= tau_max,i (tau = J^T F).
 
@@ -112,60 +115,58 @@ def peak_force(J: np.ndarray, effort_limits: Sequence[float] | np.ndarray) -> np
     translational rows) every choice of m joints at their limits whose point the others can hold
     (within a relative 1e-9 of their limits) is tried.
     """
-    J = np.asarray(J, dtype=float)
+    J = xp.asarray(J, dtype=float)
     m, n = J.shape[-2:]
     if m > n:
         raise ValueError(f"the handle's forces need at least as many joints as task coordinates, got a {m} x {n} "
                          "task Jacobian")
     limits = np.broadcast_to(np.asarray(effort_limits, dtype=float), (n,))
     if m == n:
-        return farthest_vertex(_inverse_transpose(J), limits)
-    best = np.zeros(J.shape[:-2])
-    signs = np.array([(1.0,) + rest for rest in itertools.product((1.0, -1.0), repeat=m - 1)])
-    for chosen in itertools.combinations(range(n), m):
-        columns = J[..., :, list(chosen)]                                        # (..., m, m)
-        regular = np.abs(np.linalg.det(columns)) > 1e-12 * np.prod(np.linalg.norm(columns, axis=-2), axis=-1)
-        square = np.where(regular[..., None, None], columns, np.eye(m))
-        for s in signs:
-            F = np.linalg.solve(np.swapaxes(square, -1, -2), (s * limits[list(chosen)])[..., None])[..., 0]
-            efforts = np.abs(np.einsum("...mn,...m->...n", J, F))
-            feasible = regular & np.all(efforts <= limits * (1 + 1e-9), axis=-1)
-            best = np.where(feasible, np.maximum(best, np.linalg.norm(F, axis=-1)), best)
-    return best
+        return farthest_vertex(_inverse_transpose(J, xp), limits, xp)
+    chosen = np.array(list(itertools.combinations(range(n), m)))                 # (C, m): the joints at their limits
+    signs = np.array([(1.0,) + rest for rest in itertools.product((1.0, -1.0), repeat=m - 1)])  # (S, m)
+    columns = xp.moveaxis(J[..., :, chosen], -3, -2)                            # (..., C, m, m)
+    regular = xp.abs(xp.linalg.det(columns)) > 1e-12 * xp.prod(xp.linalg.norm(columns, axis=-2), axis=-1)
+    square = xp.where(regular[..., None, None], columns, np.eye(m))
+    limited = limits[chosen][:, :, None] * signs.T[None]                       # (C, m, S): tau at every vertex
+    F = xp.linalg.solve(xp.swapaxes(square, -1, -2), xp.broadcast_to(limited, square.shape[:-1] + signs.shape[:1]))
+    efforts = xp.abs(xp.einsum("...mn,...cmk->...cnk", J, F))                   # (..., C, n, S)
+    feasible = regular[..., None] & xp.all(efforts <= limits[:, None] * (1 + 1e-9), axis=-2)
+    return xp.max(xp.where(feasible, xp.linalg.norm(F, axis=-2), 0.0), axis=(-2, -1))
 
 
-def position_resolution(J: np.ndarray, joint_steps: Sequence[float] | np.ndarray) -> np.ndarray:
+def position_resolution(J: np.ndarray, joint_steps: Sequence[float] | np.ndarray, xp: Any = np) -> np.ndarray:
     """The largest handle step between neighbouring encoder readings (...,): max_s |J (s * dq)|, dq the joints'
     steps per count (rad or m)."""
-    return farthest_vertex(J, joint_steps)
+    return farthest_vertex(J, joint_steps, xp)
 
 
-def axis_mass(M: np.ndarray, J: np.ndarray) -> np.ndarray:
+def axis_mass(M: np.ndarray, J: np.ndarray, xp: Any = np) -> np.ndarray:
     """The mass felt pushing along each task axis e_a from rest, the handle free in the others (..., m):
     1 / (e_a^T Lambda^-1 e_a), the force along e_a per unit acceleration along it (Khatib 1995's effective mass
     along a direction; a vendor's "apparent mass at the tip" along an axis); inf along an axis the handle cannot
     move along."""
     with np.errstate(divide="ignore"):
-        return 1.0 / np.diagonal(mobility(M, J), axis1=-2, axis2=-1)
+        return 1.0 / xp.diagonal(mobility(M, J, xp), axis1=-2, axis2=-1)
 
 
-def axis_step(J: np.ndarray, joint_steps: Sequence[float] | np.ndarray) -> np.ndarray:
+def axis_step(J: np.ndarray, joint_steps: Sequence[float] | np.ndarray, xp: Any = np) -> np.ndarray:
     """The handle's step along each task axis for one encoder count of the joint that moves it most there (..., m):
     max_i |J_ai| dq_i, a vendor's "nominal position resolution" per axis (one count at a time, against
     :func:`position_resolution`'s every joint stepping at once)."""
-    J = np.asarray(J, dtype=float)
-    return np.max(np.abs(J) * np.abs(np.asarray(joint_steps, dtype=float)), axis=-1)
+    J = xp.asarray(J, dtype=float)
+    return xp.max(xp.abs(J) * np.abs(np.asarray(joint_steps, dtype=float)), axis=-1)
 
 
-def axis_friction(J: np.ndarray, coulomb: Sequence[float] | np.ndarray) -> np.ndarray:
+def axis_friction(J: np.ndarray, coulomb: Sequence[float] | np.ndarray, xp: Any = np) -> np.ndarray:
     """The Coulomb friction felt moving the handle along each task axis e_a (..., m), J square: the joints turn at
     w = J^-1 e_a per unit speed and resist with power sum_i tau_c,i |w_i| (a vendor's "backdrive friction" along
     an axis; :func:`coulomb_friction_felt` is its largest over all directions); NaN where J is singular."""
-    rates = np.swapaxes(_inverse_transpose(J), -1, -2)                  # column a: J^-1 e_a
-    return np.einsum("i,...ia->...a", np.abs(np.asarray(coulomb, dtype=float)), np.abs(rates))
+    rates = xp.swapaxes(_inverse_transpose(J, xp), -1, -2)              # column a: J^-1 e_a
+    return xp.einsum("i,...ia->...a", np.abs(np.asarray(coulomb, dtype=float)), xp.abs(rates))
 
 
-def coulomb_friction_felt(J: np.ndarray, coulomb: Sequence[float] | np.ndarray) -> np.ndarray:
+def coulomb_friction_felt(J: np.ndarray, coulomb: Sequence[float] | np.ndarray, xp: Any = np) -> np.ndarray:
     """The largest Coulomb friction force the hand feels, over all directions of motion (...,): the farthest
     point of the polytope |J_i . F| <= tau_c,i, max_s |J^-T (s * tau_c)| for a square J.
 
@@ -175,16 +176,16 @@ def coulomb_friction_felt(J: np.ndarray, coulomb: Sequence[float] | np.ndarray) 
     which by linear-programming duality is max over |J^T F| <= tau_c of F . u, the support function of that
     polytope.  Its largest value over all directions u is the polytope's farthest point (:func:`peak_force`
     with the Coulomb levels as limits)."""
-    return peak_force(J, coulomb)
+    return peak_force(J, coulomb, xp)
 
 
-def gravity_share(G: np.ndarray, effort_limits: Sequence[float] | np.ndarray) -> np.ndarray:
+def gravity_share(G: np.ndarray, effort_limits: Sequence[float] | np.ndarray, xp: Any = np) -> np.ndarray:
     """max_i |G_i| / tau_max,i (...,): the largest share of an actuator's effort limit spent holding the device."""
-    G = np.asarray(G, dtype=float)
-    return np.max(np.abs(G) / np.broadcast_to(np.asarray(effort_limits, dtype=float), G.shape[-1:]), axis=-1)
+    G = xp.asarray(G, dtype=float)
+    return xp.max(xp.abs(G) / np.broadcast_to(np.asarray(effort_limits, dtype=float), G.shape[-1:]), axis=-1)
 
 
-def handle_damping(J: np.ndarray, viscous: Sequence[float] | np.ndarray) -> np.ndarray:
+def handle_damping(J: np.ndarray, viscous: Sequence[float] | np.ndarray, xp: Any = np) -> np.ndarray:
     """The smallest viscous damping at the handle (...,), N s/m: the least eigenvalue of J^-T diag(b) J^-1 for
     a square J.
 
@@ -193,63 +194,65 @@ def handle_damping(J: np.ndarray, viscous: Sequence[float] | np.ndarray) -> np.n
     apparent mass (J M^-1 J^T)^-1), so the least damping is 1 / the largest eigenvalue of J B^-1 J^T; 0 where an
     undamped joint (b_j = 0) moves the handle.
     """
-    J = np.asarray(J, dtype=float)
+    J = xp.asarray(J, dtype=float)
     m, n = J.shape[-2:]
     b = np.broadcast_to(np.asarray(viscous, dtype=float), (n,))
     if m == n:
-        inverse_transpose = _inverse_transpose(J)
-        damping = (inverse_transpose * b) @ np.swapaxes(inverse_transpose, -1, -2)
-        return np.linalg.eigvalsh(damping)[..., 0]
+        inverse_transpose = _inverse_transpose(J, xp)
+        damping = (inverse_transpose * b) @ xp.swapaxes(inverse_transpose, -1, -2)
+        return xp.linalg.eigvalsh(damping)[..., 0]
     damped = b > 0
-    free_motion = np.any(np.linalg.norm(J[..., :, ~damped], axis=-2) > 0, axis=-1)
-    mobility = (J[..., :, damped] / b[damped]) @ np.swapaxes(J[..., :, damped], -1, -2)
-    largest = np.linalg.eigvalsh(mobility)[..., -1]
+    free_motion = xp.any(xp.linalg.norm(J[..., :, ~damped], axis=-2) > 0, axis=-1)
+    mobility = (J[..., :, damped] / b[damped]) @ xp.swapaxes(J[..., :, damped], -1, -2)
+    largest = xp.linalg.eigvalsh(mobility)[..., -1]
     with np.errstate(divide="ignore"):
-        return np.where(free_motion, 0.0, 1.0 / largest)
+        return xp.where(free_motion, 0.0, 1.0 / largest)
 
 
-def axis_damping(J: np.ndarray, viscous: Sequence[float] | np.ndarray) -> np.ndarray:
+def axis_damping(J: np.ndarray, viscous: Sequence[float] | np.ndarray, xp: Any = np) -> np.ndarray:
     """The least viscous damping of a handle motion whose component along each task axis e_a is one (..., m):
     b_e = 1 / (e^T J B^-1 J^T e), B = diag(b_j) (min over J w = v, e . v = 1 of w^T B w, the hand free to move
     sideways); 0 where an undamped joint moves the handle along e, inf where no joint does."""
-    J = np.asarray(J, dtype=float)
+    J = xp.asarray(J, dtype=float)
     b = np.broadcast_to(np.asarray(viscous, dtype=float), J.shape[-1:])
-    moves = np.abs(J) > 0.0
-    undamped = np.any(moves & (b == 0.0), axis=-1)
+    moves = xp.abs(J) > 0.0
+    undamped = xp.any(moves & (b == 0.0), axis=-1)
     with np.errstate(divide="ignore", invalid="ignore"):
-        compliance = np.sum(np.where(moves, J ** 2 / np.where(b > 0.0, b, 1.0), 0.0), axis=-1)
-        return np.where(undamped, 0.0, 1.0 / compliance)
+        compliance = xp.sum(xp.where(moves, J ** 2 / np.where(b > 0.0, b, 1.0), 0.0), axis=-1)
+        return xp.where(undamped, 0.0, 1.0 / compliance)
 
 
-def axis_slip_friction(J: np.ndarray, coulomb: Sequence[float] | np.ndarray) -> np.ndarray:
+def axis_slip_friction(J: np.ndarray, coulomb: Sequence[float] | np.ndarray, xp: Any = np) -> np.ndarray:
     """The least Coulomb friction force of a handle motion whose component along each task axis e_a is one
     (..., m): f_e = min over J w = v, e . v = 1 of sum_i tau_c,i |w_i| = min_i tau_c,i / |J_ei| (a weighted l1
     minimum sits on one joint: the hand slips in the joint that resists least per unit motion along e); inf where no
     joint moves the handle along e."""
-    J = np.abs(np.asarray(J, dtype=float))
+    J = xp.abs(xp.asarray(J, dtype=float))
     tau = np.broadcast_to(np.abs(np.asarray(coulomb, dtype=float)), J.shape[-1:])
     with np.errstate(divide="ignore"):
-        return np.min(np.where(J > 0.0, tau / np.where(J > 0.0, J, 1.0), np.inf), axis=-1)
+        return xp.min(xp.where(J > 0.0, tau / xp.where(J > 0.0, J, 1.0), np.inf), axis=-1)
 
 
-def axis_quantization(J: np.ndarray, joint_steps: Sequence[float] | np.ndarray) -> np.ndarray:
+def axis_quantization(J: np.ndarray, joint_steps: Sequence[float] | np.ndarray, xp: Any = np) -> np.ndarray:
     """The width of the quantization error along each task axis (..., m): every encoder reads its joint up to one
     count dq_i below its position, so the handle's reading along e is off by up to Delta_e = sum_i |J_ei| dq_i."""
-    J = np.abs(np.asarray(J, dtype=float))
-    return np.sum(J * np.abs(np.asarray(joint_steps, dtype=float)), axis=-1)
+    J = xp.abs(xp.asarray(J, dtype=float))
+    return xp.sum(J * np.abs(np.asarray(joint_steps, dtype=float)), axis=-1)
 
 
-def quantization_stiffness(friction: np.ndarray | float, quantization: np.ndarray | float) -> np.ndarray:
+def quantization_stiffness(friction: np.ndarray | float, quantization: np.ndarray | float, xp: Any = np
+                           ) -> np.ndarray:
     """K < 2 f_c / Delta (N/m): the stiffest wall whose one-count limit cycle the device's Coulomb friction f_c
     dissipates, with encoder quantization Delta (Abbott and Okamura 2005; :func:`renderable_stiffness` is the other
     half of their condition)."""
     with np.errstate(divide="ignore"):
-        return 2.0 * np.asarray(friction, dtype=float) / np.asarray(quantization, dtype=float)
+        return 2.0 * xp.asarray(friction, dtype=float) / xp.asarray(quantization, dtype=float)
 
 
-def renderable_stiffness(damping: np.ndarray | float, period: float, virtual_damping: float = 0.0) -> np.ndarray:
+def renderable_stiffness(damping: np.ndarray | float, period: float, virtual_damping: float = 0.0, xp: Any = np
+                         ) -> np.ndarray:
     """K_max = 2 (b - |B|) / T (N/m): the stiffest virtual wall a loop of period T renders passively on a device
     with physical damping b at the handle and virtual damping B (Colgate and Schenkel 1997); 0 where |B| >= b."""
     if not period > 0.0:
         raise ValueError(f"the servo period must be positive, got {period:g} s")
-    return np.maximum(2.0 * (np.asarray(damping, dtype=float) - abs(virtual_damping)) / period, 0.0)
+    return xp.maximum(2.0 * (xp.asarray(damping, dtype=float) - abs(virtual_damping)) / period, 0.0)

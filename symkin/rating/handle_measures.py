@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -73,16 +74,17 @@ def dynamics_at(model: GeneratedModel, name: str, q: np.ndarray, poses: np.ndarr
     return mechanism.call(model, name, q=q, p=poses)
 
 
-def rotation_measures(J_w: np.ndarray, M: np.ndarray | None, actuation: Actuation, *, no_mass: str = ""
-                      ) -> tuple[tuple[Measure, ...], dict[str, str]]:
+def rotation_measures(J_w: np.ndarray, M: np.ndarray | None, actuation: Actuation, *, no_mass: str = "",
+                      xp: Any = np) -> tuple[tuple[Measure, ...], dict[str, str]]:
     """A rotating handle's inertia felt with its position free (where M is given, else not rated with the reason
-    ``no_mass``), torque capability and angular resolution (:data:`TURNED_GROUPS`), and {group: why not rated}."""
+    ``no_mass``), torque capability and angular resolution (:data:`TURNED_GROUPS`), and {group: why not rated}; in
+    the array module ``xp`` (:mod:`symkin.rating.formulas`)."""
     out: list[Measure] = []
     skipped = {}
     if M is None:
         skipped["apparent_inertia"] = no_mass
     else:
-        inertias = formulas.principal_masses(M, J_w)
+        inertias = formulas.principal_masses(M, J_w, xp)
         out += [Measure("apparent_inertia_min", "kg m^2", inertias[:, 0], False,
                         "smallest principal inertia felt turning the handle (its position free)"),
                 Measure("apparent_inertia_max", "kg m^2", inertias[:, -1], False,
@@ -90,31 +92,31 @@ def rotation_measures(J_w: np.ndarray, M: np.ndarray | None, actuation: Actuatio
     if actuation.effort_limits is None:
         skipped["torque"] = NO_EFFORT_LIMITS
     else:
-        out += [Measure("isotropic_torque", "N m", forces.isotropic_force(J_w, actuation.effort_limits), True,
+        out += [Measure("isotropic_torque", "N m", forces.isotropic_force(J_w, actuation.effort_limits, xp), True,
                         "largest torque rendered about every axis, with no force (peak efforts)"),
-                Measure("peak_torque", "N m", formulas.peak_force(J_w, actuation.effort_limits), True,
+                Measure("peak_torque", "N m", formulas.peak_force(J_w, actuation.effort_limits, xp), True,
                         "largest torque rendered about the best axis, with no force (peak efforts)")]
     if actuation.continuous_limits is None:
         skipped["continuous_torque"] = NO_CONTINUOUS_LIMITS
     else:
-        out.append(Measure("continuous_torque", "N m", forces.isotropic_force(J_w, actuation.continuous_limits), True,
+        out.append(Measure("continuous_torque", "N m", forces.isotropic_force(J_w, actuation.continuous_limits, xp), True,
                            "largest torque held for long about every axis (continuous efforts)"))
     if actuation.joint_steps is None:
         skipped["angular_resolution"] = NO_ENCODERS
     else:
-        out.append(Measure("angular_resolution", "rad", formulas.position_resolution(J_w, actuation.joint_steps), False,
+        out.append(Measure("angular_resolution", "rad", formulas.position_resolution(J_w, actuation.joint_steps, xp), False,
                            "largest handle rotation between neighbouring encoder readings"))
     return tuple(out), skipped
 
 
 def translation_measures(model: GeneratedModel, J: np.ndarray, M: np.ndarray | None, q: np.ndarray, poses: np.ndarray,
                          actuation: Actuation, axes: Sequence[str], *, no_mass: str = "",
-                         G: np.ndarray | str | None = None) -> tuple[tuple[Measure, ...], dict[str, str]]:
+                         G: np.ndarray | str | None = None, xp: Any = np) -> tuple[tuple[Measure, ...], dict[str, str]]:
     """The handle's measures (:func:`pushed_groups` of ``axes``, J's rows) from J (its translational rows), M and the
     generated functions at (q, poses), and {group: why not rated}; where M is None, the apparent mass is not rated
     with the reason ``no_mass``.  ``G``: the efforts that hold the device (N, n), or why there are none (default:
     the generated ``gravity_vector``).  Besides the measures over every direction, each group holds its figure
-    along each task axis, as a vendor's datasheet quotes it (issue 64)."""
+    along each task axis, as a vendor's datasheet quotes it (issue 64).  ``xp``: the array module of J, M and G."""
     if len(axes) != J.shape[-2]:
         raise ValueError(f"{model.name}: {len(axes)} task axes {list(axes)} for the {J.shape[-2]} rows of J")
     out: list[Measure] = []
@@ -127,26 +129,26 @@ def translation_measures(model: GeneratedModel, J: np.ndarray, M: np.ndarray | N
     if M is None:
         skipped["apparent_mass"] = no_mass
     else:
-        masses = formulas.principal_masses(M, J)
+        masses = formulas.principal_masses(M, J, xp)
         out += [Measure("apparent_mass_min", "kg", masses[:, 0], False, "smallest principal mass felt at the handle"),
                 Measure("apparent_mass_max", "kg", masses[:, -1], False, "largest principal mass felt at the handle"),
                 Measure("inertia_isotropy", "", masses[:, -1] / masses[:, 0], False,
                         "largest over smallest principal mass (1: the same mass in every direction)")]
-        out += per_axis("apparent_mass", "kg", formulas.axis_mass(M, J), False,
+        out += per_axis("apparent_mass", "kg", formulas.axis_mass(M, J, xp), False,
                         "mass felt pushing along <axis> from rest, the handle free in the other directions: "
                         "1 / (e^T J M^-1 J^T e)")
     efforts = actuation.effort_limits
     if efforts is None:
         skipped["force"] = skipped["gravity_share"] = NO_EFFORT_LIMITS
     else:
-        out += [Measure("isotropic_force", "N", forces.isotropic_force(J, efforts), True,
+        out += [Measure("isotropic_force", "N", forces.isotropic_force(J, efforts, xp), True,
                         "largest force rendered in every direction (peak efforts)"),
-                Measure("peak_force", "N", formulas.peak_force(J, efforts), True,
+                Measure("peak_force", "N", formulas.peak_force(J, efforts, xp), True,
                         "largest force rendered in the best direction (peak efforts)")]
-        out += per_axis("force", "N", forces.axis_force(J, efforts), True,
+        out += per_axis("force", "N", forces.axis_force(J, efforts, xp), True,
                         "largest force rendered along +-<axis> (peak efforts): min_i tau_max,i / |J_i . e|")
-        share = (gravity_share_measure(model, q, poses, efforts) if G is None
-                 else G if isinstance(G, str) else [held_against_gravity(G, efforts)])
+        share = (gravity_share_measure(model, q, poses, efforts, xp) if G is None
+                 else G if isinstance(G, str) else [held_against_gravity(G, efforts, xp)])
         if isinstance(share, str):
             skipped["gravity_share"] = share
         else:
@@ -154,37 +156,37 @@ def translation_measures(model: GeneratedModel, J: np.ndarray, M: np.ndarray | N
     if actuation.continuous_limits is None:
         skipped["continuous_force"] = NO_CONTINUOUS_LIMITS
     else:
-        out.append(Measure("continuous_force", "N", forces.isotropic_force(J, actuation.continuous_limits), True,
+        out.append(Measure("continuous_force", "N", forces.isotropic_force(J, actuation.continuous_limits, xp), True,
                            "largest force held for long in every direction (continuous efforts)"))
-        out += per_axis("continuous_force", "N", forces.axis_force(J, actuation.continuous_limits), True,
+        out += per_axis("continuous_force", "N", forces.axis_force(J, actuation.continuous_limits, xp), True,
                         "largest force held for long along +-<axis> (continuous efforts)")
     if actuation.joint_steps is None:
         skipped["resolution"] = NO_ENCODERS
     else:
-        out.append(Measure("resolution", "m", formulas.position_resolution(J, actuation.joint_steps), False,
+        out.append(Measure("resolution", "m", formulas.position_resolution(J, actuation.joint_steps, xp), False,
                            "largest handle step between neighbouring encoder readings"))
-        out += per_axis("resolution", "m", formulas.axis_step(J, actuation.joint_steps), False,
+        out += per_axis("resolution", "m", formulas.axis_step(J, actuation.joint_steps, xp), False,
                         "handle step along <axis> for one encoder count of the joint that moves it most there")
-    friction = (friction_measures(J, actuation, TRANSLATIONAL_FRICTION) if J.shape[-2] <= J.shape[-1]
+    friction = (friction_measures(J, actuation, TRANSLATIONAL_FRICTION, xp) if J.shape[-2] <= J.shape[-1]
                 else "friction and damping at the handle need at least as many joints as task translations")
     viscous, coulomb = actuation.viscous, actuation.coulomb
     if isinstance(friction, str) or viscous is None or coulomb is None:
         skipped["friction"] = skipped["passive_stiffness"] = str(friction)
     else:
         rate = f"{1 / actuation.period:g} Hz"
-        sampled = formulas.renderable_stiffness(formulas.axis_damping(J, viscous), actuation.period)
+        sampled = formulas.renderable_stiffness(formulas.axis_damping(J, viscous, xp), actuation.period, xp=xp)
         out += friction + per_axis("renderable_stiffness", "N/m", sampled, True,
                                    f"stiffest passive wall normal to <axis> at {rate} (Colgate-Brown): 2 b_e / T, "
                                    "b_e = 1 / (e^T J B^-1 J^T e) the least damping of a motion along <axis>")
         if actuation.joint_steps is None:
             skipped["passive_stiffness"] = NO_ENCODERS
         else:
-            quantized = formulas.quantization_stiffness(formulas.axis_slip_friction(J, coulomb),
-                                                        formulas.axis_quantization(J, actuation.joint_steps))
+            quantized = formulas.quantization_stiffness(formulas.axis_slip_friction(J, coulomb, xp),
+                                                        formulas.axis_quantization(J, actuation.joint_steps, xp), xp)
             out += per_axis("quantization_stiffness", "N/m", quantized, True,
                             "stiffest wall normal to <axis> whose one-count limit cycle Coulomb friction dissipates: "
                             "2 f_e / Delta_e, f_e = min_i tau_c,i / |J_ei|, Delta_e = sum_i |J_ei| dq_i")
-            out += per_axis("passive_stiffness", "N/m", np.minimum(sampled, quantized), True,
+            out += per_axis("passive_stiffness", "N/m", xp.minimum(sampled, quantized), True,
                             f"stiffest passive wall normal to <axis> at {rate} with its encoders (Abbott and Okamura "
                             "2005): min(2 b_e / T, 2 f_e / Delta_e)")
     if actuation.coulomb is None:
@@ -193,7 +195,7 @@ def translation_measures(model: GeneratedModel, J: np.ndarray, M: np.ndarray | N
         skipped["backdrive_friction"] = (f"the friction along each axis needs as many joints as task translations "
                                          f"({J.shape[-1]} joints, {J.shape[-2]} translations)")
     else:
-        out += per_axis("backdrive_friction", "N", formulas.axis_friction(J, actuation.coulomb), False,
+        out += per_axis("backdrive_friction", "N", formulas.axis_friction(J, actuation.coulomb, xp), False,
                         "Coulomb friction felt moving the handle along <axis>: sum_i tau_c,i |(J^-1 e)_i|")
     return tuple(out), skipped
 
@@ -202,19 +204,19 @@ def translation_measures(model: GeneratedModel, J: np.ndarray, M: np.ndarray | N
 NO_GRAVITY = "no gravity acts on the device: declare 'gravity: [0, 0, -9.81]' (the direction of g in the base frame)"
 
 
-def gravity_share_measure(model: GeneratedModel, q: np.ndarray, poses: np.ndarray, efforts: np.ndarray | None
-                          ) -> list[Measure] | str:
+def gravity_share_measure(model: GeneratedModel, q: np.ndarray, poses: np.ndarray, efforts: np.ndarray | None,
+                          xp: Any = np) -> list[Measure] | str:
     """The share of the effort limits spent holding the device against gravity (``gravity_vector``), or why not."""
     if efforts is None:
         return NO_EFFORT_LIMITS
     if "gravity_vector" not in model.functions:
         return NO_GRAVITY
-    return [held_against_gravity(dynamics_at(model, "gravity_vector", q, poses), efforts)]
+    return [held_against_gravity(dynamics_at(model, "gravity_vector", q, poses), efforts, xp)]
 
 
-def held_against_gravity(G: np.ndarray, efforts: np.ndarray) -> Measure:
+def held_against_gravity(G: np.ndarray, efforts: np.ndarray, xp: Any = np) -> Measure:
     """The gravity share of the efforts G (N, n) that hold the device still."""
-    return Measure("gravity_share", "", formulas.gravity_share(G, efforts), False,
+    return Measure("gravity_share", "", formulas.gravity_share(G, efforts, xp), False,
                    "largest share of an effort limit spent holding the device against gravity")
 
 
@@ -264,16 +266,16 @@ NO_CONTINUOUS_LIMITS = ("no continuous efforts: declare each drive's continuous 
 NO_ENCODERS = "no encoder data: give --encoder COUNTS[,...] (and --gear)"
 
 
-def friction_measures(J: np.ndarray, actuation: Actuation, labels: tuple[tuple[str, str, str], ...]
-                       ) -> list[Measure] | str:
+def friction_measures(J: np.ndarray, actuation: Actuation, labels: tuple[tuple[str, str, str], ...], xp: Any = np
+                      ) -> list[Measure] | str:
     """The Coulomb friction felt, the least damping and the stiffest passive wall at the servo rate (Colgate-Brown)
     through J (square, or with more joints than rows: :mod:`symkin.rating.formulas`), labelled by ``labels``; or
     why not (no joint friction declared)."""
     if actuation.coulomb is None or actuation.viscous is None:
         return "no joint friction declared (friction: in the model file)"
     (coulomb, coulomb_unit, coulomb_doc), (damped, damping_unit, damping_doc), (wall, wall_unit, wall_doc) = labels
-    damping = formulas.handle_damping(J, actuation.viscous)
-    return [Measure(coulomb, coulomb_unit, formulas.coulomb_friction_felt(J, actuation.coulomb), False, coulomb_doc),
+    damping = formulas.handle_damping(J, actuation.viscous, xp)
+    return [Measure(coulomb, coulomb_unit, formulas.coulomb_friction_felt(J, actuation.coulomb, xp), False, coulomb_doc),
             Measure(damped, damping_unit, damping, True, damping_doc),
-            Measure(wall, wall_unit, formulas.renderable_stiffness(damping, actuation.period), True,
+            Measure(wall, wall_unit, formulas.renderable_stiffness(damping, actuation.period, xp=xp), True,
                     f"{wall_doc} at {1 / actuation.period:g} Hz (Colgate-Brown, K < 2 b / T)")]

@@ -154,6 +154,42 @@ def test_the_global_index_is_reduced_on_the_device(name, options, methods, jax_m
         assert got.measure.value == pytest.approx(want.measure.value, rel=1e-12)
 
 
+@pytest.mark.parametrize("name", ["delta", "ur10e", "agile_eye"])
+def test_the_datasheet_is_rated_on_the_device(name, jax_model, loaded, monkeypatch):
+    """symkin rate's measures of a model loaded with JAX are one program compiled for JAX's device (the datasheet's
+    formulas traced with jax.numpy, never called with numpy): a DELTA pushed (a square J), the UR10e pushed at its
+    TCP (a redundant J: the farthest vertices of its efforts' polytope over every choice of 3 of its 6 joints) and
+    the Agile Eye turned, every group rated.  They equal numpy's sample by sample to the rounding the solves
+    amplify: the apparent mass (J M^-1 J^T)^-1 to svd(n) kappa(J)^2 kappa(M) (kappa(J) <= 1 / USABLE_CONDITIONING
+    on the usable samples; the home pose, quoted whatever its conditioning, left out), every other measure less."""
+    from symkin import mechanism
+    from symkin.rating import datasheet
+    from symkin.rating.handle_measures import Actuation
+    from tolerances import svd
+
+    modules = []
+    measures = datasheet._measures
+
+    def recorded(model, usable, actuation, xp):
+        modules.append(xp)
+        return measures(model, usable, actuation, xp)
+
+    reference = loaded(name, "numpy")
+    n = len(reference.info.coordinates)
+    actuation = Actuation(np.full(n, 10.0), np.full(n, 5.0), np.full(n, 1e-4), np.full(n, 0.01), np.full(n, 0.02))
+    want = datasheet.rate(reference, actuation, samples=256)
+    monkeypatch.setattr(datasheet, "_measures", recorded)
+    got = datasheet.rate(jax_model(name), actuation, samples=256)
+    assert modules == [jnp]
+    np.testing.assert_allclose(got.q, want.q, rtol=0, atol=KINEMATICS * np.pi)  # the same samples (by JAX's ik)
+    assert got.skipped == want.skipped
+    assert [m.name for m in got.measures] == [m.name for m in want.measures]
+    M = mechanism.call(reference, "mass_matrix", q=want.q, p=want.points)
+    bound = DYNAMICS + svd(n) * (1 / datasheet.USABLE_CONDITIONING) ** 2 * np.linalg.cond(M[:-1])
+    for g, w in zip(got.measures, want.measures):
+        np.testing.assert_array_less(np.abs(g.values - w.values)[:-1], bound * np.abs(w.values[:-1]), g.name)
+
+
 @pytest.mark.parametrize("hard_share", [0.0, 0.05, 0.5])
 def test_the_devices_extreme_singular_values_are_the_hosts(hard_share):
     """device_integrand.extreme_singular_values (jitted) against conditioning's host rules on 2 x 2, 3 x 3 and 4 x 4

@@ -1,0 +1,74 @@
+"""The datasheet's per-sample arithmetic on JAX's default device (issue 66).
+
+For a model loaded with the JAX backend, :func:`symkin.rating.datasheet.rate` evaluates the measures of
+:mod:`symkin.rating.handle_measures` over the usable samples - apparent masses and inertias (eigenvalues of
+J M^-1 J^T), force and torque capability (the farthest vertices of the efforts' polytope), resolutions, the
+gravity share (the generated ``gravity_vector`` called inside the program), friction, damping and the passive
+walls - as one jitted program: the formulas of :mod:`symkin.rating.formulas` in jax.numpy, the same code as the
+host's, so that on a GPU the samples' J and M stay on the device and only the measures' values come back.  The
+usable samples themselves (sampling, assembly, the conditioning cut) are decided as on the host.
+
+:func:`rated_on_device` takes the measures as a function of the sampled arrays and an array module, traces it
+once with jax.numpy and returns what it gave with numpy values: :class:`~symkin.rating.handle_measures.Measure`
+is a pytree whose one leaf is its values (its name, unit and doc static), the reasons a group is not rated a
+static node.
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from symkin.rating.handle_measures import Measure
+from symkin.runtime.info import GeneratedModel
+
+#: The arrays of the usable samples the measures read: the joints, the poses the generated functions take, the
+#: handle's Jacobians pushed and turned, M, and the efforts that hold the device (a reason where there are none).
+SAMPLED = ("q", "poses", "J_v", "J_w", "M", "G")
+
+Measures = tuple[tuple[Measure, ...], dict[str, str]]
+
+
+def rates_on_device(model: GeneratedModel) -> bool:
+    """Whether the model is loaded with the JAX backend: its datasheet's arithmetic runs on JAX's device."""
+    return getattr(model, "backend", None) == "jax"
+
+
+@dataclass(frozen=True)
+class _Reasons:
+    """{group: why it is not rated} as a static node of the program's output (no arrays)."""
+
+    items: tuple[tuple[str, str], ...]
+
+
+@functools.cache
+def _register() -> None:
+    """Measure and _Reasons as pytrees, once per process."""
+    import jax
+
+    jax.tree_util.register_dataclass(Measure, data_fields=["values"],
+                                     meta_fields=["name", "unit", "worst_is_min", "doc", "axis"])
+    jax.tree_util.register_static(_Reasons)
+
+
+def rated_on_device(measures_of: Callable[[Mapping[str, Any], Any], Measures], sampled: Mapping[str, Any]
+                    ) -> Measures:
+    """``measures_of(sampled, jax.numpy)`` compiled and run on JAX's default device, its values back as numpy
+    arrays: ``sampled`` maps the names of :data:`SAMPLED` to arrays (traced) or to None or a reason (static)."""
+    import jax
+    import jax.numpy as jnp
+
+    _register()
+    traced = {name: value for name, value in sampled.items() if value is not None and not isinstance(value, str)}
+    fixed = {name: value for name, value in sampled.items() if name not in traced}
+
+    def program(arrays: dict[str, Any]) -> tuple[tuple[Measure, ...], _Reasons]:
+        measures, skipped = measures_of({**arrays, **fixed}, jnp)
+        return measures, _Reasons(tuple(skipped.items()))
+
+    measures, reasons = jax.jit(program)(traced)
+    return tuple(replace(m, values=np.array(m.values)) for m in measures), dict(reasons.items)
