@@ -22,6 +22,9 @@ calls, after one that compiles):
   the Cartesian measure |det J| dq: the host decides its working mode by the C backend's fk and ik (ik(fk(q)) = q),
   the device in the same jitted function as J and its moments.
 
+``DELTA datasheet``: the seconds of ``symkin rate``'s arithmetic (:func:`symkin.rating.datasheet.rate`, every group
+of measures rated) over ``--samples`` workspace samples with numpy and on JAX's device, its first and second rating.
+
 With ``--compile``, also the seconds of the first call of every function of the UR10e's scene with the JAX backend
 (XLA's compile, at one configuration): what keeps the JAX backend out of the example scenes so far.
 
@@ -69,6 +72,8 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--batch", type=int, default=100_000, help="configurations per call (default: %(default)s)")
     parser.add_argument("--repeat", type=int, default=5, help="timed calls per case (default: %(default)s)")
+    parser.add_argument("--samples", type=int, default=100_000,
+                        help="workspace samples of the datasheet rows (default: %(default)s)")
     parser.add_argument("--compile", action="store_true",
                         help="also time the first call (the compile) of every function of the UR10e's scene")
     args = parser.parse_args(argv)
@@ -119,9 +124,33 @@ def main(argv: list[str] | None = None) -> int:
     print(format_table(["case", "backend", "ns per configuration"], rows))
     print(f"a 10^6-design x 10^4-configuration GCI sweep at the JAX row's rate: {sweep:.0f} s "
           "(issue 66's target on an H200-class GPU: <= 60 s; fk + J + M + V + G reduced <= 1 ns)")
+    print(format_table(["DELTA datasheet (symkin rate)", "backend", "seconds", "us per sample"],
+                       _datasheet_rows(args.samples)))
     if args.compile:
         print(format_table(["UR10e scene function", "first call, JAX (s)"], _first_calls()))
     return 0
+
+
+def _datasheet_rows(samples: int) -> list[list[str]]:
+    """Seconds of a DELTA's datasheet (every group rated) over ``samples`` workspace samples, numpy's against JAX's
+    device (:mod:`symkin.rating.on_device`): its first rating (XLA compiles the generated functions and the measures'
+    program) and a second one (the generated functions compiled; the measures' program compiled again, one per
+    rating)."""
+    from symkin.rating import datasheet
+    from symkin.rating.handle_measures import Actuation
+
+    with tempfile.TemporaryDirectory() as tmp:
+        directory = symkin.derive(ROOT / "models" / "delta.yaml", tmp, backends=["numpy", "jax"],
+                                  outputs=["fk", "ik", "jacobian", "mass_matrix", "gravity_vector"])
+        actuation = Actuation(np.full(3, 0.3), np.full(3, 0.15), np.full(3, 1e-4), np.full(3, 0.01), np.full(3, 0.02))
+        models = {backend: symkin.load(directory, backend) for backend in ("numpy", "jax")}
+        rows = []
+        for backend, label in (("numpy", "numpy"), ("jax", "JAX, first rating"), ("jax", "JAX, second rating")):
+            start = time.perf_counter()
+            sheet = datasheet.rate(models[backend], actuation, samples=samples)
+            seconds = time.perf_counter() - start
+            rows.append([f"{len(sheet.q)} samples", label, f"{seconds:.3f}", f"{1e6 * seconds / len(sheet.q):.2f}"])
+    return rows
 
 
 def _first_calls() -> list[list[str]]:

@@ -18,7 +18,9 @@ decided on the device too: those within the model's joint stops (:mod:`symkin.me
 as arguments) and, for a parallel mechanism with closed forms, those in its working mode - fk(q) assembles and
 ik(fk(q)) = q (:func:`symkin.mechanism.working_mode.same_branches`, the host's test in jax.numpy), the Jacobian
 J(q, fk(q)).  A parallel mechanism with declared passive-joint limits (checked on the closure, on the
-host), legs without closed forms, and an index other than 1/kappa take the host integrand.
+host), legs without closed forms, and an index other than 1/kappa take the host integrand.  The program's
+factorizations (|det J|, the SVDs) run one after the other (:class:`symkin.numerics.ordered_linalg.InOrder`): run
+concurrently, jaxlib's CPU LAPACK kernels deadlock on a 2-core machine.
 """
 
 from __future__ import annotations
@@ -33,6 +35,7 @@ from symkin import mechanism
 from symkin.integration.integrand import Integrand
 from symkin.mechanism import Limits, reach, stops, working_mode
 from symkin.numerics import conditioning
+from symkin.numerics.ordered_linalg import InOrder
 from symkin.runtime.info import GeneratedModel
 
 _EPS = float(np.finfo(np.float64).eps)
@@ -74,14 +77,17 @@ class _Functions(NamedTuple):
 HARD_SHARE = 1 / 16
 
 
-def extreme_singular_values(J: Any, threshold: float) -> tuple[Any, Any]:
+def extreme_singular_values(J: Any, threshold: float, xp: Any = None) -> tuple[Any, Any]:
     """(sigma_max, sigma_min) of a batch of finite Jacobians (N, m, n) in jax.numpy by
     :mod:`symkin.numerics.conditioning`'s rules: its closed forms for 2 x 2 and 3 x 3 matrices (the host's formulas,
     several times faster than a batched SVD), an SVD otherwise and for the 3 x 3 matrices the closed form does not
     serve - gathered to a static share of the batch (:data:`HARD_SHARE`; more take an SVD of the whole batch); a
-    sigma_min at most ``threshold`` sigma_max is 0 (the numerical rank)."""
+    sigma_min at most ``threshold`` sigma_max is 0 (the numerical rank).  ``xp``: the array module whose linalg takes
+    the SVDs (default jax.numpy; a device program's :class:`symkin.numerics.ordered_linalg.InOrder`)."""
     import jax
     import jax.numpy as jnp
+
+    linalg = (xp or jnp).linalg
 
     m, n = J.shape[-2:]
     if m == n == 2:
@@ -90,18 +96,18 @@ def extreme_singular_values(J: Any, threshold: float) -> tuple[Any, Any]:
         largest, smallest, hard = conditioning.closed_form_3x3(J, jnp)
         size = max(1, int(J.shape[0] * HARD_SHARE))
         index = jnp.nonzero(hard, size=size, fill_value=0)[0]
-        s = jnp.linalg.svd(J[index], compute_uv=False)
+        s = linalg.svd(J[index], compute_uv=False)
         taken = hard[index]
         gathered = (largest.at[index].set(jnp.where(taken, s[:, 0], largest[index])),
                     smallest.at[index].set(jnp.where(taken, s[:, -1], smallest[index])))
 
         def every_one(_: Any) -> tuple[Any, Any]:
-            s = jnp.linalg.svd(J, compute_uv=False)
+            s = linalg.svd(J, compute_uv=False)
             return jnp.where(hard, s[:, 0], largest), jnp.where(hard, s[:, -1], smallest)
 
         largest, smallest = jax.lax.cond(jnp.sum(hard) > size, every_one, lambda _: gathered, None)
     else:
-        s = jnp.linalg.svd(J, compute_uv=False)
+        s = linalg.svd(J, compute_uv=False)
         largest, smallest = s[:, 0], s[:, -1]
     return largest, jnp.where(smallest <= threshold * largest, 0.0, smallest)
 
@@ -131,11 +137,12 @@ def _compiled(functions: _Functions, measure: str, with_index: bool, threshold: 
         J, inside = jacobian_and_inside(q, joint_stops, revolute, parameters)
         finite = jnp.all(jnp.isfinite(J), axis=(-2, -1))
         J = jnp.where(finite[:, None, None], J, 0.0)
-        weight = jnp.abs(jnp.linalg.det(J)) if measure == "cartesian" else jnp.ones(q.shape[0])
+        xp = InOrder(jnp)  # |det J| and the SVD one after the other (a deadlock of jaxlib's CPU LAPACK otherwise)
+        weight = jnp.abs(xp.linalg.det(J)) if measure == "cartesian" else jnp.ones(q.shape[0])
         weight = jnp.where(inside, weight, 0.0)
         if not with_index:
             return weight[:, None], weight
-        largest, smallest = extreme_singular_values(J * scale[:, None], threshold)
+        largest, smallest = extreme_singular_values(J * scale[:, None], threshold, xp)
         index = jnp.where(finite & (largest > 0), smallest / jnp.where(largest > 0, largest, 1.0), 0.0)
         return jnp.stack([weight * index, weight], axis=-1), index
 
@@ -238,12 +245,13 @@ def compiled_surrogate_gradient(jacobian: Callable[..., Any], measure: str, obje
 
     def surrogate(q: Any, scale: Any, parameters: dict[str, Any]) -> Any:
         raw = jacobian(q, **parameters)
-        weight = jnp.abs(jnp.linalg.det(raw)) if measure == "cartesian" else jnp.ones(q.shape[0])
+        xp = InOrder(jnp)  # det and inv one after the other (see symkin.numerics.ordered_linalg)
+        weight = jnp.abs(xp.linalg.det(raw)) if measure == "cartesian" else jnp.ones(q.shape[0])
         smoothed = weight if smoothing == 0 else jnp.sqrt(weight * weight + smoothing**2 * jnp.mean(weight * weight))
         if objective == "workspace":
             return jnp.sum(smoothed)
         J = raw * scale[:, None]
-        inverse_sum = jnp.trace(jnp.linalg.inv(jnp.swapaxes(J, -1, -2) @ J), axis1=-2, axis2=-1)
+        inverse_sum = jnp.trace(xp.linalg.inv(jnp.swapaxes(J, -1, -2) @ J), axis1=-2, axis2=-1)
         index = J.shape[-1] / jnp.sqrt(jnp.sum(J * J, axis=(-2, -1)) * inverse_sum)
         return jnp.sum(weight * index) / jnp.sum(smoothed)
 

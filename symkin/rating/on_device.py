@@ -9,7 +9,8 @@ host's, so that on a GPU the samples' J and M stay on the device and only the me
 usable samples themselves (sampling, assembly, the conditioning cut) are decided as on the host.
 
 :func:`rated_on_device` takes the measures as a function of the sampled arrays and an array module, traces it
-once with jax.numpy and returns what it gave with numpy values: :class:`~symkin.rating.handle_measures.Measure`
+once with jax.numpy (its factorizations one after the other: :class:`symkin.numerics.ordered_linalg.InOrder`) and
+returns what it gave with numpy values: :class:`~symkin.rating.handle_measures.Measure`
 is a pytree whose one leaf is its values (its name, unit and doc static), the reasons a group is not rated a
 static node.
 """
@@ -23,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from symkin.numerics.ordered_linalg import InOrder
 from symkin.rating.handle_measures import Measure
 from symkin.runtime.info import GeneratedModel
 
@@ -67,7 +69,7 @@ def rated_on_device(measures_of: Callable[[Mapping[str, Any], Any], Measures], s
     fixed = {name: value for name, value in sampled.items() if name not in traced}
 
     def program(arrays: dict[str, Any]) -> tuple[tuple[Measure, ...], _Reasons]:
-        measures, skipped = measures_of({**arrays, **fixed}, jnp)
+        measures, skipped = measures_of({**arrays, **fixed}, InOrder(jnp))
         return measures, _Reasons(tuple(skipped.items()))
 
     measures, reasons = jax.jit(program)(traced)

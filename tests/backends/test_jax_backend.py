@@ -13,6 +13,7 @@ JAX backend from the shared derivations.
 from __future__ import annotations
 
 import contextlib
+import faulthandler
 import re
 
 import jax
@@ -154,15 +155,40 @@ def test_the_global_index_is_reduced_on_the_device(name, options, methods, jax_m
         assert got.measure.value == pytest.approx(want.measure.value, rel=1e-12)
 
 
-@pytest.mark.parametrize("name", ["delta", "ur10e", "agile_eye"])
-def test_the_datasheet_is_rated_on_the_device(name, jax_model, loaded, monkeypatch):
+@contextlib.contextmanager
+def _fails_if_it_hangs(seconds: float = 120.0):
+    """End the test process with every thread's traceback if the block runs longer than ``seconds`` (a deadlock)."""
+    faulthandler.dump_traceback_later(seconds, exit=True)
+    try:
+        yield
+    finally:
+        faulthandler.cancel_dump_traceback_later()
+
+
+def test_the_devices_factorizations_run_in_order(jax_model, loaded):
+    """The UR10e's GCI with the Cartesian measure on the device: |det J| and the SVD of J at 2^14 configurations,
+    which jaxlib's CPU LAPACK kernels ran concurrently and deadlocked on (2 cores) before they were ordered
+    (symkin.numerics.ordered_linalg); numpy's figures to the same bounds as the other models'."""
+    from symkin import analysis
+
+    want = analysis.gci(loaded("ur10e", "numpy"), samples=2**14, seed=3, length=0.5)
+    with _fails_if_it_hangs():
+        got = analysis.gci(jax_model("ur10e"), samples=2**14, seed=3, length=0.5)
+    assert got.value.value == pytest.approx(want.value.value, rel=1e-12)
+    assert got.measure.value == pytest.approx(want.measure.value, rel=1e-12)
+
+
+@pytest.mark.parametrize("name, samples", [("delta", 2**15), ("ur10e", 256), ("agile_eye", 256)])
+def test_the_datasheet_is_rated_on_the_device(name, samples, jax_model, loaded, monkeypatch):
     """symkin rate's measures of a model loaded with JAX are one program compiled for JAX's device (the datasheet's
     formulas traced with jax.numpy, never called with numpy): a DELTA pushed (a square J), the UR10e pushed at its
     TCP (a redundant J: the farthest vertices of its efforts' polytope over every choice of 3 of its 6 joints) and
     the Agile Eye turned, every group rated.  They equal numpy's sample by sample to the rounding the solves
     amplify: the apparent mass (J M^-1 J^T)^-1 to svd(n) kappa(J)^2 kappa(M) (kappa(J) <= 1 / USABLE_CONDITIONING
-    on the usable samples; the home pose, quoted whatever its conditioning, left out), every other measure less."""
+    on the usable samples; the home pose, quoted whatever its conditioning, left out), every other measure less.
+    The DELTA's 2^15 samples are more than the batch at which its factorizations deadlocked unordered."""
     from symkin import mechanism
+    from symkin.numerics.ordered_linalg import InOrder
     from symkin.rating import datasheet
     from symkin.rating.handle_measures import Actuation
     from tolerances import svd
@@ -177,10 +203,11 @@ def test_the_datasheet_is_rated_on_the_device(name, jax_model, loaded, monkeypat
     reference = loaded(name, "numpy")
     n = len(reference.info.coordinates)
     actuation = Actuation(np.full(n, 10.0), np.full(n, 5.0), np.full(n, 1e-4), np.full(n, 0.01), np.full(n, 0.02))
-    want = datasheet.rate(reference, actuation, samples=256)
+    want = datasheet.rate(reference, actuation, samples=samples)
     monkeypatch.setattr(datasheet, "_measures", recorded)
-    got = datasheet.rate(jax_model(name), actuation, samples=256)
-    assert modules == [jnp]
+    with _fails_if_it_hangs():
+        got = datasheet.rate(jax_model(name), actuation, samples=samples)
+    assert [type(module) for module in modules] == [InOrder]  # jax.numpy, its factorizations in order
     np.testing.assert_allclose(got.q, want.q, rtol=0, atol=KINEMATICS * np.pi)  # the same samples (by JAX's ik)
     assert got.skipped == want.skipped
     assert [m.name for m in got.measures] == [m.name for m in want.measures]
