@@ -57,10 +57,17 @@ def _register() -> None:
     jax.tree_util.register_static(_Reasons)
 
 
+#: Samples per call of the measures' program, which bounds its memory: the largest intermediates are the redundant
+#: arm's peak force, C(n, m) 2^(m-1) (m + n) numbers per sample (720 for the UR10e: 190 MB per chunk).
+CHUNK = 2**15
+
+
 def rated_on_device(measures_of: Callable[[Mapping[str, Any], Any], Measures], sampled: Mapping[str, Any]
                     ) -> Measures:
     """``measures_of(sampled, jax.numpy)`` compiled and run on JAX's default device, its values back as numpy
-    arrays: ``sampled`` maps the names of :data:`SAMPLED` to arrays (traced) or to None or a reason (static)."""
+    arrays: ``sampled`` maps the names of :data:`SAMPLED` to arrays (traced) or to None or a reason (static).  The
+    samples go through in chunks of at most :data:`CHUNK` (the last one padded with its first sample, so that one
+    compiled program serves every chunk)."""
     import jax
     import jax.numpy as jnp
 
@@ -72,5 +79,14 @@ def rated_on_device(measures_of: Callable[[Mapping[str, Any], Any], Measures], s
         measures, skipped = measures_of({**arrays, **fixed}, InOrder(jnp))
         return measures, _Reasons(tuple(skipped.items()))
 
-    measures, reasons = jax.jit(program)(traced)
-    return tuple(replace(m, values=np.array(m.values)) for m in measures), dict(reasons.items)
+    compiled = jax.jit(program)
+    count = len(traced["q"])
+    size = min(CHUNK, count)
+    parts = []
+    for start in range(0, count, size):
+        taken = min(size, count - start)
+        index = start + np.where(np.arange(size) < taken, np.arange(size), 0)
+        measures, reasons = compiled({name: value[index] for name, value in traced.items()})
+        parts.append([np.array(m.values)[:taken] for m in measures])
+    return (tuple(replace(m, values=np.concatenate(values)) for m, values in zip(measures, zip(*parts))),
+            dict(reasons.items))
