@@ -481,8 +481,8 @@ void phantom_premium_inverse_dynamics_batch(size_t n, const double *q, const dou
  * tau(q + dq, qd + dqd, qdd + dqdd) = tau + dtau_dq dq + dtau_dqd dqd + dtau_dqdd dqdd
  * to first order, tau = M qdd + V + G + F_f (seed eq. 8.34); dtau_dqdd = M.  Reverse-
  * mode derivative of the recursive Newton-Euler program (Carpentier and Mansard, RSS
- * 2018), dtau_dqdd by the composite-rigid-body algorithm; a sign(qd) Coulomb term counts
- * with derivative 0.
+ * 2018), dtau_dqdd = M from the same adjoint sweeps (its lower triangle, mirrored:
+ * exactly symmetric); a sign(qd) Coulomb term counts with derivative 0.
  *
  * Inputs:
  *   q[3]: joint coordinates: q1 [rad], q2 [rad], q3 [rad].
@@ -540,7 +540,7 @@ void phantom_premium_inverse_dynamics_batch(size_t n, const double *q, const dou
  *   dtau_dqd[9]: 3 x 3, row-major; d tau / dqd: the damping of the motion (Coriolis and
  *   friction).
  *   dtau_dqdd[9]: 3 x 3, row-major; d tau / dqdd = M(q), the mass matrix.
- * Cost: 818 operations.
+ * Cost: 758 operations.
  */
 void phantom_premium_inverse_dynamics_derivatives(const double *q, const double *qd, const double *qdd, double l1, double l2, double l3, double l5, double l6, double m_a, double I_axx, double I_ayy, double I_azz, double m_c, double I_cxx, double I_cyy, double I_czz, double m_be, double I_bexx, double I_beyy, double I_bezz, double m_df, double I_dfxx, double I_dfyy, double I_dfzz, double I_baseyy, double J_m, double g, double *dtau_dq, double *dtau_dqd, double *dtau_dqdd);
 
@@ -1038,7 +1038,7 @@ void phantom_premium_potential_energy_batch(size_t n, const double *q, const dou
  *   Gx[3]: 3; operational-space gravity force J^-T G (operational_space).
  *   k[1]: scalar; kinetic energy of all bodies (kinetic_energy) [J].
  *   u[1]: scalar; potential energy (potential_energy) [J].
- * Cost: 2655 operations.
+ * Cost: 2670 operations.
  */
 void phantom_premium_combined(const double *q, const double *qd, const double *qdd, const double *tau, double l1, double l2, double l3, double l5, double l6, double m_a, double I_axx, double I_ayy, double I_azz, double m_c, double I_cxx, double I_cyy, double I_czz, double m_be, double I_bexx, double I_beyy, double I_bezz, double m_df, double I_dfxx, double I_dfyy, double I_dfzz, double I_baseyy, double J_m, double g, double *base_T_tcp, double *base_T_turret, double *base_T_upper_arm, double *base_T_distal, double *base_T_lever, double *base_T_link_c, double *J, double *M, double *C, double *V, double *G, double *dG_dq, double *F_f, double *inverse_dynamics_tau, double *dtau_dq, double *dtau_dqd, double *dtau_dqdd, double *forward_dynamics_qdd, double *dqdd_dq, double *dqdd_dqd, double *dqdd_dtau, double *F, double *Mx, double *Vx, double *Gx, double *k, double *u);
 

@@ -290,8 +290,8 @@ void planar_2r_inverse_dynamics_batch(size_t n, const double *q, const double *q
  * tau(q + dq, qd + dqd, qdd + dqdd) = tau + dtau_dq dq + dtau_dqd dqd + dtau_dqdd dqdd
  * to first order, tau = M qdd + V + G + F_f (seed eq. 8.34); dtau_dqdd = M.  Reverse-
  * mode derivative of the recursive Newton-Euler program (Carpentier and Mansard, RSS
- * 2018), dtau_dqdd by the composite-rigid-body algorithm; a sign(qd) Coulomb term counts
- * with derivative 0.
+ * 2018), dtau_dqdd = M from the same adjoint sweeps (its lower triangle, mirrored:
+ * exactly symmetric); a sign(qd) Coulomb term counts with derivative 0.
  *
  * Inputs:
  *   q[2]: joint coordinates: theta1 [rad], theta2 [rad].
@@ -307,7 +307,7 @@ void planar_2r_inverse_dynamics_batch(size_t n, const double *q, const double *q
  *   dtau_dqd[4]: 2 x 2, row-major; d tau / dqd: the damping of the motion (Coriolis and
  *   friction).
  *   dtau_dqdd[4]: 2 x 2, row-major; d tau / dqdd = M(q), the mass matrix.
- * Cost: 87 operations.
+ * Cost: 86 operations.
  */
 void planar_2r_inverse_dynamics_derivatives(const double *q, const double *qd, const double *qdd, double l1, double l2, double m1, double m2, double g, double *dtau_dq, double *dtau_dqd, double *dtau_dqdd);
 
@@ -542,7 +542,7 @@ void planar_2r_potential_energy_batch(size_t n, const double *q, const double *p
  *   Gx[2]: 2; operational-space gravity force J^-T G (operational_space).
  *   k[1]: scalar; kinetic energy of all bodies (kinetic_energy) [J].
  *   u[1]: scalar; potential energy (potential_energy) [J].
- * Cost: 413 operations.
+ * Cost: 414 operations.
  */
 void planar_2r_combined(const double *q, const double *qd, const double *qdd, const double *tau, double l1, double l2, double m1, double m2, double g, double *base_T_tcp, double *base_T_link1, double *base_T_link2, double *jacobian_J, double *jacobian_geometric_J, double *M, double *C, double *V, double *G, double *dG_dq, double *inverse_dynamics_tau, double *dtau_dq, double *dtau_dqd, double *dtau_dqdd, double *forward_dynamics_qdd, double *dqdd_dq, double *dqdd_dqd, double *dqdd_dtau, double *F, double *Mx, double *Vx, double *Gx, double *k, double *u);
 
@@ -802,8 +802,8 @@ void planar_2r_inverse_dynamics_batch_f32(size_t n, const float *q, const float 
  * tau(q + dq, qd + dqd, qdd + dqdd) = tau + dtau_dq dq + dtau_dqd dqd + dtau_dqdd dqdd
  * to first order, tau = M qdd + V + G + F_f (seed eq. 8.34); dtau_dqdd = M.  Reverse-
  * mode derivative of the recursive Newton-Euler program (Carpentier and Mansard, RSS
- * 2018), dtau_dqdd by the composite-rigid-body algorithm; a sign(qd) Coulomb term counts
- * with derivative 0.
+ * 2018), dtau_dqdd = M from the same adjoint sweeps (its lower triangle, mirrored:
+ * exactly symmetric); a sign(qd) Coulomb term counts with derivative 0.
  *
  * Inputs:
  *   q[2]: joint coordinates: theta1 [rad], theta2 [rad].
@@ -819,7 +819,7 @@ void planar_2r_inverse_dynamics_batch_f32(size_t n, const float *q, const float 
  *   dtau_dqd[4]: 2 x 2, row-major; d tau / dqd: the damping of the motion (Coriolis and
  *   friction).
  *   dtau_dqdd[4]: 2 x 2, row-major; d tau / dqdd = M(q), the mass matrix.
- * Cost: 87 operations.
+ * Cost: 86 operations.
  */
 void planar_2r_inverse_dynamics_derivatives_f32(const float *q, const float *qd, const float *qdd, float l1, float l2, float m1, float m2, float g, float *dtau_dq, float *dtau_dqd, float *dtau_dqdd);
 
@@ -1054,7 +1054,7 @@ void planar_2r_potential_energy_batch_f32(size_t n, const float *q, const float 
  *   Gx[2]: 2; operational-space gravity force J^-T G (operational_space).
  *   k[1]: scalar; kinetic energy of all bodies (kinetic_energy) [J].
  *   u[1]: scalar; potential energy (potential_energy) [J].
- * Cost: 413 operations.
+ * Cost: 414 operations.
  */
 void planar_2r_combined_f32(const float *q, const float *qd, const float *qdd, const float *tau, float l1, float l2, float m1, float m2, float g, float *base_T_tcp, float *base_T_link1, float *base_T_link2, float *jacobian_J, float *jacobian_geometric_J, float *M, float *C, float *V, float *G, float *dG_dq, float *inverse_dynamics_tau, float *dtau_dq, float *dtau_dqd, float *dtau_dqdd, float *forward_dynamics_qdd, float *dqdd_dq, float *dqdd_dqd, float *dqdd_dtau, float *F, float *Mx, float *Vx, float *Gx, float *k, float *u);
 

@@ -427,8 +427,8 @@
    * tau(q + dq, qd + dqd, qdd + dqdd) = tau + dtau_dq dq + dtau_dqd dqd + dtau_dqdd dqdd
    * to first order, tau = M qdd + V + G + F_f (seed eq. 8.34); dtau_dqdd = M.  Reverse-
    * mode derivative of the recursive Newton-Euler program (Carpentier and Mansard, RSS
-   * 2018), dtau_dqdd by the composite-rigid-body algorithm; a sign(qd) Coulomb term
-   * counts with derivative 0.
+   * 2018), dtau_dqdd = M from the same adjoint sweeps (its lower triangle, mirrored:
+   * exactly symmetric); a sign(qd) Coulomb term counts with derivative 0.
    *
    * @param {number[]} q joint coordinates, 2 numbers: theta1 [rad], theta2 [rad].
    * @param {number[]} qd joint velocities, 2 numbers: theta1 [rad/s], theta2 [rad/s].
@@ -475,28 +475,27 @@
     const _x10 = theta2_d + theta1_d;
     const _x11 = l2 + _x7;
     const _x12 = m2*_x11;
-    const _x13 = l1*l1;
-    const _x14 = l1*_x0*_x1;
-    const _x15 = l2*l2*m2;
-    const _x16 = _x14 + _x15;
-    const _x17 = theta1_dd + theta2_dd;
-    const _x18 = m2*(-_x6 + _x0*_x8);
-    const _x19 = l1*(m2*_x9 + m2*(_x0*_x5 + _x9) - _x1*_x10*_x10) - _x12*_x5;
-    const _x20 = m2*_x4*_x7 - _x4*_x12;
-    const _x21 = l1*m2*_x4*_x4 + _x0*_x12;
-    const _x22 = _x21 + l1*m1;
-    const _x23 = l1*(_x18 + _x1*_x17 + m2*_x6) + _x12*_x8;
+    const _x13 = l2*l2*m2;
+    const _x14 = _x0*_x1;
+    const _x15 = _x13 + l1*_x14;
+    const _x16 = theta1_dd + theta2_dd;
+    const _x17 = m2*(-_x6 + _x0*_x8);
+    const _x18 = l1*(m2*_x9 + m2*(_x0*_x5 + _x9) - _x1*_x10*_x10) - _x12*_x5;
+    const _x19 = m2*_x4*_x7 - _x4*_x12;
+    const _x20 = l1*m2*_x4*_x4 + _x0*_x12;
+    const _x21 = _x20 + l1*m1;
+    const _x22 = _x1*_x7 + _x13;
+    const _x23 = l1*(_x17 + _x1*_x16 + m2*_x6) + _x12*_x8;
     const _x24 = -_x1*_x5;
     const _x25 = -_x1*_x4;
-    const _x26 = _x0*_x1;
-    const _x27 = _x1*_x8;
-    const _x28 = 2.0*l1;
-    const _x29 = _x28*theta1_d;
-    const _x30 = -_x1*_x4*_x10*_x28;
+    const _x26 = _x1*_x8;
+    const _x27 = 2.0*l1;
+    const _x28 = _x27*theta1_d;
+    const _x29 = -_x1*_x4*_x10*_x27;
     return {
-      dtau_dq: [[_x2*_x20 - _x3*_x22, _x0*_x19 - _x4*_x23], [_x2*_x25 - _x3*_x26, _x0*_x24 - _x4*_x27]],
-      dtau_dqd: [[_x30 - _x29*_x20, _x30], [-_x25*_x29, 0.0]],
-      dtau_dqdd: [[_x15 + 2.0*_x14 + m2*_x13 + m1*_x13, _x16], [_x16, _x15]],
+      dtau_dq: [[_x2*_x19 - _x3*_x21, _x0*_x18 - _x4*_x23], [_x2*_x25 - _x3*_x14, _x0*_x24 - _x4*_x26]],
+      dtau_dqd: [[_x29 - _x28*_x19, _x29], [-_x28*_x25, 0.0]],
+      dtau_dqdd: [[_x22 + l1*_x20 + l1*l1*m1, _x15], [_x15, _x13]],
     };
   }
 
@@ -1000,7 +999,7 @@
     const _x35 = _x30*_x34;
     const _x36 = -_x27*_x15 + tau_theta1 - l1*(m2*_x1*_x31 + _x6*(-_x26*_x10 + (_x1*_x18 + _x6*_x15)*m2)) + _x33;
     const _x37 = -_x34*_x35 + _x5;
-    const _x38 = _x33 - _x35*_x36 + tau_theta2;
+    const _x38 = -_x36*_x35 + _x33 + tau_theta2;
     const _x39 = _x38/_x37;
     const _x40 = -_x35*_x39 + _x30*_x36;
     const _x41 = l1*_x40 + _x15;
@@ -1018,111 +1017,114 @@
     const _x53 = l1*_x11;
     const _x54 = -_x53;
     const _x55 = l1*_x14;
-    const _x56 = m1*_x0*theta1_dd;
-    const _x57 = _x55 + _x52;
-    const _x58 = _x2 + _x27;
-    const _x59 = -_x50;
-    const _x60 = _x54 + _x50;
-    const _x61 = _x52*_x60;
-    const _x62 = -_x47 - _x46;
-    const _x63 = _x53 + _x49;
-    const _x64 = _x3*_x6;
-    const _x65 = _x64*theta1_d;
-    const _x66 = theta2_d*theta2_d;
-    const _x67 = 2.0*theta1_d*theta2_d;
-    const _x68 = -_x52*_x67 - _x52*_x66 + (-_x55 - _x52)*_x7;
-    const _x69 = -_x49*_x67 - _x49*_x66 + _x7*_x60;
-    const _x70 = -_x64;
-    const _x71 = _x8*_x9;
-    const _x72 = _x6*_x8*_x10;
-    const _x73 = _x6*_x15;
-    const _x74 = _x1*_x12;
-    const _x75 = -_x6;
-    const _x76 = -_x12;
-    const _x77 = _x1*_x10;
-    const _x78 = -_x10*_x73;
-    const _x79 = _x15*_x10*_x75 - _x10*_x74;
-    const _x80 = m2*(-_x6*_x18 + _x1*_x23);
-    const _x81 = _x5*_x16 + l2*_x80;
-    const _x82 = m2*(-_x19 + _x1*_x23);
-    const _x83 = -_x22*_x18 + l1*(-_x26*_x10 + m2*_x24 + m2*(_x24 + _x1*_x18));
-    const _x84 = m2*_x6*_x20 - _x6*_x22;
-    const _x85 = _x2*_x6*_x6 + _x1*_x22;
-    const _x86 = _x85 + _x27;
-    const _x87 = _x22*_x23 + l1*(_x10*_x16 + m2*_x19 + _x82);
-    const _x88 = -_x10*_x18;
-    const _x89 = -_x6*_x10;
-    const _x90 = _x10*_x23;
-    const _x91 = -_x6*_x25*_x28*_x10;
-    const _x92 = _x40 + _x39;
-    const _x93 = m2*(-_x19 + _x1*_x41);
-    const _x94 = -_x22*_x18 + l1*(m2*_x42 - _x26*_x10 + m2*(_x42 + _x1*_x18));
-    const _x95 = _x22*_x41 + l1*(m2*_x19 + _x10*_x92 + _x93);
-    const _x96 = _x10*_x41;
-    const _x97 = -_x15*_x84 + _x12*_x86;
-    const _x98 = _x12*_x77 - _x15*_x89 - _x35*_x97;
-    const _x99 = _x43*_x98;
-    const _x100 = -_x35*_x99 + _x30*_x97;
-    const _x101 = _x6*_x95 - _x1*_x94;
-    const _x102 = -_x1*_x88 - _x35*_x101 + _x6*_x96;
-    const _x103 = _x43*_x102;
-    const _x104 = -_x35*_x103 + _x30*_x101;
-    const _x105 = _x44 + _x45*_x84;
-    const _x106 = _x45*_x89 - _x35*_x105;
-    const _x107 = _x43*_x106;
-    const _x108 = -_x35*_x107 + _x30*_x105;
-    const _x109 = -_x44*_x35;
+    const _x56 = m1*_x0;
+    const _x57 = _x56*theta1_dd;
+    const _x58 = _x55 + _x52;
+    const _x59 = _x2 + _x27;
+    const _x60 = -_x50;
+    const _x61 = _x54 + _x50;
+    const _x62 = _x52*_x61;
+    const _x63 = -_x47 - _x46;
+    const _x64 = _x53 + _x49;
+    const _x65 = _x3*_x6;
+    const _x66 = _x65*theta1_d;
+    const _x67 = _x1*_x10;
+    const _x68 = l1*_x67 + _x5;
+    const _x69 = theta2_d*theta2_d;
+    const _x70 = 2.0*theta1_d*theta2_d;
+    const _x71 = -_x49*_x70 - _x49*_x69 + _x7*_x61;
+    const _x72 = -_x52*_x70 - _x52*_x69 + (-_x55 - _x52)*_x7;
+    const _x73 = -_x65;
+    const _x74 = _x8*_x9;
+    const _x75 = _x6*_x8*_x10;
+    const _x76 = _x6*_x15;
+    const _x77 = _x1*_x12;
+    const _x78 = -_x6;
+    const _x79 = -_x12;
+    const _x80 = -_x10*_x76;
+    const _x81 = _x15*_x10*_x78 - _x10*_x77;
+    const _x82 = m2*(-_x6*_x18 + _x1*_x23);
+    const _x83 = _x5*_x16 + l2*_x82;
+    const _x84 = m2*(-_x19 + _x1*_x23);
+    const _x85 = -_x22*_x18 + l1*(-_x26*_x10 + m2*_x24 + m2*(_x24 + _x1*_x18));
+    const _x86 = m2*_x6*_x20 - _x6*_x22;
+    const _x87 = _x2*_x6*_x6 + _x1*_x22;
+    const _x88 = _x87 + _x27;
+    const _x89 = _x20*_x10 + _x5;
+    const _x90 = _x22*_x23 + l1*(m2*_x19 + _x10*_x16 + _x84);
+    const _x91 = -_x10*_x18;
+    const _x92 = -_x6*_x10;
+    const _x93 = _x10*_x23;
+    const _x94 = -_x6*_x25*_x28*_x10;
+    const _x95 = _x39 + _x40;
+    const _x96 = m2*(-_x19 + _x1*_x41);
+    const _x97 = -_x22*_x18 + l1*(m2*_x42 - _x26*_x10 + m2*(_x1*_x18 + _x42));
+    const _x98 = _x22*_x41 + l1*(m2*_x19 + _x10*_x95 + _x96);
+    const _x99 = _x10*_x41;
+    const _x100 = -_x15*_x86 + _x12*_x88;
+    const _x101 = -_x15*_x92 + _x12*_x67 - _x35*_x100;
+    const _x102 = _x43*_x101;
+    const _x103 = -_x35*_x102 + _x30*_x100;
+    const _x104 = _x6*_x98 - _x1*_x97;
+    const _x105 = -_x35*_x104 - _x1*_x91 + _x6*_x99;
+    const _x106 = _x43*_x105;
+    const _x107 = -_x35*_x106 + _x30*_x104;
+    const _x108 = _x44 + _x45*_x86;
+    const _x109 = _x45*_x92 - _x35*_x108;
     const _x110 = _x43*_x109;
-    const _x111 = -_x35*_x110 + _x44*_x30;
-    const _x112 = -_x35;
+    const _x111 = -_x35*_x110 + _x30*_x108;
+    const _x112 = -_x44*_x35;
     const _x113 = _x43*_x112;
-    const _x114 = -_x35*_x113 + _x30;
-    const _x115 = -_x43*_x35;
-    const _x116 = _x56 + _x27*_x15 + l1*(_x6*(-_x26*_x10 + m2*(_x6*_x23 + _x1*_x18)) + _x1*(_x10*_x16 + _x80)) + _x81;
-    const _x117 = -_x57;
-    const _x118 = _x52*_x60 + _x50*_x117;
-    const _x119 = 1.0/_x118;
-    const _x120 = _x119*(_x52*_x116 + _x81*_x117);
-    const _x121 = _x119*(_x59*_x116 + _x81*_x60);
-    const _x122 = l1*(_x6*(-_x26*_x10 - _x71) + _x6*_x71) + _x72;
-    const _x123 = -_x13*_x10 + _x15*(_x1*_x10 + _x58);
-    const _x124 = _x10*(_x1*_x15 - _x13);
-    const _x125 = _x61 + _x50*_x117;
-    const _x126 = 1.0/_x125;
-    const _x127 = _x126*(_x52*_x29 + _x34*_x117);
-    const _x128 = _x126*(_x52*_x34 + _x5*_x117);
-    const _x129 = _x126*(_x52*_x122 + _x72*_x117);
-    const _x130 = _x126*(_x117*_x124 + _x52*_x123);
-    const _x131 = _x126*(_x59*_x29 + _x34*_x60);
-    const _x132 = _x126*(_x59*_x34 + _x5*_x60);
-    const _x133 = _x126*(_x59*_x122 + _x72*_x60);
-    const _x134 = _x126*(_x59*_x123 + _x60*_x124);
-    const _x135 = _x126*(_x117*_x128 + _x52*_x127);
-    const _x136 = _x126*(_x59*_x127 + _x60*_x128);
-    const _x137 = _x126*(_x59*_x131 + _x132*_x60);
+    const _x114 = -_x35*_x113 + _x44*_x30;
+    const _x115 = -_x35;
+    const _x116 = _x43*_x115;
+    const _x117 = -_x35*_x116 + _x30;
+    const _x118 = -_x43*_x35;
+    const _x119 = _x27*_x15 + l1*(_x6*(-_x26*_x10 + m2*(_x6*_x23 + _x1*_x18)) + _x1*(_x10*_x16 + _x82)) + _x57 + _x83;
+    const _x120 = -_x58;
+    const _x121 = _x52*_x61 + _x50*_x120;
+    const _x122 = 1.0/_x121;
+    const _x123 = _x122*(_x52*_x119 + _x83*_x120);
+    const _x124 = _x122*(_x60*_x119 + _x83*_x61);
+    const _x125 = l1*(_x6*(-_x26*_x10 - _x74) + _x6*_x74) + _x75;
+    const _x126 = -_x13*_x10 + _x15*(_x1*_x10 + _x59);
+    const _x127 = _x10*(_x1*_x15 - _x13);
+    const _x128 = _x62 + _x50*_x120;
+    const _x129 = 1.0/_x128;
+    const _x130 = _x129*(_x52*_x29 + _x34*_x120);
+    const _x131 = _x129*(_x52*_x34 + _x5*_x120);
+    const _x132 = _x129*(_x52*_x125 + _x75*_x120);
+    const _x133 = _x129*(_x127*_x120 + _x52*_x126);
+    const _x134 = _x129*(_x60*_x29 + _x34*_x61);
+    const _x135 = _x129*(_x60*_x34 + _x5*_x61);
+    const _x136 = _x129*(_x60*_x125 + _x75*_x61);
+    const _x137 = _x129*(_x60*_x126 + _x127*_x61);
+    const _x138 = _x129*(_x120*_x131 + _x52*_x130);
+    const _x139 = _x129*(_x60*_x130 + _x61*_x131);
+    const _x140 = _x129*(_x60*_x134 + _x61*_x135);
     return {
-      base_T_tcp: [[_x51, _x62, 0.0, _x57], [_x48, _x51, 0.0, _x63], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]],
+      base_T_tcp: [[_x51, _x63, 0.0, _x58], [_x48, _x51, 0.0, _x64], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]],
       base_T_link1: [[_x14, -_x11, 0.0, _x55], [_x11, _x14, 0.0, _x53], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]],
-      base_T_link2: [[_x51, _x62, 0.0, _x57], [_x48, _x51, 0.0, _x63], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]],
-      jacobian_J: [[_x60, _x50], [_x57, _x52]],
-      jacobian_geometric_J: [[_x60, _x50], [_x57, _x52], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0], [1.0, 1.0]],
+      base_T_link2: [[_x51, _x63, 0.0, _x58], [_x48, _x51, 0.0, _x64], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]],
+      jacobian_J: [[_x61, _x50], [_x58, _x52]],
+      jacobian_geometric_J: [[_x61, _x50], [_x58, _x52], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0], [1.0, 1.0]],
       M: [[m1*_x0 + 2.0*_x4 + m2*_x0 + _x5, _x34], [_x34, _x5]],
-      C: [[-_x64*theta2_d, -_x65 + _x70*theta2_d], [_x65, 0.0]],
-      V: [l1*(_x6*(-_x26*_x10 - _x71) + _x6*_x71) + _x72, _x72],
-      G: [-_x13*_x10 + _x15*(_x1*_x10 + _x58), _x10*(_x1*_x15 - _x13)],
-      dG_dq: [[_x76*(_x77 + _x58) + _x78, _x79], [_x76*_x77 + _x78, _x79]],
-      inverse_dynamics_tau: [_x56 + _x27*_x15 + l1*(_x6*(-_x26*_x10 + m2*(_x6*_x23 + _x1*_x18)) + _x1*(_x10*_x16 + _x80)) + _x81, _x81],
-      dtau_dq: [[-_x12*_x86 + _x15*_x84, -_x6*_x87 + _x1*_x83], [-_x12*_x77 + _x15*_x89, -_x6*_x90 + _x1*_x88]],
-      dtau_dqd: [[-_x45*_x84 + _x91, _x91], [-_x45*_x89, 0.0]],
-      dtau_dqdd: [[m1*_x0 + 2.0*_x4 + m2*_x0 + _x5, _x34], [_x34, _x5]],
+      C: [[-_x65*theta2_d, -_x66 + _x73*theta2_d], [_x66, 0.0]],
+      V: [l1*(_x6*(-_x26*_x10 - _x74) + _x6*_x74) + _x75, _x75],
+      G: [-_x13*_x10 + _x15*(_x1*_x10 + _x59), _x10*(_x1*_x15 - _x13)],
+      dG_dq: [[_x79*(_x67 + _x59) + _x80, _x81], [_x67*_x79 + _x80, _x81]],
+      inverse_dynamics_tau: [_x27*_x15 + l1*(_x6*(-_x26*_x10 + m2*(_x6*_x23 + _x1*_x18)) + _x1*(_x10*_x16 + _x82)) + _x57 + _x83, _x83],
+      dtau_dq: [[-_x12*_x88 + _x15*_x86, -_x6*_x90 + _x1*_x85], [-_x12*_x67 + _x15*_x92, -_x6*_x93 + _x1*_x91]],
+      dtau_dqd: [[-_x45*_x86 + _x94, _x94], [-_x45*_x92, 0.0]],
+      dtau_dqdd: [[_x56 + l1*_x87 + _x89, _x68], [_x68, _x5]],
       forward_dynamics_qdd: [_x40, _x39],
-      dqdd_dq: [[_x100, _x104], [_x99, _x103]],
-      dqdd_dqd: [[_x108, _x111], [_x107, _x110]],
-      dqdd_dtau: [[_x114, _x115], [_x113, _x43]],
-      F: [_x120, _x121],
-      Mx: [[_x135, _x136], [_x136, _x137]],
-      Vx: [-_x68*_x135 - _x69*_x136 + _x129, -_x69*_x137 + _x133 - _x68*_x136],
-      Gx: [_x130, _x134],
+      dqdd_dq: [[_x103, _x107], [_x102, _x106]],
+      dqdd_dqd: [[_x111, _x114], [_x110, _x113]],
+      dqdd_dtau: [[_x117, _x118], [_x116, _x43]],
+      F: [_x123, _x124],
+      Mx: [[_x138, _x139], [_x139, _x140]],
+      Vx: [-_x71*_x139 - _x72*_x138 + _x132, -_x71*_x140 - _x72*_x139 + _x136],
+      Gx: [_x133, _x137],
       k: 0.5*(_x34*theta1_d + _x5*theta2_d)*theta2_d + 0.5*((m1*_x0 + 2.0*_x4 + m2*_x0 + _x5)*theta1_d + _x34*theta2_d)*theta1_d,
       u: (_x53 + _x49)*g*m2 + g*m1*_x53,
     };

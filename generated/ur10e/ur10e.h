@@ -361,8 +361,8 @@ void ur10e_inverse_dynamics_batch(size_t n, const double *q, const double *qd, c
  * tau(q + dq, qd + dqd, qdd + dqdd) = tau + dtau_dq dq + dtau_dqd dqd + dtau_dqdd dqdd
  * to first order, tau = M qdd + V + G + F_f (seed eq. 8.34); dtau_dqdd = M.  Reverse-
  * mode derivative of the recursive Newton-Euler program (Carpentier and Mansard, RSS
- * 2018), dtau_dqdd by the composite-rigid-body algorithm; a sign(qd) Coulomb term counts
- * with derivative 0.
+ * 2018), dtau_dqdd = M from the same adjoint sweeps (its lower triangle, mirrored:
+ * exactly symmetric); a sign(qd) Coulomb term counts with derivative 0.
  *
  * Inputs:
  *   q[6]: joint coordinates: q1 [rad], q2 [rad], q3 [rad], q4 [rad], q5 [rad], q6 [rad].
@@ -387,7 +387,7 @@ void ur10e_inverse_dynamics_batch(size_t n, const double *q, const double *qd, c
  *   dtau_dqd[36]: 6 x 6, row-major; d tau / dqd: the damping of the motion (Coriolis and
  *   friction).
  *   dtau_dqdd[36]: 6 x 6, row-major; d tau / dqdd = M(q), the mass matrix.
- * Cost: 3388 operations.
+ * Cost: 3164 operations.
  */
 void ur10e_inverse_dynamics_derivatives(const double *q, const double *qd, const double *qdd, double a2, double a3, double d4, double d5, double d6, double m1, double m2, double m3, double m4, double m5, double m6, double g, double *dtau_dq, double *dtau_dqd, double *dtau_dqdd);
 

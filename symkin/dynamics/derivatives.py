@@ -99,17 +99,16 @@ def _inverse_dynamics_derivatives(d: Deriving) -> FunctionSpec:
     n = d.model.dof
     program = Program()
     terms = BoundTerms(d, program)
-    M = terms.mass_matrix()  # d tau/dqdd: the composite-rigid-body M (cheaper than tau's slope)
-    variables = [x for group in ("q", "qd") for x in coordinate_symbols(d, group)]
+    variables = [x for group in ("q", "qd", "qdd") for x in coordinate_symbols(d, group)]
     entries = program.bind(torque_jacobian(terms, variables))
-    dq, dqd = ([entries[i * 2 * n + k * n + j] for i in range(n) for j in range(n)] for k in range(2))
-    dqdd = [M[i][j] for i in range(n) for j in range(n)]
+    dq, dqd, slopes = ([entries[i * 3 * n + k * n + j] for i in range(n) for j in range(n)] for k in range(3))
+    dqdd = [slopes[max(i, j) * n + min(i, j)] for i in range(n) for j in range(n)]  # M: its lower triangle, mirrored
     return function_spec(
         d, "inverse_dynamics_derivatives", "Derivatives of the inverse dynamics: the linearization of tau at a motion.",
         "tau(q + dq, qd + dqd, qdd + dqdd) = tau + dtau_dq dq + dtau_dqd dqd + dtau_dqdd dqdd to first order, "
         "tau = M qdd + V + G + F_f (seed eq. 8.34); dtau_dqdd = M.  Reverse-mode derivative of the recursive "
-        "Newton-Euler program (Carpentier and Mansard, RSS 2018), dtau_dqdd by the composite-rigid-body algorithm; "
-        "a sign(qd) Coulomb term counts with derivative 0.",
+        "Newton-Euler program (Carpentier and Mansard, RSS 2018), dtau_dqdd = M from the same adjoint sweeps (its "
+        "lower triangle, mirrored: exactly symmetric); a sign(qd) Coulomb term counts with derivative 0.",
         ["q", "qd", "qdd"], program,
         [("dtau_dq", dq, (n, n), "d tau / dq: row i, column j is d tau_i / d q_j", ""),
          ("dtau_dqd", dqd, (n, n), "d tau / dqd: the damping of the motion (Coriolis and friction)", ""),
