@@ -83,10 +83,9 @@ def rated_on_device(measures_of: Callable[[Mapping[str, Any], Any], Measures], s
     count = len(traced["q"])
     size = min(CHUNK, count)
     parts = []
-    for start in range(0, count, size):
-        taken = min(size, count - start)
-        index = start + np.where(np.arange(size) < taken, np.arange(size), 0)
+    for start in range(0, count, size):  # every chunk dispatched before any comes back: the device never waits
+        index = start + np.where(np.arange(size) < count - start, np.arange(size), 0)
         measures, reasons = compiled({name: value[index] for name, value in traced.items()})
-        parts.append([np.array(m.values)[:taken] for m in measures])
-    return (tuple(replace(m, values=np.concatenate(values)) for m, values in zip(measures, zip(*parts))),
-            dict(reasons.items))
+        parts.append([m.values for m in measures])
+    values = [np.concatenate([np.asarray(v) for v in chunks])[:count] for chunks in zip(*parts)]
+    return tuple(replace(m, values=v) for m, v in zip(measures, values)), dict(reasons.items)
