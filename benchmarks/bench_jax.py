@@ -20,7 +20,13 @@ calls, after one that compiles):
   from the host, only the moments back);
 * ``DELTA GCI integrand``: the same for models/delta.yaml (folded), a parallel mechanism with closed forms, with
   the Cartesian measure |det J| dq: the host decides its working mode by the C backend's fk and ik (ik(fk(q)) = q),
-  the device in the same jitted function as J and its moments.
+  the device in the same jitted function as J and its moments;
+* ``Stewart Cartesian GCI integrand``: what ``symkin gci models/stewart.yaml`` integrates, [1_W 1/kappa, 1_W] over a
+  box of platform centres at the home orientation: the closed-form ik, the assembly mode (the sign of det J^-1),
+  the actuators' limits and 1/kappa of the twist Jacobian diag(I, E) (J^-1)^-1 homogenized by its characteristic
+  length, per point - the host integrand (:func:`symkin.analysis.global_indices.cartesian_integrand`, the C
+  backend's ik and J^-1, numpy's det, inverse and SVD) against the device's
+  (:func:`symkin.analysis.device_cartesian.device_cartesian_integrand`).
 
 ``DELTA datasheet``: the seconds of ``symkin rate``'s arithmetic (:func:`symkin.rating.datasheet.rate`, every group
 of measures rated) over ``--samples`` workspace samples with numpy and on JAX's device, its first and second rating.
@@ -50,8 +56,11 @@ import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
 
 import symkin  # noqa: E402
+from symkin.analysis.device_cartesian import device_cartesian_integrand  # noqa: E402
 from symkin.analysis.device_integrand import device_joint_space_integrand  # noqa: E402
-from symkin.analysis.global_indices import joint_space_integrand  # noqa: E402
+from symkin.analysis.global_indices import cartesian_integrand, joint_space_integrand  # noqa: E402
+from symkin.analysis.inverse import inverse_kinematics_for  # noqa: E402
+from symkin.mechanism import reach  # noqa: E402
 from symkin.text_table import format_table  # noqa: E402
 
 OUTPUTS = ["fk", "jacobian_geometric", "mass_matrix", "coriolis_vector", "gravity_vector"]
@@ -99,6 +108,16 @@ def main(argv: list[str] | None = None) -> int:
         delta_device = device_joint_space_integrand(symkin.load(delta_directory, "jax"))
         q_delta = rng.uniform(delta_host.lower, delta_host.upper, (args.batch, 3))
         delta_device.mean_and_covariance(q_delta)       # compiles
+        # a pose platform at a constant orientation over the Cartesian domain: ik, assembly mode, (J^-1)^-1, 1/kappa
+        stewart_directory = symkin.derive(ROOT / "models" / "stewart.yaml", Path(tmp) / "stewart",
+                                          outputs=["ik", "inverse_jacobian"], backends=["c", "jax"], fixed=["all"])
+        held = {backend: reach.held_at(symkin.load(stewart_directory, backend), None) for backend in ("c", "jax")}
+        box = reach.bounding_box(held["c"])
+        stewart_host, stewart_device = (
+            integrand(held[backend], inverse_kinematics_for(held[backend]), box, length="auto")
+            for integrand, backend in ((cartesian_integrand, "c"), (device_cartesian_integrand, "jax")))
+        centres = rng.uniform(box[0], box[1], (args.batch, 3))
+        stewart_device.mean_and_covariance(centres)     # compiles
 
         cases = [
             ("fk + J + M + V + G", "numpy", lambda: numpy_model.combined(q, qd)),
@@ -115,6 +134,10 @@ def main(argv: list[str] | None = None) -> int:
              lambda: delta_host.mean_and_covariance(q_delta)),
             ("DELTA GCI integrand (working mode, |det J|, 1/kappa)", "JAX, reduced on the device",
              lambda: delta_device.mean_and_covariance(q_delta)),
+            ("Stewart Cartesian GCI integrand (ik, assembly mode, (J^-1)^-1, 1/kappa)",
+             "C ik, J^-1 + numpy, on the host", lambda: stewart_host.mean_and_covariance(centres)),
+            ("Stewart Cartesian GCI integrand (ik, assembly mode, (J^-1)^-1, 1/kappa)", "JAX, reduced on the device",
+             lambda: stewart_device.mean_and_covariance(centres)),
         ]
         rows = [[case, backend, f"{1e9 * best_seconds(call, args.repeat) / args.batch:.2f}"]
                 for case, backend, call in cases]

@@ -148,14 +148,33 @@ def _compiled(functions: _Functions, measure: str, with_index: bool, threshold: 
 
     def reduce(q: Any, scale: Any, joint_stops: Any, revolute: Any, parameters: dict[str, Any]
                ) -> tuple[Any, Any, Any, Any]:
-        f, index = values(q, scale, joint_stops, revolute, parameters)
-        mean = f.mean(axis=0)
-        centered = f - mean
-        inside = f[:, -1] > 0
-        return (mean, centered.T @ centered, jnp.min(jnp.where(inside, index, jnp.inf)),
-                jnp.max(jnp.where(inside, index, -jnp.inf)))
+        return reduced(*values(q, scale, joint_stops, revolute, parameters))
 
     return jax.jit(lambda *arguments: values(*arguments)[0]), jax.jit(reduce)
+
+
+def reduced(f: Any, index: Any) -> tuple[Any, Any, Any, Any]:
+    """(mean, scatter, lowest, highest) of a batch's values f (N, k), on the device: the moments
+    :attr:`symkin.integration.integrand.Integrand.moments` gives back, and the extremes of ``index`` (N,) where
+    the last component (the measure) is positive, inf and -inf where it is nowhere."""
+    import jax.numpy as jnp
+
+    mean = f.mean(axis=0)
+    centered = f - mean
+    inside = f[:, -1] > 0
+    return (mean, centered.T @ centered, jnp.min(jnp.where(inside, index, jnp.inf)),
+            jnp.max(jnp.where(inside, index, -jnp.inf)))
+
+
+def stop_arguments(model: GeneratedModel) -> tuple[Any, ...]:
+    """The model's joint stops (:class:`symkin.mechanism.stops.StopInequalities`) as the device programs take them:
+    (rows, offsets, lower, upper) in jax.numpy, for :func:`symkin.mechanism.stops.within_stops`."""
+    import jax.numpy as jnp
+
+    n = len(mechanism.coordinate_names(model))
+    joint_stops = stops.StopInequalities.of_model(model)
+    return tuple(jnp.asarray(a, dtype=jnp.float64) for a in (joint_stops.rows.reshape(-1, n), joint_stops.offsets,
+                                                             joint_stops.lower, joint_stops.upper))
 
 
 def device_joint_space_integrand(model: GeneratedModel, *, with_index: bool = True, measure: str = "cartesian",
@@ -172,10 +191,7 @@ def device_joint_space_integrand(model: GeneratedModel, *, with_index: bool = Tr
         raise ValueError(f"{model.name}: the Cartesian measure |det J| dq needs a square task Jacobian, "
                          f"this one is {m} x {n}; use measure='joint' or the Cartesian domain")
     scale = jnp.asarray(row_scale(model, box, length) if with_index else np.ones(m))
-    joint_stops = stops.StopInequalities.of_model(model)
-    stop_arrays = tuple(jnp.asarray(a, dtype=jnp.float64) for a in (joint_stops.rows.reshape(-1, n),
-                                                                      joint_stops.offsets, joint_stops.lower,
-                                                                      joint_stops.upper))
+    stop_arrays = stop_arguments(model)
     revolute = jnp.asarray(mechanism.revolute_mask(model))
     names = ("jacobian", *(working_mode.assembly_functions(model) or ()))
     unbound = {name: model.unbound(name) for name in names}

@@ -34,7 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from symkin.analysis import device_integrand
+from symkin.analysis import device_cartesian, device_integrand
 from symkin.numerics import conditioning
 from symkin.mechanism import reach
 from symkin.mechanism.working_mode import jacobian_in_working_mode
@@ -191,7 +191,11 @@ def _integrand(model: GeneratedModel, *, domain: str, measure: str, index: Index
             raise ValueError("the Cartesian domain needs an inverse kinematics (inverse=...)")
         if box is None:
             box = bounding_box(model, limits=limits)
-        integrand = cartesian_integrand(model, inverse, box, index=index, limits=limits, length=length)
+        if device_cartesian.cartesian_on_device(model, inverse) and index in (None, DEFAULT_INDEX):
+            integrand = device_cartesian.device_cartesian_integrand(model, inverse, box, with_index=index is not None,
+                                                                    limits=limits, length=length)
+        else:
+            integrand = cartesian_integrand(model, inverse, box, index=index, limits=limits, length=length)
         return integrand, reach.domain_description(model, domain, measure)
     raise ValueError(f"unknown domain '{domain}'; choose one of {', '.join(DOMAINS)}")
 

@@ -11,8 +11,8 @@ import numpy as np
 LIMIT_TOLERANCE = 1e-9
 
 
-def within_limits(q: np.ndarray, limits: np.ndarray, revolute: np.ndarray,
-                  tolerance: float = LIMIT_TOLERANCE) -> tuple[np.ndarray, np.ndarray]:
+def within_limits(q: Any, limits: Any, revolute: Any, tolerance: float = LIMIT_TOLERANCE, xp: Any = np
+                  ) -> tuple[Any, Any]:
     """Joint coordinates moved into their limits where possible, and whether they are inside.
 
     A revolute coordinate is an angle: it is shifted by a multiple of 2 pi to the first
@@ -22,14 +22,15 @@ def within_limits(q: np.ndarray, limits: np.ndarray, revolute: np.ndarray,
         q: (..., n) joint coordinates.
         limits: (n, 2) [lower, upper].
         revolute: (n,) which coordinates are angles.
+        xp: the array module (numpy, or jax.numpy on a JAX device with the arrays traced).
 
     Returns:
         (q, inside): the shifted coordinates (..., n) and a boolean (...) array.
     """
     lower, upper = limits[:, 0], limits[:, 1]
-    wrapped = lower - tolerance + np.mod(q - lower + tolerance, 2.0 * np.pi)
-    q = np.where(revolute, wrapped, q)
-    inside = np.all((q >= lower - tolerance) & (q <= upper + tolerance), axis=-1)
+    wrapped = lower - tolerance + xp.mod(q - lower + tolerance, 2.0 * np.pi)
+    q = xp.where(revolute, wrapped, q)
+    inside = xp.all((q >= lower - tolerance) & (q <= upper + tolerance), axis=-1)
     return q, inside
 
 

@@ -1,0 +1,195 @@
+"""The Cartesian-domain integrand of the global indices fused on JAX's default device (issue 66).
+
+For a parallel mechanism with closed-form inverse kinematics loaded with the JAX backend,
+:func:`device_cartesian_integrand` gives the integrand of :func:`symkin.analysis.global_indices.cartesian_integrand`
+over a box of TCP points - components [1_W g, 1_W], or [1_W] for the workspace measure, with 1_W the reachability
+indicator and g = 1/kappa of the (homogenized) task Jacobian there (seed eqs. 8.25, 8.29) - as one jitted function
+whose batches are reduced to their mean and scatter on the device (:func:`symkin.analysis.device_integrand.reduced`):
+on a GPU the points' joints and Jacobians never leave it.  The program is compiled once per set of generated
+functions; the parameters, limits, stops and the held orientation are its arguments, traced.
+
+A point counts as the host's rules count it (:mod:`symkin.mechanism.reach`, :mod:`symkin.mechanism.feasibility`):
+
+* every leg reaches it: the generated ``ik`` is finite;
+* it is in the working mode: for a translational platform (the DELTA) fk(ik(p)) returns to p within
+  :data:`~symkin.mechanism.reach.POSITION_ROUND_TRIP_TOLERANCE` times the mechanism's size
+  (:class:`~symkin.mechanism.reach.WorkingModeInverse`); for a pose platform held at a constant orientation
+  (Stewart-Gough), det J^-1 has the sign it has at the home pose
+  (:class:`~symkin.mechanism.reach.ConstantOrientationInverse`);
+* the actuators are within their limits, angles wrapped into them (:func:`symkin.mechanism.limits.within_limits`),
+  and within the joint stops.
+
+The Jacobian is taken at the wrapped joints, as the host takes it, and only at the reachable points, gathered
+(:func:`on_gathered_rows`: a box around the workspace holds many points out of reach).  For a translational platform
+it is the generated ``jacobian`` J(q, p); a platform held at a constant orientation has the twist Jacobian
+J = R (J^-1)^-1 (R = diag(I, E), :class:`~symkin.mechanism.reach.ConstantOrientation`), homogenized S J, whose
+1/kappa is that of its inverse J^-1 (S R)^-1 - one constant matrix for the batch, so no inverse per point (the host
+inverts, :func:`symkin.numerics.conditioning.from_inverse`: the same index up to rounding, the numerical-rank rule
+applied to the inverse's singular values).  Declared passive-joint limits (decided on the loop closure by a
+Gauss-Newton iteration on the host) and the serial arms' closed forms (:class:`symkin.analysis.inverse.ClosedFormInverse`)
+take the host integrand.  The SVDs run after det J^-1 (they wait for the reachable set) and one after the other
+(:class:`symkin.numerics.ordered_linalg.InOrder`): jaxlib's CPU LAPACK kernels deadlock when run side by side.
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Callable
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from symkin import mechanism
+from symkin.analysis.device_integrand import extreme_singular_values, reduced, row_scale, stop_arguments
+from symkin.integration.integrand import Integrand
+from symkin.mechanism import Limits, stops
+from symkin.mechanism.feasibility import InverseKinematics
+from symkin.mechanism.limits import within_limits
+from symkin.mechanism.reach import (POSITION_ROUND_TRIP_TOLERANCE, ConstantOrientationInverse, WorkingModeInverse)
+from symkin.numerics.ordered_linalg import InOrder
+from symkin.runtime.info import GeneratedModel
+
+_EPS = float(np.finfo(np.float64).eps)
+
+
+def cartesian_on_device(model: GeneratedModel, inverse: InverseKinematics) -> bool:
+    """Whether the Cartesian integrand of ``model`` with ``inverse`` can run fused on JAX's device: a model loaded with
+    the JAX backend whose inverse is its generated closed form (a translational platform's, or a pose platform's held
+    at a constant orientation) without declared passive-joint limits."""
+    return (getattr(model, "backend", None) == "jax" and hasattr(model, "unbound")
+            and isinstance(inverse, (WorkingModeInverse, ConstantOrientationInverse))
+            and inverse.passive_limits is None)
+
+
+class _Functions(NamedTuple):
+    """The generated functions the program calls (hashable: the compile cache's key): ik, and fk with the
+    ``jacobian`` of a translational platform, or the ``inverse_jacobian`` of a platform held at an orientation."""
+
+    ik: Callable[..., Any]
+    fk: Callable[..., Any] | None
+    jacobian: Callable[..., Any] | None
+    inverse_jacobian: Callable[..., Any] | None
+
+
+#: The reachable points' Jacobians and 1/kappa are evaluated on the reachable points gathered to the first of these
+#: shares of a batch that holds them all (a box around the workspace holds many points out of reach: 88 % of the
+#: Stewart platform's, 70 % of the DELTA's), or on every point of a batch where more are reachable.
+REACHABLE_SHARES = (1 / 8, 1 / 2)
+
+
+def on_gathered_rows(mask: Any, shares: tuple[float, ...], function: Callable[..., Any], *arrays: Any) -> Any:
+    """``function(*rows)`` (k,) at the rows of ``arrays`` where ``mask`` (N,) holds, 0 elsewhere, in jax.numpy: the
+    rows gathered to the first static share of the batch, s N rows for s in ``shares``, that holds them all, or
+    every row where none does (one jax.lax.cond per share: only the branch taken runs)."""
+    import jax
+    import jax.numpy as jnp
+
+    count = mask.shape[0]
+    if not shares:
+        return jnp.where(mask, function(*arrays), 0.0)
+    size = max(1, int(count * shares[0]))
+
+    def gathered(_: Any) -> Any:
+        rows = jnp.nonzero(mask, size=size, fill_value=0)[0]
+        values = function(*(a[rows] for a in arrays))
+        return jnp.zeros(count).at[rows].set(jnp.where(mask[rows], values, 0.0))
+
+    return jax.lax.cond(jnp.sum(mask) > size, lambda _: on_gathered_rows(mask, shares[1:], function, *arrays),
+                        gathered, None)
+
+
+@functools.lru_cache(maxsize=32)
+def _compiled(functions: _Functions, with_index: bool, threshold: float, wraps: bool) -> tuple[Any, Any]:
+    """(values, reduce) jitted once per generated function set and options (see the module docstring); ``wraps``:
+    some actuator is an angle, so the Jacobian is evaluated again at the joints wrapped into their limits."""
+    import jax
+    import jax.numpy as jnp
+
+    def inverse_condition(q: Any, points: Any, poses: Any, constants: dict[str, Any], parameters: dict[str, Any]
+                          ) -> Any:
+        """1/kappa of the homogenized task Jacobian S J at the points (0 where it is singular or not finite).  A
+        platform held at an orientation has J = R (J^-1)^-1 (R = diag(I, E)), whose singular values are the
+        reciprocals of those of (S J)^-1 = J^-1 (S R)^-1: its 1/kappa needs no inverse per point."""
+        if functions.jacobian is not None:
+            J = functions.jacobian(q, points, **parameters["jacobian"]) * constants["scale"][:, None]
+        else:
+            assert functions.inverse_jacobian is not None, "a platform held at an orientation: its J^-1"
+            J = functions.inverse_jacobian(q, poses, **parameters["inverse_jacobian"]) @ constants["unscale"]
+        regular = jnp.all(jnp.isfinite(J), axis=(-2, -1))
+        J = jnp.where(regular[:, None, None], J, 0.0)
+        largest, smallest = extreme_singular_values(J, threshold, InOrder(jnp))
+        return jnp.where(regular & (largest > 0), smallest / jnp.where(largest > 0, largest, 1.0), 0.0)
+
+    def values(points: Any, constants: dict[str, Any], parameters: dict[str, Any]) -> tuple[Any, Any]:
+        held = constants["orientation"]
+        poses = points if held is None else jnp.concatenate([points, jnp.broadcast_to(held, points.shape)], axis=-1)
+        q = functions.ik(poses, **parameters["ik"]).joints
+        finite = jnp.all(jnp.isfinite(q), axis=-1)
+        q = jnp.where(finite[:, None], q, 0.0)
+        if functions.fk is not None:  # fk(ik(p)) returns to p: the fk branch of the working mode
+            back = functions.fk(q, **parameters["fk"]).position
+            in_mode = jnp.all(jnp.abs(back - points) <= constants["tolerance"], axis=-1)
+        else:  # det J^-1 keeps the sign of the home pose's: its assembly mode
+            assert functions.inverse_jacobian is not None, "a platform held at an orientation: its J^-1"
+            J_inverse = functions.inverse_jacobian(q, poses, **parameters["inverse_jacobian"])
+            in_mode = constants["sign"] * jnp.linalg.det(J_inverse) > 0
+        wrapped, inside = within_limits(q, constants["limits"], constants["revolute"], xp=jnp)
+        rows, offsets, lower, upper = constants["stops"]
+        reachable = finite & in_mode & inside & stops.within_stops(wrapped, rows, offsets, lower, upper, xp=jnp)
+        indicator = reachable.astype(jnp.float64)
+        if not with_index:
+            return indicator[:, None], indicator
+        # after det (the cond waits for reachable): the factorizations still run one at a time
+        index = on_gathered_rows(reachable, REACHABLE_SHARES,
+                                 lambda joints, centres, held_poses: inverse_condition(joints, centres, held_poses,
+                                                                                       constants, parameters),
+                                 wrapped if wraps else q, points, poses)
+        return jnp.stack([index, indicator], axis=-1), index
+
+    return (jax.jit(lambda *arguments: values(*arguments)[0]),
+            jax.jit(lambda *arguments: reduced(*values(*arguments))))
+
+
+def device_cartesian_integrand(model: GeneratedModel, inverse: InverseKinematics, box: tuple[np.ndarray, np.ndarray],
+                               *, with_index: bool = True, limits: Limits | None = None,
+                               length: float | str | None = None) -> Integrand:
+    """The Cartesian integrand [1_W 1/kappa, 1_W] (``with_index``) or [1_W] over ``box`` of a model loaded with the
+    JAX backend (:func:`cartesian_on_device`), its batches reduced on the device (see the module docstring)."""
+    import jax.numpy as jnp
+
+    if not cartesian_on_device(model, inverse):
+        raise ValueError(f"{model.name}: the Cartesian integrand runs on JAX's device for a parallel mechanism's "
+                         "closed-form ik without passive-joint limits, loaded with the JAX backend")
+    joint_box = mechanism.joint_limits(model, limits)
+    lower, upper = (np.asarray(b, dtype=np.float64) for b in box)
+    if lower.shape != (inverse.dimension,):
+        raise ValueError(f"the Cartesian box must have {inverse.dimension} coordinates, got {lower.shape}")
+    m, n = len(mechanism.task_space(model)), joint_box.shape[0]
+    revolute = mechanism.revolute_mask(model)
+    constants: dict[str, Any] = {
+        "orientation": None, "unscale": None, "sign": None, "tolerance": None,
+        "limits": jnp.asarray(joint_box), "revolute": jnp.asarray(revolute), "stops": stop_arguments(model),
+        "scale": jnp.asarray(row_scale(model, joint_box, length) if with_index else np.ones(m))}
+    if isinstance(inverse, ConstantOrientationInverse):
+        scaled_rates = np.asarray(constants["scale"])[:, None] * inverse.model.rates     # S R
+        constants.update(orientation=jnp.asarray(inverse.model.orientation), sign=inverse.sign,
+                         unscale=jnp.asarray(np.linalg.inv(scaled_rates)))
+        names: tuple[str, ...] = ("ik", "inverse_jacobian")
+    else:
+        assert isinstance(inverse, WorkingModeInverse), "cartesian_on_device admits these two"
+        constants["tolerance"] = POSITION_ROUND_TRIP_TOLERANCE * inverse.size
+        names = ("ik", "fk", "jacobian")
+    unbound = {name: model.unbound(name) for name in names}
+    functions = _Functions(unbound["ik"][0], *(unbound[name][0] if name in unbound else None
+                                               for name in ("fk", "jacobian", "inverse_jacobian")))
+    parameters = {name: values for name, (_, values) in unbound.items()}
+    evaluate, reduce = _compiled(functions, with_index, max(m, n) * _EPS, bool(revolute.any()))
+
+    def moments(points: np.ndarray) -> tuple[Any, Any]:
+        mean, scatter, _, _ = reduce(jnp.asarray(points), constants, parameters)
+        return mean, scatter
+
+    axes = tuple("xyz"[a] for a in mechanism.position_axes(model))
+    components = ("index dW", "dW") if with_index else ("dW",)
+    return Integrand(lower, upper, lambda points: np.asarray(evaluate(jnp.asarray(points), constants, parameters)),
+                     components, axes, indicator=len(components) - 1, moments=moments)
