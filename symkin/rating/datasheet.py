@@ -27,7 +27,7 @@ from symkin import mechanism
 from symkin.numerics.conditioning import inverse_condition_number
 from symkin.rating import on_device
 from symkin.rating.handle_measures import (NO_GRAVITY, ROTATIONAL_FRICTION,
-                                             SPHERICAL_GROUPS, TURNED_GROUPS, Actuation, Measure, dynamics_at,
+                                             SPHERICAL_GROUPS, TURNED_GROUPS, Actuation, Measure, SharedFactors, dynamics_at,
                                              friction_measures, gravity_share_measure, pushed_groups, rotation_measures,
                                              translation_measures)
 from symkin.mechanism import ANGLES, Sampling, continuation
@@ -233,8 +233,10 @@ def _measures(model: GeneratedModel, usable: _Usable, actuation: Actuation, xp: 
     if usable.J_v is not None:
         measures, skipped = translation_measures(model, usable.J_v, usable.M, usable.q, usable.poses, actuation,
                                                  usable.axes, no_mass=usable.no_mass, G=usable.G, xp=xp)
+    turning = None if usable.J_w is None else SharedFactors(usable.J_w, usable.M, xp)
     if usable.J_w is not None:
-        turned, not_turned = rotation_measures(usable.J_w, usable.M, actuation, no_mass=usable.no_mass, xp=xp)
+        turned, not_turned = rotation_measures(usable.J_w, usable.M, actuation, no_mass=usable.no_mass, xp=xp,
+                                               factors=turning)
         measures, skipped = measures + turned, skipped | not_turned
     if usable.J_v is None:  # a handle that only turns: what the pushed measures would have said of it
         assert usable.J_w is not None, "a handle that neither translates nor turns is refused before"
@@ -243,7 +245,7 @@ def _measures(model: GeneratedModel, usable: _Usable, actuation: Actuation, xp: 
             skipped["gravity_share"] = share
         else:
             measures += tuple(share)
-        friction = friction_measures(usable.J_w, actuation, ROTATIONAL_FRICTION, xp)
+        friction = friction_measures(usable.J_w, actuation, ROTATIONAL_FRICTION, xp, turning)
         if isinstance(friction, str):
             skipped["friction"] = friction
         else:

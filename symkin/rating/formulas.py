@@ -71,10 +71,11 @@ def mobility(M: np.ndarray, J: np.ndarray, xp: Any = np) -> np.ndarray:
     return J @ xp.linalg.solve(M, xp.swapaxes(J, -1, -2))
 
 
-def principal_masses(M: np.ndarray, J: np.ndarray, xp: Any = np) -> np.ndarray:
+def principal_masses(M: np.ndarray, J: np.ndarray, xp: Any = np, *, handle_mobility: Any = None) -> np.ndarray:
     """The eigenvalues of the apparent mass (..., m), ascending: the masses felt along its principal axes, the
-    reciprocals of the eigenvalues of the mobility J M^-1 J^T (inf along a direction a singular J cannot move)."""
-    eigenvalues = xp.linalg.eigvalsh(mobility(M, J, xp))[..., ::-1]
+    reciprocals of the eigenvalues of the mobility J M^-1 J^T (inf along a direction a singular J cannot move).
+    ``handle_mobility``: J M^-1 J^T where the caller has it (:func:`mobility`), else formed here."""
+    eigenvalues = xp.linalg.eigvalsh(mobility(M, J, xp) if handle_mobility is None else handle_mobility)[..., ::-1]
     return xp.where(eigenvalues > 0.0, 1.0 / xp.where(eigenvalues > 0.0, eigenvalues, 1.0), np.inf)
 
 
@@ -94,8 +95,10 @@ def farthest_vertex(A: np.ndarray, half_widths: Sequence[float] | np.ndarray, xp
 SINGULAR_CONDITION = 1e12
 
 
-def _inverse_transpose(J: np.ndarray, xp: Any = np) -> np.ndarray:
-    """J^-T (..., m, m), NaN where J is singular (kappa > :data:`SINGULAR_CONDITION`)."""
+def inverse_transpose(J: np.ndarray, xp: Any = np) -> np.ndarray:
+    """J^-T (..., m, m), NaN where J is singular (kappa > :data:`SINGULAR_CONDITION`): what the forces at the handle
+    (F = J^-T tau), its friction and its damping take; a caller rating several of them forms it once and passes it
+    (``inverse_transpose=``)."""
     J = xp.asarray(J, dtype=float)
     if J.shape[-1] != J.shape[-2]:
         raise ValueError(f"the handle's forces need a square task Jacobian (F = J^-T tau), got "
@@ -106,14 +109,21 @@ def _inverse_transpose(J: np.ndarray, xp: Any = np) -> np.ndarray:
     return xp.where(regular[..., None, None], xp.swapaxes(xp.linalg.inv(safe), -1, -2), np.nan)
 
 
-def peak_force(J: np.ndarray, effort_limits: Sequence[float] | np.ndarray, xp: Any = np) -> np.ndarray:
+def _given_or_formed(given: Any, J: np.ndarray, xp: Any) -> Any:
+    """J^-T as the caller gave it, or formed here (:func:`inverse_transpose`)."""
+    return inverse_transpose(J, xp) if given is None else given
+
+
+def peak_force(J: np.ndarray, effort_limits: Sequence[float] | np.ndarray, xp: Any = np, *,
+               inverse_transpose: Any = None) -> np.ndarray:
     """The largest force the actuators render in the best direction (...,): max |F| over the polytope
     |J_i . F| <= tau_max,i (tau = J^T F).
 
     Its farthest point is a vertex, where m of the n slabs' faces meet: for a square J the 2^n points
     J^-T (s * tau_max); with more joints than task coordinates (an arm pushed at its TCP, J its
     translational rows) every choice of m joints at their limits whose point the others can hold
-    (within a relative 1e-9 of their limits) is tried.
+    (within a relative 1e-9 of their limits) is tried.  ``inverse_transpose``: J^-T of a square J where the caller
+    has it (:func:`inverse_transpose`).
     """
     J = xp.asarray(J, dtype=float)
     m, n = J.shape[-2:]
@@ -122,7 +132,7 @@ def peak_force(J: np.ndarray, effort_limits: Sequence[float] | np.ndarray, xp: A
                          "task Jacobian")
     limits = np.broadcast_to(np.asarray(effort_limits, dtype=float), (n,))
     if m == n:
-        return farthest_vertex(_inverse_transpose(J, xp), limits, xp)
+        return farthest_vertex(_given_or_formed(inverse_transpose, J, xp), limits, xp)
     chosen = np.array(list(itertools.combinations(range(n), m)))                 # (C, m): the joints at their limits
     signs = np.array([(1.0,) + rest for rest in itertools.product((1.0, -1.0), repeat=m - 1)])  # (S, m)
     columns = xp.moveaxis(J[..., :, chosen], -3, -2)                            # (..., C, m, m)
@@ -141,13 +151,14 @@ def position_resolution(J: np.ndarray, joint_steps: Sequence[float] | np.ndarray
     return farthest_vertex(J, joint_steps, xp)
 
 
-def axis_mass(M: np.ndarray, J: np.ndarray, xp: Any = np) -> np.ndarray:
+def axis_mass(M: np.ndarray, J: np.ndarray, xp: Any = np, *, handle_mobility: Any = None) -> np.ndarray:
     """The mass felt pushing along each task axis e_a from rest, the handle free in the others (..., m):
     1 / (e_a^T Lambda^-1 e_a), the force along e_a per unit acceleration along it (Khatib 1995's effective mass
     along a direction; a vendor's "apparent mass at the tip" along an axis); inf along an axis the handle cannot
-    move along."""
+    move along; ``handle_mobility`` as for :func:`principal_masses`."""
+    handle_mobility = mobility(M, J, xp) if handle_mobility is None else handle_mobility
     with np.errstate(divide="ignore"):
-        return 1.0 / xp.diagonal(mobility(M, J, xp), axis1=-2, axis2=-1)
+        return 1.0 / xp.diagonal(handle_mobility, axis1=-2, axis2=-1)
 
 
 def axis_step(J: np.ndarray, joint_steps: Sequence[float] | np.ndarray, xp: Any = np) -> np.ndarray:
@@ -158,15 +169,17 @@ def axis_step(J: np.ndarray, joint_steps: Sequence[float] | np.ndarray, xp: Any 
     return xp.max(xp.abs(J) * np.abs(np.asarray(joint_steps, dtype=float)), axis=-1)
 
 
-def axis_friction(J: np.ndarray, coulomb: Sequence[float] | np.ndarray, xp: Any = np) -> np.ndarray:
+def axis_friction(J: np.ndarray, coulomb: Sequence[float] | np.ndarray, xp: Any = np, *,
+                  inverse_transpose: Any = None) -> np.ndarray:
     """The Coulomb friction felt moving the handle along each task axis e_a (..., m), J square: the joints turn at
     w = J^-1 e_a per unit speed and resist with power sum_i tau_c,i |w_i| (a vendor's "backdrive friction" along
     an axis; :func:`coulomb_friction_felt` is its largest over all directions); NaN where J is singular."""
-    rates = xp.swapaxes(_inverse_transpose(J, xp), -1, -2)              # column a: J^-1 e_a
+    rates = xp.swapaxes(_given_or_formed(inverse_transpose, J, xp), -1, -2)   # column a: J^-1 e_a
     return xp.einsum("i,...ia->...a", np.abs(np.asarray(coulomb, dtype=float)), xp.abs(rates))
 
 
-def coulomb_friction_felt(J: np.ndarray, coulomb: Sequence[float] | np.ndarray, xp: Any = np) -> np.ndarray:
+def coulomb_friction_felt(J: np.ndarray, coulomb: Sequence[float] | np.ndarray, xp: Any = np, *,
+                          inverse_transpose: Any = None) -> np.ndarray:
     """The largest Coulomb friction force the hand feels, over all directions of motion (...,): the farthest
     point of the polytope |J_i . F| <= tau_c,i, max_s |J^-T (s * tau_c)| for a square J.
 
@@ -176,7 +189,7 @@ def coulomb_friction_felt(J: np.ndarray, coulomb: Sequence[float] | np.ndarray, 
     which by linear-programming duality is max over |J^T F| <= tau_c of F . u, the support function of that
     polytope.  Its largest value over all directions u is the polytope's farthest point (:func:`peak_force`
     with the Coulomb levels as limits)."""
-    return peak_force(J, coulomb, xp)
+    return peak_force(J, coulomb, xp, inverse_transpose=inverse_transpose)
 
 
 def gravity_share(G: np.ndarray, effort_limits: Sequence[float] | np.ndarray, xp: Any = np) -> np.ndarray:
@@ -185,7 +198,8 @@ def gravity_share(G: np.ndarray, effort_limits: Sequence[float] | np.ndarray, xp
     return xp.max(xp.abs(G) / np.broadcast_to(np.asarray(effort_limits, dtype=float), G.shape[-1:]), axis=-1)
 
 
-def handle_damping(J: np.ndarray, viscous: Sequence[float] | np.ndarray, xp: Any = np) -> np.ndarray:
+def handle_damping(J: np.ndarray, viscous: Sequence[float] | np.ndarray, xp: Any = np, *,
+                   inverse_transpose: Any = None) -> np.ndarray:
     """The smallest viscous damping at the handle (...,), N s/m: the least eigenvalue of J^-T diag(b) J^-1 for
     a square J.
 
@@ -198,7 +212,7 @@ def handle_damping(J: np.ndarray, viscous: Sequence[float] | np.ndarray, xp: Any
     m, n = J.shape[-2:]
     b = np.broadcast_to(np.asarray(viscous, dtype=float), (n,))
     if m == n:
-        inverse_transpose = _inverse_transpose(J, xp)
+        inverse_transpose = _given_or_formed(inverse_transpose, J, xp)
         damping = (inverse_transpose * b) @ xp.swapaxes(inverse_transpose, -1, -2)
         return xp.linalg.eigvalsh(damping)[..., 0]
     damped = b > 0

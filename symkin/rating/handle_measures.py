@@ -9,6 +9,7 @@ actuators' data (:class:`Actuation`) come from the manifest or the caller.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -69,22 +70,44 @@ class Actuation:
                    declared([c.coulomb for c in coordinates]), declared([c.viscous for c in coordinates]), period)
 
 
+class SharedFactors:
+    """The factorizations that several measures of one handle take, each formed once, when first asked for: J^-T of a
+    square J (:func:`symkin.rating.formulas.inverse_transpose`: the peak force, the friction felt, along each axis
+    and the damping take it; an SVD for its conditioning and an inverse per sample) and the mobility J M^-1 J^T (the
+    principal and the per-axis masses)."""
+
+    def __init__(self, J: Any, M: Any, xp: Any) -> None:
+        self.J, self.M, self.xp = J, M, xp
+
+    @functools.cached_property
+    def inverse_transpose(self) -> Any:
+        """J^-T, or None for a J with more joints than rows (the formulas take their redundant path)."""
+        return formulas.inverse_transpose(self.J, self.xp) if self.J.shape[-2] == self.J.shape[-1] else None
+
+    @functools.cached_property
+    def mobility(self) -> Any:
+        """J M^-1 J^T."""
+        return formulas.mobility(self.M, self.J, self.xp)
+
+
 def dynamics_at(model: GeneratedModel, name: str, q: np.ndarray, poses: np.ndarray) -> np.ndarray:
     """A generated dynamics function at the samples (q, p), fed the inputs it declares (:func:`symkin.mechanism.call`)."""
     return mechanism.call(model, name, q=q, p=poses)
 
 
 def rotation_measures(J_w: np.ndarray, M: np.ndarray | None, actuation: Actuation, *, no_mass: str = "",
-                      xp: Any = np) -> tuple[tuple[Measure, ...], dict[str, str]]:
+                      xp: Any = np, factors: SharedFactors | None = None) -> tuple[tuple[Measure, ...], dict[str, str]]:
     """A rotating handle's inertia felt with its position free (where M is given, else not rated with the reason
     ``no_mass``), torque capability and angular resolution (:data:`TURNED_GROUPS`), and {group: why not rated}; in
-    the array module ``xp`` (:mod:`symkin.rating.formulas`)."""
+    the array module ``xp`` (:mod:`symkin.rating.formulas`); ``factors``: J_w's, where the caller shares them with
+    other measures (:func:`friction_measures`)."""
     out: list[Measure] = []
     skipped = {}
+    factors = factors or SharedFactors(J_w, M, xp)
     if M is None:
         skipped["apparent_inertia"] = no_mass
     else:
-        inertias = formulas.principal_masses(M, J_w, xp)
+        inertias = formulas.principal_masses(M, J_w, xp, handle_mobility=factors.mobility)
         out += [Measure("apparent_inertia_min", "kg m^2", inertias[:, 0], False,
                         "smallest principal inertia felt turning the handle (its position free)"),
                 Measure("apparent_inertia_max", "kg m^2", inertias[:, -1], False,
@@ -94,7 +117,8 @@ def rotation_measures(J_w: np.ndarray, M: np.ndarray | None, actuation: Actuatio
     else:
         out += [Measure("isotropic_torque", "N m", forces.isotropic_force(J_w, actuation.effort_limits, xp), True,
                         "largest torque rendered about every axis, with no force (peak efforts)"),
-                Measure("peak_torque", "N m", formulas.peak_force(J_w, actuation.effort_limits, xp), True,
+                Measure("peak_torque", "N m", formulas.peak_force(J_w, actuation.effort_limits, xp,
+                                                                  inverse_transpose=factors.inverse_transpose), True,
                         "largest torque rendered about the best axis, with no force (peak efforts)")]
     if actuation.continuous_limits is None:
         skipped["continuous_torque"] = NO_CONTINUOUS_LIMITS
@@ -121,6 +145,7 @@ def translation_measures(model: GeneratedModel, J: np.ndarray, M: np.ndarray | N
         raise ValueError(f"{model.name}: {len(axes)} task axes {list(axes)} for the {J.shape[-2]} rows of J")
     out: list[Measure] = []
     skipped = {}
+    factors = SharedFactors(J, M, xp)
 
     def per_axis(name: str, unit: str, values: np.ndarray, worst_is_min: bool, doc: str) -> list[Measure]:
         return [Measure(f"{name}_{axis}", unit, values[:, k], worst_is_min, doc.replace("<axis>", axis), axis)
@@ -129,12 +154,12 @@ def translation_measures(model: GeneratedModel, J: np.ndarray, M: np.ndarray | N
     if M is None:
         skipped["apparent_mass"] = no_mass
     else:
-        masses = formulas.principal_masses(M, J, xp)
+        masses = formulas.principal_masses(M, J, xp, handle_mobility=factors.mobility)
         out += [Measure("apparent_mass_min", "kg", masses[:, 0], False, "smallest principal mass felt at the handle"),
                 Measure("apparent_mass_max", "kg", masses[:, -1], False, "largest principal mass felt at the handle"),
                 Measure("inertia_isotropy", "", masses[:, -1] / masses[:, 0], False,
                         "largest over smallest principal mass (1: the same mass in every direction)")]
-        out += per_axis("apparent_mass", "kg", formulas.axis_mass(M, J, xp), False,
+        out += per_axis("apparent_mass", "kg", formulas.axis_mass(M, J, xp, handle_mobility=factors.mobility), False,
                         "mass felt pushing along <axis> from rest, the handle free in the other directions: "
                         "1 / (e^T J M^-1 J^T e)")
     efforts = actuation.effort_limits
@@ -143,7 +168,8 @@ def translation_measures(model: GeneratedModel, J: np.ndarray, M: np.ndarray | N
     else:
         out += [Measure("isotropic_force", "N", forces.isotropic_force(J, efforts, xp), True,
                         "largest force rendered in every direction (peak efforts)"),
-                Measure("peak_force", "N", formulas.peak_force(J, efforts, xp), True,
+                Measure("peak_force", "N", formulas.peak_force(J, efforts, xp,
+                                                               inverse_transpose=factors.inverse_transpose), True,
                         "largest force rendered in the best direction (peak efforts)")]
         out += per_axis("force", "N", forces.axis_force(J, efforts, xp), True,
                         "largest force rendered along +-<axis> (peak efforts): min_i tau_max,i / |J_i . e|")
@@ -167,7 +193,7 @@ def translation_measures(model: GeneratedModel, J: np.ndarray, M: np.ndarray | N
                            "largest handle step between neighbouring encoder readings"))
         out += per_axis("resolution", "m", formulas.axis_step(J, actuation.joint_steps, xp), False,
                         "handle step along <axis> for one encoder count of the joint that moves it most there")
-    friction = (friction_measures(J, actuation, TRANSLATIONAL_FRICTION, xp) if J.shape[-2] <= J.shape[-1]
+    friction = (friction_measures(J, actuation, TRANSLATIONAL_FRICTION, xp, factors) if J.shape[-2] <= J.shape[-1]
                 else "friction and damping at the handle need at least as many joints as task translations")
     viscous, coulomb = actuation.viscous, actuation.coulomb
     if isinstance(friction, str) or viscous is None or coulomb is None:
@@ -195,7 +221,9 @@ def translation_measures(model: GeneratedModel, J: np.ndarray, M: np.ndarray | N
         skipped["backdrive_friction"] = (f"the friction along each axis needs as many joints as task translations "
                                          f"({J.shape[-1]} joints, {J.shape[-2]} translations)")
     else:
-        out += per_axis("backdrive_friction", "N", formulas.axis_friction(J, actuation.coulomb, xp), False,
+        out += per_axis("backdrive_friction", "N", formulas.axis_friction(J, actuation.coulomb, xp,
+                                                                          inverse_transpose=factors.inverse_transpose),
+                        False,
                         "Coulomb friction felt moving the handle along <axis>: sum_i tau_c,i |(J^-1 e)_i|")
     return tuple(out), skipped
 
@@ -266,16 +294,18 @@ NO_CONTINUOUS_LIMITS = ("no continuous efforts: declare each drive's continuous 
 NO_ENCODERS = "no encoder data: give --encoder COUNTS[,...] (and --gear)"
 
 
-def friction_measures(J: np.ndarray, actuation: Actuation, labels: tuple[tuple[str, str, str], ...], xp: Any = np
-                      ) -> list[Measure] | str:
+def friction_measures(J: np.ndarray, actuation: Actuation, labels: tuple[tuple[str, str, str], ...], xp: Any = np,
+                      factors: SharedFactors | None = None) -> list[Measure] | str:
     """The Coulomb friction felt, the least damping and the stiffest passive wall at the servo rate (Colgate-Brown)
     through J (square, or with more joints than rows: :mod:`symkin.rating.formulas`), labelled by ``labels``; or
     why not (no joint friction declared)."""
     if actuation.coulomb is None or actuation.viscous is None:
         return "no joint friction declared (friction: in the model file)"
     (coulomb, coulomb_unit, coulomb_doc), (damped, damping_unit, damping_doc), (wall, wall_unit, wall_doc) = labels
-    damping = formulas.handle_damping(J, actuation.viscous, xp)
-    return [Measure(coulomb, coulomb_unit, formulas.coulomb_friction_felt(J, actuation.coulomb, xp), False, coulomb_doc),
+    inverse_transpose = (factors or SharedFactors(J, None, xp)).inverse_transpose
+    damping = formulas.handle_damping(J, actuation.viscous, xp, inverse_transpose=inverse_transpose)
+    felt = formulas.coulomb_friction_felt(J, actuation.coulomb, xp, inverse_transpose=inverse_transpose)
+    return [Measure(coulomb, coulomb_unit, felt, False, coulomb_doc),
             Measure(damped, damping_unit, damping, True, damping_doc),
             Measure(wall, wall_unit, formulas.renderable_stiffness(damping, actuation.period, xp=xp), True,
                     f"{wall_doc} at {1 / actuation.period:g} Hz (Colgate-Brown, K < 2 b / T)")]

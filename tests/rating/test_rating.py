@@ -665,3 +665,29 @@ def test_the_datasheet_figure_keeps_titles_clear_and_prints_no_negative_zero(gen
     sheet = datasheet.rate(delta, Actuation.of_model(delta, effort_limits=[0.3] * 3), samples=500)
     check_figure_layout(datasheet_files.datasheet_figure(sheet, "delta"))   # titles clear of the colour bars
     assert datasheet._point([-1e-17, 0.0, -0.15], ("x", "y", "z")) == "(0.0, 0.0, -150.0) mm"
+
+
+def test_a_datasheet_factorizes_each_jacobian_once(generated_dir, monkeypatch):
+    """The measures that take J^-T (peak force, Coulomb friction felt, damping, backdrive friction along each axis) and
+    J M^-1 J^T (principal and per-axis masses) share one of each per handle (handle_measures.SharedFactors): a DELTA
+    with friction and encoders, every group rated, forms J^-T once and J M^-1 J^T once; the Agile Eye's turned handle
+    (torques, friction) likewise.  (The figures themselves: the oracles above, the formulas called on their own.)"""
+    from symkin.rating import datasheet
+
+    formed = {"inverse_transpose": 0, "mobility": 0}
+    for name in formed:
+        def counted(*args, original=getattr(formulas, name), name=name, **kwargs):
+            formed[name] += 1
+            return original(*args, **kwargs)
+        monkeypatch.setattr(formulas, name, counted)
+    delta = load(generated_dir / "delta")
+    actuation = handle_measures.Actuation(np.full(3, 0.3), np.full(3, 0.15), np.full(3, 1e-4), np.full(3, 0.01),
+                                          np.full(3, 0.02))
+    sheet = datasheet.rate(delta, actuation, samples=400)
+    assert not sheet.skipped
+    assert formed == {"inverse_transpose": 1, "mobility": 1}
+    eye = load(generated_dir / "agile_eye")
+    formed.update(inverse_transpose=0, mobility=0)
+    datasheet.rate(eye, handle_measures.Actuation(np.full(3, 1.0), None, np.full(3, 1e-3), np.full(3, 0.01),
+                                                  np.full(3, 0.02)), samples=64)
+    assert formed == {"inverse_transpose": 1, "mobility": 1}
