@@ -157,8 +157,8 @@ def main(argv: list[str] | None = None) -> int:
 def _datasheet_rows(samples: int) -> list[list[str]]:
     """Seconds of a DELTA's datasheet (every group rated) over ``samples`` workspace samples, numpy's against JAX's
     device (:mod:`symkin.rating.on_device`): its first rating (XLA compiles the generated functions and the measures'
-    program) and a second one (the generated functions compiled; the measures' program compiled again, one per
-    rating)."""
+    program) and a second one (the generated functions and the measures' program compiled: the program is kept per
+    model and rating options, :data:`symkin.rating.on_device.PROGRAMS`)."""
     from symkin.rating import datasheet
     from symkin.rating.handle_measures import Actuation
 

@@ -16,8 +16,9 @@ datasheet), each sampling a function of its own.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -213,39 +214,43 @@ def rate(model: GeneratedModel, actuation: Actuation, *, samples: int = 4096, se
 def _datasheet(model: GeneratedModel, usable: _Usable, actuation: Actuation) -> Datasheet:
     """The measures of the handle over the usable samples (see :func:`rate`): on JAX's device in one compiled
     program for a model loaded with the JAX backend (:mod:`symkin.rating.on_device`), else with numpy."""
+    sampled = {name: getattr(usable, name) for name in on_device.SAMPLED}
+    measures_of = functools.partial(_measures, model, usable.axes, usable.no_mass, actuation)
     if on_device.rates_on_device(model):
-        arrays = {name: getattr(usable, name) for name in on_device.SAMPLED}
+        # one program per model and rating options: a later rating of the model reuses it (XLA compiles it again only
+        # for other array shapes)
         measures, skipped = on_device.rated_on_device(
-            lambda sampled, xp: _measures(model, replace(usable, **sampled), actuation, xp), arrays)
+            measures_of, sampled, key=(model, usable.axes, usable.no_mass, actuation.fingerprint()))
     else:
-        measures, skipped = _measures(model, usable, actuation, np)
+        measures, skipped = measures_of(sampled, np)
     groups = SPHERICAL_GROUPS if usable.J_v is None else \
         pushed_groups(usable.axes) | TURNED_GROUPS if usable.J_w is not None else pushed_groups(usable.axes)
     return Datasheet(model.name, usable.q, usable.points, usable.axes, measures, len(usable.q) - 1, skipped, groups,
                      usable.notes)
 
 
-def _measures(model: GeneratedModel, usable: _Usable, actuation: Actuation, xp: Any
-              ) -> tuple[tuple[Measure, ...], dict[str, str]]:
-    """The handle's measures over the usable samples and {group: why not rated}, in the array module ``xp``."""
+def _measures(model: GeneratedModel, axes: tuple[str, ...], no_mass: str, actuation: Actuation,
+              sampled: Mapping[str, Any], xp: Any) -> tuple[tuple[Measure, ...], dict[str, str]]:
+    """The handle's measures over the usable samples and {group: why not rated}, in the array module ``xp``:
+    ``sampled`` maps the names of :data:`symkin.rating.on_device.SAMPLED` to the usable samples' arrays (a
+    :class:`_Usable`'s), ``axes`` and ``no_mass`` are the usable samples' too."""
+    q, poses, J_v, J_w, M, G = (sampled[name] for name in on_device.SAMPLED)
     measures: tuple[Measure, ...] = ()
     skipped: dict[str, str] = {}
-    if usable.J_v is not None:
-        measures, skipped = translation_measures(model, usable.J_v, usable.M, usable.q, usable.poses, actuation,
-                                                 usable.axes, no_mass=usable.no_mass, G=usable.G, xp=xp)
-    turning = None if usable.J_w is None else SharedFactors(usable.J_w, usable.M, xp)
-    if usable.J_w is not None:
-        turned, not_turned = rotation_measures(usable.J_w, usable.M, actuation, no_mass=usable.no_mass, xp=xp,
-                                               factors=turning)
+    if J_v is not None:
+        measures, skipped = translation_measures(model, J_v, M, q, poses, actuation, axes, no_mass=no_mass, G=G, xp=xp)
+    turning = None if J_w is None else SharedFactors(J_w, M, xp)
+    if J_w is not None:
+        turned, not_turned = rotation_measures(J_w, M, actuation, no_mass=no_mass, xp=xp, factors=turning)
         measures, skipped = measures + turned, skipped | not_turned
-    if usable.J_v is None:  # a handle that only turns: what the pushed measures would have said of it
-        assert usable.J_w is not None, "a handle that neither translates nor turns is refused before"
-        share = gravity_share_measure(model, usable.q, usable.poses, actuation.effort_limits, xp)
+    if J_v is None:  # a handle that only turns: what the pushed measures would have said of it
+        assert J_w is not None, "a handle that neither translates nor turns is refused before"
+        share = gravity_share_measure(model, q, poses, actuation.effort_limits, xp)
         if isinstance(share, str):
             skipped["gravity_share"] = share
         else:
             measures += tuple(share)
-        friction = friction_measures(usable.J_w, actuation, ROTATIONAL_FRICTION, xp, turning)
+        friction = friction_measures(J_w, actuation, ROTATIONAL_FRICTION, xp, turning)
         if isinstance(friction, str):
             skipped["friction"] = friction
         else:

@@ -54,6 +54,12 @@ class Actuation:
     viscous: np.ndarray | None = None
     period: float = 1e-3
 
+    def fingerprint(self) -> tuple[Any, ...]:
+        """The data as a hashable value, equal for equal data (the key of a compiled program that closes over them)."""
+        return tuple(None if value is None else (np.shape(value), np.asarray(value, dtype=float).tobytes())
+                     for value in (self.effort_limits, self.continuous_limits, self.joint_steps, self.coulomb,
+                                   self.viscous)) + (float(self.period),)
+
     @classmethod
     def of_model(cls, model: GeneratedModel, *, effort_limits: Sequence[float] | None = None,
                  joint_steps: Sequence[float] | None = None, period: float = 1e-3) -> Actuation:

@@ -18,7 +18,8 @@ static node.
 from __future__ import annotations
 
 import functools
-from collections.abc import Callable, Mapping
+from collections import OrderedDict
+from collections.abc import Callable, Hashable, Mapping
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -62,26 +63,35 @@ def _register() -> None:
 CHUNK = 2**15
 
 
-def rated_on_device(measures_of: Callable[[Mapping[str, Any], Any], Measures], sampled: Mapping[str, Any]
-                    ) -> Measures:
+#: The programs kept for later ratings (:func:`rated_on_device`'s ``key``), the most recently used last.
+PROGRAMS: OrderedDict[Hashable, Any] = OrderedDict()
+#: ... at most this many (each holds its model and XLA's executables).
+KEPT_PROGRAMS = 8
+
+
+def rated_on_device(measures_of: Callable[[Mapping[str, Any], Any], Measures], sampled: Mapping[str, Any], *,
+                    key: Hashable | None = None) -> Measures:
     """``measures_of(sampled, jax.numpy)`` compiled and run on JAX's default device, its values back as numpy
     arrays: ``sampled`` maps the names of :data:`SAMPLED` to arrays (traced) or to None or a reason (static).  The
-    samples go through in chunks of at most :data:`CHUNK` (the last one padded with its first sample, so that one
-    compiled program serves every chunk)."""
-    import jax
-    import jax.numpy as jnp
+    samples go through in chunks of :data:`CHUNK` or, when fewer, of the next power of two (the last one padded with
+    its first sample, so that one compiled program serves every chunk, and later ratings of about as many samples).
 
+    ``key``: what ``measures_of`` computes, hashable, equal for equal programs (the model, its rating options): a
+    later call with an equal key and the same static entries of ``sampled`` runs the program compiled then (XLA
+    compiles it again only for other array shapes) instead of compiling ``measures_of`` anew (about a second for a
+    DELTA on a CPU).  None: compiled for this call only."""
     _register()
     traced = {name: value for name, value in sampled.items() if value is not None and not isinstance(value, str)}
-    fixed = {name: value for name, value in sampled.items() if name not in traced}
-
-    def program(arrays: dict[str, Any]) -> tuple[tuple[Measure, ...], _Reasons]:
-        measures, skipped = measures_of({**arrays, **fixed}, InOrder(jnp))
-        return measures, _Reasons(tuple(skipped.items()))
-
-    compiled = jax.jit(program)
+    fixed = tuple(sorted((name, value) for name, value in sampled.items() if name not in traced))
+    if key is None:
+        compiled = _program(measures_of, fixed)
+    else:
+        compiled = PROGRAMS.pop((key, fixed), None) or _program(measures_of, fixed)
+        PROGRAMS[key, fixed] = compiled
+        while len(PROGRAMS) > KEPT_PROGRAMS:
+            PROGRAMS.popitem(last=False)
     count = len(traced["q"])
-    size = min(CHUNK, count)
+    size = min(CHUNK, 1 << (count - 1).bit_length())  # a power of two: later ratings' counts take the same shapes
     parts = []
     for start in range(0, count, size):  # every chunk dispatched before any comes back: the device never waits
         index = start + np.where(np.arange(size) < count - start, np.arange(size), 0)
@@ -89,3 +99,15 @@ def rated_on_device(measures_of: Callable[[Mapping[str, Any], Any], Measures], s
         parts.append([m.values for m in measures])
     values = [np.concatenate([np.asarray(v) for v in chunks])[:count] for chunks in zip(*parts)]
     return tuple(replace(m, values=v) for m, v in zip(measures, values)), dict(reasons.items)
+
+
+def _program(measures_of: Callable[[Mapping[str, Any], Any], Measures], fixed: tuple[tuple[str, Any], ...]) -> Any:
+    """The jitted program of ``measures_of`` over the traced arrays, the ``fixed`` entries (None or a reason) static."""
+    import jax
+    import jax.numpy as jnp
+
+    def program(arrays: dict[str, Any]) -> tuple[tuple[Measure, ...], _Reasons]:
+        measures, skipped = measures_of({**arrays, **dict(fixed)}, InOrder(jnp))
+        return measures, _Reasons(tuple(skipped.items()))
+
+    return jax.jit(program)

@@ -249,9 +249,9 @@ def test_the_datasheet_is_rated_on_the_device(name, samples, chunk, jax_model, l
     modules = []
     measures = datasheet._measures
 
-    def recorded(model, usable, actuation, xp):
-        modules.append(xp)
-        return measures(model, usable, actuation, xp)
+    def recorded(*arguments):
+        modules.append(arguments[-1])  # the array module
+        return measures(*arguments)
 
     reference = loaded(name, "numpy")
     n = len(reference.info.coordinates)
@@ -272,6 +272,32 @@ def test_the_datasheet_is_rated_on_the_device(name, samples, chunk, jax_model, l
     bound = DYNAMICS + svd(n) * (1 / datasheet.USABLE_CONDITIONING) ** 2 * np.linalg.cond(M[:-1])
     for g, w in zip(got.measures, want.measures):
         np.testing.assert_array_less(np.abs(g.values - w.values)[:-1], bound * np.abs(w.values[:-1]), g.name)
+
+
+def test_a_later_rating_of_the_model_runs_the_program_compiled_before(jax_model, monkeypatch):
+    """The rating's program is kept per model and rating options (on_device.PROGRAMS): a DELTA rated again over other
+    samples (as many usable ones, padded to the same power of two) makes no new program, XLA compiles nothing new, and
+    it gives what a fresh program gives; other actuators' data make another program."""
+    from symkin.rating import datasheet, on_device
+    from symkin.rating.handle_measures import Actuation
+
+    made = []
+    program = on_device._program
+    monkeypatch.setattr(on_device, "_program", lambda *arguments: made.append(1) or program(*arguments))
+    monkeypatch.setattr(on_device, "PROGRAMS", type(on_device.PROGRAMS)())  # none of the other tests' programs
+    delta = jax_model("delta")
+    actuation = Actuation(np.full(3, 10.0), np.full(3, 5.0), np.full(3, 1e-4), np.full(3, 0.01), np.full(3, 0.02))
+    datasheet.rate(delta, actuation, samples=200, seed=1)
+    again = datasheet.rate(delta, actuation, samples=250, seed=3)
+    assert len(made) == 1
+    assert [program._cache_size() for program in on_device.PROGRAMS.values()] == [1]  # one XLA executable
+    monkeypatch.setattr(on_device, "PROGRAMS", type(on_device.PROGRAMS)())
+    fresh = datasheet.rate(delta, actuation, samples=250, seed=3)
+    assert len(made) == 2
+    for a, b in zip(again.measures, fresh.measures):
+        np.testing.assert_array_equal(a.values, b.values, a.name)
+    datasheet.rate(delta, Actuation(np.full(3, 20.0)), samples=200, seed=1)
+    assert len(made) == 3
 
 
 @pytest.mark.parametrize("hard_share", [0.0, 0.05, 0.5])
