@@ -157,6 +157,18 @@ def cartesian_integrand(model: GeneratedModel, inverse: InverseKinematics, box: 
     return Integrand(lower, upper, function, components, axes, indicator=len(components) - 1)
 
 
+def cartesian_integrand_for(model: GeneratedModel, inverse: InverseKinematics, box: tuple[np.ndarray, np.ndarray], *,
+                            index: Index | None = conditioning.inverse_condition_number, limits: Limits | None = None,
+                            length: float | str | None = None) -> Integrand:
+    """The Cartesian integrand (:func:`cartesian_integrand`'s components) where it is evaluated: fused on JAX's
+    device for a model loaded with the JAX backend whose closed-form ik the device decides and the default index
+    (:mod:`symkin.analysis.device_cartesian`), else on the host."""
+    if device_cartesian.cartesian_on_device(model, inverse) and index in (None, DEFAULT_INDEX):
+        return device_cartesian.device_cartesian_integrand(model, inverse, box, with_index=index is not None,
+                                                           limits=limits, length=length)
+    return cartesian_integrand(model, inverse, box, index=index, limits=limits, length=length)
+
+
 @dataclass(frozen=True)
 class GlobalIndex:
     """A global index (GCI by default) with the workspace measure it was averaged over.
@@ -191,11 +203,7 @@ def _integrand(model: GeneratedModel, *, domain: str, measure: str, index: Index
             raise ValueError("the Cartesian domain needs an inverse kinematics (inverse=...)")
         if box is None:
             box = bounding_box(model, limits=limits)
-        if device_cartesian.cartesian_on_device(model, inverse) and index in (None, DEFAULT_INDEX):
-            integrand = device_cartesian.device_cartesian_integrand(model, inverse, box, with_index=index is not None,
-                                                                    limits=limits, length=length)
-        else:
-            integrand = cartesian_integrand(model, inverse, box, index=index, limits=limits, length=length)
+        integrand = cartesian_integrand_for(model, inverse, box, index=index, limits=limits, length=length)
         return integrand, reach.domain_description(model, domain, measure)
     raise ValueError(f"unknown domain '{domain}'; choose one of {', '.join(DOMAINS)}")
 

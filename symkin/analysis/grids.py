@@ -3,8 +3,8 @@
 :func:`reachability_grid` marks the cells whose centre an inverse kinematics reaches within
 the joint limits (the workspace of a parallel mechanism, seen the inverse way);
 :func:`index_grid` adds a local index (1/kappa by default, seed Table 8.5) at those centres.
-Both evaluate :func:`symkin.analysis.global_indices.cartesian_integrand`, so a map and the
-GCI integrate the same function.
+Both evaluate :func:`symkin.analysis.global_indices.cartesian_integrand` (on JAX's device where the GCI runs there:
+:func:`~symkin.analysis.global_indices.cartesian_integrand_for`), so a map and the GCI integrate the same function.
 """
 
 from __future__ import annotations
@@ -28,7 +28,7 @@ def reachability_grid(model: GeneratedModel, inverse: InverseKinematics, box: tu
     with the Cartesian integrand of the GCI (:func:`~symkin.analysis.global_indices.cartesian_integrand`).
     """
     start, size, counts, centers = grid_cells(box, cell)
-    indicator = global_indices.cartesian_integrand(model, inverse, box, index=None, limits=limits).function(centers)
+    indicator = global_indices.cartesian_integrand_for(model, inverse, box, index=None, limits=limits).function(centers)
     return Occupancy(start, size, (indicator[:, 0] > 0).reshape(counts))
 
 
@@ -42,8 +42,8 @@ def index_grid(model: GeneratedModel, inverse: InverseKinematics, box: tuple[np.
     """
     index = conditioning.inverse_condition_number if index is None else index
     start, size, counts, centers = grid_cells(box, cell)
-    scored = global_indices.cartesian_integrand(model, inverse, box, index=index, limits=limits,
-                                                length=length).function(centers)
+    scored = global_indices.cartesian_integrand_for(model, inverse, box, index=index, limits=limits,
+                                                    length=length).function(centers)
     inside = scored[:, 1] > 0
     values = np.where(inside, scored[:, 0], np.nan)
     return Occupancy(start, size, inside.reshape(counts)), values.reshape(counts)

@@ -160,12 +160,13 @@ def test_the_cartesian_integrand_runs_on_the_device(name, options, jax_model, lo
     """The Cartesian domain on the device: the DELTA's working mode (fk(ik(p)) = p) and the Stewart platform's at its
     home orientation (det J^-1 keeps its sign; 1/kappa of the homogenized twist Jacobian diag(I, E) (J^-1)^-1)
     decided there, at the same points as numpy's: the same reachable set point by point, 1/kappa to 1e-12.  The
-    DELTA's GCI and workspace volume with the values never coming back (calling them fails here): numpy's to 1e-12.
-    An inverse with passive-joint limits stays on the host."""
+    DELTA's GCI and workspace volume with the values never coming back (calling them fails here): numpy's to 1e-12,
+    and symkin workspace's grid of 1/kappa at the reachable cell centres numpy's.  An inverse with passive-joint
+    limits stays on the host."""
     from dataclasses import replace
 
     from symkin import analysis
-    from symkin.analysis import device_cartesian
+    from symkin.analysis import device_cartesian, grids
     from symkin.analysis.global_indices import cartesian_integrand
     from symkin.analysis.inverse import inverse_kinematics_for
     from symkin.integration.integrand import Integrand
@@ -191,6 +192,11 @@ def test_the_cartesian_integrand_runs_on_the_device(name, options, jax_model, lo
         got = analysis.gci(models["jax"], domain="cartesian", inverse=inverse["jax"], samples=2**12, seed=4, **options)
     assert got.value.value == pytest.approx(want.value.value, rel=1e-12)
     assert got.measure.value == pytest.approx(want.measure.value, rel=1e-12)
+    # symkin workspace's Cartesian grid (1/kappa at the reachable cell centres) takes the same program
+    (occupied, on_host), (occupied_too, on_device) = (
+        grids.index_grid(models[backend], inverse[backend], box, 0.04) for backend in ("numpy", "jax"))
+    assert np.array_equal(occupied_too.occupied, occupied.occupied)
+    np.testing.assert_allclose(on_device, on_host, rtol=0, atol=1e-12)
 
 
 @pytest.mark.parametrize("fraction", [0.0, 0.1, 0.4, 0.9, 1.0])
