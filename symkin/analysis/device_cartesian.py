@@ -20,14 +20,15 @@ A point counts as the host's rules count it (:mod:`symkin.mechanism.reach`, :mod
   and within the joint stops.
 
 The Jacobian is taken at the wrapped joints, as the host takes it, and only at the reachable points, gathered
-(:func:`on_gathered_rows`: a box around the workspace holds many points out of reach).  For a translational platform
-it is the generated ``jacobian`` J(q, p); a platform held at a constant orientation has the twist Jacobian
-J = R (J^-1)^-1 (R = diag(I, E), :class:`~symkin.mechanism.reach.ConstantOrientation`), homogenized S J, whose
-1/kappa is that of its inverse J^-1 (S R)^-1 - one constant matrix for the batch, so no inverse per point (the host
-inverts, :func:`symkin.numerics.conditioning.from_inverse`: the same index up to rounding, the numerical-rank rule
-applied to the inverse's singular values).  Declared passive-joint limits (decided on the loop closure by a
-Gauss-Newton iteration on the host) and the serial arms' closed forms (:class:`symkin.analysis.inverse.ClosedFormInverse`)
-take the host integrand.  The SVDs run after det J^-1 (they wait for the reachable set) and one after the other
+(:func:`symkin.analysis.device_integrand.on_gathered_rows`: a box around the workspace holds many points out of
+reach). For a translational platform it is the generated ``jacobian`` J(q, p); a platform held at a constant
+orientation has the twist Jacobian J = R (J^-1)^-1 (R = diag(I, E),
+:class:`~symkin.mechanism.reach.ConstantOrientation`), homogenized S J, whose 1/kappa is that of its inverse
+J^-1 (S R)^-1 - one constant matrix for the batch, so no inverse per point (the host inverts,
+:func:`symkin.numerics.conditioning.from_inverse`: the same index up to rounding, the numerical-rank rule applied to
+the inverse's singular values). Declared passive-joint limits (decided on the loop closure by a Gauss-Newton iteration
+on the host) and the serial arms' closed forms (:class:`symkin.analysis.inverse.ClosedFormInverse`) take the host
+integrand. The SVDs run after det J^-1 (they wait for the reachable set) and one after the other
 (:class:`symkin.numerics.ordered_linalg.InOrder`): jaxlib's CPU LAPACK kernels deadlock when run side by side.
 """
 
@@ -40,7 +41,8 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from symkin import mechanism
-from symkin.analysis.device_integrand import extreme_singular_values, reduced, row_scale, stop_arguments
+from symkin.analysis.device_integrand import (extreme_singular_values, loaded_with_jax, on_gathered_rows, reduced,
+                                             row_scale, stop_arguments)
 from symkin.integration.integrand import Integrand
 from symkin.mechanism import Limits, stops
 from symkin.mechanism.feasibility import InverseKinematics
@@ -56,8 +58,7 @@ def cartesian_on_device(model: GeneratedModel, inverse: InverseKinematics) -> bo
     """Whether the Cartesian integrand of ``model`` with ``inverse`` can run fused on JAX's device: a model loaded with
     the JAX backend whose inverse is its generated closed form (a translational platform's, or a pose platform's held
     at a constant orientation) without declared passive-joint limits."""
-    return (getattr(model, "backend", None) == "jax" and hasattr(model, "unbound")
-            and isinstance(inverse, (WorkingModeInverse, ConstantOrientationInverse))
+    return (loaded_with_jax(model) and isinstance(inverse, (WorkingModeInverse, ConstantOrientationInverse))
             and inverse.passive_limits is None)
 
 
@@ -75,27 +76,6 @@ class _Functions(NamedTuple):
 #: shares of a batch that holds them all (a box around the workspace holds many points out of reach: 88 % of the
 #: Stewart platform's, 70 % of the DELTA's), or on every point of a batch where more are reachable.
 REACHABLE_SHARES = (1 / 8, 1 / 2)
-
-
-def on_gathered_rows(mask: Any, shares: tuple[float, ...], function: Callable[..., Any], *arrays: Any) -> Any:
-    """``function(*rows)`` (k,) at the rows of ``arrays`` where ``mask`` (N,) holds, 0 elsewhere, in jax.numpy: the
-    rows gathered to the first static share of the batch, s N rows for s in ``shares``, that holds them all, or
-    every row where none does (one jax.lax.cond per share: only the branch taken runs)."""
-    import jax
-    import jax.numpy as jnp
-
-    count = mask.shape[0]
-    if not shares:
-        return jnp.where(mask, function(*arrays), 0.0)
-    size = max(1, int(count * shares[0]))
-
-    def gathered(_: Any) -> Any:
-        rows = jnp.nonzero(mask, size=size, fill_value=0)[0]
-        values = function(*(a[rows] for a in arrays))
-        return jnp.zeros(count).at[rows].set(jnp.where(mask[rows], values, 0.0))
-
-    return jax.lax.cond(jnp.sum(mask) > size, lambda _: on_gathered_rows(mask, shares[1:], function, *arrays),
-                        gathered, None)
 
 
 @functools.lru_cache(maxsize=32)
@@ -166,12 +146,13 @@ def device_cartesian_integrand(model: GeneratedModel, inverse: InverseKinematics
         raise ValueError(f"the Cartesian box must have {inverse.dimension} coordinates, got {lower.shape}")
     m, n = len(mechanism.task_space(model)), joint_box.shape[0]
     revolute = mechanism.revolute_mask(model)
+    scale = row_scale(model, joint_box, length) if with_index else np.ones(m)
     constants: dict[str, Any] = {
         "orientation": None, "unscale": None, "sign": None, "tolerance": None,
         "limits": jnp.asarray(joint_box), "revolute": jnp.asarray(revolute), "stops": stop_arguments(model),
-        "scale": jnp.asarray(row_scale(model, joint_box, length) if with_index else np.ones(m))}
+        "scale": jnp.asarray(scale)}
     if isinstance(inverse, ConstantOrientationInverse):
-        scaled_rates = np.asarray(constants["scale"])[:, None] * inverse.model.rates     # S R
+        scaled_rates = scale[:, None] * inverse.model.rates     # S R
         constants.update(orientation=jnp.asarray(inverse.model.orientation), sign=inverse.sign,
                          unscale=jnp.asarray(np.linalg.inv(scaled_rates)))
         names: tuple[str, ...] = ("ik", "inverse_jacobian")

@@ -41,12 +41,16 @@ from symkin.runtime.info import GeneratedModel
 _EPS = float(np.finfo(np.float64).eps)
 
 
+def loaded_with_jax(model: GeneratedModel) -> bool:
+    """Whether the model is loaded with the JAX backend, its generated functions traceable unbound (``unbound``)."""
+    return getattr(model, "backend", None) == "jax" and hasattr(model, "unbound")
+
+
 def on_device(model: GeneratedModel) -> bool:
     """Whether the model's joint-space integrand can run fused on JAX's device: a model loaded with the JAX backend
     whose working mode its generated functions decide (:func:`symkin.mechanism.working_mode.assembly_functions`:
     an open chain, or loops closed through closed-form fk and ik without passive-joint limits)."""
-    return (getattr(model, "backend", None) == "jax" and hasattr(model, "unbound")
-            and working_mode.assembly_functions(model) is not None)
+    return loaded_with_jax(model) and working_mode.assembly_functions(model) is not None
 
 
 def jacobian_of_joints_on_device(model: GeneratedModel) -> bool:
@@ -77,6 +81,36 @@ class _Functions(NamedTuple):
 HARD_SHARE = 1 / 16
 
 
+def on_gathered_rows(mask: Any, shares: tuple[float, ...], function: Callable[..., Any], *arrays: Any,
+                     first_up_front: bool = False) -> Any:
+    """``function(*rows)`` - an array (k,) or a tuple of them - at the rows of ``arrays`` where ``mask`` (N,) holds,
+    0 elsewhere, in jax.numpy: evaluated on the masked rows gathered to s N rows for the first share s in ``shares``
+    that holds them all, or on every row where none does (a jax.lax.cond per share chooses; only the branch taken
+    runs).  ``first_up_front``: the first share's evaluation is traced before its cond and runs always - for a
+    ``function`` whose factorizations extend the one chain of an :class:`symkin.numerics.ordered_linalg.InOrder`
+    array module, which the cond's branches, each traced on its own, would otherwise extend from each other's trace."""
+    import jax
+    import jax.numpy as jnp
+
+    count = mask.shape[0]
+    if not shares:
+        return jax.tree_util.tree_map(lambda v: jnp.where(mask, v, 0.0), function(*arrays))
+    size = max(1, int(count * shares[0]))
+
+    def gathered(_: Any) -> Any:
+        rows = jnp.nonzero(mask, size=size, fill_value=0)[0]   # the fill repeats row 0: it scatters row 0's own value
+        return jax.tree_util.tree_map(lambda v: jnp.zeros(count, v.dtype).at[rows].set(jnp.where(mask[rows], v, 0.0)),
+                                      function(*(a[rows] for a in arrays)))
+
+    def wider(_: Any) -> Any:
+        return on_gathered_rows(mask, shares[1:], function, *arrays)
+
+    if first_up_front:
+        values = gathered(None)
+        return jax.lax.cond(jnp.sum(mask) > size, wider, lambda _: values, None)
+    return jax.lax.cond(jnp.sum(mask) > size, wider, gathered, None)
+
+
 def extreme_singular_values(J: Any, threshold: float, xp: Any = None) -> tuple[Any, Any]:
     """(sigma_max, sigma_min) of a batch of finite Jacobians (N, m, n) in jax.numpy by
     :mod:`symkin.numerics.conditioning`'s rules: its closed forms for 2 x 2 and 3 x 3 matrices (the host's formulas,
@@ -84,7 +118,6 @@ def extreme_singular_values(J: Any, threshold: float, xp: Any = None) -> tuple[A
     serve - gathered to a static share of the batch (:data:`HARD_SHARE`; more take an SVD of the whole batch); a
     sigma_min at most ``threshold`` sigma_max is 0 (the numerical rank).  ``xp``: the array module whose linalg takes
     the SVDs (default jax.numpy; a device program's :class:`symkin.numerics.ordered_linalg.InOrder`)."""
-    import jax
     import jax.numpy as jnp
 
     linalg = (xp or jnp).linalg
@@ -94,18 +127,13 @@ def extreme_singular_values(J: Any, threshold: float, xp: Any = None) -> tuple[A
         largest, smallest = conditioning.extreme_2x2(J, jnp)
     elif m == n == 3:
         largest, smallest, hard = conditioning.closed_form_3x3(J, jnp)
-        size = max(1, int(J.shape[0] * HARD_SHARE))
-        index = jnp.nonzero(hard, size=size, fill_value=0)[0]
-        s = linalg.svd(J[index], compute_uv=False)
-        taken = hard[index]
-        gathered = (largest.at[index].set(jnp.where(taken, s[:, 0], largest[index])),
-                    smallest.at[index].set(jnp.where(taken, s[:, -1], smallest[index])))
 
-        def every_one(_: Any) -> tuple[Any, Any]:
-            s = linalg.svd(J, compute_uv=False)
-            return jnp.where(hard, s[:, 0], largest), jnp.where(hard, s[:, -1], smallest)
+        def svd_extremes(A: Any) -> tuple[Any, Any]:
+            s = linalg.svd(A, compute_uv=False)
+            return s[:, 0], s[:, -1]
 
-        largest, smallest = jax.lax.cond(jnp.sum(hard) > size, every_one, lambda _: gathered, None)
+        exact_largest, exact_smallest = on_gathered_rows(hard, (HARD_SHARE,), svd_extremes, J, first_up_front=True)
+        largest, smallest = jnp.where(hard, exact_largest, largest), jnp.where(hard, exact_smallest, smallest)
     else:
         s = linalg.svd(J, compute_uv=False)
         largest, smallest = s[:, 0], s[:, -1]

@@ -203,7 +203,8 @@ def test_the_cartesian_integrand_runs_on_the_device(name, options, jax_model, lo
 def test_gathered_rows_give_every_rows_values(fraction):
     """on_gathered_rows: the function at the masked rows, 0 elsewhere, whichever share of the batch holds them
     (1/8, 1/2, or the whole batch where more than half are masked), row 0 masked or not."""
-    from symkin.analysis.device_cartesian import REACHABLE_SHARES, on_gathered_rows
+    from symkin.analysis.device_cartesian import REACHABLE_SHARES
+    from symkin.analysis.device_integrand import on_gathered_rows
 
     jax.config.update("jax_enable_x64", True)  # as importing a generated module does (the device programs' case)
     rng = np.random.default_rng(1)
