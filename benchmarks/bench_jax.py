@@ -11,7 +11,8 @@ calls, after one that compiles):
 * ``JAX, outputs on the device``: the jitted function, every output left on JAX's default device
   (``block_until_ready``);
 * ``JAX, reduced on the device``: the jitted function and a sum of every output to one number per configuration in
-  one jitted function (only that number comes back): the arithmetic without the memory traffic of the outputs;
+  one jitted function (only that number comes back): on a CPU the outputs' entries are still computed in one loop
+  and written to memory (the module's ``_in_one_loop``), on other devices XLA may fuse them into the sum;
 * ``GCI integrand``: what ``symkin gci`` integrates over the joint limits, [1/kappa(J), 1] of the task Jacobian per
   configuration (its singular values; the position rows divided by L = 1 m) reduced to their mean and covariance
   (``Integrand.mean_and_covariance``): the host integrand (:func:`symkin.analysis.global_indices.joint_space_integrand`:

@@ -1,7 +1,8 @@
 """The JAX backend (issue 66): one importable module of pure, jit-compiled ``jax.numpy`` functions per model.
 
 The same optimized functions as the numpy backend (one intermediate representation; the template differs): every
-function is pure (its outputs are stacked, never written in place), float64 (the module enables JAX's 64-bit
+function is pure (its outputs are stacked, never written in place; on a CPU the entries of all its outputs are
+computed in one loop, see docs/generated-code.md), float64 (the module enables JAX's 64-bit
 mode), jit-compiled, and composes with ``jax.vmap``, ``jax.grad`` and ``jax.jacfwd``; on a GPU a batch stays on
 the device.  JAX is an optional dependency (``pip install symkin[jax]``): the emitter needs none, the loader
 (:mod:`symkin.backends.jax.loader`) imports it when a model's code is loaded.
