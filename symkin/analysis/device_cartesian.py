@@ -28,8 +28,9 @@ J^-1 (S R)^-1 - one constant matrix for the batch, so no inverse per point (the 
 :func:`symkin.numerics.conditioning.from_inverse`: the same index up to rounding, the numerical-rank rule applied to
 the inverse's singular values). Declared passive-joint limits (decided on the loop closure by a Gauss-Newton iteration
 on the host) and the serial arms' closed forms (:class:`symkin.analysis.inverse.ClosedFormInverse`) take the host
-integrand. The SVDs run after det J^-1 (they wait for the reachable set) and one after the other
-(:class:`symkin.numerics.ordered_linalg.InOrder`): jaxlib's CPU LAPACK kernels deadlock when run side by side.
+integrand. The singular values are one-sided Jacobi's (:mod:`symkin.numerics.jacobi_svd`), so det J^-1 is the one
+LAPACK kernel of the program (jaxlib's CPU LAPACK kernels deadlock when run side by side:
+:mod:`symkin.numerics.ordered_linalg`).
 """
 
 from __future__ import annotations
@@ -48,7 +49,6 @@ from symkin.mechanism import Limits, stops
 from symkin.mechanism.feasibility import InverseKinematics
 from symkin.mechanism.limits import within_limits
 from symkin.mechanism.reach import (POSITION_ROUND_TRIP_TOLERANCE, ConstantOrientationInverse, WorkingModeInverse)
-from symkin.numerics.ordered_linalg import InOrder
 from symkin.runtime.info import GeneratedModel
 
 _EPS = float(np.finfo(np.float64).eps)
@@ -97,7 +97,7 @@ def _compiled(functions: _Functions, with_index: bool, threshold: float, wraps: 
             J = functions.inverse_jacobian(q, poses, **parameters["inverse_jacobian"]) @ constants["unscale"]
         regular = jnp.all(jnp.isfinite(J), axis=(-2, -1))
         J = jnp.where(regular[:, None, None], J, 0.0)
-        largest, smallest = extreme_singular_values(J, threshold, InOrder(jnp))
+        largest, smallest = extreme_singular_values(J, threshold)
         return jnp.where(regular & (largest > 0), smallest / jnp.where(largest > 0, largest, 1.0), 0.0)
 
     def values(points: Any, constants: dict[str, Any], parameters: dict[str, Any]) -> tuple[Any, Any]:

@@ -4,7 +4,7 @@ For a model loaded with the JAX backend, :func:`device_joint_space_integrand` gi
 :func:`symkin.analysis.global_indices.joint_space_integrand` - components [w g, w] with w = |det J(q)| (the
 Cartesian measure) or 1 (the joint measure) and g = 1/kappa = sigma_min / sigma_max of the (homogenized) Jacobian
 (seed eqs. 8.25, 8.28), or [w] for the workspace measure - as one jitted function: the generated Jacobian, its
-extreme singular values (conditioning's closed forms for 2 x 2 and 3 x 3, else a batched SVD), the weights and
+extreme singular values (conditioning's closed forms for 2 x 2 and 3 x 3, else one-sided Jacobi), the weights and
 the reduction of a batch to its mean and scatter run on the device,
 and only those k + k^2 numbers come back (:attr:`symkin.integration.integrand.Integrand.moments`).  On a GPU a
 batch of configurations never leaves the device; on a CPU XLA fuses the program.  The program is compiled once per
@@ -18,9 +18,9 @@ decided on the device too: those within the model's joint stops (:mod:`symkin.me
 as arguments) and, for a parallel mechanism with closed forms, those in its working mode - fk(q) assembles and
 ik(fk(q)) = q (:func:`symkin.mechanism.working_mode.same_branches`, the host's test in jax.numpy), the Jacobian
 J(q, fk(q)).  A parallel mechanism with declared passive-joint limits (checked on the closure, on the
-host), legs without closed forms, and an index other than 1/kappa take the host integrand.  The program's
-factorizations (|det J|, the SVDs) run one after the other (:class:`symkin.numerics.ordered_linalg.InOrder`): run
-concurrently, jaxlib's CPU LAPACK kernels deadlock on a 2-core machine.
+host), legs without closed forms, and an index other than 1/kappa take the host integrand.  The singular values
+call no LAPACK kernel (:mod:`symkin.numerics.jacobi_svd`), so |det J| is the program's only one (run concurrently,
+jaxlib's CPU LAPACK kernels deadlock on a 2-core machine: :mod:`symkin.numerics.ordered_linalg`).
 """
 
 from __future__ import annotations
@@ -34,7 +34,7 @@ import numpy as np
 from symkin import mechanism
 from symkin.integration.integrand import Integrand
 from symkin.mechanism import Limits, reach, stops, working_mode
-from symkin.numerics import conditioning
+from symkin.numerics import conditioning, jacobi_svd
 from symkin.numerics.ordered_linalg import InOrder
 from symkin.runtime.info import GeneratedModel
 
@@ -81,14 +81,11 @@ class _Functions(NamedTuple):
 HARD_SHARE = 1 / 16
 
 
-def on_gathered_rows(mask: Any, shares: tuple[float, ...], function: Callable[..., Any], *arrays: Any,
-                     first_up_front: bool = False) -> Any:
+def on_gathered_rows(mask: Any, shares: tuple[float, ...], function: Callable[..., Any], *arrays: Any) -> Any:
     """``function(*rows)`` - an array (k,) or a tuple of them - at the rows of ``arrays`` where ``mask`` (N,) holds,
     0 elsewhere, in jax.numpy: evaluated on the masked rows gathered to s N rows for the first share s in ``shares``
     that holds them all, or on every row where none does (a jax.lax.cond per share chooses; only the branch taken
-    runs).  ``first_up_front``: the first share's evaluation is traced before its cond and runs always - for a
-    ``function`` whose factorizations extend the one chain of an :class:`symkin.numerics.ordered_linalg.InOrder`
-    array module, which the cond's branches, each traced on its own, would otherwise extend from each other's trace."""
+    runs)."""
     import jax
     import jax.numpy as jnp
 
@@ -105,38 +102,32 @@ def on_gathered_rows(mask: Any, shares: tuple[float, ...], function: Callable[..
     def wider(_: Any) -> Any:
         return on_gathered_rows(mask, shares[1:], function, *arrays)
 
-    if first_up_front:
-        values = gathered(None)
-        return jax.lax.cond(jnp.sum(mask) > size, wider, lambda _: values, None)
     return jax.lax.cond(jnp.sum(mask) > size, wider, gathered, None)
 
 
-def extreme_singular_values(J: Any, threshold: float, xp: Any = None) -> tuple[Any, Any]:
+def extreme_singular_values(J: Any, threshold: float) -> tuple[Any, Any]:
     """(sigma_max, sigma_min) of a batch of finite Jacobians (N, m, n) in jax.numpy by
     :mod:`symkin.numerics.conditioning`'s rules: its closed forms for 2 x 2 and 3 x 3 matrices (the host's formulas,
-    several times faster than a batched SVD), an SVD otherwise and for the 3 x 3 matrices the closed form does not
-    serve - gathered to a static share of the batch (:data:`HARD_SHARE`; more take an SVD of the whole batch); a
-    sigma_min at most ``threshold`` sigma_max is 0 (the numerical rank).  ``xp``: the array module whose linalg takes
-    the SVDs (default jax.numpy; a device program's :class:`symkin.numerics.ordered_linalg.InOrder`)."""
+    several times faster than a batched SVD), the singular values by one-sided Jacobi otherwise
+    (:func:`symkin.numerics.jacobi_svd.jacobi_singular_values`: no LAPACK kernel; XLA's SVD took twice as long) and for the
+    3 x 3 matrices the closed form does not serve - gathered to a static share of the batch (:data:`HARD_SHARE`;
+    more take the sweeps over the whole batch); a sigma_min at most ``threshold`` sigma_max is 0 (the numerical
+    rank)."""
     import jax.numpy as jnp
 
-    linalg = (xp or jnp).linalg
+    def extremes(A: Any) -> tuple[Any, Any]:
+        s = jacobi_svd.jacobi_singular_values(A)
+        return jnp.max(s, axis=-1), jnp.min(s, axis=-1)
 
     m, n = J.shape[-2:]
     if m == n == 2:
         largest, smallest = conditioning.extreme_2x2(J, jnp)
     elif m == n == 3:
         largest, smallest, hard = conditioning.closed_form_3x3(J, jnp)
-
-        def svd_extremes(A: Any) -> tuple[Any, Any]:
-            s = linalg.svd(A, compute_uv=False)
-            return s[:, 0], s[:, -1]
-
-        exact_largest, exact_smallest = on_gathered_rows(hard, (HARD_SHARE,), svd_extremes, J, first_up_front=True)
+        exact_largest, exact_smallest = on_gathered_rows(hard, (HARD_SHARE,), extremes, J)
         largest, smallest = jnp.where(hard, exact_largest, largest), jnp.where(hard, exact_smallest, smallest)
     else:
-        s = linalg.svd(J, compute_uv=False)
-        largest, smallest = s[:, 0], s[:, -1]
+        largest, smallest = extremes(J)
     return largest, jnp.where(smallest <= threshold * largest, 0.0, smallest)
 
 
@@ -165,12 +156,11 @@ def _compiled(functions: _Functions, measure: str, with_index: bool, threshold: 
         J, inside = jacobian_and_inside(q, joint_stops, revolute, parameters)
         finite = jnp.all(jnp.isfinite(J), axis=(-2, -1))
         J = jnp.where(finite[:, None, None], J, 0.0)
-        xp = InOrder(jnp)  # |det J| and the SVD one after the other (a deadlock of jaxlib's CPU LAPACK otherwise)
-        weight = jnp.abs(xp.linalg.det(J)) if measure == "cartesian" else jnp.ones(q.shape[0])
+        weight = jnp.abs(jnp.linalg.det(J)) if measure == "cartesian" else jnp.ones(q.shape[0])
         weight = jnp.where(inside, weight, 0.0)
         if not with_index:
             return weight[:, None], weight
-        largest, smallest = extreme_singular_values(J * scale[:, None], threshold, xp)
+        largest, smallest = extreme_singular_values(J * scale[:, None], threshold)
         index = jnp.where(finite & (largest > 0), smallest / jnp.where(largest > 0, largest, 1.0), 0.0)
         return jnp.stack([weight * index, weight], axis=-1), index
 

@@ -27,7 +27,7 @@ from checks import agreement_bound
 from conftest import EXAMPLE_MODELS, MODELS_DIR, function_spec, random_inputs, relative_errors, worst_state
 from symkin import load, pipeline
 from symkin.cli import main
-from tolerances import DYNAMICS, EPS, KINEMATICS
+from tolerances import DYNAMICS, EPS, KINEMATICS, svd
 
 pytestmark = pytest.mark.xdist_group("jax")  # one worker imports JAX, after its other tests (conftest.LAST)
 POINTS = 64
@@ -242,9 +242,10 @@ def _fails_if_it_hangs(seconds: float = 120.0):
 
 
 def test_the_devices_factorizations_run_in_order(jax_model, loaded):
-    """The UR10e's GCI with the Cartesian measure on the device: |det J| and the SVD of J at 2^14 configurations,
+    """The UR10e's GCI with the Cartesian measure on the device at 2^14 configurations: |det J| and the SVD of J,
     which jaxlib's CPU LAPACK kernels ran concurrently and deadlocked on (2 cores) before they were ordered
-    (symkin.numerics.ordered_linalg); numpy's figures to the same bounds as the other models'."""
+    (symkin.numerics.ordered_linalg), now |det J| beside Jacobi's sweeps (no LAPACK); numpy's figures to the same
+    bounds as the other models'."""
     from symkin import analysis
 
     want = analysis.gci(loaded("ur10e", "numpy"), samples=2**14, seed=3, length=0.5)
@@ -350,6 +351,45 @@ def test_the_devices_extreme_singular_values_are_the_hosts(hard_share):
         np.testing.assert_allclose(np.asarray(largest), want[:, 0], rtol=DYNAMICS)
         np.testing.assert_allclose(np.asarray(smallest), want[:, -1], rtol=0, atol=DYNAMICS * scale.max())
         assert not np.any(np.asarray(smallest)[:4])               # the numerical rank's 0
+
+
+@pytest.mark.parametrize("shape", [(6, 6), (3, 3), (4, 4), (2, 2), (6, 7), (7, 6)])
+def test_jacobis_singular_values_are_lapacks(shape):
+    """symkin.numerics.jacobi_svd.jacobi_singular_values (jitted) against numpy's LAPACK SVD: random matrices, graded ones
+    (singular values 1 ... 1e-14), ones with all but one singular value equal, exactly singular ones (two equal
+    columns, or rows of a wide one: sigma_min within the numerical-rank threshold), the zero matrix, matrices scaled by 1e-200 and 1e200 (no
+    underflow or overflow in |a|^2), tall and wide; NaN for a matrix with a NaN.  Two backward-stable SVDs:
+    svd(n) of sigma_max."""
+    from symkin.numerics.jacobi_svd import jacobi_singular_values
+
+    rng = np.random.default_rng(sum(shape))
+    m, n = shape
+    k = min(shape)
+    A = rng.normal(size=(64, m, n))
+    if m >= n:
+        A[:4, :, -1] = A[:4, :, 0]
+    else:
+        A[:4, -1] = A[:4, 0]
+    U = np.linalg.qr(rng.normal(size=(20, m, m)))[0]
+    V = np.linalg.qr(rng.normal(size=(20, n, n)))[0]
+    S = np.zeros((20, m, n))
+    S[:, range(k), range(k)] = np.where(np.arange(20)[:, None] % 2 == 0, np.geomspace(1.0, 1e-14, k),
+                                        np.r_[np.full(k - 1, 2.0), 0.5])
+    A[4:24] = U @ S @ np.swapaxes(V, -1, -2)
+    A[24] = 0.0
+    A[25] *= 1e-200
+    A[26] *= 1e200
+    A[27, 0, 0] = np.nan
+    got = np.sort(np.asarray(jax.jit(jacobi_singular_values)(jnp.asarray(A))), axis=-1)[:, ::-1]
+    assert got.shape == (64, k)
+    assert np.all(np.isnan(got[27]))
+    A[27, 0, 0] = 0.0
+    want = np.linalg.svd(A, compute_uv=False)
+    kept = np.arange(64) != 27
+    error = np.abs(got - want)[kept].max(axis=-1)
+    assert np.all(error <= svd(max(shape)) * want[kept, 0])
+    assert np.all(got[:4, -1] <= max(shape) * EPS * got[:4, 0])   # the numerical rank's 0 in extreme_singular_values
+    assert not np.any(got[24])
 
 
 def test_the_device_counts_only_the_configurations_within_the_joint_stops(models, tmp_path, monkeypatch):
