@@ -59,16 +59,19 @@ def _run(numpy_model, casadi_model, options: dict) -> dict[str, float]:
 GRADIENT_PROBLEMS = {
     "planar_2r, free l1": ("planar_2r", dict(free=["l1"])),
     "ur10e, free a2, a3 (L = 0.3 m)": ("ur10e", dict(free=["a2", "a3"], length=0.3)),
+    "delta, free a, b, box (SLSQP)": ("delta", dict(free=["a", "b"],
+                                                    box={"x": (-0.04, 0.04), "y": (-0.04, 0.04), "z": (-0.19, -0.11)})),
 }
 
 
 def _jax_model(name: str, scratch: Path):
-    """The model's fk and jacobian derived with the JAX backend into ``scratch``, loaded."""
+    """The model's fk, ik (where it has one) and jacobian derived with the JAX backend into ``scratch``, loaded."""
     from symkin import pipeline
     from symkin.model import load_model
 
     model = load_model(ROOT / "models" / f"{name}.yaml")
-    generation = pipeline.generate(model, pipeline.resolve_request(model, "fk,jacobian", "jax"))
+    outputs = "fk,ik,jacobian" if model.parallel is not None else "fk,jacobian"
+    generation = pipeline.generate(model, pipeline.resolve_request(model, outputs, "jax"))
     return symkin.load(pipeline.write(generation, scratch / name), "jax")
 
 

@@ -109,8 +109,8 @@ def extreme_singular_values(J: Any, threshold: float) -> tuple[Any, Any]:
     """(sigma_max, sigma_min) of a batch of finite Jacobians (N, m, n) in jax.numpy by
     :mod:`symkin.numerics.conditioning`'s rules: its closed forms for 2 x 2 and 3 x 3 matrices (the host's formulas,
     several times faster than a batched SVD), the singular values by one-sided Jacobi otherwise
-    (:func:`symkin.numerics.jacobi_svd.jacobi_singular_values`: no LAPACK kernel; XLA's SVD took twice as long) and for the
-    3 x 3 matrices the closed form does not serve - gathered to a static share of the batch (:data:`HARD_SHARE`;
+    (:func:`symkin.numerics.jacobi_svd.jacobi_singular_values`: no LAPACK kernel; XLA's SVD took twice as long) and
+    for the 3 x 3 matrices the closed form does not serve - gathered to a static share of the batch (:data:`HARD_SHARE`;
     more take the sweeps over the whole batch); a sigma_min at most ``threshold`` sigma_max is 0 (the numerical
     rank)."""
     import jax.numpy as jnp
@@ -263,6 +263,14 @@ def smooth_gci_gradient(model: GeneratedModel, points: np.ndarray, *, measure: s
     return float(value), {name: float(g) for name, g in gradient.items()}
 
 
+def inverse_frobenius(J: Any, xp: Any) -> Any:
+    """1/kappa_F = n / (||J||_F ||J^-1||_F) of square Jacobians (N, n, n) in the array module ``xp`` (jax.numpy, or
+    a device program's :class:`symkin.numerics.ordered_linalg.InOrder`), ||J^-1||_F^2 = trace((J^T J)^-1): NaN where
+    J^T J is exactly singular."""
+    inverse_sum = xp.trace(xp.linalg.inv(xp.swapaxes(J, -1, -2) @ J), axis1=-2, axis2=-1)
+    return J.shape[-1] / xp.sqrt(xp.sum(J * J, axis=(-2, -1)) * inverse_sum)
+
+
 @functools.lru_cache(maxsize=32)
 def compiled_surrogate_gradient(jacobian: Callable[..., Any], measure: str, objective: str = "gci",
                                 smoothing: float = 0.0) -> Any:
@@ -284,9 +292,6 @@ def compiled_surrogate_gradient(jacobian: Callable[..., Any], measure: str, obje
         smoothed = weight if smoothing == 0 else jnp.sqrt(weight * weight + smoothing**2 * jnp.mean(weight * weight))
         if objective == "workspace":
             return jnp.sum(smoothed)
-        J = raw * scale[:, None]
-        inverse_sum = jnp.trace(xp.linalg.inv(jnp.swapaxes(J, -1, -2) @ J), axis1=-2, axis2=-1)
-        index = J.shape[-1] / jnp.sqrt(jnp.sum(J * J, axis=(-2, -1)) * inverse_sum)
-        return jnp.sum(weight * index) / jnp.sum(smoothed)
+        return jnp.sum(weight * inverse_frobenius(raw * scale[:, None], xp)) / jnp.sum(smoothed)
 
     return jax.jit(jax.value_and_grad(surrogate, argnums=2))

@@ -69,8 +69,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--gradients", choices=GRADIENTS, default="casadi",
                    help="casadi: IPOPT on the CasADi program, its exact derivatives (every objective and constraint); "
                         "jax: L-BFGS-B on the same surrogate with jax.grad through the generated JAX code (a serial "
-                        "model's gci or workspace within the bounds, no --require-box; MODEL derived with the JAX "
-                        "backend, or a model file; XLA compiles once, ~1-2 s, then each iteration is one call) "
+                        "model's gci or workspace within the bounds, no --require-box), or SLSQP with the reach "
+                        "constraints (a parallel model's gci over --require-box, its closed-form ik; no apparent-mass "
+                        "bound); MODEL derived with the JAX backend, or a model file; XLA compiles once, ~1-2 s, then "
+                        "each iteration is one call "
                         "(default: %(default)s)")
     p.add_argument("-o", "--out", metavar="DIR", help="output directory (default: out/optimize/<model>)")
     p.set_defaults(run=run, parser=p)
@@ -106,7 +108,7 @@ def run(args: argparse.Namespace) -> int:
             if args.gradients == "jax":
                 from symkin.design import gradient_solving
 
-                progress("compiling the JAX surrogate and L-BFGS-B")
+                progress("compiling the JAX surrogate (L-BFGS-B, or SLSQP with constraints)")
                 solution, description = gradient_solving.solve_with_jax(problem, other_model, numpy_model,
                                                                         nodes=args.nodes, seed=args.seed)
             else:

@@ -391,34 +391,60 @@ def _nearest_configurations(model: GeneratedModel, limits: np.ndarray, points: n
     return q[nearest]
 
 
+class InverseGrid(NamedTuple):
+    """Where a parallel model's GCI surrogate is taken and its required box is checked (also by the JAX path,
+    :mod:`symkin.design.gradient_solving`)."""
+
+    nodes: np.ndarray  # the objective's midpoint grid of the required box (N, d)
+    weights: np.ndarray  # the measure's weight at each node (1, or cos(pitch) for orientations), normalized to sum 1
+    points: np.ndarray  # where every leg must reach: the inflated box's vertex grid, then the nodes
+    description: str  # the surrogate and its points, in words
+
+
+def inverse_grid(problem: DesignProblem, nodes: int | None, box_points: int) -> InverseGrid:
+    """The nodes, weights and constraint points of a parallel model's GCI surrogate over its required box."""
+    per_axis = GRID_POINTS_PER_AXIS if nodes is None else nodes
+    p = sampling.grid(*problem.required_box, per_axis)
+    if problem.sampling is Sampling.ORIENTATIONS:
+        weights = np.cos(p[:, 1])
+        measure = "the invariant measure of SO(3), cos(pitch) droll dpitch dyaw, for J_w = E(p) J"
+    else:
+        weights = np.ones(len(p))
+        measure = "Cartesian measure"
+    points = np.concatenate([sampling.grid(*problem.inflated_box, box_points, midpoints=False), p])
+    description = (f"Frobenius GCI surrogate: mean 1/kappa_F over a {per_axis}^{p.shape[1]} midpoint grid of the "
+                   f"required box ({measure}), joints from the closed-form ik; the box is required at {len(points)} "
+                   "points (ik margin >= 0)")
+    return InverseGrid(p, weights / weights.sum(), points, description)
+
+
+def margin_reference(problem: DesignProblem, numpy_model: GeneratedModel, points: np.ndarray) -> float:
+    """The scale of the ik margins in the reach constraints: their median magnitude at ``points`` at the start
+    design (ValueError where the ik fails there)."""
+    start_margin = np.asarray(numpy_model.bind(**problem.start).ik(points)[1])
+    if not np.all(np.isfinite(start_margin)):
+        raise ValueError(f"{numpy_model.name}: the inverse kinematics fails at the start design")
+    return float(np.median(np.abs(start_margin))) or 1.0
+
+
 def _inverse_grid_terms(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model: GeneratedModel, free: casadi.SX, values: dict[str, Any],
               design: casadi.MX, nodes: int | None, box_points: int, seed: int) -> _Terms:
     per_axis = GRID_POINTS_PER_AXIS if nodes is None else nodes
-    p = sampling.grid(*problem.required_box, per_axis)
-    node = casadi.SX.sym("p", p.shape[1])
+    node = casadi.SX.sym("p", len(problem.required_box[0]))
     joints, margin = _call(casadi_function(casadi_model, "ik"), {"p": node, **values})
     J = _call(casadi_function(casadi_model, "jacobian"), {"q": joints, "p": node, **values})[0]
     masses = _apparent_mass_rows(problem, casadi_model, node, joints, J, values)
     if problem.objective == "force":
         return _force(problem, numpy_model, node, free, J, margin, joints, masses, design, per_axis, box_points)
+    grid = inverse_grid(problem, nodes, box_points)
     if problem.sampling is Sampling.ORIENTATIONS:
-        weights = np.cos(p[:, 1])
         J = angular_velocity_matrix(node) @ J
-        measure = "the invariant measure of SO(3), cos(pitch) droll dpitch dyaw, for J_w = E(p) J"
-    else:
-        weights = np.ones(len(p))
-        measure = "Cartesian measure"
     index = _node_function("inverse_frobenius", node, free, smooth.inverse_frobenius(J))
-    objective = casadi.mtimes(_mapped(index, casadi.DM(p.T), design), casadi.DM(weights / weights.sum()))
-    description = (f"Frobenius GCI surrogate: mean 1/kappa_F over a {per_axis}^{p.shape[1]} midpoint grid of the "
-                   f"required box ({measure}), joints from the closed-form ik")
-    corners = sampling.grid(*problem.inflated_box, box_points, midpoints=False)
-    points = np.concatenate([corners, p])
-    minors, g, lbg, ubg = _reach(problem, numpy_model, node, free, margin, joints, masses, points, design)
-    description += f"; the box is required at {len(points)} points (ik margin >= 0)"
-    description += _bound_apparent_mass(problem, minors, g, lbg, ubg)
-    return _Terms(objective, casadi.vertcat(*g), np.concatenate(lbg), np.concatenate(ubg), *NO_VARIABLES, p, points,
-                  description)
+    objective = casadi.mtimes(_mapped(index, casadi.DM(grid.nodes.T), design), casadi.DM(grid.weights))
+    minors, g, lbg, ubg = _reach(problem, numpy_model, node, free, margin, joints, masses, grid.points, design)
+    description = grid.description + _bound_apparent_mass(problem, minors, g, lbg, ubg)
+    return _Terms(objective, casadi.vertcat(*g), np.concatenate(lbg), np.concatenate(ubg), *NO_VARIABLES, grid.nodes,
+                  grid.points, description)
 
 
 def _reach(problem: DesignProblem, numpy_model: GeneratedModel, node: casadi.SX, free: casadi.SX,
@@ -426,10 +452,7 @@ def _reach(problem: DesignProblem, numpy_model: GeneratedModel, node: casadi.SX,
            ) -> tuple[casadi.MX, list[casadi.MX], list[np.ndarray], list[np.ndarray]]:
     """The ``extra`` rows at every point, and the constraints that every leg reaches every point (ik margin
     >= 0, scaled by its median at the start) with its actuated joints within their limits: (extra, g, lbg, ubg)."""
-    start_margin = np.asarray(numpy_model.bind(**problem.start).ik(points)[1])
-    if not np.all(np.isfinite(start_margin)):
-        raise ValueError(f"{numpy_model.name}: the inverse kinematics fails at the start design")
-    reference = float(np.median(np.abs(start_margin))) or 1.0
+    reference = margin_reference(problem, numpy_model, points)
     margins = margin.numel()
     reached = _mapped(_node_function("reach", node, free, casadi.vertcat(margin / reference, joints, extra)),
                       casadi.DM(points.T), design)

@@ -57,7 +57,8 @@ def history_figure(solution: Solution, problem: DesignProblem, model_name: str) 
         twin = ax.twinx()
         twin.semilogy(np.arange(len(solution.infeasibility)), np.maximum(solution.infeasibility, 1e-17),
                       color="tab:red", lw=0.8, ls="--")
-        twin.set_ylabel("constraint violation (IPOPT inf_pr)", color="tab:red")
+        measured = "IPOPT inf_pr" if solution.solver == "IPOPT" else "largest g < 0"
+        twin.set_ylabel(f"constraint violation ({measured})", color="tab:red")
     return figure
 
 

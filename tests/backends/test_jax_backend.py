@@ -24,8 +24,8 @@ import pyarrow.parquet as pq
 import pytest
 
 from checks import agreement_bound
-from conftest import EXAMPLE_MODELS, MODELS_DIR, function_spec, random_inputs, relative_errors, worst_state
-from symkin import load, pipeline
+from conftest import EXAMPLE_MODELS, MODELS_DIR, ROOT, function_spec, random_inputs, relative_errors, worst_state
+from symkin import derive, load, pipeline
 from symkin.cli import main
 from tolerances import DYNAMICS, EPS, KINEMATICS, svd
 
@@ -355,11 +355,11 @@ def test_the_devices_extreme_singular_values_are_the_hosts(hard_share):
 
 @pytest.mark.parametrize("shape", [(6, 6), (3, 3), (4, 4), (2, 2), (6, 7), (7, 6)])
 def test_jacobis_singular_values_are_lapacks(shape):
-    """symkin.numerics.jacobi_svd.jacobi_singular_values (jitted) against numpy's LAPACK SVD: random matrices, graded ones
-    (singular values 1 ... 1e-14), ones with all but one singular value equal, exactly singular ones (two equal
-    columns, or rows of a wide one: sigma_min within the numerical-rank threshold), the zero matrix, matrices scaled by 1e-200 and 1e200 (no
-    underflow or overflow in |a|^2), tall and wide; NaN for a matrix with a NaN.  Two backward-stable SVDs:
-    svd(n) of sigma_max."""
+    """symkin.numerics.jacobi_svd.jacobi_singular_values (jitted) against numpy's LAPACK SVD: random matrices,
+    graded ones (singular values 1 ... 1e-14), ones with all but one singular value equal, exactly singular ones
+    (two equal columns, or rows of a wide one: sigma_min within the numerical-rank threshold), the zero matrix,
+    matrices scaled by 1e-200 and 1e200 (no underflow or overflow in |a|^2), tall and wide; NaN for a matrix with a
+    NaN.  Two backward-stable SVDs: svd(n) of sigma_max."""
     from symkin.numerics.jacobi_svd import jacobi_singular_values
 
     rng = np.random.default_rng(sum(shape))
@@ -517,6 +517,53 @@ def test_jax_gradients_optimize_the_casadi_programs_surrogate(name, free, option
     reference = design.formulate(workspace, loaded(name, "casadi"), numpy_model, nodes=6)
     assert largest.surrogate_start == pytest.approx(reference.surrogate(reference.x0), rel=1e-12)
     assert largest.optimum["l1"] == pytest.approx(workspace.free[0].upper, rel=4 * EPS)  # the scaled bound's rounding
+
+
+#: The spherical 3-RRR with free link angles that docs/design-optimization.md declares (its heredoc).
+SPHERICAL_MODEL = re.search(r"^cat > out/spherical_3rrr\.yaml <<'EOF'\n(.*?)^EOF$",
+                            (ROOT / "docs" / "design-optimization.md").read_text(), re.S | re.M)
+
+
+@pytest.mark.parametrize("name", ["delta", "spherical_3rrr"])
+def test_jax_gradients_optimize_a_parallel_models_gci_over_its_box(name, jax_model, loaded, tmp_path):
+    """A parallel model with a closed-form ik (the DELTA's box of positions, free a and b; the spherical 3-RRR's box
+    of +-30 deg orientations, free link angles): SLSQP on JAX gradients optimizes the CasADi program's surrogate
+    under its reach constraints - the same surrogate at the start (two formulas of 1/kappa_F, ~1e-15), IPOPT's
+    optimum (both stop on a scaled objective change of ~1e-10 or less; the spherical one's is orthogonal arcs,
+    pi/2, tests/design/test_design.py), every leg reaching the box (the closed-form ik margin >= 0 on a grid denser
+    than the constraint points)."""
+    from symkin import design
+    from symkin.analysis.needs import NEEDS
+    from symkin.design.gradient_solving import solve_with_jax
+    from symkin.mechanism import MechanismKind
+
+    if name == "delta":
+        numpy_model, casadi_model, model = loaded("delta", "numpy"), loaded("delta", "casadi"), jax_model("delta")
+        free, box = ["a", "b"], {"x": (-0.04, 0.04), "y": (-0.04, 0.04), "z": (-0.19, -0.11)}
+    else:
+        assert SPHERICAL_MODEL, "docs/design-optimization.md no longer declares spherical_3rrr.yaml"
+        path = tmp_path / "spherical_3rrr.yaml"
+        path.write_text(SPHERICAL_MODEL.group(1))
+        directory = derive(path, tmp_path, outputs=NEEDS["design"][MechanismKind.PARALLEL_ORIENTATION],
+                           backends=["numpy", "casadi", "jax"])
+        numpy_model, casadi_model, model = (load(directory, backend) for backend in ("numpy", "casadi", "jax"))
+        free, box = ["alpha1", "alpha2"], {axis: (-np.radians(30), np.radians(30)) for axis in ("roll", "pitch", "yaw")}
+    problem = design.design_problem(numpy_model, "gci", free, box=box)
+    ipopt = design.solve(problem, design.formulate(problem, casadi_model, numpy_model, nodes=3))
+    solution, description = solve_with_jax(problem, model, numpy_model, nodes=3)
+    assert solution.success
+    assert solution.solver == "SLSQP"
+    assert description.endswith("SLSQP on JAX gradients")
+    assert "3^3 midpoint grid" in description
+    assert solution.surrogate_start == pytest.approx(ipopt.surrogate_start, rel=1e-12)
+    assert solution.surrogate_optimum == pytest.approx(ipopt.surrogate_optimum, rel=1e-10)
+    assert solution.surrogate_optimum > solution.surrogate_start
+    for parameter in free:
+        assert solution.optimum[parameter] == pytest.approx(ipopt.optimum[parameter], rel=1e-6)
+    assert solution.constraint_violation == 0.0
+    axes = [np.linspace(lo, hi, 7) for lo, hi in zip(*problem.inflated_box)]
+    points = np.stack(np.meshgrid(*axes), -1).reshape(-1, 3)
+    assert np.all(np.asarray(numpy_model.bind(**solution.optimum).ik(points).margin) >= -1e-12)
 
 
 def test_jax_gradients_refuse_what_they_do_not_solve(jax_model, loaded):

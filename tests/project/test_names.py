@@ -31,6 +31,8 @@ SAME_MEANING = {
     "Coordinate": "a coordinate in the schema and as the manifest records it (runtime.info)",
     "determinant": "the determinant in sympy (parallel.determinant) and in CasADi (design.smooth)",
     "adjugate": "the adjugate in sympy (parallel.determinant) and in CasADi (design.smooth)",
+    "inverse_frobenius": "1/kappa_F of square Jacobians in CasADi (design.smooth, by adj J) and in jax.numpy "
+                         "(analysis.device_integrand, by (J^T J)^-1): the design surrogate's two programs",
     "angular_velocity_matrix": "E with omega = E d(roll, pitch, yaw)/dt in numpy (mechanism.reach) and in CasADi "
                                "(design.formulation)",
     "jacobian": "J of a parallel mechanism: the derived quantity (parallel.quantities) and its evaluation on a "
