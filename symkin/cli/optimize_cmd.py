@@ -1,5 +1,5 @@
-"""``symkin optimize MODEL``: dimensioning with CasADi and IPOPT or JAX gradients and L-BFGS-B (seed sec. 4 steps
-1-3), rated independently."""
+"""``symkin optimize MODEL``: dimensioning with CasADi and IPOPT or JAX gradients and L-BFGS-B or SLSQP (seed
+sec. 4 steps 1-3), rated independently."""
 
 from __future__ import annotations
 
@@ -16,7 +16,7 @@ from symkin.cli.progress import Progress
 
 #: Largest --nodes: 2^16 Sobol nodes, or 16^3 grid points of a parallel model's box.
 MAX_NODES = 16
-#: Where the objective's derivatives come from: the CasADi program (IPOPT) or jax.grad (L-BFGS-B).
+#: Where the objective's derivatives come from: the CasADi program (IPOPT) or jax.grad (L-BFGS-B, SLSQP).
 GRADIENTS = ("casadi", "jax")
 
 
@@ -28,7 +28,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "conditioning index (eq. 8.28, with the Frobenius condition number 1/kappa_F at fixed sample "
                     "points) or the workspace measure over the free design parameters, with IPOPT on the "
                     "generated CasADi functions, subject to parameter bounds and a required workspace box (or, with "
-                    "--gradients jax, with L-BFGS-B on jax.grad of the same surrogate, within the bounds). The "
+                    "--gradients jax, with L-BFGS-B or SLSQP on jax.grad of the same surrogate). The "
                     "start and optimized designs are then rated independently on the generated numpy code (the "
                     "true GCI with 1/kappa from singular values, randomized QMC with a 95 % confidence "
                     "half-width; box reachability on a dense grid). Serial models integrate over the joint limits "

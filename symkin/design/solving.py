@@ -70,8 +70,8 @@ class Solution:
         start, optimum: all parameter values of the start and the optimized design.
         surrogate_start, surrogate_optimum: the objective's surrogate at both.
         history: the surrogate at every iterate of the solver (iteration 0 is the start).
-        infeasibility: IPOPT's primal infeasibility (largest scaled constraint violation) at every iterate (zeros
-            for a program with bounds only).
+        infeasibility: IPOPT's primal infeasibility (largest scaled constraint violation) at every iterate, SLSQP's
+            largest violation of its constraints g >= 0 (zeros for a program with bounds only).
         status: the solver's return status; ``success`` whether it converged.
         iterations: the solver's iterations.
         solve_seconds: wall time of the solve (IPOPT's including CasADi's evaluations of f, g and derivatives).
@@ -79,7 +79,8 @@ class Solution:
         box_points, box_configurations: serial models: the required box's constraint points and
             the optimizer's joint configurations at them (empty without a box).
         constraint_violation: largest violation of g at the optimum (0 where met).
-        solver: ``IPOPT`` (:func:`solve`) or ``L-BFGS-B`` (:func:`symkin.design.gradient_solving.solve_with_jax`).
+        solver: ``IPOPT`` (:func:`solve`), ``L-BFGS-B`` or ``SLSQP``
+            (:func:`symkin.design.gradient_solving.solve_with_jax`).
     """
 
     start: dict[str, float]
