@@ -194,8 +194,11 @@ def _solve_over_the_box(problem: DesignProblem, jax_model: GeneratedModel, numpy
     def design_values(z: np.ndarray) -> dict[str, Any]:
         return {**parameters, **{name: float(v) for name, v in zip(names, z * scales)}}
 
-    def surrogate(z: np.ndarray) -> tuple[float, np.ndarray]:
-        value, gradient = surrogate_program(*nodes_arguments, design_values(z))
+    # Both evaluated at an iterate's z (bytes of the float64 vector: a cache key) and kept for the callback and the
+    # constraints' Jacobian, which SLSQP asks for at the same z.
+    @functools.lru_cache(maxsize=4)
+    def surrogate(key: bytes) -> tuple[float, np.ndarray]:
+        value, gradient = surrogate_program(*nodes_arguments, design_values(np.frombuffer(key)))
         return float(value), np.array([float(gradient[name]) for name in names]) * scales
 
     @functools.lru_cache(maxsize=4)
@@ -205,21 +208,24 @@ def _solve_over_the_box(problem: DesignProblem, jax_model: GeneratedModel, numpy
                    for name, scale in zip(names, scales)]
         return rows(np.asarray(margins), np.asarray(joints), shift=1.0), np.stack(columns, axis=-1)
 
+    def key(z: np.ndarray) -> bytes:
+        return np.asarray(z, dtype=np.float64).tobytes()
+
     z0 = np.array([p.start for p in problem.free]) / scales
-    reference, _ = surrogate(z0)
+    reference, _ = surrogate(key(z0))
     if not (np.isfinite(reference) and reference > 0):
         raise ValueError(f"the gci surrogate is {reference} at the start design {problem.start}: start from a design "
                          "whose legs reach the required box, or use the CasADi program (--gradients casadi)")
-    history, infeasibility = [reference], [_violation(constraints(z0.tobytes())[0])]
+    history, infeasibility = [reference], [_violation(constraints(key(z0))[0])]
     chosen = {**SLSQP_OPTIONS, **(options or {})}
 
     def objective(z: np.ndarray) -> tuple[float, np.ndarray]:
-        value, gradient = surrogate(z)
+        value, gradient = surrogate(key(z))
         return -value / reference, -gradient / reference
 
     def iterate(z: np.ndarray) -> None:
-        history.append(surrogate(z)[0])
-        infeasibility.append(_violation(constraints(np.asarray(z, dtype=np.float64).tobytes())[0]))
+        history.append(surrogate(key(z))[0])
+        infeasibility.append(_violation(constraints(key(z))[0]))
         reporting.report_progress("optimizing the design (SLSQP iterations)", done=len(history) - 1,
                                    total=int(chosen["maxiter"]))
 
@@ -228,53 +234,48 @@ def _solve_over_the_box(problem: DesignProblem, jax_model: GeneratedModel, numpy
     result = optimize.minimize(
         objective, z0, jac=True, method="SLSQP", callback=iterate, options=chosen,
         bounds=[(p.lower / s, p.upper / s) for p, s in zip(problem.free, scales)],
-        constraints=[{"type": "ineq", "fun": lambda z: constraints(np.asarray(z, dtype=np.float64).tobytes())[0],
-                      "jac": lambda z: constraints(np.asarray(z, dtype=np.float64).tobytes())[1]}])
+        constraints=[{"type": "ineq", "fun": lambda z: constraints(key(z))[0],
+                      "jac": lambda z: constraints(key(z))[1]}])
     solve_seconds = time.perf_counter() - started
     lower, upper = np.array([p.lower for p in problem.free]), np.array([p.upper for p in problem.free])
     optimum = np.clip(result.x * scales, lower, upper)
     solution = Solution(
         start=problem.start, optimum=problem.design(list(optimum)), surrogate_start=reference,
-        surrogate_optimum=surrogate(optimum / scales)[0], history=np.asarray(history),
+        surrogate_optimum=surrogate(key(optimum / scales))[0], history=np.asarray(history),
         infeasibility=np.asarray(infeasibility), status=str(result.message), success=bool(result.success),
         iterations=int(result.nit), solve_seconds=solve_seconds, build_seconds=build_seconds,
-        constraint_violation=_violation(constraints((optimum / scales).tobytes())[0]), solver="SLSQP")
+        constraint_violation=_violation(constraints(key(optimum / scales))[0]), solver="SLSQP")
     return solution, f"{grid.description}; SLSQP on JAX gradients"
 
 
 def _violation(g: np.ndarray) -> float:
     """The largest violation of constraints g >= 0 (0 where every one holds)."""
-    return float(max(0.0, -np.min(g, initial=0.0)))
+    return float(-np.min(g, initial=0.0)) + 0.0
 
 
 class _ReachRows:
     """The reach constraints of a parallel model as rows g >= 0, from the ik's margins (P, legs) and joints (P, n) at
     the box's points - the CasADi program's (:func:`symkin.design.formulation._reach`): margin / its start median,
-    each finite limit of an actuated joint, each finite side of a joint stop a q + b.  Linear in (margins, joints)
-    plus constants: ``shift=0`` gives the rows of their derivatives."""
+    and each finite side of the actuated joints' limits and of the joint stops a q + b (one linear map of the joints:
+    the identity's rows, then the stops').  Linear in (margins, joints) plus constants: ``shift=0`` gives the rows of
+    their derivatives."""
 
     def __init__(self, problem: DesignProblem, model: GeneratedModel, reference_margin: float) -> None:
+        n = len(model.info.coordinates)
+        limits = np.full((n, 2), [-np.inf, np.inf]) if problem.limits is None else np.asarray(problem.limits, float)
+        inequalities = stops.StopInequalities.of_model(model)
         self.reference_margin = reference_margin
-        limits = np.full((len(model.info.coordinates), 2), [-np.inf, np.inf]) if problem.limits is None \
-            else np.asarray(problem.limits, dtype=np.float64)
-        self.limits = limits
-        self.stops = stops.StopInequalities.of_model(model)
+        self.rows = np.vstack([np.eye(n), inequalities.rows.reshape(-1, n)])
+        self.offsets = np.concatenate([np.zeros(n), inequalities.offsets])
+        self.lower = np.concatenate([limits[:, 0], inequalities.lower])
+        self.upper = np.concatenate([limits[:, 1], inequalities.upper])
 
     def __call__(self, margins: np.ndarray, joints: np.ndarray, *, shift: float) -> np.ndarray:
-        rows = [margins.reshape(-1) / self.reference_margin]
-        for k, (low, high) in enumerate(self.limits):
-            if np.isfinite(low):
-                rows.append(joints[:, k] - shift * low)
-            if np.isfinite(high):
-                rows.append(shift * high - joints[:, k])
-        if self.stops.rows.size:
-            values = joints @ self.stops.rows.T + shift * self.stops.offsets
-            for k, (low, high) in enumerate(zip(self.stops.lower, self.stops.upper)):
-                if np.isfinite(low):
-                    rows.append(values[:, k] - shift * low)
-                if np.isfinite(high):
-                    rows.append(shift * high - values[:, k])
-        return np.concatenate(rows)
+        values = joints @ self.rows.T + shift * self.offsets
+        low, high = np.isfinite(self.lower), np.isfinite(self.upper)
+        return np.concatenate([margins.reshape(-1) / self.reference_margin,
+                               (values[:, low] - shift * self.lower[low]).T.reshape(-1),
+                               (shift * self.upper[high] - values[:, high]).T.reshape(-1)])
 
 
 @functools.lru_cache(maxsize=8)

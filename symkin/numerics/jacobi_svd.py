@@ -18,7 +18,8 @@ Why: XLA's batched SVD on a CPU is LAPACK's gesdd matrix by matrix (for the UR10
 numpy's), where these sweeps are a few dozen operations per pair of columns over the whole batch, fused by XLA into
 one loop per step (:func:`in_one_loop`) - on a CPU's vector units or a GPU's threads alike - and, calling no LAPACK
 kernel, they need no place in the order of :mod:`symkin.numerics.ordered_linalg`.  The UR10e's GCI integrand on
-JAX's CPU device took 1.6 us per configuration so against 3.4 us with XLA's SVD (benchmarks/bench_jax.py).
+JAX's CPU device takes 1.4 us per configuration so against 3.3 us on the host (C's J, numpy's SVD;
+benchmarks/bench_jax.py); it took 3.5 us with XLA's SVD.
 """
 
 from __future__ import annotations
