@@ -9,7 +9,8 @@
 3. :func:`~symkin.optimize.passes.fold_constants` - evaluate constant subexpressions
    (``cos(1/10)``, ``sqrt(3)/2``) once, at 30 digits, instead of at every call;
 4. :func:`~symkin.optimize.cse.eliminate_common_subexpressions` - one CSE across all
-   outputs of the function.
+   outputs of the function;
+5. :func:`~symkin.optimize.schedule.demand_order` - the temporaries in the order the outputs need them.
 
 The operation count after each stage is recorded in ``OptimizedFunction.op_counts``.
 """
@@ -22,10 +23,11 @@ from symkin.ir.spec import FunctionSpec, OptimizedFunction
 from symkin.optimize.cse import eliminate_common_subexpressions
 from symkin.ir.opcount import spec_op_count
 from symkin.optimize.passes import fold_constants, fold_parameters, fold_parameters_after_cse
+from symkin.optimize.schedule import demand_order
 from symkin.optimize.trig import expand_trig_sums
 
 __all__ = ["optimize", "fold_parameters", "fold_parameters_after_cse", "fold_constants", "expand_trig_sums",
-           "eliminate_common_subexpressions", "spec_op_count"]
+           "eliminate_common_subexpressions", "demand_order", "spec_op_count"]
 
 
 def optimize(spec: FunctionSpec, fixed: Iterable[str] = ()) -> OptimizedFunction:
@@ -45,8 +47,12 @@ def optimize(spec: FunctionSpec, fixed: Iterable[str] = ()) -> OptimizedFunction
         (after parameter folding, when any parameter was folded; never above ``derived``)
         and ``cse`` (final: temporaries plus outputs).
     """
+    return demand_order(_reduced(spec, tuple(fixed)))
+
+
+def _reduced(spec: FunctionSpec, fixed: tuple[str, ...]) -> OptimizedFunction:
+    """The fewer operations of folding, then CSE, and CSE, then folding (see :func:`optimize`)."""
     counts = {"derived": spec_op_count(spec)}
-    fixed = tuple(fixed)
     if not any(i.kind == "parameter" and i.name in fixed for i in spec.inputs):
         return eliminate_common_subexpressions(_prepare(spec), counts)
     folded = fold_parameters(spec, fixed)

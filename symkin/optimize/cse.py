@@ -6,7 +6,7 @@ import symengine as se
 import sympy
 from sympy.core.parameters import distribute
 
-from symkin.expression_dag import free_symbols, name_shared_nodes_of_deep_graphs
+from symkin.expression_dag import free_symbols, name_shared_nodes_of_deep_graphs, post_order
 from symkin.ir.spec import FunctionSpec, OptimizedFunction
 from symkin.ir.opcount import op_count, spec_op_count
 from symkin.symengine_bridge import SympyConverter, to_symengine
@@ -32,7 +32,8 @@ def eliminate_common_subexpressions(spec: FunctionSpec, counts: dict[str, int] |
 
     The result is deterministic: sympy's canonical ordering is used (SymEngine's for programs and for
     functions over :data:`SYMPY_CSE_LIMIT`) and temporaries are
-    numbered in evaluation order (``_x0``, ``_x1``...).  The definitions of a spec become
+    numbered in CSE's evaluation order (``_x0``, ``_x1``...; :func:`symkin.optimize.demand_order` then
+    reorders them, keeping the names).  The definitions of a spec become
     temporaries too (see :func:`_cse_program`).
 
     Args:
@@ -157,19 +158,7 @@ def _used_by(assignments: list[Assignment], outputs: list) -> list[Assignment]:
 def _dependency_order(assignments: list[Assignment]) -> list[Assignment]:
     """``assignments`` reordered so that each comes after those it uses (stable, iterative DFS)."""
     index = {symbol: k for k, (symbol, _) in enumerate(assignments)}
-    deps = [sorted((index[s] for s in expr.free_symbols if s in index), reverse=True) for _, expr in assignments]
-    done = [False] * len(assignments)
-    order: list[int] = []
-    for root in range(len(assignments)):
-        stack = [(root, False)]
-        while stack:
-            k, expanded = stack.pop()
-            if done[k]:
-                continue
-            if expanded:
-                done[k] = True
-                order.append(k)
-                continue
-            stack.append((k, True))
-            stack.extend((d, False) for d in deps[k] if not done[d])
+    operands = [sorted((index[s] for s in expr.free_symbols if s in index), reverse=True) for _, expr in assignments]
+    order: dict[int, None] = {}                                 # insertion-ordered
+    post_order(range(len(assignments)), order, lambda k: None, lambda k: operands[k])
     return [assignments[k] for k in order]

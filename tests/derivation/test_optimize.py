@@ -8,12 +8,15 @@ import sympy
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from conftest import random_inputs, random_q
+import re
+
+from conftest import GENERATED_DIR, random_inputs, random_q
 from symkin import pipeline
 from symkin.derivation import emitted_quantities
 from symkin.errors import DerivationError
-from symkin.ir.spec import FunctionSpec, InputSpec, OutputSpec
+from symkin.ir.spec import FunctionSpec, InputSpec, OptimizedFunction, OutputSpec
 from symkin.optimize import fold_parameters, optimize
+from symkin.optimize.schedule import peak_live
 from symkin.ir.opcount import op_count
 from tolerances import CLOSED_FORM, DYNAMICS, KINEMATICS
 
@@ -209,3 +212,39 @@ def test_angle_sums_are_expanded_to_one_sin_cos_pair_per_angle(derivations):
     arguments = {call.args[0] for _, e in optimized.temporaries for call in e.atoms(sympy.sin, sympy.cos)}
     assert arguments
     assert all(a.is_Symbol for a in arguments)
+
+
+def _in_cse_order(function: OptimizedFunction) -> OptimizedFunction:
+    """``function`` with its temporaries back in CSE's order: their names number it (``_x0``, ``_x1``...)."""
+    order = sorted(function.temporaries, key=lambda t: int(str(t[0]).removeprefix("_x")))
+    return OptimizedFunction(function.spec, tuple(order), function.outputs, function.op_counts)
+
+
+@pytest.mark.parametrize("quantity", ["inverse_dynamics_derivatives", "forward_dynamics_derivatives", "mass_matrix"])
+def test_the_temporaries_come_in_the_order_the_outputs_need_them(quantity, models, derivations):
+    """symkin.optimize.schedule: each temporary after those it uses, never more values live at once than in CSE's
+    order (the UR10e's inverse-dynamics derivatives, parameters free: 211 against 321), and the generated C stores
+    each output entry right after the temporary it needs last (every parameter folded, as generated/ holds it)."""
+    optimized = optimize(derivations["ur10e"][quantity])
+    computed: set[sympy.Symbol] = set()
+    temporaries = {symbol for symbol, _ in optimized.temporaries}
+    for symbol, value in optimized.temporaries:
+        assert value.free_symbols & temporaries <= computed, symbol
+        computed.add(symbol)
+    assert peak_live(optimized) <= peak_live(_in_cse_order(optimized))
+    if quantity == "inverse_dynamics_derivatives":
+        assert peak_live(optimized) < 0.7 * peak_live(_in_cse_order(optimized))
+    source = (GENERATED_DIR / "ur10e" / "ur10e.c").read_text()
+    body = source[source.index(f"void ur10e_{quantity}("):]
+    body = body[:body.index("\n}\n")]
+    last = None                                    # the temporary defined last, before a run of stores
+    stores = 0
+    for line in body.splitlines():
+        definition = re.match(r"\s+const double (_x\d+) = ", line)
+        if definition:
+            last = definition.group(1)
+        elif re.match(r"\s+\w+\[\d+\] = ", line):
+            stores += 1
+            used = set(re.findall(r"_x\d+", line.split("=", 1)[1]))
+            assert (last in used) if last else not used, line
+    assert stores == sum(len(output) for output in optimized.outputs)

@@ -48,6 +48,7 @@ from symkin.backends.naming import c_symbol
 from symkin.backends.templating import provenance, render
 from symkin.ir.bundle import ModelCode
 from symkin.ir.spec import FunctionSpec, OptimizedFunction
+from symkin.optimize.schedule import store_positions
 
 HEADER_TEMPLATE = "c/header.h.j2"
 SOURCE_TEMPLATE = "c/source.c.j2"
@@ -147,6 +148,21 @@ def _outputs(spec: FunctionSpec, f: OptimizedFunction, text: Callable[[sympy.Exp
     return outputs, slots
 
 
+def _statements(f: OptimizedFunction, outputs: list[dict], text: Callable[[sympy.Expr], str]) -> list[dict]:
+    """The temporaries with each output entry's store right after the last temporary it uses
+    (:func:`symkin.optimize.schedule.store_positions`): in the temporaries' demand order a value stored is no
+    longer live, so fewer are held in registers or spilled (:mod:`symkin.optimize.schedule`)."""
+    stores: list[list[dict]] = [[] for _ in range(len(f.temporaries) + 1)]
+    for output, positions in zip(outputs, store_positions(f)):
+        for assignment, position in zip(output["assignments"], positions):
+            stores[position].append({"store": True, "output": output["name"], **assignment})
+    statements = list(stores[0])
+    for (symbol, value), after in zip(f.temporaries, stores[1:]):
+        statements.append({"store": False, "name": str(symbol), "code": text(value)})
+        statements.extend(after)
+    return statements
+
+
 def _function_context(code: ModelCode, f: OptimizedFunction, precision: str, printer: CPrinter) -> dict[str, Any]:
     spec = f.spec
     suffix = VARIANTS[precision]
@@ -179,7 +195,7 @@ def _function_context(code: ModelCode, f: OptimizedFunction, precision: str, pri
         # lane arrays of the batch function: inputs, outputs, and angle/sin/cos per angle
         "batch_stack_bytes": (len(scalars) + slots + 3 * len(trig)) * BLOCK * (4 if precision == "float" else 8),
         "lanes": slots <= LANE_SLOTS,
-        "temporaries": [{"name": str(s), "code": text(e)} for s, e in f.temporaries],
+        "statements": _statements(f, outputs, text),
         "op_count": f.op_counts["cse"],
     }
 
