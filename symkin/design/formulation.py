@@ -447,26 +447,46 @@ def _inverse_grid_terms(problem: DesignProblem, casadi_model: GeneratedModel, nu
                   grid.points, description)
 
 
+class JointRules(NamedTuple):
+    """The linear constraints on a parallel model's joints q at each point of its required box,
+    lower <= rows q + offsets <= upper: the actuated joints' limits where the problem gives them (rows of the
+    identity), then the joint stops (:class:`symkin.mechanism.stops.StopInequalities`).  One description for both
+    programs that require the box: the CasADi one (:func:`_reach`) and the JAX one
+    (:mod:`symkin.design.gradient_solving`); a side may be infinite."""
+
+    rows: np.ndarray  # (k, n)
+    offsets: np.ndarray  # (k,)
+    lower: np.ndarray  # (k,)
+    upper: np.ndarray  # (k,)
+
+
+def joint_rules(problem: DesignProblem, numpy_model: GeneratedModel) -> JointRules:
+    """The :class:`JointRules` of ``problem`` on ``numpy_model``."""
+    n = len(numpy_model.info.coordinates)
+    inequalities = stops.StopInequalities.of_model(numpy_model)
+    limits = np.empty((0, 2)) if problem.limits is None else np.asarray(problem.limits, dtype=np.float64)
+    return JointRules(np.vstack([np.eye(n)[:len(limits)], inequalities.rows.reshape(-1, n)]),
+                      np.concatenate([np.zeros(len(limits)), inequalities.offsets]),
+                      np.concatenate([limits[:, 0], inequalities.lower]),
+                      np.concatenate([limits[:, 1], inequalities.upper]))
+
+
 def _reach(problem: DesignProblem, numpy_model: GeneratedModel, node: casadi.SX, free: casadi.SX,
            margin: casadi.SX, joints: casadi.SX, extra: casadi.SX, points: np.ndarray, design: casadi.MX
            ) -> tuple[casadi.MX, list[casadi.MX], list[np.ndarray], list[np.ndarray]]:
     """The ``extra`` rows at every point, and the constraints that every leg reaches every point (ik margin
-    >= 0, scaled by its median at the start) with its actuated joints within their limits: (extra, g, lbg, ubg)."""
+    >= 0, scaled by its median at the start) with its joints within the problem's :class:`JointRules`:
+    (extra, g, lbg, ubg); each rule's rows at every point in turn."""
     reference = margin_reference(problem, numpy_model, points)
     margins = margin.numel()
     reached = _mapped(_node_function("reach", node, free, casadi.vertcat(margin / reference, joints, extra)),
                       casadi.DM(points.T), design)
-    g = [casadi.vec(reached[:margins, :])]
-    lbg, ubg = [np.zeros(margins * len(points))], [np.full(margins * len(points), np.inf)]
-    if problem.limits is not None:
-        for k, (lo, hi) in enumerate(problem.limits):
-            g.append(reached[margins + k, :].T)
-            lbg.append(np.full(len(points), lo))
-            ubg.append(np.full(len(points), hi))
-    stop_rows, stop_lower, stop_upper = _within_stops(numpy_model, reached[margins:margins + joints.numel(), :])
-    g.append(stop_rows)
-    lbg.append(stop_lower)
-    ubg.append(stop_upper)
+    rules = joint_rules(problem, numpy_model)
+    # the identity's rows sparse: each a joint itself, exactly (no 0 * other joint terms)
+    ruled = casadi.mtimes(casadi.sparsify(casadi.DM(rules.rows)), reached[margins:margins + joints.numel(), :])
+    g = [casadi.vec(reached[:margins, :]), casadi.vec(ruled.T)]
+    lbg = [np.zeros(margins * len(points)), np.repeat(rules.lower - rules.offsets, len(points))]
+    ubg = [np.full(margins * len(points), np.inf), np.repeat(rules.upper - rules.offsets, len(points))]
     return reached[margins + joints.numel():, :], g, lbg, ubg
 
 

@@ -37,10 +37,10 @@ import numpy as np
 from symkin import reporting
 from symkin.analysis import device_integrand
 from symkin.design.formulation import (BOX_POINTS_PER_AXIS, DETERMINANT_SMOOTHING, inverse_grid, joint_nodes,
-                                       margin_reference)
+                                       joint_rules, margin_reference)
 from symkin.design.problem import DesignProblem
 from symkin.design.solving import Solution
-from symkin.mechanism import Sampling, reach, stops
+from symkin.mechanism import Sampling, reach
 from symkin.numerics.ordered_linalg import InOrder
 from symkin.runtime.info import GeneratedModel
 
@@ -256,19 +256,12 @@ def _violation(g: np.ndarray) -> float:
 class _ReachRows:
     """The reach constraints of a parallel model as rows g >= 0, from the ik's margins (P, legs) and joints (P, n) at
     the box's points - the CasADi program's (:func:`symkin.design.formulation._reach`): margin / its start median,
-    and each finite side of the actuated joints' limits and of the joint stops a q + b (one linear map of the joints:
-    the identity's rows, then the stops').  Linear in (margins, joints) plus constants: ``shift=0`` gives the rows of
-    their derivatives."""
+    and each finite side of the problem's joint rules (:func:`symkin.design.formulation.joint_rules`).  Linear in
+    (margins, joints) plus constants: ``shift=0`` gives the rows of their derivatives."""
 
     def __init__(self, problem: DesignProblem, model: GeneratedModel, reference_margin: float) -> None:
-        n = len(model.info.coordinates)
-        limits = np.full((n, 2), [-np.inf, np.inf]) if problem.limits is None else np.asarray(problem.limits, float)
-        inequalities = stops.StopInequalities.of_model(model)
         self.reference_margin = reference_margin
-        self.rows = np.vstack([np.eye(n), inequalities.rows.reshape(-1, n)])
-        self.offsets = np.concatenate([np.zeros(n), inequalities.offsets])
-        self.lower = np.concatenate([limits[:, 0], inequalities.lower])
-        self.upper = np.concatenate([limits[:, 1], inequalities.upper])
+        self.rows, self.offsets, self.lower, self.upper = joint_rules(problem, model)
 
     def __call__(self, margins: np.ndarray, joints: np.ndarray, *, shift: float) -> np.ndarray:
         values = joints @ self.rows.T + shift * self.offsets

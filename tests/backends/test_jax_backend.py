@@ -524,22 +524,32 @@ SPHERICAL_MODEL = re.search(r"^cat > out/spherical_3rrr\.yaml <<'EOF'\n(.*?)^EOF
                             (ROOT / "docs" / "design-optimization.md").read_text(), re.S | re.M)
 
 
-@pytest.mark.parametrize("name", ["delta", "spherical_3rrr"])
+@pytest.mark.parametrize("name", ["delta", "delta_stopped", "spherical_3rrr"])
 def test_jax_gradients_optimize_a_parallel_models_gci_over_its_box(name, jax_model, loaded, tmp_path):
     """A parallel model with a closed-form ik (the DELTA's box of positions, free a and b; the spherical 3-RRR's box
     of +-30 deg orientations, free link angles): SLSQP on JAX gradients optimizes the CasADi program's surrogate
     under its reach constraints - the same surrogate at the start (two formulas of 1/kappa_F, ~1e-15), IPOPT's
     optimum (both stop on a scaled objective change of ~1e-10 or less; the spherical one's is orthogonal arcs,
     pi/2, tests/design/test_design.py), every leg reaching the box (the closed-form ik margin >= 0 on a grid denser
-    than the constraint points)."""
+    than the constraint points).  The DELTA with its first two arms kept within 45 deg of each other (a joint stop
+    the free optimum and the start break at the box's corners, tests/design/test_design.py): SLSQP's optimum is
+    IPOPT's and keeps it at every constraint point."""
     from symkin import design
     from symkin.analysis.needs import NEEDS
     from symkin.design.gradient_solving import solve_with_jax
     from symkin.mechanism import MechanismKind
 
+    box = {"x": (-0.04, 0.04), "y": (-0.04, 0.04), "z": (-0.19, -0.11)}
     if name == "delta":
         numpy_model, casadi_model, model = loaded("delta", "numpy"), loaded("delta", "casadi"), jax_model("delta")
-        free, box = ["a", "b"], {"x": (-0.04, 0.04), "y": (-0.04, 0.04), "z": (-0.19, -0.11)}
+        free = ["a", "b"]
+    elif name == "delta_stopped":
+        path = tmp_path / "delta.yaml"
+        path.write_text((MODELS_DIR / "delta.yaml").read_text()
+                        + '\njoint_stops:\n  - {expression: "theta1 - theta2", limits: [deg(-45), deg(45)]}\n')
+        directory = derive(path, tmp_path, outputs=["ik", "jacobian"], backends=["numpy", "casadi", "jax"], fixed=[])
+        numpy_model, casadi_model, model = (load(directory, backend) for backend in ("numpy", "casadi", "jax"))
+        free = ["a"]
     else:
         assert SPHERICAL_MODEL, "docs/design-optimization.md no longer declares spherical_3rrr.yaml"
         path = tmp_path / "spherical_3rrr.yaml"
@@ -557,13 +567,25 @@ def test_jax_gradients_optimize_a_parallel_models_gci_over_its_box(name, jax_mod
     assert "3^3 midpoint grid" in description
     assert solution.surrogate_start == pytest.approx(ipopt.surrogate_start, rel=1e-12)
     assert solution.surrogate_optimum == pytest.approx(ipopt.surrogate_optimum, rel=1e-10)
-    assert solution.surrogate_optimum > solution.surrogate_start
+    improved = solution.surrogate_optimum > solution.surrogate_start
+    assert improved != (name == "delta_stopped")                       # the stopped DELTA's start breaks its stop
     for parameter in free:
         assert solution.optimum[parameter] == pytest.approx(ipopt.optimum[parameter], rel=1e-6)
     assert solution.constraint_violation == 0.0
     axes = [np.linspace(lo, hi, 7) for lo, hi in zip(*problem.inflated_box)]
     points = np.stack(np.meshgrid(*axes), -1).reshape(-1, 3)
     assert np.all(np.asarray(numpy_model.bind(**solution.optimum).ik(points).margin) >= -1e-12)
+    if name == "delta_stopped":
+        points = design.formulate(problem, casadi_model, numpy_model, nodes=3).box_points
+        unstopped = design.design_problem(loaded("delta", "numpy"), "gci", free, box=box)
+        apart = {}
+        for key, (at, optimum) in {"stopped": (numpy_model, solution.optimum), "free": (
+                loaded("delta", "numpy"), solve_with_jax(unstopped, jax_model("delta"), loaded("delta", "numpy"),
+                                                         nodes=3)[0].optimum)}.items():
+            q = np.asarray(at.bind(**optimum).ik(points).joints)
+            apart[key] = np.abs(q[:, 0] - q[:, 1]).max()
+        assert apart["free"] > np.radians(45), apart
+        assert apart["stopped"] <= np.radians(45) + 1e-9, apart
 
 
 def test_jax_gradients_refuse_what_they_do_not_solve(jax_model, loaded):
