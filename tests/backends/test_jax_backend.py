@@ -116,20 +116,34 @@ def test_the_module_is_float64_and_says_what_it_takes(jax_model):
         arm.fk(np.zeros(3))
 
 
+def _fused(values):
+    raise AssertionError("fused")
+
+
 def test_a_functions_outputs_are_computed_in_one_loop_on_a_cpu(jax_model):
     """XLA's CPU compiler gives each output entry a loop of its own, each recomputing the subexpressions the entries
     share: the UR10e's Jacobian compiled 177 sine and cosine evaluations for the 10 of its source so.  The module
     computes a function's entries in one loop (_in_one_loop: one variadic reduce): a few loops XLA splits off remain,
     so at most three times the source's; the values are exact (-0.0 + e = e), signed zeros, infinities and NaN
-    included."""
+    included.  Op by op (jax.disable_jit) the entries are left as they are."""
     arm = jax_model("ur10e")
     source = inspect.getsource(arm.jacobian)
     written = len(re.findall(r"jax\.numpy\.(?:sin|cos)\(", source))
     compiled = jax.jit(arm.jacobian).lower(np.zeros((16, 6))).compile().as_text()
     assert 0 < len(re.findall(r"\b(?:sine|cosine)\(", compiled)) <= 3 * written
-    one_loop = arm.jacobian.__wrapped__.__globals__["_one_loop"]
+    module = arm.jacobian.__wrapped__.__globals__
+    one_loop = module["_one_loop"]
     values = np.array([-0.0, 0.0, np.inf, -np.inf, np.nan, 1e-300, -1.5, np.finfo(float).max])
     assert np.asarray(jax.jit(one_loop)((values, -values))[1]).tobytes() == (-values).tobytes()
+    # op by op (jit disabled) there is no loop to fuse: the reduce is neither compiled nor run
+    module["_one_loop"] = _fused
+    try:
+        with jax.disable_jit():
+            assert np.asarray(arm.jacobian(np.zeros(6))).shape == (6, 6)
+        with pytest.raises(AssertionError, match="fused"):
+            jax.jit(arm.jacobian)(np.ones(6))
+    finally:
+        module["_one_loop"] = one_loop
 
 
 def test_the_analyses_take_the_jax_backend(jax_directory, generated_dir, capsys):
