@@ -152,6 +152,8 @@ def ik(p, *, r_base=0.07, r_tcp=0.025, a=0.1, b=0.15):
     x = p[..., 0]
     y = p[..., 1]
     z = p[..., 2]
+    _out_joints = numpy.zeros(batch + (3,))
+    _out_margin = numpy.zeros(batch + (3,))
     _x0 = r_tcp*x
     _x1 = r_base*x
     _x2 = a*a
@@ -165,32 +167,41 @@ def ik(p, *, r_base=0.07, r_tcp=0.025, a=0.1, b=0.15):
     _x10 = _x8 - _x9
     _x11 = _x10 + _x7
     _x12 = _x2*_x3
+    del _x2, _x3
     _x13 = -_x11
     _x14 = _x12 + _x13*_x13 - _x5*_x5
+    _out_margin[..., 0] = _x14
     _x15 = numpy.sqrt(_x14)
+    _out_joints[..., 0] = numpy.arctan2(_x11*_x15 + _x5*_x6, -_x13*_x5 - _x15*_x6)
+    del _x5, _x11, _x13, _x14, _x15
     _x16 = 0.8660254037844386*y
     _x17 = _x16*r_tcp
     _x18 = _x16*r_base
     _x19 = _x4 + 0.5*_x1 - 0.5*_x0
+    del _x0, _x1, _x4
     _x20 = _x17 + _x19 - _x18
     _x21 = 0.5*_x7
+    del _x7
     _x22 = _x16*a
+    del _x16
     _x23 = _x21 + _x9 - _x8
+    del _x8, _x9
     _x24 = _x23 - _x22
     _x25 = _x12 + _x24*_x24 - _x20*_x20
-    _x26 = numpy.sqrt(_x25)
-    _x27 = _x18 + _x19 - _x17
-    _x28 = _x22 + _x23
-    _x29 = _x12 + _x28*_x28 - _x27*_x27
-    _x30 = numpy.sqrt(_x29)
-    _out_joints = numpy.zeros(batch + (3,))
-    _out_joints[..., 0] = numpy.arctan2(_x11*_x15 + _x5*_x6, -_x13*_x5 - _x15*_x6)
-    _out_joints[..., 1] = numpy.arctan2(_x20*_x6 + _x26*(_x10 + _x22 - _x21), -_x20*_x24 - _x26*_x6)
-    _out_joints[..., 2] = numpy.arctan2(_x27*_x6 - _x28*_x30, -_x27*_x28 - _x30*_x6)
-    _out_margin = numpy.zeros(batch + (3,))
-    _out_margin[..., 0] = _x14
     _out_margin[..., 1] = _x25
+    _x26 = numpy.sqrt(_x25)
+    _out_joints[..., 1] = numpy.arctan2(_x20*_x6 + _x26*(_x10 + _x22 - _x21), -_x20*_x24 - _x26*_x6)
+    del _x10, _x20, _x21, _x24, _x25, _x26
+    _x27 = _x18 + _x19 - _x17
+    del _x17, _x18, _x19
+    _x28 = _x22 + _x23
+    del _x22, _x23
+    _x29 = _x12 + _x28*_x28 - _x27*_x27
     _out_margin[..., 2] = _x29
+    del _x12
+    _x30 = numpy.sqrt(_x29)
+    _out_joints[..., 2] = numpy.arctan2(_x27*_x6 - _x28*_x30, -_x27*_x28 - _x30*_x6)
+    del _x6, _x27, _x28, _x29, _x30
     return IkResult(_out_joints, _out_margin)
 
 
@@ -226,6 +237,8 @@ def fk(q, *, r_base=0.07, r_tcp=0.025, a=0.1, b=0.15):
     theta1 = q[..., 0]
     theta2 = q[..., 1]
     theta3 = q[..., 2]
+    _out_position = numpy.zeros(batch + (3,))
+    _out_margin = numpy.zeros(batch + ())
     _x0 = a*numpy.cos(theta1)
     _x1 = a*numpy.sin(theta1)
     _x2 = -_x1
@@ -235,13 +248,17 @@ def fk(q, *, r_base=0.07, r_tcp=0.025, a=0.1, b=0.15):
     _x6 = 0.8660254037844386*r_base - 0.8660254037844386*r_tcp
     _x7 = _x6 + _x4*_x5
     _x8 = _x2 + a*numpy.sin(theta2)
+    del _x2
     _x9 = numpy.cos(theta3)
     _x10 = -(_x6 + _x5*_x9)
+    del _x5, _x6
     _x11 = _x3*_x7 - _x10*_x8
     _x12 = 0.5*a
     _x13 = _x0 - 1.5*r_tcp + 1.5*r_base
     _x14 = -(_x13 + _x12*_x9)
+    del _x9
     _x15 = -(_x13 + _x12*_x4)
+    del _x4, _x12, _x13
     _x16 = _x14*_x8 - _x15*_x3
     _x17 = _x10*_x15 - _x14*_x7
     _x18 = _x11*_x11 + _x16*_x16 + _x17*_x17
@@ -250,16 +267,19 @@ def fk(q, *, r_base=0.07, r_tcp=0.025, a=0.1, b=0.15):
     _x21 = 0.5*_x15*_x15 + 0.5*_x7*_x7 + 0.5*_x8*_x8
     _x22 = _x20*(_x16*_x8 - _x17*_x7) + _x21*(_x10*_x17 - _x16*_x3)
     _x23 = 1.0/(_x18*_x18)
+    del _x18
     _x24 = _x20*(_x11*_x7 - _x15*_x16) + _x21*(_x14*_x16 - _x10*_x11)
+    del _x7, _x10
     _x25 = _x20*(_x15*_x17 - _x11*_x8) + _x21*(_x11*_x3 - _x14*_x17)
+    del _x3, _x8, _x14, _x15, _x20, _x21
     _x26 = -(-b*b + _x23*_x22*_x22 + _x23*_x24*_x24 + _x23*_x25*_x25)
+    _out_margin[...] = _x26
+    del _x23
     _x27 = numpy.sqrt(_x19*_x26)
-    _out_position = numpy.zeros(batch + (3,))
     _out_position[..., 0] = _x0 + r_base - r_tcp + _x19*_x22 - _x11*_x27
     _out_position[..., 1] = _x19*_x25 - _x16*_x27
     _out_position[..., 2] = _x1 + _x19*_x24 - _x17*_x27
-    _out_margin = numpy.zeros(batch + ())
-    _out_margin[...] = _x26
+    del _x0, _x1, _x11, _x16, _x17, _x19, _x22, _x24, _x25, _x26, _x27
     return FkResult(_out_position, _out_margin)
 
 
@@ -296,13 +316,6 @@ def leg_points(q, p, *, r_base=0.07, r_tcp=0.025, a=0.1):
     x = p[..., 0]
     y = p[..., 1]
     z = p[..., 2]
-    _x0 = 0.5*r_base
-    _x1 = -_x0
-    _x2 = 0.8660254037844386*r_base
-    _x3 = a*numpy.cos(theta2)
-    _x4 = x - 0.5*r_tcp
-    _x5 = 0.8660254037844386*r_tcp
-    _x6 = a*numpy.cos(theta3)
     _out_points = numpy.zeros(batch + (9, 3))
     _out_points[..., 0, 0] = r_base
     _out_points[..., 1, 0] = r_base + a*numpy.cos(theta1)
@@ -310,22 +323,34 @@ def leg_points(q, p, *, r_base=0.07, r_tcp=0.025, a=0.1):
     _out_points[..., 2, 0] = r_tcp + x
     _out_points[..., 2, 1] = y
     _out_points[..., 2, 2] = z
+    _out_points[..., 4, 2] = a*numpy.sin(theta2)
+    _out_points[..., 5, 2] = z
+    _out_points[..., 7, 2] = a*numpy.sin(theta3)
+    _out_points[..., 8, 2] = z
+    _x0 = 0.5*r_base
+    _x1 = -_x0
     _out_points[..., 3, 0] = _x1
+    _out_points[..., 6, 0] = _x1
+    del _x1
+    _x2 = 0.8660254037844386*r_base
     _out_points[..., 3, 1] = _x2
+    _out_points[..., 6, 1] = -_x2
+    _x3 = a*numpy.cos(theta2)
     _out_points[..., 4, 0] = -(_x0 + 0.5*_x3)
     _out_points[..., 4, 1] = _x2 + 0.8660254037844386*_x3
-    _out_points[..., 4, 2] = a*numpy.sin(theta2)
+    del _x3
+    _x4 = x - 0.5*r_tcp
     _out_points[..., 5, 0] = _x4
+    _out_points[..., 8, 0] = _x4
+    del _x4
+    _x5 = 0.8660254037844386*r_tcp
     _out_points[..., 5, 1] = _x5 + y
-    _out_points[..., 5, 2] = z
-    _out_points[..., 6, 0] = _x1
-    _out_points[..., 6, 1] = -_x2
+    _out_points[..., 8, 1] = y - _x5
+    del _x5
+    _x6 = a*numpy.cos(theta3)
     _out_points[..., 7, 0] = -(_x0 + 0.5*_x6)
     _out_points[..., 7, 1] = -(_x2 + 0.8660254037844386*_x6)
-    _out_points[..., 7, 2] = a*numpy.sin(theta3)
-    _out_points[..., 8, 0] = _x4
-    _out_points[..., 8, 1] = y - _x5
-    _out_points[..., 8, 2] = z
+    del _x0, _x2, _x6
     return _out_points
 
 
@@ -359,6 +384,7 @@ def jacobian(q, p, *, r_base=0.07, r_tcp=0.025, a=0.1):
     x = p[..., 0]
     y = p[..., 1]
     z = p[..., 2]
+    _out_J = numpy.zeros(batch + (3, 3))
     _x0 = a*numpy.sin(theta3)
     _x1 = z - _x0
     _x2 = 0.8660254037844386*r_base
@@ -372,34 +398,42 @@ def jacobian(q, p, *, r_base=0.07, r_tcp=0.025, a=0.1):
     _x10 = _x8 + _x9
     _x11 = numpy.cos(theta3)
     _x12 = _x2 - _x3
+    del _x2, _x3
     _x13 = _x12 + y + _x11*_x5
+    del _x5
     _x14 = _x1*_x7 + _x10*_x13
     _x15 = 0.5*a
     _x16 = x + 0.5*r_base - 0.5*r_tcp
     _x17 = _x16 + _x15*_x4
     _x18 = _x16 + _x11*_x15
+    del _x15, _x16
     _x19 = _x1*_x17 + _x10*_x18
+    del _x10
     _x20 = a*numpy.cos(theta1)
     _x21 = r_tcp + x - _x20 - r_base
     _x22 = a*numpy.sin(theta1)
     _x23 = z - _x22
     _x24 = _x13*_x17 + _x18*(_x12 + _x6 - y)
+    del _x6, _x12
     _x25 = 1.0/(_x14*_x21 + _x23*_x24 - _x19*y)
     _x26 = _x25*(_x20*_x23 - _x21*_x22)
+    _out_J[..., 0, 0] = _x14*_x26
+    _out_J[..., 1, 0] = -_x19*_x26
+    _out_J[..., 2, 0] = _x24*_x26
+    del _x14, _x19, _x20, _x23, _x24, _x26
     _x27 = _x22 + _x8
+    del _x8, _x22
     _x28 = z - _x9
     _x29 = _x25*(0.5*_x17*_x9 - 0.8660254037844386*_x7*_x9 + _x28*_x4*a)
-    _x30 = _x25*(0.5*_x0*_x18 + 0.8660254037844386*_x0*_x13 + _x1*_x11*a)
-    _out_J = numpy.zeros(batch + (3, 3))
-    _out_J[..., 0, 0] = _x14*_x26
     _out_J[..., 0, 1] = -_x29*(_x1*y + _x13*_x27)
-    _out_J[..., 0, 2] = _x30*(_x27*_x7 + _x28*y)
-    _out_J[..., 1, 0] = -_x19*_x26
     _out_J[..., 1, 1] = _x29*(_x1*_x21 + _x18*_x27)
-    _out_J[..., 1, 2] = -_x30*(_x17*_x27 + _x21*_x28)
-    _out_J[..., 2, 0] = _x24*_x26
     _out_J[..., 2, 1] = _x29*(_x18*y - _x13*_x21)
+    del _x4, _x9, _x29
+    _x30 = _x25*(0.5*_x0*_x18 + 0.8660254037844386*_x0*_x13 + _x1*_x11*a)
+    _out_J[..., 0, 2] = _x30*(_x27*_x7 + _x28*y)
+    _out_J[..., 1, 2] = -_x30*(_x17*_x27 + _x21*_x28)
     _out_J[..., 2, 2] = _x30*(_x21*_x7 - _x17*y)
+    del _x0, _x1, _x7, _x11, _x13, _x17, _x18, _x21, _x25, _x27, _x28, _x30
     return _out_J
 
 
@@ -434,11 +468,16 @@ def inverse_jacobian(q, p, *, r_base=0.07, r_tcp=0.025, a=0.1):
     x = p[..., 0]
     y = p[..., 1]
     z = p[..., 2]
+    _out_J_inv = numpy.zeros(batch + (3, 3))
     _x0 = a*numpy.cos(theta1)
     _x1 = r_tcp + x - _x0 - r_base
     _x2 = a*numpy.sin(theta1)
     _x3 = z - _x2
     _x4 = 1.0/(_x0*_x3 - _x1*_x2)
+    _out_J_inv[..., 0, 0] = _x1*_x4
+    _out_J_inv[..., 0, 1] = _x4*y
+    _out_J_inv[..., 0, 2] = _x3*_x4
+    del _x0, _x1, _x2, _x3, _x4
     _x5 = a*numpy.cos(theta2)
     _x6 = x + 0.5*r_base - 0.5*r_tcp
     _x7 = _x6 + 0.5*_x5
@@ -448,22 +487,22 @@ def inverse_jacobian(q, p, *, r_base=0.07, r_tcp=0.025, a=0.1):
     _x11 = 0.8660254037844386*r_tcp
     _x12 = _x11 + y - _x10 - 0.8660254037844386*_x5
     _x13 = 1.0/(_x5*_x9 + 0.5*_x7*_x8 - 0.8660254037844386*_x12*_x8)
-    _x14 = a*numpy.cos(theta3)
-    _x15 = _x6 + 0.5*_x14
-    _x16 = a*numpy.sin(theta3)
-    _x17 = z - _x16
-    _x18 = _x10 + y - _x11 + 0.8660254037844386*_x14
-    _x19 = 1.0/(_x14*_x17 + 0.5*_x15*_x16 + 0.8660254037844386*_x16*_x18)
-    _out_J_inv = numpy.zeros(batch + (3, 3))
-    _out_J_inv[..., 0, 0] = _x1*_x4
-    _out_J_inv[..., 0, 1] = _x4*y
-    _out_J_inv[..., 0, 2] = _x3*_x4
     _out_J_inv[..., 1, 0] = _x13*_x7
     _out_J_inv[..., 1, 1] = _x12*_x13
     _out_J_inv[..., 1, 2] = _x13*_x9
+    del _x5, _x7, _x8, _x9, _x12, _x13
+    _x14 = a*numpy.cos(theta3)
+    _x15 = _x6 + 0.5*_x14
+    del _x6
+    _x16 = a*numpy.sin(theta3)
+    _x17 = z - _x16
+    _x18 = _x10 + y - _x11 + 0.8660254037844386*_x14
+    del _x10, _x11
+    _x19 = 1.0/(_x14*_x17 + 0.5*_x15*_x16 + 0.8660254037844386*_x16*_x18)
     _out_J_inv[..., 2, 0] = _x15*_x19
     _out_J_inv[..., 2, 1] = _x18*_x19
     _out_J_inv[..., 2, 2] = _x17*_x19
+    del _x14, _x15, _x16, _x17, _x18, _x19
     return _out_J_inv
 
 
@@ -502,6 +541,8 @@ def singularities(q, p, *, r_base=0.07, r_tcp=0.025, a=0.1):
     x = p[..., 0]
     y = p[..., 1]
     z = p[..., 2]
+    _out_det_Jq = numpy.zeros(batch + ())
+    _out_det_Jx = numpy.zeros(batch + ())
     _x0 = a*numpy.sin(theta1)
     _x1 = z - _x0
     _x2 = a*numpy.cos(theta1)
@@ -518,13 +559,14 @@ def singularities(q, p, *, r_base=0.07, r_tcp=0.025, a=0.1):
     _x13 = z - _x12
     _x14 = a*numpy.cos(theta3)
     _x15 = _x6 - _x7
+    del _x6, _x7
     _x16 = _x15 + y + 0.8660254037844386*_x14
     _x17 = _x10 + 0.5*_x14
-    _x18 = _x4 - z
-    _out_det_Jq = numpy.zeros(batch + ())
     _out_det_Jq[...] = (_x1*_x2 - _x0*_x3)*(_x13*_x14 + 0.5*_x12*_x17 + 0.8660254037844386*_x12*_x16)*(_x5*(z - _x4) + 0.5*_x11*_x4 - 0.8660254037844386*_x4*_x9)
-    _out_det_Jx = numpy.zeros(batch + ())
+    del _x0, _x2, _x5, _x10, _x12, _x14
+    _x18 = _x4 - z
     _out_det_Jx[...] = _x1*(_x11*_x16 + _x17*(_x15 + _x8 - y)) + _x3*(_x13*_x9 + _x16*_x18) - y*(_x11*_x13 + _x17*_x18)
+    del _x1, _x3, _x4, _x8, _x9, _x11, _x13, _x15, _x16, _x17, _x18
     return SingularitiesResult(_out_det_Jq, _out_det_Jx)
 
 
@@ -579,12 +621,16 @@ def gravity_vector(q, p, qw, *, r_base=0.07, r_tcp=0.025, a=0.1, m_arm=0.0093, m
     psi1 = qw[..., 0]
     psi2 = qw[..., 1]
     psi3 = qw[..., 2]
+    _out_G = numpy.zeros(batch + (6,))
     _x0 = numpy.cos(theta1)
     _x3 = 9.81*m_handle
+    _out_G[..., 4] = h*_x3*numpy.cos(psi2)
     _x4 = 9.81*m_platform + 14.715*m_rod + 9.81*m_fork2 + _x3 + 9.81*m_fork1
+    del _x3
     _x5 = 4.905*a
     _x6 = _x5*m_arm
     _x7 = _x5*m_rod
+    del _x5
     _x8 = a*_x0
     _x9 = -_x8 - r_base + x + r_tcp
     _x10 = a*numpy.sin(theta1)
@@ -597,13 +643,18 @@ def gravity_vector(q, p, qw, *, r_base=0.07, r_tcp=0.025, a=0.1, m_arm=0.0093, m
     _x16 = -_x14 + x + _x15
     _x17 = _x13 + _x16
     _x18 = 1.7320508075688772*_x15
+    del _x15
     _x19 = 1.7320508075688772*_x14
+    del _x14
     _x20 = _x19 - _x18 + y - 1.7320508075688772*_x13
+    del _x13
     _x2 = numpy.cos(theta3)
     _x23 = a*_x2
     _x24 = 0.5*_x23
     _x25 = _x24 + _x16
+    del _x16
     _x26 = y + _x18 - _x19 + 1.7320508075688772*_x24
+    del _x18, _x19, _x24
     _x34 = -_x25*_x20 + _x26*_x17
     _x21 = a*numpy.sin(theta2)
     _x22 = -_x21 + z
@@ -613,22 +664,31 @@ def gravity_vector(q, p, qw, *, r_base=0.07, r_tcp=0.025, a=0.1, m_arm=0.0093, m
     _x32 = -(-_x26*_x11 + y*_x28)
     _x33 = -_x20*_x11 + y*_x22
     _x37 = _x25*_x33 + _x32*_x17 + _x9*_x31
+    del _x31, _x32, _x33
     _x38 = 1.0/_x37
+    del _x37
     _x39 = _x34*_x38
+    del _x34
     _x42 = _x39*(-_x9*_x10 + _x8*_x11)
+    _out_G[..., 0] = _x0*_x7 + _x0*_x6 + _x4*_x42
+    del _x0, _x8, _x10, _x11, _x39, _x42
     _x29 = 0.5*_x21
+    del _x21
     _x35 = -(-y*_x25 + _x9*_x26)
     _x40 = _x35*_x38
+    del _x35
     _x43 = _x40*(_x22*_x12 + _x29*_x17 - 1.7320508075688772*_x20*_x29)
-    _x30 = 0.5*_x27
-    _x36 = -y*_x17 + _x9*_x20
-    _x41 = _x36*_x38
-    _x44 = _x41*(_x23*_x28 + _x25*_x30 + 1.7320508075688772*_x26*_x30)
-    _out_G = numpy.zeros(batch + (6,))
-    _out_G[..., 0] = _x0*_x7 + _x0*_x6 + _x4*_x42
     _out_G[..., 1] = _x1*_x7 + _x1*_x6 + _x4*_x43
+    del _x1, _x12, _x22, _x29, _x40, _x43
+    _x30 = 0.5*_x27
+    del _x27
+    _x36 = -y*_x17 + _x9*_x20
+    del _x9, _x17, _x20
+    _x41 = _x36*_x38
+    del _x38, _x36
+    _x44 = _x41*(_x23*_x28 + _x25*_x30 + 1.7320508075688772*_x26*_x30)
     _out_G[..., 2] = _x2*_x7 + _x4*_x44 + _x2*_x6
-    _out_G[..., 4] = h*_x3*numpy.cos(psi2)
+    del _x4, _x6, _x7, _x2, _x23, _x25, _x26, _x28, _x30, _x41, _x44
     return _out_G
 
 
@@ -687,11 +747,13 @@ def mass_matrix(q, p, qw, *, r_base=0.07, r_tcp=0.025, a=0.1, m_arm=0.0093, m_ro
     psi1 = qw[..., 0]
     psi2 = qw[..., 1]
     psi3 = qw[..., 2]
+    _out_M = numpy.zeros(batch + (6, 6))
     _x0 = a*numpy.cos(theta1)
     _x1 = -_x0 - r_base + x + r_tcp
     _x2 = a*numpy.sin(theta1)
     _x3 = -_x2 + z
     _x4 = -_x2*_x1 + _x3*_x0
+    del _x0, _x2
     _x5 = a*numpy.cos(theta2)
     _x6 = 0.5*_x5
     _x7 = 0.5*r_tcp
@@ -699,49 +761,82 @@ def mass_matrix(q, p, qw, *, r_base=0.07, r_tcp=0.025, a=0.1, m_arm=0.0093, m_ro
     _x9 = x - _x7 + _x8
     _x10 = _x6 + _x9
     _x11 = 1.7320508075688772*_x8
+    del _x8
     _x12 = 1.7320508075688772*_x7
+    del _x7
     _x13 = _x12 - _x11 + y - 1.7320508075688772*_x6
+    del _x6
     _x14 = a*numpy.sin(theta2)
     _x15 = -_x14 + z
     _x16 = 0.5*_x14
+    del _x14
     _x17 = _x5*_x15 - 1.7320508075688772*_x16*_x13 + _x10*_x16
+    del _x5, _x16
     _x18 = a*numpy.cos(theta3)
     _x19 = 0.5*_x18
     _x20 = _x19 + _x9
+    del _x9
     _x21 = y + _x11 - _x12 + 1.7320508075688772*_x19
+    del _x11, _x12, _x19
     _x22 = a*numpy.sin(theta3)
     _x23 = -_x22 + z
     _x24 = 0.5*_x22
+    del _x22
     _x25 = _x23*_x18 + _x24*_x20 + 1.7320508075688772*_x24*_x21
+    del _x18, _x24
     _x26 = -_x15*_x21 + _x23*_x13
     _x27 = -(-_x3*_x21 + y*_x23)
     _x28 = -_x3*_x13 + y*_x15
     _x29 = -(-_x20*_x15 + _x10*_x23)
     _x30 = -_x3*_x20 + _x1*_x23
+    del _x23
     _x31 = -(-_x10*_x3 + _x1*_x15)
+    del _x3, _x15
     _x32 = -_x13*_x20 + _x10*_x21
     _x33 = -(-y*_x20 + _x1*_x21)
+    del _x21
     _x34 = -y*_x10 + _x1*_x13
+    del _x13
     _x35 = _x28*_x20 + _x10*_x27 + _x1*_x26
+    del _x1, _x10, _x20
     _x36 = 1.0/_x35
+    del _x35
     _x37 = _x26*_x36
+    del _x26
     _x38 = _x27*_x36
+    del _x27
     _x39 = _x28*_x36
+    del _x28
     _x40 = _x29*_x36
+    del _x29
     _x41 = _x30*_x36
+    del _x30
     _x42 = _x36*_x31
+    del _x31
     _x43 = _x36*_x32
+    del _x32
     _x44 = _x33*_x36
+    del _x33
     _x45 = _x34*_x36
+    del _x34, _x36
     _x46 = _x4*_x37
+    del _x37
     _x47 = _x17*_x38
+    del _x38
     _x48 = _x25*_x39
+    del _x39
     _x49 = _x4*_x40
+    del _x40
     _x50 = _x17*_x41
+    del _x41
     _x51 = _x25*_x42
+    del _x42
     _x52 = _x4*_x43
+    del _x4, _x43
     _x53 = _x17*_x44
+    del _x17, _x44
     _x54 = _x25*_x45
+    del _x25, _x45
     _x55 = m_platform + 1.5*m_rod + m_fork1 + m_handle + m_fork2
     _x56 = numpy.cos(psi1)
     _x57 = numpy.cos(psi2)
@@ -751,14 +846,25 @@ def mass_matrix(q, p, qw, *, r_base=0.07, r_tcp=0.025, a=0.1, m_arm=0.0093, m_ro
     _x61 = numpy.sin(psi1)
     _x62 = numpy.sin(psi2)
     _x63 = _x58*_x62
+    del _x58
     _x64 = _x61*_x63
     _x65 = -_x61*_x59
+    del _x61
     _x66 = -_x56*_x63
+    del _x56, _x63
     _x67 = 0.00013333333333333334*m_fork2
     _x68 = 0.0005583333333333333*m_handle + h*h*m_handle
     _x69 = _x68*numpy.sin(psi3)**2 + _x68*numpy.cos(psi3)**2
+    _out_M[..., 4, 4] = _x69
+    del _x68
     _x70 = 5e-05*m_handle
+    _out_M[..., 3, 3] = (_x67 + _x70)*_x62*_x62 + (_x69 + _x67)*_x57*_x57
+    _out_M[..., 5, 5] = _x70
+    del _x57, _x67, _x69
     _x71 = _x62*_x70
+    _out_M[..., 3, 5] = _x71
+    _out_M[..., 5, 3] = _x71
+    del _x62, _x70, _x71
     _x72 = _x55*_x46
     _x73 = _x55*_x49
     _x74 = _x52*_x55
@@ -768,47 +874,55 @@ def mass_matrix(q, p, qw, *, r_base=0.07, r_tcp=0.025, a=0.1, m_arm=0.0093, m_ro
     _x78 = _x55*_x48
     _x79 = _x55*_x51
     _x80 = _x55*_x54
+    del _x55
     _x81 = a*a
     _x82 = 0.3333333333333333*_x81*m_arm + gear*gear*J_rotor + 0.5*_x81*m_rod
+    del _x81
     _x83 = _x82 + _x52*_x74 + _x73*_x49 + _x72*_x46
-    _x84 = _x52*_x77 + _x76*_x49 + _x75*_x46
-    _x85 = _x52*_x80 + _x79*_x49 + _x78*_x46
-    _x86 = _x82 + _x53*_x77 + _x76*_x50 + _x75*_x47
-    _x87 = _x53*_x80 + _x79*_x50 + _x78*_x47
-    _x88 = _x82 + _x54*_x80 + _x79*_x51 + _x78*_x48
-    _x89 = _x65*_x49 + _x60*_x46
-    _x90 = _x65*_x50 + _x60*_x47
-    _x91 = _x65*_x51 + _x60*_x48
-    _x92 = _x52*_x59 + _x66*_x49 + _x64*_x46
-    _x93 = _x53*_x59 + _x66*_x50 + _x64*_x47
-    _x94 = _x59*_x54 + _x66*_x51 + _x64*_x48
-    _out_M = numpy.zeros(batch + (6, 6))
     _out_M[..., 0, 0] = _x83
+    del _x72, _x73, _x74, _x83
+    _x84 = _x52*_x77 + _x76*_x49 + _x75*_x46
     _out_M[..., 0, 1] = _x84
-    _out_M[..., 0, 2] = _x85
-    _out_M[..., 0, 3] = _x89
-    _out_M[..., 0, 4] = _x92
     _out_M[..., 1, 0] = _x84
-    _out_M[..., 1, 1] = _x86
-    _out_M[..., 1, 2] = _x87
-    _out_M[..., 1, 3] = _x90
-    _out_M[..., 1, 4] = _x93
+    del _x84
+    _x85 = _x52*_x80 + _x79*_x49 + _x78*_x46
+    _out_M[..., 0, 2] = _x85
     _out_M[..., 2, 0] = _x85
+    del _x85
+    _x86 = _x82 + _x53*_x77 + _x76*_x50 + _x75*_x47
+    _out_M[..., 1, 1] = _x86
+    del _x75, _x76, _x77, _x86
+    _x87 = _x53*_x80 + _x79*_x50 + _x78*_x47
+    _out_M[..., 1, 2] = _x87
     _out_M[..., 2, 1] = _x87
+    del _x87
+    _x88 = _x82 + _x54*_x80 + _x79*_x51 + _x78*_x48
     _out_M[..., 2, 2] = _x88
-    _out_M[..., 2, 3] = _x91
-    _out_M[..., 2, 4] = _x94
+    del _x78, _x79, _x80, _x82, _x88
+    _x89 = _x65*_x49 + _x60*_x46
+    _out_M[..., 0, 3] = _x89
     _out_M[..., 3, 0] = _x89
+    del _x89
+    _x90 = _x65*_x50 + _x60*_x47
+    _out_M[..., 1, 3] = _x90
     _out_M[..., 3, 1] = _x90
+    del _x90
+    _x91 = _x65*_x51 + _x60*_x48
+    _out_M[..., 2, 3] = _x91
     _out_M[..., 3, 2] = _x91
-    _out_M[..., 3, 3] = (_x67 + _x70)*_x62*_x62 + (_x69 + _x67)*_x57*_x57
-    _out_M[..., 3, 5] = _x71
+    del _x60, _x65, _x91
+    _x92 = _x52*_x59 + _x66*_x49 + _x64*_x46
+    _out_M[..., 0, 4] = _x92
     _out_M[..., 4, 0] = _x92
+    del _x46, _x49, _x52, _x92
+    _x93 = _x53*_x59 + _x66*_x50 + _x64*_x47
+    _out_M[..., 1, 4] = _x93
     _out_M[..., 4, 1] = _x93
+    del _x47, _x50, _x53, _x93
+    _x94 = _x59*_x54 + _x66*_x51 + _x64*_x48
+    _out_M[..., 2, 4] = _x94
     _out_M[..., 4, 2] = _x94
-    _out_M[..., 4, 4] = _x69
-    _out_M[..., 5, 3] = _x71
-    _out_M[..., 5, 5] = _x70
+    del _x48, _x51, _x54, _x59, _x64, _x66, _x94
     return _out_M
 
 
@@ -873,6 +987,7 @@ def coriolis_vector(q, p, qw, qd, qwd, *, r_base=0.07, r_tcp=0.025, a=0.1, m_rod
     psi1_d = qwd[..., 0]
     psi2_d = qwd[..., 1]
     psi3_d = qwd[..., 2]
+    _out_V = numpy.zeros(batch + (6,))
     _x0 = a*numpy.cos(theta1)
     _x1 = a*numpy.sin(theta1)
     _x6 = r_tcp + x - r_base - _x0
@@ -890,59 +1005,86 @@ def coriolis_vector(q, p, qw, qd, qwd, *, r_base=0.07, r_tcp=0.025, a=0.1, m_rod
     _x4 = a*numpy.cos(theta3)
     _x20 = 0.5*_x4
     _x22 = y + _x14 - _x15 + 1.7320508075688772*_x20
+    del _x14, _x15
     _x5 = a*numpy.sin(theta3)
     _x23 = z - _x5
     _x27 = -_x17*_x22 + _x23*_x16
     _x12 = x - _x10 + _x11
+    del _x11, _x10
     _x13 = _x9 + _x12
+    del _x9
     _x21 = _x20 + _x12
+    del _x20, _x12
     _x28 = -(-_x7*_x22 + y*_x23)
     _x29 = -_x7*_x16 + y*_x17
     _x30 = _x29*_x21 + _x13*_x28 + _x6*_x27
     _x31 = 1.0/_x30
+    del _x30
     _x32 = _x27*_x31
+    del _x27
     _x33 = _x8*_x32
     _x39 = -(-_x21*_x17 + _x13*_x23)
     _x40 = _x39*_x31
+    del _x39
     _x41 = _x8*_x40
     _x49 = -_x16*_x21 + _x13*_x22
     _x50 = _x31*_x49
+    del _x49
     _x51 = _x8*_x50
+    del _x8
     _x34 = _x28*_x31
+    del _x28
     _x36 = _x29*_x31
+    del _x29
     _x26 = 2.0*theta1_d
     _x18 = 0.5*_x3
     _x19 = _x2*_x17 - 1.7320508075688772*_x18*_x16 + _x13*_x18
+    del _x18
     _x35 = _x19*_x34
     _x24 = 0.5*_x5
     _x25 = _x4*_x23 + _x24*_x21 + 1.7320508075688772*_x24*_x22
+    del _x24
     _x37 = _x25*_x36
     _x38 = _x37*theta3_d + _x35*theta2_d + _x33*theta1_d
     _x52 = -(-y*_x21 + _x6*_x22)
+    del _x22
     _x53 = _x52*_x31
+    del _x52
     _x54 = _x19*_x53
     _x55 = -y*_x13 + _x6*_x16
+    del _x16
     _x56 = _x55*_x31
+    del _x55
     _x57 = _x25*_x56
     _x58 = _x57*theta3_d + _x54*theta2_d + _x51*theta1_d
     _x42 = -_x7*_x21 + _x6*_x23
+    del _x23, _x21
     _x43 = _x42*_x31
+    del _x42
     _x44 = _x19*_x43
+    del _x19
     _x45 = -(-_x13*_x7 + _x6*_x17)
+    del _x6, _x7, _x17, _x13
     _x46 = _x31*_x45
+    del _x31, _x45
     _x47 = _x25*_x46
+    del _x25
     _x48 = _x47*theta3_d + _x44*theta2_d + _x41*theta1_d
     _x59 = _x48*_x48 + _x58*_x58 + _x38*_x38
     _x71 = _x59 - _x0*_x26*_x58 + _x1*_x26*_x38 + theta1_d*theta1_d*(-_x0*r_base + z*_x1 + x*_x0 + _x0*r_tcp)
+    del _x0, _x1, _x26
     _x60 = _x3*theta2_d
     _x61 = 1.7320508075688772*_x48
     _x62 = 2.0*_x58
     _x63 = 0.8660254037844386*y
     _x64 = 0.5*x
     _x72 = _x59 + (_x2*r_tcp - _x2*r_base + z*_x3 - _x2*_x64 + _x2*_x63)*theta2_d*theta2_d - _x60*_x38 - _x2*_x62*theta2_d + _x61*_x60
+    del _x2, _x3, _x60
     _x65 = _x5*theta3_d
     _x73 = _x59 + (z*_x5 - _x4*r_base - _x4*_x64 + _x4*r_tcp - _x4*_x63)*theta3_d*theta3_d - _x65*_x38 - _x4*_x62*theta3_d - _x61*_x65
+    del _x4, _x5, _x59, _x61, _x62, _x63, _x64, _x65
     _x74 = -(_x73*_x36 + _x72*_x34 + _x71*_x32)
+    del _x32, _x34, _x36
     _x75 = m_platform + 1.5*m_rod + m_fork1 + m_handle + m_fork2
     _x67 = numpy.cos(psi2)
     _x68 = h*m_handle
@@ -952,41 +1094,57 @@ def coriolis_vector(q, p, qw, qd, qwd, *, r_base=0.07, r_tcp=0.025, a=0.1, m_rod
     _x66 = numpy.cos(psi1)
     _x70 = numpy.sin(psi2)
     _x78 = _x70*_x68
+    del _x68
     _x79 = _x66*_x78
     _x80 = _x76*_x77 + _x79*psi1_d
     _x81 = _x69*psi1_d
     _x82 = _x79*psi2_d + _x76*_x81
     _x83 = _x74*_x75 + _x80*psi2_d + _x82*psi1_d
     _x84 = -(_x73*_x46 + _x72*_x43 + _x71*_x40)
+    del _x40, _x43, _x46
     _x85 = _x66*_x76
     _x86 = -_x85*psi2_d + _x78*_x81
+    del _x81
     _x87 = _x78*_x77 - _x85*psi1_d
+    del _x77
     _x88 = _x84*_x75 + _x86*psi2_d + _x87*psi1_d
     _x89 = -(_x73*_x56 + _x72*_x53 + _x71*_x50)
+    del _x50, _x53, _x56, _x71, _x72, _x73
     _x90 = -_x78*psi2_d*psi2_d + _x89*_x75
-    _x91 = -_x66*_x76
-    _x93 = -_x69*_x76
-    _x95 = _x38*_x79 + _x69*_x48*_x78
-    _x96 = _x69*_x38*_x76 - _x48*_x85
-    _x97 = _x48*_x87 + _x38*_x82
-    _x98 = 5e-05*m_handle
-    _x99 = 0.00013333333333333334*m_fork2
-    _x100 = 2.0*_x70*_x67
-    _x101 = 0.0005583333333333333*m_handle + h*h*m_handle
-    _x102 = psi1_d*((_x98 + _x99)*_x100 - _x100*(_x99 + numpy.cos(psi3)**2*_x101 + numpy.sin(psi3)**2*_x101))
-    _x103 = _x67*_x98
-    _x104 = _x103*psi3_d
-    _x92 = _x69*_x78
-    _x94 = -_x66*_x78
-    _x105 = _x58*_x78
-    _x106 = -_x105*psi2_d + _x48*_x86 + _x38*_x80
-    _out_V = numpy.zeros(batch + (6,))
     _out_V[..., 0] = _x83*_x33 + _x90*_x51 + _x88*_x41
     _out_V[..., 1] = _x83*_x35 + _x88*_x44 + _x90*_x54
     _out_V[..., 2] = _x83*_x37 + _x88*_x47 + _x90*_x57
-    _out_V[..., 3] = _x74*_x91 + _x84*_x93 - 0.5*(_x97 + _x96*psi1_d + _x95*psi2_d) + _x102*psi2_d + _x104*psi2_d + _x97
-    _out_V[..., 4] = _x74*_x92 + _x84*_x94 + _x76*_x89 - 0.5*(_x106 + (_x95 + _x102 + _x104)*psi1_d + _x104*psi1_d + (_x96 - _x105)*psi2_d) + _x106
+    del _x33, _x41, _x51, _x35, _x37, _x54, _x57, _x44, _x47, _x75, _x83, _x88, _x90
+    _x91 = -_x66*_x76
+    _x93 = -_x69*_x76
+    _x95 = _x38*_x79 + _x69*_x48*_x78
+    del _x79
+    _x96 = _x69*_x38*_x76 - _x48*_x85
+    del _x85
+    _x97 = _x48*_x87 + _x38*_x82
+    del _x82, _x87
+    _x98 = 5e-05*m_handle
+    _x99 = 0.00013333333333333334*m_fork2
+    _x100 = 2.0*_x70*_x67
+    del _x70
+    _x101 = 0.0005583333333333333*m_handle + h*h*m_handle
+    _x102 = psi1_d*((_x98 + _x99)*_x100 - _x100*(_x99 + numpy.cos(psi3)**2*_x101 + numpy.sin(psi3)**2*_x101))
+    del _x99, _x100, _x101
+    _x103 = _x67*_x98
     _out_V[..., 5] = _x103*psi1_d*psi2_d
+    del _x67, _x98
+    _x104 = _x103*psi3_d
+    _out_V[..., 3] = _x74*_x91 + _x84*_x93 - 0.5*(_x97 + _x96*psi1_d + _x95*psi2_d) + _x102*psi2_d + _x104*psi2_d + _x97
+    del _x91, _x93, _x97, _x103
+    _x92 = _x69*_x78
+    del _x69
+    _x94 = -_x66*_x78
+    del _x66
+    _x105 = _x58*_x78
+    del _x58, _x78
+    _x106 = -_x105*psi2_d + _x48*_x86 + _x38*_x80
+    _out_V[..., 4] = _x74*_x92 + _x84*_x94 + _x76*_x89 - 0.5*(_x106 + (_x95 + _x102 + _x104)*psi1_d + _x104*psi1_d + (_x96 - _x105)*psi2_d) + _x106
+    del _x38, _x48, _x74, _x76, _x80, _x84, _x86, _x89, _x95, _x96, _x102, _x104, _x92, _x94, _x105, _x106
     return _out_V
 
 
@@ -1069,6 +1227,7 @@ def inverse_dynamics(q, p, qw, qd, qwd, qdd, qwdd, *, r_base=0.07, r_tcp=0.025, 
     psi1_dd = qwdd[..., 0]
     psi2_dd = qwdd[..., 1]
     psi3_dd = qwdd[..., 2]
+    _out_tau = numpy.zeros(batch + (6,))
     _x0 = numpy.cos(theta1)
     _x1 = a*_x0
     _x2 = a*numpy.sin(theta1)
@@ -1089,60 +1248,87 @@ def inverse_dynamics(q, p, qw, qd, qwd, qdd, qwdd, *, r_base=0.07, r_tcp=0.025, 
     _x7 = a*_x6
     _x23 = 0.5*_x7
     _x25 = y + _x17 - _x18 + 1.7320508075688772*_x23
+    del _x17, _x18
     _x8 = a*numpy.sin(theta3)
     _x26 = z - _x8
     _x30 = -_x20*_x25 + _x26*_x19
     _x15 = x - _x13 + _x14
+    del _x14, _x13
     _x16 = _x12 + _x15
+    del _x12
     _x24 = _x23 + _x15
+    del _x23, _x15
     _x31 = -(-_x10*_x25 + y*_x26)
     _x32 = -_x10*_x19 + y*_x20
     _x33 = _x32*_x24 + _x16*_x31 + _x9*_x30
     _x34 = 1.0/_x33
+    del _x33
     _x35 = _x30*_x34
+    del _x30
     _x36 = _x11*_x35
     _x42 = -(-_x24*_x20 + _x16*_x26)
     _x43 = _x42*_x34
+    del _x42
     _x44 = _x11*_x43
     _x52 = -_x19*_x24 + _x16*_x25
     _x53 = _x34*_x52
+    del _x52
     _x54 = _x11*_x53
+    del _x11
     _x21 = 0.5*_x5
     _x22 = _x4*_x20 - 1.7320508075688772*_x21*_x19 + _x16*_x21
+    del _x21
     _x45 = -_x10*_x24 + _x9*_x26
     _x46 = _x45*_x34
+    del _x45
     _x47 = _x22*_x46
     _x27 = 0.5*_x8
     _x28 = _x7*_x26 + _x27*_x24 + 1.7320508075688772*_x27*_x25
+    del _x26, _x27
     _x48 = -(-_x16*_x10 + _x9*_x20)
+    del _x10, _x20
     _x49 = _x34*_x48
+    del _x48
     _x50 = _x28*_x49
     _x29 = 2.0*theta1_d
     _x37 = _x31*_x34
+    del _x31
     _x38 = _x22*_x37
     _x39 = _x32*_x34
+    del _x32
     _x40 = _x28*_x39
     _x41 = _x40*theta3_d + _x38*theta2_d + _x36*theta1_d
     _x55 = -(-y*_x24 + _x9*_x25)
+    del _x25, _x24
     _x56 = _x55*_x34
+    del _x55
     _x57 = _x22*_x56
+    del _x22
     _x58 = -y*_x16 + _x9*_x19
+    del _x9, _x19, _x16
     _x59 = _x58*_x34
+    del _x34, _x58
     _x60 = _x28*_x59
+    del _x28
     _x61 = _x60*theta3_d + _x57*theta2_d + _x54*theta1_d
     _x51 = _x50*theta3_d + _x47*theta2_d + _x44*theta1_d
     _x62 = _x51*_x51 + _x61*_x61 + _x41*_x41
     _x79 = _x62 - _x1*_x29*_x61 + _x2*_x29*_x41 + theta1_d*theta1_d*(-_x1*r_base + x*_x1 + z*_x2 + _x1*r_tcp)
+    del _x1, _x2, _x29
     _x63 = _x5*theta2_d
     _x64 = 1.7320508075688772*_x51
     _x65 = 2.0*_x61
     _x66 = 0.8660254037844386*y
     _x67 = 0.5*x
     _x80 = _x62 + (_x4*r_tcp + z*_x5 - _x4*r_base - _x4*_x67 + _x4*_x66)*theta2_d*theta2_d - _x63*_x41 - _x4*_x65*theta2_d + _x64*_x63
+    del _x4, _x5, _x63
     _x68 = _x8*theta3_d
     _x81 = (z*_x8 - _x7*r_base + _x7*r_tcp - _x7*_x67 - _x7*_x66)*theta3_d*theta3_d - _x68*_x41 - _x7*_x65*theta3_d + _x62 - _x64*_x68
+    del _x7, _x8, _x62, _x64, _x65, _x66, _x67, _x68
     _x82 = -(_x81*_x49 + _x80*_x46 + _x79*_x43)
+    del _x43, _x46, _x49
     _x83 = _x82 + _x50*theta3_dd + _x47*theta2_dd + _x44*theta1_dd
+    del _x82
     _x84 = m_platform + 1.5*m_rod + m_fork1 + m_handle + m_fork2
     _x72 = numpy.sin(psi1)
     _x70 = numpy.cos(psi2)
@@ -1152,6 +1338,7 @@ def inverse_dynamics(q, p, qw, qd, qwd, qdd, qwdd, *, r_base=0.07, r_tcp=0.025, 
     _x69 = numpy.cos(psi1)
     _x73 = numpy.sin(psi2)
     _x87 = _x73*_x71
+    del _x71
     _x88 = -_x69*_x87
     _x89 = _x72*psi1_d
     _x90 = _x69*_x85
@@ -1160,22 +1347,35 @@ def inverse_dynamics(q, p, qw, qd, qwd, qdd, qwdd, *, r_base=0.07, r_tcp=0.025, 
     _x93 = -_x90*psi1_d + _x92*_x87
     _x94 = _x93*psi1_d + _x91*psi2_d + _x86*psi1_dd + _x88*psi2_dd + _x83*_x84
     _x95 = -(_x81*_x59 + _x80*_x56 + _x79*_x53)
+    del _x53, _x56, _x59
     _x96 = _x95 + _x60*theta3_dd + _x57*theta2_dd + _x54*theta1_dd
+    del _x95
     _x97 = 9.81*m_handle
     _x98 = _x96*_x84 + 9.81*m_fork2 + _x85*psi2_dd + 9.81*m_platform - _x87*psi2_d*psi2_d + 14.715*m_rod + _x97 + 9.81*m_fork1
     _x99 = -(_x81*_x39 + _x80*_x37 + _x79*_x35)
+    del _x35, _x37, _x39, _x79, _x80, _x81
     _x100 = _x99 + _x38*theta2_dd + _x40*theta3_dd + _x36*theta1_dd
+    del _x99
     _x101 = -_x69*_x85
     _x102 = _x72*_x87
     _x103 = _x69*_x87
+    del _x69
     _x104 = _x103*psi1_d + _x92*_x85
+    del _x92
     _x105 = _x89*_x85 + _x103*psi2_d
+    del _x89
     _x106 = _x105*psi1_d + _x104*psi2_d + _x102*psi2_dd + _x101*psi1_dd + _x100*_x84
+    del _x84
     _x118 = a*a
     _x119 = 0.3333333333333333*m_arm*_x118 + gear*gear*J_rotor + 0.5*m_rod*_x118
+    del _x118
     _x120 = 4.905*a
     _x121 = m_arm*_x120
     _x122 = m_rod*_x120
+    _out_tau[..., 0] = _x94*_x44 + _x0*_x121 + _x119*theta1_dd + _x0*_x122 + _x98*_x54 + _x106*_x36
+    _out_tau[..., 1] = _x3*_x122 + _x3*_x121 + _x119*theta2_dd + _x98*_x57 + _x94*_x47 + _x106*_x38
+    _out_tau[..., 2] = _x6*_x122 + _x106*_x40 + _x119*theta3_dd + _x98*_x60 + _x6*_x121 + _x94*_x50
+    del _x0, _x3, _x6, _x36, _x44, _x54, _x47, _x50, _x38, _x40, _x57, _x60, _x94, _x98, _x106, _x119, _x120, _x121, _x122
     _x74 = 0.00013333333333333334*m_fork2
     _x78 = 5e-05*m_handle
     _x75 = 0.0005583333333333333*m_handle + h*h*m_handle
@@ -1184,21 +1384,24 @@ def inverse_dynamics(q, p, qw, qd, qwd, qdd, qwdd, *, r_base=0.07, r_tcp=0.025, 
     _x107 = _x75*_x76 + _x77*_x75
     _x108 = _x73*_x78
     _x109 = _x41*_x103 + _x72*_x51*_x87
+    del _x103
     _x110 = _x72*_x41*_x85 - _x51*_x90
+    del _x72, _x90
     _x111 = _x51*_x93 + _x41*_x105
+    del _x93, _x105
     _x112 = 2.0*_x73*_x70
     _x113 = psi1_d*(-(_x77*_x75 + _x75*_x76 + _x74)*_x112 + (_x74 + _x78)*_x112)
+    del _x75, _x76, _x77, _x112
     _x114 = _x70*_x78
-    _x115 = _x114*psi3_d
-    _x116 = _x61*_x87
-    _x117 = -_x116*psi2_d + _x51*_x91 + _x41*_x104
-    _out_tau = numpy.zeros(batch + (6,))
-    _out_tau[..., 0] = _x94*_x44 + _x0*_x121 + _x119*theta1_dd + _x0*_x122 + _x98*_x54 + _x106*_x36
-    _out_tau[..., 1] = _x3*_x122 + _x3*_x121 + _x119*theta2_dd + _x98*_x57 + _x94*_x47 + _x106*_x38
-    _out_tau[..., 2] = _x6*_x122 + _x106*_x40 + _x119*theta3_dd + _x98*_x60 + _x6*_x121 + _x94*_x50
-    _out_tau[..., 3] = _x100*_x101 + _x113*psi2_d - 0.5*(_x111 + _x110*psi1_d + _x109*psi2_d) + _x83*_x86 + psi1_dd*((_x74 + _x78)*_x73*_x73 + _x70*_x70*(_x107 + _x74)) + _x108*psi3_dd + _x115*psi2_d + _x111
-    _out_tau[..., 4] = _x100*_x102 + _x83*_x88 + h*_x70*_x97 + _x107*psi2_dd + _x96*_x85 - 0.5*(_x117 + (_x109 + _x113 + _x115)*psi1_d + _x115*psi1_d + (_x110 - _x116)*psi2_d) + _x117
     _out_tau[..., 5] = _x108*psi1_dd + _x78*psi3_dd + _x114*psi1_d*psi2_d
+    _x115 = _x114*psi3_d
+    _out_tau[..., 3] = _x100*_x101 + _x113*psi2_d - 0.5*(_x111 + _x110*psi1_d + _x109*psi2_d) + _x83*_x86 + psi1_dd*((_x74 + _x78)*_x73*_x73 + _x70*_x70*(_x107 + _x74)) + _x108*psi3_dd + _x115*psi2_d + _x111
+    del _x86, _x73, _x101, _x74, _x78, _x108, _x111, _x114
+    _x116 = _x61*_x87
+    del _x61, _x87
+    _x117 = -_x116*psi2_d + _x51*_x91 + _x41*_x104
+    _out_tau[..., 4] = _x100*_x102 + _x83*_x88 + h*_x70*_x97 + _x107*psi2_dd + _x96*_x85 - 0.5*(_x117 + (_x109 + _x113 + _x115)*psi1_d + _x115*psi1_d + (_x110 - _x116)*psi2_d) + _x117
+    del _x41, _x51, _x83, _x70, _x85, _x88, _x91, _x96, _x97, _x100, _x102, _x104, _x107, _x109, _x110, _x113, _x115, _x116, _x117
     return _out_tau
 
 
@@ -1280,6 +1483,7 @@ def forward_dynamics(q, p, qw, qd, qwd, tau, tauw, *, r_base=0.07, r_tcp=0.025, 
     tau_psi1 = tauw[..., 0]
     tau_psi2 = tauw[..., 1]
     tau_psi3 = tauw[..., 2]
+    _out_qdd = numpy.zeros(batch + (6,))
     _x0 = numpy.cos(theta1)
     _x1 = a*_x0
     _x2 = a*numpy.sin(theta1)
@@ -1300,59 +1504,83 @@ def forward_dynamics(q, p, qw, qd, qwd, tau, tauw, *, r_base=0.07, r_tcp=0.025, 
     _x7 = a*_x6
     _x23 = 0.5*_x7
     _x25 = y + _x17 - _x18 + 1.7320508075688772*_x23
+    del _x17, _x18
     _x8 = a*numpy.sin(theta3)
     _x26 = z - _x8
     _x30 = -_x20*_x25 + _x26*_x19
     _x15 = x - _x13 + _x14
+    del _x14, _x13
     _x16 = _x12 + _x15
+    del _x12
     _x24 = _x23 + _x15
+    del _x23, _x15
     _x31 = -(-_x10*_x25 + y*_x26)
     _x32 = -_x10*_x19 + y*_x20
     _x33 = _x32*_x24 + _x16*_x31 + _x9*_x30
     _x34 = 1.0/_x33
+    del _x33
     _x35 = _x30*_x34
+    del _x30
     _x36 = _x11*_x35
     _x42 = -(-_x24*_x20 + _x16*_x26)
     _x43 = _x42*_x34
+    del _x42
     _x44 = _x11*_x43
     _x52 = -_x19*_x24 + _x16*_x25
     _x53 = _x34*_x52
+    del _x52
     _x54 = _x11*_x53
+    del _x11
     _x79 = m_platform + 1.5*m_rod + m_fork1 + m_handle + m_fork2
     _x80 = _x79*_x36
     _x81 = _x79*_x44
     _x82 = _x54*_x79
     _x83 = a*a
     _x84 = 0.3333333333333333*m_arm*_x83 + gear*gear*J_rotor + 0.5*m_rod*_x83
+    del _x83
     _x85 = _x84 + _x54*_x82 + _x44*_x81 + _x36*_x80
+    del _x80, _x81, _x82
     _x86 = 1.0/_x85
+    del _x85
     _x21 = 0.5*_x5
     _x22 = _x4*_x20 - 1.7320508075688772*_x21*_x19 + _x16*_x21
+    del _x21
     _x37 = _x31*_x34
+    del _x31
     _x38 = _x22*_x37
     _x87 = _x79*_x38
     _x45 = -_x10*_x24 + _x9*_x26
     _x46 = _x45*_x34
+    del _x45
     _x47 = _x22*_x46
     _x88 = _x79*_x47
     _x55 = -(-y*_x24 + _x9*_x25)
     _x56 = _x55*_x34
+    del _x55
     _x57 = _x22*_x56
+    del _x22
     _x89 = _x57*_x79
     _x90 = _x54*_x89 + _x44*_x88 + _x36*_x87
     _x92 = _x86*_x90
     _x27 = 0.5*_x8
     _x28 = _x7*_x26 + _x27*_x24 + 1.7320508075688772*_x27*_x25
+    del _x25, _x26, _x24, _x27
     _x39 = _x32*_x34
+    del _x32
     _x40 = _x28*_x39
     _x95 = _x79*_x40
     _x48 = -(-_x16*_x10 + _x9*_x20)
+    del _x10, _x20
     _x49 = _x34*_x48
+    del _x48
     _x50 = _x28*_x49
     _x96 = _x79*_x50
     _x58 = -y*_x16 + _x9*_x19
+    del _x9, _x19, _x16
     _x59 = _x58*_x34
+    del _x34, _x58
     _x60 = _x28*_x59
+    del _x28
     _x97 = _x60*_x79
     _x98 = _x54*_x97 + _x44*_x96 + _x36*_x95
     _x100 = _x86*_x98
@@ -1367,6 +1595,7 @@ def forward_dynamics(q, p, qw, qd, qwd, tau, tauw, *, r_base=0.07, r_tcp=0.025, 
     _x112 = _x86*_x109
     _x73 = numpy.sin(psi2)
     _x121 = _x73*_x71
+    del _x71
     _x122 = _x72*_x121
     _x123 = -_x69*_x121
     _x124 = _x54*_x106 + _x123*_x44 + _x122*_x36
@@ -1377,18 +1606,23 @@ def forward_dynamics(q, p, qw, qd, qwd, tau, tauw, *, r_base=0.07, r_tcp=0.025, 
     _x51 = _x50*theta3_d + _x47*theta2_d + _x44*theta1_d
     _x62 = _x51*_x51 + _x61*_x61 + _x41*_x41
     _x136 = _x62 - _x1*_x29*_x61 + _x2*_x29*_x41 + theta1_d*theta1_d*(-_x1*r_base + x*_x1 + z*_x2 + _x1*r_tcp)
+    del _x1, _x2, _x29
     _x63 = _x5*theta2_d
     _x64 = 1.7320508075688772*_x51
     _x65 = 2.0*_x61
     _x66 = 0.8660254037844386*y
     _x67 = 0.5*x
     _x137 = _x62 + (_x4*r_tcp + z*_x5 - _x4*r_base - _x4*_x67 + _x4*_x66)*theta2_d*theta2_d - _x63*_x41 - _x4*_x65*theta2_d + _x64*_x63
+    del _x4, _x5, _x63
     _x68 = _x8*theta3_d
     _x138 = (z*_x8 - _x7*r_base + _x7*r_tcp - _x7*_x67 - _x7*_x66)*theta3_d*theta3_d - _x68*_x41 - _x7*_x65*theta3_d + _x62 - _x64*_x68
+    del _x7, _x8, _x62, _x64, _x65, _x66, _x67, _x68
     _x139 = -(_x138*_x59 + _x137*_x56 + _x136*_x53)
+    del _x53, _x56, _x59
     _x140 = 9.81*m_handle
     _x141 = _x139*_x79 + 9.81*m_platform - _x121*psi2_d*psi2_d + 14.715*m_rod + 9.81*m_fork2 + _x140 + 9.81*m_fork1
     _x142 = -(_x138*_x49 + _x137*_x46 + _x136*_x43)
+    del _x43, _x46, _x49
     _x143 = _x72*psi1_d
     _x144 = _x69*_x106
     _x145 = _x143*_x121 - _x144*psi2_d
@@ -1396,80 +1630,121 @@ def forward_dynamics(q, p, qw, qd, qwd, tau, tauw, *, r_base=0.07, r_tcp=0.025, 
     _x147 = -_x144*psi1_d + _x146*_x121
     _x148 = _x142*_x79 + _x145*psi2_d + _x147*psi1_d
     _x149 = -(_x138*_x39 + _x137*_x37 + _x136*_x35)
+    del _x35, _x37, _x39, _x136, _x137, _x138
     _x150 = _x69*_x121
+    del _x69
     _x151 = _x150*psi1_d + _x146*_x106
+    del _x146
     _x152 = _x143*_x106 + _x150*psi2_d
+    del _x143
     _x153 = _x149*_x79 + _x151*psi2_d + _x152*psi1_d
+    del _x79
     _x164 = 4.905*a
     _x165 = m_arm*_x164
     _x166 = m_rod*_x164
+    del _x164
     _x171 = tau_theta1 - (_x0*_x165 + _x0*_x166 + _x141*_x54 + _x148*_x44 + _x153*_x36)
+    del _x0, _x36, _x44, _x54
     _x75 = 0.0005583333333333333*m_handle + h*h*m_handle
     _x76 = numpy.cos(psi3)**2
     _x77 = numpy.sin(psi3)**2
     _x110 = _x75*_x76 + _x77*_x75
     _x126 = _x123*_x47 + _x57*_x106 + _x122*_x38
     _x127 = -_x125*_x90 + _x126
+    del _x126
     _x91 = _x84 + _x47*_x88 + _x57*_x89 + _x38*_x87
+    del _x87, _x88, _x89
     _x93 = -_x92*_x90 + _x91
+    del _x91
     _x94 = 1.0/_x93
+    del _x93
     _x128 = _x94*_x127
     _x101 = _x57*_x97 + _x47*_x96 + _x38*_x95
     _x102 = -_x100*_x90 + _x101
+    del _x101
     _x129 = _x60*_x106 + _x123*_x50 + _x122*_x40
     _x130 = -(_x128*_x102 + _x125*_x98) + _x129
+    del _x129
     _x99 = _x84 + _x60*_x97 + _x50*_x96 + _x40*_x95
+    del _x84, _x95, _x96, _x97
     _x103 = _x94*_x102
     _x104 = -(_x103*_x102 + _x100*_x98) + _x99
+    del _x99
     _x105 = 1.0/_x104
+    del _x104
     _x131 = _x105*_x130
     _x113 = _x108*_x47 + _x107*_x38
     _x114 = -_x112*_x90 + _x113
+    del _x90, _x113
     _x115 = _x94*_x114
     _x116 = _x108*_x50 + _x107*_x40
     _x117 = -(_x115*_x102 + _x112*_x98) + _x116
+    del _x98, _x102, _x116
     _x132 = -(_x131*_x117 + _x128*_x114 + _x125*_x109)
     _x74 = 0.00013333333333333334*m_fork2
     _x78 = 5e-05*m_handle
     _x111 = (_x74 + _x78)*_x73*_x73 + _x70*_x70*(_x110 + _x74)
     _x118 = _x105*_x117
     _x119 = -(_x118*_x117 + _x115*_x114 + _x112*_x109) + _x111
+    del _x109, _x114, _x117, _x111
     _x120 = 1.0/_x119
+    del _x119
     _x133 = _x120*_x132
     _x134 = -(_x132*_x133 + _x130*_x131 + _x128*_x127 + _x125*_x124) + _x110
+    del _x124, _x110, _x127, _x130
     _x135 = 1.0/_x134
+    del _x134
     _x154 = _x73*_x78
     _x167 = _x120*_x154
     _x168 = -_x132*_x167
+    del _x132
     _x169 = _x135*_x168
     _x155 = _x41*_x150 + _x72*_x51*_x121
+    del _x150
     _x156 = _x72*_x41*_x106 - _x51*_x144
+    del _x72, _x144
     _x158 = 2.0*_x73*_x70
+    del _x73
     _x159 = psi1_d*(-(_x77*_x75 + _x75*_x76 + _x74)*_x158 + (_x74 + _x78)*_x158)
+    del _x75, _x76, _x77, _x74, _x158
     _x160 = _x70*_x78
     _x161 = _x160*psi3_d
     _x162 = _x61*_x121
+    del _x121, _x61
     _x163 = -_x162*psi2_d + _x51*_x145 + _x41*_x151
+    del _x145, _x151
     _x172 = tau_theta2 - (_x3*_x165 + _x141*_x57 + _x148*_x47 + _x3*_x166 + _x153*_x38) - _x171*_x92
+    del _x3, _x38, _x47, _x57
     _x173 = tau_theta3 - (_x6*_x166 + _x6*_x165 + _x141*_x60 + _x148*_x50 + _x153*_x40) - (_x171*_x100 + _x172*_x103)
+    del _x6, _x40, _x50, _x60, _x141, _x148, _x153, _x165, _x166
     _x157 = _x51*_x147 + _x41*_x152
+    del _x41, _x51, _x147, _x152
     _x174 = -(_x173*_x118 + _x172*_x115 + _x171*_x112) - (_x157 + _x161*psi2_d + _x159*psi2_d - 0.5*(_x155*psi2_d + _x156*psi1_d + _x157) + _x142*_x108 + _x149*_x107) + tau_psi1
+    del _x107, _x108, _x157
     _x175 = -(h*_x70*_x140 + _x163 - 0.5*((-_x162 + _x156)*psi2_d + _x161*psi1_d + (_x161 + _x159 + _x155)*psi1_d + _x163) + _x139*_x106 + _x142*_x123 + _x149*_x122) - (_x174*_x133 + _x173*_x131 + _x172*_x128 + _x171*_x125) + tau_psi2
+    del _x70, _x106, _x122, _x123, _x139, _x140, _x142, _x149, _x155, _x156, _x159, _x161, _x162, _x163
     _x170 = _x78 - (_x154*_x167 + _x169*_x168)
+    del _x78, _x154, _x168
     _x176 = -(_x169*_x175 + _x174*_x167) - _x160*psi1_d*psi2_d + tau_psi3
+    del _x160
     _x177 = _x176/_x170
-    _x178 = -_x169*_x177 + _x135*_x175
-    _x179 = -(_x177*_x167 + _x178*_x133) + _x120*_x174
-    _x180 = -(_x178*_x131 + _x179*_x118) + _x105*_x173
-    _x181 = -(_x178*_x128 + _x179*_x115 + _x180*_x103) + _x94*_x172
-    _x182 = -(_x178*_x125 + _x179*_x112 + _x180*_x100 + _x181*_x92) + _x86*_x171
-    _out_qdd = numpy.zeros(batch + (6,))
-    _out_qdd[..., 0] = _x182
-    _out_qdd[..., 1] = _x181
-    _out_qdd[..., 2] = _x180
-    _out_qdd[..., 3] = _x179
-    _out_qdd[..., 4] = _x178
     _out_qdd[..., 5] = _x177
+    del _x170, _x176
+    _x178 = -_x169*_x177 + _x135*_x175
+    _out_qdd[..., 4] = _x178
+    del _x135, _x169, _x175
+    _x179 = -(_x177*_x167 + _x178*_x133) + _x120*_x174
+    _out_qdd[..., 3] = _x179
+    del _x120, _x133, _x167, _x174, _x177
+    _x180 = -(_x178*_x131 + _x179*_x118) + _x105*_x173
+    _out_qdd[..., 2] = _x180
+    del _x105, _x131, _x118, _x173
+    _x181 = -(_x178*_x128 + _x179*_x115 + _x180*_x103) + _x94*_x172
+    _out_qdd[..., 1] = _x181
+    del _x94, _x128, _x103, _x115, _x172
+    _x182 = -(_x178*_x125 + _x179*_x112 + _x180*_x100 + _x181*_x92) + _x86*_x171
+    _out_qdd[..., 0] = _x182
+    del _x86, _x92, _x100, _x112, _x125, _x171, _x178, _x179, _x180, _x181, _x182
     return _out_qdd
 
 
@@ -1547,6 +1822,9 @@ def operational_space(q, p, qw, qd, qwd, *, r_base=0.07, r_tcp=0.025, a=0.1, m_a
     psi1_d = qwd[..., 0]
     psi2_d = qwd[..., 1]
     psi3_d = qwd[..., 2]
+    _out_Mx = numpy.zeros(batch + (6, 6))
+    _out_Vx = numpy.zeros(batch + (6,))
+    _out_Gx = numpy.zeros(batch + (6,))
     _x0 = numpy.cos(theta1)
     _x1 = a*_x0
     _x2 = a*numpy.sin(theta1)
@@ -1566,18 +1844,25 @@ def operational_space(q, p, qw, qd, qwd, *, r_base=0.07, r_tcp=0.025, a=0.1, m_a
     _x16 = x - _x14 + _x15
     _x17 = _x13 + _x16
     _x18 = 1.7320508075688772*_x15
+    del _x15
     _x19 = 1.7320508075688772*_x14
+    del _x14
     _x20 = _x19 - _x18 + y - 1.7320508075688772*_x13
+    del _x13
     _x21 = z - _x5
     _x22 = 0.5*_x5
     _x23 = _x4*_x21 - 1.7320508075688772*_x22*_x20 + _x17*_x22
+    del _x22
     _x24 = 1.0/_x23
     _x25 = 0.5*_x7
     _x26 = _x25 + _x16
+    del _x16
     _x27 = y + _x18 - _x19 + 1.7320508075688772*_x25
+    del _x18, _x19, _x25
     _x28 = z - _x8
     _x29 = 0.5*_x8
     _x30 = _x7*_x28 + _x29*_x26 + 1.7320508075688772*_x29*_x27
+    del _x29
     _x31 = 1.0/_x30
     _x32 = 2.0*theta1_d
     _x33 = -_x21*_x27 + _x28*_x20
@@ -1585,33 +1870,55 @@ def operational_space(q, p, qw, qd, qwd, *, r_base=0.07, r_tcp=0.025, a=0.1, m_a
     _x35 = -_x10*_x20 + y*_x21
     _x36 = _x35*_x26 + _x17*_x34 + _x9*_x33
     _x37 = 1.0/_x36
+    del _x36
     _x38 = _x33*_x37
+    del _x33
     _x39 = _x11*_x38
+    del _x38
     _x40 = _x34*_x37
+    del _x34
     _x41 = _x23*_x40
+    del _x40
     _x42 = _x35*_x37
+    del _x35
     _x43 = _x30*_x42
+    del _x42
     _x44 = _x43*theta3_d + _x41*theta2_d + _x39*theta1_d
+    del _x39, _x41, _x43
     _x45 = -(-_x26*_x21 + _x17*_x28)
     _x46 = _x45*_x37
+    del _x45
     _x47 = _x11*_x46
+    del _x46
     _x48 = -_x10*_x26 + _x9*_x28
     _x49 = _x48*_x37
+    del _x48
     _x50 = _x23*_x49
+    del _x49
     _x51 = -(-_x17*_x10 + _x9*_x21)
     _x52 = _x51*_x37
+    del _x51
     _x53 = _x30*_x52
+    del _x52
     _x54 = _x50*theta2_d + _x53*theta3_d + _x47*theta1_d
+    del _x47, _x50, _x53
     _x55 = -_x20*_x26 + _x17*_x27
     _x56 = _x55*_x37
+    del _x55
     _x57 = _x11*_x56
+    del _x11, _x56
     _x58 = -(-y*_x26 + _x9*_x27)
     _x59 = _x58*_x37
+    del _x58
     _x60 = _x23*_x59
+    del _x23, _x59
     _x61 = -y*_x17 + _x9*_x20
     _x62 = _x61*_x37
+    del _x37, _x61
     _x63 = _x30*_x62
+    del _x30, _x62
     _x64 = _x63*theta3_d + _x60*theta2_d + _x57*theta1_d
+    del _x57, _x60, _x63
     _x65 = _x64*_x64 + _x54*_x54 + _x44*_x44
     _x66 = _x5*theta2_d
     _x67 = 1.7320508075688772*_x54
@@ -1630,14 +1937,19 @@ def operational_space(q, p, qw, qd, qwd, *, r_base=0.07, r_tcp=0.025, a=0.1, m_a
     _x80 = numpy.sin(psi3)**2
     _x81 = 5e-05*m_handle
     _x82 = _x12*_x9
+    del _x9
     _x83 = a*a
     _x84 = 0.3333333333333333*_x83*m_arm + gear*gear*J_rotor + 0.5*_x83*m_rod
+    del _x83
     _x85 = _x82*_x84
     _x86 = _x24*_x20
+    del _x20
     _x87 = _x86*_x84
     _x88 = _x31*_x27
+    del _x27
     _x89 = _x88*_x84
     _x90 = _x24*_x21
+    del _x21
     _x91 = _x90*_x84
     _x92 = psi2_d*psi2_d
     _x93 = psi1_d*psi2_d
@@ -1656,43 +1968,66 @@ def operational_space(q, p, qw, qd, qwd, *, r_base=0.07, r_tcp=0.025, a=0.1, m_a
     _x106 = h*_x73*_x105 + _x73*_x104
     _x107 = -_x99
     _x108 = _x65 - _x1*_x32*_x64 + _x2*_x32*_x44 + theta1_d*theta1_d*(-_x1*r_base + x*_x1 + z*_x2 + _x1*r_tcp)
+    del _x1, _x2, _x32
     _x109 = -_x12*_x108
+    del _x108
     _x110 = _x84*_x109
+    del _x109
     _x111 = _x65 + (_x7*r_tcp + z*_x8 - _x7*r_base - _x7*_x70 - _x7*_x69)*theta3_d*theta3_d - _x71*_x44 - _x7*_x68*theta3_d - _x71*_x67
+    del _x7, _x8, _x71
     _x112 = -_x31*_x111
+    del _x111
     _x113 = _x84*_x112
     _x114 = 4.905*a
     _x115 = m_arm*_x114
     _x116 = m_rod*_x114
+    del _x114
     _x117 = _x0*_x116 + _x0*_x115
+    del _x0
     _x118 = _x3*_x116 + _x3*_x115
+    del _x3
     _x119 = _x6*_x116 + _x6*_x115
+    del _x6, _x115, _x116
     _x120 = 1.0 + _x96*_x96 + _x98*_x98
     _x121 = 1.0/_x120
+    del _x120
     _x122 = _x98*_x121
     _x123 = _x96*_x121
     _x124 = psi1_d*psi1_d
     _x125 = 2.0*_x93*_x102 + _x124*_x100 + _x92*_x100
+    del _x100, _x102
     _x126 = _x93*_x75
     _x127 = 2.0*_x126*_x97 - _x124*_x95 - _x92*_x95
+    del _x95, _x124
     _x128 = _x92*(-_x76*_x104 - _x105*_x97)
+    del _x97, _x104, _x105
     _x129 = psi3_d*psi2_d
     _x130 = _x73*_x129
     _x131 = _x76*_x129
+    del _x129
     _x132 = psi1_d*psi3_d
     _x133 = -_x126 - _x132*_x94 + _x75*_x131
+    del _x126
     _x134 = _x93*_x72 - _x132*_x99 - _x72*_x131
+    del _x99, _x131, _x132
     _x135 = y*_x12
     _x136 = _x12*_x10
+    del _x10, _x12
     _x137 = _x24*_x17
+    del _x17
     _x138 = _x31*_x26
+    del _x26
     _x139 = _x31*_x28
+    del _x28, _x31
     _x140 = _x65 + (_x4*r_tcp + z*_x5 - _x4*r_base - _x4*_x70 + _x4*_x69)*theta2_d*theta2_d - _x66*_x44 - _x4*_x68*theta2_d + _x67*_x66
+    del _x4, _x5, _x65, _x66, _x67, _x68, _x69, _x70
     _x141 = -_x24*_x140
+    del _x24, _x140
     _x142 = m_platform + 1.5*m_rod + m_fork1 + m_handle + m_fork2
     _x143 = _x73*_x74
     _x144 = -_x72*_x143
     _x145 = _x74*_x76
+    del _x74
     _x146 = _x75*_x145
     _x147 = -_x75*_x143
     _x148 = -_x72*_x145
@@ -1701,9 +2036,11 @@ def operational_space(q, p, qw, qd, qwd, *, r_base=0.07, r_tcp=0.025, a=0.1, m_a
     _x151 = _x142 + _x138*_x138*_x84 + _x137*_x137*_x84 + _x82*_x82*_x84
     _x152 = _x89*_x138 + _x87*_x137 + _x85*_x135
     _x153 = _x91*_x137 + _x139*_x138*_x84 + _x85*_x136
+    del _x85
     _x154 = _x142 + _x88*_x88*_x84 + _x86*_x86*_x84 + _x135*_x135*_x84
     _x155 = _x89*_x139 + _x91*_x86 + _x135*_x136*_x84
     _x156 = _x142 + _x139*_x139*_x84 + _x90*_x90*_x84 + _x136*_x136*_x84
+    del _x142
     _x157 = (_x77 + _x81)*_x76*_x76 + _x73*_x73*(_x149 + _x77)
     _x158 = _x75*_x143
     _x159 = _x72*_x145
@@ -1713,46 +2050,68 @@ def operational_space(q, p, qw, qd, qwd, *, r_base=0.07, r_tcp=0.025, a=0.1, m_a
     _x163 = _x146*psi1_d - _x162*psi2_d
     _x164 = -_x162*psi1_d + _x146*psi2_d
     _x165 = _x44*_x159 + _x146*_x54
+    del _x159
     _x166 = -_x54*_x162 + _x44*_x158
+    del _x158, _x162
     _x167 = _x54*_x164 + _x44*_x161
     _x168 = _x81*_x73
     _x169 = _x168*psi3_d
     _x170 = 2.0*_x73*_x76
     _x171 = psi1_d*(-(_x80*_x78 + _x79*_x78 + _x77)*_x170 + (_x77 + _x81)*_x170)
+    del _x77, _x78, _x79, _x80, _x170
     _x172 = _x64*_x145
+    del _x64
     _x173 = -_x172*psi2_d + _x54*_x163 + _x44*_x160
+    del _x44, _x54
     _x174 = 9.81*m_handle
     _x175 = _x161*psi1_d + _x160*psi2_d - _x113*_x138 - _x137*_x84*_x141 - _x110*_x82
+    del _x84, _x160, _x161
     _x176 = _x119*_x138 + _x118*_x137 + _x117*_x82
+    del _x82, _x137, _x138
     _x177 = _x164*psi1_d + _x163*psi2_d - _x89*_x112 - _x87*_x141 - _x110*_x135
+    del _x87, _x89, _x112, _x163, _x164
     _x178 = _x118*_x86 + _x119*_x88 + _x117*_x135
+    del _x86, _x88, _x135
     _x179 = -_x110*_x136 - _x91*_x141 - _x113*_x139 - _x92*_x145
+    del _x91, _x92, _x110, _x113, _x141, _x145
     _x180 = _x174 + 9.81*m_fork2 + 14.715*m_rod + 9.81*m_platform + _x119*_x139 + _x118*_x90 + 9.81*m_fork1 + _x117*_x136
+    del _x90, _x117, _x118, _x119, _x136, _x139
     _x181 = _x171*psi2_d - 0.5*(_x165*psi2_d + _x166*psi1_d + _x167) + _x169*psi2_d + _x167
+    del _x167
     _x182 = -0.5*(_x169*psi1_d + (-_x172 + _x166)*psi2_d + psi1_d*(_x169 + _x171 + _x165) + _x173) + _x173
+    del _x165, _x166, _x169, _x171, _x172, _x173
     _x183 = h*_x73*_x174
+    del _x73, _x174
     _x184 = _x93*_x168
+    del _x93, _x168
     _x185 = (_x101*_x96 + _x98*_x103)*_x121
     _x186 = -_x185
     _x187 = _x101 - _x96*_x185
+    del _x101
     _x188 = _x103 - _x98*_x185
+    del _x103
     _x189 = _x122*_x106
     _x190 = -_x189
     _x191 = -_x96*_x189
     _x192 = _x106 - _x98*_x189
+    del _x106
     _x193 = _x122*_x72
     _x194 = -_x193
     _x195 = -_x96*_x193
     _x196 = _x72 - _x98*_x193
+    del _x72
     _x197 = _x122*_x75
+    del _x122
     _x198 = -_x197
     _x199 = -_x96*_x197
     _x200 = _x75 - _x98*_x197
+    del _x75
     _x201 = -_x123
     _x202 = 1.0 - _x123*_x96
     _x203 = -_x123*_x98
     _x204 = (_x151 + _x96*_x144 + _x98*_x146)*_x121
     _x205 = -_x204 + _x151
+    del _x151
     _x206 = _x144 - _x96*_x204
     _x207 = _x146 - _x98*_x204
     _x208 = (_x152 + _x96*_x147 + _x98*_x148)*_x121
@@ -1765,587 +2124,1017 @@ def operational_space(q, p, qw, qd, qwd, *, r_base=0.07, r_tcp=0.025, a=0.1, m_a
     _x215 = _x143 - _x98*_x212
     _x216 = _x121*(_x144 + _x96*_x157)
     _x217 = -_x216 + _x144
+    del _x144
     _x218 = _x157 - _x96*_x216
+    del _x157
     _x219 = -_x98*_x216
     _x220 = _x121*(_x146 + _x98*_x149)
     _x221 = -_x220 + _x146
+    del _x146
     _x222 = -_x96*_x220
     _x223 = _x149 - _x98*_x220
+    del _x149
     _x224 = _x123*_x150
     _x225 = -_x224
     _x226 = _x150 - _x96*_x224
     _x227 = -_x98*_x224
     _x228 = _x121*(_x175 + _x96*_x181 + _x98*_x182)
     _x229 = -_x228 + _x175
+    del _x175
     _x230 = _x181 - _x96*_x228
+    del _x181
     _x231 = _x182 - _x98*_x228
+    del _x182
     _x232 = _x121*(_x176 + _x98*_x183)
     _x233 = -_x232 + _x176
+    del _x176
     _x234 = -_x96*_x232
     _x235 = _x183 - _x98*_x232
+    del _x183
     _x236 = 1.0 + _x188*_x188 + _x187*_x187 + _x186*_x186
     _x237 = 1.0/_x236
+    del _x236
     _x238 = _x237*(_x192*_x188 + _x191*_x187 + _x190*_x186)
     _x239 = -_x238*_x186 + _x190
+    del _x190
     _x240 = -_x238
     _x241 = -_x238*_x187 + _x191
+    del _x191
     _x242 = -_x238*_x188 + _x192
+    del _x192
     _x243 = _x237*(_x188*_x196 + _x187*_x195 + _x194*_x186)
     _x244 = -_x243*_x186 + _x194
+    del _x194
     _x245 = -_x243
     _x246 = -_x243*_x187 + _x195
+    del _x195
     _x247 = -_x243*_x188 + _x196
+    del _x196
     _x248 = _x237*(_x200*_x188 + _x199*_x187 + _x198*_x186)
     _x249 = -_x248*_x186 + _x198
+    del _x198
     _x250 = -_x248
     _x251 = -_x248*_x187 + _x199
+    del _x199
     _x252 = -_x248*_x188 + _x200
+    del _x200
     _x253 = _x237*(_x203*_x188 + _x202*_x187 + _x201*_x186)
     _x254 = -_x253*_x186 + _x201
+    del _x201
     _x255 = -_x253
     _x256 = -_x253*_x187 + _x202
+    del _x202
     _x257 = -_x253*_x188 + _x203
+    del _x203
     _x258 = _x237*(_x188*_x207 + _x187*_x206 + _x152 + _x205*_x186)
     _x259 = -_x258*_x186 + _x205
+    del _x205
     _x260 = -_x258 + _x152
+    del _x152
     _x261 = -_x258*_x187 + _x206
+    del _x206
     _x262 = -_x258*_x188 + _x207
+    del _x207
     _x263 = _x237*(_x188*_x211 + _x187*_x210 + _x154 + _x186*_x209)
     _x264 = -_x263*_x186 + _x209
+    del _x209
     _x265 = -_x263 + _x154
+    del _x154
     _x266 = -_x263*_x187 + _x210
+    del _x210
     _x267 = -_x263*_x188 + _x211
+    del _x211
     _x268 = _x237*(_x188*_x215 + _x187*_x214 + _x155 + _x186*_x213)
     _x269 = -_x268*_x186 + _x213
+    del _x213
     _x270 = -_x268 + _x155
     _x271 = -_x268*_x187 + _x214
+    del _x214
     _x272 = -_x268*_x188 + _x215
+    del _x215
     _x273 = _x237*(_x219*_x188 + _x218*_x187 + _x147 + _x217*_x186)
     _x274 = -_x273*_x186 + _x217
+    del _x217
     _x275 = -_x273 + _x147
+    del _x147
     _x276 = -_x273*_x187 + _x218
+    del _x218
     _x277 = -_x273*_x188 + _x219
+    del _x219
     _x278 = _x237*(_x223*_x188 + _x222*_x187 + _x148 + _x221*_x186)
     _x279 = -_x278*_x186 + _x221
+    del _x221
     _x280 = -_x278 + _x148
+    del _x148
     _x281 = -_x278*_x187 + _x222
+    del _x222
     _x282 = -_x278*_x188 + _x223
+    del _x223
     _x283 = _x237*(_x227*_x188 + _x226*_x187 + _x225*_x186)
     _x284 = -_x283*_x186 + _x225
+    del _x225
     _x285 = -_x283
     _x286 = -_x283*_x187 + _x226
+    del _x226
     _x287 = -_x283*_x188 + _x227
+    del _x227
     _x288 = _x237*(_x231*_x188 + _x230*_x187 + _x177 + _x229*_x186)
     _x289 = -_x288*_x186 + _x229
+    del _x229
     _x290 = -_x288 + _x177
+    del _x177
     _x291 = -_x288*_x187 + _x230
+    del _x230
     _x292 = -_x288*_x188 + _x231
+    del _x231
     _x293 = _x237*(_x235*_x188 + _x234*_x187 + _x178 + _x233*_x186)
     _x294 = -_x293*_x186 + _x233
+    del _x233
     _x295 = -_x293 + _x178
+    del _x178
     _x296 = -_x293*_x187 + _x234
+    del _x234
     _x297 = -_x293*_x188 + _x235
+    del _x235
     _x298 = 1.0 + _x241*_x241 + _x242*_x242 + _x240*_x240 + _x239*_x239
     _x299 = 1.0/_x298
+    del _x298
     _x300 = (_x247*_x242 + _x246*_x241 + _x245*_x240 + _x244*_x239)*_x299
     _x301 = -_x239*_x300 + _x244
+    del _x244
     _x302 = -_x240*_x300 + _x245
+    del _x245
     _x303 = -_x300
     _x304 = -_x241*_x300 + _x246
+    del _x246
     _x305 = -_x242*_x300 + _x247
+    del _x247
     _x306 = (_x252*_x242 + _x251*_x241 + _x250*_x240 + _x249*_x239)*_x299
     _x307 = -_x239*_x306 + _x249
+    del _x249
     _x308 = -_x240*_x306 + _x250
+    del _x250
     _x309 = -_x306
     _x310 = -_x241*_x306 + _x251
+    del _x251
     _x311 = -_x242*_x306 + _x252
+    del _x252
     _x312 = (_x242*_x257 + _x241*_x256 + _x240*_x255 + _x239*_x254)*_x299
     _x313 = -_x239*_x312 + _x254
+    del _x254
     _x314 = -_x240*_x312 + _x255
+    del _x255
     _x315 = -_x312
     _x316 = -_x241*_x312 + _x256
+    del _x256
     _x317 = -_x242*_x312 + _x257
+    del _x257
     _x318 = (_x241*_x261 + _x153 + _x242*_x262 + _x240*_x260 + _x239*_x259)*_x299
     _x319 = -_x239*_x318 + _x259
+    del _x259
     _x320 = -_x240*_x318 + _x260
+    del _x260
     _x321 = -_x318 + _x153
+    del _x153
     _x322 = -_x241*_x318 + _x261
+    del _x261
     _x323 = -_x242*_x318 + _x262
+    del _x262
     _x324 = (_x242*_x267 + _x241*_x266 + _x155 + _x240*_x265 + _x239*_x264)*_x299
     _x325 = -_x239*_x324 + _x264
+    del _x264
     _x326 = -_x240*_x324 + _x265
+    del _x265
     _x327 = -_x324 + _x155
+    del _x155
     _x328 = -_x241*_x324 + _x266
+    del _x266
     _x329 = -_x242*_x324 + _x267
+    del _x267
     _x330 = (_x241*_x271 + _x156 + _x242*_x272 + _x240*_x270 + _x239*_x269)*_x299
     _x331 = -_x239*_x330 + _x269
+    del _x269
     _x332 = -_x240*_x330 + _x270
+    del _x270
     _x333 = -_x330 + _x156
+    del _x156
     _x334 = -_x241*_x330 + _x271
+    del _x271
     _x335 = -_x242*_x330 + _x272
+    del _x272
     _x336 = (_x242*_x277 + _x241*_x276 + _x240*_x275 + _x239*_x274)*_x299
     _x337 = -_x239*_x336 + _x274
+    del _x274
     _x338 = -_x240*_x336 + _x275
+    del _x275
     _x339 = -_x336
     _x340 = -_x241*_x336 + _x276
+    del _x276
     _x341 = -_x242*_x336 + _x277
+    del _x277
     _x342 = (_x241*_x281 + _x143 + _x240*_x280 + _x242*_x282 + _x239*_x279)*_x299
     _x343 = -_x239*_x342 + _x279
+    del _x279
     _x344 = -_x240*_x342 + _x280
+    del _x280
     _x345 = -_x342 + _x143
+    del _x143
     _x346 = -_x241*_x342 + _x281
+    del _x281
     _x347 = -_x242*_x342 + _x282
+    del _x282
     _x348 = (_x242*_x287 + _x241*_x286 + _x240*_x285 + _x239*_x284)*_x299
     _x349 = -_x239*_x348 + _x284
+    del _x284
     _x350 = -_x240*_x348 + _x285
+    del _x285
     _x351 = -_x348
     _x352 = -_x241*_x348 + _x286
+    del _x286
     _x353 = -_x242*_x348 + _x287
+    del _x287
     _x354 = _x299*(_x242*_x292 + _x241*_x291 + _x179 + _x240*_x290 + _x239*_x289)
     _x355 = -_x239*_x354 + _x289
+    del _x289
     _x356 = -_x240*_x354 + _x290
+    del _x290
     _x357 = -_x354 + _x179
+    del _x179
     _x358 = -_x241*_x354 + _x291
+    del _x291
     _x359 = -_x242*_x354 + _x292
+    del _x292
     _x360 = _x299*(_x242*_x297 + _x241*_x296 + _x180 + _x240*_x295 + _x239*_x294)
     _x361 = -_x239*_x360 + _x294
+    del _x294
     _x362 = -_x240*_x360 + _x295
+    del _x295
     _x363 = -_x360 + _x180
+    del _x180
     _x364 = -_x241*_x360 + _x296
+    del _x296
     _x365 = -_x242*_x360 + _x297
+    del _x297
     _x366 = _x301*_x301 + _x302*_x302 + _x304*_x304 + _x303*_x303 + _x305*_x305 + _x107*_x107
     _x367 = 1.0/_x366
+    del _x366
     _x368 = _x367*(_x301*_x307 + _x302*_x308 + _x303*_x309 + _x304*_x310 + _x305*_x311 + _x107*_x94)
     _x369 = -_x301*_x368 + _x307
+    del _x307
     _x370 = -_x302*_x368 + _x308
+    del _x308
     _x371 = -_x303*_x368 + _x309
+    del _x309
     _x372 = -_x304*_x368 + _x310
+    del _x310
     _x373 = -_x305*_x368 + _x311
+    del _x311
     _x374 = _x94 - _x107*_x368
+    del _x94
     _x375 = _x367*(_x301*_x313 + _x302*_x314 + _x107*_x76 + _x303*_x315 + _x304*_x316 + _x305*_x317)
     _x376 = -_x301*_x375 + _x313
+    del _x313
     _x377 = -_x302*_x375 + _x314
+    del _x314
     _x378 = -_x303*_x375 + _x315
+    del _x315
     _x379 = -_x304*_x375 + _x316
+    del _x316
     _x380 = -_x305*_x375 + _x317
+    del _x317
     _x381 = _x76 - _x107*_x375
+    del _x76
     _x382 = _x367*(_x305*_x323 + _x304*_x322 + _x303*_x321 + _x302*_x320 + _x301*_x319)
     _x383 = -_x301*_x382 + _x319
+    del _x319
     _x384 = -_x302*_x382 + _x320
+    del _x320
     _x385 = -_x303*_x382 + _x321
+    del _x321
     _x386 = -_x304*_x382 + _x322
+    del _x322
     _x387 = -_x305*_x382 + _x323
+    del _x323
     _x388 = -_x107*_x382
     _x389 = _x367*(_x305*_x329 + _x304*_x328 + _x303*_x327 + _x302*_x326 + _x301*_x325)
     _x390 = -_x301*_x389 + _x325
+    del _x325
     _x391 = -_x302*_x389 + _x326
+    del _x326
     _x392 = -_x303*_x389 + _x327
+    del _x327
     _x393 = -_x304*_x389 + _x328
+    del _x328
     _x394 = -_x305*_x389 + _x329
+    del _x329
     _x395 = -_x107*_x389
     _x396 = _x367*(_x305*_x335 + _x304*_x334 + _x303*_x333 + _x302*_x332 + _x301*_x331)
     _x397 = -_x301*_x396 + _x331
+    del _x331
     _x398 = -_x302*_x396 + _x332
+    del _x332
     _x399 = -_x303*_x396 + _x333
+    del _x333
     _x400 = -_x304*_x396 + _x334
+    del _x334
     _x401 = -_x305*_x396 + _x335
+    del _x335
     _x402 = -_x107*_x396
     _x403 = _x367*(_x301*_x337 + _x107*_x150 + _x302*_x338 + _x303*_x339 + _x304*_x340 + _x305*_x341)
     _x404 = -_x301*_x403 + _x337
+    del _x337
     _x405 = -_x302*_x403 + _x338
+    del _x338
     _x406 = -_x303*_x403 + _x339
+    del _x339
     _x407 = -_x304*_x403 + _x340
+    del _x340
     _x408 = -_x305*_x403 + _x341
+    del _x341
     _x409 = _x150 - _x107*_x403
+    del _x150
     _x410 = _x367*(_x305*_x347 + _x304*_x346 + _x303*_x345 + _x302*_x344 + _x301*_x343)
     _x411 = -_x301*_x410 + _x343
+    del _x343
     _x412 = -_x302*_x410 + _x344
+    del _x344
     _x413 = -_x303*_x410 + _x345
+    del _x345
     _x414 = -_x304*_x410 + _x346
+    del _x346
     _x415 = -_x305*_x410 + _x347
+    del _x347
     _x416 = -_x107*_x410
     _x417 = _x367*(_x301*_x349 + _x302*_x350 + _x303*_x351 + _x304*_x352 + _x305*_x353 + _x107*_x81)
     _x418 = -_x301*_x417 + _x349
+    del _x349
     _x419 = -_x302*_x417 + _x350
+    del _x350
     _x420 = -_x303*_x417 + _x351
+    del _x351
     _x421 = -_x304*_x417 + _x352
+    del _x352
     _x422 = -_x305*_x417 + _x353
+    del _x353
     _x423 = _x81 - _x107*_x417
+    del _x81
     _x424 = _x367*(_x301*_x355 + _x302*_x356 + _x305*_x359 + _x303*_x357 + _x304*_x358 + _x107*_x184)
     _x425 = -_x301*_x424 + _x355
+    del _x355
     _x426 = -_x302*_x424 + _x356
+    del _x356
     _x427 = -_x303*_x424 + _x357
+    del _x357
     _x428 = -_x304*_x424 + _x358
+    del _x358
     _x429 = -_x305*_x424 + _x359
+    del _x359
     _x430 = _x184 - _x107*_x424
+    del _x184
     _x431 = _x367*(_x305*_x365 + _x304*_x364 + _x303*_x363 + _x302*_x362 + _x301*_x361)
     _x432 = -_x301*_x431 + _x361
+    del _x361
     _x433 = -_x302*_x431 + _x362
+    del _x362
     _x434 = -_x303*_x431 + _x363
+    del _x363
     _x435 = -_x304*_x431 + _x364
+    del _x364
     _x436 = -_x305*_x431 + _x365
+    del _x365
     _x437 = -_x107*_x431
     _x438 = _x374*_x374 + _x373*_x373 + _x372*_x372 + _x371*_x371 + _x370*_x370 + _x369*_x369
     _x439 = 1.0/_x438
+    del _x438
     _x440 = (_x381*_x374 + _x380*_x373 + _x378*_x371 + _x377*_x370 + _x379*_x372 + _x376*_x369)*_x439
     _x441 = -_x369*_x440 + _x376
+    del _x376
     _x442 = -_x370*_x440 + _x377
+    del _x377
     _x443 = -_x371*_x440 + _x378
+    del _x378
     _x444 = -_x372*_x440 + _x379
+    del _x379
     _x445 = -_x373*_x440 + _x380
+    del _x380
     _x446 = -_x374*_x440 + _x381
+    del _x381
     _x447 = (_x388*_x374 + _x387*_x373 + _x386*_x372 + _x385*_x371 + _x384*_x370 + _x383*_x369)*_x439
     _x448 = -_x369*_x447 + _x383
+    del _x383
     _x449 = -_x370*_x447 + _x384
+    del _x384
     _x450 = -_x371*_x447 + _x385
+    del _x385
     _x451 = -_x372*_x447 + _x386
+    del _x386
     _x452 = -_x373*_x447 + _x387
+    del _x387
     _x453 = -_x374*_x447 + _x388
+    del _x388
     _x454 = (_x395*_x374 + _x394*_x373 + _x393*_x372 + _x392*_x371 + _x391*_x370 + _x390*_x369)*_x439
     _x455 = -_x369*_x454 + _x390
+    del _x390
     _x456 = -_x370*_x454 + _x391
+    del _x391
     _x457 = -_x371*_x454 + _x392
+    del _x392
     _x458 = -_x372*_x454 + _x393
+    del _x393
     _x459 = -_x373*_x454 + _x394
+    del _x394
     _x460 = -_x374*_x454 + _x395
+    del _x395
     _x461 = (_x400*_x372 + _x402*_x374 + _x401*_x373 + _x399*_x371 + _x398*_x370 + _x397*_x369)*_x439
     _x462 = -_x369*_x461 + _x397
+    del _x397
     _x463 = -_x370*_x461 + _x398
+    del _x398
     _x464 = -_x371*_x461 + _x399
+    del _x399
     _x465 = -_x372*_x461 + _x400
+    del _x400
     _x466 = -_x373*_x461 + _x401
+    del _x401
     _x467 = -_x374*_x461 + _x402
+    del _x402
     _x468 = (_x374*_x409 + _x373*_x408 + _x372*_x407 + _x371*_x406 + _x405*_x370 + _x404*_x369)*_x439
     _x469 = -_x369*_x468 + _x404
+    del _x404
     _x470 = -_x370*_x468 + _x405
+    del _x405
     _x471 = -_x371*_x468 + _x406
+    del _x406
     _x472 = -_x372*_x468 + _x407
+    del _x407
     _x473 = -_x373*_x468 + _x408
+    del _x408
     _x474 = -_x374*_x468 + _x409
+    del _x409
     _x475 = (_x374*_x416 + _x373*_x415 + _x372*_x414 + _x371*_x413 + _x370*_x412 + _x369*_x411)*_x439
     _x476 = -_x369*_x475 + _x411
+    del _x411
     _x477 = -_x370*_x475 + _x412
+    del _x412
     _x478 = -_x371*_x475 + _x413
+    del _x413
     _x479 = -_x372*_x475 + _x414
+    del _x414
     _x480 = -_x373*_x475 + _x415
+    del _x415
     _x481 = -_x374*_x475 + _x416
+    del _x416
     _x482 = (_x374*_x423 + _x373*_x422 + _x372*_x421 + _x371*_x420 + _x370*_x419 + _x369*_x418)*_x439
     _x483 = -_x369*_x482 + _x418
+    del _x418
     _x484 = -_x370*_x482 + _x419
+    del _x419
     _x485 = -_x371*_x482 + _x420
+    del _x420
     _x486 = -_x372*_x482 + _x421
+    del _x421
     _x487 = -_x373*_x482 + _x422
+    del _x422
     _x488 = -_x374*_x482 + _x423
+    del _x423
     _x489 = (_x374*_x430 + _x373*_x429 + _x372*_x428 + _x371*_x427 + _x370*_x426 + _x369*_x425)*_x439
     _x490 = -_x369*_x489 + _x425
+    del _x425
     _x491 = -_x370*_x489 + _x426
+    del _x426
     _x492 = -_x371*_x489 + _x427
+    del _x427
     _x493 = -_x372*_x489 + _x428
+    del _x428
     _x494 = -_x373*_x489 + _x429
+    del _x429
     _x495 = -_x374*_x489 + _x430
+    del _x430
     _x496 = (_x373*_x436 + _x372*_x435 + _x374*_x437 + _x371*_x434 + _x370*_x433 + _x369*_x432)*_x439
     _x497 = -_x369*_x496 + _x432
+    del _x432
     _x498 = -_x370*_x496 + _x433
+    del _x433
     _x499 = -_x371*_x496 + _x434
+    del _x434
     _x500 = -_x372*_x496 + _x435
+    del _x435
     _x501 = -_x373*_x496 + _x436
+    del _x436
     _x502 = -_x374*_x496 + _x437
+    del _x437
     _x503 = _x445*_x445 + _x444*_x444 + _x443*_x443 + _x442*_x442 + _x446*_x446 + _x441*_x441
     _x504 = 1.0/_x503
+    del _x503
     _x505 = (_x446*_x453 + _x452*_x445 + _x450*_x443 + _x451*_x444 + _x449*_x442 + _x448*_x441)*_x504
+    del _x448, _x449, _x450, _x451, _x452, _x453
     _x506 = (_x459*_x445 + _x460*_x446 + _x458*_x444 + _x457*_x443 + _x456*_x442 + _x455*_x441)*_x504
+    del _x455, _x456, _x457, _x458, _x459, _x460
     _x507 = (_x446*_x467 + _x445*_x466 + _x465*_x444 + _x464*_x443 + _x463*_x442 + _x462*_x441)*_x504
+    del _x462, _x463, _x464, _x465, _x466, _x467
     _x508 = (_x446*_x474 + _x444*_x472 + _x443*_x471 + _x445*_x473 + _x442*_x470 + _x441*_x469)*_x504
+    del _x469, _x470, _x471, _x472, _x473, _x474
     _x509 = (_x480*_x445 + _x481*_x446 + _x479*_x444 + _x478*_x443 + _x477*_x442 + _x476*_x441)*_x504
+    del _x476, _x477, _x478, _x479, _x480, _x481
     _x510 = (_x488*_x446 + _x487*_x445 + _x486*_x444 + _x485*_x443 + _x484*_x442 + _x483*_x441)*_x504
+    del _x483, _x484, _x485, _x486, _x487, _x488
     _x511 = (_x495*_x446 + _x494*_x445 + _x493*_x444 + _x492*_x443 + _x491*_x442 + _x490*_x441)*_x504
+    del _x490, _x491, _x492, _x493, _x494, _x495
     _x512 = (_x502*_x446 + _x500*_x444 + _x501*_x445 + _x499*_x443 + _x498*_x442 + _x497*_x441)*_x504
+    _out_Gx[..., 5] = _x512
+    del _x497, _x498, _x499, _x500, _x501, _x502
     _x513 = -_x505*_x440 + _x447
+    del _x447
     _x514 = -(_x375*_x505 + _x513*_x368) + _x382
+    del _x382
     _x515 = -(_x312*_x505 + _x513*_x306 + _x514*_x300) + _x318
+    del _x318
     _x516 = -(_x253*_x505 + _x513*_x248 + _x514*_x243 + _x515*_x238) + _x258
+    del _x258
     _x517 = _x204 - (_x516*_x185 + _x514*_x193 + _x515*_x189 + _x513*_x197 + _x123*_x505)
+    del _x204
     _x518 = -_x506*_x440 + _x454
+    del _x454
     _x519 = -(_x375*_x506 + _x518*_x368) + _x389
+    del _x389
     _x520 = -(_x312*_x506 + _x518*_x306 + _x519*_x300) + _x324
+    del _x324
     _x521 = -(_x253*_x506 + _x518*_x248 + _x519*_x243 + _x520*_x238) + _x263
+    del _x263
     _x522 = _x208 - (_x521*_x185 + _x520*_x189 + _x519*_x193 + _x518*_x197 + _x123*_x506)
+    del _x208
     _x523 = -_x507*_x440 + _x461
+    del _x461
     _x524 = -(_x507*_x375 + _x523*_x368) + _x396
+    del _x396
     _x525 = -(_x507*_x312 + _x523*_x306 + _x524*_x300) + _x330
+    del _x330
     _x526 = -(_x507*_x253 + _x523*_x248 + _x524*_x243 + _x525*_x238) + _x268
+    del _x268
     _x527 = _x212 - (_x526*_x185 + _x525*_x189 + _x524*_x193 + _x523*_x197 + _x123*_x507)
+    del _x212
     _x528 = -_x508*_x440 + _x468
+    del _x468
     _x529 = -(_x508*_x375 + _x528*_x368) + _x403
+    del _x403
     _x530 = -(_x508*_x312 + _x528*_x306 + _x529*_x300) + _x336
+    del _x336
     _x531 = -(_x508*_x253 + _x528*_x248 + _x529*_x243 + _x530*_x238) + _x273
+    del _x273
     _x532 = _x216 - (_x531*_x185 + _x530*_x189 + _x529*_x193 + _x528*_x197 + _x123*_x508)
+    del _x216
     _x533 = -_x509*_x440 + _x475
+    del _x475
     _x534 = -(_x509*_x375 + _x533*_x368) + _x410
+    del _x410
     _x535 = -(_x533*_x306 + _x509*_x312 + _x534*_x300) + _x342
+    del _x342
     _x536 = -(_x533*_x248 + _x534*_x243 + _x509*_x253 + _x535*_x238) + _x278
+    del _x278
     _x537 = _x220 - (_x536*_x185 + _x535*_x189 + _x533*_x197 + _x123*_x509 + _x534*_x193)
+    del _x220
     _x538 = -_x510*_x440 + _x482
+    del _x482
     _x539 = -(_x510*_x375 + _x538*_x368) + _x417
+    del _x417
     _x540 = -(_x510*_x312 + _x538*_x306 + _x539*_x300) + _x348
+    del _x348
     _x541 = -(_x538*_x248 + _x539*_x243 + _x510*_x253 + _x540*_x238) + _x283
+    del _x283
     _x542 = _x224 - (_x541*_x185 + _x540*_x189 + _x539*_x193 + _x538*_x197 + _x123*_x510)
+    del _x224
     _x543 = -_x511*_x440 + _x489
+    del _x489
     _x544 = -(_x511*_x375 + _x543*_x368) + _x424
+    del _x424
     _x545 = -(_x511*_x312 + _x543*_x306 + _x544*_x300) + _x354
+    del _x354
     _x546 = -(_x511*_x253 + _x543*_x248 + _x544*_x243 + _x545*_x238) + _x288
+    del _x288
     _x547 = _x228 - (_x546*_x185 + _x545*_x189 + _x123*_x511 + _x544*_x193 + _x543*_x197)
+    del _x228
     _x548 = -_x512*_x440 + _x496
+    _out_Gx[..., 4] = _x548
+    del _x496
     _x549 = -(_x512*_x375 + _x548*_x368) + _x431
+    _out_Gx[..., 3] = _x549
+    del _x431
     _x550 = -(_x512*_x312 + _x548*_x306 + _x549*_x300) + _x360
+    _out_Gx[..., 2] = _x550
+    del _x360
     _x551 = -(_x548*_x248 + _x512*_x253 + _x549*_x243 + _x550*_x238) + _x293
+    _out_Gx[..., 1] = _x551
+    del _x293
     _x552 = _x232 - (_x551*_x185 + _x550*_x189 + _x549*_x193 + _x548*_x197 + _x123*_x512)
+    _out_Gx[..., 0] = _x552
+    del _x232, _x512, _x548, _x549, _x550, _x551, _x552
     _x553 = _x121*(_x517 + _x98*_x537 + _x96*_x532)
     _x554 = -_x553 + _x517
+    del _x517
     _x555 = _x532 - _x96*_x553
+    del _x532
     _x556 = _x537 - _x98*_x553
+    del _x537
     _x557 = _x121*(_x516 + _x96*_x531 + _x98*_x536)
     _x558 = -_x557 + _x516
+    del _x516
     _x559 = _x531 - _x96*_x557
+    del _x531
     _x560 = _x536 - _x98*_x557
+    del _x536, _x557
     _x561 = _x121*(_x515 + _x96*_x530 + _x98*_x535)
     _x562 = -_x561 + _x515
+    del _x515
     _x563 = _x530 - _x96*_x561
+    del _x530
     _x564 = _x535 - _x98*_x561
+    del _x535, _x561
     _x565 = _x121*(_x96*_x529 + _x514 + _x98*_x534)
     _x566 = -_x565 + _x514
+    del _x514
     _x567 = _x529 - _x96*_x565
+    del _x529
     _x568 = _x534 - _x98*_x565
+    del _x534, _x565
     _x569 = _x121*(_x513 + _x96*_x528 + _x98*_x533)
     _x570 = -_x569 + _x513
+    del _x513
     _x571 = _x528 - _x96*_x569
+    del _x528
     _x572 = _x533 - _x98*_x569
+    del _x533, _x569
     _x573 = _x121*(_x505 + _x96*_x508 + _x98*_x509)
+    del _x121
     _x574 = -_x573 + _x505
+    del _x505
     _x575 = _x508 - _x96*_x573
+    del _x96, _x508
     _x576 = _x509 - _x98*_x573
+    del _x98, _x509, _x573
     _x577 = _x237*(_x186*_x554 + _x522 + _x187*_x555 + _x188*_x556)
     _x578 = _x554 - _x186*_x577
+    del _x554
     _x579 = -_x577 + _x522
+    del _x522
     _x580 = _x555 - _x187*_x577
+    del _x555
     _x581 = _x556 - _x188*_x577
+    del _x556
     _x582 = _x237*(_x186*_x558 + _x521 + _x187*_x559 + _x188*_x560)
     _x583 = _x558 - _x186*_x582
+    del _x558
     _x584 = -_x582 + _x521
+    del _x521
     _x585 = _x559 - _x187*_x582
+    del _x559
     _x586 = _x560 - _x188*_x582
+    del _x560
     _x587 = _x237*(_x186*_x562 + _x520 + _x187*_x563 + _x188*_x564)
     _x588 = _x562 - _x186*_x587
+    del _x562
     _x589 = -_x587 + _x520
+    del _x520
     _x590 = _x563 - _x187*_x587
+    del _x563
     _x591 = _x564 - _x188*_x587
+    del _x564, _x587
     _x592 = _x237*(_x186*_x566 + _x519 + _x188*_x568 + _x187*_x567)
     _x593 = _x566 - _x186*_x592
+    del _x566
     _x594 = -_x592 + _x519
+    del _x519
     _x595 = _x567 - _x187*_x592
+    del _x567
     _x596 = _x568 - _x188*_x592
+    del _x568, _x592
     _x597 = _x237*(_x186*_x570 + _x518 + _x187*_x571 + _x188*_x572)
     _x598 = _x570 - _x186*_x597
+    del _x570
     _x599 = -_x597 + _x518
+    del _x518
     _x600 = _x571 - _x187*_x597
+    del _x571
     _x601 = _x572 - _x188*_x597
+    del _x572, _x597
     _x602 = _x237*(_x186*_x574 + _x187*_x575 + _x506 + _x188*_x576)
+    del _x237
     _x603 = _x574 - _x186*_x602
+    del _x186, _x574
     _x604 = -_x602 + _x506
+    del _x506
     _x605 = _x575 - _x187*_x602
+    del _x187, _x575
     _x606 = _x576 - _x188*_x602
+    del _x188, _x576, _x602
     _x607 = _x299*(_x240*_x579 + _x239*_x578 + _x527 + _x241*_x580 + _x242*_x581)
     _x608 = _x578 - _x239*_x607
+    del _x578
     _x609 = _x579 - _x240*_x607
+    del _x579
     _x610 = -_x607 + _x527
+    del _x527
     _x611 = _x580 - _x241*_x607
+    del _x580
     _x612 = _x581 - _x242*_x607
+    del _x581
     _x613 = _x299*(_x240*_x584 + _x239*_x583 + _x241*_x585 + _x242*_x586 + _x526)
     _x614 = _x583 - _x239*_x613
+    del _x583
     _x615 = _x584 - _x240*_x613
+    del _x584
     _x616 = -_x613 + _x526
+    del _x526
     _x617 = _x585 - _x241*_x613
+    del _x585
     _x618 = _x586 - _x242*_x613
+    del _x586
     _x619 = _x299*(_x241*_x590 + _x240*_x589 + _x239*_x588 + _x525 + _x242*_x591)
     _x620 = _x588 - _x239*_x619
+    del _x588
     _x621 = _x589 - _x240*_x619
+    del _x589
     _x622 = -_x619 + _x525
+    del _x525
     _x623 = _x590 - _x241*_x619
+    del _x590
     _x624 = _x591 - _x242*_x619
+    del _x591
     _x625 = _x299*(_x240*_x594 + _x241*_x595 + _x524 + _x239*_x593 + _x242*_x596)
     _x626 = _x593 - _x239*_x625
+    del _x593
     _x627 = _x594 - _x240*_x625
+    del _x594
     _x628 = -_x625 + _x524
+    del _x524
     _x629 = _x595 - _x241*_x625
+    del _x595
     _x630 = _x596 - _x242*_x625
+    del _x596, _x625
     _x631 = _x299*(_x239*_x598 + _x240*_x599 + _x523 + _x241*_x600 + _x242*_x601)
     _x632 = _x598 - _x239*_x631
+    del _x598
     _x633 = _x599 - _x240*_x631
+    del _x599
     _x634 = -_x631 + _x523
+    del _x523
     _x635 = _x600 - _x241*_x631
+    del _x600
     _x636 = _x601 - _x242*_x631
+    del _x601, _x631
     _x637 = _x299*(_x239*_x603 + _x240*_x604 + _x507 + _x241*_x605 + _x242*_x606)
+    del _x299
     _x638 = _x603 - _x239*_x637
+    del _x239, _x603
     _x639 = _x604 - _x240*_x637
+    del _x240, _x604
     _x640 = -_x637 + _x507
+    del _x507
     _x641 = _x605 - _x241*_x637
+    del _x241, _x605
     _x642 = _x606 - _x242*_x637
+    del _x242, _x606, _x637
     _x643 = _x367*(_x301*_x608 + _x302*_x609 + _x303*_x610 + _x304*_x611 + _x305*_x612 + _x107*_x542)
     _x644 = _x608 - _x301*_x643
+    del _x608
     _x645 = _x609 - _x302*_x643
+    del _x609
     _x646 = _x610 - _x303*_x643
+    del _x610
     _x647 = _x611 - _x304*_x643
+    del _x611
     _x648 = _x612 - _x305*_x643
+    del _x612
     _x649 = _x542 - _x107*_x643
+    del _x542
     _x650 = _x367*(_x301*_x614 + _x304*_x617 + _x305*_x618 + _x302*_x615 + _x303*_x616 + _x107*_x541)
     _x651 = _x614 - _x301*_x650
+    del _x614
     _x652 = _x615 - _x302*_x650
+    del _x615
     _x653 = _x616 - _x303*_x650
+    del _x616
     _x654 = _x617 - _x304*_x650
+    del _x617
     _x655 = _x618 - _x305*_x650
+    del _x618
     _x656 = _x541 - _x107*_x650
+    del _x541
     _x657 = _x367*(_x301*_x620 + _x302*_x621 + _x303*_x622 + _x304*_x623 + _x305*_x624 + _x107*_x540)
     _x658 = _x620 - _x301*_x657
+    del _x620
     _x659 = _x621 - _x302*_x657
+    del _x621
     _x660 = _x622 - _x303*_x657
+    del _x622
     _x661 = _x623 - _x304*_x657
+    del _x623
     _x662 = _x624 - _x305*_x657
+    del _x624
     _x663 = _x540 - _x107*_x657
+    del _x540
     _x664 = _x367*(_x301*_x626 + _x302*_x627 + _x304*_x629 + _x303*_x628 + _x305*_x630 + _x107*_x539)
     _x665 = _x626 - _x301*_x664
+    del _x626
     _x666 = _x627 - _x302*_x664
+    del _x627
     _x667 = _x628 - _x303*_x664
+    del _x628
     _x668 = _x629 - _x304*_x664
+    del _x629
     _x669 = _x630 - _x305*_x664
+    del _x630
     _x670 = _x539 - _x107*_x664
+    del _x539
     _x671 = _x367*(_x301*_x632 + _x107*_x538 + _x302*_x633 + _x303*_x634 + _x304*_x635 + _x305*_x636)
     _x672 = _x632 - _x301*_x671
+    del _x632
     _x673 = _x633 - _x302*_x671
+    del _x633
     _x674 = _x634 - _x303*_x671
+    del _x634
     _x675 = _x635 - _x304*_x671
+    del _x635
     _x676 = _x636 - _x305*_x671
+    del _x636
     _x677 = _x538 - _x107*_x671
+    del _x538, _x671
     _x678 = _x367*(_x302*_x639 + _x303*_x640 + _x304*_x641 + _x301*_x638 + _x305*_x642 + _x107*_x510)
+    del _x367
     _x679 = _x638 - _x301*_x678
+    del _x301, _x638
     _x680 = _x639 - _x302*_x678
+    del _x302, _x639
     _x681 = _x640 - _x303*_x678
+    del _x303, _x640
     _x682 = _x641 - _x304*_x678
+    del _x304, _x641
     _x683 = _x642 - _x305*_x678
+    del _x305, _x642
     _x684 = _x510 - _x107*_x678
+    del _x107, _x510, _x678
     _x685 = (_x369*_x644 + _x370*_x645 + _x372*_x647 + _x371*_x646 + _x373*_x648 + _x374*_x649)*_x439
     _x686 = _x644 - _x369*_x685
+    del _x644
     _x687 = _x645 - _x370*_x685
+    del _x645
     _x688 = _x646 - _x371*_x685
+    del _x646
     _x689 = _x647 - _x372*_x685
+    del _x647
     _x690 = _x648 - _x373*_x685
+    del _x648
     _x691 = _x649 - _x374*_x685
+    del _x649
     _x692 = (_x369*_x651 + _x374*_x656 + _x371*_x653 + _x370*_x652 + _x372*_x654 + _x373*_x655)*_x439
     _x693 = _x651 - _x369*_x692
+    del _x651
     _x694 = _x652 - _x370*_x692
+    del _x652
     _x695 = _x653 - _x371*_x692
+    del _x653
     _x696 = _x654 - _x372*_x692
+    del _x654
     _x697 = _x655 - _x373*_x692
+    del _x655
     _x698 = _x656 - _x374*_x692
+    del _x656
     _x699 = (_x370*_x659 + _x371*_x660 + _x372*_x661 + _x369*_x658 + _x373*_x662 + _x374*_x663)*_x439
     _x700 = _x658 - _x369*_x699
+    del _x658
     _x701 = _x659 - _x370*_x699
+    del _x659
     _x702 = _x660 - _x371*_x699
+    del _x660
     _x703 = _x661 - _x372*_x699
+    del _x661
     _x704 = _x662 - _x373*_x699
+    del _x662
     _x705 = _x663 - _x374*_x699
+    del _x663
     _x706 = (_x369*_x665 + _x370*_x666 + _x371*_x667 + _x372*_x668 + _x373*_x669 + _x374*_x670)*_x439
     _x707 = _x665 - _x369*_x706
+    del _x665
     _x708 = _x666 - _x370*_x706
+    del _x666
     _x709 = _x667 - _x371*_x706
+    del _x667
     _x710 = _x668 - _x372*_x706
+    del _x668
     _x711 = _x669 - _x373*_x706
+    del _x669
     _x712 = _x670 - _x374*_x706
+    del _x670
     _x713 = (_x374*_x677 + _x370*_x673 + _x371*_x674 + _x372*_x675 + _x369*_x672 + _x373*_x676)*_x439
     _x714 = _x672 - _x369*_x713
+    del _x672
     _x715 = _x673 - _x370*_x713
+    del _x673
     _x716 = _x674 - _x371*_x713
+    del _x674
     _x717 = _x675 - _x372*_x713
+    del _x675
     _x718 = _x676 - _x373*_x713
+    del _x676
     _x719 = _x677 - _x374*_x713
+    del _x677
     _x720 = (_x369*_x679 + _x370*_x680 + _x372*_x682 + _x371*_x681 + _x373*_x683 + _x374*_x684)*_x439
+    del _x439
     _x721 = _x679 - _x369*_x720
+    del _x369, _x679
     _x722 = _x680 - _x370*_x720
+    del _x370, _x680
     _x723 = _x681 - _x371*_x720
+    del _x371, _x681
     _x724 = _x682 - _x372*_x720
+    del _x372, _x682
     _x725 = _x683 - _x373*_x720
+    del _x373, _x683
     _x726 = _x684 - _x374*_x720
+    del _x374, _x684, _x720
     _x727 = (_x686*_x441 + _x687*_x442 + _x688*_x443 + _x690*_x445 + _x689*_x444 + _x691*_x446)*_x504
-    _x728 = (_x695*_x443 + _x693*_x441 + _x696*_x444 + _x697*_x445 + _x694*_x442 + _x698*_x446)*_x504
-    _x729 = (_x702*_x443 + _x701*_x442 + _x703*_x444 + _x704*_x445 + _x700*_x441 + _x705*_x446)*_x504
-    _x730 = (_x707*_x441 + _x709*_x443 + _x711*_x445 + _x708*_x442 + _x710*_x444 + _x712*_x446)*_x504
-    _x731 = (_x714*_x441 + _x715*_x442 + _x716*_x443 + _x717*_x444 + _x718*_x445 + _x719*_x446)*_x504
-    _x732 = (_x721*_x441 + _x723*_x443 + _x722*_x442 + _x724*_x444 + _x725*_x445 + _x726*_x446)*_x504
-    _x733 = _x685 - _x727*_x440
-    _x734 = _x643 - (_x368*_x733 + _x375*_x727)
-    _x735 = _x607 - (_x300*_x734 + _x306*_x733 + _x312*_x727)
-    _x736 = _x577 - (_x238*_x735 + _x243*_x734 + _x248*_x733 + _x253*_x727)
-    _x737 = _x553 - (_x185*_x736 + _x193*_x734 + _x197*_x733 + _x189*_x735 + _x123*_x727)
-    _x738 = _x692 - _x728*_x440
-    _x739 = _x650 - (_x368*_x738 + _x375*_x728)
-    _x740 = _x613 - (_x300*_x739 + _x306*_x738 + _x312*_x728)
-    _x741 = _x582 - (_x238*_x740 + _x253*_x728 + _x243*_x739 + _x248*_x738)
-    _x742 = _x699 - _x729*_x440
-    _x743 = _x657 - (_x368*_x742 + _x375*_x729)
-    _x744 = _x619 - (_x300*_x743 + _x306*_x742 + _x312*_x729)
-    _x745 = _x706 - _x730*_x440
-    _x746 = _x664 - (_x368*_x745 + _x375*_x730)
-    _x747 = _x713 - _x731*_x440
-    _out_Mx = numpy.zeros(batch + (6, 6))
-    _out_Mx[..., 0, 0] = _x737
-    _out_Mx[..., 0, 1] = _x736
-    _out_Mx[..., 0, 2] = _x735
-    _out_Mx[..., 0, 3] = _x734
-    _out_Mx[..., 0, 4] = _x733
     _out_Mx[..., 0, 5] = _x727
-    _out_Mx[..., 1, 0] = _x736
-    _out_Mx[..., 1, 1] = _x741
-    _out_Mx[..., 1, 2] = _x740
-    _out_Mx[..., 1, 3] = _x739
-    _out_Mx[..., 1, 4] = _x738
-    _out_Mx[..., 1, 5] = _x728
-    _out_Mx[..., 2, 0] = _x735
-    _out_Mx[..., 2, 1] = _x740
-    _out_Mx[..., 2, 2] = _x744
-    _out_Mx[..., 2, 3] = _x743
-    _out_Mx[..., 2, 4] = _x742
-    _out_Mx[..., 2, 5] = _x729
-    _out_Mx[..., 3, 0] = _x734
-    _out_Mx[..., 3, 1] = _x739
-    _out_Mx[..., 3, 2] = _x743
-    _out_Mx[..., 3, 3] = _x746
-    _out_Mx[..., 3, 4] = _x745
-    _out_Mx[..., 3, 5] = _x730
-    _out_Mx[..., 4, 0] = _x733
-    _out_Mx[..., 4, 1] = _x738
-    _out_Mx[..., 4, 2] = _x742
-    _out_Mx[..., 4, 3] = _x745
-    _out_Mx[..., 4, 4] = _x747
-    _out_Mx[..., 4, 5] = _x731
     _out_Mx[..., 5, 0] = _x727
+    del _x686, _x687, _x688, _x689, _x690, _x691
+    _x728 = (_x695*_x443 + _x693*_x441 + _x696*_x444 + _x697*_x445 + _x694*_x442 + _x698*_x446)*_x504
+    _out_Mx[..., 1, 5] = _x728
     _out_Mx[..., 5, 1] = _x728
+    del _x693, _x694, _x695, _x696, _x697, _x698
+    _x729 = (_x702*_x443 + _x701*_x442 + _x703*_x444 + _x704*_x445 + _x700*_x441 + _x705*_x446)*_x504
+    _out_Mx[..., 2, 5] = _x729
     _out_Mx[..., 5, 2] = _x729
+    del _x700, _x701, _x702, _x703, _x704, _x705
+    _x730 = (_x707*_x441 + _x709*_x443 + _x711*_x445 + _x708*_x442 + _x710*_x444 + _x712*_x446)*_x504
+    _out_Mx[..., 3, 5] = _x730
     _out_Mx[..., 5, 3] = _x730
+    del _x707, _x708, _x709, _x710, _x711, _x712
+    _x731 = (_x714*_x441 + _x715*_x442 + _x716*_x443 + _x717*_x444 + _x718*_x445 + _x719*_x446)*_x504
+    _out_Mx[..., 4, 5] = _x731
     _out_Mx[..., 5, 4] = _x731
+    del _x714, _x715, _x716, _x717, _x718, _x719
+    _x732 = (_x721*_x441 + _x723*_x443 + _x722*_x442 + _x724*_x444 + _x725*_x445 + _x726*_x446)*_x504
     _out_Mx[..., 5, 5] = _x732
-    _out_Vx = numpy.zeros(batch + (6,))
-    _out_Vx[..., 0] = _x547 - (_x125*_x737 + _x127*_x736 + _x133*_x734 + _x128*_x735 + _x130*_x727 + _x134*_x733)
-    _out_Vx[..., 1] = _x546 - (_x125*_x736 + _x134*_x738 + _x127*_x741 + _x128*_x740 + _x133*_x739 + _x130*_x728)
-    _out_Vx[..., 2] = _x545 - (_x125*_x735 + _x130*_x729 + _x127*_x740 + _x128*_x744 + _x133*_x743 + _x134*_x742)
-    _out_Vx[..., 3] = _x544 - (_x125*_x734 + _x130*_x730 + _x127*_x739 + _x128*_x743 + _x134*_x745 + _x133*_x746)
-    _out_Vx[..., 4] = _x543 - (_x125*_x733 + _x133*_x745 + _x127*_x738 + _x128*_x742 + _x134*_x747 + _x130*_x731)
     _out_Vx[..., 5] = _x511 - (_x125*_x727 + _x130*_x732 + _x127*_x728 + _x128*_x729 + _x134*_x731 + _x133*_x730)
-    _out_Gx = numpy.zeros(batch + (6,))
-    _out_Gx[..., 0] = _x552
-    _out_Gx[..., 1] = _x551
-    _out_Gx[..., 2] = _x550
-    _out_Gx[..., 3] = _x549
-    _out_Gx[..., 4] = _x548
-    _out_Gx[..., 5] = _x512
+    del _x441, _x442, _x443, _x444, _x445, _x446, _x504, _x511, _x721, _x722, _x723, _x724, _x725, _x726, _x732
+    _x733 = _x685 - _x727*_x440
+    _out_Mx[..., 0, 4] = _x733
+    _out_Mx[..., 4, 0] = _x733
+    del _x685
+    _x734 = _x643 - (_x368*_x733 + _x375*_x727)
+    _out_Mx[..., 0, 3] = _x734
+    _out_Mx[..., 3, 0] = _x734
+    del _x643
+    _x735 = _x607 - (_x300*_x734 + _x306*_x733 + _x312*_x727)
+    _out_Mx[..., 0, 2] = _x735
+    _out_Mx[..., 2, 0] = _x735
+    del _x607
+    _x736 = _x577 - (_x238*_x735 + _x243*_x734 + _x248*_x733 + _x253*_x727)
+    _out_Mx[..., 0, 1] = _x736
+    _out_Mx[..., 1, 0] = _x736
+    del _x577
+    _x737 = _x553 - (_x185*_x736 + _x193*_x734 + _x197*_x733 + _x189*_x735 + _x123*_x727)
+    _out_Mx[..., 0, 0] = _x737
+    _out_Vx[..., 0] = _x547 - (_x125*_x737 + _x127*_x736 + _x133*_x734 + _x128*_x735 + _x130*_x727 + _x134*_x733)
+    del _x123, _x185, _x189, _x193, _x197, _x547, _x553, _x727, _x737
+    _x738 = _x692 - _x728*_x440
+    _out_Mx[..., 1, 4] = _x738
+    _out_Mx[..., 4, 1] = _x738
+    del _x692
+    _x739 = _x650 - (_x368*_x738 + _x375*_x728)
+    _out_Mx[..., 1, 3] = _x739
+    _out_Mx[..., 3, 1] = _x739
+    del _x650
+    _x740 = _x613 - (_x300*_x739 + _x306*_x738 + _x312*_x728)
+    _out_Mx[..., 1, 2] = _x740
+    _out_Mx[..., 2, 1] = _x740
+    del _x613
+    _x741 = _x582 - (_x238*_x740 + _x253*_x728 + _x243*_x739 + _x248*_x738)
+    _out_Mx[..., 1, 1] = _x741
+    _out_Vx[..., 1] = _x546 - (_x125*_x736 + _x134*_x738 + _x127*_x741 + _x128*_x740 + _x133*_x739 + _x130*_x728)
+    del _x238, _x243, _x248, _x253, _x546, _x582, _x728, _x736, _x741
+    _x742 = _x699 - _x729*_x440
+    _out_Mx[..., 2, 4] = _x742
+    _out_Mx[..., 4, 2] = _x742
+    del _x699
+    _x743 = _x657 - (_x368*_x742 + _x375*_x729)
+    _out_Mx[..., 2, 3] = _x743
+    _out_Mx[..., 3, 2] = _x743
+    del _x657
+    _x744 = _x619 - (_x300*_x743 + _x306*_x742 + _x312*_x729)
+    _out_Mx[..., 2, 2] = _x744
+    _out_Vx[..., 2] = _x545 - (_x125*_x735 + _x130*_x729 + _x127*_x740 + _x128*_x744 + _x133*_x743 + _x134*_x742)
+    del _x300, _x306, _x312, _x545, _x619, _x729, _x735, _x740, _x744
+    _x745 = _x706 - _x730*_x440
+    _out_Mx[..., 3, 4] = _x745
+    _out_Mx[..., 4, 3] = _x745
+    del _x706
+    _x746 = _x664 - (_x368*_x745 + _x375*_x730)
+    _out_Mx[..., 3, 3] = _x746
+    _out_Vx[..., 3] = _x544 - (_x125*_x734 + _x130*_x730 + _x127*_x739 + _x128*_x743 + _x134*_x745 + _x133*_x746)
+    del _x368, _x375, _x544, _x664, _x730, _x734, _x739, _x743, _x746
+    _x747 = _x713 - _x731*_x440
+    _out_Mx[..., 4, 4] = _x747
+    _out_Vx[..., 4] = _x543 - (_x125*_x733 + _x133*_x745 + _x127*_x738 + _x128*_x742 + _x134*_x747 + _x130*_x731)
+    del _x125, _x127, _x128, _x130, _x133, _x134, _x440, _x543, _x713, _x731, _x733, _x738, _x742, _x745, _x747
     return OperationalSpaceResult(_out_Mx, _out_Vx, _out_Gx)
 
 
@@ -2414,11 +3203,13 @@ def kinetic_energy(q, p, qw, qd, qwd, *, r_base=0.07, r_tcp=0.025, a=0.1, m_arm=
     psi1_d = qwd[..., 0]
     psi2_d = qwd[..., 1]
     psi3_d = qwd[..., 2]
+    _out_k = numpy.zeros(batch + ())
     _x0 = a*numpy.cos(theta1)
     _x1 = -_x0 - r_base + x + r_tcp
     _x2 = a*numpy.sin(theta1)
     _x3 = -_x2 + z
     _x4 = -_x2*_x1 + _x3*_x0
+    del _x0, _x2
     _x5 = a*numpy.cos(theta2)
     _x6 = 0.5*_x5
     _x7 = 0.5*r_tcp
@@ -2426,54 +3217,91 @@ def kinetic_energy(q, p, qw, qd, qwd, *, r_base=0.07, r_tcp=0.025, a=0.1, m_arm=
     _x9 = x - _x7 + _x8
     _x10 = _x6 + _x9
     _x11 = 1.7320508075688772*_x8
+    del _x8
     _x12 = 1.7320508075688772*_x7
+    del _x7
     _x13 = _x12 - _x11 + y - 1.7320508075688772*_x6
+    del _x6
     _x14 = a*numpy.sin(theta2)
     _x15 = -_x14 + z
     _x16 = 0.5*_x14
+    del _x14
     _x17 = _x5*_x15 - 1.7320508075688772*_x16*_x13 + _x10*_x16
+    del _x5, _x16
     _x18 = a*numpy.cos(theta3)
     _x19 = 0.5*_x18
     _x20 = _x19 + _x9
+    del _x9
     _x21 = y + _x11 - _x12 + 1.7320508075688772*_x19
+    del _x11, _x12, _x19
     _x22 = a*numpy.sin(theta3)
     _x23 = -_x22 + z
     _x24 = 0.5*_x22
+    del _x22
     _x25 = _x23*_x18 + _x24*_x20 + 1.7320508075688772*_x24*_x21
+    del _x18, _x24
     _x26 = -_x15*_x21 + _x23*_x13
     _x27 = -(-_x3*_x21 + y*_x23)
     _x28 = -_x3*_x13 + y*_x15
     _x29 = -(-_x20*_x15 + _x10*_x23)
     _x30 = -_x3*_x20 + _x1*_x23
+    del _x23
     _x31 = -(-_x10*_x3 + _x1*_x15)
+    del _x3, _x15
     _x32 = -_x13*_x20 + _x10*_x21
     _x33 = -(-y*_x20 + _x1*_x21)
+    del _x21
     _x34 = -y*_x10 + _x1*_x13
+    del _x13
     _x35 = _x28*_x20 + _x10*_x27 + _x1*_x26
+    del _x1, _x10, _x20
     _x36 = 1.0/_x35
+    del _x35
     _x37 = _x26*_x36
+    del _x26
     _x38 = _x27*_x36
+    del _x27
     _x39 = _x28*_x36
+    del _x28
     _x40 = _x29*_x36
+    del _x29
     _x41 = _x30*_x36
+    del _x30
     _x42 = _x36*_x31
+    del _x31
     _x43 = _x36*_x32
+    del _x32
     _x44 = _x33*_x36
+    del _x33
     _x45 = _x34*_x36
+    del _x34, _x36
     _x46 = _x4*_x37
+    del _x37
     _x47 = _x17*_x38
+    del _x38
     _x48 = _x25*_x39
+    del _x39
     _x49 = _x4*_x40
+    del _x40
     _x50 = _x17*_x41
+    del _x41
     _x51 = _x25*_x42
+    del _x42
     _x52 = _x4*_x43
+    del _x4, _x43
     _x53 = _x17*_x44
+    del _x17, _x44
     _x54 = _x25*_x45
+    del _x25, _x45
     _x55 = _x48*theta3_d + _x47*theta2_d + _x46*theta1_d
+    del _x46, _x47, _x48
     _x56 = _x51*theta3_d + _x50*theta2_d + _x49*theta1_d
+    del _x49, _x50, _x51
     _x57 = _x54*theta3_d + _x53*theta2_d + _x52*theta1_d
+    del _x52, _x53, _x54
     _x58 = a*a
     _x59 = 0.3333333333333333*_x58*m_arm + gear*gear*J_rotor + 0.5*_x58*m_rod
+    del _x58
     _x60 = m_platform + 1.5*m_rod + m_fork1 + m_handle + m_fork2
     _x61 = numpy.cos(psi1)
     _x62 = numpy.cos(psi2)
@@ -2483,16 +3311,20 @@ def kinetic_energy(q, p, qw, qd, qwd, *, r_base=0.07, r_tcp=0.025, a=0.1, m_arm=
     _x66 = numpy.sin(psi1)
     _x67 = numpy.sin(psi2)
     _x68 = _x63*_x67
+    del _x63
     _x69 = _x68*_x66
     _x70 = -_x64*_x66
+    del _x66
     _x71 = -_x61*_x68
+    del _x61, _x68
     _x72 = 0.00013333333333333334*m_fork2
     _x73 = 0.0005583333333333333*m_handle + h*h*m_handle
     _x74 = _x73*numpy.sin(psi3)**2 + _x73*numpy.cos(psi3)**2
+    del _x73
     _x75 = 5e-05*m_handle
     _x76 = _x67*_x75
-    _out_k = numpy.zeros(batch + ())
     _out_k[...] = 0.5*(_x59*theta1_d*theta1_d + _x59*theta2_d*theta2_d + _x59*theta3_d*theta3_d + (_x76*psi1_d + _x75*psi3_d)*psi3_d + (_x55*_x69 + _x74*psi2_d + _x56*_x71 + _x57*_x64)*psi2_d + _x57*(_x60*_x57 + _x64*psi2_d) + psi1_d*(_x55*_x65 + _x56*_x70 + _x76*psi3_d + ((_x72 + _x75)*_x67*_x67 + (_x74 + _x72)*_x62*_x62)*psi1_d) + _x56*(_x60*_x56 + _x70*psi1_d + _x71*psi2_d) + _x55*(_x60*_x55 + _x65*psi1_d + _x69*psi2_d))
+    del _x55, _x56, _x57, _x59, _x60, _x62, _x64, _x65, _x67, _x69, _x70, _x71, _x72, _x74, _x75, _x76
     return _out_k
 
 
@@ -2543,6 +3375,7 @@ def potential_energy(q, p, qw, *, a=0.1, m_arm=0.0093, m_rod=0.0095, m_platform=
     psi1 = qw[..., 0]
     psi2 = qw[..., 1]
     psi3 = qw[..., 2]
+    _out_u = numpy.zeros(batch + ())
     _x0 = z - w
     _x1 = numpy.sin(theta2)
     _x2 = 4.905*a
@@ -2550,9 +3383,10 @@ def potential_energy(q, p, qw, *, a=0.1, m_arm=0.0093, m_rod=0.0095, m_platform=
     _x4 = numpy.sin(theta3)
     _x5 = numpy.sin(theta1)
     _x6 = _x2*m_arm
+    del _x2
     _x7 = 9.81*_x0
-    _out_u = numpy.zeros(batch + ())
     _out_u[...] = _x7*m_fork2 + 14.715*z*m_rod + _x7*m_fork1 + _x3*_x1 + _x4*_x3 + _x6*_x4 + 9.81*(_x0 + h*numpy.sin(psi2))*m_handle + _x5*_x3 + _x6*_x1 + _x6*_x5 + 9.81*z*m_platform
+    del _x0, _x1, _x3, _x4, _x5, _x6, _x7
     return _out_u
 
 
@@ -2585,32 +3419,37 @@ def device_fk(p, qw, *, w=0.05, h=0.03):
     psi1 = qw[..., 0]
     psi2 = qw[..., 1]
     psi3 = qw[..., 2]
+    _out_base_T_tcp = numpy.zeros(batch + (4, 4))
+    _out_base_T_tcp[..., 3, 3] = 1.0
     _x0 = numpy.cos(psi1)
     _x1 = numpy.cos(psi3)
     _x2 = _x0*_x1
     _x3 = numpy.sin(psi2)
+    _out_base_T_tcp[..., 2, 1] = _x3
+    _out_base_T_tcp[..., 2, 3] = z - w + _x3*h
     _x4 = numpy.sin(psi1)
     _x5 = numpy.sin(psi3)
     _x6 = _x4*_x5
-    _x7 = numpy.cos(psi2)
-    _x8 = _x4*_x7
-    _x9 = _x0*_x5
-    _x10 = _x1*_x4
-    _x11 = _x0*_x7
-    _out_base_T_tcp = numpy.zeros(batch + (4, 4))
     _out_base_T_tcp[..., 0, 0] = _x2 - _x3*_x6
-    _out_base_T_tcp[..., 0, 1] = -_x8
-    _out_base_T_tcp[..., 0, 2] = _x9 + _x10*_x3
-    _out_base_T_tcp[..., 0, 3] = x - _x8*h
-    _out_base_T_tcp[..., 1, 0] = _x10 + _x3*_x9
-    _out_base_T_tcp[..., 1, 1] = _x11
     _out_base_T_tcp[..., 1, 2] = _x6 - _x2*_x3
-    _out_base_T_tcp[..., 1, 3] = y + _x11*h
+    del _x2, _x6
+    _x7 = numpy.cos(psi2)
     _out_base_T_tcp[..., 2, 0] = -_x5*_x7
-    _out_base_T_tcp[..., 2, 1] = _x3
     _out_base_T_tcp[..., 2, 2] = _x1*_x7
-    _out_base_T_tcp[..., 2, 3] = z - w + _x3*h
-    _out_base_T_tcp[..., 3, 3] = 1.0
+    _x8 = _x4*_x7
+    _out_base_T_tcp[..., 0, 1] = -_x8
+    _out_base_T_tcp[..., 0, 3] = x - _x8*h
+    del _x8
+    _x9 = _x0*_x5
+    del _x5
+    _x10 = _x1*_x4
+    _out_base_T_tcp[..., 0, 2] = _x9 + _x10*_x3
+    _out_base_T_tcp[..., 1, 0] = _x10 + _x3*_x9
+    del _x1, _x3, _x4, _x9, _x10
+    _x11 = _x0*_x7
+    _out_base_T_tcp[..., 1, 1] = _x11
+    _out_base_T_tcp[..., 1, 3] = y + _x11*h
+    del _x0, _x7, _x11
     return _out_base_T_tcp
 
 
@@ -2646,54 +3485,59 @@ def device_frames(p, qw, *, w=0.05):
     psi1 = qw[..., 0]
     psi2 = qw[..., 1]
     psi3 = qw[..., 2]
-    _x0 = numpy.cos(psi1)
-    _x1 = numpy.sin(psi1)
-    _x2 = z - w
-    _x3 = numpy.cos(psi2)
-    _x4 = -_x1*_x3
-    _x5 = numpy.sin(psi2)
-    _x6 = _x1*_x5
-    _x7 = _x0*_x3
-    _x8 = _x0*_x5
-    _x9 = numpy.cos(psi3)
-    _x10 = numpy.sin(psi3)
     _out_base_T_fork1 = numpy.zeros(batch + (4, 4))
-    _out_base_T_fork1[..., 0, 0] = _x0
-    _out_base_T_fork1[..., 0, 1] = -_x1
+    _out_base_T_fork2 = numpy.zeros(batch + (4, 4))
+    _out_base_T_handle = numpy.zeros(batch + (4, 4))
     _out_base_T_fork1[..., 0, 3] = x
-    _out_base_T_fork1[..., 1, 0] = _x1
-    _out_base_T_fork1[..., 1, 1] = _x0
     _out_base_T_fork1[..., 1, 3] = y
     _out_base_T_fork1[..., 2, 2] = 1.0
-    _out_base_T_fork1[..., 2, 3] = _x2
     _out_base_T_fork1[..., 3, 3] = 1.0
-    _out_base_T_fork2 = numpy.zeros(batch + (4, 4))
-    _out_base_T_fork2[..., 0, 0] = _x0
-    _out_base_T_fork2[..., 0, 1] = _x4
-    _out_base_T_fork2[..., 0, 2] = _x6
     _out_base_T_fork2[..., 0, 3] = x
-    _out_base_T_fork2[..., 1, 0] = _x1
-    _out_base_T_fork2[..., 1, 1] = _x7
-    _out_base_T_fork2[..., 1, 2] = -_x8
     _out_base_T_fork2[..., 1, 3] = y
-    _out_base_T_fork2[..., 2, 1] = _x5
-    _out_base_T_fork2[..., 2, 2] = _x3
-    _out_base_T_fork2[..., 2, 3] = _x2
     _out_base_T_fork2[..., 3, 3] = 1.0
-    _out_base_T_handle = numpy.zeros(batch + (4, 4))
-    _out_base_T_handle[..., 0, 0] = _x0*_x9 - _x10*_x6
-    _out_base_T_handle[..., 0, 1] = _x4
-    _out_base_T_handle[..., 0, 2] = _x0*_x10 + _x6*_x9
     _out_base_T_handle[..., 0, 3] = x
-    _out_base_T_handle[..., 1, 0] = _x1*_x9 + _x10*_x8
-    _out_base_T_handle[..., 1, 1] = _x7
-    _out_base_T_handle[..., 1, 2] = _x1*_x10 - _x8*_x9
     _out_base_T_handle[..., 1, 3] = y
-    _out_base_T_handle[..., 2, 0] = -_x10*_x3
-    _out_base_T_handle[..., 2, 1] = _x5
-    _out_base_T_handle[..., 2, 2] = _x3*_x9
-    _out_base_T_handle[..., 2, 3] = _x2
     _out_base_T_handle[..., 3, 3] = 1.0
+    _x0 = numpy.cos(psi1)
+    _out_base_T_fork1[..., 0, 0] = _x0
+    _out_base_T_fork1[..., 1, 1] = _x0
+    _out_base_T_fork2[..., 0, 0] = _x0
+    _x1 = numpy.sin(psi1)
+    _out_base_T_fork1[..., 0, 1] = -_x1
+    _out_base_T_fork1[..., 1, 0] = _x1
+    _out_base_T_fork2[..., 1, 0] = _x1
+    _x2 = z - w
+    _out_base_T_fork1[..., 2, 3] = _x2
+    _out_base_T_fork2[..., 2, 3] = _x2
+    _out_base_T_handle[..., 2, 3] = _x2
+    del _x2
+    _x3 = numpy.cos(psi2)
+    _out_base_T_fork2[..., 2, 2] = _x3
+    _x4 = -_x1*_x3
+    _out_base_T_fork2[..., 0, 1] = _x4
+    _out_base_T_handle[..., 0, 1] = _x4
+    del _x4
+    _x5 = numpy.sin(psi2)
+    _out_base_T_fork2[..., 2, 1] = _x5
+    _out_base_T_handle[..., 2, 1] = _x5
+    _x6 = _x1*_x5
+    _out_base_T_fork2[..., 0, 2] = _x6
+    _x7 = _x0*_x3
+    _out_base_T_fork2[..., 1, 1] = _x7
+    _out_base_T_handle[..., 1, 1] = _x7
+    del _x7
+    _x8 = _x0*_x5
+    _out_base_T_fork2[..., 1, 2] = -_x8
+    del _x5
+    _x9 = numpy.cos(psi3)
+    _out_base_T_handle[..., 2, 2] = _x3*_x9
+    _x10 = numpy.sin(psi3)
+    _out_base_T_handle[..., 0, 0] = _x0*_x9 - _x10*_x6
+    _out_base_T_handle[..., 0, 2] = _x0*_x10 + _x6*_x9
+    _out_base_T_handle[..., 1, 0] = _x1*_x9 + _x10*_x8
+    _out_base_T_handle[..., 1, 2] = _x1*_x10 - _x8*_x9
+    _out_base_T_handle[..., 2, 0] = -_x10*_x3
+    del _x0, _x1, _x3, _x6, _x8, _x9, _x10
     return DeviceFramesResult(_out_base_T_fork1, _out_base_T_fork2, _out_base_T_handle)
 
 
@@ -2726,29 +3570,33 @@ def device_jacobian(p, qw, *, h=0.03):
     psi1 = qw[..., 0]
     psi2 = qw[..., 1]
     psi3 = qw[..., 2]
-    _x0 = numpy.cos(psi1)
-    _x1 = numpy.cos(psi2)
-    _x2 = _x0*_x1
-    _x3 = numpy.sin(psi1)
-    _x4 = numpy.sin(psi2)
-    _x5 = _x4*h
-    _x6 = _x1*_x3
-    _x7 = _x1*h
     _out_J = numpy.zeros(batch + (6, 6))
     _out_J[..., 0, 0] = 1.0
-    _out_J[..., 0, 3] = -_x2*h
-    _out_J[..., 0, 4] = _x3*_x5
     _out_J[..., 1, 1] = 1.0
-    _out_J[..., 1, 3] = -_x6*h
-    _out_J[..., 1, 4] = -_x0*_x5
     _out_J[..., 2, 2] = 1.0
-    _out_J[..., 2, 4] = _x7*_x0*_x0 + _x7*_x3*_x3
-    _out_J[..., 3, 4] = _x0
-    _out_J[..., 3, 5] = -_x6
-    _out_J[..., 4, 4] = _x3
-    _out_J[..., 4, 5] = _x2
     _out_J[..., 5, 3] = 1.0
+    _x0 = numpy.cos(psi1)
+    _out_J[..., 3, 4] = _x0
+    _x1 = numpy.cos(psi2)
+    _x2 = _x0*_x1
+    _out_J[..., 0, 3] = -_x2*h
+    _out_J[..., 4, 5] = _x2
+    del _x2
+    _x3 = numpy.sin(psi1)
+    _out_J[..., 4, 4] = _x3
+    _x4 = numpy.sin(psi2)
     _out_J[..., 5, 5] = _x4
+    _x5 = _x4*h
+    _out_J[..., 0, 4] = _x3*_x5
+    _out_J[..., 1, 4] = -_x0*_x5
+    del _x4, _x5
+    _x6 = _x1*_x3
+    _out_J[..., 1, 3] = -_x6*h
+    _out_J[..., 3, 5] = -_x6
+    del _x6
+    _x7 = _x1*h
+    _out_J[..., 2, 4] = _x7*_x0*_x0 + _x7*_x3*_x3
+    del _x0, _x1, _x3, _x7
     return _out_J
 
 
@@ -2792,6 +3640,8 @@ def device_actuator_jacobian(q, p, qw, *, r_base=0.07, r_tcp=0.025, a=0.1, h=0.0
     psi1 = qw[..., 0]
     psi2 = qw[..., 1]
     psi3 = qw[..., 2]
+    _out_J = numpy.zeros(batch + (6, 6))
+    _out_J[..., 5, 3] = 1.0
     _x0 = a*numpy.sin(theta3)
     _x1 = z - _x0
     _x2 = 0.8660254037844386*r_base
@@ -2805,53 +3655,64 @@ def device_actuator_jacobian(q, p, qw, *, r_base=0.07, r_tcp=0.025, a=0.1, h=0.0
     _x10 = _x8 + _x9
     _x11 = numpy.cos(theta3)
     _x12 = _x2 - _x3
+    del _x2, _x3
     _x13 = _x12 + y + _x11*_x5
+    del _x5
     _x14 = _x1*_x7 + _x10*_x13
     _x15 = 0.5*a
     _x16 = x + 0.5*r_base - 0.5*r_tcp
     _x17 = _x16 + _x15*_x4
     _x18 = _x16 + _x11*_x15
+    del _x15, _x16
     _x19 = _x1*_x17 + _x10*_x18
+    del _x10
     _x20 = a*numpy.cos(theta1)
     _x21 = r_tcp + x - _x20 - r_base
     _x22 = a*numpy.sin(theta1)
     _x23 = z - _x22
     _x24 = _x13*_x17 + _x18*(_x12 + _x6 - y)
+    del _x6, _x12
     _x25 = 1.0/(_x14*_x21 + _x23*_x24 - _x19*y)
     _x26 = _x25*(_x20*_x23 - _x21*_x22)
+    _out_J[..., 0, 0] = _x14*_x26
+    _out_J[..., 1, 0] = -_x19*_x26
+    _out_J[..., 2, 0] = _x24*_x26
+    del _x14, _x19, _x20, _x23, _x24, _x26
     _x27 = _x22 + _x8
+    del _x8, _x22
     _x28 = z - _x9
     _x29 = _x25*(0.5*_x17*_x9 - 0.8660254037844386*_x7*_x9 + _x28*_x4*a)
+    _out_J[..., 0, 1] = -_x29*(_x1*y + _x13*_x27)
+    _out_J[..., 1, 1] = _x29*(_x1*_x21 + _x18*_x27)
+    _out_J[..., 2, 1] = _x29*(_x18*y - _x13*_x21)
+    del _x4, _x9, _x29
     _x30 = _x25*(0.5*_x0*_x18 + 0.8660254037844386*_x0*_x13 + _x1*_x11*a)
+    _out_J[..., 0, 2] = _x30*(_x27*_x7 + _x28*y)
+    _out_J[..., 1, 2] = -_x30*(_x17*_x27 + _x21*_x28)
+    _out_J[..., 2, 2] = _x30*(_x21*_x7 - _x17*y)
+    del _x0, _x1, _x7, _x11, _x13, _x17, _x18, _x21, _x25, _x27, _x28, _x30
     _x31 = numpy.cos(psi1)
+    _out_J[..., 3, 4] = _x31
     _x32 = numpy.cos(psi2)
     _x33 = _x31*_x32
-    _x34 = numpy.sin(psi1)
-    _x35 = numpy.sin(psi2)
-    _x36 = _x35*h
-    _x37 = _x32*_x34
-    _x38 = _x32*h
-    _out_J = numpy.zeros(batch + (6, 6))
-    _out_J[..., 0, 0] = _x14*_x26
-    _out_J[..., 0, 1] = -_x29*(_x1*y + _x13*_x27)
-    _out_J[..., 0, 2] = _x30*(_x27*_x7 + _x28*y)
     _out_J[..., 0, 3] = -_x33*h
-    _out_J[..., 0, 4] = _x34*_x36
-    _out_J[..., 1, 0] = -_x19*_x26
-    _out_J[..., 1, 1] = _x29*(_x1*_x21 + _x18*_x27)
-    _out_J[..., 1, 2] = -_x30*(_x17*_x27 + _x21*_x28)
-    _out_J[..., 1, 3] = -_x37*h
-    _out_J[..., 1, 4] = -_x31*_x36
-    _out_J[..., 2, 0] = _x24*_x26
-    _out_J[..., 2, 1] = _x29*(_x18*y - _x13*_x21)
-    _out_J[..., 2, 2] = _x30*(_x21*_x7 - _x17*y)
-    _out_J[..., 2, 4] = _x38*_x31*_x31 + _x38*_x34*_x34
-    _out_J[..., 3, 4] = _x31
-    _out_J[..., 3, 5] = -_x37
-    _out_J[..., 4, 4] = _x34
     _out_J[..., 4, 5] = _x33
-    _out_J[..., 5, 3] = 1.0
+    del _x33
+    _x34 = numpy.sin(psi1)
+    _out_J[..., 4, 4] = _x34
+    _x35 = numpy.sin(psi2)
     _out_J[..., 5, 5] = _x35
+    _x36 = _x35*h
+    _out_J[..., 0, 4] = _x34*_x36
+    _out_J[..., 1, 4] = -_x31*_x36
+    del _x35, _x36
+    _x37 = _x32*_x34
+    _out_J[..., 1, 3] = -_x37*h
+    _out_J[..., 3, 5] = -_x37
+    del _x37
+    _x38 = _x32*h
+    _out_J[..., 2, 4] = _x38*_x31*_x31 + _x38*_x34*_x34
+    del _x31, _x32, _x34, _x38
     return _out_J
 
 
@@ -2912,6 +3773,11 @@ def combined(q, p, qw, *, r_base=0.07, r_tcp=0.025, a=0.1, m_arm=0.0093, m_rod=0
     psi1 = qw[..., 0]
     psi2 = qw[..., 1]
     psi3 = qw[..., 2]
+    _out_G = numpy.zeros(batch + (6,))
+    _out_base_T_tcp = numpy.zeros(batch + (4, 4))
+    _out_J = numpy.zeros(batch + (6, 6))
+    _out_base_T_tcp[..., 3, 3] = 1.0
+    _out_J[..., 5, 3] = 1.0
     _x0 = numpy.cos(theta1)
     _x1 = numpy.cos(theta2)
     _x2 = numpy.cos(theta3)
@@ -2928,21 +3794,54 @@ def combined(q, p, qw, *, r_base=0.07, r_tcp=0.025, a=0.1, m_arm=0.0093, m_rod=0
     _x13 = _x12 + 9.81*m_fork1 + 9.81*m_fork2 + 9.81*m_platform + 14.715*m_rod
     _x14 = numpy.cos(psi2)
     _x15 = h*_x14
+    _out_G[..., 4] = _x15*_x12
+    del _x12
     _x16 = numpy.sin(psi2)
+    _out_base_T_tcp[..., 2, 1] = _x16
+    _out_J[..., 5, 5] = _x16
     _x17 = numpy.sin(psi1)
+    _out_J[..., 4, 4] = _x17
     _x18 = numpy.sin(psi3)
+    _out_base_T_tcp[..., 2, 0] = -_x14*_x18
     _x19 = _x18*_x17
     _x20 = numpy.cos(psi3)
+    _out_base_T_tcp[..., 2, 2] = _x14*_x20
     _x21 = numpy.cos(psi1)
+    _out_J[..., 2, 4] = _x15*_x17*_x17 + _x21*_x21*_x15
+    _out_J[..., 3, 4] = _x21
+    del _x15
     _x22 = _x21*_x20
+    _out_base_T_tcp[..., 0, 0] = -_x16*_x19 + _x22
+    _out_base_T_tcp[..., 1, 2] = -_x22*_x16 + _x19
+    del _x19, _x22
     _x23 = _x14*_x17
     _x24 = -_x23
+    _out_base_T_tcp[..., 0, 1] = _x24
+    _out_J[..., 3, 5] = _x24
+    del _x24
     _x25 = _x20*_x17
+    del _x20
     _x26 = _x21*_x18
+    _out_base_T_tcp[..., 0, 2] = _x25*_x16 + _x26
+    _out_base_T_tcp[..., 1, 0] = _x26*_x16 + _x25
+    del _x18, _x25, _x26
     _x27 = -h*_x23
+    _out_base_T_tcp[..., 0, 3] = _x27 + x
+    _out_J[..., 1, 3] = _x27
+    del _x23, _x27
     _x28 = _x21*_x14
+    _out_base_T_tcp[..., 1, 1] = _x28
+    _out_J[..., 4, 5] = _x28
+    del _x14
     _x29 = h*_x28
+    _out_base_T_tcp[..., 1, 3] = _x29 + y
+    _out_J[..., 0, 3] = -_x29
+    del _x28, _x29
     _x30 = h*_x16
+    _out_base_T_tcp[..., 2, 3] = _x30 - w + z
+    _out_J[..., 0, 4] = _x30*_x17
+    _out_J[..., 1, 4] = -_x21*_x30
+    del _x16, _x17, _x21, _x30
     _x31 = 0.8660254037844386*r_tcp
     _x32 = 0.8660254037844386*r_base
     _x33 = _x32 - _x31
@@ -2951,35 +3850,60 @@ def combined(q, p, qw, *, r_base=0.07, r_tcp=0.025, a=0.1, m_arm=0.0093, m_rod=0
     _x36 = _x35 + _x9
     _x37 = 0.8660254037844386*_x6
     _x38 = y + _x31 - _x32 - _x37
+    del _x31, _x32
     _x39 = z - _x11
     _x40 = _x39*_x38 + _x34*_x36
     _x41 = _x8 - _x7 + x
     _x42 = _x41 + 0.5*_x10
     _x43 = _x42*_x36
+    del _x36
     _x44 = _x41 + 0.5*_x6
     _x45 = _x44*_x39
     _x46 = _x4 - _x3
+    del _x4
     _x47 = _x44*_x34 + (_x33 - y + _x37)*_x42
+    del _x33, _x37
     _x48 = z - _x5
     _x49 = 1.0/(_x47*_x48 + _x46*_x40 - y*(_x45 + _x43))
     _x50 = (_x3*_x48 - _x5*_x46)*_x49
+    _out_J[..., 0, 0] = _x50*_x40
+    _out_J[..., 1, 0] = (-_x43 - _x45)*_x50
+    _out_J[..., 2, 0] = _x47*_x50
+    del _x40, _x43, _x45, _x47, _x50
     _x51 = _x35 + _x5
+    del _x35
     _x52 = z - _x9
     _x53 = _x49*(_x6*_x52 + 0.5*_x9*_x44 - 0.8660254037844386*_x9*_x38)
+    _out_J[..., 0, 1] = _x53*(-_x51*_x34 - y*_x39)
+    _out_J[..., 1, 1] = (_x51*_x42 + _x46*_x39)*_x53
+    _out_J[..., 2, 1] = _x53*(-_x46*_x34 + y*_x42)
+    del _x53
     _x54 = _x49*(_x39*_x10 + 0.5*_x42*_x11 + 0.8660254037844386*_x34*_x11)
+    _out_J[..., 0, 2] = _x54*(_x51*_x38 + y*_x52)
+    _out_J[..., 1, 2] = (-_x51*_x44 - _x52*_x46)*_x54
+    _out_J[..., 2, 2] = _x54*(-y*_x44 + _x46*_x38)
+    del _x34, _x38, _x42, _x44, _x49, _x51, _x54
     _x55 = 4.905*a
     _x56 = _x55*m_arm
     _x57 = _x55*m_rod
+    del _x55
     _x58 = 0.5*_x6
     _x59 = _x41 + _x58
     _x60 = 1.7320508075688772*_x8
+    del _x8
     _x61 = 1.7320508075688772*_x7
+    del _x7
     _x62 = -1.7320508075688772*_x58 - _x60 + y + _x61
+    del _x58
     _x63 = 0.5*_x10
     _x64 = _x63 + _x41
+    del _x41
     _x65 = 1.7320508075688772*_x63 - _x61 + y + _x60
+    del _x60, _x61, _x63
     _x66 = 0.5*_x9
+    del _x9
     _x67 = 0.5*_x11
+    del _x11
     _x68 = -_x52*_x65 + _x39*_x62
     _x69 = -y*_x39 + _x48*_x65
     _x70 = -_x48*_x62 + y*_x52
@@ -2987,51 +3911,22 @@ def combined(q, p, qw, *, r_base=0.07, r_tcp=0.025, a=0.1, m_arm=0.0093, m_rod=0
     _x72 = -_x46*_x65 + y*_x64
     _x73 = -y*_x59 + _x46*_x62
     _x74 = _x64*_x70 + _x46*_x68 + _x69*_x59
+    del _x68, _x69, _x70
     _x75 = 1.0/_x74
+    del _x74
     _x76 = _x71*_x75
+    del _x71
     _x77 = _x72*_x75
+    del _x72
     _x78 = _x73*_x75
+    del _x73, _x75
     _x79 = (_x3*_x48 - _x5*_x46)*_x76
-    _x80 = _x77*(-1.7320508075688772*_x62*_x66 + _x66*_x59 + _x6*_x52)
-    _x81 = _x78*(1.7320508075688772*_x65*_x67 + _x64*_x67 + _x39*_x10)
-    _out_G = numpy.zeros(batch + (6,))
     _out_G[..., 0] = _x13*_x79 + _x0*_x57 + _x0*_x56
+    del _x0, _x3, _x5, _x46, _x48, _x76, _x79
+    _x80 = _x77*(-1.7320508075688772*_x62*_x66 + _x66*_x59 + _x6*_x52)
     _out_G[..., 1] = _x1*_x57 + _x13*_x80 + _x1*_x56
+    del _x1, _x6, _x52, _x59, _x62, _x66, _x77, _x80
+    _x81 = _x78*(1.7320508075688772*_x65*_x67 + _x64*_x67 + _x39*_x10)
     _out_G[..., 2] = _x13*_x81 + _x2*_x57 + _x2*_x56
-    _out_G[..., 4] = _x15*_x12
-    _out_base_T_tcp = numpy.zeros(batch + (4, 4))
-    _out_base_T_tcp[..., 0, 0] = -_x16*_x19 + _x22
-    _out_base_T_tcp[..., 0, 1] = _x24
-    _out_base_T_tcp[..., 0, 2] = _x25*_x16 + _x26
-    _out_base_T_tcp[..., 0, 3] = _x27 + x
-    _out_base_T_tcp[..., 1, 0] = _x26*_x16 + _x25
-    _out_base_T_tcp[..., 1, 1] = _x28
-    _out_base_T_tcp[..., 1, 2] = -_x22*_x16 + _x19
-    _out_base_T_tcp[..., 1, 3] = _x29 + y
-    _out_base_T_tcp[..., 2, 0] = -_x14*_x18
-    _out_base_T_tcp[..., 2, 1] = _x16
-    _out_base_T_tcp[..., 2, 2] = _x14*_x20
-    _out_base_T_tcp[..., 2, 3] = _x30 - w + z
-    _out_base_T_tcp[..., 3, 3] = 1.0
-    _out_J = numpy.zeros(batch + (6, 6))
-    _out_J[..., 0, 0] = _x50*_x40
-    _out_J[..., 0, 1] = _x53*(-_x51*_x34 - y*_x39)
-    _out_J[..., 0, 2] = _x54*(_x51*_x38 + y*_x52)
-    _out_J[..., 0, 3] = -_x29
-    _out_J[..., 0, 4] = _x30*_x17
-    _out_J[..., 1, 0] = (-_x43 - _x45)*_x50
-    _out_J[..., 1, 1] = (_x51*_x42 + _x46*_x39)*_x53
-    _out_J[..., 1, 2] = (-_x51*_x44 - _x52*_x46)*_x54
-    _out_J[..., 1, 3] = _x27
-    _out_J[..., 1, 4] = -_x21*_x30
-    _out_J[..., 2, 0] = _x47*_x50
-    _out_J[..., 2, 1] = _x53*(-_x46*_x34 + y*_x42)
-    _out_J[..., 2, 2] = _x54*(-y*_x44 + _x46*_x38)
-    _out_J[..., 2, 4] = _x15*_x17*_x17 + _x21*_x21*_x15
-    _out_J[..., 3, 4] = _x21
-    _out_J[..., 3, 5] = _x24
-    _out_J[..., 4, 4] = _x17
-    _out_J[..., 4, 5] = _x28
-    _out_J[..., 5, 3] = 1.0
-    _out_J[..., 5, 5] = _x16
+    del _x2, _x10, _x13, _x39, _x56, _x57, _x64, _x65, _x67, _x78, _x81
     return CombinedResult(_out_G, _out_base_T_tcp, _out_J)

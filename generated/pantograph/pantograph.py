@@ -142,6 +142,8 @@ def ik(p, *, d=0.038, l=0.07, L=0.09):
         return _in_chunks(ik, batch, (p, ), {"d": d, "l": l, "L": L})
     x = p[..., 0]
     y = p[..., 1]
+    _out_joints = numpy.zeros(batch + (2,))
+    _out_margin = numpy.zeros(batch + (2,))
     _x0 = 0.5*d
     _x1 = _x0*x
     _x2 = l*l
@@ -151,21 +153,26 @@ def ik(p, *, d=0.038, l=0.07, L=0.09):
     _x6 = l*y
     _x7 = l*x
     _x8 = _x0*l
+    del _x0
     _x9 = _x7 + _x8
     _x10 = _x2*_x3
+    del _x2, _x3
     _x11 = -_x9
     _x12 = _x10 + _x11*_x11 - _x5*_x5
-    _x13 = numpy.sqrt(_x12)
-    _x14 = _x4 - _x1
-    _x15 = _x8 - _x7
-    _x16 = _x10 + _x15*_x15 - _x14*_x14
-    _x17 = numpy.sqrt(_x16)
-    _out_joints = numpy.zeros(batch + (2,))
-    _out_joints[..., 0] = numpy.arctan2(_x13*_x9 + _x5*_x6, -_x11*_x5 - _x13*_x6)
-    _out_joints[..., 1] = numpy.arctan2(_x14*_x6 + _x15*_x17, _x17*_x6 - _x14*_x15)
-    _out_margin = numpy.zeros(batch + (2,))
     _out_margin[..., 0] = _x12
+    _x13 = numpy.sqrt(_x12)
+    _out_joints[..., 0] = numpy.arctan2(_x13*_x9 + _x5*_x6, -_x11*_x5 - _x13*_x6)
+    del _x5, _x9, _x11, _x12, _x13
+    _x14 = _x4 - _x1
+    del _x1, _x4
+    _x15 = _x8 - _x7
+    del _x7, _x8
+    _x16 = _x10 + _x15*_x15 - _x14*_x14
     _out_margin[..., 1] = _x16
+    del _x10
+    _x17 = numpy.sqrt(_x16)
+    _out_joints[..., 1] = numpy.arctan2(_x14*_x6 + _x15*_x17, _x17*_x6 - _x14*_x15)
+    del _x6, _x14, _x15, _x16, _x17
     return IkResult(_out_joints, _out_margin)
 
 
@@ -198,6 +205,8 @@ def fk(q, *, d=0.038, l=0.07, L=0.09):
         return _in_chunks(fk, batch, (q, ), {"d": d, "l": l, "L": L})
     theta1 = q[..., 0]
     theta2 = q[..., 1]
+    _out_position = numpy.zeros(batch + (2,))
+    _out_margin = numpy.zeros(batch + ())
     _x0 = l*numpy.cos(theta1)
     _x1 = d - _x0 + l*numpy.cos(theta2)
     _x2 = l*numpy.sin(theta2)
@@ -209,13 +218,14 @@ def fk(q, *, d=0.038, l=0.07, L=0.09):
     _x8 = _x5 + _x6
     _x9 = _x8/_x7
     _x10 = _x8*_x8/(_x7*_x7)
+    del _x7
     _x11 = -(-L*L + _x10*_x5 + _x10*_x6)
+    _out_margin[...] = _x11
+    del _x5, _x6, _x10
     _x12 = numpy.sqrt(_x11/_x8)
-    _out_position = numpy.zeros(batch + (2,))
     _out_position[..., 0] = _x0 - 0.5*d + _x1*_x9 + _x12*(_x3 - _x2)
     _out_position[..., 1] = _x3 + _x1*_x12 + _x4*_x9
-    _out_margin = numpy.zeros(batch + ())
-    _out_margin[...] = _x11
+    del _x0, _x1, _x2, _x3, _x4, _x8, _x9, _x11, _x12
     return FkResult(_out_position, _out_margin)
 
 
@@ -248,19 +258,20 @@ def leg_points(q, p, *, d=0.038, l=0.07):
     theta2 = q[..., 1]
     x = p[..., 0]
     y = p[..., 1]
-    _x0 = 0.5*d
-    _x1 = -_x0
     _out_points = numpy.zeros(batch + (6, 3))
-    _out_points[..., 0, 0] = _x1
-    _out_points[..., 1, 0] = _x1 + l*numpy.cos(theta1)
     _out_points[..., 1, 1] = l*numpy.sin(theta1)
     _out_points[..., 2, 0] = x
     _out_points[..., 2, 1] = y
-    _out_points[..., 3, 0] = _x0
-    _out_points[..., 4, 0] = _x0 + l*numpy.cos(theta2)
     _out_points[..., 4, 1] = l*numpy.sin(theta2)
     _out_points[..., 5, 0] = x
     _out_points[..., 5, 1] = y
+    _x0 = 0.5*d
+    _out_points[..., 3, 0] = _x0
+    _out_points[..., 4, 0] = _x0 + l*numpy.cos(theta2)
+    _x1 = -_x0
+    _out_points[..., 0, 0] = _x1
+    _out_points[..., 1, 0] = _x1 + l*numpy.cos(theta1)
+    del _x0, _x1
     return _out_points
 
 
@@ -293,11 +304,12 @@ def constraints(q, p, *, d=0.038, l=0.07, L=0.09):
     theta2 = q[..., 1]
     x = p[..., 0]
     y = p[..., 1]
+    _out_f = numpy.zeros(batch + (2,))
     _x0 = -0.5*L*L
     _x1 = 0.5*d
-    _out_f = numpy.zeros(batch + (2,))
     _out_f[..., 0] = _x0 + 0.5*(y - l*numpy.sin(theta1))**2 + 0.5*(_x1 + x - l*numpy.cos(theta1))**2
     _out_f[..., 1] = _x0 + 0.5*(y - l*numpy.sin(theta2))**2 + 0.5*(_x1 - x + l*numpy.cos(theta2))**2
+    del _x0, _x1
     return _out_f
 
 
@@ -331,23 +343,26 @@ def constraint_jacobians(q, p, *, d=0.038, l=0.07):
     theta2 = q[..., 1]
     x = p[..., 0]
     y = p[..., 1]
+    _out_J_x = numpy.zeros(batch + (2, 2))
+    _out_J_q = numpy.zeros(batch + (2, 2))
     _x0 = 0.5*d
     _x1 = l*numpy.cos(theta1)
     _x2 = _x0 + x - _x1
+    _out_J_x[..., 0, 0] = _x2
     _x3 = l*numpy.sin(theta1)
     _x4 = y - _x3
+    _out_J_x[..., 0, 1] = _x4
+    _out_J_q[..., 0, 0] = _x1*_x4 - _x2*_x3
+    del _x1, _x2, _x3, _x4
     _x5 = l*numpy.cos(theta2)
     _x6 = -(_x0 + _x5 - x)
+    _out_J_x[..., 1, 0] = _x6
+    del _x0
     _x7 = l*numpy.sin(theta2)
     _x8 = y - _x7
-    _out_J_x = numpy.zeros(batch + (2, 2))
-    _out_J_x[..., 0, 0] = _x2
-    _out_J_x[..., 0, 1] = _x4
-    _out_J_x[..., 1, 0] = _x6
     _out_J_x[..., 1, 1] = _x8
-    _out_J_q = numpy.zeros(batch + (2, 2))
-    _out_J_q[..., 0, 0] = _x1*_x4 - _x2*_x3
     _out_J_q[..., 1, 1] = _x5*_x8 - _x6*_x7
+    del _x5, _x6, _x7, _x8
     return ConstraintJacobiansResult(_out_J_x, _out_J_q)
 
 
@@ -377,6 +392,7 @@ def jacobian(q, p, *, d=0.038, l=0.07):
     theta2 = q[..., 1]
     x = p[..., 0]
     y = p[..., 1]
+    _out_J = numpy.zeros(batch + (2, 2))
     _x0 = l*numpy.sin(theta2)
     _x1 = y - _x0
     _x2 = 0.5*d
@@ -386,15 +402,17 @@ def jacobian(q, p, *, d=0.038, l=0.07):
     _x6 = _x5 - y
     _x7 = l*numpy.cos(theta2)
     _x8 = _x2 + _x7 - x
+    del _x2
     _x9 = -_x8
     _x10 = 1.0/(_x1*_x4 + _x6*_x9)
     _x11 = _x10*(_x3*(y - _x5) - _x4*_x5)
-    _x12 = _x10*(_x1*_x7 - _x0*_x9)
-    _out_J = numpy.zeros(batch + (2, 2))
     _out_J[..., 0, 0] = _x1*_x11
-    _out_J[..., 0, 1] = _x12*_x6
     _out_J[..., 1, 0] = _x11*_x8
+    del _x3, _x5, _x8, _x11
+    _x12 = _x10*(_x1*_x7 - _x0*_x9)
+    _out_J[..., 0, 1] = _x12*_x6
     _out_J[..., 1, 1] = _x12*_x4
+    del _x0, _x1, _x4, _x6, _x7, _x9, _x10, _x12
     return _out_J
 
 
@@ -425,22 +443,25 @@ def inverse_jacobian(q, p, *, d=0.038, l=0.07):
     theta2 = q[..., 1]
     x = p[..., 0]
     y = p[..., 1]
+    _out_J_inv = numpy.zeros(batch + (2, 2))
     _x0 = 0.5*d
     _x1 = l*numpy.cos(theta1)
     _x2 = _x0 + x - _x1
     _x3 = l*numpy.sin(theta1)
     _x4 = y - _x3
     _x5 = 1.0/(_x1*_x4 - _x2*_x3)
+    _out_J_inv[..., 0, 0] = _x2*_x5
+    _out_J_inv[..., 0, 1] = _x4*_x5
+    del _x1, _x2, _x3, _x4, _x5
     _x6 = l*numpy.cos(theta2)
     _x7 = -(_x0 + _x6 - x)
+    del _x0
     _x8 = l*numpy.sin(theta2)
     _x9 = y - _x8
     _x10 = 1.0/(_x6*_x9 - _x7*_x8)
-    _out_J_inv = numpy.zeros(batch + (2, 2))
-    _out_J_inv[..., 0, 0] = _x2*_x5
-    _out_J_inv[..., 0, 1] = _x4*_x5
     _out_J_inv[..., 1, 0] = _x10*_x7
     _out_J_inv[..., 1, 1] = _x10*_x9
+    del _x6, _x7, _x8, _x9, _x10
     return _out_J_inv
 
 
@@ -475,6 +496,8 @@ def singularities(q, p, *, d=0.038, l=0.07):
     theta2 = q[..., 1]
     x = p[..., 0]
     y = p[..., 1]
+    _out_det_Jq = numpy.zeros(batch + ())
+    _out_det_Jx = numpy.zeros(batch + ())
     _x0 = l*numpy.sin(theta1)
     _x1 = l*numpy.cos(theta1)
     _x2 = 0.5*d
@@ -483,10 +506,9 @@ def singularities(q, p, *, d=0.038, l=0.07):
     _x5 = y - _x4
     _x6 = l*numpy.cos(theta2)
     _x7 = -(_x2 + _x6 - x)
-    _out_det_Jq = numpy.zeros(batch + ())
     _out_det_Jq[...] = (_x1*(y - _x0) - _x0*_x3)*(_x5*_x6 - _x4*_x7)
-    _out_det_Jx = numpy.zeros(batch + ())
     _out_det_Jx[...] = _x3*_x5 + _x7*(_x0 - y)
+    del _x0, _x1, _x2, _x3, _x4, _x5, _x6, _x7
     return SingularitiesResult(_out_det_Jq, _out_det_Jx)
 
 
@@ -529,32 +551,35 @@ def closure(q, s, p, *, d=0.038, l=0.07, L=0.09):
     handle2 = s[..., 3]
     x = p[..., 0]
     y = p[..., 1]
+    _out_phi = numpy.zeros(batch + (12,))
     _x0 = 0.5*d
     _x1 = -x
     _x2 = numpy.cos(theta1)
     _x3 = numpy.cos(elbow1)
     _x4 = numpy.sin(elbow1)
     _x5 = numpy.sin(theta1)
+    _out_phi[..., 0] = _x1 - _x0 + L*(_x2*_x3 - _x4*_x5) + _x2*l
     _x6 = -y
+    _out_phi[..., 1] = _x6 + L*(_x2*_x4 + _x3*_x5) + _x5*l
     _x7 = numpy.cos(handle1)
     _x8 = numpy.sin(handle1)
     _x9 = _x3*_x8 + _x4*_x7
     _x10 = _x3*_x7 - _x4*_x8
+    _out_phi[..., 5] = 4.0*(_x10*_x5 + _x2*_x9)/(2.0 - 2.0*_x5*_x9 + 2.0*_x10*_x2)
+    del _x2, _x3, _x4, _x5, _x7, _x8, _x9, _x10
     _x11 = numpy.cos(theta2)
     _x12 = numpy.cos(elbow2)
     _x13 = numpy.sin(elbow2)
     _x14 = numpy.sin(theta2)
+    _out_phi[..., 6] = _x0 + _x1 + L*(_x11*_x12 - _x13*_x14) + _x11*l
+    _out_phi[..., 7] = _x6 + L*(_x11*_x13 + _x12*_x14) + _x14*l
+    del _x0, _x1, _x6
     _x15 = numpy.cos(handle2)
     _x16 = numpy.sin(handle2)
     _x17 = _x12*_x16 + _x13*_x15
     _x18 = _x12*_x15 - _x13*_x16
-    _out_phi = numpy.zeros(batch + (12,))
-    _out_phi[..., 0] = _x1 - _x0 + L*(_x2*_x3 - _x4*_x5) + _x2*l
-    _out_phi[..., 1] = _x6 + L*(_x2*_x4 + _x3*_x5) + _x5*l
-    _out_phi[..., 5] = 4.0*(_x10*_x5 + _x2*_x9)/(2.0 - 2.0*_x5*_x9 + 2.0*_x10*_x2)
-    _out_phi[..., 6] = _x0 + _x1 + L*(_x11*_x12 - _x13*_x14) + _x11*l
-    _out_phi[..., 7] = _x6 + L*(_x11*_x13 + _x12*_x14) + _x14*l
     _out_phi[..., 11] = 4.0*(_x11*_x17 + _x14*_x18)/(2.0 - 2.0*_x14*_x17 + 2.0*_x11*_x18)
+    del _x11, _x12, _x13, _x14, _x15, _x16, _x17, _x18
     return _out_phi
 
 
@@ -600,55 +625,63 @@ def closure_jacobians(q, s, p, *, l=0.07, L=0.09):
     handle2 = s[..., 3]
     x = p[..., 0]
     y = p[..., 1]
+    _out_Phi_p = numpy.zeros(batch + (12, 2))
+    _out_Phi_q = numpy.zeros(batch + (12, 2))
+    _out_Phi_s = numpy.zeros(batch + (12, 4))
+    _out_Phi_p[..., 0, 0] = -1.0
+    _out_Phi_p[..., 1, 1] = -1.0
+    _out_Phi_p[..., 6, 0] = -1.0
+    _out_Phi_p[..., 7, 1] = -1.0
     _x0 = numpy.sin(theta1)
     _x1 = numpy.sin(elbow1)
     _x2 = numpy.cos(theta1)
     _x3 = numpy.cos(elbow1)
     _x4 = L*(_x0*_x3 + _x1*_x2)
+    _out_Phi_q[..., 0, 0] = -(_x4 + _x0*l)
+    _out_Phi_s[..., 0, 0] = -_x4
+    del _x4
     _x5 = L*(_x2*_x3 - _x0*_x1)
+    _out_Phi_q[..., 1, 0] = _x5 + _x2*l
+    _out_Phi_s[..., 1, 0] = _x5
+    del _x5
     _x6 = numpy.cos(handle1)
     _x7 = numpy.sin(handle1)
     _x8 = _x3*_x6 - _x1*_x7
     _x9 = _x2*_x8
     _x10 = _x1*_x6 + _x3*_x7
+    del _x1, _x3, _x6, _x7
     _x11 = _x0*_x10
     _x12 = 2.0 - 2.0*_x11 + 2.0*_x9
     _x13 = 4.0*(_x9 - _x11)/_x12 + 8.0*(_x0*_x8 + _x10*_x2)**2/(_x12*_x12)
+    _out_Phi_q[..., 5, 0] = _x13
+    _out_Phi_s[..., 5, 0] = _x13
+    _out_Phi_s[..., 5, 1] = _x13
+    del _x0, _x2, _x8, _x9, _x10, _x11, _x12, _x13
     _x14 = numpy.sin(theta2)
     _x15 = numpy.sin(elbow2)
     _x16 = numpy.cos(theta2)
     _x17 = numpy.cos(elbow2)
     _x18 = L*(_x14*_x17 + _x15*_x16)
+    _out_Phi_q[..., 6, 1] = -(_x18 + _x14*l)
+    _out_Phi_s[..., 6, 2] = -_x18
+    del _x18
     _x19 = L*(_x16*_x17 - _x14*_x15)
+    _out_Phi_q[..., 7, 1] = _x19 + _x16*l
+    _out_Phi_s[..., 7, 2] = _x19
+    del _x19
     _x20 = numpy.cos(handle2)
     _x21 = numpy.sin(handle2)
     _x22 = _x17*_x20 - _x15*_x21
     _x23 = _x16*_x22
     _x24 = _x15*_x20 + _x17*_x21
+    del _x15, _x17, _x20, _x21
     _x25 = _x14*_x24
     _x26 = 2.0 - 2.0*_x25 + 2.0*_x23
     _x27 = 4.0*(_x23 - _x25)/_x26 + 8.0*(_x14*_x22 + _x16*_x24)**2/(_x26*_x26)
-    _out_Phi_p = numpy.zeros(batch + (12, 2))
-    _out_Phi_p[..., 0, 0] = -1.0
-    _out_Phi_p[..., 1, 1] = -1.0
-    _out_Phi_p[..., 6, 0] = -1.0
-    _out_Phi_p[..., 7, 1] = -1.0
-    _out_Phi_q = numpy.zeros(batch + (12, 2))
-    _out_Phi_q[..., 0, 0] = -(_x4 + _x0*l)
-    _out_Phi_q[..., 1, 0] = _x5 + _x2*l
-    _out_Phi_q[..., 5, 0] = _x13
-    _out_Phi_q[..., 6, 1] = -(_x18 + _x14*l)
-    _out_Phi_q[..., 7, 1] = _x19 + _x16*l
     _out_Phi_q[..., 11, 1] = _x27
-    _out_Phi_s = numpy.zeros(batch + (12, 4))
-    _out_Phi_s[..., 0, 0] = -_x4
-    _out_Phi_s[..., 1, 0] = _x5
-    _out_Phi_s[..., 5, 0] = _x13
-    _out_Phi_s[..., 5, 1] = _x13
-    _out_Phi_s[..., 6, 2] = -_x18
-    _out_Phi_s[..., 7, 2] = _x19
     _out_Phi_s[..., 11, 2] = _x27
     _out_Phi_s[..., 11, 3] = _x27
+    del _x14, _x16, _x22, _x23, _x24, _x25, _x26, _x27
     return ClosureJacobiansResult(_out_Phi_p, _out_Phi_q, _out_Phi_s)
 
 
@@ -718,6 +751,7 @@ def mass_matrix(q, p, *, d=0.038, l=0.07, L=0.09, m_proximal=0.00567, m_distal=0
     theta2 = q[..., 1]
     x = p[..., 0]
     y = p[..., 1]
+    _out_M = numpy.zeros(batch + (2, 2))
     _x0 = l*numpy.cos(theta1)
     _x1 = 0.5*d
     _x2 = l*numpy.sin(theta1)
@@ -730,49 +764,72 @@ def mass_matrix(q, p, *, d=0.038, l=0.07, L=0.09, m_proximal=0.00567, m_distal=0
     _x9 = y - _x4
     _x10 = _x3*_x9 - _x4*_x8
     _x11 = -_x2
+    del _x2
     _x12 = -_x4
+    del _x4
     _x13 = L*L
     _x14 = 1.0/_x13
     _x15 = 0.16666666666666666*_x13*m_distal
+    del _x13
     _x16 = -_x6
+    del _x6
     _x17 = -_x8
     _x18 = _x16*_x8 + _x9*_x5
+    del _x8
     _x19 = 1.0/_x18
+    del _x18
     _x20 = _x9*_x19
+    del _x9
     _x21 = _x16*_x19
+    del _x16
     _x22 = _x19*_x17
+    del _x17
     _x23 = _x5*_x19
+    del _x5, _x19
     _x24 = _x7*_x20
+    del _x20
     _x25 = _x10*_x21
+    del _x21
     _x26 = _x7*_x22
+    del _x7, _x22
     _x27 = _x10*_x23
+    del _x10, _x23
     _x28 = m_distal + m_handle
     _x29 = _x28*_x24
     _x30 = _x28*_x26
     _x31 = _x28*_x25
     _x32 = _x28*_x27
+    del _x28
     _x33 = x - (-_x1 + _x0)
     _x34 = _x11 + y
     _x35 = x - (_x1 + _x3)
+    del _x1
     _x36 = _x12 + y
     _x37 = (_x33*(_x26 - _x0) - _x34*(_x24 - _x11))*_x14
+    del _x0, _x11
     _x38 = (-_x34*_x25 + _x27*_x33)*_x14
+    del _x33, _x34
     _x39 = (-_x36*_x24 + _x35*_x26)*_x14
     _x40 = (_x35*(_x27 - _x3) - _x36*(_x25 - _x12))*_x14
+    del _x3, _x12, _x14, _x35, _x36
     _x41 = -_x15*_x37
     _x42 = -_x15*_x38
     _x43 = -_x15*_x39
     _x44 = -_x15*_x40
+    del _x15
     _x45 = l*l
     _x46 = 0.3333333333333333*_x45*m_proximal + 0.5*_x45*m_distal + J_rotor
+    del _x45
     _x47 = _x37*_x41 + _x39*_x43 + _x46 + _x30*_x26 + _x29*_x24
-    _x48 = _x37*_x42 + _x39*_x44 + _x32*_x26 + _x31*_x24
-    _x49 = _x38*_x42 + _x40*_x44 + _x46 + _x32*_x27 + _x31*_x25
-    _out_M = numpy.zeros(batch + (2, 2))
     _out_M[..., 0, 0] = _x47
+    del _x29, _x30, _x41, _x43, _x47
+    _x48 = _x37*_x42 + _x39*_x44 + _x32*_x26 + _x31*_x24
     _out_M[..., 0, 1] = _x48
     _out_M[..., 1, 0] = _x48
+    del _x24, _x26, _x37, _x39, _x48
+    _x49 = _x38*_x42 + _x40*_x44 + _x46 + _x32*_x27 + _x31*_x25
     _out_M[..., 1, 1] = _x49
+    del _x25, _x27, _x31, _x32, _x38, _x40, _x42, _x44, _x46, _x49
     return _out_M
 
 
@@ -814,6 +871,7 @@ def coriolis_vector(q, p, qd, *, d=0.038, l=0.07, L=0.09, m_distal=0.00729, m_ha
     y = p[..., 1]
     theta1_d = qd[..., 0]
     theta2_d = qd[..., 1]
+    _out_V = numpy.zeros(batch + (2,))
     _x0 = l*numpy.cos(theta1)
     _x2 = l*numpy.sin(theta1)
     _x1 = 0.5*d
@@ -825,52 +883,74 @@ def coriolis_vector(q, p, qd, *, d=0.038, l=0.07, L=0.09, m_distal=0.00729, m_ha
     _x3 = l*numpy.cos(theta2)
     _x8 = x - _x1 - _x3
     _x12 = -_x6
+    del _x6
     _x13 = _x12*_x8 + _x9*_x5
     _x14 = 1.0/_x13
+    del _x13
     _x15 = _x9*_x14
     _x16 = _x7*_x15
     _x21 = -_x8
     _x22 = _x14*_x21
+    del _x21
     _x23 = _x7*_x22
+    del _x7
     _x24 = _x5*_x14
+    del _x5
     _x11 = theta1_d*theta1_d
     _x10 = _x3*_x9 - _x4*_x8
+    del _x9, _x8
     _x17 = _x12*_x14
+    del _x12, _x14
     _x18 = _x10*_x17
     _x19 = _x18*theta2_d + _x16*theta1_d
     _x20 = 2.0*_x19
     _x25 = _x10*_x24
+    del _x10
     _x26 = _x25*theta2_d + _x23*theta1_d
     _x27 = 2.0*_x26
     _x28 = _x26*_x26 + _x19*_x19
+    del _x19, _x26
     _x35 = -_x0*_x27*theta1_d + _x2*_x20*theta1_d + _x28 + _x11*(_x0*_x1 + y*_x2 + x*_x0)
     _x29 = theta2_d*theta2_d
     _x36 = _x28 - _x3*_x27*theta2_d + _x4*_x20*theta2_d + _x29*(-_x1*_x3 + y*_x4 + x*_x3)
+    del _x20, _x27, _x28
     _x37 = -(_x36*_x24 + _x35*_x22)
+    del _x22, _x24
     _x38 = m_distal + m_handle
     _x39 = _x37*_x38
     _x40 = -(_x36*_x17 + _x35*_x15)
+    del _x15, _x17, _x35, _x36
     _x41 = _x40*_x38
+    del _x38
     _x30 = -_x2
+    del _x2
     _x32 = L*L
     _x33 = 1.0/_x32
     _x42 = x - (-_x1 + _x0)
     _x43 = _x30 + y
     _x46 = _x33*(_x42*(_x23 - _x0) - _x43*(_x16 - _x30))
     _x44 = x - (_x1 + _x3)
+    del _x1
     _x31 = -_x4
+    del _x4
     _x45 = _x31 + y
     _x48 = (-_x45*_x16 + _x44*_x23)*_x33
     _x34 = 0.16666666666666666*_x32*m_distal
+    del _x32
     _x50 = _x33*(_x42*(_x37 - _x11*_x30) - _x43*(_x40 + _x0*_x11))
+    del _x0, _x11, _x30
     _x51 = -_x34*_x50
+    del _x50
     _x52 = _x33*(_x44*(_x37 - _x31*_x29) - _x45*(_x40 + _x3*_x29))
+    del _x29, _x37, _x40
     _x53 = -_x34*_x52
-    _x47 = (-_x43*_x18 + _x25*_x42)*_x33
-    _x49 = _x33*(_x44*(_x25 - _x3) - _x45*(_x18 - _x31))
-    _out_V = numpy.zeros(batch + (2,))
     _out_V[..., 0] = _x46*_x51 + _x48*_x53 + _x39*_x23 + _x41*_x16
+    del _x16, _x23, _x46, _x48, _x34, _x52
+    _x47 = (-_x43*_x18 + _x25*_x42)*_x33
+    del _x42, _x43
+    _x49 = _x33*(_x44*(_x25 - _x3) - _x45*(_x18 - _x31))
     _out_V[..., 1] = _x47*_x51 + _x49*_x53 + _x39*_x25 + _x41*_x18
+    del _x3, _x18, _x25, _x39, _x41, _x33, _x44, _x31, _x45, _x51, _x53, _x47, _x49
     return _out_V
 
 
@@ -920,6 +1000,7 @@ def inverse_dynamics(q, p, qd, qdd, *, d=0.038, l=0.07, L=0.09, m_proximal=0.005
     theta2_d = qd[..., 1]
     theta1_dd = qdd[..., 0]
     theta2_dd = qdd[..., 1]
+    _out_tau = numpy.zeros(batch + (2,))
     _x0 = l*numpy.cos(theta1)
     _x2 = l*numpy.sin(theta1)
     _x1 = 0.5*d
@@ -931,56 +1012,81 @@ def inverse_dynamics(q, p, qd, qdd, *, d=0.038, l=0.07, L=0.09, m_proximal=0.005
     _x3 = l*numpy.cos(theta2)
     _x8 = x - _x1 - _x3
     _x12 = -_x6
+    del _x6
     _x13 = _x12*_x8 + _x9*_x5
     _x14 = 1.0/_x13
+    del _x13
     _x15 = _x9*_x14
     _x16 = _x7*_x15
     _x21 = -_x8
     _x22 = _x14*_x21
+    del _x21
     _x23 = _x7*_x22
+    del _x7
     _x10 = _x3*_x9 - _x4*_x8
+    del _x9, _x8
     _x24 = _x5*_x14
+    del _x5
     _x25 = _x10*_x24
     _x11 = theta1_d*theta1_d
     _x17 = _x12*_x14
+    del _x12, _x14
     _x18 = _x10*_x17
+    del _x10
     _x19 = _x18*theta2_d + _x16*theta1_d
     _x20 = 2.0*_x19
     _x26 = _x25*theta2_d + _x23*theta1_d
     _x27 = 2.0*_x26
     _x28 = _x26*_x26 + _x19*_x19
+    del _x19, _x26
     _x34 = -_x0*_x27*theta1_d + _x2*_x20*theta1_d + _x28 + _x11*(_x0*_x1 + y*_x2 + x*_x0)
     _x29 = theta2_d*theta2_d
     _x35 = _x28 - _x3*_x27*theta2_d + _x4*_x20*theta2_d + _x29*(-_x1*_x3 + y*_x4 + x*_x3)
+    del _x20, _x27, _x28
     _x36 = -(_x35*_x24 + _x34*_x22)
+    del _x22, _x24
     _x37 = _x36 + _x25*theta2_dd + _x23*theta1_dd
+    del _x36
     _x41 = m_distal + m_handle
     _x42 = _x37*_x41
     _x38 = -(_x35*_x17 + _x34*_x15)
+    del _x15, _x17, _x34, _x35
     _x39 = _x38 + _x18*theta2_dd + _x16*theta1_dd
+    del _x38
     _x43 = _x39*_x41
+    del _x41
     _x44 = l*l
     _x45 = 0.3333333333333333*_x44*m_proximal + 0.5*_x44*m_distal + J_rotor
+    del _x44
     _x30 = -_x2
+    del _x2
     _x32 = L*L
     _x33 = 1.0/_x32
     _x46 = x - (-_x1 + _x0)
     _x47 = _x30 + y
     _x50 = _x33*(_x46*(_x23 - _x0) - _x47*(_x16 - _x30))
     _x48 = x - (_x1 + _x3)
+    del _x1
     _x31 = -_x4
+    del _x4
     _x49 = _x31 + y
     _x52 = (-_x49*_x16 + _x48*_x23)*_x33
     _x40 = 0.16666666666666666*_x32*m_distal
+    del _x32
     _x54 = _x33*(_x46*(-(_x11*_x30 + _x0*theta1_dd) + _x37) - _x47*(-(-_x0*_x11 + _x30*theta1_dd) + _x39))
+    del _x0, _x11, _x30
     _x55 = -_x40*_x54
+    del _x54
     _x56 = _x33*(_x48*(-(_x31*_x29 + _x3*theta2_dd) + _x37) - _x49*(-(-_x3*_x29 + _x31*theta2_dd) + _x39))
+    del _x29, _x37, _x39
     _x57 = -_x40*_x56
-    _x51 = (-_x47*_x18 + _x25*_x46)*_x33
-    _x53 = _x33*(_x48*(_x25 - _x3) - _x49*(_x18 - _x31))
-    _out_tau = numpy.zeros(batch + (2,))
     _out_tau[..., 0] = _x50*_x55 + _x57*_x52 + _x45*theta1_dd + _x42*_x23 + _x43*_x16
+    del _x16, _x23, _x50, _x52, _x40, _x56
+    _x51 = (-_x47*_x18 + _x25*_x46)*_x33
+    del _x46, _x47
+    _x53 = _x33*(_x48*(_x25 - _x3) - _x49*(_x18 - _x31))
     _out_tau[..., 1] = _x51*_x55 + _x57*_x53 + _x45*theta2_dd + _x42*_x25 + _x43*_x18
+    del _x3, _x25, _x18, _x42, _x43, _x45, _x33, _x48, _x31, _x49, _x55, _x57, _x51, _x53
     return _out_tau
 
 
@@ -1030,6 +1136,7 @@ def forward_dynamics(q, p, qd, tau, *, d=0.038, l=0.07, L=0.09, m_proximal=0.005
     theta2_d = qd[..., 1]
     tau_theta1 = tau[..., 0]
     tau_theta2 = tau[..., 1]
+    _out_qdd = numpy.zeros(batch + (2,))
     _x0 = l*numpy.cos(theta1)
     _x1 = 0.5*d
     _x2 = l*numpy.sin(theta1)
@@ -1043,22 +1150,32 @@ def forward_dynamics(q, p, qd, tau, *, d=0.038, l=0.07, L=0.09, m_proximal=0.005
     _x10 = _x3*_x9 - _x4*_x8
     _x11 = theta1_d*theta1_d
     _x12 = -_x6
+    del _x6
     _x13 = _x12*_x8 + _x9*_x5
     _x14 = 1.0/_x13
+    del _x13
     _x15 = _x9*_x14
+    del _x9
     _x16 = _x7*_x15
     _x17 = _x12*_x14
+    del _x12
     _x18 = _x10*_x17
     _x19 = _x18*theta2_d + _x16*theta1_d
     _x20 = 2.0*_x19
     _x21 = -_x8
+    del _x8
     _x22 = _x14*_x21
+    del _x21
     _x23 = _x7*_x22
+    del _x7
     _x24 = _x5*_x14
+    del _x5, _x14
     _x25 = _x10*_x24
+    del _x10
     _x26 = _x25*theta2_d + _x23*theta1_d
     _x27 = 2.0*_x26
     _x28 = _x26*_x26 + _x19*_x19
+    del _x19, _x26
     _x29 = theta2_d*theta2_d
     _x30 = -_x2
     _x31 = -_x4
@@ -1073,38 +1190,58 @@ def forward_dynamics(q, p, qd, tau, *, d=0.038, l=0.07, L=0.09, m_proximal=0.005
     _x40 = (-_x39*_x16 + _x38*_x23)*_x33
     _x41 = _x33*(_x38*(_x25 - _x3) - _x39*(_x18 - _x31))
     _x42 = 0.16666666666666666*_x32*m_distal
+    del _x32
     _x43 = m_distal + m_handle
     _x44 = _x43*_x16
     _x45 = _x43*_x23
     _x46 = _x43*_x18
     _x47 = _x43*_x25
+    del _x43
     _x48 = -_x42*_x36
     _x49 = -_x42*_x40
     _x50 = l*l
     _x51 = 0.3333333333333333*_x50*m_proximal + 0.5*_x50*m_distal + J_rotor
+    del _x50
     _x52 = _x44*_x16 + _x45*_x23 + _x36*_x48 + _x51 + _x40*_x49
+    del _x48, _x49
     _x53 = 1.0/_x52
+    del _x52
     _x54 = -_x0*_x27*theta1_d + _x2*_x20*theta1_d + _x28 + _x11*(_x0*_x1 + y*_x2 + x*_x0)
+    del _x2
     _x55 = _x28 - _x3*_x27*theta2_d + _x4*_x20*theta2_d + _x29*(-_x1*_x3 + y*_x4 + x*_x3)
+    del _x1, _x4, _x20, _x27, _x28
     _x56 = -(_x55*_x17 + _x54*_x15)
+    del _x15, _x17
     _x57 = -(_x55*_x24 + _x54*_x22)
+    del _x22, _x24, _x54, _x55
     _x58 = _x33*(_x34*(_x57 - _x11*_x30) - _x35*(_x56 + _x0*_x11))
+    del _x0, _x11, _x30, _x34, _x35
     _x59 = -_x42*_x58
+    del _x58
     _x60 = _x33*(_x38*(_x57 - _x31*_x29) - _x39*(_x56 + _x3*_x29))
+    del _x3, _x29, _x31, _x33, _x38, _x39
     _x61 = -_x42*_x60
+    del _x60
     _x62 = -_x42*_x37
     _x63 = -_x42*_x41
+    del _x42
     _x64 = _x46*_x16 + _x47*_x23 + _x40*_x63 + _x36*_x62
+    del _x16, _x23
     _x65 = _x51 + _x47*_x25 + _x41*_x63 + _x46*_x18 + _x37*_x62
+    del _x18, _x25, _x51, _x62, _x63
     _x66 = _x53*_x64
     _x67 = -_x64*_x66 + _x65
+    del _x64, _x65
     _x68 = tau_theta1 - (_x45*_x57 + _x40*_x61 + _x36*_x59 + _x44*_x56)
+    del _x36, _x40, _x44, _x45
     _x69 = tau_theta2 - (_x41*_x61 + _x37*_x59 + _x46*_x56 + _x47*_x57) - _x68*_x66
+    del _x37, _x41, _x46, _x47, _x56, _x57, _x59, _x61
     _x70 = _x69/_x67
-    _x71 = -_x70*_x66 + _x53*_x68
-    _out_qdd = numpy.zeros(batch + (2,))
-    _out_qdd[..., 0] = _x71
     _out_qdd[..., 1] = _x70
+    del _x67, _x69
+    _x71 = -_x70*_x66 + _x53*_x68
+    _out_qdd[..., 0] = _x71
+    del _x53, _x66, _x68, _x70, _x71
     return _out_qdd
 
 
@@ -1157,6 +1294,9 @@ def operational_space(q, p, qd, *, d=0.038, l=0.07, L=0.09, m_proximal=0.00567, 
     y = p[..., 1]
     theta1_d = qd[..., 0]
     theta2_d = qd[..., 1]
+    _out_Mx = numpy.zeros(batch + (2, 2))
+    _out_Vx = numpy.zeros(batch + (2,))
+    _out_Gx = numpy.zeros(batch + (2,))
     _x0 = l*numpy.cos(theta1)
     _x1 = 0.5*d
     _x2 = l*numpy.sin(theta1)
@@ -1174,70 +1314,98 @@ def operational_space(q, p, qd, *, d=0.038, l=0.07, L=0.09, m_proximal=0.00567, 
     _x14 = -_x6
     _x15 = _x9*_x14 + _x10*_x5
     _x16 = 1.0/_x15
+    del _x15
     _x17 = _x10*_x16
     _x18 = _x7*_x17
+    del _x17
     _x19 = _x14*_x16
+    del _x14
     _x20 = _x11*_x19
+    del _x19
     _x21 = _x20*theta2_d + _x18*theta1_d
+    del _x18, _x20
     _x22 = 2.0*_x21
     _x23 = -_x9
     _x24 = _x23*_x16
+    del _x23
     _x25 = _x7*_x24
+    del _x7, _x24
     _x26 = _x5*_x16
+    del _x16
     _x27 = _x11*_x26
+    del _x11, _x26
     _x28 = _x27*theta2_d + _x25*theta1_d
+    del _x25, _x27
     _x29 = 2.0*_x28
     _x30 = _x28*_x28 + _x21*_x21
+    del _x21, _x28
     _x31 = theta2_d*theta2_d
     _x32 = _x12*_x9
+    del _x9
     _x33 = l*l
     _x34 = 0.3333333333333333*_x33*m_proximal + 0.5*_x33*m_distal + J_rotor
+    del _x33
     _x35 = _x34*_x32
     _x36 = -_x2
     _x37 = -_x4
     _x38 = L*L
     _x39 = 1.0/_x38
     _x40 = _x8*_x5
+    del _x5
     _x41 = x - (-_x1 + _x0)
     _x42 = _x36 + y
     _x43 = _x39*(-_x0*_x40*_x41 - _x42*(1.0 - _x36*_x40))
     _x44 = _x8*_x6
+    del _x6
     _x45 = _x39*(_x41*(1.0 - _x0*_x44) + _x36*_x44*_x42)
     _x46 = x - (_x1 + _x3)
     _x47 = _x37 + y
     _x48 = _x39*(-_x3*_x32*_x46 - _x47*(1.0 - _x37*_x32))
     _x49 = _x12*_x10
+    del _x10
     _x50 = _x39*(_x46*(1.0 - _x3*_x49) + _x37*_x49*_x47)
     _x51 = 0.16666666666666666*_x38*m_distal
+    del _x38
     _x52 = _x30 - _x0*_x29*theta1_d + _x2*_x22*theta1_d + _x13*(_x0*_x1 + y*_x2 + x*_x0)
+    del _x2
     _x53 = -_x8*_x52
+    del _x8, _x52
     _x54 = _x34*_x53
     _x55 = _x30 - _x3*_x29*theta2_d + _x4*_x22*theta2_d + _x31*(-_x1*_x3 + y*_x4 + x*_x3)
+    del _x1, _x4, _x22, _x29, _x30
     _x56 = -_x12*_x55
+    del _x12, _x55
     _x57 = m_distal + m_handle
     _x58 = _x57 + _x34*_x32*_x32 + _x40*_x40*_x34
+    del _x32
     _x59 = _x35*_x49 + _x40*_x34*_x44
     _x60 = _x34*_x49*_x49 + _x57 + _x34*_x44*_x44
+    del _x57
     _x61 = _x39*(-_x41*(_x13*_x36 - _x0*_x53) + _x42*(-_x0*_x13 - _x36*_x53))
+    del _x0, _x13, _x36, _x41, _x42, _x53
     _x62 = -_x51*_x61
+    del _x61
     _x63 = _x39*(-_x46*(_x31*_x37 - _x3*_x56) + _x47*(-_x3*_x31 - _x37*_x56))
+    del _x3, _x31, _x37, _x39, _x46, _x47
     _x64 = -_x51*_x63
+    _out_Vx[..., 0] = -_x54*_x40 - _x35*_x56 + _x48*_x64 + _x43*_x62
+    _out_Vx[..., 1] = -_x54*_x44 - _x34*_x56*_x49 + _x50*_x64 + _x45*_x62
+    del _x34, _x35, _x40, _x44, _x49, _x54, _x56, _x62, _x63, _x64
     _x65 = -_x51*_x43
     _x66 = -_x51*_x45
     _x67 = -_x51*_x48
     _x68 = -_x50*_x51
+    del _x51
     _x69 = _x43*_x65 + _x48*_x67 + _x58
-    _x70 = _x43*_x66 + _x48*_x68 + _x59
-    _x71 = _x45*_x66 + _x50*_x68 + _x60
-    _out_Mx = numpy.zeros(batch + (2, 2))
     _out_Mx[..., 0, 0] = _x69
+    del _x58, _x65, _x67, _x69
+    _x70 = _x43*_x66 + _x48*_x68 + _x59
     _out_Mx[..., 0, 1] = _x70
     _out_Mx[..., 1, 0] = _x70
+    del _x43, _x48, _x59, _x70
+    _x71 = _x45*_x66 + _x50*_x68 + _x60
     _out_Mx[..., 1, 1] = _x71
-    _out_Vx = numpy.zeros(batch + (2,))
-    _out_Vx[..., 0] = -_x54*_x40 - _x35*_x56 + _x48*_x64 + _x43*_x62
-    _out_Vx[..., 1] = -_x54*_x44 - _x34*_x56*_x49 + _x50*_x64 + _x45*_x62
-    _out_Gx = numpy.zeros(batch + (2,))
+    del _x45, _x50, _x60, _x66, _x68, _x71
     return OperationalSpaceResult(_out_Mx, _out_Vx, _out_Gx)
 
 
@@ -1281,6 +1449,7 @@ def kinetic_energy(q, p, qd, *, d=0.038, l=0.07, L=0.09, m_proximal=0.00567, m_d
     y = p[..., 1]
     theta1_d = qd[..., 0]
     theta2_d = qd[..., 1]
+    _out_k = numpy.zeros(batch + ())
     _x0 = l*numpy.cos(theta1)
     _x1 = 0.5*d
     _x2 = l*numpy.sin(theta1)
@@ -1293,35 +1462,54 @@ def kinetic_energy(q, p, qd, *, d=0.038, l=0.07, L=0.09, m_proximal=0.00567, m_d
     _x9 = y - _x4
     _x10 = _x3*_x9 - _x4*_x8
     _x11 = -_x2
+    del _x2
     _x12 = -_x4
+    del _x4
     _x13 = L*L
     _x14 = 1.0/_x13
     _x15 = 0.08333333333333333*_x13*m_distal
+    del _x13
     _x16 = -_x6
+    del _x6
     _x17 = -_x8
     _x18 = _x16*_x8 + _x9*_x5
+    del _x8
     _x19 = 1.0/_x18
+    del _x18
     _x20 = _x9*_x19
+    del _x9
     _x21 = _x16*_x19
+    del _x16
     _x22 = _x19*_x17
+    del _x17
     _x23 = _x5*_x19
+    del _x5, _x19
     _x24 = _x7*_x20
+    del _x20
     _x25 = _x10*_x21
+    del _x21
     _x26 = _x7*_x22
+    del _x7, _x22
     _x27 = _x10*_x23
+    del _x10, _x23
     _x28 = _x25*theta2_d + _x24*theta1_d
+    del _x24, _x25
     _x29 = _x27*theta2_d + _x26*theta1_d
+    del _x26, _x27
     _x30 = l*l
     _x31 = 0.3333333333333333*_x30*m_proximal + 0.5*_x30*m_distal + J_rotor
+    del _x30
     _x32 = m_distal + m_handle
     _x33 = x - (-_x1 + _x0)
     _x34 = _x11 + y
     _x35 = x - (_x1 + _x3)
+    del _x1
     _x36 = _x12 + y
     _x37 = _x14*(_x33*(_x29 - _x0*theta1_d) - _x34*(_x28 - _x11*theta1_d))
+    del _x0, _x11, _x33, _x34
     _x38 = _x14*(_x35*(_x29 - _x3*theta2_d) - _x36*(_x28 - _x12*theta2_d))
-    _out_k = numpy.zeros(batch + ())
     _out_k[...] = -_x15*_x37*_x37 - _x15*_x38*_x38 + 0.5*(_x31*theta1_d*theta1_d + _x31*theta2_d*theta2_d + _x29*_x29*_x32 + _x28*_x28*_x32)
+    del _x3, _x12, _x14, _x15, _x28, _x29, _x31, _x32, _x35, _x36, _x37, _x38
     return _out_k
 
 
@@ -1451,7 +1639,42 @@ def combined(p, q, s, qd, qdd, tau, *, d=0.038, l=0.07, L=0.09, m_proximal=0.005
     theta2_dd = qdd[..., 1]
     tau_theta1 = tau[..., 0]
     tau_theta2 = tau[..., 1]
+    _out_joints = numpy.zeros(batch + (2,))
+    _out_ik_margin = numpy.zeros(batch + (2,))
+    _out_position = numpy.zeros(batch + (2,))
+    _out_fk_margin = numpy.zeros(batch + ())
+    _out_points = numpy.zeros(batch + (6, 3))
+    _out_f = numpy.zeros(batch + (2,))
+    _out_J_x = numpy.zeros(batch + (2, 2))
+    _out_J_q = numpy.zeros(batch + (2, 2))
+    _out_J = numpy.zeros(batch + (2, 2))
+    _out_J_inv = numpy.zeros(batch + (2, 2))
+    _out_det_Jq = numpy.zeros(batch + ())
+    _out_det_Jx = numpy.zeros(batch + ())
+    _out_phi = numpy.zeros(batch + (12,))
+    _out_Phi_p = numpy.zeros(batch + (12, 2))
+    _out_Phi_q = numpy.zeros(batch + (12, 2))
+    _out_Phi_s = numpy.zeros(batch + (12, 4))
+    _out_G = numpy.zeros(batch + (2,))
+    _out_M = numpy.zeros(batch + (2, 2))
+    _out_V = numpy.zeros(batch + (2,))
+    _out_inverse_dynamics_tau = numpy.zeros(batch + (2,))
+    _out_forward_dynamics_qdd = numpy.zeros(batch + (2,))
+    _out_Mx = numpy.zeros(batch + (2, 2))
+    _out_Vx = numpy.zeros(batch + (2,))
+    _out_Gx = numpy.zeros(batch + (2,))
+    _out_k = numpy.zeros(batch + ())
+    _out_u = numpy.zeros(batch + ())
+    _out_points[..., 2, 0] = x
+    _out_points[..., 2, 1] = y
+    _out_points[..., 5, 0] = x
+    _out_points[..., 5, 1] = y
+    _out_Phi_p[..., 0, 0] = -1.0
+    _out_Phi_p[..., 1, 1] = -1.0
+    _out_Phi_p[..., 6, 0] = -1.0
+    _out_Phi_p[..., 7, 1] = -1.0
     _x2 = 0.5*d
+    _out_points[..., 3, 0] = _x2
     _x92 = x*_x2
     _x23 = L*L
     _x93 = 0.5*_x23
@@ -1470,18 +1693,31 @@ def combined(p, q, s, qd, qdd, tau, *, d=0.038, l=0.07, L=0.09, m_proximal=0.005
     _x106 = -_x104
     _x107 = _x106 - _x103
     _x105 = _x96*_x27
+    del _x96
     _x108 = _x107*_x107 - _x101*_x101 + _x105
+    _out_ik_margin[..., 0] = _x108
     _x109 = numpy.sqrt(_x108)
+    del _x108
     _x110 = -_x92
     _x111 = _x93 - _x99 - _x98 - _x97 - _x95
+    _out_joints[..., 0] = numpy.arctan2(_x102*_x101 + (_x103 + _x104)*_x109, -_x102*_x109 + (_x110 + _x111)*_x107)
+    del _x93, _x95, _x97, _x98, _x99, _x101, _x104, _x107, _x109
     _x112 = _x100 + _x110
+    del _x100, _x110
     _x113 = _x103 + _x106
+    del _x103, _x106
     _x114 = -_x112*_x112 + _x113*_x113 + _x105
+    _out_ik_margin[..., 1] = _x114
+    del _x105
     _x115 = numpy.sqrt(_x114)
+    _out_joints[..., 1] = numpy.arctan2(_x102*_x112 + _x115*_x113, _x102*_x115 + _x113*(_x92 + _x111))
+    del _x92, _x102, _x111, _x112, _x113, _x114, _x115
     _x3 = numpy.sin(theta1)
     _x4 = l*_x3
+    _out_points[..., 1, 1] = _x4
     _x7 = numpy.sin(theta2)
     _x8 = l*_x7
+    _out_points[..., 4, 1] = _x8
     _x19 = -_x8
     _x5 = numpy.cos(theta2)
     _x6 = l*_x5
@@ -1497,59 +1733,128 @@ def combined(p, q, s, qd, qdd, tau, *, d=0.038, l=0.07, L=0.09, m_proximal=0.005
     _x121 = _x119 + _x117
     _x122 = _x121/_x120
     _x123 = _x121*_x121/(_x120*_x120)
+    del _x120
     _x124 = _x23 - _x123*_x119 - _x117*_x123
+    _out_fk_margin[...] = _x124
+    del _x117, _x119, _x123
     _x125 = numpy.sqrt(_x124/_x121)
+    _out_position[..., 1] = _x118*_x122 + _x116*_x125 + _x4
+    del _x118, _x121, _x124
     _x21 = -_x2
+    _out_points[..., 0, 0] = _x21
     _x126 = _x21 + _x1
+    _out_position[..., 0] = _x116*_x122 + _x125*(_x19 + _x4) + _x126
+    _out_points[..., 1, 0] = _x126
+    del _x116, _x122, _x125
     _x127 = _x2 + _x6
+    _out_points[..., 4, 0] = _x127
     _x18 = x + _x2
     _x61 = _x17 + _x18
+    _out_J_x[..., 0, 0] = _x61
     _x62 = _x16 + y
+    _out_f[..., 0] = _x94 + 0.5*_x61*_x61 + 0.5*_x62*_x62
+    _out_J_x[..., 0, 1] = _x62
     _x66 = _x19 + y
+    _out_J_x[..., 1, 1] = _x66
     _x22 = x + _x21
+    del _x21
     _x88 = -_x6 + _x22
+    _out_f[..., 1] = _x94 + 0.5*_x88*_x88 + 0.5*_x66*_x66
+    _out_J_x[..., 1, 0] = _x88
+    del _x94
     _x128 = -_x4*_x61 + _x1*_x62
+    _out_J_q[..., 0, 0] = _x128
     _x129 = -_x8*_x88 + _x6*_x66
+    _out_J_q[..., 1, 1] = _x129
+    _out_det_Jq[...] = _x128*_x129
     _x130 = -y
     _x131 = _x130 + _x4
     _x132 = _x131*_x88 + _x66*_x61
+    _out_det_Jx[...] = _x132
     _x133 = 1.0/_x132
+    del _x132
     _x134 = _x128*_x133
+    _out_J[..., 0, 0] = _x134*_x66
     _x135 = _x129*_x133
+    _out_J[..., 0, 1] = _x131*_x135
+    _out_J[..., 1, 1] = _x135*_x61
+    del _x133, _x135
     _x136 = -x
     _x137 = _x127 + _x136
+    _out_J[..., 1, 0] = _x134*_x137
+    del _x127, _x134
     _x138 = 1.0/_x128
+    _out_J_inv[..., 0, 0] = _x138*_x61
+    _out_J_inv[..., 0, 1] = _x138*_x62
+    del _x128, _x138
     _x139 = 1.0/_x129
+    _out_J_inv[..., 1, 0] = _x139*_x88
+    _out_J_inv[..., 1, 1] = _x139*_x66
+    del _x129, _x139
     _x140 = numpy.sin(elbow1)
     _x141 = numpy.cos(elbow1)
     _x142 = (_x0*_x141 - _x3*_x140)*L
+    _out_phi[..., 0] = _x142 + _x136 + _x126
+    _out_Phi_q[..., 1, 0] = _x1 + _x142
+    _out_Phi_s[..., 1, 0] = _x142
+    del _x126, _x136, _x142
     _x143 = (_x3*_x141 + _x0*_x140)*L
+    _out_phi[..., 1] = _x143 + _x131
+    del _x131
     _x144 = numpy.cos(handle1)
     _x145 = numpy.sin(handle1)
     _x146 = _x141*_x145 + _x140*_x144
     _x147 = _x141*_x144 - _x140*_x145
+    del _x140, _x141, _x144, _x145
     _x148 = _x3*_x147 + _x0*_x146
     _x149 = _x0*_x147
+    del _x0, _x147
     _x150 = _x3*_x146
+    del _x3, _x146
     _x151 = 2.0 - 2.0*_x150 + 2.0*_x149
     _x152 = 4.0/_x151
+    _out_phi[..., 5] = _x148*_x152
     _x153 = numpy.sin(elbow2)
     _x154 = numpy.cos(elbow2)
     _x155 = (_x5*_x154 - _x7*_x153)*L
+    _out_phi[..., 6] = _x155 + _x137
+    _out_Phi_q[..., 7, 1] = _x6 + _x155
+    _out_Phi_s[..., 7, 2] = _x155
+    del _x137, _x155
     _x156 = (_x7*_x154 + _x5*_x153)*L
+    _out_phi[..., 7] = _x8 + _x156 + _x130
+    del _x130
     _x157 = numpy.cos(handle2)
     _x158 = numpy.sin(handle2)
     _x159 = _x154*_x158 + _x153*_x157
     _x160 = _x154*_x157 - _x153*_x158
+    del _x153, _x154, _x157, _x158
     _x161 = _x7*_x160 + _x5*_x159
     _x162 = _x5*_x160
+    del _x5, _x160
     _x163 = _x7*_x159
+    del _x7, _x159
     _x164 = 2.0 - 2.0*_x163 + 2.0*_x162
     _x165 = 4.0/_x164
+    _out_phi[..., 11] = _x161*_x165
     _x166 = -_x143
+    _out_Phi_q[..., 0, 0] = _x16 + _x166
+    _out_Phi_s[..., 0, 0] = _x166
+    del _x143, _x166
     _x167 = (_x149 - _x150)*_x152 + 8.0*_x148*_x148/(_x151*_x151)
+    _out_Phi_q[..., 5, 0] = _x167
+    _out_Phi_s[..., 5, 0] = _x167
+    _out_Phi_s[..., 5, 1] = _x167
+    del _x148, _x149, _x150, _x151, _x152, _x167
     _x168 = -_x156
+    _out_Phi_q[..., 6, 1] = _x19 + _x168
+    _out_Phi_s[..., 6, 2] = _x168
+    del _x156, _x168
     _x169 = (_x162 - _x163)*_x165 + 8.0*_x161*_x161/(_x164*_x164)
+    _out_Phi_q[..., 11, 1] = _x169
+    _out_Phi_s[..., 11, 2] = _x169
+    _out_Phi_s[..., 11, 3] = _x169
+    del _x161, _x162, _x163, _x164, _x165, _x169
     _x9 = -_x1 + x + _x2
     _x10 = -_x4 + y
     _x11 = -_x4*_x9 + _x1*_x10
@@ -1558,212 +1863,180 @@ def combined(p, q, s, qd, qdd, tau, *, d=0.038, l=0.07, L=0.09, m_proximal=0.005
     _x35 = -_x10
     _x36 = _x12*_x35 + _x13*_x9
     _x37 = 1.0/_x36
+    del _x36
     _x38 = _x13*_x37
     _x39 = _x11*_x38
     _x43 = -_x12
     _x44 = _x43*_x37
+    del _x43
     _x45 = _x11*_x44
     _x24 = 1.0/_x23
     _x63 = (-(-_x16 + _x39)*_x62 + (_x17 + _x45)*_x61)*_x24
+    del _x17
     _x20 = -_x6
     _x65 = _x20 + _x22
+    del _x22
     _x67 = (-_x39*_x66 + _x45*_x65)*_x24
     _x15 = m_distal + m_handle
     _x69 = _x15*_x39
     _x70 = _x15*_x45
     _x25 = _x23*m_distal
+    del _x23
     _x26 = 0.16666666666666666*_x25
     _x73 = -_x63*_x26
     _x74 = -_x67*_x26
     _x28 = 0.3333333333333333*m_proximal
     _x29 = 0.5*m_distal
     _x75 = _x28*_x27 + _x29*_x27 + J_rotor
+    del _x27, _x28, _x29
     _x76 = _x67*_x74 + _x63*_x73 + _x70*_x45 + _x69*_x39 + _x75
+    _out_M[..., 0, 0] = _x76
+    del _x73, _x74
     _x14 = -_x8*_x12 + _x6*_x13
     _x40 = _x35*_x37
+    del _x35
     _x41 = _x14*_x40
     _x71 = _x15*_x41
     _x46 = _x9*_x37
+    del _x37
     _x47 = _x14*_x46
     _x72 = _x15*_x47
     _x64 = (-_x41*_x62 + _x47*_x61)*_x24
     _x177 = -_x64*_x26
     _x68 = (-(-_x19 + _x41)*_x66 + (_x20 + _x47)*_x65)*_x24
+    del _x20
     _x178 = -_x68*_x26
     _x179 = _x67*_x178 + _x63*_x177 + _x72*_x45 + _x71*_x39
+    _out_M[..., 0, 1] = _x179
+    _out_M[..., 1, 0] = _x179
     _x180 = _x68*_x178 + _x64*_x177 + _x72*_x47 + _x71*_x41 + _x75
+    _out_M[..., 1, 1] = _x180
+    del _x177, _x178
     _x30 = theta1_d*theta1_d
     _x31 = _x30*(_x2*_x1 + y*_x4 + x*_x1)
     _x32 = 2.0*theta1_d
     _x33 = _x4*_x32
+    del _x4
     _x34 = _x1*_x32
+    del _x32
     _x42 = _x39*theta1_d + _x41*theta2_d
     _x48 = _x45*theta1_d + _x47*theta2_d
     _x49 = _x42*_x42 + _x48*_x48
     _x55 = -_x34*_x48 + _x33*_x42 + _x31 + _x49
+    del _x31, _x33, _x34
     _x50 = theta2_d*theta2_d
     _x51 = _x50*(-_x2*_x6 + y*_x8 + x*_x6)
+    del _x2
     _x52 = 2.0*theta2_d
     _x53 = _x8*_x52
+    del _x8
     _x54 = _x6*_x52
+    del _x52
     _x56 = _x51 + _x49 + _x53*_x42 - _x54*_x48
+    del _x49, _x51, _x53, _x54
     _x59 = -_x46*_x56 - _x44*_x55
+    del _x44, _x46
     _x170 = _x15*_x59
     _x57 = -_x40*_x56 - _x38*_x55
+    del _x38, _x40
     _x171 = _x15*_x57
     _x181 = _x24*(-_x62*(_x1*_x30 + _x57) + _x61*(-_x30*_x16 + _x59))
     _x182 = -_x26*_x181
+    del _x181
     _x183 = _x24*(-_x66*(_x6*_x50 + _x57) + _x65*(-_x50*_x19 + _x59))
     _x184 = -_x26*_x183
+    _out_V[..., 0] = _x170*_x45 + _x171*_x39 + _x67*_x184 + _x63*_x182
+    _out_V[..., 1] = _x170*_x47 + _x171*_x41 + _x68*_x184 + _x64*_x182
+    del _x170, _x171, _x183
     _x60 = _x47*theta2_dd + _x45*theta1_dd + _x59
     _x172 = _x60*_x15
     _x58 = _x41*theta2_dd + _x39*theta1_dd + _x57
     _x173 = _x58*_x15
     _x185 = _x24*(-_x62*(-_x16*theta1_dd + _x1*_x30 + _x58) + _x61*(-_x30*_x16 - _x1*theta1_dd + _x60))
+    del _x61
     _x186 = -_x26*_x185
+    del _x185
     _x187 = _x24*(-_x66*(-_x19*theta2_dd + _x6*_x50 + _x58) + _x65*(-_x6*theta2_dd - _x50*_x19 + _x60))
+    del _x65, _x60, _x58
     _x188 = -_x26*_x187
+    _out_inverse_dynamics_tau[..., 0] = _x172*_x45 + _x67*_x188 + _x173*_x39 + _x63*_x186 + _x75*theta1_dd
+    _out_inverse_dynamics_tau[..., 1] = _x172*_x47 + _x173*_x41 + _x68*_x188 + _x64*_x186 + _x75*theta2_dd
+    del _x39, _x45, _x41, _x47, _x172, _x173, _x186, _x187, _x188
     _x77 = 1.0/_x76
+    del _x76
     _x189 = _x77*_x179
     _x191 = -_x70*_x59 - _x69*_x57 - _x67*_x184 - _x63*_x182 + tau_theta1
+    del _x63, _x67, _x69, _x70
     _x190 = -_x179*_x189 + _x180
+    del _x179, _x180
     _x192 = -_x71*_x57 - _x191*_x189 - _x72*_x59 - _x64*_x182 - _x68*_x184 + tau_theta2
+    del _x71, _x72, _x64, _x68, _x59, _x57, _x182, _x184
     _x193 = _x192/_x190
+    _out_forward_dynamics_qdd[..., 1] = _x193
+    del _x190, _x192
     _x194 = _x77*_x191 - _x193*_x189
+    _out_forward_dynamics_qdd[..., 0] = _x194
+    del _x77, _x189, _x191, _x193, _x194
     _x78 = 1.0/_x11
+    del _x11
     _x82 = _x78*_x9
+    del _x9
     _x84 = -_x1 + _x18
+    del _x18
     _x85 = _x24*(-_x1*_x82*_x84 - _x62*(1.0 - _x16*_x82))
     _x79 = 1.0/_x14
+    del _x14
     _x80 = _x79*_x12
+    del _x12
     _x89 = _x24*(-_x6*_x80*_x88 - _x66*(1.0 - _x19*_x80))
     _x197 = _x80*_x80*_x75 + _x82*_x82*_x75 + _x15
     _x204 = -_x85*_x26
     _x206 = -_x89*_x26
     _x208 = _x89*_x206 + _x85*_x204 + _x197
+    _out_Mx[..., 0, 0] = _x208
+    del _x197, _x204, _x206, _x208
     _x81 = _x80*_x75
+    del _x80
     _x83 = _x82*_x75
+    del _x82
     _x86 = _x78*_x10
+    del _x10
     _x90 = _x79*_x13
+    del _x13
     _x198 = _x83*_x86 + _x81*_x90
     _x87 = _x24*(_x16*_x86*_x62 + _x84*(1.0 - _x1*_x86))
     _x205 = -_x87*_x26
     _x91 = _x24*(_x19*_x90*_x66 + _x88*(1.0 - _x6*_x90))
     _x207 = -_x91*_x26
     _x209 = _x89*_x207 + _x85*_x205 + _x198
-    _x199 = _x90*_x90*_x75 + _x86*_x86*_x75 + _x15
-    _x210 = _x87*_x205 + _x91*_x207 + _x199
-    _x195 = -_x78*_x55
-    _x196 = -_x79*_x56
-    _x200 = _x24*(-_x84*(-_x1*_x195 + _x30*_x16) + _x62*(-_x1*_x30 - _x16*_x195))
-    _x201 = -_x26*_x200
-    _x202 = _x24*(-_x88*(-_x6*_x196 + _x50*_x19) + _x66*(-_x6*_x50 - _x19*_x196))
-    _x203 = -_x26*_x202
-    _x174 = 0.08333333333333333*_x25
-    _x175 = 0.5*_x15
-    _x176 = 0.5*_x75
-    _x211 = _x24*(-_x62*(-_x16*theta1_d + _x42) + _x84*(-_x1*theta1_d + _x48))
-    _x212 = _x24*(-_x66*(-_x19*theta2_d + _x42) + _x88*(-_x6*theta2_d + _x48))
-    _out_joints = numpy.zeros(batch + (2,))
-    _out_joints[..., 0] = numpy.arctan2(_x102*_x101 + (_x103 + _x104)*_x109, -_x102*_x109 + (_x110 + _x111)*_x107)
-    _out_joints[..., 1] = numpy.arctan2(_x102*_x112 + _x115*_x113, _x102*_x115 + _x113*(_x92 + _x111))
-    _out_ik_margin = numpy.zeros(batch + (2,))
-    _out_ik_margin[..., 0] = _x108
-    _out_ik_margin[..., 1] = _x114
-    _out_position = numpy.zeros(batch + (2,))
-    _out_position[..., 0] = _x116*_x122 + _x125*(_x19 + _x4) + _x126
-    _out_position[..., 1] = _x118*_x122 + _x116*_x125 + _x4
-    _out_fk_margin = numpy.zeros(batch + ())
-    _out_fk_margin[...] = _x124
-    _out_points = numpy.zeros(batch + (6, 3))
-    _out_points[..., 0, 0] = _x21
-    _out_points[..., 1, 0] = _x126
-    _out_points[..., 1, 1] = _x4
-    _out_points[..., 2, 0] = x
-    _out_points[..., 2, 1] = y
-    _out_points[..., 3, 0] = _x2
-    _out_points[..., 4, 0] = _x127
-    _out_points[..., 4, 1] = _x8
-    _out_points[..., 5, 0] = x
-    _out_points[..., 5, 1] = y
-    _out_f = numpy.zeros(batch + (2,))
-    _out_f[..., 0] = _x94 + 0.5*_x61*_x61 + 0.5*_x62*_x62
-    _out_f[..., 1] = _x94 + 0.5*_x88*_x88 + 0.5*_x66*_x66
-    _out_J_x = numpy.zeros(batch + (2, 2))
-    _out_J_x[..., 0, 0] = _x61
-    _out_J_x[..., 0, 1] = _x62
-    _out_J_x[..., 1, 0] = _x88
-    _out_J_x[..., 1, 1] = _x66
-    _out_J_q = numpy.zeros(batch + (2, 2))
-    _out_J_q[..., 0, 0] = _x128
-    _out_J_q[..., 1, 1] = _x129
-    _out_J = numpy.zeros(batch + (2, 2))
-    _out_J[..., 0, 0] = _x134*_x66
-    _out_J[..., 0, 1] = _x131*_x135
-    _out_J[..., 1, 0] = _x134*_x137
-    _out_J[..., 1, 1] = _x135*_x61
-    _out_J_inv = numpy.zeros(batch + (2, 2))
-    _out_J_inv[..., 0, 0] = _x138*_x61
-    _out_J_inv[..., 0, 1] = _x138*_x62
-    _out_J_inv[..., 1, 0] = _x139*_x88
-    _out_J_inv[..., 1, 1] = _x139*_x66
-    _out_det_Jq = numpy.zeros(batch + ())
-    _out_det_Jq[...] = _x128*_x129
-    _out_det_Jx = numpy.zeros(batch + ())
-    _out_det_Jx[...] = _x132
-    _out_phi = numpy.zeros(batch + (12,))
-    _out_phi[..., 0] = _x142 + _x136 + _x126
-    _out_phi[..., 1] = _x143 + _x131
-    _out_phi[..., 5] = _x148*_x152
-    _out_phi[..., 6] = _x155 + _x137
-    _out_phi[..., 7] = _x8 + _x156 + _x130
-    _out_phi[..., 11] = _x161*_x165
-    _out_Phi_p = numpy.zeros(batch + (12, 2))
-    _out_Phi_p[..., 0, 0] = -1.0
-    _out_Phi_p[..., 1, 1] = -1.0
-    _out_Phi_p[..., 6, 0] = -1.0
-    _out_Phi_p[..., 7, 1] = -1.0
-    _out_Phi_q = numpy.zeros(batch + (12, 2))
-    _out_Phi_q[..., 0, 0] = _x16 + _x166
-    _out_Phi_q[..., 1, 0] = _x1 + _x142
-    _out_Phi_q[..., 5, 0] = _x167
-    _out_Phi_q[..., 6, 1] = _x19 + _x168
-    _out_Phi_q[..., 7, 1] = _x6 + _x155
-    _out_Phi_q[..., 11, 1] = _x169
-    _out_Phi_s = numpy.zeros(batch + (12, 4))
-    _out_Phi_s[..., 0, 0] = _x166
-    _out_Phi_s[..., 1, 0] = _x142
-    _out_Phi_s[..., 5, 0] = _x167
-    _out_Phi_s[..., 5, 1] = _x167
-    _out_Phi_s[..., 6, 2] = _x168
-    _out_Phi_s[..., 7, 2] = _x155
-    _out_Phi_s[..., 11, 2] = _x169
-    _out_Phi_s[..., 11, 3] = _x169
-    _out_G = numpy.zeros(batch + (2,))
-    _out_M = numpy.zeros(batch + (2, 2))
-    _out_M[..., 0, 0] = _x76
-    _out_M[..., 0, 1] = _x179
-    _out_M[..., 1, 0] = _x179
-    _out_M[..., 1, 1] = _x180
-    _out_V = numpy.zeros(batch + (2,))
-    _out_V[..., 0] = _x170*_x45 + _x171*_x39 + _x67*_x184 + _x63*_x182
-    _out_V[..., 1] = _x170*_x47 + _x171*_x41 + _x68*_x184 + _x64*_x182
-    _out_inverse_dynamics_tau = numpy.zeros(batch + (2,))
-    _out_inverse_dynamics_tau[..., 0] = _x172*_x45 + _x67*_x188 + _x173*_x39 + _x63*_x186 + _x75*theta1_dd
-    _out_inverse_dynamics_tau[..., 1] = _x172*_x47 + _x173*_x41 + _x68*_x188 + _x64*_x186 + _x75*theta2_dd
-    _out_forward_dynamics_qdd = numpy.zeros(batch + (2,))
-    _out_forward_dynamics_qdd[..., 0] = _x194
-    _out_forward_dynamics_qdd[..., 1] = _x193
-    _out_Mx = numpy.zeros(batch + (2, 2))
-    _out_Mx[..., 0, 0] = _x208
     _out_Mx[..., 0, 1] = _x209
     _out_Mx[..., 1, 0] = _x209
+    del _x198, _x209
+    _x199 = _x90*_x90*_x75 + _x86*_x86*_x75 + _x15
+    _x210 = _x87*_x205 + _x91*_x207 + _x199
     _out_Mx[..., 1, 1] = _x210
-    _out_Vx = numpy.zeros(batch + (2,))
+    del _x205, _x207, _x199, _x210
+    _x195 = -_x78*_x55
+    del _x55, _x78
+    _x196 = -_x79*_x56
+    del _x56, _x79
+    _x200 = _x24*(-_x84*(-_x1*_x195 + _x30*_x16) + _x62*(-_x1*_x30 - _x16*_x195))
+    _x201 = -_x26*_x200
+    del _x200
+    _x202 = _x24*(-_x88*(-_x6*_x196 + _x50*_x19) + _x66*(-_x6*_x50 - _x19*_x196))
+    _x203 = -_x26*_x202
     _out_Vx[..., 0] = -_x81*_x196 - _x83*_x195 + _x89*_x203 + _x85*_x201
     _out_Vx[..., 1] = -_x90*_x196*_x75 - _x86*_x195*_x75 + _x91*_x203 + _x87*_x201
-    _out_Gx = numpy.zeros(batch + (2,))
-    _out_k = numpy.zeros(batch + ())
+    del _x26, _x85, _x89, _x81, _x83, _x86, _x90, _x87, _x91, _x195, _x196, _x201, _x202, _x203
+    _x174 = 0.08333333333333333*_x25
+    del _x25
+    _x175 = 0.5*_x15
+    del _x15
+    _x176 = 0.5*_x75
+    del _x75
+    _x211 = _x24*(-_x62*(-_x16*theta1_d + _x42) + _x84*(-_x1*theta1_d + _x48))
+    del _x1, _x16, _x62, _x84
+    _x212 = _x24*(-_x66*(-_x19*theta2_d + _x42) + _x88*(-_x6*theta2_d + _x48))
     _out_k[...] = -_x174*_x212*_x212 - _x174*_x211*_x211 + _x175*_x48*_x48 + _x175*_x42*_x42 + _x50*_x176 + _x30*_x176
-    _out_u = numpy.zeros(batch + ())
+    del _x19, _x6, _x66, _x88, _x24, _x30, _x42, _x48, _x50, _x174, _x175, _x176, _x211, _x212
     return CombinedResult(_out_joints, _out_ik_margin, _out_position, _out_fk_margin, _out_points, _out_f, _out_J_x, _out_J_q, _out_J, _out_J_inv, _out_det_Jq, _out_det_Jx, _out_phi, _out_Phi_p, _out_Phi_q, _out_Phi_s, _out_G, _out_M, _out_V, _out_inverse_dynamics_tau, _out_forward_dynamics_qdd, _out_Mx, _out_Vx, _out_Gx, _out_k, _out_u)

@@ -148,26 +148,29 @@ def fk(q, *, l1=0.215, l2=0.17):
     q1 = q[..., 0]
     q2 = q[..., 1]
     q3 = q[..., 2]
-    _x0 = numpy.cos(q1)
-    _x1 = numpy.cos(q3)
-    _x2 = numpy.sin(q1)
-    _x3 = numpy.sin(q3)
-    _x4 = _x0*_x3
-    _x5 = l1*numpy.cos(q2)
-    _x6 = _x2*_x3
     _out_base_T_tcp = numpy.zeros(batch + (4, 4))
-    _out_base_T_tcp[..., 0, 0] = _x0*_x1
-    _out_base_T_tcp[..., 0, 1] = -_x2
-    _out_base_T_tcp[..., 0, 2] = -_x4
-    _out_base_T_tcp[..., 0, 3] = _x0*_x5 + _x4*l2
-    _out_base_T_tcp[..., 1, 0] = _x1*_x2
+    _out_base_T_tcp[..., 3, 3] = 1.0
+    _x0 = numpy.cos(q1)
     _out_base_T_tcp[..., 1, 1] = _x0
-    _out_base_T_tcp[..., 1, 2] = -_x6
-    _out_base_T_tcp[..., 1, 3] = _x2*_x5 + _x6*l2
-    _out_base_T_tcp[..., 2, 0] = _x3
+    _x1 = numpy.cos(q3)
+    _out_base_T_tcp[..., 0, 0] = _x0*_x1
     _out_base_T_tcp[..., 2, 2] = _x1
     _out_base_T_tcp[..., 2, 3] = l1*numpy.sin(q2) - _x1*l2
-    _out_base_T_tcp[..., 3, 3] = 1.0
+    _x2 = numpy.sin(q1)
+    _out_base_T_tcp[..., 0, 1] = -_x2
+    _out_base_T_tcp[..., 1, 0] = _x1*_x2
+    del _x1
+    _x3 = numpy.sin(q3)
+    _out_base_T_tcp[..., 2, 0] = _x3
+    _x4 = _x0*_x3
+    _out_base_T_tcp[..., 0, 2] = -_x4
+    _x5 = l1*numpy.cos(q2)
+    _out_base_T_tcp[..., 0, 3] = _x0*_x5 + _x4*l2
+    del _x0, _x4
+    _x6 = _x2*_x3
+    _out_base_T_tcp[..., 1, 2] = -_x6
+    _out_base_T_tcp[..., 1, 3] = _x2*_x5 + _x6*l2
+    del _x2, _x3, _x5, _x6
     return _out_base_T_tcp
 
 
@@ -203,76 +206,87 @@ def frames(q, *, l1=0.215, l3=0.0325):
     q1 = q[..., 0]
     q2 = q[..., 1]
     q3 = q[..., 2]
-    _x0 = numpy.cos(q1)
-    _x1 = numpy.sin(q1)
-    _x2 = -_x1
-    _x3 = numpy.cos(q2)
-    _x4 = _x0*_x3
-    _x5 = numpy.sin(q2)
-    _x6 = -_x0*_x5
-    _x7 = _x1*_x3
-    _x8 = -_x1*_x5
-    _x9 = numpy.cos(q3)
-    _x10 = _x0*_x9
-    _x11 = numpy.sin(q3)
-    _x12 = _x0*_x11
-    _x13 = -_x12
-    _x14 = _x1*_x9
-    _x15 = _x1*_x11
-    _x16 = -_x15
     _out_base_T_turret = numpy.zeros(batch + (4, 4))
-    _out_base_T_turret[..., 0, 0] = _x0
-    _out_base_T_turret[..., 0, 1] = _x2
-    _out_base_T_turret[..., 1, 0] = _x1
-    _out_base_T_turret[..., 1, 1] = _x0
+    _out_base_T_upper_arm = numpy.zeros(batch + (4, 4))
+    _out_base_T_distal = numpy.zeros(batch + (4, 4))
+    _out_base_T_lever = numpy.zeros(batch + (4, 4))
+    _out_base_T_link_c = numpy.zeros(batch + (4, 4))
     _out_base_T_turret[..., 2, 2] = 1.0
     _out_base_T_turret[..., 3, 3] = 1.0
-    _out_base_T_upper_arm = numpy.zeros(batch + (4, 4))
-    _out_base_T_upper_arm[..., 0, 0] = _x4
-    _out_base_T_upper_arm[..., 0, 1] = _x2
-    _out_base_T_upper_arm[..., 0, 2] = _x6
-    _out_base_T_upper_arm[..., 1, 0] = _x7
-    _out_base_T_upper_arm[..., 1, 1] = _x0
-    _out_base_T_upper_arm[..., 1, 2] = _x8
-    _out_base_T_upper_arm[..., 2, 0] = _x5
-    _out_base_T_upper_arm[..., 2, 2] = _x3
     _out_base_T_upper_arm[..., 3, 3] = 1.0
-    _out_base_T_distal = numpy.zeros(batch + (4, 4))
-    _out_base_T_distal[..., 0, 0] = _x10
-    _out_base_T_distal[..., 0, 1] = _x2
-    _out_base_T_distal[..., 0, 2] = _x13
-    _out_base_T_distal[..., 0, 3] = _x4*l1
-    _out_base_T_distal[..., 1, 0] = _x14
-    _out_base_T_distal[..., 1, 1] = _x0
-    _out_base_T_distal[..., 1, 2] = _x16
-    _out_base_T_distal[..., 1, 3] = _x7*l1
-    _out_base_T_distal[..., 2, 0] = _x11
-    _out_base_T_distal[..., 2, 2] = _x9
-    _out_base_T_distal[..., 2, 3] = _x5*l1
     _out_base_T_distal[..., 3, 3] = 1.0
-    _out_base_T_lever = numpy.zeros(batch + (4, 4))
-    _out_base_T_lever[..., 0, 0] = _x10
-    _out_base_T_lever[..., 0, 1] = _x2
-    _out_base_T_lever[..., 0, 2] = _x13
-    _out_base_T_lever[..., 1, 0] = _x14
-    _out_base_T_lever[..., 1, 1] = _x0
-    _out_base_T_lever[..., 1, 2] = _x16
-    _out_base_T_lever[..., 2, 0] = _x11
-    _out_base_T_lever[..., 2, 2] = _x9
     _out_base_T_lever[..., 3, 3] = 1.0
-    _out_base_T_link_c = numpy.zeros(batch + (4, 4))
-    _out_base_T_link_c[..., 0, 0] = _x4
-    _out_base_T_link_c[..., 0, 1] = _x2
-    _out_base_T_link_c[..., 0, 2] = _x6
-    _out_base_T_link_c[..., 0, 3] = _x12*l3
-    _out_base_T_link_c[..., 1, 0] = _x7
-    _out_base_T_link_c[..., 1, 1] = _x0
-    _out_base_T_link_c[..., 1, 2] = _x8
-    _out_base_T_link_c[..., 1, 3] = _x15*l3
-    _out_base_T_link_c[..., 2, 0] = _x5
-    _out_base_T_link_c[..., 2, 2] = _x3
-    _out_base_T_link_c[..., 2, 3] = -_x9*l3
     _out_base_T_link_c[..., 3, 3] = 1.0
+    _x0 = numpy.cos(q1)
+    _out_base_T_turret[..., 0, 0] = _x0
+    _out_base_T_turret[..., 1, 1] = _x0
+    _out_base_T_upper_arm[..., 1, 1] = _x0
+    _out_base_T_distal[..., 1, 1] = _x0
+    _out_base_T_lever[..., 1, 1] = _x0
+    _out_base_T_link_c[..., 1, 1] = _x0
+    _x1 = numpy.sin(q1)
+    _out_base_T_turret[..., 1, 0] = _x1
+    _x2 = -_x1
+    _out_base_T_turret[..., 0, 1] = _x2
+    _out_base_T_upper_arm[..., 0, 1] = _x2
+    _out_base_T_distal[..., 0, 1] = _x2
+    _out_base_T_lever[..., 0, 1] = _x2
+    _out_base_T_link_c[..., 0, 1] = _x2
+    del _x2
+    _x3 = numpy.cos(q2)
+    _out_base_T_upper_arm[..., 2, 2] = _x3
+    _out_base_T_link_c[..., 2, 2] = _x3
+    _x4 = _x0*_x3
+    _out_base_T_upper_arm[..., 0, 0] = _x4
+    _out_base_T_distal[..., 0, 3] = _x4*l1
+    _out_base_T_link_c[..., 0, 0] = _x4
+    del _x4
+    _x5 = numpy.sin(q2)
+    _out_base_T_upper_arm[..., 2, 0] = _x5
+    _out_base_T_distal[..., 2, 3] = _x5*l1
+    _out_base_T_link_c[..., 2, 0] = _x5
+    _x6 = -_x0*_x5
+    _out_base_T_upper_arm[..., 0, 2] = _x6
+    _out_base_T_link_c[..., 0, 2] = _x6
+    del _x6
+    _x7 = _x1*_x3
+    _out_base_T_upper_arm[..., 1, 0] = _x7
+    _out_base_T_distal[..., 1, 3] = _x7*l1
+    _out_base_T_link_c[..., 1, 0] = _x7
+    del _x3, _x7
+    _x8 = -_x1*_x5
+    _out_base_T_upper_arm[..., 1, 2] = _x8
+    _out_base_T_link_c[..., 1, 2] = _x8
+    del _x5, _x8
+    _x9 = numpy.cos(q3)
+    _out_base_T_distal[..., 2, 2] = _x9
+    _out_base_T_lever[..., 2, 2] = _x9
+    _out_base_T_link_c[..., 2, 3] = -_x9*l3
+    _x10 = _x0*_x9
+    _out_base_T_distal[..., 0, 0] = _x10
+    _out_base_T_lever[..., 0, 0] = _x10
+    del _x10
+    _x11 = numpy.sin(q3)
+    _out_base_T_distal[..., 2, 0] = _x11
+    _out_base_T_lever[..., 2, 0] = _x11
+    _x12 = _x0*_x11
+    _out_base_T_link_c[..., 0, 3] = _x12*l3
+    del _x0
+    _x13 = -_x12
+    _out_base_T_distal[..., 0, 2] = _x13
+    _out_base_T_lever[..., 0, 2] = _x13
+    del _x12, _x13
+    _x14 = _x1*_x9
+    _out_base_T_distal[..., 1, 0] = _x14
+    _out_base_T_lever[..., 1, 0] = _x14
+    del _x9, _x14
+    _x15 = _x1*_x11
+    _out_base_T_link_c[..., 1, 3] = _x15*l3
+    del _x1, _x11
+    _x16 = -_x15
+    _out_base_T_distal[..., 1, 2] = _x16
+    _out_base_T_lever[..., 1, 2] = _x16
+    del _x15, _x16
     return FramesResult(_out_base_T_turret, _out_base_T_upper_arm, _out_base_T_distal, _out_base_T_lever, _out_base_T_link_c)
 
 
@@ -298,27 +312,31 @@ def jacobian(q, *, l1=0.215, l2=0.17):
     q1 = q[..., 0]
     q2 = q[..., 1]
     q3 = q[..., 2]
+    _out_J = numpy.zeros(batch + (3, 3))
     _x0 = numpy.sin(q1)
     _x1 = l1*numpy.cos(q2)
     _x2 = l2*numpy.sin(q3)
     _x3 = _x0*_x1 + _x0*_x2
+    _out_J[..., 0, 0] = -_x3
     _x4 = numpy.cos(q1)
     _x5 = l2*numpy.cos(q3)
     _x6 = _x4*_x5
-    _x7 = -_x5 + l1*numpy.sin(q2)
-    _x8 = _x1*_x4 + _x2*_x4
-    _x9 = _x0*_x5
-    _x10 = _x2*_x0*_x0
-    _x11 = _x2*_x4*_x4
-    _out_J = numpy.zeros(batch + (3, 3))
-    _out_J[..., 0, 0] = -_x3
-    _out_J[..., 0, 1] = -(_x6 + _x4*_x7)
     _out_J[..., 0, 2] = _x6
+    _x7 = -_x5 + l1*numpy.sin(q2)
+    _out_J[..., 0, 1] = -(_x6 + _x4*_x7)
+    del _x6
+    _x8 = _x1*_x4 + _x2*_x4
     _out_J[..., 1, 0] = _x8
+    del _x1
+    _x9 = _x0*_x5
     _out_J[..., 1, 1] = -(_x9 + _x0*_x7)
     _out_J[..., 1, 2] = _x9
+    del _x5, _x7, _x9
+    _x10 = _x2*_x0*_x0
+    _x11 = _x2*_x4*_x4
     _out_J[..., 2, 1] = -_x10 - _x11 + _x0*_x3 + _x4*_x8
     _out_J[..., 2, 2] = _x10 + _x11
+    del _x0, _x2, _x3, _x4, _x8, _x10, _x11
     return _out_J
 
 
@@ -380,6 +398,7 @@ def mass_matrix(q, *, l1=0.215, l2=0.17, l3=0.0325, m_a=0.0202, I_axx=4.864e-05,
     q1 = q[..., 0]
     q2 = q[..., 1]
     q3 = q[..., 2]
+    _out_M = numpy.zeros(batch + (3, 3))
     _x0 = numpy.sin(q2)
     _x1 = numpy.cos(q2)
     _x2 = numpy.sin(q3)
@@ -394,32 +413,45 @@ def mass_matrix(q, *, l1=0.215, l2=0.17, l3=0.0325, m_a=0.0202, I_axx=4.864e-05,
     _x11 = -_x8*I_ayy + _x6*_x4 + _x10*_x8
     _x12 = _x7*_x7
     _x13 = _x5*_x5
+    del _x5
     _x14 = l1*l1
     _x15 = m_a*_x14
     _x16 = l1*_x7
+    del _x7
     _x17 = _x4*_x16
+    del _x4
     _x18 = 0.25*m_c*_x14
+    del _x14
     _x19 = _x18 + I_cyy
     _x20 = l3*m_c
     _x21 = _x6*_x20 - _x8*I_czz + _x8*_x19
+    del _x6, _x8
     _x22 = l3*l3*m_c
     _x23 = _x20*_x16
+    _out_M[..., 0, 0] = 176.89*J_m + _x3*(_x2*_x21 + _x3*(_x12*I_czz + _x13*_x19 + I_dfyy)) + I_baseyy + _x1*(_x0*_x11 + _x1*(_x10*_x12 + _x17 + _x15 + _x13*I_ayy + I_beyy)) + _x2*(_x2*(_x13*I_czz + _x12*_x19 + _x22 + _x23 + I_dfzz) + _x3*_x21) + _x0*(_x0*(_x10*_x13 + _x12*I_ayy + I_bezz) + _x1*_x11)
+    del _x0, _x1, _x2, _x3, _x10, _x11, _x12, _x13, _x16, _x19, _x20, _x21
     _x24 = _x9 + I_axx
+    del _x9
     _x25 = -_x24
     _x26 = 0.5*_x17
+    del _x17
     _x27 = _x25 - (-_x26 + _x25)
     _x28 = _x18 + I_cxx
+    del _x18
     _x29 = 125.44*J_m + _x28 + _x24
-    _x30 = -_x28
-    _x31 = 0.5*_x23
-    _x32 = _x30 - (-_x31 + _x30)
-    _x33 = _x27 + _x32
-    _out_M = numpy.zeros(batch + (3, 3))
-    _out_M[..., 0, 0] = 176.89*J_m + _x3*(_x2*_x21 + _x3*(_x12*I_czz + _x13*_x19 + I_dfyy)) + I_baseyy + _x1*(_x0*_x11 + _x1*(_x10*_x12 + _x17 + _x15 + _x13*I_ayy + I_beyy)) + _x2*(_x2*(_x13*I_czz + _x12*_x19 + _x22 + _x23 + I_dfzz) + _x3*_x21) + _x0*(_x0*(_x10*_x13 + _x12*I_ayy + I_bezz) + _x1*_x11)
     _out_M[..., 1, 1] = _x29 + _x26 - _x27 + I_bexx + _x15 + _x25
+    del _x15, _x24, _x25, _x26
+    _x30 = -_x28
+    del _x28
+    _x31 = 0.5*_x23
+    del _x23
+    _x32 = _x30 - (-_x31 + _x30)
+    _out_M[..., 2, 2] = _x29 + _x30 + _x31 + I_dfxx - _x32 + _x22
+    del _x22, _x29, _x30, _x31
+    _x33 = _x27 + _x32
     _out_M[..., 1, 2] = _x33
     _out_M[..., 2, 1] = _x33
-    _out_M[..., 2, 2] = _x29 + _x30 + _x31 + I_dfxx - _x32 + _x22
+    del _x27, _x32, _x33
     return _out_M
 
 
@@ -473,6 +505,7 @@ def coriolis_matrix(q, qd, *, l1=0.215, l2=0.17, l3=0.0325, m_a=0.0202, I_ayy=1.
     q1_d = qd[..., 0]
     q2_d = qd[..., 1]
     q3_d = qd[..., 2]
+    _out_C = numpy.zeros(batch + (3, 3))
     _x0 = numpy.cos(q3)
     _x1 = numpy.sin(q3)
     _x2 = numpy.sin(q2)
@@ -494,61 +527,91 @@ def coriolis_matrix(q, qd, *, l1=0.215, l2=0.17, l3=0.0325, m_a=0.0202, I_ayy=1.
     _x18 = _x16 + _x17
     _x19 = -_x6 - _x11 + _x15 + _x18
     _x20 = _x7*_x4
+    del _x4
     _x21 = _x20*I_czz
     _x22 = 2.0*_x21
     _x23 = _x10*_x20
+    del _x10
     _x24 = 2.0*_x23
     _x25 = -_x22 + _x24
     _x26 = l2*m_a
     _x27 = _x26*_x13
+    del _x13
     _x28 = _x8*I_ayy
     _x29 = I_azz + 0.25*l2*l2*m_a
     _x30 = _x5*_x29
     _x31 = _x28 + _x30
     _x32 = _x9*m_a + _x27 + I_beyy + _x31
+    del _x9
     _x33 = l1*_x7
+    del _x7
     _x34 = _x26*_x33
+    del _x26
     _x35 = 0.5*_x34
     _x36 = _x20*I_ayy
     _x37 = _x29*_x20
+    del _x20
     _x38 = _x35 - _x36 + _x37
     _x39 = _x2*_x38
     _x40 = _x3*_x38
+    del _x38
     _x41 = _x8*_x29
+    del _x8, _x29
     _x42 = _x5*I_ayy
+    del _x5
     _x43 = 0.5*_x27
+    del _x27
     _x44 = -_x41 - _x42 + _x43 + _x31
+    del _x31
     _x45 = 2.0*_x37
+    del _x37
     _x46 = 2.0*_x36
+    del _x36
     _x47 = -_x45 + _x46
     _x48 = _x33*_x12
+    del _x12, _x33
     _x49 = _x22 - _x24
+    del _x22, _x24
     _x50 = _x42 + _x41
+    del _x41, _x42
     _x51 = I_bezz + _x50
     _x52 = _x45 - _x46
+    del _x45, _x46
     _x53 = 0.5*(_x3*(_x2*_x51 + _x40) + _x3*((_x47 - _x34)*_x3 - _x2*_x32 + _x2*_x44 + _x40) - _x2*(_x39 + _x3*_x32) + _x2*(_x3*_x44 + _x3*_x51 + _x2*_x52 - _x39) + _x1*(_x0*_x19 + (_x49 - _x48)*_x1) + (_x0*_x25 + _x1*_x19)*_x0)
+    del _x19, _x32, _x39, _x40, _x44, _x51
     _x54 = 0.5*_x48
     _x55 = _x54 + _x23 - _x21
+    del _x21, _x23
     _x56 = _x0*_x55
     _x57 = I_dfzz + _x18 + l3*l3*m_c + _x14
+    del _x14, _x18
     _x58 = _x1*_x55
+    del _x55
     _x59 = _x11 + _x6
+    del _x6, _x11
     _x60 = -_x16 - _x15 - _x17 + _x59
+    del _x15, _x16, _x17
     _x61 = I_dfyy + _x59
+    del _x59
     _x62 = -_x30 - _x28 - _x43 + _x50
+    del _x28, _x30, _x43, _x50
     _x63 = 0.5*(_x3*((_x52 + _x34)*_x3 + _x2*_x62) + _x0*(_x1*_x57 + _x56) + _x0*(_x0*_x49 + _x56 - _x1*_x61 + _x1*_x60) + (_x3*_x62 + _x2*_x47)*_x2 - _x1*(_x58 + _x0*_x61) + _x1*(-_x58 + (_x25 + _x48)*_x1 + _x0*_x60 + _x0*_x57))
-    _x64 = _x53*q1_d
-    _x65 = _x63*q1_d
-    _x66 = -_x35 - _x54
-    _x67 = _x35 + _x54
-    _out_C = numpy.zeros(batch + (3, 3))
     _out_C[..., 0, 0] = _x53*q2_d + _x63*q3_d
+    del _x0, _x1, _x2, _x3, _x25, _x34, _x47, _x48, _x49, _x52, _x56, _x57, _x58, _x60, _x61, _x62
+    _x64 = _x53*q1_d
     _out_C[..., 0, 1] = _x64
-    _out_C[..., 0, 2] = _x65
     _out_C[..., 1, 0] = -_x64
-    _out_C[..., 1, 2] = q3_d*_x67
+    del _x53, _x64
+    _x65 = _x63*q1_d
+    _out_C[..., 0, 2] = _x65
     _out_C[..., 2, 0] = -_x65
+    del _x63, _x65
+    _x66 = -_x35 - _x54
     _out_C[..., 2, 1] = q2_d*_x66
+    del _x66
+    _x67 = _x35 + _x54
+    _out_C[..., 1, 2] = q3_d*_x67
+    del _x35, _x54, _x67
     return _out_C
 
 
@@ -612,6 +675,7 @@ def coriolis_vector(q, qd, *, l1=0.215, l2=0.17, l3=0.0325, m_a=0.0202, I_axx=4.
     q1_d = qd[..., 0]
     q2_d = qd[..., 1]
     q3_d = qd[..., 2]
+    _out_V = numpy.zeros(batch + (3,))
     _x0 = numpy.sin(q2)
     _x1 = numpy.sin(q3)
     _x2 = numpy.cos(q2)
@@ -629,10 +693,13 @@ def coriolis_vector(q, qd, *, l1=0.215, l2=0.17, l3=0.0325, m_a=0.0202, I_axx=4.
     _x14 = _x0*_x13
     _x15 = _x11 - _x14
     _x16 = _x9*_x15 - q2_d*_x14 + q2_d*_x11
+    del _x11, _x14
     _x17 = 0.25*l2*l2*m_a
     _x18 = _x17 + I_azz
     _x19 = _x17 + I_axx
+    del _x17
     _x20 = -_x9 + _x8
+    del _x8
     _x21 = _x15*_x20
     _x22 = -l2*_x7 + _x18*_x16 - _x21*_x19 + _x21*I_ayy
     _x23 = _x2*_x13
@@ -640,6 +707,7 @@ def coriolis_vector(q, qd, *, l1=0.215, l2=0.17, l3=0.0325, m_a=0.0202, I_axx=4.
     _x25 = _x23 + _x24
     _x26 = _x25*_x20
     _x27 = I_ayy*(-_x9*_x25 - q2_d*_x24 - q2_d*_x23) - _x26*_x18 + _x26*_x19
+    del _x9, _x19, _x23, _x24, _x26
     _x28 = _x2*I_bezz
     _x29 = _x5*I_bexx
     _x30 = _x2*I_beyy
@@ -648,47 +716,62 @@ def coriolis_vector(q, qd, *, l1=0.215, l2=0.17, l3=0.0325, m_a=0.0202, I_axx=4.
     _x33 = -q3_d
     _x34 = _x33 + q2_d
     _x35 = _x3*_x10
+    del _x10
     _x36 = _x1*q1_d
     _x37 = _x36*_x12
     _x38 = _x35 + _x37
     _x39 = -_x34 + _x33
+    del _x33
     _x40 = 0.25*l1*l1*m_c
     _x41 = _x39*(_x40 + I_cxx)
     _x42 = _x40 + I_cyy
+    del _x40
     _x43 = _x38*_x42
     _x44 = I_czz*(_x34*_x38 + q3_d*_x37 + q3_d*_x35) - _x38*_x41 + _x39*_x43
+    del _x35, _x37
     _x45 = q3_d*_x36
     _x46 = q1_d*q3_d
     _x47 = _x3*_x46
     _x48 = l3*m_c*_x47
     _x49 = _x3*_x13
+    del _x13
     _x50 = _x4*_x36
+    del _x36
     _x51 = -_x49 + _x50
     _x52 = -q3_d*_x50 - _x51*_x34 + q3_d*_x49
+    del _x34, _x49, _x50
     _x53 = _x51*I_czz
     _x54 = l1*_x48 + _x52*_x42 - _x53*_x39 + _x51*_x41
+    del _x41, _x42
     _x55 = 0.5*l1
     _x56 = m_c*_x55
     _x57 = _x56*_x51
     _x58 = _x3*I_dfzz
+    _out_V[..., 0] = _x1*(-_x47*I_dfyy + _x47*I_dfxx + _x58*_x46 + _x4*_x44 + l3*(_x56*_x52 + _x57*_x39 + 2.0*_x48) + _x54*_x12) + _x3*(-_x45*I_dfxx + _x4*_x54 + _x45*I_dfzz - _x45*I_dfyy - _x12*_x44) + _x2*(_x6*I_bezz - _x6*I_beyy + _x4*_x27 + l1*(_x32*_x16 - 2.0*_x7 - _x21*_x32) - _x0*_x29 + _x22*_x12) + _x0*(-_x5*_x30 + _x5*_x28 - _x27*_x12 + _x2*_x29 + _x4*_x22)
+    del _x5, _x6, _x7, _x16, _x21, _x22, _x27, _x29, _x44, _x45, _x46, _x47, _x48, _x52, _x54
     _x59 = q1_d*q1_d
     _x60 = l3*_x59
     _x61 = _x1*_x1*_x60 + l3*q3_d*q3_d
     _x62 = _x1*_x3*_x60
+    del _x60
     _x63 = m_c*(_x4*_x61 - _x12*_x62)
     _x64 = -_x55*_x63 - _x51*_x43 + _x53*_x38
+    del _x43, _x51, _x53, _x55
     _x65 = l1*_x59
     _x66 = _x0*_x2*_x65
     _x67 = -l1*q2_d*q2_d - _x2*_x2*_x65
+    del _x2, _x65
     _x68 = _x25*_x15
+    del _x15
     _x69 = m_a*(_x12*_x66 + _x4*_x67)
     _x70 = _x0*_x59
+    del _x0
     _x71 = -_x31*_x69 - _x68*I_ayy + _x18*_x68
-    _x72 = _x1*_x59
-    _out_V = numpy.zeros(batch + (3,))
-    _out_V[..., 0] = _x1*(-_x47*I_dfyy + _x47*I_dfxx + _x58*_x46 + _x4*_x44 + l3*(_x56*_x52 + _x57*_x39 + 2.0*_x48) + _x54*_x12) + _x3*(-_x45*I_dfxx + _x4*_x54 + _x45*I_dfzz - _x45*I_dfyy - _x12*_x44) + _x2*(_x6*I_bezz - _x6*I_beyy + _x4*_x27 + l1*(_x32*_x16 - 2.0*_x7 - _x21*_x32) - _x0*_x29 + _x22*_x12) + _x0*(-_x5*_x30 + _x5*_x28 - _x27*_x12 + _x2*_x29 + _x4*_x22)
     _out_V[..., 1] = _x71 - (_x71 - _x30*_x70 + _x28*_x70 - l1*(_x12*(_x69 - _x32*_x68) + _x4*(_x25*_x25*_x32 + m_a*(-_x12*_x67 + _x4*_x66) + _x32*_x20*_x20))) - _x64
+    del _x18, _x20, _x25, _x28, _x30, _x31, _x32, _x66, _x67, _x68, _x69, _x70
+    _x72 = _x1*_x59
     _out_V[..., 2] = -_x71 + _x64 - (_x64 + _x58*_x72 - _x3*_x72*I_dfyy - l3*(_x4*(-_x56*_x39*_x39 - _x56*_x38*_x38 + m_c*(-_x4*_x62 - _x12*_x61)) + _x12*(_x63 + _x57*_x38)))
+    del _x1, _x3, _x4, _x12, _x38, _x39, _x56, _x57, _x58, _x59, _x61, _x62, _x63, _x64, _x71, _x72
     return _out_V
 
 
@@ -733,6 +816,7 @@ def gravity_vector(q, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6=0.0527, m_
     q1 = q[..., 0]
     q2 = q[..., 1]
     q3 = q[..., 2]
+    _out_G = numpy.zeros(batch + (3,))
     _x0 = numpy.sin(q2)
     _x1 = numpy.sin(q3)
     _x2 = numpy.cos(q2)
@@ -740,16 +824,20 @@ def gravity_vector(q, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6=0.0527, m_
     _x4 = (_x2*_x3 + _x0*_x1)*g
     _x5 = _x3*_x4
     _x6 = _x2*_x1 - _x0*_x3
+    del _x3
     _x7 = g*_x1
+    del _x1
     _x8 = 0.5*l1*m_c
     _x9 = _x8*(_x5 + _x7*_x6)
     _x10 = g*_x2
+    del _x2
     _x11 = _x0*_x4
+    del _x0, _x4
     _x12 = 0.5*l2*m_a
     _x13 = _x12*(_x10*_x6 + _x11)
-    _out_G = numpy.zeros(batch + (3,))
     _out_G[..., 1] = -(-_x11*_x12 - _x10*(_x12*_x6 + l1*m_a + l5*m_be)) - _x13 + _x9
     _out_G[..., 2] = _x13 - (_x7*(-_x8*_x6 - l3*m_c + l6*m_df) - _x8*_x5) - _x9
+    del _x5, _x6, _x7, _x8, _x9, _x10, _x11, _x12, _x13
     return _out_G
 
 
@@ -794,6 +882,7 @@ def gravity_derivatives(q, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6=0.052
     q1 = q[..., 0]
     q2 = q[..., 1]
     q3 = q[..., 2]
+    _out_dG_dq = numpy.zeros(batch + (3, 3))
     _x0 = numpy.sin(q2)
     _x1 = numpy.sin(q3)
     _x2 = _x0*_x1
@@ -806,33 +895,48 @@ def gravity_derivatives(q, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6=0.052
     _x9 = 0.5*l1*m_c
     _x10 = _x4*_x8
     _x11 = _x9*_x10
+    del _x10
     _x12 = g*_x1
     _x13 = _x12*_x9
+    del _x12
     _x14 = g*_x6
     _x15 = -_x8
     _x16 = -_x1*_x14 + _x4*_x15
+    del _x1
     _x17 = _x9*_x16
+    del _x16
     _x18 = _x7*_x9
+    del _x9
     _x19 = g*_x3
     _x20 = 0.5*l2*m_a
     _x21 = _x20*_x19
+    del _x19
     _x22 = _x7*_x20
+    del _x7
     _x23 = _x0*_x8 + _x3*_x14
+    del _x3, _x8, _x14
     _x24 = _x20*_x23
+    del _x23
     _x25 = _x0*_x15
+    del _x15
     _x26 = _x20*_x25
+    del _x20, _x25
     _x27 = -_x5 - _x2
+    del _x2, _x5
     _x28 = g*_x4
+    del _x4
     _x29 = _x13*_x27 + _x11
     _x30 = _x17 + _x6*_x13 + _x18*_x28
     _x31 = -g*_x0
+    del _x0
     _x32 = _x24 + _x22*_x31 + _x21*_x27
-    _x33 = _x6*_x21 + _x26
-    _out_dG_dq = numpy.zeros(batch + (3, 3))
     _out_dG_dq[..., 1, 1] = _x29 + _x31*(_x22 + l1*m_a + l5*m_be) + _x24 + _x21*_x27 - _x32
-    _out_dG_dq[..., 1, 2] = _x6*_x21 + _x30 - _x33 + _x26
     _out_dG_dq[..., 2, 1] = _x11 + _x13*_x27 + _x32 - _x29
+    del _x11, _x22, _x24, _x27, _x29, _x31, _x32
+    _x33 = _x6*_x21 + _x26
+    _out_dG_dq[..., 1, 2] = _x6*_x21 + _x30 - _x33 + _x26
     _out_dG_dq[..., 2, 2] = _x17 + _x6*_x13 - _x30 + _x33 + _x28*(-l6*m_df + l3*m_c + _x18)
+    del _x6, _x13, _x17, _x18, _x21, _x26, _x28, _x30, _x33
     return _out_dG_dq
 
 
@@ -857,12 +961,13 @@ def friction(qd):
     q1_d = qd[..., 0]
     q2_d = qd[..., 1]
     q3_d = qd[..., 2]
-    _x0 = -q2_d + q3_d
-    _x1 = 0.01*numpy.tanh(10.0*_x0) + 0.0005*_x0
     _out_F_f = numpy.zeros(batch + (3,))
     _out_F_f[..., 0] = 0.01*numpy.tanh(10.0*q1_d) + 0.0005*q1_d
+    _x0 = -q2_d + q3_d
+    _x1 = 0.01*numpy.tanh(10.0*_x0) + 0.0005*_x0
     _out_F_f[..., 1] = -_x1 + 0.01*numpy.tanh(10.0*q2_d) + 0.0005*q2_d
     _out_F_f[..., 2] = _x1
+    del _x0, _x1
     return _out_F_f
 
 
@@ -945,6 +1050,7 @@ def inverse_dynamics(q, qd, qdd, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6
     q1_dd = qdd[..., 0]
     q2_dd = qdd[..., 1]
     q3_dd = qdd[..., 2]
+    _out_tau = numpy.zeros(batch + (3,))
     _x0 = numpy.sin(q2)
     _x1 = numpy.sin(q3)
     _x2 = numpy.cos(q2)
@@ -963,17 +1069,22 @@ def inverse_dynamics(q, qd, qdd, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6
     _x15 = q1_d*_x14
     _x16 = -_x0*_x15 + _x2*_x13
     _x17 = _x2*_x8
+    del _x8
     _x18 = _x0*q1_dd + _x17
     _x19 = _x7*_x18 + _x10*_x14 + _x5*_x16
     _x20 = 0.25*l2*l2*m_a
     _x21 = _x20 + I_azz
     _x22 = _x20 + I_axx
+    del _x20
     _x23 = _x4 - _x5
+    del _x4
     _x24 = _x23*_x16
     _x25 = _x12*_x11 + _x19*_x21 - _x24*_x22 + _x24*I_ayy
     _x26 = _x0*_x13 + _x2*_x15
     _x27 = _x26*_x21
+    del _x21
     _x28 = -_x23*_x27 + _x23*_x26*_x22 + I_ayy*(-_x14*_x18 + _x10*_x7 - _x5*_x26)
+    del _x5
     _x29 = _x12*m_a
     _x30 = -q3_d
     _x31 = _x30 + q2_d
@@ -982,48 +1093,64 @@ def inverse_dynamics(q, qd, qdd, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6
     _x34 = _x1*_x33
     _x35 = _x3*q1_dd - _x34
     _x36 = _x3*_x33
+    del _x33
     _x37 = _x1*q1_dd + _x36
     _x38 = 0.25*l1*l1*m_c
     _x39 = _x38 + I_cxx
     _x40 = -_x31 + _x30
+    del _x30
     _x41 = _x32*_x40
     _x42 = _x38 + I_cyy
+    del _x38
     _x43 = I_czz*(_x32*_x31 - _x35*_x14 + _x7*_x37) - _x39*_x41 + _x41*_x42
+    del _x41
     _x44 = (l3*_x36 + l3*_x37)*m_c
     _x45 = 0.5*l1
     _x46 = _x1*_x13 - _x3*_x15
+    del _x13, _x15
     _x47 = _x7*_x35 - _x31*_x46 + _x37*_x14
+    del _x31
     _x48 = _x40*_x46
     _x49 = _x44*_x45 + _x47*_x42 - _x48*I_czz + _x39*_x48
     _x50 = m_c*_x45
+    _out_tau[..., 0] = _x0*(_x17*I_bexx - _x28*_x14 + _x18*I_bezz + _x7*_x25 - _x17*I_beyy) + _x3*(-_x34*I_dfxx + _x34*I_dfzz + _x35*I_dfyy + _x7*_x49 - _x14*_x43) + 0.01*numpy.tanh(10.0*q1_d) + _x2*(-_x9*I_bexx + _x9*I_bezz + _x10*I_beyy + l1*(_x29*_x19 - _x24*_x29 + _x11) + _x7*_x28 + _x25*_x14) + _x1*(-_x36*I_dfyy + _x36*I_dfxx + l3*(_x50*_x47 + _x50*_x48 + _x44) + _x37*I_dfzz + _x14*_x49 + _x7*_x43) + 0.0005*q1_d + q1_dd*I_baseyy + 176.89*J_m*q1_dd
+    del _x9, _x10, _x11, _x17, _x18, _x19, _x24, _x25, _x28, _x34, _x35, _x36, _x37, _x43, _x44, _x47, _x48, _x49
     _x51 = q1_d*q1_d
     _x52 = l3*_x51
     _x53 = _x1*_x1*_x52 + l3*q3_d*q3_d + g*_x3
     _x54 = g*_x1
     _x55 = _x1*_x3
+    del _x1, _x3
     _x56 = _x54 - _x55*_x52 + l3*q3_dd
+    del _x52
     _x57 = m_c*(_x7*_x53 + _x56*_x14)
     _x58 = -q3_dd
     _x59 = -(_x58 + q2_dd) + _x58
+    del _x58
     _x60 = _x32*_x46
+    del _x46
     _x61 = -_x57*_x45 + _x59*_x39 - _x60*_x42 + _x60*I_czz
+    del _x39, _x42, _x45
     _x62 = 125.44*J_m
     _x63 = g*_x2
     _x64 = l1*_x51
     _x65 = _x0*_x2
     _x66 = _x63 + _x64*_x65 + l1*q2_dd
     _x67 = -l1*q2_d*q2_d - _x2*_x2*_x64 + g*_x0
+    del _x0, _x2, _x64
     _x68 = m_a*(_x14*_x66 + _x7*_x67)
     _x69 = _x26*_x16
     _x70 = -q2_dd
     _x71 = -(_x70 + q3_dd) + _x70
+    del _x70
     _x72 = _x51*_x65
+    del _x65
     _x73 = _x27*_x16 + _x22*_x71 - _x12*_x68 - _x69*I_ayy
-    _x74 = _x51*_x55
-    _out_tau = numpy.zeros(batch + (3,))
-    _out_tau[..., 0] = _x0*(_x17*I_bexx - _x28*_x14 + _x18*I_bezz + _x7*_x25 - _x17*I_beyy) + _x3*(-_x34*I_dfxx + _x34*I_dfzz + _x35*I_dfyy + _x7*_x49 - _x14*_x43) + 0.01*numpy.tanh(10.0*q1_d) + _x2*(-_x9*I_bexx + _x9*I_bezz + _x10*I_beyy + l1*(_x29*_x19 - _x24*_x29 + _x11) + _x7*_x28 + _x25*_x14) + _x1*(-_x36*I_dfyy + _x36*I_dfxx + l3*(_x50*_x47 + _x50*_x48 + _x44) + _x37*I_dfzz + _x14*_x49 + _x7*_x43) + 0.0005*q1_d + q1_dd*I_baseyy + 176.89*J_m*q1_dd
     _out_tau[..., 1] = _x73 - (_x73 + _x72*I_bezz - _x72*I_beyy - q2_dd*I_bexx - l5*m_be*_x63 - l1*(_x14*(-_x29*_x71 - _x29*_x69 + _x68) + _x7*(_x26*_x26*_x29 + _x23*_x23*_x29 + m_a*(-_x14*_x67 + _x7*_x66)))) + _x62*q2_dd - _x61 - _x6 + 0.01*numpy.tanh(10.0*q2_d) + 0.0005*q2_d
+    del _x12, _x16, _x22, _x23, _x26, _x27, _x29, _x63, _x66, _x67, _x68, _x69, _x71, _x72
+    _x74 = _x51*_x55
     _out_tau[..., 2] = _x61 + _x6 + _x62*q3_dd - (_x61 + _x74*I_dfzz - q3_dd*I_dfxx - _x74*I_dfyy + l6*m_df*_x54 - l3*(_x7*(-_x50*_x40*_x40 - _x50*_x32*_x32 + m_c*(_x7*_x56 - _x53*_x14)) + _x14*(-_x50*_x59 + _x50*_x60 + _x57))) - _x73
+    del _x6, _x7, _x14, _x32, _x40, _x50, _x51, _x53, _x54, _x55, _x56, _x57, _x59, _x60, _x61, _x62, _x73, _x74
     return _out_tau
 
 
@@ -1112,6 +1239,9 @@ def inverse_dynamics_derivatives(q, qd, qdd, *, l1=0.215, l2=0.17, l3=0.0325, l5
     q1_dd = qdd[..., 0]
     q2_dd = qdd[..., 1]
     q3_dd = qdd[..., 2]
+    _out_dtau_dq = numpy.zeros(batch + (3, 3))
+    _out_dtau_dqd = numpy.zeros(batch + (3, 3))
+    _out_dtau_dqdd = numpy.zeros(batch + (3, 3))
     _x0 = numpy.sin(q2)
     _x2 = numpy.cos(q2)
     _x1 = numpy.sin(q3)
@@ -1137,6 +1267,7 @@ def inverse_dynamics_derivatives(q, qd, qdd, *, l1=0.215, l2=0.17, l3=0.0325, l5
     _x7 = 0.25*l2*l2*m_a
     _x8 = _x7 + I_axx
     _x40 = _x7 + I_azz
+    del _x7
     _x84 = _x13*_x76 + _x81*_x40 - _x83*_x8 + _x83*I_ayy
     _x11 = _x0*_x9 + _x2*_x10
     _x12 = _x11*_x8
@@ -1145,6 +1276,7 @@ def inverse_dynamics_derivatives(q, qd, qdd, *, l1=0.215, l2=0.17, l3=0.0325, l5
     _x43 = _x2*_x4 - _x0*_x6
     _x127 = -_x82*_x43
     _x128 = _x40*_x127 + _x43*(_x82*_x8 - _x77*I_ayy)
+    del _x127
     _x44 = _x43*I_ayy
     _x37 = l1*_x2
     _x38 = _x14*_x37
@@ -1153,13 +1285,19 @@ def inverse_dynamics_derivatives(q, qd, qdd, *, l1=0.215, l2=0.17, l3=0.0325, l5
     _x132 = _x0*I_bezz - _x6*_x44 + _x4*_x131
     _x133 = (-I_beyy + I_bexx)*_x0 + _x132
     _x39 = -_x8
+    del _x8
     _x129 = _x47*(I_ayy + _x39) - _x38
+    del _x38
     _x134 = _x77*_x131 + _x82*_x129
+    del _x77
     _x46 = l1*m_a
     _x48 = _x13*_x47 + _x37
+    del _x13, _x37, _x47
     _x49 = _x46*_x48
+    del _x48
     _x140 = _x2*I_beyy + _x4*_x44 + _x6*_x131 + _x49
     _x141 = -_x74*I_bexx + _x74*I_bezz + l1*(_x14*_x81 - _x14*_x83 + _x76) + _x4*_x85 + _x73*_x133 + q1_dd*_x140 + _x75*I_beyy + _x6*_x84 + _x10*_x128 + _x9*_x134
+    del _x74, _x76, _x81, _x83
     _x35 = -_x3*_x6 + _x1*_x4
     _x36 = _x35*I_czz
     _x89 = q1_d*q3_d
@@ -1173,9 +1311,12 @@ def inverse_dynamics_derivatives(q, qd, qdd, *, l1=0.215, l2=0.17, l3=0.0325, l5
     _x87 = _x86 + q2_d
     _x88 = _x1*_x10 + _x3*_x9
     _x94 = -_x87 + _x86
+    del _x86
     _x95 = _x88*_x94
     _x96 = _x28 + I_cyy
+    del _x28
     _x97 = -_x29*_x95 + _x95*_x96 + I_czz*(_x4*_x93 - _x6*_x91 + _x88*_x87)
+    del _x95
     _x15 = 0.5*l1
     _x98 = (l3*_x92 + l3*_x93)*m_c
     _x99 = _x1*_x9 - _x3*_x10
@@ -1188,26 +1329,43 @@ def inverse_dynamics_derivatives(q, qd, qdd, *, l1=0.215, l2=0.17, l3=0.0325, l5
     _x32 = _x4*_x3 + _x1*_x6
     _x113 = _x32*_x96 + _x27
     _x112 = _x32*(_x29 - I_czz) + _x27
+    del _x27
     _x114 = -_x87*_x113 + _x112*_x94
     _x30 = -_x29
+    del _x29
     _x115 = _x35*(_x96 + _x30)
+    del _x35
     _x122 = _x115*_x94 + _x36*_x87
+    del _x87
     _x135 = -_x3*_x114 + _x1*_x122 + _x2*_x128 - _x0*_x134
     _x136 = -_x3*_x97 + _x2*_x84 - _x0*_x85 - _x44*_x80 + _x93*_x113 - _x36*_x91 + _x75*_x131 + _x1*_x102 + q1_d*_x135
     _x137 = _x1*_x114 + _x3*_x122 + _x0*_x128 + _x2*_x134
     _x144 = _x80*_x131 + _x3*_x102 + _x44*_x75 + _x0*_x84 + _x1*_x97 + _x2*_x85 + _x91*_x113 + _x36*_x93 + q1_d*_x137
+    del _x75, _x44
     _x145 = _x4*_x136 - _x6*_x144
+    del _x136, _x144
     _x142 = (I_bezz - I_bexx)*_x2 - _x49 - _x140
+    del _x49
     _x146 = -_x6*_x85 + q1_dd*_x132 + _x80*I_bezz + _x79*I_bexx + _x4*_x84 - _x79*I_beyy + _x9*_x128 - _x10*_x134 + _x73*_x142
+    _out_dtau_dq[..., 0, 1] = -_x0*_x141 - _x145 + _x2*_x146
+    del _x73, _x79, _x80, _x84, _x85, _x128, _x134, _x141, _x146
     _x31 = l3*m_c
     _x33 = _x32*_x15 + _x26
+    del _x15, _x26, _x32
     _x34 = _x31*_x33
+    del _x33
     _x117 = _x1*I_dfzz + _x6*_x113 + _x34 + _x4*_x36
     _x119 = _x3*I_dfyy + _x4*_x113 - _x6*_x36
+    _out_dtau_dqdd[..., 0, 0] = _x0*_x132 + _x2*_x140 + _x3*_x119 + I_baseyy + _x1*_x117 + 176.89*J_m
+    del _x132, _x140
     _x120 = (I_dfzz - I_dfxx)*_x3 - _x119
     _x123 = -_x92*I_dfyy + _x92*I_dfxx + _x93*I_dfzz + _x4*_x97 + _x6*_x102 + _x9*_x114 + _x10*_x122 + _x117*q1_dd + l3*(_x16*_x100 + _x16*_x101 + _x98) + _x89*_x120
+    del _x92, _x93, _x98, _x100, _x101
     _x118 = (I_dfxx - I_dfyy)*_x1 + _x34 + _x117
+    del _x34, _x117
     _x126 = -_x90*I_dfxx + _x90*I_dfzz + _x91*I_dfyy + _x4*_x102 + _x89*_x118 - _x6*_x97 - _x10*_x114 + _x119*q1_dd + _x9*_x122
+    _out_dtau_dq[..., 0, 2] = _x3*_x123 - _x1*_x126 + _x145
+    del _x89, _x90, _x91, _x97, _x102, _x114, _x122, _x145, _x119, _x123, _x126
     _x18 = q1_d*q1_d
     _x23 = l1*_x18
     _x56 = 2.0*_x2*_x23
@@ -1217,61 +1375,83 @@ def inverse_dynamics_derivatives(q, qd, qdd, *, l1=0.215, l2=0.17, l3=0.0325, l5
     _x147 = I_beyy - I_bezz
     _x52 = _x4*_x4
     _x150 = _x52*_x46 + _x6*_x51
+    del _x46
     _x151 = _x23*_x150 + _x18*_x147
     _x153 = _x150 + l5*m_be
     _x54 = 2.0*l1
     _x55 = _x4*_x14*_x54
     _x148 = -_x14*_x50
+    del _x50
     _x164 = _x78*_x148 + _x55*_x11
     _x166 = _x11*_x148
+    del _x148
     _x172 = -_x56*_x149 + _x0*_x151 + g*_x153 + _x9*_x166 + _x10*_x164
+    del _x153
     _x22 = _x2*_x2
     _x24 = -l1*q2_d*q2_d - _x22*_x23 + g*_x0
     _x25 = _x4*_x24
     _x57 = g*_x2
     _x58 = _x0*_x2
     _x59 = _x57 + _x23*_x58 + l1*q2_dd
+    del _x57
     _x19 = l3*_x18
     _x66 = g*_x1
     _x67 = _x1*_x3
     _x68 = _x66 - _x67*_x19 + l3*q3_dd
+    del _x66
     _x108 = m_a*(_x25 + _x6*_x59)
     _x109 = _x11*_x78
     _x110 = -q2_dd
     _x111 = -(_x110 + q3_dd) + _x110
+    del _x110
     _x154 = -(I_czz - _x96)
+    del _x96
     _x160 = _x88*_x154
     _x161 = _x99*_x154
+    del _x154
     _x167 = -_x3*_x160 + _x1*_x161 + _x2*_x164 - _x0*_x166
     _x168 = l1*(-_x25*m_a - _x14*_x111 - _x14*_x109 + _x108) + _x16*_x68 + _x51*_x59 + q1_d*_x167
+    del _x25, _x108, _x109, _x111
     _x17 = _x1*_x1
     _x20 = _x17*_x19 + l3*q3_d*q3_d + g*_x3
     _x60 = _x4*_x59
     _x169 = _x3*_x161 + _x0*_x164 + _x1*_x160 + _x2*_x166
     _x173 = l1*(_x60*m_a + _x14*_x11*_x11 + _x14*_x82*_x82 + m_a*(-_x6*_x24 + _x60)) + _x51*_x24 + _x16*_x20 + q1_d*_x169
+    del _x51, _x60
     _x174 = _x4*_x168 - _x6*_x173
+    del _x168, _x173
     _x175 = g*_x149 + _x2*_x151 + _x9*_x164 - _x10*_x166
+    _out_dtau_dq[..., 1, 1] = -_x0*_x172 - _x174 + _x2*_x175
+    del _x151, _x164, _x166, _x172, _x175
     _x53 = 2.0*_x1*_x19
     _x155 = _x6*_x16
     _x156 = -_x19*_x155
     _x157 = _x4*_x16
     _x162 = _x3*_x156 + g*_x155 + _x53*_x157 + _x9*_x160 + _x10*_x161
     _x163 = _x1*_x156 + g*_x157 - _x10*_x160 + _x9*_x161
+    _out_dtau_dq[..., 1, 2] = _x3*_x162 - _x1*_x163 + _x174
+    del _x160, _x161, _x174, _x156, _x162, _x163
     _x70 = _x6*_x14
     _x177 = _x4*_x14
     _x178 = _x23*_x70
+    del _x23
     _x193 = -_x78
     _x194 = _x40*_x193 + _x78*I_ayy
+    del _x40, _x193
     _x42 = -_x41
+    del _x41
     _x45 = _x11*I_ayy
+    del _x11
     _x195 = _x45 + _x42
     _x199 = -_x56*_x177 + _x0*_x178 + g*_x70 + _x10*_x194 + _x9*_x195
+    del _x56
     _x21 = _x4*_x20
     _x61 = l3*_x6
     _x63 = _x61*m_c
     _x103 = m_c*(_x6*_x68 + _x21)
     _x104 = -q3_dd
     _x105 = -(_x104 + q2_dd) + _x104
+    del _x104
     _x106 = _x88*_x99
     _x62 = _x16*_x61
     _x186 = _x62*_x88
@@ -1280,69 +1460,97 @@ def inverse_dynamics_derivatives(q, qd, qdd, *, l1=0.215, l2=0.17, l3=0.0325, l5
     _x188 = -_x65*_x88 + _x62*_x99
     _x196 = -_x3*_x186 + _x1*_x188 + _x2*_x194 - _x0*_x195
     _x197 = l3*(-_x16*_x105 + _x16*_x106 + _x103 - _x21*m_c) + _x14*_x59 + _x63*_x68 + q1_d*_x196
+    del _x59, _x21, _x103, _x105, _x106
     _x69 = _x4*_x68
+    del _x68
     _x198 = _x1*_x186 + _x3*_x188 + _x0*_x194 + _x2*_x195
     _x200 = l3*(_x69*m_c - _x16*_x94*_x94 + m_c*(_x69 - _x6*_x20) - _x16*_x88*_x88) + _x14*_x24 + q1_d*_x198 + _x63*_x20
+    del _x14, _x16, _x24, _x20, _x69
     _x201 = _x4*_x197 - _x6*_x200
+    del _x197, _x200
     _x202 = g*_x177 + _x9*_x194 + _x2*_x178 - _x10*_x195
+    _out_dtau_dq[..., 2, 1] = -_x0*_x199 - _x201 + _x2*_x202
+    del _x178, _x194, _x195, _x199, _x202
     _x176 = I_dfyy - I_dfzz
     _x180 = _x52*_x31 + _x6*_x63
+    del _x31, _x52
     _x181 = -_x19*_x180 + _x18*_x176
+    del _x18, _x19
     _x182 = _x180 - l6*m_df
     _x183 = -_x4*_x61*m_c + _x4*_x63
+    del _x61, _x63
     _x189 = _x3*_x181 + _x53*_x183 + g*_x182 + _x9*_x186 + _x10*_x188
+    del _x53, _x182
     _x192 = _x1*_x181 + g*_x183 - _x10*_x186 + _x9*_x188
+    _out_dtau_dq[..., 2, 2] = _x3*_x189 - _x1*_x192 + _x201
+    del _x9, _x10, _x186, _x188, _x201, _x181, _x189, _x192
     _x121 = _x3*_x118 + _x1*_x120
+    del _x1, _x3, _x120, _x118
     _x143 = _x2*_x133 + _x0*_x142
+    _out_dtau_dqd[..., 0, 0] = 0.0005 + 0.1*(1.0 - numpy.tanh(10.0*q1_d)**2) + q2_d*_x143 + _x4*_x137 + _x6*_x135 + q3_d*_x121
+    del _x0, _x2, _x133, _x135, _x137, _x142
     _x116 = _x88*_x115 + _x112*_x99
+    del _x112, _x115
     _x124 = -_x116 + _x36*_x88 - _x113*_x99
+    del _x36, _x88, _x99, _x113
     _x130 = _x78*_x129 + _x43*(_x12 + _x42)
+    del _x12, _x129, _x42
     _x138 = _x78*_x131 - _x130 - _x45*_x43
+    del _x78, _x43, _x131, _x45
     _x139 = _x138 + _x130
+    _out_dtau_dqd[..., 0, 1] = q1_d*_x143 - _x139 + _x124
+    del _x143, _x130, _x139
     _x125 = _x124 + _x116
+    _out_dtau_dqd[..., 0, 2] = _x138 - _x125 + q1_d*_x121
+    del _x121, _x116, _x124, _x138, _x125
     _x152 = _x58*_x150 - _x22*_x149
     _x158 = _x17*_x157 - _x67*_x155
+    del _x155
     _x159 = l3*_x158 + l1*_x152 + _x58*_x147
+    del _x147, _x152, _x158
     _x203 = 2.0*q1_d
+    _out_dtau_dqd[..., 1, 0] = _x203*_x159 + _x4*_x169 + _x6*_x167
+    del _x167, _x169, _x159
     _x165 = _x55*_x82
+    del _x82, _x55
     _x170 = -_x165
     _x171 = _x170 + _x165
+    del _x165
     _x204 = 0.1*(1.0 - numpy.tanh(10.0*(q3_d + _x5))**2)
+    del _x5
     _x205 = _x54*q2_d
-    _x206 = _x64*q3_d
-    _x207 = -0.0005 - _x204
-    _x179 = _x58*_x70 - _x22*_x177
-    _x184 = _x17*_x183 - _x67*_x180
-    _x185 = l1*_x179 + l3*_x184 + _x67*_x176
-    _x187 = -_x65*_x94
-    _x190 = -_x187
-    _x191 = _x190 + _x187
-    _x107 = 125.44*J_m
-    _x71 = -_x62
-    _x72 = l1*_x70 - _x71
-    _out_dtau_dq = numpy.zeros(batch + (3, 3))
-    _out_dtau_dq[..., 0, 1] = -_x0*_x141 - _x145 + _x2*_x146
-    _out_dtau_dq[..., 0, 2] = _x3*_x123 - _x1*_x126 + _x145
-    _out_dtau_dq[..., 1, 1] = -_x0*_x172 - _x174 + _x2*_x175
-    _out_dtau_dq[..., 1, 2] = _x3*_x162 - _x1*_x163 + _x174
-    _out_dtau_dq[..., 2, 1] = -_x0*_x199 - _x201 + _x2*_x202
-    _out_dtau_dq[..., 2, 2] = _x3*_x189 - _x1*_x192 + _x201
-    _out_dtau_dqd = numpy.zeros(batch + (3, 3))
-    _out_dtau_dqd[..., 0, 0] = 0.0005 + 0.1*(1.0 - numpy.tanh(10.0*q1_d)**2) + q2_d*_x143 + _x4*_x137 + _x6*_x135 + q3_d*_x121
-    _out_dtau_dqd[..., 0, 1] = q1_d*_x143 - _x139 + _x124
-    _out_dtau_dqd[..., 0, 2] = _x138 - _x125 + q1_d*_x121
-    _out_dtau_dqd[..., 1, 0] = _x203*_x159 + _x4*_x169 + _x6*_x167
     _out_dtau_dqd[..., 1, 1] = 0.001 - _x205*_x149 - _x171 + 0.1*(1.0 - numpy.tanh(10.0*q2_d)**2) + _x204
+    del _x149, _x54, _x171
+    _x206 = _x64*q3_d
+    del _x64
+    _x207 = -0.0005 - _x204
     _out_dtau_dqd[..., 1, 2] = _x207 + _x206*_x157 + _x170
+    del _x157, _x170
+    _x179 = _x58*_x70 - _x22*_x177
+    del _x22, _x58
+    _x184 = _x17*_x183 - _x67*_x180
+    del _x17
+    _x185 = l1*_x179 + l3*_x184 + _x67*_x176
     _out_dtau_dqd[..., 2, 0] = _x203*_x185 + _x6*_x196 + _x4*_x198
+    del _x4, _x6, _x67, _x196, _x198, _x176, _x203, _x179, _x184, _x185
+    _x187 = -_x65*_x94
+    del _x94, _x65
+    _x190 = -_x187
     _out_dtau_dqd[..., 2, 1] = -_x205*_x177 + _x207 + _x190
+    del _x177, _x205, _x207
+    _x191 = _x190 + _x187
     _out_dtau_dqd[..., 2, 2] = 0.0005 - _x191 + _x206*_x183 + _x204
-    _out_dtau_dqdd = numpy.zeros(batch + (3, 3))
-    _out_dtau_dqdd[..., 0, 0] = _x0*_x132 + _x2*_x140 + _x3*_x119 + I_baseyy + _x1*_x117 + 176.89*J_m
+    del _x183, _x204, _x206, _x187, _x190, _x191
+    _x107 = 125.44*J_m
     _out_dtau_dqdd[..., 1, 1] = -_x30 + l1*_x150 + I_bexx + _x107
+    _out_dtau_dqdd[..., 2, 2] = -_x39 + l3*_x180 + _x107 + I_dfxx
+    del _x39, _x30, _x150, _x180, _x107
+    _x71 = -_x62
+    del _x62
+    _x72 = l1*_x70 - _x71
     _out_dtau_dqdd[..., 1, 2] = _x72
     _out_dtau_dqdd[..., 2, 1] = _x72
-    _out_dtau_dqdd[..., 2, 2] = -_x39 + l3*_x180 + _x107 + I_dfxx
+    del _x70, _x71, _x72
     return InverseDynamicsDerivativesResult(_out_dtau_dq, _out_dtau_dqd, _out_dtau_dqdd)
 
 
@@ -1425,6 +1633,7 @@ def forward_dynamics(q, qd, tau, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6
     tau_q1 = tau[..., 0]
     tau_q2 = tau[..., 1]
     tau_q3 = tau[..., 2]
+    _out_qdd = numpy.zeros(batch + (3,))
     _x0 = numpy.sin(q2)
     _x1 = numpy.cos(q2)
     _x2 = numpy.sin(q3)
@@ -1442,16 +1651,21 @@ def forward_dynamics(q, qd, tau, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6
     _x27 = _x5*_x4
     _x28 = _x4*_x6
     _x30 = -_x28*I_ayy + _x27*_x15 + _x29*_x28
+    del _x15
     _x31 = _x6*_x6
     _x32 = _x4*_x4
     _x9 = 0.25*m_c
     _x20 = _x8*_x9
+    del _x8, _x9
     _x33 = _x20 + I_cyy
     _x10 = l3*m_c
     _x34 = _x28*_x33 - _x28*I_czz + _x10*_x27
+    del _x27, _x28
     _x35 = l3*l3*m_c
     _x36 = _x10*_x16
+    del _x16
     _x102 = 176.89*J_m + _x3*(_x2*_x34 + _x3*(_x31*I_czz + _x32*_x33 + I_dfyy)) + I_baseyy + _x1*(_x0*_x30 + _x1*(_x29*_x31 + _x17 + _x12 + _x32*I_ayy + I_beyy)) + _x2*(_x2*(_x32*I_czz + _x31*_x33 + _x35 + _x36 + I_dfzz) + _x3*_x34) + _x0*(_x0*(_x29*_x32 + _x31*I_ayy + I_bezz) + _x1*_x30)
+    del _x30, _x31, _x32, _x34
     _x41 = q2_d*q1_d
     _x42 = _x0*_x41
     _x43 = l1*m_a*_x42
@@ -1463,7 +1677,9 @@ def forward_dynamics(q, qd, tau, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6
     _x47 = _x0*_x46
     _x48 = _x45 - _x47
     _x49 = q2_d*_x45 - q2_d*_x47 + _x25*_x48
+    del _x45, _x47
     _x50 = _x11 - _x25
+    del _x11
     _x51 = _x50*(I_axx + _x7)
     _x52 = _x48*I_ayy
     _x53 = -_x51*_x48 + _x52*_x50 + _x29*_x49 - l2*_x43
@@ -1471,76 +1687,112 @@ def forward_dynamics(q, qd, tau, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6
     _x55 = _x0*_x44
     _x56 = _x54 + _x55
     _x57 = _x29*_x56
+    del _x29
     _x58 = -_x50*_x57 + _x56*_x51 + I_ayy*(-q2_d*_x54 - q2_d*_x55 - _x25*_x56)
+    del _x51, _x54, _x55
     _x59 = _x1*_x41
     _x60 = _x41*I_beyy
+    del _x41
     _x61 = 0.5*l2
     _x62 = m_a*_x61
     _x63 = _x62*_x48
     _x64 = -q3_d
     _x65 = _x64 + q2_d
     _x70 = -_x65 + _x64
+    del _x64
     _x66 = _x3*q1_d
     _x67 = _x4*_x66
     _x68 = _x2*_x46
+    del _x46
     _x69 = _x67 + _x68
     _x71 = _x70*(_x20 + I_cxx)
     _x72 = _x33*_x69
     _x73 = I_czz*(_x65*_x69 + q3_d*_x68 + q3_d*_x67) - _x71*_x69 + _x72*_x70
+    del _x67, _x68
     _x74 = _x2*q1_d*q3_d
     _x75 = q3_d*_x66
     _x76 = _x10*_x75
+    del _x10
     _x77 = _x6*_x66
+    del _x66
     _x78 = _x2*_x44
+    del _x44
     _x79 = -_x77 + _x78
     _x80 = -_x79*_x65 - q3_d*_x78 + q3_d*_x77
+    del _x65, _x77, _x78
     _x81 = _x79*I_czz
     _x82 = _x79*_x71 - _x81*_x70 + _x33*_x80 + l1*_x76
+    del _x33, _x71
     _x83 = _x5*m_c
     _x84 = _x79*_x83
     _x106 = tau_q1 - (0.0005*q1_d + _x3*(-_x74*I_dfxx + _x74*I_dfzz + _x4*_x82 - _x74*I_dfyy - _x6*_x73) + _x2*(_x75*I_dfxx - _x75*I_dfyy + _x4*_x73 + _x75*I_dfzz + l3*(_x80*_x83 + _x84*_x70 + 2.0*_x76) + _x6*_x82) + _x1*(-_x42*I_bexx + _x42*I_bezz + _x6*_x53 + _x4*_x58 - _x0*_x60 + l1*(_x49*_x62 - _x50*_x63 - 2.0*_x43)) + _x0*(_x59*I_bezz - _x6*_x58 + _x59*I_bexx - _x1*_x60 + _x4*_x53) + 0.01*numpy.tanh(10.0*q1_d))
+    del _x42, _x43, _x49, _x53, _x58, _x59, _x60, _x73, _x74, _x75, _x76, _x80, _x82
     _x111 = _x106/_x102
+    _out_qdd[..., 0] = _x111
+    del _x102, _x106, _x111
     _x13 = I_axx + _x7
+    del _x7
     _x14 = -_x13
     _x18 = 0.5*_x17
+    del _x17
     _x19 = _x14 - (-_x18 + _x14)
     _x21 = _x20 + I_cxx
+    del _x20
     _x22 = 125.44*J_m + _x21 + _x13
+    del _x13
     _x23 = _x14 + _x12 + I_bexx - _x19 + _x18 + _x22
+    del _x12, _x14, _x18
     _x24 = 1.0/_x23
+    del _x23
     _x37 = -_x21
+    del _x21
     _x38 = 0.5*_x36
+    del _x36
     _x39 = _x37 - (-_x38 + _x37)
     _x40 = _x19 + _x39
+    del _x19
     _x104 = _x24*_x40
     _x26 = 0.01*numpy.tanh(10.0*_x25) + 0.0005*_x25
+    del _x25
     _x88 = g*_x1
     _x85 = q1_d*q1_d
     _x86 = l1*_x85
     _x87 = _x0*_x1
     _x89 = _x87*_x86 + _x88
     _x90 = -l1*q2_d*q2_d - _x1*_x1*_x86 + g*_x0
+    del _x0, _x1, _x86
     _x91 = (_x4*_x90 + _x6*_x89)*m_a
     _x92 = _x87*_x85
+    del _x87
     _x93 = -_x91*_x61 - _x56*_x52 + _x57*_x48
+    del _x48, _x52, _x57, _x61
     _x94 = l3*_x85
     _x95 = l3*q3_d*q3_d + _x2*_x2*_x94 + g*_x3
     _x96 = _x3*_x2
+    del _x3
     _x97 = g*_x2
+    del _x2
     _x98 = -_x94*_x96 + _x97
+    del _x94
     _x99 = (_x6*_x98 + _x4*_x95)*m_c
     _x100 = _x81*_x69 - _x5*_x99 - _x79*_x72
+    del _x5, _x72, _x79, _x81
     _x107 = tau_q2 - (_x93 - _x100 - (_x93 + _x92*I_bezz - _x92*I_beyy - l5*m_be*_x88 - l1*(_x6*(_x91 - _x56*_x63) + _x4*(_x56*_x56*_x62 + _x50*_x50*_x62 + (-_x6*_x90 + _x4*_x89)*m_a))) - _x26 + 0.01*numpy.tanh(10.0*q2_d) + 0.0005*q2_d)
+    del _x50, _x56, _x62, _x63, _x88, _x89, _x90, _x91, _x92
     _x103 = _x35 - _x39 + I_dfxx + _x38 + _x37 + _x22
+    del _x35, _x22, _x37, _x38, _x39
     _x105 = -_x40*_x104 + _x103
+    del _x40, _x103
     _x101 = _x85*_x96
+    del _x85, _x96
     _x108 = tau_q3 - (_x100 - _x93 - (_x100 - _x101*I_dfyy + _x101*I_dfzz - l3*(_x4*(-_x83*_x70*_x70 + (_x4*_x98 - _x6*_x95)*m_c - _x83*_x69*_x69) + _x6*(_x99 + _x84*_x69)) + l6*m_df*_x97) + _x26) - _x104*_x107
+    del _x6, _x4, _x70, _x69, _x83, _x84, _x26, _x93, _x95, _x97, _x98, _x99, _x100, _x101
     _x109 = _x108/_x105
-    _x110 = -_x109*_x104 + _x24*_x107
-    _out_qdd = numpy.zeros(batch + (3,))
-    _out_qdd[..., 0] = _x111
-    _out_qdd[..., 1] = _x110
     _out_qdd[..., 2] = _x109
+    del _x105, _x108
+    _x110 = -_x109*_x104 + _x24*_x107
+    _out_qdd[..., 1] = _x110
+    del _x24, _x104, _x107, _x109, _x110
     return _out_qdd
 
 
@@ -1629,6 +1881,9 @@ def forward_dynamics_derivatives(q, qd, tau, *, l1=0.215, l2=0.17, l3=0.0325, l5
     tau_q1 = tau[..., 0]
     tau_q2 = tau[..., 1]
     tau_q3 = tau[..., 2]
+    _out_dqdd_dq = numpy.zeros(batch + (3, 3))
+    _out_dqdd_dqd = numpy.zeros(batch + (3, 3))
+    _out_dqdd_dtau = numpy.zeros(batch + (3, 3))
     _x0 = numpy.sin(q2)
     _x1 = numpy.cos(q2)
     _x2 = numpy.sin(q3)
@@ -1648,15 +1903,20 @@ def forward_dynamics_derivatives(q, qd, tau, *, l1=0.215, l2=0.17, l3=0.0325, l5
     _x28 = _x8*m_a
     _x29 = l1*_x6
     _x30 = _x22*_x29
+    del _x22
     _x9 = 0.25*m_c
     _x16 = _x8*_x9
+    del _x8, _x9
     _x31 = I_cyy + _x16
     _x10 = l3*m_c
     _x32 = _x24*_x31 - _x24*I_czz + _x10*_x23
+    del _x23, _x24
     _x33 = l3*l3*m_c
     _x34 = _x10*_x29
     _x35 = 176.89*J_m + _x3*(_x2*_x32 + _x3*(_x26*I_czz + _x27*_x31 + I_dfyy)) + I_baseyy + _x1*(_x0*_x25 + _x1*(_x21*_x26 + _x30 + _x28 + _x27*I_ayy + I_beyy)) + _x2*(_x2*(_x27*I_czz + _x26*_x31 + _x33 + _x34 + I_dfzz) + _x3*_x32) + _x0*(_x0*(_x21*_x27 + _x26*I_ayy + I_bezz) + _x1*_x25)
+    del _x25, _x26, _x32
     _x150 = 1.0/_x35
+    _out_dqdd_dtau[..., 0, 0] = _x150
     _x11 = q2_d*q1_d
     _x14 = 0.5*l2
     _x57 = _x14*m_a
@@ -1667,6 +1927,7 @@ def forward_dynamics_derivatives(q, qd, tau, *, l1=0.215, l2=0.17, l3=0.0325, l5
     _x13 = -q2_d
     _x50 = _x13 + q3_d
     _x55 = -_x50 + _x13
+    del _x13
     _x58 = _x5*m_c
     _x101 = _x1*_x76
     _x102 = _x0*_x77
@@ -1675,6 +1936,7 @@ def forward_dynamics_derivatives(q, qd, tau, *, l1=0.215, l2=0.17, l3=0.0325, l5
     _x15 = -q3_d
     _x131 = q2_d + _x15
     _x132 = _x15 - _x131
+    del _x15
     _x114 = _x3*q1_d
     _x119 = _x6*_x114
     _x120 = _x2*_x76
@@ -1683,6 +1945,7 @@ def forward_dynamics_derivatives(q, qd, tau, *, l1=0.215, l2=0.17, l3=0.0325, l5
     _x12 = l1*m_a
     _x157 = _x12*_x156
     _x158 = q2_d*_x101 - q2_d*_x102 + _x50*_x103
+    del _x101, _x102
     _x111 = _x103*I_ayy
     _x159 = _x55*(I_axx + _x7)
     _x160 = _x111*_x55 - _x159*_x103 + _x21*_x158 - l2*_x157
@@ -1691,6 +1954,7 @@ def forward_dynamics_derivatives(q, qd, tau, *, l1=0.215, l2=0.17, l3=0.0325, l5
     _x100 = _x98 + _x99
     _x112 = _x21*_x100
     _x161 = _x100*_x159 - _x112*_x55 + I_ayy*(-q2_d*_x98 - q2_d*_x99 - _x50*_x100)
+    del _x159, _x98, _x99
     _x162 = _x1*_x11
     _x163 = _x11*I_beyy
     _x115 = _x4*_x114
@@ -1699,15 +1963,21 @@ def forward_dynamics_derivatives(q, qd, tau, *, l1=0.215, l2=0.17, l3=0.0325, l5
     _x118 = _x31*_x117
     _x164 = _x132*(I_cxx + _x16)
     _x165 = I_czz*(_x131*_x117 + q3_d*_x116 + q3_d*_x115) - _x164*_x117 + _x118*_x132
+    del _x115, _x116
     _x17 = q1_d*q3_d
     _x166 = _x2*_x17
     _x167 = q3_d*_x114
+    del _x114
     _x168 = _x10*_x167
     _x169 = -_x121*_x131 - q3_d*_x120 + q3_d*_x119
+    del _x119, _x120
     _x122 = _x121*I_czz
     _x170 = _x121*_x164 - _x122*_x132 + _x31*_x169 + l1*_x168
+    del _x164
     _x171 = tau_q1 - (_x2*(_x167*I_dfxx - _x167*I_dfyy + _x4*_x165 + _x167*I_dfzz + l3*(_x58*_x169 + _x133*_x132 + 2.0*_x168) + _x6*_x170) + 0.0005*q1_d + _x3*(-_x166*I_dfxx + _x166*I_dfzz + _x4*_x170 - _x166*I_dfyy - _x6*_x165) + _x1*(-_x156*I_bexx + _x156*I_bezz + _x6*_x160 + _x4*_x161 - _x0*_x163 + l1*(_x57*_x158 - _x104*_x55 - 2.0*_x157)) + _x0*(_x162*I_bezz - _x6*_x161 + _x162*I_bexx - _x1*_x163 + _x4*_x160) + 0.01*_x48)
+    del _x157, _x158, _x160, _x161, _x163, _x165, _x167, _x168, _x169, _x170
     _x172 = _x171/_x35
+    del _x35, _x171
     _x173 = -_x156 + _x1*_x172
     _x174 = m_a*(-l1*_x156 + l1*_x173)
     _x175 = _x1*_x76 - _x0*_x77
@@ -1715,6 +1985,7 @@ def forward_dynamics_derivatives(q, qd, tau, *, l1=0.215, l2=0.17, l3=0.0325, l5
     _x177 = _x50*_x175 + _x6*_x173 + _x4*_x176
     _x178 = _x55*_x175
     _x36 = I_axx + _x7
+    del _x7
     _x179 = _x14*_x174 + _x21*_x177 - _x36*_x178 + _x178*I_ayy
     _x56 = _x36*_x55
     _x78 = _x1*_x77 + _x0*_x76
@@ -1723,6 +1994,7 @@ def forward_dynamics_derivatives(q, qd, tau, *, l1=0.215, l2=0.17, l3=0.0325, l5
     _x81 = -_x0*_x6 + _x1*_x4
     _x215 = -_x81*_x55
     _x216 = _x21*_x215 + _x81*(_x56 - _x50*I_ayy)
+    del _x56, _x215
     _x82 = _x81*I_ayy
     _x74 = l1*_x1
     _x75 = _x74*_x57
@@ -1731,20 +2003,26 @@ def forward_dynamics_derivatives(q, qd, tau, *, l1=0.215, l2=0.17, l3=0.0325, l5
     _x220 = _x4*_x219 - _x6*_x82 + _x0*I_bezz
     _x221 = _x220 + (-I_beyy + I_bexx)*_x0
     _x217 = _x84*(I_ayy - _x36) - _x75
+    del _x75
     _x222 = _x50*_x219 + _x217*_x55
     _x85 = _x14*_x84 + _x74
+    del _x74, _x84
     _x86 = _x12*_x85
+    del _x85
     _x228 = _x86 + _x4*_x82 + _x6*_x219 + _x1*I_beyy
     _x229 = _x228*_x172 + _x11*_x221 + _x222*_x76 + _x216*_x77 + l1*(_x174 - _x57*_x178 + _x57*_x177) + _x6*_x179 + _x4*_x180 + _x156*I_bezz + _x173*I_beyy - _x156*I_bexx
+    del _x156, _x174, _x177, _x178
     _x69 = _x2*_x4 - _x3*_x6
     _x70 = _x69*I_czz
     _x182 = -_x166 + _x3*_x172
     _x183 = _x3*_x17
     _x184 = _x183 + _x2*_x172
     _x40 = I_cxx + _x16
+    del _x16
     _x181 = _x3*_x76 + _x2*_x77
     _x185 = _x132*_x181
     _x186 = I_czz*(_x131*_x181 - _x6*_x182 + _x4*_x184) - _x40*_x185 + _x31*_x185
+    del _x185
     _x187 = (l3*_x184 + l3*_x183)*m_c
     _x188 = -_x3*_x77 + _x2*_x76
     _x189 = -_x131*_x188 + _x4*_x182 + _x6*_x184
@@ -1755,38 +2033,62 @@ def forward_dynamics_derivatives(q, qd, tau, *, l1=0.215, l2=0.17, l3=0.0325, l5
     _x71 = _x2*_x6 + _x3*_x4
     _x201 = _x31*_x71 + _x68
     _x200 = _x71*(_x40 - I_czz) + _x68
+    del _x68
     _x202 = -_x131*_x201 + _x132*_x200
     _x203 = (_x31 - _x40)*_x69
+    del _x69
     _x210 = _x132*_x203 + _x70*_x131
+    del _x131
     _x223 = _x1*_x216 - _x0*_x222 + _x2*_x210 - _x3*_x202
     _x224 = _x219*_x173 - _x82*_x176 + _x201*_x184 + q1_d*_x223 + _x2*_x191 - _x70*_x182 - _x0*_x180 + _x1*_x179 - _x3*_x186
     _x225 = _x1*_x222 + _x0*_x216 + _x3*_x210 + _x2*_x202
     _x232 = q1_d*_x225 + _x70*_x184 + _x201*_x182 + _x219*_x176 + _x2*_x186 + _x0*_x179 + _x1*_x180 + _x82*_x173 + _x3*_x191
+    del _x173, _x82
     _x233 = _x4*_x224 - _x6*_x232
+    del _x224, _x232
     _x230 = -_x228 - _x86 + (I_bezz - I_bexx)*_x1
+    del _x86, _x228
     _x234 = _x220*_x172 + _x162*I_bexx + _x216*_x76 + _x4*_x179 + _x11*_x230 - _x162*I_beyy + _x176*I_bezz - _x222*_x77 - _x6*_x180
+    del _x11, _x162, _x176, _x179, _x180, _x216, _x220, _x222
     _x289 = -(-_x0*_x229 - _x233 + _x1*_x234)
+    del _x229, _x234
     _x294 = _x150*_x289
+    _out_dqdd_dq[..., 0, 1] = _x294
+    del _x289, _x294
     _x72 = _x5*_x71 + _x67
+    del _x67, _x71
     _x73 = _x10*_x72
+    del _x72
     _x205 = _x73 + _x4*_x70 + _x2*I_dfzz + _x6*_x201
     _x207 = _x4*_x201 - _x6*_x70 + _x3*I_dfyy
     _x208 = -_x207 + (I_dfzz - I_dfxx)*_x3
     _x211 = _x210*_x77 + _x17*_x208 + _x4*_x186 + _x205*_x172 + _x202*_x76 + l3*(_x187 + _x58*_x190 + _x58*_x189) + _x184*I_dfzz + _x6*_x191 + _x183*I_dfxx - _x183*I_dfyy
+    del _x183, _x184, _x187, _x189, _x190
     _x206 = _x205 + _x73 + (I_dfxx - I_dfyy)*_x2
+    del _x73, _x205
     _x214 = _x210*_x76 - _x202*_x77 + _x207*_x172 + _x17*_x206 - _x6*_x186 + _x4*_x191 + _x182*I_dfyy + _x166*I_dfzz - _x166*I_dfxx
+    del _x17, _x166, _x172, _x182, _x186, _x191, _x202, _x210, _x207
     _x295 = -(_x3*_x211 - _x2*_x214 + _x233)
+    del _x233, _x211, _x214
     _x300 = _x150*_x295
+    _out_dqdd_dq[..., 0, 2] = _x300
+    del _x295, _x300
     _x37 = -_x36
     _x38 = 0.5*_x30
+    del _x30
     _x39 = _x37 - (-_x38 + _x37)
     _x41 = 125.44*J_m + _x40 + _x36
     _x42 = _x37 + _x28 + I_bexx - _x39 + _x38 + _x41
+    del _x28, _x37, _x38
     _x47 = 1.0/_x42
+    del _x42
     _x43 = -_x40
+    del _x40
     _x44 = 0.5*_x34
+    del _x34
     _x45 = _x43 - (-_x44 + _x43)
     _x96 = _x39 + _x45
+    del _x39
     _x97 = _x47*_x96
     _x87 = m_a*_x29
     _x93 = _x4*_x87 - _x4*m_a*_x29
@@ -1796,15 +2098,19 @@ def forward_dynamics_derivatives(q, qd, tau, *, l1=0.215, l2=0.17, l3=0.0325, l5
     _x95 = _x1*_x64
     _x235 = I_beyy - I_bezz
     _x237 = _x6*_x87 + _x12*_x27
+    del _x12
     _x238 = _x237*_x64 + _x18*_x235
     _x49 = l5*m_be
     _x240 = _x49 + _x237
     _x91 = 2.0*_x4
     _x92 = l1*_x91*_x57
     _x236 = -_x57*_x29
+    del _x29
     _x250 = _x92*_x78 + _x236*_x175
     _x252 = _x236*_x78
+    del _x236
     _x258 = _x252*_x76 + _x250*_x77 + g*_x240 + _x0*_x238 - _x95*_x94
+    del _x240
     _x19 = -l1*q2_d*q2_d
     _x63 = _x1*_x1
     _x65 = g*_x0 - _x63*_x64 + _x19
@@ -1813,12 +2119,15 @@ def forward_dynamics_derivatives(q, qd, tau, *, l1=0.215, l2=0.17, l3=0.0325, l5
     _x106 = _x0*_x1
     _x51 = numpy.tanh(10.0*_x50)
     _x52 = 0.01*_x51 + 0.0005*_x50
+    del _x50
     _x53 = numpy.tanh(10.0*q2_d)
     _x107 = _x105 + _x106*_x64
     _x108 = _x19 - _x1*_x1*_x64 + g*_x0
+    del _x19
     _x109 = (_x4*_x108 + _x6*_x107)*m_a
     _x110 = _x18*_x106
     _x113 = _x112*_x103 - _x100*_x111 - _x14*_x109
+    del _x14, _x103, _x111, _x112
     _x20 = l3*q3_d*q3_d
     _x60 = l3*_x18
     _x123 = _x2*_x2*_x60 + _x20 + g*_x3
@@ -1827,154 +2136,235 @@ def forward_dynamics_derivatives(q, qd, tau, *, l1=0.215, l2=0.17, l3=0.0325, l5
     _x126 = _x125 - _x60*_x124
     _x127 = (_x6*_x126 + _x4*_x123)*m_c
     _x128 = _x122*_x117 - _x5*_x127 - _x121*_x118
+    del _x5, _x121, _x118, _x122
     _x129 = tau_q2 - (_x113 - _x128 - (_x113 + _x110*I_bezz - _x110*I_beyy - _x49*_x105 - l1*(_x6*(_x109 - _x100*_x104) + _x4*(_x57*_x100*_x100 + _x57*_x55*_x55 + (-_x6*_x108 + _x4*_x107)*m_a))) - _x52 + 0.01*_x53 + 0.0005*q2_d)
+    del _x104, _x100, _x49, _x107, _x108, _x109, _x110
     _x46 = _x33 - _x45 + I_dfxx + _x44 + _x43 + _x41
+    del _x33, _x41, _x43, _x44, _x45
     _x130 = _x46 - _x96*_x97
+    del _x96, _x46
     _x54 = l6*m_df
     _x134 = _x18*_x124
     _x135 = tau_q3 - (_x128 - _x113 - (_x128 - _x134*I_dfyy + _x134*I_dfzz - l3*(_x4*(-_x58*_x132*_x132 + (_x4*_x126 - _x6*_x123)*m_c - _x58*_x117*_x117) + _x6*(_x127 + _x133*_x117)) + _x54*_x125) + _x52) - _x97*_x129
+    del _x133, _x117, _x52, _x113, _x123, _x126, _x127, _x128, _x134
     _x136 = _x135/_x130
+    del _x135
     _x137 = -_x136*_x97 + _x47*_x129
+    del _x129
     _x138 = _x105 + _x106*_x64 + l1*_x137
+    del _x105
     _x147 = _x125 - _x60*_x124 + l3*_x136
+    del _x125
     _x196 = m_a*(_x6*_x138 + _x66)
     _x197 = _x78*_x175
     _x198 = -_x137
     _x199 = _x198 - (_x136 + _x198)
+    del _x198
     _x241 = -(I_czz - _x31)
+    del _x31
     _x246 = _x241*_x181
     _x247 = _x241*_x188
+    del _x241
     _x253 = -_x0*_x252 + _x1*_x250 + _x2*_x247 - _x3*_x246
     _x254 = q1_d*_x253 + l1*(_x196 - _x57*_x197 - _x57*_x199 - _x66*m_a) + _x58*_x147 + _x87*_x138
+    del _x66, _x196, _x197, _x199
     _x59 = _x2*_x2
     _x61 = g*_x3 + _x20 + _x59*_x60
+    del _x20
     _x139 = _x4*_x138
     _x255 = _x1*_x252 + _x0*_x250 + _x3*_x247 + _x2*_x246
     _x259 = q1_d*_x255 + _x58*_x61 + l1*(m_a*(_x139 - _x6*_x65) + _x139*m_a + _x57*_x55*_x55 + _x57*_x78*_x78) + _x87*_x65
+    del _x87, _x139
     _x260 = _x4*_x254 - _x6*_x259
+    del _x254, _x259
     _x261 = -_x252*_x77 + _x250*_x76 + _x1*_x238 + g*_x93
+    del _x238, _x250, _x252
     _x290 = -(-_x0*_x258 - _x260 + _x1*_x261)
+    del _x258, _x261
     _x149 = 1.0/_x130
+    _out_dqdd_dtau[..., 2, 2] = _x149
+    del _x130
     _x145 = _x4*_x57
     _x146 = 2.0*_x145
     _x263 = _x6*_x57
     _x264 = _x263*_x64
+    del _x64
     _x279 = -_x175
     _x280 = _x21*_x279 + _x175*I_ayy
+    del _x21, _x279
     _x80 = -_x79
+    del _x79
     _x83 = _x78*I_ayy
     _x281 = _x80 + _x83
     _x285 = _x281*_x76 + _x280*_x77 - _x146*_x95 + g*_x263 + _x0*_x264
+    del _x95
     _x62 = _x4*_x61
     _x140 = l3*_x6
     _x141 = _x140*m_c
     _x192 = m_c*(_x62 + _x6*_x147)
     _x193 = -_x136
+    del _x136
     _x194 = _x193 - (_x137 + _x193)
+    del _x137, _x193
     _x195 = _x188*_x181
     _x266 = _x140*_x58
     _x272 = _x266*_x181
     _x142 = l3*_x91*_x58
+    del _x91
     _x274 = -_x142*_x181 + _x266*_x188
+    del _x266
     _x282 = -_x0*_x281 + _x1*_x280 + _x2*_x274 - _x3*_x272
     _x283 = q1_d*_x282 + _x141*_x147 + _x57*_x138 + l3*(-_x62*m_c + _x58*_x195 + _x192 - _x58*_x194)
+    del _x138, _x62, _x192, _x194, _x195
     _x148 = _x4*_x147
+    del _x147
     _x284 = _x0*_x280 + _x1*_x281 + _x3*_x274 + _x2*_x272
     _x286 = q1_d*_x284 + _x141*_x61 + _x57*_x65 + l3*(m_c*(-_x6*_x61 + _x148) - _x58*_x181*_x181 + _x148*m_c - _x58*_x132*_x132)
+    del _x57, _x65, _x61, _x148
     _x287 = _x4*_x283 - _x6*_x286
+    del _x283, _x286
     _x288 = -_x281*_x77 + _x280*_x76 + _x1*_x264 + g*_x145
+    del _x264, _x280, _x281
     _x291 = -(_x1*_x288 - _x287 - _x0*_x285) - _x290*_x97
+    del _x285, _x288
     _x292 = _x149*_x291
+    _out_dqdd_dq[..., 2, 1] = _x292
+    del _x291
     _x293 = _x47*_x290 - _x292*_x97
+    _out_dqdd_dq[..., 1, 1] = _x293
+    del _x290, _x292, _x293
     _x88 = _x4*_x58
     _x89 = 2.0*_x88
     _x90 = _x2*_x60
     _x242 = _x6*_x58
+    del _x58
     _x243 = -_x242*_x60
     _x248 = _x247*_x77 + _x246*_x76 + _x90*_x89 + g*_x242 + _x3*_x243
     _x249 = _x247*_x76 - _x246*_x77 + g*_x88 + _x2*_x243
+    del _x246, _x247, _x243
     _x296 = -(-_x2*_x249 + _x3*_x248 + _x260)
+    del _x260, _x248, _x249
     _x143 = _x4*_x141 - _x4*_x140*m_c
+    del _x140
     _x144 = 2.0*_x143
     _x262 = I_dfyy - I_dfzz
     _x267 = _x6*_x141 + _x10*_x27
+    del _x27, _x10, _x141
     _x268 = -_x267*_x60 + _x18*_x262
+    del _x18, _x60
     _x269 = -_x54 + _x267
+    del _x54
     _x275 = _x272*_x76 + _x274*_x77 + _x144*_x90 + g*_x269 + _x3*_x268
+    del _x90, _x269
     _x278 = _x274*_x76 - _x272*_x77 + g*_x143 + _x2*_x268
+    del _x76, _x77, _x272, _x274, _x268
     _x297 = -(_x287 - _x2*_x278 + _x3*_x275) - _x296*_x97
+    del _x287, _x275, _x278
     _x298 = _x149*_x297
+    _out_dqdd_dq[..., 2, 2] = _x298
+    del _x297
     _x299 = _x47*_x296 - _x298*_x97
+    _out_dqdd_dq[..., 1, 2] = _x299
+    del _x296, _x298, _x299
     _x209 = _x2*_x208 + _x3*_x206
+    del _x2, _x3, _x208, _x206
     _x231 = _x0*_x230 + _x1*_x221
+    del _x0, _x1, _x221, _x230
     _x301 = -(0.0005 + q2_d*_x231 + _x4*_x225 + _x6*_x223 + 0.1*(1.0 - _x48*_x48) + q3_d*_x209)
+    del _x48, _x223, _x225
     _x306 = _x150*_x301
+    _out_dqdd_dqd[..., 0, 0] = _x306
+    del _x301, _x306
     _x204 = _x200*_x188 + _x203*_x181
+    del _x200, _x203
     _x212 = -_x201*_x188 + _x70*_x181 - _x204
+    del _x70, _x181, _x188, _x201
     _x218 = _x217*_x175 + _x81*(_x36*_x78 + _x80)
+    del _x36, _x78, _x217, _x80
     _x226 = -_x83*_x81 - _x218 + _x219*_x175
+    del _x175, _x81, _x219, _x83
     _x227 = _x218 + _x226
+    del _x218
     _x307 = -(_x212 - _x227 + q1_d*_x231)
+    del _x231, _x227
     _x312 = _x150*_x307
+    _out_dqdd_dqd[..., 0, 1] = _x312
+    del _x307, _x312
     _x213 = _x204 + _x212
+    del _x204, _x212
     _x313 = -(q1_d*_x209 - _x213 + _x226)
+    del _x209, _x226, _x213
     _x318 = _x150*_x313
+    _out_dqdd_dqd[..., 0, 2] = _x318
+    del _x150, _x313, _x318
     _x151 = 2.0*q1_d
     _x239 = _x106*_x237 - _x63*_x93
+    del _x93, _x237
     _x244 = _x59*_x88 - _x242*_x124
+    del _x88, _x242
     _x245 = l3*_x244 + l1*_x239 + _x106*_x235
+    del _x235, _x239, _x244
     _x302 = -(_x4*_x255 + _x6*_x253 + _x151*_x245)
+    del _x253, _x255, _x245
     _x265 = _x106*_x263 - _x63*_x145
+    del _x63, _x106, _x145, _x263
     _x270 = _x59*_x143 - _x267*_x124
+    del _x59, _x143, _x267
     _x271 = l3*_x270 + l1*_x265 + _x262*_x124
+    del _x124, _x262, _x265, _x270
     _x303 = -(_x4*_x284 + _x6*_x282 + _x151*_x271) - _x302*_x97
+    del _x4, _x6, _x282, _x284, _x151, _x271
     _x304 = _x149*_x303
+    _out_dqdd_dqd[..., 2, 0] = _x304
+    del _x303
     _x305 = _x47*_x302 - _x304*_x97
+    _out_dqdd_dqd[..., 1, 0] = _x305
+    del _x302, _x304, _x305
     _x152 = 0.1*(1.0 - _x51*_x51)
+    del _x51
     _x153 = l1*q2_d
     _x251 = _x92*_x55
+    del _x55, _x92
     _x256 = -_x251
     _x257 = _x251 + _x256
+    del _x251
     _x308 = -(0.001 - _x153*_x94 - _x257 + 0.1*(1.0 - _x53*_x53) + _x152)
+    del _x94, _x53, _x257
     _x154 = -0.0005 - _x152
     _x273 = -_x142*_x132
+    del _x132, _x142
     _x276 = -_x273
     _x309 = -(_x276 - _x153*_x146 + _x154) - _x308*_x97
+    del _x146, _x153
     _x310 = _x149*_x309
+    _out_dqdd_dqd[..., 2, 1] = _x310
+    del _x309
     _x311 = _x47*_x308 - _x310*_x97
+    _out_dqdd_dqd[..., 1, 1] = _x311
+    del _x308, _x310, _x311
     _x155 = l3*q3_d
     _x314 = -(_x154 + _x155*_x89 + _x256)
+    del _x89, _x256, _x154
     _x277 = _x273 + _x276
+    del _x273, _x276
     _x315 = -(0.0005 + _x152 - _x277 + _x155*_x144) - _x314*_x97
+    del _x144, _x152, _x155, _x277
     _x316 = _x149*_x315
+    _out_dqdd_dqd[..., 2, 2] = _x316
+    del _x315
     _x317 = _x47*_x314 - _x316*_x97
+    _out_dqdd_dqd[..., 1, 2] = _x317
+    del _x314, _x316, _x317
     _x319 = -_x97
     _x320 = _x149*_x319
-    _x321 = _x47 - _x320*_x97
-    _x322 = -_x149*_x97
-    _out_dqdd_dq = numpy.zeros(batch + (3, 3))
-    _out_dqdd_dq[..., 0, 1] = _x294
-    _out_dqdd_dq[..., 0, 2] = _x300
-    _out_dqdd_dq[..., 1, 1] = _x293
-    _out_dqdd_dq[..., 1, 2] = _x299
-    _out_dqdd_dq[..., 2, 1] = _x292
-    _out_dqdd_dq[..., 2, 2] = _x298
-    _out_dqdd_dqd = numpy.zeros(batch + (3, 3))
-    _out_dqdd_dqd[..., 0, 0] = _x306
-    _out_dqdd_dqd[..., 0, 1] = _x312
-    _out_dqdd_dqd[..., 0, 2] = _x318
-    _out_dqdd_dqd[..., 1, 0] = _x305
-    _out_dqdd_dqd[..., 1, 1] = _x311
-    _out_dqdd_dqd[..., 1, 2] = _x317
-    _out_dqdd_dqd[..., 2, 0] = _x304
-    _out_dqdd_dqd[..., 2, 1] = _x310
-    _out_dqdd_dqd[..., 2, 2] = _x316
-    _out_dqdd_dtau = numpy.zeros(batch + (3, 3))
-    _out_dqdd_dtau[..., 0, 0] = _x150
-    _out_dqdd_dtau[..., 1, 1] = _x321
-    _out_dqdd_dtau[..., 1, 2] = _x322
     _out_dqdd_dtau[..., 2, 1] = _x320
-    _out_dqdd_dtau[..., 2, 2] = _x149
+    del _x319
+    _x321 = _x47 - _x320*_x97
+    _out_dqdd_dtau[..., 1, 1] = _x321
+    del _x47, _x320, _x321
+    _x322 = -_x149*_x97
+    _out_dqdd_dtau[..., 1, 2] = _x322
+    del _x97, _x149, _x322
     return ForwardDynamicsDerivativesResult(_out_dqdd_dq, _out_dqdd_dqd, _out_dqdd_dtau)
 
 
@@ -2057,6 +2447,7 @@ def tcp_force(q, qd, qdd, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6=0.0527
     q1_dd = qdd[..., 0]
     q2_dd = qdd[..., 1]
     q3_dd = qdd[..., 2]
+    _out_F = numpy.zeros(batch + (3,))
     _x0 = numpy.sin(q2)
     _x1 = numpy.sin(q3)
     _x2 = numpy.cos(q2)
@@ -2068,6 +2459,7 @@ def tcp_force(q, qd, qdd, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6=0.0527
     _x8 = (-l1*_x6 + l1*_x7)*m_a
     _x13 = _x2*_x1 - _x0*_x3
     _x16 = _x2*_x5
+    del _x5
     _x17 = _x0*q1_dd + _x16
     _x10 = -q2_d
     _x11 = _x10 + q3_d
@@ -2076,20 +2468,25 @@ def tcp_force(q, qd, qdd, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6=0.0527
     _x15 = -_x0*_x14 + _x2*_x12
     _x18 = _x15*_x11 + _x7*_x13 + _x4*_x17
     _x22 = -_x11 + _x10
+    del _x10
     _x23 = _x22*_x15
     _x9 = 0.5*l2
     _x19 = 0.25*l2*l2*m_a
     _x20 = _x19 + I_azz
     _x21 = _x19 + I_axx
+    del _x19
     _x24 = _x9*_x8 + _x18*_x20 - _x23*_x21 + _x23*I_ayy
     _x25 = _x0*_x12 + _x2*_x14
     _x26 = _x25*_x20
+    del _x20
     _x27 = I_ayy*(-_x25*_x11 + _x7*_x4 - _x13*_x17) - _x22*_x26 + _x22*_x25*_x21
+    del _x11
     _x28 = _x9*m_a
     _x32 = q1_d*q3_d
     _x33 = _x1*_x32
     _x34 = _x3*q1_dd - _x33
     _x35 = _x3*_x32
+    del _x32
     _x36 = _x1*q1_dd + _x35
     _x29 = -q3_d
     _x30 = _x29 + q2_d
@@ -2097,79 +2494,114 @@ def tcp_force(q, qd, qdd, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6=0.0527
     _x37 = 0.25*l1*l1*m_c
     _x38 = _x37 + I_cxx
     _x39 = -_x30 + _x29
+    del _x29
     _x40 = _x31*_x39
     _x41 = _x37 + I_cyy
+    del _x37
     _x42 = I_czz*(_x31*_x30 - _x34*_x13 + _x4*_x36) - _x38*_x40 + _x40*_x41
+    del _x40
     _x43 = (l3*_x35 + l3*_x36)*m_c
     _x45 = _x1*_x12 - _x3*_x14
+    del _x12, _x14
     _x46 = _x4*_x34 - _x30*_x45 + _x36*_x13
+    del _x30
     _x47 = _x39*_x45
     _x44 = 0.5*l1
     _x48 = _x43*_x44 + _x46*_x41 - _x47*I_czz + _x38*_x47
     _x49 = m_c*_x44
     _x92 = _x1*(-_x35*I_dfyy + _x35*I_dfxx + l3*(_x49*_x46 + _x49*_x47 + _x43) + _x36*I_dfzz + _x13*_x48 + _x4*_x42) + _x0*(_x16*I_bexx - _x27*_x13 + _x17*I_bezz + _x4*_x24 - _x16*I_beyy) + _x3*(-_x33*I_dfxx + _x33*I_dfzz + _x34*I_dfyy + _x4*_x48 - _x13*_x42) + _x2*(-_x6*I_bexx + _x6*I_bezz + _x7*I_beyy + l1*(_x28*_x18 - _x23*_x28 + _x8) + _x4*_x27 + _x24*_x13) + q1_dd*I_baseyy + 176.89*J_m*q1_dd
+    del _x6, _x7, _x8, _x16, _x17, _x18, _x23, _x24, _x27, _x33, _x34, _x35, _x36, _x42, _x43, _x46, _x47, _x48
     _x50 = q1_d*q1_d
     _x51 = l3*_x50
     _x52 = _x1*_x1*_x51 + l3*q3_d*q3_d + g*_x3
     _x53 = g*_x1
     _x54 = _x1*_x3
     _x55 = _x53 - _x54*_x51 + l3*q3_dd
+    del _x51
     _x56 = m_c*(_x4*_x52 + _x55*_x13)
     _x57 = -q3_dd
     _x58 = -(_x57 + q2_dd) + _x57
+    del _x57
     _x59 = _x31*_x45
+    del _x45
     _x60 = -_x56*_x44 + _x58*_x38 - _x59*_x41 + _x59*I_czz
+    del _x38, _x41, _x44
     _x61 = 125.44*J_m
     _x62 = g*_x2
     _x63 = l1*_x50
     _x64 = _x0*_x2
     _x65 = _x62 + _x63*_x64 + l1*q2_dd
     _x66 = -l1*q2_d*q2_d - _x2*_x2*_x63 + g*_x0
+    del _x63
     _x67 = m_a*(_x13*_x65 + _x4*_x66)
     _x68 = _x25*_x15
     _x69 = -q2_dd
     _x70 = -(_x69 + q3_dd) + _x69
+    del _x69
     _x71 = _x50*_x64
+    del _x64
     _x72 = _x26*_x15 + _x21*_x70 - _x9*_x67 - _x68*I_ayy
+    del _x15, _x9, _x21, _x26
     _x93 = -_x60 + _x61*q2_dd - (-l1*(_x4*(m_a*(_x4*_x65 - _x13*_x66) + _x22*_x22*_x28 + _x25*_x25*_x28) + _x13*(_x67 - _x28*_x68 - _x28*_x70)) - l5*m_be*_x62 - q2_dd*I_bexx - _x71*I_beyy + _x71*I_bezz + _x72) + _x72
+    del _x22, _x25, _x28, _x62, _x65, _x66, _x67, _x68, _x70, _x71
     _x73 = _x50*_x54
+    del _x50, _x54
     _x94 = -_x72 - (-l3*(_x13*(_x56 + _x49*_x59 - _x49*_x58) + _x4*(m_c*(-_x52*_x13 + _x4*_x55) - _x49*_x31*_x31 - _x49*_x39*_x39)) + l6*m_df*_x53 - _x73*I_dfyy - q3_dd*I_dfxx + _x73*I_dfzz + _x60) + _x61*q3_dd + _x60
+    del _x4, _x13, _x31, _x39, _x49, _x52, _x53, _x55, _x56, _x58, _x59, _x60, _x61, _x72, _x73
     _x74 = numpy.sin(q1)
     _x80 = l2*_x3
+    del _x3
     _x84 = _x80*_x74
     _x82 = -_x80 + l1*_x0
+    del _x0
     _x89 = -_x84 - _x82*_x74
     _x75 = l2*_x1
+    del _x1
     _x76 = _x75*_x74
     _x77 = l1*_x2
+    del _x2
     _x78 = _x77*_x74
     _x79 = numpy.cos(q1)
     _x83 = _x79*_x75 + _x79*_x77
+    del _x77
     _x85 = _x75*_x74*_x74
     _x86 = _x79*_x79*_x75
+    del _x75
     _x90 = -_x85 - _x86 + _x79*_x83 + (_x76 + _x78)*_x74
+    del _x74
     _x91 = _x85 + _x86
+    del _x85, _x86
     _x95 = -_x84*_x90 + _x91*_x89
     _x96 = -_x83*_x91
     _x97 = _x83*_x90
     _x81 = _x80*_x79
+    del _x80
     _x87 = -_x76 - _x78
+    del _x76, _x78
     _x88 = -_x81 - _x79*_x82
+    del _x82, _x79
     _x104 = _x81*_x97 + _x88*_x96 + _x87*_x95
     _x105 = 1.0/_x104
+    del _x104
     _x106 = _x105*(_x94*_x97 + _x93*_x96 + _x95*_x92)
+    _out_F[..., 0] = _x106
+    del _x95, _x96, _x97, _x106
     _x98 = -(-_x81*_x90 + _x88*_x91)
     _x99 = _x87*_x91
+    del _x91
     _x100 = -_x87*_x90
+    del _x90
     _x107 = _x105*(_x94*_x100 + _x93*_x99 + _x92*_x98)
+    _out_F[..., 1] = _x107
+    del _x98, _x99, _x100, _x107
     _x101 = -_x81*_x89 + _x84*_x88
     _x102 = -(-_x81*_x83 + _x84*_x87)
+    del _x84, _x81
     _x103 = -_x83*_x88 + _x87*_x89
+    del _x89, _x83, _x87, _x88
     _x108 = _x105*(_x94*_x103 + _x93*_x102 + _x92*_x101)
-    _out_F = numpy.zeros(batch + (3,))
-    _out_F[..., 0] = _x106
-    _out_F[..., 1] = _x107
     _out_F[..., 2] = _x108
+    del _x92, _x93, _x94, _x105, _x101, _x102, _x103, _x108
     return _out_F
 
 
@@ -2251,6 +2683,9 @@ def operational_space(q, qd, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6=0.0
     q1_d = qd[..., 0]
     q2_d = qd[..., 1]
     q3_d = qd[..., 2]
+    _out_Mx = numpy.zeros(batch + (3, 3))
+    _out_Vx = numpy.zeros(batch + (3,))
+    _out_Gx = numpy.zeros(batch + (3,))
     _x18 = numpy.sin(q1)
     _x3 = numpy.cos(q3)
     _x19 = l2*_x3
@@ -2273,18 +2708,23 @@ def operational_space(q, qd, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6=0.0
     _x33 = _x25*_x25
     _x34 = _x33*_x26
     _x35 = _x26*_x18
+    del _x26
     _x36 = _x18*_x28
+    del _x28
     _x37 = _x35 + _x36
     _x38 = -_x32 - _x34 + _x37*_x18 + _x30*_x25
     _x39 = _x32 + _x34
+    del _x32, _x34
     _x62 = _x39*_x24 - _x38*_x20
     _x63 = -_x39*_x30
     _x64 = _x38*_x30
     _x40 = _x25*_x19
     _x41 = -_x40 - _x22*_x25
+    del _x22
     _x43 = -_x35 - _x36
     _x65 = _x64*_x40 + _x63*_x41 + _x62*_x43
     _x66 = 1.0/_x65
+    del _x65
     _x7 = 0.25*l2*l2*m_a
     _x46 = I_azz + _x7
     _x47 = l2*m_a
@@ -2300,50 +2740,82 @@ def operational_space(q, qd, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6=0.0
     _x53 = _x8*m_a
     _x54 = l1*_x6
     _x55 = _x47*_x54
+    del _x47
     _x9 = 0.25*m_c
     _x56 = _x8*_x9
+    del _x8, _x9
     _x57 = _x56 + I_cyy
     _x10 = l3*m_c
     _x58 = _x49*_x57 - _x49*I_czz + _x10*_x48
+    del _x48, _x49
     _x59 = l3*l3*m_c
     _x60 = _x10*_x54
+    del _x54
     _x61 = 176.89*J_m + _x3*(_x2*_x58 + _x3*(_x51*I_czz + _x52*_x57 + I_dfyy)) + I_baseyy + _x1*(_x0*_x50 + _x1*(_x46*_x51 + _x55 + _x53 + _x52*I_ayy + I_beyy)) + _x2*(_x2*(_x52*I_czz + _x51*_x57 + _x59 + _x60 + I_dfzz) + _x3*_x58) + _x0*(_x0*(_x46*_x52 + _x51*I_ayy + I_bezz) + _x1*_x50)
+    del _x50, _x51, _x52, _x58
     _x67 = _x66*_x61
+    del _x61
     _x159 = _x67*_x62
     _x73 = I_axx + _x7
+    del _x7
     _x74 = -_x73
     _x75 = 0.5*_x55
+    del _x55
     _x76 = _x74 - (-_x75 + _x74)
     _x77 = _x56 + I_cxx
     _x79 = -_x77
     _x80 = 0.5*_x60
+    del _x60
     _x81 = _x79 - (-_x80 + _x79)
     _x82 = _x76 + _x81
     _x78 = 125.44*J_m + _x77 + _x73
+    del _x77
     _x148 = _x74 + _x53 + I_bexx - _x76 + _x75 + _x78
+    del _x53, _x74, _x75, _x76
     _x160 = _x66*(_x82*_x64 + _x63*_x148)
     _x151 = _x59 - _x81 + I_dfxx + _x80 + _x79 + _x78
+    del _x59, _x79, _x80, _x81, _x78
     _x161 = _x66*(_x64*_x151 + _x82*_x63)
     _x174 = _x66*(_x159*_x62 + _x160*_x63 + _x161*_x64)
+    _out_Mx[..., 0, 0] = _x174
     _x154 = -(_x39*_x41 - _x38*_x40)
     _x155 = _x39*_x43
+    del _x39
     _x156 = -_x38*_x43
+    del _x38
     _x175 = _x66*(_x159*_x154 + _x160*_x155 + _x161*_x156)
+    _out_Mx[..., 0, 1] = _x175
+    _out_Mx[..., 1, 0] = _x175
     _x44 = -(-_x30*_x40 + _x20*_x43)
     _x42 = _x41*_x20
     _x157 = _x42 - _x24*_x40
+    del _x42
     _x45 = -_x41*_x30
+    del _x30
     _x158 = _x24*_x43 + _x45
+    del _x24, _x45
     _x177 = _x66*(_x159*_x157 + _x44*_x160 + _x161*_x158)
+    _out_Mx[..., 0, 2] = _x177
+    _out_Mx[..., 2, 0] = _x177
+    del _x159, _x160, _x161
     _x164 = _x67*_x154
     _x165 = _x66*(_x82*_x156 + _x155*_x148)
     _x166 = _x66*(_x156*_x151 + _x82*_x155)
     _x176 = _x66*(_x164*_x154 + _x166*_x156 + _x165*_x155)
+    _out_Mx[..., 1, 1] = _x176
     _x178 = _x66*(_x164*_x157 + _x44*_x165 + _x166*_x158)
+    _out_Mx[..., 1, 2] = _x178
+    _out_Mx[..., 2, 1] = _x178
+    del _x164, _x165, _x166
     _x169 = _x67*_x157
+    del _x67
     _x170 = _x66*(_x44*_x148 + _x82*_x158)
+    del _x148
     _x171 = _x66*(_x44*_x82 + _x158*_x151)
+    del _x82, _x151
     _x179 = _x66*(_x44*_x170 + _x169*_x157 + _x171*_x158)
+    _out_Mx[..., 2, 2] = _x179
+    del _x169, _x170, _x171
     _x11 = q2_d*q1_d
     _x15 = q1_d*q1_d
     _x16 = q3_d*q3_d
@@ -2352,8 +2824,11 @@ def operational_space(q, qd, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6=0.0
     _x68 = 2.0*_x14
     _x69 = _x11*_x21
     _x70 = _x69*_x18 + (_x20 + _x23)*_x11 + (-_x27 - _x29)*_x15 - _x68*_x20 - _x17*_x29 - _x16*_x27
+    del _x18, _x20, _x23, _x27, _x29
     _x71 = _x15*_x43 - _x69*_x25 - _x17*_x36 + _x68*_x40 + _x11*_x41 - _x16*_x35
+    del _x35, _x36, _x40, _x41, _x68, _x69
     _x72 = (_x37*_x25 + _x43*_x25)*_x11 + (-_x31*_x21 - _x33*_x21)*_x17 + (_x31*_x19 + _x33*_x19)*_x16
+    del _x19, _x21, _x25, _x31, _x33, _x37, _x43
     _x83 = _x0*_x11
     _x12 = l1*m_a
     _x84 = _x12*_x83
@@ -2365,7 +2840,9 @@ def operational_space(q, qd, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6=0.0
     _x90 = _x0*_x89
     _x91 = _x88 - _x90
     _x92 = _x91*_x86 - q2_d*_x90 + q2_d*_x88
+    del _x88, _x90
     _x93 = -_x86 + _x85
+    del _x85
     _x94 = _x93*_x91
     _x95 = _x94*I_ayy - _x94*_x73 + _x46*_x92 - l2*_x84
     _x96 = _x1*_x89
@@ -2373,6 +2850,7 @@ def operational_space(q, qd, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6=0.0
     _x98 = _x96 + _x97
     _x99 = _x98*_x93
     _x100 = _x73*_x99 - _x46*_x99 + I_ayy*(-q2_d*_x96 - q2_d*_x97 - _x98*_x86)
+    del _x73, _x86, _x96, _x97, _x99
     _x101 = _x1*I_bezz
     _x102 = _x11*I_bexx
     _x103 = _x1*I_beyy
@@ -2381,74 +2859,93 @@ def operational_space(q, qd, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6=0.0
     _x105 = -q3_d
     _x106 = _x105 + q2_d
     _x111 = -_x106 + _x105
+    del _x105
     _x107 = _x3*_x87
+    del _x87
     _x108 = _x2*q1_d
     _x109 = _x6*_x108
     _x110 = _x107 + _x109
     _x112 = _x111*(_x56 + I_cxx)
+    del _x56
     _x113 = _x57*_x110
     _x114 = I_czz*(_x106*_x110 + q3_d*_x109 + q3_d*_x107) - _x112*_x110 + _x113*_x111
+    del _x107, _x109
     _x115 = q3_d*_x108
     _x116 = _x3*_x14
     _x117 = _x10*_x116
     _x118 = _x3*_x89
+    del _x89
     _x119 = _x4*_x108
+    del _x108
     _x120 = -_x118 + _x119
     _x121 = -_x120*_x106 - q3_d*_x119 + q3_d*_x118
+    del _x106, _x118, _x119
     _x122 = _x120*I_czz
     _x123 = _x120*_x112 + _x57*_x121 - _x122*_x111 + l1*_x117
+    del _x57, _x112
     _x124 = _x5*m_c
     _x125 = _x120*_x124
     _x126 = _x3*I_dfzz
     _x147 = _x2*(_x116*I_dfxx + _x14*_x126 - _x116*I_dfyy + l3*(_x121*_x124 + _x125*_x111 + 2.0*_x117) + _x6*_x123 + _x4*_x114) + _x3*(-_x115*I_dfxx + _x115*I_dfzz + _x4*_x123 - _x115*I_dfyy - _x6*_x114) + _x1*(_x83*I_bezz + _x6*_x95 - _x83*I_beyy + l1*(_x92*_x104 - _x94*_x104 - 2.0*_x84) - _x0*_x102 + _x4*_x100) + _x0*(-_x11*_x103 + _x11*_x101 - _x6*_x100 + _x1*_x102 + _x4*_x95)
+    del _x11, _x14, _x83, _x84, _x92, _x94, _x95, _x100, _x102, _x114, _x115, _x116, _x117, _x121, _x123
     _x127 = l3*_x15
     _x128 = _x2*_x2*_x127 + l3*_x16
+    del _x16
     _x129 = _x3*_x2*_x127
+    del _x127
     _x130 = (-_x6*_x129 + _x4*_x128)*m_c
     _x131 = _x122*_x110 - _x120*_x113 - _x5*_x130
+    del _x5, _x113, _x120, _x122
     _x132 = l1*_x15
     _x133 = _x0*_x1*_x132
     _x134 = -l1*_x17 - _x1*_x1*_x132
+    del _x17, _x132
     _x135 = _x98*_x91
+    del _x91
     _x136 = (_x4*_x134 + _x6*_x133)*m_a
     _x137 = _x0*_x15
     _x138 = _x46*_x135 - _x135*I_ayy - _x13*_x136
+    del _x46, _x13
     _x149 = _x138 - (_x138 - _x103*_x137 + _x101*_x137 - l1*(_x6*(_x136 - _x104*_x135) + _x4*(_x98*_x98*_x104 + _x93*_x93*_x104 + (-_x6*_x134 + _x4*_x133)*m_a))) - _x131
+    del _x93, _x98, _x101, _x103, _x133, _x134, _x135, _x136, _x137
     _x139 = _x2*_x15
+    del _x15
     _x152 = _x131 - (_x131 + _x126*_x139 - _x3*_x139*I_dfyy - l3*(_x4*(-_x124*_x111*_x111 - _x124*_x110*_x110 + (-_x4*_x129 - _x6*_x128)*m_c) + _x6*(_x130 + _x125*_x110))) - _x138
+    del _x111, _x110, _x125, _x126, _x128, _x129, _x130, _x131, _x138, _x139
     _x162 = _x66*(_x64*_x152 + _x63*_x149 + _x147*_x62)
+    _out_Vx[..., 0] = _x162 - (_x70*_x174 + _x71*_x175 + _x72*_x177)
+    del _x62, _x174, _x162
     _x167 = _x66*(_x156*_x152 + _x155*_x149 + _x154*_x147)
+    _out_Vx[..., 1] = _x167 - (_x70*_x175 + _x72*_x178 + _x71*_x176)
+    del _x154, _x175, _x176, _x167
     _x172 = _x66*(_x157*_x147 + _x44*_x149 + _x158*_x152)
+    _out_Vx[..., 2] = _x172 - (_x70*_x177 + _x71*_x178 + _x72*_x179)
+    del _x157, _x177, _x178, _x179, _x70, _x71, _x72, _x147, _x149, _x152, _x172
     _x140 = g*_x4
+    del _x4
     _x141 = _x3*_x140
+    del _x3
     _x142 = g*_x2
+    del _x2
     _x143 = _x124*(_x6*_x142 + _x141)
     _x144 = g*_x1
+    del _x1
     _x145 = _x0*_x140
+    del _x0, _x140
     _x146 = _x104*(_x145 + _x6*_x144)
     _x150 = -(-_x104*_x145 - (_x6*_x104 + _x12 + l5*m_be)*_x144) + _x143 - _x146
+    del _x12, _x104, _x144, _x145
     _x153 = _x146 - ((-_x6*_x124 + l6*m_df - _x10)*_x142 - _x124*_x141) - _x143
+    del _x6, _x10, _x124, _x141, _x142, _x143, _x146
     _x163 = (_x64*_x153 + _x63*_x150)*_x66
-    _x168 = (_x156*_x153 + _x155*_x150)*_x66
-    _x173 = _x66*(_x44*_x150 + _x158*_x153)
-    _out_Mx = numpy.zeros(batch + (3, 3))
-    _out_Mx[..., 0, 0] = _x174
-    _out_Mx[..., 0, 1] = _x175
-    _out_Mx[..., 0, 2] = _x177
-    _out_Mx[..., 1, 0] = _x175
-    _out_Mx[..., 1, 1] = _x176
-    _out_Mx[..., 1, 2] = _x178
-    _out_Mx[..., 2, 0] = _x177
-    _out_Mx[..., 2, 1] = _x178
-    _out_Mx[..., 2, 2] = _x179
-    _out_Vx = numpy.zeros(batch + (3,))
-    _out_Vx[..., 0] = _x162 - (_x70*_x174 + _x71*_x175 + _x72*_x177)
-    _out_Vx[..., 1] = _x167 - (_x70*_x175 + _x72*_x178 + _x71*_x176)
-    _out_Vx[..., 2] = _x172 - (_x70*_x177 + _x71*_x178 + _x72*_x179)
-    _out_Gx = numpy.zeros(batch + (3,))
     _out_Gx[..., 0] = _x163
+    del _x63, _x64, _x163
+    _x168 = (_x156*_x153 + _x155*_x150)*_x66
     _out_Gx[..., 1] = _x168
+    del _x155, _x156, _x168
+    _x173 = _x66*(_x44*_x150 + _x158*_x153)
     _out_Gx[..., 2] = _x173
+    del _x66, _x44, _x158, _x150, _x153, _x173
     return OperationalSpaceResult(_out_Mx, _out_Vx, _out_Gx)
 
 
@@ -2513,6 +3010,7 @@ def kinetic_energy(q, qd, *, l1=0.215, l2=0.17, l3=0.0325, m_a=0.0202, I_axx=4.8
     q1_d = qd[..., 0]
     q2_d = qd[..., 1]
     q3_d = qd[..., 2]
+    _out_k = numpy.zeros(batch + ())
     _x0 = numpy.sin(q2)
     _x1 = numpy.cos(q2)
     _x2 = numpy.sin(q3)
@@ -2527,28 +3025,38 @@ def kinetic_energy(q, qd, *, l1=0.215, l2=0.17, l3=0.0325, m_a=0.0202, I_axx=4.8
     _x11 = -_x8*I_ayy + _x6*_x4 + _x10*_x8
     _x12 = _x7*_x7
     _x13 = _x5*_x5
+    del _x5
     _x14 = l1*l1
     _x15 = m_a*_x14
     _x16 = l1*_x7
+    del _x7
     _x17 = _x4*_x16
+    del _x4
     _x18 = 0.25*m_c*_x14
+    del _x14
     _x19 = _x18 + I_cyy
     _x20 = l3*m_c
     _x21 = _x6*_x20 - _x8*I_czz + _x8*_x19
+    del _x6, _x8
     _x22 = l3*l3*m_c
     _x23 = _x20*_x16
+    del _x16, _x20
     _x24 = _x9 + I_axx
+    del _x9
     _x25 = -_x24
     _x26 = 0.5*_x17
     _x27 = _x25 - (-_x26 + _x25)
     _x28 = _x18 + I_cxx
+    del _x18
     _x29 = 125.44*J_m + _x28 + _x24
+    del _x24
     _x30 = -_x28
+    del _x28
     _x31 = 0.5*_x23
     _x32 = _x30 - (-_x31 + _x30)
     _x33 = _x27 + _x32
-    _out_k = numpy.zeros(batch + ())
     _out_k[...] = 0.5*(q3_d*(q3_d*(_x29 + _x30 + _x31 + I_dfxx - _x32 + _x22) + q2_d*_x33) + q2_d*(q3_d*_x33 + q2_d*(_x29 + _x26 - _x27 + I_bexx + _x15 + _x25)) + q1_d*q1_d*(176.89*J_m + _x3*(_x2*_x21 + _x3*(_x12*I_czz + _x13*_x19 + I_dfyy)) + I_baseyy + _x1*(_x0*_x11 + _x1*(_x10*_x12 + _x17 + _x15 + _x13*I_ayy + I_beyy)) + _x2*(_x2*(_x13*I_czz + _x12*_x19 + _x22 + _x23 + I_dfzz) + _x3*_x21) + _x0*(_x0*(_x10*_x13 + _x12*I_ayy + I_bezz) + _x1*_x11)))
+    del _x0, _x1, _x2, _x3, _x10, _x11, _x12, _x13, _x15, _x17, _x19, _x21, _x22, _x23, _x25, _x26, _x27, _x29, _x30, _x31, _x32, _x33
     return _out_k
 
 
@@ -2592,11 +3100,12 @@ def potential_energy(q, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6=0.0527, 
     q1 = q[..., 0]
     q2 = q[..., 1]
     q3 = q[..., 2]
+    _out_u = numpy.zeros(batch + ())
     _x0 = numpy.sin(q2)
     _x1 = l1*_x0
     _x2 = numpy.cos(q3)
-    _out_u = numpy.zeros(batch + ())
     _out_u[...] = -(-g*l5*_x0*m_be - g*l6*_x2*m_df - g*m_a*(_x1 - 0.5*l2*_x2) - g*m_c*(-l3*_x2 + 0.5*_x1))
+    del _x0, _x1, _x2
     return _out_u
 
 
@@ -2732,37 +3241,142 @@ def combined(q, qd, qdd, tau, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6=0.
     tau_q1 = tau[..., 0]
     tau_q2 = tau[..., 1]
     tau_q3 = tau[..., 2]
+    _out_base_T_tcp = numpy.zeros(batch + (4, 4))
+    _out_base_T_turret = numpy.zeros(batch + (4, 4))
+    _out_base_T_upper_arm = numpy.zeros(batch + (4, 4))
+    _out_base_T_distal = numpy.zeros(batch + (4, 4))
+    _out_base_T_lever = numpy.zeros(batch + (4, 4))
+    _out_base_T_link_c = numpy.zeros(batch + (4, 4))
+    _out_J = numpy.zeros(batch + (3, 3))
+    _out_M = numpy.zeros(batch + (3, 3))
+    _out_C = numpy.zeros(batch + (3, 3))
+    _out_V = numpy.zeros(batch + (3,))
+    _out_G = numpy.zeros(batch + (3,))
+    _out_dG_dq = numpy.zeros(batch + (3, 3))
+    _out_F_f = numpy.zeros(batch + (3,))
+    _out_inverse_dynamics_tau = numpy.zeros(batch + (3,))
+    _out_dtau_dq = numpy.zeros(batch + (3, 3))
+    _out_dtau_dqd = numpy.zeros(batch + (3, 3))
+    _out_dtau_dqdd = numpy.zeros(batch + (3, 3))
+    _out_forward_dynamics_qdd = numpy.zeros(batch + (3,))
+    _out_dqdd_dq = numpy.zeros(batch + (3, 3))
+    _out_dqdd_dqd = numpy.zeros(batch + (3, 3))
+    _out_dqdd_dtau = numpy.zeros(batch + (3, 3))
+    _out_F = numpy.zeros(batch + (3,))
+    _out_Mx = numpy.zeros(batch + (3, 3))
+    _out_Vx = numpy.zeros(batch + (3,))
+    _out_Gx = numpy.zeros(batch + (3,))
+    _out_k = numpy.zeros(batch + ())
+    _out_u = numpy.zeros(batch + ())
+    _out_base_T_tcp[..., 3, 3] = 1.0
+    _out_base_T_turret[..., 2, 2] = 1.0
+    _out_base_T_turret[..., 3, 3] = 1.0
+    _out_base_T_upper_arm[..., 3, 3] = 1.0
+    _out_base_T_distal[..., 3, 3] = 1.0
+    _out_base_T_lever[..., 3, 3] = 1.0
+    _out_base_T_link_c[..., 3, 3] = 1.0
     _x5 = numpy.cos(q3)
+    _out_base_T_tcp[..., 2, 2] = _x5
+    _out_base_T_distal[..., 2, 2] = _x5
+    _out_base_T_lever[..., 2, 2] = _x5
+    _out_base_T_link_c[..., 2, 3] = -l3*_x5
     _x203 = numpy.cos(q1)
+    _out_base_T_tcp[..., 1, 1] = _x203
+    _out_base_T_turret[..., 0, 0] = _x203
+    _out_base_T_turret[..., 1, 1] = _x203
+    _out_base_T_upper_arm[..., 1, 1] = _x203
+    _out_base_T_distal[..., 1, 1] = _x203
+    _out_base_T_lever[..., 1, 1] = _x203
+    _out_base_T_link_c[..., 1, 1] = _x203
     _x239 = _x5*_x203
+    _out_base_T_tcp[..., 0, 0] = _x239
+    _out_base_T_distal[..., 0, 0] = _x239
+    _out_base_T_lever[..., 0, 0] = _x239
+    del _x239
     _x201 = numpy.sin(q1)
+    _out_base_T_turret[..., 1, 0] = _x201
     _x240 = -_x201
+    _out_base_T_tcp[..., 0, 1] = _x240
+    _out_base_T_turret[..., 0, 1] = _x240
+    _out_base_T_upper_arm[..., 0, 1] = _x240
+    _out_base_T_distal[..., 0, 1] = _x240
+    _out_base_T_lever[..., 0, 1] = _x240
+    _out_base_T_link_c[..., 0, 1] = _x240
+    del _x240
     _x3 = numpy.sin(q3)
+    _out_base_T_tcp[..., 2, 0] = _x3
+    _out_base_T_distal[..., 2, 0] = _x3
+    _out_base_T_lever[..., 2, 0] = _x3
     _x241 = _x3*_x203
+    _out_base_T_link_c[..., 0, 3] = l3*_x241
     _x242 = -_x241
+    _out_base_T_tcp[..., 0, 2] = _x242
+    _out_base_T_distal[..., 0, 2] = _x242
+    _out_base_T_lever[..., 0, 2] = _x242
+    del _x241, _x242
     _x202 = l2*_x3
     _x1 = numpy.cos(q2)
+    _out_base_T_upper_arm[..., 2, 2] = _x1
+    _out_base_T_link_c[..., 2, 2] = _x1
     _x76 = l1*_x1
     _x214 = _x76*_x203
+    _out_base_T_distal[..., 0, 3] = _x214
     _x243 = _x202*_x203 + _x214
+    _out_base_T_tcp[..., 0, 3] = _x243
+    _out_J[..., 1, 0] = _x243
     _x244 = _x5*_x201
+    _out_base_T_tcp[..., 1, 0] = _x244
+    _out_base_T_distal[..., 1, 0] = _x244
+    _out_base_T_lever[..., 1, 0] = _x244
+    del _x244
     _x245 = _x3*_x201
+    _out_base_T_link_c[..., 1, 3] = l3*_x245
     _x246 = -_x245
+    _out_base_T_tcp[..., 1, 2] = _x246
+    _out_base_T_distal[..., 1, 2] = _x246
+    _out_base_T_lever[..., 1, 2] = _x246
+    del _x245, _x246
     _x220 = _x201*_x202
     _x221 = _x76*_x201
+    _out_base_T_distal[..., 1, 3] = _x221
+    _out_J[..., 0, 0] = -_x220 - _x221
     _x222 = _x220 + _x221
+    _out_base_T_tcp[..., 1, 3] = _x222
     _x204 = l2*_x5
     _x0 = numpy.sin(q2)
+    _out_base_T_upper_arm[..., 2, 0] = _x0
+    _out_base_T_link_c[..., 2, 0] = _x0
     _x205 = l1*_x0
+    _out_base_T_distal[..., 2, 3] = _x205
     _x210 = -_x204 + _x205
+    _out_base_T_tcp[..., 2, 3] = _x210
     _x247 = _x1*_x203
+    _out_base_T_upper_arm[..., 0, 0] = _x247
+    _out_base_T_link_c[..., 0, 0] = _x247
+    del _x247
     _x248 = -_x0*_x203
+    _out_base_T_upper_arm[..., 0, 2] = _x248
+    _out_base_T_link_c[..., 0, 2] = _x248
+    del _x248
     _x249 = _x1*_x201
+    _out_base_T_upper_arm[..., 1, 0] = _x249
+    _out_base_T_link_c[..., 1, 0] = _x249
+    del _x249
     _x250 = -_x0*_x201
+    _out_base_T_upper_arm[..., 1, 2] = _x250
+    _out_base_T_link_c[..., 1, 2] = _x250
+    del _x250
     _x227 = _x203*_x204
+    _out_J[..., 0, 1] = -_x203*_x210 - _x227
+    _out_J[..., 0, 2] = _x227
     _x209 = _x201*_x204
+    _out_J[..., 1, 1] = -_x201*_x210 - _x209
+    _out_J[..., 1, 2] = _x209
     _x251 = _x201*_x201*_x202
     _x252 = _x202*_x203*_x203
+    _out_J[..., 2, 1] = -_x251 - _x252 + _x201*_x222 + _x243*_x203
+    _out_J[..., 2, 2] = _x252 + _x251
+    del _x243
     _x14 = l3*l3*m_c
     _x10 = 0.25*l2*l2*m_a
     _x79 = _x10 + I_azz
@@ -2788,19 +3402,26 @@ def combined(q, qd, qdd, tau, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6=0.
     _x145 = _x21 + I_cyy
     _x13 = l3*m_c
     _x146 = -_x142*I_czz + _x142*_x145 + _x13*_x141
+    del _x141
     _x147 = _x94*_x13
+    _out_M[..., 0, 0] = _x3*(_x3*(_x145*_x144 + _x96*I_czz + _x14 + _x147 + I_dfzz) + _x5*_x146) + _x1*(_x1*(_x96*I_ayy + _x79*_x144 + _x124 + _x123 + I_beyy) + _x0*_x143) + _x0*(_x1*_x143 + _x0*(_x96*_x79 + _x144*I_ayy + I_bezz)) + _x122 + _x5*(_x3*_x146 + _x5*(_x144*I_czz + _x96*_x145 + I_dfyy))
     _x51 = _x10 + I_axx
     _x78 = -_x51
     _x15 = 125.44*J_m
     _x67 = _x21 + I_cxx
     _x126 = _x15 + _x67 + _x51
+    _out_M[..., 1, 1] = _x126 + _x78 + _x123 + I_bexx
     _x125 = 0.5*_x124
     _x149 = 0.5*_x147
     _x151 = _x149 + _x125
+    _out_M[..., 1, 2] = _x151
+    _out_M[..., 2, 1] = _x151
     _x68 = -_x67
+    _out_M[..., 2, 2] = _x68 + _x126 + _x14 + I_dfxx
     _x253 = _x142*I_czz
     _x254 = 2.0*_x253
     _x255 = _x12*_x11 + I_cyy
+    del _x12
     _x256 = _x255*_x142
     _x257 = 2.0*_x256
     _x258 = _x257 - _x254
@@ -2809,24 +3430,33 @@ def combined(q, qd, qdd, tau, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6=0.
     _x261 = _x142*_x79
     _x262 = 2.0*_x261
     _x263 = _x142*I_ayy
+    del _x142
     _x264 = 2.0*_x263
     _x265 = _x264 - _x262
     _x266 = _x13*_x259
+    del _x259
     _x267 = _x254 - _x257
+    del _x254, _x257
     _x268 = _x262 - _x264
+    del _x262, _x264
     _x269 = 0.5*_x266
     _x270 = _x256 + _x269 - _x253
+    del _x253, _x256
     _x271 = _x5*_x270
     _x272 = _x255*_x144
     _x273 = _x96*I_czz
     _x274 = _x272 + _x273
     _x275 = _x14 + _x274 + _x147 + I_dfzz
     _x276 = _x3*_x270
+    del _x270
     _x277 = _x144*I_czz
     _x278 = _x96*_x255
+    del _x255
     _x279 = _x277 + _x278
     _x280 = -_x273 - _x272 - _x149 + _x279
+    del _x272, _x273
     _x281 = I_dfyy + _x279
+    del _x279
     _x282 = _x96*I_ayy
     _x283 = _x79*_x144
     _x284 = _x96*_x79
@@ -2834,23 +3464,43 @@ def combined(q, qd, qdd, tau, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6=0.
     _x286 = _x284 + _x285
     _x287 = -_x125 - _x283 - _x282 + _x286
     _x288 = _x5*(-_x3*_x281 + _x3*_x280 + _x5*_x267 + _x271) + _x3*((_x266 + _x258)*_x3 + _x5*_x280 + _x5*_x275 - _x276) - _x3*(_x5*_x281 + _x276) + (_x1*_x287 + _x0*_x265)*_x0 + _x1*((_x268 + _x260)*_x1 + _x0*_x287) + _x5*(_x3*_x275 + _x271)
+    del _x271, _x275, _x276, _x280, _x281, _x287
     _x289 = 0.5*q3_d
     _x290 = -_x278 - _x277 + _x274 + _x149
+    del _x149, _x274, _x277, _x278
     _x291 = _x282 + _x283
+    del _x282, _x283
     _x292 = _x11*m_a + _x291 + _x124 + I_beyy
+    del _x11
     _x293 = 0.5*_x260
     _x294 = _x293 + _x261 - _x263
+    del _x261, _x263
     _x295 = _x0*_x294
     _x296 = _x1*_x294
+    del _x294
     _x297 = -_x284 - _x285 + _x125 + _x291
+    del _x125, _x284, _x285, _x291
     _x298 = I_bezz + _x286
+    del _x286
     _x299 = -_x0*(_x1*_x292 + _x295) + _x1*((-_x260 + _x265)*_x1 + _x0*_x297 - _x0*_x292 + _x296) + _x1*(_x0*_x298 + _x296) + _x0*(_x1*_x297 + _x0*_x268 + _x1*_x298 - _x295) + _x3*((-_x266 + _x267)*_x3 + _x5*_x290) + (_x3*_x290 + _x5*_x258)*_x5
+    del _x258, _x260, _x265, _x266, _x267, _x268, _x290, _x292, _x295, _x296, _x297, _x298
     _x300 = 0.5*q2_d
+    _out_C[..., 0, 0] = _x288*_x289 + _x299*_x300
     _x301 = 0.5*q1_d
     _x302 = _x299*_x301
+    _out_C[..., 0, 1] = _x302
+    _out_C[..., 1, 0] = -_x302
+    del _x299, _x302
     _x303 = _x288*_x301
+    _out_C[..., 0, 2] = _x303
+    _out_C[..., 2, 0] = -_x303
+    del _x288, _x301, _x303
     _x315 = _x293 + _x269
+    _out_C[..., 1, 2] = q3_d*_x315
+    del _x315
     _x314 = -_x293 - _x269
+    _out_C[..., 2, 1] = q2_d*_x314
+    del _x269, _x293, _x314
     _x16 = q2_d*q1_d
     _x22 = q1_d*q3_d
     _x30 = _x8*m_c
@@ -2859,6 +3509,7 @@ def combined(q, qd, qdd, tau, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6=0.
     _x20 = -q3_d
     _x158 = q2_d + _x20
     _x159 = -_x158 + _x20
+    del _x20
     _x316 = _x0*_x16
     _x17 = l1*m_a
     _x317 = _x17*_x316
@@ -2870,7 +3521,9 @@ def combined(q, qd, qdd, tau, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6=0.
     _x165 = _x0*_x81
     _x166 = _x164 - _x165
     _x318 = -q2_d*_x165 + q2_d*_x164 + _x52*_x166
+    del _x164, _x165
     _x53 = -_x52 + _x18
+    del _x18
     _x319 = _x53*_x166
     _x320 = -l2*_x317 + _x79*_x318 - _x51*_x319 + _x319*I_ayy
     _x168 = _x1*_x81
@@ -2878,6 +3531,7 @@ def combined(q, qd, qdd, tau, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6=0.
     _x170 = _x168 + _x169
     _x321 = _x53*_x170
     _x322 = -_x79*_x321 + _x51*_x321 + I_ayy*(-q2_d*_x169 - q2_d*_x168 - _x52*_x170)
+    del _x321
     _x323 = _x1*I_bezz
     _x324 = _x16*I_bexx
     _x325 = _x1*I_beyy
@@ -2886,27 +3540,35 @@ def combined(q, qd, qdd, tau, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6=0.
     _x328 = _x9*_x327
     _x329 = _x326 + _x328
     _x330 = _x159*(_x21 + I_cxx)
+    del _x21
     _x331 = _x329*_x145
     _x332 = -_x330*_x329 + _x331*_x159 + I_czz*(q3_d*_x328 + q3_d*_x326 + _x329*_x158)
+    del _x326, _x328
     _x333 = q3_d*_x327
     _x334 = _x5*_x22
     _x335 = _x13*_x334
     _x336 = _x5*_x81
     _x337 = _x7*_x327
+    del _x327
     _x338 = _x337 - _x336
     _x339 = -q3_d*_x337 - _x338*_x158 + q3_d*_x336
+    del _x336, _x337
     _x340 = _x338*I_czz
     _x341 = -_x340*_x159 + l1*_x335 + _x339*_x145 + _x338*_x330
     _x342 = _x30*_x338
     _x343 = _x5*I_dfzz
+    _out_V[..., 0] = _x3*(-_x334*I_dfyy + l3*(_x30*_x339 + _x342*_x159 + 2.0*_x335) + _x22*_x343 + _x7*_x332 + _x9*_x341 + _x334*I_dfxx) + _x5*(-_x9*_x332 - _x333*I_dfyy - _x333*I_dfxx + _x7*_x341 + _x333*I_dfzz) + _x1*(-_x316*I_beyy - _x0*_x324 + l1*(-_x55*_x319 + _x55*_x318 - 2.0*_x317) + _x9*_x320 + _x7*_x322 + _x316*I_bezz) + _x0*(-_x9*_x322 - _x16*_x325 + _x1*_x324 + _x16*_x323 + _x7*_x320)
     _x24 = q3_d*q3_d
     _x25 = l3*_x24
     _x23 = q1_d*q1_d
+    _out_k[...] = 0.5*_x23*(_x3*(_x3*(_x145*_x144 + _x96*I_czz + _x14 + _x147 + I_dfzz) + _x5*_x146) + _x1*(_x1*(_x96*I_ayy + _x79*_x144 + _x124 + _x123 + I_beyy) + _x0*_x143) + _x0*(_x1*_x143 + _x0*(_x96*_x79 + _x144*I_ayy + I_bezz)) + _x122 + _x5*(_x3*_x146 + _x5*(_x144*I_czz + _x96*_x145 + I_dfyy))) + _x289*(q3_d*(_x68 + _x126 + _x14 + I_dfxx) + q2_d*_x151) + _x300*(q2_d*(_x126 + _x78 + _x123 + I_bexx) + q3_d*_x151)
+    del _x289, _x300
     _x57 = l3*_x23
     _x344 = _x25 + _x3*_x3*_x57
     _x345 = _x3*_x5*_x57
     _x346 = m_c*(-_x9*_x345 + _x7*_x344)
     _x347 = -_x8*_x346 - _x338*_x331 + _x340*_x329
+    del _x331, _x338, _x340
     _x61 = l1*_x23
     _x348 = _x0*_x1*_x61
     _x26 = q2_d*q2_d
@@ -2915,10 +3577,13 @@ def combined(q, qd, qdd, tau, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6=0.
     _x350 = _x170*_x166
     _x351 = m_a*(_x9*_x348 + _x7*_x349)
     _x352 = _x0*_x23
+    _out_V[..., 1] = l1*(_x9*(-_x55*_x350 + _x351) + _x7*(m_a*(-_x9*_x349 + _x7*_x348) + _x55*_x170*_x170 + _x55*_x53*_x53)) - _x352*_x323 + _x352*_x325 - _x347
     _x353 = -_x19*_x351 - _x350*I_ayy + _x79*_x350
     _x354 = _x3*_x23
+    _out_V[..., 2] = _x5*_x354*I_dfyy + l3*(_x9*(_x342*_x329 + _x346) + _x7*(-_x30*_x159*_x159 - _x30*_x329*_x329 + m_c*(-_x9*_x344 - _x7*_x345))) - _x354*_x343 - _x353
     _x31 = g*_x1
     _x32 = 0.5*_x2
+    del _x2
     _x97 = l5*m_be
     _x225 = _x17 + _x97
     _x29 = g*_x3
@@ -2927,34 +3592,52 @@ def combined(q, qd, qdd, tau, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6=0.
     _x356 = _x30*(_x29*_x9 + _x355)
     _x357 = _x0*_x28
     _x358 = _x32*(_x31*_x9 + _x357)
+    _out_G[..., 1] = _x31*(_x32*_x9 + _x225) - _x358 + _x32*_x357 + _x356
     _x109 = l6*m_df
+    _out_u[...] = g*_x5*_x109 + g*m_c*(-l3*_x5 + 0.5*_x205) + g*m_a*(-_x5*_x19 + _x205) + g*_x0*_x97
     _x226 = _x109 - _x13
+    _out_G[..., 2] = -_x29*(-_x30*_x9 + _x226) - _x356 + _x30*_x355 + _x358
     _x41 = _x31*_x32
     _x42 = _x32*_x9
     _x33 = g*_x9
     _x43 = _x0*_x33 + _x1*_x28
     _x44 = _x32*_x43
+    del _x43
     _x359 = -_x6 - _x4
+    del _x4, _x6
     _x34 = _x29*_x30
     _x35 = _x5*_x33
     _x36 = _x30*_x35
+    del _x35
     _x361 = _x36 + _x34*_x359
     _x363 = -g*_x0
     _x364 = _x44 + _x42*_x363 + _x41*_x359
+    _out_dG_dq[..., 1, 1] = (_x42 + _x225)*_x363 - _x364 + _x41*_x359 + _x44 + _x361
+    _out_dG_dq[..., 2, 1] = _x34*_x359 + _x36 - _x361 + _x364
+    del _x42, _x44, _x359, _x36, _x361, _x363, _x364
     _x38 = -_x33
+    del _x33
     _x45 = _x0*_x38
     _x46 = _x32*_x45
+    del _x45
     _x37 = _x30*_x9
     _x39 = -_x3*_x28 + _x5*_x38
+    del _x28, _x38
     _x40 = _x30*_x39
+    del _x39
     _x360 = g*_x5
     _x362 = _x7*_x34 + _x37*_x360 + _x40
     _x365 = _x7*_x41 + _x46
+    _out_dG_dq[..., 1, 2] = _x7*_x41 + _x46 - _x365 + _x362
+    del _x41, _x46
     _x110 = -_x109
+    _out_dG_dq[..., 2, 2] = _x7*_x34 + (_x110 + _x13 + _x37)*_x360 + _x365 + _x40 - _x362
+    del _x34, _x40, _x360, _x362, _x365
     _x129 = 0.0005*q1_d
     _x130 = numpy.tanh(10.0*q1_d)
     _x131 = 0.01*_x130
     _x304 = _x131 + _x129
+    _out_F_f[..., 0] = _x304
     _x133 = 0.0005*q2_d
     _x134 = numpy.tanh(10.0*q2_d)
     _x135 = 0.01*_x134
@@ -2962,8 +3645,11 @@ def combined(q, qd, qdd, tau, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6=0.
     _x117 = numpy.tanh(10.0*_x52)
     _x137 = 0.01*_x117
     _x138 = _x137 + _x136
+    _out_F_f[..., 2] = _x138
     _x305 = -_x138 + _x135 + _x133
+    _out_F_f[..., 1] = _x305
     _x206 = q1_dd*I_baseyy + _x121*q1_dd
+    del _x121
     _x366 = _x1*q1_dd - _x316
     _x367 = (-l1*_x316 + l1*_x366)*m_a
     _x369 = _x1*_x16
@@ -2986,10 +3672,13 @@ def combined(q, qd, qdd, tau, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6=0.
     _x383 = -_x382*_x158 + _x9*_x378 + _x7*_x377
     _x384 = _x382*_x159
     _x385 = -_x384*I_czz + _x8*_x381 + _x383*_x145 + _x384*_x67
+    _out_inverse_dynamics_tau[..., 0] = _x3*(-_x334*I_dfyy + _x9*_x385 + _x7*_x380 + l3*(_x30*_x384 + _x30*_x383 + _x381) + _x378*I_dfzz + _x334*I_dfxx) + _x5*(-_x9*_x380 + _x7*_x385 + _x376*I_dfzz - _x376*I_dfxx + _x377*I_dfyy) + _x304 + _x1*(-_x316*I_bexx + _x9*_x373 + _x7*_x374 + l1*(_x55*_x371 - _x55*_x372 + _x367) + _x316*I_bezz + _x366*I_beyy) + _x0*(-_x9*_x374 - _x369*I_beyy + _x7*_x373 + _x370*I_bezz + _x369*I_bexx) + _x206
+    del _x304
     _x48 = -q3_dd
     _x50 = l1*q2_dd
     _x102 = _x0*_x1
     _x103 = _x50 + _x61*_x102 + _x31
+    del _x50
     _x173 = _x27 - _x1*_x1*_x61 + g*_x0
     _x181 = _x23*_x102
     _x207 = q2_dd*I_bexx
@@ -2997,20 +3686,25 @@ def combined(q, qd, qdd, tau, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6=0.
     _x47 = l3*q3_dd
     _x113 = _x3*_x5
     _x114 = -_x57*_x113 + _x47 + _x29
+    del _x47
     _x176 = _x25 + _x3*_x3*_x57 + g*_x5
     _x386 = m_c*(_x9*_x114 + _x7*_x176)
     _x387 = _x382*_x375
     _x388 = -_x8*_x386 - _x387*_x145 + _x49*_x67 + _x387*I_czz
     _x389 = m_a*(_x9*_x103 + _x7*_x173)
     _x390 = _x368*_x82
+    _out_inverse_dynamics_tau[..., 1] = _x207 + _x97*_x31 + l1*(_x9*(-_x48*_x55 - _x55*_x390 + _x389) + _x7*(m_a*(-_x9*_x173 + _x7*_x103) + _x55*_x82*_x82 + _x55*_x53*_x53)) - _x181*I_bezz - _x388 + _x15*q2_dd + _x181*I_beyy + _x305
+    del _x305
     _x179 = _x23*_x113
     _x208 = q3_dd*I_dfxx
     _x391 = -_x19*_x389 - _x390*I_ayy + _x48*_x51 + _x368*_x83
+    _out_inverse_dynamics_tau[..., 2] = _x208 - _x391 - _x179*I_dfzz + l3*(_x9*(-_x49*_x30 + _x30*_x387 + _x386) + _x7*(-_x30*_x159*_x159 - _x30*_x375*_x375 + m_c*(-_x9*_x176 + _x7*_x114))) + _x15*q3_dd + _x179*I_dfyy - _x109*_x29 + _x138
     _x54 = _x51*_x53
     _x392 = _x54*_x82 + I_ayy*(-_x9*_x370 - _x82*_x52 + _x7*_x366) - _x83*_x53
     _x85 = -_x0*_x9 + _x1*_x7
     _x410 = -_x85*_x53
     _x411 = _x410*_x79 + _x85*(_x54 - _x52*I_ayy)
+    del _x410
     _x87 = I_bexx - I_beyy
     _x86 = _x85*I_ayy
     _x77 = _x76*_x55
@@ -3018,10 +3712,12 @@ def combined(q, qd, qdd, tau, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6=0.
     _x414 = _x89*_x79 + _x77
     _x415 = -_x86*_x9 + _x7*_x414 + _x0*I_bezz
     _x416 = _x0*_x87 + _x415
+    del _x87
     _x412 = _x89*(I_ayy + _x78) - _x77
     _x417 = _x414*_x52 + _x412*_x53
     _x90 = _x19*_x89 + _x76
     _x91 = _x17*_x90
+    del _x90
     _x423 = _x7*_x86 + _x9*_x414 + _x91 + _x1*I_beyy
     _x424 = q1_dd*_x423 + _x9*_x373 + _x417*_x80 + _x7*_x392 + l1*(_x55*_x371 - _x55*_x372 + _x367) + _x316*I_bezz + _x411*_x81 - _x316*I_bexx + _x16*_x416 + _x366*I_beyy
     _x69 = -_x5*_x9 + _x3*_x7
@@ -3032,6 +3728,7 @@ def combined(q, qd, qdd, tau, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6=0.
     _x396 = _x65 + _x71*_x145
     _x66 = -I_czz
     _x395 = _x71*(_x67 + _x66) + _x65
+    del _x65
     _x397 = -_x396*_x158 + _x395*_x159
     _x398 = _x69*(_x68 + _x145)
     _x405 = _x70*_x158 + _x398*_x159
@@ -3040,62 +3737,91 @@ def combined(q, qd, qdd, tau, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6=0.
     _x420 = _x3*_x397 + _x5*_x405 + _x1*_x417 + _x0*_x411
     _x427 = _x86*_x366 + _x3*_x380 + _x370*_x414 + _x5*_x385 + _x70*_x378 + q1_d*_x420 + _x377*_x396 + _x1*_x392 + _x0*_x373
     _x428 = _x7*_x419 - _x9*_x427
+    del _x419, _x427
     _x92 = -I_bexx + I_bezz
     _x425 = -_x91 + _x1*_x92 - _x423
+    del _x91, _x92
     _x429 = -_x369*I_beyy + q1_dd*_x415 - _x9*_x392 + _x411*_x80 + _x16*_x425 + _x7*_x373 + _x370*I_bezz - _x417*_x81 + _x369*I_bexx
+    _out_dtau_dq[..., 0, 1] = -_x0*_x424 + _x1*_x429 - _x428
+    del _x392, _x417, _x424, _x429
     _x72 = _x8*_x71 + _x64
+    del _x64, _x71
     _x73 = _x13*_x72
+    del _x72
     _x400 = _x7*_x70 + _x3*I_dfzz + _x9*_x396 + _x73
     _x75 = -I_dfxx + I_dfzz
     _x402 = -_x70*_x9 + _x7*_x396 + _x5*I_dfyy
+    _out_dtau_dqdd[..., 0, 0] = _x1*_x423 + _x3*_x400 + _x5*_x402 + _x0*_x415 + _x122
     _x403 = _x5*_x75 - _x402
+    del _x75
     _x406 = q1_dd*_x400 + _x405*_x81 + _x397*_x80 + _x9*_x385 + _x7*_x380 - _x334*I_dfyy + _x22*_x403 + l3*(_x30*_x384 + _x30*_x383 + _x381) + _x378*I_dfzz + _x334*I_dfxx
     _x74 = -I_dfyy + I_dfxx
     _x401 = _x73 + _x3*_x74 + _x400
+    del _x73, _x74
     _x409 = -_x9*_x380 + _x22*_x401 + _x7*_x385 - _x397*_x81 + q1_dd*_x402 + _x405*_x80 + _x376*I_dfzz - _x376*I_dfxx + _x377*I_dfyy
+    _out_dtau_dq[..., 0, 2] = -_x3*_x409 + _x5*_x406 + _x428
+    del _x405, _x428, _x406, _x409
     _x101 = 2.0*_x1*_x61
     _x95 = _x94*m_a
     _x431 = -_x7*_x94*m_a + _x7*_x95
     _x93 = I_beyy - I_bezz
     _x432 = _x96*_x17 + _x95*_x9
+    _out_dtau_dqdd[..., 1, 1] = l1*_x432 - _x68 + _x15 + I_bexx
+    del _x17
     _x433 = _x61*_x432 + _x93*_x23
     _x435 = _x432 + _x97
     _x99 = 2.0*l1
     _x100 = _x7*_x99*_x55
     _x430 = -_x94*_x55
+    del _x94
     _x445 = _x100*_x82 + _x368*_x430
     _x447 = _x82*_x430
+    del _x430
     _x453 = -_x101*_x431 + g*_x435 + _x81*_x445 + _x80*_x447 + _x0*_x433
+    del _x435
     _x60 = _x1*_x1
     _x62 = _x27 - _x60*_x61 + g*_x0
+    del _x27
     _x63 = _x7*_x62
     _x394 = m_a*(_x9*_x103 + _x63)
     _x436 = _x66 + _x145
+    del _x66
     _x441 = _x375*_x436
     _x442 = _x382*_x436
+    del _x436
     _x448 = -_x5*_x441 - _x0*_x447 + _x3*_x442 + _x1*_x445
     _x449 = _x95*_x103 + _x30*_x114 + l1*(-_x63*m_a - _x48*_x55 - _x55*_x390 + _x394) + q1_d*_x448
+    del _x394
     _x56 = _x3*_x3
     _x58 = _x25 + g*_x5 + _x56*_x57
+    del _x25
     _x104 = _x7*_x103
     _x450 = _x5*_x442 + _x1*_x447 + _x3*_x441 + _x0*_x445
     _x454 = _x95*_x62 + _x30*_x58 + l1*(_x104*m_a + m_a*(-_x9*_x62 + _x104) + _x55*_x82*_x82 + _x55*_x53*_x53) + q1_d*_x450
+    del _x104
     _x455 = _x7*_x449 - _x9*_x454
+    del _x449, _x454
     _x456 = -_x81*_x447 + g*_x431 + _x80*_x445 + _x1*_x433
+    _out_dtau_dq[..., 1, 1] = -_x0*_x453 + _x1*_x456 - _x455
+    del _x433, _x445, _x447
     _x98 = 2.0*_x3*_x57
     _x437 = -_x37*_x57
     _x438 = _x7*_x30
     _x443 = g*_x37 + _x81*_x442 + _x5*_x437 + _x98*_x438 + _x80*_x441
     _x444 = -_x81*_x441 + g*_x438 + _x3*_x437 + _x80*_x442
+    _out_dtau_dq[..., 1, 2] = -_x3*_x444 + _x5*_x443 + _x455
+    del _x441, _x442, _x455, _x437
     _x306 = _x55*_x9
     _x457 = _x7*_x55
     _x458 = _x61*_x306
     _x473 = -_x368
     _x474 = _x79*_x473 + _x368*I_ayy
+    del _x473
     _x84 = -_x83
     _x88 = _x82*I_ayy
     _x475 = _x84 + _x88
     _x479 = -_x101*_x457 + _x81*_x474 + g*_x306 + _x80*_x475 + _x0*_x458
+    del _x101
     _x59 = _x7*_x58
     _x106 = l3*_x9
     _x108 = _x106*m_c
@@ -3107,49 +3833,96 @@ def combined(q, qd, qdd, tau, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6=0.
     _x468 = -_x112*_x375 + _x107*_x382
     _x476 = -_x0*_x475 - _x5*_x466 + _x3*_x468 + _x1*_x474
     _x477 = _x55*_x103 + l3*(-_x59*m_c + _x393 - _x49*_x30 + _x30*_x387) + _x108*_x114 + q1_d*_x476
+    del _x393
     _x115 = _x7*_x114
     _x478 = _x3*_x466 + _x5*_x468 + _x1*_x475 + _x0*_x474
     _x480 = _x55*_x62 + _x108*_x58 + l3*(_x115*m_c - _x30*_x159*_x159 - _x30*_x375*_x375 + m_c*(-_x9*_x58 + _x115)) + q1_d*_x478
+    del _x115
     _x481 = _x7*_x477 - _x9*_x480
+    del _x477, _x480
     _x482 = g*_x457 + _x80*_x474 - _x81*_x475 + _x1*_x458
+    _out_dtau_dq[..., 2, 1] = -_x0*_x479 + _x1*_x482 - _x481
+    del _x458, _x474, _x475
     _x105 = I_dfyy - I_dfzz
     _x460 = _x96*_x13 + _x108*_x9
+    _out_dtau_dqdd[..., 2, 2] = l3*_x460 - _x78 + _x15 + I_dfxx
     _x461 = -_x57*_x460 + _x105*_x23
     _x462 = _x460 + _x110
+    del _x110
     _x463 = -_x7*_x106*m_c + _x7*_x108
+    del _x106
     _x469 = _x98*_x463 + g*_x462 + _x5*_x461 + _x81*_x468 + _x80*_x466
+    del _x98, _x462
     _x472 = -_x81*_x466 + g*_x463 + _x3*_x461 + _x80*_x468
+    _out_dtau_dq[..., 2, 2] = _x5*_x469 - _x3*_x472 + _x481
+    del _x466, _x468, _x481, _x461
     _x197 = 0.1*(1.0 - _x130*_x130)
+    del _x130
     _x404 = _x3*_x403 + _x5*_x401
     _x426 = _x1*_x416 + _x0*_x425
+    _out_dtau_dqd[..., 0, 0] = 0.0005 + q2_d*_x426 + q3_d*_x404 + _x9*_x418 + _x7*_x420 + _x197
+    del _x418, _x420
     _x399 = _x382*_x395 + _x375*_x398
+    del _x398
     _x407 = _x70*_x375 - _x382*_x396 - _x399
     _x413 = _x85*(_x51*_x82 + _x84) + _x368*_x412
+    del _x412
     _x421 = -_x88*_x85 + _x368*_x414 - _x413
     _x422 = _x413 + _x421
+    _out_dtau_dqd[..., 0, 1] = q1_d*_x426 - _x422 + _x407
+    del _x413, _x422
     _x408 = _x399 + _x407
+    _out_dtau_dqd[..., 0, 2] = q1_d*_x404 - _x408 + _x421
+    del _x399, _x407, _x421, _x408
     _x116 = 2.0*q1_d
     _x434 = _x102*_x432 - _x60*_x431
+    del _x432
     _x439 = -_x37*_x113 + _x56*_x438
+    del _x37
     _x440 = l3*_x439 + l1*_x434 + _x93*_x102
+    _out_dtau_dqd[..., 1, 0] = _x116*_x440 + _x9*_x448 + _x7*_x450
+    del _x93, _x434, _x439
     _x118 = 0.1*(1.0 - _x117*_x117)
+    del _x117
     _x119 = _x99*q2_d
+    del _x99
     _x199 = 0.1*(1.0 - _x134*_x134)
+    del _x134
     _x446 = _x100*_x53
+    del _x100
     _x451 = -_x446
     _x452 = _x446 + _x451
+    _out_dtau_dqd[..., 1, 1] = 0.001 - _x119*_x431 - _x452 + _x199 + _x118
+    del _x446
     _x120 = _x111*q3_d
+    del _x111
     _x483 = -0.0005 - _x118
+    _out_dtau_dqd[..., 1, 2] = _x120*_x438 + _x483 + _x451
     _x459 = _x102*_x306 - _x60*_x457
+    del _x60
     _x464 = _x56*_x463 - _x113*_x460
+    del _x56, _x460
     _x465 = l3*_x464 + l1*_x459 + _x105*_x113
+    _out_dtau_dqd[..., 2, 0] = _x116*_x465 + _x9*_x476 + _x7*_x478
+    del _x105, _x459, _x464
     _x467 = -_x112*_x159
+    del _x112
     _x470 = -_x467
+    _out_dtau_dqd[..., 2, 1] = -_x119*_x457 + _x483 + _x470
+    del _x483
     _x471 = _x467 + _x470
+    _out_dtau_dqd[..., 2, 2] = 0.0005 + _x120*_x463 - _x471 + _x118
+    del _x467
     _x307 = -_x107
+    del _x107
     _x308 = -_x307 + l1*_x306
+    _out_dtau_dqdd[..., 1, 2] = _x308
+    _out_dtau_dqdd[..., 2, 1] = _x308
+    del _x306, _x307, _x308
     _x148 = _x3*(_x3*(_x145*_x144 + _x96*I_czz + _x14 + _x147 + I_dfzz) + _x5*_x146) + _x1*(_x1*(_x96*I_ayy + _x79*_x144 + _x124 + _x123 + I_beyy) + _x0*_x143) + _x0*(_x1*_x143 + _x0*(_x96*_x79 + _x144*I_ayy + I_bezz)) + _x122 + _x5*(_x3*_x146 + _x5*(_x144*I_czz + _x96*_x145 + I_dfyy))
+    del _x96, _x122, _x124, _x143, _x144, _x146, _x147
     _x132 = tau_q1 - _x131 - _x129
+    del _x129, _x131
     _x154 = _x5*q1_d
     _x160 = _x9*_x154
     _x161 = _x3*_x80
@@ -3158,129 +3931,241 @@ def combined(q, qd, qdd, tau, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6=0.
     _x180 = _x55*_x166
     _x167 = _x166*I_ayy
     _x484 = _x53*(_x10 + I_axx)
+    del _x10
     _x485 = -_x484*_x166 + _x53*_x167 - l2*_x317 + _x79*_x318
     _x171 = _x79*_x170
     _x486 = -_x53*_x171 + _x484*_x170 + I_ayy*(-q2_d*_x169 - q2_d*_x168 - _x52*_x170)
+    del _x168, _x169, _x484
     _x487 = _x16*I_beyy
     _x155 = _x7*_x154
     _x156 = _x3*_x81
     _x157 = _x155 + _x156
     _x182 = _x157*_x145
     _x488 = -_x330*_x157 + _x182*_x159 + I_czz*(q3_d*_x156 + q3_d*_x155 + _x157*_x158)
+    del _x155, _x156
     _x489 = q3_d*_x154
+    del _x154
     _x490 = _x13*_x489
+    del _x13
     _x491 = -_x162*_x158 - q3_d*_x161 + q3_d*_x160
+    del _x160, _x161
     _x183 = _x162*I_czz
     _x492 = l1*_x490 + _x491*_x145 - _x183*_x159 + _x330*_x162
+    del _x330
     _x493 = -_x3*(l3*(_x30*_x491 + _x163*_x159 + 2.0*_x490) + _x9*_x492 + _x7*_x488 + _x489*I_dfzz - _x489*I_dfyy + _x489*I_dfxx) - _x5*(-_x9*_x488 - _x376*I_dfyy - _x376*I_dfxx + _x7*_x492 + _x376*I_dfzz) - _x1*(-_x0*_x487 - _x316*I_bexx + _x9*_x485 + l1*(-_x53*_x180 + _x55*_x318 - 2.0*_x317) + _x7*_x486 + _x316*I_bezz) + _x132 - _x0*(-_x9*_x486 - _x1*_x487 + _x7*_x485 + _x369*I_bezz + _x369*I_bexx)
+    del _x132, _x485, _x486, _x487, _x488, _x489, _x490, _x491, _x492
     _x494 = _x493/_x148
+    _out_forward_dynamics_qdd[..., 0] = _x494
+    del _x493
     _x127 = _x126 + _x78 + _x123 + I_bexx
+    del _x123, _x78
     _x128 = 1.0/_x127
     _x152 = _x128*_x151
     _x139 = _x138 + tau_q2 - _x135 - _x133
+    del _x133, _x135, _x138
     _x172 = _x61*_x102 + _x31
     _x174 = m_a*(_x9*_x172 + _x7*_x173)
     _x177 = -_x57*_x113 + _x29
     _x178 = m_c*(_x9*_x177 + _x7*_x176)
     _x184 = -_x8*_x178 - _x162*_x182 + _x183*_x157
+    del _x162, _x182, _x183
     _x185 = -_x97*_x31 - l1*(_x9*(-_x170*_x180 + _x174) + _x7*(m_a*(-_x9*_x173 + _x7*_x172) + _x55*_x170*_x170 + _x55*_x53*_x53)) - _x181*I_beyy + _x181*I_bezz + _x184 + _x139
+    del _x180, _x139, _x172, _x184
     _x150 = _x68 + _x126 + _x14 + I_dfxx
+    del _x14, _x126, _x68
     _x153 = -_x151*_x152 + _x150
     _x140 = tau_q3 - _x137 - _x136
+    del _x136, _x137
     _x175 = -_x19*_x174 - _x170*_x167 + _x171*_x166
+    del _x166, _x167, _x171, _x174
     _x186 = -_x185*_x152 - l3*(_x9*(_x163*_x157 + _x178) + _x7*(-_x30*_x159*_x159 - _x30*_x157*_x157 + m_c*(-_x9*_x176 + _x7*_x177))) - _x179*I_dfyy + _x179*I_dfzz + _x175 + _x109*_x29 + _x140
+    del _x163, _x157, _x177, _x178, _x140, _x175
     _x187 = _x186/_x153
+    _out_forward_dynamics_qdd[..., 2] = _x187
+    del _x186
     _x189 = -_x152*_x187 + _x128*_x185
+    _out_forward_dynamics_qdd[..., 1] = _x189
+    del _x185
     _x196 = 1.0/_x148
+    _out_dqdd_dtau[..., 0, 0] = _x196
     _x495 = _x1*_x494 - _x316
     _x496 = (-l1*_x316 + l1*_x495)*m_a
     _x497 = _x0*_x494 + _x369
     _x498 = _x368*_x52 + _x9*_x495 + _x7*_x497
     _x499 = -_x372*_x51 + _x19*_x496 + _x79*_x498 + _x372*I_ayy
+    del _x79, _x19
     _x500 = _x54*_x82 - _x83*_x53 + I_ayy*(-_x9*_x497 - _x82*_x52 + _x7*_x495)
+    del _x83, _x54
     _x516 = -_x77 + (-_x51 + I_ayy)*_x89
+    del _x77, _x89
     _x518 = _x53*_x516 + _x414*_x52
+    del _x52
     _x524 = _x80*_x518 + _x9*_x499 + _x16*_x416 + _x7*_x500 + _x316*I_bezz + _x411*_x81 - _x316*I_bexx + _x494*_x423 + l1*(-_x55*_x372 + _x55*_x498 + _x496) + _x495*I_beyy
+    del _x416, _x423, _x496, _x498
     _x501 = _x5*_x494 - _x376
     _x502 = _x3*_x494 + _x334
     _x503 = -_x379*_x67 + _x379*_x145 + I_czz*(-_x9*_x501 + _x375*_x158 + _x7*_x502)
+    del _x379
     _x504 = (l3*_x502 + l3*_x334)*m_c
     _x505 = -_x382*_x158 + _x9*_x502 + _x7*_x501
     _x506 = -_x384*I_czz + _x8*_x504 + _x145*_x505 + _x384*_x67
+    del _x8
     _x509 = (-_x67 + _x145)*_x69
+    del _x145, _x67, _x69
     _x511 = _x70*_x158 + _x159*_x509
+    del _x158
     _x519 = -_x5*_x397 - _x0*_x518 + _x3*_x511 + _x1*_x411
     _x520 = _x3*_x506 - _x70*_x501 - _x86*_x497 - _x5*_x503 + q1_d*_x519 + _x396*_x502 + _x414*_x495 - _x0*_x500 + _x1*_x499
     _x521 = _x3*_x397 + _x1*_x518 + _x5*_x511 + _x0*_x411
     _x525 = _x86*_x495 + _x3*_x503 + _x5*_x506 + _x396*_x501 + _x1*_x500 + q1_d*_x521 + _x414*_x497 + _x70*_x502 + _x0*_x499
+    del _x86, _x495
     _x526 = _x7*_x520 - _x9*_x525
+    del _x520, _x525
     _x527 = -_x81*_x518 - _x369*I_beyy + _x16*_x425 + _x494*_x415 + _x411*_x80 + _x497*I_bezz + _x7*_x499 - _x9*_x500 + _x369*I_bexx
+    del _x411, _x415, _x425, _x497, _x499, _x500, _x518
     _x534 = _x526 + _x0*_x524 - _x1*_x527
+    del _x524, _x527
     _x539 = _x196*_x534
+    _out_dqdd_dq[..., 0, 1] = _x539
+    del _x534, _x539
     _x512 = l3*(_x30*_x384 + _x30*_x505 + _x504) + _x9*_x506 + _x7*_x503 + _x81*_x511 + _x397*_x80 + _x494*_x400 - _x334*I_dfyy + _x22*_x403 + _x502*I_dfzz + _x334*I_dfxx
+    del _x400, _x403, _x502, _x504, _x505
     _x515 = -_x397*_x81 - _x9*_x503 - _x376*I_dfxx + _x80*_x511 + _x7*_x506 + _x22*_x401 + _x494*_x402 + _x376*I_dfzz + _x501*I_dfyy
+    del _x80, _x81, _x397, _x402, _x401, _x494, _x501, _x503, _x506, _x511
     _x540 = -_x526 + _x3*_x515 - _x5*_x512
+    del _x526, _x512, _x515
     _x545 = _x196*_x540
+    _out_dqdd_dq[..., 0, 2] = _x545
+    del _x540, _x545
     _x188 = -_x187
     _x191 = _x61*_x102 + l1*_x189 + _x31
+    del _x61, _x102
     _x193 = l3*_x187 - _x57*_x113 + _x29
+    del _x57, _x113, _x187
     _x508 = m_a*(_x9*_x191 + _x63)
     _x528 = _x95*_x191 + l1*(-_x55*_x188 - _x55*_x390 - _x63*m_a + _x508) + _x30*_x193 + q1_d*_x448
+    del _x63, _x188, _x508
     _x192 = _x7*_x191
     _x529 = _x95*_x62 + _x30*_x58 + q1_d*_x450 + l1*(m_a*_x192 + m_a*(-_x9*_x62 + _x192) + _x55*_x82*_x82 + _x55*_x53*_x53)
+    del _x95, _x192
     _x530 = _x7*_x528 - _x9*_x529
+    del _x528, _x529
     _x535 = -_x1*_x456 + _x530 + _x0*_x453
+    del _x453, _x456
     _x195 = 1.0/_x153
+    _out_dqdd_dtau[..., 2, 2] = _x195
+    del _x153
     _x190 = -_x189
+    del _x189
     _x507 = m_c*(_x9*_x193 + _x59)
     _x531 = _x108*_x193 + _x55*_x191 + l3*(-_x59*m_c - _x30*_x190 + _x30*_x387 + _x507) + q1_d*_x476
+    del _x59, _x191, _x190, _x507
     _x194 = _x7*_x193
+    del _x193
     _x532 = _x55*_x62 + l3*(m_c*_x194 - _x30*_x159*_x159 - _x30*_x375*_x375 + m_c*(-_x9*_x58 + _x194)) + _x108*_x58 + q1_d*_x478
+    del _x62, _x58, _x108, _x194
     _x533 = _x7*_x531 - _x9*_x532
+    del _x531, _x532
     _x536 = -_x535*_x152 - _x1*_x482 + _x0*_x479 + _x533
+    del _x479, _x482
     _x537 = _x195*_x536
+    _out_dqdd_dq[..., 2, 1] = _x537
+    del _x536
     _x538 = -_x537*_x152 + _x128*_x535
+    _out_dqdd_dq[..., 1, 1] = _x538
+    del _x535, _x537, _x538
     _x541 = -_x5*_x443 + _x3*_x444 - _x530
+    del _x443, _x444, _x530
     _x542 = -_x541*_x152 + _x3*_x472 - _x5*_x469 - _x533
+    del _x469, _x472, _x533
     _x543 = _x195*_x542
+    _out_dqdd_dq[..., 2, 2] = _x543
+    del _x542
     _x544 = -_x543*_x152 + _x128*_x541
+    _out_dqdd_dq[..., 1, 2] = _x544
+    del _x541, _x543, _x544
     _x546 = -0.0005 - _x9*_x519 - q2_d*_x426 - _x7*_x521 - q3_d*_x404 - _x197
+    del _x197, _x519, _x521
     _x551 = _x196*_x546
+    _out_dqdd_dqd[..., 0, 0] = _x551
+    del _x546, _x551
     _x510 = _x382*_x395 + _x375*_x509
+    del _x395, _x509
     _x513 = -_x382*_x396 + _x70*_x375 - _x510
+    del _x382, _x70, _x396
     _x517 = _x85*(_x51*_x82 + _x84) + _x368*_x516
+    del _x51, _x84, _x516
     _x522 = -_x88*_x85 + _x368*_x414 - _x517
+    del _x368, _x85, _x414, _x88
     _x523 = _x517 + _x522
+    del _x517
     _x552 = -q1_d*_x426 - _x513 + _x523
+    del _x426, _x523
     _x557 = _x196*_x552
+    _out_dqdd_dqd[..., 0, 1] = _x557
+    del _x552, _x557
     _x514 = _x510 + _x513
+    del _x510, _x513
     _x558 = -q1_d*_x404 - _x522 + _x514
+    del _x404, _x522, _x514
     _x563 = _x196*_x558
+    _out_dqdd_dqd[..., 0, 2] = _x563
+    del _x196, _x558, _x563
     _x547 = -_x116*_x440 - _x9*_x448 - _x7*_x450
+    del _x448, _x450, _x440
     _x548 = -_x116*_x465 - _x7*_x478 - _x547*_x152 - _x9*_x476
+    del _x476, _x478, _x116, _x465
     _x549 = _x195*_x548
+    _out_dqdd_dqd[..., 2, 0] = _x549
+    del _x548
     _x550 = -_x549*_x152 + _x128*_x547
+    _out_dqdd_dqd[..., 1, 0] = _x550
+    del _x547, _x549, _x550
     _x198 = -_x118
     _x553 = -0.001 + _x119*_x431 + _x198 - _x199 + _x452
+    del _x431, _x199, _x452
     _x200 = 0.0005 + _x118
+    del _x118
     _x554 = _x119*_x457 - _x553*_x152 - _x470 + _x200
+    del _x457, _x119, _x470
     _x555 = _x195*_x554
+    _out_dqdd_dqd[..., 2, 1] = _x555
+    del _x554
     _x556 = -_x555*_x152 + _x128*_x553
+    _out_dqdd_dqd[..., 1, 1] = _x556
+    del _x553, _x555, _x556
     _x559 = -_x451 - _x120*_x438 + _x200
+    del _x438, _x451, _x200
     _x560 = -0.0005 - _x120*_x463 - _x559*_x152 + _x198 + _x471
+    del _x463, _x120, _x471, _x198
     _x561 = _x195*_x560
+    _out_dqdd_dqd[..., 2, 2] = _x561
+    del _x560
     _x562 = -_x561*_x152 + _x128*_x559
+    _out_dqdd_dqd[..., 1, 2] = _x562
+    del _x559, _x561, _x562
     _x564 = -_x152
     _x565 = _x195*_x564
+    _out_dqdd_dtau[..., 2, 1] = _x565
+    del _x564
     _x566 = -_x565*_x152 + _x128
+    _out_dqdd_dtau[..., 1, 1] = _x566
+    del _x128, _x565, _x566
     _x567 = -_x195*_x152
+    _out_dqdd_dtau[..., 1, 2] = _x567
+    del _x152, _x195, _x567
     _x572 = _x3*(-_x334*I_dfyy + _x9*_x385 + _x7*_x380 + l3*(_x30*_x384 + _x30*_x383 + _x381) + _x378*I_dfzz + _x334*I_dfxx) + _x5*(-_x9*_x380 + _x7*_x385 + _x376*I_dfzz - _x376*I_dfxx + _x377*I_dfyy) + _x1*(-_x316*I_bexx + _x9*_x373 + _x7*_x374 + l1*(_x55*_x371 - _x55*_x372 + _x367) + _x316*I_bezz + _x366*I_beyy) + _x206 + _x0*(-_x9*_x374 - _x369*I_beyy + _x7*_x373 + _x370*I_bezz + _x369*I_bexx)
+    del _x206, _x366, _x367, _x369, _x370, _x371, _x372, _x373, _x374, _x376, _x377, _x378, _x380, _x381, _x383, _x384, _x385
     _x573 = -_x181*I_bezz + l1*(_x9*(-_x48*_x55 - _x55*_x390 + _x389) + _x7*(m_a*(-_x9*_x173 + _x7*_x103) + _x55*_x82*_x82 + _x55*_x53*_x53)) + _x97*_x31 + _x207 + _x15*q2_dd + _x181*I_beyy - _x388
+    del _x97, _x82, _x48, _x103, _x173, _x181, _x207, _x388, _x389, _x390
     _x574 = l3*(_x9*(-_x49*_x30 + _x30*_x387 + _x386) + _x7*(-_x30*_x159*_x159 - _x30*_x375*_x375 + m_c*(-_x9*_x176 + _x7*_x114))) - _x179*I_dfzz + _x208 - _x109*_x29 + _x15*q3_dd + _x179*I_dfyy - _x391
+    del _x15, _x109, _x375, _x49, _x114, _x176, _x386, _x387, _x179, _x208, _x391
     _x569 = -_x201*_x210 - _x209
     _x568 = _x76*_x203 + _x202*_x203
+    del _x76
     _x570 = (_x220 + _x221)*_x201 + _x203*_x568 - _x252 - _x251
     _x571 = _x252 + _x251
+    del _x251, _x252
     _x575 = -_x209*_x570 + _x569*_x571
     _x576 = -_x568*_x571
     _x577 = _x568*_x570
@@ -3288,16 +4173,27 @@ def combined(q, qd, qdd, tau, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6=0.
     _x230 = -_x220 - _x221
     _x584 = _x228*_x576 + _x230*_x575 + _x227*_x577
     _x585 = 1.0/_x584
+    del _x584
     _x586 = _x585*(_x572*_x575 + _x573*_x576 + _x574*_x577)
+    _out_F[..., 0] = _x586
+    del _x575, _x576, _x577, _x586
     _x578 = -_x228*_x571 + _x227*_x570
     _x579 = _x230*_x571
+    del _x571
     _x580 = -_x230*_x570
+    del _x570
     _x587 = _x585*(_x572*_x578 + _x573*_x579 + _x574*_x580)
+    _out_F[..., 1] = _x587
+    del _x578, _x579, _x580, _x587
     _x581 = -_x227*_x569 + _x209*_x228
     _x582 = -_x230*_x209 + _x227*_x568
     _x583 = -_x228*_x568 + _x230*_x569
+    del _x569, _x568
     _x588 = _x585*(_x572*_x581 + _x574*_x583 + _x573*_x582)
+    _out_F[..., 2] = _x588
+    del _x572, _x573, _x574, _x585, _x581, _x582, _x583, _x588
     _x211 = _x201*_x210
+    del _x210
     _x212 = -_x209 - _x211
     _x213 = _x202*_x203
     _x215 = _x213 + _x214
@@ -3305,236 +4201,96 @@ def combined(q, qd, qdd, tau, *, l1=0.215, l2=0.17, l3=0.0325, l5=-0.0368, l6=0.
     _x217 = _x202*_x216
     _x218 = _x203*_x203
     _x219 = _x202*_x218
+    del _x202
     _x223 = _x203*_x215 + _x201*_x222 - _x219 - _x217
     _x224 = _x217 + _x219
+    del _x217, _x219
     _x233 = -_x223*_x209 + _x212*_x224
     _x234 = -_x224*_x215
     _x235 = _x223*_x215
     _x236 = _x233*_x230 + _x234*_x228 + _x235*_x227
     _x237 = 1.0/_x236
+    del _x236
     _x238 = _x148*_x237
+    del _x148
     _x599 = _x238*_x233
     _x600 = (_x127*_x234 + _x151*_x235)*_x237
     _x601 = _x237*(_x150*_x235 + _x151*_x234)
     _x614 = _x237*(_x235*_x601 + _x234*_x600 + _x233*_x599)
+    _out_Mx[..., 0, 0] = _x614
     _x594 = -_x224*_x228 + _x223*_x227
     _x595 = _x224*_x230
+    del _x224
     _x596 = -_x223*_x230
+    del _x223
     _x615 = _x237*(_x596*_x601 + _x595*_x600 + _x594*_x599)
+    _out_Mx[..., 0, 1] = _x615
+    _out_Mx[..., 1, 0] = _x615
     _x231 = _x215*_x227 - _x230*_x209
     _x229 = _x209*_x228
     _x597 = -_x212*_x227 + _x229
+    del _x229
     _x232 = -_x215*_x228
+    del _x215
     _x598 = _x232 + _x212*_x230
+    del _x212, _x232
     _x617 = _x237*(_x601*_x598 + _x231*_x600 + _x597*_x599)
+    _out_Mx[..., 0, 2] = _x617
+    _out_Mx[..., 2, 0] = _x617
+    del _x599, _x600, _x601
     _x604 = _x238*_x594
     _x605 = (_x127*_x595 + _x151*_x596)*_x237
     _x606 = _x237*(_x150*_x596 + _x151*_x595)
     _x616 = _x237*(_x596*_x606 + _x595*_x605 + _x594*_x604)
+    _out_Mx[..., 1, 1] = _x616
     _x618 = _x237*(_x606*_x598 + _x231*_x605 + _x597*_x604)
+    _out_Mx[..., 1, 2] = _x618
+    _out_Mx[..., 2, 1] = _x618
+    del _x604, _x605, _x606
     _x609 = _x238*_x597
+    del _x238
     _x610 = _x237*(_x231*_x127 + _x151*_x598)
+    del _x127
     _x611 = _x237*(_x150*_x598 + _x231*_x151)
+    del _x151, _x150
     _x619 = _x237*(_x611*_x598 + _x231*_x610 + _x597*_x609)
+    _out_Mx[..., 2, 2] = _x619
+    del _x609, _x610, _x611
     _x309 = (_x203*_x222 + _x203*_x230)*_x16 + (-_x205*_x218 - _x205*_x216)*_x26 + (_x204*_x218 + _x204*_x216)*_x24
+    del _x222, _x204, _x216, _x218
     _x310 = 2.0*_x22
     _x311 = _x16*_x205
+    del _x205
     _x312 = -_x24*_x220 - _x203*_x311 - _x26*_x221 + _x16*_x228 + _x310*_x227 + _x23*_x230
+    del _x203, _x220, _x221, _x227, _x228, _x230
     _x313 = -_x26*_x214 - _x24*_x213 + (-_x214 - _x213)*_x23 - _x310*_x209 + (_x211 + _x209)*_x16 + _x201*_x311
+    del _x201, _x214, _x209, _x24, _x23, _x26, _x211, _x213, _x310, _x311
     _x589 = _x3*(-_x334*I_dfyy + l3*(_x30*_x339 + _x342*_x159 + 2.0*_x335) + _x22*_x343 + _x7*_x332 + _x9*_x341 + _x334*I_dfxx) + _x5*(-_x9*_x332 - _x333*I_dfyy - _x333*I_dfxx + _x7*_x341 + _x333*I_dfzz) + _x1*(-_x316*I_beyy - _x0*_x324 + l1*(-_x55*_x319 + _x55*_x318 - 2.0*_x317) + _x9*_x320 + _x7*_x322 + _x316*I_bezz) + _x0*(-_x9*_x322 - _x16*_x325 + _x1*_x324 + _x16*_x323 + _x7*_x320)
+    del _x3, _x1, _x0, _x16, _x22, _x316, _x317, _x318, _x319, _x320, _x322, _x324, _x332, _x333, _x334, _x335, _x339, _x341
     _x590 = l1*(_x9*(-_x55*_x350 + _x351) + _x7*(m_a*(-_x9*_x349 + _x7*_x348) + _x55*_x170*_x170 + _x55*_x53*_x53)) - _x352*_x323 + _x352*_x325 - _x347
+    del _x55, _x53, _x170, _x323, _x325, _x347, _x348, _x349, _x350, _x351, _x352
     _x592 = _x5*_x354*I_dfyy + l3*(_x9*(_x342*_x329 + _x346) + _x7*(-_x30*_x159*_x159 - _x30*_x329*_x329 + m_c*(-_x9*_x344 - _x7*_x345))) - _x354*_x343 - _x353
+    del _x5, _x7, _x159, _x329, _x342, _x343, _x344, _x345, _x346, _x353, _x354
     _x602 = _x237*(_x589*_x233 + _x590*_x234 + _x592*_x235)
-    _x607 = _x237*(_x589*_x594 + _x590*_x595 + _x592*_x596)
-    _x612 = _x237*(_x592*_x598 + _x231*_x590 + _x589*_x597)
-    _x591 = _x31*(_x32*_x9 + _x225) - _x358 + _x32*_x357 + _x356
-    _x593 = -_x29*(-_x30*_x9 + _x226) - _x356 + _x30*_x355 + _x358
-    _x603 = (_x591*_x234 + _x593*_x235)*_x237
-    _x608 = (_x591*_x595 + _x593*_x596)*_x237
-    _x613 = _x237*(_x593*_x598 + _x231*_x591)
-    _out_base_T_tcp = numpy.zeros(batch + (4, 4))
-    _out_base_T_tcp[..., 0, 0] = _x239
-    _out_base_T_tcp[..., 0, 1] = _x240
-    _out_base_T_tcp[..., 0, 2] = _x242
-    _out_base_T_tcp[..., 0, 3] = _x243
-    _out_base_T_tcp[..., 1, 0] = _x244
-    _out_base_T_tcp[..., 1, 1] = _x203
-    _out_base_T_tcp[..., 1, 2] = _x246
-    _out_base_T_tcp[..., 1, 3] = _x222
-    _out_base_T_tcp[..., 2, 0] = _x3
-    _out_base_T_tcp[..., 2, 2] = _x5
-    _out_base_T_tcp[..., 2, 3] = _x210
-    _out_base_T_tcp[..., 3, 3] = 1.0
-    _out_base_T_turret = numpy.zeros(batch + (4, 4))
-    _out_base_T_turret[..., 0, 0] = _x203
-    _out_base_T_turret[..., 0, 1] = _x240
-    _out_base_T_turret[..., 1, 0] = _x201
-    _out_base_T_turret[..., 1, 1] = _x203
-    _out_base_T_turret[..., 2, 2] = 1.0
-    _out_base_T_turret[..., 3, 3] = 1.0
-    _out_base_T_upper_arm = numpy.zeros(batch + (4, 4))
-    _out_base_T_upper_arm[..., 0, 0] = _x247
-    _out_base_T_upper_arm[..., 0, 1] = _x240
-    _out_base_T_upper_arm[..., 0, 2] = _x248
-    _out_base_T_upper_arm[..., 1, 0] = _x249
-    _out_base_T_upper_arm[..., 1, 1] = _x203
-    _out_base_T_upper_arm[..., 1, 2] = _x250
-    _out_base_T_upper_arm[..., 2, 0] = _x0
-    _out_base_T_upper_arm[..., 2, 2] = _x1
-    _out_base_T_upper_arm[..., 3, 3] = 1.0
-    _out_base_T_distal = numpy.zeros(batch + (4, 4))
-    _out_base_T_distal[..., 0, 0] = _x239
-    _out_base_T_distal[..., 0, 1] = _x240
-    _out_base_T_distal[..., 0, 2] = _x242
-    _out_base_T_distal[..., 0, 3] = _x214
-    _out_base_T_distal[..., 1, 0] = _x244
-    _out_base_T_distal[..., 1, 1] = _x203
-    _out_base_T_distal[..., 1, 2] = _x246
-    _out_base_T_distal[..., 1, 3] = _x221
-    _out_base_T_distal[..., 2, 0] = _x3
-    _out_base_T_distal[..., 2, 2] = _x5
-    _out_base_T_distal[..., 2, 3] = _x205
-    _out_base_T_distal[..., 3, 3] = 1.0
-    _out_base_T_lever = numpy.zeros(batch + (4, 4))
-    _out_base_T_lever[..., 0, 0] = _x239
-    _out_base_T_lever[..., 0, 1] = _x240
-    _out_base_T_lever[..., 0, 2] = _x242
-    _out_base_T_lever[..., 1, 0] = _x244
-    _out_base_T_lever[..., 1, 1] = _x203
-    _out_base_T_lever[..., 1, 2] = _x246
-    _out_base_T_lever[..., 2, 0] = _x3
-    _out_base_T_lever[..., 2, 2] = _x5
-    _out_base_T_lever[..., 3, 3] = 1.0
-    _out_base_T_link_c = numpy.zeros(batch + (4, 4))
-    _out_base_T_link_c[..., 0, 0] = _x247
-    _out_base_T_link_c[..., 0, 1] = _x240
-    _out_base_T_link_c[..., 0, 2] = _x248
-    _out_base_T_link_c[..., 0, 3] = l3*_x241
-    _out_base_T_link_c[..., 1, 0] = _x249
-    _out_base_T_link_c[..., 1, 1] = _x203
-    _out_base_T_link_c[..., 1, 2] = _x250
-    _out_base_T_link_c[..., 1, 3] = l3*_x245
-    _out_base_T_link_c[..., 2, 0] = _x0
-    _out_base_T_link_c[..., 2, 2] = _x1
-    _out_base_T_link_c[..., 2, 3] = -l3*_x5
-    _out_base_T_link_c[..., 3, 3] = 1.0
-    _out_J = numpy.zeros(batch + (3, 3))
-    _out_J[..., 0, 0] = -_x220 - _x221
-    _out_J[..., 0, 1] = -_x203*_x210 - _x227
-    _out_J[..., 0, 2] = _x227
-    _out_J[..., 1, 0] = _x243
-    _out_J[..., 1, 1] = -_x201*_x210 - _x209
-    _out_J[..., 1, 2] = _x209
-    _out_J[..., 2, 1] = -_x251 - _x252 + _x201*_x222 + _x243*_x203
-    _out_J[..., 2, 2] = _x252 + _x251
-    _out_M = numpy.zeros(batch + (3, 3))
-    _out_M[..., 0, 0] = _x3*(_x3*(_x145*_x144 + _x96*I_czz + _x14 + _x147 + I_dfzz) + _x5*_x146) + _x1*(_x1*(_x96*I_ayy + _x79*_x144 + _x124 + _x123 + I_beyy) + _x0*_x143) + _x0*(_x1*_x143 + _x0*(_x96*_x79 + _x144*I_ayy + I_bezz)) + _x122 + _x5*(_x3*_x146 + _x5*(_x144*I_czz + _x96*_x145 + I_dfyy))
-    _out_M[..., 1, 1] = _x126 + _x78 + _x123 + I_bexx
-    _out_M[..., 1, 2] = _x151
-    _out_M[..., 2, 1] = _x151
-    _out_M[..., 2, 2] = _x68 + _x126 + _x14 + I_dfxx
-    _out_C = numpy.zeros(batch + (3, 3))
-    _out_C[..., 0, 0] = _x288*_x289 + _x299*_x300
-    _out_C[..., 0, 1] = _x302
-    _out_C[..., 0, 2] = _x303
-    _out_C[..., 1, 0] = -_x302
-    _out_C[..., 1, 2] = q3_d*_x315
-    _out_C[..., 2, 0] = -_x303
-    _out_C[..., 2, 1] = q2_d*_x314
-    _out_V = numpy.zeros(batch + (3,))
-    _out_V[..., 0] = _x3*(-_x334*I_dfyy + l3*(_x30*_x339 + _x342*_x159 + 2.0*_x335) + _x22*_x343 + _x7*_x332 + _x9*_x341 + _x334*I_dfxx) + _x5*(-_x9*_x332 - _x333*I_dfyy - _x333*I_dfxx + _x7*_x341 + _x333*I_dfzz) + _x1*(-_x316*I_beyy - _x0*_x324 + l1*(-_x55*_x319 + _x55*_x318 - 2.0*_x317) + _x9*_x320 + _x7*_x322 + _x316*I_bezz) + _x0*(-_x9*_x322 - _x16*_x325 + _x1*_x324 + _x16*_x323 + _x7*_x320)
-    _out_V[..., 1] = l1*(_x9*(-_x55*_x350 + _x351) + _x7*(m_a*(-_x9*_x349 + _x7*_x348) + _x55*_x170*_x170 + _x55*_x53*_x53)) - _x352*_x323 + _x352*_x325 - _x347
-    _out_V[..., 2] = _x5*_x354*I_dfyy + l3*(_x9*(_x342*_x329 + _x346) + _x7*(-_x30*_x159*_x159 - _x30*_x329*_x329 + m_c*(-_x9*_x344 - _x7*_x345))) - _x354*_x343 - _x353
-    _out_G = numpy.zeros(batch + (3,))
-    _out_G[..., 1] = _x31*(_x32*_x9 + _x225) - _x358 + _x32*_x357 + _x356
-    _out_G[..., 2] = -_x29*(-_x30*_x9 + _x226) - _x356 + _x30*_x355 + _x358
-    _out_dG_dq = numpy.zeros(batch + (3, 3))
-    _out_dG_dq[..., 1, 1] = (_x42 + _x225)*_x363 - _x364 + _x41*_x359 + _x44 + _x361
-    _out_dG_dq[..., 1, 2] = _x7*_x41 + _x46 - _x365 + _x362
-    _out_dG_dq[..., 2, 1] = _x34*_x359 + _x36 - _x361 + _x364
-    _out_dG_dq[..., 2, 2] = _x7*_x34 + (_x110 + _x13 + _x37)*_x360 + _x365 + _x40 - _x362
-    _out_F_f = numpy.zeros(batch + (3,))
-    _out_F_f[..., 0] = _x304
-    _out_F_f[..., 1] = _x305
-    _out_F_f[..., 2] = _x138
-    _out_inverse_dynamics_tau = numpy.zeros(batch + (3,))
-    _out_inverse_dynamics_tau[..., 0] = _x3*(-_x334*I_dfyy + _x9*_x385 + _x7*_x380 + l3*(_x30*_x384 + _x30*_x383 + _x381) + _x378*I_dfzz + _x334*I_dfxx) + _x5*(-_x9*_x380 + _x7*_x385 + _x376*I_dfzz - _x376*I_dfxx + _x377*I_dfyy) + _x304 + _x1*(-_x316*I_bexx + _x9*_x373 + _x7*_x374 + l1*(_x55*_x371 - _x55*_x372 + _x367) + _x316*I_bezz + _x366*I_beyy) + _x0*(-_x9*_x374 - _x369*I_beyy + _x7*_x373 + _x370*I_bezz + _x369*I_bexx) + _x206
-    _out_inverse_dynamics_tau[..., 1] = _x207 + _x97*_x31 + l1*(_x9*(-_x48*_x55 - _x55*_x390 + _x389) + _x7*(m_a*(-_x9*_x173 + _x7*_x103) + _x55*_x82*_x82 + _x55*_x53*_x53)) - _x181*I_bezz - _x388 + _x15*q2_dd + _x181*I_beyy + _x305
-    _out_inverse_dynamics_tau[..., 2] = _x208 - _x391 - _x179*I_dfzz + l3*(_x9*(-_x49*_x30 + _x30*_x387 + _x386) + _x7*(-_x30*_x159*_x159 - _x30*_x375*_x375 + m_c*(-_x9*_x176 + _x7*_x114))) + _x15*q3_dd + _x179*I_dfyy - _x109*_x29 + _x138
-    _out_dtau_dq = numpy.zeros(batch + (3, 3))
-    _out_dtau_dq[..., 0, 1] = -_x0*_x424 + _x1*_x429 - _x428
-    _out_dtau_dq[..., 0, 2] = -_x3*_x409 + _x5*_x406 + _x428
-    _out_dtau_dq[..., 1, 1] = -_x0*_x453 + _x1*_x456 - _x455
-    _out_dtau_dq[..., 1, 2] = -_x3*_x444 + _x5*_x443 + _x455
-    _out_dtau_dq[..., 2, 1] = -_x0*_x479 + _x1*_x482 - _x481
-    _out_dtau_dq[..., 2, 2] = _x5*_x469 - _x3*_x472 + _x481
-    _out_dtau_dqd = numpy.zeros(batch + (3, 3))
-    _out_dtau_dqd[..., 0, 0] = 0.0005 + q2_d*_x426 + q3_d*_x404 + _x9*_x418 + _x7*_x420 + _x197
-    _out_dtau_dqd[..., 0, 1] = q1_d*_x426 - _x422 + _x407
-    _out_dtau_dqd[..., 0, 2] = q1_d*_x404 - _x408 + _x421
-    _out_dtau_dqd[..., 1, 0] = _x116*_x440 + _x9*_x448 + _x7*_x450
-    _out_dtau_dqd[..., 1, 1] = 0.001 - _x119*_x431 - _x452 + _x199 + _x118
-    _out_dtau_dqd[..., 1, 2] = _x120*_x438 + _x483 + _x451
-    _out_dtau_dqd[..., 2, 0] = _x116*_x465 + _x9*_x476 + _x7*_x478
-    _out_dtau_dqd[..., 2, 1] = -_x119*_x457 + _x483 + _x470
-    _out_dtau_dqd[..., 2, 2] = 0.0005 + _x120*_x463 - _x471 + _x118
-    _out_dtau_dqdd = numpy.zeros(batch + (3, 3))
-    _out_dtau_dqdd[..., 0, 0] = _x1*_x423 + _x3*_x400 + _x5*_x402 + _x0*_x415 + _x122
-    _out_dtau_dqdd[..., 1, 1] = l1*_x432 - _x68 + _x15 + I_bexx
-    _out_dtau_dqdd[..., 1, 2] = _x308
-    _out_dtau_dqdd[..., 2, 1] = _x308
-    _out_dtau_dqdd[..., 2, 2] = l3*_x460 - _x78 + _x15 + I_dfxx
-    _out_forward_dynamics_qdd = numpy.zeros(batch + (3,))
-    _out_forward_dynamics_qdd[..., 0] = _x494
-    _out_forward_dynamics_qdd[..., 1] = _x189
-    _out_forward_dynamics_qdd[..., 2] = _x187
-    _out_dqdd_dq = numpy.zeros(batch + (3, 3))
-    _out_dqdd_dq[..., 0, 1] = _x539
-    _out_dqdd_dq[..., 0, 2] = _x545
-    _out_dqdd_dq[..., 1, 1] = _x538
-    _out_dqdd_dq[..., 1, 2] = _x544
-    _out_dqdd_dq[..., 2, 1] = _x537
-    _out_dqdd_dq[..., 2, 2] = _x543
-    _out_dqdd_dqd = numpy.zeros(batch + (3, 3))
-    _out_dqdd_dqd[..., 0, 0] = _x551
-    _out_dqdd_dqd[..., 0, 1] = _x557
-    _out_dqdd_dqd[..., 0, 2] = _x563
-    _out_dqdd_dqd[..., 1, 0] = _x550
-    _out_dqdd_dqd[..., 1, 1] = _x556
-    _out_dqdd_dqd[..., 1, 2] = _x562
-    _out_dqdd_dqd[..., 2, 0] = _x549
-    _out_dqdd_dqd[..., 2, 1] = _x555
-    _out_dqdd_dqd[..., 2, 2] = _x561
-    _out_dqdd_dtau = numpy.zeros(batch + (3, 3))
-    _out_dqdd_dtau[..., 0, 0] = _x196
-    _out_dqdd_dtau[..., 1, 1] = _x566
-    _out_dqdd_dtau[..., 1, 2] = _x567
-    _out_dqdd_dtau[..., 2, 1] = _x565
-    _out_dqdd_dtau[..., 2, 2] = _x195
-    _out_F = numpy.zeros(batch + (3,))
-    _out_F[..., 0] = _x586
-    _out_F[..., 1] = _x587
-    _out_F[..., 2] = _x588
-    _out_Mx = numpy.zeros(batch + (3, 3))
-    _out_Mx[..., 0, 0] = _x614
-    _out_Mx[..., 0, 1] = _x615
-    _out_Mx[..., 0, 2] = _x617
-    _out_Mx[..., 1, 0] = _x615
-    _out_Mx[..., 1, 1] = _x616
-    _out_Mx[..., 1, 2] = _x618
-    _out_Mx[..., 2, 0] = _x617
-    _out_Mx[..., 2, 1] = _x618
-    _out_Mx[..., 2, 2] = _x619
-    _out_Vx = numpy.zeros(batch + (3,))
     _out_Vx[..., 0] = -_x309*_x617 - _x312*_x615 - _x313*_x614 + _x602
+    del _x233, _x614, _x602
+    _x607 = _x237*(_x589*_x594 + _x590*_x595 + _x592*_x596)
     _out_Vx[..., 1] = -_x312*_x616 - _x309*_x618 - _x313*_x615 + _x607
+    del _x594, _x615, _x616, _x607
+    _x612 = _x237*(_x592*_x598 + _x231*_x590 + _x589*_x597)
     _out_Vx[..., 2] = -_x312*_x618 - _x309*_x619 - _x313*_x617 + _x612
-    _out_Gx = numpy.zeros(batch + (3,))
+    del _x597, _x617, _x618, _x619, _x309, _x312, _x313, _x589, _x590, _x592, _x612
+    _x591 = _x31*(_x32*_x9 + _x225) - _x358 + _x32*_x357 + _x356
+    del _x31, _x32, _x225, _x357
+    _x593 = -_x29*(-_x30*_x9 + _x226) - _x356 + _x30*_x355 + _x358
+    del _x9, _x30, _x29, _x355, _x356, _x358, _x226
+    _x603 = (_x591*_x234 + _x593*_x235)*_x237
     _out_Gx[..., 0] = _x603
+    del _x234, _x235, _x603
+    _x608 = (_x591*_x595 + _x593*_x596)*_x237
     _out_Gx[..., 1] = _x608
+    del _x595, _x596, _x608
+    _x613 = _x237*(_x593*_x598 + _x231*_x591)
     _out_Gx[..., 2] = _x613
-    _out_k = numpy.zeros(batch + ())
-    _out_k[...] = 0.5*_x23*(_x3*(_x3*(_x145*_x144 + _x96*I_czz + _x14 + _x147 + I_dfzz) + _x5*_x146) + _x1*(_x1*(_x96*I_ayy + _x79*_x144 + _x124 + _x123 + I_beyy) + _x0*_x143) + _x0*(_x1*_x143 + _x0*(_x96*_x79 + _x144*I_ayy + I_bezz)) + _x122 + _x5*(_x3*_x146 + _x5*(_x144*I_czz + _x96*_x145 + I_dfyy))) + _x289*(q3_d*(_x68 + _x126 + _x14 + I_dfxx) + q2_d*_x151) + _x300*(q2_d*(_x126 + _x78 + _x123 + I_bexx) + q3_d*_x151)
-    _out_u = numpy.zeros(batch + ())
-    _out_u[...] = g*_x5*_x109 + g*m_c*(-l3*_x5 + 0.5*_x205) + g*m_a*(-_x5*_x19 + _x205) + g*_x0*_x97
+    del _x237, _x231, _x598, _x591, _x593, _x613
     return CombinedResult(_out_base_T_tcp, _out_base_T_turret, _out_base_T_upper_arm, _out_base_T_distal, _out_base_T_lever, _out_base_T_link_c, _out_J, _out_M, _out_C, _out_V, _out_G, _out_dG_dq, _out_F_f, _out_inverse_dynamics_tau, _out_dtau_dq, _out_dtau_dqd, _out_dtau_dqdd, _out_forward_dynamics_qdd, _out_dqdd_dq, _out_dqdd_dqd, _out_dqdd_dtau, _out_F, _out_Mx, _out_Vx, _out_Gx, _out_k, _out_u)

@@ -123,21 +123,23 @@ def fk(q, *, l1=0.1, l2=0.1):
         return _in_chunks(fk, batch, (q, ), {"l1": l1, "l2": l2})
     theta1 = q[..., 0]
     theta2 = q[..., 1]
+    _out_base_T_tcp = numpy.zeros(batch + (4, 4))
+    _out_base_T_tcp[..., 2, 2] = 1.0
+    _out_base_T_tcp[..., 3, 3] = 1.0
     _x0 = numpy.cos(theta1)
     _x1 = numpy.cos(theta2)
     _x2 = numpy.sin(theta1)
     _x3 = numpy.sin(theta2)
     _x4 = _x0*_x1 - _x2*_x3
-    _x5 = _x0*_x3 + _x1*_x2
-    _out_base_T_tcp = numpy.zeros(batch + (4, 4))
     _out_base_T_tcp[..., 0, 0] = _x4
-    _out_base_T_tcp[..., 0, 1] = -_x5
     _out_base_T_tcp[..., 0, 3] = _x0*l1 + _x4*l2
-    _out_base_T_tcp[..., 1, 0] = _x5
     _out_base_T_tcp[..., 1, 1] = _x4
+    del _x4
+    _x5 = _x0*_x3 + _x1*_x2
+    _out_base_T_tcp[..., 0, 1] = -_x5
+    _out_base_T_tcp[..., 1, 0] = _x5
     _out_base_T_tcp[..., 1, 3] = _x2*l1 + _x5*l2
-    _out_base_T_tcp[..., 2, 2] = 1.0
-    _out_base_T_tcp[..., 3, 3] = 1.0
+    del _x0, _x1, _x2, _x3, _x5
     return _out_base_T_tcp
 
 
@@ -166,32 +168,34 @@ def frames(q, *, l1=0.1, l2=0.1):
         return _in_chunks(frames, batch, (q, ), {"l1": l1, "l2": l2})
     theta1 = q[..., 0]
     theta2 = q[..., 1]
+    _out_base_T_link1 = numpy.zeros(batch + (4, 4))
+    _out_base_T_link2 = numpy.zeros(batch + (4, 4))
+    _out_base_T_link1[..., 2, 2] = 1.0
+    _out_base_T_link1[..., 3, 3] = 1.0
+    _out_base_T_link2[..., 2, 2] = 1.0
+    _out_base_T_link2[..., 3, 3] = 1.0
     _x0 = numpy.cos(theta1)
+    _out_base_T_link1[..., 0, 0] = _x0
+    _out_base_T_link1[..., 1, 1] = _x0
     _x1 = numpy.sin(theta1)
+    _out_base_T_link1[..., 0, 1] = -_x1
+    _out_base_T_link1[..., 1, 0] = _x1
     _x2 = _x0*l1
+    _out_base_T_link1[..., 0, 3] = _x2
     _x3 = _x1*l1
+    _out_base_T_link1[..., 1, 3] = _x3
     _x4 = numpy.cos(theta2)
     _x5 = numpy.sin(theta2)
     _x6 = _x0*_x4 - _x1*_x5
-    _x7 = _x0*_x5 + _x1*_x4
-    _out_base_T_link1 = numpy.zeros(batch + (4, 4))
-    _out_base_T_link1[..., 0, 0] = _x0
-    _out_base_T_link1[..., 0, 1] = -_x1
-    _out_base_T_link1[..., 0, 3] = _x2
-    _out_base_T_link1[..., 1, 0] = _x1
-    _out_base_T_link1[..., 1, 1] = _x0
-    _out_base_T_link1[..., 1, 3] = _x3
-    _out_base_T_link1[..., 2, 2] = 1.0
-    _out_base_T_link1[..., 3, 3] = 1.0
-    _out_base_T_link2 = numpy.zeros(batch + (4, 4))
     _out_base_T_link2[..., 0, 0] = _x6
-    _out_base_T_link2[..., 0, 1] = -_x7
     _out_base_T_link2[..., 0, 3] = _x2 + _x6*l2
-    _out_base_T_link2[..., 1, 0] = _x7
     _out_base_T_link2[..., 1, 1] = _x6
+    del _x2, _x6
+    _x7 = _x0*_x5 + _x1*_x4
+    _out_base_T_link2[..., 0, 1] = -_x7
+    _out_base_T_link2[..., 1, 0] = _x7
     _out_base_T_link2[..., 1, 3] = _x3 + _x7*l2
-    _out_base_T_link2[..., 2, 2] = 1.0
-    _out_base_T_link2[..., 3, 3] = 1.0
+    del _x0, _x1, _x3, _x4, _x5, _x7
     return FramesResult(_out_base_T_link1, _out_base_T_link2)
 
 
@@ -216,17 +220,19 @@ def jacobian(q, *, l1=0.1, l2=0.1):
         return _in_chunks(jacobian, batch, (q, ), {"l1": l1, "l2": l2})
     theta1 = q[..., 0]
     theta2 = q[..., 1]
+    _out_J = numpy.zeros(batch + (2, 2))
     _x0 = numpy.sin(theta1)
     _x1 = numpy.cos(theta2)
     _x2 = numpy.sin(theta2)
     _x3 = numpy.cos(theta1)
     _x4 = l2*(_x0*_x1 + _x2*_x3)
-    _x5 = l2*(_x1*_x3 - _x0*_x2)
-    _out_J = numpy.zeros(batch + (2, 2))
     _out_J[..., 0, 0] = -(_x4 + _x0*l1)
     _out_J[..., 0, 1] = -_x4
+    del _x4
+    _x5 = l2*(_x1*_x3 - _x0*_x2)
     _out_J[..., 1, 0] = _x5 + _x3*l1
     _out_J[..., 1, 1] = _x5
+    del _x0, _x1, _x2, _x3, _x5
     return _out_J
 
 
@@ -253,19 +259,21 @@ def jacobian_geometric(q, *, l1=0.1, l2=0.1):
         return _in_chunks(jacobian_geometric, batch, (q, ), {"l1": l1, "l2": l2})
     theta1 = q[..., 0]
     theta2 = q[..., 1]
+    _out_J = numpy.zeros(batch + (6, 2))
+    _out_J[..., 5, 0] = 1.0
+    _out_J[..., 5, 1] = 1.0
     _x0 = numpy.sin(theta1)
     _x1 = numpy.cos(theta2)
     _x2 = numpy.sin(theta2)
     _x3 = numpy.cos(theta1)
     _x4 = l2*(_x0*_x1 + _x2*_x3)
-    _x5 = l2*(_x1*_x3 - _x0*_x2)
-    _out_J = numpy.zeros(batch + (6, 2))
     _out_J[..., 0, 0] = -(_x4 + _x0*l1)
     _out_J[..., 0, 1] = -_x4
+    del _x4
+    _x5 = l2*(_x1*_x3 - _x0*_x2)
     _out_J[..., 1, 0] = _x5 + _x3*l1
     _out_J[..., 1, 1] = _x5
-    _out_J[..., 5, 0] = 1.0
-    _out_J[..., 5, 1] = 1.0
+    del _x0, _x1, _x2, _x3, _x5
     return _out_J
 
 
@@ -296,15 +304,17 @@ def mass_matrix(q, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1):
         return _in_chunks(mass_matrix, batch, (q, ), {"l1": l1, "l2": l2, "m1": m1, "m2": m2})
     theta1 = q[..., 0]
     theta2 = q[..., 1]
+    _out_M = numpy.zeros(batch + (2, 2))
     _x0 = l1*l1
     _x1 = l2*l1*m2*numpy.cos(theta2)
     _x2 = l2*l2*m2
-    _x3 = _x1 + _x2
-    _out_M = numpy.zeros(batch + (2, 2))
     _out_M[..., 0, 0] = _x2 + 2.0*_x1 + m2*_x0 + m1*_x0
+    _out_M[..., 1, 1] = _x2
+    del _x0
+    _x3 = _x1 + _x2
     _out_M[..., 0, 1] = _x3
     _out_M[..., 1, 0] = _x3
-    _out_M[..., 1, 1] = _x2
+    del _x1, _x2, _x3
     return _out_M
 
 
@@ -336,13 +346,14 @@ def coriolis_matrix(q, qd, *, l1=0.1, l2=0.1, m2=0.1):
     theta2 = q[..., 1]
     theta1_d = qd[..., 0]
     theta2_d = qd[..., 1]
-    _x0 = l2*l1*m2*numpy.sin(theta2)
-    _x1 = _x0*theta1_d
-    _x2 = -_x0
     _out_C = numpy.zeros(batch + (2, 2))
+    _x0 = l2*l1*m2*numpy.sin(theta2)
     _out_C[..., 0, 0] = -_x0*theta2_d
-    _out_C[..., 0, 1] = -_x1 + _x2*theta2_d
+    _x1 = _x0*theta1_d
     _out_C[..., 1, 0] = _x1
+    _x2 = -_x0
+    _out_C[..., 0, 1] = -_x1 + _x2*theta2_d
+    del _x0, _x1, _x2
     return _out_C
 
 
@@ -376,14 +387,15 @@ def coriolis_vector(q, qd, *, l1=0.1, l2=0.1, m2=0.1):
     theta2 = q[..., 1]
     theta1_d = qd[..., 0]
     theta2_d = qd[..., 1]
+    _out_V = numpy.zeros(batch + (2,))
     _x0 = numpy.sin(theta2)
     _x1 = l1*theta1_d*theta1_d
     _x2 = m2*_x1*numpy.cos(theta2)
     _x3 = l2*m2
     _x4 = _x3*_x0*_x1
-    _out_V = numpy.zeros(batch + (2,))
     _out_V[..., 0] = _x4 + l1*(_x0*(-_x2 - (theta1_d + theta2_d)**2*_x3) + _x2*_x0)
     _out_V[..., 1] = _x4
+    del _x0, _x1, _x2, _x3, _x4
     return _out_V
 
 
@@ -416,13 +428,14 @@ def gravity_vector(q, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
         return _in_chunks(gravity_vector, batch, (q, ), {"l1": l1, "l2": l2, "m1": m1, "m2": m2, "g": g})
     theta1 = q[..., 0]
     theta2 = q[..., 1]
+    _out_G = numpy.zeros(batch + (2,))
     _x0 = l2*m2
     _x1 = g*numpy.sin(theta2)*numpy.sin(theta1)
     _x2 = numpy.cos(theta2)
     _x3 = g*numpy.cos(theta1)
-    _out_G = numpy.zeros(batch + (2,))
     _out_G[..., 0] = _x3*(_x2*_x0 + l1*m2 + l1*m1) - _x0*_x1
     _out_G[..., 1] = _x0*(-_x1 + _x2*_x3)
+    del _x0, _x1, _x2, _x3
     return _out_G
 
 
@@ -455,6 +468,7 @@ def gravity_derivatives(q, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
         return _in_chunks(gravity_derivatives, batch, (q, ), {"l1": l1, "l2": l2, "m1": m1, "m2": m2, "g": g})
     theta1 = q[..., 0]
     theta2 = q[..., 1]
+    _out_dG_dq = numpy.zeros(batch + (2, 2))
     _x0 = numpy.cos(theta2)
     _x1 = g*numpy.cos(theta1)
     _x2 = numpy.sin(theta2)
@@ -463,15 +477,19 @@ def gravity_derivatives(q, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
     _x5 = _x2*_x1
     _x6 = _x0*_x3
     _x7 = -_x2
+    del _x2
     _x8 = -_x3
+    del _x3
     _x9 = _x0*_x4
+    del _x0
     _x10 = -_x5*_x4
-    _x11 = _x1*_x7*_x4 - _x6*_x4
-    _out_dG_dq = numpy.zeros(batch + (2, 2))
     _out_dG_dq[..., 0, 0] = _x10 + _x8*(_x9 + l1*m2 + l1*m1)
-    _out_dG_dq[..., 0, 1] = _x11
     _out_dG_dq[..., 1, 0] = _x10 + _x9*_x8
+    del _x5, _x8, _x9, _x10
+    _x11 = _x1*_x7*_x4 - _x6*_x4
+    _out_dG_dq[..., 0, 1] = _x11
     _out_dG_dq[..., 1, 1] = _x11
+    del _x1, _x4, _x6, _x7, _x11
     return _out_dG_dq
 
 
@@ -512,6 +530,7 @@ def inverse_dynamics(q, qd, qdd, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
     theta2_d = qd[..., 1]
     theta1_dd = qdd[..., 0]
     theta2_dd = qdd[..., 1]
+    _out_tau = numpy.zeros(batch + (2,))
     _x0 = numpy.cos(theta2)
     _x1 = theta1_dd + theta2_dd
     _x2 = l2*m2
@@ -521,9 +540,9 @@ def inverse_dynamics(q, qd, qdd, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
     _x6 = numpy.sin(theta2)
     _x7 = (_x4*_x0 - _x6*_x5)*m2
     _x8 = l2*_x7 + l2*l2*m2*_x1
-    _out_tau = numpy.zeros(batch + (2,))
     _out_tau[..., 0] = _x8 + l1*l1*m1*theta1_dd + l1*m1*_x3 + l1*(_x6*((_x5*_x0 + _x6*_x4)*m2 - (theta1_d + theta2_d)**2*_x2) + _x0*(_x7 + _x2*_x1))
     _out_tau[..., 1] = _x8
+    del _x0, _x1, _x2, _x3, _x4, _x5, _x6, _x7, _x8
     return _out_tau
 
 
@@ -570,6 +589,9 @@ def inverse_dynamics_derivatives(q, qd, qdd, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, 
     theta2_d = qd[..., 1]
     theta1_dd = qdd[..., 0]
     theta2_dd = qdd[..., 1]
+    _out_dtau_dq = numpy.zeros(batch + (2, 2))
+    _out_dtau_dqd = numpy.zeros(batch + (2, 2))
+    _out_dtau_dqdd = numpy.zeros(batch + (2, 2))
     _x2 = g*numpy.cos(theta1)
     _x3 = g*numpy.sin(theta1)
     _x4 = numpy.sin(theta2)
@@ -577,43 +599,51 @@ def inverse_dynamics_derivatives(q, qd, qdd, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, 
     _x7 = l1*_x0
     _x11 = l2 + _x7
     _x12 = m2*_x11
+    del _x11
     _x19 = m2*_x4*_x7 - _x4*_x12
     _x20 = l1*m2*_x4*_x4 + _x0*_x12
     _x21 = _x20 + l1*m1
+    _out_dtau_dq[..., 0, 0] = _x2*_x19 - _x3*_x21
+    del _x21
     _x1 = l2*m2
     _x5 = _x3 - l1*theta1_d*theta1_d
     _x8 = _x2 + l1*theta1_dd
     _x9 = _x4*_x8
     _x10 = theta2_d + theta1_d
     _x18 = l1*(m2*_x9 + m2*(_x0*_x5 + _x9) - _x1*_x10*_x10) - _x12*_x5
+    del _x9
     _x6 = _x4*_x5
     _x16 = theta1_dd + theta2_dd
     _x17 = m2*(-_x6 + _x0*_x8)
     _x23 = l1*(_x17 + _x1*_x16 + m2*_x6) + _x12*_x8
+    _out_dtau_dq[..., 0, 1] = _x0*_x18 - _x4*_x23
+    del _x12, _x18, _x6, _x16, _x17, _x23
     _x14 = _x0*_x1
     _x25 = -_x1*_x4
+    _out_dtau_dq[..., 1, 0] = _x2*_x25 - _x3*_x14
+    del _x2, _x3
     _x24 = -_x1*_x5
+    del _x5
     _x26 = _x1*_x8
+    _out_dtau_dq[..., 1, 1] = _x0*_x24 - _x4*_x26
+    del _x0, _x8, _x24, _x26
     _x27 = 2.0*l1
     _x28 = _x27*theta1_d
+    _out_dtau_dqd[..., 1, 0] = -_x28*_x25
+    del _x25
     _x29 = -_x1*_x4*_x10*_x27
-    _x13 = l2*l2*m2
-    _x22 = _x1*_x7 + _x13
-    _x15 = _x13 + l1*_x14
-    _out_dtau_dq = numpy.zeros(batch + (2, 2))
-    _out_dtau_dq[..., 0, 0] = _x2*_x19 - _x3*_x21
-    _out_dtau_dq[..., 0, 1] = _x0*_x18 - _x4*_x23
-    _out_dtau_dq[..., 1, 0] = _x2*_x25 - _x3*_x14
-    _out_dtau_dq[..., 1, 1] = _x0*_x24 - _x4*_x26
-    _out_dtau_dqd = numpy.zeros(batch + (2, 2))
     _out_dtau_dqd[..., 0, 0] = _x29 - _x28*_x19
     _out_dtau_dqd[..., 0, 1] = _x29
-    _out_dtau_dqd[..., 1, 0] = -_x28*_x25
-    _out_dtau_dqdd = numpy.zeros(batch + (2, 2))
+    del _x4, _x19, _x10, _x27, _x28, _x29
+    _x13 = l2*l2*m2
+    _out_dtau_dqdd[..., 1, 1] = _x13
+    _x22 = _x1*_x7 + _x13
     _out_dtau_dqdd[..., 0, 0] = _x22 + l1*_x20 + l1*l1*m1
+    del _x7, _x20, _x1, _x22
+    _x15 = _x13 + l1*_x14
     _out_dtau_dqdd[..., 0, 1] = _x15
     _out_dtau_dqdd[..., 1, 0] = _x15
-    _out_dtau_dqdd[..., 1, 1] = _x13
+    del _x14, _x13, _x15
     return InverseDynamicsDerivativesResult(_out_dtau_dq, _out_dtau_dqd, _out_dtau_dqdd)
 
 
@@ -654,14 +684,18 @@ def forward_dynamics(q, qd, tau, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
     theta2_d = qd[..., 1]
     tau_theta1 = tau[..., 0]
     tau_theta2 = tau[..., 1]
+    _out_qdd = numpy.zeros(batch + (2,))
     _x0 = numpy.cos(theta2)
     _x1 = l2*m2
     _x2 = l1*l1
     _x3 = l1*_x0*_x1
     _x4 = l2*l2*m2
     _x5 = m1*_x2 + m2*_x2 + 2.0*_x3 + _x4
+    del _x2
     _x6 = 1.0/_x5
+    del _x5
     _x7 = _x3 + _x4
+    del _x3
     _x8 = g*numpy.cos(theta1)
     _x9 = g*numpy.sin(theta1) - l1*theta1_d*theta1_d
     _x10 = numpy.sin(theta2)
@@ -669,13 +703,17 @@ def forward_dynamics(q, qd, tau, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
     _x12 = _x1*_x11
     _x13 = _x6*_x7
     _x14 = -_x7*_x13 + _x4
+    del _x4, _x7
     _x15 = tau_theta1 - (_x12 + l1*(_x10*(m2*(_x0*_x9 + _x10*_x8) - (theta1_d + theta2_d)**2*_x1) + m2*_x0*_x11) + l1*m1*_x8)
+    del _x0, _x1, _x8, _x9, _x10, _x11
     _x16 = -_x13*_x15 - _x12 + tau_theta2
+    del _x12
     _x17 = _x16/_x14
-    _x18 = -_x13*_x17 + _x6*_x15
-    _out_qdd = numpy.zeros(batch + (2,))
-    _out_qdd[..., 0] = _x18
     _out_qdd[..., 1] = _x17
+    del _x14, _x16
+    _x18 = -_x13*_x17 + _x6*_x15
+    _out_qdd[..., 0] = _x18
+    del _x6, _x13, _x15, _x17, _x18
     return _out_qdd
 
 
@@ -722,14 +760,20 @@ def forward_dynamics_derivatives(q, qd, tau, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, 
     theta2_d = qd[..., 1]
     tau_theta1 = tau[..., 0]
     tau_theta2 = tau[..., 1]
+    _out_dqdd_dq = numpy.zeros(batch + (2, 2))
+    _out_dqdd_dqd = numpy.zeros(batch + (2, 2))
+    _out_dqdd_dtau = numpy.zeros(batch + (2, 2))
     _x6 = l1*l1
     _x0 = numpy.cos(theta2)
     _x1 = l2*m2
     _x7 = l1*_x0*_x1
     _x8 = l2*l2*m2
     _x9 = m1*_x6 + m2*_x6 + 2.0*_x7 + _x8
+    del _x6
     _x10 = 1.0/_x9
+    del _x9
     _x18 = _x7 + _x8
+    del _x7
     _x19 = _x10*_x18
     _x2 = g*numpy.cos(theta1)
     _x3 = g*numpy.sin(theta1)
@@ -737,69 +781,99 @@ def forward_dynamics_derivatives(q, qd, tau, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, 
     _x15 = l1*_x0
     _x16 = _x15 + l2
     _x17 = m2*_x16
+    del _x16
     _x36 = -_x5*_x17 + m2*_x5*_x15
+    del _x15
     _x13 = l1*m1
     _x37 = _x0*_x17 + l1*m2*_x5*_x5
     _x38 = _x13 + _x37
+    del _x37
     _x44 = -(_x2*_x36 - _x3*_x38)
+    del _x38
     _x23 = -_x18*_x19 + _x8
+    del _x8, _x18
     _x29 = 1.0/_x23
+    _out_dqdd_dtau[..., 1, 1] = _x29
     _x41 = -_x1*_x5
     _x42 = _x0*_x1
     _x45 = -(-_x3*_x42 + _x2*_x41) - _x19*_x44
+    del _x42
     _x46 = _x29*_x45
+    _out_dqdd_dq[..., 1, 0] = _x46
+    del _x45
     _x47 = _x10*_x44 - _x19*_x46
+    _out_dqdd_dq[..., 0, 0] = _x47
+    del _x44, _x46, _x47
     _x4 = _x3 - l1*theta1_d*theta1_d
+    del _x3
     _x11 = theta2_d + theta1_d
     _x12 = _x11*_x11
     _x20 = -_x4*_x5 + _x0*_x2
     _x21 = _x1*_x20
     _x22 = tau_theta1 - (_x21 + l1*(_x5*((_x0*_x4 + _x2*_x5)*m2 - _x1*_x12) + m2*_x0*_x20) + _x2*_x13)
+    del _x13, _x20
     _x24 = -_x19*_x22 - _x21 + tau_theta2
+    del _x21
     _x25 = _x24/_x23
+    del _x23, _x24
     _x26 = -_x19*_x25 + _x10*_x22
+    del _x22
     _x27 = l1*_x26 + _x2
+    del _x2
     _x28 = _x5*_x27
     _x35 = -_x4*_x17 + l1*(-_x1*_x12 + m2*_x28 + m2*(_x28 + _x0*_x4))
+    del _x12, _x28
     _x14 = _x4*_x5
     _x33 = _x25 + _x26
+    del _x25, _x26
     _x34 = m2*(_x0*_x27 - _x14)
     _x39 = _x17*_x27 + l1*(m2*_x14 + _x1*_x33 + _x34)
+    del _x17, _x14, _x33, _x34
     _x48 = -(_x0*_x35 - _x5*_x39)
+    del _x35, _x39
     _x40 = -_x1*_x4
+    del _x4
     _x43 = _x1*_x27
+    del _x27
     _x49 = -(-_x5*_x43 + _x0*_x40) - _x48*_x19
+    del _x0, _x40, _x43
     _x50 = _x29*_x49
+    _out_dqdd_dq[..., 1, 1] = _x50
+    del _x49
     _x51 = _x10*_x48 - _x50*_x19
+    _out_dqdd_dq[..., 0, 1] = _x51
+    del _x48, _x50, _x51
     _x30 = 2.0*l1
     _x31 = _x30*theta1_d
     _x32 = _x1*_x5*_x11*_x30
+    del _x1, _x5, _x11, _x30
     _x52 = -(-_x32 - _x31*_x36)
+    del _x36
     _x53 = _x31*_x41 - _x52*_x19
+    del _x41, _x31
     _x54 = _x29*_x53
+    _out_dqdd_dqd[..., 1, 0] = _x54
+    del _x53
     _x55 = _x10*_x52 - _x54*_x19
+    _out_dqdd_dqd[..., 0, 0] = _x55
+    del _x52, _x54, _x55
     _x56 = -_x32*_x19
     _x57 = _x29*_x56
+    _out_dqdd_dqd[..., 1, 1] = _x57
+    del _x56
     _x58 = _x10*_x32 - _x19*_x57
+    _out_dqdd_dqd[..., 0, 1] = _x58
+    del _x32, _x57, _x58
     _x59 = -_x19
     _x60 = _x29*_x59
-    _x61 = _x10 - _x19*_x60
-    _x62 = -_x29*_x19
-    _out_dqdd_dq = numpy.zeros(batch + (2, 2))
-    _out_dqdd_dq[..., 0, 0] = _x47
-    _out_dqdd_dq[..., 0, 1] = _x51
-    _out_dqdd_dq[..., 1, 0] = _x46
-    _out_dqdd_dq[..., 1, 1] = _x50
-    _out_dqdd_dqd = numpy.zeros(batch + (2, 2))
-    _out_dqdd_dqd[..., 0, 0] = _x55
-    _out_dqdd_dqd[..., 0, 1] = _x58
-    _out_dqdd_dqd[..., 1, 0] = _x54
-    _out_dqdd_dqd[..., 1, 1] = _x57
-    _out_dqdd_dtau = numpy.zeros(batch + (2, 2))
-    _out_dqdd_dtau[..., 0, 0] = _x61
-    _out_dqdd_dtau[..., 0, 1] = _x62
     _out_dqdd_dtau[..., 1, 0] = _x60
-    _out_dqdd_dtau[..., 1, 1] = _x29
+    del _x59
+    _x61 = _x10 - _x19*_x60
+    _out_dqdd_dtau[..., 0, 0] = _x61
+    del _x10, _x60, _x61
+    _x62 = -_x29*_x19
+    _out_dqdd_dtau[..., 0, 1] = _x62
+    del _x19, _x29, _x62
     return ForwardDynamicsDerivativesResult(_out_dqdd_dq, _out_dqdd_dqd, _out_dqdd_dtau)
 
 
@@ -840,6 +914,7 @@ def tcp_force(q, qd, qdd, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
     theta2_d = qd[..., 1]
     theta1_dd = qdd[..., 0]
     theta2_dd = qdd[..., 1]
+    _out_F = numpy.zeros(batch + (2,))
     _x4 = theta1_dd + theta2_dd
     _x0 = numpy.cos(theta2)
     _x3 = numpy.sin(theta2)
@@ -853,18 +928,25 @@ def tcp_force(q, qd, qdd, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
     _x12 = (_x0*_x1 - _x2*_x3)*l2
     _x5 = l2*m2
     _x15 = _x10 + l1*l1*m1*theta1_dd + l1*m1*_x6 + l1*(_x3*((_x0*_x8 + _x3*_x7)*m2 - (theta1_d + theta2_d)**2*_x5) + _x0*(_x9 + _x5*_x4))
+    del _x4, _x6, _x7, _x8, _x9, _x5
     _x14 = _x12 + l1*_x1
     _x16 = -_x14
+    del _x14
     _x11 = -(_x1*_x3 + _x0*_x2)*l2
+    del _x0, _x3, _x1
     _x13 = _x11 - l1*_x2
+    del _x2
     _x18 = _x16*_x11 + _x13*_x12
     _x19 = 1.0/_x18
+    del _x18
     _x20 = _x19*(_x10*_x16 + _x15*_x12)
-    _x17 = -_x11
-    _x21 = _x19*(_x10*_x13 + _x15*_x17)
-    _out_F = numpy.zeros(batch + (2,))
     _out_F[..., 0] = _x20
+    del _x12, _x16, _x20
+    _x17 = -_x11
+    del _x11
+    _x21 = _x19*(_x10*_x13 + _x15*_x17)
     _out_F[..., 1] = _x21
+    del _x10, _x15, _x13, _x19, _x17, _x21
     return _out_F
 
 
@@ -905,6 +987,9 @@ def operational_space(q, qd, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
     theta2 = q[..., 1]
     theta1_d = qd[..., 0]
     theta2_d = qd[..., 1]
+    _out_Mx = numpy.zeros(batch + (2, 2))
+    _out_Vx = numpy.zeros(batch + (2,))
+    _out_Gx = numpy.zeros(batch + (2,))
     _x0 = numpy.cos(theta2)
     _x2 = numpy.sin(theta2)
     _x4 = numpy.sin(theta1)
@@ -914,54 +999,73 @@ def operational_space(q, qd, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
     _x8 = l1*_x6
     _x9 = _x7 + _x8
     _x32 = -_x9
+    del _x9
     _x10 = (_x2*_x6 + _x0*_x4)*l2
     _x11 = -_x10
     _x13 = _x11 - l1*_x4
+    del _x4
     _x14 = _x7*_x13
     _x33 = _x32*_x11 + _x14
+    del _x14
     _x34 = 1.0/_x33
+    del _x33
     _x1 = l2*m2
     _x20 = l1*_x0*_x1
     _x21 = l2*l2*m2
     _x22 = _x20 + _x21
     _x19 = l1*l1
     _x28 = m1*_x19 + m2*_x19 + 2.0*_x20 + _x21
+    del _x20, _x19
     _x35 = _x34*(_x22*_x32 + _x28*_x7)
     _x36 = (_x21*_x32 + _x22*_x7)*_x34
     _x43 = (_x35*_x7 + _x32*_x36)*_x34
+    _out_Mx[..., 0, 0] = _x43
     _x12 = -_x11
+    del _x11
     _x44 = _x34*(_x12*_x35 + _x36*_x13)
+    _out_Mx[..., 0, 1] = _x44
+    _out_Mx[..., 1, 0] = _x44
+    del _x35, _x36
     _x39 = _x34*(_x12*_x28 + _x22*_x13)
+    del _x28
     _x40 = _x34*(_x12*_x22 + _x21*_x13)
+    del _x21, _x22
     _x45 = _x34*(_x12*_x39 + _x40*_x13)
+    _out_Mx[..., 1, 1] = _x45
+    del _x39, _x40
     _x3 = theta1_d*theta1_d
     _x15 = theta2_d*theta2_d
     _x16 = 2.0*theta1_d*theta2_d
     _x17 = (-_x7 - _x8)*_x3 - _x16*_x7 - _x7*_x15
+    del _x8
     _x18 = _x3*_x13 - _x16*_x10 - _x10*_x15
+    del _x10, _x15, _x16
     _x23 = l1*_x3
+    del _x3
     _x25 = _x2*_x1*_x23
     _x24 = m2*_x0*_x23
+    del _x23
     _x29 = _x25 + l1*(_x2*(-_x24 - (theta1_d + theta2_d)**2*_x1) + _x2*_x24)
+    del _x2, _x24
     _x37 = _x34*(_x25*_x32 + _x29*_x7)
+    _out_Vx[..., 0] = _x37 - (_x17*_x43 + _x18*_x44)
+    del _x43, _x37
     _x41 = _x34*(_x12*_x29 + _x25*_x13)
+    _out_Vx[..., 1] = _x41 - (_x17*_x44 + _x18*_x45)
+    del _x44, _x45, _x17, _x18, _x25, _x29, _x41
     _x26 = g*_x5
+    del _x5
     _x27 = g*_x6
+    del _x6
     _x30 = _x27*(_x0*_x1 + l1*m2 + l1*m1) - _x1*_x26
     _x31 = _x1*(-_x26 + _x0*_x27)
+    del _x0, _x1, _x26, _x27
     _x38 = (_x31*_x32 + _x30*_x7)*_x34
-    _x42 = _x34*(_x12*_x30 + _x31*_x13)
-    _out_Mx = numpy.zeros(batch + (2, 2))
-    _out_Mx[..., 0, 0] = _x43
-    _out_Mx[..., 0, 1] = _x44
-    _out_Mx[..., 1, 0] = _x44
-    _out_Mx[..., 1, 1] = _x45
-    _out_Vx = numpy.zeros(batch + (2,))
-    _out_Vx[..., 0] = _x37 - (_x17*_x43 + _x18*_x44)
-    _out_Vx[..., 1] = _x41 - (_x17*_x44 + _x18*_x45)
-    _out_Gx = numpy.zeros(batch + (2,))
     _out_Gx[..., 0] = _x38
+    del _x7, _x32, _x38
+    _x42 = _x34*(_x12*_x30 + _x31*_x13)
     _out_Gx[..., 1] = _x42
+    del _x13, _x34, _x12, _x30, _x31, _x42
     return OperationalSpaceResult(_out_Mx, _out_Vx, _out_Gx)
 
 
@@ -994,12 +1098,13 @@ def kinetic_energy(q, qd, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1):
     theta2 = q[..., 1]
     theta1_d = qd[..., 0]
     theta2_d = qd[..., 1]
+    _out_k = numpy.zeros(batch + ())
     _x0 = l1*l1
     _x1 = l2*l1*m2*numpy.cos(theta2)
     _x2 = l2*l2*m2
     _x3 = _x1 + _x2
-    _out_k = numpy.zeros(batch + ())
     _out_k[...] = 0.5*((_x2*theta2_d + _x3*theta1_d)*theta2_d + (_x3*theta2_d + (_x2 + 2.0*_x1 + m2*_x0 + m1*_x0)*theta1_d)*theta1_d)
+    del _x0, _x1, _x2, _x3
     return _out_k
 
 
@@ -1031,10 +1136,11 @@ def potential_energy(q, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
         return _in_chunks(potential_energy, batch, (q, ), {"l1": l1, "l2": l2, "m1": m1, "m2": m2, "g": g})
     theta1 = q[..., 0]
     theta2 = q[..., 1]
+    _out_u = numpy.zeros(batch + ())
     _x0 = numpy.sin(theta1)
     _x1 = l1*_x0
-    _out_u = numpy.zeros(batch + ())
     _out_u[...] = g*m2*(l2*(_x0*numpy.cos(theta2) + numpy.sin(theta2)*numpy.cos(theta1)) + _x1) + g*m1*_x1
+    del _x0, _x1
     return _out_u
 
 
@@ -1122,33 +1228,110 @@ def combined(q, qd, qdd, tau, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
     theta2_dd = qdd[..., 1]
     tau_theta1 = tau[..., 0]
     tau_theta2 = tau[..., 1]
+    _out_base_T_tcp = numpy.zeros(batch + (4, 4))
+    _out_base_T_link1 = numpy.zeros(batch + (4, 4))
+    _out_base_T_link2 = numpy.zeros(batch + (4, 4))
+    _out_jacobian_J = numpy.zeros(batch + (2, 2))
+    _out_jacobian_geometric_J = numpy.zeros(batch + (6, 2))
+    _out_M = numpy.zeros(batch + (2, 2))
+    _out_C = numpy.zeros(batch + (2, 2))
+    _out_V = numpy.zeros(batch + (2,))
+    _out_G = numpy.zeros(batch + (2,))
+    _out_dG_dq = numpy.zeros(batch + (2, 2))
+    _out_inverse_dynamics_tau = numpy.zeros(batch + (2,))
+    _out_dtau_dq = numpy.zeros(batch + (2, 2))
+    _out_dtau_dqd = numpy.zeros(batch + (2, 2))
+    _out_dtau_dqdd = numpy.zeros(batch + (2, 2))
+    _out_forward_dynamics_qdd = numpy.zeros(batch + (2,))
+    _out_dqdd_dq = numpy.zeros(batch + (2, 2))
+    _out_dqdd_dqd = numpy.zeros(batch + (2, 2))
+    _out_dqdd_dtau = numpy.zeros(batch + (2, 2))
+    _out_F = numpy.zeros(batch + (2,))
+    _out_Mx = numpy.zeros(batch + (2, 2))
+    _out_Vx = numpy.zeros(batch + (2,))
+    _out_Gx = numpy.zeros(batch + (2,))
+    _out_k = numpy.zeros(batch + ())
+    _out_u = numpy.zeros(batch + ())
+    _out_base_T_tcp[..., 2, 2] = 1.0
+    _out_base_T_tcp[..., 3, 3] = 1.0
+    _out_base_T_link1[..., 2, 2] = 1.0
+    _out_base_T_link1[..., 3, 3] = 1.0
+    _out_base_T_link2[..., 2, 2] = 1.0
+    _out_base_T_link2[..., 3, 3] = 1.0
+    _out_jacobian_geometric_J[..., 5, 0] = 1.0
+    _out_jacobian_geometric_J[..., 5, 1] = 1.0
     _x1 = numpy.cos(theta2)
     _x6 = numpy.sin(theta2)
     _x11 = numpy.sin(theta1)
+    _out_base_T_link1[..., 0, 1] = -_x11
+    _out_base_T_link1[..., 1, 0] = _x11
     _x14 = numpy.cos(theta1)
+    _out_base_T_link1[..., 0, 0] = _x14
+    _out_base_T_link1[..., 1, 1] = _x14
     _x51 = _x1*_x14 - _x6*_x11
+    _out_base_T_tcp[..., 0, 0] = _x51
+    _out_base_T_tcp[..., 1, 1] = _x51
+    _out_base_T_link2[..., 0, 0] = _x51
+    _out_base_T_link2[..., 1, 1] = _x51
     _x46 = _x1*_x11
     _x47 = _x6*_x14
     _x63 = -_x47 - _x46
+    _out_base_T_tcp[..., 0, 1] = _x63
+    _out_base_T_link2[..., 0, 1] = _x63
+    del _x63
     _x52 = l2*_x51
+    _out_jacobian_J[..., 1, 1] = _x52
+    _out_jacobian_geometric_J[..., 1, 1] = _x52
+    del _x51
     _x55 = l1*_x14
+    _out_base_T_link1[..., 0, 3] = _x55
     _x58 = _x55 + _x52
+    _out_base_T_tcp[..., 0, 3] = _x58
+    _out_base_T_link2[..., 0, 3] = _x58
+    _out_jacobian_J[..., 1, 0] = _x58
+    _out_jacobian_geometric_J[..., 1, 0] = _x58
     _x48 = _x47 + _x46
+    _out_base_T_tcp[..., 1, 0] = _x48
+    _out_base_T_link2[..., 1, 0] = _x48
+    del _x46, _x47
     _x49 = l2*_x48
+    del _x48
     _x53 = l1*_x11
+    _out_base_T_link1[..., 1, 3] = _x53
+    _out_u[...] = (_x53 + _x49)*g*m2 + g*m1*_x53
     _x64 = _x53 + _x49
+    _out_base_T_tcp[..., 1, 3] = _x64
+    _out_base_T_link2[..., 1, 3] = _x64
+    del _x64
     _x50 = -_x49
+    _out_jacobian_J[..., 0, 1] = _x50
+    _out_jacobian_geometric_J[..., 0, 1] = _x50
     _x54 = -_x53
+    del _x53
     _x61 = _x54 + _x50
+    _out_jacobian_J[..., 0, 0] = _x61
+    _out_jacobian_geometric_J[..., 0, 0] = _x61
+    del _x54
     _x0 = l1*l1
     _x2 = l1*m2
     _x3 = l2*_x2
     _x4 = _x1*_x3
     _x5 = l2*l2*m2
+    _out_M[..., 0, 0] = m1*_x0 + 2.0*_x4 + m2*_x0 + _x5
+    _out_M[..., 1, 1] = _x5
+    _out_dtau_dqdd[..., 1, 1] = _x5
     _x34 = _x5 + _x4
+    _out_M[..., 0, 1] = _x34
+    _out_M[..., 1, 0] = _x34
+    _out_k[...] = 0.5*(_x34*theta1_d + _x5*theta2_d)*theta2_d + 0.5*((m1*_x0 + 2.0*_x4 + m2*_x0 + _x5)*theta1_d + _x34*theta2_d)*theta1_d
     _x65 = _x3*_x6
+    _out_C[..., 0, 0] = -_x65*theta2_d
+    del _x3
     _x66 = _x65*theta1_d
+    _out_C[..., 1, 0] = _x66
     _x73 = -_x65
+    _out_C[..., 0, 1] = -_x66 + _x73*theta2_d
+    del _x65, _x66, _x73
     _x10 = l2*m2
     _x25 = theta2_d + theta1_d
     _x26 = _x25*_x25
@@ -1156,223 +1339,219 @@ def combined(q, qd, qdd, tau, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
     _x8 = l1*_x7
     _x9 = m2*_x1
     _x74 = _x8*_x9
+    del _x9
     _x75 = _x6*_x8*_x10
+    _out_V[..., 0] = l1*(_x6*(-_x26*_x10 - _x74) + _x6*_x74) + _x75
+    _out_V[..., 1] = _x75
     _x12 = g*_x11
+    del _x11
     _x13 = _x6*_x12
     _x15 = g*_x14
+    _out_G[..., 1] = _x10*(_x1*_x15 - _x13)
+    del _x14
     _x27 = l1*m1
     _x59 = _x2 + _x27
+    _out_G[..., 0] = -_x13*_x10 + _x15*(_x1*_x10 + _x59)
     _x67 = _x1*_x10
     _x79 = -_x12
     _x76 = _x6*_x15
     _x80 = -_x10*_x76
+    _out_dG_dq[..., 0, 0] = _x79*(_x67 + _x59) + _x80
+    _out_dG_dq[..., 1, 0] = _x67*_x79 + _x80
+    del _x79, _x76, _x80
     _x77 = _x1*_x12
     _x78 = -_x6
     _x81 = _x15*_x10*_x78 - _x10*_x77
+    _out_dG_dq[..., 0, 1] = _x81
+    _out_dG_dq[..., 1, 1] = _x81
+    del _x77, _x78, _x81
     _x16 = theta1_dd + theta2_dd
     _x18 = _x12 - _x8
+    del _x8
     _x17 = l1*theta1_dd
     _x23 = _x17 + _x15
+    del _x17
     _x56 = m1*_x0
     _x57 = _x56*theta1_dd
     _x82 = m2*(-_x6*_x18 + _x1*_x23)
     _x83 = _x5*_x16 + l2*_x82
+    _out_inverse_dynamics_tau[..., 0] = _x27*_x15 + l1*(_x6*(-_x26*_x10 + m2*(_x6*_x23 + _x1*_x18)) + _x1*(_x10*_x16 + _x82)) + _x57 + _x83
+    _out_inverse_dynamics_tau[..., 1] = _x83
     _x20 = l1*_x1
     _x21 = l2 + _x20
     _x22 = m2*_x21
+    del _x21
     _x86 = m2*_x6*_x20 - _x6*_x22
     _x87 = _x2*_x6*_x6 + _x1*_x22
+    del _x2
     _x88 = _x87 + _x27
+    _out_dtau_dq[..., 0, 0] = -_x12*_x88 + _x15*_x86
     _x24 = _x6*_x23
     _x85 = -_x22*_x18 + l1*(-_x26*_x10 + m2*_x24 + m2*(_x24 + _x1*_x18))
+    del _x24
     _x19 = _x6*_x18
     _x84 = m2*(-_x19 + _x1*_x23)
     _x90 = _x22*_x23 + l1*(m2*_x19 + _x10*_x16 + _x84)
+    _out_dtau_dq[..., 0, 1] = -_x6*_x90 + _x1*_x85
+    del _x85, _x84, _x90
     _x92 = -_x6*_x10
+    _out_dtau_dq[..., 1, 0] = -_x12*_x67 + _x15*_x92
     _x91 = -_x10*_x18
     _x93 = _x10*_x23
+    _out_dtau_dq[..., 1, 1] = -_x6*_x93 + _x1*_x91
+    del _x93
     _x28 = 2.0*l1
     _x45 = _x28*theta1_d
+    _out_dtau_dqd[..., 1, 0] = -_x45*_x92
     _x94 = -_x6*_x25*_x28*_x10
+    _out_dtau_dqd[..., 0, 0] = -_x45*_x86 + _x94
+    _out_dtau_dqd[..., 0, 1] = _x94
+    del _x94
     _x89 = _x20*_x10 + _x5
+    _out_dtau_dqdd[..., 0, 0] = _x56 + l1*_x87 + _x89
+    del _x56, _x20, _x87, _x89
     _x68 = l1*_x67 + _x5
+    _out_dtau_dqdd[..., 0, 1] = _x68
+    _out_dtau_dqdd[..., 1, 0] = _x68
+    del _x68
     _x29 = m1*_x0 + 2.0*_x4 + m2*_x0 + _x5
+    del _x0, _x4
     _x30 = 1.0/_x29
     _x35 = _x30*_x34
     _x31 = -_x6*_x18 + _x1*_x15
     _x32 = _x10*_x31
     _x33 = -_x32
+    del _x32
     _x36 = -_x27*_x15 + tau_theta1 - l1*(m2*_x1*_x31 + _x6*(-_x26*_x10 + (_x1*_x18 + _x6*_x15)*m2)) + _x33
+    del _x31
     _x37 = -_x34*_x35 + _x5
     _x38 = -_x36*_x35 + _x33 + tau_theta2
+    del _x33
     _x39 = _x38/_x37
+    _out_forward_dynamics_qdd[..., 1] = _x39
+    del _x38
     _x40 = -_x35*_x39 + _x30*_x36
+    _out_forward_dynamics_qdd[..., 0] = _x40
+    del _x36
     _x100 = -_x15*_x86 + _x12*_x88
+    del _x88
     _x43 = 1.0/_x37
+    _out_dqdd_dtau[..., 1, 1] = _x43
+    del _x37
     _x101 = -_x15*_x92 + _x12*_x67 - _x35*_x100
+    del _x12, _x67
     _x102 = _x43*_x101
+    _out_dqdd_dq[..., 1, 0] = _x102
+    del _x101
     _x103 = -_x35*_x102 + _x30*_x100
+    _out_dqdd_dq[..., 0, 0] = _x103
+    del _x100, _x102, _x103
     _x41 = l1*_x40 + _x15
     _x42 = _x6*_x41
     _x97 = -_x22*_x18 + l1*(m2*_x42 - _x26*_x10 + m2*(_x1*_x18 + _x42))
+    del _x42
     _x95 = _x39 + _x40
+    del _x39, _x40
     _x96 = m2*(-_x19 + _x1*_x41)
     _x98 = _x22*_x41 + l1*(m2*_x19 + _x10*_x95 + _x96)
+    del _x22, _x19, _x95, _x96
     _x104 = _x6*_x98 - _x1*_x97
+    del _x97, _x98
     _x99 = _x10*_x41
+    del _x41
     _x105 = -_x35*_x104 - _x1*_x91 + _x6*_x99
+    del _x91, _x99
     _x106 = _x43*_x105
+    _out_dqdd_dq[..., 1, 1] = _x106
+    del _x105
     _x107 = -_x35*_x106 + _x30*_x104
+    _out_dqdd_dq[..., 0, 1] = _x107
+    del _x104, _x106, _x107
     _x44 = _x6*_x25*_x28*_x10
+    del _x25, _x28
     _x108 = _x44 + _x45*_x86
+    del _x86
     _x109 = _x45*_x92 - _x35*_x108
+    del _x92, _x45
     _x110 = _x43*_x109
+    _out_dqdd_dqd[..., 1, 0] = _x110
+    del _x109
     _x111 = -_x35*_x110 + _x30*_x108
+    _out_dqdd_dqd[..., 0, 0] = _x111
+    del _x108, _x110, _x111
     _x112 = -_x44*_x35
     _x113 = _x43*_x112
+    _out_dqdd_dqd[..., 1, 1] = _x113
+    del _x112
     _x114 = -_x35*_x113 + _x44*_x30
+    _out_dqdd_dqd[..., 0, 1] = _x114
+    del _x44, _x113, _x114
     _x115 = -_x35
     _x116 = _x43*_x115
+    _out_dqdd_dtau[..., 1, 0] = _x116
+    del _x115
     _x117 = -_x35*_x116 + _x30
+    _out_dqdd_dtau[..., 0, 0] = _x117
+    del _x30, _x116, _x117
     _x118 = -_x43*_x35
+    _out_dqdd_dtau[..., 0, 1] = _x118
+    del _x35, _x43, _x118
     _x119 = _x27*_x15 + l1*(_x6*(-_x26*_x10 + m2*(_x6*_x23 + _x1*_x18)) + _x1*(_x10*_x16 + _x82)) + _x57 + _x83
+    del _x27, _x16, _x18, _x23, _x57, _x82
     _x120 = -_x58
+    del _x58
     _x121 = _x52*_x61 + _x50*_x120
     _x122 = 1.0/_x121
+    del _x121
     _x123 = _x122*(_x52*_x119 + _x83*_x120)
+    _out_F[..., 0] = _x123
+    del _x123
     _x60 = -_x50
     _x124 = _x122*(_x60*_x119 + _x83*_x61)
+    _out_F[..., 1] = _x124
+    del _x83, _x119, _x122, _x124
     _x62 = _x52*_x61
     _x128 = _x62 + _x50*_x120
+    del _x50, _x62
     _x129 = 1.0/_x128
+    del _x128
     _x130 = _x129*(_x52*_x29 + _x34*_x120)
     _x131 = _x129*(_x52*_x34 + _x5*_x120)
     _x138 = _x129*(_x120*_x131 + _x52*_x130)
+    _out_Mx[..., 0, 0] = _x138
     _x139 = _x129*(_x60*_x130 + _x61*_x131)
+    _out_Mx[..., 0, 1] = _x139
+    _out_Mx[..., 1, 0] = _x139
+    del _x130, _x131
     _x134 = _x129*(_x60*_x29 + _x34*_x61)
+    del _x29
     _x135 = _x129*(_x60*_x34 + _x5*_x61)
+    del _x5, _x34
     _x140 = _x129*(_x60*_x134 + _x61*_x135)
+    _out_Mx[..., 1, 1] = _x140
+    del _x134, _x135
     _x69 = theta2_d*theta2_d
     _x70 = 2.0*theta1_d*theta2_d
     _x71 = -_x49*_x70 - _x49*_x69 + _x7*_x61
+    del _x49
     _x72 = -_x52*_x70 - _x52*_x69 + (-_x55 - _x52)*_x7
+    del _x55, _x7, _x69, _x70
     _x125 = l1*(_x6*(-_x26*_x10 - _x74) + _x6*_x74) + _x75
+    del _x6, _x26, _x74
     _x132 = _x129*(_x52*_x125 + _x75*_x120)
-    _x136 = _x129*(_x60*_x125 + _x75*_x61)
-    _x126 = -_x13*_x10 + _x15*(_x1*_x10 + _x59)
-    _x127 = _x10*(_x1*_x15 - _x13)
-    _x133 = _x129*(_x127*_x120 + _x52*_x126)
-    _x137 = _x129*(_x60*_x126 + _x127*_x61)
-    _out_base_T_tcp = numpy.zeros(batch + (4, 4))
-    _out_base_T_tcp[..., 0, 0] = _x51
-    _out_base_T_tcp[..., 0, 1] = _x63
-    _out_base_T_tcp[..., 0, 3] = _x58
-    _out_base_T_tcp[..., 1, 0] = _x48
-    _out_base_T_tcp[..., 1, 1] = _x51
-    _out_base_T_tcp[..., 1, 3] = _x64
-    _out_base_T_tcp[..., 2, 2] = 1.0
-    _out_base_T_tcp[..., 3, 3] = 1.0
-    _out_base_T_link1 = numpy.zeros(batch + (4, 4))
-    _out_base_T_link1[..., 0, 0] = _x14
-    _out_base_T_link1[..., 0, 1] = -_x11
-    _out_base_T_link1[..., 0, 3] = _x55
-    _out_base_T_link1[..., 1, 0] = _x11
-    _out_base_T_link1[..., 1, 1] = _x14
-    _out_base_T_link1[..., 1, 3] = _x53
-    _out_base_T_link1[..., 2, 2] = 1.0
-    _out_base_T_link1[..., 3, 3] = 1.0
-    _out_base_T_link2 = numpy.zeros(batch + (4, 4))
-    _out_base_T_link2[..., 0, 0] = _x51
-    _out_base_T_link2[..., 0, 1] = _x63
-    _out_base_T_link2[..., 0, 3] = _x58
-    _out_base_T_link2[..., 1, 0] = _x48
-    _out_base_T_link2[..., 1, 1] = _x51
-    _out_base_T_link2[..., 1, 3] = _x64
-    _out_base_T_link2[..., 2, 2] = 1.0
-    _out_base_T_link2[..., 3, 3] = 1.0
-    _out_jacobian_J = numpy.zeros(batch + (2, 2))
-    _out_jacobian_J[..., 0, 0] = _x61
-    _out_jacobian_J[..., 0, 1] = _x50
-    _out_jacobian_J[..., 1, 0] = _x58
-    _out_jacobian_J[..., 1, 1] = _x52
-    _out_jacobian_geometric_J = numpy.zeros(batch + (6, 2))
-    _out_jacobian_geometric_J[..., 0, 0] = _x61
-    _out_jacobian_geometric_J[..., 0, 1] = _x50
-    _out_jacobian_geometric_J[..., 1, 0] = _x58
-    _out_jacobian_geometric_J[..., 1, 1] = _x52
-    _out_jacobian_geometric_J[..., 5, 0] = 1.0
-    _out_jacobian_geometric_J[..., 5, 1] = 1.0
-    _out_M = numpy.zeros(batch + (2, 2))
-    _out_M[..., 0, 0] = m1*_x0 + 2.0*_x4 + m2*_x0 + _x5
-    _out_M[..., 0, 1] = _x34
-    _out_M[..., 1, 0] = _x34
-    _out_M[..., 1, 1] = _x5
-    _out_C = numpy.zeros(batch + (2, 2))
-    _out_C[..., 0, 0] = -_x65*theta2_d
-    _out_C[..., 0, 1] = -_x66 + _x73*theta2_d
-    _out_C[..., 1, 0] = _x66
-    _out_V = numpy.zeros(batch + (2,))
-    _out_V[..., 0] = l1*(_x6*(-_x26*_x10 - _x74) + _x6*_x74) + _x75
-    _out_V[..., 1] = _x75
-    _out_G = numpy.zeros(batch + (2,))
-    _out_G[..., 0] = -_x13*_x10 + _x15*(_x1*_x10 + _x59)
-    _out_G[..., 1] = _x10*(_x1*_x15 - _x13)
-    _out_dG_dq = numpy.zeros(batch + (2, 2))
-    _out_dG_dq[..., 0, 0] = _x79*(_x67 + _x59) + _x80
-    _out_dG_dq[..., 0, 1] = _x81
-    _out_dG_dq[..., 1, 0] = _x67*_x79 + _x80
-    _out_dG_dq[..., 1, 1] = _x81
-    _out_inverse_dynamics_tau = numpy.zeros(batch + (2,))
-    _out_inverse_dynamics_tau[..., 0] = _x27*_x15 + l1*(_x6*(-_x26*_x10 + m2*(_x6*_x23 + _x1*_x18)) + _x1*(_x10*_x16 + _x82)) + _x57 + _x83
-    _out_inverse_dynamics_tau[..., 1] = _x83
-    _out_dtau_dq = numpy.zeros(batch + (2, 2))
-    _out_dtau_dq[..., 0, 0] = -_x12*_x88 + _x15*_x86
-    _out_dtau_dq[..., 0, 1] = -_x6*_x90 + _x1*_x85
-    _out_dtau_dq[..., 1, 0] = -_x12*_x67 + _x15*_x92
-    _out_dtau_dq[..., 1, 1] = -_x6*_x93 + _x1*_x91
-    _out_dtau_dqd = numpy.zeros(batch + (2, 2))
-    _out_dtau_dqd[..., 0, 0] = -_x45*_x86 + _x94
-    _out_dtau_dqd[..., 0, 1] = _x94
-    _out_dtau_dqd[..., 1, 0] = -_x45*_x92
-    _out_dtau_dqdd = numpy.zeros(batch + (2, 2))
-    _out_dtau_dqdd[..., 0, 0] = _x56 + l1*_x87 + _x89
-    _out_dtau_dqdd[..., 0, 1] = _x68
-    _out_dtau_dqdd[..., 1, 0] = _x68
-    _out_dtau_dqdd[..., 1, 1] = _x5
-    _out_forward_dynamics_qdd = numpy.zeros(batch + (2,))
-    _out_forward_dynamics_qdd[..., 0] = _x40
-    _out_forward_dynamics_qdd[..., 1] = _x39
-    _out_dqdd_dq = numpy.zeros(batch + (2, 2))
-    _out_dqdd_dq[..., 0, 0] = _x103
-    _out_dqdd_dq[..., 0, 1] = _x107
-    _out_dqdd_dq[..., 1, 0] = _x102
-    _out_dqdd_dq[..., 1, 1] = _x106
-    _out_dqdd_dqd = numpy.zeros(batch + (2, 2))
-    _out_dqdd_dqd[..., 0, 0] = _x111
-    _out_dqdd_dqd[..., 0, 1] = _x114
-    _out_dqdd_dqd[..., 1, 0] = _x110
-    _out_dqdd_dqd[..., 1, 1] = _x113
-    _out_dqdd_dtau = numpy.zeros(batch + (2, 2))
-    _out_dqdd_dtau[..., 0, 0] = _x117
-    _out_dqdd_dtau[..., 0, 1] = _x118
-    _out_dqdd_dtau[..., 1, 0] = _x116
-    _out_dqdd_dtau[..., 1, 1] = _x43
-    _out_F = numpy.zeros(batch + (2,))
-    _out_F[..., 0] = _x123
-    _out_F[..., 1] = _x124
-    _out_Mx = numpy.zeros(batch + (2, 2))
-    _out_Mx[..., 0, 0] = _x138
-    _out_Mx[..., 0, 1] = _x139
-    _out_Mx[..., 1, 0] = _x139
-    _out_Mx[..., 1, 1] = _x140
-    _out_Vx = numpy.zeros(batch + (2,))
     _out_Vx[..., 0] = -_x71*_x139 - _x72*_x138 + _x132
+    del _x138, _x132
+    _x136 = _x129*(_x60*_x125 + _x75*_x61)
     _out_Vx[..., 1] = -_x71*_x140 - _x72*_x139 + _x136
-    _out_Gx = numpy.zeros(batch + (2,))
+    del _x75, _x139, _x140, _x71, _x72, _x125, _x136
+    _x126 = -_x13*_x10 + _x15*(_x1*_x10 + _x59)
+    del _x59
+    _x127 = _x10*(_x1*_x15 - _x13)
+    del _x1, _x10, _x13, _x15
+    _x133 = _x129*(_x127*_x120 + _x52*_x126)
     _out_Gx[..., 0] = _x133
+    del _x52, _x120, _x133
+    _x137 = _x129*(_x60*_x126 + _x127*_x61)
     _out_Gx[..., 1] = _x137
-    _out_k = numpy.zeros(batch + ())
-    _out_k[...] = 0.5*(_x34*theta1_d + _x5*theta2_d)*theta2_d + 0.5*((m1*_x0 + 2.0*_x4 + m2*_x0 + _x5)*theta1_d + _x34*theta2_d)*theta1_d
-    _out_u = numpy.zeros(batch + ())
-    _out_u[...] = (_x53 + _x49)*g*m2 + g*m1*_x53
+    del _x61, _x60, _x129, _x126, _x127, _x137
     return CombinedResult(_out_base_T_tcp, _out_base_T_link1, _out_base_T_link2, _out_jacobian_J, _out_jacobian_geometric_J, _out_M, _out_C, _out_V, _out_G, _out_dG_dq, _out_inverse_dynamics_tau, _out_dtau_dq, _out_dtau_dqd, _out_dtau_dqdd, _out_forward_dynamics_qdd, _out_dqdd_dq, _out_dqdd_dqd, _out_dqdd_dtau, _out_F, _out_Mx, _out_Vx, _out_Gx, _out_k, _out_u)

@@ -123,6 +123,8 @@ def fk(q, *, d1=0.1807, a2=-0.6127, a3=-0.57155, d4=0.17415, d5=0.11985, d6=0.11
     q4 = q[..., 3]
     q5 = q[..., 4]
     q6 = q[..., 5]
+    _out_base_T_tcp = numpy.zeros(batch + (4, 4))
+    _out_base_T_tcp[..., 3, 3] = 1.0
     _x0 = numpy.sin(q6)
     _x1 = numpy.cos(q1)
     _x2 = numpy.cos(q4)
@@ -133,6 +135,7 @@ def fk(q, *, d1=0.1807, a2=-0.6127, a3=-0.57155, d4=0.17415, d5=0.11985, d6=0.11
     _x7 = _x3*_x4 + _x5*_x6
     _x8 = numpy.sin(q4)
     _x9 = _x4*_x6 - _x3*_x5
+    del _x4, _x5
     _x10 = _x2*_x7 + _x8*_x9
     _x11 = _x1*_x10
     _x12 = numpy.cos(q6)
@@ -140,33 +143,39 @@ def fk(q, *, d1=0.1807, a2=-0.6127, a3=-0.57155, d4=0.17415, d5=0.11985, d6=0.11
     _x14 = numpy.sin(q5)
     _x15 = _x13*_x14
     _x16 = _x2*_x9 - _x7*_x8
+    del _x2, _x8
     _x17 = numpy.cos(q5)
     _x18 = _x1*_x17
     _x19 = _x15 + _x16*_x18
+    _out_base_T_tcp[..., 0, 0] = _x12*_x19 - _x0*_x11
+    _out_base_T_tcp[..., 0, 1] = -(_x0*_x19 + _x11*_x12)
+    del _x19
     _x20 = _x13*_x17
     _x21 = _x1*_x14
     _x22 = _x20 - _x16*_x21
+    _out_base_T_tcp[..., 0, 2] = _x22
     _x23 = _x6*a2
+    del _x6
     _x24 = _x9*a3
+    _out_base_T_tcp[..., 0, 3] = _x1*_x23 + _x1*_x24 + _x11*d5 + _x13*d4 + _x22*d6
+    del _x9, _x11, _x22
     _x25 = _x10*_x13
     _x26 = -_x21 + _x16*_x20
-    _x27 = -(_x18 + _x15*_x16)
-    _x28 = _x10*_x17
-    _x29 = _x10*_x14
-    _out_base_T_tcp = numpy.zeros(batch + (4, 4))
-    _out_base_T_tcp[..., 0, 0] = _x12*_x19 - _x0*_x11
-    _out_base_T_tcp[..., 0, 1] = -(_x0*_x19 + _x11*_x12)
-    _out_base_T_tcp[..., 0, 2] = _x22
-    _out_base_T_tcp[..., 0, 3] = _x1*_x23 + _x1*_x24 + _x11*d5 + _x13*d4 + _x22*d6
     _out_base_T_tcp[..., 1, 0] = _x12*_x26 - _x0*_x25
     _out_base_T_tcp[..., 1, 1] = -(_x0*_x26 + _x12*_x25)
+    del _x20, _x21, _x26
+    _x27 = -(_x18 + _x15*_x16)
     _out_base_T_tcp[..., 1, 2] = _x27
     _out_base_T_tcp[..., 1, 3] = _x13*_x23 + _x13*_x24 + _x25*d5 + _x27*d6 - _x1*d4
+    del _x1, _x13, _x15, _x18, _x23, _x24, _x25, _x27
+    _x28 = _x10*_x17
     _out_base_T_tcp[..., 2, 0] = _x0*_x16 + _x12*_x28
     _out_base_T_tcp[..., 2, 1] = _x12*_x16 - _x0*_x28
+    del _x0, _x12, _x17, _x28
+    _x29 = _x10*_x14
     _out_base_T_tcp[..., 2, 2] = -_x29
     _out_base_T_tcp[..., 2, 3] = d1 + _x3*a2 + _x7*a3 - _x16*d5 - _x29*d6
-    _out_base_T_tcp[..., 3, 3] = 1.0
+    del _x3, _x7, _x10, _x14, _x16, _x29
     return _out_base_T_tcp
 
 
@@ -216,126 +225,146 @@ def frames(q, *, d1=0.1807, a2=-0.6127, a3=-0.57155, d4=0.17415, d5=0.11985, d6=
     q4 = q[..., 3]
     q5 = q[..., 4]
     q6 = q[..., 5]
+    _out_base_T_link1 = numpy.zeros(batch + (4, 4))
+    _out_base_T_link2 = numpy.zeros(batch + (4, 4))
+    _out_base_T_link3 = numpy.zeros(batch + (4, 4))
+    _out_base_T_link4 = numpy.zeros(batch + (4, 4))
+    _out_base_T_link5 = numpy.zeros(batch + (4, 4))
+    _out_base_T_link6 = numpy.zeros(batch + (4, 4))
+    _out_base_T_link1[..., 2, 1] = 1.0
+    _out_base_T_link1[..., 2, 3] = d1
+    _out_base_T_link1[..., 3, 3] = 1.0
+    _out_base_T_link2[..., 3, 3] = 1.0
+    _out_base_T_link3[..., 3, 3] = 1.0
+    _out_base_T_link4[..., 3, 3] = 1.0
+    _out_base_T_link5[..., 3, 3] = 1.0
+    _out_base_T_link6[..., 3, 3] = 1.0
     _x0 = numpy.cos(q1)
+    _out_base_T_link1[..., 0, 0] = _x0
     _x1 = numpy.sin(q1)
+    _out_base_T_link1[..., 0, 2] = _x1
+    _out_base_T_link1[..., 1, 0] = _x1
+    _out_base_T_link2[..., 0, 2] = _x1
+    _out_base_T_link3[..., 0, 2] = _x1
+    _out_base_T_link4[..., 0, 1] = _x1
     _x2 = -_x0
+    _out_base_T_link1[..., 1, 2] = _x2
+    _out_base_T_link2[..., 1, 2] = _x2
+    _out_base_T_link3[..., 1, 2] = _x2
+    _out_base_T_link4[..., 1, 1] = _x2
+    del _x2
     _x3 = numpy.cos(q2)
+    _out_base_T_link2[..., 2, 1] = _x3
     _x4 = _x0*_x3
+    _out_base_T_link2[..., 0, 0] = _x4
     _x5 = numpy.sin(q2)
+    _out_base_T_link2[..., 0, 1] = -_x0*_x5
+    _out_base_T_link2[..., 1, 1] = -_x1*_x5
+    _out_base_T_link2[..., 2, 0] = _x5
     _x6 = _x4*a2
+    _out_base_T_link2[..., 0, 3] = _x6
+    del _x4
     _x7 = _x1*_x3
+    _out_base_T_link2[..., 1, 0] = _x7
     _x8 = _x7*a2
+    _out_base_T_link2[..., 1, 3] = _x8
+    del _x7
     _x9 = d1 + _x5*a2
+    _out_base_T_link2[..., 2, 3] = _x9
     _x10 = numpy.cos(q3)
     _x11 = numpy.sin(q3)
     _x12 = _x10*_x3 - _x11*_x5
+    _out_base_T_link3[..., 2, 1] = _x12
     _x13 = _x0*_x12
+    _out_base_T_link3[..., 0, 0] = _x13
     _x14 = _x10*_x5 + _x11*_x3
+    _out_base_T_link3[..., 0, 1] = -_x0*_x14
+    _out_base_T_link3[..., 1, 1] = -_x1*_x14
+    _out_base_T_link3[..., 2, 0] = _x14
+    del _x3, _x5, _x10, _x11
     _x15 = _x6 + _x13*a3
+    _out_base_T_link3[..., 0, 3] = _x15
+    del _x6, _x13
     _x16 = _x1*_x12
+    _out_base_T_link3[..., 1, 0] = _x16
     _x17 = _x8 + _x16*a3
+    _out_base_T_link3[..., 1, 3] = _x17
+    del _x8, _x16
     _x18 = _x9 + _x14*a3
+    _out_base_T_link3[..., 2, 3] = _x18
+    _out_base_T_link4[..., 2, 3] = _x18
+    del _x9
     _x19 = numpy.cos(q4)
     _x20 = _x12*_x19
     _x21 = numpy.sin(q4)
     _x22 = _x14*_x21
+    _out_base_T_link4[..., 2, 2] = _x22 - _x20
     _x23 = _x20 - _x22
+    _out_base_T_link5[..., 2, 1] = _x23
+    del _x20, _x22
     _x24 = _x0*_x23
+    _out_base_T_link4[..., 0, 0] = _x24
     _x25 = _x12*_x21 + _x14*_x19
+    _out_base_T_link4[..., 2, 0] = _x25
+    del _x12, _x14, _x19, _x21
     _x26 = _x0*_x25
+    _out_base_T_link4[..., 0, 2] = _x26
+    _out_base_T_link5[..., 0, 1] = -_x26
     _x27 = _x15 + _x1*d4
+    _out_base_T_link4[..., 0, 3] = _x27
+    del _x15
     _x28 = _x1*_x23
+    _out_base_T_link4[..., 1, 0] = _x28
     _x29 = _x1*_x25
+    _out_base_T_link4[..., 1, 2] = _x29
+    _out_base_T_link5[..., 1, 1] = -_x29
     _x30 = _x17 - _x0*d4
+    _out_base_T_link4[..., 1, 3] = _x30
+    del _x17
     _x31 = numpy.sin(q5)
     _x32 = numpy.cos(q5)
     _x33 = _x1*_x31 + _x24*_x32
+    _out_base_T_link5[..., 0, 0] = _x33
     _x34 = _x1*_x32 - _x24*_x31
+    _out_base_T_link5[..., 0, 2] = _x34
+    _out_base_T_link6[..., 0, 2] = _x34
+    del _x1, _x24
     _x35 = _x27 + _x26*d5
+    _out_base_T_link5[..., 0, 3] = _x35
+    _out_base_T_link6[..., 0, 3] = _x35 + _x34*d6
+    del _x27, _x34, _x35
     _x36 = _x28*_x32 - _x0*_x31
+    _out_base_T_link5[..., 1, 0] = _x36
     _x37 = -(_x0*_x32 + _x28*_x31)
+    _out_base_T_link5[..., 1, 2] = _x37
+    _out_base_T_link6[..., 1, 2] = _x37
+    del _x0, _x28
     _x38 = _x30 + _x29*d5
+    _out_base_T_link5[..., 1, 3] = _x38
+    _out_base_T_link6[..., 1, 3] = _x38 + _x37*d6
+    del _x30, _x37, _x38
     _x39 = _x25*_x32
+    _out_base_T_link5[..., 2, 0] = _x39
+    del _x32
     _x40 = _x25*_x31
+    del _x25, _x31
     _x41 = -_x40
+    _out_base_T_link5[..., 2, 2] = _x41
+    _out_base_T_link6[..., 2, 2] = _x41
+    del _x41
     _x42 = _x18 - _x23*d5
+    _out_base_T_link5[..., 2, 3] = _x42
+    _out_base_T_link6[..., 2, 3] = _x42 - _x40*d6
+    del _x18, _x40, _x42
     _x43 = numpy.sin(q6)
     _x44 = numpy.cos(q6)
-    _out_base_T_link1 = numpy.zeros(batch + (4, 4))
-    _out_base_T_link1[..., 0, 0] = _x0
-    _out_base_T_link1[..., 0, 2] = _x1
-    _out_base_T_link1[..., 1, 0] = _x1
-    _out_base_T_link1[..., 1, 2] = _x2
-    _out_base_T_link1[..., 2, 1] = 1.0
-    _out_base_T_link1[..., 2, 3] = d1
-    _out_base_T_link1[..., 3, 3] = 1.0
-    _out_base_T_link2 = numpy.zeros(batch + (4, 4))
-    _out_base_T_link2[..., 0, 0] = _x4
-    _out_base_T_link2[..., 0, 1] = -_x0*_x5
-    _out_base_T_link2[..., 0, 2] = _x1
-    _out_base_T_link2[..., 0, 3] = _x6
-    _out_base_T_link2[..., 1, 0] = _x7
-    _out_base_T_link2[..., 1, 1] = -_x1*_x5
-    _out_base_T_link2[..., 1, 2] = _x2
-    _out_base_T_link2[..., 1, 3] = _x8
-    _out_base_T_link2[..., 2, 0] = _x5
-    _out_base_T_link2[..., 2, 1] = _x3
-    _out_base_T_link2[..., 2, 3] = _x9
-    _out_base_T_link2[..., 3, 3] = 1.0
-    _out_base_T_link3 = numpy.zeros(batch + (4, 4))
-    _out_base_T_link3[..., 0, 0] = _x13
-    _out_base_T_link3[..., 0, 1] = -_x0*_x14
-    _out_base_T_link3[..., 0, 2] = _x1
-    _out_base_T_link3[..., 0, 3] = _x15
-    _out_base_T_link3[..., 1, 0] = _x16
-    _out_base_T_link3[..., 1, 1] = -_x1*_x14
-    _out_base_T_link3[..., 1, 2] = _x2
-    _out_base_T_link3[..., 1, 3] = _x17
-    _out_base_T_link3[..., 2, 0] = _x14
-    _out_base_T_link3[..., 2, 1] = _x12
-    _out_base_T_link3[..., 2, 3] = _x18
-    _out_base_T_link3[..., 3, 3] = 1.0
-    _out_base_T_link4 = numpy.zeros(batch + (4, 4))
-    _out_base_T_link4[..., 0, 0] = _x24
-    _out_base_T_link4[..., 0, 1] = _x1
-    _out_base_T_link4[..., 0, 2] = _x26
-    _out_base_T_link4[..., 0, 3] = _x27
-    _out_base_T_link4[..., 1, 0] = _x28
-    _out_base_T_link4[..., 1, 1] = _x2
-    _out_base_T_link4[..., 1, 2] = _x29
-    _out_base_T_link4[..., 1, 3] = _x30
-    _out_base_T_link4[..., 2, 0] = _x25
-    _out_base_T_link4[..., 2, 2] = _x22 - _x20
-    _out_base_T_link4[..., 2, 3] = _x18
-    _out_base_T_link4[..., 3, 3] = 1.0
-    _out_base_T_link5 = numpy.zeros(batch + (4, 4))
-    _out_base_T_link5[..., 0, 0] = _x33
-    _out_base_T_link5[..., 0, 1] = -_x26
-    _out_base_T_link5[..., 0, 2] = _x34
-    _out_base_T_link5[..., 0, 3] = _x35
-    _out_base_T_link5[..., 1, 0] = _x36
-    _out_base_T_link5[..., 1, 1] = -_x29
-    _out_base_T_link5[..., 1, 2] = _x37
-    _out_base_T_link5[..., 1, 3] = _x38
-    _out_base_T_link5[..., 2, 0] = _x39
-    _out_base_T_link5[..., 2, 1] = _x23
-    _out_base_T_link5[..., 2, 2] = _x41
-    _out_base_T_link5[..., 2, 3] = _x42
-    _out_base_T_link5[..., 3, 3] = 1.0
-    _out_base_T_link6 = numpy.zeros(batch + (4, 4))
     _out_base_T_link6[..., 0, 0] = _x33*_x44 - _x26*_x43
     _out_base_T_link6[..., 0, 1] = -(_x26*_x44 + _x33*_x43)
-    _out_base_T_link6[..., 0, 2] = _x34
-    _out_base_T_link6[..., 0, 3] = _x35 + _x34*d6
     _out_base_T_link6[..., 1, 0] = _x36*_x44 - _x29*_x43
     _out_base_T_link6[..., 1, 1] = -(_x29*_x44 + _x36*_x43)
-    _out_base_T_link6[..., 1, 2] = _x37
-    _out_base_T_link6[..., 1, 3] = _x38 + _x37*d6
     _out_base_T_link6[..., 2, 0] = _x23*_x43 + _x39*_x44
     _out_base_T_link6[..., 2, 1] = _x23*_x44 - _x39*_x43
-    _out_base_T_link6[..., 2, 2] = _x41
-    _out_base_T_link6[..., 2, 3] = _x42 - _x40*d6
-    _out_base_T_link6[..., 3, 3] = 1.0
+    del _x23, _x26, _x29, _x33, _x36, _x39, _x43, _x44
     return FramesResult(_out_base_T_link1, _out_base_T_link2, _out_base_T_link3, _out_base_T_link4, _out_base_T_link5, _out_base_T_link6)
 
 
@@ -371,7 +400,12 @@ def jacobian(q, *, a2=-0.6127, a3=-0.57155, d4=0.17415, d5=0.11985, d6=0.11655):
     q4 = q[..., 3]
     q5 = q[..., 4]
     q6 = q[..., 5]
+    _out_J = numpy.zeros(batch + (6, 6))
+    _out_J[..., 5, 0] = 1.0
     _x0 = numpy.sin(q1)
+    _out_J[..., 3, 1] = _x0
+    _out_J[..., 3, 2] = _x0
+    _out_J[..., 3, 3] = _x0
     _x1 = numpy.cos(q2)
     _x2 = _x1*a2
     _x3 = numpy.cos(q3)
@@ -382,64 +416,77 @@ def jacobian(q, *, a2=-0.6127, a3=-0.57155, d4=0.17415, d5=0.11985, d6=0.11655):
     _x8 = numpy.cos(q1)
     _x9 = numpy.cos(q4)
     _x10 = _x1*_x5 + _x3*_x4
+    del _x1, _x3, _x5
     _x11 = numpy.sin(q4)
     _x12 = _x10*_x9 + _x11*_x6
     _x13 = _x0*_x12
+    _out_J[..., 4, 4] = _x13
     _x14 = numpy.cos(q5)
     _x15 = _x6*_x9
+    del _x6, _x9
     _x16 = _x10*_x11
+    _out_J[..., 5, 4] = _x16 - _x15
+    del _x11
     _x17 = _x15 - _x16
+    del _x15, _x16
     _x18 = numpy.sin(q5)
     _x19 = _x17*_x18
     _x20 = -(_x0*_x19 + _x14*_x8)
+    _out_J[..., 4, 5] = _x20
     _x21 = _x13*d5 + _x20*d6
+    del _x20
     _x22 = _x21 - _x8*d4
     _x23 = _x22 + _x0*_x7
     _x24 = _x23 + _x0*_x2
+    _out_J[..., 0, 0] = -_x24
     _x25 = _x17*d5
     _x26 = _x12*_x18
+    _out_J[..., 5, 5] = -_x26
+    del _x18
     _x27 = _x26*d6
+    del _x26
     _x28 = -_x25 - _x27 + _x10*a3 + _x4*a2
-    _x29 = _x25 + _x27
-    _x30 = -(_x29 - _x10*a3)
-    _x31 = -_x29
-    _x32 = _x31*_x8
-    _x33 = _x0*_x31
-    _x34 = _x12*_x8
-    _x35 = _x0*_x14 - _x19*_x8
-    _x36 = _x34*d5 + _x35*d6
-    _x37 = _x36 + _x0*d4
-    _x38 = _x37 + _x7*_x8
-    _x39 = _x38 + _x2*_x8
-    _x40 = -_x8
-    _out_J = numpy.zeros(batch + (6, 6))
-    _out_J[..., 0, 0] = -_x24
     _out_J[..., 0, 1] = -_x28*_x8
-    _out_J[..., 0, 2] = -_x30*_x8
-    _out_J[..., 0, 3] = -_x32
-    _out_J[..., 0, 4] = _x12*_x33 + _x17*_x21
-    _out_J[..., 1, 0] = _x39
     _out_J[..., 1, 1] = -_x0*_x28
+    del _x4, _x28
+    _x29 = _x25 + _x27
+    del _x25, _x27
+    _x30 = -(_x29 - _x10*a3)
+    _out_J[..., 0, 2] = -_x30*_x8
     _out_J[..., 1, 2] = -_x0*_x30
+    del _x10, _x30
+    _x31 = -_x29
+    del _x29
+    _x32 = _x31*_x8
+    _out_J[..., 0, 3] = -_x32
+    _x33 = _x0*_x31
+    _out_J[..., 0, 4] = _x12*_x33 + _x17*_x21
     _out_J[..., 1, 3] = -_x33
-    _out_J[..., 1, 4] = -(_x12*_x32 + _x17*_x36)
-    _out_J[..., 2, 1] = _x0*_x24 + _x39*_x8
-    _out_J[..., 2, 2] = _x0*_x23 + _x38*_x8
-    _out_J[..., 2, 3] = _x0*_x22 + _x37*_x8
-    _out_J[..., 2, 4] = _x21*_x34 - _x13*_x36
-    _out_J[..., 3, 1] = _x0
-    _out_J[..., 3, 2] = _x0
-    _out_J[..., 3, 3] = _x0
+    del _x31, _x33
+    _x34 = _x12*_x8
     _out_J[..., 3, 4] = _x34
+    _x35 = _x0*_x14 - _x19*_x8
     _out_J[..., 3, 5] = _x35
+    del _x14, _x19
+    _x36 = _x34*d5 + _x35*d6
+    _out_J[..., 1, 4] = -(_x12*_x32 + _x17*_x36)
+    _out_J[..., 2, 4] = _x21*_x34 - _x13*_x36
+    del _x12, _x13, _x17, _x21, _x32, _x34, _x35
+    _x37 = _x36 + _x0*d4
+    _out_J[..., 2, 3] = _x0*_x22 + _x37*_x8
+    del _x22, _x36
+    _x38 = _x37 + _x7*_x8
+    _out_J[..., 2, 2] = _x0*_x23 + _x38*_x8
+    del _x7, _x23, _x37
+    _x39 = _x38 + _x2*_x8
+    _out_J[..., 1, 0] = _x39
+    _out_J[..., 2, 1] = _x0*_x24 + _x39*_x8
+    del _x0, _x2, _x24, _x38, _x39
+    _x40 = -_x8
     _out_J[..., 4, 1] = _x40
     _out_J[..., 4, 2] = _x40
     _out_J[..., 4, 3] = _x40
-    _out_J[..., 4, 4] = _x13
-    _out_J[..., 4, 5] = _x20
-    _out_J[..., 5, 0] = 1.0
-    _out_J[..., 5, 4] = _x16 - _x15
-    _out_J[..., 5, 5] = -_x26
+    del _x8, _x40
     return _out_J
 
 
@@ -493,196 +540,237 @@ def combined(q, *, d1=0.1807, a2=-0.6127, a3=-0.57155, d4=0.17415, d5=0.11985, d
     q4 = q[..., 3]
     q5 = q[..., 4]
     q6 = q[..., 5]
+    _out_base_T_tcp = numpy.zeros(batch + (4, 4))
+    _out_base_T_link1 = numpy.zeros(batch + (4, 4))
+    _out_base_T_link2 = numpy.zeros(batch + (4, 4))
+    _out_base_T_link3 = numpy.zeros(batch + (4, 4))
+    _out_base_T_link4 = numpy.zeros(batch + (4, 4))
+    _out_base_T_link5 = numpy.zeros(batch + (4, 4))
+    _out_base_T_link6 = numpy.zeros(batch + (4, 4))
+    _out_J = numpy.zeros(batch + (6, 6))
+    _out_base_T_tcp[..., 3, 3] = 1.0
+    _out_base_T_link1[..., 2, 1] = 1.0
+    _out_base_T_link1[..., 2, 3] = d1
+    _out_base_T_link1[..., 3, 3] = 1.0
+    _out_base_T_link2[..., 3, 3] = 1.0
+    _out_base_T_link3[..., 3, 3] = 1.0
+    _out_base_T_link4[..., 3, 3] = 1.0
+    _out_base_T_link5[..., 3, 3] = 1.0
+    _out_base_T_link6[..., 3, 3] = 1.0
+    _out_J[..., 5, 0] = 1.0
     _x0 = numpy.sin(q6)
     _x1 = numpy.cos(q1)
+    _out_base_T_link1[..., 0, 0] = _x1
     _x2 = numpy.cos(q4)
     _x3 = numpy.sin(q2)
+    _out_base_T_link2[..., 0, 1] = -_x1*_x3
+    _out_base_T_link2[..., 2, 0] = _x3
     _x4 = numpy.cos(q3)
     _x5 = numpy.sin(q3)
     _x6 = numpy.cos(q2)
+    _out_base_T_link2[..., 2, 1] = _x6
     _x7 = _x3*_x4 + _x5*_x6
+    _out_base_T_link3[..., 0, 1] = -_x1*_x7
+    _out_base_T_link3[..., 2, 0] = _x7
     _x8 = numpy.sin(q4)
     _x9 = _x4*_x6 - _x3*_x5
+    _out_base_T_link3[..., 2, 1] = _x9
+    del _x4, _x5
     _x10 = _x2*_x7 + _x8*_x9
+    _out_base_T_link4[..., 2, 0] = _x10
     _x11 = _x1*_x10
+    _out_base_T_link4[..., 0, 2] = _x11
+    _out_base_T_link5[..., 0, 1] = -_x11
+    _out_J[..., 3, 4] = _x11
     _x12 = numpy.cos(q6)
     _x13 = numpy.sin(q1)
+    _out_base_T_link1[..., 0, 2] = _x13
+    _out_base_T_link1[..., 1, 0] = _x13
+    _out_base_T_link2[..., 0, 2] = _x13
+    _out_base_T_link2[..., 1, 1] = -_x13*_x3
+    _out_base_T_link3[..., 0, 2] = _x13
+    _out_base_T_link3[..., 1, 1] = -_x13*_x7
+    _out_base_T_link4[..., 0, 1] = _x13
+    _out_J[..., 3, 1] = _x13
+    _out_J[..., 3, 2] = _x13
+    _out_J[..., 3, 3] = _x13
     _x14 = numpy.sin(q5)
     _x15 = _x13*_x14
     _x16 = _x2*_x9
+    del _x2
     _x17 = _x7*_x8
+    del _x8
     _x18 = _x16 - _x17
+    _out_base_T_link4[..., 0, 0] = _x1*_x18
+    _out_base_T_link4[..., 1, 0] = _x13*_x18
+    _out_base_T_link5[..., 2, 1] = _x18
     _x19 = numpy.cos(q5)
     _x20 = _x1*_x19
     _x21 = _x15 + _x18*_x20
+    _out_base_T_link5[..., 0, 0] = _x21
     _x22 = _x12*_x21 - _x0*_x11
+    _out_base_T_tcp[..., 0, 0] = _x22
+    _out_base_T_link6[..., 0, 0] = _x22
+    del _x22
     _x23 = -(_x0*_x21 + _x11*_x12)
+    _out_base_T_tcp[..., 0, 1] = _x23
+    _out_base_T_link6[..., 0, 1] = _x23
+    del _x21, _x23
     _x24 = _x13*_x19
     _x25 = _x1*_x14
     _x26 = _x24 - _x18*_x25
+    _out_base_T_tcp[..., 0, 2] = _x26
+    _out_base_T_link5[..., 0, 2] = _x26
+    _out_base_T_link6[..., 0, 2] = _x26
+    _out_J[..., 3, 5] = _x26
     _x27 = _x11*d5
     _x28 = _x27 + _x26*d6
+    del _x26
     _x29 = _x13*d4
     _x30 = _x1*_x6
+    _out_base_T_link2[..., 0, 0] = _x30
     _x31 = _x30*a2
+    _out_base_T_link2[..., 0, 3] = _x31
+    del _x30
     _x32 = _x1*_x9
+    _out_base_T_link3[..., 0, 0] = _x32
     _x33 = _x32*a3
+    del _x32
     _x34 = _x31 + _x33
+    _out_base_T_link3[..., 0, 3] = _x34
+    del _x31
     _x35 = _x29 + _x34
+    _out_base_T_link4[..., 0, 3] = _x35
+    _out_base_T_link5[..., 0, 3] = _x27 + _x35
+    del _x27, _x34
     _x36 = _x28 + _x35
+    _out_base_T_tcp[..., 0, 3] = _x36
+    _out_base_T_link6[..., 0, 3] = _x36
+    _out_J[..., 1, 0] = _x36
+    del _x35
     _x37 = _x10*_x13
+    _out_base_T_link4[..., 1, 2] = _x37
+    _out_base_T_link5[..., 1, 1] = -_x37
+    _out_J[..., 4, 4] = _x37
     _x38 = -_x25 + _x18*_x24
+    _out_base_T_link5[..., 1, 0] = _x38
+    del _x24, _x25
     _x39 = _x12*_x38 - _x0*_x37
+    _out_base_T_tcp[..., 1, 0] = _x39
+    _out_base_T_link6[..., 1, 0] = _x39
+    del _x39
     _x40 = -(_x0*_x38 + _x12*_x37)
+    _out_base_T_tcp[..., 1, 1] = _x40
+    _out_base_T_link6[..., 1, 1] = _x40
+    del _x38, _x40
     _x41 = -(_x20 + _x15*_x18)
+    _out_base_T_tcp[..., 1, 2] = _x41
+    _out_base_T_link5[..., 1, 2] = _x41
+    _out_base_T_link6[..., 1, 2] = _x41
+    _out_J[..., 4, 5] = _x41
+    del _x15, _x20
     _x42 = _x37*d5
     _x43 = _x42 + _x41*d6
+    _out_J[..., 2, 4] = _x11*_x43 - _x28*_x37
+    del _x41
     _x44 = -_x1*d4
     _x45 = _x13*_x6
+    _out_base_T_link2[..., 1, 0] = _x45
+    del _x6
     _x46 = _x45*a2
+    _out_base_T_link2[..., 1, 3] = _x46
+    del _x45
     _x47 = _x13*_x9
+    _out_base_T_link3[..., 1, 0] = _x47
+    del _x9
     _x48 = _x47*a3
+    del _x47
     _x49 = _x46 + _x48
+    _out_base_T_link3[..., 1, 3] = _x49
+    del _x46
     _x50 = _x44 + _x49
+    _out_base_T_link4[..., 1, 3] = _x50
+    _out_base_T_link5[..., 1, 3] = _x42 + _x50
+    del _x42, _x49
     _x51 = _x43 + _x50
+    _out_base_T_tcp[..., 1, 3] = _x51
+    _out_base_T_link6[..., 1, 3] = _x51
+    _out_J[..., 0, 0] = -_x51
+    _out_J[..., 2, 1] = _x1*_x36 + _x13*_x51
+    del _x36, _x50, _x51
     _x52 = _x10*_x19
+    _out_base_T_link5[..., 2, 0] = _x52
+    del _x19
     _x53 = _x0*_x18 + _x12*_x52
+    _out_base_T_tcp[..., 2, 0] = _x53
+    _out_base_T_link6[..., 2, 0] = _x53
+    del _x53
     _x54 = _x12*_x18 - _x0*_x52
+    _out_base_T_tcp[..., 2, 1] = _x54
+    _out_base_T_link6[..., 2, 1] = _x54
+    del _x0, _x12, _x52, _x54
     _x55 = _x10*_x14
+    del _x10, _x14
     _x56 = -_x55
+    _out_base_T_tcp[..., 2, 2] = _x56
+    _out_base_T_link5[..., 2, 2] = _x56
+    _out_base_T_link6[..., 2, 2] = _x56
+    _out_J[..., 5, 5] = _x56
+    del _x56
     _x57 = _x55*d6
+    del _x55
     _x58 = -_x57
     _x59 = _x18*d5
     _x60 = -_x59
     _x61 = _x7*a3
     _x62 = _x3*a2
+    del _x3
     _x63 = _x62 + d1
-    _x64 = _x61 + _x63
-    _x65 = _x60 + _x64
-    _x66 = _x58 + _x65
-    _x67 = -_x1
-    _x68 = _x17 - _x16
-    _x69 = _x58 + _x60 + _x61 + _x62
-    _x70 = _x57 + _x59
-    _x71 = -(_x70 - _x7*a3)
-    _x72 = -_x70
-    _x73 = _x28 + _x29
-    _x74 = _x43 + _x44
-    _out_base_T_tcp = numpy.zeros(batch + (4, 4))
-    _out_base_T_tcp[..., 0, 0] = _x22
-    _out_base_T_tcp[..., 0, 1] = _x23
-    _out_base_T_tcp[..., 0, 2] = _x26
-    _out_base_T_tcp[..., 0, 3] = _x36
-    _out_base_T_tcp[..., 1, 0] = _x39
-    _out_base_T_tcp[..., 1, 1] = _x40
-    _out_base_T_tcp[..., 1, 2] = _x41
-    _out_base_T_tcp[..., 1, 3] = _x51
-    _out_base_T_tcp[..., 2, 0] = _x53
-    _out_base_T_tcp[..., 2, 1] = _x54
-    _out_base_T_tcp[..., 2, 2] = _x56
-    _out_base_T_tcp[..., 2, 3] = _x66
-    _out_base_T_tcp[..., 3, 3] = 1.0
-    _out_base_T_link1 = numpy.zeros(batch + (4, 4))
-    _out_base_T_link1[..., 0, 0] = _x1
-    _out_base_T_link1[..., 0, 2] = _x13
-    _out_base_T_link1[..., 1, 0] = _x13
-    _out_base_T_link1[..., 1, 2] = _x67
-    _out_base_T_link1[..., 2, 1] = 1.0
-    _out_base_T_link1[..., 2, 3] = d1
-    _out_base_T_link1[..., 3, 3] = 1.0
-    _out_base_T_link2 = numpy.zeros(batch + (4, 4))
-    _out_base_T_link2[..., 0, 0] = _x30
-    _out_base_T_link2[..., 0, 1] = -_x1*_x3
-    _out_base_T_link2[..., 0, 2] = _x13
-    _out_base_T_link2[..., 0, 3] = _x31
-    _out_base_T_link2[..., 1, 0] = _x45
-    _out_base_T_link2[..., 1, 1] = -_x13*_x3
-    _out_base_T_link2[..., 1, 2] = _x67
-    _out_base_T_link2[..., 1, 3] = _x46
-    _out_base_T_link2[..., 2, 0] = _x3
-    _out_base_T_link2[..., 2, 1] = _x6
     _out_base_T_link2[..., 2, 3] = _x63
-    _out_base_T_link2[..., 3, 3] = 1.0
-    _out_base_T_link3 = numpy.zeros(batch + (4, 4))
-    _out_base_T_link3[..., 0, 0] = _x32
-    _out_base_T_link3[..., 0, 1] = -_x1*_x7
-    _out_base_T_link3[..., 0, 2] = _x13
-    _out_base_T_link3[..., 0, 3] = _x34
-    _out_base_T_link3[..., 1, 0] = _x47
-    _out_base_T_link3[..., 1, 1] = -_x13*_x7
-    _out_base_T_link3[..., 1, 2] = _x67
-    _out_base_T_link3[..., 1, 3] = _x49
-    _out_base_T_link3[..., 2, 0] = _x7
-    _out_base_T_link3[..., 2, 1] = _x9
+    _x64 = _x61 + _x63
     _out_base_T_link3[..., 2, 3] = _x64
-    _out_base_T_link3[..., 3, 3] = 1.0
-    _out_base_T_link4 = numpy.zeros(batch + (4, 4))
-    _out_base_T_link4[..., 0, 0] = _x1*_x18
-    _out_base_T_link4[..., 0, 1] = _x13
-    _out_base_T_link4[..., 0, 2] = _x11
-    _out_base_T_link4[..., 0, 3] = _x35
-    _out_base_T_link4[..., 1, 0] = _x13*_x18
-    _out_base_T_link4[..., 1, 1] = _x67
-    _out_base_T_link4[..., 1, 2] = _x37
-    _out_base_T_link4[..., 1, 3] = _x50
-    _out_base_T_link4[..., 2, 0] = _x10
-    _out_base_T_link4[..., 2, 2] = _x68
     _out_base_T_link4[..., 2, 3] = _x64
-    _out_base_T_link4[..., 3, 3] = 1.0
-    _out_base_T_link5 = numpy.zeros(batch + (4, 4))
-    _out_base_T_link5[..., 0, 0] = _x21
-    _out_base_T_link5[..., 0, 1] = -_x11
-    _out_base_T_link5[..., 0, 2] = _x26
-    _out_base_T_link5[..., 0, 3] = _x27 + _x35
-    _out_base_T_link5[..., 1, 0] = _x38
-    _out_base_T_link5[..., 1, 1] = -_x37
-    _out_base_T_link5[..., 1, 2] = _x41
-    _out_base_T_link5[..., 1, 3] = _x42 + _x50
-    _out_base_T_link5[..., 2, 0] = _x52
-    _out_base_T_link5[..., 2, 1] = _x18
-    _out_base_T_link5[..., 2, 2] = _x56
+    del _x63
+    _x65 = _x60 + _x64
     _out_base_T_link5[..., 2, 3] = _x65
-    _out_base_T_link5[..., 3, 3] = 1.0
-    _out_base_T_link6 = numpy.zeros(batch + (4, 4))
-    _out_base_T_link6[..., 0, 0] = _x22
-    _out_base_T_link6[..., 0, 1] = _x23
-    _out_base_T_link6[..., 0, 2] = _x26
-    _out_base_T_link6[..., 0, 3] = _x36
-    _out_base_T_link6[..., 1, 0] = _x39
-    _out_base_T_link6[..., 1, 1] = _x40
-    _out_base_T_link6[..., 1, 2] = _x41
-    _out_base_T_link6[..., 1, 3] = _x51
-    _out_base_T_link6[..., 2, 0] = _x53
-    _out_base_T_link6[..., 2, 1] = _x54
-    _out_base_T_link6[..., 2, 2] = _x56
+    del _x64
+    _x66 = _x58 + _x65
+    _out_base_T_tcp[..., 2, 3] = _x66
     _out_base_T_link6[..., 2, 3] = _x66
-    _out_base_T_link6[..., 3, 3] = 1.0
-    _out_J = numpy.zeros(batch + (6, 6))
-    _out_J[..., 0, 0] = -_x51
-    _out_J[..., 0, 1] = -_x1*_x69
-    _out_J[..., 0, 2] = -_x1*_x71
-    _out_J[..., 0, 3] = -_x1*_x72
-    _out_J[..., 0, 4] = _x18*_x43 + _x37*_x72
-    _out_J[..., 1, 0] = _x36
-    _out_J[..., 1, 1] = -_x13*_x69
-    _out_J[..., 1, 2] = -_x13*_x71
-    _out_J[..., 1, 3] = -_x13*_x72
-    _out_J[..., 1, 4] = -(_x11*_x72 + _x18*_x28)
-    _out_J[..., 2, 1] = _x1*_x36 + _x13*_x51
-    _out_J[..., 2, 2] = _x1*(_x33 + _x73) + _x13*(_x48 + _x74)
-    _out_J[..., 2, 3] = _x1*_x73 + _x13*_x74
-    _out_J[..., 2, 4] = _x11*_x43 - _x28*_x37
-    _out_J[..., 3, 1] = _x13
-    _out_J[..., 3, 2] = _x13
-    _out_J[..., 3, 3] = _x13
-    _out_J[..., 3, 4] = _x11
-    _out_J[..., 3, 5] = _x26
+    del _x65, _x66
+    _x67 = -_x1
+    _out_base_T_link1[..., 1, 2] = _x67
+    _out_base_T_link2[..., 1, 2] = _x67
+    _out_base_T_link3[..., 1, 2] = _x67
+    _out_base_T_link4[..., 1, 1] = _x67
     _out_J[..., 4, 1] = _x67
     _out_J[..., 4, 2] = _x67
     _out_J[..., 4, 3] = _x67
-    _out_J[..., 4, 4] = _x37
-    _out_J[..., 4, 5] = _x41
-    _out_J[..., 5, 0] = 1.0
+    del _x67
+    _x68 = _x17 - _x16
+    _out_base_T_link4[..., 2, 2] = _x68
     _out_J[..., 5, 4] = _x68
-    _out_J[..., 5, 5] = _x56
+    del _x16, _x17, _x68
+    _x69 = _x58 + _x60 + _x61 + _x62
+    _out_J[..., 0, 1] = -_x1*_x69
+    _out_J[..., 1, 1] = -_x13*_x69
+    del _x58, _x60, _x61, _x62, _x69
+    _x70 = _x57 + _x59
+    del _x57, _x59
+    _x71 = -(_x70 - _x7*a3)
+    _out_J[..., 0, 2] = -_x1*_x71
+    _out_J[..., 1, 2] = -_x13*_x71
+    del _x7, _x71
+    _x72 = -_x70
+    _out_J[..., 0, 3] = -_x1*_x72
+    _out_J[..., 0, 4] = _x18*_x43 + _x37*_x72
+    _out_J[..., 1, 3] = -_x13*_x72
+    _out_J[..., 1, 4] = -(_x11*_x72 + _x18*_x28)
+    del _x11, _x18, _x37, _x70, _x72
+    _x73 = _x28 + _x29
+    del _x28, _x29
+    _x74 = _x43 + _x44
+    _out_J[..., 2, 2] = _x1*(_x33 + _x73) + _x13*(_x48 + _x74)
+    _out_J[..., 2, 3] = _x1*_x73 + _x13*_x74
+    del _x1, _x13, _x33, _x43, _x44, _x48, _x73, _x74
     return CombinedResult(_out_base_T_tcp, _out_base_T_link1, _out_base_T_link2, _out_base_T_link3, _out_base_T_link4, _out_base_T_link5, _out_base_T_link6, _out_J)

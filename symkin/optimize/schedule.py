@@ -7,7 +7,8 @@ outputs ask for them: the output entries are taken in order (outputs, then entri
 temporaries not yet computed are computed depth first, each after the ones it uses (a post-order walk of the
 expression DAG from the entry, the operands in their CSE order).  An entry's temporaries then sit together, just
 before it, and a backend that stores each entry as soon as its last temporary is computed
-(:func:`store_positions`: the C backend) keeps few values live at a time - the classic locality order of
+(:func:`store_positions`: the C and numpy backends; numpy also drops each temporary after its last use,
+:func:`last_uses`) keeps few values live at a time - the classic locality order of
 register allocation for straight-line code (Sethi and Ullman, "The Generation of Optimal Code for Arithmetic
 Expressions", J. ACM 17, 1970, for trees; for a DAG a heuristic).
 
@@ -55,23 +56,30 @@ def store_positions(function: OptimizedFunction) -> list[list[int]]:
             for output in function.outputs]
 
 
-def peak_live(function: OptimizedFunction) -> int:
-    """The most temporaries live at once - computed and used again later - when each output entry is stored as
-    soon as its last temporary is computed (:func:`store_positions`): the values a compiler must keep in registers
-    or spill."""
+def last_uses(function: OptimizedFunction) -> list[int]:
+    """For each temporary, the last temporary after which it is still needed: its last user among the temporaries,
+    or the last temporary before the store of an output entry that uses it (:func:`store_positions`); its own
+    position where nothing uses it.  After that temporary (and the stores that follow it) it is dead."""
     index = {symbol: k for k, (symbol, _) in enumerate(function.temporaries)}
-    last_use = list(range(len(function.temporaries)))
+    last = list(range(len(function.temporaries)))
     for user, (_, expr) in enumerate(function.temporaries):
         for s in expr.free_symbols:
             if s in index:
-                last_use[index[s]] = max(last_use[index[s]], user)
+                last[index[s]] = max(last[index[s]], user)
     for output, positions in zip(function.outputs, store_positions(function)):
         for entry, position in zip(output, positions):
             for s in entry.free_symbols:
                 if s in index:
-                    last_use[index[s]] = max(last_use[index[s]], position - 1)
+                    last[index[s]] = max(last[index[s]], position - 1)
+    return last
+
+
+def peak_live(function: OptimizedFunction) -> int:
+    """The most temporaries live at once - computed and used again later - when each output entry is stored as
+    soon as its last temporary is computed (:func:`store_positions`): the values a compiler must keep in registers
+    or spill, the arrays a batched backend holds."""
     changes = [0] * (len(function.temporaries) + 1)
-    for k, last in enumerate(last_use):
+    for k, last in enumerate(last_uses(function)):
         changes[k] += 1
         changes[last] -= 1
     live = peak = 0

