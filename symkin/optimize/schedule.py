@@ -26,6 +26,8 @@ sorts by name would be added in another order, and round otherwise.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 from symkin.expression_dag import post_order
 from symkin.ir.spec import OptimizedFunction
 
@@ -54,6 +56,37 @@ def store_positions(function: OptimizedFunction) -> list[list[int]]:
     index = {symbol: k for k, (symbol, _) in enumerate(function.temporaries)}
     return [[1 + max((index[s] for s in e.free_symbols if s in index), default=-1) for e in output]
             for output in function.outputs]
+
+
+class Step(NamedTuple):
+    """One statement of a straight-line program that stores its outputs early (:func:`steps`): ``kind`` is
+    "temporary" (temporary ``number``), "store" (entry ``entry`` of output ``number``) or "dead" (the temporaries
+    ``dead``, used for the last time by now)."""
+
+    kind: str
+    number: int = 0
+    entry: int = 0
+    dead: tuple[int, ...] = ()
+
+
+def steps(function: OptimizedFunction) -> list[Step]:
+    """The temporaries in order, each output entry stored right after the last temporary it uses
+    (:func:`store_positions`; entries of inputs and constants alone first), and after each temporary with its
+    stores the temporaries dead from there on (:func:`last_uses`): what every backend that stores early emits."""
+    stores: list[list[Step]] = [[] for _ in range(len(function.temporaries) + 1)]
+    for output, positions in enumerate(store_positions(function)):
+        for entry, position in enumerate(positions):
+            stores[position].append(Step("store", output, entry))
+    dead: list[list[int]] = [[] for _ in function.temporaries]
+    for k, last in enumerate(last_uses(function)):
+        dead[last].append(k)
+    program = list(stores[0])
+    for k, (after, names) in enumerate(zip(stores[1:], dead)):
+        program.append(Step("temporary", k))
+        program.extend(after)
+        if names:
+            program.append(Step("dead", dead=tuple(names)))
+    return program
 
 
 def last_uses(function: OptimizedFunction) -> list[int]:

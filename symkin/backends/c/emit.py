@@ -48,7 +48,7 @@ from symkin.backends.naming import c_symbol
 from symkin.backends.templating import provenance, render
 from symkin.ir.bundle import ModelCode
 from symkin.ir.spec import FunctionSpec, OptimizedFunction
-from symkin.optimize.schedule import store_positions
+from symkin.optimize.schedule import steps
 
 HEADER_TEMPLATE = "c/header.h.j2"
 SOURCE_TEMPLATE = "c/source.c.j2"
@@ -150,16 +150,16 @@ def _outputs(spec: FunctionSpec, f: OptimizedFunction, text: Callable[[sympy.Exp
 
 def _statements(f: OptimizedFunction, outputs: list[dict], text: Callable[[sympy.Expr], str]) -> list[dict]:
     """The temporaries with each output entry's store right after the last temporary it uses
-    (:func:`symkin.optimize.schedule.store_positions`): in the temporaries' demand order a value stored is no
-    longer live, so fewer are held in registers or spilled (:mod:`symkin.optimize.schedule`)."""
-    stores: list[list[dict]] = [[] for _ in range(len(f.temporaries) + 1)]
-    for output, positions in zip(outputs, store_positions(f)):
-        for assignment, position in zip(output["assignments"], positions):
-            stores[position].append({"store": True, "output": output["name"], **assignment})
-    statements = list(stores[0])
-    for (symbol, value), after in zip(f.temporaries, stores[1:]):
-        statements.append({"store": False, "name": str(symbol), "code": text(value)})
-        statements.extend(after)
+    (:func:`symkin.optimize.schedule.steps`): in the temporaries' demand order a value stored is no longer live, so
+    fewer are held in registers or spilled (:mod:`symkin.optimize.schedule`)."""
+    statements = []
+    for step in steps(f):
+        if step.kind == "temporary":
+            symbol, value = f.temporaries[step.number]
+            statements.append({"store": False, "name": str(symbol), "code": text(value)})
+        elif step.kind == "store":
+            output = outputs[step.number]
+            statements.append({"store": True, "output": output["name"], **output["assignments"][step.entry]})
     return statements
 
 

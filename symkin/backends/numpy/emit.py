@@ -10,7 +10,7 @@ from symkin.backends.numpy.printer import BatchNumPyPrinter
 from symkin.backends.templating import provenance, render
 from symkin.ir.bundle import ModelCode
 from symkin.ir.spec import InputSpec, OptimizedFunction
-from symkin.optimize.schedule import last_uses, store_positions
+from symkin.optimize.schedule import steps
 
 TEMPLATE = "numpy/module.py.j2"
 #: Configurations per chunk of large batches (temporaries of a 6-DoF chunk fit in L2).
@@ -34,30 +34,27 @@ def _input_doc(i: InputSpec) -> list[str]:
 
 def _statements(f: OptimizedFunction, temporaries: list[dict], outputs: list[dict]) -> list[dict]:
     """The temporaries, each output entry stored right after the last temporary it uses and each temporary deleted
-    after its last use (:mod:`symkin.optimize.schedule`): a batch then holds few arrays at once (the UR10e's
+    after its last use (:func:`symkin.optimize.schedule.steps`): a batch then holds few arrays at once (the UR10e's
     inverse-dynamics derivatives: at most 235 of their 686 temporaries instead of all; 1.8x faster over a chunk of
     4 096 configurations), which keeps a chunk's arrays in the caches.  Bit for bit the same values."""
-    stores: list[list[dict]] = [[] for _ in range(len(temporaries) + 1)]
-    for output, positions in zip(outputs, store_positions(f)):
-        assigned = iter(output["assignments"])
-        for entry, position in zip(output["entries"], positions):
-            if entry is not None:
-                stores[position].append({"kind": "store", "local": output["local"], **next(assigned)})
-    dead: list[list[str]] = [[] for _ in temporaries]
-    for temporary, last in zip(temporaries, last_uses(f)):
-        dead[last].append(temporary["name"])
-    statements = list(stores[0])
-    for temporary, after, names in zip(temporaries, stores[1:], dead):
-        statements.append({"kind": "temporary", **temporary})
-        statements.extend(after)
-        if names:
-            statements.append({"kind": "delete", "names": ", ".join(names)})
+    statements = []
+    for step in steps(f):
+        if step.kind == "temporary":
+            statements.append({"kind": "temporary", **temporaries[step.number]})
+        elif step.kind == "dead":
+            statements.append({"kind": "delete", "names": ", ".join(temporaries[k]["name"] for k in step.dead)})
+        else:
+            output = outputs[step.number]
+            code = output["entries"][step.entry]
+            if code is not None:                                    # an identically zero entry stays zeros' 0
+                statements.append({"kind": "store", "local": output["local"], "index": output["indices"][step.entry],
+                                   "code": code})
     return statements
 
 
 def function_context(f: OptimizedFunction, printer: BatchNumPyPrinter) -> dict[str, Any]:
     """What the module templates (numpy, JAX) say of one function: signature, docstring, inputs, temporaries,
-    outputs (entry by entry: assignments of the non-zero ones, and every entry row-major), and numpy's statements
+    outputs (every entry row-major, printed, and its index), and numpy's statements
     (:func:`_statements`), printed by ``printer``."""
     spec = f.spec
     vectors = spec.vector_inputs
@@ -72,8 +69,7 @@ def function_context(f: OptimizedFunction, printer: BatchNumPyPrinter) -> dict[s
             "local": f"_out_{out.name}",
             "shape": repr(tuple(out.shape)),
             "entries": printed,  # the JAX template stacks them
-            "assignments": [{"index": ", ".join(["..."] + [str(k) for k in index]), "code": code}
-                            for index, code in zip(element_indices(out.shape), printed) if code is not None],
+            "indices": [", ".join(["..."] + [str(k) for k in index]) for index in element_indices(out.shape)],
         })
     returns = [line for out in spec.outputs
                for line in _wrap(f"{out.name}: shape {shape_text(out.shape)}; {out.doc}"
