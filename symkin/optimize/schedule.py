@@ -15,9 +15,9 @@ Expressions", J. ACM 17, 1970, for trees; for a DAG a heuristic).
 The reverse-mode derivative program of the UR10e's dynamics (``inverse_dynamics_derivatives``, every parameter
 folded, 3 092 operations) needs its forward pass's values in the backward sweeps: 321 values live at the peak in
 CSE's order, 211 in demand order with the stores interleaved.  GCC 12 (-O3 -march=native) then refers to the stack
-1 734 times in the single call instead of 2 157 (spills and reloads), and the call takes 536 ns instead of 583, the
-batch 164 ns per configuration instead of 180
-(``benchmarks/bench_eval.py``).  The order is a heuristic, kept where it holds fewer values live than CSE's
+1 734 times in the single call instead of 2 157 (spills and reloads; counted once in its ``gcc -S`` output), and the
+call takes 536 ns instead of 583, the batch 164 ns per configuration instead of 180 (``benchmarks/bench_eval.py``,
+C columns).  The order is a heuristic, kept where it holds fewer values live than CSE's
 (:func:`peak_live`; the UR10e's forward-dynamics derivatives keep CSE's).  The arithmetic is the same operations on
 the same operands in the same order, so every backend's results are bit for bit those of CSE's order.  So the
 temporaries keep CSE's names, which no longer follow the evaluation order: renamed, the terms of a sum that sympy
@@ -73,12 +73,13 @@ def steps(function: OptimizedFunction) -> list[Step]:
     """The temporaries in order, each output entry stored right after the last temporary it uses
     (:func:`store_positions`; entries of inputs and constants alone first), and after each temporary with its
     stores the temporaries dead from there on (:func:`last_uses`): what every backend that stores early emits."""
+    positions = store_positions(function)
     stores: list[list[Step]] = [[] for _ in range(len(function.temporaries) + 1)]
-    for output, positions in enumerate(store_positions(function)):
-        for entry, position in enumerate(positions):
+    for output, entries in enumerate(positions):
+        for entry, position in enumerate(entries):
             stores[position].append(Step("store", output, entry))
     dead: list[list[int]] = [[] for _ in function.temporaries]
-    for k, last in enumerate(last_uses(function)):
+    for k, last in enumerate(last_uses(function, positions)):
         dead[last].append(k)
     program = list(stores[0])
     for k, (after, names) in enumerate(zip(stores[1:], dead)):
@@ -89,18 +90,19 @@ def steps(function: OptimizedFunction) -> list[Step]:
     return program
 
 
-def last_uses(function: OptimizedFunction) -> list[int]:
+def last_uses(function: OptimizedFunction, positions: list[list[int]] | None = None) -> list[int]:
     """For each temporary, the last temporary after which it is still needed: its last user among the temporaries,
-    or the last temporary before the store of an output entry that uses it (:func:`store_positions`); its own
-    position where nothing uses it.  After that temporary (and the stores that follow it) it is dead."""
+    or the last temporary before the store of an output entry that uses it (``positions``, by default
+    :func:`store_positions`); its own position where nothing uses it.  After that temporary (and the stores that
+    follow it) it is dead."""
     index = {symbol: k for k, (symbol, _) in enumerate(function.temporaries)}
     last = list(range(len(function.temporaries)))
     for user, (_, expr) in enumerate(function.temporaries):
         for s in expr.free_symbols:
             if s in index:
                 last[index[s]] = max(last[index[s]], user)
-    for output, positions in zip(function.outputs, store_positions(function)):
-        for entry, position in zip(output, positions):
+    for output, entries in zip(function.outputs, store_positions(function) if positions is None else positions):
+        for entry, position in zip(output, entries):
             for s in entry.free_symbols:
                 if s in index:
                     last[index[s]] = max(last[index[s]], position - 1)
