@@ -16,6 +16,11 @@ from pathlib import Path
 # (symkin.cli.BLAS_THREADS): the workers take the cores; set before numpy is first imported, for a bare pytest run.
 for _variable in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_variable, "1")
+# XLA compiles the JAX programs with LLVM's optimizations off (set before JAX is first imported, here and in the
+# commands the tests run): the same HLO, fused by XLA's own passes, computed by slower machine code.  The tests check
+# values, never speed, and a third of the JAX tests' time was LLVM optimizing code that runs once (issue 66's module:
+# 120 s -> 100 s standalone, 69 s -> 48 s of it compiling).  A user's XLA_FLAGS is kept.
+os.environ.setdefault("XLA_FLAGS", "--xla_backend_optimization_level=0")
 
 import numpy as np  # after the BLAS threads are set
 import pytest
@@ -54,11 +59,15 @@ EXAMPLE_MODELS = sorted(p.stem for p in MODELS_DIR.glob("*.yaml"))
 #: The backends the example models' scenes emit into generated/ (every one of them emits these).
 SCENE_BACKENDS = set.intersection(*(set(json.loads(path.read_text())["backends"])
                                     for path in GENERATED_DIR.glob("*/manifest.json")))
+#: Backends whose generated code the suite tests in a module of its own, not beside the others: the JAX modules in
+#: generated/ (every scene emits them) are checked by tests/backends/test_jax_backend.py, which runs most of them op by
+#: op - XLA compiling every function of every example model, as the shared tests would, takes longer than the suite
+#: has (the UR10e's scene about half a minute on a CPU: benchmarks/bench_jax.py --compile).
+OWN_MODULE_BACKENDS = ("jax",)
 #: The backends whose code Python loads, from the one registry: a backend added there and to the scenes is tested
-#: with the others on generated/.  The JAX backend is in no scene yet (its compiles take too long for the suite:
-#: issue 66), so tests/backends/test_jax_backend.py derives its own.
+#: with the others on generated/ (but :data:`OWN_MODULE_BACKENDS`).
 BACKENDS = tuple(name for name, backend in REGISTERED_BACKENDS.items()
-                 if backend.loader is not None and name in SCENE_BACKENDS)
+                 if backend.loader is not None and name in SCENE_BACKENDS and name not in OWN_MODULE_BACKENDS)
 
 
 def model_group(name: str):

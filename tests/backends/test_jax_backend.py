@@ -6,8 +6,8 @@ References: the numpy module of the same model and request at random states, to 
 of the generated forward kinematics (the derivative of the chain's transform against the geometric Jacobian
 derived symbolically: two programs); vmap against the batch.  The models: every example model's scene, every
 function - the planar 2R's compiled by XLA (jit), the others' run op by op (jax.disable_jit: the same traced code
-without XLA's compile, which takes about half a minute for the UR10e's scene alone on a CPU) - derived here with the
-JAX backend from the shared derivations.
+without XLA's compile, which takes about half a minute for the UR10e's scene alone on a CPU) - as generated/ holds
+them (every scene emits the JAX module; tests/backends/test_golden.py checks its bytes).
 """
 
 from __future__ import annotations
@@ -42,19 +42,9 @@ UR10E_FUNCTIONS = ("fk", "jacobian", "mass_matrix", "coriolis_vector", "gravity_
 
 
 @pytest.fixture(scope="module")
-def jax_directory(models, derivations, tmp_path_factory):
-    """jax_directory(name): the example model's scene derived with the JAX backend (once per module)."""
-    cache = {}
-
-    def get(name: str):
-        if name not in cache:
-            model = models[name]
-            request = pipeline.resolve_request(model, None, "jax")
-            generation = pipeline.generate(model, request, derivation=derivations[name])
-            cache[name] = pipeline.write(generation, tmp_path_factory.mktemp(name))
-        return cache[name]
-
-    return get
+def jax_directory(generated_dir):
+    """jax_directory(name): the example model's generated directory, whose scene emits the JAX module too."""
+    return lambda name: generated_dir / name
 
 
 @pytest.fixture(scope="module")

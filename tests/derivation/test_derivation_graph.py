@@ -55,7 +55,7 @@ def test_manifest_describes_every_function(generated_dir):
     assert fk["outputs"][0]["name"] == "base_T_tcp"
     assert fk["outputs"][0]["shape"] == [4, 4]
     assert fk["op_counts"]["cse"] < fk["op_counts"]["derived"]
-    assert fk["backends"] == ["c", "casadi", "js", "numpy"]
+    assert fk["backends"] == ["c", "casadi", "jax", "js", "numpy"]
     assert manifest["backends"]["numpy"]["files"] == ["ur10e.py"]
     assert manifest["backends"]["c"]["files"] == ["ur10e.c", "ur10e.h"]
     assert manifest["backends"]["js"]["files"] == ["ur10e.js"]
