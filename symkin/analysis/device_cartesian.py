@@ -27,8 +27,16 @@ orientation has the twist Jacobian J = R (J^-1)^-1 (R = diag(I, E),
 J^-1 (S R)^-1 - one constant matrix for the batch, so no inverse per point (the host inverts,
 :func:`symkin.numerics.conditioning.from_inverse`: the same index up to rounding, the numerical-rank rule applied to
 the inverse's singular values). Declared passive-joint limits (decided on the loop closure by a Gauss-Newton iteration
-on the host) and the serial arms' closed forms (:class:`symkin.analysis.inverse.ClosedFormInverse`) take the host
-integrand. The singular values are one-sided Jacobi's (:mod:`symkin.numerics.jacobi_svd`), so det J^-1 is the one
+on the host) take the host integrand.
+
+A serial arm's closed form (:class:`symkin.analysis.inverse.ClosedFormInverse`) runs on the device where its solver
+traces in jax.numpy (:data:`TRACEABLE_SOLVERS`: the planar 2R of the seed's Fig. 8.19, both elbow branches by the
+half-angle law of cosines): the host's rules point by point - a branch is valid where it exists and the generated fk
+reproduces the target within :data:`symkin.ik.closed_form.VALID_TOLERANCE` of max(1, |target|), each point takes its
+first valid branch within the limits (angles wrapped into them) and the stops, and 1/kappa is that of the
+(homogenized) task Jacobian J(q) there.
+
+The singular values are one-sided Jacobi's (:mod:`symkin.numerics.jacobi_svd`), so det J^-1 is the one
 LAPACK kernel of the program (jaxlib's CPU LAPACK kernels deadlock when run side by side:
 :mod:`symkin.numerics.ordered_linalg`).
 """
@@ -44,6 +52,9 @@ import numpy as np
 from symkin import mechanism
 from symkin.analysis.device_integrand import (extreme_singular_values, loaded_with_jax, on_gathered_rows, reduced,
                                              row_scale, stop_arguments)
+from symkin.analysis.inverse import ClosedFormInverse
+from symkin.ik.closed_form import UNREACHABLE, VALID_TOLERANCE
+from symkin.ik.planar import Planar2R
 from symkin.integration.integrand import Integrand
 from symkin.mechanism import Limits, stops
 from symkin.mechanism.feasibility import InverseKinematics
@@ -52,14 +63,28 @@ from symkin.mechanism.reach import (POSITION_ROUND_TRIP_TOLERANCE, ConstantOrien
 from symkin.runtime.info import GeneratedModel
 
 _EPS = float(np.finfo(np.float64).eps)
+#: The serial closed forms whose ``candidates`` take an array module (jax.numpy traces them).
+TRACEABLE_SOLVERS = (Planar2R,)
 
 
 def cartesian_on_device(model: GeneratedModel, inverse: InverseKinematics) -> bool:
     """Whether the Cartesian integrand of ``model`` with ``inverse`` can run fused on JAX's device: a model loaded with
     the JAX backend whose inverse is its generated closed form (a translational platform's, or a pose platform's held
-    at a constant orientation) without declared passive-joint limits."""
+    at a constant orientation) without declared passive-joint limits, or a serial arm's closed form that traces in
+    jax.numpy (:func:`traced_closed_form_on_device`)."""
+    if isinstance(inverse, ClosedFormInverse):
+        return traced_closed_form_on_device(model, inverse)
     return (loaded_with_jax(model) and isinstance(inverse, (WorkingModeInverse, ConstantOrientationInverse))
             and inverse.passive_limits is None)
+
+
+def traced_closed_form_on_device(model: GeneratedModel, inverse: ClosedFormInverse) -> bool:
+    """Whether a serial arm's closed-form inverse runs on JAX's device: the model is loaded with the JAX backend, the
+    solver's candidates take an array module (:class:`symkin.ik.planar.Planar2R`: the half-angle law of cosines and
+    subproblem 1 in jax.numpy) and its residual is the generated ``fk``'s TCP position (no generated
+    ``task_coordinates``)."""
+    return (loaded_with_jax(model) and isinstance(inverse.solver.solver, TRACEABLE_SOLVERS)
+            and inverse.solver.kind == "task" and "task_coordinates" not in model.functions)
 
 
 class _Functions(NamedTuple):
@@ -130,6 +155,72 @@ def _compiled(functions: _Functions, with_index: bool, threshold: float, wraps: 
             jax.jit(lambda *arguments: reduced(*values(*arguments))))
 
 
+@functools.lru_cache(maxsize=32)
+def _compiled_traced_closed_form(solver: Any, order: tuple[int, ...], rows: tuple[int, ...], fk: Callable[..., Any],
+                                 jacobian: Callable[..., Any], with_index: bool, threshold: float) -> tuple[Any, Any]:
+    """(values, reduce) of a serial arm's closed form (:func:`traced_closed_form_on_device`), jitted once per solver,
+    generated functions and options: :meth:`symkin.ik.closed_form.ClosedFormIK.solve` without shifts (the branches
+    valid where they exist and fk reproduces the target within VALID_TOLERANCE of max(1, |target|)), then
+    :func:`symkin.mechanism.feasibility.feasible_configurations` (each point's first branch within the limits and the
+    stops, its angles wrapped into them) and 1/kappa of the (scaled) Jacobian there."""
+    import jax
+    import jax.numpy as jnp
+
+    def values(points: Any, constants: dict[str, Any], parameters: dict[str, Any]) -> tuple[Any, Any]:
+        target = points[:, list(order)]
+        q, flags = solver.candidates(target, xp=jnp)                       # (N, B, n), (N, B)
+        count, branches, n = q.shape
+        exists = jnp.all(jnp.isfinite(q), axis=-1) & ((flags & int(UNREACHABLE)) == 0)
+        at = jnp.where(jnp.isfinite(q), q, 0.0).reshape(-1, n)
+        reached = fk(at, **parameters["fk"])[:, list(rows), 3].reshape(count, branches, len(rows))
+        error = jnp.linalg.norm(target[:, None, :] - reached, axis=-1)
+        scale = jnp.maximum(1.0, jnp.linalg.norm(target, axis=-1))[:, None]
+        valid = exists & (error <= VALID_TOLERANCE * scale)
+        wrapped, inside = within_limits(q, constants["limits"], constants["revolute"], xp=jnp)
+        row_stops, offsets, lower, upper = constants["stops"]
+        feasible = valid & inside & stops.within_stops(wrapped, row_stops, offsets, lower, upper, xp=jnp)
+        first = jnp.argmax(feasible, axis=1)
+        chosen = jnp.take_along_axis(wrapped, first[:, None, None], axis=1)[:, 0]
+        reachable = jnp.any(feasible, axis=1)
+        indicator = reachable.astype(jnp.float64)
+        if not with_index:
+            return indicator[:, None], indicator
+        J = jacobian(jnp.where(reachable[:, None], chosen, 0.0), **parameters["jacobian"]) * constants["scale"][:, None]
+        regular = jnp.all(jnp.isfinite(J), axis=(-2, -1))
+        largest, smallest = extreme_singular_values(jnp.where(regular[:, None, None], J, 0.0), threshold)
+        index = jnp.where(reachable & regular & (largest > 0), smallest / jnp.where(largest > 0, largest, 1.0), 0.0)
+        return jnp.stack([index, indicator], axis=-1), index
+
+    return (jax.jit(lambda *arguments: values(*arguments)[0]),
+            jax.jit(lambda *arguments: reduced(*values(*arguments))))
+
+
+def _traced_closed_form_integrand(model: GeneratedModel, inverse: ClosedFormInverse, lower: np.ndarray,
+                                  upper: np.ndarray, joint_box: np.ndarray, scale: np.ndarray,
+                                  with_index: bool) -> Integrand:
+    """:func:`device_cartesian_integrand` of a serial arm's closed form (:func:`traced_closed_form_on_device`)."""
+    import jax.numpy as jnp
+
+    m, n = len(mechanism.task_space(model)), joint_box.shape[0]
+    rows = tuple(mechanism.POSITION_COMPONENTS.index(c) for c in mechanism.task_space(model))
+    (fk, fk_values), (jacobian, jacobian_values) = model.unbound("fk"), model.unbound("jacobian")
+    constants = {"limits": jnp.asarray(joint_box), "revolute": jnp.asarray(mechanism.revolute_mask(model)),
+                 "stops": stop_arguments(model), "scale": jnp.asarray(scale)}
+    parameters = {"fk": fk_values, "jacobian": jacobian_values}
+    solver: Any = inverse.solver.solver  # a TRACEABLE_SOLVERS instance: hashable by identity (the compile cache's key)
+    evaluate, reduce = _compiled_traced_closed_form(solver, inverse.order, rows, fk, jacobian, with_index,
+                                                    max(m, n) * _EPS)
+
+    def moments(points: np.ndarray) -> tuple[Any, Any]:
+        mean, scatter, _, _ = reduce(jnp.asarray(points), constants, parameters)
+        return mean, scatter
+
+    axes = tuple("xyz"[a] for a in mechanism.position_axes(model))
+    components = ("index dW", "dW") if with_index else ("dW",)
+    return Integrand(lower, upper, lambda points: np.asarray(evaluate(jnp.asarray(points), constants, parameters)),
+                     components, axes, indicator=len(components) - 1, moments=moments)
+
+
 def device_cartesian_integrand(model: GeneratedModel, inverse: InverseKinematics, box: tuple[np.ndarray, np.ndarray],
                                *, with_index: bool = True, limits: Limits | None = None,
                                length: float | str | None = None) -> Integrand:
@@ -147,6 +238,8 @@ def device_cartesian_integrand(model: GeneratedModel, inverse: InverseKinematics
     m, n = len(mechanism.task_space(model)), joint_box.shape[0]
     revolute = mechanism.revolute_mask(model)
     scale = row_scale(model, joint_box, length) if with_index else np.ones(m)
+    if isinstance(inverse, ClosedFormInverse):
+        return _traced_closed_form_integrand(model, inverse, lower, upper, joint_box, scale, with_index)
     constants: dict[str, Any] = {
         "orientation": None, "unscale": None, "sign": None, "tolerance": None,
         "limits": jnp.asarray(joint_box), "revolute": jnp.asarray(revolute), "stops": stop_arguments(model),

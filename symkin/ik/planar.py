@@ -24,6 +24,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
+from typing import Any
 
 import numpy as np
 
@@ -31,7 +32,7 @@ from symkin.ik.closed_form import SINGULARITY_EPSILON, STRUCTURE_TOLERANCE, Bran
 from symkin.ik.problem import POSITION_INDEX, ModelKinematics
 from symkin.ik.rotations import cross, rotate
 from symkin.ik.screws import HomeScrews
-from symkin.ik.subproblems import exterior_angle, perpendicular, signed_angle
+from symkin.ik.subproblems import dot, exterior_angle, perpendicular, signed_angle
 
 
 @dataclass(frozen=True)
@@ -76,22 +77,23 @@ class ParallelPair:
         """The axes are distinct and the point is off the second axis (otherwise no triangle)."""
         return bool(self.a > STRUCTURE_TOLERANCE * scale and self.b > STRUCTURE_TOLERANCE * scale)
 
-    def solve(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(theta1, theta2, flags), each (..., 2) for the branches +beta, -beta; x is (..., 3)."""
+    def solve(self, x: np.ndarray, xp: Any = np) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(theta1, theta2, flags), each (..., 2) for the branches +beta, -beta; x is (..., 3); ``xp``: the array
+        module (numpy, or jax.numpy on a JAX device with x traced)."""
         h, a, b = self.h, self.a, self.b
         x_vec = perpendicular(h, x - self.c1)
-        d = np.linalg.norm(x_vec, axis=-1)
-        beta = exterior_angle(a, b, d)
-        flags = np.where(beta.unreachable, int(BranchFlag.UNREACHABLE_ELBOW), 0)
-        flags |= np.where(beta.clamped, int(BranchFlag.CLAMPED), 0)
+        d = xp.linalg.norm(x_vec, axis=-1)
+        beta = exterior_angle(a, b, d, xp)
+        flags = xp.where(beta.unreachable, int(BranchFlag.UNREACHABLE_ELBOW), 0)
+        flags |= xp.where(beta.clamped, int(BranchFlag.CLAMPED), 0)
         near = (beta.plus <= SINGULARITY_EPSILON) | (np.pi - beta.plus <= SINGULARITY_EPSILON)
-        flags |= np.where(near, int(BranchFlag.ELBOW), 0)
-        flags |= np.where(d <= SINGULARITY_EPSILON * (a + b), int(BranchFlag.SHOULDER), 0)
+        flags |= xp.where(near, int(BranchFlag.ELBOW), 0)
+        flags |= xp.where(d <= SINGULARITY_EPSILON * (a + b), int(BranchFlag.SHOULDER), 0)
         # both branches at once: the last axis is (+beta, -beta)
-        turn = np.stack([beta.plus, beta.minus], -1) - self.phi0
-        y = self.a_vec + rotate(h, turn, self.b0)
-        theta1 = self.s1 * signed_angle(h, y, x_vec[..., None, :])
-        return theta1, self.s2 * turn, np.stack([flags, flags], -1)
+        turn = xp.stack([beta.plus, beta.minus], -1) - self.phi0
+        y = self.a_vec + rotate(h, turn, self.b0, xp)
+        theta1 = self.s1 * signed_angle(h, y, x_vec[..., None, :], xp)
+        return theta1, self.s2 * turn, xp.stack([flags, flags], -1)
 
 
 class Planar2R:
@@ -106,15 +108,18 @@ class Planar2R:
         self.components = components
         self.home_point = home_point
 
-    def candidates(self, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        x = np.array(np.broadcast_to(self.home_point, target.shape[:-1] + (3,)))
-        x[..., self.components] = target
-        theta1, theta2, flags = self.pair.solve(x)
+    def candidates(self, target: np.ndarray, xp: Any = np) -> tuple[np.ndarray, np.ndarray]:
+        """(q (..., 2 branches, 2), flags (..., 2)) for targets (..., m) in the task space's components; ``xp``: the
+        array module (numpy, or jax.numpy on a JAX device with the targets traced)."""
+        # the point: the target's components, the home point's along the axes the task space leaves out
+        x = xp.stack([target[..., self.components.index(k)] if k in self.components
+                      else xp.full(target.shape[:-1], self.home_point[k]) for k in range(3)], axis=-1)
+        theta1, theta2, flags = self.pair.solve(x, xp)
         # a target off the plane of motion (when the task space has all of x, y, z) is unreachable
-        off_plane = np.abs(np.dot(x - self.home_point, self.pair.h)) > SINGULARITY_EPSILON * max(
+        off_plane = xp.abs(dot(x - self.home_point, self.pair.h)) > SINGULARITY_EPSILON * max(
             1.0, float(np.linalg.norm(self.home_point)))
-        flags = flags | np.where(off_plane, int(BranchFlag.UNREACHABLE_ELBOW), 0)[..., None]
-        return np.stack([theta1, theta2], -1), flags
+        flags = flags | xp.where(off_plane, int(BranchFlag.UNREACHABLE_ELBOW), 0)[..., None]
+        return xp.stack([theta1, theta2], -1), flags
 
 
 @register

@@ -1,4 +1,5 @@
-"""Vectorized rotation helpers for inverse kinematics (numpy only, any leading batch shape).
+"""Vectorized rotation helpers for inverse kinematics (numpy, any leading batch shape; :func:`cross` and :func:`rotate`
+also in jax.numpy, for the closed forms a JAX device traces: :mod:`symkin.analysis.device_cartesian`).
 
 Angles follow the right-hand rule; vectors are arrays of shape (..., 3), rotation matrices
 (..., 3, 3) and homogeneous transforms (..., 4, 4).
@@ -6,14 +7,16 @@ Angles follow the right-hand rule; vectors are arrays of shape (..., 3), rotatio
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 
-def cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+def cross(u: np.ndarray, v: np.ndarray, xp: Any = np) -> np.ndarray:
     """u x v over the last axis (numpy.cross without its per-call overhead, which dominates
-    for the single targets of a control loop)."""
-    u, v = np.asarray(u), np.asarray(v)
-    return np.stack([u[..., 1] * v[..., 2] - u[..., 2] * v[..., 1],
+    for the single targets of a control loop), in the array module ``xp`` (numpy, or jax.numpy)."""
+    u, v = xp.asarray(u), xp.asarray(v)
+    return xp.stack([u[..., 1] * v[..., 2] - u[..., 2] * v[..., 1],
                      u[..., 2] * v[..., 0] - u[..., 0] * v[..., 2],
                      u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]], axis=-1)
 
@@ -25,13 +28,13 @@ def vee(skew: np.ndarray) -> np.ndarray:
                            skew[..., 1, 0] - skew[..., 0, 1]], axis=-1)
 
 
-def rotate(axis: np.ndarray, angle: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """Rotate ``v`` about the unit ``axis`` (through the origin) by ``angle`` (Rodrigues):
+def rotate(axis: np.ndarray, angle: np.ndarray, v: np.ndarray, xp: Any = np) -> np.ndarray:
+    """Rotate ``v`` about the unit ``axis`` (through the origin) by ``angle`` (Rodrigues), in the array module ``xp``:
     R v = v cos(t) + (h x v) sin(t) + h (h . v)(1 - cos(t))."""
-    angle = np.asarray(angle)[..., None]
-    c, s = np.cos(angle), np.sin(angle)
+    angle = xp.asarray(angle)[..., None]
+    c, s = xp.cos(angle), xp.sin(angle)
     dot = (axis * v).sum(-1, keepdims=True)
-    return v * c + cross(axis, v) * s + axis * dot * (1.0 - c)
+    return v * c + cross(axis, v, xp) * s + axis * dot * (1.0 - c)
 
 
 def rotation_matrix(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:

@@ -27,6 +27,7 @@ unreachable, and the result is NaN with the flag ``unreachable`` - never a silen
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -77,21 +78,21 @@ def perpendicular(h: np.ndarray, v: np.ndarray) -> np.ndarray:
     return v - dot(h, v)[..., None] * h
 
 
-def signed_angle(h: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+def signed_angle(h: np.ndarray, u: np.ndarray, v: np.ndarray, xp: Any = np) -> np.ndarray:
     """Subproblem 1: the angle theta with rot(h, theta) u parallel to v in the plane normal to h,
 
     theta = atan2(h . (u x v), u . v)  (only the components of u, v normal to h matter).
     Returns 0 where u or v has no such component (the subproblem is degenerate there).
     """
-    return np.arctan2(dot(h, cross(u, v)), dot(perpendicular(h, u), perpendicular(h, v)))
+    return xp.arctan2(dot(h, cross(u, v, xp)), dot(perpendicular(h, u), perpendicular(h, v)))
 
 
-def _nonnegative(factor: np.ndarray, scale: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _nonnegative(factor: np.ndarray, scale: np.ndarray, xp: Any = np) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(factor clamped at 0, clamped mask, unreachable mask) for a quantity that must be >= 0."""
     negative = factor < 0.0
     unreachable = factor < -REACH_SLACK * scale
     clamped = negative & ~unreachable
-    return np.where(negative, 0.0, factor), clamped, unreachable
+    return xp.where(negative, 0.0, factor), clamped, unreachable
 
 
 def sinusoid(a: np.ndarray, b: np.ndarray, c: np.ndarray, root: np.ndarray | None = None) -> Roots:
@@ -117,19 +118,19 @@ def sinusoid(a: np.ndarray, b: np.ndarray, c: np.ndarray, root: np.ndarray | Non
     return Roots(plus, minus, root, clamped, unreachable)
 
 
-def exterior_angle(a: float | np.ndarray, b: float | np.ndarray, d: np.ndarray) -> Roots:
+def exterior_angle(a: float | np.ndarray, b: float | np.ndarray, d: np.ndarray, xp: Any = np) -> Roots:
     """Subproblem 3 in the plane: the turn beta at the joint between links of lengths a and b
     that puts the far end at distance d from the first joint (beta = 0: stretched).
 
     beta = 2 atan2(sqrt((a + b - d)(a + b + d)), sqrt((d - a + b)(d + a - b))), the
     half-angle form of the law of cosines cos(beta) = (d^2 - a^2 - b^2) / (2 a b).
-    ``plus`` is +beta, ``minus`` is -beta (the two elbow branches).
+    ``plus`` is +beta, ``minus`` is -beta (the two elbow branches); ``xp``: the array module (numpy, or jax.numpy).
     """
-    a, b, d = (np.asarray(x, dtype=float) for x in (a, b, d))  # broadcast by the arithmetic below
+    a, b, d = (xp.asarray(x, dtype=float) for x in (a, b, d))  # broadcast by the arithmetic below
     scale = a + b + d
-    outer, clamped_out, unreachable_out = _nonnegative((a + b) - d, scale)
-    inner, clamped_in, unreachable_in = _nonnegative(d - np.abs(a - b), scale)
-    beta = 2.0 * np.arctan2(np.sqrt(outer * (a + b + d)), np.sqrt(inner * (d + np.abs(a - b))))
+    outer, clamped_out, unreachable_out = _nonnegative((a + b) - d, scale, xp)
+    inner, clamped_in, unreachable_in = _nonnegative(d - xp.abs(a - b), scale, xp)
+    beta = 2.0 * xp.arctan2(xp.sqrt(outer * (a + b + d)), xp.sqrt(inner * (d + xp.abs(a - b))))
     unreachable = unreachable_out | unreachable_in
-    beta = np.where(unreachable, np.nan, beta)
-    return Roots(beta, -beta, np.sqrt(outer * (a + b + d)), clamped_out | clamped_in, unreachable)
+    beta = xp.where(unreachable, np.nan, beta)
+    return Roots(beta, -beta, xp.sqrt(outer * (a + b + d)), clamped_out | clamped_in, unreachable)

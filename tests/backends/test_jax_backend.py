@@ -220,6 +220,51 @@ def test_the_cartesian_integrand_runs_on_the_device(name, options, jax_model, lo
     np.testing.assert_allclose(on_device, on_host, rtol=0, atol=1e-12)
 
 
+def test_a_serial_arms_closed_form_runs_on_the_device(jax_model, loaded, monkeypatch):
+    """The planar 2R's Cartesian domain (seed Fig. 8.19) on the device: both elbow branches by the half-angle law of
+    cosines in jax.numpy, valid where fk reproduces the point, the first one within the 0..90 deg limits, 1/kappa of
+    J there - point by point numpy's: the same reachable set (random points, and the edge cases: the stretched arm's
+    circle, where the law of cosines clamps, the folded arm at the shoulder's axis, the points the limits' edges
+    reach), 1/kappa to 1e-12; the GCI, its workspace area and symkin workspace's grid of 1/kappa with the values never
+    coming back."""
+    from symkin import analysis
+    from symkin.analysis import device_cartesian, grids
+    from symkin.analysis.global_indices import cartesian_integrand
+    from symkin.analysis.inverse import inverse_kinematics_for
+    from symkin.integration.integrand import Integrand
+    from symkin.mechanism import reach
+
+    models = {"numpy": loaded("planar_2r", "numpy"), "jax": jax_model("planar_2r")}
+    inverse = {backend: inverse_kinematics_for(model) for backend, model in models.items()}
+    assert device_cartesian.cartesian_on_device(models["jax"], inverse["jax"])
+    assert not device_cartesian.cartesian_on_device(models["numpy"], inverse["numpy"])
+    box = reach.bounding_box(models["numpy"])
+    angles = np.linspace(0.0, np.pi / 2, 33)
+    reach_of = 0.2                                               # l1 + l2 = 0.2 m: the stretched arm
+    edges = np.concatenate([
+        reach_of * np.stack([np.cos(angles), np.sin(angles)], axis=-1),              # stretched: the clamped root
+        np.zeros((1, 2)),                                                            # folded onto the shoulder
+        0.1 * np.stack([1 + np.cos(angles), np.sin(angles)], axis=-1),               # theta1 = 0, theta2 in limits
+        0.1 * np.stack([np.cos(angles) - np.sin(angles), np.sin(angles) + np.cos(angles)], axis=-1)])  # theta2 = 90
+    points = np.concatenate([np.random.default_rng(2).uniform(*box, (2048, 2)), edges])
+    want = cartesian_integrand(models["numpy"], inverse["numpy"], box)(points)
+    got = device_cartesian.device_cartesian_integrand(models["jax"], inverse["jax"], box)(points)
+    assert np.array_equal(got[:, 1], want[:, 1])
+    assert 0 < want[:, 1].sum() < len(points)
+    assert want[-len(edges):, 1].sum() > len(edges) / 2             # most edge points are reached
+    assert np.max(np.abs(got[:, 0] - want[:, 0])) <= 1e-12
+    want = analysis.gci(models["numpy"], domain="cartesian", inverse=inverse["numpy"], samples=2**12, seed=4)
+    with monkeypatch.context() as patch:
+        patch.setattr(Integrand, "__call__", _values_on_the_host)
+        got = analysis.gci(models["jax"], domain="cartesian", inverse=inverse["jax"], samples=2**12, seed=4)
+    assert got.value.value == pytest.approx(want.value.value, rel=1e-12)
+    assert got.measure.value == pytest.approx(want.measure.value, rel=1e-12)
+    (occupied, on_host), (occupied_too, on_device) = (
+        grids.index_grid(models[backend], inverse[backend], box, 0.005) for backend in ("numpy", "jax"))
+    assert np.array_equal(occupied_too.occupied, occupied.occupied)
+    np.testing.assert_allclose(on_device, on_host, rtol=0, atol=1e-12)
+
+
 @pytest.mark.parametrize("fraction", [0.0, 0.1, 0.4, 0.9, 1.0])
 def test_gathered_rows_give_every_rows_values(fraction):
     """on_gathered_rows: the function at the masked rows, 0 elsewhere, whichever share of the batch holds them
