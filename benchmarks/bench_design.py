@@ -7,10 +7,10 @@ built and solved from scratch (median over the repeats), on the committed genera
 functions over the nodes), IPOPT (including CasADi's function and derivative evaluations),
 and the independent rating of the start and the optimum (true GCI by randomized QMC,
 2^14 evaluations each, and the box check).  The second table solves the problems both solvers take (a serial
-model's GCI within bounds) both ways in the same process: the CasADi program's build and IPOPT against the JAX
-path's first call (XLA's compile of the surrogate's value and gradient) and a warm solve (what every later design
-or restart costs: the program is compiled once per generated Jacobian); the JAX code is derived into a scratch
-directory (generated/ holds no JAX backend).
+model's GCI within bounds; a parallel model's GCI or worst force over a required box) both ways in the same process:
+the CasADi program's build and IPOPT against the JAX path's first call (XLA's compile of the surrogate's value and
+gradient) and a warm solve (what every later design or restart costs: the program is compiled once per generated
+Jacobian), on generated/'s JAX modules.
 """
 
 from __future__ import annotations
@@ -18,7 +18,6 @@ from __future__ import annotations
 import argparse
 import statistics
 import sys
-import tempfile
 import time
 from pathlib import Path
 
@@ -55,24 +54,15 @@ def _run(numpy_model, casadi_model, options: dict) -> dict[str, float]:
             "before": before.gci, "after": after.gci}
 
 
-#: The problems of the solver comparison: model, free parameters, design_problem's other options.
+DELTA_BOX = {"x": (-0.04, 0.04), "y": (-0.04, 0.04), "z": (-0.19, -0.11)}
+#: The problems of the solver comparison: model, objective, free parameters, design_problem's other options.
 GRADIENT_PROBLEMS = {
-    "planar_2r, free l1": ("planar_2r", dict(free=["l1"])),
-    "ur10e, free a2, a3 (L = 0.3 m)": ("ur10e", dict(free=["a2", "a3"], length=0.3)),
-    "delta, free a, b, box (SLSQP)": ("delta", dict(free=["a", "b"],
-                                                    box={"x": (-0.04, 0.04), "y": (-0.04, 0.04), "z": (-0.19, -0.11)})),
+    "planar_2r gci, free l1": ("planar_2r", "gci", dict(free=["l1"])),
+    "ur10e gci, free a2, a3 (L = 0.3 m)": ("ur10e", "gci", dict(free=["a2", "a3"], length=0.3)),
+    "delta gci, free a, b, box (SLSQP)": ("delta", "gci", dict(free=["a", "b"], box=DELTA_BOX)),
+    "delta force, free a, b, box (SLSQP, epigraph)": ("delta", "force", dict(
+        free=["a", "b"], bounds={"a": (0.06, 0.15), "b": (0.10, 0.25)}, box=DELTA_BOX, effort_limits=[1.0, 1.0, 1.0])),
 }
-
-
-def _jax_model(name: str, scratch: Path):
-    """The model's fk, ik (where it has one) and jacobian derived with the JAX backend into ``scratch``, loaded."""
-    from symkin import pipeline
-    from symkin.model import load_model
-
-    model = load_model(ROOT / "models" / f"{name}.yaml")
-    outputs = "fk,ik,jacobian" if model.parallel is not None else "fk,jacobian"
-    generation = pipeline.generate(model, pipeline.resolve_request(model, outputs, "jax"))
-    return symkin.load(pipeline.write(generation, scratch / name), "jax")
 
 
 def _timed(solve, *args) -> tuple[float, object]:
@@ -96,21 +86,20 @@ def _compare_solvers(repeat: int) -> list[list[str]]:
     """Per problem: IPOPT's median ms (build and solve) and iterations; JAX's first call (compile included), its
     median warm ms and iterations; their ratio and how far the optima differ."""
     rows = []
-    with tempfile.TemporaryDirectory() as scratch:
-        for label, (name, options) in GRADIENT_PROBLEMS.items():
-            options = dict(options)
-            free = options.pop("free")
-            numpy_model = symkin.load(ROOT / "generated" / name)
-            casadi_model, jax_model = symkin.load(ROOT / "generated" / name, "casadi"), _jax_model(name, Path(scratch))
-            problem = design.design_problem(numpy_model, "gci", free, **options)
-            first, _ = _timed(_solve_with_jax, problem, jax_model, numpy_model)
-            _solve_with_casadi(problem, casadi_model, numpy_model)  # warm-up: CasADi's plugin loading
-            ipopt = [_timed(_solve_with_casadi, problem, casadi_model, numpy_model) for _ in range(repeat)]
-            warm = [_timed(_solve_with_jax, problem, jax_model, numpy_model) for _ in range(repeat)]
-            ipopt_ms, jax_ms = (statistics.median(t for t, _ in runs) * 1e3 for runs in (ipopt, warm))
-            rows.append([label, f"{ipopt_ms:.1f}", str(ipopt[0][1].iterations), f"{first * 1e3:.0f}", f"{jax_ms:.1f}",
-                         str(warm[0][1].iterations), f"{ipopt_ms / jax_ms:.1f}x",
-                         f"{max(abs(warm[0][1].optimum[k] / ipopt[0][1].optimum[k] - 1) for k in free):.1e}"])
+    for label, (name, objective, options) in GRADIENT_PROBLEMS.items():
+        options = dict(options)
+        free = options.pop("free")
+        numpy_model, casadi_model, jax_model = (symkin.load(ROOT / "generated" / name, backend)
+                                                for backend in ("numpy", "casadi", "jax"))  # every scene emits JAX
+        problem = design.design_problem(numpy_model, objective, free, **options)
+        first, _ = _timed(_solve_with_jax, problem, jax_model, numpy_model)
+        _solve_with_casadi(problem, casadi_model, numpy_model)  # warm-up: CasADi's plugin loading
+        ipopt = [_timed(_solve_with_casadi, problem, casadi_model, numpy_model) for _ in range(repeat)]
+        warm = [_timed(_solve_with_jax, problem, jax_model, numpy_model) for _ in range(repeat)]
+        ipopt_ms, jax_ms = (statistics.median(t for t, _ in runs) * 1e3 for runs in (ipopt, warm))
+        rows.append([label, f"{ipopt_ms:.1f}", str(ipopt[0][1].iterations), f"{first * 1e3:.0f}", f"{jax_ms:.1f}",
+                     str(warm[0][1].iterations), f"{ipopt_ms / jax_ms:.1f}x",
+                     f"{max(abs(warm[0][1].optimum[k] / ipopt[0][1].optimum[k] - 1) for k in free):.1e}"])
     return rows
 
 
@@ -130,7 +119,7 @@ def main(argv: list[str] | None = None) -> int:
     print(format_table(["problem", "iter", "build ms", "IPOPT ms", "eval ms", "wall ms", "GCI before", "GCI after"],
                        rows))
     print()
-    print(format_table(["problem (gci)", "CasADi+IPOPT ms", "iter", "JAX first call ms", "JAX warm ms", "iter",
+    print(format_table(["problem", "CasADi+IPOPT ms", "iter", "JAX first call ms", "JAX warm ms", "iter",
                         "IPOPT/JAX", "optima differ (rel)"], _compare_solvers(args.repeat)))
     return 0
 

@@ -195,6 +195,22 @@ def _compiled_traced_closed_form(solver: Any, order: tuple[int, ...], rows: tupl
             jax.jit(lambda *arguments: reduced(*values(*arguments))))
 
 
+def _integrand(model: GeneratedModel, lower: np.ndarray, upper: np.ndarray, evaluate: Any, reduce: Any,
+               constants: dict[str, Any], parameters: dict[str, Any], with_index: bool) -> Integrand:
+    """The Integrand over the box [lower, upper] whose values are ``evaluate``'s and whose batches ``reduce`` reduces
+    to their moments on the device (both called with the points, ``constants`` and ``parameters``)."""
+    import jax.numpy as jnp
+
+    def moments(points: np.ndarray) -> tuple[Any, Any]:
+        mean, scatter, _, _ = reduce(jnp.asarray(points), constants, parameters)
+        return mean, scatter
+
+    axes = tuple("xyz"[a] for a in mechanism.position_axes(model))
+    components = ("index dW", "dW") if with_index else ("dW",)
+    return Integrand(lower, upper, lambda points: np.asarray(evaluate(jnp.asarray(points), constants, parameters)),
+                     components, axes, indicator=len(components) - 1, moments=moments)
+
+
 def _traced_closed_form_integrand(model: GeneratedModel, inverse: ClosedFormInverse, lower: np.ndarray,
                                   upper: np.ndarray, joint_box: np.ndarray, scale: np.ndarray,
                                   with_index: bool) -> Integrand:
@@ -211,14 +227,7 @@ def _traced_closed_form_integrand(model: GeneratedModel, inverse: ClosedFormInve
     evaluate, reduce = _compiled_traced_closed_form(solver, inverse.order, rows, fk, jacobian, with_index,
                                                     max(m, n) * _EPS)
 
-    def moments(points: np.ndarray) -> tuple[Any, Any]:
-        mean, scatter, _, _ = reduce(jnp.asarray(points), constants, parameters)
-        return mean, scatter
-
-    axes = tuple("xyz"[a] for a in mechanism.position_axes(model))
-    components = ("index dW", "dW") if with_index else ("dW",)
-    return Integrand(lower, upper, lambda points: np.asarray(evaluate(jnp.asarray(points), constants, parameters)),
-                     components, axes, indicator=len(components) - 1, moments=moments)
+    return _integrand(model, lower, upper, evaluate, reduce, constants, parameters, with_index)
 
 
 def device_cartesian_integrand(model: GeneratedModel, inverse: InverseKinematics, box: tuple[np.ndarray, np.ndarray],
@@ -259,11 +268,4 @@ def device_cartesian_integrand(model: GeneratedModel, inverse: InverseKinematics
     parameters = {name: values for name, (_, values) in unbound.items()}
     evaluate, reduce = _compiled(functions, with_index, max(m, n) * _EPS, bool(revolute.any()))
 
-    def moments(points: np.ndarray) -> tuple[Any, Any]:
-        mean, scatter, _, _ = reduce(jnp.asarray(points), constants, parameters)
-        return mean, scatter
-
-    axes = tuple("xyz"[a] for a in mechanism.position_axes(model))
-    components = ("index dW", "dW") if with_index else ("dW",)
-    return Integrand(lower, upper, lambda points: np.asarray(evaluate(jnp.asarray(points), constants, parameters)),
-                     components, axes, indicator=len(components) - 1, moments=moments)
+    return _integrand(model, lower, upper, evaluate, reduce, constants, parameters, with_index)

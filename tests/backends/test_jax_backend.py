@@ -637,14 +637,49 @@ def test_jax_gradients_optimize_a_parallel_models_gci_over_its_box(name, jax_mod
         assert apart["stopped"] <= np.radians(45) + 1e-9, apart
 
 
-def test_jax_gradients_refuse_what_they_do_not_solve(jax_model, loaded):
-    """A required box (constraints) or the force objective: a ValueError naming the CasADi path."""
+def test_jax_gradients_maximize_a_parallel_models_worst_force_over_its_box(jax_model, loaded):
+    """--maximize force --gradients jax: the DELTA's worst isotropic force over its required box (free a and b, unit
+    efforts, the arms within their declared limits), SLSQP on the CasADi program's epigraph form with JAX gradients:
+    the same worst force at the start (1e-12), IPOPT's optimum (both converge to ~1e-11 here: the parameters to 1e-8,
+    the force to 1e-10), 40 % more force than at the start, every leg reaching the box on a grid denser than the
+    constraint points."""
     from symkin import design
     from symkin.design.gradient_solving import solve_with_jax
 
-    arm = loaded("planar_2r", "numpy")
-    for problem in (design.design_problem(arm, "gci", ["l1"], box={"x": (0.11, 0.14), "y": (0.11, 0.14)}),
-                    design.design_problem(arm, "force", ["l1"], box={"x": (0.11, 0.14), "y": (0.11, 0.14)},
-                                          effort_limits=np.ones(2))):
+    numpy_model, casadi_model = loaded("delta", "numpy"), loaded("delta", "casadi")
+    box = {"x": (-0.04, 0.04), "y": (-0.04, 0.04), "z": (-0.19, -0.11)}
+    problem = design.design_problem(numpy_model, "force", ["a", "b"], bounds={"a": (0.06, 0.15), "b": (0.10, 0.25)},
+                                    box=box, effort_limits=np.ones(3))
+    ipopt = design.solve(problem, design.formulate(problem, casadi_model, numpy_model, nodes=3))
+    solution, description = solve_with_jax(problem, jax_model("delta"), numpy_model, nodes=3)
+    assert solution.success
+    assert solution.solver == "SLSQP"
+    assert "epigraph form" in description
+    assert description.endswith("SLSQP on JAX gradients")
+    assert solution.surrogate_start == pytest.approx(ipopt.surrogate_start, rel=1e-12)
+    assert solution.surrogate_optimum == pytest.approx(ipopt.surrogate_optimum, rel=1e-10)
+    assert solution.surrogate_optimum > 1.4 * solution.surrogate_start
+    for parameter in ("a", "b"):
+        assert solution.optimum[parameter] == pytest.approx(ipopt.optimum[parameter], rel=1e-8)
+    assert solution.constraint_violation <= 1e-12
+    axes = [np.linspace(lo, hi, 7) for lo, hi in zip(*problem.inflated_box)]
+    points = np.stack(np.meshgrid(*axes), -1).reshape(-1, 3)
+    assert np.all(np.asarray(numpy_model.bind(**solution.optimum).ik(points).margin) >= -1e-12)
+
+
+def test_jax_gradients_refuse_what_they_do_not_solve(jax_model, loaded):
+    """A serial model's required box (constraints) or its force objective, a parallel model's bound on the apparent
+    mass: a ValueError naming the CasADi path."""
+    from symkin import design
+    from symkin.design.gradient_solving import solve_with_jax
+
+    arm, delta = loaded("planar_2r", "numpy"), loaded("delta", "numpy")
+    box = {"x": (-0.04, 0.04), "y": (-0.04, 0.04), "z": (-0.19, -0.11)}
+    for problem, model in ((design.design_problem(arm, "gci", ["l1"], box={"x": (0.11, 0.14), "y": (0.11, 0.14)}),
+                            "planar_2r"),
+                           (design.design_problem(arm, "force", ["l1"], box={"x": (0.11, 0.14), "y": (0.11, 0.14)},
+                                                  effort_limits=np.ones(2)), "planar_2r"),
+                           (design.design_problem(delta, "force", ["a"], box=box, effort_limits=np.ones(3),
+                                                  max_apparent_mass=0.2), "delta")):
         with pytest.raises(ValueError, match="--gradients casadi"):
-            solve_with_jax(problem, jax_model("planar_2r"), arm)
+            solve_with_jax(problem, jax_model(model), loaded(model, "numpy"))

@@ -1,0 +1,296 @@
+"""Dimensioning a parallel model over its required box with JAX gradients (issue 66, ``symkin optimize
+--gradients jax``; the serial models' L-BFGS-B: :mod:`symkin.design.gradient_solving`).
+
+A parallel model with a closed-form ik (a translational platform's box of positions, or a spherical one's box of
+orientations) has the CasADi program's GCI surrogate over its required box (:func:`symkin.design.formulation.
+inverse_grid`: the mean of 1/kappa_F of J(ik(p), p) - of E(p) J for orientations, weighted by cos(pitch) - over a
+midpoint grid) and its constraints, that every leg reaches every point of the inflated box's vertex grid and of the
+grid (ik margin >= 0, scaled by its median at the start), its actuated joints within their limits and the joint stops
+kept: SLSQP (Kraft 1988, scipy) on the surrogate's gradient by jax.value_and_grad and the constraints' Jacobian by
+jax.jacfwd through the generated ik and Jacobian (few free parameters: forward mode), one compiled XLA program each.
+Its force objective - the isotropic force min_i tau_max,i / |J_i| at the worst of the same points - takes the
+CasADi program's epigraph form: maximize t subject to (t |J_i(p_j)| / tau_max,i)^2 <= 1 at every point p_j and
+actuator i (t scaled by the start design's worst force), the squared column norms and their derivatives by
+jax.jacfwd, with the same reach constraints.  A bound on the apparent mass stays with the CasADi program.
+"""
+
+from __future__ import annotations
+
+import functools
+import time
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from symkin import reporting
+from symkin.analysis import device_integrand
+from symkin.design.formulation import BOX_POINTS_PER_AXIS, inverse_grid, joint_rules, margin_reference
+from symkin.design.problem import DesignProblem
+from symkin.design.solving import Solution
+from symkin.mechanism import Sampling, reach
+from symkin.numerics.ordered_linalg import InOrder
+from symkin.runtime.info import GeneratedModel
+
+#: SLSQP's options: stop on a change of the (order one) scaled objective below 1e-14.
+SLSQP_OPTIONS: dict[str, Any] = {"maxiter": 300, "ftol": 1e-14}
+
+
+def solve_gci_over_the_box(problem: DesignProblem, jax_model: GeneratedModel, numpy_model: GeneratedModel,
+                        nodes: int | None, options: dict[str, Any] | None) -> tuple[Solution, str]:
+    """SLSQP on a parallel model's GCI surrogate over its required box, the reach constraints at its points (see
+    the module docstring)."""
+    import jax.numpy as jnp
+    from scipy import optimize
+
+    started = time.perf_counter()
+    grid = inverse_grid(problem, nodes, BOX_POINTS_PER_AXIS)
+    reference_margin = margin_reference(problem, numpy_model, grid.points)
+    (ik, ik_values), (jacobian, jacobian_values), parameters = _box_functions(problem, jax_model)
+    dimension = grid.nodes.shape[1]
+    rotation = (reach.angular_velocity_matrix(grid.nodes) if problem.sampling is Sampling.ORIENTATIONS
+                else np.broadcast_to(np.eye(dimension), (len(grid.nodes), dimension, dimension)))
+    surrogate_program, reach_program = _programs_over_the_box(ik, jacobian, tuple(sorted(ik_values)),
+                                                              tuple(sorted(jacobian_values)))
+    nodes_arguments = (jnp.asarray(grid.nodes), jnp.asarray(rotation), jnp.asarray(grid.weights))
+    points = jnp.asarray(grid.points)
+    rows = _ReachRows(problem, numpy_model, reference_margin)
+    names = [p.name for p in problem.free]
+    scales = np.array([p.scale for p in problem.free])
+
+    def design_values(z: np.ndarray) -> dict[str, Any]:
+        return {**parameters, **{name: float(v) for name, v in zip(names, z * scales)}}
+
+    # Evaluated at an iterate's z (bytes of the float64 vector: a cache key, as the constraints are) and kept for the
+    # callback, which asks at the same z.
+    @functools.lru_cache(maxsize=4)
+    def surrogate(key: bytes) -> tuple[float, np.ndarray]:
+        value, gradient = surrogate_program(*nodes_arguments, design_values(np.frombuffer(key)))
+        return float(value), np.array([float(gradient[name]) for name in names]) * scales
+
+    constraints = _reach_constraints(reach_program, points, rows, design_values, names, scales)
+
+    z0 = np.array([p.start for p in problem.free]) / scales
+    reference, _ = surrogate(_key(z0))
+    if not (np.isfinite(reference) and reference > 0):
+        raise ValueError(f"the gci surrogate is {reference} at the start design {problem.start}: start from a design "
+                         "whose legs reach the required box, or use the CasADi program (--gradients casadi)")
+    history, infeasibility = [reference], [_violation(constraints(_key(z0))[0])]
+    chosen = {**SLSQP_OPTIONS, **(options or {})}
+
+    def objective(z: np.ndarray) -> tuple[float, np.ndarray]:
+        value, gradient = surrogate(_key(z))
+        return -value / reference, -gradient / reference
+
+    def iterate(z: np.ndarray) -> None:
+        history.append(surrogate(_key(z))[0])
+        infeasibility.append(_violation(constraints(_key(z))[0]))
+        reporting.report_progress("optimizing the design (SLSQP iterations)", done=len(history) - 1,
+                                   total=int(chosen["maxiter"]))
+
+    build_seconds = time.perf_counter() - started
+    started = time.perf_counter()
+    result = optimize.minimize(
+        objective, z0, jac=True, method="SLSQP", callback=iterate, options=chosen,
+        bounds=[(p.lower / s, p.upper / s) for p, s in zip(problem.free, scales)],
+        constraints=[{"type": "ineq", "fun": lambda z: constraints(_key(z))[0],
+                      "jac": lambda z: constraints(_key(z))[1]}])
+    solve_seconds = time.perf_counter() - started
+    lower, upper = np.array([p.lower for p in problem.free]), np.array([p.upper for p in problem.free])
+    optimum = np.clip(result.x * scales, lower, upper)
+    solution = Solution(
+        start=problem.start, optimum=problem.design(list(optimum)), surrogate_start=reference,
+        surrogate_optimum=surrogate(_key(optimum / scales))[0], history=np.asarray(history),
+        infeasibility=np.asarray(infeasibility), status=str(result.message), success=bool(result.success),
+        iterations=int(result.nit), solve_seconds=solve_seconds, build_seconds=build_seconds,
+        constraint_violation=_violation(constraints(_key(optimum / scales))[0]), solver="SLSQP")
+    return solution, f"{grid.description}; SLSQP on JAX gradients"
+
+
+def _key(z: np.ndarray) -> bytes:
+    """The scaled free parameters z as a cache key (their float64 bytes): SLSQP asks for the objective, the
+    constraints and their Jacobians at the same z."""
+    return np.asarray(z, dtype=np.float64).tobytes()
+
+
+def _reach_constraints(reach_program: Any, points: Any, rows: _ReachRows,
+                       design_values: Callable[[np.ndarray], dict[str, Any]], names: list[str],
+                       scales: np.ndarray) -> Callable[[bytes], tuple[np.ndarray, np.ndarray]]:
+    """key -> (the reach constraints g >= 0 at ``points``, their Jacobian by the scaled free parameters z) of the
+    design z (:func:`_key`), by the jitted ``reach_program`` (:func:`_programs_over_the_box`); the last few kept."""
+
+    @functools.lru_cache(maxsize=4)
+    def constraints(key: bytes) -> tuple[np.ndarray, np.ndarray]:
+        (margins, joints), (margin_slopes, joint_slopes) = reach_program(points, design_values(np.frombuffer(key)))
+        columns = [rows(np.asarray(margin_slopes[name]), np.asarray(joint_slopes[name]), shift=0.0) * scale
+                   for name, scale in zip(names, scales)]
+        return rows(np.asarray(margins), np.asarray(joints), shift=1.0), np.stack(columns, axis=-1)
+
+    return constraints
+
+
+def _box_functions(problem: DesignProblem, jax_model: GeneratedModel) -> tuple[Any, Any, dict[str, Any]]:
+    """((ik, its parameters), (jacobian, its parameters), every parameter at the problem's values) of a parallel
+    model's JAX code; ValueError where a free parameter is neither's."""
+    (ik, ik_values), (jacobian, jacobian_values) = jax_model.unbound("ik"), jax_model.unbound("jacobian")
+    parameters = {**ik_values, **jacobian_values}
+    parameters.update({k: float(v) for k, v in problem.values.items() if k in parameters})
+    missing = [p.name for p in problem.free if p.name not in parameters]
+    if missing:
+        raise ValueError(f"{jax_model.name}: neither the ik nor the Jacobian depends on {', '.join(missing)}: free "
+                         f"only their parameters ({', '.join(sorted(parameters))})")
+    return (ik, ik_values), (jacobian, jacobian_values), parameters
+
+
+def solve_force_over_the_box(problem: DesignProblem, jax_model: GeneratedModel, numpy_model: GeneratedModel,
+                              nodes: int | None, options: dict[str, Any] | None) -> tuple[Solution, str]:
+    """SLSQP on a translational platform's worst isotropic force over its required box, in the CasADi program's
+    epigraph form (:func:`symkin.design.formulation._force`, see the module docstring): the variables are the scaled
+    free parameters z and the bound t (the force / the start design's worst), the reach constraints those of
+    :func:`solve_gci_over_the_box` at the same points."""
+    import jax.numpy as jnp
+    from scipy import optimize
+
+    started = time.perf_counter()
+    grid = inverse_grid(problem, nodes, BOX_POINTS_PER_AXIS)  # its points: the box's vertex grid and the midpoints
+    reference_margin = margin_reference(problem, numpy_model, grid.points)
+    (ik, ik_values), (jacobian, jacobian_values), parameters = _box_functions(problem, jax_model)
+    ik_names, jacobian_names = tuple(sorted(ik_values)), tuple(sorted(jacobian_values))
+    _, reach_program = _programs_over_the_box(ik, jacobian, ik_names, jacobian_names)
+    force_program = _force_program(ik, jacobian, ik_names, jacobian_names)
+    points, limits = jnp.asarray(grid.points), jnp.asarray(np.asarray(problem.effort_limits, dtype=np.float64))
+    rows = _ReachRows(problem, numpy_model, reference_margin)
+    names = [p.name for p in problem.free]
+    scales = np.array([p.scale for p in problem.free])
+
+    def design_values(z: np.ndarray) -> dict[str, Any]:
+        return {**parameters, **{name: float(v) for name, v in zip(names, z * scales)}}
+
+    @functools.lru_cache(maxsize=4)
+    def squared(key: bytes) -> tuple[np.ndarray, np.ndarray]:
+        """(|J_i(p_j)|^2 / tau_max,i^2 flattened, its derivatives by z (columns))."""
+        values, slopes = force_program(points, limits, design_values(np.frombuffer(key)))
+        return (np.asarray(values).reshape(-1),
+                np.stack([np.asarray(slopes[name]).reshape(-1) * scale for name, scale in zip(names, scales)], -1))
+
+    reached = _reach_constraints(reach_program, points, rows, design_values, names, scales)
+
+    def worst(z: np.ndarray) -> float:
+        """The design's worst isotropic force over the points, min 1 / sqrt(|J_i|^2 / tau_max,i^2)."""
+        return float(np.min(1.0 / np.sqrt(squared(_key(z))[0])))
+
+    z0 = np.array([p.start for p in problem.free]) / scales
+    start = worst(z0)
+    if not (np.isfinite(start) and start > 0):
+        raise ValueError(f"{numpy_model.name}: the isotropic force vanishes in the box at the start design")
+
+    def constraints(y: np.ndarray) -> np.ndarray:
+        z, t = y[:-1], y[-1]
+        return np.concatenate([1.0 - (t * start) ** 2 * squared(_key(z))[0], reached(_key(z))[0]])
+
+    def constraints_jacobian(y: np.ndarray) -> np.ndarray:
+        z, t = y[:-1], y[-1]
+        values, slopes = squared(_key(z))
+        force = np.concatenate([-(t * start) ** 2 * slopes, (-2.0 * t * start**2 * values)[:, None]], axis=1)
+        reach_slopes = reached(_key(z))[1]
+        return np.concatenate([force, np.concatenate([reach_slopes, np.zeros((len(reach_slopes), 1))], axis=1)])
+
+    def violation(y: np.ndarray) -> float:
+        return _violation(constraints(y))
+
+    y0 = np.append(z0, 1.0)
+    history, infeasibility = [start], [violation(y0)]
+    chosen = {**SLSQP_OPTIONS, **(options or {})}
+    last = np.append(np.zeros(len(z0)), -1.0)
+
+    def iterate(y: np.ndarray) -> None:
+        history.append(float(y[-1]) * start)
+        infeasibility.append(violation(y))
+        reporting.report_progress("optimizing the design (SLSQP iterations)", done=len(history) - 1,
+                                  total=int(chosen["maxiter"]))
+
+    build_seconds = time.perf_counter() - started
+    started = time.perf_counter()
+    result = optimize.minimize(
+        lambda y: (-float(y[-1]), last), y0, jac=True, method="SLSQP", callback=iterate, options=chosen,
+        bounds=[(p.lower / s, p.upper / s) for p, s in zip(problem.free, scales)] + [(0.0, None)],
+        constraints=[{"type": "ineq", "fun": constraints, "jac": constraints_jacobian}])
+    solve_seconds = time.perf_counter() - started
+    lower, upper = np.array([p.lower for p in problem.free]), np.array([p.upper for p in problem.free])
+    optimum = np.clip(result.x[:-1] * scales, lower, upper)
+    solution = Solution(
+        start=problem.start, optimum=problem.design(list(optimum)), surrogate_start=start,
+        surrogate_optimum=worst(optimum / scales), history=np.asarray(history),
+        infeasibility=np.asarray(infeasibility), status=str(result.message), success=bool(result.success),
+        iterations=int(result.nit), solve_seconds=solve_seconds, build_seconds=build_seconds,
+        constraint_violation=_violation(reached(_key(optimum / scales))[0]), solver="SLSQP")
+    limits_text = ", ".join(f"{v:g}" for v in np.asarray(problem.effort_limits))
+    return solution, (f"isotropic force min_i tau_max,i / |J_i| at the worst of {len(grid.points)} points (the box's "
+                      f"vertex grid and its {len(grid.nodes)} midpoints; epigraph form), effort limits {limits_text}; "
+                      "the box is required at every point (ik margin >= 0); SLSQP on JAX gradients")
+
+
+@functools.lru_cache(maxsize=8)
+def _force_program(ik: Any, jacobian: Any, ik_names: tuple[str, ...], jacobian_names: tuple[str, ...]) -> Any:
+    """``force(points, limits, parameters) -> (|J_i(p_j)|^2 / tau_max,i^2 (P, n), its derivatives by every
+    parameter)``, J_i the i-th column of J(ik(p_j), p_j), by jax.jacfwd; jitted once per generated ik and Jacobian."""
+    import jax
+    import jax.numpy as jnp
+
+    def squared(points: Any, limits: Any, parameters: dict[str, Any]) -> Any:
+        q = ik(points, **{name: parameters[name] for name in ik_names}).joints
+        J = jacobian(q, points, **{name: parameters[name] for name in jacobian_names})
+        return jnp.sum(J * J, axis=-2) / (limits * limits)
+
+    return jax.jit(lambda points, limits, parameters: (squared(points, limits, parameters),
+                                                       jax.jacfwd(squared, argnums=2)(points, limits, parameters)))
+
+
+def _violation(g: np.ndarray) -> float:
+    """The largest violation of constraints g >= 0 (0 where every one holds)."""
+    return float(-np.min(g, initial=0.0)) + 0.0
+
+
+class _ReachRows:
+    """The reach constraints of a parallel model as rows g >= 0, from the ik's margins (P, legs) and joints (P, n) at
+    the box's points - the CasADi program's (:func:`symkin.design.formulation._reach`): margin / its start median,
+    and each finite side of the problem's joint rules (:func:`symkin.design.formulation.joint_rules`).  Linear in
+    (margins, joints) plus constants: ``shift=0`` gives the rows of their derivatives."""
+
+    def __init__(self, problem: DesignProblem, model: GeneratedModel, reference_margin: float) -> None:
+        self.reference_margin = reference_margin
+        self.rows, self.offsets, self.lower, self.upper = joint_rules(problem, model)
+
+    def __call__(self, margins: np.ndarray, joints: np.ndarray, *, shift: float) -> np.ndarray:
+        values = joints @ self.rows.T + shift * self.offsets
+        low, high = np.isfinite(self.lower), np.isfinite(self.upper)
+        return np.concatenate([margins.reshape(-1) / self.reference_margin,
+                               (values[:, low] - shift * self.lower[low]).T.reshape(-1),
+                               (shift * self.upper[high] - values[:, high]).T.reshape(-1)])
+
+
+@functools.lru_cache(maxsize=8)
+def _programs_over_the_box(ik: Any, jacobian: Any, ik_names: tuple[str, ...], jacobian_names: tuple[str, ...]
+                           ) -> tuple[Any, Any]:
+    """(surrogate, reach), jitted once per generated ik and Jacobian: ``surrogate(nodes, rotation, weights,
+    parameters) -> (sum_j w_j / kappa_F(R_j J_j), {name: derivative})``, J_j = J(ik(p_j), p_j), by
+    jax.value_and_grad; ``reach(points, parameters) -> ((margins, joints), their derivatives by every parameter)``
+    by jax.jacfwd."""
+    import jax
+    import jax.numpy as jnp
+
+    def own(parameters: dict[str, Any], names: tuple[str, ...]) -> dict[str, Any]:
+        return {name: parameters[name] for name in names}
+
+    def surrogate(nodes: Any, rotation: Any, weights: Any, parameters: dict[str, Any]) -> Any:
+        q = ik(nodes, **own(parameters, ik_names)).joints
+        J = rotation @ jacobian(q, nodes, **own(parameters, jacobian_names))
+        return jnp.sum(weights * device_integrand.inverse_frobenius(J, InOrder(jnp)))
+
+    def reached(points: Any, parameters: dict[str, Any]) -> tuple[Any, Any]:
+        solution = ik(points, **own(parameters, ik_names))
+        return solution.margin, solution.joints
+
+    return (jax.jit(jax.value_and_grad(surrogate, argnums=3)),
+            jax.jit(lambda points, parameters: (reached(points, parameters),
+                                                jax.jacfwd(reached, argnums=1)(points, parameters))))
