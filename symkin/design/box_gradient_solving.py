@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import functools
 import time
+from dataclasses import dataclass
 from collections.abc import Callable
 from typing import Any
 
@@ -44,31 +45,21 @@ def solve_gci_over_the_box(problem: DesignProblem, jax_model: GeneratedModel, nu
     from scipy import optimize
 
     started = time.perf_counter()
-    grid = inverse_grid(problem, nodes, BOX_POINTS_PER_AXIS)
-    reference_margin = margin_reference(problem, numpy_model, grid.points)
-    (ik, ik_values), (jacobian, jacobian_values), parameters = _box_functions(problem, jax_model)
+    box = _BoxDesign.of(problem, jax_model, numpy_model, nodes)
+    grid, names, scales, constraints = box.grid, box.names, box.scales, box.reach
     dimension = grid.nodes.shape[1]
     rotation = (reach.angular_velocity_matrix(grid.nodes) if problem.sampling is Sampling.ORIENTATIONS
                 else np.broadcast_to(np.eye(dimension), (len(grid.nodes), dimension, dimension)))
-    surrogate_program, reach_program = _programs_over_the_box(ik, jacobian, tuple(sorted(ik_values)),
-                                                              tuple(sorted(jacobian_values)))
+    surrogate_program, _ = _programs_over_the_box(box.ik, box.jacobian, box.ik_names, box.jacobian_names)
     nodes_arguments = (jnp.asarray(grid.nodes), jnp.asarray(rotation), jnp.asarray(grid.weights))
-    points = jnp.asarray(grid.points)
-    rows = _ReachRows(problem, numpy_model, reference_margin)
-    names = [p.name for p in problem.free]
-    scales = np.array([p.scale for p in problem.free])
-
-    def design_values(z: np.ndarray) -> dict[str, Any]:
-        return {**parameters, **{name: float(v) for name, v in zip(names, z * scales)}}
 
     # Evaluated at an iterate's z (bytes of the float64 vector: a cache key, as the constraints are) and kept for the
     # callback, which asks at the same z.
     @functools.lru_cache(maxsize=4)
     def surrogate(key: bytes) -> tuple[float, np.ndarray]:
-        value, gradient = surrogate_program(*nodes_arguments, design_values(np.frombuffer(key)))
+        value, gradient = surrogate_program(*nodes_arguments, box.design_values(np.frombuffer(key)))
         return float(value), np.array([float(gradient[name]) for name in names]) * scales
 
-    constraints = _reach_constraints(reach_program, points, rows, design_values, names, scales)
 
     z0 = np.array([p.start for p in problem.free]) / scales
     reference, _ = surrogate(_key(z0))
@@ -129,17 +120,50 @@ def _reach_constraints(reach_program: Any, points: Any, rows: _ReachRows,
     return constraints
 
 
-def _box_functions(problem: DesignProblem, jax_model: GeneratedModel) -> tuple[Any, Any, dict[str, Any]]:
-    """((ik, its parameters), (jacobian, its parameters), every parameter at the problem's values) of a parallel
-    model's JAX code; ValueError where a free parameter is neither's."""
-    (ik, ik_values), (jacobian, jacobian_values) = jax_model.unbound("ik"), jax_model.unbound("jacobian")
-    parameters = {**ik_values, **jacobian_values}
-    parameters.update({k: float(v) for k, v in problem.values.items() if k in parameters})
-    missing = [p.name for p in problem.free if p.name not in parameters]
-    if missing:
-        raise ValueError(f"{jax_model.name}: neither the ik nor the Jacobian depends on {', '.join(missing)}: free "
-                         f"only their parameters ({', '.join(sorted(parameters))})")
-    return (ik, ik_values), (jacobian, jacobian_values), parameters
+@dataclass(frozen=True)
+class _BoxDesign:
+    """What both box problems start from: the grid (:func:`symkin.design.formulation.inverse_grid`), the model's JAX ik
+    and Jacobian with their parameters' names, the free parameters' names and scales (z = value / scale), the
+    constraint points, every parameter's value at a design z, and the reach constraints (:func:`_reach_constraints`)."""
+
+    grid: Any
+    ik: Any
+    jacobian: Any
+    ik_names: tuple[str, ...]
+    jacobian_names: tuple[str, ...]
+    names: list[str]
+    scales: np.ndarray
+    points: Any
+    design_values: Callable[[np.ndarray], dict[str, Any]]
+    reach: Callable[[bytes], tuple[np.ndarray, np.ndarray]]
+
+    @classmethod
+    def of(cls, problem: DesignProblem, jax_model: GeneratedModel, numpy_model: GeneratedModel,
+           nodes: int | None) -> _BoxDesign:
+        """ValueError where a free parameter is neither the ik's nor the Jacobian's."""
+        import jax.numpy as jnp
+
+        grid = inverse_grid(problem, nodes, BOX_POINTS_PER_AXIS)
+        reference_margin = margin_reference(problem, numpy_model, grid.points)
+        (ik, ik_values), (jacobian, jacobian_values) = jax_model.unbound("ik"), jax_model.unbound("jacobian")
+        parameters = {**ik_values, **jacobian_values}
+        parameters.update({k: float(v) for k, v in problem.values.items() if k in parameters})
+        missing = [p.name for p in problem.free if p.name not in parameters]
+        if missing:
+            raise ValueError(f"{jax_model.name}: neither the ik nor the Jacobian depends on {', '.join(missing)}: "
+                             f"free only their parameters ({', '.join(sorted(parameters))})")
+        ik_names, jacobian_names = tuple(sorted(ik_values)), tuple(sorted(jacobian_values))
+        names, scales = [p.name for p in problem.free], np.array([p.scale for p in problem.free])
+        points = jnp.asarray(grid.points)
+        _, reach_program = _programs_over_the_box(ik, jacobian, ik_names, jacobian_names)
+
+        def design_values(z: np.ndarray) -> dict[str, Any]:
+            """Every parameter, the free ones at the scaled values z."""
+            return {**parameters, **{name: float(v) for name, v in zip(names, z * scales)}}
+
+        reach = _reach_constraints(reach_program, points, _ReachRows(problem, numpy_model, reference_margin),
+                                   design_values, names, scales)
+        return cls(grid, ik, jacobian, ik_names, jacobian_names, names, scales, points, design_values, reach)
 
 
 def solve_force_over_the_box(problem: DesignProblem, jax_model: GeneratedModel, numpy_model: GeneratedModel,
@@ -152,28 +176,18 @@ def solve_force_over_the_box(problem: DesignProblem, jax_model: GeneratedModel, 
     from scipy import optimize
 
     started = time.perf_counter()
-    grid = inverse_grid(problem, nodes, BOX_POINTS_PER_AXIS)  # its points: the box's vertex grid and the midpoints
-    reference_margin = margin_reference(problem, numpy_model, grid.points)
-    (ik, ik_values), (jacobian, jacobian_values), parameters = _box_functions(problem, jax_model)
-    ik_names, jacobian_names = tuple(sorted(ik_values)), tuple(sorted(jacobian_values))
-    _, reach_program = _programs_over_the_box(ik, jacobian, ik_names, jacobian_names)
-    force_program = _force_program(ik, jacobian, ik_names, jacobian_names)
-    points, limits = jnp.asarray(grid.points), jnp.asarray(np.asarray(problem.effort_limits, dtype=np.float64))
-    rows = _ReachRows(problem, numpy_model, reference_margin)
-    names = [p.name for p in problem.free]
-    scales = np.array([p.scale for p in problem.free])
-
-    def design_values(z: np.ndarray) -> dict[str, Any]:
-        return {**parameters, **{name: float(v) for name, v in zip(names, z * scales)}}
+    box = _BoxDesign.of(problem, jax_model, numpy_model, nodes)  # its points: the box's vertex grid and midpoints
+    grid, names, scales, reached = box.grid, box.names, box.scales, box.reach
+    force_program = _force_program(box.ik, box.jacobian, box.ik_names, box.jacobian_names)
+    limits = jnp.asarray(np.asarray(problem.effort_limits, dtype=np.float64))
 
     @functools.lru_cache(maxsize=4)
     def squared(key: bytes) -> tuple[np.ndarray, np.ndarray]:
         """(|J_i(p_j)|^2 / tau_max,i^2 flattened, its derivatives by z (columns))."""
-        values, slopes = force_program(points, limits, design_values(np.frombuffer(key)))
+        values, slopes = force_program(box.points, limits, box.design_values(np.frombuffer(key)))
         return (np.asarray(values).reshape(-1),
                 np.stack([np.asarray(slopes[name]).reshape(-1) * scale for name, scale in zip(names, scales)], -1))
 
-    reached = _reach_constraints(reach_program, points, rows, design_values, names, scales)
 
     def worst(z: np.ndarray) -> float:
         """The design's worst isotropic force over the points, min 1 / sqrt(|J_i|^2 / tau_max,i^2)."""

@@ -176,6 +176,43 @@ def test_the_global_index_is_reduced_on_the_device(name, options, methods, jax_m
         assert got.measure.value == pytest.approx(want.measure.value, rel=1e-12)
 
 
+def _check_the_cartesian_values(models, inverse, box, points, **options):
+    """The inverse runs on the device for the JAX model only, and there the Cartesian integrand's values at
+    ``points`` are numpy's point by point: the same reachable set (the box holds points out of the workspace too),
+    1/kappa to 1e-12.  Returns numpy's values."""
+    from symkin.analysis import device_cartesian
+    from symkin.analysis.global_indices import cartesian_integrand
+
+    assert device_cartesian.cartesian_on_device(models["jax"], inverse["jax"])
+    assert not device_cartesian.cartesian_on_device(models["numpy"], inverse["numpy"])
+    want = cartesian_integrand(models["numpy"], inverse["numpy"], box, **options)(points)
+    got = device_cartesian.device_cartesian_integrand(models["jax"], inverse["jax"], box, **options)(points)
+    assert np.array_equal(got[:, 1], want[:, 1])
+    assert 0 < want[:, 1].sum() < len(points)
+    assert np.max(np.abs(got[:, 0] - want[:, 0])) <= 1e-12
+    return want
+
+
+def _check_the_cartesian_gci_and_grid(models, inverse, box, cell, monkeypatch, **options):
+    """The Cartesian GCI and workspace measure on the device with the values never coming back (calling them fails
+    here): numpy's to 1e-12; and symkin workspace's grid of 1/kappa at the reachable cell centres (side ``cell``),
+    which takes the same program: numpy's."""
+    from symkin import analysis
+    from symkin.analysis import grids
+    from symkin.integration.integrand import Integrand
+
+    want = analysis.gci(models["numpy"], domain="cartesian", inverse=inverse["numpy"], samples=2**12, seed=4, **options)
+    with monkeypatch.context() as patch:
+        patch.setattr(Integrand, "__call__", _values_on_the_host)
+        got = analysis.gci(models["jax"], domain="cartesian", inverse=inverse["jax"], samples=2**12, seed=4, **options)
+    assert got.value.value == pytest.approx(want.value.value, rel=1e-12)
+    assert got.measure.value == pytest.approx(want.measure.value, rel=1e-12)
+    (occupied, on_host), (occupied_too, on_device) = (
+        grids.index_grid(models[backend], inverse[backend], box, cell) for backend in ("numpy", "jax"))
+    assert np.array_equal(occupied_too.occupied, occupied.occupied)
+    np.testing.assert_allclose(on_device, on_host, rtol=0, atol=1e-12)
+
+
 @pytest.mark.parametrize("name, options", [("delta", {}), ("stewart", {"length": "auto"})])
 def test_the_cartesian_integrand_runs_on_the_device(name, options, jax_model, loaded, monkeypatch):
     """The Cartesian domain on the device: the DELTA's working mode (fk(ik(p)) = p) and the Stewart platform's at its
@@ -186,38 +223,18 @@ def test_the_cartesian_integrand_runs_on_the_device(name, options, jax_model, lo
     limits stays on the host."""
     from dataclasses import replace
 
-    from symkin import analysis
-    from symkin.analysis import device_cartesian, grids
-    from symkin.analysis.global_indices import cartesian_integrand
+    from symkin.analysis import device_cartesian
     from symkin.analysis.inverse import inverse_kinematics_for
-    from symkin.integration.integrand import Integrand
     from symkin.mechanism import reach
 
     models = {"numpy": reach.held_at(loaded(name, "numpy"), None), "jax": reach.held_at(jax_model(name), None)}
     inverse = {backend: inverse_kinematics_for(model) for backend, model in models.items()}
-    assert device_cartesian.cartesian_on_device(models["jax"], inverse["jax"])
-    assert not device_cartesian.cartesian_on_device(models["numpy"], inverse["numpy"])
     assert not device_cartesian.cartesian_on_device(models["jax"], replace(inverse["jax"], passive_limits=object()))
     box = reach.bounding_box(models["numpy"])
-    points = np.random.default_rng(2).uniform(*box, (2048, 3))
-    want = cartesian_integrand(models["numpy"], inverse["numpy"], box, **options)(points)
-    got = device_cartesian.device_cartesian_integrand(models["jax"], inverse["jax"], box, **options)(points)
-    assert np.array_equal(got[:, 1], want[:, 1])
-    assert 0 < want[:, 1].sum() < len(points)                   # the box holds points out of the workspace
-    assert np.max(np.abs(got[:, 0] - want[:, 0])) <= 1e-12
+    _check_the_cartesian_values(models, inverse, box, np.random.default_rng(2).uniform(*box, (2048, 3)), **options)
     if name != "delta":
         return  # a second program (the reduction) compiled for one model is enough
-    want = analysis.gci(models["numpy"], domain="cartesian", inverse=inverse["numpy"], samples=2**12, seed=4, **options)
-    with monkeypatch.context() as patch:
-        patch.setattr(Integrand, "__call__", _values_on_the_host)
-        got = analysis.gci(models["jax"], domain="cartesian", inverse=inverse["jax"], samples=2**12, seed=4, **options)
-    assert got.value.value == pytest.approx(want.value.value, rel=1e-12)
-    assert got.measure.value == pytest.approx(want.measure.value, rel=1e-12)
-    # symkin workspace's Cartesian grid (1/kappa at the reachable cell centres) takes the same program
-    (occupied, on_host), (occupied_too, on_device) = (
-        grids.index_grid(models[backend], inverse[backend], box, 0.04) for backend in ("numpy", "jax"))
-    assert np.array_equal(occupied_too.occupied, occupied.occupied)
-    np.testing.assert_allclose(on_device, on_host, rtol=0, atol=1e-12)
+    _check_the_cartesian_gci_and_grid(models, inverse, box, 0.04, monkeypatch, **options)
 
 
 def test_a_serial_arms_closed_form_runs_on_the_device(jax_model, loaded, monkeypatch):
@@ -227,17 +244,11 @@ def test_a_serial_arms_closed_form_runs_on_the_device(jax_model, loaded, monkeyp
     circle, where the law of cosines clamps, the folded arm at the shoulder's axis, the points the limits' edges
     reach), 1/kappa to 1e-12; the GCI, its workspace area and symkin workspace's grid of 1/kappa with the values never
     coming back."""
-    from symkin import analysis
-    from symkin.analysis import device_cartesian, grids
-    from symkin.analysis.global_indices import cartesian_integrand
     from symkin.analysis.inverse import inverse_kinematics_for
-    from symkin.integration.integrand import Integrand
     from symkin.mechanism import reach
 
     models = {"numpy": loaded("planar_2r", "numpy"), "jax": jax_model("planar_2r")}
     inverse = {backend: inverse_kinematics_for(model) for backend, model in models.items()}
-    assert device_cartesian.cartesian_on_device(models["jax"], inverse["jax"])
-    assert not device_cartesian.cartesian_on_device(models["numpy"], inverse["numpy"])
     box = reach.bounding_box(models["numpy"])
     angles = np.linspace(0.0, np.pi / 2, 33)
     reach_of = 0.2                                               # l1 + l2 = 0.2 m: the stretched arm
@@ -246,23 +257,10 @@ def test_a_serial_arms_closed_form_runs_on_the_device(jax_model, loaded, monkeyp
         np.zeros((1, 2)),                                                            # folded onto the shoulder
         0.1 * np.stack([1 + np.cos(angles), np.sin(angles)], axis=-1),               # theta1 = 0, theta2 in limits
         0.1 * np.stack([np.cos(angles) - np.sin(angles), np.sin(angles) + np.cos(angles)], axis=-1)])  # theta2 = 90
-    points = np.concatenate([np.random.default_rng(2).uniform(*box, (2048, 2)), edges])
-    want = cartesian_integrand(models["numpy"], inverse["numpy"], box)(points)
-    got = device_cartesian.device_cartesian_integrand(models["jax"], inverse["jax"], box)(points)
-    assert np.array_equal(got[:, 1], want[:, 1])
-    assert 0 < want[:, 1].sum() < len(points)
+    want = _check_the_cartesian_values(models, inverse, box,
+                                       np.concatenate([np.random.default_rng(2).uniform(*box, (2048, 2)), edges]))
     assert want[-len(edges):, 1].sum() > len(edges) / 2             # most edge points are reached
-    assert np.max(np.abs(got[:, 0] - want[:, 0])) <= 1e-12
-    want = analysis.gci(models["numpy"], domain="cartesian", inverse=inverse["numpy"], samples=2**12, seed=4)
-    with monkeypatch.context() as patch:
-        patch.setattr(Integrand, "__call__", _values_on_the_host)
-        got = analysis.gci(models["jax"], domain="cartesian", inverse=inverse["jax"], samples=2**12, seed=4)
-    assert got.value.value == pytest.approx(want.value.value, rel=1e-12)
-    assert got.measure.value == pytest.approx(want.measure.value, rel=1e-12)
-    (occupied, on_host), (occupied_too, on_device) = (
-        grids.index_grid(models[backend], inverse[backend], box, 0.005) for backend in ("numpy", "jax"))
-    assert np.array_equal(occupied_too.occupied, occupied.occupied)
-    np.testing.assert_allclose(on_device, on_host, rtol=0, atol=1e-12)
+    _check_the_cartesian_gci_and_grid(models, inverse, box, 0.005, monkeypatch)
 
 
 @pytest.mark.parametrize("fraction", [0.0, 0.1, 0.4, 0.9, 1.0])
