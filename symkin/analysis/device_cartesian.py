@@ -120,10 +120,7 @@ def _compiled(functions: _Functions, with_index: bool, threshold: float, wraps: 
         else:
             assert functions.inverse_jacobian is not None, "a platform held at an orientation: its J^-1"
             J = functions.inverse_jacobian(q, poses, **parameters["inverse_jacobian"]) @ constants["unscale"]
-        regular = jnp.all(jnp.isfinite(J), axis=(-2, -1))
-        J = jnp.where(regular[:, None, None], J, 0.0)
-        largest, smallest = extreme_singular_values(J, threshold)
-        return jnp.where(regular & (largest > 0), smallest / jnp.where(largest > 0, largest, 1.0), 0.0)
+        return _device_inverse_condition(J, threshold)
 
     def values(points: Any, constants: dict[str, Any], parameters: dict[str, Any]) -> tuple[Any, Any]:
         held = constants["orientation"]
@@ -186,13 +183,22 @@ def _compiled_traced_closed_form(solver: Any, order: tuple[int, ...], rows: tupl
         if not with_index:
             return indicator[:, None], indicator
         J = jacobian(jnp.where(reachable[:, None], chosen, 0.0), **parameters["jacobian"]) * constants["scale"][:, None]
-        regular = jnp.all(jnp.isfinite(J), axis=(-2, -1))
-        largest, smallest = extreme_singular_values(jnp.where(regular[:, None, None], J, 0.0), threshold)
-        index = jnp.where(reachable & regular & (largest > 0), smallest / jnp.where(largest > 0, largest, 1.0), 0.0)
+        index = jnp.where(reachable, _device_inverse_condition(J, threshold), 0.0)
         return jnp.stack([index, indicator], axis=-1), index
 
     return (jax.jit(lambda *arguments: values(*arguments)[0]),
             jax.jit(lambda *arguments: reduced(*values(*arguments))))
+
+
+def _device_inverse_condition(J: Any, threshold: float) -> Any:
+    """1/kappa = sigma_min / sigma_max of a batch of Jacobians (N, m, n) in jax.numpy - the device's
+    :func:`symkin.numerics.conditioning.inverse_condition_number`, by
+    :func:`symkin.analysis.device_integrand.extreme_singular_values` - 0 where J has a non-finite entry or vanishes."""
+    import jax.numpy as jnp
+
+    regular = jnp.all(jnp.isfinite(J), axis=(-2, -1))
+    largest, smallest = extreme_singular_values(jnp.where(regular[:, None, None], J, 0.0), threshold)
+    return jnp.where(regular & (largest > 0), smallest / jnp.where(largest > 0, largest, 1.0), 0.0)
 
 
 def _integrand(model: GeneratedModel, lower: np.ndarray, upper: np.ndarray, evaluate: Any, reduce: Any,
@@ -226,7 +232,6 @@ def _traced_closed_form_integrand(model: GeneratedModel, inverse: ClosedFormInve
     solver: Any = inverse.solver.solver  # a TRACEABLE_SOLVERS instance: hashable by identity (the compile cache's key)
     evaluate, reduce = _compiled_traced_closed_form(solver, inverse.order, rows, fk, jacobian, with_index,
                                                     max(m, n) * _EPS)
-
     return _integrand(model, lower, upper, evaluate, reduce, constants, parameters, with_index)
 
 

@@ -18,8 +18,8 @@ from __future__ import annotations
 
 import functools
 import time
-from dataclasses import dataclass
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -38,7 +38,7 @@ SLSQP_OPTIONS: dict[str, Any] = {"maxiter": 300, "ftol": 1e-14}
 
 
 def solve_gci_over_the_box(problem: DesignProblem, jax_model: GeneratedModel, numpy_model: GeneratedModel,
-                        nodes: int | None, options: dict[str, Any] | None) -> tuple[Solution, str]:
+                           nodes: int | None, options: dict[str, Any] | None) -> tuple[Solution, str]:
     """SLSQP on a parallel model's GCI surrogate over its required box, the reach constraints at its points (see
     the module docstring)."""
     import jax.numpy as jnp
@@ -59,7 +59,6 @@ def solve_gci_over_the_box(problem: DesignProblem, jax_model: GeneratedModel, nu
     def surrogate(key: bytes) -> tuple[float, np.ndarray]:
         value, gradient = surrogate_program(*nodes_arguments, box.design_values(np.frombuffer(key)))
         return float(value), np.array([float(gradient[name]) for name in names]) * scales
-
 
     z0 = np.array([p.start for p in problem.free]) / scales
     reference, _ = surrogate(_key(z0))
@@ -83,12 +82,10 @@ def solve_gci_over_the_box(problem: DesignProblem, jax_model: GeneratedModel, nu
     started = time.perf_counter()
     result = optimize.minimize(
         objective, z0, jac=True, method="SLSQP", callback=iterate, options=chosen,
-        bounds=[(p.lower / s, p.upper / s) for p, s in zip(problem.free, scales)],
-        constraints=[{"type": "ineq", "fun": lambda z: constraints(_key(z))[0],
-                      "jac": lambda z: constraints(_key(z))[1]}])
+        bounds=box.bounds, constraints=[{"type": "ineq", "fun": lambda z: constraints(_key(z))[0],
+                                         "jac": lambda z: constraints(_key(z))[1]}])
     solve_seconds = time.perf_counter() - started
-    lower, upper = np.array([p.lower for p in problem.free]), np.array([p.upper for p in problem.free])
-    optimum = np.clip(result.x * scales, lower, upper)
+    optimum = box.clipped(result.x)
     solution = Solution(
         start=problem.start, optimum=problem.design(list(optimum)), surrogate_start=reference,
         surrogate_optimum=surrogate(_key(optimum / scales))[0], history=np.asarray(history),
@@ -136,6 +133,17 @@ class _BoxDesign:
     points: Any
     design_values: Callable[[np.ndarray], dict[str, Any]]
     reach: Callable[[bytes], tuple[np.ndarray, np.ndarray]]
+    lower: np.ndarray
+    upper: np.ndarray
+
+    @property
+    def bounds(self) -> list[tuple[float, float]]:
+        """The free parameters' bounds in z."""
+        return [(low / s, high / s) for low, high, s in zip(self.lower, self.upper, self.scales)]
+
+    def clipped(self, z: np.ndarray) -> np.ndarray:
+        """The free parameters' values at z, in their units, within their bounds (z * scale may round past one)."""
+        return np.clip(z * self.scales, self.lower, self.upper)
 
     @classmethod
     def of(cls, problem: DesignProblem, jax_model: GeneratedModel, numpy_model: GeneratedModel,
@@ -163,7 +171,9 @@ class _BoxDesign:
 
         reach = _reach_constraints(reach_program, points, _ReachRows(problem, numpy_model, reference_margin),
                                    design_values, names, scales)
-        return cls(grid, ik, jacobian, ik_names, jacobian_names, names, scales, points, design_values, reach)
+        lower, upper = np.array([p.lower for p in problem.free]), np.array([p.upper for p in problem.free])
+        return cls(grid, ik, jacobian, ik_names, jacobian_names, names, scales, points, design_values, reach, lower,
+                   upper)
 
 
 def solve_force_over_the_box(problem: DesignProblem, jax_model: GeneratedModel, numpy_model: GeneratedModel,
@@ -187,7 +197,6 @@ def solve_force_over_the_box(problem: DesignProblem, jax_model: GeneratedModel, 
         values, slopes = force_program(box.points, limits, box.design_values(np.frombuffer(key)))
         return (np.asarray(values).reshape(-1),
                 np.stack([np.asarray(slopes[name]).reshape(-1) * scale for name, scale in zip(names, scales)], -1))
-
 
     def worst(z: np.ndarray) -> float:
         """The design's worst isotropic force over the points, min 1 / sqrt(|J_i|^2 / tau_max,i^2)."""
@@ -215,7 +224,7 @@ def solve_force_over_the_box(problem: DesignProblem, jax_model: GeneratedModel, 
     y0 = np.append(z0, 1.0)
     history, infeasibility = [start], [violation(y0)]
     chosen = {**SLSQP_OPTIONS, **(options or {})}
-    last = np.append(np.zeros(len(z0)), -1.0)
+    objective_gradient = np.append(np.zeros(len(z0)), -1.0)  # of -t
 
     def iterate(y: np.ndarray) -> None:
         history.append(float(y[-1]) * start)
@@ -226,12 +235,11 @@ def solve_force_over_the_box(problem: DesignProblem, jax_model: GeneratedModel, 
     build_seconds = time.perf_counter() - started
     started = time.perf_counter()
     result = optimize.minimize(
-        lambda y: (-float(y[-1]), last), y0, jac=True, method="SLSQP", callback=iterate, options=chosen,
-        bounds=[(p.lower / s, p.upper / s) for p, s in zip(problem.free, scales)] + [(0.0, None)],
+        lambda y: (-float(y[-1]), objective_gradient), y0, jac=True, method="SLSQP", callback=iterate, options=chosen,
+        bounds=box.bounds + [(0.0, None)],
         constraints=[{"type": "ineq", "fun": constraints, "jac": constraints_jacobian}])
     solve_seconds = time.perf_counter() - started
-    lower, upper = np.array([p.lower for p in problem.free]), np.array([p.upper for p in problem.free])
-    optimum = np.clip(result.x[:-1] * scales, lower, upper)
+    optimum = box.clipped(result.x[:-1])
     solution = Solution(
         start=problem.start, optimum=problem.design(list(optimum)), surrogate_start=start,
         surrogate_optimum=worst(optimum / scales), history=np.asarray(history),
@@ -244,6 +252,11 @@ def solve_force_over_the_box(problem: DesignProblem, jax_model: GeneratedModel, 
                       "the box is required at every point (ik margin >= 0); SLSQP on JAX gradients")
 
 
+def _own(parameters: dict[str, Any], names: tuple[str, ...]) -> dict[str, Any]:
+    """The parameters a generated function takes (``names``) out of every parameter of the design."""
+    return {name: parameters[name] for name in names}
+
+
 @functools.lru_cache(maxsize=8)
 def _force_program(ik: Any, jacobian: Any, ik_names: tuple[str, ...], jacobian_names: tuple[str, ...]) -> Any:
     """``force(points, limits, parameters) -> (|J_i(p_j)|^2 / tau_max,i^2 (P, n), its derivatives by every
@@ -252,8 +265,8 @@ def _force_program(ik: Any, jacobian: Any, ik_names: tuple[str, ...], jacobian_n
     import jax.numpy as jnp
 
     def squared(points: Any, limits: Any, parameters: dict[str, Any]) -> Any:
-        q = ik(points, **{name: parameters[name] for name in ik_names}).joints
-        J = jacobian(q, points, **{name: parameters[name] for name in jacobian_names})
+        q = ik(points, **_own(parameters, ik_names)).joints
+        J = jacobian(q, points, **_own(parameters, jacobian_names))
         return jnp.sum(J * J, axis=-2) / (limits * limits)
 
     return jax.jit(lambda points, limits, parameters: (squared(points, limits, parameters),
@@ -293,16 +306,13 @@ def _programs_over_the_box(ik: Any, jacobian: Any, ik_names: tuple[str, ...], ja
     import jax
     import jax.numpy as jnp
 
-    def own(parameters: dict[str, Any], names: tuple[str, ...]) -> dict[str, Any]:
-        return {name: parameters[name] for name in names}
-
     def surrogate(nodes: Any, rotation: Any, weights: Any, parameters: dict[str, Any]) -> Any:
-        q = ik(nodes, **own(parameters, ik_names)).joints
-        J = rotation @ jacobian(q, nodes, **own(parameters, jacobian_names))
+        q = ik(nodes, **_own(parameters, ik_names)).joints
+        J = rotation @ jacobian(q, nodes, **_own(parameters, jacobian_names))
         return jnp.sum(weights * device_integrand.inverse_frobenius(J, InOrder(jnp)))
 
     def reached(points: Any, parameters: dict[str, Any]) -> tuple[Any, Any]:
-        solution = ik(points, **own(parameters, ik_names))
+        solution = ik(points, **_own(parameters, ik_names))
         return solution.margin, solution.joints
 
     return (jax.jit(jax.value_and_grad(surrogate, argnums=3)),
