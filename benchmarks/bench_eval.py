@@ -16,8 +16,9 @@ Columns:
 * ``py call``   microseconds per call from Python, one configuration (best of 9 runs of at least 0.1 s
   each, the implementations of a case in turn: :func:`interleaved_best_us`); ``symkin c`` is the compiled
   CPython entry point, ``symkin c (ctypes)`` the same library through ctypes (SYMKIN_C_ENTRY=ctypes); a last
-  table sets them beside Pinocchio's binding and the floor: an empty call of a CPython builtin (``id``) in the
-  same loop plus the C time;
+  table sets them beside the compiled entry writing into arrays the caller allocated once (``out=``, as a control
+  loop calls it and as Pinocchio's binding writes into its ``Data``), Pinocchio's binding and the floor: an empty
+  call of a CPython builtin (``id``) in the same loop plus the C time;
 * ``py batch``  nanoseconds per configuration of one batched call over ``--batch`` configurations
   (numpy and C: the generated vectorized functions; CasADi: ``Function.map``; Pinocchio: a
   Python loop, as a Python user would write it);
@@ -64,6 +65,11 @@ from symkin.model import load_model  # noqa: E402
 from symkin.backends.c.loader_entry_points import ENTRY_VARIABLE  # noqa: E402
 
 MODEL = ROOT.parent / "models" / "ur10e.yaml"
+#: The C flags of a servo loop's build on its own machine (docs/generated-code.md): its instruction set, and fused
+#: multiply-adds - one rounding per multiply-add instead of two, what GCC does by default outside ISO C mode and
+#: clang within an expression; symkin's C is ISO C99, whose default keeps them apart.  The test suite's second pass
+#: (tests/conftest.py, Makefile FOREIGN_ARITHMETIC) checks the generated C's error bounds built this way.
+SERVO_CFLAGS = "-O3 -march=native -ffp-contract=fast"
 RING = 1024  # configurations cycled through by the single-call timings
 
 
@@ -113,30 +119,45 @@ CALL_RUN_SECONDS = 0.1
 CALL_REPEATS = 9
 
 
-def _timed_calls(fn, args_ring: list[tuple], calls: int) -> float:
+@functools.lru_cache(maxsize=None)
+def _call_loop(arity: int, keyword: bool):
+    """``loop(fn, ring, calls, out)``: ``calls`` calls ``fn(a0, ..., out=out)`` (``out=`` only with ``keyword``) of
+    the argument tuples of ``ring`` in turn, written out for ``arity`` arguments - CPython's vectorcall with a keyword
+    name, as a user's loop calls it (``fn(*args, out=out)`` or a functools.partial would build a dict each call)."""
+    names = ", ".join(f"a{i}" for i in range(arity))
+    source = (f"def loop(fn, ring, calls, out):\n    n = len(ring)\n    for k in range(calls):\n"
+              f"        {names}, = ring[k % n]\n        fn({names}{', out=out' if keyword else ''})\n")
+    namespace: dict = {}
+    exec(source, namespace)  # noqa: S102 - a loop of this script's own text, no outside input
+    return namespace["loop"]
+
+
+def _timed_calls(fn, args_ring: list[tuple], calls: int, out=None) -> float:
+    loop = _call_loop(len(args_ring[0]), out is not None)
     start = time.perf_counter()
-    for k in range(calls):
-        fn(*args_ring[k % len(args_ring)])
+    loop(fn, args_ring, calls, out)
     return time.perf_counter() - start
 
 
-def _calibrated(fn, args_ring: list[tuple], seconds: float) -> int:
+def _calibrated(fn, args_ring: list[tuple], out, seconds: float) -> int:
     """A number of calls of ``fn`` that lasts at least ``seconds``."""
     calls = 1000
-    while (elapsed := _timed_calls(fn, args_ring, calls)) < seconds:
+    while (elapsed := _timed_calls(fn, args_ring, calls, out)) < seconds:
         calls = int(calls * max(2.0, 1.2 * seconds / max(elapsed, 1e-9)))
     return calls
 
 
 def interleaved_best_us(cases: dict[str, tuple], repeat: int = CALL_REPEATS,
                         seconds: float = CALL_RUN_SECONDS) -> dict[str, float]:
-    """{name: microseconds per call} of each ``(fn, args_ring)``: the best of ``repeat`` rounds, each round one run
-    of at least ``seconds`` of every function in turn."""
-    counts = {name: _calibrated(fn, ring, seconds) for name, (fn, ring) in cases.items()}
+    """{name: microseconds per call} of each ``(fn, args_ring)`` or ``(fn, args_ring, out)`` (called with
+    ``out=out``): the best of ``repeat`` rounds, each round one run of at least ``seconds`` of every function in
+    turn."""
+    cases = {name: (case + (None,))[:3] for name, case in cases.items()}
+    counts = {name: _calibrated(fn, ring, out, seconds) for name, (fn, ring, out) in cases.items()}
     best = dict.fromkeys(cases, float("inf"))
     for _ in range(repeat):
-        for name, (fn, ring) in cases.items():
-            best[name] = min(best[name], _timed_calls(fn, ring, counts[name]) / counts[name])
+        for name, (fn, ring, out) in cases.items():
+            best[name] = min(best[name], _timed_calls(fn, ring, counts[name], out) / counts[name])
     return {name: 1e6 * value for name, value in best.items()}
 
 
@@ -298,8 +319,9 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--batch", type=int, default=100_000, help="configurations per batched call (default 1e5)")
     parser.add_argument("--calls", type=int, default=1_000_000, help="single calls per C timing run (default 1e6)")
-    parser.add_argument("--cflags", default="-O3 -march=native",
-                        help="flags for the C harness and SymForce (default: %(default)s)")
+    parser.add_argument("--cflags", default=SERVO_CFLAGS,
+                        help="flags for the generated C, the C harness and SymForce (default: %(default)s; "
+                             "'-O3 -march=native' keeps every product and sum rounded apart, as ISO C99 does)")
     parser.add_argument("--no-symforce", action="store_true", help="skip SymForce")
     args = parser.parse_args(argv)
     compiler = [os.environ.get("CC", "cc")]
@@ -337,7 +359,7 @@ def main(argv: list[str] | None = None) -> int:
             into = out[0] if len(out) == 1 else out
             calls = {impl: (fn, ring) for impl, fn in functions.items()}
             calls["empty"] = (id, [(a[0],) for a in ring])
-            calls["out"] = (functools.partial(functions["symkin c"], out=into), ring)  # partial: no Python frame
+            calls["out"] = (functions["symkin c"], ring, into)
             if pm is not None:
                 calls["pinocchio"] = (pinocchio_call(label, pm, tcp), ring)
             per_call = interleaved_best_us(calls)
@@ -377,18 +399,19 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def python_call_summary(rows, empty_calls, out_calls, c_timings) -> str:
-    """The compiled entry points' Python call beside ctypes, Pinocchio's binding and the floor (an empty CPython
-    call of a builtin plus the C time), with the targets of issue 34."""
+    """The compiled entry points' Python call, with and without ``out=``, beside ctypes, Pinocchio's binding and the
+    floor (an empty CPython call of a builtin plus the C time), with the targets of issues 34 and 65."""
     table = []
     for label, empty in empty_calls.items():
         compiled, plain = rows[label, "symkin c"][0], rows[label, "symkin c (ctypes)"][0]
         pinocchio = rows.get((label, "pinocchio"), (float("nan"),))[0]
         floor = empty + 1e-3 * c_timings.get((label, "single"), float("nan"))
         table.append([label, f"{compiled:.3f}", f"{out_calls[label]:.3f}", f"{plain:.2f}", f"{pinocchio:.2f}",
-                      f"{floor:.3f}", f"{pinocchio / compiled:.1f}x"])
+                      f"{floor:.3f}", f"{pinocchio / compiled:.1f}x", f"{pinocchio / out_calls[label]:.1f}x"])
     return ("Python call, one configuration [us] (targets: FK, M <= 0.4, M+V+G <= 0.6, each >= 2.5x faster than "
-            "Pinocchio's binding)\n" + format_table(["case", "compiled entry", "with out=", "ctypes", "pinocchio",
-                                                      "floor (empty call + C)", "vs pinocchio"], table))
+            "Pinocchio's binding; dtau <= 0.6 and >= 6x, dqdd <= 1.0)\n"
+            + format_table(["case", "compiled entry", "with out=", "ctypes", "pinocchio", "floor (empty call + C)",
+                            "vs pinocchio", "with out= vs pinocchio"], table))
 
 
 def pinocchio_call(label, pm, tcp):
