@@ -7,7 +7,8 @@ built and solved from scratch (median over the repeats), on the committed genera
 functions over the nodes), IPOPT (including CasADi's function and derivative evaluations),
 and the independent rating of the start and the optimum (true GCI by randomized QMC,
 2^14 evaluations each, and the box check).  The second table solves the problems both solvers take (a serial
-model's GCI within bounds; a parallel model's GCI or worst force over a required box) both ways in the same process:
+model's GCI within bounds; a parallel model's GCI or worst force over a required box, the force also under a bound on
+the apparent mass) both ways in the same process:
 the CasADi program's build and IPOPT against the JAX path's first call (XLA's compile of the surrogate's value and
 gradient) and a warm solve (what every later design or restart costs: the program is compiled once per generated
 Jacobian), on generated/'s JAX modules.
@@ -62,6 +63,9 @@ GRADIENT_PROBLEMS = {
     "delta gci, free a, b, box (SLSQP)": ("delta", "gci", dict(free=["a", "b"], box=DELTA_BOX)),
     "delta force, free a, b, box (SLSQP, epigraph)": ("delta", "force", dict(
         free=["a", "b"], bounds={"a": (0.06, 0.15), "b": (0.10, 0.25)}, box=DELTA_BOX, effort_limits=[1.0, 1.0, 1.0])),
+    "delta force, apparent mass <= 0.2 kg (SLSQP)": ("delta", "force", dict(
+        free=["a", "b"], bounds={"a": (0.06, 0.15), "b": (0.10, 0.25)}, box=DELTA_BOX, effort_limits=[1.0, 1.0, 1.0],
+        max_apparent_mass=0.2)),
 }
 
 

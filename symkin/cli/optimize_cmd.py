@@ -71,7 +71,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "jax: L-BFGS-B on the same surrogate with jax.grad through the generated JAX code (a serial "
                         "model's gci or workspace within the bounds, no --require-box), or SLSQP with the reach "
                         "constraints (a parallel model's gci, or its worst force in epigraph form, over --require-box, its "
-                        "closed-form ik; no apparent-mass bound); MODEL derived with the JAX backend, or a model file; XLA compiles once, ~1-2 s, then "
+                        "closed-form ik, also under --max-apparent-mass); MODEL derived with the JAX backend, or a model file; XLA compiles once, ~1-2 s, then "
                         "each iteration is one call "
                         "(default: %(default)s)")
     p.add_argument("-o", "--out", metavar="DIR", help="output directory (default: out/optimize/<model>)")

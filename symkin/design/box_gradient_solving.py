@@ -11,7 +11,11 @@ jax.jacfwd through the generated ik and Jacobian (few free parameters: forward m
 Its force objective - the isotropic force min_i tau_max,i / |J_i| at the worst of the same points - takes the
 CasADi program's epigraph form: maximize t subject to (t |J_i(p_j)| / tau_max,i)^2 <= 1 at every point p_j and
 actuator i (t scaled by the start design's worst force), the squared column norms and their derivatives by
-jax.jacfwd, with the same reach constraints.  A bound on the apparent mass stays with the CasADi program.
+jax.jacfwd, with the same reach constraints.  A bound m_max on the apparent mass at the handle adds the CasADi
+program's constraints at the same points: every principal minor of B = m_max J M^-1 J^T - 1 >= 0
+(:func:`symkin.design.formulation._apparent_mass_rows`), M the generated actuator-space mass matrix at (ik(p), p),
+M^-1 and the minors by cofactors (:mod:`symkin.numerics.cofactors`: the matrices are n x n with n <= 3 actuators for
+a translating handle, and no LAPACK kernel enters the program) and their derivatives by jax.jacfwd.
 """
 
 from __future__ import annotations
@@ -26,10 +30,12 @@ import numpy as np
 
 from symkin import reporting
 from symkin.analysis import device_integrand
-from symkin.design.formulation import BOX_POINTS_PER_AXIS, inverse_grid, joint_rules, margin_reference
+from symkin.design.formulation import (BOX_POINTS_PER_AXIS, apparent_mass_description, inverse_grid, joint_rules,
+                                      margin_reference, principal_subsets)
 from symkin.design.problem import DesignProblem
 from symkin.design.solving import Solution
 from symkin.mechanism import Sampling, reach
+from symkin.numerics import cofactors
 from symkin.numerics.ordered_linalg import InOrder
 from symkin.runtime.info import GeneratedModel
 
@@ -46,7 +52,7 @@ def solve_gci_over_the_box(problem: DesignProblem, jax_model: GeneratedModel, nu
 
     started = time.perf_counter()
     box = _BoxDesign.of(problem, jax_model, numpy_model, nodes)
-    grid, names, scales, constraints = box.grid, box.names, box.scales, box.reach
+    grid, names, scales, constraints = box.grid, box.names, box.scales, box.constraints
     dimension = grid.nodes.shape[1]
     rotation = (reach.angular_velocity_matrix(grid.nodes) if problem.sampling is Sampling.ORIENTATIONS
                 else np.broadcast_to(np.eye(dimension), (len(grid.nodes), dimension, dimension)))
@@ -92,7 +98,7 @@ def solve_gci_over_the_box(problem: DesignProblem, jax_model: GeneratedModel, nu
         infeasibility=np.asarray(infeasibility), status=str(result.message), success=bool(result.success),
         iterations=int(result.nit), solve_seconds=solve_seconds, build_seconds=build_seconds,
         constraint_violation=_violation(constraints(_key(optimum / scales))[0]), solver="SLSQP")
-    return solution, f"{grid.description}; SLSQP on JAX gradients"
+    return solution, f"{grid.description}{apparent_mass_description(problem)}; SLSQP on JAX gradients"
 
 
 def _key(z: np.ndarray) -> bytes:
@@ -121,7 +127,8 @@ def _reach_constraints(reach_program: Any, points: Any, rows: _ReachRows,
 class _BoxDesign:
     """What both box problems start from: the grid (:func:`symkin.design.formulation.inverse_grid`), the model's JAX ik
     and Jacobian with their parameters' names, the free parameters' names and scales (z = value / scale), the
-    constraint points, every parameter's value at a design z, and the reach constraints (:func:`_reach_constraints`)."""
+    constraint points, every parameter's value at a design z, the reach constraints (:func:`_reach_constraints`) and,
+    under an apparent-mass bound, its constraints (:func:`_mass_constraints`; None without one)."""
 
     grid: Any
     ik: Any
@@ -135,6 +142,16 @@ class _BoxDesign:
     reach: Callable[[bytes], tuple[np.ndarray, np.ndarray]]
     lower: np.ndarray
     upper: np.ndarray
+    masses: Callable[[bytes], tuple[np.ndarray, np.ndarray]] | None
+
+    def constraints(self, key: bytes) -> tuple[np.ndarray, np.ndarray]:
+        """The constraints g >= 0 at the design z (:func:`_key`) and their Jacobian by z: the reach constraints, then
+        the apparent-mass bound's."""
+        reach = self.reach(key)
+        if self.masses is None:
+            return reach
+        masses = self.masses(key)
+        return np.concatenate([reach[0], masses[0]]), np.concatenate([reach[1], masses[1]])
 
     @property
     def bounds(self) -> list[tuple[float, float]]:
@@ -148,17 +165,20 @@ class _BoxDesign:
     @classmethod
     def of(cls, problem: DesignProblem, jax_model: GeneratedModel, numpy_model: GeneratedModel,
            nodes: int | None) -> _BoxDesign:
-        """ValueError where a free parameter is neither the ik's nor the Jacobian's."""
+        """ValueError where a free parameter is neither the ik's nor the Jacobian's (nor, under an apparent-mass
+        bound, the mass matrix's)."""
         import jax.numpy as jnp
 
         grid = inverse_grid(problem, nodes, BOX_POINTS_PER_AXIS)
         reference_margin = margin_reference(problem, numpy_model, grid.points)
         (ik, ik_values), (jacobian, jacobian_values) = jax_model.unbound("ik"), jax_model.unbound("jacobian")
-        parameters = {**ik_values, **jacobian_values}
+        mass_matrix, mass_values = (None, {}) if problem.max_apparent_mass is None else jax_model.unbound("mass_matrix")
+        parameters = {**ik_values, **jacobian_values, **mass_values}
         parameters.update({k: float(v) for k, v in problem.values.items() if k in parameters})
         missing = [p.name for p in problem.free if p.name not in parameters]
         if missing:
-            raise ValueError(f"{jax_model.name}: neither the ik nor the Jacobian depends on {', '.join(missing)}: "
+            functions = "the ik, the Jacobian nor the mass matrix" if mass_matrix else "the ik nor the Jacobian"
+            raise ValueError(f"{jax_model.name}: neither {functions} depends on {', '.join(missing)}: "
                              f"free only their parameters ({', '.join(sorted(parameters))})")
         ik_names, jacobian_names = tuple(sorted(ik_values)), tuple(sorted(jacobian_values))
         names, scales = [p.name for p in problem.free], np.array([p.scale for p in problem.free])
@@ -172,8 +192,12 @@ class _BoxDesign:
         reach = _reach_constraints(reach_program, points, _ReachRows(problem, numpy_model, reference_margin),
                                    design_values, names, scales)
         lower, upper = np.array([p.lower for p in problem.free]), np.array([p.upper for p in problem.free])
+        masses = None
+        if problem.max_apparent_mass is not None:
+            program = _mass_program(ik, jacobian, mass_matrix, ik_names, jacobian_names, tuple(sorted(mass_values)))
+            masses = _mass_constraints(program, points, problem.max_apparent_mass, design_values, names, scales)
         return cls(grid, ik, jacobian, ik_names, jacobian_names, names, scales, points, design_values, reach, lower,
-                   upper)
+                   upper, masses)
 
 
 def solve_force_over_the_box(problem: DesignProblem, jax_model: GeneratedModel, numpy_model: GeneratedModel,
@@ -187,7 +211,7 @@ def solve_force_over_the_box(problem: DesignProblem, jax_model: GeneratedModel, 
 
     started = time.perf_counter()
     box = _BoxDesign.of(problem, jax_model, numpy_model, nodes)  # its points: the box's vertex grid and midpoints
-    grid, names, scales, reached = box.grid, box.names, box.scales, box.reach
+    grid, names, scales, reached = box.grid, box.names, box.scales, box.constraints
     force_program = _force_program(box.ik, box.jacobian, box.ik_names, box.jacobian_names)
     limits = jnp.asarray(np.asarray(problem.effort_limits, dtype=np.float64))
 
@@ -249,7 +273,8 @@ def solve_force_over_the_box(problem: DesignProblem, jax_model: GeneratedModel, 
     limits_text = ", ".join(f"{v:g}" for v in np.asarray(problem.effort_limits))
     return solution, (f"isotropic force min_i tau_max,i / |J_i| at the worst of {len(grid.points)} points (the box's "
                       f"vertex grid and its {len(grid.nodes)} midpoints; epigraph form), effort limits {limits_text}; "
-                      "the box is required at every point (ik margin >= 0); SLSQP on JAX gradients")
+                      f"the box is required at every point (ik margin >= 0){apparent_mass_description(problem)}; "
+                      "SLSQP on JAX gradients")
 
 
 def _own(parameters: dict[str, Any], names: tuple[str, ...]) -> dict[str, Any]:
@@ -271,6 +296,46 @@ def _force_program(ik: Any, jacobian: Any, ik_names: tuple[str, ...], jacobian_n
 
     return jax.jit(lambda points, limits, parameters: (squared(points, limits, parameters),
                                                        jax.jacfwd(squared, argnums=2)(points, limits, parameters)))
+
+
+def _mass_constraints(mass_program: Any, points: Any, bound: float,
+                      design_values: Callable[[np.ndarray], dict[str, Any]], names: list[str],
+                      scales: np.ndarray) -> Callable[[bytes], tuple[np.ndarray, np.ndarray]]:
+    """key -> (the principal minors of m_max J M^-1 J^T - 1 at ``points``, >= 0 where every apparent mass is at most
+    the ``bound`` m_max; their Jacobian by z) of the design z (:func:`_key`) by the jitted ``mass_program``
+    (:func:`_mass_program`); the last few kept."""
+
+    @functools.lru_cache(maxsize=4)
+    def constraints(key: bytes) -> tuple[np.ndarray, np.ndarray]:
+        minors, slopes = mass_program(points, bound, design_values(np.frombuffer(key)))
+        return (np.asarray(minors).reshape(-1),
+                np.stack([np.asarray(slopes[name]).reshape(-1) * scale for name, scale in zip(names, scales)], -1))
+
+    return constraints
+
+
+@functools.lru_cache(maxsize=8)
+def _mass_program(ik: Any, jacobian: Any, mass_matrix: Any, ik_names: tuple[str, ...],
+                  jacobian_names: tuple[str, ...], mass_names: tuple[str, ...]) -> Any:
+    """``minors(points, bound, parameters) -> (the principal minors of B = bound J M^-1 J^T - 1 at each point (P, S),
+    their derivatives by every parameter)``, J and M the generated Jacobian and actuator-space mass matrix at
+    (ik(p), p), by jax.jacfwd (the CasADi program's :func:`symkin.design.formulation._apparent_mass_rows`, in the
+    order of :func:`symkin.design.formulation.principal_subsets`); jitted once per generated ik, Jacobian and mass
+    matrix."""
+    import jax
+    import jax.numpy as jnp
+
+    def minors(points: Any, bound: Any, parameters: dict[str, Any]) -> Any:
+        q = ik(points, **_own(parameters, ik_names)).joints
+        J = jacobian(q, points, **_own(parameters, jacobian_names))
+        M = mass_matrix(q, points, **_own(parameters, mass_names))
+        size = J.shape[-2]
+        B = bound * (J @ cofactors.inverse(M, jnp) @ jnp.swapaxes(J, -1, -2)) - jnp.eye(size)
+        return jnp.stack([cofactors.determinant(B[..., rows, :][..., :, rows], jnp) for rows in principal_subsets(size)],
+                         axis=-1)
+
+    return jax.jit(lambda points, bound, parameters: (minors(points, bound, parameters),
+                                                      jax.jacfwd(minors, argnums=2)(points, bound, parameters)))
 
 
 def _violation(g: np.ndarray) -> float:

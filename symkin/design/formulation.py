@@ -499,8 +499,7 @@ def _apparent_mass_rows(problem: DesignProblem, casadi_model: GeneratedModel, no
     M = _call(casadi_function(casadi_model, "mass_matrix"), {"q": joints, "p": node, **values})[0]
     size = J.shape[0]
     B = problem.max_apparent_mass * casadi.mtimes(J, casadi.solve(M, J.T)) - casadi.SX.eye(size)
-    subsets = [list(rows) for count in range(1, size + 1) for rows in itertools.combinations(range(size), count)]
-    return casadi.vertcat(*[casadi.det(B[rows, rows]) for rows in subsets])
+    return casadi.vertcat(*[casadi.det(B[rows, rows]) for rows in principal_subsets(size)])
 
 
 def _bound_apparent_mass(problem: DesignProblem, minors: casadi.MX, g: list[casadi.MX], lbg: list[np.ndarray],
@@ -511,8 +510,21 @@ def _bound_apparent_mass(problem: DesignProblem, minors: casadi.MX, g: list[casa
     g.append(casadi.vec(minors))
     lbg.append(np.zeros(minors.numel()))
     ubg.append(np.full(minors.numel(), np.inf))
+    return apparent_mass_description(problem)
+
+
+def apparent_mass_description(problem: DesignProblem) -> str:
+    """The words of the apparent-mass constraints (both programs that require a box state them so), or ""."""
+    if problem.max_apparent_mass is None:
+        return ""
     return (f"; the apparent mass at the handle is at most {problem.max_apparent_mass:g} kg at every point "
             "(principal minors of m_max J M^-1 J^T - 1 >= 0)")
+
+
+def principal_subsets(size: int) -> list[list[int]]:
+    """The index sets of every principal minor of a size x size matrix, by size then lexicographically (both
+    programs' order of the apparent-mass constraints)."""
+    return [list(rows) for count in range(1, size + 1) for rows in itertools.combinations(range(size), count)]
 
 
 def _force(problem: DesignProblem, numpy_model: GeneratedModel, node: casadi.SX, free: casadi.SX, J: casadi.SX,

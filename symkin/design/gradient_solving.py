@@ -17,7 +17,8 @@ where J^T J is exactly singular makes the value NaN (1/kappa_F is written with |
 and names the CasADi path, whose surrogate is written with adj J.
 
 A parallel model with a closed-form ik and a required box takes SLSQP with the reach constraints
-(:mod:`symkin.design.box_gradient_solving`: its GCI, and its worst isotropic force in epigraph form).
+(:mod:`symkin.design.box_gradient_solving`: its GCI, and its worst isotropic force in epigraph form; an apparent-mass
+bound at the handle too).
 """
 
 from __future__ import annotations
@@ -51,12 +52,13 @@ def refusal(problem: DesignProblem, jax_model: GeneratedModel) -> str | None:
     """Why the JAX path cannot solve the problem (and what to use instead), or None when it can."""
     fix = "; use the CasADi program (--gradients casadi, the default)"
     if problem.sampling in INVERSE_SAMPLINGS:
-        if problem.objective not in BOX_OBJECTIVES or problem.max_apparent_mass is not None:
+        if problem.objective not in BOX_OBJECTIVES:
             return (f"JAX gradients optimize a parallel model's {' or '.join(BOX_OBJECTIVES)} over its required box, "
-                    f"not the {problem.objective} objective nor a bound on the apparent mass{fix}")
-        if not {"ik", "jacobian"} <= set(jax_model.functions) or not device_integrand.loaded_with_jax(jax_model):
-            return (f"{jax_model.name}: JAX gradients need the model's JAX ik and jacobian (derive them with --backend "
-                    "numpy,jax, or load the model with backend='jax')")
+                    f"not the {problem.objective} objective{fix}")
+        needed = ("ik", "jacobian") + (() if problem.max_apparent_mass is None else ("mass_matrix",))
+        if not set(needed) <= set(jax_model.functions) or not device_integrand.loaded_with_jax(jax_model):
+            return (f"{jax_model.name}: JAX gradients need the model's JAX {', '.join(needed)} (derive them with "
+                    "--backend numpy,jax, or load the model with backend='jax')")
         return None
     if problem.sampling != Sampling.JOINTS or problem.objective not in OBJECTIVES:
         return (f"JAX gradients optimize a serial model's {' or '.join(OBJECTIVES)} over its joint limits or a "
