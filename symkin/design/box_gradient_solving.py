@@ -88,16 +88,17 @@ def solve_gci_over_the_box(problem: DesignProblem, jax_model: GeneratedModel, nu
     started = time.perf_counter()
     result = optimize.minimize(
         objective, z0, jac=True, method="SLSQP", callback=iterate, options=chosen,
-        bounds=box.bounds, constraints=[{"type": "ineq", "fun": lambda z: constraints(_key(z))[0],
+        bounds=problem.scaled_bounds, constraints=[{"type": "ineq", "fun": lambda z: constraints(_key(z))[0],
                                          "jac": lambda z: constraints(_key(z))[1]}])
     solve_seconds = time.perf_counter() - started
-    optimum = box.clipped(result.x)
+    optimum = problem.design_at(result.x)
+    z_optimum = box.scaled(optimum)
     solution = Solution(
-        start=problem.start, optimum=problem.design(list(optimum)), surrogate_start=reference,
-        surrogate_optimum=surrogate(_key(optimum / scales))[0], history=np.asarray(history),
+        start=problem.start, optimum=optimum, surrogate_start=reference,
+        surrogate_optimum=surrogate(_key(z_optimum))[0], history=np.asarray(history),
         infeasibility=np.asarray(infeasibility), status=str(result.message), success=bool(result.success),
         iterations=int(result.nit), solve_seconds=solve_seconds, build_seconds=build_seconds,
-        constraint_violation=_violation(constraints(_key(optimum / scales))[0]), solver="SLSQP")
+        constraint_violation=_violation(constraints(_key(z_optimum))[0]), solver="SLSQP")
     return solution, f"{grid.description}{apparent_mass_description(problem)}; SLSQP on JAX gradients"
 
 
@@ -140,8 +141,6 @@ class _BoxDesign:
     points: Any
     design_values: Callable[[np.ndarray], dict[str, Any]]
     reach: Callable[[bytes], tuple[np.ndarray, np.ndarray]]
-    lower: np.ndarray
-    upper: np.ndarray
     masses: Callable[[bytes], tuple[np.ndarray, np.ndarray]] | None
 
     def constraints(self, key: bytes) -> tuple[np.ndarray, np.ndarray]:
@@ -153,14 +152,9 @@ class _BoxDesign:
         masses = self.masses(key)
         return np.concatenate([reach[0], masses[0]]), np.concatenate([reach[1], masses[1]])
 
-    @property
-    def bounds(self) -> list[tuple[float, float]]:
-        """The free parameters' bounds in z."""
-        return [(low / s, high / s) for low, high, s in zip(self.lower, self.upper, self.scales)]
-
-    def clipped(self, z: np.ndarray) -> np.ndarray:
-        """The free parameters' values at z, in their units, within their bounds (z * scale may round past one)."""
-        return np.clip(z * self.scales, self.lower, self.upper)
+    def scaled(self, design: dict[str, float]) -> np.ndarray:
+        """The scaled free parameters z of a design's values."""
+        return np.array([design[name] for name in self.names]) / self.scales
 
     @classmethod
     def of(cls, problem: DesignProblem, jax_model: GeneratedModel, numpy_model: GeneratedModel,
@@ -181,7 +175,7 @@ class _BoxDesign:
             raise ValueError(f"{jax_model.name}: neither {functions} depends on {', '.join(missing)}: "
                              f"free only their parameters ({', '.join(sorted(parameters))})")
         ik_names, jacobian_names = tuple(sorted(ik_values)), tuple(sorted(jacobian_values))
-        names, scales = [p.name for p in problem.free], np.array([p.scale for p in problem.free])
+        names, scales = [p.name for p in problem.free], problem.scales
         points = jnp.asarray(grid.points)
         _, reach_program = _programs_over_the_box(ik, jacobian, ik_names, jacobian_names)
 
@@ -191,13 +185,11 @@ class _BoxDesign:
 
         reach = _reach_constraints(reach_program, points, _ReachRows(problem, numpy_model, reference_margin),
                                    design_values, names, scales)
-        lower, upper = np.array([p.lower for p in problem.free]), np.array([p.upper for p in problem.free])
         masses = None
         if problem.max_apparent_mass is not None:
             program = _mass_program(ik, jacobian, mass_matrix, ik_names, jacobian_names, tuple(sorted(mass_values)))
             masses = _mass_constraints(program, points, problem.max_apparent_mass, design_values, names, scales)
-        return cls(grid, ik, jacobian, ik_names, jacobian_names, names, scales, points, design_values, reach, lower,
-                   upper, masses)
+        return cls(grid, ik, jacobian, ik_names, jacobian_names, names, scales, points, design_values, reach, masses)
 
 
 def solve_force_over_the_box(problem: DesignProblem, jax_model: GeneratedModel, numpy_model: GeneratedModel,
@@ -260,16 +252,17 @@ def solve_force_over_the_box(problem: DesignProblem, jax_model: GeneratedModel, 
     started = time.perf_counter()
     result = optimize.minimize(
         lambda y: (-float(y[-1]), objective_gradient), y0, jac=True, method="SLSQP", callback=iterate, options=chosen,
-        bounds=box.bounds + [(0.0, None)],
+        bounds=problem.scaled_bounds + [(0.0, None)],
         constraints=[{"type": "ineq", "fun": constraints, "jac": constraints_jacobian}])
     solve_seconds = time.perf_counter() - started
-    optimum = box.clipped(result.x[:-1])
+    optimum = problem.design_at(result.x[:-1])
+    z_optimum = box.scaled(optimum)
     solution = Solution(
-        start=problem.start, optimum=problem.design(list(optimum)), surrogate_start=start,
-        surrogate_optimum=worst(optimum / scales), history=np.asarray(history),
+        start=problem.start, optimum=optimum, surrogate_start=start,
+        surrogate_optimum=worst(z_optimum), history=np.asarray(history),
         infeasibility=np.asarray(infeasibility), status=str(result.message), success=bool(result.success),
         iterations=int(result.nit), solve_seconds=solve_seconds, build_seconds=build_seconds,
-        constraint_violation=_violation(reached(_key(optimum / scales))[0]), solver="SLSQP")
+        constraint_violation=_violation(reached(_key(z_optimum))[0]), solver="SLSQP")
     limits_text = ", ".join(f"{v:g}" for v in np.asarray(problem.effort_limits))
     return solution, (f"isotropic force min_i tau_max,i / |J_i| at the worst of {len(grid.points)} points (the box's "
                       f"vertex grid and its {len(grid.nodes)} midpoints; epigraph form), effort limits {limits_text}; "

@@ -115,7 +115,7 @@ def solve_with_jax(problem: DesignProblem, jax_model: GeneratedModel, numpy_mode
     program = device_integrand.compiled_surrogate_gradient(jacobian, "cartesian", problem.objective,
                                                            DETERMINANT_SMOOTHING)
     factor = 1.0 if problem.objective == "gci" else sampled.volume_per_node
-    scales = np.array([p.scale for p in problem.free])
+    scales = problem.scales
 
     def surrogate(z: np.ndarray) -> tuple[float, np.ndarray]:
         values = {**parameters, **{p.name: float(v) for p, v in zip(problem.free, z * scales)}}
@@ -146,13 +146,10 @@ def solve_with_jax(problem: DesignProblem, jax_model: GeneratedModel, numpy_mode
     build_seconds = time.perf_counter() - started
     started = time.perf_counter()
     result = optimize.minimize(objective, z0, jac=True, method="L-BFGS-B", callback=iterate,
-                               bounds=[(p.lower / s, p.upper / s) for p, s in zip(problem.free, scales)],
-                               options=chosen)
+                               bounds=problem.scaled_bounds, options=chosen)
     solve_seconds = time.perf_counter() - started
-    # the bounds in the parameters' units (x * scale may round past one)
-    lower, upper = np.array([p.lower for p in problem.free]), np.array([p.upper for p in problem.free])
     solution = Solution(
-        start=problem.start, optimum=problem.design(list(np.clip(result.x * scales, lower, upper))),
+        start=problem.start, optimum=problem.design_at(result.x),
         surrogate_start=reference, surrogate_optimum=-float(result.fun) * reference, history=np.asarray(history),
         infeasibility=np.zeros(len(history)), status=str(result.message), success=bool(result.success),
         iterations=int(result.nit), solve_seconds=solve_seconds, build_seconds=build_seconds, solver="L-BFGS-B")

@@ -86,6 +86,21 @@ class DesignProblem:
         return {**self.values, **{p.name: float(v) for p, v in zip(self.free, free_values)}}
 
     @property
+    def scales(self) -> np.ndarray:
+        """The free parameters' scales: an optimizer without CasADi's own scaling works on z = value / scale."""
+        return np.array([p.scale for p in self.free])
+
+    @property
+    def scaled_bounds(self) -> list[tuple[float, float]]:
+        """The free parameters' bounds in z = value / scale."""
+        return [(p.lower / p.scale, p.upper / p.scale) for p in self.free]
+
+    def design_at(self, z: np.ndarray) -> dict[str, float]:
+        """:meth:`design` of the scaled free values z, each within its bounds (z * scale may round past one)."""
+        lower, upper = np.array([p.lower for p in self.free]), np.array([p.upper for p in self.free])
+        return self.design(list(np.clip(np.asarray(z) * self.scales, lower, upper)))
+
+    @property
     def joint_limits(self) -> np.ndarray:
         """The joint limits (n, 2); a model sampled in its joint box always has them (ValueError for an unlimited
         one sampled in its task space)."""
