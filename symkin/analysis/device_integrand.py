@@ -13,6 +13,9 @@ generated Jacobian: the model's parameters are its arguments (traced), so every 
 :mod:`symkin.numerics.conditioning`'s: singular values at most max(m, n) eps sigma_max count as 0, a Jacobian
 with a non-finite entry has 1/kappa = 0.
 
+:func:`device_torque_peak` reduces the sweeps' peak effort per unit TCP force (the largest column norm of J's
+position rows over the configurations that count) on the device the same way.
+
 The configurations that count are the host's (:func:`symkin.mechanism.working_mode.jacobian_in_working_mode`),
 decided on the device too: those within the model's joint stops (:mod:`symkin.mechanism.stops`, their rows passed
 as arguments) and, for a parallel mechanism with closed forms, those in its working mode - fk(q) assembles and
@@ -131,6 +134,24 @@ def extreme_singular_values(J: Any, threshold: float) -> tuple[Any, Any]:
     return largest, jnp.where(smallest <= threshold * largest, 0.0, smallest)
 
 
+def _jacobian_and_inside(functions: _Functions, q: Any, joint_stops: Any, revolute: Any, parameters: dict[str, Any]
+                         ) -> tuple[Any, Any]:
+    """The task Jacobian at configurations q (N, n) and the configurations that count (N,), in jax.numpy: within
+    the joint stops and, where the model closes loops, in the working mode (:mod:`symkin.mechanism.working_mode`:
+    fk assembles and ik(fk(q)) = q; J(q, fk(q)))."""
+    import jax.numpy as jnp
+
+    rows, offsets, lower, upper = joint_stops
+    inside = stops.within_stops(q, rows, offsets, lower, upper, xp=jnp)
+    if functions.fk is None or functions.ik is None:
+        return functions.jacobian(q, **parameters["jacobian"]), inside
+    p = functions.fk(q, **parameters["fk"]).position
+    assembled = jnp.where(jnp.isfinite(p), p, 0.0)
+    back = functions.ik(assembled, **parameters["ik"]).joints
+    inside = inside & working_mode.same_branches(q, p, back, revolute, jnp)
+    return functions.jacobian(q, assembled, **parameters["jacobian"]), inside
+
+
 @functools.lru_cache(maxsize=32)
 def _compiled(functions: _Functions, measure: str, with_index: bool, threshold: float) -> tuple[Any, Any]:
     """(values, reduce) jitted once per generated function set and options: the parameters, the rows' scale, the
@@ -140,20 +161,8 @@ def _compiled(functions: _Functions, measure: str, with_index: bool, threshold: 
     import jax
     import jax.numpy as jnp
 
-    def jacobian_and_inside(q: Any, joint_stops: Any, revolute: Any, parameters: dict[str, Any]) -> tuple[Any, Any]:
-        rows, offsets, lower, upper = joint_stops
-        inside = stops.within_stops(q, rows, offsets, lower, upper, xp=jnp)
-        if functions.fk is None or functions.ik is None:
-            return functions.jacobian(q, **parameters["jacobian"]), inside
-        # the working mode (symkin.mechanism.working_mode): fk assembles and ik(fk(q)) = q
-        p = functions.fk(q, **parameters["fk"]).position
-        assembled = jnp.where(jnp.isfinite(p), p, 0.0)
-        back = functions.ik(assembled, **parameters["ik"]).joints
-        inside = inside & working_mode.same_branches(q, p, back, revolute, jnp)
-        return functions.jacobian(q, assembled, **parameters["jacobian"]), inside
-
     def values(q: Any, scale: Any, joint_stops: Any, revolute: Any, parameters: dict[str, Any]) -> tuple[Any, Any]:
-        J, inside = jacobian_and_inside(q, joint_stops, revolute, parameters)
+        J, inside = _jacobian_and_inside(functions, q, joint_stops, revolute, parameters)
         finite = jnp.all(jnp.isfinite(J), axis=(-2, -1))
         J = jnp.where(finite[:, None, None], J, 0.0)
         weight = jnp.abs(jnp.linalg.det(J)) if measure == "cartesian" else jnp.ones(q.shape[0])
@@ -209,14 +218,9 @@ def device_joint_space_integrand(model: GeneratedModel, *, with_index: bool = Tr
         raise ValueError(f"{model.name}: the Cartesian measure |det J| dq needs a square task Jacobian, "
                          f"this one is {m} x {n}; use measure='joint' or the Cartesian domain")
     scale = jnp.asarray(row_scale(model, box, length) if with_index else np.ones(m))
-    stop_arrays = stop_arguments(model)
-    revolute = jnp.asarray(mechanism.revolute_mask(model))
-    names = ("jacobian", *(working_mode.assembly_functions(model) or ()))
-    unbound = {name: model.unbound(name) for name in names}
-    functions = _Functions(*(function for function, _ in unbound.values()))
-    parameters = {name: values for name, (_, values) in unbound.items()}
+    functions, model_arguments = _program_of(model)
     evaluate, reduce = _compiled(functions, measure, with_index, max(m, n) * _EPS)
-    arguments = (scale, stop_arrays, revolute, parameters)
+    arguments = (scale, *model_arguments)
 
     def moments(q: np.ndarray) -> tuple[Any, Any]:
         mean, scatter, lowest, highest = reduce(jnp.asarray(q), *arguments)
@@ -227,6 +231,50 @@ def device_joint_space_integrand(model: GeneratedModel, *, with_index: bool = Tr
     components = ("index dW", "dW") if with_index else ("dW",)
     return Integrand(box[:, 0], box[:, 1], lambda q: np.asarray(evaluate(jnp.asarray(q), *arguments)),
                      components, mechanism.coordinate_names(model), moments=moments)
+
+
+def _program_of(model: GeneratedModel) -> tuple[_Functions, tuple[Any, Any, dict[str, dict[str, Any]]]]:
+    """The generated functions a device program of ``model`` calls (:class:`_Functions`: the compile cache's key) and
+    the model's arguments to it: its joint stops (:func:`stop_arguments`), revolute mask and the functions'
+    parameters."""
+    import jax.numpy as jnp
+
+    names = ("jacobian", *(working_mode.assembly_functions(model) or ()))
+    unbound = {name: model.unbound(name) for name in names}
+    parameters = {name: values for name, (_, values) in unbound.items()}
+    return (_Functions(*(function for function, _ in unbound.values())),
+            (stop_arguments(model), jnp.asarray(mechanism.revolute_mask(model)), parameters))
+
+
+@functools.lru_cache(maxsize=32)
+def _compiled_levers(functions: _Functions, position_rows: tuple[int, ...]) -> Any:
+    """``levers(q, joint_stops, revolute, parameters) -> (max_q max_i ||J_p[:, i](q)||, the count of configurations
+    that count)`` over the configurations that count with a finite J_p, jitted once per generated function set."""
+    import jax
+    import jax.numpy as jnp
+
+    def levers(q: Any, joint_stops: Any, revolute: Any, parameters: dict[str, Any]) -> tuple[Any, Any]:
+        J, inside = _jacobian_and_inside(functions, q, joint_stops, revolute, parameters)
+        position = J[:, list(position_rows), :]
+        norms = jnp.sqrt(jnp.sum(position * position, axis=1))          # (N, n): ||J_p[:, i]||
+        counted = inside & jnp.all(jnp.isfinite(norms), axis=1)
+        return jnp.max(jnp.where(counted[:, None], norms, -jnp.inf)), jnp.sum(counted)
+
+    return jax.jit(levers)
+
+
+def device_torque_peak(model: GeneratedModel, q: np.ndarray) -> float:
+    """The largest column norm of the position rows J_p of the task Jacobian over the configurations q (N, n) that
+    count (:func:`on_device`'s model: within the joint stops, a parallel mechanism's in its working mode) - the peak
+    effort per unit TCP force of :func:`symkin.design.sweep_metrics.torque_peak` - reduced on JAX's device: only the
+    number comes back.  ValueError where no configuration counts."""
+    import jax.numpy as jnp
+
+    functions, arguments = _program_of(model)
+    peak, count = _compiled_levers(functions, tuple(mechanism.position_rows(model)))(jnp.asarray(q), *arguments)
+    if int(count) == 0:
+        raise ValueError("no configuration of the working mode among the sampled ones")
+    return float(peak)
 
 
 def smooth_gci_gradient(model: GeneratedModel, points: np.ndarray, *, measure: str = "cartesian",

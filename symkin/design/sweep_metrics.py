@@ -86,12 +86,16 @@ def evaluate_design(model: Any, values: dict[str, float], definition: Any) -> di
 
 def torque_peak(model: Any, lower: np.ndarray, upper: np.ndarray, samples: int, seed: int) -> float:
     """max over Sobol configurations in [lower, upper] (in the working mode, for a parallel
-    mechanism) of the largest column norm of J_p: the peak effort per unit TCP force (see above)."""
+    mechanism) of the largest column norm of J_p: the peak effort per unit TCP force (see above); for a model loaded
+    with the JAX backend reduced on its device (:func:`symkin.analysis.device_integrand.device_torque_peak`)."""
+    from symkin.analysis import device_integrand
     from symkin.numerics import sampling
     from symkin.mechanism.working_mode import jacobian_in_working_mode
     from symkin import mechanism
 
     q = sampling.sobol(lower, upper, max(4, int(math.log2(samples))), np.random.default_rng(seed))
+    if device_integrand.on_device(model):    # a model loaded with JAX: the Jacobians stay on the device
+        return device_integrand.device_torque_peak(model, q)
     with np.errstate(all="ignore"):
         J, in_mode = jacobian_in_working_mode(model, q)
     inside = np.ones(len(q), dtype=bool) if in_mode is None else in_mode

@@ -176,6 +176,31 @@ def test_the_global_index_is_reduced_on_the_device(name, options, methods, jax_m
         assert got.measure.value == pytest.approx(want.measure.value, rel=1e-12)
 
 
+@pytest.mark.parametrize("name", ["ur10e", "delta"])
+def test_the_torque_peak_is_reduced_on_the_device(name, jax_model, loaded, monkeypatch):
+    """symkin sweep's torque_peak (max over Sobol configurations of J_p's largest column norm) of a model loaded with
+    JAX: reduced on the device - the host's Jacobians are never formed (calling them fails here) - and numpy's value to
+    rounding (the same configurations, the DELTA's working mode decided there): a few eps times kappa(J) at the
+    peak's configuration (the DELTA's J solves with J_x; at a = 0.12 m its peak lies near a singularity)."""
+    from symkin import mechanism
+    from symkin.design import sweep_metrics
+    from symkin.mechanism import working_mode
+    from symkin.numerics import sampling
+
+    numpy_model = loaded(name, "numpy")
+    box = mechanism.joint_limits(numpy_model)
+    want = sweep_metrics.torque_peak(numpy_model, box[:, 0], box[:, 1], 4096, 3)
+    q = sampling.sobol(box[:, 0], box[:, 1], 12, np.random.default_rng(3))  # torque_peak's configurations
+    J, inside = working_mode.jacobian_in_working_mode(numpy_model, q)
+    levers = np.linalg.norm(J[:, list(mechanism.position_rows(numpy_model)), :], axis=1).max(axis=1)
+    peak = np.argmax(np.where(True if inside is None else inside, levers, -np.inf))
+    assert levers[peak] == want
+    with monkeypatch.context() as patch:
+        patch.setattr(working_mode, "jacobian_in_working_mode", _values_on_the_host)
+        got = sweep_metrics.torque_peak(jax_model(name), box[:, 0], box[:, 1], 4096, 3)
+    assert got == pytest.approx(want, rel=16 * EPS * np.linalg.cond(J[peak]))
+
+
 def _check_the_cartesian_values(models, inverse, box, points, **options):
     """The inverse runs on the device for the JAX model only, and there the Cartesian integrand's values at
     ``points`` are numpy's point by point: the same reachable set (the box holds points out of the workspace too),
