@@ -36,6 +36,12 @@ reproduces the target within :data:`symkin.ik.closed_form.VALID_TOLERANCE` of ma
 first valid branch within the limits (angles wrapped into them) and the stops, and 1/kappa is that of the
 (homogenized) task Jacobian J(q) there.
 
+A spherical platform's orientation workspace (:mod:`symkin.analysis.orientations`: the roll-pitch-yaw box, the
+invariant measure |cos pitch|) runs on the device by :func:`device_orientation_integrand` with the host's rules: an
+orientation is reachable where the generated ``ik`` is finite and its joints are within the limits (angles wrapped
+into them) and the stops, and 1/kappa is that of J^-1 E^-1 (E the angular-velocity matrix, inverted by cofactors:
+:mod:`symkin.numerics.cofactors`).
+
 The singular values are one-sided Jacobi's (:mod:`symkin.numerics.jacobi_svd`), so det J^-1 is the one
 LAPACK kernel of the program (jaxlib's CPU LAPACK kernels deadlock when run side by side:
 :mod:`symkin.numerics.ordered_linalg`).
@@ -59,7 +65,9 @@ from symkin.integration.integrand import Integrand
 from symkin.mechanism import Limits, stops
 from symkin.mechanism.feasibility import InverseKinematics
 from symkin.mechanism.limits import within_limits
-from symkin.mechanism.reach import (POSITION_ROUND_TRIP_TOLERANCE, ConstantOrientationInverse, WorkingModeInverse)
+from symkin.mechanism.reach import (POSITION_ROUND_TRIP_TOLERANCE, ConstantOrientationInverse, WorkingModeInverse,
+                                    angular_velocity_matrix)
+from symkin.numerics import cofactors
 from symkin.runtime.info import GeneratedModel
 
 _EPS = float(np.finfo(np.float64).eps)
@@ -202,16 +210,18 @@ def _device_inverse_condition(J: Any, threshold: float) -> Any:
 
 
 def _integrand(model: GeneratedModel, lower: np.ndarray, upper: np.ndarray, evaluate: Any, reduce: Any,
-               constants: dict[str, Any], parameters: dict[str, Any], with_index: bool) -> Integrand:
+               constants: dict[str, Any], parameters: dict[str, Any], with_index: bool,
+               axes: tuple[str, ...] | None = None) -> Integrand:
     """The Integrand over the box [lower, upper] whose values are ``evaluate``'s and whose batches ``reduce`` reduces
-    to their moments on the device (both called with the points, ``constants`` and ``parameters``)."""
+    to their moments on the device (both called with the points, ``constants`` and ``parameters``); ``axes``: the
+    box's coordinates (default: the model's position axes)."""
     import jax.numpy as jnp
 
     def moments(points: np.ndarray) -> tuple[Any, Any]:
         mean, scatter, _, _ = reduce(jnp.asarray(points), constants, parameters)
         return mean, scatter
 
-    axes = tuple("xyz"[a] for a in mechanism.position_axes(model))
+    axes = axes or tuple("xyz"[a] for a in mechanism.position_axes(model))
     components = ("index dW", "dW") if with_index else ("dW",)
     return Integrand(lower, upper, lambda points: np.asarray(evaluate(jnp.asarray(points), constants, parameters)),
                      components, axes, indicator=len(components) - 1, moments=moments)
@@ -274,3 +284,54 @@ def device_cartesian_integrand(model: GeneratedModel, inverse: InverseKinematics
     evaluate, reduce = _compiled(functions, with_index, max(m, n) * _EPS, bool(revolute.any()))
 
     return _integrand(model, lower, upper, evaluate, reduce, constants, parameters, with_index)
+
+
+def orientations_on_device(model: GeneratedModel, with_index: bool = True) -> bool:
+    """Whether the orientation integrand of a spherical platform runs fused on JAX's device: the model is loaded with
+    the JAX backend and has the generated ``ik`` (and ``inverse_jacobian`` for the index)."""
+    needed = {"ik", "inverse_jacobian"} if with_index else {"ik"}
+    return loaded_with_jax(model) and mechanism.turns_only(model) and needed <= set(model.functions)
+
+
+@functools.lru_cache(maxsize=32)
+def _compiled_orientations(ik: Callable[..., Any], inverse_jacobian: Callable[..., Any] | None, with_index: bool,
+                           threshold: float) -> tuple[Any, Any]:
+    """(values, reduce) of the orientation integrand (:func:`device_orientation_integrand`), jitted once per generated
+    ik and J^-1 and options: [w 1/kappa(J^-1 E^-1), w] with w = 1_W |cos pitch|, or [w]."""
+    import jax
+    import jax.numpy as jnp
+
+    def values(p: Any, constants: dict[str, Any], parameters: dict[str, Any]) -> tuple[Any, Any]:
+        q = ik(p, **parameters["ik"]).joints
+        finite = jnp.all(jnp.isfinite(q), axis=-1)
+        q = jnp.where(finite[:, None], q, 0.0)
+        _, inside = within_limits(q, constants["limits"], constants["revolute"], xp=jnp)
+        rows, offsets, lower, upper = constants["stops"]
+        reachable = finite & inside & stops.within_stops(q, rows, offsets, lower, upper, xp=jnp)
+        weight = jnp.where(reachable, jnp.abs(jnp.cos(p[:, 1])), 0.0)
+        if not with_index:
+            return weight[:, None], weight
+        assert inverse_jacobian is not None, "the index needs J^-1"
+        E = angular_velocity_matrix(p, jnp)
+        inverse = inverse_jacobian(q, p, **parameters["inverse_jacobian"]) @ cofactors.inverse(E, jnp)
+        index = jnp.where(reachable, _device_inverse_condition(inverse, threshold), 0.0)
+        return jnp.stack([weight * index, weight], axis=-1), index
+
+    return (jax.jit(lambda *arguments: values(*arguments)[0]),
+            jax.jit(lambda *arguments: reduced(*values(*arguments))))
+
+
+def device_orientation_integrand(model: GeneratedModel, lower: np.ndarray, upper: np.ndarray, joint_box: np.ndarray,
+                                 *, with_index: bool = True) -> Integrand:
+    """The orientation integrand of :func:`symkin.analysis.orientations.orientation_integrand` over the roll-pitch-yaw
+    box [lower, upper] of a spherical platform loaded with the JAX backend (:func:`orientations_on_device`), its
+    batches reduced on the device (see the module docstring)."""
+    import jax.numpy as jnp
+
+    ik, ik_values = model.unbound("ik")
+    inverse_jacobian, inverse_values = model.unbound("inverse_jacobian") if with_index else (None, {})
+    constants = {"limits": jnp.asarray(joint_box), "revolute": jnp.asarray(mechanism.revolute_mask(model)),
+                 "stops": stop_arguments(model)}
+    parameters = {"ik": ik_values, "inverse_jacobian": inverse_values}
+    evaluate, reduce = _compiled_orientations(ik, inverse_jacobian, with_index, 3 * _EPS)
+    return _integrand(model, lower, upper, evaluate, reduce, constants, parameters, with_index, mechanism.ANGLES)

@@ -14,7 +14,8 @@ depend on the angles either; kappa(J_w) = kappa(J^-1 E^-1), formed without inver
 
 The workspace is integrated over the roll-pitch-yaw box (the whole chart of SO(3) by default: roll and
 yaw over a full turn, pitch over [-90, 90] deg, each orientation once) with reachability from the
-generated closed-form ``ik`` (every leg reaches p on its declared branch, the joints within their limits):
+generated closed-form ``ik`` (every leg reaches p on its declared branch, the joints within their limits; for a
+model loaded with the JAX backend on its device, :func:`symkin.analysis.device_cartesian.device_orientation_integrand`):
 
     GCI = int_W 1/kappa(J_w) dW / int_W dW.
 """
@@ -25,6 +26,7 @@ import numpy as np
 
 from symkin.numerics import conditioning
 from symkin import mechanism
+from symkin.analysis import device_cartesian
 from symkin.analysis.global_indices import GlobalIndex
 from symkin.integration.integrand import Integrand
 from symkin.integration.integrators import integrate
@@ -93,6 +95,8 @@ def orientation_integrand(model: GeneratedModel, box: tuple[np.ndarray, np.ndarr
     joint_box = mechanism.joint_limits(model, limits)
     revolute = mechanism.revolute_mask(model)
     lower, upper = (np.asarray(b, dtype=np.float64) for b in box)
+    if device_cartesian.orientations_on_device(model, index):  # loaded with JAX: fused and reduced on its device
+        return device_cartesian.device_orientation_integrand(model, lower, upper, joint_box, with_index=index)
 
     def function(p: np.ndarray) -> np.ndarray:
         if not index:

@@ -171,19 +171,20 @@ GIMBAL_TOLERANCE = 1e-6
 SPHERE_TOLERANCE = 1e-9
 
 
-def angular_velocity_matrix(orientation: np.ndarray) -> np.ndarray:
+def angular_velocity_matrix(orientation: Any, xp: Any = np) -> Any:
     """E (..., 3, 3) with omega = E d(roll, pitch, yaw)/dt, omega in the base frame, R = Rz(yaw) Ry(pitch)
-    Rx(roll), at orientations (..., 3).
+    Rx(roll), at orientations (..., 3), in the array module ``xp`` (numpy, or jax.numpy on a device).
 
     omega = e_z dyaw + Rz(yaw) e_y dpitch + Rz(yaw) Ry(pitch) e_x droll, so the columns of E
     are Rz Ry e_x = (cy cp, sy cp, -sp), Rz e_y = (-sy, cy, 0) and e_z; E = I at roll = pitch =
     yaw = 0 and det E = cos(pitch).
     """
-    _, pitch, yaw = np.moveaxis(np.asarray(orientation, dtype=np.float64), -1, 0)
-    cp, sp, cy, sy = np.cos(pitch), np.sin(pitch), np.cos(yaw), np.sin(yaw)
-    zero, one = np.zeros_like(cp), np.ones_like(cp)
-    return np.stack([np.stack([cy * cp, -sy, zero], -1), np.stack([sy * cp, cy, zero], -1),
-                     np.stack([-sp, zero, one], -1)], -2)
+    orientation = xp.asarray(orientation, dtype=xp.float64)
+    pitch, yaw = orientation[..., 1], orientation[..., 2]
+    cp, sp, cy, sy = xp.cos(pitch), xp.sin(pitch), xp.cos(yaw), xp.sin(yaw)
+    zero, one = xp.zeros_like(cp), xp.ones_like(cp)
+    return xp.stack([xp.stack([cy * cp, -sy, zero], -1), xp.stack([sy * cp, cy, zero], -1),
+                     xp.stack([-sp, zero, one], -1)], -2)
 
 
 class ConstantOrientation:

@@ -262,6 +262,33 @@ def test_the_cartesian_integrand_runs_on_the_device(name, options, jax_model, lo
     _check_the_cartesian_gci_and_grid(models, inverse, box, 0.04, monkeypatch, **options)
 
 
+def test_the_orientation_integrand_runs_on_the_device(jax_model, loaded, monkeypatch):
+    """The Agile Eye's orientation workspace on the device (the roll-pitch-yaw chart of SO(3), the invariant measure
+    |cos pitch|): at random orientations of the whole chart the same reachable set as numpy's point by point, the
+    weights and 1/kappa of J^-1 E^-1 to rounding (E^-1 by cofactors, numpy's by LAPACK: a few eps times kappa(E) =
+    O(1 / |cos pitch|)); the GCI and the measure with the values never coming back (calling them fails here): numpy's
+    to 1e-12."""
+    from symkin.analysis import device_cartesian, orientations
+    from symkin.integration.integrand import Integrand
+
+    numpy_model, model = loaded("agile_eye", "numpy"), jax_model("agile_eye")
+    assert device_cartesian.orientations_on_device(model)
+    assert not device_cartesian.orientations_on_device(numpy_model)
+    points = np.random.default_rng(7).uniform(*orientations.FULL_CHART, (4096, 3))
+    want = orientations.orientation_integrand(numpy_model)(points)
+    got = orientations.orientation_integrand(model)(points)
+    assert np.array_equal(got[:, 1] > 0, want[:, 1] > 0)
+    assert 0 < np.count_nonzero(want[:, 1]) < len(points)
+    bound = 64 * EPS / np.abs(np.cos(points[:, 1]))
+    assert np.all(np.abs(got - want) <= bound[:, None])
+    expected = orientations.orientation_gci(numpy_model, samples=2**12, seed=4)
+    with monkeypatch.context() as patch:
+        patch.setattr(Integrand, "__call__", _values_on_the_host)
+        found = orientations.orientation_gci(model, samples=2**12, seed=4)
+    assert found.value.value == pytest.approx(expected.value.value, rel=1e-12)
+    assert found.measure.value == pytest.approx(expected.measure.value, rel=1e-12)
+
+
 def test_a_serial_arms_closed_form_runs_on_the_device(jax_model, loaded, monkeypatch):
     """The planar 2R's Cartesian domain (seed Fig. 8.19) on the device: both elbow branches by the half-angle law of
     cosines in jax.numpy, valid where fk reproduces the point, the first one within the 0..90 deg limits, 1/kappa of
