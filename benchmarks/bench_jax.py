@@ -27,7 +27,11 @@ calls, after one that compiles):
   the actuators' limits and 1/kappa of the twist Jacobian diag(I, E) (J^-1)^-1 homogenized by its characteristic
   length, per point - the host integrand (:func:`symkin.analysis.global_indices.cartesian_integrand`, the C
   backend's ik and J^-1, numpy's det, inverse and SVD) against the device's
-  (:func:`symkin.analysis.device_cartesian.device_cartesian_integrand`).
+  (:func:`symkin.analysis.device_cartesian.device_cartesian_integrand`);
+* ``Agile Eye orientation GCI integrand``: what ``symkin gci models/agile_eye.yaml`` integrates over the roll-pitch-yaw
+  chart of SO(3), [|cos pitch| 1_W 1/kappa, |cos pitch| 1_W]: the closed-form ik, the joint limits and 1/kappa of
+  J^-1 E^-1 per orientation - the host's (:func:`symkin.analysis.orientations.orientation_integrand` on the C backend)
+  against the device's (:func:`symkin.analysis.device_cartesian.device_orientation_integrand`).
 
 ``DELTA datasheet``: the seconds of ``symkin rate``'s arithmetic (:func:`symkin.rating.datasheet.rate`, every group
 of measures rated) over ``--samples`` workspace samples with numpy and on JAX's device, its first and second rating.
@@ -61,6 +65,7 @@ from symkin.analysis.device_cartesian import device_cartesian_integrand  # noqa:
 from symkin.analysis.device_integrand import device_joint_space_integrand  # noqa: E402
 from symkin.analysis.global_indices import cartesian_integrand, joint_space_integrand  # noqa: E402
 from symkin.analysis.inverse import inverse_kinematics_for  # noqa: E402
+from symkin.analysis.orientations import FULL_CHART, orientation_integrand  # noqa: E402
 from symkin.mechanism import reach  # noqa: E402
 from symkin.text_table import format_table  # noqa: E402
 
@@ -119,6 +124,12 @@ def main(argv: list[str] | None = None) -> int:
             for integrand, backend in ((cartesian_integrand, "c"), (device_cartesian_integrand, "jax")))
         centres = rng.uniform(box[0], box[1], (args.batch, 3))
         stewart_device.mean_and_covariance(centres)     # compiles
+        # a spherical platform's orientations: ik, limits, |cos pitch| and 1/kappa of J^-1 E^-1
+        eye_directory = symkin.derive(ROOT / "models" / "agile_eye.yaml", Path(tmp) / "agile_eye",
+                                      outputs=["ik", "inverse_jacobian"], backends=["c", "jax"], fixed=["all"])
+        eye_host, eye_device = (orientation_integrand(symkin.load(eye_directory, backend)) for backend in ("c", "jax"))
+        angles = rng.uniform(*FULL_CHART, (args.batch, 3))
+        eye_device.mean_and_covariance(angles)          # compiles
 
         cases = [
             ("fk + J + M + V + G", "numpy", lambda: numpy_model.combined(q, qd)),
@@ -139,6 +150,10 @@ def main(argv: list[str] | None = None) -> int:
              "C ik, J^-1 + numpy, on the host", lambda: stewart_host.mean_and_covariance(centres)),
             ("Stewart Cartesian GCI integrand (ik, assembly mode, (J^-1)^-1, 1/kappa)", "JAX, reduced on the device",
              lambda: stewart_device.mean_and_covariance(centres)),
+            ("Agile Eye orientation GCI integrand (ik, limits, |cos pitch|, 1/kappa of J^-1 E^-1)",
+             "C ik, J^-1 + numpy, on the host", lambda: eye_host.mean_and_covariance(angles)),
+            ("Agile Eye orientation GCI integrand (ik, limits, |cos pitch|, 1/kappa of J^-1 E^-1)",
+             "JAX, reduced on the device", lambda: eye_device.mean_and_covariance(angles)),
         ]
         rows = [[case, backend, f"{1e9 * best_seconds(call, args.repeat) / args.batch:.2f}"]
                 for case, backend, call in cases]

@@ -40,7 +40,7 @@ A spherical platform's orientation workspace (:mod:`symkin.analysis.orientations
 invariant measure |cos pitch|) runs on the device by :func:`device_orientation_integrand` with the host's rules: an
 orientation is reachable where the generated ``ik`` is finite and its joints are within the limits (angles wrapped
 into them) and the stops, and 1/kappa is that of J^-1 E^-1 (E the angular-velocity matrix, inverted by cofactors:
-:mod:`symkin.numerics.cofactors`).
+:mod:`symkin.numerics.cofactors`), at the reachable orientations gathered (the Agile Eye reaches 9 % of the chart).
 
 The singular values are one-sided Jacobi's (:mod:`symkin.numerics.jacobi_svd`), so det J^-1 is the one
 LAPACK kernel of the program (jaxlib's CPU LAPACK kernels deadlock when run side by side:
@@ -312,9 +312,13 @@ def _compiled_orientations(ik: Callable[..., Any], inverse_jacobian: Callable[..
         if not with_index:
             return weight[:, None], weight
         assert inverse_jacobian is not None, "the index needs J^-1"
-        E = angular_velocity_matrix(p, jnp)
-        inverse = inverse_jacobian(q, p, **parameters["inverse_jacobian"]) @ cofactors.inverse(E, jnp)
-        index = jnp.where(reachable, _device_inverse_condition(inverse, threshold), 0.0)
+
+        def inverse_condition(joints: Any, angles: Any) -> Any:
+            inverse = inverse_jacobian(joints, angles, **parameters["inverse_jacobian"])
+            return _device_inverse_condition(inverse @ cofactors.inverse(angular_velocity_matrix(angles, jnp), jnp),
+                                             threshold)
+
+        index = on_gathered_rows(reachable, REACHABLE_SHARES, inverse_condition, q, p)  # few orientations reachable
         return jnp.stack([weight * index, weight], axis=-1), index
 
     return (jax.jit(lambda *arguments: values(*arguments)[0]),
