@@ -66,7 +66,7 @@ def solve_gci_over_the_box(problem: DesignProblem, jax_model: GeneratedModel, nu
         value, gradient = surrogate_program(*nodes_arguments, box.design_values(np.frombuffer(key)))
         return float(value), np.array([float(gradient[name]) for name in names]) * scales
 
-    z0 = np.array([p.start for p in problem.free]) / scales
+    z0 = problem.scaled_start
     reference, _ = surrogate(_key(z0))
     if not (np.isfinite(reference) and reference > 0):
         raise ValueError(f"the gci surrogate is {reference} at the start design {problem.start}: start from a design "
@@ -212,13 +212,13 @@ def solve_force_over_the_box(problem: DesignProblem, jax_model: GeneratedModel, 
         """(|J_i(p_j)|^2 / tau_max,i^2 flattened, its derivatives by z (columns))."""
         values, slopes = force_program(box.points, limits, box.design_values(np.frombuffer(key)))
         return (np.asarray(values).reshape(-1),
-                np.stack([np.asarray(slopes[name]).reshape(-1) * scale for name, scale in zip(names, scales)], -1))
+                _scaled_columns(slopes, names, scales))
 
     def worst(z: np.ndarray) -> float:
         """The design's worst isotropic force over the points, min 1 / sqrt(|J_i|^2 / tau_max,i^2)."""
         return float(np.min(1.0 / np.sqrt(squared(_key(z))[0])))
 
-    z0 = np.array([p.start for p in problem.free]) / scales
+    z0 = problem.scaled_start
     start = worst(z0)
     if not (np.isfinite(start) and start > 0):
         raise ValueError(f"{numpy_model.name}: the isotropic force vanishes in the box at the start design")
@@ -302,7 +302,7 @@ def _mass_constraints(mass_program: Any, points: Any, bound: float,
     def constraints(key: bytes) -> tuple[np.ndarray, np.ndarray]:
         minors, slopes = mass_program(points, bound, design_values(np.frombuffer(key)))
         return (np.asarray(minors).reshape(-1),
-                np.stack([np.asarray(slopes[name]).reshape(-1) * scale for name, scale in zip(names, scales)], -1))
+                _scaled_columns(slopes, names, scales))
 
     return constraints
 
@@ -329,6 +329,12 @@ def _mass_program(ik: Any, jacobian: Any, mass_matrix: Any, ik_names: tuple[str,
 
     return jax.jit(lambda points, bound, parameters: (minors(points, bound, parameters),
                                                       jax.jacfwd(minors, argnums=2)(points, bound, parameters)))
+
+
+def _scaled_columns(slopes: dict[str, Any], names: list[str], scales: np.ndarray) -> np.ndarray:
+    """The derivatives of flattened values by the scaled free parameters z, as columns: jax.jacfwd's derivatives by
+    each parameter (``slopes``), flattened, times its scale."""
+    return np.stack([np.asarray(slopes[name]).reshape(-1) * scale for name, scale in zip(names, scales)], -1)
 
 
 def _violation(g: np.ndarray) -> float:

@@ -206,7 +206,7 @@ def formulate(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model:
         box_points: constraint points per axis of the required box.
         seed: seed of the fixed Sobol nodes.
     """
-    scales = np.array([p.scale for p in problem.free])
+    scales = problem.scales
     free = casadi.SX.sym("free", len(problem.free))
     values: dict[str, Any] = dict(problem.values)
     values.update({p.name: free[k] for k, p in enumerate(problem.free)})
@@ -226,9 +226,9 @@ def formulate(problem: DesignProblem, casadi_model: GeneratedModel, numpy_model:
         raise ValueError(f"the {problem.objective} surrogate is 0 at the start design {problem.start}: "
                          "start from a design with a nonsingular, reachable workspace")
     return DesignProgram(casadi.vertcat(z, terms.variables), -terms.objective / reference, terms.g,
-                   np.concatenate([start / scales, terms.start]),
-                   np.concatenate([[p.lower for p in problem.free] / scales, terms.lower]),
-                   np.concatenate([[p.upper for p in problem.free] / scales, terms.upper]),
+                   np.concatenate([problem.scaled_start, terms.start]),
+                   np.concatenate([[low for low, _ in problem.scaled_bounds], terms.lower]),
+                   np.concatenate([[high for _, high in problem.scaled_bounds], terms.upper]),
                    np.asarray(terms.lbg, float), np.asarray(terms.ubg, float), objective_function,
                    reference, len(problem.free), scales, terms.nodes, terms.box_points, terms.description,
                    terms.configuration_count)

@@ -122,7 +122,7 @@ def solve_with_jax(problem: DesignProblem, jax_model: GeneratedModel, numpy_mode
         value, gradient = program(points, scale, values)
         return factor * float(value), factor * np.array([float(gradient[p.name]) for p in problem.free]) * scales
 
-    z0 = np.array([p.start for p in problem.free]) / scales
+    z0 = problem.scaled_start
     reference, _ = surrogate(z0)
     if not (np.isfinite(reference) and reference > 0):
         raise ValueError(f"the {problem.objective} surrogate is {reference} at the start design {problem.start}: start "

@@ -91,6 +91,11 @@ class DesignProblem:
         return np.array([p.scale for p in self.free])
 
     @property
+    def scaled_start(self) -> np.ndarray:
+        """The start design's free values in z = value / scale."""
+        return np.array([p.start / p.scale for p in self.free])
+
+    @property
     def scaled_bounds(self) -> list[tuple[float, float]]:
         """The free parameters' bounds in z = value / scale."""
         return [(p.lower / p.scale, p.upper / p.scale) for p in self.free]
