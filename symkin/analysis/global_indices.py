@@ -157,6 +157,18 @@ def cartesian_integrand(model: GeneratedModel, inverse: InverseKinematics, box: 
     return Integrand(lower, upper, function, components, axes, indicator=len(components) - 1)
 
 
+def joint_space_integrand_for(model: GeneratedModel, *, index: Index | None = conditioning.inverse_condition_number,
+                              measure: str = "cartesian", limits: Limits | None = None,
+                              length: float | str | None = None) -> Integrand:
+    """The joint-space integrand (:func:`joint_space_integrand`'s components) where it is evaluated: fused on JAX's
+    device for a model loaded with the JAX backend whose working mode its generated functions decide and the default
+    index (:mod:`symkin.analysis.device_integrand`), else on the host."""
+    if measure in MEASURES and device_integrand.on_device(model) and index in (None, DEFAULT_INDEX):
+        return device_integrand.device_joint_space_integrand(model, with_index=index is not None, measure=measure,
+                                                             limits=limits, length=length)
+    return joint_space_integrand(model, index=index, measure=measure, limits=limits, length=length)
+
+
 def cartesian_integrand_for(model: GeneratedModel, inverse: InverseKinematics, box: tuple[np.ndarray, np.ndarray], *,
                             index: Index | None = conditioning.inverse_condition_number, limits: Limits | None = None,
                             length: float | str | None = None) -> Integrand:
@@ -192,11 +204,7 @@ def _integrand(model: GeneratedModel, *, domain: str, measure: str, index: Index
                length: float | str | None, inverse: InverseKinematics | None,
                box: tuple[np.ndarray, np.ndarray] | None) -> tuple[Integrand, str]:
     if domain == "joint":
-        if measure in MEASURES and device_integrand.on_device(model) and index in (None, DEFAULT_INDEX):
-            integrand = device_integrand.device_joint_space_integrand(model, with_index=index is not None,
-                                                                      measure=measure, limits=limits, length=length)
-        else:
-            integrand = joint_space_integrand(model, index=index, measure=measure, limits=limits, length=length)
+        integrand = joint_space_integrand_for(model, index=index, measure=measure, limits=limits, length=length)
         return integrand, reach.domain_description(model, domain, measure)
     if domain == "cartesian":
         if inverse is None:

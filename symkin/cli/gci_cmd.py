@@ -61,7 +61,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     analysis_args.add_orientation_argument(p)
     analysis_args.add_device_argument(p)
     p.add_argument("--seed", type=int, default=None, help="seed of mc/qmc (default: fresh randomness)")
-    analysis_args.add_chunk_arguments(p, "mc/qmc on the joint domain")
+    analysis_args.add_chunk_arguments(p, "mc/qmc on the joint or Cartesian domain (the numpy or JAX code of --backend on each worker; with jax each chunk is reduced on the worker's device)")
     p.add_argument("--map", metavar="FIGURE", help="also draw the local index over the workspace into FIGURE")
     p.set_defaults(run=run, parser=p)
 
@@ -74,14 +74,18 @@ def _chunked(args: argparse.Namespace) -> int:
     from symkin.mechanism import reach
     from symkin.mechanism.reach import bounding_box, domain_description
     from symkin.runtime.cluster import check_scheduler
-    from symkin.runtime.payload import ModelPayload
+    from symkin.runtime.payload import PAYLOAD_BACKENDS, ModelPayload
 
     try:
         check_scheduler(args.scheduler, args.workers)
         if args.method not in ("mc", "qmc") or args.map:
             raise ValueError("--scheduler integrates by mc or qmc (no --map)")
-        with model_files.generated_directory(args.model, ("numpy",), NEEDS["kinematics"], display=Progress) as d:
-            payload = ModelPayload.from_directory(d)
+        if args.backend not in PAYLOAD_BACKENDS:
+            raise ValueError(f"--scheduler ships the model's {' or '.join(PAYLOAD_BACKENDS)} code to the workers, not "
+                             f"its {args.backend} code: use --backend {' or --backend '.join(PAYLOAD_BACKENDS)}")
+        with model_files.generated_directory(args.model, (args.backend,), NEEDS["kinematics"],
+                                             display=Progress) as d:
+            payload = ModelPayload.from_directory(d, args.backend)
         values = analysis_args.parse_assignments(args.assignments)
         model = payload.load().bind(**values) if values else payload.load()
         limits = analysis_args.parse_limits(args.limits)
@@ -97,6 +101,7 @@ def _chunked(args: argparse.Namespace) -> int:
         spec = IntegrandSpec(tuple(sorted(values.items())), INDICES[args.index], args.measure,
                              tuple(sorted(limits.items())), analysis_args.resolve_length(held, args.length, limits),
                              domain, box, None if orientation is None else (orientation[0], orientation[1], orientation[2]))
+        fused = spec.build(payload.load()).moments is not None    # the integrand each worker builds, built here
         start = time.perf_counter()
         with Progress(model.name) as progress:
             result = integrate_chunked(payload, spec, args.method, args.samples, seed=args.seed or 0,
@@ -111,7 +116,8 @@ def _chunked(args: argparse.Namespace) -> int:
     space = domain_description(held, domain, args.measure)
     found = GlobalIndex(result.ratio(0, 1), result.component(1), result,
                         f"{space}, in chunks of at most {args.chunk} points {where}"
-                        + (f" ({chunks} chunks)" if chunks else ""))
+                        + (f" ({chunks} chunks)" if chunks else "")
+                        + (", each reduced on the worker's JAX device" if fused else ""))
     _print(args, held, found, seconds, None)
     return 0
 

@@ -75,6 +75,10 @@ def _chunked_study(args: argparse.Namespace, models: list, designs: list[dict[st
     from symkin.runtime.payload import ModelPayload
 
     check_scheduler(args.scheduler, args.workers)
+    if args.backend != "numpy":
+        raise ValueError(f"--scheduler samples the workspace with the numpy code on the workers (its clouds come back "
+                         f"for the figures), not the {args.backend} code: leave out --backend, or --scheduler to "
+                         "evaluate in this process")
     if args.orientation:
         raise ValueError("--scheduler samples a serial mechanism's joint space (no --orientation)")
     with model_files.generated_directory(args.model, ("numpy",), NEEDS["kinematics"], display=Progress) as d:

@@ -6,21 +6,25 @@ cut into chunks of at most ``chunk`` points; each chunk is a task
 (:func:`symkin.runtime.cluster.run_tasks`: a LocalCluster, a cluster, or this process) that
 draws its own points from the definition alone, evaluates the integrand on the worker (rebuilt
 there from the model's :class:`~symkin.runtime.payload.ModelPayload` and an
-:class:`IntegrandSpec`) and returns sums, so memory is bounded by the chunk size on every
-machine:
+:class:`IntegrandSpec`) and returns the moments of its values, so memory is bounded by the chunk size on
+every machine:
 
 * ``qmc``: replicate r is the scrambled Sobol sequence of 2^m points whose scrambling comes
   from the seed sequence (seed, r) (:class:`~symkin.numerics.sobol.Sobol`, its points k0 ... k1
   drawn alone); as in :func:`~symkin.numerics.sampling.sobol`, the digits below its 30 bits
   are uniform random, here from the generator (seed, r, k0) of the chunk.  A task
-  returns sum f over its points; the replicate means and the Student-t half-width of their
+  returns the moments of f over its points (below); the replicate means and the Student-t half-width of their
   spread are those of the in-memory integrator (Owen, "Monte Carlo theory, methods and
   examples", ch. 17);
-* ``mc``: chunk c draws its uniform points from the generator (seed, c) and returns sum f and
-  sum f f^T: the mean and the covariance of the mean (95 % normal half-width).
+* ``mc``: chunk c draws its uniform points from the generator (seed, c) and returns the moments of f
+  (count, mean, scatter): the mean and the covariance of the mean (95 % normal half-width).
 
-The chunks' sums are added in chunk order, so for a given chunk size the estimate does not
-depend on where or in which order the chunks ran (tested: serial and on a 2-worker
+A chunk reduces its values to their moments where they are evaluated
+(:meth:`~symkin.integration.integrand.Integrand.reduce`): on a worker's JAX device for a payload of
+JAX code whose integrand the device decides (:meth:`IntegrandSpec.build`), so that only k + k^2 numbers
+come back from it, or from the values on the worker.  The chunks' moments are combined in chunk order
+(Chan, Golub and LeVeque's pairwise update, :func:`~symkin.integration.integrand.combined`), so for a
+given chunk size the estimate does not depend on where or in which order the chunks ran (tested: serial and on a 2-worker
 LocalCluster agree to the bit); another chunk size draws other low digits.
 The chunked estimates are not bit-identical to the in-memory ones (their random streams
 differ) but estimate the same integrals with the same error model (tested within the error bars).
@@ -36,6 +40,7 @@ from typing import Any
 import numpy as np
 
 from symkin.integration.estimates import IntegralEstimate
+from symkin.integration.integrand import Integrand, Moments, combined
 from symkin.integration.integrators import QMC_REPLICATES, monte_carlo_estimate, quasi_monte_carlo_estimate
 from symkin.numerics.sampling import sobol_range
 from symkin.runtime.cluster import run_tasks
@@ -73,42 +78,44 @@ class IntegrandSpec:
     box: tuple[tuple[float, ...], tuple[float, ...]] | None = None
     orientation: tuple[float, float, float] | None = None
 
-    def build(self, model: Any) -> Any:
+    def build(self, model: Any) -> Integrand:
+        """The integrand of ``model`` (loaded on the worker) where it is evaluated: fused on JAX's device for a
+        model loaded with the JAX backend that the device decides (:func:`~symkin.analysis.global_indices.
+        joint_space_integrand_for`, :func:`~symkin.analysis.global_indices.cartesian_integrand_for`), else here."""
         from symkin.numerics import conditioning
         from symkin.analysis import inverse
-        from symkin.analysis.global_indices import cartesian_integrand, joint_space_integrand
+        from symkin.analysis.global_indices import cartesian_integrand_for, joint_space_integrand_for
         from symkin.mechanism import reach
 
         bound = model.bind(**dict(self.parameters)) if self.parameters else model
         index = getattr(conditioning, self.index) if self.index is not None else None
         limits = dict(self.limits) or None
         if self.domain == "joint":
-            return joint_space_integrand(bound, index=index, measure=self.measure, limits=limits, length=self.length)
+            return joint_space_integrand_for(bound, index=index, measure=self.measure, limits=limits,
+                                             length=self.length)
         held = reach.held_at(bound, self.orientation)
         ik = inverse.inverse_kinematics_for(held)
         if ik is None or self.box is None:
             raise ValueError(f"{model.name}: the Cartesian domain needs an inverse kinematics and a box")
         box = (np.array(self.box[0], dtype=float), np.array(self.box[1], dtype=float))
-        return cartesian_integrand(held, ik, box, index=index, limits=limits, length=self.length)
+        return cartesian_integrand_for(held, ik, box, index=index, limits=limits, length=self.length)
 
 
 def _qmc_chunk(payload: ModelPayload, spec: IntegrandSpec, seed: int, replicate: int, start: int,
-               stop: int) -> np.ndarray:
-    """sum f over points start ... stop - 1 of replicate ``replicate`` (see the module docstring)."""
+               stop: int) -> Moments:
+    """The moments of f over points start ... stop - 1 of replicate ``replicate`` (see the module docstring)."""
     integrand = spec.build(payload.load())
     unit = sobol_range(integrand.dimension, (seed, replicate), start, stop)
     with np.errstate(all="ignore"):
-        return integrand(integrand.lower + unit * (integrand.upper - integrand.lower)).sum(axis=0)
+        return integrand.reduce(integrand.lower + unit * (integrand.upper - integrand.lower))
 
 
-def _mc_chunk(payload: ModelPayload, spec: IntegrandSpec, seed: int, chunk: int, count: int
-              ) -> tuple[np.ndarray, np.ndarray]:
-    """(sum f, sum f f^T) over ``count`` uniform points from the generator (seed, chunk)."""
+def _mc_chunk(payload: ModelPayload, spec: IntegrandSpec, seed: int, chunk: int, count: int) -> Moments:
+    """The moments of f over ``count`` uniform points from the generator (seed, chunk)."""
     integrand = spec.build(payload.load())
     unit = np.random.default_rng([seed, chunk]).random((count, integrand.dimension))
     with np.errstate(all="ignore"):
-        f = integrand(integrand.lower + unit * (integrand.upper - integrand.lower))
-    return f.sum(axis=0), f.T @ f
+        return integrand.reduce(integrand.lower + unit * (integrand.upper - integrand.lower))
 
 
 def integrate_chunked(payload: ModelPayload, spec: IntegrandSpec, method: str, samples: int, *, seed: int = 0,
@@ -156,14 +163,11 @@ def integrate_chunked(payload: ModelPayload, spec: IntegrandSpec, method: str, s
 
     run_tasks(function, tasks, shared=payload, name=f"symkin-integrate-{payload.digest[:12]}-{method}-{seed}",
               finished=finished, scheduler=scheduler, workers=workers, client=client)
-    ordered = [results[i] for i in range(len(tasks))]
+    ordered: list[Moments] = [results[i] for i in range(len(tasks))]
+    components = len(ordered[0].mean)
     if method == "qmc":
-        sums = np.zeros((replicates, len(ordered[0])))
-        for (_, _, r, _, _), s in zip(tasks, ordered):
-            sums[r] += s
-        return quasi_monte_carlo_estimate(volume * sums / size, total)
-    first = sum((s for s, _ in ordered), np.zeros_like(ordered[0][0]))
-    second = sum((p for _, p in ordered), np.zeros_like(ordered[0][1]))
-    mean = first / samples
-    return monte_carlo_estimate(volume, mean, (second / samples - np.outer(mean, mean)) * samples / (samples - 1),
-                                samples)
+        means = [combined([part for task, part in zip(tasks, ordered) if task[2] == r], components).mean
+                 for r in range(replicates)]
+        return quasi_monte_carlo_estimate(volume * np.array(means), total)
+    union = combined(ordered, components)
+    return monte_carlo_estimate(volume, union.mean, union.scatter / (samples - 1), samples)

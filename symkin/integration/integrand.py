@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -10,6 +10,33 @@ import numpy as np
 #: Points per call of the integrand: bounds the memory of one batch (a (N, 4, 4) fk array
 #: of 2**17 points is 16 MiB) while keeping the per-call overhead negligible.
 CHUNK = 2**17
+
+
+@dataclass(frozen=True)
+class Moments:
+    """The first two moments of a batch of values (N, k): its count N, mean (k,) and scatter (k, k) =
+    sum (f - mean)(f - mean)^T."""
+
+    count: int
+    mean: np.ndarray
+    scatter: np.ndarray
+
+
+def combined(parts: Sequence[Moments], components: int) -> Moments:
+    """The moments of the union of batches, from theirs in the order given, by Chan, Golub and LeVeque's pairwise
+    update (Am. Stat. 37(3), 1983): n = n_a + n_b, mean = mean_a + (n_b / n) delta, scatter = scatter_a + scatter_b
+    + (n_a n_b / n) delta delta^T with delta = mean_b - mean_a, which keeps the digits a one-pass sum of squares
+    loses.  ``components``: k, the shape of the moments of no batch."""
+    count, mean, scatter = 0, np.zeros(components), np.zeros((components, components))
+    for part in parts:
+        total = count + part.count
+        if total == 0:
+            continue
+        delta = part.mean - mean
+        mean = mean + delta * (part.count / total)
+        scatter = scatter + part.scatter + np.outer(delta, delta) * (count * part.count / total)
+        count = total
+    return Moments(count, mean, scatter)
 
 
 @dataclass(frozen=True)
@@ -62,25 +89,26 @@ class Integrand:
         return self.mean_and_covariance(points)[0] if self.moments is not None else self(points).mean(axis=0)
 
     def mean_and_covariance(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The mean (k,) and sample covariance (k, k; divisor N - 1) of the values at points (N, d).  With
-        :attr:`moments`, batches of at most :data:`CHUNK` points are reduced where they are evaluated and their
-        statistics combined by Chan, Golub and LeVeque's pairwise update (Am. Stat. 37(3), 1983): n = n_a + n_b,
-        mean = mean_a + (n_b / n) delta, scatter = scatter_a + scatter_b + (n_a n_b / n) delta delta^T with
-        delta = mean_b - mean_a, which keeps the digits a one-pass sum of squares loses."""
+        """The mean (k,) and sample covariance (k, k; divisor N - 1) of the values at points (N, d)."""
         points = np.asarray(points, dtype=np.float64)
         if self.moments is None:
             values = self(points)
             return values.mean(axis=0), np.atleast_2d(np.cov(values, rowvar=False))
-        count, mean, scatter = 0, np.zeros(len(self.components)), np.zeros((len(self.components),) * 2)
-        for start in range(0, len(points), CHUNK):
-            batch = points[start:start + CHUNK]
-            batch_mean, batch_scatter = (np.asarray(v, dtype=np.float64) for v in self.moments(batch))
-            total = count + len(batch)
-            delta = batch_mean - mean
-            mean = mean + delta * (len(batch) / total)
-            scatter = scatter + batch_scatter + np.outer(delta, delta) * (count * len(batch) / total)
-            count = total
-        return mean, scatter / max(count - 1, 1)
+        reduced = self.reduce(points)
+        return reduced.mean, reduced.scatter / max(reduced.count - 1, 1)
+
+    def reduce(self, points: np.ndarray) -> Moments:
+        """The count, mean and scatter of the values at points (N, d), reduced where they are evaluated: with
+        :attr:`moments` batches of at most :data:`CHUNK` points on the device, combined here (:func:`combined`);
+        without, from the values evaluated here."""
+        points = np.asarray(points, dtype=np.float64)
+        if self.moments is None:
+            values = self(points)
+            mean = values.mean(axis=0)
+            return Moments(len(points), mean, (values - mean).T @ (values - mean))
+        return combined([Moments(len(batch), *(np.asarray(v, dtype=np.float64) for v in self.moments(batch)))
+                         for batch in (points[start:start + CHUNK] for start in range(0, len(points), CHUNK))],
+                        len(self.components))
 
     def _checked(self, values: np.ndarray, count: int) -> np.ndarray:
         values = np.asarray(values, dtype=np.float64)

@@ -545,6 +545,52 @@ def test_a_sweep_on_the_jax_backend_compiles_once_and_gives_numpys_rows(jax_dire
     assert pq.read_table(out).to_pydict()["gci"] == rows["jax"]["gci"]
 
 
+@pytest.mark.parametrize("name, domain", [("planar_2r", "joint"), ("delta", "cartesian")])
+def test_chunks_of_the_jax_payload_are_reduced_on_the_workers_device(name, domain, jax_directory, generated_dir,
+                                                                    monkeypatch):
+    """The GCI in chunks (symkin.integration.chunked) with the JAX payload: each chunk's integrand is the device's
+    (its values never come back: calling them fails here) and the qmc and mc estimates equal the numpy payload's at
+    the same points - the integrals to 1e-12 relative, their covariances (spreads of a few hundred values) to 1e-9."""
+    from symkin.integration.chunked import IntegrandSpec, integrate_chunked
+    from symkin.integration.integrand import Integrand
+    from symkin.mechanism import reach
+    from symkin.runtime.payload import ModelPayload
+
+    payloads = {backend: ModelPayload.from_directory(directory, backend)
+                for backend, directory in (("numpy", generated_dir / name), ("jax", jax_directory(name)))}
+    box = None
+    if domain == "cartesian":
+        box = tuple(tuple(float(v) for v in b) for b in reach.bounding_box(payloads["numpy"].load()))
+    spec = IntegrandSpec(domain=domain, box=box)
+    assert spec.build(payloads["jax"].load()).moments is not None
+    assert spec.build(payloads["numpy"].load()).moments is None
+    for method, samples in (("qmc", 2**12), ("mc", 2**11)):   # chunks of one shape: one compile
+        want = integrate_chunked(payloads["numpy"], spec, method, samples, seed=3, chunk=256, scheduler="serial")
+        with monkeypatch.context() as patch:
+            patch.setattr(Integrand, "__call__", _values_on_the_host)
+            got = integrate_chunked(payloads["jax"], spec, method, samples, seed=3, chunk=256, scheduler="serial")
+        assert got.evaluations == want.evaluations
+        np.testing.assert_allclose(got.values, want.values, rtol=1e-12, atol=0)
+        np.testing.assert_allclose(got.covariance, want.covariance, rtol=1e-9, atol=0)
+
+
+def test_the_chunked_gci_takes_the_backend_it_is_given(jax_directory, capsys):
+    """symkin gci --scheduler runs the --backend it is given on the workers (JAX: each chunk reduced on the device,
+    as the report says) and refuses a backend it cannot ship (C) with exit code 2, as symkin workspace --scheduler
+    refuses any but numpy's (its clouds come back for the figures), instead of running numpy's code silently."""
+    directory = str(jax_directory("planar_2r"))
+    common = ["-n", "4096", "--seed", "1", "--scheduler", "serial", "--chunk", "1000"]
+    assert main(["gci", directory, "--backend", "jax", *common]) == 0
+    assert "in chunks of at most 1000 points in this process, each reduced on the worker's JAX device" in \
+        capsys.readouterr().out
+    for command in (["gci", directory, "--backend", "c", *common],
+                    ["workspace", directory, "--backend", "jax", "--scheduler", "serial", "--no-figure"]):
+        with pytest.raises(SystemExit) as exit_info:
+            main(command)
+        assert exit_info.value.code == 2
+        assert "--scheduler" in capsys.readouterr().err
+
+
 def test_the_smooth_gcis_gradient_is_its_central_difference(jax_model, loaded):
     """smooth_gci_gradient of the planar 2R (jax.value_and_grad through the generated Jacobian) against the same
     surrogate in numpy (conditioning's 1/kappa_F and |det J| of the numpy backend's J) and its central differences in
