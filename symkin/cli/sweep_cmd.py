@@ -51,6 +51,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "JAX's default device, compiled once for every design; workers with a GPU use it)")
     p.add_argument("-n", "--samples", type=int, default=4096, metavar="N",
                    help="integrand evaluations per design (quasi-Monte Carlo; default: %(default)s)")
+    p.add_argument("--length", metavar="L", default="auto",
+                   help="characteristic length [m] homogenizing the Jacobian of a task space that mixes translations "
+                        "and rotations (the UR10e's), the same for every design, or 'auto': each design's own, "
+                        "minimizing its mean kappa_F^2 (default: auto; ignored for a task space of one kind)")
     p.add_argument("--seed", type=int, default=0, help="seed of the integrator, the same for every design "
                                                        "(default: %(default)s)")
     p.add_argument("--chunk", type=int, default=64, metavar="K", help="designs per task (default: %(default)s)")
@@ -76,7 +80,8 @@ def _definition(args: argparse.Namespace):
     axes = tuple(parse_axis(text, args.sobol is None) for text in args.vary)
     fixed = tuple(sorted(analysis_args.parse_assignments(args.assignments).items()))
     metrics = tuple(m.strip() for m in args.metric.split(",") if m.strip())
-    return SweepDefinition(axes, metrics, args.sobol, args.samples, args.seed, args.chunk, fixed)
+    return SweepDefinition(axes, metrics, args.sobol, args.samples, args.seed, args.chunk, fixed,
+                           analysis_args.parse_length(args.length))
 
 
 def _check_names(definition, payload) -> None:

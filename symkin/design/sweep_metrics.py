@@ -5,6 +5,8 @@
   over the joint limits with dW = |det J| dq (a parallel mechanism: its configurations in the
   working mode), each with its 95 % confidence half-width
   (:func:`~symkin.analysis.global_indices.joint_space_integrand`);
+  - of the Jacobian homogenized by the definition's characteristic length where the task space mixes
+  translations and rotations (each design's own with ``"auto"``);
 * ``kappa_min`` and ``kappa_max``: the extremes of kappa over the same integration points
   inside the workspace (sample extremes: the true minimum is at most ``kappa_min``, the true
   maximum at least ``kappa_max``);
@@ -49,9 +51,9 @@ def evaluate_design(model: Any, values: dict[str, float], definition: Any) -> di
             extremes[0], extremes[1] = min(extremes[0], lowest), max(extremes[1], highest)
 
         if device_integrand.on_device(design):    # the extremes come back with each batch's moments
-            integrand = device_integrand.device_joint_space_integrand(design, extremes=record)
+            integrand = device_integrand.device_joint_space_integrand(design, extremes=record, length=definition.length)
         else:
-            host = joint_space_integrand(design)
+            host = joint_space_integrand(design, length=definition.length)
 
             def recorded(q: np.ndarray) -> np.ndarray:
                 out = host.function(q)

@@ -76,6 +76,10 @@ class SweepDefinition:
         seed: seed of the integrator's scrambling (the same for every design).
         chunk: designs per task.
         fixed: parameter values every design shares (``--set``).
+        length: the characteristic length L (m) that homogenizes the Jacobian of a task space mixing translations
+            and rotations (:func:`symkin.numerics.conditioning.homogenize`), or ``"auto"``: each design's own
+            (:func:`symkin.mechanism.reach.characteristic_length_of`, minimizing the mean kappa_F^2 over its joint
+            limits, as ``symkin gci`` takes it); ignored for a task space of one kind.
     """
 
     axes: tuple[SweepAxis, ...]
@@ -85,8 +89,12 @@ class SweepDefinition:
     seed: int = 0
     chunk: int = 64
     fixed: tuple[tuple[str, float], ...] = field(default=())
+    length: float | str = "auto"
 
     def __post_init__(self) -> None:
+        if self.length != "auto" and not (isinstance(self.length, (int, float)) and math.isfinite(self.length)
+                                          and self.length > 0):
+            raise ValueError(f"the characteristic length must be a positive length in m or 'auto', got {self.length!r}")
         names = [a.name for a in self.axes]
         if not names:
             raise ValueError("a sweep varies at least one parameter (--vary NAME=LOW:HIGH:COUNT)")

@@ -143,6 +143,24 @@ def test_a_worker_killed_mid_sweep_loses_no_design(reference, payload, tmp_path)
     assert table.equals(reference)
 
 
+@pytest.mark.parametrize("length", ["auto", 0.5])
+def test_a_task_space_of_lengths_and_angles_is_homogenized(length, tmp_path):
+    """The UR10e's task space mixes translations and rotations: every design's GCI, workspace measure and extreme
+    kappas are those of its Jacobian homogenized by the definition's characteristic length - each design's own with
+    "auto", as symkin gci takes it, or the one given - the same numbers as gci of the bound model (before, every
+    design of such a model failed for want of a length)."""
+    ur10e = ModelPayload.from_directory(GENERATED_DIR / "ur10e")
+    definition = SweepDefinition((SweepAxis("a2", 0.5, 0.7, 2),), samples=256, length=length)
+    store = SweepStore(tmp_path / "ur10e.parquet", definition, ur10e)
+    evaluate_missing(ur10e, definition, store, scheduler="serial")
+    rows = store.finish().to_pydict()
+    assert rows["status"] == [OK, OK]
+    for a2, found, error, volume in zip(rows["a2"], rows["gci"], rows["gci_error"], rows["volume"]):
+        direct = gci(ur10e.load().bind(a2=a2), samples=definition.samples, seed=definition.seed, length=length)
+        assert (found, error, volume) == (direct.value.value, direct.value.error, direct.measure.value)
+    assert rows["gci"][1] > rows["gci"][0] > 0.0
+
+
 def test_torque_peak_is_the_longest_lever_arm(payload, tmp_path):
     """Planar 2R: tau = J^T F, column 1 of J has the length of the TCP radius |p| (largest, l1 + l2, at
     theta2 = 0), column 2 has l2.  The Sobol net puts a point within (pi/2) / 2^6 of theta2 = 0 among
@@ -214,6 +232,7 @@ def test_cli_marks_the_optimum_of_symkin_optimize(tmp_path, capsys):
     (["--vary", "l1=0.1:0.2"], "expected NAME=LOW:HIGH:COUNT"),
     (["--vary", "l1=0.1:0.2:3", "--scheduler", "nowhere"], "--scheduler 'nowhere'"),
     (["--vary", "l1=0.1:0.2:3", "--metric", "gci,speed"], "unknown metrics"),
+    (["--vary", "l1=0.1:0.2:3", "--length", "-1"], "--length must be positive"),
 ])
 def test_cli_bad_input_exits_with_code_2(tmp_path, capsys, arguments, message):
     with pytest.raises(SystemExit) as exit_info:
