@@ -23,7 +23,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="GCI, workspace and conditioning of many designs (grid or Sobol set), on all cores or a Dask cluster",
         description="Evaluate every design of a grid (--vary NAME=LOW:HIGH:COUNT per parameter, row-major) or of a "
                     "Sobol set (--sobol N with --vary NAME=LOW:HIGH): the GCI (seed eq. 8.28) and workspace measure "
-                    "of one quasi-Monte Carlo integration over the joint limits, each with its 95 % error "
+                    "of one quasi-Monte Carlo integration over the domain symkin gci rates the model on by default "
+                    "(the joint limits; a platform that also rotates: its Cartesian workspace at its home "
+                    "orientation; a spherical platform: its orientations), each with its 95 % error "
                     "estimate, and the extreme condition numbers over its points. One derivation serves every "
                     "design (parameters are inputs of the generated code). Chunks of designs run on a Dask "
                     "LocalCluster (default, one worker per core), a scheduler you started (--scheduler "
@@ -167,6 +169,12 @@ def run(args: argparse.Namespace) -> int:
         rows += [[f"optimum {m}", f"{optimum[m]:.6g}", optimum["design"]] for m in definition.metrics
                  if m in ("gci", "volume")]
     print(format_table(["", "value", "design"], rows))
+    failures = [(design, status) for design, status in zip(table.column("design").to_pylist(),
+                                                           table.column("status").to_pylist())
+                if status.startswith("failed")]
+    if failures:
+        print(f"design {failures[0][0]} {failures[0][1]}" + (f" (and {len(failures) - 1} more: the status column)"
+                                                             if len(failures) > 1 else ""))
     print(f"wrote {out} ({table.num_rows} rows) in {seconds:.1f} s")
     if not args.no_figure:
         from symkin.atomic import replace_file

@@ -2,11 +2,11 @@
 
 * ``gci`` and ``volume``: the global conditioning index v = int_W 1/kappa dW / int_W dW
   (seed eq. 8.28) and the workspace measure int_W dW, from one quasi-Monte Carlo integration
-  over the joint limits with dW = |det J| dq (a parallel mechanism: its configurations in the
-  working mode), each with its 95 % confidence half-width
-  (:func:`~symkin.analysis.global_indices.joint_space_integrand`);
-  - of the Jacobian homogenized by the definition's characteristic length where the task space mixes
-  translations and rotations (each design's own with ``"auto"``);
+  over ``symkin gci``'s default domain (:func:`design_integrand`): the joint limits with dW = |det J| dq
+  (a parallel mechanism: its configurations in the working mode), a rotating platform's Cartesian
+  box at its home orientation, a spherical platform's orientations; each with its 95 % confidence half-width.
+  1/kappa is that of the Jacobian homogenized by the definition's characteristic length where the task space
+  mixes translations and rotations (each design's own with ``"auto"``);
 * ``kappa_min`` and ``kappa_max``: the extremes of kappa over the same integration points
   inside the workspace (sample extremes: the true minimum is at most ``kappa_min``, the true
   maximum at least ``kappa_max``);
@@ -21,6 +21,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import replace
 from typing import Any
 
@@ -35,11 +36,58 @@ ESTIMATED = ("gci", "volume")
 OK, EMPTY = "ok", "empty workspace"
 
 
+def design_integrand(design: Any, length: float | str | None, record: Callable[[float, float], None]) -> Any:
+    """The integrand of the GCI and workspace measure of one design over ``symkin gci``'s default domain, calling
+    ``record(lowest, highest)`` with the extremes of 1/kappa over each batch's points inside the workspace: the
+    joint limits (dW = |det J| dq, a parallel mechanism's configurations in its working mode), fused on JAX's
+    device for a model loaded with JAX that the device decides (the extremes come back with each batch's moments);
+    a platform that also rotates (Stewart-Gough): the Cartesian box of its workspace at its home orientation,
+    reachability by its ik (:func:`~symkin.analysis.global_indices.cartesian_integrand_for`); a spherical platform:
+    its orientations with the invariant measure of SO(3) (:func:`~symkin.analysis.orientations.orientation_integrand`).
+    The values of the last two come back to the host, where the extremes are taken.
+
+    Raises:
+        ValueError: legs without closed forms (rated on a continued grid by ``symkin gci``, not sampled here).
+    """
+    from symkin import mechanism
+    from symkin.analysis import device_integrand, inverse, orientations
+    from symkin.analysis.global_indices import cartesian_integrand_for, joint_space_integrand
+    from symkin.mechanism import reach
+
+    sampled = mechanism.sampling(design)
+    if sampled is mechanism.Sampling.CONTINUATION:
+        raise ValueError(f"{design.name}: legs without closed forms are rated by continuation over a grid "
+                         "(symkin gci MODEL --set ... per design), which a sweep does not sample")
+    held = reach.held_at(design, None)
+    if sampled is mechanism.Sampling.ORIENTATIONS:
+        integrand = orientations.orientation_integrand(design)
+    elif isinstance(held, reach.ConstantOrientation):
+        ik = inverse.inverse_kinematics_for(held)
+        if ik is None:
+            raise ValueError(f"{design.name}: a platform that also rotates is rated over its Cartesian workspace, "
+                             "which needs its generated 'ik' (derive it)")
+        integrand = cartesian_integrand_for(held, ik, reach.bounding_box(held), length=length)
+    elif device_integrand.on_device(design):    # the extremes come back with each batch's moments
+        return device_integrand.device_joint_space_integrand(design, extremes=record, length=length)
+    else:
+        integrand = joint_space_integrand(design, length=length)
+    host = replace(integrand, moments=None)    # the values come back: their extremes are taken here
+
+    def recorded(points: np.ndarray) -> np.ndarray:
+        out = host.function(points)
+        inside = out[:, 1] > 0.0
+        if inside.any():
+            index = out[inside, 0] / out[inside, 1]
+            record(float(index.min()), float(index.max()))
+        return out
+
+    return replace(host, function=recorded)
+
+
 def evaluate_design(model: Any, values: dict[str, float], definition: Any) -> dict[str, Any]:
     """The metrics of one design ({column: value} and ``status``): ``model`` bound to the sweep's
     fixed values and then ``values``; ``definition`` a :class:`~symkin.design.sweeps.SweepDefinition`."""
-    from symkin.analysis import device_integrand
-    from symkin.analysis.global_indices import joint_space_integrand
+    from symkin import mechanism
     from symkin.integration.integrators import integrate
 
     row: dict[str, Any] = {c: math.nan for c in definition.columns()[1 + len(definition.axes):-1]}
@@ -50,20 +98,7 @@ def evaluate_design(model: Any, values: dict[str, float], definition: Any) -> di
         def record(lowest: float, highest: float) -> None:
             extremes[0], extremes[1] = min(extremes[0], lowest), max(extremes[1], highest)
 
-        if device_integrand.on_device(design):    # the extremes come back with each batch's moments
-            integrand = device_integrand.device_joint_space_integrand(design, extremes=record, length=definition.length)
-        else:
-            host = joint_space_integrand(design, length=definition.length)
-
-            def recorded(q: np.ndarray) -> np.ndarray:
-                out = host.function(q)
-                inside = out[:, 1] > 0.0
-                if inside.any():
-                    index = out[inside, 0] / out[inside, 1]
-                    record(float(index.min()), float(index.max()))
-                return out
-
-            integrand = replace(host, function=recorded)
+        integrand = design_integrand(design, definition.length, record)
         with np.errstate(all="ignore"):
             result = integrate(integrand, "qmc", definition.samples, seed=definition.seed)
         measure = result.component(1)
@@ -75,7 +110,8 @@ def evaluate_design(model: Any, values: dict[str, float], definition: Any) -> di
             "kappa_min": (1.0 / extremes[1] if extremes[1] > 0 else math.inf,),
             "kappa_max": (1.0 / extremes[0] if extremes[0] > 0 else math.inf,)}
         if "torque_peak" in definition.metrics:
-            found["torque_peak"] = (torque_peak(design, integrand.lower, integrand.upper, definition.samples,
+            joints = mechanism.joint_limits(design)
+            found["torque_peak"] = (torque_peak(design, joints[:, 0], joints[:, 1], definition.samples,
                                                 definition.seed),)
         for metric in definition.metrics:
             row[metric] = float(found[metric][0])

@@ -36,7 +36,8 @@ def _payload(model: Any) -> ModelPayload:
 def sweep(model: Any, definition: SweepDefinition | None = None, *,
           vary: Mapping[str, Sequence[float]] | None = None, sobol: int | None = None,
           metrics: Sequence[str] = DEFAULT_METRICS, samples: int = 4096, seed: int = 0, chunk: int = 64,
-          fixed: Mapping[str, float] | None = None, out: str | Path | None = None, resume: bool = False,
+          fixed: Mapping[str, float] | None = None, length: float | str = "auto", out: str | Path | None = None,
+          resume: bool = False,
           scheduler: str = "local", workers: int | None = None, client: Any = None,
           progress: Callable[[int, int], None] = lambda done, total: None) -> Any:
     """Evaluate a design sweep and return its table (pyarrow; see :mod:`symkin.design.sweeps`).
@@ -45,7 +46,8 @@ def sweep(model: Any, definition: SweepDefinition | None = None, *,
         model: a generated model directory, a model loaded from one (``symkin.load``), or a
             :class:`~symkin.runtime.payload.ModelPayload`.
         definition: the sweep; or give ``vary`` ({name: (low, high, count)} for a grid,
-            {name: (low, high)} with ``sobol``) and the other fields below.
+            {name: (low, high)} with ``sobol``) and the other fields (``length``: the characteristic length
+            of a task space mixing translations and rotations, m or ``"auto"``; :class:`SweepDefinition`).
         out: the Parquet file to write (with ``resume``, continue the interrupted sweep of
             the same definition there); None: nothing is kept on disk.
         scheduler, workers, client: where the chunks run: ``local`` (a LocalCluster),
@@ -58,7 +60,7 @@ def sweep(model: Any, definition: SweepDefinition | None = None, *,
         axes = tuple(SweepAxis(name, float(r[0]), float(r[1]), None if sobol is not None else int(r[2]))
                      for name, r in vary.items())
         definition = SweepDefinition(axes, tuple(metrics), sobol, samples, seed, chunk,
-                                     tuple(sorted((fixed or {}).items())))
+                                     tuple(sorted((fixed or {}).items())), length)
     payload = _payload(model)
     with tempfile.TemporaryDirectory(prefix="symkin-sweep-") as scratch:
         store = SweepStore(out if out is not None else Path(scratch) / "sweep.parquet", definition, payload,
