@@ -5,8 +5,10 @@ For a parallel mechanism with closed-form inverse kinematics loaded with the JAX
 over a box of TCP points - components [1_W g, 1_W], or [1_W] for the workspace measure, with 1_W the reachability
 indicator and g = 1/kappa of the (homogenized) task Jacobian there (seed eqs. 8.25, 8.29) - as one jitted function
 whose batches are reduced to their mean and scatter on the device (:func:`symkin.analysis.device_integrand.reduced`):
-on a GPU the points' joints and Jacobians never leave it.  The program is compiled once per set of generated
-functions; the parameters, limits, stops and the held orientation are its arguments, traced.
+on a GPU the points' joints and Jacobians never leave it; with ``extremes`` (a sweep's kappa extremes,
+:mod:`symkin.design.sweep_metrics`) the smallest and largest 1/kappa of each batch's reachable points come back
+with its moments.  The program is compiled once per set of generated functions; the parameters, limits, stops and
+the held orientation are its arguments, traced.
 
 A point counts as the host's rules count it (:mod:`symkin.mechanism.reach`, :mod:`symkin.mechanism.feasibility`):
 
@@ -211,14 +213,18 @@ def _device_inverse_condition(J: Any, threshold: float) -> Any:
 
 def _integrand(model: GeneratedModel, lower: np.ndarray, upper: np.ndarray, evaluate: Any, reduce: Any,
                constants: dict[str, Any], parameters: dict[str, Any], with_index: bool,
-               axes: tuple[str, ...] | None = None) -> Integrand:
+               axes: tuple[str, ...] | None = None,
+               extremes: Callable[[float, float], None] | None = None) -> Integrand:
     """The Integrand over the box [lower, upper] whose values are ``evaluate``'s and whose batches ``reduce`` reduces
     to their moments on the device (both called with the points, ``constants`` and ``parameters``); ``axes``: the
-    box's coordinates (default: the model's position axes)."""
+    box's coordinates (default: the model's position axes); ``extremes``: called with the smallest and largest
+    1/kappa of each batch's points inside the workspace (inf and -inf where none is), as the moments come back."""
     import jax.numpy as jnp
 
     def moments(points: np.ndarray) -> tuple[Any, Any]:
-        mean, scatter, _, _ = reduce(jnp.asarray(points), constants, parameters)
+        mean, scatter, lowest, highest = reduce(jnp.asarray(points), constants, parameters)
+        if extremes is not None:
+            extremes(float(lowest), float(highest))
         return mean, scatter
 
     axes = axes or tuple("xyz"[a] for a in mechanism.position_axes(model))
@@ -229,7 +235,7 @@ def _integrand(model: GeneratedModel, lower: np.ndarray, upper: np.ndarray, eval
 
 def _traced_closed_form_integrand(model: GeneratedModel, inverse: ClosedFormInverse, lower: np.ndarray,
                                   upper: np.ndarray, joint_box: np.ndarray, scale: np.ndarray,
-                                  with_index: bool) -> Integrand:
+                                  with_index: bool, extremes: Callable[[float, float], None] | None) -> Integrand:
     """:func:`device_cartesian_integrand` of a serial arm's closed form (:func:`traced_closed_form_on_device`)."""
     import jax.numpy as jnp
 
@@ -242,14 +248,17 @@ def _traced_closed_form_integrand(model: GeneratedModel, inverse: ClosedFormInve
     solver: Any = inverse.solver.solver  # a TRACEABLE_SOLVERS instance: hashable by identity (the compile cache's key)
     evaluate, reduce = _compiled_traced_closed_form(solver, inverse.order, rows, fk, jacobian, with_index,
                                                     max(m, n) * _EPS)
-    return _integrand(model, lower, upper, evaluate, reduce, constants, parameters, with_index)
+    return _integrand(model, lower, upper, evaluate, reduce, constants, parameters, with_index, extremes=extremes)
 
 
 def device_cartesian_integrand(model: GeneratedModel, inverse: InverseKinematics, box: tuple[np.ndarray, np.ndarray],
                                *, with_index: bool = True, limits: Limits | None = None,
-                               length: float | str | None = None) -> Integrand:
+                               length: float | str | None = None,
+                               extremes: Callable[[float, float], None] | None = None) -> Integrand:
     """The Cartesian integrand [1_W 1/kappa, 1_W] (``with_index``) or [1_W] over ``box`` of a model loaded with the
-    JAX backend (:func:`cartesian_on_device`), its batches reduced on the device (see the module docstring)."""
+    JAX backend (:func:`cartesian_on_device`), its batches reduced on the device (see the module docstring).
+    ``extremes``: called with the smallest and largest 1/kappa of each batch's reachable points (a sweep's kappa
+    extremes, :mod:`symkin.design.sweep_metrics`)."""
     import jax.numpy as jnp
 
     if not cartesian_on_device(model, inverse):
@@ -263,7 +272,7 @@ def device_cartesian_integrand(model: GeneratedModel, inverse: InverseKinematics
     revolute = mechanism.revolute_mask(model)
     scale = row_scale(model, joint_box, length) if with_index else np.ones(m)
     if isinstance(inverse, ClosedFormInverse):
-        return _traced_closed_form_integrand(model, inverse, lower, upper, joint_box, scale, with_index)
+        return _traced_closed_form_integrand(model, inverse, lower, upper, joint_box, scale, with_index, extremes)
     constants: dict[str, Any] = {
         "orientation": None, "unscale": None, "sign": None, "tolerance": None,
         "limits": jnp.asarray(joint_box), "revolute": jnp.asarray(revolute), "stops": stop_arguments(model),
@@ -283,7 +292,7 @@ def device_cartesian_integrand(model: GeneratedModel, inverse: InverseKinematics
     parameters = {name: values for name, (_, values) in unbound.items()}
     evaluate, reduce = _compiled(functions, with_index, max(m, n) * _EPS, bool(revolute.any()))
 
-    return _integrand(model, lower, upper, evaluate, reduce, constants, parameters, with_index)
+    return _integrand(model, lower, upper, evaluate, reduce, constants, parameters, with_index, extremes=extremes)
 
 
 def orientations_on_device(model: GeneratedModel, with_index: bool = True) -> bool:
@@ -326,10 +335,11 @@ def _compiled_orientations(ik: Callable[..., Any], inverse_jacobian: Callable[..
 
 
 def device_orientation_integrand(model: GeneratedModel, lower: np.ndarray, upper: np.ndarray, joint_box: np.ndarray,
-                                 *, with_index: bool = True) -> Integrand:
+                                 *, with_index: bool = True,
+                                 extremes: Callable[[float, float], None] | None = None) -> Integrand:
     """The orientation integrand of :func:`symkin.analysis.orientations.orientation_integrand` over the roll-pitch-yaw
     box [lower, upper] of a spherical platform loaded with the JAX backend (:func:`orientations_on_device`), its
-    batches reduced on the device (see the module docstring)."""
+    batches reduced on the device (see the module docstring); ``extremes`` as :func:`device_cartesian_integrand`'s."""
     import jax.numpy as jnp
 
     ik, ik_values = model.unbound("ik")
@@ -338,4 +348,5 @@ def device_orientation_integrand(model: GeneratedModel, lower: np.ndarray, upper
                  "stops": stop_arguments(model)}
     parameters = {"ik": ik_values, "inverse_jacobian": inverse_values}
     evaluate, reduce = _compiled_orientations(ik, inverse_jacobian, with_index, 3 * _EPS)
-    return _integrand(model, lower, upper, evaluate, reduce, constants, parameters, with_index, mechanism.ANGLES)
+    return _integrand(model, lower, upper, evaluate, reduce, constants, parameters, with_index, mechanism.ANGLES,
+                      extremes)

@@ -49,8 +49,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--set", dest="assignments", action="append", default=[], metavar="NAME=VALUE[,...]",
                    help="values every design shares instead of the defaults (repeatable)")
     p.add_argument("--backend", choices=("numpy", "jax"), default="numpy",
-                   help="the code the workers evaluate: numpy (default) or jax (a serial model's integrand fused on "
-                        "JAX's default device, compiled once for every design; workers with a GPU use it)")
+                   help="the code the workers evaluate: numpy (default) or jax (the integrand fused on JAX's default "
+                        "device where the device decides the model's workspace - a serial arm, closed-form working "
+                        "modes, a rotating or spherical platform's closed-form ik - compiled once for every design; "
+                        "workers with a GPU use it)")
     p.add_argument("-n", "--samples", type=int, default=4096, metavar="N",
                    help="integrand evaluations per design (quasi-Monte Carlo; default: %(default)s)")
     p.add_argument("--length", metavar="L", default="auto",

@@ -4,7 +4,8 @@
   (seed eq. 8.28) and the workspace measure int_W dW, from one quasi-Monte Carlo integration
   over ``symkin gci``'s default domain (:func:`design_integrand`): the joint limits with dW = |det J| dq
   (a parallel mechanism: its configurations in the working mode), a rotating platform's Cartesian
-  box at its home orientation, a spherical platform's orientations; each with its 95 % confidence half-width.
+  box at its home orientation, a spherical platform's orientations (fused on JAX's device for a model loaded
+  with JAX that the device decides); each with its 95 % confidence half-width.
   1/kappa is that of the Jacobian homogenized by the definition's characteristic length where the task space
   mixes translations and rotations (each design's own with ``"auto"``);
 * ``kappa_min`` and ``kappa_max``: the extremes of kappa over the same integration points
@@ -39,19 +40,20 @@ OK, EMPTY = "ok", "empty workspace"
 def design_integrand(design: Any, length: float | str | None, record: Callable[[float, float], None]) -> Any:
     """The integrand of the GCI and workspace measure of one design over ``symkin gci``'s default domain, calling
     ``record(lowest, highest)`` with the extremes of 1/kappa over each batch's points inside the workspace: the
-    joint limits (dW = |det J| dq, a parallel mechanism's configurations in its working mode), fused on JAX's
-    device for a model loaded with JAX that the device decides (the extremes come back with each batch's moments);
-    a platform that also rotates (Stewart-Gough): the Cartesian box of its workspace at its home orientation,
-    reachability by its ik (:func:`~symkin.analysis.global_indices.cartesian_integrand_for`); a spherical platform:
-    its orientations with the invariant measure of SO(3) (:func:`~symkin.analysis.orientations.orientation_integrand`).
-    The values of the last two come back to the host, where the extremes are taken.
+    joint limits (dW = |det J| dq, a parallel mechanism's configurations in its working mode); a platform that also
+    rotates (Stewart-Gough): the Cartesian box of its workspace at its home orientation, reachability by its ik
+    (:func:`~symkin.analysis.global_indices.cartesian_integrand`); a spherical platform: its orientations with the
+    invariant measure of SO(3) (:func:`~symkin.analysis.orientations.orientation_integrand`).  For a model loaded
+    with JAX whose integrand the device decides it is fused there (:mod:`symkin.analysis.device_integrand`,
+    :mod:`symkin.analysis.device_cartesian`) and the extremes come back with each batch's moments; elsewhere the
+    values come back and the extremes are taken from them.
 
     Raises:
         ValueError: legs without closed forms (rated on a continued grid by ``symkin gci``, not sampled here).
     """
     from symkin import mechanism
-    from symkin.analysis import device_integrand, inverse, orientations
-    from symkin.analysis.global_indices import cartesian_integrand_for, joint_space_integrand
+    from symkin.analysis import device_cartesian, device_integrand, inverse, orientations
+    from symkin.analysis.global_indices import cartesian_integrand, joint_space_integrand
     from symkin.mechanism import reach
 
     sampled = mechanism.sampling(design)
@@ -60,18 +62,24 @@ def design_integrand(design: Any, length: float | str | None, record: Callable[[
                          "(symkin gci MODEL --set ... per design), which a sweep does not sample")
     held = reach.held_at(design, None)
     if sampled is mechanism.Sampling.ORIENTATIONS:
-        integrand = orientations.orientation_integrand(design)
+        lower, upper = orientations.FULL_CHART
+        if device_cartesian.orientations_on_device(design):
+            return device_cartesian.device_orientation_integrand(design, lower, upper, mechanism.joint_limits(design),
+                                                                 extremes=record)
+        host = orientations.orientation_integrand(design)
     elif isinstance(held, reach.ConstantOrientation):
         ik = inverse.inverse_kinematics_for(held)
         if ik is None:
             raise ValueError(f"{design.name}: a platform that also rotates is rated over its Cartesian workspace, "
                              "which needs its generated 'ik' (derive it)")
-        integrand = cartesian_integrand_for(held, ik, reach.bounding_box(held), length=length)
-    elif device_integrand.on_device(design):    # the extremes come back with each batch's moments
+        box = reach.bounding_box(held)
+        if device_cartesian.cartesian_on_device(held, ik):
+            return device_cartesian.device_cartesian_integrand(held, ik, box, length=length, extremes=record)
+        host = cartesian_integrand(held, ik, box, length=length)
+    elif device_integrand.on_device(design):
         return device_integrand.device_joint_space_integrand(design, extremes=record, length=length)
     else:
-        integrand = joint_space_integrand(design, length=length)
-    host = replace(integrand, moments=None)    # the values come back: their extremes are taken here
+        host = joint_space_integrand(design, length=length)
 
     def recorded(points: np.ndarray) -> np.ndarray:
         out = host.function(points)

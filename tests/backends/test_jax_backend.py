@@ -267,8 +267,10 @@ def test_the_orientation_integrand_runs_on_the_device(jax_model, loaded, monkeyp
     |cos pitch|): at random orientations of the whole chart the same reachable set as numpy's point by point, the
     weights and 1/kappa of J^-1 E^-1 to rounding (E^-1 by cofactors, numpy's by LAPACK: a few eps times kappa(E) =
     O(1 / |cos pitch|)); the GCI and the measure with the values never coming back (calling them fails here): numpy's
-    to 1e-12."""
+    to 1e-12, and a sweep's design (symkin sweep --backend jax) the same, its kappa extremes numpy's."""
     from symkin.analysis import device_cartesian, orientations
+    from symkin.design.sweep_metrics import evaluate_design
+    from symkin.design.sweeps import SweepAxis, SweepDefinition
     from symkin.integration.integrand import Integrand
 
     numpy_model, model = loaded("agile_eye", "numpy"), jax_model("agile_eye")
@@ -285,8 +287,15 @@ def test_the_orientation_integrand_runs_on_the_device(jax_model, loaded, monkeyp
     with monkeypatch.context() as patch:
         patch.setattr(Integrand, "__call__", _values_on_the_host)
         found = orientations.orientation_gci(model, samples=2**12, seed=4)
+        # a sweep's design on the device (the same compiled reduction: 16 replicates of 256 orientations)
+        definition = SweepDefinition((SweepAxis("r_p", 0.08, 0.08, 1),), samples=2**12, seed=4)
+        row = evaluate_design(model, {"r_p": 0.08}, definition)
     assert found.value.value == pytest.approx(expected.value.value, rel=1e-12)
     assert found.measure.value == pytest.approx(expected.measure.value, rel=1e-12)
+    assert (row["status"], row["gci"], row["volume"]) == ("ok", found.value.value, found.measure.value)
+    host_row = evaluate_design(numpy_model, {"r_p": 0.08}, definition)
+    for extreme in ("kappa_min", "kappa_max"):  # 1/kappa to 64 eps / |cos pitch| at the same orientations
+        assert row[extreme] == pytest.approx(host_row[extreme], rel=1e-9)
 
 
 def test_a_serial_arms_closed_form_runs_on_the_device(jax_model, loaded, monkeypatch):
