@@ -242,6 +242,7 @@ def global_index(model: GeneratedModel, *, method: str = "qmc", samples: int = 2
     """
     integrand, description = _integrand(model, domain=domain, measure=measure, index=index, limits=limits,
                                         length=length, inverse=inverse, box=box)
+    description += evaluation_site(model, integrand, method, _host_reason(domain, measure, index, inverse))
     result = integrate(integrand, method, samples, seed=seed, **options)
     caveat = ""
     if domain == "cartesian" and not result.statistical:
@@ -249,6 +250,35 @@ def global_index(model: GeneratedModel, *, method: str = "qmc", samples: int = 2
                   "sample points see every crossing of the workspace boundary; mc and qmc give a confidence "
                   "interval without that assumption")
     return GlobalIndex(result.ratio(0, 1), result.component(1), result, description, caveat)
+
+
+def evaluation_site(model: GeneratedModel, integrand: Integrand, method: str, host_reason: str) -> str:
+    """Where the integrand of a model loaded with the JAX backend was evaluated, as a clause for a result's
+    description: "; fused on JAX's <backend> device" (cpu, gpu) where its batches were reduced there, else "; the JAX code
+    evaluated point by point, its values reduced on the host (<why>)", so that --backend jax never falls back
+    silently; "" for the other backends."""
+    if not device_integrand.loaded_with_jax(model):
+        return ""
+    if integrand.moments is not None and method != "adaptive":
+        import jax
+
+        return f"; fused on JAX's {jax.default_backend()} device"
+    why = "the adaptive integrator refines on the values" if integrand.moments is not None else host_reason
+    return f"; the JAX code evaluated point by point, its values reduced on the host ({why})"
+
+
+def _host_reason(domain: str, measure: str, index: Index | None, inverse: InverseKinematics | None) -> str:
+    """Why a model loaded with JAX takes the host integrand (:func:`joint_space_integrand_for`,
+    :func:`cartesian_integrand_for`), in words."""
+    if index not in (None, DEFAULT_INDEX):
+        return "the device program computes 1/kappa, not another index"
+    if domain == "joint":
+        if measure not in MEASURES:
+            return f"the measure {measure!r}"
+        return "the working mode is decided on the loop closure: legs without closed forms or passive-joint limits"
+    if getattr(inverse, "passive_limits", None) is not None:
+        return "the passive-joint limits are decided on the loop closure"
+    return "this inverse kinematics does not trace in jax.numpy"
 
 
 def gci(model: GeneratedModel, **kwargs) -> GlobalIndex:

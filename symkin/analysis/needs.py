@@ -37,7 +37,7 @@ NEEDS: Mapping[str, Mapping[MechanismKind, tuple[str, ...]]] = {
     # symkin.analysis.orientations)
     "design": {MechanismKind.SERIAL: ("fk", "jacobian"),
                MechanismKind.PARALLEL: ("ik", "jacobian"),
-               MechanismKind.PARALLEL_POSE: ("ik", "jacobian"),
+               MechanismKind.PARALLEL_POSE: ("ik", "inverse_jacobian"),
                MechanismKind.PARALLEL_ORIENTATION: ("ik", "jacobian", "inverse_jacobian")},
     # the scenarios of symkin.simulation: the kinematics of the handle and the dynamics
     "simulate": {MechanismKind.SERIAL: ("fk", "jacobian", "jacobian_geometric") + SIMULATED_DYNAMICS,

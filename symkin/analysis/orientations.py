@@ -27,7 +27,7 @@ import numpy as np
 from symkin.numerics import conditioning
 from symkin import mechanism
 from symkin.analysis import device_cartesian
-from symkin.analysis.global_indices import GlobalIndex
+from symkin.analysis.global_indices import GlobalIndex, evaluation_site
 from symkin.integration.integrand import Integrand
 from symkin.integration.integrators import integrate
 from symkin.mechanism.limits import within_limits
@@ -127,9 +127,11 @@ def orientation_gci(model: GeneratedModel, *, method: str = "qmc", samples: int 
                     box: tuple[np.ndarray, np.ndarray] = FULL_CHART, limits: Limits | None = None,
                     **options) -> GlobalIndex:
     """GCI over the orientation workspace and its Haar measure in rad^3 (see the module docstring)."""
-    result = integrate(orientation_integrand(model, box, limits=limits), method, samples, seed=seed, **options)
+    integrand = orientation_integrand(model, box, limits=limits)
+    result = integrate(integrand, method, samples, seed=seed, **options)
     description = ("orientations (roll, pitch, yaw) with reachability from the closed-form ik, dW = |cos pitch| "
-                   "droll dpitch dyaw: the invariant measure of SO(3) in rad^3 (all orientations: 8 pi^2 = 78.96)")
+                   "droll dpitch dyaw: the invariant measure of SO(3) in rad^3 (all orientations: 8 pi^2 = 78.96)"
+                   + evaluation_site(model, integrand, method, "the model lacks the generated ik or inverse_jacobian"))
     caveat = "" if result.statistical else ("the reachability indicator is discontinuous: mc and qmc give a "
                                             "confidence interval without assumptions on the boundary")
     return GlobalIndex(result.ratio(0, 1), result.component(1), result, description, caveat)

@@ -60,6 +60,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "orientations) (default: %(default)s)")
     p.add_argument("--length", type=float, default=None, metavar="L",
                    help="characteristic length [m] of a task space mixing translations and rotations")
+    analysis_args.add_orientation_argument(p)
     p.add_argument("--nodes", type=int, default=None, metavar="N",
                    help="fixed sample points of the surrogate: serial: 2^N Sobol nodes (default 8); "
                         "parallel: N per axis of the box (default 5)")
@@ -104,7 +105,8 @@ def run(args: argparse.Namespace) -> int:
                        if args.effort_limit else None)
             problem = design.design_problem(numpy_model, args.maximize, free, bounds=bounds, values=values, box=box,
                                             margin=args.margin, limits=limits, length=args.length,
-                                            effort_limits=efforts, max_apparent_mass=args.max_apparent_mass)
+                                            effort_limits=efforts, max_apparent_mass=args.max_apparent_mass,
+                                            orientation=analysis_args.parse_orientation(args.orientation))
             if args.gradients == "jax":
                 from symkin.design import gradient_solving
 
@@ -145,6 +147,11 @@ def run(args: argparse.Namespace) -> int:
     seconds = {"build": solution.build_seconds, "solve": solution.solve_seconds, "evaluation": evaluation,
                "wall": wall}
     report = _report(args, problem, description, solution, rating, seconds)
+    flat = design.scale_invariance(problem, numpy_model)
+    if flat:
+        report["notes"] = [f"the GCI does not change when {', '.join(flat)} scale together (J scales with them): every "
+                           "design on the ray through this optimum is as good, only their ratios were optimized; "
+                           f"keep one of them out of --free to choose the scale"]
     files["result.json"] = json.dumps(report, indent=2) + "\n"
     out = Path(args.out or Path("out") / "optimize" / numpy_model.name)
     replace_directory(out, files)
@@ -170,13 +177,17 @@ def _report(args, problem, description: str, solution, rating, seconds: dict[str
             for which, r in (("start", before), ("optimum", after))}},
         "required_box": None if problem.box is None else {"lower": problem.box[0].tolist(),
                                                           "upper": problem.box[1].tolist(),
-                                                          "margin": problem.margin},
+                                                          "margin": problem.margin,
+                                                          "orientation": None if problem.orientation is None
+                                                          else problem.orientation.tolist()},
         "seconds": seconds,
     }
 
 
 def _print(report: dict, out: Path) -> None:
     print(f"{report['model']}: maximize {report['objective']}; {report['surrogate']}")
+    for note in report.get("notes", ()):
+        print(f"  note: {note}")
     for name, p in report["parameters"].items():
         print(f"  {name}: {p['start']:.6g} -> {p['optimum']:.10g}   (bounds {p['bounds'][0]:g} .. {p['bounds'][1]:g})")
     s, solver = report["surrogate_value"], report["solver"]

@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING
 from symkin.lazy import lazy_exports
 
 if TYPE_CHECKING:  # the names as the type checker sees them
-    from symkin.design.evaluation import Evaluation, evaluate
+    from symkin.design.evaluation import Evaluation, evaluate, scale_invariance
     from symkin.design.formulation import DesignProgram, formulate
     from symkin.design.problem import (APPARENT_MASS_FUNCTIONS, OBJECTIVES, DesignProblem, FreeParameter,
                                       design_problem)
@@ -35,7 +35,7 @@ if TYPE_CHECKING:  # the names as the type checker sees them
 _EXPORTS = {
     "APPARENT_MASS_FUNCTIONS": "problem", "OBJECTIVES": "problem", "DesignProblem": "problem",
     "FreeParameter": "problem", "design_problem": "problem",
-    "Evaluation": "evaluation", "evaluate": "evaluation",
+    "Evaluation": "evaluation", "evaluate": "evaluation", "scale_invariance": "evaluation",
     "DesignProgram": "formulation", "formulate": "formulation",
     "Solution": "solving", "solve": "solving",
     "sweep": "sweep_run",

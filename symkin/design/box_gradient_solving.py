@@ -53,9 +53,9 @@ def solve_gci_over_the_box(problem: DesignProblem, jax_model: GeneratedModel, nu
     started = time.perf_counter()
     box = _BoxDesign.of(problem, jax_model, numpy_model, nodes)
     grid, names, scales, constraints = box.grid, box.names, box.scales, box.constraints
-    dimension = grid.nodes.shape[1]
+    rows = grid.nodes.shape[1] if problem.orientation is None else 6  # J's, or a held platform's J_h^-1
     rotation = (reach.angular_velocity_matrix(grid.nodes) if problem.sampling is Sampling.ORIENTATIONS
-                else np.broadcast_to(np.eye(dimension), (len(grid.nodes), dimension, dimension)))
+                else np.broadcast_to(np.eye(rows), (len(grid.nodes), rows, rows)))
     surrogate_program, _ = _programs_over_the_box(box.ik, box.jacobian, box.ik_names, box.jacobian_names)
     nodes_arguments = (jnp.asarray(grid.nodes), jnp.asarray(rotation), jnp.asarray(grid.weights))
 
@@ -165,7 +165,7 @@ class _BoxDesign:
 
         grid = inverse_grid(problem, nodes, BOX_POINTS_PER_AXIS)
         reference_margin = margin_reference(problem, numpy_model, grid.points)
-        (ik, ik_values), (jacobian, jacobian_values) = jax_model.unbound("ik"), jax_model.unbound("jacobian")
+        (ik, ik_values), (jacobian, jacobian_values) = _task_functions(problem, jax_model)
         mass_matrix, mass_values = (None, {}) if problem.max_apparent_mass is None else jax_model.unbound("mass_matrix")
         parameters = {**ik_values, **jacobian_values, **mass_values}
         parameters.update({k: float(v) for k, v in problem.values.items() if k in parameters})
@@ -190,6 +190,22 @@ class _BoxDesign:
             program = _mass_program(ik, jacobian, mass_matrix, ik_names, jacobian_names, tuple(sorted(mass_values)))
             masses = _mass_constraints(program, points, problem.max_apparent_mass, design_values, names, scales)
         return cls(grid, ik, jacobian, ik_names, jacobian_names, names, scales, points, design_values, reach, masses)
+
+
+def _task_functions(problem: DesignProblem, jax_model: GeneratedModel) -> tuple[tuple[Any, dict], tuple[Any, dict]]:
+    """((ik, its parameters), (J, its parameters)) of the box's points: the generated ik and Jacobian, or a held
+    platform's ik of (points, orientation) and J_h^-1 = J^-1 D (:attr:`DesignProblem.held_inverse_scaling`)."""
+    if problem.orientation is None:
+        return jax_model.unbound("ik"), jax_model.unbound("jacobian")
+    import jax.numpy as jnp
+    (ik, ik_values), (inverse, inverse_values) = jax_model.unbound("ik"), jax_model.unbound("inverse_jacobian")
+    orientation, scaling = jnp.asarray(problem.orientation), jnp.asarray(problem.held_inverse_scaling)
+
+    def poses(points: Any) -> Any:
+        return jnp.concatenate([points, jnp.broadcast_to(orientation, (*points.shape[:-1], 3))], axis=-1)
+
+    return ((lambda points, **parameters: ik(poses(points), **parameters), ik_values),
+            (lambda q, points, **parameters: inverse(q, poses(points), **parameters) @ scaling, inverse_values))
 
 
 def solve_force_over_the_box(problem: DesignProblem, jax_model: GeneratedModel, numpy_model: GeneratedModel,
@@ -343,21 +359,21 @@ def _violation(g: np.ndarray) -> float:
 
 
 class _ReachRows:
-    """The reach constraints of a parallel model as rows g >= 0, from the ik's margins (P, legs) and joints (P, n) at
-    the box's points - the CasADi program's (:func:`symkin.design.formulation._reach`): margin / its start median,
-    and each finite side of the problem's joint rules (:func:`symkin.design.formulation.joint_rules`).  Linear in
-    (margins, joints) plus constants: ``shift=0`` gives the rows of their derivatives."""
+    """The reach constraints as rows g >= 0 from the ik's margins (P, legs) and joints (P, n) at the box's points, as
+    the CasADi program's (:func:`symkin.design.formulation._reach`): margin / its start median, each finite side of
+    the joint rules (angles centred, :class:`~symkin.design.formulation.JointRules`); ``shift=0``: their slopes."""
 
     def __init__(self, problem: DesignProblem, model: GeneratedModel, reference_margin: float) -> None:
         self.reference_margin = reference_margin
-        self.rows, self.offsets, self.lower, self.upper = joint_rules(problem, model)
+        self.rules = joint_rules(problem, model)
 
     def __call__(self, margins: np.ndarray, joints: np.ndarray, *, shift: float) -> np.ndarray:
-        values = joints @ self.rows.T + shift * self.offsets
-        low, high = np.isfinite(self.lower), np.isfinite(self.upper)
+        rows, offsets, lower, upper, _ = self.rules
+        values = (self.rules.centred(joints) if shift else joints) @ rows.T + shift * offsets
+        low, high = np.isfinite(lower), np.isfinite(upper)
         return np.concatenate([margins.reshape(-1) / self.reference_margin,
-                               (values[:, low] - shift * self.lower[low]).T.reshape(-1),
-                               (shift * self.upper[high] - values[:, high]).T.reshape(-1)])
+                               (values[:, low] - shift * lower[low]).T.reshape(-1),
+                               (shift * upper[high] - values[:, high]).T.reshape(-1)])
 
 
 @functools.lru_cache(maxsize=8)

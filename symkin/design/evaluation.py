@@ -30,7 +30,7 @@ from symkin import mechanism
 from symkin.mechanism import Sampling
 from symkin.integration.estimates import Estimate
 from symkin.mechanism.limits import within_limits
-from symkin.design.problem import DesignProblem
+from symkin.design.problem import DesignProblem, held
 from symkin.runtime.info import GeneratedModel
 
 #: Integrand evaluations of the independent GCI (qmc: 16 scrambles of 2^10 points).
@@ -41,6 +41,9 @@ CHECK_POINTS_PER_AXIS = 11
 CONTINUED_CELLS_PER_AXIS = 16
 #: Steps of the design from the start design's home assembly to another design's (:func:`continued_home`).
 DESIGN_STEPS = 16
+#: Configurations and relative rounding of :func:`scale_invariance`'s test J(s p) = s J(p).
+SCALE_TEST_CONFIGURATIONS = 8
+SCALE_TEST_TOLERANCE = 1e-12
 
 
 @dataclass(frozen=True)
@@ -79,7 +82,7 @@ def evaluate(problem: DesignProblem, model: GeneratedModel, design: dict[str, fl
     joint configurations at them (:class:`~symkin.design.solving.Solution`), checked by forward
     kinematics when no closed-form inverse applies.
     """
-    bound = model.bind(**design)
+    bound = held(problem, model.bind(**design))
     if problem.sampling is Sampling.CONTINUATION:
         return _continued(problem, bound, continued_home(problem, model, design))
     if problem.sampling is not Sampling.JOINTS:
@@ -126,12 +129,14 @@ def _joint_box(problem: DesignProblem, model: GeneratedModel, points: np.ndarray
             "(the first feasible branch)", q[inside])
 
 
-def inverse_index(model: GeneratedModel, points: np.ndarray, limits: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+def inverse_index(model: GeneratedModel, points: np.ndarray, limits: np.ndarray | None,
+                  length: float | None = None) -> tuple[np.ndarray, np.ndarray]:
     """1/kappa of J at each point (0 where unreachable), and whether it is reachable: by the
     analyses' own test (:func:`symkin.mechanism.reach.generated_inverse`: IK margin, fk round
     trip, declared passive-joint limits) within the actuated-joint ``limits``; a spherical
     platform's orientations by :func:`symkin.analysis.orientations.orientation_integrand` (1/kappa
-    of J_w)."""
+    of J_w).  ``length``: a platform held at a constant orientation has its twist Jacobian's position rows
+    divided by it (:func:`symkin.numerics.conditioning.homogenize`)."""
     if mechanism.turns_only(model):
         return orientations.reachable_index(model, points, limits)
     ik = reach.generated_inverse(model)
@@ -139,7 +144,10 @@ def inverse_index(model: GeneratedModel, points: np.ndarray, limits: np.ndarray 
                                                     mechanism.revolute_mask(model), stops.StopInequalities.of_model(model))
     values = np.zeros(len(points))
     if inside.any():
-        values[inside] = conditioning.inverse_condition_number(model.jacobian(q[inside], points[inside]))
+        J = model.jacobian(q[inside], points[inside])
+        if length is not None:
+            J = conditioning.homogenize(J, length, mechanism.position_rows(model))
+        values[inside] = conditioning.inverse_condition_number(J)
     return values, inside
 
 
@@ -157,7 +165,7 @@ def _task_box(problem: DesignProblem, model: GeneratedModel, samples: int, seed:
         return _spherical(problem, model, samples, seed)
     ik = reach.generated_inverse(model)
     result = global_indices.gci(model, method="qmc", samples=samples, seed=seed, domain="cartesian", inverse=ik,
-                                box=problem.box, limits=problem.limits)
+                                box=problem.box, limits=problem.limits, length=problem.length)
     points = box_check_points(problem)
     q, inside = feasibility.feasible_configurations(ik, points, mechanism.joint_limits(model, problem.limits),
                                                     mechanism.revolute_mask(model), stops.StopInequalities.of_model(model))
@@ -210,3 +218,25 @@ def _continued(problem: DesignProblem, model: GeneratedModel, home: tuple[np.nda
                       f"the working mode flooded over a {CHECK_POINTS_PER_AXIS}^{len(lower)} vertex grid of the box "
                       "from the home assembly (closure solved from a neighbour, within the limits, no singularity "
                       "crossed)")
+
+
+def scale_invariance(problem: DesignProblem, model: GeneratedModel) -> tuple[str, ...]:
+    """The free lengths whose common scaling leaves the objective unchanged, or (): the GCI of a model sampled in its
+    joint box (revolute joints only), without a required box or characteristic length, whose Jacobian scales with them,
+    J(s p) = s J(p) (tested at a few configurations of the box: a length folded into the code would break it).  Then
+    kappa does not change and the measure's weights |det J| all scale by s^n (seed eq. 8.28 is a ratio of integrals):
+    the optimum is a ray of designs, of which the optimizer returns one; only the lengths' ratios were optimized."""
+    if (problem.objective != "gci" or problem.sampling is not Sampling.JOINTS or problem.box is not None
+            or problem.length is not None or not mechanism.revolute_mask(model).all()):
+        return ()
+    lengths = tuple(name for name in problem.names if model.info.units.get(name) == "m")
+    if not lengths:
+        return ()
+    lower, upper = problem.joint_limits[:, 0], problem.joint_limits[:, 1]
+    q = lower + (upper - lower) * np.random.default_rng(0).random((SCALE_TEST_CONFIGURATIONS, len(lower)))
+    design = problem.start
+    J = np.asarray(model.bind(**design).jacobian(q))
+    scaled = np.asarray(model.bind(**{**design, **{name: 2.0 * design[name] for name in lengths}}).jacobian(q))
+    flat = np.max(np.abs(scaled - 2.0 * J)) <= SCALE_TEST_TOLERANCE * np.max(np.abs(J))
+    return lengths if flat else ()
+

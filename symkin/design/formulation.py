@@ -82,7 +82,7 @@ from symkin.mechanism import passive, stops
 from symkin.mechanism.casadi_assembly import CasadiAssembly
 from symkin.mechanism.limits import within_limits
 from symkin.design import smooth
-from symkin.design.problem import DesignProblem
+from symkin.design.problem import DesignProblem, held
 from symkin.backends.casadi.loader import casadi_function
 from symkin.runtime.info import GeneratedModel
 
@@ -412,16 +412,21 @@ def inverse_grid(problem: DesignProblem, nodes: int | None, box_points: int) -> 
         weights = np.ones(len(p))
         measure = "Cartesian measure"
     points = np.concatenate([sampling.grid(*problem.inflated_box, box_points, midpoints=False), p])
+    held = ""
+    if problem.orientation is not None:
+        angles = ", ".join(f"{a:g}" for a in np.degrees(problem.orientation))
+        held = (f" at the constant orientation roll, pitch, yaw = {angles} deg, of the twist Jacobian with its "
+                f"position rows divided by L = {problem.length:g} m (kappa_F of J^-1 diag(L I, E^-1))")
     description = (f"Frobenius GCI surrogate: mean 1/kappa_F over a {per_axis}^{p.shape[1]} midpoint grid of the "
-                   f"required box ({measure}), joints from the closed-form ik; the box is required at {len(points)} "
-                   "points (ik margin >= 0)")
+                   f"required box ({measure}){held}, joints from the closed-form ik; the box is required at "
+                   f"{len(points)} points (ik margin >= 0)")
     return InverseGrid(p, weights / weights.sum(), points, description)
 
 
 def margin_reference(problem: DesignProblem, numpy_model: GeneratedModel, points: np.ndarray) -> float:
     """The scale of the ik margins in the reach constraints: their median magnitude at ``points`` at the start
     design (ValueError where the ik fails there)."""
-    start_margin = np.asarray(numpy_model.bind(**problem.start).ik(points)[1])
+    start_margin = np.asarray(held(problem, numpy_model.bind(**problem.start)).ik(points)[1])
     if not np.all(np.isfinite(start_margin)):
         raise ValueError(f"{numpy_model.name}: the inverse kinematics fails at the start design")
     return float(np.median(np.abs(start_margin))) or 1.0
@@ -431,8 +436,13 @@ def _inverse_grid_terms(problem: DesignProblem, casadi_model: GeneratedModel, nu
               design: casadi.MX, nodes: int | None, box_points: int, seed: int) -> _Terms:
     per_axis = GRID_POINTS_PER_AXIS if nodes is None else nodes
     node = casadi.SX.sym("p", len(problem.required_box[0]))
-    joints, margin = _call(casadi_function(casadi_model, "ik"), {"p": node, **values})
-    J = _call(casadi_function(casadi_model, "jacobian"), {"q": joints, "p": node, **values})[0]
+    pose = node if problem.orientation is None else casadi.vertcat(node, casadi.DM(problem.orientation))
+    joints, margin = _call(casadi_function(casadi_model, "ik"), {"p": pose, **values})
+    if problem.orientation is None:
+        J = _call(casadi_function(casadi_model, "jacobian"), {"q": joints, "p": node, **values})[0]
+    else:  # kappa_F of J_h^-1 = J^-1 D is that of J_h (DesignProblem.held_inverse_scaling)
+        inverse = _call(casadi_function(casadi_model, "inverse_jacobian"), {"q": joints, "p": pose, **values})[0]
+        J = casadi.mtimes(inverse, casadi.DM(problem.held_inverse_scaling))
     masses = _apparent_mass_rows(problem, casadi_model, node, joints, J, values)
     if problem.objective == "force":
         return _force(problem, numpy_model, node, free, J, margin, joints, masses, design, per_axis, box_points)
@@ -452,12 +462,28 @@ class JointRules(NamedTuple):
     lower <= rows q + offsets <= upper: the actuated joints' limits where the problem gives them (rows of the
     identity), then the joint stops (:class:`symkin.mechanism.stops.StopInequalities`).  One description for both
     programs that require the box: the CasADi one (:func:`_reach`) and the JAX one
-    (:mod:`symkin.design.gradient_solving`); a side may be infinite."""
+    (:mod:`symkin.design.gradient_solving`); a side may be infinite.
+
+    A revolute joint with finite limits is an angle: both programs take it as its representative within pi of the
+    limits' centre c (:meth:`centred`), as :func:`symkin.mechanism.limits.within_limits` takes it within the limits, so
+    that a joint passing the +-pi of the ik's atan2 inside its range (the pantograph's, limited to [0, pi]) moves the
+    constraint by its step, not by 2 pi (a jump that stops SLSQP's line search)."""
 
     rows: np.ndarray  # (k, n)
     offsets: np.ndarray  # (k,)
     lower: np.ndarray  # (k,)
     upper: np.ndarray  # (k,)
+    centres: np.ndarray  # (n,): c of each joint taken within pi of it, NaN for the others
+
+    def centred(self, joints: Any, xp: Any = np) -> Any:
+        """Joints (..., n) with each angle of :attr:`centres` moved by a multiple of 2 pi to within pi of its c:
+        c + atan2(sin(q - c), cos(q - c)), smooth but at c +- pi, outside the limits (``xp``: numpy or casadi)."""
+        if xp is casadi:
+            return casadi.vertcat(*[joints[i] if np.isnan(c) else c + casadi.atan2(casadi.sin(joints[i] - c),
+                                                                                     casadi.cos(joints[i] - c))
+                                    for i, c in enumerate(self.centres)])
+        centred = self.centres + np.arctan2(np.sin(joints - self.centres), np.cos(joints - self.centres))
+        return np.where(np.isnan(self.centres), joints, centred)
 
 
 def joint_rules(problem: DesignProblem, numpy_model: GeneratedModel) -> JointRules:
@@ -465,10 +491,13 @@ def joint_rules(problem: DesignProblem, numpy_model: GeneratedModel) -> JointRul
     n = len(numpy_model.info.coordinates)
     inequalities = stops.StopInequalities.of_model(numpy_model)
     limits = np.empty((0, 2)) if problem.limits is None else np.asarray(problem.limits, dtype=np.float64)
+    centres = np.full(n, np.nan)
+    angles = mechanism.revolute_mask(numpy_model)[:len(limits)] & np.all(np.isfinite(limits), axis=1)
+    centres[:len(limits)][angles] = limits[angles].mean(axis=1)
     return JointRules(np.vstack([np.eye(n)[:len(limits)], inequalities.rows.reshape(-1, n)]),
                       np.concatenate([np.zeros(len(limits)), inequalities.offsets]),
                       np.concatenate([limits[:, 0], inequalities.lower]),
-                      np.concatenate([limits[:, 1], inequalities.upper]))
+                      np.concatenate([limits[:, 1], inequalities.upper]), centres)
 
 
 def _reach(problem: DesignProblem, numpy_model: GeneratedModel, node: casadi.SX, free: casadi.SX,
@@ -479,9 +508,10 @@ def _reach(problem: DesignProblem, numpy_model: GeneratedModel, node: casadi.SX,
     (extra, g, lbg, ubg); each rule's rows at every point in turn."""
     reference = margin_reference(problem, numpy_model, points)
     margins = margin.numel()
+    rules = joint_rules(problem, numpy_model)
+    joints = rules.centred(joints, casadi)
     reached = _mapped(_node_function("reach", node, free, casadi.vertcat(margin / reference, joints, extra)),
                       casadi.DM(points.T), design)
-    rules = joint_rules(problem, numpy_model)
     # the identity's rows sparse: each a joint itself, exactly (no 0 * other joint terms)
     ruled = casadi.mtimes(casadi.sparsify(casadi.DM(rules.rows)), reached[margins:margins + joints.numel(), :])
     g = [casadi.vec(reached[:margins, :]), casadi.vec(ruled.T)]

@@ -55,7 +55,8 @@ def refusal(problem: DesignProblem, jax_model: GeneratedModel) -> str | None:
         if problem.objective not in BOX_OBJECTIVES:
             return (f"JAX gradients optimize a parallel model's {' or '.join(BOX_OBJECTIVES)} over its required box, "
                     f"not the {problem.objective} objective{fix}")
-        needed = ("ik", "jacobian") + (() if problem.max_apparent_mass is None else ("mass_matrix",))
+        jacobian = "jacobian" if problem.orientation is None else "inverse_jacobian"  # a held pose platform's
+        needed = ("ik", jacobian) + (() if problem.max_apparent_mass is None else ("mass_matrix",))
         if not set(needed) <= set(jax_model.functions) or not device_integrand.loaded_with_jax(jax_model):
             return (f"{jax_model.name}: JAX gradients need the model's JAX {', '.join(needed)} (derive them with "
                     "--backend numpy,jax, or load the model with backend='jax')")

@@ -14,7 +14,7 @@ import numpy as np
 
 from symkin.analysis import global_indices, workspace
 from symkin.design.evaluation import Evaluation, continued_home, inverse_index
-from symkin.design.problem import DesignProblem, box_axes
+from symkin.design.problem import DesignProblem, box_axes, held
 from symkin.design.solving import Solution
 from symkin.mechanism import Sampling, continuation
 from symkin.runtime.info import GeneratedModel
@@ -130,7 +130,8 @@ def _box_panel(ax: Any, problem: DesignProblem, model: GeneratedModel, design: d
     else:
         points = np.tile(lo, (U.size, 1))
         points[:, first], points[:, last] = U.ravel(), V.ravel()
-        values = inverse_index(model.bind(**design), points, problem.limits)[0].reshape(U.shape)
+        values = inverse_index(held(problem, model.bind(**design)), points, problem.limits,
+                               problem.length)[0].reshape(U.shape)
     scale, unit = (np.degrees(1.0), "deg") if problem.sampling is Sampling.ORIENTATIONS else (1.0, "m")
     mesh = ax.pcolormesh(scale * U, scale * V, np.ma.masked_equal(values, 0.0), shading="auto", cmap="viridis",
                          vmin=0.0, vmax=1.0, rasterized=True)

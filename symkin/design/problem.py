@@ -16,7 +16,7 @@ import numpy as np
 from symkin import mechanism
 from symkin.rating.handle_measures import Actuation
 from symkin.analysis.needs import needs_of
-from symkin.mechanism import Sampling
+from symkin.mechanism import Sampling, reach
 from symkin.runtime.info import GeneratedModel
 
 #: What can be maximized: the GCI, the workspace measure, the isotropic force at the worst point of the box.
@@ -64,6 +64,9 @@ class DesignProblem:
         max_apparent_mass: the largest apparent mass the handle may have (kg): every eigenvalue of
             (J M^-1 J^T)^-1 at every point of the required box at most this (a parallel model whose handle
             translates), else None.
+        orientation: a platform that translates and rotates (a Stewart-Gough platform): the constant orientation
+            (roll, pitch, yaw in rad, its home pose's) its box of positions is required at, as ``symkin gci`` rates
+            it (:class:`symkin.mechanism.reach.ConstantOrientation`); else None.
     """
 
     objective: str
@@ -76,6 +79,19 @@ class DesignProblem:
     length: float | None
     effort_limits: np.ndarray | None = None
     max_apparent_mass: float | None = None
+    orientation: np.ndarray | None = None
+
+    @property
+    def held_inverse_scaling(self) -> np.ndarray:
+        """D with J_h^-1 = J^-1 D for a platform held at :attr:`orientation`: its twist Jacobian J_t = diag(I, E)
+        (J^-1)^-1 (E the angular-velocity matrix of the roll-pitch-yaw rates) with the position rows divided by the
+        characteristic length L, J_h = diag(I / L, I) J_t, so D = diag(L I, E^-1) and kappa_F(J_h) = kappa_F(J^-1 D)
+        from the generated J^-1 without inverting it."""
+        assert self.orientation is not None and self.length is not None
+        scaling = np.zeros((6, 6))
+        scaling[:3, :3] = self.length * np.eye(3)
+        scaling[3:, 3:] = np.linalg.inv(reach.angular_velocity_matrix(self.orientation))
+        return scaling
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -140,6 +156,16 @@ def _parameter_inputs(model: GeneratedModel, functions: Sequence[str]) -> set[st
     return {parameter for name in functions for parameter in generated[name].parameters}
 
 
+def _irrelevant(model: GeneratedModel, name: str, relevant: list[str]) -> str:
+    """Why ``name`` cannot be optimized: the objective's functions do not take it; which free parameters they
+    take, or that they take none (a spherical mechanism's kinematics, say, depend on its angles, not its radii)."""
+    head = f"{model.name}: the objective does not depend on '{name}' (it is no input of the kinematics); "
+    if relevant:
+        return head + f"free parameters that matter: {', '.join(relevant)}"
+    return head + ("no free parameter of the model is: declare a parameter that shapes the kinematics (a length "
+                   "or an angle the joints' placement uses) and derive the model again to optimize it")
+
+
 def _free_parameters(model: GeneratedModel, free: Sequence[str], bounds: Mapping[str, tuple[float, float]],
                      values: Mapping[str, float], used: set[str]) -> tuple[FreeParameter, ...]:
     known = sorted(model.parameters)
@@ -151,8 +177,7 @@ def _free_parameters(model: GeneratedModel, free: Sequence[str], bounds: Mapping
             raise ValueError(f"{model.name}: '{name}' is not a free parameter of the model; parameters: "
                              f"{', '.join(known)} (parameters fixed at derivation cannot be optimized)")
         if name not in used:
-            raise ValueError(f"{model.name}: the objective does not depend on '{name}' (it is no input of the "
-                             f"kinematics); free parameters that matter: {', '.join(sorted(used & set(known)))}")
+            raise ValueError(_irrelevant(model, name, sorted(used & set(known))))
         start = float(values.get(name, model.parameters[name]))
         if name in bounds:
             lower, upper = bounds[name]
@@ -249,7 +274,8 @@ def design_problem(model: GeneratedModel, objective: str, free: Sequence[str], *
                    box: Mapping[str, tuple[float, float]] | None = None, margin: float = 0.0,
                    limits: mechanism.Limits | None = None, length: float | None = None,
                    effort_limits: Sequence[float] | None = None,
-                   max_apparent_mass: float | None = None) -> DesignProblem:
+                   max_apparent_mass: float | None = None,
+                   orientation: Sequence[float] | None = None) -> DesignProblem:
     """Check a dimensioning problem against a loaded model and describe it.
 
     Args:
@@ -268,6 +294,8 @@ def design_problem(model: GeneratedModel, objective: str, free: Sequence[str], *
         effort_limits: the actuators' effort limits of the force objective (default: the model's).
         max_apparent_mass: a bound (kg) on the apparent mass at the handle over the required box (a
             constraint of a parallel model whose handle translates; the model needs its mass_matrix).
+        orientation: a platform that translates and rotates: the constant orientation (roll, pitch, yaw in rad) of
+            its box of positions (default: its home pose's).
 
     Raises:
         ValueError: an unknown or irrelevant parameter, bad bounds, a malformed box, or a
@@ -281,6 +309,7 @@ def design_problem(model: GeneratedModel, objective: str, free: Sequence[str], *
     if unknown:
         raise ValueError(f"{model.name}: not parameters of the model: {', '.join(unknown)}; "
                          f"parameters: {', '.join(sorted(model.parameters))}")
+    held_orientation = _held_orientation(model, orientation)
     if sampled is Sampling.CONTINUATION and (objective == "force" or max_apparent_mass is not None):
         raise ValueError(f"{model.name}: its legs have no closed-form inverse kinematics; their dimensioning "
                          "maximizes the GCI over the required box (--maximize gci), without force objectives or "
@@ -317,10 +346,12 @@ def design_problem(model: GeneratedModel, objective: str, free: Sequence[str], *
             what = {"gci": "GCI", "force": "worst-case force"}.get(objective, objective)
             raise ValueError(f"{model.name}: the {what} of a parallel mechanism is taken over the required workspace "
                              f"box: give --require-box {','.join(f'{a}=LOWER:UPPER' for a in axes)} ({unit})")
-        if sampled is Sampling.INVERSE and len(mechanism.position_rows(model)) != len(task):
+        if sampled is Sampling.INVERSE and held_orientation is None and len(mechanism.position_rows(model)) != len(task):
             raise ValueError(f"{model.name}: the task space {list(task)} mixes positions and orientations; the GCI "
-                             "of a parallel mechanism is taken over a box of TCP positions (such as the DELTA's) or "
-                             "of a spherical platform's orientations (roll, pitch, yaw), not over both")
+                             "of a parallel mechanism is taken over a box of TCP positions (such as the DELTA's), of "
+                             "a platform's positions at its home orientation (x, y, z, roll, pitch, yaw: a "
+                             "Stewart-Gough platform's) or of a spherical platform's orientations (roll, pitch, yaw), "
+                             "not over a box of both")
         declared = np.array(model.joint_limits, dtype=np.float64)
         joint_box = mechanism.joint_limits(model, limits) if limits or np.isfinite(declared).any() else None
     else:
@@ -328,4 +359,30 @@ def design_problem(model: GeneratedModel, objective: str, free: Sequence[str], *
     fixed = {k: float(v) for k, v in {**model.parameters, **values}.items()
              if k in used and k not in {p.name for p in free_parameters}}
     return DesignProblem(objective, free_parameters, fixed, sampled, joint_box, required, float(margin), length,
-                         _effort_limits(model, objective, effort_limits, required), bound)
+                         _effort_limits(model, objective, effort_limits, required), bound, held_orientation)
+
+
+def _held_orientation(model: GeneratedModel, angles: Sequence[float] | None) -> np.ndarray | None:
+    """The constant orientation (``angles``, default its home pose's) a platform that translates and rotates (task
+    space x, y, z, roll, pitch, yaw, closed-form ik) is dimensioned at over a box of positions, else None.
+
+    Raises:
+        ValueError: angles for another model, or not three finite angles away from pitch = +-90 deg.
+    """
+    if (mechanism.sampling(model) is Sampling.INVERSE and tuple(mechanism.task_space(model))
+            == (*mechanism.POSITION_COMPONENTS, *mechanism.ANGLES)):
+        return reach.constant_orientation(model, angles).orientation
+    if angles is not None:
+        raise ValueError(f"--orientation: {model.name} is not a platform that translates and rotates with a "
+                         f"closed-form ik (task space {list(mechanism.task_space(model))}); leave the option out")
+    return None
+
+
+def held(problem: DesignProblem, model: GeneratedModel) -> GeneratedModel:
+    """``model`` as the problem rates it: a platform that translates and rotates held at the problem's constant
+    orientation (:func:`symkin.mechanism.reach.constant_orientation`: ik and the twist Jacobian of platform
+    positions), any other model itself."""
+    if problem.orientation is None:
+        return model
+    return reach.constant_orientation(model, problem.orientation)
+

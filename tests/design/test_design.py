@@ -529,6 +529,49 @@ def test_delta_actuated_joint_limits_are_kept_over_the_box(delta):
     assert design.evaluate(problem, numpy_model, solution.optimum, samples=2**10).box_reachable == 1.0
 
 
+def test_a_limited_angle_is_taken_about_its_limits_centre_in_both_programs(tmp_path):
+    """The pantograph's proximal joints are limited to [0, pi]; its ik's atan2 returns pi + d as -pi + d: the joint rules
+    take it as pi + d (continuous in the design), in numpy and CasADi alike, and leave lengths alone."""
+    model = symkin.load(str(GENERATED_DIR / "pantograph"))
+    problem = design.design_problem(model, "gci", ["l"], box={"x": (-0.03, 0.03), "y": (0.08, 0.12)})
+    rules = formulation.joint_rules(problem, model)
+    assert rules.centres == pytest.approx([np.pi / 2, np.pi / 2])
+    d = 1e-3
+    joints = np.array([[-np.pi + d, 0.3], [np.pi - d, -0.6 * np.pi], [0.0, np.pi / 2]])
+    expected = np.array([[np.pi + d, 0.3], [np.pi - d, 1.4 * np.pi], [0.0, np.pi / 2]])
+    assert rules.centred(joints) == pytest.approx(expected, abs=4 * np.pi * np.finfo(float).eps)
+    q = formulation.casadi.SX.sym("q", 2)
+    centred = formulation.casadi.Function("centred", [q], [rules.centred(q, formulation.casadi)])
+    for row, want in zip(joints, expected):
+        assert np.asarray(centred(row)).ravel() == pytest.approx(want, abs=4 * np.pi * np.finfo(float).eps)
+    stewart = symkin.load(str(GENERATED_DIR / "stewart"))  # prismatic legs: lengths, not angles
+    legs = formulation.joint_rules(design.design_problem(stewart, "gci", ["r_b"], box={"x": (-0.01, 0.01), "y": (
+        -0.01, 0.01), "z": (0.22, 0.24)}, length=0.2), stewart)
+    assert np.all(np.isnan(legs.centres))
+
+
+@pytest.mark.parametrize("model_dir, free, options, flat", [
+    (ARM_DIR, ["l1", "l2"], {}, ("l1", "l2")),
+    (ARM_DIR, ["l1"], {}, ()),
+    (str(GENERATED_DIR / "phantom_premium"), ["l1", "l2"], {}, ("l1", "l2")),       # its fk takes l1 and l2 only
+    (ARM_DIR, ["l1", "l2"], {"box": {"x": (0.11, 0.14), "y": (0.11, 0.14)}}, ()),  # the box sets the scale
+    (str(GENERATED_DIR / "ur10e"), ["a2", "a3", "d4", "d5", "d6"], {"length": 0.3}, ()),  # so does L (and d1, fixed)
+])
+def test_a_gci_that_only_sees_the_ratios_of_the_free_lengths_is_said_so(model_dir, free, options, flat):
+    """The GCI of a design and of all its free lengths doubled are one number where scale_invariance says so (the
+    CasADi surrogate at its nodes), so that the optimum is a ray and the report says which ratios were optimized."""
+    numpy_model = symkin.load(model_dir)
+    problem = design.design_problem(numpy_model, "gci", free, **options)
+    assert design.scale_invariance(problem, numpy_model) == flat
+    if not flat:
+        return
+    program = design.formulate(problem, symkin.load(model_dir, "casadi"), numpy_model, nodes=6)
+    start = np.array([problem.start[name] for name in free])
+    rest = program.x0[program.free_count:]
+    assert float(program.objective(2 * start, rest)) == pytest.approx(float(program.objective(start, rest)),
+                                                                      rel=KINEMATICS)
+
+
 def test_a_6x6_pose_task_with_a_characteristic_length_converges():
     """UR10e, L = 0.3 m: nodes whose det J changes sign with the design would stall IPOPT without smoothing."""
     directory = GENERATED_DIR / "ur10e"
