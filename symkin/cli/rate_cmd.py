@@ -168,6 +168,9 @@ def run(args: argparse.Namespace) -> int:
         device = analysis_args.DEVICE_OUTPUTS if args.device else ()
         models = model_files.load_models(args.model, (args.backend,), NEEDS["rate"],
                                          ("gravity_vector", "closure_dynamics", *device), display=Progress)
+        if analysis_args.continued_on_the_host(args.backend, models[0]):
+            models = model_files.load_models(args.model, ("numpy",), NEEDS["rate"],
+                                             ("gravity_vector", "closure_dynamics", *device), display=Progress)
         values = analysis_args.parse_assignments(args.assignments)
         model = analysis_args.device_view(args, models[0].bind(**values) if values else models[0])
         encoders = _encoders(args, model)
@@ -197,6 +200,9 @@ def run(args: argparse.Namespace) -> int:
                 if maker.box is not None:
                     box_lines, record["maker"]["workspace_box"] = maker_figures.box_lines_and_record(maker.box, shapes)
                     summary += ["    " + line for line in box_lines]
+            draw = not args.no_figure and bool(datasheet_files.drawn_measures(sheet))
+            if not args.no_figure and not draw:
+                summary.append("  no datasheet.png: no measure over every direction was rated (why: above)")
             files: dict[str, str | bytes] = {
                 "datasheet.json": json.dumps(record | {"servo_rate_hz": args.rate,
                                                        "usable_conditioning": conditioning,
@@ -204,7 +210,7 @@ def run(args: argparse.Namespace) -> int:
                                              indent=2, allow_nan=False) + "\n",
                 "datasheet.csv": datasheet_files.csv_text(sheet, model.info.coordinate_names),
                 "summary.txt": "\n".join(summary) + "\n"}
-            if not args.no_figure:
+            if draw:
                 progress("drawing the datasheet")
                 files["datasheet.png"] = datasheet_files.figure_png(sheet, f"{model.name}: datasheet over the usable "
                                                                      "workspace")

@@ -60,6 +60,12 @@ def worst_map(points: np.ndarray, values: np.ndarray, worst_is_min: bool, cells:
     return result.x_edge, result.y_edge, result.statistic.T
 
 
+def drawn_measures(sheet: Datasheet) -> list:
+    """The measures the datasheet figure maps: those over every direction (those along one axis are in the table
+    only); none where the model declares nothing they need (the figure is then not drawn)."""
+    return [measure for measure in sheet.measures if measure.axis is None]
+
+
 def figure_png(sheet: Datasheet, title: str) -> bytes:
     """The datasheet figure (:func:`datasheet_figure`) as PNG bytes."""
     import io
@@ -76,7 +82,7 @@ def datasheet_figure(sheet: Datasheet, title: str) -> Any:
     arrows and the true range in its label."""
     from matplotlib.figure import Figure
 
-    drawn = [measure for measure in sheet.measures if measure.axis is None]
+    drawn = drawn_measures(sheet)
     count = len(drawn)
     columns = min(3, count)
     rows = -(-count // columns)
