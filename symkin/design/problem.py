@@ -234,10 +234,13 @@ def _apparent_mass(model: GeneratedModel, max_apparent_mass: float | None) -> fl
     is checked with its objective)."""
     if max_apparent_mass is None:
         return None
-    if mechanism.sampling(model) is Sampling.JOINTS or not mechanism.is_positional(model):
-        raise ValueError(f"{model.name}: the apparent-mass bound is a constraint at the points of the required box of "
-                         "a parallel mechanism whose handle translates (the masses felt at the handle, in kg); rate a "
-                         "serial arm's apparent mass with 'symkin rate'")
+    what = ("the apparent-mass bound is a constraint at the points of the required box of a parallel mechanism whose "
+            "handle translates (the masses felt at the handle, in kg)")
+    if mechanism.sampling(model) is Sampling.JOINTS:
+        raise ValueError(f"{model.name}: {what}; rate a serial arm's apparent mass with 'symkin rate'")
+    if not mechanism.is_positional(model):
+        raise ValueError(f"{model.name}: {what}, and this handle turns (task space {list(mechanism.task_space(model))}: "
+                         "the masses and inertias it feels mix kg with kg m^2); leave the bound out")
     if not (np.isfinite(max_apparent_mass) and max_apparent_mass > 0):
         raise ValueError(f"the apparent-mass bound must be a positive mass in kg, got {max_apparent_mass:g}")
     return float(max_apparent_mass)

@@ -427,6 +427,10 @@ def test_the_strongest_delta_whose_handle_feels_at_most_200_grams(delta):
                                                          "yaw": (-0.1, 0.1)}},
      "a parallel mechanism whose handle translates"),
     (DELTA_DIR, ["a"], {"box": DELTA_BOX, "max_apparent_mass": -1.0}, "a positive mass in kg, got -1"),
+    (str(GENERATED_DIR / "stewart"), ["r_b"], {"box": {"x": (-0.01, 0.01), "y": (-0.01, 0.01), "z": (0.22, 0.24)},
+                                               "length": 0.2},
+     "this handle turns (task space ['x', 'y', 'z', 'roll', 'pitch', 'yaw']: the masses and inertias it feels mix kg "
+     "with kg m^2); leave the bound out"),
 ])
 def test_the_apparent_mass_bound_says_what_it_needs(model_dir, free, kwargs, message):
     with pytest.raises(ValueError, match=re.escape(message)):
