@@ -849,3 +849,12 @@ def test_jax_gradients_refuse_what_they_do_not_solve(jax_model, loaded):
                                                   effort_limits=np.ones(2)), "planar_2r")):
         with pytest.raises(ValueError, match="--gradients casadi"):
             solve_with_jax(problem, jax_model(model), loaded(model, "numpy"))
+
+
+def test_a_simulation_with_the_jax_code_says_it_is_not_the_fast_way(jax_directory, capsys, tmp_path):
+    """symkin simulate evaluates one state per call: with --backend jax it says that numpy's or C's code is faster."""
+    out = tmp_path / "swing"
+    assert main(["simulate", str(jax_directory("planar_2r")), "--backend", "jax", "--scenario", "free-swing",
+                 "--duration", "0.01", "--no-figure", "-o", str(out)]) == 0
+    assert "planar_2r: --backend jax: a simulation evaluates one state per call" in capsys.readouterr().out
+
