@@ -30,7 +30,7 @@ any function of the Jacobians (..., m, n) -> (...) can replace it (e.g. the smoo
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -159,26 +159,50 @@ def cartesian_integrand(model: GeneratedModel, inverse: InverseKinematics, box: 
 
 def joint_space_integrand_for(model: GeneratedModel, *, index: Index | None = conditioning.inverse_condition_number,
                               measure: str = "cartesian", limits: Limits | None = None,
-                              length: float | str | None = None) -> Integrand:
+                              length: float | str | None = None, extremes: Extremes | None = None) -> Integrand:
     """The joint-space integrand (:func:`joint_space_integrand`'s components) where it is evaluated: fused on JAX's
     device for a model loaded with the JAX backend whose working mode its generated functions decide and the default
-    index (:mod:`symkin.analysis.device_integrand`), else on the host."""
+    index (:mod:`symkin.analysis.device_integrand`), else on the host; ``extremes`` as :func:`recording_extremes`."""
     if measure in MEASURES and device_integrand.on_device(model) and index in (None, DEFAULT_INDEX):
         return device_integrand.device_joint_space_integrand(model, with_index=index is not None, measure=measure,
-                                                             limits=limits, length=length)
-    return joint_space_integrand(model, index=index, measure=measure, limits=limits, length=length)
+                                                             limits=limits, length=length, extremes=extremes)
+    return recording_extremes(joint_space_integrand(model, index=index, measure=measure, limits=limits,
+                                                    length=length), extremes)
+
+
+#: Called with the smallest and largest index of each batch's points inside the workspace (a sweep's kappa extremes).
+Extremes = Callable[[float, float], None]
+
+
+def recording_extremes(integrand: Integrand, extremes: Extremes | None) -> Integrand:
+    """A host integrand [index dW, dW] that also calls ``extremes`` with the smallest and largest index of each
+    batch's points inside the workspace (dW > 0), as the device's integrands do with their moments; itself without."""
+    if extremes is None:
+        return integrand
+    host = integrand.function
+
+    def recorded(points: np.ndarray) -> np.ndarray:
+        out = host(points)
+        inside = out[:, 1] > 0.0
+        if inside.any():
+            index = out[inside, 0] / out[inside, 1]
+            extremes(float(index.min()), float(index.max()))
+        return out
+
+    return replace(integrand, function=recorded)
 
 
 def cartesian_integrand_for(model: GeneratedModel, inverse: InverseKinematics, box: tuple[np.ndarray, np.ndarray], *,
                             index: Index | None = conditioning.inverse_condition_number, limits: Limits | None = None,
-                            length: float | str | None = None) -> Integrand:
+                            length: float | str | None = None, extremes: Extremes | None = None) -> Integrand:
     """The Cartesian integrand (:func:`cartesian_integrand`'s components) where it is evaluated: fused on JAX's
     device for a model loaded with the JAX backend whose closed-form ik the device decides and the default index
-    (:mod:`symkin.analysis.device_cartesian`), else on the host."""
+    (:mod:`symkin.analysis.device_cartesian`), else on the host; ``extremes`` as :func:`recording_extremes`."""
     if device_cartesian.cartesian_on_device(model, inverse) and index in (None, DEFAULT_INDEX):
         return device_cartesian.device_cartesian_integrand(model, inverse, box, with_index=index is not None,
-                                                           limits=limits, length=length)
-    return cartesian_integrand(model, inverse, box, index=index, limits=limits, length=length)
+                                                           limits=limits, length=length, extremes=extremes)
+    return recording_extremes(cartesian_integrand(model, inverse, box, index=index, limits=limits, length=length),
+                              extremes)
 
 
 @dataclass(frozen=True)

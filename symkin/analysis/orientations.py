@@ -27,7 +27,7 @@ import numpy as np
 from symkin.numerics import conditioning
 from symkin import mechanism
 from symkin.analysis import device_cartesian
-from symkin.analysis.global_indices import GlobalIndex, evaluation_site
+from symkin.analysis.global_indices import Extremes, GlobalIndex, evaluation_site, recording_extremes
 from symkin.integration.integrand import Integrand
 from symkin.integration.integrators import integrate
 from symkin.mechanism.limits import within_limits
@@ -82,8 +82,10 @@ def reachable_index(model: GeneratedModel, p: np.ndarray, limits: Limits | None 
 
 
 def orientation_integrand(model: GeneratedModel, box: tuple[np.ndarray, np.ndarray] = FULL_CHART, *,
-                          limits: Limits | None = None, index: bool = True) -> Integrand:
-    """Components [1_W |cos pitch| 1/kappa, 1_W |cos pitch|] (or the measure alone) over a roll-pitch-yaw box.
+                          limits: Limits | None = None, index: bool = True,
+                          extremes: Extremes | None = None) -> Integrand:
+    """Components [1_W |cos pitch| 1/kappa, 1_W |cos pitch|] (or the measure alone) over a roll-pitch-yaw box;
+    ``extremes`` as :func:`symkin.analysis.global_indices.recording_extremes`.
 
     Raises:
         ValueError: the model is not a spherical platform with generated ``ik`` and ``inverse_jacobian``.
@@ -96,7 +98,8 @@ def orientation_integrand(model: GeneratedModel, box: tuple[np.ndarray, np.ndarr
     revolute = mechanism.revolute_mask(model)
     lower, upper = (np.asarray(b, dtype=np.float64) for b in box)
     if device_cartesian.orientations_on_device(model, index):  # loaded with JAX: fused and reduced on its device
-        return device_cartesian.device_orientation_integrand(model, lower, upper, joint_box, with_index=index)
+        return device_cartesian.device_orientation_integrand(model, lower, upper, joint_box, with_index=index,
+                                                             extremes=extremes)
 
     def function(p: np.ndarray) -> np.ndarray:
         if not index:
@@ -106,7 +109,8 @@ def orientation_integrand(model: GeneratedModel, box: tuple[np.ndarray, np.ndarr
         return np.stack([weight * values, weight], axis=-1)
 
     components = ("index dW", "dW") if index else ("dW",)
-    return Integrand(lower, upper, function, components, mechanism.ANGLES, indicator=len(components) - 1)
+    return recording_extremes(Integrand(lower, upper, function, components, mechanism.ANGLES,
+                                        indicator=len(components) - 1), extremes)
 
 
 def orientation_cloud(model: GeneratedModel, samples: int = 2**14, *, seed: int = 0,

@@ -166,8 +166,8 @@ def model_from_args(args: argparse.Namespace) -> tuple[Any, dict[str, tuple[floa
 def continued_on_the_host(backend: str, model: Any) -> bool:
     """Whether a model loaded with ``backend`` is analysed with its numpy code instead, and if so say it (stdout): legs
     without closed forms are continued over the workspace by solving the loop closure point by point on the host
-    (:mod:`symkin.mechanism.continuation`), where each call of the JAX code costs a dispatch (the Falcon's GCI took
-    188 s with it against 6.4 s with numpy's, the same figures) and JAX has no device path for them yet."""
+    (:mod:`symkin.mechanism.continuation`), where each call of the JAX code costs a dispatch (many times numpy's
+    time for the same figures) and JAX has no device path for them yet."""
     from symkin import mechanism
 
     if backend != "jax" or mechanism.sampling(model) is not mechanism.Sampling.CONTINUATION:

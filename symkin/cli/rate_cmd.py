@@ -166,11 +166,10 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError(f"--conditioning must lie in [0, 1], got {conditioning:g}")
         box = analysis_args.parse_ranges(args.box, "--box", "AXIS")
         device = analysis_args.DEVICE_OUTPUTS if args.device else ()
-        models = model_files.load_models(args.model, (args.backend,), NEEDS["rate"],
-                                         ("gravity_vector", "closure_dynamics", *device), display=Progress)
+        optional = ("gravity_vector", "closure_dynamics", *device)
+        models = model_files.load_models(args.model, (args.backend,), NEEDS["rate"], optional, display=Progress)
         if analysis_args.continued_on_the_host(args.backend, models[0]):
-            models = model_files.load_models(args.model, ("numpy",), NEEDS["rate"],
-                                             ("gravity_vector", "closure_dynamics", *device), display=Progress)
+            models = model_files.load_models(args.model, ("numpy",), NEEDS["rate"], optional, display=Progress)
         values = analysis_args.parse_assignments(args.assignments)
         model = analysis_args.device_view(args, models[0].bind(**values) if values else models[0])
         encoders = _encoders(args, model)

@@ -174,8 +174,7 @@ def run(args: argparse.Namespace) -> int:
                                            display=Progress)
         if args.backend == "jax":  # the same figures, but no batch for JAX to fuse: each step's calls are dispatches
             print(f"{base.name}: --backend jax: a simulation evaluates one state per call, and each call of the JAX code "
-                  "costs a dispatch (the DELTA's haptic wall took 5 times numpy's time); --backend c or numpy run it "
-                  "faster", flush=True)
+                  "costs a dispatch; --backend c or numpy run it faster", flush=True)
         values = analysis_args.parse_assignments(args.assignments)
         if values:
             base = base.bind(**values)

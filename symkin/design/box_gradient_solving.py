@@ -53,7 +53,7 @@ def solve_gci_over_the_box(problem: DesignProblem, jax_model: GeneratedModel, nu
     started = time.perf_counter()
     box = _BoxDesign.of(problem, jax_model, numpy_model, nodes)
     grid, names, scales, constraints = box.grid, box.names, box.scales, box.constraints
-    rows = grid.nodes.shape[1] if problem.orientation is None else 6  # J's, or a held platform's J_h^-1
+    rows = grid.nodes.shape[1] if problem.orientation is None else len(problem.held_inverse_scaling)  # J_h^-1's
     rotation = (reach.angular_velocity_matrix(grid.nodes) if problem.sampling is Sampling.ORIENTATIONS
                 else np.broadcast_to(np.eye(rows), (len(grid.nodes), rows, rows)))
     surrogate_program, _ = _programs_over_the_box(box.ik, box.jacobian, box.ik_names, box.jacobian_names)

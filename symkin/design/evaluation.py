@@ -239,4 +239,3 @@ def scale_invariance(problem: DesignProblem, model: GeneratedModel) -> tuple[str
     scaled = np.asarray(model.bind(**{**design, **{name: 2.0 * design[name] for name in lengths}}).jacobian(q))
     flat = np.max(np.abs(scaled - 2.0 * J)) <= SCALE_TEST_TOLERANCE * np.max(np.abs(J))
     return lengths if flat else ()
-

@@ -388,4 +388,3 @@ def held(problem: DesignProblem, model: GeneratedModel) -> GeneratedModel:
     if problem.orientation is None:
         return model
     return reach.constant_orientation(model, problem.orientation)
-

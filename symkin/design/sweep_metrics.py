@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -52,8 +51,8 @@ def design_integrand(design: Any, length: float | str | None, record: Callable[[
         ValueError: legs without closed forms (rated on a continued grid by ``symkin gci``, not sampled here).
     """
     from symkin import mechanism
-    from symkin.analysis import device_cartesian, device_integrand, inverse, orientations
-    from symkin.analysis.global_indices import cartesian_integrand, joint_space_integrand
+    from symkin.analysis import inverse, orientations
+    from symkin.analysis.global_indices import cartesian_integrand_for, joint_space_integrand_for
     from symkin.mechanism import reach
 
     sampled = mechanism.sampling(design)
@@ -62,34 +61,14 @@ def design_integrand(design: Any, length: float | str | None, record: Callable[[
                          "(symkin gci MODEL --set ... per design), which a sweep does not sample")
     held = reach.held_at(design, None)
     if sampled is mechanism.Sampling.ORIENTATIONS:
-        lower, upper = orientations.FULL_CHART
-        if device_cartesian.orientations_on_device(design):
-            return device_cartesian.device_orientation_integrand(design, lower, upper, mechanism.joint_limits(design),
-                                                                 extremes=record)
-        host = orientations.orientation_integrand(design)
-    elif isinstance(held, reach.ConstantOrientation):
+        return orientations.orientation_integrand(design, extremes=record)
+    if isinstance(held, reach.ConstantOrientation):
         ik = inverse.inverse_kinematics_for(held)
         if ik is None:
             raise ValueError(f"{design.name}: a platform that also rotates is rated over its Cartesian workspace, "
                              "which needs its generated 'ik' (derive it)")
-        box = reach.bounding_box(held)
-        if device_cartesian.cartesian_on_device(held, ik):
-            return device_cartesian.device_cartesian_integrand(held, ik, box, length=length, extremes=record)
-        host = cartesian_integrand(held, ik, box, length=length)
-    elif device_integrand.on_device(design):
-        return device_integrand.device_joint_space_integrand(design, extremes=record, length=length)
-    else:
-        host = joint_space_integrand(design, length=length)
-
-    def recorded(points: np.ndarray) -> np.ndarray:
-        out = host.function(points)
-        inside = out[:, 1] > 0.0
-        if inside.any():
-            index = out[inside, 0] / out[inside, 1]
-            record(float(index.min()), float(index.max()))
-        return out
-
-    return replace(host, function=recorded)
+        return cartesian_integrand_for(held, ik, reach.bounding_box(held), length=length, extremes=record)
+    return joint_space_integrand_for(design, length=length, extremes=record)
 
 
 def evaluate_design(model: Any, values: dict[str, float], definition: Any) -> dict[str, Any]:
