@@ -39,6 +39,10 @@ PASSIVE_LIMIT_OUTPUTS = ("closure", "closure_jacobians")
 #: What the analyses of legs of any topology (no distance form, so no closed-form ik) use instead of the kind's
 #: outputs (symkin.analysis.continued_workspace).
 CLOSURE_OUTPUTS = ("closure", "closure_jacobians")
+#: Backends whose every call is a dispatch to a device (JAX): slow for the point-by-point solves of a continued
+#: closure, whose analyses take the :data:`HOST_BACKEND`'s code instead (:func:`load_for_analysis`).
+DISPATCHED_BACKENDS = ("jax",)
+HOST_BACKEND = "numpy"
 
 
 def is_model_file(path: str | Path) -> bool:
@@ -88,6 +92,29 @@ def load_models(path: str, backends: Sequence[str],
     # The generated module is imported (numpy) or read (C, CasADi) by load(): the files may go afterwards.
     with generated_directory(path, backends, outputs, optional, closure, reading, display) as directory:
         return [load(directory, backend) for backend in backends]
+
+
+def load_for_analysis(path: str, backend: str,
+                      outputs: Sequence[str] | Mapping[MechanismKind, Sequence[str]] = ANALYSIS_OUTPUTS,
+                      optional: Sequence[str] | Mapping[MechanismKind, Sequence[str]] = (),
+                      display: Display | None = None) -> Any:
+    """MODEL loaded with ``backend``'s code for an analysis (as :func:`generated_model`), except JAX's for legs the
+    analyses continue (:attr:`symkin.mechanism.Sampling.CONTINUATION`): those get the :data:`HOST_BACKEND`'s code,
+    and the loaded model's ``backend`` says so.  Such legs have no closed forms: the loop closure is solved point by
+    point on the host (:mod:`symkin.mechanism.continuation`), where each call of the JAX code costs a dispatch (many
+    times numpy's time for the same figures), and JAX has no device path for them.  The choice is read from the
+    manifest before any code is loaded: a model file is derived once, its code emitted for both backends, and JAX's
+    is loaded only where it is used (a generated directory without numpy's code keeps JAX's)."""
+    from symkin.manifest import read_manifest
+    from symkin.mechanism import Sampling, sampling_of
+    from symkin.runtime.info import ModelInfo
+    from symkin.viewer.notebook import load
+
+    backends = (backend, HOST_BACKEND) if backend in DISPATCHED_BACKENDS else (backend,)
+    with generated_directory(path, backends, outputs, optional, display=display) as directory:
+        info = ModelInfo.from_manifest(read_manifest(directory))
+        continued = sampling_of(info, tuple(info.functions)) is Sampling.CONTINUATION
+        return load(directory, backends[-1] if continued and backends[-1] in info.backend_files else backend)
 
 
 @contextlib.contextmanager

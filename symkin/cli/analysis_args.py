@@ -11,7 +11,7 @@ from pathlib import Path
 from typing import Any, NoReturn
 
 from symkin.analysis.needs import NEEDS
-from symkin.analysis.model_files import load_models
+from symkin.analysis.model_files import load_for_analysis, load_models
 from symkin.cli.progress import Progress
 from symkin.runtime.info import GeneratedModel
 
@@ -152,29 +152,26 @@ def parse_limits(texts: list[str]) -> dict[str, tuple[float, float]]:
 
 
 def model_from_args(args: argparse.Namespace) -> tuple[Any, dict[str, tuple[float, float]]]:
-    """The model of MODEL with --set applied, and the --limit overrides.
+    """The model of MODEL with --set applied, and the --limit overrides; with --backend jax, legs without closed forms
+    get the numpy code, and the first line printed says so (:func:`say_where_continued`).
 
     Raises:
         ValueError: malformed --set or --limit (KeyError for an unknown parameter).
     """
-    (model,), limits = models_from_args(args, (args.backend,))
-    if continued_on_the_host(args.backend, model):
-        (model,), limits = models_from_args(args, ("numpy",))
-    return model, limits
+    model = load_for_analysis(args.model, args.backend, NEEDS["kinematics"],
+                              DEVICE_OUTPUTS if getattr(args, "device", False) else (), display=Progress)
+    say_where_continued(args.backend, model)
+    return with_assignments(args, [model])[0], parse_limits(args.limits)
 
 
-def continued_on_the_host(backend: str, model: Any) -> bool:
-    """Whether a model loaded with ``backend`` is analysed with its numpy code instead, and if so say it (stdout): legs
-    without closed forms are continued over the workspace by solving the loop closure point by point on the host
-    (:mod:`symkin.mechanism.continuation`), where each call of the JAX code costs a dispatch (many times numpy's
-    time for the same figures) and JAX has no device path for them yet."""
-    from symkin import mechanism
-
-    if backend != "jax" or mechanism.sampling(model) is not mechanism.Sampling.CONTINUATION:
-        return False
-    print(f"{model.name}: --backend jax: its legs have no closed forms, so the loop closure is continued point by "
-          "point on the host, with the numpy code (JAX has no device path for them yet)", flush=True)
-    return True
+def say_where_continued(backend: str, model: Any) -> None:
+    """Say (stdout) that ``model``, asked for with ``backend``, was loaded with the numpy code instead: legs without
+    closed forms are continued over the workspace by solving the loop closure point by point on the host
+    (:func:`symkin.analysis.model_files.load_for_analysis`)."""
+    if model.backend != backend:
+        print(f"{model.name}: --backend {backend}: its legs have no closed forms, so the loop closure is continued "
+              f"point by point on the host, with the {model.backend} code (JAX has no device path for them yet)",
+              flush=True)
 
 
 def models_from_args(args: argparse.Namespace,
@@ -183,10 +180,13 @@ def models_from_args(args: argparse.Namespace,
     --limit overrides (see :func:`model_from_args`)."""
     models = load_models(args.model, backends, NEEDS["kinematics"],
                          DEVICE_OUTPUTS if getattr(args, "device", False) else (), display=Progress)
+    return with_assignments(args, models), parse_limits(args.limits)
+
+
+def with_assignments(args: argparse.Namespace, models: list[Any]) -> list[Any]:
+    """``models`` with the --set values bound (KeyError for an unknown parameter)."""
     values = parse_assignments(args.assignments)
-    if values:
-        models = [model.bind(**values) for model in models]
-    return models, parse_limits(args.limits)
+    return [model.bind(**values) for model in models] if values else models
 
 
 def per_joint(option: str, text: str, count: int) -> list[float]:

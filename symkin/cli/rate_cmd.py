@@ -167,11 +167,9 @@ def run(args: argparse.Namespace) -> int:
         box = analysis_args.parse_ranges(args.box, "--box", "AXIS")
         device = analysis_args.DEVICE_OUTPUTS if args.device else ()
         optional = ("gravity_vector", "closure_dynamics", *device)
-        models = model_files.load_models(args.model, (args.backend,), NEEDS["rate"], optional, display=Progress)
-        if analysis_args.continued_on_the_host(args.backend, models[0]):
-            models = model_files.load_models(args.model, ("numpy",), NEEDS["rate"], optional, display=Progress)
-        values = analysis_args.parse_assignments(args.assignments)
-        model = analysis_args.device_view(args, models[0].bind(**values) if values else models[0])
+        loaded = model_files.load_for_analysis(args.model, args.backend, NEEDS["rate"], optional, display=Progress)
+        analysis_args.say_where_continued(args.backend, loaded)
+        model = analysis_args.device_view(args, analysis_args.with_assignments(args, [loaded])[0])
         encoders = _encoders(args, model)
         actuation = datasheet.Actuation.of_model(model, effort_limits=analysis_args.effort_limits(args.effort_limit,
                                                                                                   model),

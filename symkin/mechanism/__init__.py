@@ -24,13 +24,13 @@ task space.  The C backend plugs in by being loaded instead of the numpy one: on
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Collection, Mapping, Sequence
 from typing import Any
 from enum import Enum
 
 import numpy as np
 
-from symkin.runtime.info import GeneratedModel
+from symkin.runtime.info import GeneratedModel, ModelInfo
 
 #: Task-space components that are TCP coordinates in metres (symkin.kinematics.task_space).
 POSITION_COMPONENTS = ("x", "y", "z")
@@ -152,7 +152,12 @@ def turns_only(model: GeneratedModel) -> bool:
     """Whether the handle only turns: a mechanism closing loops whose task coordinates are roll, pitch, yaw (a
     spherical platform such as the Agile Eye), whose workspace is a set of orientations
     (:mod:`symkin.analysis.orientations`) reached through its generated ``ik``."""
-    return is_parallel(model) and tuple(task_space(model)) == ANGLES
+    return turns_only_info(model.info)
+
+
+def turns_only_info(info: ModelInfo) -> bool:
+    """:func:`turns_only` of a model's manifest (before its code is loaded)."""
+    return info.is_parallel and tuple(info.task_space) == ANGLES
 
 
 def is_parallel(model: GeneratedModel) -> bool:
@@ -237,13 +242,23 @@ def sampling(model: GeneratedModel) -> Sampling:
     """How the workspace analyses sample ``model`` (:class:`Sampling`): the orientations of a handle that only
     turns; the joint box of a mechanism that closes no loops; a Cartesian grid reached through the inverse
     kinematics where it has a closed form, else by continuing its generated loop closure from the home pose."""
-    from symkin.mechanism.closure import uses_closure  # a module of this package, which imports this one
+    return sampling_of(model.info, model.functions)
 
-    if turns_only(model):
+
+def sampling_of(info: ModelInfo, functions: Collection[str]) -> Sampling:
+    """:func:`sampling` of a model's manifest and the names of its generated ``functions``: known before any code is
+    loaded (which backend's code to load may hang on it: ``symkin.analysis.model_files.load_for_analysis``)."""
+    if turns_only_info(info):
         return Sampling.ORIENTATIONS
-    if not is_parallel(model):
+    if not info.is_parallel:
         return Sampling.JOINTS
-    return Sampling.CONTINUATION if uses_closure(model) else Sampling.INVERSE
+    return Sampling.CONTINUATION if closure_alone(functions) else Sampling.INVERSE
+
+
+def closure_alone(functions: Collection[str]) -> bool:
+    """Whether generated ``functions`` reach the assembly through the loop closure alone: ``closure`` and
+    ``closure_jacobians`` but no closed-form ``ik`` (legs without the distance form)."""
+    return "ik" not in functions and {"closure", "closure_jacobians"} <= set(functions)
 
 
 def handle_on_further_joints(model: GeneratedModel) -> bool:

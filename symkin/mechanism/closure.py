@@ -53,8 +53,7 @@ CLOSED = 1e-9
 def uses_closure(model: GeneratedModel) -> bool:
     """Whether a parallel model is analysed through its loop closure: it has the generated ``closure`` and
     ``closure_jacobians`` but no closed-form ``ik`` (legs without the distance form)."""
-    return (mechanism.is_parallel(model) and "ik" not in model.functions
-            and {"closure", "closure_jacobians"} <= set(model.functions))
+    return mechanism.is_parallel(model) and mechanism.closure_alone(model.functions)
 
 
 def closure_sizes(model: GeneratedModel) -> tuple[int, int]:

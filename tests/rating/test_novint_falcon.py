@@ -138,11 +138,17 @@ def test_with_the_jax_backend_the_falcon_is_rated_by_the_numpy_code_and_says_so(
     assert sorted(path.name for path in out.iterdir()) == ["datasheet.csv", "datasheet.json", "summary.txt"]
 
 
-def test_only_continued_legs_loaded_with_jax_are_taken_to_the_host(falcon, capsys):
-    from symkin.cli.analysis_args import continued_on_the_host
+def test_only_continued_legs_asked_for_with_jax_get_the_numpy_code(falcon, capsys):
+    """The choice is read from the manifest before any code is loaded (no JAX import here: the DELTA's JAX load is
+    tests/backends/test_jax_backend.py's); a model that keeps its backend prints nothing."""
+    from symkin.analysis.model_files import load_for_analysis
+    from symkin.cli.analysis_args import say_where_continued
 
-    assert continued_on_the_host("jax", falcon)
-    assert "novint_falcon: --backend jax" in capsys.readouterr().out
-    assert not continued_on_the_host("numpy", falcon)
-    assert not continued_on_the_host("jax", load(ROOT / "generated" / "delta"))
+    taken = load_for_analysis(str(falcon.directory), "jax")
+    assert (taken.name, taken.backend) == ("novint_falcon", "numpy")
+    say_where_continued("jax", taken)
+    assert "novint_falcon: --backend jax: its legs have no closed forms" in capsys.readouterr().out
+    kept = load_for_analysis(str(ROOT / "generated" / "delta"), "numpy")
+    say_where_continued("numpy", kept)
+    assert kept.backend == "numpy"
     assert capsys.readouterr().out == ""
