@@ -165,13 +165,22 @@ def model_from_args(args: argparse.Namespace) -> tuple[Any, dict[str, tuple[floa
 
 
 def say_where_continued(backend: str, model: Any) -> None:
-    """Say (stdout) that ``model``, asked for with ``backend``, was loaded with the numpy code instead: legs without
-    closed forms are continued over the workspace by solving the loop closure point by point on the host
-    (:func:`symkin.analysis.model_files.load_for_analysis`)."""
+    """Say (stdout) how ``model``, asked for with ``backend``, continues legs without closed forms: the loop closure
+    is solved point by point on the host (:func:`symkin.analysis.model_files.load_for_analysis`), so with the numpy
+    code that was loaded instead; or, where a generated directory holds JAX's code alone, with it, one dispatch per
+    call (many times numpy's time for the same figures), and how to get the numpy code."""
+    from symkin import mechanism
+    from symkin.analysis.model_files import DISPATCHED_BACKENDS, HOST_BACKEND
+
     if model.backend != backend:
         print(f"{model.name}: --backend {backend}: its legs have no closed forms, so the loop closure is continued "
               f"point by point on the host, with the {model.backend} code (JAX has no device path for them yet)",
               flush=True)
+    elif backend in DISPATCHED_BACKENDS and mechanism.sampling(model) is mechanism.Sampling.CONTINUATION:
+        print(f"{model.name}: --backend {backend}: its legs have no closed forms and {model.directory} holds no "
+              f"{HOST_BACKEND} code, so the loop closure is continued point by point with the {backend} code, one "
+              f"dispatch per call (many times {HOST_BACKEND}'s time for the same figures): derive it with --backend "
+              f"{HOST_BACKEND} too", flush=True)
 
 
 def models_from_args(args: argparse.Namespace,

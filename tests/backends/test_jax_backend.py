@@ -858,3 +858,23 @@ def test_a_simulation_with_the_jax_code_says_it_is_not_the_fast_way(jax_director
                  "--duration", "0.01", "--no-figure", "-o", str(out)]) == 0
     assert "planar_2r: --backend jax: a simulation evaluates one state per call" in capsys.readouterr().out
 
+
+
+def test_legs_continued_with_jax_code_alone_say_how_to_get_the_faster_code(tmp_path, capsys):
+    """A generated directory of the Novint Falcon (legs without closed forms) that holds JAX's code alone is analysed
+    with it, point by point: the first line says so and how to get numpy's code (load_for_analysis takes numpy's
+    where it is there: tests/rating/test_novint_falcon.py)."""
+    from symkin.analysis.model_files import load_for_analysis
+    from symkin.cli.analysis_args import say_where_continued
+    from symkin.model import load_model
+
+    model = load_model(MODELS_DIR / "devices" / "novint_falcon.yaml")
+    request = pipeline.resolve_request(model, "closure,closure_jacobians", "jax", fixed="all")
+    directory = pipeline.write(pipeline.generate(model, request), tmp_path)
+    taken = load_for_analysis(str(directory), "jax")
+    assert taken.backend == "jax"
+    say_where_continued("jax", taken)
+    printed = capsys.readouterr().out
+    assert printed.startswith(f"novint_falcon: --backend jax: its legs have no closed forms and {directory} holds no "
+                              "numpy code")
+    assert printed.rstrip().endswith("derive it with --backend numpy too")
