@@ -113,8 +113,9 @@ def load_for_analysis(path: str, backend: str,
     backends = (backend, HOST_BACKEND) if backend in DISPATCHED_BACKENDS else (backend,)
     with generated_directory(path, backends, outputs, optional, display=display) as directory:
         info = ModelInfo.from_manifest(read_manifest(directory))
-        continued = sampling_of(info, tuple(info.functions)) is Sampling.CONTINUATION
-        return load(directory, backends[-1] if continued and backends[-1] in info.backend_files else backend)
+        on_the_host = (backend in DISPATCHED_BACKENDS and HOST_BACKEND in info.backend_files
+                       and sampling_of(info, info.functions) is Sampling.CONTINUATION)
+        return load(directory, HOST_BACKEND if on_the_host else backend)
 
 
 @contextlib.contextmanager

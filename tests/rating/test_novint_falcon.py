@@ -139,8 +139,8 @@ def test_with_the_jax_backend_the_falcon_is_rated_by_the_numpy_code_and_says_so(
 
 
 def test_only_continued_legs_asked_for_with_jax_get_the_numpy_code(falcon, capsys):
-    """The choice is read from the manifest before any code is loaded (no JAX import here: the DELTA's JAX load is
-    tests/backends/test_jax_backend.py's); a model that keeps its backend prints nothing."""
+    """The choice is read from the manifest before any code is loaded (no JAX import here: a JAX load that keeps its
+    code is tests/backends/test_jax_backend.py's); asked for with numpy, the same legs keep it and print nothing."""
     from symkin.analysis.model_files import load_for_analysis
     from symkin.cli.analysis_args import say_where_continued
 
@@ -148,7 +148,7 @@ def test_only_continued_legs_asked_for_with_jax_get_the_numpy_code(falcon, capsy
     assert (taken.name, taken.backend) == ("novint_falcon", "numpy")
     say_where_continued("jax", taken)
     assert "novint_falcon: --backend jax: its legs have no closed forms" in capsys.readouterr().out
-    kept = load_for_analysis(str(ROOT / "generated" / "delta"), "numpy")
+    kept = load_for_analysis(str(falcon.directory), "numpy")    # the same legs asked for with the host's code
     say_where_continued("numpy", kept)
     assert kept.backend == "numpy"
     assert capsys.readouterr().out == ""
