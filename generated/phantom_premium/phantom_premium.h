@@ -625,8 +625,9 @@ void phantom_premium_forward_dynamics_batch(size_t n, const double *q, const dou
  * qdd(q + dq, qd + dqd, tau + dtau) = qdd + dqdd_dq dq + dqdd_dqd dqd + dqdd_dtau dtau
  * to first order, qdd = M^-1 (tau - V - G - F_f) (seed eq. 8.34); by the implicit-
  * function theorem dqdd_dq = -M^-1 dtau_dq, dqdd_dqd = -M^-1 dtau_dqd at qdd and
- * dqdd_dtau = M^-1, by LDL^T solves (Carpentier and Mansard, RSS 2018); a state-space
- * model x = (q, qd) has A = [[0, I], [dqdd_dq, dqdd_dqd]] and B = [[0], [dqdd_dtau]].
+ * dqdd_dtau = M^-1, by LDL^T solves (Carpentier and Mansard, RSS 2018), M^-1 from its
+ * lower triangle, mirrored (exactly symmetric); a state-space model x = (q, qd) has A =
+ * [[0, I], [dqdd_dq, dqdd_dqd]] and B = [[0], [dqdd_dtau]].
  *
  * Inputs:
  *   q[3]: joint coordinates: q1 [rad], q2 [rad], q3 [rad].
@@ -682,8 +683,8 @@ void phantom_premium_forward_dynamics_batch(size_t n, const double *q, const dou
  * Outputs:
  *   dqdd_dq[9]: 3 x 3, row-major; d qdd / dq: row i, column j is d qdd_i / d q_j.
  *   dqdd_dqd[9]: 3 x 3, row-major; d qdd / dqd.
- *   dqdd_dtau[9]: 3 x 3, row-major; d qdd / dtau = M(q)^-1.
- * Cost: 1098 operations.
+ *   dqdd_dtau[9]: 3 x 3, row-major; d qdd / dtau = M(q)^-1, exactly symmetric.
+ * Cost: 1097 operations.
  */
 void phantom_premium_forward_dynamics_derivatives(const double *q, const double *qd, const double *tau, double l1, double l2, double l3, double l5, double l6, double m_a, double I_axx, double I_ayy, double I_azz, double m_c, double I_cxx, double I_cyy, double I_czz, double m_be, double I_bexx, double I_beyy, double I_bezz, double m_df, double I_dfxx, double I_dfyy, double I_dfzz, double I_baseyy, double J_m, double g, double *dqdd_dq, double *dqdd_dqd, double *dqdd_dtau);
 
@@ -1029,7 +1030,8 @@ void phantom_premium_potential_energy_batch(size_t n, const double *q, const dou
  *   dqdd_dq[9]: 3 x 3, row-major; d qdd / dq: row i, column j is d qdd_i / d q_j
  *   (forward_dynamics_derivatives).
  *   dqdd_dqd[9]: 3 x 3, row-major; d qdd / dqd (forward_dynamics_derivatives).
- *   dqdd_dtau[9]: 3 x 3, row-major; d qdd / dtau = M(q)^-1 (forward_dynamics_derivatives).
+ *   dqdd_dtau[9]: 3 x 3, row-major; d qdd / dtau = M(q)^-1, exactly symmetric
+ *   (forward_dynamics_derivatives).
  *   F[3]: 3; TCP force components [x, y, z] (tcp_force) [N, N*m].
  *   Mx[9]: 3 x 3, row-major; operational-space mass matrix J^-T M J^-1
  *   (operational_space).
@@ -1038,7 +1040,7 @@ void phantom_premium_potential_energy_batch(size_t n, const double *q, const dou
  *   Gx[3]: 3; operational-space gravity force J^-T G (operational_space).
  *   k[1]: scalar; kinetic energy of all bodies (kinetic_energy) [J].
  *   u[1]: scalar; potential energy (potential_energy) [J].
- * Cost: 2670 operations.
+ * Cost: 2674 operations.
  */
 void phantom_premium_combined(const double *q, const double *qd, const double *qdd, const double *tau, double l1, double l2, double l3, double l5, double l6, double m_a, double I_axx, double I_ayy, double I_azz, double m_c, double I_cxx, double I_cyy, double I_czz, double m_be, double I_bexx, double I_beyy, double I_bezz, double m_df, double I_dfxx, double I_dfyy, double I_dfzz, double I_baseyy, double J_m, double g, double *base_T_tcp, double *base_T_turret, double *base_T_upper_arm, double *base_T_distal, double *base_T_lever, double *base_T_link_c, double *J, double *M, double *C, double *V, double *G, double *dG_dq, double *F_f, double *inverse_dynamics_tau, double *dtau_dq, double *dtau_dqd, double *dtau_dqdd, double *forward_dynamics_qdd, double *dqdd_dq, double *dqdd_dqd, double *dqdd_dtau, double *F, double *Mx, double *Vx, double *Gx, double *k, double *u);
 

@@ -350,8 +350,9 @@ void planar_2r_forward_dynamics_batch(size_t n, const double *q, const double *q
  * qdd(q + dq, qd + dqd, tau + dtau) = qdd + dqdd_dq dq + dqdd_dqd dqd + dqdd_dtau dtau
  * to first order, qdd = M^-1 (tau - V - G - F_f) (seed eq. 8.34); by the implicit-
  * function theorem dqdd_dq = -M^-1 dtau_dq, dqdd_dqd = -M^-1 dtau_dqd at qdd and
- * dqdd_dtau = M^-1, by LDL^T solves (Carpentier and Mansard, RSS 2018); a state-space
- * model x = (q, qd) has A = [[0, I], [dqdd_dq, dqdd_dqd]] and B = [[0], [dqdd_dtau]].
+ * dqdd_dtau = M^-1, by LDL^T solves (Carpentier and Mansard, RSS 2018), M^-1 from its
+ * lower triangle, mirrored (exactly symmetric); a state-space model x = (q, qd) has A =
+ * [[0, I], [dqdd_dq, dqdd_dqd]] and B = [[0], [dqdd_dtau]].
  *
  * Inputs:
  *   q[2]: joint coordinates: theta1 [rad], theta2 [rad].
@@ -365,8 +366,8 @@ void planar_2r_forward_dynamics_batch(size_t n, const double *q, const double *q
  * Outputs:
  *   dqdd_dq[4]: 2 x 2, row-major; d qdd / dq: row i, column j is d qdd_i / d q_j.
  *   dqdd_dqd[4]: 2 x 2, row-major; d qdd / dqd.
- *   dqdd_dtau[4]: 2 x 2, row-major; d qdd / dtau = M(q)^-1.
- * Cost: 145 operations.
+ *   dqdd_dtau[4]: 2 x 2, row-major; d qdd / dtau = M(q)^-1, exactly symmetric.
+ * Cost: 144 operations.
  */
 void planar_2r_forward_dynamics_derivatives(const double *q, const double *qd, const double *tau, double l1, double l2, double m1, double m2, double g, double *dqdd_dq, double *dqdd_dqd, double *dqdd_dtau);
 
@@ -533,7 +534,8 @@ void planar_2r_potential_energy_batch(size_t n, const double *q, const double *p
  *   dqdd_dq[4]: 2 x 2, row-major; d qdd / dq: row i, column j is d qdd_i / d q_j
  *   (forward_dynamics_derivatives).
  *   dqdd_dqd[4]: 2 x 2, row-major; d qdd / dqd (forward_dynamics_derivatives).
- *   dqdd_dtau[4]: 2 x 2, row-major; d qdd / dtau = M(q)^-1 (forward_dynamics_derivatives).
+ *   dqdd_dtau[4]: 2 x 2, row-major; d qdd / dtau = M(q)^-1, exactly symmetric
+ *   (forward_dynamics_derivatives).
  *   F[2]: 2; TCP force components [x, y] (tcp_force) [N, N*m].
  *   Mx[4]: 2 x 2, row-major; operational-space mass matrix J^-T M J^-1
  *   (operational_space).
@@ -542,7 +544,7 @@ void planar_2r_potential_energy_batch(size_t n, const double *q, const double *p
  *   Gx[2]: 2; operational-space gravity force J^-T G (operational_space).
  *   k[1]: scalar; kinetic energy of all bodies (kinetic_energy) [J].
  *   u[1]: scalar; potential energy (potential_energy) [J].
- * Cost: 414 operations.
+ * Cost: 417 operations.
  */
 void planar_2r_combined(const double *q, const double *qd, const double *qdd, const double *tau, double l1, double l2, double m1, double m2, double g, double *base_T_tcp, double *base_T_link1, double *base_T_link2, double *jacobian_J, double *jacobian_geometric_J, double *M, double *C, double *V, double *G, double *dG_dq, double *inverse_dynamics_tau, double *dtau_dq, double *dtau_dqd, double *dtau_dqdd, double *forward_dynamics_qdd, double *dqdd_dq, double *dqdd_dqd, double *dqdd_dtau, double *F, double *Mx, double *Vx, double *Gx, double *k, double *u);
 
@@ -862,8 +864,9 @@ void planar_2r_forward_dynamics_batch_f32(size_t n, const float *q, const float 
  * qdd(q + dq, qd + dqd, tau + dtau) = qdd + dqdd_dq dq + dqdd_dqd dqd + dqdd_dtau dtau
  * to first order, qdd = M^-1 (tau - V - G - F_f) (seed eq. 8.34); by the implicit-
  * function theorem dqdd_dq = -M^-1 dtau_dq, dqdd_dqd = -M^-1 dtau_dqd at qdd and
- * dqdd_dtau = M^-1, by LDL^T solves (Carpentier and Mansard, RSS 2018); a state-space
- * model x = (q, qd) has A = [[0, I], [dqdd_dq, dqdd_dqd]] and B = [[0], [dqdd_dtau]].
+ * dqdd_dtau = M^-1, by LDL^T solves (Carpentier and Mansard, RSS 2018), M^-1 from its
+ * lower triangle, mirrored (exactly symmetric); a state-space model x = (q, qd) has A =
+ * [[0, I], [dqdd_dq, dqdd_dqd]] and B = [[0], [dqdd_dtau]].
  *
  * Inputs:
  *   q[2]: joint coordinates: theta1 [rad], theta2 [rad].
@@ -877,8 +880,8 @@ void planar_2r_forward_dynamics_batch_f32(size_t n, const float *q, const float 
  * Outputs:
  *   dqdd_dq[4]: 2 x 2, row-major; d qdd / dq: row i, column j is d qdd_i / d q_j.
  *   dqdd_dqd[4]: 2 x 2, row-major; d qdd / dqd.
- *   dqdd_dtau[4]: 2 x 2, row-major; d qdd / dtau = M(q)^-1.
- * Cost: 145 operations.
+ *   dqdd_dtau[4]: 2 x 2, row-major; d qdd / dtau = M(q)^-1, exactly symmetric.
+ * Cost: 144 operations.
  */
 void planar_2r_forward_dynamics_derivatives_f32(const float *q, const float *qd, const float *tau, float l1, float l2, float m1, float m2, float g, float *dqdd_dq, float *dqdd_dqd, float *dqdd_dtau);
 
@@ -1045,7 +1048,8 @@ void planar_2r_potential_energy_batch_f32(size_t n, const float *q, const float 
  *   dqdd_dq[4]: 2 x 2, row-major; d qdd / dq: row i, column j is d qdd_i / d q_j
  *   (forward_dynamics_derivatives).
  *   dqdd_dqd[4]: 2 x 2, row-major; d qdd / dqd (forward_dynamics_derivatives).
- *   dqdd_dtau[4]: 2 x 2, row-major; d qdd / dtau = M(q)^-1 (forward_dynamics_derivatives).
+ *   dqdd_dtau[4]: 2 x 2, row-major; d qdd / dtau = M(q)^-1, exactly symmetric
+ *   (forward_dynamics_derivatives).
  *   F[2]: 2; TCP force components [x, y] (tcp_force) [N, N*m].
  *   Mx[4]: 2 x 2, row-major; operational-space mass matrix J^-T M J^-1
  *   (operational_space).
@@ -1054,7 +1058,7 @@ void planar_2r_potential_energy_batch_f32(size_t n, const float *q, const float 
  *   Gx[2]: 2; operational-space gravity force J^-T G (operational_space).
  *   k[1]: scalar; kinetic energy of all bodies (kinetic_energy) [J].
  *   u[1]: scalar; potential energy (potential_energy) [J].
- * Cost: 414 operations.
+ * Cost: 417 operations.
  */
 void planar_2r_combined_f32(const float *q, const float *qd, const float *qdd, const float *tau, float l1, float l2, float m1, float m2, float g, float *base_T_tcp, float *base_T_link1, float *base_T_link2, float *jacobian_J, float *jacobian_geometric_J, float *M, float *C, float *V, float *G, float *dG_dq, float *inverse_dynamics_tau, float *dtau_dq, float *dtau_dqd, float *dtau_dqdd, float *forward_dynamics_qdd, float *dqdd_dq, float *dqdd_dqd, float *dqdd_dtau, float *F, float *Mx, float *Vx, float *Gx, float *k, float *u);
 

@@ -756,8 +756,9 @@ def forward_dynamics_derivatives(q, qd, tau, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, 
     qdd(q + dq, qd + dqd, tau + dtau) = qdd + dqdd_dq dq + dqdd_dqd dqd + dqdd_dtau dtau
     to first order, qdd = M^-1 (tau - V - G - F_f) (seed eq. 8.34); by the implicit-
     function theorem dqdd_dq = -M^-1 dtau_dq, dqdd_dqd = -M^-1 dtau_dqd at qdd and
-    dqdd_dtau = M^-1, by LDL^T solves (Carpentier and Mansard, RSS 2018); a state-space
-    model x = (q, qd) has A = [[0, I], [dqdd_dq, dqdd_dqd]] and B = [[0], [dqdd_dtau]].
+    dqdd_dtau = M^-1, by LDL^T solves (Carpentier and Mansard, RSS 2018), M^-1 from its
+    lower triangle, mirrored (exactly symmetric); a state-space model x = (q, qd) has A
+    = [[0, I], [dqdd_dq, dqdd_dqd]] and B = [[0], [dqdd_dtau]].
 
     Args:
         q: joint coordinates, shape (..., 2): theta1 [rad], theta2 [rad].
@@ -779,7 +780,7 @@ def forward_dynamics_derivatives(q, qd, tau, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, 
         ForwardDynamicsDerivativesResult with the fields:
         dqdd_dq: shape (..., 2, 2); d qdd / dq: row i, column j is d qdd_i / d q_j.
         dqdd_dqd: shape (..., 2, 2); d qdd / dqd.
-        dqdd_dtau: shape (..., 2, 2); d qdd / dtau = M(q)^-1.
+        dqdd_dtau: shape (..., 2, 2); d qdd / dtau = M(q)^-1, exactly symmetric.
     """
     q = _vector(q, 2, "q", "forward_dynamics_derivatives")
     qd = _vector(qd, 2, "qd", "forward_dynamics_derivatives")
@@ -798,62 +799,61 @@ def forward_dynamics_derivatives(q, qd, tau, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, 
     _x8 = l2*l2*m2
     _x9 = m1*_x6 + m2*_x6 + 2.0*_x7 + _x8
     _x10 = 1.0/_x9
-    _x18 = _x7 + _x8
-    _x19 = _x10*_x18
+    _x14 = _x7 + _x8
+    _x15 = _x10*_x14
     _x2 = g*jax.numpy.cos(theta1)
     _x3 = g*jax.numpy.sin(theta1)
     _x5 = jax.numpy.sin(theta2)
-    _x15 = l1*_x0
-    _x16 = _x15 + l2
-    _x17 = m2*_x16
-    _x36 = -_x5*_x17 + m2*_x5*_x15
+    _x19 = l1*_x0
+    _x20 = _x19 + l2
+    _x21 = m2*_x20
+    _x36 = -_x5*_x21 + m2*_x5*_x19
     _x13 = l1*m1
-    _x37 = _x0*_x17 + l1*m2*_x5*_x5
+    _x37 = _x0*_x21 + l1*m2*_x5*_x5
     _x38 = _x13 + _x37
     _x44 = -(_x2*_x36 - _x3*_x38)
-    _x23 = -_x18*_x19 + _x8
-    _x29 = 1.0/_x23
+    _x16 = -_x14*_x15 + _x8
+    _x17 = 1.0/_x16
     _x41 = -_x1*_x5
     _x42 = _x0*_x1
-    _x45 = -(-_x3*_x42 + _x2*_x41) - _x19*_x44
-    _x46 = _x29*_x45
-    _x47 = _x10*_x44 - _x19*_x46
+    _x45 = -_x15*_x44 - (_x2*_x41 - _x3*_x42)
+    _x46 = _x17*_x45
+    _x47 = -_x15*_x46 + _x10*_x44
     _x4 = _x3 - l1*theta1_d*theta1_d
     _x11 = theta2_d + theta1_d
     _x12 = _x11*_x11
-    _x20 = -_x4*_x5 + _x0*_x2
-    _x21 = _x1*_x20
-    _x22 = tau_theta1 - (_x21 + l1*(_x5*((_x0*_x4 + _x2*_x5)*m2 - _x1*_x12) + m2*_x0*_x20) + _x2*_x13)
-    _x24 = -_x19*_x22 - _x21 + tau_theta2
-    _x25 = _x24/_x23
-    _x26 = -_x19*_x25 + _x10*_x22
-    _x27 = l1*_x26 + _x2
-    _x28 = _x5*_x27
-    _x35 = -_x4*_x17 + l1*(-_x1*_x12 + m2*_x28 + m2*(_x28 + _x0*_x4))
-    _x14 = _x4*_x5
-    _x33 = _x25 + _x26
-    _x34 = m2*(_x0*_x27 - _x14)
-    _x39 = _x17*_x27 + l1*(m2*_x14 + _x1*_x33 + _x34)
+    _x22 = -_x4*_x5 + _x0*_x2
+    _x23 = _x1*_x22
+    _x24 = tau_theta1 - (_x23 + _x2*_x13 + l1*(_x5*((_x0*_x4 + _x2*_x5)*m2 - _x1*_x12) + m2*_x0*_x22))
+    _x25 = -_x15*_x24 - _x23 + tau_theta2
+    _x26 = _x17*_x25
+    _x27 = -_x15*_x26 + _x10*_x24
+    _x28 = l1*_x27 + _x2
+    _x29 = _x5*_x28
+    _x35 = -_x4*_x21 + l1*(-_x1*_x12 + m2*_x29 + m2*(_x29 + _x0*_x4))
+    _x18 = _x4*_x5
+    _x33 = _x26 + _x27
+    _x34 = m2*(_x0*_x28 - _x18)
+    _x39 = _x21*_x28 + l1*(m2*_x18 + _x1*_x33 + _x34)
     _x48 = -(_x0*_x35 - _x5*_x39)
     _x40 = -_x1*_x4
-    _x43 = _x1*_x27
-    _x49 = -(-_x5*_x43 + _x0*_x40) - _x48*_x19
-    _x50 = _x29*_x49
-    _x51 = _x10*_x48 - _x50*_x19
+    _x43 = _x1*_x28
+    _x49 = -_x15*_x48 - (_x0*_x40 - _x5*_x43)
+    _x50 = _x17*_x49
+    _x51 = -_x15*_x50 + _x10*_x48
     _x30 = 2.0*l1
     _x31 = _x30*theta1_d
     _x32 = _x1*_x5*_x11*_x30
     _x52 = -(-_x32 - _x31*_x36)
-    _x53 = _x31*_x41 - _x52*_x19
-    _x54 = _x29*_x53
-    _x55 = _x10*_x52 - _x54*_x19
-    _x56 = -_x32*_x19
-    _x57 = _x29*_x56
-    _x58 = _x10*_x32 - _x19*_x57
-    _x59 = -_x19
-    _x60 = _x29*_x59
-    _x61 = _x10 - _x19*_x60
-    _x62 = -_x29*_x19
+    _x53 = -_x52*_x15 + _x31*_x41
+    _x54 = _x17*_x53
+    _x55 = -_x54*_x15 + _x10*_x52
+    _x56 = -_x32*_x15
+    _x57 = _x17*_x56
+    _x58 = _x10*_x32 - _x57*_x15
+    _x59 = -_x15
+    _x60 = _x17*_x59
+    _x61 = -_x60*_x15 + _x10
     _entries = _in_one_loop(batch, [
         _x47,
         _x51,
@@ -864,9 +864,9 @@ def forward_dynamics_derivatives(q, qd, tau, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, 
         _x54,
         _x57,
         _x61,
-        _x62,
         _x60,
-        _x29,
+        _x60,
+        _x17,
     ])
     _out_dqdd_dq = _stacked(batch, (2, 2), _entries[0:4])
     _out_dqdd_dqd = _stacked(batch, (2, 2), _entries[4:8])
@@ -1173,7 +1173,8 @@ def combined(q, qd, qdd, tau, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
         dqdd_dq: shape (..., 2, 2); d qdd / dq: row i, column j is d qdd_i / d q_j
             (forward_dynamics_derivatives).
         dqdd_dqd: shape (..., 2, 2); d qdd / dqd (forward_dynamics_derivatives).
-        dqdd_dtau: shape (..., 2, 2); d qdd / dtau = M(q)^-1 (forward_dynamics_derivatives).
+        dqdd_dtau: shape (..., 2, 2); d qdd / dtau = M(q)^-1, exactly symmetric
+            (forward_dynamics_derivatives).
         F: shape (..., 2); TCP force components [x, y] (tcp_force) [N, N*m].
         Mx: shape (..., 2, 2); operational-space mass matrix J^-T M J^-1
             (operational_space).
@@ -1198,145 +1199,146 @@ def combined(q, qd, qdd, tau, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
     tau_theta2 = tau[..., 1]
     _x1 = jax.numpy.cos(theta2)
     _x6 = jax.numpy.sin(theta2)
-    _x11 = jax.numpy.sin(theta1)
-    _x14 = jax.numpy.cos(theta1)
-    _x51 = _x1*_x14 - _x6*_x11
-    _x46 = _x1*_x11
-    _x47 = _x6*_x14
+    _x10 = jax.numpy.sin(theta1)
+    _x13 = jax.numpy.cos(theta1)
+    _x51 = _x1*_x13 - _x6*_x10
+    _x46 = _x1*_x10
+    _x47 = _x6*_x13
     _x63 = -_x47 - _x46
     _x52 = l2*_x51
-    _x55 = l1*_x14
+    _x55 = l1*_x13
     _x58 = _x55 + _x52
     _x48 = _x47 + _x46
     _x49 = l2*_x48
-    _x53 = l1*_x11
+    _x53 = l1*_x10
     _x64 = _x53 + _x49
     _x50 = -_x49
     _x54 = -_x53
     _x61 = _x54 + _x50
     _x0 = l1*l1
-    _x2 = l1*m2
-    _x3 = l2*_x2
+    _x2 = l2*m2
+    _x3 = l1*_x2
     _x4 = _x1*_x3
     _x5 = l2*l2*m2
     _x34 = _x5 + _x4
     _x65 = _x3*_x6
     _x66 = _x65*theta1_d
     _x73 = -_x65
-    _x10 = l2*m2
-    _x25 = theta2_d + theta1_d
-    _x26 = _x25*_x25
+    _x24 = theta2_d + theta1_d
+    _x25 = _x24*_x24
     _x7 = theta1_d*theta1_d
     _x8 = l1*_x7
     _x9 = m2*_x1
     _x74 = _x8*_x9
-    _x75 = _x6*_x8*_x10
-    _x12 = g*_x11
-    _x13 = _x6*_x12
-    _x15 = g*_x14
+    _x75 = _x2*_x6*_x8
+    _x11 = g*_x10
+    _x12 = _x6*_x11
+    _x14 = g*_x13
+    _x26 = l1*m2
     _x27 = l1*m1
-    _x59 = _x2 + _x27
-    _x67 = _x1*_x10
-    _x79 = -_x12
-    _x76 = _x6*_x15
-    _x80 = -_x10*_x76
-    _x77 = _x1*_x12
+    _x59 = _x26 + _x27
+    _x67 = _x2*_x1
+    _x79 = -_x11
+    _x76 = _x6*_x14
+    _x80 = -_x2*_x76
+    _x77 = _x1*_x11
     _x78 = -_x6
-    _x81 = _x15*_x10*_x78 - _x10*_x77
-    _x16 = theta1_dd + theta2_dd
-    _x18 = _x12 - _x8
-    _x17 = l1*theta1_dd
-    _x23 = _x17 + _x15
+    _x81 = _x2*_x14*_x78 - _x2*_x77
+    _x15 = theta1_dd + theta2_dd
+    _x17 = _x11 - _x8
+    _x16 = l1*theta1_dd
+    _x22 = _x16 + _x14
     _x56 = m1*_x0
     _x57 = _x56*theta1_dd
-    _x82 = m2*(-_x6*_x18 + _x1*_x23)
-    _x83 = _x5*_x16 + l2*_x82
-    _x20 = l1*_x1
-    _x21 = l2 + _x20
-    _x22 = m2*_x21
-    _x86 = m2*_x6*_x20 - _x6*_x22
-    _x87 = _x2*_x6*_x6 + _x1*_x22
+    _x82 = m2*(-_x6*_x17 + _x1*_x22)
+    _x83 = _x5*_x15 + l2*_x82
+    _x19 = l1*_x1
+    _x20 = l2 + _x19
+    _x21 = m2*_x20
+    _x86 = m2*_x6*_x19 - _x6*_x21
+    _x87 = _x6*_x6*_x26 + _x1*_x21
     _x88 = _x87 + _x27
-    _x24 = _x6*_x23
-    _x85 = -_x22*_x18 + l1*(-_x26*_x10 + m2*_x24 + m2*(_x24 + _x1*_x18))
-    _x19 = _x6*_x18
-    _x84 = m2*(-_x19 + _x1*_x23)
-    _x90 = _x22*_x23 + l1*(m2*_x19 + _x10*_x16 + _x84)
-    _x92 = -_x6*_x10
-    _x91 = -_x10*_x18
-    _x93 = _x10*_x23
+    _x23 = _x6*_x22
+    _x85 = -_x21*_x17 + l1*(m2*_x23 - _x2*_x25 + m2*(_x23 + _x1*_x17))
+    _x18 = _x6*_x17
+    _x84 = m2*(-_x18 + _x1*_x22)
+    _x90 = _x21*_x22 + l1*(m2*_x18 + _x2*_x15 + _x84)
+    _x92 = -_x2*_x6
+    _x91 = -_x2*_x17
+    _x93 = _x2*_x22
     _x28 = 2.0*l1
     _x45 = _x28*theta1_d
-    _x94 = -_x6*_x25*_x28*_x10
-    _x89 = _x20*_x10 + _x5
+    _x94 = -_x2*_x6*_x24*_x28
+    _x89 = _x2*_x19 + _x5
     _x68 = l1*_x67 + _x5
     _x29 = m1*_x0 + 2.0*_x4 + m2*_x0 + _x5
     _x30 = 1.0/_x29
     _x35 = _x30*_x34
-    _x31 = -_x6*_x18 + _x1*_x15
-    _x32 = _x10*_x31
+    _x31 = -_x6*_x17 + _x1*_x14
+    _x32 = _x2*_x31
     _x33 = -_x32
-    _x36 = -_x27*_x15 + tau_theta1 - l1*(m2*_x1*_x31 + _x6*(-_x26*_x10 + (_x1*_x18 + _x6*_x15)*m2)) + _x33
-    _x37 = -_x34*_x35 + _x5
-    _x38 = -_x36*_x35 + _x33 + tau_theta2
-    _x39 = _x38/_x37
-    _x40 = -_x35*_x39 + _x30*_x36
-    _x100 = -_x15*_x86 + _x12*_x88
-    _x43 = 1.0/_x37
-    _x101 = -_x15*_x92 + _x12*_x67 - _x35*_x100
-    _x102 = _x43*_x101
-    _x103 = -_x35*_x102 + _x30*_x100
-    _x41 = l1*_x40 + _x15
-    _x42 = _x6*_x41
-    _x97 = -_x22*_x18 + l1*(m2*_x42 - _x26*_x10 + m2*(_x1*_x18 + _x42))
-    _x95 = _x39 + _x40
-    _x96 = m2*(-_x19 + _x1*_x41)
-    _x98 = _x22*_x41 + l1*(m2*_x19 + _x10*_x95 + _x96)
-    _x104 = _x6*_x98 - _x1*_x97
-    _x99 = _x10*_x41
-    _x105 = -_x35*_x104 - _x1*_x91 + _x6*_x99
-    _x106 = _x43*_x105
-    _x107 = -_x35*_x106 + _x30*_x104
-    _x44 = _x6*_x25*_x28*_x10
-    _x108 = _x44 + _x45*_x86
-    _x109 = _x45*_x92 - _x35*_x108
-    _x110 = _x43*_x109
-    _x111 = -_x35*_x110 + _x30*_x108
-    _x112 = -_x44*_x35
-    _x113 = _x43*_x112
-    _x114 = -_x35*_x113 + _x44*_x30
-    _x115 = -_x35
-    _x116 = _x43*_x115
-    _x117 = -_x35*_x116 + _x30
-    _x118 = -_x43*_x35
-    _x119 = _x27*_x15 + l1*(_x6*(-_x26*_x10 + m2*(_x6*_x23 + _x1*_x18)) + _x1*(_x10*_x16 + _x82)) + _x57 + _x83
-    _x120 = -_x58
-    _x121 = _x52*_x61 + _x50*_x120
-    _x122 = 1.0/_x121
-    _x123 = _x122*(_x52*_x119 + _x83*_x120)
+    _x38 = -_x27*_x14 + tau_theta1 - l1*(m2*_x1*_x31 + _x6*(-_x2*_x25 + (_x1*_x17 + _x6*_x14)*m2)) + _x33
+    _x36 = -_x34*_x35 + _x5
+    _x39 = -_x38*_x35 + _x33 + tau_theta2
+    _x95 = _x39/_x36
+    _x96 = -_x35*_x95 + _x30*_x38
+    _x102 = -_x14*_x86 + _x11*_x88
+    _x37 = 1.0/_x36
+    _x103 = -_x14*_x92 + _x11*_x67 - _x35*_x102
+    _x104 = _x37*_x103
+    _x105 = -_x35*_x104 + _x30*_x102
+    _x40 = _x37*_x39
+    _x41 = -_x35*_x40 + _x30*_x38
+    _x42 = l1*_x41 + _x14
+    _x43 = _x6*_x42
+    _x99 = -_x21*_x17 + l1*(m2*_x43 - _x2*_x25 + m2*(_x1*_x17 + _x43))
+    _x97 = _x40 + _x41
+    _x98 = m2*(-_x18 + _x1*_x42)
+    _x100 = _x21*_x42 + l1*(m2*_x18 + _x2*_x97 + _x98)
+    _x106 = _x6*_x100 - _x1*_x99
+    _x101 = _x2*_x42
+    _x107 = -_x1*_x91 - _x35*_x106 + _x6*_x101
+    _x108 = _x37*_x107
+    _x109 = -_x35*_x108 + _x30*_x106
+    _x44 = _x2*_x6*_x24*_x28
+    _x110 = _x44 + _x45*_x86
+    _x111 = _x45*_x92 - _x35*_x110
+    _x112 = _x37*_x111
+    _x113 = -_x35*_x112 + _x30*_x110
+    _x114 = -_x44*_x35
+    _x115 = _x37*_x114
+    _x116 = -_x35*_x115 + _x44*_x30
+    _x117 = -_x35
+    _x118 = _x37*_x117
+    _x119 = -_x35*_x118 + _x30
+    _x120 = _x57 + _x27*_x14 + _x83 + l1*(_x6*(-_x2*_x25 + m2*(_x6*_x22 + _x1*_x17)) + _x1*(_x2*_x15 + _x82))
+    _x121 = -_x58
+    _x122 = _x52*_x61 + _x50*_x121
+    _x123 = 1.0/_x122
+    _x124 = _x123*(_x52*_x120 + _x83*_x121)
     _x60 = -_x50
-    _x124 = _x122*(_x60*_x119 + _x83*_x61)
+    _x125 = _x123*(_x60*_x120 + _x83*_x61)
     _x62 = _x52*_x61
-    _x128 = _x62 + _x50*_x120
-    _x129 = 1.0/_x128
-    _x130 = _x129*(_x52*_x29 + _x34*_x120)
-    _x131 = _x129*(_x52*_x34 + _x5*_x120)
-    _x138 = _x129*(_x120*_x131 + _x52*_x130)
-    _x139 = _x129*(_x60*_x130 + _x61*_x131)
-    _x134 = _x129*(_x60*_x29 + _x34*_x61)
-    _x135 = _x129*(_x60*_x34 + _x5*_x61)
-    _x140 = _x129*(_x60*_x134 + _x61*_x135)
+    _x129 = _x62 + _x50*_x121
+    _x130 = 1.0/_x129
+    _x131 = _x130*(_x52*_x29 + _x34*_x121)
+    _x132 = _x130*(_x52*_x34 + _x5*_x121)
+    _x139 = _x130*(_x121*_x132 + _x52*_x131)
+    _x140 = _x130*(_x60*_x131 + _x61*_x132)
+    _x135 = _x130*(_x60*_x29 + _x34*_x61)
+    _x136 = _x130*(_x60*_x34 + _x5*_x61)
+    _x141 = _x130*(_x60*_x135 + _x61*_x136)
     _x69 = theta2_d*theta2_d
     _x70 = 2.0*theta1_d*theta2_d
     _x71 = -_x49*_x70 - _x49*_x69 + _x7*_x61
     _x72 = -_x52*_x70 - _x52*_x69 + (-_x55 - _x52)*_x7
-    _x125 = l1*(_x6*(-_x26*_x10 - _x74) + _x6*_x74) + _x75
-    _x132 = _x129*(_x52*_x125 + _x75*_x120)
-    _x136 = _x129*(_x60*_x125 + _x75*_x61)
-    _x126 = -_x13*_x10 + _x15*(_x1*_x10 + _x59)
-    _x127 = _x10*(_x1*_x15 - _x13)
-    _x133 = _x129*(_x127*_x120 + _x52*_x126)
-    _x137 = _x129*(_x60*_x126 + _x127*_x61)
+    _x126 = l1*(_x6*(-_x2*_x25 - _x74) + _x6*_x74) + _x75
+    _x133 = _x130*(_x52*_x126 + _x75*_x121)
+    _x137 = _x130*(_x60*_x126 + _x75*_x61)
+    _x127 = -_x2*_x12 + _x14*(_x2*_x1 + _x59)
+    _x128 = _x2*(_x1*_x14 - _x12)
+    _x134 = _x130*(_x128*_x121 + _x52*_x127)
+    _x138 = _x130*(_x60*_x127 + _x128*_x61)
     _entries = _in_one_loop(batch, [
         _x51,
         _x63,
@@ -1354,12 +1356,12 @@ def combined(q, qd, qdd, tau, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
         None,
         None,
         1.0,
-        _x14,
-        -_x11,
+        _x13,
+        -_x10,
         None,
         _x55,
-        _x11,
-        _x14,
+        _x10,
+        _x13,
         None,
         _x53,
         None,
@@ -1410,19 +1412,19 @@ def combined(q, qd, qdd, tau, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
         -_x66 + _x73*theta2_d,
         _x66,
         None,
-        l1*(_x6*(-_x26*_x10 - _x74) + _x6*_x74) + _x75,
+        l1*(_x6*(-_x2*_x25 - _x74) + _x6*_x74) + _x75,
         _x75,
-        -_x13*_x10 + _x15*(_x1*_x10 + _x59),
-        _x10*(_x1*_x15 - _x13),
+        -_x2*_x12 + _x14*(_x2*_x1 + _x59),
+        _x2*(_x1*_x14 - _x12),
         _x79*(_x67 + _x59) + _x80,
         _x81,
         _x67*_x79 + _x80,
         _x81,
-        _x27*_x15 + l1*(_x6*(-_x26*_x10 + m2*(_x6*_x23 + _x1*_x18)) + _x1*(_x10*_x16 + _x82)) + _x57 + _x83,
+        _x57 + _x27*_x14 + _x83 + l1*(_x6*(-_x2*_x25 + m2*(_x6*_x22 + _x1*_x17)) + _x1*(_x2*_x15 + _x82)),
         _x83,
-        -_x12*_x88 + _x15*_x86,
+        -_x11*_x88 + _x14*_x86,
         -_x6*_x90 + _x1*_x85,
-        -_x12*_x67 + _x15*_x92,
+        -_x11*_x67 + _x14*_x92,
         -_x6*_x93 + _x1*_x91,
         -_x45*_x86 + _x94,
         _x94,
@@ -1432,30 +1434,30 @@ def combined(q, qd, qdd, tau, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
         _x68,
         _x68,
         _x5,
-        _x40,
-        _x39,
-        _x103,
-        _x107,
-        _x102,
-        _x106,
-        _x111,
-        _x114,
-        _x110,
+        _x96,
+        _x95,
+        _x105,
+        _x109,
+        _x104,
+        _x108,
         _x113,
-        _x117,
-        _x118,
         _x116,
-        _x43,
-        _x123,
+        _x112,
+        _x115,
+        _x119,
+        _x118,
+        _x118,
+        _x37,
         _x124,
-        _x138,
-        _x139,
+        _x125,
         _x139,
         _x140,
-        -_x71*_x139 - _x72*_x138 + _x132,
-        -_x71*_x140 - _x72*_x139 + _x136,
-        _x133,
-        _x137,
+        _x140,
+        _x141,
+        -_x71*_x140 - _x72*_x139 + _x133,
+        -_x71*_x141 - _x72*_x140 + _x137,
+        _x134,
+        _x138,
         0.5*(_x34*theta1_d + _x5*theta2_d)*theta2_d + 0.5*((m1*_x0 + 2.0*_x4 + m2*_x0 + _x5)*theta1_d + _x34*theta2_d)*theta1_d,
         (_x53 + _x49)*g*m2 + g*m1*_x53,
     ])

@@ -439,8 +439,9 @@ void ur10e_forward_dynamics_batch(size_t n, const double *q, const double *qd, c
  * qdd(q + dq, qd + dqd, tau + dtau) = qdd + dqdd_dq dq + dqdd_dqd dqd + dqdd_dtau dtau
  * to first order, qdd = M^-1 (tau - V - G - F_f) (seed eq. 8.34); by the implicit-
  * function theorem dqdd_dq = -M^-1 dtau_dq, dqdd_dqd = -M^-1 dtau_dqd at qdd and
- * dqdd_dtau = M^-1, by LDL^T solves (Carpentier and Mansard, RSS 2018); a state-space
- * model x = (q, qd) has A = [[0, I], [dqdd_dq, dqdd_dqd]] and B = [[0], [dqdd_dtau]].
+ * dqdd_dtau = M^-1, by LDL^T solves (Carpentier and Mansard, RSS 2018), M^-1 from its
+ * lower triangle, mirrored (exactly symmetric); a state-space model x = (q, qd) has A =
+ * [[0, I], [dqdd_dq, dqdd_dqd]] and B = [[0], [dqdd_dtau]].
  *
  * Inputs:
  *   q[6]: joint coordinates: q1 [rad], q2 [rad], q3 [rad], q4 [rad], q5 [rad], q6 [rad].
@@ -463,8 +464,8 @@ void ur10e_forward_dynamics_batch(size_t n, const double *q, const double *qd, c
  * Outputs:
  *   dqdd_dq[36]: 6 x 6, row-major; d qdd / dq: row i, column j is d qdd_i / d q_j.
  *   dqdd_dqd[36]: 6 x 6, row-major; d qdd / dqd.
- *   dqdd_dtau[36]: 6 x 6, row-major; d qdd / dtau = M(q)^-1.
- * Cost: 4991 operations.
+ *   dqdd_dtau[36]: 6 x 6, row-major; d qdd / dtau = M(q)^-1, exactly symmetric.
+ * Cost: 4899 operations.
  */
 void ur10e_forward_dynamics_derivatives(const double *q, const double *qd, const double *tau, double a2, double a3, double d4, double d5, double d6, double m1, double m2, double m3, double m4, double m5, double m6, double g, double *dqdd_dq, double *dqdd_dqd, double *dqdd_dtau);
 

@@ -33,7 +33,8 @@ tau = ID(q, qd, qdd) at qdd = FD(q, qd, tau) (Carpentier and Mansard's route to 
     d qdd/dq = -M^-1 d tau/dq,   d qdd/dqd = -M^-1 d tau/dqd,   d qdd/dtau = M^-1,
 
 the inverse dynamics' derivative program evaluated at the accelerations the LDL^T solve of the forward dynamics
-gives, and one more LDL^T solve with the n + n + n right-hand sides [-d tau/dq | -d tau/dqd | I].
+gives, one more solve with the same factors for the n + n right-hand sides [-d tau/dq | -d tau/dqd], and M^-1 from
+them as its lower triangle, mirrored (exactly symmetric, as d tau/dqdd = M is).
 """
 
 from __future__ import annotations
@@ -43,7 +44,7 @@ from collections.abc import Callable
 import symengine as se
 import sympy
 
-from symkin.dynamics.linsolve import ldl_solve
+from symkin.dynamics.linsolve import ldl_factor, ldl_inverse, ldl_substitute
 from symkin.dynamics.program import Program
 from symkin.dynamics.quantities import (BoundTerms, coordinate_symbols, function_spec, inverse_dynamics_spec,
                                         require_gravity)
@@ -80,18 +81,19 @@ def forward_dynamics_slopes(program: Program, M: list[list[se.Basic]], rest: lis
     """(d qdd/dq, d qdd/dqd, d qdd/dtau) row-major by the implicit-function theorem on tau = M qdd + rest: the
     accelerations qdd = M^-1 (tau - rest) by an LDL^T solve bound into ``program``, then ``slope_rows()`` - row i the
     2n derivatives d tau_i/dq, d tau_i/dqd of the inverse dynamics at the symbols ``qdd``, bound after the solve - at
-    those accelerations, and M^-1 [-dtau/dq | -dtau/dqd | I] by one more LDL^T solve (n + n + n right-hand sides)."""
+    those accelerations, M^-1 [-dtau/dq | -dtau/dqd] by the same factors (n + n right-hand sides) and M^-1 itself
+    from them, its lower triangle mirrored (:func:`~symkin.dynamics.linsolve.ldl_inverse`: exactly symmetric)."""
     n = len(tau)
-    accelerations = [row[0] for row in ldl_solve(program, M, [[t - r] for t, r in zip(tau, rest)])]
+    factors = ldl_factor(program, M)
+    accelerations = [row[0] for row in ldl_substitute(program, *factors, [[t - r] for t, r in zip(tau, rest)])]
     start = len(program.assignments)
     rows = slope_rows()
     at_motion = dict(zip(qdd, accelerations))  # the derivative program at qdd = FD(q, qd, tau)
     program.substitute(start, at_motion)
-    right = [[-entry.xreplace(at_motion) for entry in row] + [se.Integer(int(i == j)) for j in range(n)]
-             for i, row in enumerate(rows)]
-    X = ldl_solve(program, M, right)
-    by_q, by_qd, by_tau = ([X[i][k * n + j] for i in range(n) for j in range(n)] for k in range(3))
-    return by_q, by_qd, by_tau
+    X = ldl_substitute(program, *factors, [[-entry.xreplace(at_motion) for entry in row] for row in rows])
+    by_q, by_qd = ([X[i][k * n + j] for i in range(n) for j in range(n)] for k in range(2))
+    inverse = ldl_inverse(program, *factors)
+    return by_q, by_qd, [inverse[i][j] for i in range(n) for j in range(n)]
 
 
 @quantity("inverse_dynamics_derivatives", "d tau/dq, d tau/dqd, d tau/dqdd = M of the inverse dynamics (n x n each)")
@@ -134,12 +136,13 @@ def _forward_dynamics_derivatives(d: Deriving) -> FunctionSpec:
         d, "forward_dynamics_derivatives", "Derivatives of the forward dynamics: the linearization of the plant.",
         "qdd(q + dq, qd + dqd, tau + dtau) = qdd + dqdd_dq dq + dqdd_dqd dqd + dqdd_dtau dtau to first order, "
         "qdd = M^-1 (tau - V - G - F_f) (seed eq. 8.34); by the implicit-function theorem dqdd_dq = -M^-1 dtau_dq, "
-        "dqdd_dqd = -M^-1 dtau_dqd at qdd and dqdd_dtau = M^-1, by LDL^T solves (Carpentier and Mansard, RSS 2018); "
+        "dqdd_dqd = -M^-1 dtau_dqd at qdd and dqdd_dtau = M^-1, by LDL^T solves (Carpentier and Mansard, RSS 2018), "
+        "M^-1 from its lower triangle, mirrored (exactly symmetric); "
         "a state-space model x = (q, qd) has A = [[0, I], [dqdd_dq, dqdd_dqd]] and B = [[0], [dqdd_dtau]].",
         ["q", "qd", "tau"], program,
         [("dqdd_dq", dq, (n, n), "d qdd / dq: row i, column j is d qdd_i / d q_j", ""),
          ("dqdd_dqd", dqd, (n, n), "d qdd / dqd", ""),
-         ("dqdd_dtau", dtau, (n, n), "d qdd / dtau = M(q)^-1", "")])
+         ("dqdd_dtau", dtau, (n, n), "d qdd / dtau = M(q)^-1, exactly symmetric", "")])
 
 
 @quantity("gravity_derivatives", "d G/dq of the gravity vector (n x n)")

@@ -8,6 +8,10 @@ for their (large) expressions once, every factor is computed once, and CSE share
   A = L D L^T without pivoting.  For an SPD matrix every pivot D_k is positive (Golub &
   Van Loan, *Matrix Computations*, sec. 4.1-4.2), so the factorization exists and is
   backward stable without pivoting; it costs n^3/6 multiplications and no square roots.
+* :func:`ldl_inverse` - A^-1 of the same A from its factors (:func:`ldl_factor`), its lower triangle alone
+  (A^-1 is symmetric): column c of A^-1 solves A x = e_c, and the rows i >= c of its back
+  substitution need no row above c, so the upper triangle is never computed and the inverse
+  comes out exactly symmetric once mirrored.
 * :func:`transpose_solve` - ``J^T X = B`` for a square, nonsingular but otherwise general
   matrix (a task Jacobian).  Elimination without pivoting is not sound here: a leading
   minor of J may vanish where J is regular (the UR10e at q = 0 has J_11 = 0), and dividing
@@ -42,11 +46,10 @@ Matrix = list[list[se.Basic]]
 ADJUGATE_MAX_SIZE = 3
 
 
-def ldl_solve(program: Program, A: Matrix, B: Matrix) -> Matrix:
-    """X with A X = B, for symmetric positive definite A (n x n) and B (n x r), by LDL^T.
-
-    Only the lower triangle of A is used.
-    """
+def ldl_factor(program: Program, A: Matrix) -> tuple[Matrix, list[se.Basic]]:
+    """(L, D) of A = L D L^T, L unit lower triangular (its entries below the diagonal named, the rest 0), for
+    symmetric positive definite A (n x n); only the lower triangle of A is used.  Every entry is named in
+    ``program``; solve with the factors by :func:`ldl_substitute` and :func:`ldl_inverse`."""
     n = len(A)
     A = [[program.let(A[i][j]) for j in range(i + 1)] for i in range(n)]
     D: list[se.Basic] = []
@@ -59,6 +62,20 @@ def ldl_solve(program: Program, A: Matrix, B: Matrix) -> Matrix:
         for i in range(j + 1, n):
             E[i][j] = program.let(A[i][j] - sum((L[i][k] * E[j][k] for k in range(j)), se.Integer(0)))
             L[i][j] = program.let(E[i][j] * inverse)
+    return L, D
+
+
+def ldl_solve(program: Program, A: Matrix, B: Matrix) -> Matrix:
+    """X with A X = B, for symmetric positive definite A (n x n) and B (n x r), by LDL^T (:func:`ldl_factor`).
+
+    Only the lower triangle of A is used.
+    """
+    return ldl_substitute(program, *ldl_factor(program, A), B)
+
+
+def ldl_substitute(program: Program, L: Matrix, D: list[se.Basic], B: Matrix) -> Matrix:
+    """X with L D L^T X = B for the factors of :func:`ldl_factor` and B (n x r): L y = b, then D L^T x = y."""
+    n = len(L)
     columns = []
     for c in range(len(B[0])):
         y: list[se.Basic] = []
@@ -69,6 +86,24 @@ def ldl_solve(program: Program, A: Matrix, B: Matrix) -> Matrix:
             x[i] = program.let(y[i] / D[i] - sum((L[k][i] * x[k] for k in range(i + 1, n)), se.Integer(0)))
         columns.append(x)
     return [[columns[c][i] for c in range(len(B[0]))] for i in range(n)]
+
+
+def ldl_inverse(program: Program, L: Matrix, D: list[se.Basic]) -> Matrix:
+    """A^-1 (n x n, exactly symmetric) of A = L D L^T (the factors of :func:`ldl_factor`): column c solves
+    A x = e_c, L y = e_c giving y_i = 0 above c and y_c = 1, and the back substitution D L^T x = y for the rows
+    i >= c alone, x_i = y_i / D_i - sum_{k > i} L_ki x_k (which never needs a row above c): the lower triangle,
+    mirrored."""
+    n = len(L)
+    lower: Matrix = [[se.Integer(0)] * n for _ in range(n)]
+    for c in range(n):
+        y: list[se.Basic] = [se.Integer(0)] * n
+        y[c] = se.Integer(1)
+        for i in range(c + 1, n):  # L y = e_c below the diagonal
+            y[i] = program.let(-sum((L[i][k] * y[k] for k in range(c, i)), se.Integer(0)))
+        for i in reversed(range(c, n)):  # D L^T x = y, rows c..n-1
+            lower[i][c] = program.let(y[i] / D[i] - sum((L[k][i] * lower[k][c] for k in range(i + 1, n)),
+                                                        se.Integer(0)))
+    return [[lower[max(i, j)][min(i, j)] for j in range(n)] for i in range(n)]
 
 
 def transpose_solve(program: Program, J: Matrix, B: Matrix) -> Matrix:

@@ -122,7 +122,7 @@ def _forward_dynamics_derivatives(d: Deriving) -> FunctionSpec:
         device_inputs(d, "qd", "tau"), program,
         [("dqdd_dq", by_q, (n, n), "d qdd / dq: row i, column j is d qdd_i / d q_j", ""),
          ("dqdd_dqd", by_qd, (n, n), "d qdd / dqd", ""),
-         ("dqdd_dtau", by_tau, (n, n), "d qdd / dtau = M(q)^-1", "")])
+         ("dqdd_dtau", by_tau, (n, n), "d qdd / dtau = M(q)^-1, exactly symmetric", "")])
 
 
 @quantity("gravity_derivatives", "d G/dq of the gravity compensation efforts at the actuators (n x n)",

@@ -136,7 +136,7 @@ def test_the_generated_linearization_of_the_plant_is_the_forward_dynamics_slope(
     """generated/ur10e's forward_dynamics_derivatives (docs/generated-code.md's MPC linearization) against central
     differences of its generated forward dynamics (h = EPS^(1/3): error ~EPS^(2/3) kappa(M) of the slopes' scale;
     1e-6 leaves a wide margin at kappa(M) ~ 1e3), and against -M^-1 times the inverse dynamics' derivatives at the
-    same motion."""
+    same motion; M^-1 exactly symmetric."""
     from symkin import load
 
     arm = load(generated_dir / "ur10e")
@@ -145,6 +145,7 @@ def test_the_generated_linearization_of_the_plant_is_the_forward_dynamics_slope(
     inverse = arm.inverse_dynamics_derivatives(q, qd, arm.forward_dynamics(q, qd, tau))
     kappa = float(np.linalg.cond(inverse.dtau_dqdd))
     _agree(d.dqdd_dtau, np.linalg.inv(inverse.dtau_dqdd), q, kappa)
+    assert np.array_equal(d.dqdd_dtau, d.dqdd_dtau.T), "M^-1 is its lower triangle, mirrored"
     h = EPS ** (1 / 3)
     for which, analytic in ((0, d.dqdd_dq), (1, d.dqdd_dqd)):
         _agree(analytic, -d.dqdd_dtau @ (inverse.dtau_dq, inverse.dtau_dqd)[which], q, kappa)
