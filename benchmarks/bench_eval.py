@@ -26,6 +26,10 @@ Columns:
   harness this script compiles (best of 5 runs of ``--calls`` calls over 1024 configurations);
 * ``C batch``   nanoseconds per configuration of the C batch entry point, timed in C.
 
+A line gives each case's single-configuration C function's machine code in bytes (its symbol's size in ``nm -S`` of
+the harness: the sincos helper, where GCC keeps it apart, is not counted) beside the CPU's L1 instruction cache: code
+that does not fit it with its caller's is fetched from L2 at every call.
+
 Pinocchio: ``computeFrameJacobian`` (which also updates the TCP placement) for FK+J,
 ``forwardKinematics`` + ``updateFramePlacement`` for FK, ``crba`` for M, ``crba`` + ``rnea``
 (zero acceleration: V + G) + ``computeGeneralizedGravity`` for M+V+G, ``computeRNEADerivatives`` (its analytical
@@ -287,6 +291,43 @@ def run_harness(source: str, sources: list[Path], includes: list[Path], compiler
     return results
 
 
+def function_bytes(binary: Path, symbol: str) -> int | None:
+    """The size in bytes of the machine code of function ``symbol`` in ``binary`` (binutils' ``nm -S``), or None
+    where nm is missing or does not list it."""
+    nm = shutil.which("nm")
+    if nm is None:
+        return None
+    listing = subprocess.run([nm, "-S", "--defined-only", str(binary)], capture_output=True, text=True).stdout
+    for line in listing.splitlines():
+        parts = line.split()
+        if len(parts) == 4 and parts[3] == symbol:
+            return int(parts[1], 16)
+    return None
+
+
+def instruction_cache() -> str:
+    """This CPU's level-1 instruction cache as Linux reports it (e.g. "32K"), or "unknown"."""
+    for index in sorted(Path("/sys/devices/system/cpu/cpu0/cache").glob("index*")):
+        try:
+            if (index / "level").read_text().strip() == "1" and (index / "type").read_text().strip() == "Instruction":
+                return (index / "size").read_text().strip()
+        except OSError:
+            continue
+    return "unknown"
+
+
+def code_size_line(code_bytes: dict[str, int | None]) -> str:
+    """The machine code of each case's single-configuration C function beside the L1 instruction cache: a call
+    whose code (with its caller's: the interpreter's, from Python) exceeds the cache fetches instructions from L2 on
+    every call, which costs more than its arithmetic (a C loop calling the UR10e's d tau/d(q, qd) - 26.6 KB of code -
+    with 13 KB of other code in the loop took 1 145 ns per call instead of its 496 + 199 ns apart; one-off, GCC 12,
+    the servo flags, a 32 KB L1i)."""
+    sizes = ", ".join(f"{label} {size:,}".replace(",", " ") if size is not None else f"{label} ?"
+                      for label, size in code_bytes.items())
+    return f"machine code of the single-configuration C functions [bytes] (L1 instruction cache " \
+           f"{instruction_cache()}): {sizes}"
+
+
 def symforce_harness(header_dir: Path, dof: int) -> str:
     return (HARNESS_HEAD.replace("%(includes)s", '#include <Eigen/Core>\n#include "ur10e_fk_jacobian.h"')
             .replace("#define _POSIX_C_SOURCE 199309L", "")
@@ -343,6 +384,7 @@ def main(argv: list[str] | None = None) -> int:
         out_calls: dict[str, float] = {}
         c_timings: dict[tuple[str, str], float] = {}
         op_counts = {}
+        code_bytes: dict[str, int | None] = {}
         for label, quantities in cases.items():
             target = generate(model, quantities, work / label.replace("+", "_"))
             name = function_name(quantities)
@@ -368,9 +410,10 @@ def main(argv: list[str] | None = None) -> int:
             empty_calls[label], out_calls[label] = per_call["empty"], per_call["out"]
             source = HARNESS_HEAD % {"includes": f'#include "{model.name}.h"'} + symkin_case_c(label, model.name, record) \
                 + HARNESS_TAIL
+            harness = f"harness_{label.replace('+', '_')}"
             c_timings.update(run_harness(source, [target / f"{model.name}.c"], [target], compiler,
-                                         ["-std=c99", *cflags], work, args.calls, args.batch,
-                                         f"harness_{label.replace('+', '_')}"))
+                                         ["-std=c99", *cflags], work, args.calls, args.batch, harness))
+            code_bytes[label] = function_bytes(work / harness, f"{model.name}_{name}")
             if pm is not None:
                 rows[label, "pinocchio"] = (per_call["pinocchio"], pinocchio_batch_ns(calls["pinocchio"][0], inputs,
                                                                                     args.batch))
@@ -388,6 +431,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"UR10e evaluation speed, {args.batch} configurations per batch, C flags '{args.cflags}', "
               f"all parameters folded")
         print("op counts after CSE: " + ", ".join(f"{k} {v}" for k, v in op_counts.items()))
+        print(code_size_line(code_bytes))
         print(format_table(["case", "implementation", "py call [us]", "py batch [ns/config]", "C call [ns]",
                             "C batch [ns/config]"], table))
         if symforce_note:
