@@ -28,7 +28,9 @@ Columns:
 
 A line gives each case's single-configuration C function's machine code in bytes (its symbol's size in ``nm -S`` of
 the harness: the sincos helper, where GCC keeps it apart, is not counted) beside the CPU's L1 instruction cache: code
-that does not fit it with its caller's is fetched from L2 at every call.
+that does not fit it with its caller's is fetched from L2 at every call.  The next line shows it: each single call
+timed alone, with a function of about 13 KB of other code (:func:`other_code_c`) called after it in the same loop,
+and the two apart, summed.
 
 Pinocchio: ``computeFrameJacobian`` (which also updates the TCP placement) for FK+J,
 ``forwardKinematics`` + ``updateFramePlacement`` for FK, ``crba`` for M, ``crba`` + ``rnea``
@@ -232,9 +234,45 @@ HARNESS_CASE = r"""
             best = per < best ? per : best;
         }
         printf("%(label)s single %%.2f\n", 1e9 * best);
-%(batch_block)s
+%(beside_block)s%(batch_block)s
     }
 """
+
+#: The single call timed again with :func:`other_code_c`'s function called after it in the same loop, and that
+#: function alone: code beside the call's, as a control loop or an interpreter runs around it.
+BESIDE_BLOCK = r"""
+        double scratch[64];
+        for (int j = 0; j < 64; ++j) {
+            scratch[j] = 1e-3 * j;
+        }
+        best = 1e30;
+        for (int run = 0; run < 5; ++run) {
+            const double start = now();
+            for (long i = 0; i < calls; ++i) {
+                const size_t k = (size_t)(i & %(mask)d);
+                %(single_call)s;
+                symkin_bench_other_code(scratch);
+                sink += %(first_output)s[0] + scratch[5];
+            }
+            const double per = (now() - start) / (double)calls;
+            best = per < best ? per : best;
+        }
+        printf("%(label)s beside %%.2f\n", 1e9 * best);
+        best = 1e30;
+        for (int run = 0; run < 5; ++run) {
+            const double start = now();
+            for (long i = 0; i < calls; ++i) {
+                symkin_bench_other_code(scratch);
+                sink += scratch[5];
+            }
+            const double per = (now() - start) / (double)calls;
+            best = per < best ? per : best;
+        }
+        printf("%(label)s other %%.2f\n", 1e9 * best);
+"""
+
+#: Statements of :func:`other_code_c`'s function (about 12.9 KB of machine code with GCC 12 and the servo flags).
+OTHER_STATEMENTS = 800
 
 BATCH_BLOCK = r"""
 %(batch_allocs)s
@@ -256,7 +294,21 @@ HARNESS_TAIL = r"""
 """
 
 
-def symkin_case_c(label: str, model_name: str, record: dict) -> str:
+def other_code_c(statements: int = OTHER_STATEMENTS) -> str:
+    """C source of ``symkin_bench_other_code(double *a)``: ``statements`` multiply-adds on a 64-entry array, each
+    reading and writing other entries (``a[7i mod 64] = a[(11i + 3) mod 64] * c_i + a[(13i + 5) mod 64]``), so that
+    none can be dropped and the function's machine code grows with ``statements``; compiled as a translation unit of
+    its own, so that it is not inlined into the timing loop."""
+    lines = [f"    a[{(7 * i) % 64}] = a[{(11 * i + 3) % 64}] * {1 + i * 1e-6!r} + a[{(13 * i + 5) % 64}];"
+             for i in range(statements)]
+    signature = "void symkin_bench_other_code(double *restrict a)"
+    return f"{signature};\n\n{signature}\n{{\n" + "\n".join(lines) + "\n}\n"
+
+
+def symkin_case_c(label: str, model_name: str, record: dict, beside: bool = False) -> str:
+    """The harness block that times ``record``'s single call and its batch entry point; with ``beside``, the
+    single call also with :func:`other_code_c`'s function after it in the loop (the harness then declares it and
+    links its source), and that function alone."""
     vectors = [(i["name"], i["shape"][0]) for i in record["inputs"] if i["kind"] == "vector"]
     outputs = [(o["name"], int(np.prod(o["shape"], dtype=int))) for o in record["outputs"]]
     allocs = "\n".join(f"        double *in_{v} = random_array({RING} * {n}, &state);" for v, n in vectors)
@@ -270,8 +322,9 @@ def symkin_case_c(label: str, model_name: str, record: dict) -> str:
         [f"batch_{v}" for v, _ in vectors] + [f"batch_out_{o}" for o, _ in outputs]) + ")"
     block = BATCH_BLOCK % {"batch_allocs": batch_allocs, "batch_call": batch_call, "label": label,
                            "first_batch_output": f"batch_out_{outputs[0][0]}"}
-    return HARNESS_CASE % {"label": label, "allocs": allocs, "mask": RING - 1, "single_call": single,
-                           "first_output": f"out_{outputs[0][0]}", "batch_block": block}
+    fields = {"label": label, "mask": RING - 1, "single_call": single, "first_output": f"out_{outputs[0][0]}"}
+    return HARNESS_CASE % {**fields, "allocs": allocs, "batch_block": block,
+                           "beside_block": BESIDE_BLOCK % fields if beside else ""}
 
 
 def run_harness(source: str, sources: list[Path], includes: list[Path], compiler: list[str], flags: list[str],
@@ -286,7 +339,7 @@ def run_harness(source: str, sources: list[Path], includes: list[Path], compiler
     results = {}
     for line in out.splitlines():
         parts = line.rsplit(" ", 2)
-        if len(parts) == 3 and parts[1] in ("single", "batch"):
+        if len(parts) == 3 and parts[1] in ("single", "batch", "beside", "other"):
             results[parts[0], parts[1]] = float(parts[2])
     return results
 
@@ -319,13 +372,22 @@ def instruction_cache() -> str:
 def code_size_line(code_bytes: dict[str, int | None]) -> str:
     """The machine code of each case's single-configuration C function beside the L1 instruction cache: a call
     whose code (with its caller's: the interpreter's, from Python) exceeds the cache fetches instructions from L2 on
-    every call, which costs more than its arithmetic (a C loop calling the UR10e's d tau/d(q, qd) - 26.6 KB of code -
-    with 13 KB of other code in the loop took 1 145 ns per call instead of its 496 + 199 ns apart; one-off, GCC 12,
-    the servo flags, a 32 KB L1i)."""
+    every call, which costs more than its arithmetic (:func:`beside_line`)."""
     sizes = ", ".join(f"{label} {size:,}".replace(",", " ") if size is not None else f"{label} ?"
                       for label, size in code_bytes.items())
     return f"machine code of the single-configuration C functions [bytes] (L1 instruction cache " \
            f"{instruction_cache()}): {sizes}"
+
+
+def beside_line(c_timings: dict[tuple[str, str], float], other_bytes: int | None) -> str:
+    """Each case's single C call alone, beside :func:`other_code_c`'s function in the same loop, and the sum of the
+    two apart [ns]: a loop whose code outgrows the L1 instruction cache takes longer than the sum."""
+    cases = [label for label, kind in c_timings if kind == "beside"]
+    size = f"{other_bytes:,}".replace(",", " ") if other_bytes is not None else "?"
+    cells = [f"{label} {c_timings[label, 'single']:.0f} / {c_timings[label, 'beside']:.0f} / "
+             f"{c_timings[label, 'single'] + c_timings[label, 'other']:.0f}" for label in cases]
+    return f"C call alone / beside {size} bytes of other code in the loop / the two apart, summed [ns]: " \
+           + ", ".join(cells)
 
 
 def symforce_harness(header_dir: Path, dof: int) -> str:
@@ -385,6 +447,9 @@ def main(argv: list[str] | None = None) -> int:
         c_timings: dict[tuple[str, str], float] = {}
         op_counts = {}
         code_bytes: dict[str, int | None] = {}
+        other_code = work / "other_code.c"
+        other_code.write_text(other_code_c())
+        other_bytes: int | None = None
         for label, quantities in cases.items():
             target = generate(model, quantities, work / label.replace("+", "_"))
             name = function_name(quantities)
@@ -408,12 +473,14 @@ def main(argv: list[str] | None = None) -> int:
             for impl, fn in functions.items():
                 rows[label, impl] = (per_call[impl], batch_ns(fn, inputs, args.batch))
             empty_calls[label], out_calls[label] = per_call["empty"], per_call["out"]
-            source = HARNESS_HEAD % {"includes": f'#include "{model.name}.h"'} + symkin_case_c(label, model.name, record) \
+            includes = f'#include "{model.name}.h"\nvoid symkin_bench_other_code(double *restrict a);'
+            source = HARNESS_HEAD % {"includes": includes} + symkin_case_c(label, model.name, record, beside=True) \
                 + HARNESS_TAIL
             harness = f"harness_{label.replace('+', '_')}"
-            c_timings.update(run_harness(source, [target / f"{model.name}.c"], [target], compiler,
+            c_timings.update(run_harness(source, [target / f"{model.name}.c", other_code], [target], compiler,
                                          ["-std=c99", *cflags], work, args.calls, args.batch, harness))
             code_bytes[label] = function_bytes(work / harness, f"{model.name}_{name}")
+            other_bytes = function_bytes(work / harness, "symkin_bench_other_code")
             if pm is not None:
                 rows[label, "pinocchio"] = (per_call["pinocchio"], pinocchio_batch_ns(calls["pinocchio"][0], inputs,
                                                                                     args.batch))
@@ -432,6 +499,7 @@ def main(argv: list[str] | None = None) -> int:
               f"all parameters folded")
         print("op counts after CSE: " + ", ".join(f"{k} {v}" for k, v in op_counts.items()))
         print(code_size_line(code_bytes))
+        print(beside_line(c_timings, other_bytes))
         print(format_table(["case", "implementation", "py call [us]", "py batch [ns/config]", "C call [ns]",
                             "C batch [ns/config]"], table))
         if symforce_note:
