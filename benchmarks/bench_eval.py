@@ -449,7 +449,6 @@ def main(argv: list[str] | None = None) -> int:
         code_bytes: dict[str, int | None] = {}
         other_code = work / "other_code.c"
         other_code.write_text(other_code_c())
-        other_bytes: int | None = None
         for label, quantities in cases.items():
             target = generate(model, quantities, work / label.replace("+", "_"))
             name = function_name(quantities)
@@ -480,7 +479,6 @@ def main(argv: list[str] | None = None) -> int:
             c_timings.update(run_harness(source, [target / f"{model.name}.c", other_code], [target], compiler,
                                          ["-std=c99", *cflags], work, args.calls, args.batch, harness))
             code_bytes[label] = function_bytes(work / harness, f"{model.name}_{name}")
-            other_bytes = function_bytes(work / harness, "symkin_bench_other_code")
             if pm is not None:
                 rows[label, "pinocchio"] = (per_call["pinocchio"], pinocchio_batch_ns(calls["pinocchio"][0], inputs,
                                                                                     args.batch))
@@ -499,7 +497,7 @@ def main(argv: list[str] | None = None) -> int:
               f"all parameters folded")
         print("op counts after CSE: " + ", ".join(f"{k} {v}" for k, v in op_counts.items()))
         print(code_size_line(code_bytes))
-        print(beside_line(c_timings, other_bytes))
+        print(beside_line(c_timings, function_bytes(work / harness, "symkin_bench_other_code")))  # in every harness
         print(format_table(["case", "implementation", "py call [us]", "py batch [ns/config]", "C call [ns]",
                             "C batch [ns/config]"], table))
         if symforce_note:

@@ -859,7 +859,6 @@ def test_a_simulation_with_the_jax_code_says_it_is_not_the_fast_way(jax_director
     assert "planar_2r: --backend jax: a simulation evaluates one state per call" in capsys.readouterr().out
 
 
-
 def test_legs_continued_with_jax_code_alone_say_how_to_get_the_faster_code(tmp_path, capsys):
     """A generated directory of the Novint Falcon (legs without closed forms) that holds JAX's code alone is analysed
     with it, point by point: the first line says so and how to get numpy's code (load_for_analysis takes numpy's
