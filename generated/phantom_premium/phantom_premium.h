@@ -626,8 +626,9 @@ void phantom_premium_forward_dynamics_batch(size_t n, const double *q, const dou
  * to first order, qdd = M^-1 (tau - V - G - F_f) (seed eq. 8.34); by the implicit-
  * function theorem dqdd_dq = -M^-1 dtau_dq, dqdd_dqd = -M^-1 dtau_dqd at qdd and
  * dqdd_dtau = M^-1, by LDL^T solves (Carpentier and Mansard, RSS 2018), M^-1 from its
- * lower triangle, mirrored (exactly symmetric); a state-space model x = (q, qd) has A =
- * [[0, I], [dqdd_dq, dqdd_dqd]] and B = [[0], [dqdd_dtau]].
+ * lower triangle, mirrored (exactly symmetric), the solves' substitutions one loop over
+ * columns; a state-space model x = (q, qd) has A = [[0, I], [dqdd_dq, dqdd_dqd]] and B =
+ * [[0], [dqdd_dtau]].
  *
  * Inputs:
  *   q[3]: joint coordinates: q1 [rad], q2 [rad], q3 [rad].
@@ -692,7 +693,7 @@ void phantom_premium_forward_dynamics_derivatives(const double *q, const double 
 void phantom_premium_forward_dynamics_derivatives_packed(const double *in, double *out);
 
 /* phantom_premium_forward_dynamics_derivatives for n configurations; params: l1, l2, l3, l5, l6, m_a, I_axx, I_ayy, I_azz, m_c, I_cxx, I_cyy, I_czz, m_be, I_bexx, I_beyy, I_bezz, m_df, I_dfxx, I_dfyy, I_dfzz, I_baseyy, J_m, g, stride 0 or 24.
- * Uses 3712 bytes of stack for its blocks of 8 configurations. */
+ * Calls phantom_premium_forward_dynamics_derivatives once per configuration. */
 void phantom_premium_forward_dynamics_derivatives_batch(size_t n, const double *q, const double *qd, const double *tau, const double *params, size_t params_stride, double *dqdd_dq, double *dqdd_dqd, double *dqdd_dtau);
 
 /* phantom_premium_tcp_force: Force (wrench) at the TCP that produces a joint motion.
@@ -1040,7 +1041,7 @@ void phantom_premium_potential_energy_batch(size_t n, const double *q, const dou
  *   Gx[3]: 3; operational-space gravity force J^-T G (operational_space).
  *   k[1]: scalar; kinetic energy of all bodies (kinetic_energy) [J].
  *   u[1]: scalar; potential energy (potential_energy) [J].
- * Cost: 2674 operations.
+ * Cost: 2682 operations.
  */
 void phantom_premium_combined(const double *q, const double *qd, const double *qdd, const double *tau, double l1, double l2, double l3, double l5, double l6, double m_a, double I_axx, double I_ayy, double I_azz, double m_c, double I_cxx, double I_cyy, double I_czz, double m_be, double I_bexx, double I_beyy, double I_bezz, double m_df, double I_dfxx, double I_dfyy, double I_dfzz, double I_baseyy, double J_m, double g, double *base_T_tcp, double *base_T_turret, double *base_T_upper_arm, double *base_T_distal, double *base_T_lever, double *base_T_link_c, double *J, double *M, double *C, double *V, double *G, double *dG_dq, double *F_f, double *inverse_dynamics_tau, double *dtau_dq, double *dtau_dqd, double *dtau_dqdd, double *forward_dynamics_qdd, double *dqdd_dq, double *dqdd_dqd, double *dqdd_dtau, double *F, double *Mx, double *Vx, double *Gx, double *k, double *u);
 

@@ -351,8 +351,9 @@ void planar_2r_forward_dynamics_batch(size_t n, const double *q, const double *q
  * to first order, qdd = M^-1 (tau - V - G - F_f) (seed eq. 8.34); by the implicit-
  * function theorem dqdd_dq = -M^-1 dtau_dq, dqdd_dqd = -M^-1 dtau_dqd at qdd and
  * dqdd_dtau = M^-1, by LDL^T solves (Carpentier and Mansard, RSS 2018), M^-1 from its
- * lower triangle, mirrored (exactly symmetric); a state-space model x = (q, qd) has A =
- * [[0, I], [dqdd_dq, dqdd_dqd]] and B = [[0], [dqdd_dtau]].
+ * lower triangle, mirrored (exactly symmetric), the solves' substitutions one loop over
+ * columns; a state-space model x = (q, qd) has A = [[0, I], [dqdd_dq, dqdd_dqd]] and B =
+ * [[0], [dqdd_dtau]].
  *
  * Inputs:
  *   q[2]: joint coordinates: theta1 [rad], theta2 [rad].
@@ -375,7 +376,7 @@ void planar_2r_forward_dynamics_derivatives(const double *q, const double *qd, c
 void planar_2r_forward_dynamics_derivatives_packed(const double *in, double *out);
 
 /* planar_2r_forward_dynamics_derivatives for n configurations; params: l1, l2, m1, m2, g, stride 0 or 5.
- * Uses 1856 bytes of stack for its blocks of 8 configurations. */
+ * Calls planar_2r_forward_dynamics_derivatives once per configuration. */
 void planar_2r_forward_dynamics_derivatives_batch(size_t n, const double *q, const double *qd, const double *tau, const double *params, size_t params_stride, double *dqdd_dq, double *dqdd_dqd, double *dqdd_dtau);
 
 /* planar_2r_tcp_force: Force (wrench) at the TCP that produces a joint motion.
@@ -544,7 +545,7 @@ void planar_2r_potential_energy_batch(size_t n, const double *q, const double *p
  *   Gx[2]: 2; operational-space gravity force J^-T G (operational_space).
  *   k[1]: scalar; kinetic energy of all bodies (kinetic_energy) [J].
  *   u[1]: scalar; potential energy (potential_energy) [J].
- * Cost: 417 operations.
+ * Cost: 429 operations.
  */
 void planar_2r_combined(const double *q, const double *qd, const double *qdd, const double *tau, double l1, double l2, double m1, double m2, double g, double *base_T_tcp, double *base_T_link1, double *base_T_link2, double *jacobian_J, double *jacobian_geometric_J, double *M, double *C, double *V, double *G, double *dG_dq, double *inverse_dynamics_tau, double *dtau_dq, double *dtau_dqd, double *dtau_dqdd, double *forward_dynamics_qdd, double *dqdd_dq, double *dqdd_dqd, double *dqdd_dtau, double *F, double *Mx, double *Vx, double *Gx, double *k, double *u);
 
@@ -552,7 +553,7 @@ void planar_2r_combined(const double *q, const double *qd, const double *qdd, co
 void planar_2r_combined_packed(const double *in, double *out);
 
 /* planar_2r_combined for n configurations; params: l1, l2, m1, m2, g, stride 0 or 5.
- * Uses 6336 bytes of stack for its blocks of 8 configurations. */
+ * Calls planar_2r_combined once per configuration. */
 void planar_2r_combined_batch(size_t n, const double *q, const double *qd, const double *qdd, const double *tau, const double *params, size_t params_stride, double *base_T_tcp, double *base_T_link1, double *base_T_link2, double *jacobian_J, double *jacobian_geometric_J, double *M, double *C, double *V, double *G, double *dG_dq, double *inverse_dynamics_tau, double *dtau_dq, double *dtau_dqd, double *dtau_dqdd, double *forward_dynamics_qdd, double *dqdd_dq, double *dqdd_dqd, double *dqdd_dtau, double *F, double *Mx, double *Vx, double *Gx, double *k, double *u);
 
 /* planar_2r_fk_f32: Forward kinematics: pose of the TCP in the base frame.
@@ -865,8 +866,9 @@ void planar_2r_forward_dynamics_batch_f32(size_t n, const float *q, const float 
  * to first order, qdd = M^-1 (tau - V - G - F_f) (seed eq. 8.34); by the implicit-
  * function theorem dqdd_dq = -M^-1 dtau_dq, dqdd_dqd = -M^-1 dtau_dqd at qdd and
  * dqdd_dtau = M^-1, by LDL^T solves (Carpentier and Mansard, RSS 2018), M^-1 from its
- * lower triangle, mirrored (exactly symmetric); a state-space model x = (q, qd) has A =
- * [[0, I], [dqdd_dq, dqdd_dqd]] and B = [[0], [dqdd_dtau]].
+ * lower triangle, mirrored (exactly symmetric), the solves' substitutions one loop over
+ * columns; a state-space model x = (q, qd) has A = [[0, I], [dqdd_dq, dqdd_dqd]] and B =
+ * [[0], [dqdd_dtau]].
  *
  * Inputs:
  *   q[2]: joint coordinates: theta1 [rad], theta2 [rad].
@@ -889,7 +891,7 @@ void planar_2r_forward_dynamics_derivatives_f32(const float *q, const float *qd,
 void planar_2r_forward_dynamics_derivatives_packed_f32(const float *in, float *out);
 
 /* planar_2r_forward_dynamics_derivatives_f32 for n configurations; params: l1, l2, m1, m2, g, stride 0 or 5.
- * Uses 928 bytes of stack for its blocks of 8 configurations. */
+ * Calls planar_2r_forward_dynamics_derivatives_f32 once per configuration. */
 void planar_2r_forward_dynamics_derivatives_batch_f32(size_t n, const float *q, const float *qd, const float *tau, const float *params, size_t params_stride, float *dqdd_dq, float *dqdd_dqd, float *dqdd_dtau);
 
 /* planar_2r_tcp_force_f32: Force (wrench) at the TCP that produces a joint motion.
@@ -1058,7 +1060,7 @@ void planar_2r_potential_energy_batch_f32(size_t n, const float *q, const float 
  *   Gx[2]: 2; operational-space gravity force J^-T G (operational_space).
  *   k[1]: scalar; kinetic energy of all bodies (kinetic_energy) [J].
  *   u[1]: scalar; potential energy (potential_energy) [J].
- * Cost: 417 operations.
+ * Cost: 429 operations.
  */
 void planar_2r_combined_f32(const float *q, const float *qd, const float *qdd, const float *tau, float l1, float l2, float m1, float m2, float g, float *base_T_tcp, float *base_T_link1, float *base_T_link2, float *jacobian_J, float *jacobian_geometric_J, float *M, float *C, float *V, float *G, float *dG_dq, float *inverse_dynamics_tau, float *dtau_dq, float *dtau_dqd, float *dtau_dqdd, float *forward_dynamics_qdd, float *dqdd_dq, float *dqdd_dqd, float *dqdd_dtau, float *F, float *Mx, float *Vx, float *Gx, float *k, float *u);
 
@@ -1066,7 +1068,7 @@ void planar_2r_combined_f32(const float *q, const float *qd, const float *qdd, c
 void planar_2r_combined_packed_f32(const float *in, float *out);
 
 /* planar_2r_combined_f32 for n configurations; params: l1, l2, m1, m2, g, stride 0 or 5.
- * Uses 3168 bytes of stack for its blocks of 8 configurations. */
+ * Calls planar_2r_combined_f32 once per configuration. */
 void planar_2r_combined_batch_f32(size_t n, const float *q, const float *qd, const float *qdd, const float *tau, const float *params, size_t params_stride, float *base_T_tcp, float *base_T_link1, float *base_T_link2, float *jacobian_J, float *jacobian_geometric_J, float *M, float *C, float *V, float *G, float *dG_dq, float *inverse_dynamics_tau, float *dtau_dq, float *dtau_dqd, float *dtau_dqdd, float *forward_dynamics_qdd, float *dqdd_dq, float *dqdd_dqd, float *dqdd_dtau, float *F, float *Mx, float *Vx, float *Gx, float *k, float *u);
 
 #ifdef __cplusplus

@@ -563,8 +563,9 @@
    * to first order, qdd = M^-1 (tau - V - G - F_f) (seed eq. 8.34); by the implicit-
    * function theorem dqdd_dq = -M^-1 dtau_dq, dqdd_dqd = -M^-1 dtau_dqd at qdd and
    * dqdd_dtau = M^-1, by LDL^T solves (Carpentier and Mansard, RSS 2018), M^-1 from its
-   * lower triangle, mirrored (exactly symmetric); a state-space model x = (q, qd) has A =
-   * [[0, I], [dqdd_dq, dqdd_dqd]] and B = [[0], [dqdd_dtau]].
+   * lower triangle, mirrored (exactly symmetric), the solves' substitutions one loop over
+   * columns; a state-space model x = (q, qd) has A = [[0, I], [dqdd_dq, dqdd_dqd]] and B
+   * = [[0], [dqdd_dtau]].
    *
    * @param {number[]} q joint coordinates, 2 numbers: theta1 [rad], theta2 [rad].
    * @param {number[]} qd joint velocities, 2 numbers: theta1 [rad/s], theta2 [rad/s].
@@ -606,6 +607,8 @@
     const _x10 = 1.0/_x9;
     const _x14 = _x7 + _x8;
     const _x15 = _x10*_x14;
+    const _x16 = -_x14*_x15 + _x8;
+    const _x17 = 1.0/_x16;
     const _x2 = g*Math.cos(theta1);
     const _x3 = g*Math.sin(theta1);
     const _x5 = Math.sin(theta2);
@@ -616,14 +619,7 @@
     const _x13 = l1*m1;
     const _x37 = _x0*_x21 + l1*m2*_x5*_x5;
     const _x38 = _x13 + _x37;
-    const _x44 = -(_x2*_x36 - _x3*_x38);
-    const _x16 = -_x14*_x15 + _x8;
-    const _x17 = 1.0/_x16;
-    const _x41 = -_x1*_x5;
-    const _x42 = _x0*_x1;
-    const _x45 = -_x15*_x44 - (_x2*_x41 - _x3*_x42);
-    const _x46 = _x17*_x45;
-    const _x47 = -_x15*_x46 + _x10*_x44;
+    const _x44 = -(-_x3*_x38 + _x2*_x36);
     const _x4 = _x3 - l1*theta1_d*theta1_d;
     const _x11 = theta2_d + theta1_d;
     const _x12 = _x11*_x11;
@@ -640,29 +636,37 @@
     const _x33 = _x26 + _x27;
     const _x34 = m2*(_x0*_x28 - _x18);
     const _x39 = _x21*_x28 + l1*(m2*_x18 + _x1*_x33 + _x34);
-    const _x48 = -(_x0*_x35 - _x5*_x39);
-    const _x40 = -_x1*_x4;
-    const _x43 = _x1*_x28;
-    const _x49 = -_x15*_x48 - (_x0*_x40 - _x5*_x43);
-    const _x50 = _x17*_x49;
-    const _x51 = -_x15*_x50 + _x10*_x48;
+    const _x45 = -(-_x5*_x39 + _x0*_x35);
     const _x30 = 2.0*l1;
     const _x31 = _x30*theta1_d;
     const _x32 = _x1*_x5*_x11*_x30;
-    const _x52 = -(-_x32 - _x31*_x36);
-    const _x53 = -_x52*_x15 + _x31*_x41;
+    const _x46 = -(-_x31*_x36 - _x32);
+    const _x41 = -_x1*_x5;
+    const _x49 = _x31*_x41;
+    const _x42 = _x0*_x1;
+    const _x47 = -(-_x3*_x42 + _x2*_x41);
+    const _x40 = -_x1*_x4;
+    const _x43 = _x1*_x28;
+    const _x48 = -(-_x5*_x43 + _x0*_x40);
+    const _x50 = _x47 - _x15*_x44;
+    const _x51 = _x17*_x50;
+    const _x52 = _x10*_x44 - _x15*_x51;
+    const _x53 = _x48 - _x15*_x45;
     const _x54 = _x17*_x53;
-    const _x55 = -_x54*_x15 + _x10*_x52;
-    const _x56 = -_x32*_x15;
+    const _x55 = _x10*_x45 - _x15*_x54;
+    const _x56 = _x49 - _x15*_x46;
     const _x57 = _x17*_x56;
-    const _x58 = _x10*_x32 - _x57*_x15;
-    const _x59 = -_x15;
+    const _x58 = _x10*_x46 - _x15*_x57;
+    const _x59 = -_x15*_x32;
     const _x60 = _x17*_x59;
-    const _x61 = -_x60*_x15 + _x10;
+    const _x61 = _x10*_x32 - _x15*_x60;
+    const _x62 = -_x15;
+    const _x63 = _x17*_x62;
+    const _x64 = _x10 - _x15*_x63;
     return {
-      dqdd_dq: [[_x47, _x51], [_x46, _x50]],
-      dqdd_dqd: [[_x55, _x58], [_x54, _x57]],
-      dqdd_dtau: [[_x61, _x60], [_x60, _x17]],
+      dqdd_dq: [[_x52, _x55], [_x51, _x54]],
+      dqdd_dqd: [[_x58, _x61], [_x57, _x60]],
+      dqdd_dtau: [[_x64, _x63], [_x63, _x17]],
     };
   }
 
@@ -963,169 +967,177 @@
     const tau_theta2 = tau[1];
     const _x1 = Math.cos(theta2);
     const _x6 = Math.sin(theta2);
-    const _x10 = Math.sin(theta1);
-    const _x13 = Math.cos(theta1);
-    const _x51 = _x1*_x13 - _x6*_x10;
-    const _x46 = _x1*_x10;
-    const _x47 = _x6*_x13;
+    const _x11 = Math.sin(theta1);
+    const _x14 = Math.cos(theta1);
+    const _x51 = _x1*_x14 - _x6*_x11;
+    const _x46 = _x1*_x11;
+    const _x47 = _x6*_x14;
     const _x63 = -_x47 - _x46;
     const _x52 = l2*_x51;
-    const _x55 = l1*_x13;
+    const _x55 = l1*_x14;
     const _x58 = _x55 + _x52;
     const _x48 = _x47 + _x46;
     const _x49 = l2*_x48;
-    const _x53 = l1*_x10;
+    const _x53 = l1*_x11;
     const _x64 = _x53 + _x49;
     const _x50 = -_x49;
     const _x54 = -_x53;
     const _x61 = _x54 + _x50;
     const _x0 = l1*l1;
-    const _x2 = l2*m2;
-    const _x3 = l1*_x2;
+    const _x2 = l1*m2;
+    const _x3 = l2*_x2;
     const _x4 = _x1*_x3;
     const _x5 = l2*l2*m2;
     const _x34 = _x5 + _x4;
     const _x65 = _x3*_x6;
     const _x66 = _x65*theta1_d;
-    const _x73 = -_x65;
-    const _x24 = theta2_d + theta1_d;
-    const _x25 = _x24*_x24;
+    const _x75 = -_x65;
+    const _x10 = l2*m2;
+    const _x25 = theta2_d + theta1_d;
+    const _x26 = _x25*_x25;
     const _x7 = theta1_d*theta1_d;
     const _x8 = l1*_x7;
     const _x9 = m2*_x1;
-    const _x74 = _x8*_x9;
-    const _x75 = _x2*_x6*_x8;
-    const _x11 = g*_x10;
-    const _x12 = _x6*_x11;
-    const _x14 = g*_x13;
-    const _x26 = l1*m2;
+    const _x76 = _x8*_x9;
+    const _x77 = _x6*_x8*_x10;
+    const _x12 = g*_x11;
+    const _x13 = _x6*_x12;
+    const _x15 = g*_x14;
     const _x27 = l1*m1;
-    const _x59 = _x26 + _x27;
-    const _x67 = _x2*_x1;
-    const _x79 = -_x11;
-    const _x76 = _x6*_x14;
-    const _x80 = -_x2*_x76;
-    const _x77 = _x1*_x11;
-    const _x78 = -_x6;
-    const _x81 = _x2*_x14*_x78 - _x2*_x77;
-    const _x15 = theta1_dd + theta2_dd;
-    const _x17 = _x11 - _x8;
-    const _x16 = l1*theta1_dd;
-    const _x22 = _x16 + _x14;
+    const _x59 = _x2 + _x27;
+    const _x67 = _x1*_x10;
+    const _x81 = -_x12;
+    const _x78 = _x6*_x15;
+    const _x82 = -_x10*_x78;
+    const _x79 = _x1*_x12;
+    const _x80 = -_x6;
+    const _x83 = _x15*_x10*_x80 - _x10*_x79;
+    const _x16 = theta1_dd + theta2_dd;
+    const _x18 = _x12 - _x8;
+    const _x17 = l1*theta1_dd;
+    const _x23 = _x17 + _x15;
     const _x56 = m1*_x0;
     const _x57 = _x56*theta1_dd;
-    const _x82 = m2*(-_x6*_x17 + _x1*_x22);
-    const _x83 = _x5*_x15 + l2*_x82;
-    const _x19 = l1*_x1;
-    const _x20 = l2 + _x19;
-    const _x21 = m2*_x20;
-    const _x86 = m2*_x6*_x19 - _x6*_x21;
-    const _x87 = _x6*_x6*_x26 + _x1*_x21;
-    const _x88 = _x87 + _x27;
-    const _x23 = _x6*_x22;
-    const _x85 = -_x21*_x17 + l1*(m2*_x23 - _x2*_x25 + m2*(_x23 + _x1*_x17));
-    const _x18 = _x6*_x17;
-    const _x84 = m2*(-_x18 + _x1*_x22);
-    const _x90 = _x21*_x22 + l1*(m2*_x18 + _x2*_x15 + _x84);
-    const _x92 = -_x2*_x6;
-    const _x91 = -_x2*_x17;
-    const _x93 = _x2*_x22;
+    const _x84 = m2*(-_x6*_x18 + _x1*_x23);
+    const _x85 = _x5*_x16 + l2*_x84;
+    const _x20 = l1*_x1;
+    const _x21 = l2 + _x20;
+    const _x22 = m2*_x21;
+    const _x88 = _x2*_x1*_x6 - _x6*_x22;
+    const _x89 = _x2*_x6*_x6 + _x1*_x22;
+    const _x90 = _x89 + _x27;
+    const _x24 = _x6*_x23;
+    const _x87 = -_x22*_x18 + l1*(-_x26*_x10 + m2*_x24 + m2*(_x24 + _x1*_x18));
+    const _x19 = _x6*_x18;
+    const _x86 = m2*(-_x19 + _x1*_x23);
+    const _x92 = _x22*_x23 + l1*(m2*_x19 + _x10*_x16 + _x86);
+    const _x94 = -_x6*_x10;
+    const _x132 = -_x15*_x94 + _x12*_x67;
+    const _x93 = -_x10*_x18;
+    const _x95 = _x10*_x23;
     const _x28 = 2.0*l1;
-    const _x45 = _x28*theta1_d;
-    const _x94 = -_x2*_x6*_x24*_x28;
-    const _x89 = _x2*_x19 + _x5;
+    const _x74 = _x28*theta1_d;
+    const _x134 = _x74*_x94;
+    const _x96 = -_x6*_x25*_x28*_x10;
+    const _x91 = _x20*_x10 + _x5;
     const _x68 = l1*_x67 + _x5;
     const _x29 = m1*_x0 + 2.0*_x4 + m2*_x0 + _x5;
     const _x30 = 1.0/_x29;
     const _x35 = _x30*_x34;
-    const _x31 = -_x6*_x17 + _x1*_x14;
-    const _x32 = _x2*_x31;
+    const _x31 = -_x6*_x18 + _x1*_x15;
+    const _x32 = _x10*_x31;
     const _x33 = -_x32;
-    const _x38 = -_x27*_x14 + tau_theta1 - l1*(m2*_x1*_x31 + _x6*(-_x2*_x25 + (_x1*_x17 + _x6*_x14)*m2)) + _x33;
+    const _x40 = -_x27*_x15 + tau_theta1 - l1*(m2*_x1*_x31 + _x6*(-_x26*_x10 + (_x1*_x18 + _x6*_x15)*m2)) + _x33;
     const _x36 = -_x34*_x35 + _x5;
-    const _x39 = -_x38*_x35 + _x33 + tau_theta2;
-    const _x95 = _x39/_x36;
-    const _x96 = -_x35*_x95 + _x30*_x38;
-    const _x102 = -_x14*_x86 + _x11*_x88;
-    const _x37 = 1.0/_x36;
-    const _x103 = -_x14*_x92 + _x11*_x67 - _x35*_x102;
-    const _x104 = _x37*_x103;
-    const _x105 = -_x35*_x104 + _x30*_x102;
-    const _x40 = _x37*_x39;
-    const _x41 = -_x35*_x40 + _x30*_x38;
-    const _x42 = l1*_x41 + _x14;
-    const _x43 = _x6*_x42;
-    const _x99 = -_x21*_x17 + l1*(m2*_x43 - _x2*_x25 + m2*(_x1*_x17 + _x43));
-    const _x97 = _x40 + _x41;
-    const _x98 = m2*(-_x18 + _x1*_x42);
-    const _x100 = _x21*_x42 + l1*(m2*_x18 + _x2*_x97 + _x98);
-    const _x106 = _x6*_x100 - _x1*_x99;
-    const _x101 = _x2*_x42;
-    const _x107 = -_x1*_x91 - _x35*_x106 + _x6*_x101;
-    const _x108 = _x37*_x107;
-    const _x109 = -_x35*_x108 + _x30*_x106;
-    const _x44 = _x2*_x6*_x24*_x28;
-    const _x110 = _x44 + _x45*_x86;
-    const _x111 = _x45*_x92 - _x35*_x110;
-    const _x112 = _x37*_x111;
-    const _x113 = -_x35*_x112 + _x30*_x110;
-    const _x114 = -_x44*_x35;
-    const _x115 = _x37*_x114;
-    const _x116 = -_x35*_x115 + _x44*_x30;
-    const _x117 = -_x35;
-    const _x118 = _x37*_x117;
-    const _x119 = -_x35*_x118 + _x30;
-    const _x120 = _x57 + _x27*_x14 + _x83 + l1*(_x6*(-_x2*_x25 + m2*(_x6*_x22 + _x1*_x17)) + _x1*(_x2*_x15 + _x82));
-    const _x121 = -_x58;
-    const _x122 = _x52*_x61 + _x50*_x121;
-    const _x123 = 1.0/_x122;
-    const _x124 = _x123*(_x52*_x120 + _x83*_x121);
+    const _x41 = -_x40*_x35 + _x33 + tau_theta2;
+    const _x97 = _x41/_x36;
+    const _x98 = -_x35*_x97 + _x30*_x40;
+    const _x107 = _x57 + _x27*_x15 + l1*(_x6*(-_x26*_x10 + m2*(_x6*_x23 + _x1*_x18)) + _x1*(_x10*_x16 + _x84)) + _x85;
+    const _x108 = -_x58;
+    const _x109 = _x52*_x61 + _x50*_x108;
+    const _x110 = 1.0/_x109;
+    const _x111 = _x110*(_x52*_x107 + _x85*_x108);
     const _x60 = -_x50;
-    const _x125 = _x123*(_x60*_x120 + _x83*_x61);
+    const _x112 = _x110*(_x60*_x107 + _x85*_x61);
     const _x62 = _x52*_x61;
-    const _x129 = _x62 + _x50*_x121;
-    const _x130 = 1.0/_x129;
-    const _x131 = _x130*(_x52*_x29 + _x34*_x121);
-    const _x132 = _x130*(_x52*_x34 + _x5*_x121);
-    const _x139 = _x130*(_x121*_x132 + _x52*_x131);
-    const _x140 = _x130*(_x60*_x131 + _x61*_x132);
-    const _x135 = _x130*(_x60*_x29 + _x34*_x61);
-    const _x136 = _x130*(_x60*_x34 + _x5*_x61);
-    const _x141 = _x130*(_x60*_x135 + _x61*_x136);
+    const _x116 = _x62 + _x50*_x108;
+    const _x117 = 1.0/_x116;
+    const _x118 = _x117*(_x52*_x29 + _x34*_x108);
+    const _x119 = _x117*(_x52*_x34 + _x5*_x108);
+    const _x126 = _x117*(_x119*_x108 + _x52*_x118);
+    const _x127 = _x117*(_x60*_x118 + _x119*_x61);
+    const _x122 = _x117*(_x60*_x29 + _x34*_x61);
+    const _x123 = _x117*(_x60*_x34 + _x5*_x61);
+    const _x128 = _x117*(_x60*_x122 + _x123*_x61);
     const _x69 = theta2_d*theta2_d;
     const _x70 = 2.0*theta1_d*theta2_d;
     const _x71 = -_x49*_x70 - _x49*_x69 + _x7*_x61;
     const _x72 = -_x52*_x70 - _x52*_x69 + (-_x55 - _x52)*_x7;
-    const _x126 = l1*(_x6*(-_x2*_x25 - _x74) + _x6*_x74) + _x75;
-    const _x133 = _x130*(_x52*_x126 + _x75*_x121);
-    const _x137 = _x130*(_x60*_x126 + _x75*_x61);
-    const _x127 = -_x2*_x12 + _x14*(_x2*_x1 + _x59);
-    const _x128 = _x2*(_x1*_x14 - _x12);
-    const _x134 = _x130*(_x128*_x121 + _x52*_x127);
-    const _x138 = _x130*(_x60*_x127 + _x128*_x61);
+    const _x113 = l1*(_x6*(-_x26*_x10 - _x76) + _x6*_x76) + _x77;
+    const _x120 = _x117*(_x52*_x113 + _x77*_x108);
+    const _x124 = _x117*(_x60*_x113 + _x77*_x61);
+    const _x114 = -_x13*_x10 + _x15*(_x1*_x10 + _x59);
+    const _x115 = _x10*(_x1*_x15 - _x13);
+    const _x121 = _x117*(_x115*_x108 + _x52*_x114);
+    const _x125 = _x117*(_x60*_x114 + _x115*_x61);
+    const _x37 = 1.0/_x36;
+    const _x38 = l1*_x1 + l2;
+    const _x39 = m2*_x38;
+    const _x102 = _x2*_x1*_x6 - _x6*_x39;
+    const _x103 = _x2*_x6*_x6 + _x1*_x39;
+    const _x104 = _x103 + _x27;
+    const _x129 = -_x15*_x102 + _x12*_x104;
+    const _x42 = _x37*_x41;
+    const _x43 = -_x35*_x42 + _x30*_x40;
+    const _x44 = l1*_x43 + _x15;
+    const _x45 = _x6*_x44;
+    const _x101 = -_x39*_x18 + l1*(m2*_x45 - _x26*_x10 + m2*(_x1*_x18 + _x45));
+    const _x99 = _x42 + _x43;
+    const _x100 = m2*(-_x19 + _x1*_x44);
+    const _x105 = _x39*_x44 + l1*(m2*_x19 + _x10*_x99 + _x100);
+    const _x130 = -_x1*_x101 + _x6*_x105;
+    const _x73 = _x6*_x25*_x28*_x10;
+    const _x131 = _x73 + _x74*_x102;
+    const _x106 = _x10*_x44;
+    const _x133 = -_x1*_x93 + _x6*_x106;
+    const _x135 = _x132 - _x129*_x35;
+    const _x136 = _x135*_x37;
+    const _x137 = _x129*_x30 - _x136*_x35;
+    const _x138 = _x133 - _x130*_x35;
+    const _x139 = _x138*_x37;
+    const _x140 = _x130*_x30 - _x139*_x35;
+    const _x141 = _x134 - _x131*_x35;
+    const _x142 = _x141*_x37;
+    const _x143 = _x131*_x30 - _x142*_x35;
+    const _x144 = -_x35*_x73;
+    const _x145 = _x144*_x37;
+    const _x146 = _x30*_x73 - _x145*_x35;
+    const _x147 = -_x35;
+    const _x148 = _x147*_x37;
+    const _x149 = _x30 - _x148*_x35;
     return {
       base_T_tcp: [[_x51, _x63, 0.0, _x58], [_x48, _x51, 0.0, _x64], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]],
-      base_T_link1: [[_x13, -_x10, 0.0, _x55], [_x10, _x13, 0.0, _x53], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]],
+      base_T_link1: [[_x14, -_x11, 0.0, _x55], [_x11, _x14, 0.0, _x53], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]],
       base_T_link2: [[_x51, _x63, 0.0, _x58], [_x48, _x51, 0.0, _x64], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]],
       jacobian_J: [[_x61, _x50], [_x58, _x52]],
       jacobian_geometric_J: [[_x61, _x50], [_x58, _x52], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0], [1.0, 1.0]],
       M: [[m1*_x0 + 2.0*_x4 + m2*_x0 + _x5, _x34], [_x34, _x5]],
-      C: [[-_x65*theta2_d, -_x66 + _x73*theta2_d], [_x66, 0.0]],
-      V: [l1*(_x6*(-_x2*_x25 - _x74) + _x6*_x74) + _x75, _x75],
-      G: [-_x2*_x12 + _x14*(_x2*_x1 + _x59), _x2*(_x1*_x14 - _x12)],
-      dG_dq: [[_x79*(_x67 + _x59) + _x80, _x81], [_x67*_x79 + _x80, _x81]],
-      inverse_dynamics_tau: [_x57 + _x27*_x14 + _x83 + l1*(_x6*(-_x2*_x25 + m2*(_x6*_x22 + _x1*_x17)) + _x1*(_x2*_x15 + _x82)), _x83],
-      dtau_dq: [[-_x11*_x88 + _x14*_x86, -_x6*_x90 + _x1*_x85], [-_x11*_x67 + _x14*_x92, -_x6*_x93 + _x1*_x91]],
-      dtau_dqd: [[-_x45*_x86 + _x94, _x94], [-_x45*_x92, 0.0]],
-      dtau_dqdd: [[_x56 + l1*_x87 + _x89, _x68], [_x68, _x5]],
-      forward_dynamics_qdd: [_x96, _x95],
-      dqdd_dq: [[_x105, _x109], [_x104, _x108]],
-      dqdd_dqd: [[_x113, _x116], [_x112, _x115]],
-      dqdd_dtau: [[_x119, _x118], [_x118, _x37]],
-      F: [_x124, _x125],
-      Mx: [[_x139, _x140], [_x140, _x141]],
-      Vx: [-_x71*_x140 - _x72*_x139 + _x133, -_x71*_x141 - _x72*_x140 + _x137],
-      Gx: [_x134, _x138],
+      C: [[-_x65*theta2_d, -_x66 + _x75*theta2_d], [_x66, 0.0]],
+      V: [l1*(_x6*(-_x26*_x10 - _x76) + _x6*_x76) + _x77, _x77],
+      G: [-_x13*_x10 + _x15*(_x1*_x10 + _x59), _x10*(_x1*_x15 - _x13)],
+      dG_dq: [[_x81*(_x67 + _x59) + _x82, _x83], [_x67*_x81 + _x82, _x83]],
+      inverse_dynamics_tau: [_x57 + _x27*_x15 + l1*(_x6*(-_x26*_x10 + m2*(_x6*_x23 + _x1*_x18)) + _x1*(_x10*_x16 + _x84)) + _x85, _x85],
+      dtau_dq: [[-_x12*_x90 + _x15*_x88, -_x6*_x92 + _x1*_x87], [-_x12*_x67 + _x15*_x94, -_x6*_x95 + _x1*_x93]],
+      dtau_dqd: [[-_x74*_x88 + _x96, _x96], [-_x74*_x94, 0.0]],
+      dtau_dqdd: [[_x56 + l1*_x89 + _x91, _x68], [_x68, _x5]],
+      forward_dynamics_qdd: [_x98, _x97],
+      dqdd_dq: [[_x137, _x140], [_x136, _x139]],
+      dqdd_dqd: [[_x143, _x146], [_x142, _x145]],
+      dqdd_dtau: [[_x149, _x148], [_x148, _x37]],
+      F: [_x111, _x112],
+      Mx: [[_x126, _x127], [_x127, _x128]],
+      Vx: [-_x71*_x127 + _x120 - _x72*_x126, -_x71*_x128 - _x72*_x127 + _x124],
+      Gx: [_x121, _x125],
       k: 0.5*(_x34*theta1_d + _x5*theta2_d)*theta2_d + 0.5*((m1*_x0 + 2.0*_x4 + m2*_x0 + _x5)*theta1_d + _x34*theta2_d)*theta1_d,
       u: (_x53 + _x49)*g*m2 + g*m1*_x53,
     };

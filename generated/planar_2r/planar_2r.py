@@ -724,8 +724,9 @@ def forward_dynamics_derivatives(q, qd, tau, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, 
     to first order, qdd = M^-1 (tau - V - G - F_f) (seed eq. 8.34); by the implicit-
     function theorem dqdd_dq = -M^-1 dtau_dq, dqdd_dqd = -M^-1 dtau_dqd at qdd and
     dqdd_dtau = M^-1, by LDL^T solves (Carpentier and Mansard, RSS 2018), M^-1 from its
-    lower triangle, mirrored (exactly symmetric); a state-space model x = (q, qd) has A
-    = [[0, I], [dqdd_dq, dqdd_dqd]] and B = [[0], [dqdd_dtau]].
+    lower triangle, mirrored (exactly symmetric), the solves' substitutions one loop
+    over columns; a state-space model x = (q, qd) has A = [[0, I], [dqdd_dq, dqdd_dqd]]
+    and B = [[0], [dqdd_dtau]].
 
     Args:
         q: joint coordinates, shape (..., 2): theta1 [rad], theta2 [rad].
@@ -776,6 +777,11 @@ def forward_dynamics_derivatives(q, qd, tau, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, 
     _x14 = _x7 + _x8
     del _x7
     _x15 = _x10*_x14
+    _x16 = -_x14*_x15 + _x8
+    del _x8, _x14
+    _x17 = 1.0/_x16
+    _out_dqdd_dtau[..., 1, 1] = _x17
+    del _x16
     _x2 = g*numpy.cos(theta1)
     _x3 = g*numpy.sin(theta1)
     _x5 = numpy.sin(theta2)
@@ -789,25 +795,9 @@ def forward_dynamics_derivatives(q, qd, tau, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, 
     _x37 = _x0*_x21 + l1*m2*_x5*_x5
     _x38 = _x13 + _x37
     del _x37
-    _x44 = -(_x2*_x36 - _x3*_x38)
+    _x44 = -(-_x3*_x38 + _x2*_x36)
     del _x38
-    _x16 = -_x14*_x15 + _x8
-    del _x8, _x14
-    _x17 = 1.0/_x16
-    _out_dqdd_dtau[..., 1, 1] = _x17
-    del _x16
-    _x41 = -_x1*_x5
-    _x42 = _x0*_x1
-    _x45 = -_x15*_x44 - (_x2*_x41 - _x3*_x42)
-    del _x42
-    _x46 = _x17*_x45
-    _out_dqdd_dq[..., 1, 0] = _x46
-    del _x45
-    _x47 = -_x15*_x46 + _x10*_x44
-    _out_dqdd_dq[..., 0, 0] = _x47
-    del _x44, _x46, _x47
     _x4 = _x3 - l1*theta1_d*theta1_d
-    del _x3
     _x11 = theta2_d + theta1_d
     _x12 = _x11*_x11
     _x22 = -_x4*_x5 + _x0*_x2
@@ -821,7 +811,6 @@ def forward_dynamics_derivatives(q, qd, tau, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, 
     _x27 = -_x15*_x26 + _x10*_x24
     del _x24
     _x28 = l1*_x27 + _x2
-    del _x2
     _x29 = _x5*_x28
     _x35 = -_x4*_x21 + l1*(-_x1*_x12 + m2*_x29 + m2*(_x29 + _x0*_x4))
     del _x12, _x29
@@ -831,49 +820,65 @@ def forward_dynamics_derivatives(q, qd, tau, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, 
     _x34 = m2*(_x0*_x28 - _x18)
     _x39 = _x21*_x28 + l1*(m2*_x18 + _x1*_x33 + _x34)
     del _x21, _x18, _x33, _x34
-    _x48 = -(_x0*_x35 - _x5*_x39)
+    _x45 = -(-_x5*_x39 + _x0*_x35)
     del _x35, _x39
-    _x40 = -_x1*_x4
-    del _x4
-    _x43 = _x1*_x28
-    del _x28
-    _x49 = -_x15*_x48 - (_x0*_x40 - _x5*_x43)
-    del _x0, _x40, _x43
-    _x50 = _x17*_x49
-    _out_dqdd_dq[..., 1, 1] = _x50
-    del _x49
-    _x51 = -_x15*_x50 + _x10*_x48
-    _out_dqdd_dq[..., 0, 1] = _x51
-    del _x48, _x50, _x51
     _x30 = 2.0*l1
     _x31 = _x30*theta1_d
     _x32 = _x1*_x5*_x11*_x30
-    del _x1, _x5, _x11, _x30
-    _x52 = -(-_x32 - _x31*_x36)
+    del _x11, _x30
+    _x46 = -(-_x31*_x36 - _x32)
     del _x36
-    _x53 = -_x52*_x15 + _x31*_x41
-    del _x41, _x31
+    _x41 = -_x1*_x5
+    _x49 = _x31*_x41
+    del _x31
+    _x42 = _x0*_x1
+    _x47 = -(-_x3*_x42 + _x2*_x41)
+    del _x2, _x3, _x41, _x42
+    _x40 = -_x1*_x4
+    del _x4
+    _x43 = _x1*_x28
+    del _x1, _x28
+    _x48 = -(-_x5*_x43 + _x0*_x40)
+    del _x0, _x5, _x40, _x43
+    _x50 = _x47 - _x15*_x44
+    del _x47
+    _x51 = _x17*_x50
+    _out_dqdd_dq[..., 1, 0] = _x51
+    del _x50
+    _x52 = _x10*_x44 - _x15*_x51
+    _out_dqdd_dq[..., 0, 0] = _x52
+    del _x44, _x51, _x52
+    _x53 = _x48 - _x15*_x45
+    del _x48
     _x54 = _x17*_x53
-    _out_dqdd_dqd[..., 1, 0] = _x54
+    _out_dqdd_dq[..., 1, 1] = _x54
     del _x53
-    _x55 = -_x54*_x15 + _x10*_x52
-    _out_dqdd_dqd[..., 0, 0] = _x55
-    del _x52, _x54, _x55
-    _x56 = -_x32*_x15
+    _x55 = _x10*_x45 - _x15*_x54
+    _out_dqdd_dq[..., 0, 1] = _x55
+    del _x45, _x54, _x55
+    _x56 = _x49 - _x15*_x46
+    del _x49
     _x57 = _x17*_x56
-    _out_dqdd_dqd[..., 1, 1] = _x57
+    _out_dqdd_dqd[..., 1, 0] = _x57
     del _x56
-    _x58 = _x10*_x32 - _x57*_x15
-    _out_dqdd_dqd[..., 0, 1] = _x58
-    del _x32, _x57, _x58
-    _x59 = -_x15
+    _x58 = _x10*_x46 - _x15*_x57
+    _out_dqdd_dqd[..., 0, 0] = _x58
+    del _x46, _x57, _x58
+    _x59 = -_x15*_x32
     _x60 = _x17*_x59
-    _out_dqdd_dtau[..., 0, 1] = _x60
-    _out_dqdd_dtau[..., 1, 0] = _x60
-    del _x17, _x59
-    _x61 = -_x60*_x15 + _x10
-    _out_dqdd_dtau[..., 0, 0] = _x61
-    del _x10, _x15, _x60, _x61
+    _out_dqdd_dqd[..., 1, 1] = _x60
+    del _x59
+    _x61 = _x10*_x32 - _x15*_x60
+    _out_dqdd_dqd[..., 0, 1] = _x61
+    del _x32, _x60, _x61
+    _x62 = -_x15
+    _x63 = _x17*_x62
+    _out_dqdd_dtau[..., 0, 1] = _x63
+    _out_dqdd_dtau[..., 1, 0] = _x63
+    del _x17, _x62
+    _x64 = _x10 - _x15*_x63
+    _out_dqdd_dtau[..., 0, 0] = _x64
+    del _x10, _x15, _x63, _x64
     return ForwardDynamicsDerivativesResult(_out_dqdd_dq, _out_dqdd_dqd, _out_dqdd_dtau)
 
 
@@ -1263,19 +1268,19 @@ def combined(q, qd, qdd, tau, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
     _out_jacobian_geometric_J[..., 5, 1] = 1.0
     _x1 = numpy.cos(theta2)
     _x6 = numpy.sin(theta2)
-    _x10 = numpy.sin(theta1)
-    _out_base_T_link1[..., 0, 1] = -_x10
-    _out_base_T_link1[..., 1, 0] = _x10
-    _x13 = numpy.cos(theta1)
-    _out_base_T_link1[..., 0, 0] = _x13
-    _out_base_T_link1[..., 1, 1] = _x13
-    _x51 = _x1*_x13 - _x6*_x10
+    _x11 = numpy.sin(theta1)
+    _out_base_T_link1[..., 0, 1] = -_x11
+    _out_base_T_link1[..., 1, 0] = _x11
+    _x14 = numpy.cos(theta1)
+    _out_base_T_link1[..., 0, 0] = _x14
+    _out_base_T_link1[..., 1, 1] = _x14
+    _x51 = _x1*_x14 - _x6*_x11
     _out_base_T_tcp[..., 0, 0] = _x51
     _out_base_T_tcp[..., 1, 1] = _x51
     _out_base_T_link2[..., 0, 0] = _x51
     _out_base_T_link2[..., 1, 1] = _x51
-    _x46 = _x1*_x10
-    _x47 = _x6*_x13
+    _x46 = _x1*_x11
+    _x47 = _x6*_x14
     _x63 = -_x47 - _x46
     _out_base_T_tcp[..., 0, 1] = _x63
     _out_base_T_link2[..., 0, 1] = _x63
@@ -1284,7 +1289,7 @@ def combined(q, qd, qdd, tau, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
     _out_jacobian_J[..., 1, 1] = _x52
     _out_jacobian_geometric_J[..., 1, 1] = _x52
     del _x51
-    _x55 = l1*_x13
+    _x55 = l1*_x14
     _out_base_T_link1[..., 0, 3] = _x55
     _x58 = _x55 + _x52
     _out_base_T_tcp[..., 0, 3] = _x58
@@ -1297,7 +1302,7 @@ def combined(q, qd, qdd, tau, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
     del _x46, _x47
     _x49 = l2*_x48
     del _x48
-    _x53 = l1*_x10
+    _x53 = l1*_x11
     _out_base_T_link1[..., 1, 3] = _x53
     _out_u[...] = (_x53 + _x49)*g*m2 + g*m1*_x53
     _x64 = _x53 + _x49
@@ -1314,8 +1319,8 @@ def combined(q, qd, qdd, tau, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
     _out_jacobian_geometric_J[..., 0, 0] = _x61
     del _x54
     _x0 = l1*l1
-    _x2 = l2*m2
-    _x3 = l1*_x2
+    _x2 = l1*m2
+    _x3 = l2*_x2
     _x4 = _x1*_x3
     _x5 = l2*l2*m2
     _out_M[..., 0, 0] = m1*_x0 + 2.0*_x4 + m2*_x0 + _x5
@@ -1330,230 +1335,244 @@ def combined(q, qd, qdd, tau, *, l1=0.1, l2=0.1, m1=0.1, m2=0.1, g=9.81):
     del _x3
     _x66 = _x65*theta1_d
     _out_C[..., 1, 0] = _x66
-    _x73 = -_x65
-    _out_C[..., 0, 1] = -_x66 + _x73*theta2_d
-    del _x65, _x66, _x73
-    _x24 = theta2_d + theta1_d
-    _x25 = _x24*_x24
+    _x75 = -_x65
+    _out_C[..., 0, 1] = -_x66 + _x75*theta2_d
+    del _x65, _x66, _x75
+    _x10 = l2*m2
+    _x25 = theta2_d + theta1_d
+    _x26 = _x25*_x25
     _x7 = theta1_d*theta1_d
     _x8 = l1*_x7
     _x9 = m2*_x1
-    _x74 = _x8*_x9
+    _x76 = _x8*_x9
     del _x9
-    _x75 = _x2*_x6*_x8
-    _out_V[..., 0] = l1*(_x6*(-_x2*_x25 - _x74) + _x6*_x74) + _x75
-    _out_V[..., 1] = _x75
-    _x11 = g*_x10
-    del _x10
-    _x12 = _x6*_x11
-    _x14 = g*_x13
-    _out_G[..., 1] = _x2*(_x1*_x14 - _x12)
-    del _x13
-    _x26 = l1*m2
+    _x77 = _x6*_x8*_x10
+    _out_V[..., 0] = l1*(_x6*(-_x26*_x10 - _x76) + _x6*_x76) + _x77
+    _out_V[..., 1] = _x77
+    _x12 = g*_x11
+    del _x11
+    _x13 = _x6*_x12
+    _x15 = g*_x14
+    _out_G[..., 1] = _x10*(_x1*_x15 - _x13)
+    del _x14
     _x27 = l1*m1
-    _x59 = _x26 + _x27
-    _out_G[..., 0] = -_x2*_x12 + _x14*(_x2*_x1 + _x59)
-    _x67 = _x2*_x1
-    _x79 = -_x11
-    _x76 = _x6*_x14
-    _x80 = -_x2*_x76
-    _out_dG_dq[..., 0, 0] = _x79*(_x67 + _x59) + _x80
-    _out_dG_dq[..., 1, 0] = _x67*_x79 + _x80
-    del _x79, _x76, _x80
-    _x77 = _x1*_x11
-    _x78 = -_x6
-    _x81 = _x2*_x14*_x78 - _x2*_x77
-    _out_dG_dq[..., 0, 1] = _x81
-    _out_dG_dq[..., 1, 1] = _x81
-    del _x77, _x78, _x81
-    _x15 = theta1_dd + theta2_dd
-    _x17 = _x11 - _x8
+    _x59 = _x2 + _x27
+    _out_G[..., 0] = -_x13*_x10 + _x15*(_x1*_x10 + _x59)
+    _x67 = _x1*_x10
+    _x81 = -_x12
+    _x78 = _x6*_x15
+    _x82 = -_x10*_x78
+    _out_dG_dq[..., 0, 0] = _x81*(_x67 + _x59) + _x82
+    _out_dG_dq[..., 1, 0] = _x67*_x81 + _x82
+    del _x81, _x78, _x82
+    _x79 = _x1*_x12
+    _x80 = -_x6
+    _x83 = _x15*_x10*_x80 - _x10*_x79
+    _out_dG_dq[..., 0, 1] = _x83
+    _out_dG_dq[..., 1, 1] = _x83
+    del _x79, _x80, _x83
+    _x16 = theta1_dd + theta2_dd
+    _x18 = _x12 - _x8
     del _x8
-    _x16 = l1*theta1_dd
-    _x22 = _x16 + _x14
-    del _x16
+    _x17 = l1*theta1_dd
+    _x23 = _x17 + _x15
+    del _x17
     _x56 = m1*_x0
     _x57 = _x56*theta1_dd
-    _x82 = m2*(-_x6*_x17 + _x1*_x22)
-    _x83 = _x5*_x15 + l2*_x82
-    _out_inverse_dynamics_tau[..., 0] = _x57 + _x27*_x14 + _x83 + l1*(_x6*(-_x2*_x25 + m2*(_x6*_x22 + _x1*_x17)) + _x1*(_x2*_x15 + _x82))
-    _out_inverse_dynamics_tau[..., 1] = _x83
-    _x19 = l1*_x1
-    _x20 = l2 + _x19
-    _x21 = m2*_x20
-    del _x20
-    _x86 = m2*_x6*_x19 - _x6*_x21
-    _x87 = _x6*_x6*_x26 + _x1*_x21
-    del _x26
-    _x88 = _x87 + _x27
-    _out_dtau_dq[..., 0, 0] = -_x11*_x88 + _x14*_x86
-    _x23 = _x6*_x22
-    _x85 = -_x21*_x17 + l1*(m2*_x23 - _x2*_x25 + m2*(_x23 + _x1*_x17))
-    del _x23
-    _x18 = _x6*_x17
-    _x84 = m2*(-_x18 + _x1*_x22)
-    _x90 = _x21*_x22 + l1*(m2*_x18 + _x2*_x15 + _x84)
-    _out_dtau_dq[..., 0, 1] = -_x6*_x90 + _x1*_x85
-    del _x85, _x84, _x90
-    _x92 = -_x2*_x6
-    _out_dtau_dq[..., 1, 0] = -_x11*_x67 + _x14*_x92
-    _x91 = -_x2*_x17
-    _x93 = _x2*_x22
-    _out_dtau_dq[..., 1, 1] = -_x6*_x93 + _x1*_x91
-    del _x93
+    _x84 = m2*(-_x6*_x18 + _x1*_x23)
+    _x85 = _x5*_x16 + l2*_x84
+    _out_inverse_dynamics_tau[..., 0] = _x57 + _x27*_x15 + l1*(_x6*(-_x26*_x10 + m2*(_x6*_x23 + _x1*_x18)) + _x1*(_x10*_x16 + _x84)) + _x85
+    _out_inverse_dynamics_tau[..., 1] = _x85
+    _x20 = l1*_x1
+    _x21 = l2 + _x20
+    _x22 = m2*_x21
+    del _x21
+    _x88 = _x2*_x1*_x6 - _x6*_x22
+    _x89 = _x2*_x6*_x6 + _x1*_x22
+    _x90 = _x89 + _x27
+    _out_dtau_dq[..., 0, 0] = -_x12*_x90 + _x15*_x88
+    del _x90
+    _x24 = _x6*_x23
+    _x87 = -_x22*_x18 + l1*(-_x26*_x10 + m2*_x24 + m2*(_x24 + _x1*_x18))
+    del _x24
+    _x19 = _x6*_x18
+    _x86 = m2*(-_x19 + _x1*_x23)
+    _x92 = _x22*_x23 + l1*(m2*_x19 + _x10*_x16 + _x86)
+    _out_dtau_dq[..., 0, 1] = -_x6*_x92 + _x1*_x87
+    del _x22, _x87, _x86, _x92
+    _x94 = -_x6*_x10
+    _out_dtau_dq[..., 1, 0] = -_x12*_x67 + _x15*_x94
+    _x132 = -_x15*_x94 + _x12*_x67
+    _x93 = -_x10*_x18
+    _x95 = _x10*_x23
+    _out_dtau_dq[..., 1, 1] = -_x6*_x95 + _x1*_x93
+    del _x95
     _x28 = 2.0*l1
-    _x45 = _x28*theta1_d
-    _out_dtau_dqd[..., 1, 0] = -_x45*_x92
-    _x94 = -_x2*_x6*_x24*_x28
-    _out_dtau_dqd[..., 0, 0] = -_x45*_x86 + _x94
-    _out_dtau_dqd[..., 0, 1] = _x94
+    _x74 = _x28*theta1_d
+    _out_dtau_dqd[..., 1, 0] = -_x74*_x94
+    _x134 = _x74*_x94
     del _x94
-    _x89 = _x2*_x19 + _x5
-    _out_dtau_dqdd[..., 0, 0] = _x56 + l1*_x87 + _x89
-    del _x56, _x19, _x87, _x89
+    _x96 = -_x6*_x25*_x28*_x10
+    _out_dtau_dqd[..., 0, 0] = -_x74*_x88 + _x96
+    _out_dtau_dqd[..., 0, 1] = _x96
+    del _x88, _x96
+    _x91 = _x20*_x10 + _x5
+    _out_dtau_dqdd[..., 0, 0] = _x56 + l1*_x89 + _x91
+    del _x56, _x20, _x89, _x91
     _x68 = l1*_x67 + _x5
     _out_dtau_dqdd[..., 0, 1] = _x68
     _out_dtau_dqdd[..., 1, 0] = _x68
-    del _x68
+    del _x67, _x68
     _x29 = m1*_x0 + 2.0*_x4 + m2*_x0 + _x5
     del _x0, _x4
     _x30 = 1.0/_x29
     _x35 = _x30*_x34
-    _x31 = -_x6*_x17 + _x1*_x14
-    _x32 = _x2*_x31
+    _x31 = -_x6*_x18 + _x1*_x15
+    _x32 = _x10*_x31
     _x33 = -_x32
     del _x32
-    _x38 = -_x27*_x14 + tau_theta1 - l1*(m2*_x1*_x31 + _x6*(-_x2*_x25 + (_x1*_x17 + _x6*_x14)*m2)) + _x33
+    _x40 = -_x27*_x15 + tau_theta1 - l1*(m2*_x1*_x31 + _x6*(-_x26*_x10 + (_x1*_x18 + _x6*_x15)*m2)) + _x33
     del _x31
     _x36 = -_x34*_x35 + _x5
-    _x39 = -_x38*_x35 + _x33 + tau_theta2
+    _x41 = -_x40*_x35 + _x33 + tau_theta2
     del _x33
-    _x95 = _x39/_x36
-    _out_forward_dynamics_qdd[..., 1] = _x95
-    _x96 = -_x35*_x95 + _x30*_x38
-    _out_forward_dynamics_qdd[..., 0] = _x96
-    del _x95, _x96
-    _x102 = -_x14*_x86 + _x11*_x88
-    del _x88
-    _x37 = 1.0/_x36
-    _out_dqdd_dtau[..., 1, 1] = _x37
-    del _x36
-    _x103 = -_x14*_x92 + _x11*_x67 - _x35*_x102
-    del _x11, _x67
-    _x104 = _x37*_x103
-    _out_dqdd_dq[..., 1, 0] = _x104
-    del _x103
-    _x105 = -_x35*_x104 + _x30*_x102
-    _out_dqdd_dq[..., 0, 0] = _x105
-    del _x102, _x104, _x105
-    _x40 = _x37*_x39
-    del _x39
-    _x41 = -_x35*_x40 + _x30*_x38
-    del _x38
-    _x42 = l1*_x41 + _x14
-    _x43 = _x6*_x42
-    _x99 = -_x21*_x17 + l1*(m2*_x43 - _x2*_x25 + m2*(_x1*_x17 + _x43))
-    del _x43
-    _x97 = _x40 + _x41
-    del _x40, _x41
-    _x98 = m2*(-_x18 + _x1*_x42)
-    _x100 = _x21*_x42 + l1*(m2*_x18 + _x2*_x97 + _x98)
-    del _x21, _x18, _x97, _x98
-    _x106 = _x6*_x100 - _x1*_x99
-    del _x99, _x100
-    _x101 = _x2*_x42
-    del _x42
-    _x107 = -_x1*_x91 - _x35*_x106 + _x6*_x101
-    del _x91, _x101
-    _x108 = _x37*_x107
-    _out_dqdd_dq[..., 1, 1] = _x108
-    del _x107
-    _x109 = -_x35*_x108 + _x30*_x106
-    _out_dqdd_dq[..., 0, 1] = _x109
-    del _x106, _x108, _x109
-    _x44 = _x2*_x6*_x24*_x28
-    del _x24, _x28
-    _x110 = _x44 + _x45*_x86
-    del _x86
-    _x111 = _x45*_x92 - _x35*_x110
-    del _x92, _x45
-    _x112 = _x37*_x111
-    _out_dqdd_dqd[..., 1, 0] = _x112
-    del _x111
-    _x113 = -_x35*_x112 + _x30*_x110
-    _out_dqdd_dqd[..., 0, 0] = _x113
-    del _x110, _x112, _x113
-    _x114 = -_x44*_x35
-    _x115 = _x37*_x114
-    _out_dqdd_dqd[..., 1, 1] = _x115
-    del _x114
-    _x116 = -_x35*_x115 + _x44*_x30
-    _out_dqdd_dqd[..., 0, 1] = _x116
-    del _x44, _x115, _x116
-    _x117 = -_x35
-    _x118 = _x37*_x117
-    _out_dqdd_dtau[..., 0, 1] = _x118
-    _out_dqdd_dtau[..., 1, 0] = _x118
-    del _x37, _x117
-    _x119 = -_x35*_x118 + _x30
-    _out_dqdd_dtau[..., 0, 0] = _x119
-    del _x30, _x35, _x118, _x119
-    _x120 = _x57 + _x27*_x14 + _x83 + l1*(_x6*(-_x2*_x25 + m2*(_x6*_x22 + _x1*_x17)) + _x1*(_x2*_x15 + _x82))
-    del _x27, _x15, _x17, _x22, _x57, _x82
-    _x121 = -_x58
+    _x97 = _x41/_x36
+    _out_forward_dynamics_qdd[..., 1] = _x97
+    _x98 = -_x35*_x97 + _x30*_x40
+    _out_forward_dynamics_qdd[..., 0] = _x98
+    del _x97, _x98
+    _x107 = _x57 + _x27*_x15 + l1*(_x6*(-_x26*_x10 + m2*(_x6*_x23 + _x1*_x18)) + _x1*(_x10*_x16 + _x84)) + _x85
+    del _x16, _x23, _x57, _x84
+    _x108 = -_x58
     del _x58
-    _x122 = _x52*_x61 + _x50*_x121
-    _x123 = 1.0/_x122
-    del _x122
-    _x124 = _x123*(_x52*_x120 + _x83*_x121)
-    _out_F[..., 0] = _x124
-    del _x124
+    _x109 = _x52*_x61 + _x50*_x108
+    _x110 = 1.0/_x109
+    del _x109
+    _x111 = _x110*(_x52*_x107 + _x85*_x108)
+    _out_F[..., 0] = _x111
+    del _x111
     _x60 = -_x50
-    _x125 = _x123*(_x60*_x120 + _x83*_x61)
-    _out_F[..., 1] = _x125
-    del _x83, _x120, _x123, _x125
+    _x112 = _x110*(_x60*_x107 + _x85*_x61)
+    _out_F[..., 1] = _x112
+    del _x85, _x107, _x110, _x112
     _x62 = _x52*_x61
-    _x129 = _x62 + _x50*_x121
+    _x116 = _x62 + _x50*_x108
     del _x50, _x62
-    _x130 = 1.0/_x129
-    del _x129
-    _x131 = _x130*(_x52*_x29 + _x34*_x121)
-    _x132 = _x130*(_x52*_x34 + _x5*_x121)
-    _x139 = _x130*(_x121*_x132 + _x52*_x131)
-    _out_Mx[..., 0, 0] = _x139
-    _x140 = _x130*(_x60*_x131 + _x61*_x132)
-    _out_Mx[..., 0, 1] = _x140
-    _out_Mx[..., 1, 0] = _x140
-    del _x131, _x132
-    _x135 = _x130*(_x60*_x29 + _x34*_x61)
+    _x117 = 1.0/_x116
+    del _x116
+    _x118 = _x117*(_x52*_x29 + _x34*_x108)
+    _x119 = _x117*(_x52*_x34 + _x5*_x108)
+    _x126 = _x117*(_x119*_x108 + _x52*_x118)
+    _out_Mx[..., 0, 0] = _x126
+    _x127 = _x117*(_x60*_x118 + _x119*_x61)
+    _out_Mx[..., 0, 1] = _x127
+    _out_Mx[..., 1, 0] = _x127
+    del _x118, _x119
+    _x122 = _x117*(_x60*_x29 + _x34*_x61)
     del _x29
-    _x136 = _x130*(_x60*_x34 + _x5*_x61)
+    _x123 = _x117*(_x60*_x34 + _x5*_x61)
     del _x5, _x34
-    _x141 = _x130*(_x60*_x135 + _x61*_x136)
-    _out_Mx[..., 1, 1] = _x141
-    del _x135, _x136
+    _x128 = _x117*(_x60*_x122 + _x123*_x61)
+    _out_Mx[..., 1, 1] = _x128
+    del _x122, _x123
     _x69 = theta2_d*theta2_d
     _x70 = 2.0*theta1_d*theta2_d
     _x71 = -_x49*_x70 - _x49*_x69 + _x7*_x61
     del _x49
     _x72 = -_x52*_x70 - _x52*_x69 + (-_x55 - _x52)*_x7
     del _x55, _x7, _x69, _x70
-    _x126 = l1*(_x6*(-_x2*_x25 - _x74) + _x6*_x74) + _x75
-    del _x6, _x25, _x74
-    _x133 = _x130*(_x52*_x126 + _x75*_x121)
-    _out_Vx[..., 0] = -_x71*_x140 - _x72*_x139 + _x133
-    del _x139, _x133
-    _x137 = _x130*(_x60*_x126 + _x75*_x61)
-    _out_Vx[..., 1] = -_x71*_x141 - _x72*_x140 + _x137
-    del _x75, _x140, _x141, _x71, _x72, _x126, _x137
-    _x127 = -_x2*_x12 + _x14*(_x2*_x1 + _x59)
+    _x113 = l1*(_x6*(-_x26*_x10 - _x76) + _x6*_x76) + _x77
+    del _x76
+    _x120 = _x117*(_x52*_x113 + _x77*_x108)
+    _out_Vx[..., 0] = -_x71*_x127 + _x120 - _x72*_x126
+    del _x126, _x120
+    _x124 = _x117*(_x60*_x113 + _x77*_x61)
+    _out_Vx[..., 1] = -_x71*_x128 - _x72*_x127 + _x124
+    del _x77, _x127, _x128, _x71, _x72, _x113, _x124
+    _x114 = -_x13*_x10 + _x15*(_x1*_x10 + _x59)
     del _x59
-    _x128 = _x2*(_x1*_x14 - _x12)
-    del _x1, _x2, _x12, _x14
-    _x134 = _x130*(_x128*_x121 + _x52*_x127)
-    _out_Gx[..., 0] = _x134
-    del _x52, _x121, _x134
-    _x138 = _x130*(_x60*_x127 + _x128*_x61)
-    _out_Gx[..., 1] = _x138
-    del _x61, _x60, _x130, _x127, _x128, _x138
+    _x115 = _x10*(_x1*_x15 - _x13)
+    del _x13
+    _x121 = _x117*(_x115*_x108 + _x52*_x114)
+    _out_Gx[..., 0] = _x121
+    del _x52, _x108, _x121
+    _x125 = _x117*(_x60*_x114 + _x115*_x61)
+    _out_Gx[..., 1] = _x125
+    del _x61, _x60, _x117, _x114, _x115, _x125
+    _x37 = 1.0/_x36
+    _out_dqdd_dtau[..., 1, 1] = _x37
+    del _x36
+    _x38 = l1*_x1 + l2
+    _x39 = m2*_x38
+    del _x38
+    _x102 = _x2*_x1*_x6 - _x6*_x39
+    _x103 = _x2*_x6*_x6 + _x1*_x39
+    del _x2
+    _x104 = _x103 + _x27
+    del _x27, _x103
+    _x129 = -_x15*_x102 + _x12*_x104
+    del _x12, _x104
+    _x42 = _x37*_x41
+    del _x41
+    _x43 = -_x35*_x42 + _x30*_x40
+    del _x40
+    _x44 = l1*_x43 + _x15
+    del _x15
+    _x45 = _x6*_x44
+    _x101 = -_x39*_x18 + l1*(m2*_x45 - _x26*_x10 + m2*(_x1*_x18 + _x45))
+    del _x26, _x18, _x45
+    _x99 = _x42 + _x43
+    del _x42, _x43
+    _x100 = m2*(-_x19 + _x1*_x44)
+    _x105 = _x39*_x44 + l1*(m2*_x19 + _x10*_x99 + _x100)
+    del _x19, _x39, _x99, _x100
+    _x130 = -_x1*_x101 + _x6*_x105
+    del _x101, _x105
+    _x73 = _x6*_x25*_x28*_x10
+    del _x25, _x28
+    _x131 = _x73 + _x74*_x102
+    del _x74, _x102
+    _x106 = _x10*_x44
+    del _x10, _x44
+    _x133 = -_x1*_x93 + _x6*_x106
+    del _x1, _x6, _x93, _x106
+    _x135 = _x132 - _x129*_x35
+    del _x132
+    _x136 = _x135*_x37
+    _out_dqdd_dq[..., 1, 0] = _x136
+    del _x135
+    _x137 = _x129*_x30 - _x136*_x35
+    _out_dqdd_dq[..., 0, 0] = _x137
+    del _x129, _x136, _x137
+    _x138 = _x133 - _x130*_x35
+    del _x133
+    _x139 = _x138*_x37
+    _out_dqdd_dq[..., 1, 1] = _x139
+    del _x138
+    _x140 = _x130*_x30 - _x139*_x35
+    _out_dqdd_dq[..., 0, 1] = _x140
+    del _x130, _x139, _x140
+    _x141 = _x134 - _x131*_x35
+    del _x134
+    _x142 = _x141*_x37
+    _out_dqdd_dqd[..., 1, 0] = _x142
+    del _x141
+    _x143 = _x131*_x30 - _x142*_x35
+    _out_dqdd_dqd[..., 0, 0] = _x143
+    del _x131, _x142, _x143
+    _x144 = -_x35*_x73
+    _x145 = _x144*_x37
+    _out_dqdd_dqd[..., 1, 1] = _x145
+    del _x144
+    _x146 = _x30*_x73 - _x145*_x35
+    _out_dqdd_dqd[..., 0, 1] = _x146
+    del _x73, _x145, _x146
+    _x147 = -_x35
+    _x148 = _x147*_x37
+    _out_dqdd_dtau[..., 0, 1] = _x148
+    _out_dqdd_dtau[..., 1, 0] = _x148
+    del _x37, _x147
+    _x149 = _x30 - _x148*_x35
+    _out_dqdd_dtau[..., 0, 0] = _x149
+    del _x30, _x35, _x148, _x149
     return CombinedResult(_out_base_T_tcp, _out_base_T_link1, _out_base_T_link2, _out_jacobian_J, _out_jacobian_geometric_J, _out_M, _out_C, _out_V, _out_G, _out_dG_dq, _out_inverse_dynamics_tau, _out_dtau_dq, _out_dtau_dqd, _out_dtau_dqdd, _out_forward_dynamics_qdd, _out_dqdd_dq, _out_dqdd_dqd, _out_dqdd_dtau, _out_F, _out_Mx, _out_Vx, _out_Gx, _out_k, _out_u)

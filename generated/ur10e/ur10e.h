@@ -440,8 +440,9 @@ void ur10e_forward_dynamics_batch(size_t n, const double *q, const double *qd, c
  * to first order, qdd = M^-1 (tau - V - G - F_f) (seed eq. 8.34); by the implicit-
  * function theorem dqdd_dq = -M^-1 dtau_dq, dqdd_dqd = -M^-1 dtau_dqd at qdd and
  * dqdd_dtau = M^-1, by LDL^T solves (Carpentier and Mansard, RSS 2018), M^-1 from its
- * lower triangle, mirrored (exactly symmetric); a state-space model x = (q, qd) has A =
- * [[0, I], [dqdd_dq, dqdd_dqd]] and B = [[0], [dqdd_dtau]].
+ * lower triangle, mirrored (exactly symmetric), the solves' substitutions one loop over
+ * columns; a state-space model x = (q, qd) has A = [[0, I], [dqdd_dq, dqdd_dqd]] and B =
+ * [[0], [dqdd_dtau]].
  *
  * Inputs:
  *   q[6]: joint coordinates: q1 [rad], q2 [rad], q3 [rad], q4 [rad], q5 [rad], q6 [rad].
@@ -465,7 +466,7 @@ void ur10e_forward_dynamics_batch(size_t n, const double *q, const double *qd, c
  *   dqdd_dq[36]: 6 x 6, row-major; d qdd / dq: row i, column j is d qdd_i / d q_j.
  *   dqdd_dqd[36]: 6 x 6, row-major; d qdd / dqd.
  *   dqdd_dtau[36]: 6 x 6, row-major; d qdd / dtau = M(q)^-1, exactly symmetric.
- * Cost: 4899 operations.
+ * Cost: 4900 operations.
  */
 void ur10e_forward_dynamics_derivatives(const double *q, const double *qd, const double *tau, double a2, double a3, double d4, double d5, double d6, double m1, double m2, double m3, double m4, double m5, double m6, double g, double *dqdd_dq, double *dqdd_dqd, double *dqdd_dtau);
 
@@ -473,7 +474,7 @@ void ur10e_forward_dynamics_derivatives(const double *q, const double *qd, const
 void ur10e_forward_dynamics_derivatives_packed(const double *in, double *out);
 
 /* ur10e_forward_dynamics_derivatives for n configurations; params: a2, a3, d4, d5, d6, m1, m2, m3, m4, m5, m6, g, stride 0 or 12.
- * Uses 9344 bytes of stack for its blocks of 8 configurations. */
+ * Calls ur10e_forward_dynamics_derivatives once per configuration. */
 void ur10e_forward_dynamics_derivatives_batch(size_t n, const double *q, const double *qd, const double *tau, const double *params, size_t params_stride, double *dqdd_dq, double *dqdd_dqd, double *dqdd_dtau);
 
 /* ur10e_tcp_force: Force (wrench) at the TCP that produces a joint motion.

@@ -33,8 +33,10 @@ tau = ID(q, qd, qdd) at qdd = FD(q, qd, tau) (Carpentier and Mansard's route to 
     d qdd/dq = -M^-1 d tau/dq,   d qdd/dqd = -M^-1 d tau/dqd,   d qdd/dtau = M^-1,
 
 the inverse dynamics' derivative program evaluated at the accelerations the LDL^T solve of the forward dynamics
-gives, one more solve with the same factors for the n + n right-hand sides [-d tau/dq | -d tau/dqd], and M^-1 from
-them as its lower triangle, mirrored (exactly symmetric, as d tau/dqdd = M is).
+gives, then the same factors' substitutions for the n + n right-hand sides [-d tau/dq | -d tau/dqd] and the n
+columns of the identity, as one column map (:func:`~symkin.dynamics.linsolve.ldl_substitution_map`: the C backend
+prints its body once, as a loop over the 3n columns, so the function's code fits the instruction cache), and M^-1
+as the lower triangle of the last n columns, mirrored (exactly symmetric, as d tau/dqdd = M is).
 """
 
 from __future__ import annotations
@@ -44,8 +46,8 @@ from collections.abc import Callable
 import symengine as se
 import sympy
 
-from symkin.dynamics.linsolve import ldl_factor, ldl_inverse, ldl_substitute
-from symkin.dynamics.program import Program
+from symkin.dynamics.linsolve import ldl_factor, ldl_substitute, ldl_substitution_map
+from symkin.dynamics.program import Program, ProgramMap
 from symkin.dynamics.quantities import (BoundTerms, coordinate_symbols, function_spec, inverse_dynamics_spec,
                                         require_gravity)
 from symkin.errors import DerivationError
@@ -77,12 +79,13 @@ def torque_jacobian(terms: BoundTerms, variables: list[se.Symbol]) -> list[se.Ba
 
 def forward_dynamics_slopes(program: Program, M: list[list[se.Basic]], rest: list[se.Basic], tau: list[se.Basic],
                             qdd: list[se.Basic], slope_rows: Callable[[], list[list[se.Basic]]]
-                            ) -> tuple[list[se.Basic], list[se.Basic], list[se.Basic]]:
-    """(d qdd/dq, d qdd/dqd, d qdd/dtau) row-major by the implicit-function theorem on tau = M qdd + rest: the
-    accelerations qdd = M^-1 (tau - rest) by an LDL^T solve bound into ``program``, then ``slope_rows()`` - row i the
-    2n derivatives d tau_i/dq, d tau_i/dqd of the inverse dynamics at the symbols ``qdd``, bound after the solve - at
-    those accelerations, M^-1 [-dtau/dq | -dtau/dqd] by the same factors (n + n right-hand sides) and M^-1 itself
-    from them, its lower triangle mirrored (:func:`~symkin.dynamics.linsolve.ldl_inverse`: exactly symmetric)."""
+                            ) -> tuple[list[se.Basic], list[se.Basic], list[se.Basic], ProgramMap]:
+    """(d qdd/dq, d qdd/dqd, d qdd/dtau) row-major by the implicit-function theorem on tau = M qdd + rest, and the
+    column map they read: the accelerations qdd = M^-1 (tau - rest) by an LDL^T solve bound into ``program``, then
+    ``slope_rows()`` - row i the 2n derivatives d tau_i/dq, d tau_i/dqd of the inverse dynamics at the symbols
+    ``qdd``, bound after the solve - at those accelerations, and M^-1 [-dtau/dq | -dtau/dqd | I] by the same
+    factors' substitutions as one column map (:func:`~symkin.dynamics.linsolve.ldl_substitution_map`, the
+    function's map 0), M^-1 its last n columns' lower triangle, mirrored (exactly symmetric)."""
     n = len(tau)
     factors = ldl_factor(program, M)
     accelerations = [row[0] for row in ldl_substitute(program, *factors, [[t - r] for t, r in zip(tau, rest)])]
@@ -90,10 +93,12 @@ def forward_dynamics_slopes(program: Program, M: list[list[se.Basic]], rest: lis
     rows = slope_rows()
     at_motion = dict(zip(qdd, accelerations))  # the derivative program at qdd = FD(q, qd, tau)
     program.substitute(start, at_motion)
-    X = ldl_substitute(program, *factors, [[-entry.xreplace(at_motion) for entry in row] for row in rows])
-    by_q, by_qd = ([X[i][k * n + j] for i in range(n) for j in range(n)] for k in range(2))
-    inverse = ldl_inverse(program, *factors)
-    return by_q, by_qd, [inverse[i][j] for i in range(n) for j in range(n)]
+    columns = [[-rows[i][j].xreplace(at_motion) for i in range(n)] for j in range(2 * n)]
+    columns += [[se.Integer(int(i == c)) for i in range(n)] for c in range(n)]
+    solve = ldl_substitution_map(program, *factors, columns)
+    X = solve.targets
+    by_q, by_qd = ([X[k * n + j][i] for i in range(n) for j in range(n)] for k in range(2))
+    return by_q, by_qd, [X[2 * n + min(i, j)][max(i, j)] for i in range(n) for j in range(n)], solve
 
 
 @quantity("inverse_dynamics_derivatives", "d tau/dq, d tau/dqd, d tau/dqdd = M of the inverse dynamics (n x n each)")
@@ -129,7 +134,7 @@ def _forward_dynamics_derivatives(d: Deriving) -> FunctionSpec:
         slopes = torque_jacobian(terms, variables)
         return [slopes[i * 2 * n:(i + 1) * 2 * n] for i in range(n)]
 
-    dq, dqd, dtau = forward_dynamics_slopes(
+    dq, dqd, dtau, solve = forward_dynamics_slopes(
         program, terms.mass_matrix(), terms.torques(acceleration=False, with_friction=True),
         coordinate_symbols(d, "tau"), coordinate_symbols(d, "qdd"), slope_rows)
     return function_spec(
@@ -137,12 +142,12 @@ def _forward_dynamics_derivatives(d: Deriving) -> FunctionSpec:
         "qdd(q + dq, qd + dqd, tau + dtau) = qdd + dqdd_dq dq + dqdd_dqd dqd + dqdd_dtau dtau to first order, "
         "qdd = M^-1 (tau - V - G - F_f) (seed eq. 8.34); by the implicit-function theorem dqdd_dq = -M^-1 dtau_dq, "
         "dqdd_dqd = -M^-1 dtau_dqd at qdd and dqdd_dtau = M^-1, by LDL^T solves (Carpentier and Mansard, RSS 2018), "
-        "M^-1 from its lower triangle, mirrored (exactly symmetric); "
+        "M^-1 from its lower triangle, mirrored (exactly symmetric), the solves' substitutions one loop over columns; "
         "a state-space model x = (q, qd) has A = [[0, I], [dqdd_dq, dqdd_dqd]] and B = [[0], [dqdd_dtau]].",
         ["q", "qd", "tau"], program,
         [("dqdd_dq", dq, (n, n), "d qdd / dq: row i, column j is d qdd_i / d q_j", ""),
          ("dqdd_dqd", dqd, (n, n), "d qdd / dqd", ""),
-         ("dqdd_dtau", dtau, (n, n), "d qdd / dtau = M(q)^-1, exactly symmetric", "")])
+         ("dqdd_dtau", dtau, (n, n), "d qdd / dtau = M(q)^-1, exactly symmetric", "")], maps=[solve])
 
 
 @quantity("gravity_derivatives", "d G/dq of the gravity vector (n x n)")
@@ -200,7 +205,7 @@ def parameter_sensitivities(d: Deriving, spec: FunctionSpec, name: str, summary:
     program = Program()
     memo: dict = {}
     renamed: dict[se.Basic, se.Basic] = {}
-    for symbol, expr in spec.definitions:  # the spec's names are replaced by the program's (one substitution each)
+    for symbol, expr in spec.straight_line_definitions():  # the spec's names replaced by the program's
         renamed[to_symengine(symbol)] = program.let(to_symengine(expr, memo).xreplace(renamed))
     outputs = [[to_symengine(e, memo).xreplace(renamed) for e in out.expr] for out in spec.outputs]
     symbols = [to_symengine(p.symbols[0]) for p in parameters]

@@ -8,10 +8,8 @@ for their (large) expressions once, every factor is computed once, and CSE share
   A = L D L^T without pivoting.  For an SPD matrix every pivot D_k is positive (Golub &
   Van Loan, *Matrix Computations*, sec. 4.1-4.2), so the factorization exists and is
   backward stable without pivoting; it costs n^3/6 multiplications and no square roots.
-* :func:`ldl_inverse` - A^-1 of the same A from its factors (:func:`ldl_factor`), its lower triangle alone
-  (A^-1 is symmetric): column c of A^-1 solves A x = e_c, and the rows i >= c of its back
-  substitution need no row above c, so the upper triangle is never computed and the inverse
-  comes out exactly symmetric once mirrored.
+* :func:`ldl_substitution_map` - the substitutions with given factors as one body for many right-hand sides
+  (a column map, :class:`~symkin.ir.spec.ColumnMap`): a loop in the backends that have loops.
 * :func:`transpose_solve` - ``J^T X = B`` for a square, nonsingular but otherwise general
   matrix (a task Jacobian).  Elimination without pivoting is not sound here: a leading
   minor of J may vanish where J is regular (the UR10e at q = 0 has J_11 = 0), and dividing
@@ -38,7 +36,8 @@ from __future__ import annotations
 
 import symengine as se
 
-from symkin.dynamics.program import Program, dot
+from symkin.dynamics.program import Program, ProgramMap, dot
+from symkin.ir.spec import MAP_COLUMN_PREFIX, MAP_SHARED_PREFIX
 
 Matrix = list[list[se.Basic]]
 
@@ -49,7 +48,7 @@ ADJUGATE_MAX_SIZE = 3
 def ldl_factor(program: Program, A: Matrix) -> tuple[Matrix, list[se.Basic]]:
     """(L, D) of A = L D L^T, L unit lower triangular (its entries below the diagonal named, the rest 0), for
     symmetric positive definite A (n x n); only the lower triangle of A is used.  Every entry is named in
-    ``program``; solve with the factors by :func:`ldl_substitute` and :func:`ldl_inverse`."""
+    ``program``; solve with the factors by :func:`ldl_substitute` and :func:`ldl_substitution_map`."""
     n = len(A)
     A = [[program.let(A[i][j]) for j in range(i + 1)] for i in range(n)]
     D: list[se.Basic] = []
@@ -88,22 +87,25 @@ def ldl_substitute(program: Program, L: Matrix, D: list[se.Basic], B: Matrix) ->
     return [[columns[c][i] for c in range(len(B[0]))] for i in range(n)]
 
 
-def ldl_inverse(program: Program, L: Matrix, D: list[se.Basic]) -> Matrix:
-    """A^-1 (n x n, exactly symmetric) of A = L D L^T (the factors of :func:`ldl_factor`): column c solves
-    A x = e_c, L y = e_c giving y_i = 0 above c and y_c = 1, and the back substitution D L^T x = y for the rows
-    i >= c alone, x_i = y_i / D_i - sum_{k > i} L_ki x_k (which never needs a row above c): the lower triangle,
-    mirrored."""
+def ldl_substitution_map(program: Program, L: Matrix, D: list[se.Basic], columns: list[list[se.Basic]],
+                         number: int = 0) -> ProgramMap:
+    """The column map (:class:`~symkin.dynamics.program.ProgramMap`, function map ``number``) of x with
+    L D L^T x = b for each of the ``columns`` b (n values each, of ``program``): one body, the substitutions of
+    :func:`ldl_substitute` over the shared factors (L below its diagonal and 1/D, named in ``program``), so a
+    backend with loops prints them once for all columns.  A column of numbers (e_c) or zeros costs the loop a full
+    substitution; unrolled, its constant operations fold away."""
     n = len(L)
-    lower: Matrix = [[se.Integer(0)] * n for _ in range(n)]
-    for c in range(n):
-        y: list[se.Basic] = [se.Integer(0)] * n
-        y[c] = se.Integer(1)
-        for i in range(c + 1, n):  # L y = e_c below the diagonal
-            y[i] = program.let(-sum((L[i][k] * y[k] for k in range(c, i)), se.Integer(0)))
-        for i in reversed(range(c, n)):  # D L^T x = y, rows c..n-1
-            lower[i][c] = program.let(y[i] / D[i] - sum((L[k][i] * lower[k][c] for k in range(i + 1, n)),
-                                                        se.Integer(0)))
-    return [[lower[max(i, j)][min(i, j)] for j in range(n)] for i in range(n)]
+    below = [(i, k) for i in range(n) for k in range(i)]
+    shared = ProgramMap.symbols(MAP_SHARED_PREFIX, len(below) + n)
+    L_body: Matrix = [[se.Integer(0)] * n for _ in range(n)]
+    for (i, k), symbol in zip(below, shared):
+        L_body[i][k] = symbol
+    parameters = ProgramMap.symbols(MAP_COLUMN_PREFIX, n)
+    body = Program()
+    x = ldl_substitute(body, L_body, [1 / s for s in shared[len(below):]], [[b] for b in parameters])
+    return ProgramMap(shared, tuple([L[i][k] for i, k in below] + [program.let(1 / d) for d in D]), parameters, body,
+                      tuple(row[0] for row in x), tuple(tuple(c) for c in columns),
+                      ProgramMap.target_symbols(number, len(columns), n))
 
 
 def transpose_solve(program: Program, J: Matrix, B: Matrix) -> Matrix:

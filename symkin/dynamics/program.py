@@ -11,7 +11,9 @@ nodes).  A :class:`Program` collects the values a function needs as named assign
 * :meth:`Program.let` names one value (a pivot, a factor of a solve);
 * :meth:`Program.to_sympy` converts the assignments that the outputs need, one small
   expression at a time, into the sympy ``definitions`` of a
-  :class:`~symkin.ir.spec.FunctionSpec` (sympy stays the public expression type).
+  :class:`~symkin.ir.spec.FunctionSpec` (sympy stays the public expression type);
+* a :class:`ProgramMap` is a column map (:class:`~symkin.ir.spec.ColumnMap`) over a program's
+  values: a small program of its own applied to r columns of them.
 
 Converting the graphs directly into sympy trees instead would repeat every shared
 subexpression at every use (the UR10e Coriolis matrix grows to about a million operations
@@ -22,12 +24,13 @@ that way); the program form keeps it at a few thousand.  ``symengine.cse`` is de
 from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
 
 import symengine as se
 import sympy
 
 from symkin.expression_dag import name_shared_nodes_of_deep_graphs
-from symkin.ir.spec import DEFINITION_PREFIX
+from symkin.ir.spec import DEFINITION_PREFIX, MAP_BODY_PREFIX, ColumnMap, map_targets
 from symkin.symengine_bridge import SympyConverter, to_symengine
 
 
@@ -163,6 +166,54 @@ class Program:
         definitions = tuple((convert(symbol), convert(expr))
                             for k, (symbol, expr) in enumerate(self.assignments) if needed[k])
         return definitions, [convert(se.sympify(e)) for e in outputs]
+
+
+@dataclass(frozen=True)
+class ProgramMap:
+    """A column map in SymEngine form: ``body`` (a program over the symbols ``shared_symbols`` and ``parameters``)
+    giving ``results`` for each of the ``columns``, whose values, like ``shared_values``, are a program's; the
+    outputs use the results of column c as ``targets[c]`` (:func:`~symkin.ir.spec.map_targets`)."""
+
+    shared_symbols: tuple[se.Symbol, ...]
+    shared_values: tuple[se.Basic, ...]
+    parameters: tuple[se.Symbol, ...]
+    body: Program
+    results: tuple[se.Basic, ...]
+    columns: tuple[tuple[se.Basic, ...], ...]
+    targets: tuple[tuple[se.Symbol, ...], ...]
+
+    @staticmethod
+    def symbols(prefix: str, count: int) -> tuple[se.Symbol, ...]:
+        """``count`` body symbols ``<prefix><k>`` (:data:`~symkin.ir.spec.MAP_SHARED_PREFIX`, ...)."""
+        return tuple(se.Symbol(f"{prefix}{k}") for k in range(count))
+
+    @staticmethod
+    def target_symbols(number: int, columns: int, results: int) -> tuple[tuple[se.Symbol, ...], ...]:
+        """The SymEngine form of :func:`~symkin.ir.spec.map_targets`."""
+        return tuple(tuple(se.Symbol(t.name) for t in column) for column in map_targets(number, columns, results))
+
+    def values(self) -> list[se.Basic]:
+        """The values it reads from the function's program, in the order of
+        :meth:`~symkin.ir.spec.ColumnMap.values`."""
+        return list(self.shared_values) + [c[k] for k in range(len(self.parameters)) for c in self.columns]
+
+    def to_sympy(self, values: Sequence[sympy.Expr]) -> ColumnMap:
+        """The :class:`~symkin.ir.spec.ColumnMap`, given :meth:`values` converted (in order); the body's
+        assignments renamed ``_u<k>``."""
+        definitions, results = self.body.to_sympy(self.results, SympyConverter({}))
+        body_names = {symbol: sympy.Symbol(f"{MAP_BODY_PREFIX}{k}", real=True)
+                      for k, (symbol, _) in enumerate(definitions)}
+        body = tuple((body_names[symbol], expr.xreplace(body_names)) for symbol, expr in definitions)
+        symbol = lambda s: sympy.Symbol(s.name, real=True)  # noqa: E731 - as the converter names a new symbol
+        width, shared = len(self.parameters), len(self.shared_symbols)
+        count = len(self.columns)
+        columns = [values[shared + c:shared + width * count:count] for c in range(count)]
+        return ColumnMap(
+            shared=tuple((symbol(s), v) for s, v in zip(self.shared_symbols, values[:shared])),
+            parameters=tuple(symbol(p) for p in self.parameters),
+            body=body, results=tuple(r.xreplace(body_names) for r in results),
+            columns=tuple(tuple(column) for column in columns),
+            targets=tuple(tuple(sympy.Symbol(t.name, real=True) for t in column) for column in self.targets))
 
 
 def cross(u: Sequence[se.Basic], v: Sequence[se.Basic]) -> list[se.Basic]:

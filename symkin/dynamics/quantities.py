@@ -35,7 +35,7 @@ from symkin.dynamics import lagrange, newton_euler
 from symkin.dynamics.coupling import forces_on_coordinates, joint_rates, matrix_on_coordinates
 from symkin.dynamics.bodies import BodyJacobians, body_jacobians
 from symkin.dynamics.linsolve import ldl_solve, transpose_solve
-from symkin.dynamics.program import Program, se_matrix, se_vector
+from symkin.dynamics.program import Program, ProgramMap, se_matrix, se_vector
 from symkin.errors import DerivationError
 from symkin.dynamics.physical import require_physical
 from symkin.dynamics.joint_forces import SPRINGS_IN_G, SPRINGS_IN_U, friction_graph, spring_energy, spring_torques
@@ -57,16 +57,23 @@ def coordinate_symbols(d: Deriving, group: str) -> list[se.Symbol]:
 
 
 def function_spec(d: Deriving, name: str, summary: str, doc: str, groups: Sequence[str | InputSpec],
-                  program: Program, outputs: Sequence[tuple[str, Sequence[se.Basic], tuple[int, ...], str, str]]
-                  ) -> FunctionSpec:
+                  program: Program, outputs: Sequence[tuple[str, Sequence[se.Basic], tuple[int, ...], str, str]],
+                  maps: Sequence[ProgramMap] = ()) -> FunctionSpec:
     """The spec of a function whose outputs are SymEngine values of ``program`` (its inputs: the coordinate
     ``groups`` by name, or any input specs), converted to sympy with the model's shared converter.
 
     Args:
         outputs: (name, row-major entries, shape, doc, unit) per output.
+        maps: the column maps over ``program``'s values whose targets the outputs use, in the function's order.
     """
     model = d.model
-    definitions, flat = program.to_sympy([e for out in outputs for e in out[1]], d[_sympy_converter])
+    values = [e for out in outputs for e in out[1]]
+    map_values = [v for m in maps for v in m.values()]
+    definitions, flat = program.to_sympy(values + map_values, d[_sympy_converter])
+    converted_maps, start = [], len(values)
+    for m in maps:
+        converted_maps.append(m.to_sympy(flat[start:start + len(m.values())]))
+        start += len(m.values())
     specs, start = [], 0
     for out_name, entries, shape, out_doc, unit in outputs:
         size = len(entries)
@@ -75,7 +82,7 @@ def function_spec(d: Deriving, name: str, summary: str, doc: str, groups: Sequen
         specs.append(OutputSpec(out_name, matrix, out_doc, unit, shape))
         start += size
     inputs = [g if isinstance(g, InputSpec) else coordinate_input(model, g) for g in groups]
-    return make_function(model, name, summary, doc, inputs, specs, definitions)
+    return make_function(model, name, summary, doc, inputs, specs, definitions, converted_maps)
 
 
 def _flat(matrix: Matrix) -> list[se.Basic]:

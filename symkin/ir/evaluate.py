@@ -42,7 +42,7 @@ def lambdify_spec(spec: FunctionSpec, args: Sequence[object], modules: str | Seq
         printer: lambdify's code printer (default: :func:`reference_printer` of ``modules``).
     """
     values = dict(values or {})
-    definitions = [(s, e.xreplace(values)) for s, e in spec.definitions]
+    definitions = [(s, e.xreplace(values)) for s, e in spec.straight_line_definitions()]
     entries = [e.xreplace(values) for out in spec.outputs for e in out.entries]
     share = spec_op_count(spec) > SHARED_EVALUATION_OPS
 
@@ -90,7 +90,7 @@ def symengine_entries(spec: FunctionSpec, args: Sequence[sympy.Symbol],
     values = dict(values or {})
     memo: dict[sympy.Basic, se.Basic] = {}
     definitions: dict[se.Basic, se.Basic] = {}
-    for symbol, expr in spec.definitions:
+    for symbol, expr in spec.straight_line_definitions():
         definitions[to_symengine(symbol)] = to_symengine(expr.xreplace(values), memo).subs(definitions)
     entries = [to_symengine(e.xreplace(values), memo).subs(definitions) for out in spec.outputs for e in out.entries]
     function = se.Lambdify([to_symengine(a) for a in args], entries, backend=backend, cse=True)

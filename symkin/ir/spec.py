@@ -13,12 +13,20 @@ such a straight-line program, because writing them out as one sympy tree per ent
 repeat every shared subexpression at each use.  The optimizer treats definitions and
 outputs together (folding, one CSE) and emits every definition as a temporary, so backends
 see only :class:`OptimizedFunction` temporaries and never need to know.
+
+A spec may also carry *column maps* (:class:`ColumnMap`): one small straight-line body applied
+to r columns of values (the substitutions of a solve with given factors, one column per
+right-hand side).  The optimized function holds them twice: unrolled into its temporaries, so
+every backend and analysis that reads straight-line code works unchanged, and as a
+:class:`MapBlock` naming those temporaries, which a backend with loops prints as one loop
+over the columns (the C backend: the body's code once instead of r times, the instruction
+cache's share of the derivatives of the dynamics, issue 65).
 """
 
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import sympy
@@ -29,6 +37,13 @@ from symkin.model.schema import Model
 
 #: Prefix of definition symbols (``_w0``, ``_w1``...); no model name starts with "_".
 DEFINITION_PREFIX = "_w"
+#: Prefixes of a column map's symbols: its results as the function sees them (``_y<map>_<column>_<k>``), and inside
+#: its body the values shared by the columns (``_s<k>``), one column's values (``_b<k>``) and the body's
+#: assignments (``_u<k>``).
+MAP_TARGET_PREFIX = "_y"
+MAP_SHARED_PREFIX = "_s"
+MAP_COLUMN_PREFIX = "_b"
+MAP_BODY_PREFIX = "_u"
 
 #: The most that a notebook shows as LaTeX (``_repr_latex_``): equations, and operations over all of them
 #: (sympy.count_ops); beyond either the formulas no longer fit a screen and Jupyter shows the text repr.
@@ -125,6 +140,53 @@ class OutputSpec:
 
 
 @dataclass(frozen=True)
+class ColumnMap:
+    """One straight-line body evaluated for r columns of values: a loop where the backend has loops.
+
+    Attributes:
+        shared: (body symbol ``_s<k>``, value) of the values every column reads (a solve's factors); the values
+            are expressions of the function's inputs and definitions.
+        parameters: the body's symbols ``_b<k>`` of one column's values.
+        body: the body's assignments ``(_u<k>, expression)`` in evaluation order, over the shared symbols, the
+            parameters and earlier assignments.
+        results: one column's results, expressions of the body's symbols.
+        columns: r tuples of values for the parameters (expressions of the inputs and definitions).
+        targets: r tuples of symbols ``_y..`` (one per result) by which the outputs use column c's results.
+    """
+
+    shared: tuple[tuple[sympy.Symbol, sympy.Expr], ...]
+    parameters: tuple[sympy.Symbol, ...]
+    body: tuple[tuple[sympy.Symbol, sympy.Expr], ...]
+    results: tuple[sympy.Expr, ...]
+    columns: tuple[tuple[sympy.Expr, ...], ...]
+    targets: tuple[tuple[sympy.Symbol, ...], ...]
+
+    def __post_init__(self) -> None:
+        if len(self.columns) != len(self.targets):
+            raise ValueError(f"{len(self.columns)} columns for {len(self.targets)} tuples of targets")
+        if any(len(c) != len(self.parameters) for c in self.columns) or any(
+                len(t) != len(self.results) for t in self.targets):
+            raise ValueError("a column map's columns must each give every parameter and take every result")
+
+    def rewritten(self, rewrite: Callable[[sympy.Expr], sympy.Expr]) -> ColumnMap:
+        """The map with ``rewrite`` applied to its shared values and its columns (the function's expressions)."""
+        return dataclasses.replace(self, shared=tuple((s, rewrite(v)) for s, v in self.shared),
+                                   columns=tuple(tuple(rewrite(v) for v in c) for c in self.columns))
+
+    def values(self) -> list[sympy.Expr]:
+        """Its shared values, then its columns' values parameter by parameter (``columns[c][k]`` for every c, k
+        after k), flat: what the function computes for it, in the order of the array ``[k][c]`` (a solve's
+        right-hand sides row by row; the rows of a derivative come from one adjoint sweep each)."""
+        return [v for _, v in self.shared] + [c[k] for k in range(len(self.parameters)) for c in self.columns]
+
+
+def map_targets(number: int, columns: int, results: int) -> tuple[tuple[sympy.Symbol, ...], ...]:
+    """The target symbols ``_y<number>_<column>_<k>`` of a function's column map ``number``."""
+    return tuple(tuple(sympy.Symbol(f"{MAP_TARGET_PREFIX}{number}_{c}_{k}", real=True) for k in range(results))
+                 for c in range(columns))
+
+
+@dataclass(frozen=True)
 class FunctionSpec:
     """A function to generate.
 
@@ -140,6 +202,8 @@ class FunctionSpec:
             ``_w<k>`` (:data:`DEFINITION_PREFIX`), which no model name can be.
         parts: for a combined function (see :func:`combine_functions`), the names of the
             functions whose outputs it computes together; empty otherwise.
+        maps: column maps (:class:`ColumnMap`) evaluated after the definitions; the outputs use
+            their targets.
     """
 
     name: str
@@ -149,6 +213,7 @@ class FunctionSpec:
     outputs: tuple[OutputSpec, ...]
     definitions: tuple[tuple[sympy.Symbol, sympy.Expr], ...] = ()
     parts: tuple[str, ...] = ()
+    maps: tuple[ColumnMap, ...] = ()
 
     @property
     def vector_inputs(self) -> tuple[InputSpec, ...]:
@@ -163,18 +228,58 @@ class FunctionSpec:
     def parameter_inputs(self) -> tuple[InputSpec, ...]:
         return tuple(i for i in self.inputs if i.kind == "parameter")
 
+    def straight_line_definitions(self) -> tuple[tuple[sympy.Symbol, sympy.Expr], ...]:
+        """The definitions, then every column map unrolled into more: per column its body's assignments (named
+        ``_y<map>_<column><body symbol>``) and its targets, each the value of a result (what an evaluator of
+        straight-line code reads)."""
+        definitions = list(self.definitions)
+        for number, column_map in enumerate(self.maps):
+            for c, (column, targets) in enumerate(zip(column_map.columns, column_map.targets)):
+                local = dict(column_map.shared) | dict(zip(column_map.parameters, column))
+                for symbol, expr in column_map.body:
+                    named = sympy.Symbol(f"{MAP_TARGET_PREFIX}{number}_{c}{symbol.name}", real=True)
+                    definitions.append((named, expr.xreplace(local)))
+                    local[symbol] = named
+                definitions += [(t, r.xreplace(local)) for t, r in zip(targets, column_map.results)]
+        return tuple(definitions)
+
     def expanded_outputs(self) -> tuple[sympy.ImmutableMatrix, ...]:
         """The output matrices with every definition substituted (plain expressions of the inputs).
 
         Meant for small specs and tests (symbolic comparisons): for a large program the
         expanded trees can be far bigger than the program itself.
         """
-        if not self.definitions:
+        if not self.definitions and not self.maps:
             return tuple(o.expr for o in self.outputs)
         values: dict[sympy.Symbol, sympy.Expr] = {}
-        for symbol, expr in self.definitions:
+        for symbol, expr in self.straight_line_definitions():
             values[symbol] = expr.xreplace(values)
         return tuple(sympy.ImmutableMatrix(o.expr.xreplace(values)) for o in self.outputs)
+
+
+@dataclass(frozen=True)
+class MapBlock:
+    """A column map (:class:`ColumnMap`) of an optimized function: its columns unrolled into the function's
+    temporaries ``start`` to ``stop`` (exclusive), which no other temporary lies between, and the body that
+    computes any one of them, for the backends that print it once, as a loop over the columns.
+
+    Attributes:
+        start, stop: the unrolled temporaries' range.
+        parameters: the body's symbols of one column's values.
+        body: its assignments over the parameters and the function's temporaries and inputs (the shared values).
+        results: one column's results over the body's symbols.
+        columns: per column, the values of the parameters: symbols of the function or numbers.
+        targets: per column, its results as the unrolled code holds them (temporaries of the block, or atoms
+            where a result folded to a number or a value computed before the block).
+    """
+
+    start: int
+    stop: int
+    parameters: tuple[sympy.Symbol, ...]
+    body: tuple[tuple[sympy.Symbol, sympy.Expr], ...]
+    results: tuple[sympy.Expr, ...]
+    columns: tuple[tuple[sympy.Expr, ...], ...]
+    targets: tuple[tuple[sympy.Expr, ...], ...]
 
 
 @dataclass(frozen=True)
@@ -186,12 +291,14 @@ class OptimizedFunction:
         temporaries: (symbol, expression) assignments, in evaluation order.
         outputs: per output, its entries (row-major) written in terms of inputs and temporaries.
         op_counts: operation counts by stage, e.g. {"derived": 410, "folded": 380, "cse": 120}.
+        maps: the spec's column maps, each unrolled into a run of the temporaries (:class:`MapBlock`).
     """
 
     spec: FunctionSpec
     temporaries: tuple[tuple[sympy.Symbol, sympy.Expr], ...]
     outputs: tuple[tuple[sympy.Expr, ...], ...]
     op_counts: dict[str, int]
+    maps: tuple[MapBlock, ...] = ()
 
     @property
     def name(self) -> str:
@@ -200,14 +307,16 @@ class OptimizedFunction:
 
 def make_function(model: Model, name: str, summary: str, doc: str,
                   vectors: Sequence[InputSpec], outputs: Sequence[OutputSpec],
-                  definitions: Sequence[tuple[sympy.Symbol, sympy.Expr]] = ()) -> FunctionSpec:
+                  definitions: Sequence[tuple[sympy.Symbol, sympy.Expr]] = (),
+                  maps: Sequence[ColumnMap] = ()) -> FunctionSpec:
     """Build a spec whose parameter inputs are the model parameters its outputs use.
 
     Raises:
         DerivationError: if an output uses a symbol that no input provides.
     """
-    used = free_symbols([e for out in outputs for e in out.expr] + [expr for _, expr in definitions])
-    used -= {symbol for symbol, _ in definitions}
+    used = free_symbols([e for out in outputs for e in out.expr] + [expr for _, expr in definitions]
+                        + [v for m in maps for v in m.values()])
+    used -= {symbol for symbol, _ in definitions} | {t for m in maps for column in m.targets for t in column}
     params = tuple(
         InputSpec(p.name, "parameter", (p.symbol,), (p.name,), (p.unit,), p.doc, p.value)
         for p in model.parameters if p.symbol in used
@@ -216,7 +325,8 @@ def make_function(model: Model, name: str, summary: str, doc: str,
     missing = used - provided
     if missing:
         raise DerivationError(f"{name}: outputs use {sorted(map(str, missing))} which no input provides")
-    return FunctionSpec(name, summary, doc, tuple(vectors) + params, tuple(outputs), tuple(definitions))
+    return FunctionSpec(name, summary, doc, tuple(vectors) + params, tuple(outputs), tuple(definitions),
+                        maps=tuple(maps))
 
 
 def combine_functions(model: Model, name: str, specs: Sequence[FunctionSpec]) -> FunctionSpec:
@@ -247,12 +357,17 @@ def combine_functions(model: Model, name: str, specs: Sequence[FunctionSpec]) ->
     # Each part numbers its definitions from _w0: renumber them so the parts cannot clash
     # (identical work in several parts is then shared by the one CSE over the combination).
     definitions: list[tuple[sympy.Symbol, sympy.Expr]] = []
+    maps: list[ColumnMap] = []
     outputs = []
     for spec in specs:
         renamed: dict[sympy.Symbol, sympy.Symbol] = {}
         for symbol, expr in spec.definitions:
             renamed[symbol] = sympy.Symbol(f"{DEFINITION_PREFIX}{len(definitions)}", **symbol.assumptions0)
             definitions.append((renamed[symbol], expr.xreplace(renamed)))
+        for column_map in spec.maps:  # the maps are numbered apart too
+            targets = map_targets(len(maps), len(column_map.targets), len(column_map.results))
+            renamed.update(zip((t for c in column_map.targets for t in c), (t for c in targets for t in c)))
+            maps.append(dataclasses.replace(column_map.rewritten(lambda e: e.xreplace(renamed)), targets=targets))
         outputs += [OutputSpec(out.name if counts[out.name] == 1 else f"{spec.name}_{out.name}",
                                sympy.ImmutableMatrix(out.expr.xreplace(renamed)), f"{out.doc} ({spec.name})",
                                out.unit, out.shape, out.elements)
@@ -261,5 +376,5 @@ def combine_functions(model: Model, name: str, specs: Sequence[FunctionSpec]) ->
     summary = f"{', '.join(parts)} together, with one set of shared subexpressions."
     doc = ("Computes the outputs of " + ", ".join(parts) + " in one call; subexpressions common to "
            "several of them are evaluated once.")
-    combined = make_function(model, name, summary, doc, list(vectors.values()), outputs, definitions)
+    combined = make_function(model, name, summary, doc, list(vectors.values()), outputs, definitions, maps)
     return dataclasses.replace(combined, parts=parts)

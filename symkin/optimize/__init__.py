@@ -10,7 +10,10 @@
    (``cos(1/10)``, ``sqrt(3)/2``) once, at 30 digits, instead of at every call;
 4. :func:`~symkin.optimize.cse.eliminate_common_subexpressions` - one CSE across all
    outputs of the function;
-5. :func:`~symkin.optimize.schedule.demand_order` - the temporaries in the order the outputs need them.
+5. :func:`~symkin.optimize.schedule.demand_order` - the temporaries in the order the outputs need them;
+6. :func:`~symkin.optimize.maps.unroll_maps` - a spec's column maps (whose values ran through
+   the passes and the CSE as one more output, :func:`~symkin.optimize.maps.with_map_values`)
+   unrolled into the temporaries, each run of them marked for backends that print loops.
 
 The operation count after each stage is recorded in ``OptimizedFunction.op_counts``.
 """
@@ -21,6 +24,7 @@ from collections.abc import Iterable
 
 from symkin.ir.spec import FunctionSpec, OptimizedFunction
 from symkin.optimize.cse import eliminate_common_subexpressions
+from symkin.optimize.maps import unroll_maps, with_map_values
 from symkin.ir.opcount import spec_op_count
 from symkin.optimize.passes import fold_constants, fold_parameters, fold_parameters_after_cse
 from symkin.optimize.schedule import demand_order
@@ -47,6 +51,8 @@ def optimize(spec: FunctionSpec, fixed: Iterable[str] = ()) -> OptimizedFunction
         (after parameter folding, when any parameter was folded; never above ``derived``)
         and ``cse`` (final: temporaries plus outputs).
     """
+    if spec.maps:
+        return unroll_maps(demand_order(_reduced(with_map_values(spec), tuple(fixed))), spec.maps)
     return demand_order(_reduced(spec, tuple(fixed)))
 
 

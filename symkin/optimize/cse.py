@@ -135,7 +135,7 @@ def _cse_program(definitions: tuple[Assignment, ...], entries: list[sympy.Expr])
             first_with_value[expr] = symbol
             kept.append((symbol, expr))
     outputs = [e.xreplace({s: alias[s] for s in e.free_symbols if s in alias}) for e in reduced[len(definitions):]]
-    kept = _used_by(kept, outputs)
+    kept = used_by(kept, outputs)
     for symbol, _ in kept:
         symbols[symbol.name] = next(names)
     convert = SympyConverter(symbols)
@@ -143,7 +143,7 @@ def _cse_program(definitions: tuple[Assignment, ...], entries: list[sympy.Expr])
     return temporaries, [convert(e) for e in outputs]
 
 
-def _used_by(assignments: list[Assignment], outputs: list) -> list[Assignment]:
+def used_by(assignments: list[Assignment], outputs: list) -> list[Assignment]:
     """The ``assignments`` (in dependency order) that ``outputs`` need, directly or through others:
     a definition whose every use was rewritten away (trig of a sum expanded) is not emitted."""
     needed = {s for e in outputs for s in e.free_symbols}

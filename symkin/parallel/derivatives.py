@@ -110,7 +110,7 @@ def _forward_dynamics_derivatives(d: Deriving) -> FunctionSpec:
         return [dq[i * n:(i + 1) * n] + dqd[i * n:(i + 1) * n] for i in range(n)]
 
     rest = terms.torques(coordinate_symbols(d, "qd"), None, wrist=(terms.wrist("qd"), None))
-    by_q, by_qd, by_tau = forward_dynamics_slopes(
+    by_q, by_qd, by_tau, solve = forward_dynamics_slopes(
         program, terms.mass_matrix(), rest, coordinate_symbols(d, "tau") + terms.wrist("tau"),
         coordinate_symbols(d, "qdd") + terms.wrist("qdd"), slope_rows)
     return function_spec(
@@ -122,7 +122,7 @@ def _forward_dynamics_derivatives(d: Deriving) -> FunctionSpec:
         device_inputs(d, "qd", "tau"), program,
         [("dqdd_dq", by_q, (n, n), "d qdd / dq: row i, column j is d qdd_i / d q_j", ""),
          ("dqdd_dqd", by_qd, (n, n), "d qdd / dqd", ""),
-         ("dqdd_dtau", by_tau, (n, n), "d qdd / dtau = M(q)^-1, exactly symmetric", "")])
+         ("dqdd_dtau", by_tau, (n, n), "d qdd / dtau = M(q)^-1, exactly symmetric", "")], maps=[solve])
 
 
 @quantity("gravity_derivatives", "d G/dq of the gravity compensation efforts at the actuators (n x n)",

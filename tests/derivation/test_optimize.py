@@ -14,7 +14,7 @@ from conftest import GENERATED_DIR, random_inputs, random_q
 from symkin import pipeline
 from symkin.derivation import emitted_quantities
 from symkin.errors import DerivationError
-from symkin.ir.spec import FunctionSpec, InputSpec, OptimizedFunction, OutputSpec
+from symkin.ir.spec import ColumnMap, FunctionSpec, InputSpec, OptimizedFunction, OutputSpec, map_targets
 from symkin.optimize import fold_parameters, optimize
 from symkin.optimize.schedule import peak_live
 from symkin.ir.opcount import op_count
@@ -272,3 +272,33 @@ def test_the_temporaries_come_in_the_order_the_outputs_need_them(quantity, model
     assert held >= 1
     if quantity == "inverse_dynamics_derivatives":
         assert held < 0.4 * len(optimized.temporaries)
+
+
+def test_a_column_map_unrolls_into_temporaries_its_numbers_folded():
+    """A spec's column map (symkin.optimize.maps): its shared value and columns share the CSE, its columns are
+    unrolled into one run of temporaries (a MapBlock), a column of numbers folds into its copy, and the result
+    equals the spec's own expansion; the C backend prints the run as one loop (the UR10e's forward-dynamics
+    derivatives: the LDL^T substitutions' body once for the 3n = 18 columns)."""
+    x0, x1, x2 = X
+    s0, b0, b1, u0 = (sympy.Symbol(name, real=True) for name in ("_s0", "_b0", "_b1", "_u0"))
+    targets = map_targets(0, 3, 2)
+    column_map = ColumnMap(((s0, x0 * x1),), (b0, b1), ((u0, b0 * s0 + b1),), (u0, u0 * b1),
+                           ((x2, sympy.sin(x1)), (sympy.Integer(1), sympy.Integer(0)), (sympy.Integer(0), x0)), targets)
+    vector = InputSpec("q", "vector", X, tuple(map(str, X)), ("rad",) * 3, "coordinates")
+    entries = [t for column in targets for t in column]
+    spec = FunctionSpec("f", "f", "f", (vector,), (OutputSpec("y", sympy.ImmutableMatrix(entries), "y", shape=(6,)),),
+                        maps=(column_map,))
+    f = optimize(spec)
+    (block,) = f.maps
+    before = dict(f.temporaries[:block.start])
+    assert before[block.targets[1][0]] == x0 * x1   # the column (1, 0): u0 = s0 (the shared value) and u0 * b1 = 0
+    assert block.targets[1][1] == 0
+    assert block.stop - block.start == 3            # u0 and u0 * b1 of the first column, u0 of the last
+    point = (0.3, -1.2, 0.7)
+    expected = np.array([float(e.subs(dict(zip(X, point)))) for e in spec.expanded_outputs()[0]])
+    np.testing.assert_allclose(_evaluate(f, [X], {})(point), expected, rtol=CLOSED_FORM)
+    body = (GENERATED_DIR / "ur10e" / "ur10e.c").read_text()
+    body = body[body.index("void ur10e_forward_dynamics_derivatives("):]
+    body = body[:body.index("\n}\n")]
+    assert body.count("for (int _c = 0; _c < 18; ++_c)") == 1
+    assert len(re.findall(r"const double _u\d+ = ", body)) == len(set(re.findall(r"const double (_u\d+) = ", body)))

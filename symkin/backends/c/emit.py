@@ -22,7 +22,10 @@ them, after :func:`~symkin.optimize.passes.expand_trig_sums`) are computed befor
 by the generated vectorizable ``sincos`` (:mod:`symkin.backends.c.trig`).  A function with
 more than :data:`LANE_SLOTS` non-constant outputs gets no lane loop: its batch function calls
 the single one per configuration (same statements, same bits), because compiling the lane
-loop grows much faster than its size (see :data:`LANE_SLOTS`).
+loop grows much faster than its size (see :data:`LANE_SLOTS`); so does a function with a
+column map (:class:`~symkin.ir.spec.MapBlock`), whose run of temporaries the single function
+prints as one loop over the map's columns (the body's code once: the forward dynamics'
+derivatives then fit the L1 instruction cache).
 
 The functions are grouped, in order, into translation units of about :data:`PART_OPS`
 operations, each guarded by ``#if !defined(<MODEL>_PART) || <MODEL>_PART == k`` (its sincos
@@ -47,7 +50,7 @@ from symkin.backends.layout import element_text, expressions, used_symbols
 from symkin.backends.naming import c_symbol
 from symkin.backends.templating import provenance, render
 from symkin.ir.bundle import ModelCode
-from symkin.ir.spec import FunctionSpec, OptimizedFunction
+from symkin.ir.spec import FunctionSpec, MapBlock, OptimizedFunction
 from symkin.optimize.schedule import steps
 
 HEADER_TEMPLATE = "c/header.h.j2"
@@ -151,16 +154,58 @@ def _outputs(spec: FunctionSpec, f: OptimizedFunction, text: Callable[[sympy.Exp
 def _statements(f: OptimizedFunction, outputs: list[dict], text: Callable[[sympy.Expr], str]) -> list[dict]:
     """The temporaries with each output entry's store right after the last temporary it uses
     (:func:`symkin.optimize.schedule.steps`): in the temporaries' demand order a value stored is no longer live, so
-    fewer are held in registers or spilled (:mod:`symkin.optimize.schedule`)."""
+    fewer are held in registers or spilled (:mod:`symkin.optimize.schedule`).  A column map's run of temporaries
+    is one loop over its columns instead (:func:`_column_loop`), its arrays declared first and each column value
+    written into them where it is computed (so it is not held until the loop)."""
+    temporaries = {symbol for symbol, _ in f.temporaries}
+    feeds: dict[sympy.Symbol, list[str]] = {}
     statements = []
+    for number, block in enumerate(f.maps):
+        fills = []
+        for c, column in enumerate(block.columns):
+            for k, value in enumerate(column):
+                element = f"_map{number}_in[{k}][{c}]"
+                if value in temporaries:
+                    feeds.setdefault(value, []).append(element)
+                else:  # a number or an input
+                    fills.append({"element": element, "code": text(value)})
+        statements.append({"store": False, "declare": {"name": f"_map{number}", "rows": len(block.parameters),
+                                                       "count": len(block.columns), "results": len(block.results),
+                                                       "fills": fills}})
+    blocks = {block.start: (number, block) for number, block in enumerate(f.maps)}
+    results = {t: f"_map{number}_out[{k}][{c}]" for number, block in enumerate(f.maps)
+               for c, column in enumerate(block.targets) for k, t in enumerate(column) if t in temporaries}
+    skip_below = 0
     for step in steps(f):
         if step.kind == "temporary":
+            if step.number in blocks:
+                number, block = blocks[step.number]
+                statements.append({"store": False, "map": _column_loop(number, block, text)})
+                skip_below = block.stop
             symbol, value = f.temporaries[step.number]
-            statements.append({"store": False, "name": str(symbol), "code": text(value)})
+            if step.number < skip_below:  # the loop computed it: a result is read from its array where it is due
+                if symbol in results:
+                    statements.append({"store": False, "name": str(symbol), "code": results[symbol], "feeds": []})
+                continue
+            statements.append({"store": False, "name": str(symbol), "code": text(value),
+                               "feeds": feeds.get(symbol, [])})
         elif step.kind == "store":
             output = outputs[step.number]
             statements.append({"store": True, "output": output["name"], **output["assignments"][step.entry]})
     return statements
+
+
+def _column_loop(number: int, block: MapBlock, text: Callable[[sympy.Expr], str]) -> dict[str, Any]:
+    """The context of map ``number``'s loop over the columns of ``_map<number>_in[k][r]`` (one row per parameter,
+    the columns along it: the loop reads and writes contiguous columns, so the compiler vectorizes it): the body
+    once, each result into ``_map<number>_out[m][r]``, which the function reads where the unrolled code would
+    compute that result (:func:`_statements`)."""
+    return {
+        "name": f"_map{number}", "count": len(block.columns),
+        "parameters": [str(p) for p in block.parameters],
+        "body": [{"name": str(s), "code": text(e)} for s, e in block.body],
+        "stores": [text(r) for r in block.results],
+    }
 
 
 def _function_context(code: ModelCode, f: OptimizedFunction, precision: str, printer: CPrinter) -> dict[str, Any]:
@@ -194,7 +239,7 @@ def _function_context(code: ModelCode, f: OptimizedFunction, precision: str, pri
         "slots": slots,
         # lane arrays of the batch function: inputs, outputs, and angle/sin/cos per angle
         "batch_stack_bytes": (len(scalars) + slots + 3 * len(trig)) * BLOCK * (4 if precision == "float" else 8),
-        "lanes": slots <= LANE_SLOTS,
+        "lanes": slots <= LANE_SLOTS and not f.maps,  # a column map's loop is no lane loop's statement
         "statements": _statements(f, outputs, text),
         "op_count": f.op_counts["cse"],
     }

@@ -1,0 +1,109 @@
+"""Column maps through the optimizer: their values share the function's CSE, their columns are unrolled after it.
+
+A spec's column map (:class:`~symkin.ir.spec.ColumnMap`) reads values of the function - the factors of a solve and
+one column of right-hand sides per column - and gives results the outputs use.  :func:`with_map_values` hands those
+values to the passes and the CSE as one more output (so they are folded and shared like any other expression, and
+the map's results stay opaque symbols there); :func:`unroll_maps` then takes that output off again, writes every
+column's copy of the body into the temporaries (a column's numbers folded into its copy: a column of the identity
+costs what its nonzeros need) and records the run of temporaries as a :class:`~symkin.ir.spec.MapBlock`, which a
+backend with loops prints as one loop (:mod:`symkin.backends.c.emit`) and every other reads as straight-line code.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+from collections.abc import Iterator
+
+import sympy
+
+from symkin.ir.opcount import op_count
+from symkin.ir.spec import ColumnMap, FunctionSpec, MapBlock, OptimizedFunction, OutputSpec
+from symkin.optimize.cse import TEMPORARY_PREFIX, used_by
+
+#: Name of the output that carries the maps' values through the passes (removed again by :func:`unroll_maps`).
+MAP_VALUES = "_map_values"
+
+
+def with_map_values(spec: FunctionSpec) -> FunctionSpec:
+    """``spec`` without its maps, their values (:meth:`ColumnMap.values`, map by map) as a last output."""
+    values = [v for m in spec.maps for v in m.values()]
+    carrier = OutputSpec(MAP_VALUES, sympy.ImmutableMatrix(len(values), 1, values), "the column maps' values",
+                         shape=(len(values),))
+    return dataclasses.replace(spec, outputs=spec.outputs + (carrier,), maps=())
+
+
+def _fresh_names(temporaries: list[tuple[sympy.Symbol, sympy.Expr]]) -> Iterator[sympy.Symbol]:
+    """Temporary symbols numbered after the highest ``_x<k>`` of ``temporaries``."""
+    numbers = [int(s.name[len(TEMPORARY_PREFIX):]) for s, _ in temporaries
+               if s.name.startswith(TEMPORARY_PREFIX) and s.name[len(TEMPORARY_PREFIX):].isdigit()]
+    return (sympy.Symbol(f"{TEMPORARY_PREFIX}{k}", real=True) for k in itertools.count(max(numbers, default=-1) + 1))
+
+
+def unroll_maps(function: OptimizedFunction, maps: tuple[ColumnMap, ...]) -> OptimizedFunction:
+    """``function`` (optimized from :func:`with_map_values` of a spec with ``maps``) with the maps' values output
+    taken off and each map's columns unrolled into temporaries after the rest, a :class:`MapBlock` per map.
+
+    A value that is no symbol or number becomes a temporary before the block; in a column's copy of the body an
+    assignment that folds to a symbol or a number is substituted into its uses; copies no output needs (the upper
+    triangle of an inverse) are dropped.  ``op_counts["cse"]`` counts the unrolled code."""
+    *outputs, (values_output) = function.outputs
+    values = list(values_output)
+    temporaries = list(function.temporaries)
+    names = _fresh_names(temporaries)
+
+    def named(value: sympy.Expr) -> sympy.Expr:
+        if value.is_Atom:
+            return value
+        symbol = next(names)
+        temporaries.append((symbol, value))
+        return symbol
+
+    def placed(value: sympy.Expr) -> sympy.Expr:
+        """``value`` named where its last operand is computed (not held live until the block: a derivative's
+        entry is stored as soon as its adjoint sweep gives it)."""
+        if value.is_Atom:
+            return value
+        symbol = named(value)
+        temporaries.pop()
+        order = {s: k for k, (s, _) in enumerate(temporaries)}
+        after = max((order[s] for s in value.free_symbols if s in order), default=-1)
+        temporaries.insert(after + 1, (symbol, value))
+        return symbol
+
+    targets: dict[sympy.Symbol, sympy.Expr] = {}
+    drafts = []
+    position = 0
+    for m in maps:
+        shared = {s: placed(v) for (s, _), v in zip(m.shared, values[position:])}
+        position += len(m.shared)
+        count = len(m.columns)
+        by_parameter = [[placed(v) for v in values[position + k * count:position + (k + 1) * count]]
+                        for k in range(len(m.parameters))]  # in the order of ColumnMap.values
+        position += count * len(m.parameters)
+        columns = [tuple(row[c] for row in by_parameter) for c in range(count)]
+        body = tuple((s, e.xreplace(shared)) for s, e in m.body)
+        results = tuple(r.xreplace(shared) for r in m.results)
+        start = len(temporaries)
+        column_targets = []
+        for column, symbols in zip(columns, m.targets):
+            local: dict[sympy.Symbol, sympy.Expr] = dict(zip(m.parameters, column))
+            for s, e in body:
+                local[s] = named(e.xreplace(local))
+            column_targets.append(tuple(named(r.xreplace(local)) for r in results))
+            targets.update(zip(symbols, column_targets[-1]))
+        drafts.append((start, len(temporaries), m.parameters, body, results, tuple(columns), tuple(column_targets)))
+    final_outputs = tuple(tuple(e.xreplace(targets) for e in entries) for entries in outputs)
+    kept = used_by(temporaries, [e for entries in final_outputs for e in entries])
+    index = {s: k for k, (s, _) in enumerate(kept)}
+    blocks = []
+    for first, stop, parameters, block_body, block_results, block_columns, block_targets in drafts:
+        inside = [index[s] for s, _ in temporaries[first:stop] if s in index]
+        if inside:
+            blocks.append(MapBlock(inside[0], inside[-1] + 1, parameters, block_body, block_results, block_columns,
+                                   block_targets))
+    counts = dict(function.op_counts)
+    counts["cse"] = op_count([e for _, e in kept] + [e for entries in final_outputs for e in entries])
+    spec = dataclasses.replace(function.spec, outputs=function.spec.outputs[:-1])
+    return OptimizedFunction(spec, tuple(kept), final_outputs, counts, tuple(blocks))
+
