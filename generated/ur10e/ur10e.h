@@ -474,7 +474,7 @@ void ur10e_forward_dynamics_derivatives(const double *q, const double *qd, const
 void ur10e_forward_dynamics_derivatives_packed(const double *in, double *out);
 
 /* ur10e_forward_dynamics_derivatives for n configurations; params: a2, a3, d4, d5, d6, m1, m2, m3, m4, m5, m6, g, stride 0 or 12.
- * Calls ur10e_forward_dynamics_derivatives once per configuration. */
+ * Uses 9344 bytes of stack for its blocks of 8 configurations. */
 void ur10e_forward_dynamics_derivatives_batch(size_t n, const double *q, const double *qd, const double *tau, const double *params, size_t params_stride, double *dqdd_dq, double *dqdd_dqd, double *dqdd_dtau);
 
 /* ur10e_tcp_force: Force (wrench) at the TCP that produces a joint motion.

@@ -204,6 +204,24 @@ def test_a_function_with_many_outputs_batches_by_single_calls_with_the_same_bits
         np.testing.assert_array_equal(out, np.stack([single[k] for single in singles]))
 
 
+def test_a_column_maps_loop_and_its_written_out_lanes_return_the_same_bits(loaded, models, derivations,
+                                                                          generated_dir):
+    """The forward-dynamics derivatives' LDL^T substitutions are one loop over 18 columns in the single function
+    and written out column by column in the batch's lane loop (symkin.backends.c.emit._column_loop): the same
+    operations in the same order, so under the default flags the batch returns the single calls' bits."""
+    source = (generated_dir / "ur10e" / "ur10e.c").read_text()
+    batch_code = source[source.index("void ur10e_forward_dynamics_derivatives_batch("):]
+    assert "_b0_c17 = " in batch_code[:batch_code.index("\n}\n")]
+    ur10e = loaded("ur10e", "c")
+    record = next(f for f in ur10e.manifest["functions"] if f["name"] == "forward_dynamics_derivatives")
+    inputs = random_inputs(models["ur10e"], function_spec(models["ur10e"], derivations["ur10e"], record),
+                           np.random.default_rng(5), 11)
+    batch = ur10e.forward_dynamics_derivatives(*inputs)
+    singles = [ur10e.forward_dynamics_derivatives(*(a[i] for a in inputs)) for i in range(11)]
+    for k, out in enumerate(batch):
+        np.testing.assert_array_equal(out, np.stack([single[k] for single in singles]))
+
+
 def test_the_source_compiles_as_parallel_translation_units_with_the_bits_of_the_whole_file(generated_dir, tmp_path,
                                                                                             monkeypatch):
     """The build splits a source into the units it states (-D<MODEL>_PART=k), each warning-free with

@@ -22,10 +22,14 @@ them, after :func:`~symkin.optimize.passes.expand_trig_sums`) are computed befor
 by the generated vectorizable ``sincos`` (:mod:`symkin.backends.c.trig`).  A function with
 more than :data:`LANE_SLOTS` non-constant outputs gets no lane loop: its batch function calls
 the single one per configuration (same statements, same bits), because compiling the lane
-loop grows much faster than its size (see :data:`LANE_SLOTS`); so does a function with a
-column map (:class:`~symkin.ir.spec.MapBlock`), whose run of temporaries the single function
-prints as one loop over the map's columns (the body's code once: the forward dynamics'
-derivatives then fit the L1 instruction cache).
+loop grows much faster than its size (see :data:`LANE_SLOTS`).  A column map
+(:class:`~symkin.ir.spec.MapBlock`) is one loop over its columns in the single function (the
+body's code once: the forward dynamics' derivatives then fit the L1 instruction cache) and
+the same operations written out column by column in the lane loop (:func:`_column_loop`):
+the same bits under ISO C's rounding; where the compiler may fuse a product with a sum of
+another statement (``-ffp-contract=fast``), the loop's column values, passed through an
+array, leave it fewer products to fuse than the written-out copies, so the two may differ
+in the last bits (the planar 2R arm's: 4e-16 relative in one column).
 
 The functions are grouped, in order, into translation units of about :data:`PART_OPS`
 operations, each guarded by ``#if !defined(<MODEL>_PART) || <MODEL>_PART == k`` (its sincos
@@ -36,6 +40,7 @@ helper too, for the units that use it), which the build compiles in parallel
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Callable
 from typing import Any
 
@@ -199,13 +204,26 @@ def _column_loop(number: int, block: MapBlock, text: Callable[[sympy.Expr], str]
     """The context of map ``number``'s loop over the columns of ``_map<number>_in[k][r]`` (one row per parameter,
     the columns along it: the loop reads and writes contiguous columns, so the compiler vectorizes it): the body
     once, each result into ``_map<number>_out[m][r]``, which the function reads where the unrolled code would
-    compute that result (:func:`_statements`)."""
-    return {
-        "name": f"_map{number}", "count": len(block.columns),
-        "parameters": [str(p) for p in block.parameters],
-        "body": [{"name": str(s), "code": text(e)} for s, e in block.body],
-        "stores": [text(r) for r in block.results],
-    }
+    compute that result (:func:`_statements`).
+
+    ``columns`` is the same loop written out column by column for the batch's lane loop (a loop inside it would
+    keep the compiler from vectorizing the lanes): the body's code with its names suffixed ``_c<column>`` and the
+    column's values for its parameters, the very operations of the loop in the same order, so that a batch returns
+    the single calls' bits."""
+    body = [{"name": str(s), "code": text(e)} for s, e in block.body]
+    stores = [text(r) for r in block.results]
+    own = re.compile(r"\b(" + "|".join(re.escape(str(s)) for s in (*block.parameters, *(s for s, _ in block.body)))
+                     + r")\b")
+    columns = []
+    for c, column in enumerate(block.columns):
+        suffix = f"_c{c}"
+        parameters = [{"name": f"{p}{suffix}", "code": text(v)} for p, v in zip(block.parameters, column)]
+        columns.append({"parameters": parameters,
+                        "body": [{"name": b["name"] + suffix, "code": own.sub(r"\1" + suffix, b["code"])}
+                                 for b in body],
+                        "stores": [own.sub(r"\1" + suffix, code) for code in stores]})
+    return {"name": f"_map{number}", "count": len(block.columns), "parameters": [str(p) for p in block.parameters],
+            "body": body, "stores": stores, "columns": columns}
 
 
 def _function_context(code: ModelCode, f: OptimizedFunction, precision: str, printer: CPrinter) -> dict[str, Any]:
@@ -239,7 +257,7 @@ def _function_context(code: ModelCode, f: OptimizedFunction, precision: str, pri
         "slots": slots,
         # lane arrays of the batch function: inputs, outputs, and angle/sin/cos per angle
         "batch_stack_bytes": (len(scalars) + slots + 3 * len(trig)) * BLOCK * (4 if precision == "float" else 8),
-        "lanes": slots <= LANE_SLOTS and not f.maps,  # a column map's loop is no lane loop's statement
+        "lanes": slots <= LANE_SLOTS,
         "statements": _statements(f, outputs, text),
         "op_count": f.op_counts["cse"],
     }
