@@ -26,31 +26,61 @@ MAP_VALUES = "_map_values"
 
 
 def with_map_values(spec: FunctionSpec) -> FunctionSpec:
-    """``spec`` without its maps, their values (:meth:`ColumnMap.values`, map by map) as a last output."""
+    """``spec`` without its maps, their values (:meth:`ColumnMap.values`, map by map) as a last output.
+
+    Raises:
+        ValueError: a map's values read a map's results (maps run after every other value, not one another).
+    """
     values = [v for m in spec.maps for v in m.values()]
+    targets = {t for m in spec.maps for column in m.targets for t in column}
+    if any(v.free_symbols & targets for v in values):
+        raise ValueError(f"{spec.name}: a column map's values read a column map's results; maps do not chain")
     carrier = OutputSpec(MAP_VALUES, sympy.ImmutableMatrix(len(values), 1, values), "the column maps' values",
                          shape=(len(values),))
     return dataclasses.replace(spec, outputs=spec.outputs + (carrier,), maps=())
 
 
-def _fresh_names(temporaries: list[tuple[sympy.Symbol, sympy.Expr]]) -> Iterator[sympy.Symbol]:
+def _fresh_names(temporaries: tuple[tuple[sympy.Symbol, sympy.Expr], ...]) -> Iterator[sympy.Symbol]:
     """Temporary symbols numbered after the highest ``_x<k>`` of ``temporaries``."""
     numbers = [int(s.name[len(TEMPORARY_PREFIX):]) for s, _ in temporaries
                if s.name.startswith(TEMPORARY_PREFIX) and s.name[len(TEMPORARY_PREFIX):].isdigit()]
     return (sympy.Symbol(f"{TEMPORARY_PREFIX}{k}", real=True) for k in itertools.count(max(numbers, default=-1) + 1))
 
 
+def _placed(temporaries: tuple[tuple[sympy.Symbol, sympy.Expr], ...], values: list[sympy.Expr],
+            names: Iterator[sympy.Symbol]) -> tuple[list[tuple[sympy.Symbol, sympy.Expr]], list[sympy.Expr]]:
+    """(the temporaries with each of ``values`` that is no symbol or number named right after the last temporary it
+    reads, the values as atoms): a value is not held live until the maps run (a derivative's entry is written as
+    soon as its adjoint sweep gives it); equal values share one name."""
+    order = {symbol: k for k, (symbol, _) in enumerate(temporaries)}
+    after: dict[int, list[tuple[sympy.Symbol, sympy.Expr]]] = {}
+    named: dict[sympy.Expr, sympy.Symbol] = {}
+    atoms: list[sympy.Expr] = []
+    for value in values:
+        if value.is_Atom:
+            atoms.append(value)
+            continue
+        if value not in named:
+            named[value] = next(names)
+            last = max((order[s] for s in value.free_symbols if s in order), default=-1)
+            after.setdefault(last, []).append((named[value], value))
+        atoms.append(named[value])
+    merged = list(after.get(-1, []))
+    for k, assignment in enumerate(temporaries):
+        merged += [assignment, *after.get(k, [])]
+    return merged, atoms
+
+
 def unroll_maps(function: OptimizedFunction, maps: tuple[ColumnMap, ...]) -> OptimizedFunction:
     """``function`` (optimized from :func:`with_map_values` of a spec with ``maps``) with the maps' values output
     taken off and each map's columns unrolled into temporaries after the rest, a :class:`MapBlock` per map.
 
-    A value that is no symbol or number becomes a temporary before the block; in a column's copy of the body an
-    assignment that folds to a symbol or a number is substituted into its uses; copies no output needs (the upper
-    triangle of an inverse) are dropped.  ``op_counts["cse"]`` counts the unrolled code."""
-    *outputs, (values_output) = function.outputs
-    values = list(values_output)
-    temporaries = list(function.temporaries)
-    names = _fresh_names(temporaries)
+    A value that is no symbol or number becomes a temporary before the blocks (:func:`_placed`); in a column's
+    copy of the body an assignment that folds to a symbol or a number is substituted into its uses; copies no output
+    needs (the upper triangle of an inverse) are dropped.  ``op_counts["cse"]`` counts the unrolled code."""
+    *outputs, values_output = function.outputs
+    names = _fresh_names(function.temporaries)
+    temporaries, values = _placed(function.temporaries, list(values_output), names)
 
     def named(value: sympy.Expr) -> sympy.Expr:
         if value.is_Atom:
@@ -59,29 +89,16 @@ def unroll_maps(function: OptimizedFunction, maps: tuple[ColumnMap, ...]) -> Opt
         temporaries.append((symbol, value))
         return symbol
 
-    def placed(value: sympy.Expr) -> sympy.Expr:
-        """``value`` named where its last operand is computed (not held live until the block: a derivative's
-        entry is stored as soon as its adjoint sweep gives it)."""
-        if value.is_Atom:
-            return value
-        symbol = named(value)
-        temporaries.pop()
-        order = {s: k for k, (s, _) in enumerate(temporaries)}
-        after = max((order[s] for s in value.free_symbols if s in order), default=-1)
-        temporaries.insert(after + 1, (symbol, value))
-        return symbol
-
     targets: dict[sympy.Symbol, sympy.Expr] = {}
     drafts = []
     position = 0
     for m in maps:
-        shared = {s: placed(v) for (s, _), v in zip(m.shared, values[position:])}
+        shared = dict(zip((s for s, _ in m.shared), values[position:]))
         position += len(m.shared)
         count = len(m.columns)
-        by_parameter = [[placed(v) for v in values[position + k * count:position + (k + 1) * count]]
-                        for k in range(len(m.parameters))]  # in the order of ColumnMap.values
+        columns = tuple(tuple(values[position + k * count + c] for k in range(len(m.parameters)))
+                        for c in range(count))  # values in the order of ColumnMap.values: parameter by parameter
         position += count * len(m.parameters)
-        columns = [tuple(row[c] for row in by_parameter) for c in range(count)]
         body = tuple((s, e.xreplace(shared)) for s, e in m.body)
         results = tuple(r.xreplace(shared) for r in m.results)
         start = len(temporaries)
@@ -92,7 +109,7 @@ def unroll_maps(function: OptimizedFunction, maps: tuple[ColumnMap, ...]) -> Opt
                 local[s] = named(e.xreplace(local))
             column_targets.append(tuple(named(r.xreplace(local)) for r in results))
             targets.update(zip(symbols, column_targets[-1]))
-        drafts.append((start, len(temporaries), m.parameters, body, results, tuple(columns), tuple(column_targets)))
+        drafts.append((start, len(temporaries), m.parameters, body, results, columns, tuple(column_targets)))
     final_outputs = tuple(tuple(e.xreplace(targets) for e in entries) for entries in outputs)
     kept = used_by(temporaries, [e for entries in final_outputs for e in entries])
     index = {s: k for k, (s, _) in enumerate(kept)}
